@@ -1,0 +1,248 @@
+r"""Direct kinematics of the AmigoBot: pure, batched numpy functions.
+
+Conventions (``shared/MODEL.md``): ground frame 0 with z up; the pose of the robot is
+``pose = (x_A, y_A, beta)``, the position of the axle midpoint A [m] and the heading beta [rad]
+about z. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the left (contact
+L = A - l1 (sin b, -cos b)); wheel angles ``alpha1..3`` are positive when the robot moves forward.
+Wheel rates are stacked as ``w = (alpha1dot, alpha2dot)`` [rad/s].
+
+Every function accepts a single item or a batch with leading axes: a pose of shape ``(3,)`` or
+``(N, 3)`` (any ``(..., 3)``), wheel rates ``(2,)`` or ``(N, 2)``, speeds ``()`` or ``(N,)``. Outputs
+carry the same leading axes. Nothing here integrates numerically: :func:`step_pose` is the exact
+solution for rates held constant over a step (zero-order hold), valid for any ``dt``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.params import RobotParams
+
+__all__ = [
+    "body_velocity",
+    "wheel_rates",
+    "castor_rate",
+    "h_position",
+    "contact_points",
+    "castor_position",
+    "step_pose",
+    "step_wheel_angles",
+    "sinc",
+    "SteadyCircle",
+    "circle_steady_state",
+]
+
+Array = NDArray[np.float64]
+
+
+def sinc(x: ArrayLike) -> Array:
+    """Unnormalised sinc, ``sin(x) / x`` with value 1 at 0, elementwise [-]."""
+    return np.sinc(np.asarray(x, dtype=np.float64) / np.pi)
+
+
+def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+    r"""Speed of A and turn rate from the wheel rates (inverse of :func:`wheel_rates`).
+
+    .. math::
+        v_A = \frac{r_1 \dot\alpha_1 + r_2 \dot\alpha_2}{2}, \qquad
+        \dot\beta = \frac{r_1 \dot\alpha_1 - r_2 \dot\alpha_2}{2 l_1}
+
+    Args:
+        w: wheel rates ``(..., 2)`` [rad/s], ``[wheel 1 (right), wheel 2 (left)]``.
+        robot: geometry.
+
+    Returns:
+        ``(v_A, betadot)``, each of shape ``(...)``, in [m/s] and [rad/s].
+    """
+    w = np.asarray(w, dtype=np.float64)
+    u1 = robot.r1 * w[..., 0]
+    u2 = robot.r2 * w[..., 1]
+    return 0.5 * (u1 + u2), (u1 - u2) / (2.0 * robot.l1)
+
+
+def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+    r"""Wheel rates that roll without slipping for a given motion (MODEL.md, system 29).
+
+    .. math::
+        r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
+
+    Args:
+        v_a: speed of A along the heading, shape ``(...)`` [m/s].
+        betadot: turn rate, shape ``(...)`` [rad/s].
+        robot: geometry.
+
+    Returns:
+        wheel rates ``(..., 2)`` [rad/s], ``[alpha1dot, alpha2dot]``.
+    """
+    v = np.asarray(v_a, dtype=np.float64)
+    b = np.asarray(betadot, dtype=np.float64)
+    return np.stack(np.broadcast_arrays((v + robot.l1 * b) / robot.r1, (v - robot.l1 * b) / robot.r2), axis=-1)
+
+
+def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+    r"""Rolling rate of the self-aligned castor (seventh equation of system 29).
+
+    .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
+
+    The castor is taken as aligned with the velocity of its swivel (no swivel transient); the rate
+    is the swivel's speed over ``r3``, signed like ``v_A`` so that it is positive moving forward.
+
+    Returns:
+        ``alpha3dot`` of shape ``(...)`` [rad/s].
+    """
+    v = np.asarray(v_a, dtype=np.float64)
+    b = np.asarray(betadot, dtype=np.float64)
+    sign = np.where(v < 0.0, -1.0, 1.0)
+    return sign * np.hypot(robot.l5 * b, v) / robot.r3
+
+
+def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
+    """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
+
+    ``r_H = (x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
+
+    Args:
+        pose: ``(..., 3)`` as ``(x_A [m], y_A [m], beta [rad])``.
+
+    Returns:
+        ``(..., 2)`` [m].
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    b = p[..., 2]
+    return np.stack((p[..., 0] + robot.l3 * np.cos(b), p[..., 1] + robot.l3 * np.sin(b)), axis=-1)
+
+
+def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+    """Contact points K (wheel 1, right) and L (wheel 2, left) on the ground (paper eqs 14, 22).
+
+    ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
+
+    Returns:
+        ``(K, L)``, each ``(..., 2)`` [m].
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    side = np.stack((np.sin(p[..., 2]), -np.cos(p[..., 2])), axis=-1) * robot.l1
+    return p[..., :2] + side, p[..., :2] - side
+
+
+def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
+    """Ground position of the castor swivel, ``l5`` behind A on the body axis ``(..., 2)`` [m].
+
+    The paper places the castor on the body axis at distance ``l5`` from A; as on the real robot it
+    trails the drive axle.
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    b = p[..., 2]
+    return np.stack((p[..., 0] - robot.l5 * np.cos(b), p[..., 1] - robot.l5 * np.sin(b)), axis=-1)
+
+
+def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+    r"""Exact pose after ``dt`` with wheel rates ``w`` held constant (closed-form arc).
+
+    With ``(v_A, betadot)`` from :func:`body_velocity` and ``db = betadot dt``, A moves on a circular
+    arc (a straight line when ``db = 0``); the chord form
+
+    .. math::
+        \Delta\beta = \dot\beta\,dt, \qquad
+        \Delta \mathbf{r}_A = v_A\,dt\,\operatorname{sinc}\!\left(\tfrac{\Delta\beta}{2}\right)
+        \begin{pmatrix}\cos(\beta + \Delta\beta/2)\\ \sin(\beta + \Delta\beta/2)\end{pmatrix}
+
+    is exact for every ``dt`` and has no division by a small ``betadot``. The heading is not
+    wrapped, so that it stays continuous along a trajectory.
+
+    Args:
+        pose: ``(..., 3)`` as ``(x_A, y_A, beta)`` [m, m, rad].
+        w: wheel rates ``(..., 2)`` [rad/s] (broadcast against ``pose``'s leading axes).
+        dt: step length [s], scalar or ``(...)``.
+        robot: geometry.
+
+    Returns:
+        new pose ``(..., 3)``.
+    """
+    p = np.asarray(pose, dtype=np.float64)
+    v, bdot = body_velocity(w, robot)
+    dt_ = np.asarray(dt, dtype=np.float64)
+    db = bdot * dt_
+    chord = v * dt_ * sinc(0.5 * db)
+    mid = p[..., 2] + 0.5 * db
+    return np.stack(
+        np.broadcast_arrays(p[..., 0] + chord * np.cos(mid), p[..., 1] + chord * np.sin(mid), p[..., 2] + db), axis=-1
+    )
+
+
+def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+    """Wheel angles after ``dt`` with drive-wheel rates ``w`` held (exact).
+
+    ``alpha1, alpha2`` advance by ``w dt``; the castor ``alpha3`` by ``castor_rate dt``, which is
+    constant while the rates are held.
+
+    Args:
+        alpha: ``(..., 3)`` wheel angles ``(alpha1, alpha2, alpha3)`` [rad].
+        w: ``(..., 2)`` drive-wheel rates [rad/s].
+        dt: step [s].
+
+    Returns:
+        ``(..., 3)`` [rad].
+    """
+    a = np.asarray(alpha, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    dt_ = np.asarray(dt, dtype=np.float64)
+    v, bdot = body_velocity(w, robot)
+    a3 = castor_rate(v, bdot, robot)
+    return np.stack(
+        np.broadcast_arrays(a[..., 0] + w[..., 0] * dt_, a[..., 1] + w[..., 1] * dt_, a[..., 2] + a3 * dt_), axis=-1
+    )
+
+
+class SteadyCircle(NamedTuple):
+    """Closed-form steady state of H on a circle (MODEL.md, "The path of H and the inverse problem").
+
+    Attributes:
+        radius_a: radius of A's concentric circle ``R_A = sqrt(R^2 - l3^2)`` [m].
+        betadot: turn rate ``d v_A / R_A`` [rad/s].
+        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad], the path tangent minus the heading.
+        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], shape ``(..., 2)``.
+        castor_rate: ``alpha3dot`` [rad/s].
+        speed_h: speed of H, ``v_A R / R_A`` [m/s].
+    """
+
+    radius_a: Array
+    betadot: Array
+    heading_lag: Array
+    wheel_rates: Array
+    castor_rate: Array
+    speed_h: Array
+
+
+def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: RobotParams, direction: int = 1) -> SteadyCircle:
+    r"""Steady state of H on a circle of radius ``R`` with A at constant speed ``v_A``.
+
+    .. math::
+        R_A = \sqrt{R^2 - l_3^2},\quad \dot\beta = d\,\frac{v_A}{R_A},\quad
+        \theta - \beta = d \arctan\frac{l_3}{R_A}
+
+    and the wheel rates from :func:`wheel_rates`. Requires ``R > l3``.
+
+    Args:
+        radius: R [m], shape ``(...)``.
+        v_a: speed of A [m/s], shape ``(...)``.
+        robot: geometry.
+        direction: +1 for a left turn, -1 for a right turn.
+    """
+    r = np.asarray(radius, dtype=np.float64)
+    if np.any(~(r > robot.l3)):
+        raise ValueError(f"radius must exceed l3 = {robot.l3} m for a steady state, got {radius!r}")
+    v = np.asarray(v_a, dtype=np.float64)
+    ra = np.sqrt(r * r - robot.l3**2)
+    bd = direction * v / ra
+    return SteadyCircle(
+        radius_a=ra,
+        betadot=bd,
+        heading_lag=direction * np.arctan2(robot.l3, ra),
+        wheel_rates=wheel_rates(v, bd, robot),
+        castor_rate=castor_rate(v, bd, robot),
+        speed_h=v * r / ra,
+    )

@@ -1,0 +1,1 @@
+"""Experiment scripts behind the ``amigo-gym`` command (each file readable on its own)."""
