@@ -37,7 +37,6 @@ driving the path the wrong way loses the heading term, leaving the path loses th
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -262,5 +261,3 @@ def transition(
 def max_return(n_steps: int) -> float:
     """Largest possible return of ``n_steps`` steps (each term at most 1)."""
     return float(n_steps)
-
-
