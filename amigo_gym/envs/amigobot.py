@@ -1,0 +1,360 @@
+r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
+
+The environment is a thin stateful shell over the pure, batched functions of
+:mod:`amigo_gym.task` (observation, reward, start, end), :mod:`amigo_gym.kinematics` (the exact
+step) and :mod:`amigo_gym.paths`. :class:`AmigoBotEnv` holds one robot; the native vector
+environment :class:`amigo_gym.envs.AmigoBotVectorEnv` holds ``N`` and calls the same functions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import fields, replace
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from amigo_gym import task
+from amigo_gym.kinematics import h_position
+from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+
+__all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "parse_pose_option"]
+
+Array = NDArray[np.float64]
+ObsArray = NDArray[np.float32]
+
+#: names of the task settings accepted as keywords by the environments (every ``EnvParams`` field)
+ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
+
+#: keys accepted in ``reset(options=...)``
+RESET_OPTIONS: tuple[str, ...] = ("pose",)
+
+RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
+
+
+def make_env_params(
+    owner: str, params: EnvParams | None = None, robot: RobotParams | Mapping[str, float] | None = None, **settings: Any
+) -> EnvParams:
+    """Task settings from the keywords of ``gym.make`` / ``gym.make_vec``.
+
+    Args:
+        owner: name of the caller, for error messages.
+        params: a complete :class:`EnvParams` to start from (defaults if ``None``).
+        robot: a :class:`RobotParams`, or a mapping of its field names to values (e.g. from a YAML file).
+        **settings: any other :class:`EnvParams` field (``dt``, ``radius``, ``speed``, ...); they
+            override the fields of ``params``.
+
+    Raises:
+        TypeError: on an unknown keyword, or a ``params`` that is not an ``EnvParams``.
+        ValueError: on a bad value (from :class:`EnvParams` / :class:`RobotParams`, naming the field and range).
+    """
+    unknown = sorted(k for k in settings if k not in ENV_SETTINGS)
+    if unknown:
+        allowed = ", ".join(("params", *ENV_SETTINGS))
+        names = ", ".join(map(repr, unknown))
+        raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")
+    if params is None:
+        params = EnvParams()
+    elif not isinstance(params, EnvParams):
+        raise TypeError(f"{owner}: params must be an EnvParams, got {type(params).__name__}")
+    if robot is not None:
+        if isinstance(robot, Mapping):
+            robot_names = {f.name for f in fields(RobotParams)}
+            bad = sorted(k for k in robot if k not in robot_names)
+            if bad:
+                raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(robot_names))}")
+            robot = RobotParams(**robot)
+        settings["robot"] = robot
+    return replace(params, **settings) if settings else params
+
+
+def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
+    """Validate ``options["pose"]``: ``(x_A [m], y_A [m], beta [rad])`` as finite numbers.
+
+    Args:
+        value: the option's value; shape ``(3,)``, or ``batch_shape + (3,)`` when ``batch_shape`` is given.
+        batch_shape: leading axes a vector environment also accepts.
+
+    Raises:
+        ValueError: not numbers, wrong shape, or NaN/inf.
+    """
+    try:
+        pose = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f'options["pose"] must be 3 finite numbers (x_A, y_A, beta), got {value!r}') from None
+    if pose.shape != (3,) and pose.shape != (*batch_shape, 3):
+        want = "(3,)" if not batch_shape else f"(3,) or {(*batch_shape, 3)}"
+        raise ValueError(f'options["pose"] must have shape {want} (x_A, y_A, beta), got shape {pose.shape}')
+    if not np.all(np.isfinite(pose)):
+        raise ValueError(f'options["pose"] must be finite, got {value!r}')
+    return pose
+
+
+def check_reset_options(options: Mapping[str, Any] | None, extra: tuple[str, ...] = ()) -> None:
+    """Refuse unknown ``reset`` option keys (``ValueError`` naming the allowed ones)."""
+    if options is None:
+        return
+    if not isinstance(options, Mapping):
+        raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
+    allowed = (*RESET_OPTIONS, *extra)
+    unknown = sorted(str(k) for k in options if k not in allowed)
+    if unknown:
+        raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(allowed)}")
+
+
+def check_render_mode(render_mode: str | None) -> str | None:
+    """Refuse a render mode other than ``None``, ``"human"`` and ``"rgb_array"`` (``ValueError``)."""
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode must be one of {list(RENDER_MODES)} or None, got {render_mode!r}")
+    return render_mode
+
+
+class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+    r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
+
+    ## Description
+
+    The AmigoBot is a differential-drive robot with two driven wheels and a self-aligning castor
+    (Pioneer-family robot of Adept MobileRobots). Its kinematics follow the D–H model of the
+    seed paper, corrected as in ``shared/MODEL.md``: the pose is ``(x_A, y_A, beta)``, A the midpoint
+    of the drive axle, ``beta`` the heading; point H sits ``l3 = 0.08 m`` ahead of A. The task is
+    the paper's inverse problem turned into control: keep H on the path (by default the paper's
+    circle, eq. 6: radius ``R = 1 m`` through the origin, tangent to x0 there, turning left) while A
+    drives at the reference speed ``v_ref = 0.2 m/s``. The wheel rates are held over each control
+    period ``dt`` and the pose advances by the exact arc of the rolling constraints (no Euler
+    step); the analytic inverse solution therefore follows the circle exactly in the environment.
+
+    ## Action Space
+
+    ``Box(-1, 1, (2,), float32)``: the wheel rates normalised by ``w_max = robot.max_wheel_rate``
+    (15 rad/s: the AmigoBot-SH's 0.75 m/s over r = 0.05 m). Values outside [-1, 1] are clipped;
+    NaN, infinities and wrong shapes raise ``ValueError``. float64 actions are applied exactly (no
+    cast through float32).
+
+    | Num | Action                              | Min | Max | Unit after scaling |
+    |-----|-------------------------------------|-----|-----|--------------------|
+    | 0   | ``alpha1dot / w_max``, wheel 1 (right) | -1  | 1   | rad/s              |
+    | 1   | ``alpha2dot / w_max``, wheel 2 (left)  | -1  | 1   | rad/s              |
+
+    ## Observation Space
+
+    ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.obs_bounds`).
+    ``e`` is H's signed cross-track error (positive left of the path), ``psi = wrap(beta - theta)``
+    the heading minus the path tangent at H's closest point, ``kappa`` the signed path curvature.
+    With the default ``preview = (0.2, 0.4)`` the shape is ``(10,)``:
+
+    | Num | Observation                                | Min                  | Max                 |
+    |-----|--------------------------------------------|----------------------|---------------------|
+    | 0   | ``e / error_scale`` (clipped)              | ``-2 d_term / e_s``  | ``2 d_term / e_s``  |
+    | 1   | ``sin(psi)``                               | -1                   | 1                   |
+    | 2   | ``cos(psi)``                               | -1                   | 1                   |
+    | 3   | ``kappa(s_H) l3``                          | -1                   | 1                   |
+    | 4   | ``kappa(s_H + 0.2 m) l3`` (preview)        | -1                   | 1                   |
+    | 5   | ``kappa(s_H + 0.4 m) l3`` (preview)        | -1                   | 1                   |
+    | 6   | ``alpha1dot / w_max`` (applied, wheel 1)   | -1                   | 1                   |
+    | 7   | ``alpha2dot / w_max`` (applied, wheel 2)   | -1                   | 1                   |
+    | 8   | ``(v_A - v_ref) / v_max``                  | -2                   | 2                   |
+    | 9   | ``v_ref / v_max``                          | 0                    | 1                   |
+
+    ``d_term = termination_distance`` (0.25 m), ``e_s = error_scale`` (0.05 m): row 0 lies in [-10, 10].
+
+    ## Rewards
+
+    The product of four terms, each in [0, 1] (:data:`amigo_gym.task.REWARD_TERMS`), so each step
+    earns at most 1 and an episode of ``n`` steps at most ``n``:
+
+    ``r = track * speed * heading * smooth`` with
+
+    * ``track = exp(-|e| / sigma_track)``
+    * ``speed = exp(-|v_A - v_ref| / sigma_speed)``
+    * ``heading = (1 + cos(psi - psi_ss)) / 2``
+    * ``smooth = 1 - w_s (1 - exp(-(|da| / sigma_smooth)^2))``
+
+    with ``psi_ss = -asin(kappa l3)`` the heading error of the exact steady state and ``da`` the
+    change of the normalised wheel-rate command. The terms are in ``info["reward_terms"]``.
+    Driving the exact inverse solution earns more than 99 % of the maximum; standing still,
+    spinning in place or driving the circle the wrong way earn less than 20 %.
+
+    ## Starting State
+
+    H starts at the path's start point (the origin) plus a uniform perturbation of
+    ``±init_position_noise`` (0.02 m) per axis, heading along the path tangent (0) plus
+    ``±init_heading_noise`` (0.1 rad); A is ``l3`` behind H. Wheel rates start at the straight
+    roll at the reference speed, ``v_ref / r`` (4 rad/s); wheel angles at 0.
+    ``reset(options={"pose": (x_A, y_A, beta)})`` sets an exact start pose instead.
+
+    ## Episode End
+
+    * Termination: ``|e| > termination_distance`` (0.25 m).
+    * Truncation: after 400 steps (40 s at dt = 0.1 s, 1.28 laps of the default circle), by the
+      ``TimeLimit`` of the registration (``max_episode_steps`` of ``gym.make``).
+
+    ## Info
+
+    At every ``reset`` and ``step``: ``pose`` (float64 (3,): x_A, y_A [m], beta [rad], unwrapped),
+    ``h_position`` ((2,) [m]), ``cross_track_error`` (float, signed, [m]), ``wheel_rates`` (applied
+    ``(alpha1dot, alpha2dot)`` [rad/s] (2,)), ``wheel_angles`` (``(alpha1, alpha2)`` [rad] (2,)),
+    ``castor_angle`` (the castor wheel's rolling angle ``alpha3`` [rad]), ``reward_terms`` (dict of
+    floats; at reset, the terms of the start state with the smoothness term at 1) and ``time`` [s].
+
+    ## Arguments
+
+    Every setting is a keyword of ``gym.make("AmigoBot-v0", ...)``: any field of
+    :class:`amigo_gym.EnvParams` (``dt``, ``radius``, ``speed``, ``direction``, ``path``,
+    ``straight_length``, ``termination_distance``, ``init_position_noise``, ``init_heading_noise``,
+    ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
+    ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
+    ``params`` (a whole ``EnvParams``; other keywords override its fields) and ``render_mode``
+    (``"human"`` or ``"rgb_array"``). Unknown keywords raise ``TypeError``, bad values
+    ``ValueError`` naming the field and its range.
+
+    ```python
+    import gymnasium as gym
+    import amigo_gym  # registers AmigoBot-v0
+
+    env = gym.make("AmigoBot-v0", dt=0.05, radius=1.5, speed=0.3, max_episode_steps=800)
+    ```
+
+    ## Version History
+
+    * v0: initial version.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        params: EnvParams | None = None,
+        robot: RobotParams | Mapping[str, float] | None = None,
+        **settings: Any,
+    ) -> None:
+        self.params: EnvParams = make_env_params(type(self).__name__, params, robot, **settings)
+        self.render_mode = check_render_mode(render_mode)
+        p = self.params
+        self.path: CirclePath | ManoeuvrePath = make_path(p)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        low, high = task.obs_bounds(p)
+        self.observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        self._initial_rates = task.initial_wheel_rates(p)
+        # state (set by reset)
+        self._pose: Array = np.zeros(3)
+        self._angles: Array = np.zeros(3)
+        self._rates: Array = self._initial_rates.copy()
+        self._steps = 0
+        self._trail: list[tuple[float, float]] = []
+        self._renderer: Any = None
+
+    # ------------------------------------------------------------------ state access
+    @property
+    def pose(self) -> Array:
+        """Current pose ``(x_A [m], y_A [m], beta [rad])``, a copy."""
+        return self._pose.copy()
+
+    @property
+    def wheel_rates(self) -> Array:
+        """Wheel rates applied during the last step (at reset: the initial rates) [rad/s], a copy."""
+        return self._rates.copy()
+
+    @property
+    def time(self) -> float:
+        """Time since reset [s]: ``steps * dt``."""
+        return self._steps * self.params.dt
+
+    # ------------------------------------------------------------------ gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Start an episode (see the class docstring, *Starting State*).
+
+        Args:
+            seed: seeds ``self.np_random`` (as every Gymnasium env).
+            options: ``None`` or ``{"pose": (x_A, y_A, beta)}`` for an exact start pose.
+
+        Raises:
+            ValueError: unknown option key or a bad pose.
+        """
+        super().reset(seed=seed)
+        check_reset_options(options)
+        if options is not None and "pose" in options:
+            pose = parse_pose_option(options["pose"])
+        else:
+            u = self.np_random.uniform(-1.0, 1.0, size=3)
+            pose = task.start_pose(u, self.params, self.path)
+        self._pose = pose
+        self._angles = np.zeros(3)
+        self._rates = self._initial_rates.copy()
+        self._steps = 0
+        ev = task.evaluate(pose, self._rates, self.params, self.path)
+        terms = task.reward_terms(pose, self._rates, self._rates, self.params, ev.projection)
+        self._trail = [(float(ev.h[0]), float(ev.h[1]))]
+        info = self._info(ev, terms)
+        if self.render_mode == "human":
+            self.render()
+        return ev.obs.astype(np.float32), info
+
+    def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Hold the wheel rates ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
+
+        Raises:
+            ValueError: action of a wrong shape or with NaN/inf entries.
+        """
+        a = task.validate_action(action)
+        tr = task.transition(self._pose, self._angles, self._rates, a, self.params, self.path)
+        self._pose, self._angles, self._rates = tr.pose, tr.wheel_angles, tr.rates
+        self._steps += 1
+        ev = tr.evaluation
+        if self.render_mode is not None:
+            self._trail.append((float(ev.h[0]), float(ev.h[1])))
+        info = self._info(ev, tr.terms)
+        if self.render_mode == "human":
+            self.render()
+        return ev.obs.astype(np.float32), float(tr.reward), bool(ev.terminated), False, info
+
+    def _info(self, ev: task.Evaluation, terms: Mapping[str, Array]) -> dict[str, Any]:
+        return {
+            "pose": self._pose.copy(),
+            "h_position": np.array(ev.h, dtype=np.float64),
+            "cross_track_error": float(ev.projection.cross_track_error),
+            "wheel_rates": self._rates.copy(),
+            "wheel_angles": self._angles[:2].copy(),
+            "castor_angle": float(self._angles[2]),
+            "reward_terms": {k: float(terms[k]) for k in task.REWARD_TERMS},
+            "time": self._steps * self.params.dt,
+        }
+
+    # ------------------------------------------------------------------ rendering
+    def render(self) -> NDArray[np.uint8] | None:
+        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.rendering`).
+
+        Returns:
+            ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"``; ``None`` otherwise.
+        """
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make"
+            )
+            return None
+        from amigo_gym.rendering import Renderer
+
+        if self._renderer is None:
+            self._renderer = Renderer(self.params, self.path, self.render_mode)
+        frame: NDArray[np.uint8] | None = self._renderer.draw(
+            self._pose, self._trail, time=self.time, cross_track_error=self._last_error()
+        )
+        return frame
+
+    def _last_error(self) -> float:
+        return float(self.path.project(h_position(self._pose, self.params.robot)).cross_track_error)
+
+    def close(self) -> None:
+        """Close the render window, if any."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
