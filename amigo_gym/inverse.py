@@ -51,6 +51,7 @@ __all__ = [
     "SteadyCircle",
     "TrapezoidProfile",
     "circle_steady_state",
+    "manoeuvre_profile",
     "paper_circle",
     "path_breakpoints",
     "solve_inverse",
@@ -62,6 +63,13 @@ AnyPath = CirclePath | ManoeuvrePath
 
 #: largest number of time-grid points accepted (about 120 MB of output columns)
 MAX_GRID_POINTS = 1_000_000
+
+#: the project's choice for the paper's manoeuvre (the paper gives no timing): gentle start and stop,
+#: well inside the real robot's limits (0.3 m/s^2 and 0.75 m/s^2), so that the phases are visible
+MANOEUVRE_ACCEL = 0.1
+MANOEUVRE_DECEL = 0.2
+MANOEUVRE_T_START = 1.0
+MANOEUVRE_LAPS = 1.0
 
 
 class SpeedProfile(Protocol):
@@ -529,6 +537,32 @@ def solve_inverse(
         alpha3_dot=castor_rate(v, bdot, robot),
         x_H=h[:, 0],
         y_H=h[:, 1],
+    )
+
+
+def manoeuvre_profile(
+    path: ManoeuvrePath,
+    speed: float = 0.2,
+    robot: RobotParams | None = None,
+    *,
+    accel: float | None = MANOEUVRE_ACCEL,
+    decel: float = MANOEUVRE_DECEL,
+    t_start: float = MANOEUVRE_T_START,
+    laps: float = MANOEUVRE_LAPS,
+) -> TrapezoidProfile:
+    """Speed profile of the manoeuvre "starting, driving straight, circular curve, braking".
+
+    A stands still until ``t_start``, accelerates at ``accel`` to ``speed``, cruises and brakes at
+    ``decel`` so that it comes to rest after travelling ``straight_length + laps * 2 pi R_A`` [m], the
+    straight plus ``laps`` laps of its steady circle ``R_A = sqrt(R^2 - l3^2)`` (H stops close to,
+    not exactly at, the end of the lap, because A's path differs from the steady circle during the
+    transient at the start of the curve).
+    """
+    robot = RobotParams() if robot is None else robot
+    check_range("manoeuvre_profile", "laps", laps, 0.0, 1e3)
+    ra = math.sqrt(check_range("manoeuvre_profile", "radius", path.radius, robot.l3, low_open=True) ** 2 - robot.l3**2)
+    return TrapezoidProfile.from_distance(
+        speed, path.straight_length + laps * 2.0 * math.pi * ra, accel=accel, decel=decel, t_start=t_start
     )
 
 
