@@ -1,0 +1,349 @@
+"""Native numpy-batched vector environment of ``AmigoBot-v0``.
+
+``gym.make_vec("AmigoBot-v0", num_envs=N)`` (or ``vectorization_mode="vector_entry_point"``)
+builds :class:`AmigoBotVectorEnv`: ``N`` robots stepped together by the same pure, batched
+functions of :mod:`amigo_gym.task` that the single environment calls, with no Python loop over
+the environments on the step path (loops run only over the environments being reset, to draw
+their start perturbations from their own generators).
+
+For the same seed it reproduces ``gym.make_vec(..., vectorization_mode="sync")`` bit for bit:
+observations, rewards, terminations, truncations and infos (in the vector format with ``_key``
+masks), across autoresets and truncations, in the ``NEXT_STEP`` (default), ``SAME_STEP`` and
+``DISABLED`` autoreset modes. Sub-environment ``i`` reset with ``seed`` uses the generator
+``gymnasium.utils.seeding.np_random(seed + i)``, exactly as ``Env.reset(seed=seed + i)`` seeds
+``np_random``, and draws its start perturbation ``u ~ U[-1, 1]^3`` from it in the same order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from amigo_gym import task
+from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
+from amigo_gym.kinematics import h_position
+from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+
+__all__ = ["AmigoBotVectorEnv"]
+
+Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+def _parse_autoreset_mode(mode: str | AutoresetMode) -> AutoresetMode:
+    try:
+        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
+    except ValueError:
+        allowed = [m.value for m in AutoresetMode]
+        raise ValueError(f"autoreset_mode must be one of {allowed}, got {mode!r}") from None
+
+
+class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+    """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
+
+    Args:
+        num_envs: number of robots ``N`` >= 1.
+        max_episode_steps: truncation after this many steps (``None``: never); ``gym.make_vec``
+            passes the registration's 400 unless given.
+        render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
+        autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
+            (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
+        params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
+
+    Spaces: ``single_action_space = Box(-1, 1, (2,), float32)``, ``action_space`` its batch
+    ``(N, 2)``; ``single_observation_space`` as the single env's, ``observation_space`` ``(N, obs_dim)``.
+    ``step`` accepts actions of shape ``(N, 2)`` (float64 applied exactly; NaN/inf or a wrong
+    shape raise ``ValueError``) and returns rewards ``(N,)`` float64, terminations and truncations
+    ``(N,)`` bool, and infos with the single env's keys as ``(N, ...)`` arrays plus ``_key`` masks.
+    ``reset`` accepts ``seed`` (``None``, an int ``s`` for seeds ``s + i``, or a list of ``N``) and
+    ``options`` with ``"pose"`` (``(3,)`` for all or ``(N, 3)``) and ``"reset_mask"`` (``(N,)`` bool).
+    """
+
+    metadata: dict[str, Any] = {  # noqa: RUF012  (gymnasium declares metadata as a plain attribute)
+        "render_modes": ["rgb_array"],
+        "render_fps": 10.0,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        *,
+        params: EnvParams | None = None,
+        robot: RobotParams | Mapping[str, float] | None = None,
+        **settings: Any,
+    ) -> None:
+        owner = type(self).__name__
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool)
+            or not isinstance(max_episode_steps, int | np.integer)
+            or max_episode_steps < 1
+        ):
+            raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
+        if render_mode is not None and render_mode != "rgb_array":
+            raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
+        self.params: EnvParams = make_env_params(owner, params, robot, **settings)
+        p = self.params
+        self.path: CirclePath | ManoeuvrePath = make_path(p)
+        self.num_envs = int(num_envs)
+        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
+        self.render_mode = render_mode
+        self.autoreset_mode = _parse_autoreset_mode(autoreset_mode)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
+
+        n = self.num_envs
+        self.single_action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.action_space = batch_space(self.single_action_space, n)
+        low, high = task.obs_bounds(p)
+        self.single_observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        self.observation_space = batch_space(self.single_observation_space, n)
+
+        self._initial_rates = task.initial_wheel_rates(p)
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._seeds: list[int | None] = [None] * n
+        self._pose: Array = np.zeros((n, 3))
+        self._angles: Array = np.zeros((n, 3))
+        self._rates: Array = np.broadcast_to(self._initial_rates, (n, 2)).copy()
+        self._steps = np.zeros(n, dtype=np.int64)
+        self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
+        self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
+        self._trail: list[Array] = []
+        self._trail_start = np.zeros(n, dtype=np.int64)
+        self._renderers: list[Any] = []
+
+    # ------------------------------------------------------------------ seeding
+    @property
+    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``)."""
+        return tuple(self._seeds)
+
+    @property
+    def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
+        """The sub-environments' generators (``None`` before the first reset)."""
+        return tuple(self._rngs)
+
+    def _rng(self, i: int) -> np.random.Generator:
+        g = self._rngs[i]
+        if g is None:  # as Env.np_random: a random seed on first use
+            g, self._seeds[i] = seeding.np_random()
+            self._rngs[i] = g
+        return g
+
+    # ------------------------------------------------------------------ reset
+    def reset(
+        self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
+
+        Raises:
+            ValueError: bad seed list, unknown option, bad pose or mask.
+        """
+        n = self.num_envs
+        check_reset_options(options, extra=("reset_mask",))
+        if seed is None:
+            seeds: list[int | None] = [None] * n
+        elif isinstance(seed, bool):
+            raise ValueError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
+        mask: BoolArray = np.ones(n, dtype=np.bool_)
+        if options is not None and "reset_mask" in options:
+            m = options["reset_mask"]
+            if not isinstance(m, np.ndarray) or m.dtype != np.bool_ or m.shape != (n,):
+                raise ValueError(f'options["reset_mask"] must be a bool numpy array of shape ({n},), got {m!r}')
+            if not m.any():
+                raise ValueError('options["reset_mask"] must contain at least one True value')
+            mask = m.copy()
+        pose_opt = None
+        if options is not None and "pose" in options:
+            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        idx = np.flatnonzero(mask)
+        for i in idx:
+            if seeds[i] is not None:
+                self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
+        self._autoreset[idx] = False
+        obs, infos = self._reset_rows(idx, pose_opt)
+        self._obs[idx] = obs
+        if self.render_mode is not None:
+            self._trail.append(h_position(self._pose, self.params.robot))
+        return self._obs.copy(), self._scatter(infos, mask)
+
+    def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
+        """Start new episodes for the robots ``idx``; return their observations and (compact) infos."""
+        if pose_opt is not None:
+            pose = pose_opt[idx].copy()
+        else:
+            u = np.empty((len(idx), 3))
+            for k, i in enumerate(idx):
+                u[k] = self._rng(int(i)).uniform(-1.0, 1.0, size=3)
+            pose = task.start_pose(u, self.params, self.path)
+        rates = np.broadcast_to(self._initial_rates, (len(idx), 2)).copy()
+        angles = np.zeros((len(idx), 3))
+        self._pose[idx] = pose
+        self._angles[idx] = angles
+        self._rates[idx] = rates
+        self._steps[idx] = 0
+        ev = task.evaluate(pose, rates, self.params, self.path)
+        terms = task.reward_terms(pose, rates, rates, self.params, ev.projection)
+        if self.render_mode is not None:
+            self._trail_start[idx] = len(self._trail)
+        infos = self._info(pose, ev, rates, angles, terms, np.zeros(len(idx), dtype=np.int64))
+        return ev.obs.astype(np.float32), infos
+
+    # ------------------------------------------------------------------ step
+    def step(
+        self, actions: NDArray[np.floating[Any]]
+    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
+        """Step every robot; autoreset finished ones according to ``autoreset_mode``.
+
+        Raises:
+            ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
+            RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
+        """
+        n = self.num_envs
+        a = task.validate_action(actions, (n,))
+        mode = self.autoreset_mode
+        if mode == AutoresetMode.DISABLED and self._autoreset.any():
+            raise RuntimeError(
+                f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
+                "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
+            )
+        tr = task.transition(self._pose, self._angles, self._rates, a, self.params, self.path)
+        self._pose, self._angles, self._rates = tr.pose, tr.wheel_angles, tr.rates
+        self._steps += 1
+        ev = tr.evaluation
+        obs = ev.obs.astype(np.float32)
+        reward = tr.reward
+        terminated = ev.terminated.copy()
+        truncated = (
+            self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
+        )
+        infos = self._info(self._pose, ev, self._rates, self._angles, tr.terms, self._steps)
+
+        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+            idx = np.flatnonzero(self._autoreset)
+            obs_r, info_r = self._reset_rows(idx)
+            obs[idx] = obs_r
+            reward[idx] = 0.0
+            terminated[idx] = False
+            truncated[idx] = False
+            _assign_rows(infos, info_r, idx)
+        elif mode == AutoresetMode.SAME_STEP:
+            done = terminated | truncated
+            if done.any():
+                idx = np.flatnonzero(done)
+                final_obs = np.full(n, None, dtype=object)
+                for i in idx:
+                    final_obs[i] = obs[i].copy()
+                final_info = self._scatter(_take_rows(infos, idx), done)
+                obs_r, info_r = self._reset_rows(idx)
+                obs[idx] = obs_r
+                _assign_rows(infos, info_r, idx)
+                infos = {
+                    "final_obs": final_obs,
+                    "_final_obs": done.copy(),
+                    "final_info": final_info,
+                    "_final_info": done.copy(),
+                    **infos,
+                }
+        self._autoreset = terminated | truncated
+        self._obs = obs
+        if self.render_mode is not None:
+            self._trail.append(h_position(self._pose, self.params.robot))
+        return obs.copy(), reward, terminated, truncated, self._scatter(infos, None)
+
+    # ------------------------------------------------------------------ infos
+    def _info(
+        self,
+        pose: Array,
+        ev: task.Evaluation,
+        rates: Array,
+        angles: Array,
+        terms: Mapping[str, Array],
+        steps: NDArray[np.int64],
+    ) -> dict[str, Any]:
+        """Compact infos (rows of the robots concerned, no masks); keys as the single env's."""
+        return {
+            "pose": pose.copy(),
+            "h_position": ev.h.copy(),
+            "cross_track_error": ev.projection.cross_track_error.copy(),
+            "wheel_rates": rates.copy(),
+            "wheel_angles": angles[:, :2].copy(),
+            "castor_angle": angles[:, 2].copy(),
+            "reward_terms": {k: np.asarray(terms[k], dtype=np.float64).copy() for k in task.REWARD_TERMS},
+            "time": steps * self.params.dt,
+        }
+
+    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
+        """Vector-format infos: ``(N, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
+
+        ``mask=None`` means that ``infos`` already holds full ``(N, ...)`` rows for every robot.
+        """
+        n = self.num_envs
+        out: dict[str, Any] = {}
+        for k, v in infos.items():
+            if k.startswith("_") or k in ("final_obs", "final_info"):
+                out[k] = v
+                continue
+            if isinstance(v, dict):
+                out[k] = self._scatter(v, mask)
+            elif mask is None:
+                out[k] = v
+            else:
+                full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
+                full[mask] = v
+                out[k] = full
+            out[f"_{k}"] = np.ones(n, dtype=np.bool_) if mask is None else mask.copy()
+        return out
+
+    # ------------------------------------------------------------------ rendering
+    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
+            return None
+        from amigo_gym.rendering import Renderer
+
+        while len(self._renderers) < self.num_envs:
+            self._renderers.append(Renderer(self.params, self.path, "rgb_array"))
+        frames = []
+        for i, r in enumerate(self._renderers):
+            trail = [tuple(h[i]) for h in self._trail[int(self._trail_start[i]) :]]
+            frames.append(r.draw(self._pose[i], trail, time=float(self._steps[i] * self.params.dt)))
+        return tuple(frames)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderers."""
+        for r in self._renderers:
+            r.close()
+        self._renderers = []
+
+
+def _take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
+    return {k: (_take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
+
+
+def _assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
+    for k, v in rows.items():
+        if isinstance(v, dict):
+            _assign_rows(infos[k], v, idx)
+        else:
+            infos[k][idx] = v
