@@ -9,14 +9,6 @@
 from __future__ import annotations
 
 from amigo_gym.envs.amigobot import AmigoBotEnv, make_env_params
+from amigo_gym.envs.vector import AmigoBotVectorEnv
 
 __all__ = ["AmigoBotEnv", "AmigoBotVectorEnv", "make_env_params"]
-
-
-def __getattr__(name: str) -> object:
-    # the vector env is imported lazily so that a missing or broken vector module never blocks the single env
-    if name == "AmigoBotVectorEnv":
-        from amigo_gym.envs.vector import AmigoBotVectorEnv
-
-        return AmigoBotVectorEnv
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -224,7 +224,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     * v0: initial version.
     """
 
-    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}  # noqa: RUF012
 
     def __init__(
         self,
@@ -346,7 +346,11 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         if self._renderer is None:
             self._renderer = Renderer(self.params, self.path, self.render_mode)
         frame: NDArray[np.uint8] | None = self._renderer.draw(
-            self._pose, self._trail, time=self.time, cross_track_error=self._last_error()
+            self._pose,
+            self._trail,
+            wheel_angles=self._angles[:2],
+            time=self.time,
+            cross_track_error=self._last_error(),
         )
         return frame
 

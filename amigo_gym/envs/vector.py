@@ -327,7 +327,11 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         frames = []
         for i, r in enumerate(self._renderers):
             trail = [tuple(h[i]) for h in self._trail[int(self._trail_start[i]) :]]
-            frames.append(r.draw(self._pose[i], trail, time=float(self._steps[i] * self.params.dt)))
+            frames.append(
+                r.draw(
+                    self._pose[i], trail, wheel_angles=self._angles[i, :2], time=float(self._steps[i] * self.params.dt)
+                )
+            )
         return tuple(frames)
 
     def close_extras(self, **kwargs: Any) -> None:

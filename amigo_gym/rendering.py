@@ -1,0 +1,217 @@
+"""Top-down drawing of the AmigoBot on its path, to scale (pygame, imported only when used).
+
+The world frame 0 (x right, y up, metres) is mapped to the screen with a fixed scale chosen so
+that the whole path plus a margin of ``termination_distance + 0.25 m`` fits. Drawn to scale:
+
+* the body, a 0.330 m x 0.279 m rectangle (``RobotParams.body_length`` x ``body_width``) centred
+  on the axle midpoint A and aligned with the heading;
+* both drive wheels, ``2 r1`` long, at the contact points K (wheel 1, right) and L (wheel 2, left),
+  ``l1`` either side of A, with a spoke that turns with the wheel angle;
+* the castor, a disc of radius ``r3`` at its swivel ``l5`` behind A;
+* point H (red), ``l3`` ahead of A, and the trail of H (green); the path (blue); a 0.5 m grid.
+
+``render_mode="rgb_array"`` draws on an off-screen surface and returns ``(H, W, 3)`` uint8;
+``"human"`` shows the same picture in a window at ``1/dt`` frames per second. Both work headless
+with ``SDL_VIDEODRIVER=dummy``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.kinematics import castor_position, contact_points, h_position
+from amigo_gym.params import EnvParams
+from amigo_gym.paths import CirclePath, ManoeuvrePath
+
+__all__ = ["Renderer", "path_polyline", "view_box"]
+
+BACKGROUND = (255, 255, 255)
+GRID = (228, 228, 228)
+PATH = (40, 90, 200)
+TRAIL = (30, 160, 60)
+BODY = (200, 200, 205)
+BODY_EDGE = (70, 70, 80)
+WHEEL = (30, 30, 30)
+SPOKE = (230, 230, 230)
+CASTOR = (90, 90, 90)
+POINT_H = (220, 30, 30)
+POINT_A = (0, 0, 0)
+TEXT = (20, 20, 20)
+
+
+def path_polyline(path: CirclePath | ManoeuvrePath, n: int = 400) -> NDArray[np.float64]:
+    """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
+    s = np.linspace(0.0, path.length, n + 1)
+    pts: NDArray[np.float64] = np.asarray(path.point(s), dtype=np.float64)
+    return pts
+
+
+def view_box(params: EnvParams, path: CirclePath | ManoeuvrePath) -> tuple[float, float, float, float]:
+    """Square world window ``(x_min, y_min, x_max, y_max)`` [m] containing the path and a margin."""
+    pts = path_polyline(path)
+    lo = pts.min(axis=0)
+    hi = pts.max(axis=0)
+    margin = params.termination_distance + 0.25
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * float(np.max(hi - lo)) + margin
+    return (centre[0] - half, centre[1] - half, centre[0] + half, centre[1] + half)
+
+
+def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: float) -> NDArray[np.float64]:
+    """Corners ``(4, 2)`` [m] of a ``length`` x ``width`` rectangle centred at (cx, cy), long side along heading."""
+    c, s = math.cos(heading), math.sin(heading)
+    hl, hw = 0.5 * length, 0.5 * width
+    local = np.array([[hl, hw], [hl, -hw], [-hl, -hw], [-hl, hw]])
+    return np.array([cx, cy]) + local @ np.array([[c, s], [-s, c]])
+
+
+class Renderer:
+    """Draws frames of one robot; one instance per environment (holds the window in human mode).
+
+    Args:
+        params: task settings (geometry of the robot, termination distance for the view).
+        path: the path of H.
+        mode: ``"rgb_array"`` or ``"human"``.
+        size: frame width and height [px].
+    """
+
+    def __init__(
+        self, params: EnvParams, path: CirclePath | ManoeuvrePath, mode: str = "rgb_array", size: int = 600
+    ) -> None:
+        if mode not in ("rgb_array", "human"):
+            raise ValueError(f"render mode must be 'rgb_array' or 'human', got {mode!r}")
+        try:
+            import pygame
+        except ImportError as exc:  # pragma: no cover - pygame is an optional dependency
+            from gymnasium.error import DependencyNotInstalled
+
+            raise DependencyNotInstalled('rendering needs pygame: pip install "amigo_gym[render]"') from exc
+        self._pg: Any = pygame
+        self.params = params
+        self.path = path
+        self.mode = mode
+        self.size = int(size)
+        x0, y0, x1, _ = view_box(params, path)
+        self._origin = (x0, y0)
+        self.scale = self.size / (x1 - x0)  # px per metre
+        self._path_px = [self._px(p) for p in path_polyline(path)]
+        self._window: Any = None
+        self._clock: Any = None
+        self._font: Any = None
+        if mode == "human":
+            pygame.display.init()
+            pygame.display.set_caption("AmigoBot-v0")
+            self._window = pygame.display.set_mode((self.size, self.size))
+            self._clock = pygame.time.Clock()
+        try:
+            pygame.font.init()
+            self._font = pygame.font.Font(None, 20)
+        except Exception:  # fonts are optional decoration
+            self._font = None
+        self._background = self._draw_background()
+
+    def _px(self, p: ArrayLike) -> tuple[float, float]:
+        """Screen pixel of a world point [m] (y up in the world, down on the screen)."""
+        q = np.asarray(p, dtype=np.float64)
+        return ((q[0] - self._origin[0]) * self.scale, self.size - (q[1] - self._origin[1]) * self.scale)
+
+    def _draw_background(self) -> Any:
+        pg = self._pg
+        surf = pg.Surface((self.size, self.size))
+        surf.fill(BACKGROUND)
+        x0, y0 = self._origin
+        span = self.size / self.scale
+        step = 0.5
+        for k in range(math.ceil(x0 / step), math.floor((x0 + span) / step) + 1):
+            x, _ = self._px((k * step, 0.0))
+            pg.draw.line(surf, GRID, (x, 0), (x, self.size))
+        for k in range(math.ceil(y0 / step), math.floor((y0 + span) / step) + 1):
+            _, y = self._px((0.0, k * step))
+            pg.draw.line(surf, GRID, (0, y), (self.size, y))
+        pg.draw.aalines(surf, PATH, False, self._path_px)
+        return surf
+
+    def _polygon(self, surf: Any, corners: NDArray[np.float64], fill: tuple[int, int, int], edge: Any) -> None:
+        from pygame import gfxdraw
+
+        pts = [self._px(c) for c in corners]
+        ipts = [(round(x), round(y)) for x, y in pts]
+        gfxdraw.filled_polygon(surf, ipts, fill)
+        gfxdraw.aapolygon(surf, ipts, edge)
+
+    def draw(
+        self,
+        pose: ArrayLike,
+        trail: Sequence[Sequence[float]] = (),
+        *,
+        wheel_angles: ArrayLike | None = None,
+        time: float | None = None,
+        cross_track_error: float | None = None,
+    ) -> NDArray[np.uint8] | None:
+        """Draw the robot at ``pose`` ``(x_A, y_A, beta)`` with H's ``trail`` (list of ``(x, y)`` [m]).
+
+        Args:
+            pose: ``(3,)`` pose [m, m, rad].
+            trail: past positions of H [m], oldest first.
+            wheel_angles: ``(alpha1, alpha2)`` [rad] for the wheel spokes (optional).
+            time: time [s] to print (optional).
+            cross_track_error: H's cross-track error [m] to print (optional).
+
+        Returns:
+            the frame ``(size, size, 3)`` uint8 in ``rgb_array`` mode; ``None`` in ``human`` mode.
+        """
+        pg = self._pg
+        robot = self.params.robot
+        pose = np.asarray(pose, dtype=np.float64)
+        x, y, b = float(pose[0]), float(pose[1]), float(pose[2])
+        surf = self._background.copy()
+        if len(trail) >= 2:
+            pg.draw.aalines(surf, TRAIL, False, [self._px(p) for p in trail])
+        body = _rotated_rect(x, y, b, robot.body_length, robot.body_width)
+        self._polygon(surf, body, BODY, BODY_EDGE)
+        k, l_ = contact_points(pose, robot)
+        alphas = (0.0, 0.0) if wheel_angles is None else tuple(np.asarray(wheel_angles, dtype=np.float64)[:2])
+        for c, r, alpha in ((k, robot.r1, alphas[0]), (l_, robot.r2, alphas[1])):
+            self._polygon(surf, _rotated_rect(float(c[0]), float(c[1]), b, 2 * r, 0.025), WHEEL, WHEEL)
+            # spoke: the wheel's visible rotation, projected on the ground (length r cos(alpha))
+            tip = np.asarray(c) + r * math.cos(alpha) * np.array([math.cos(b), math.sin(b)])
+            pg.draw.line(surf, SPOKE, self._px(c), self._px(tip), 2)
+        cp = castor_position(pose, robot)
+        cpx = self._px(cp)
+        pg.draw.circle(surf, CASTOR, cpx, max(2.0, robot.r3 * self.scale))
+        front = (x + 0.5 * robot.body_length * math.cos(b), y + 0.5 * robot.body_length * math.sin(b))
+        pg.draw.line(surf, BODY_EDGE, self._px((x, y)), self._px(front), 2)
+        pg.draw.circle(surf, POINT_A, self._px((x, y)), 3)
+        pg.draw.circle(surf, POINT_H, self._px(h_position(pose, robot)), 4)
+        if self._font is not None and (time is not None or cross_track_error is not None):
+            parts = []
+            if time is not None:
+                parts.append(f"t = {time:6.2f} s")
+            if cross_track_error is not None:
+                parts.append(f"e = {1000 * cross_track_error:+7.1f} mm")
+            surf.blit(self._font.render("   ".join(parts), True, TEXT), (8, 8))
+        if self.mode == "human":
+            assert self._window is not None
+            self._window.blit(surf, (0, 0))
+            pg.event.pump()
+            pg.display.flip()
+            self._clock.tick(1.0 / self.params.dt)
+            return None
+        return np.ascontiguousarray(np.transpose(pg.surfarray.array3d(surf), (1, 0, 2)), dtype=np.uint8)
+
+    def close(self) -> None:
+        """Close the window (human mode)."""
+        if self._window is not None:
+            self._pg.display.quit()
+            self._window = None
+
+
+def headless() -> None:
+    """Select SDL's dummy video driver when no display is available (tests, servers)."""
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
