@@ -60,7 +60,8 @@ def view_box(params: EnvParams, path: CirclePath | ManoeuvrePath) -> tuple[float
     margin = params.termination_distance + 0.25
     centre = 0.5 * (lo + hi)
     half = 0.5 * float(np.max(hi - lo)) + margin
-    return (centre[0] - half, centre[1] - half, centre[0] + half, centre[1] + half)
+    cx, cy = float(centre[0]), float(centre[1])
+    return (cx - half, cy - half, cx + half, cy + half)
 
 
 def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: float) -> NDArray[np.float64]:
@@ -68,7 +69,8 @@ def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: fl
     c, s = math.cos(heading), math.sin(heading)
     hl, hw = 0.5 * length, 0.5 * width
     local = np.array([[hl, hw], [hl, -hw], [-hl, -hw], [-hl, hw]])
-    return np.array([cx, cy]) + local @ np.array([[c, s], [-s, c]])
+    corners: NDArray[np.float64] = np.array([cx, cy]) + local @ np.array([[c, s], [-s, c]])
+    return corners
 
 
 class Renderer:
