@@ -346,11 +346,18 @@ class InverseSolution:
                 np.savetxt(fh, data, delimiter=",", fmt="%.15g")
                 fh.flush()
                 os.fsync(fh.fileno())
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode of a new file
             os.replace(tmp, target)
         except BaseException:
             if os.path.exists(tmp):
                 os.unlink(tmp)
             raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def time_grid(duration: float, dt: float, t0: float = 0.0) -> Array:
