@@ -1,0 +1,145 @@
+"""Parameters: defaults are the paper's Table 1 and the real robot's data (MODEL.md); bad values are refused."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from typing import Any
+
+import pytest
+
+from amigo_gym.params import EnvParams, RobotParams, check_range
+
+# shared/MODEL.md, "Construction data" and "Public data on the real robot"
+TABLE_1 = {"l1": 0.12, "l3": 0.08, "l4": 0.03, "l5": 0.12, "r1": 0.05, "r2": 0.05, "r3": 0.03}
+ROBOT_LIMITS = {
+    "max_speed": 0.75,
+    "max_acceleration": 0.3,
+    "max_deceleration": 0.75,
+    "max_rotation_rate": 0.87,
+    "body_length": 0.330,
+    "body_width": 0.279,
+}
+RANGE = re.compile(r"[\[(](-?[0-9.e+-]+|-inf), (-?[0-9.e+-]+|inf)[\])]")
+
+
+def test_robot_defaults_are_table_1_and_robot_data() -> None:
+    r = RobotParams()
+    for name, value in {**TABLE_1, **ROBOT_LIMITS}.items():
+        assert getattr(r, name) == value, name
+    # 0.75 m/s over a 0.05 m wheel (MODEL.md)
+    assert r.max_wheel_rate == pytest.approx(15.0, abs=1e-12)
+
+
+def test_env_defaults() -> None:
+    p = EnvParams()
+    assert p.speed == 0.2  # the paper's v_A
+    assert p.dt == 0.1
+    assert p.radius == 1.0
+    assert p.direction == 1
+    assert p.path == "circle"
+    assert p.robot == RobotParams()
+    ra = math.sqrt(1.0 - 0.08**2)
+    assert p.lap_time == pytest.approx(2.0 * math.pi * ra / 0.2, rel=1e-14)
+    assert p.speed_h == pytest.approx(0.2 / ra, rel=1e-14)
+
+
+def test_frozen() -> None:
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        RobotParams().l1 = 0.2  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        EnvParams().speed = 0.3  # type: ignore[misc]
+
+
+BAD_ROBOT: list[tuple[str, Any]] = [
+    ("l1", 0.0),
+    ("l1", -0.1),
+    ("l3", math.nan),
+    ("l5", math.inf),
+    ("r1", 0.0),
+    ("r2", -math.inf),
+    ("r3", "abc"),
+    ("max_speed", 0.0),
+    ("l4", 0.05),  # H must be above ground: l4 < r1
+    ("l4", 0.0),
+]
+
+
+@pytest.mark.parametrize(("field", "value"), BAD_ROBOT)
+def test_robot_rejects(field: str, value: Any) -> None:
+    with pytest.raises(ValueError, match=re.escape(f"RobotParams.{field}")) as exc:
+        RobotParams(**{field: value})
+    assert RANGE.search(str(exc.value)), str(exc.value)
+
+
+BAD_ENV: list[tuple[str, Any]] = [
+    ("dt", 0.0),
+    ("dt", 2.5),
+    ("dt", math.nan),
+    ("radius", -1.0),
+    ("radius", 0.08),  # must exceed l3
+    ("radius", math.inf),
+    ("speed", 0.0),
+    ("speed", 0.76),  # above the robot's 0.75 m/s
+    ("speed", math.nan),
+    ("straight_length", -0.1),
+    ("termination_distance", 0.0),
+    ("init_position_noise", 0.2),  # > termination_distance / 2
+    ("init_heading_noise", math.pi / 4 + 1e-9),
+    ("error_scale", 0.0),
+    ("sigma_track", 0.0),
+    ("sigma_speed", -1.0),
+    ("sigma_smooth", math.inf),
+    ("smooth_weight", 1.0),
+]
+
+
+@pytest.mark.parametrize(("field", "value"), BAD_ENV)
+def test_env_rejects(field: str, value: Any) -> None:
+    with pytest.raises(ValueError, match=re.escape(f"EnvParams.{field}")) as exc:
+        EnvParams(**{field: value})
+    assert RANGE.search(str(exc.value)), str(exc.value)
+
+
+@pytest.mark.parametrize("value", [0, 2, -2, True])
+def test_env_rejects_direction(value: Any) -> None:
+    with pytest.raises(ValueError, match=r"EnvParams\.direction.*\+1.*-1"):
+        EnvParams(direction=value)
+
+
+@pytest.mark.parametrize("value", ["square", "", "Circle"])
+def test_env_rejects_path(value: Any) -> None:
+    with pytest.raises(ValueError, match=r"EnvParams\.path.*'circle'.*'manoeuvre'"):
+        EnvParams(path=value)
+
+
+def test_env_rejects_preview_and_robot() -> None:
+    with pytest.raises(ValueError, match=r"EnvParams\.preview\[1\]"):
+        EnvParams(preview=(0.2, -0.1))
+    with pytest.raises(ValueError, match=r"EnvParams\.preview\[0\]"):
+        EnvParams(preview=(math.nan,))
+    with pytest.raises(ValueError, match=r"EnvParams\.robot"):
+        EnvParams(robot="amigobot")  # type: ignore[arg-type]
+
+
+def test_limits_follow_the_robot() -> None:
+    """The radius bound is the robot's l3 and the speed bound its max_speed, not fixed numbers."""
+    big = RobotParams(l3=0.2, max_speed=1.0)
+    with pytest.raises(ValueError, match=r"EnvParams\.radius"):
+        EnvParams(robot=big, radius=0.15)
+    assert EnvParams(robot=big, radius=0.25, speed=0.9).speed == 0.9
+    assert EnvParams(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]
+
+
+def test_check_range() -> None:
+    assert check_range("O", "x", 1, 0.0, 1.0) == 1.0
+    assert isinstance(check_range("O", "x", 1, 0.0, 1.0), float)
+    with pytest.raises(ValueError, match=re.escape("O.x must be a finite number in (0, 1]")):
+        check_range("O", "x", 0.0, 0.0, 1.0, low_open=True)
+    with pytest.raises(ValueError, match=re.escape("O.x must be a finite number in [0, 1)")):
+        check_range("O", "x", 1.0, 0.0, 1.0, high_open=True)
+    with pytest.raises(ValueError, match=re.escape("O.x must be a real number")):
+        check_range("O", "x", None)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"O\.x must be a finite number"):
+        check_range("O", "x", -math.inf)
