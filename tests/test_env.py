@@ -64,10 +64,10 @@ def lookahead_action(pose: np.ndarray, radius: float, speed: float, direction: i
 
 
 def run_episode(env: gym.Env[Any, Any], policy: Any, pose: tuple[float, float, float] | None = None) -> float:
-    obs, info = env.reset(seed=0, options=None if pose is None else {"pose": pose})
+    _, info = env.reset(seed=0, options=None if pose is None else {"pose": pose})
     total = 0.0
     while True:
-        obs, r, term, trunc, info = env.step(policy(info["pose"]))
+        _, r, term, trunc, info = env.step(policy(info["pose"]))
         total += float(r)
         if term or trunc:
             return total
@@ -113,7 +113,8 @@ def test_reset_start_state_and_info() -> None:
     assert info["pose"].dtype == np.float64 and info["pose"].shape == (3,)
     np.testing.assert_array_equal(info["h_position"], [x + L3 * math.cos(b), y + L3 * math.sin(b)])
     # cross-track error on the circle of centre (0, 1): R - |H - c|, positive left (inside)
-    assert info["cross_track_error"] == pytest.approx(1.0 - math.hypot(info["h_position"][0], info["h_position"][1] - 1))
+    hx, hy = info["h_position"]
+    assert info["cross_track_error"] == pytest.approx(1.0 - math.hypot(hx, hy - 1.0))
     np.testing.assert_array_equal(info["wheel_rates"], [0.2 / 0.05, 0.2 / 0.05])
     np.testing.assert_array_equal(info["wheel_angles"], [0.0, 0.0])
     assert info["castor_angle"] == 0.0 and info["time"] == 0.0
