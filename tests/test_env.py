@@ -18,7 +18,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym import EnvParams, RobotParams
+from amigo_gym import MAX_EPISODE_STEPS, EnvParams, RobotParams
 from amigo_gym.envs import AmigoBotEnv
 
 L1, L3, R_WHEEL = 0.12, 0.08, 0.05
@@ -75,7 +75,8 @@ def run_episode(env: gym.Env[Any, Any], policy: Any, pose: tuple[float, float, f
 
 # ---------------------------------------------------------------- checkers
 def test_gymnasium_check_env_no_warnings() -> None:
-    for kw in ({}, {"path": "manoeuvre", "dt": 0.05, "direction": -1}):
+    settings: list[dict[str, Any]] = [{}, {"path": "manoeuvre", "dt": 0.05, "direction": -1}]
+    for kw in settings:
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             check_env(gym.make("AmigoBot-v0", **kw).unwrapped)
@@ -182,7 +183,7 @@ def test_truncation_by_time_limit() -> None:
 # ---------------------------------------------------------------- determinism, pickling
 def _rollout(env: gym.Env[Any, Any], n: int, seed: int | None = None) -> list[Any]:
     rng = np.random.default_rng(1)
-    out = []
+    out: list[Any] = []
     if seed is not None:
         out.append(env.reset(seed=seed))
     for _ in range(n):
@@ -251,7 +252,7 @@ def test_steady_rates_keep_h_on_circle(dt: float, direction: int) -> None:
 def test_analytic_inverse_solution_earns_99_percent() -> None:
     env = gym.make("AmigoBot-v0")
     pose, _ = steady_start(1.0)
-    n = env.spec.max_episode_steps  # type: ignore[union-attr]
+    n = MAX_EPISODE_STEPS
     ret = run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2), pose)
     assert ret >= 0.99 * n
     # also from the paper's start (H at the origin, beta = 0): the law converges at once
@@ -267,7 +268,7 @@ def test_analytic_inverse_solution_earns_99_percent() -> None:
 )
 def test_bad_behaviours_earn_at_most_20_percent(name: str) -> None:
     env = gym.make("AmigoBot-v0")
-    n = env.spec.max_episode_steps  # type: ignore[union-attr]
+    n = MAX_EPISODE_STEPS
     pose, _ = steady_start(1.0)
     if name == "spin":
         ret = run_episode(env, lambda p: np.array([0.5, -0.5]), pose)
