@@ -181,7 +181,7 @@ def test_law_solves_the_velocity_map() -> None:
     obs[:, -1] = p.speed / p.robot.max_speed
     l3, k = p.robot.l3, 2.5
     for sr in ("A", "H"):
-        v, bd = analytic_body_velocity(obs, p, gain=k, speed_reference=sr)  # type: ignore[arg-type]
+        v, bd = analytic_body_velocity(obs, p, gain=k, speed_reference=sr)
         h_t = np.cos(psi) * v - l3 * np.sin(psi) * bd
         h_n = np.sin(psi) * v + l3 * np.cos(psi) * bd
         np.testing.assert_allclose(h_n, -k * e, atol=1e-12)

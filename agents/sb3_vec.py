@@ -1,0 +1,159 @@
+"""Adapter from the native Gymnasium vector env (:class:`amigo_gym.envs.AmigoBotVectorEnv`) to SB3's ``VecEnv``.
+
+Stable-Baselines3 expects its own vectorised API rather than Gymnasium's ``VectorEnv``:
+
+* ``reset()`` takes no arguments; seeds and options set by :meth:`VecEnv.seed` / :meth:`VecEnv.set_options`
+  are used once, by the next ``reset`` (sub-env ``i`` gets ``seed + i``, as in ``DummyVecEnv``);
+* ``step`` returns ``(obs, rewards, dones, infos)`` with ``dones = terminated | truncated`` and a *list*
+  of per-env info dicts;
+* a finished sub-env is reset in the same step: the returned observation is the new episode's first,
+  the last observation of the finished episode is ``infos[i]["terminal_observation"]``, and
+  ``infos[i]["TimeLimit.truncated"]`` is ``truncated and not terminated`` (set for every env and step);
+  the info of the reset is in ``reset_infos[i]``.
+
+The native env runs in Gymnasium's ``SAME_STEP`` autoreset mode, whose ``final_obs`` / ``final_info``
+carry exactly what SB3 needs, so no step is wasted and no Python loop runs over the environments
+except to build SB3's list of info dicts. Each per-env info has the single env's keys and types
+(``pose``, ``h_position``, ``cross_track_error`` (float), ``wheel_rates``, ``wheel_angles``,
+``castor_angle`` (float), ``reward_terms`` (dict of floats), ``time`` (float)), so that rollouts match
+``DummyVecEnv([lambda: gym.make("AmigoBot-v0")] * N)`` step for step (rewards as float32, like
+``DummyVecEnv``'s buffer).
+
+Example::
+
+    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=32))
+    PPO("MlpPolicy", venv).learn(100_000)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from copy import deepcopy
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from numpy.typing import NDArray
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
+
+from amigo_gym import MAX_EPISODE_STEPS
+from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+__all__ = ["AmigoBotSB3VecEnv"]
+
+_FLOAT_KEYS = ("cross_track_error", "castor_angle", "time")
+
+
+class AmigoBotSB3VecEnv(VecEnv):
+    """SB3 ``VecEnv`` over one native :class:`AmigoBotVectorEnv` of ``num_envs`` robots.
+
+    Args:
+        num_envs: number of robots (>= 1).
+        max_episode_steps: truncation after this many steps (default 400, the registration's).
+        render_mode: ``None`` or ``"rgb_array"``.
+        **settings: task settings, as keywords of ``gym.make("AmigoBot-v0", ...)`` (``dt``, ``radius``,
+            ``params``, ``robot``, ...).
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = MAX_EPISODE_STEPS,
+        render_mode: str | None = None,
+        **settings: Any,
+    ) -> None:
+        self.venv = AmigoBotVectorEnv(
+            num_envs=num_envs,
+            max_episode_steps=max_episode_steps,
+            render_mode=render_mode,
+            autoreset_mode=AutoresetMode.SAME_STEP,
+            **settings,
+        )
+        self.render_mode = render_mode
+        super().__init__(self.venv.num_envs, self.venv.single_observation_space, self.venv.single_action_space)
+        self.params = self.venv.params
+        self._actions: NDArray[Any] | None = None
+
+    # ------------------------------------------------------------------ core API
+    def reset(self) -> VecEnvObs:
+        """Reset every robot with the pending seeds/options (used once, as in ``DummyVecEnv``)."""
+        seeds = list(self._seeds)
+        options: dict[str, Any] | None = None
+        if any(self._options):
+            if not all(self._options) or any(set(o) != {"pose"} for o in self._options):
+                raise ValueError('options: only {"pose": (x_A, y_A, beta)} for every env is supported')
+            options = {"pose": np.stack([np.asarray(o["pose"], dtype=np.float64) for o in self._options])}
+        obs, infos = self.venv.reset(seed=None if all(s is None for s in seeds) else seeds, options=options)
+        self.reset_infos = self._split(infos, range(self.num_envs))
+        self._reset_seeds()
+        self._reset_options()
+        return obs
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions)
+
+    def step_wait(self) -> VecEnvStepReturn:
+        if self._actions is None:
+            raise RuntimeError("step_wait() called without step_async()")
+        obs, rewards, terminated, truncated, vinfo = self.venv.step(self._actions)
+        self._actions = None
+        dones = terminated | truncated
+        infos = self._split(vinfo, range(self.num_envs))
+        done_idx = np.flatnonzero(dones)
+        if done_idx.size:
+            final = self._split(vinfo["final_info"], done_idx)
+            for j, fin in zip(done_idx.tolist(), final, strict=True):
+                self.reset_infos[j] = infos[j]
+                fin["terminal_observation"] = vinfo["final_obs"][j]
+                infos[j] = fin
+        for i in range(self.num_envs):
+            infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+        return obs, rewards.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        frames = self.venv.render()
+        return [None] * self.num_envs if frames is None else list(frames)
+
+    # ------------------------------------------------------------------ attributes
+    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
+        """The native env's attribute (``params``, ``path``, ``render_mode``, ...), once per index."""
+        value = getattr(self.venv, attr_name)
+        return [value for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
+        """Set an attribute of the native env (shared by every robot: all indices must be selected)."""
+        if sorted(self._get_indices(indices)) != list(range(self.num_envs)):
+            raise ValueError("set_attr: the robots share one native env; set attributes for all indices")
+        setattr(self.venv, attr_name, value)
+
+    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **kw: Any) -> list[Any]:
+        """Call a method of the native env once and return its result for each index."""
+        result = getattr(self.venv, method_name)(*method_args, **kw)
+        return [result for _ in self._get_indices(indices)]
+
+    def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
+        """The robots are not wrapped in Gymnasium wrappers (use ``VecMonitor`` for episode statistics)."""
+        return [False for _ in self._get_indices(indices)]
+
+    # ------------------------------------------------------------------ helpers
+    @staticmethod
+    def _split(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
+        """Per-env info dicts (the single env's keys and types) from vector-format infos."""
+        out = []
+        for i in idx:
+            d: dict[str, Any] = {}
+            for k, v in vinfo.items():
+                if k.startswith("_") or k in ("final_obs", "final_info"):
+                    continue
+                if isinstance(v, dict):
+                    d[k] = {kk: float(vv[i]) for kk, vv in v.items() if not kk.startswith("_")}
+                elif k in _FLOAT_KEYS:
+                    d[k] = float(v[i])
+                else:
+                    d[k] = deepcopy(v[i])
+            out.append(d)
+        return out
