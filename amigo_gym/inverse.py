@@ -10,7 +10,7 @@ two-state ODE (``shared/MODEL.md``, "The path of H and the inverse problem"):
 
 The wheel rates follow from the rolling constraints (system 29, :func:`~amigo_gym.kinematics.wheel_rates`
 and :func:`~amigo_gym.kinematics.castor_rate`), the wheel angles by integration. This module integrates
-``(s, beta, x_A, y_A, alpha1, alpha2, alpha3)`` together with SciPy's DOP853 at ``rtol = atol = 1e-12``
+``(s, psi = theta(s) - beta, x_A, y_A, alpha1, alpha2, alpha3)`` together with SciPy's DOP853 at ``rtol = atol = 1e-12``
 (``x_A, y_A`` from ``xdot_A = v_A cos beta``, ``ydot_A = v_A sin beta``, so that ``r_H`` computed from the
 integrated pose is an independent check that H stays on the path). The integration is split at every
 kink of the speed profile (its :meth:`breakpoints`) and at every curvature jump of the path (the
@@ -401,14 +401,20 @@ def solve_inverse(
 ) -> InverseSolution:
     r"""Integrate the inverse kinematics of H on ``path`` with speed ``profile`` and sample it at ``t``.
 
-    State ``y = (s, beta, x_A, y_A, alpha1, alpha2, alpha3)``:
+    The ODE of MODEL.md is integrated in the variables ``(s, psi)`` with the heading error
+    ``psi = theta(s) - beta`` (so ``beta = theta(s) - psi``; ``psidot = kappa(s) sdot - betadot``), together
+    with the pose of A and the wheel angles; state ``y = (s, psi, x_A, y_A, alpha1, alpha2, alpha3)``:
 
     .. math::
-        \dot s = \frac{v_A}{\cos(\theta(s)-\beta)},\quad
-        \dot\beta = \frac{v_A \tan(\theta(s)-\beta)}{l_3},\quad
+        \dot s = \frac{v_A}{\cos\psi},\quad
+        \dot\beta = \frac{v_A \tan\psi}{l_3},\quad
+        \dot\psi = \kappa(s)\,\dot s - \dot\beta,\quad
         \dot x_A = v_A\cos\beta,\quad \dot y_A = v_A\sin\beta,\quad
         \dot\alpha_{1,2} = \frac{v_A \pm l_1\dot\beta}{r_{1,2}},\quad
         \dot\alpha_3 = \frac{\sqrt{l_5^2\dot\beta^2 + v_A^2}}{r_3}
+
+    ``psi`` tends to the constant lag ``atan(l3 / R_A)`` on a circle; integrating it rather than ``beta``
+    (which grows without bound) puts the solver's error control on the quantity the rates depend on.
 
     At ``t[0]`` H is at ``path.point(s0)`` with heading ``beta0`` (default ``theta(s0)``, the paper's
     start) and A is ``l3`` behind H.
@@ -457,7 +463,9 @@ def solve_inverse(
 
     l3 = robot.l3
     h0 = path.point(s0)
-    y = np.array([s0, b0, h0[0] - l3 * math.cos(b0), h0[1] - l3 * math.sin(b0), *alpha0], dtype=np.float64)
+    # the heading error psi = theta(s) - beta is integrated instead of beta: it tends to a constant on a
+    # circle, so that the error control acts on the small, well-scaled quantity the rates depend on
+    y = np.array([s0, theta0 - b0, h0[0] - l3 * math.cos(b0), h0[1] - l3 * math.sin(b0), *alpha0], dtype=np.float64)
 
     def make_rhs(ta: float, tb: float) -> Callable[[float, Array], Array]:
         lo, hi = np.nextafter(ta, math.inf), np.nextafter(tb, -math.inf)
@@ -465,15 +473,17 @@ def solve_inverse(
         def rhs(tt: float, yy: Array) -> Array:
             # the profile is smooth inside (ta, tb); evaluate it there (one-sided at the ends)
             v = float(profile(min(max(tt, lo), hi)))
-            d = float(path.tangent_angle(yy[0])) - yy[1]
-            bdot = v * math.tan(d) / l3
+            psi = yy[1]
+            sdot = v / math.cos(psi)
+            bdot = v * math.tan(psi) / l3
+            beta = float(path.tangent_angle(yy[0])) - psi
             w = wheel_rates(v, bdot, robot)
             return np.array(
                 [
-                    v / math.cos(d),
-                    bdot,
-                    v * math.cos(yy[1]),
-                    v * math.sin(yy[1]),
+                    sdot,
+                    float(path.curvature(yy[0])) * sdot - bdot,
+                    v * math.cos(beta),
+                    v * math.sin(beta),
                     w[0],
                     w[1],
                     float(castor_rate(v, bdot, robot)),
@@ -482,6 +492,10 @@ def solve_inverse(
 
         return rhs
 
+    # The heading error relaxes at the rate v_A / l3 (exactly, on any circle, at the steady state): steps
+    # longer than a few l3 / v_A put DOP853 at the edge of its stability region, where the error
+    # estimate no longer bounds the dense output's error; 2 l3 / v_A keeps every sample near 1e-12.
+    max_step = 2.0 * l3 / profile.peak_speed
     t_first, t_last = float(tg[0]), float(tg[-1])
     edges = [t_first, *(b for b in profile.breakpoints() if t_first < b < t_last), t_last]
     s_breaks = [sb for sb in path_breakpoints(path) if sb > s0]
@@ -509,6 +523,7 @@ def solve_inverse(
                 atol=atol,
                 dense_output=True,
                 events=events or None,
+                max_step=max_step,
             )
             if not sol.success:
                 raise RuntimeError(f"{o}: integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
@@ -523,9 +538,10 @@ def solve_inverse(
                 break
             tc = t_end
 
-    s, beta, xa, ya, a1, a2, a3 = out
+    s, psi, xa, ya, a1, a2, a3 = out
+    beta = path.tangent_angle(s) - psi
     v = profile(tg)
-    bdot = v * np.tan(path.tangent_angle(s) - beta) / l3
+    bdot = v * np.tan(psi) / l3
     w = wheel_rates(v, bdot, robot)
     h = h_position(np.stack((xa, ya, beta), axis=-1), robot)
     return InverseSolution(
