@@ -191,9 +191,9 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         if pose_opt is not None:
             pose = pose_opt[idx].copy()
         else:
-            u = np.empty((len(idx), 3))
-            for k, i in enumerate(idx):
-                u[k] = self._rng(int(i)).uniform(-1.0, 1.0, size=3)
+            # u ~ U[-1, 1]^3 from each robot's own generator, as the single env draws it:
+            # Generator.uniform(-1, 1, 3) is -1 + 2 * Generator.random(3) (the same stream and rounding)
+            u = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in idx.tolist()]).reshape(len(idx), 3)
             pose = task.start_pose(u, self.params, self.path)
         rates = np.broadcast_to(self._initial_rates, (len(idx), 2)).copy()
         angles = np.zeros((len(idx), 3))
