@@ -118,15 +118,17 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     ## Description
 
-    The AmigoBot is a differential-drive robot with two driven wheels and a self-aligning castor
-    (Pioneer-family robot of Adept MobileRobots). Its kinematics follow the D–H model of the
-    seed paper, corrected as in ``shared/MODEL.md``: the pose is ``(x_A, y_A, beta)``, A the midpoint
+    The AmigoBot is a small differential-drive robot (ActivMedia / Adept MobileRobots) with two
+    driven wheels and a self-aligning castor. Its kinematics follow the D–H model of the seed
+    paper, corrected as in ``shared/MODEL.md``: the pose is ``(x_A, y_A, beta)``, A the midpoint
     of the drive axle, ``beta`` the heading; point H sits ``l3 = 0.08 m`` ahead of A. The task is
     the paper's inverse problem turned into control: keep H on the path (by default the paper's
     circle, eq. 6: radius ``R = 1 m`` through the origin, tangent to x0 there, turning left) while A
     drives at the reference speed ``v_ref = 0.2 m/s``. The wheel rates are held over each control
     period ``dt`` and the pose advances by the exact arc of the rolling constraints (no Euler
     step); the analytic inverse solution therefore follows the circle exactly in the environment.
+    ``path="manoeuvre"`` selects the paper's manoeuvre instead: a straight segment along x0, then
+    the circle.
 
     ## Action Space
 
