@@ -80,7 +80,7 @@ class Settings:
         dpi: resolution of the PNG files.
     """
 
-    out: str = "docs/figures"
+    out: str = "results/paper"
     speed: float = 0.2
     radius: float = 1.0
     straight_length: float = 1.0
