@@ -353,3 +353,19 @@ def test_bad_reset_options(options: Any, match: str) -> None:
     env = AmigoBotEnv()
     with pytest.raises(ValueError, match=match):
         env.reset(options=options)
+
+
+def test_env_card_mirrors_the_docstring() -> None:
+    """Every section of the class docstring appears verbatim (markdown backticks) in docs/env_card.md."""
+    import inspect
+    import re
+    from pathlib import Path
+
+    card = (Path(__file__).resolve().parents[1] / "docs" / "env_card.md").read_text(encoding="utf-8")
+    doc = inspect.getdoc(AmigoBotEnv)
+    assert doc is not None
+    body = re.sub(r":(?:func|class|data|mod):`([^`]+)`", r"`\1`", doc.partition("\n\n")[2]).replace("``", "`")
+    sections = ["## " + s.strip() for s in body.split("## ") if s.strip()]
+    assert len(sections) >= 9
+    for sec in sections:
+        assert sec in card, sec.splitlines()[0]
