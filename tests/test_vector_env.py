@@ -199,3 +199,22 @@ def test_disabled_mode_refuses_stepping_finished_envs() -> None:
     envs.step(np.zeros((2, 2)))
     with pytest.raises(RuntimeError, match="reset"):
         envs.step(np.zeros((2, 2)))
+
+
+def test_bench_env_smoke_and_bad_arguments(tmp_path: Any, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from experiments.bench_env import main
+
+    out = tmp_path / "bench.json"
+    assert main(["--quick", "--sizes", "1", "8", "--sync-max", "8", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "Pendulum-v1" in printed and "native / CartPole" in printed
+    doc = json.loads(out.read_text())
+    assert [r["n"] for r in doc["vector"]] == [1, 8] and all(r["sync"] > 0 for r in doc["vector"])
+    assert doc["single"]["amigobot_us"] > 0 and doc["single"]["pendulum_us"] > 0
+    assert main(["--sizes", "0", "--skip-single"]) == 2
+    assert "sizes[0]" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["--repeats", "x"])
+    assert exc.value.code == 2
