@@ -218,3 +218,9 @@ def test_bench_env_smoke_and_bad_arguments(tmp_path: Any, capsys: pytest.Capture
     with pytest.raises(SystemExit) as exc:
         main(["--repeats", "x"])
     assert exc.value.code == 2
+
+
+def test_step_before_reset_is_refused() -> None:
+    envs = AmigoBotVectorEnv(num_envs=2)
+    with pytest.raises(gym.error.ResetNeeded):
+        envs.step(np.zeros((2, 2)))

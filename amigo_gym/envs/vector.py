@@ -124,6 +124,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._trail: list[Array] = []
         self._trail_start = np.zeros(n, dtype=np.int64)
         self._renderers: list[Any] = []
+        self._was_reset = False
 
     # ------------------------------------------------------------------ seeding
     @property
@@ -175,6 +176,9 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         pose_opt = None
         if options is not None and "pose" in options:
             pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        if not mask.all() and not self._was_reset:
+            raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
+        self._was_reset = True
         idx = np.flatnonzero(mask)
         for i in idx:
             if seeds[i] is not None:
@@ -219,6 +223,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
         """
         n = self.num_envs
+        if not self._was_reset:
+            raise gym.error.ResetNeeded("call reset() before step() on AmigoBotVectorEnv")
         a = task.validate_action(actions, (n,))
         mode = self.autoreset_mode
         if mode == AutoresetMode.DISABLED and self._autoreset.any():
