@@ -1,0 +1,563 @@
+"""Train a PPO, SAC or TD3 baseline on ``AmigoBot-v0`` (one readable file, cleanrl style).
+
+Usage::
+
+    amigo-gym train --algo sac --seed 0 --timesteps 60000 --out runs/sac_s0
+    amigo-gym train --algo ppo --seed 0 --n-envs 16 --out runs/ppo_s0     # native vector env
+    amigo-gym train --algo sac --seed 0 --timesteps 60000 --out runs/sac_s0 --resume   # continue
+
+Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (rl-zoo format: the mapping under the key
+``AmigoBot-v0``); ``--timesteps`` and ``--n-envs`` override its ``n_timesteps`` and ``n_envs``.
+
+What a run writes in ``--out`` (every file written to a temporary name, then ``os.replace``d, so that
+a killed run never leaves a half-written file):
+
+* ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions;
+* ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
+* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the latest checkpoint (model and, for SAC/TD3, the
+  replay buffer); ``checkpoint.json`` is written last and names the complete checkpoint;
+* ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
+  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps) and its best model;
+* ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
+  last evaluation, versions, command).
+
+``--resume`` loads the latest checkpoint and trains the remaining ``timesteps - num_timesteps``
+steps with ``reset_num_timesteps=False`` (same TensorBoard curve, same step counter); the replay
+buffer is restored, so an off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` writes a
+checkpoint before exiting (status 130), so an interrupted run loses no steps: SAC/TD3 at the current
+step (every collected transition is in the saved replay buffer), PPO at the start of the rollout being
+collected (the weights have seen only the complete rollouts; the incomplete one is collected again).
+SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3, ``n_steps`` per env for PPO),
+so a run may end up to one rollout beyond ``--timesteps``.
+
+Seeding: ``seed`` seeds Python, NumPy and torch (SB3's ``set_random_seed``), the training envs
+(sub-env ``i``: ``seed + i``), the evaluation env (``seed + 10_000``) and the action space. A run
+resumed from a checkpoint reseeds its environments with ``seed + num_timesteps``; it is reproducible
+but not bit-identical to an uninterrupted run.
+
+Threads: ``torch.set_num_threads(--threads)`` (default 1): the networks are small, and on a 2-core
+machine one thread for torch leaves the other for the environment and the rest of the system.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.cli import OneLineParser, run_guarded
+
+__all__ = [
+    "ALGOS",
+    "HYPERPARAMS_DIR",
+    "Settings",
+    "atomic_write_bytes",
+    "atomic_write_json",
+    "git_revision",
+    "load_hyperparams",
+    "main",
+    "train",
+]
+
+ALGOS = ("ppo", "sac", "td3")
+ENV_ID = "AmigoBot-v0"
+HYPERPARAMS_DIR = Path(__file__).resolve().parent.parent / "agents" / "hyperparams"
+OFF_POLICY = ("sac", "td3")
+EVAL_SEED_OFFSET = 10_000
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+#: mode of the files a run writes (as ``open`` would create them under the current umask)
+_FILE_MODE = 0o666 & ~_UMASK
+
+
+# --------------------------------------------------------------------------- settings
+@dataclass
+class Settings:
+    """Everything a run depends on besides the hyperparameter file (saved in ``config.json``).
+
+    Attributes:
+        algo: ``ppo``, ``sac`` or ``td3``.
+        seed: master seed (>= 0).
+        out: run directory.
+        timesteps: total environment steps (``None``: the YAML's ``n_timesteps``).
+        n_envs: parallel environments (``None``: the YAML's ``n_envs``, else 1).
+        vec: ``native`` (:class:`agents.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3 ``DummyVecEnv``
+            of ``gym.make``); ``auto``: native when ``n_envs > 1``.
+        hyperparams: YAML file (``None``: ``agents/hyperparams/<algo>.yml``).
+        resume: continue from the latest checkpoint in ``out``.
+        eval_freq: environment steps between evaluations (0: none).
+        eval_episodes: episodes per evaluation.
+        checkpoint_freq: environment steps between checkpoints (0: only at the end / on interrupt).
+        threads: ``torch.set_num_threads``.
+        progress: show a progress bar (tqdm + rich).
+        export: directory to copy the final model and record to, as ``<algo>.zip`` / ``<algo>.json``.
+    """
+
+    algo: str
+    seed: int = 0
+    out: str = "runs/run"
+    timesteps: int | None = None
+    n_envs: int | None = None
+    vec: str = "auto"
+    hyperparams: str | None = None
+    resume: bool = False
+    eval_freq: int = 10_000
+    eval_episodes: int = 5
+    checkpoint_freq: int = 20_000
+    threads: int = 1
+    progress: bool = True
+    export: str | None = None
+    argv: list[str] = field(default_factory=list)
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
+        if self.algo not in ALGOS:
+            raise ValueError(f"algo must be one of {list(ALGOS)}, got {self.algo!r}")
+        if self.vec not in ("auto", "native", "dummy"):
+            raise ValueError(f"vec must be 'auto', 'native' or 'dummy', got {self.vec!r}")
+        for name, low in (("seed", 0), ("eval_freq", 0), ("checkpoint_freq", 0), ("eval_episodes", 1), ("threads", 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+        for name in ("timesteps", "n_envs"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+
+
+# --------------------------------------------------------------------------- small utilities
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to a temporary file in the same directory, fsync it, then ``os.replace``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        os.chmod(tmp, _FILE_MODE)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_json(path: str | os.PathLike[str], obj: Any) -> None:
+    """``json.dumps(obj, indent=2)`` written atomically (:func:`atomic_write_bytes`)."""
+    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())
+
+
+def atomic_save(save: Callable[[str], object], path: str | os.PathLike[str]) -> None:
+    """Call ``save(tmp_path)`` (e.g. ``model.save``) on a temporary name, then ``os.replace`` it to ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        save(tmp)
+        os.chmod(tmp, _FILE_MODE)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def git_revision() -> str:
+    """``git rev-parse HEAD`` of the repository holding this file, with ``-dirty`` if tracked files changed."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        rev = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True, timeout=10
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return rev + ("-dirty" if dirty else "")
+
+
+def versions() -> dict[str, str]:
+    """Versions of Python and of the libraries a run depends on."""
+    import gymnasium
+    import stable_baselines3
+    import torch
+
+    from amigo_gym import __version__
+
+    return {
+        "python": platform.python_version(),
+        "amigo_gym": __version__,
+        "numpy": np.__version__,
+        "gymnasium": gymnasium.__version__,
+        "stable_baselines3": stable_baselines3.__version__,
+        "torch": torch.__version__,
+    }
+
+
+# --------------------------------------------------------------------------- hyperparameters
+def load_hyperparams(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``AmigoBot-v0`` mapping of an rl-zoo style YAML file.
+
+    Recognised keys besides the algorithm's keyword arguments: ``n_timesteps``, ``n_envs``, ``policy``,
+    ``noise_type`` (``normal``) with ``noise_std`` (action noise of TD3/SAC), and in ``policy_kwargs``
+    ``activation_fn`` as a name (``ReLU``, ``Tanh``, ...). A ``learning_rate`` written ``lin_<x>``
+    decays linearly from ``x`` to 0 (as in rl-zoo).
+    """
+    import yaml
+
+    with open(path, encoding="utf-8") as f:
+        doc = yaml.safe_load(f)
+    if not isinstance(doc, dict) or ENV_ID not in doc or not isinstance(doc[ENV_ID], dict):
+        raise ValueError(f"{path}: expected a mapping with the key {ENV_ID!r}")
+    hp: dict[str, Any] = dict(doc[ENV_ID])
+    return hp
+
+
+def _algo_kwargs(algo: str, hp: dict[str, Any], n_actions: int) -> dict[str, Any]:
+    """Turn the YAML mapping into keyword arguments of the SB3 algorithm class."""
+    import torch
+
+    kw = {k: v for k, v in hp.items() if k not in ("n_timesteps", "n_envs", "policy", "noise_type", "noise_std")}
+    lr = kw.get("learning_rate")
+    if isinstance(lr, str):
+        if not lr.startswith("lin_"):
+            raise ValueError(f"learning_rate must be a number or 'lin_<x>', got {lr!r}")
+        lr0 = float(lr[4:])
+        kw["learning_rate"] = lambda progress: progress * lr0
+    pk = dict(kw.get("policy_kwargs") or {})
+    if "activation_fn" in pk:
+        name = pk["activation_fn"]
+        fn = getattr(torch.nn, str(name), None)
+        if fn is None:
+            raise ValueError(f"policy_kwargs.activation_fn: unknown torch.nn activation {name!r}")
+        pk["activation_fn"] = fn
+    if pk:
+        kw["policy_kwargs"] = pk
+    if hp.get("noise_type") is not None:
+        from stable_baselines3.common.noise import NormalActionNoise
+
+        if hp["noise_type"] != "normal":
+            raise ValueError(f"noise_type must be 'normal', got {hp['noise_type']!r}")
+        std = float(hp.get("noise_std", 0.1))
+        kw["action_noise"] = NormalActionNoise(np.zeros(n_actions), std * np.ones(n_actions))
+    return kw
+
+
+# --------------------------------------------------------------------------- environments
+def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
+    """SB3 VecEnv of ``n_envs`` AmigoBot-v0 with episode statistics (``VecMonitor``), seeded ``seed + i``."""
+    import gymnasium as gym
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
+
+    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
+    from agents.sb3_vec import AmigoBotSB3VecEnv
+
+    native = vec == "native" or (vec == "auto" and n_envs > 1)
+    venv: Any
+    if native:
+        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs))
+    else:
+        venv = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID)) for _ in range(n_envs)])
+    venv.seed(seed)
+    venv.action_space.seed(seed)
+    return venv
+
+
+# --------------------------------------------------------------------------- callbacks
+def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]:
+    import gymnasium as gym
+    from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    class Checkpoint(BaseCallback):
+        """Every ``freq`` steps: a complete checkpoint (model [+ replay buffer]), then ``checkpoint.json``."""
+
+        def __init__(self, freq: int) -> None:
+            super().__init__()
+            self.freq = freq
+            self.last = 0
+            self.rollout_start = 0
+
+        def _on_rollout_start(self) -> None:
+            self.rollout_start = self.num_timesteps
+
+        def _on_step(self) -> bool:
+            if self.freq and self.num_timesteps - self.last >= self.freq:
+                self.last = self.num_timesteps
+                save_checkpoint(self.model, out, s.algo)
+            return True
+
+    class AfterEval(BaseCallback):
+        """After each evaluation: append it to ``eval.json`` (atomically)."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            f = out / "eval.json"
+            self.history: list[dict[str, float]] = json.loads(f.read_text()) if f.is_file() else []
+
+        def _on_step(self) -> bool:
+            parent = self.parent
+            assert isinstance(parent, EvalCallback)
+            self.history.append(
+                {
+                    "timesteps": int(self.num_timesteps),
+                    "mean_reward": float(parent.last_mean_reward),
+                    "best_mean_reward": float(parent.best_mean_reward),
+                }
+            )
+            atomic_write_json(out / "eval.json", self.history)
+            return True
+
+    class SaveBest(BaseCallback):
+        """On a new best evaluation: ``best_model.zip`` (atomically)."""
+
+        def _on_step(self) -> bool:
+            atomic_save(self.model.save, out / "best_model.zip")
+            return True
+
+    cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
+    if s.eval_freq > 0:
+        eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
+        eval_env.seed(eval_seed)
+        after = AfterEval()
+        ev = EvalCallback(
+            eval_env,
+            n_eval_episodes=s.eval_episodes,
+            eval_freq=max(1, s.eval_freq // n_envs),
+            deterministic=True,
+            callback_on_new_best=SaveBest(),
+            callback_after_eval=after,
+            verbose=0,
+        )
+        if after.history:  # resumed: a new best must beat the evaluations before the interruption
+            ev.best_mean_reward = max(h["mean_reward"] for h in after.history)
+        cbs.append(ev)
+    return cbs
+
+
+def save_checkpoint(model: Any, out: Path, algo: str) -> Path:
+    """Write ``checkpoints/step_<n>/`` completely, then point ``checkpoint.json`` at it; drop older ones."""
+    step = int(model.num_timesteps)
+    root = out / "checkpoints"
+    final = root / f"step_{step}"
+    tmp = Path(tempfile.mkdtemp(dir=out, prefix=".ckpt."))
+    try:
+        os.chmod(tmp, 0o777 & ~_UMASK)
+        model.save(tmp / "model.zip")
+        if algo in OFF_POLICY:
+            model.save_replay_buffer(tmp / "replay_buffer.pkl")
+        root.mkdir(exist_ok=True)
+        if final.exists():
+            shutil.rmtree(final)
+        os.replace(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    atomic_write_json(out / "checkpoint.json", {"num_timesteps": step, "path": str(final.relative_to(out))})
+    for old in root.iterdir():
+        if old != final and old.name.startswith("step_"):
+            shutil.rmtree(old, ignore_errors=True)
+    return final
+
+
+# --------------------------------------------------------------------------- training
+def train(s: Settings) -> dict[str, Any]:
+    """Run (or resume) one training run; return the run record (also written to ``run.json``)."""
+    s.validate()
+    import torch
+    from stable_baselines3 import PPO, SAC, TD3
+    from stable_baselines3.common.utils import set_random_seed
+
+    algo_cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[s.algo]
+    out = Path(s.out)
+    hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
+    hp = load_hyperparams(hp_path)
+    total = int(s.timesteps if s.timesteps is not None else hp.get("n_timesteps", 100_000))
+    n_envs = int(s.n_envs if s.n_envs is not None else hp.get("n_envs", 1))
+
+    ckpt_file = out / "checkpoint.json"
+    if s.resume:
+        if not ckpt_file.is_file():
+            raise FileNotFoundError(f"--resume: no checkpoint in {out} (missing {ckpt_file.name})")
+        config = json.loads((out / "config.json").read_text())
+        if config["settings"]["algo"] != s.algo:
+            raise ValueError(f"--resume: {out} holds a {config['settings']['algo']} run, not {s.algo}")
+    elif out.exists() and any(out.iterdir()):
+        raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
+
+    torch.set_num_threads(s.threads)
+    set_random_seed(s.seed)
+    out.mkdir(parents=True, exist_ok=True)
+
+    if s.resume:
+        ckpt = json.loads(ckpt_file.read_text())
+        done_steps = int(ckpt["num_timesteps"])
+        venv = make_train_env(n_envs, s.vec, s.seed + done_steps)
+        model = algo_cls.load(out / ckpt["path"] / "model.zip", env=venv, device="cpu")
+        if s.algo in OFF_POLICY:
+            model.load_replay_buffer(out / ckpt["path"] / "replay_buffer.pkl")
+        set_random_seed(s.seed + done_steps)
+    else:
+        config = {
+            "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
+            "hyperparams": hp,
+            "env_id": ENV_ID,
+            "git_revision": git_revision(),
+            "versions": versions(),
+            "command": "amigo-gym train " + " ".join(s.argv),
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        atomic_write_json(out / "config.json", config)
+        venv = make_train_env(n_envs, s.vec, s.seed)
+        policy = hp.get("policy", "MlpPolicy")
+        kw = _algo_kwargs(s.algo, hp, int(venv.action_space.shape[0]))
+        model = algo_cls(policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw)
+        done_steps = 0
+
+    remaining = total - int(model.num_timesteps)
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET)
+    t0 = time.perf_counter()
+    previous_wall = _previous_wall(out)
+
+    def on_term(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    old_handler = signal.signal(signal.SIGTERM, on_term)
+    try:
+        if remaining > 0:
+            model.learn(
+                remaining,
+                callback=cbs,
+                reset_num_timesteps=not s.resume,
+                tb_log_name=s.algo,
+                progress_bar=s.progress,
+            )
+    except KeyboardInterrupt:
+        if s.algo not in OFF_POLICY:  # PPO: drop the incomplete rollout (not trained on); it is collected again
+            model.num_timesteps = max(cbs[0].rollout_start, done_steps)
+        save_checkpoint(model, out, s.algo)
+        _write_wall(out, previous_wall + time.perf_counter() - t0)
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, old_handler)
+    wall = previous_wall + time.perf_counter() - t0
+    save_checkpoint(model, out, s.algo)
+    _write_wall(out, wall)
+    atomic_save(model.save, out / "model.zip")
+
+    evals = json.loads((out / "eval.json").read_text()) if (out / "eval.json").is_file() else []
+    record = {
+        "algo": s.algo,
+        "seed": s.seed,
+        "timesteps": int(model.num_timesteps),
+        "n_envs": n_envs,
+        "wall_time_s": round(wall, 1),
+        "resumed_from": done_steps if s.resume else None,
+        "last_eval": evals[-1] if evals else None,
+        "command": json.loads((out / "config.json").read_text())["command"],
+        "git_revision": json.loads((out / "config.json").read_text())["git_revision"],
+        "versions": versions(),
+        "cpu_count": os.cpu_count(),
+        "torch_threads": s.threads,
+    }
+    atomic_write_json(out / "run.json", record)
+    if s.export:
+        exp = Path(s.export)
+        atomic_save(lambda tmp: shutil.copyfile(out / "model.zip", tmp), exp / f"{s.algo}.zip")
+        atomic_write_json(exp / f"{s.algo}.json", record)
+    venv.close()
+    return record
+
+
+def _previous_wall(out: Path) -> float:
+    f = out / "wall_time.json"
+    return float(json.loads(f.read_text())["wall_time_s"]) if f.is_file() else 0.0
+
+
+def _write_wall(out: Path, wall: float) -> None:
+    atomic_write_json(out / "wall_time.json", {"wall_time_s": wall})
+
+
+# --------------------------------------------------------------------------- command line
+def parse_args(argv: Sequence[str]) -> Settings:
+    """Settings from the command line (``amigo-gym train --help``)."""
+    p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0.")
+    p.add_argument("--algo", required=True, choices=ALGOS)
+    p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
+    p.add_argument("--timesteps", type=int, default=None, help="total env steps (default: the YAML's n_timesteps)")
+    p.add_argument("--out", required=True, help="run directory (must be empty unless --resume)")
+    p.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
+    p.add_argument("--n-envs", type=int, default=None, help="parallel envs (default: the YAML's n_envs or 1)")
+    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env (default auto)")
+    p.add_argument("--hyperparams", default=None, help="YAML file (default agents/hyperparams/<algo>.yml)")
+    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations, 0: none")
+    p.add_argument("--eval-episodes", type=int, default=5)
+    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints")
+    p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json")
+    a = p.parse_args(list(argv))
+    s = Settings(
+        algo=a.algo,
+        seed=a.seed,
+        out=a.out,
+        timesteps=a.timesteps,
+        n_envs=a.n_envs,
+        vec=a.vec,
+        hyperparams=a.hyperparams,
+        resume=a.resume,
+        eval_freq=a.eval_freq,
+        eval_episodes=a.eval_episodes,
+        checkpoint_freq=a.checkpoint_freq,
+        threads=a.threads,
+        progress=not a.no_progress,
+        export=a.export,
+        argv=list(argv),
+    )
+    try:
+        s.validate()
+    except ValueError as exc:
+        p.error(str(exc))
+    return s
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym train``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    s = parse_args(args)
+
+    def run() -> int:
+        record = train(s)
+        lines = [f"{k}: {record[k]}" for k in ("algo", "seed", "timesteps", "wall_time_s")]
+        if record["last_eval"]:
+            lines.append(f"last eval mean reward: {record['last_eval']['mean_reward']:.2f}")
+        print("\n".join(lines))
+        return 0
+
+    return run_guarded(run, "amigo-gym train")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
