@@ -282,10 +282,11 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         Raises:
             ValueError: unknown option key or a bad pose.
         """
+        check_reset_options(options)  # refuse bad options before touching the state or the generator
+        pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
         super().reset(seed=seed)
-        check_reset_options(options)
-        if options is not None and "pose" in options:
-            pose = parse_pose_option(options["pose"])
+        if pose_opt is not None:
+            pose = pose_opt
         else:
             u = self.np_random.uniform(-1.0, 1.0, size=3)
             pose = task.start_pose(u, self.params, self.path)
