@@ -143,3 +143,22 @@ def test_cli_writes_json_table_and_plots(tmp_path: Path) -> None:
         [*cmd[:4], "--models", str(tmp_path / "nope")], cwd=ROOT, env=env, capture_output=True, text=True
     )
     assert r.returncode == 2 and "no directory" in r.stderr
+
+
+def test_compare_main_job_smoke(tmp_path: Path) -> None:
+    """``amigo-gym compare`` with a tiny fresh PPO run and short episodes: report, JSON, plots."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(tmp_path), "--models", ""]
+    cmd += ["--train-steps", "1000", "--seeds", "1", "--steps", "40"]
+    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "results.json").read_text())
+    agents = {d["agent"] for d in doc["results"]}
+    assert agents == {"analytic", "analytic_ff", "ppo_fresh"}
+    assert doc["best_learned"]["agent"] == "ppo_fresh" and doc["best_learned"]["scenario"] == "perturbed"
+    assert doc["training"]["ppo_fresh"]["timesteps"] >= 1000
+    report = (tmp_path / "report.md").read_text()
+    assert "## Targets" in report and "ppo_fresh" in report and "eval_wheels.png" in report
+    assert (tmp_path / "eval_trajectories.png").is_file() and (tmp_path / "train_ppo" / "model.zip").is_file()
+    r = subprocess.run([*cmd[:4], "--seeds", "0"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "--seeds" in r.stderr

@@ -1,0 +1,178 @@
+"""The main job: the pretrained agents (and optionally a freshly trained one) against the analytic solution.
+
+Usage::
+
+    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3 + a 200k-step PPO run
+    amigo-gym compare --out results/ --train-steps 0     # evaluation only (about 20 s)
+
+Steps:
+
+1. Optionally train a PPO agent for ``--train-steps`` steps on the native vector env (``amigo-gym
+   train --algo ppo``, hyperparameters of ``agents/hyperparams/ppo.yml``, in ``<out>/train_ppo``);
+   the default 200 000 steps take about a minute on 2 CPU cores and already track to a fraction
+   of a millimetre. The fresh agent is evaluated as ``ppo_fresh``.
+2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
+   ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`experiments.evaluate`.
+3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
+   run's record, the targets), ``<out>/report.md`` (the table, the targets, the training records) and
+   the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``; every file atomically.
+
+Targets checked (best learned agent on the perturbed starts): H RMS error <= 2 mm and RMS wheel-rate
+deviation from the analytic inverse solution <= 0.1 rad/s.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from amigo_gym.cli import OneLineParser, run_guarded
+
+__all__ = ["TARGETS", "main", "report_markdown", "run_compare"]
+
+#: targets for the best learned agent on the perturbed scenario
+TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
+ANALYTIC = ("analytic", "analytic_ff")
+
+
+def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed") -> dict[str, Any] | None:
+    """The learned agent with the smallest H RMS error on ``scenario`` (``None`` if there is none)."""
+    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ANALYTIC]
+    return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
+
+
+def report_markdown(doc: dict[str, Any]) -> str:
+    """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
+    from experiments.evaluate import markdown_table
+
+    proto = doc["protocol"]
+    lines = [
+        "# AmigoBot-v0: learned agents against the analytic inverse solution",
+        "",
+        f"Protocol: {proto['steps']} steps of {proto['env_params']['dt']} s ({proto['duration_s']:.0f} s, "
+        f"one lap = {proto['lap_time_s']:.1f} s) on the circle R = {proto['env_params']['radius']} m at "
+        f"v_ref = {proto['env_params']['speed']} m/s; scenarios `nominal` (H on the circle, steady heading), "
+        f"`paper_start` (H at the origin, beta = 0), `perturbed` (seeds {proto['scenarios']['perturbed']['seeds']}). "
+        f"Wheel-rate deviation: {proto['wheel_rate_reference']}.",
+        "",
+        markdown_table(doc["results"]),
+    ]
+    best = doc.get("best_learned")
+    if best:
+        ok_h = best["h_rms_m"] <= TARGETS["h_rms_m"]
+        ok_w = best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"]
+        lines += [
+            "## Targets (best learned agent, perturbed starts)",
+            "",
+            f"- agent: **{best['agent']}**",
+            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): "
+            + ("met" if ok_h else "NOT met"),
+            f"- RMS wheel-rate deviation: {best['wheel_rate_dev_rms']:.4f} rad/s (target <= "
+            f"{TARGETS['wheel_rate_dev_rms']} rad/s): " + ("met" if ok_w else "NOT met"),
+        ]
+        rec = doc.get("training", {}).get(best["agent"])
+        if rec:
+            lines.append(
+                f"- training: {rec['timesteps']} steps in {rec['wall_time_s']:.0f} s wall time "
+                f"({rec.get('cpu_count', '?')} CPU cores, {rec.get('torch_threads', '?')} torch thread(s))"
+            )
+        lines.append("")
+    if doc.get("training"):
+        lines += ["## Training records", "", "| agent | steps | wall time [s] | command |", "|---|---|---|---|"]
+        for name, rec in doc["training"].items():
+            lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | `{rec['command']}` |")
+        lines.append("")
+    lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
+    return "\n".join(lines)
+
+
+def run_compare(
+    out: Path, models: Path | None, train_steps: int, seeds: int, steps: int, seed: int, plots: bool = True
+) -> dict[str, Any]:
+    """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents."""
+    from agents.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
+    from amigo_gym.params import EnvParams
+    from experiments.evaluate import (
+        EvalProtocol,
+        _atomic_write,
+        default_agents,
+        evaluate_agents,
+        load_agents,
+        write_outputs,
+    )
+
+    proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
+    agents = default_agents(EnvParams(), proto.analytic_gain)
+    training: dict[str, Any] = {}
+    if models is not None:
+        loaded = load_agents(models)
+        agents.update(loaded)
+        for name in loaded:
+            rec = models / f"{name}.json"
+            if rec.is_file():
+                training[name] = json.loads(rec.read_text())
+    if train_steps > 0:
+        from stable_baselines3 import PPO
+
+        from experiments.train import Settings, train
+
+        run_dir = out / "train_ppo"
+        s = Settings(
+            algo="ppo",
+            seed=seed,
+            out=str(run_dir),
+            timesteps=train_steps,
+            resume=(run_dir / "checkpoint.json").is_file(),
+            eval_freq=0,
+            checkpoint_freq=max(train_steps // 4, 1),
+            progress=False,
+            argv=["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)],
+        )
+        t0 = time.perf_counter()
+        training["ppo_fresh"] = train(s)
+        print(f"trained ppo_fresh: {training['ppo_fresh']['timesteps']} steps in {time.perf_counter() - t0:.0f} s")
+        agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
+    results, trajs = evaluate_agents(agents, proto)
+    best = best_learned(results)
+    extra = {"training": training, "targets": TARGETS, "best_learned": best}
+    doc = write_outputs(results, trajs, proto, out, out / "results.json", extra=extra, plots=plots)
+    _atomic_write(out / "report.md", report_markdown(doc).encode())
+    return doc
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym compare``."""
+    from experiments.evaluate import PRETRAINED_DIR
+
+    p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
+    p.add_argument("--out", default="results", help="output directory (default results/)")
+    p.add_argument("--models", default=str(PRETRAINED_DIR), help="pretrained <algo>.zip directory ('' for none)")
+    p.add_argument("--train-steps", type=int, default=200_000, help="steps of a fresh PPO run, 0: none (200000)")
+    p.add_argument("--seeds", type=int, default=10, help="perturbed starts (default 10)")
+    p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run")
+    p.add_argument("--no-plots", action="store_true")
+    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+
+    def run() -> int:
+        for name in ("train_steps", "seed"):
+            if getattr(a, name) < 0:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(a, name)}")
+        if a.seeds < 1:
+            raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
+        out = Path(a.out)
+        models = Path(a.models) if a.models else None
+        doc = run_compare(out, models, a.train_steps, a.seeds, a.steps, a.seed, plots=not a.no_plots)
+        print(report_markdown(doc))
+        print(f"wrote {out / 'report.md'}, {out / 'results.json'}")
+        return 0
+
+    return run_guarded(run, "amigo-gym compare")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
