@@ -43,7 +43,11 @@ Keys of each entry of ``results`` (pooled over the episodes of the scenario)
   leaving the path (``|e| > 0.25 m``).
 * ``laps``: mean number of laps of the circle travelled by H (arc length of H's closest point / 2 pi R).
 
-Outputs: ``--json`` (default ``<out>/results.json``), ``<out>/eval.md`` (the table) and the plots
+``training`` (when the models directory holds ``<algo>.json`` records): each model's training record
+(command, seed, steps, wall time, git revision, versions).
+
+Outputs: ``--json`` (default ``<out>/results.json``), ``--markdown`` (default ``<out>/eval.md``, the
+table) and the plots
 ``<out>/eval_trajectories.png`` (H's path around the circle and ``|e|`` over time, every agent) and
 ``<out>/eval_wheels.png`` (each agent's wheel angles and rates over time against the analytic
 policy's from the same start: the paper's Figs. 2–5 with the test rig replaced by the agent). Every
@@ -524,14 +528,17 @@ def write_outputs(
     json_path: Path,
     extra: dict[str, Any] | None = None,
     plots: bool = True,
+    markdown_path: Path | None = None,
 ) -> dict[str, Any]:
-    """Write the JSON, the Markdown table and (``plots``) the figures; return the JSON document."""
-    from amigo_gym.params import EnvParams as _EP
+    """Write the JSON, the Markdown table (``markdown_path``, default ``out/eval.md``) and the figures.
 
-    params = _EP()
+    Returns:
+        the JSON document.
+    """
+    params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
     _atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2) + "\n").encode())
-    _atomic_write(out / "eval.md", markdown_table(results).encode())
+    _atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode())
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")
         plot_wheels(trajs, params, out / "eval_wheels.png")
@@ -544,6 +551,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--models", default=str(PRETRAINED_DIR), help="directory of <algo>.zip (default agents/pretrained)")
     p.add_argument("--out", default="results", help="directory for eval.md and the plots (default results/)")
     p.add_argument("--json", default=None, help="JSON file (default <out>/results.json)")
+    p.add_argument("--markdown", default=None, help="Markdown table file (default <out>/eval.md)")
     p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400 = 40 s)")
     p.add_argument("--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. (default 10)")
     p.add_argument("--no-models", action="store_true", help="only the analytic policies")
@@ -555,14 +563,22 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
         proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
         agents = default_agents(EnvParams(), proto.analytic_gain)
+        training: dict[str, Any] = {}
         if not a.no_models:
-            agents.update(load_agents(a.models))
+            loaded = load_agents(a.models)
+            agents.update(loaded)
+            for name in loaded:  # the training records next to the models, if any
+                rec = Path(a.models) / f"{name}.json"
+                if rec.is_file():
+                    training[name] = json.loads(rec.read_text())
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "results.json"
-        write_outputs(results, trajs, proto, out, json_path, plots=not a.no_plots)
+        md_path = Path(a.markdown) if a.markdown else out / "eval.md"
+        extra = {"training": training} if training else None
+        write_outputs(results, trajs, proto, out, json_path, extra, plots=not a.no_plots, markdown_path=md_path)
         print(markdown_table(results), end="")
-        print(f"wrote {json_path}, {out / 'eval.md'}" + ("" if a.no_plots else f", {out}/eval_*.png"))
+        print(f"wrote {json_path}, {md_path}" + ("" if a.no_plots else f", {out}/eval_*.png"))
         return 0
 
     return run_guarded(run, "amigo-gym evaluate")

@@ -226,3 +226,26 @@ def test_action_is_clipped() -> None:
     obs[0], obs[1], obs[2], obs[-1] = 4.0, math.sin(1.5), math.cos(1.5), 1.0  # far off, facing across
     a, _ = AnalyticPolicy(p).predict(obs)
     assert np.all(np.abs(a) <= 1.0) and np.isclose(np.abs(a).max(), 1.0)
+
+
+def test_env_lap_from_steady_pose_via_reset_options() -> None:
+    """In AmigoBot-v0 itself: started on the steady state (reset option "pose"), H stays on the circle."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    p = EnvParams()
+    env = gym.make("AmigoBot-v0", max_episode_steps=None)
+    pol = AnalyticPolicy(p)
+    obs, info = env.reset(options={"pose": steady_pose(p)})
+    assert abs(info["cross_track_error"]) < 1e-15
+    n = math.ceil(p.lap_time / p.dt)
+    es, rates = [], []
+    for _ in range(n):
+        obs, _, terminated, _, info = env.step(pol.predict(obs)[0])
+        es.append(info["cross_track_error"])
+        rates.append(info["wheel_rates"])
+        assert not terminated
+    assert np.abs(es).max() <= 1e-6
+    ss = circle_steady_state(p.radius, p.speed, p.robot)
+    np.testing.assert_allclose(np.array(rates)[1:], np.broadcast_to(ss.wheel_rates, (n - 1, 2)), atol=1e-5)
