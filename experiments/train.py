@@ -103,7 +103,9 @@ class Settings:
         checkpoint_freq: environment steps between checkpoints (0: only at the end / on interrupt).
         threads: ``torch.set_num_threads``.
         progress: show a progress bar (tqdm + rich).
-        export: directory to copy the final model and record to, as ``<algo>.zip`` / ``<algo>.json``.
+        export: directory to copy the model and the record to, as ``<algo>.zip`` / ``<algo>.json``.
+        export_model: which model ``export`` copies: ``final`` (``model.zip``) or ``best`` (``best_model.zip``,
+            the best periodic evaluation; the record names its step).
     """
 
     algo: str
@@ -120,12 +122,15 @@ class Settings:
     threads: int = 1
     progress: bool = True
     export: str | None = None
+    export_model: str = "final"
     argv: list[str] = field(default_factory=list)
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
         if self.algo not in ALGOS:
             raise ValueError(f"algo must be one of {list(ALGOS)}, got {self.algo!r}")
+        if self.export_model not in ("final", "best"):
+            raise ValueError(f"export_model must be 'final' or 'best', got {self.export_model!r}")
         if self.vec not in ("auto", "native", "dummy"):
             raise ValueError(f"vec must be 'auto', 'native' or 'dummy', got {self.vec!r}")
         for name, low in (("seed", 0), ("eval_freq", 0), ("checkpoint_freq", 0), ("eval_episodes", 1), ("threads", 1)):
@@ -485,8 +490,16 @@ def train(s: Settings) -> dict[str, Any]:
     atomic_write_json(out / "run.json", record)
     if s.export:
         exp = Path(s.export)
-        atomic_save(lambda tmp: shutil.copyfile(out / "model.zip", tmp), exp / f"{s.algo}.zip")
-        atomic_write_json(exp / f"{s.algo}.json", record)
+        src = out / "model.zip"
+        exported = {"exported_model": "final", "exported_timesteps": record["timesteps"]}
+        if s.export_model == "best":
+            if not evals or not (out / "best_model.zip").is_file():
+                raise FileNotFoundError(f"--export-model best: no evaluation / best_model.zip in {out}")
+            src = out / "best_model.zip"
+            best = max(evals, key=lambda e: e["mean_reward"])
+            exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
+        atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip")
+        atomic_write_json(exp / f"{s.algo}.json", record | exported)
     venv.close()
     return record
 
@@ -518,6 +531,7 @@ def parse_args(argv: Sequence[str]) -> Settings:
     p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json")
+    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export (final)")
     a = p.parse_args(list(argv))
     s = Settings(
         algo=a.algo,
@@ -534,6 +548,7 @@ def parse_args(argv: Sequence[str]) -> Settings:
         threads=a.threads,
         progress=not a.no_progress,
         export=a.export,
+        export_model=a.export_model,
         argv=list(argv),
     )
     try:

@@ -145,12 +145,18 @@ def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
 
 def test_td3_runs_with_noise_and_schedule(tmp_path: Path) -> None:
     out = tmp_path / "td3"
+    exp = tmp_path / "exp"
     r = run_train(
         "--algo", "td3", "--out", str(out), "--hyperparams", hp_file(tmp_path, "td3"), "--timesteps", "200",
-        "--eval-freq", "0",
+        "--eval-freq", "100", "--eval-episodes", "1", "--export", str(exp), "--export-model", "best",
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "run.json").read_text())["timesteps"] == 200
+    rec = json.loads((exp / "td3.json").read_text())
+    evals = json.loads((out / "eval.json").read_text())
+    assert rec["exported_model"] == "best" and rec["exported_timesteps"] in (100, 200) and len(evals) == 2
+    assert rec["best_eval"] == max(evals, key=lambda e: e["mean_reward"])
+    assert (exp / "td3.zip").read_bytes() == (out / "best_model.zip").read_bytes()
 
 
 @pytest.mark.parametrize(
