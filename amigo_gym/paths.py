@@ -7,20 +7,25 @@ length ``s`` [m] from its start point; its tangent angle ``theta(s)`` [rad] and 
 
 The signed cross-track error of a point is positive when the point lies to the **left** of the
 path direction, i.e. ``e = (p - closest) . n`` with ``n = (-sin theta, cos theta)``.
+
+``project`` takes points ``(..., 2)``; ``project_xy`` is its column form (``x`` and ``y`` as separate
+floats or arrays, the form the environments call), and ``project`` is a thin wrapper over it.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple, Protocol
+from functools import cached_property
+from typing import NamedTuple, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.kinematics import Real, col_arctan2, col_sqrt, pack
 from amigo_gym.params import EnvParams, check_range
 
-__all__ = ["Projection", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
+__all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
@@ -40,6 +45,8 @@ class Projection(NamedTuple):
         tangent_angle: path tangent angle there [rad].
         curvature: signed path curvature there [1/m].
         cross_track_error: signed distance, positive left of the path direction [m].
+        cos_theta: ``cos(tangent_angle)``, the x component of the unit tangent there [-].
+        sin_theta: ``sin(tangent_angle)``, its y component [-].
     """
 
     s: Array
@@ -47,6 +54,38 @@ class Projection(NamedTuple):
     tangent_angle: Array
     curvature: Array
     cross_track_error: Array
+    cos_theta: Array
+    sin_theta: Array
+
+
+class ClosestPoint(NamedTuple):
+    """Column form of :class:`Projection` (from ``project_xy``): the point as ``x``, ``y`` columns.
+
+    ``curvature`` is a plain float where it is the same for every query (on a circle); every other
+    field has the query's shape.
+    """
+
+    s: Real
+    x: Real
+    y: Real
+    tangent_angle: Real
+    curvature: Real
+    cross_track_error: Real
+    cos_theta: Real
+    sin_theta: Real
+
+    def projection(self) -> Projection:
+        """The :class:`Projection` of these columns (point stacked ``(..., 2)``, curvature broadcast)."""
+        s = np.asarray(self.s)
+        return Projection(
+            s=s,
+            point=pack(self.x, self.y),
+            tangent_angle=np.asarray(self.tangent_angle),
+            curvature=np.asarray(np.broadcast_to(self.curvature, s.shape)).copy(),
+            cross_track_error=np.asarray(self.cross_track_error),
+            cos_theta=np.asarray(self.cos_theta),
+            sin_theta=np.asarray(self.sin_theta),
+        )
 
 
 class Path(Protocol):
@@ -71,6 +110,14 @@ class Path(Protocol):
 
     def project(self, p: ArrayLike) -> Projection:
         """Closest point to ``p`` ``(..., 2)``, with tangent, curvature and signed cross-track error."""
+        ...
+
+    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
+        """Column form of :meth:`project` for the points ``(x, y)``."""
+        ...
+
+    def curvature_columns(self, s: Real) -> Real:
+        """:meth:`curvature` as a column: a plain float where it does not depend on ``s``."""
         ...
 
 
@@ -138,22 +185,53 @@ class CirclePath:
         dr = self.direction * self.radius
         return np.stack((c[0] + dr * np.sin(th), c[1] - dr * np.cos(th)), axis=-1)
 
+    def curvature_columns(self, s: Real) -> Real:
+        return self.direction / self.radius
+
+    @cached_property
+    def _frame(self) -> tuple[float, float, float, float]:
+        """Centre ``(cx, cy)`` and the unit vector ``(r0x, r0y)`` from the centre to the start point."""
+        d, t0 = self.direction, self.start_angle
+        return (*self.center, d * math.sin(t0), -d * math.cos(t0))
+
     def project(self, p: ArrayLike) -> Projection:
         p = np.asarray(p, dtype=np.float64)
-        c = self.center
-        d = self.direction
-        ux = p[..., 0] - c[0]
-        uy = p[..., 1] - c[1]
-        rho = np.hypot(ux, uy)
-        th = np.arctan2(d * ux, -d * uy)  # tangent angle at the closest point (0 at the centre)
-        s = self.radius * np.mod(d * (th - self.start_angle), TWO_PI)
-        th = self.tangent_angle(s)
-        return Projection(
+        return self.project_xy(p[..., 0], p[..., 1]).projection()
+
+    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
+        r"""Closest point of the circle to ``(x, y)``, by vector algebra about the centre ``c``.
+
+        With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho``: the closest point is ``c + R n``,
+        the unit tangent there ``d (-n_y, n_x)``, the cross-track error ``d (R - rho)``, and the arc
+        length ``s = R a`` with ``a`` in ``[0, 2 pi)`` the angle from the start radius ``r0`` to ``u``
+        in the direction of travel, ``a = atan2(d (r0 x u), r0 . u)`` (plus ``2 pi`` where negative).
+        At the centre itself (every point of the circle equally close) it is the start point.
+        """
+        cx, cy, r0x, r0y = self._frame
+        d, r = self.direction, self.radius
+        ux = x - cx
+        uy = y - cy
+        rho = col_sqrt(ux * ux + uy * uy)
+        norm = rho
+        at_centre = rho == 0.0
+        if at_centre.any() if isinstance(at_centre, np.ndarray) else at_centre:  # H at the centre
+            ux = np.where(at_centre, r0x, ux)
+            uy = np.where(at_centre, r0y, uy)
+            norm = np.where(at_centre, 1.0, rho)
+        cross = r0x * uy - r0y * ux
+        a = col_arctan2(cross if d > 0 else -cross, r0x * ux + r0y * uy)
+        s = cast(Real, r * (a + TWO_PI * (a < 0.0)))  # a + 2 pi where a < 0: in [0, 2 pi R]
+        nx = ux / norm
+        ny = uy / norm
+        return ClosestPoint(
             s=s,
-            point=self.point(s),
-            tangent_angle=th,
-            curvature=self.curvature(s),
-            cross_track_error=d * (self.radius - rho),
+            x=cx + r * nx,
+            y=cy + r * ny,
+            tangent_angle=self.start_angle + (s if d > 0 else -s) / r,
+            curvature=d / r,
+            cross_track_error=r - rho if d > 0 else rho - r,
+            cos_theta=-ny if d > 0 else ny,
+            sin_theta=nx if d > 0 else -nx,
         )
 
 
@@ -183,7 +261,7 @@ class ManoeuvrePath:
         if self.direction not in (1, -1):
             raise ValueError(f"ManoeuvrePath.direction must be +1 or -1, got {self.direction!r}")
 
-    @property
+    @cached_property
     def circle(self) -> CirclePath:
         """The circular part, starting at the segment's end."""
         return CirclePath(self.radius, (self.straight_length, 0.0), 0.0, self.direction)
@@ -207,27 +285,38 @@ class ManoeuvrePath:
         arc = self.circle.point(s - self.straight_length)
         return np.where((s <= self.straight_length)[..., None], straight, arc)
 
+    def curvature_columns(self, s: Real) -> Real:
+        return _where(s <= self.straight_length, 0.0, self.direction / self.radius)
+
     def project(self, p: ArrayLike) -> Projection:
         p = np.asarray(p, dtype=np.float64)
+        return self.project_xy(p[..., 0], p[..., 1]).projection()
+
+    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
         L = self.straight_length
-        s_line = np.minimum(p[..., 0], L)
-        d_line = np.hypot(p[..., 0] - s_line, p[..., 1])
-        circ = self.circle.project(p)
+        s_line = np.minimum(x, L)
+        d_line = np.hypot(x - s_line, y)
+        circ = self.circle.project_xy(x, y)
         use_line = d_line <= np.abs(circ.cross_track_error)
-        s = np.where(use_line, s_line, L + circ.s)
-        line_point = np.stack((s_line, np.zeros_like(s_line)), axis=-1)
-        point = np.where(use_line[..., None], line_point, circ.point)
-        th = np.where(use_line, 0.0, circ.tangent_angle)
         # for the line: e = (p - q) . (0, 1) = y (exact beyond the segment end too, as the distance
         # there is measured to the end point only in the rare case it is the closer feature)
-        e_line = np.where(p[..., 0] <= L, p[..., 1], np.sign(p[..., 1]) * d_line)
-        return Projection(
-            s=s,
-            point=point,
-            tangent_angle=th,
-            curvature=np.where(use_line, 0.0, circ.curvature),
-            cross_track_error=np.where(use_line, e_line, circ.cross_track_error),
+        e_line = np.where(x <= L, y, np.sign(y) * d_line)
+        return ClosestPoint(
+            s=_where(use_line, s_line, L + circ.s),
+            x=_where(use_line, s_line, circ.x),
+            y=_where(use_line, 0.0, circ.y),
+            tangent_angle=_where(use_line, 0.0, circ.tangent_angle),
+            curvature=_where(use_line, 0.0, circ.curvature),
+            cross_track_error=_where(use_line, e_line, circ.cross_track_error),
+            cos_theta=_where(use_line, 1.0, circ.cos_theta),
+            sin_theta=_where(use_line, 0.0, circ.sin_theta),
         )
+
+
+def _where(condition: ArrayLike, a: ArrayLike, b: ArrayLike) -> Real:
+    """``np.where`` that gives a scalar, not a 0-d array, for scalar arguments."""
+    out: Real = np.where(condition, a, b)[()]
+    return out
 
 
 def make_path(params: EnvParams) -> CirclePath | ManoeuvrePath:

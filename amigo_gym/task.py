@@ -33,18 +33,46 @@ with ``psi_ss = -asin(kappa l3)`` the steady heading error of the exact inverse 
 local curvature and ``Delta a`` the change of the normalised wheel-rate command. A product (rather
 than a sum) makes every term necessary: standing still or spinning in place loses the speed term,
 driving the path the wrong way loses the heading term, leaving the path loses the tracking term.
+
+Evaluation without angles: the cosine and sine of the heading error come from the unit vectors of
+the heading, ``u = (cos beta, sin beta)``, and of the path tangent, ``t = (cos theta, sin theta)``
+(:attr:`amigo_gym.paths.Projection.cos_theta`, ``sin_theta``), as ``cos(psi) = u . t`` and
+``sin(psi) = t x u``; the heading term as ``cos(psi - psi_ss) = cos(psi) cos(psi_ss) + sin(psi)
+sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kappa l3)^2)``; and
+``(||Delta a|| / sigma_a)^2`` as ``(Delta a_1^2 + Delta a_2^2) / sigma_a^2``.
+
+Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
+reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
+quantity the environments report (:class:`Outcome`); :func:`transition`, :func:`evaluate`,
+:func:`observe` and :func:`reward_terms` are thin wrappers over the same column functions. The single
+environment calls them with plain scalars, the vector environment with ``(N,)`` arrays, so that both
+run the same code. The constants of a step are derived once per :class:`EnvParams`
+(:func:`task_constants`).
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import body_velocity, h_position, step_pose, step_wheel_angles
-from amigo_gym.params import EnvParams
-from amigo_gym.paths import CirclePath, ManoeuvrePath, Projection, wrap_angle
+from amigo_gym.kinematics import (
+    Real,
+    arc_step,
+    body_velocity_columns,
+    castor_rate_columns,
+    col_cos,
+    col_exp,
+    col_sin,
+    col_sqrt,
+    pack,
+)
+from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection, wrap_angle
 
 __all__ = [
     "REWARD_TERMS",
@@ -63,6 +91,12 @@ __all__ = [
     "evaluate",
     "Transition",
     "transition",
+    "TaskConstants",
+    "task_constants",
+    "State",
+    "Outcome",
+    "reset_columns",
+    "step_columns",
 ]
 
 Array = NDArray[np.float64]
@@ -104,7 +138,8 @@ def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Arr
     want = (*batch_shape, 2)
     if a.shape != want:
         raise ValueError(f"action must have shape {want} (wheel 1, wheel 2), got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    # a few values (one robot) are checked faster one by one than by a numpy reduction
+    if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 8 else np.isfinite(a).all()):
         raise ValueError(f"action must be finite; got NaN or infinite values: {np.asarray(action)!r}")
     return a
 
@@ -147,6 +182,149 @@ def heading_error(pose: ArrayLike, proj: Projection) -> Array:
     return wrap_angle(np.asarray(pose, dtype=np.float64)[..., 2] - proj.tangent_angle)
 
 
+@dataclass(frozen=True)
+class TaskConstants:
+    """The numbers a step needs, derived once from :class:`EnvParams` (:func:`task_constants`).
+
+    Attributes:
+        params: the settings they derive from.
+        robot: ``params.robot``.
+        dt: ``params.dt`` [s].
+        w_max: ``robot.max_wheel_rate`` [rad/s].
+        l3: ``robot.l3`` [m].
+        speed: reference speed ``v_ref`` [m/s].
+        max_speed: ``robot.max_speed`` [m/s].
+        error_scale: ``params.error_scale`` [m].
+        e_max: bound of observation 0, ``2 termination_distance / error_scale`` [-].
+        termination_distance: [m].
+        sigma_track: [m].
+        sigma_speed: [m/s].
+        sigma_smooth_sq: ``sigma_smooth ** 2`` [-].
+        smooth_weight: [-].
+        preview: preview distances [m].
+        reference_obs: observation ``-1``, ``v_ref / v_max`` [-].
+    """
+
+    params: EnvParams
+    robot: RobotParams
+    dt: float
+    w_max: float
+    l3: float
+    speed: float
+    max_speed: float
+    error_scale: float
+    e_max: float
+    termination_distance: float
+    sigma_track: float
+    sigma_speed: float
+    sigma_smooth_sq: float
+    smooth_weight: float
+    preview: tuple[float, ...]
+    reference_obs: float
+
+
+@lru_cache(maxsize=64)
+def task_constants(params: EnvParams) -> TaskConstants:
+    """The :class:`TaskConstants` of ``params`` (cached: equal settings give the same object)."""
+    robot = params.robot
+    return TaskConstants(
+        params=params,
+        robot=robot,
+        dt=params.dt,
+        w_max=robot.max_wheel_rate,
+        l3=robot.l3,
+        speed=params.speed,
+        max_speed=robot.max_speed,
+        error_scale=params.error_scale,
+        e_max=2.0 * params.termination_distance / params.error_scale,  # obs_bounds(params)[1][0]
+        termination_distance=params.termination_distance,
+        sigma_track=params.sigma_track,
+        sigma_speed=params.sigma_speed,
+        sigma_smooth_sq=params.sigma_smooth * params.sigma_smooth,
+        smooth_weight=params.smooth_weight,
+        preview=params.preview,
+        reference_obs=params.speed / robot.max_speed,
+    )
+
+
+def _clip(x: Real, low: float, high: float) -> Real:
+    """``np.clip`` of an array, ``min(max(x, low), high)`` of a scalar (the same values)."""
+    if isinstance(x, np.ndarray):
+        out: Real = np.clip(x, low, high)
+        return out
+    return min(max(x, low), high)
+
+
+def _abs(x: Real) -> Real:
+    """``|x|`` of a float or an array."""
+    return cast(Real, abs(x))
+
+
+def _heading_error_columns(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
+    """``(cos(psi), sin(psi))`` of ``psi = beta - theta`` from the unit vectors: ``u . t`` and ``t x u``."""
+    return cos_beta * cos_theta + sin_beta * sin_theta, sin_beta * cos_theta - cos_beta * sin_theta
+
+
+def _observe_columns(
+    k: TaskConstants,
+    path: AnyPath,
+    s: Real,
+    error: Real,
+    curvature: Real,
+    cos_psi: Real,
+    sin_psi: Real,
+    v: Real,
+    w1: Real,
+    w2: Real,
+) -> tuple[Real, ...]:
+    """The observation's columns, in the order of the module table."""
+    l3 = k.l3
+    return (
+        _clip(error / k.error_scale, -k.e_max, k.e_max),
+        sin_psi,
+        cos_psi,
+        curvature * l3,
+        *(path.curvature_columns(s + d) * l3 for d in k.preview),
+        w1 / k.w_max,
+        w2 / k.w_max,
+        (v - k.speed) / k.max_speed,
+        k.reference_obs,
+    )
+
+
+def _reward_columns(
+    k: TaskConstants,
+    error: Real,
+    curvature: Real,
+    cos_psi: Real,
+    sin_psi: Real,
+    v: Real,
+    w1: Real,
+    w2: Real,
+    prev1: Real,
+    prev2: Real,
+) -> tuple[Real, Real, Real, Real]:
+    """The reward terms ``(track, speed, heading, smooth)`` (:data:`REWARD_TERMS`), module docstring."""
+    sin_ss = -_clip(curvature * k.l3, -1.0, 1.0)  # psi_ss = -asin(kappa l3)
+    cos_ss = col_sqrt(1.0 - sin_ss * sin_ss)
+    da1 = (w1 - prev1) / k.w_max
+    da2 = (w2 - prev2) / k.w_max
+    return (
+        col_exp(-_abs(error) / k.sigma_track),
+        col_exp(-_abs(v - k.speed) / k.sigma_speed),
+        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
+        1.0 - k.smooth_weight * (1.0 - col_exp(-((da1 * da1 + da2 * da2) / k.sigma_smooth_sq))),
+    )
+
+
+def _product(terms: tuple[Real, ...]) -> Real:
+    """The reward, ``((track * speed) * heading) * smooth``, as :func:`combine_reward` multiplies."""
+    out = terms[0]
+    for t in terms[1:]:
+        out = out * t
+    return out
+
+
 def observe(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath, proj: Projection) -> Array:
     """Observation ``(..., obs_dim)`` (float64; the environments cast to float32), module table.
 
@@ -157,26 +335,16 @@ def observe(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath,
         path: the path of H.
         proj: ``path.project(h_position(pose))``, passed in so that it is computed once.
     """
-    robot = params.robot
+    k = task_constants(params)
     pose = np.asarray(pose, dtype=np.float64)
     rates = np.asarray(rates, dtype=np.float64)
-    psi = heading_error(pose, proj)
-    v, _ = body_velocity(rates, robot)
-    e_max = 2.0 * params.termination_distance / params.error_scale  # obs_bounds(params)[1][0]
-    # filled column by column (the leading axes of pose and rates broadcast): no stacking copies
-    out = np.empty((*np.broadcast_shapes(np.shape(psi), np.shape(v)), 8 + len(params.preview)))
-    out[..., 0] = np.clip(proj.cross_track_error / params.error_scale, -e_max, e_max)
-    out[..., 1] = np.sin(psi)
-    out[..., 2] = np.cos(psi)
-    out[..., 3] = proj.curvature * robot.l3
-    for i, d in enumerate(params.preview):
-        out[..., 4 + i] = path.curvature(proj.s + d) * robot.l3
-    wmax = robot.max_wheel_rate
-    out[..., -4] = rates[..., 0] / wmax
-    out[..., -3] = rates[..., 1] / wmax
-    out[..., -2] = (v - params.speed) / robot.max_speed
-    out[..., -1] = params.speed / robot.max_speed
-    return out
+    b = pose[..., 2]
+    cos_psi, sin_psi = _heading_error_columns(np.cos(b), np.sin(b), proj.cos_theta, proj.sin_theta)
+    v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
+    cols = _observe_columns(
+        k, path, proj.s, proj.cross_track_error, proj.curvature, cos_psi, sin_psi, v, rates[..., 0], rates[..., 1]
+    )
+    return pack(*cols)
 
 
 def reward_terms(
@@ -191,18 +359,26 @@ def reward_terms(
         params: task settings.
         proj: projection of H (after the step) onto the path.
     """
-    robot = params.robot
+    k = task_constants(params)
+    pose = np.asarray(pose, dtype=np.float64)
     rates = np.asarray(rates, dtype=np.float64)
-    v, _ = body_velocity(rates, robot)
-    psi = heading_error(pose, proj)
-    psi_ss = -np.arcsin(np.clip(proj.curvature * robot.l3, -1.0, 1.0))
-    da = np.linalg.norm((rates - np.asarray(prev_rates, dtype=np.float64)) / robot.max_wheel_rate, axis=-1)
-    return {
-        "track": np.exp(-np.abs(proj.cross_track_error) / params.sigma_track),
-        "speed": np.exp(-np.abs(v - params.speed) / params.sigma_speed),
-        "heading": 0.5 * (1.0 + np.cos(psi - psi_ss)),
-        "smooth": 1.0 - params.smooth_weight * (1.0 - np.exp(-((da / params.sigma_smooth) ** 2))),
-    }
+    prev = np.asarray(prev_rates, dtype=np.float64)
+    b = pose[..., 2]
+    cos_psi, sin_psi = _heading_error_columns(np.cos(b), np.sin(b), proj.cos_theta, proj.sin_theta)
+    v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
+    terms = _reward_columns(
+        k,
+        proj.cross_track_error,
+        proj.curvature,
+        cos_psi,
+        sin_psi,
+        v,
+        rates[..., 0],
+        rates[..., 1],
+        prev[..., 0],
+        prev[..., 1],
+    )
+    return {name: np.asarray(t) for name, t in zip(REWARD_TERMS, terms, strict=True)}
 
 
 def combine_reward(terms: dict[str, Array]) -> Array:
@@ -211,6 +387,109 @@ def combine_reward(terms: dict[str, Array]) -> Array:
     for k in REWARD_TERMS:
         out = out * terms[k]
     return out
+
+
+class State(NamedTuple):
+    """The state of one robot or of a batch, as columns (floats, or arrays of one shape).
+
+    Attributes:
+        x, y, beta: the pose ``(x_A [m], y_A [m], beta [rad])``.
+        alpha1, alpha2, alpha3: the wheel angles [rad] (right, left, castor).
+        rate1, rate2: the wheel rates applied during the last step [rad/s] (at reset: the initial ones).
+    """
+
+    x: Real
+    y: Real
+    beta: Real
+    alpha1: Real
+    alpha2: Real
+    alpha3: Real
+    rate1: Real
+    rate2: Real
+
+
+class Outcome(NamedTuple):
+    """What the environments report about a state, as columns (:func:`step_columns`, :func:`reset_columns`).
+
+    Attributes:
+        h_x, h_y: point H [m].
+        closest: H's projection on the path (:meth:`amigo_gym.paths.CirclePath.project_xy`).
+        obs: the observation's columns (float64; scalars where constant), module table.
+        terms: the reward terms in the order of :data:`REWARD_TERMS`.
+        reward: their product.
+        terminated: ``|e| > termination_distance``.
+    """
+
+    h_x: Real
+    h_y: Real
+    closest: ClosestPoint
+    obs: tuple[Real, ...]
+    terms: tuple[Real, Real, Real, Real]
+    reward: Real
+    terminated: Any
+
+
+def _outcome(
+    k: TaskConstants,
+    path: AnyPath,
+    x: Real,
+    y: Real,
+    cos_beta: Real,
+    sin_beta: Real,
+    v: Real,
+    w1: Real,
+    w2: Real,
+    prev1: Real,
+    prev2: Real,
+) -> Outcome:
+    """Observation, reward and end of the state with pose ``(x, y, beta)`` (given ``cos beta``, ``sin beta``)."""
+    l3 = k.l3
+    hx = x + l3 * cos_beta
+    hy = y + l3 * sin_beta
+    cp = path.project_xy(hx, hy)
+    cos_psi, sin_psi = _heading_error_columns(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
+    e = cp.cross_track_error
+    obs = _observe_columns(k, path, cp.s, e, cp.curvature, cos_psi, sin_psi, v, w1, w2)
+    terms = _reward_columns(k, e, cp.curvature, cos_psi, sin_psi, v, w1, w2, prev1, prev2)
+    return Outcome(hx, hy, cp, obs, terms, _product(terms), _abs(e) > k.termination_distance)
+
+
+def reset_columns(k: TaskConstants, path: AnyPath, state: State) -> Outcome:
+    """The :class:`Outcome` of a start state (the smoothness term is 1: no change of the rates)."""
+    b = state.beta
+    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
+    return _outcome(
+        k, path, state.x, state.y, col_cos(b), col_sin(b), v, state.rate1, state.rate2, state.rate1, state.rate2
+    )
+
+
+def step_columns(k: TaskConstants, path: AnyPath, state: State, a1: Real, a2: Real) -> tuple[State, Outcome]:
+    """One environment step in column form: the new state and its :class:`Outcome` (see :func:`transition`).
+
+    Args:
+        k: constants of the settings.
+        path: the path of H.
+        state: the state before the step.
+        a1, a2: the validated, normalised action (wheel 1, wheel 2); clipped to [-1, 1] here.
+    """
+    robot = k.robot
+    dt = k.dt
+    w1 = _clip(a1, -1.0, 1.0) * k.w_max
+    w2 = _clip(a2, -1.0, 1.0) * k.w_max
+    v, bdot = body_velocity_columns(w1, w2, robot)
+    b = state.beta
+    arc = arc_step(state.x, state.y, b, col_cos(b), col_sin(b), v, bdot, dt)
+    new = State(
+        arc.x,
+        arc.y,
+        arc.beta,
+        state.alpha1 + w1 * dt,
+        state.alpha2 + w2 * dt,
+        state.alpha3 + castor_rate_columns(v, bdot, robot) * dt,
+        w1,
+        w2,
+    )
+    return new, _outcome(k, path, arc.x, arc.y, arc.cos_beta, arc.sin_beta, v, w1, w2, state.rate1, state.rate2)
 
 
 class Evaluation(NamedTuple):
@@ -222,15 +501,22 @@ class Evaluation(NamedTuple):
     terminated: NDArray[np.bool_]
 
 
+def _evaluation(out: Outcome) -> Evaluation:
+    return Evaluation(pack(*out.obs), out.closest.projection(), pack(out.h_x, out.h_y), np.asarray(out.terminated))
+
+
 def evaluate(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath) -> Evaluation:
     """Observation, projection of H, H itself and the termination flag of a state.
 
     Terminated when ``|e| > termination_distance``.
     """
-    h = h_position(pose, params.robot)
-    proj = path.project(h)
-    obs = observe(pose, rates, params, path, proj)
-    return Evaluation(obs, proj, h, np.abs(proj.cross_track_error) > params.termination_distance)
+    k = task_constants(params)
+    p = np.asarray(pose, dtype=np.float64)
+    r = np.asarray(rates, dtype=np.float64)
+    b = p[..., 2]
+    w1, w2 = r[..., 0], r[..., 1]
+    v, _ = body_velocity_columns(w1, w2, k.robot)
+    return _evaluation(_outcome(k, path, p[..., 0], p[..., 1], np.cos(b), np.sin(b), v, w1, w2, w1, w2))
 
 
 class Transition(NamedTuple):
@@ -257,12 +543,21 @@ def transition(
     The action must already be validated (:func:`validate_action`). The pose and the wheel angles
     advance by the closed-form solution for rates held over ``params.dt`` (no Euler step).
     """
-    rates = action_to_wheel_rates(action, params)
-    new_pose = step_pose(pose, rates, params.dt, params.robot)
-    angles = step_wheel_angles(wheel_angles, rates, params.dt, params.robot)
-    ev = evaluate(new_pose, rates, params, path)
-    terms = reward_terms(new_pose, rates, prev_rates, params, ev.projection)
-    return Transition(new_pose, angles, rates, combine_reward(terms), terms, ev)
+    k = task_constants(params)
+    p = np.asarray(pose, dtype=np.float64)
+    al = np.asarray(wheel_angles, dtype=np.float64)
+    pr = np.asarray(prev_rates, dtype=np.float64)
+    a = np.asarray(action, dtype=np.float64)
+    state = State(p[..., 0], p[..., 1], p[..., 2], al[..., 0], al[..., 1], al[..., 2], pr[..., 0], pr[..., 1])
+    new, out = step_columns(k, path, state, a[..., 0], a[..., 1])
+    return Transition(
+        pack(new.x, new.y, new.beta),
+        pack(new.alpha1, new.alpha2, new.alpha3),
+        pack(new.rate1, new.rate2),
+        np.asarray(out.reward),
+        {name: np.asarray(t) for name, t in zip(REWARD_TERMS, out.terms, strict=True)},
+        _evaluation(out),
+    )
 
 
 def max_return(n_steps: int) -> float:

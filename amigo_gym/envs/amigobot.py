@@ -244,11 +244,11 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         low, high = task.obs_bounds(p)
         self.observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
-        self._initial_rates = task.initial_wheel_rates(p)
-        # state (set by reset)
-        self._pose: Array = np.zeros(3)
-        self._angles: Array = np.zeros(3)
-        self._rates: Array = self._initial_rates.copy()
+        self._k = task.task_constants(p)
+        rate1, rate2 = task.initial_wheel_rates(p).tolist()
+        self._initial_state = task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate1, rate2)
+        # state (set by reset): plain scalars, stepped by the same column functions as the vector env
+        self._state: task.State = self._initial_state
         self._steps = 0
         self._trail: list[tuple[float, float]] = []
         self._renderer: Any = None
@@ -257,12 +257,13 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     @property
     def pose(self) -> Array:
         """Current pose ``(x_A [m], y_A [m], beta [rad])``, a copy."""
-        return self._pose.copy()
+        st = self._state
+        return np.array((st.x, st.y, st.beta))
 
     @property
     def wheel_rates(self) -> Array:
         """Wheel rates applied during the last step (at reset: the initial rates) [rad/s], a copy."""
-        return self._rates.copy()
+        return np.array((self._state.rate1, self._state.rate2))
 
     @property
     def time(self) -> float:
@@ -290,17 +291,15 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         else:
             u = self.np_random.uniform(-1.0, 1.0, size=3)
             pose = task.start_pose(u, self.params, self.path)
-        self._pose = pose
-        self._angles = np.zeros(3)
-        self._rates = self._initial_rates.copy()
+        x, y, beta = pose.tolist()
+        self._state = self._initial_state._replace(x=x, y=y, beta=beta)
         self._steps = 0
-        ev = task.evaluate(pose, self._rates, self.params, self.path)
-        terms = task.reward_terms(pose, self._rates, self._rates, self.params, ev.projection)
-        self._trail = [(float(ev.h[0]), float(ev.h[1]))]
-        info = self._info(ev, terms)
+        out = task.reset_columns(self._k, self.path, self._state)
+        self._trail = [(float(out.h_x), float(out.h_y))]
+        info = self._info(out)
         if self.render_mode == "human":
             self.render()
-        return ev.obs.astype(np.float32), info
+        return np.array(out.obs, dtype=np.float32), info
 
     def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
         """Hold the wheel rates ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
@@ -308,28 +307,33 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         Raises:
             ValueError: action of a wrong shape or with NaN/inf entries.
         """
-        a = task.validate_action(action)
-        tr = task.transition(self._pose, self._angles, self._rates, a, self.params, self.path)
-        self._pose, self._angles, self._rates = tr.pose, tr.wheel_angles, tr.rates
+        a1, a2 = task.validate_action(action).tolist()
+        self._state, out = task.step_columns(self._k, self.path, self._state, a1, a2)
         self._steps += 1
-        ev = tr.evaluation
         if self.render_mode is not None:
-            self._trail.append((float(ev.h[0]), float(ev.h[1])))
-        info = self._info(ev, tr.terms)
+            self._trail.append((float(out.h_x), float(out.h_y)))
+        info = self._info(out)
         if self.render_mode == "human":
             self.render()
-        return ev.obs.astype(np.float32), float(tr.reward), bool(ev.terminated), False, info
+        return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), False, info
 
-    def _info(self, ev: task.Evaluation, terms: Mapping[str, Array]) -> dict[str, Any]:
+    def _info(self, out: task.Outcome) -> dict[str, Any]:
+        st = self._state
+        track, speed, heading, smooth = out.terms
         return {
-            "pose": self._pose.copy(),
-            "h_position": np.array(ev.h, dtype=np.float64),
-            "cross_track_error": float(ev.projection.cross_track_error),
-            "wheel_rates": self._rates.copy(),
-            "wheel_angles": self._angles[:2].copy(),
-            "castor_angle": float(self._angles[2]),
-            "reward_terms": {k: float(terms[k]) for k in task.REWARD_TERMS},
-            "time": self._steps * self.params.dt,
+            "pose": np.array((st.x, st.y, st.beta)),
+            "h_position": np.array((out.h_x, out.h_y)),
+            "cross_track_error": float(out.closest.cross_track_error),
+            "wheel_rates": np.array((st.rate1, st.rate2)),
+            "wheel_angles": np.array((st.alpha1, st.alpha2)),
+            "castor_angle": float(st.alpha3),
+            "reward_terms": {
+                "track": float(track),
+                "speed": float(speed),
+                "heading": float(heading),
+                "smooth": float(smooth),
+            },
+            "time": self._steps * self._k.dt,
         }
 
     # ------------------------------------------------------------------ rendering
@@ -348,17 +352,18 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
         if self._renderer is None:
             self._renderer = Renderer(self.params, self.path, self.render_mode)
+        st = self._state
         frame: NDArray[np.uint8] | None = self._renderer.draw(
-            self._pose,
+            self.pose,
             self._trail,
-            wheel_angles=self._angles[:2],
+            wheel_angles=np.array((st.alpha1, st.alpha2)),
             time=self.time,
             cross_track_error=self._last_error(),
         )
         return frame
 
     def _last_error(self) -> float:
-        return float(self.path.project(h_position(self._pose, self.params.robot)).cross_track_error)
+        return float(self.path.project(h_position(self.pose, self.params.robot)).cross_track_error)
 
     def close(self) -> None:
         """Close the render window, if any."""

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import task
 from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
-from amigo_gym.kinematics import h_position
+from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
@@ -112,12 +112,14 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self.single_observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, n)
 
+        self._k = task.task_constants(p)
         self._initial_rates = task.initial_wheel_rates(p)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
-        self._pose: Array = np.zeros((n, 3))
-        self._angles: Array = np.zeros((n, 3))
-        self._rates: Array = np.broadcast_to(self._initial_rates, (n, 2)).copy()
+        # the state as (N,) columns, stepped by the same column functions as the single env
+        rate1, rate2 = self._initial_rates.tolist()
+        z = [np.zeros(n) for _ in range(6)]
+        self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
@@ -185,9 +187,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
         self._autoreset[idx] = False
         obs, infos = self._reset_rows(idx, pose_opt)
+        self._obs = self._obs.copy()  # the last step returned it
         self._obs[idx] = obs
         if self.render_mode is not None:
-            self._trail.append(h_position(self._pose, self.params.robot))
+            self._trail.append(h_position(self._pose(), self.params.robot))
         return self._obs.copy(), self._scatter(infos, mask)
 
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
@@ -199,18 +202,26 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             # Generator.uniform(-1, 1, 3) is -1 + 2 * Generator.random(3) (the same stream and rounding)
             u = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in idx.tolist()]).reshape(len(idx), 3)
             pose = task.start_pose(u, self.params, self.path)
-        rates = np.broadcast_to(self._initial_rates, (len(idx), 2)).copy()
-        angles = np.zeros((len(idx), 3))
-        self._pose[idx] = pose
-        self._angles[idx] = angles
-        self._rates[idx] = rates
+        m = len(idx)
+        rate1, rate2 = self._initial_rates.tolist()
+        zeros = np.zeros(m)
+        state = task.State(
+            pose[:, 0].copy(),
+            pose[:, 1].copy(),
+            pose[:, 2].copy(),
+            zeros,
+            zeros,
+            zeros,
+            np.full(m, rate1),
+            np.full(m, rate2),
+        )
+        for full, rows in zip(self._state, state, strict=True):
+            np.asarray(full)[idx] = rows
         self._steps[idx] = 0
-        ev = task.evaluate(pose, rates, self.params, self.path)
-        terms = task.reward_terms(pose, rates, rates, self.params, ev.projection)
+        out = task.reset_columns(self._k, self.path, state)
         if self.render_mode is not None:
             self._trail_start[idx] = len(self._trail)
-        infos = self._info(pose, ev, rates, angles, terms, np.zeros(len(idx), dtype=np.int64))
-        return ev.obs.astype(np.float32), infos
+        return self._obs_array(out, m), self._info(state, out, np.zeros(m, dtype=np.int64))
 
     # ------------------------------------------------------------------ step
     def step(
@@ -232,17 +243,16 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
             )
-        tr = task.transition(self._pose, self._angles, self._rates, a, self.params, self.path)
-        self._pose, self._angles, self._rates = tr.pose, tr.wheel_angles, tr.rates
+        state, out = task.step_columns(self._k, self.path, self._state, a[:, 0], a[:, 1])
+        self._state = state
         self._steps += 1
-        ev = tr.evaluation
-        obs = ev.obs.astype(np.float32)
-        reward = tr.reward
-        terminated = ev.terminated.copy()
+        obs = self._obs_array(out, n)
+        reward = _column(out.reward, n)
+        terminated: BoolArray = np.asarray(out.terminated)
         truncated = (
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
         )
-        infos = self._info(self._pose, ev, self._rates, self._angles, tr.terms, self._steps)
+        infos = self._info(state, out, self._steps)
 
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             idx = np.flatnonzero(self._autoreset)
@@ -271,32 +281,39 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                     **infos,
                 }
         self._autoreset = terminated | truncated
-        self._obs = obs
+        self._obs = obs  # returned as is: reset() copies it before changing rows
         if self.render_mode is not None:
-            self._trail.append(h_position(self._pose, self.params.robot))
-        return obs.copy(), reward, terminated, truncated, self._scatter(infos, None)
+            self._trail.append(h_position(self._pose(), self.params.robot))
+        return obs, reward, terminated, truncated, self._scatter(infos, None)
 
     # ------------------------------------------------------------------ infos
-    def _info(
-        self,
-        pose: Array,
-        ev: task.Evaluation,
-        rates: Array,
-        angles: Array,
-        terms: Mapping[str, Array],
-        steps: NDArray[np.int64],
-    ) -> dict[str, Any]:
-        """Compact infos (rows of the robots concerned, no masks); keys as the single env's."""
+    def _obs_array(self, out: task.Outcome, m: int) -> ObsArray:
+        """The float32 observations ``(m, obs_dim)`` of an outcome, filled column by column."""
+        obs = np.empty((m, len(out.obs)), dtype=np.float32)
+        for j, col in enumerate(out.obs):
+            obs[:, j] = col
+        return obs
+
+    def _info(self, state: task.State, out: task.Outcome, steps: NDArray[np.int64]) -> dict[str, Any]:
+        """Compact infos (rows of the robots concerned, no masks); keys as the single env's.
+
+        The arrays of ``out`` are new at every step and not kept, so they are handed out without a copy.
+        """
+        m = len(steps)
         return {
-            "pose": pose.copy(),
-            "h_position": ev.h.copy(),
-            "cross_track_error": ev.projection.cross_track_error.copy(),
-            "wheel_rates": rates.copy(),
-            "wheel_angles": angles[:, :2].copy(),
-            "castor_angle": angles[:, 2].copy(),
-            "reward_terms": {k: np.asarray(terms[k], dtype=np.float64).copy() for k in task.REWARD_TERMS},
-            "time": steps * self.params.dt,
+            "pose": pack(state.x, state.y, state.beta),
+            "h_position": pack(out.h_x, out.h_y),
+            "cross_track_error": _column(out.closest.cross_track_error, m),
+            "wheel_rates": pack(state.rate1, state.rate2),
+            "wheel_angles": pack(state.alpha1, state.alpha2),
+            "castor_angle": np.array(state.alpha3),
+            "reward_terms": {name: _column(t, m) for name, t in zip(task.REWARD_TERMS, out.terms, strict=True)},
+            "time": steps * self._k.dt,
         }
+
+    def _pose(self) -> Array:
+        """The poses ``(N, 3)``."""
+        return pack(self._state.x, self._state.y, self._state.beta)
 
     def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
         """Vector-format infos: ``(N, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
@@ -331,11 +348,16 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         while len(self._renderers) < self.num_envs:
             self._renderers.append(Renderer(self.params, self.path, "rgb_array"))
         frames = []
+        pose = self._pose()
+        st = self._state
         for i, r in enumerate(self._renderers):
             trail = [tuple(h[i]) for h in self._trail[int(self._trail_start[i]) :]]
             frames.append(
                 r.draw(
-                    self._pose[i], trail, wheel_angles=self._angles[i, :2], time=float(self._steps[i] * self.params.dt)
+                    pose[i],
+                    trail,
+                    wheel_angles=np.array((np.asarray(st.alpha1)[i], np.asarray(st.alpha2)[i])),
+                    time=float(self._steps[i] * self.params.dt),
                 )
             )
         return tuple(frames)
@@ -345,6 +367,13 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         for r in self._renderers:
             r.close()
         self._renderers = []
+
+
+def _column(x: Any, m: int) -> Array:
+    """``x`` as a float64 array of shape ``(m,)`` (a new one if ``x`` is not already such an array)."""
+    if isinstance(x, np.ndarray) and x.shape == (m,) and x.dtype == np.float64:
+        return x
+    return np.full(m, x, dtype=np.float64)
 
 
 def _take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
