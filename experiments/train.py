@@ -12,7 +12,8 @@ Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (rl-zoo format: the 
 What a run writes in ``--out`` (every file written to a temporary name, then ``os.replace``d, so that
 a killed run never leaves a half-written file):
 
-* ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions;
+* ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
+  (and, for each ``--resume``, its command line, step and git revision);
 * ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
 * ``checkpoint.json`` + ``checkpoints/step_<n>/``: the latest checkpoint (model and, for SAC/TD3, the
   replay buffer); ``checkpoint.json`` is written last and names the complete checkpoint;
@@ -424,6 +425,9 @@ def train(s: Settings) -> dict[str, Any]:
         if s.algo in OFF_POLICY:
             model.load_replay_buffer(out / ckpt["path"] / "replay_buffer.pkl")
         set_random_seed(s.seed + done_steps)
+        resume_entry = {"command": "amigo-gym train " + " ".join(s.argv), "from_step": done_steps}
+        config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
+        atomic_write_json(out / "config.json", config)
     else:
         config = {
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
@@ -481,8 +485,9 @@ def train(s: Settings) -> dict[str, Any]:
         "wall_time_s": round(wall, 1),
         "resumed_from": done_steps if s.resume else None,
         "last_eval": evals[-1] if evals else None,
-        "command": json.loads((out / "config.json").read_text())["command"],
-        "git_revision": json.loads((out / "config.json").read_text())["git_revision"],
+        "command": config["command"],
+        "resumes": config.get("resumes", []),
+        "git_revision": config["git_revision"],
         "versions": versions(),
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,

@@ -96,6 +96,8 @@ def test_sac_train_then_resume(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == 600 and rec["resumed_from"] == 400
+    assert rec["command"] == cfg["command"] and rec["resumes"][0]["from_step"] == 400
+    assert "--resume" in rec["resumes"][0]["command"]
     assert [e["timesteps"] for e in json.loads((out / "eval.json").read_text())] == [200, 400, 600]
     assert SAC.load(out / "model.zip", device="cpu").num_timesteps == 600
     assert json.loads((tmp_path / "exp" / "sac.json").read_text())["timesteps"] == 600
