@@ -73,8 +73,8 @@ def col_cos(x: Real) -> Real:
 
 
 def col_sqrt(x: Real) -> Real:
-    """``np.sqrt(x)``; a Python float for a scalar ``x``."""
-    return np.sqrt(x) if isinstance(x, np.ndarray) else float(np.sqrt(x))
+    """``np.sqrt(x)``; ``math.sqrt(x)`` for a scalar ``x`` (the same value: IEEE 754 rounds sqrt exactly)."""
+    return np.sqrt(x) if isinstance(x, np.ndarray) else math.sqrt(x)
 
 
 def col_exp(x: Real) -> Real:
@@ -110,10 +110,13 @@ def body_velocity_columns(w1: Real, w2: Real, robot: RobotParams) -> tuple[Real,
 
 
 def castor_rate_columns(v_a: Real, betadot: Real, robot: RobotParams) -> Real:
-    """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s]."""
+    """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s].
+
+    The sign is that of ``v_A`` as a float: negative for ``-0.0`` (where the environments have
+    ``betadot = 0`` too, so a zero rate either way).
+    """
     lb = robot.l5 * betadot
-    # the sign of v_A + 0.0: positive for v_A = -0.0 too, as "forward unless v_A < 0"
-    return _copysign(col_sqrt(lb * lb + v_a * v_a), v_a + 0.0) / robot.r3
+    return _copysign(col_sqrt(lb * lb + v_a * v_a), v_a) / robot.r3
 
 
 def _copysign(x: Real, y: Real) -> Real:
@@ -228,7 +231,7 @@ def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
-    return np.asarray(castor_rate_columns(v, b, robot))
+    return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
 
 
 def h_position(pose: ArrayLike, robot: RobotParams) -> Array:

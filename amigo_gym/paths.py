@@ -62,7 +62,8 @@ class ClosestPoint(NamedTuple):
     """Column form of :class:`Projection` (from ``project_xy``): the point as ``x``, ``y`` columns.
 
     ``curvature`` is a plain float where it is the same for every query (on a circle); every other
-    field has the query's shape.
+    field has the query's shape, except the fields a ``minimal`` projection does not compute, which
+    are NaN.
     """
 
     s: Real
@@ -112,8 +113,13 @@ class Path(Protocol):
         """Closest point to ``p`` ``(..., 2)``, with tangent, curvature and signed cross-track error."""
         ...
 
-    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
-        """Column form of :meth:`project` for the points ``(x, y)``."""
+    def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
+        """Column form of :meth:`project` for the points ``(x, y)``.
+
+        ``minimal=True`` computes only what the observation and the reward need (cross-track error,
+        curvature, unit tangent, and the arc length where the curvature varies) and leaves the other
+        fields NaN.
+        """
         ...
 
     def curvature_columns(self, s: Real) -> Real:
@@ -198,7 +204,7 @@ class CirclePath:
         p = np.asarray(p, dtype=np.float64)
         return self.project_xy(p[..., 0], p[..., 1]).projection()
 
-    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
+    def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         r"""Closest point of the circle to ``(x, y)``, by vector algebra about the centre ``c``.
 
         With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho``: the closest point is ``c + R n``,
@@ -206,6 +212,7 @@ class CirclePath:
         length ``s = R a`` with ``a`` in ``[0, 2 pi)`` the angle from the start radius ``r0`` to ``u``
         in the direction of travel, ``a = atan2(d (r0 x u), r0 . u)`` (plus ``2 pi`` where negative).
         At the centre itself (every point of the circle equally close) it is the start point.
+        ``minimal=True``: ``s``, the point and the tangent angle are not computed (NaN).
         """
         cx, cy, r0x, r0y = self._frame
         d, r = self.direction, self.radius
@@ -218,20 +225,25 @@ class CirclePath:
             ux = np.where(at_centre, r0x, ux)
             uy = np.where(at_centre, r0y, uy)
             norm = np.where(at_centre, 1.0, rho)
+        nx = ux / norm
+        ny = uy / norm
+        e = r - rho if d > 0 else rho - r
+        cos_theta = -ny if d > 0 else ny
+        sin_theta = nx if d > 0 else -nx
+        if minimal:
+            return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, e, cos_theta, sin_theta)
         cross = r0x * uy - r0y * ux
         a = col_arctan2(cross if d > 0 else -cross, r0x * ux + r0y * uy)
         s = cast(Real, r * (a + TWO_PI * (a < 0.0)))  # a + 2 pi where a < 0: in [0, 2 pi R]
-        nx = ux / norm
-        ny = uy / norm
         return ClosestPoint(
             s=s,
             x=cx + r * nx,
             y=cy + r * ny,
             tangent_angle=self.start_angle + (s if d > 0 else -s) / r,
             curvature=d / r,
-            cross_track_error=r - rho if d > 0 else rho - r,
-            cos_theta=-ny if d > 0 else ny,
-            sin_theta=nx if d > 0 else -nx,
+            cross_track_error=e,
+            cos_theta=cos_theta,
+            sin_theta=sin_theta,
         )
 
 
@@ -292,7 +304,7 @@ class ManoeuvrePath:
         p = np.asarray(p, dtype=np.float64)
         return self.project_xy(p[..., 0], p[..., 1]).projection()
 
-    def project_xy(self, x: Real, y: Real) -> ClosestPoint:
+    def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         L = self.straight_length
         s_line = np.minimum(x, L)
         d_line = np.hypot(x - s_line, y)
@@ -303,9 +315,9 @@ class ManoeuvrePath:
         e_line = np.where(x <= L, y, np.sign(y) * d_line)
         return ClosestPoint(
             s=_where(use_line, s_line, L + circ.s),
-            x=_where(use_line, s_line, circ.x),
-            y=_where(use_line, 0.0, circ.y),
-            tangent_angle=_where(use_line, 0.0, circ.tangent_angle),
+            x=math.nan if minimal else _where(use_line, s_line, circ.x),
+            y=math.nan if minimal else _where(use_line, 0.0, circ.y),
+            tangent_angle=math.nan if minimal else _where(use_line, 0.0, circ.tangent_angle),
             curvature=_where(use_line, 0.0, circ.curvature),
             cross_track_error=_where(use_line, e_line, circ.cross_track_error),
             cos_theta=_where(use_line, 1.0, circ.cos_theta),

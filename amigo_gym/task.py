@@ -39,7 +39,8 @@ the heading, ``u = (cos beta, sin beta)``, and of the path tangent, ``t = (cos t
 (:attr:`amigo_gym.paths.Projection.cos_theta`, ``sin_theta``), as ``cos(psi) = u . t`` and
 ``sin(psi) = t x u``; the heading term as ``cos(psi - psi_ss) = cos(psi) cos(psi_ss) + sin(psi)
 sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kappa l3)^2)``; and
-``(||Delta a|| / sigma_a)^2`` as ``(Delta a_1^2 + Delta a_2^2) / sigma_a^2``.
+``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
+``Delta w`` of the wheel rates.
 
 Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
 reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
@@ -95,6 +96,9 @@ __all__ = [
     "task_constants",
     "State",
     "Outcome",
+    "Motion",
+    "move_columns",
+    "outcome_columns",
     "reset_columns",
     "step_columns",
 ]
@@ -169,12 +173,19 @@ def start_pose(u: ArrayLike, params: EnvParams, path: AnyPath) -> Array:
         pose ``(..., 3)`` as ``(x_A, y_A, beta)``.
     """
     u = np.asarray(u, dtype=np.float64)
-    p0 = path.point(0.0)
-    beta = path.tangent_angle(0.0) + u[..., 2] * params.init_heading_noise
-    hx = p0[0] + u[..., 0] * params.init_position_noise
-    hy = p0[1] + u[..., 1] * params.init_position_noise
+    x0, y0, theta0 = _path_start(path)
+    beta = theta0 + u[..., 2] * params.init_heading_noise
+    hx = x0 + u[..., 0] * params.init_position_noise
+    hy = y0 + u[..., 1] * params.init_position_noise
     l3 = params.robot.l3
-    return np.stack((hx - l3 * np.cos(beta), hy - l3 * np.sin(beta), beta), axis=-1)
+    return pack(hx - l3 * col_cos(beta), hy - l3 * col_sin(beta), beta)
+
+
+@lru_cache(maxsize=64)
+def _path_start(path: AnyPath) -> tuple[float, float, float]:
+    """Start point ``(x, y)`` [m] and tangent angle [rad] of ``path`` (arc length 0)."""
+    x0, y0 = path.point(0.0).tolist()
+    return x0, y0, float(path.tangent_angle(0.0))
 
 
 def heading_error(pose: ArrayLike, proj: Projection) -> Array:
@@ -199,7 +210,7 @@ class TaskConstants:
         termination_distance: [m].
         sigma_track: [m].
         sigma_speed: [m/s].
-        sigma_smooth_sq: ``sigma_smooth ** 2`` [-].
+        smooth_scale_sq: ``(w_max sigma_smooth) ** 2`` [rad^2/s^2].
         smooth_weight: [-].
         preview: preview distances [m].
         reference_obs: observation ``-1``, ``v_ref / v_max`` [-].
@@ -217,7 +228,7 @@ class TaskConstants:
     termination_distance: float
     sigma_track: float
     sigma_speed: float
-    sigma_smooth_sq: float
+    smooth_scale_sq: float
     smooth_weight: float
     preview: tuple[float, ...]
     reference_obs: float
@@ -227,6 +238,7 @@ class TaskConstants:
 def task_constants(params: EnvParams) -> TaskConstants:
     """The :class:`TaskConstants` of ``params`` (cached: equal settings give the same object)."""
     robot = params.robot
+    smooth_scale = robot.max_wheel_rate * params.sigma_smooth
     return TaskConstants(
         params=params,
         robot=robot,
@@ -240,7 +252,7 @@ def task_constants(params: EnvParams) -> TaskConstants:
         termination_distance=params.termination_distance,
         sigma_track=params.sigma_track,
         sigma_speed=params.sigma_speed,
-        sigma_smooth_sq=params.sigma_smooth * params.sigma_smooth,
+        smooth_scale_sq=smooth_scale * smooth_scale,
         smooth_weight=params.smooth_weight,
         preview=params.preview,
         reference_obs=params.speed / robot.max_speed,
@@ -248,11 +260,11 @@ def task_constants(params: EnvParams) -> TaskConstants:
 
 
 def _clip(x: Real, low: float, high: float) -> Real:
-    """``np.clip`` of an array, ``min(max(x, low), high)`` of a scalar (the same values)."""
+    """``np.clip`` of an array; of a scalar, the same value by comparisons."""
     if isinstance(x, np.ndarray):
         out: Real = np.clip(x, low, high)
         return out
-    return min(max(x, low), high)
+    return x if low <= x <= high else (low if x < low else high)
 
 
 def _abs(x: Real) -> Real:
@@ -273,11 +285,11 @@ def _observe_columns(
     curvature: Real,
     cos_psi: Real,
     sin_psi: Real,
-    v: Real,
+    dv: Real,
     w1: Real,
     w2: Real,
 ) -> tuple[Real, ...]:
-    """The observation's columns, in the order of the module table."""
+    """The observation's columns, in the order of the module table (``dv = v_A - v_ref``)."""
     l3 = k.l3
     return (
         _clip(error / k.error_scale, -k.e_max, k.e_max),
@@ -287,42 +299,43 @@ def _observe_columns(
         *(path.curvature_columns(s + d) * l3 for d in k.preview),
         w1 / k.w_max,
         w2 / k.w_max,
-        (v - k.speed) / k.max_speed,
+        dv / k.max_speed,
         k.reference_obs,
     )
 
 
 def _reward_columns(
     k: TaskConstants,
-    error: Real,
+    abs_error: Real,
     curvature: Real,
     cos_psi: Real,
     sin_psi: Real,
-    v: Real,
+    dv: Real,
     w1: Real,
     w2: Real,
     prev1: Real,
     prev2: Real,
 ) -> tuple[Real, Real, Real, Real]:
-    """The reward terms ``(track, speed, heading, smooth)`` (:data:`REWARD_TERMS`), module docstring."""
+    """The reward terms ``(track, speed, heading, smooth)`` (:data:`REWARD_TERMS`), module docstring.
+
+    Given ``|e|`` and ``dv = v_A - v_ref``; ``(||Delta a|| / sigma_a)^2 = (dw_1^2 + dw_2^2) / (w_max
+    sigma_a)^2`` with ``dw`` the change of the wheel rates.
+    """
     sin_ss = -_clip(curvature * k.l3, -1.0, 1.0)  # psi_ss = -asin(kappa l3)
     cos_ss = col_sqrt(1.0 - sin_ss * sin_ss)
-    da1 = (w1 - prev1) / k.w_max
-    da2 = (w2 - prev2) / k.w_max
+    dw1 = w1 - prev1
+    dw2 = w2 - prev2
     return (
-        col_exp(-_abs(error) / k.sigma_track),
-        col_exp(-_abs(v - k.speed) / k.sigma_speed),
+        col_exp(abs_error / -k.sigma_track),
+        col_exp(_abs(dv) / -k.sigma_speed),
         0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
-        1.0 - k.smooth_weight * (1.0 - col_exp(-((da1 * da1 + da2 * da2) / k.sigma_smooth_sq))),
+        1.0 - k.smooth_weight * (1.0 - col_exp((dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq)),
     )
 
 
-def _product(terms: tuple[Real, ...]) -> Real:
+def _product(terms: tuple[Real, Real, Real, Real]) -> Real:
     """The reward, ``((track * speed) * heading) * smooth``, as :func:`combine_reward` multiplies."""
-    out = terms[0]
-    for t in terms[1:]:
-        out = out * t
-    return out
+    return ((terms[0] * terms[1]) * terms[2]) * terms[3]
 
 
 def observe(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath, proj: Projection) -> Array:
@@ -342,7 +355,16 @@ def observe(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath,
     cos_psi, sin_psi = _heading_error_columns(np.cos(b), np.sin(b), proj.cos_theta, proj.sin_theta)
     v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
     cols = _observe_columns(
-        k, path, proj.s, proj.cross_track_error, proj.curvature, cos_psi, sin_psi, v, rates[..., 0], rates[..., 1]
+        k,
+        path,
+        proj.s,
+        proj.cross_track_error,
+        proj.curvature,
+        cos_psi,
+        sin_psi,
+        v - k.speed,
+        rates[..., 0],
+        rates[..., 1],
     )
     return pack(*cols)
 
@@ -368,11 +390,11 @@ def reward_terms(
     v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
     terms = _reward_columns(
         k,
-        proj.cross_track_error,
+        _abs(proj.cross_track_error),
         proj.curvature,
         cos_psi,
         sin_psi,
-        v,
+        v - k.speed,
         rates[..., 0],
         rates[..., 1],
         prev[..., 0],
@@ -429,46 +451,26 @@ class Outcome(NamedTuple):
     terminated: Any
 
 
-def _outcome(
-    k: TaskConstants,
-    path: AnyPath,
-    x: Real,
-    y: Real,
-    cos_beta: Real,
-    sin_beta: Real,
-    v: Real,
-    w1: Real,
-    w2: Real,
-    prev1: Real,
-    prev2: Real,
-) -> Outcome:
-    """Observation, reward and end of the state with pose ``(x, y, beta)`` (given ``cos beta``, ``sin beta``)."""
-    l3 = k.l3
-    hx = x + l3 * cos_beta
-    hy = y + l3 * sin_beta
-    cp = path.project_xy(hx, hy)
-    cos_psi, sin_psi = _heading_error_columns(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
-    e = cp.cross_track_error
-    obs = _observe_columns(k, path, cp.s, e, cp.curvature, cos_psi, sin_psi, v, w1, w2)
-    terms = _reward_columns(k, e, cp.curvature, cos_psi, sin_psi, v, w1, w2, prev1, prev2)
-    return Outcome(hx, hy, cp, obs, terms, _product(terms), _abs(e) > k.termination_distance)
+class Motion(NamedTuple):
+    """Result of :func:`move_columns`: the state after a step, with what its evaluation needs.
+
+    Attributes:
+        state: the new state.
+        cos_beta, sin_beta: cosine and sine of the new heading (by angle addition, :func:`arc_step`).
+        v: speed of A during the step [m/s].
+    """
+
+    state: State
+    cos_beta: Real
+    sin_beta: Real
+    v: Real
 
 
-def reset_columns(k: TaskConstants, path: AnyPath, state: State) -> Outcome:
-    """The :class:`Outcome` of a start state (the smoothness term is 1: no change of the rates)."""
-    b = state.beta
-    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
-    return _outcome(
-        k, path, state.x, state.y, col_cos(b), col_sin(b), v, state.rate1, state.rate2, state.rate1, state.rate2
-    )
-
-
-def step_columns(k: TaskConstants, path: AnyPath, state: State, a1: Real, a2: Real) -> tuple[State, Outcome]:
-    """One environment step in column form: the new state and its :class:`Outcome` (see :func:`transition`).
+def move_columns(k: TaskConstants, state: State, a1: Real, a2: Real) -> Motion:
+    """The motion part of a step: clip and scale the action, advance pose and wheel angles exactly.
 
     Args:
         k: constants of the settings.
-        path: the path of H.
         state: the state before the step.
         a1, a2: the validated, normalised action (wheel 1, wheel 2); clipped to [-1, 1] here.
     """
@@ -489,7 +491,70 @@ def step_columns(k: TaskConstants, path: AnyPath, state: State, a1: Real, a2: Re
         w1,
         w2,
     )
-    return new, _outcome(k, path, arc.x, arc.y, arc.cos_beta, arc.sin_beta, v, w1, w2, state.rate1, state.rate2)
+    return Motion(new, arc.cos_beta, arc.sin_beta, v)
+
+
+def outcome_columns(
+    k: TaskConstants,
+    path: AnyPath,
+    state: State,
+    cos_beta: Real,
+    sin_beta: Real,
+    v: Real,
+    prev1: Real,
+    prev2: Real,
+    minimal: bool = False,
+) -> Outcome:
+    """Observation, reward and end of ``state`` (the evaluation part of a step, or of a reset).
+
+    Args:
+        k: constants of the settings.
+        path: the path of H.
+        state: the state to evaluate; its ``rate1``, ``rate2`` are the rates applied to reach it.
+        cos_beta, sin_beta: cosine and sine of ``state.beta``.
+        v: speed of A for ``state``'s rates [m/s].
+        prev1, prev2: the rates of the step before (equal to ``state``'s at a reset).
+        minimal: project H with ``minimal=True`` (the projection's fields the environments do not
+            report are left as NaN); nothing else changes.
+    """
+    l3 = k.l3
+    w1, w2 = state.rate1, state.rate2
+    hx = state.x + l3 * cos_beta
+    hy = state.y + l3 * sin_beta
+    cp = path.project_xy(hx, hy, minimal)
+    cos_psi, sin_psi = _heading_error_columns(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
+    e = cp.cross_track_error
+    abs_e = _abs(e)
+    dv = v - k.speed
+    obs = _observe_columns(k, path, cp.s, e, cp.curvature, cos_psi, sin_psi, dv, w1, w2)
+    terms = _reward_columns(k, abs_e, cp.curvature, cos_psi, sin_psi, dv, w1, w2, prev1, prev2)
+    return Outcome(hx, hy, cp, obs, terms, _product(terms), abs_e > k.termination_distance)
+
+
+def reset_columns(k: TaskConstants, path: AnyPath, state: State, minimal: bool = False) -> Outcome:
+    """The :class:`Outcome` of a start state (the smoothness term is 1: no change of the rates)."""
+    b = state.beta
+    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
+    return outcome_columns(k, path, state, col_cos(b), col_sin(b), v, state.rate1, state.rate2, minimal)
+
+
+def step_columns(
+    k: TaskConstants, path: AnyPath, state: State, a1: Real, a2: Real, minimal: bool = False
+) -> tuple[State, Outcome]:
+    """One environment step in column form: :func:`move_columns`, then :func:`outcome_columns`.
+
+    Args:
+        k: constants of the settings.
+        path: the path of H.
+        state: the state before the step.
+        a1, a2: the validated, normalised action (wheel 1, wheel 2); clipped to [-1, 1] here.
+        minimal: as for :func:`outcome_columns`.
+
+    Returns:
+        the new state and its :class:`Outcome` (see :func:`transition`).
+    """
+    m = move_columns(k, state, a1, a2)
+    return m.state, outcome_columns(k, path, m.state, m.cos_beta, m.sin_beta, m.v, state.rate1, state.rate2, minimal)
 
 
 class Evaluation(NamedTuple):
@@ -513,10 +578,9 @@ def evaluate(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath
     k = task_constants(params)
     p = np.asarray(pose, dtype=np.float64)
     r = np.asarray(rates, dtype=np.float64)
-    b = p[..., 2]
-    w1, w2 = r[..., 0], r[..., 1]
-    v, _ = body_velocity_columns(w1, w2, k.robot)
-    return _evaluation(_outcome(k, path, p[..., 0], p[..., 1], np.cos(b), np.sin(b), v, w1, w2, w1, w2))
+    zero = np.zeros(np.broadcast_shapes(p.shape[:-1], r.shape[:-1]))
+    state = State(p[..., 0], p[..., 1], p[..., 2], zero, zero, zero, r[..., 0], r[..., 1])
+    return _evaluation(reset_columns(k, path, state))
 
 
 class Transition(NamedTuple):

@@ -294,7 +294,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         x, y, beta = pose.tolist()
         self._state = self._initial_state._replace(x=x, y=y, beta=beta)
         self._steps = 0
-        out = task.reset_columns(self._k, self.path, self._state)
+        out = task.reset_columns(self._k, self.path, self._state, minimal=True)
         self._trail = [(float(out.h_x), float(out.h_y))]
         info = self._info(out)
         if self.render_mode == "human":
@@ -308,7 +308,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             ValueError: action of a wrong shape or with NaN/inf entries.
         """
         a1, a2 = task.validate_action(action).tolist()
-        self._state, out = task.step_columns(self._k, self.path, self._state, a1, a2)
+        self._state, out = task.step_columns(self._k, self.path, self._state, a1, a2, minimal=True)
         self._steps += 1
         if self.render_mode is not None:
             self._trail.append((float(out.h_x), float(out.h_y)))

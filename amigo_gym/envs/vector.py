@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import task
 from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
-from amigo_gym.kinematics import h_position, pack
+from amigo_gym.kinematics import body_velocity_columns, col_cos, col_sin, h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
@@ -193,19 +193,24 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             self._trail.append(h_position(self._pose(), self.params.robot))
         return self._obs.copy(), self._scatter(infos, mask)
 
-    def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """Start new episodes for the robots ``idx``; return their observations and (compact) infos."""
+    def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
+        """Start states of the robots ``idx`` (compact columns): a drawn pose (or ``pose_opt``'s rows),
+        wheel angles 0, the initial rates."""
+        m = len(idx)
         if pose_opt is not None:
-            pose = pose_opt[idx].copy()
+            pose = pose_opt[idx]
         else:
             # u ~ U[-1, 1]^3 from each robot's own generator, as the single env draws it:
             # Generator.uniform(-1, 1, 3) is -1 + 2 * Generator.random(3) (the same stream and rounding)
-            u = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in idx.tolist()]).reshape(len(idx), 3)
-            pose = task.start_pose(u, self.params, self.path)
-        m = len(idx)
+            u = np.empty((m, 3))
+            rngs = self._rngs
+            for j, i in enumerate(idx.tolist()):
+                g = rngs[i]
+                (self._rng(i) if g is None else g).random(out=u[j])
+            pose = task.start_pose(-1.0 + 2.0 * u, self.params, self.path)
         rate1, rate2 = self._initial_rates.tolist()
         zeros = np.zeros(m)
-        state = task.State(
+        return task.State(
             pose[:, 0].copy(),
             pose[:, 1].copy(),
             pose[:, 2].copy(),
@@ -215,12 +220,16 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             np.full(m, rate1),
             np.full(m, rate2),
         )
-        for full, rows in zip(self._state, state, strict=True):
-            np.asarray(full)[idx] = rows
+
+    def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
+        """Start new episodes for the robots ``idx``; return their observations and (compact) infos."""
+        state = self._start_states(idx, pose_opt)
+        _set_rows(self._state, state, idx)
         self._steps[idx] = 0
-        out = task.reset_columns(self._k, self.path, state)
+        out = task.reset_columns(self._k, self.path, state, minimal=True)
         if self.render_mode is not None:
             self._trail_start[idx] = len(self._trail)
+        m = len(idx)
         return self._obs_array(out, m), self._info(state, out, np.zeros(m, dtype=np.int64))
 
     # ------------------------------------------------------------------ step
@@ -243,9 +252,31 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
             )
-        state, out = task.step_columns(self._k, self.path, self._state, a[:, 0], a[:, 1])
-        self._state = state
+        k = self._k
+        motion = task.move_columns(k, self._state, a[:, 0], a[:, 1])
+        state = motion.state
+        cos_beta, sin_beta, v = (np.asarray(c) for c in motion[1:])
+        prev1, prev2 = self._state.rate1, self._state.rate2
         self._steps += 1
+        idx = None
+        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+            # robots whose episode ended at the last step start a new one instead of this step: their
+            # start states replace their rows and are evaluated with the others, with the inputs that
+            # task.reset_columns gives them (so the same values as a separate reset)
+            idx = np.flatnonzero(self._autoreset)
+            start = self._start_states(idx)
+            _set_rows(state, start, idx)
+            cos_beta[idx] = col_cos(start.beta)
+            sin_beta[idx] = col_sin(start.beta)
+            v[idx] = body_velocity_columns(start.rate1, start.rate2, k.robot)[0]
+            prev1, prev2 = np.array(prev1), np.array(prev2)
+            prev1[idx] = start.rate1
+            prev2[idx] = start.rate2
+            self._steps[idx] = 0
+            if self.render_mode is not None:
+                self._trail_start[idx] = len(self._trail)
+        out = task.outcome_columns(k, self.path, state, cos_beta, sin_beta, v, prev1, prev2, minimal=True)
+        self._state = state
         obs = self._obs_array(out, n)
         reward = _column(out.reward, n)
         terminated: BoolArray = np.asarray(out.terminated)
@@ -254,14 +285,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         )
         infos = self._info(state, out, self._steps)
 
-        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
-            idx = np.flatnonzero(self._autoreset)
-            obs_r, info_r = self._reset_rows(idx)
-            obs[idx] = obs_r
+        if idx is not None:
             reward[idx] = 0.0
             terminated[idx] = False
             truncated[idx] = False
-            _assign_rows(infos, info_r, idx)
         elif mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
             if done.any():
@@ -321,6 +348,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         ``mask=None`` means that ``infos`` already holds full ``(N, ...)`` rows for every robot.
         """
         n = self.num_envs
+        every = np.ones(n, dtype=np.bool_) if mask is None else mask
         out: dict[str, Any] = {}
         for k, v in infos.items():
             if k.startswith("_") or k in ("final_obs", "final_info"):
@@ -334,7 +362,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
                 full[mask] = v
                 out[k] = full
-            out[f"_{k}"] = np.ones(n, dtype=np.bool_) if mask is None else mask.copy()
+            out[f"_{k}"] = every.copy()  # a mask of its own per key
         return out
 
     # ------------------------------------------------------------------ rendering
@@ -367,6 +395,12 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         for r in self._renderers:
             r.close()
         self._renderers = []
+
+
+def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:
+    """Write the compact columns ``rows`` into the rows ``idx`` of the ``(N,)`` columns ``full``."""
+    for f, r in zip(full, rows, strict=True):
+        np.asarray(f)[idx] = r
 
 
 def _column(x: Any, m: int) -> Array:
