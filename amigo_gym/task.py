@@ -98,6 +98,7 @@ __all__ = [
     "Outcome",
     "Motion",
     "move_columns",
+    "start_motion",
     "outcome_columns",
     "reset_columns",
     "step_columns",
@@ -479,8 +480,7 @@ def move_columns(k: TaskConstants, state: State, a1: Real, a2: Real) -> Motion:
     w1 = _clip(a1, -1.0, 1.0) * k.w_max
     w2 = _clip(a2, -1.0, 1.0) * k.w_max
     v, bdot = body_velocity_columns(w1, w2, robot)
-    b = state.beta
-    arc = arc_step(state.x, state.y, b, col_cos(b), col_sin(b), v, bdot, dt)
+    arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
     new = State(
         arc.x,
         arc.y,
@@ -531,11 +531,22 @@ def outcome_columns(
     return Outcome(hx, hy, cp, obs, terms, _product(terms), abs_e > k.termination_distance)
 
 
+def start_motion(k: TaskConstants, state: State) -> Motion:
+    """The :class:`Motion` of a start state, for its evaluation: ``cos``, ``sin`` of its heading, its speed.
+
+    The start heading's cosine and sine are ``np.cos``, ``np.sin`` themselves (so that H at a reset is
+    exactly ``A + l3 (cos beta, sin beta)``).
+    """
+    b = state.beta
+    cos_b, sin_b = col_cos(b), col_sin(b)
+    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
+    return Motion(state, cos_b, sin_b, v)
+
+
 def reset_columns(k: TaskConstants, path: AnyPath, state: State, minimal: bool = False) -> Outcome:
     """The :class:`Outcome` of a start state (the smoothness term is 1: no change of the rates)."""
-    b = state.beta
-    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
-    return outcome_columns(k, path, state, col_cos(b), col_sin(b), v, state.rate1, state.rate2, minimal)
+    m = start_motion(k, state)
+    return outcome_columns(k, path, state, m.cos_beta, m.sin_beta, m.v, state.rate1, state.rate2, minimal)
 
 
 def step_columns(

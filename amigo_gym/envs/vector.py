@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import task
 from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
-from amigo_gym.kinematics import body_velocity_columns, col_cos, col_sin, h_position, pack
+from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
@@ -266,9 +266,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             idx = np.flatnonzero(self._autoreset)
             start = self._start_states(idx)
             _set_rows(state, start, idx)
-            cos_beta[idx] = col_cos(start.beta)
-            sin_beta[idx] = col_sin(start.beta)
-            v[idx] = body_velocity_columns(start.rate1, start.rate2, k.robot)[0]
+            begin = task.start_motion(k, start)
+            cos_beta[idx] = begin.cos_beta
+            sin_beta[idx] = begin.sin_beta
+            v[idx] = begin.v
             prev1, prev2 = np.array(prev1), np.array(prev2)
             prev1[idx] = start.rate1
             prev2[idx] = start.rate2
