@@ -2,15 +2,15 @@
 
 Usage::
 
-    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3 + a 200k-step PPO run
+    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3 + a 500k-step PPO run
     amigo-gym compare --out results/ --train-steps 0     # evaluation only (about 20 s)
 
 Steps:
 
 1. Optionally train a PPO agent for ``--train-steps`` steps on the native vector env (``amigo-gym
    train --algo ppo``, hyperparameters of ``agents/hyperparams/ppo.yml``, in ``<out>/train_ppo``);
-   the default 200 000 steps take about a minute on 2 CPU cores and already track to a fraction
-   of a millimetre. The fresh agent is evaluated as ``ppo_fresh``.
+   the default 500 000 steps take about a minute on 2 CPU cores and already track to a fraction
+   of a millimetre. The fresh agent (its final model) is evaluated as ``ppo_fresh``.
 2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
    ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`experiments.evaluate`.
 3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
@@ -82,9 +82,16 @@ def report_markdown(doc: dict[str, Any]) -> str:
             )
         lines.append("")
     if doc.get("training"):
-        lines += ["## Training records", "", "| agent | steps | wall time [s] | command |", "|---|---|---|---|"]
+        lines += [
+            "## Training records",
+            "",
+            "| agent | steps | wall time [s] | model | command (then resumes) |",
+            "|---|---|---|---|---|",
+        ]
         for name, rec in doc["training"].items():
-            lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | `{rec['command']}` |")
+            model = f"{rec.get('exported_model', 'final')} @ {rec.get('exported_timesteps', rec['timesteps'])}"
+            cmds = "<br>".join(f"`{c}`" for c in [rec["command"], *(r["command"] for r in rec.get("resumes", []))])
+            lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | {model} | {cmds} |")
         lines.append("")
     lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
     return "\n".join(lines)
@@ -151,7 +158,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
     p.add_argument("--out", default="results", help="output directory (default results/)")
     p.add_argument("--models", default=str(PRETRAINED_DIR), help="pretrained <algo>.zip directory ('' for none)")
-    p.add_argument("--train-steps", type=int, default=200_000, help="steps of a fresh PPO run, 0: none (200000)")
+    p.add_argument("--train-steps", type=int, default=500_000, help="steps of a fresh PPO run, 0: none (500000)")
     p.add_argument("--seeds", type=int, default=10, help="perturbed starts (default 10)")
     p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400)")
     p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run")
