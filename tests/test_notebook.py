@@ -16,7 +16,7 @@ NOTEBOOK = ROOT / "experiments" / "notebooks" / "evaluate_policy.ipynb"
 
 
 def test_notebook_runs_and_shows_table_and_plots() -> None:
-    nb = nbformat.read(NOTEBOOK, as_version=4)
+    nb = nbformat.read(NOTEBOOK, as_version=4)  # type: ignore[no-untyped-call]
     client = NotebookClient(
         nb, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(NOTEBOOK.parent)}}
     )
