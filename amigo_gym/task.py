@@ -297,7 +297,7 @@ def _observe_columns(
         sin_psi,
         cos_psi,
         curvature * l3,
-        *(path.curvature_columns(s + d) * l3 for d in k.preview),
+        *[path.curvature_columns(s + d) * l3 for d in k.preview],
         w1 / k.w_max,
         w2 / k.w_max,
         dv / k.max_speed,
@@ -322,8 +322,10 @@ def _reward_columns(
     Given ``|e|`` and ``dv = v_A - v_ref``; ``(||Delta a|| / sigma_a)^2 = (dw_1^2 + dw_2^2) / (w_max
     sigma_a)^2`` with ``dw`` the change of the wheel rates.
     """
-    sin_ss = -_clip(curvature * k.l3, -1.0, 1.0)  # psi_ss = -asin(kappa l3)
-    cos_ss = col_sqrt(1.0 - sin_ss * sin_ss)
+    if isinstance(curvature, float):  # the same for every robot (a circle): from a cache
+        cos_ss, sin_ss = _steady_heading_scalar(curvature, k.l3)
+    else:
+        cos_ss, sin_ss = _steady_heading(curvature, k.l3)
     dw1 = w1 - prev1
     dw2 = w2 - prev2
     return (
@@ -332,6 +334,15 @@ def _reward_columns(
         0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
         1.0 - k.smooth_weight * (1.0 - col_exp((dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq)),
     )
+
+
+def _steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
+    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)``."""
+    sin_ss = -_clip(curvature * l3, -1.0, 1.0)
+    return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
+
+
+_steady_heading_scalar = lru_cache(maxsize=256)(_steady_heading)
 
 
 def _product(terms: tuple[Real, Real, Real, Real]) -> Real:

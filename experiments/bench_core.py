@@ -3,7 +3,10 @@
 For each batch size N it times (median of ``--repeats`` repeats, each at least ``--min-time`` seconds):
 
 * ``transition``: :func:`amigo_gym.task.transition`, the environment's whole pure step (action → wheel
-  rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms);
+  rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms),
+  returned as ``(N, k)`` arrays;
+* ``columns``: :func:`amigo_gym.task.step_columns`, the same step in the column form that the environments
+  run (state and results as ``(N,)`` columns, ``minimal=True``: no arc length nor closest point);
 * ``step_pose``: :func:`amigo_gym.kinematics.step_pose` alone, the exact closed-form arc step;
 * ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
   (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
@@ -34,7 +37,7 @@ from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.kinematics import body_velocity, step_pose
 from amigo_gym.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
-from amigo_gym.task import transition
+from amigo_gym.task import State, step_columns, task_constants, transition
 
 __all__ = ["Row", "euler_step", "loop_step", "measure", "bench", "format_table", "main"]
 
@@ -87,6 +90,7 @@ class Row:
 
     n: int
     transition: float
+    columns: float
     step_pose: float
     euler: float
     loop: float | None
@@ -111,6 +115,10 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
     t_tr = measure(lambda: transition(pose, angles, w, action, params, path), repeats, min_time)
+    k = task_constants(params)
+    state = State(*(np.ascontiguousarray(c) for c in (*pose.T, *angles.T, *w.T)))
+    a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
+    t_co = measure(lambda: step_columns(k, path, state, a1, a2, minimal=True), repeats, min_time)
     t_sp = measure(lambda: step_pose(pose, w, params.dt, robot), repeats, min_time)
     t_eu = measure(lambda: euler_step(pose, w, params.dt, robot), repeats, min_time)
     loop = None
@@ -118,7 +126,7 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
         pl = [(float(a), float(b), float(c)) for a, b, c in pose]
         wl = [(float(a), float(b)) for a, b in w]
         loop = n / measure(lambda: loop_step(pl, wl, params.dt, robot), repeats, min_time)
-    return Row(n, n / t_tr, n / t_sp, n / t_eu, loop)
+    return Row(n, n / t_tr, n / t_co, n / t_sp, n / t_eu, loop)
 
 
 def bench(
@@ -136,13 +144,13 @@ def _fmt(x: float | None, spec: str = ".3g") -> str:
 def format_table(rows: Sequence[Row]) -> str:
     """Markdown table of env-steps per second and ratios."""
     head = (
-        "| N | transition [steps/s] | step_pose [steps/s] | Euler peer [steps/s] | Python loop [steps/s] "
-        "| step_pose/Euler | step_pose/loop |"
+        "| N | transition [steps/s] | step_columns [steps/s] | step_pose [steps/s] | Euler peer [steps/s] "
+        "| Python loop [steps/s] | step_pose/Euler | step_pose/loop |"
     )
-    lines = [head, "|" + "---:|" * 7]
+    lines = [head, "|" + "---:|" * 8]
     for r in rows:
         lines.append(
-            f"| {r.n} | {r.transition:.3g} | {r.step_pose:.3g} | {r.euler:.3g} | {_fmt(r.loop)} | "
+            f"| {r.n} | {r.transition:.3g} | {r.columns:.3g} | {r.step_pose:.3g} | {r.euler:.3g} | {_fmt(r.loop)} | "
             f"{r.ratio_euler:.2f} | {_fmt(r.ratio_loop, '.3g')} |"
         )
     return "\n".join(lines)

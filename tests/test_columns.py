@@ -1,0 +1,222 @@
+"""The column functions the environments run: scalars and arrays give the same bits, and the array
+functions (step_pose, project, transition, evaluate) are thin wrappers over them."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+from amigo_gym import task
+from amigo_gym.kinematics import (
+    arc_step,
+    body_velocity,
+    body_velocity_columns,
+    castor_rate,
+    castor_rate_columns,
+    col_arctan2,
+    col_cos,
+    col_exp,
+    col_sin,
+    col_sqrt,
+    col_tan,
+    cos_sin,
+    pack,
+    step_pose,
+)
+from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+
+ROBOT = RobotParams()
+PATHS = [
+    CirclePath(),
+    CirclePath(1.2, (0.5, -0.5), 0.4, -1),
+    ManoeuvrePath(1.0, 1.0, 1),
+    ManoeuvrePath(0.6, 0.0, -1),
+]
+
+
+def rng() -> np.random.Generator:
+    return np.random.default_rng(11)
+
+
+def test_column_math_is_numpy_and_gives_floats_for_scalars() -> None:
+    x = rng().uniform(-40.0, 40.0, 500)
+    for col, ref in ((col_sin, np.sin), (col_cos, np.cos), (col_tan, np.tan), (col_exp, np.exp)):
+        np.testing.assert_array_equal(col(x), ref(x))
+        one = col(float(x[3]))
+        assert type(one) is float and one == ref(x)[3]
+    y = np.abs(x)
+    np.testing.assert_array_equal(col_sqrt(y), np.sqrt(y))
+    assert type(col_sqrt(2.0)) is float and col_sqrt(2.0) == float(np.sqrt(2.0))
+    np.testing.assert_array_equal(col_arctan2(x, x[::-1]), np.arctan2(x, x[::-1]))
+    assert col_arctan2(float(x[0]), float(x[1])) == np.arctan2(x[0], x[1])
+
+
+def test_cos_sin_from_the_half_angle_tangent() -> None:
+    x = np.concatenate((rng().uniform(-100.0, 100.0, 20000), [0.0, -0.0, 1e-300, math.pi, -math.pi, 1e5]))
+    c, s = cos_sin(x)
+    np.testing.assert_allclose(c, np.cos(x), rtol=0, atol=5e-16)
+    np.testing.assert_allclose(s, np.sin(x), rtol=0, atol=5e-16)
+    assert cos_sin(0.0) == (1.0, 0.0)
+    # small angles: the sine to a few units in the last place, relative
+    h = np.geomspace(1e-12, 0.5, 200)
+    np.testing.assert_allclose(cos_sin(h)[1], np.sin(h), rtol=1e-15, atol=0)
+    # scalars give the same bits as the array
+    for i in (0, 7, 20001):
+        cs = cos_sin(float(x[i]))
+        assert cs == (c[i], s[i])
+
+
+def test_arc_step_is_step_pose_and_carries_the_heading() -> None:
+    g = rng()
+    n = 300
+    pose = np.column_stack((g.normal(size=(n, 2)), g.uniform(-60, 60, n)))
+    w = g.uniform(-15, 15, (n, 2))
+    w[:5, 1] = w[:5, 0]  # straight lines: betadot = 0
+    v, bd = body_velocity(w, ROBOT)
+    for dt in (0.01, 0.1, 2.0):
+        arc = arc_step(pose[:, 0], pose[:, 1], pose[:, 2], v, bd, dt)
+        np.testing.assert_array_equal(pack(arc.x, arc.y, arc.beta), step_pose(pose, w, dt, ROBOT))
+        # to the rounding of beta' itself (|beta| up to 60 rad: a unit in the last place is 7e-15)
+        tol = 1e-15 + 2.0 * np.spacing(np.abs(arc.beta))
+        assert np.all(np.abs(arc.cos_beta - np.cos(arc.beta)) <= tol)
+        assert np.all(np.abs(arc.sin_beta - np.sin(arc.beta)) <= tol)
+        light = arc_step(pose[:, 0], pose[:, 1], pose[:, 2], v, bd, dt, with_heading=False)
+        np.testing.assert_array_equal(pack(light.x, light.y, light.beta), pack(arc.x, arc.y, arc.beta))
+        assert math.isnan(light.cos_beta) and math.isnan(light.sin_beta)
+        # one robot at a time, as plain floats: the same bits
+        for i in (0, 3, 100):
+            one = arc_step(*(float(c) for c in (pose[i, 0], pose[i, 1], pose[i, 2], v[i], bd[i])), dt)
+            assert all(type(c) is float for c in one)
+            assert tuple(one) == tuple(float(c[i]) for c in arc)
+
+
+def test_velocity_and_castor_columns() -> None:
+    w = rng().uniform(-15, 15, (50, 2))
+    v, bd = body_velocity_columns(w[:, 0], w[:, 1], ROBOT)
+    v2, bd2 = body_velocity(w, ROBOT)
+    np.testing.assert_array_equal(v, v2)
+    np.testing.assert_array_equal(bd, bd2)
+    np.testing.assert_array_equal(castor_rate_columns(v, bd, ROBOT), castor_rate(v, bd, ROBOT))
+    np.testing.assert_allclose(
+        castor_rate(v, bd, ROBOT), np.sign(v) * np.hypot(ROBOT.l5 * bd, v) / ROBOT.r3, rtol=1e-15
+    )
+    assert castor_rate_columns(float(v[0]), float(bd[0]), ROBOT) == castor_rate(v, bd, ROBOT)[0]
+    # positive unless v_A < 0: -0.0 counts as forward in the public function
+    assert float(castor_rate(-0.0, 1.5, ROBOT)) == pytest.approx(ROBOT.l5 * 1.5 / ROBOT.r3, rel=1e-15)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_project_xy_is_project_and_minimal_keeps_what_the_envs_need(path: Any) -> None:
+    q = rng().uniform(-2.0, 3.0, (400, 2))
+    full = path.project(q)
+    cp = path.project_xy(q[:, 0], q[:, 1])
+    for name in ("s", "tangent_angle", "curvature", "cross_track_error", "cos_theta", "sin_theta"):
+        np.testing.assert_array_equal(np.broadcast_to(getattr(cp, name), (400,)), getattr(full, name), err_msg=name)
+    np.testing.assert_array_equal(pack(cp.x, cp.y), full.point)
+    np.testing.assert_allclose(full.cos_theta, np.cos(full.tangent_angle), atol=1e-14)
+    np.testing.assert_allclose(full.sin_theta, np.sin(full.tangent_angle), atol=1e-14)
+    mini = path.project_xy(q[:, 0], q[:, 1], minimal=True)
+    for name in ("curvature", "cross_track_error", "cos_theta", "sin_theta"):
+        np.testing.assert_array_equal(getattr(mini, name), getattr(cp, name), err_msg=name)
+    for name in ("x", "y", "tangent_angle"):
+        assert np.all(np.isnan(getattr(mini, name))), name
+    # scalars: the same bits
+    for i in (0, 5, 399):
+        one = path.project_xy(float(q[i, 0]), float(q[i, 1]))
+        for name, col in one._asdict().items():
+            assert float(col) == float(np.broadcast_to(getattr(cp, name), (400,))[i]), name
+
+
+def test_circle_projection_at_the_centre_is_the_start_point() -> None:
+    c = CirclePath(1.2, (0.5, -0.5), 0.4, -1)
+    cx, cy = c.center
+    for pr in (c.project(np.array([cx, cy])), c.project(np.array([[cx, cy], [cx + 0.3, cy]]))):
+        s = np.atleast_1d(pr.s)[0]
+        np.testing.assert_allclose(np.atleast_2d(pr.point)[0], c.start, atol=1e-15)
+        assert s == 0.0
+        assert abs(np.atleast_1d(pr.cross_track_error)[0]) == pytest.approx(1.2)
+        assert np.atleast_1d(pr.tangent_angle)[0] == pytest.approx(0.4)
+    one = c.project_xy(cx, cy)
+    assert (one.x, one.y) == pytest.approx(c.start, abs=1e-15)
+
+
+@pytest.mark.parametrize("path_name", ["circle", "manoeuvre"])
+def test_step_columns_scalars_equal_arrays_and_transition(path_name: str) -> None:
+    p = EnvParams(path=path_name, dt=0.2)
+    path = make_path(p)
+    k = task.task_constants(p)
+    g = rng()
+    n = 64
+    pose = task.start_pose(g.uniform(-1, 1, (n, 3)), p, path)
+    pose[:, 0] += g.uniform(0.0, 2.0, n)  # along the straight part and onto the circle
+    angles = g.normal(size=(n, 3))
+    prev = g.uniform(-15, 15, (n, 2))
+    action = g.uniform(-1.3, 1.3, (n, 2))
+    tr = task.transition(pose, angles, prev, action, p, path)
+    state = task.State(*pose.T, *angles.T, *prev.T)
+    new, out = task.step_columns(k, path, state, action[:, 0], action[:, 1])
+    np.testing.assert_array_equal(pack(new.x, new.y, new.beta), tr.pose)
+    np.testing.assert_array_equal(pack(new.alpha1, new.alpha2, new.alpha3), tr.wheel_angles)
+    np.testing.assert_array_equal(pack(*out.obs), tr.evaluation.obs)
+    np.testing.assert_array_equal(out.reward, tr.reward)
+    np.testing.assert_array_equal(out.reward, task.combine_reward(tr.terms))
+    _, mini = task.step_columns(k, path, state, action[:, 0], action[:, 1], minimal=True)
+    np.testing.assert_array_equal(pack(*mini.obs), tr.evaluation.obs)
+    for i in range(n):
+        one_state = task.State(*(float(c[i]) for c in state))
+        one_new, one_out = task.step_columns(k, path, one_state, float(action[i, 0]), float(action[i, 1]), True)
+        assert tuple(map(float, one_new)) == tuple(float(c[i]) for c in new)
+        np.testing.assert_array_equal(np.array(one_out.obs, dtype=np.float32), tr.evaluation.obs[i].astype(np.float32))
+        assert float(one_out.reward) == tr.reward[i]
+        assert tuple(map(float, one_out.terms)) == tuple(float(tr.terms[name][i]) for name in task.REWARD_TERMS)
+    # the evaluation of a start state
+    ev = task.evaluate(pose, prev, p, path)
+    reset = task.reset_columns(k, path, task.State(*pose.T, *angles.T, *prev.T))
+    np.testing.assert_array_equal(pack(*reset.obs), ev.obs)
+    np.testing.assert_array_equal(pack(reset.h_x, reset.h_y), ev.h)
+
+
+def test_task_constants_are_cached_and_derived() -> None:
+    p = EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)
+    k = task.task_constants(p)
+    assert task.task_constants(EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)) is k
+    assert k.e_max == task.obs_bounds(p)[1][0]
+    assert k.smooth_scale_sq == pytest.approx((p.robot.max_wheel_rate * 0.3) ** 2, rel=1e-15)
+    assert k.reference_obs == p.speed / p.robot.max_speed
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+@pytest.mark.parametrize("n", [1, 5])
+def test_vector_env_equals_sync_on_the_manoeuvre_path(mode: AutoresetMode, n: int) -> None:
+    kw: dict[str, Any] = {
+        "path": "manoeuvre",
+        "straight_length": 0.3,
+        "init_position_noise": 0.1,
+        "termination_distance": 0.2,
+        "max_episode_steps": 30,
+    }
+    vec = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kw)
+    sync = gym.make_vec(
+        "AmigoBot-v0", num_envs=n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kw
+    )
+    g = np.random.default_rng(3)
+    rv, rs = vec.reset(seed=9), sync.reset(seed=9)
+    np.testing.assert_array_equal(rv[0], rs[0], strict=True)
+    ends = 0
+    for _ in range(80):
+        a = g.uniform(-0.2, 1.0, (n, 2))
+        rv, rs = vec.step(a), sync.step(a)
+        for x, y in zip(rv[:4], rs[:4], strict=True):
+            np.testing.assert_array_equal(x, y, strict=True)
+        for key in ("pose", "h_position", "cross_track_error", "wheel_angles", "castor_angle", "time"):
+            np.testing.assert_array_equal(rv[4][key], rs[4][key], err_msg=key)
+        for name in task.REWARD_TERMS:
+            np.testing.assert_array_equal(rv[4]["reward_terms"][name], rs[4]["reward_terms"][name], err_msg=name)
+        ends += int(np.sum(rv[2] | rv[3]))
+    assert ends >= 3
