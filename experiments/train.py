@@ -270,6 +270,11 @@ def _algo_kwargs(algo: str, hp: dict[str, Any], n_actions: int) -> dict[str, Any
 
 
 # --------------------------------------------------------------------------- environments
+def _native(vec: str, n_envs: int) -> bool:
+    """Whether the run uses the native vector env (``--vec native``, or ``auto`` with several envs)."""
+    return vec == "native" or (vec == "auto" and n_envs > 1)
+
+
 def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
     """SB3 VecEnv of ``n_envs`` AmigoBot-v0 with episode statistics (``VecMonitor``), seeded ``seed + i``."""
     import gymnasium as gym
@@ -279,9 +284,8 @@ def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
     from agents.sb3_vec import AmigoBotSB3VecEnv
 
-    native = vec == "native" or (vec == "auto" and n_envs > 1)
     venv: Any
-    if native:
+    if _native(vec, n_envs):
         venv = VecMonitor(AmigoBotSB3VecEnv(n_envs))
     else:
         venv = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID)) for _ in range(n_envs)])
@@ -295,7 +299,9 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
     from stable_baselines3.common.monitor import Monitor
-    from stable_baselines3.common.vec_env import DummyVecEnv
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
+
+    from agents.sb3_vec import AmigoBotSB3VecEnv
 
     class Checkpoint(BaseCallback):
         """Every ``freq`` steps: a complete checkpoint (model [+ replay buffer]), then ``checkpoint.json``."""
@@ -345,7 +351,11 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
     if s.eval_freq > 0:
-        eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
+        eval_env: Any
+        if _native(s.vec, n_envs):  # the same VecEnv type as training (SB3 warns otherwise); same rollouts
+            eval_env = VecMonitor(AmigoBotSB3VecEnv(1))
+        else:
+            eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
         eval_env.seed(eval_seed)
         after = AfterEval()
         ev = EvalCallback(
