@@ -34,3 +34,32 @@ def test_readme_cli_commands_exist() -> None:
     used = set(re.findall(r"amigo-gym ([a-z][a-z-]+)", text))
     assert used, "README shows no amigo-gym command"
     assert used <= set(COMMANDS), used - set(COMMANDS)
+
+
+def _plain(text: str) -> str:
+    """Text without markup that differs between a docstring and Markdown: backticks, role prefixes, spacing."""
+    text = re.sub(r":(?:func|class|data|mod|attr):", "", text)
+    return " ".join(text.replace("`", "").split())
+
+
+def test_readme_mirrors_the_env_card() -> None:
+    """Every section of AmigoBotEnv's docstring (the env card) appears in the README."""
+    import inspect
+
+    from amigo_gym.envs import AmigoBotEnv
+
+    doc = inspect.getdoc(AmigoBotEnv)
+    assert doc is not None
+    readme = _plain((ROOT / "README.md").read_text())
+    sections = [s for s in doc.partition("\n\n")[2].split("## ") if s.strip()]
+    assert len(sections) >= 9
+    for sec in sections:
+        assert _plain(sec) in readme, sec.splitlines()[0]
+
+
+def test_readme_images_exist() -> None:
+    text = (ROOT / "README.md").read_text()
+    images = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+    assert len(images) >= 5
+    for img in images:
+        assert (ROOT / img).is_file(), img
