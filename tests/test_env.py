@@ -356,16 +356,19 @@ def test_bad_reset_options(options: Any, match: str) -> None:
 
 
 def test_env_card_mirrors_the_docstring() -> None:
-    """Every section of the class docstring appears verbatim (markdown backticks) in docs/env_card.md."""
+    """Every section of the class docstring appears in docs/env_card.md (text equal up to markup and spacing)."""
     import inspect
     import re
     from pathlib import Path
 
-    card = (Path(__file__).resolve().parents[1] / "docs" / "env_card.md").read_text(encoding="utf-8")
+    def plain(text: str) -> str:
+        text = re.sub(r":(?:func|class|data|mod|attr):", "", text)
+        return " ".join(text.replace("`", "").split())
+
+    card = plain((Path(__file__).resolve().parents[1] / "docs" / "env_card.md").read_text(encoding="utf-8"))
     doc = inspect.getdoc(AmigoBotEnv)
     assert doc is not None
-    body = re.sub(r":(?:func|class|data|mod):`([^`]+)`", r"`\1`", doc.partition("\n\n")[2]).replace("``", "`")
-    sections = ["## " + s.strip() for s in body.split("## ") if s.strip()]
+    sections = [s for s in doc.partition("\n\n")[2].split("## ") if s.strip()]
     assert len(sections) >= 9
     for sec in sections:
-        assert sec in card, sec.splitlines()[0]
+        assert plain(sec) in card, sec.splitlines()[0]
