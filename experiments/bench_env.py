@@ -21,13 +21,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
-import statistics
 import sys
 import tempfile
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -39,26 +36,12 @@ from amigo_gym.params import check_range
 
 __all__ = ["SingleResult", "VectorRow", "bench_single", "bench_vector", "format_report", "main"]
 
+from experiments.bench_core import measure
+
 PROG = "amigo-gym bench-env"
 DEFAULT_SIZES = (1, 64, 1024, 4096, 16384)
 QUICK_SIZES = (1, 64, 1024)
 POOL = 16
-
-
-def measure(step: Callable[[], object], repeats: int, min_time: float) -> float:
-    """Median time of one call of ``step`` [s]; each repeat runs it enough times to last ``min_time``."""
-    step()  # warm-up
-    t0 = time.perf_counter()
-    step()
-    once = max(time.perf_counter() - t0, 1e-7)
-    inner = max(1, math.ceil(min_time / once))
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            step()
-        samples.append((time.perf_counter() - t0) / inner)
-    return statistics.median(samples)
 
 
 def _single_stepper(env: Any, seed: int) -> Callable[[], object]:
