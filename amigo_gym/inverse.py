@@ -32,7 +32,6 @@ from __future__ import annotations
 import itertools
 import math
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from typing import Protocol
@@ -40,6 +39,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.io import atomic_save
 from amigo_gym.kinematics import SteadyCircle, castor_rate, circle_steady_state, h_position, wheel_rates
 from amigo_gym.params import RobotParams, check_range
 from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
@@ -337,27 +337,8 @@ class InverseSolution:
         if unknown:
             raise ValueError(f"unknown column(s) {unknown}; choose from {', '.join(COLUMNS)}")
         data = np.stack([getattr(self, c) for c in columns], axis=-1)
-        target = os.fspath(path)
-        folder = os.path.dirname(os.path.abspath(target))
-        fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".csv", dir=folder)
-        try:
-            with os.fdopen(fd, "w", newline="") as fh:
-                fh.write(",".join(columns) + "\n")
-                np.savetxt(fh, data, delimiter=",", fmt="%.15g")
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode of a new file
-            os.replace(tmp, target)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+        header = ",".join(columns)
+        atomic_save(lambda tmp: np.savetxt(tmp, data, delimiter=",", fmt="%.15g", header=header, comments=""), path)
 
 
 def time_grid(duration: float, dt: float, t0: float = 0.0) -> Array:

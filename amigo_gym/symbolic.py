@@ -84,18 +84,16 @@ Numbers: :func:`lambdify` turns derived expressions into batched numpy functions
 from __future__ import annotations
 
 import functools
-import os
 import sys
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import sympy as sp
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.io import atomic_write
 from amigo_gym.params import RobotParams
 
 __all__ = [
@@ -705,22 +703,6 @@ def render(latex: bool = False) -> str:
     return "\n".join(out) + "\n"
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and ``os.replace``."""
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"--out: folder {str(folder)!r} does not exist")
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
     from amigo_gym.cli import OneLineParser, run_guarded
@@ -740,7 +722,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.out is None or args.out == "-":
             sys.stdout.write(text)
         else:
-            _write_atomic(Path(args.out), text)
+            atomic_write(args.out, text)
             print(f"wrote {args.out}", file=sys.stderr)
         return 0
 

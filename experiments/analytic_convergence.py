@@ -14,11 +14,11 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
-from pathlib import Path
 
 import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_save
 from amigo_gym.params import check_range
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
@@ -134,10 +134,8 @@ def _plot(rows: list[GainFit], path: str) -> None:
     ax.set_ylim(1e-12, 0.05)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    tmp = Path(path).with_suffix(".tmp.png")
-    fig.savefig(tmp, dpi=110)
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
     plt.close(fig)
-    tmp.replace(path)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -20,12 +20,10 @@ and ``step_pose/loop``, which are less sensitive to the machine's load than the 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import statistics
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -34,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_write_json
 from amigo_gym.kinematics import body_velocity, step_pose
 from amigo_gym.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
@@ -181,11 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"numpy {np.__version__}, {os.cpu_count()} CPUs visible; median of {args.repeats} repeats")
         print(format_table(rows))
         if args.json is not None:
-            folder = os.path.dirname(os.path.abspath(args.json))
-            fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".json", dir=folder)
-            with os.fdopen(fd, "w") as fh:
-                json.dump([asdict(r) for r in rows], fh, indent=1)
-            os.replace(tmp, args.json)
+            atomic_write_json(args.json, [asdict(r) for r in rows])
         return 0
 
     return run_guarded(go, PROG)

@@ -20,11 +20,9 @@ by one ``dt``. Each figure is the median over ``--repeats`` repeats, each lastin
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -32,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_write_json
 from amigo_gym.params import check_range
 
 __all__ = ["SingleResult", "VectorRow", "bench_single", "bench_vector", "format_report", "main"]
@@ -231,19 +230,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         rows = [] if args.skip_vector else bench_vector(sizes, repeats, min_time, sync_max, log=_log)
         print(format_report(single, rows))
         if args.json is not None:
-            folder = os.path.dirname(os.path.abspath(args.json))
-            fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".json", dir=folder)
-            try:
-                with os.fdopen(fd, "w") as fh:
-                    json.dump(
-                        {"single": None if single is None else asdict(single), "vector": [asdict(r) for r in rows]},
-                        fh,
-                        indent=1,
-                    )
-                os.replace(tmp, args.json)
-            except BaseException:
-                os.unlink(tmp)
-                raise
+            doc = {"single": None if single is None else asdict(single), "vector": [asdict(r) for r in rows]}
+            atomic_write_json(args.json, doc)
         return 0
 
     return run_guarded(go, PROG)

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_write
 
 __all__ = ["TARGETS", "main", "report_markdown", "run_compare"]
 
@@ -105,7 +106,6 @@ def run_compare(
     from amigo_gym.params import EnvParams
     from experiments.evaluate import (
         EvalProtocol,
-        _atomic_write,
         default_agents,
         evaluate_agents,
         load_agents,
@@ -147,7 +147,7 @@ def run_compare(
     best = best_learned(results)
     extra = {"training": training, "targets": TARGETS, "best_learned": best}
     doc = write_outputs(results, trajs, proto, out, out / "results.json", extra=extra, plots=plots)
-    _atomic_write(out / "report.md", report_markdown(doc).encode())
+    atomic_write(out / "report.md", report_markdown(doc).encode(), parents=True)
     return doc
 
 

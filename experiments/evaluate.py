@@ -61,7 +61,6 @@ import json
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -71,6 +70,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_write
 from amigo_gym.params import EnvParams
 
 __all__ = [
@@ -393,7 +393,7 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 def _save_fig(fig: Any, path: Path) -> None:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
-    _atomic_write(path, buf.getvalue())
+    atomic_write(path, buf.getvalue(), parents=True)
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
@@ -505,21 +505,6 @@ def plot_wheels(
 
 
 # --------------------------------------------------------------------------- files
-def _atomic_write(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_outputs(
     results: list[dict[str, Any]],
     trajs: dict[str, dict[str, list[Trajectory]]],
@@ -537,8 +522,8 @@ def write_outputs(
     """
     params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
-    _atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2) + "\n").encode())
-    _atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode())
+    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2) + "\n").encode(), parents=True)
+    atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")
         plot_wheels(trajs, params, out / "eval_wheels.png")

@@ -30,7 +30,6 @@ import argparse
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
 from typing import Any
@@ -50,6 +49,7 @@ from amigo_gym.inverse import (
     solve_inverse,
     time_grid,
 )
+from amigo_gym.io import atomic_save
 from amigo_gym.params import RobotParams, check_range
 from amigo_gym.paths import ManoeuvrePath
 
@@ -150,19 +150,7 @@ def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath)
 
 
 def _save_atomic(fig: Any, target: str, dpi: int) -> None:
-    folder = os.path.dirname(os.path.abspath(target))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp_", suffix=".png", dir=folder)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, format="png", dpi=dpi)
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)  # mkstemp makes 0600; give the usual mode of a new file
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), target)
 
 
 def _shade(ax: Any, ph: list[Phase]) -> None:

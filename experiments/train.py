@@ -51,7 +51,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -60,13 +60,12 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.io import atomic_save, atomic_write_json
 
 __all__ = [
     "ALGOS",
     "HYPERPARAMS_DIR",
     "Settings",
-    "atomic_write_bytes",
-    "atomic_write_json",
     "git_revision",
     "load_hyperparams",
     "main",
@@ -80,8 +79,6 @@ OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
 _UMASK = os.umask(0)
 os.umask(_UMASK)
-#: mode of the files a run writes (as ``open`` would create them under the current umask)
-_FILE_MODE = 0o666 & ~_UMASK
 
 
 # --------------------------------------------------------------------------- settings
@@ -145,43 +142,6 @@ class Settings:
 
 
 # --------------------------------------------------------------------------- small utilities
-def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
-    """Write ``data`` to a temporary file in the same directory, fsync it, then ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        os.chmod(tmp, _FILE_MODE)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def atomic_write_json(path: str | os.PathLike[str], obj: Any) -> None:
-    """``json.dumps(obj, indent=2)`` written atomically (:func:`atomic_write_bytes`)."""
-    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())
-
-
-def atomic_save(save: Callable[[str], object], path: str | os.PathLike[str]) -> None:
-    """Call ``save(tmp_path)`` (e.g. ``model.save``) on a temporary name, then ``os.replace`` it to ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        save(tmp)
-        os.chmod(tmp, _FILE_MODE)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def git_revision() -> str:
     """``git rev-parse HEAD`` of the repository holding this file, with ``-dirty`` if tracked files changed."""
     root = Path(__file__).resolve().parent.parent
@@ -339,14 +299,14 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
                     "best_mean_reward": float(parent.best_mean_reward),
                 }
             )
-            atomic_write_json(out / "eval.json", self.history)
+            atomic_write_json(out / "eval.json", self.history, parents=True)
             return True
 
     class SaveBest(BaseCallback):
         """On a new best evaluation: ``best_model.zip`` (atomically)."""
 
         def _on_step(self) -> bool:
-            atomic_save(self.model.save, out / "best_model.zip")
+            atomic_save(self.model.save, out / "best_model.zip", parents=True)
             return True
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
@@ -391,7 +351,9 @@ def save_checkpoint(model: Any, out: Path, algo: str) -> Path:
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    atomic_write_json(out / "checkpoint.json", {"num_timesteps": step, "path": str(final.relative_to(out))})
+    atomic_write_json(
+        out / "checkpoint.json", {"num_timesteps": step, "path": str(final.relative_to(out))}, parents=True
+    )
     for old in root.iterdir():
         if old != final and old.name.startswith("step_"):
             shutil.rmtree(old, ignore_errors=True)
@@ -437,7 +399,7 @@ def train(s: Settings) -> dict[str, Any]:
         set_random_seed(s.seed + done_steps)
         resume_entry = {"command": "amigo-gym train " + " ".join(s.argv), "from_step": done_steps}
         config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
-        atomic_write_json(out / "config.json", config)
+        atomic_write_json(out / "config.json", config, parents=True)
     else:
         config = {
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
@@ -448,7 +410,7 @@ def train(s: Settings) -> dict[str, Any]:
             "command": "amigo-gym train " + " ".join(s.argv),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
-        atomic_write_json(out / "config.json", config)
+        atomic_write_json(out / "config.json", config, parents=True)
         venv = make_train_env(n_envs, s.vec, s.seed)
         policy = hp.get("policy", "MlpPolicy")
         kw = _algo_kwargs(s.algo, hp, int(venv.action_space.shape[0]))
@@ -484,7 +446,7 @@ def train(s: Settings) -> dict[str, Any]:
     wall = previous_wall + time.perf_counter() - t0
     save_checkpoint(model, out, s.algo)
     _write_wall(out, wall)
-    atomic_save(model.save, out / "model.zip")
+    atomic_save(model.save, out / "model.zip", parents=True)
 
     evals = json.loads((out / "eval.json").read_text()) if (out / "eval.json").is_file() else []
     record = {
@@ -502,7 +464,7 @@ def train(s: Settings) -> dict[str, Any]:
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
     }
-    atomic_write_json(out / "run.json", record)
+    atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
         src = out / "model.zip"
@@ -513,8 +475,8 @@ def train(s: Settings) -> dict[str, Any]:
             src = out / "best_model.zip"
             best = max(evals, key=lambda e: e["mean_reward"])
             exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
-        atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip")
-        atomic_write_json(exp / f"{s.algo}.json", record | exported)
+        atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip", parents=True)
+        atomic_write_json(exp / f"{s.algo}.json", record | exported, parents=True)
     venv.close()
     return record
 
@@ -525,7 +487,7 @@ def _previous_wall(out: Path) -> float:
 
 
 def _write_wall(out: Path, wall: float) -> None:
-    atomic_write_json(out / "wall_time.json", {"wall_time_s": wall})
+    atomic_write_json(out / "wall_time.json", {"wall_time_s": wall}, parents=True)
 
 
 # --------------------------------------------------------------------------- command line
