@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "derive": ("amigo_gym.symbolic:main", "symbolic D-H derivation; print the equations (LaTeX)"),
     "train": ("experiments.train:main", "train a PPO/SAC/TD3 baseline on AmigoBot-v0"),
     "evaluate": ("experiments.evaluate:main", "evaluate analytic and trained agents on the fixed protocol"),
+    "verify": ("experiments.verify:main", "exactness figures against references (steady state, laps, symbolic)"),
     "convergence": ("experiments.analytic_convergence:main", "convergence rate of the analytic policy vs its gain"),
     "compare": ("experiments.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
     "bench-core": ("experiments.bench_core:main", "benchmark the batched exact step"),

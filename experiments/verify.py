@@ -1,0 +1,165 @@
+"""``amigo-gym verify``: the project's exactness figures, measured against references, in one table.
+
+Each row is a residual against an independent reference (nothing is compared with itself):
+
+1. the closed-form steady state on the circle against the values printed in ``shared/MODEL.md``;
+2. exactness of the step: from the steady pose on the circle (R = 1 m, v_A = 0.2 m/s), the closed-form
+   steady wheel rates held through :func:`amigo_gym.kinematics.step_pose` keep H on the circle over 10
+   laps (largest ``| |H - c| - R |``), for dt = 0.01, 0.1, 0.5 s; an explicit Euler step of the same
+   unicycle as the counter-example;
+3. the same through ``gym.make("AmigoBot-v0")`` with float64 actions, dt = 0.1 s;
+4. the inverse solution (SciPy DOP853) of the paper's case: largest cross-track error of H along 60 s;
+5. the transient round trip: the inverse solution's wheel-angle increments per step, held through the
+   exact step, keep H near the circle over a lap (dt = 0.1 and 0.05 s; their ratio ~4: second order);
+6. the symbolic derivation (SymPy): the rolling constraints of system 29 (both components of v_K and
+   v_L, eqs 11-12 and the castor) evaluated on 1000 random states of the numeric kinematics.
+
+The tests assert bounds on the same quantities (``tests/test_kinematics.py``, ``test_env.py``,
+``test_inverse.py``, ``test_symbolic.py``); this command prints the measured values.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.kinematics import body_velocity, castor_rate, circle_steady_state, h_position, step_pose
+from amigo_gym.params import RobotParams
+
+__all__ = ["main", "rows"]
+
+MODEL_MD = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
+ROBOT = RobotParams()
+R, V = 1.0, 0.2
+
+
+def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
+    """Steady pose with H at the origin on the circle of eq. 6 (centre (0, R)), and the steady rates."""
+    ss = circle_steady_state(R, V, ROBOT)
+    beta = -float(ss.heading_lag)
+    pose = np.array([-ROBOT.l3 * math.cos(beta), -ROBOT.l3 * math.sin(beta), beta])
+    return pose, np.asarray(ss.wheel_rates)
+
+
+def _laps_error(dt: float, euler: bool) -> float:
+    pose, w = _steady_pose()
+    v, bd = body_velocity(w, ROBOT)
+    n = math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / dt)
+    err = 0.0
+    for _ in range(n):
+        if euler:
+            b = pose[2]
+            pose = pose + dt * np.array([v * math.cos(b), v * math.sin(b), bd])
+        else:
+            pose = step_pose(pose, w, dt, ROBOT)
+        h = h_position(pose, ROBOT)
+        err = max(err, abs(math.hypot(h[0], h[1] - R) - R))
+    return err
+
+
+def _env_laps_error() -> float:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    pose, w = _steady_pose()
+    env = gym.make("AmigoBot-v0", max_episode_steps=None)
+    env.reset(options={"pose": pose})
+    action = w / ROBOT.max_wheel_rate
+    err = 0.0
+    for _ in range(math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / 0.1)):
+        _, _, _, _, info = env.step(action)
+        err = max(err, abs(info["cross_track_error"]))
+    return err
+
+
+def _round_trip(dt: float) -> float:
+    from amigo_gym.inverse import paper_circle
+    from amigo_gym.paths import CirclePath
+
+    path = CirclePath(radius=R)
+    sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)
+    w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt
+    pose = sol.pose[0]
+    err = 0.0
+    for k in range(w.shape[0]):
+        pose = step_pose(pose, w[k], dt, ROBOT)
+        err = max(err, abs(float(path.project(h_position(pose, ROBOT)).cross_track_error)))
+    return err
+
+
+def _symbolic_residual(n: int = 1000, seed: int = 0) -> float:
+    from amigo_gym import symbolic as S
+
+    d = S.derive()
+    rng = np.random.default_rng(seed)
+    x, y, b = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n)
+    w = rng.uniform(-15, 15, (n, 2))
+    v, bd = body_velocity(w, ROBOT)
+    values = {
+        "x_A": x,
+        "y_A": y,
+        "beta": b,
+        "xdot_A": v * np.cos(b),
+        "ydot_A": v * np.sin(b),
+        "betadot": bd,
+        "alphadot_1": w[:, 0],
+        "alphadot_2": w[:, 1],
+        "v_A": v,
+        **S.robot_values(ROBOT),
+    }
+    rolling = S.lambdify([d.eq11, d.eq12, d.eq19, d.eq20, d.eq27, d.eq28])(**values)
+    # the castor's equation is written for forward motion: speed |v_A| and rolling rate |alpha3dot|
+    castor = S.lambdify([d.eq_castor])(**{**values, "v_A": np.abs(v), "alphadot_3": np.abs(castor_rate(v, bd, ROBOT))})
+    return float(max(np.max(np.abs(rolling)), np.max(np.abs(castor))))
+
+
+def rows(quick: bool = False) -> list[tuple[str, float, str]]:
+    """``(what, measured value, reference / bound)`` for every check (``quick``: skip the slow ones)."""
+    ss = circle_steady_state(R, V, ROBOT)
+    got = {
+        "betadot": float(ss.betadot),
+        "alpha1_dot": float(ss.wheel_rates[0]),
+        "alpha2_dot": float(ss.wheel_rates[1]),
+        "alpha3_dot": float(ss.castor_rate),
+    }
+    out = [(f"steady {k} [rad/s] - MODEL.md's {MODEL_MD[k]}", got[k] - MODEL_MD[k], "|.| < 5e-7") for k in MODEL_MD]
+    for dt in (0.01, 0.1, 0.5):
+        out.append((f"exact step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, False), "<= 1e-9"))
+        out.append((f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, True), "(fails)"))
+    out.append(("AmigoBot-v0, 10 laps, dt = 0.1 s: max |e| [m]", _env_laps_error(), "<= 1e-9"))
+    if not quick:
+        from amigo_gym.inverse import paper_circle
+
+        sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
+        e = np.hypot(sol.x_H, sol.y_H - R) - R
+        out.append(("inverse solution, 60 s: max |e| of H [m]", float(np.max(np.abs(e))), "<= 1e-8"))
+        e1, e2 = _round_trip(0.1), _round_trip(0.05)
+        out.append(("round trip, 1 lap, dt = 0.1 s: max |e| [m]", e1, "<= 1e-4"))
+        out.append(("round trip, 1 lap, dt = 0.05 s: max |e| [m]", e2, "ratio ~4"))
+        out.append(("round trip ratio dt 0.1 / 0.05", e1 / e2, "in [3.5, 4.5]"))
+        out.append(("symbolic system 29 on 1000 random states: max residual", _symbolic_residual(), "<= 1e-12"))
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym verify [--quick]``: print the table of residuals."""
+    parser = OneLineParser(prog="amigo-gym verify", description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="skip the inverse solution and the symbolic check")
+    args = parser.parse_args(argv)
+
+    def run() -> int:
+        print("| check | measured | reference |\n|---|---:|---|")
+        for what, value, ref in rows(args.quick):
+            print(f"| {what} | {value:.3g} | {ref} |")
+        return 0
+
+    return run_guarded(run, "amigo-gym verify")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
