@@ -131,16 +131,16 @@ def rows(quick: bool = False) -> list[tuple[str, float, str]]:
     for dt in (0.01, 0.1, 0.5):
         out.append((f"exact step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, False), "<= 1e-9"))
         out.append((f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, True), "(fails)"))
-    out.append(("AmigoBot-v0, 10 laps, dt = 0.1 s: max |e| [m]", _env_laps_error(), "<= 1e-9"))
+    out.append(("AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]", _env_laps_error(), "<= 1e-9"))
     if not quick:
         from amigo_gym.inverse import paper_circle
 
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R
-        out.append(("inverse solution, 60 s: max |e| of H [m]", float(np.max(np.abs(e))), "<= 1e-8"))
+        out.append(("inverse solution, 60 s: max abs(e) of H [m]", float(np.max(np.abs(e))), "<= 1e-8"))
         e1, e2 = _round_trip(0.1), _round_trip(0.05)
-        out.append(("round trip, 1 lap, dt = 0.1 s: max |e| [m]", e1, "<= 1e-4"))
-        out.append(("round trip, 1 lap, dt = 0.05 s: max |e| [m]", e2, "ratio ~4"))
+        out.append(("round trip, 1 lap, dt = 0.1 s: max abs(e) [m]", e1, "<= 1e-4"))
+        out.append(("round trip, 1 lap, dt = 0.05 s: max abs(e) [m]", e2, "ratio ~4"))
         out.append(("round trip ratio dt 0.1 / 0.05", e1 / e2, "in [3.5, 4.5]"))
         out.append(("symbolic system 29 on 1000 random states: max residual", _symbolic_residual(), "<= 1e-12"))
     return out
