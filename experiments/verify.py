@@ -127,10 +127,15 @@ def rows(quick: bool = False) -> list[tuple[str, float, str]]:
         "alpha2_dot": float(ss.wheel_rates[1]),
         "alpha3_dot": float(ss.castor_rate),
     }
-    out = [(f"steady {k} [rad/s] - MODEL.md's {MODEL_MD[k]}", got[k] - MODEL_MD[k], "abs < 5e-7 (6 decimals)") for k in MODEL_MD]
+    out = [
+        (f"steady {k} [rad/s] - MODEL.md's {MODEL_MD[k]}", got[k] - MODEL_MD[k], "abs < 5e-7 (6 decimals)")
+        for k in MODEL_MD
+    ]
     for dt in (0.01, 0.1, 0.5):
         out.append((f"exact step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, False), "<= 1e-9"))
-        out.append((f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, True), "> 1e-4: not exact"))
+        out.append(
+            (f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]", _laps_error(dt, True), "> 1e-4: not exact")
+        )
     out.append(("AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]", _env_laps_error(), "<= 1e-9"))
     if not quick:
         from amigo_gym.inverse import paper_circle
