@@ -98,10 +98,25 @@ def report_markdown(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _say(message: str) -> None:
+    """A progress line on stderr (the report itself goes to stdout)."""
+    print(message, file=sys.stderr, flush=True)
+
+
 def run_compare(
-    out: Path, models: Path | None, train_steps: int, seeds: int, steps: int, seed: int, plots: bool = True
+    out: Path,
+    models: Path | None,
+    train_steps: int,
+    seeds: int,
+    steps: int,
+    seed: int,
+    plots: bool = True,
+    progress: bool = False,
 ) -> dict[str, Any]:
-    """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents."""
+    """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents.
+
+    ``progress`` shows the training run's progress bar; phase lines go to stderr in any case.
+    """
     from agents.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.params import EnvParams
     from experiments.evaluate import (
@@ -116,6 +131,7 @@ def run_compare(
     agents = default_agents(EnvParams(), proto.analytic_gain)
     training: dict[str, Any] = {}
     if models is not None:
+        _say(f"loading pretrained agents from {models}")
         loaded = load_agents(models)
         agents.update(loaded)
         for name in loaded:
@@ -136,13 +152,15 @@ def run_compare(
             resume=(run_dir / "checkpoint.json").is_file(),
             eval_freq=0,
             checkpoint_freq=max(train_steps // 4, 1),
-            progress=False,
+            progress=progress,
             argv=["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)],
         )
+        _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(s)
         print(f"trained ppo_fresh: {training['ppo_fresh']['timesteps']} steps in {time.perf_counter() - t0:.0f} s")
         agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
+    _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
     extra = {"training": training, "targets": TARGETS, "best_learned": best}
@@ -163,6 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400)")
     p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run")
     p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
@@ -173,7 +192,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
         out = Path(a.out)
         models = Path(a.models) if a.models else None
-        doc = run_compare(out, models, a.train_steps, a.seeds, a.steps, a.seed, plots=not a.no_plots)
+        progress = sys.stderr.isatty() and not a.no_progress
+        doc = run_compare(out, models, a.train_steps, a.seeds, a.steps, a.seed, plots=not a.no_plots, progress=progress)
         print(report_markdown(doc))
         print(f"wrote {out / 'report.md'}, {out / 'results.json'}")
         return 0
