@@ -124,7 +124,7 @@ def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
         deadline = time.monotonic() + 60
         while not any((out / "tb").rglob("events.out.tfevents.*")) and time.monotonic() < deadline:
             time.sleep(0.2)
-        time.sleep(1.0)  # some rollouts
+        time.sleep(2.0)  # some rollouts (a rollout of 128 steps takes milliseconds; 2 s leaves room on a loaded CI)
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     finally:
