@@ -30,7 +30,7 @@ from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.kinematics import body_velocity, castor_rate, circle_steady_state, h_position, step_pose
 from amigo_gym.params import RobotParams
 
-__all__ = ["main", "rows"]
+__all__ = ["main", "round_trip_error", "rows"]
 
 MODEL_MD = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
 ROBOT = RobotParams()
@@ -77,7 +77,8 @@ def _env_laps_error() -> float:
     return err
 
 
-def _round_trip(dt: float) -> float:
+def round_trip_error(dt: float) -> float:
+    """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
     from amigo_gym.inverse import paper_circle
     from amigo_gym.paths import CirclePath
 
@@ -143,7 +144,7 @@ def rows(quick: bool = False) -> list[tuple[str, float, str]]:
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R
         out.append(("inverse solution, 60 s: max abs(e) of H [m]", float(np.max(np.abs(e))), "<= 1e-8"))
-        e1, e2 = _round_trip(0.1), _round_trip(0.05)
+        e1, e2 = round_trip_error(0.1), round_trip_error(0.05)
         out.append(("round trip, 1 lap, dt = 0.1 s: max abs(e) [m]", e1, "<= 1e-4"))
         out.append(("round trip, 1 lap, dt = 0.05 s: max abs(e) [m]", e2, "ratio ~4"))
         out.append(("round trip ratio dt 0.1 / 0.05", e1 / e2, "in [3.5, 4.5]"))

@@ -21,9 +21,9 @@ from amigo_gym.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.kinematics import h_position, step_pose
 from amigo_gym.params import RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath
+from experiments.verify import round_trip_error
 
 ROBOT = RobotParams()
 L1, L3, R1, R2 = ROBOT.l1, ROBOT.l3, ROBOT.r1, ROBOT.r2
@@ -89,22 +89,9 @@ def test_wheel_angles_match_distance_and_heading() -> None:
     np.testing.assert_allclose(np.ptp(sol.alpha1[rest]), 0.0, atol=1e-12)
 
 
-def _round_trip_error(dt: float) -> float:
-    """Drive the exact step with the inverse solution's wheel-angle increments / dt, held; max |e| of H."""
-    path = CirclePath(radius=1.0)
-    sol = paper_circle(duration=2 * math.pi * math.sqrt(1 - L3**2) / 0.2, dt=dt)
-    w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt
-    pose = sol.pose[0]
-    err = 0.0
-    for k in range(w.shape[0]):
-        pose = step_pose(pose, w[k], dt, ROBOT)
-        err = max(err, abs(float(path.project(h_position(pose, ROBOT)).cross_track_error)))
-    return err
-
-
 def test_transient_round_trip_second_order() -> None:
-    e1 = _round_trip_error(0.1)
-    e2 = _round_trip_error(0.05)
+    e1 = round_trip_error(0.1)
+    e2 = round_trip_error(0.05)
     assert e1 <= 1e-4
     assert 3.5 <= e1 / e2 <= 4.5  # second order in dt
 

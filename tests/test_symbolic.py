@@ -44,13 +44,8 @@ def _is_zero(expr: Any) -> bool:
     return bool(sp.simplify(sp.expand(expr)) == 0)
 
 
-def rolling_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
-    """Random poses and random wheel rates; the motion of A from the core's ``body_velocity`` (MODEL.md eqs 11-12)."""
-    rng = np.random.default_rng(seed)
-    pose = np.column_stack((rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n)))
-    pose[:4, 2] = (math.pi / 2, -math.pi / 2, 0.0, math.pi)  # headings along the axes are included
-    w = rng.uniform(-robot.max_wheel_rate, robot.max_wheel_rate, (n, 2))
-    v, bd = K.body_velocity(w, robot)
+def _motion_values(pose: Array, v: Array, bd: Array, w: Array, robot: RobotParams) -> dict[str, Array]:
+    """Symbol values of a rolling motion: pose, A's velocity (eqs 11-12), turn rate, wheel and castor rates."""
     b = pose[:, 2]
     return {
         "x_A": pose[:, 0],
@@ -66,6 +61,16 @@ def rolling_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
         "pose": pose,
         "w": w,
     }
+
+
+def rolling_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
+    """Random poses and random wheel rates; the motion of A from the core's ``body_velocity`` (MODEL.md eqs 11-12)."""
+    rng = np.random.default_rng(seed)
+    pose = np.column_stack((rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n)))
+    pose[:4, 2] = (math.pi / 2, -math.pi / 2, 0.0, math.pi)  # headings along the axes are included
+    w = rng.uniform(-robot.max_wheel_rate, robot.max_wheel_rate, (n, 2))
+    v, bd = K.body_velocity(w, robot)
+    return _motion_values(pose, v, bd, w, robot)
 
 
 def circle_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
@@ -92,22 +97,12 @@ def circle_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
     bd, phd = np.linalg.solve(mat, rhs[..., None])[..., 0].T
     w = K.wheel_rates(v, bd, robot)
     return {
+        **_motion_values(pose, v, bd, w, robot),
         "R": radius,
         "phi": ph,
         "phidot": phd,
-        "x_A": pose[:, 0],
-        "y_A": pose[:, 1],
-        "beta": b,
-        "xdot_A": v * np.cos(b),
-        "ydot_A": v * np.sin(b),
-        "betadot": bd,
-        "v_A": v,
-        "alphadot_1": w[:, 0],
-        "alphadot_2": w[:, 1],
-        "alphadot_3": K.castor_rate(v, bd, robot),
         "theta": ph,
         "sdot": radius * phd,
-        "pose": pose,
         "h": h,
     }
 
