@@ -1,0 +1,102 @@
+r"""The one integral behind every curve of AmigoBot-v1: motion with speed and turn rate linear in time.
+
+A body moving with speed ``v(t) = v0 + a t`` along its heading and turn rate ``w(t) = w0 + alpha t``
+has the heading ``theta(t) = theta0 + w0 t + alpha t^2 / 2`` (exact, a quadratic) and the position
+
+.. math::
+    \mathbf{p}(T) = \mathbf{p}_0 + \int_0^T (v_0 + a t)
+        \begin{pmatrix}\cos\theta(t)\\ \sin\theta(t)\end{pmatrix} dt,
+
+a generalised Fresnel integral. Two things in this package are such motions:
+
+* the robot's point A within a control step when the firmware ramps its speeds (:mod:`amigo_gym.actuators`):
+  ``v``, ``w`` are piecewise linear in time, and each linear piece is one call;
+* a clothoid path segment (:mod:`amigo_gym.paths`): arc length plays the time, ``v = 1``, ``a = 0``,
+  and the curvature ``kappa0 + c s`` the turn rate.
+
+Evaluation: Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal
+sub-intervals. The integrand is entire; on a sub-interval over which the phase ``theta`` varies by
+at most :data:`MAX_PHASE_PER_SUB` radians the quadrature error bound,
+``|E| <= h^{2n+1} (n!)^4 / ((2n+1) ((2n)!)^3) max|f^{(2n)}|``, is below 1e-20 relative to ``|v| h``,
+so the result is exact to rounding (about 1e-16 relative; measured against mpmath at 50 digits in
+``tests/test_fresnel.py``). The closed forms via Fresnel integrals lose digits when the curvature
+rate is small (the difference of two nearly equal Fresnel values); the quadrature has no such
+branch: lines (``w0 = alpha = 0``), arcs (``alpha = 0``) and clothoids are the same code.
+Callers choose ``n_sub`` with :func:`subintervals` from a bound of the phase change they can meet.
+
+Every function takes columns (floats, or float64 arrays that broadcast together) and returns the
+same kind, so one robot and a batch run the same code.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.kinematics import Real, col_cos, col_sin
+
+__all__ = ["NODES", "MAX_PHASE_PER_SUB", "subintervals", "advance"]
+
+#: Gauss–Legendre nodes per sub-interval
+NODES = 10
+#: largest phase change [rad] on one sub-interval for which the quadrature is exact to rounding
+MAX_PHASE_PER_SUB = 2.0
+
+_X, _W = np.polynomial.legendre.leggauss(NODES)
+#: nodes on [0, 1] and their weights (summing to 1)
+_U: NDArray[np.float64] = 0.5 * (_X + 1.0)
+_UW: NDArray[np.float64] = 0.5 * _W
+_U_LIST: list[float] = _U.tolist()
+_UW_LIST: list[float] = _UW.tolist()
+
+
+def subintervals(max_phase_change: float) -> int:
+    """Number of sub-intervals so that the phase varies by at most :data:`MAX_PHASE_PER_SUB` on each.
+
+    Args:
+        max_phase_change: a bound of ``|w0| T + |alpha| T^2 / 2`` over the calls to come [rad].
+    """
+    if not math.isfinite(max_phase_change) or max_phase_change < 0:
+        raise ValueError(f"max_phase_change must be a finite number >= 0, got {max_phase_change!r}")
+    return max(1, math.ceil(max_phase_change / MAX_PHASE_PER_SUB))
+
+
+def advance(
+    x: Real, y: Real, theta: Real, v0: Real, a: Real, w0: Real, alpha: Real, t: Real, n_sub: int = 1
+) -> tuple[Real, Real, Real]:
+    r"""Pose after time ``t`` with speed ``v0 + a tau`` and turn rate ``w0 + alpha tau`` (``0 <= tau <= t``).
+
+    .. math::
+        \theta' = \theta + w_0 t + \tfrac12 \alpha t^2, \qquad
+        (x', y') = (x, y) + \int_0^t (v_0 + a\tau)\,(\cos, \sin)(\theta + w_0\tau + \tfrac12\alpha\tau^2)\,d\tau
+
+    evaluated by Gauss–Legendre quadrature (module docstring); ``t = 0`` returns the pose unchanged.
+
+    Args:
+        x, y, theta: start pose [m, m, rad].
+        v0, a: speed at the start [m/s] and its rate of change [m/s^2].
+        w0, alpha: turn rate at the start [rad/s] and its rate of change [rad/s^2].
+        t: duration [s], >= 0 (not checked: callers pass piece lengths they computed).
+        n_sub: number of equal sub-intervals (:func:`subintervals`).
+
+    Returns:
+        ``(x', y', theta')``, columns of the broadcast shape of the inputs.
+    """
+    if n_sub == 1:
+        u, uw = _U_LIST, _UW_LIST
+    else:
+        u = [(k + ui) / n_sub for k in range(n_sub) for ui in _U_LIST]
+        uw = [wi / n_sub for _ in range(n_sub) for wi in _UW_LIST]
+    # a fixed order of summation, node by node, so that a float and an array element get the same bits
+    half_alpha = 0.5 * alpha
+    dx: Real = 0.0
+    dy: Real = 0.0
+    for ui, wi in zip(u, uw, strict=True):
+        tau = ui * t
+        phase = theta + tau * (w0 + half_alpha * tau)
+        weight = (v0 + a * tau) * wi
+        dx = dx + weight * col_cos(phase)
+        dy = dy + weight * col_sin(phase)
+    return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
