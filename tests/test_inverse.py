@@ -103,7 +103,7 @@ def test_manoeuvre_continuity() -> None:
     dt = 1e-3
     sol = solve_inverse(path, prof, time_grid(10.0, dt), ROBOT)
     j = int(np.argmax(sol.s >= 1.0))  # first sample on the circle, at t = 5 s
-    assert sol.t[j] == pytest.approx(5.0, abs=dt)
+    assert sol.t[j] == pytest.approx(5.0, abs=1.5 * dt)  # the first sample at s >= 1 may fall one step late by rounding
     # largest possible change of a rate per sample: betaddot <= v kappa sdot / l3 (at zero heading error)
     bound = L1 * 0.2 * 1.0 * 0.2 / L3 / R1 * dt * 1.01
     assert np.max(np.abs(np.diff(sol.wheel_rates, axis=0))) <= bound
