@@ -17,15 +17,15 @@ __all__ = ["COMMANDS", "OneLineParser", "main", "run_guarded"]
 #: sub-command -> (module:function taking argv, one-line summary)
 COMMANDS: dict[str, tuple[str, str]] = {
     "inverse": ("amigo_gym.cli_inverse:main", "analytic inverse solution of H on a path, as CSV"),
-    "paper": ("experiments.paper_figures:main", "the paper's manoeuvre: Fig. 2/3-style plots and CSV"),
+    "paper": ("amigo_gym.analysis.paper_figures:main", "the paper's manoeuvre: Fig. 2/3-style plots and CSV"),
     "derive": ("amigo_gym.symbolic:main", "symbolic D-H derivation; print the equations (LaTeX)"),
-    "train": ("experiments.train:main", "train a PPO/SAC/TD3 baseline on AmigoBot-v0"),
-    "evaluate": ("experiments.evaluate:main", "evaluate analytic and trained agents on the fixed protocol"),
-    "verify": ("experiments.verify:main", "exactness figures against references (steady state, laps, symbolic)"),
-    "convergence": ("experiments.analytic_convergence:main", "convergence rate of the analytic policy vs its gain"),
-    "compare": ("experiments.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
-    "bench-core": ("experiments.bench_core:main", "benchmark the batched exact step"),
-    "bench-env": ("experiments.bench_env:main", "benchmark the environment against peers"),
+    "train": ("amigo_gym.training.train:main", "train a PPO/SAC/TD3 baseline on AmigoBot-v0"),
+    "evaluate": ("amigo_gym.training.evaluate:main", "evaluate analytic and trained agents on the fixed protocol"),
+    "verify": ("amigo_gym.analysis.verify:main", "exactness figures against references (steady state, laps, symbolic)"),
+    "convergence": ("amigo_gym.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"),
+    "compare": ("amigo_gym.training.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
+    "bench-core": ("amigo_gym.bench.core:main", "benchmark the batched exact step"),
+    "bench-env": ("amigo_gym.bench.env:main", "benchmark the environment against peers"),
 }
 
 

@@ -1,4 +1,4 @@
-"""Tests of the analytic inverse-solution policy (agents/analytic.py).
+"""Tests of the analytic inverse-solution policy (amigo_gym/policies/analytic.py).
 
 References: the closed-form steady state on a circle, the continuous-time error law
 ``e(t) = e0 exp(-k t)``, and the paper's inverse ODE integrated independently with SciPy.
@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from agents.analytic import AnalyticPolicy, analytic_body_velocity
 from amigo_gym import task
 from amigo_gym.kinematics import body_velocity, circle_steady_state
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import make_path
+from amigo_gym.policies.analytic import AnalyticPolicy, analytic_body_velocity
 
 
 def steady_pose(p: EnvParams) -> np.ndarray:

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from experiments.analytic_convergence import Settings, halving_times
+from amigo_gym.analysis.convergence import Settings, halving_times
 
 
 def test_convergence_command_writes_table_and_plot(tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""``experiments/evaluate.py``: protocol, metrics against independent computations, outputs."""
+"""``amigo_gym/training/evaluate.py``: protocol, metrics against independent computations, outputs."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from agents.analytic import AnalyticPolicy
 from amigo_gym.params import EnvParams
-from experiments.evaluate import (
+from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.training.evaluate import (
     EvalProtocol,
     default_agents,
     evaluate_agents,

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+from amigo_gym.analysis.verify import round_trip_error
 from amigo_gym.inverse import (
     COLUMNS,
     ConstantSpeed,
@@ -23,7 +24,6 @@ from amigo_gym.inverse import (
 )
 from amigo_gym.params import RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath
-from experiments.verify import round_trip_error
 
 ROBOT = RobotParams()
 L1, L3, R1, R2 = ROBOT.l1, ROBOT.l3, ROBOT.r1, ROBOT.r2
@@ -111,7 +111,7 @@ def test_manoeuvre_continuity() -> None:
     assert np.max(np.abs(np.diff(sol.s))) <= 0.2 * 1.01 * dt
     before = sol.s < 1.0
     np.testing.assert_allclose(sol.wheel_rates[before], 4.0, atol=1e-12)
-    np.testing.assert_allclose(sol.beta[before], 0.0, atol=1e-14)
+    np.testing.assert_allclose(sol.beta[before], 0.0, atol=1e-12)  # 1e-13 at the junction sample
     assert np.all(sol.betadot[~before] > 0.0)
 
 

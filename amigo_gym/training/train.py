@@ -60,6 +60,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json
 
 __all__ = [
@@ -74,7 +75,7 @@ __all__ = [
 
 ALGOS = ("ppo", "sac", "td3")
 ENV_ID = "AmigoBot-v0"
-HYPERPARAMS_DIR = Path(__file__).resolve().parent.parent / "agents" / "hyperparams"
+HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
 _UMASK = os.umask(0)
@@ -92,7 +93,7 @@ class Settings:
         out: run directory.
         timesteps: total environment steps (``None``: the YAML's ``n_timesteps``).
         n_envs: parallel environments (``None``: the YAML's ``n_envs``, else 1).
-        vec: ``native`` (:class:`agents.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3 ``DummyVecEnv``
+        vec: ``native`` (:class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3 ``DummyVecEnv``
             of ``gym.make``); ``auto``: native when ``n_envs > 1``.
         hyperparams: YAML file (``None``: ``agents/hyperparams/<algo>.yml``).
         resume: continue from the latest checkpoint in ``out``.
@@ -144,7 +145,9 @@ class Settings:
 # --------------------------------------------------------------------------- small utilities
 def git_revision() -> str:
     """``git rev-parse HEAD`` of the repository holding this file, with ``-dirty`` if tracked files changed."""
-    root = Path(__file__).resolve().parent.parent
+    root = repository_root()
+    if root is None:
+        return "not a git checkout"
     try:
         rev = subprocess.run(
             ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True, timeout=10
@@ -242,7 +245,7 @@ def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-    from agents.sb3_vec import AmigoBotSB3VecEnv
+    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     venv: Any
     if _native(vec, n_envs):
@@ -261,7 +264,7 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
-    from agents.sb3_vec import AmigoBotSB3VecEnv
+    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     class Checkpoint(BaseCallback):
         """Every ``freq`` steps: a complete checkpoint (model [+ replay buffer]), then ``checkpoint.json``."""

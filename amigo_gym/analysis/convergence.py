@@ -1,6 +1,6 @@
 """Convergence of the analytic policy from perturbed starts, for several feedback gains.
 
-``amigo-gym convergence`` rolls out :class:`agents.analytic.AnalyticPolicy` with each gain ``k`` on the
+``amigo-gym convergence`` rolls out :class:`amigo_gym.policies.analytic.AnalyticPolicy` with each gain ``k`` on the
 evaluation protocol's perturbed starts (``reset(seed=s)``, s = 100..109: H within +-2 cm per axis,
 heading +-0.1 rad) and fits, by least squares over all episodes, the slope of ``log|e(t)|`` over a time
 window (default [1, 4] s, after the heading transient and before rounding noise). The halving time
@@ -85,8 +85,8 @@ def halving_times(settings: Settings) -> list[GainFit]:
     import gymnasium as gym
 
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-    from agents.analytic import AnalyticPolicy
-    from experiments.evaluate import rollout
+    from amigo_gym.policies.analytic import AnalyticPolicy
+    from amigo_gym.training.evaluate import rollout
 
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)

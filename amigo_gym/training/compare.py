@@ -12,7 +12,7 @@ Steps:
    the default 500 000 steps take about a minute on 2 CPU cores and already track to a fraction
    of a millimetre. The fresh agent (its final model) is evaluated as ``ppo_fresh``.
 2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
-   ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`experiments.evaluate`.
+   ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`amigo_gym.training.evaluate`.
 3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
    run's record, the targets), ``<out>/report.md`` (the table, the targets, the training records) and
    the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``; every file atomically.
@@ -48,7 +48,7 @@ def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed")
 
 def report_markdown(doc: dict[str, Any]) -> str:
     """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
-    from experiments.evaluate import markdown_table
+    from amigo_gym.training.evaluate import markdown_table
 
     proto = doc["protocol"]
     lines = [
@@ -117,9 +117,9 @@ def run_compare(
 
     ``progress`` shows the training run's progress bar; phase lines go to stderr in any case.
     """
-    from agents.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.params import EnvParams
-    from experiments.evaluate import (
+    from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
+    from amigo_gym.training.evaluate import (
         EvalProtocol,
         default_agents,
         evaluate_agents,
@@ -141,7 +141,7 @@ def run_compare(
     if train_steps > 0:
         from stable_baselines3 import PPO
 
-        from experiments.train import Settings, train
+        from amigo_gym.training.train import Settings, train
 
         run_dir = out / "train_ppo"
         s = Settings(
@@ -171,7 +171,7 @@ def run_compare(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym compare``."""
-    from experiments.evaluate import PRETRAINED_DIR
+    from amigo_gym.training.evaluate import PRETRAINED_DIR
 
     p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
     p.add_argument("--out", default="results", help="output directory (default results/)")

@@ -35,7 +35,7 @@ from amigo_gym.params import check_range
 
 __all__ = ["SingleResult", "VectorRow", "bench_single", "bench_vector", "format_report", "main"]
 
-from experiments.bench_core import measure
+from amigo_gym.bench.core import measure
 
 PROG = "amigo-gym bench-env"
 DEFAULT_SIZES = (1, 64, 1024, 4096, 16384)

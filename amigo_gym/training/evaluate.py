@@ -17,7 +17,7 @@ Protocol (``protocol`` in the JSON; every rollout is deterministic)
   the steady lag), so even the exact solution has a short heading transient.
 * Scenario ``perturbed``: ``reset(seed=s)`` for the seeds ``--seeds`` (default 100..109): the
   environment's random start, H within +-2 cm per axis of the origin, heading +-0.1 rad.
-* Agents: ``analytic`` (:class:`agents.analytic.AnalyticPolicy`, gain 3 1/s), ``analytic_ff`` (the
+* Agents: ``analytic`` (:class:`amigo_gym.policies.analytic.AnalyticPolicy`, gain 3 1/s), ``analytic_ff`` (the
   paper's inverse ODE in closed loop, gain 0), and every ``<algo>.zip`` in ``--models`` (PPO, SAC,
   TD3), acting deterministically.
 
@@ -33,7 +33,7 @@ Keys of each entry of ``results`` (pooled over the episodes of the scenario)
 * ``wheel_rate_dev_rms``: RMS over steps and both wheels of the applied wheel rates minus those of the
   analytic inverse solution with feedback *on the agent's own observations*:
   ``w_t - clip(w_analytic(o_t), -w_max, w_max)`` [rad/s], with ``o_t`` the observation the agent acted
-  on and ``w_analytic`` :func:`agents.analytic.analytic_wheel_rates` (gain 3). It says how far the agent's
+  on and ``w_analytic`` :func:`amigo_gym.policies.analytic.analytic_wheel_rates` (gain 3). It says how far the agent's
   command is from what the exact inverse solution would command in the same state; 0 for ``analytic``.
 * ``wheel_rate_dev_steady_rms``: RMS over ``t >= settle_time_s`` of the applied rates minus the
   closed-form steady-state rates of the circle (:func:`amigo_gym.kinematics.circle_steady_state`,
@@ -70,6 +70,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write
 from amigo_gym.params import EnvParams
 
@@ -91,14 +92,14 @@ __all__ = [
 
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
-PRETRAINED_DIR = Path(__file__).resolve().parent.parent / "agents" / "pretrained"
+PRETRAINED_DIR = pretrained_dir()
 ALGOS = ("ppo", "sac", "td3")
 SCENARIOS = ("nominal", "paper_start", "perturbed")
 SETTLED_BAND_M = 1e-3
 
 
 class Agent(Protocol):
-    """Anything with SB3's ``predict`` (SB3 models, :class:`agents.analytic.AnalyticPolicy`)."""
+    """Anything with SB3's ``predict`` (SB3 models, :class:`amigo_gym.policies.analytic.AnalyticPolicy`)."""
 
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
@@ -184,7 +185,7 @@ def steady_start_pose(params: EnvParams) -> Array:
 
 def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
     """Run ``agent`` deterministically for up to ``steps`` steps after ``env.reset(**reset_kwargs)``."""
-    from agents.analytic import analytic_wheel_rates
+    from amigo_gym.policies.analytic import analytic_wheel_rates
 
     params: EnvParams = env.unwrapped.params
     path = env.unwrapped.path
@@ -275,7 +276,7 @@ def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtoco
 
 def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
-    from agents.analytic import AnalyticPolicy
+    from amigo_gym.policies.analytic import AnalyticPolicy
 
     return {
         "analytic": AnalyticPolicy(params, gain=gain),

@@ -1,0 +1,3 @@
+"""Benchmarks of the exact step and of the environments against peers measured in the same run."""
+
+from __future__ import annotations

@@ -1,0 +1,46 @@
+"""Where the shipped artefacts live: the pretrained models and the hyperparameter files.
+
+In the repository they are the top-level folder ``agents/`` (data, not code: rl-zoo hyperparameter
+YAML, pretrained models with their manifests). A wheel ships the same folder as package data,
+installed as ``amigo_gym/agents/``. :func:`agents_dir` finds it in either layout. Imports only the
+standard library.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["agents_dir", "hyperparams_dir", "pretrained_dir", "repository_root"]
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def repository_root() -> Path | None:
+    """The source checkout holding this package (``None`` when installed from a wheel)."""
+    root = _PACKAGE.parent
+    return root if (root / "pyproject.toml").is_file() and (root / "agents").is_dir() else None
+
+
+def agents_dir() -> Path:
+    """The ``agents/`` data folder: ``amigo_gym/agents`` in a wheel, ``<repository>/agents`` in a checkout.
+
+    Raises:
+        FileNotFoundError: neither exists (a broken installation).
+    """
+    installed = _PACKAGE / "agents"
+    if installed.is_dir():
+        return installed
+    root = repository_root()
+    if root is not None:
+        return root / "agents"
+    raise FileNotFoundError(f"the agents data folder is missing: neither {installed} nor a source checkout")
+
+
+def pretrained_dir() -> Path:
+    """Folder of the pretrained models and their manifests (``agents/pretrained``)."""
+    return agents_dir() / "pretrained"
+
+
+def hyperparams_dir() -> Path:
+    """Folder of the rl-zoo hyperparameter files (``agents/hyperparams``)."""
+    return agents_dir() / "hyperparams"
