@@ -1,0 +1,293 @@
+r"""Domain randomisation of AmigoBot-v1 as data: ranges in frozen dataclasses, drawn from the env's generator.
+
+The robot that is simulated is not the robot the policy knows. :class:`Randomization` holds the
+ranges (each a closed interval ``(low, high)``, with ``low == high`` meaning "fixed"); :func:`sample`
+draws one episode's values (:class:`EpisodeDraw`) from the environment's ``np_random`` in a fixed order,
+so that ``reset(seed=...)`` reproduces every draw. Per-step randomness (slip and measurement noise)
+is a pure function of a per-episode key (drawn at reset from the env's generator) and the step index
+(:func:`step_noise`), so that one robot and a batch of robots get the same draws without a per-robot
+generator call in the step.
+
+What each range means (scales multiply the nominal value; they never add):
+
+* ``wheel_radius``: scale of each true drive-wheel radius, drawn independently for the right and the
+  left wheel [-]. Worn or under-inflated tyres and manufacturing tolerance change the effective rolling
+  radius by a few per cent; odometry calibration (UMBmark, Borenstein & Feng 1996) measures wheel-radius
+  ratios off by 0.1–1 % on calibrated robots and several per cent on uncalibrated ones.
+* ``track``: scale of the true half track ``l1`` [-] (the effective contact width of rubber tyres).
+* ``slip``: per-episode bound ``s_max`` [-] of the per-step loss of ground speed: at every step each wheel's
+  ground contact speed is ``(1 - s_i) r_i alphadot_i`` with ``s_i ~ U(0, s_max)`` drawn per step.
+* ``delay``: actuation delay [s]: a command takes effect this long after it is issued (applied exactly,
+  mid-step). The robot's controller runs a 100 ms cycle (ARCOS/AROS server information packets every
+  100 ms), so a command waits 0–100 ms for the next cycle, plus the serial link.
+* ``position_noise``, ``heading_noise``, ``wheel_rate_noise``: standard deviations of zero-mean Gaussian
+  noise on the measured pose of A [m], heading [rad] and wheel rates [rad/s] (what the observation is
+  computed from). Fresh noise every step; the true state is never perturbed.
+
+The presets (:data:`PRESETS`) are choices of this project, not measurements: ``"mild"`` covers a
+calibrated robot on a clean floor, ``"hard"`` an uncalibrated one with worn tyres, a slippery floor and
+a slow link. Held-out conditions for the benchmark lie outside ``"hard"``.
+
+Imports only numpy, :mod:`amigo_gym.params` and :mod:`amigo_gym.kinematics` (column type).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.kinematics import Real
+from amigo_gym.params import check_range
+
+__all__ = [
+    "MAX_DELAY",
+    "PRESETS",
+    "EpisodeDraw",
+    "Randomization",
+    "StepNoise",
+    "counter_normal",
+    "counter_uniform",
+    "draw_key",
+    "make_randomization",
+    "sample",
+    "step_noise",
+]
+
+#: largest actuation delay the environments support [s]
+MAX_DELAY = 0.5
+
+
+def _interval(owner: str, name: str, value: Any, low: float, high: float) -> tuple[float, float]:
+    """Check a ``(low, high)`` pair inside ``[low, high]`` with ``low <= high``; return it as floats."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ValueError(f"{owner}.{name} must be a pair (low, high) within [{low:g}, {high:g}], got {value!r}")
+    lo = check_range(owner, f"{name}[0]", value[0], low, high)
+    hi = check_range(owner, f"{name}[1]", value[1], low, high)
+    if lo > hi:
+        raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
+    return (lo, hi)
+
+
+@dataclass(frozen=True)
+class Randomization:
+    """Ranges of the randomised quantities (module docstring); ``(x, x)`` fixes a value.
+
+    Attributes:
+        wheel_radius: scale of each true wheel radius [-], within [0.5, 1.5]. Default (1, 1).
+        track: scale of the true half track ``l1`` [-], within [0.5, 1.5]. Default (1, 1).
+        slip: bound ``s_max`` of the per-step loss of each wheel's ground speed [-], within [0, 0.5].
+            Default (0, 0).
+        delay: actuation delay [s], within [0, MAX_DELAY = 0.5]. Default (0, 0).
+        position_noise: std of the measured position of A [m], within [0, 0.1]. Default 0.
+        heading_noise: std of the measured heading [rad], within [0, 0.2]. Default 0.
+        wheel_rate_noise: std of the measured wheel rates [rad/s], within [0, 2]. Default 0.
+    """
+
+    wheel_radius: tuple[float, float] = (1.0, 1.0)
+    track: tuple[float, float] = (1.0, 1.0)
+    slip: tuple[float, float] = (0.0, 0.0)
+    delay: tuple[float, float] = (0.0, 0.0)
+    position_noise: float = 0.0
+    heading_noise: float = 0.0
+    wheel_rate_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        o = "Randomization"
+        object.__setattr__(self, "wheel_radius", _interval(o, "wheel_radius", self.wheel_radius, 0.5, 1.5))
+        object.__setattr__(self, "track", _interval(o, "track", self.track, 0.5, 1.5))
+        object.__setattr__(self, "slip", _interval(o, "slip", self.slip, 0.0, 0.5))
+        object.__setattr__(self, "delay", _interval(o, "delay", self.delay, 0.0, MAX_DELAY))
+        object.__setattr__(self, "position_noise", check_range(o, "position_noise", self.position_noise, 0.0, 0.1))
+        object.__setattr__(self, "heading_noise", check_range(o, "heading_noise", self.heading_noise, 0.0, 0.2))
+        object.__setattr__(
+            self, "wheel_rate_noise", check_range(o, "wheel_rate_noise", self.wheel_rate_noise, 0.0, 2.0)
+        )
+
+    @property
+    def is_off(self) -> bool:
+        """True when nothing is randomised (the default)."""
+        return self == Randomization()
+
+    @property
+    def has_noise(self) -> bool:
+        """True when the measurements are noisy."""
+        return self.position_noise > 0 or self.heading_noise > 0 or self.wheel_rate_noise > 0
+
+
+#: named presets of ``randomize=`` (module docstring)
+PRESETS: dict[str, Randomization] = {
+    "none": Randomization(),
+    "mild": Randomization(
+        wheel_radius=(0.98, 1.02),
+        track=(0.98, 1.02),
+        slip=(0.0, 0.02),
+        delay=(0.0, 0.05),
+        position_noise=0.002,
+        heading_noise=0.005,
+        wheel_rate_noise=0.05,
+    ),
+    "hard": Randomization(
+        wheel_radius=(0.95, 1.05),
+        track=(0.95, 1.05),
+        slip=(0.0, 0.1),
+        delay=(0.0, 0.15),
+        position_noise=0.005,
+        heading_noise=0.01,
+        wheel_rate_noise=0.2,
+    ),
+}
+
+
+def make_randomization(value: str | Randomization | Mapping[str, Any] | None) -> Randomization:
+    """``randomize=`` of the environments: a preset name, a :class:`Randomization`, or a mapping of its fields.
+
+    Raises:
+        ValueError: an unknown preset or field, or a bad range (naming the field, value and allowed range).
+    """
+    if value is None:
+        return PRESETS["none"]
+    if isinstance(value, Randomization):
+        return value
+    if isinstance(value, str):
+        if value not in PRESETS:
+            raise ValueError(f"randomize must be one of {sorted(PRESETS)} or a mapping of ranges, got {value!r}")
+        return PRESETS[value]
+    if isinstance(value, Mapping):
+        names = {f.name for f in fields(Randomization)}
+        bad = sorted(str(k) for k in value if k not in names)
+        if bad:
+            raise ValueError(f"randomize: unknown field(s) {bad}; allowed: {sorted(names)}")
+        kwargs: dict[str, Any] = {str(k): (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
+        return Randomization(**kwargs)
+    raise ValueError(f"randomize must be a preset name, a Randomization or a mapping, got {type(value).__name__}")
+
+
+class EpisodeDraw(NamedTuple):
+    """One episode's randomised values (module docstring).
+
+    Attributes:
+        r1_scale, r2_scale: scales of the true right and left wheel radii [-].
+        track_scale: scale of the true half track [-].
+        slip_max: bound of the per-step slip of this episode [-].
+        delay: actuation delay [s].
+    """
+
+    r1_scale: float
+    r2_scale: float
+    track_scale: float
+    slip_max: float
+    delay: float
+
+
+def _uniform(rng: np.random.Generator, interval: tuple[float, float]) -> float:
+    """A draw from ``U(low, high)``; the low end itself, without using the generator, when fixed."""
+    lo, hi = interval
+    return lo if lo == hi else float(rng.uniform(lo, hi))
+
+
+def sample(rng: np.random.Generator, r: Randomization) -> EpisodeDraw:
+    """Draw one episode's values from ``rng`` in a fixed order (right wheel, left wheel, track, slip, delay).
+
+    A fixed range uses no random number, so that turning randomisation off changes no other draw's stream
+    only through the ranges that are fixed; with everything off the generator is not touched at all.
+    """
+    return EpisodeDraw(
+        r1_scale=_uniform(rng, r.wheel_radius),
+        r2_scale=_uniform(rng, r.wheel_radius),
+        track_scale=_uniform(rng, r.track),
+        slip_max=_uniform(rng, r.slip),
+        delay=_uniform(rng, r.delay),
+    )
+
+
+class StepNoise(NamedTuple):
+    """One step's per-step draws as columns: slip factors [-] and measurement noise [m, m, rad, rad/s, rad/s]."""
+
+    slip1: Real
+    slip2: Real
+    x: Real
+    y: Real
+    beta: Real
+    rate1: Real
+    rate2: Real
+
+
+_M64 = 0xFFFFFFFFFFFFFFFF
+
+
+def _splitmix64(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
+    """The SplitMix64 finaliser (Steele, Lea & Flood 2014), elementwise on uint64 with wrap-around."""
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
+    r"""Uniform numbers in ``(0, 1)`` from a counter-based generator: a pure function of ``(key, step, channel)``.
+
+    .. math:: u = (\lfloor h / 2^{11} \rfloor + 1/2) / 2^{53}, \qquad
+        h = \mathrm{splitmix64}(\mathrm{key} + \gamma\,(2^{8} \mathrm{step} + \mathrm{channel} + 1))
+
+    with the golden-ratio increment ``gamma = 0x9E3779B97F4A7C15`` (SplitMix64's sequence). Being a pure function
+    of its arguments, the same draw comes out for one robot and for row ``i`` of a batch with no per-robot
+    generator call in the step; the episode's ``key`` is drawn at reset from the env's ``np_random``.
+
+    Args:
+        key: per-episode 64-bit keys, shape ``(...)`` (uint64).
+        step: step counters, shape ``(...)``.
+        channel: which quantity, in ``[0, 256)``.
+    """
+    k = np.asarray(key, dtype=np.uint64)
+    n = np.asarray(step, dtype=np.uint64) * np.uint64(256) + np.uint64(channel + 1)
+    with np.errstate(over="ignore"):
+        h = _splitmix64(k + n * np.uint64(0x9E3779B97F4A7C15))
+    return ((h >> np.uint64(11)).astype(np.float64) + 0.5) * (1.0 / 9007199254740992.0)
+
+
+def counter_normal(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
+    r"""Standard normal numbers by Box–Muller from uniform channels ``2 channel`` and ``2 channel + 1``.
+
+    .. math:: z = \sqrt{-2 \ln u_1}\,\cos(2\pi u_2)
+    """
+    u1 = counter_uniform(key, step, 2 * channel)
+    u2 = counter_uniform(key, step, 2 * channel + 1)
+    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * math.pi * u2)
+
+
+def draw_key(rng: np.random.Generator) -> int:
+    """A fresh 64-bit episode key for :func:`step_noise`, from the env's generator."""
+    return int(rng.integers(0, 2**63, dtype=np.int64)) * 2 + int(rng.integers(0, 2, dtype=np.int64))
+
+
+def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real) -> StepNoise:
+    """The draws of step ``step`` of the episodes with keys ``key``: slip ``U(0, slip_max)`` per wheel, Gaussian noise.
+
+    Quantities that are off are exact zeros. Channels: 0, 1 slip of wheels 1, 2; normal channels 1–5 for
+    ``x, y, beta, rate1, rate2`` (uniform channels 2–11).
+
+    Args:
+        key: per-episode keys (:func:`draw_key`), shape ``(...)``.
+        step: index of the step within the episode (0 for the first), shape ``(...)``.
+        r: the ranges (noise levels).
+        slip_max: per-episode slip bounds, shape ``(...)`` or a float.
+    """
+    zero: Real = 0.0
+    s1 = s2 = zero
+    if np.any(np.asarray(slip_max) > 0.0):
+        s1 = slip_max * counter_uniform(key, step, 0)
+        s2 = slip_max * counter_uniform(key, step, 1)
+    nx = ny = nb = n1 = n2 = zero
+    if r.position_noise > 0.0:
+        nx = r.position_noise * counter_normal(key, step, 1)
+        ny = r.position_noise * counter_normal(key, step, 2)
+    if r.heading_noise > 0.0:
+        nb = r.heading_noise * counter_normal(key, step, 3)
+    if r.wheel_rate_noise > 0.0:
+        n1 = r.wheel_rate_noise * counter_normal(key, step, 4)
+        n2 = r.wheel_rate_noise * counter_normal(key, step, 5)
+    return StepNoise(s1, s2, nx, ny, nb, n1, n2)
