@@ -316,12 +316,14 @@ def delay_split(delay: Real, dt: float) -> tuple[int | NDArray[np.int64], Real]:
 def ring_length(dt: float, max_delay: float = MAX_DELAY) -> int:
     """Number of past commands to keep for delays up to ``max_delay`` [s] with step ``dt`` [s].
 
-    ``floor(max_delay / dt) + 2``: the commands of steps ``k - m - 1`` and ``k - m`` for every
-    ``m <= max_delay / dt``.
+    ``m + 2`` with ``m`` the whole steps of ``max_delay`` (:func:`delay_split`, the floor of the exact
+    quotient of the binary numbers: 4 for 0.5 / 0.1): the commands of steps ``k - m - 1`` and ``k - m``
+    for every delay up to ``max_delay`` (``m`` grows with the delay).
     """
     check_range("ring_length", "dt", dt, 0.0, low_open=True)
     check_range("ring_length", "max_delay", max_delay, 0.0, MAX_DELAY)
-    return int(max_delay // dt) + 2
+    m, _ = delay_split(max_delay, dt)
+    return int(m) + 2
 
 
 def make_ring(length: int, w1c: Real, w2c: Real) -> NDArray[np.float64]:
