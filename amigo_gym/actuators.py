@@ -3,8 +3,8 @@ r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuat
 Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
 float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
 as in :mod:`amigo_gym.kinematics`; one robot and a batch run the same code and get the same bits.
-This module may import only numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and
-:mod:`amigo_gym.fresnel`.
+This module may import only numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics`,
+:mod:`amigo_gym.fresnel` and the standard library (``tests/test_actuators.py`` checks it).
 
 The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
 -------------------------------------------------------------------------

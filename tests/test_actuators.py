@@ -7,8 +7,11 @@ versus a batch, clipping, and the true robot's scale.
 
 from __future__ import annotations
 
+import ast
 import itertools
 import math
+import sys
+from pathlib import Path
 
 import mpmath
 import numpy as np
@@ -48,6 +51,22 @@ def _step(state: tuple, old: tuple, new: tuple, t_s: object, dt: float, true: tu
 
 def _state(s: ActuatorStep) -> tuple:
     return s.x, s.y, s.beta, s.w1, s.w2
+
+
+def test_imports_are_restricted() -> None:
+    """numpy, the standard library and three amigo_gym modules only (the module docstring's promise)."""
+    import amigo_gym.actuators as mod
+
+    allowed = {"numpy", "amigo_gym.params", "amigo_gym.kinematics", "amigo_gym.fresnel"}
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(Path(str(mod.__file__)).read_text())):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.update(f"{node.module}.{a.name}" if node.module == "amigo_gym" else node.module for a in node.names)
+    bad = {n for n in names if n.split(".")[0] not in sys.stdlib_module_names and n not in allowed}
+    bad -= {n for n in names if n.startswith("numpy.")}
+    assert not bad, bad
 
 
 # -- parameters and helpers ---------------------------------------------------------------------------
