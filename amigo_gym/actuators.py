@@ -56,7 +56,8 @@ robot parameter file and MobileSim simulator model of the AmigoBot-SH, as collec
 ``shared/MODEL.md`` ("Public data on the real robot"): maximum speed 0.75 m/s (15 rad/s of wheel
 rate with r = 0.05 m), acceleration 0.3 m/s^2 (0.87 rad/s^2), deceleration 0.75 m/s^2 (2.5 rad/s^2).
 The ramp rule (speeding up at the acceleration, slowing down at the deceleration, through zero by
-stopping first) is the ARCOS firmware's velocity profile that these parameters configure. The delay
+stopping first) is the project's model of the ARCOS firmware's velocity profile that these
+parameters configure; it has not been checked here against an ARCOS manual or the robot. The delay
 bound ``MAX_DELAY`` is the project's choice (a few control cycles of 0.1 s); the delay is in seconds
 and applied exactly (``shared/REFERENCES.md``, "Actuators: limits and delay").
 """
