@@ -1,0 +1,571 @@
+r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuation delay, slip, true geometry.
+
+Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
+float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
+as in :mod:`amigo_gym.kinematics`; one robot and a batch run the same code and get the same bits.
+This module may import only numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics`,
+:mod:`amigo_gym.fresnel` and the standard library (``tests/test_actuators.py`` checks it).
+
+The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
+-------------------------------------------------------------------------
+1. **Setpoints.** The action is a wheel-rate setpoint pair ``(w1c, w2c)`` [rad/s] (wheel 1 right,
+   wheel 2 left), clipped to ``[-w_max, w_max]`` with ``w_max = RobotParams.max_wheel_rate``
+   (``max_speed / r = 0.75 / 0.05 = 15`` rad/s). The firmware (ARCOS) turns it into commanded speeds
+   with the **nominal** robot (:func:`amigo_gym.kinematics.body_velocity_columns`)::
+
+       v_c = (r1 w1c + r2 w2c) / 2,        w_c = (r1 w1c - r2 w2c) / (2 l1).
+
+2. **Ramps** (:func:`ramp`). The firmware's translational speed ``v`` [m/s] and rotational speed
+   ``w`` [rad/s] each move towards their command at a constant rate: ``A`` while ``|u|`` grows
+   (speeding up), ``D`` while ``|u|`` shrinks (slowing down); a command of the other sign is reached
+   by slowing down to 0 at ``D`` and then speeding up at ``A``. Rates (:class:`ActuatorParams`):
+   ``A_v = 0.3 m/s^2``, ``D_v = 0.75 m/s^2``, ``A_w = 0.87 rad/s^2``, ``D_w = 2.5 rad/s^2``.
+   Within a step each of ``v(t)``, ``w(t)`` is continuous and piecewise linear.
+
+3. **Actuator state.** The actual wheel rates are the nominal inverse of the ramped speeds::
+
+       w1 = (v + l1 w) / r1,        w2 = (v - l1 w) / r2,
+
+   and they are the state carried from step to step (:func:`wheel_rates_columns`).
+
+4. **Delay** (:func:`delay_split`, :func:`ring_read`). A command issued at step ``k`` (time ``k dt``)
+   takes effect at ``k dt + delay``. With ``delay = m dt + f`` (``m`` whole steps, ``0 <= f < dt``),
+   during step ``k`` the setpoint in effect is the command of step ``k - m - 1`` for ``t < f`` and the
+   command of step ``k - m`` for ``t >= f``: :func:`actuator_step` takes both and the switch time
+   ``f``. The environment keeps the commands of the last :func:`ring_length` steps in a ring of state
+   columns; ``0 <= delay <= MAX_DELAY = 0.5`` s.
+
+5. **Slip and the true robot.** The ground moves the body with the **true** wheel radii ``r1t``,
+   ``r2t`` and half track ``l1t`` (columns: they may differ per robot), and each wheel loses a
+   fraction ``s_i`` in ``[0, 1)`` of its ground speed in the step (drawn by the caller)::
+
+       v_true = ((1 - s1) r1t w1 + (1 - s2) r2t w2) / 2,
+       w_true = ((1 - s1) r1t w1 - (1 - s2) r2t w2) / (2 l1t).
+
+   These are linear in ``(w1, w2)``, hence in ``(v, w)``: piecewise linear in time with the union
+   of the breakpoints of ``v`` and ``w``.
+
+6. **Exact step** (:func:`actuator_step`). On each linear piece the pose of A advances by
+   :func:`amigo_gym.fresnel.advance` (exact: speed and turn rate linear in time); the wheel angles
+   advance by the exact integral of the (piecewise linear) wheel rates.
+
+Sources
+-------
+The limits are those of the manufacturer's (Adept MobileRobots, formerly ActivMedia) AmigoBot
+robot parameter file and MobileSim simulator model of the AmigoBot-SH, as collected in
+``shared/MODEL.md`` ("Public data on the real robot"): maximum speed 0.75 m/s (15 rad/s of wheel
+rate with r = 0.05 m), acceleration 0.3 m/s^2 (0.87 rad/s^2), deceleration 0.75 m/s^2 (2.5 rad/s^2).
+The ramp rule (speeding up at the acceleration, slowing down at the deceleration, through zero by
+stopping first) is the project's model of the ARCOS firmware's velocity profile that these
+parameters configure; it has not been checked here against an ARCOS manual or the robot. The delay
+bound ``MAX_DELAY`` is the project's choice (a few control cycles of 0.1 s); the delay is in seconds
+and applied exactly (``shared/REFERENCES.md``, "Actuators: limits and delay").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym import fresnel
+from amigo_gym.kinematics import Real, body_velocity_columns
+from amigo_gym.params import RobotParams, check_range
+
+__all__ = [
+    "MAX_DELAY",
+    "MAX_TRUE_DEVIATION",
+    "PIECES",
+    "ActuatorParams",
+    "Ramp",
+    "ActuatorStep",
+    "clip_setpoints",
+    "wheel_rates_columns",
+    "ramp",
+    "turn_rate_bound",
+    "step_subintervals",
+    "delay_split",
+    "ring_length",
+    "make_ring",
+    "ring_write",
+    "ring_read",
+    "actuator_step",
+]
+
+#: largest actuation delay supported [s] (the project's choice: a few 0.1 s control cycles)
+MAX_DELAY = 0.5
+#: relative deviation of the true wheel radii and half track from nominal assumed by :func:`turn_rate_bound`
+MAX_TRUE_DEVIATION = 0.25
+#: number of linear pieces per step in :func:`actuator_step` (some of zero length): 9 inner breakpoints
+PIECES = 10
+
+
+@dataclass(frozen=True)
+class ActuatorParams:
+    """Speed ramps of the robot's firmware and the actuation delay.
+
+    Attributes:
+        acceleration: rate at which the translational speed ``|v|`` grows [m/s^2], in (0, 10].
+            Manufacturer's parameter file / MobileSim model: 0.3 (= ``RobotParams.max_acceleration``).
+        deceleration: rate at which ``|v|`` shrinks [m/s^2], in (0, 10]. Manufacturer: 0.75
+            (= ``RobotParams.max_deceleration``).
+        rot_acceleration: rate at which the rotational speed ``|w|`` grows [rad/s^2], in (0, 100].
+            Manufacturer: 0.87.
+        rot_deceleration: rate at which ``|w|`` shrinks [rad/s^2], in (0, 100]. Manufacturer: 2.5.
+        delay: actuation delay [s], in [0, MAX_DELAY]: a command issued at time ``t_k`` takes effect
+            at ``t_k + delay``. Default 0 (no public measurement; the environment chooses).
+
+    Sources: ``shared/MODEL.md``, "Public data on the real robot" (module docstring).
+    """
+
+    acceleration: float = 0.3
+    deceleration: float = 0.75
+    rot_acceleration: float = 0.87
+    rot_deceleration: float = 2.5
+    delay: float = 0.0
+
+    def __post_init__(self) -> None:
+        o = "ActuatorParams"
+        highs = {"acceleration": 10.0, "deceleration": 10.0, "rot_acceleration": 100.0, "rot_deceleration": 100.0}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "delay":
+                v = check_range(o, f.name, value, 0.0, MAX_DELAY)
+            else:
+                v = check_range(o, f.name, value, 0.0, highs[f.name], low_open=True)
+            object.__setattr__(self, f.name, v)
+
+
+# Column helpers: the same values for floats and arrays (selection and comparison do no arithmetic).
+
+
+def _any_array(*cols: object) -> bool:
+    return any(isinstance(c, np.ndarray) for c in cols)
+
+
+def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
+    """``a`` where ``cond`` else ``b`` (``np.where`` for arrays)."""
+    if isinstance(cond, np.ndarray) or _any_array(a, b):
+        out: Real = np.where(cond, a, b)
+        return out
+    return a if cond else b
+
+
+def _abs(x: Real) -> Real:
+    return np.abs(x) if isinstance(x, np.ndarray) else abs(x)
+
+
+def _min(a: Real, b: Real) -> Real:
+    if _any_array(a, b):
+        out: Real = np.minimum(a, b)
+        return out
+    return a if a <= b else b
+
+
+def _max(a: Real, b: Real) -> Real:
+    if _any_array(a, b):
+        out: Real = np.maximum(a, b)
+        return out
+    return a if a >= b else b
+
+
+def _copysign(x: Real, y: Real) -> Real:
+    if _any_array(x, y):
+        out: Real = np.copysign(x, y)
+        return out
+    return math.copysign(x, y)
+
+
+def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Real]:
+    """Wheel-rate setpoints clipped to ``[-w_max, w_max]``, ``w_max = nominal.max_wheel_rate`` [rad/s].
+
+    Args:
+        w1c, w2c: setpoints of wheel 1 (right) and wheel 2 (left) [rad/s], columns.
+        nominal: the robot the firmware believes in (15 rad/s by default).
+
+    Returns:
+        the clipped setpoints [rad/s], columns of the broadcast shape.
+    """
+    w_max = nominal.max_wheel_rate
+    return _min(_max(w1c, -w_max), w_max), _min(_max(w2c, -w_max), w_max)
+
+
+def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Real]:
+    r"""Wheel rates rolling without slip for speeds ``(v, w)`` (inverse of ``body_velocity_columns``).
+
+    .. math:: \dot\alpha_1 = (v + l_1 w) / r_1, \qquad \dot\alpha_2 = (v - l_1 w) / r_2
+
+    Args:
+        v: translational speed of A [m/s]; w: rotational speed [rad/s] (columns).
+        robot: geometry (the nominal robot for the firmware's actuator state).
+
+    Returns:
+        ``(alpha1dot, alpha2dot)`` [rad/s], columns.
+    """
+    lw = robot.l1 * w
+    return (v + lw) / robot.r1, (v - lw) / robot.r2
+
+
+class Ramp(NamedTuple):
+    """One speed channel ramped over ``[0, T]`` (:func:`ramp`): three linear pieces, some of zero length.
+
+    Pieces ``[0, t_a]`` (from ``u0`` with slope ``s_a``), ``[t_a, t_b]`` (from ``u_a`` with slope ``s_b``)
+    and ``[t_b, T]`` (constant ``u_b``). ``0 <= t_a <= t_b <= T``; ``u_b`` is the value at ``T``.
+    Times in [s]; values in the channel's unit ([m/s] or [rad/s]), slopes in that unit per second.
+    """
+
+    t_a: Real
+    t_b: Real
+    u_a: Real
+    u_b: Real
+    s_a: Real
+    s_b: Real
+
+
+def ramp(u0: Real, target: Real, accel: float, decel: float, duration: Real) -> Ramp:
+    r"""The firmware's ramp of one speed ``u`` from ``u0`` towards ``target`` over ``[0, T]``, in closed form.
+
+    ``|u|`` grows at ``accel`` and shrinks at ``decel``; a target of the other sign is reached by
+    slowing to 0 first. With ``c`` the target:
+
+    * ``u0 c < 0`` (reversing): ``u`` falls to 0 at rate ``D`` until ``t_z = |u0| / D``, then grows
+      towards ``c`` at rate ``A``: it reaches ``c`` at ``t_r = t_z + |c| / A``;
+    * otherwise ``t_z = 0`` and ``c`` is reached at ``t_r = |c - u0| / A`` when ``|c| > |u0|``,
+      at ``t_r = |c - u0| / D`` when ``|c| <= |u0|``;
+    * after ``t_r``, ``u = c``.
+
+    So ``u(t) = u0 - sign(u0) D t`` on ``[0, t_z]``, ``u(t) = u_z + sign(c - u_z) R (t - t_z)`` on
+    ``[t_z, t_r]`` (``u_z`` = 0 when reversing, else ``u0``; ``R`` = A or D as above), ``u(t) = c`` after;
+    the breakpoints are clipped to ``T``.
+
+    Args:
+        u0: speed at ``t = 0`` (column). target: the command ``c`` (column).
+        accel, decel: the rates ``A``, ``D`` > 0 [unit/s].
+        duration: ``T >= 0`` [s] (column).
+
+    Returns:
+        :class:`Ramp` with ``t_a = min(t_z, T)``, ``t_b = min(t_r, T)``, the values at these times and the slopes.
+    """
+    reverse = u0 * target < 0.0
+    u_z = _where(reverse, 0.0, u0)
+    t_z = _where(reverse, _abs(u0) / decel, 0.0)
+    s_a = _where(reverse, _copysign(decel, -u0), 0.0)
+    d = target - u_z
+    rate = _where(_abs(target) > _abs(u_z), accel, decel)
+    t_r = t_z + _abs(d) / rate
+    s_b = _copysign(rate, d)
+    z_in = t_z <= duration
+    r_in = t_r <= duration
+    u_a = _where(z_in, u_z, u0 + s_a * duration)
+    u_b = _where(r_in, target, _where(z_in, u_z + s_b * (duration - t_z), u_a))
+    return Ramp(_min(t_z, duration), _min(t_r, duration), u_a, u_b, s_a, s_b)
+
+
+def turn_rate_bound(nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION) -> float:
+    r"""A bound of the true turn rate ``|w_true|`` [rad/s] in :func:`actuator_step`.
+
+    The ramps keep ``v`` and ``w`` between their start values and their (clipped) commands, so from
+    any state reached from within the limits ``|v| <= V = (r1 + r2) w_max / 2`` and ``|w| <= V / l1``;
+    then ``|w_i| <= 2 V / r_i`` and, with true radii at most ``(1 + deviation)`` times nominal and a
+    true half track at least ``l1 / (1 + deviation)``,
+
+    .. math:: |w_{true}| \le (1 + \delta)^2 \, 2 V / l_1
+
+    (19.5 rad/s for the default robot and ``deviation = 0.25``). Slip only lowers it.
+    """
+    check_range("turn_rate_bound", "deviation", deviation, 0.0, 1.0)
+    v_max = 0.5 * (nominal.r1 + nominal.r2) * nominal.max_wheel_rate
+    return (1.0 + deviation) ** 2 * 2.0 * v_max / nominal.l1
+
+
+def step_subintervals(dt: float, nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION) -> int:
+    """``n_sub`` for :func:`amigo_gym.fresnel.advance` on the pieces of a step of ``dt`` [s].
+
+    From the bound ``turn_rate_bound(nominal, deviation) * dt`` of the phase change on a piece (1 for
+    ``dt = 0.1`` with the default robot). It depends on parameters only, never on the state, so that
+    one robot and a batch use the same quadrature.
+    """
+    return fresnel.subintervals(turn_rate_bound(nominal, deviation) * dt)
+
+
+# -- delay ---------------------------------------------------------------------------------------------
+
+
+def delay_split(delay: Real, dt: float) -> tuple[int | NDArray[np.int64], Real]:
+    """Split a delay into whole steps and a switch time: ``delay = m dt + f``, ``0 <= f < dt``.
+
+    During step ``k`` the command of step ``k - m - 1`` is in effect for step time ``t < f`` and that of
+    step ``k - m`` for ``t >= f`` (module docstring, item 4). ``f = fmod(delay, dt)`` is exact.
+
+    Args:
+        delay: the delay [s], in ``[0, MAX_DELAY]`` (a column: it may differ per robot).
+        dt: the control step [s], > 0.
+
+    Returns:
+        ``(m, f)``: an int (an int64 array for an array ``delay``) and the switch time [s] (column).
+    """
+    if isinstance(delay, np.ndarray):
+        f_arr = np.fmod(delay, dt)
+        return np.rint((delay - f_arr) / dt).astype(np.int64), f_arr
+    f = math.fmod(delay, dt)
+    return round((delay - f) / dt), f
+
+
+def ring_length(dt: float, max_delay: float = MAX_DELAY) -> int:
+    """Number of past commands to keep for delays up to ``max_delay`` [s] with step ``dt`` [s].
+
+    ``m + 2`` with ``m`` the whole steps of ``max_delay`` (:func:`delay_split`, the floor of the exact
+    quotient of the binary numbers: 4 for 0.5 / 0.1): the commands of steps ``k - m - 1`` and ``k - m``
+    for every delay up to ``max_delay`` (``m`` grows with the delay).
+    """
+    check_range("ring_length", "dt", dt, 0.0, low_open=True)
+    check_range("ring_length", "max_delay", max_delay, 0.0, MAX_DELAY)
+    m, _ = delay_split(max_delay, dt)
+    return int(m) + 2
+
+
+def make_ring(length: int, w1c: Real, w2c: Real) -> NDArray[np.float64]:
+    """A command ring filled with one command (what the robot was doing before the first step).
+
+    Args:
+        length: :func:`ring_length`.
+        w1c, w2c: the command [rad/s], columns of shape ``()`` or ``(N,)``.
+
+    Returns:
+        float64 array ``(length, 2)`` for float commands, ``(N, length, 2)`` for ``(N,)`` commands: slot
+        ``j % length`` holds ``(w1c, w2c)`` issued at step ``j``.
+    """
+    shape = np.broadcast_shapes(np.shape(w1c), np.shape(w2c))
+    ring = np.empty((*shape, length, 2))
+    ring[..., 0] = np.asarray(w1c)[..., None]
+    ring[..., 1] = np.asarray(w2c)[..., None]
+    return ring
+
+
+def ring_write(ring: NDArray[np.float64], step: int, w1c: Real, w2c: Real) -> None:
+    """Store the command issued at ``step`` in its slot, ``step % length`` (in place: the ring is the caller's state).
+
+    Args:
+        ring: from :func:`make_ring`, ``(length, 2)`` or ``(N, length, 2)``.
+        step: the step counter ``k`` (>= 0).
+        w1c, w2c: the command [rad/s] (columns matching the ring's leading shape).
+    """
+    slot = step % ring.shape[-2]
+    ring[..., slot, 0] = w1c
+    ring[..., slot, 1] = w2c
+
+
+def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]) -> tuple[Real, Real, Real, Real]:
+    """The setpoints in effect during step ``step``: those of steps ``step - lag - 1`` and ``step - lag``.
+
+    Write the command of ``step`` (:func:`ring_write`) before reading.
+
+    Args:
+        ring: ``(length, 2)`` or ``(N, length, 2)`` with ``length >= lag + 2``.
+        step: the step counter ``k``.
+        lag: ``m`` from :func:`delay_split` (an int, or ``(N,)`` ints for a batch).
+
+    Returns:
+        ``(w1_old, w2_old, w1_new, w2_new)`` [rad/s]: floats for a ``(length, 2)`` ring, else ``(N,)`` arrays.
+
+    Raises:
+        ValueError: if the ring is too short for ``lag``.
+    """
+    length = ring.shape[-2]
+    if np.any(np.asarray(lag) + 2 > length) or np.any(np.asarray(lag) < 0):
+        raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
+    i_new = (step - np.asarray(lag)) % length
+    i_old = (step - np.asarray(lag) - 1) % length
+    if ring.ndim == 2:
+        new, old = ring[int(i_new)], ring[int(i_old)]
+        return float(old[0]), float(old[1]), float(new[0]), float(new[1])
+    rows = np.arange(ring.shape[0])
+    new_a, old_a = ring[rows, i_new], ring[rows, i_old]
+    return old_a[:, 0].copy(), old_a[:, 1].copy(), new_a[:, 0].copy(), new_a[:, 1].copy()
+
+
+# -- the step ------------------------------------------------------------------------------------------
+
+
+class ActuatorStep(NamedTuple):
+    """Result of :func:`actuator_step` (columns).
+
+    Attributes:
+        x, y, beta: the new pose of A [m, m, rad] (heading not wrapped).
+        w1, w2: the actual wheel rates at the end of the step [rad/s] (the new actuator state).
+        dalpha1, dalpha2: wheel-angle increments over the step, ``int w_i dt`` [rad].
+        distance: signed distance travelled by A over the step, ``int v_true dt`` [m]
+            (its mean speed is ``distance / dt``).
+        v_true, w_true: true speed of A [m/s] and turn rate [rad/s] at the end of the step.
+    """
+
+    x: Real
+    y: Real
+    beta: Real
+    w1: Real
+    w2: Real
+    dalpha1: Real
+    dalpha2: Real
+    distance: Real
+    v_true: Real
+    w_true: Real
+
+
+def _channel(
+    u0: Real, c_old: Real, c_new: Real, accel: float, decel: float, t_s: Real, dt: float
+) -> tuple[list[Real], list[Real], list[Real], Real]:
+    """One speed channel over the step: targets ``c_old`` on ``[0, t_s)``, ``c_new`` on ``[t_s, dt]``.
+
+    Returns the 7 breakpoints ``0 <= b_1 <= ... <= b_5 <= dt`` (as 0, 4 ramp breakpoints, t_s, dt in
+    order), the value and slope at the start of each of the 6 pieces, and the value at ``dt``.
+    """
+    r1 = ramp(u0, c_old, accel, decel, t_s)
+    r2 = ramp(r1.u_b, c_new, accel, decel, dt - t_s)
+    knots: list[Real] = [0.0, r1.t_a, r1.t_b, t_s, _min(t_s + r2.t_a, dt), _min(t_s + r2.t_b, dt), dt]
+    values: list[Real] = [u0, r1.u_a, r1.u_b, r1.u_b, r2.u_a, r2.u_b]
+    slopes: list[Real] = [r1.s_a, r1.s_b, 0.0, r2.s_a, r2.s_b, 0.0]
+    return knots, values, slopes, r2.u_b
+
+
+def _evaluate(knots: list[Real], values: list[Real], slopes: list[Real], t: Real, mid: Real) -> tuple[Real, Real]:
+    """Value at ``t`` and slope of the channel piece that contains ``mid`` (``t <= mid``, same piece)."""
+    val = values[0] + slopes[0] * t
+    slope = slopes[0]
+    for i in range(1, len(values)):
+        inside = mid >= knots[i]
+        val = _where(inside, values[i] + slopes[i] * (t - knots[i]), val)
+        slope = _where(inside, slopes[i], slope)
+    return val, slope
+
+
+def actuator_step(
+    x: Real,
+    y: Real,
+    beta: Real,
+    w1: Real,
+    w2: Real,
+    w1c_old: Real,
+    w2c_old: Real,
+    w1c_new: Real,
+    w2c_new: Real,
+    t_switch: Real,
+    dt: float,
+    nominal: RobotParams,
+    limits: ActuatorParams,
+    r1_true: Real,
+    r2_true: Real,
+    l1_true: Real,
+    slip1: Real = 0.0,
+    slip2: Real = 0.0,
+    n_sub: int | None = None,
+) -> ActuatorStep:
+    r"""One control step of the robot with its actuators, exact (module docstring for the model).
+
+    1. Setpoints clipped (:func:`clip_setpoints`) and converted with the nominal robot to commands
+       ``(v_c, w_c)``, the old ones in effect on ``[0, t_s)``, the new ones on ``[t_s, dt]``.
+    2. ``(v, w)`` from the wheel rates ``(w1, w2)`` (nominal ``body_velocity_columns``), ramped per channel
+       (:func:`ramp`, twice: towards the old then the new command): each channel has 5 inner
+       breakpoints ``t_a, t_b`` of each ramp and ``t_s``; their union (9 times, sorted per robot)
+       splits the step into :data:`PIECES` pieces (some of zero length) on which ``v`` and ``w`` are linear.
+    3. On each piece ``[t_j, t_{j+1}]`` of length ``L``: nominal wheel rates
+       ``w_i(t) = w_i(t_j) + \dot w_i (t - t_j)`` (:func:`wheel_rates_columns`); true ground speed and
+       turn rate ``v_true = (g1 w1 + g2 w2) / 2``, ``w_true = (g1 w1 - g2 w2) / (2 l1t)`` with
+       ``g_i = (1 - s_i) r_it``, both linear; the pose advances by
+       ``fresnel.advance(x, y, beta, v_true(t_j), dv_true/dt, w_true(t_j), dw_true/dt, L, n_sub)``, the
+       wheel angles by ``L (w_i(t_j) + \dot w_i L / 2)`` and the distance by ``L (v_true(t_j) + \dot v_true L / 2)``.
+    4. The new wheel rates are the nominal inverse of ``(v(dt), w(dt))``.
+
+    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays: the same bits).
+
+    Args:
+        x, y, beta: pose of A at the start [m, m, rad].
+        w1, w2: actual wheel rates at the start [rad/s] (the actuator state).
+        w1c_old, w2c_old: setpoints in effect before the switch [rad/s] (unclipped is fine).
+        w1c_new, w2c_new: setpoints in effect from the switch on [rad/s].
+        t_switch: the switch time ``t_s`` in ``[0, dt]`` [s] (``f`` of :func:`delay_split`; 0 without delay).
+        dt: the step [s], > 0.
+        nominal: the robot the firmware believes in (radii, half track, ``max_wheel_rate``).
+        limits: the ramp rates (its ``delay`` is not used here: pass ``t_switch`` and the right setpoints).
+        r1_true, r2_true, l1_true: the true wheel radii and half track [m] (columns).
+        slip1, slip2: slip fractions ``s_i`` in ``[0, 1)`` for this step [-] (columns).
+        n_sub: quadrature sub-intervals per piece; default :func:`step_subintervals` ``(dt, nominal)``.
+
+    Returns:
+        :class:`ActuatorStep`. All inputs are columns (floats, or arrays that broadcast together);
+        floats in, floats out; with any array input every output is an array of the broadcast shape.
+        Not checked (for speed): ranges of ``t_switch``, slips and the true geometry.
+    """
+    if n_sub is None:
+        n_sub = step_subintervals(dt, nominal)
+    cols: tuple[Real, ...] = (
+        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
+    )  # fmt: skip
+    batch = _any_array(*cols)
+    if batch:
+        arrays = np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols))
+        cols = tuple(np.array(a, dtype=np.float64) for a in arrays)
+    else:
+        cols = tuple(float(c) for c in cols)
+    x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, r1t, r2t, l1t, s1, s2 = cols
+
+    # 1. commands from the clipped setpoints, with the nominal robot
+    vc_old, wc_old = body_velocity_columns(*clip_setpoints(w1c_old, w2c_old, nominal), nominal)
+    vc_new, wc_new = body_velocity_columns(*clip_setpoints(w1c_new, w2c_new, nominal), nominal)
+    # 2. ramps of the firmware's speeds
+    v0, om0 = body_velocity_columns(w1, w2, nominal)
+    kv, uv, sv, v_end = _channel(v0, vc_old, vc_new, limits.acceleration, limits.deceleration, t_s, dt)
+    kw, uw, sw, w_end = _channel(om0, wc_old, wc_new, limits.rot_acceleration, limits.rot_deceleration, t_s, dt)
+    inner = [kv[1], kv[2], kv[3], kv[4], kv[5], kw[1], kw[2], kw[4], kw[5]]
+    if batch:
+        srt = np.sort(np.stack(inner), axis=0)
+        times: list[Real] = [0.0, *(srt[i] for i in range(len(inner))), dt]
+    else:
+        times = [0.0, *sorted(inner), dt]
+
+    # 3. pieces
+    g1 = (1.0 - s1) * r1t
+    g2 = (1.0 - s2) * r2t
+    inv_2l1t = 0.5 / l1t
+    l1n, r1n, r2n = nominal.l1, nominal.r1, nominal.r2
+    da1: Real = 0.0
+    da2: Real = 0.0
+    dist: Real = 0.0
+    for j in range(PIECES):
+        t0, t1 = times[j], times[j + 1]
+        length = t1 - t0
+        if batch:
+            live = length > 0.0
+            if not np.any(live):
+                continue
+        elif not length > 0.0:
+            continue
+        mid = 0.5 * (t0 + t1)
+        v, a = _evaluate(kv, uv, sv, t0, mid)
+        om, al = _evaluate(kw, uw, sw, t0, mid)
+        p1 = (v + l1n * om) / r1n
+        q1 = (a + l1n * al) / r1n
+        p2 = (v - l1n * om) / r2n
+        q2 = (a - l1n * al) / r2n
+        vt = 0.5 * (g1 * p1 + g2 * p2)
+        at = 0.5 * (g1 * q1 + g2 * q2)
+        wt = (g1 * p1 - g2 * p2) * inv_2l1t
+        alt = (g1 * q1 - g2 * q2) * inv_2l1t
+        nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
+        half = 0.5 * length
+        nda1 = da1 + length * (p1 + q1 * half)
+        nda2 = da2 + length * (p2 + q2 * half)
+        ndist = dist + length * (vt + at * half)
+        if batch:
+            x, y, beta = np.where(live, nx, x), np.where(live, ny, y), np.where(live, nb, beta)
+            da1, da2, dist = np.where(live, nda1, da1), np.where(live, nda2, da2), np.where(live, ndist, dist)
+        else:
+            x, y, beta, da1, da2, dist = nx, ny, nb, nda1, nda2, ndist
+
+    # 4. the new actuator state and the true speeds at the end
+    w1n, w2n = wheel_rates_columns(v_end, w_end, nominal)
+    v_true = 0.5 * (g1 * w1n + g2 * w2n)
+    w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
+    return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)
