@@ -1,0 +1,856 @@
+r"""The AmigoBot-v1 task as pure, batched functions: settings, start, step, observation, reward, end.
+
+``AmigoBot-v1`` is the real robot on many paths: actions are wheel-rate *setpoints* that the firmware
+ramps (:mod:`amigo_gym.actuators`), the simulated robot may differ from the nominal one (``true_robot``,
+:mod:`amigo_gym.randomization`), commands may arrive late, wheels may slip, and measurements may be
+noisy; point H follows a path of any family (:mod:`amigo_gym.paths`). Both
+:class:`amigo_gym.envs.AmigoBotV1Env` and :class:`amigo_gym.envs.AmigoBotV1VectorEnv` call the column
+functions here (floats for one robot, ``(N,)`` arrays for a batch), so that they run the same code.
+
+Observation (float32, every field named in :data:`OBS_FIELDS` order; "measured" means computed from
+the noisy pose and wheel rates, with the nominal robot). ``e`` is H's signed cross-track error
+(positive left), ``psi`` the heading minus the path tangent at H's closest point, ``kappa`` the path
+curvature, ``(x_i, y_i)`` the path point ``d_i`` ahead of H's closest point in the robot frame (origin A,
+x along the heading), ``v_ref`` the reference speed of A:
+
+==============================  =====================================  ===========================
+field                           value                                  bounds
+==============================  =====================================  ===========================
+``cross_track_error``           ``e / error_scale`` (clipped)          ``+-2 d_term / error_scale``
+``sin_heading_error``           ``sin psi``                            [-1, 1]
+``cos_heading_error``           ``cos psi``                            [-1, 1]
+``curvature``                   ``kappa l3`` (clipped)                 [-1, 1]
+``preview_x_<d>``               ``x_i / preview_scale`` (clipped)      ``+-b_i``
+``preview_y_<d>``               ``y_i / preview_scale`` (clipped)      ``+-b_i``
+``preview_curvature_<d>``       ``kappa(s + d_i) l3`` (clipped)        [-1, 1]
+``reference_speed``             ``v_ref(t) / v_max``                   [0, 1]
+``reference_speed_ahead``       ``v_ref(t + 1 s) / v_max``             [0, 1]
+``speed_error``                 ``(v_meas - v_ref) / v_max`` (clipped) [-2, 2]
+``wheel_rate_1``, ``_2``        measured ``alphadot_i / w_max``        [-2, 2] (clipped)
+``previous_command_1``, ``_2``  the previous action                    [-1, 1]
+==============================  =====================================  ===========================
+
+with ``b_i = (d_i + l3 + 2 d_term) / preview_scale``.
+
+Reward: the product of four named terms in [0, 1] (as AmigoBot-v0's, from the *true* state):
+
+.. math::
+    r = e^{-|e|/\sigma_e} \cdot e^{-|v_A - v_{ref}|/\sigma_v} \cdot \tfrac12(1 + \cos(\psi - \psi_{ss}))
+        \cdot \left(1 - w_s (1 - e^{-(\|\Delta a\|/\sigma_a)^2})\right)
+
+``track``, ``speed``, ``heading``, ``smooth``; ``psi_ss = -asin(kappa l3)`` is the heading error of the
+exact steady state, ``v_A`` the true speed of A at the end of the step and ``Delta a`` the change of the
+normalised command. Ignoring the reference speed costs the speed term.
+
+End: terminated when ``|e| > termination_distance`` (true H) or when H reaches the end of an open path;
+truncated by the registration's time limit.
+
+This module may import numpy and the core modules (params, kinematics, fresnel, actuators, paths,
+randomization); never the environments, policies, training or the CLI.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Literal, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym import actuators
+from amigo_gym.actuators import ActuatorParams
+from amigo_gym.kinematics import Real, col_cos, col_exp, col_sin, col_sqrt
+from amigo_gym.params import RobotParams, check_range
+from amigo_gym.randomization import Randomization, make_randomization
+
+__all__ = [
+    "REWARD_TERMS",
+    "PATH_FAMILIES",
+    "TrackingParams",
+    "make_tracking_params",
+    "obs_fields",
+    "obs_bounds",
+    "Constants",
+    "constants",
+    "Episode",
+    "State",
+    "Outcome",
+    "reference_speed",
+    "step_columns",
+    "reset_columns",
+]
+
+REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
+#: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
+PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
+#: the families ``"mixed"`` draws from, with equal probability
+MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
+#: how far ahead the reference speed is also observed [s]
+SPEED_LOOKAHEAD = 1.0
+
+SpeedProfile = Literal["constant", "trapezoid"]
+
+
+def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
+    """A float in ``(low, high]`` or a pair ``(a, b)`` with ``low < a <= b <= high``."""
+    if isinstance(value, (tuple, list)) and not isinstance(value, str):
+        if len(value) != 2:
+            raise ValueError(
+                f"{owner}.{name} must be a number or a pair (low, high) in ({low:g}, {high:g}], got {value!r}"
+            )
+        a = check_range(owner, f"{name}[0]", value[0], low, high, low_open=True)
+        b = check_range(owner, f"{name}[1]", value[1], low, high, low_open=True)
+        if a > b:
+            raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
+        return (a, b)
+    return check_range(owner, name, value, low, high, low_open=True)
+
+
+@dataclass(frozen=True)
+class TrackingParams:
+    """Settings of ``AmigoBot-v1`` (every keyword argument of ``gym.make("AmigoBot-v1", ...)``).
+
+    Attributes:
+        robot: the nominal robot: what the action scale, the observation and every policy use.
+        true_robot: the robot actually simulated (its ``r1``, ``r2``, ``l1``, ``l3`` matter); ``None``: the
+            nominal one. ``gym.make`` takes a mapping of the fields that differ.
+        actuators: the firmware's ramps (0.3 / 0.75 m/s^2, 0.87 / 2.5 rad/s^2) and a fixed delay [s].
+        randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
+            a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
+        dt: control period [s], in (0, 1]. Default 0.1 (the robot's 100 ms cycle).
+        path: a family name of :data:`PATH_FAMILIES`, or a path object (:class:`amigo_gym.paths.PathSpec`).
+        radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
+            ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.
+        direction: +1 (left turn) or -1 (right) for circles and the manoeuvre. Default +1.
+        path_params: further parameters of the family (e.g. ``{"size": 4.0}`` for ``"figure8"``), as
+            sorted ``(name, value)`` pairs; ``gym.make`` takes a mapping.
+        random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each
+            built once per process. Default 1024.
+        speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)``
+            drawn per episode. Default 0.2.
+        speed_profile: ``"constant"``, or ``"trapezoid"`` (start at 0, accelerate at ``profile_accel``,
+            cruise at ``speed``, brake at ``profile_decel`` to stop at ``profile_duration``).
+        profile_accel, profile_decel: the trapezoid's rates [m/s^2], within the robot's
+            (``max_acceleration`` 0.3, ``max_deceleration`` 0.75). Defaults 0.2 and 0.5.
+        profile_duration: time at which the trapezoid stops [s]. Default 40.
+        start_at_rest: the wheels start at rest (a real robot's start); else rolling straight at the
+            reference speed. Default True.
+        termination_distance: the episode terminates when H is farther than this from the path [m].
+        init_position_noise: half-width of the uniform start offset of H per axis [m].
+        init_heading_noise: half-width of the uniform start heading offset [rad].
+        error_scale: the observation divides the cross-track error by this [m].
+        preview: distances ahead of H's closest point at which the path is observed [m], each in (0, 5].
+        preview_scale: the observation divides preview coordinates by this [m].
+        sigma_track, sigma_speed, sigma_smooth, smooth_weight: reward scales (module docstring).
+    """
+
+    robot: RobotParams = field(default_factory=RobotParams)
+    true_robot: RobotParams | None = None
+    actuators: ActuatorParams = field(default_factory=ActuatorParams)
+    randomize: Randomization = field(default_factory=Randomization)
+    dt: float = 0.1
+    path: Any = "circle"
+    radius: float = 1.0
+    direction: int = 1
+    path_params: tuple[tuple[str, float], ...] = ()
+    random_pool: int = 1024
+    speed: float | tuple[float, float] = 0.2
+    speed_profile: SpeedProfile = "constant"
+    profile_accel: float = 0.2
+    profile_decel: float = 0.5
+    profile_duration: float = 40.0
+    start_at_rest: bool = True
+    termination_distance: float = 0.25
+    init_position_noise: float = 0.02
+    init_heading_noise: float = 0.1
+    error_scale: float = 0.05
+    preview: tuple[float, ...] = (0.2, 0.5, 1.0)
+    preview_scale: float = 1.0
+    sigma_track: float = 0.02
+    sigma_speed: float = 0.05
+    sigma_smooth: float = 0.1
+    smooth_weight: float = 0.2
+
+    def __post_init__(self) -> None:
+        o = "TrackingParams"
+        s = object.__setattr__
+        if not isinstance(self.robot, RobotParams):
+            raise ValueError(f"{o}.robot must be a RobotParams, got {type(self.robot).__name__}")
+        if self.true_robot is not None and not isinstance(self.true_robot, RobotParams):
+            raise ValueError(f"{o}.true_robot must be a RobotParams or None, got {type(self.true_robot).__name__}")
+        if not isinstance(self.actuators, ActuatorParams):
+            raise ValueError(f"{o}.actuators must be an ActuatorParams, got {type(self.actuators).__name__}")
+        if not isinstance(self.randomize, Randomization):
+            raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
+        s(self, "dt", check_range(o, "dt", self.dt, 0.0, 1.0, low_open=True))
+        if isinstance(self.path, str):
+            if self.path not in PATH_FAMILIES:
+                raise ValueError(f"{o}.path must be one of {list(PATH_FAMILIES)} or a path object, got {self.path!r}")
+        elif not (hasattr(self.path, "locate") and hasattr(self.path, "pose_columns") and hasattr(self.path, "length")):
+            raise ValueError(
+                f"{o}.path must be a family name or an object with length, closed, pose_columns and locate "
+                f"(amigo_gym.paths.PathSpec), got {type(self.path).__name__}"
+            )
+        s(self, "radius", check_range(o, "radius", self.radius, self.robot.l3, 1e3, low_open=True))
+        if isinstance(self.direction, bool) or self.direction not in (1, -1):
+            raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
+        if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
+            raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
+        s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, self.robot.max_speed))
+        if self.speed_profile not in ("constant", "trapezoid"):
+            raise ValueError(f"{o}.speed_profile must be 'constant' or 'trapezoid', got {self.speed_profile!r}")
+        s(
+            self,
+            "profile_accel",
+            check_range(o, "profile_accel", self.profile_accel, 0.0, self.robot.max_acceleration, low_open=True),
+        )
+        s(
+            self,
+            "profile_decel",
+            check_range(o, "profile_decel", self.profile_decel, 0.0, self.robot.max_deceleration, low_open=True),
+        )
+        s(self, "profile_duration", check_range(o, "profile_duration", self.profile_duration, 0.0, 1e5, low_open=True))
+        if not isinstance(self.start_at_rest, bool):
+            raise ValueError(f"{o}.start_at_rest must be True or False, got {self.start_at_rest!r}")
+        s(
+            self,
+            "termination_distance",
+            check_range(o, "termination_distance", self.termination_distance, 0.0, 10.0, low_open=True),
+        )
+        s(
+            self,
+            "init_position_noise",
+            check_range(o, "init_position_noise", self.init_position_noise, 0.0, self.termination_distance / 2),
+        )
+        s(self, "init_heading_noise", check_range(o, "init_heading_noise", self.init_heading_noise, 0.0, math.pi / 4))
+        s(self, "error_scale", check_range(o, "error_scale", self.error_scale, 1e-4, 10.0))
+        if isinstance(self.preview, (str, bytes)) or not hasattr(self.preview, "__iter__"):
+            raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
+        prev = tuple(check_range(o, f"preview[{i}]", d, 0.0, 5.0, low_open=True) for i, d in enumerate(self.preview))
+        s(self, "preview", prev)
+        s(self, "preview_scale", check_range(o, "preview_scale", self.preview_scale, 1e-2, 10.0))
+        s(self, "sigma_track", check_range(o, "sigma_track", self.sigma_track, 1e-6, 10.0))
+        s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, 10.0))
+        s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, 10.0))
+        s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
+        pp = self.path_params
+        if isinstance(pp, Mapping):
+            pp = tuple(sorted((str(k), v) for k, v in pp.items()))
+        if not isinstance(pp, tuple):
+            raise ValueError(f"{o}.path_params must be a mapping of family parameters, got {type(pp).__name__}")
+        s(self, "path_params", pp)
+
+    @property
+    def simulated_robot(self) -> RobotParams:
+        """The robot that is simulated before randomisation: ``true_robot``, or the nominal one."""
+        return self.robot if self.true_robot is None else self.true_robot
+
+    @property
+    def speed_range(self) -> tuple[float, float]:
+        """``(low, high)`` of the reference cruise speed [m/s] (equal for a constant)."""
+        sp = self.speed
+        return sp if isinstance(sp, tuple) else (float(sp), float(sp))
+
+
+def make_tracking_params(
+    owner: str, params: TrackingParams | Mapping[str, Any] | None = None, **settings: Any
+) -> TrackingParams:
+    """Settings from the keywords of ``gym.make("AmigoBot-v1", ...)``: every field, mappings accepted.
+
+    ``robot`` a :class:`RobotParams` or a mapping of its fields; ``true_robot`` a mapping of the fields
+    that differ from the nominal robot (or a whole ``RobotParams``); ``actuators`` a mapping of
+    :class:`ActuatorParams` fields; ``randomize`` a preset name or a mapping of :class:`Randomization` fields;
+    ``path_params`` a mapping; ``params`` a whole :class:`TrackingParams` or a mapping of its fields.
+
+    Raises:
+        TypeError: an unknown keyword (listing the allowed ones).
+        ValueError: a bad value, naming the field, the value and the allowed range.
+    """
+    names = [f.name for f in fields(TrackingParams)]
+    if isinstance(params, Mapping):
+        settings = {**dict(params), **settings}
+        params = None
+    unknown = sorted(k for k in settings if k not in names)
+    if unknown:
+        raise TypeError(
+            f"{owner} got unexpected keyword argument(s) {unknown}; allowed: {', '.join(['params', *names])}"
+        )
+    base = TrackingParams() if params is None else params
+    if not isinstance(base, TrackingParams):
+        raise TypeError(f"{owner}: params must be a TrackingParams or a mapping, got {type(base).__name__}")
+    robot = settings.get("robot", base.robot)
+    if isinstance(robot, Mapping):
+        robot = _robot_from_mapping(owner, "robot", RobotParams(), robot)
+        settings["robot"] = robot
+    tr = settings.get("true_robot")
+    if isinstance(tr, Mapping):
+        settings["true_robot"] = _robot_from_mapping(owner, "true_robot", robot, tr)
+    act = settings.get("actuators")
+    if isinstance(act, Mapping):
+        allowed = {f.name for f in fields(ActuatorParams)}
+        bad = sorted(str(k) for k in act if k not in allowed)
+        if bad:
+            raise ValueError(f"{owner}: unknown actuators field(s) {bad}; allowed: {sorted(allowed)}")
+        settings["actuators"] = ActuatorParams(**act)
+    if "randomize" in settings:
+        settings["randomize"] = make_randomization(settings["randomize"])
+    if isinstance(settings.get("preview"), list):
+        settings["preview"] = tuple(settings["preview"])
+    if isinstance(settings.get("speed"), list):
+        settings["speed"] = tuple(settings["speed"])
+    return replace(base, **settings) if settings else base
+
+
+def _robot_from_mapping(owner: str, name: str, base: RobotParams, values: Mapping[str, Any]) -> RobotParams:
+    allowed = {f.name for f in fields(RobotParams)}
+    bad = sorted(str(k) for k in values if k not in allowed)
+    if bad:
+        raise ValueError(f"{owner}: unknown {name} field(s) {bad}; allowed: {sorted(allowed)}")
+    return replace(base, **{str(k): v for k, v in values.items()})
+
+
+# --------------------------------------------------------------------------- observation layout
+
+
+def obs_fields(p: TrackingParams) -> tuple[str, ...]:
+    """Names of the observation's components, in order (module table)."""
+    out = ["cross_track_error", "sin_heading_error", "cos_heading_error", "curvature"]
+    for d in p.preview:
+        out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
+    out += [
+        "reference_speed",
+        "reference_speed_ahead",
+        "speed_error",
+        "wheel_rate_1",
+        "wheel_rate_2",
+        "previous_command_1",
+        "previous_command_2",
+    ]
+    return tuple(out)
+
+
+def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Finite ``(low, high)`` bounds of the observation (module table)."""
+    e_max = 2.0 * p.termination_distance / p.error_scale
+    high = [e_max, 1.0, 1.0, 1.0]
+    for d in p.preview:
+        b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
+        high += [b, b, 1.0]
+    high += [1.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0]
+    hi = np.array(high)
+    lo = -hi
+    lo[len(high) - 7] = 0.0  # reference speed
+    lo[len(high) - 6] = 0.0  # reference speed ahead
+    return lo, hi
+
+
+# --------------------------------------------------------------------------- constants and state
+
+
+@dataclass(frozen=True)
+class Constants:
+    """Numbers a step needs, derived once from :class:`TrackingParams` (:func:`constants`); internal."""
+
+    params: TrackingParams
+    nominal: RobotParams
+    w_max: float
+    v_max: float
+    l3: float
+    e_max: float
+    n_sub: int
+    ring_length: int
+    window: float
+    preview_bounds: tuple[float, ...]
+    smooth_scale_sq: float
+
+
+def constants(p: TrackingParams) -> Constants:
+    """The :class:`Constants` of ``p``."""
+    robot = p.robot
+    w_max = robot.max_wheel_rate
+    # the projection window: farther than H can move in one step (speed of H <= v + l3 |w|)
+    h_speed = actuators.turn_rate_bound(robot) * robot.l3 + 1.25 * robot.max_speed
+    window = max(0.25, 1.5 * h_speed * p.dt + 0.1)
+    return Constants(
+        params=p,
+        nominal=robot,
+        w_max=w_max,
+        v_max=robot.max_speed,
+        l3=robot.l3,
+        e_max=2.0 * p.termination_distance / p.error_scale,
+        n_sub=actuators.step_subintervals(p.dt, robot),
+        ring_length=actuators.ring_length(p.dt),
+        window=window,
+        preview_bounds=tuple((d + robot.l3 + 2.0 * p.termination_distance) / p.preview_scale for d in p.preview),
+        smooth_scale_sq=4.0 * p.sigma_smooth * p.sigma_smooth,
+    )
+
+
+class Episode(NamedTuple):
+    """What is drawn once per episode (columns).
+
+    Attributes:
+        r1, r2, l1, l3: the true geometry [m].
+        slip_max: bound of the per-step slip [-].
+        lag, t_switch: the delay as whole steps and the switch time within a step [s] (``delay = lag dt + t_switch``).
+        key: the key of the per-step draws (uint64).
+        v_cruise: the reference cruise speed [m/s].
+        t_brake: time at which the trapezoid starts braking [s] (``inf`` for a constant speed).
+    """
+
+    r1: Real
+    r2: Real
+    l1: Real
+    l3: Real
+    slip_max: Real
+    lag: Any
+    t_switch: Real
+    key: Any
+    v_cruise: Real
+    t_brake: Real
+
+
+class State(NamedTuple):
+    """The state of one robot or a batch (columns).
+
+    Attributes:
+        x, y, beta: true pose of A [m, m, rad].
+        w1, w2: actual wheel rates [rad/s] (the actuator state).
+        alpha1, alpha2: wheel angles [rad].
+        progress: H's arc length along the path, unwrapped over laps [m] (the projection's hint).
+        a1, a2: the previous action (normalised command) [-].
+        steps: steps taken in the episode (int).
+    """
+
+    x: Real
+    y: Real
+    beta: Real
+    w1: Real
+    w2: Real
+    alpha1: Real
+    alpha2: Real
+    progress: Real
+    a1: Real
+    a2: Real
+    steps: Any
+
+
+class Outcome(NamedTuple):
+    """What the environments report about a state (columns).
+
+    Attributes:
+        obs: the observation's columns, in :func:`obs_fields` order (float64; the envs cast to float32).
+        terms: the reward terms in :data:`REWARD_TERMS` order.
+        reward: their product.
+        terminated: H left the path or reached an open path's end (bool columns).
+        h_x, h_y: true H [m].
+        error: H's true signed cross-track error [m].
+        v_true: true speed of A [m/s]; v_ref: the reference speed [m/s].
+        meas_x, meas_y, meas_beta: the measured pose [m, m, rad]; meas_w1, meas_w2: measured wheel rates [rad/s].
+    """
+
+    obs: tuple[Real, ...]
+    terms: tuple[Real, Real, Real, Real]
+    reward: Real
+    terminated: Any
+    h_x: Real
+    h_y: Real
+    error: Real
+    v_true: Real
+    v_ref: Real
+    meas_x: Real
+    meas_y: Real
+    meas_beta: Real
+    meas_w1: Real
+    meas_w2: Real
+
+
+# --------------------------------------------------------------------------- column helpers
+
+
+def _clip(x: Real, lo: float, hi: float) -> Real:
+    if isinstance(x, np.ndarray):
+        out: Real = np.minimum(np.maximum(x, lo), hi)
+        return out
+    return lo if x < lo else (hi if x > hi else x)
+
+
+def _min(a: Real, b: Real) -> Real:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        out: Real = np.minimum(a, b)
+        return out
+    return a if a <= b else b
+
+
+def _abs(x: Real) -> Real:
+    if isinstance(x, np.ndarray):
+        out: Real = np.abs(x)
+        return out
+    return abs(x)
+
+
+def _max0(x: Real) -> Real:
+    if isinstance(x, np.ndarray):
+        out: Real = np.maximum(x, 0.0)
+        return out
+    return x if x > 0.0 else 0.0
+
+
+def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
+    r"""Reference speed of A at episode time ``t`` [s], in [m/s].
+
+    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake):
+
+    .. math:: v_{ref}(t) = \max\bigl(0, \min(a_{up} t,\; v,\; v - a_{down} (t - t_b))\bigr),
+        \qquad t_b = T - v / a_{down}
+
+    with ``a_up = profile_accel``, ``a_down = profile_decel``, ``T = profile_duration`` (``t_b`` is
+    :attr:`Episode.t_brake`).
+    """
+    v = ep.v_cruise
+    if p.speed_profile == "constant":
+        return v
+    return _max0(_min(_min(p.profile_accel * t, v), v - p.profile_decel * (t - ep.t_brake)))
+
+
+# --------------------------------------------------------------------------- paths
+
+
+def check_feasible(p: TrackingParams, path: Any) -> None:
+    """Refuse a task whose exact inverse solution needs more than the nominal robot has (one-line ``ValueError``).
+
+    Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
+    (``actuators.rot_acceleration``) at the highest reference speed, with the exact heading lag of H
+    (:func:`amigo_gym.paths.feasibility`), and the trapezoid's rates against the robot's ramps.
+    """
+    from amigo_gym.paths import feasibility
+
+    v = p.speed_range[1]
+    f = feasibility(
+        path,
+        v,
+        p.robot,
+        "A",
+        max_rotational_acceleration=p.actuators.rot_acceleration,
+    )
+    if not f.feasible:
+        raise ValueError(f.message())
+
+
+#: ranges of the family parameters drawn per episode by ``path="mixed"`` (feasible at 0.4 m/s by construction:
+#: ``tests/test_tracking.py`` checks the extremes with :func:`amigo_gym.paths.feasibility`)
+MIXED_RANGES: dict[str, dict[str, tuple[float, float]]] = {
+    "circle": {"radius": (0.5, 3.0)},
+    "figure8": {"size": (3.0, 6.0)},
+    "lane_change": {"offset": (-1.0, 1.0), "length": (3.0, 6.0)},
+}
+
+
+def fixed_path(p: TrackingParams) -> Any:
+    """The path of a task whose path is not drawn per episode, else ``None`` (``"random"`` and ``"mixed"``)."""
+    if not isinstance(p.path, str):
+        return p.path
+    extra = dict(p.path_params)
+    if p.path == "circle":
+        return _cached_family("circle", (("direction", p.direction), ("radius", p.radius), *sorted(extra.items())))
+    if p.path == "manoeuvre":
+        return _cached_family("manoeuvre", (("direction", p.direction), ("radius", p.radius), *sorted(extra.items())))
+    if p.path in ("figure8", "lane_change"):
+        return _cached_family(p.path, tuple(sorted(extra.items())))
+    return None
+
+
+_FAMILY_CACHE: dict[tuple[Any, ...], Any] = {}
+
+
+def _cached_family(name: str, items: tuple[tuple[str, Any], ...]) -> Any:
+    """A family path, built once per process for each parameter set."""
+    from amigo_gym.paths import make_family_path
+
+    key = (name, items)
+    path = _FAMILY_CACHE.get(key)
+    if path is None:
+        path = make_family_path(name, None, **dict(items))
+        if len(_FAMILY_CACHE) > 4096:
+            _FAMILY_CACHE.clear()
+        _FAMILY_CACHE[key] = path
+    return path
+
+
+def random_pool_path(p: TrackingParams, path_id: int) -> Any:
+    """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
+    from amigo_gym.paths import make_family_path
+
+    extra = tuple(sorted(dict(p.path_params).items())) if p.path == "random" else ()
+    key = ("random", (("id", path_id), *extra))
+    path = _FAMILY_CACHE.get(key)
+    if path is None:
+        path = make_family_path("random", np.random.default_rng(path_id), **dict(extra))
+        _FAMILY_CACHE[key] = path
+    return path
+
+
+def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[str, Any]]:
+    """The episode's path, drawn from ``rng`` for ``"random"`` and ``"mixed"`` (else the fixed path, no draw).
+
+    Returns:
+        the path and a description for ``info`` (family and parameters).
+    """
+    if p.path == "random":
+        pid = int(rng.integers(p.random_pool))
+        return random_pool_path(p, pid), {"family": "random", "id": pid}
+    if p.path != "mixed":
+        fam = p.path if isinstance(p.path, str) else type(p.path).__name__
+        return fixed_path(p), {"family": fam}
+    fam = MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
+    if fam == "random":
+        pid = int(rng.integers(p.random_pool))
+        return random_pool_path(p, pid), {"family": "random", "id": pid}
+    values: dict[str, Any] = {}
+    for name, (lo, hi) in MIXED_RANGES[fam].items():
+        values[name] = float(rng.uniform(lo, hi))
+    if fam == "circle":
+        values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
+    return _cached_family(fam, tuple(sorted(values.items()))), {"family": fam, **values}
+
+
+# --------------------------------------------------------------------------- episodes and steps
+
+
+def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
+    """Draw one episode's constants and the start offsets from ``rng``, in a fixed order.
+
+    Order: speed (when a range), randomisation (:func:`amigo_gym.randomization.sample`), start offsets
+    ``u ~ U[-1, 1]^3``, the key of the per-step draws. (The path is drawn before, by :func:`draw_path`.)
+
+    Returns:
+        the :class:`Episode` (floats) and ``u``.
+    """
+    from amigo_gym.randomization import draw_key, sample
+
+    lo, hi = p.speed_range
+    v = lo if lo == hi else float(rng.uniform(lo, hi))
+    d = sample(rng, p.randomize)
+    u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
+    key = draw_key(rng)
+    true = p.simulated_robot
+    delay = p.actuators.delay + d.delay
+    delay = min(delay, actuators.MAX_DELAY)
+    lag, t_switch = actuators.delay_split(delay, p.dt)
+    t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
+    ep = Episode(
+        r1=true.r1 * d.r1_scale,
+        r2=true.r2 * d.r2_scale,
+        l1=true.l1 * d.track_scale,
+        l3=true.l3,
+        slip_max=d.slip_max,
+        lag=int(lag),
+        t_switch=float(t_switch),
+        key=key,
+        v_cruise=v,
+        t_brake=t_brake,
+    )
+    return ep, (u0, u1, u2)
+
+
+def start_state(k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real]) -> State:
+    """The start state: H at the path's start plus ``u[:2] * init_position_noise``, heading along the tangent
+    plus ``u[2] * init_heading_noise``, A ``l3`` (true) behind H; wheels at rest (or rolling at the reference
+    speed), wheel angles 0; the previous command is the wheels' state (0 at rest).
+    """
+    p = k.params
+    start = path.pose_columns(0.0 * u[0])
+    beta = start.theta + u[2] * p.init_heading_noise
+    hx = start.x + u[0] * p.init_position_noise
+    hy = start.y + u[1] * p.init_position_noise
+    ax = hx - ep.l3 * col_cos(beta)
+    ay = hy - ep.l3 * col_sin(beta)
+    zero = 0.0 * u[0]
+    if p.start_at_rest:
+        w1 = w2 = zero
+    else:
+        v0 = reference_speed(p, ep, zero)
+        w1, w2 = actuators.wheel_rates_columns(v0, zero, k.nominal)
+    hint = path.locate(hx, hy, zero, k.window, k.window)
+    return State(ax, ay, beta, w1, w2, zero, zero, hint.progress, w1 / k.w_max, w2 / k.w_max, 0 * np.asarray(0))
+
+
+def step_columns(
+    k: Constants, path: Any, state: State, ep: Episode, ring: NDArray[np.float64], ring_step: int, a1: Real, a2: Real
+) -> tuple[State, Outcome, Any]:
+    """One step of AmigoBot-v1 in column form.
+
+    1. Clip the normalised action to [-1, 1]; setpoints ``a w_max`` [rad/s] into the command ring; read the
+       setpoints in effect (delay, :func:`amigo_gym.actuators.ring_read`).
+    2. Per-step draws (slip, noise: :func:`amigo_gym.randomization.step_noise`).
+    3. The exact actuator step (:func:`amigo_gym.actuators.actuator_step`).
+    4. Observation, reward and end of the new state (:func:`evaluate_columns`).
+
+    Args:
+        k: constants; path: the path (or a batch of paths); state: the state before the step; ep: the episode.
+        ring: the command ring (``(L, 2)`` for one robot, ``(N, L, 2)`` for a batch), written in place.
+        ring_step: the ring's counter (any counter that increases by one per step).
+        a1, a2: the validated action (finite numbers).
+
+    Returns:
+        the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.randomization.StepNoise`).
+    """
+    from amigo_gym.randomization import step_noise
+
+    p = k.params
+    c1 = _clip(a1, -1.0, 1.0)
+    c2 = _clip(a2, -1.0, 1.0)
+    actuators.ring_write(ring, ring_step, c1 * k.w_max, c2 * k.w_max)
+    o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
+    noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
+    act = actuators.actuator_step(
+        state.x,
+        state.y,
+        state.beta,
+        state.w1,
+        state.w2,
+        o1,
+        o2,
+        n1,
+        n2,
+        ep.t_switch,
+        p.dt,
+        k.nominal,
+        p.actuators,
+        ep.r1,
+        ep.r2,
+        ep.l1,
+        noise.slip1,
+        noise.slip2,
+        k.n_sub,
+    )
+    steps = state.steps + 1
+    new = State(
+        act.x,
+        act.y,
+        act.beta,
+        act.w1,
+        act.w2,
+        state.alpha1 + act.dalpha1,
+        state.alpha2 + act.dalpha2,
+        state.progress,
+        c1,
+        c2,
+        steps,
+    )
+    out, progress = evaluate_columns(k, path, new, ep, noise, act.v_true, state.a1, state.a2, steps * p.dt)
+    return new._replace(progress=progress), out, noise
+
+
+def evaluate_columns(
+    k: Constants,
+    path: Any,
+    st: State,
+    ep: Episode,
+    noise: Any,
+    v_true: Real,
+    prev1: Real,
+    prev2: Real,
+    t: Real,
+) -> tuple[Outcome, Real]:
+    """Observation, reward and end of the state ``st`` at time ``t`` (module docstring).
+
+    The true H is projected with the hint ``st.progress``; the measured pose (true pose plus ``noise``) is
+    projected again only when it differs (noise on, or a true ``l3`` other than the nominal).
+
+    Returns:
+        the :class:`Outcome` and H's new progress [m].
+    """
+    p = k.params
+    l3 = k.l3
+    cb, sb = col_cos(st.beta), col_sin(st.beta)
+    hx = st.x + ep.l3 * cb
+    hy = st.y + ep.l3 * sb
+    loc = path.locate(hx, hy, st.progress, k.window, k.window)
+    e = loc.cross_track_error
+    cos_psi = cb * loc.cos_theta + sb * loc.sin_theta
+    sin_psi = sb * loc.cos_theta - cb * loc.sin_theta
+    v_ref = reference_speed(p, ep, t)
+    sin_ss = -_clip(loc.curvature * l3, -1.0, 1.0)
+    cos_ss = col_sqrt(1.0 - sin_ss * sin_ss)
+    da1 = st.a1 - prev1
+    da2 = st.a2 - prev2
+    terms = (
+        col_exp(_abs(e) / -p.sigma_track),
+        col_exp(_abs(v_true - v_ref) / -p.sigma_speed),
+        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
+        1.0 - p.smooth_weight * (1.0 - col_exp((da1 * da1 + da2 * da2) / -k.smooth_scale_sq)),
+    )
+    reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
+    terminated = _abs(e) > p.termination_distance
+    if not bool(path.closed):
+        terminated = (
+            terminated | (np.asarray(loc.status) == 2)
+            if isinstance(e, np.ndarray)
+            else (terminated or int(loc.status) == 2)
+        )
+    # measurements
+    mx, my, mb = st.x + noise.x, st.y + noise.y, st.beta + noise.beta
+    mw1, mw2 = st.w1 + noise.rate1, st.w2 + noise.rate2
+    if p.randomize.position_noise > 0 or p.randomize.heading_noise > 0 or ep_l3_differs(k, ep):
+        mcb, msb = col_cos(mb), col_sin(mb)
+        mloc = path.locate(mx + l3 * mcb, my + l3 * msb, loc.progress, k.window, k.window)
+        m_e, m_ct, m_st, m_k, m_s = (
+            mloc.cross_track_error,
+            mloc.cos_theta,
+            mloc.sin_theta,
+            mloc.curvature,
+            mloc.progress,
+        )
+    else:
+        mcb, msb = cb, sb
+        m_e, m_ct, m_st, m_k, m_s = e, loc.cos_theta, loc.sin_theta, loc.curvature, loc.progress
+    obs: list[Real] = [
+        _clip(m_e / p.error_scale, -k.e_max, k.e_max),
+        msb * m_ct - mcb * m_st,
+        mcb * m_ct + msb * m_st,
+        _clip(m_k * l3, -1.0, 1.0),
+    ]
+    for d, bound in zip(p.preview, k.preview_bounds, strict=True):
+        q = path.pose_columns(m_s + d)
+        dx = q.x - mx
+        dy = q.y - my
+        obs += [
+            _clip((mcb * dx + msb * dy) / p.preview_scale, -bound, bound),
+            _clip((mcb * dy - msb * dx) / p.preview_scale, -bound, bound),
+            _clip(q.curvature * l3, -1.0, 1.0),
+        ]
+    v_meas = 0.5 * (k.nominal.r1 * mw1 + k.nominal.r2 * mw2)
+    obs += [
+        v_ref / k.v_max,
+        reference_speed(p, ep, t + SPEED_LOOKAHEAD) / k.v_max,
+        _clip((v_meas - v_ref) / k.v_max, -2.0, 2.0),
+        _clip(mw1 / k.w_max, -2.0, 2.0),
+        _clip(mw2 / k.w_max, -2.0, 2.0),
+        st.a1,
+        st.a2,
+    ]
+    out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2)
+    return out, loc.progress
+
+
+def ep_l3_differs(k: Constants, ep: Episode) -> bool:
+    """Whether the true ``l3`` differs from the nominal (then the measured H is projected separately)."""
+    return bool(np.any(np.asarray(ep.l3) != k.l3))
+
+
+def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -> Outcome:
+    """The :class:`Outcome` of a start state (smoothness term 1: the previous command is the state's own)."""
+    zero = 0.0 * st.x
+    v, _ = _body(st.w1, st.w2, ep)
+    out, _ = evaluate_columns(k, path, st, ep, noise, v + zero, st.a1, st.a2, zero)
+    return out
+
+
+def _body(w1: Real, w2: Real, ep: Episode) -> tuple[Real, Real]:
+    """True speed of A and turn rate for wheel rates ``w1``, ``w2`` (no slip) [m/s, rad/s]."""
+    g1 = ep.r1 * w1
+    g2 = ep.r2 * w2
+    return 0.5 * (g1 + g2), (g1 - g2) / (2.0 * ep.l1)
