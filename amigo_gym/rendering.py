@@ -20,16 +20,35 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.kinematics import castor_position, contact_points, h_position
-from amigo_gym.params import EnvParams
-from amigo_gym.paths import CirclePath, ManoeuvrePath
+from amigo_gym.params import RobotParams
 
-__all__ = ["Renderer", "path_polyline", "view_box"]
+
+class RenderSettings(Protocol):
+    """What the renderer needs of the task settings (``EnvParams`` of v0, ``TrackingParams`` of v1)."""
+
+    @property
+    def robot(self) -> RobotParams: ...
+    @property
+    def termination_distance(self) -> float: ...
+    @property
+    def dt(self) -> float: ...
+
+
+class DrawablePath(Protocol):
+    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m]."""
+
+    @property
+    def length(self) -> float: ...
+    def point(self, s: ArrayLike) -> NDArray[np.float64]: ...
+
+
+__all__ = ["DrawablePath", "RenderSettings", "Renderer", "path_polyline", "view_box"]
 
 BACKGROUND = (255, 255, 255)
 GRID = (228, 228, 228)
@@ -45,14 +64,14 @@ POINT_A = (0, 0, 0)
 TEXT = (20, 20, 20)
 
 
-def path_polyline(path: CirclePath | ManoeuvrePath, n: int = 400) -> NDArray[np.float64]:
+def path_polyline(path: DrawablePath, n: int = 400) -> NDArray[np.float64]:
     """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
     s = np.linspace(0.0, path.length, n + 1)
     pts: NDArray[np.float64] = np.asarray(path.point(s), dtype=np.float64)
     return pts
 
 
-def view_box(params: EnvParams, path: CirclePath | ManoeuvrePath) -> tuple[float, float, float, float]:
+def view_box(params: RenderSettings, path: DrawablePath) -> tuple[float, float, float, float]:
     """Square world window ``(x_min, y_min, x_max, y_max)`` [m] containing the path and a margin."""
     pts = path_polyline(path)
     lo = pts.min(axis=0)
@@ -83,9 +102,7 @@ class Renderer:
         size: frame width and height [px].
     """
 
-    def __init__(
-        self, params: EnvParams, path: CirclePath | ManoeuvrePath, mode: str = "rgb_array", size: int = 600
-    ) -> None:
+    def __init__(self, params: RenderSettings, path: DrawablePath, mode: str = "rgb_array", size: int = 600) -> None:
         if mode not in ("rgb_array", "human"):
             raise ValueError(f"render mode must be 'rgb_array' or 'human', got {mode!r}")
         try:
@@ -108,7 +125,7 @@ class Renderer:
         self._font: Any = None
         if mode == "human":
             pygame.display.init()
-            pygame.display.set_caption("AmigoBot-v0")
+            pygame.display.set_caption("AmigoBot")
             self._window = pygame.display.set_mode((self.size, self.size))
             self._clock = pygame.time.Clock()
         try:

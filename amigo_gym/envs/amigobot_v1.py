@@ -1,0 +1,275 @@
+r"""``AmigoBot-v1``: the real robot on many paths: actuator ramps, mismatch, slip, delay and noise, exactly integrated.
+
+A thin stateful shell over the column functions of :mod:`amigo_gym.tracking`; the native vector environment
+:class:`amigo_gym.envs.AmigoBotV1VectorEnv` calls the same functions on ``(N,)`` columns.
+"""
+
+from __future__ import annotations
+
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from amigo_gym import tracking
+from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
+from amigo_gym.randomization import StepNoise
+
+__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
+
+ObsArray = NDArray[np.float32]
+
+#: keys accepted in ``reset(options=...)``
+V1_RESET_OPTIONS: tuple[str, ...] = ("pose",)
+
+_NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
+    """The action space ``Box(-1, 1, (2,), float32)`` and the observation space (:func:`tracking.obs_bounds`)."""
+    low, high = tracking.obs_bounds(p)
+    obs = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+    return spaces.Box(-1.0, 1.0, (2,), np.float32), obs
+
+
+def validate_action_v1(action: Any) -> tuple[float, float]:
+    """A finite real action of shape (2,), as two floats.
+
+    Raises:
+        TypeError: not numbers (strings, complex, objects).
+        ValueError: wrong shape, NaN or infinite values.
+    """
+    try:
+        a = np.asarray(action)
+    except ValueError as exc:  # ragged sequences
+        raise ValueError(f"action must be 2 finite numbers (wheel 1, wheel 2), got {action!r}") from exc
+    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
+        raise TypeError(f"action must be real numbers (wheel 1, wheel 2), got dtype {a.dtype} from {action!r}")
+    if a.shape != (2,):
+        raise ValueError(f"action must have shape (2,) (wheel 1, wheel 2), got shape {a.shape}")
+    a1, a2 = a.astype(np.float64).tolist()
+    if not (np.isfinite(a1) and np.isfinite(a2)):
+        raise ValueError(f"action must be finite; got {action!r}")
+    return a1, a2
+
+
+class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+    r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
+
+    ## Description
+
+    The AmigoBot's kinematics as in ``AmigoBot-v0`` (the D–H model of the paper: pose ``(x_A, y_A, beta)``,
+    point H ``l3 = 0.08 m`` ahead of the axle midpoint A), with the robot as it is:
+
+    * **Actuators.** Actions are wheel-rate *setpoints*; the firmware ramps its translational speed at
+      0.3 m/s^2 (speeding up) / 0.75 m/s^2 (slowing down) and its rotational speed at 0.87 / 2.5 rad/s^2
+      towards them, and the wheel rates are limited to 15 rad/s (:mod:`amigo_gym.actuators`). The actual
+      wheel rates are part of the state; episodes start with the wheels at rest.
+    * **Exact integration.** Within a step the speeds are piecewise linear in time; the pose advances by
+      the exact generalised Fresnel integral on each piece (:mod:`amigo_gym.fresnel`), no Euler or RK step.
+    * **The robot is not the model.** ``robot`` is the nominal robot (the action scale, the observation,
+      every policy); ``true_robot`` is the simulated one; ``randomize`` draws wheel radii, track, slip,
+      actuation delay and measurement noise per episode (:mod:`amigo_gym.randomization`).
+    * **Many paths.** ``path``: ``"circle"``, ``"manoeuvre"``, ``"figure8"``, ``"lane_change"``,
+      ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
+      ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
+    * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
+      acceleration than the robot has is refused at construction.
+
+    ## Action Space
+
+    ``Box(-1, 1, (2,), float32)``: the setpoints of wheel 1 (right) and wheel 2 (left) over
+    ``w_max = robot.max_wheel_rate`` of the *nominal* robot (15 rad/s). Clipped to [-1, 1]; NaN, infinities,
+    wrong shapes raise ``ValueError``, non-numbers ``TypeError``.
+
+    ## Observation Space
+
+    ``Box(low, high, (18 + 3 (len(preview) - 3),), float32)``: the fields of :func:`amigo_gym.tracking.obs_fields`
+    (errors of H, path preview in the robot frame, reference speed now and 1 s ahead, speed error, measured
+    wheel rates, previous command); the table is in :mod:`amigo_gym.tracking`. The true robot, slip and
+    delay are never observed.
+
+    ## Rewards
+
+    ``track * speed * heading * smooth``, each in [0, 1], from the true state (:mod:`amigo_gym.tracking`);
+    the terms are in ``info["reward_terms"]``.
+
+    ## Starting State
+
+    H at the path's start plus ``U(-1, 1) * init_position_noise`` per axis, heading along the path plus
+    ``U(-1, 1) * init_heading_noise``, wheels at rest. ``reset(options={"pose": (x_A, y_A, beta)})`` sets
+    the start pose.
+
+    ## Episode End
+
+    Terminated when H is farther than ``termination_distance`` from the path, or reaches the end of an
+    open path; truncated by ``max_episode_steps`` (600 by default: 60 s at dt = 0.1 s).
+
+    ## Info
+
+    ``pose`` (true A), ``h_position``, ``cross_track_error`` [m], ``progress`` (H's arc length) [m],
+    ``speed`` (true speed of A) and ``reference_speed`` [m/s], ``speed_error`` [m/s], ``wheel_rates``
+    (actual, end of step) and ``command`` (the setpoints) [rad/s], ``wheel_angles`` [rad], ``measured_pose``,
+    ``reward_terms``, ``time`` [s], ``path`` (family and parameters), ``true_robot`` (``r1``, ``r2``, ``l1`` [m]),
+    ``delay`` [s], ``slip`` (this step's loss of ground speed per wheel).
+
+    ## Arguments
+
+    Every field of :class:`amigo_gym.tracking.TrackingParams` as a keyword, mappings accepted for ``robot``,
+    ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; and ``render_mode``.
+
+    ```python
+    import gymnasium as gym
+    import amigo_gym
+
+    env = gym.make("AmigoBot-v1", path="mixed", speed=(0.1, 0.4), randomize="hard")
+    ```
+
+    ## Version History
+
+    * v1: the real robot (actuator ramps and limits, true robot, slip, delay, noise), path families and
+      speed profiles, a generalising observation (preview, reference speed, previous command).
+    * v0: the ideal robot on the paper's circle (unchanged, ``AmigoBot-v0``).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 10.0}  # noqa: RUF012
+
+    def __init__(self, render_mode: str | None = None, *, params: Any = None, **settings: Any) -> None:
+        self.params: tracking.TrackingParams = tracking.make_tracking_params(type(self).__name__, params, **settings)
+        self.render_mode = check_render_mode(render_mode)
+        p = self.params
+        self._k = tracking.constants(p)
+        fixed = tracking.fixed_path(p)
+        if fixed is not None:
+            tracking.check_feasible(p, fixed)
+        self._fixed_path = fixed
+        self.path: Any = fixed
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
+        self.action_space, self.observation_space = make_spaces_v1(p)
+        self._ring = np.zeros((self._k.ring_length, 2))
+        self._state: tracking.State | None = None
+        self._episode: tracking.Episode | None = None
+        self._path_info: dict[str, Any] = {}
+        self._done = False
+        self._last_command = (0.0, 0.0)
+        self._trail: list[tuple[float, float]] = []
+        self._renderer: Any = None
+
+    # ------------------------------------------------------------------ gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Start an episode (class docstring); ``options={"pose": (x_A, y_A, beta)}`` sets the start pose."""
+        check_reset_options(options)
+        pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
+        super().reset(seed=seed)
+        p = self.params
+        path, self._path_info = tracking.draw_path(self.np_random, p)
+        ep, u = tracking.draw_episode(self.np_random, p)
+        self.path = path
+        self._episode = ep
+        st = tracking.start_state(self._k, path, ep, u)
+        if pose_opt is not None:
+            x, y, b = pose_opt.tolist()
+            hx = x + ep.l3 * np.cos(b)
+            hy = y + ep.l3 * np.sin(b)
+            hint = path.locate(float(hx), float(hy), 0.0, self._k.window, self._k.window)
+            st = st._replace(x=x, y=y, beta=b, progress=hint.progress)
+        self._state = st
+        # the command the robot was executing before the first step: its wheels' state (0 at rest)
+        self._ring[:, 0] = st.a1 * self._k.w_max
+        self._ring[:, 1] = st.a2 * self._k.w_max
+        self._ring_step = 0
+        self._done = False
+        self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
+        out = tracking.reset_columns(self._k, path, st, ep, _NO_NOISE)
+        self._trail = [(float(out.h_x), float(out.h_y))]
+        info = self._info(out, _NO_NOISE)
+        if self.render_mode == "human":
+            self.render()
+        return np.array(out.obs, dtype=np.float32), info
+
+    def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Advance one control period (class docstring)."""
+        if self._state is None or self._episode is None:
+            raise gym.error.ResetNeeded("call reset() before step() on AmigoBot-v1")
+        a1, a2 = validate_action_v1(action)
+        if self._done:
+            gym.logger.warn(
+                "You are calling 'step()' even though this environment has already returned terminated = True. "
+                "You should always call 'reset()' once you receive 'terminated = True'."
+            )
+        self._ring_step += 1
+        st, out, noise = tracking.step_columns(
+            self._k, self.path, self._state, self._episode, self._ring, self._ring_step, a1, a2
+        )
+        self._state = st
+        self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
+        terminated = bool(out.terminated)
+        self._done = terminated
+        self._trail.append((float(out.h_x), float(out.h_y)))
+        if len(self._trail) > 4096:
+            del self._trail[: len(self._trail) - 4096]
+        info = self._info(out, noise)
+        if self.render_mode == "human":
+            self.render()
+        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+
+    # ------------------------------------------------------------------ info
+    def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
+        st, ep = self._state, self._episode
+        assert st is not None and ep is not None
+        return {
+            "pose": np.array((st.x, st.y, st.beta)),
+            "h_position": np.array((out.h_x, out.h_y)),
+            "cross_track_error": float(out.error),
+            "progress": float(st.progress),
+            "speed": float(out.v_true),
+            "reference_speed": float(out.v_ref),
+            "speed_error": float(out.v_true) - float(out.v_ref),
+            "wheel_rates": np.array((st.w1, st.w2)),
+            "command": np.array(self._last_command),
+            "wheel_angles": np.array((st.alpha1, st.alpha2)),
+            "measured_pose": np.array((out.meas_x, out.meas_y, out.meas_beta)),
+            "reward_terms": {n: float(t) for n, t in zip(tracking.REWARD_TERMS, out.terms, strict=True)},
+            "time": int(st.steps) * self.params.dt,
+            "path": dict(self._path_info),
+            "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
+            "delay": int(ep.lag) * self.params.dt + float(ep.t_switch),
+            "slip": np.array((noise.slip1, noise.slip2), dtype=np.float64),
+        }
+
+    # ------------------------------------------------------------------ rendering
+    def render(self) -> NDArray[np.uint8] | None:
+        """Draw the path, H, A, the robot outline and H's trail (``rgb_array``: a frame; ``human``: a window)."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make")
+            return None
+        if self._state is None:
+            raise gym.error.ResetNeeded("call reset() before render()")
+        from amigo_gym.rendering import Renderer
+
+        if self._renderer is None or self._renderer.path is not self.path:
+            if self._renderer is not None:
+                self._renderer.close()
+            self._renderer = Renderer(self.params, self.path, self.render_mode)
+        st = self._state
+        frame: NDArray[np.uint8] | None = self._renderer.draw(
+            np.array((st.x, st.y, st.beta)),
+            self._trail,
+            wheel_angles=np.array((st.alpha1, st.alpha2)),
+            time=float(int(st.steps) * self.params.dt),
+        )
+        return frame
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
