@@ -15,6 +15,7 @@ This package may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinemati
 
 from __future__ import annotations
 
+from amigo_gym.paths.analysis import Feasibility, LagProfile, Preview, feasibility, heading_lag_profile, preview
 from amigo_gym.paths.classic import (
     CirclePath,
     ClosestPoint,
@@ -73,4 +74,10 @@ __all__ = [
     "make_family_path",
     "manoeuvre",
     "random_path",
+    "Feasibility",
+    "LagProfile",
+    "Preview",
+    "feasibility",
+    "heading_lag_profile",
+    "preview",
 ]

@@ -396,6 +396,13 @@ class ClothoidPath:
         """``max |kappa|`` over the path [1/m]."""
         return self._t.max_abs_curvature
 
+    def breakpoints(self) -> tuple[float, ...]:
+        """Arc lengths of the segment joints, with 0 and :attr:`length` [m] (where the curvature may have a kink)."""
+        out = [0.0]
+        for g in self.segments:
+            out.append(out[-1] + float(g.length))
+        return tuple(out)
+
     def _pose(self, t: _Tables, s: Real) -> PathPose:
         r"""Pose at ``s``: locate the piece, then one quadrature from its start (:func:`advance`).
 
