@@ -72,7 +72,7 @@ def preview(path: PathSpec, x: Real, y: Real, heading: Real, s: Real, distances:
 
 
 #: largest arc-length step of the heading-lag integration, as a fraction of ``l3``
-STEP_FRACTION = 1.0 / 32.0
+STEP_FRACTION = 1.0 / 64.0
 #: arc length of the warm-up of a closed path (whole laps), in units of ``l3``: the lag forgets its start
 #: as ``exp(-s cos(psi) / l3)``
 WARMUP_L3 = 60.0
@@ -270,7 +270,7 @@ def feasibility(
     r"""Peak wheel rate, accelerations and turn rates the exact inverse solution needs to track ``path`` at ``speed``.
 
     Method: the heading lag ``psi(s)`` of the exact inverse solution (:func:`heading_lag_profile`, RK4 with steps
-    of at most ``l3/32``), then, at every sample (each step's ends, both sides of every breakpoint), with the
+    of at most ``l3/64``), then, at every sample (each step's ends, both sides of every breakpoint), with the
     speed of H ``v_H`` (``= speed`` for ``speed_of="H"``, ``speed / cos psi`` for ``"A"``) and
     ``psi_t = v_H dpsi/ds``:
 
@@ -285,7 +285,7 @@ def feasibility(
     wheel rates ``(v_A +- l1 v_A / R_A) / r``, e.g. 16.58 rad/s for 0.74 m/s on 1 m, 20.71 rad/s for 0.2 m/s
     on 0.085 m (``l1 = 0.12``, ``l3 = 0.08``, ``r = 0.05``).
 
-    Accuracy: ``psi`` to about 1e-9 rad (RK4, step ``l3/32``; the lag converges to the path's within
+    Accuracy: ``psi`` to about 1e-9 rad (RK4, step ``l3/64``; the lag converges to the path's within
     ``exp(-s/l3)``); the peaks are taken over the samples, so a smooth maximum between two samples ``h`` apart
     is underestimated by at most ``h^2/8 max|f''|`` (relative 1e-5 or less on the families' paths); peaks at
     curvature jumps (steps of the accelerations) are sampled on both sides exactly.
