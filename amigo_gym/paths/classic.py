@@ -1,4 +1,4 @@
-r"""Paths for point H: the paper's circle (eq. 6) and its manoeuvre path (straight, then circle).
+r"""AmigoBot-v0 paths for point H: the paper's circle (eq. 6) and its manoeuvre path (straight, then circle).
 
 Paths are frozen dataclasses whose methods are pure and batched: arc lengths ``s`` have shape
 ``(...)`` and points ``(..., 2)``; results keep the leading axes. A path is parametrised by arc

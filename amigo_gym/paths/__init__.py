@@ -1,0 +1,83 @@
+"""Paths for point H: the AmigoBot-v0 paths and the clothoid path families of AmigoBot-v1.
+
+* :mod:`amigo_gym.paths.classic`: :class:`CirclePath` and :class:`ManoeuvrePath` of AmigoBot-v0, unchanged
+  (the env's behaviour is bit for bit that of the former module ``amigo_gym/paths.py``).
+* :mod:`amigo_gym.paths.clothoid`: :class:`ClothoidPath`, exact clothoid geometry and a projection that keeps
+  progress (:meth:`ClothoidPath.locate`); :class:`PathSpec`, what AmigoBot-v1 needs of a path.
+* :mod:`amigo_gym.paths.families`: the path families (circle, manoeuvre, figure-8, lane change, random) and
+  their registry :data:`FAMILIES`.
+* :mod:`amigo_gym.paths.analysis`: :func:`preview` (path ahead in the robot frame) and :func:`feasibility`
+  (wheel rates and accelerations the exact inverse solution needs).
+
+This package may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and
+:mod:`amigo_gym.fresnel` only.
+"""
+
+from __future__ import annotations
+
+from amigo_gym.paths.analysis import Feasibility, LagProfile, Preview, feasibility, heading_lag_profile, preview
+from amigo_gym.paths.classic import (
+    CirclePath,
+    ClosestPoint,
+    ManoeuvrePath,
+    Path,
+    Projection,
+    make_path,
+    wrap_angle,
+)
+from amigo_gym.paths.clothoid import (
+    STATUS_END,
+    STATUS_INTERIOR,
+    STATUS_START,
+    STATUS_WINDOW,
+    ClothoidPath,
+    ClothoidSegment,
+    PathPoint,
+    PathPose,
+    PathSpec,
+)
+from amigo_gym.paths.families import (
+    FAMILIES,
+    Family,
+    ParamRange,
+    circle,
+    figure8,
+    lane_change,
+    make_family_path,
+    manoeuvre,
+    random_path,
+)
+
+__all__ = [
+    "Projection",
+    "ClosestPoint",
+    "Path",
+    "CirclePath",
+    "ManoeuvrePath",
+    "make_path",
+    "wrap_angle",
+    "STATUS_END",
+    "STATUS_INTERIOR",
+    "STATUS_START",
+    "STATUS_WINDOW",
+    "ClothoidPath",
+    "ClothoidSegment",
+    "PathPoint",
+    "PathPose",
+    "PathSpec",
+    "FAMILIES",
+    "Family",
+    "ParamRange",
+    "circle",
+    "figure8",
+    "lane_change",
+    "make_family_path",
+    "manoeuvre",
+    "random_path",
+    "Feasibility",
+    "LagProfile",
+    "Preview",
+    "feasibility",
+    "heading_lag_profile",
+    "preview",
+]

@@ -1,0 +1,384 @@
+r"""What a path asks of the robot: the path ahead in the robot's frame (:func:`preview`) and the wheel rates and
+accelerations the exact inverse solution needs (:func:`feasibility`).
+
+Both take any :class:`~amigo_gym.paths.clothoid.PathSpec` (a :class:`~amigo_gym.paths.clothoid.ClothoidPath` or a
+user's own path).
+
+This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.kinematics import Real
+from amigo_gym.params import RobotParams
+from amigo_gym.paths.clothoid import PathSpec, check_real
+
+__all__ = ["Preview", "preview", "LagProfile", "Feasibility", "feasibility", "heading_lag_profile"]
+
+Array = NDArray[np.float64]
+
+
+class Preview(NamedTuple):
+    """The path at fixed distances ahead, in the robot's frame; arrays ``(..., K)`` for ``K`` distances.
+
+    Attributes:
+        forward: coordinate along the robot's heading [m].
+        left: coordinate to the robot's left [m].
+        curvature: signed path curvature there [1/m].
+        s: the arc lengths ``s + d_i`` [m].
+    """
+
+    forward: Array
+    left: Array
+    curvature: Array
+    s: Array
+
+
+def preview(path: PathSpec, x: Real, y: Real, heading: Real, s: Real, distances: Sequence[float]) -> Preview:
+    r"""Path points at arc lengths ``s + d_i`` in the frame of the robot pose ``(x, y, heading)``, with the curvature.
+
+    With the path point ``c_i = c(s + d_i)`` and ``(dx, dy) = c_i - (x, y)``:
+
+    .. math:: f_i = \cos\beta\,dx + \sin\beta\,dy, \qquad l_i = -\sin\beta\,dx + \cos\beta\,dy.
+
+    Args:
+        path: the path.
+        x, y, heading: the frame's origin [m] and heading ``beta`` [rad] (e.g. point H or A and the robot's
+            heading), columns of one shape ``(...)`` (floats or arrays).
+        s: arc length (progress) of the reference point on the path [m], a column of the same shape.
+        distances: ``d_i`` [m], ``K`` finite numbers (may be negative: behind).
+
+    Returns:
+        :class:`Preview` with arrays of shape ``(..., K)``.
+    """
+    d = np.asarray([check_real("preview", f"distances[{i}]", v) for i, v in enumerate(distances)], dtype=np.float64)
+    sk = np.asarray(s, dtype=np.float64)[..., None] + d
+    p = path.pose_columns(sk)
+    dx = np.asarray(p.x) - np.asarray(x, dtype=np.float64)[..., None]
+    dy = np.asarray(p.y) - np.asarray(y, dtype=np.float64)[..., None]
+    b = np.asarray(heading, dtype=np.float64)[..., None]
+    cb, sb = np.cos(b), np.sin(b)
+    kappa = np.broadcast_to(np.asarray(p.curvature, dtype=np.float64), sk.shape).copy()
+    return Preview(cb * dx + sb * dy, cb * dy - sb * dx, kappa, sk)
+
+
+#: largest arc-length step of the heading-lag integration, as a fraction of ``l3``
+STEP_FRACTION = 1.0 / 64.0
+#: arc length of the warm-up of a closed path (whole laps), in units of ``l3``: the lag forgets its start
+#: as ``exp(-s cos(psi) / l3)``
+WARMUP_L3 = 60.0
+
+
+class LagProfile(NamedTuple):
+    """The heading lag along a path (:func:`heading_lag_profile`); arrays ``(M,)``.
+
+    Attributes:
+        s: arc lengths of the samples [m], increasing (a sample at each side of every breakpoint).
+        psi: heading lag ``theta - beta`` [rad].
+        dpsi_ds: ``kappa - sin(psi) / l3`` [rad/m].
+        curvature: path curvature [1/m].
+    """
+
+    s: Array
+    psi: Array
+    dpsi_ds: Array
+    curvature: Array
+
+
+def _grid(path: PathSpec, start: float, stop: float, h_max: float) -> tuple[Array, Array]:
+    """Step ends ``(s_i, s_{i+1})`` covering ``[start, stop]``, aligned with the path's breakpoints if it has any."""
+    brk = getattr(path, "breakpoints", None)
+    pts = [start, stop]
+    if callable(brk):
+        length = path.length
+        base = [float(b) for b in brk()]
+        lap0 = math.floor(start / length) if path.closed else 0
+        lap1 = math.ceil(stop / length) if path.closed else 0
+        for lap in range(lap0, lap1 + 1):
+            pts.extend(b + lap * length for b in base)
+    knots = np.unique(np.clip(np.asarray(pts, dtype=np.float64), start, stop))
+    a_list: list[Array] = []
+    b_list: list[Array] = []
+    for a, b in itertools.pairwise(knots):
+        n = max(1, math.ceil((b - a) / h_max))
+        e = a + (b - a) * np.arange(n + 1) / n
+        e[-1] = b
+        a_list.append(e[:-1])
+        b_list.append(e[1:])
+    return np.concatenate(a_list), np.concatenate(b_list)
+
+
+def heading_lag_profile(
+    path: PathSpec, robot: RobotParams, initial_lag: float | None = None, step_fraction: float = STEP_FRACTION
+) -> LagProfile:
+    r"""The heading lag ``psi = theta - beta`` of the exact inverse solution along a path (H on the path).
+
+    H, ``l3`` ahead of A on the heading, moves along the path with speed ``v_H``; in the robot's frame its
+    velocity ``v_A (cos, sin)(beta) + l3 betadot (-sin, cos)(beta) = v_H (cos, sin)(theta)`` gives
+    ``v_A = v_H cos psi`` and ``l3 betadot = v_H sin psi``; with ``dtheta/dt = kappa v_H`` the lag obeys, per
+    unit arc length of H (for any speed profile),
+
+    .. math:: \frac{d\psi}{ds} = \kappa(s) - \frac{\sin\psi}{l_3},
+
+    stable about the quasi-steady lag ``sin psi = kappa l3`` (a circle: ``tan psi = l3 / R_A``). It is integrated
+    by the classical Runge–Kutta method with steps of at most ``step_fraction l3``, aligned with the path's
+    breakpoints (``path.breakpoints()`` if it has them) so that the curvature is smooth within each step (the
+    curvature at a step's end is evaluated just before a breakpoint: its left limit).
+
+    Args:
+        path: the path; an open path from its start to its end, a closed one over one lap after a warm-up of
+            whole laps of at least :data:`WARMUP_L3` ``l3`` (the periodic solution to about ``exp(-60)``).
+        robot: geometry (``l3``).
+        initial_lag: ``psi`` at the start of an open path [rad]; None: the quasi-steady lag ``asin(kappa(0) l3)``
+            (clipped to ``[-1, 1]``); 0: the paper's start, heading along the tangent.
+        step_fraction: largest step over ``l3``, in [1e-3, 0.5].
+    """
+    l3 = robot.l3
+    frac = check_real("heading_lag_profile", "step_fraction", step_fraction, 1e-3, 0.5)
+    h_max = frac * l3
+    length = path.length
+    warm = 0.0
+    if path.closed:
+        warm = length * math.ceil(WARMUP_L3 * l3 / length)
+    a, b = _grid(path, -warm, length, h_max) if path.closed else _grid(path, 0.0, length, h_max)
+    mid = 0.5 * (a + b)
+    b_left = np.nextafter(b, a)
+    k_a = np.asarray(path.pose_columns(a).curvature, dtype=np.float64) * np.ones_like(a)
+    k_m = np.asarray(path.pose_columns(mid).curvature, dtype=np.float64) * np.ones_like(a)
+    k_b = np.asarray(path.pose_columns(b_left).curvature, dtype=np.float64) * np.ones_like(a)
+    if initial_lag is None:
+        psi = math.asin(min(max(float(k_a[0]) * l3, -1.0), 1.0))
+    else:
+        psi = check_real(
+            "heading_lag_profile", "initial_lag", initial_lag, -math.pi / 2, math.pi / 2, low_open=True, high_open=True
+        )
+    inv = 1.0 / l3
+    n = len(a)
+    psi_a = np.empty(n)
+    psi_b = np.empty(n)
+    hs = (b - a).tolist()
+    ka, km, kb = k_a.tolist(), k_m.tolist(), k_b.tolist()
+    sin = math.sin
+    for i in range(n):
+        h = hs[i]
+        psi_a[i] = psi
+        f1 = ka[i] - sin(psi) * inv
+        f2 = km[i] - sin(psi + 0.5 * h * f1) * inv
+        f3 = km[i] - sin(psi + 0.5 * h * f2) * inv
+        f4 = kb[i] - sin(psi + h * f3) * inv
+        psi = psi + h * (f1 + 2.0 * f2 + 2.0 * f3 + f4) / 6.0
+        psi_b[i] = psi
+    keep = a >= 0.0
+    s = np.concatenate((a[keep], b[keep]))
+    ps = np.concatenate((psi_a[keep], psi_b[keep]))
+    kk = np.concatenate((k_a[keep], k_b[keep]))
+    order = np.argsort(s, kind="stable")
+    s, ps, kk = s[order], ps[order], kk[order]
+    return LagProfile(s, ps, kk - np.sin(ps) * inv, kk)
+
+
+QUANTITIES = {
+    "wheel_rate": ("rad/s", "max_wheel_rate"),
+    "wheel_acceleration": ("rad/s^2", "max_wheel_acceleration"),
+    "acceleration": ("m/s^2", "max_acceleration"),
+    "rotation_rate": ("rad/s", "max_rotation_rate"),
+    "rotational_acceleration": ("rad/s^2", "max_rotational_acceleration"),
+}
+
+
+@dataclass(frozen=True)
+class Feasibility:
+    """What tracking a path at a reference speed needs, and the binding limit.
+
+    Attributes:
+        speed: the reference speed [m/s].
+        speed_of: ``"A"`` (the axle midpoint, AmigoBot-v0's ``speed``) or ``"H"``.
+        peaks: largest magnitude of each quantity over the path: ``wheel_rate`` [rad/s], ``wheel_acceleration``
+            [rad/s^2], ``acceleration`` (of A along its heading, [m/s^2]), ``rotation_rate`` [rad/s],
+            ``rotational_acceleration`` [rad/s^2].
+        peak_s: arc length of each peak [m].
+        peak_wheel: for the wheel quantities, which wheel: ``"outer"``, ``"inner"`` (of the turn there) or ``"each"``.
+        limits: the limits checked (name as in ``peaks``, value).
+        binding: the quantity with the largest ratio of need to limit (``"heading lag"`` if the lag reaches
+            90 degrees: H cannot follow the path forward).
+        needed, limit: its peak and its limit.
+        radius: path radius ``1/|kappa|`` at the binding peak [m] (``inf`` on a straight).
+        feasible: every peak within its limit and the lag below 90 degrees.
+        max_heading_lag: largest ``|theta - beta|`` [rad].
+    """
+
+    speed: float
+    speed_of: str
+    peaks: dict[str, float]
+    peak_s: dict[str, float]
+    peak_wheel: dict[str, str]
+    limits: dict[str, float]
+    binding: str
+    needed: float
+    limit: float
+    radius: float
+    feasible: bool
+    max_heading_lag: float
+
+    def message(self) -> str:
+        """One line, e.g. ``path: speed 0.74 m/s on radius 1 m needs 16.6 rad/s on the outer wheel, above the
+        robot's limit of 15 rad/s``."""
+        where = "on a straight line" if math.isinf(self.radius) else f"on radius {self.radius:.3g} m"
+        head = f"path: speed {self.speed:.3g} m/s of {self.speed_of} {where}"
+        if self.speed_of == "A":
+            head = f"path: speed {self.speed:.3g} m/s {where}"
+        if self.binding == "heading lag":
+            return f"{head} turns the heading 90 degrees away from the path: H cannot follow it"
+        unit = QUANTITIES[self.binding][0]
+        what = self.binding.replace("_", " ")
+        if self.binding.startswith("wheel"):
+            wheel = self.peak_wheel[self.binding]
+            side = "on each wheel" if wheel == "each" else f"on the {wheel} wheel"
+            need = (
+                f"{self.needed:.3g} {unit} {side}"
+                if self.binding == "wheel_rate"
+                else f"{self.needed:.3g} {unit} of {what} {side}"
+            )
+        else:
+            need = f"{self.needed:.3g} {unit} of {what}"
+        verdict = "above" if self.needed > self.limit else "within"
+        return f"{head} needs {need}, {verdict} the robot's limit of {self.limit:.3g} {unit}"
+
+
+def feasibility(
+    path: PathSpec,
+    speed: float,
+    robot: RobotParams | None = None,
+    speed_of: Literal["A", "H"] = "A",
+    *,
+    max_wheel_rate: float | None = None,
+    max_wheel_acceleration: float | None = None,
+    max_acceleration: float | None = None,
+    max_rotation_rate: float | None = None,
+    max_rotational_acceleration: float | None = None,
+    initial_lag: float | None = None,
+) -> Feasibility:
+    r"""Peak wheel rate, accelerations and turn rates the exact inverse solution needs to track ``path`` at ``speed``.
+
+    Method: the heading lag ``psi(s)`` of the exact inverse solution (:func:`heading_lag_profile`, RK4 with steps
+    of at most ``l3/64``), then, at every sample (each step's ends, both sides of every breakpoint), with the
+    speed of H ``v_H`` (``= speed`` for ``speed_of="H"``, ``speed / cos psi`` for ``"A"``) and
+    ``psi_t = v_H dpsi/ds``:
+
+    .. math::
+        v_A = v_H \cos\psi,\quad \dot\beta = \frac{v_H \sin\psi}{l_3},\quad
+        \dot\alpha_{1,2} = \frac{v_A \pm l_1 \dot\beta}{r_{1,2}},
+
+    and the time derivatives: for constant ``v_H``, ``dv_A/dt = -v_H sin(psi) psi_t``,
+    ``betaddot = v_H cos(psi) psi_t / l3``; for constant ``v_A``, ``dv_A/dt = 0``,
+    ``betaddot = v_A psi_t / (l3 cos^2 psi)``; ``alphaddot_{1,2} = (dv_A/dt +- l1 betaddot) / r_{1,2}``.
+    On a circle of radius ``R`` this is the steady state ``R_A = sqrt(R^2 - l3^2)``, ``betadot = v_A / R_A``,
+    wheel rates ``(v_A +- l1 v_A / R_A) / r``, e.g. 16.58 rad/s for 0.74 m/s on 1 m, 20.71 rad/s for 0.2 m/s
+    on 0.085 m (``l1 = 0.12``, ``l3 = 0.08``, ``r = 0.05``).
+
+    Accuracy: ``psi`` to about 1e-9 rad (RK4, step ``l3/64``; the lag converges to the path's within
+    ``exp(-s/l3)``); the peaks are taken over the samples, so a smooth maximum between two samples ``h`` apart
+    is underestimated by at most ``h^2/8 max|f''|`` (relative 1e-5 or less on the families' paths); peaks at
+    curvature jumps (steps of the accelerations) are sampled on both sides exactly.
+
+    Args:
+        path: the path (open: from its start, with ``initial_lag``; closed: the periodic solution).
+        speed: the reference speed [m/s], in (0, 10].
+        robot: geometry and the wheel-rate limit (default :class:`RobotParams`).
+        speed_of: whose speed is held constant: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
+        max_wheel_rate: [rad/s], default ``robot.max_wheel_rate`` (15).
+        max_wheel_acceleration, max_acceleration, max_rotation_rate, max_rotational_acceleration: further
+            limits [rad/s^2, m/s^2, rad/s, rad/s^2] to check; None: not checked (the peaks are still reported).
+        initial_lag: see :func:`heading_lag_profile`.
+    """
+    robot = RobotParams() if robot is None else robot
+    v = check_real("feasibility", "speed", speed, 0.0, 10.0, low_open=True)
+    if speed_of not in ("A", "H"):
+        raise ValueError(f"feasibility.speed_of must be 'A' or 'H', got {speed_of!r}")
+    given = {
+        "wheel_rate": robot.max_wheel_rate if max_wheel_rate is None else max_wheel_rate,
+        "wheel_acceleration": max_wheel_acceleration,
+        "acceleration": max_acceleration,
+        "rotation_rate": max_rotation_rate,
+        "rotational_acceleration": max_rotational_acceleration,
+    }
+    limits = {
+        k: check_real("feasibility", QUANTITIES[k][1], x, 0.0, low_open=True) for k, x in given.items() if x is not None
+    }
+    prof = heading_lag_profile(path, robot, initial_lag)
+    psi, kappa = prof.psi, prof.curvature
+    cos_p, sin_p = np.cos(psi), np.sin(psi)
+    l1, l3 = robot.l1, robot.l3
+    max_lag = float(np.max(np.abs(psi)))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if speed_of == "H":
+            v_h = np.full_like(psi, v)
+            v_a = v * cos_p
+            psi_t = v_h * prof.dpsi_ds
+            acc = -v * sin_p * psi_t
+            bdd = v * cos_p * psi_t / l3
+        else:
+            v_h = v / cos_p
+            v_a = np.full_like(psi, v)
+            psi_t = v_h * prof.dpsi_ds
+            acc = np.zeros_like(psi)
+            bdd = v * psi_t / (l3 * cos_p * cos_p)
+        bd = v_h * sin_p / l3
+        w1 = (v_a + l1 * bd) / robot.r1
+        w2 = (v_a - l1 * bd) / robot.r2
+        wd1 = (acc + l1 * bdd) / robot.r1
+        wd2 = (acc - l1 * bdd) / robot.r2
+    series = {
+        "wheel_rate": np.maximum(np.abs(w1), np.abs(w2)),
+        "wheel_acceleration": np.maximum(np.abs(wd1), np.abs(wd2)),
+        "acceleration": np.abs(acc),
+        "rotation_rate": np.abs(bd),
+        "rotational_acceleration": np.abs(bdd),
+    }
+    peaks: dict[str, float] = {}
+    peak_s: dict[str, float] = {}
+    peak_wheel: dict[str, str] = {}
+    arg: dict[str, int] = {}
+    for name, f in series.items():
+        i = int(np.argmax(np.where(np.isfinite(f), f, np.inf)))
+        arg[name] = i
+        peaks[name] = float(f[i])
+        peak_s[name] = float(prof.s[i])
+    for name, (a1, a2) in (("wheel_rate", (w1, w2)), ("wheel_acceleration", (wd1, wd2))):
+        i = arg[name]
+        # wheel 1 (right) is outer on a left turn (betadot > 0)
+        one = abs(a1[i]) > abs(a2[i])
+        if abs(a1[i]) == abs(a2[i]) or bd[i] == 0.0:
+            peak_wheel[name] = "each"
+        else:
+            peak_wheel[name] = "outer" if one == (bd[i] > 0.0) else "inner"
+    singular = not max_lag < math.pi / 2 - 1e-9
+    if singular:
+        i = int(np.argmax(np.abs(psi)))
+        binding, needed, limit, k = "heading lag", max_lag, math.pi / 2, float(kappa[i])
+    else:
+        binding = max(limits, key=lambda q: peaks[q] / limits[q])
+        needed, limit, k = peaks[binding], limits[binding], float(kappa[arg[binding]])
+    return Feasibility(
+        speed=v,
+        speed_of=speed_of,
+        peaks=peaks,
+        peak_s=peak_s,
+        peak_wheel=peak_wheel,
+        limits=limits,
+        binding=binding,
+        needed=needed,
+        limit=limit,
+        radius=math.inf if k == 0.0 else 1.0 / abs(k),
+        feasible=not singular and all(peaks[q] <= limits[q] for q in limits),
+        max_heading_lag=max_lag,
+    )

@@ -1,0 +1,597 @@
+r"""Clothoid paths for point H (AmigoBot-v1): exact geometry, and a projection that keeps progress.
+
+A :class:`ClothoidPath` is a chain of :class:`ClothoidSegment` s, each with curvature linear in arc length
+(lines and circular arcs are the special cases of a zero curvature rate), from a start pose, optionally
+closed (it is then traversed in laps). Along one piece of curvature ``kappa(u) = k0 + c u`` starting at
+``(x0, y0, theta0)``:
+
+.. math::
+    \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
+    \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
+
+evaluated by :func:`amigo_gym.fresnel.advance` (speed 1, turn rate ``k0 + c u``), exact to rounding as long as
+``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``. Segments are therefore split into equal *pieces* that satisfy
+this bound, and the start pose of every piece is computed once, at construction, by chaining the pieces.
+A point then costs one quadrature from its piece's start (no accumulation along the path).
+
+Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m] from the start point, tangent angle
+``theta(s)`` [rad] continuous (never wrapped, laps add the total turn), signed curvature ``kappa = dtheta/ds``
+[1/m] positive turning left, signed cross-track error ``e = (p - c(s)) . n`` [m] with the left normal
+``n = (-sin theta, cos theta)``. An open path continues beyond its ends as the straight lines along its end
+tangents (curvature 0 there); a closed path repeats (``s`` modulo the lap length). Column arguments are
+floats or float64 arrays of any shape; one code serves both, with bit-identical results.
+
+This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.fresnel import advance, subintervals
+from amigo_gym.kinematics import Real, col_cos, col_sin, col_sqrt, pack
+from amigo_gym.params import check_range
+from amigo_gym.paths.classic import ClosestPoint, Projection
+
+__all__ = [
+    "STATUS_INTERIOR",
+    "STATUS_START",
+    "STATUS_END",
+    "STATUS_WINDOW",
+    "ClothoidSegment",
+    "ClothoidPath",
+    "PathPose",
+    "PathPoint",
+    "PathSpec",
+    "check_real",
+]
+
+Array = NDArray[np.float64]
+IntColumn = int | NDArray[np.int64]
+TWO_PI = 2.0 * math.pi
+
+#: the closest point is an orthogonal foot point inside the searched range
+STATUS_INTERIOR = 0
+#: the projection is clamped at the start of an open path (the point lies before it)
+STATUS_START = 1
+#: the projection is clamped at the end of an open path (the point lies beyond it)
+STATUS_END = 2
+#: the projection is clamped at an edge of the search window around the hint ``s_prev``
+STATUS_WINDOW = 3
+
+#: Newton iterations of the projection (a fixed count, so that one point and a batch give the same bits)
+NEWTON_ITERATIONS = 5
+#: the Newton denominator ``1 - kappa e`` is bounded below by this (points near a centre of curvature)
+MIN_NEWTON_DENOMINATOR = 0.05
+#: largest length [m] and curvature [1/m] of a segment
+MAX_SEGMENT_LENGTH = 1.0e5
+MAX_CURVATURE = 1.0e4
+#: closure tolerance of a closed path: position gap relative to max(1 m, length), and heading gap [rad]
+CLOSURE_TOLERANCE = 1e-9
+
+
+def check_real(
+    owner: str,
+    name: str,
+    value: object,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> float:
+    """:func:`amigo_gym.params.check_range` that also refuses bools, strings and other non-numbers.
+
+    Raises:
+        ValueError: one line naming ``owner.name``, the allowed range and the offending value.
+    """
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer | np.floating):
+        lo_b = "(" if low_open else "["
+        hi_b = ")" if high_open else "]"
+        raise ValueError(f"{owner}.{name} must be a real number in {lo_b}{low:g}, {high:g}{hi_b}, got {value!r}")
+    return check_range(owner, name, float(value), low, high, low_open=low_open, high_open=high_open)
+
+
+@dataclass(frozen=True)
+class ClothoidSegment:
+    r"""One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` for ``0 <= u <= length``.
+
+    A line has ``curvature = curvature_rate = 0``, a circular arc ``curvature_rate = 0``.
+
+    Attributes:
+        length: arc length [m], in (0, 1e5].
+        curvature: signed curvature at the segment's start [1/m], in [-1e4, 1e4] (positive turns left).
+        curvature_rate: ``dkappa/ds`` [1/m^2], finite; the end curvature must lie in [-1e4, 1e4] too.
+    """
+
+    length: float
+    curvature: float = 0.0
+    curvature_rate: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_real("ClothoidSegment", "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True)
+        check_real("ClothoidSegment", "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE)
+        check_real("ClothoidSegment", "curvature_rate", self.curvature_rate)
+        check_range("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
+
+    @classmethod
+    def line(cls, length: float) -> ClothoidSegment:
+        """A straight segment of ``length`` [m]."""
+        return cls(length, 0.0, 0.0)
+
+    @classmethod
+    def arc(cls, length: float, curvature: float) -> ClothoidSegment:
+        """A circular arc of ``length`` [m] and signed ``curvature`` [1/m]."""
+        return cls(length, curvature, 0.0)
+
+    @classmethod
+    def transition(cls, length: float, curvature_start: float, curvature_end: float) -> ClothoidSegment:
+        """A clothoid from ``curvature_start`` to ``curvature_end`` [1/m] over ``length`` [m]."""
+        check_real("ClothoidSegment", "length", length, 0.0, MAX_SEGMENT_LENGTH, low_open=True)
+        return cls(length, curvature_start, (curvature_end - curvature_start) / length)
+
+    @property
+    def curvature_end(self) -> float:
+        """Curvature at the segment's end, ``curvature + curvature_rate length`` [1/m]."""
+        return float(self.curvature) + float(self.curvature_rate) * float(self.length)
+
+    @property
+    def turn(self) -> float:
+        """Change of tangent angle over the segment, ``k0 L + c L^2 / 2`` [rad]."""
+        length = float(self.length)
+        return length * (float(self.curvature) + 0.5 * float(self.curvature_rate) * length)
+
+
+class PathPose(NamedTuple):
+    """The path at arc lengths ``s``: columns of the shape of ``s``.
+
+    Attributes:
+        x, y: the point [m].
+        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
+        curvature: signed curvature [1/m].
+        curvature_rate: ``dkappa/ds`` [1/m^2].
+        cos_theta, sin_theta: the unit tangent [-].
+    """
+
+    x: Real
+    y: Real
+    theta: Real
+    curvature: Real
+    curvature_rate: Real
+    cos_theta: Real
+    sin_theta: Real
+
+
+class PathPoint(NamedTuple):
+    """Result of :meth:`ClothoidPath.locate`: the closest path point to query points, as columns.
+
+    Attributes:
+        s: arc length of the closest point within one traversal [m]: in ``[0, length)`` on a closed path
+            (``[0, length]`` on an open one).
+        progress: the unwrapped arc length [m]: ``s`` plus whole laps on a closed path (continuing from the
+            hint ``s_prev``); equal to ``s`` on an open path.
+        x, y: the closest point [m].
+        tangent_angle: path tangent angle there [rad], ``theta(progress)`` (continuous, unwrapped).
+        curvature: signed curvature there [1/m].
+        curvature_rate: ``dkappa/ds`` there [1/m^2].
+        cross_track_error: ``(p - c) . n``, positive left of the path direction [m] (at a clamped end, the
+            lateral part of the offset only; ``distance`` is the full distance).
+        cos_theta, sin_theta: the unit tangent there [-].
+        distance: ``|p - c|`` [m].
+        status: :data:`STATUS_INTERIOR`, :data:`STATUS_START`, :data:`STATUS_END` or :data:`STATUS_WINDOW`.
+    """
+
+    s: Real
+    progress: Real
+    x: Real
+    y: Real
+    tangent_angle: Real
+    curvature: Real
+    curvature_rate: Real
+    cross_track_error: Real
+    cos_theta: Real
+    sin_theta: Real
+    distance: Real
+    status: IntColumn
+
+    def closest_point(self) -> ClosestPoint:
+        """The :class:`~amigo_gym.paths.classic.ClosestPoint` of these columns (``s`` within one lap)."""
+        return ClosestPoint(
+            self.s,
+            self.x,
+            self.y,
+            self.tangent_angle,
+            self.curvature,
+            self.cross_track_error,
+            self.cos_theta,
+            self.sin_theta,
+        )
+
+
+class PathSpec(Protocol):
+    """What AmigoBot-v1 needs of a path; implement it to drive the robot along a path of your own.
+
+    A path is parametrised by arc length ``s`` [m] of point H, with a tangent angle continuous in ``s`` and
+    a signed curvature (positive turning left). :class:`ClothoidPath` implements it.
+    """
+
+    @property
+    def length(self) -> float:
+        """Arc length of one traversal [m] (one lap of a closed path)."""
+        ...
+
+    @property
+    def closed(self) -> bool:
+        """Whether the path repeats with period :attr:`length` (laps)."""
+        ...
+
+    def pose_columns(self, s: Real) -> PathPose:
+        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` (columns)."""
+        ...
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> PathPoint:
+        """Closest path point to ``(x, y)``; within ``[s_prev - max_retreat, s_prev + max_advance]`` given a hint."""
+        ...
+
+
+def _floor(x: Real) -> Real:
+    return np.floor(x) if isinstance(x, np.ndarray) else float(math.floor(x))
+
+
+def _clip(x: Real, lo: Real, hi: Real) -> Real:
+    if isinstance(x, np.ndarray) or isinstance(lo, np.ndarray) or isinstance(hi, np.ndarray):
+        out: Real = np.minimum(np.maximum(x, lo), hi)
+        return out
+    return min(max(x, lo), hi)
+
+
+def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
+    if isinstance(cond, np.ndarray):
+        out: Real = np.where(cond, a, b)
+        return out
+    return a if cond else b
+
+
+class _Tables(NamedTuple):
+    """Precomputed pieces and coarse samples of a :class:`ClothoidPath` (lists for floats, arrays for batches)."""
+
+    s0: list[float]
+    x0: list[float]
+    y0: list[float]
+    th0: list[float]
+    k0: list[float]
+    c: list[float]
+    s0_a: Array
+    x0_a: Array
+    y0_a: Array
+    th0_a: Array
+    k0_a: Array
+    c_a: Array
+    length: float
+    turn: float
+    spacing: float
+    sample_x: Array
+    sample_y: Array
+    max_abs_curvature: float
+
+
+@dataclass(frozen=True)
+class ClothoidPath:
+    r"""A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
+
+    Attributes:
+        segments: the segments in order (a non-empty tuple of :class:`ClothoidSegment`).
+        start: start point ``(x, y)`` [m].
+        start_angle: tangent angle at the start [rad].
+        closed: the path repeats; its end pose must then equal its start pose (to 1e-9 relative to
+            ``max(1 m, length)`` in position and 1e-9 rad in angle modulo ``2 pi``).
+        sample_spacing: largest spacing [m] of the samples of the coarse projection search, in
+            [1e-4, 1]; the samples are also at most ``0.1 / max|kappa|`` apart. Default 0.02.
+    """
+
+    segments: tuple[ClothoidSegment, ...]
+    start: tuple[float, float] = (0.0, 0.0)
+    start_angle: float = 0.0
+    closed: bool = False
+    sample_spacing: float = 0.02
+    _t: _Tables = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        segs = self.segments
+        if isinstance(segs, list):
+            segs = tuple(segs)
+            object.__setattr__(self, "segments", segs)
+        if not isinstance(segs, tuple) or not segs or not all(isinstance(g, ClothoidSegment) for g in segs):
+            raise ValueError(f"ClothoidPath.segments must be a non-empty tuple of ClothoidSegment, got {segs!r}")
+        if not isinstance(self.start, tuple) or len(self.start) != 2:
+            raise ValueError(f"ClothoidPath.start must be a pair (x, y), got {self.start!r}")
+        for i, v in enumerate(self.start):
+            check_real("ClothoidPath", f"start[{i}]", v)
+        check_real("ClothoidPath", "start_angle", self.start_angle)
+        if not isinstance(self.closed, bool):
+            raise ValueError(f"ClothoidPath.closed must be True or False, got {self.closed!r}")
+        check_real("ClothoidPath", "sample_spacing", self.sample_spacing, 1e-4, 1.0)
+        object.__setattr__(self, "_t", self._build())
+
+    def _build(self) -> _Tables:
+        """Split the segments into pieces of phase change <= MAX_PHASE_PER_SUB and chain their start poses."""
+        s0: list[float] = []
+        x0: list[float] = []
+        y0: list[float] = []
+        th0: list[float] = []
+        k0: list[float] = []
+        c: list[float] = []
+        x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
+        s_seg = 0.0
+        kmax = 0.0
+        for g in self.segments:
+            length, k, rate = float(g.length), float(g.curvature), float(g.curvature_rate)
+            kabs = max(abs(k), abs(g.curvature_end))
+            kmax = max(kmax, kabs)
+            # piece j of n: |k_j| h + |c| h^2 / 2 <= (kabs L + |c| L^2 / 2) / n <= MAX_PHASE_PER_SUB
+            n = subintervals(kabs * length + 0.5 * abs(rate) * length * length)
+            h = length / n
+            for j in range(n):
+                kj = k + rate * (j * h)
+                hj = h if j < n - 1 else length - (n - 1) * h
+                s0.append(s_seg + j * h)
+                x0.append(x)
+                y0.append(y)
+                th0.append(th)
+                k0.append(kj)
+                c.append(rate)
+                xa, ya, tha = advance(x, y, th, 1.0, 0.0, kj, rate, hj, 1)
+                x, y, th = float(xa), float(ya), float(tha)
+            s_seg += length
+        total = s_seg
+        raw_turn = th - float(self.start_angle)
+        turn = raw_turn
+        if self.closed:
+            laps = round(raw_turn / TWO_PI)
+            turn = TWO_PI * laps
+            gap = math.hypot(x - self.start[0], y - self.start[1])
+            if gap > CLOSURE_TOLERANCE * max(1.0, total) or abs(raw_turn - turn) > CLOSURE_TOLERANCE:
+                raise ValueError(
+                    f"ClothoidPath.closed: the segments end {gap:.3g} m from the start with a heading "
+                    f"{raw_turn - turn:.3g} rad off, but a closed path must end at its start pose"
+                )
+        spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
+        n_samples = max(8, math.ceil(total / spacing))
+        spacing = total / n_samples
+
+        def arr(v: list[float]) -> Array:
+            return np.array(v, dtype=np.float64)
+
+        t = _Tables(
+            s0, x0, y0, th0, k0, c, arr(s0), arr(x0), arr(y0), arr(th0), arr(k0), arr(c),
+            total, turn, spacing, np.empty(0), np.empty(0), kmax,
+        )  # fmt: skip
+        # coarse samples: s_j = j * spacing, j = 0..n (open) or 0..n-1 (closed, periodic)
+        js = np.arange(n_samples + (0 if self.closed else 1), dtype=np.float64)
+        sx, sy, *_ = self._pose(t, js * spacing)
+        return t._replace(sample_x=np.asarray(sx), sample_y=np.asarray(sy))
+
+    # --- evaluation -------------------------------------------------------------------------------------
+
+    @property
+    def length(self) -> float:
+        """Arc length of one traversal [m] (one lap if closed)."""
+        return self._t.length
+
+    @property
+    def total_turn(self) -> float:
+        """Tangent angle change over one traversal [rad] (a multiple of ``2 pi`` if closed: 0 for a figure-8)."""
+        return self._t.turn
+
+    @property
+    def max_abs_curvature(self) -> float:
+        """``max |kappa|`` over the path [1/m]."""
+        return self._t.max_abs_curvature
+
+    def breakpoints(self) -> tuple[float, ...]:
+        """Arc lengths of the segment joints, with 0 and :attr:`length` [m] (where the curvature may have a kink)."""
+        out = [0.0]
+        for g in self.segments:
+            out.append(out[-1] + float(g.length))
+        return tuple(out)
+
+    def _pose(self, t: _Tables, s: Real) -> PathPose:
+        r"""Pose at ``s``: locate the piece, then one quadrature from its start (:func:`advance`).
+
+        Closed: ``s = lap L + u`` with ``0 <= u < L``; ``theta(s) = theta(u) + lap * turn``. Open: ``u`` is ``s``
+        clipped to ``[0, L]`` and the path continues along the end tangent by ``s - u`` (curvature 0 there).
+        """
+        length = t.length
+        if self.closed:
+            lap = _floor(s / length)
+            u = s - lap * length
+            extra: Real = 0.0
+        else:
+            lap = 0.0
+            u = _clip(s, 0.0, length)
+            extra = s - u
+        s0: Real
+        x0: Real
+        y0: Real
+        th0: Real
+        k0: Real
+        c: Real
+        if isinstance(u, np.ndarray):
+            i = np.clip(np.searchsorted(t.s0_a, u, side="right") - 1, 0, len(t.s0) - 1)
+            s0, x0, y0, th0, k0, c = t.s0_a[i], t.x0_a[i], t.y0_a[i], t.th0_a[i], t.k0_a[i], t.c_a[i]
+        else:
+            j = min(max(bisect.bisect_right(t.s0, u) - 1, 0), len(t.s0) - 1)
+            s0, x0, y0, th0, k0, c = t.s0[j], t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j]
+        du = u - s0
+        x, y, th = advance(x0, y0, th0, 1.0, 0.0, k0, c, du, 1)
+        kappa = k0 + c * du
+        cos_t, sin_t = col_cos(th), col_sin(th)
+        if self.closed:
+            return PathPose(x, y, th + lap * t.turn, kappa, c, cos_t, sin_t)
+        beyond = extra != 0.0
+        return PathPose(
+            x + extra * cos_t,
+            y + extra * sin_t,
+            th,
+            _where(beyond, 0.0, kappa),
+            _where(beyond, 0.0, c),
+            cos_t,
+            sin_t,
+        )
+
+    def pose_columns(self, s: Real) -> PathPose:
+        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
+        return self._pose(self._t, s)
+
+    def _array_pose(self, s: ArrayLike) -> PathPose:
+        a = np.asarray(s, dtype=np.float64)
+        p = self._pose(self._t, a.reshape(-1))
+        return PathPose(*(np.broadcast_to(v, (a.size,)).reshape(a.shape) for v in p))
+
+    def point(self, s: ArrayLike) -> Array:
+        """Point at arc length ``s``: ``(..., 2)`` [m]."""
+        p = self._array_pose(s)
+        return pack(p.x, p.y)
+
+    def tangent_angle(self, s: ArrayLike) -> Array:
+        """Tangent angle ``theta(s)`` [rad], continuous in ``s`` (not wrapped)."""
+        return np.asarray(self._array_pose(s).theta)
+
+    def curvature(self, s: ArrayLike) -> Array:
+        """Signed curvature ``kappa(s)`` [1/m]."""
+        return np.asarray(self._array_pose(s).curvature)
+
+    def curvature_rate(self, s: ArrayLike) -> Array:
+        """``dkappa/ds`` [1/m^2] (right-continuous at segment joints)."""
+        return np.asarray(self._array_pose(s).curvature_rate)
+
+    def curvature_columns(self, s: Real) -> Real:
+        """:meth:`curvature` as a column."""
+        return self._pose(self._t, s).curvature
+
+    # --- projection -------------------------------------------------------------------------------------
+
+    def project(self, p: ArrayLike) -> Projection:
+        """Closest point to ``p`` ``(..., 2)`` [m] (global search; :meth:`locate` for the column form with a hint)."""
+        q = np.asarray(p, dtype=np.float64)
+        return self.project_xy(q[..., 0], q[..., 1]).projection()
+
+    def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
+        """Column form of :meth:`project` (global search), the :class:`~amigo_gym.paths.classic.Path` protocol.
+
+        ``minimal`` is accepted for the protocol; every field is computed.
+        """
+        return self.locate(x, y).closest_point()
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> PathPoint:
+        r"""Closest path point to the points ``(x, y)`` [m], keeping progress along the path.
+
+        1. Coarse search over the precomputed samples ``s_j = j h`` (``h`` = the sample spacing): without a
+           hint over the whole path (one lap), with a hint ``s_prev`` [m] (unwrapped progress) over the
+           samples in the window ``[s_prev - max_retreat, s_prev + max_advance]`` only (unwrapped too). The
+           window keeps the projection on its branch where the path passes near itself (a figure-8's
+           crossing): choose it smaller than half the arc length between such branches and larger than the
+           distance the point can advance between calls.
+        2. Newton's method on ``g(s) = (p - c(s)) . t(s)`` (zero at a foot point), with
+           ``g'(s) = -(1 - kappa e)``, ``e = (p - c) . n``: ``s <- s + g / max(1 - kappa e, 0.05)``, the step
+           limited to ``h`` and ``s`` kept in the window and, on an open path, in ``[0, L]``;
+           :data:`NEWTON_ITERATIONS` iterations, to machine precision from a start within ``h / 2``.
+        3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
+
+        Args:
+            x, y: query points, columns [m].
+            s_prev: the previous progress [m] (column broadcasting with ``x``), or None for a global search.
+            max_advance, max_retreat: the window ahead of and behind ``s_prev`` [m], > 0 (``max_retreat``
+                defaults to ``max_advance``).
+
+        Returns:
+            :class:`PathPoint` columns of the broadcast shape of ``x``, ``y`` (and ``s_prev``).
+        """
+        t = self._t
+        h = t.spacing
+        length = t.length
+        n_samp = len(t.sample_x)
+        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
+        xa = np.asarray(x, dtype=np.float64)
+        ya = np.asarray(y, dtype=np.float64)
+        lo: Real
+        hi: Real
+        if s_prev is None:
+            d2 = (t.sample_x - xa[..., None]) ** 2 + (t.sample_y - ya[..., None]) ** 2
+            jbest = np.argmin(d2, axis=-1)
+            s_start = jbest * h
+            lo, hi = (0.0, length) if not self.closed else (-math.inf, math.inf)
+        else:
+            ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+            behind = (
+                ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+            )
+            sp = np.asarray(s_prev, dtype=np.float64)
+            m = math.ceil((ahead + behind) / h) + 2
+            j0 = np.floor((sp - behind) / h)
+            jj = j0[..., None] + np.arange(m, dtype=np.float64)  # unwrapped sample numbers
+            if self.closed:
+                idx = np.mod(jj, n_samp).astype(np.int64)
+            else:
+                jj = np.clip(jj, 0, n_samp - 1)
+                idx = jj.astype(np.int64)
+            xb, yb = np.broadcast_arrays(xa, ya)
+            d2 = (t.sample_x[idx] - xb[..., None]) ** 2 + (t.sample_y[idx] - yb[..., None]) ** 2
+            k = np.argmin(d2, axis=-1)
+            s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h
+            lo_a = sp - behind
+            hi_a = sp + ahead
+            if not self.closed:
+                lo_a = np.clip(lo_a, 0.0, length)
+                hi_a = np.clip(hi_a, 0.0, length)
+            lo, hi = (float(lo_a), float(hi_a)) if scalar else (lo_a, hi_a)
+            s_start = np.clip(s_start, lo_a, hi_a)
+        s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
+        if not scalar:
+            x = np.asarray(x + 0.0 * s)
+            y = np.asarray(y + 0.0 * s)
+        for _ in range(NEWTON_ITERATIONS):
+            p = self._pose(t, s)
+            dx = x - p.x
+            dy = y - p.y
+            g = dx * p.cos_theta + dy * p.sin_theta
+            e = dy * p.cos_theta - dx * p.sin_theta
+            den = 1.0 - p.curvature * e
+            den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+            s = _clip(s + _clip(g / den, -h, h), lo, hi)
+        p = self._pose(t, s)
+        dx = x - p.x
+        dy = y - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        dist = col_sqrt(dx * dx + dy * dy)
+        status = self._status(s, g, lo, hi, scalar)
+        if self.closed:
+            s_lap = s - _floor(s / length) * length
+            s_lap = _where(s_lap >= length, s_lap - length, s_lap)
+        else:
+            s_lap = s
+        return PathPoint(
+            s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
+        )
+
+    def _status(self, s: Real, g: Real, lo: Real, hi: Real, scalar: bool) -> IntColumn:
+        sa, ga = np.asarray(s), np.asarray(g)
+        out = np.full(sa.shape, STATUS_INTERIOR, dtype=np.int64)
+        at_lo = (sa <= lo) & (ga < 0.0)
+        at_hi = (sa >= hi) & (ga > 0.0)
+        out[at_lo | at_hi] = STATUS_WINDOW
+        if not self.closed:
+            out[(sa <= 0.0) & (ga < 0.0)] = STATUS_START
+            out[(sa >= self._t.length) & (ga > 0.0)] = STATUS_END
+        return int(out) if scalar else out

@@ -1,0 +1,368 @@
+r"""Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry.
+
+Each family is a pure function of its parameters (and of a :class:`numpy.random.Generator` where random):
+the same arguments give the same path. :data:`FAMILIES` names them with their documented parameter ranges,
+and :func:`make_family_path` builds one by name, validating every parameter (a one-line ``ValueError``
+naming the field, the value and the allowed range; NaN, infinities, bools and strings are refused).
+
+* ``"circle"``: :func:`circle`, the paper's eq. (6) (the geometry of :class:`~amigo_gym.paths.CirclePath`).
+* ``"manoeuvre"``: :func:`manoeuvre`, the paper's manoeuvre: a straight segment along x0, then the circle.
+* ``"figure8"``: :func:`figure8`, two lobes joined by straight lines crossing at the origin, with clothoid
+  transitions (continuous curvature).
+* ``"lane_change"``: :func:`lane_change`, a sideways shift made of four clothoids (continuous curvature).
+* ``"random"``: :func:`random_path`, seeded random smooth paths of bounded curvature and curvature rate.
+
+This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.fresnel import advance, subintervals
+from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, check_real
+
+__all__ = [
+    "ParamRange",
+    "Family",
+    "FAMILIES",
+    "circle",
+    "manoeuvre",
+    "figure8",
+    "lane_change",
+    "random_path",
+    "make_family_path",
+]
+
+
+@dataclass(frozen=True)
+class ParamRange:
+    """Allowed range of one family parameter.
+
+    Attributes:
+        low, high: bounds (inclusive unless ``low_open``/``high_open``).
+        default: the value used when the parameter is not given.
+        unit: its unit, e.g. ``"m"``.
+        doc: one line saying what it is.
+    """
+
+    low: float
+    high: float
+    default: float
+    unit: str
+    doc: str
+    low_open: bool = False
+    high_open: bool = False
+
+    def check(self, owner: str, name: str, value: object) -> float:
+        """``value`` as a float if it is a real number in range, else a one-line ``ValueError``."""
+        return check_real(owner, name, value, self.low, self.high, low_open=self.low_open, high_open=self.high_open)
+
+
+def _direction(owner: str, value: object) -> int:
+    if isinstance(value, bool | np.bool_) or value not in (1, -1):
+        raise ValueError(f"{owner}.direction must be +1 (left) or -1 (right), got {value!r}")
+    return 1 if value == 1 else -1
+
+
+CIRCLE_RANGES = {
+    "radius": ParamRange(0.0, 1e3, 1.0, "m", "circle radius R", low_open=True),
+}
+MANOEUVRE_RANGES = {
+    "radius": ParamRange(0.0, 1e3, 1.0, "m", "radius R of the circular part", low_open=True),
+    "straight_length": ParamRange(0.0, 1e3, 1.0, "m", "length of the straight part along x0"),
+    "laps": ParamRange(0.0, 100.0, 1.0, "-", "number of laps of the circular part", low_open=True),
+}
+FIGURE8_RANGES = {
+    "size": ParamRange(0.0, 1e3, 4.0, "m", "overall width of the figure-8 along x0", low_open=True),
+    "crossing_angle": ParamRange(0.3, 2.0, math.pi / 2, "rad", "angle between the lines crossing at the origin"),
+    "transition": ParamRange(0.0, 1.5, 0.5, "-", "length of each clothoid transition over the lobe radius"),
+}
+LANE_CHANGE_RANGES = {
+    "offset": ParamRange(-1e2, 1e2, 0.5, "m", "sideways shift, positive to the left; |offset| <= 0.68 length"),
+    "length": ParamRange(0.0, 1e3, 3.0, "m", "distance along x0 over which the shift happens", low_open=True),
+    "lead": ParamRange(0.0, 1e3, 1.0, "m", "straight run before and after the shift"),
+}
+RANDOM_RANGES = {
+    "length": ParamRange(0.0, 1e4, 20.0, "m", "arc length of the path", low_open=True),
+    "max_curvature": ParamRange(0.0, 1e2, 1.0, "1/m", "bound of |curvature|", low_open=True),
+    "max_curvature_rate": ParamRange(0.0, 1e3, 1.0, "1/m^2", "bound of |dcurvature/ds|", low_open=True),
+    "min_piece": ParamRange(0.01, 1e2, 0.5, "m", "shortest random piece (before the rate bound stretches it)"),
+    "max_piece": ParamRange(0.01, 1e2, 3.0, "m", "longest random piece"),
+}
+
+
+def circle(
+    radius: float = 1.0, direction: int = 1, start: tuple[float, float] = (0.0, 0.0), start_angle: float = 0.0
+) -> ClothoidPath:
+    r"""A closed circle of ``radius`` [m] entered at ``start`` [m] with heading ``start_angle`` [rad].
+
+    One arc segment of length ``2 pi R`` and curvature ``d / R``; with the defaults it is the paper's eq. (6),
+    ``x = R sin(s/R)``, ``y = R (1 - cos(s/R))`` (the geometry of :class:`~amigo_gym.paths.CirclePath`).
+
+    Args:
+        radius: R [m], in (0, 1000].
+        direction: +1 turns left (counter-clockwise), -1 right.
+    """
+    r = CIRCLE_RANGES["radius"].check("circle", "radius", radius)
+    d = _direction("circle", direction)
+    return ClothoidPath((ClothoidSegment.arc(2.0 * math.pi * r, d / r),), start, start_angle, closed=True)
+
+
+def manoeuvre(radius: float = 1.0, straight_length: float = 1.0, direction: int = 1, laps: float = 1.0) -> ClothoidPath:
+    """The paper's manoeuvre path: ``straight_length`` [m] along x0 from the origin, then ``laps`` laps of the circle.
+
+    The geometry of :class:`~amigo_gym.paths.ManoeuvrePath` (an open path: it ends after ``laps`` laps).
+
+    Args:
+        radius: circle radius [m], in (0, 1000].
+        straight_length: [m], in [0, 1000] (0: the circle alone).
+        direction: +1 (left) or -1 (right).
+        laps: laps of the circle, in (0, 100].
+    """
+    r = MANOEUVRE_RANGES["radius"].check("manoeuvre", "radius", radius)
+    sl = MANOEUVRE_RANGES["straight_length"].check("manoeuvre", "straight_length", straight_length)
+    n = MANOEUVRE_RANGES["laps"].check("manoeuvre", "laps", laps)
+    d = _direction("manoeuvre", direction)
+    arc = ClothoidSegment.arc(2.0 * math.pi * r * n, d / r)
+    segs = (ClothoidSegment.line(sl), arc) if sl > 0.0 else (arc,)
+    return ClothoidPath(segs)
+
+
+def _run(segs: list[tuple[float, float, float]], pose: tuple[float, float, float]) -> tuple[float, float, float]:
+    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (exact quadrature, split by phase)."""
+    x, y, th = pose
+    for length, k, c in segs:
+        kabs = max(abs(k), abs(k + c * length))
+        n = subintervals(kabs * length + 0.5 * abs(c) * length * length)
+        xa, ya, ta = advance(x, y, th, 1.0, 0.0, k, c, length, n)
+        x, y, th = float(xa), float(ya), float(ta)
+    return x, y, th
+
+
+def figure8(size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5) -> ClothoidPath:
+    r"""A closed figure-8 crossing itself at the origin, with continuous curvature.
+
+    Construction (lobe radius ``R`` first taken as 1, then everything scaled so that the width is ``size``):
+    the right lobe leaves the origin with heading ``phi = crossing_angle / 2`` along a line of length ``a``,
+    turns right through a clothoid (curvature 0 to ``-1/R`` over ``b = transition R``), an arc, the mirror
+    clothoid, and returns to the origin with heading ``pi - phi`` along a line of length ``a``. Its curvature
+    profile is a palindrome, so the lobe is symmetric about the normal at its middle, where the heading is
+    ``-pi/2``; it returns to the origin when that middle lies on the x axis, which fixes
+    ``a = -y_m / sin(phi)`` (``y_m``: height gained from the line's end to the middle, computed exactly). The
+    left lobe is the mirror image in the y axis (curvatures negated). The path starts at the right lobe's
+    rightmost point heading down (``-pi/2``), away from the crossing, so that a projection without a hint
+    is unambiguous at the start; it crosses the origin at ``s = L/4`` and ``s = 3L/4``.
+
+    Args:
+        size: overall width along x0 [m], in (0, 1000].
+        crossing_angle: angle between the crossing lines [rad], in [0.3, 2.0].
+        transition: clothoid length over lobe radius [-], in [0, 1.5].
+    """
+    size = FIGURE8_RANGES["size"].check("figure8", "size", size)
+    phi = 0.5 * FIGURE8_RANGES["crossing_angle"].check("figure8", "crossing_angle", crossing_angle)
+    b = FIGURE8_RANGES["transition"].check("figure8", "transition", transition)
+    # unit lobe radius; the right half-lobe from the line's end to the middle (heading phi -> -pi/2)
+    half_turn = math.pi / 2 + phi  # total right turn from the line to the middle
+    arc_half = half_turn - 0.5 * b  # turn of half the arc (the clothoid turns b/2)
+    if arc_half <= 0.0:
+        raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
+    pieces = [(b, 0.0, -1.0 / b)] if b > 0.0 else []
+    pieces.append((arc_half, -1.0, 0.0))
+    xm, ym, _ = _run(pieces, (0.0, 0.0, phi))
+    a = -ym / math.sin(phi)
+    if a < 0.0:
+        raise ValueError(
+            f"figure8: crossing_angle {crossing_angle!r} with transition {transition!r} leaves no room for the "
+            "crossing lines; use a smaller angle or transition"
+        )
+    x_right = a * math.cos(phi) + xm  # rightmost point (the middle of the right lobe)
+    scale = size / (2.0 * x_right)
+    la, lb, lc = a * scale, b * scale, arc_half * scale
+    k = 1.0 / scale
+    seg = ClothoidSegment
+    right_in = [seg.transition(lb, 0.0, -k)] if b > 0.0 else []
+    right_out = [seg.transition(lb, -k, 0.0)] if b > 0.0 else []
+    left_in = [seg.transition(lb, 0.0, k)] if b > 0.0 else []
+    left_out = [seg.transition(lb, k, 0.0)] if b > 0.0 else []
+    segs = (
+        seg.arc(lc, -k),
+        *right_out,
+        seg.line(2.0 * la),
+        *left_in,
+        seg.arc(2.0 * lc, k),
+        *left_out,
+        seg.line(2.0 * la),
+        *right_in,
+        seg.arc(lc, -k),
+    )
+    return ClothoidPath(segs, (size / 2.0, 0.0), -math.pi / 2, closed=True)
+
+
+def _s_curve_half(theta_max: float) -> tuple[float, float]:
+    """End point of the first half of the unit S-curve: clothoids 0 -> theta_max -> 0 curvature over length 1 each."""
+    x, y, _ = _run([(1.0, 0.0, theta_max), (1.0, theta_max, -theta_max)], (0.0, 0.0, 0.0))
+    return x, y
+
+
+#: largest heading reached in a lane change [rad]
+LANE_CHANGE_MAX_HEADING = 1.2
+
+
+def lane_change(offset: float = 0.5, length: float = 3.0, lead: float = 1.0) -> ClothoidPath:
+    r"""A lane change: straight along x0, a sideways shift by ``offset`` over ``length``, straight again.
+
+    The shift is four clothoids of equal length ``q``: curvature ``0 -> k -> 0 -> -k -> 0`` (for a left shift),
+    so the curvature is continuous and piecewise linear, and the heading rises to ``theta_m = k q`` and back
+    to 0. The second half is the first turned by ``pi`` about the shift's midpoint, so the shift is twice the
+    first half's. Unit half (``q = 1``, ``k = theta_m``) ends at ``(X1, Y1)(theta_m)``; a scale ``q`` multiplies
+    both. ``Y1/X1`` increases with ``theta_m``, so ``theta_m`` solves ``Y1/X1 = |offset| / length`` (bisection to
+    rounding), then ``q = length / (2 X1)``. Requires ``theta_m <= 1.2 rad``, i.e. ``|offset|`` up to about
+    ``0.68 length``.
+
+    Args:
+        offset: sideways shift [m], positive to the left, in [-100, 100] (0 gives a straight line).
+        length: extent of the shift along x0 [m], in (0, 1000].
+        lead: straight run before and after [m], in [0, 1000].
+    """
+    off = LANE_CHANGE_RANGES["offset"].check("lane_change", "offset", offset)
+    ln = LANE_CHANGE_RANGES["length"].check("lane_change", "length", length)
+    lead = LANE_CHANGE_RANGES["lead"].check("lane_change", "lead", lead)
+    ratio = abs(off) / ln
+    x1, y1 = _s_curve_half(LANE_CHANGE_MAX_HEADING)
+    if ratio > y1 / x1:
+        raise ValueError(
+            f"lane_change.offset must satisfy |offset| <= {y1 / x1:.4f} length = {y1 / x1 * ln:.4g} m, got {offset!r}"
+        )
+    lo, hi = 0.0, LANE_CHANGE_MAX_HEADING
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):
+            break
+        xm, ym = _s_curve_half(mid)
+        if ym / xm < ratio:
+            lo = mid
+        else:
+            hi = mid
+    theta_m = 0.5 * (lo + hi)
+    x1, _ = _s_curve_half(theta_m)
+    q = ln / (2.0 * x1)
+    k = math.copysign(theta_m / q, off) if off != 0.0 else 0.0
+    seg = ClothoidSegment
+    shift = (
+        seg.transition(q, 0.0, k),
+        seg.transition(q, k, 0.0),
+        seg.transition(q, 0.0, -k),
+        seg.transition(q, -k, 0.0),
+    )
+    lines = (seg.line(lead),) if lead > 0.0 else ()
+    return ClothoidPath((*lines, *shift, *lines))
+
+
+def random_path(
+    rng: np.random.Generator,
+    length: float = 20.0,
+    max_curvature: float = 1.0,
+    max_curvature_rate: float = 1.0,
+    min_piece: float = 0.5,
+    max_piece: float = 3.0,
+) -> ClothoidPath:
+    r"""A random smooth open path from the origin along x0: continuous curvature, ``|kappa| <= max_curvature``,
+    ``|dkappa/ds| <= max_curvature_rate``.
+
+    The curvature starts at 0 and alternates between *ramps* and *holds*: a ramp goes linearly to a target
+    drawn uniformly in ``[-max_curvature, max_curvature]`` over a length drawn uniformly in
+    ``[min_piece, max_piece]`` and stretched if needed to ``|delta kappa| / max_curvature_rate``, so that the
+    rate bound holds; a hold keeps the curvature (an arc) over a length drawn uniformly in
+    ``[0, max_piece]``. The last piece is cut at ``length`` (a cut ramp keeps its rate). The curvature is
+    piecewise linear and continuous, so both bounds hold everywhere. The same generator state gives the same
+    path.
+
+    Args:
+        rng: the random generator (consumed).
+        length: arc length [m], in (0, 10000].
+        max_curvature: [1/m], in (0, 100].
+        max_curvature_rate: [1/m^2], in (0, 1000].
+        min_piece, max_piece: ramp lengths [m], in [0.01, 100], ``min_piece <= max_piece``.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
+    total = RANDOM_RANGES["length"].check("random_path", "length", length)
+    kmax = RANDOM_RANGES["max_curvature"].check("random_path", "max_curvature", max_curvature)
+    cmax = RANDOM_RANGES["max_curvature_rate"].check("random_path", "max_curvature_rate", max_curvature_rate)
+    pmin = RANDOM_RANGES["min_piece"].check("random_path", "min_piece", min_piece)
+    pmax = RANDOM_RANGES["max_piece"].check("random_path", "max_piece", max_piece)
+    if pmin > pmax:
+        raise ValueError(f"random_path.min_piece must be <= max_piece = {pmax:g} m, got {min_piece!r}")
+    segs: list[ClothoidSegment] = []
+    s = 0.0
+    k = 0.0
+    while s < total:
+        target = float(rng.uniform(-kmax, kmax))
+        ramp = max(float(rng.uniform(pmin, pmax)), abs(target - k) / cmax)
+        hold = float(rng.uniform(0.0, pmax))
+        rate = (target - k) / ramp
+        ramp = min(ramp, total - s)
+        segs.append(ClothoidSegment(ramp, k, rate))
+        s += ramp
+        k = min(max(k + rate * ramp, -kmax), kmax)
+        if s < total and hold > 0.0:
+            hold = min(hold, total - s)
+            segs.append(ClothoidSegment.arc(hold, k))
+            s += hold
+    return ClothoidPath(tuple(segs))
+
+
+@dataclass(frozen=True)
+class Family:
+    """A path family of the registry.
+
+    Attributes:
+        name: its registry name.
+        build: the constructor (:func:`circle`, ...); ``random`` takes the generator as its first argument.
+        params: the numeric parameters with their ranges and defaults.
+        random: whether it needs a generator.
+        doc: one line.
+    """
+
+    name: str
+    build: Callable[..., ClothoidPath]
+    params: dict[str, ParamRange]
+    random: bool
+    doc: str
+
+
+FAMILIES: dict[str, Family] = {
+    "circle": Family("circle", circle, CIRCLE_RANGES, False, "closed circle (paper eq. 6); also direction=+-1"),
+    "manoeuvre": Family(
+        "manoeuvre", manoeuvre, MANOEUVRE_RANGES, False, "straight along x0, then the circle; also direction=+-1"
+    ),
+    "figure8": Family("figure8", figure8, FIGURE8_RANGES, False, "closed figure-8 crossing itself at the origin"),
+    "lane_change": Family("lane_change", lane_change, LANE_CHANGE_RANGES, False, "sideways shift by clothoids"),
+    "random": Family("random", random_path, RANDOM_RANGES, True, "seeded random path, bounded curvature and rate"),
+}
+
+
+def make_family_path(name: str, rng: np.random.Generator | None = None, **params: Any) -> ClothoidPath:
+    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at their defaults).
+
+    Raises:
+        ValueError: unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``.
+    """
+    fam = FAMILIES.get(name) if isinstance(name, str) else None
+    if fam is None:
+        raise ValueError(f"path family must be one of {sorted(FAMILIES)}, got {name!r}")
+    allowed = set(fam.params) | ({"direction"} if name in ("circle", "manoeuvre") else set())
+    unknown = sorted(set(params) - allowed)
+    if unknown:
+        raise ValueError(f"path family {name!r} has no parameter {unknown[0]!r}; it takes {sorted(allowed)}")
+    if fam.random:
+        if rng is None:
+            raise ValueError(f"path family {name!r} needs a numpy.random.Generator rng")
+        return fam.build(rng, **params)
+    return fam.build(**params)
