@@ -147,7 +147,9 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._fixed_path = fixed
         self.path: Any = fixed
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
-        self.action_space, self.observation_space = make_spaces_v1(p)
+        act_space, obs_space = make_spaces_v1(p)
+        self.action_space = act_space  # type: ignore[assignment]
+        self.observation_space = obs_space  # type: ignore[assignment]
         self._ring = np.zeros((self._k.ring_length, 2))
         self._state: tracking.State | None = None
         self._episode: tracking.Episode | None = None
