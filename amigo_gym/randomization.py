@@ -290,4 +290,6 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
     if r.wheel_rate_noise > 0.0:
         n1 = r.wheel_rate_noise * counter_normal(key, step, 4)
         n2 = r.wheel_rate_noise * counter_normal(key, step, 5)
+    if np.ndim(key) == 0 and np.ndim(step) == 0 and np.ndim(slip_max) == 0:  # one robot: plain floats
+        return StepNoise(*(float(c) for c in (s1, s2, nx, ny, nb, n1, n2)))
     return StepNoise(s1, s2, nx, ny, nb, n1, n2)

@@ -63,7 +63,10 @@ from amigo_gym import actuators
 from amigo_gym.actuators import ActuatorParams
 from amigo_gym.kinematics import Real, col_cos, col_exp, col_sin, col_sqrt
 from amigo_gym.params import RobotParams, check_range
-from amigo_gym.randomization import Randomization, make_randomization
+from amigo_gym.randomization import Randomization, StepNoise, make_randomization
+
+#: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
+STATUS_END = 2
 
 __all__ = [
     "REWARD_TERMS",
@@ -674,7 +677,7 @@ def start_state(k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real]
         v0 = reference_speed(p, ep, zero)
         w1, w2 = actuators.wheel_rates_columns(v0, zero, k.nominal)
     hint = path.locate(hx, hy, zero, k.window, k.window)
-    return State(ax, ay, beta, w1, w2, zero, zero, hint.progress, w1 / k.w_max, w2 / k.w_max, 0 * np.asarray(0))
+    return State(ax, ay, beta, w1, w2, zero, zero, hint.progress, w1 / k.w_max, w2 / k.w_max, 0)
 
 
 def step_columns(
@@ -785,12 +788,11 @@ def evaluate_columns(
     )
     reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
     terminated = _abs(e) > p.termination_distance
-    if not bool(path.closed):
-        terminated = (
-            terminated | (np.asarray(loc.status) == 2)
-            if isinstance(e, np.ndarray)
-            else (terminated or int(loc.status) == 2)
-        )
+    closed = path.closed
+    if isinstance(e, np.ndarray):  # a batch: per-row paths, open ones end when H passes their end
+        terminated = terminated | (~np.asarray(closed, dtype=np.bool_) & (np.asarray(loc.status) == STATUS_END))
+    elif not bool(closed):
+        terminated = terminated or int(loc.status) == STATUS_END
     # measurements
     mx, my, mb = st.x + noise.x, st.y + noise.y, st.beta + noise.beta
     mw1, mw2 = st.w1 + noise.rate1, st.w2 + noise.rate2
@@ -854,3 +856,34 @@ def _body(w1: Real, w2: Real, ep: Episode) -> tuple[Real, Real]:
     g1 = ep.r1 * w1
     g2 = ep.r2 * w2
     return 0.5 * (g1 + g2), (g1 - g2) / (2.0 * ep.l1)
+
+
+NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+class Begin(NamedTuple):
+    """A new episode of one robot (:func:`begin_episode`): floats."""
+
+    path: Any
+    path_info: dict[str, Any]
+    episode: Episode
+    state: State
+    outcome: Outcome
+
+
+def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None) -> Begin:
+    """Draw and start one robot's episode from its generator (the single env's reset and the vector env's rows).
+
+    Draws, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`), then builds the
+    start state (:func:`start_state`; ``pose`` replaces the drawn pose of A) and evaluates it.
+    """
+    path, info = draw_path(rng, k.params)
+    ep, u = draw_episode(rng, k.params)
+    st = start_state(k, path, ep, u)
+    if pose is not None:
+        x, y, b = (float(c) for c in pose)
+        hx = x + ep.l3 * col_cos(b)
+        hy = y + ep.l3 * col_sin(b)
+        hint = path.locate(hx, hy, 0.0, k.window, k.window)
+        st = st._replace(x=x, y=y, beta=b, progress=float(hint.progress))
+    return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))

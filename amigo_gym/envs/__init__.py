@@ -9,6 +9,8 @@
 from __future__ import annotations
 
 from amigo_gym.envs.amigobot import AmigoBotEnv, make_env_params
+from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
 from amigo_gym.envs.vector import AmigoBotVectorEnv
+from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 
-__all__ = ["AmigoBotEnv", "AmigoBotVectorEnv", "make_env_params"]
+__all__ = ["AmigoBotEnv", "AmigoBotV1Env", "AmigoBotV1VectorEnv", "AmigoBotVectorEnv", "make_env_params"]

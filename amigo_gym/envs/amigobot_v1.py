@@ -24,8 +24,6 @@ ObsArray = NDArray[np.float32]
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = ("pose",)
 
-_NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-
 
 def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
     """The action space ``Box(-1, 1, (2,), float32)`` and the observation space (:func:`tracking.obs_bounds`)."""
@@ -167,18 +165,8 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         check_reset_options(options)
         pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
         super().reset(seed=seed)
-        p = self.params
-        path, self._path_info = tracking.draw_path(self.np_random, p)
-        ep, u = tracking.draw_episode(self.np_random, p)
-        self.path = path
-        self._episode = ep
-        st = tracking.start_state(self._k, path, ep, u)
-        if pose_opt is not None:
-            x, y, b = pose_opt.tolist()
-            hx = x + ep.l3 * np.cos(b)
-            hy = y + ep.l3 * np.sin(b)
-            hint = path.locate(float(hx), float(hy), 0.0, self._k.window, self._k.window)
-            st = st._replace(x=x, y=y, beta=b, progress=hint.progress)
+        b = tracking.begin_episode(self.np_random, self._k, None if pose_opt is None else tuple(pose_opt.tolist()))
+        self.path, self._path_info, self._episode, st, out = b
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
         self._ring[:, 0] = st.a1 * self._k.w_max
@@ -186,9 +174,8 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._ring_step = 0
         self._done = False
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
-        out = tracking.reset_columns(self._k, path, st, ep, _NO_NOISE)
         self._trail = [(float(out.h_x), float(out.h_y))]
-        info = self._info(out, _NO_NOISE)
+        info = self._info(out, tracking.NO_NOISE)
         if self.render_mode == "human":
             self.render()
         return np.array(out.obs, dtype=np.float32), info

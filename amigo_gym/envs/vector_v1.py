@@ -1,0 +1,447 @@
+"""Native numpy-batched vector environment of ``AmigoBot-v1``, for heterogeneous batches.
+
+``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with
+its own path (of its own family when ``path="mixed"``), reference speed, true robot, slip, delay and noise,
+stepped together by the column functions of :mod:`amigo_gym.tracking` that the single environment calls,
+with no Python loop over the robots in the step: the paths are one :class:`amigo_gym.paths.PathBatch`, the
+per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` ring. Loops run only over
+the robots being reset, which draw their episodes from their own generators with the single environment's
+function (:func:`amigo_gym.tracking.begin_episode`).
+
+For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` bit for bit
+(observations, rewards, terminations, truncations and the numeric infos), randomisation included, in the
+``NEXT_STEP`` (default), ``SAME_STEP`` and ``DISABLED`` autoreset modes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from amigo_gym import tracking
+from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
+from amigo_gym.envs.amigobot_v1 import make_spaces_v1
+from amigo_gym.envs.vector import _parse_autoreset_mode
+
+__all__ = ["AmigoBotV1VectorEnv"]
+
+Array = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+ObsArray = NDArray[np.float32]
+
+#: the numeric info keys, in the single env's order (``path`` is kept per robot in :attr:`path_infos`)
+_EPISODE_FIELDS = tracking.Episode._fields
+_STATE_FIELDS = tracking.State._fields
+
+
+def validate_actions(actions: Any, n: int) -> tuple[Array, Array]:
+    """Finite real actions of shape ``(n, 2)`` as two float64 columns.
+
+    Raises:
+        TypeError: not real numbers. ValueError: wrong shape, NaN or infinities.
+    """
+    try:
+        a = np.asarray(actions)
+    except ValueError as exc:
+        raise ValueError(f"actions must be an array of shape ({n}, 2), got {actions!r}") from exc
+    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
+        raise TypeError(f"actions must be real numbers of shape ({n}, 2), got dtype {a.dtype}")
+    if a.shape != (n, 2):
+        raise ValueError(f"actions must have shape ({n}, 2) (wheel 1, wheel 2), got shape {a.shape}")
+    a = a.astype(np.float64)
+    if not np.isfinite(a).all():
+        raise ValueError("actions must be finite; got NaN or infinite values")
+    return a[:, 0].copy(), a[:, 1].copy()
+
+
+class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+    """``N`` AmigoBot-v1 tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotV1Env`).
+
+    Args:
+        num_envs: number of robots ``N`` >= 1.
+        max_episode_steps: truncation after this many steps (``None``: never); ``gym.make_vec`` passes the
+            registration's 600 unless given.
+        render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
+        autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
+        params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
+
+    Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
+    of each robot is :attr:`path_infos` (strings are not batched).
+    """
+
+    metadata: dict[str, Any] = {  # noqa: RUF012
+        "render_modes": ["rgb_array"],
+        "render_fps": 10.0,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        *,
+        params: Any = None,
+        **settings: Any,
+    ) -> None:
+        from amigo_gym.paths import PathBatch
+
+        owner = type(self).__name__
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool)
+            or not isinstance(max_episode_steps, int | np.integer)
+            or max_episode_steps < 1
+        ):
+            raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
+        if render_mode is not None and render_mode != "rgb_array":
+            raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
+        self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
+        p = self.params
+        self._k = tracking.constants(p)
+        fixed = tracking.fixed_path(p)
+        if fixed is not None:
+            tracking.check_feasible(p, fixed)
+        n = int(num_envs)
+        self.num_envs = n
+        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
+        self.render_mode = render_mode
+        self.autoreset_mode = _parse_autoreset_mode(autoreset_mode)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
+        act, obs = make_spaces_v1(p)
+        self.single_action_space = act
+        self.single_observation_space = obs
+        self.action_space = batch_space(act, n)
+        self.observation_space = batch_space(obs, n)
+
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._seeds: list[int | None] = [None] * n
+        placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
+        self.paths = PathBatch([placeholder] * n)
+        self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
+        z = np.zeros(n)
+        self._state = tracking.State(
+            z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(),
+            np.zeros(n, dtype=np.int64),
+        )  # fmt: skip
+        self._episode = tracking.Episode(
+            r1=z.copy(),
+            r2=z.copy(),
+            l1=z.copy(),
+            l3=z.copy(),
+            slip_max=z.copy(),
+            lag=np.zeros(n, dtype=np.int64),
+            t_switch=z.copy(),
+            key=np.zeros(n, dtype=np.uint64),
+            v_cruise=z.copy(),
+            t_brake=z.copy(),
+        )
+        self._ring = np.zeros((n, self._k.ring_length, 2))
+        self._ring_step = 0
+        self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
+        self._obs: ObsArray = np.zeros((n, obs.shape[0]), dtype=np.float32)
+        self._trails: list[list[tuple[float, float]]] = [[] for _ in range(n)]
+        self._renderers: list[Any] = [None] * n
+        self._was_reset = False
+
+    # ------------------------------------------------------------------ seeding
+    @property
+    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``)."""
+        for i in range(self.num_envs):
+            self._rng(i)
+        return tuple(self._seeds)
+
+    def _rng(self, i: int) -> np.random.Generator:
+        g = self._rngs[i]
+        if g is None:
+            g, self._seeds[i] = seeding.np_random()
+            self._rngs[i] = g
+        return g
+
+    # ------------------------------------------------------------------ reset
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Reset all robots, or those of ``options["reset_mask"]``; ``options["pose"]`` sets start poses."""
+        n = self.num_envs
+        check_reset_options(options, extra=("reset_mask",))
+        if seed is None:
+            seeds: list[int | None] = [None] * n
+        elif isinstance(seed, bool):
+            raise TypeError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
+        mask: BoolArray = np.ones(n, dtype=np.bool_)
+        if options is not None and "reset_mask" in options:
+            m = options["reset_mask"]
+            if not isinstance(m, np.ndarray) or m.dtype != np.bool_:
+                raise TypeError(f'options["reset_mask"] must be a bool numpy array of shape ({n},), got {m!r}')
+            if m.shape != (n,):
+                raise ValueError(f'options["reset_mask"] must have shape ({n},), got {m.shape}')
+            if not m.any():
+                raise ValueError('options["reset_mask"] must contain at least one True value')
+            mask = m.copy()
+        pose_opt = None
+        if options is not None and "pose" in options:
+            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        if not mask.all() and not self._was_reset:
+            raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
+        self._was_reset = True
+        idx = np.flatnonzero(mask)
+        for i in idx.tolist():
+            if seeds[i] is not None:
+                self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
+        self._autoreset[idx] = False
+        rows = self._begin_rows(idx, pose_opt)
+        obs = self._obs.copy()
+        obs[idx] = rows[0]
+        self._obs = obs
+        infos = self._scatter(self._infos(rows[1], idx), mask)
+        return obs.copy(), infos
+
+    def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
+        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only)."""
+        k = self._k
+        m = len(idx)
+        obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
+        cols: dict[str, list[Any]] = {}
+        paths = []
+        for j, i in enumerate(idx.tolist()):
+            pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
+            b = tracking.begin_episode(self._rng(i), k, pose)
+            paths.append(b.path)
+            self.path_infos[i] = b.path_info
+            for name in _STATE_FIELDS:
+                np.asarray(getattr(self._state, name))[i] = getattr(b.state, name)
+            for name in _EPISODE_FIELDS:
+                np.asarray(getattr(self._episode, name))[i] = getattr(b.episode, name)
+            self._ring[i, :, 0] = b.state.a1 * k.w_max
+            self._ring[i, :, 1] = b.state.a2 * k.w_max
+            obs[j] = b.outcome.obs
+            for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
+                cols.setdefault(key, []).append(value)
+            self._trails[i] = [(float(b.outcome.h_x), float(b.outcome.h_y))]
+        self.paths.replace(idx, paths)
+        return obs, {key: _stack(v) for key, v in cols.items()}
+
+    # ------------------------------------------------------------------ step
+    def step(
+        self, actions: NDArray[np.floating[Any]]
+    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
+        """Step every robot; autoreset finished ones according to ``autoreset_mode``."""
+        n = self.num_envs
+        if not self._was_reset:
+            raise gym.error.ResetNeeded("call reset() before step() on AmigoBotV1VectorEnv")
+        a1, a2 = validate_actions(actions, n)
+        mode = self.autoreset_mode
+        if mode == AutoresetMode.DISABLED and self._autoreset.any():
+            raise RuntimeError(
+                f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
+                "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
+            )
+        k = self._k
+        self._ring_step += 1
+        st, out, noise = tracking.step_columns(
+            k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
+        )
+        self._state = tracking.State(*(np.asarray(c) for c in st))
+        obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
+        for j, c in enumerate(out.obs):
+            obs[:, j] = c
+        reward = np.asarray(out.reward, dtype=np.float64).copy()
+        terminated: BoolArray = np.asarray(out.terminated, dtype=np.bool_).copy()
+        steps = np.asarray(self._state.steps)
+        truncated = (
+            steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, dtype=np.bool_)
+        )
+        infos = self._infos(self._batch_info(out, noise), None)
+        restart = None
+        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+            restart = np.flatnonzero(self._autoreset)
+            obs_r, info_r = self._begin_rows(restart)
+            obs[restart] = obs_r
+            reward[restart] = 0.0
+            terminated[restart] = False
+            truncated[restart] = False
+            _assign_rows(infos, self._infos(info_r, restart), restart)
+        elif mode == AutoresetMode.SAME_STEP:
+            done = terminated | truncated
+            if done.any():
+                restart = np.flatnonzero(done)
+                final_obs = np.full(n, None, dtype=object)
+                for i in restart.tolist():
+                    final_obs[i] = obs[i].copy()
+                final_info = self._scatter(_take_rows(infos, restart), done)
+                obs_r, info_r = self._begin_rows(restart)
+                obs[restart] = obs_r
+                _assign_rows(infos, self._infos(info_r, restart), restart)
+                infos = {
+                    "final_obs": final_obs,
+                    "_final_obs": done.copy(),
+                    "final_info": final_info,
+                    "_final_info": done.copy(),
+                    **infos,
+                }
+        if self.render_mode is not None:
+            hx, hy = np.asarray(out.h_x), np.asarray(out.h_y)
+            fresh = set() if restart is None else set(restart.tolist())
+            for i in range(n):
+                if i not in fresh:
+                    self._trails[i].append((float(hx[i]), float(hy[i])))
+                    if len(self._trails[i]) > 4096:
+                        del self._trails[i][:1024]
+        self._autoreset = terminated | truncated
+        self._obs = obs
+        return obs, reward, terminated, truncated, self._scatter(infos, None)
+
+    # ------------------------------------------------------------------ infos
+    def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
+        """One robot's numeric info values (the single env's keys, without ``path``)."""
+        dt = self.params.dt
+        w_max = self._k.w_max
+        return {
+            "pose": (st.x, st.y, st.beta),
+            "h_position": (out.h_x, out.h_y),
+            "cross_track_error": out.error,
+            "progress": st.progress,
+            "speed": out.v_true,
+            "reference_speed": out.v_ref,
+            "speed_error": out.v_true - out.v_ref,
+            "wheel_rates": (st.w1, st.w2),
+            "command": (st.a1 * w_max, st.a2 * w_max),
+            "wheel_angles": (st.alpha1, st.alpha2),
+            "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
+            "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
+            "time": st.steps * dt,
+            "true_robot": {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1},
+            "delay": ep.lag * dt + ep.t_switch,
+            "slip": (noise.slip1, noise.slip2),
+        }
+
+    def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
+        return {
+            k: _as_columns(v, self.num_envs) for k, v in self._row_info(self._state, self._episode, out, noise).items()
+        }
+
+    def _infos(self, cols: dict[str, Any], idx: NDArray[np.intp] | None) -> dict[str, Any]:
+        """Compact infos (rows of the robots concerned) as arrays."""
+        out: dict[str, Any] = {}
+        for key, v in cols.items():
+            out[key] = self._infos(v, idx) if isinstance(v, dict) else _array(v)
+        return out
+
+    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
+        """Vector-format infos: ``(N, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks."""
+        n = self.num_envs
+        every = np.ones(n, dtype=np.bool_) if mask is None else mask
+        out: dict[str, Any] = {}
+        for key, v in infos.items():
+            if key.startswith("_") or key in ("final_obs", "final_info"):
+                out[key] = v
+                continue
+            if isinstance(v, dict):
+                out[key] = self._scatter(v, mask)
+            elif mask is None:
+                out[key] = v
+            else:
+                full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
+                full[mask] = v
+                out[key] = full
+            out[f"_{key}"] = every.copy()
+        return out
+
+    # ------------------------------------------------------------------ rendering
+    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
+            return None
+        from amigo_gym.rendering import Renderer
+
+        frames = []
+        x, y, beta, _, _, alpha1, alpha2, *_ = (np.asarray(c) for c in self._state)
+        steps = np.asarray(self._state.steps)
+        for i in range(self.num_envs):
+            path = self.paths[i]
+            r = self._renderers[i]
+            if r is None or r.path is not path:
+                r = self._renderers[i] = Renderer(self.params, path, "rgb_array")
+            pose = np.array((x[i], y[i], beta[i]))
+            frames.append(
+                r.draw(
+                    pose,
+                    self._trails[i],
+                    wheel_angles=np.array((alpha1[i], alpha2[i])),
+                    time=float(steps[i] * self.params.dt),
+                )
+            )
+        return tuple(frames)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderers."""
+        for r in self._renderers:
+            if r is not None:
+                r.close()
+        self._renderers = [None] * self.num_envs
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderers"] = [None] * self.num_envs
+        return state
+
+
+def _as_columns(v: Any, n: int) -> Any:
+    if isinstance(v, dict):
+        return {k: _as_columns(x, n) for k, x in v.items()}
+    if isinstance(v, tuple):
+        return tuple(_full(c, n) for c in v)
+    return _full(v, n)
+
+
+def _full(c: Any, n: int) -> Array:
+    a = np.asarray(c)
+    if a.shape == (n,):
+        return a.astype(np.float64, copy=False)
+    return np.full(n, float(a))
+
+
+def _stack(values: list[Any]) -> Any:
+    """Rows of one info key (floats, tuples of floats or dicts) as columns."""
+    first = values[0]
+    if isinstance(first, dict):
+        return {k: _stack([v[k] for v in values]) for k in first}
+    if isinstance(first, tuple):
+        return tuple(np.array([v[j] for v in values], dtype=np.float64) for j in range(len(first)))
+    return np.array(values, dtype=np.float64)
+
+
+def _array(v: Any) -> Array:
+    """An info value as an array: a tuple of columns becomes ``(m, k)``."""
+    if isinstance(v, tuple):
+        return np.stack([np.asarray(c, dtype=np.float64) for c in v], axis=-1)
+    return np.asarray(v, dtype=np.float64)
+
+
+def _take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
+    return {k: (_take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
+
+
+def _assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
+    for k, v in rows.items():
+        if isinstance(v, dict):
+            _assign_rows(infos[k], v, idx)
+        else:
+            infos[k][idx] = v
