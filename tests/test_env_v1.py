@@ -1,0 +1,211 @@
+"""AmigoBot-v1 through the environment: exact integration, feasibility, checks of Gymnasium and SB3, seeding."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import amigo_gym  # noqa: F401  (registers the environments)
+from amigo_gym import tracking
+from amigo_gym.envs import AmigoBotV1Env
+
+
+def test_registered_with_time_limit() -> None:
+    env = gym.make("AmigoBot-v1")
+    assert env.spec is not None and env.spec.max_episode_steps == 600
+    assert isinstance(env.unwrapped, AmigoBotV1Env)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {},
+        {"path": "mixed", "randomize": "hard"},
+        {"path": "figure8", "speed": (0.1, 0.4)},
+        {"path": "lane_change", "speed_profile": "trapezoid"},
+        {"path": "random", "randomize": "mild"},
+        {"path": "manoeuvre", "direction": -1},
+    ],
+)
+def test_gymnasium_check_env(kwargs: dict[str, object]) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        check_env(gym.make("AmigoBot-v1", **kwargs).unwrapped, skip_render_check=True)
+
+
+def test_sb3_check_env() -> None:
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sb3_check_env(gym.make("AmigoBot-v1", path="mixed", randomize="hard"))
+
+
+def _pose_run(dt: float, actions: np.ndarray, repeat: int, **kw: object) -> np.ndarray:
+    env = AmigoBotV1Env(dt=dt, termination_distance=10.0, init_position_noise=0.0, init_heading_noise=0.0, **kw)
+    env.reset(seed=0, options={"pose": (0.0, 0.0, 0.3)})
+    poses = []
+    for a in actions:
+        for _ in range(repeat):
+            _, _, _, _, info = env.step(a)
+        poses.append(info["pose"])
+    return np.array(poses)
+
+
+def test_one_step_equals_two_half_steps_through_the_env() -> None:
+    """With randomisation off, a command held over dt gives the pose of two steps of dt/2 (exact integration)."""
+    rng = np.random.default_rng(5)
+    actions = rng.uniform(-1.0, 1.0, size=(300, 2))
+    actions[::7] = actions[::7, ::-1]  # reversals
+    actions[::11, 1] = actions[::11, 0]  # straight
+    full = _pose_run(0.1, actions, 1)
+    half = _pose_run(0.05, actions, 2)
+    assert np.max(np.abs(full[:, :2] - half[:, :2])) < 1e-12
+    assert np.max(np.abs(full[:, 2] - half[:, 2])) < 1e-12
+
+
+def test_from_rest_full_forward_is_half_a_t_squared() -> None:
+    """From rest with both wheels at full forward, A travels 0.3 t^2 / 2 until 0.75 m/s, then 0.75 m/s (to 1e-12 m)."""
+    for dt in (0.1, 0.07, 0.25):
+        n = math.ceil(4.0 / dt)
+        poses = _pose_run(dt, np.ones((n, 2)), 1, radius=100.0)
+        t = dt * np.arange(1, n + 1)
+        # the pose option put A at the origin with heading 0.3
+        d = np.where(t <= 2.5, 0.5 * 0.3 * t * t, 0.5 * 0.3 * 2.5**2 + 0.75 * (t - 2.5))
+        along = poses[:, 0] * math.cos(0.3) + poses[:, 1] * math.sin(0.3)
+        across = -poses[:, 0] * math.sin(0.3) + poses[:, 1] * math.cos(0.3)
+        assert np.max(np.abs(along - d)) < 1e-12
+        assert np.max(np.abs(across)) < 1e-12
+        assert np.all(poses[:, 2] == 0.3)
+
+
+def test_true_wheel_radius_five_percent_larger_is_five_percent_faster() -> None:
+    nominal = _pose_run(0.1, np.full((60, 2), 0.5), 1, radius=100.0)
+    larger = _pose_run(0.1, np.full((60, 2), 0.5), 1, radius=100.0, true_robot={"r1": 0.0525, "r2": 0.0525})
+    d0 = np.hypot(*(nominal[-1, :2] - nominal[-2, :2]))
+    d1 = np.hypot(*(larger[-1, :2] - larger[-2, :2]))
+    assert d1 / d0 == pytest.approx(1.05, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"speed": 0.74}, "needs 16.6 rad/s on the outer wheel, above the robot's limit of 15 rad/s"),
+        ({"radius": 0.085}, "needs 20.7 rad/s on the outer wheel"),
+        ({"speed": (0.1, 0.74)}, "needs 16.6 rad/s"),
+    ],
+)
+def test_infeasible_tasks_are_refused_in_one_line(kwargs: dict[str, object], message: str) -> None:
+    with pytest.raises(ValueError, match=message) as err:
+        gym.make("AmigoBot-v1", **kwargs)
+    assert "\n" not in str(err.value)
+
+
+def test_mixed_families_are_feasible_at_the_highest_speed() -> None:
+    """The extremes of the ranges drawn by path="mixed" (and the random pool's defaults) are feasible at 0.4 m/s."""
+    from amigo_gym.paths import feasibility, make_family_path
+
+    robot = tracking.TrackingParams().robot
+    limits = {"max_rotational_acceleration": 0.87}
+    for fam, ranges in tracking.MIXED_RANGES.items():
+        for corner in ((lo for lo, _ in ranges.values()), (hi for _, hi in ranges.values())):
+            params = dict(zip(ranges, corner, strict=True))
+            for direction in (1, -1) if fam == "circle" else (None,):
+                kw = {**params, **({} if direction is None else {"direction": direction})}
+                f = feasibility(make_family_path(fam, None, **kw), 0.4, robot, "A", **limits)
+                assert f.feasible, (fam, kw, f.message())
+    for pid in range(8):
+        f = feasibility(
+            tracking.random_pool_path(tracking.TrackingParams(path="random"), pid), 0.4, robot, "A", **limits
+        )
+        assert f.feasible, f.message()
+
+
+def test_same_seed_same_episode_and_seeds_differ() -> None:
+    def episode(seed: int) -> list[np.ndarray]:
+        env = gym.make("AmigoBot-v1", path="mixed", randomize="hard", speed=(0.1, 0.4))
+        obs, info = env.reset(seed=seed)
+        out = [obs, info["pose"]]
+        rng = np.random.default_rng(0)
+        for _ in range(50):
+            obs, r, term, trunc, info = env.step(rng.uniform(-1, 1, 2))
+            out += [obs, np.array([r]), info["pose"], info["slip"], info["measured_pose"]]
+            if term or trunc:
+                break
+        return out
+
+    a, b, c = episode(3), episode(3), episode(4)
+    assert len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    assert not all(np.array_equal(x, y) for x, y in zip(a, c, strict=False))
+
+
+def test_randomisation_is_in_info_not_in_observation() -> None:
+    env = gym.make("AmigoBot-v1", randomize="hard")
+    _, info = env.reset(seed=1)
+    r = info["true_robot"]
+    assert r["r1"] != 0.05 and 0.95 * 0.05 <= r["r1"] <= 1.05 * 0.05
+    assert 0.0 <= info["delay"] <= 0.15
+    names = tracking.obs_fields(env.unwrapped.params)  # type: ignore[attr-defined]
+    assert not any(("radius" in n) or ("delay" in n) or ("slip" in n) for n in names)
+    _, _, _, _, info = env.step(np.zeros(2))
+    assert np.all(info["slip"] >= 0.0) and np.all(info["slip"] <= 0.1)
+    assert not np.array_equal(info["measured_pose"], info["pose"])  # noisy measurement
+
+
+def test_delay_shifts_the_motion_by_the_delay() -> None:
+    """A delay of 0.15 s (1.5 steps) gives, from rest, the motion without delay 0.15 s later (to 1e-12 m)."""
+    actions = np.tile([[0.8, 0.6]], (40, 1))
+    fast = _pose_run(0.05, np.repeat(actions, 2, axis=0), 1, radius=100.0)
+    slow = _pose_run(0.05, np.repeat(actions, 2, axis=0), 1, radius=100.0, actuators={"delay": 0.15})
+    # slow at step k + 3 equals fast at step k
+    assert np.max(np.abs(slow[3:, :2] - fast[:-3, :2])) < 1e-12
+
+
+def test_ignoring_the_reference_speed_costs_reward() -> None:
+    """On a straight line, driving at 0.2 m/s when 0.4 m/s is asked for loses most of the reward."""
+    env = AmigoBotV1Env(
+        path="lane_change", path_params={"lead": 10.0}, speed=0.4, init_position_noise=0.0, init_heading_noise=0.0
+    )
+    env.reset(seed=0)
+    slow = [env.step(np.array([4.0, 4.0]) / 15.0)[1] for _ in range(40)]  # 0.2 m/s
+    env.reset(seed=0)
+    right = [env.step(np.array([8.0, 8.0]) / 15.0)[1] for _ in range(40)]  # 0.4 m/s
+    assert np.mean(right[-10:]) > 0.99
+    assert np.mean(slow[-10:]) < 0.05
+
+
+def test_step_before_reset_and_after_termination() -> None:
+    env = AmigoBotV1Env()
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.zeros(2))
+    env.reset(seed=0)
+    done = False
+    for _ in range(200):
+        *_, done, _, _ = env.step(np.array([1.0, -0.2]))
+        if done:
+            break
+    assert done
+    with pytest.warns(UserWarning, match="already returned terminated"):
+        env.step(np.zeros(2))
+
+
+@pytest.mark.parametrize(
+    ("action", "error"),
+    [
+        ("ab", TypeError),
+        ([1.0, 2.0, 3.0], ValueError),
+        ([1 + 2j, 0], TypeError),
+        ([np.nan, 0.0], ValueError),
+        ([[1, 2], [3]], ValueError),
+    ],
+)
+def test_bad_actions_are_refused(action: object, error: type[Exception]) -> None:
+    env = AmigoBotV1Env()
+    env.reset(seed=0)
+    with pytest.raises(error, match="action"):
+        env.step(action)  # type: ignore[arg-type]
