@@ -209,3 +209,15 @@ def test_bad_actions_are_refused(action: object, error: type[Exception]) -> None
     env.reset(seed=0)
     with pytest.raises(error, match="action"):
         env.step(action)  # type: ignore[arg-type]
+
+
+def test_docs_observation_table_matches_the_field_names() -> None:
+    """docs/amigobot_v1.md lists exactly obs_fields() of the default settings, in order."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "amigobot_v1.md").read_text()
+    section = text.split("## Observation", 1)[1].split("## Reward", 1)[0]
+    rows = re.findall(r"^\| (\d+) \| `([^`]+)` \|", section, flags=re.MULTILINE)
+    assert [int(i) for i, _ in rows] == list(range(len(rows)))
+    assert tuple(name for _, name in rows) == tracking.obs_fields(tracking.TrackingParams())
