@@ -131,6 +131,9 @@ def test_pose_columns_bit_identical_over_laps_and_beyond_ends() -> None:
         np.where(batch.closed, 3.0 * length, length + 0.7),  # whole laps; past the end
         np.zeros(len(paths)),
         -rng.uniform(0.0, 2.0, len(paths)),
+        length,
+        -length,
+        np.array([p._t.s0[rng.integers(len(p._t.s0))] for p in paths]),  # exactly at a piece's start
     ):
         _assert_rows(batch.pose_columns(s), [p.pose_columns(float(v)) for p, v in zip(paths, s, strict=True)])
 
