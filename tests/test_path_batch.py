@@ -297,3 +297,14 @@ def test_properties_and_errors() -> None:
     with pytest.raises(ValueError, match=r"from_path\.n"):
         PathBatch.from_path(circle(1.0), 0)
     assert batch[0] is paths[0] and batch[1] is paths[1]  # unchanged by the refused calls
+
+
+def test_single_row_batches() -> None:
+    """N = 1 (the path's float code behind (1,) columns), windowed, global and poses, for every family."""
+    rng = np.random.default_rng(10)
+    for path in _random_paths(rng, 12):
+        batch = PathBatch([path])
+        x, y, sp = _queries(rng, [path])
+        _assert_rows(batch.locate(x, y, sp, 0.3), _ref_locate([path], x, y, sp, 0.3))
+        _assert_rows(batch.locate(float(x[0]), float(y[0])), _ref_locate([path], x, y, None))
+        _assert_rows(batch.pose_columns(sp), [path.pose_columns(float(sp[0]))])

@@ -18,8 +18,8 @@ complex numbers lexicographically, so this is each row's own ``searchsorted`` of
 Special cases:
 
 * every row the same object (:meth:`PathBatch.from_path`, or ``PathBatch([path] * n)``): the batch calls that
-  object with the ``(N,)`` columns directly (no padded tables are built, no padding cost); a ClothoidPath gives
-  the same bits for an array and for its floats.
+  object with the ``(N,)`` columns directly (no padded tables are built, no padding cost; with ``N = 1``, with
+  floats); a ClothoidPath gives the same bits for an array and for its floats.
 * a path of your own (an object with ``length``, ``closed``, ``pose_columns`` and ``locate`` that is not a
   :class:`ClothoidPath`) may sit in any rows: the batch groups the rows by distinct object (a loop over the
   distinct objects, not the rows), calls each object once with the columns of its rows (``(k,)`` arrays)
@@ -344,7 +344,7 @@ class PathBatch:
         sa = self._column("s", s)
         only = self._uniform()
         if only is not None:
-            return PathPose(*self._full(only.pose_columns(sa)))
+            return PathPose(*self._full(only.pose_columns(float(sa[0]) if sa.size == 1 else sa)))
         foreign = self._foreign()
         if len(foreign) == len(self._objects):
             out = [np.zeros(sa.shape) for _ in PathPose._fields]
@@ -385,6 +385,9 @@ class PathBatch:
         sp = None if s_prev is None else self._column("s_prev", s_prev)
         only = self._uniform()
         if only is not None:
+            if xa.size == 1:  # one row: the path's float code (the same bits, a fifth of the time)
+                sp1 = None if sp is None else float(sp[0])
+                return self._point(only.locate(float(xa[0]), float(ya[0]), sp1, max_advance, max_retreat))
             return self._point(only.locate(xa, ya, sp, max_advance, max_retreat))
         foreign = self._foreign()
         if len(foreign) == len(self._objects):
