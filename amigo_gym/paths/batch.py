@@ -247,8 +247,11 @@ class PathBatch:
             p_max = max(len(p._t.s0) for p in clothoids)
             s_max = max(len(p._t.sample_x) for p in clothoids)
             t = _Padded.empty(len(self._paths), p_max, s_max)
-            for oid, p in self._objects.items():
-                self._write(t, np.flatnonzero(self._ids == oid), p)
+            order = np.argsort(self._ids, kind="stable")  # rows grouped by object: O(N log N), not O(N * objects)
+            ids = self._ids[order]
+            starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+            for rows in np.split(order, starts[1:]):
+                self._write(t, rows, self._objects[int(self._ids[rows[0]])])
             self._tables = t
         return self._tables
 
@@ -297,14 +300,14 @@ class PathBatch:
 
     @property
     def length(self) -> Array:
-        """``(N,)`` arc length of one traversal of each row's path [m] (read-only)."""
+        """``(N,)`` lap length of each row's path [m] (a read-only view, updated by :meth:`replace`)."""
         v = self._length.view()
         v.flags.writeable = False
         return v
 
     @property
     def closed(self) -> BoolArray:
-        """``(N,)`` whether each row's path is closed (read-only)."""
+        """``(N,)`` whether each row's path is closed (a read-only view, updated by :meth:`replace`)."""
         v = self._closed.view()
         v.flags.writeable = False
         return v
