@@ -6,6 +6,8 @@
   progress (:meth:`ClothoidPath.locate`); :class:`PathSpec`, what AmigoBot-v1 needs of a path.
 * :mod:`amigo_gym.paths.families`: the path families (circle, manoeuvre, figure-8, lane change, random) and
   their registry :data:`FAMILIES`.
+* :mod:`amigo_gym.paths.batch`: :class:`PathBatch`, ``N`` paths (one per sub-environment) behind the column
+  interface of one path on ``(N,)`` columns, row ``i`` bit-identical to path ``i``.
 * :mod:`amigo_gym.paths.analysis`: :func:`preview` (path ahead in the robot frame) and :func:`feasibility`
   (wheel rates and accelerations the exact inverse solution needs).
 
@@ -16,6 +18,7 @@ This package may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinemati
 from __future__ import annotations
 
 from amigo_gym.paths.analysis import Feasibility, LagProfile, Preview, feasibility, heading_lag_profile, preview
+from amigo_gym.paths.batch import PathBatch
 from amigo_gym.paths.classic import (
     CirclePath,
     ClosestPoint,
@@ -65,6 +68,7 @@ __all__ = [
     "PathPoint",
     "PathPose",
     "PathSpec",
+    "PathBatch",
     "FAMILIES",
     "Family",
     "ParamRange",

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
 
@@ -260,6 +261,158 @@ def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
     return a if cond else b
 
 
+#: ``closed`` of one path (a bool) or of a batch of paths (a bool column, one per row)
+Closed = bool | NDArray[np.bool_]
+#: the start of the piece holding ``u``: ``(s0, x0, y0, theta0, kappa0, c)`` [m, m, m, rad, 1/m, 1/m^2]
+Piece = tuple[Real, Real, Real, Real, Real, Real]
+
+
+def pose_from_pieces(s: Real, length: Real, turn: Real, closed: Closed, piece: Callable[[Real], Piece]) -> PathPose:
+    r"""Pose at ``s`` [m]: find the piece, then one quadrature from its start (:func:`advance`).
+
+    Closed: ``s = lap L + u`` with ``0 <= u < L``; ``theta(s) = theta(u) + lap * turn``. Open: ``u`` is ``s``
+    clipped to ``[0, L]`` and the path continues along the end tangent by ``s - u`` (curvature 0 there).
+
+    The one home of this formula: :class:`ClothoidPath` calls it with its own length, turn and ``closed``
+    (floats, a bool), :class:`amigo_gym.paths.batch.PathBatch` with ``(N,)`` columns of them (one path per
+    row); an element of the latter gets the bits the former gives for its row's path.
+
+    Args:
+        s: arc lengths [m], a column.
+        length, turn: lap length [m] and total turn [rad] (floats, or columns broadcasting with ``s``).
+        closed: a bool, or a bool column broadcasting with ``s`` (both branches computed, then selected).
+        piece: ``u -> (s0, x0, y0, theta0, kappa0, c)``, the piece holding ``u`` in ``[0, length]``.
+    """
+    lap: Real
+    u: Real
+    extra: Real
+    if isinstance(closed, np.ndarray):
+        lap = np.floor(s / length)
+        u_open = np.minimum(np.maximum(s, 0.0), length)
+        u = np.where(closed, s - lap * length, u_open)
+        extra = np.where(closed, 0.0, s - u_open)
+    elif closed:
+        lap = _floor(s / length)
+        u = s - lap * length
+        extra = 0.0
+    else:
+        lap = 0.0
+        u = _clip(s, 0.0, length)
+        extra = s - u
+    s0, x0, y0, th0, k0, c = piece(u)
+    du = u - s0
+    x, y, th = advance(x0, y0, th0, 1.0, 0.0, k0, c, du, 1)
+    kappa = k0 + c * du
+    cos_t, sin_t = col_cos(th), col_sin(th)
+    if isinstance(closed, np.ndarray):
+        beyond_a = extra != 0.0  # False on closed rows
+        return PathPose(
+            np.where(closed, x, x + extra * cos_t),
+            np.where(closed, y, y + extra * sin_t),
+            np.where(closed, th + lap * turn, th),
+            np.where(beyond_a, 0.0, kappa),
+            np.where(beyond_a, 0.0, c),
+            cos_t,
+            sin_t,
+        )
+    if closed:
+        return PathPose(x, y, th + lap * turn, kappa, c, cos_t, sin_t)
+    beyond = extra != 0.0
+    return PathPose(
+        x + extra * cos_t,
+        y + extra * sin_t,
+        th,
+        _where(beyond, 0.0, kappa),
+        _where(beyond, 0.0, c),
+        cos_t,
+        sin_t,
+    )
+
+
+def window_bounds(sp: Array, ahead: float, behind: float, length: Real, closed: Closed) -> tuple[Array, Array]:
+    """The search window ``[sp - behind, sp + ahead]`` [m] around hints ``sp``, clipped to ``[0, length]`` if open."""
+    lo_a = sp - behind
+    hi_a = sp + ahead
+    if isinstance(closed, np.ndarray):
+        lo_a = np.where(closed, lo_a, np.clip(lo_a, 0.0, length))
+        hi_a = np.where(closed, hi_a, np.clip(hi_a, 0.0, length))
+    elif not closed:
+        lo_a = np.clip(lo_a, 0.0, length)
+        hi_a = np.clip(hi_a, 0.0, length)
+    return np.asarray(lo_a), np.asarray(hi_a)
+
+
+def refine(
+    pose: Callable[[Real], PathPose],
+    x: Real,
+    y: Real,
+    s: Real,
+    lo: Real,
+    hi: Real,
+    h: Real,
+    length: Real,
+    closed: Closed,
+    scalar: bool,
+) -> PathPoint:
+    r"""Newton's method from the coarse estimate ``s`` [m], then the :class:`PathPoint` (step 2 and 3 of
+    :meth:`ClothoidPath.locate`; shared with :class:`amigo_gym.paths.batch.PathBatch`).
+
+    Args:
+        pose: ``s -> PathPose`` of the path (or the batch).
+        x, y: query points [m]; s: start values [m], inside ``[lo, hi]``.
+        lo, hi: the search range [m]; h: the sample spacing, the largest Newton step [m].
+        length: lap length [m]; closed: a bool or a bool column (as :func:`pose_from_pieces`).
+        scalar: floats in, floats out (else arrays of the broadcast shape).
+    """
+    if not scalar:
+        x = np.asarray(x + 0.0 * s)
+        y = np.asarray(y + 0.0 * s)
+    for _ in range(NEWTON_ITERATIONS):
+        p = pose(s)
+        dx = x - p.x
+        dy = y - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = 1.0 - p.curvature * e
+        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+        s = _clip(s + _clip(g / den, -h, h), lo, hi)
+    p = pose(s)
+    dx = x - p.x
+    dy = y - p.y
+    g = dx * p.cos_theta + dy * p.sin_theta
+    e = dy * p.cos_theta - dx * p.sin_theta
+    dist = col_sqrt(dx * dx + dy * dy)
+    status = locate_status(s, g, lo, hi, length, closed, scalar)
+    s_lap: Real
+    if isinstance(closed, np.ndarray):
+        s_c = s - np.floor(s / length) * length
+        s_lap = np.where(closed, np.where(s_c >= length, s_c - length, s_c), s)
+    elif closed:
+        s_lap = s - _floor(s / length) * length
+        s_lap = _where(s_lap >= length, s_lap - length, s_lap)
+    else:
+        s_lap = s
+    return PathPoint(
+        s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
+    )
+
+
+def locate_status(s: Real, g: Real, lo: Real, hi: Real, length: Real, closed: Closed, scalar: bool) -> IntColumn:
+    """Status of a projection ``s`` with residual ``g = (p - c) . t`` in the range ``[lo, hi]`` (a column)."""
+    sa, ga = np.asarray(s), np.asarray(g)
+    out = np.full(sa.shape, STATUS_INTERIOR, dtype=np.int64)
+    at_lo = (sa <= lo) & (ga < 0.0)
+    at_hi = (sa >= hi) & (ga > 0.0)
+    out[at_lo | at_hi] = STATUS_WINDOW
+    if isinstance(closed, np.ndarray):
+        out[~closed & (sa <= 0.0) & (ga < 0.0)] = STATUS_START
+        out[~closed & (sa >= length) & (ga > 0.0)] = STATUS_END
+    elif not closed:
+        out[(sa <= 0.0) & (ga < 0.0)] = STATUS_START
+        out[(sa >= length) & (ga > 0.0)] = STATUS_END
+    return int(out) if scalar else out
+
+
 class _Tables(NamedTuple):
     """Precomputed pieces and coarse samples of a :class:`ClothoidPath` (lists for floats, arrays for batches)."""
 
@@ -281,6 +434,15 @@ class _Tables(NamedTuple):
     sample_x: Array
     sample_y: Array
     max_abs_curvature: float
+
+
+def _piece(t: _Tables, u: Real) -> Piece:
+    """The piece of the path of tables ``t`` holding ``u`` [m] (the last piece whose start is <= ``u``)."""
+    if isinstance(u, np.ndarray):
+        i = np.clip(np.searchsorted(t.s0_a, u, side="right") - 1, 0, len(t.s0) - 1)
+        return t.s0_a[i], t.x0_a[i], t.y0_a[i], t.th0_a[i], t.k0_a[i], t.c_a[i]
+    j = min(max(bisect.bisect_right(t.s0, u) - 1, 0), len(t.s0) - 1)
+    return t.s0[j], t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j]
 
 
 @dataclass(frozen=True)
@@ -404,48 +566,8 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        r"""Pose at ``s``: locate the piece, then one quadrature from its start (:func:`advance`).
-
-        Closed: ``s = lap L + u`` with ``0 <= u < L``; ``theta(s) = theta(u) + lap * turn``. Open: ``u`` is ``s``
-        clipped to ``[0, L]`` and the path continues along the end tangent by ``s - u`` (curvature 0 there).
-        """
-        length = t.length
-        if self.closed:
-            lap = _floor(s / length)
-            u = s - lap * length
-            extra: Real = 0.0
-        else:
-            lap = 0.0
-            u = _clip(s, 0.0, length)
-            extra = s - u
-        s0: Real
-        x0: Real
-        y0: Real
-        th0: Real
-        k0: Real
-        c: Real
-        if isinstance(u, np.ndarray):
-            i = np.clip(np.searchsorted(t.s0_a, u, side="right") - 1, 0, len(t.s0) - 1)
-            s0, x0, y0, th0, k0, c = t.s0_a[i], t.x0_a[i], t.y0_a[i], t.th0_a[i], t.k0_a[i], t.c_a[i]
-        else:
-            j = min(max(bisect.bisect_right(t.s0, u) - 1, 0), len(t.s0) - 1)
-            s0, x0, y0, th0, k0, c = t.s0[j], t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j]
-        du = u - s0
-        x, y, th = advance(x0, y0, th0, 1.0, 0.0, k0, c, du, 1)
-        kappa = k0 + c * du
-        cos_t, sin_t = col_cos(th), col_sin(th)
-        if self.closed:
-            return PathPose(x, y, th + lap * t.turn, kappa, c, cos_t, sin_t)
-        beyond = extra != 0.0
-        return PathPose(
-            x + extra * cos_t,
-            y + extra * sin_t,
-            th,
-            _where(beyond, 0.0, kappa),
-            _where(beyond, 0.0, c),
-            cos_t,
-            sin_t,
-        )
+        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces)."""
+        return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
 
     def pose_columns(self, s: Real) -> PathPose:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
@@ -549,49 +671,8 @@ class ClothoidPath:
             d2 = (t.sample_x[idx] - xb[..., None]) ** 2 + (t.sample_y[idx] - yb[..., None]) ** 2
             k = np.argmin(d2, axis=-1)
             s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h
-            lo_a = sp - behind
-            hi_a = sp + ahead
-            if not self.closed:
-                lo_a = np.clip(lo_a, 0.0, length)
-                hi_a = np.clip(hi_a, 0.0, length)
+            lo_a, hi_a = window_bounds(sp, ahead, behind, length, self.closed)
             lo, hi = (float(lo_a), float(hi_a)) if scalar else (lo_a, hi_a)
             s_start = np.clip(s_start, lo_a, hi_a)
         s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
-        if not scalar:
-            x = np.asarray(x + 0.0 * s)
-            y = np.asarray(y + 0.0 * s)
-        for _ in range(NEWTON_ITERATIONS):
-            p = self._pose(t, s)
-            dx = x - p.x
-            dy = y - p.y
-            g = dx * p.cos_theta + dy * p.sin_theta
-            e = dy * p.cos_theta - dx * p.sin_theta
-            den = 1.0 - p.curvature * e
-            den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-            s = _clip(s + _clip(g / den, -h, h), lo, hi)
-        p = self._pose(t, s)
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        dist = col_sqrt(dx * dx + dy * dy)
-        status = self._status(s, g, lo, hi, scalar)
-        if self.closed:
-            s_lap = s - _floor(s / length) * length
-            s_lap = _where(s_lap >= length, s_lap - length, s_lap)
-        else:
-            s_lap = s
-        return PathPoint(
-            s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
-        )
-
-    def _status(self, s: Real, g: Real, lo: Real, hi: Real, scalar: bool) -> IntColumn:
-        sa, ga = np.asarray(s), np.asarray(g)
-        out = np.full(sa.shape, STATUS_INTERIOR, dtype=np.int64)
-        at_lo = (sa <= lo) & (ga < 0.0)
-        at_hi = (sa >= hi) & (ga > 0.0)
-        out[at_lo | at_hi] = STATUS_WINDOW
-        if not self.closed:
-            out[(sa <= 0.0) & (ga < 0.0)] = STATUS_START
-            out[(sa >= self._t.length) & (ga > 0.0)] = STATUS_END
-        return int(out) if scalar else out
+        return refine(lambda q: self._pose(t, q), x, y, s, lo, hi, h, length, self.closed, scalar)
