@@ -375,7 +375,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         x, y, beta, _, _, alpha1, alpha2, *_ = (np.asarray(c) for c in self._state)
         steps = np.asarray(self._state.steps)
         for i in range(self.num_envs):
-            path = self.paths[i]
+            path: Any = self.paths[i]
             r = self._renderers[i]
             if r is None or r.path is not path:
                 r = self._renderers[i] = Renderer(self.params, path, "rgb_array")

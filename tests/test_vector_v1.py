@@ -1,0 +1,118 @@
+"""The native AmigoBot-v1 vector env equals Gymnasium's SyncVectorEnv of single envs bit for bit (heterogeneous)."""
+
+from __future__ import annotations
+
+import pickle
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import amigo_gym  # noqa: F401
+from amigo_gym.envs import AmigoBotV1VectorEnv
+
+INFO_KEYS = ("pose", "h_position", "cross_track_error", "progress", "speed", "speed_error", "wheel_rates", "command")
+INFO_KEYS += ("measured_pose", "slip", "time", "delay")
+
+
+def _pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.VectorEnv, gym.vector.VectorEnv]:
+    steps = kw.pop("max_episode_steps", None)
+    extra = {} if steps is None else {"max_episode_steps": steps}
+    native = gym.make_vec("AmigoBot-v1", n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **extra, **kw)
+    sync = gym.make_vec(
+        "AmigoBot-v1", n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **extra, **kw
+    )
+    assert isinstance(native.unwrapped, AmigoBotV1VectorEnv)
+    return native, sync
+
+
+def _same(a: Any, b: Any, what: str) -> None:
+    assert np.array_equal(np.asarray(a), np.asarray(b)), what
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"max_episode_steps": 40},
+        {"path": "mixed", "randomize": "hard", "speed": (0.1, 0.4), "max_episode_steps": 30},
+        {
+            "path": "random",
+            "randomize": "mild",
+            "speed_profile": "trapezoid",
+            "profile_duration": 3.0,
+            "max_episode_steps": 45,
+        },
+    ],
+)
+def test_native_equals_sync_bit_for_bit(mode: AutoresetMode, kwargs: dict[str, Any]) -> None:
+    n = 5
+    native, sync = _pair(n, mode, **dict(kwargs))
+    o1, i1 = native.reset(seed=11)
+    o2, i2 = sync.reset(seed=11)
+    _same(o1, o2, "reset obs")
+    for key in INFO_KEYS:
+        _same(i1[key], i2[key], f"reset info {key}")
+    rng = np.random.default_rng(1)
+    for t in range(100):
+        a = rng.uniform(-1.0, 1.0, (n, 2))
+        a[:, 1] = 0.6 * a[:, 1] + 0.4 * a[:, 0]
+        r1 = native.step(a)
+        r2 = sync.step(a)
+        for j, name in enumerate(("obs", "reward", "terminated", "truncated")):
+            _same(r1[j], r2[j], f"{name} at step {t}")
+        for key in INFO_KEYS:
+            _same(r1[4][key], r2[4][key], f"info {key} at step {t}")
+        for term in ("track", "speed", "heading", "smooth"):
+            _same(r1[4]["reward_terms"][term], r2[4]["reward_terms"][term], f"reward term {term}")
+        if mode == AutoresetMode.SAME_STEP and "final_obs" in r2[4]:
+            for i in np.flatnonzero(r2[4]["_final_obs"]):
+                _same(r1[4]["final_obs"][i], r2[4]["final_obs"][i], "final_obs")
+
+
+def test_disabled_mode_and_reset_mask_equal_sync() -> None:
+    n = 4
+    native, sync = _pair(n, AutoresetMode.DISABLED, path="mixed", randomize="mild", max_episode_steps=20)
+    _same(native.reset(seed=3)[0], sync.reset(seed=3)[0], "reset")
+    for t in range(60):
+        a = np.full((n, 2), 0.4)
+        r1, r2 = native.step(a), sync.step(a)
+        _same(r1[0], r2[0], f"obs {t}")
+        done = r1[2] | r1[3]
+        if done.any():
+            o1, _ = native.reset(options={"reset_mask": done})
+            o2, _ = sync.reset(options={"reset_mask": done})
+            _same(o1, o2, "partial reset")
+
+
+def test_heterogeneous_batch_holds_several_families() -> None:
+    envs = gym.make_vec("AmigoBot-v1", 16, vectorization_mode="vector_entry_point", path="mixed")
+    envs.reset(seed=0)
+    fams = {d["family"] for d in envs.unwrapped.path_infos}  # type: ignore[attr-defined]
+    assert len(fams) >= 3
+
+
+def test_bad_actions_and_order() -> None:
+    envs = AmigoBotV1VectorEnv(num_envs=3)
+    with pytest.raises(gym.error.ResetNeeded):
+        envs.step(np.zeros((3, 2)))
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        envs.step(np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="finite"):
+        envs.step(np.full((3, 2), np.nan))
+    with pytest.raises(TypeError):
+        envs.step(np.full((3, 2), "a"))
+
+
+def test_pickle_after_render() -> None:
+    envs = AmigoBotV1VectorEnv(num_envs=2, render_mode="rgb_array")
+    envs.reset(seed=0)
+    envs.step(np.zeros((2, 2)))
+    frames = envs.render()
+    assert frames is not None and frames[0].shape[2] == 3
+    clone = pickle.loads(pickle.dumps(envs))
+    a = np.full((2, 2), 0.3)
+    _same(clone.step(a)[0], envs.step(a)[0], "clone steps like the original")
