@@ -70,16 +70,18 @@ the predicted heading error of mid-step, ``psi + psidot dt / 2``, i.e. adding
 
 removes the first-order hold error (``psidot = omega - kappa sdot / (1 - kappa e)`` uses the curvature at H,
 observed). On a circle in steady state ``psidot = 0``: the term vanishes. The reference speed is fed forward
-the same way: ``v = v_ref + (v_ahead - v_ref) dt / 1 s`` (the profile's slope from the 1 s preview), so that a
-trapezoid's ramps are met at the end of each step rather than one step late.
+too: ``v`` is the reference predicted for the end of the step (:meth:`AnalyticTrackingPolicy.next_reference_speed`,
+from the 1 s preview), so that a trapezoid's ramp is met at each step's end rather than one step late.
 
 Tracking error on paths whose curvature changes (:func:`zoh_error_bound`)
 --------------------------------------------------------------------------
-On the path the exact solution's turn rate is ``omega*(t)``. For H on the path and ``v_A = v`` constant, the heading
-lag ``psi = theta - beta`` obeys ``dpsi/ds = u``, ``u = kappa - sin(psi) / l3`` (:func:`amigo_gym.paths.heading_lag_profile`),
-and ``omega* = v tan(psi) / l3``, so ``omegadot* = v^2 u / (l3 cos^3 psi)``. Two first-order low passes in arc length
-bound it: ``d(sin psi)/ds = (cos psi / l3) (l3 kappa - sin psi)`` keeps ``|sin psi| <= l3 kappa_max``, and
-``du/ds = (cos psi / l3) (l3 kappa' / cos psi - u)`` keeps ``|u| <= l3 K / cos psi`` (``K = max |dkappa/ds|``), hence
+On the path the exact solution's turn rate is ``omega*(t)``. For H on the path and ``v_A = v`` constant, the
+heading lag ``psi = theta - beta`` obeys ``dpsi/ds = u``, ``u = kappa - sin(psi) / l3``
+(:func:`amigo_gym.paths.heading_lag_profile`), and ``omega* = v tan(psi) / l3``, so
+``omegadot* = v^2 u / (l3 cos^3 psi)``. Two first-order low passes in arc length bound it:
+``d(sin psi)/ds = (cos psi / l3) (l3 kappa - sin psi)`` keeps ``|sin psi| <= l3 kappa_max``, and
+``du/ds = (cos psi / l3) (l3 kappa' / cos psi - u)`` keeps ``|u| <= l3 K / cos psi`` (``K = max |dkappa/ds|``;
+``u`` is continuous where ``kappa'`` jumps), hence, with ``cos^2 psi >= 1 - (l3 kappa_max)^2``,
 
 .. math:: |\dot\omega^*| \le \dot W = \frac{v^2 K}{(1 - (l_3\kappa_{max})^2)^2}
 
@@ -231,7 +233,9 @@ def analytic_tracking_command(
 
 
 def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tuple[Array, Array]:
-    r"""Pure pursuit (Coulter 1992): ``kappa = 2 y_L / L^2``, ``L^2 = x_L^2 + y_L^2``, ``v = v_ref``, ``omega = v kappa``.
+    r"""Pure pursuit (Coulter 1992) towards the goal point ``(x_L, y_L)`` in the frame of A.
+
+    .. math:: \kappa = \frac{2 y_L}{L^2}, \quad L^2 = x_L^2 + y_L^2, \quad v = v_{ref}, \quad \omega = v\kappa.
 
     Args:
         x_l, y_l: the goal point in the frame of A (x along the heading) [m], ``(N,)``; ``L`` is floored at 1 mm.
@@ -291,7 +295,10 @@ def zoh_error_bound(
 
 
 def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> float:
-    """Steady signed cross-track error of H under pure pursuit on a circle [m]: ``-direction (sqrt(R^2 + l3^2) - R)``."""
+    """Steady signed cross-track error of H under pure pursuit on a circle of radius ``R`` [m].
+
+    ``e_ss = -direction (sqrt(R^2 + l3^2) - R)`` (module docstring): A on the circle, H ``l3`` ahead on the tangent.
+    """
     return -direction * (math.hypot(radius, l3) - radius)
 
 
@@ -359,6 +366,20 @@ class AnalyticTrackingPolicy:
     def _z_max(self) -> float:
         return math.inf if self.integral_gain == 0.0 else self.integral_limit / self.integral_gain
 
+    def next_reference_speed(self, v_ref: Array, v_ahead: Array) -> Array:
+        """The reference speed at the end of the step [m/s], predicted from now and 1 s ahead.
+
+        Rising (``v_ahead > v_ref``): ``min(v_ref + a_up dt, v_ahead)`` with ``a_up = profile_accel`` (exact on a
+        trapezoid's ramp and at its corner). Otherwise the chord ``v_ref + (v_ahead - v_ref) dt / 1 s`` (exact on a
+        constant speed; within 1 s of the stop the preview reads 0 both while cruising and while braking, so the
+        chord is off by at most ``profile_decel dt`` there).
+        """
+        p = self.params
+        rise = np.minimum(v_ref + p.profile_accel * p.dt, v_ahead)
+        chord = v_ref + (v_ahead - v_ref) * (p.dt / SPEED_LOOKAHEAD)
+        out: Array = np.maximum(np.where(v_ahead > v_ref, rise, chord), 0.0)
+        return out
+
     def command(self, obs: Array, z: Array) -> tuple[Array, Array, Array]:
         """``(v [m/s], omega [rad/s], z_new [m s])`` for observations ``(N, d)`` and integrals ``(N,)``.
 
@@ -374,8 +395,7 @@ class AnalyticTrackingPolicy:
         kappa = d(obs, "curvature") / r.l3
         v_ref = d(obs, "reference_speed") * r.max_speed
         if self.feedforward:
-            v_ahead = d(obs, "reference_speed_ahead") * r.max_speed
-            v_ref = np.maximum(v_ref + (v_ahead - v_ref) * (p.dt / SPEED_LOOKAHEAD), 0.0)
+            v_ref = self.next_reference_speed(v_ref, d(obs, "reference_speed_ahead") * r.max_speed)
         z_max = self._z_max()
         z_new = np.clip(z + p.dt * e, -z_max, z_max)
         c = -self.gain * e - self.integral_gain * z_new
@@ -469,7 +489,7 @@ class PurePursuitPolicy:
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[NDArray[np.float32], Any]:
-        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1]; ``state`` returned as is."""
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1]; ``state`` as given."""
         o, single = _check_obs("PurePursuitPolicy", observation, self._dec.dim)
         v, om = self.command(o)
         act = limit_wheel_rates(v, om, self.params).astype(np.float32)
