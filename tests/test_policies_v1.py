@@ -115,8 +115,8 @@ def test_analytic_within_derived_zoh_bound(family: str, speed: float) -> None:
     assert w_dot <= 1.05 * peak
     assert errors[False] <= bound
     assert errors[True] <= bound
-    # the bound is O(dt) and not vacuous: the plain law's error is within a factor 10 of it
-    assert errors[False] >= bound / 10
+    # the bound is not vacuous: the plain law's error is within a factor 20 of it (measured 1.2-9x)
+    assert errors[False] >= bound / 20
     # the mid-step feedforward removes most of the first-order hold error
     assert errors[True] < errors[False]
 

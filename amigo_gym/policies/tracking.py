@@ -101,8 +101,19 @@ this loop (:func:`closed_loop_impulse_response`; ``||h||_1 = 7.50`` for ``k = 2`
 to the continuous loop's ``4 / (e k dt) = 7.36``: its response to a unit velocity impulse, ``(1 - k t / 2)
 exp(-k t / 2)``, has L1 norm ``4 / (e k)``).
 The bound is ``O(dt)``: ``|e| <= ||h||_1 delta ~ (4 / (e k)) l3 Wdot dt (1/2 + Wdot / (2 a_w))``. With the
-feedforward the first term is cancelled to first order; the same bound then holds with room to spare (measured
-values in ``tests/test_policies_v1.py`` and ``docs``).
+feedforward the first term is cancelled to first order; the same bound then holds with room to spare.
+
+Measured (``dt = 0.1``, randomisation off, no start offsets, max ``|e|`` after 5 s; ``tests/test_policies_v1.py``)::
+
+    path          v [m/s]  K [1/m^2]  bound [mm]  plain [mm]  feedforward [mm]  pure pursuit [mm]
+    figure8       0.1      2.95       0.093       0.034       0.0040            42
+    figure8       0.4      2.95       2.24        0.94        0.49              41
+    lane_change   0.1      0.563      0.017       0.013       0.0004            17
+    lane_change   0.4      0.563      0.30        0.23        0.015             16
+    random (id)   0.4      1.0        0.58        0.22        0.045             27
+
+On circles (radii 0.5-2 m, both directions, 0.1-0.4 m/s, from the env's 2 cm / 0.1 rad start offsets) H is within
+3e-8 m of the path at 20-25 s and still converging; with true wheel radii and track 5 % larger, within 3e-8 m too.
 
 Pure pursuit (:class:`PurePursuitPolicy`)
 -----------------------------------------
