@@ -1,0 +1,510 @@
+r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
+
+Both read only the observation (decoded by field name with :func:`amigo_gym.tracking.obs_fields`) and the
+constant settings :class:`~amigo_gym.tracking.TrackingParams`, use the **nominal** robot (``params.robot``),
+and have stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
+
+Fields used (module table of :mod:`amigo_gym.tracking`; ``v_max = robot.max_speed``, ``w_max =
+robot.max_wheel_rate``, ``l3 = robot.l3``):
+
+* ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
+* ``psi = atan2(sin_heading_error, cos_heading_error)``: heading minus the path tangent at H's closest
+  point [rad];
+* ``kappa = curvature / l3``: path curvature there [1/m];
+* ``v_ref = reference_speed * v_max`` and ``v_ahead = reference_speed_ahead * v_max`` (1 s later) [m/s];
+* ``(x_d, y_d) = preview_{x,y}_<d> * preview_scale``: the path point ``d`` [m] of arc length ahead of H's
+  closest point, in the robot frame (origin A, x along the heading) [m].
+
+Velocity of H in the path frame
+-------------------------------
+With ``t``, ``n`` the path's unit tangent and left normal at H's closest point and ``H = A + l3 (cos beta,
+sin beta)``, the velocity of H for a speed ``v`` of A and turn rate ``omega = betadot`` is
+
+.. math::
+    \dot H \cdot t = v\cos\psi - l_3\omega\sin\psi, \qquad \dot H \cdot n = v\sin\psi + l_3\omega\cos\psi,
+
+and ``edot = Hdot . n`` for any smooth path (the derivative of the signed distance at the closest point).
+The map ``(v, omega) -> Hdot`` has determinant ``l3 != 0``: H can be steered directly (feedback
+linearisation), and the error dynamics do not depend on the path's curvature at all.
+
+Analytic law (:func:`analytic_tracking_command`)
+------------------------------------------------
+Ask for ``Hdot = sdot t + c n`` with ``c = -k e - k_i z``, ``z = int e dt``, and keep ``v = v_ref``:
+
+.. math::
+    v = v_{ref}, \qquad \dot s = \frac{v_{ref} - c\sin\psi}{\cos\psi}, \qquad
+    \omega = \frac{-\dot s\sin\psi + c\cos\psi}{l_3} = \frac{c - v_{ref}\sin\psi}{l_3\cos\psi}.
+
+Then ``edot = -k e - k_i z`` exactly in continuous time, on every path and speed profile. On the path
+(``e = z = 0``) this *is* the paper's exact inverse solution: with the lag ``theta - beta = -psi``,
+``sdot = v_A / cos(theta - beta)`` and ``betadot = v_A tan(theta - beta) / l3``. ``cos psi`` is floored at
+:data:`COS_MIN` (the law is singular when the robot faces across the path, like the paper's ODE).
+
+Gains (the default ``k = 2 1/s``, ``k_i = k^2/4 = 1 1/s^2``). The error obeys ``e'' + k e' + k_i e = 0``:
+
+* critically damped, ``k_i = k^2 / 4``: the fastest decay without overshoot, double pole at ``-k/2``;
+* sampling: the command is held over ``dt``; the discrete loop (:func:`closed_loop_impulse_response`) has
+  both poles at about ``exp(-k dt / 2) = 0.905`` for ``k dt = 0.2``, far inside its stability limit (the
+  discrete loop becomes unstable near ``k dt = 2``); its behaviour is within a few per cent of the continuous one;
+* actuator ramps: correcting an error ``e`` at rate ``~k`` needs turn-rate changes of ``~k^2 e / l3`` per
+  second; the firmware ramps the turn rate at ``a_w = 0.87 rad/s^2``, so the loop stays linear for
+  ``|e| <= a_w l3 / k^2 = 1.7 cm`` at ``k = 2``, the size of the env's start offsets (2 cm). Larger gains
+  shrink that range as ``1/k^2`` (the ramp then rate-limits the turn: slower, not unstable); smaller gains
+  slow the settling (``|e| < 1e-6 m`` after about 13 s at ``k = 2`` from a 2 cm start, 25 s at ``k = 1``).
+
+Anti-windup: ``k_i |z|`` is clamped at ``integral_limit`` (default 0.1 m/s, the correction speed a 25 %
+mismatch of wheel radii or track needs at 0.4 m/s). A constant mismatch (true wheel radii or track off)
+leaves a constant ``c`` in steady state; the integral supplies it, so ``e -> 0``.
+
+Limits: the wheel-rate setpoints ``r1 w1 = v + l1 omega``, ``r2 w2 = v - l1 omega`` are divided by
+``max(1, |w1| / w_max, |w2| / w_max)``: within ``+-w_max`` with the ratio ``omega / v`` (the path's
+curvature of A) kept.
+
+Feedforward (``feedforward=True``, default). The command is held over a step while the exact solution's turn
+rate changes; ``Hdot . n = v sin psi + l3 omega cos psi`` then drifts by ``sdot psidot t``. Evaluating the law at
+the predicted heading error of mid-step, ``psi + psidot dt / 2``, i.e. adding
+
+.. math::
+    \Delta\omega = \frac{\partial \omega}{\partial \psi}\,\dot\psi\,\frac{dt}{2}
+    = -\frac{\dot s}{l_3\cos\psi}\Bigl(\omega - \frac{\kappa\,\dot s}{1 - \kappa e}\Bigr)\frac{dt}{2},
+
+removes the first-order hold error (``psidot = omega - kappa sdot / (1 - kappa e)`` uses the curvature at H,
+observed). On a circle in steady state ``psidot = 0``: the term vanishes. The reference speed is fed forward
+too: ``v`` is the reference predicted for the end of the step (:meth:`AnalyticTrackingPolicy.next_reference_speed`,
+from the 1 s preview), so that a trapezoid's ramp is met at each step's end rather than one step late.
+
+Tracking error on paths whose curvature changes (:func:`zoh_error_bound`)
+--------------------------------------------------------------------------
+On the path the exact solution's turn rate is ``omega*(t)``. For H on the path and ``v_A = v`` constant, the
+heading lag ``psi = theta - beta`` obeys ``dpsi/ds = u``, ``u = kappa - sin(psi) / l3``
+(:func:`amigo_gym.paths.heading_lag_profile`), and ``omega* = v tan(psi) / l3``, so
+``omegadot* = v^2 u / (l3 cos^3 psi)``. Two first-order low passes in arc length bound it:
+``d(sin psi)/ds = (cos psi / l3) (l3 kappa - sin psi)`` keeps ``|sin psi| <= l3 kappa_max``, and
+``du/ds = (cos psi / l3) (l3 kappa' / cos psi - u)`` keeps ``|u| <= l3 K / cos psi`` (``K = max |dkappa/ds|``;
+``u`` is continuous where ``kappa'`` jumps), hence, with ``cos^2 psi >= 1 - (l3 kappa_max)^2``,
+
+.. math:: |\dot\omega^*| \le \dot W = \frac{v^2 K}{(1 - (l_3\kappa_{max})^2)^2}
+
+(the tests check ``Wdot`` against the exact peak of :func:`amigo_gym.paths.feasibility`). Two effects make the
+held command miss ``omega*`` within a step:
+
+1. zero-order hold: ``omega_cmd = omega*(t_k)`` while ``omega*(t_k + t) = omega*(t_k) + omegadot* t``: ``Hdot . n``
+   is off by ``l3 cos(psi) omegadot* t``; over a step, ``e`` loses up to ``l3 Wdot dt^2 / 2``;
+2. the firmware's ramp: successive commands differ by ``Delta omega = omegadot* dt``, reached after
+   ``|Delta omega| / a_w`` (``a_w = rot_acceleration`` 0.87 rad/s^2, the slower of the two rates); the turn rate
+   lags by the triangle ``Delta omega^2 / (2 a_w)``: ``e`` loses up to another ``l3 Wdot^2 dt^2 / (2 a_w)``.
+
+So each step adds at most ``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))`` to the error dynamics
+``e_{k+1} = e_k + dt c_k + delta_k`` (with ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, as implemented).
+A sequence of disturbances bounded by ``delta`` gives ``|e| <= ||h||_1 delta``, with ``h`` the impulse response of
+this loop (:func:`closed_loop_impulse_response`; ``||h||_1 = 7.50`` for ``k = 2``, ``k_i = 1``, ``dt = 0.1``, close
+to the continuous loop's ``4 / (e k dt) = 7.36``: its response to a unit velocity impulse, ``(1 - k t / 2)
+exp(-k t / 2)``, has L1 norm ``4 / (e k)``).
+The bound is ``O(dt)``: ``|e| <= ||h||_1 delta ~ (4 / (e k)) l3 Wdot dt (1/2 + Wdot / (2 a_w))``. With the
+feedforward the first term is cancelled to first order; the same bound then holds with room to spare.
+
+Measured (``dt = 0.1``, randomisation off, no start offsets, max ``|e|`` after 5 s; ``tests/test_policies_v1.py``)::
+
+    path          v [m/s]  K [1/m^2]  bound [mm]  plain [mm]  feedforward [mm]  pure pursuit [mm]
+    figure8       0.1      2.95       0.093       0.034       0.0040            42
+    figure8       0.4      2.95       2.24        0.94        0.49              41
+    lane_change   0.1      0.563      0.017       0.013       0.0004            17
+    lane_change   0.4      0.563      0.30        0.23        0.015             16
+    random (id)   0.4      1.0        0.58        0.22        0.045             27
+
+On circles (radii 0.5-2 m, both directions, 0.1-0.4 m/s, from the env's 2 cm / 0.1 rad start offsets) H is within
+3e-8 m of the path at 20-25 s and still converging; with true wheel radii and track 5 % larger, within 3e-8 m too.
+
+Pure pursuit (:class:`PurePursuitPolicy`)
+-----------------------------------------
+Coulter (1992), "Implementation of the Pure Pursuit Path Tracking Algorithm", CMU-RI-TR-92-01: the reference
+point A drives on the circular arc through the goal point ``(x_L, y_L)`` (robot frame) tangent to its heading,
+
+.. math:: \kappa = \frac{2 y_L}{L^2}, \qquad L^2 = x_L^2 + y_L^2, \qquad v = v_{ref}, \qquad \omega = v\kappa.
+
+The goal point is the observation's preview point at the chosen arc-length distance ``d`` ahead of H's closest
+point (no interpolation: a chord between preview points would put the goal off the path); its distance from A
+is ``L ~ l3 + d`` on a straight. On a circle of radius ``R`` the steady state has A on a circle of radius
+``R_A`` concentric with the path and the goal on the path: ``y_L = (R_A^2 + L^2 - R^2) / (2 R_A)``, and
+``1 / R_A = 2 y_L / L^2`` gives ``R_A = R`` for every ``L``. A tracks the circle exactly and H, ``l3`` ahead on
+the tangent, runs outside it at ``sqrt(R^2 + l3^2)``: the steady cross-track error of H is
+
+.. math:: e_{ss} = -\mathrm{direction}\,\bigl(\sqrt{R^2 + l_3^2} - R\bigr) \approx -\mathrm{direction}\,\frac{l_3^2}{2R}
+
+(3.2 mm on R = 1 m, 6.4 mm on 0.5 m), whatever the lookahead: the offset is the price of tracking A, not H.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.params import check_range
+from amigo_gym.tracking import SPEED_LOOKAHEAD, TrackingParams, obs_fields
+
+__all__ = [
+    "COS_MIN",
+    "DEFAULT_TRACKING_GAIN",
+    "DEFAULT_INTEGRAL_LIMIT",
+    "AnalyticTrackingPolicy",
+    "PurePursuitPolicy",
+    "analytic_tracking_command",
+    "pure_pursuit_command",
+    "limit_wheel_rates",
+    "closed_loop_impulse_response",
+    "zoh_error_bound",
+    "pure_pursuit_circle_offset",
+]
+
+Array = NDArray[np.float64]
+
+#: floor of ``cos psi`` in the analytic law's denominators [-]
+COS_MIN = 0.2
+#: default proportional gain ``k`` on H's cross-track error [1/s] (module docstring: "Gains")
+DEFAULT_TRACKING_GAIN = 2.0
+#: default clamp of the integral term ``k_i |z|`` [m/s]
+DEFAULT_INTEGRAL_LIMIT = 0.1
+#: default pure-pursuit goal distance, arc length ahead of H's closest point [m] (one of the preview distances)
+DEFAULT_LOOKAHEAD = 0.5
+
+
+def _check_obs(owner: str, obs: ArrayLike, dim: int) -> tuple[Array, bool]:
+    """Observations as float64 ``(N, dim)`` and whether a single ``(dim,)`` was given."""
+    o = np.asarray(obs, dtype=np.float64)
+    if o.ndim not in (1, 2) or o.shape[-1] != dim:
+        raise ValueError(f"{owner}: observation must have shape ({dim},) or (N, {dim}), got {o.shape}")
+    if not np.all(np.isfinite(o)):
+        raise ValueError(f"{owner}: observation must be finite; got NaN or infinite values")
+    single = o.ndim == 1
+    return (o[None, :] if single else o), single
+
+
+def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) -> Array:
+    r"""Normalised wheel-rate setpoints ``(..., 2)`` for speeds ``v`` [m/s] and turn rates ``omega`` [rad/s].
+
+    ``w1 = (v + l1 omega) / r1``, ``w2 = (v - l1 omega) / r2`` (nominal robot), both divided by
+    ``max(1, |w1| / w_max, |w2| / w_max)`` (within ``+-w_max``, the ratio ``omega / v`` kept), then by ``w_max``:
+    the action in ``[-1, 1]``.
+    """
+    r = params.robot
+    v_a = np.asarray(v, dtype=np.float64)
+    om = np.asarray(omega, dtype=np.float64)
+    w1 = (v_a + r.l1 * om) / r.r1
+    w2 = (v_a - r.l1 * om) / r.r2
+    w_max = r.max_wheel_rate
+    m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
+    out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max
+    return np.clip(out, -1.0, 1.0)
+
+
+def analytic_tracking_command(
+    e: ArrayLike,
+    sin_psi: ArrayLike,
+    cos_psi: ArrayLike,
+    kappa: ArrayLike,
+    v_ref: ArrayLike,
+    c: ArrayLike,
+    l3: float,
+    dt: float,
+    feedforward: bool = True,
+) -> tuple[Array, Array]:
+    r"""Speed of A ``v`` [m/s] and turn rate ``omega`` [rad/s] of the analytic law (module docstring).
+
+    .. math::
+        \dot s = \frac{v - c\sin\psi}{\cos\psi}, \quad \omega_0 = \frac{c - v\sin\psi}{l_3\cos\psi}, \quad
+        \omega = \omega_0 - \frac{\dot s}{l_3\cos\psi}\Bigl(\omega_0 - \frac{\kappa\dot s}{1 - \kappa e}\Bigr)
+        \frac{dt}{2}\ \text{(feedforward)},
+
+    with ``cos psi`` floored at :data:`COS_MIN` and ``kappa e`` at 0.5. ``v = v_ref``.
+
+    Args:
+        e: H's cross-track error [m]; sin_psi, cos_psi: of the heading error [-]; kappa: curvature at H's closest
+            point [1/m]; v_ref: speed of A to command [m/s]; c: the commanded normal speed of H [m/s]. Columns of
+            one shape ``(N,)``.
+        l3: distance A to H [m]; dt: control period [s]; feedforward: add the mid-step term.
+
+    Returns:
+        ``(v, omega)``, each ``(N,)``.
+    """
+    e_a = np.asarray(e, dtype=np.float64)
+    sp = np.asarray(sin_psi, dtype=np.float64)
+    cp = np.maximum(np.asarray(cos_psi, dtype=np.float64), COS_MIN)
+    v = np.asarray(v_ref, dtype=np.float64)
+    c_a = np.asarray(c, dtype=np.float64)
+    sdot = (v - c_a * sp) / cp
+    omega = (c_a - v * sp) / (l3 * cp)
+    if feedforward:
+        k = np.asarray(kappa, dtype=np.float64)
+        psidot = omega - k * sdot / np.maximum(1.0 - k * e_a, 0.5)
+        omega = omega - sdot / (l3 * cp) * psidot * (0.5 * dt)
+    return v + 0.0 * omega, omega
+
+
+def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tuple[Array, Array]:
+    r"""Pure pursuit (Coulter 1992) towards the goal point ``(x_L, y_L)`` in the frame of A.
+
+    .. math:: \kappa = \frac{2 y_L}{L^2}, \quad L^2 = x_L^2 + y_L^2, \quad v = v_{ref}, \quad \omega = v\kappa.
+
+    Args:
+        x_l, y_l: the goal point in the frame of A (x along the heading) [m], ``(N,)``; ``L`` is floored at 1 mm.
+        v_ref: speed of A [m/s], ``(N,)``.
+
+    Returns:
+        ``(v [m/s], omega [rad/s])``, each ``(N,)``.
+    """
+    x = np.asarray(x_l, dtype=np.float64)
+    y = np.asarray(y_l, dtype=np.float64)
+    v = np.asarray(v_ref, dtype=np.float64)
+    l2 = np.maximum(x * x + y * y, 1e-6)
+    kappa = 2.0 * y / l2
+    return v + 0.0 * kappa, v * kappa
+
+
+def closed_loop_impulse_response(gain: float, integral_gain: float, dt: float, steps: int = 20000) -> Array:
+    r"""Response ``h_n`` [m per m] of the sampled error loop to one disturbance ``delta_0 = 1`` m.
+
+    ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, ``e_{k+1} = e_k + dt c_k + delta_k`` (the analytic
+    policy's update, module docstring); ``h_0 = 0``, ``h_1 = 1``. Returns ``(steps,)``.
+    """
+    h = np.zeros(steps)
+    e, z = 0.0, 0.0
+    for n in range(1, steps):
+        z += dt * e
+        c = -gain * e - integral_gain * z
+        e = e + dt * c + (1.0 if n == 1 else 0.0)
+        h[n] = e
+    return h
+
+
+def zoh_error_bound(
+    params: TrackingParams,
+    speed: float,
+    max_curvature: float,
+    max_curvature_rate: float,
+    gain: float = DEFAULT_TRACKING_GAIN,
+    integral_gain: float | None = None,
+) -> float:
+    r"""Bound [m] on H's settled cross-track error on a path with ``|kappa| <= max_curvature`` and
+    ``|dkappa/ds| <= max_curvature_rate`` at constant ``speed`` of A (module docstring).
+
+    .. math::
+        \dot W = \frac{v^2 K}{(1 - (l_3\kappa_{max})^2)^2}, \qquad
+        \delta = l_3 \dot W dt^2 \Bigl(\frac12 + \frac{\dot W}{2 a_w}\Bigr), \qquad |e| \le \|h\|_1\,\delta,
+
+    ``a_w = params.actuators.rot_acceleration``, ``h`` from :func:`closed_loop_impulse_response`.
+    """
+    ki = gain * gain / 4.0 if integral_gain is None else integral_gain
+    l3 = params.robot.l3
+    dt = params.dt
+    w_dot = speed * speed * max_curvature_rate / (1.0 - (l3 * max_curvature) ** 2) ** 2
+    delta = l3 * w_dot * dt * dt * (0.5 + w_dot / (2.0 * params.actuators.rot_acceleration))
+    h1 = float(np.abs(closed_loop_impulse_response(gain, ki, dt)).sum())
+    return h1 * delta
+
+
+def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> float:
+    """Steady signed cross-track error of H under pure pursuit on a circle of radius ``R`` [m].
+
+    ``e_ss = -direction (sqrt(R^2 + l3^2) - R)`` (module docstring): A on the circle, H ``l3`` ahead on the tangent.
+    """
+    return -direction * (math.hypot(radius, l3) - radius)
+
+
+class _Decoder:
+    """Indices of the observation fields the policies read (by name)."""
+
+    def __init__(self, owner: str, params: TrackingParams) -> None:
+        if not isinstance(params, TrackingParams):
+            raise ValueError(f"{owner}.params must be a TrackingParams, got {type(params).__name__}")
+        names = obs_fields(params)
+        self.dim = len(names)
+        self.index = {n: i for i, n in enumerate(names)}
+
+    def __call__(self, o: Array, name: str) -> Array:
+        return o[:, self.index[name]]
+
+
+class AnalyticTrackingPolicy:
+    """The exact inverse solution along any path and speed profile, with PI feedback on H (module docstring).
+
+    ``predict`` keeps the integral ``z`` [m s] of H's cross-track error per batch row, SB3-recurrent style:
+
+    * ``state`` given: an ``(N, 1)`` array (``(1, 1)`` for a single observation) of ``z``; rows where
+      ``episode_start`` is True are reset to 0 before the update; the new ``(N, 1)`` state is returned (the input
+      is not modified).
+    * ``state=None``: the policy's own internal state (one row per batch row) is used and updated, reset where
+      ``episode_start`` is True, and reset to zeros whenever the batch size changes; call :meth:`reset` at the
+      start of new episodes if ``episode_start`` is not passed. The returned state is a copy of it.
+
+    Args:
+        params: the task's settings (nominal robot, ``dt``, observation layout).
+        gain: ``k`` [1/s], in (0, 1/dt]; default 2.
+        integral_gain: ``k_i`` [1/s^2] >= 0; default ``k^2/4`` (critically damped); 0 disables the integral.
+        integral_limit: clamp of ``k_i |z|`` [m/s] (anti-windup), > 0; default 0.1.
+        feedforward: mid-step feedforward of the turn rate and the reference speed (module docstring); default True.
+    """
+
+    def __init__(
+        self,
+        params: TrackingParams,
+        gain: float = DEFAULT_TRACKING_GAIN,
+        integral_gain: float | None = None,
+        integral_limit: float = DEFAULT_INTEGRAL_LIMIT,
+        feedforward: bool = True,
+    ) -> None:
+        o = "AnalyticTrackingPolicy"
+        self._dec = _Decoder(o, params)
+        self.params = params
+        self.gain = check_range(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
+        ki = self.gain * self.gain / 4.0 if integral_gain is None else integral_gain
+        self.integral_gain = check_range(o, "integral_gain", ki, 0.0, 1.0 / params.dt**2)
+        self.integral_limit = check_range(o, "integral_limit", integral_limit, 0.0, 10.0, low_open=True)
+        self.feedforward = bool(feedforward)
+        self._z: Array | None = None
+
+    @property
+    def name(self) -> str:
+        """Short label: ``analytic_v1``."""
+        return "analytic_v1"
+
+    def reset(self) -> None:
+        """Forget the internal integrator state (used when ``predict`` gets no ``state``)."""
+        self._z = None
+
+    def _z_max(self) -> float:
+        return math.inf if self.integral_gain == 0.0 else self.integral_limit / self.integral_gain
+
+    def next_reference_speed(self, v_ref: Array, v_ahead: Array) -> Array:
+        """The reference speed at the end of the step [m/s], predicted from now and 1 s ahead.
+
+        Rising (``v_ahead > v_ref``): ``min(v_ref + a_up dt, v_ahead)`` with ``a_up = profile_accel`` (exact on a
+        trapezoid's ramp and at its corner). Otherwise the chord ``v_ref + (v_ahead - v_ref) dt / 1 s`` (exact on a
+        constant speed; within 1 s of the stop the preview reads 0 both while cruising and while braking, so the
+        chord is off by at most ``profile_decel dt`` there).
+        """
+        p = self.params
+        rise = np.minimum(v_ref + p.profile_accel * p.dt, v_ahead)
+        chord = v_ref + (v_ahead - v_ref) * (p.dt / SPEED_LOOKAHEAD)
+        out: Array = np.maximum(np.where(v_ahead > v_ref, rise, chord), 0.0)
+        return out
+
+    def command(self, obs: Array, z: Array) -> tuple[Array, Array, Array]:
+        """``(v [m/s], omega [rad/s], z_new [m s])`` for observations ``(N, d)`` and integrals ``(N,)``.
+
+        ``z_new = clip(z + dt e, -z_max, z_max)`` with ``z_max = integral_limit / k_i``; ``c = -k e - k_i z_new``;
+        then :func:`analytic_tracking_command`.
+        """
+        p = self.params
+        r = p.robot
+        d = self._dec
+        e = d(obs, "cross_track_error") * p.error_scale
+        sp = d(obs, "sin_heading_error")
+        cp = d(obs, "cos_heading_error")
+        kappa = d(obs, "curvature") / r.l3
+        v_ref = d(obs, "reference_speed") * r.max_speed
+        if self.feedforward:
+            v_ref = self.next_reference_speed(v_ref, d(obs, "reference_speed_ahead") * r.max_speed)
+        z_max = self._z_max()
+        z_new = np.clip(z + p.dt * e, -z_max, z_max)
+        c = -self.gain * e - self.integral_gain * z_new
+        v, om = analytic_tracking_command(e, sp, cp, kappa, v_ref, c, r.l3, p.dt, self.feedforward)
+        return v, om, z_new
+
+    def predict(
+        self,
+        observation: ArrayLike,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Array]:
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1], state ``(N, 1)``.
+
+        Args:
+            observation: ``(d,)`` or ``(N, d)``.
+            state: ``(N, 1)`` integrals of the cross-track error [m s], or None (internal state; class docstring).
+            episode_start: ``(N,)`` booleans (or a scalar for a single observation): rows to reset; None: none.
+            deterministic: ignored (the policy is deterministic).
+        """
+        o, single = _check_obs("AnalyticTrackingPolicy", observation, self._dec.dim)
+        n = o.shape[0]
+        if state is None:
+            if self._z is None or self._z.shape[0] != n:
+                self._z = np.zeros(n)
+            z = self._z
+        else:
+            s = np.asarray(state, dtype=np.float64)
+            if s.size != n:
+                raise ValueError(f"AnalyticTrackingPolicy: state must have shape ({n}, 1), got {s.shape}")
+            z = s.reshape(n).copy()
+        if episode_start is not None:
+            starts = np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,))
+            z = np.where(starts, 0.0, z)
+        v, om, z_new = self.command(o, z)
+        if state is None:
+            self._z = z_new
+        act = limit_wheel_rates(v, om, self.params).astype(np.float32)
+        return (act[0] if single else act), z_new.reshape(n, 1).copy()
+
+    def __repr__(self) -> str:
+        return (
+            f"AnalyticTrackingPolicy(gain={self.gain:g}, integral_gain={self.integral_gain:g}, "
+            f"integral_limit={self.integral_limit:g}, feedforward={self.feedforward})"
+        )
+
+
+class PurePursuitPolicy:
+    """Pure pursuit (Coulter 1992) of the axle midpoint A towards a preview point of the observation.
+
+    Args:
+        params: the task's settings.
+        lookahead: arc length ahead of H's closest point of the goal point [m]; must be one of ``params.preview``
+            (the goal is that preview point, module docstring). Default 0.5 (or the preview distance nearest it).
+
+    ``predict`` is stateless: it returns ``state`` unchanged.
+    """
+
+    def __init__(self, params: TrackingParams, lookahead: float | None = None) -> None:
+        o = "PurePursuitPolicy"
+        self._dec = _Decoder(o, params)
+        self.params = params
+        prev = params.preview
+        if lookahead is None:
+            lookahead = min(prev, key=lambda d: abs(d - DEFAULT_LOOKAHEAD))
+        la = check_range(o, "lookahead", lookahead, 0.0, 5.0, low_open=True)
+        if la not in prev:
+            raise ValueError(f"{o}.lookahead must be one of the preview distances {list(prev)} m, got {lookahead!r}")
+        self.lookahead = la
+        self._x = f"preview_x_{la:g}m"
+        self._y = f"preview_y_{la:g}m"
+
+    @property
+    def name(self) -> str:
+        """Short label: ``pure_pursuit``."""
+        return "pure_pursuit"
+
+    def command(self, obs: Array) -> tuple[Array, Array]:
+        """``(v [m/s], omega [rad/s])`` for observations ``(N, d)`` (:func:`pure_pursuit_command`)."""
+        p = self.params
+        x = self._dec(obs, self._x) * p.preview_scale
+        y = self._dec(obs, self._y) * p.preview_scale
+        v_ref = self._dec(obs, "reference_speed") * p.robot.max_speed
+        return pure_pursuit_command(x, y, v_ref)
+
+    def predict(
+        self,
+        observation: ArrayLike,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Any]:
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1]; ``state`` as given."""
+        o, single = _check_obs("PurePursuitPolicy", observation, self._dec.dim)
+        v, om = self.command(o)
+        act = limit_wheel_rates(v, om, self.params).astype(np.float32)
+        return (act[0] if single else act), state
+
+    def __repr__(self) -> str:
+        return f"PurePursuitPolicy(lookahead={self.lookahead:g})"
