@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "compare": ("amigo_gym.training.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
     "bench-core": ("amigo_gym.bench.core:main", "benchmark the batched exact step"),
     "bench-env": ("amigo_gym.bench.env:main", "benchmark the environment against peers"),
+    "gallery": ("amigo_gym.analysis.gallery:main", "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)"),
 }
 
 
