@@ -714,7 +714,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",
     )
     parser.add_argument("--latex", action="store_true", help="emit LaTeX (amsmath align environments)")
-    parser.add_argument("--out", metavar="FILE", help="write to FILE (atomically) instead of standard output")
+    parser.add_argument("--out", metavar="FILE", help="write to FILE, atomically [file] (default: standard output)")
     args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:

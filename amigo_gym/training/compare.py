@@ -174,13 +174,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     from amigo_gym.training.evaluate import PRETRAINED_DIR
 
     p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
-    p.add_argument("--out", default="results", help="output directory (default results/)")
-    p.add_argument("--models", default=str(PRETRAINED_DIR), help="pretrained <algo>.zip directory ('' for none)")
-    p.add_argument("--train-steps", type=int, default=500_000, help="steps of a fresh PPO run, 0: none (500000)")
-    p.add_argument("--seeds", type=int, default=10, help="perturbed starts (default 10)")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run")
-    p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--out", default="results", help="output directory [dir]")
+    p.add_argument(
+        "--models", default=str(PRETRAINED_DIR), help="pretrained models, as for evaluate --models [path], '' for none"
+    )
+    p.add_argument(
+        "--train-steps", type=int, default=500_000, help="steps of a fresh PPO run [steps], 0: none (default 500000)"
+    )
+    p.add_argument("--seeds", type=int, default=10, help="perturbed starts [episodes]")
+    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps]")
+    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run [-]")
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 

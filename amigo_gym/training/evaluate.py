@@ -534,12 +534,19 @@ def write_outputs(
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     p = OneLineParser(prog="amigo-gym evaluate", description="Evaluate analytic and trained agents (fixed protocol).")
-    p.add_argument("--models", default=str(PRETRAINED_DIR), help="directory of <algo>.zip (default agents/pretrained)")
-    p.add_argument("--out", default="results", help="directory for eval.md and the plots (default results/)")
-    p.add_argument("--json", default=None, help="JSON file (default <out>/results.json)")
-    p.add_argument("--markdown", default=None, help="Markdown table file (default <out>/eval.md)")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400 = 40 s)")
-    p.add_argument("--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. (default 10)")
+    p.add_argument(
+        "--models",
+        default=None,
+        help="what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of "
+        "<algo>.zip [path] (default: the pretrained agents/pretrained)",
+    )
+    p.add_argument("--out", default="results", help="directory for eval.md and the plots [dir]")
+    p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/results.json)")
+    p.add_argument("--markdown", default=None, help="Markdown table file [file] (default: <out>/eval.md)")
+    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps] (default 400 = 40 s)")
+    p.add_argument(
+        "--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. [episodes] (default 10)"
+    )
     p.add_argument("--no-models", action="store_true", help="only the analytic policies")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))

@@ -497,21 +497,25 @@ def _write_wall(out: Path, wall: float) -> None:
 def parse_args(argv: Sequence[str]) -> Settings:
     """Settings from the command line (``amigo-gym train --help``)."""
     p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0.")
-    p.add_argument("--algo", required=True, choices=ALGOS)
-    p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
-    p.add_argument("--timesteps", type=int, default=None, help="total env steps (default: the YAML's n_timesteps)")
-    p.add_argument("--out", required=True, help="run directory (must be empty unless --resume)")
+    p.add_argument("--algo", required=True, choices=ALGOS, help="algorithm (required)")
+    p.add_argument("--seed", type=int, default=0, help="master seed [-]")
+    p.add_argument(
+        "--timesteps", type=int, default=None, help="total env steps [steps] (default: the YAML's n_timesteps)"
+    )
+    p.add_argument("--out", required=True, help="run directory [dir], must be empty unless --resume (required)")
     p.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
-    p.add_argument("--n-envs", type=int, default=None, help="parallel envs (default: the YAML's n_envs or 1)")
-    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env (default auto)")
-    p.add_argument("--hyperparams", default=None, help="YAML file (default agents/hyperparams/<algo>.yml)")
-    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations, 0: none")
-    p.add_argument("--eval-episodes", type=int, default=5)
-    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints")
-    p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--n-envs", type=int, default=None, help="parallel envs [envs] (default: the YAML's n_envs or 1)")
+    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env")
+    p.add_argument("--hyperparams", default=None, help="rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml)")
+    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations [steps], 0: none")
+    p.add_argument("--eval-episodes", type=int, default=5, help="episodes per evaluation [episodes]")
+    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints [steps]")
+    p.add_argument("--threads", type=int, default=1, help="torch threads [threads]")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json")
-    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export (final)")
+    p.add_argument(
+        "--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none)"
+    )
+    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export")
     a = p.parse_args(list(argv))
     s = Settings(
         algo=a.algo,
