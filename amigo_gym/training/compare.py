@@ -123,7 +123,8 @@ def run_compare(
         EvalProtocol,
         default_agents,
         evaluate_agents,
-        load_agents,
+        find_models,
+        load_model,
         write_outputs,
     )
 
@@ -132,12 +133,9 @@ def run_compare(
     training: dict[str, Any] = {}
     if models is not None:
         _say(f"loading pretrained agents from {models}")
-        loaded = load_agents(models)
-        agents.update(loaded)
-        for name in loaded:
-            rec = models / f"{name}.json"
-            if rec.is_file():
-                training[name] = json.loads(rec.read_text())
+        refs = find_models(models)
+        agents.update({ref.name: load_model(ref) for ref in refs})
+        training.update({r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None})
     if train_steps > 0:
         from stable_baselines3 import PPO
 
