@@ -191,6 +191,16 @@ def versions() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- environments
+def env_kwargs() -> dict[str, Any]:
+    """The settings of the environment a run trains on (``gym.make(ENV_ID)``'s defaults), as JSON values."""
+    from dataclasses import asdict
+
+    from amigo_gym.params import EnvParams
+
+    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(EnvParams())))
+    return kwargs
+
+
 def _native(vec: str, n_envs: int) -> bool:
     """Whether the run uses the native vector env (``--vec native``, or ``auto`` with several envs)."""
     return vec == "native" or (vec == "auto" and n_envs > 1)
@@ -385,6 +395,7 @@ def train(s: Settings) -> dict[str, Any]:
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
             "hyperparams": hp,
             "env_id": ENV_ID,
+            "env_kwargs": env_kwargs(),
             "git_revision": git_revision(),
             "versions": versions(),
             "command": "amigo-gym train " + " ".join(s.argv),
