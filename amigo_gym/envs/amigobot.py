@@ -36,20 +36,57 @@ RESET_OPTIONS: tuple[str, ...] = ("pose",)
 RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
 
 
+def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
+    """A :class:`RobotParams`, or one made from a mapping of its field names (``TypeError`` on others)."""
+    if isinstance(robot, RobotParams):
+        return robot
+    if not isinstance(robot, Mapping):
+        raise TypeError(f"{owner}: robot must be a RobotParams or a mapping of its fields, got {type(robot).__name__}")
+    names = {f.name for f in fields(RobotParams)}
+    bad = sorted(str(k) for k in robot if k not in names)
+    if bad:
+        raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(names))}")
+    return RobotParams(**robot)
+
+
+def _env_params(owner: str, params: EnvParams | Mapping[str, Any] | None) -> EnvParams:
+    """An :class:`EnvParams`, or one made from a mapping of its field names (``robot`` may be a mapping too)."""
+    if params is None:
+        return EnvParams()
+    if isinstance(params, EnvParams):
+        return params
+    if not isinstance(params, Mapping):
+        raise TypeError(f"{owner}: params must be an EnvParams or a mapping of its fields, got {type(params).__name__}")
+    bad = sorted(str(k) for k in params if k not in ENV_SETTINGS)
+    if bad:
+        raise TypeError(f"{owner}: unknown params field(s) {bad}; allowed: {', '.join(ENV_SETTINGS)}")
+    kw = dict(params)
+    if "robot" in kw:
+        kw["robot"] = _robot_params(owner, kw["robot"])
+    return EnvParams(**kw)
+
+
 def make_env_params(
-    owner: str, params: EnvParams | None = None, robot: RobotParams | Mapping[str, float] | None = None, **settings: Any
+    owner: str,
+    params: EnvParams | Mapping[str, Any] | None = None,
+    robot: RobotParams | Mapping[str, Any] | None = None,
+    **settings: Any,
 ) -> EnvParams:
     """Task settings from the keywords of ``gym.make`` / ``gym.make_vec``.
 
+    Every configuration keyword accepts a plain mapping as well as its dataclass, so that the settings
+    survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's ``--env-kwargs``.
+
     Args:
         owner: name of the caller, for error messages.
-        params: a complete :class:`EnvParams` to start from (defaults if ``None``).
+        params: a complete :class:`EnvParams`, or a mapping of its field names to values (``robot``
+            inside it may be a mapping too); defaults if ``None``.
         robot: a :class:`RobotParams`, or a mapping of its field names to values (e.g. from a YAML file).
         **settings: any other :class:`EnvParams` field (``dt``, ``radius``, ``speed``, ...); they
             override the fields of ``params``.
 
     Raises:
-        TypeError: on an unknown keyword, or a ``params`` that is not an ``EnvParams``.
+        TypeError: on an unknown keyword or field, or a ``params`` / ``robot`` of another type.
         ValueError: on a bad value (from :class:`EnvParams` / :class:`RobotParams`, naming the field and range).
     """
     unknown = sorted(k for k in settings if k not in ENV_SETTINGS)
@@ -57,19 +94,12 @@ def make_env_params(
         allowed = ", ".join(("params", *ENV_SETTINGS))
         names = ", ".join(map(repr, unknown))
         raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")
-    if params is None:
-        params = EnvParams()
-    elif not isinstance(params, EnvParams):
-        raise TypeError(f"{owner}: params must be an EnvParams, got {type(params).__name__}")
+    base = _env_params(owner, params)
     if robot is not None:
-        if isinstance(robot, Mapping):
-            robot_names = {f.name for f in fields(RobotParams)}
-            bad = sorted(k for k in robot if k not in robot_names)
-            if bad:
-                raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(robot_names))}")
-            robot = RobotParams(**robot)
-        settings["robot"] = robot
-    return replace(params, **settings) if settings else params
+        settings["robot"] = _robot_params(owner, robot)
+    elif "robot" in settings:
+        settings["robot"] = _robot_params(owner, settings["robot"])
+    return replace(base, **settings) if settings else base
 
 
 def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
@@ -210,7 +240,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ``straight_length``, ``termination_distance``, ``init_position_noise``, ``init_heading_noise``,
     ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
-    ``params`` (a whole ``EnvParams``; other keywords override its fields) and ``render_mode``
+    ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
     (``"human"`` or ``"rgb_array"``). Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
 
@@ -232,8 +262,8 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self,
         render_mode: str | None = None,
         *,
-        params: EnvParams | None = None,
-        robot: RobotParams | Mapping[str, float] | None = None,
+        params: EnvParams | Mapping[str, Any] | None = None,
+        robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
         self.params: EnvParams = make_env_params(type(self).__name__, params, robot, **settings)

@@ -81,8 +81,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         render_mode: str | None = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         *,
-        params: EnvParams | None = None,
-        robot: RobotParams | Mapping[str, float] | None = None,
+        params: EnvParams | Mapping[str, Any] | None = None,
+        robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
         owner = type(self).__name__
@@ -130,9 +130,15 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
     # ------------------------------------------------------------------ seeding
     @property
-    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
-        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``)."""
-        return tuple(self._seeds)
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``).
+
+        Before the first reset, as ``Env.np_random_seed``: each generator is made from a random seed
+        on first use, and that seed is reported (and used by a ``reset()`` without a seed).
+        """
+        for i in range(self.num_envs):
+            self._rng(i)
+        return tuple(int(s) for s in self._seeds if s is not None)
 
     @property
     def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
@@ -153,7 +159,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
 
         Raises:
-            ValueError: bad seed list, unknown option, bad pose or mask.
+            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
+            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
         """
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
@@ -169,12 +176,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
         mask: BoolArray = np.ones(n, dtype=np.bool_)
         if options is not None and "reset_mask" in options:
-            m = options["reset_mask"]
-            if not isinstance(m, np.ndarray) or m.dtype != np.bool_ or m.shape != (n,):
-                raise ValueError(f'options["reset_mask"] must be a bool numpy array of shape ({n},), got {m!r}')
-            if not m.any():
-                raise ValueError('options["reset_mask"] must contain at least one True value')
-            mask = m.copy()
+            mask = _check_reset_mask(options["reset_mask"], n)
         pose_opt = None
         if options is not None and "pose" in options:
             pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
@@ -239,12 +241,15 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         """Step every robot; autoreset finished ones according to ``autoreset_mode``.
 
         Raises:
+            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``.
             ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
             RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
         """
         n = self.num_envs
         if not self._was_reset:
             raise gym.error.ResetNeeded("call reset() before step() on AmigoBotVectorEnv")
+        if np.ndim(actions) == 0:  # as SyncVectorEnv, which iterates over the actions
+            raise TypeError(f"Unable to iterate over the following elements: {actions}")
         a = task.validate_action(actions, (n,))
         mode = self.autoreset_mode
         if mode == AutoresetMode.DISABLED and self._autoreset.any():
@@ -396,6 +401,22 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         for r in self._renderers:
             r.close()
         self._renderers = []
+
+
+def _check_reset_mask(mask: Any, n: int) -> BoolArray:
+    """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
+    if not isinstance(mask, np.ndarray):
+        raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
+    if mask.shape != (n,):
+        raise ValueError(f"`options['reset_mask']` must have shape `({n},)`, got {mask.shape}")
+    if mask.dtype != np.bool_:
+        raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
+    if not np.any(mask):
+        raise ValueError(
+            f"`options['reset_mask']` must contain a boolean array with at least one True value, got reset_mask={mask}"
+        )
+    out: BoolArray = mask.copy()
+    return out
 
 
 def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:
