@@ -32,6 +32,8 @@ __all__ = [
     "wheel_rates",
     "castor_rate",
     "h_position",
+    "h_from_a",
+    "a_from_h",
     "contact_points",
     "castor_position",
     "step_pose",
@@ -261,6 +263,20 @@ def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
 
 
+def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+    """Point H from point A in column form: H lies ``l3`` ahead of A along the heading (paper eq. 4).
+
+    ``(x_H, y_H) = (x_A + l3 cos beta, y_A + l3 sin beta)``; the inverse of :func:`a_from_h`. The one
+    home of this relation: the task, the policies' start poses, the inverse solution and rendering call it.
+    """
+    return x_a + l3 * cos_beta, y_a + l3 * sin_beta
+
+
+def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+    """Point A from point H in column form: A lies ``l3`` behind H, ``(x_H - l3 cos beta, y_H - l3 sin beta)``."""
+    return x_h - l3 * cos_beta, y_h - l3 * sin_beta
+
+
 def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
 
@@ -274,7 +290,7 @@ def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
-    return pack(p[..., 0] + robot.l3 * np.cos(b), p[..., 1] + robot.l3 * np.sin(b))
+    return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
 def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:

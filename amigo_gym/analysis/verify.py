@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
-from amigo_gym.kinematics import body_velocity, castor_rate, circle_steady_state, h_position, step_pose
+from amigo_gym.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
 from amigo_gym.params import RobotParams
 
 __all__ = ["Check", "main", "round_trip_error", "rows"]
@@ -45,7 +45,7 @@ def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
     """Steady pose with H at the origin on the circle of eq. 6 (centre (0, R)), and the steady rates."""
     ss = circle_steady_state(R, V, ROBOT)
     beta = -float(ss.heading_lag)
-    pose = np.array([-ROBOT.l3 * math.cos(beta), -ROBOT.l3 * math.sin(beta), beta])
+    pose = np.array([*a_from_h(0.0, 0.0, math.cos(beta), math.sin(beta), ROBOT.l3), beta])
     return pose, np.asarray(ss.wheel_rates)
 
 

@@ -21,14 +21,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from amigo_gym import task
-from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
+from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, make_spaces, parse_pose_option
 from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -106,10 +105,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
 
         n = self.num_envs
-        self.single_action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.single_action_space, self.single_observation_space = make_spaces(p)
         self.action_space = batch_space(self.single_action_space, n)
-        low, high = task.obs_bounds(p)
-        self.single_observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, n)
 
         self._k = task.task_constants(p)
@@ -333,16 +330,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         The arrays of ``out`` are new at every step and not kept, so they are handed out without a copy.
         """
         m = len(steps)
-        return {
-            "pose": pack(state.x, state.y, state.beta),
-            "h_position": pack(out.h_x, out.h_y),
-            "cross_track_error": _column(out.closest.cross_track_error, m),
-            "wheel_rates": pack(state.rate1, state.rate2),
-            "wheel_angles": pack(state.alpha1, state.alpha2),
-            "castor_angle": np.array(state.alpha3),
-            "reward_terms": {name: _column(t, m) for name, t in zip(task.REWARD_TERMS, out.terms, strict=True)},
-            "time": steps * self._k.dt,
-        }
+        cols = task.info_columns(state, out, steps * self._k.dt)
+        return {key: _batched(kind, cols[key], m) for key, kind in task.INFO_KEYS.items()}
 
     def _pose(self) -> Array:
         """The poses ``(N, 3)``."""
@@ -423,6 +412,17 @@ def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None
     """Write the compact columns ``rows`` into the rows ``idx`` of the ``(N,)`` columns ``full``."""
     for f, r in zip(full, rows, strict=True):
         np.asarray(f)[idx] = r
+
+
+def _batched(kind: str, value: Any, m: int) -> Any:
+    """One info entry of :func:`amigo_gym.task.info_columns` as ``(m, ...)`` arrays (new ones: never the state's)."""
+    if kind == "columns":
+        return pack(*value)
+    if kind == "terms":
+        return {name: _column(v, m) for name, v in value.items()}
+    if isinstance(value, np.ndarray) and value.shape == (m,):
+        return np.array(value, dtype=np.float64)
+    return np.full(m, value, dtype=np.float64)
 
 
 def _column(x: Any, m: int) -> Array:

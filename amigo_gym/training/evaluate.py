@@ -175,7 +175,7 @@ def steady_start_pose(params: EnvParams) -> Array:
     ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.kinematics.circle_steady_state`), A ``l3``
     behind H.
     """
-    from amigo_gym.kinematics import circle_steady_state
+    from amigo_gym.kinematics import a_from_h, circle_steady_state
     from amigo_gym.paths import make_path
 
     path = make_path(params)
@@ -184,8 +184,7 @@ def steady_start_pose(params: EnvParams) -> Array:
     ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction)
     beta = float(path.tangent_angle(0.0)) - float(ss.heading_lag)
     h = path.point(0.0)
-    l3 = params.robot.l3
-    return np.array([h[0] - l3 * math.cos(beta), h[1] - l3 * math.sin(beta), beta])
+    return np.array([*a_from_h(h[0], h[1], math.cos(beta), math.sin(beta), params.robot.l3), beta])
 
 
 def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
