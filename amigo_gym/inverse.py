@@ -2,7 +2,7 @@ r"""The analytic inverse solution: wheel angles and rates that make H follow a p
 
 Given a path of H with tangent angle ``theta(s)`` at arc length ``s`` (:mod:`amigo_gym.paths`) and a
 prescribed speed profile ``v_A(t)`` of the axle midpoint A, the paper's eqs (7)–(10) reduce to a
-two-state ODE (``shared/MODEL.md``, "The path of H and the inverse problem"):
+two-state ODE (``docs/model.md``, "The path of H and the inverse problem"):
 
 .. math::
     \dot s = \frac{v_A}{\cos(\theta(s) - \beta)}, \qquad
@@ -382,7 +382,7 @@ def solve_inverse(
 ) -> InverseSolution:
     r"""Integrate the inverse kinematics of H on ``path`` with speed ``profile`` and sample it at ``t``.
 
-    The ODE of MODEL.md is integrated in the variables ``(s, psi)`` with the heading error
+    The ODE of docs/model.md is integrated in the variables ``(s, psi)`` with the heading error
     ``psi = theta(s) - beta`` (so ``beta = theta(s) - psi``; ``psidot = kappa(s) sdot - betadot``), together
     with the pose of A and the wheel angles; state ``y = (s, psi, x_A, y_A, alpha1, alpha2, alpha3)``:
 

@@ -1,6 +1,6 @@
 r"""Direct kinematics of the AmigoBot: pure, batched numpy functions.
 
-Conventions (``shared/MODEL.md``): ground frame 0 with z up; the pose of the robot is
+Conventions (``docs/model.md``): ground frame 0 with z up; the pose of the robot is
 ``pose = (x_A, y_A, beta)``, the position of the axle midpoint A [m] and the heading beta [rad]
 about z. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the left (contact
 L = A - l1 (sin b, -cos b)); wheel angles ``alpha1..3`` are positive when the robot moves forward.
@@ -229,7 +229,7 @@ def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
 
 
 def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
-    r"""Wheel rates that roll without slipping for a given motion (MODEL.md, system 29).
+    r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
 
     .. math::
         r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
@@ -372,7 +372,7 @@ def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Robo
 
 
 class SteadyCircle(NamedTuple):
-    """Closed-form steady state of H on a circle (MODEL.md, "The path of H and the inverse problem").
+    """Closed-form steady state of H on a circle (docs/model.md, "The path of H and the inverse problem").
 
     Attributes:
         radius_a: radius of A's concentric circle ``R_A = sqrt(R^2 - l3^2)`` [m].

@@ -68,7 +68,7 @@ def test_steady_state_rates_match_closed_form(p: EnvParams, speed_reference: str
 
 
 def test_modelmd_example_rates() -> None:
-    # MODEL.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
+    # docs/model.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
     p = EnvParams()
     obs = task.evaluate(steady_pose(p), np.array([4.481543, 3.518457]), p, make_path(p)).obs
     np.testing.assert_allclose(AnalyticPolicy(p).wheel_rates(obs), [4.481543, 3.518457], atol=1e-5)
