@@ -1,53 +1,239 @@
 """The ``amigo-gym`` command: a thin dispatcher; each sub-command lives in its own module.
 
-Sub-commands import their (possibly heavy) modules only when they run, so ``amigo-gym inverse``
-needs no torch and ``amigo-gym --help`` needs nothing but the standard library.
+Every sub-command declares the optional extra it needs and the modules that extra provides; they are
+looked up (``importlib.util.find_spec``, nothing imported) *before* the sub-command's module is
+imported, so that a missing one gives one line naming the extra to install and exit status 2, never a
+traceback. Every other error path also ends in one line on stderr and a non-zero exit status
+(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs
+nothing but the standard library.
+
+May import the standard library only at module level; the sub-commands are imported by name when
+they run (arrows point from here down into the package, never back).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
+import os
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import NoReturn
 
-__all__ = ["COMMANDS", "OneLineParser", "main", "run_guarded"]
+__all__ = [
+    "COMMANDS",
+    "EXTRA_OF_MODULE",
+    "Command",
+    "add_dataclass_options",
+    "attribute_help",
+    "HelpFormatter",
+    "OneLineParser",
+    "main",
+    "missing_modules",
+    "run_guarded",
+]
 
-#: sub-command -> (module:function taking argv, one-line summary)
-COMMANDS: dict[str, tuple[str, str]] = {
-    "inverse": ("amigo_gym.cli_inverse:main", "analytic inverse solution of H on a path, as CSV"),
-    "paper": ("amigo_gym.analysis.paper_figures:main", "the paper's manoeuvre: Fig. 2/3-style plots and CSV"),
-    "derive": ("amigo_gym.symbolic:main", "symbolic D-H derivation; print the equations (LaTeX)"),
-    "train": ("amigo_gym.training.train:main", "train a PPO/SAC/TD3 baseline on AmigoBot-v0"),
-    "evaluate": ("amigo_gym.training.evaluate:main", "evaluate analytic and trained agents on the fixed protocol"),
-    "verify": ("amigo_gym.analysis.verify:main", "exactness figures against references (steady state, laps, symbolic)"),
-    "convergence": ("amigo_gym.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"),
-    "compare": ("amigo_gym.training.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
-    "bench-core": ("amigo_gym.bench.core:main", "benchmark the batched exact step"),
-    "bench-env": ("amigo_gym.bench.env:main", "benchmark the environment against peers"),
-    "gallery": ("amigo_gym.analysis.gallery:main", "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)"),
+
+@dataclass(frozen=True)
+class Command:
+    """A sub-command of ``amigo-gym``.
+
+    Attributes:
+        target: ``module:function`` taking the remaining arguments and returning the exit status.
+        summary: one line for ``amigo-gym --help``.
+        extra: the optional extra of ``pip install "amigo-gym[<extra>]"`` it needs (``None``: none).
+        modules: the top-level modules that extra provides and the command imports.
+        unless: flags that lift the need (e.g. ``verify --quick`` needs no SymPy).
+    """
+
+    target: str
+    summary: str
+    extra: str | None = None
+    modules: tuple[str, ...] = ()
+    unless: tuple[str, ...] = ()
+
+
+_TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib")
+
+COMMANDS: dict[str, Command] = {
+    "inverse": Command("amigo_gym.cli_inverse:main", "analytic inverse solution of H on a path, as CSV"),
+    "paper": Command(
+        "amigo_gym.analysis.paper_figures:main",
+        "the paper's manoeuvre: Fig. 2/3-style plots and CSV",
+        extra="plot",
+        modules=("matplotlib",),
+    ),
+    "derive": Command(
+        "amigo_gym.symbolic:main",
+        "symbolic D-H derivation; print the equations (LaTeX)",
+        extra="symbolic",
+        modules=("sympy",),
+    ),
+    "train": Command(
+        "amigo_gym.training.train:main",
+        "train a PPO/SAC/TD3 baseline on AmigoBot-v0",
+        extra="train",
+        modules=("torch", "stable_baselines3", "yaml", "tqdm", "rich"),
+    ),
+    "evaluate": Command(
+        "amigo_gym.training.evaluate:main",
+        "evaluate analytic and trained agents on the fixed protocol",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "verify": Command(
+        "amigo_gym.analysis.verify:main",
+        "exactness checks against references, PASS/FAIL (exit 1 on a FAIL)",
+        extra="symbolic",
+        modules=("sympy",),
+        unless=("--quick",),
+    ),
+    "convergence": Command(
+        "amigo_gym.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"
+    ),
+    "compare": Command(
+        "amigo_gym.training.compare:main",
+        "main job: pretrained agents vs analytic solution, report + plots",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "bench-core": Command("amigo_gym.bench.core:main", "benchmark the batched exact step"),
+    "bench-env": Command("amigo_gym.bench.env:main", "benchmark the environment against peers"),
+    "gallery": Command(
+        "amigo_gym.analysis.gallery:main",
+        "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)",
+        extra="render",
+        modules=("pygame", "matplotlib"),
+    ),
+}
+
+#: optional top-level module -> the extra that installs it (for a module missing at run time)
+EXTRA_OF_MODULE: dict[str, str] = {
+    "torch": "train",
+    "stable_baselines3": "train",
+    "yaml": "train",
+    "tqdm": "train",
+    "rich": "train",
+    "tensorboard": "train",
+    "sympy": "symbolic",
+    "matplotlib": "plot",
+    "pygame": "render",
+    "moviepy": "video",
+    "nbclient": "notebook",
+    "nbformat": "notebook",
 }
 
 
+class HelpFormatter(argparse.HelpFormatter):
+    """Appends ``(default: X)`` to an option's help unless the help already names its default.
+
+    Flags (``store_true``) say ``(default: off)``. Units stay the help text's job: every option taking a
+    value names its unit in brackets, e.g. ``[m]``, ``[s]``, ``[steps]``, ``[file]``.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if "default" in text.lower() or not action.option_strings or action.default is argparse.SUPPRESS:
+            return text
+        if isinstance(action, argparse._StoreTrueAction):
+            return f"{text} (default: off)"
+        if action.default is None:
+            return text
+        default = action.default
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else str(default)
+        return f"{text} (default: {shown!r})" if shown == "" else f"{text} (default: {shown})"
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump)."""
+    """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump).
+
+    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise.
+    """
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
+def attribute_help(cls: type) -> dict[str, str]:
+    """The ``Attributes:`` section of a dataclass's docstring as ``{field: text}`` (continuation lines joined)."""
+    doc = cls.__doc__ or ""
+    out: dict[str, str] = {}
+    inside, current = False, ""
+    for line in doc.splitlines():
+        stripped = line.strip()
+        if stripped == "Attributes:":
+            inside = True
+            continue
+        if not inside:
+            continue
+        if not stripped:
+            break
+        name, colon, text = stripped.partition(": ")
+        if colon and name.isidentifier():
+            current = name
+            out[name] = text.rstrip(".")
+        elif current:
+            out[current] += " " + stripped
+    return out
+
+
+def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
+    """One option ``--field-name`` per field of the dataclass ``cls``, typed and defaulted as the field.
+
+    The help of each option is the field's line in the class docstring's ``Attributes:`` section (which
+    therefore names the unit in brackets); the default is appended by :class:`HelpFormatter`.
+    """
+    from dataclasses import fields
+
+    helps = attribute_help(cls)
+    defaults = cls()
+    for f in fields(cls):
+        default = getattr(defaults, f.name)
+        flag = "--" + f.name.replace("_", "-")
+        parser.add_argument(flag, type=type(default), default=default, help=helps.get(f.name, ""))
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
 def run_guarded(fn: Callable[[], int | None], prog: str) -> int:
-    """Run ``fn``; turn ``ValueError``/``FileNotFoundError`` into a one-line error and exit status 2."""
+    """Run ``fn``; a bad input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``) gives one line, status 2."""
     try:
         rc = fn()
     except (ValueError, FileNotFoundError, FileExistsError) as exc:
-        print(f"{prog}: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     return 0 if rc is None else int(rc)
+
+
+def missing_modules(modules: Sequence[str]) -> list[str]:
+    """The modules of ``modules`` that cannot be found (``importlib.util.find_spec``; nothing is imported)."""
+    out = []
+    for m in modules:
+        try:
+            found = importlib.util.find_spec(m) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            out.append(m)
+    return out
+
+
+def _needs_extra(prog: str, extra: str, missing: Sequence[str]) -> int:
+    names = ", ".join(missing)
+    line = f'{prog}: error: needs the {extra!r} extra: pip install "amigo-gym[{extra}]" (missing: {names})'
+    print(line, file=sys.stderr)
+    return 2
 
 
 def _load(target: str) -> Callable[[Sequence[str]], int | None]:
@@ -56,13 +242,17 @@ def _load(target: str) -> Callable[[Sequence[str]], int | None]:
     return func
 
 
+def _usage() -> str:
+    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", "", "commands:"]
+    lines += [f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else "") for name, c in COMMANDS.items()]
+    return "\n".join(lines)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym``."""
     args = list(sys.argv[1:] if argv is None else argv)
     if not args or args[0] in ("-h", "--help"):
-        lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", "", "commands:"]
-        lines += [f"  {name:<11} {summary}" for name, (_, summary) in COMMANDS.items()]
-        print("\n".join(lines))
+        print(_usage())
         return 0 if args else 2
     if args[0] == "--version":
         from amigo_gym import __version__
@@ -73,7 +263,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     if name not in COMMANDS:
         print(f"amigo-gym: error: unknown command {name!r} (choose from {', '.join(COMMANDS)})", file=sys.stderr)
         return 2
-    rc = _load(COMMANDS[name][0])(rest)
+    cmd = COMMANDS[name]
+    prog = f"amigo-gym {name}"
+    if cmd.extra is not None and not any(flag in rest for flag in cmd.unless):
+        missing = missing_modules(cmd.modules)
+        if missing:
+            return _needs_extra(prog, cmd.extra, missing)
+    try:
+        rc = _load(cmd.target)(rest)
+    except SystemExit:
+        raise
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    except ModuleNotFoundError as exc:
+        top = (exc.name or "").partition(".")[0]
+        if top in EXTRA_OF_MODULE:
+            return _needs_extra(prog, EXTRA_OF_MODULE[top], [top])
+        if os.environ.get("AMIGO_GYM_TRACEBACK"):
+            raise
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # an unexpected error: still one line unless asked for the traceback
+        if os.environ.get("AMIGO_GYM_TRACEBACK"):
+            raise
+        hint = "(AMIGO_GYM_TRACEBACK=1 shows the traceback)"
+        print(f"{prog}: error: {type(exc).__name__}: {_one_line(exc)} {hint}", file=sys.stderr)
+        return 1
     return 0 if rc is None else int(rc)
 
 

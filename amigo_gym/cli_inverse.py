@@ -57,7 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--path", choices=("circle", "manoeuvre"), default="circle", help="path of H (default circle)")
     p.add_argument("--radius", type=float, default=1.0, help="circle radius R [m], > l3 (default 1)")
     p.add_argument("--speed", type=float, default=0.2, help="cruise speed of A, v_A [m/s] (default 0.2)")
-    p.add_argument("--direction", type=int, choices=(1, -1), default=1, help="+1 left turn (eq. 6), -1 right")
+    p.add_argument(
+        "--direction", type=int, choices=(1, -1), default=1, help="+1 left turn (eq. 6), -1 right (default 1)"
+    )
     p.add_argument("--straight-length", type=float, default=1.0, help="manoeuvre: straight part [m] (default 1)")
     p.add_argument(
         "--duration", type=float, default=None, help="simulated time [s] (default: 40, or until 1 s after stopping)"
@@ -79,15 +81,20 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"start of motion [s] (default: circle 0, else {MANOEUVRE_T_START})",
     )
     brake = p.add_mutually_exclusive_group()
-    brake.add_argument("--brake-at", type=float, default=None, help="time at which braking starts [s]")
+    brake.add_argument("--brake-at", type=float, default=None, help="time at which braking starts [s] (default: none)")
     brake.add_argument(
         "--laps",
         type=float,
         default=None,
-        help=f"manoeuvre: stop after the straight plus this many laps of A's circle (default {MANOEUVRE_LAPS})",
+        help=f"manoeuvre: stop after the straight plus this many laps of A's circle [laps] (default {MANOEUVRE_LAPS})",
     )
     brake.add_argument("--no-brake", action="store_true", help="manoeuvre: never brake")
-    p.add_argument("--csv", default=None, metavar="FILE", help="write the solution as CSV (atomically)")
+    p.add_argument(
+        "--csv",
+        default=None,
+        metavar="FILE",
+        help="write the solution as CSV, atomically [file] (default: none, a summary)",
+    )
     return p
 
 

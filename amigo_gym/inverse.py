@@ -2,7 +2,7 @@ r"""The analytic inverse solution: wheel angles and rates that make H follow a p
 
 Given a path of H with tangent angle ``theta(s)`` at arc length ``s`` (:mod:`amigo_gym.paths`) and a
 prescribed speed profile ``v_A(t)`` of the axle midpoint A, the paper's eqs (7)–(10) reduce to a
-two-state ODE (``shared/MODEL.md``, "The path of H and the inverse problem"):
+two-state ODE (``docs/model.md``, "The path of H and the inverse problem"):
 
 .. math::
     \dot s = \frac{v_A}{\cos(\theta(s) - \beta)}, \qquad
@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_save
-from amigo_gym.kinematics import SteadyCircle, castor_rate, circle_steady_state, h_position, wheel_rates
+from amigo_gym.kinematics import SteadyCircle, a_from_h, castor_rate, circle_steady_state, h_position, wheel_rates
 from amigo_gym.params import RobotParams, check_range
 from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
 
@@ -382,7 +382,7 @@ def solve_inverse(
 ) -> InverseSolution:
     r"""Integrate the inverse kinematics of H on ``path`` with speed ``profile`` and sample it at ``t``.
 
-    The ODE of MODEL.md is integrated in the variables ``(s, psi)`` with the heading error
+    The ODE of docs/model.md is integrated in the variables ``(s, psi)`` with the heading error
     ``psi = theta(s) - beta`` (so ``beta = theta(s) - psi``; ``psidot = kappa(s) sdot - betadot``), together
     with the pose of A and the wheel angles; state ``y = (s, psi, x_A, y_A, alpha1, alpha2, alpha3)``:
 
@@ -446,7 +446,7 @@ def solve_inverse(
     h0 = path.point(s0)
     # the heading error psi = theta(s) - beta is integrated instead of beta: it tends to a constant on a
     # circle, so that the error control acts on the small, well-scaled quantity the rates depend on
-    y = np.array([s0, theta0 - b0, h0[0] - l3 * math.cos(b0), h0[1] - l3 * math.sin(b0), *alpha0], dtype=np.float64)
+    y = np.array([s0, theta0 - b0, *a_from_h(h0[0], h0[1], math.cos(b0), math.sin(b0), l3), *alpha0], dtype=np.float64)
 
     def make_rhs(ta: float, tb: float) -> Callable[[float, Array], Array]:
         lo, hi = np.nextafter(ta, math.inf), np.nextafter(tb, -math.inf)

@@ -1,6 +1,6 @@
 r"""Direct kinematics of the AmigoBot: pure, batched numpy functions.
 
-Conventions (``shared/MODEL.md``): ground frame 0 with z up; the pose of the robot is
+Conventions (``docs/model.md``): ground frame 0 with z up; the pose of the robot is
 ``pose = (x_A, y_A, beta)``, the position of the axle midpoint A [m] and the heading beta [rad]
 about z. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the left (contact
 L = A - l1 (sin b, -cos b)); wheel angles ``alpha1..3`` are positive when the robot moves forward.
@@ -32,6 +32,8 @@ __all__ = [
     "wheel_rates",
     "castor_rate",
     "h_position",
+    "h_from_a",
+    "a_from_h",
     "contact_points",
     "castor_position",
     "step_pose",
@@ -227,7 +229,7 @@ def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
 
 
 def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
-    r"""Wheel rates that roll without slipping for a given motion (MODEL.md, system 29).
+    r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
 
     .. math::
         r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
@@ -261,6 +263,20 @@ def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
 
 
+def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+    """Point H from point A in column form: H lies ``l3`` ahead of A along the heading (paper eq. 4).
+
+    ``(x_H, y_H) = (x_A + l3 cos beta, y_A + l3 sin beta)``; the inverse of :func:`a_from_h`. The one
+    home of this relation: the task, the policies' start poses, the inverse solution and rendering call it.
+    """
+    return x_a + l3 * cos_beta, y_a + l3 * sin_beta
+
+
+def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+    """Point A from point H in column form: A lies ``l3`` behind H, ``(x_H - l3 cos beta, y_H - l3 sin beta)``."""
+    return x_h - l3 * cos_beta, y_h - l3 * sin_beta
+
+
 def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
 
@@ -274,7 +290,7 @@ def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
-    return pack(p[..., 0] + robot.l3 * np.cos(b), p[..., 1] + robot.l3 * np.sin(b))
+    return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
 def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
@@ -356,7 +372,7 @@ def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Robo
 
 
 class SteadyCircle(NamedTuple):
-    """Closed-form steady state of H on a circle (MODEL.md, "The path of H and the inverse problem").
+    """Closed-form steady state of H on a circle (docs/model.md, "The path of H and the inverse problem").
 
     Attributes:
         radius_a: radius of A's concentric circle ``R_A = sqrt(R^2 - l3^2)`` [m].

@@ -6,10 +6,10 @@ explicitly to the pure functions of :mod:`amigo_gym.kinematics`, :mod:`amigo_gym
 
 Sources
 -------
-* Construction data: Table 1 of the AmigoBot paper (``shared/seed``), read as in ``shared/MODEL.md``:
+* Construction data: Table 1 of the AmigoBot paper (docs/model.md), read as in ``docs/model.md``:
   ``l1 = 0.12, l3 = 0.08, l4 = 0.03, l5 = 0.12, r1 = r2 = 0.05, r3 = 0.03`` m.
 * Limits of the real robot: Adept MobileRobots' (formerly ActivMedia) AmigoBot robot parameter
-  files and the MobileSim simulator model of the AmigoBot-SH, as collected in ``shared/MODEL.md``:
+  files and the MobileSim simulator model of the AmigoBot-SH, as collected in ``docs/model.md``:
   maximum speed 0.75 m/s (0.5 m/s for the older AmigoBot), acceleration 0.3 m/s^2, deceleration
   0.75 m/s^2, rotation 0.87 rad/s with rotational acceleration 0.87 rad/s^2 and deceleration
   2.5 rad/s^2; body 0.330 m long and 0.279 m wide, bounding radius 0.18 m.

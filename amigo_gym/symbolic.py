@@ -1,7 +1,7 @@
 r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy), from the transforms to system (29).
 
-This module redoes, in SymPy, the Maple derivation of the paper (``shared/seed``) and checks it against the
-conventions of ``shared/MODEL.md``. It is **not** on the environment's stepping path: ``import amigo_gym`` never
+This module redoes, in SymPy, the Maple derivation of the paper (cited in docs/model.md) and checks it against the
+conventions of ``docs/model.md``. It is **not** on the environment's stepping path: ``import amigo_gym`` never
 imports it (nor SymPy); the numeric model lives in :mod:`amigo_gym.kinematics`. Everything is derived once and cached
 (:func:`derive`); ``amigo-gym derive [--latex] [--out FILE]`` prints the result.
 
@@ -42,7 +42,7 @@ positive lengths and ``v_A`` is the speed of A. A dot is a time derivative.
    ``xdot_A = v_A cos b``, ``ydot_A = v_A sin b``, no side slip of A) the component of ``v_K`` across the
    heading vanishes identically, and the component along it gives ``r1 alpha1dot = v_A + l1 betadot``; for wheel 2,
    ``r2 alpha2dot = v_A - l1 betadot``. Conversely ``v_A = (r1 alpha1dot + r2 alpha2dot)/2`` and
-   ``betadot = (r1 alpha1dot - r2 alpha2dot)/(2 l1)``: the differential-drive relations of MODEL.md and
+   ``betadot = (r1 alpha1dot - r2 alpha2dot)/(2 l1)``: the differential-drive relations of docs/model.md and
    :func:`amigo_gym.kinematics.wheel_rates`.
 
 5. **Castor** (the seventh equation; no transform for it is printed in the paper). By analogy: the swivel S on the
@@ -65,7 +65,7 @@ positive lengths and ``v_A`` is the speed of A. A dot is a time derivative.
 
 7. **System (29), corrected**: the seven equations (9), (10), (11), (12), (19), (27) and the castor's, each ``= 0``.
 
-Where the paper's printing is wrong (cf. MODEL.md):
+Where the paper's printing is wrong (cf. docs/model.md):
 
 * eqs 17 and 25 print the derivative of a product as the product of the derivatives,
   ``Tdot_{4,0,K} Tdot_{1,4} rho_K``; that is ``r1 alpha1dot betadot (sin b, -cos b, 0, 0)``, not eq. 18;
@@ -714,7 +714,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",
     )
     parser.add_argument("--latex", action="store_true", help="emit LaTeX (amsmath align environments)")
-    parser.add_argument("--out", metavar="FILE", help="write to FILE (atomically) instead of standard output")
+    parser.add_argument("--out", metavar="FILE", help="write to FILE, atomically [file] (default: standard output)")
     args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:

@@ -44,17 +44,24 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 
 Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
 reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
-quantity the environments report (:class:`Outcome`); :func:`transition`, :func:`evaluate`,
-:func:`observe` and :func:`reward_terms` are thin wrappers over the same column functions. The single
-environment calls them with plain scalars, the vector environment with ``(N,)`` arrays, so that both
-run the same code. The constants of a step are derived once per :class:`EnvParams`
-(:func:`task_constants`).
+quantity the environments report (:class:`Outcome`); :func:`transition` and :func:`evaluate` are thin
+array wrappers over the same column functions. The single environment calls them with plain scalars,
+the vector environment with ``(N,)`` arrays, so that both run the same code. The constants of a step
+are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache: ``EnvParams`` is
+the only way to set them).
+
+One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
+reader decodes the observation by these names), the info dict's schema (:data:`INFO_KEYS`,
+:func:`info_columns`, used by the single env, the vector env and the SB3 adapter) and the start pose
+(A ``l3`` behind H by :func:`amigo_gym.kinematics.a_from_h`).
+
+May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, NamedTuple, cast
 
@@ -63,6 +70,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.kinematics import (
     Real,
+    a_from_h,
     arc_step,
     body_velocity_columns,
     castor_rate_columns,
@@ -70,10 +78,11 @@ from amigo_gym.kinematics import (
     col_exp,
     col_sin,
     col_sqrt,
+    h_from_a,
     pack,
 )
 from amigo_gym.params import EnvParams, RobotParams
-from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection, wrap_angle
+from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection
 
 __all__ = [
     "REWARD_TERMS",
@@ -81,13 +90,8 @@ __all__ = [
     "obs_bounds",
     "obs_names",
     "validate_action",
-    "action_to_wheel_rates",
     "initial_wheel_rates",
     "start_pose",
-    "heading_error",
-    "observe",
-    "reward_terms",
-    "combine_reward",
     "Evaluation",
     "evaluate",
     "Transition",
@@ -96,6 +100,11 @@ __all__ = [
     "task_constants",
     "State",
     "Outcome",
+    "INFO_KEYS",
+    "OBS_HEAD",
+    "OBS_TAIL",
+    "info_columns",
+    "obs_index",
     "Motion",
     "move_columns",
     "start_motion",
@@ -109,19 +118,38 @@ AnyPath = CirclePath | ManoeuvrePath
 
 REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
 
+#: the observation's fields before the preview (named in :func:`obs_names`)
+OBS_HEAD: tuple[str, ...] = ("cross_track_error", "sin_heading_error", "cos_heading_error", "curvature")
+#: the observation's fields after the preview
+OBS_TAIL: tuple[str, ...] = ("wheel_rate_1", "wheel_rate_2", "speed_error", "reference_speed")
 
-def obs_dim(params: EnvParams) -> int:
-    """Length of the observation vector: ``8 + len(params.preview)``."""
-    return 8 + len(params.preview)
+#: the info dict's keys (every ``reset`` and ``step`` of both environments), and what each holds:
+#: ``"columns"`` a float64 vector of columns, ``"scalar"`` one float, ``"terms"`` a dict of the reward terms
+INFO_KEYS: dict[str, str] = {
+    "pose": "columns",
+    "h_position": "columns",
+    "cross_track_error": "scalar",
+    "wheel_rates": "columns",
+    "wheel_angles": "columns",
+    "castor_angle": "scalar",
+    "reward_terms": "terms",
+    "time": "scalar",
+}
 
 
 def obs_names(params: EnvParams) -> list[str]:
-    """Names of the observation components, in order."""
-    return (
-        ["cross_track_error", "sin_heading_error", "cos_heading_error", "curvature"]
-        + [f"curvature_ahead_{d:g}m" for d in params.preview]
-        + ["wheel_rate_1", "wheel_rate_2", "speed_error", "reference_speed"]
-    )
+    """Names of the observation components, in order (the module table): the contract every reader uses."""
+    return [*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(params.preview))), *OBS_TAIL]
+
+
+def obs_index(params: EnvParams) -> dict[str, int]:
+    """``{name: index}`` of the observation components (:func:`obs_names`)."""
+    return {name: i for i, name in enumerate(obs_names(params))}
+
+
+def obs_dim(params: EnvParams) -> int:
+    """Length of the observation vector: ``len(obs_names(params))``, ``8 + len(params.preview)``."""
+    return len(OBS_HEAD) + len(params.preview) + len(OBS_TAIL)
 
 
 def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
@@ -149,15 +177,6 @@ def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Arr
     return a
 
 
-def action_to_wheel_rates(action: ArrayLike, params: EnvParams) -> Array:
-    """Applied wheel rates [rad/s] from a normalised action: ``clip(a, -1, 1) * w_max``.
-
-    ``w_max = robot.max_wheel_rate`` (15 rad/s: 0.75 m/s over a 0.05 m wheel). Values outside
-    [-1, 1] are clipped; call :func:`validate_action` first to refuse NaN and infinities.
-    """
-    return np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0) * params.robot.max_wheel_rate
-
-
 def initial_wheel_rates(params: EnvParams) -> Array:
     """Wheel rates at the start: rolling straight at the reference speed, ``(v/r1, v/r2)`` [rad/s]."""
     return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
@@ -178,8 +197,7 @@ def start_pose(u: ArrayLike, params: EnvParams, path: AnyPath) -> Array:
     beta = theta0 + u[..., 2] * params.init_heading_noise
     hx = x0 + u[..., 0] * params.init_position_noise
     hy = y0 + u[..., 1] * params.init_position_noise
-    l3 = params.robot.l3
-    return pack(hx - l3 * col_cos(beta), hy - l3 * col_sin(beta), beta)
+    return pack(*a_from_h(hx, hy, col_cos(beta), col_sin(beta), params.robot.l3), beta)
 
 
 @lru_cache(maxsize=64)
@@ -189,14 +207,12 @@ def _path_start(path: AnyPath) -> tuple[float, float, float]:
     return x0, y0, float(path.tangent_angle(0.0))
 
 
-def heading_error(pose: ArrayLike, proj: Projection) -> Array:
-    """``psi = wrap(beta - theta)`` [rad], the heading minus the path tangent at H's closest point."""
-    return wrap_angle(np.asarray(pose, dtype=np.float64)[..., 2] - proj.tangent_angle)
-
-
 @dataclass(frozen=True)
 class TaskConstants:
-    """The numbers a step needs, derived once from :class:`EnvParams` (:func:`task_constants`).
+    """The numbers a step needs, derived from :class:`EnvParams` (an internal cache, :func:`task_constants`).
+
+    ``params`` is the only argument: every other attribute is computed from it, so there is no second
+    way to set ``dt`` or any other setting.
 
     Attributes:
         params: the settings they derive from.
@@ -214,50 +230,55 @@ class TaskConstants:
         smooth_scale_sq: ``(w_max sigma_smooth) ** 2`` [rad^2/s^2].
         smooth_weight: [-].
         preview: preview distances [m].
-        reference_obs: observation ``-1``, ``v_ref / v_max`` [-].
+        reference_obs: observation ``reference_speed``, ``v_ref / v_max`` [-].
     """
 
     params: EnvParams
-    robot: RobotParams
-    dt: float
-    w_max: float
-    l3: float
-    speed: float
-    max_speed: float
-    error_scale: float
-    e_max: float
-    termination_distance: float
-    sigma_track: float
-    sigma_speed: float
-    smooth_scale_sq: float
-    smooth_weight: float
-    preview: tuple[float, ...]
-    reference_obs: float
+    robot: RobotParams = field(init=False)
+    dt: float = field(init=False)
+    w_max: float = field(init=False)
+    l3: float = field(init=False)
+    speed: float = field(init=False)
+    max_speed: float = field(init=False)
+    error_scale: float = field(init=False)
+    e_max: float = field(init=False)
+    termination_distance: float = field(init=False)
+    sigma_track: float = field(init=False)
+    sigma_speed: float = field(init=False)
+    smooth_scale_sq: float = field(init=False)
+    smooth_weight: float = field(init=False)
+    preview: tuple[float, ...] = field(init=False)
+    reference_obs: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        params = self.params
+        robot = params.robot
+        smooth_scale = robot.max_wheel_rate * params.sigma_smooth
+        derived = {
+            "robot": robot,
+            "dt": params.dt,
+            "w_max": robot.max_wheel_rate,
+            "l3": robot.l3,
+            "speed": params.speed,
+            "max_speed": robot.max_speed,
+            "error_scale": params.error_scale,
+            "e_max": 2.0 * params.termination_distance / params.error_scale,  # obs_bounds(params)[1][0]
+            "termination_distance": params.termination_distance,
+            "sigma_track": params.sigma_track,
+            "sigma_speed": params.sigma_speed,
+            "smooth_scale_sq": smooth_scale * smooth_scale,
+            "smooth_weight": params.smooth_weight,
+            "preview": params.preview,
+            "reference_obs": params.speed / robot.max_speed,
+        }
+        for name, value in derived.items():
+            object.__setattr__(self, name, value)
 
 
 @lru_cache(maxsize=64)
 def task_constants(params: EnvParams) -> TaskConstants:
     """The :class:`TaskConstants` of ``params`` (cached: equal settings give the same object)."""
-    robot = params.robot
-    smooth_scale = robot.max_wheel_rate * params.sigma_smooth
-    return TaskConstants(
-        params=params,
-        robot=robot,
-        dt=params.dt,
-        w_max=robot.max_wheel_rate,
-        l3=robot.l3,
-        speed=params.speed,
-        max_speed=robot.max_speed,
-        error_scale=params.error_scale,
-        e_max=2.0 * params.termination_distance / params.error_scale,  # obs_bounds(params)[1][0]
-        termination_distance=params.termination_distance,
-        sigma_track=params.sigma_track,
-        sigma_speed=params.sigma_speed,
-        smooth_scale_sq=smooth_scale * smooth_scale,
-        smooth_weight=params.smooth_weight,
-        preview=params.preview,
-        reference_obs=params.speed / robot.max_speed,
-    )
+    return TaskConstants(params)
 
 
 def _clip(x: Real, low: float, high: float) -> Real:
@@ -350,79 +371,6 @@ def _product(terms: tuple[Real, Real, Real, Real]) -> Real:
     return ((terms[0] * terms[1]) * terms[2]) * terms[3]
 
 
-def observe(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath, proj: Projection) -> Array:
-    """Observation ``(..., obs_dim)`` (float64; the environments cast to float32), module table.
-
-    Args:
-        pose: ``(..., 3)`` robot pose.
-        rates: ``(..., 2)`` applied wheel rates [rad/s].
-        params: task settings.
-        path: the path of H.
-        proj: ``path.project(h_position(pose))``, passed in so that it is computed once.
-    """
-    k = task_constants(params)
-    pose = np.asarray(pose, dtype=np.float64)
-    rates = np.asarray(rates, dtype=np.float64)
-    b = pose[..., 2]
-    cos_psi, sin_psi = _heading_error_columns(np.cos(b), np.sin(b), proj.cos_theta, proj.sin_theta)
-    v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
-    cols = _observe_columns(
-        k,
-        path,
-        proj.s,
-        proj.cross_track_error,
-        proj.curvature,
-        cos_psi,
-        sin_psi,
-        v - k.speed,
-        rates[..., 0],
-        rates[..., 1],
-    )
-    return pack(*cols)
-
-
-def reward_terms(
-    pose: ArrayLike, rates: ArrayLike, prev_rates: ArrayLike, params: EnvParams, proj: Projection
-) -> dict[str, Array]:
-    """The named reward terms, each in [0, 1] with shape ``(...)`` (formula in the module docstring).
-
-    Args:
-        pose: pose after the step ``(..., 3)``.
-        rates: wheel rates applied during the step ``(..., 2)`` [rad/s].
-        prev_rates: wheel rates of the step before ``(..., 2)`` [rad/s].
-        params: task settings.
-        proj: projection of H (after the step) onto the path.
-    """
-    k = task_constants(params)
-    pose = np.asarray(pose, dtype=np.float64)
-    rates = np.asarray(rates, dtype=np.float64)
-    prev = np.asarray(prev_rates, dtype=np.float64)
-    b = pose[..., 2]
-    cos_psi, sin_psi = _heading_error_columns(np.cos(b), np.sin(b), proj.cos_theta, proj.sin_theta)
-    v, _ = body_velocity_columns(rates[..., 0], rates[..., 1], k.robot)
-    terms = _reward_columns(
-        k,
-        _abs(proj.cross_track_error),
-        proj.curvature,
-        cos_psi,
-        sin_psi,
-        v - k.speed,
-        rates[..., 0],
-        rates[..., 1],
-        prev[..., 0],
-        prev[..., 1],
-    )
-    return {name: np.asarray(t) for name, t in zip(REWARD_TERMS, terms, strict=True)}
-
-
-def combine_reward(terms: dict[str, Array]) -> Array:
-    """The reward: the product of the named terms, in [0, 1]."""
-    out = np.ones_like(terms[REWARD_TERMS[0]])
-    for k in REWARD_TERMS:
-        out = out * terms[k]
-    return out
-
-
 class State(NamedTuple):
     """The state of one robot or of a batch, as columns (floats, or arrays of one shape).
 
@@ -461,6 +409,29 @@ class Outcome(NamedTuple):
     terms: tuple[Real, Real, Real, Real]
     reward: Real
     terminated: Any
+
+
+def info_columns(state: State, out: Outcome, time: Any) -> dict[str, Any]:
+    """The info dict's entries as columns, keyed as :data:`INFO_KEYS` (the one place its schema is built).
+
+    ``"columns"`` entries are tuples of columns, ``"scalar"`` ones a column, ``reward_terms`` a dict
+    of columns; the single env turns them into arrays and floats, the vector env into ``(N, ...)`` arrays.
+
+    Args:
+        state: the state reported on (its rates are those applied to reach it).
+        out: its :class:`Outcome`.
+        time: time since the episode's reset [s] (a float, or a column).
+    """
+    return {
+        "pose": (state.x, state.y, state.beta),
+        "h_position": (out.h_x, out.h_y),
+        "cross_track_error": out.closest.cross_track_error,
+        "wheel_rates": (state.rate1, state.rate2),
+        "wheel_angles": (state.alpha1, state.alpha2),
+        "castor_angle": state.alpha3,
+        "reward_terms": dict(zip(REWARD_TERMS, out.terms, strict=True)),
+        "time": time,
+    }
 
 
 class Motion(NamedTuple):
@@ -528,10 +499,8 @@ def outcome_columns(
         minimal: project H with ``minimal=True`` (the projection's fields the environments do not
             report are left as NaN); nothing else changes.
     """
-    l3 = k.l3
     w1, w2 = state.rate1, state.rate2
-    hx = state.x + l3 * cos_beta
-    hy = state.y + l3 * sin_beta
+    hx, hy = h_from_a(state.x, state.y, cos_beta, sin_beta, k.l3)
     cp = path.project_xy(hx, hy, minimal)
     cos_psi, sin_psi = _heading_error_columns(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
     e = cp.cross_track_error
@@ -644,8 +613,3 @@ def transition(
         {name: np.asarray(t) for name, t in zip(REWARD_TERMS, out.terms, strict=True)},
         _evaluation(out),
     )
-
-
-def max_return(n_steps: int) -> float:
-    """Largest possible return of ``n_steps`` steps (each term at most 1)."""
-    return float(n_steps)

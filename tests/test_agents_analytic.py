@@ -68,7 +68,7 @@ def test_steady_state_rates_match_closed_form(p: EnvParams, speed_reference: str
 
 
 def test_modelmd_example_rates() -> None:
-    # MODEL.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
+    # docs/model.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
     p = EnvParams()
     obs = task.evaluate(steady_pose(p), np.array([4.481543, 3.518457]), p, make_path(p)).obs
     np.testing.assert_allclose(AnalyticPolicy(p).wheel_rates(obs), [4.481543, 3.518457], atol=1e-5)
@@ -191,18 +191,34 @@ def test_law_solves_the_velocity_map() -> None:
             np.testing.assert_allclose(h_t, p.speed / np.sqrt(1 - kl3**2), atol=1e-12)
 
 
-def test_mirror_symmetry() -> None:
-    """A right-turning circle is the mirror image: the wheels swap."""
-    pl, pr = EnvParams(direction=1), EnvParams(direction=-1)
+@pytest.mark.parametrize("direction", [1, -1])
+def test_law_from_plain_geometry(direction: int) -> None:
+    """The policy's wheel rates equal the law evaluated by hand from the pose, with no observation code.
+
+    Replaces a mirror test that ran the policy twice. Here the cross-track error and the heading
+    error come from the circle's centre and radius directly (H = A + l3 (cos b, sin b); e > 0 left of
+    the path), and the rates from ``r w = v_A +- l1 betadot`` with ``betadot = (-k e - v sin psi) /
+    (l3 cos psi)``.
+    """
+    p = EnvParams(direction=direction)
+    robot, k = p.robot, 3.0
     rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, size=(6, 3))
-    ul, ur = u.copy(), u * np.array([1.0, -1.0, -1.0])
+    pose = task.start_pose(u, p, make_path(p))
     rates = np.full((6, 2), 4.0)
-    ol = task.evaluate(task.start_pose(ul, pl, make_path(pl)), rates, pl, make_path(pl)).obs
-    orr = task.evaluate(task.start_pose(ur, pr, make_path(pr)), rates, pr, make_path(pr)).obs
-    np.testing.assert_allclose(
-        AnalyticPolicy(pl).wheel_rates(ol), AnalyticPolicy(pr).wheel_rates(orr)[:, ::-1], atol=1e-9
-    )
+    obs = task.evaluate(pose, rates, p, make_path(p)).obs
+    cx, cy = 0.0, direction * p.radius  # eq. 6: through the origin, tangent to x0, centre left (or right)
+    hx = pose[:, 0] + robot.l3 * np.cos(pose[:, 2])
+    hy = pose[:, 1] + robot.l3 * np.sin(pose[:, 2])
+    dist = np.hypot(hx - cx, hy - cy)
+    e = direction * (p.radius - dist)  # inside a left circle is left of the path
+    phi = np.arctan2(hy - cy, hx - cx)
+    theta = phi + direction * math.pi / 2  # tangent of the circle travelled in `direction`
+    psi = np.angle(np.exp(1j * (pose[:, 2] - theta)))
+    v = p.speed
+    betadot = (-k * e - v * np.sin(psi)) / (robot.l3 * np.maximum(np.cos(psi), 0.2))
+    want = np.stack([(v + robot.l1 * betadot) / robot.r1, (v - robot.l1 * betadot) / robot.r2], axis=-1)
+    np.testing.assert_allclose(AnalyticPolicy(p, gain=k).wheel_rates(obs), want, rtol=1e-5, atol=1e-5)
 
 
 def test_bad_input() -> None:

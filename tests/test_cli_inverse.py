@@ -39,7 +39,7 @@ def test_circle_csv_reaches_model_md_steady_state(tmp_path: Path) -> None:
     np.testing.assert_allclose(cols["t"], 0.5 * np.arange(201), atol=1e-12)
     # the paper's start: H at the origin, beta = 0, A l3 = 0.08 m behind
     assert (cols["beta"][0], cols["x_A"][0], cols["y_A"][0]) == (0.0, -0.08, 0.0)
-    # MODEL.md's steady state at the end of a long run
+    # docs/model.md's steady state at the end of a long run
     assert round(cols["alpha1_dot"][-1], 6) == 4.481543
     assert round(cols["alpha2_dot"][-1], 6) == 3.518457
     assert round(cols["alpha3_dot"][-1], 6) == 6.714802

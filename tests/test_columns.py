@@ -165,7 +165,9 @@ def test_step_columns_scalars_equal_arrays_and_transition(path_name: str) -> Non
     np.testing.assert_array_equal(pack(new.alpha1, new.alpha2, new.alpha3), tr.wheel_angles)
     np.testing.assert_array_equal(pack(*out.obs), tr.evaluation.obs)
     np.testing.assert_array_equal(out.reward, tr.reward)
-    np.testing.assert_array_equal(out.reward, task.combine_reward(tr.terms))
+    t = tr.terms  # the reward is the product of its named terms, each in [0, 1]
+    np.testing.assert_array_equal(out.reward, ((t["track"] * t["speed"]) * t["heading"]) * t["smooth"])
+    assert all(np.all((t[n] >= 0.0) & (t[n] <= 1.0)) for n in task.REWARD_TERMS)
     _, mini = task.step_columns(k, path, state, action[:, 0], action[:, 1], minimal=True)
     np.testing.assert_array_equal(pack(*mini.obs), tr.evaluation.obs)
     for i in range(n):
@@ -185,6 +187,9 @@ def test_step_columns_scalars_equal_arrays_and_transition(path_name: str) -> Non
 def test_task_constants_are_cached_and_derived() -> None:
     p = EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)
     k = task.task_constants(p)
+    with pytest.raises(TypeError):  # EnvParams is the only way to set dt (no second one)
+        task.TaskConstants(p, dt=0.5)  # type: ignore[call-arg]
+    assert k.dt == p.dt and k.l3 == p.robot.l3
     assert task.task_constants(EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)) is k
     assert k.e_max == task.obs_bounds(p)[1][0]
     assert k.smooth_scale_sq == pytest.approx((p.robot.max_wheel_rate * 0.3) ** 2, rel=1e-15)

@@ -29,7 +29,7 @@ W_MAX = 15.0  # 0.75 m/s over r = 0.05 m
 def steady_start(radius: float, direction: int = 1) -> tuple[tuple[float, float, float], np.ndarray]:
     """Pose with H at the origin on the circle (centre (0, d R)) and the steady heading lag.
 
-    Closed form (MODEL.md): R_A = sqrt(R^2 - l3^2), lag = d atan(l3 / R_A), beta = theta - lag with
+    Closed form (docs/model.md): R_A = sqrt(R^2 - l3^2), lag = d atan(l3 / R_A), beta = theta - lag with
     theta = 0 at the origin; A = H - l3 (cos b, sin b).
     """
     ra = math.sqrt(radius**2 - L3**2)

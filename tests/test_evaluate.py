@@ -142,7 +142,7 @@ def test_cli_writes_json_table_and_plots(tmp_path: Path) -> None:
     r = subprocess.run(
         [*cmd[:4], "--models", str(tmp_path / "nope")], cwd=ROOT, env=env, capture_output=True, text=True
     )
-    assert r.returncode == 2 and "no directory" in r.stderr
+    assert r.returncode == 2 and "no file or directory" in r.stderr
 
 
 def test_compare_main_job_smoke(tmp_path: Path) -> None:

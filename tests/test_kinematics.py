@@ -1,4 +1,4 @@
-"""Direct kinematics against closed forms and independent formulas (MODEL.md)."""
+"""Direct kinematics against closed forms and independent formulas (docs/model.md)."""
 
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ def rng() -> np.random.Generator:
 
 
 def test_model_md_steady_state_values() -> None:
-    """MODEL.md's example: v_A = 0.2 m/s, R = 1 m, 6 decimals."""
+    """docs/model.md's example: v_A = 0.2 m/s, R = 1 m, 6 decimals."""
     ss = circle_steady_state(1.0, 0.2, ROBOT)
     assert round(float(ss.betadot), 6) == 0.200643
     assert round(float(ss.wheel_rates[0]), 6) == 4.481543
@@ -160,7 +160,7 @@ def test_small_turn_rate_is_continuous_with_straight() -> None:
 
 
 def test_rolling_constraints_system_29() -> None:
-    """Wheel rates make the contact points' velocities vanish (MODEL.md's corrected system 29)."""
+    """Wheel rates make the contact points' velocities vanish (docs/model.md's corrected system 29)."""
     g = rng()
     v, bd, b = g.uniform(-0.7, 0.7, 30), g.uniform(-3, 3, 30), g.uniform(-4, 4, 30)
     w = wheel_rates(v, bd, ROBOT)

@@ -1,4 +1,4 @@
-"""Parameters: defaults are the paper's Table 1 and the real robot's data (MODEL.md); bad values are refused."""
+"""Parameters: defaults are the paper's Table 1 and the real robot's data (docs/model.md); bad values are refused."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 
 from amigo_gym.params import EnvParams, RobotParams, check_range
 
-# shared/MODEL.md, "Construction data" and "Public data on the real robot"
+# docs/model.md, "Construction data" and "Public data on the real robot"
 TABLE_1 = {"l1": 0.12, "l3": 0.08, "l4": 0.03, "l5": 0.12, "r1": 0.05, "r2": 0.05, "r3": 0.03}
 ROBOT_LIMITS = {
     "max_speed": 0.75,
@@ -28,7 +28,7 @@ def test_robot_defaults_are_table_1_and_robot_data() -> None:
     r = RobotParams()
     for name, value in {**TABLE_1, **ROBOT_LIMITS}.items():
         assert getattr(r, name) == value, name
-    # 0.75 m/s over a 0.05 m wheel (MODEL.md)
+    # 0.75 m/s over a 0.05 m wheel (docs/model.md)
     assert r.max_wheel_rate == pytest.approx(15.0, abs=1e-12)
 
 

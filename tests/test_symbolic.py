@@ -1,7 +1,7 @@
-"""The symbolic D–H derivation (amigo_gym.symbolic) against the numeric core, MODEL.md and the paper's misprints.
+"""The symbolic D–H derivation (amigo_gym.symbolic) against the numeric core, docs/model.md and the paper's misprints.
 
 References: the numeric kinematics of :mod:`amigo_gym.kinematics` (an independent implementation), the equations of
-``shared/MODEL.md`` typed here by hand, rigid-body velocities computed here with numpy, and MODEL.md's steady-state
+``docs/model.md`` typed here by hand, rigid-body velocities computed here with numpy, and docs/model.md's steady-state
 figures for the circle (v_A = 0.2 m/s, R = 1 m).
 """
 
@@ -64,7 +64,7 @@ def _motion_values(pose: Array, v: Array, bd: Array, w: Array, robot: RobotParam
 
 
 def rolling_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
-    """Random poses and random wheel rates; the motion of A from the core's ``body_velocity`` (MODEL.md eqs 11-12)."""
+    """Random poses and random wheel rates; the motion of A from the core's ``body_velocity`` (docs/model.md)."""
     rng = np.random.default_rng(seed)
     pose = np.column_stack((rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-math.pi, math.pi, n)))
     pose[:4, 2] = (math.pi / 2, -math.pi / 2, 0.0, math.pi)  # headings along the axes are included
@@ -108,7 +108,7 @@ def circle_states(robot: RobotParams, n: int, seed: int) -> dict[str, Array]:
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-# (a) the derivation against the numeric kinematics and MODEL.md
+# (a) the derivation against the numeric kinematics and docs/model.md
 # ---------------------------------------------------------------------------------------------------------------------
 
 
@@ -176,7 +176,7 @@ def test_castor_rolls_when_aligned_with_its_swivel_velocity(d: S.Derivation, rob
 
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_wheel_rate_solution_equals_core(d: S.Derivation, robot: RobotParams) -> None:
-    # symbolically: MODEL.md's differential-drive relations
+    # symbolically: docs/model.md's differential-drive relations
     assert _is_zero(d.wheel_rates[ad1] - (v_A + l1 * betadot) / r1)
     assert _is_zero(d.wheel_rates[ad2] - (v_A - l1 * betadot) / r2)
     assert _is_zero(d.body_velocity[v_A] - (r1 * ad1 + r2 * ad2) / 2)
@@ -226,7 +226,7 @@ def test_steady_state_on_circle_gives_model_md_numbers(d: S.Derivation) -> None:
     vals = {"v_A": 0.2, "R": 1.0, **S.robot_values(robot)}
     names = ("betadot", "alphadot_1", "alphadot_2", "alphadot_3")
     got = S.lambdify([d.steady[n] for n in names])(**vals)
-    # MODEL.md, "The path of H and the inverse problem", printed to 6 decimals
+    # docs/model.md, "The path of H and the inverse problem", printed to 6 decimals
     np.testing.assert_allclose(got, [0.200643, 4.481543, 3.518457, 6.714802], rtol=0, atol=6e-7)
     ref = K.circle_steady_state(1.0, 0.2, robot)
     lag = S.lambdify([d.steady_lag])(**vals)[0]
@@ -259,7 +259,7 @@ def test_inverse_ode_integrated_on_circle_settles_to_steady_state(d: S.Derivatio
 
 
 def steady_circle_motion(robot: RobotParams, phases: Array) -> dict[str, Array]:
-    """The steady rolling motion of MODEL.md's example (v_A = 0.2, R = 1) at the given path phases of H."""
+    """The steady rolling motion of docs/model.md's example (v_A = 0.2, R = 1) at the given path phases of H."""
     radius, speed = 1.0, 0.2
     ss = K.circle_steady_state(radius, speed, robot)
     b = phases - ss.heading_lag
@@ -319,7 +319,7 @@ def test_printed_x_components_say_nothing_when_heading_along_y(d: S.Derivation) 
 
 def test_latex_emitter_gives_the_seven_equations() -> None:
     cb, sb = sp.cos(beta), sp.sin(beta)
-    model_md = [  # MODEL.md / the paper's system 29, typed here
+    model_md = [  # docs/model.md / the paper's system 29, typed here
         xdot_A - l3 * betadot * sb - R * phidot * sp.cos(phi),
         ydot_A + l3 * betadot * cb - R * phidot * sp.sin(phi),
         xdot_A - v_A * cb,

@@ -13,11 +13,11 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.cli import OneLineParser, add_dataclass_options, run_guarded
 from amigo_gym.io import atomic_save
 from amigo_gym.params import check_range
 
@@ -49,12 +49,12 @@ class Settings:
 
     Attributes:
         gains: feedback gains ``k`` to compare [1/s], comma-separated on the command line.
-        seeds: reset seeds of the perturbed starts (``first``..``first + count - 1``).
-        seed_count: how many seeds.
+        seeds: first reset seed of the perturbed starts (seeds ``first``..``first + count - 1``) [-].
+        seed_count: how many seeds [episodes].
         t_from: start of the fit window [s].
         t_to: end of the fit window [s].
-        steps: steps per episode (dt = 0.1 s).
-        plot: optional PNG path for the ``|e(t)|`` plot.
+        steps: steps per episode, dt = 0.1 s [steps].
+        plot: PNG for the ``|e(t)|`` plot [file], '' for none.
     """
 
     gains: str = "1,2,3,5"
@@ -141,10 +141,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
     parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
-    defaults = Settings()
-    for f in fields(Settings):
-        default = getattr(defaults, f.name)
-        parser.add_argument("--" + f.name.replace("_", "-"), type=type(default), default=default)
+    add_dataclass_options(parser, Settings)
     args = parser.parse_args(argv)
     settings = Settings(**vars(args))
 

@@ -31,12 +31,12 @@ import math
 import os
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.cli import OneLineParser, add_dataclass_options, run_guarded
 from amigo_gym.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
@@ -66,18 +66,18 @@ class Settings:
     """Settings of the paper's manoeuvre (each one is a command-line option of the same name).
 
     Attributes:
-        out: output folder for the figures and the CSV.
+        out: output folder for the figures and the CSV [dir].
         speed: cruise speed of A, v_A [m/s] (paper: 0.2).
         radius: circle radius R [m].
         straight_length: straight part of the path [m].
-        direction: +1 left turn, -1 right.
+        direction: +1 left turn, -1 right [-].
         accel: acceleration of A [m/s^2], at most the robot's 0.3.
         decel: deceleration of A [m/s^2], at most the robot's 0.75.
         t_start: standstill before the start [s].
-        laps: laps of A's steady circle driven before A comes to rest.
+        laps: laps of A's steady circle driven before A comes to rest [laps].
         tail: time at rest after stopping [s].
         dt: output time step [s].
-        dpi: resolution of the PNG files.
+        dpi: resolution of the PNG files [dots/inch].
     """
 
     out: str = "results/paper"
@@ -236,12 +236,7 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
 def build_parser() -> argparse.ArgumentParser:
     """Options: one per field of :class:`Settings`, with its default."""
     p = OneLineParser(prog=PROG, description="The paper's manoeuvre: Fig. 2/3-style plots and a CSV.")
-    defaults = Settings()
-    for f in fields(Settings):
-        default = getattr(defaults, f.name)
-        p.add_argument(
-            "--" + f.name.replace("_", "-"), type=type(default), default=default, help=f"(default {default})"
-        )
+    add_dataclass_options(p, Settings)
     return p
 
 

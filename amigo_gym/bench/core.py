@@ -158,11 +158,13 @@ def format_table(rows: Sequence[Row]) -> str:
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-core``."""
     p = OneLineParser(prog=PROG, description="Env-steps per second of the batched exact step, with peers.")
-    p.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES), help="batch sizes N")
-    p.add_argument("--repeats", type=int, default=7, help="repeats per measurement; the median is reported")
+    p.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES), help="batch sizes N [envs]")
+    p.add_argument("--repeats", type=int, default=7, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.05, help="least duration of one repeat [s]")
-    p.add_argument("--loop-max", type=int, default=4096, help="largest N for the Python-loop peer")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the rows as JSON (atomically)")
+    p.add_argument("--loop-max", type=int, default=4096, help="largest N for the Python-loop peer [envs]")
+    p.add_argument(
+        "--json", default=None, metavar="FILE", help="also write the rows as JSON, atomically [file] (default: none)"
+    )
     return p
 
 

@@ -194,14 +194,18 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow]) -> str
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-env``."""
     p = OneLineParser(prog=PROG, description="Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and Sync.")
-    p.add_argument("--sizes", type=int, nargs="+", default=None, help=f"vector sizes N (default {DEFAULT_SIZES})")
-    p.add_argument("--repeats", type=int, default=5, help="repeats per measurement; the median is reported")
+    p.add_argument(
+        "--sizes", type=int, nargs="+", default=None, help=f"vector sizes N [envs] (default {DEFAULT_SIZES})"
+    )
+    p.add_argument("--repeats", type=int, default=5, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.2, help="least duration of one repeat [s]")
-    p.add_argument("--sync-max", type=int, default=4096, help="largest N for the SyncVectorEnv peer")
+    p.add_argument("--sync-max", type=int, default=4096, help="largest N for the SyncVectorEnv peer [envs]")
     p.add_argument("--skip-single", action="store_true", help="skip the single-env comparison")
     p.add_argument("--skip-vector", action="store_true", help="skip the vector-env comparison")
     p.add_argument("--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the figures as JSON (atomically)")
+    p.add_argument(
+        "--json", default=None, metavar="FILE", help="also write the figures as JSON, atomically [file] (default: none)"
+    )
     return p
 
 

@@ -22,7 +22,7 @@ from amigo_gym.kinematics import h_position
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
-__all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "parse_pose_option"]
+__all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "make_spaces", "parse_pose_option"]
 
 Array = NDArray[np.float64]
 ObsArray = NDArray[np.float32]
@@ -36,20 +36,57 @@ RESET_OPTIONS: tuple[str, ...] = ("pose",)
 RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
 
 
+def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
+    """A :class:`RobotParams`, or one made from a mapping of its field names (``TypeError`` on others)."""
+    if isinstance(robot, RobotParams):
+        return robot
+    if not isinstance(robot, Mapping):
+        raise TypeError(f"{owner}: robot must be a RobotParams or a mapping of its fields, got {type(robot).__name__}")
+    names = {f.name for f in fields(RobotParams)}
+    bad = sorted(str(k) for k in robot if k not in names)
+    if bad:
+        raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(names))}")
+    return RobotParams(**robot)
+
+
+def _env_params(owner: str, params: EnvParams | Mapping[str, Any] | None) -> EnvParams:
+    """An :class:`EnvParams`, or one made from a mapping of its field names (``robot`` may be a mapping too)."""
+    if params is None:
+        return EnvParams()
+    if isinstance(params, EnvParams):
+        return params
+    if not isinstance(params, Mapping):
+        raise TypeError(f"{owner}: params must be an EnvParams or a mapping of its fields, got {type(params).__name__}")
+    bad = sorted(str(k) for k in params if k not in ENV_SETTINGS)
+    if bad:
+        raise TypeError(f"{owner}: unknown params field(s) {bad}; allowed: {', '.join(ENV_SETTINGS)}")
+    kw = dict(params)
+    if "robot" in kw:
+        kw["robot"] = _robot_params(owner, kw["robot"])
+    return EnvParams(**kw)
+
+
 def make_env_params(
-    owner: str, params: EnvParams | None = None, robot: RobotParams | Mapping[str, float] | None = None, **settings: Any
+    owner: str,
+    params: EnvParams | Mapping[str, Any] | None = None,
+    robot: RobotParams | Mapping[str, Any] | None = None,
+    **settings: Any,
 ) -> EnvParams:
     """Task settings from the keywords of ``gym.make`` / ``gym.make_vec``.
 
+    Every configuration keyword accepts a plain mapping as well as its dataclass, so that the settings
+    survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's ``--env-kwargs``.
+
     Args:
         owner: name of the caller, for error messages.
-        params: a complete :class:`EnvParams` to start from (defaults if ``None``).
+        params: a complete :class:`EnvParams`, or a mapping of its field names to values (``robot``
+            inside it may be a mapping too); defaults if ``None``.
         robot: a :class:`RobotParams`, or a mapping of its field names to values (e.g. from a YAML file).
         **settings: any other :class:`EnvParams` field (``dt``, ``radius``, ``speed``, ...); they
             override the fields of ``params``.
 
     Raises:
-        TypeError: on an unknown keyword, or a ``params`` that is not an ``EnvParams``.
+        TypeError: on an unknown keyword or field, or a ``params`` / ``robot`` of another type.
         ValueError: on a bad value (from :class:`EnvParams` / :class:`RobotParams`, naming the field and range).
     """
     unknown = sorted(k for k in settings if k not in ENV_SETTINGS)
@@ -57,19 +94,12 @@ def make_env_params(
         allowed = ", ".join(("params", *ENV_SETTINGS))
         names = ", ".join(map(repr, unknown))
         raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")
-    if params is None:
-        params = EnvParams()
-    elif not isinstance(params, EnvParams):
-        raise TypeError(f"{owner}: params must be an EnvParams, got {type(params).__name__}")
+    base = _env_params(owner, params)
     if robot is not None:
-        if isinstance(robot, Mapping):
-            robot_names = {f.name for f in fields(RobotParams)}
-            bad = sorted(k for k in robot if k not in robot_names)
-            if bad:
-                raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(robot_names))}")
-            robot = RobotParams(**robot)
-        settings["robot"] = robot
-    return replace(params, **settings) if settings else params
+        settings["robot"] = _robot_params(owner, robot)
+    elif "robot" in settings:
+        settings["robot"] = _robot_params(owner, settings["robot"])
+    return replace(base, **settings) if settings else base
 
 
 def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
@@ -113,6 +143,27 @@ def check_render_mode(render_mode: str | None) -> str | None:
     return render_mode
 
 
+def make_spaces(params: EnvParams) -> tuple[spaces.Space[NDArray[np.floating[Any]]], spaces.Space[ObsArray]]:
+    """The action and observation spaces of one robot (both environments; the vector env batches them).
+
+    Action ``Box(-1, 1, (2,), float32)``; observation ``Box(low, high, (obs_dim,), float32)`` with the
+    bounds of :func:`amigo_gym.task.obs_bounds`.
+    """
+    low, high = task.obs_bounds(params)
+    action: Any = spaces.Box(-1.0, 1.0, (2,), np.float32)
+    observation: Any = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+    return action, observation
+
+
+def _single(kind: str, value: Any) -> Any:
+    """One info entry of :func:`amigo_gym.task.info_columns` in the single env's types."""
+    if kind == "columns":
+        return np.array(value)
+    if kind == "terms":
+        return {name: float(v) for name, v in value.items()}
+    return float(value)
+
+
 class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
 
@@ -120,7 +171,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     The AmigoBot is a small differential-drive robot (ActivMedia / Adept MobileRobots) with two
     driven wheels and a self-aligning castor. Its kinematics follow the D–H model of the seed
-    paper, corrected as in ``shared/MODEL.md``: the pose is ``(x_A, y_A, beta)``, A the midpoint
+    paper, corrected as in ``docs/model.md``: the pose is ``(x_A, y_A, beta)``, A the midpoint
     of the drive axle, ``beta`` the heading; point H sits ``l3 = 0.08 m`` ahead of A. The task is
     the paper's inverse problem turned into control: keep H on the path (by default the paper's
     circle, eq. 6: radius ``R = 1 m`` through the origin, tangent to x0 there, turning left) while A
@@ -147,20 +198,21 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.obs_bounds`).
     ``e`` is H's signed cross-track error (positive left of the path), ``psi = wrap(beta - theta)``
     the heading minus the path tangent at H's closest point, ``kappa`` the signed path curvature.
-    With the default ``preview = (0.2, 0.4)`` the shape is ``(10,)``:
+    Every reader decodes it by the names of :func:`amigo_gym.task.obs_names` (index by
+    :func:`amigo_gym.task.obs_index`). With the default ``preview = (0.2, 0.4)`` the shape is ``(10,)``:
 
-    | Num | Observation                                | Min                  | Max                 |
-    |-----|--------------------------------------------|----------------------|---------------------|
-    | 0   | ``e / error_scale`` (clipped)              | ``-2 d_term / e_s``  | ``2 d_term / e_s``  |
-    | 1   | ``sin(psi)``                               | -1                   | 1                   |
-    | 2   | ``cos(psi)``                               | -1                   | 1                   |
-    | 3   | ``kappa(s_H) l3``                          | -1                   | 1                   |
-    | 4   | ``kappa(s_H + 0.2 m) l3`` (preview)        | -1                   | 1                   |
-    | 5   | ``kappa(s_H + 0.4 m) l3`` (preview)        | -1                   | 1                   |
-    | 6   | ``alpha1dot / w_max`` (applied, wheel 1)   | -1                   | 1                   |
-    | 7   | ``alpha2dot / w_max`` (applied, wheel 2)   | -1                   | 1                   |
-    | 8   | ``(v_A - v_ref) / v_max``                  | -2                   | 2                   |
-    | 9   | ``v_ref / v_max``                          | 0                    | 1                   |
+    | Num | Name                  | Observation                              | Min                 | Max               |
+    |-----|-----------------------|------------------------------------------|---------------------|-------------------|
+    | 0   | ``cross_track_error`` | ``e / error_scale`` (clipped)            | ``-2 d_term / e_s`` | ``2 d_term / e_s``|
+    | 1   | ``sin_heading_error`` | ``sin(psi)``                             | -1                  | 1                 |
+    | 2   | ``cos_heading_error`` | ``cos(psi)``                             | -1                  | 1                 |
+    | 3   | ``curvature``         | ``kappa(s_H) l3``                        | -1                  | 1                 |
+    | 4   | ``curvature_ahead_1`` | ``kappa(s_H + 0.2 m) l3`` (preview)      | -1                  | 1                 |
+    | 5   | ``curvature_ahead_2`` | ``kappa(s_H + 0.4 m) l3`` (preview)      | -1                  | 1                 |
+    | 6   | ``wheel_rate_1``      | ``alpha1dot / w_max`` (applied, wheel 1) | -1                  | 1                 |
+    | 7   | ``wheel_rate_2``      | ``alpha2dot / w_max`` (applied, wheel 2) | -1                  | 1                 |
+    | 8   | ``speed_error``       | ``(v_A - v_ref) / v_max``                | -2                  | 2                 |
+    | 9   | ``reference_speed``   | ``v_ref / v_max``                        | 0                   | 1                 |
 
     ``d_term = termination_distance`` (0.25 m), ``e_s = error_scale`` (0.05 m): row 0 lies in [-10, 10].
 
@@ -210,7 +262,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ``straight_length``, ``termination_distance``, ``init_position_noise``, ``init_heading_noise``,
     ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
-    ``params`` (a whole ``EnvParams``; other keywords override its fields) and ``render_mode``
+    ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
     (``"human"`` or ``"rgb_array"``). Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
 
@@ -232,8 +284,8 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self,
         render_mode: str | None = None,
         *,
-        params: EnvParams | None = None,
-        robot: RobotParams | Mapping[str, float] | None = None,
+        params: EnvParams | Mapping[str, Any] | None = None,
+        robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
         self.params: EnvParams = make_env_params(type(self).__name__, params, robot, **settings)
@@ -241,9 +293,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         p = self.params
         self.path: CirclePath | ManoeuvrePath = make_path(p)
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
-        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
-        low, high = task.obs_bounds(p)
-        self.observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        self.action_space, self.observation_space = make_spaces(p)
         self._k = task.task_constants(p)
         rate1, rate2 = task.initial_wheel_rates(p).tolist()
         self._initial_state = task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate1, rate2)
@@ -318,23 +368,8 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), False, info
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
-        st = self._state
-        track, speed, heading, smooth = out.terms
-        return {
-            "pose": np.array((st.x, st.y, st.beta)),
-            "h_position": np.array((out.h_x, out.h_y)),
-            "cross_track_error": float(out.closest.cross_track_error),
-            "wheel_rates": np.array((st.rate1, st.rate2)),
-            "wheel_angles": np.array((st.alpha1, st.alpha2)),
-            "castor_angle": float(st.alpha3),
-            "reward_terms": {
-                "track": float(track),
-                "speed": float(speed),
-                "heading": float(heading),
-                "smooth": float(smooth),
-            },
-            "time": self._steps * self._k.dt,
-        }
+        cols = task.info_columns(self._state, out, self._steps * self._k.dt)
+        return {key: _single(kind, cols[key]) for key, kind in task.INFO_KEYS.items()}
 
     # ------------------------------------------------------------------ rendering
     def render(self) -> NDArray[np.uint8] | None:

@@ -21,14 +21,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from amigo_gym import task
-from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
+from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, make_spaces, parse_pose_option
 from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -81,8 +80,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         render_mode: str | None = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         *,
-        params: EnvParams | None = None,
-        robot: RobotParams | Mapping[str, float] | None = None,
+        params: EnvParams | Mapping[str, Any] | None = None,
+        robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
         owner = type(self).__name__
@@ -106,10 +105,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
 
         n = self.num_envs
-        self.single_action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.single_action_space, self.single_observation_space = make_spaces(p)
         self.action_space = batch_space(self.single_action_space, n)
-        low, high = task.obs_bounds(p)
-        self.single_observation_space = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, n)
 
         self._k = task.task_constants(p)
@@ -130,9 +127,15 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
     # ------------------------------------------------------------------ seeding
     @property
-    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
-        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``)."""
-        return tuple(self._seeds)
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``).
+
+        Before the first reset, as ``Env.np_random_seed``: each generator is made from a random seed
+        on first use, and that seed is reported (and used by a ``reset()`` without a seed).
+        """
+        for i in range(self.num_envs):
+            self._rng(i)
+        return tuple(int(s) for s in self._seeds if s is not None)
 
     @property
     def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
@@ -153,7 +156,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
 
         Raises:
-            ValueError: bad seed list, unknown option, bad pose or mask.
+            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
+            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
         """
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
@@ -169,12 +173,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
         mask: BoolArray = np.ones(n, dtype=np.bool_)
         if options is not None and "reset_mask" in options:
-            m = options["reset_mask"]
-            if not isinstance(m, np.ndarray) or m.dtype != np.bool_ or m.shape != (n,):
-                raise ValueError(f'options["reset_mask"] must be a bool numpy array of shape ({n},), got {m!r}')
-            if not m.any():
-                raise ValueError('options["reset_mask"] must contain at least one True value')
-            mask = m.copy()
+            mask = _check_reset_mask(options["reset_mask"], n)
         pose_opt = None
         if options is not None and "pose" in options:
             pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
@@ -239,12 +238,15 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         """Step every robot; autoreset finished ones according to ``autoreset_mode``.
 
         Raises:
+            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``.
             ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
             RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
         """
         n = self.num_envs
         if not self._was_reset:
             raise gym.error.ResetNeeded("call reset() before step() on AmigoBotVectorEnv")
+        if np.ndim(actions) == 0:  # as SyncVectorEnv, which iterates over the actions
+            raise TypeError(f"Unable to iterate over the following elements: {actions}")
         a = task.validate_action(actions, (n,))
         mode = self.autoreset_mode
         if mode == AutoresetMode.DISABLED and self._autoreset.any():
@@ -328,16 +330,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         The arrays of ``out`` are new at every step and not kept, so they are handed out without a copy.
         """
         m = len(steps)
-        return {
-            "pose": pack(state.x, state.y, state.beta),
-            "h_position": pack(out.h_x, out.h_y),
-            "cross_track_error": _column(out.closest.cross_track_error, m),
-            "wheel_rates": pack(state.rate1, state.rate2),
-            "wheel_angles": pack(state.alpha1, state.alpha2),
-            "castor_angle": np.array(state.alpha3),
-            "reward_terms": {name: _column(t, m) for name, t in zip(task.REWARD_TERMS, out.terms, strict=True)},
-            "time": steps * self._k.dt,
-        }
+        cols = task.info_columns(state, out, steps * self._k.dt)
+        return {key: _batched(kind, cols[key], m) for key, kind in task.INFO_KEYS.items()}
 
     def _pose(self) -> Array:
         """The poses ``(N, 3)``."""
@@ -398,10 +392,37 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._renderers = []
 
 
+def _check_reset_mask(mask: Any, n: int) -> BoolArray:
+    """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
+    if not isinstance(mask, np.ndarray):
+        raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
+    if mask.shape != (n,):
+        raise ValueError(f"`options['reset_mask']` must have shape `({n},)`, got {mask.shape}")
+    if mask.dtype != np.bool_:
+        raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
+    if not np.any(mask):
+        raise ValueError(
+            f"`options['reset_mask']` must contain a boolean array with at least one True value, got reset_mask={mask}"
+        )
+    out: BoolArray = mask.copy()
+    return out
+
+
 def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:
     """Write the compact columns ``rows`` into the rows ``idx`` of the ``(N,)`` columns ``full``."""
     for f, r in zip(full, rows, strict=True):
         np.asarray(f)[idx] = r
+
+
+def _batched(kind: str, value: Any, m: int) -> Any:
+    """One info entry of :func:`amigo_gym.task.info_columns` as ``(m, ...)`` arrays (new ones: never the state's)."""
+    if kind == "columns":
+        return pack(*value)
+    if kind == "terms":
+        return {name: _column(v, m) for name, v in value.items()}
+    if isinstance(value, np.ndarray) and value.shape == (m,):
+        return np.array(value, dtype=np.float64)
+    return np.full(m, value, dtype=np.float64)
 
 
 def _column(x: Any, m: int) -> Array:

@@ -1,12 +1,12 @@
 r"""The analytic inverse solution as a state-feedback policy for ``AmigoBot-v0``.
 
-The policy reads only the observation (layout in :mod:`amigo_gym.task`) and the constant task
-settings :class:`~amigo_gym.params.EnvParams`. From the observation it takes
+The policy reads only the observation, by the field names of :func:`amigo_gym.task.obs_names` (never
+by raw positions), and the constant task settings :class:`~amigo_gym.params.EnvParams`. It takes
 
-* ``e = obs[0] * error_scale``: signed cross-track error of H [m], positive left of the path;
-* ``psi = atan2(obs[1], obs[2])``: heading error ``beta - theta`` against the path tangent [rad];
-* ``kappa = obs[3] / l3``: signed path curvature at H's closest point [1/m];
-* ``v_ref = obs[-1] * max_speed``: reference speed of A [m/s].
+* ``e = cross_track_error * error_scale``: signed cross-track error of H [m], positive left of the path;
+* ``psi = atan2(sin_heading_error, cos_heading_error)``: heading error ``beta - theta`` [rad];
+* ``kappa = curvature / l3``: signed path curvature at H's closest point [1/m];
+* ``v_ref = reference_speed * max_speed``: reference speed of A [m/s].
 
 Velocity of H in the path frame
 -------------------------------
@@ -33,7 +33,7 @@ solving the second row of the map for the turn rate gives
     v_A = v_{ref}, \qquad
     \dot\beta = \frac{-k\,e - v_{ref}\sin\psi}{l_3\cos\psi}.
 
-With ``k = 0`` (``feedforward_only=True``) this is exactly the paper's inverse ODE (MODEL.md)
+With ``k = 0`` (``feedforward_only=True``) this is exactly the paper's inverse ODE (docs/model.md)
 ``betadot = v_A tan(theta - beta) / l3`` evaluated on the measured heading error, i.e. the open-loop
 inverse solution run in closed loop: it keeps ``Hdot . n = 0``, so H keeps whatever offset it
 starts with, while the heading converges to the steady lag (rate ``v_A / l3``). The feedback term
@@ -82,7 +82,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.kinematics import wheel_rates
 from amigo_gym.params import EnvParams, check_range
-from amigo_gym.task import obs_dim
+from amigo_gym.task import obs_dim, obs_index
 
 __all__ = ["DEFAULT_GAIN", "AnalyticPolicy", "analytic_body_velocity", "analytic_wheel_rates"]
 
@@ -128,17 +128,18 @@ def analytic_body_velocity(
         ``(v_A, betadot)``, each of shape ``()`` or ``(N,)``.
     """
     o = _check_obs(obs, params)
+    i = obs_index(params)
     robot = params.robot
     l3 = robot.l3
-    e = o[..., 0] * params.error_scale
-    psi = np.arctan2(o[..., 1], o[..., 2])
+    e = o[..., i["cross_track_error"]] * params.error_scale
+    psi = np.arctan2(o[..., i["sin_heading_error"]], o[..., i["cos_heading_error"]])
     s, c = np.sin(psi), np.maximum(np.cos(psi), COS_MIN)
-    v_ref = o[..., -1] * robot.max_speed
+    v_ref = o[..., i["reference_speed"]] * robot.max_speed
     u_n = -gain * e
     if speed_reference == "A":
         return v_ref, (u_n - v_ref * s) / (l3 * c)
     if speed_reference == "H":
-        kl3 = np.clip(o[..., 3], -1.0 + 1e-9, 1.0 - 1e-9)
+        kl3 = np.clip(o[..., i["curvature"]], -1.0 + 1e-9, 1.0 - 1e-9)
         u_t = v_ref / np.sqrt(1.0 - kl3 * kl3)
         return c * u_t + s * u_n, (-s * u_t + c * u_n) / l3
     raise ValueError(f"speed_reference must be 'A' or 'H', got {speed_reference!r}")

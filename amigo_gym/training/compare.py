@@ -8,9 +8,12 @@ Usage::
 Steps:
 
 1. Optionally train a PPO agent for ``--train-steps`` steps on the native vector env (``amigo-gym
-   train --algo ppo``, hyperparameters of ``agents/hyperparams/ppo.yml``, in ``<out>/train_ppo``);
-   the default 500 000 steps take about a minute on 2 CPU cores and already track to a fraction
-   of a millimetre. The fresh agent (its final model) is evaluated as ``ppo_fresh``.
+   train --algo ppo``, hyperparameters of ``agents/hyperparams/ppo.yml`` or ``--hyperparams``, in
+   ``<out>/train_ppo``); the default 500 000 steps take about a minute on 2 CPU cores and already
+   track to a fraction of a millimetre. The fresh agent (its final model) is evaluated as
+   ``ppo_fresh``. A rerun reuses (or resumes) the run in ``<out>/train_ppo`` only when its recorded
+   configuration (algorithm, steps, seed, environment settings, hyperparameters, package versions)
+   equals the request; otherwise that folder is removed and the agent trained again.
 2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
    ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`amigo_gym.training.evaluate`.
 3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
@@ -24,6 +27,7 @@ deviation from the analytic inverse solution <= 0.1 rad/s.
 from __future__ import annotations
 
 import json
+import shutil
 import sys
 import time
 from collections.abc import Sequence
@@ -98,6 +102,47 @@ def report_markdown(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
+    """What the fresh PPO run must have been trained with to be reused (compared with its ``config.json``)."""
+    from amigo_gym.training.train import HYPERPARAMS_DIR, env_kwargs, load_hyperparams, versions
+
+    return {
+        "algo": "ppo",
+        "timesteps": train_steps,
+        "seed": seed,
+        "env_kwargs": env_kwargs(),
+        "hyperparams": load_hyperparams(hyperparams or HYPERPARAMS_DIR / "ppo.yml"),
+        "versions": versions(),
+    }
+
+
+def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
+    """Why the run in ``run_dir`` cannot serve ``request`` (``None``: it can, to be resumed or reused as is).
+
+    The run's ``config.json`` must record the same algorithm, steps, seed, environment settings,
+    hyperparameters and package versions, and the run must have a checkpoint to continue from.
+    """
+    cfg_file = run_dir / "config.json"
+    if not cfg_file.is_file() or not (run_dir / "checkpoint.json").is_file():
+        return "no complete earlier run"
+    try:
+        cfg = json.loads(cfg_file.read_text())
+        recorded = {
+            "algo": cfg["settings"]["algo"],
+            "timesteps": cfg["settings"]["timesteps"],
+            "seed": cfg["settings"]["seed"],
+            "env_kwargs": cfg.get("env_kwargs"),
+            "hyperparams": cfg["hyperparams"],
+            "versions": cfg["versions"],
+        }
+    except (ValueError, KeyError, TypeError):
+        return f"unreadable {cfg_file}"
+    differ = [k for k in request if json.dumps(recorded[k], sort_keys=True) != json.dumps(request[k], sort_keys=True)]
+    short = ("algo", "timesteps", "seed")
+    reasons = [f"{k} {recorded[k]!r} != {request[k]!r}" if k in short else f"{k} differ" for k in differ]
+    return ", ".join(reasons) if reasons else None
+
+
 def _say(message: str) -> None:
     """A progress line on stderr (the report itself goes to stdout)."""
     print(message, file=sys.stderr, flush=True)
@@ -112,8 +157,11 @@ def run_compare(
     seed: int,
     plots: bool = True,
     progress: bool = False,
+    hyperparams: Path | None = None,
 ) -> dict[str, Any]:
     """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents.
+
+    ``hyperparams``: the fresh PPO run's YAML (default ``agents/hyperparams/ppo.yml``).
 
     ``progress`` shows the training run's progress bar; phase lines go to stderr in any case.
     """
@@ -123,7 +171,8 @@ def run_compare(
         EvalProtocol,
         default_agents,
         evaluate_agents,
-        load_agents,
+        find_models,
+        load_model,
         write_outputs,
     )
 
@@ -132,33 +181,40 @@ def run_compare(
     training: dict[str, Any] = {}
     if models is not None:
         _say(f"loading pretrained agents from {models}")
-        loaded = load_agents(models)
-        agents.update(loaded)
-        for name in loaded:
-            rec = models / f"{name}.json"
-            if rec.is_file():
-                training[name] = json.loads(rec.read_text())
+        refs = find_models(models)
+        agents.update({ref.name: load_model(ref) for ref in refs})
+        training.update({r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None})
     if train_steps > 0:
         from stable_baselines3 import PPO
 
         from amigo_gym.training.train import Settings, train
 
         run_dir = out / "train_ppo"
+        request = fresh_run_request(train_steps, seed, hyperparams)
+        stale = reuse_mismatch(run_dir, request)
+        if stale is not None and run_dir.exists():
+            _say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+            shutil.rmtree(run_dir)
+        argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
         s = Settings(
             algo="ppo",
             seed=seed,
             out=str(run_dir),
             timesteps=train_steps,
-            resume=(run_dir / "checkpoint.json").is_file(),
+            hyperparams=None if hyperparams is None else str(hyperparams),
+            resume=stale is None,
             eval_freq=0,
             checkpoint_freq=max(train_steps // 4, 1),
             progress=progress,
-            argv=["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)],
+            argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
         )
-        _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+        if stale is None:
+            _say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+        else:
+            _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(s)
-        print(f"trained ppo_fresh: {training['ppo_fresh']['timesteps']} steps in {time.perf_counter() - t0:.0f} s")
+        print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
         agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
     _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
@@ -174,13 +230,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     from amigo_gym.training.evaluate import PRETRAINED_DIR
 
     p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
-    p.add_argument("--out", default="results", help="output directory (default results/)")
-    p.add_argument("--models", default=str(PRETRAINED_DIR), help="pretrained <algo>.zip directory ('' for none)")
-    p.add_argument("--train-steps", type=int, default=500_000, help="steps of a fresh PPO run, 0: none (500000)")
-    p.add_argument("--seeds", type=int, default=10, help="perturbed starts (default 10)")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run")
-    p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--out", default="results", help="output directory [dir]")
+    p.add_argument(
+        "--models", default=str(PRETRAINED_DIR), help="pretrained models, as for evaluate --models [path], '' for none"
+    )
+    p.add_argument(
+        "--train-steps", type=int, default=500_000, help="steps of a fresh PPO run [steps], 0: none (default 500000)"
+    )
+    p.add_argument("--seeds", type=int, default=10, help="perturbed starts [episodes]")
+    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps]")
+    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run [-]")
+    p.add_argument(
+        "--hyperparams", default=None, help="YAML of the fresh PPO run [file] (default: agents/hyperparams/ppo.yml)"
+    )
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
@@ -193,7 +256,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = Path(a.out)
         models = Path(a.models) if a.models else None
         progress = sys.stderr.isatty() and not a.no_progress
-        doc = run_compare(out, models, a.train_steps, a.seeds, a.steps, a.seed, plots=not a.no_plots, progress=progress)
+        hp = Path(a.hyperparams) if a.hyperparams else None
+        doc = run_compare(
+            out,
+            models,
+            a.train_steps,
+            a.seeds,
+            a.steps,
+            a.seed,
+            plots=not a.no_plots,
+            progress=progress,
+            hyperparams=hp,
+        )
         print(report_markdown(doc))
         print(f"wrote {out / 'report.md'}, {out / 'results.json'}")
         return 0

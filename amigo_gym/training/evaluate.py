@@ -18,8 +18,10 @@ Protocol (``protocol`` in the JSON; every rollout is deterministic)
 * Scenario ``perturbed``: ``reset(seed=s)`` for the seeds ``--seeds`` (default 100..109): the
   environment's random start, H within +-2 cm per axis of the origin, heading +-0.1 rad.
 * Agents: ``analytic`` (:class:`amigo_gym.policies.analytic.AnalyticPolicy`, gain 3 1/s), ``analytic_ff`` (the
-  paper's inverse ODE in closed loop, gain 0), and every ``<algo>.zip`` in ``--models`` (PPO, SAC,
-  TD3), acting deterministically.
+  paper's inverse ODE in closed loop, gain 0), and every model :func:`find_models` finds in ``--models``
+  (what ``amigo-gym train`` writes: a run folder, a folder of runs, a model zip; or a folder of
+  ``<algo>.zip``), acting deterministically; a model trained with ``normalize`` sees its observations
+  through the ``vecnormalize.pkl`` statistics saved beside it.
 
 Keys of each entry of ``results`` (pooled over the episodes of the scenario)
 -------------------------------------------------------------------------
@@ -80,7 +82,10 @@ __all__ = [
     "Trajectory",
     "default_agents",
     "evaluate_agents",
+    "find_models",
     "load_agents",
+    "load_model",
+    "training_records",
     "main",
     "markdown_table",
     "plot_trajectories",
@@ -170,7 +175,7 @@ def steady_start_pose(params: EnvParams) -> Array:
     ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.kinematics.circle_steady_state`), A ``l3``
     behind H.
     """
-    from amigo_gym.kinematics import circle_steady_state
+    from amigo_gym.kinematics import a_from_h, circle_steady_state
     from amigo_gym.paths import make_path
 
     path = make_path(params)
@@ -179,8 +184,7 @@ def steady_start_pose(params: EnvParams) -> Array:
     ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction)
     beta = float(path.tangent_angle(0.0)) - float(ss.heading_lag)
     h = path.point(0.0)
-    l3 = params.robot.l3
-    return np.array([h[0] - l3 * math.cos(beta), h[1] - l3 * math.sin(beta), beta])
+    return np.array([*a_from_h(h[0], h[1], math.cos(beta), math.sin(beta), params.robot.l3), beta])
 
 
 def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
@@ -284,20 +288,137 @@ def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     }
 
 
-def load_agents(models_dir: str | os.PathLike[str]) -> dict[str, Agent]:
-    """Load every ``<algo>.zip`` (algo in ppo, sac, td3) of ``models_dir`` with its SB3 class, on the CPU."""
-    d = Path(models_dir)
-    if not d.is_dir():
-        raise FileNotFoundError(f"--models: no directory {d}")
+@dataclass(frozen=True)
+class ModelRef:
+    """A trained model found by :func:`find_models`.
+
+    Attributes:
+        name: the agent's name in the results: the algorithm for ``<algo>.zip`` files (pretrained
+            layout), the run folder's name for a run written by ``amigo-gym train``.
+        algo: ``ppo``, ``sac`` or ``td3``.
+        model: the SB3 ``.zip``.
+        record: the training record beside it (``<algo>.json`` or the run's ``run.json``), if any.
+        vecnormalize: the ``VecNormalize`` statistics saved beside it (``vecnormalize.pkl``), if any.
+    """
+
+    name: str
+    algo: str
+    model: Path
+    record: Path | None = None
+    vecnormalize: Path | None = None
+
+
+def _run_algo(run_dir: Path) -> str:
+    """The algorithm a run folder's ``config.json`` names."""
+    cfg = run_dir / "config.json"
+    try:
+        algo = json.loads(cfg.read_text())["settings"]["algo"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
+    if algo not in ALGOS:
+        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
+    return str(algo)
+
+
+def _beside(model: Path, name: str) -> Path | None:
+    f = model.parent / name
+    return f if f.is_file() else None
+
+
+def _run_ref(run_dir: Path, model: Path | None = None) -> ModelRef:
+    model = model or run_dir / "model.zip"
+    return ModelRef(
+        run_dir.name, _run_algo(run_dir), model, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    )
+
+
+def _is_run(d: Path) -> bool:
+    return (d / "model.zip").is_file() and (d / "config.json").is_file()
+
+
+def find_models(path: str | os.PathLike[str]) -> list[ModelRef]:
+    """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
+
+    ``path`` may be a run folder (``model.zip`` with the ``config.json`` naming its algorithm), a
+    folder of run folders, a model ``.zip`` (a run's ``model.zip`` / ``best_model.zip``, or an
+    ``<algo>.zip``), or a folder of ``<algo>.zip`` files (``agents/pretrained``, ``train --export``).
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        ValueError: it holds no model, or a model whose algorithm cannot be told.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"--models: no file or directory {p}")
+    if p.is_file():
+        if p.suffix != ".zip":
+            raise ValueError(f"--models: {p} is not a model .zip")
+        if p.stem in ALGOS:
+            return [ModelRef(p.stem, p.stem, p, _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl"))]
+        if (p.parent / "config.json").is_file():
+            return [_run_ref(p.parent, p)]
+        raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
+    if _is_run(p):
+        return [_run_ref(p)]
+    refs = [
+        ModelRef(a, a, p / f"{a}.zip", _beside(p / f"{a}.zip", f"{a}.json"))
+        for a in ALGOS
+        if (p / f"{a}.zip").is_file()
+    ]
+    refs += [_run_ref(d) for d in sorted(p.iterdir()) if d.is_dir() and _is_run(d)]
+    if not refs:
+        raise ValueError(
+            f"--models: no models in {p} (expected a run folder with model.zip and config.json, "
+            "folders of such runs, or <algo>.zip files)"
+        )
+    names = [r.name for r in refs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"--models: two models in {p} share a name: {sorted(names)}")
+    return refs
+
+
+class NormalizedAgent:
+    """A model trained on ``VecNormalize``d observations: normalizes each observation with the saved statistics."""
+
+    def __init__(self, model: Any, vecnormalize: Any) -> None:
+        self.model = model
+        self.vecnormalize = vecnormalize
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]:
+        obs = self.vecnormalize.normalize_obs(np.asarray(observation, dtype=np.float32))
+        action, new_state = self.model.predict(
+            obs, state=state, episode_start=episode_start, deterministic=deterministic
+        )
+        return action, new_state
+
+
+def load_model(ref: ModelRef) -> Agent:
+    """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any)."""
+    import pickle
+
     from stable_baselines3 import PPO, SAC, TD3
 
     classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
-    out: dict[str, Agent] = {}
-    for algo in ALGOS:
-        f = d / f"{algo}.zip"
-        if f.is_file():
-            out[algo] = classes[algo].load(f, device="cpu")
-    return out
+    model = classes[ref.algo].load(ref.model, device="cpu")
+    if ref.vecnormalize is None:
+        agent: Agent = model
+        return agent
+    with open(ref.vecnormalize, "rb") as f:  # VecNormalize.load without a venv: the statistics only
+        stats = pickle.load(f)
+    stats.training = False
+    return NormalizedAgent(model, stats)
+
+
+def load_agents(models: str | os.PathLike[str]) -> dict[str, Agent]:
+    """Load every model :func:`find_models` finds at ``models``, by name."""
+    return {ref.name: load_model(ref) for ref in find_models(models)}
+
+
+def training_records(models: str | os.PathLike[str]) -> dict[str, Any]:
+    """The training records beside the models :func:`find_models` finds, by agent name."""
+    return {r.name: json.loads(r.record.read_text()) for r in find_models(models) if r.record is not None}
 
 
 def evaluate_agents(
@@ -534,12 +655,19 @@ def write_outputs(
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     p = OneLineParser(prog="amigo-gym evaluate", description="Evaluate analytic and trained agents (fixed protocol).")
-    p.add_argument("--models", default=str(PRETRAINED_DIR), help="directory of <algo>.zip (default agents/pretrained)")
-    p.add_argument("--out", default="results", help="directory for eval.md and the plots (default results/)")
-    p.add_argument("--json", default=None, help="JSON file (default <out>/results.json)")
-    p.add_argument("--markdown", default=None, help="Markdown table file (default <out>/eval.md)")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode (default 400 = 40 s)")
-    p.add_argument("--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. (default 10)")
+    p.add_argument(
+        "--models",
+        default=None,
+        help="what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of "
+        "<algo>.zip [path] (default: the pretrained agents/pretrained)",
+    )
+    p.add_argument("--out", default="results", help="directory for eval.md and the plots [dir]")
+    p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/results.json)")
+    p.add_argument("--markdown", default=None, help="Markdown table file [file] (default: <out>/eval.md)")
+    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps] (default 400 = 40 s)")
+    p.add_argument(
+        "--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. [episodes] (default 10)"
+    )
     p.add_argument("--no-models", action="store_true", help="only the analytic policies")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
@@ -551,12 +679,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         agents = default_agents(EnvParams(), proto.analytic_gain)
         training: dict[str, Any] = {}
         if not a.no_models:
-            loaded = load_agents(a.models)
-            agents.update(loaded)
-            for name in loaded:  # the training records next to the models, if any
-                rec = Path(a.models) / f"{name}.json"
-                if rec.is_file():
-                    training[name] = json.loads(rec.read_text())
+            models = a.models if a.models is not None else PRETRAINED_DIR
+            refs = find_models(models)
+            agents.update({ref.name: load_model(ref) for ref in refs})
+            training = {r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None}
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "results.json"

@@ -28,7 +28,6 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from copy import deepcopy
 from typing import Any
 
 import gymnasium as gym
@@ -39,10 +38,9 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices,
 
 from amigo_gym import MAX_EPISODE_STEPS
 from amigo_gym.envs.vector import AmigoBotVectorEnv
+from amigo_gym.task import INFO_KEYS, REWARD_TERMS
 
 __all__ = ["AmigoBotSB3VecEnv"]
-
-_FLOAT_KEYS = ("cross_track_error", "castor_angle", "time")
 
 
 class AmigoBotSB3VecEnv(VecEnv):
@@ -146,14 +144,13 @@ class AmigoBotSB3VecEnv(VecEnv):
         out = []
         for i in idx:
             d: dict[str, Any] = {}
-            for k, v in vinfo.items():
-                if k.startswith("_") or k in ("final_obs", "final_info"):
-                    continue
-                if isinstance(v, dict):
-                    d[k] = {kk: float(vv[i]) for kk, vv in v.items() if not kk.startswith("_")}
-                elif k in _FLOAT_KEYS:
+            for k, kind in INFO_KEYS.items():  # the schema's one home: amigo_gym.task
+                v = vinfo[k]
+                if kind == "terms":
+                    d[k] = {name: float(v[name][i]) for name in REWARD_TERMS}
+                elif kind == "scalar":
                     d[k] = float(v[i])
                 else:
-                    d[k] = deepcopy(v[i])
+                    d[k] = v[i].copy()
             out.append(d)
         return out

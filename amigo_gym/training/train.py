@@ -7,7 +7,11 @@ Usage::
     amigo-gym train --algo sac --seed 0 --timesteps 60000 --out runs/sac_s0 --resume   # continue
 
 Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (rl-zoo format: the mapping under the key
-``AmigoBot-v0``); ``--timesteps`` and ``--n-envs`` override its ``n_timesteps`` and ``n_envs``.
+``AmigoBot-v0``, with rl-zoo's idioms, :mod:`amigo_gym.training.hyperparams`); ``--timesteps`` and
+``--n-envs`` override its ``n_timesteps`` and ``n_envs``. The file is checked before anything is
+written: an unknown key or a bad value gives one line and leaves no ``--out`` folder behind.
+``normalize`` wraps the training env in SB3's ``VecNormalize``; its statistics are saved beside the
+model as ``vecnormalize.pkl`` (and in every checkpoint), and ``amigo-gym evaluate`` uses them.
 
 What a run writes in ``--out`` (every file written to a temporary name, then ``os.replace``d, so that
 a killed run never leaves a half-written file):
@@ -62,6 +66,7 @@ import numpy as np
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json
+from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
 
 __all__ = [
     "ALGOS",
@@ -78,6 +83,8 @@ ENV_ID = "AmigoBot-v0"
 HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
+#: the VecNormalize statistics, beside the model (and in each checkpoint) when the file asks for normalize
+VECNORMALIZE = "vecnormalize.pkl"
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
@@ -183,63 +190,27 @@ def versions() -> dict[str, str]:
     }
 
 
-# --------------------------------------------------------------------------- hyperparameters
-def load_hyperparams(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The ``AmigoBot-v0`` mapping of an rl-zoo style YAML file.
-
-    Recognised keys besides the algorithm's keyword arguments: ``n_timesteps``, ``n_envs``, ``policy``,
-    ``noise_type`` (``normal``) with ``noise_std`` (action noise of TD3/SAC), and in ``policy_kwargs``
-    ``activation_fn`` as a name (``ReLU``, ``Tanh``, ...). A ``learning_rate`` written ``lin_<x>``
-    decays linearly from ``x`` to 0 (as in rl-zoo).
-    """
-    import yaml
-
-    with open(path, encoding="utf-8") as f:
-        doc = yaml.safe_load(f)
-    if not isinstance(doc, dict) or ENV_ID not in doc or not isinstance(doc[ENV_ID], dict):
-        raise ValueError(f"{path}: expected a mapping with the key {ENV_ID!r}")
-    hp: dict[str, Any] = dict(doc[ENV_ID])
-    return hp
-
-
-def _algo_kwargs(algo: str, hp: dict[str, Any], n_actions: int) -> dict[str, Any]:
-    """Turn the YAML mapping into keyword arguments of the SB3 algorithm class."""
-    import torch
-
-    kw = {k: v for k, v in hp.items() if k not in ("n_timesteps", "n_envs", "policy", "noise_type", "noise_std")}
-    lr = kw.get("learning_rate")
-    if isinstance(lr, str):
-        if not lr.startswith("lin_"):
-            raise ValueError(f"learning_rate must be a number or 'lin_<x>', got {lr!r}")
-        lr0 = float(lr[4:])
-        kw["learning_rate"] = lambda progress: progress * lr0
-    pk = dict(kw.get("policy_kwargs") or {})
-    if "activation_fn" in pk:
-        name = pk["activation_fn"]
-        fn = getattr(torch.nn, str(name), None)
-        if fn is None:
-            raise ValueError(f"policy_kwargs.activation_fn: unknown torch.nn activation {name!r}")
-        pk["activation_fn"] = fn
-    if pk:
-        kw["policy_kwargs"] = pk
-    if hp.get("noise_type") is not None:
-        from stable_baselines3.common.noise import NormalActionNoise
-
-        if hp["noise_type"] != "normal":
-            raise ValueError(f"noise_type must be 'normal', got {hp['noise_type']!r}")
-        std = float(hp.get("noise_std", 0.1))
-        kw["action_noise"] = NormalActionNoise(np.zeros(n_actions), std * np.ones(n_actions))
-    return kw
-
-
 # --------------------------------------------------------------------------- environments
+def env_kwargs() -> dict[str, Any]:
+    """The settings of the environment a run trains on (``gym.make(ENV_ID)``'s defaults), as JSON values."""
+    from dataclasses import asdict
+
+    from amigo_gym.params import EnvParams
+
+    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(EnvParams())))
+    return kwargs
+
+
 def _native(vec: str, n_envs: int) -> bool:
     """Whether the run uses the native vector env (``--vec native``, or ``auto`` with several envs)."""
     return vec == "native" or (vec == "auto" and n_envs > 1)
 
 
-def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
-    """SB3 VecEnv of ``n_envs`` AmigoBot-v0 with episode statistics (``VecMonitor``), seeded ``seed + i``."""
+def make_train_env(n_envs: int, vec: str, seed: int, normalize: dict[str, Any] | None = None) -> Any:
+    """SB3 VecEnv of ``n_envs`` AmigoBot-v0 with episode statistics (``VecMonitor``), seeded ``seed + i``.
+
+    ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``.
+    """
     import gymnasium as gym
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
@@ -254,11 +225,15 @@ def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
         venv = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID)) for _ in range(n_envs)])
     venv.seed(seed)
     venv.action_space.seed(seed)
+    if normalize is not None:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        venv = VecNormalize(venv, **normalize)
     return venv
 
 
 # --------------------------------------------------------------------------- callbacks
-def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]:
+def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int, normalize: bool = False) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
     from stable_baselines3.common.monitor import Monitor
@@ -320,6 +295,10 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
         else:
             eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
         eval_env.seed(eval_seed)
+        if normalize:  # EvalCallback copies the training statistics into it before each evaluation
+            from stable_baselines3.common.vec_env import VecNormalize
+
+            eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
         after = AfterEval()
         ev = EvalCallback(
             eval_env,
@@ -347,6 +326,9 @@ def save_checkpoint(model: Any, out: Path, algo: str) -> Path:
         model.save(tmp / "model.zip")
         if algo in OFF_POLICY:
             model.save_replay_buffer(tmp / "replay_buffer.pkl")
+        vecnormalize = model.get_vec_normalize_env()
+        if vecnormalize is not None:
+            vecnormalize.save(tmp / VECNORMALIZE)
         root.mkdir(exist_ok=True)
         if final.exists():
             shutil.rmtree(final)
@@ -375,8 +357,9 @@ def train(s: Settings) -> dict[str, Any]:
     out = Path(s.out)
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     hp = load_hyperparams(hp_path)
-    total = int(s.timesteps if s.timesteps is not None else hp.get("n_timesteps", 100_000))
-    n_envs = int(s.n_envs if s.n_envs is not None else hp.get("n_envs", 1))
+    parsed: Hyperparams = parse_hyperparams(s.algo, hp, str(hp_path))  # checked before anything is written
+    total = int(s.timesteps if s.timesteps is not None else (parsed.n_timesteps or 100_000))
+    n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
 
     ckpt_file = out / "checkpoint.json"
     if s.resume:
@@ -396,6 +379,10 @@ def train(s: Settings) -> dict[str, Any]:
         ckpt = json.loads(ckpt_file.read_text())
         done_steps = int(ckpt["num_timesteps"])
         venv = make_train_env(n_envs, s.vec, s.seed + done_steps)
+        if (out / ckpt["path"] / VECNORMALIZE).is_file():
+            from stable_baselines3.common.vec_env import VecNormalize
+
+            venv = VecNormalize.load(str(out / ckpt["path"] / VECNORMALIZE), venv)
         model = algo_cls.load(out / ckpt["path"] / "model.zip", env=venv, device="cpu")
         if s.algo in OFF_POLICY:
             model.load_replay_buffer(out / ckpt["path"] / "replay_buffer.pkl")
@@ -408,20 +395,25 @@ def train(s: Settings) -> dict[str, Any]:
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
             "hyperparams": hp,
             "env_id": ENV_ID,
+            "env_kwargs": env_kwargs(),
             "git_revision": git_revision(),
             "versions": versions(),
             "command": "amigo-gym train " + " ".join(s.argv),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
         atomic_write_json(out / "config.json", config, parents=True)
-        venv = make_train_env(n_envs, s.vec, s.seed)
-        policy = hp.get("policy", "MlpPolicy")
-        kw = _algo_kwargs(s.algo, hp, int(venv.action_space.shape[0]))
-        model = algo_cls(policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw)
+        venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize)
+        kw = dict(parsed.kwargs)
+        noise = parsed.action_noise(int(venv.action_space.shape[0]))
+        if noise is not None:
+            kw["action_noise"] = noise
+        model = algo_cls(
+            parsed.policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw
+        )
         done_steps = 0
 
     remaining = total - int(model.num_timesteps)
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET)
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, normalize=model.get_vec_normalize_env() is not None)
     t0 = time.perf_counter()
     previous_wall = _previous_wall(out)
 
@@ -450,6 +442,9 @@ def train(s: Settings) -> dict[str, Any]:
     save_checkpoint(model, out, s.algo)
     _write_wall(out, wall)
     atomic_save(model.save, out / "model.zip", parents=True)
+    vecnormalize = model.get_vec_normalize_env()
+    if vecnormalize is not None:
+        atomic_save(vecnormalize.save, out / VECNORMALIZE, parents=True)
 
     evals = json.loads((out / "eval.json").read_text()) if (out / "eval.json").is_file() else []
     record = {
@@ -497,21 +492,25 @@ def _write_wall(out: Path, wall: float) -> None:
 def parse_args(argv: Sequence[str]) -> Settings:
     """Settings from the command line (``amigo-gym train --help``)."""
     p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0.")
-    p.add_argument("--algo", required=True, choices=ALGOS)
-    p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
-    p.add_argument("--timesteps", type=int, default=None, help="total env steps (default: the YAML's n_timesteps)")
-    p.add_argument("--out", required=True, help="run directory (must be empty unless --resume)")
+    p.add_argument("--algo", required=True, choices=ALGOS, help="algorithm (required)")
+    p.add_argument("--seed", type=int, default=0, help="master seed [-]")
+    p.add_argument(
+        "--timesteps", type=int, default=None, help="total env steps [steps] (default: the YAML's n_timesteps)"
+    )
+    p.add_argument("--out", required=True, help="run directory [dir], must be empty unless --resume (required)")
     p.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
-    p.add_argument("--n-envs", type=int, default=None, help="parallel envs (default: the YAML's n_envs or 1)")
-    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env (default auto)")
-    p.add_argument("--hyperparams", default=None, help="YAML file (default agents/hyperparams/<algo>.yml)")
-    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations, 0: none")
-    p.add_argument("--eval-episodes", type=int, default=5)
-    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints")
-    p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--n-envs", type=int, default=None, help="parallel envs [envs] (default: the YAML's n_envs or 1)")
+    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env")
+    p.add_argument("--hyperparams", default=None, help="rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml)")
+    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations [steps], 0: none")
+    p.add_argument("--eval-episodes", type=int, default=5, help="episodes per evaluation [episodes]")
+    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints [steps]")
+    p.add_argument("--threads", type=int, default=1, help="torch threads [threads]")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json")
-    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export (final)")
+    p.add_argument(
+        "--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none)"
+    )
+    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export")
     a = p.parse_args(list(argv))
     s = Settings(
         algo=a.algo,

@@ -1,0 +1,80 @@
+"""``amigo-gym compare`` reuses its fresh PPO run only when the recorded configuration equals the request."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY_PPO = """AmigoBot-v0:
+  n_envs: 2
+  policy: MlpPolicy
+  n_steps: 32
+  batch_size: 64
+  n_epochs: 1
+  policy_kwargs: {net_arch: [8, 8]}
+"""
+
+
+def compare(out: Path, hp: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", "", "--no-plots"]
+    cmd += ["--seeds", "1", "--steps", "10", "--no-progress", "--hyperparams", str(hp), *args]
+    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr
+    return r
+
+
+def test_reuse_only_the_same_configuration(tmp_path: Path) -> None:
+    hp = tmp_path / "ppo.yml"
+    hp.write_text(TINY_PPO)
+    out = tmp_path / "out"
+    model = out / "train_ppo" / "model.zip"
+
+    r = compare(out, hp, "--train-steps", "128", "--seed", "0")
+    assert "training a fresh PPO agent" in r.stderr
+    first = model.stat().st_mtime_ns
+
+    r = compare(out, hp, "--train-steps", "128", "--seed", "0")
+    assert "reusing the PPO run" in r.stderr and "retraining" not in r.stderr
+    cfg = json.loads((out / "train_ppo" / "config.json").read_text())
+    assert (cfg["settings"]["seed"], cfg["settings"]["timesteps"]) == (0, 128)
+    assert "resumes" not in cfg or all(r["from_step"] >= 128 for r in cfg["resumes"])
+
+    r = compare(out, hp, "--train-steps", "192", "--seed", "0")
+    assert "retraining" in r.stderr and "timesteps 128 != 192" in r.stderr
+    cfg = json.loads((out / "train_ppo" / "config.json").read_text())
+    assert cfg["settings"]["timesteps"] == 192 and "resumes" not in cfg
+    assert model.stat().st_mtime_ns != first
+
+    r = compare(out, hp, "--train-steps", "192", "--seed", "1")
+    assert "retraining" in r.stderr and "seed 0 != 1" in r.stderr
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["training"]["ppo_fresh"]["seed"] == 1
+    assert json.loads((out / "train_ppo" / "config.json").read_text())["settings"]["seed"] == 1
+
+
+@pytest.mark.parametrize("key", ["versions", "env_kwargs", "hyperparams"])
+def test_any_recorded_difference_is_a_mismatch(tmp_path: Path, key: str) -> None:
+    from amigo_gym.training.compare import fresh_run_request, reuse_mismatch
+
+    request = fresh_run_request(100, 0)
+    run = tmp_path / "train_ppo"
+    run.mkdir()
+    (run / "checkpoint.json").write_text("{}")
+    cfg = {
+        "settings": {"algo": "ppo", "timesteps": 100, "seed": 0},
+        "env_kwargs": request["env_kwargs"],
+        "hyperparams": request["hyperparams"],
+        "versions": request["versions"],
+    }
+    (run / "config.json").write_text(json.dumps(cfg))
+    assert reuse_mismatch(run, request) is None
+    changed = {**cfg, key: {**cfg[key], "extra": 1}}
+    (run / "config.json").write_text(json.dumps(changed))
+    assert reuse_mismatch(run, request) == f"{key} differ"
