@@ -7,6 +7,8 @@ are imported only where they are used.
 
 from __future__ import annotations
 
+import warnings
+
 from gymnasium.envs.registration import register, registry
 
 from amigo_gym.params import EnvParams, RobotParams
@@ -28,6 +30,10 @@ if "AmigoBot-v0" not in registry:
         vector_entry_point="amigo_gym.envs:AmigoBotVectorEnv",
         max_episode_steps=MAX_EPISODE_STEPS,
     )
+
+# AmigoBot-v0 is not deprecated by v1: it stays the ideal robot of the paper comparison (docs/amigobot_v1.md).
+# Gymnasium warns whenever an older version of an id is made; silence that one message, nothing else.
+warnings.filterwarnings("ignore", message=r".*The environment AmigoBot-v0 is out of date", category=DeprecationWarning)
 
 if "AmigoBot-v1" not in registry:
     register(

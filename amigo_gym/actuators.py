@@ -53,13 +53,13 @@ Sources
 -------
 The limits are those of the manufacturer's (Adept MobileRobots, formerly ActivMedia) AmigoBot
 robot parameter file and MobileSim simulator model of the AmigoBot-SH, as collected in
-``shared/MODEL.md`` ("Public data on the real robot"): maximum speed 0.75 m/s (15 rad/s of wheel
+``docs/model.md`` (public data on the real robot): maximum speed 0.75 m/s (15 rad/s of wheel
 rate with r = 0.05 m), acceleration 0.3 m/s^2 (0.87 rad/s^2), deceleration 0.75 m/s^2 (2.5 rad/s^2).
 The ramp rule (speeding up at the acceleration, slowing down at the deceleration, through zero by
 stopping first) is the project's model of the ARCOS firmware's velocity profile that these
 parameters configure; it has not been checked here against an ARCOS manual or the robot. The delay
 bound ``MAX_DELAY`` is the project's choice (a few control cycles of 0.1 s); the delay is in seconds
-and applied exactly (``shared/REFERENCES.md``, "Actuators: limits and delay").
+and applied exactly (a delay in seconds, not in steps; ``docs/amigobot_v1.md``).
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ class ActuatorParams:
         delay: actuation delay [s], in [0, MAX_DELAY]: a command issued at time ``t_k`` takes effect
             at ``t_k + delay``. Default 0 (no public measurement; the environment chooses).
 
-    Sources: ``shared/MODEL.md``, "Public data on the real robot" (module docstring).
+    Sources: the module docstring (``docs/model.md``, public data on the real robot).
     """
 
     acceleration: float = 0.3

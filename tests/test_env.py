@@ -77,16 +77,28 @@ def run_episode(env: gym.Env[Any, Any], policy: Any, pose: tuple[float, float, f
 def test_gymnasium_check_env_no_warnings() -> None:
     settings: list[dict[str, Any]] = [{}, {"path": "manoeuvre", "dt": 0.05, "direction": -1}]
     for kw in settings:
+        env = gym.make("AmigoBot-v0", **kw)  # made outside: test_making_v0_is_silent covers gym.make itself
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            check_env(gym.make("AmigoBot-v0", **kw).unwrapped)
+            check_env(env.unwrapped)
 
 
 def test_sb3_check_env_no_warnings() -> None:
     sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    env = gym.make("AmigoBot-v0")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        sb3_checker.check_env(gym.make("AmigoBot-v0"))
+        sb3_checker.check_env(env)
+
+
+def test_making_v0_is_silent() -> None:
+    """v1 does not deprecate v0: ``import amigo_gym`` silences Gymnasium's "out of date" warning for it (only)."""
+    import subprocess
+    import sys
+
+    code = "import gymnasium as gym, amigo_gym; gym.make('AmigoBot-v0'); gym.make('AmigoBot-v1')"
+    r = subprocess.run([sys.executable, "-W", "default", "-c", code], capture_output=True, text=True, check=True)
+    assert r.stderr == ""
 
 
 def test_spaces_and_metadata() -> None:
