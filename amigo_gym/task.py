@@ -137,6 +137,13 @@ def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
     return low, high
 
 
+def _has_bool(value: Any, depth: int = 0) -> bool:
+    """Whether a (nested) list or tuple holds a ``bool`` or ``numpy.bool_``."""
+    if isinstance(value, bool | np.bool_):
+        return True
+    return depth < 3 and isinstance(value, list | tuple) and any(_has_bool(v, depth + 1) for v in value)
+
+
 def real_array(value: Any, what: str) -> Array:
     """``value`` as a float64 array, refusing what is not an array of real numbers (one-line errors).
 
@@ -146,6 +153,8 @@ def real_array(value: Any, what: str) -> Array:
     """
     if isinstance(value, str | bytes):
         raise TypeError(f"{what} must be real numbers, got a string: {show_value(value)}")
+    if isinstance(value, list | tuple) and _has_bool(value):  # numpy would read True as 1.0
+        raise TypeError(f"{what} must be real numbers (float or int), got bool values: {show_value(value)}")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # e.g. numpy's ComplexWarning: never drop a part silently

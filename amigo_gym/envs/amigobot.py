@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import task
 from amigo_gym.kinematics import h_position
-from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams
+from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "parse_pose_option"]
@@ -98,11 +98,11 @@ def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
         want = "(3,)" if not batch_shape else f"(3,) or {(*batch_shape, 3)}"
         raise ValueError(f'options["pose"] must have shape {want} (x_A, y_A, beta), got shape {pose.shape}')
     if not np.all(np.isfinite(pose)):
-        raise ValueError(f'options["pose"] must be finite, got {task.show_value(value)}')
+        raise ValueError(f'options["pose"] must be finite, got {show_value(value)}')
     if np.abs(pose[..., :2]).max() > POSE_LIMIT or np.abs(pose[..., 2]).max() > HEADING_LIMIT:
         raise ValueError(
             f'options["pose"] must have x_A, y_A in [-{POSE_LIMIT:g}, {POSE_LIMIT:g}] m and beta in '
-            f"[-{HEADING_LIMIT:g}, {HEADING_LIMIT:g}] rad, got {task.show_value(value)}"
+            f"[-{HEADING_LIMIT:g}, {HEADING_LIMIT:g}] rad, got {show_value(value)}"
         )
     return pose
 
@@ -266,11 +266,9 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
         self._renderer: Any = None
         # order of calls (Gymnasium's classic-control convention): no step before reset; a warning
-        # when a finished episode is stepped (terminated here, or truncated by the spec's step limit)
+        # when a terminated episode is stepped
         self._needs_reset = True
-        self._ended: str | None = None
-        self._warned = False
-        self._limit: int | None = None
+        self._ended: bool | None = False  # None: terminated and warned
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickle and deep-copy without the renderer (pygame surfaces); it is recreated when next used."""
@@ -320,9 +318,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._state = self._initial_state._replace(x=x, y=y, beta=beta)
         self._steps = 0
         self._needs_reset = False
-        self._ended = None
-        self._warned = False
-        self._limit = self.spec.max_episode_steps if self.spec is not None else None
+        self._ended = False
         out = task.reset_columns(self._k, self.path, self._state, minimal=True)
         self._trail.clear()
         self._trail.append((float(out.h_x), float(out.h_y)))
@@ -339,14 +335,16 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             TypeError: an action that is not real numbers (:func:`amigo_gym.task.validate_action`).
             ValueError: action of a wrong shape or with NaN/inf entries.
 
-        Stepping an episode that has ended (terminated, or at the spec's ``max_episode_steps``) warns
-        once per episode, as Gymnasium's classic-control environments do, and goes on integrating.
+        Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
+        environments do, and goes on integrating. (Truncation belongs to the ``TimeLimit`` wrapper of
+        ``gym.make``, outside this environment; the vector environment truncates itself and autoresets,
+        or refuses to step a finished robot in ``Disabled`` mode.)
         """
         if self._needs_reset:
             raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before step()")
         a1, a2 = task.validate_action(action).tolist()
-        if not self._warned and (self._ended is not None or (self._limit is not None and self._steps >= self._limit)):
-            self._warn_ended(self._ended or "truncated")
+        if self._ended:
+            self._warn_ended()
         state, out = task.step_columns(self._k, self.path, self._state, a1, a2, minimal=True)
         self._state = task.bound_heading(state)
         self._steps += 1
@@ -356,16 +354,16 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         if self.render_mode == "human":
             self.render()
         terminated = bool(out.terminated)
-        if terminated and self._ended is None:
-            self._ended = "terminated"
+        if terminated and self._ended is False:
+            self._ended = True
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
 
-    def _warn_ended(self, how: str) -> None:
+    def _warn_ended(self) -> None:
         gym.logger.warn(
-            f"AmigoBotEnv: step() called after the episode was {how}; call reset() to start a new one "
+            "AmigoBotEnv: step() called after the episode was terminated; call reset() to start a new one "
             "(the steps go on integrating, outside the task)"
         )
-        self._warned = True
+        self._ended = None  # warned: once per episode
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
         st = self._state
