@@ -46,6 +46,9 @@ Keys of each entry of ``results`` (pooled over the episodes of the scenario)
 ``training`` (when the models directory holds ``<algo>.json`` records): each model's training record
 (command, seed, steps, wall time, git revision, versions).
 
+Metrics that do not exist (e.g. ``h_rms_settled_m`` of an episode that ended before ``settle_time_s``)
+are written as ``null``; the JSON is strict (no bare ``NaN``).
+
 Outputs: ``--json`` (default ``<out>/results.json``), ``--markdown`` (default ``<out>/eval.md``, the
 table) and the plots
 ``<out>/eval_trajectories.png`` (H's path around the circle and ``|e|`` over time, every agent) and
@@ -71,7 +74,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write
+from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.params import EnvParams
 
 __all__ = [
@@ -285,18 +288,36 @@ def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
 
 
 def load_agents(models_dir: str | os.PathLike[str]) -> dict[str, Agent]:
-    """Load every ``<algo>.zip`` (algo in ppo, sac, td3) of ``models_dir`` with its SB3 class, on the CPU."""
+    """Load every ``<algo>.zip`` (algo in ppo, sac, td3) of ``models_dir`` with its SB3 class, on the CPU.
+
+    Model zips are pickles: loading one runs code, so load only files you trust (docs/security.md).
+    When ``<algo>.json`` beside the zip records a ``sha256``, the file must match it; the shipped
+    pretrained models (``agents/pretrained``) must have one.
+
+    Raises:
+        CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+    """
+    from amigo_gym.runs import CorruptFileError, corrupt_errors, read_json, verify_sha256
+
     d = Path(models_dir)
     if not d.is_dir():
         raise FileNotFoundError(f"--models: no directory {d}")
     from stable_baselines3 import PPO, SAC, TD3
 
+    shipped = d.resolve() == PRETRAINED_DIR.resolve()
     classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
     out: dict[str, Agent] = {}
     for algo in ALGOS:
         f = d / f"{algo}.zip"
         if f.is_file():
-            out[algo] = classes[algo].load(f, device="cpu")
+            manifest = d / f"{algo}.json"
+            digest = read_json(manifest).get("sha256") if manifest.is_file() else None
+            if digest is not None:
+                verify_sha256(f, str(digest), str(manifest))
+            elif shipped:
+                raise CorruptFileError(f"{manifest}: no sha256 for the shipped model {f.name}")
+            with corrupt_errors(f, f"{algo.upper()} model"):
+                out[algo] = classes[algo].load(f, device="cpu")
     return out
 
 
@@ -359,13 +380,8 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
 
 
 def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
+    """``x`` for strict JSON: numpy scalars as Python numbers, NaN and inf as ``None`` (``null``)."""
+    return json_safe(x)
 
 
 # --------------------------------------------------------------------------- table and plots
@@ -383,11 +399,17 @@ COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 )
 
 
+def _missing(v: Any) -> bool:
+    """A metric that does not exist: ``None`` (as read back from JSON) or NaN."""
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     """The results as a Markdown table (one row per agent and scenario)."""
     lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
     for r in results:
-        lines.append("| " + " | ".join(fmt(r[key]) for key, _, fmt in COLUMNS) + " |")
+        cells = ("n/a" if _missing(r[key]) and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -523,7 +545,7 @@ def write_outputs(
     """
     params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
-    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2) + "\n").encode(), parents=True)
+    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2, allow_nan=False) + "\n").encode(), parents=True)
     atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")
@@ -534,7 +556,12 @@ def write_outputs(
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     p = OneLineParser(prog="amigo-gym evaluate", description="Evaluate analytic and trained agents (fixed protocol).")
-    p.add_argument("--models", default=str(PRETRAINED_DIR), help="directory of <algo>.zip (default agents/pretrained)")
+    p.add_argument(
+        "--models",
+        default=str(PRETRAINED_DIR),
+        help="directory of <algo>.zip (default agents/pretrained). Model zips are pickles: loading one runs "
+        "its code, so pass only files you trust; the shipped ones are checked against their sha256",
+    )
     p.add_argument("--out", default="results", help="directory for eval.md and the plots (default results/)")
     p.add_argument("--json", default=None, help="JSON file (default <out>/results.json)")
     p.add_argument("--markdown", default=None, help="Markdown table file (default <out>/eval.md)")

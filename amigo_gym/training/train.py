@@ -15,21 +15,25 @@ a killed run never leaves a half-written file):
 * ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
   (and, for each ``--resume``, its command line, step and git revision);
 * ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
-* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the latest checkpoint (model and, for SAC/TD3, the
-  replay buffer); ``checkpoint.json`` is written last and names the complete checkpoint;
+* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the last two checkpoints (model, for SAC/TD3 the
+  replay buffer, the evaluation record as of that step, ``meta.json`` with sha256 sums);
+  ``checkpoint.json`` is switched atomically to a complete checkpoint (:mod:`amigo_gym.runs`);
 * ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
   policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
-  last evaluation, versions, command).
+  last evaluation, versions, command, the model's sha256);
+* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
 
-``--resume`` loads the latest checkpoint and trains the remaining ``timesteps - num_timesteps``
-steps with ``reset_num_timesteps=False`` (same TensorBoard curve, same step counter); the replay
-buffer is restored, so an off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` writes a
-checkpoint before exiting (status 130), so an interrupted run loses no steps: SAC/TD3 at the current
-step (every collected transition is in the saved replay buffer), PPO at the start of the rollout being
-collected (the weights have seen only the complete rollouts; the incomplete one is collected again).
-SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3, ``n_steps`` per env for PPO),
-so a run may end up to one rollout beyond ``--timesteps``.
+Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
+(:mod:`amigo_gym.runs`). ``--resume`` loads the newest good checkpoint (falling back to the previous
+one, with a warning, if a file is damaged), restores the evaluation record of that step and trains the
+remaining ``timesteps - num_timesteps`` steps with ``reset_num_timesteps=False`` (same TensorBoard
+curve, same step counter, evaluations at the same steps); the replay buffer is restored, so an
+off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` stops at the next rollout start with a
+checkpoint (status 130): a PPO run collects its interrupted rollout again, so its step count only ever
+counts steps it has trained on. SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3,
+``n_steps`` per env for PPO), so a run may end up to one rollout beyond ``--timesteps``. Model zips and
+replay buffers are pickles: resume only runs you trust (``docs/reliability.md``).
 
 Seeding: ``seed`` seeds Python, NumPy and torch (SB3's ``set_random_seed``), the training envs
 (sub-env ``i``: ``seed + i``), the evaluation env (``seed + 10_000``) and the action space. A run
@@ -539,7 +543,12 @@ def parse_args(argv: Sequence[str]) -> Settings:
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     p.add_argument("--timesteps", type=int, default=None, help="total env steps (default: the YAML's n_timesteps)")
     p.add_argument("--out", required=True, help="run directory (must be empty unless --resume)")
-    p.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue from the latest good checkpoint in --out (its model and replay buffer are pickles: "
+        "resume only runs you trust)",
+    )
     p.add_argument("--n-envs", type=int, default=None, help="parallel envs (default: the YAML's n_envs or 1)")
     p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env (default auto)")
     p.add_argument("--hyperparams", default=None, help="YAML file (default agents/hyperparams/<algo>.yml)")
