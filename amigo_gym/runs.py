@@ -301,7 +301,7 @@ def _step_of(folder: Path) -> tuple[int, int]:
         return -1, 0
 
 
-def candidates(out: Path) -> list[Path]:
+def candidates(out: Path, report: bool = True) -> list[Path]:
     """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first.
 
     A damaged pointer is reported with a warning (the folders are still found by name).
@@ -310,7 +310,8 @@ def candidates(out: Path) -> list[Path]:
     try:
         ptr = _read_pointer(out)
     except CorruptFileError as exc:
-        warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
+        if report:
+            warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
         ptr = None
     if ptr is not None:
         for key in ("path", "previous"):
@@ -329,6 +330,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
 
     Each candidate (:func:`candidates`) is verified (:func:`verify_checkpoint`) and then passed to
     ``load``; a :class:`CorruptFileError` (from either) prints a warning and falls back to the next.
+    A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
 
     Returns:
         ``(checkpoint, load's result)``, or ``None`` if the run has no checkpoint folder at all.
@@ -341,11 +343,19 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
     for i, folder in enumerate(cands):
         try:
             ck = verify_checkpoint(folder, algo)
-            return ck, load(ck)
+            result = load(ck)
         except CorruptFileError as exc:
             tried.append(str(exc))
             nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
             warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
+            continue
+        try:
+            ptr = _read_pointer(out)
+        except CorruptFileError:
+            ptr = None
+        if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
+            _write_pointer(out, algo, folder, ck.step)
+        return ck, result
     if tried:
         raise CorruptFileError(f"no usable checkpoint in {out}: " + "; ".join(tried))
     return None
@@ -414,16 +424,7 @@ def save_checkpoint(
         raise
     fsync_dir(root)
     fault_point("checkpoint:rename")
-    previous: str | None = None
-    try:
-        ptr = _read_pointer(out)
-        prev = _inside(out, ptr.get("path")) if ptr else None
-        if prev is not None and prev.is_dir() and prev != final:
-            previous = str(prev.relative_to(out))
-    except CorruptFileError:
-        previous = None
-    rel = str(final.relative_to(out))
-    atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
+    rel, previous = _write_pointer(out, algo, final, step)
     keep = {rel, previous}
     for old in list(root.iterdir()):
         name = str(old.relative_to(out))
@@ -435,6 +436,26 @@ def save_checkpoint(
         shutil.rmtree(trash, ignore_errors=True)
     fsync_dir(root)
     return final
+
+
+def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, str | None]:
+    """Switch ``checkpoint.json`` atomically to ``folder`` (and the previous good checkpoint)."""
+    previous = _previous_good(out, algo, folder)
+    rel = str(folder.relative_to(out))
+    atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
+    return rel, previous
+
+
+def _previous_good(out: Path, algo: str, new: Path) -> str | None:
+    """The checkpoint to keep beside ``new``: the first of the pointer's, its previous one and the
+    others (newest first) that verifies (a damaged one a resume fell back from is not kept)."""
+    for folder in (p for p in candidates(out, report=False) if p != new):
+        try:
+            verify_checkpoint(folder, algo)
+        except CorruptFileError:
+            continue
+        return str(folder.relative_to(out))
+    return None
 
 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:

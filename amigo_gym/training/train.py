@@ -53,6 +53,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -264,8 +265,28 @@ class _StopAtBoundary(Exception):
     """Raised at a rollout boundary, after the checkpoint, when a stop was asked for."""
 
 
+class _Stop:
+    """``SIGTERM``/``SIGINT`` while a run holds its folder: the first asks for a stop at the next rollout
+    start (after a checkpoint), a second one stops at once (``KeyboardInterrupt``)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("amigo-gym train: stopping at the end of this rollout (checkpoint first)", file=sys.stderr, flush=True)
+
+
 def _callbacks(
-    s: Settings, out: Path, n_envs: int, eval_seed: int, done_steps: int, wall: Callable[[], float]
+    s: Settings,
+    out: Path,
+    n_envs: int,
+    eval_seed: int,
+    done_steps: int,
+    wall: Callable[[], float],
+    stop: _Stop,
 ) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
@@ -282,14 +303,13 @@ def _callbacks(
             super().__init__()
             self.freq = freq
             self.last = done_steps
-            self.stop_requested = False
 
         def _on_rollout_start(self) -> None:
             due = self.freq and self.num_timesteps - self.last >= self.freq
-            if due or self.stop_requested:
+            if due or stop.requested:
                 self.last = self.num_timesteps
                 save_checkpoint(self.model, out, s.algo, wall())
-            if self.stop_requested:
+            if stop.requested:
                 raise _StopAtBoundary
 
         def _on_step(self) -> bool:
@@ -396,11 +416,23 @@ def train(s: Settings) -> dict[str, Any]:
         CorruptFileError: a damaged file that has no fallback (one line naming it).
     """
     s.validate()
-    with runs.RunLock(s.out):
-        return _train(s)
+    stop = _Stop()
+    main = threading.current_thread() is threading.main_thread()  # signals can only be handled there
+    old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        with runs.RunLock(s.out):
+            result = _train(s, stop)
+    finally:
+        for sig, handler in old_handlers.items():
+            signal.signal(sig, handler)
+    if stop.requested and result is None:
+        raise KeyboardInterrupt
+    if result is None:  # pragma: no cover - _train returns None only on a stop
+        raise RuntimeError("training stopped")
+    return result
 
 
-def _train(s: Settings) -> dict[str, Any]:
+def _train(s: Settings, stop: _Stop) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
@@ -472,16 +504,7 @@ def _train(s: Settings) -> dict[str, Any]:
     def wall() -> float:
         return previous_wall + time.perf_counter() - t0
 
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall)
-    ckpt_cb = cbs[0]
-
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        if ckpt_cb.stop_requested:  # a second signal: stop now (the last checkpoint stands)
-            raise KeyboardInterrupt
-        ckpt_cb.stop_requested = True
-        print("amigo-gym train: stopping at the end of this rollout (checkpoint first)", file=sys.stderr, flush=True)
-
-    old_handlers = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGTERM, signal.SIGINT)}
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop)
     try:
         if remaining > 0:
             model.learn(
@@ -492,10 +515,8 @@ def _train(s: Settings) -> dict[str, Any]:
                 progress_bar=s.progress,
             )
     except _StopAtBoundary:
-        raise KeyboardInterrupt from None
-    finally:
-        for sig, handler in old_handlers.items():
-            signal.signal(sig, handler)
+        venv.close()
+        return None
     if int(model.num_timesteps) != done_steps or loaded is None:
         save_checkpoint(model, out, s.algo, wall())
     atomic_save(model.save, out / "model.zip", parents=True)
