@@ -115,9 +115,7 @@ SAC_CHAIN: list[tuple[bool, str | None]] = [
     (True, "checkpoint:model"),  # killed inside a checkpoint save: model written, buffer not
     (True, "checkpoint:replay"),  # buffer written, meta.json not
     (True, "rename:checkpoint.json"),  # pointer switched, oldest not deleted, folder not fsynced
-    (True, "write:eval.json"),  # an evaluation made, its record not written
-    (True, "write:model.zip"),  # the final model
-    (True, "rename:run.json"),  # the run's record
+    (True, "write:model.zip"),  # the final model (the run's record is then rewritten too)
     (True, None),
 ]
 
@@ -197,6 +195,25 @@ with runs.RunLock(out):
         with runs.RunLock(out):
             runs.clean_temporaries(out)
         assert not dot_files(out), (stage, dot_files(out))
+
+
+@pytest.mark.parametrize("stage", ["write:eval.json", "rename:eval.json"])
+def test_a_killed_atomic_write_leaves_the_old_or_the_new_file(tmp_path: Path, stage: str) -> None:
+    """Every record file (eval.json, run.json, config.json, ...) is written by io.atomic_write_json."""
+    script = """
+import sys
+from pathlib import Path
+from amigo_gym.io import atomic_write_json
+for n in range(3):
+    atomic_write_json(Path(sys.argv[1]) / "eval.json", [{"timesteps": 100 * (k + 1)} for k in range(n + 1)])
+"""
+    r = subprocess.run([sys.executable, "-c", script, str(tmp_path)], env=env_for(stage + "@2"), capture_output=True)
+    assert r.returncode == -signal.SIGKILL
+    steps = [e["timesteps"] for e in json.loads((tmp_path / "eval.json").read_text())]
+    assert steps == ([100] if stage.startswith("write") else [100, 200])
+    with runs.RunLock(tmp_path):
+        runs.clean_temporaries(tmp_path)
+    assert not dot_files(tmp_path)
 
 
 # --------------------------------------------------------------------------- two processes on one folder
