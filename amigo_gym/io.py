@@ -4,18 +4,73 @@ Every writer puts the data in a temporary file in the target's own folder (same 
 and fsyncs it, gives it the mode a plain new file would get (``0o666 & ~umask``; ``mkstemp`` makes
 ``0o600``) and then moves it over the target with ``os.replace``, which is atomic on POSIX and Windows.
 On any error, ``KeyboardInterrupt`` included, the temporary file is removed and the target is untouched.
+After the move the folder itself is fsynced, so that the new name survives a power loss.
+
+JSON is written strictly (``allow_nan=False``): NaN and infinities become ``null``.
+
+Fault injection (tests only): with the environment variable ``AMIGO_GYM_FAULT=<stage>[@<n>]`` the process
+kills itself (``SIGKILL``) the ``n``-th time (default 1) it reaches ``<stage>``:
+``write:<file name>`` (temporary file complete, not yet moved) and ``rename:<file name>`` (moved, folder
+not yet fsynced) here, and the stages of :mod:`amigo_gym.runs`. Unset, :func:`fault_point` does nothing.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
+import signal
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_save", "atomic_write", "atomic_write_json", "file_mode"]
+__all__ = ["atomic_save", "atomic_write", "atomic_write_json", "fault_point", "file_mode", "fsync_dir", "json_safe"]
+
+FAULT_ENV = "AMIGO_GYM_FAULT"
+_fault_counts: dict[str, int] = {}
+
+
+def fault_point(stage: str) -> None:
+    """Kill this process here if ``AMIGO_GYM_FAULT`` names ``stage`` (module docstring; tests only)."""
+    spec = os.environ.get(FAULT_ENV)
+    if not spec:
+        return
+    name, _, nth = spec.partition("@")
+    if name != stage:
+        return
+    _fault_counts[stage] = count = _fault_counts.get(stage, 0) + 1
+    if count == int(nth or 1):
+        if hasattr(signal, "SIGKILL"):
+            os.kill(os.getpid(), signal.SIGKILL)
+        os._exit(137)  # pragma: no cover - no SIGKILL (Windows)
+
+
+def fsync_dir(folder: str | os.PathLike[str]) -> None:
+    """fsync a folder, so that renames in it are durable (a no-op where folders cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # pragma: no cover - Windows
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # pragma: no cover - file systems without directory fsync
+        pass
+    finally:
+        os.close(fd)
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with every non-finite float (NaN, inf) replaced by ``None`` and numpy scalars as Python ones."""
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    if hasattr(obj, "item") and getattr(obj, "shape", None) == ():
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
 
 
 def file_mode() -> int:
@@ -53,10 +108,13 @@ def atomic_save(save: Callable[[str], object], path: str | os.PathLike[str], *, 
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, file_mode())
+        fault_point(f"write:{target.name}")
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    fault_point(f"rename:{target.name}")
+    fsync_dir(target.parent)
 
 
 def atomic_write(path: str | os.PathLike[str], data: bytes | str, *, parents: bool = False) -> None:
@@ -66,5 +124,5 @@ def atomic_write(path: str | os.PathLike[str], data: bytes | str, *, parents: bo
 
 
 def atomic_write_json(path: str | os.PathLike[str], obj: Any, *, parents: bool = False) -> None:
-    """``json.dumps(obj, indent=2)`` plus a newline, written atomically."""
-    atomic_write(path, json.dumps(obj, indent=2) + "\n", parents=parents)
+    """``json.dumps(obj, indent=2)`` plus a newline, written atomically; NaN and inf as ``null`` (:func:`json_safe`)."""
+    atomic_write(path, json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n", parents=parents)

@@ -18,40 +18,105 @@ Sources
 from __future__ import annotations
 
 import math
+import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Literal
+from typing import Any, Literal
 
-__all__ = ["RobotParams", "EnvParams", "check_range"]
+__all__ = [
+    "HEADING_LIMIT",
+    "POSE_LIMIT",
+    "RobotParams",
+    "EnvParams",
+    "check_range",
+    "check_real",
+    "show_value",
+]
+
+#: largest ``|x_A|``, ``|y_A|`` of a start pose [m]: float64 still resolves 2.3e-10 m there (ulp(1e6)),
+#: far below any tracking error the task measures
+POSE_LIMIT = 1e6
+#: largest ``|beta|`` of a start pose [rad] (159 155 turns): the heading keeps a resolution of 1.2e-10 rad.
+#: At 1e17 rad one ulp is 16 rad and a step's turn of under a radian is lost: the robot could not turn.
+HEADING_LIMIT = 1e6
+
+# Ranges of the parameters. They are physical (a millimetre to a hundred metres for the robot's lengths,
+# up to 100 m/s) and chosen so that every intermediate of a step stays finite and resolved in float64:
+# the largest wheel rate is max_speed / r <= 1e5 rad/s, the largest turn rate max_speed / l1 <= 1e5 rad/s,
+# squares of rate changes <= 4e10, the smoothness scale (w_max sigma_smooth)^2 in [1e-28, 1e22], the
+# observation bound 2 termination_distance / error_scale <= 2e7 (finite in float32), the lap time finite.
+LENGTH_RANGE = (1e-3, 1e2)  # robot lengths [m]
+SPEED_RANGE = (1e-3, 1e2)  # max_speed [m/s]
+MIN_SPEED = 1e-6  # reference speed [m/s]
+LIMIT_RANGE = (1e-6, 1e3)  # max_acceleration, max_deceleration [m/s^2], max_rotation_rate [rad/s]
+SIGMA_RANGE = (1e-6, 1e6)  # reward scales
 
 
-def check_range(
+def show_value(value: Any, width: int = 60) -> str:
+    """A one-line, bounded ``repr`` of ``value`` with its type, for error messages."""
+    text = " ".join(repr(value).split())
+    if len(text) > width:
+        text = text[: width - 3] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def _real(value: Any) -> float | None:
+    """``value`` as a Python float if it is a real number (not a bool), else ``None``.
+
+    Accepted: ``int``, ``float``, numpy integer and floating scalars, ``fractions.Fraction`` (every
+    :class:`numbers.Real`) and 0-d numpy arrays of an integer or floating dtype. Refused: ``bool`` and
+    ``numpy.bool_``, strings, complex numbers, ``None``, sequences and arrays of other shapes.
+    """
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        return None
+    if isinstance(value, numbers.Real):
+        return float(value)
+    shape = getattr(value, "shape", None)
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    if shape == () and kind in ("i", "u", "f") and hasattr(value, "item"):
+        return float(value.item())
+    return None
+
+
+def check_real(
     owner: str,
     name: str,
-    value: float,
+    value: Any,
     low: float = -math.inf,
     high: float = math.inf,
     *,
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """Check that ``value`` is a finite real number in the given interval.
+    """``value`` as a Python ``float``, checked to be a finite real number in the given interval.
+
+    Converting to ``float`` keeps numpy scalar types (``np.float32``) out of the exact state and makes
+    equal settings compare (and hash) equal only when their values are equal.
 
     Raises:
-        ValueError: naming ``owner.name``, the allowed range and the offending value.
+        ValueError: one line naming ``owner.name``, the allowed range and the offending value (also for
+            a wrong type: ``bool``, ``str``, complex, ``None``, sequences).
     """
     lo_b = "(" if low_open else "["
     hi_b = ")" if high_open else "]"
     rng = f"{lo_b}{low:g}, {high:g}{hi_b}"
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}.{name} must be a real number in {rng}, got {value!r}") from None
+    v = _real(value)
+    if v is None:
+        raise ValueError(f"{owner}.{name} must be a real number in {rng}, got {show_value(value)}")
     ok = math.isfinite(v)
     ok = ok and (v > low if low_open else v >= low)
     ok = ok and (v < high if high_open else v <= high)
     if not ok:
         raise ValueError(f"{owner}.{name} must be a finite number in {rng}, got {value!r}")
     return v
+
+
+#: the former name of :func:`check_real`
+check_range = check_real
+
+
+def _set(obj: object, name: str, value: object) -> None:
+    object.__setattr__(obj, name, value)
 
 
 @dataclass(frozen=True)
@@ -72,6 +137,10 @@ class RobotParams:
         max_rotation_rate: rotational velocity limit of the simulator model [rad/s]: 0.87.
         body_length: body length, for rendering [m]: 0.330.
         body_width: body width, for rendering [m]: 0.279.
+
+    Ranges (refused outside, with a one-line ``ValueError``; see the module's range constants): every
+    length in [1e-3, 100] m, ``l4`` in [1e-6, r1), ``max_speed`` in [1e-3, 100] m/s, the other limits
+    in [1e-6, 1e3]. Values are stored as Python floats; bools, strings and other non-numbers are refused.
     """
 
     l1: float = 0.12
@@ -89,9 +158,18 @@ class RobotParams:
     body_width: float = 0.279
 
     def __post_init__(self) -> None:
+        o = "RobotParams"
         for f in fields(self):
-            check_range("RobotParams", f.name, getattr(self, f.name), 0.0, low_open=True)
-        check_range("RobotParams", "l4", self.l4, 0.0, self.r1, low_open=True, high_open=True)
+            if f.name in ("max_acceleration", "max_deceleration", "max_rotation_rate"):
+                low, high = LIMIT_RANGE
+            elif f.name == "max_speed":
+                low, high = SPEED_RANGE
+            elif f.name == "l4":
+                continue
+            else:
+                low, high = LENGTH_RANGE
+            _set(self, f.name, check_real(o, f.name, getattr(self, f.name), low, high))
+        _set(self, "l4", check_real(o, "l4", self.l4, LIMIT_RANGE[0], self.r1, high_open=True))
 
     @property
     def max_wheel_rate(self) -> float:
@@ -110,29 +188,37 @@ class EnvParams:
     """Settings of the ``AmigoBot`` tracking task (all keyword arguments of ``gym.make``).
 
     Attributes:
-        robot: robot geometry and limits.
+        robot: robot geometry and limits (a :class:`RobotParams`).
         dt: control period; wheel rates are held over it [s]. Default 0.1 (the robot's 100 ms cycle).
-            Range (0, 2].
+            Range [1e-6, 2].
         radius: radius ``R`` of the circle that H must follow [m]; must exceed ``robot.l3`` so that
             the steady state exists (``R_A = sqrt(R^2 - l3^2)``). Default 1.0.
-        speed: reference speed of point A, ``v_A`` [m/s], in (0, robot.max_speed]. Default 0.2.
-        direction: +1 for a left (counter-clockwise) circle as in the paper's eq. (6), -1 for right.
+        speed: reference speed of point A, ``v_A`` [m/s], in [1e-6, robot.max_speed]. Default 0.2.
+        direction: +1 for a left (counter-clockwise) circle as in the paper's eq. (6), -1 for right (an integer).
         path: ``"circle"`` (eq. 6: through the origin, tangent to x0 there) or ``"manoeuvre"``
             (a straight segment of ``straight_length`` along x0 from the origin, then the circle).
         straight_length: length of the straight part of the manoeuvre path [m], >= 0. Default 1.0.
         termination_distance: the episode terminates when |cross-track error of H| exceeds it [m].
-            Default 0.25.
+            In [1e-3, 10]. Default 0.25.
         init_position_noise: half-width of the uniform perturbation of H's start position, per
             axis [m], in [0, termination_distance/2]. Default 0.02.
         init_heading_noise: half-width of the uniform perturbation of the start heading [rad], in
             [0, pi/4]. Default 0.1.
-        error_scale: the observation reports the cross-track error divided by this [m]. Default 0.05.
+        error_scale: the observation reports the cross-track error divided by this [m], in [1e-6, 10].
+            Default 0.05.
         preview: distances ahead of H's closest path point at which the path curvature is also
-            observed [m], each in [0, 10]. Default (0.2, 0.4).
+            observed [m], each in [0, 10] (any sequence; stored as a tuple). Default (0.2, 0.4).
         sigma_track: scale of the tracking reward term ``exp(-|e|/sigma_track)`` [m]. Default 0.02.
         sigma_speed: scale of the speed term ``exp(-|v_A - v_ref|/sigma_speed)`` [m/s]. Default 0.05.
         sigma_smooth: scale of the change of normalised action in the smoothness term [-]. Default 0.1.
         smooth_weight: largest loss the smoothness term can cause, in [0, 1). Default 0.2.
+
+    The sigmas lie in [1e-6, 1e6]. Numbers are stored as Python floats (``direction`` as an int), so
+    ``dt=np.float32(0.1)`` becomes ``0.10000000149011612`` and never makes the state float32. The task
+    must be drivable: the straight roll at ``speed`` and the exact steady state on the circle
+    (:func:`amigo_gym.kinematics.circle_steady_state`) must keep both wheel rates within
+    ``robot.max_wheel_rate``; otherwise a one-line ``ValueError`` names the rate needed and the limit
+    (``speed 0.74 m/s on a 1 m circle needs 16.6 rad/s on the outer wheel, over the limit 15 rad/s``).
     """
 
     robot: RobotParams = RobotParams()
@@ -155,27 +241,65 @@ class EnvParams:
     def __post_init__(self) -> None:
         o = "EnvParams"
         if not isinstance(self.robot, RobotParams):
-            raise ValueError(f"{o}.robot must be a RobotParams, got {type(self.robot).__name__}")
-        check_range(o, "dt", self.dt, 0.0, 2.0, low_open=True)
-        check_range(o, "radius", self.radius, self.robot.l3, 1e3, low_open=True)
-        check_range(o, "speed", self.speed, 0.0, self.robot.max_speed, low_open=True)
-        if self.direction not in (1, -1) or isinstance(self.direction, bool):
-            raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
-        if self.path not in ("circle", "manoeuvre"):
-            raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {self.path!r}")
-        check_range(o, "straight_length", self.straight_length, 0.0, 1e3)
-        check_range(o, "termination_distance", self.termination_distance, 0.0, 10.0, low_open=True)
-        check_range(o, "init_position_noise", self.init_position_noise, 0.0, self.termination_distance / 2)
-        check_range(o, "init_heading_noise", self.init_heading_noise, 0.0, math.pi / 4)
-        check_range(o, "error_scale", self.error_scale, 0.0, 10.0, low_open=True)
-        if not isinstance(self.preview, tuple):
-            object.__setattr__(self, "preview", tuple(self.preview))
-        for i, d in enumerate(self.preview):
-            check_range(o, f"preview[{i}]", d, 0.0, 10.0)
-        check_range(o, "sigma_track", self.sigma_track, 0.0, low_open=True)
-        check_range(o, "sigma_speed", self.sigma_speed, 0.0, low_open=True)
-        check_range(o, "sigma_smooth", self.sigma_smooth, 0.0, low_open=True)
-        check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True)
+            raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(self.robot)}")
+        robot = self.robot
+
+        def real(name: str, low: float, high: float, **kw: bool) -> None:
+            _set(self, name, check_real(o, name, getattr(self, name), low, high, **kw))
+
+        real("dt", 1e-6, 2.0)
+        real("radius", robot.l3, 1e3, low_open=True)
+        real("speed", MIN_SPEED, robot.max_speed)
+        d = self.direction
+        if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
+            raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
+        _set(self, "direction", int(d))
+        if not isinstance(self.path, str) or self.path not in ("circle", "manoeuvre"):
+            raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(self.path)}")
+        _set(self, "path", str(self.path))
+        real("straight_length", 0.0, 1e3)
+        real("termination_distance", 1e-3, 10.0)
+        real("init_position_noise", 0.0, self.termination_distance / 2)
+        real("init_heading_noise", 0.0, math.pi / 4)
+        real("error_scale", 1e-6, 10.0)
+        pv = self.preview
+        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
+            raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
+        _set(self, "preview", tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv)))
+        real("sigma_track", *SIGMA_RANGE)
+        real("sigma_speed", *SIGMA_RANGE)
+        real("sigma_smooth", *SIGMA_RANGE)
+        real("smooth_weight", 0.0, 1.0, high_open=True)
+        self._check_feasible()
+
+    def _check_feasible(self) -> None:
+        """Refuse a task the robot cannot drive: a steady wheel rate above ``robot.max_wheel_rate``.
+
+        The start (and the manoeuvre's straight) rolls straight at ``speed``: ``speed / r`` on each wheel.
+        The circle needs the exact steady state's rates (:func:`amigo_gym.kinematics.circle_steady_state`);
+        they are linear in the speed, so the largest speed that fits is ``speed * w_max / needed``.
+        """
+        from amigo_gym.kinematics import circle_steady_state
+
+        robot, v, w_max = self.robot, self.speed, self.robot.max_wheel_rate
+        limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
+        r_min = min(robot.r1, robot.r2)
+        need = v / r_min
+        if need > w_max:
+            raise ValueError(
+                f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+                f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
+            )
+        ra = math.sqrt((self.radius - robot.l3) * (self.radius + robot.l3))
+        if not ra > 0.0:
+            raise ValueError(f"EnvParams.radius {self.radius!r} is too close to robot.l3 = {robot.l3:g} m")
+        rates = circle_steady_state(self.radius, v, robot, self.direction).wheel_rates.tolist()
+        need = max(abs(rates[0]), abs(rates[1]))
+        if not need <= w_max:
+            raise ValueError(
+                f"EnvParams: speed {v:g} m/s on a {self.radius:g} m circle needs {need:.3g} rad/s on the outer "
+                f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
+            )
 
     @property
     def speed_h(self) -> float:

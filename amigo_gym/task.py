@@ -61,6 +61,7 @@ May import numpy and the core (params, kinematics, paths); never envs, policies,
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, NamedTuple, cast
@@ -81,7 +82,7 @@ from amigo_gym.kinematics import (
     h_from_a,
     pack,
 )
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection
 
 __all__ = [
@@ -90,6 +91,8 @@ __all__ = [
     "obs_bounds",
     "obs_names",
     "validate_action",
+    "real_array",
+    "bound_heading",
     "initial_wheel_rates",
     "start_pose",
     "Evaluation",
@@ -117,6 +120,7 @@ Array = NDArray[np.float64]
 AnyPath = CirclePath | ManoeuvrePath
 
 REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
+TWO_PI = 2.0 * math.pi
 
 #: the observation's fields before the preview (named in :func:`obs_names`)
 OBS_HEAD: tuple[str, ...] = ("cross_track_error", "sin_heading_error", "cos_heading_error", "curvature")
@@ -161,20 +165,76 @@ def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
     return low, high
 
 
+def _has_bool(value: Any, depth: int = 0) -> bool:
+    """Whether a (nested) list or tuple holds a ``bool`` or ``numpy.bool_``."""
+    if isinstance(value, bool | np.bool_):
+        return True
+    return depth < 3 and isinstance(value, list | tuple) and any(_has_bool(v, depth + 1) for v in value)
+
+
+def real_array(value: Any, what: str) -> Array:
+    """``value`` as a float64 array, refusing what is not an array of real numbers (one-line errors).
+
+    Accepted: numbers, (nested) sequences of numbers, arrays of an integer or floating dtype (float32
+    included; the conversion to float64 is exact). Refused with ``TypeError``: strings, bools, complex
+    numbers, ``None`` and other objects; with ``ValueError``: ragged sequences.
+    """
+    if isinstance(value, str | bytes):
+        raise TypeError(f"{what} must be real numbers, got a string: {show_value(value)}")
+    if isinstance(value, list | tuple) and _has_bool(value):  # numpy would read True as 1.0
+        raise TypeError(f"{what} must be real numbers (float or int), got bool values: {show_value(value)}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # e.g. numpy's ComplexWarning: never drop a part silently
+            arr = np.asarray(value)
+    except (ValueError, TypeError, Warning):
+        raise ValueError(f"{what} must be a rectangular array of real numbers, got {show_value(value)}") from None
+    kind = arr.dtype.kind
+    if kind not in ("f", "i", "u"):
+        names = {"b": "bool", "c": "complex", "U": "str", "S": "bytes", "O": "object", "V": "void", "M": "datetime"}
+        got = names.get(kind, str(arr.dtype))
+        raise TypeError(f"{what} must be real numbers (float or int), got {got} values: {show_value(value)}")
+    return arr.astype(np.float64, copy=False)
+
+
 def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Array:
-    """Check a normalised action: shape ``batch_shape + (2,)`` and all values finite.
+    """Check a normalised action: real numbers of shape ``batch_shape + (2,)``, all finite.
 
     Raises:
-        ValueError: on a wrong shape, or on NaN or infinite entries (never silently clipped).
+        TypeError: not real numbers (strings, bools, complex numbers, objects; see :func:`real_array`).
+        ValueError: a ragged sequence, a wrong shape, or NaN or infinite entries (never silently clipped).
     """
-    a = np.asarray(action, dtype=np.float64)
+    if type(action) is np.ndarray and action.dtype.kind == "f":  # the common case, checked quickly
+        a = action.astype(np.float64, copy=False)
+    else:
+        a = real_array(action, "action")
     want = (*batch_shape, 2)
     if a.shape != want:
         raise ValueError(f"action must have shape {want} (wheel 1, wheel 2), got shape {a.shape}")
     # a few values (one robot) are checked faster one by one than by a numpy reduction
     if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 8 else np.isfinite(a).all()):
-        raise ValueError(f"action must be finite; got NaN or infinite values: {np.asarray(action)!r}")
+        raise ValueError(f"action must be finite; got NaN or infinite values: {show_value(action)}")
     return a
+
+
+def bound_heading(state: State) -> State:
+    """``state`` with its heading reduced by whole turns where ``|beta| > HEADING_LIMIT`` (1e6 rad).
+
+    The heading is kept unwrapped (continuous) along an episode; only a robot that has spun more than
+    159 155 turns gets ``beta - 2 pi round(beta / 2 pi)``, so that float64 keeps resolving a step's turn.
+    Cosine and sine are unchanged up to rounding. A no-op (the same object) otherwise.
+    """
+    b = state.beta
+    if isinstance(b, np.ndarray):
+        if b.size == 0 or (b.max() <= HEADING_LIMIT and b.min() >= -HEADING_LIMIT):
+            return state
+        big = np.abs(b) > HEADING_LIMIT
+        nb = b.copy()
+        nb[big] = b[big] - TWO_PI * np.round(b[big] / TWO_PI)
+        return state._replace(beta=nb)
+    if -HEADING_LIMIT <= b <= HEADING_LIMIT:
+        return state
+    return state._replace(beta=b - TWO_PI * round(b / TWO_PI))
 
 
 def initial_wheel_rates(params: EnvParams) -> Array:

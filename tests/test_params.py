@@ -128,7 +128,7 @@ def test_limits_follow_the_robot() -> None:
     big = RobotParams(l3=0.2, max_speed=1.0)
     with pytest.raises(ValueError, match=r"EnvParams\.radius"):
         EnvParams(robot=big, radius=0.15)
-    assert EnvParams(robot=big, radius=0.25, speed=0.9).speed == 0.9
+    assert EnvParams(robot=big, radius=2.0, speed=0.9).speed == 0.9
     assert EnvParams(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]
 
 

@@ -8,6 +8,7 @@ environment :class:`amigo_gym.envs.AmigoBotVectorEnv` holds ``N`` and calls the 
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import fields, replace
 from typing import Any, SupportsFloat
@@ -19,7 +20,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import task
 from amigo_gym.kinematics import h_position
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "make_spaces", "parse_pose_option"]
@@ -34,6 +35,9 @@ ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
 RESET_OPTIONS: tuple[str, ...] = ("pose",)
 
 RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
+
+#: points of H's trail kept for rendering (the most recent ones; memory stays flat however long the run)
+TRAIL_LENGTH = 1000
 
 
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
@@ -105,22 +109,31 @@ def make_env_params(
 def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
     """Validate ``options["pose"]``: ``(x_A [m], y_A [m], beta [rad])`` as finite numbers.
 
+    The coordinates must lie within ``POSE_LIMIT`` (1e6 m) and the heading within ``HEADING_LIMIT``
+    (1e6 rad) of zero, where float64 still resolves a step (:mod:`amigo_gym.params`).
+
     Args:
         value: the option's value; shape ``(3,)``, or ``batch_shape + (3,)`` when ``batch_shape`` is given.
         batch_shape: leading axes a vector environment also accepts.
 
     Raises:
-        ValueError: not numbers, wrong shape, or NaN/inf.
+        ValueError: not real numbers (strings, bools, complex numbers, objects), a ragged sequence, a
+            wrong shape, NaN/inf, or a value out of range.
     """
     try:
-        pose = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f'options["pose"] must be 3 finite numbers (x_A, y_A, beta), got {value!r}') from None
+        pose = task.real_array(value, 'options["pose"]').copy()
+    except TypeError as exc:  # reset options are refused with ValueError, whatever is wrong
+        raise ValueError(str(exc)) from None
     if pose.shape != (3,) and pose.shape != (*batch_shape, 3):
         want = "(3,)" if not batch_shape else f"(3,) or {(*batch_shape, 3)}"
         raise ValueError(f'options["pose"] must have shape {want} (x_A, y_A, beta), got shape {pose.shape}')
     if not np.all(np.isfinite(pose)):
-        raise ValueError(f'options["pose"] must be finite, got {value!r}')
+        raise ValueError(f'options["pose"] must be finite, got {show_value(value)}')
+    if np.abs(pose[..., :2]).max() > POSE_LIMIT or np.abs(pose[..., 2]).max() > HEADING_LIMIT:
+        raise ValueError(
+            f'options["pose"] must have x_A, y_A in [-{POSE_LIMIT:g}, {POSE_LIMIT:g}] m and beta in '
+            f"[-{HEADING_LIMIT:g}, {HEADING_LIMIT:g}] rad, got {show_value(value)}"
+        )
     return pose
 
 
@@ -300,8 +313,18 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         # state (set by reset): plain scalars, stepped by the same column functions as the vector env
         self._state: task.State = self._initial_state
         self._steps = 0
-        self._trail: list[tuple[float, float]] = []
+        self._trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
         self._renderer: Any = None
+        # order of calls (Gymnasium's classic-control convention): no step before reset; a warning
+        # when a terminated episode is stepped
+        self._needs_reset = True
+        self._ended: bool | None = False  # None: terminated and warned
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle and deep-copy without the renderer (pygame surfaces); it is recreated when next used."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
 
     # ------------------------------------------------------------------ state access
     @property
@@ -344,8 +367,11 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         x, y, beta = pose.tolist()
         self._state = self._initial_state._replace(x=x, y=y, beta=beta)
         self._steps = 0
+        self._needs_reset = False
+        self._ended = False
         out = task.reset_columns(self._k, self.path, self._state, minimal=True)
-        self._trail = [(float(out.h_x), float(out.h_y))]
+        self._trail.clear()
+        self._trail.append((float(out.h_x), float(out.h_y)))
         info = self._info(out)
         if self.render_mode == "human":
             self.render()
@@ -355,17 +381,39 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         """Hold the wheel rates ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
 
         Raises:
+            gymnasium.error.ResetNeeded: before the first ``reset()``.
+            TypeError: an action that is not real numbers (:func:`amigo_gym.task.validate_action`).
             ValueError: action of a wrong shape or with NaN/inf entries.
+
+        Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
+        environments do, and goes on integrating. (Truncation belongs to the ``TimeLimit`` wrapper of
+        ``gym.make``, outside this environment; the vector environment truncates itself and autoresets,
+        or refuses to step a finished robot in ``Disabled`` mode.)
         """
+        if self._needs_reset:
+            raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before step()")
         a1, a2 = task.validate_action(action).tolist()
-        self._state, out = task.step_columns(self._k, self.path, self._state, a1, a2, minimal=True)
+        if self._ended:
+            self._warn_ended()
+        state, out = task.step_columns(self._k, self.path, self._state, a1, a2, minimal=True)
+        self._state = task.bound_heading(state)
         self._steps += 1
         if self.render_mode is not None:
             self._trail.append((float(out.h_x), float(out.h_y)))
         info = self._info(out)
         if self.render_mode == "human":
             self.render()
-        return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), False, info
+        terminated = bool(out.terminated)
+        if terminated and self._ended is False:
+            self._ended = True
+        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+
+    def _warn_ended(self) -> None:
+        gym.logger.warn(
+            "AmigoBotEnv: step() called after the episode was terminated; call reset() to start a new one "
+            "(the steps go on integrating, outside the task)"
+        )
+        self._ended = None  # warned: once per episode
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
         cols = task.info_columns(self._state, out, self._steps * self._k.dt)
@@ -383,6 +431,8 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
                 "render() called without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make"
             )
             return None
+        if self._needs_reset:
+            raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before render()")
         from amigo_gym.rendering import Renderer
 
         if self._renderer is None:

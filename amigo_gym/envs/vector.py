@@ -27,7 +27,14 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from amigo_gym import task
-from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, make_spaces, parse_pose_option
+from amigo_gym.envs.amigobot import (
+    TRAIL_LENGTH,
+    ObsArray,
+    check_reset_options,
+    make_env_params,
+    make_spaces,
+    parse_pose_option,
+)
 from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -65,7 +72,14 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
     ``(N,)`` bool, and infos with the single env's keys as ``(N, ...)`` arrays plus ``_key`` masks.
     ``reset`` accepts ``seed`` (``None``, an int ``s`` for seeds ``s + i``, or a list of ``N``) and
     ``options`` with ``"pose"`` (``(3,)`` for all or ``(N, 3)``) and ``"reset_mask"`` (``(N,)`` bool).
+
+    Rendering keeps the last ``trail_length`` (1000) positions of H per robot in a ring buffer, so memory
+    stays flat however many steps are rendered. The environment pickles and deep-copies (also after
+    ``render()``: the renderers are dropped and recreated when next used).
     """
+
+    #: positions of H kept per robot for the rendered trail (a fixed-size ring buffer)
+    trail_length: int = TRAIL_LENGTH
 
     metadata: dict[str, Any] = {  # noqa: RUF012  (gymnasium declares metadata as a plain attribute)
         "render_modes": ["rgb_array"],
@@ -120,7 +134,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
-        self._trail: list[Array] = []
+        self._trail: Array | None = None  # ring buffer (trail_length, N, 2), allocated when first used
+        self._trail_count = 0  # positions written so far
         self._trail_start = np.zeros(n, dtype=np.int64)
         self._renderers: list[Any] = []
         self._was_reset = False
@@ -189,7 +204,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._obs = self._obs.copy()  # the last step returned it
         self._obs[idx] = obs
         if self.render_mode is not None:
-            self._trail.append(h_position(self._pose(), self.params.robot))
+            self._append_trail()
         return self._obs.copy(), self._scatter(infos, mask)
 
     def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
@@ -227,7 +242,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._steps[idx] = 0
         out = task.reset_columns(self._k, self.path, state, minimal=True)
         if self.render_mode is not None:
-            self._trail_start[idx] = len(self._trail)
+            self._trail_start[idx] = self._trail_count
         m = len(idx)
         return self._obs_array(out, m), self._info(state, out, np.zeros(m, dtype=np.int64))
 
@@ -277,9 +292,9 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             prev2[idx] = start.rate2
             self._steps[idx] = 0
             if self.render_mode is not None:
-                self._trail_start[idx] = len(self._trail)
+                self._trail_start[idx] = self._trail_count
         out = task.outcome_columns(k, self.path, state, cos_beta, sin_beta, v, prev1, prev2, minimal=True)
-        self._state = state
+        self._state = task.bound_heading(state)
         obs = self._obs_array(out, n)
         reward = _column(out.reward, n)
         terminated: BoolArray = np.asarray(out.terminated)
@@ -313,7 +328,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._autoreset = terminated | truncated
         self._obs = obs  # returned as is: reset() copies it before changing rows
         if self.render_mode is not None:
-            self._trail.append(h_position(self._pose(), self.params.robot))
+            self._append_trail()
         return obs, reward, terminated, truncated, self._scatter(infos, None)
 
     # ------------------------------------------------------------------ infos
@@ -361,11 +376,42 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         return out
 
     # ------------------------------------------------------------------ rendering
+    def _append_trail(self) -> None:
+        """Write the robots' H into the trail's ring buffer."""
+        length = max(1, int(self.trail_length))
+        if self._trail is None or self._trail.shape[0] != length:
+            self._trail = np.zeros((length, self.num_envs, 2))
+            self._trail_count = 0
+            self._trail_start[:] = 0
+        self._trail[self._trail_count % length] = h_position(self._pose(), self.params.robot)
+        self._trail_count += 1
+
+    def _trail_of(self, i: int) -> list[tuple[float, float]]:
+        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
+        if self._trail is None:
+            return []
+        length = self._trail.shape[0]
+        first = max(int(self._trail_start[i]), self._trail_count - length)
+        rows = np.arange(first, self._trail_count) % length
+        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
+        state = self.__dict__.copy()
+        state["_renderers"] = []
+        return state
+
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
+
+        Raises:
+            gymnasium.error.ResetNeeded: before the first ``reset()``.
+        """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
             return None
+        if not self._was_reset:
+            raise gym.error.ResetNeeded("call reset() before render() on AmigoBotVectorEnv")
         from amigo_gym.rendering import Renderer
 
         while len(self._renderers) < self.num_envs:
@@ -374,7 +420,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         pose = self._pose()
         st = self._state
         for i, r in enumerate(self._renderers):
-            trail = [tuple(h[i]) for h in self._trail[int(self._trail_start[i]) :]]
+            trail = self._trail_of(i)
             frames.append(
                 r.draw(
                     pose[i],

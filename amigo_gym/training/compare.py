@@ -17,8 +17,16 @@ Steps:
 2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
    ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`amigo_gym.training.evaluate`.
 3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
-   run's record, the targets), ``<out>/report.md`` (the table, the targets, the training records) and
-   the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``; every file atomically.
+   run's record, the targets), ``<out>/report.md`` (the table, the targets, the training records),
+   ``<out>/eval.md`` and the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``.
+
+The output set is published as a whole, with a manifest written last that readers trust: every file is
+first written into a staging folder ``<out>/.staging-*``; then ``<out>/manifest.json`` is removed, the
+files are moved into ``<out>`` one by one (``os.replace``) and a new ``manifest.json`` listing each
+file's sha256 is written atomically. A set is complete and consistent exactly when ``manifest.json``
+exists and every file matches it (:func:`verify_outputs`); a compare killed halfway leaves no manifest
+(and, after the next run, no staging folder or temporary file). ``<out>`` is locked while a compare
+runs (:class:`amigo_gym.runs.RunLock`), so two compares never mix their files.
 
 Targets checked (best learned agent on the perturbed starts): H RMS error <= 2 mm and RMS wheel-rate
 deviation from the analytic inverse solution <= 0.1 rad/s.
@@ -27,17 +35,22 @@ deviation from the analytic inverse solution <= 0.1 rad/s.
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sys
+import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from amigo_gym import runs
 from amigo_gym.cli import OneLineParser, run_guarded
-from amigo_gym.io import atomic_write
+from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
 
-__all__ = ["TARGETS", "main", "report_markdown", "run_compare"]
+__all__ = ["MANIFEST", "TARGETS", "main", "publish", "report_markdown", "run_compare", "verify_outputs"]
+
+MANIFEST = "manifest.json"
 
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
@@ -143,6 +156,41 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
     return ", ".join(reasons) if reasons else None
 
 
+def publish(staging: Path, out: Path) -> dict[str, str]:
+    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring).
+
+    Fault stages (tests): ``publish:<file name>`` after each move, ``write:``/``rename:manifest.json``.
+    Returns the manifest's ``{file name: sha256}``.
+    """
+    files = {p.name: runs.sha256_file(p) for p in sorted(staging.iterdir()) if p.is_file()}
+    (out / MANIFEST).unlink(missing_ok=True)
+    fsync_dir(out)
+    for name in files:
+        os.replace(staging / name, out / name)
+        fault_point(f"publish:{name}")
+    fsync_dir(out)
+    atomic_write_json(out / MANIFEST, {"files": files, "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+    return files
+
+
+def verify_outputs(out: Path) -> dict[str, str]:
+    """The manifest of a compare's output set, after checking every file against it.
+
+    Raises:
+        FileNotFoundError: no ``manifest.json`` (no complete set: a compare was interrupted).
+        CorruptFileError: a file missing or not the one the manifest lists.
+    """
+    path = out / MANIFEST
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
+    doc = runs.read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
+        raise runs.CorruptFileError(f"{path}: not a manifest (needs 'files')")
+    for name, digest in doc["files"].items():
+        runs.verify_sha256(out / name, str(digest), str(path))
+    return dict(doc["files"])
+
+
 def _say(message: str) -> None:
     """A progress line on stderr (the report itself goes to stdout)."""
     print(message, file=sys.stderr, flush=True)
@@ -165,6 +213,22 @@ def run_compare(
 
     ``progress`` shows the training run's progress bar; phase lines go to stderr in any case.
     """
+    with runs.RunLock(out):
+        runs.clean_temporaries(out)
+        return _run_compare(out, models, train_steps, seeds, steps, seed, plots, progress, hyperparams)
+
+
+def _run_compare(
+    out: Path,
+    models: Path | None,
+    train_steps: int,
+    seeds: int,
+    steps: int,
+    seed: int,
+    plots: bool,
+    progress: bool,
+    hyperparams: Path | None = None,
+) -> dict[str, Any]:
     from amigo_gym.params import EnvParams
     from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.training.evaluate import (
@@ -220,8 +284,13 @@ def run_compare(
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
     extra = {"training": training, "targets": TARGETS, "best_learned": best}
-    doc = write_outputs(results, trajs, proto, out, out / "results.json", extra=extra, plots=plots)
-    atomic_write(out / "report.md", report_markdown(doc).encode(), parents=True)
+    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
+    try:
+        doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+        atomic_write(staging / "report.md", report_markdown(doc).encode())
+        publish(staging, out)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     return doc
 
 
@@ -232,7 +301,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
     p.add_argument("--out", default="results", help="output directory [dir]")
     p.add_argument(
-        "--models", default=str(PRETRAINED_DIR), help="pretrained models, as for evaluate --models [path], '' for none"
+        "--models",
+        default=str(PRETRAINED_DIR),
+        help="pretrained models, as for evaluate --models [path], '' for none. Model zips are pickles that run "
+        "code when loaded: pass only files you trust (the shipped ones are checked against their sha256)",
     )
     p.add_argument(
         "--train-steps", type=int, default=500_000, help="steps of a fresh PPO run [steps], 0: none (default 500000)"

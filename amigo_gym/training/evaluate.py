@@ -48,6 +48,9 @@ Keys of each entry of ``results`` (pooled over the episodes of the scenario)
 ``training`` (when the models directory holds ``<algo>.json`` records): each model's training record
 (command, seed, steps, wall time, git revision, versions).
 
+Metrics that do not exist (e.g. ``h_rms_settled_m`` of an episode that ended before ``settle_time_s``)
+are written as ``null``; the JSON is strict (no bare ``NaN``).
+
 Outputs: ``--json`` (default ``<out>/results.json``), ``--markdown`` (default ``<out>/eval.md``, the
 table) and the plots
 ``<out>/eval_trajectories.png`` (H's path around the circle and ``|e|`` over time, every agent) and
@@ -73,7 +76,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write
+from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.params import EnvParams
 
 __all__ = [
@@ -395,13 +398,34 @@ class NormalizedAgent:
 
 
 def load_model(ref: ModelRef) -> Agent:
-    """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any)."""
+    """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any).
+
+    Model zips are pickles: loading one runs code, so load only files you trust (docs/reliability.md).
+    When the record beside the zip (``<algo>.json`` or ``run.json``) holds a ``sha256``, the file must match
+    it; the shipped pretrained models (``agents/pretrained``) must have one.
+
+    Raises:
+        CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+    """
     import pickle
 
+    from amigo_gym.runs import CorruptFileError, corrupt_errors, read_json, verify_sha256
+
+    d = ref.model.parent
     from stable_baselines3 import PPO, SAC, TD3
 
+    shipped = d.resolve() == PRETRAINED_DIR.resolve()
     classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
-    model = classes[ref.algo].load(ref.model, device="cpu")
+    # a run's run.json records the sha256 of its final model.zip (not of best_model.zip)
+    recorded = ref.record is not None and (ref.record.name != "run.json" or ref.model.name == "model.zip")
+    digest = read_json(ref.record).get("sha256") if recorded and ref.record is not None else None
+    if digest is not None:
+        verify_sha256(ref.model, str(digest), str(ref.record))
+    elif shipped:
+        manifest = d / f"{ref.algo}.json"
+        raise CorruptFileError(f"{manifest}: no sha256 for the shipped model {ref.model.name}")
+    with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
+        model = classes[ref.algo].load(ref.model, device="cpu")
     if ref.vecnormalize is None:
         agent: Agent = model
         return agent
@@ -480,13 +504,8 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
 
 
 def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
+    """``x`` for strict JSON: numpy scalars as Python numbers, NaN and inf as ``None`` (``null``)."""
+    return json_safe(x)
 
 
 # --------------------------------------------------------------------------- table and plots
@@ -504,11 +523,17 @@ COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 )
 
 
+def _missing(v: Any) -> bool:
+    """A metric that does not exist: ``None`` (as read back from JSON) or NaN."""
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     """The results as a Markdown table (one row per agent and scenario)."""
     lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
     for r in results:
-        lines.append("| " + " | ".join(fmt(r[key]) for key, _, fmt in COLUMNS) + " |")
+        cells = ("n/a" if _missing(r[key]) and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -644,7 +669,7 @@ def write_outputs(
     """
     params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
-    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2) + "\n").encode(), parents=True)
+    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2, allow_nan=False) + "\n").encode(), parents=True)
     atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")
@@ -659,7 +684,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--models",
         default=None,
         help="what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of "
-        "<algo>.zip [path] (default: the pretrained agents/pretrained)",
+        "<algo>.zip [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs "
+        "its code, so pass only files you trust; the shipped ones are checked against their sha256",
     )
     p.add_argument("--out", default="results", help="directory for eval.md and the plots [dir]")
     p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/results.json)")

@@ -19,21 +19,25 @@ a killed run never leaves a half-written file):
 * ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
   (and, for each ``--resume``, its command line, step and git revision);
 * ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
-* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the latest checkpoint (model and, for SAC/TD3, the
-  replay buffer); ``checkpoint.json`` is written last and names the complete checkpoint;
+* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the last two checkpoints (model, for SAC/TD3 the
+  replay buffer, the evaluation record as of that step, ``meta.json`` with sha256 sums);
+  ``checkpoint.json`` is switched atomically to a complete checkpoint (:mod:`amigo_gym.runs`);
 * ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
   policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
-  last evaluation, versions, command).
+  last evaluation, versions, command, the model's sha256);
+* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
 
-``--resume`` loads the latest checkpoint and trains the remaining ``timesteps - num_timesteps``
-steps with ``reset_num_timesteps=False`` (same TensorBoard curve, same step counter); the replay
-buffer is restored, so an off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` writes a
-checkpoint before exiting (status 130), so an interrupted run loses no steps: SAC/TD3 at the current
-step (every collected transition is in the saved replay buffer), PPO at the start of the rollout being
-collected (the weights have seen only the complete rollouts; the incomplete one is collected again).
-SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3, ``n_steps`` per env for PPO),
-so a run may end up to one rollout beyond ``--timesteps``.
+Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
+(:mod:`amigo_gym.runs`). ``--resume`` loads the newest good checkpoint (falling back to the previous
+one, with a warning, if a file is damaged), restores the evaluation record of that step and trains the
+remaining ``timesteps - num_timesteps`` steps with ``reset_num_timesteps=False`` (same TensorBoard
+curve, same step counter, evaluations at the same steps); the replay buffer is restored, so an
+off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` stops at the next rollout start with a
+checkpoint (status 130): a PPO run collects its interrupted rollout again, so its step count only ever
+counts steps it has trained on. SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3,
+``n_steps`` per env for PPO), so a run may end up to one rollout beyond ``--timesteps``. Model zips and
+replay buffers are pickles: resume only runs you trust (``docs/reliability.md``).
 
 Seeding: ``seed`` seeds Python, NumPy and torch (SB3's ``set_random_seed``), the training envs
 (sub-env ``i``: ``seed + i``), the evaluation env (``seed + 10_000``) and the action space. A run
@@ -53,9 +57,9 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -63,9 +67,10 @@ from typing import Any
 
 import numpy as np
 
+from amigo_gym import runs
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import hyperparams_dir, repository_root
-from amigo_gym.io import atomic_save, atomic_write_json
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point
 from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
 
 __all__ = [
@@ -85,8 +90,6 @@ OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
 #: the VecNormalize statistics, beside the model (and in each checkpoint) when the file asks for normalize
 VECNORMALIZE = "vecnormalize.pkl"
-_UMASK = os.umask(0)
-os.umask(_UMASK)
 
 
 # --------------------------------------------------------------------------- settings
@@ -193,8 +196,6 @@ def versions() -> dict[str, str]:
 # --------------------------------------------------------------------------- environments
 def env_kwargs() -> dict[str, Any]:
     """The settings of the environment a run trains on (``gym.make(ENV_ID)``'s defaults), as JSON values."""
-    from dataclasses import asdict
-
     from amigo_gym.params import EnvParams
 
     kwargs: dict[str, Any] = json.loads(json.dumps(asdict(EnvParams())))
@@ -233,7 +234,34 @@ def make_train_env(n_envs: int, vec: str, seed: int, normalize: dict[str, Any] |
 
 
 # --------------------------------------------------------------------------- callbacks
-def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int, normalize: bool = False) -> list[Any]:
+class _StopAtBoundary(Exception):
+    """Raised at a rollout boundary, after the checkpoint, when a stop was asked for."""
+
+
+class _Stop:
+    """``SIGTERM``/``SIGINT`` while a run holds its folder: the first asks for a stop at the next rollout
+    start (after a checkpoint), a second one stops at once (``KeyboardInterrupt``)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("amigo-gym train: stopping at the end of this rollout (checkpoint first)", file=sys.stderr, flush=True)
+
+
+def _callbacks(
+    s: Settings,
+    out: Path,
+    n_envs: int,
+    eval_seed: int,
+    done_steps: int,
+    wall: Callable[[], float],
+    stop: _Stop,
+    normalize: bool = False,
+) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
     from stable_baselines3.common.monitor import Monitor
@@ -242,21 +270,23 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int, normalize: b
     from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     class Checkpoint(BaseCallback):
-        """Every ``freq`` steps: a complete checkpoint (model [+ replay buffer]), then ``checkpoint.json``."""
+        """At the start of a rollout (a consistent state: module docstring of :mod:`amigo_gym.runs`): a
+        checkpoint every ``freq`` steps, and the stop asked for by ``SIGTERM``/``SIGINT``."""
 
         def __init__(self, freq: int) -> None:
             super().__init__()
             self.freq = freq
-            self.last = 0
-            self.rollout_start = 0
+            self.last = done_steps
 
         def _on_rollout_start(self) -> None:
-            self.rollout_start = self.num_timesteps
+            due = self.freq and self.num_timesteps - self.last >= self.freq
+            if due or stop.requested:
+                self.last = self.num_timesteps
+                save_checkpoint(self.model, out, s.algo, wall())
+            if stop.requested:
+                raise _StopAtBoundary
 
         def _on_step(self) -> bool:
-            if self.freq and self.num_timesteps - self.last >= self.freq:
-                self.last = self.num_timesteps
-                save_checkpoint(self.model, out, s.algo)
             return True
 
     class AfterEval(BaseCallback):
@@ -309,46 +339,92 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int, normalize: b
             callback_after_eval=after,
             verbose=0,
         )
+        ev.n_calls = done_steps // n_envs  # resumed: evaluate at the same steps as an uninterrupted run
         if after.history:  # resumed: a new best must beat the evaluations before the interruption
             ev.best_mean_reward = max(h["mean_reward"] for h in after.history)
         cbs.append(ev)
     return cbs
 
 
-def save_checkpoint(model: Any, out: Path, algo: str) -> Path:
-    """Write ``checkpoints/step_<n>/`` completely, then point ``checkpoint.json`` at it; drop older ones."""
-    step = int(model.num_timesteps)
-    root = out / "checkpoints"
-    final = root / f"step_{step}"
-    tmp = Path(tempfile.mkdtemp(dir=out, prefix=".ckpt."))
-    try:
-        os.chmod(tmp, 0o777 & ~_UMASK)
-        model.save(tmp / "model.zip")
-        if algo in OFF_POLICY:
-            model.save_replay_buffer(tmp / "replay_buffer.pkl")
-        vecnormalize = model.get_vec_normalize_env()
-        if vecnormalize is not None:
-            vecnormalize.save(tmp / VECNORMALIZE)
-        root.mkdir(exist_ok=True)
-        if final.exists():
-            shutil.rmtree(final)
-        os.replace(tmp, final)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    atomic_write_json(
-        out / "checkpoint.json", {"num_timesteps": step, "path": str(final.relative_to(out))}, parents=True
-    )
-    for old in root.iterdir():
-        if old != final and old.name.startswith("step_"):
-            shutil.rmtree(old, ignore_errors=True)
-    return final
+def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) -> Path:
+    """A checkpoint of ``model`` (and its replay buffer for SAC/TD3): :func:`amigo_gym.runs.save_checkpoint`."""
+
+    def write(folder: Path) -> list[str]:
+        model.save(folder / "model.zip")
+        fault_point("checkpoint:model")
+        if algo not in OFF_POLICY:
+            return ["model.zip"]
+        model.save_replay_buffer(folder / "replay_buffer.pkl")
+        fault_point("checkpoint:replay")
+        return ["model.zip", "replay_buffer.pkl"]
+
+    vecnormalize = model.get_vec_normalize_env()
+    if vecnormalize is not None:  # its statistics are part of the state: saved (and checked) with the model
+        inner = write
+
+        def write(folder: Path) -> list[str]:
+            names = inner(folder)
+            vecnormalize.save(folder / VECNORMALIZE)
+            return [*names, VECNORMALIZE]
+
+    return runs.save_checkpoint(out, algo, int(model.num_timesteps), write, wall_time_s)
+
+
+def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int, vec: str, seed: int) -> Any:
+    """Model (with its replay buffer) of a verified checkpoint, on a new training env seeded for its step."""
+    venv = make_train_env(n_envs, vec, seed + ck.step)
+    if (ck.folder / VECNORMALIZE).is_file():
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        with runs.corrupt_errors(ck.folder / VECNORMALIZE, "VecNormalize statistics"):
+            venv = VecNormalize.load(str(ck.folder / VECNORMALIZE), venv)
+    path = ck.folder / "model.zip"
+    with runs.corrupt_errors(path, f"{algo.upper()} model"):
+        model = algo_cls.load(path, env=venv, device="cpu")
+    if int(model.num_timesteps) != ck.step:
+        raise runs.CorruptFileError(f"{path}: holds step {model.num_timesteps}, meta.json says {ck.step}")
+    if algo in OFF_POLICY:
+        rb_path = ck.folder / "replay_buffer.pkl"
+        with runs.corrupt_errors(rb_path, "replay buffer"):
+            model.load_replay_buffer(rb_path)
+        rb = model.replay_buffer
+        per_env = ck.step // n_envs
+        if rb.n_envs != n_envs or rb.pos != per_env % rb.buffer_size or rb.full != (per_env >= rb.buffer_size):
+            raise runs.CorruptFileError(
+                f"{rb_path}: holds {rb.buffer_size if rb.full else rb.pos} transitions per env, "
+                f"not the {per_env} of step {ck.step}"
+            )
+    return model
 
 
 # --------------------------------------------------------------------------- training
 def train(s: Settings) -> dict[str, Any]:
-    """Run (or resume) one training run; return the run record (also written to ``run.json``)."""
+    """Run (or resume) one training run; return the run record (also written to ``run.json``).
+
+    The run folder is locked for the whole call (:class:`amigo_gym.runs.RunLock`).
+
+    Raises:
+        RunLockedError: another process uses the folder.
+        CorruptFileError: a damaged file that has no fallback (one line naming it).
+    """
     s.validate()
+    stop = _Stop()
+    main = threading.current_thread() is threading.main_thread()  # signals can only be handled there
+    old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        with runs.RunLock(s.out):
+            result = _train(s, stop)
+    finally:
+        for sig, handler in old_handlers.items():
+            signal.signal(sig, handler)
+    if stop.requested and result is None:
+        raise KeyboardInterrupt
+    if result is None:  # pragma: no cover - _train returns None only on a stop
+        raise RuntimeError("training stopped")
+    return result
+
+
+def _train(s: Settings, stop: _Stop) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
@@ -361,35 +437,36 @@ def train(s: Settings) -> dict[str, Any]:
     total = int(s.timesteps if s.timesteps is not None else (parsed.n_timesteps or 100_000))
     n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
 
-    ckpt_file = out / "checkpoint.json"
+    config_file = out / "config.json"
     if s.resume:
-        if not ckpt_file.is_file():
-            raise FileNotFoundError(f"--resume: no checkpoint in {out} (missing {ckpt_file.name})")
-        config = json.loads((out / "config.json").read_text())
-        if config["settings"]["algo"] != s.algo:
-            raise ValueError(f"--resume: {out} holds a {config['settings']['algo']} run, not {s.algo}")
-    elif out.exists() and any(out.iterdir()):
+        if not config_file.is_file():
+            raise FileNotFoundError(f"--resume: no checkpoint in {out} (no run started there: missing config.json)")
+        config = runs.read_json(config_file)
+        if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
+            raise runs.CorruptFileError(f"{config_file}: not a run configuration (no 'settings')")
+        if config["settings"].get("algo") != s.algo:
+            raise ValueError(f"--resume: {out} holds a {config['settings'].get('algo')} run, not {s.algo}")
+    elif runs.has_run_files(out):
         raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
+    runs.clean_temporaries(out)  # left by a killed run; we hold the lock
 
     torch.set_num_threads(s.threads)
     set_random_seed(s.seed)
-    out.mkdir(parents=True, exist_ok=True)
 
+    loaded = None
     if s.resume:
-        ckpt = json.loads(ckpt_file.read_text())
-        done_steps = int(ckpt["num_timesteps"])
-        venv = make_train_env(n_envs, s.vec, s.seed + done_steps)
-        if (out / ckpt["path"] / VECNORMALIZE).is_file():
-            from stable_baselines3.common.vec_env import VecNormalize
-
-            venv = VecNormalize.load(str(out / ckpt["path"] / VECNORMALIZE), venv)
-        model = algo_cls.load(out / ckpt["path"] / "model.zip", env=venv, device="cpu")
-        if s.algo in OFF_POLICY:
-            model.load_replay_buffer(out / ckpt["path"] / "replay_buffer.pkl")
-        set_random_seed(s.seed + done_steps)
-        resume_entry = {"command": "amigo-gym train " + " ".join(s.argv), "from_step": done_steps}
+        loaded = runs.load_checkpoint(
+            out, s.algo, lambda ck: _load_checkpoint(algo_cls, s.algo, ck, n_envs, s.vec, s.seed)
+        )
+        if loaded is None:
+            runs.warn(f"--resume: no checkpoint yet in {out}; starting from step 0")
+        runs.restore_snapshot(out, None if loaded is None else loaded[0])
+        resume_entry = {
+            "command": "amigo-gym train " + " ".join(s.argv),
+            "from_step": 0 if loaded is None else loaded[0].step,
+        }
         config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
-        atomic_write_json(out / "config.json", config, parents=True)
+        atomic_write_json(config_file, config, parents=True)
     else:
         config = {
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
@@ -401,7 +478,13 @@ def train(s: Settings) -> dict[str, Any]:
             "command": "amigo-gym train " + " ".join(s.argv),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
-        atomic_write_json(out / "config.json", config, parents=True)
+        atomic_write_json(config_file, config, parents=True)
+
+    if loaded is not None:
+        ck, model = loaded
+        done_steps, previous_wall = ck.step, ck.wall_time_s
+        set_random_seed(s.seed + done_steps)
+    else:
         venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize)
         kw = dict(parsed.kwargs)
         noise = parsed.action_noise(int(venv.action_space.shape[0]))
@@ -410,49 +493,43 @@ def train(s: Settings) -> dict[str, Any]:
         model = algo_cls(
             parsed.policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw
         )
-        done_steps = 0
+        done_steps, previous_wall = 0, 0.0
+    venv = model.get_env()
 
     remaining = total - int(model.num_timesteps)
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, normalize=model.get_vec_normalize_env() is not None)
     t0 = time.perf_counter()
-    previous_wall = _previous_wall(out)
 
-    def on_term(signum: int, frame: FrameType | None) -> None:
-        raise KeyboardInterrupt
+    def wall() -> float:
+        return previous_wall + time.perf_counter() - t0
 
-    old_handler = signal.signal(signal.SIGTERM, on_term)
+    normalize = model.get_vec_normalize_env() is not None
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop, normalize)
     try:
         if remaining > 0:
             model.learn(
                 remaining,
                 callback=cbs,
-                reset_num_timesteps=not s.resume,
+                reset_num_timesteps=loaded is None and not s.resume,
                 tb_log_name=s.algo,
                 progress_bar=s.progress,
             )
-    except KeyboardInterrupt:
-        if s.algo not in OFF_POLICY:  # PPO: drop the incomplete rollout (not trained on); it is collected again
-            model.num_timesteps = max(cbs[0].rollout_start, done_steps)
-        save_checkpoint(model, out, s.algo)
-        _write_wall(out, previous_wall + time.perf_counter() - t0)
-        raise
-    finally:
-        signal.signal(signal.SIGTERM, old_handler)
-    wall = previous_wall + time.perf_counter() - t0
-    save_checkpoint(model, out, s.algo)
-    _write_wall(out, wall)
+    except _StopAtBoundary:
+        venv.close()
+        return None
+    if int(model.num_timesteps) != done_steps or loaded is None:
+        save_checkpoint(model, out, s.algo, wall())
     atomic_save(model.save, out / "model.zip", parents=True)
     vecnormalize = model.get_vec_normalize_env()
     if vecnormalize is not None:
         atomic_save(vecnormalize.save, out / VECNORMALIZE, parents=True)
 
-    evals = json.loads((out / "eval.json").read_text()) if (out / "eval.json").is_file() else []
+    evals = runs.read_json(out / "eval.json") if (out / "eval.json").is_file() else []
     record = {
         "algo": s.algo,
         "seed": s.seed,
         "timesteps": int(model.num_timesteps),
         "n_envs": n_envs,
-        "wall_time_s": round(wall, 1),
+        "wall_time_s": round(wall(), 1),
         "resumed_from": done_steps if s.resume else None,
         "last_eval": evals[-1] if evals else None,
         "command": config["command"],
@@ -461,6 +538,7 @@ def train(s: Settings) -> dict[str, Any]:
         "versions": versions(),
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
+        "sha256": runs.sha256_file(out / "model.zip"),
     }
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
@@ -473,19 +551,11 @@ def train(s: Settings) -> dict[str, Any]:
             src = out / "best_model.zip"
             best = max(evals, key=lambda e: e["mean_reward"])
             exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
+        exported["sha256"] = runs.sha256_file(src)
         atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip", parents=True)
         atomic_write_json(exp / f"{s.algo}.json", record | exported, parents=True)
     venv.close()
     return record
-
-
-def _previous_wall(out: Path) -> float:
-    f = out / "wall_time.json"
-    return float(json.loads(f.read_text())["wall_time_s"]) if f.is_file() else 0.0
-
-
-def _write_wall(out: Path, wall: float) -> None:
-    atomic_write_json(out / "wall_time.json", {"wall_time_s": wall}, parents=True)
 
 
 # --------------------------------------------------------------------------- command line
@@ -498,7 +568,12 @@ def parse_args(argv: Sequence[str]) -> Settings:
         "--timesteps", type=int, default=None, help="total env steps [steps] (default: the YAML's n_timesteps)"
     )
     p.add_argument("--out", required=True, help="run directory [dir], must be empty unless --resume (required)")
-    p.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue from the latest good checkpoint in --out (its model and replay buffer are pickles: "
+        "resume only runs you trust)",
+    )
     p.add_argument("--n-envs", type=int, default=None, help="parallel envs [envs] (default: the YAML's n_envs or 1)")
     p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env")
     p.add_argument("--hyperparams", default=None, help="rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml)")

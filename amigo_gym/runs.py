@@ -1,0 +1,492 @@
+"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
+
+Used by ``amigo-gym train`` (:mod:`amigo_gym.training.train`) and ``amigo-gym compare``; imports only the
+standard library and :mod:`amigo_gym.io` (the SB3 objects are passed in).
+
+Lock
+    :class:`RunLock` holds an exclusive ``fcntl.flock`` on ``<folder>/run.lock`` for the life of the run.
+    The operating system drops it when the process ends, however it ends (``kill -9`` included), so a
+    killed run never blocks its resume; a second process on the same folder (a second ``train``, a
+    ``--resume`` of a running run) stops at once with one line and a non-zero status. The file itself
+    stays (removing a lock file would race with a process about to take it); it holds the owner's pid.
+
+Checkpoints
+    ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
+    evaluation history ``eval.json`` and of ``best_model.zip`` as of that step, and ``meta.json`` (step,
+    algorithm, wall time, the sha256 of every file), written last. :func:`save_checkpoint` writes the
+    folder under a temporary name, fsyncs every file and the folder, renames it, then switches
+    ``checkpoint.json`` atomically (``os.replace`` + fsync of the folder) to name it and the one before,
+    and only then deletes the older ones (renamed to a temporary name first). The last two are kept, so
+    a kill at any point leaves a pointer naming a complete checkpoint.
+
+    A checkpoint is taken at the start of a rollout (SB3's ``on_rollout_start``): every collected step
+    is in the replay buffer and every completed rollout has been trained on, so the step count, the
+    weights and the data agree. (Inside a rollout they do not: PPO's weights have not seen the partial
+    rollout, and SB3 calls ``on_step`` before it stores the step's transition.) A resumed run therefore
+    continues exactly where the checkpoint's step count says.
+
+Corrupt files
+    :func:`load_checkpoint` checks ``checkpoint.json`` and each checkpoint's ``meta.json`` and sha256
+    sums before unpickling anything; a damaged checkpoint gives one line naming the file and what is
+    wrong, and the resume falls back to the previous good checkpoint with a warning.
+
+Files left by a killed process (temporary files, half-deleted checkpoints) carry names starting with a
+dot; :func:`clean_temporaries` removes them while the lock is held.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir
+
+__all__ = [
+    "CHECKPOINTS",
+    "LOCK_NAME",
+    "POINTER",
+    "Checkpoint",
+    "CorruptFileError",
+    "RunLock",
+    "RunLockedError",
+    "clean_temporaries",
+    "has_run_files",
+    "load_checkpoint",
+    "read_json",
+    "restore_snapshot",
+    "save_checkpoint",
+    "sha256_file",
+    "verify_sha256",
+]
+
+LOCK_NAME = "run.lock"
+POINTER = "checkpoint.json"
+CHECKPOINTS = "checkpoints"
+META = "meta.json"
+#: files of a run folder that a checkpoint snapshots and a resume restores
+SNAPSHOT = ("eval.json", "best_model.zip")
+
+
+class RunLockedError(FileExistsError):
+    """Another process holds the run folder's lock."""
+
+
+class CorruptFileError(ValueError):
+    """A file of a run (or a model) is damaged or not what it should be; the message names it."""
+
+
+def warn(message: str) -> None:
+    """A one-line warning on stderr."""
+    print(f"amigo-gym: warning: {message}", file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------- lock
+class RunLock:
+    """Exclusive lock on a run folder for the life of the process's use of it (module docstring).
+
+    Use as a context manager; the folder is created if missing.
+
+    Raises:
+        RunLockedError: another process holds it (one line with its pid).
+    """
+
+    def __init__(self, folder: str | os.PathLike[str]) -> None:
+        self.folder = Path(folder)
+        self._fd: int | None = None
+
+    def acquire(self) -> RunLock:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        path = self.folder / LOCK_NAME
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
+        try:
+            _lock_fd(fd)
+        except OSError:
+            try:
+                owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
+            finally:
+                os.close(fd)
+            raise RunLockedError(
+                f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
+                "or stop it, then --resume"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        if self._fd is not None:
+            with contextlib.suppress(OSError):
+                _unlock_fd(self._fd)
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> RunLock:
+        return self.acquire()
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.release()
+
+
+if sys.platform == "win32":  # pragma: no cover - msvcrt locks the first byte; released when the process ends
+    import msvcrt
+
+    def _lock_fd(fd: int) -> None:
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+
+    def _unlock_fd(fd: int) -> None:
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
+
+else:
+    import fcntl
+
+    def _lock_fd(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+    def _unlock_fd(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+
+
+def clean_temporaries(folder: Path) -> None:
+    """Remove what killed processes left: dot-named temporary files and folders in ``folder`` and in
+    its ``checkpoints/``. Call only while holding the folder's :class:`RunLock`."""
+    for d in (folder, folder / CHECKPOINTS):
+        if not d.is_dir():
+            continue
+        for p in d.iterdir():
+            if p.name.startswith("."):
+                if p.is_dir() and not p.is_symlink():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+
+
+def has_run_files(folder: Path) -> bool:
+    """Whether ``folder`` holds anything besides the lock file and temporaries."""
+    return folder.is_dir() and any(p.name != LOCK_NAME and not p.name.startswith(".") for p in folder.iterdir())
+
+
+# --------------------------------------------------------------------------- files
+def sha256_file(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def verify_sha256(path: Path, expected: str, source: str) -> None:
+    """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
+    if not path.is_file():
+        raise CorruptFileError(f"{path}: missing (listed in {source})")
+    got = sha256_file(path)
+    if got != expected:
+        raise CorruptFileError(
+            f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
+            "(changed, truncated or replaced)"
+        )
+
+
+def read_json(path: Path, what: str = "") -> Any:
+    """Parse a JSON file; :class:`CorruptFileError` naming the file on a decoding error."""
+    try:
+        return json.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise
+    except (ValueError, UnicodeDecodeError) as exc:
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CorruptFileError(f"{path}: not valid JSON{' ' + what if what else ''} ({detail})") from None
+
+
+def _dir_mode() -> int:
+    """The mode of a new folder under the current umask, ``0o777 & ~umask``."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o777 & ~umask
+
+
+def _fsync_file(path: Path) -> None:
+    with open(path, "rb+") as fh:
+        os.fsync(fh.fileno())
+
+
+# --------------------------------------------------------------------------- checkpoints
+class Checkpoint:
+    """A checkpoint folder whose ``meta.json`` and sha256 sums have been verified.
+
+    Attributes:
+        folder: ``<run>/checkpoints/step_<n>[.<k>]``.
+        step: its ``num_timesteps``.
+        meta: the parsed ``meta.json``.
+    """
+
+    def __init__(self, folder: Path, step: int, meta: dict[str, Any]) -> None:
+        self.folder = folder
+        self.step = step
+        self.meta = meta
+
+    @property
+    def wall_time_s(self) -> float:
+        return float(self.meta.get("wall_time_s", 0.0))
+
+
+def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
+    """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling).
+
+    Raises:
+        CorruptFileError: missing or damaged ``meta.json``, another algorithm, a file missing or changed.
+    """
+    meta_path = folder / META
+    if not meta_path.is_file():
+        raise CorruptFileError(f"{meta_path}: missing (the checkpoint is incomplete)")
+    meta = read_json(meta_path)
+    if (
+        not isinstance(meta, dict)
+        or not isinstance(meta.get("num_timesteps"), int)
+        or not isinstance(meta.get("files"), dict)
+    ):
+        raise CorruptFileError(f"{meta_path}: not a checkpoint record (needs num_timesteps and files)")
+    if meta.get("algo") != algo:
+        raise CorruptFileError(f"{meta_path}: a checkpoint of {meta.get('algo')!r}, not {algo!r}")
+    if "model.zip" not in meta["files"]:
+        raise CorruptFileError(f"{meta_path}: lists no model.zip")
+    for name, digest in meta["files"].items():
+        if not isinstance(name, str) or "/" in name or name.startswith("."):
+            raise CorruptFileError(f"{meta_path}: bad file name {name!r}")
+        verify_sha256(folder / name, str(digest), str(meta_path))
+    return Checkpoint(folder, int(meta["num_timesteps"]), meta)
+
+
+def _read_pointer(out: Path) -> dict[str, Any] | None:
+    """The parsed ``checkpoint.json`` (``None`` if absent); :class:`CorruptFileError` if damaged."""
+    path = out / POINTER
+    if not path.is_file():
+        return None
+    doc = read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("path"), str):
+        raise CorruptFileError(f"{path}: not a checkpoint pointer (needs a 'path')")
+    return doc
+
+
+def _inside(out: Path, rel: Any) -> Path | None:
+    """``out / rel`` if ``rel`` names a checkpoint folder inside ``out/checkpoints`` (else ``None``)."""
+    if not isinstance(rel, str):
+        return None
+    p = Path(rel)
+    if len(p.parts) != 2 or p.parts[0] != CHECKPOINTS or p.name.startswith("."):
+        return None
+    return out / p
+
+
+def _step_of(folder: Path) -> tuple[int, int]:
+    """Sort key of ``step_<n>[.<k>]``: ``(n, k)`` (``(-1, 0)`` if the name does not parse)."""
+    name = folder.name.removeprefix("step_")
+    n, _, k = name.partition(".")
+    try:
+        return int(n), int(k or 0)
+    except ValueError:
+        return -1, 0
+
+
+def candidates(out: Path, report: bool = True) -> list[Path]:
+    """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first.
+
+    A damaged pointer is reported with a warning (the folders are still found by name).
+    """
+    found: list[Path] = []
+    try:
+        ptr = _read_pointer(out)
+    except CorruptFileError as exc:
+        if report:
+            warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
+        ptr = None
+    if ptr is not None:
+        for key in ("path", "previous"):
+            p = _inside(out, ptr.get(key))
+            if p is not None and p.is_dir() and p not in found:
+                found.append(p)
+    root = out / CHECKPOINTS
+    if root.is_dir():
+        rest = [p for p in root.iterdir() if p.is_dir() and p.name.startswith("step_") and p not in found]
+        found += sorted(rest, key=_step_of, reverse=True)
+    return found
+
+
+def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> tuple[Checkpoint, Any] | None:
+    """Load the newest good checkpoint of the run in ``out`` with ``load`` (which unpickles the model etc.).
+
+    Each candidate (:func:`candidates`) is verified (:func:`verify_checkpoint`) and then passed to
+    ``load``; a :class:`CorruptFileError` (from either) prints a warning and falls back to the next.
+    A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
+
+    Returns:
+        ``(checkpoint, load's result)``, or ``None`` if the run has no checkpoint folder at all.
+
+    Raises:
+        CorruptFileError: checkpoints exist but none is usable (one line listing why).
+    """
+    tried: list[str] = []
+    cands = candidates(out)
+    for i, folder in enumerate(cands):
+        try:
+            ck = verify_checkpoint(folder, algo)
+            result = load(ck)
+        except CorruptFileError as exc:
+            tried.append(str(exc))
+            nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
+            warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
+            continue
+        try:
+            ptr = _read_pointer(out)
+        except CorruptFileError:
+            ptr = None
+        if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
+            _write_pointer(out, algo, folder, ck.step)
+        return ck, result
+    if tried:
+        raise CorruptFileError(f"no usable checkpoint in {out}: " + "; ".join(tried))
+    return None
+
+
+def save_checkpoint(
+    out: Path,
+    algo: str,
+    step: int,
+    write: Callable[[Path], list[str]],
+    wall_time_s: float,
+) -> Path:
+    """Write a complete checkpoint, switch ``checkpoint.json`` to it, then delete all but the last two.
+
+    Args:
+        out: the run folder (its :class:`RunLock` held).
+        algo: algorithm name, recorded in ``meta.json``.
+        step: the model's ``num_timesteps``.
+        write: writes the model files into the folder it is given; returns their names.
+        wall_time_s: training wall time so far [s], recorded in ``meta.json``.
+
+    Fault stages (``AMIGO_GYM_FAULT``, see :mod:`amigo_gym.io`): those of ``write`` (train.py:
+    ``checkpoint:model``, ``checkpoint:replay``), ``checkpoint:files`` (every file written and fsynced),
+    ``checkpoint:meta`` (``meta.json`` written), ``checkpoint:rename`` (folder renamed, pointer
+    not switched), ``write:checkpoint.json`` / ``rename:checkpoint.json`` (the pointer's atomic write),
+    ``checkpoint:trash`` (an old checkpoint renamed for deletion, not yet deleted).
+
+    Returns:
+        the new checkpoint folder.
+    """
+    root = out / CHECKPOINTS
+    root.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
+    try:
+        os.chmod(tmp, _dir_mode())
+        names = list(write(tmp))
+        for name in SNAPSHOT:  # the run's evaluation record as of this step
+            src = out / name
+            if src.is_file():
+                try:
+                    os.link(src, tmp / name)  # the run replaces these files atomically: a link is a snapshot
+                except OSError:
+                    shutil.copyfile(src, tmp / name)
+                names.append(name)
+        for name in names:
+            _fsync_file(tmp / name)
+        fault_point("checkpoint:files")
+        meta = {
+            "num_timesteps": int(step),
+            "algo": algo,
+            "wall_time_s": float(wall_time_s),
+            "files": {name: sha256_file(tmp / name) for name in names},
+        }
+        (tmp / META).write_text(json.dumps(meta, indent=2) + "\n")
+        _fsync_file(tmp / META)
+        fsync_dir(tmp)
+        fault_point("checkpoint:meta")
+        final = root / f"step_{step}"
+        k = 0
+        while final.exists():
+            k += 1
+            final = root / f"step_{step}.{k}"
+        os.replace(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    fsync_dir(root)
+    fault_point("checkpoint:rename")
+    rel, previous = _write_pointer(out, algo, final, step)
+    keep = {rel, previous}
+    for old in list(root.iterdir()):
+        name = str(old.relative_to(out))
+        if name in keep or old.name.startswith("."):
+            continue
+        trash = root / f".trash-{old.name}"
+        os.replace(old, trash)
+        fault_point("checkpoint:trash")
+        shutil.rmtree(trash, ignore_errors=True)
+    fsync_dir(root)
+    return final
+
+
+def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, str | None]:
+    """Switch ``checkpoint.json`` atomically to ``folder`` (and the previous good checkpoint)."""
+    previous = _previous_good(out, algo, folder)
+    rel = str(folder.relative_to(out))
+    atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
+    return rel, previous
+
+
+def _previous_good(out: Path, algo: str, new: Path) -> str | None:
+    """The checkpoint to keep beside ``new``: the first of the pointer's, its previous one and the
+    others (newest first) that verifies (a damaged one a resume fell back from is not kept)."""
+    for folder in (p for p in candidates(out, report=False) if p != new):
+        try:
+            verify_checkpoint(folder, algo)
+        except CorruptFileError:
+            continue
+        return str(folder.relative_to(out))
+    return None
+
+
+def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
+    """Put the run's evaluation record (``eval.json``, ``best_model.zip``) back to the checkpoint's.
+
+    Evaluations made after the checkpoint by a run that was then killed are dropped (the resumed run
+    makes them again at the same steps), so the history holds no duplicate. ``ck=None``: no record.
+    """
+    for name in SNAPSHOT:
+        src = None if ck is None else ck.folder / name
+        dst = out / name
+        if src is not None and src.is_file():
+            tmp = out / f".{name}.restore"
+            shutil.copyfile(src, tmp)
+            _fsync_file(tmp)
+            os.replace(tmp, dst)
+        else:
+            dst.unlink(missing_ok=True)
+    fsync_dir(out)
+
+
+@contextlib.contextmanager
+def corrupt_errors(path: Path, what: str) -> Iterator[None]:
+    """Turn any exception while loading ``path`` (unpickling, unzipping, SB3's checks) into one
+    :class:`CorruptFileError` line naming the file."""
+    try:
+        yield
+    except CorruptFileError:
+        raise
+    except FileNotFoundError:
+        raise CorruptFileError(f"{path}: missing") from None
+    except Exception as exc:
+        detail = " ".join(str(exc).split())[:160] or "no detail"
+        raise CorruptFileError(f"{path}: not a loadable {what} ({type(exc).__name__}: {detail})") from None
