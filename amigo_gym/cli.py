@@ -24,6 +24,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "verify": ("amigo_gym.analysis.verify:main", "exactness figures against references (steady state, laps, symbolic)"),
     "convergence": ("amigo_gym.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"),
     "compare": ("amigo_gym.training.compare:main", "main job: pretrained agents vs analytic solution, report + plots"),
+    "benchmark": ("amigo_gym.training.benchmark:main", "scenario suite x agents x seeds: IQM, bootstrap CIs, plots"),
+    "sweep": ("amigo_gym.training.sweep:main", "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL"),
     "bench-core": ("amigo_gym.bench.core:main", "benchmark the batched exact step"),
     "bench-env": ("amigo_gym.bench.env:main", "benchmark the environment against peers"),
 }
