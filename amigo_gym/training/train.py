@@ -14,11 +14,13 @@ a killed run never leaves a half-written file):
 
 * ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
   (and, for each ``--resume``, its command line, step and git revision);
-* ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
+* ``tb/``: TensorBoard logs (training and ``eval/`` scalars, including the task metrics ``eval/h_rms_m``,
+  ``eval/h_rms_settled_m``, ``eval/speed_err_rms`` and ``eval/failure_rate`` of the evaluation episodes);
 * ``checkpoint.json`` + ``checkpoints/step_<n>/``: the latest checkpoint (model and, for SAC/TD3, the
   replay buffer); ``checkpoint.json`` is written last and names the complete checkpoint;
 * ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
-  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps) and its best model;
+  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps; each entry with the steps, the wall
+  time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
   last evaluation, versions, command).
 
@@ -51,7 +53,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -62,6 +64,7 @@ import numpy as np
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json
+from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
 __all__ = [
     "ALGOS",
@@ -78,6 +81,8 @@ ENV_ID = "AmigoBot-v0"
 HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
+#: ``train(after_eval=...)``: receives each evaluation's record; ``False`` stops training
+AfterEvalHook = Callable[[dict[str, Any]], bool]
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 
@@ -258,7 +263,9 @@ def make_train_env(n_envs: int, vec: str, seed: int) -> Any:
 
 
 # --------------------------------------------------------------------------- callbacks
-def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]:
+def _callbacks(
+    s: Settings, out: Path, n_envs: int, eval_seed: int, after_eval: AfterEvalHook | None = None
+) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
     from stable_baselines3.common.monitor import Monitor
@@ -285,7 +292,7 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
             return True
 
     class AfterEval(BaseCallback):
-        """After each evaluation: append it to ``eval.json`` (atomically)."""
+        """After each evaluation: append it and its task metrics to ``eval.json`` (atomically); call ``after_eval``."""
 
         def __init__(self) -> None:
             super().__init__()
@@ -294,16 +301,16 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
 
         def _on_step(self) -> bool:
             parent = self.parent
-            assert isinstance(parent, EvalCallback)
-            self.history.append(
-                {
-                    "timesteps": int(self.num_timesteps),
-                    "mean_reward": float(parent.last_mean_reward),
-                    "best_mean_reward": float(parent.best_mean_reward),
-                }
-            )
+            assert isinstance(parent, TaskEvalCallback)
+            entry = {
+                "timesteps": int(self.num_timesteps),
+                "mean_reward": float(parent.last_mean_reward),
+                "best_mean_reward": float(parent.best_mean_reward),
+                "wall_time_s": time.perf_counter() - parent.t_start,
+            } | parent.task_metrics
+            self.history.append(entry)
             atomic_write_json(out / "eval.json", self.history, parents=True)
-            return True
+            return True if after_eval is None else bool(after_eval(entry))
 
     class SaveBest(BaseCallback):
         """On a new best evaluation: ``best_model.zip`` (atomically)."""
@@ -311,6 +318,52 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
         def _on_step(self) -> bool:
             atomic_save(self.model.save, out / "best_model.zip", parents=True)
             return True
+
+    class TaskEvalCallback(EvalCallback):
+        """SB3's ``EvalCallback`` that also logs the task metrics of its evaluation episodes.
+
+        TensorBoard scalars next to ``eval/mean_reward``: ``eval/h_rms_m`` (mean over the episodes of H's
+        cross-track RMS), ``eval/h_rms_settled_m`` (over ``t >= 5 s``), ``eval/speed_err_rms`` [m/s] and
+        ``eval/failure_rate`` (:mod:`amigo_gym.training.task_metrics`); also in ``eval.json``.
+        """
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            from amigo_gym.params import EnvParams
+
+            p = EnvParams()
+            self.adapter = InfoAdapter(p.robot, p.speed)
+            self.dt = p.dt
+            self.recorders: dict[int, EpisodeRecorder] = {}
+            self.episodes: list[dict[str, float]] = []
+            self.task_metrics: dict[str, float] = {}
+            self.t_start = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
+                self.recorders, self.episodes = {}, []
+            return bool(super()._on_step())
+
+        def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+            super()._log_success_callback(locals_, globals_)
+            i, info = int(locals_["i"]), locals_["info"]
+            rec = self.recorders.setdefault(i, EpisodeRecorder(self.dt))
+            rec.add(self.adapter.read(info), float(locals_["reward"]))
+            if locals_["done"]:
+                rec.terminated = not info.get("TimeLimit.truncated", False)
+                self.episodes.append(rec.metrics())
+                del self.recorders[i]
+                for key, src in (
+                    ("h_rms_m", "h_rms_m"),
+                    ("h_rms_settled_m", "h_rms_settled_m"),
+                    ("speed_err_rms", "speed_err_rms"),
+                    ("failure_rate", "failure"),
+                ):
+                    vals = np.array([e[src] for e in self.episodes])
+                    vals = vals[np.isfinite(vals)]
+                    value = float(vals.mean()) if vals.size else float("nan")
+                    self.task_metrics[key] = value
+                    self.logger.record(f"eval/{key}", value)
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
     if s.eval_freq > 0:
@@ -321,7 +374,7 @@ def _callbacks(s: Settings, out: Path, n_envs: int, eval_seed: int) -> list[Any]
             eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
         eval_env.seed(eval_seed)
         after = AfterEval()
-        ev = EvalCallback(
+        ev = TaskEvalCallback(
             eval_env,
             n_eval_episodes=s.eval_episodes,
             eval_freq=max(1, s.eval_freq // n_envs),
@@ -364,8 +417,15 @@ def save_checkpoint(model: Any, out: Path, algo: str) -> Path:
 
 
 # --------------------------------------------------------------------------- training
-def train(s: Settings) -> dict[str, Any]:
-    """Run (or resume) one training run; return the run record (also written to ``run.json``)."""
+def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any]:
+    """Run (or resume) one training run; return the run record (also written to ``run.json``).
+
+    Args:
+        s: the settings.
+        after_eval: called after every periodic evaluation with its ``eval.json`` entry (``timesteps``,
+            ``mean_reward``, ``h_rms_m``, ...); returning ``False`` stops training (used by
+            :mod:`amigo_gym.training.sweep` for pruning). The run then ends normally, with its model.
+    """
     s.validate()
     import torch
     from stable_baselines3 import PPO, SAC, TD3
@@ -421,7 +481,7 @@ def train(s: Settings) -> dict[str, Any]:
         done_steps = 0
 
     remaining = total - int(model.num_timesteps)
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET)
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, after_eval)
     t0 = time.perf_counter()
     previous_wall = _previous_wall(out)
 
