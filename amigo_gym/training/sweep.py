@@ -75,7 +75,16 @@ import numpy as np
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write, atomic_write_json
 
-__all__ = ["SweepConfig", "budget_count", "main", "make_storage", "open_study", "run_worker", "sample_hyperparams"]
+__all__ = [
+    "SweepConfig",
+    "budget_count",
+    "driver_url",
+    "main",
+    "make_storage",
+    "open_study",
+    "run_worker",
+    "sample_hyperparams",
+]
 
 ALGOS = ("ppo", "sac", "td3")
 MODES = ("hyperparams", "seeds")
@@ -167,7 +176,7 @@ def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring)."""
     import optuna.storages as st
 
-    url = cfg.storage_url
+    url = driver_url(cfg.storage_url)
     engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
     if sqlite:
@@ -185,6 +194,8 @@ def make_storage(cfg: SweepConfig) -> Any:
         try:
             storage = st.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
             break
+        except ImportError:
+            raise
         except Exception as exc:  # sqlalchemy's errors vary by driver
             last = exc
             time.sleep(0.5 + attempt)
@@ -198,6 +209,17 @@ def make_storage(cfg: SweepConfig) -> Any:
             conn.exec_driver_sql("BEGIN IMMEDIATE")
 
     return storage
+
+
+def driver_url(url: str) -> str:
+    """``postgresql://`` with the driver that is installed: SQLAlchemy 2.1 defaults to psycopg 3, the
+    ``bench`` extra installs ``psycopg2-binary``; an explicit ``postgresql+<driver>://`` is kept."""
+    if url.startswith(("postgresql://", "postgres://")):
+        import importlib.util
+
+        if importlib.util.find_spec("psycopg") is None and importlib.util.find_spec("psycopg2") is not None:
+            return "postgresql+psycopg2://" + url.split("://", 1)[1]
+    return url
 
 
 def _worker_seed(cfg: SweepConfig) -> int:
@@ -320,7 +342,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         trial.set_user_attr("sampler_seed", sampler_seed)
         trial.set_user_attr("command", cfg.command)
         if cfg.mode == "seeds":
-            if "fixed_params" not in trial.system_attrs:
+            if "fixed_params" not in study._storage.get_trial_system_attrs(trial._trial_id):
                 study.stop()
                 raise _OverBudget("the grid is exhausted")
             algo = str(trial.suggest_categorical("algo", cfg.algos))
