@@ -1,7 +1,8 @@
 """``amigo-gym sweep`` with real storages: SQLite with two worker processes, a real PostgreSQL 15 server with two
 concurrent workers (as two machines would), and a worker killed mid-trial (heartbeat -> FAIL -> retried).
 
-Training budgets are tiny (PPO, one rollout of 32 steps and one evaluation episode, a 16-unit network); each worker process pays torch's import once.
+Training budgets are tiny (PPO, one rollout of 32 steps, one evaluation episode, a 16-unit network); each
+worker process pays torch's import once.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from optuna.trial import TrialState  # noqa: E402
 from amigo_gym.training.sweep import driver_url  # noqa: E402
 
 TINY = "AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [16]\n"
-PG_BIN = Path("/usr/lib/postgresql/15/bin")
+PG_ROOT = Path("/usr/lib/postgresql")  # Debian's layout: <version>/bin/initdb (15 here; any version works)
 
 
 def _common(tmp: Path, *extra: str) -> list[str]:
@@ -109,7 +110,8 @@ def _free_port() -> int:
 def postgres() -> Iterator[str]:
     """A throw-away PostgreSQL 15 server on 127.0.0.1 (as user postgres when run as root); its URL."""
     pytest.importorskip("psycopg2")
-    initdb = PG_BIN / "initdb" if (PG_BIN / "initdb").is_file() else shutil.which("initdb")
+    found = sorted(PG_ROOT.glob("*/bin/initdb"), key=lambda p: int(p.parts[-3]) if p.parts[-3].isdigit() else 0)
+    initdb = str(found[-1]) if found else shutil.which("initdb")
     if initdb is None:
         pytest.skip("PostgreSQL server binaries not installed (.ci/run installs the Debian package)")
     bindir = Path(initdb).parent
@@ -168,7 +170,8 @@ def test_postgresql_hyperparameter_budget_is_global(tmp_path: Path, postgres: st
 def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path) -> None:
     base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "--study-name", "kill")
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
-    long = [a if a != "32" else "10000000" for a in base]  # --timesteps: a trial that would run for hours
+    long = list(base)
+    long[long.index("--timesteps") + 1] = "10000000"  # a trial that would run for hours
     victim = _sweep(long, start_new_session=True)
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
     deadline = time.monotonic() + 90
