@@ -297,3 +297,40 @@ def test_cli_list_and_errors(tmp_path: Path) -> None:
         text=True,
     )
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "unknown" in r.stderr
+
+
+# --------------------------------------------------------------------------- learning curves: task metrics in training
+def test_training_logs_task_metrics_and_after_eval_can_stop(tmp_path: Path) -> None:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    from amigo_gym.training.train import Settings, train
+
+    hp = tmp_path / "tiny.yml"
+    hp.write_text("AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [8]\n")
+    seen: list[dict[str, Any]] = []
+
+    def stop_after_first(entry: dict[str, Any]) -> bool:
+        seen.append(entry)
+        return False
+
+    s = Settings(
+        algo="ppo",
+        out=str(tmp_path / "run"),
+        timesteps=256,
+        eval_freq=32,
+        eval_episodes=2,
+        checkpoint_freq=0,
+        progress=False,
+        hyperparams=str(hp),
+    )
+    record = train(s, after_eval=stop_after_first)
+    assert len(seen) == 1 and record["timesteps"] < 256  # the hook stopped training after one evaluation
+    entry = json.loads((tmp_path / "run" / "eval.json").read_text())[0]
+    for key in ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "wall_time_s"):
+        assert key in entry and math.isfinite(entry[key]), key
+    assert 0.0 <= entry["failure_rate"] <= 1.0
+    events = list((tmp_path / "run" / "tb").rglob("events.out.tfevents.*"))
+    ea = EventAccumulator(str(events[0]))
+    ea.Reload()
+    for tag in ("eval/h_rms_m", "eval/speed_err_rms", "eval/failure_rate", "eval/mean_reward"):
+        assert tag in ea.Tags()["scalars"], tag
