@@ -99,6 +99,18 @@ COMMANDS: dict[str, Command] = {
         extra="train",
         modules=_TRAIN,
     ),
+    "benchmark": Command(
+        "amigo_gym.training.benchmark:main",
+        "scenario suite x agents x seeds: IQM, bootstrap CIs, plots",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "sweep": Command(
+        "amigo_gym.training.sweep:main",
+        "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL",
+        extra="bench",
+        modules=("optuna", "torch", "stable_baselines3", "yaml"),
+    ),
     "bench-core": Command("amigo_gym.bench.core:main", "benchmark the batched exact step"),
     "bench-env": Command("amigo_gym.bench.env:main", "benchmark the environment against peers"),
     "gallery": Command(
@@ -123,6 +135,8 @@ EXTRA_OF_MODULE: dict[str, str] = {
     "moviepy": "video",
     "nbclient": "notebook",
     "nbformat": "notebook",
+    "optuna": "bench",
+    "psycopg2": "bench",
 }
 
 

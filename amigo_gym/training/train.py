@@ -18,12 +18,14 @@ a killed run never leaves a half-written file):
 
 * ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
   (and, for each ``--resume``, its command line, step and git revision);
-* ``tb/``: TensorBoard logs (training and ``eval/`` scalars);
+* ``tb/``: TensorBoard logs (training and ``eval/`` scalars, including the task metrics ``eval/h_rms_m``,
+  ``eval/h_rms_settled_m``, ``eval/speed_err_rms`` and ``eval/failure_rate`` of the evaluation episodes);
 * ``checkpoint.json`` + ``checkpoints/step_<n>/``: the last two checkpoints (model, for SAC/TD3 the
   replay buffer, the evaluation record as of that step, ``meta.json`` with sha256 sums);
   ``checkpoint.json`` is switched atomically to a complete checkpoint (:mod:`amigo_gym.runs`);
 * ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
-  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps) and its best model;
+  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps; each entry with the steps, the wall
+  time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
   last evaluation, versions, command, the model's sha256);
 * ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
@@ -72,6 +74,7 @@ from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point
 from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
+from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
 __all__ = [
     "ALGOS",
@@ -90,6 +93,8 @@ OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
 #: the VecNormalize statistics, beside the model (and in each checkpoint) when the file asks for normalize
 VECNORMALIZE = "vecnormalize.pkl"
+#: ``train(after_eval=...)``: receives each evaluation's record; ``False`` stops training
+AfterEvalHook = Callable[[dict[str, Any]], bool]
 
 
 # --------------------------------------------------------------------------- settings
@@ -261,6 +266,7 @@ def _callbacks(
     wall: Callable[[], float],
     stop: _Stop,
     normalize: bool = False,
+    after_eval: AfterEvalHook | None = None,
 ) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
@@ -290,7 +296,7 @@ def _callbacks(
             return True
 
     class AfterEval(BaseCallback):
-        """After each evaluation: append it to ``eval.json`` (atomically)."""
+        """After each evaluation: append it and its task metrics to ``eval.json`` (atomically); call ``after_eval``."""
 
         def __init__(self) -> None:
             super().__init__()
@@ -299,16 +305,16 @@ def _callbacks(
 
         def _on_step(self) -> bool:
             parent = self.parent
-            assert isinstance(parent, EvalCallback)
-            self.history.append(
-                {
-                    "timesteps": int(self.num_timesteps),
-                    "mean_reward": float(parent.last_mean_reward),
-                    "best_mean_reward": float(parent.best_mean_reward),
-                }
-            )
+            assert isinstance(parent, TaskEvalCallback)
+            entry = {
+                "timesteps": int(self.num_timesteps),
+                "mean_reward": float(parent.last_mean_reward),
+                "best_mean_reward": float(parent.best_mean_reward),
+                "wall_time_s": wall(),
+            } | parent.task_metrics
+            self.history.append(entry)
             atomic_write_json(out / "eval.json", self.history, parents=True)
-            return True
+            return True if after_eval is None else bool(after_eval(entry))
 
     class SaveBest(BaseCallback):
         """On a new best evaluation: ``best_model.zip`` (atomically)."""
@@ -316,6 +322,52 @@ def _callbacks(
         def _on_step(self) -> bool:
             atomic_save(self.model.save, out / "best_model.zip", parents=True)
             return True
+
+    class TaskEvalCallback(EvalCallback):
+        """SB3's ``EvalCallback`` that also logs the task metrics of its evaluation episodes.
+
+        TensorBoard scalars next to ``eval/mean_reward``: ``eval/h_rms_m`` (mean over the episodes of H's
+        cross-track RMS), ``eval/h_rms_settled_m`` (over ``t >= 5 s``), ``eval/speed_err_rms`` [m/s] and
+        ``eval/failure_rate`` (:mod:`amigo_gym.training.task_metrics`); also in ``eval.json``.
+        """
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            from amigo_gym.params import EnvParams
+
+            p = EnvParams()
+            self.adapter = InfoAdapter(p.robot, p.speed)
+            self.dt = p.dt
+            self.recorders: dict[int, EpisodeRecorder] = {}
+            self.episodes: list[dict[str, float]] = []
+            self.task_metrics: dict[str, float] = {}
+            self.t_start = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
+                self.recorders, self.episodes = {}, []
+            return bool(super()._on_step())
+
+        def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+            super()._log_success_callback(locals_, globals_)
+            i, info = int(locals_["i"]), locals_["info"]
+            rec = self.recorders.setdefault(i, EpisodeRecorder(self.dt))
+            rec.add(self.adapter.read(info), float(locals_["reward"]))
+            if locals_["done"]:
+                rec.terminated = not info.get("TimeLimit.truncated", False)
+                self.episodes.append(rec.metrics())
+                del self.recorders[i]
+                for key, src in (
+                    ("h_rms_m", "h_rms_m"),
+                    ("h_rms_settled_m", "h_rms_settled_m"),
+                    ("speed_err_rms", "speed_err_rms"),
+                    ("failure_rate", "failure"),
+                ):
+                    vals = np.array([e[src] for e in self.episodes])
+                    vals = vals[np.isfinite(vals)]
+                    value = float(vals.mean()) if vals.size else float("nan")
+                    self.task_metrics[key] = value
+                    self.logger.record(f"eval/{key}", value)
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
     if s.eval_freq > 0:
@@ -330,7 +382,7 @@ def _callbacks(
 
             eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
         after = AfterEval()
-        ev = EvalCallback(
+        ev = TaskEvalCallback(
             eval_env,
             n_eval_episodes=s.eval_episodes,
             eval_freq=max(1, s.eval_freq // n_envs),
@@ -398,8 +450,12 @@ def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int,
 
 
 # --------------------------------------------------------------------------- training
-def train(s: Settings) -> dict[str, Any]:
+def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any]:
     """Run (or resume) one training run; return the run record (also written to ``run.json``).
+
+    ``after_eval`` is called after every periodic evaluation with its ``eval.json`` entry (``timesteps``,
+    ``mean_reward``, ``h_rms_m``, ...); returning ``False`` stops training (used by
+    :mod:`amigo_gym.training.sweep` for pruning). The run then ends normally, with its model.
 
     The run folder is locked for the whole call (:class:`amigo_gym.runs.RunLock`).
 
@@ -413,7 +469,7 @@ def train(s: Settings) -> dict[str, Any]:
     old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
     try:
         with runs.RunLock(s.out):
-            result = _train(s, stop)
+            result = _train(s, stop, after_eval)
     finally:
         for sig, handler in old_handlers.items():
             signal.signal(sig, handler)
@@ -424,7 +480,7 @@ def train(s: Settings) -> dict[str, Any]:
     return result
 
 
-def _train(s: Settings, stop: _Stop) -> dict[str, Any] | None:
+def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
@@ -503,7 +559,7 @@ def _train(s: Settings, stop: _Stop) -> dict[str, Any] | None:
         return previous_wall + time.perf_counter() - t0
 
     normalize = model.get_vec_normalize_env() is not None
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop, normalize)
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop, normalize, after_eval)
     try:
         if remaining > 0:
             model.learn(

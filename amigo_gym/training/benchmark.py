@@ -1,0 +1,873 @@
+"""``amigo-gym benchmark``: a versioned scenario suite, many agents and training seeds, rliable statistics.
+
+Usage::
+
+    amigo-gym benchmark                                  # the whole suite, default agents
+    amigo-gym benchmark --quick                          # a small subset (seconds; used by the tests)
+    amigo-gym benchmark --agents analytic sac=runs/sac_s*/model.zip --out results/bench
+    amigo-gym benchmark --list                           # print the suite
+
+The suite is data
+-----------------
+A :class:`Scenario` names an environment id and its ``gym.make`` keywords, fixed evaluation seeds
+(one episode per seed), an episode length, whether it is **held out** (outside the training
+distribution of the generalists, :data:`TRAINING_DISTRIBUTION`), and the suite version. A released
+suite is never edited: a change of any scenario gets a new :data:`SUITE_VERSION` beside the old one
+(as Safety-Gymnasium does). :data:`SUITES` maps versions to suites; :data:`SUITE` is the current one.
+Scenarios on ``AmigoBot-v1`` use the keywords of that environment (``path``, ``radius``,
+``direction``, ``speed``, ``speed_profile``, ``dt``, ``true_robot``, ``randomize``). A scenario whose
+environment id is not registered, or whose ``gym.make`` refuses its keywords, is reported as
+``unavailable`` with the reason (in the JSON, the Markdown and the console), never dropped silently.
+
+Agents
+------
+Anything with SB3's ``predict(observation, state, episode_start, deterministic)``; the benchmark
+passes ``state`` and ``episode_start`` through, so stateful policies (integral action) work.
+``--agents`` takes
+
+* a classical policy by name (:data:`CLASSICAL`): ``analytic`` (the analytic inverse solution with
+  feedback, gain 3 1/s, on the nominal model), ``analytic_ff`` (gain 0) and ``pure_pursuit``. It is
+  built per scenario from the environment: if the environment offers ``classical_policy(name)`` that
+  is used (AmigoBot-v1's policies), otherwise the v0 policy on ``env.unwrapped.params``. A policy that
+  cannot run a scenario (other observation layout) makes that (agent, scenario) ``unavailable``.
+* ``NAME=PATTERN``: SB3 model zips (a glob); each file is one training seed of agent ``NAME``. The
+  algorithm and seed come from the manifest beside the zip (``<stem>.json``: ``algo``, ``seed``), else
+  from the names (``ppo``/``sac``/``td3`` in the agent or folder name; ``seed_<n>``/``_s<n>`` in the
+  file name), else the seed is the file's index.
+* a zip file or a folder of zips (``agents/pretrained/v1/`` holds ``<algo>/<file>.zip``).
+
+Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
+(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped.
+
+Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
+-------------------------------------------------------------------------------------------
+``h_rms_m`` (H's cross-track RMS over the episode), ``h_rms_settled_m`` (over ``t >= 5 s``, the
+documented settling time :data:`~amigo_gym.training.task_metrics.DEFAULT_SETTLE_TIME_S`), ``h_max_m``,
+``failure_rate`` (fraction of episodes that terminated or whose settled error exceeded 0.10 m,
+:data:`~amigo_gym.training.task_metrics.DEFAULT_FAILURE_TOLERANCE_M`), ``speed_err_rms`` [m/s],
+``return``, ``return_per_step`` (return over the scenario's episode length: in [0, 1] for a reward of
+at most 1 per step), ``chatter_rms`` / ``chatter_settled_rms`` (RMS step-to-step change of the
+wheel-rate command [rad/s]), ``effort_rms`` (RMS wheel rate [rad/s]); ``per_episode`` lists the
+episode values.
+
+Aggregation (:mod:`amigo_gym.training.intervals`: rliable's definitions)
+-------------------------------------------------------------------------
+For every agent, score matrices ``(training seeds, scenarios)`` over the scenarios every seed of the
+agent could run: IQM of ``h_rms_m`` and of ``speed_err_rms``, the optimality gap of ``h_rms_m`` to the
+target :data:`H_TARGET_M` (``mean(max(h - 0.01 m, 0))``), the mean failure rate, and the IQM and
+optimality gap (``gamma = 1``) of ``return_per_step``; each with a stratified-bootstrap 95 % percentile
+interval of ``--reps`` replications (default 10 000; seeded by ``--bootstrap-seed``, so the numbers are
+reproducible). Groups: ``all`` scenarios, ``in_distribution`` and ``held_out``. Performance profiles:
+the fraction of (seed, scenario) runs whose ``h_rms_m`` is below each threshold ``tau`` (rliable's score
+distribution of ``-h_rms``), with bootstrap bands of ``--profile-reps`` (2 000) replications. With one
+training seed (the classical policies are deterministic) the intervals have zero width: they measure
+training-seed variation only.
+
+Outputs (every file written atomically, :mod:`amigo_gym.io`)
+-----------------------------------------------------------
+``--json`` (default ``<out>/benchmark.json``): ``suite_version``, ``protocol``, ``scenarios`` (each
+scenario's definition and status), ``agents``, ``results`` (one record per (agent, training seed,
+scenario) with ``agent``, ``seed``, ``scenario`` and the metrics), ``unavailable`` ((agent, scenario)
+pairs that could not run, with the reason), ``aggregates`` (per agent: ``iqm`` and ``ci95`` of
+``h_rms_m`` at the top level, then every group and metric) and ``performance_profiles``.
+``--markdown`` (default ``<out>/benchmark.md``) and the plots ``<out>/benchmark_scenarios.png``
+(per-scenario bars with 95 % intervals over training seeds) and ``<out>/benchmark_profiles.png``.
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import json
+import math
+import re
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.data import pretrained_dir
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.training.task_metrics import (
+    DEFAULT_FAILURE_TOLERANCE_M,
+    DEFAULT_SETTLE_TIME_S,
+    EpisodeRecorder,
+    InfoAdapter,
+)
+
+__all__ = [
+    "CLASSICAL",
+    "H_TARGET_M",
+    "QUICK_SCENARIOS",
+    "SUITE",
+    "SUITES",
+    "SUITE_VERSION",
+    "TRAINING_DISTRIBUTION",
+    "AgentSpec",
+    "Scenario",
+    "aggregate",
+    "default_agents",
+    "evaluate",
+    "main",
+    "markdown_report",
+    "parse_agents",
+    "quick_suite",
+    "run_benchmark",
+    "write_outputs",
+]
+
+SUITE_VERSION = "1.0"
+ALGOS = ("ppo", "sac", "td3")
+#: target of the H-error optimality gap [m]
+H_TARGET_M = 0.01
+#: thresholds of the H-error performance profile [m]
+PROFILE_TAUS = tuple(float(x) for x in np.logspace(-6, math.log10(0.25), 41))
+
+#: the training distribution of the v1 generalists; "held out" scenarios lie outside it
+TRAINING_DISTRIBUTION: dict[str, Any] = {
+    "env_id": "AmigoBot-v1",
+    "path": ["circle", "manoeuvre", "figure8", "random"],
+    "radius_m": [0.5, 2.0],
+    "direction": [1, -1],
+    "speed_m_s": [0.1, 0.4],
+    "speed_profile": ["constant", "trapezoid"],
+    "dt_s": [0.05, 0.1, 0.2],
+    "randomize": "mild (wheel radii and track +-2 %, slip <= 2 %, delay <= 50 ms, small noise)",
+    "not_trained_on": ["lane_change paths", "unequal wheel radii beyond +-2 %", "delays beyond 50 ms", "'hard'"],
+}
+
+
+# --------------------------------------------------------------------------- scenarios
+@dataclass(frozen=True)
+class Scenario:
+    """One benchmark scenario (data; never edited once released: bump :data:`SUITE_VERSION`).
+
+    Attributes:
+        name: unique name.
+        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
+        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
+        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
+        max_steps: episode length (``max_episode_steps``).
+        held_out: outside the generalists' training distribution (:data:`TRAINING_DISTRIBUTION`).
+        description: one line for the tables.
+        version: the suite version the scenario belongs to.
+        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
+    """
+
+    name: str
+    env_id: str
+    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    seeds: tuple[int, ...] = tuple(range(100, 110))
+    max_steps: int = 400
+    held_out: bool = False
+    description: str = ""
+    version: str = SUITE_VERSION
+    settle_time_s: float = DEFAULT_SETTLE_TIME_S
+    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError(f"Scenario.name must be a non-empty string, got {self.name!r}")
+        if not self.seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be non-negative integers, got {self.seeds!r}")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
+            raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    @property
+    def episodes(self) -> int:
+        """Number of evaluation episodes (one per seed)."""
+        return len(self.seeds)
+
+    def to_json(self) -> dict[str, Any]:
+        """The scenario as JSON data (tuples as lists)."""
+        return {
+            "name": self.name,
+            "env_id": self.env_id,
+            "env_kwargs": _jsonable(dict(self.env_kwargs)),
+            "seeds": list(self.seeds),
+            "episodes": self.episodes,
+            "max_steps": self.max_steps,
+            "held_out": self.held_out,
+            "description": self.description,
+            "version": self.version,
+            "settle_time_s": self.settle_time_s,
+            "failure_tolerance_m": self.failure_tolerance_m,
+        }
+
+
+def _v0(name: str, desc: str, held_out: bool = False, max_steps: int = 400, **kw: Any) -> Scenario:
+    return Scenario(name, "AmigoBot-v0", kw, max_steps=max_steps, held_out=held_out, description=desc)
+
+
+def _v1(name: str, desc: str, held_out: bool = False, dt: float = 0.1, duration: float = 40.0, **kw: Any) -> Scenario:
+    kwargs = {"dt": dt, "randomize": "none", **kw}
+    return Scenario(name, "AmigoBot-v1", kwargs, max_steps=round(duration / dt), held_out=held_out, description=desc)
+
+
+_WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
+_WHEELS_MINUS5 = {"r1": 0.0475, "r2": 0.0475, "l1": 0.114}
+_WHEELS_UNEQUAL = {"r1": 0.0525, "r2": 0.0475}
+
+SUITE_1_0: tuple[Scenario, ...] = (
+    # the paper's task on the exact v0 environment (the v0 specialists were trained on it)
+    _v0("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s"),
+    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", held_out=True, speed=0.1),
+    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", held_out=True, speed=0.4),
+    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", held_out=True, dt=0.2, max_steps=200),
+    # circles: radii and both directions
+    _v1("circle_r1_ccw", "paper circle on v1 (actuator limits)", path="circle", radius=1.0, direction=1, speed=0.2),
+    _v1("circle_r0.5_ccw", "circle R 0.5 m, left", path="circle", radius=0.5, direction=1, speed=0.2),
+    _v1("circle_r0.5_cw", "circle R 0.5 m, right", path="circle", radius=0.5, direction=-1, speed=0.2),
+    _v1("circle_r2_cw", "circle R 2 m, right", path="circle", radius=2.0, direction=-1, speed=0.3),
+    # speeds
+    _v1("circle_v0.1", "circle R 1 m at 0.1 m/s", path="circle", radius=1.0, speed=0.1),
+    _v1("circle_v0.4", "circle R 1 m at 0.4 m/s", path="circle", radius=1.0, speed=0.4),
+    _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
+    _v1(
+        "manoeuvre_trapezoid",
+        "paper manoeuvre, start-cruise-brake at 0.3 m/s",
+        path="manoeuvre",
+        speed=0.3,
+        speed_profile="trapezoid",
+    ),
+    # path families
+    _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s", path="manoeuvre", speed=0.2),
+    _v1("figure8", "figure-8, 0.2 m/s", path="figure8", speed=0.2),
+    _v1("random_paths", "seeded random smooth paths, 0.2 m/s", path="random", speed=0.2),
+    _v1("lane_change", "lane change, 0.3 m/s (path family not trained on)", True, path="lane_change", speed=0.3),
+    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", path="mixed", speed=(0.1, 0.4)),
+    # control period
+    _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s", dt=0.05, path="circle", radius=1.0, speed=0.2),
+    _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s", dt=0.2, path="circle", radius=1.0, speed=0.2),
+    # the robot is not the model
+    _v1("wheels_plus5", "true wheel radii and track +5 %", path="circle", speed=0.2, true_robot=_WHEELS_PLUS5),
+    _v1("wheels_minus5", "true wheel radii and track -5 %", path="circle", speed=0.2, true_robot=_WHEELS_MINUS5),
+    _v1(
+        "wheels_unequal",
+        "right wheel +5 %, left -5 % (held out)",
+        True,
+        path="figure8",
+        speed=0.2,
+        true_robot=_WHEELS_UNEQUAL,
+    ),
+    _v1("slip", "wheel slip up to 5 % per step", path="circle", speed=0.2, randomize={"slip": (0.0, 0.05)}),
+    _v1("delay_0.1", "actuation delay 0.1 s", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}),
+    _v1("delay_0.25", "actuation delay 0.25 s (held out)", True, path="figure8", randomize={"delay": (0.25, 0.25)}),
+    _v1(
+        "noise",
+        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s",
+        path="circle",
+        speed=0.2,
+        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2},
+    ),
+    _v1("mild", "'mild' randomisation on mixed paths", path="mixed", speed=(0.1, 0.4), randomize="mild"),
+    _v1(
+        "hard", "'hard' randomisation on mixed paths (held out)", True, path="mixed", speed=(0.1, 0.4), randomize="hard"
+    ),
+)
+
+#: released suites by version (never edited)
+SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0}
+SUITE: tuple[Scenario, ...] = SUITES[SUITE_VERSION]
+#: the scenarios of ``--quick`` (run with 2 episodes of at most 120 steps)
+QUICK_SCENARIOS: tuple[str, ...] = ("v0_paper_circle", "v0_speed_0.4", "circle_r1_ccw")
+
+
+def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps: int = 120) -> tuple[Scenario, ...]:
+    """The ``--quick`` subset: :data:`QUICK_SCENARIOS` with at most ``episodes`` seeds and ``max_steps`` steps."""
+    return tuple(
+        replace(sc, seeds=sc.seeds[:episodes], max_steps=min(sc.max_steps, max_steps))
+        for sc in suite
+        if sc.name in QUICK_SCENARIOS
+    )
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, Mapping):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return None if not math.isfinite(float(x)) else float(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    return x
+
+
+# --------------------------------------------------------------------------- agents
+class Unavailable(Exception):
+    """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
+
+
+def _classical(name: str) -> Callable[[Any], Any]:
+    def make(env: Any) -> Any:
+        base = env.unwrapped
+        hook = getattr(base, "classical_policy", None)
+        if callable(hook):
+            return hook(name)
+        from amigo_gym.params import EnvParams
+        from amigo_gym.policies.analytic import AnalyticPolicy
+
+        params = getattr(base, "params", None)
+        if not isinstance(params, EnvParams):
+            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
+        if name == "analytic":
+            return AnalyticPolicy(params)
+        if name == "analytic_ff":
+            return AnalyticPolicy(params, feedforward_only=True)
+        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
+
+    return make
+
+
+#: classical policies by name: built per scenario from the environment
+CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
+
+
+@dataclass
+class AgentSpec:
+    """One training seed of one agent: a classical policy (``path is None``) or an SB3 model zip."""
+
+    name: str
+    seed: int = 0
+    path: str | None = None
+    algo: str | None = None
+    manifest: dict[str, Any] | None = None
+    _model: Any = field(default=None, repr=False)
+
+    def instantiate(self, env: Any) -> Any:
+        """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
+        if self.path is None:
+            return CLASSICAL[self.name](env)
+        if self._model is None:
+            from stable_baselines3 import PPO, SAC, TD3
+
+            cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
+            self._model = cls.load(self.path, device="cpu")
+        want = getattr(self._model.observation_space, "shape", None)
+        got = getattr(env.observation_space, "shape", None)
+        if want != got:
+            raise Unavailable(f"observation shape {got} of the scenario differs from the model's {want}")
+        return self._model
+
+    def describe(self) -> dict[str, Any]:
+        """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
+        d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
+        if self.path is None:
+            d["kind"] = "classical"
+        else:
+            d |= {"kind": "sb3", "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
+            if self.manifest is not None:
+                d["manifest"] = self.manifest
+        return d
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
+    manifest_file = path.with_suffix(".json")
+    manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else None
+    algo = (manifest or {}).get("algo")
+    if algo not in ALGOS:
+        for cand in (path.stem, path.parent.name, name or ""):
+            hit = next((a for a in ALGOS if a in cand.lower()), None)
+            if hit:
+                algo = hit
+                break
+    if algo not in ALGOS:
+        raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
+    seed = (manifest or {}).get("seed")
+    if not isinstance(seed, int):
+        m = re.search(r"(?:seed_?|_s)(\d+)", path.stem)
+        seed = int(m.group(1)) if m else index
+    return AgentSpec(name or str(algo), int(seed), str(path), str(algo), manifest)
+
+
+def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
+    """Agent specs from ``--agents`` (module docstring). Raises ``ValueError`` / ``FileNotFoundError``."""
+    out: list[AgentSpec] = []
+    for spec in specs:
+        if spec in CLASSICAL:
+            out.append(AgentSpec(spec))
+            continue
+        name, sep, pattern = spec.partition("=")
+        if not sep:
+            name, pattern = "", spec
+        p = Path(pattern)
+        if p.is_dir():
+            zips = sorted(p.glob("*.zip")) + sorted(p.glob("*/*.zip"))
+            if not zips:
+                raise FileNotFoundError(f"--agents {spec}: no .zip in {p}")
+            for i, z in enumerate(zips):
+                label = name or (z.parent.name if z.parent != p else z.stem)
+                out.append(_model_spec(label, z, i))
+            continue
+        files = sorted(glob.glob(pattern))
+        if not files:
+            if not sep and not pattern.endswith(".zip"):
+                raise ValueError(f"--agents: unknown classical policy {spec!r} (choose from {', '.join(CLASSICAL)})")
+            raise FileNotFoundError(f"--agents {spec}: no file matches {pattern!r}")
+        for i, f in enumerate(files):
+            out.append(_model_spec(name or None, Path(f), i))
+    names_seeds = [(a.name, a.seed) for a in out]
+    dup = sorted({x for x in names_seeds if names_seeds.count(x) > 1})
+    if dup:
+        raise ValueError(f"--agents: the same (agent, seed) twice: {dup}")
+    return out
+
+
+def default_agents() -> list[AgentSpec]:
+    """``analytic``, ``analytic_ff``, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<algo>``)."""
+    out = [AgentSpec("analytic"), AgentSpec("analytic_ff")]
+    d = pretrained_dir()
+    for algo in ALGOS:
+        if (d / f"{algo}.zip").is_file():
+            out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
+    for algo in ALGOS:
+        for i, z in enumerate(sorted((d / "v1" / algo).glob("*.zip"))):
+            out.append(_model_spec(algo, z, i))
+    return out
+
+
+# --------------------------------------------------------------------------- evaluation
+def make_env(sc: Scenario) -> Any:
+    """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
+
+    if sc.env_id not in gym.registry:
+        raise Unavailable(f"environment {sc.env_id} is not registered")
+    try:
+        return gym.make(sc.env_id, max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
+    except (TypeError, ValueError) as exc:
+        raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
+
+
+def _dt(env: Any, sc: Scenario) -> float:
+    params = getattr(env.unwrapped, "params", None)
+    dt = getattr(params, "dt", None)
+    if isinstance(dt, (int, float)) and not isinstance(dt, bool):
+        return float(dt)
+    return float(sc.env_kwargs.get("dt", 0.1))
+
+
+def evaluate(
+    agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
+) -> list[dict[str, float]]:
+    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics."""
+    adapter = InfoAdapter.for_env(env)
+    dt = _dt(env, sc)
+    episodes: list[dict[str, float]] = []
+    for seed in sc.seeds:
+        obs, _ = env.reset(seed=seed)
+        rec = EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m)
+        state: Any = None
+        start = True
+        while True:
+            action, state = agent.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
+            start = False
+            obs, reward, terminated, truncated, info = env.step(action)
+            rec.add(adapter.read(info), float(reward))
+            if terminated or truncated:
+                rec.terminated = bool(terminated)
+                break
+        episodes.append(rec.metrics())
+        if on_episode is not None:
+            on_episode()
+    return episodes
+
+
+def _nanmean(x: Sequence[float]) -> float | None:
+    a = np.asarray(x, dtype=np.float64)
+    a = a[np.isfinite(a)]
+    return float(a.mean()) if a.size else None
+
+
+def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[str, Any]:
+    col = {k: [e[k] for e in eps] for k in eps[0]}
+    rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
+    rec["episodes"] = len(eps)
+    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms"):
+        rec[k] = _nanmean(col[k])
+    rec["failure_rate"] = _nanmean(col["failure"])
+    rec["return"] = _nanmean(col["return"])
+    rec["return_per_step"] = None if rec["return"] is None else rec["return"] / sc.max_steps
+    for k in ("chatter_rms", "chatter_settled_rms", "effort_rms"):
+        rec[k] = _nanmean(col[k])
+    rec["mean_steps"] = _nanmean(col["steps"])
+    rec["terminated"] = int(sum(col["terminated"]))
+    rec["per_episode"] = {k: _jsonable(v) for k, v in col.items()}
+    return rec
+
+
+def run_benchmark(
+    agents: Sequence[AgentSpec],
+    scenarios: Sequence[Scenario],
+    *,
+    progress: bool = True,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+    bootstrap_seed: int = 0,
+    quick: bool = False,
+) -> dict[str, Any]:
+    """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
+    from tqdm.auto import tqdm
+
+    names = [sc.name for sc in scenarios]
+    if len(set(names)) != len(names):
+        raise ValueError(f"scenario names must be unique, got {names}")
+    t0 = time.perf_counter()
+    envs: dict[str, Any] = {}
+    status: dict[str, str] = {}
+    for sc in scenarios:
+        try:
+            envs[sc.name] = make_env(sc)
+            status[sc.name] = "ok"
+        except Unavailable as exc:
+            status[sc.name] = f"unavailable: {exc}"
+    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
+    results: list[dict[str, Any]] = []
+    unavailable: list[dict[str, Any]] = [
+        {"agent": None, "seed": None, "scenario": n, "reason": s.removeprefix("unavailable: ")}
+        for n, s in status.items()
+        if s != "ok"
+    ]
+    bar = tqdm(total=total, desc="benchmark", unit="ep", file=sys.stderr, disable=not progress)
+    try:
+        for spec in agents:
+            for sc in scenarios:
+                env = envs.get(sc.name)
+                if env is None:
+                    continue
+                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
+                try:
+                    agent = spec.instantiate(env)
+                    eps = evaluate(agent, env, sc, on_episode=lambda: bar.update(1))
+                except Unavailable as exc:
+                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
+                    bar.update(sc.episodes)
+                    continue
+                results.append(_record(spec, sc, eps))
+    finally:
+        bar.close()
+        for env in envs.values():
+            env.close()
+    doc: dict[str, Any] = {
+        "suite_version": SUITE_VERSION,
+        "quick": quick,
+        "protocol": {
+            "deterministic": True,
+            "episode_metric_average": "mean over the scenario's episodes (NaN-free)",
+            "settle_time_s": "per scenario (default 5 s)",
+            "failure": "terminated, or |e| > failure_tolerance_m at some t >= settle_time_s",
+            "h_target_m": H_TARGET_M,
+            "bootstrap": "stratified over training seeds within each scenario (rliable), percentile 95 % intervals",
+            "reps": reps,
+            "profile_reps": profile_reps,
+            "bootstrap_seed": bootstrap_seed,
+            "training_distribution": TRAINING_DISTRIBUTION,
+        },
+        "scenarios": [sc.to_json() | {"status": status[sc.name]} for sc in scenarios],
+        "agents": [a.describe() for a in agents],
+        "results": results,
+        "unavailable": unavailable,
+    }
+    held = {sc.name: sc.held_out for sc in scenarios}
+    doc["aggregates"], doc["performance_profiles"] = aggregate(
+        results, held, reps=reps, profile_reps=profile_reps, seed=bootstrap_seed
+    )
+    doc["wall_time_s"] = round(time.perf_counter() - t0, 2)
+    return doc
+
+
+# --------------------------------------------------------------------------- aggregation
+def _score_matrix(
+    results: Sequence[dict[str, Any]], agent: str, scen: Sequence[str], key: str
+) -> tuple[np.ndarray, list[int]]:
+    seeds = sorted({r["seed"] for r in results if r["agent"] == agent})
+    table = {(r["seed"], r["scenario"]): r[key] for r in results if r["agent"] == agent}
+    m = np.array([[table[(s, c)] for c in scen] for s in seeds], dtype=np.float64)
+    return m, seeds
+
+
+def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
+    return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
+
+
+def aggregate(
+    results: Sequence[dict[str, Any]],
+    held_out: Mapping[str, bool],
+    *,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+    seed: int = 0,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Per-agent aggregates and H-error performance profiles (module docstring)."""
+    from amigo_gym.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
+
+    aggregates: dict[str, Any] = {}
+    profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
+    keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
+    for agent in dict.fromkeys(r["agent"] for r in results):
+        rs = [r for r in results if r["agent"] == agent and all(r[k] is not None for k in keys)]
+        seeds = sorted({r["seed"] for r in rs})
+        common = [
+            c
+            for c in dict.fromkeys(r["scenario"] for r in rs)
+            if all((s, c) in {(x["seed"], x["scenario"]) for x in rs} for s in seeds)
+        ]
+        groups = {
+            "all": common,
+            "in_distribution": [c for c in common if not held_out.get(c, False)],
+            "held_out": [c for c in common if held_out.get(c, False)],
+        }
+        entry: dict[str, Any] = {"n_runs": len(seeds), "seeds": seeds}
+        for g, scen in groups.items():
+            if not scen:
+                entry[g] = None
+                continue
+            h, _ = _score_matrix(rs, agent, scen, "h_rms_m")
+            v, _ = _score_matrix(rs, agent, scen, "speed_err_rms")
+            f, _ = _score_matrix(rs, agent, scen, "failure_rate")
+            ret, _ = _score_matrix(rs, agent, scen, "return_per_step")
+            gi = {"n_scenarios": len(scen), "scenarios": scen}
+            gi["h_rms_m_iqm"] = _interval(*stratified_bootstrap(h, iqm, reps=reps, seed=seed))
+            gi["h_rms_m_optimality_gap"] = _interval(
+                *stratified_bootstrap(-h, lambda s: optimality_gap(s, -H_TARGET_M), reps=reps, seed=seed)
+            )
+            gi["speed_err_rms_iqm"] = _interval(*stratified_bootstrap(v, iqm, reps=reps, seed=seed))
+            gi["failure_rate_mean"] = _interval(
+                *stratified_bootstrap(f, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
+            )
+            gi["return_per_step_iqm"] = _interval(*stratified_bootstrap(ret, iqm, reps=reps, seed=seed))
+            gi["return_per_step_optimality_gap"] = _interval(
+                *stratified_bootstrap(ret, optimality_gap, reps=reps, seed=seed)
+            )
+            entry[g] = gi
+            if g == "all":
+                prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
+                profiles["agents"][agent] = {
+                    "fraction_below": prof.tolist(),
+                    "ci95_low": band[0].tolist(),
+                    "ci95_high": band[1].tolist(),
+                }
+        top = entry["all"]
+        if top is not None:
+            entry = {
+                "metric": "h_rms_m",
+                "iqm": top["h_rms_m_iqm"]["value"],
+                "ci95": top["h_rms_m_iqm"]["ci95"],
+                **entry,
+            }
+        aggregates[str(agent)] = entry
+    return aggregates, profiles
+
+
+# --------------------------------------------------------------------------- reports
+def _mm(x: float | None) -> str:
+    return "–" if x is None else f"{1e3 * x:.3g}"
+
+
+def markdown_report(doc: Mapping[str, Any]) -> str:
+    """Markdown: the aggregate table, the per-scenario table of H RMS, the unavailable scenarios."""
+    lines = [
+        f"# AmigoBot benchmark, suite {doc['suite_version']}" + (" (quick subset)" if doc.get("quick") else ""),
+        "",
+        f"IQM and optimality gap over (training seed, scenario) runs; [95 % stratified-bootstrap interval, "
+        f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
+        "",
+        "| agent | seeds | scenarios | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] | failure rate "
+        "| return/step IQM | held-out H RMS IQM [mm] |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+
+    def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
+        if d is None:
+            return "–"
+        lo, hi = d["ci95"]
+        return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
+
+    for agent, a in doc["aggregates"].items():
+        g = a.get("all")
+        if g is None:
+            continue
+        h = a.get("held_out")
+        lines.append(
+            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {iv(g['h_rms_m_iqm'])} | "
+            f"{iv(g['h_rms_m_optimality_gap'])} | {iv(g['speed_err_rms_iqm'])} | "
+            f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
+            f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
+        )
+    agents = list(doc["aggregates"])
+    lines += ["", "## H cross-track RMS per scenario [mm] (mean over training seeds)", ""]
+    lines.append("| scenario | held out | " + " | ".join(agents) + " |")
+    lines.append("|---|---|" + "---|" * len(agents))
+    for sc in doc["scenarios"]:
+        cells = []
+        for agent in agents:
+            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
+            vals = [v for v in vals if v is not None]
+            cells.append(_mm(float(np.mean(vals))) if vals else "–")
+        lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+    if doc["unavailable"]:
+        lines += ["", "## Unavailable", ""]
+        for u in doc["unavailable"]:
+            who = "all agents" if u["agent"] is None else f"{u['agent']} (seed {u['seed']})"
+            lines.append(f"- {u['scenario']}, {who}: {u['reason']}")
+    return "\n".join(lines) + "\n"
+
+
+def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
+    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from amigo_gym.training.intervals import stratified_bootstrap
+
+    scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
+    agents = list(doc["aggregates"])
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.5 * len(scen) * max(1, len(agents)) ** 0.5 + 2), 4.5))
+    width = 0.8 / max(1, len(agents))
+    floor = 1e-7
+    for j, agent in enumerate(agents):
+        xs, ys, lo, hi = [], [], [], []
+        for i, name in enumerate(scen):
+            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == name]
+            vals = [v for v in vals if v is not None]
+            if not vals:
+                continue
+            m = np.asarray(vals, dtype=np.float64).reshape(-1, 1)
+            pt, ci = stratified_bootstrap(m, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
+            xs.append(i + (j - (len(agents) - 1) / 2) * width)
+            ys.append(max(float(pt), floor))
+            lo.append(max(float(pt), floor) - max(float(ci[0]), floor))
+            hi.append(max(float(ci[1]), floor) - max(float(pt), floor))
+        ax.bar(xs, ys, width, yerr=[lo, hi], capsize=2, label=agent)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(scen)), scen, rotation=60, ha="right", fontsize=8)
+    ax.set_ylabel("H cross-track RMS [m]")
+    ax.set_title(f"AmigoBot benchmark {doc['suite_version']}: per scenario (95 % interval over training seeds)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
+    """Performance profiles: fraction of (seed, scenario) runs with H RMS below tau, with bootstrap bands."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    prof = doc["performance_profiles"]
+    taus = np.asarray(prof["taus_m"])
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for agent, p in prof["agents"].items():
+        (line,) = ax.plot(taus, p["fraction_below"], label=agent)
+        ax.fill_between(taus, p["ci95_low"], p["ci95_high"], color=line.get_color(), alpha=0.2)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"threshold $\tau$ on H cross-track RMS [m]")
+    ax.set_ylabel(r"fraction of runs with RMS $< \tau$")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_title("Performance profiles (rliable score distributions)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def write_outputs(
+    doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
+) -> list[Path]:
+    """Write the JSON, the Markdown and (``plots``) the two figures atomically; the paths written."""
+    atomic_write_json(json_path, _jsonable(doc), parents=True)
+    atomic_write(md_path, markdown_report(doc), parents=True)
+    written = [json_path, md_path]
+    if plots and doc["results"]:
+        plot_scenarios(doc, out / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+        plot_profiles(doc, out / "benchmark_profiles.png")
+        written += [out / "benchmark_scenarios.png", out / "benchmark_profiles.png"]
+    return written
+
+
+# --------------------------------------------------------------------------- command line
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym benchmark``."""
+    p = OneLineParser(prog="amigo-gym benchmark", description="Run the AmigoBot benchmark suite.")
+    p.add_argument("--agents", nargs="+", default=None, help="classical names, NAME=GLOB of zips, zips or folders")
+    p.add_argument("--scenarios", nargs="+", default=None, help="scenario names (default: the whole suite)")
+    p.add_argument("--suite", default=SUITE_VERSION, choices=sorted(SUITES), help="suite version")
+    p.add_argument("--quick", action="store_true", help="small subset: 3 scenarios, 2 episodes of <= 120 steps")
+    p.add_argument("--out", default="results/benchmark", help="output folder (default results/benchmark)")
+    p.add_argument("--json", default=None, help="JSON file (default <out>/benchmark.json)")
+    p.add_argument("--markdown", default=None, help="Markdown file (default <out>/benchmark.md)")
+    p.add_argument("--reps", type=int, default=10_000, help="bootstrap replications of the intervals (10000)")
+    p.add_argument("--profile-reps", type=int, default=2_000, help="bootstrap replications of the profiles (2000)")
+    p.add_argument("--bootstrap-seed", type=int, default=0)
+    p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--list", action="store_true", help="print the suite and exit")
+    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+
+    def run() -> int:
+        suite = SUITES[a.suite]
+        if a.list:
+            for sc in suite:
+                flag = "held out" if sc.held_out else ""
+                size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
+                print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
+            return 0
+        scenarios = quick_suite(suite) if a.quick else suite
+        if a.scenarios:
+            known = {sc.name: sc for sc in suite}
+            bad = [n for n in a.scenarios if n not in known]
+            if bad:
+                raise ValueError(f"--scenarios: unknown {bad}; see amigo-gym benchmark --list")
+            chosen = {sc.name: sc for sc in scenarios}
+            scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)
+        for name in ("reps", "profile_reps"):
+            if getattr(a, name) < 1:
+                raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(a, name)}")
+        agents = parse_agents(a.agents) if a.agents else default_agents()
+        doc = run_benchmark(
+            agents,
+            scenarios,
+            progress=not a.no_progress,
+            reps=a.reps,
+            profile_reps=a.profile_reps,
+            bootstrap_seed=a.bootstrap_seed,
+            quick=a.quick,
+        )
+        doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
+        out = Path(a.out)
+        json_path = Path(a.json) if a.json else out / "benchmark.json"
+        md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
+        written = write_outputs(doc, out, json_path, md_path, plots=not a.no_plots)
+        print(markdown_report(doc), end="")
+        print("wrote " + ", ".join(map(str, written)))
+        return 0
+
+    return run_guarded(run, "amigo-gym benchmark")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,145 @@
+"""Aggregate scores with honest uncertainty: rliable's estimators, re-implemented in numpy.
+
+Definitions follow ``rliable`` (Agarwal et al., "Deep RL at the Edge of the Statistical Precipice",
+NeurIPS 2021; ``google-research/rliable``, ``rliable/metrics.py`` and ``rliable/library.py``, v1.2.0).
+They are re-implemented here because rliable 1.2 requires ``arch<8``, whose 7.x releases fail to
+import with pandas 3 (``deprecate_kwarg() missing ... 'new_arg_name'``); the numbers are the same
+estimators, vectorised over bootstrap replications. Scores are matrices ``(num_runs, num_tasks)``:
+here runs are training seeds and tasks are benchmark scenarios.
+
+* :func:`iqm`: interquartile mean, ``scipy.stats.trim_mean(scores, 0.25, axis=None)``: sort the
+  ``n = runs * tasks`` scores, drop ``floor(0.25 n)`` at each end, average the rest.
+* :func:`optimality_gap`: ``gamma - mean(min(scores, gamma))`` (higher scores are better). For a
+  lower-is-better metric ``x`` with target ``g`` it is applied to ``-x`` with ``gamma = -g``, which is
+  ``mean(max(x - g, 0))``: by how much, on average, the agent misses the target.
+* :func:`stratified_bootstrap`: rliable's ``StratifiedBootstrap`` (``task_bootstrap=False``): each
+  replication resamples the runs of every task independently, with replacement (the tasks are kept),
+  and the 95 % interval is the percentile interval (2.5 and 97.5 percentiles of the replications,
+  rliable's default ``method="percentile"``). It measures the uncertainty of repeating the experiment
+  with other training seeds on the same scenarios; with one run per task (a deterministic classical
+  policy) the interval has zero width.
+* :func:`performance_profile`: rliable's score distribution, the fraction of all ``(run, task)``
+  scores above ``tau`` (``run_score_deviation``), for a list of thresholds, with the same bootstrap.
+
+Imports only numpy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "DEFAULT_PROFILE_REPS",
+    "DEFAULT_REPS",
+    "iqm",
+    "optimality_gap",
+    "performance_profile",
+    "score_distribution",
+    "stratified_bootstrap",
+]
+
+Array = NDArray[np.float64]
+Stat = Callable[[Array], Array]
+
+#: bootstrap replications of the interval estimates (rliable's default is 50 000; 10 000 puts the
+#: Monte-Carlo error of a 95 % percentile bound well below the bound's own spread)
+DEFAULT_REPS = 10_000
+#: bootstrap replications of the performance profiles (rliable's default)
+DEFAULT_PROFILE_REPS = 2_000
+#: largest number of resampled scores held in memory at once
+_CHUNK = 4_000_000
+
+
+def _matrix(scores: ArrayLike) -> Array:
+    x = np.asarray(scores, dtype=np.float64)
+    if x.ndim != 2 or x.size == 0:
+        raise ValueError(f"scores must be a non-empty matrix (num_runs, num_tasks), got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("scores must be finite (drop or replace NaN before aggregating)")
+    return x
+
+
+def iqm(scores: ArrayLike) -> Array:
+    """Interquartile mean over the last two axes ``(..., runs, tasks)`` (``trim_mean(x, 0.25, axis=None)``)."""
+    x = np.asarray(scores, dtype=np.float64)
+    flat = np.sort(x.reshape(*x.shape[:-2], -1), axis=-1)
+    n = flat.shape[-1]
+    cut = int(0.25 * n)
+    return np.asarray(np.mean(flat[..., cut : n - cut], axis=-1), dtype=np.float64)
+
+
+def optimality_gap(scores: ArrayLike, gamma: float = 1.0) -> Array:
+    """rliable's optimality gap over the last two axes: ``gamma - mean(min(scores, gamma))``."""
+    x = np.asarray(scores, dtype=np.float64)
+    return np.asarray(gamma - np.mean(np.minimum(x, gamma), axis=(-2, -1)), dtype=np.float64)
+
+
+def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
+    """Fraction of scores ``> tau`` over the last two axes, for each ``tau``: shape ``(..., len(taus))``."""
+    x = np.asarray(scores, dtype=np.float64)
+    t = np.asarray(taus, dtype=np.float64).reshape(-1)
+    flat = x.reshape(*x.shape[:-2], -1)
+    return np.asarray(np.mean(flat[..., None, :] > t[:, None], axis=-1), dtype=np.float64)
+
+
+def stratified_bootstrap(
+    scores: ArrayLike,
+    stat: Stat,
+    *,
+    reps: int = DEFAULT_REPS,
+    size: float = 0.95,
+    seed: int | np.random.Generator = 0,
+) -> tuple[Array, Array]:
+    """Point estimate and percentile interval of ``stat`` under rliable's stratified bootstrap.
+
+    Args:
+        scores: ``(num_runs, num_tasks)``.
+        stat: vectorised statistic: maps ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``.
+        reps: bootstrap replications.
+        size: coverage of the interval (0.95: the 2.5 and 97.5 percentiles).
+        seed: seed or generator of the resampling (the same seed gives the same interval).
+
+    Returns:
+        ``(point, interval)``: ``stat(scores)`` and an array ``(2, ...)`` of the lower and upper bounds.
+    """
+    x = _matrix(scores)
+    if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
+        raise ValueError(f"reps must be an integer >= 1, got {reps!r}")
+    if not 0.0 < size < 1.0:
+        raise ValueError(f"size must be in (0, 1), got {size!r}")
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    n, m = x.shape
+    point = np.asarray(stat(x), dtype=np.float64)
+    chunk = max(1, _CHUNK // (n * m))
+    cols = np.arange(m)
+    out: list[Array] = []
+    done = 0
+    while done < reps:
+        k = min(chunk, reps - done)
+        idx = rng.integers(0, n, size=(k, n, m))
+        out.append(np.asarray(stat(x[idx, cols]), dtype=np.float64))
+        done += k
+    values = np.concatenate(out, axis=0)
+    tail = 100.0 * (1.0 - size) / 2.0
+    interval = np.percentile(values, [tail, 100.0 - tail], axis=0)
+    return point, np.asarray(interval, dtype=np.float64)
+
+
+def performance_profile(
+    scores: ArrayLike,
+    taus: Sequence[float] | Array,
+    *,
+    reps: int = DEFAULT_PROFILE_REPS,
+    size: float = 0.95,
+    seed: int | np.random.Generator = 0,
+) -> tuple[Array, Array]:
+    """rliable's performance profile (score distribution) with its stratified-bootstrap interval.
+
+    Returns:
+        ``(profile, interval)``: ``(len(taus),)`` fractions of scores above each ``tau`` and ``(2, len(taus))``.
+    """
+    t = np.asarray(taus, dtype=np.float64)
+    return stratified_bootstrap(scores, lambda s: score_distribution(s, t), reps=reps, size=size, seed=seed)

@@ -1,0 +1,336 @@
+"""The benchmark: rliable statistics against closed forms, task metrics, the suite, the CLI on v0 and a fake v1."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from scipy import stats
+
+import amigo_gym  # noqa: F401
+from amigo_gym.training import benchmark as bm
+from amigo_gym.training.intervals import (
+    iqm,
+    optimality_gap,
+    performance_profile,
+    score_distribution,
+    stratified_bootstrap,
+)
+from amigo_gym.training.task_metrics import InfoAdapter, episode_metrics
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# --------------------------------------------------------------------------- statistics (rliable definitions)
+@pytest.mark.parametrize("shape", [(1, 1), (3, 1), (5, 7), (10, 3), (4, 4)])
+def test_iqm_is_scipy_trim_mean(shape: tuple[int, int]) -> None:
+    x = np.random.default_rng(1).normal(size=shape)
+    assert iqm(x) == pytest.approx(stats.trim_mean(x, proportiontocut=0.25, axis=None), abs=1e-15)
+
+
+def test_iqm_closed_form_and_batched() -> None:
+    x = np.arange(1.0, 9.0).reshape(2, 4)  # 8 scores: drop 2 at each end -> mean(3..6) = 4.5
+    assert float(iqm(x)) == 4.5
+    batch = np.stack([x, 2 * x])
+    np.testing.assert_allclose(iqm(batch), [4.5, 9.0])
+
+
+def test_optimality_gap_closed_form() -> None:
+    x = np.array([[0.5, 1.2], [0.9, 1.0]])
+    assert float(optimality_gap(x)) == pytest.approx(1 - (0.5 + 1.0 + 0.9 + 1.0) / 4)
+    # lower-is-better metric h with target g: gap of -h at -g is mean(max(h - g, 0))
+    h = np.array([[0.004, 0.02], [0.03, 0.0]])
+    assert float(optimality_gap(-h, -0.01)) == pytest.approx(np.mean(np.maximum(h - 0.01, 0)))
+
+
+def test_score_distribution_definition() -> None:
+    x = np.array([[0.1, 0.5], [0.9, 0.3]])
+    np.testing.assert_allclose(score_distribution(x, [0.0, 0.2, 0.4, 1.0]), [1.0, 0.75, 0.5, 0.0])
+
+
+def test_bootstrap_is_stratified_and_reproducible() -> None:
+    # one run per task, or identical runs within every task: every resample is the data -> zero width
+    single = np.array([[1.0, 2.0, 5.0]])
+    pt, ci = stratified_bootstrap(single, iqm, reps=200)
+    assert ci[0] == ci[1] == pt
+    same_per_task = np.tile([[1.0, 4.0, 9.0]], (5, 1))
+    pt, ci = stratified_bootstrap(same_per_task, iqm, reps=200)
+    assert ci[0] == ci[1] == pt
+    x = np.random.default_rng(0).normal(size=(5, 8))
+    a = stratified_bootstrap(x, iqm, reps=500, seed=3)
+    b = stratified_bootstrap(x, iqm, reps=500, seed=3)
+    np.testing.assert_array_equal(a[1], b[1])
+
+
+def test_bootstrap_of_the_mean_matches_the_normal_approximation() -> None:
+    # rliable's documented example: StratifiedBootstrap(x).conf_int(np.mean), x standard normal (5, 50).
+    # Stratified resampling of runs within tasks: Var(mean*) = sum_m s_m^2 / (N M^2), s_m^2 the plug-in
+    # variance of task m's N runs. The percentile interval is then mean +- 1.96 sd (CLT over 50 tasks).
+    x = np.random.default_rng(1234).standard_normal((5, 50))
+    pt, ci = stratified_bootstrap(x, lambda s: np.mean(s, axis=(-2, -1)), reps=20_000, seed=0)
+    sd = math.sqrt(np.sum(np.var(x, axis=0)) / (5 * 50**2))
+    assert float(pt) == pytest.approx(x.mean())
+    assert ci[0] == pytest.approx(x.mean() - 1.96 * sd, abs=0.05 * sd + 1e-3)
+    assert ci[1] == pytest.approx(x.mean() + 1.96 * sd, abs=0.05 * sd + 1e-3)
+
+
+def test_performance_profile_shapes_and_band() -> None:
+    x = np.random.default_rng(2).uniform(size=(4, 6))
+    taus = np.linspace(0, 1, 11)
+    prof, band = performance_profile(x, taus, reps=300)
+    assert prof.shape == (11,) and band.shape == (2, 11)
+    assert np.all(band[0] <= prof + 1e-12) and np.all(prof <= band[1] + 1e-12)
+    assert prof[0] == 1.0 and prof[-1] == 0.0
+
+
+def test_statistics_refuse_bad_input() -> None:
+    with pytest.raises(ValueError, match="finite"):
+        stratified_bootstrap(np.array([[np.nan]]), iqm)
+    with pytest.raises(ValueError, match="matrix"):
+        stratified_bootstrap(np.zeros(3), iqm)
+    with pytest.raises(ValueError, match="reps"):
+        stratified_bootstrap(np.zeros((2, 2)), iqm, reps=0)
+
+
+# --------------------------------------------------------------------------- task metrics
+def test_episode_metrics_closed_form() -> None:
+    e = np.array([0.3, -0.2, 0.05, 0.0])
+    cmd = np.array([[1.0, 1.0], [2.0, 1.0], [2.0, 1.0], [2.0, 3.0]])
+    m = episode_metrics(
+        e, np.array([0.1, 0.0, 0.0, 0.0]), cmd, cmd, np.ones(4), dt=0.5, terminated=False, settle_time_s=1.5
+    )
+    assert m["h_rms_m"] == pytest.approx(math.sqrt((0.09 + 0.04 + 0.0025) / 4))
+    assert m["h_rms_settled_m"] == pytest.approx(math.sqrt(0.0025 / 2))  # t = 1.5, 2.0
+    assert m["h_max_m"] == 0.3 and m["return"] == 4.0 and m["failure"] == 0.0
+    assert m["chatter_rms"] == pytest.approx(math.sqrt((1 + 0 + 0 + 0 + 0 + 4) / 6))
+    assert m["chatter_settled_rms"] == pytest.approx(math.sqrt((0 + 0 + 0 + 4) / 4))
+    assert m["speed_err_rms"] == pytest.approx(0.05)
+    bad = episode_metrics(e * 10, e, cmd, cmd, np.ones(4), dt=0.5, terminated=False, settle_time_s=1.5)
+    assert bad["failure"] == 1.0  # settled |e| = 0.5 m > 0.1 m
+    term = episode_metrics(e, e, cmd, cmd, np.ones(4), dt=0.5, terminated=True)
+    assert term["failure"] == 1.0 and math.isnan(term["h_rms_settled_m"])
+
+
+def test_info_adapter_v0_and_v1() -> None:
+    env = gym.make("AmigoBot-v0", speed=0.3)
+    ad = InfoAdapter.for_env(env)
+    r = env.unwrapped.params.robot  # type: ignore[attr-defined]
+    s = ad.read({"cross_track_error": 0.01, "wheel_rates": np.array([6.0, 5.0])})
+    assert s.speed_error == pytest.approx(0.5 * (r.r1 * 6 + r.r2 * 5) - 0.3)
+    assert s.command == (6.0, 5.0)
+    v1 = ad.read({"cross_track_error": 0.0, "wheel_rates": [1, 2], "command": [3, 4], "speed_error": -0.02})
+    assert v1.speed_error == -0.02 and v1.command == (3.0, 4.0) and v1.wheel_rates == (1.0, 2.0)
+    env.close()
+
+
+# --------------------------------------------------------------------------- the suite
+def test_suite_is_versioned_data_with_required_coverage() -> None:
+    names = [sc.name for sc in bm.SUITE]
+    assert len(set(names)) == len(names)
+    assert all(sc.version == bm.SUITE_VERSION for sc in bm.SUITE)
+    assert bm.SUITES[bm.SUITE_VERSION] is bm.SUITE
+    v1 = [sc for sc in bm.SUITE if sc.env_id == "AmigoBot-v1"]
+    kw = [dict(sc.env_kwargs) for sc in v1]
+    assert {k.get("path") for k in kw} >= {"circle", "manoeuvre", "figure8", "lane_change", "random", "mixed"}
+    assert {k.get("dt") for k in kw} >= {0.05, 0.2}
+    assert {k.get("direction") for k in kw if k.get("path") == "circle"} >= {1, -1}
+    assert {k.get("speed") for k in kw} >= {0.1, 0.4}
+    assert any(k.get("speed_profile") == "trapezoid" for k in kw)
+    assert any("true_robot" in k for k in kw)
+    rand = [k["randomize"] for k in kw if isinstance(k.get("randomize"), dict)]
+    for field in ("slip", "delay", "position_noise"):
+        assert any(field in r for r in rand), field
+    assert any(sc.held_out for sc in bm.SUITE) and not all(sc.held_out for sc in bm.SUITE)
+    assert any(sc.env_id == "AmigoBot-v0" and not sc.env_kwargs for sc in bm.SUITE)  # the paper's circle on v0
+    for sc in bm.SUITE:  # the mapping kwargs are valid Randomization ranges
+        r = sc.env_kwargs.get("randomize")
+        if isinstance(r, dict):
+            from amigo_gym.randomization import make_randomization
+
+            make_randomization(r)
+    json.dumps([sc.to_json() for sc in bm.SUITE])
+
+
+def test_scenario_validation() -> None:
+    with pytest.raises(ValueError, match="seeds"):
+        bm.Scenario("x", "AmigoBot-v0", seeds=())
+    with pytest.raises(ValueError, match="distinct"):
+        bm.Scenario("x", "AmigoBot-v0", seeds=(1, 1))
+    with pytest.raises(ValueError, match="max_steps"):
+        bm.Scenario("x", "AmigoBot-v0", max_steps=0)
+
+
+# --------------------------------------------------------------------------- runs
+class _FakeV1(gym.Wrapper[Any, Any, Any, Any]):
+    """AmigoBot-v0 reporting v1-style info (command, actual rates lagging, speed error) and a stateful agent."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(gym.make("AmigoBot-v0", **kwargs).env)  # type: ignore[attr-defined]
+
+    def step(self, action: Any) -> Any:
+        obs, r, term, trunc, info = self.env.step(action)
+        info = dict(info)
+        info["command"] = info["wheel_rates"]
+        info["wheel_rates"] = 0.9 * info["wheel_rates"]
+        info["speed_error"] = 0.01
+        return obs, r, term, trunc, info
+
+
+class _CountingAgent:
+    """A stateful policy: counts steps since the episode start (integral action would keep its integral)."""
+
+    def __init__(self) -> None:
+        from amigo_gym.params import EnvParams
+        from amigo_gym.policies.analytic import AnalyticPolicy
+
+        self.inner = AnalyticPolicy(EnvParams())
+        self.starts = 0
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> Any:
+        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
+            self.starts += 1
+            assert state is None or state == 0 or isinstance(state, int)
+            state = 0
+        action, _ = self.inner.predict(observation)
+        return action, int(state) + 1
+
+
+@pytest.fixture(scope="module")
+def fake_v1() -> str:
+    env_id = "AmigoBotFakeBench-v1"
+    if env_id not in gym.registry:
+        gym.register(env_id, entry_point=_FakeV1, max_episode_steps=400)
+    return env_id
+
+
+def test_run_benchmark_on_v0_and_fake_v1(fake_v1: str, tmp_path: Path) -> None:
+    scenarios = (
+        bm.Scenario("v0_circle", "AmigoBot-v0", seeds=(100, 101), max_steps=80),
+        bm.Scenario("fake_v1", fake_v1, {"speed": 0.3}, seeds=(5,), max_steps=60, held_out=True),
+        bm.Scenario("missing", "AmigoBot-v77", {"path": "circle"}, seeds=(1,), max_steps=10),
+        bm.Scenario("bad_kwargs", "AmigoBot-v0", {"no_such_setting": 1}, seeds=(1,), max_steps=10),
+    )
+    counting = _CountingAgent()
+    bm.CLASSICAL["counting"] = lambda env: counting
+    try:
+        agents = [bm.AgentSpec("analytic"), bm.AgentSpec("counting"), bm.AgentSpec("pure_pursuit")]
+        doc = bm.run_benchmark(agents, scenarios, progress=False, reps=200, profile_reps=50)
+    finally:
+        del bm.CLASSICAL["counting"]
+    assert counting.starts == 3  # episode_start passed through: 2 + 1 episodes
+    recs = {(r["agent"], r["scenario"]): r for r in doc["results"]}
+    assert set(recs) == {(a, s) for a in ("analytic", "counting") for s in ("v0_circle", "fake_v1")}
+    for r in doc["results"]:
+        for key in ("agent", "seed", "scenario", "h_rms_m", "speed_err_rms", "failure_rate", "return"):
+            assert key in r
+    assert recs[("analytic", "fake_v1")]["speed_err_rms"] == pytest.approx(0.01)  # v1 info used as is
+    assert recs[("analytic", "v0_circle")]["speed_err_rms"] < 1e-6  # v0: from the wheel rates
+    assert recs[("analytic", "v0_circle")]["episodes"] == 2
+    status = {s["name"]: s["status"] for s in doc["scenarios"]}
+    assert status["missing"] == "unavailable: environment AmigoBot-v77 is not registered"
+    assert status["bad_kwargs"].startswith("unavailable: gym.make")
+    reasons = {(u["agent"], u["scenario"]) for u in doc["unavailable"]}
+    assert {(None, "missing"), (None, "bad_kwargs"), ("pure_pursuit", "v0_circle")} <= reasons
+    agg = doc["aggregates"]["analytic"]
+    assert agg["metric"] == "h_rms_m" and agg["ci95"][0] <= agg["iqm"] <= agg["ci95"][1]
+    assert agg["held_out"]["scenarios"] == ["fake_v1"] and agg["in_distribution"]["scenarios"] == ["v0_circle"]
+    assert set(doc["performance_profiles"]["agents"]) == {"analytic", "counting"}
+    md = bm.markdown_report(doc)
+    assert "Unavailable" in md and "AmigoBot-v77" in md
+    written = bm.write_outputs(doc, tmp_path, tmp_path / "b.json", tmp_path / "b.md")
+    assert all(p.is_file() and p.stat().st_size > 0 for p in written)
+    json.loads((tmp_path / "b.json").read_text())
+
+
+def test_parse_agents(tmp_path: Path) -> None:
+    assert [a.name for a in bm.parse_agents(["analytic", "analytic_ff"])] == ["analytic", "analytic_ff"]
+    with pytest.raises(ValueError, match="unknown classical"):
+        bm.parse_agents(["nonsense"])
+    with pytest.raises(FileNotFoundError):
+        bm.parse_agents([f"sac={tmp_path}/*.zip"])
+    d = tmp_path / "v1" / "ppo"
+    d.mkdir(parents=True)
+    for s in (3, 7):
+        (d / f"seed_{s}.zip").write_bytes(b"x")
+    specs = bm.parse_agents([str(tmp_path / "v1")])
+    assert [(a.name, a.seed, a.algo) for a in specs] == [("ppo", 3, "ppo"), ("ppo", 7, "ppo")]
+    (d / "seed_7.json").write_text(json.dumps({"algo": "ppo", "seed": 11}))
+    specs = bm.parse_agents([f"gen={d}/*.zip"])
+    assert [(a.name, a.seed) for a in specs] == [("gen", 3), ("gen", 11)]
+
+
+def test_cli_quick(tmp_path: Path) -> None:
+    sac = ROOT / "agents" / "pretrained" / "sac.zip"
+    cmd = [sys.executable, "-m", "amigo_gym.cli", "benchmark", "--quick", "--out", str(tmp_path), "--reps", "500"]
+    cmd += ["--agents", "analytic", f"sac_v0={sac}"]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "benchmark.json").read_text())
+    assert doc["quick"] and doc["suite_version"] == bm.SUITE_VERSION
+    assert {r["agent"] for r in doc["results"]} == {"analytic", "sac_v0"}
+    assert {r["scenario"] for r in doc["results"]} == {"v0_paper_circle", "v0_speed_0.4"}
+    if "AmigoBot-v1" not in gym.registry:
+        assert any(u["scenario"] == "circle_r1_ccw" for u in doc["unavailable"])
+        assert "circle_r1_ccw" in r.stdout
+    sac_rec = next(a for a in doc["agents"] if a["agent"] == "sac_v0")
+    assert sac_rec["seed"] == 0 and len(sac_rec["sha256"]) == 64
+    for f in ("benchmark.md", "benchmark_scenarios.png", "benchmark_profiles.png"):
+        assert (tmp_path / f).is_file()
+    assert "benchmark" in r.stderr  # the progress bar
+
+
+def test_cli_list_and_errors(tmp_path: Path) -> None:
+    r = subprocess.run([sys.executable, "-m", "amigo_gym.cli", "benchmark", "--list"], capture_output=True, text=True)
+    assert r.returncode == 0 and "v0_paper_circle" in r.stdout and "held out" in r.stdout
+    r = subprocess.run(
+        [sys.executable, "-m", "amigo_gym.cli", "benchmark", "--scenarios", "nope", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "unknown" in r.stderr
+
+
+# --------------------------------------------------------------------------- learning curves: task metrics in training
+def test_training_logs_task_metrics_and_after_eval_can_stop(tmp_path: Path) -> None:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    from amigo_gym.training.train import Settings, train
+
+    hp = tmp_path / "tiny.yml"
+    hp.write_text("AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [8]\n")
+    seen: list[dict[str, Any]] = []
+
+    def stop_after_first(entry: dict[str, Any]) -> bool:
+        seen.append(entry)
+        return False
+
+    s = Settings(
+        algo="ppo",
+        out=str(tmp_path / "run"),
+        timesteps=256,
+        eval_freq=32,
+        eval_episodes=2,
+        checkpoint_freq=0,
+        progress=False,
+        hyperparams=str(hp),
+    )
+    record = train(s, after_eval=stop_after_first)
+    assert len(seen) == 1 and record["timesteps"] < 256  # the hook stopped training after one evaluation
+    entry = json.loads((tmp_path / "run" / "eval.json").read_text())[0]
+    for key in ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "wall_time_s"):
+        assert key in entry and math.isfinite(entry[key]), key
+    assert 0.0 <= entry["failure_rate"] <= 1.0
+    events = list((tmp_path / "run" / "tb").rglob("events.out.tfevents.*"))
+    ea = EventAccumulator(str(events[0]))
+    ea.Reload()
+    for tag in ("eval/h_rms_m", "eval/speed_err_rms", "eval/failure_rate", "eval/mean_reward"):
+        assert tag in ea.Tags()["scalars"], tag
