@@ -26,7 +26,8 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 ``--agents`` takes
 
 * a classical policy by name (:data:`CLASSICAL`): ``analytic`` (the analytic inverse solution with
-  feedback, gain 3 1/s, on the nominal model), ``analytic_ff`` (gain 0) and ``pure_pursuit``. It is
+  feedback: on v0 gain 3 1/s, on v1 :class:`amigo_gym.policies.AnalyticTrackingPolicy`; nominal model),
+  ``analytic_ff`` (v0 only, gain 0) and ``pure_pursuit`` (v1). It is
   built per scenario from the environment: if the environment offers ``classical_policy(name)`` that
   is used (AmigoBot-v1's policies), otherwise the v0 policy on ``env.unwrapped.params``. A policy that
   cannot run a scenario (other observation layout) makes that (agent, scenario) ``unavailable``.
@@ -131,14 +132,25 @@ PROFILE_TAUS = tuple(float(x) for x in np.logspace(-6, math.log10(0.25), 41))
 #: the training distribution of the v1 generalists; "held out" scenarios lie outside it
 TRAINING_DISTRIBUTION: dict[str, Any] = {
     "env_id": "AmigoBot-v1",
-    "path": ["circle", "manoeuvre", "figure8", "random"],
-    "radius_m": [0.5, 2.0],
-    "direction": [1, -1],
+    "env_kwargs": {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"},
+    "paths": "mixed: circles R 0.5-3 m either direction, figure-8 size 3-6 m, lane change +-1 m over 3-6 m, "
+    "random paths of the default pool (ids 0-1023, |kappa| <= 1 1/m, |dkappa/ds| <= 1 1/m^2)",
     "speed_m_s": [0.1, 0.4],
-    "speed_profile": ["constant", "trapezoid"],
-    "dt_s": [0.05, 0.1, 0.2],
+    "speed_profile": "constant",
+    "dt_s": 0.1,
     "randomize": "mild (wheel radii and track +-2 %, slip <= 2 %, delay <= 50 ms, small noise)",
-    "not_trained_on": ["lane_change paths", "unequal wheel radii beyond +-2 %", "delays beyond 50 ms", "'hard'"],
+    "not_trained_on": [
+        "the manoeuvre path",
+        "random paths of higher curvature",
+        "the trapezoid speed profile",
+        "dt other than 0.1 s",
+        "wheel radii and track beyond +-2 %",
+        "slip beyond 2 %",
+        "delays beyond 50 ms",
+        "noise beyond 'mild'",
+        "'hard'",
+        "AmigoBot-v0 (another observation)",
+    ],
 }
 
 
@@ -232,23 +244,46 @@ SUITE_1_0: tuple[Scenario, ...] = (
     _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
     _v1(
         "manoeuvre_trapezoid",
-        "paper manoeuvre, start-cruise-brake at 0.3 m/s",
+        "paper manoeuvre, start-cruise-brake at 0.3 m/s (held out)",
+        True,
         path="manoeuvre",
         speed=0.3,
         speed_profile="trapezoid",
     ),
     # path families
-    _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s", path="manoeuvre", speed=0.2),
+    _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s (held out)", True, path="manoeuvre", speed=0.2),
     _v1("figure8", "figure-8, 0.2 m/s", path="figure8", speed=0.2),
     _v1("random_paths", "seeded random smooth paths, 0.2 m/s", path="random", speed=0.2),
-    _v1("lane_change", "lane change, 0.3 m/s (path family not trained on)", True, path="lane_change", speed=0.3),
+    _v1(
+        "random_paths_sharp",
+        "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
+        True,
+        path="random",
+        speed=0.2,
+        path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5},
+    ),
+    _v1("lane_change", "lane change, 0.3 m/s", path="lane_change", speed=0.3),
     _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", path="mixed", speed=(0.1, 0.4)),
     # control period
-    _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s", dt=0.05, path="circle", radius=1.0, speed=0.2),
-    _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s", dt=0.2, path="circle", radius=1.0, speed=0.2),
+    _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s (held out)", True, dt=0.05, path="circle", radius=1.0, speed=0.2),
+    _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s (held out)", True, dt=0.2, path="circle", radius=1.0, speed=0.2),
     # the robot is not the model
-    _v1("wheels_plus5", "true wheel radii and track +5 %", path="circle", speed=0.2, true_robot=_WHEELS_PLUS5),
-    _v1("wheels_minus5", "true wheel radii and track -5 %", path="circle", speed=0.2, true_robot=_WHEELS_MINUS5),
+    _v1(
+        "wheels_plus5",
+        "true wheel radii and track +5 % (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        true_robot=_WHEELS_PLUS5,
+    ),
+    _v1(
+        "wheels_minus5",
+        "true wheel radii and track -5 % (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        true_robot=_WHEELS_MINUS5,
+    ),
     _v1(
         "wheels_unequal",
         "right wheel +5 %, left -5 % (held out)",
@@ -257,12 +292,22 @@ SUITE_1_0: tuple[Scenario, ...] = (
         speed=0.2,
         true_robot=_WHEELS_UNEQUAL,
     ),
-    _v1("slip", "wheel slip up to 5 % per step", path="circle", speed=0.2, randomize={"slip": (0.0, 0.05)}),
-    _v1("delay_0.1", "actuation delay 0.1 s", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}),
+    _v1(
+        "slip",
+        "wheel slip up to 5 % per step (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        randomize={"slip": (0.0, 0.05)},
+    ),
+    _v1(
+        "delay_0.1", "actuation delay 0.1 s (held out)", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}
+    ),
     _v1("delay_0.25", "actuation delay 0.25 s (held out)", True, path="figure8", randomize={"delay": (0.25, 0.25)}),
     _v1(
         "noise",
-        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s",
+        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)",
+        True,
         path="circle",
         speed=0.2,
         randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2},
@@ -318,6 +363,16 @@ def _classical(name: str) -> Callable[[Any], Any]:
         from amigo_gym.policies.analytic import AnalyticPolicy
 
         params = getattr(base, "params", None)
+        from amigo_gym.tracking import TrackingParams
+
+        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
+            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
+
+            if name == "analytic":
+                return AnalyticTrackingPolicy(params)
+            if name == "pure_pursuit":
+                return PurePursuitPolicy(params)
+            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
         if not isinstance(params, EnvParams):
             raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
         if name == "analytic":

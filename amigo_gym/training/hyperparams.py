@@ -284,11 +284,12 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
     return out
 
 
-def load_hyperparams(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The ``AmigoBot-v0`` mapping of an rl-zoo style YAML file (unchecked; see :func:`parse_hyperparams`).
+def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict[str, Any]:
+    """The ``env_id`` mapping (``AmigoBot-v0`` by default) of an rl-zoo style YAML file (unchecked; see
+    :func:`parse_hyperparams`).
 
     Raises:
-        ValueError: the file is not YAML or has no ``AmigoBot-v0`` mapping.
+        ValueError: the file is not YAML or has no ``env_id`` mapping.
         FileNotFoundError: no such file.
     """
     import yaml
@@ -298,6 +299,6 @@ def load_hyperparams(path: str | os.PathLike[str]) -> dict[str, Any]:
             doc = yaml.safe_load(f)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
-    if not isinstance(doc, dict) or ENV_ID not in doc or not isinstance(doc[ENV_ID], dict):
-        raise ValueError(f"{path}: expected a mapping with the key {ENV_ID!r}")
-    return dict(doc[ENV_ID])
+    if not isinstance(doc, dict) or env_id not in doc or not isinstance(doc[env_id], dict):
+        raise ValueError(f"{path}: expected a mapping with the key {env_id!r}")
+    return dict(doc[env_id])

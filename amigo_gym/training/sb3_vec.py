@@ -36,11 +36,16 @@ from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
-from amigo_gym import MAX_EPISODE_STEPS
+from amigo_gym import MAX_EPISODE_STEPS, MAX_EPISODE_STEPS_V1
 from amigo_gym.envs.vector import AmigoBotVectorEnv
+from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.task import INFO_KEYS, REWARD_TERMS
 
 __all__ = ["AmigoBotSB3VecEnv"]
+
+
+#: the native vector env of each id (the registrations' ``vector_entry_point``)
+VECTOR_ENVS: dict[str, Any] = {"AmigoBot-v0": AmigoBotVectorEnv, "AmigoBot-v1": AmigoBotV1VectorEnv}
 
 
 class AmigoBotSB3VecEnv(VecEnv):
@@ -50,7 +55,8 @@ class AmigoBotSB3VecEnv(VecEnv):
         num_envs: number of robots (>= 1).
         max_episode_steps: truncation after this many steps (default 400, the registration's).
         render_mode: ``None`` or ``"rgb_array"``.
-        **settings: task settings, as keywords of ``gym.make("AmigoBot-v0", ...)`` (``dt``, ``radius``,
+        env_id: ``"AmigoBot-v0"`` (default) or ``"AmigoBot-v1"`` (then ``max_episode_steps`` defaults to 600).
+        **settings: task settings, as keywords of ``gym.make(env_id, ...)`` (``dt``, ``radius``,
             ``params``, ``robot``, ...).
     """
 
@@ -59,9 +65,15 @@ class AmigoBotSB3VecEnv(VecEnv):
         num_envs: int = 1,
         max_episode_steps: int | None = MAX_EPISODE_STEPS,
         render_mode: str | None = None,
+        env_id: str = "AmigoBot-v0",
         **settings: Any,
     ) -> None:
-        self.venv = AmigoBotVectorEnv(
+        if env_id not in VECTOR_ENVS:
+            raise ValueError(f"env_id must be one of {sorted(VECTOR_ENVS)}, got {env_id!r}")
+        self.env_id = env_id
+        if max_episode_steps == MAX_EPISODE_STEPS and env_id == "AmigoBot-v1":
+            max_episode_steps = MAX_EPISODE_STEPS_V1
+        self.venv: Any = VECTOR_ENVS[env_id](
             num_envs=num_envs,
             max_episode_steps=max_episode_steps,
             render_mode=render_mode,
@@ -83,10 +95,11 @@ class AmigoBotSB3VecEnv(VecEnv):
                 raise ValueError('options: only {"pose": (x_A, y_A, beta)} for every env is supported')
             options = {"pose": np.stack([np.asarray(o["pose"], dtype=np.float64) for o in self._options])}
         obs, infos = self.venv.reset(seed=None if all(s is None for s in seeds) else seeds, options=options)
-        self.reset_infos = self._split(infos, range(self.num_envs))
+        self.reset_infos = self._split_infos(infos, range(self.num_envs))
         self._reset_seeds()
         self._reset_options()
-        return obs
+        out: NDArray[Any] = obs
+        return out
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions)
@@ -97,10 +110,10 @@ class AmigoBotSB3VecEnv(VecEnv):
         obs, rewards, terminated, truncated, vinfo = self.venv.step(self._actions)
         self._actions = None
         dones = terminated | truncated
-        infos = self._split(vinfo, range(self.num_envs))
+        infos = self._split_infos(vinfo, range(self.num_envs))
         done_idx = np.flatnonzero(dones)
         if done_idx.size:
-            final = self._split(vinfo["final_info"], done_idx)
+            final = self._split_infos(vinfo["final_info"], done_idx)
             for j, fin in zip(done_idx.tolist(), final, strict=True):
                 self.reset_infos[j] = infos[j]
                 fin["terminal_observation"] = vinfo["final_obs"][j]
@@ -138,6 +151,29 @@ class AmigoBotSB3VecEnv(VecEnv):
         return [False for _ in self._get_indices(indices)]
 
     # ------------------------------------------------------------------ helpers
+    def _split_infos(self, vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
+        """Per-env info dicts: v0's schema (:func:`_split`), or v1's numeric keys (:func:`_split_generic`)."""
+        return self._split(vinfo, idx) if self.env_id == "AmigoBot-v0" else self._split_generic(vinfo, idx)
+
+    @staticmethod
+    def _split_generic(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
+        """Per-env info dicts of AmigoBot-v1: ``(N,)`` columns become floats, ``(N, k)`` rows arrays, dicts recurse."""
+
+        def row(v: dict[str, Any], i: int) -> dict[str, Any]:
+            d: dict[str, Any] = {}
+            for k, x in v.items():
+                if k.startswith("_") or k in ("final_obs", "final_info"):
+                    continue
+                if isinstance(x, dict):
+                    d[k] = row(x, i)
+                elif x.ndim == 1:
+                    d[k] = float(x[i])
+                else:
+                    d[k] = x[i].copy()
+            return d
+
+        return [row(vinfo, i) for i in idx]
+
     @staticmethod
     def _split(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
         """Per-env info dicts (the single env's keys and types) from vector-format infos."""

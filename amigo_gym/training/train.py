@@ -88,6 +88,8 @@ __all__ = [
 
 ALGOS = ("ppo", "sac", "td3")
 ENV_ID = "AmigoBot-v0"
+#: the environments a run can train on
+ENV_IDS = ("AmigoBot-v0", "AmigoBot-v1")
 HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
@@ -120,6 +122,8 @@ class Settings:
         export: directory to copy the model and the record to, as ``<algo>.zip`` / ``<algo>.json``.
         export_model: which model ``export`` copies: ``final`` (``model.zip``) or ``best`` (``best_model.zip``,
             the best periodic evaluation; the record names its step).
+        env_id: ``AmigoBot-v0`` (the paper's task) or ``AmigoBot-v1`` (the real robot on many paths).
+        env_kwargs: keyword arguments of ``gym.make(env_id, ...)`` (JSON values): the training distribution.
     """
 
     algo: str
@@ -137,6 +141,8 @@ class Settings:
     progress: bool = True
     export: str | None = None
     export_model: str = "final"
+    env_id: str = ENV_ID
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
     argv: list[str] = field(default_factory=list)
 
     def validate(self) -> None:
@@ -145,6 +151,10 @@ class Settings:
             raise ValueError(f"algo must be one of {list(ALGOS)}, got {self.algo!r}")
         if self.export_model not in ("final", "best"):
             raise ValueError(f"export_model must be 'final' or 'best', got {self.export_model!r}")
+        if self.env_id not in ENV_IDS:
+            raise ValueError(f"env_id must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        if not isinstance(self.env_kwargs, dict):
+            raise ValueError(f"env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
         if self.vec not in ("auto", "native", "dummy"):
             raise ValueError(f"vec must be 'auto', 'native' or 'dummy', got {self.vec!r}")
         for name, low in (("seed", 0), ("eval_freq", 0), ("checkpoint_freq", 0), ("eval_episodes", 1), ("threads", 1)):
@@ -199,12 +209,30 @@ def versions() -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- environments
-def env_kwargs() -> dict[str, Any]:
-    """The settings of the environment a run trains on (``gym.make(ENV_ID)``'s defaults), as JSON values."""
+def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The settings of the environment a run trains on, as JSON values.
+
+    ``AmigoBot-v0``: every field of its ``EnvParams`` (``gym.make``'s defaults updated by ``overrides``);
+    ``AmigoBot-v1``: the ``overrides`` as given (the defaults of ``TrackingParams`` apply to the rest).
+    """
     from amigo_gym.params import EnvParams
 
-    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(EnvParams())))
+    if env_id != ENV_ID:
+        return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
+    from amigo_gym.envs.amigobot import make_env_params
+
+    params = make_env_params("train", None, **(overrides or {})) if overrides else EnvParams()
+    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(params)))
     return kwargs
+
+
+def _make_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any]:
+    """JSON env kwargs as ``gym.make`` keywords (lists that stand for pairs become tuples)."""
+    out = dict(kwargs or {})
+    for key in ("speed", "preview"):
+        if isinstance(out.get(key), list):
+            out[key] = tuple(out[key])
+    return out
 
 
 def _native(vec: str, n_envs: int) -> bool:
@@ -212,10 +240,17 @@ def _native(vec: str, n_envs: int) -> bool:
     return vec == "native" or (vec == "auto" and n_envs > 1)
 
 
-def make_train_env(n_envs: int, vec: str, seed: int, normalize: dict[str, Any] | None = None) -> Any:
-    """SB3 VecEnv of ``n_envs`` AmigoBot-v0 with episode statistics (``VecMonitor``), seeded ``seed + i``.
+def make_train_env(
+    n_envs: int,
+    vec: str,
+    seed: int,
+    normalize: dict[str, Any] | None = None,
+    env_id: str = ENV_ID,
+    kwargs: dict[str, Any] | None = None,
+) -> Any:
+    """SB3 VecEnv of ``n_envs`` ``env_id`` envs with episode statistics (``VecMonitor``), seeded ``seed + i``.
 
-    ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``.
+    ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``; ``kwargs``: of ``gym.make``.
     """
     import gymnasium as gym
     from stable_baselines3.common.monitor import Monitor
@@ -226,9 +261,9 @@ def make_train_env(n_envs: int, vec: str, seed: int, normalize: dict[str, Any] |
 
     venv: Any
     if _native(vec, n_envs):
-        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs))
+        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs, env_id=env_id, **_make_kwargs(kwargs)))
     else:
-        venv = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID)) for _ in range(n_envs)])
+        venv = DummyVecEnv([lambda: Monitor(gym.make(env_id, **_make_kwargs(kwargs))) for _ in range(n_envs)])
     venv.seed(seed)
     venv.action_space.seed(seed)
     if normalize is not None:
@@ -333,11 +368,10 @@ def _callbacks(
 
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
-            from amigo_gym.params import EnvParams
-
-            p = EnvParams()
-            self.adapter = InfoAdapter(p.robot, p.speed)
-            self.dt = p.dt
+            probe = gym.make(s.env_id, **_make_kwargs(s.env_kwargs))
+            self.adapter = InfoAdapter.for_env(probe)  # v1's infos carry their own speed error
+            self.dt = float(probe.unwrapped.params.dt)  # type: ignore[attr-defined]
+            probe.close()
             self.recorders: dict[int, EpisodeRecorder] = {}
             self.episodes: list[dict[str, float]] = []
             self.task_metrics: dict[str, float] = {}
@@ -373,9 +407,9 @@ def _callbacks(
     if s.eval_freq > 0:
         eval_env: Any
         if _native(s.vec, n_envs):  # the same VecEnv type as training (SB3 warns otherwise); same rollouts
-            eval_env = VecMonitor(AmigoBotSB3VecEnv(1))
+            eval_env = VecMonitor(AmigoBotSB3VecEnv(1, env_id=s.env_id, **_make_kwargs(s.env_kwargs)))
         else:
-            eval_env = DummyVecEnv([lambda: Monitor(gym.make(ENV_ID))])
+            eval_env = DummyVecEnv([lambda: Monitor(gym.make(s.env_id, **_make_kwargs(s.env_kwargs)))])
         eval_env.seed(eval_seed)
         if normalize:  # EvalCallback copies the training statistics into it before each evaluation
             from stable_baselines3.common.vec_env import VecNormalize
@@ -422,9 +456,9 @@ def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) 
     return runs.save_checkpoint(out, algo, int(model.num_timesteps), write, wall_time_s)
 
 
-def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int, vec: str, seed: int) -> Any:
+def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int, s: Settings) -> Any:
     """Model (with its replay buffer) of a verified checkpoint, on a new training env seeded for its step."""
-    venv = make_train_env(n_envs, vec, seed + ck.step)
+    venv = make_train_env(n_envs, s.vec, s.seed + ck.step, None, s.env_id, s.env_kwargs)
     if (ck.folder / VECNORMALIZE).is_file():
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -488,7 +522,7 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
     algo_cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[s.algo]
     out = Path(s.out)
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
-    hp = load_hyperparams(hp_path)
+    hp = load_hyperparams(hp_path, s.env_id)
     parsed: Hyperparams = parse_hyperparams(s.algo, hp, str(hp_path))  # checked before anything is written
     total = int(s.timesteps if s.timesteps is not None else (parsed.n_timesteps or 100_000))
     n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
@@ -511,9 +545,7 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
 
     loaded = None
     if s.resume:
-        loaded = runs.load_checkpoint(
-            out, s.algo, lambda ck: _load_checkpoint(algo_cls, s.algo, ck, n_envs, s.vec, s.seed)
-        )
+        loaded = runs.load_checkpoint(out, s.algo, lambda ck: _load_checkpoint(algo_cls, s.algo, ck, n_envs, s))
         if loaded is None:
             runs.warn(f"--resume: no checkpoint yet in {out}; starting from step 0")
         runs.restore_snapshot(out, None if loaded is None else loaded[0])
@@ -527,8 +559,8 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         config = {
             "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
             "hyperparams": hp,
-            "env_id": ENV_ID,
-            "env_kwargs": env_kwargs(),
+            "env_id": s.env_id,
+            "env_kwargs": env_kwargs(s.env_id, s.env_kwargs),
             "git_revision": git_revision(),
             "versions": versions(),
             "command": "amigo-gym train " + " ".join(s.argv),
@@ -541,7 +573,7 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         done_steps, previous_wall = ck.step, ck.wall_time_s
         set_random_seed(s.seed + done_steps)
     else:
-        venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize)
+        venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize, s.env_id, s.env_kwargs)
         kw = dict(parsed.kwargs)
         noise = parsed.action_noise(int(venv.action_space.shape[0]))
         if noise is not None:
@@ -617,7 +649,7 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> Settings:
     """Settings from the command line (``amigo-gym train --help``)."""
-    p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0.")
+    p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.")
     p.add_argument("--algo", required=True, choices=ALGOS, help="algorithm (required)")
     p.add_argument("--seed", type=int, default=0, help="master seed [-]")
     p.add_argument(
@@ -642,7 +674,19 @@ def parse_args(argv: Sequence[str]) -> Settings:
         "--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none)"
     )
     p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export")
+    p.add_argument("--env", choices=ENV_IDS, default=ENV_ID, help="environment id")
+    p.add_argument(
+        "--env-kwargs",
+        default="{}",
+        help='keywords of gym.make as JSON [json] (default {}), e.g. \'{"path": "mixed", "speed": [0.1, 0.4]}\'',
+    )
     a = p.parse_args(list(argv))
+    try:
+        env_kw = json.loads(a.env_kwargs)
+    except ValueError:
+        p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
+    if not isinstance(env_kw, dict):
+        p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
     s = Settings(
         algo=a.algo,
         seed=a.seed,
@@ -659,6 +703,8 @@ def parse_args(argv: Sequence[str]) -> Settings:
         progress=not a.no_progress,
         export=a.export,
         export_model=a.export_model,
+        env_id=a.env,
+        env_kwargs=env_kw,
         argv=list(argv),
     )
     try:
