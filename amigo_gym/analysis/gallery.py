@@ -62,8 +62,10 @@ def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np
 
 def main(argv: Sequence[str] | None = None) -> int:
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="docs/figures", help="output folder (default docs/figures)")
-    p.add_argument("--only", nargs="*", default=None, help=f"families to draw (default all: {', '.join(GALLERY)})")
+    p.add_argument("--out", default="docs/figures", help="output folder [dir]")
+    p.add_argument(
+        "--only", nargs="*", default=None, help=f"families to draw [names] (default: all, {', '.join(GALLERY)})"
+    )
     args = p.parse_args(argv)
 
     def run() -> int:

@@ -260,8 +260,12 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         n = self.num_envs
         if not self._was_reset:
             raise gym.error.ResetNeeded("call reset() before step() on AmigoBotVectorEnv")
-        if np.ndim(actions) == 0:  # as SyncVectorEnv, which iterates over the actions
-            raise TypeError(f"Unable to iterate over the following elements: {actions}")
+        if _is_scalar(actions):  # TypeError as SyncVectorEnv, which iterates over the actions
+            kind = "a string" if isinstance(actions, str | bytes) else f"a scalar {type(actions).__name__} object"
+            raise TypeError(
+                f"Unable to iterate over the following elements: {actions} "
+                f"(actions must be an array of shape ({n}, 2), got {kind})"
+            )
         a = task.validate_action(actions, (n,))
         mode = self.autoreset_mode
         if mode == AutoresetMode.DISABLED and self._autoreset.any():
@@ -452,6 +456,19 @@ def _check_reset_mask(mask: Any, n: int) -> BoolArray:
         )
     out: BoolArray = mask.copy()
     return out
+
+
+def _is_scalar(x: Any) -> bool:
+    """Whether ``x`` is not a sequence of per-robot actions (strings count as scalars)."""
+    if isinstance(x, str | bytes):
+        return True
+    if isinstance(x, np.ndarray):
+        return x.ndim == 0
+    try:
+        iter(x)
+    except TypeError:
+        return True
+    return False
 
 
 def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:

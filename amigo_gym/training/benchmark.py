@@ -868,18 +868,24 @@ def write_outputs(
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym benchmark``."""
     p = OneLineParser(prog="amigo-gym benchmark", description="Run the AmigoBot benchmark suite.")
-    p.add_argument("--agents", nargs="+", default=None, help="classical names, NAME=GLOB of zips, zips or folders")
-    p.add_argument("--scenarios", nargs="+", default=None, help="scenario names (default: the whole suite)")
+    p.add_argument(
+        "--agents",
+        nargs="+",
+        default=None,
+        help="classical names, NAME=GLOB of zips, zips or folders [agents] "
+        "(default: the classical policies and the shipped models)",
+    )
+    p.add_argument("--scenarios", nargs="+", default=None, help="scenario names [names] (default: the whole suite)")
     p.add_argument("--suite", default=SUITE_VERSION, choices=sorted(SUITES), help="suite version")
     p.add_argument("--quick", action="store_true", help="small subset: 3 scenarios, 2 episodes of <= 120 steps")
-    p.add_argument("--out", default="results/benchmark", help="output folder (default results/benchmark)")
-    p.add_argument("--json", default=None, help="JSON file (default <out>/benchmark.json)")
-    p.add_argument("--markdown", default=None, help="Markdown file (default <out>/benchmark.md)")
-    p.add_argument("--reps", type=int, default=10_000, help="bootstrap replications of the intervals (10000)")
-    p.add_argument("--profile-reps", type=int, default=2_000, help="bootstrap replications of the profiles (2000)")
-    p.add_argument("--bootstrap-seed", type=int, default=0)
-    p.add_argument("--no-plots", action="store_true")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--out", default="results/benchmark", help="output folder [dir]")
+    p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/benchmark.json)")
+    p.add_argument("--markdown", default=None, help="Markdown file [file] (default: <out>/benchmark.md)")
+    p.add_argument("--reps", type=int, default=10_000, help="bootstrap replications of the intervals [reps]")
+    p.add_argument("--profile-reps", type=int, default=2_000, help="bootstrap replications of the profiles [reps]")
+    p.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the bootstrap [-]")
+    p.add_argument("--no-plots", action="store_true", help="skip the plots")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--list", action="store_true", help="print the suite and exit")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 

@@ -498,6 +498,8 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
         CorruptFileError: a damaged file that has no fallback (one line naming it).
     """
     s.validate()
+    hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
+    parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
     stop = _Stop()
     main = threading.current_thread() is threading.main_thread()  # signals can only be handled there
     old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
