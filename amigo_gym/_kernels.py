@@ -107,10 +107,8 @@ SPEED, MAX_SPEED, ERROR_SCALE, E_MAX, TERM = (_C[n] for n in CONSTANT_FIELDS[8:1
 NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTANT_FIELDS[13:18])
 MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:])
 
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": False}
 
-
-@numba.njit(inline="always", **_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 def _clip(x: float, low: float, high: float) -> float:
     # as task._clip / np.clip for non-NaN x (x itself when inside, so -0.0 stays -0.0)
     if low <= x <= high:
@@ -118,7 +116,7 @@ def _clip(x: float, low: float, high: float) -> float:
     return low if x < low else high
 
 
-@numba.njit(inline="always", **_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 def _cos_sin(x: float) -> tuple[float, float]:
     # kinematics.cos_sin: one tangent of the half angle
     t = math.tan(0.5 * x)
@@ -127,7 +125,7 @@ def _cos_sin(x: float) -> tuple[float, float]:
     return (1.0 - t2) * r, (t + t) * r
 
 
-@numba.njit(inline="always", **_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 def _sign(y: float) -> float:
     # np.sign of a float: 1, -1, 0 (for +-0.0; NaN stays NaN)
     if y > 0.0:
@@ -137,7 +135,7 @@ def _sign(y: float) -> float:
     return 0.0 if y == 0.0 else y
 
 
-@numba.njit(inline="always", **_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 def _step_row(
     i: int,
     c: NDArray[np.float64],
@@ -257,10 +255,7 @@ def _step_row(
     obs[i, 2] = cos_psi
     obs[i, 3] = kl3
     for j in range(preview.shape[0]):
-        if manoeuvre:
-            kj = 0.0 if s + preview[j] <= c[STRAIGHT] else c[CURV]
-        else:
-            kj = c[CURV]
+        kj = (0.0 if s + preview[j] <= c[STRAIGHT] else c[CURV]) if manoeuvre else c[CURV]
         obs[i, 4 + j] = kj * l3
     m = 4 + preview.shape[0]
     obs[i, m] = w1 / w_max
@@ -299,7 +294,7 @@ def _step_row(
     record[i, 15] = rew
 
 
-@numba.njit(**_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 def step_rows(
     c: NDArray[np.float64],
     preview: NDArray[np.float64],
@@ -316,7 +311,7 @@ def step_rows(
         _step_row(i, c, preview, state, actions, restart, obs, reward, terminated, record)
 
 
-@numba.njit(parallel=True, **_JIT)  # type: ignore[untyped-decorator]
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
 def step_rows_parallel(
     c: NDArray[np.float64],
     preview: NDArray[np.float64],
