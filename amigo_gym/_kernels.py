@@ -1,32 +1,49 @@
-r"""Fused, compiled step of ``AmigoBot-v0`` (numba): one loop over the robots, no temporaries.
+r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
 
-The optional fast path (install the extra ``amigo_gym[fast]``, i.e. numba). It computes exactly what
+The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
 :func:`amigo_gym.task.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
-termination) with the same formulas in the same order of operations, one robot at a time, writing
-into preallocated arrays. :mod:`amigo_gym.task` stays the reference: ``tests/test_kernels.py`` checks
-that the two agree to 1e-12 (absolute; in practice they differ by at most a few units in the last
-place, where numpy's vectorised ``tan``, ``exp``, ``sqrt``, ``arctan2``, ``cos``, ``sin`` and the C
-library's that numba calls round differently; every other operation is the same IEEE operation, so
-most values are bit-identical).
+termination) with the same formulas in the same order of operations, writing into preallocated
+arrays. :mod:`amigo_gym.task` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
+
+Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
+evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
+``np.exp(exps, out=exps)``, :func:`amigo_gym.fast.step_rows`): they are several times faster than the
+C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
+reference calls, so the results are **bit-identical** to the reference's. Everything else (about a
+hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
+would run as as many passes over temporary arrays) is fused into the loops:
+
+1. :func:`move_arguments`: the arguments of the two tangents of the arc step, ``0.5 h`` and
+   ``0.5 (beta + h)``, into ``tans (N, 2)``;
+2. :func:`evaluate`: the arc step from the tangents (state updated in place), H, its projection,
+   the observation, the heading term, the termination, and the arguments of the three exponentials
+   into ``exps (N, 3)``;
+3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
+
+Only ``math.atan2`` and ``math.hypot`` (the manoeuvre path's arc length and its distance to the
+segment's end) are the C library's; they agree with numpy's to an ulp or better, and the arc length
+only decides whether a preview point lies before the end of the straight part.
 
 Layouts (all C-contiguous, one row per robot):
 
-* ``state (N, 8)`` float64, read and updated in place: the columns of :class:`amigo_gym.task.State`,
+* ``consts`` float64: :data:`CONSTANT_FIELDS` (:func:`amigo_gym.fast.kernel_constants`);
+* ``state (N, 8)`` float64, updated in place: the columns of :class:`amigo_gym.task.State`,
   ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``;
 * ``actions (N, 2)`` float64: the validated, normalised action (clipped to [-1, 1] here);
 * ``restart (N,)`` bool: rows whose ``state`` has just been set to a start state; they do not move
-  and are evaluated as :func:`amigo_gym.task.reset_columns` evaluates them (no smoothness loss);
+  and are evaluated as :func:`amigo_gym.task.reset_columns` evaluates them (no smoothness loss); their
+  ``tans`` row must hold ``(np.cos(beta), np.sin(beta))`` when :func:`evaluate` runs;
 * outputs ``obs (N, obs_dim)`` float32 or float64, ``reward (N,)`` float64, ``terminated (N,)`` bool
   and ``record (N, 16)`` float64 with the columns :data:`RECORD_FIELDS` (the new state and what the
   infos report about it).
 
 This module imports numba at import time; :mod:`amigo_gym.fast` imports it only when the fast path
 is first used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk
-(``cache=True``, in ``__pycache__`` or ``NUMBA_CACHE_DIR``), so only the first process compiles.
-``parallel=True`` selects a variant whose loop over the robots runs on numba's threads
-(``numba.set_num_threads`` or ``NUMBA_NUM_THREADS`` set their number); each row is computed the same
-way, so the results do not depend on the number of threads.
+(``cache=True``, in ``__pycache__`` or ``NUMBA_CACHE_DIR``), so only the first process compiles. The
+``*_parallel`` variants run their loop on numba's threads (``prange``; ``numba.set_num_threads`` or
+``NUMBA_NUM_THREADS`` set their number); each row is computed the same way, so the results do not
+depend on the number of threads.
 """
 
 from __future__ import annotations
@@ -41,8 +58,12 @@ __all__ = [
     "RECORD_FIELDS",
     "STATE_FIELDS",
     "CONSTANT_FIELDS",
-    "step_rows",
-    "step_rows_parallel",
+    "move_arguments",
+    "move_arguments_parallel",
+    "evaluate",
+    "evaluate_parallel",
+    "finish",
+    "finish_parallel",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -108,6 +129,9 @@ NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTAN
 MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:])
 
 
+F64 = NDArray[np.float64]
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 def _clip(x: float, low: float, high: float) -> float:
     # as task._clip / np.clip for non-NaN x (x itself when inside, so -0.0 stays -0.0)
@@ -117,9 +141,8 @@ def _clip(x: float, low: float, high: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
-def _cos_sin(x: float) -> tuple[float, float]:
-    # kinematics.cos_sin: one tangent of the half angle
-    t = math.tan(0.5 * x)
+def _cos_sin(t: float) -> tuple[float, float]:
+    # kinematics.cos_sin from t = tan(x / 2)
     t2 = t * t
     r = 1.0 / (1.0 + t2)
     return (1.0 - t2) * r, (t + t) * r
@@ -136,17 +159,41 @@ def _sign(y: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
-def _step_row(
+def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, float]:
+    # task.move_columns up to the arc step: (w1, w2, v, bdot, db)
+    w1 = _clip(a1, -1.0, 1.0) * c[W_MAX]
+    w2 = _clip(a2, -1.0, 1.0) * c[W_MAX]
+    u1 = c[R1] * w1
+    u2 = c[R2] * w2
+    bdot = (u1 - u2) / c[TWO_L1]
+    return w1, w2, 0.5 * (u1 + u2), bdot, bdot * c[DT]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
+def _move_arguments_row(i: int, c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64) -> None:
+    if restart[i]:
+        tans[i, 0] = 0.0
+        tans[i, 1] = 0.0
+        return
+    db = _motion(c, actions[i, 0], actions[i, 1])[4]
+    h = 0.5 * db
+    tans[i, 0] = 0.5 * h
+    tans[i, 1] = 0.5 * (state[i, 2] + h)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
+def _evaluate_row(
     i: int,
-    c: NDArray[np.float64],
-    preview: NDArray[np.float64],
-    state: NDArray[np.float64],
-    actions: NDArray[np.float64],
+    c: F64,
+    preview: F64,
+    state: F64,
+    actions: F64,
     restart: NDArray[np.bool_],
+    tans: F64,
     obs: NDArray[np.floating],
-    reward: NDArray[np.float64],
     terminated: NDArray[np.bool_],
-    record: NDArray[np.float64],
+    record: F64,
+    exps: F64,
 ) -> None:
     x = state[i, 0]
     y = state[i, 1]
@@ -157,25 +204,19 @@ def _step_row(
     prev1 = state[i, 6]
     prev2 = state[i, 7]
     if restart[i]:
-        # task.start_motion: the start state as it is, cos and sin of its heading, its speed
+        # task.start_motion: the start state as it is, np.cos and np.sin of its heading, its speed
         w1 = prev1
         w2 = prev2
         v = 0.5 * (c[R1] * w1 + c[R2] * w2)
-        cos_beta = math.cos(beta)
-        sin_beta = math.sin(beta)
+        cos_beta = tans[i, 0]
+        sin_beta = tans[i, 1]
     else:
-        # task.move_columns: clip and scale the action, kinematics.arc_step, wheel angles
+        # task.move_columns: kinematics.arc_step from the two tangents, the wheel angles
         dt = c[DT]
-        w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
-        w2 = _clip(actions[i, 1], -1.0, 1.0) * c[W_MAX]
-        u1 = c[R1] * w1
-        u2 = c[R2] * w2
-        v = 0.5 * (u1 + u2)
-        bdot = (u1 - u2) / c[TWO_L1]
-        db = bdot * dt
+        w1, w2, v, bdot, db = _motion(c, actions[i, 0], actions[i, 1])
         h = 0.5 * db
-        cos_h, sin_h = _cos_sin(h)
-        cos_mid, sin_mid = _cos_sin(beta + h)
+        cos_h, sin_h = _cos_sin(tans[i, 0])
+        cos_mid, sin_mid = _cos_sin(tans[i, 1])
         sinc = 1.0 if h == 0.0 else sin_h / h  # kinematics._sinc: (sin_h + 1) / (h + 1) = 1 at h = 0
         chord = v * dt * sinc
         x = x + chord * cos_mid
@@ -263,17 +304,14 @@ def _step_row(
     obs[i, m + 2] = dv / c[MAX_SPEED]
     obs[i, m + 3] = c[REF_OBS]
 
-    # task._reward_columns, task._steady_heading, task._product
+    # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
     sin_ss = -_clip(kl3, -1.0, 1.0)
     cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
     dw1 = w1 - prev1
     dw2 = w2 - prev2
-    track = math.exp(abs_e / c[NEG_SIG_T])
-    speed = math.exp(abs(dv) / c[NEG_SIG_V])
-    heading = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
-    smooth = 1.0 - c[SMOOTH_W] * (1.0 - math.exp((dw1 * dw1 + dw2 * dw2) / c[NEG_SMOOTH_SQ]))
-    rew = ((track * speed) * heading) * smooth
-    reward[i] = rew
+    exps[i, 0] = abs_e / c[NEG_SIG_T]
+    exps[i, 1] = abs(dv) / c[NEG_SIG_V]
+    exps[i, 2] = (dw1 * dw1 + dw2 * dw2) / c[NEG_SMOOTH_SQ]
     terminated[i] = abs_e > c[TERM]
 
     record[i, 0] = x
@@ -287,42 +325,82 @@ def _step_row(
     record[i, 8] = al1
     record[i, 9] = al2
     record[i, 10] = al3
+    record[i, 13] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
+def _finish_row(i: int, c: F64, reward: F64, record: F64, exps: F64) -> None:
+    # task._reward_columns and task._product, from exps = exp(arguments)
+    track = exps[i, 0]
+    speed = exps[i, 1]
+    smooth = 1.0 - c[SMOOTH_W] * (1.0 - exps[i, 2])
+    rew = ((track * speed) * record[i, 13]) * smooth
     record[i, 11] = track
     record[i, 12] = speed
-    record[i, 13] = heading
     record[i, 14] = smooth
     record[i, 15] = rew
+    reward[i] = rew
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
-def step_rows(
-    c: NDArray[np.float64],
-    preview: NDArray[np.float64],
-    state: NDArray[np.float64],
-    actions: NDArray[np.float64],
-    restart: NDArray[np.bool_],
-    obs: NDArray[np.floating],
-    reward: NDArray[np.float64],
-    terminated: NDArray[np.bool_],
-    record: NDArray[np.float64],
-) -> None:
-    """Step (or, where ``restart``, evaluate) every row: a serial loop (layouts in the module docstring)."""
+def move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64) -> None:
+    """Pass 1: ``tans[i] = (0.5 h, 0.5 (beta + h))`` of the arc step (zeros where ``restart``)."""
     for i in range(state.shape[0]):
-        _step_row(i, c, preview, state, actions, restart, obs, reward, terminated, record)
+        _move_arguments_row(i, c, state, actions, restart, tans)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
-def step_rows_parallel(
-    c: NDArray[np.float64],
-    preview: NDArray[np.float64],
-    state: NDArray[np.float64],
-    actions: NDArray[np.float64],
-    restart: NDArray[np.bool_],
-    obs: NDArray[np.floating],
-    reward: NDArray[np.float64],
-    terminated: NDArray[np.bool_],
-    record: NDArray[np.float64],
-) -> None:
-    """:func:`step_rows` with the loop over the rows on numba's threads (``prange``)."""
+def move_arguments_parallel(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64) -> None:
+    """:func:`move_arguments` on numba's threads."""
     for i in numba.prange(state.shape[0]):
-        _step_row(i, c, preview, state, actions, restart, obs, reward, terminated, record)
+        _move_arguments_row(i, c, state, actions, restart, tans)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def evaluate(
+    c: F64,
+    preview: F64,
+    state: F64,
+    actions: F64,
+    restart: NDArray[np.bool_],
+    tans: F64,
+    obs: NDArray[np.floating],
+    terminated: NDArray[np.bool_],
+    record: F64,
+    exps: F64,
+) -> None:
+    """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
+    for i in range(state.shape[0]):
+        _evaluate_row(i, c, preview, state, actions, restart, tans, obs, terminated, record, exps)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
+def evaluate_parallel(
+    c: F64,
+    preview: F64,
+    state: F64,
+    actions: F64,
+    restart: NDArray[np.bool_],
+    tans: F64,
+    obs: NDArray[np.floating],
+    terminated: NDArray[np.bool_],
+    record: F64,
+    exps: F64,
+) -> None:
+    """:func:`evaluate` on numba's threads."""
+    for i in numba.prange(state.shape[0]):
+        _evaluate_row(i, c, preview, state, actions, restart, tans, obs, terminated, record, exps)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
+    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward."""
+    for i in range(reward.shape[0]):
+        _finish_row(i, c, reward, record, exps)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
+def finish_parallel(c: F64, reward: F64, record: F64, exps: F64) -> None:
+    """:func:`finish` on numba's threads."""
+    for i in numba.prange(reward.shape[0]):
+        _finish_row(i, c, reward, record, exps)

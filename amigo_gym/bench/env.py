@@ -500,9 +500,9 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             "| SB3 PPO learn | AmigoBot-v0 [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) |",
             "|---|---:|---:|---:|",
         ]
-        for r in report.ppo:
-            name = f"{r.n_envs} env(s), AmigoBot via {r.amigobot_vec}"
-            out.append(f"| {name} | {r.amigobot:.0f} | {r.pendulum:.0f} | {r.ratio:.2f} |")
+        for pr in report.ppo:
+            name = f"{pr.n_envs} env(s), AmigoBot via {pr.amigobot_vec}"
+            out.append(f"| {name} | {pr.amigobot:.0f} | {pr.pendulum:.0f} | {pr.ratio:.2f} |")
         out.append("")
     if report is not None and report.v1 is not None:
         v = report.v1
