@@ -1,0 +1,125 @@
+"""Where the time of a step goes: cProfile of the single env and of the native vector env.
+
+``python -m amigo_gym.bench.profile [--steps K] [--top T]`` profiles, with random actions and
+autoreset, ``K`` steps of ``gym.make("AmigoBot-v0")`` (wrappers included) and of
+``gym.make_vec("AmigoBot-v0", num_envs=N)`` at N = 1 and N = 4096 (``--sizes``), and prints for each
+the ``T`` functions with the largest own time (``tottime``), as a share of the total, in Markdown.
+cProfile adds a fixed cost to every Python call, so the shares overstate small Python functions
+against numpy's C loops; read them as "where", and the benchmarks (``amigo-gym bench-env``) as "how
+much".
+"""
+
+from __future__ import annotations
+
+import cProfile
+import pstats
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.cli import OneLineParser, run_guarded
+
+__all__ = ["profile_steps", "main"]
+
+PROG = "python -m amigo_gym.bench.profile"
+
+
+def _label(func: tuple[str, int, str]) -> str:
+    file, line, name = func
+    if file == "~":  # a built-in
+        return name
+    parts = file.replace("\\", "/").split("/")
+    for root in ("amigo_gym", "gymnasium", "numpy"):
+        if root in parts:
+            return f"{'/'.join(parts[parts.index(root) :])}:{line}({name})"
+    return f"{parts[-1]}:{line}({name})"
+
+
+def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[float, list[tuple[str, float, int]]]:
+    """``(total seconds, [(function, share of the total, calls), ...])`` of ``steps`` calls of ``step``."""
+    for _ in range(min(steps, 50)):  # warm-up
+        step()
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(steps):
+        step()
+    prof.disable()
+    st = pstats.Stats(prof)
+    raw: dict[Any, Any] = st.stats  # type: ignore[attr-defined]
+    total = sum(v[2] for v in raw.values())
+    rows = sorted(((_label(f), v[2] / total, v[1]) for f, v in raw.items()), key=lambda r: -r[1])
+    return total, rows[:top]
+
+
+def _single(seed: int) -> Callable[[], object]:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    env = gym.make("AmigoBot-v0")
+    env.reset(seed=seed)
+    pool = np.random.default_rng(seed).uniform(-1, 1, (16, 2)).astype(np.float32)
+    k = [0]
+
+    def step() -> object:
+        k[0] = (k[0] + 1) % 16
+        _, _, term, trunc, _ = env.step(pool[k[0]])
+        if term or trunc:
+            env.reset()
+        return None
+
+    return step
+
+
+def _vector(n: int, seed: int, kernel: str | None) -> Callable[[], object]:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    kw: dict[str, Any] = {} if kernel is None else {"kernel": kernel}
+    envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
+    envs.reset(seed=seed)
+    pool = list(np.random.default_rng(seed).uniform(-1, 1, (16, n, 2)).astype(np.float32))
+    k = [0]
+
+    def step() -> object:
+        k[0] = (k[0] + 1) % 16
+        envs.step(pool[k[0]])
+        return None
+
+    return step
+
+
+def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
+    out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
+    out += ["| function | own time | calls per step |", "|---|---:|---:|"]
+    out += [f"| `{name}` | {100 * share:.1f} % | {calls / steps:.3g} |" for name, share, calls in rows]
+    return "\n".join(out)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point."""
+    p = OneLineParser(prog=PROG, description="cProfile of AmigoBot-v0's single and vector env steps.")
+    p.add_argument("--steps", type=int, default=3000, help="profiled steps per case (vector: divided by N/64)")
+    p.add_argument("--top", type=int, default=12, help="functions listed per case")
+    p.add_argument("--sizes", type=int, nargs="+", default=[1, 4096], help="vector env sizes N")
+    p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
+    args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
+
+    def go() -> int:
+        total, rows = profile_steps(_single(0), args.steps, args.top)
+        print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")
+        for n in args.sizes:
+            steps = max(20, args.steps // max(1, n // 64))
+            total, rows = profile_steps(_vector(n, 0, args.kernel), steps, args.top)
+            name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if args.kernel is None else f", kernel={args.kernel}")
+            print(_table(name, steps, total, rows), end="\n\n")
+        return 0
+
+    return run_guarded(go, PROG)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
