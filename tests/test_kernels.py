@@ -234,3 +234,54 @@ def test_import_amigo_gym_does_not_load_numba() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "False"
+
+
+def _same(a: Any, b: Any, where: str) -> None:
+    if isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        for key in a:
+            _same(a[key], b[key], f"{where}.{key}")
+    elif isinstance(a, tuple | list) or (isinstance(a, np.ndarray) and a.dtype == object):
+        for x, y in zip(a, b, strict=True):
+            _same(x, y, where)
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape, where
+        np.testing.assert_array_equal(a, b, err_msg=where)
+    else:
+        assert a == b, where
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep", "Disabled"])
+@pytest.mark.parametrize("path", ["circle", "manoeuvre"])
+def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) -> None:
+    """AmigoBotVectorEnv(kernel="numba") against the numpy path: every output, across autoresets."""
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    n = 16
+    kw: dict[str, Any] = {"num_envs": n, "max_episode_steps": 25, "autoreset_mode": mode, "path": path}
+    ref = AmigoBotVectorEnv(**kw)
+    envs = [AmigoBotVectorEnv(kernel="numba", **kw), AmigoBotVectorEnv(kernel="numba-parallel", **kw)]
+    g = np.random.default_rng(3)
+    outs = [e.reset(seed=7) for e in (ref, *envs)]
+    for o in outs[1:]:
+        _same(o, outs[0], "reset")
+    for t in range(80):
+        a = np.clip(0.27 + 0.6 * g.normal(size=(n, 2)), -1.2, 1.2)
+        if mode == "Disabled" and ref._autoreset.any():
+            mask = ref._autoreset.copy()
+            outs = [e.reset(options={"reset_mask": mask}) for e in (ref, *envs)]
+            for o in outs[1:]:
+                _same(o, outs[0], f"partial reset {t}")
+        outs = [e.step(a.astype(np.float32) if t % 2 else a) for e in (ref, *envs)]
+        for o in outs[1:]:
+            _same(o, outs[0], f"step {t}")
+    assert ref._steps.max() < 25  # episodes ended (terminated or truncated) and restarted
+
+
+def test_vector_env_kernel_argument() -> None:
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    with pytest.raises(ValueError, match="kernel"):
+        AmigoBotVectorEnv(num_envs=2, kernel="cuda")
+    assert AmigoBotVectorEnv(num_envs=2)._ws is None
+    assert AmigoBotVectorEnv(num_envs=2, kernel="numba")._ws is not None
