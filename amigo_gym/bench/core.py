@@ -48,7 +48,18 @@ from amigo_gym.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
 from amigo_gym.task import State, obs_dim, step_columns, task_constants, transition
 
-__all__ = ["Row", "Startup", "euler_step", "loop_step", "measure", "bench", "bench_startup", "format_table", "main"]
+__all__ = [
+    "Row",
+    "Startup",
+    "euler_step",
+    "loop_step",
+    "measure",
+    "measure_many",
+    "bench",
+    "bench_startup",
+    "format_table",
+    "main",
+]
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
@@ -91,6 +102,29 @@ def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
             fn()
         samples.append((time.perf_counter() - t0) / inner)
     return statistics.median(samples)
+
+
+def measure_many(fns: dict[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
+    """Median time of one call [s] of each function, the repeats interleaved (round robin).
+
+    Each repeat times every function in turn (each for at least ``min_time``), so a change of the
+    machine's load during the run affects the competitors alike and their ratios stay meaningful.
+    """
+    inner = {}
+    for name, fn in fns.items():
+        fn()  # warm-up
+        t0 = time.perf_counter()
+        fn()
+        inner[name] = max(1, math.ceil(min_time / max(time.perf_counter() - t0, 1e-7)))
+    samples: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            m = inner[name]
+            t0 = time.perf_counter()
+            for _ in range(m):
+                fn()
+            samples[name].append((time.perf_counter() - t0) / m)
+    return {name: statistics.median(v) for name, v in samples.items()}
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,9 @@ read (ratios move less with the machine's load than absolute figures). From one 
 Actions are uniform random in the action space, drawn in advance (a pool of 16 batches cycled), so
 episodes end and autoreset at the rate of an untrained policy. One env-step is one robot advanced by
 one ``dt``. Each time is the median over ``--repeats`` repeats, each lasting at least ``--min-time``
-seconds. ``--plot FILE`` draws throughput against N (log-log) with the peers; ``--json FILE`` writes
+seconds; the competitors of one comparison are timed in interleaved repeats
+(:func:`amigo_gym.bench.core.measure_many`), so that a change of the machine's load affects them alike.
+``--plot FILE`` draws throughput against N (log-log) with the peers; ``--json FILE`` writes
 every figure. ``--quick`` is a smoke run (small sizes, short times, tiny PPO budget). Progress goes to
 stderr, the report to stdout.
 """
@@ -48,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.bench.core import measure
+from amigo_gym.bench.core import measure_many
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.params import check_range
@@ -156,11 +158,15 @@ def bench_single(repeats: int, min_time: float, seed: int = 0) -> SingleResult:
 
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
 
-    amigo = _single_stepper(gym.make("AmigoBot-v0"), seed)
-    pend = _single_stepper(gym.make("Pendulum-v1"), seed)
-    t_a = measure(amigo, repeats, min_time)
-    t_p = measure(pend, repeats, min_time)
-    return SingleResult(t_a * 1e6, t_p * 1e6)
+    t = measure_many(
+        {
+            "amigo": _single_stepper(gym.make("AmigoBot-v0"), seed),
+            "pendulum": _single_stepper(gym.make("Pendulum-v1"), seed),
+        },
+        repeats,
+        min_time,
+    )
+    return SingleResult(t["amigo"] * 1e6, t["pendulum"] * 1e6)
 
 
 # ---------------------------------------------------------------------------------------------- vector
@@ -217,24 +223,21 @@ def bench_vector(
     choices = _vector_kernels()
     rows = []
     for n in sizes:
-        native = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point")
-        t_n = measure(_vector_stepper(native, seed), repeats, min_time)
-        native.close()
-        kernels: dict[str, float] = {}
+        # every competitor built first, then timed in interleaved repeats (measure_many)
+        vec = "vector_entry_point"
+        envs: dict[str, Any] = {"native": gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode=vec)}
         for name in choices:
-            env = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", kernel=name)
-            kernels[name] = n / measure(_vector_stepper(env, seed), repeats, min_time)
-            env.close()
-        cart = CartPoleVectorEnv(num_envs=n)
-        cart.action_space.seed(seed)
-        t_c = measure(_vector_stepper(cart, seed), repeats, min_time)
-        cart.close()
-        sync = None
+            envs[name] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode=vec, kernel=name)
+        envs["cartpole"] = CartPoleVectorEnv(num_envs=n)
+        envs["cartpole"].action_space.seed(seed)
         if n <= sync_max:
-            senv = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
-            # Sync is slow: fewer repeats, each still at least min_time long
-            sync = n / measure(_vector_stepper(senv, seed), max(1, min(3, repeats)), min_time)
-            senv.close()
+            envs["sync"] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
+        t = measure_many({k: _vector_stepper(e, seed) for k, e in envs.items()}, repeats, min_time)
+        for e in envs.values():
+            e.close()
+        t_n, t_c = t["native"], t["cartpole"]
+        sync = n / t["sync"] if "sync" in t else None
+        kernels = {name: n / t[name] for name in choices}
         row = VectorRow(n, n / t_n, n / t_c, sync, kernels)
         extra = "".join(f", {k} {v:.3g}" for k, v in kernels.items())
         say(f"  N = {n}: native {row.native:.3g} steps/s{extra}, CartPole {row.cartpole:.3g}, sync {_fmt(row.sync)}")
@@ -325,10 +328,10 @@ def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> float:
     return float(rate)
 
 
-def bench_ppo(timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None) -> list[PPORow]:
+def bench_ppo(timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048) -> list[PPORow]:
     """PPO training throughput on AmigoBot-v0 and Pendulum-v1 with the same settings, 1 and ``n_envs`` envs.
 
-    PPO: ``MlpPolicy``, ``n_steps = 2048 // n_envs`` (at least 64; ``timesteps`` rounded up to whole
+    PPO: ``MlpPolicy``, ``n_steps = rollout // n_envs`` (at least 32; ``timesteps`` rounded up to whole
     rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, torch's default threads.
     """
     import gymnasium as gym
@@ -341,7 +344,7 @@ def bench_ppo(timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None
     say = log or _quiet
     rows = []
     for m in sorted({1, n_envs}):
-        n_steps = max(64, 2048 // m)
+        n_steps = max(32, rollout // m)
         budget = max(timesteps, n_steps * m)
         if m == 1:
             amigo_vec, kind = make_vec_env("AmigoBot-v0", n_envs=1, seed=seed), "DummyVecEnv"
@@ -377,17 +380,20 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
 
     if "AmigoBot-v1" not in gym.registry:
         return None
-    t1 = measure(_single_stepper(gym.make("AmigoBot-v1"), seed), repeats, min_time)
-    t0 = measure(_single_stepper(gym.make("AmigoBot-v0"), seed), repeats, min_time)
+    single = {v: _single_stepper(gym.make(f"AmigoBot-{v}"), seed) for v in ("v1", "v0")}
+    ts = measure_many(single, repeats, min_time)
+    t1, t0 = ts["v1"], ts["v0"]
     vector: dict[int, tuple[float, float]] = {}
     if gym.registry["AmigoBot-v1"].vector_entry_point is not None:
         for n in sizes:
-            rates = []
-            for env_id in ("AmigoBot-v1", "AmigoBot-v0"):
-                envs = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
-                rates.append(n / measure(_vector_stepper(envs, seed), repeats, min_time))
-                envs.close()
-            vector[n] = (rates[0], rates[1])
+            venvs = {
+                v: gym.make_vec(f"AmigoBot-{v}", num_envs=n, vectorization_mode="vector_entry_point")
+                for v in ("v1", "v0")
+            }
+            tv = measure_many({v: _vector_stepper(e, seed) for v, e in venvs.items()}, repeats, min_time)
+            for e in venvs.values():
+                e.close()
+            vector[n] = (n / tv["v1"], n / tv["v0"])
     return V1Result(t1 * 1e6, t0 * 1e6, vector)
 
 
@@ -616,7 +622,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
             else:
                 _log(f"SB3 PPO learn, {ppo_steps} steps per run")
-                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log)
+                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=64 if args.quick else 2048)
         if args.v1:
             _log("AmigoBot-v1 vs v0")
             rep.v1 = bench_v1(sizes, repeats, min_time)
