@@ -41,6 +41,7 @@ import gc
 import inspect
 import os
 import platform
+import statistics
 import sys
 import time
 import tracemalloc
@@ -328,13 +329,18 @@ def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> float:
     return float(rate)
 
 
-def bench_ppo(timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048) -> list[PPORow]:
+def bench_ppo(
+    timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048, repeats: int = 3
+) -> list[PPORow]:
     """PPO training throughput on AmigoBot-v0 and Pendulum-v1 with the same settings, 1 and ``n_envs`` envs.
 
     PPO: ``MlpPolicy``, ``n_steps = rollout // n_envs`` (at least 32; ``timesteps`` rounded up to whole
-    rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, torch's default threads.
+    rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, one torch thread (so that torch's threads do
+    not compete with the machine's other load). The AmigoBot and Pendulum runs alternate ``repeats``
+    times; the medians are reported.
     """
     import gymnasium as gym
+    import torch
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecMonitor
 
@@ -342,18 +348,28 @@ def bench_ppo(timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None
     from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     say = log or _quiet
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
     rows = []
-    for m in sorted({1, n_envs}):
-        n_steps = max(32, rollout // m)
-        budget = max(timesteps, n_steps * m)
-        if m == 1:
-            amigo_vec, kind = make_vec_env("AmigoBot-v0", n_envs=1, seed=seed), "DummyVecEnv"
-        else:
-            amigo_vec, kind = VecMonitor(AmigoBotSB3VecEnv(num_envs=m)), "AmigoBotSB3VecEnv"
-        a = _ppo_rate(amigo_vec, budget, n_steps, seed)
-        p = _ppo_rate(make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed), budget, n_steps, seed)
-        rows.append(PPORow(m, kind, a, p))
-        say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s, Pendulum {p:.0f}")
+    try:
+        for m in sorted({1, n_envs}):
+            n_steps = max(32, rollout // m)
+            budget = max(timesteps, n_steps * m)
+            kind = "DummyVecEnv" if m == 1 else "AmigoBotSB3VecEnv"
+            rates_a, rates_p = [], []
+            for _ in range(repeats):
+                if m == 1:
+                    amigo_vec = make_vec_env("AmigoBot-v0", n_envs=1, seed=seed)
+                else:
+                    amigo_vec = VecMonitor(AmigoBotSB3VecEnv(num_envs=m))
+                rates_a.append(_ppo_rate(amigo_vec, budget, n_steps, seed))
+                pend = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed)
+                rates_p.append(_ppo_rate(pend, budget, n_steps, seed))
+            a, p = statistics.median(rates_a), statistics.median(rates_p)
+            rows.append(PPORow(m, kind, a, p))
+            say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s, Pendulum {p:.0f}")
+    finally:
+        torch.set_num_threads(threads)
     return rows
 
 
@@ -565,6 +581,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--memory-n", type=int, default=65536, help="N of the memory measurement (against N = 1)")
     p.add_argument("--ppo-steps", type=int, default=8192, help="PPO budget per run [env-steps]")
     p.add_argument("--ppo-envs", type=int, default=8, help="envs of the vectorised PPO comparison")
+    p.add_argument("--ppo-repeats", type=int, default=3, help="alternating AmigoBot/Pendulum PPO runs (median)")
     p.add_argument("--skip-single", action="store_true", help="skip the single-env comparison")
     p.add_argument("--skip-vector", action="store_true", help="skip the vector-env comparison")
     p.add_argument("--skip-memory", action="store_true", help="skip the memory measurement")
@@ -599,6 +616,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_range(PROG, "memory_n", memory_n, 2, 10_000_000)
         check_range(PROG, "ppo_steps", ppo_steps, 1, 10_000_000)
         check_range(PROG, "ppo_envs", args.ppo_envs, 1, 4096)
+        check_range(PROG, "ppo_repeats", args.ppo_repeats, 1, 100)
         print(
             f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}, "
             f"{os.cpu_count()} CPUs visible; median of {repeats} repeats of >= {min_time:g} s",
@@ -622,7 +640,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
             else:
                 _log(f"SB3 PPO learn, {ppo_steps} steps per run")
-                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=64 if args.quick else 2048)
+                rollout, rounds = (64, 1) if args.quick else (2048, args.ppo_repeats)
+                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=rollout, repeats=rounds)
         if args.v1:
             _log("AmigoBot-v1 vs v0")
             rep.v1 = bench_v1(sizes, repeats, min_time)
