@@ -549,9 +549,11 @@ def plot_vector(rows: Sequence[VectorRow], path: str) -> None:
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     ns = [r.n for r in rows]
-    ax.plot(ns, [r.native for r in rows], "o-", label="AmigoBotVectorEnv (native)")
-    for k in rows[0].kernels if rows else []:
-        ax.plot(ns, [r.kernels[k] for r in rows], "^--", label=f"AmigoBotVectorEnv, {k} step")
+    kernels = list(rows[0].kernels) if rows else []
+    if not kernels:  # with a choice of kernels, the default is one of them
+        ax.plot(ns, [r.native for r in rows], "o-", label="AmigoBotVectorEnv (native)")
+    for k, style in zip(kernels, ("^--", "o-", "v-."), strict=False):
+        ax.plot(ns, [r.kernels[k] for r in rows], style, label=f"AmigoBotVectorEnv, {k} step")
     ax.plot(ns, [r.cartpole for r in rows], "s-", label="CartPoleVectorEnv (Gymnasium)")
     sync = [(r.n, r.sync) for r in rows if r.sync is not None]
     if sync:
