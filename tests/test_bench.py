@@ -40,7 +40,7 @@ def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.Ca
     assert set(doc["vector"][0]["kernels"]) <= {"numpy", "numba"}
     assert doc["fixed_cost_n1"]["cartpole_us"] > 0
     assert doc["memory"]["n"] >= 2 and doc["memory"]["amigobot_retained"] > 0
-    assert [r["n_envs"] for r in doc["ppo"]] == [1, 2] and all(r["ratio"] > 0 for r in doc["ppo"])
+    assert [r["n_envs"] for r in doc["ppo"]][:2] == [1, 2] and all(r["ratio"] > 0 for r in doc["ppo"])
     assert (doc["v1"] is None) == any("AmigoBot-v1" in n for n in doc["notes"])
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

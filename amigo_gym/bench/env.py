@@ -329,6 +329,10 @@ def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> float:
     return float(rate)
 
 
+def _adapter(monitor: Any, adapter: Any, n: int, kw: dict[str, Any]) -> Callable[[], Any]:
+    return lambda: monitor(adapter(num_envs=n, **kw))
+
+
 def bench_ppo(
     timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048, repeats: int = 3
 ) -> list[PPORow]:
@@ -352,17 +356,23 @@ def bench_ppo(
     torch.set_num_threads(1)
     rows = []
     try:
-        for m in sorted({1, n_envs}):
+        # AmigoBot's configurations: one env (DummyVecEnv), n_envs through the native adapter with each
+        # step implementation the vector env offers; each against Pendulum with as many envs
+        configs: list[tuple[int, str, Callable[[], Any]]] = [
+            (1, "DummyVecEnv", lambda: make_vec_env("AmigoBot-v0", n_envs=1, seed=seed))
+        ]
+        if n_envs > 1:
+            kernels: list[str | None] = [*_vector_kernels()] or [None]
+            for kern in kernels:
+                label = "AmigoBotSB3VecEnv" + ("" if kern is None else f"(kernel={kern})")
+                kw: dict[str, Any] = {} if kern is None else {"kernel": kern}
+                configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, kw)))
+        for m, kind, make in configs:
             n_steps = max(32, rollout // m)
             budget = max(timesteps, n_steps * m)
-            kind = "DummyVecEnv" if m == 1 else "AmigoBotSB3VecEnv"
             rates_a, rates_p = [], []
             for _ in range(repeats):
-                if m == 1:
-                    amigo_vec = make_vec_env("AmigoBot-v0", n_envs=1, seed=seed)
-                else:
-                    amigo_vec = VecMonitor(AmigoBotSB3VecEnv(num_envs=m))
-                rates_a.append(_ppo_rate(amigo_vec, budget, n_steps, seed))
+                rates_a.append(_ppo_rate(make(), budget, n_steps, seed))
                 pend = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed)
                 rates_p.append(_ppo_rate(pend, budget, n_steps, seed))
             a, p = statistics.median(rates_a), statistics.median(rates_p)

@@ -27,7 +27,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import task
+from amigo_gym import fast, task
 from amigo_gym.envs.amigobot import ObsArray, check_reset_options, make_env_params, parse_pose_option
 from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import EnvParams, RobotParams
@@ -268,7 +268,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
             )
         if self._ws is not None:
-            return self._step_kernel(a, mode)
+            return self._step_kernel(self._ws, a, mode)
         k = self._k
         motion = task.move_columns(k, self._state, a[:, 0], a[:, 1])
         state = motion.state
@@ -305,12 +305,9 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
     def _step_kernel(
-        self, a: Array, mode: AutoresetMode
+        self, ws: fast.Workspace, a: Array, mode: AutoresetMode
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
         """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results."""
-        from amigo_gym.fast import step_rows
-
-        assert self._ws is not None
         n = self.num_envs
         self._steps += 1
         idx = None
@@ -323,13 +320,12 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             self._steps[idx] = 0
             if self.render_mode is not None:
                 self._trail_start[idx] = len(self._trail)
-        obs: ObsArray = np.empty((n, self._ws.obs_dim), dtype=np.float32)
+        obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
         reward = np.empty(n)
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
-        step_rows(
-            self._ws, self._rows, np.ascontiguousarray(a), restart, obs, reward, terminated, record, self._parallel
-        )
+        a = np.ascontiguousarray(a)
+        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
         truncated = (
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
         )
@@ -470,10 +466,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._renderers = []
 
 
-def _kernel_workspace(owner: str, kernel: str, k: task.TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Any:
+def _kernel_workspace(
+    owner: str, kernel: str, k: task.TaskConstants, path: CirclePath | ManoeuvrePath, n: int
+) -> fast.Workspace | None:
     """The kernel's workspace for ``kernel="numba"`` (or ``"auto"`` with numba), ``None`` for numpy."""
-    from amigo_gym import fast
-
     if kernel not in ("numpy", "numba", "numba-parallel", "auto"):
         raise ValueError(f"{owner}.kernel must be 'numpy', 'numba', 'numba-parallel' or 'auto', got {kernel!r}")
     if not fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
