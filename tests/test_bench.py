@@ -66,3 +66,9 @@ def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:
     assert profile.main(["--steps", "30", "--top", "3", "--sizes", "2"]) == 0
     out = capsys.readouterr().out
     assert out.count("| function | own time |") == 2 and "N = 2" in out
+
+
+def test_profile_gap_table(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("numba")
+    assert profile.main(["--gap", "--sizes", "8"]) == 0
+    assert "| 8 |" in capsys.readouterr().out

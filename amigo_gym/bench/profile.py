@@ -21,7 +21,7 @@ import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
 
-__all__ = ["profile_steps", "main"]
+__all__ = ["gap", "profile_steps", "main"]
 
 PROG = "python -m amigo_gym.bench.profile"
 
@@ -99,6 +99,57 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
     return "\n".join(out)
 
 
+def _gap_row(n: int, repeats: int, min_time: float) -> str:
+    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+    from amigo_gym import fast
+    from amigo_gym.bench.core import measure_many
+    from amigo_gym.bench.env import _vector_stepper
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
+    bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
+    ws = quiet._ws
+    assert ws is not None
+    rows = np.zeros((n, 8))
+    rows[:, 6:] = 4.0
+    a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
+    no = np.zeros(n, dtype=np.bool_)
+    out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
+
+    def kernel() -> None:
+        fast.step_rows(ws, rows, a, no, *out)
+
+    def fresh() -> None:
+        obs = np.empty((n, ws.obs_dim), np.float32)
+        fast.step_rows(ws, rows, a, no, obs, np.empty(n), no.copy(), np.empty((n, 16)))
+
+    fns = {
+        "kernel": kernel,
+        "fresh": fresh,
+        "quiet": _vector_stepper(quiet, 0),
+        "bench": _vector_stepper(bench, 0),
+        "cart": _vector_stepper(CartPoleVectorEnv(num_envs=n), 0),
+    }
+    t = measure_many(fns, repeats, min_time)
+    c = t["cart"]
+    cells = " | ".join(f"{1e6 * t[k]:.0f} ({c / t[k]:.2f})" for k in ("kernel", "fresh", "quiet", "bench"))
+    return f"| {n} | {cells} | {1e6 * c:.0f} |"
+
+
+def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
+    """Markdown table: the kernel alone, the kernel env without and with episode restarts, against CartPole.
+
+    Times per ``step`` call [us] in interleaved repeats, with CartPole's time over each in brackets.
+    "No episode ends": ``termination_distance=10``, ``max_episode_steps=None``. Needs numba.
+    """
+    head = (
+        "| N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
+        "| env.step, random actions (benchmark) | CartPoleVectorEnv |"
+    )
+    return "\n".join([head, "|---:|---:|---:|---:|---:|---:|", *(_gap_row(n, repeats, min_time) for n in sizes)])
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point."""
     p = OneLineParser(prog=PROG, description="cProfile of AmigoBot-v0's single and vector env steps.")
@@ -106,9 +157,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--top", type=int, default=12, help="functions listed per case")
     p.add_argument("--sizes", type=int, nargs="+", default=[1, 4096], help="vector env sizes N")
     p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
+    p.add_argument("--gap", action="store_true", help="instead: the kernel env against CartPole, with/without restarts")
     args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
 
     def go() -> int:
+        if args.gap:
+            print(gap(args.sizes))
+            return 0
         total, rows = profile_steps(_single(0), args.steps, args.top)
         print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")
         for n in args.sizes:
