@@ -72,3 +72,8 @@ def test_profile_gap_table(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("numba")
     assert profile.main(["--gap", "--sizes", "8"]) == 0
     assert "| 8 |" in capsys.readouterr().out
+
+
+def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
+    assert profile.main(["--single-parts"]) == 0
+    assert "Pendulum unwrapped step" in capsys.readouterr().out

@@ -21,7 +21,7 @@ import numpy as np
 
 from amigo_gym.cli import OneLineParser, run_guarded
 
-__all__ = ["gap", "profile_steps", "main"]
+__all__ = ["gap", "profile_steps", "single_parts", "main"]
 
 PROG = "python -m amigo_gym.bench.profile"
 
@@ -137,6 +137,46 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
     return f"| {n} | {cells} | {1e6 * c:.0f} |"
 
 
+def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
+    """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+    from amigo_gym import task
+    from amigo_gym.bench.core import measure_many
+
+    env = gym.make("AmigoBot-v0")
+    env.reset(seed=0)
+    raw: Any = env.unwrapped
+    pend = gym.make("Pendulum-v1")
+    pend.reset(seed=0)
+    a = np.array([0.27, 0.27], np.float32)
+    ap = np.array([0.5], np.float32)
+    start = raw._state
+
+    def wrapped() -> None:
+        raw._state = start
+        env.step(a)
+
+    def unwrapped() -> None:
+        raw._state = start
+        raw.step(a)
+
+    fns = {
+        "AmigoBot `gym.make` step": wrapped,
+        "AmigoBot unwrapped `env.step`": unwrapped,
+        "`task.step_columns` on Python floats": lambda: task.step_columns(raw._k, raw.path, start, 0.27, 0.27, True),
+        "`task.validate_action`": lambda: task.validate_action(a).tolist(),
+        "Pendulum `gym.make` step": lambda: pend.step(ap),
+        "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),
+    }
+    t = measure_many(fns, repeats, min_time)
+    ref = t["Pendulum `gym.make` step"]
+    lines = ["| part | [us] | / Pendulum step |", "|---|---:|---:|"]
+    lines += [f"| {k} | {1e6 * v:.1f} | {v / ref:.2f} |" for k, v in t.items()]
+    return "\n".join(lines)
+
+
 def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
     """Markdown table: the kernel alone, the kernel env without and with episode restarts, against CartPole.
 
@@ -158,11 +198,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--sizes", type=int, nargs="+", default=[1, 4096], help="vector env sizes N")
     p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
     p.add_argument("--gap", action="store_true", help="instead: the kernel env against CartPole, with/without restarts")
+    p.add_argument("--single-parts", action="store_true", help="instead: a single step and its parts vs Pendulum")
     args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
 
     def go() -> int:
         if args.gap:
             print(gap(args.sizes))
+            return 0
+        if args.single_parts:
+            print(single_parts())
             return 0
         total, rows = profile_steps(_single(0), args.steps, args.top)
         print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")
