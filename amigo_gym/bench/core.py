@@ -11,10 +11,17 @@ For each batch size N it times (median of ``--repeats`` repeats, each at least `
 * ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
   (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
 * ``loop``: the other peer, a Python loop of the scalar exact step (``math`` functions) over the N states
-  (only up to ``--loop-max`` states, as it is slow).
+  (only up to ``--loop-max`` states, as it is slow);
+* ``kernel``: the compiled fast path, :func:`amigo_gym._kernels.step_rows` (the whole step of
+  ``step_columns`` plus the float32 observation, fused into one numba loop writing into preallocated
+  arrays), and ``kernel_par``, its ``prange`` variant on numba's threads (``--threads``; default all
+  CPUs); both only when numba is installed.
 
-It prints env-steps per second (N states advanced once = N steps) and the ratios ``step_pose/euler``
-and ``step_pose/loop``, which are less sensitive to the machine's load than the absolute figures.
+It prints env-steps per second (N states advanced once = N steps) and the ratios ``step_pose/euler``,
+``step_pose/loop`` and ``kernel/step_columns``, which are less sensitive to the machine's load than the
+absolute figures. It also times start-up in fresh processes (``--skip-startup`` to skip):
+``python -c "import amigo_gym"``, and import plus the first kernel step with an empty numba cache
+(compilation) and again with the cache the first process wrote (what every later process pays).
 """
 
 from __future__ import annotations
@@ -23,10 +30,13 @@ import argparse
 import math
 import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,9 +46,20 @@ from amigo_gym.io import atomic_write_json
 from amigo_gym.kinematics import body_velocity, step_pose
 from amigo_gym.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
-from amigo_gym.task import State, step_columns, task_constants, transition
+from amigo_gym.task import State, obs_dim, step_columns, task_constants, transition
 
-__all__ = ["Row", "euler_step", "loop_step", "measure", "bench", "format_table", "main"]
+__all__ = [
+    "Row",
+    "Startup",
+    "euler_step",
+    "loop_step",
+    "measure",
+    "measure_many",
+    "bench",
+    "bench_startup",
+    "format_table",
+    "main",
+]
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
@@ -83,6 +104,29 @@ def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
     return statistics.median(samples)
 
 
+def measure_many(fns: dict[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
+    """Median time of one call [s] of each function, the repeats interleaved (round robin).
+
+    Each repeat times every function in turn (each for at least ``min_time``), so a change of the
+    machine's load during the run affects the competitors alike and their ratios stay meaningful.
+    """
+    inner = {}
+    for name, fn in fns.items():
+        fn()  # warm-up
+        t0 = time.perf_counter()
+        fn()
+        inner[name] = max(1, math.ceil(min_time / max(time.perf_counter() - t0, 1e-7)))
+    samples: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            m = inner[name]
+            t0 = time.perf_counter()
+            for _ in range(m):
+                fn()
+            samples[name].append((time.perf_counter() - t0) / m)
+    return {name: statistics.median(v) for name, v in samples.items()}
+
+
 @dataclass(frozen=True)
 class Row:
     """Env-steps per second at batch size ``n`` (``None`` where not measured)."""
@@ -93,6 +137,8 @@ class Row:
     step_pose: float
     euler: float
     loop: float | None
+    kernel: float | None = None
+    kernel_par: float | None = None
 
     @property
     def ratio_euler(self) -> float:
@@ -104,8 +150,15 @@ class Row:
         """``step_pose / loop`` throughput (speed-up of batching over a Python loop)."""
         return None if self.loop is None else self.step_pose / self.loop
 
+    @property
+    def ratio_kernel(self) -> float | None:
+        """``kernel / columns`` throughput (speed-up of the compiled step over the numpy reference)."""
+        return None if self.kernel is None else self.kernel / self.columns
 
-def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator) -> Row:
+
+def _bench_one(
+    n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool = False
+) -> Row:
     params = EnvParams()
     robot = params.robot
     path = make_path(params)
@@ -125,45 +178,154 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
         pl = [(float(a), float(b), float(c)) for a, b, c in pose]
         wl = [(float(a), float(b)) for a, b in w]
         loop = n / measure(lambda: loop_step(pl, wl, params.dt, robot), repeats, min_time)
-    return Row(n, n / t_tr, n / t_co, n / t_sp, n / t_eu, loop)
+    kern = kern_par = None
+    if kernels:
+        steppers = _kernel_steppers(params, path, pose, angles, w, action)
+        kern = n / measure(steppers[0], repeats, min_time)
+        kern_par = n / measure(steppers[1], repeats, min_time)
+    return Row(n, n / t_tr, n / t_co, n / t_sp, n / t_eu, loop, kern, kern_par)
+
+
+def _kernel_steppers(
+    params: EnvParams, path: Any, pose: Array, angles: Array, w: Array, action: Array
+) -> tuple[Callable[[], object], Callable[[], object]]:
+    """Serial and parallel kernel steps of the states (preallocated outputs; the state advances)."""
+    from amigo_gym import fast
+
+    n = len(pose)
+    ws = fast.workspace(task_constants(params), path, n)
+    state = np.ascontiguousarray(np.column_stack((pose, angles, w)))
+    act = np.ascontiguousarray(action)
+    restart = np.zeros(n, dtype=np.bool_)
+    obs = np.empty((n, obs_dim(params)), dtype=np.float32)
+    reward = np.empty(n)
+    term = np.empty(n, dtype=np.bool_)
+    record = np.empty((n, 16))
+    args = (ws, state, act, restart, obs, reward, term, record)
+    step = fast.step_rows
+    return (lambda: step(*args)), (lambda: step(*args, parallel=True))
 
 
 def bench(
-    sizes: Sequence[int], repeats: int = 7, min_time: float = 0.05, loop_max: int = 4096, seed: int = 0
+    sizes: Sequence[int],
+    repeats: int = 7,
+    min_time: float = 0.05,
+    loop_max: int = 4096,
+    seed: int = 0,
+    kernels: bool = True,
 ) -> list[Row]:
-    """Measure every size (same random states for every method); returns one :class:`Row` each."""
+    """Measure every size (same random states for every method); returns one :class:`Row` each.
+
+    ``kernels=False`` (or numba missing) leaves the kernel columns ``None``.
+    """
+    from amigo_gym.fast import numba_available
+
     rng = np.random.default_rng(seed)
-    return [_bench_one(n, repeats, min_time, loop_max, rng) for n in sizes]
+    use = kernels and numba_available()
+    return [_bench_one(n, repeats, min_time, loop_max, rng, use) for n in sizes]
+
+
+@dataclass(frozen=True)
+class Startup:
+    """Wall times of fresh processes [s] (median of ``repeats``).
+
+    Attributes:
+        import_s: ``python -c "import amigo_gym"``.
+        python_s: ``python -c "pass"`` (the interpreter alone), for reference.
+        kernel_cold_s: import plus the first kernel step with an empty numba cache (compiles).
+        kernel_warm_s: the same with the cache the cold run wrote (a second process).
+    """
+
+    import_s: float
+    python_s: float
+    kernel_cold_s: float | None
+    kernel_warm_s: float | None
+
+
+_FIRST_STEP = (
+    "import numpy as np, amigo_gym\n"
+    "from amigo_gym import fast, task\n"
+    "from amigo_gym.paths import make_path\n"
+    "p = amigo_gym.EnvParams(); n = 4\n"
+    "ws = fast.workspace(task.task_constants(p), make_path(p), n)\n"
+    "no = np.zeros(n, np.bool_)\n"
+    "fast.step_rows(ws, np.zeros((n, 8)), np.zeros((n, 2)), no, np.empty((n, task.obs_dim(p)), np.float32),\n"
+    "               np.empty(n), no.copy(), np.empty((n, 16)))\n"
+)
+
+
+def _wall(code: str, env: dict[str, str] | None = None) -> float:
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True)
+    return time.perf_counter() - t0
+
+
+def bench_startup(repeats: int = 3) -> Startup:
+    """Time fresh processes: the import, and the kernel's first step from an empty then a filled cache."""
+    from amigo_gym.fast import numba_available
+
+    py = statistics.median(_wall("pass") for _ in range(repeats))
+    imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
+    cold = warm = None
+    if numba_available():
+        colds, warms = [], []
+        for _ in range(repeats):
+            with tempfile.TemporaryDirectory() as cache:
+                env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+                colds.append(_wall(_FIRST_STEP, env))
+                warms.append(_wall(_FIRST_STEP, env))
+        cold, warm = statistics.median(colds), statistics.median(warms)
+    return Startup(imp, py, cold, warm)
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
     return "-" if x is None else format(x, spec)
 
 
-def format_table(rows: Sequence[Row]) -> str:
-    """Markdown table of env-steps per second and ratios."""
+def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: int | None = None) -> str:
+    """Markdown table of env-steps per second and ratios (and of the start-up times, if measured)."""
     head = (
         "| N | transition [steps/s] | step_columns [steps/s] | step_pose [steps/s] | Euler peer [steps/s] "
-        "| Python loop [steps/s] | step_pose/Euler | step_pose/loop |"
+        f"| Python loop [steps/s] | kernel [steps/s] | kernel, {threads or '-'} threads [steps/s] "
+        "| step_pose/Euler | step_pose/loop | kernel/step_columns |"
     )
-    lines = [head, "|" + "---:|" * 8]
+    lines = [head, "|" + "---:|" * 11]
     for r in rows:
         lines.append(
             f"| {r.n} | {r.transition:.3g} | {r.columns:.3g} | {r.step_pose:.3g} | {r.euler:.3g} | {_fmt(r.loop)} | "
-            f"{r.ratio_euler:.2f} | {_fmt(r.ratio_loop, '.3g')} |"
+            f"{_fmt(r.kernel)} | {_fmt(r.kernel_par)} | "
+            f"{r.ratio_euler:.2f} | {_fmt(r.ratio_loop, '.3g')} | {_fmt(r.ratio_kernel, '.1f')} |"
         )
+    if startup is not None:
+        lines += [
+            "",
+            "| fresh process | wall time [s] |",
+            "|---|---:|",
+            f'| python -c "pass" | {startup.python_s:.3f} |',
+            f'| python -c "import amigo_gym" | {startup.import_s:.3f} |',
+            f"| import + first kernel step, empty numba cache (compiles) | {_fmt(startup.kernel_cold_s, '.3f')} |",
+            f"| the same, second process (cached; target < 1) | {_fmt(startup.kernel_warm_s, '.3f')} |",
+        ]
     return "\n".join(lines)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-core``."""
     p = OneLineParser(prog=PROG, description="Env-steps per second of the batched exact step, with peers.")
-    p.add_argument("--sizes", type=int, nargs="+", default=list(DEFAULT_SIZES), help="batch sizes N [envs]")
+    p.add_argument(
+        "--sizes", type=int, nargs="+", default=None, help=f"batch sizes [envs] (default: {DEFAULT_SIZES})"
+    )
     p.add_argument("--repeats", type=int, default=7, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.05, help="least duration of one repeat [s]")
     p.add_argument("--loop-max", type=int, default=4096, help="largest N for the Python-loop peer [envs]")
     p.add_argument(
-        "--json", default=None, metavar="FILE", help="also write the rows as JSON, atomically [file] (default: none)"
+        "--threads", type=int, default=None, help="numba threads [threads] (default: all)"
+    )
+    p.add_argument("--skip-kernel", action="store_true", help="skip the compiled kernel (numba)")
+    p.add_argument("--skip-startup", action="store_true", help="skip the fresh-process start-up times")
+    p.add_argument("--quick", action="store_true", help="smoke run: sizes 1 64, 1 repeat of 0.01 s, one start-up run")
+    p.add_argument(
+        "--json", default=None, metavar="FILE", help="JSON output [file] (default: none)"
     )
     return p
 
@@ -173,16 +335,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
 
     def go() -> int:
-        for i, n in enumerate(args.sizes):
+        sizes = list(args.sizes or ((1, 64) if args.quick else DEFAULT_SIZES))
+        repeats, min_time = (1, 0.01) if args.quick else (args.repeats, args.min_time)
+        for i, n in enumerate(sizes):
             check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
-        check_range(PROG, "repeats", args.repeats, 1, 1000)
-        check_range(PROG, "min_time", args.min_time, 0.0, 60.0, low_open=True)
+        check_range(PROG, "repeats", repeats, 1, 1000)
+        check_range(PROG, "min_time", min_time, 0.0, 60.0, low_open=True)
         check_range(PROG, "loop_max", args.loop_max, 0, 10_000_000)
-        rows = bench(args.sizes, args.repeats, args.min_time, args.loop_max)
-        print(f"numpy {np.__version__}, {os.cpu_count()} CPUs visible; median of {args.repeats} repeats")
-        print(format_table(rows))
+        threads = None
+        from amigo_gym.fast import numba_available
+
+        if not args.skip_kernel and numba_available():
+            import numba
+
+            if args.threads is not None:
+                check_range(PROG, "threads", args.threads, 1, 4096)
+                numba.set_num_threads(args.threads)
+            threads = int(numba.get_num_threads())
+        print(f"numpy {np.__version__}, {os.cpu_count()} CPUs visible; median of {repeats} repeats", flush=True)
+        print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
+        rows = bench(sizes, repeats, min_time, args.loop_max, kernels=not args.skip_kernel)
+        startup = None
+        if not args.skip_startup:
+            print(f"{PROG}: start-up of fresh processes", file=sys.stderr, flush=True)
+            startup = bench_startup(1 if args.quick else 3)
+        print(format_table(rows, startup, threads))
         if args.json is not None:
-            atomic_write_json(args.json, [asdict(r) for r in rows])
+            doc = {
+                "rows": [{**asdict(r), "ratio_kernel": r.ratio_kernel} for r in rows],
+                "threads": threads,
+                "startup": None if startup is None else asdict(startup),
+            }
+            atomic_write_json(args.json, doc)
         return 0
 
     return run_guarded(go, PROG)

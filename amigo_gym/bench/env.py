@@ -1,48 +1,96 @@
 """``amigo-gym bench-env``: speed of ``AmigoBot-v0`` against peers measured in the same run.
 
-Two comparisons, each a ratio of times measured back to back on the same machine (ratios are less
-sensitive to the machine's load than the absolute figures):
+Every figure is set beside a peer timed back to back on the same machine, and the ratio is what to
+read (ratios move less with the machine's load than absolute figures). From one run it prints:
 
 * **single env**: time of one ``step`` of ``gym.make("AmigoBot-v0")`` against one of
   ``gym.make("Pendulum-v1")`` (both with the wrappers of ``gym.make``: ``TimeLimit``,
   ``OrderEnforcing``, ``PassiveEnvChecker``); the loop resets on episode end, as training does.
 * **vector env**: env-steps per second of the native :class:`amigo_gym.envs.AmigoBotVectorEnv`
-  (``gym.make_vec``) at several ``N`` against gymnasium's native ``CartPoleVectorEnv`` and against
-  ``SyncVectorEnv`` of ``AmigoBot-v0`` itself (a Python loop over ``N`` single envs; measured only
-  up to ``--sync-max`` envs, as it is slow to build and to step).
+  (``gym.make_vec``) at N = 1, 64, 1024, 4096, 65536 against Gymnasium's native ``CartPoleVectorEnv``
+  and against ``SyncVectorEnv`` of ``AmigoBot-v0`` itself (a Python loop over N single envs, measured
+  only up to ``--sync-max`` = 1024 envs: it is slow to build and to step, and its throughput no longer
+  changes with N there). Where the vector env offers the compiled fast path (a ``kernel`` argument),
+  the numpy and the numba step are both measured.
+* **fixed cost per call** at N = 1 [us]: the time of one ``step`` of one robot, against
+  ``CartPoleVectorEnv``'s.
+* **memory per sub-env** [bytes]: what ``tracemalloc`` sees retained after ``reset`` and a few steps at
+  ``--memory-n`` robots minus at 1 robot, divided by the difference, and the transient peak of one
+  ``step`` per robot; the same for ``CartPoleVectorEnv``.
+* **SB3 PPO training throughput** [env-steps/s of ``learn``]: the same PPO settings on ``AmigoBot-v0``
+  and on ``Pendulum-v1``, with one env (``make_vec_env``, ``DummyVecEnv``) and with ``--ppo-envs``
+  envs (AmigoBot through the native adapter :class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`,
+  Pendulum through ``DummyVecEnv``). Needs torch and stable-baselines3 (skipped with a note otherwise).
+* ``--v1``: ``AmigoBot-v1`` against ``AmigoBot-v0`` (single step, and the vector env at the sizes),
+  when ``"AmigoBot-v1"`` is in Gymnasium's registry; otherwise a note says it was skipped.
 
 Actions are uniform random in the action space, drawn in advance (a pool of 16 batches cycled), so
-episodes end and autoreset at the rate of an untrained policy. One env-step is one robot advanced
-by one ``dt``. Each figure is the median over ``--repeats`` repeats, each lasting at least
-``--min-time`` seconds. ``--quick`` is a smoke run (small sizes, short times).
+episodes end and autoreset at the rate of an untrained policy. One env-step is one robot advanced by
+one ``dt``. Each time is the median over ``--repeats`` repeats, each lasting at least ``--min-time``
+seconds; the competitors of one comparison are timed in interleaved repeats
+(:func:`amigo_gym.bench.core.measure_many`), so that a change of the machine's load affects them alike.
+``--plot FILE`` draws throughput against N (log-log) with the peers; ``--json FILE`` writes
+every figure. ``--quick`` is a smoke run (small sizes, short times, tiny PPO budget). Progress goes to
+stderr, the report to stdout.
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
+import inspect
 import os
 import platform
+import statistics
 import sys
+import time
+import tracemalloc
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
+from amigo_gym.bench.core import measure_many
 from amigo_gym.cli import OneLineParser, run_guarded
-from amigo_gym.io import atomic_write_json
+from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.params import check_range
 
-__all__ = ["SingleResult", "VectorRow", "bench_single", "bench_vector", "format_report", "main"]
-
-from amigo_gym.bench.core import measure
+__all__ = [
+    "SingleResult",
+    "VectorRow",
+    "MemoryResult",
+    "PPORow",
+    "V1Result",
+    "Report",
+    "bench_single",
+    "bench_vector",
+    "bench_memory",
+    "bench_ppo",
+    "bench_v1",
+    "format_report",
+    "plot_vector",
+    "main",
+]
 
 PROG = "amigo-gym bench-env"
-DEFAULT_SIZES = (1, 64, 1024, 4096, 16384)
+DEFAULT_SIZES = (1, 64, 1024, 4096, 65536)
 QUICK_SIZES = (1, 64, 1024)
+SYNC_MAX = 1024
 POOL = 16
 
+Log = Callable[[str], None]
 
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _quiet(msg: str) -> None:
+    return None
+
+
+# ---------------------------------------------------------------------------------------------- steppers
 def _single_stepper(env: Any, seed: int) -> Callable[[], object]:
     """One ``step`` of a single env with a random action; resets on termination or truncation."""
     rng = np.random.default_rng(seed)
@@ -80,9 +128,21 @@ def _vector_stepper(envs: Any, seed: int) -> Callable[[], object]:
     return step
 
 
+def _vector_kernels() -> list[str]:
+    """The step implementations the native vector env lets a caller choose (``[]``: only its default)."""
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
+        return []
+    from amigo_gym.fast import numba_available
+
+    return ["numpy", "numba"] if numba_available() else ["numpy"]
+
+
+# ---------------------------------------------------------------------------------------------- single
 @dataclass(frozen=True)
 class SingleResult:
-    """Time of one single-env step [us] and the ratio AmigoBot / Pendulum (goal <= 0.3)."""
+    """Time of one single-env step [us] and the ratio AmigoBot / Pendulum (target <= 0.5, goal <= 0.3)."""
 
     amigobot_us: float
     pendulum_us: float
@@ -93,37 +153,57 @@ class SingleResult:
         return self.amigobot_us / self.pendulum_us
 
 
-@dataclass(frozen=True)
-class VectorRow:
-    """Env-steps per second at ``N`` robots (``None`` where not measured)."""
-
-    n: int
-    native: float
-    cartpole: float
-    sync: float | None
-
-    @property
-    def ratio_cartpole(self) -> float:
-        """Native AmigoBot over native CartPole throughput (goal >= 1 at N = 4096)."""
-        return self.native / self.cartpole
-
-    @property
-    def ratio_sync(self) -> float | None:
-        """Native over ``SyncVectorEnv`` throughput of AmigoBot itself (goal >= 20 at N = 4096)."""
-        return None if self.sync is None else self.native / self.sync
-
-
 def bench_single(repeats: int, min_time: float, seed: int = 0) -> SingleResult:
     """Time one step of ``gym.make("AmigoBot-v0")`` and of ``gym.make("Pendulum-v1")``."""
     import gymnasium as gym
 
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
 
-    amigo = _single_stepper(gym.make("AmigoBot-v0"), seed)
-    pend = _single_stepper(gym.make("Pendulum-v1"), seed)
-    t_a = measure(amigo, repeats, min_time)
-    t_p = measure(pend, repeats, min_time)
-    return SingleResult(t_a * 1e6, t_p * 1e6)
+    t = measure_many(
+        {
+            "amigo": _single_stepper(gym.make("AmigoBot-v0"), seed),
+            "pendulum": _single_stepper(gym.make("Pendulum-v1"), seed),
+        },
+        repeats,
+        min_time,
+    )
+    return SingleResult(t["amigo"] * 1e6, t["pendulum"] * 1e6)
+
+
+# ---------------------------------------------------------------------------------------------- vector
+@dataclass(frozen=True)
+class VectorRow:
+    """Env-steps per second at ``N`` robots (``None`` where not measured).
+
+    ``native`` is the vector env as built by default; ``kernels`` the same env with each step
+    implementation it offers (``{"numpy": ..., "numba": ...}``), when it offers a choice.
+    """
+
+    n: int
+    native: float
+    cartpole: float
+    sync: float | None
+    kernels: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ratio_cartpole(self) -> float:
+        """Native AmigoBot over native CartPole throughput (target >= 0.8 at N = 4096)."""
+        return self.native / self.cartpole
+
+    @property
+    def ratio_sync(self) -> float | None:
+        """Native over ``SyncVectorEnv`` throughput of AmigoBot itself (target >= 20 at N = 4096)."""
+        return None if self.sync is None else self.native / self.sync
+
+    @property
+    def call_us(self) -> float:
+        """Time of one ``step`` call of the native env [us]."""
+        return 1e6 * self.n / self.native
+
+    @property
+    def cartpole_call_us(self) -> float:
+        """Time of one ``step`` call of ``CartPoleVectorEnv`` [us]."""
+        return 1e6 * self.n / self.cartpole
 
 
 def bench_vector(
@@ -132,7 +212,7 @@ def bench_vector(
     min_time: float,
     sync_max: int,
     seed: int = 0,
-    log: Callable[[str], None] | None = None,
+    log: Log | None = None,
 ) -> list[VectorRow]:
     """Env-steps per second of the native vector env, CartPole's native one, and Sync of AmigoBot."""
     import gymnasium as gym
@@ -140,72 +220,394 @@ def bench_vector(
 
     import amigo_gym  # noqa: F401
 
+    say = log or _quiet
+    choices = _vector_kernels()
     rows = []
     for n in sizes:
-        native = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point")
-        t_n = measure(_vector_stepper(native, seed), repeats, min_time)
-        native.close()
-        cart = CartPoleVectorEnv(num_envs=n)
-        cart.action_space.seed(seed)
-        t_c = measure(_vector_stepper(cart, seed), repeats, min_time)
-        sync = None
+        # every competitor built first, then timed in interleaved repeats (measure_many)
+        vec = "vector_entry_point"
+        envs: dict[str, Any] = {"native": gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode=vec)}
+        for name in choices:
+            envs[name] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode=vec, kernel=name)
+        envs["cartpole"] = CartPoleVectorEnv(num_envs=n)
+        envs["cartpole"].action_space.seed(seed)
         if n <= sync_max:
-            senv = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
-            # Sync is slow: fewer repeats, each still at least min_time long
-            sync = n / measure(_vector_stepper(senv, seed), max(1, min(3, repeats)), min_time)
-            senv.close()
-        row = VectorRow(n, n / t_n, n / t_c, sync)
-        if log is not None:
-            log(f"  N = {n}: native {row.native:.3g} steps/s, CartPole {row.cartpole:.3g}, sync {_fmt(row.sync)}")
+            envs["sync"] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
+        t = measure_many({k: _vector_stepper(e, seed) for k, e in envs.items()}, repeats, min_time)
+        for e in envs.values():
+            e.close()
+        t_n, t_c = t["native"], t["cartpole"]
+        sync = n / t["sync"] if "sync" in t else None
+        kernels = {name: n / t[name] for name in choices}
+        row = VectorRow(n, n / t_n, n / t_c, sync, kernels)
+        extra = "".join(f", {k} {v:.3g}" for k, v in kernels.items())
+        say(f"  N = {n}: native {row.native:.3g} steps/s{extra}, CartPole {row.cartpole:.3g}, sync {_fmt(row.sync)}")
         rows.append(row)
     return rows
+
+
+# ---------------------------------------------------------------------------------------------- memory
+@dataclass(frozen=True)
+class MemoryResult:
+    """Bytes per sub-env: retained (state and buffers) and the transient peak of one ``step``."""
+
+    n: int
+    amigobot_retained: float
+    amigobot_step_peak: float
+    cartpole_retained: float
+    cartpole_step_peak: float
+
+
+def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, int]:
+    """``(retained, step_peak)`` bytes of an env built by ``make``, reset and stepped ``steps`` times."""
+    gc.collect()
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        envs = make()
+        step = _vector_stepper(envs, seed)
+        for _ in range(steps):
+            step()
+        gc.collect()
+        retained = tracemalloc.get_traced_memory()[0] - base
+        tracemalloc.reset_peak()
+        before = tracemalloc.get_traced_memory()[0]
+        step()
+        peak = tracemalloc.get_traced_memory()[1] - before
+        envs.close()
+        del envs, step
+    finally:
+        tracemalloc.stop()
+    return retained, peak
+
+
+def bench_memory(n: int, seed: int = 0) -> MemoryResult:
+    """Memory per sub-env of the native vector env and of ``CartPoleVectorEnv`` (differences ``n`` vs 1)."""
+    import gymnasium as gym
+    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+    import amigo_gym  # noqa: F401
+
+    def amigo(m: int) -> Callable[[], Any]:
+        return lambda: gym.make_vec("AmigoBot-v0", num_envs=m, vectorization_mode="vector_entry_point")
+
+    def cart(m: int) -> Callable[[], Any]:
+        return lambda: CartPoleVectorEnv(num_envs=m)
+
+    out = []
+    for make in (amigo, cart):
+        r1, p1 = _traced(make(1), seed)
+        rn, pn = _traced(make(n), seed)
+        out += [(rn - r1) / (n - 1), (pn - p1) / (n - 1)]
+    return MemoryResult(n, *out)
+
+
+# ---------------------------------------------------------------------------------------------- PPO
+@dataclass(frozen=True)
+class PPORow:
+    """SB3 PPO ``learn`` throughput [env-steps/s] with ``n_envs`` envs, AmigoBot against Pendulum."""
+
+    n_envs: int
+    amigobot_vec: str
+    amigobot: float
+    pendulum: float
+
+    @property
+    def ratio(self) -> float:
+        """AmigoBot over Pendulum (target >= 0.95: the env is never the bottleneck)."""
+        return self.amigobot / self.pendulum
+
+
+def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> float:
+    from stable_baselines3 import PPO
+
+    model = PPO("MlpPolicy", venv, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=timesteps)
+    rate = model.num_timesteps / (time.perf_counter() - t0)
+    venv.close()
+    return float(rate)
+
+
+def _adapter(monitor: Any, adapter: Any, n: int, kw: dict[str, Any]) -> Callable[[], Any]:
+    return lambda: monitor(adapter(num_envs=n, **kw))
+
+
+def bench_ppo(
+    timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048, repeats: int = 3
+) -> list[PPORow]:
+    """PPO training throughput on AmigoBot-v0 and Pendulum-v1 with the same settings, 1 and ``n_envs`` envs.
+
+    PPO: ``MlpPolicy``, ``n_steps = rollout // n_envs`` (at least 32; ``timesteps`` rounded up to whole
+    rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, one torch thread (so that torch's threads do
+    not compete with the machine's other load). The AmigoBot and Pendulum runs alternate ``repeats``
+    times; the medians are reported.
+    """
+    import gymnasium as gym
+    import torch
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    import amigo_gym  # noqa: F401
+    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
+
+    say = log or _quiet
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    rows = []
+    try:
+        # AmigoBot's configurations: one env (DummyVecEnv), n_envs through the native adapter with each
+        # step implementation the vector env offers; each against Pendulum with as many envs
+        configs: list[tuple[int, str, Callable[[], Any]]] = [
+            (1, "DummyVecEnv", lambda: make_vec_env("AmigoBot-v0", n_envs=1, seed=seed))
+        ]
+        if n_envs > 1:
+            kernels: list[str | None] = [*_vector_kernels()] or [None]
+            for kern in kernels:
+                label = "AmigoBotSB3VecEnv" + ("" if kern is None else f"(kernel={kern})")
+                kw: dict[str, Any] = {} if kern is None else {"kernel": kern}
+                configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, kw)))
+        for m, kind, make in configs:
+            n_steps = max(32, rollout // m)
+            budget = max(timesteps, n_steps * m)
+            rates_a, rates_p = [], []
+            for _ in range(repeats):
+                rates_a.append(_ppo_rate(make(), budget, n_steps, seed))
+                pend = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed)
+                rates_p.append(_ppo_rate(pend, budget, n_steps, seed))
+            a, p = statistics.median(rates_a), statistics.median(rates_p)
+            rows.append(PPORow(m, kind, a, p))
+            say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s, Pendulum {p:.0f}")
+    finally:
+        torch.set_num_threads(threads)
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------- v1
+@dataclass(frozen=True)
+class V1Result:
+    """``AmigoBot-v1`` against ``AmigoBot-v0``: single step [us] and vector env-steps/s per ``N``."""
+
+    v1_us: float
+    v0_us: float
+    vector: dict[int, tuple[float, float]]
+
+    @property
+    def ratio(self) -> float:
+        """v1's time per single step over v0's (target <= 2)."""
+        return self.v1_us / self.v0_us
+
+
+def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> V1Result | None:
+    """v1 against v0, or ``None`` when ``AmigoBot-v1`` is not registered."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    if "AmigoBot-v1" not in gym.registry:
+        return None
+    single = {v: _single_stepper(gym.make(f"AmigoBot-{v}"), seed) for v in ("v1", "v0")}
+    ts = measure_many(single, repeats, min_time)
+    t1, t0 = ts["v1"], ts["v0"]
+    vector: dict[int, tuple[float, float]] = {}
+    if gym.registry["AmigoBot-v1"].vector_entry_point is not None:
+        for n in sizes:
+            venvs = {
+                v: gym.make_vec(f"AmigoBot-{v}", num_envs=n, vectorization_mode="vector_entry_point")
+                for v in ("v1", "v0")
+            }
+            tv = measure_many({v: _vector_stepper(e, seed) for v, e in venvs.items()}, repeats, min_time)
+            for e in venvs.values():
+                e.close()
+            vector[n] = (n / tv["v1"], n / tv["v0"])
+    return V1Result(t1 * 1e6, t0 * 1e6, vector)
+
+
+# ---------------------------------------------------------------------------------------------- report
+@dataclass
+class Report:
+    """Everything one run measured (``None`` or empty where skipped), with notes on what was skipped."""
+
+    single: SingleResult | None = None
+    vector: list[VectorRow] = field(default_factory=list)
+    memory: MemoryResult | None = None
+    ppo: list[PPORow] = field(default_factory=list)
+    v1: V1Result | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON document of the figures, with the ratios."""
+        vector = [
+            {
+                **asdict(r),
+                "ratio_cartpole": r.ratio_cartpole,
+                "ratio_sync": r.ratio_sync,
+                "call_us": r.call_us,
+                "cartpole_call_us": r.cartpole_call_us,
+            }
+            for r in self.vector
+        ]
+        return {
+            "single": None if self.single is None else {**asdict(self.single), "ratio": self.single.ratio},
+            "vector": vector,
+            "fixed_cost_n1": _fixed_cost(self.vector),
+            "memory": None if self.memory is None else asdict(self.memory),
+            "ppo": [{**asdict(r), "ratio": r.ratio} for r in self.ppo],
+            "v1": None
+            if self.v1 is None
+            else {
+                "v1_us": self.v1.v1_us,
+                "v0_us": self.v1.v0_us,
+                "ratio": self.v1.ratio,
+                "vector": {str(n): {"v1": a, "v0": b} for n, (a, b) in self.v1.vector.items()},
+            },
+            "notes": self.notes,
+        }
+
+
+def _fixed_cost(rows: Sequence[VectorRow]) -> dict[str, float] | None:
+    one = [r for r in rows if r.n == 1]
+    if not one:
+        return None
+    r = one[0]
+    out = {"amigobot_us": r.call_us, "cartpole_us": r.cartpole_call_us, "ratio": r.call_us / r.cartpole_call_us}
+    for k, v in r.kernels.items():
+        out[f"amigobot_{k}_us"] = 1e6 / v
+    return out
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
     return "-" if x is None else format(x, spec)
 
 
-def format_report(single: SingleResult | None, rows: Sequence[VectorRow]) -> str:
-    """Markdown tables of the single-env and vector-env figures with their ratios."""
-    out = []
+def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report: Report | None = None) -> str:
+    """Markdown tables of every figure with its ratio (``report`` adds memory, PPO, v1 and notes)."""
+    out: list[str] = []
     if single is not None:
         out += [
             "| single env (gym.make) | time per step [us] |",
             "|---|---:|",
             f"| AmigoBot-v0 | {single.amigobot_us:.1f} |",
             f"| Pendulum-v1 | {single.pendulum_us:.1f} |",
-            f"| ratio AmigoBot / Pendulum (goal <= 0.3) | {single.ratio:.2f} |",
+            f"| ratio AmigoBot / Pendulum (target <= 0.5, goal <= 0.3) | {single.ratio:.2f} |",
             "",
         ]
     if rows:
-        out += [
-            "| N | native AmigoBot [steps/s] | CartPoleVectorEnv [steps/s] | Sync AmigoBot [steps/s] "
-            "| native / CartPole | native / Sync |",
-            "|---:|---:|---:|---:|---:|---:|",
-        ]
+        names = list(rows[0].kernels)
+        head = "| N | native AmigoBot [steps/s] | " + "".join(f"native, {k} [steps/s] | " for k in names)
+        head += "CartPoleVectorEnv [steps/s] | Sync AmigoBot [steps/s] | native / CartPole | native / Sync |"
+        out += [head, "|---:|" + "---:|" * (5 + len(names))]
         for r in rows:
+            ks = "".join(f"{r.kernels[k]:.3g} | " for k in names)
             out.append(
-                f"| {r.n} | {r.native:.3g} | {r.cartpole:.3g} | {_fmt(r.sync)} | "
+                f"| {r.n} | {r.native:.3g} | {ks}{r.cartpole:.3g} | {_fmt(r.sync)} | "
                 f"{r.ratio_cartpole:.2f} | {_fmt(r.ratio_sync, '.1f')} |"
             )
-    return "\n".join(out)
+        out.append(f"(Sync measured up to N = {max([r.n for r in rows if r.sync is not None], default=0)})")
+        fc = _fixed_cost(rows)
+        if fc is not None:
+            out += [
+                "",
+                "| fixed cost per step call at N = 1 | [us] |",
+                "|---|---:|",
+                f"| AmigoBotVectorEnv | {fc['amigobot_us']:.1f} |",
+            ]
+            out += [f"| AmigoBotVectorEnv, {k} | {1e6 / v:.1f} |" for k, v in rows[0].kernels.items() if rows[0].n == 1]
+            out += [
+                f"| CartPoleVectorEnv | {fc['cartpole_us']:.1f} |",
+                f"| ratio AmigoBot / CartPole (target <= 1) | {fc['ratio']:.2f} |",
+            ]
+        out.append("")
+    if report is not None and report.memory is not None:
+        m = report.memory
+        out += [
+            f"| memory per sub-env (N = {m.n} vs 1, tracemalloc) | retained [bytes] | peak of one step [bytes] |",
+            "|---|---:|---:|",
+            f"| AmigoBotVectorEnv | {m.amigobot_retained:.0f} | {m.amigobot_step_peak:.0f} |",
+            f"| CartPoleVectorEnv | {m.cartpole_retained:.0f} | {m.cartpole_step_peak:.0f} |",
+            "",
+        ]
+    if report is not None and report.ppo:
+        out += [
+            "| SB3 PPO learn | AmigoBot-v0 [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) |",
+            "|---|---:|---:|---:|",
+        ]
+        for pr in report.ppo:
+            name = f"{pr.n_envs} env(s), AmigoBot via {pr.amigobot_vec}"
+            out.append(f"| {name} | {pr.amigobot:.0f} | {pr.pendulum:.0f} | {pr.ratio:.2f} |")
+        out.append("")
+    if report is not None and report.v1 is not None:
+        v = report.v1
+        out += [
+            "| AmigoBot-v1 vs v0 | v1 | v0 | v1 / v0 |",
+            "|---|---:|---:|---:|",
+            f"| single step [us] (target <= 2) | {v.v1_us:.1f} | {v.v0_us:.1f} | {v.ratio:.2f} |",
+        ]
+        out += [f"| vector, N = {n} [steps/s] | {a:.3g} | {b:.3g} | {a / b:.2f} |" for n, (a, b) in v.vector.items()]
+        out.append("")
+    if report is not None:
+        out += [f"note: {n}" for n in report.notes]
+    return "\n".join(out).rstrip()
 
 
+def plot_vector(rows: Sequence[VectorRow], path: str) -> None:
+    """Env-steps/s against N (log-log): the native env (per step implementation), CartPole, Sync."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    ns = [r.n for r in rows]
+    kernels = list(rows[0].kernels) if rows else []
+    if not kernels:  # with a choice of kernels, the default is one of them
+        ax.plot(ns, [r.native for r in rows], "o-", label="AmigoBotVectorEnv (native)")
+    for k, style in zip(kernels, ("^--", "o-", "v-."), strict=False):
+        ax.plot(ns, [r.kernels[k] for r in rows], style, label=f"AmigoBotVectorEnv, {k} step")
+    ax.plot(ns, [r.cartpole for r in rows], "s-", label="CartPoleVectorEnv (Gymnasium)")
+    sync = [(r.n, r.sync) for r in rows if r.sync is not None]
+    if sync:
+        ax.plot(*zip(*sync, strict=True), "x:", label="SyncVectorEnv(AmigoBot-v0)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("number of sub-envs N")
+    ax.set_ylabel("env-steps per second")
+    ax.set_title("Vector env throughput (one run, same machine)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=120, format="png"), path, parents=True)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------------------- CLI
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-env``."""
-    p = OneLineParser(prog=PROG, description="Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and Sync.")
+    p = OneLineParser(
+        prog=PROG, description="Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and SyncVectorEnv."
+    )
     p.add_argument(
-        "--sizes", type=int, nargs="+", default=None, help=f"vector sizes N [envs] (default {DEFAULT_SIZES})"
+        "--sizes", type=int, nargs="+", default=None, help=f"vector sizes [envs] (default: {DEFAULT_SIZES})"
     )
     p.add_argument("--repeats", type=int, default=5, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.2, help="least duration of one repeat [s]")
-    p.add_argument("--sync-max", type=int, default=4096, help="largest N for the SyncVectorEnv peer [envs]")
+    p.add_argument("--sync-max", type=int, default=SYNC_MAX, help="largest N for the SyncVectorEnv peer [envs]")
+    p.add_argument("--memory-n", type=int, default=65536, help="N of the memory measurement (against N = 1) [envs]")
+    p.add_argument("--ppo-steps", type=int, default=8192, help="PPO budget per run [env-steps]")
+    p.add_argument("--ppo-envs", type=int, default=8, help="envs of the vectorised PPO comparison [envs]")
+    p.add_argument("--ppo-repeats", type=int, default=3, help="alternating AmigoBot/Pendulum PPO runs (median) [runs]")
     p.add_argument("--skip-single", action="store_true", help="skip the single-env comparison")
     p.add_argument("--skip-vector", action="store_true", help="skip the vector-env comparison")
-    p.add_argument("--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s")
+    p.add_argument("--skip-memory", action="store_true", help="skip the memory measurement")
+    p.add_argument("--skip-ppo", action="store_true", help="skip the SB3 PPO comparison")
+    p.add_argument("--v1", action="store_true", help="also AmigoBot-v1 against v0 (when registered)")
     p.add_argument(
-        "--json", default=None, metavar="FILE", help="also write the figures as JSON, atomically [file] (default: none)"
+        "--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s, tiny memory/PPO runs"
     )
+    p.add_argument(
+        "--json", default=None, metavar="FILE", help="JSON output [file] (default: none)"
+    )
+    p.add_argument("--plot", default=None, metavar="PNG", help="plot throughput against N [file] (default: none)")
     return p
 
 
@@ -216,33 +618,60 @@ def main(argv: Sequence[str] | None = None) -> int:
     def go() -> int:
         if args.quick:
             sizes = list(args.sizes or QUICK_SIZES)
-            repeats, min_time, sync_max = 1, 0.02, min(args.sync_max, 1024)
+            repeats, min_time, sync_max = 1, 0.02, min(args.sync_max, SYNC_MAX)
+            memory_n, ppo_steps = min(args.memory_n, 256), min(args.ppo_steps, 128)
         else:
             sizes = list(args.sizes or DEFAULT_SIZES)
             repeats, min_time, sync_max = args.repeats, args.min_time, args.sync_max
+            memory_n, ppo_steps = args.memory_n, args.ppo_steps
         for i, n in enumerate(sizes):
             check_range(PROG, f"sizes[{i}]", n, 1, 1_000_000)
         check_range(PROG, "repeats", repeats, 1, 1000)
         check_range(PROG, "min_time", min_time, 0.0, 60.0, low_open=True)
         check_range(PROG, "sync_max", sync_max, 0, 1_000_000)
+        check_range(PROG, "memory_n", memory_n, 2, 10_000_000)
+        check_range(PROG, "ppo_steps", ppo_steps, 1, 10_000_000)
+        check_range(PROG, "ppo_envs", args.ppo_envs, 1, 4096)
+        check_range(PROG, "ppo_repeats", args.ppo_repeats, 1, 100)
         print(
             f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}, "
             f"{os.cpu_count()} CPUs visible; median of {repeats} repeats of >= {min_time:g} s",
             flush=True,
         )
-        single = None if args.skip_single else bench_single(repeats, min_time)
-        rows = [] if args.skip_vector else bench_vector(sizes, repeats, min_time, sync_max, log=_log)
-        print(format_report(single, rows))
+        rep = Report()
+        if not args.skip_single:
+            _log("single env: AmigoBot-v0 vs Pendulum-v1")
+            rep.single = bench_single(repeats, min_time)
+        if not args.skip_vector:
+            _log(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
+            rep.vector = bench_vector(sizes, repeats, min_time, sync_max, log=_log)
+        if not args.skip_memory:
+            _log(f"memory per sub-env (N = {memory_n} vs 1)")
+            rep.memory = bench_memory(memory_n)
+        if not args.skip_ppo:
+            try:
+                import stable_baselines3  # noqa: F401
+                import torch  # noqa: F401
+            except ImportError:
+                rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
+            else:
+                _log(f"SB3 PPO learn, {ppo_steps} steps per run")
+                rollout, rounds = (64, 1) if args.quick else (2048, args.ppo_repeats)
+                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=rollout, repeats=rounds)
+        if args.v1:
+            _log("AmigoBot-v1 vs v0")
+            rep.v1 = bench_v1(sizes, repeats, min_time)
+            if rep.v1 is None:
+                rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
+        print(format_report(rep.single, rep.vector, rep))
+        if args.plot is not None and rep.vector:
+            plot_vector(rep.vector, args.plot)
+            _log(f"wrote {args.plot}")
         if args.json is not None:
-            doc = {"single": None if single is None else asdict(single), "vector": [asdict(r) for r in rows]}
-            atomic_write_json(args.json, doc)
+            atomic_write_json(args.json, rep.to_json())
         return 0
 
     return run_guarded(go, PROG)
-
-
-def _log(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import task
+from amigo_gym import fast, task
 from amigo_gym.envs.amigobot import (
     TRAIL_LENGTH,
     ObsArray,
@@ -63,6 +63,11 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
             (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
+        kernel: the step's implementation (:mod:`amigo_gym.fast`): ``"numpy"`` (default: the
+            reference column functions of :mod:`amigo_gym.task`), ``"numba"`` (the compiled kernel,
+            the same results bit for bit; needs the extra ``amigo_gym[fast]``), ``"auto"`` (numba when
+            installed, unless ``AMIGO_GYM_KERNEL=numpy``), or ``"numba-parallel"`` (the kernel's loops on
+            numba's threads).
         params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
 
     Spaces: ``single_action_space = Box(-1, 1, (2,), float32)``, ``action_space`` its batch
@@ -93,6 +98,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        kernel: str = "numpy",
         *,
         params: EnvParams | Mapping[str, Any] | None = None,
         robot: RobotParams | Mapping[str, Any] | None = None,
@@ -127,10 +133,19 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._initial_rates = task.initial_wheel_rates(p)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
-        # the state as (N,) columns, stepped by the same column functions as the single env
+        # the state as (N,) columns, stepped by the same column functions as the single env; with the
+        # compiled kernel, the columns are views of one (N, 8) array that the kernel updates in place
         rate1, rate2 = self._initial_rates.tolist()
-        z = [np.zeros(n) for _ in range(6)]
-        self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
+        self._ws = _kernel_workspace(owner, kernel, self._k, self.path, n)
+        self._parallel = kernel == "numba-parallel"
+        self._rows = np.zeros((n, 8))
+        self._rows[:, 6] = rate1
+        self._rows[:, 7] = rate2
+        if self._ws is not None:
+            self._state = task.State(*(self._rows[:, j] for j in range(8)))
+        else:
+            z = [np.zeros(n) for _ in range(6)]
+            self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
@@ -273,6 +288,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
             )
+        if self._ws is not None:
+            return self._step_kernel(self._ws, a, mode)
         k = self._k
         motion = task.move_columns(k, self._state, a[:, 0], a[:, 1])
         state = motion.state
@@ -306,7 +323,58 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
         )
         infos = self._info(state, out, self._steps)
+        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
+    def _step_kernel(
+        self, ws: fast.Workspace, a: Array, mode: AutoresetMode
+    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
+        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results."""
+        n = self.num_envs
+        self._steps += 1
+        idx = None
+        restart = np.zeros(n, dtype=np.bool_)
+        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+            # as in the numpy path: the start states replace these rows, evaluated without moving
+            idx = np.flatnonzero(self._autoreset)
+            _set_rows(self._state, self._start_states(idx), idx)
+            restart[idx] = True
+            self._steps[idx] = 0
+            if self.render_mode is not None:
+                self._trail_start[idx] = self._trail_count
+        obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
+        reward = np.empty(n)
+        terminated: BoolArray = np.empty(n, dtype=np.bool_)
+        record = np.empty((n, 16))
+        a = np.ascontiguousarray(a)
+        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
+        truncated = (
+            self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
+        )
+        # the infos are views of the record, a new array at every step (the single env's keys)
+        infos = {
+            "pose": record[:, 0:3],
+            "h_position": record[:, 3:5],
+            "cross_track_error": record[:, 5],
+            "wheel_rates": record[:, 6:8],
+            "wheel_angles": record[:, 8:10],
+            "castor_angle": record[:, 10],
+            "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
+            "time": self._steps * self._k.dt,
+        }
+        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
+
+    def _finish_step(
+        self,
+        obs: ObsArray,
+        reward: Array,
+        terminated: BoolArray,
+        truncated: BoolArray,
+        infos: dict[str, Any],
+        idx: NDArray[np.intp] | None,
+    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
+        """Autoreset bookkeeping of a step (both implementations)."""
+        n = self.num_envs
+        mode = self.autoreset_mode
         if idx is not None:
             reward[idx] = 0.0
             terminated[idx] = False
@@ -469,6 +537,17 @@ def _is_scalar(x: Any) -> bool:
     except TypeError:
         return True
     return False
+
+
+def _kernel_workspace(
+    owner: str, kernel: str, k: task.TaskConstants, path: CirclePath | ManoeuvrePath, n: int
+) -> fast.Workspace | None:
+    """The kernel's workspace for ``kernel="numba"`` (or ``"auto"`` with numba), ``None`` for numpy."""
+    if kernel not in ("numpy", "numba", "numba-parallel", "auto"):
+        raise ValueError(f"{owner}.kernel must be 'numpy', 'numba', 'numba-parallel' or 'auto', got {kernel!r}")
+    if not fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
+        return None
+    return fast.workspace(k, path, n)
 
 
 def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:

@@ -1,0 +1,368 @@
+r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
+
+The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
+:func:`amigo_gym.task.step_columns` computes (clip and scale the action, exact arc step of pose and
+wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
+termination) with the same formulas in the same order of operations, writing into preallocated
+arrays. :mod:`amigo_gym.task` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
+
+Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
+evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
+``np.exp(exps, out=exps)``, :func:`amigo_gym.fast.step_rows`): they are several times faster than the
+C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
+reference calls, so the results are **bit-identical** to the reference's. Everything else (about a
+hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
+would run as as many passes over temporary arrays) is fused into the loops:
+
+1. :func:`move_arguments`: the arguments of the two tangents of the arc step, ``0.5 h`` and
+   ``0.5 (beta + h)``, into ``tans (N, 2)``;
+2. :func:`evaluate`: the arc step from the tangents (state updated in place), H, its projection,
+   the observation, the heading term, the termination, and the arguments of the three exponentials
+   into ``exps (N, 3)``;
+3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
+
+Only ``math.atan2`` and ``math.hypot`` (the manoeuvre path's arc length and its distance to the
+segment's end) are the C library's; they agree with numpy's to an ulp or better, and the arc length
+only decides whether a preview point lies before the end of the straight part.
+
+Layouts (all C-contiguous, one row per robot):
+
+* ``consts`` float64: :data:`CONSTANT_FIELDS` (:func:`amigo_gym.fast.kernel_constants`);
+* ``state (N, 8)`` float64, updated in place: the columns of :class:`amigo_gym.task.State`,
+  ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``;
+* ``actions (N, 2)`` float64: the validated, normalised action (clipped to [-1, 1] here);
+* ``restart (N,)`` bool: rows whose ``state`` has just been set to a start state; they do not move
+  and are evaluated as :func:`amigo_gym.task.reset_columns` evaluates them (no smoothness loss); their
+  ``tans`` row must hold ``(np.cos(beta), np.sin(beta))`` when :func:`evaluate` runs;
+* outputs ``obs (N, obs_dim)`` float32 or float64, ``reward (N,)`` float64, ``terminated (N,)`` bool
+  and ``record (N, 16)`` float64 with the columns :data:`RECORD_FIELDS` (the new state and what the
+  infos report about it).
+
+This module imports numba at import time; :mod:`amigo_gym.fast` imports it only when the fast path
+is first used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk
+(``cache=True``, in ``__pycache__`` or ``NUMBA_CACHE_DIR``), so only the first process compiles. The
+``*_parallel`` variants run their loop on numba's threads (``prange``; ``numba.set_num_threads`` or
+``NUMBA_NUM_THREADS`` set their number); each row is computed the same way, so the results do not
+depend on the number of threads.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+from collections.abc import Callable
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "RECORD_FIELDS",
+    "STATE_FIELDS",
+    "CONSTANT_FIELDS",
+    "move_arguments",
+    "move_arguments_parallel",
+    "evaluate",
+    "evaluate_parallel",
+    "finish",
+    "finish_parallel",
+]
+
+TWO_PI = 2.0 * math.pi
+
+#: columns of the ``state`` array (the order of :class:`amigo_gym.task.State`)
+STATE_FIELDS: tuple[str, ...] = ("x", "y", "beta", "alpha1", "alpha2", "alpha3", "rate1", "rate2")
+
+#: columns of the ``record`` array
+RECORD_FIELDS: tuple[str, ...] = (
+    "x",
+    "y",
+    "beta",
+    "h_x",
+    "h_y",
+    "cross_track_error",
+    "rate1",
+    "rate2",
+    "alpha1",
+    "alpha2",
+    "alpha3",
+    "track",
+    "speed",
+    "heading",
+    "smooth",
+    "reward",
+)
+
+#: entries of the ``consts`` vector (built by :func:`amigo_gym.fast.kernel_constants`)
+CONSTANT_FIELDS: tuple[str, ...] = (
+    "dt",
+    "w_max",
+    "r1",
+    "r2",
+    "two_l1",
+    "l3",
+    "l5",
+    "r3",
+    "speed",
+    "max_speed",
+    "error_scale",
+    "e_max",
+    "termination_distance",
+    "neg_sigma_track",
+    "neg_sigma_speed",
+    "neg_smooth_scale_sq",
+    "smooth_weight",
+    "reference_obs",
+    "manoeuvre",
+    "direction",
+    "radius",
+    "cx",
+    "cy",
+    "r0x",
+    "r0y",
+    "straight_length",
+    "curvature",
+)
+
+_C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
+DT, W_MAX, R1, R2, TWO_L1, L3, L5, R3 = (_C[n] for n in CONSTANT_FIELDS[:8])
+SPEED, MAX_SPEED, ERROR_SCALE, E_MAX, TERM = (_C[n] for n in CONSTANT_FIELDS[8:13])
+NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTANT_FIELDS[13:18])
+MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:])
+
+
+F64 = NDArray[np.float64]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _clip(x: float, low: float, high: float) -> float:
+    # as task._clip / np.clip for non-NaN x (x itself when inside, so -0.0 stays -0.0)
+    if low <= x <= high:
+        return x
+    return low if x < low else high
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _cos_sin(t: float) -> tuple[float, float]:
+    # kinematics.cos_sin from t = tan(x / 2)
+    t2 = t * t
+    r = 1.0 / (1.0 + t2)
+    return (1.0 - t2) * r, (t + t) * r
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _sign(y: float) -> float:
+    # np.sign of a float: 1, -1, 0 (for +-0.0; NaN stays NaN)
+    if y > 0.0:
+        return 1.0
+    if y < 0.0:
+        return -1.0
+    return 0.0 if y == 0.0 else y
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, float]:
+    # task.move_columns up to the arc step: (w1, w2, v, bdot, db)
+    w1 = _clip(a1, -1.0, 1.0) * c[W_MAX]
+    w2 = _clip(a2, -1.0, 1.0) * c[W_MAX]
+    u1 = c[R1] * w1
+    u2 = c[R2] * w2
+    bdot = (u1 - u2) / c[TWO_L1]
+    return w1, w2, 0.5 * (u1 + u2), bdot, bdot * c[DT]
+
+
+def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64) -> None:
+    """Pass 1: ``tans[i] = (0.5 h, 0.5 (beta + h))`` of the arc step (zeros where ``restart``)."""
+    for i in numba.prange(state.shape[0]):
+        if restart[i]:
+            tans[i, 0] = 0.0
+            tans[i, 1] = 0.0
+            continue
+        db = _motion(c, actions[i, 0], actions[i, 1])[4]
+        h = 0.5 * db
+        tans[i, 0] = 0.5 * h
+        tans[i, 1] = 0.5 * (state[i, 2] + h)
+
+
+def _evaluate(
+    c: F64,
+    preview: F64,
+    state: F64,
+    actions: F64,
+    restart: NDArray[np.bool_],
+    tans: F64,
+    obs: NDArray[np.floating],
+    terminated: NDArray[np.bool_],
+    record: F64,
+    exps: F64,
+) -> None:
+    """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
+    for i in numba.prange(state.shape[0]):
+        x = state[i, 0]
+        y = state[i, 1]
+        beta = state[i, 2]
+        al1 = state[i, 3]
+        al2 = state[i, 4]
+        al3 = state[i, 5]
+        prev1 = state[i, 6]
+        prev2 = state[i, 7]
+        if restart[i]:
+            # task.start_motion: the start state as it is, np.cos and np.sin of its heading, its speed
+            w1 = prev1
+            w2 = prev2
+            v = 0.5 * (c[R1] * w1 + c[R2] * w2)
+            cos_beta = tans[i, 0]
+            sin_beta = tans[i, 1]
+        else:
+            # task.move_columns: kinematics.arc_step from the two tangents, the wheel angles
+            dt = c[DT]
+            w1, w2, v, bdot, db = _motion(c, actions[i, 0], actions[i, 1])
+            h = 0.5 * db
+            cos_h, sin_h = _cos_sin(tans[i, 0])
+            cos_mid, sin_mid = _cos_sin(tans[i, 1])
+            sinc = 1.0 if h == 0.0 else sin_h / h  # kinematics._sinc: (sin_h + 1) / (h + 1) = 1 at h = 0
+            chord = v * dt * sinc
+            x = x + chord * cos_mid
+            y = y + chord * sin_mid
+            beta = beta + db
+            cos_beta = cos_mid * cos_h - sin_mid * sin_h
+            sin_beta = sin_mid * cos_h + cos_mid * sin_h
+            lb = c[L5] * bdot
+            castor = math.copysign(math.sqrt(lb * lb + v * v), v) / c[R3]
+            al1 = al1 + w1 * dt
+            al2 = al2 + w2 * dt
+            al3 = al3 + castor * dt
+            state[i, 0] = x
+            state[i, 1] = y
+            state[i, 2] = beta
+            state[i, 3] = al1
+            state[i, 4] = al2
+            state[i, 5] = al3
+            state[i, 6] = w1
+            state[i, 7] = w2
+
+        # task.outcome_columns: H, its projection on the path (paths.*.project_xy, minimal)
+        l3 = c[L3]
+        hx = x + l3 * cos_beta
+        hy = y + l3 * sin_beta
+        d = c[DIRECTION]
+        r = c[RADIUS]
+        r0x = c[R0X]
+        r0y = c[R0Y]
+        ux = hx - c[CX]
+        uy = hy - c[CY]
+        rho = math.sqrt(ux * ux + uy * uy)
+        norm = rho
+        if rho == 0.0:  # H at the centre: the start point
+            ux = r0x
+            uy = r0y
+            norm = 1.0
+        nx = ux / norm
+        ny = uy / norm
+        if d > 0.0:
+            e = r - rho
+            cos_theta = -ny
+            sin_theta = nx
+        else:
+            e = rho - r
+            cos_theta = ny
+            sin_theta = -nx
+        curvature = c[CURV]
+        s = 0.0
+        manoeuvre = c[MANOEUVRE] != 0.0
+        if manoeuvre:
+            # paths.ManoeuvrePath.project_xy: the closer of the straight half-line and the circle
+            big_l = c[STRAIGHT]
+            cross = r0x * uy - r0y * ux
+            a = math.atan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
+            s_circ = r * (a + (TWO_PI if a < 0.0 else 0.0))
+            s_line = min(hx, big_l)
+            d_line = math.hypot(hx - s_line, hy)
+            if d_line <= abs(e):
+                e = hy if hx <= big_l else _sign(hy) * d_line
+                s = s_line
+                curvature = 0.0
+                cos_theta = 1.0
+                sin_theta = 0.0
+            else:
+                s = big_l + s_circ
+        cos_psi = cos_beta * cos_theta + sin_beta * sin_theta
+        sin_psi = sin_beta * cos_theta - cos_beta * sin_theta
+        abs_e = abs(e)
+        dv = v - c[SPEED]
+        w_max = c[W_MAX]
+
+        # task._observe_columns
+        kl3 = curvature * l3
+        obs[i, 0] = _clip(e / c[ERROR_SCALE], -c[E_MAX], c[E_MAX])
+        obs[i, 1] = sin_psi
+        obs[i, 2] = cos_psi
+        obs[i, 3] = kl3
+        for j in range(preview.shape[0]):
+            kj = (0.0 if s + preview[j] <= c[STRAIGHT] else c[CURV]) if manoeuvre else c[CURV]
+            obs[i, 4 + j] = kj * l3
+        m = 4 + preview.shape[0]
+        obs[i, m] = w1 / w_max
+        obs[i, m + 1] = w2 / w_max
+        obs[i, m + 2] = dv / c[MAX_SPEED]
+        obs[i, m + 3] = c[REF_OBS]
+
+        # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
+        sin_ss = -_clip(kl3, -1.0, 1.0)
+        cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
+        dw1 = w1 - prev1
+        dw2 = w2 - prev2
+        exps[i, 0] = abs_e / c[NEG_SIG_T]
+        exps[i, 1] = abs(dv) / c[NEG_SIG_V]
+        exps[i, 2] = (dw1 * dw1 + dw2 * dw2) / c[NEG_SMOOTH_SQ]
+        terminated[i] = abs_e > c[TERM]
+
+        record[i, 0] = x
+        record[i, 1] = y
+        record[i, 2] = beta
+        record[i, 3] = hx
+        record[i, 4] = hy
+        record[i, 5] = e
+        record[i, 6] = w1
+        record[i, 7] = w2
+        record[i, 8] = al1
+        record[i, 9] = al2
+        record[i, 10] = al3
+        record[i, 13] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+
+
+def _finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
+    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward."""
+    for i in numba.prange(reward.shape[0]):
+        # task._reward_columns and task._product, from exps = exp(arguments)
+        track = exps[i, 0]
+        speed = exps[i, 1]
+        smooth = 1.0 - c[SMOOTH_W] * (1.0 - exps[i, 2])
+        rew = ((track * speed) * record[i, 13]) * smooth
+        record[i, 11] = track
+        record[i, 12] = speed
+        record[i, 14] = smooth
+        record[i, 15] = rew
+        reward[i] = rew
+
+
+def _twin(fn: Callable[..., None], name: str) -> Callable[..., None]:
+    """A copy of ``fn`` named ``name``: numba caches a compiled function under its name, so the serial
+    and the parallel compilation of one loop need two names (else they would share a cache entry)."""
+    twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
+    twin.__qualname__ = name
+    twin.__doc__ = fn.__doc__
+    return twin
+
+
+# Each loop is written once, with ``prange``: compiled without ``parallel`` it is a plain serial loop.
+# The row's code is written in the loop itself (not in a function called per row), which lets LLVM keep
+# every value in registers; a per-row call with a dozen array arguments cost twice the time.
+_serial = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
+move_arguments = _serial(_twin(_move_arguments, "move_arguments"))
+move_arguments_parallel = _parallel(_twin(_move_arguments, "move_arguments_parallel"))
+evaluate = _serial(_twin(_evaluate, "evaluate"))
+evaluate_parallel = _parallel(_twin(_evaluate, "evaluate_parallel"))
+finish = _serial(_twin(_finish, "finish"))
+finish_parallel = _parallel(_twin(_finish, "finish_parallel"))

@@ -1,0 +1,224 @@
+"""Where the time of a step goes: cProfile of the single env and of the native vector env.
+
+``python -m amigo_gym.bench.profile [--steps K] [--top T]`` profiles, with random actions and
+autoreset, ``K`` steps of ``gym.make("AmigoBot-v0")`` (wrappers included) and of
+``gym.make_vec("AmigoBot-v0", num_envs=N)`` at N = 1 and N = 4096 (``--sizes``), and prints for each
+the ``T`` functions with the largest own time (``tottime``), as a share of the total, in Markdown.
+cProfile adds a fixed cost to every Python call, so the shares overstate small Python functions
+against numpy's C loops; read them as "where", and the benchmarks (``amigo-gym bench-env``) as "how
+much".
+"""
+
+from __future__ import annotations
+
+import cProfile
+import pstats
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.cli import OneLineParser, run_guarded
+
+__all__ = ["gap", "profile_steps", "single_parts", "main"]
+
+PROG = "python -m amigo_gym.bench.profile"
+
+
+def _label(func: tuple[str, int, str]) -> str:
+    file, line, name = func
+    if file == "~":  # a built-in
+        return name
+    parts = file.replace("\\", "/").split("/")
+    for root in ("amigo_gym", "gymnasium", "numpy"):
+        if root in parts:
+            return f"{'/'.join(parts[parts.index(root) :])}:{line}({name})"
+    return f"{parts[-1]}:{line}({name})"
+
+
+def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[float, list[tuple[str, float, int]]]:
+    """``(total seconds, [(function, share of the total, calls), ...])`` of ``steps`` calls of ``step``."""
+    for _ in range(min(steps, 50)):  # warm-up
+        step()
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(steps):
+        step()
+    prof.disable()
+    st = pstats.Stats(prof)
+    raw: dict[Any, Any] = st.stats  # type: ignore[attr-defined]
+    total = sum(v[2] for v in raw.values())
+    rows = sorted(((_label(f), v[2] / total, v[1]) for f, v in raw.items()), key=lambda r: -r[1])
+    return total, rows[:top]
+
+
+def _single(seed: int) -> Callable[[], object]:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    env = gym.make("AmigoBot-v0")
+    env.reset(seed=seed)
+    pool = np.random.default_rng(seed).uniform(-1, 1, (16, 2)).astype(np.float32)
+    k = [0]
+
+    def step() -> object:
+        k[0] = (k[0] + 1) % 16
+        _, _, term, trunc, _ = env.step(pool[k[0]])
+        if term or trunc:
+            env.reset()
+        return None
+
+    return step
+
+
+def _vector(n: int, seed: int, kernel: str | None) -> Callable[[], object]:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    kw: dict[str, Any] = {} if kernel is None else {"kernel": kernel}
+    envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
+    envs.reset(seed=seed)
+    pool = list(np.random.default_rng(seed).uniform(-1, 1, (16, n, 2)).astype(np.float32))
+    k = [0]
+
+    def step() -> object:
+        k[0] = (k[0] + 1) % 16
+        envs.step(pool[k[0]])
+        return None
+
+    return step
+
+
+def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
+    out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
+    out += ["| function | own time | calls per step |", "|---|---:|---:|"]
+    out += [f"| `{name}` | {100 * share:.1f} % | {calls / steps:.3g} |" for name, share, calls in rows]
+    return "\n".join(out)
+
+
+def _gap_row(n: int, repeats: int, min_time: float) -> str:
+    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+    from amigo_gym import fast
+    from amigo_gym.bench.core import measure_many
+    from amigo_gym.bench.env import _vector_stepper
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
+    bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
+    ws = quiet._ws
+    assert ws is not None
+    rows = np.zeros((n, 8))
+    rows[:, 6:] = 4.0
+    a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
+    no = np.zeros(n, dtype=np.bool_)
+    out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
+
+    def kernel() -> None:
+        fast.step_rows(ws, rows, a, no, *out)
+
+    def fresh() -> None:
+        obs = np.empty((n, ws.obs_dim), np.float32)
+        fast.step_rows(ws, rows, a, no, obs, np.empty(n), no.copy(), np.empty((n, 16)))
+
+    fns = {
+        "kernel": kernel,
+        "fresh": fresh,
+        "quiet": _vector_stepper(quiet, 0),
+        "bench": _vector_stepper(bench, 0),
+        "cart": _vector_stepper(CartPoleVectorEnv(num_envs=n), 0),
+    }
+    t = measure_many(fns, repeats, min_time)
+    c = t["cart"]
+    cells = " | ".join(f"{1e6 * t[k]:.0f} ({c / t[k]:.2f})" for k in ("kernel", "fresh", "quiet", "bench"))
+    return f"| {n} | {cells} | {1e6 * c:.0f} |"
+
+
+def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
+    """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+    from amigo_gym import task
+    from amigo_gym.bench.core import measure_many
+
+    env = gym.make("AmigoBot-v0")
+    env.reset(seed=0)
+    raw: Any = env.unwrapped
+    pend = gym.make("Pendulum-v1")
+    pend.reset(seed=0)
+    a = np.array([0.27, 0.27], np.float32)
+    ap = np.array([0.5], np.float32)
+    start = raw._state
+
+    def wrapped() -> None:
+        raw._state = start
+        env.step(a)
+
+    def unwrapped() -> None:
+        raw._state = start
+        raw.step(a)
+
+    fns = {
+        "AmigoBot `gym.make` step": wrapped,
+        "AmigoBot unwrapped `env.step`": unwrapped,
+        "`task.step_columns` on Python floats": lambda: task.step_columns(raw._k, raw.path, start, 0.27, 0.27, True),
+        "`task.validate_action`": lambda: task.validate_action(a).tolist(),
+        "Pendulum `gym.make` step": lambda: pend.step(ap),
+        "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),
+    }
+    t = measure_many(fns, repeats, min_time)
+    ref = t["Pendulum `gym.make` step"]
+    lines = ["| part | [us] | / Pendulum step |", "|---|---:|---:|"]
+    lines += [f"| {k} | {1e6 * v:.1f} | {v / ref:.2f} |" for k, v in t.items()]
+    return "\n".join(lines)
+
+
+def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
+    """Markdown table: the kernel alone, the kernel env without and with episode restarts, against CartPole.
+
+    Times per ``step`` call [us] in interleaved repeats, with CartPole's time over each in brackets.
+    "No episode ends": ``termination_distance=10``, ``max_episode_steps=None``. Needs numba.
+    """
+    head = (
+        "| N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
+        "| env.step, random actions (benchmark) | CartPoleVectorEnv |"
+    )
+    return "\n".join([head, "|---:|---:|---:|---:|---:|---:|", *(_gap_row(n, repeats, min_time) for n in sizes)])
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point."""
+    p = OneLineParser(prog=PROG, description="cProfile of AmigoBot-v0's single and vector env steps.")
+    p.add_argument("--steps", type=int, default=3000, help="profiled steps per case (vector: divided by N/64)")
+    p.add_argument("--top", type=int, default=12, help="functions listed per case")
+    p.add_argument("--sizes", type=int, nargs="+", default=[1, 4096], help="vector env sizes N")
+    p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
+    p.add_argument("--gap", action="store_true", help="instead: the kernel env against CartPole, with/without restarts")
+    p.add_argument("--single-parts", action="store_true", help="instead: a single step and its parts vs Pendulum")
+    args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
+
+    def go() -> int:
+        if args.gap:
+            print(gap(args.sizes))
+            return 0
+        if args.single_parts:
+            print(single_parts())
+            return 0
+        total, rows = profile_steps(_single(0), args.steps, args.top)
+        print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")
+        for n in args.sizes:
+            steps = max(20, args.steps // max(1, n // 64))
+            total, rows = profile_steps(_vector(n, 0, args.kernel), steps, args.top)
+            name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if args.kernel is None else f", kernel={args.kernel}")
+            print(_table(name, steps, total, rows), end="\n\n")
+        return 0
+
+    return run_guarded(go, PROG)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,243 @@
+"""The optional compiled fast path (numba) of ``AmigoBot-v0``'s step, and which path runs when.
+
+Two implementations of one step exist:
+
+* the **reference**, :func:`amigo_gym.task.step_columns` and :func:`amigo_gym.task.reset_columns`
+  (numpy, always available; the single environment runs it on Python floats, the vector environment
+  on ``(N,)`` arrays);
+* the **fast path**, :func:`step_rows`: the same formulas fused into three compiled loops over the
+  robots (:mod:`amigo_gym._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan``
+  and ``exp`` ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives
+  the reference's results (bit for bit on the circle; to 1e-12 everywhere).
+
+:func:`use_fast_path` decides: ``AMIGO_GYM_KERNEL=numpy`` forces the reference, ``=numba`` requires
+the fast path (an ``ImportError`` if numba is missing), unset or ``auto`` uses numba when it can be
+imported. numba is imported only on the first call of :func:`kernels` (never by ``import amigo_gym``);
+its compiled code is cached on disk, so a later process loads it instead of compiling.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+from types import ModuleType
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.paths import CirclePath, ManoeuvrePath
+from amigo_gym.task import TaskConstants, obs_dim
+
+__all__ = [
+    "KERNEL_ENV",
+    "kernel_mode",
+    "numba_available",
+    "use_fast_path",
+    "kernels",
+    "kernel_constants",
+    "Workspace",
+    "workspace",
+    "step_rows",
+]
+
+Array = NDArray[np.float64]
+
+#: environment variable that selects the step's implementation: ``auto`` (default), ``numba``, ``numpy``
+KERNEL_ENV = "AMIGO_GYM_KERNEL"
+
+KernelMode = Literal["auto", "numba", "numpy"]
+
+
+def kernel_mode() -> KernelMode:
+    """The mode set by :data:`KERNEL_ENV` (``ValueError`` on another value)."""
+    mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
+    if mode == "auto":
+        return "auto"
+    if mode == "numba":
+        return "numba"
+    if mode == "numpy":
+        return "numpy"
+    raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
+
+
+@lru_cache(maxsize=1)
+def numba_available() -> bool:
+    """Whether numba can be imported (checked without importing it)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+def use_fast_path(requested: bool | None = None) -> bool:
+    """Whether to run the compiled kernel.
+
+    Args:
+        requested: ``True`` requires it, ``False`` refuses it, ``None`` follows :data:`KERNEL_ENV`.
+
+    Raises:
+        ImportError: the fast path is required (argument or ``AMIGO_GYM_KERNEL=numba``) but numba is missing.
+    """
+    if requested is None:
+        mode = kernel_mode()
+        if mode == "numpy":
+            return False
+        requested = True if mode == "numba" else None
+    if requested is False:
+        return False
+    if numba_available():
+        return True
+    if requested:
+        raise ImportError("the fast path needs numba: pip install 'amigo_gym[fast]' (or set AMIGO_GYM_KERNEL=numpy)")
+    return False
+
+
+def kernels() -> ModuleType:
+    """The compiled kernels, :mod:`amigo_gym._kernels` (imports numba on the first call)."""
+    import amigo_gym._kernels as k
+
+    return k
+
+
+def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
+    """The ``consts`` vector of the kernels (:data:`amigo_gym._kernels.CONSTANT_FIELDS`).
+
+    Every entry is computed as the reference computes it (``2.0 * l1``, ``direction / radius``, the
+    negated scales the reference divides by), so the kernel's arithmetic is the reference's.
+    """
+    robot = k.robot
+    if isinstance(path, CirclePath):
+        circle, manoeuvre, straight = path, 0.0, 0.0
+    else:
+        circle, manoeuvre, straight = path.circle, 1.0, path.straight_length
+    cx, cy, r0x, r0y = circle._frame
+    values = {
+        "dt": k.dt,
+        "w_max": k.w_max,
+        "r1": robot.r1,
+        "r2": robot.r2,
+        "two_l1": 2.0 * robot.l1,
+        "l3": k.l3,
+        "l5": robot.l5,
+        "r3": robot.r3,
+        "speed": k.speed,
+        "max_speed": k.max_speed,
+        "error_scale": k.error_scale,
+        "e_max": k.e_max,
+        "termination_distance": k.termination_distance,
+        "neg_sigma_track": -k.sigma_track,
+        "neg_sigma_speed": -k.sigma_speed,
+        "neg_smooth_scale_sq": -k.smooth_scale_sq,
+        "smooth_weight": k.smooth_weight,
+        "reference_obs": k.reference_obs,
+        "manoeuvre": manoeuvre,
+        "direction": float(circle.direction),
+        "radius": circle.radius,
+        "cx": cx,
+        "cy": cy,
+        "r0x": r0x,
+        "r0y": r0y,
+        "straight_length": straight,
+        "curvature": circle.direction / circle.radius,
+    }
+    fields: tuple[str, ...] = kernels().CONSTANT_FIELDS
+    return np.array([values[name] for name in fields], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """What the kernels need besides the state: the constants and scratch arrays for ``n`` rows.
+
+    Attributes:
+        consts: :func:`kernel_constants`.
+        preview: the preview distances [m].
+        tans: ``(n, 2)`` scratch: arguments, then values, of the two tangents of the arc step.
+        exps: ``(n, 3)`` scratch: arguments, then values, of the three exponentials of the reward.
+        obs_dim: length of an observation.
+    """
+
+    consts: Array
+    preview: Array
+    tans: Array
+    exps: Array
+    obs_dim: int
+
+
+def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Workspace:
+    """A :class:`Workspace` for ``n`` robots with the settings ``k`` on ``path``."""
+    return Workspace(
+        kernel_constants(k, path),
+        np.array(k.preview, dtype=np.float64),
+        np.zeros((n, 2)),
+        np.zeros((n, 3)),
+        obs_dim(k.params),
+    )
+
+
+def step_rows(
+    ws: Workspace,
+    state: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    obs: NDArray[np.floating],
+    reward: Array,
+    terminated: NDArray[np.bool_],
+    record: Array,
+    parallel: bool = False,
+) -> None:
+    """One step of every row of ``state`` (in place), the outputs written into the arrays given.
+
+    The three passes of :mod:`amigo_gym._kernels` with numpy's ``tan`` and ``exp`` between them; rows
+    where ``restart`` is set (their ``state`` a start state) are evaluated without moving, as
+    :func:`amigo_gym.task.reset_columns` does. Layouts: :mod:`amigo_gym._kernels`. ``parallel`` runs
+    the loops on numba's threads (the same results).
+
+    Raises:
+        ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them).
+    """
+    _check(ws, state, actions, restart, obs, reward, terminated, record)
+    k = kernels()
+    c, tans, exps = ws.consts, ws.tans, ws.exps
+    move, evaluate, finish = (
+        (k.move_arguments_parallel, k.evaluate_parallel, k.finish_parallel)
+        if parallel
+        else (k.move_arguments, k.evaluate, k.finish)
+    )
+    move(c, state, actions, restart, tans)
+    np.tan(tans, out=tans)
+    if restart.any():
+        idx = np.flatnonzero(restart)
+        beta = state[idx, 2]
+        tans[idx, 0] = np.cos(beta)
+        tans[idx, 1] = np.sin(beta)
+    evaluate(c, ws.preview, state, actions, restart, tans, obs, terminated, record, exps)
+    np.exp(exps, out=exps)
+    finish(c, reward, record, exps)
+
+
+def _check(
+    ws: Workspace,
+    state: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    obs: NDArray[np.floating],
+    reward: Array,
+    terminated: NDArray[np.bool_],
+    record: Array,
+) -> None:
+    n = ws.tans.shape[0]
+    want: tuple[tuple[str, NDArray[np.generic], tuple[int, ...], tuple[type[np.generic], ...]], ...] = (
+        ("state", state, (n, 8), (np.float64,)),
+        ("actions", actions, (n, 2), (np.float64,)),
+        ("restart", restart, (n,), (np.bool_,)),
+        ("obs", obs, (n, ws.obs_dim), (np.float32, np.float64)),
+        ("reward", reward, (n,), (np.float64,)),
+        ("terminated", terminated, (n,), (np.bool_,)),
+        ("record", record, (n, 16), (np.float64,)),
+    )
+    for name, a, shape, dtypes in want:
+        if a.shape != shape or a.dtype.type not in dtypes or not a.flags.c_contiguous:
+            raise ValueError(
+                f"{name} must be a C-contiguous {'/'.join(d.__name__ for d in dtypes)} array of shape {shape}, "
+                f"got {a.dtype} {a.shape}"
+            )

@@ -1,0 +1,79 @@
+"""Smoke tests of the benchmarks (they run and report every section; no timing is asserted)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from amigo_gym.bench import core, env, profile
+
+
+def test_measure_many_times_every_function() -> None:
+    calls = {"a": 0, "b": 0}
+
+    def a() -> None:
+        calls["a"] += 1
+
+    def b() -> None:
+        calls["b"] += 1
+
+    t = core.measure_many({"a": a, "b": b}, repeats=3, min_time=0.001)
+    assert set(t) == {"a", "b"} and all(v > 0 for v in t.values())
+    assert calls["a"] >= 5 and calls["b"] >= 5
+
+
+def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("stable_baselines3")
+    pytest.importorskip("matplotlib")
+    out, png = tmp_path / "bench.json", tmp_path / "fig" / "vector.png"
+    argv = ["--quick", "--sizes", "1", "4", "--v1", "--ppo-envs", "2", "--json", str(out), "--plot", str(png)]
+    assert env.main(argv) == 0
+    cap = capsys.readouterr()
+    for text in ("Pendulum-v1", "native / CartPole", "fixed cost", "memory per sub-env", "SB3 PPO", "AmigoBot-v1"):
+        assert text in cap.out
+    assert "N = 4" in cap.err  # progress on stderr
+    doc = json.loads(out.read_text())
+    assert [r["n"] for r in doc["vector"]] == [1, 4]
+    assert all(r["sync"] > 0 and r["native"] > 0 and r["cartpole"] > 0 for r in doc["vector"])
+    assert set(doc["vector"][0]["kernels"]) <= {"numpy", "numba"}
+    assert doc["fixed_cost_n1"]["cartpole_us"] > 0
+    assert doc["memory"]["n"] >= 2 and doc["memory"]["amigobot_retained"] > 0
+    assert [r["n_envs"] for r in doc["ppo"]][:2] == [1, 2] and all(r["ratio"] > 0 for r in doc["ppo"])
+    assert (doc["v1"] is None) == any("AmigoBot-v1" in n for n in doc["notes"])
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bench_env_refuses_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
+    assert env.main(["--quick", "--memory-n", "1", "--skip-single", "--skip-vector", "--skip-ppo"]) == 2
+    assert "memory_n" in capsys.readouterr().err
+
+
+def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "core.json"
+    assert core.main(["--quick", "--skip-startup", "--threads", "1", "--json", str(out)]) == 0
+    assert "kernel/step_columns" in capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    assert [r["n"] for r in doc["rows"]] == [1, 64]
+    from amigo_gym.fast import numba_available
+
+    if numba_available():
+        assert all(r["kernel"] > 0 and r["kernel_par"] > 0 for r in doc["rows"])
+
+
+def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:
+    assert profile.main(["--steps", "30", "--top", "3", "--sizes", "2"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("| function | own time |") == 2 and "N = 2" in out
+
+
+def test_profile_gap_table(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("numba")
+    assert profile.main(["--gap", "--sizes", "8"]) == 0
+    assert "| 8 |" in capsys.readouterr().out
+
+
+def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
+    assert profile.main(["--single-parts"]) == 0
+    assert "Pendulum unwrapped step" in capsys.readouterr().out

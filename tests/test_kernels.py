@@ -1,0 +1,287 @@
+"""The compiled fast path (amigo_gym.fast.step_rows) against the reference column functions of amigo_gym.task.
+
+Random states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the
+circle and the manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the
+contract) and is in fact bit-identical; the parallel variant gives the serial one's bits; restart
+rows are evaluated as task.reset_columns does.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from typing import Any
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+
+from amigo_gym import fast, task
+from amigo_gym.params import EnvParams
+from amigo_gym.paths import make_path
+
+pytest.importorskip("numba")
+
+ATOL = 1e-12
+Array = NDArray[np.float64]
+
+SETTINGS = [
+    {"path": "circle", "direction": 1},
+    {"path": "circle", "direction": -1, "radius": 0.5, "dt": 0.05},
+    {"path": "manoeuvre", "direction": 1, "dt": 0.3},
+    {"path": "manoeuvre", "direction": -1, "straight_length": 0.0, "radius": 1.7, "dt": 1.5},
+    {"path": "manoeuvre", "direction": 1, "preview": (), "dt": 0.01},
+    {"path": "circle", "direction": 1, "preview": (0.1, 0.5, 2.0), "dt": 2.0},
+]
+
+
+def _states(params: EnvParams, n: int, seed: int) -> tuple[Array, Array]:
+    """``(state (n, 8), actions (n, 2))``: poses around the path, some special actions."""
+    g = np.random.default_rng(seed)
+    r = params.radius
+    s = g.uniform(-0.5, params.straight_length + 2 * np.pi * r, n)
+    # points near the straight part (x <= L), near the circle, and anywhere in between
+    x = np.where(g.random(n) < 0.5, s, g.uniform(-1.0, params.straight_length + r + 1.0, n))
+    y = np.where(g.random(n) < 0.5, g.normal(0.0, 0.3, n), params.direction * g.uniform(-0.5, 2 * r + 0.5, n))
+    state = np.column_stack(
+        (
+            x,
+            y,
+            g.uniform(-20.0, 20.0, n),
+            g.normal(0.0, 50.0, n),
+            g.normal(0.0, 50.0, n),
+            g.normal(0.0, 50.0, n),
+            g.uniform(-15.0, 15.0, n),
+            g.uniform(-15.0, 15.0, n),
+        )
+    )
+    actions = g.uniform(-1.3, 1.3, (n, 2))
+    actions[:20, 1] = actions[:20, 0]  # straight: h = 0
+    actions[20:30, 1] = -actions[20:30, 0]  # on the spot: v = 0
+    actions[30:35] = 0.0
+    actions[35:40] = -0.0
+    actions[40:45] = (1.0, -1.0)
+    state[45:50, 6:8] = actions[45:50] * params.robot.max_wheel_rate  # no change of the rates
+    return np.ascontiguousarray(state), np.ascontiguousarray(actions)
+
+
+def _columns(state: Array) -> task.State:
+    return task.State(*(state[:, j].copy() for j in range(8)))
+
+
+def _run(
+    params: EnvParams, state: Array, actions: Array, restart: NDArray[np.bool_], parallel: bool = False
+) -> tuple[Array, Array, Array, NDArray[np.bool_], Array]:
+    n = len(state)
+    st = state.copy()
+    obs = np.full((n, task.obs_dim(params)), np.nan)
+    reward = np.full(n, np.nan)
+    terminated = np.zeros(n, dtype=np.bool_)
+    record = np.full((n, len(fast.kernels().RECORD_FIELDS)), np.nan)
+    ws = fast.workspace(task.task_constants(params), make_path(params), n)
+    fast.step_rows(ws, st, actions, restart, obs, reward, terminated, record, parallel=parallel)
+    return st, obs, reward, terminated, record
+
+
+def _reference_record(new: task.State, out: task.Outcome, n: int) -> Array:
+    cols: list[Any] = [new.x, new.y, new.beta, out.h_x, out.h_y, out.closest.cross_track_error]
+    cols += [new.rate1, new.rate2, new.alpha1, new.alpha2, new.alpha3, *out.terms, out.reward]
+    return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in cols])
+
+
+def _obs(out: task.Outcome, n: int) -> Array:
+    return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in out.obs])
+
+
+@pytest.mark.parametrize("settings", SETTINGS, ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
+def test_kernel_step_agrees_with_step_columns(settings: dict[str, Any]) -> None:
+    params = EnvParams(**settings)
+    n = 3000
+    state, actions = _states(params, n, seed=len(str(settings)))
+    kt = task.task_constants(params)
+    path = make_path(params)
+    new, out = task.step_columns(kt, path, _columns(state), actions[:, 0], actions[:, 1], minimal=True)
+    st, obs, reward, terminated, record = _run(params, state, actions, np.zeros(n, dtype=np.bool_))
+
+    ref_state = np.column_stack([np.asarray(c) for c in new])
+    np.testing.assert_allclose(st, ref_state, rtol=0, atol=ATOL)
+    np.testing.assert_array_equal(st[:, 3:], ref_state[:, 3:])  # wheel angles and rates: no transcendentals
+    np.testing.assert_allclose(obs, _obs(out, n), rtol=0, atol=ATOL)
+    np.testing.assert_allclose(reward, out.reward, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(record, _reference_record(new, out, n), rtol=0, atol=ATOL)
+    np.testing.assert_array_equal(terminated, out.terminated)
+    assert terminated.any() and not terminated.all()
+    # the same numpy tan and exp, the same IEEE operations: the same bits. (The manoeuvre's arc length
+    # comes from the C library's atan2, which differs from numpy's AVX-512 arctan2 by an ulp at times;
+    # it only decides whether a preview point lies before the end of the straight part.)
+    np.testing.assert_array_equal(st, ref_state)
+    np.testing.assert_array_equal(obs, _obs(out, n))
+    np.testing.assert_array_equal(record, _reference_record(new, out, n))
+
+
+@pytest.mark.parametrize("settings", SETTINGS[:4], ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
+def test_kernel_restart_rows_agree_with_reset_columns(settings: dict[str, Any]) -> None:
+    params = EnvParams(**settings)
+    n = 500
+    state, actions = _states(params, n, seed=5)
+    restart = np.random.default_rng(1).random(n) < 0.5
+    st, obs, _, terminated, record = _run(params, state, actions, restart)
+    kt = task.task_constants(params)
+    path = make_path(params)
+    start = _columns(state[restart])
+    out = task.reset_columns(kt, path, start, minimal=True)
+    m = int(restart.sum())
+    np.testing.assert_array_equal(st[restart], state[restart])  # not moved
+    np.testing.assert_allclose(obs[restart], _obs(out, m), rtol=0, atol=ATOL)
+    np.testing.assert_allclose(record[restart], _reference_record(start, out, m), rtol=0, atol=ATOL)
+    np.testing.assert_array_equal(record[restart], _reference_record(start, out, m))
+    np.testing.assert_array_equal(terminated[restart], out.terminated)
+    assert np.all(record[restart, 14] == 1.0)  # no smoothness loss at a start
+    # the other rows stepped as without restarts
+    st2, obs2, *_ = _run(params, state, actions, np.zeros(n, dtype=np.bool_))
+    np.testing.assert_array_equal(st[~restart], st2[~restart])
+    np.testing.assert_array_equal(obs[~restart], obs2[~restart])
+
+
+def test_parallel_variant_gives_the_same_bits() -> None:
+    params = EnvParams(path="manoeuvre")
+    state, actions = _states(params, 4096, seed=3)
+    restart = np.random.default_rng(2).random(4096) < 0.1
+    serial = _run(params, state, actions, restart)
+    par = _run(params, state, actions, restart, parallel=True)
+    for a, b in zip(serial, par, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_float32_observations_are_the_float64_ones_rounded() -> None:
+    params = EnvParams()
+    state, actions = _states(params, 1000, seed=4)
+    _, obs64, *_ = _run(params, state, actions, np.zeros(1000, dtype=np.bool_))
+    obs32 = np.empty(obs64.shape, dtype=np.float32)
+    ws = fast.workspace(task.task_constants(params), make_path(params), 1000)
+    no = np.zeros(1000, np.bool_)
+    fast.step_rows(ws, state.copy(), actions, no, obs32, np.empty(1000), no.copy(), np.empty((1000, 16)))
+    np.testing.assert_array_equal(obs32, obs64.astype(np.float32))
+
+
+def test_bad_buffers_are_refused() -> None:
+    params = EnvParams()
+    ws = fast.workspace(task.task_constants(params), make_path(params), 4)
+    good: list[Any] = [
+        np.zeros((4, 8)),
+        np.zeros((4, 2)),
+        np.zeros(4, np.bool_),
+        np.zeros((4, 10), np.float32),
+        np.zeros(4),
+        np.zeros(4, np.bool_),
+        np.zeros((4, 16)),
+    ]
+    fast.step_rows(ws, *good)
+    bad = [np.zeros((5, 8)), np.zeros((4, 2), np.float32), np.zeros(4), np.zeros((4, 9), np.float32)]
+    for i, b in enumerate(bad):
+        args = list(good)
+        args[i] = b
+        with pytest.raises(ValueError, match="C-contiguous"):
+            fast.step_rows(ws, *args)
+    args = list(good)
+    args[0] = np.zeros((8, 4)).T
+    with pytest.raises(ValueError, match="state"):
+        fast.step_rows(ws, *args)
+
+
+def test_a_trajectory_stays_with_the_reference() -> None:
+    """200 steps fed back into themselves: rounding differences do not grow beyond 1e-12."""
+    params = EnvParams(path="manoeuvre", dt=0.1)
+    n = 64
+    state, _ = _states(params, n, seed=6)
+    state[:, 0:3] = np.random.default_rng(0).normal(0.0, [0.02, 0.02, 0.1], (n, 3))
+    g = np.random.default_rng(7)
+    kt = task.task_constants(params)
+    path = make_path(params)
+    ref = _columns(state)
+    st = state.copy()
+    for _ in range(200):
+        a = np.ascontiguousarray(0.27 + 0.05 * g.normal(size=(n, 2)))
+        ref, out = task.step_columns(kt, path, ref, a[:, 0], a[:, 1], minimal=True)
+        st, _, reward, *_ = _run(params, st, a, np.zeros(n, dtype=np.bool_))
+        np.testing.assert_allclose(reward, out.reward, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(st, np.column_stack([np.asarray(c) for c in ref]), rtol=0, atol=1e-11)
+
+
+def test_which_path_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(fast.KERNEL_ENV, "numpy")
+    assert fast.use_fast_path() is False
+    monkeypatch.setenv(fast.KERNEL_ENV, "numba")
+    assert fast.use_fast_path() is True
+    monkeypatch.setenv(fast.KERNEL_ENV, "auto")
+    assert fast.use_fast_path() is True
+    assert fast.use_fast_path(False) is False
+    monkeypatch.setenv(fast.KERNEL_ENV, "fortran")
+    with pytest.raises(ValueError, match="AMIGO_GYM_KERNEL"):
+        fast.use_fast_path()
+    monkeypatch.delenv(fast.KERNEL_ENV)
+    monkeypatch.setattr(fast, "numba_available", lambda: False)
+    assert fast.use_fast_path() is False
+    with pytest.raises(ImportError, match="amigo_gym\\[fast\\]"):
+        fast.use_fast_path(True)
+
+
+def test_import_amigo_gym_does_not_load_numba() -> None:
+    code = (
+        "import sys, gymnasium as gym, amigo_gym, amigo_gym.fast\n"
+        "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
+        "print('numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "False"
+
+
+def _same(a: Any, b: Any, where: str) -> None:
+    if isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        for key in a:
+            _same(a[key], b[key], f"{where}.{key}")
+    elif isinstance(a, tuple | list) or (isinstance(a, np.ndarray) and a.dtype == object):
+        for x, y in zip(a, b, strict=True):
+            _same(x, y, where)
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape, where
+        np.testing.assert_array_equal(a, b, err_msg=where)
+    else:
+        assert a == b, where
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep", "Disabled"])
+@pytest.mark.parametrize("path", ["circle", "manoeuvre"])
+def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) -> None:
+    """AmigoBotVectorEnv(kernel="numba") against the numpy path: every output, across autoresets."""
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    n = 16
+    kw: dict[str, Any] = {"num_envs": n, "max_episode_steps": 25, "autoreset_mode": mode, "path": path}
+    ref = AmigoBotVectorEnv(**kw)
+    envs = [AmigoBotVectorEnv(kernel="numba", **kw), AmigoBotVectorEnv(kernel="numba-parallel", **kw)]
+    g = np.random.default_rng(3)
+    outs = [e.reset(seed=7) for e in (ref, *envs)]
+    for o in outs[1:]:
+        _same(o, outs[0], "reset")
+    for t in range(80):
+        a = np.clip(0.27 + 0.6 * g.normal(size=(n, 2)), -1.2, 1.2)
+        if mode == "Disabled" and ref._autoreset.any():
+            mask = ref._autoreset.copy()
+            outs = [e.reset(options={"reset_mask": mask}) for e in (ref, *envs)]
+            for o in outs[1:]:
+                _same(o, outs[0], f"partial reset {t}")
+        outs = [e.step(a.astype(np.float32) if t % 2 else a) for e in (ref, *envs)]
+        for o in outs[1:]:
+            _same(o, outs[0], f"step {t}")
+    assert ref._steps.max() < 25  # episodes ended (terminated or truncated) and restarted
+
+
+def test_vector_env_kernel_argument() -> None:
+    from amigo_gym.envs.vector import AmigoBotVectorEnv
+
+    with pytest.raises(ValueError, match="kernel"):
+        AmigoBotVectorEnv(num_envs=2, kernel="cuda")
+    assert AmigoBotVectorEnv(num_envs=2)._ws is None
+    assert AmigoBotVectorEnv(num_envs=2, kernel="numba")._ws is not None
