@@ -452,6 +452,7 @@ class Outcome(NamedTuple):
         error: H's true signed cross-track error [m].
         v_true: true speed of A [m/s]; v_ref: the reference speed [m/s].
         meas_x, meas_y, meas_beta: the measured pose [m, m, rad]; meas_w1, meas_w2: measured wheel rates [rad/s].
+        end_of_path: H reached the end of an open path (a terminal state that is a success, not a failure).
     """
 
     obs: tuple[Real, ...]
@@ -468,6 +469,7 @@ class Outcome(NamedTuple):
     meas_beta: Real
     meas_w1: Real
     meas_w2: Real
+    end_of_path: Any = False
 
 
 # --------------------------------------------------------------------------- column helpers
@@ -787,12 +789,15 @@ def evaluate_columns(
         1.0 - p.smooth_weight * (1.0 - col_exp((da1 * da1 + da2 * da2) / -k.smooth_scale_sq)),
     )
     reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
-    terminated = _abs(e) > p.termination_distance
+    off_path = _abs(e) > p.termination_distance
     closed = path.closed
+    at_end: Any
     if isinstance(e, np.ndarray):  # a batch: per-row paths, open ones end when H passes their end
-        terminated = terminated | (~np.asarray(closed, dtype=np.bool_) & (np.asarray(loc.status) == STATUS_END))
-    elif not bool(closed):
-        terminated = terminated or int(loc.status) == STATUS_END
+        at_end = ~np.asarray(closed, dtype=np.bool_) & (np.asarray(loc.status) == STATUS_END)
+        terminated = off_path | at_end
+    else:
+        at_end = (not bool(closed)) and int(loc.status) == STATUS_END
+        terminated = off_path or at_end
     # measurements
     mx, my, mb = st.x + noise.x, st.y + noise.y, st.beta + noise.beta
     mw1, mw2 = st.w1 + noise.rate1, st.w2 + noise.rate2
@@ -834,7 +839,7 @@ def evaluate_columns(
         st.a1,
         st.a2,
     ]
-    out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2)
+    out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
 
 

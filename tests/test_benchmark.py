@@ -277,10 +277,16 @@ def test_cli_quick(tmp_path: Path) -> None:
     doc = json.loads((tmp_path / "benchmark.json").read_text())
     assert doc["quick"] and doc["suite_version"] == bm.SUITE_VERSION
     assert {r["agent"] for r in doc["results"]} == {"analytic", "sac_v0"}
-    assert {r["scenario"] for r in doc["results"]} == {"v0_paper_circle", "v0_speed_0.4"}
-    if "AmigoBot-v1" not in gym.registry:
-        assert any(u["scenario"] == "circle_r1_ccw" for u in doc["unavailable"])
-        assert "circle_r1_ccw" in r.stdout
+    assert {(r["agent"], r["scenario"]) for r in doc["results"]} == {
+        ("analytic", "v0_paper_circle"),
+        ("analytic", "v0_speed_0.4"),
+        ("analytic", "circle_r1_ccw"),  # AmigoBot-v1's analytic tracking policy
+        ("sac_v0", "v0_paper_circle"),
+        ("sac_v0", "v0_speed_0.4"),
+    }
+    # the v0 specialist cannot read v1's observation: reported, not dropped
+    assert any(u["scenario"] == "circle_r1_ccw" and u.get("agent") == "sac_v0" for u in doc["unavailable"])
+    assert "circle_r1_ccw" in r.stdout
     sac_rec = next(a for a in doc["agents"] if a["agent"] == "sac_v0")
     assert sac_rec["seed"] == 0 and len(sac_rec["sha256"]) == 64
     for f in ("benchmark.md", "benchmark_scenarios.png", "benchmark_profiles.png"):

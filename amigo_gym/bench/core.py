@@ -312,21 +312,15 @@ def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: i
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-core``."""
     p = OneLineParser(prog=PROG, description="Env-steps per second of the batched exact step, with peers.")
-    p.add_argument(
-        "--sizes", type=int, nargs="+", default=None, help=f"batch sizes [envs] (default: {DEFAULT_SIZES})"
-    )
+    p.add_argument("--sizes", type=int, nargs="+", default=None, help=f"batch sizes [envs] (default: {DEFAULT_SIZES})")
     p.add_argument("--repeats", type=int, default=7, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.05, help="least duration of one repeat [s]")
     p.add_argument("--loop-max", type=int, default=4096, help="largest N for the Python-loop peer [envs]")
-    p.add_argument(
-        "--threads", type=int, default=None, help="numba threads [threads] (default: all)"
-    )
+    p.add_argument("--threads", type=int, default=None, help="numba threads [threads] (default: all)")
     p.add_argument("--skip-kernel", action="store_true", help="skip the compiled kernel (numba)")
     p.add_argument("--skip-startup", action="store_true", help="skip the fresh-process start-up times")
     p.add_argument("--quick", action="store_true", help="smoke run: sizes 1 64, 1 repeat of 0.01 s, one start-up run")
-    p.add_argument(
-        "--json", default=None, metavar="FILE", help="JSON output [file] (default: none)"
-    )
+    p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
     return p
 
 

@@ -586,9 +586,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(
         prog=PROG, description="Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and SyncVectorEnv."
     )
-    p.add_argument(
-        "--sizes", type=int, nargs="+", default=None, help=f"vector sizes [envs] (default: {DEFAULT_SIZES})"
-    )
+    p.add_argument("--sizes", type=int, nargs="+", default=None, help=f"vector sizes [envs] (default: {DEFAULT_SIZES})")
     p.add_argument("--repeats", type=int, default=5, help="repeats per measurement [repeats]; the median is reported")
     p.add_argument("--min-time", type=float, default=0.2, help="least duration of one repeat [s]")
     p.add_argument("--sync-max", type=int, default=SYNC_MAX, help="largest N for the SyncVectorEnv peer [envs]")
@@ -604,9 +602,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s, tiny memory/PPO runs"
     )
-    p.add_argument(
-        "--json", default=None, metavar="FILE", help="JSON output [file] (default: none)"
-    )
+    p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
     p.add_argument("--plot", default=None, metavar="PNG", help="plot throughput against N [file] (default: none)")
     return p
 

@@ -111,7 +111,8 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ``speed`` (true speed of A) and ``reference_speed`` [m/s], ``speed_error`` [m/s], ``wheel_rates``
     (actual, end of step) and ``command`` (the setpoints) [rad/s], ``wheel_angles`` [rad], ``measured_pose``,
     ``reward_terms``, ``time`` [s], ``path`` (family and parameters), ``true_robot`` (``r1``, ``r2``, ``l1`` [m]),
-    ``delay`` [s], ``slip`` (this step's loss of ground speed per wheel).
+    ``delay`` [s], ``slip`` (this step's loss of ground speed per wheel), ``end_of_path`` (H reached the end of an
+    open path: the episode terminated as a success).
 
     ## Arguments
 
@@ -228,6 +229,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
             "delay": int(ep.lag) * self.params.dt + float(ep.t_switch),
             "slip": np.array((noise.slip1, noise.slip2), dtype=np.float64),
+            "end_of_path": bool(out.end_of_path),
         }
 
     # ------------------------------------------------------------------ rendering

@@ -329,6 +329,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             "true_robot": {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1},
             "delay": ep.lag * dt + ep.t_switch,
             "slip": (noise.slip1, noise.slip2),
+            "end_of_path": out.end_of_path,
         }
 
     def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:

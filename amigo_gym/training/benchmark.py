@@ -540,7 +540,8 @@ def evaluate(
             obs, reward, terminated, truncated, info = env.step(action)
             rec.add(adapter.read(info), float(reward))
             if terminated or truncated:
-                rec.terminated = bool(terminated)
+                # reaching the end of an open path (AmigoBot-v1) ends the episode as a success, not a failure
+                rec.terminated = bool(terminated) and not bool(info.get("end_of_path", False))
                 break
         episodes.append(rec.metrics())
         if on_episode is not None:

@@ -18,7 +18,8 @@ Metrics of one episode (:func:`episode_metrics`)
 * ``h_rms_m``: RMS of H's cross-track error over every step of the episode (the state after each action).
 * ``h_rms_settled_m``: the same over ``t >= settle_time_s`` (the steady tracking error; NaN if the
   episode ended before). ``h_max_m``: largest ``|e|`` over the episode.
-* ``failure``: the episode terminated (left the path), or ``|e|`` exceeded ``failure_tolerance_m``
+* ``failure``: the episode terminated by leaving the path (reaching the end of an open path of
+  AmigoBot-v1, ``info["end_of_path"]``, is a success, not a failure), or ``|e|`` exceeded ``failure_tolerance_m``
   at some ``t >= settle_time_s``.
 * ``speed_err_rms``: RMS of the speed error of A [m/s] over the episode.
 * ``return``: sum of the rewards.

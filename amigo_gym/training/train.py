@@ -388,7 +388,8 @@ def _callbacks(
             rec = self.recorders.setdefault(i, EpisodeRecorder(self.dt))
             rec.add(self.adapter.read(info), float(locals_["reward"]))
             if locals_["done"]:
-                rec.terminated = not info.get("TimeLimit.truncated", False)
+                ended = not info.get("TimeLimit.truncated", False)
+                rec.terminated = ended and not bool(info.get("end_of_path", False))  # v1: path end = success
                 self.episodes.append(rec.metrics())
                 del self.recorders[i]
                 for key, src in (
