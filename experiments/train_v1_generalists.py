@@ -63,7 +63,8 @@ def export(s: Settings, algo: str, seed: int, cmd: list[str], wall_s: float) -> 
     manifest = record | {
         "env_id": "AmigoBot-v1",
         "env_kwargs": s.env_kwargs,
-        "training_command": " ".join(c for c in cmd if c != "--resume"),
+        # as typed from the repository root (the run folder named relative to --runs)
+        "training_command": " ".join(c for c in cmd if c != "--resume").replace(str(s.runs), s.runs.name),
         "training_distribution": TRAINING_DISTRIBUTION,
         "wall_time_this_call_s": round(wall_s, 1),
     }
