@@ -196,12 +196,14 @@ class _CountingAgent:
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
     ) -> Any:
-        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
-            self.starts += 1
-            assert state is None or state == 0 or isinstance(state, int)
-            state = 0
-        action, _ = self.inner.predict(observation)
-        return action, int(state) + 1
+        """SB3's batched interface: ``observation (N, d)``, ``episode_start (N,)``, ``state (N,)`` step counts."""
+        obs = np.atleast_2d(observation)
+        starts = np.ones(len(obs), dtype=bool) if episode_start is None else np.asarray(episode_start, dtype=bool)
+        self.starts += int(starts.sum())
+        count = np.zeros(len(obs), dtype=np.int64) if state is None else np.asarray(state).copy()
+        count[starts] = 0
+        action, _ = self.inner.predict(obs)
+        return action, count + 1
 
 
 @pytest.fixture(scope="module")

@@ -522,31 +522,72 @@ def _dt(env: Any, sc: Scenario) -> float:
     return float(sc.env_kwargs.get("dt", 0.1))
 
 
+def _vector_env(sc: Scenario) -> Any:
+    """The native vector env of ``sc`` (``SyncVectorEnv`` if it has none): one robot per evaluation seed."""
+    import gymnasium as gym
+
+    native = gym.spec(sc.env_id).vector_entry_point is not None  # else Gymnasium's SyncVectorEnv
+    return gym.make_vec(
+        sc.env_id,
+        num_envs=len(sc.seeds),
+        vectorization_mode="vector_entry_point" if native else "sync",
+        max_episode_steps=sc.max_steps,
+        **dict(sc.env_kwargs),
+    )
+
+
+def _info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
+    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats, ``(N, k)`` rows as arrays."""
+    out: dict[str, Any] = {}
+    for k, v in vinfo.items():
+        if k.startswith("_") or k in ("final_obs", "final_info"):
+            continue
+        if isinstance(v, dict):
+            out[k] = _info_row(v, i)
+        else:
+            a = np.asarray(v)
+            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
+    return out
+
+
 def evaluate(
     agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
 ) -> list[dict[str, float]]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics."""
+    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics.
+
+    The episodes run side by side in the environment's native vector env (robot ``i`` reset with seed
+    ``sc.seeds[i]``; the native vector env reproduces the single env bit for bit, tests/test_vector_v1.py),
+    the agent predicting for the whole batch at every step (a constant batch size, so that a network's
+    outputs do not depend on how many episodes are still running). A robot's episode is its steps up to its
+    first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
+    """
     adapter = InfoAdapter.for_env(env)
     dt = _dt(env, sc)
-    episodes: list[dict[str, float]] = []
-    for seed in sc.seeds:
-        obs, _ = env.reset(seed=seed)
-        rec = EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m)
+    venv = _vector_env(sc)
+    try:
+        n = len(sc.seeds)
+        obs, _ = venv.reset(seed=list(sc.seeds))
+        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in range(n)]
+        live = np.ones(n, dtype=np.bool_)
         state: Any = None
-        start = True
-        while True:
-            action, state = agent.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
-            start = False
-            obs, reward, terminated, truncated, info = env.step(action)
-            rec.add(adapter.read(info), float(reward))
-            if terminated or truncated:
-                # reaching the end of an open path (AmigoBot-v1) ends the episode as a success, not a failure
-                rec.terminated = bool(terminated) and not bool(info.get("end_of_path", False))
-                break
-        episodes.append(rec.metrics())
-        if on_episode is not None:
-            on_episode()
-    return episodes
+        start = np.ones(n, dtype=np.bool_)
+        while live.any():
+            action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
+            start = np.zeros(n, dtype=np.bool_)
+            obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
+            for i in np.flatnonzero(live).tolist():
+                info = _info_row(vinfo, i)
+                recs[i].add(adapter.read(info), float(reward[i]))
+                if terminated[i] or truncated[i]:
+                    # reaching the end of an open path (AmigoBot-v1) ends the episode as a success, not a failure
+                    recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
+                    live[i] = False
+                    if on_episode is not None:
+                        on_episode()
+            start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
+    finally:
+        venv.close()
+    return [r.metrics() for r in recs]
 
 
 def _nanmean(x: Sequence[float]) -> float | None:
