@@ -221,3 +221,30 @@ def test_docs_observation_table_matches_the_field_names() -> None:
     rows = re.findall(r"^\| (\d+) \| `([^`]+)` \|", section, flags=re.MULTILINE)
     assert [int(i) for i, _ in rows] == list(range(len(rows)))
     assert tuple(name for _, name in rows) == tracking.obs_fields(tracking.TrackingParams())
+
+
+def test_a_users_own_path_object() -> None:
+    """Any object with length, closed, pose_columns and locate is a path (here a ClothoidPath built by hand)."""
+    from amigo_gym.paths import ClothoidPath, ClothoidSegment
+    from amigo_gym.policies import AnalyticTrackingPolicy
+
+    mine = ClothoidPath(
+        (ClothoidSegment.line(1.0), ClothoidSegment.transition(1.0, 0.0, 1.0), ClothoidSegment.arc(6.0, 1.0)),
+        start=(0.0, 0.0),
+        start_angle=0.0,
+    )
+    env = gym.make("AmigoBot-v1", path=mine, speed=0.2, max_episode_steps=300)
+    policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
+    obs, info = env.reset(seed=0)
+    assert info["path"]["family"] == "ClothoidPath"
+    state, start, errors = None, np.array([True]), []
+    for _ in range(300):
+        a, state = policy.predict(obs[None, :], state, start)
+        start = np.array([False])
+        obs, _, term, trunc, info = env.step(a[0])
+        errors.append(abs(info["cross_track_error"]))
+        if term or trunc:
+            break
+    assert max(errors[150:]) < 1e-3  # settled on the user's path
+    with pytest.raises(ValueError, match="path must be"):
+        gym.make("AmigoBot-v1", path=object())
