@@ -151,7 +151,9 @@ def test_postgresql_two_concurrent_workers_run_the_seed_grid_once(tmp_path: Path
     assert all(t.params["algo"] == "ppo" for t in done)
     assert not [t for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
     assert len(trials) == 4  # the grid was enqueued once, no extra trial
-    assert len({t.user_attrs["worker"] for t in done}) == 2, outs  # both workers took part
+    # both workers joined the one study (which of them ran how many trials depends on the machine's load:
+    # on a busy machine the first may take them all before the second starts)
+    assert sum("Using an existing study" in o for o in outs) >= 1, outs
     assert study.user_attrs["mode"] == "seeds" and study.user_attrs["budget"] == 4
 
 
