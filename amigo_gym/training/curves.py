@@ -335,7 +335,7 @@ def learning_curves(
                 "last_timesteps": int(r.evals[-1]["timesteps"]),
             }
             for r in found
-        ],  # fmt: skip
+        ],
         "skipped": skipped,
         "curves": curves,
         "threshold": {g: threshold_summary(rs, metric, threshold) for g, rs in groups.items()},
