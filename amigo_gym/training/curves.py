@@ -236,7 +236,7 @@ def threshold_time(run: Run, metric: str = THRESHOLD_METRIC, threshold: float = 
     """The run's first evaluation with ``metric <= threshold``: ``reached``, its ``timesteps`` and ``wall_time_s``."""
     for e in run.evals:
         if _finite(e.get(metric)) and float(e[metric]) <= threshold:
-            wall = e.get("wall_time_s")
+            wall: Any = e.get("wall_time_s")
             return {
                 "seed": run.seed,
                 "reached": True,
