@@ -14,8 +14,9 @@ h_rms_settled_m, speed_err_rms, failure_rate}``. Its algorithm and training seed
 ``config.json`` (``settings.algo``, ``settings.seed``), else from the folder name ``<algo>_s<seed>``;
 a folder without ``eval.json``, or whose algorithm and seed cannot be told, is listed as skipped (with
 the reason) and not used. Runs are grouped by algorithm (by algorithm and environment id when the
-runs were trained on several environments); the same (group, seed) twice is an error. An evaluation
-repeated at the same step (a run resumed from an earlier checkpoint) counts once, the later one.
+runs' ``config.json`` files name several environment ids); the same (group, seed) twice is an error.
+An evaluation repeated at the same step (a run resumed from an earlier checkpoint) counts once, the
+later one.
 
 Curves (:func:`curve`)
 ----------------------
@@ -179,11 +180,12 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
                 skipped.append({"path": str(run_dir), "reason": "eval.json holds no evaluation yet"})
                 continue
             found.append(Run(algo, seed, run_dir, env_id, evals))
-    several_envs = len({r.env_id for r in found}) > 1
-    runs_out = [
-        Run(r.algo, r.seed, r.path, r.env_id, r.evals, f"{r.algo} {r.env_id}" if several_envs else r.algo)
-        for r in found
-    ]
+    several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1
+
+    def group(r: Run) -> str:
+        return f"{r.algo} {r.env_id}" if several_envs and r.env_id is not None else r.algo
+
+    runs_out = [Run(r.algo, r.seed, r.path, r.env_id, r.evals, group(r)) for r in found]
     seen: dict[tuple[str, int], Path] = {}
     for r in runs_out:
         key = (r.group, r.seed)
