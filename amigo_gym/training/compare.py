@@ -44,6 +44,7 @@ deviation from the analytic inverse solution <= 0.1 rad/s.
 
 from __future__ import annotations
 
+import glob
 import json
 import os
 import shutil
@@ -180,7 +181,7 @@ def quick_benchmark(
     if generalists is not None:
         for algo in ALGOS:
             if any((generalists / algo).glob("*.zip")):
-                for spec in parse_agents([f"{algo}_v1={generalists / algo}/*.zip"]):
+                for spec in parse_agents([f"{algo}_v1={glob.escape(str(generalists / algo))}/*.zip"]):
                     digest = (spec.manifest or {}).get("sha256")
                     if digest is not None and spec.path is not None:  # checked before the pickle is loaded
                         manifest = Path(spec.path).with_suffix(".json")
