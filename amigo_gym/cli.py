@@ -105,6 +105,12 @@ COMMANDS: dict[str, Command] = {
         extra="train",
         modules=_TRAIN,
     ),
+    "curves": Command(
+        "amigo_gym.training.curves:main",
+        "learning curves over training seeds (eval.json), time to a tracking threshold",
+        extra="train",
+        modules=("tqdm", "matplotlib"),
+    ),
     "sweep": Command(
         "amigo_gym.training.sweep:main",
         "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL",

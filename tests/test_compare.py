@@ -21,10 +21,11 @@ TINY_PPO = """AmigoBot-v0:
 """
 
 
-def compare(out: Path, hp: Path, *args: str) -> subprocess.CompletedProcess[str]:
+def compare(out: Path, hp: Path, *args: str, bench: bool = False) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", "", "--no-plots"]
     cmd += ["--seeds", "1", "--steps", "10", "--no-progress", "--hyperparams", str(hp), *args]
+    cmd += [] if bench else ["--no-benchmark"]
     r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
     assert r.returncode == 0, r.stderr
     return r
@@ -36,9 +37,15 @@ def test_reuse_only_the_same_configuration(tmp_path: Path) -> None:
     out = tmp_path / "out"
     model = out / "train_ppo" / "model.zip"
 
-    r = compare(out, hp, "--train-steps", "128", "--seed", "0")
+    r = compare(out, hp, "--train-steps", "128", "--seed", "0", bench=True)
     assert "training a fresh PPO agent" in r.stderr
     first = model.stat().st_mtime_ns
+    # the quick benchmark ran on the fresh agent too (a v0 model: unavailable on the v1 scenario, said so)
+    bench = json.loads((out / "results.json").read_text())["benchmark"]
+    assert bench["quick"] and {r["agent"] for r in bench["results"]} == {"analytic", "analytic_ff", "ppo_fresh"}
+    assert {u["scenario"] for u in bench["unavailable"] if u["agent"] == "ppo_fresh"} == {"circle_r1_ccw"}
+    fresh = next(a for a in bench["agents"] if a["agent"] == "ppo_fresh")
+    assert fresh["sha256"] == json.loads((out / "train_ppo" / "run.json").read_text())["sha256"]
 
     r = compare(out, hp, "--train-steps", "128", "--seed", "0")
     assert "reusing the PPO run" in r.stderr and "retraining" not in r.stderr
@@ -78,3 +85,24 @@ def test_any_recorded_difference_is_a_mismatch(tmp_path: Path, key: str) -> None
     changed = {**cfg, key: {**cfg[key], "extra": 1}}
     (run / "config.json").write_text(json.dumps(changed))
     assert reuse_mismatch(run, request) == f"{key} differ"
+
+
+def test_quick_benchmark_table_in_the_published_set(tmp_path: Path) -> None:
+    """Without ``--no-benchmark`` the report and results.json carry the quick benchmark; the set verifies."""
+    from amigo_gym.training.benchmark import QUICK_SCENARIOS
+    from amigo_gym.training.compare import verify_outputs
+
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", "", "--train-steps", "0"]
+    cmd += ["--seeds", "1", "--steps", "20", "--no-progress"]
+    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr
+    report = (out / "report.md").read_text()
+    assert "## AmigoBot benchmark, suite 1.0 (quick subset)" in report
+    assert "| analytic | 1 | 3 |" in report and "### H cross-track RMS per scenario" in report
+    doc = json.loads((out / "results.json").read_text())
+    assert [s["name"] for s in doc["benchmark"]["scenarios"]] == list(QUICK_SCENARIOS)
+    assert doc["benchmark"]["aggregates"]["analytic"]["n_runs"] == 1
+    files = verify_outputs(out)
+    assert {"benchmark_scenarios.png", "benchmark_profiles.png", "report.md", "results.json"} <= set(files)

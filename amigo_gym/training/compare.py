@@ -16,9 +16,19 @@ Steps:
    equals the request; otherwise that folder is removed and the agent trained again.
 2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
    ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`amigo_gym.training.evaluate`.
-3. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
-   run's record, the targets), ``<out>/report.md`` (the table, the targets, the training records),
-   ``<out>/eval.md`` and the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``.
+3. Run the quick subset of the benchmark (``amigo-gym benchmark --quick``:
+   :func:`amigo_gym.training.benchmark.quick_suite`, 3 scenarios of 2 episodes of at most 120 steps,
+   on AmigoBot-v0 and v1) on the same agents: ``analytic`` and ``analytic_ff`` (built per scenario by
+   the benchmark), the pretrained v0 agents and ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
+   under ``<models>/v1/<algo>/*.zip`` (named ``<algo>_v1``, one training seed per zip, checked against
+   the sha256 of their manifests). An agent that cannot run a scenario (a v0 model on v1's
+   observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
+   is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
+4. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
+   run's record, the targets, the quick benchmark's document under ``benchmark``), ``<out>/report.md``
+   (the table, the targets, the training records, the quick benchmark table), ``<out>/eval.md`` and
+   the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``, ``<out>/benchmark_scenarios.png``
+   and ``<out>/benchmark_profiles.png``.
 
 The output set is published as a whole, with a manifest written last that readers trust: every file is
 first written into a staging folder ``<out>/.staging-*``; then ``<out>/manifest.json`` is removed, the
@@ -34,13 +44,14 @@ deviation from the analytic inverse solution <= 0.1 rad/s.
 
 from __future__ import annotations
 
+import glob
 import json
 import os
 import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +59,16 @@ from amigo_gym import runs
 from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
 
-__all__ = ["MANIFEST", "TARGETS", "main", "publish", "report_markdown", "run_compare", "verify_outputs"]
+__all__ = [
+    "MANIFEST",
+    "TARGETS",
+    "main",
+    "publish",
+    "quick_benchmark",
+    "report_markdown",
+    "run_compare",
+    "verify_outputs",
+]
 
 MANIFEST = "manifest.json"
 
@@ -112,7 +132,64 @@ def report_markdown(doc: dict[str, Any]) -> str:
             lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | {model} | {cmds} |")
         lines.append("")
     lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
+    bench = doc.get("benchmark")
+    if bench:
+        from amigo_gym.training.benchmark import markdown_report as benchmark_markdown
+
+        table = benchmark_markdown(bench).splitlines()
+        lines += [
+            "#" + table[0],  # one level down
+            "",
+            f"`amigo-gym benchmark --quick` on the agents above ({len(bench['scenarios'])} scenarios, "
+            f"{bench['scenarios'][0]['episodes']} episodes each; {bench['wall_time_s']:.0f} s). A smoke-sized view: "
+            "the whole suite is `amigo-gym benchmark` (docs/benchmark.md).",
+        ]
+        lines += [("#" + ln if ln.startswith("#") else ln) for ln in table[1:]]
+        if doc.get("benchmark_plots"):
+            lines += ["", "![benchmark scenarios](benchmark_scenarios.png)", ""]
+            lines += ["![benchmark profiles](benchmark_profiles.png)", ""]
     return "\n".join(lines)
+
+
+def quick_benchmark(
+    agents: Mapping[str, Any],
+    sources: Mapping[str, tuple[Path, str, int]],
+    generalists: Path | None = None,
+    *,
+    progress: bool = False,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+) -> dict[str, Any]:
+    """The benchmark's ``--quick`` subset on compare's agents (module docstring, step 3): its JSON document.
+
+    Args:
+        agents: compare's agents by name; the classical ones (``analytic``, ``analytic_ff``) are rebuilt
+            per scenario by the benchmark, the others are used as loaded.
+        sources: ``{name: (model zip, algo, training seed)}`` of the loaded models (an agent without one
+            is left out).
+        generalists: a folder ``<algo>/*.zip`` of AmigoBot-v1 generalists (``<models>/v1``), if any.
+    """
+    from amigo_gym.training.benchmark import ALGOS, CLASSICAL, AgentSpec, parse_agents, quick_suite, run_benchmark
+
+    specs: list[AgentSpec] = []
+    for name, agent in agents.items():
+        if name in CLASSICAL:
+            specs.append(AgentSpec(name))
+        elif name in sources:
+            path, algo, seed = sources[name]
+            specs.append(AgentSpec(name, seed, str(path), algo, None, _model=agent))
+    if generalists is not None:
+        for algo in ALGOS:
+            if any((generalists / algo).glob("*.zip")):
+                for spec in parse_agents([f"{algo}_v1={glob.escape(str(generalists / algo))}/*.zip"]):
+                    digest = (spec.manifest or {}).get("sha256")
+                    if digest is not None and spec.path is not None:  # checked before the pickle is loaded
+                        manifest = Path(spec.path).with_suffix(".json")
+                        runs.verify_sha256(Path(spec.path), str(digest), str(manifest))
+                    specs.append(spec)
+    doc = run_benchmark(specs, quick_suite(), progress=progress, reps=reps, profile_reps=profile_reps, quick=True)
+    doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
+    return doc
 
 
 def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
@@ -206,16 +283,18 @@ def run_compare(
     plots: bool = True,
     progress: bool = False,
     hyperparams: Path | None = None,
+    benchmark: bool = True,
 ) -> dict[str, Any]:
     """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents.
 
     ``hyperparams``: the fresh PPO run's YAML (default ``agents/hyperparams/ppo.yml``).
+    ``benchmark``: run the quick benchmark subset (step 3).
 
-    ``progress`` shows the training run's progress bar; phase lines go to stderr in any case.
+    ``progress`` shows the progress bars (training, benchmark); phase lines go to stderr in any case.
     """
     with runs.RunLock(out):
         runs.clean_temporaries(out)
-        return _run_compare(out, models, train_steps, seeds, steps, seed, plots, progress, hyperparams)
+        return _run_compare(out, models, train_steps, seeds, steps, seed, plots, progress, hyperparams, benchmark)
 
 
 def _run_compare(
@@ -228,6 +307,7 @@ def _run_compare(
     plots: bool,
     progress: bool,
     hyperparams: Path | None = None,
+    benchmark: bool = True,
 ) -> dict[str, Any]:
     from amigo_gym.params import EnvParams
     from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
@@ -243,11 +323,15 @@ def _run_compare(
     proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
     agents = default_agents(EnvParams(), proto.analytic_gain)
     training: dict[str, Any] = {}
+    sources: dict[str, tuple[Path, str, int]] = {}  # name -> (zip, algo, training seed), for the benchmark
     if models is not None:
         _say(f"loading pretrained agents from {models}")
         refs = find_models(models)
         agents.update({ref.name: load_model(ref) for ref in refs})
         training.update({r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None})
+        for r in refs:
+            rec_seed = training.get(r.name, {}).get("seed")
+            sources[r.name] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
     if train_steps > 0:
         from stable_baselines3 import PPO
 
@@ -280,13 +364,31 @@ def _run_compare(
         training["ppo_fresh"] = train(s)
         print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
         agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
+        sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
     _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
-    extra = {"training": training, "targets": TARGETS, "best_learned": best}
+    extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
+    bench: dict[str, Any] | None = None
+    if benchmark:
+        from amigo_gym.training.benchmark import _jsonable
+
+        generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
+        _say(
+            "quick benchmark (amigo-gym benchmark --quick) on these agents"
+            + (f" and {generalists}" if generalists else "")
+        )
+        bench = quick_benchmark(agents, sources, generalists, progress=progress)
+        extra["benchmark"] = _jsonable(bench)
+        extra["benchmark_plots"] = plots and bool(bench["results"])
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
     try:
         doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+        if bench is not None and extra["benchmark_plots"]:
+            from amigo_gym.training.benchmark import plot_profiles, plot_scenarios
+
+            plot_scenarios(bench, staging / "benchmark_scenarios.png")
+            plot_profiles(bench, staging / "benchmark_profiles.png")
         atomic_write(staging / "report.md", report_markdown(doc).encode())
         publish(staging, out)
     finally:
@@ -316,6 +418,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--hyperparams", default=None, help="YAML of the fresh PPO run [file] (default: agents/hyperparams/ppo.yml)"
     )
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    p.add_argument("--no-benchmark", action="store_true", help="skip the quick benchmark table (step 3)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
@@ -339,6 +442,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             plots=not a.no_plots,
             progress=progress,
             hyperparams=hp,
+            benchmark=not a.no_benchmark,
         )
         print(report_markdown(doc))
         print(f"wrote {out / 'report.md'}, {out / 'results.json'}")

@@ -387,6 +387,11 @@ class NormalizedAgent:
         self.model = model
         self.vecnormalize = vecnormalize
 
+    @property
+    def observation_space(self) -> Any:
+        """The model's observation space (the benchmark checks it against a scenario's)."""
+        return self.model.observation_space
+
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
     ) -> tuple[Any, Any]:
