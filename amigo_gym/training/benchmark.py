@@ -487,8 +487,9 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 
 def default_agents() -> list[AgentSpec]:
-    """``analytic``, ``analytic_ff``, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<algo>``)."""
-    out = [AgentSpec("analytic"), AgentSpec("analytic_ff")]
+    """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
+    (``<algo>_v0``) and v1 generalists (``<algo>``)."""
+    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
     for algo in ALGOS:
         if (d / f"{algo}.zip").is_file():
