@@ -35,7 +35,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.fresnel import advance, subintervals
+from amigo_gym.fresnel import advance, subintervals, unit_speed_pose
 from amigo_gym.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.params import check_range
 from amigo_gym.paths.classic import ClosestPoint, Projection
@@ -566,7 +566,9 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces)."""
+        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`_pose_float` for a float)."""
+        if type(s) is float:
+            return _pose_float(t, self.closed, s)
         return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
 
     def pose_columns(self, s: Real) -> PathPose:
@@ -640,6 +642,8 @@ class ClothoidPath:
             :class:`PathPoint` columns of the broadcast shape of ``x``, ``y`` (and ``s_prev``).
         """
         t = self._t
+        if s_prev is not None and type(x) is float and type(y) is float and type(s_prev) is float:
+            return _locate_float(t, self.closed, x, y, s_prev, max_advance, max_retreat)
         h = t.spacing
         length = t.length
         n_samp = len(t.sample_x)
@@ -676,3 +680,117 @@ class ClothoidPath:
             s_start = np.clip(s_start, lo_a, hi_a)
         s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
         return refine(lambda q: self._pose(t, q), x, y, s, lo, hi, h, length, self.closed, scalar)
+
+
+# --------------------------------------------------------------------------- the float path of one point
+#
+# The same expressions as pose_from_pieces, refine, window_bounds and locate_status for Python floats,
+# written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
+# (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
+
+
+def _np_clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for floats (numpy's rule: NaN propagates, ties take the bound)."""
+    if not (x != x or x > lo):
+        x = lo
+    if not (x != x or x < hi):
+        x = hi
+    return x
+
+
+def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
+    """:func:`pose_from_pieces` for a float ``s`` on the tables ``t`` (the same bits)."""
+    length = t.length
+    lap: float
+    if closed:
+        lap = float(math.floor(s / length))
+        u = s - lap * length
+        extra = 0.0
+    else:
+        lap = 0.0
+        u = min(max(s, 0.0), length)
+        extra = s - u
+    s0 = t.s0
+    j = min(max(bisect.bisect_right(s0, u) - 1, 0), len(s0) - 1)
+    k0 = t.k0[j]
+    c = t.c[j]
+    du = u - s0[j]
+    x, y, th, cos_t, sin_t = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], k0, c, du)
+    kappa = k0 + c * du
+    if closed:
+        return PathPose(x, y, th + lap * t.turn, kappa, c, cos_t, sin_t)
+    beyond = extra != 0.0
+    return PathPose(
+        x + extra * cos_t,
+        y + extra * sin_t,
+        th,
+        0.0 if beyond else kappa,
+        0.0 if beyond else c,
+        cos_t,
+        sin_t,
+    )
+
+
+_ARANGE: dict[int, NDArray[np.float64]] = {}
+
+
+def _locate_float(
+    t: _Tables, closed: bool, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
+) -> PathPoint:
+    """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` (the same bits)."""
+    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+    behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+    h = t.spacing
+    length = t.length
+    n_samp = len(t.sample_x)
+    m = math.ceil((ahead + behind) / h) + 2
+    steps = _ARANGE.get(m)
+    if steps is None:
+        steps = _ARANGE[m] = np.arange(m, dtype=np.float64)
+    jj = float(math.floor((sp - behind) / h)) + steps  # unwrapped sample numbers
+    if closed:
+        idx = np.mod(jj, n_samp).astype(np.int64)
+    else:
+        jj = np.clip(jj, 0, n_samp - 1)
+        idx = jj.astype(np.int64)
+    d2 = (t.sample_x[idx] - x) ** 2 + (t.sample_y[idx] - y) ** 2
+    s_start = float(jj[int(np.argmin(d2))]) * h
+    lo = sp - behind
+    hi = sp + ahead
+    if not closed:
+        lo = _np_clip(lo, 0.0, length)
+        hi = _np_clip(hi, 0.0, length)
+    s = _np_clip(s_start, lo, hi)
+    # Newton's method (refine)
+    for _ in range(NEWTON_ITERATIONS):
+        p = _pose_float(t, closed, s)
+        dx = x - p.x
+        dy = y - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = 1.0 - p.curvature * e
+        if den < MIN_NEWTON_DENOMINATOR:
+            den = MIN_NEWTON_DENOMINATOR
+        s = min(max(s + min(max(g / den, -h), h), lo), hi)
+    p = _pose_float(t, closed, s)
+    dx = x - p.x
+    dy = y - p.y
+    g = dx * p.cos_theta + dy * p.sin_theta
+    e = dy * p.cos_theta - dx * p.sin_theta
+    dist = math.sqrt(dx * dx + dy * dy)
+    status = STATUS_INTERIOR
+    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
+        status = STATUS_WINDOW
+    s_lap = s
+    if closed:
+        s_lap = s - float(math.floor(s / length)) * length
+        if s_lap >= length:
+            s_lap = s_lap - length
+    else:
+        if s <= 0.0 and g < 0.0:
+            status = STATUS_START
+        if s >= length and g > 0.0:
+            status = STATUS_END
+    return PathPoint(
+        s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
+    )
