@@ -378,6 +378,12 @@ def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]
         ValueError: if the ring is too short for ``lag``.
     """
     length = ring.shape[-2]
+    if ring.ndim == 2 and type(lag) is int:  # one robot: no array arithmetic
+        if lag + 2 > length or lag < 0:
+            raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
+        w1_new, w2_new = ring[(step - lag) % length].tolist()
+        w1_old, w2_old = ring[(step - lag - 1) % length].tolist()
+        return w1_old, w2_old, w1_new, w2_new
     if np.any(np.asarray(lag) + 2 > length) or np.any(np.asarray(lag) < 0):
         raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
     i_new = (step - np.asarray(lag)) % length

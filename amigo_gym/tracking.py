@@ -845,7 +845,10 @@ def evaluate_columns(
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
     """Whether the true ``l3`` differs from the nominal (then the measured H is projected separately)."""
-    return bool(np.any(np.asarray(ep.l3) != k.l3))
+    l3 = ep.l3
+    if type(l3) is float:
+        return l3 != k.l3
+    return bool(np.any(np.asarray(l3) != k.l3))
 
 
 def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -> Outcome:

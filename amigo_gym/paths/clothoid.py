@@ -738,8 +738,16 @@ def _locate_float(
     t: _Tables, closed: bool, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
 ) -> PathPoint:
     """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` (the same bits)."""
-    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-    behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+    if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
+        ahead = max_advance  # what check_real returns for a finite positive float
+    else:
+        ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+    if max_retreat is None:
+        behind = ahead
+    elif type(max_retreat) is float and max_retreat > 0.0 and max_retreat < math.inf:
+        behind = max_retreat
+    else:
+        behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
     h = t.spacing
     length = t.length
     n_samp = len(t.sample_x)
