@@ -570,7 +570,14 @@ def actuator_step(
         at = 0.5 * (g1 * q1 + g2 * q2)
         wt = (g1 * p1 - g2 * p2) * inv_2l1t
         alt = (g1 * q1 - g2 * q2) * inv_2l1t
-        nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
+        if batch and 2 * int(np.count_nonzero(live)) < live.size:
+            # most rows have no piece here: the quadrature on the live rows only (the same bits per row)
+            nx, ny, nb = np.array(x), np.array(y), np.array(beta)
+            nx[live], ny[live], nb[live] = fresnel.advance(
+                nx[live], ny[live], nb[live], vt[live], at[live], wt[live], alt[live], length[live], n_sub
+            )
+        else:
+            nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
         half = 0.5 * length
         nda1 = da1 + length * (p1 + q1 * half)
         nda2 = da2 + length * (p2 + q2 * half)

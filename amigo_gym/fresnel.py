@@ -35,7 +35,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.kinematics import Real, col_cos, col_sin
+from amigo_gym.kinematics import Real
 
 __all__ = ["NODES", "MAX_PHASE_PER_SUB", "subintervals", "advance", "advance_float", "advance_chain_float", "unit_speed_pose"]
 
@@ -93,16 +93,22 @@ def advance(
     if not isinstance(t, np.ndarray) and not _any_array(x, y, theta, v0, a, w0, alpha):
         return advance_float(x, y, theta, v0, a, w0, alpha, t, n_sub)  # type: ignore[arg-type]
     u, uw = _nodes(n_sub)
-    # a fixed order of summation, node by node, so that a float and an array element get the same bits
+    # all nodes at once: arrays of shape (nodes, *shape), the same expressions element by element; then the
+    # sums node by node in a fixed order, so that a float and an array element get the same bits
+    nd = max(np.ndim(c) for c in (x, y, theta, v0, a, w0, alpha, t))
+    col = (len(u),) + (1,) * nd
+    u_col = np.asarray(u).reshape(col)
     half_alpha = 0.5 * alpha
-    dx: Real = 0.0
-    dy: Real = 0.0
-    for ui, wi in zip(u, uw, strict=True):
-        tau = ui * t
-        phase = theta + tau * (w0 + half_alpha * tau)
-        weight = (v0 + a * tau) * wi
-        dx = dx + weight * col_cos(phase)
-        dy = dy + weight * col_sin(phase)
+    tau = u_col * t
+    phase = theta + tau * (w0 + half_alpha * tau)
+    weight = (v0 + a * tau) * np.asarray(uw).reshape(col)
+    px = weight * np.cos(phase)
+    py = weight * np.sin(phase)
+    dx = 0.0 + px[0]
+    dy = 0.0 + py[0]
+    for k in range(1, len(u)):
+        dx = dx + px[k]
+        dy = dy + py[k]
     return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
 
 

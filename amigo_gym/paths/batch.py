@@ -193,6 +193,8 @@ class PathBatch:
         self._length = np.zeros(n)
         self._closed = np.zeros(n, dtype=np.bool_)
         self._objects: dict[int, PathSpec] = {}
+        #: the objects that are not ClothoidPaths (a subset of ``_objects``, in its order)
+        self._foreign_objects: dict[int, PathSpec] = {}
         self._counts: dict[int, int] = {}
         self._tables: _Padded | None = None
         self._set(np.arange(n, dtype=np.intp), seq)
@@ -220,6 +222,7 @@ class PathBatch:
                 oid = int(self._ids[r])
                 if old == 1:
                     del self._counts[oid], self._objects[oid]
+                    self._foreign_objects.pop(oid, None)
                 else:
                     self._counts[oid] = old - 1
         groups = self._groups(rows, paths)
@@ -229,6 +232,8 @@ class PathBatch:
             self._length[ra] = float(p.length)
             self._closed[ra] = bool(p.closed)
             self._objects[oid] = p
+            if not isinstance(p, ClothoidPath):
+                self._foreign_objects[oid] = p
             self._counts[oid] = self._counts.get(oid, 0) + len(rs)
             for r in rs:
                 self._paths[r] = p
@@ -326,9 +331,7 @@ class PathBatch:
         return next(iter(self._objects.values())) if len(self._objects) == 1 else None
 
     def _foreign(self) -> list[tuple[PathSpec, NDArray[np.intp]]]:
-        return [
-            (p, np.flatnonzero(self._ids == oid)) for oid, p in self._objects.items() if not isinstance(p, ClothoidPath)
-        ]
+        return [(p, np.flatnonzero(self._ids == oid)) for oid, p in self._foreign_objects.items()]
 
     def _full(self, fields: Sequence[Any], rows: NDArray[np.intp] | None = None) -> list[NDArray[Any]]:
         """Result fields as fresh ``(N,)`` arrays (or ``(len(rows),)``)."""
