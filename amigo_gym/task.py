@@ -667,7 +667,7 @@ def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: flo
     cp = path.project_xy(hx, hy, True)
     cos_psi = cos_b * cp.cos_theta + sin_b * cp.sin_theta
     sin_psi = sin_b * cp.cos_theta - cos_b * cp.sin_theta
-    e = cp.cross_track_error
+    e = cast(float, cp.cross_track_error)
     abs_e = abs(e)
     dv = v - k.speed
     curvature = cp.curvature

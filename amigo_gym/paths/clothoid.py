@@ -698,8 +698,16 @@ def _np_clip(x: float, lo: float, hi: float) -> float:
     return x
 
 
+FloatPose = tuple[float, float, float, float, float, float, float]
+
+
 def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
     """:func:`pose_from_pieces` for a float ``s`` on the tables ``t`` (the same bits)."""
+    return PathPose(*_pose_tuple(t, closed, s))
+
+
+def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
+    """The fields of :func:`_pose_float` as a plain tuple of floats."""
     length = t.length
     lap: float
     if closed:
@@ -718,17 +726,10 @@ def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
     x, y, th, cos_t, sin_t = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], k0, c, du)
     kappa = k0 + c * du
     if closed:
-        return PathPose(x, y, th + lap * t.turn, kappa, c, cos_t, sin_t)
-    beyond = extra != 0.0
-    return PathPose(
-        x + extra * cos_t,
-        y + extra * sin_t,
-        th,
-        0.0 if beyond else kappa,
-        0.0 if beyond else c,
-        cos_t,
-        sin_t,
-    )
+        return x, y, th + lap * t.turn, kappa, c, cos_t, sin_t
+    if extra != 0.0:
+        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
+    return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
 
 
 _ARANGE: dict[int, NDArray[np.float64]] = {}
@@ -771,20 +772,20 @@ def _locate_float(
     s = _np_clip(s_start, lo, hi)
     # Newton's method (refine)
     for _ in range(NEWTON_ITERATIONS):
-        p = _pose_float(t, closed, s)
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = 1.0 - p.curvature * e
+        px, py, _th, kappa, _c, ct, st = _pose_tuple(t, closed, s)
+        dx = x - px
+        dy = y - py
+        g = dx * ct + dy * st
+        e = dy * ct - dx * st
+        den = 1.0 - kappa * e
         if den < MIN_NEWTON_DENOMINATOR:
             den = MIN_NEWTON_DENOMINATOR
         s = min(max(s + min(max(g / den, -h), h), lo), hi)
-    p = _pose_float(t, closed, s)
-    dx = x - p.x
-    dy = y - p.y
-    g = dx * p.cos_theta + dy * p.sin_theta
-    e = dy * p.cos_theta - dx * p.sin_theta
+    px, py, th, kappa, c, ct, st = _pose_tuple(t, closed, s)
+    dx = x - px
+    dy = y - py
+    g = dx * ct + dy * st
+    e = dy * ct - dx * st
     dist = math.sqrt(dx * dx + dy * dy)
     status = STATUS_INTERIOR
     if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
@@ -799,6 +800,4 @@ def _locate_float(
             status = STATUS_START
         if s >= length and g > 0.0:
             status = STATUS_END
-    return PathPoint(
-        s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
-    )
+    return PathPoint(s_lap, s, px, py, th, kappa, c, e, ct, st, dist, status)
