@@ -367,16 +367,21 @@ def refine(
     if not scalar:
         x = np.asarray(x + 0.0 * s)
         y = np.asarray(y + 0.0 * s)
+    p = pose(s)
     for _ in range(NEWTON_ITERATIONS):
-        p = pose(s)
         dx = x - p.x
         dy = y - p.y
         g = dx * p.cos_theta + dy * p.sin_theta
         e = dy * p.cos_theta - dx * p.sin_theta
         den = 1.0 - p.curvature * e
         den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s = _clip(s + _clip(g / den, -h, h), lo, hi)
-    p = pose(s)
+        s_new = _clip(s + _clip(g / den, -h, h), lo, hi)
+        if _same_bits(s_new, s):
+            # a fixed point: the iteration is a function of s alone, so the remaining ones would repeat
+            # this one; stopping gives the bits of all NEWTON_ITERATIONS
+            break
+        s = s_new
+        p = pose(s)
     dx = x - p.x
     dy = y - p.y
     g = dx * p.cos_theta + dy * p.sin_theta
@@ -395,6 +400,14 @@ def refine(
     return PathPoint(
         s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
     )
+
+
+def _same_bits(a: Real, b: Real) -> bool:
+    """Whether ``a`` and ``b`` are equal bit for bit (zeros of one sign; NaN never: then the caller goes on)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        aa, ba = np.asarray(a), np.asarray(b)
+        return aa.shape == ba.shape and bool(np.array_equal(aa, ba) and np.array_equal(np.signbit(aa), np.signbit(ba)))
+    return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)
 
 
 def locate_status(s: Real, g: Real, lo: Real, hi: Real, length: Real, closed: Closed, scalar: bool) -> IntColumn:
@@ -770,9 +783,10 @@ def _locate_float(
         lo = _np_clip(lo, 0.0, length)
         hi = _np_clip(hi, 0.0, length)
     s = _np_clip(s_start, lo, hi)
-    # Newton's method (refine)
+    # Newton's method (refine), stopped at a fixed point as there
+    pose = _pose_tuple(t, closed, s)
     for _ in range(NEWTON_ITERATIONS):
-        px, py, _th, kappa, _c, ct, st = _pose_tuple(t, closed, s)
+        px, py, _th, kappa, _c, ct, st = pose
         dx = x - px
         dy = y - py
         g = dx * ct + dy * st
@@ -780,8 +794,12 @@ def _locate_float(
         den = 1.0 - kappa * e
         if den < MIN_NEWTON_DENOMINATOR:
             den = MIN_NEWTON_DENOMINATOR
-        s = min(max(s + min(max(g / den, -h), h), lo), hi)
-    px, py, th, kappa, c, ct, st = _pose_tuple(t, closed, s)
+        s_new = min(max(s + min(max(g / den, -h), h), lo), hi)
+        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
+            break
+        s = s_new
+        pose = _pose_tuple(t, closed, s)
+    px, py, th, kappa, c, ct, st = pose
     dx = x - px
     dy = y - py
     g = dx * ct + dy * st
