@@ -178,3 +178,25 @@ def test_v0_step_float_equals_step_columns(path_name: str) -> None:
         rows_equal(got.obs, out.obs, i)
         rows_equal(got.terms, out.terms, i)
         rows_equal((got.h_x, got.h_y, got.reward, got.terminated), (out.h_x, out.h_y, out.reward, out.terminated), i)
+
+
+def test_path_batch_locate_rows_equal_each_path_on_floats() -> None:
+    """Newton's method on the rows still moving only (PathBatch, ClothoidPath on arrays): every row's bits."""
+    from amigo_gym.paths import PathBatch
+
+    g = np.random.default_rng(6)
+    family = [make_family_path(n, np.random.default_rng(5) if n == "random" else None, **kw) for n, kw in PATHS]
+    n = 240
+    paths = [family[i % len(family)] for i in range(n)]
+    batch = PathBatch(paths)
+    length = np.array([p.length for p in paths])
+    s = g.uniform(-0.2, 1.2, n) * length
+    x = np.empty(n)
+    y = np.empty(n)
+    for i, p in enumerate(paths):
+        q = p.pose_columns(float(s[i]))
+        x[i], y[i] = float(q.x) + g.normal() * 0.1, float(q.y) + g.normal() * 0.1
+    hint = s + g.normal(size=n) * 0.2
+    got = batch.locate(x, y, hint, 0.475, 0.475)
+    for i, p in enumerate(paths):
+        rows_equal(p.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475, 0.475), got, i)

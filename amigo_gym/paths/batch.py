@@ -162,6 +162,23 @@ class _Padded:
         g = self.piece.reshape(-1, 6)[self.base + j]
         return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
 
+    def piece_of_rows(self, u: Array, rows: NDArray[np.intp]) -> Piece:
+        """:meth:`piece_of` for the rows ``rows`` only (``u``: ``(k,)``, one per listed row)."""
+        q = np.empty(u.shape, dtype=np.complex128)
+        q.real = self.key[rows, 0].real
+        q.imag = u
+        base = self.base[rows]
+        j = np.searchsorted(self.key.reshape(-1), q, side="right") - 1 - base
+        j = np.clip(j, 0, self.npieces[rows] - 1)
+        g = self.piece.reshape(-1, 6)[base + j]
+        return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
+
+    def pose_rows(self, s: Array, rows: NDArray[np.intp]) -> PathPose:
+        """:meth:`pose` of the rows ``rows`` only (``s``: ``(k,)``)."""
+        return pose_from_pieces(
+            s, self.length[rows], self.turn[rows], self.closed[rows], lambda u: self.piece_of_rows(np.asarray(u), rows)
+        )
+
     def pose(self, s: Real) -> PathPose:
         """:func:`pose_from_pieces` with each row's own tables (``s``: ``(N,)`` [m])."""
         return pose_from_pieces(s, self.length, self.turn, self.closed, lambda u: self.piece_of(np.asarray(u)))
@@ -441,4 +458,4 @@ class PathBatch:
             lo, hi = window_bounds(sp, ahead, behind, t.length, t.closed)
             s_start = np.clip(s_start, lo, hi)
         s = np.asarray(s_start, dtype=np.float64)
-        return refine(t.pose, x, y, s, lo, hi, h, t.length, t.closed, False)
+        return refine(t.pose, x, y, s, lo, hi, h, t.length, t.closed, False, t.pose_rows)

@@ -353,6 +353,7 @@ def refine(
     length: Real,
     closed: Closed,
     scalar: bool,
+    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose] | None = None,
 ) -> PathPoint:
     r"""Newton's method from the coarse estimate ``s`` [m], then the :class:`PathPoint` (step 2 and 3 of
     :meth:`ClothoidPath.locate`; shared with :class:`amigo_gym.paths.batch.PathBatch`).
@@ -363,25 +364,17 @@ def refine(
         lo, hi: the search range [m]; h: the sample spacing, the largest Newton step [m].
         length: lap length [m]; closed: a bool or a bool column (as :func:`pose_from_pieces`).
         scalar: floats in, floats out (else arrays of the broadcast shape).
+        pose_rows: ``(s, rows) -> PathPose`` of the rows ``rows`` only (``(k,)`` columns), for ``(N,)`` columns:
+            then each iteration evaluates only the rows that have not reached a fixed point.
     """
     if not scalar:
         x = np.asarray(x + 0.0 * s)
         y = np.asarray(y + 0.0 * s)
-    p = pose(s)
-    for _ in range(NEWTON_ITERATIONS):
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = 1.0 - p.curvature * e
-        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s_new = _clip(s + _clip(g / den, -h, h), lo, hi)
-        if _same_bits(s_new, s):
-            # a fixed point: the iteration is a function of s alone, so the remaining ones would repeat
-            # this one; stopping gives the bits of all NEWTON_ITERATIONS
-            break
-        s = s_new
-        p = pose(s)
+    p: PathPose
+    if pose_rows is not None and not scalar and np.ndim(s) == 1:
+        s, p = _newton_rows(pose, pose_rows, np.asarray(x), np.asarray(y), np.asarray(s, dtype=np.float64), lo, hi, h)
+    else:
+        s, p = _newton(pose, x, y, s, lo, hi, h)
     dx = x - p.x
     dy = y - p.y
     g = dx * p.cos_theta + dy * p.sin_theta
@@ -400,6 +393,87 @@ def refine(
     return PathPoint(
         s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
     )
+
+
+def _newton(
+    pose: Callable[[Real], PathPose], x: Real, y: Real, s: Real, lo: Real, hi: Real, h: Real
+) -> tuple[Real, PathPose]:
+    """:data:`NEWTON_ITERATIONS` steps of Newton's method (:meth:`ClothoidPath.locate`); ``s`` and its pose."""
+    p = pose(s)
+    for _ in range(NEWTON_ITERATIONS):
+        dx = x - p.x
+        dy = y - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = 1.0 - p.curvature * e
+        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+        s_new = _clip(s + _clip(g / den, -h, h), lo, hi)
+        if _same_bits(s_new, s):
+            # a fixed point: the iteration is a function of s alone, so the remaining ones would repeat
+            # this one; stopping gives the bits of all NEWTON_ITERATIONS
+            break
+        s = s_new
+        p = pose(s)
+    return s, p
+
+
+def _newton_rows(
+    pose: Callable[[Real], PathPose],
+    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose],
+    x: Array,
+    y: Array,
+    s: Array,
+    lo: Real,
+    hi: Real,
+    h: Real,
+) -> tuple[Array, PathPose]:
+    """:func:`_newton` on ``(N,)`` columns, each iteration on the rows still moving only.
+
+    A row's iteration depends on that row alone, and a row at a fixed point (``s`` unchanged, bit for bit)
+    stays there: its remaining iterations are skipped, its pose is the one computed last. The same bits as
+    every row through all :data:`NEWTON_ITERATIONS` iterations.
+    """
+    n = s.shape[0]
+    s = s.copy()
+    full = [np.array(np.broadcast_to(np.asarray(f, dtype=np.float64), (n,))) for f in pose(s)]
+    act = np.arange(n, dtype=np.intp)
+    s_act = s.copy()
+    p = PathPose(*full)
+    xs: Array = x
+    ys: Array = y
+    los, his, hs = lo, hi, h
+    for _ in range(NEWTON_ITERATIONS):
+        dx = xs - p.x
+        dy = ys - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = np.asarray(1.0 - p.curvature * e)
+        den = np.where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+        s_new: Array = np.asarray(_clip(s_act + _clip(g / den, -hs, hs), los, his), dtype=np.float64)
+        moving = (s_new != s_act) | (np.signbit(s_new) != np.signbit(s_act)) | np.isnan(s_new)
+        s[act] = s_new
+        if not moving.any():
+            break
+        if not moving.all():
+            keep = np.flatnonzero(moving)
+            act = act[keep]
+            s_new = s_new[keep]
+            xs, ys = xs[keep], ys[keep]
+            los, his, hs = (_rows(v, keep) for v in (los, his, hs))
+        s_act = s_new
+        got = pose_rows(s_act, act)
+        for f, v in zip(full, got, strict=True):
+            f[act] = v
+        p = PathPose(*(np.broadcast_to(np.asarray(v, dtype=np.float64), act.shape) for v in got))
+    return s, PathPose(*full)
+
+
+def _rows(v: Real, keep: NDArray[np.intp]) -> Real:
+    """The entries ``keep`` of a column (a float stays a float)."""
+    if isinstance(v, np.ndarray) and v.ndim == 1:
+        out: Real = v[keep]
+        return out
+    return v
 
 
 def _same_bits(a: Real, b: Real) -> bool:
@@ -692,7 +766,19 @@ class ClothoidPath:
             lo, hi = (float(lo_a), float(hi_a)) if scalar else (lo_a, hi_a)
             s_start = np.clip(s_start, lo_a, hi_a)
         s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
-        return refine(lambda q: self._pose(t, q), x, y, s, lo, hi, h, length, self.closed, scalar)
+        return refine(
+            lambda q: self._pose(t, q),
+            x,
+            y,
+            s,
+            lo,
+            hi,
+            h,
+            length,
+            self.closed,
+            scalar,
+            lambda q, _rows: self._pose(t, q),
+        )
 
 
 # --------------------------------------------------------------------------- the float path of one point
