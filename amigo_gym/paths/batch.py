@@ -445,16 +445,29 @@ class PathBatch:
             hi = np.where(t.closed, math.inf, t.length)
         else:
             m = np.ceil((ahead + behind) / h) + 2  # samples in each row's window
-            j0 = np.floor((sp - behind) / h)
-            jj = j0[:, None] + np.arange(int(m.max()), dtype=np.float64)  # unwrapped sample numbers
-            closed = t.closed[:, None]
-            jj = np.where(closed, jj, np.clip(jj, 0, nsamp - 1))
-            idx = np.where(closed, np.mod(jj, nsamp), jj).astype(np.int64)
+            m_max = int(m.max())
+            # unwrapped sample numbers as integers (exact: the float code's values are whole numbers), clipped
+            # to [0, nsamp - 1] on open rows; the sample index is then jj mod nsamp on every row (a no-op where
+            # clipped)
+            jj = np.floor((sp - behind) / h).astype(np.int64)[:, None] + np.arange(m_max, dtype=np.int64)
+            if not t.closed.all():
+                big = np.iinfo(np.int64).max
+                np.clip(
+                    jj, np.where(t.closed, -big, 0)[:, None], np.where(t.closed, big, nsamp[:, 0] - 1)[:, None], out=jj
+                )
+            idx = jj % nsamp if t.closed.any() else jj.copy()
             idx += np.arange(len(h), dtype=np.int64)[:, None] * t.sx.shape[1]  # flat index into (N * S)
-            d2 = (t.sx.reshape(-1)[idx] - x[:, None]) ** 2 + (t.sy.reshape(-1)[idx] - y[:, None]) ** 2
-            d2 = np.where(np.arange(jj.shape[1]) < m[:, None], d2, math.inf)
+            d2 = t.sx.reshape(-1)[idx]
+            d2 -= x[:, None]
+            np.square(d2, out=d2)
+            dy2 = t.sy.reshape(-1)[idx]
+            dy2 -= y[:, None]
+            np.square(dy2, out=dy2)
+            d2 += dy2
+            if (m != m_max).any():
+                d2[np.arange(m_max) >= m[:, None]] = math.inf
             k = np.argmin(d2, axis=-1)
-            s_start = np.take_along_axis(jj, k[:, None], axis=-1)[:, 0] * h
+            s_start = np.take_along_axis(jj, k[:, None], axis=-1)[:, 0].astype(np.float64) * h
             lo, hi = window_bounds(sp, ahead, behind, t.length, t.closed)
             s_start = np.clip(s_start, lo, hi)
         s = np.asarray(s_start, dtype=np.float64)
