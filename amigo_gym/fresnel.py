@@ -232,3 +232,33 @@ def advance_chain_float(
         x = x + dx * t
         y = y + dy * t
     return x, y, th
+
+
+def unit_speed_poses(
+    starts: list[tuple[float, float, float, float, float, float]],
+) -> list[tuple[float, float, float, float, float]]:
+    """:func:`unit_speed_pose` of several independent ``(x, y, theta, w0, alpha, t)``, with one ``np.cos`` and one
+    ``np.sin`` call for all (the same bits as one call each)."""
+    phases: list[float] = []
+    ends: list[float] = []
+    for _x, _y, theta, w0, alpha, t in starts:
+        half_alpha = 0.5 * alpha
+        phases += [theta + tau * (w0 + half_alpha * tau) for tau in [ui * t for ui in _U_LIST]]
+        th = theta + t * (w0 + half_alpha * t)
+        phases.append(th)
+        ends.append(th)
+    arr = _np_array(phases)
+    cs = _np_cos(arr).tolist()
+    sn = _np_sin(arr).tolist()
+    out: list[tuple[float, float, float, float, float]] = []
+    base = 0
+    for (x, y, _theta, _w0, _alpha, t), th in zip(starts, ends, strict=True):
+        dx = 0.0
+        dy = 0.0
+        for i in range(NODES):
+            wi = _UW_LIST[i]
+            dx = dx + wi * cs[base + i]
+            dy = dy + wi * sn[base + i]
+        out.append((x + dx * t, y + dy * t, th, cs[base + NODES], sn[base + NODES]))
+        base += NODES + 1
+    return out

@@ -820,8 +820,11 @@ def evaluate_columns(
         mcb * m_ct + msb * m_st,
         _clip(m_k * l3, -1.0, 1.0),
     ]
-    for d, bound in zip(p.preview, k.preview_bounds, strict=True):
-        q = path.pose_columns(m_s + d)
+    if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
+        ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
+    else:
+        ahead = [path.pose_columns(m_s + d) for d in p.preview]
+    for q, bound in zip(ahead, k.preview_bounds, strict=True):
         dx = q.x - mx
         dy = q.y - my
         obs += [

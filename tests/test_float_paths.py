@@ -137,6 +137,9 @@ def test_locate_and_pose_float_equal_arrays(name: str, kw: dict[str, Any]) -> No
         assert type(got.status) is int
         rows_equal(got, ref, i)
         rows_equal(path.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475), ref_default, i)
+    for i in range(0, n - 3, 3):
+        for j, got_pose in enumerate(path.pose_floats([float(v) for v in s[i : i + 3]])):
+            rows_equal(got_pose, q, i + j)
     with pytest.raises(ValueError, match="max_advance"):
         path.locate(0.0, 0.0, 0.0, -1.0)
 

@@ -35,7 +35,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.fresnel import advance, subintervals, unit_speed_pose
+from amigo_gym.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
 from amigo_gym.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.params import check_range
 from amigo_gym.paths.classic import ClosestPoint, Projection
@@ -662,6 +662,10 @@ class ClothoidPath:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
         return self._pose(self._t, s)
 
+    def pose_floats(self, ss: list[float]) -> list[PathPose]:
+        """:meth:`pose_columns` of each float in ``ss`` (the same bits), computed together (one robot's preview)."""
+        return [PathPose(*q) for q in _poses_tuple(self._t, self.closed, ss)]
+
     def _array_pose(self, s: ArrayLike) -> PathPose:
         a = np.asarray(s, dtype=np.float64)
         p = self._pose(self._t, a.reshape(-1))
@@ -829,6 +833,39 @@ def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
     if extra != 0.0:
         return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
     return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
+
+
+def _poses_tuple(t: _Tables, closed: bool, ss: list[float]) -> list[FloatPose]:
+    """:func:`_pose_tuple` of several floats, the cosines and sines of all in one numpy call each."""
+    length = t.length
+    s0 = t.s0
+    last = len(s0) - 1
+    starts: list[tuple[float, float, float, float, float, float]] = []
+    rest: list[tuple[float, float, float, float]] = []
+    for s in ss:
+        if closed:
+            lap = float(math.floor(s / length))
+            u = s - lap * length
+            extra = 0.0
+        else:
+            lap = 0.0
+            u = min(max(s, 0.0), length)
+            extra = s - u
+        j = min(max(bisect.bisect_right(s0, u) - 1, 0), last)
+        k0 = t.k0[j]
+        c = t.c[j]
+        du = u - s0[j]
+        starts.append((t.x0[j], t.y0[j], t.th0[j], k0, c, du))
+        rest.append((lap, extra, k0 + c * du, c))
+    out: list[FloatPose] = []
+    for (x, y, th, cos_t, sin_t), (lap, extra, kappa, c) in zip(unit_speed_poses(starts), rest, strict=True):
+        if closed:
+            out.append((x, y, th + lap * t.turn, kappa, c, cos_t, sin_t))
+        elif extra != 0.0:
+            out.append((x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t))
+        else:
+            out.append((x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t))
+    return out
 
 
 _ARANGE: dict[int, NDArray[np.float64]] = {}
