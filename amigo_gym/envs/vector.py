@@ -36,7 +36,7 @@ from amigo_gym.envs.amigobot import (
     parse_pose_option,
 )
 from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = ["AmigoBotVectorEnv"]
@@ -347,6 +347,13 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
         fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
+        beta = self._rows[:, 2]
+        if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
+            # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
+            # state and in the info's pose
+            bounded = np.asarray(task.bound_heading(self._state).beta)
+            beta[:] = bounded
+            record[:, 2] = bounded
         truncated = (
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
         )
