@@ -143,7 +143,10 @@ class ActuatorParams:
 
 
 def _any_array(*cols: object) -> bool:
-    return any(isinstance(c, np.ndarray) for c in cols)
+    for c in cols:  # noqa: SIM110  (a loop: a third of the time of any() over a generator)
+        if isinstance(c, np.ndarray):
+            return True
+    return False
 
 
 def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
@@ -375,6 +378,12 @@ def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]
         ValueError: if the ring is too short for ``lag``.
     """
     length = ring.shape[-2]
+    if ring.ndim == 2 and type(lag) is int:  # one robot: no array arithmetic
+        if lag + 2 > length or lag < 0:
+            raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
+        w1_new, w2_new = ring[(step - lag) % length].tolist()
+        w1_old, w2_old = ring[(step - lag - 1) % length].tolist()
+        return w1_old, w2_old, w1_new, w2_new
     if np.any(np.asarray(lag) + 2 > length) or np.any(np.asarray(lag) < 0):
         raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
     i_new = (step - np.asarray(lag)) % length
@@ -500,6 +509,14 @@ def actuator_step(
     """
     if n_sub is None:
         n_sub = step_subintervals(dt, nominal)
+    if not _any_array(
+        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
+    ):
+        return _actuator_step_float(
+            float(x), float(y), float(beta), float(w1), float(w2), float(w1c_old), float(w2c_old),
+            float(w1c_new), float(w2c_new), float(t_switch), dt, nominal, limits, float(r1_true),
+            float(r2_true), float(l1_true), float(slip1), float(slip2), n_sub,
+        )  # fmt: skip
     cols: tuple[Real, ...] = (
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
     )  # fmt: skip
@@ -553,7 +570,18 @@ def actuator_step(
         at = 0.5 * (g1 * q1 + g2 * q2)
         wt = (g1 * p1 - g2 * p2) * inv_2l1t
         alt = (g1 * q1 - g2 * q2) * inv_2l1t
-        nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
+        nx: Real
+        ny: Real
+        nb: Real
+        if batch and 2 * int(np.count_nonzero(live)) < np.size(live):
+            # most rows have no piece here: the quadrature on the live rows only (the same bits per row)
+            m = np.asarray(live)
+            xa, ya, ba = np.array(x), np.array(y), np.array(beta)
+            v_m, a_m, w_m, al_m, t_m = (np.asarray(c)[m] for c in (vt, at, wt, alt, length))
+            xa[m], ya[m], ba[m] = fresnel.advance(xa[m], ya[m], ba[m], v_m, a_m, w_m, al_m, t_m, n_sub)
+            nx, ny, nb = xa, ya, ba
+        else:
+            nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
         half = 0.5 * length
         nda1 = da1 + length * (p1 + q1 * half)
         nda2 = da2 + length * (p2 + q2 * half)
@@ -566,6 +594,152 @@ def actuator_step(
 
     # 4. the new actuator state and the true speeds at the end
     w1n, w2n = wheel_rates_columns(v_end, w_end, nominal)
+    v_true = 0.5 * (g1 * w1n + g2 * w2n)
+    w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
+    return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)
+
+
+# -- the float path of one robot ------------------------------------------------------------------------
+#
+# The expressions of ramp, _channel, _evaluate and actuator_step for Python floats, written out flat (the
+# selections as ``if``, which do no arithmetic): the same bits as the column code (tests/test_actuators.py
+# compares them), without its per-call overhead. The pose advances over all pieces with one np.cos and one
+# np.sin call (:func:`amigo_gym.fresnel.advance_chain_float`).
+
+
+def _ramp_float(
+    u0: float, target: float, accel: float, decel: float, duration: float
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`ramp` for floats: ``(t_a, t_b, u_a, u_b, s_a, s_b)``."""
+    if u0 * target < 0.0:
+        u_z = 0.0
+        t_z = abs(u0) / decel
+        s_a = math.copysign(decel, -u0)
+    else:
+        u_z = u0
+        t_z = 0.0
+        s_a = 0.0
+    d = target - u_z
+    rate = accel if abs(target) > abs(u_z) else decel
+    t_r = t_z + abs(d) / rate
+    s_b = math.copysign(rate, d)
+    z_in = t_z <= duration
+    u_a = u_z if z_in else u0 + s_a * duration
+    if t_r <= duration:
+        u_b = target
+    elif z_in:
+        u_b = u_z + s_b * (duration - t_z)
+    else:
+        u_b = u_a
+    return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
+
+
+def _channel_float(
+    u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
+) -> tuple[list[float], list[float], list[float], float]:
+    """:func:`_channel` for floats."""
+    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp_float(u0, c_old, accel, decel, t_s)
+    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp_float(ub1, c_new, accel, decel, dt - t_s)
+    k4 = t_s + ta2
+    k5 = t_s + tb2
+    knots = [0.0, ta1, tb1, t_s, k4 if k4 <= dt else dt, k5 if k5 <= dt else dt, dt]
+    return knots, [u0, ua1, ub1, ub1, ua2, ub2], [sa1, sb1, 0.0, sa2, sb2, 0.0], ub2
+
+
+def _evaluate_float(
+    knots: list[float], values: list[float], slopes: list[float], t: float, mid: float
+) -> tuple[float, float]:
+    """:func:`_evaluate` for floats."""
+    val = values[0] + slopes[0] * t
+    slope = slopes[0]
+    for i in range(1, 6):
+        if mid >= knots[i]:
+            val = values[i] + slopes[i] * (t - knots[i])
+            slope = slopes[i]
+    return val, slope
+
+
+def _clip_float(w: float, w_max: float) -> float:
+    """:func:`clip_setpoints` of one setpoint for floats."""
+    lo = -w_max
+    w = w if w >= lo else lo
+    return w if w <= w_max else w_max
+
+
+def _actuator_step_float(
+    x: float,
+    y: float,
+    beta: float,
+    w1: float,
+    w2: float,
+    w1c_old: float,
+    w2c_old: float,
+    w1c_new: float,
+    w2c_new: float,
+    t_s: float,
+    dt: float,
+    nominal: RobotParams,
+    limits: ActuatorParams,
+    r1t: float,
+    r2t: float,
+    l1t: float,
+    s1: float,
+    s2: float,
+    n_sub: int,
+) -> ActuatorStep:
+    """:func:`actuator_step` for Python floats (the same bits)."""
+    w_max = nominal.max_wheel_rate
+    l1n, r1n, r2n = nominal.l1, nominal.r1, nominal.r2
+    two_l1 = 2.0 * l1n
+    # 1. commands (clip_setpoints, body_velocity_columns)
+    u1 = r1n * _clip_float(w1c_old, w_max)
+    u2 = r2n * _clip_float(w2c_old, w_max)
+    vc_old, wc_old = 0.5 * (u1 + u2), (u1 - u2) / two_l1
+    u1 = r1n * _clip_float(w1c_new, w_max)
+    u2 = r2n * _clip_float(w2c_new, w_max)
+    vc_new, wc_new = 0.5 * (u1 + u2), (u1 - u2) / two_l1
+    # 2. ramps
+    u1 = r1n * w1
+    u2 = r2n * w2
+    v0, om0 = 0.5 * (u1 + u2), (u1 - u2) / two_l1
+    kv, uv, sv, v_end = _channel_float(v0, vc_old, vc_new, limits.acceleration, limits.deceleration, t_s, dt)
+    kw, uw, sw, w_end = _channel_float(om0, wc_old, wc_new, limits.rot_acceleration, limits.rot_deceleration, t_s, dt)
+    times = [0.0, *sorted([kv[1], kv[2], kv[3], kv[4], kv[5], kw[1], kw[2], kw[4], kw[5]]), dt]
+    # 3. pieces
+    g1 = (1.0 - s1) * r1t
+    g2 = (1.0 - s2) * r2t
+    inv_2l1t = 0.5 / l1t
+    da1 = 0.0
+    da2 = 0.0
+    dist = 0.0
+    pieces: list[tuple[float, float, float, float, float]] = []
+    for j in range(PIECES):
+        t0 = times[j]
+        t1 = times[j + 1]
+        length = t1 - t0
+        if not length > 0.0:
+            continue
+        mid = 0.5 * (t0 + t1)
+        v, a = _evaluate_float(kv, uv, sv, t0, mid)
+        om, al = _evaluate_float(kw, uw, sw, t0, mid)
+        p1 = (v + l1n * om) / r1n
+        q1 = (a + l1n * al) / r1n
+        p2 = (v - l1n * om) / r2n
+        q2 = (a - l1n * al) / r2n
+        vt = 0.5 * (g1 * p1 + g2 * p2)
+        at = 0.5 * (g1 * q1 + g2 * q2)
+        wt = (g1 * p1 - g2 * p2) * inv_2l1t
+        alt = (g1 * q1 - g2 * q2) * inv_2l1t
+        pieces.append((vt, at, wt, alt, length))
+        half = 0.5 * length
+        da1 = da1 + length * (p1 + q1 * half)
+        da2 = da2 + length * (p2 + q2 * half)
+        dist = dist + length * (vt + at * half)
+    x, y, beta = fresnel.advance_chain_float(x, y, beta, pieces, n_sub)
+    # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
+    lw = l1n * w_end
+    w1n = (v_end + lw) / r1n
+    w2n = (v_end - lw) / r2n
     v_true = 0.5 * (g1 * w1n + g2 * w2n)
     w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
     return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)

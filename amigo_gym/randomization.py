@@ -276,6 +276,8 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
         r: the ranges (noise levels).
         slip_max: per-episode slip bounds, shape ``(...)`` or a float.
     """
+    if type(key) is int and type(step) is int and type(slip_max) is float:
+        return _step_noise_float(key, step, r, slip_max)
     zero: Real = 0.0
     s1 = s2 = zero
     if np.any(np.asarray(slip_max) > 0.0):
@@ -293,3 +295,40 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
     if np.ndim(key) == 0 and np.ndim(step) == 0 and np.ndim(slip_max) == 0:  # one robot: plain floats
         return StepNoise(*(float(c) for c in (s1, s2, nx, ny, nb, n1, n2)))
     return StepNoise(s1, s2, nx, ny, nb, n1, n2)
+
+
+# -- the float path of one robot: the same bits with Python integers (wrapping as uint64 does) -------------
+
+_GAMMA = 0x9E3779B97F4A7C15
+_MIX1 = 0xBF58476D1CE4E5B9
+_MIX2 = 0x94D049BB133111EB
+_INV_2_53 = 1.0 / 9007199254740992.0
+_TWO_PI = 2.0 * math.pi
+
+
+def _counter_uniform_int(key: int, step: int, channel: int) -> float:
+    """:func:`counter_uniform` for one Python ``int`` key and step (``0 <= key < 2**64``, ``step >= 0``)."""
+    z = (key + ((step * 256 + channel + 1) & _M64) * _GAMMA) & _M64
+    z = ((z ^ (z >> 30)) * _MIX1) & _M64
+    z = ((z ^ (z >> 27)) * _MIX2) & _M64
+    z = z ^ (z >> 31)
+    return (float(z >> 11) + 0.5) * _INV_2_53
+
+
+def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:
+    """:func:`step_noise` for one robot (the same bits): the normals' ``log`` and ``cos`` in one numpy call each."""
+    s1 = s2 = 0.0
+    if slip_max > 0.0:
+        s1 = slip_max * _counter_uniform_int(key, step, 0)
+        s2 = slip_max * _counter_uniform_int(key, step, 1)
+    levels = (r.position_noise, r.position_noise, r.heading_noise, r.wheel_rate_noise, r.wheel_rate_noise)
+    on = [c for c in range(5) if levels[c] > 0.0]
+    out = [0.0, 0.0, 0.0, 0.0, 0.0]
+    if on:
+        u1 = np.array([_counter_uniform_int(key, step, 2 * (c + 1)) for c in on])
+        u2 = np.array([_TWO_PI * _counter_uniform_int(key, step, 2 * (c + 1) + 1) for c in on])
+        logs = np.log(u1).tolist()
+        coss = np.cos(u2).tolist()
+        for c, lg, cs in zip(on, logs, coss, strict=True):
+            out[c] = levels[c] * (math.sqrt(-2.0 * lg) * cs)
+    return StepNoise(s1, s2, out[0], out[1], out[2], out[3], out[4])

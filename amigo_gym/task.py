@@ -114,6 +114,7 @@ __all__ = [
     "outcome_columns",
     "reset_columns",
     "step_columns",
+    "step_float",
 ]
 
 Array = NDArray[np.float64]
@@ -606,6 +607,105 @@ def step_columns(
     """
     m = move_columns(k, state, a1, a2)
     return m.state, outcome_columns(k, path, m.state, m.cos_beta, m.sin_beta, m.v, state.rate1, state.rate2, minimal)
+
+
+def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
+    """:func:`step_columns` (``minimal=True``) for one robot's Python floats, as one flat function: the same bits.
+
+    The expressions of :func:`move_columns`, :func:`amigo_gym.kinematics.arc_step` (with ``cos_sin`` and the
+    sinc), ``castor_rate_columns``, ``h_from_a`` and :func:`outcome_columns` written out in their order,
+    without the layers of small functions; the two tangents and the three exponentials are numpy's, each
+    pair or triple in one call on a small array (numpy gives an element the bits it gives a scalar), so the
+    single env and the vector env (:func:`step_columns` on ``(N,)`` columns) agree bit for bit
+    (``tests/test_columns.py`` checks it). The path's projection and curvature are the path's own methods.
+    """
+    robot = k.robot
+    dt = k.dt
+    w_max = k.w_max
+    # move_columns: clip and scale, body velocity
+    c1 = a1 if -1.0 <= a1 <= 1.0 else (-1.0 if a1 < -1.0 else 1.0)
+    c2 = a2 if -1.0 <= a2 <= 1.0 else (-1.0 if a2 < -1.0 else 1.0)
+    w1 = c1 * w_max
+    w2 = c2 * w_max
+    u1 = robot.r1 * w1
+    u2 = robot.r2 * w2
+    v = 0.5 * (u1 + u2)
+    bdot = (u1 - u2) / (2.0 * robot.l1)
+    # arc_step: cos_sin of the half turn and of the mid-step heading from one np.tan call
+    beta = state.beta
+    db = bdot * dt
+    h = 0.5 * db
+    t_h, t_m = _np_tan(_np_array((0.5 * h, 0.5 * (beta + h)))).tolist()
+    t2 = t_h * t_h
+    r = 1.0 / (1.0 + t2)
+    cos_h, sin_h = (1.0 - t2) * r, (t_h + t_h) * r
+    t2 = t_m * t_m
+    r = 1.0 / (1.0 + t2)
+    cos_mid, sin_mid = (1.0 - t2) * r, (t_m + t_m) * r
+    zero = h == 0.0
+    chord = v * dt * ((sin_h + zero) / (h + zero))
+    x = state.x + chord * cos_mid
+    y = state.y + chord * sin_mid
+    cos_b = cos_mid * cos_h - sin_mid * sin_h
+    sin_b = sin_mid * cos_h + cos_mid * sin_h
+    lb = robot.l5 * bdot
+    castor = math.copysign(math.sqrt(lb * lb + v * v), v) / robot.r3
+    new = State(
+        x,
+        y,
+        beta + db,
+        state.alpha1 + w1 * dt,
+        state.alpha2 + w2 * dt,
+        state.alpha3 + castor * dt,
+        w1,
+        w2,
+    )
+    # outcome_columns
+    l3 = k.l3
+    hx = x + l3 * cos_b
+    hy = y + l3 * sin_b
+    cp = path.project_xy(hx, hy, True)
+    cos_psi = cos_b * cp.cos_theta + sin_b * cp.sin_theta
+    sin_psi = sin_b * cp.cos_theta - cos_b * cp.sin_theta
+    e = cast(float, cp.cross_track_error)
+    abs_e = abs(e)
+    dv = v - k.speed
+    curvature = cp.curvature
+    eo = e / k.error_scale
+    e_max = k.e_max
+    obs = (
+        eo if -e_max <= eo <= e_max else (-e_max if eo < -e_max else e_max),
+        sin_psi,
+        cos_psi,
+        curvature * l3,
+        *[path.curvature_columns(cp.s + d) * l3 for d in k.preview],
+        w1 / w_max,
+        w2 / w_max,
+        dv / k.max_speed,
+        k.reference_obs,
+    )
+    if isinstance(curvature, float):
+        cos_ss, sin_ss = _steady_heading_scalar(curvature, l3)
+    else:
+        cos_ss, sin_ss = _steady_heading(curvature, l3)
+    dw1 = w1 - state.rate1
+    dw2 = w2 - state.rate2
+    ex = _np_exp(
+        _np_array((abs_e / -k.sigma_track, abs(dv) / -k.sigma_speed, (dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq))
+    ).tolist()
+    terms = (
+        ex[0],
+        ex[1],
+        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
+        1.0 - k.smooth_weight * (1.0 - ex[2]),
+    )
+    reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
+    return new, Outcome(hx, hy, cp, obs, terms, reward, abs_e > k.termination_distance)
+
+
+_np_array = np.array
+_np_tan = np.tan
+_np_exp = np.exp
 
 
 class Evaluation(NamedTuple):

@@ -820,8 +820,11 @@ def evaluate_columns(
         mcb * m_ct + msb * m_st,
         _clip(m_k * l3, -1.0, 1.0),
     ]
-    for d, bound in zip(p.preview, k.preview_bounds, strict=True):
-        q = path.pose_columns(m_s + d)
+    if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
+        ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
+    else:
+        ahead = [path.pose_columns(m_s + d) for d in p.preview]
+    for q, bound in zip(ahead, k.preview_bounds, strict=True):
         dx = q.x - mx
         dy = q.y - my
         obs += [
@@ -845,7 +848,10 @@ def evaluate_columns(
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
     """Whether the true ``l3`` differs from the nominal (then the measured H is projected separately)."""
-    return bool(np.any(np.asarray(ep.l3) != k.l3))
+    l3 = ep.l3
+    if type(l3) is float:
+        return l3 != k.l3
+    return bool(np.any(np.asarray(l3) != k.l3))
 
 
 def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -> Outcome:

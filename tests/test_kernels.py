@@ -278,10 +278,14 @@ def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) ->
     assert ref._steps.max() < 25  # episodes ended (terminated or truncated) and restarted
 
 
-def test_vector_env_kernel_argument() -> None:
+def test_vector_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     from amigo_gym.envs.vector import AmigoBotVectorEnv
 
     with pytest.raises(ValueError, match="kernel"):
         AmigoBotVectorEnv(num_envs=2, kernel="cuda")
-    assert AmigoBotVectorEnv(num_envs=2)._ws is None
+    assert AmigoBotVectorEnv(num_envs=2, kernel="numpy")._ws is None
     assert AmigoBotVectorEnv(num_envs=2, kernel="numba")._ws is not None
+    # the default is "auto": the kernel when numba is installed (it is, here), unless AMIGO_GYM_KERNEL=numpy
+    assert AmigoBotVectorEnv(num_envs=2)._ws is not None
+    monkeypatch.setenv("AMIGO_GYM_KERNEL", "numpy")
+    assert AmigoBotVectorEnv(num_envs=2)._ws is None

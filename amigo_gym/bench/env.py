@@ -21,7 +21,8 @@ read (ratios move less with the machine's load than absolute figures). From one 
   and on ``Pendulum-v1``, with one env (``make_vec_env``, ``DummyVecEnv``) and with ``--ppo-envs``
   envs (AmigoBot through the native adapter :class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`,
   Pendulum through ``DummyVecEnv``). Needs torch and stable-baselines3 (skipped with a note otherwise).
-* ``--v1``: ``AmigoBot-v1`` against ``AmigoBot-v0`` (single step, and the vector env at the sizes),
+* ``--v1``: ``AmigoBot-v1`` against ``AmigoBot-v0`` (single step, and the vector env at the sizes up to
+  :data:`V1_MAX_N`), both v1's default task and :data:`V1_HARD` (mixed paths, hard randomisation),
   when ``"AmigoBot-v1"`` is in Gymnasium's registry; otherwise a note says it was skipped.
 
 Actions are uniform random in the action space, drawn in advance (a pool of 16 batches cycled), so
@@ -384,43 +385,70 @@ def bench_ppo(
 
 
 # ---------------------------------------------------------------------------------------------- v1
+#: the harder v1 task of the comparison: every path family, a speed range and the "hard" randomisation
+V1_HARD: dict[str, Any] = {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}
+#: largest N at which ``--v1`` times the v1 vector env (a v1 env-step costs tens of v0's)
+V1_MAX_N = 4096
+
+
 @dataclass(frozen=True)
 class V1Result:
-    """``AmigoBot-v1`` against ``AmigoBot-v0``: single step [us] and vector env-steps/s per ``N``."""
+    """``AmigoBot-v1`` against ``AmigoBot-v0``: single step [us] and vector env-steps/s per ``N``.
+
+    ``v1`` is the default task (the circle, no randomisation), ``v1_hard`` the task of :data:`V1_HARD`
+    (mixed paths, a speed range, hard randomisation: two projections per step instead of one).
+    ``vector[n] = (v1, v0)`` and ``vector_hard[n]`` the hard task's env-steps/s.
+    """
 
     v1_us: float
     v0_us: float
     vector: dict[int, tuple[float, float]]
+    v1_hard_us: float | None = None
+    vector_hard: dict[int, float] = field(default_factory=dict)
 
     @property
     def ratio(self) -> float:
         """v1's time per single step over v0's (target <= 2)."""
         return self.v1_us / self.v0_us
 
+    @property
+    def ratio_hard(self) -> float | None:
+        """The hard v1 task's time per single step over v0's."""
+        return None if self.v1_hard_us is None else self.v1_hard_us / self.v0_us
+
 
 def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> V1Result | None:
-    """v1 against v0, or ``None`` when ``AmigoBot-v1`` is not registered."""
+    """v1 (default and :data:`V1_HARD`) against v0, single step and vector env at ``sizes`` up to
+    :data:`V1_MAX_N`; ``None`` when ``AmigoBot-v1`` is not registered."""
     import gymnasium as gym
 
     import amigo_gym  # noqa: F401
 
     if "AmigoBot-v1" not in gym.registry:
         return None
-    single = {v: _single_stepper(gym.make(f"AmigoBot-{v}"), seed) for v in ("v1", "v0")}
+    tasks: dict[str, tuple[str, dict[str, Any]]] = {
+        "v1": ("AmigoBot-v1", {}),
+        "v1_hard": ("AmigoBot-v1", V1_HARD),
+        "v0": ("AmigoBot-v0", {}),
+    }
+    single = {name: _single_stepper(gym.make(env_id, **kw), seed) for name, (env_id, kw) in tasks.items()}
     ts = measure_many(single, repeats, min_time)
-    t1, t0 = ts["v1"], ts["v0"]
     vector: dict[int, tuple[float, float]] = {}
+    hard: dict[int, float] = {}
     if gym.registry["AmigoBot-v1"].vector_entry_point is not None:
         for n in sizes:
+            if n > V1_MAX_N:
+                continue
             venvs = {
-                v: gym.make_vec(f"AmigoBot-{v}", num_envs=n, vectorization_mode="vector_entry_point")
-                for v in ("v1", "v0")
+                name: gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kw)
+                for name, (env_id, kw) in tasks.items()
             }
-            tv = measure_many({v: _vector_stepper(e, seed) for v, e in venvs.items()}, repeats, min_time)
+            tv = measure_many({name: _vector_stepper(e, seed) for name, e in venvs.items()}, repeats, min_time)
             for e in venvs.values():
                 e.close()
             vector[n] = (n / tv["v1"], n / tv["v0"])
-    return V1Result(t1 * 1e6, t0 * 1e6, vector)
+            hard[n] = n / tv["v1_hard"]
+    return V1Result(ts["v1"] * 1e6, ts["v0"] * 1e6, vector, ts["v1_hard"] * 1e6, hard)
 
 
 # ---------------------------------------------------------------------------------------------- report
@@ -459,7 +487,13 @@ class Report:
                 "v1_us": self.v1.v1_us,
                 "v0_us": self.v1.v0_us,
                 "ratio": self.v1.ratio,
-                "vector": {str(n): {"v1": a, "v0": b} for n, (a, b) in self.v1.vector.items()},
+                "v1_hard_us": self.v1.v1_hard_us,
+                "ratio_hard": self.v1.ratio_hard,
+                "hard_task": {k: list(v) if isinstance(v, tuple) else v for k, v in V1_HARD.items()},
+                "vector": {
+                    str(n): {"v1": a, "v0": b, "v1_hard": self.v1.vector_hard.get(n)}
+                    for n, (a, b) in self.v1.vector.items()
+                },
             },
             "notes": self.notes,
         }
@@ -538,12 +572,19 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
         out.append("")
     if report is not None and report.v1 is not None:
         v = report.v1
+        hard = "path=mixed, speed=(0.1, 0.4), randomize=hard"
         out += [
-            "| AmigoBot-v1 vs v0 | v1 | v0 | v1 / v0 |",
-            "|---|---:|---:|---:|",
-            f"| single step [us] (target <= 2) | {v.v1_us:.1f} | {v.v0_us:.1f} | {v.ratio:.2f} |",
+            f"| AmigoBot-v1 vs v0 | v1 | v1 ({hard}) | v0 | v1 / v0 | v1 hard / v0 |",
+            "|---|---:|---:|---:|---:|---:|",
+            f"| single step [us] (target <= 2) | {v.v1_us:.1f} | {_fmt(v.v1_hard_us, '.1f')} | {v.v0_us:.1f} "
+            f"| {v.ratio:.2f} | {_fmt(v.ratio_hard, '.2f')} |",
         ]
-        out += [f"| vector, N = {n} [steps/s] | {a:.3g} | {b:.3g} | {a / b:.2f} |" for n, (a, b) in v.vector.items()]
+        for n, (a, b) in v.vector.items():
+            h = v.vector_hard.get(n)
+            out.append(
+                f"| vector, N = {n} [steps/s] | {a:.3g} | {_fmt(h)} | {b:.3g} | {b / a:.2f} (time) "
+                f"| {_fmt(None if h is None else b / h, '.2f')} (time) |"
+            )
         out.append("")
     if report is not None:
         out += [f"note: {n}" for n in report.notes]

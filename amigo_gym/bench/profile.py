@@ -166,6 +166,7 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
         "AmigoBot `gym.make` step": wrapped,
         "AmigoBot unwrapped `env.step`": unwrapped,
         "`task.step_columns` on Python floats": lambda: task.step_columns(raw._k, raw.path, start, 0.27, 0.27, True),
+        "`task.step_float` (what the env's step runs)": lambda: task.step_float(raw._k, raw.path, start, 0.27, 0.27),
         "`task.validate_action`": lambda: task.validate_action(a).tolist(),
         "Pendulum `gym.make` step": lambda: pend.step(ap),
         "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),

@@ -395,12 +395,34 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         a1, a2 = task.validate_action(action).tolist()
         if self._ended:
             self._warn_ended()
-        state, out = task.step_columns(self._k, self.path, self._state, a1, a2, minimal=True)
-        self._state = task.bound_heading(state)
+        st = self._state
+        if type(st.x) is float and type(st.beta) is float:  # floats (always, after reset): one flat function
+            state, out = task.step_float(self._k, self.path, st, a1, a2)
+        else:
+            state, out = task.step_columns(self._k, self.path, st, a1, a2, minimal=True)
+        self._state = st = task.bound_heading(state)
         self._steps += 1
         if self.render_mode is not None:
             self._trail.append((float(out.h_x), float(out.h_y)))
-        info = self._info(out)
+        if type(st.x) is float:  # task.info_columns in the single env's types, built directly
+            terms = out.terms
+            info = {
+                "pose": np.array((st.x, st.y, st.beta)),
+                "h_position": np.array((out.h_x, out.h_y)),
+                "cross_track_error": float(out.closest.cross_track_error),
+                "wheel_rates": np.array((st.rate1, st.rate2)),
+                "wheel_angles": np.array((st.alpha1, st.alpha2)),
+                "castor_angle": float(st.alpha3),
+                "reward_terms": {
+                    "track": float(terms[0]),
+                    "speed": float(terms[1]),
+                    "heading": float(terms[2]),
+                    "smooth": float(terms[3]),
+                },
+                "time": float(self._steps * self._k.dt),
+            }
+        else:
+            info = self._info(out)
         if self.render_mode == "human":
             self.render()
         terminated = bool(out.terminated)

@@ -36,7 +36,7 @@ from amigo_gym.envs.amigobot import (
     parse_pose_option,
 )
 from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = ["AmigoBotVectorEnv"]
@@ -63,11 +63,11 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
             (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
-        kernel: the step's implementation (:mod:`amigo_gym.fast`): ``"numpy"`` (default: the
-            reference column functions of :mod:`amigo_gym.task`), ``"numba"`` (the compiled kernel,
-            the same results bit for bit; needs the extra ``amigo_gym[fast]``), ``"auto"`` (numba when
-            installed, unless ``AMIGO_GYM_KERNEL=numpy``), or ``"numba-parallel"`` (the kernel's loops on
-            numba's threads).
+        kernel: the step's implementation (:mod:`amigo_gym.fast`): ``"auto"`` (default: the compiled
+            kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
+            reference column functions of :mod:`amigo_gym.task`), ``"numba"`` (the compiled kernel, the
+            same results bit for bit; needs the extra ``amigo_gym[fast]``), or ``"numba-parallel"`` (the
+            kernel's loops on numba's threads).
         params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
 
     Spaces: ``single_action_space = Box(-1, 1, (2,), float32)``, ``action_space`` its batch
@@ -98,7 +98,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
-        kernel: str = "numpy",
+        kernel: str = "auto",
         *,
         params: EnvParams | Mapping[str, Any] | None = None,
         robot: RobotParams | Mapping[str, Any] | None = None,
@@ -347,6 +347,13 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
         fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
+        beta = self._rows[:, 2]
+        if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
+            # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
+            # state and in the info's pose
+            bounded = np.asarray(task.bound_heading(self._state).beta)
+            beta[:] = bounded
+            record[:, 2] = bounded
         truncated = (
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
         )

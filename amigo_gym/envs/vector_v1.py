@@ -28,6 +28,8 @@ from amigo_gym import tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
 from amigo_gym.envs.vector import _parse_autoreset_mode
+from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.randomization import StepNoise
 
 __all__ = ["AmigoBotV1VectorEnv"]
 
@@ -36,6 +38,8 @@ BoolArray = NDArray[np.bool_]
 ObsArray = NDArray[np.float32]
 
 #: the numeric info keys, in the single env's order (``path`` is kept per robot in :attr:`path_infos`)
+#: up to this many robots a step runs the float code row by row (cheaper than numpy calls on tiny columns)
+ROWWISE_MAX_N = 12
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 
@@ -254,9 +258,12 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             )
         k = self._k
         self._ring_step += 1
-        st, out, noise = tracking.step_columns(
-            k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
-        )
+        if n <= ROWWISE_MAX_N and all(isinstance(p, ClothoidPath) for p in self.paths.paths):
+            st, out, noise = self._step_rowwise(a1, a2)
+        else:
+            st, out, noise = tracking.step_columns(
+                k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
+            )
         self._state = tracking.State(*(np.asarray(c) for c in st))
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
@@ -306,6 +313,35 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         self._autoreset = terminated | truncated
         self._obs = obs
         return obs, reward, terminated, truncated, self._scatter(infos, None)
+
+    def _step_rowwise(self, a1: Array, a2: Array) -> tuple[tracking.State, tracking.Outcome, StepNoise]:
+        """:func:`tracking.step_columns` row by row on Python floats (the single env's code), stacked as columns.
+
+        The float path gives each row the bits of the column code (``tests/test_float_paths.py``), at a
+        fraction of the fixed cost of numpy calls on ``(1,)`` arrays: the step of a few robots (``N <=``
+        :data:`ROWWISE_MAX_N`).
+        """
+        k = self._k
+        rows = []
+        for i in range(self.num_envs):
+            st_i = tracking.State(*(_item(c, i) for c in self._state))
+            ep_i = tracking.Episode(*(_item(c, i) for c in self._episode))
+            rows.append(
+                tracking.step_columns(
+                    k, self.paths[i], st_i, ep_i, self._ring[i], self._ring_step, float(a1[i]), float(a2[i])
+                )
+            )
+        st = tracking.State(*(np.array(col) for col in zip(*(r[0] for r in rows), strict=True)))
+        outs = [r[1] for r in rows]
+        cols: list[Any] = []
+        for f, first in zip(tracking.Outcome._fields, outs[0], strict=True):
+            values = [getattr(o, f) for o in outs]
+            if isinstance(first, tuple):
+                cols.append(tuple(np.array(c, dtype=np.float64) for c in zip(*values, strict=True)))
+            else:
+                cols.append(np.array(values))
+        noise = StepNoise(*(np.array(c, dtype=np.float64) for c in zip(*(r[2] for r in rows), strict=True)))
+        return st, tracking.Outcome(*cols), noise
 
     # ------------------------------------------------------------------ infos
     def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
@@ -402,6 +438,12 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         state = self.__dict__.copy()
         state["_renderers"] = [None] * self.num_envs
         return state
+
+
+def _item(c: Any, i: int) -> Any:
+    """Row ``i`` of a column as a Python scalar (a column that is a scalar: itself)."""
+    a = np.asarray(c)
+    return a[i].item() if a.ndim == 1 else a.item()
 
 
 def _as_columns(v: Any, n: int) -> Any:

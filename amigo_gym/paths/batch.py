@@ -162,6 +162,23 @@ class _Padded:
         g = self.piece.reshape(-1, 6)[self.base + j]
         return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
 
+    def piece_of_rows(self, u: Array, rows: NDArray[np.intp]) -> Piece:
+        """:meth:`piece_of` for the rows ``rows`` only (``u``: ``(k,)``, one per listed row)."""
+        q = np.empty(u.shape, dtype=np.complex128)
+        q.real = self.key[rows, 0].real
+        q.imag = u
+        base = self.base[rows]
+        j = np.searchsorted(self.key.reshape(-1), q, side="right") - 1 - base
+        j = np.clip(j, 0, self.npieces[rows] - 1)
+        g = self.piece.reshape(-1, 6)[base + j]
+        return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
+
+    def pose_rows(self, s: Array, rows: NDArray[np.intp]) -> PathPose:
+        """:meth:`pose` of the rows ``rows`` only (``s``: ``(k,)``)."""
+        return pose_from_pieces(
+            s, self.length[rows], self.turn[rows], self.closed[rows], lambda u: self.piece_of_rows(np.asarray(u), rows)
+        )
+
     def pose(self, s: Real) -> PathPose:
         """:func:`pose_from_pieces` with each row's own tables (``s``: ``(N,)`` [m])."""
         return pose_from_pieces(s, self.length, self.turn, self.closed, lambda u: self.piece_of(np.asarray(u)))
@@ -193,6 +210,8 @@ class PathBatch:
         self._length = np.zeros(n)
         self._closed = np.zeros(n, dtype=np.bool_)
         self._objects: dict[int, PathSpec] = {}
+        #: the objects that are not ClothoidPaths (a subset of ``_objects``, in its order)
+        self._foreign_objects: dict[int, PathSpec] = {}
         self._counts: dict[int, int] = {}
         self._tables: _Padded | None = None
         self._set(np.arange(n, dtype=np.intp), seq)
@@ -220,6 +239,7 @@ class PathBatch:
                 oid = int(self._ids[r])
                 if old == 1:
                     del self._counts[oid], self._objects[oid]
+                    self._foreign_objects.pop(oid, None)
                 else:
                     self._counts[oid] = old - 1
         groups = self._groups(rows, paths)
@@ -229,6 +249,8 @@ class PathBatch:
             self._length[ra] = float(p.length)
             self._closed[ra] = bool(p.closed)
             self._objects[oid] = p
+            if not isinstance(p, ClothoidPath):
+                self._foreign_objects[oid] = p
             self._counts[oid] = self._counts.get(oid, 0) + len(rs)
             for r in rs:
                 self._paths[r] = p
@@ -326,9 +348,7 @@ class PathBatch:
         return next(iter(self._objects.values())) if len(self._objects) == 1 else None
 
     def _foreign(self) -> list[tuple[PathSpec, NDArray[np.intp]]]:
-        return [
-            (p, np.flatnonzero(self._ids == oid)) for oid, p in self._objects.items() if not isinstance(p, ClothoidPath)
-        ]
+        return [(p, np.flatnonzero(self._ids == oid)) for oid, p in self._foreign_objects.items()]
 
     def _full(self, fields: Sequence[Any], rows: NDArray[np.intp] | None = None) -> list[NDArray[Any]]:
         """Result fields as fresh ``(N,)`` arrays (or ``(len(rows),)``)."""
@@ -425,17 +445,30 @@ class PathBatch:
             hi = np.where(t.closed, math.inf, t.length)
         else:
             m = np.ceil((ahead + behind) / h) + 2  # samples in each row's window
-            j0 = np.floor((sp - behind) / h)
-            jj = j0[:, None] + np.arange(int(m.max()), dtype=np.float64)  # unwrapped sample numbers
-            closed = t.closed[:, None]
-            jj = np.where(closed, jj, np.clip(jj, 0, nsamp - 1))
-            idx = np.where(closed, np.mod(jj, nsamp), jj).astype(np.int64)
+            m_max = int(m.max())
+            # unwrapped sample numbers as integers (exact: the float code's values are whole numbers), clipped
+            # to [0, nsamp - 1] on open rows; the sample index is then jj mod nsamp on every row (a no-op where
+            # clipped)
+            jj = np.floor((sp - behind) / h).astype(np.int64)[:, None] + np.arange(m_max, dtype=np.int64)
+            if not t.closed.all():
+                big = np.iinfo(np.int64).max
+                np.clip(
+                    jj, np.where(t.closed, -big, 0)[:, None], np.where(t.closed, big, nsamp[:, 0] - 1)[:, None], out=jj
+                )
+            idx = jj % nsamp if t.closed.any() else jj.copy()
             idx += np.arange(len(h), dtype=np.int64)[:, None] * t.sx.shape[1]  # flat index into (N * S)
-            d2 = (t.sx.reshape(-1)[idx] - x[:, None]) ** 2 + (t.sy.reshape(-1)[idx] - y[:, None]) ** 2
-            d2 = np.where(np.arange(jj.shape[1]) < m[:, None], d2, math.inf)
+            d2 = t.sx.reshape(-1)[idx]
+            d2 -= x[:, None]
+            np.square(d2, out=d2)
+            dy2 = t.sy.reshape(-1)[idx]
+            dy2 -= y[:, None]
+            np.square(dy2, out=dy2)
+            d2 += dy2
+            if (m != m_max).any():
+                d2[np.arange(m_max) >= m[:, None]] = math.inf
             k = np.argmin(d2, axis=-1)
-            s_start = np.take_along_axis(jj, k[:, None], axis=-1)[:, 0] * h
+            s_start = np.take_along_axis(jj, k[:, None], axis=-1)[:, 0].astype(np.float64) * h
             lo, hi = window_bounds(sp, ahead, behind, t.length, t.closed)
             s_start = np.clip(s_start, lo, hi)
         s = np.asarray(s_start, dtype=np.float64)
-        return refine(t.pose, x, y, s, lo, hi, h, t.length, t.closed, False)
+        return refine(t.pose, x, y, s, lo, hi, h, t.length, t.closed, False, t.pose_rows)

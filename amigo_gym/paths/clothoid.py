@@ -35,7 +35,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.fresnel import advance, subintervals
+from amigo_gym.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
 from amigo_gym.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.params import check_range
 from amigo_gym.paths.classic import ClosestPoint, Projection
@@ -353,6 +353,7 @@ def refine(
     length: Real,
     closed: Closed,
     scalar: bool,
+    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose] | None = None,
 ) -> PathPoint:
     r"""Newton's method from the coarse estimate ``s`` [m], then the :class:`PathPoint` (step 2 and 3 of
     :meth:`ClothoidPath.locate`; shared with :class:`amigo_gym.paths.batch.PathBatch`).
@@ -363,20 +364,17 @@ def refine(
         lo, hi: the search range [m]; h: the sample spacing, the largest Newton step [m].
         length: lap length [m]; closed: a bool or a bool column (as :func:`pose_from_pieces`).
         scalar: floats in, floats out (else arrays of the broadcast shape).
+        pose_rows: ``(s, rows) -> PathPose`` of the rows ``rows`` only (``(k,)`` columns), for ``(N,)`` columns:
+            then each iteration evaluates only the rows that have not reached a fixed point.
     """
     if not scalar:
         x = np.asarray(x + 0.0 * s)
         y = np.asarray(y + 0.0 * s)
-    for _ in range(NEWTON_ITERATIONS):
-        p = pose(s)
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = 1.0 - p.curvature * e
-        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s = _clip(s + _clip(g / den, -h, h), lo, hi)
-    p = pose(s)
+    p: PathPose
+    if pose_rows is not None and not scalar and np.ndim(s) == 1:
+        s, p = _newton_rows(pose, pose_rows, np.asarray(x), np.asarray(y), np.asarray(s, dtype=np.float64), lo, hi, h)
+    else:
+        s, p = _newton(pose, x, y, s, lo, hi, h)
     dx = x - p.x
     dy = y - p.y
     g = dx * p.cos_theta + dy * p.sin_theta
@@ -395,6 +393,95 @@ def refine(
     return PathPoint(
         s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
     )
+
+
+def _newton(
+    pose: Callable[[Real], PathPose], x: Real, y: Real, s: Real, lo: Real, hi: Real, h: Real
+) -> tuple[Real, PathPose]:
+    """:data:`NEWTON_ITERATIONS` steps of Newton's method (:meth:`ClothoidPath.locate`); ``s`` and its pose."""
+    p = pose(s)
+    for _ in range(NEWTON_ITERATIONS):
+        dx = x - p.x
+        dy = y - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = 1.0 - p.curvature * e
+        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+        s_new = _clip(s + _clip(g / den, -h, h), lo, hi)
+        if _same_bits(s_new, s):
+            # a fixed point: the iteration is a function of s alone, so the remaining ones would repeat
+            # this one; stopping gives the bits of all NEWTON_ITERATIONS
+            break
+        s = s_new
+        p = pose(s)
+    return s, p
+
+
+def _newton_rows(
+    pose: Callable[[Real], PathPose],
+    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose],
+    x: Array,
+    y: Array,
+    s: Array,
+    lo: Real,
+    hi: Real,
+    h: Real,
+) -> tuple[Array, PathPose]:
+    """:func:`_newton` on ``(N,)`` columns, each iteration on the rows still moving only.
+
+    A row's iteration depends on that row alone, and a row at a fixed point (``s`` unchanged, bit for bit)
+    stays there: its remaining iterations are skipped, its pose is the one computed last. The same bits as
+    every row through all :data:`NEWTON_ITERATIONS` iterations.
+    """
+    n = s.shape[0]
+    s = s.copy()
+    full = [np.array(np.broadcast_to(np.asarray(f, dtype=np.float64), (n,))) for f in pose(s)]
+    act = np.arange(n, dtype=np.intp)
+    s_act = s.copy()
+    p = PathPose(*full)
+    xs: Array = x
+    ys: Array = y
+    los, his, hs = lo, hi, h
+    for _ in range(NEWTON_ITERATIONS):
+        dx = xs - p.x
+        dy = ys - p.y
+        g = dx * p.cos_theta + dy * p.sin_theta
+        e = dy * p.cos_theta - dx * p.sin_theta
+        den = np.asarray(1.0 - p.curvature * e)
+        den = np.where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
+        s_new: Array = np.asarray(_clip(s_act + _clip(g / den, -hs, hs), los, his), dtype=np.float64)
+        moving = (s_new != s_act) | (np.signbit(s_new) != np.signbit(s_act)) | np.isnan(s_new)
+        s[act] = s_new
+        if not moving.any():
+            break
+        if not moving.all():
+            keep = np.flatnonzero(moving)
+            act = act[keep]
+            s_new = s_new[keep]
+            xs, ys = xs[keep], ys[keep]
+            los, his, hs = (_rows(v, keep) for v in (los, his, hs))
+        s_act = s_new
+        got = pose_rows(s_act, act)
+        for f, v in zip(full, got, strict=True):
+            f[act] = v
+        p = PathPose(*(np.broadcast_to(np.asarray(v, dtype=np.float64), act.shape) for v in got))
+    return s, PathPose(*full)
+
+
+def _rows(v: Real, keep: NDArray[np.intp]) -> Real:
+    """The entries ``keep`` of a column (a float stays a float)."""
+    if isinstance(v, np.ndarray) and v.ndim == 1:
+        out: Real = v[keep]
+        return out
+    return v
+
+
+def _same_bits(a: Real, b: Real) -> bool:
+    """Whether ``a`` and ``b`` are equal bit for bit (zeros of one sign; NaN never: then the caller goes on)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        aa, ba = np.asarray(a), np.asarray(b)
+        return aa.shape == ba.shape and bool(np.array_equal(aa, ba) and np.array_equal(np.signbit(aa), np.signbit(ba)))
+    return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)
 
 
 def locate_status(s: Real, g: Real, lo: Real, hi: Real, length: Real, closed: Closed, scalar: bool) -> IntColumn:
@@ -566,12 +653,18 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces)."""
+        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`_pose_float` for a float)."""
+        if type(s) is float:
+            return _pose_float(t, self.closed, s)
         return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
 
     def pose_columns(self, s: Real) -> PathPose:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
         return self._pose(self._t, s)
+
+    def pose_floats(self, ss: list[float]) -> list[PathPose]:
+        """:meth:`pose_columns` of each float in ``ss`` (the same bits), computed together (one robot's preview)."""
+        return [PathPose(*q) for q in _poses_tuple(self._t, self.closed, ss)]
 
     def _array_pose(self, s: ArrayLike) -> PathPose:
         a = np.asarray(s, dtype=np.float64)
@@ -640,6 +733,8 @@ class ClothoidPath:
             :class:`PathPoint` columns of the broadcast shape of ``x``, ``y`` (and ``s_prev``).
         """
         t = self._t
+        if s_prev is not None and type(x) is float and type(y) is float and type(s_prev) is float:
+            return _locate_float(t, self.closed, x, y, s_prev, max_advance, max_retreat)
         h = t.spacing
         length = t.length
         n_samp = len(t.sample_x)
@@ -675,4 +770,175 @@ class ClothoidPath:
             lo, hi = (float(lo_a), float(hi_a)) if scalar else (lo_a, hi_a)
             s_start = np.clip(s_start, lo_a, hi_a)
         s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
-        return refine(lambda q: self._pose(t, q), x, y, s, lo, hi, h, length, self.closed, scalar)
+        return refine(
+            lambda q: self._pose(t, q),
+            x,
+            y,
+            s,
+            lo,
+            hi,
+            h,
+            length,
+            self.closed,
+            scalar,
+            lambda q, _rows: self._pose(t, q),
+        )
+
+
+# --------------------------------------------------------------------------- the float path of one point
+#
+# The same expressions as pose_from_pieces, refine, window_bounds and locate_status for Python floats,
+# written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
+# (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
+
+
+def _np_clip(x: float, lo: float, hi: float) -> float:
+    """``float(np.clip(x, lo, hi))`` for floats (numpy's rule: NaN propagates, ties take the bound)."""
+    if not (x != x or x > lo):
+        x = lo
+    if not (x != x or x < hi):
+        x = hi
+    return x
+
+
+FloatPose = tuple[float, float, float, float, float, float, float]
+
+
+def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
+    """:func:`pose_from_pieces` for a float ``s`` on the tables ``t`` (the same bits)."""
+    return PathPose(*_pose_tuple(t, closed, s))
+
+
+def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
+    """The fields of :func:`_pose_float` as a plain tuple of floats."""
+    length = t.length
+    lap: float
+    if closed:
+        lap = float(math.floor(s / length))
+        u = s - lap * length
+        extra = 0.0
+    else:
+        lap = 0.0
+        u = min(max(s, 0.0), length)
+        extra = s - u
+    s0 = t.s0
+    j = min(max(bisect.bisect_right(s0, u) - 1, 0), len(s0) - 1)
+    k0 = t.k0[j]
+    c = t.c[j]
+    du = u - s0[j]
+    x, y, th, cos_t, sin_t = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], k0, c, du)
+    kappa = k0 + c * du
+    if closed:
+        return x, y, th + lap * t.turn, kappa, c, cos_t, sin_t
+    if extra != 0.0:
+        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
+    return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
+
+
+def _poses_tuple(t: _Tables, closed: bool, ss: list[float]) -> list[FloatPose]:
+    """:func:`_pose_tuple` of several floats, the cosines and sines of all in one numpy call each."""
+    length = t.length
+    s0 = t.s0
+    last = len(s0) - 1
+    starts: list[tuple[float, float, float, float, float, float]] = []
+    rest: list[tuple[float, float, float, float]] = []
+    for s in ss:
+        if closed:
+            lap = float(math.floor(s / length))
+            u = s - lap * length
+            extra = 0.0
+        else:
+            lap = 0.0
+            u = min(max(s, 0.0), length)
+            extra = s - u
+        j = min(max(bisect.bisect_right(s0, u) - 1, 0), last)
+        k0 = t.k0[j]
+        c = t.c[j]
+        du = u - s0[j]
+        starts.append((t.x0[j], t.y0[j], t.th0[j], k0, c, du))
+        rest.append((lap, extra, k0 + c * du, c))
+    out: list[FloatPose] = []
+    for (x, y, th, cos_t, sin_t), (lap, extra, kappa, c) in zip(unit_speed_poses(starts), rest, strict=True):
+        if closed:
+            out.append((x, y, th + lap * t.turn, kappa, c, cos_t, sin_t))
+        elif extra != 0.0:
+            out.append((x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t))
+        else:
+            out.append((x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t))
+    return out
+
+
+_ARANGE: dict[int, NDArray[np.float64]] = {}
+
+
+def _locate_float(
+    t: _Tables, closed: bool, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
+) -> PathPoint:
+    """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` (the same bits)."""
+    if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
+        ahead = max_advance  # what check_real returns for a finite positive float
+    else:
+        ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+    if max_retreat is None:
+        behind = ahead
+    elif type(max_retreat) is float and max_retreat > 0.0 and max_retreat < math.inf:
+        behind = max_retreat
+    else:
+        behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+    h = t.spacing
+    length = t.length
+    n_samp = len(t.sample_x)
+    m = math.ceil((ahead + behind) / h) + 2
+    steps = _ARANGE.get(m)
+    if steps is None:
+        steps = _ARANGE[m] = np.arange(m, dtype=np.float64)
+    jj = float(math.floor((sp - behind) / h)) + steps  # unwrapped sample numbers
+    if closed:
+        idx = np.mod(jj, n_samp).astype(np.int64)
+    else:
+        jj = np.clip(jj, 0, n_samp - 1)
+        idx = jj.astype(np.int64)
+    d2 = (t.sample_x[idx] - x) ** 2 + (t.sample_y[idx] - y) ** 2
+    s_start = float(jj[int(np.argmin(d2))]) * h
+    lo = sp - behind
+    hi = sp + ahead
+    if not closed:
+        lo = _np_clip(lo, 0.0, length)
+        hi = _np_clip(hi, 0.0, length)
+    s = _np_clip(s_start, lo, hi)
+    # Newton's method (refine), stopped at a fixed point as there
+    pose = _pose_tuple(t, closed, s)
+    for _ in range(NEWTON_ITERATIONS):
+        px, py, _th, kappa, _c, ct, st = pose
+        dx = x - px
+        dy = y - py
+        g = dx * ct + dy * st
+        e = dy * ct - dx * st
+        den = 1.0 - kappa * e
+        if den < MIN_NEWTON_DENOMINATOR:
+            den = MIN_NEWTON_DENOMINATOR
+        s_new = min(max(s + min(max(g / den, -h), h), lo), hi)
+        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
+            break
+        s = s_new
+        pose = _pose_tuple(t, closed, s)
+    px, py, th, kappa, c, ct, st = pose
+    dx = x - px
+    dy = y - py
+    g = dx * ct + dy * st
+    e = dy * ct - dx * st
+    dist = math.sqrt(dx * dx + dy * dy)
+    status = STATUS_INTERIOR
+    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
+        status = STATUS_WINDOW
+    s_lap = s
+    if closed:
+        s_lap = s - float(math.floor(s / length)) * length
+        if s_lap >= length:
+            s_lap = s_lap - length
+    else:
+        if s <= 0.0 and g < 0.0:
+            status = STATUS_START
+        if s >= length and g > 0.0:
+            status = STATUS_END
+    return PathPoint(s_lap, s, px, py, th, kappa, c, e, ct, st, dist, status)

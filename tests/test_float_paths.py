@@ -1,0 +1,205 @@
+"""The float paths of one robot give the bits of the column code on arrays (issue 12, part 2).
+
+The single environments run flat functions on Python floats (``task.step_float``, the float branches of
+``fresnel.advance``, ``actuators.actuator_step``, ``ClothoidPath.locate``/``pose_columns`` and
+``randomization.step_noise``); the vector environments run the column code on ``(N,)`` arrays. Each float
+result here must equal the array result of its row bit for bit (signs of zeros included).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from amigo_gym import actuators, fresnel, task
+from amigo_gym.actuators import ActuatorParams
+from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.paths import make_family_path, make_path
+from amigo_gym.randomization import make_randomization, step_noise
+
+
+def same(a: Any, b: Any) -> bool:
+    """Bit for bit, the sign of a zero included (NaN equal to NaN)."""
+    a = float(a)
+    b = float(b)
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+def rows_equal(floats: Any, arrays: Any, i: int) -> None:
+    """Row ``i`` of the columns ``arrays`` (a constant column: a scalar) equals ``floats`` bit for bit."""
+    for name, f, a in zip(getattr(floats, "_fields", range(len(floats))), floats, arrays, strict=True):
+        flat = np.asarray(a).reshape(-1)
+        want = flat[i] if flat.size > 1 else flat[0]
+        assert same(f, want), (name, f, want)
+
+
+@pytest.mark.parametrize("n_sub", [1, 3])
+def test_fresnel_float_paths_equal_the_node_loop_on_arrays(n_sub: int) -> None:
+    g = np.random.default_rng(1)
+    n = 300
+    cols = [g.normal(size=n) for _ in range(7)]
+    cols[4][::5] = 0.0  # constant speed
+    cols[6][::4] = 0.0  # arcs
+    cols[5][::7] = 0.0  # lines
+    t = np.abs(g.normal(size=n)) * 0.3
+    t[::11] = 0.0
+    ref = fresnel.advance(*cols, t, n_sub)
+    for i in range(n):
+        args = [float(c[i]) for c in cols]
+        rows_equal(fresnel.advance_float(*args, float(t[i]), n_sub), ref, i)
+        rows_equal(fresnel.advance(*args, float(t[i]), n_sub), ref, i)
+    # unit speed: a path piece, with the cosine and sine of the end heading
+    ref = fresnel.advance(cols[0], cols[1], cols[2], 1.0, 0.0, cols[5], cols[6], t, 1)
+    for i in range(n):
+        x, y, th, c, s = fresnel.unit_speed_pose(
+            *(float(v[i]) for v in (cols[0], cols[1], cols[2], cols[5], cols[6])), float(t[i])
+        )
+        rows_equal((x, y, th), ref, i)
+        assert same(c, np.cos(ref[2])[i]) and same(s, np.sin(ref[2])[i])
+    # a chain of pieces: advance after advance
+    for i in range(0, n - 4, 5):
+        pieces = [
+            (float(cols[3][j]), float(cols[4][j]), float(cols[5][j]), float(cols[6][j]), float(t[j]))
+            for j in range(i, i + 4)
+        ]
+        x, y, th = float(cols[0][i]), float(cols[1][i]), float(cols[2][i])
+        want = (x, y, th)
+        for p in pieces:
+            want = fresnel.advance(np.array([want[0]]), np.array([want[1]]), np.array([want[2]]), *p, n_sub)
+        got = fresnel.advance_chain_float(x, y, th, pieces, n_sub)
+        rows_equal(got, want, 0)
+
+
+def test_actuator_step_float_equals_the_column_code() -> None:
+    g = np.random.default_rng(2)
+    nominal = RobotParams()
+    limits = ActuatorParams()
+    n = 400
+    w = nominal.max_wheel_rate
+    x, y, beta = g.normal(size=n), g.normal(size=n), g.normal(size=n) * 3
+    w1, w2 = g.uniform(-w, w, n), g.uniform(-w, w, n)
+    w1[::6] = 0.0
+    c = [g.uniform(-1.3 * w, 1.3 * w, n) for _ in range(4)]
+    c[0][::5] = w1[::5]  # already at the command
+    t_s = g.uniform(0.0, 0.1, n)
+    t_s[::3] = 0.0
+    r1, r2, l1 = g.uniform(0.04, 0.06, n), g.uniform(0.04, 0.06, n), g.uniform(0.1, 0.14, n)
+    s1, s2 = g.uniform(0.0, 0.2, n), g.uniform(0.0, 0.2, n)
+    ref = actuators.actuator_step(x, y, beta, w1, w2, *c, t_s, 0.1, nominal, limits, r1, r2, l1, s1, s2)
+    for i in range(n):
+        got = actuators.actuator_step(
+            float(x[i]), float(y[i]), float(beta[i]), float(w1[i]), float(w2[i]), *(float(v[i]) for v in c),
+            float(t_s[i]), 0.1, nominal, limits, float(r1[i]), float(r2[i]), float(l1[i]), float(s1[i]), float(s2[i]),
+        )  # fmt: skip
+        assert all(type(v) is float for v in got)
+        rows_equal(got, ref, i)
+    ring = actuators.make_ring(4, 1.5, -2.0)
+    actuators.ring_write(ring, 7, 3.0, 4.0)
+    batch = actuators.make_ring(4, np.array([1.5]), np.array([-2.0]))
+    actuators.ring_write(batch, 7, np.array([3.0]), np.array([4.0]))
+    for lag in (0, 1, 2):
+        rows_equal(actuators.ring_read(ring, 7, lag), actuators.ring_read(batch, 7, np.array([lag])), 0)
+    with pytest.raises(ValueError, match="lag"):
+        actuators.ring_read(ring, 7, 3)
+
+
+PATHS = [
+    ("circle", {"radius": 0.7, "direction": -1}),
+    ("figure8", {"size": 4.0}),
+    ("lane_change", {"offset": 0.6, "length": 3.5}),
+    ("manoeuvre", {"radius": 1.0, "direction": 1}),
+    ("random", {}),
+]
+
+
+@pytest.mark.parametrize(("name", "kw"), PATHS)
+def test_locate_and_pose_float_equal_arrays(name: str, kw: dict[str, Any]) -> None:
+    g = np.random.default_rng(3)
+    path = make_family_path(name, np.random.default_rng(5) if name == "random" else None, **kw)
+    n = 300
+    length = path.length
+    s = g.uniform(-0.3 * length, 1.3 * length, n)
+    s[:4] = (0.0, length, -0.0, 0.5 * length)
+    q = path.pose_columns(s)
+    x = q.x + g.normal(size=n) * 0.1
+    y = q.y + g.normal(size=n) * 0.1
+    hint = s + g.normal(size=n) * 0.2
+    ref = path.locate(x, y, hint, 0.475, 0.3)
+    ref_default = path.locate(x, y, hint, 0.475)
+    for i in range(n):
+        rows_equal(path.pose_columns(float(s[i])), q, i)
+        got = path.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475, 0.3)
+        assert type(got.status) is int
+        rows_equal(got, ref, i)
+        rows_equal(path.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475), ref_default, i)
+    for i in range(0, n - 3, 3):
+        for j, got_pose in enumerate(path.pose_floats([float(v) for v in s[i : i + 3]])):
+            rows_equal(got_pose, q, i + j)
+    with pytest.raises(ValueError, match="max_advance"):
+        path.locate(0.0, 0.0, 0.0, -1.0)
+
+
+@pytest.mark.parametrize("preset", ["none", "mild", "hard"])
+def test_step_noise_float_equals_arrays(preset: str) -> None:
+    r = make_randomization(preset)
+    keys = [0, 1, 2**63 - 1, 2**64 - 1, 12345678901234567]
+    steps = [0, 1, 599, 2**40]
+    for key in keys:
+        for st in steps:
+            for slip in (0.0, 0.07):
+                got = step_noise(key, st, r, slip)
+                assert all(type(v) is float for v in got)
+                ref = step_noise(np.array([key], dtype=np.uint64), np.array([st]), r, np.array([slip]))
+                rows_equal(got, ref, 0)
+
+
+@pytest.mark.parametrize("path_name", ["circle", "manoeuvre"])
+def test_v0_step_float_equals_step_columns(path_name: str) -> None:
+    p = EnvParams(path=path_name, dt=0.2)
+    path = make_path(p)
+    k = task.task_constants(p)
+    g = np.random.default_rng(4)
+    n = 200
+    pose = task.start_pose(g.uniform(-1, 1, (n, 3)), p, path)
+    pose[:, 0] += g.uniform(0.0, 2.0, n)
+    angles = g.normal(size=(n, 3))
+    prev = g.uniform(-15, 15, (n, 2))
+    action = g.uniform(-1.3, 1.3, (n, 2))
+    action[::5, 0] = action[::5, 1]  # straight lines: a zero turn
+    action[::7] = 0.0
+    state = task.State(*pose.T, *angles.T, *prev.T)
+    new, out = task.step_columns(k, path, state, action[:, 0], action[:, 1], minimal=True)
+    for i in range(n):
+        one = task.State(*(float(c[i]) for c in state))
+        got_new, got = task.step_float(k, path, one, float(action[i, 0]), float(action[i, 1]))
+        rows_equal(got_new, new, i)
+        rows_equal(got.obs, out.obs, i)
+        rows_equal(got.terms, out.terms, i)
+        rows_equal((got.h_x, got.h_y, got.reward, got.terminated), (out.h_x, out.h_y, out.reward, out.terminated), i)
+
+
+def test_path_batch_locate_rows_equal_each_path_on_floats() -> None:
+    """Newton's method on the rows still moving only (PathBatch, ClothoidPath on arrays): every row's bits."""
+    from amigo_gym.paths import PathBatch
+
+    g = np.random.default_rng(6)
+    family = [make_family_path(n, np.random.default_rng(5) if n == "random" else None, **kw) for n, kw in PATHS]
+    n = 240
+    paths = [family[i % len(family)] for i in range(n)]
+    batch = PathBatch(paths)
+    length = np.array([p.length for p in paths])
+    s = g.uniform(-0.2, 1.2, n) * length
+    x = np.empty(n)
+    y = np.empty(n)
+    for i, p in enumerate(paths):
+        q = p.pose_columns(float(s[i]))
+        x[i], y[i] = float(q.x) + g.normal() * 0.1, float(q.y) + g.normal() * 0.1
+    hint = s + g.normal(size=n) * 0.2
+    got = batch.locate(x, y, hint, 0.475, 0.475)
+    for i, p in enumerate(paths):
+        rows_equal(p.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475, 0.475), got, i)
