@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import shutil
 import subprocess
 import sys
@@ -64,7 +65,7 @@ def export(s: Settings, algo: str, seed: int, cmd: list[str], wall_s: float) -> 
         "env_id": "AmigoBot-v1",
         "env_kwargs": s.env_kwargs,
         # as typed from the repository root (the run folder named relative to --runs)
-        "training_command": " ".join(c for c in cmd if c != "--resume").replace(str(s.runs), s.runs.name),
+        "training_command": " ".join(shlex.quote(c) for c in cmd if c != "--resume").replace(str(s.runs), s.runs.name),
         "training_distribution": TRAINING_DISTRIBUTION,
         "wall_time_this_call_s": round(wall_s, 1),
     }

@@ -244,10 +244,10 @@ SUITE_1_0: tuple[Scenario, ...] = (
     _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
     _v1(
         "manoeuvre_trapezoid",
-        "paper manoeuvre, start-cruise-brake at 0.3 m/s (held out)",
+        "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)",
         True,
         path="manoeuvre",
-        speed=0.3,
+        speed=0.2,
         speed_profile="trapezoid",
     ),
     # path families
