@@ -93,6 +93,8 @@ __all__ = [
     "validate_action",
     "real_array",
     "bound_heading",
+    "reward_term_columns",
+    "steady_heading",
     "initial_wheel_rates",
     "start_pose",
     "Evaluation",
@@ -410,12 +412,57 @@ def _reward_columns(
         cos_ss, sin_ss = _steady_heading(curvature, k.l3)
     dw1 = w1 - prev1
     dw2 = w2 - prev2
-    return (
-        col_exp(abs_error / -k.sigma_track),
-        col_exp(_abs(dv) / -k.sigma_speed),
-        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
-        1.0 - k.smooth_weight * (1.0 - col_exp((dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq)),
+    return reward_term_columns(
+        abs_error,
+        _abs(dv),
+        cos_psi,
+        sin_psi,
+        cos_ss,
+        sin_ss,
+        dw1 * dw1 + dw2 * dw2,
+        k.sigma_track,
+        k.sigma_speed,
+        k.smooth_weight,
+        k.smooth_scale_sq,
     )
+
+
+def reward_term_columns(
+    abs_error: Real,
+    abs_dv: Real,
+    cos_psi: Real,
+    sin_psi: Real,
+    cos_ss: Real,
+    sin_ss: Real,
+    change_sq: Real,
+    sigma_track: float,
+    sigma_speed: float,
+    smooth_weight: float,
+    smooth_scale_sq: float,
+) -> tuple[Real, Real, Real, Real]:
+    r"""The four reward terms ``(track, speed, heading, smooth)``, each in [0, 1] (AmigoBot-v0 and -v1).
+
+    .. math::
+        e^{-|e|/\sigma_e},\quad e^{-|\Delta v|/\sigma_v},\quad \tfrac12(1 + \cos\psi\cos\psi_{ss}
+        + \sin\psi\sin\psi_{ss}),\quad 1 - w_s\left(1 - e^{-c/s^2}\right)
+
+    Args:
+        abs_error: ``|e|`` [m]; abs_dv: ``|v_A - v_ref|`` [m/s].
+        cos_psi, sin_psi: of the heading error; cos_ss, sin_ss: of the steady one (:func:`steady_heading`).
+        change_sq: squared change of the command, in the units of ``smooth_scale_sq``.
+        sigma_track [m], sigma_speed [m/s], smooth_weight [-], smooth_scale_sq: the scales.
+    """
+    return (
+        col_exp(abs_error / -sigma_track),
+        col_exp(abs_dv / -sigma_speed),
+        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
+        1.0 - smooth_weight * (1.0 - col_exp(change_sq / -smooth_scale_sq)),
+    )
+
+
+def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
+    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (the public name)."""
+    return _steady_heading(curvature, l3)
 
 
 def _steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:

@@ -61,9 +61,10 @@ from numpy.typing import NDArray
 
 from amigo_gym import actuators
 from amigo_gym.actuators import ActuatorParams
-from amigo_gym.kinematics import Real, col_cos, col_exp, col_sin, col_sqrt
+from amigo_gym.kinematics import Real, col_cos, col_sin
 from amigo_gym.params import RobotParams, check_range
 from amigo_gym.randomization import Randomization, StepNoise, make_randomization
+from amigo_gym.task import reward_term_columns, steady_heading
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -778,15 +779,21 @@ def evaluate_columns(
     cos_psi = cb * loc.cos_theta + sb * loc.sin_theta
     sin_psi = sb * loc.cos_theta - cb * loc.sin_theta
     v_ref = reference_speed(p, ep, t)
-    sin_ss = -_clip(loc.curvature * l3, -1.0, 1.0)
-    cos_ss = col_sqrt(1.0 - sin_ss * sin_ss)
+    cos_ss, sin_ss = steady_heading(loc.curvature, l3)
     da1 = st.a1 - prev1
     da2 = st.a2 - prev2
-    terms = (
-        col_exp(_abs(e) / -p.sigma_track),
-        col_exp(_abs(v_true - v_ref) / -p.sigma_speed),
-        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
-        1.0 - p.smooth_weight * (1.0 - col_exp((da1 * da1 + da2 * da2) / -k.smooth_scale_sq)),
+    terms = reward_term_columns(  # the reward of AmigoBot-v0, from the true state
+        _abs(e),
+        _abs(v_true - v_ref),
+        cos_psi,
+        sin_psi,
+        cos_ss,
+        sin_ss,
+        da1 * da1 + da2 * da2,
+        p.sigma_track,
+        p.sigma_speed,
+        p.smooth_weight,
+        k.smooth_scale_sq,
     )
     reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
     off_path = _abs(e) > p.termination_distance

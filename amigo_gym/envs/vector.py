@@ -39,7 +39,7 @@ from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
-__all__ = ["AmigoBotVectorEnv"]
+__all__ = ["AmigoBotVectorEnv", "assign_rows", "scatter_infos", "take_rows"]
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -393,10 +393,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
                 final_obs = np.full(n, None, dtype=object)
                 for i in idx:
                     final_obs[i] = obs[i].copy()
-                final_info = self._scatter(_take_rows(infos, idx), done)
+                final_info = self._scatter(take_rows(infos, idx), done)
                 obs_r, info_r = self._reset_rows(idx)
                 obs[idx] = obs_r
-                _assign_rows(infos, info_r, idx)
+                assign_rows(infos, info_r, idx)
                 infos = {
                     "final_obs": final_obs,
                     "_final_obs": done.copy(),
@@ -432,27 +432,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         return pack(self._state.x, self._state.y, self._state.beta)
 
     def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos: ``(N, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
-
-        ``mask=None`` means that ``infos`` already holds full ``(N, ...)`` rows for every robot.
-        """
-        n = self.num_envs
-        every = np.ones(n, dtype=np.bool_) if mask is None else mask
-        out: dict[str, Any] = {}
-        for k, v in infos.items():
-            if k.startswith("_") or k in ("final_obs", "final_info"):
-                out[k] = v
-                continue
-            if isinstance(v, dict):
-                out[k] = self._scatter(v, mask)
-            elif mask is None:
-                out[k] = v
-            else:
-                full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
-                full[mask] = v
-                out[k] = full
-            out[f"_{k}"] = every.copy()  # a mask of its own per key
-        return out
+        """Vector-format infos (:func:`scatter_infos`)."""
+        return scatter_infos(infos, mask, self.num_envs)
 
     # ------------------------------------------------------------------ rendering
     def _append_trail(self) -> None:
@@ -581,13 +562,37 @@ def _column(x: Any, m: int) -> Array:
     return np.full(m, x, dtype=np.float64)
 
 
-def _take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
-    return {k: (_take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
+def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict[str, Any]:
+    """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
+
+    ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
+    native vector envs of AmigoBot-v0 and -v1.
+    """
+    every = np.ones(n, dtype=np.bool_) if mask is None else mask
+    out: dict[str, Any] = {}
+    for k, v in infos.items():
+        if k.startswith("_") or k in ("final_obs", "final_info"):
+            out[k] = v
+            continue
+        if isinstance(v, dict):
+            out[k] = scatter_infos(v, mask, n)
+        elif mask is None:
+            out[k] = v
+        else:
+            full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
+            full[mask] = v
+            out[k] = full
+        out[f"_{k}"] = every.copy()  # a mask of its own per key
+    return out
 
 
-def _assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
+def take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
+    return {k: (take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
+
+
+def assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
     for k, v in rows.items():
         if isinstance(v, dict):
-            _assign_rows(infos[k], v, idx)
+            assign_rows(infos[k], v, idx)
         else:
             infos[k][idx] = v

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from amigo_gym import tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
-from amigo_gym.envs.vector import _parse_autoreset_mode
+from amigo_gym.envs.vector import _parse_autoreset_mode, assign_rows, scatter_infos, take_rows
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
 
@@ -283,7 +283,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             reward[restart] = 0.0
             terminated[restart] = False
             truncated[restart] = False
-            _assign_rows(infos, self._infos(info_r, restart), restart)
+            assign_rows(infos, self._infos(info_r, restart), restart)
         elif mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
             if done.any():
@@ -291,10 +291,10 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
                 final_obs = np.full(n, None, dtype=object)
                 for i in restart.tolist():
                     final_obs[i] = obs[i].copy()
-                final_info = self._scatter(_take_rows(infos, restart), done)
+                final_info = self._scatter(take_rows(infos, restart), done)
                 obs_r, info_r = self._begin_rows(restart)
                 obs[restart] = obs_r
-                _assign_rows(infos, self._infos(info_r, restart), restart)
+                assign_rows(infos, self._infos(info_r, restart), restart)
                 infos = {
                     "final_obs": final_obs,
                     "_final_obs": done.copy(),
@@ -381,24 +381,8 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         return out
 
     def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos: ``(N, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks."""
-        n = self.num_envs
-        every = np.ones(n, dtype=np.bool_) if mask is None else mask
-        out: dict[str, Any] = {}
-        for key, v in infos.items():
-            if key.startswith("_") or key in ("final_obs", "final_info"):
-                out[key] = v
-                continue
-            if isinstance(v, dict):
-                out[key] = self._scatter(v, mask)
-            elif mask is None:
-                out[key] = v
-            else:
-                full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
-                full[mask] = v
-                out[key] = full
-            out[f"_{key}"] = every.copy()
-        return out
+        """Vector-format infos (:func:`amigo_gym.envs.vector.scatter_infos`)."""
+        return scatter_infos(infos, mask, self.num_envs)
 
     # ------------------------------------------------------------------ rendering
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
@@ -476,15 +460,3 @@ def _array(v: Any) -> Array:
     if isinstance(v, tuple):
         return np.stack([np.asarray(c, dtype=np.float64) for c in v], axis=-1)
     return np.asarray(v, dtype=np.float64)
-
-
-def _take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
-    return {k: (_take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
-
-
-def _assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
-    for k, v in rows.items():
-        if isinstance(v, dict):
-            _assign_rows(infos[k], v, idx)
-        else:
-            infos[k][idx] = v
