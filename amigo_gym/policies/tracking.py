@@ -149,6 +149,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.actuators import wheel_rates_columns
 from amigo_gym.params import check_range
 from amigo_gym.tracking import SPEED_LOOKAHEAD, TrackingParams, obs_fields
 
@@ -199,8 +200,7 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) ->
     r = params.robot
     v_a = np.asarray(v, dtype=np.float64)
     om = np.asarray(omega, dtype=np.float64)
-    w1 = (v_a + r.l1 * om) / r.r1
-    w2 = (v_a - r.l1 * om) / r.r2
+    w1, w2 = wheel_rates_columns(v_a, om, r)  # the firmware's inverse, one home: amigo_gym.actuators
     w_max = r.max_wheel_rate
     m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
     out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max
