@@ -813,16 +813,22 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
         )
     agents = list(doc["aggregates"])
-    lines += ["", "## H cross-track RMS per scenario [mm] (mean over training seeds)", ""]
-    lines.append("| scenario | held out | " + " | ".join(agents) + " |")
-    lines.append("|---|---|" + "---|" * len(agents))
-    for sc in doc["scenarios"]:
-        cells = []
-        for agent in agents:
-            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
-            vals = [v for v in vals if v is not None]
-            cells.append(_mm(float(np.mean(vals))) if vals else "–")
-        lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+    per_scenario = (
+        ("h_rms_m", "H cross-track RMS per scenario [mm]", _mm),
+        ("speed_err_rms", "Speed error RMS per scenario [mm/s]", _mm),
+        ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
+    )
+    for key, title, fmt in per_scenario:
+        lines += ["", f"## {title} (mean over training seeds)", ""]
+        lines.append("| scenario | held out | " + " | ".join(agents) + " |")
+        lines.append("|---|---|" + "---|" * len(agents))
+        for sc in doc["scenarios"]:
+            cells = []
+            for agent in agents:
+                vals = [r.get(key) for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
+                vals = [v for v in vals if v is not None]
+                cells.append(fmt(float(np.mean(vals))) if vals else "–")
+            lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
     if doc["unavailable"]:
         lines += ["", "## Unavailable", ""]
         for u in doc["unavailable"]:
