@@ -41,7 +41,13 @@ def main() -> int:
             print(f"{model}: not in {a.benchmark}; left unclaimed", file=sys.stderr)
             continue
         m = json.loads(manifest.read_text())
-        m["claimed"] = {"suite_version": doc["suite_version"], "command": doc.get("command"), "scenarios": by_sha[sha]}
+        m["claimed"] = {
+            "suite_version": doc["suite_version"],
+            "command": doc.get("command"),
+            # the run of docs/benchmark used torch's default, one thread per core (2 on the 2-core machines)
+            "torch_threads": int(doc.get("torch_threads", 2)),
+            "scenarios": by_sha[sha],
+        }
         manifest.write_text(json.dumps(m, indent=2) + "\n")
         done += 1
     print(f"claimed numbers written for {done} models", file=sys.stderr)

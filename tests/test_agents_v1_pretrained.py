@@ -43,7 +43,14 @@ def test_benchmark_reproduces_claimed_numbers(manifest: Path) -> None:
     scenarios = [sc for sc in bm.SUITE if sc.name in RERUN and sc.name in claimed["scenarios"]]
     assert scenarios
     spec = bm.parse_agents([str(manifest.with_suffix(".zip"))])[0]
-    doc = bm.run_benchmark([spec], scenarios, progress=False, reps=100, profile_reps=10)
+    import torch
+
+    threads = torch.get_num_threads()  # other tests may have changed it: the last bits depend on it
+    torch.set_num_threads(int(claimed["torch_threads"]))
+    try:
+        doc = bm.run_benchmark([spec], scenarios, progress=False, reps=100, profile_reps=10)
+    finally:
+        torch.set_num_threads(threads)
     for r in doc["results"]:
         want = claimed["scenarios"][r["scenario"]]
         for key in KEYS:

@@ -39,7 +39,16 @@ from amigo_gym.kinematics import h_position, pack
 from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
-__all__ = ["AmigoBotVectorEnv", "assign_rows", "scatter_infos", "take_rows"]
+__all__ = [
+    "AmigoBotVectorEnv",
+    "assign_rows",
+    "check_reset_mask",
+    "check_vector_args",
+    "info_row",
+    "parse_seeds",
+    "scatter_infos",
+    "take_rows",
+]
 
 Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -105,16 +114,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         **settings: Any,
     ) -> None:
         owner = type(self).__name__
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
-            raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
-        if max_episode_steps is not None and (
-            isinstance(max_episode_steps, bool)
-            or not isinstance(max_episode_steps, int | np.integer)
-            or max_episode_steps < 1
-        ):
-            raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
-        if render_mode is not None and render_mode != "rgb_array":
-            raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
+        check_vector_args(owner, num_envs, max_episode_steps, render_mode)
         self.params: EnvParams = make_env_params(owner, params, robot, **settings)
         p = self.params
         self.path: CirclePath | ManoeuvrePath = make_path(p)
@@ -191,19 +191,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         """
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
-        if seed is None:
-            seeds: list[int | None] = [None] * n
-        elif isinstance(seed, bool):
-            raise ValueError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(n)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != n:
-                raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
+        seeds = parse_seeds(seed, n)
         mask: BoolArray = np.ones(n, dtype=np.bool_)
         if options is not None and "reset_mask" in options:
-            mask = _check_reset_mask(options["reset_mask"], n)
+            mask = check_reset_mask(options["reset_mask"], n)
         pose_opt = None
         if options is not None and "pose" in options:
             pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
@@ -498,7 +489,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._renderers = []
 
 
-def _check_reset_mask(mask: Any, n: int) -> BoolArray:
+def check_reset_mask(mask: Any, n: int) -> BoolArray:
     """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
     if not isinstance(mask, np.ndarray):
         raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
@@ -562,6 +553,34 @@ def _column(x: Any, m: int) -> Array:
     return np.full(m, x, dtype=np.float64)
 
 
+def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_mode: Any) -> None:
+    """Refuse a bad ``num_envs`` (an integer >= 1), ``max_episode_steps`` (>= 1 or None) or ``render_mode``."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+        raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
+    if max_episode_steps is not None and (
+        isinstance(max_episode_steps, bool)
+        or not isinstance(max_episode_steps, int | np.integer)
+        or max_episode_steps < 1
+    ):
+        raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
+    if render_mode is not None and render_mode != "rgb_array":
+        raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
+
+
+def parse_seeds(seed: Any, n: int) -> list[int | None]:
+    """``reset(seed=...)`` of a vector env: ``None``, an int ``s`` (seeds ``s + i``) or a list of ``n`` ints/None."""
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, bool):
+        raise ValueError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
+    if isinstance(seed, int | np.integer):
+        return [int(seed) + i for i in range(n)]
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
+    return seeds
+
+
 def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict[str, Any]:
     """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
 
@@ -583,6 +602,23 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
             full[mask] = v
             out[k] = full
         out[f"_{k}"] = every.copy()  # a mask of its own per key
+    return out
+
+
+def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
+    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats, ``(N, k)`` rows as arrays.
+
+    The ``_key`` masks and ``final_obs``/``final_info`` are left out; nested dicts recurse.
+    """
+    out: dict[str, Any] = {}
+    for k, v in vinfo.items():
+        if k.startswith("_") or k in ("final_obs", "final_info"):
+            continue
+        if isinstance(v, dict):
+            out[k] = info_row(v, i)
+        else:
+            a = np.asarray(v)
+            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
     return out
 
 

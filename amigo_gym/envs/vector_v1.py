@@ -27,7 +27,15 @@ from numpy.typing import NDArray
 from amigo_gym import tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
-from amigo_gym.envs.vector import _parse_autoreset_mode, assign_rows, scatter_infos, take_rows
+from amigo_gym.envs.vector import (
+    _parse_autoreset_mode,
+    assign_rows,
+    check_reset_mask,
+    check_vector_args,
+    parse_seeds,
+    scatter_infos,
+    take_rows,
+)
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
 
@@ -98,16 +106,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         from amigo_gym.paths import PathBatch
 
         owner = type(self).__name__
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
-            raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
-        if max_episode_steps is not None and (
-            isinstance(max_episode_steps, bool)
-            or not isinstance(max_episode_steps, int | np.integer)
-            or max_episode_steps < 1
-        ):
-            raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
-        if render_mode is not None and render_mode != "rgb_array":
-            raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
+        check_vector_args(owner, num_envs, max_episode_steps, render_mode)
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
@@ -178,26 +177,10 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         """Reset all robots, or those of ``options["reset_mask"]``; ``options["pose"]`` sets start poses."""
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
-        if seed is None:
-            seeds: list[int | None] = [None] * n
-        elif isinstance(seed, bool):
-            raise TypeError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(n)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != n:
-                raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
+        seeds = parse_seeds(seed, n)
         mask: BoolArray = np.ones(n, dtype=np.bool_)
         if options is not None and "reset_mask" in options:
-            m = options["reset_mask"]
-            if not isinstance(m, np.ndarray) or m.dtype != np.bool_:
-                raise TypeError(f'options["reset_mask"] must be a bool numpy array of shape ({n},), got {m!r}')
-            if m.shape != (n,):
-                raise ValueError(f'options["reset_mask"] must have shape ({n},), got {m.shape}')
-            if not m.any():
-                raise ValueError('options["reset_mask"] must contain at least one True value')
-            mask = m.copy()
+            mask = check_reset_mask(options["reset_mask"], n)
         pose_opt = None
         if options is not None and "pose" in options:
             pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))

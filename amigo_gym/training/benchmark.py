@@ -537,20 +537,6 @@ def _vector_env(sc: Scenario) -> Any:
     )
 
 
-def _info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
-    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats, ``(N, k)`` rows as arrays."""
-    out: dict[str, Any] = {}
-    for k, v in vinfo.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
-            continue
-        if isinstance(v, dict):
-            out[k] = _info_row(v, i)
-        else:
-            a = np.asarray(v)
-            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
-    return out
-
-
 def evaluate(
     agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
 ) -> list[dict[str, float]]:
@@ -562,6 +548,8 @@ def evaluate(
     outputs do not depend on how many episodes are still running). A robot's episode is its steps up to its
     first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
     """
+    from amigo_gym.envs.vector import info_row
+
     adapter = InfoAdapter.for_env(env)
     dt = _dt(env, sc)
     venv = _vector_env(sc)
@@ -577,7 +565,7 @@ def evaluate(
             start = np.zeros(n, dtype=np.bool_)
             obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
             for i in np.flatnonzero(live).tolist():
-                info = _info_row(vinfo, i)
+                info = info_row(vinfo, i)
                 recs[i].add(adapter.read(info), float(reward[i]))
                 if terminated[i] or truncated[i]:
                     # reaching the end of an open path (AmigoBot-v1) ends the episode as a success, not a failure
@@ -691,6 +679,8 @@ def run_benchmark(
         results, held, reps=reps, profile_reps=profile_reps, seed=bootstrap_seed
     )
     doc["wall_time_s"] = round(time.perf_counter() - t0, 2)
+    if "torch" in sys.modules:  # a network's outputs depend on torch's thread count in the last bits
+        doc["torch_threads"] = int(sys.modules["torch"].get_num_threads())
     return doc
 
 

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from amigo_gym import MAX_EPISODE_STEPS, MAX_EPISODE_STEPS_V1
-from amigo_gym.envs.vector import AmigoBotVectorEnv
+from amigo_gym.envs.vector import AmigoBotVectorEnv, info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.task import INFO_KEYS, REWARD_TERMS
 
@@ -158,22 +158,8 @@ class AmigoBotSB3VecEnv(VecEnv):
 
     @staticmethod
     def _split_generic(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts of AmigoBot-v1: ``(N,)`` columns become floats, ``(N, k)`` rows arrays, dicts recurse."""
-
-        def row(v: dict[str, Any], i: int) -> dict[str, Any]:
-            d: dict[str, Any] = {}
-            for k, x in v.items():
-                if k.startswith("_") or k in ("final_obs", "final_info"):
-                    continue
-                if isinstance(x, dict):
-                    d[k] = row(x, i)
-                elif x.ndim == 1:
-                    d[k] = float(x[i])
-                else:
-                    d[k] = x[i].copy()
-            return d
-
-        return [row(vinfo, i) for i in idx]
+        """Per-env info dicts of AmigoBot-v1 (:func:`amigo_gym.envs.vector.info_row`)."""
+        return [info_row(vinfo, i) for i in idx]
 
     @staticmethod
     def _split(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
