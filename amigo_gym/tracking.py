@@ -895,6 +895,17 @@ def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, flo
     Draws, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`), then builds the
     start state (:func:`start_state`; ``pose`` replaces the drawn pose of A) and evaluates it.
     """
+    path, info, ep, st = start_episode(rng, k, pose)
+    return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))
+
+
+def start_episode(
+    rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None
+) -> tuple[Any, dict[str, Any], Episode, State]:
+    """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
+
+    (The single env's compiled step evaluates the start state itself, :mod:`amigo_gym.fast_v1`.)
+    """
     path, info = draw_path(rng, k.params)
     ep, u = draw_episode(rng, k.params)
     st = start_state(k, path, ep, u)
@@ -904,4 +915,4 @@ def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, flo
         hy = y + ep.l3 * col_sin(b)
         hint = path.locate(hx, hy, 0.0, k.window, k.window)
         st = st._replace(x=x, y=y, beta=b, progress=float(hint.progress))
-    return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))
+    return path, info, ep, st

@@ -6,20 +6,32 @@ A thin stateful shell over the column functions of :mod:`amigo_gym.tracking`; th
 
 from __future__ import annotations
 
-from typing import Any, SupportsFloat
+import math
+from typing import Any, SupportsFloat, cast
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym import tracking
+from amigo_gym import fast_v1, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
-from amigo_gym.randomization import StepNoise
+from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.randomization import StepNoise, step_noise
 
 __all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
 
 ObsArray = NDArray[np.float32]
+#: :class:`amigo_gym.randomization.StepNoise` of one robot (floats)
+StepNoiseFloats = tuple[float, float, float, float, float, float, float]
+
+# entries of the compiled step's workspace (amigo_gym.fast_v1.WS_FIELDS)
+_W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
+_W_AL1, _W_AL2, _W_PROGRESS = fast_v1.W_AL1, fast_v1.W_AL2, fast_v1.W_PROGRESS
+_W_HX, _W_HY, _W_E, _W_VT, _W_VREF = fast_v1.W_HX, fast_v1.W_HY, fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF
+_W_MX, _W_MY, _W_MB, _W_HEADING = fast_v1.W_MX, fast_v1.W_MY, fast_v1.W_MB, fast_v1.W_HEADING
+_W_ARG_T, _W_ARG_S, _W_TERM, _W_END = fast_v1.W_ARG_T, fast_v1.W_ARG_S, fast_v1.W_TERM, fast_v1.W_END
+_W_CMD1, _W_CMD2 = fast_v1.W_CMD1, fast_v1.W_CMD2
 
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = ("pose",)
@@ -117,7 +129,12 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ## Arguments
 
     Every field of :class:`amigo_gym.tracking.TrackingParams` as a keyword, mappings accepted for ``robot``,
-    ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; and ``render_mode``.
+    ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; ``render_mode``; and
+    ``kernel``, the step's implementation (:mod:`amigo_gym.fast_v1`): ``"auto"`` (default: the compiled step
+    when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference float code of
+    :mod:`amigo_gym.tracking`) or ``"numba"`` (the compiled step; needs the extra ``amigo_gym[fast]``). The
+    compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`); a path object of
+    your own runs the reference code. Both give the same results bit for bit.
 
     ```python
     import gymnasium as gym
@@ -135,11 +152,22 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 10.0}  # noqa: RUF012
 
-    def __init__(self, render_mode: str | None = None, *, params: Any = None, **settings: Any) -> None:
-        self.params: tracking.TrackingParams = tracking.make_tracking_params(type(self).__name__, params, **settings)
+    def __init__(
+        self, render_mode: str | None = None, *, params: Any = None, kernel: str = "auto", **settings: Any
+    ) -> None:
+        owner = type(self).__name__
+        self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         self.render_mode = check_render_mode(render_mode)
         p = self.params
         self._k = tracking.constants(p)
+        # the compiled step (amigo_gym.fast_v1), for the episodes on a ClothoidPath; None: the reference code
+        self._kernel: fast_v1.StepKernel | None = None
+        if fast_v1.use_kernel(owner, kernel):
+            self._kernel = fast_v1.StepKernel(self._k)
+        self._in_kernel = False  # this episode's state lives in the kernel's workspace
+        self._steps = 0
+        self._noise_off = True
+        self._delay = 0.0
         fixed = tracking.fixed_path(p)
         if fixed is not None:
             tracking.check_feasible(p, fixed)
@@ -149,6 +177,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         act_space, obs_space = make_spaces_v1(p)
         self.action_space = act_space  # type: ignore[assignment]
         self.observation_space = obs_space  # type: ignore[assignment]
+        self._obs_shape: tuple[int, ...] = obs_space.shape
         self._ring = np.zeros((self._k.ring_length, 2))
         self._state: tracking.State | None = None
         self._episode: tracking.Episode | None = None
@@ -166,36 +195,66 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         check_reset_options(options)
         pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
         super().reset(seed=seed)
-        b = tracking.begin_episode(self.np_random, self._k, None if pose_opt is None else tuple(pose_opt.tolist()))
-        self.path, self._path_info, self._episode, st, out = b
+        k = self._k
+        pose = None if pose_opt is None else tuple(pose_opt.tolist())
+        self.path, self._path_info, ep, st = tracking.start_episode(self.np_random, k, pose)
+        self._episode = ep
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
-        self._ring[:, 0] = st.a1 * self._k.w_max
-        self._ring[:, 1] = st.a2 * self._k.w_max
+        self._ring[:, 0] = st.a1 * k.w_max
+        self._ring[:, 1] = st.a2 * k.w_max
         self._ring_step = 0
+        self._steps = int(st.steps)
         self._done = False
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
-        self._trail = [(float(out.h_x), float(out.h_y))]
-        info = self._info(out, tracking.NO_NOISE)
+        rz = self.params.randomize
+        self._noise_off = not (ep.slip_max > 0.0 or rz.has_noise)
+        self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
+        kern = self._kernel
+        self._in_kernel = kern is not None and type(self.path) is ClothoidPath
+        if kern is not None and self._in_kernel:
+            # tracking.reset_columns, compiled: the start state without noise, its own previous command
+            kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
+            zero = 0.0 * st.x
+            v = 0.5 * (ep.r1 * st.w1 + ep.r2 * st.w2)  # tracking._body
+            obs = np.empty(self._obs_shape, dtype=np.float32)
+            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v + zero, st.a1, st.a2, zero)
+            o = kern.outputs()
+            info = self._kernel_info(o, 0.0, 0.0)
+            self._trail = [(o[_W_HX], o[_W_HY])]
+        else:
+            out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
+            obs = np.array(out.obs, dtype=np.float32)
+            self._trail = [(float(out.h_x), float(out.h_y))]
+            info = self._info(out, tracking.NO_NOISE)
         if self.render_mode == "human":
             self.render()
-        return np.array(out.obs, dtype=np.float32), info
+        return obs, info
 
     def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
         """Advance one control period (class docstring)."""
-        if self._state is None or self._episode is None:
+        if self._episode is None:
             raise gym.error.ResetNeeded("call reset() before step() on AmigoBot-v1")
-        a1, a2 = validate_action_v1(action)
+        if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in "fd":
+            a1, a2 = action.tolist()  # validate_action_v1's floats (float32 to float64 is exact)
+            if not (math.isfinite(a1) and math.isfinite(a2)):
+                validate_action_v1(action)  # raises
+        else:
+            a1, a2 = validate_action_v1(action)
         if self._done:
             gym.logger.warn(
                 "You are calling 'step()' even though this environment has already returned terminated = True. "
                 "You should always call 'reset()' once you receive 'terminated = True'."
             )
         self._ring_step += 1
+        if self._in_kernel:
+            return self._step_kernel(a1, a2)
+        assert self._state is not None
         st, out, noise = tracking.step_columns(
             self._k, self.path, self._state, self._episode, self._ring, self._ring_step, a1, a2
         )
         self._state = st
+        self._steps = int(st.steps)
         self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
         terminated = bool(out.terminated)
         self._done = terminated
@@ -206,6 +265,95 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         if self.render_mode == "human":
             self.render()
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+
+    def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, bool, dict[str, Any]]:
+        """:meth:`step` by the compiled kernel (:mod:`amigo_gym.fast_v1`): the same results as the reference.
+
+        The per-step draws (``log``, ``cos``) before the kernel and the reward's exponentials after it, by numpy,
+        as the reference evaluates them (:func:`amigo_gym.tracking.step_columns`).
+        """
+        kern = self._kernel
+        ep = self._episode
+        assert kern is not None and ep is not None
+        steps = self._steps
+        obs = np.empty(self._obs_shape, dtype=np.float32)
+        if self._noise_off:
+            s1 = s2 = 0.0
+            kern.step(
+                kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2,
+                0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            )  # fmt: skip
+        else:
+            noise = step_noise(ep.key, steps, self.params.randomize, ep.slip_max)
+            s1, s2, nx, ny, nb, n1, n2 = cast(StepNoiseFloats, noise)
+            kern.step(
+                kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2, s1, s2, nx, ny, nb, n1, n2
+            )
+        self._steps = steps + 1
+        o = kern.outputs()
+        self._last_command = (o[_W_CMD1], o[_W_CMD2])
+        info = self._kernel_info(o, s1, s2)
+        terms = info["reward_terms"]
+        reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
+        terminated = o[_W_TERM] != 0.0
+        self._done = terminated
+        if self.render_mode is not None:
+            self._trail.append((o[_W_HX], o[_W_HY]))
+            if len(self._trail) > 4096:
+                del self._trail[: len(self._trail) - 4096]
+            if self.render_mode == "human":
+                self.render()
+        return obs, reward, terminated, False, info
+
+    def _kernel_info(self, o: list[float], slip1: float, slip2: float) -> dict[str, Any]:
+        """:meth:`_info` from the kernel's outputs ``o`` (:data:`amigo_gym._kernels_v1.WS_FIELDS`): the same entries.
+
+        The track, speed and smoothness terms from one ``np.exp`` of their arguments, and the heading term, as
+        :func:`amigo_gym.task.reward_term_columns` computes them.
+        """
+        ep = self._episode
+        assert self._kernel is not None and ep is not None
+        track, speed, ex = np.exp(self._kernel.ws[_W_ARG_T : _W_ARG_S + 1]).tolist()
+        v_true = o[_W_VT]
+        v_ref = o[_W_VREF]
+        return {
+            "pose": np.array((o[_W_X], o[_W_Y], o[_W_BETA])),
+            "h_position": np.array((o[_W_HX], o[_W_HY])),
+            "cross_track_error": o[_W_E],
+            "progress": o[_W_PROGRESS],
+            "speed": v_true,
+            "reference_speed": v_ref,
+            "speed_error": v_true - v_ref,
+            "wheel_rates": np.array((o[_W_W1], o[_W_W2])),
+            "command": np.array(self._last_command),
+            "wheel_angles": np.array((o[_W_AL1], o[_W_AL2])),
+            "measured_pose": np.array((o[_W_MX], o[_W_MY], o[_W_MB])),
+            "reward_terms": {
+                "track": track,
+                "speed": speed,
+                "heading": o[_W_HEADING],
+                "smooth": 1.0 - self.params.smooth_weight * (1.0 - ex),
+            },
+            "time": self._steps * self.params.dt,
+            "path": dict(self._path_info),
+            "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
+            "delay": self._delay,
+            "slip": np.array((slip1, slip2), dtype=np.float64),
+            "end_of_path": o[_W_END] != 0.0,
+        }
+
+    def _current_state(self) -> tracking.State:
+        """The state of the episode (:class:`amigo_gym.tracking.State` of floats; from the compiled step's workspace
+        when it runs the episode).
+
+        Raises:
+            gymnasium.error.ResetNeeded: before the first ``reset()``.
+        """
+        if self._state is None:
+            raise gym.error.ResetNeeded("call reset() before _current_state() on AmigoBot-v1")
+        if self._kernel is not None and self._in_kernel:
+            return self._kernel.state(self._steps)
+        return self._state
 
     # ------------------------------------------------------------------ info
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
@@ -240,13 +388,13 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             return None
         if self._state is None:
             raise gym.error.ResetNeeded("call reset() before render()")
+        st = self._current_state()
         from amigo_gym.rendering import Renderer
 
         if self._renderer is None or self._renderer.path is not self.path:
             if self._renderer is not None:
                 self._renderer.close()
             self._renderer = Renderer(self.params, self.path, self.render_mode)
-        st = self._state
         frame: NDArray[np.uint8] | None = self._renderer.draw(
             np.array((st.x, st.y, st.beta)),
             self._trail,

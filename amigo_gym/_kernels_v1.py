@@ -1,0 +1,718 @@
+r"""Compiled step of ``AmigoBot-v1`` for one robot on a :class:`~amigo_gym.paths.ClothoidPath` (numba).
+
+The optional fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (the extra ``amigo_gym[fast]``, i.e. numba;
+loaded by :mod:`amigo_gym.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.tracking.step_columns`
+does on Python floats, and :func:`evaluate` what :func:`amigo_gym.tracking.evaluate_columns` does:
+
+1. clip the action, write it into the command ring and read the setpoints in effect (delay):
+   :func:`amigo_gym.actuators.ring_write`, :func:`amigo_gym.actuators.ring_read`;
+2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.actuators.PIECES` linear pieces, the
+   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.actuators._actuator_step_float`,
+   :func:`amigo_gym.fresnel.advance_chain_float`);
+3. H's projection on the path, and the measured H's when it differs
+   (:func:`amigo_gym.paths.clothoid._locate_float`, :func:`amigo_gym.paths.clothoid._pose_tuple`);
+4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
+   and the arguments of the three exponential terms (:func:`amigo_gym.task.reward_term_columns`,
+   :func:`amigo_gym.task.steady_heading`), the reference speed, termination and end of path.
+
+**The reference is the Python float path** (the functions named above); this module is its deliberate
+compiled twin: the same formulas, written again, in the same order of operations, so that every result is
+**bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit; ``tests/test_golden_v1.py``
+runs the golden episodes through it). What makes the bits equal:
+
+* arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
+  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
+  reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
+* ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
+  reference on arrays of node phases) equal bit for bit on this platform (the test checks it too);
+* the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
+  the per-step noise (``log``, ``cos``) is drawn before the call (:func:`amigo_gym.randomization.step_noise`)
+  and passed in; the three reward exponentials are evaluated by ``np.exp`` after the call, on the arguments
+  written here (:mod:`amigo_gym.fast_v1`).
+
+Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.fast_v1`,
+which numba never loads):
+
+* ``consts`` (:data:`CONSTANT_FIELDS`, then the ``n_preview`` preview distances [m], their observation bounds,
+  the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
+  built by :func:`amigo_gym.fast_v1.kernel_constants`);
+* ``path`` (:data:`PATH_HEADER`, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
+  ``x, y``; built once per path by :func:`amigo_gym.fast_v1.flat_path`);
+* ``ring (L, 2)``: the command ring of :func:`amigo_gym.actuators.make_ring`, updated in place;
+* ``ws``: :data:`WS_FIELDS` (the state, read and updated in place; the episode's constants; the outputs),
+  then scratch space of :data:`WS_SCRATCH` entries;
+* ``obs``: the observation (float32 or float64), written.
+
+This module imports numba at import time; :mod:`amigo_gym.fast_v1` imports it only when the kernel is first
+used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.fast_v1 import (
+    C_ACC,
+    C_DEC,
+    C_DT,
+    C_E_MAX,
+    C_ERROR_SCALE,
+    C_L1,
+    C_L3,
+    C_LOOKAHEAD,
+    C_MEAS_NOISE,
+    C_N_NODES,
+    C_N_PREVIEW,
+    C_NEG_SIG_T,
+    C_NEG_SIG_V,
+    C_NEG_SMOOTH_SQ,
+    C_PACC,
+    C_PDEC,
+    C_PREVIEW_SCALE,
+    C_R1,
+    C_R2,
+    C_RACC,
+    C_RDEC,
+    C_TAIL,
+    C_TERM,
+    C_TRAPEZOID,
+    C_TWO_L1,
+    C_V_MAX,
+    C_W_MAX,
+    C_WINDOW,
+    P_CLOSED,
+    P_LENGTH,
+    P_M,
+    P_N,
+    P_SPACING,
+    P_TAIL,
+    P_TURN,
+    PATH_NODES,
+    S_KV,
+    S_KW,
+    S_PIECES,
+    S_TIMES,
+    W_A1,
+    W_A2,
+    W_AL1,
+    W_AL2,
+    W_ARG_S,
+    W_ARG_T,
+    W_ARG_V,
+    W_BETA,
+    W_CMD1,
+    W_CMD2,
+    W_E,
+    W_END,
+    W_HEADING,
+    W_HX,
+    W_HY,
+    W_L1,
+    W_L3,
+    W_L3D,
+    W_LAG,
+    W_MB,
+    W_MW1,
+    W_MW2,
+    W_MX,
+    W_MY,
+    W_PROGRESS,
+    W_R1,
+    W_R2,
+    W_STEPS,
+    W_TB,
+    W_TERM,
+    W_TS,
+    W_VC,
+    W_VREF,
+    W_VT,
+    W_W1,
+    W_W2,
+    W_X,
+    W_Y,
+)
+
+__all__ = ["step", "evaluate"]
+
+F64 = NDArray[np.float64]
+
+#: status codes of :mod:`amigo_gym.paths.clothoid`
+STATUS_INTERIOR, STATUS_START, STATUS_END, STATUS_WINDOW = 0, 1, 2, 3
+#: :data:`amigo_gym.paths.clothoid.NEWTON_ITERATIONS`, :data:`~amigo_gym.paths.clothoid.MIN_NEWTON_DENOMINATOR`
+NEWTON_ITERATIONS = 5
+MIN_NEWTON_DENOMINATOR = 0.05
+#: :data:`amigo_gym.actuators.PIECES`
+PIECES = 10
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+
+# ----------------------------------------------------------------------------------------- small rules
+
+
+@_jit
+def _py_min(a: float, b: float) -> float:
+    # Python's min(a, b): a unless b < a
+    return b if b < a else a
+
+
+@_jit
+def _py_max(a: float, b: float) -> float:
+    # Python's max(a, b): a unless b > a
+    return b if b > a else a
+
+
+@_jit
+def _np_clip(x: float, lo: float, hi: float) -> float:
+    # clothoid._np_clip: float(np.clip(x, lo, hi)) (NaN propagates, ties take the bound)
+    if not (x != x or x > lo):
+        x = lo
+    if not (x != x or x < hi):
+        x = hi
+    return x
+
+
+@_jit
+def _clip(x: float, lo: float, hi: float) -> float:
+    # tracking._clip of a float
+    return lo if x < lo else (hi if x > hi else x)
+
+
+@_jit
+def _task_clip(x: float, low: float, high: float) -> float:
+    # task._clip of a float
+    if low <= x <= high:
+        return x
+    return low if x < low else high
+
+
+# ----------------------------------------------------------------------------------------- actuators
+
+
+@_jit
+def _ramp(
+    u0: float, target: float, accel: float, decel: float, duration: float
+) -> tuple[float, float, float, float, float, float]:
+    # actuators._ramp_float: (t_a, t_b, u_a, u_b, s_a, s_b)
+    if u0 * target < 0.0:
+        u_z = 0.0
+        t_z = abs(u0) / decel
+        s_a = math.copysign(decel, -u0)
+    else:
+        u_z = u0
+        t_z = 0.0
+        s_a = 0.0
+    d = target - u_z
+    rate = accel if abs(target) > abs(u_z) else decel
+    t_r = t_z + abs(d) / rate
+    s_b = math.copysign(rate, d)
+    z_in = t_z <= duration
+    u_a = u_z if z_in else u0 + s_a * duration
+    if t_r <= duration:
+        u_b = target
+    elif z_in:
+        u_b = u_z + s_b * (duration - t_z)
+    else:
+        u_b = u_a
+    return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
+
+
+@_jit
+def _channel(
+    ws: F64, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
+) -> float:
+    # actuators._channel_float: knots ws[k:k+7], values ws[k+7:k+13], slopes ws[k+13:k+19]; returns u at dt
+    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp(u0, c_old, accel, decel, t_s)
+    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp(ub1, c_new, accel, decel, dt - t_s)
+    k4 = t_s + ta2
+    k5 = t_s + tb2
+    ws[k] = 0.0
+    ws[k + 1] = ta1
+    ws[k + 2] = tb1
+    ws[k + 3] = t_s
+    ws[k + 4] = k4 if k4 <= dt else dt
+    ws[k + 5] = k5 if k5 <= dt else dt
+    ws[k + 6] = dt
+    v = k + 7
+    ws[v] = u0
+    ws[v + 1] = ua1
+    ws[v + 2] = ub1
+    ws[v + 3] = ub1
+    ws[v + 4] = ua2
+    ws[v + 5] = ub2
+    s = k + 13
+    ws[s] = sa1
+    ws[s + 1] = sb1
+    ws[s + 2] = 0.0
+    ws[s + 3] = sa2
+    ws[s + 4] = sb2
+    ws[s + 5] = 0.0
+    return ub2
+
+
+@_jit
+def _evaluate_channel(ws: F64, k: int, t: float, mid: float) -> tuple[float, float]:
+    # actuators._evaluate_float on the channel at ws[k:]
+    v = k + 7
+    s = k + 13
+    val = ws[v] + ws[s] * t
+    slope = ws[s]
+    for i in range(1, 6):
+        if mid >= ws[k + i]:
+            val = ws[v + i] + ws[s + i] * (t - ws[k + i])
+            slope = ws[s + i]
+    return val, slope
+
+
+@_jit
+def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
+    """actuators._actuator_step_float from the state in ``ws``: the new pose, wheel rates and angles into ``ws``.
+
+    Returns the true speed of A at the end of the step [m/s].
+    """
+    w_max = c[C_W_MAX]
+    l1n = c[C_L1]
+    r1n = c[C_R1]
+    r2n = c[C_R2]
+    two_l1 = c[C_TWO_L1]
+    dt = c[C_DT]
+    t_s = ws[W_TS]
+    # 1. commands (clip_setpoints, body_velocity_columns)
+    lo = -w_max
+    w = o1 if o1 >= lo else lo
+    u1 = r1n * (w if w <= w_max else w_max)
+    w = o2 if o2 >= lo else lo
+    u2 = r2n * (w if w <= w_max else w_max)
+    vc_old = 0.5 * (u1 + u2)
+    wc_old = (u1 - u2) / two_l1
+    w = n1 if n1 >= lo else lo
+    u1 = r1n * (w if w <= w_max else w_max)
+    w = n2 if n2 >= lo else lo
+    u2 = r2n * (w if w <= w_max else w_max)
+    vc_new = 0.5 * (u1 + u2)
+    wc_new = (u1 - u2) / two_l1
+    # 2. ramps
+    u1 = r1n * ws[W_W1]
+    u2 = r2n * ws[W_W2]
+    v0 = 0.5 * (u1 + u2)
+    om0 = (u1 - u2) / two_l1
+    v_end = _channel(ws, S_KV, v0, vc_old, vc_new, c[C_ACC], c[C_DEC], t_s, dt)
+    w_end = _channel(ws, S_KW, om0, wc_old, wc_new, c[C_RACC], c[C_RDEC], t_s, dt)
+    # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
+    tm = S_TIMES
+    ws[tm] = 0.0
+    ws[tm + 1] = ws[S_KV + 1]
+    ws[tm + 2] = ws[S_KV + 2]
+    ws[tm + 3] = ws[S_KV + 3]
+    ws[tm + 4] = ws[S_KV + 4]
+    ws[tm + 5] = ws[S_KV + 5]
+    ws[tm + 6] = ws[S_KW + 1]
+    ws[tm + 7] = ws[S_KW + 2]
+    ws[tm + 8] = ws[S_KW + 4]
+    ws[tm + 9] = ws[S_KW + 5]
+    ws[tm + 10] = dt
+    for i in range(2, 10):
+        key = ws[tm + i]
+        j = i - 1
+        while j >= 1 and key < ws[tm + j]:
+            ws[tm + j + 1] = ws[tm + j]
+            j -= 1
+        ws[tm + j + 1] = key
+    # 3. pieces
+    g1 = (1.0 - s1) * ws[W_R1]
+    g2 = (1.0 - s2) * ws[W_R2]
+    inv_2l1t = 0.5 / ws[W_L1]
+    da1 = 0.0
+    da2 = 0.0
+    n_pieces = 0
+    for j in range(PIECES):
+        t0 = ws[tm + j]
+        t1 = ws[tm + j + 1]
+        length = t1 - t0
+        if not length > 0.0:
+            continue
+        mid = 0.5 * (t0 + t1)
+        v, a = _evaluate_channel(ws, S_KV, t0, mid)
+        om, al = _evaluate_channel(ws, S_KW, t0, mid)
+        p1 = (v + l1n * om) / r1n
+        q1 = (a + l1n * al) / r1n
+        p2 = (v - l1n * om) / r2n
+        q2 = (a - l1n * al) / r2n
+        pc = S_PIECES + 5 * n_pieces
+        ws[pc] = 0.5 * (g1 * p1 + g2 * p2)
+        ws[pc + 1] = 0.5 * (g1 * q1 + g2 * q2)
+        ws[pc + 2] = (g1 * p1 - g2 * p2) * inv_2l1t
+        ws[pc + 3] = (g1 * q1 - g2 * q2) * inv_2l1t
+        ws[pc + 4] = length
+        n_pieces += 1
+        half = 0.5 * length
+        da1 = da1 + length * (p1 + q1 * half)
+        da2 = da2 + length * (p2 + q2 * half)
+    # fresnel.advance_chain_float: the heading of each piece's start in closed form, the nodes' sums in order
+    x = ws[W_X]
+    y = ws[W_Y]
+    th = ws[W_BETA]
+    nn = int(c[C_N_NODES])
+    base = C_TAIL + 2 * int(c[C_N_PREVIEW])
+    for q in range(n_pieces):
+        pc = S_PIECES + 5 * q
+        v0p = ws[pc]
+        ap = ws[pc + 1]
+        w0 = ws[pc + 2]
+        half_alpha = 0.5 * ws[pc + 3]
+        t = ws[pc + 4]
+        dx = 0.0
+        dy = 0.0
+        for i in range(nn):
+            tau = c[base + i] * t
+            phase = th + tau * (w0 + half_alpha * tau)
+            weight = (v0p + ap * tau) * c[base + nn + i]
+            dx = dx + weight * math.cos(phase)
+            dy = dy + weight * math.sin(phase)
+        x = x + dx * t
+        y = y + dy * t
+        th = th + t * (w0 + half_alpha * t)
+    # 4. the new actuator state (wheel_rates_columns) and the true speed at the end
+    lw = l1n * w_end
+    w1n = (v_end + lw) / r1n
+    w2n = (v_end - lw) / r2n
+    ws[W_X] = x
+    ws[W_Y] = y
+    ws[W_BETA] = th
+    ws[W_W1] = w1n
+    ws[W_W2] = w2n
+    ws[W_AL1] = ws[W_AL1] + da1
+    ws[W_AL2] = ws[W_AL2] + da2
+    v_true: float = 0.5 * (g1 * w1n + g2 * w2n)
+    return v_true
+
+
+# ----------------------------------------------------------------------------------------- the path
+
+
+@_jit
+def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
+    # clothoid._pose_tuple: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s
+    n = int(pv[P_N])
+    length = pv[P_LENGTH]
+    closed = pv[P_CLOSED] != 0.0
+    if closed:
+        lap = np.floor(s / length)
+        u = s - lap * length
+        extra = 0.0
+    else:
+        lap = 0.0
+        u = _py_min(_py_max(s, 0.0), length)
+        extra = s - u
+    # bisect.bisect_right(s0, u) - 1, clamped to [0, n - 1]
+    s0 = P_TAIL
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if u < pv[s0 + mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    j = lo - 1
+    if j < 0:
+        j = 0
+    if j > n - 1:
+        j = n - 1
+    x0 = pv[P_TAIL + n + j]
+    y0 = pv[P_TAIL + 2 * n + j]
+    theta = pv[P_TAIL + 3 * n + j]
+    w0 = pv[P_TAIL + 4 * n + j]
+    cr = pv[P_TAIL + 5 * n + j]
+    t = u - pv[s0 + j]
+    # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
+    half_alpha = 0.5 * cr
+    th = theta + t * (w0 + half_alpha * t)
+    nb = C_TAIL + 2 * int(c[C_N_PREVIEW]) + 2 * int(c[C_N_NODES])
+    dx = 0.0
+    dy = 0.0
+    for i in range(PATH_NODES):
+        tau = c[nb + i] * t
+        phase = theta + tau * (w0 + half_alpha * tau)
+        wi = c[nb + PATH_NODES + i]
+        dx = dx + wi * math.cos(phase)
+        dy = dy + wi * math.sin(phase)
+    x = x0 + dx * t
+    y = y0 + dy * t
+    cos_t = math.cos(th)
+    sin_t = math.sin(th)
+    kappa = w0 + cr * t
+    if closed:
+        return x, y, th + lap * pv[P_TURN], kappa, cr, cos_t, sin_t
+    if extra != 0.0:
+        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
+    return x + extra * cos_t, y + extra * sin_t, th, kappa, cr, cos_t, sin_t
+
+
+@_jit
+def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
+    """clothoid._locate_float with the window ``c[C_WINDOW]`` ahead and behind.
+
+    Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
+    """
+    ahead = c[C_WINDOW]
+    behind = ahead
+    h = pv[P_SPACING]
+    length = pv[P_LENGTH]
+    closed = pv[P_CLOSED] != 0.0
+    n = int(pv[P_N])
+    n_samp = int(pv[P_M])
+    sx = P_TAIL + 6 * n
+    sy = sx + n_samp
+    m = math.ceil((ahead + behind) / h) + 2
+    j0 = np.floor((sp - behind) / h)
+    top = float(n_samp - 1)
+    best = 0.0
+    best_j = 0.0
+    for k in range(m):
+        jj = j0 + float(k)
+        if closed:
+            idx = int(jj) % n_samp  # np.mod(jj, n_samp) of a whole number jj, as an integer: exact
+            if idx < 0:
+                idx += n_samp
+        else:
+            jj = _np_clip(jj, 0.0, top)
+            idx = int(jj)
+        ddx = pv[sx + idx] - x
+        ddy = pv[sy + idx] - y
+        d2 = ddx * ddx + ddy * ddy
+        if k == 0 or d2 < best or (d2 != d2 and best == best):  # np.argmin: the first minimum (or NaN)
+            best = d2
+            best_j = jj
+    s_start = best_j * h
+    lo = sp - behind
+    hi = sp + ahead
+    if not closed:
+        lo = _np_clip(lo, 0.0, length)
+        hi = _np_clip(hi, 0.0, length)
+    s = _np_clip(s_start, lo, hi)
+    px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
+    for _ in range(NEWTON_ITERATIONS):
+        dx = x - px
+        dy = y - py
+        g = dx * ct + dy * st
+        e = dy * ct - dx * st
+        den = 1.0 - kappa * e
+        if den < MIN_NEWTON_DENOMINATOR:
+            den = MIN_NEWTON_DENOMINATOR
+        s_new = _py_min(_py_max(s + _py_min(_py_max(g / den, -h), h), lo), hi)
+        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
+            break
+        s = s_new
+        px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
+    dx = x - px
+    dy = y - py
+    g = dx * ct + dy * st
+    e = dy * ct - dx * st
+    status = STATUS_INTERIOR
+    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
+        status = STATUS_WINDOW
+    if not closed:
+        if s <= 0.0 and g < 0.0:
+            status = STATUS_START
+        if s >= length and g > 0.0:
+            status = STATUS_END
+    return s, kappa, e, ct, st, status
+
+
+# ----------------------------------------------------------------------------------------- the task
+
+
+@_jit
+def _reference_speed(c: F64, ws: F64, t: float) -> float:
+    # tracking.reference_speed
+    v: float = ws[W_VC]
+    if c[C_TRAPEZOID] == 0.0:
+        return v
+    a = c[C_PACC] * t
+    a = a if a <= v else v
+    b = v - c[C_PDEC] * (t - ws[W_TB])
+    a = a if a <= b else b
+    return a if a > 0.0 else 0.0
+
+
+@_jit
+def _evaluate(
+    c: F64,
+    pv: F64,
+    ws: F64,
+    obs: NDArray[np.floating],
+    v_true: float,
+    prev1: float,
+    prev2: float,
+    t: float,
+    nx: float,
+    ny: float,
+    nbeta: float,
+    nr1: float,
+    nr2: float,
+) -> None:
+    # tracking.evaluate_columns of the state in ws (true H, its projection, measurements, observation, reward
+    # arguments, end), with the noise (nx, ny, nbeta, nr1, nr2); the new progress into ws
+    l3 = c[C_L3]
+    x = ws[W_X]
+    y = ws[W_Y]
+    beta = ws[W_BETA]
+    cb = math.cos(beta)
+    sb = math.sin(beta)
+    hx = x + ws[W_L3] * cb
+    hy = y + ws[W_L3] * sb
+    s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[W_PROGRESS])
+    cos_psi = cb * ct + sb * st
+    sin_psi = sb * ct - cb * st
+    v_ref = _reference_speed(c, ws, t)
+    # task.steady_heading, task.reward_term_columns (the exponentials' arguments only)
+    sin_ss = -_task_clip(kappa * l3, -1.0, 1.0)
+    cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
+    da1 = ws[W_A1] - prev1
+    da2 = ws[W_A2] - prev2
+    abs_e = abs(e)
+    ws[W_ARG_T] = abs_e / c[C_NEG_SIG_T]
+    ws[W_ARG_V] = abs(v_true - v_ref) / c[C_NEG_SIG_V]
+    ws[W_HEADING] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+    ws[W_ARG_S] = (da1 * da1 + da2 * da2) / c[C_NEG_SMOOTH_SQ]
+    closed = pv[P_CLOSED] != 0.0
+    at_end = (not closed) and status == STATUS_END
+    terminated = abs_e > c[C_TERM] or at_end
+    # measurements
+    mx = x + nx
+    my = y + ny
+    mb = beta + nbeta
+    mw1 = ws[W_W1] + nr1
+    mw2 = ws[W_W2] + nr2
+    if c[C_MEAS_NOISE] != 0.0 or ws[W_L3D] != 0.0:
+        mcb = math.cos(mb)
+        msb = math.sin(mb)
+        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mx + l3 * mcb, my + l3 * msb, s_h)
+    else:
+        mcb = cb
+        msb = sb
+        m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
+    e_max = c[C_E_MAX]
+    obs[0] = _clip(m_e / c[C_ERROR_SCALE], -e_max, e_max)
+    obs[1] = msb * m_ct - mcb * m_st
+    obs[2] = mcb * m_ct + msb * m_st
+    obs[3] = _clip(m_k * l3, -1.0, 1.0)
+    n_prev = int(c[C_N_PREVIEW])
+    scale = c[C_PREVIEW_SCALE]
+    for i in range(n_prev):
+        qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[C_TAIL + i])
+        bound = c[C_TAIL + n_prev + i]
+        dx = qx - mx
+        dy = qy - my
+        obs[4 + 3 * i] = _clip((mcb * dx + msb * dy) / scale, -bound, bound)
+        obs[5 + 3 * i] = _clip((mcb * dy - msb * dx) / scale, -bound, bound)
+        obs[6 + 3 * i] = _clip(qk * l3, -1.0, 1.0)
+    v_max = c[C_V_MAX]
+    w_max = c[C_W_MAX]
+    v_meas = 0.5 * (c[C_R1] * mw1 + c[C_R2] * mw2)
+    k = 4 + 3 * n_prev
+    obs[k] = v_ref / v_max
+    obs[k + 1] = _reference_speed(c, ws, t + c[C_LOOKAHEAD]) / v_max
+    obs[k + 2] = _clip((v_meas - v_ref) / v_max, -2.0, 2.0)
+    obs[k + 3] = _clip(mw1 / w_max, -2.0, 2.0)
+    obs[k + 4] = _clip(mw2 / w_max, -2.0, 2.0)
+    obs[k + 5] = ws[W_A1]
+    obs[k + 6] = ws[W_A2]
+    ws[W_PROGRESS] = s_h
+    ws[W_HX] = hx
+    ws[W_HY] = hy
+    ws[W_E] = e
+    ws[W_VT] = v_true
+    ws[W_VREF] = v_ref
+    ws[W_MX] = mx
+    ws[W_MY] = my
+    ws[W_MB] = mb
+    ws[W_MW1] = mw1
+    ws[W_MW2] = mw2
+    ws[W_TERM] = 1.0 if terminated else 0.0
+    ws[W_END] = 1.0 if at_end else 0.0
+
+
+@_jit
+def evaluate(
+    c: F64,
+    pv: F64,
+    ws: F64,
+    obs: NDArray[np.floating],
+    v_true: float,
+    prev1: float,
+    prev2: float,
+    t: float,
+) -> None:
+    """:func:`amigo_gym.tracking.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise.
+
+    As there, the state keeps its progress (the start's hint): only the outputs of ``ws`` and ``obs`` are written.
+
+    Args:
+        c, pv, ws, obs: the layouts of the module docstring.
+        v_true: the true speed of A [m/s]; prev1, prev2: the previous normalised command [-]; t: time [s].
+    """
+    progress = ws[W_PROGRESS]
+    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, t, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ws[W_PROGRESS] = progress
+
+
+@_jit
+def step(
+    c: F64,
+    pv: F64,
+    ring: F64,
+    ws: F64,
+    obs: NDArray[np.floating],
+    ring_step: int,
+    a1: float,
+    a2: float,
+    slip1: float,
+    slip2: float,
+    nx: float,
+    ny: float,
+    nbeta: float,
+    nr1: float,
+    nr2: float,
+) -> None:
+    """:func:`amigo_gym.tracking.step_columns` of the state in ``ws`` (updated in place) on Python floats.
+
+    Args:
+        c, pv, ring, ws, obs: the layouts of the module docstring.
+        ring_step: the ring's counter (one more than at the previous step).
+        a1, a2: the validated action (finite) [-], clipped here.
+        slip1, slip2, nx, ny, nbeta, nr1, nr2: this step's draws
+            (:func:`amigo_gym.randomization.step_noise` of the state's step counter).
+    """
+    w_max = c[C_W_MAX]
+    c1 = _clip(a1, -1.0, 1.0)
+    c2 = _clip(a2, -1.0, 1.0)
+    # actuators.ring_write, ring_read (Python's modulo: never negative)
+    length = ring.shape[0]
+    slot = ring_step % length
+    cmd1 = c1 * w_max
+    cmd2 = c2 * w_max
+    ring[slot, 0] = cmd1
+    ring[slot, 1] = cmd2
+    lag = int(ws[W_LAG])
+    i_new = (ring_step - lag) % length
+    i_old = (ring_step - lag - 1) % length
+    if i_new < 0:
+        i_new += length
+    if i_old < 0:
+        i_old += length
+    v_true = _actuator_step(c, ws, ring[i_old, 0], ring[i_old, 1], ring[i_new, 0], ring[i_new, 1], slip1, slip2)
+    prev1 = ws[W_A1]
+    prev2 = ws[W_A2]
+    steps = ws[W_STEPS] + 1.0
+    ws[W_A1] = c1
+    ws[W_A2] = c2
+    ws[W_STEPS] = steps
+    ws[W_CMD1] = cmd1
+    ws[W_CMD2] = cmd2
+    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, steps * c[C_DT], nx, ny, nbeta, nr1, nr2)

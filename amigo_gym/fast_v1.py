@@ -1,0 +1,290 @@
+"""The optional compiled step of the single ``AmigoBot-v1`` environment (numba), and when it runs.
+
+Two implementations of one robot's step exist:
+
+* the **reference**, :func:`amigo_gym.tracking.step_columns` / :func:`amigo_gym.tracking.evaluate_columns`
+  on Python floats (numpy, always available, any path object);
+* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym._kernels_v1`, numba, the
+  extra ``amigo_gym[fast]``) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family), with
+  the per-step noise drawn before it and the three reward exponentials evaluated after it by numpy, exactly
+  as the reference draws and evaluates them. The results are the reference's bit for bit
+  (``tests/test_kernel_v1.py``).
+
+:func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
+env's keyword (:func:`amigo_gym.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
+it can be imported). numba is imported only when a :class:`StepKernel` is first built (never by
+``import amigo_gym``); its compiled code is cached on disk, so a later process loads it instead of compiling.
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym import fast, fresnel, tracking
+from amigo_gym.paths.clothoid import ClothoidPath
+
+__all__ = ["KERNELS", "use_kernel", "kernels", "kernel_constants", "flat_path", "StepKernel"]
+
+Array = NDArray[np.float64]
+
+# ---------------------------------------------------------------------------- layouts of the kernel's vectors
+
+#: scalar entries at the head of ``consts`` (the variable-length parts follow, module docstring)
+CONSTANT_FIELDS: tuple[str, ...] = (
+    "dt",  # control period [s]
+    "w_max",  # nominal max wheel rate [rad/s]
+    "r1",  # nominal wheel radii [m] and half track [m]
+    "r2",
+    "l1",
+    "two_l1",  # 2 l1 [m]
+    "accel",  # firmware ramps [m/s^2], [rad/s^2]
+    "decel",
+    "rot_accel",
+    "rot_decel",
+    "l3",  # nominal l3 [m]
+    "error_scale",  # [m]
+    "e_max",  # observation bound of the cross-track error [-]
+    "termination_distance",  # [m]
+    "preview_scale",  # [m]
+    "v_max",  # nominal max speed [m/s]
+    "neg_sigma_track",  # -sigma_track [m]
+    "neg_sigma_speed",  # -sigma_speed [m/s]
+    "neg_smooth_scale_sq",  # -smooth_scale_sq [-]
+    "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
+    "profile_accel",  # [m/s^2]
+    "profile_decel",  # [m/s^2]
+    "window",  # projection window ahead and behind [m]
+    "measured_noise",  # 1.0 when position or heading noise is on (the measured H is projected again)
+    "speed_lookahead",  # [s]
+    "n_preview",  # number of preview distances
+    "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
+)
+_C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
+C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
+C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
+C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
+C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
+C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
+#: where the variable-length parts of ``consts`` start
+C_TAIL = len(CONSTANT_FIELDS)
+#: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.fresnel.NODES`)
+PATH_NODES = 10
+
+#: the head of a flattened path (then the arrays, module docstring)
+PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
+P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
+P_TAIL = len(PATH_HEADER)
+
+#: entries of ``ws``: the state (:class:`amigo_gym.tracking.State`), the episode (:class:`amigo_gym.tracking.Episode`;
+#: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
+WS_FIELDS: tuple[str, ...] = (
+    # state, updated by step
+    "x",
+    "y",
+    "beta",
+    "w1",
+    "w2",
+    "alpha1",
+    "alpha2",
+    "progress",
+    "a1",
+    "a2",
+    "steps",
+    # episode, read only
+    "r1",
+    "r2",
+    "l1",
+    "l3",
+    "lag",
+    "t_switch",
+    "v_cruise",
+    "t_brake",
+    "l3_differs",
+    # outputs
+    "h_x",
+    "h_y",
+    "error",
+    "v_true",
+    "v_ref",
+    "meas_x",
+    "meas_y",
+    "meas_beta",
+    "meas_w1",
+    "meas_w2",
+    "heading",  # the heading reward term
+    "arg_track",  # arguments of the exponentials of the track, speed and smoothness terms
+    "arg_speed",
+    "arg_smooth",
+    "terminated",  # 1.0 / 0.0
+    "end_of_path",  # 1.0 / 0.0
+    "command1",  # the setpoints written into the ring this step [rad/s]
+    "command2",
+)
+_W = {name: i for i, name in enumerate(WS_FIELDS)}
+W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
+W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[11:20])
+W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[20:30])
+W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
+#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5
+WS_SCRATCH = 2 * 19 + 11 + 10 * 5
+S_KV = len(WS_FIELDS)
+S_UV = S_KV + 7
+S_SV = S_UV + 6
+S_KW = S_SV + 6
+S_UW = S_KW + 7
+S_SW = S_UW + 6
+S_TIMES = S_SW + 6
+S_PIECES = S_TIMES + 11
+
+# ---------------------------------------------------------------------------- selection and data
+
+#: values of the ``kernel=`` keyword of :class:`amigo_gym.envs.AmigoBotV1Env`
+KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
+
+
+def use_kernel(owner: str, kernel: object) -> bool:
+    """Whether ``kernel=`` selects the compiled step (``"auto"``: when numba is importable).
+
+    Raises:
+        ValueError: not one of :data:`KERNELS`.
+        ImportError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba`` with ``"auto"``) without numba installed.
+    """
+    if not isinstance(kernel, str) or kernel not in KERNELS:
+        raise ValueError(f"{owner}.kernel must be 'auto', 'numpy' or 'numba', got {kernel!r}")
+    return fast.use_fast_path(None if kernel == "auto" else kernel == "numba")
+
+
+def kernels() -> ModuleType:
+    """The compiled kernels, :mod:`amigo_gym._kernels_v1` (imports numba on the first call)."""
+    import amigo_gym._kernels_v1 as kv
+
+    return kv
+
+
+def kernel_constants(k: tracking.Constants) -> Array:
+    """The ``consts`` vector of :mod:`amigo_gym._kernels_v1` for the constants ``k``.
+
+    Every entry is computed as the reference computes it (``2.0 * l1``, the negated scales the reference
+    divides by), the quadrature nodes are :mod:`amigo_gym.fresnel`'s own lists, so the kernel's arithmetic is
+    the reference's.
+    """
+    p = k.params
+    nominal = k.nominal
+    act = p.actuators
+    rz = p.randomize
+    u, uw = fresnel._nodes(k.n_sub)
+    values: dict[str, float] = {
+        "dt": p.dt,
+        "w_max": k.w_max,
+        "r1": nominal.r1,
+        "r2": nominal.r2,
+        "l1": nominal.l1,
+        "two_l1": 2.0 * nominal.l1,
+        "accel": act.acceleration,
+        "decel": act.deceleration,
+        "rot_accel": act.rot_acceleration,
+        "rot_decel": act.rot_deceleration,
+        "l3": k.l3,
+        "error_scale": p.error_scale,
+        "e_max": k.e_max,
+        "termination_distance": p.termination_distance,
+        "preview_scale": p.preview_scale,
+        "v_max": k.v_max,
+        "neg_sigma_track": -p.sigma_track,
+        "neg_sigma_speed": -p.sigma_speed,
+        "neg_smooth_scale_sq": -k.smooth_scale_sq,
+        "trapezoid": 1.0 if p.speed_profile == "trapezoid" else 0.0,
+        "profile_accel": p.profile_accel,
+        "profile_decel": p.profile_decel,
+        "window": k.window,
+        "measured_noise": 1.0 if (rz.position_noise > 0 or rz.heading_noise > 0) else 0.0,
+        "speed_lookahead": tracking.SPEED_LOOKAHEAD,
+        "n_preview": float(len(p.preview)),
+        "n_nodes": float(len(u)),
+    }
+    head = [values[name] for name in CONSTANT_FIELDS]
+    tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
+    return np.array(head + tail, dtype=np.float64)
+
+
+#: flattened paths by ``id`` (the path is kept with its array, so that its id is not reused meanwhile)
+_FLAT: dict[int, tuple[ClothoidPath, Array]] = {}
+_FLAT_MAX = 4096
+
+
+def flat_path(path: ClothoidPath) -> Array:
+    """The ``path`` vector of :mod:`amigo_gym._kernels_v1` for a :class:`ClothoidPath` (built once per path object).
+
+    The pieces' tables and the coarse samples the reference searches (``path._t``), copied as they are.
+    """
+    got = _FLAT.get(id(path))
+    if got is not None and got[0] is path:
+        return got[1]
+    t = path._t
+    header = [float(len(t.s0)), float(len(t.sample_x)), t.length, t.turn, t.spacing, 1.0 if path.closed else 0.0]
+    flat = np.concatenate(
+        (np.array(header, dtype=np.float64), t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a, t.sample_x, t.sample_y)
+    ).astype(np.float64, copy=False)
+    if len(_FLAT) >= _FLAT_MAX:
+        _FLAT.clear()
+    _FLAT[id(path)] = (path, flat)
+    return flat
+
+
+class StepKernel:
+    """The compiled step of one robot (:mod:`amigo_gym._kernels_v1`): constants, flattened path, workspace.
+
+    The state of an episode lives in :attr:`ws` between steps (:meth:`load` puts a :class:`tracking.State` and a
+    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`step` and :attr:`evaluate` are the
+    compiled :func:`amigo_gym._kernels_v1.step` and :func:`amigo_gym._kernels_v1.evaluate` (dropped when pickled,
+    loaded again when unpickled).
+
+    Attributes:
+        consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
+        ws: the workspace, ``len(WS_FIELDS) + WS_SCRATCH`` float64.
+    """
+
+    def __init__(self, k: tracking.Constants) -> None:
+        self.consts: Array = kernel_constants(k)
+        self.ws: Array = np.zeros(len(WS_FIELDS) + WS_SCRATCH)
+        self.path: Array = np.zeros(0)
+        self._bind()
+
+    def _bind(self) -> None:
+        kv = kernels()
+        self.step: Any = kv.step
+        self.evaluate: Any = kv.evaluate
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        del state["step"], state["evaluate"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._bind()
+
+    def load(self, path: ClothoidPath, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
+        """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
+        self.path = flat_path(path)
+        ws = self.ws
+        ws[W_X : W_STEPS + 1] = (
+            st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
+        )  # fmt: skip
+        ws[W_R1 : W_L3D + 1] = (
+            ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
+        )  # fmt: skip
+
+    def state(self, steps: int) -> tracking.State:
+        """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""
+        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[W_X : W_A2 + 1].tolist()
+        return tracking.State(x, y, beta, w1, w2, al1, al2, prog, a1, a2, steps)
+
+    def outputs(self) -> list[float]:
+        """The entries :data:`WS_FIELDS` of the workspace as Python floats."""
+        out: list[float] = self.ws[: len(WS_FIELDS)].tolist()
+        return out

@@ -1,0 +1,289 @@
+"""The compiled single-robot step of AmigoBot-v1 (amigo_gym.fast_v1, amigo_gym._kernels_v1) against the reference.
+
+The reference is the Python float code of amigo_gym.tracking (``kernel="numpy"``). Whole episodes run side by
+side in both, with the same seeds and actions, on every path family (the circle both ways, the manoeuvre, the
+figure-8, the lane change to its end, random and mixed paths), without and with randomisation, speed ranges and
+the trapezoid profile, fixed delays, a true robot that differs from the nominal one, other control periods,
+start poses, and steps past termination: observations, rewards, terminations, truncations and every info entry
+are equal bit for bit (and of the same types).
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+import subprocess
+import sys
+import warnings
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from amigo_gym import fast_v1, tracking
+from amigo_gym.envs import AmigoBotV1Env
+from amigo_gym.policies import AnalyticTrackingPolicy
+
+pytest.importorskip("numba", reason="the compiled v1 step needs numba (the extra amigo_gym[fast])")
+
+#: name -> settings of AmigoBotV1Env
+CONFIGS: dict[str, dict[str, Any]] = {
+    "circle": {},
+    "circle_right": {"direction": -1, "radius": 0.7},
+    "manoeuvre": {"path": "manoeuvre"},
+    "manoeuvre_right_mild": {"path": "manoeuvre", "direction": -1, "randomize": "mild"},
+    "figure8": {"path": "figure8", "speed": 0.3},
+    "lane_change": {"path": "lane_change", "speed": 0.4},
+    "lane_change_trapezoid": {"path": "lane_change", "speed_profile": "trapezoid", "profile_duration": 8.0, "dt": 0.05},
+    "random": {"path": "random", "speed": (0.1, 0.4)},
+    "random_delay_mild": {"path": "random", "speed": 0.3, "actuators": {"delay": 0.13}, "randomize": "mild"},
+    "mixed_hard": {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"},
+    "mixed_hard_trapezoid": {
+        "path": "mixed",
+        "randomize": "hard",
+        "speed_profile": "trapezoid",
+        "profile_duration": 6.0,
+    },
+    "long_delay": {"path": "figure8", "actuators": {"delay": 0.35}, "start_at_rest": False},
+    "true_robot_l3": {"path": "circle", "true_robot": {"l3": 0.09, "r1": 0.051}},
+    "slow_dt": {"path": "mixed", "dt": 0.3, "speed": 0.15, "preview": (0.3, 0.7, 1.5, 3.0)},
+    "slip_only": {"path": "circle", "randomize": {"slip": (0.0, 0.2), "delay": (0.0, 0.5)}, "preview": (0.4,)},
+}
+SEEDS = (0, 1, 2)
+STEPS = 120
+
+
+def _same(a: Any, b: Any, where: str) -> None:
+    """``a`` and ``b`` equal bit for bit, of the same types (dicts, arrays, floats, bools, ints, strings)."""
+    assert type(a) is type(b), f"{where}: {type(a).__name__} != {type(b).__name__}"
+    if isinstance(a, dict):
+        assert list(a) == list(b), where
+        for k in a:
+            _same(a[k], b[k], f"{where}[{k!r}]")
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape, where
+        np.testing.assert_array_equal(a.view(np.uint8), b.view(np.uint8), err_msg=where)
+    elif isinstance(a, tuple | list):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _same(x, y, f"{where}[{i}]")
+    elif isinstance(a, float):
+        assert np.float64(a).view(np.int64) == np.float64(b).view(np.int64), f"{where}: {a!r} != {b!r}"
+    else:
+        assert a == b, f"{where}: {a!r} != {b!r}"
+
+
+def _pair(settings: dict[str, Any]) -> tuple[AmigoBotV1Env, AmigoBotV1Env]:
+    return AmigoBotV1Env(kernel="numpy", **settings), AmigoBotV1Env(kernel="numba", **settings)
+
+
+def _actions(kind: str, rng: np.random.Generator, policy: AnalyticTrackingPolicy, obs: Any, t: int, state: Any) -> Any:
+    """An action of ``kind``: the analytic policy (perturbed), random in [-1.3, 1.3], or a mix; varied types."""
+    a, state = policy.predict(obs[None, :], state, np.array([t == 0]))
+    act = np.asarray(a[0], dtype=np.float64)
+    if kind == "random" or (kind == "mixed" and rng.random() < 0.3):
+        act = rng.uniform(-1.3, 1.3, size=2)
+    elif kind == "noisy":
+        act = act + rng.normal(0.0, 0.15, size=2)
+    form = t % 4
+    if form == 1:
+        return act.astype(np.float32), state
+    if form == 2:
+        return [float(act[0]), float(act[1])], state
+    if form == 3 and t % 8 == 3:
+        return (np.float32(act[0]), round(float(act[1]))), state
+    return act, state
+
+
+def _run_pair(settings: dict[str, Any], seed: int, kind: str, pose: Any = None, past_end: int = 5) -> int:
+    """Run both envs side by side; returns the number of steps compared."""
+    ref, fast = _pair(settings)
+    assert fast._kernel is not None and ref._kernel is None
+    options = None if pose is None else {"pose": pose}
+    o1, i1 = ref.reset(seed=seed, options=options)
+    o2, i2 = fast.reset(seed=seed, options=options)
+    assert fast._in_kernel
+    _same(o1, o2, "reset obs")
+    _same(i1, i2, "reset info")
+    policy = AnalyticTrackingPolicy(ref.params)
+    rng = np.random.default_rng(1000 + seed)
+    state = None
+    obs = o1
+    n = 0
+    after = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # stepping past termination warns
+        for t in range(STEPS):
+            action, state = _actions(kind, rng, policy, obs, t, state)
+            r1 = ref.step(action)
+            r2 = fast.step(action)
+            n += 1
+            for name, a, b in zip(("obs", "reward", "terminated", "truncated", "info"), r1, r2, strict=True):
+                _same(a, b, f"{settings} seed {seed} {kind} step {t}: {name}")
+            obs = r1[0]
+            if r1[2]:
+                after += 1
+                if after > past_end:
+                    break
+    st_ref = ref._current_state()
+    st_fast = fast._current_state()
+    for name, a, b in zip(tracking.State._fields, st_ref, st_fast, strict=True):
+        _same(a, b, f"state {name}")
+    return n
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_kernel_episodes_bit_identical(name: str) -> None:
+    total = 0
+    for seed in SEEDS:
+        for kind in ("noisy", "random", "mixed"):
+            total += _run_pair(CONFIGS[name], seed, kind)
+    assert total > 100
+
+
+def test_lane_change_reaches_its_end() -> None:
+    """The open path's end (a success): both implementations terminate there, with end_of_path set."""
+    settings = {"path": "lane_change", "speed": 0.4}
+    ref, fast = _pair(settings)
+    for env in (ref, fast):
+        env.reset(seed=4)
+    policy = AnalyticTrackingPolicy(ref.params)
+    state = None
+    obs, _ = ref.reset(seed=4)
+    fast.reset(seed=4)
+    ended = False
+    for t in range(2000):
+        a, state = policy.predict(obs[None, :], state, np.array([t == 0]))
+        r1 = ref.step(a[0])
+        r2 = fast.step(a[0])
+        for name, x, y in zip(("obs", "reward", "terminated", "truncated", "info"), r1, r2, strict=True):
+            _same(x, y, f"step {t}: {name}")
+        obs = r1[0]
+        if r1[2]:
+            ended = bool(r1[4]["end_of_path"])
+            break
+    assert ended
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(5):  # past the end
+            r1 = ref.step(np.zeros(2))
+            r2 = fast.step(np.zeros(2))
+            for name, x, y in zip(("obs", "reward", "terminated", "truncated", "info"), r1, r2, strict=True):
+                _same(x, y, f"past the end: {name}")
+
+
+@pytest.mark.parametrize("pose", [(0.05, -0.02, 1.4), (1.2, 0.3, 2.5), (-3.0, 0.0, -0.5)])
+def test_kernel_start_pose(pose: tuple[float, float, float]) -> None:
+    for settings in ({}, {"path": "figure8", "randomize": "hard"}, {"path": "lane_change"}):
+        _run_pair(settings, 7, "mixed", pose=pose)
+
+
+def test_kernel_reset_sequences_and_pickle() -> None:
+    """Several episodes per env (no reseeding), and an env pickled mid-episode goes on with the same bits."""
+    settings = {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}
+    ref, fast = _pair(settings)
+    ref.reset(seed=11)
+    fast.reset(seed=11)
+    rng = np.random.default_rng(3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for episode in range(6):
+            if episode:
+                _same(ref.reset(), fast.reset(), f"reset {episode}")
+            for t in range(40):
+                a = rng.uniform(-1, 1, 2)
+                if episode == 3 and t == 20:
+                    fast = pickle.loads(pickle.dumps(fast))
+                _same(ref.step(a), fast.step(a), f"episode {episode} step {t}")
+
+
+def test_cos_sin_match_numpy() -> None:
+    """The kernel's premise: the C library's cos/sin (math in numba) give numpy's float64 bits here."""
+    import numba
+
+    @numba.njit(cache=False)
+    def cos_sin(x: Any, c: Any, s: Any) -> None:
+        for i in range(x.shape[0]):
+            c[i] = math.cos(x[i])
+            s[i] = math.sin(x[i])
+
+    g = np.random.default_rng(0)
+    x = np.concatenate((g.uniform(-10, 10, 100_000), g.uniform(-1e4, 1e4, 10_000), g.normal(0, 1e-3, 10_000)))
+    c = np.empty_like(x)
+    s = np.empty_like(x)
+    cos_sin(x, c, s)
+    np.testing.assert_array_equal(c.view(np.int64), np.cos(x).view(np.int64))
+    np.testing.assert_array_equal(s.view(np.int64), np.sin(x).view(np.int64))
+
+
+def test_kernel_keyword_and_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
+    with pytest.raises(ValueError, match="kernel must be 'auto', 'numpy' or 'numba'"):
+        AmigoBotV1Env(kernel="fast")
+    assert AmigoBotV1Env()._kernel is not None  # auto, numba installed
+    assert AmigoBotV1Env(kernel="numpy")._kernel is None
+    monkeypatch.setenv("AMIGO_GYM_KERNEL", "numpy")
+    assert AmigoBotV1Env()._kernel is None
+    assert AmigoBotV1Env(kernel="numba")._kernel is not None
+    monkeypatch.delenv("AMIGO_GYM_KERNEL")
+    env = gym.make("AmigoBot-v1", kernel="numpy")
+    assert env.unwrapped._kernel is None  # type: ignore[attr-defined]
+
+    class Wrapped:
+        """A path object of the user's own (not a ClothoidPath): the reference code runs."""
+
+        def __init__(self, inner: Any) -> None:
+            self.inner = inner
+            self.length = inner.length
+            self.closed = inner.closed
+
+        def pose_columns(self, s: Any) -> Any:
+            return self.inner.pose_columns(s)
+
+        def locate(self, *args: Any, **kw: Any) -> Any:
+            return self.inner.locate(*args, **kw)
+
+    base = tracking.fixed_path(tracking.make_tracking_params("t", path="figure8"))
+    fast = AmigoBotV1Env(path=Wrapped(base))
+    ref = AmigoBotV1Env(path="figure8", kernel="numba")
+    o1, _ = fast.reset(seed=2)
+    o2, _ = ref.reset(seed=2)
+    assert not fast._in_kernel and ref._in_kernel
+    _same(o1, o2, "reset obs")
+    for t in range(30):
+        a = np.array([0.5, 0.45 + 0.01 * t])
+        r1, r2 = fast.step(a), ref.step(a)
+        for name, x, y in zip(("obs", "reward", "terminated", "truncated"), r1[:4], r2[:4], strict=True):
+            _same(x, y, f"step {t}: {name}")
+
+
+def test_fast_action_validation() -> None:
+    env = AmigoBotV1Env(kernel="numba")
+    env.reset(seed=0)
+    for bad in (np.array([np.nan, 0.0]), np.array([0.0, np.inf], dtype=np.float32)):
+        with pytest.raises(ValueError, match="finite"):
+            env.step(bad)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(3))
+    with pytest.raises(TypeError):
+        env.step(np.array(["a", "b"]))
+    fresh = AmigoBotV1Env(kernel="numba")
+    with pytest.raises(gym.error.ResetNeeded):
+        fresh.step(np.zeros(2))
+
+
+def test_flat_path_cached() -> None:
+    path = tracking.fixed_path(tracking.make_tracking_params("t", path="figure8"))
+    assert fast_v1.flat_path(path) is fast_v1.flat_path(path)
+
+
+def test_warm_cache_start_is_quick() -> None:
+    """A second process loads the compiled step from numba's cache: import, build, reset and a step well under 1 s."""
+    AmigoBotV1Env(kernel="numba").reset(seed=0)  # compiled (and cached) in this process at the latest
+    code = (
+        "import time; t = time.perf_counter(); import numpy as np; from amigo_gym.envs import AmigoBotV1Env; "
+        "e = AmigoBotV1Env(kernel='numba'); e.reset(seed=0); e.step(np.zeros(2)); "
+        "print(time.perf_counter() - t)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert float(out.stdout.strip().splitlines()[-1]) < 1.0
