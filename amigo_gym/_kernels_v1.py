@@ -26,9 +26,10 @@ runs the golden episodes through it). What makes the bits equal:
 * ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on this platform (the test checks it too);
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
-  the per-step noise (``log``, ``cos``) is drawn before the call (:func:`amigo_gym.randomization.step_noise`)
-  and passed in; the three reward exponentials are evaluated by ``np.exp`` after the call, on the arguments
-  written here (:mod:`amigo_gym.fast_v1`).
+  the per-step draws (:func:`amigo_gym.randomization.step_noise`) are split in three: the counter-based uniforms
+  (integer SplitMix64 on ``uint64``, exact) by :func:`noise_uniforms`, their logarithms by ``np.log`` between the
+  calls, the Box–Muller normals (``sqrt``, ``cos``) in :func:`step`; the three reward exponentials are
+  evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.fast_v1`).
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.fast_v1`,
 which numba never loads):
@@ -61,6 +62,7 @@ from amigo_gym.fast_v1 import (
     C_DT,
     C_E_MAX,
     C_ERROR_SCALE,
+    C_HEAD_NOISE,
     C_L1,
     C_L3,
     C_LOOKAHEAD,
@@ -72,10 +74,12 @@ from amigo_gym.fast_v1 import (
     C_NEG_SMOOTH_SQ,
     C_PACC,
     C_PDEC,
+    C_POS_NOISE,
     C_PREVIEW_SCALE,
     C_R1,
     C_R2,
     C_RACC,
+    C_RATE_NOISE,
     C_RDEC,
     C_TAIL,
     C_TERM,
@@ -94,8 +98,11 @@ from amigo_gym.fast_v1 import (
     PATH_NODES,
     S_KV,
     S_KW,
+    S_LOG,
     S_PIECES,
     S_TIMES,
+    S_U1,
+    S_U2,
     W_A1,
     W_A2,
     W_AL1,
@@ -120,9 +127,18 @@ from amigo_gym.fast_v1 import (
     W_MW2,
     W_MX,
     W_MY,
+    W_NB,
+    W_NOISE_ON,
+    W_NR1,
+    W_NR2,
+    W_NX,
+    W_NY,
     W_PROGRESS,
     W_R1,
     W_R2,
+    W_SLIP1,
+    W_SLIP2,
+    W_SLIP_MAX,
     W_STEPS,
     W_TB,
     W_TERM,
@@ -136,7 +152,7 @@ from amigo_gym.fast_v1 import (
     W_Y,
 )
 
-__all__ = ["step", "evaluate"]
+__all__ = ["step", "evaluate", "noise_uniforms"]
 
 F64 = NDArray[np.float64]
 
@@ -524,6 +540,71 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     return s, kappa, e, ct, st, status
 
 
+# ----------------------------------------------------------------------------------------- per-step draws
+
+_GAMMA = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+_INV_2_53 = 1.0 / 9007199254740992.0
+_TWO_PI = 2.0 * math.pi
+
+
+@_jit
+def _counter_uniform(key: np.uint64, step: int, channel: int) -> float:
+    # randomization._counter_uniform_int: SplitMix64 on uint64 (wrapping as the reference's "& (2**64 - 1)")
+    n = np.uint64(step) * np.uint64(256) + np.uint64(channel + 1)
+    z = key + n * _GAMMA
+    z = (z ^ (z >> np.uint64(30))) * _MIX1
+    z = (z ^ (z >> np.uint64(27))) * _MIX2
+    z = z ^ (z >> np.uint64(31))
+    u: float = (float(z >> np.uint64(11)) + 0.5) * _INV_2_53
+    return u
+
+
+@_jit
+def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
+    """The uniform numbers of :func:`amigo_gym.randomization.step_noise` (``_step_noise_float``) for step ``step``.
+
+    Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
+    that is on (in channel order), ``u1`` at ``ws[S_U1:]`` and ``2 pi u2`` at ``ws[S_U2:]``. The caller then
+    writes ``np.log`` of the ``u1`` at ``ws[S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
+
+    Args:
+        key: the episode's key (:func:`amigo_gym.randomization.draw_key`), step: the state's step counter.
+
+    Returns:
+        the number of channels on (the length of the ``u1`` written).
+    """
+    slip_max = ws[W_SLIP_MAX]
+    if slip_max > 0.0:
+        ws[W_SLIP1] = slip_max * _counter_uniform(key, step, 0)
+        ws[W_SLIP2] = slip_max * _counter_uniform(key, step, 1)
+    else:
+        ws[W_SLIP1] = 0.0
+        ws[W_SLIP2] = 0.0
+    on = 0
+    for ch in range(5):
+        level = c[C_POS_NOISE] if ch < 2 else (c[C_HEAD_NOISE] if ch == 2 else c[C_RATE_NOISE])
+        if level > 0.0:
+            ws[S_U1 + on] = _counter_uniform(key, step, 2 * (ch + 1))
+            ws[S_U2 + on] = _TWO_PI * _counter_uniform(key, step, 2 * (ch + 1) + 1)
+            on += 1
+    return on
+
+
+@_jit
+def _normals(c: F64, ws: F64) -> None:
+    # the rest of randomization._step_noise_float: level * (sqrt(-2 log u1) cos(2 pi u2)) per channel that is on
+    on = 0
+    for ch in range(5):
+        level = c[C_POS_NOISE] if ch < 2 else (c[C_HEAD_NOISE] if ch == 2 else c[C_RATE_NOISE])
+        value = 0.0
+        if level > 0.0:
+            value = level * (math.sqrt(-2.0 * ws[S_LOG + on]) * math.cos(ws[S_U2 + on]))
+            on += 1
+        ws[W_NX + ch] = value
+
+
 # ----------------------------------------------------------------------------------------- the task
 
 
@@ -672,23 +753,28 @@ def step(
     ring_step: int,
     a1: float,
     a2: float,
-    slip1: float,
-    slip2: float,
-    nx: float,
-    ny: float,
-    nbeta: float,
-    nr1: float,
-    nr2: float,
 ) -> None:
     """:func:`amigo_gym.tracking.step_columns` of the state in ``ws`` (updated in place) on Python floats.
+
+    This step's draws (:func:`amigo_gym.randomization.step_noise` of the state's step counter) come from
+    :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[W_NOISE_ON]`` is set, else they are zeros;
+    they are written to ``ws`` (``slip1`` ... ``noise_rate2``).
 
     Args:
         c, pv, ring, ws, obs: the layouts of the module docstring.
         ring_step: the ring's counter (one more than at the previous step).
         a1, a2: the validated action (finite) [-], clipped here.
-        slip1, slip2, nx, ny, nbeta, nr1, nr2: this step's draws
-            (:func:`amigo_gym.randomization.step_noise` of the state's step counter).
     """
+    if ws[W_NOISE_ON] != 0.0:
+        _normals(c, ws)
+    else:
+        ws[W_SLIP1] = 0.0
+        ws[W_SLIP2] = 0.0
+        ws[W_NX] = 0.0
+        ws[W_NY] = 0.0
+        ws[W_NB] = 0.0
+        ws[W_NR1] = 0.0
+        ws[W_NR2] = 0.0
     w_max = c[C_W_MAX]
     c1 = _clip(a1, -1.0, 1.0)
     c2 = _clip(a2, -1.0, 1.0)
@@ -706,7 +792,9 @@ def step(
         i_new += length
     if i_old < 0:
         i_old += length
-    v_true = _actuator_step(c, ws, ring[i_old, 0], ring[i_old, 1], ring[i_new, 0], ring[i_new, 1], slip1, slip2)
+    o1 = ring[i_old, 0]
+    o2 = ring[i_old, 1]
+    v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[W_SLIP1], ws[W_SLIP2])
     prev1 = ws[W_A1]
     prev2 = ws[W_A2]
     steps = ws[W_STEPS] + 1.0
@@ -715,4 +803,4 @@ def step(
     ws[W_STEPS] = steps
     ws[W_CMD1] = cmd1
     ws[W_CMD2] = cmd2
-    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, steps * c[C_DT], nx, ny, nbeta, nr1, nr2)
+    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, steps * c[C_DT], ws[W_NX], ws[W_NY], ws[W_NB], ws[W_NR1], ws[W_NR2])

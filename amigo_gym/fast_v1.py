@@ -62,6 +62,9 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "speed_lookahead",  # [s]
     "n_preview",  # number of preview distances
     "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
+    "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
+    "heading_noise",
+    "wheel_rate_noise",
 )
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
@@ -69,6 +72,7 @@ C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIE
 C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
 C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
 C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
+C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
 #: where the variable-length parts of ``consts`` start
 C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.fresnel.NODES`)
@@ -123,14 +127,28 @@ WS_FIELDS: tuple[str, ...] = (
     "end_of_path",  # 1.0 / 0.0
     "command1",  # the setpoints written into the ring this step [rad/s]
     "command2",
+    # the per-step draws (randomization.step_noise): the episode's slip bound and whether anything is drawn (1.0 /
+    # 0.0), then this step's draws
+    "slip_max",
+    "noise_on",
+    "slip1",
+    "slip2",
+    "noise_x",
+    "noise_y",
+    "noise_beta",
+    "noise_rate1",
+    "noise_rate2",
 )
 _W = {name: i for i, name in enumerate(WS_FIELDS)}
 W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
 W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[11:20])
 W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[20:30])
 W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
-#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5
-WS_SCRATCH = 2 * 19 + 11 + 10 * 5
+W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
+W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
+#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5,
+#: then the normal draws' uniforms ``u1``, their logarithms and the angles ``2 pi u2`` (5 each)
+WS_SCRATCH = 2 * 19 + 11 + 10 * 5 + 3 * 5
 S_KV = len(WS_FIELDS)
 S_UV = S_KV + 7
 S_SV = S_UV + 6
@@ -139,6 +157,9 @@ S_UW = S_KW + 7
 S_SW = S_UW + 6
 S_TIMES = S_SW + 6
 S_PIECES = S_TIMES + 11
+S_U1 = S_PIECES + 10 * 5
+S_LOG = S_U1 + 5
+S_U2 = S_LOG + 5
 
 # ---------------------------------------------------------------------------- selection and data
 
@@ -205,6 +226,9 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "speed_lookahead": tracking.SPEED_LOOKAHEAD,
         "n_preview": float(len(p.preview)),
         "n_nodes": float(len(u)),
+        "position_noise": rz.position_noise,
+        "heading_noise": rz.heading_noise,
+        "wheel_rate_noise": rz.wheel_rate_noise,
     }
     head = [values[name] for name in CONSTANT_FIELDS]
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
@@ -252,16 +276,24 @@ class StepKernel:
         self.consts: Array = kernel_constants(k)
         self.ws: Array = np.zeros(len(WS_FIELDS) + WS_SCRATCH)
         self.path: Array = np.zeros(0)
+        self.key = np.uint64(0)
+        rz = k.params.randomize
+        levels = (rz.position_noise, rz.position_noise, rz.heading_noise, rz.wheel_rate_noise, rz.wheel_rate_noise)
+        self.n_normal = sum(1 for level in levels if level > 0.0)  # normal draws per step
         self._bind()
 
     def _bind(self) -> None:
         kv = kernels()
         self.step: Any = kv.step
         self.evaluate: Any = kv.evaluate
+        self.noise_uniforms: Any = kv.noise_uniforms
+        self.u1: Array = self.ws[S_U1 : S_U1 + self.n_normal]
+        self.logs: Array = self.ws[S_LOG : S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        del state["step"], state["evaluate"]
+        for name in ("step", "evaluate", "noise_uniforms", "u1", "logs"):
+            del state[name]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -278,6 +310,17 @@ class StepKernel:
         ws[W_R1 : W_L3D + 1] = (
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
+        ws[W_SLIP_MAX] = ep.slip_max
+        ws[W_NOISE_ON] = 1.0 if (ep.slip_max > 0.0 or self.n_normal > 0) else 0.0
+        self.key = np.uint64(ep.key)
+
+    def draw(self, steps: int) -> None:
+        """This step's draws into the workspace (:func:`amigo_gym.randomization.step_noise` of the step counter
+        ``steps``): the uniforms by :func:`amigo_gym._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
+        (as the reference); :func:`amigo_gym._kernels_v1.step` completes the normals. Only when anything is drawn.
+        """
+        if self.noise_uniforms(self.consts, self.ws, self.key, steps):
+            np.log(self.u1, out=self.logs)
 
     def state(self, steps: int) -> tracking.State:
         """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""

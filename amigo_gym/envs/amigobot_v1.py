@@ -7,7 +7,7 @@ A thin stateful shell over the column functions of :mod:`amigo_gym.tracking`; th
 from __future__ import annotations
 
 import math
-from typing import Any, SupportsFloat, cast
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -17,13 +17,11 @@ from numpy.typing import NDArray
 from amigo_gym import fast_v1, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.randomization import StepNoise, step_noise
+from amigo_gym.randomization import StepNoise
 
 __all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
 
 ObsArray = NDArray[np.float32]
-#: :class:`amigo_gym.randomization.StepNoise` of one robot (floats)
-StepNoiseFloats = tuple[float, float, float, float, float, float, float]
 
 # entries of the compiled step's workspace (amigo_gym.fast_v1.WS_FIELDS)
 _W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
@@ -31,7 +29,7 @@ _W_AL1, _W_AL2, _W_PROGRESS = fast_v1.W_AL1, fast_v1.W_AL2, fast_v1.W_PROGRESS
 _W_HX, _W_HY, _W_E, _W_VT, _W_VREF = fast_v1.W_HX, fast_v1.W_HY, fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF
 _W_MX, _W_MY, _W_MB, _W_HEADING = fast_v1.W_MX, fast_v1.W_MY, fast_v1.W_MB, fast_v1.W_HEADING
 _W_ARG_T, _W_ARG_S, _W_TERM, _W_END = fast_v1.W_ARG_T, fast_v1.W_ARG_S, fast_v1.W_TERM, fast_v1.W_END
-_W_CMD1, _W_CMD2 = fast_v1.W_CMD1, fast_v1.W_CMD2
+_W_CMD1, _W_CMD2, _W_SLIP1, _W_SLIP2 = fast_v1.W_CMD1, fast_v1.W_CMD2, fast_v1.W_SLIP1, fast_v1.W_SLIP2
 
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = ("pose",)
@@ -269,30 +267,21 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, bool, dict[str, Any]]:
         """:meth:`step` by the compiled kernel (:mod:`amigo_gym.fast_v1`): the same results as the reference.
 
-        The per-step draws (``log``, ``cos``) before the kernel and the reward's exponentials after it, by numpy,
-        as the reference evaluates them (:func:`amigo_gym.tracking.step_columns`).
+        The per-step draws' logarithms (:meth:`amigo_gym.fast_v1.StepKernel.draw`) and the reward's exponentials
+        (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.tracking.step_columns`).
         """
         kern = self._kernel
         ep = self._episode
         assert kern is not None and ep is not None
         steps = self._steps
         obs = np.empty(self._obs_shape, dtype=np.float32)
-        if self._noise_off:
-            s1 = s2 = 0.0
-            kern.step(
-                kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2,
-                0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-            )  # fmt: skip
-        else:
-            noise = step_noise(ep.key, steps, self.params.randomize, ep.slip_max)
-            s1, s2, nx, ny, nb, n1, n2 = cast(StepNoiseFloats, noise)
-            kern.step(
-                kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2, s1, s2, nx, ny, nb, n1, n2
-            )
+        if not self._noise_off:
+            kern.draw(steps)
+        kern.step(kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2)
         self._steps = steps + 1
         o = kern.outputs()
         self._last_command = (o[_W_CMD1], o[_W_CMD2])
-        info = self._kernel_info(o, s1, s2)
+        info = self._kernel_info(o, o[_W_SLIP1], o[_W_SLIP2])
         terms = info["reward_terms"]
         reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
         terminated = o[_W_TERM] != 0.0
