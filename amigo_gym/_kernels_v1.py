@@ -56,6 +56,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.actuators import PIECES
 from amigo_gym.fast_v1 import (
     C_ACC,
     C_DEC,
@@ -150,19 +151,30 @@ from amigo_gym.fast_v1 import (
     W_W2,
     W_X,
     W_Y,
+    layout_fingerprint,
+)
+from amigo_gym.paths.clothoid import (
+    MIN_NEWTON_DENOMINATOR,
+    NEWTON_ITERATIONS,
+    STATUS_END,
+    STATUS_INTERIOR,
+    STATUS_START,
+    STATUS_WINDOW,
 )
 
 __all__ = ["step", "evaluate", "noise_uniforms"]
 
 F64 = NDArray[np.float64]
 
-#: status codes of :mod:`amigo_gym.paths.clothoid`
-STATUS_INTERIOR, STATUS_START, STATUS_END, STATUS_WINDOW = 0, 1, 2, 3
-#: :data:`amigo_gym.paths.clothoid.NEWTON_ITERATIONS`, :data:`~amigo_gym.paths.clothoid.MIN_NEWTON_DENOMINATOR`
-NEWTON_ITERATIONS = 5
-MIN_NEWTON_DENOMINATOR = 0.05
-#: :data:`amigo_gym.actuators.PIECES`
-PIECES = 10
+#: the :func:`amigo_gym.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts and the
+#: constants imported above into the kernels and keys its disk cache on this file alone: when they change, this
+#: line must change too (the check below refuses to load otherwise), which also invalidates the cached code.
+LAYOUT_FINGERPRINT = "11ac7d05305dc062"
+if layout_fingerprint() != LAYOUT_FINGERPRINT:
+    raise ImportError(
+        f"amigo_gym._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.fast_v1 now has "
+        f"{layout_fingerprint()}: update the kernels and LAYOUT_FINGERPRINT in amigo_gym/_kernels_v1.py"
+    )
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 

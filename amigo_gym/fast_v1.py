@@ -18,6 +18,7 @@ it can be imported). numba is imported only when a :class:`StepKernel` is first 
 
 from __future__ import annotations
 
+import hashlib
 from types import ModuleType
 from typing import Any
 
@@ -27,7 +28,7 @@ from numpy.typing import NDArray
 from amigo_gym import fast, fresnel, tracking
 from amigo_gym.paths.clothoid import ClothoidPath
 
-__all__ = ["KERNELS", "use_kernel", "kernels", "kernel_constants", "flat_path", "StepKernel"]
+__all__ = ["KERNELS", "layout_fingerprint", "use_kernel", "kernels", "kernel_constants", "flat_path", "StepKernel"]
 
 Array = NDArray[np.float64]
 
@@ -160,6 +161,30 @@ S_PIECES = S_TIMES + 11
 S_U1 = S_PIECES + 10 * 5
 S_LOG = S_U1 + 5
 S_U2 = S_LOG + 5
+
+
+def layout_fingerprint() -> str:
+    """A short hash of the layouts above and of the constants the kernel takes from their homes
+    (:data:`amigo_gym.actuators.PIECES`, :data:`amigo_gym.fresnel.NODES`, the projection's Newton iterations,
+    smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`).
+
+    numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
+    :mod:`amigo_gym._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
+    a change here must come with a change of that file, which invalidates the cached code.
+    """
+    from amigo_gym import actuators
+    from amigo_gym.paths import clothoid
+
+    homes = (
+        actuators.PIECES,
+        fresnel.NODES,
+        clothoid.NEWTON_ITERATIONS,
+        clothoid.MIN_NEWTON_DENOMINATOR,
+        (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
+    )
+    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
+    return hashlib.sha256(repr((layout, homes)).encode()).hexdigest()[:16]
+
 
 # ---------------------------------------------------------------------------- selection and data
 
