@@ -162,7 +162,7 @@ from amigo_gym.paths.clothoid import (
     STATUS_WINDOW,
 )
 
-__all__ = ["step", "evaluate", "noise_uniforms"]
+__all__ = ["step", "evaluate", "noise_uniforms", "progress"]
 
 F64 = NDArray[np.float64]
 
@@ -615,6 +615,13 @@ def _normals(c: F64, ws: F64) -> None:
             value = level * (math.sqrt(-2.0 * ws[S_LOG + on]) * math.cos(ws[S_U2 + on]))
             on += 1
         ws[W_NX + ch] = value
+
+
+@_jit
+def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
+    """H's progress [m]: ``path.locate(x, y, s_prev, window, window).progress`` (``clothoid._locate_float``)."""
+    s: float = _locate(c, pv, x, y, s_prev)[0]
+    return s
 
 
 # ----------------------------------------------------------------------------------------- the task

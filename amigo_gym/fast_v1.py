@@ -305,6 +305,7 @@ class StepKernel:
         rz = k.params.randomize
         levels = (rz.position_noise, rz.position_noise, rz.heading_noise, rz.wheel_rate_noise, rz.wheel_rate_noise)
         self.n_normal = sum(1 for level in levels if level > 0.0)  # normal draws per step
+        self.window = k.window
         self._bind()
 
     def _bind(self) -> None:
@@ -312,18 +313,28 @@ class StepKernel:
         self.step: Any = kv.step
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
+        self.locate_progress: Any = kv.progress
         self.u1: Array = self.ws[S_U1 : S_U1 + self.n_normal]
         self.logs: Array = self.ws[S_LOG : S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("step", "evaluate", "noise_uniforms", "u1", "logs"):
+        for name in ("step", "evaluate", "noise_uniforms", "locate_progress", "u1", "logs"):
             del state[name]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._bind()
+
+    def progress(self, path: Any, x: float, y: float, hint: float) -> float:
+        """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.tracking.ProgressFn`): compiled on a
+        :class:`ClothoidPath`, ``path.locate`` on any other path."""
+        if type(path) is ClothoidPath:
+            s: float = self.locate_progress(self.consts, flat_path(path), x, y, hint)
+            return s
+        got: float = path.locate(x, y, hint, self.window, self.window).progress
+        return got
 
     def load(self, path: ClothoidPath, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""

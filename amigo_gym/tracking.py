@@ -52,7 +52,7 @@ randomization); never the environments, policies, training or the CLI.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Literal, NamedTuple
 
@@ -661,10 +661,27 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     return ep, (u0, u1, u2)
 
 
-def start_state(k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real]) -> State:
+#: ``(path, x, y, hint) -> progress``: H's progress [m] at ``(x, y)`` from the hint, as
+#: ``path.locate(x, y, hint, k.window, k.window).progress`` (the single env passes its compiled twin)
+ProgressFn = Callable[[Any, Any, Any, Any], Real]
+
+
+def _progress(k: Constants, path: Any, x: Real, y: Real, hint: Real, progress: ProgressFn | None) -> Real:
+    """H's progress at ``(x, y)`` from ``hint``: ``progress`` when given, else by ``path.locate``."""
+    if progress is not None:
+        return progress(path, x, y, hint)
+    s_h: Real = path.locate(x, y, hint, k.window, k.window).progress
+    return s_h
+
+
+def start_state(
+    k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real], progress: ProgressFn | None = None
+) -> State:
     """The start state: H at the path's start plus ``u[:2] * init_position_noise``, heading along the tangent
     plus ``u[2] * init_heading_noise``, A ``l3`` (true) behind H; wheels at rest (or rolling at the reference
     speed), wheel angles 0; the previous command is the wheels' state (0 at rest).
+
+    ``progress`` replaces the projection of H (:data:`ProgressFn`; default ``path.locate``).
     """
     p = k.params
     start = path.pose_columns(0.0 * u[0])
@@ -679,8 +696,8 @@ def start_state(k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real]
     else:
         v0 = reference_speed(p, ep, zero)
         w1, w2 = actuators.wheel_rates_columns(v0, zero, k.nominal)
-    hint = path.locate(hx, hy, zero, k.window, k.window)
-    return State(ax, ay, beta, w1, w2, zero, zero, hint.progress, w1 / k.w_max, w2 / k.w_max, 0)
+    s_h = _progress(k, path, hx, hy, zero, progress)
+    return State(ax, ay, beta, w1, w2, zero, zero, s_h, w1 / k.w_max, w2 / k.w_max, 0)
 
 
 def step_columns(
@@ -900,19 +917,23 @@ def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, flo
 
 
 def start_episode(
-    rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None
+    rng: np.random.Generator,
+    k: Constants,
+    pose: tuple[float, float, float] | None = None,
+    progress: ProgressFn | None = None,
 ) -> tuple[Any, dict[str, Any], Episode, State]:
     """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
 
-    (The single env's compiled step evaluates the start state itself, :mod:`amigo_gym.fast_v1`.)
+    ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``). (The single env's
+    compiled step projects and evaluates the start state itself, :mod:`amigo_gym.fast_v1`.)
     """
     path, info = draw_path(rng, k.params)
     ep, u = draw_episode(rng, k.params)
-    st = start_state(k, path, ep, u)
+    st = start_state(k, path, ep, u, progress)
     if pose is not None:
         x, y, b = (float(c) for c in pose)
         hx = x + ep.l3 * col_cos(b)
         hy = y + ep.l3 * col_sin(b)
-        hint = path.locate(hx, hy, 0.0, k.window, k.window)
-        st = st._replace(x=x, y=y, beta=b, progress=float(hint.progress))
+        s_h = _progress(k, path, hx, hy, 0.0, progress)
+        st = st._replace(x=x, y=y, beta=b, progress=float(s_h))
     return path, info, ep, st

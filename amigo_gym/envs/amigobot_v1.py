@@ -195,7 +195,10 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         super().reset(seed=seed)
         k = self._k
         pose = None if pose_opt is None else tuple(pose_opt.tolist())
-        self.path, self._path_info, ep, st = tracking.start_episode(self.np_random, k, pose)
+        kern = self._kernel
+        self.path, self._path_info, ep, st = tracking.start_episode(
+            self.np_random, k, pose, None if kern is None else kern.progress
+        )
         self._episode = ep
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
@@ -208,7 +211,6 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         rz = self.params.randomize
         self._noise_off = not (ep.slip_max > 0.0 or rz.has_noise)
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
-        kern = self._kernel
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
         if kern is not None and self._in_kernel:
             # tracking.reset_columns, compiled: the start state without noise, its own previous command
