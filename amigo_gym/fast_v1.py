@@ -260,15 +260,17 @@ def kernel_constants(k: tracking.Constants) -> Array:
     return np.array(head + tail, dtype=np.float64)
 
 
-#: flattened paths by ``id`` (the path is kept with its array, so that its id is not reused meanwhile)
+#: the last flattened paths by ``id`` (each kept with its array, so that its id is not reused meanwhile); a few
+#: dozen: the array is a copy of the path's tables, cheap to rebuild (one concatenation) when evicted
 _FLAT: dict[int, tuple[ClothoidPath, Array]] = {}
-_FLAT_MAX = 4096
+_FLAT_MAX = 64
 
 
 def flat_path(path: ClothoidPath) -> Array:
-    """The ``path`` vector of :mod:`amigo_gym._kernels_v1` for a :class:`ClothoidPath` (built once per path object).
+    """The ``path`` vector of :mod:`amigo_gym._kernels_v1` for a :class:`ClothoidPath` (cached per path object).
 
-    The pieces' tables and the coarse samples the reference searches (``path._t``), copied as they are.
+    The pieces' tables and the coarse samples the reference searches (``path._t``), copied as they are: built
+    at a reset, never in a step.
     """
     got = _FLAT.get(id(path))
     if got is not None and got[0] is path:
@@ -279,7 +281,7 @@ def flat_path(path: ClothoidPath) -> Array:
         (np.array(header, dtype=np.float64), t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a, t.sample_x, t.sample_y)
     ).astype(np.float64, copy=False)
     if len(_FLAT) >= _FLAT_MAX:
-        _FLAT.clear()
+        del _FLAT[next(iter(_FLAT))]  # the oldest
     _FLAT[id(path)] = (path, flat)
     return flat
 
