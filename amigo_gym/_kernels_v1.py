@@ -2,7 +2,8 @@ r"""Compiled step of ``AmigoBot-v1`` for one robot on a :class:`~amigo_gym.paths
 
 The optional fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (the extra ``amigo_gym[fast]``, i.e. numba;
 loaded by :mod:`amigo_gym.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.tracking.step_columns`
-does on Python floats, and :func:`evaluate` what :func:`amigo_gym.tracking.evaluate_columns` does:
+does on Python floats, :func:`evaluate` what :func:`amigo_gym.tracking.reset_columns` does, and :func:`progress`
+the projection of :func:`amigo_gym.tracking.start_state`:
 
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
    :func:`amigo_gym.actuators.ring_write`, :func:`amigo_gym.actuators.ring_read`;
@@ -34,18 +35,19 @@ runs the golden episodes through it). What makes the bits equal:
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.fast_v1`,
 which numba never loads):
 
-* ``consts`` (:data:`CONSTANT_FIELDS`, then the ``n_preview`` preview distances [m], their observation bounds,
+* ``consts`` (``CONSTANT_FIELDS``, then the ``n_preview`` preview distances [m], their observation bounds,
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
   built by :func:`amigo_gym.fast_v1.kernel_constants`);
-* ``path`` (:data:`PATH_HEADER`, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
+* ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
   ``x, y``; built once per path by :func:`amigo_gym.fast_v1.flat_path`);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.actuators.make_ring`, updated in place;
-* ``ws``: :data:`WS_FIELDS` (the state, read and updated in place; the episode's constants; the outputs),
-  then scratch space of :data:`WS_SCRATCH` entries;
+* ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
+  the outputs), then scratch space of ``WS_SCRATCH`` entries;
 * ``obs``: the observation (float32 or float64), written.
 
 This module imports numba at import time; :mod:`amigo_gym.fast_v1` imports it only when the kernel is first
-used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``).
+used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``), keyed on
+this file: see :data:`LAYOUT_FINGERPRINT`.
 """
 
 from __future__ import annotations

@@ -5,10 +5,15 @@ Two implementations of one robot's step exist:
 * the **reference**, :func:`amigo_gym.tracking.step_columns` / :func:`amigo_gym.tracking.evaluate_columns`
   on Python floats (numpy, always available, any path object);
 * the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym._kernels_v1`, numba, the
-  extra ``amigo_gym[fast]``) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family), with
-  the per-step noise drawn before it and the three reward exponentials evaluated after it by numpy, exactly
-  as the reference draws and evaluates them. The results are the reference's bit for bit
-  (``tests/test_kernel_v1.py``).
+  extra ``amigo_gym[fast]``) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family). The
+  logarithms of the per-step noise (between a small compiled call that draws the uniforms and the step) and
+  the three reward exponentials (after the step) are numpy's, as in the reference, since numpy's ``log`` and
+  ``exp`` are not the C library's. The results are the reference's bit for bit (``tests/test_kernel_v1.py``).
+  A path object of another class runs the reference.
+
+This module is numba-free: it holds the layouts of the kernel's vectors (the index constants below, used by
+the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`; :func:`layout_fingerprint` keeps numba's disk cache
+honest about them), builds the constants and the flattened paths, and loads the kernel.
 
 :func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
 env's keyword (:func:`amigo_gym.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
@@ -34,7 +39,7 @@ Array = NDArray[np.float64]
 
 # ---------------------------------------------------------------------------- layouts of the kernel's vectors
 
-#: scalar entries at the head of ``consts`` (the variable-length parts follow, module docstring)
+#: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
     "dt",  # control period [s]
     "w_max",  # nominal max wheel rate [rad/s]
@@ -79,7 +84,7 @@ C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.fresnel.NODES`)
 PATH_NODES = 10
 
-#: the head of a flattened path (then the arrays, module docstring)
+#: the head of a flattened path (then the arrays: :mod:`amigo_gym._kernels_v1`)
 PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
 P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
 P_TAIL = len(PATH_HEADER)
