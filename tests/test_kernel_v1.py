@@ -49,6 +49,9 @@ CONFIGS: dict[str, dict[str, Any]] = {
     "true_robot_l3": {"path": "circle", "true_robot": {"l3": 0.09, "r1": 0.051}},
     "slow_dt": {"path": "mixed", "dt": 0.3, "speed": 0.15, "preview": (0.3, 0.7, 1.5, 3.0)},
     "slip_only": {"path": "circle", "randomize": {"slip": (0.0, 0.2), "delay": (0.0, 0.5)}, "preview": (0.4,)},
+    "no_preview_heading_noise": {"path": "figure8", "preview": (), "randomize": {"heading_noise": 0.05}},
+    "wheel_noise_only": {"path": "lane_change", "randomize": {"wheel_rate_noise": 0.5}, "speed": (0.05, 0.3)},
+    "dt_1s": {"path": "random", "dt": 1.0, "speed": 0.1, "randomize": "hard"},
 }
 SEEDS = (0, 1, 2)
 STEPS = 120
