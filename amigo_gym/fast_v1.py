@@ -313,6 +313,7 @@ class StepKernel:
         levels = (rz.position_noise, rz.position_noise, rz.heading_noise, rz.wheel_rate_noise, rz.wheel_rate_noise)
         self.n_normal = sum(1 for level in levels if level > 0.0)  # normal draws per step
         self.window = k.window
+        self.noise_on = False  # this episode draws per step (:meth:`draw` before :attr:`step`)
         self._bind()
 
     def _bind(self) -> None:
@@ -354,7 +355,9 @@ class StepKernel:
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
         ws[W_SLIP_MAX] = ep.slip_max
-        ws[W_NOISE_ON] = 1.0 if (ep.slip_max > 0.0 or self.n_normal > 0) else 0.0
+        # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
+        self.noise_on = float(ep.slip_max) > 0.0 or self.n_normal > 0
+        ws[W_NOISE_ON] = 1.0 if self.noise_on else 0.0
         self.key = np.uint64(ep.key)
 
     def draw(self, steps: int) -> None:

@@ -880,10 +880,16 @@ def ep_l3_differs(k: Constants, ep: Episode) -> bool:
 
 def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -> Outcome:
     """The :class:`Outcome` of a start state (smoothness term 1: the previous command is the state's own)."""
+    v_true, t = start_speed_time(st, ep)
+    out, _ = evaluate_columns(k, path, st, ep, noise, v_true, st.a1, st.a2, t)
+    return out
+
+
+def start_speed_time(st: State, ep: Episode) -> tuple[Real, Real]:
+    """The true speed of A [m/s] (no slip) and the time [s] at which :func:`reset_columns` evaluates a start state."""
     zero = 0.0 * st.x
     v, _ = _body(st.w1, st.w2, ep)
-    out, _ = evaluate_columns(k, path, st, ep, noise, v + zero, st.a1, st.a2, zero)
-    return out
+    return v + zero, zero
 
 
 def _body(w1: Real, w2: Real, ep: Episode) -> tuple[Real, Real]:

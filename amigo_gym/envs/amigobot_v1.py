@@ -164,7 +164,6 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             self._kernel = fast_v1.StepKernel(self._k)
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
-        self._noise_off = True
         self._delay = 0.0
         fixed = tracking.fixed_path(p)
         if fixed is not None:
@@ -208,17 +207,14 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._steps = int(st.steps)
         self._done = False
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
-        rz = self.params.randomize
-        self._noise_off = not (ep.slip_max > 0.0 or rz.has_noise)
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
         if kern is not None and self._in_kernel:
             # tracking.reset_columns, compiled: the start state without noise, its own previous command
             kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
-            zero = 0.0 * st.x
-            v = 0.5 * (ep.r1 * st.w1 + ep.r2 * st.w2)  # tracking._body
+            v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
-            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v + zero, st.a1, st.a2, zero)
+            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
             o = kern.outputs()
             info = self._kernel_info(o, 0.0, 0.0)
             self._trail = [(o[_W_HX], o[_W_HY])]
@@ -277,7 +273,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         assert kern is not None and ep is not None
         steps = self._steps
         obs = np.empty(self._obs_shape, dtype=np.float32)
-        if not self._noise_off:
+        if kern.noise_on:
             kern.draw(steps)
         kern.step(kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2)
         self._steps = steps + 1
