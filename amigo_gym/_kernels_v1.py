@@ -25,7 +25,8 @@ runs the golden episodes through it). What makes the bits equal:
   Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
   reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
 * ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
-  reference on arrays of node phases) equal bit for bit on this platform (the test checks it too);
+  reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
+  once per process (:func:`amigo_gym.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
   the per-step draws (:func:`amigo_gym.randomization.step_noise`) are split in three: the counter-based uniforms
   (integer SplitMix64 on ``uint64``, exact) by :func:`noise_uniforms`, their logarithms by ``np.log`` between the
@@ -164,7 +165,7 @@ from amigo_gym.paths.clothoid import (
     STATUS_WINDOW,
 )
 
-__all__ = ["step", "evaluate", "noise_uniforms", "progress"]
+__all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
 F64 = NDArray[np.float64]
 
@@ -179,6 +180,15 @@ if layout_fingerprint() != LAYOUT_FINGERPRINT:
     )
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+
+@_jit
+def cos_sin(x: F64, c: F64, s: F64) -> None:
+    """``c = cos(x)``, ``s = sin(x)`` elementwise by the functions the kernels use (for
+    :func:`amigo_gym.fast_v1.libm_matches_numpy`)."""
+    for i in range(x.shape[0]):
+        c[i] = math.cos(x[i])
+        s[i] = math.sin(x[i])
 
 
 # ----------------------------------------------------------------------------------------- small rules

@@ -24,6 +24,7 @@ it can be imported). numba is imported only when a :class:`StepKernel` is first 
 from __future__ import annotations
 
 import hashlib
+from functools import lru_cache
 from types import ModuleType
 from typing import Any
 
@@ -33,7 +34,16 @@ from numpy.typing import NDArray
 from amigo_gym import fast, fresnel, tracking
 from amigo_gym.paths.clothoid import ClothoidPath
 
-__all__ = ["KERNELS", "layout_fingerprint", "use_kernel", "kernels", "kernel_constants", "flat_path", "StepKernel"]
+__all__ = [
+    "KERNELS",
+    "layout_fingerprint",
+    "use_kernel",
+    "libm_matches_numpy",
+    "kernels",
+    "kernel_constants",
+    "flat_path",
+    "StepKernel",
+]
 
 Array = NDArray[np.float64]
 
@@ -198,15 +208,42 @@ KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
 
 
 def use_kernel(owner: str, kernel: object) -> bool:
-    """Whether ``kernel=`` selects the compiled step (``"auto"``: when numba is importable).
+    """Whether ``kernel=`` selects the compiled step (``"auto"``: when numba is importable and the platform's
+    ``cos``/``sin`` give numpy's bits, :func:`libm_matches_numpy`).
 
     Raises:
         ValueError: not one of :data:`KERNELS`.
         ImportError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba`` with ``"auto"``) without numba installed.
+        RuntimeError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba``) where the compiled step cannot give the
+            reference's bits.
     """
     if not isinstance(kernel, str) or kernel not in KERNELS:
         raise ValueError(f"{owner}.kernel must be 'auto', 'numpy' or 'numba', got {kernel!r}")
-    return fast.use_fast_path(None if kernel == "auto" else kernel == "numba")
+    requested = None if kernel == "auto" else kernel == "numba"
+    if not fast.use_fast_path(requested):
+        return False
+    if libm_matches_numpy():
+        return True
+    if requested or fast.kernel_mode() == "numba":
+        raise RuntimeError(
+            f"{owner}: the compiled step cannot reproduce the reference's bits on this platform (numba's cos/sin, "
+            "the C library's, differ from numpy's); use kernel='numpy' (or 'auto')"
+        )
+    return False
+
+
+@lru_cache(maxsize=1)
+def libm_matches_numpy() -> bool:
+    """Whether the kernel's ``math.cos``/``math.sin`` (the C library's) give numpy's float64 ``np.cos``/``np.sin``
+    bits on a fixed sample of 4000 arguments (small ones, and headings of many laps): the premise of the
+    kernel's bit-identity (:mod:`amigo_gym._kernels_v1`). Checked once per process (a millisecond)."""
+    g = np.random.default_rng(20240601)
+    x = np.concatenate((g.uniform(-10.0, 10.0, 2000), g.uniform(-2000.0, 2000.0, 1000), g.normal(0.0, 1e-3, 1000)))
+    c = np.empty_like(x)
+    s = np.empty_like(x)
+    kernels().cos_sin(x, c, s)
+    same_c = np.array_equal(c.view(np.int64), np.cos(x).view(np.int64))
+    return bool(same_c and np.array_equal(s.view(np.int64), np.sin(x).view(np.int64)))
 
 
 def kernels() -> ModuleType:

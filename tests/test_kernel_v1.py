@@ -10,7 +10,6 @@ are equal bit for bit (and of the same types).
 
 from __future__ import annotations
 
-import math
 import pickle
 import subprocess
 import sys
@@ -203,21 +202,22 @@ def test_kernel_reset_sequences_and_pickle() -> None:
 
 def test_cos_sin_match_numpy() -> None:
     """The kernel's premise: the C library's cos/sin (math in numba) give numpy's float64 bits here."""
-    import numba
-
-    @numba.njit(cache=False)
-    def cos_sin(x: Any, c: Any, s: Any) -> None:
-        for i in range(x.shape[0]):
-            c[i] = math.cos(x[i])
-            s[i] = math.sin(x[i])
-
     g = np.random.default_rng(0)
     x = np.concatenate((g.uniform(-10, 10, 100_000), g.uniform(-1e4, 1e4, 10_000), g.normal(0, 1e-3, 10_000)))
     c = np.empty_like(x)
     s = np.empty_like(x)
-    cos_sin(x, c, s)
+    fast_v1.kernels().cos_sin(x, c, s)
     np.testing.assert_array_equal(c.view(np.int64), np.cos(x).view(np.int64))
     np.testing.assert_array_equal(s.view(np.int64), np.sin(x).view(np.int64))
+    assert fast_v1.libm_matches_numpy()
+
+
+def test_platform_without_numpy_bits(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where numba's cos/sin would not give numpy's bits: "auto" runs the reference, "numba" refuses."""
+    monkeypatch.setattr(fast_v1, "libm_matches_numpy", lambda: False)
+    assert AmigoBotV1Env()._kernel is None
+    with pytest.raises(RuntimeError, match="cannot reproduce the reference's bits"):
+        AmigoBotV1Env(kernel="numba")
 
 
 def test_kernel_keyword_and_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
