@@ -91,6 +91,7 @@ __all__ = [
     "obs_bounds",
     "obs_names",
     "validate_action",
+    "action_pair",
     "real_array",
     "bound_heading",
     "reward_term_columns",
@@ -218,6 +219,25 @@ def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Arr
     if not (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 8 else np.isfinite(a).all()):
         raise ValueError(f"action must be finite; got NaN or infinite values: {show_value(action)}")
     return a
+
+
+def action_pair(action: ArrayLike) -> tuple[float, float]:
+    """:func:`validate_action` of one robot's action, as two Python floats (the same checks and errors).
+
+    A float32 or float64 array of shape ``(2,)`` (what agents and ``action_space.sample()`` give) is
+    checked directly: ``tolist`` gives the exact float64 values, and ``a - a == 0`` holds exactly for
+    finite ``a`` (``inf - inf`` and ``nan - nan`` are NaN). Anything else goes through
+    :func:`validate_action`.
+    """
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in _PAIR_CHARS:
+        a1, a2 = action.tolist()
+        if a1 - a1 == 0.0 and a2 - a2 == 0.0:
+            return a1, a2
+    b1, b2 = validate_action(action).tolist()
+    return b1, b2
+
+
+_PAIR_CHARS = ("f", "d")
 
 
 def bound_heading(state: State) -> State:
@@ -725,7 +745,11 @@ def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: flo
         sin_psi,
         cos_psi,
         curvature * l3,
-        *[path.curvature_columns(cp.s + d) * l3 for d in k.preview],
+        *(
+            (curvature * l3,) * len(k.preview)  # a circle: the curvature of every preview point (d / r)
+            if type(path) is CirclePath
+            else [path.curvature_columns(cp.s + d) * l3 for d in k.preview]
+        ),
         w1 / w_max,
         w2 / w_max,
         dv / k.max_speed,

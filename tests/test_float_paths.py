@@ -203,3 +203,33 @@ def test_path_batch_locate_rows_equal_each_path_on_floats() -> None:
     got = batch.locate(x, y, hint, 0.475, 0.475)
     for i, p in enumerate(paths):
         rows_equal(p.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475, 0.475), got, i)
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_circle_projection_of_one_point_is_the_column_projection(direction: int) -> None:
+    """``CirclePath.project_xy`` on one point of floats (its own float branch) equals its row of the columns."""
+    from amigo_gym.paths import CirclePath
+
+    path = CirclePath(radius=0.7, start=(0.3, -0.2), start_angle=0.4, direction=direction)
+    rng = np.random.default_rng(7)
+    xs = np.concatenate([rng.uniform(-3, 3, 300), [path.center[0], -0.0, 0.0]])
+    ys = np.concatenate([rng.uniform(-3, 3, 300), [path.center[1], 0.0, -0.0]])
+    cols = path.project_xy(xs, ys, True)
+    for i, (x, y) in enumerate(zip(xs.tolist(), ys.tolist(), strict=True)):
+        rows_equal(path.project_xy(x, y, True), cols, i)
+
+
+def test_action_pair_is_validate_action() -> None:
+    """``task.action_pair`` (the single env's check) gives ``validate_action``'s values and refuses the same."""
+    rng = np.random.default_rng(3)
+    for dtype in (np.float32, np.float64):
+        for a in rng.uniform(-3, 3, (200, 2)).astype(dtype):
+            assert task.action_pair(a) == tuple(task.validate_action(a).tolist())
+        for bad in ((np.nan, 0.0), (0.0, np.inf), (-np.inf, 1.0)):
+            with pytest.raises(ValueError, match="finite"):
+                task.action_pair(np.array(bad, dtype=dtype))
+    assert task.action_pair([0.5, -1]) == (0.5, -1.0)  # other inputs take validate_action's route
+    with pytest.raises(ValueError, match="shape"):
+        task.action_pair(np.zeros(3, dtype=np.float32))
+    with pytest.raises(TypeError):
+        task.action_pair(np.array(["a", "b"]))

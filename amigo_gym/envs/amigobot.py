@@ -40,6 +40,9 @@ RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
 TRAIL_LENGTH = 1000
 
 
+_np_array = np.array
+
+
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
     """A :class:`RobotParams`, or one made from a mapping of its field names (``TypeError`` on others)."""
     if isinstance(robot, RobotParams):
@@ -392,7 +395,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         """
         if self._needs_reset:
             raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before step()")
-        a1, a2 = task.validate_action(action).tolist()
+        a1, a2 = task.action_pair(action)
         if self._ended:
             self._warn_ended()
         st = self._state
@@ -406,12 +409,14 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             self._trail.append((float(out.h_x), float(out.h_y)))
         if type(st.x) is float:  # task.info_columns in the single env's types, built directly
             terms = out.terms
+            # the four arrays are views of one new array (one allocation instead of four)
+            rec = _np_array((st.x, st.y, st.beta, out.h_x, out.h_y, st.rate1, st.rate2, st.alpha1, st.alpha2))
             info = {
-                "pose": np.array((st.x, st.y, st.beta)),
-                "h_position": np.array((out.h_x, out.h_y)),
+                "pose": rec[0:3],
+                "h_position": rec[3:5],
                 "cross_track_error": float(out.closest.cross_track_error),
-                "wheel_rates": np.array((st.rate1, st.rate2)),
-                "wheel_angles": np.array((st.alpha1, st.alpha2)),
+                "wheel_rates": rec[5:7],
+                "wheel_angles": rec[7:9],
                 "castor_angle": float(st.alpha3),
                 "reward_terms": {
                     "track": float(terms[0]),

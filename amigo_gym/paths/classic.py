@@ -216,6 +216,18 @@ class CirclePath:
         """
         cx, cy, r0x, r0y = self._frame
         d, r = self.direction, self.radius
+        if minimal and type(x) is float and type(y) is float:
+            # one point of Python floats (the single env's step): the same expressions without the column
+            # dispatch (math.sqrt rounds as np.sqrt: IEEE 754 square roots are exact)
+            fx = x - cx
+            fy = y - cy
+            frho = math.sqrt(fx * fx + fy * fy)
+            if frho != 0.0:
+                fnx = fx / frho
+                fny = fy / frho
+                if d > 0:
+                    return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, r - frho, -fny, fnx)
+                return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, frho - r, fny, -fnx)
         ux = x - cx
         uy = y - cy
         rho = col_sqrt(ux * ux + uy * uy)
