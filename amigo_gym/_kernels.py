@@ -38,6 +38,14 @@ Layouts (all C-contiguous, one row per robot):
   and ``record (N, 16)`` float64 with the columns :data:`RECORD_FIELDS` (the new state and what the
   infos report about it).
 
+Start states of restarting rows (:func:`draw_starts`, :func:`place_starts`): the native vector env's
+``NEXT_STEP`` autoreset draws each restarting robot's start perturbation from that robot's own numpy
+generator inside the compiled loop, by calling the generator's C function ``next_double`` through the
+address of its ``bitgen_t`` (:func:`_next_double`; the call ``Generator.random`` makes per number), so
+the numbers and the generators' states afterwards are those of ``Generator.random(3)`` per robot. The
+start pose is :func:`amigo_gym.task.start_pose`'s arithmetic in its order, with numpy's ``cos`` and
+``sin`` of the headings evaluated between the two loops (:func:`amigo_gym.fast.step_rows`).
+
 This module imports numba at import time; :mod:`amigo_gym.fast` imports it only when the fast path
 is first used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk
 (``cache=True``, in ``__pycache__`` or ``NUMBA_CACHE_DIR``), so only the first process compiles. The
@@ -51,9 +59,14 @@ from __future__ import annotations
 import math
 import types
 from collections.abc import Callable
+from typing import cast
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types as nb_types
+from numba.core.typing.templates import Signature
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 __all__ = [
@@ -66,6 +79,9 @@ __all__ = [
     "evaluate_parallel",
     "finish",
     "finish_parallel",
+    "START_FIELDS",
+    "draw_starts",
+    "place_starts",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -123,6 +139,23 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "straight_length",
     "curvature",
 )
+
+#: entries of the ``start`` vector of :func:`draw_starts` and :func:`place_starts`
+#: (:func:`amigo_gym.fast.start_constants`): the path's start point and tangent angle, the noise scales of
+#: :func:`amigo_gym.task.start_pose`, ``l3``, and the initial wheel rates
+START_FIELDS: tuple[str, ...] = (
+    "x0",
+    "y0",
+    "theta0",
+    "position_noise",
+    "heading_noise",
+    "l3",
+    "rate1",
+    "rate2",
+)
+
+_S = {name: i for i, name in enumerate(START_FIELDS)}
+S_X0, S_Y0, S_THETA0, S_POS_NOISE, S_HEADING_NOISE, S_L3, S_RATE1, S_RATE2 = (_S[n] for n in START_FIELDS)
 
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 DT, W_MAX, R1, R2, TWO_L1, L3, L5, R3 = (_C[n] for n in CONSTANT_FIELDS[:8])
@@ -366,3 +399,107 @@ evaluate = _serial(_twin(_evaluate, "evaluate"))
 evaluate_parallel = _parallel(_twin(_evaluate, "evaluate_parallel"))
 finish = _serial(_twin(_finish, "finish"))
 finish_parallel = _parallel(_twin(_finish, "finish_parallel"))
+
+
+# ---------------------------------------------------------------------------------------------- start states
+def _next_double_typing(typingctx: object, bitgen: nb_types.Type) -> tuple[Signature, Callable[..., ir.Value]] | None:
+    """``bitgen->next_double(bitgen->state)`` for ``bitgen`` the address (an integer) of a numpy ``bitgen_t``.
+
+    numpy's C API (``numpy/random/bitgen.h``): ``bitgen_t`` is ``{void *state; uint64_t (*next_uint64)(void *);
+    uint32_t (*next_uint32)(void *); double (*next_double)(void *); uint64_t (*next_raw)(void *);}``, and
+    ``Generator.random`` fills its output with exactly this call, one per number. The address is an
+    argument, never a constant of the compiled code, so the on-disk cache holds nothing of one process.
+    """
+    if not isinstance(bitgen, nb_types.Integer):
+        return None
+
+    def codegen(context: object, builder: ir.IRBuilder, signature: Signature, args: list[ir.Value]) -> ir.Value:
+        void_p = ir.IntType(8).as_pointer()
+        next_double = ir.FunctionType(ir.DoubleType(), [void_p]).as_pointer()
+        bitgen_t = ir.LiteralStructType([void_p, void_p, void_p, next_double, void_p])
+        ptr = builder.inttoptr(args[0], bitgen_t.as_pointer())
+        zero, i32 = ir.Constant(ir.IntType(32), 0), ir.IntType(32)
+        state = builder.load(builder.gep(ptr, [zero, ir.Constant(i32, 0)], inbounds=True))
+        fn = builder.load(builder.gep(ptr, [zero, ir.Constant(i32, 3)], inbounds=True))
+        return builder.call(fn, [state])
+
+    return nb_types.float64(bitgen), codegen
+
+
+#: :func:`_next_double_typing` as numba's intrinsic: ``_next_double(address) -> float`` in compiled code
+_next_double = cast(Callable[[int], float], intrinsic(_next_double_typing))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def draw_starts(
+    bitgens: NDArray[np.uintp],
+    restart: NDArray[np.bool_],
+    start: F64,
+    state: F64,
+    rows: NDArray[np.intp],
+    beta: F64,
+) -> int:
+    """Draw the start states of the rows where ``restart`` is set, in row order; return their number ``m``.
+
+    Row ``i`` draws three numbers ``r`` from the generator whose ``bitgen_t`` lies at ``bitgens[i]``
+    (what ``Generator.random(3)`` draws; :class:`amigo_gym.envs.AmigoBotEnv` draws ``uniform(-1, 1, 3)``,
+    which is ``-1 + 2 r``) and sets ``state[i]`` to :func:`amigo_gym.task.start_pose` of ``u = -1 + 2 r``
+    with wheel angles 0 and the initial rates, except that ``x, y`` hold H's position until
+    :func:`place_starts` moves them to A (it needs ``cos beta, sin beta``). ``rows[:m]`` receives the
+    rows, ``beta[:m]`` their headings. Returns ``-1`` (and draws nothing more) at a zero address.
+    """
+    x0 = start[S_X0]
+    y0 = start[S_Y0]
+    theta0 = start[S_THETA0]
+    pos_noise = start[S_POS_NOISE]
+    heading_noise = start[S_HEADING_NOISE]
+    rate1 = start[S_RATE1]
+    rate2 = start[S_RATE2]
+    m = 0
+    for i in range(restart.shape[0]):
+        if not restart[i]:
+            continue
+        g = bitgens[i]
+        if g == 0:
+            return -1
+        u0 = -1.0 + 2.0 * _next_double(g)  # three calls in order, as Generator.random(3)
+        u1 = -1.0 + 2.0 * _next_double(g)
+        u2 = -1.0 + 2.0 * _next_double(g)
+        b = theta0 + u2 * heading_noise
+        state[i, 0] = x0 + u0 * pos_noise
+        state[i, 1] = y0 + u1 * pos_noise
+        state[i, 2] = b
+        state[i, 3] = 0.0
+        state[i, 4] = 0.0
+        state[i, 5] = 0.0
+        state[i, 6] = rate1
+        state[i, 7] = rate2
+        rows[m] = i
+        beta[m] = b
+        m += 1
+    return m
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def place_starts(
+    start: F64,
+    rows: NDArray[np.intp],
+    cos_beta: F64,
+    sin_beta: F64,
+    state: F64,
+    tans: F64,
+) -> None:
+    """Finish :func:`draw_starts`' rows with ``cos_beta, sin_beta`` of their headings (numpy's ``cos``, ``sin``).
+
+    A lies ``l3`` behind H (:func:`amigo_gym.kinematics.a_from_h`): ``x = x_H - l3 cos beta``, ``y = y_H -
+    l3 sin beta``; the row's ``tans`` receive ``(cos beta, sin beta)``, as :func:`evaluate` wants them.
+    """
+    l3 = start[S_L3]
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        c = cos_beta[j]
+        s = sin_beta[j]
+        state[i, 0] = state[i, 0] - l3 * c
+        state[i, 1] = state[i, 1] - l3 * s
+        tans[i, 0] = c
+        tans[i, 1] = s

@@ -3,8 +3,11 @@
 ``gym.make_vec("AmigoBot-v0", num_envs=N)`` (or ``vectorization_mode="vector_entry_point"``)
 builds :class:`AmigoBotVectorEnv`: ``N`` robots stepped together by the same pure, batched
 functions of :mod:`amigo_gym.task` that the single environment calls, with no Python loop over
-the environments on the step path (loops run only over the environments being reset, to draw
-their start perturbations from their own generators).
+the environments on the step path. Restarting robots draw their start perturbations from their own
+generators: with the compiled kernel, inside it (:func:`amigo_gym.fast.step_rows` with the table of
+generators, :class:`amigo_gym.fast.GeneratorTable`); otherwise (the numpy path, or a generator that is
+not ``PCG64``) by a Python loop of ``Generator.random`` over them. The two give the same numbers and
+leave the generators in the same states.
 
 For the same seed it reproduces ``gym.make_vec(..., vectorization_mode="sync")`` bit for bit:
 observations, rewards, terminations, truncations and infos (in the vector format with ``_key``
@@ -131,7 +134,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
         self._k = task.task_constants(p)
         self._initial_rates = task.initial_wheel_rates(p)
-        self._rngs: list[np.random.Generator | None] = [None] * n
+        # the generators, with the addresses of their C bit generators for the kernel's draws
+        self._rngs = fast.GeneratorTable([None] * n)
         self._seeds: list[int | None] = [None] * n
         # the state as (N,) columns, stepped by the same column functions as the single env; with the
         # compiled kernel, the columns are views of one (N, 8) array that the kernel updates in place
@@ -148,6 +152,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
+        self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the kernel's restart mask when none restarts
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
         self._trail: Array | None = None  # ring buffer (trail_length, N, 2), allocated when first used
         self._trail_count = 0  # positions written so far
@@ -319,25 +324,34 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
     def _step_kernel(
         self, ws: fast.Workspace, a: Array, mode: AutoresetMode
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results."""
+        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results.
+
+        Restarting robots (``NEXT_STEP``) get their start states inside the kernel's step, drawn from
+        their generators' C bit generators (:attr:`amigo_gym.fast.GeneratorTable.bitgens`), when every
+        generator is a ``PCG64``; otherwise from :meth:`_start_states` (the Python loop). Both give the
+        numpy path's numbers and leave the generators in the same states.
+        """
         n = self.num_envs
         self._steps += 1
-        idx = None
-        restart = np.zeros(n, dtype=np.bool_)
+        restart = self._no_restart
+        bitgens = None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             # as in the numpy path: the start states replace these rows, evaluated without moving
-            idx = np.flatnonzero(self._autoreset)
-            _set_rows(self._state, self._start_states(idx), idx)
-            restart[idx] = True
-            self._steps[idx] = 0
+            restart = self._autoreset  # a new array at every step (_finish_step), not changed before then
+            if self._rngs.drawable:
+                bitgens = self._rngs.bitgens
+            else:
+                idx = np.flatnonzero(restart)
+                _set_rows(self._state, self._start_states(idx), idx)
+            self._steps[restart] = 0
             if self.render_mode is not None:
-                self._trail_start[idx] = self._trail_count
+                self._trail_start[restart] = self._trail_count
         obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
         reward = np.empty(n)
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
-        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
+        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
         beta = self._rows[:, 2]
         if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
             # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
@@ -359,7 +373,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
             "time": self._steps * self._k.dt,
         }
-        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
+        restarted = None if restart is self._no_restart else restart
+        return self._finish_step(obs, reward, terminated, truncated, infos, restarted)
 
     def _finish_step(
         self,
@@ -368,15 +383,16 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         terminated: BoolArray,
         truncated: BoolArray,
         infos: dict[str, Any],
-        idx: NDArray[np.intp] | None,
+        restarted: NDArray[np.intp] | BoolArray | None,
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Autoreset bookkeeping of a step (both implementations)."""
+        """Autoreset bookkeeping of a step (both implementations); ``restarted`` the rows (indices or a
+        mask) that started a new episode at this step instead of stepping (``NEXT_STEP``)."""
         n = self.num_envs
         mode = self.autoreset_mode
-        if idx is not None:
-            reward[idx] = 0.0
-            terminated[idx] = False
-            truncated[idx] = False
+        if restarted is not None:
+            reward[restarted] = 0.0
+            terminated[restarted] = False
+            truncated[restarted] = False
         elif mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
             if done.any():
@@ -447,7 +463,11 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
+        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
+
+        The generators are copied with their table, which computes the copies' addresses anew
+        (:class:`amigo_gym.fast.GeneratorTable`): a copy draws from its own generators only.
+        """
         state = self.__dict__.copy()
         state["_renderers"] = []
         return state
