@@ -226,7 +226,7 @@ def step_rows(
     record: Array,
     parallel: bool = False,
     bitgens: NDArray[np.uintp] | None = None,
-) -> None:
+) -> int:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
     The three passes of :mod:`amigo_gym._kernels` with numpy's ``tan`` and ``exp`` between them; rows
@@ -240,6 +240,10 @@ def step_rows(
     :func:`amigo_gym._kernels.place_starts`): the state ``_start_states`` of the vector env computes
     with a Python loop of ``Generator.random(out=u[j])`` and :func:`amigo_gym.task.start_pose`, bit
     for bit, and the generators advance as that loop advances them. Without it the caller has set them.
+
+    Returns:
+        the number ``m`` of start states drawn from ``bitgens`` (their rows are ``ws.rows[:m]``, in
+        increasing order, until the next call); 0 without ``bitgens``.
 
     Raises:
         ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them),
@@ -257,6 +261,7 @@ def step_rows(
     )
     move(c, state, actions, restart, tans)
     np.tan(tans, out=tans)
+    m = 0
     if bitgens is not None:
         m = k.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
         if m < 0:
@@ -274,6 +279,7 @@ def step_rows(
     evaluate(c, ws.preview, state, actions, restart, tans, obs, terminated, record, exps)
     np.exp(exps, out=exps)
     finish(c, reward, record, exps)
+    return int(m)
 
 
 def _check(

@@ -19,7 +19,7 @@ masks), across autoresets and truncations, in the ``NEXT_STEP`` (default), ``SAM
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -335,6 +335,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._steps += 1
         restart = self._no_restart
         bitgens = None
+        idx = None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             # as in the numpy path: the start states replace these rows, evaluated without moving
             restart = self._autoreset  # a new array at every step (_finish_step), not changed before then
@@ -343,15 +344,18 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             else:
                 idx = np.flatnonzero(restart)
                 _set_rows(self._state, self._start_states(idx), idx)
-            self._steps[restart] = 0
-            if self.render_mode is not None:
-                self._trail_start[restart] = self._trail_count
         obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
         reward = np.empty(n)
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
-        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
+        m = fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
+        if bitgens is not None:
+            idx = ws.rows[:m].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
+        if idx is not None:
+            self._steps[idx] = 0
+            if self.render_mode is not None:
+                self._trail_start[idx] = self._trail_count
         beta = self._rows[:, 2]
         if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
             # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
@@ -373,8 +377,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
             "time": self._steps * self._k.dt,
         }
-        restarted = None if restart is self._no_restart else restart
-        return self._finish_step(obs, reward, terminated, truncated, infos, restarted)
+        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
     def _finish_step(
         self,
@@ -383,16 +386,16 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         terminated: BoolArray,
         truncated: BoolArray,
         infos: dict[str, Any],
-        restarted: NDArray[np.intp] | BoolArray | None,
+        idx: NDArray[np.intp] | None,
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Autoreset bookkeeping of a step (both implementations); ``restarted`` the rows (indices or a
-        mask) that started a new episode at this step instead of stepping (``NEXT_STEP``)."""
+        """Autoreset bookkeeping of a step (both implementations); ``idx`` the robots that started a new
+        episode at this step instead of stepping (``NEXT_STEP``)."""
         n = self.num_envs
         mode = self.autoreset_mode
-        if restarted is not None:
-            reward[restarted] = 0.0
-            terminated[restarted] = False
-            truncated[restarted] = False
+        if idx is not None:
+            reward[idx] = 0.0
+            terminated[idx] = False
+            truncated[idx] = False
         elif mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
             if done.any():
@@ -605,23 +608,40 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
     """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
 
     ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
-    native vector envs of AmigoBot-v0 and -v1.
+    native vector envs of AmigoBot-v0 and -v1. Every ``_key`` mask is an array of its own, as in
+    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once).
     """
-    every = np.ones(n, dtype=np.bool_) if mask is None else mask
+    masks = np.empty((_mask_count(infos), n), dtype=np.bool_)
+    masks[...] = True if mask is None else mask
+    return _scatter_into(infos, mask, n, iter(masks))
+
+
+def _mask_count(infos: dict[str, Any]) -> int:
+    """How many ``_key`` masks :func:`scatter_infos` gives ``infos`` (nested dicts included)."""
+    count = 0
+    for k, v in infos.items():
+        if k.startswith("_") or k in ("final_obs", "final_info"):
+            continue
+        count += 1 + (_mask_count(v) if isinstance(v, dict) else 0)
+    return count
+
+
+def _scatter_into(infos: dict[str, Any], mask: BoolArray | None, n: int, masks: Iterator[BoolArray]) -> dict[str, Any]:
+    """:func:`scatter_infos` with the ``_key`` masks taken from ``masks`` in order."""
     out: dict[str, Any] = {}
     for k, v in infos.items():
         if k.startswith("_") or k in ("final_obs", "final_info"):
             out[k] = v
             continue
         if isinstance(v, dict):
-            out[k] = scatter_infos(v, mask, n)
+            out[k] = _scatter_into(v, mask, n, masks)
         elif mask is None:
             out[k] = v
         else:
             full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
             full[mask] = v
             out[k] = full
-        out[f"_{k}"] = every.copy()  # a mask of its own per key
+        out[f"_{k}"] = next(masks)  # a mask of its own per key
     return out
 
 
