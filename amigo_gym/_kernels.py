@@ -138,6 +138,7 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "r0y",
     "straight_length",
     "curvature",
+    "heading_limit",
 )
 
 #: entries of the ``start`` vector of :func:`draw_starts` and :func:`place_starts`
@@ -161,7 +162,8 @@ _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 DT, W_MAX, R1, R2, TWO_L1, L3, L5, R3 = (_C[n] for n in CONSTANT_FIELDS[:8])
 SPEED, MAX_SPEED, ERROR_SCALE, E_MAX, TERM = (_C[n] for n in CONSTANT_FIELDS[8:13])
 NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTANT_FIELDS[13:18])
-MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:])
+MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:27])
+HEADING_LIM = _C["heading_limit"]
 
 
 F64 = NDArray[np.float64]
@@ -364,9 +366,17 @@ def _evaluate(
         record[i, 13] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
 
 
-def _finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
-    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward."""
+def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
+    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
+
+    Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
+    value (the rows :func:`amigo_gym.task.bound_heading` changes; NaN is not past it).
+    """
+    limit = c[HEADING_LIM]
+    past = 0
     for i in numba.prange(reward.shape[0]):
+        if abs(record[i, 2]) > limit:
+            past += 1
         # task._reward_columns and task._product, from exps = exp(arguments)
         track = exps[i, 0]
         speed = exps[i, 1]
@@ -377,9 +387,10 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
         record[i, 14] = smooth
         record[i, 15] = rew
         reward[i] = rew
+    return past
 
 
-def _twin(fn: Callable[..., None], name: str) -> Callable[..., None]:
+def _twin(fn: Callable[..., object], name: str) -> Callable[..., object]:
     """A copy of ``fn`` named ``name``: numba caches a compiled function under its name, so the serial
     and the parallel compilation of one loop need two names (else they would share a cache entry)."""
     twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)

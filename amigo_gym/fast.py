@@ -25,11 +25,12 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
-from typing import Literal, SupportsIndex
+from typing import Literal, NamedTuple, SupportsIndex
 
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
@@ -45,6 +46,7 @@ __all__ = [
     "step_rows",
     "start_constants",
     "GeneratorTable",
+    "StepReport",
 ]
 
 Array = NDArray[np.float64]
@@ -143,6 +145,7 @@ def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDAr
         "r0y": r0y,
         "straight_length": straight,
         "curvature": circle.direction / circle.radius,
+        "heading_limit": HEADING_LIMIT,
     }
     fields: tuple[str, ...] = kernels().CONSTANT_FIELDS
     return np.array([values[name] for name in fields], dtype=np.float64)
@@ -215,6 +218,17 @@ def start_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> Array
     return np.array([values[name] for name in fields], dtype=np.float64)
 
 
+class StepReport(NamedTuple):
+    """What :func:`step_rows` reports besides its outputs."""
+
+    #: the number ``m`` of start states drawn from ``bitgens`` (their rows are ``ws.rows[:m]``, in increasing
+    #: order, until the next call); 0 without ``bitgens``
+    drawn: int
+    #: the number of rows whose new heading lies past :data:`amigo_gym.params.HEADING_LIMIT` in absolute
+    #: value (those :func:`amigo_gym.task.bound_heading` reduces; the kernel leaves them as they are)
+    past_limit: int
+
+
 def step_rows(
     ws: Workspace,
     state: Array,
@@ -226,7 +240,7 @@ def step_rows(
     record: Array,
     parallel: bool = False,
     bitgens: NDArray[np.uintp] | None = None,
-) -> int:
+) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
     The three passes of :mod:`amigo_gym._kernels` with numpy's ``tan`` and ``exp`` between them; rows
@@ -242,8 +256,7 @@ def step_rows(
     for bit, and the generators advance as that loop advances them. Without it the caller has set them.
 
     Returns:
-        the number ``m`` of start states drawn from ``bitgens`` (their rows are ``ws.rows[:m]``, in
-        increasing order, until the next call); 0 without ``bitgens``.
+        :class:`StepReport`: how many start states were drawn, how many headings are past the limit.
 
     Raises:
         ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them),
@@ -278,8 +291,8 @@ def step_rows(
         tans[idx, 1] = np.sin(beta)
     evaluate(c, ws.preview, state, actions, restart, tans, obs, terminated, record, exps)
     np.exp(exps, out=exps)
-    finish(c, reward, record, exps)
-    return int(m)
+    past = finish(c, reward, record, exps)
+    return StepReport(int(m), int(past))
 
 
 def _check(

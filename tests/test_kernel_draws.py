@@ -233,3 +233,23 @@ def test_copies_draw_from_their_own_generators(clone: str) -> None:
     for t, a in enumerate(actions):
         _same_step(env.step(a), twin_steps[t], f"original {t}")
     _same_generators(env.np_randoms, twin.np_randoms)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_step_report_counts_headings_past_the_limit(parallel: bool) -> None:
+    """step_rows reports the rows task.bound_heading would change (|beta| > HEADING_LIMIT; NaN is not)."""
+    from amigo_gym.params import HEADING_LIMIT
+
+    params = EnvParams()
+    n = 64
+    state = np.zeros((n, 8))
+    state[:, 2] = np.linspace(-3.0, 3.0, n)
+    state[[3, 10, 50], 2] = [HEADING_LIMIT + 5.0, -HEADING_LIMIT - 5.0, np.nan]
+    state[11, 2] = HEADING_LIMIT  # at the limit: kept
+    actions = np.zeros((n, 2))  # a zero action keeps the heading
+    ws = fast.workspace(task.task_constants(params), make_path(params), n)
+    out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
+    report = fast.step_rows(ws, state, actions, np.zeros(n, np.bool_), *out, parallel=parallel)
+    assert report == fast.StepReport(drawn=0, past_limit=2)
+    changed = np.asarray(task.bound_heading(task.State(*(state[:, j].copy() for j in range(8)))).beta) != state[:, 2]
+    assert int(np.sum(changed & ~np.isnan(state[:, 2]))) == 2

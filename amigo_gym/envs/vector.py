@@ -39,7 +39,7 @@ from amigo_gym.envs.amigobot import (
     parse_pose_option,
 )
 from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
+from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = [
@@ -349,19 +349,18 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
-        m = fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
+        report = fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
         if bitgens is not None:
-            idx = ws.rows[:m].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
+            idx = ws.rows[: report.drawn].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
         if idx is not None:
             self._steps[idx] = 0
             if self.render_mode is not None:
                 self._trail_start[idx] = self._trail_count
-        beta = self._rows[:, 2]
-        if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
+        if report.past_limit:
             # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
             # state and in the info's pose
             bounded = np.asarray(task.bound_heading(self._state).beta)
-            beta[:] = bounded
+            self._rows[:, 2] = bounded
             record[:, 2] = bounded
         truncated = (
             self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
