@@ -82,6 +82,7 @@ __all__ = [
     "START_FIELDS",
     "draw_starts",
     "place_starts",
+    "count_steps",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -514,3 +515,25 @@ def place_starts(
         state[i, 1] = state[i, 1] - l3 * s
         tans[i, 0] = c
         tans[i, 1] = s
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def count_steps(
+    steps: NDArray[np.int64],
+    rows: NDArray[np.intp],
+    max_steps: int,
+    dt: float,
+    truncated: NDArray[np.bool_],
+    time: F64,
+) -> None:
+    """The vector env's step counters in one pass: what ``steps += 1; steps[rows] = 0; truncated = steps >=
+    max_steps`` (all False for ``max_steps < 0``, i.e. no limit) ``; time = steps * dt`` compute with numpy
+    (``steps * dt`` converts the count to float64, then multiplies, as numpy does)."""
+    for i in range(steps.shape[0]):
+        steps[i] += 1
+    for j in range(rows.shape[0]):
+        steps[rows[j]] = 0
+    for i in range(steps.shape[0]):
+        s = steps[i]
+        truncated[i] = max_steps >= 0 and s >= max_steps
+        time[i] = float(s) * dt

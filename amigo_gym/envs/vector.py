@@ -153,6 +153,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the kernel's restart mask when none restarts
+        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
         self._trail: Array | None = None  # ring buffer (trail_length, N, 2), allocated when first used
         self._trail_count = 0  # positions written so far
@@ -332,7 +333,6 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         numpy path's numbers and leave the generators in the same states.
         """
         n = self.num_envs
-        self._steps += 1
         restart = self._no_restart
         bitgens = None
         idx = None
@@ -352,19 +352,21 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         report = fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
         if bitgens is not None:
             idx = ws.rows[: report.drawn].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
-        if idx is not None:
-            self._steps[idx] = 0
-            if self.render_mode is not None:
-                self._trail_start[idx] = self._trail_count
+        # steps += 1, 0 for the restarted rows; truncated = steps >= max_episode_steps; time = steps * dt
+        truncated: BoolArray = np.empty(n, dtype=np.bool_)
+        time = np.empty(n)
+        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
+        fast.kernels().count_steps(
+            self._steps, self._no_rows if idx is None else idx, limit, self._k.dt, truncated, time
+        )
+        if idx is not None and self.render_mode is not None:
+            self._trail_start[idx] = self._trail_count
         if report.past_limit:
             # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
             # state and in the info's pose
             bounded = np.asarray(task.bound_heading(self._state).beta)
             self._rows[:, 2] = bounded
             record[:, 2] = bounded
-        truncated = (
-            self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
-        )
         # the infos are views of the record, a new array at every step (the single env's keys)
         infos = {
             "pose": record[:, 0:3],
@@ -374,7 +376,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             "wheel_angles": record[:, 8:10],
             "castor_angle": record[:, 10],
             "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
-            "time": self._steps * self._k.dt,
+            "time": time,
         }
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
