@@ -47,6 +47,7 @@ __all__ = [
     "start_constants",
     "GeneratorTable",
     "StepReport",
+    "step_rows_unchecked",
 ]
 
 Array = NDArray[np.float64]
@@ -265,6 +266,24 @@ def step_rows(
     _check(ws, state, actions, restart, obs, reward, terminated, record)
     if bitgens is not None and (bitgens.shape != restart.shape or bitgens.dtype != np.uintp):
         raise ValueError(f"bitgens must be a uintp array of shape {restart.shape}, got {bitgens.dtype} {bitgens.shape}")
+    return step_rows_unchecked(ws, state, actions, restart, obs, reward, terminated, record, parallel, bitgens)
+
+
+def step_rows_unchecked(
+    ws: Workspace,
+    state: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    obs: NDArray[np.floating],
+    reward: Array,
+    terminated: NDArray[np.bool_],
+    record: Array,
+    parallel: bool = False,
+    bitgens: NDArray[np.uintp] | None = None,
+) -> StepReport:
+    """:func:`step_rows` without checking its arguments, for a caller that built them for ``ws`` itself
+    (the vector env: its own state, buffers it has just allocated, validated actions, its generator
+    table). Wrong shapes, dtypes or layouts make numba read or write out of bounds."""
     k = kernels()
     c, tans, exps = ws.consts, ws.tans, ws.exps
     move, evaluate, finish = (

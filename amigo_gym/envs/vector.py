@@ -349,7 +349,10 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
-        report = fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens)
+        # the env's own arrays, of the workspace's shapes and dtypes (validated actions): no checks per step
+        report = fast.step_rows_unchecked(
+            ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens
+        )
         if bitgens is not None:
             idx = ws.rows[: report.drawn].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
         # steps += 1, 0 for the restarted rows; truncated = steps >= max_episode_steps; time = steps * dt
