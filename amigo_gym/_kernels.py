@@ -233,6 +233,15 @@ def _evaluate(
     exps: F64,
 ) -> None:
     """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
+    # task._steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
+    # of the manoeuvre), computed once with the same operations instead of a square root per row
+    l3 = c[L3]
+    kl3_curve = c[CURV] * l3
+    kl3_line = 0.0 * l3
+    sin_ss_curve = -_clip(kl3_curve, -1.0, 1.0)
+    cos_ss_curve = math.sqrt(1.0 - sin_ss_curve * sin_ss_curve)
+    sin_ss_line = -_clip(kl3_line, -1.0, 1.0)
+    cos_ss_line = math.sqrt(1.0 - sin_ss_line * sin_ss_line)
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -278,7 +287,6 @@ def _evaluate(
             state[i, 7] = w2
 
         # task.outcome_columns: H, its projection on the path (paths.*.project_xy, minimal)
-        l3 = c[L3]
         hx = x + l3 * cos_beta
         hy = y + l3 * sin_beta
         d = c[DIRECTION]
@@ -303,7 +311,7 @@ def _evaluate(
             e = rho - r
             cos_theta = ny
             sin_theta = -nx
-        curvature = c[CURV]
+        on_line = False  # on the manoeuvre's straight part: curvature 0 (else the path's)
         s = 0.0
         manoeuvre = c[MANOEUVRE] != 0.0
         if manoeuvre:
@@ -317,7 +325,7 @@ def _evaluate(
             if d_line <= abs(e):
                 e = hy if hx <= big_l else _sign(hy) * d_line
                 s = s_line
-                curvature = 0.0
+                on_line = True
                 cos_theta = 1.0
                 sin_theta = 0.0
             else:
@@ -329,7 +337,7 @@ def _evaluate(
         w_max = c[W_MAX]
 
         # task._observe_columns
-        kl3 = curvature * l3
+        kl3 = kl3_line if on_line else kl3_curve  # curvature * l3
         obs[i, 0] = _clip(e / c[ERROR_SCALE], -c[E_MAX], c[E_MAX])
         obs[i, 1] = sin_psi
         obs[i, 2] = cos_psi
@@ -344,8 +352,8 @@ def _evaluate(
         obs[i, m + 3] = c[REF_OBS]
 
         # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
-        sin_ss = -_clip(kl3, -1.0, 1.0)
-        cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
+        sin_ss = sin_ss_line if on_line else sin_ss_curve
+        cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1
         dw2 = w2 - prev2
         exps[i, 0] = abs_e / c[NEG_SIG_T]
