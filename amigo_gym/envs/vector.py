@@ -221,7 +221,12 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
     def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
         """Start states of the robots ``idx`` (compact columns): a drawn pose (or ``pose_opt``'s rows),
-        wheel angles 0, the initial rates."""
+        wheel angles 0, the initial rates.
+
+        The Python loop here is the reference of the draws that :func:`amigo_gym.fast.step_rows` makes
+        in the kernel for ``NEXT_STEP`` restarts (:func:`amigo_gym._kernels.draw_starts`): the same
+        numbers, start states and generator states afterwards (``tests/test_kernel_draws.py``).
+        """
         m = len(idx)
         if pose_opt is not None:
             pose = pose_opt[idx]
