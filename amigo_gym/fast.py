@@ -160,6 +160,7 @@ class Workspace:
         consts: :func:`kernel_constants`.
         preview: the preview distances [m].
         tans: ``(n, 2)`` scratch: arguments, then values, of the two tangents of the arc step.
+        turn: ``(n,)`` scratch: the turn rates of the actions (pass 1, read by pass 2).
         exps: ``(n, 3)`` scratch: arguments, then values, of the three exponentials of the reward.
         obs_dim: length of an observation.
         start: :func:`start_constants`, for start states drawn in :func:`step_rows`.
@@ -170,6 +171,7 @@ class Workspace:
     consts: Array
     preview: Array
     tans: Array
+    turn: Array
     exps: Array
     obs_dim: int
     start: Array
@@ -185,6 +187,7 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
         kernel_constants(k, path),
         np.array(k.preview, dtype=np.float64),
         np.zeros((n, 2)),
+        np.zeros(n),
         np.zeros((n, 3)),
         obs_dim(k.params),
         start_constants(k, path),
@@ -291,7 +294,7 @@ def step_rows_unchecked(
         if parallel
         else (k.move_arguments, k.evaluate, k.finish)
     )
-    move(c, state, actions, restart, tans)
+    move(c, state, actions, restart, tans, ws.turn)
     np.tan(tans, out=tans)
     m = 0
     if bitgens is not None:
@@ -308,7 +311,7 @@ def step_rows_unchecked(
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    evaluate(c, ws.preview, state, actions, restart, tans, obs, terminated, record, exps)
+    evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
     np.exp(exps, out=exps)
     past = finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
