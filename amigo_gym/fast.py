@@ -255,9 +255,10 @@ def step_rows(
     ``bitgens`` (:attr:`GeneratorTable.bitgens`, one address per row) makes the step draw the start
     states of the ``restart`` rows itself, each from its row's generator, before evaluating them
     (:func:`amigo_gym._kernels.draw_starts`, numpy's ``cos`` and ``sin`` of the headings,
-    :func:`amigo_gym._kernels.place_starts`): the state ``_start_states`` of the vector env computes
-    with a Python loop of ``Generator.random(out=u[j])`` and :func:`amigo_gym.task.start_pose`, bit
-    for bit, and the generators advance as that loop advances them. Without it the caller has set them.
+    :func:`amigo_gym._kernels.place_starts`). The reference is the vector env's ``_start_states``, a
+    Python loop of ``Generator.random(out=u[j])`` over the rows and :func:`amigo_gym.task.start_pose`:
+    the start states agree bit for bit, and the generators advance as that loop advances them.
+    Without ``bitgens`` the caller has set the start states.
 
     Returns:
         :class:`StepReport`: how many start states were drawn, how many headings are past the limit.
@@ -374,14 +375,20 @@ class GeneratorTable:
     :attr:`bitgens` (else the caller draws with ``Generator.random``). Pickling and deep copies copy the
     generators and compute the copies' addresses anew (an address is only good in its own process and
     for its own object).
+
+    The compiled draws do not take a generator's lock (its methods do): do not draw from these
+    generators in another thread while the environment steps.
     """
 
-    __slots__ = ("_generators", "_missing", "bitgens")
+    __slots__ = ("_addresses", "_generators", "_missing", "bitgens")
 
     def __init__(self, generators: Sequence[np.random.Generator | None]) -> None:
         n = len(generators)
         self._generators: list[np.random.Generator | None] = [None] * n
-        self.bitgens: NDArray[np.uintp] = np.zeros(n, dtype=np.uintp)
+        self._addresses: NDArray[np.uintp] = np.zeros(n, dtype=np.uintp)
+        #: the addresses, one per row (0: none), a read-only view (only setting a generator changes them)
+        self.bitgens: NDArray[np.uintp] = self._addresses.view()
+        self.bitgens.flags.writeable = False
         self._missing = n
         for i, g in enumerate(generators):
             self[i] = g
@@ -394,9 +401,9 @@ class GeneratorTable:
 
     def __setitem__(self, i: SupportsIndex, g: np.random.Generator | None) -> None:
         address = _bitgen_address(g)
-        self._missing += (address == 0) - (int(self.bitgens[i]) == 0)
+        self._missing += (address == 0) - (int(self._addresses[i]) == 0)
         self._generators[i] = g
-        self.bitgens[i] = address
+        self._addresses[i] = address
 
     def __iter__(self) -> Iterator[np.random.Generator | None]:
         return iter(self._generators)

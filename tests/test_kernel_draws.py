@@ -253,3 +253,9 @@ def test_step_report_counts_headings_past_the_limit(parallel: bool) -> None:
     assert report == fast.StepReport(drawn=0, past_limit=2)
     changed = np.asarray(task.bound_heading(task.State(*(state[:, j].copy() for j in range(8)))).beta) != state[:, 2]
     assert int(np.sum(changed & ~np.isnan(state[:, 2]))) == 2
+
+
+def test_generator_table_addresses_are_read_only() -> None:
+    table = fast.GeneratorTable([seeding.np_random(1)[0]])
+    with pytest.raises(ValueError, match="read-only"):
+        table.bitgens[0] = 1
