@@ -34,9 +34,19 @@ Layouts (all C-contiguous, one row per robot):
 * ``restart (N,)`` bool: rows whose ``state`` has just been set to a start state; they do not move
   and are evaluated as :func:`amigo_gym.task.reset_columns` evaluates them (no smoothness loss); their
   ``tans`` row must hold ``(np.cos(beta), np.sin(beta))`` when :func:`evaluate` runs;
+* ``turn (N,)`` float64 scratch: the turn rate ``bdot`` of each row's action, written by
+  :func:`move_arguments` and read by :func:`evaluate` (one division per row instead of two);
 * outputs ``obs (N, obs_dim)`` float32 or float64, ``reward (N,)`` float64, ``terminated (N,)`` bool
   and ``record (N, 16)`` float64 with the columns :data:`RECORD_FIELDS` (the new state and what the
   infos report about it).
+
+Start states of restarting rows (:func:`draw_starts`, :func:`place_starts`): the native vector env's
+``NEXT_STEP`` autoreset draws each restarting robot's start perturbation from that robot's own numpy
+generator inside the compiled loop, by calling the generator's C function ``next_double`` through the
+address of its ``bitgen_t`` (:func:`_next_double`; the call ``Generator.random`` makes per number), so
+the numbers and the generators' states afterwards are those of ``Generator.random(3)`` per robot. The
+start pose is :func:`amigo_gym.task.start_pose`'s arithmetic in its order, with numpy's ``cos`` and
+``sin`` of the headings evaluated between the two loops (:func:`amigo_gym.fast.step_rows`).
 
 This module imports numba at import time; :mod:`amigo_gym.fast` imports it only when the fast path
 is first used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk
@@ -51,9 +61,14 @@ from __future__ import annotations
 import math
 import types
 from collections.abc import Callable
+from typing import cast
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types as nb_types
+from numba.core.typing.templates import Signature
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 __all__ = [
@@ -66,6 +81,10 @@ __all__ = [
     "evaluate_parallel",
     "finish",
     "finish_parallel",
+    "START_FIELDS",
+    "draw_starts",
+    "place_starts",
+    "count_steps",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -122,13 +141,32 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "r0y",
     "straight_length",
     "curvature",
+    "heading_limit",
 )
+
+#: entries of the ``start`` vector of :func:`draw_starts` and :func:`place_starts`
+#: (:func:`amigo_gym.fast.start_constants`): the path's start point and tangent angle, the noise scales of
+#: :func:`amigo_gym.task.start_pose`, ``l3``, and the initial wheel rates
+START_FIELDS: tuple[str, ...] = (
+    "x0",
+    "y0",
+    "theta0",
+    "position_noise",
+    "heading_noise",
+    "l3",
+    "rate1",
+    "rate2",
+)
+
+_S = {name: i for i, name in enumerate(START_FIELDS)}
+S_X0, S_Y0, S_THETA0, S_POS_NOISE, S_HEADING_NOISE, S_L3, S_RATE1, S_RATE2 = (_S[n] for n in START_FIELDS)
 
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 DT, W_MAX, R1, R2, TWO_L1, L3, L5, R3 = (_C[n] for n in CONSTANT_FIELDS[:8])
 SPEED, MAX_SPEED, ERROR_SCALE, E_MAX, TERM = (_C[n] for n in CONSTANT_FIELDS[8:13])
 NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTANT_FIELDS[13:18])
-MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:])
+MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:27])
+HEADING_LIM = _C["heading_limit"]
 
 
 F64 = NDArray[np.float64]
@@ -171,14 +209,16 @@ def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, f
     return w1, w2, 0.5 * (u1 + u2), bdot, bdot * c[DT]
 
 
-def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64) -> None:
-    """Pass 1: ``tans[i] = (0.5 h, 0.5 (beta + h))`` of the arc step (zeros where ``restart``)."""
+def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64, turn: F64) -> None:
+    """Pass 1: ``tans[i] = (0.5 h, 0.5 (beta + h))`` of the arc step (zeros where ``restart``), and the
+    turn rate ``bdot`` into ``turn[i]`` (for :func:`evaluate`, which would divide again)."""
     for i in numba.prange(state.shape[0]):
         if restart[i]:
             tans[i, 0] = 0.0
             tans[i, 1] = 0.0
             continue
-        db = _motion(c, actions[i, 0], actions[i, 1])[4]
+        bdot, db = _motion(c, actions[i, 0], actions[i, 1])[3:]
+        turn[i] = bdot
         h = 0.5 * db
         tans[i, 0] = 0.5 * h
         tans[i, 1] = 0.5 * (state[i, 2] + h)
@@ -191,12 +231,22 @@ def _evaluate(
     actions: F64,
     restart: NDArray[np.bool_],
     tans: F64,
+    turn: F64,
     obs: NDArray[np.floating],
     terminated: NDArray[np.bool_],
     record: F64,
     exps: F64,
 ) -> None:
     """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
+    # task._steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
+    # of the manoeuvre), computed once with the same operations instead of a square root per row
+    l3 = c[L3]
+    kl3_curve = c[CURV] * l3
+    kl3_line = 0.0 * l3
+    sin_ss_curve = -_clip(kl3_curve, -1.0, 1.0)
+    cos_ss_curve = math.sqrt(1.0 - sin_ss_curve * sin_ss_curve)
+    sin_ss_line = -_clip(kl3_line, -1.0, 1.0)
+    cos_ss_line = math.sqrt(1.0 - sin_ss_line * sin_ss_line)
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -216,7 +266,12 @@ def _evaluate(
         else:
             # task.move_columns: kinematics.arc_step from the two tangents, the wheel angles
             dt = c[DT]
-            w1, w2, v, bdot, db = _motion(c, actions[i, 0], actions[i, 1])
+            # _motion's numbers, bdot from pass 1
+            w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
+            w2 = _clip(actions[i, 1], -1.0, 1.0) * c[W_MAX]
+            v = 0.5 * (c[R1] * w1 + c[R2] * w2)
+            bdot = turn[i]
+            db = bdot * dt
             h = 0.5 * db
             cos_h, sin_h = _cos_sin(tans[i, 0])
             cos_mid, sin_mid = _cos_sin(tans[i, 1])
@@ -242,7 +297,6 @@ def _evaluate(
             state[i, 7] = w2
 
         # task.outcome_columns: H, its projection on the path (paths.*.project_xy, minimal)
-        l3 = c[L3]
         hx = x + l3 * cos_beta
         hy = y + l3 * sin_beta
         d = c[DIRECTION]
@@ -267,7 +321,7 @@ def _evaluate(
             e = rho - r
             cos_theta = ny
             sin_theta = -nx
-        curvature = c[CURV]
+        on_line = False  # on the manoeuvre's straight part: curvature 0 (else the path's)
         s = 0.0
         manoeuvre = c[MANOEUVRE] != 0.0
         if manoeuvre:
@@ -281,7 +335,7 @@ def _evaluate(
             if d_line <= abs(e):
                 e = hy if hx <= big_l else _sign(hy) * d_line
                 s = s_line
-                curvature = 0.0
+                on_line = True
                 cos_theta = 1.0
                 sin_theta = 0.0
             else:
@@ -293,7 +347,7 @@ def _evaluate(
         w_max = c[W_MAX]
 
         # task._observe_columns
-        kl3 = curvature * l3
+        kl3 = kl3_line if on_line else kl3_curve  # curvature * l3
         obs[i, 0] = _clip(e / c[ERROR_SCALE], -c[E_MAX], c[E_MAX])
         obs[i, 1] = sin_psi
         obs[i, 2] = cos_psi
@@ -308,8 +362,8 @@ def _evaluate(
         obs[i, m + 3] = c[REF_OBS]
 
         # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
-        sin_ss = -_clip(kl3, -1.0, 1.0)
-        cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
+        sin_ss = sin_ss_line if on_line else sin_ss_curve
+        cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1
         dw2 = w2 - prev2
         exps[i, 0] = abs_e / c[NEG_SIG_T]
@@ -331,9 +385,17 @@ def _evaluate(
         record[i, 13] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
 
 
-def _finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
-    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward."""
+def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
+    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
+
+    Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
+    value (the rows :func:`amigo_gym.task.bound_heading` changes; NaN is not past it).
+    """
+    limit = c[HEADING_LIM]
+    past = 0
     for i in numba.prange(reward.shape[0]):
+        if abs(record[i, 2]) > limit:
+            past += 1
         # task._reward_columns and task._product, from exps = exp(arguments)
         track = exps[i, 0]
         speed = exps[i, 1]
@@ -344,9 +406,10 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> None:
         record[i, 14] = smooth
         record[i, 15] = rew
         reward[i] = rew
+    return past
 
 
-def _twin(fn: Callable[..., None], name: str) -> Callable[..., None]:
+def _twin(fn: Callable[..., object], name: str) -> Callable[..., object]:
     """A copy of ``fn`` named ``name``: numba caches a compiled function under its name, so the serial
     and the parallel compilation of one loop need two names (else they would share a cache entry)."""
     twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
@@ -366,3 +429,129 @@ evaluate = _serial(_twin(_evaluate, "evaluate"))
 evaluate_parallel = _parallel(_twin(_evaluate, "evaluate_parallel"))
 finish = _serial(_twin(_finish, "finish"))
 finish_parallel = _parallel(_twin(_finish, "finish_parallel"))
+
+
+# ---------------------------------------------------------------------------------------------- start states
+def _next_double_typing(typingctx: object, bitgen: nb_types.Type) -> tuple[Signature, Callable[..., ir.Value]] | None:
+    """``bitgen->next_double(bitgen->state)`` for ``bitgen`` the address (an integer) of a numpy ``bitgen_t``.
+
+    numpy's C API (``numpy/random/bitgen.h``): ``bitgen_t`` is ``{void *state; uint64_t (*next_uint64)(void *);
+    uint32_t (*next_uint32)(void *); double (*next_double)(void *); uint64_t (*next_raw)(void *);}``, and
+    ``Generator.random`` fills its output with exactly this call, one per number. The address is an
+    argument, never a constant of the compiled code, so the on-disk cache holds nothing of one process.
+    """
+    if not isinstance(bitgen, nb_types.Integer):
+        return None
+
+    def codegen(context: object, builder: ir.IRBuilder, signature: Signature, args: list[ir.Value]) -> ir.Value:
+        void_p = ir.IntType(8).as_pointer()
+        next_double = ir.FunctionType(ir.DoubleType(), [void_p]).as_pointer()
+        bitgen_t = ir.LiteralStructType([void_p, void_p, void_p, next_double, void_p])
+        ptr = builder.inttoptr(args[0], bitgen_t.as_pointer())
+        zero, i32 = ir.Constant(ir.IntType(32), 0), ir.IntType(32)
+        state = builder.load(builder.gep(ptr, [zero, ir.Constant(i32, 0)], inbounds=True))
+        fn = builder.load(builder.gep(ptr, [zero, ir.Constant(i32, 3)], inbounds=True))
+        return builder.call(fn, [state])
+
+    return nb_types.float64(bitgen), codegen
+
+
+#: :func:`_next_double_typing` as numba's intrinsic: ``_next_double(address) -> float`` in compiled code
+_next_double = cast(Callable[[int], float], intrinsic(_next_double_typing))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def draw_starts(
+    bitgens: NDArray[np.uintp],
+    restart: NDArray[np.bool_],
+    start: F64,
+    state: F64,
+    rows: NDArray[np.intp],
+    beta: F64,
+) -> int:
+    """Draw the start states of the rows where ``restart`` is set, in row order; return their number ``m``.
+
+    Row ``i`` draws three numbers ``r`` from the generator whose ``bitgen_t`` lies at ``bitgens[i]``
+    (what ``Generator.random(3)`` draws; :class:`amigo_gym.envs.AmigoBotEnv` draws ``uniform(-1, 1, 3)``,
+    which is ``-1 + 2 r``) and sets ``state[i]`` to :func:`amigo_gym.task.start_pose` of ``u = -1 + 2 r``
+    with wheel angles 0 and the initial rates, except that ``x, y`` hold H's position until
+    :func:`place_starts` moves them to A (it needs ``cos beta, sin beta``). ``rows[:m]`` receives the
+    rows, ``beta[:m]`` their headings. Returns ``-1`` (and draws nothing more) at a zero address.
+    """
+    x0 = start[S_X0]
+    y0 = start[S_Y0]
+    theta0 = start[S_THETA0]
+    pos_noise = start[S_POS_NOISE]
+    heading_noise = start[S_HEADING_NOISE]
+    rate1 = start[S_RATE1]
+    rate2 = start[S_RATE2]
+    m = 0
+    for i in range(restart.shape[0]):
+        if not restart[i]:
+            continue
+        g = bitgens[i]
+        if g == 0:
+            return -1
+        u0 = -1.0 + 2.0 * _next_double(g)  # three calls in order, as Generator.random(3)
+        u1 = -1.0 + 2.0 * _next_double(g)
+        u2 = -1.0 + 2.0 * _next_double(g)
+        b = theta0 + u2 * heading_noise
+        state[i, 0] = x0 + u0 * pos_noise
+        state[i, 1] = y0 + u1 * pos_noise
+        state[i, 2] = b
+        state[i, 3] = 0.0
+        state[i, 4] = 0.0
+        state[i, 5] = 0.0
+        state[i, 6] = rate1
+        state[i, 7] = rate2
+        rows[m] = i
+        beta[m] = b
+        m += 1
+    return m
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def place_starts(
+    start: F64,
+    rows: NDArray[np.intp],
+    cos_beta: F64,
+    sin_beta: F64,
+    state: F64,
+    tans: F64,
+) -> None:
+    """Finish :func:`draw_starts`' rows with ``cos_beta, sin_beta`` of their headings (numpy's ``cos``, ``sin``).
+
+    A lies ``l3`` behind H (:func:`amigo_gym.kinematics.a_from_h`): ``x = x_H - l3 cos beta``, ``y = y_H -
+    l3 sin beta``; the row's ``tans`` receive ``(cos beta, sin beta)``, as :func:`evaluate` wants them.
+    """
+    l3 = start[S_L3]
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        c = cos_beta[j]
+        s = sin_beta[j]
+        state[i, 0] = state[i, 0] - l3 * c
+        state[i, 1] = state[i, 1] - l3 * s
+        tans[i, 0] = c
+        tans[i, 1] = s
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def count_steps(
+    steps: NDArray[np.int64],
+    rows: NDArray[np.intp],
+    max_steps: int,
+    dt: float,
+    truncated: NDArray[np.bool_],
+    time: F64,
+) -> None:
+    """The vector env's step counters in one pass: what ``steps += 1; steps[rows] = 0; truncated = steps >=
+    max_steps`` (all False for ``max_steps < 0``, i.e. no limit) ``; time = steps * dt`` compute with numpy
+    (``steps * dt`` converts the count to float64, then multiplies, as numpy does)."""
+    for i in range(steps.shape[0]):
+        steps[i] += 1
+    for j in range(rows.shape[0]):
+        steps[rows[j]] = 0
+    for i in range(steps.shape[0]):
+        s = steps[i]
+        truncated[i] = max_steps >= 0 and s >= max_steps
+        time[i] = float(s) * dt

@@ -18,18 +18,21 @@ its compiled code is cached on disk, so a later process loads it instead of comp
 
 from __future__ import annotations
 
+import ctypes
 import importlib.util
 import os
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
-from typing import Literal
+from typing import Literal, NamedTuple, SupportsIndex
 
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
-from amigo_gym.task import TaskConstants, obs_dim
+from amigo_gym.task import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
 __all__ = [
     "KERNEL_ENV",
@@ -41,6 +44,10 @@ __all__ = [
     "Workspace",
     "workspace",
     "step_rows",
+    "start_constants",
+    "GeneratorTable",
+    "StepReport",
+    "step_rows_unchecked",
 ]
 
 Array = NDArray[np.float64]
@@ -139,6 +146,7 @@ def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDAr
         "r0y": r0y,
         "straight_length": straight,
         "curvature": circle.direction / circle.radius,
+        "heading_limit": HEADING_LIMIT,
     }
     fields: tuple[str, ...] = kernels().CONSTANT_FIELDS
     return np.array([values[name] for name in fields], dtype=np.float64)
@@ -152,15 +160,25 @@ class Workspace:
         consts: :func:`kernel_constants`.
         preview: the preview distances [m].
         tans: ``(n, 2)`` scratch: arguments, then values, of the two tangents of the arc step.
+        turn: ``(n,)`` scratch: the turn rates of the actions (pass 1, read by pass 2).
         exps: ``(n, 3)`` scratch: arguments, then values, of the three exponentials of the reward.
         obs_dim: length of an observation.
+        start: :func:`start_constants`, for start states drawn in :func:`step_rows`.
+        rows, beta, cos_beta, sin_beta: ``(n,)`` scratch of those draws: the restarting rows, their
+            headings and numpy's cosines and sines of them.
     """
 
     consts: Array
     preview: Array
     tans: Array
+    turn: Array
     exps: Array
     obs_dim: int
+    start: Array
+    rows: NDArray[np.intp]
+    beta: Array
+    cos_beta: Array
+    sin_beta: Array
 
 
 def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Workspace:
@@ -169,9 +187,50 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
         kernel_constants(k, path),
         np.array(k.preview, dtype=np.float64),
         np.zeros((n, 2)),
+        np.zeros(n),
         np.zeros((n, 3)),
         obs_dim(k.params),
+        start_constants(k, path),
+        np.zeros(n, dtype=np.intp),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
     )
+
+
+def start_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> Array:
+    """The ``start`` vector of the start-state kernels (:data:`amigo_gym._kernels.START_FIELDS`).
+
+    The very numbers :func:`amigo_gym.task.start_pose` and :func:`amigo_gym.task.initial_wheel_rates`
+    use: the path's start point and tangent angle, ``init_position_noise``, ``init_heading_noise``,
+    the robot's ``l3``, and the initial wheel rates.
+    """
+    p = k.params
+    x0, y0, theta0 = _path_start(path)
+    rate1, rate2 = initial_wheel_rates(p).tolist()
+    values = {
+        "x0": x0,
+        "y0": y0,
+        "theta0": theta0,
+        "position_noise": p.init_position_noise,
+        "heading_noise": p.init_heading_noise,
+        "l3": p.robot.l3,
+        "rate1": rate1,
+        "rate2": rate2,
+    }
+    fields: tuple[str, ...] = kernels().START_FIELDS
+    return np.array([values[name] for name in fields], dtype=np.float64)
+
+
+class StepReport(NamedTuple):
+    """What :func:`step_rows` reports besides its outputs."""
+
+    #: the number ``m`` of start states drawn from ``bitgens`` (their rows are ``ws.rows[:m]``, in increasing
+    #: order, until the next call); 0 without ``bitgens``
+    drawn: int
+    #: the number of rows whose new heading lies past :data:`amigo_gym.params.HEADING_LIMIT` in absolute
+    #: value (those :func:`amigo_gym.task.bound_heading` reduces; the kernel leaves them as they are)
+    past_limit: int
 
 
 def step_rows(
@@ -184,7 +243,8 @@ def step_rows(
     terminated: NDArray[np.bool_],
     record: Array,
     parallel: bool = False,
-) -> None:
+    bitgens: NDArray[np.uintp] | None = None,
+) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
     The three passes of :mod:`amigo_gym._kernels` with numpy's ``tan`` and ``exp`` between them; rows
@@ -192,10 +252,42 @@ def step_rows(
     :func:`amigo_gym.task.reset_columns` does. Layouts: :mod:`amigo_gym._kernels`. ``parallel`` runs
     the loops on numba's threads (the same results).
 
+    ``bitgens`` (:attr:`GeneratorTable.bitgens`, one address per row) makes the step draw the start
+    states of the ``restart`` rows itself, each from its row's generator, before evaluating them
+    (:func:`amigo_gym._kernels.draw_starts`, numpy's ``cos`` and ``sin`` of the headings,
+    :func:`amigo_gym._kernels.place_starts`). The reference is the vector env's ``_start_states``, a
+    Python loop of ``Generator.random(out=u[j])`` over the rows and :func:`amigo_gym.task.start_pose`:
+    the start states agree bit for bit, and the generators advance as that loop advances them.
+    Without ``bitgens`` the caller has set the start states.
+
+    Returns:
+        :class:`StepReport`: how many start states were drawn, how many headings are past the limit.
+
     Raises:
-        ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them).
+        ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them),
+            or a zero address in ``bitgens`` for a restarting row.
     """
     _check(ws, state, actions, restart, obs, reward, terminated, record)
+    if bitgens is not None and (bitgens.shape != restart.shape or bitgens.dtype != np.uintp):
+        raise ValueError(f"bitgens must be a uintp array of shape {restart.shape}, got {bitgens.dtype} {bitgens.shape}")
+    return step_rows_unchecked(ws, state, actions, restart, obs, reward, terminated, record, parallel, bitgens)
+
+
+def step_rows_unchecked(
+    ws: Workspace,
+    state: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    obs: NDArray[np.floating],
+    reward: Array,
+    terminated: NDArray[np.bool_],
+    record: Array,
+    parallel: bool = False,
+    bitgens: NDArray[np.uintp] | None = None,
+) -> StepReport:
+    """:func:`step_rows` without checking its arguments, for a caller that built them for ``ws`` itself
+    (the vector env: its own state, buffers it has just allocated, validated actions, its generator
+    table). Wrong shapes, dtypes or layouts make numba read or write out of bounds."""
     k = kernels()
     c, tans, exps = ws.consts, ws.tans, ws.exps
     move, evaluate, finish = (
@@ -203,16 +295,27 @@ def step_rows(
         if parallel
         else (k.move_arguments, k.evaluate, k.finish)
     )
-    move(c, state, actions, restart, tans)
+    move(c, state, actions, restart, tans, ws.turn)
     np.tan(tans, out=tans)
-    if restart.any():
+    m = 0
+    if bitgens is not None:
+        m = k.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
+        if m < 0:
+            raise ValueError("bitgens has no generator for a restarting row (address 0)")
+        # numpy's cos and sin of the (m,) headings, as task.start_pose calls them on its (m,) column
+        beta, cos_beta, sin_beta = ws.beta[:m], ws.cos_beta[:m], ws.sin_beta[:m]
+        np.cos(beta, out=cos_beta)
+        np.sin(beta, out=sin_beta)
+        k.place_starts(ws.start, ws.rows[:m], cos_beta, sin_beta, state, tans)
+    elif restart.any():
         idx = np.flatnonzero(restart)
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    evaluate(c, ws.preview, state, actions, restart, tans, obs, terminated, record, exps)
+    evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
     np.exp(exps, out=exps)
-    finish(c, reward, record, exps)
+    past = finish(c, reward, record, exps)
+    return StepReport(int(m), int(past))
 
 
 def _check(
@@ -241,3 +344,75 @@ def _check(
                 f"{name} must be a C-contiguous {'/'.join(d.__name__ for d in dtypes)} array of shape {shape}, "
                 f"got {a.dtype} {a.shape}"
             )
+
+
+# ---------------------------------------------------------------------------------------------- generators
+_capsule_pointer = ctypes.PYFUNCTYPE(ctypes.c_void_p, ctypes.py_object, ctypes.c_char_p)(
+    ("PyCapsule_GetPointer", ctypes.pythonapi)
+)
+
+
+def _bitgen_address(g: np.random.Generator | None) -> int:
+    """Address of the C ``bitgen_t`` of ``g``'s bit generator when it is a ``PCG64``; 0 otherwise.
+
+    It is the pointer in the bit generator's ``capsule`` (``numpy/random/bitgen.h``), the struct that
+    ``Generator`` itself calls (``bitgen->next_double(bitgen->state)``); it lives inside the bit
+    generator object, so it stays valid while ``g`` is referenced.
+    """
+    if g is None or type(g.bit_generator) is not np.random.PCG64:
+        return 0
+    address: int | None = _capsule_pointer(g.bit_generator.capsule, b"BitGenerator")
+    return address or 0
+
+
+class GeneratorTable:
+    """The generators of ``n`` sub-environments (``None`` until set) and the addresses of their C bit generators.
+
+    Indexing reads and sets generators like a list; setting one records its address in :attr:`bitgens`
+    (0 for ``None`` or a bit generator other than ``PCG64``), and the table keeps a reference to every
+    generator it holds, so each address stays valid as long as the table holds it. :attr:`drawable`
+    says whether every row has an address, i.e. whether :func:`step_rows` may draw from
+    :attr:`bitgens` (else the caller draws with ``Generator.random``). Pickling and deep copies copy the
+    generators and compute the copies' addresses anew (an address is only good in its own process and
+    for its own object).
+
+    The compiled draws do not take a generator's lock (its methods do): do not draw from these
+    generators in another thread while the environment steps.
+    """
+
+    __slots__ = ("_addresses", "_generators", "_missing", "bitgens")
+
+    def __init__(self, generators: Sequence[np.random.Generator | None]) -> None:
+        n = len(generators)
+        self._generators: list[np.random.Generator | None] = [None] * n
+        self._addresses: NDArray[np.uintp] = np.zeros(n, dtype=np.uintp)
+        #: the addresses, one per row (0: none), a read-only view (only setting a generator changes them)
+        self.bitgens: NDArray[np.uintp] = self._addresses.view()
+        self.bitgens.flags.writeable = False
+        self._missing = n
+        for i, g in enumerate(generators):
+            self[i] = g
+
+    def __len__(self) -> int:
+        return len(self._generators)
+
+    def __getitem__(self, i: SupportsIndex) -> np.random.Generator | None:
+        return self._generators[i]
+
+    def __setitem__(self, i: SupportsIndex, g: np.random.Generator | None) -> None:
+        address = _bitgen_address(g)
+        self._missing += (address == 0) - (int(self._addresses[i]) == 0)
+        self._generators[i] = g
+        self._addresses[i] = address
+
+    def __iter__(self) -> Iterator[np.random.Generator | None]:
+        return iter(self._generators)
+
+    @property
+    def drawable(self) -> bool:
+        """Whether every row has a ``PCG64`` generator, so that :func:`step_rows` can draw from :attr:`bitgens`."""
+        return self._missing == 0
+
+    def __reduce__(self) -> tuple[type[GeneratorTable], tuple[list[np.random.Generator | None]]]:
+        # rebuilt from the (copied) generators: the addresses are computed for the new objects
+        return (GeneratorTable, (self._generators,))

@@ -3,8 +3,11 @@
 ``gym.make_vec("AmigoBot-v0", num_envs=N)`` (or ``vectorization_mode="vector_entry_point"``)
 builds :class:`AmigoBotVectorEnv`: ``N`` robots stepped together by the same pure, batched
 functions of :mod:`amigo_gym.task` that the single environment calls, with no Python loop over
-the environments on the step path (loops run only over the environments being reset, to draw
-their start perturbations from their own generators).
+the environments on the step path. Restarting robots draw their start perturbations from their own
+generators: with the compiled kernel, inside it (:func:`amigo_gym.fast.step_rows` with the table of
+generators, :class:`amigo_gym.fast.GeneratorTable`); otherwise (the numpy path, or a generator that is
+not ``PCG64``) by a Python loop of ``Generator.random`` over them. The two give the same numbers and
+leave the generators in the same states.
 
 For the same seed it reproduces ``gym.make_vec(..., vectorization_mode="sync")`` bit for bit:
 observations, rewards, terminations, truncations and infos (in the vector format with ``_key``
@@ -16,7 +19,7 @@ masks), across autoresets and truncations, in the ``NEXT_STEP`` (default), ``SAM
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -36,7 +39,7 @@ from amigo_gym.envs.amigobot import (
     parse_pose_option,
 )
 from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
+from amigo_gym.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = [
@@ -131,7 +134,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
         self._k = task.task_constants(p)
         self._initial_rates = task.initial_wheel_rates(p)
-        self._rngs: list[np.random.Generator | None] = [None] * n
+        # the generators, with the addresses of their C bit generators for the kernel's draws
+        self._rngs = fast.GeneratorTable([None] * n)
         self._seeds: list[int | None] = [None] * n
         # the state as (N,) columns, stepped by the same column functions as the single env; with the
         # compiled kernel, the columns are views of one (N, 8) array that the kernel updates in place
@@ -148,6 +152,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
+        self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the kernel's restart mask when none restarts
+        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
         self._trail: Array | None = None  # ring buffer (trail_length, N, 2), allocated when first used
         self._trail_count = 0  # positions written so far
@@ -215,7 +221,12 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
 
     def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
         """Start states of the robots ``idx`` (compact columns): a drawn pose (or ``pose_opt``'s rows),
-        wheel angles 0, the initial rates."""
+        wheel angles 0, the initial rates.
+
+        The Python loop here is the reference of the draws that :func:`amigo_gym.fast.step_rows` makes
+        in the kernel for ``NEXT_STEP`` restarts (:func:`amigo_gym._kernels.draw_starts`): the same
+        numbers, start states and generator states afterwards (``tests/test_kernel_draws.py``).
+        """
         m = len(idx)
         if pose_opt is not None:
             pose = pose_opt[idx]
@@ -319,35 +330,51 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
     def _step_kernel(
         self, ws: fast.Workspace, a: Array, mode: AutoresetMode
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results."""
+        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results.
+
+        Restarting robots (``NEXT_STEP``) get their start states inside the kernel's step, drawn from
+        their generators' C bit generators (:attr:`amigo_gym.fast.GeneratorTable.bitgens`), when every
+        generator is a ``PCG64``; otherwise from :meth:`_start_states` (the Python loop). Both give the
+        numpy path's numbers and leave the generators in the same states.
+        """
         n = self.num_envs
-        self._steps += 1
+        restart = self._no_restart
+        bitgens = None
         idx = None
-        restart = np.zeros(n, dtype=np.bool_)
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             # as in the numpy path: the start states replace these rows, evaluated without moving
-            idx = np.flatnonzero(self._autoreset)
-            _set_rows(self._state, self._start_states(idx), idx)
-            restart[idx] = True
-            self._steps[idx] = 0
-            if self.render_mode is not None:
-                self._trail_start[idx] = self._trail_count
+            restart = self._autoreset  # a new array at every step (_finish_step), not changed before then
+            if self._rngs.drawable:
+                bitgens = self._rngs.bitgens
+            else:
+                idx = np.flatnonzero(restart)
+                _set_rows(self._state, self._start_states(idx), idx)
         obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
         reward = np.empty(n)
         terminated: BoolArray = np.empty(n, dtype=np.bool_)
         record = np.empty((n, 16))
         a = np.ascontiguousarray(a)
-        fast.step_rows(ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel)
-        beta = self._rows[:, 2]
-        if beta.max() > HEADING_LIMIT or beta.min() < -HEADING_LIMIT:
+        # the env's own arrays, of the workspace's shapes and dtypes (validated actions): no checks per step
+        report = fast.step_rows_unchecked(
+            ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens
+        )
+        if bitgens is not None:
+            idx = ws.rows[: report.drawn].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
+        # steps += 1, 0 for the restarted rows; truncated = steps >= max_episode_steps; time = steps * dt
+        truncated: BoolArray = np.empty(n, dtype=np.bool_)
+        time = np.empty(n)
+        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
+        fast.kernels().count_steps(
+            self._steps, self._no_rows if idx is None else idx, limit, self._k.dt, truncated, time
+        )
+        if idx is not None and self.render_mode is not None:
+            self._trail_start[idx] = self._trail_count
+        if report.past_limit:
             # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
             # state and in the info's pose
             bounded = np.asarray(task.bound_heading(self._state).beta)
-            beta[:] = bounded
+            self._rows[:, 2] = bounded
             record[:, 2] = bounded
-        truncated = (
-            self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
-        )
         # the infos are views of the record, a new array at every step (the single env's keys)
         infos = {
             "pose": record[:, 0:3],
@@ -357,7 +384,7 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
             "wheel_angles": record[:, 8:10],
             "castor_angle": record[:, 10],
             "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
-            "time": self._steps * self._k.dt,
+            "time": time,
         }
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
@@ -370,7 +397,8 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         infos: dict[str, Any],
         idx: NDArray[np.intp] | None,
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Autoreset bookkeeping of a step (both implementations)."""
+        """Autoreset bookkeeping of a step (both implementations); ``idx`` the robots that started a new
+        episode at this step instead of stepping (``NEXT_STEP``)."""
         n = self.num_envs
         mode = self.autoreset_mode
         if idx is not None:
@@ -447,7 +475,11 @@ class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[A
         return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
+        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
+
+        The generators are copied with their table, which computes the copies' addresses anew
+        (:class:`amigo_gym.fast.GeneratorTable`): a copy draws from its own generators only.
+        """
         state = self.__dict__.copy()
         state["_renderers"] = []
         return state
@@ -585,23 +617,40 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
     """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
 
     ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
-    native vector envs of AmigoBot-v0 and -v1.
+    native vector envs of AmigoBot-v0 and -v1. Every ``_key`` mask is an array of its own, as in
+    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once).
     """
-    every = np.ones(n, dtype=np.bool_) if mask is None else mask
+    masks = np.empty((_mask_count(infos), n), dtype=np.bool_)
+    masks[...] = True if mask is None else mask
+    return _scatter_into(infos, mask, n, iter(masks))
+
+
+def _mask_count(infos: dict[str, Any]) -> int:
+    """How many ``_key`` masks :func:`scatter_infos` gives ``infos`` (nested dicts included)."""
+    count = 0
+    for k, v in infos.items():
+        if k.startswith("_") or k in ("final_obs", "final_info"):
+            continue
+        count += 1 + (_mask_count(v) if isinstance(v, dict) else 0)
+    return count
+
+
+def _scatter_into(infos: dict[str, Any], mask: BoolArray | None, n: int, masks: Iterator[BoolArray]) -> dict[str, Any]:
+    """:func:`scatter_infos` with the ``_key`` masks taken from ``masks`` in order."""
     out: dict[str, Any] = {}
     for k, v in infos.items():
         if k.startswith("_") or k in ("final_obs", "final_info"):
             out[k] = v
             continue
         if isinstance(v, dict):
-            out[k] = scatter_infos(v, mask, n)
+            out[k] = _scatter_into(v, mask, n, masks)
         elif mask is None:
             out[k] = v
         else:
             full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
             full[mask] = v
             out[k] = full
-        out[f"_{k}"] = every.copy()  # a mask of its own per key
+        out[f"_{k}"] = next(masks)  # a mask of its own per key
     return out
 
 
