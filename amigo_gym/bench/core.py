@@ -232,25 +232,31 @@ class Startup:
     Attributes:
         import_s: ``python -c "import amigo_gym"``.
         python_s: ``python -c "pass"`` (the interpreter alone), for reference.
-        kernel_cold_s: import plus the first kernel step with an empty numba cache (compiles).
+        kernel_cold_s: import, ``gym.make_vec("AmigoBot-v0", num_envs=4)`` (the compiled v0 kernel), reset and
+            the first step, with an empty numba cache (compiles).
         kernel_warm_s: the same with the cache the cold run wrote (a second process).
+        v1_cold_s: import, ``gym.make("AmigoBot-v1")`` (the compiled v1 step), reset and the first step, with an
+            empty numba cache.
+        v1_warm_s: the same, second process.
     """
 
     import_s: float
     python_s: float
     kernel_cold_s: float | None
     kernel_warm_s: float | None
+    v1_cold_s: float | None = None
+    v1_warm_s: float | None = None
 
 
 _FIRST_STEP = (
-    "import numpy as np, amigo_gym\n"
-    "from amigo_gym import fast, task\n"
-    "from amigo_gym.paths import make_path\n"
-    "p = amigo_gym.EnvParams(); n = 4\n"
-    "ws = fast.workspace(task.task_constants(p), make_path(p), n)\n"
-    "no = np.zeros(n, np.bool_)\n"
-    "fast.step_rows(ws, np.zeros((n, 8)), np.zeros((n, 2)), no, np.empty((n, task.obs_dim(p)), np.float32),\n"
-    "               np.empty(n), no.copy(), np.empty((n, 16)))\n"
+    "import numpy as np, gymnasium as gym, amigo_gym\n"
+    "e = gym.make_vec('AmigoBot-v0', num_envs=4, vectorization_mode='vector_entry_point', kernel='numba')\n"
+    "e.reset(seed=0); e.step(np.zeros((4, 2), np.float32))\n"
+)
+_FIRST_STEP_V1 = (
+    "import numpy as np, gymnasium as gym, amigo_gym\n"
+    "e = gym.make('AmigoBot-v1', kernel='numba')\n"
+    "e.reset(seed=0); e.step(np.zeros(2, np.float32))\n"
 )
 
 
@@ -260,22 +266,29 @@ def _wall(code: str, env: dict[str, str] | None = None) -> float:
     return time.perf_counter() - t0
 
 
+def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
+    """Median wall times of ``code`` in a fresh process with an empty numba cache, then with the one it wrote."""
+    colds, warms = [], []
+    for _ in range(repeats):
+        with tempfile.TemporaryDirectory() as cache:
+            env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+            colds.append(_wall(code, env))
+            warms.append(_wall(code, env))
+    return statistics.median(colds), statistics.median(warms)
+
+
 def bench_startup(repeats: int = 3) -> Startup:
-    """Time fresh processes: the import, and the kernel's first step from an empty then a filled cache."""
+    """Time fresh processes: the import, and the first compiled steps (v0 vector, v1 single) from an empty then a
+    filled numba cache."""
     from amigo_gym.fast import numba_available
 
     py = statistics.median(_wall("pass") for _ in range(repeats))
     imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
-    cold = warm = None
-    if numba_available():
-        colds, warms = [], []
-        for _ in range(repeats):
-            with tempfile.TemporaryDirectory() as cache:
-                env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-                colds.append(_wall(_FIRST_STEP, env))
-                warms.append(_wall(_FIRST_STEP, env))
-        cold, warm = statistics.median(colds), statistics.median(warms)
-    return Startup(imp, py, cold, warm)
+    if not numba_available():
+        return Startup(imp, py, None, None)
+    cold, warm = _cold_warm(_FIRST_STEP, repeats)
+    cold1, warm1 = _cold_warm(_FIRST_STEP_V1, repeats)
+    return Startup(imp, py, cold, warm, cold1, warm1)
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
@@ -303,8 +316,10 @@ def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: i
             "|---|---:|",
             f'| python -c "pass" | {startup.python_s:.3f} |',
             f'| python -c "import amigo_gym" | {startup.import_s:.3f} |',
-            f"| import + first kernel step, empty numba cache (compiles) | {_fmt(startup.kernel_cold_s, '.3f')} |",
+            f"| import + first v0 vector step (kernel), empty numba cache | {_fmt(startup.kernel_cold_s, '.3f')} |",
             f"| the same, second process (cached; target < 1) | {_fmt(startup.kernel_warm_s, '.3f')} |",
+            f"| import + first AmigoBot-v1 step (compiled), empty numba cache | {_fmt(startup.v1_cold_s, '.3f')} |",
+            f"| the same, second process (cached; target < 1) | {_fmt(startup.v1_warm_s, '.3f')} |",
         ]
     return "\n".join(lines)
 
