@@ -335,14 +335,21 @@ def _adapter(monitor: Any, adapter: Any, n: int, kw: dict[str, Any]) -> Callable
 
 
 def bench_ppo(
-    timesteps: int, n_envs: int, seed: int = 0, log: Log | None = None, rollout: int = 2048, repeats: int = 3
+    timesteps: int,
+    n_envs: int,
+    seed: int = 0,
+    log: Log | None = None,
+    rollout: int = 2048,
+    repeats: int = 3,
+    v1: bool = False,
 ) -> list[PPORow]:
     """PPO training throughput on AmigoBot-v0 and Pendulum-v1 with the same settings, 1 and ``n_envs`` envs.
 
     PPO: ``MlpPolicy``, ``n_steps = rollout // n_envs`` (at least 32; ``timesteps`` rounded up to whole
     rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, one torch thread (so that torch's threads do
     not compete with the machine's other load). The AmigoBot and Pendulum runs alternate ``repeats``
-    times; the medians are reported.
+    times; the medians are reported. ``v1=True`` adds ``AmigoBot-v1`` with the task of :data:`V1_HARD` through
+    the native adapter (``n_envs`` envs, the default step implementation).
     """
     import gymnasium as gym
     import torch
@@ -368,6 +375,10 @@ def bench_ppo(
                 label = "AmigoBotSB3VecEnv" + ("" if kern is None else f"(kernel={kern})")
                 kw: dict[str, Any] = {} if kern is None else {"kernel": kern}
                 configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, kw)))
+        if v1:
+            v1_kw: dict[str, Any] = {"env_id": "AmigoBot-v1", **V1_HARD}
+            label = "AmigoBotSB3VecEnv(AmigoBot-v1, mixed paths, hard randomisation)"
+            configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, v1_kw)))
         for m, kind, make in configs:
             n_steps = max(32, rollout // m)
             budget = max(timesteps, n_steps * m)
@@ -563,11 +574,11 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
         ]
     if report is not None and report.ppo:
         out += [
-            "| SB3 PPO learn | AmigoBot-v0 [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) |",
+            "| SB3 PPO learn | AmigoBot [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) |",
             "|---|---:|---:|---:|",
         ]
         for pr in report.ppo:
-            name = f"{pr.n_envs} env(s), AmigoBot via {pr.amigobot_vec}"
+            name = f"{pr.n_envs} env(s), AmigoBot{'' if 'v1' in pr.amigobot_vec else '-v0'} via {pr.amigobot_vec}"
             out.append(f"| {name} | {pr.amigobot:.0f} | {pr.pendulum:.0f} | {pr.ratio:.2f} |")
         out.append("")
     if report is not None and report.v1 is not None:
@@ -694,7 +705,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             else:
                 _log(f"SB3 PPO learn, {ppo_steps} steps per run")
                 rollout, rounds = (64, 1) if args.quick else (2048, args.ppo_repeats)
-                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=rollout, repeats=rounds)
+                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=rollout, repeats=rounds, v1=args.v1)
         if args.v1:
             _log("AmigoBot-v1 vs v0")
             rep.v1 = bench_v1(sizes, repeats, min_time)
