@@ -175,7 +175,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         # the compiled step (amigo_gym.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: Any = None
         compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
-        if compiled and fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel):
+        if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
             from amigo_gym.fast_v1_batch import BatchKernel
 
             self._batch = BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
