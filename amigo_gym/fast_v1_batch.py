@@ -10,7 +10,10 @@ is the Python float code of :mod:`amigo_gym.tracking`: see :mod:`amigo_gym.fast_
 3. one compiled loop steps every row (:func:`amigo_gym._kernels_v1.step`), each on its own path, ring and
    workspace row, and copies the arguments of the three reward exponentials to an ``(N, 3)`` block;
 4. ``np.exp`` of that block (numpy's, as the reference); the caller forms the reward terms and the reward with
-   the single environment's operations (:meth:`BatchKernel.rewards`).
+   the single environment's operations (:func:`reward_terms`).
+
+Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
+compiled :func:`amigo_gym._kernels_v1.evaluate`, as the single environment's reset.
 
 So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv`` of single
 envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
@@ -31,7 +34,7 @@ from numpy.typing import NDArray
 from amigo_gym import fast_v1, tracking
 from amigo_gym.paths.clothoid import ClothoidPath
 
-__all__ = ["PathArena", "BatchKernel"]
+__all__ = ["PathArena", "BatchKernel", "reward_terms"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -121,14 +124,12 @@ class BatchKernel:
         consts: :func:`amigo_gym.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
         ws: ``(n, len(WS_FIELDS) + WS_SCRATCH)`` float64, the rows' workspaces.
         keys: ``(n,)`` uint64, the episodes' keys of the per-step draws.
-        exps: ``(n, 3)`` float64, after :meth:`step`: ``exp`` of the track, speed and smoothness arguments.
     """
 
     def __init__(self, k: tracking.Constants, n: int, parallel: bool = False) -> None:
         self._k = k
         self._row = fast_v1.StepKernel(k)  # the single robot's loader (its workspace: one row's staging)
         self.consts: Array = self._row.consts
-        self.smooth_weight = k.params.smooth_weight
         self.parallel = parallel
         self.arena = PathArena(n)
         self.ws: Array = np.zeros((n, len(fast_v1.WS_FIELDS) + fast_v1.WS_SCRATCH))
@@ -138,7 +139,6 @@ class BatchKernel:
         self._u1: Array = np.ones((n, m))
         self._logs: Array = np.zeros((n, m))
         self._args: Array = np.zeros((n, 3))
-        self.exps: Array = np.zeros((n, 3))
         self._bind()
 
     def _bind(self) -> None:
@@ -181,7 +181,37 @@ class BatchKernel:
             self.noise_on[i] = one.noise_on
         self.arena.assign(rows, paths)
 
-    def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> None:
+    def progress(self, path: Any, x: float, y: float, hint: float) -> float:
+        """H's progress [m] (:data:`amigo_gym.tracking.ProgressFn`): :meth:`amigo_gym.fast_v1.StepKernel.progress`."""
+        return self._row.progress(path, x, y, hint)
+
+    def start(
+        self,
+        rows: Sequence[int],
+        paths: Sequence[ClothoidPath],
+        states: Sequence[tracking.State],
+        episodes: Sequence[tracking.Episode],
+        obs: NDArray[np.floating[Any]],
+    ) -> Array:
+        """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.tracking.reset_columns`,
+        compiled: :func:`amigo_gym._kernels_v1.evaluate`, as the single env's reset).
+
+        Args:
+            obs: ``(len(rows), D)``, written: the rows' observations.
+
+        Returns:
+            ``(len(rows), 3)``: ``np.exp`` of the rows' track, speed and smoothness arguments.
+        """
+        self.load(rows, paths, states, episodes)
+        c = self.consts
+        flat, starts, stops = self.arena.flat, self.arena.starts, self.arena.stops
+        for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
+            v_true, t = tracking.start_speed_time(st, ep)
+            self._row.evaluate(c, flat[starts[i] : stops[i]], self.ws[i], obs[j], v_true, st.a1, st.a2, t)
+        args = self.ws[np.asarray(rows, dtype=np.intp), fast_v1.W_ARG_T : fast_v1.W_ARG_S + 1]  # a C-contiguous copy
+        return np.exp(args)
+
+    def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
         """Step every row (:func:`amigo_gym.tracking.step_columns` of each, the single robot's compiled step).
 
         Args:
@@ -189,7 +219,9 @@ class BatchKernel:
             a1, a2: ``(n,)`` float64, the validated actions [-] (clipped in the step).
             obs: ``(n, D)`` C-contiguous, written (float32 for the env).
 
-        Afterwards the rows of :attr:`ws` hold the new states and the outputs, :attr:`exps` the exponentials.
+        Returns:
+            ``(n, 3)``: ``np.exp`` of the track, speed and smoothness arguments (the rows of :attr:`ws` hold the
+            new states and the other outputs).
         """
         c = self.consts
         ws = self.ws
@@ -200,16 +232,11 @@ class BatchKernel:
             self._noise_rows(c, ws, self.keys, self._u1)
         a = self.arena
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, self._args)
-        np.exp(self._args, out=self.exps)
+        return np.exp(self._args)
 
-    def rewards(self) -> tuple[Array, Array, Array, Array, Array]:
-        """The reward terms ``(track, speed, heading, smooth)`` and the reward ``(n,)`` of the last :meth:`step`,
-        by the operations of :func:`amigo_gym.task.reward_term_columns` and :func:`amigo_gym.tracking.evaluate_columns`
-        on the exponentials (:attr:`exps`) and the heading term of the rows."""
-        e = self.exps
-        track = e[:, 0].copy()
-        speed = e[:, 1].copy()
-        heading = self.ws[:, fast_v1.W_HEADING].copy()
-        smooth = 1.0 - self.smooth_weight * (1.0 - e[:, 2])
-        reward = ((track * speed) * heading) * smooth
-        return track, speed, heading, smooth, reward
+
+def reward_terms(exps: Array, heading: Array, smooth_weight: float) -> tuple[Array, Array, Array, Array]:
+    """The reward terms ``(track, speed, heading, smooth)`` ``(m,)`` from ``exps (m, 3)`` (:meth:`BatchKernel.step`)
+    and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.reward_term_columns` (as
+    :meth:`amigo_gym.envs.AmigoBotV1Env._kernel_info`). The reward is their product, in that order."""
+    return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), 1.0 - smooth_weight * (1.0 - exps[:, 2])

@@ -32,7 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, tracking
+from amigo_gym import fast_v1, fast_v1_batch, tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
 from amigo_gym.envs.vector import (
@@ -63,7 +63,7 @@ KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
 _W_X, _W_BETA, _W_HX, _W_HY = fast_v1.W_X, fast_v1.W_BETA, fast_v1.W_HX, fast_v1.W_HY
 _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v1.W_AL2
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
-_W_MX, _W_MB, _W_CMD1, _W_CMD2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_CMD1, fast_v1.W_CMD2
+_W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
 
 
@@ -176,9 +176,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         self._batch: Any = None
         compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
         if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
-            from amigo_gym.fast_v1_batch import BatchKernel
-
-            self._batch = BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
+            self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
         self._ring_step = 0
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
@@ -232,33 +230,66 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         return obs.copy(), infos
 
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only)."""
+        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
+
+        Returns:
+            the rows' observations ``(m, D)`` and their compact infos (``(m, ...)`` arrays).
+        """
+        if self._batch is not None:
+            return self._begin_rows_kernel(idx, pose_opt)
         k = self._k
         m = len(idx)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
         cols: dict[str, list[Any]] = {}
         paths = []
-        begun = []
         for j, i in enumerate(idx.tolist()):
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
             b = tracking.begin_episode(self._rng(i), k, pose)
-            begun.append(b)
             paths.append(b.path)
-            self.path_infos[i] = b.path_info
-            for name in _STATE_FIELDS:
-                np.asarray(getattr(self._state, name))[i] = getattr(b.state, name)
-            for name in _EPISODE_FIELDS:
-                np.asarray(getattr(self._episode, name))[i] = getattr(b.episode, name)
-            self._ring[i, :, 0] = b.state.a1 * k.w_max
-            self._ring[i, :, 1] = b.state.a2 * k.w_max
+            self._set_row(i, b.path_info, b.state, b.episode)
             obs[j] = b.outcome.obs
             for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
                 cols.setdefault(key, []).append(value)
             self._trails[i] = [(float(b.outcome.h_x), float(b.outcome.h_y))]
         self.paths.replace(idx, paths)
-        if self._batch is not None:
-            self._batch.load(idx.tolist(), paths, [b.state for b in begun], [b.episode for b in begun])
         return obs, {key: _stack(v) for key, v in cols.items()}
+
+    def _begin_rows_kernel(
+        self, idx: NDArray[np.intp], pose_opt: Array | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
+        :func:`tracking.start_episode` (H's projections compiled), its start state evaluated by the compiled
+        :func:`amigo_gym.tracking.reset_columns` (:meth:`amigo_gym.fast_v1_batch.BatchKernel.start`), the
+        infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
+        b = self._batch
+        rows = idx.tolist()
+        paths, states, episodes = [], [], []
+        for i in rows:
+            pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
+            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress)
+            self._set_row(i, info, st, ep)
+            paths.append(path)
+            states.append(st)
+            episodes.append(ep)
+        self.paths.replace(idx, paths)
+        obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
+        exps = b.start(rows, paths, states, episodes, obs)
+        infos = self._kernel_infos(idx, exps, None)
+        for i, (hx, hy) in zip(rows, infos["h_position"].tolist(), strict=True):
+            self._trails[i] = [(hx, hy)]
+        return obs, infos
+
+    def _set_row(self, i: int, path_info: dict[str, Any], st: tracking.State, ep: tracking.Episode) -> None:
+        """Robot ``i`` starts the episode ``ep`` at ``st``: its columns, command ring and path description."""
+        w_max = self._k.w_max
+        self.path_infos[i] = path_info
+        for name in _STATE_FIELDS:
+            np.asarray(getattr(self._state, name))[i] = getattr(st, name)
+        for name in _EPISODE_FIELDS:
+            np.asarray(getattr(self._episode, name))[i] = getattr(ep, name)
+        # the command the robot was executing before the first step: its wheels' state (0 at rest)
+        self._ring[i, :, 0] = st.a1 * w_max
+        self._ring[i, :, 1] = st.a2 * w_max
 
     # ------------------------------------------------------------------ step
     def step(
@@ -347,16 +378,30 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         :meth:`_batch_info`)."""
         b = self._batch
         obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
-        b.step(self._ring, self._ring_step, a1, a2, obs)
+        exps = b.step(self._ring, self._ring_step, a1, a2, obs)
         steps = self._state.steps
         np.add(steps, 1, out=steps)
-        track, speed, heading, smooth, reward = b.rewards()
-        ws: Array = b.ws
+        infos = self._kernel_infos(slice(None), exps, b.ws[:, _W_SLIP1 : _W_SLIP2 + 1].copy())
+        terms = infos["reward_terms"]
+        reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
+        terminated: BoolArray = b.ws[:, _W_TERM] != 0.0
+        return obs, reward, terminated, infos, infos["h_position"][:, 0], infos["h_position"][:, 1]
+
+    def _kernel_infos(self, rows: NDArray[np.intp] | slice, exps: Array, slip: Array | None) -> dict[str, Any]:
+        """The compact infos of ``rows`` from the compiled step's workspace rows: :meth:`_row_info`'s entries with
+        the same dtypes and values, as the reference forms them.
+
+        Args:
+            rows: the robots (``slice(None)``: all). exps: ``(m, 3)`` ``exp`` of their reward arguments (track,
+                speed, smoothness). slip: ``(m, 2)`` this step's slips; ``None``: zeros (a start state).
+        """
+        ws: Array = self._batch.ws[rows]
         ep = self._episode
         dt = self.params.dt
         v_true = ws[:, _W_VT].copy()
         v_ref = ws[:, _W_VREF].copy()
-        infos = {
+        terms = fast_v1_batch.reward_terms(exps, ws[:, fast_v1.W_HEADING], self.params.smooth_weight)
+        return {
             "pose": ws[:, _W_X : _W_BETA + 1].copy(),
             "h_position": ws[:, _W_HX : _W_HY + 1].copy(),
             "cross_track_error": ws[:, _W_E].copy(),
@@ -365,18 +410,16 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             "reference_speed": v_ref,
             "speed_error": v_true - v_ref,
             "wheel_rates": ws[:, _W_W1 : _W_W2 + 1].copy(),
-            "command": ws[:, _W_CMD1 : _W_CMD2 + 1].copy(),
+            "command": ws[:, _W_A1 : _W_A2 + 1] * self._k.w_max,
             "wheel_angles": ws[:, _W_AL1 : _W_AL2 + 1].copy(),
             "measured_pose": ws[:, _W_MX : _W_MB + 1].copy(),
-            "reward_terms": dict(zip(tracking.REWARD_TERMS, (track, speed, heading, smooth), strict=True)),
-            "time": steps * dt,
-            "true_robot": {"r1": np.array(ep.r1), "r2": np.array(ep.r2), "l1": np.array(ep.l1)},
-            "delay": ep.lag * dt + ep.t_switch,
-            "slip": ws[:, _W_SLIP1 : _W_SLIP2 + 1].copy(),
+            "reward_terms": dict(zip(tracking.REWARD_TERMS, terms, strict=True)),
+            "time": np.asarray(self._state.steps)[rows] * dt,
+            "true_robot": {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
+            "delay": np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
+            "slip": np.zeros((ws.shape[0], 2)) if slip is None else slip,
             "end_of_path": ws[:, _W_END].copy(),
         }
-        terminated: BoolArray = ws[:, _W_TERM] != 0.0
-        return obs, reward, terminated, infos, infos["h_position"][:, 0], infos["h_position"][:, 1]
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
         """The state columns as views of the compiled step's workspace rows (``steps``: the int64 counter,
