@@ -61,6 +61,13 @@ class PathArena:
         self._live: dict[int, list[Any]] = {}
         self._dead = 0  # entries of the arena that no live path owns
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # the paths are new objects: key them by their new ids
+        self.__dict__.update(state)
+        new = {oid: id(entry[0]) for oid, entry in self._live.items()}
+        self._live = {new[oid]: entry for oid, entry in self._live.items()}
+        self._row_ids = [new[oid] if oid else 0 for oid in self._row_ids]
+
     def assign(self, rows: Sequence[int], paths: Sequence[ClothoidPath]) -> None:
         """Rows ``rows`` take ``paths`` (one each, built-in :class:`ClothoidPath` objects)."""
         for i, path in zip(rows, paths, strict=True):
@@ -99,11 +106,8 @@ class PathArena:
         self.flat = np.zeros(max(1024, 2 * (self.used - self._dead)))
         self.used = 0
         self._dead = 0
-        moved: dict[int, int] = {}  # old start -> new start
         for entry in self._live.values():
-            start, stop = self._append(old[entry[1] : entry[2]])
-            moved[entry[1]] = start
-            entry[1], entry[2] = start, stop
+            entry[1], entry[2] = self._append(old[entry[1] : entry[2]])
         for i, oid in enumerate(self._row_ids):
             if oid:
                 entry = self._live[oid]

@@ -287,3 +287,19 @@ def test_path_arena_rows_read_their_paths() -> None:
     assert compacted
     live = {id(q): q for q in rows if q is not None}
     assert arena.used - arena._dead == sum(fast_v1.flat_path(q).size for q in live.values())
+
+
+def test_path_arena_survives_pickling() -> None:
+    from amigo_gym import tracking
+    from amigo_gym.fast_v1_batch import PathArena
+
+    p = tracking.make_tracking_params("t", None, path="random")
+    pool = [tracking.random_pool_path(p, i) for i in range(6)]
+    arena = PathArena(4)
+    arena.assign([0, 1, 2, 3], [pool[0], pool[1], pool[0], pool[2]])
+    clone, paths = pickle.loads(pickle.dumps((arena, pool)))
+    assert sorted(clone._live) == sorted({id(paths[0]), id(paths[1]), id(paths[2])})
+    clone.assign([1, 3], [paths[0], paths[5]])  # row 1 joins a live path, row 3 takes a new one
+    for i, q in enumerate([paths[0], paths[0], paths[0], paths[5]]):
+        np.testing.assert_array_equal(clone.flat[clone.starts[i] : clone.stops[i]], fast_v1.flat_path(q))
+    assert clone._live[id(paths[0])][3] == 3 and id(paths[1]) not in clone._live
