@@ -303,3 +303,21 @@ def test_path_arena_survives_pickling() -> None:
     for i, q in enumerate([paths[0], paths[0], paths[0], paths[5]]):
         np.testing.assert_array_equal(clone.flat[clone.starts[i] : clone.stops[i]], fast_v1.flat_path(q))
     assert clone._live[id(paths[0])][3] == 3 and id(paths[1]) not in clone._live
+
+
+def test_warm_cache_start_is_quick() -> None:
+    """A second process loads the batch loops from numba's disk cache (no compilation): building the env, the first
+    reset and the first step (numba's import and set-up included) in well under two seconds."""
+    import subprocess
+    import sys
+
+    code = (
+        "import time; import numpy as np; from amigo_gym.envs import AmigoBotV1VectorEnv; t = time.perf_counter(); "
+        "e = AmigoBotV1VectorEnv(4, kernel='numba', randomize='hard'); e.reset(seed=0); e.step(np.zeros((4, 2))); "
+        "print(time.perf_counter() - t)"
+    )
+    warm = AmigoBotV1VectorEnv(4, kernel="numba", randomize="hard")  # compiled (and cached) here at the latest
+    warm.reset(seed=0)
+    warm.step(np.zeros((4, 2)))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert float(out.stdout.strip().splitlines()[-1]) < 1.5
