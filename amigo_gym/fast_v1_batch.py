@@ -44,12 +44,16 @@ class PathArena:
     """The flattened paths of ``n`` rows in one float64 array: row ``i``'s is ``flat[starts[i]:stops[i]]``.
 
     Each distinct path (by object) is stored once, while a row uses it; a new path is appended (the arena grows
-    by doubling), and the arena is compacted when more than half of it belongs to paths no row uses any more.
+    by doubling), and the arena is compacted when more than half of it (and over :attr:`COMPACT_MIN` entries)
+    belongs to paths no row uses any more. Built at resets, never in a step.
 
     Attributes:
         flat: the arena (its length is the capacity; entries past :attr:`used` are free).
         starts, stops: ``(n,)`` int64, each row's slice (``0, 0`` until a path is assigned).
     """
+
+    #: the arena is compacted only once this many entries are dead (and more than the live ones)
+    COMPACT_MIN = 4096
 
     def __init__(self, n: int) -> None:
         self.flat: Array = np.zeros(1024)
@@ -86,7 +90,7 @@ class PathArena:
             self._row_ids[i] = id(path)
             self.starts[i] = got[1]
             self.stops[i] = got[2]
-        if self._dead > 4096 and 2 * self._dead > self.used:
+        if self._dead > self.COMPACT_MIN and 2 * self._dead > self.used:
             self._compact()
 
     def _append(self, vec: Array) -> tuple[int, int]:

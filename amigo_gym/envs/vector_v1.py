@@ -173,7 +173,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         )
         self._ring = np.zeros((n, self._k.ring_length, 2))
         # the compiled step (amigo_gym.fast_v1_batch) for built-in paths; None: the reference column functions
-        self._batch: Any = None
+        self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
         if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
@@ -262,6 +262,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         :func:`amigo_gym.tracking.reset_columns` (:meth:`amigo_gym.fast_v1_batch.BatchKernel.start`), the
         infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
         b = self._batch
+        assert b is not None
         rows = idx.tolist()
         paths, states, episodes = [], [], []
         for i in rows:
@@ -377,6 +378,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         results, the infos built from the workspace rows (the same keys, dtypes and values as
         :meth:`_batch_info`)."""
         b = self._batch
+        assert b is not None
         obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
         exps = b.step(self._ring, self._ring_step, a1, a2, obs)
         steps = self._state.steps
@@ -395,7 +397,8 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             rows: the robots (``slice(None)``: all). exps: ``(m, 3)`` ``exp`` of their reward arguments (track,
                 speed, smoothness). slip: ``(m, 2)`` this step's slips; ``None``: zeros (a start state).
         """
-        ws: Array = self._batch.ws[rows]
+        assert self._batch is not None
+        ws = self._batch.ws[rows]
         ep = self._episode
         dt = self.params.dt
         v_true = ws[:, _W_VT].copy()
@@ -424,6 +427,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
         """The state columns as views of the compiled step's workspace rows (``steps``: the int64 counter,
         kept beside them)."""
+        assert self._batch is not None
         ws = self._batch.ws
         cols: list[Any] = [ws[:, fast_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
         return tracking.State._make([*cols, steps])
