@@ -15,8 +15,9 @@ is the Python float code of :mod:`amigo_gym.tracking`: see :mod:`amigo_gym.fast_
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
 compiled :func:`amigo_gym._kernels_v1.evaluate`, as the single environment's reset.
 
-So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv`` of single
-envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
+Both numpy calls take and write C-contiguous blocks, like the reference's arrays (numpy may pick its loop by
+memory layout). So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv``
+of single envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
 (:func:`amigo_gym.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
 ``arena.flat[starts[i]:stops[i]]``.
 
