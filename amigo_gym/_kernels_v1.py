@@ -54,6 +54,8 @@ this file: see :data:`LAYOUT_FINGERPRINT`.
 from __future__ import annotations
 
 import math
+import types
+from collections.abc import Callable
 
 import numba
 import numpy as np
@@ -835,3 +837,72 @@ def step(
     ws[W_CMD1] = cmd1
     ws[W_CMD2] = cmd2
     _evaluate(c, pv, ws, obs, v_true, prev1, prev2, steps * c[C_DT], ws[W_NX], ws[W_NY], ws[W_NB], ws[W_NR1], ws[W_NR2])
+
+
+# ----------------------------------------------------------------------------------------- N robots
+# The batch of :class:`amigo_gym.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
+# :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``
+# between the two loops and numpy's ``exp`` after the second (as for one robot). They live in this file so
+# that numba's disk cache, keyed on this file, is invalidated with the row functions they call. Each loop is
+# written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under another name).
+
+
+def _noise_rows(c: F64, ws: F64, keys: NDArray[np.uint64], u1: F64) -> None:
+    """:func:`noise_uniforms` of every row of ``ws (N, W)`` that draws per step, at its own step counter.
+
+    Copies each such row's uniforms ``u1`` into ``u1 (N, n_normal)`` (C-contiguous: the caller takes
+    ``np.log`` of the whole block, then passes it to :func:`_step_rows`). Rows that draw nothing are left alone.
+    """
+    for i in numba.prange(ws.shape[0]):
+        row = ws[i]
+        if row[W_NOISE_ON] != 0.0:
+            on = noise_uniforms(c, row, keys[i], int(row[W_STEPS]))
+            for j in range(on):
+                u1[i, j] = row[S_U1 + j]
+
+
+def _step_rows(
+    c: F64,
+    flat: F64,
+    starts: NDArray[np.int64],
+    stops: NDArray[np.int64],
+    rings: F64,
+    ws: F64,
+    obs: NDArray[np.floating],
+    ring_step: int,
+    a1: F64,
+    a2: F64,
+    logs: F64,
+    args: F64,
+) -> None:
+    """:func:`step` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L, 2)``,
+    its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``.
+
+    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first;
+    the arguments of the three reward exponentials are copied to ``args (N, 3)`` (track, speed, smoothness).
+    """
+    for i in numba.prange(ws.shape[0]):
+        row = ws[i]
+        for j in range(logs.shape[1]):
+            row[S_LOG + j] = logs[i, j]
+        step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
+        args[i, 0] = row[W_ARG_T]
+        args[i, 1] = row[W_ARG_V]
+        args[i, 2] = row[W_ARG_S]
+
+
+def _twin(fn: Callable[..., None], name: str) -> Callable[..., None]:
+    """A copy of ``fn`` named ``name`` (numba caches a compiled function under its name: the serial and the
+    parallel compilation of one loop need two names)."""
+    assert isinstance(fn, types.FunctionType)
+    twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
+    twin.__qualname__ = name
+    twin.__doc__ = fn.__doc__
+    return twin
+
+
+_jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
+noise_rows = _jit(_twin(_noise_rows, "noise_rows"))
+noise_rows_parallel = _jit_parallel(_twin(_noise_rows, "noise_rows_parallel"))
+step_rows = _jit(_twin(_step_rows, "step_rows"))
+step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))

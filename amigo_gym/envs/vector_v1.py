@@ -8,9 +8,17 @@ per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` r
 the robots being reset, which draw their episodes from their own generators with the single environment's
 function (:func:`amigo_gym.tracking.begin_episode`).
 
+With numba (``kernel="auto"`` or ``"numba"``, the extra ``amigo_gym[fast]``) and the built-in path families
+(:class:`amigo_gym.paths.ClothoidPath`), the step is instead the single environment's compiled step
+(:mod:`amigo_gym.fast_v1`) run over the robots in one compiled loop (:class:`amigo_gym.fast_v1_batch.BatchKernel`);
+the state then lives in the rows of its workspace (the ``(N,)`` state columns are views of them). Otherwise
+(``kernel="numpy"``, no numba, a path object of another class) the column functions step the batch; they are
+the reference.
+
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` bit for bit
 (observations, rewards, terminations, truncations and the numeric infos), randomisation included, in the
-``NEXT_STEP`` (default), ``SAME_STEP`` and ``DISABLED`` autoreset modes.
+``NEXT_STEP`` (default), ``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation
+(``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
 """
 
 from __future__ import annotations
@@ -24,7 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import tracking
+from amigo_gym import fast_v1, fast_v1_batch, tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
 from amigo_gym.envs.vector import (
@@ -45,11 +53,18 @@ Array = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 ObsArray = NDArray[np.float32]
 
-#: the numeric info keys, in the single env's order (``path`` is kept per robot in :attr:`path_infos`)
 #: up to this many robots a step runs the float code row by row (cheaper than numpy calls on tiny columns)
 ROWWISE_MAX_N = 12
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
+#: values of the ``kernel=`` keyword (:func:`amigo_gym.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
+KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
+# entries of the compiled step's workspace rows (amigo_gym.fast_v1.WS_FIELDS)
+_W_X, _W_BETA, _W_HX, _W_HY = fast_v1.W_X, fast_v1.W_BETA, fast_v1.W_HX, fast_v1.W_HY
+_W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v1.W_AL2
+_W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
+_W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
+_W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
 
 
 def validate_actions(actions: Any, n: int) -> tuple[Array, Array]:
@@ -81,6 +96,12 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             registration's 600 unless given.
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
+        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed and
+            gives the reference's bits, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
+            functions of :mod:`amigo_gym.tracking`), ``"numba"`` (the compiled step, :mod:`amigo_gym.fast_v1_batch`)
+            or ``"numba-parallel"`` (its loops on numba's threads), as for :class:`amigo_gym.envs.AmigoBotV1Env`
+            and :class:`amigo_gym.envs.AmigoBotVectorEnv`. The compiled step runs the built-in path families;
+            a path object of another class runs the reference. All give the same results bit for bit.
         params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
 
     Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
@@ -99,6 +120,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        kernel: str = "auto",
         *,
         params: Any = None,
         **settings: Any,
@@ -107,6 +129,8 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
 
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
+        if not isinstance(kernel, str) or kernel not in KERNELS:
+            raise ValueError(f"{owner}.kernel must be 'auto', 'numpy', 'numba' or 'numba-parallel', got {kernel!r}")
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
@@ -148,6 +172,12 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             t_brake=z.copy(),
         )
         self._ring = np.zeros((n, self._k.ring_length, 2))
+        # the compiled step (amigo_gym.fast_v1_batch) for built-in paths; None: the reference column functions
+        self._batch: fast_v1_batch.BatchKernel | None = None
+        compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
+        if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
+            self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
+            self._state = self._state_views(self._state.steps)
         self._ring_step = 0
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs.shape[0]), dtype=np.float32)
@@ -200,7 +230,13 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         return obs.copy(), infos
 
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only)."""
+        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
+
+        Returns:
+            the rows' observations ``(m, D)`` and their compact infos (``(m, ...)`` arrays).
+        """
+        if self._batch is not None:
+            return self._begin_rows_kernel(idx, pose_opt)
         k = self._k
         m = len(idx)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
@@ -210,19 +246,51 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
             b = tracking.begin_episode(self._rng(i), k, pose)
             paths.append(b.path)
-            self.path_infos[i] = b.path_info
-            for name in _STATE_FIELDS:
-                np.asarray(getattr(self._state, name))[i] = getattr(b.state, name)
-            for name in _EPISODE_FIELDS:
-                np.asarray(getattr(self._episode, name))[i] = getattr(b.episode, name)
-            self._ring[i, :, 0] = b.state.a1 * k.w_max
-            self._ring[i, :, 1] = b.state.a2 * k.w_max
+            self._set_row(i, b.path_info, b.state, b.episode)
             obs[j] = b.outcome.obs
             for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
                 cols.setdefault(key, []).append(value)
             self._trails[i] = [(float(b.outcome.h_x), float(b.outcome.h_y))]
         self.paths.replace(idx, paths)
         return obs, {key: _stack(v) for key, v in cols.items()}
+
+    def _begin_rows_kernel(
+        self, idx: NDArray[np.intp], pose_opt: Array | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
+        :func:`tracking.start_episode` (H's projections compiled), its start state evaluated by the compiled
+        :func:`amigo_gym.tracking.reset_columns` (:meth:`amigo_gym.fast_v1_batch.BatchKernel.start`), the
+        infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
+        b = self._batch
+        assert b is not None
+        rows = idx.tolist()
+        paths, states, episodes = [], [], []
+        for i in rows:
+            pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
+            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress)
+            self._set_row(i, info, st, ep)
+            paths.append(path)
+            states.append(st)
+            episodes.append(ep)
+        self.paths.replace(idx, paths)
+        obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
+        exps = b.start(rows, paths, states, episodes, obs)
+        infos = self._kernel_infos(idx, exps, None)
+        for i, (hx, hy) in zip(rows, infos["h_position"].tolist(), strict=True):
+            self._trails[i] = [(hx, hy)]
+        return obs, infos
+
+    def _set_row(self, i: int, path_info: dict[str, Any], st: tracking.State, ep: tracking.Episode) -> None:
+        """Robot ``i`` starts the episode ``ep`` at ``st``: its columns, command ring and path description."""
+        w_max = self._k.w_max
+        self.path_infos[i] = path_info
+        for name in _STATE_FIELDS:
+            np.asarray(getattr(self._state, name))[i] = getattr(st, name)
+        for name in _EPISODE_FIELDS:
+            np.asarray(getattr(self._episode, name))[i] = getattr(ep, name)
+        # the command the robot was executing before the first step: its wheels' state (0 at rest)
+        self._ring[i, :, 0] = st.a1 * w_max
+        self._ring[i, :, 1] = st.a2 * w_max
 
     # ------------------------------------------------------------------ step
     def step(
@@ -239,25 +307,15 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
                 f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
             )
-        k = self._k
         self._ring_step += 1
-        if n <= ROWWISE_MAX_N and all(isinstance(p, ClothoidPath) for p in self.paths.paths):
-            st, out, noise = self._step_rowwise(a1, a2)
+        if self._batch is not None:
+            obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
         else:
-            st, out, noise = tracking.step_columns(
-                k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
-            )
-        self._state = tracking.State(*(np.asarray(c) for c in st))
-        obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
-        for j, c in enumerate(out.obs):
-            obs[:, j] = c
-        reward = np.asarray(out.reward, dtype=np.float64).copy()
-        terminated: BoolArray = np.asarray(out.terminated, dtype=np.bool_).copy()
+            obs, reward, terminated, infos, hx, hy = self._step_columns(a1, a2)
         steps = np.asarray(self._state.steps)
         truncated = (
             steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, dtype=np.bool_)
         )
-        infos = self._infos(self._batch_info(out, noise), None)
         restart = None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             restart = np.flatnonzero(self._autoreset)
@@ -286,7 +344,6 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
                     **infos,
                 }
         if self.render_mode is not None:
-            hx, hy = np.asarray(out.h_x), np.asarray(out.h_y)
             fresh = set() if restart is None else set(restart.tolist())
             for i in range(n):
                 if i not in fresh:
@@ -296,6 +353,84 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         self._autoreset = terminated | truncated
         self._obs = obs
         return obs, reward, terminated, truncated, self._scatter(infos, None)
+
+    def _step_columns(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
+        """The step of every robot by the reference column functions (:func:`tracking.step_columns`; row by row
+        up to :data:`ROWWISE_MAX_N` robots): ``(obs, reward, terminated, infos, h_x, h_y)``, infos compact."""
+        n = self.num_envs
+        if n <= ROWWISE_MAX_N and all(isinstance(p, ClothoidPath) for p in self.paths.paths):
+            st, out, noise = self._step_rowwise(a1, a2)
+        else:
+            st, out, noise = tracking.step_columns(
+                self._k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
+            )
+        self._state = tracking.State(*(np.asarray(c) for c in st))
+        obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
+        for j, c in enumerate(out.obs):
+            obs[:, j] = c
+        reward = np.asarray(out.reward, dtype=np.float64).copy()
+        terminated: BoolArray = np.asarray(out.terminated, dtype=np.bool_).copy()
+        infos = self._infos(self._batch_info(out, noise), None)
+        return obs, reward, terminated, infos, np.asarray(out.h_x), np.asarray(out.h_y)
+
+    def _step_kernel(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
+        """:meth:`_step_columns` by the compiled step (:class:`amigo_gym.fast_v1_batch.BatchKernel`): the same
+        results, the infos built from the workspace rows (the same keys, dtypes and values as
+        :meth:`_batch_info`)."""
+        b = self._batch
+        assert b is not None
+        obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
+        exps = b.step(self._ring, self._ring_step, a1, a2, obs)
+        steps = self._state.steps
+        np.add(steps, 1, out=steps)
+        infos = self._kernel_infos(slice(None), exps, b.ws[:, _W_SLIP1 : _W_SLIP2 + 1].copy())
+        terms = infos["reward_terms"]
+        reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
+        terminated: BoolArray = b.ws[:, _W_TERM] != 0.0
+        return obs, reward, terminated, infos, infos["h_position"][:, 0], infos["h_position"][:, 1]
+
+    def _kernel_infos(self, rows: NDArray[np.intp] | slice, exps: Array, slip: Array | None) -> dict[str, Any]:
+        """The compact infos of ``rows`` from the compiled step's workspace rows: :meth:`_row_info`'s entries with
+        the same dtypes and values, as the reference forms them.
+
+        Args:
+            rows: the robots (``slice(None)``: all). exps: ``(m, 3)`` ``exp`` of their reward arguments (track,
+                speed, smoothness). slip: ``(m, 2)`` this step's slips; ``None``: zeros (a start state).
+        """
+        assert self._batch is not None
+        ws = self._batch.ws[rows]
+        ep = self._episode
+        dt = self.params.dt
+        v_true = ws[:, _W_VT].copy()
+        v_ref = ws[:, _W_VREF].copy()
+        terms = fast_v1_batch.reward_terms(exps, ws[:, fast_v1.W_HEADING], self.params.smooth_weight)
+        return {
+            "pose": ws[:, _W_X : _W_BETA + 1].copy(),
+            "h_position": ws[:, _W_HX : _W_HY + 1].copy(),
+            "cross_track_error": ws[:, _W_E].copy(),
+            "progress": ws[:, _W_PROGRESS].copy(),
+            "speed": v_true,
+            "reference_speed": v_ref,
+            "speed_error": v_true - v_ref,
+            "wheel_rates": ws[:, _W_W1 : _W_W2 + 1].copy(),
+            "command": ws[:, _W_A1 : _W_A2 + 1] * self._k.w_max,
+            "wheel_angles": ws[:, _W_AL1 : _W_AL2 + 1].copy(),
+            "measured_pose": ws[:, _W_MX : _W_MB + 1].copy(),
+            "reward_terms": dict(zip(tracking.REWARD_TERMS, terms, strict=True)),
+            "time": np.asarray(self._state.steps)[rows] * dt,
+            "true_robot": {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
+            "delay": np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
+            "slip": np.zeros((ws.shape[0], 2)) if slip is None else slip,
+            "end_of_path": ws[:, _W_END].copy(),
+        }
+
+    def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
+        """The state columns as views of the compiled step's workspace rows (``steps``: the int64 counter,
+        kept beside them)."""
+        assert self._batch is not None
+        ws = self._batch.ws
+        cols: list[Any] = [ws[:, fast_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
+        return tracking.State._make([*cols, steps])
 
     def _step_rowwise(self, a1: Array, a2: Array) -> tuple[tracking.State, tracking.Outcome, StepNoise]:
         """:func:`tracking.step_columns` row by row on Python floats (the single env's code), stacked as columns.
@@ -405,6 +540,11 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         state = self.__dict__.copy()
         state["_renderers"] = [None] * self.num_envs
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
+            self._state = self._state_views(np.asarray(self._state.steps))
 
 
 def _item(c: Any, i: int) -> Any:

@@ -1,0 +1,251 @@
+"""The compiled step of ``N`` ``AmigoBot-v1`` robots at once (numba): the native vector env's fast path.
+
+:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym._kernels_v1.step`, whose reference
+is the Python float code of :mod:`amigo_gym.tracking`: see :mod:`amigo_gym.fast_v1`) over the rows of an
+``(N, W)`` workspace in one compiled loop, with the single robot's split kept exactly:
+
+1. one compiled loop draws every row's uniforms (:func:`amigo_gym._kernels_v1.noise_uniforms`, only when the
+   task draws per step);
+2. ``np.log`` of the whole ``(N, n_normal)`` block of uniforms (numpy's logarithm, as the reference);
+3. one compiled loop steps every row (:func:`amigo_gym._kernels_v1.step`), each on its own path, ring and
+   workspace row, and copies the arguments of the three reward exponentials to an ``(N, 3)`` block;
+4. ``np.exp`` of that block (numpy's, as the reference); the caller forms the reward terms and the reward with
+   the single environment's operations (:func:`reward_terms`).
+
+Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
+compiled :func:`amigo_gym._kernels_v1.evaluate`, as the single environment's reset.
+
+Both numpy calls take and write C-contiguous blocks, like the reference's arrays (numpy may pick its loop by
+memory layout). So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv``
+of single envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
+(:func:`amigo_gym.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
+``arena.flat[starts[i]:stops[i]]``.
+
+numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.fast_v1.kernels`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym import fast_v1, tracking
+from amigo_gym.paths.clothoid import ClothoidPath
+
+__all__ = ["PathArena", "BatchKernel", "reward_terms"]
+
+Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+class PathArena:
+    """The flattened paths of ``n`` rows in one float64 array: row ``i``'s is ``flat[starts[i]:stops[i]]``.
+
+    Each distinct path (by object) is stored once, while a row uses it; a new path is appended (the arena grows
+    by doubling), and the arena is compacted when more than half of it (and over :attr:`COMPACT_MIN` entries)
+    belongs to paths no row uses any more. Built at resets, never in a step.
+
+    Attributes:
+        flat: the arena (its length is the capacity; entries past :attr:`used` are free).
+        starts, stops: ``(n,)`` int64, each row's slice (``0, 0`` until a path is assigned).
+    """
+
+    #: the arena is compacted only once this many entries are dead (and more than the live ones)
+    COMPACT_MIN = 4096
+
+    def __init__(self, n: int) -> None:
+        self.flat: Array = np.zeros(1024)
+        self.used = 0
+        self.starts: IntArray = np.zeros(n, dtype=np.int64)
+        self.stops: IntArray = np.zeros(n, dtype=np.int64)
+        self._row_ids: list[int] = [0] * n  # id of each row's path (0: none)
+        # id -> [path, start, stop, rows using it]
+        self._live: dict[int, list[Any]] = {}
+        self._dead = 0  # entries of the arena that no live path owns
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # the paths are new objects: key them by their new ids
+        self.__dict__.update(state)
+        new = {oid: id(entry[0]) for oid, entry in self._live.items()}
+        self._live = {new[oid]: entry for oid, entry in self._live.items()}
+        self._row_ids = [new[oid] if oid else 0 for oid in self._row_ids]
+
+    def assign(self, rows: Sequence[int], paths: Sequence[ClothoidPath]) -> None:
+        """Rows ``rows`` take ``paths`` (one each, built-in :class:`ClothoidPath` objects)."""
+        for i, path in zip(rows, paths, strict=True):
+            old = self._row_ids[i]
+            if old:
+                entry = self._live[old]
+                entry[3] -= 1
+                if entry[3] == 0:
+                    del self._live[old]
+                    self._dead += entry[2] - entry[1]
+            got = self._live.get(id(path))
+            if got is None:
+                start, stop = self._append(fast_v1.flat_path(path))
+                got = self._live[id(path)] = [path, start, stop, 0]
+            got[3] += 1
+            self._row_ids[i] = id(path)
+            self.starts[i] = got[1]
+            self.stops[i] = got[2]
+        if self._dead > self.COMPACT_MIN and 2 * self._dead > self.used:
+            self._compact()
+
+    def _append(self, vec: Array) -> tuple[int, int]:
+        start = self.used
+        stop = start + vec.shape[0]
+        if stop > self.flat.shape[0]:
+            grown = np.zeros(max(2 * self.flat.shape[0], stop))
+            grown[:start] = self.flat[:start]
+            self.flat = grown
+        self.flat[start:stop] = vec
+        self.used = stop
+        return start, stop
+
+    def _compact(self) -> None:
+        """Keep the live paths only, in their order, and move the rows' slices with them."""
+        old = self.flat
+        self.flat = np.zeros(max(1024, 2 * (self.used - self._dead)))
+        self.used = 0
+        self._dead = 0
+        for entry in self._live.values():
+            entry[1], entry[2] = self._append(old[entry[1] : entry[2]])
+        for i, oid in enumerate(self._row_ids):
+            if oid:
+                entry = self._live[oid]
+                self.starts[i] = entry[1]
+                self.stops[i] = entry[2]
+
+
+class BatchKernel:
+    """The compiled step of ``n`` robots (module docstring): constants, path arena, workspace rows.
+
+    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.fast_v1.WS_FIELDS`, loaded by
+    :meth:`load` with :meth:`amigo_gym.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
+    every row. The compiled loops are :func:`amigo_gym._kernels_v1.noise_rows` and
+    :func:`amigo_gym._kernels_v1.step_rows` (``parallel``: their ``prange`` twins on numba's threads; the
+    rows are independent, so the results are the same).
+
+    Attributes:
+        consts: :func:`amigo_gym.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
+        ws: ``(n, len(WS_FIELDS) + WS_SCRATCH)`` float64, the rows' workspaces.
+        keys: ``(n,)`` uint64, the episodes' keys of the per-step draws.
+    """
+
+    def __init__(self, k: tracking.Constants, n: int, parallel: bool = False) -> None:
+        self._k = k
+        self._row = fast_v1.StepKernel(k)  # the single robot's loader (its workspace: one row's staging)
+        self.consts: Array = self._row.consts
+        self.parallel = parallel
+        self.arena = PathArena(n)
+        self.ws: Array = np.zeros((n, len(fast_v1.WS_FIELDS) + fast_v1.WS_SCRATCH))
+        self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
+        m = self._row.n_normal
+        self.noise_on = np.zeros(n, dtype=np.bool_)
+        self._u1: Array = np.ones((n, m))
+        self._logs: Array = np.zeros((n, m))
+        self._args: Array = np.zeros((n, 3))
+        self._bind()
+
+    def _bind(self) -> None:
+        kv = fast_v1.kernels()
+        self._noise_rows: Any = kv.noise_rows_parallel if self.parallel else kv.noise_rows
+        self._step_rows: Any = kv.step_rows_parallel if self.parallel else kv.step_rows
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        del state["_noise_rows"], state["_step_rows"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._bind()
+
+    def load(
+        self,
+        rows: Sequence[int],
+        paths: Sequence[ClothoidPath],
+        states: Sequence[tracking.State],
+        episodes: Sequence[tracking.Episode],
+    ) -> None:
+        """Start the episodes of ``rows``: their paths, states (of floats) and episodes into the workspace.
+
+        Raises:
+            TypeError: a path is not a :class:`ClothoidPath` (the compiled step's paths).
+        """
+        one = self._row
+        ws = self.ws
+        state = slice(fast_v1.W_X, fast_v1.W_L3D + 1)  # the state and the episode's constants
+        draws = slice(fast_v1.W_SLIP_MAX, fast_v1.W_NOISE_ON + 1)  # the slip bound, whether the episode draws
+        for i, path, st, ep in zip(rows, paths, states, episodes, strict=True):
+            if type(path) is not ClothoidPath:
+                raise TypeError(f"BatchKernel.load: row {i}'s path must be a ClothoidPath, got {type(path).__name__}")
+            one.load(path, st, ep, tracking.ep_l3_differs(self._k, ep))
+            ws[i, state] = one.ws[state]
+            ws[i, draws] = one.ws[draws]
+            self.keys[i] = one.key
+            self.noise_on[i] = one.noise_on
+        self.arena.assign(rows, paths)
+
+    def progress(self, path: Any, x: float, y: float, hint: float) -> float:
+        """H's progress [m] (:data:`amigo_gym.tracking.ProgressFn`): :meth:`amigo_gym.fast_v1.StepKernel.progress`."""
+        return self._row.progress(path, x, y, hint)
+
+    def start(
+        self,
+        rows: Sequence[int],
+        paths: Sequence[ClothoidPath],
+        states: Sequence[tracking.State],
+        episodes: Sequence[tracking.Episode],
+        obs: NDArray[np.floating[Any]],
+    ) -> Array:
+        """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.tracking.reset_columns`,
+        compiled: :func:`amigo_gym._kernels_v1.evaluate`, as the single env's reset).
+
+        Args:
+            obs: ``(len(rows), D)``, written: the rows' observations.
+
+        Returns:
+            ``(len(rows), 3)``: ``np.exp`` of the rows' track, speed and smoothness arguments.
+        """
+        self.load(rows, paths, states, episodes)
+        c = self.consts
+        flat, starts, stops = self.arena.flat, self.arena.starts, self.arena.stops
+        for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
+            v_true, t = tracking.start_speed_time(st, ep)
+            self._row.evaluate(c, flat[starts[i] : stops[i]], self.ws[i], obs[j], v_true, st.a1, st.a2, t)
+        args = self.ws[np.asarray(rows, dtype=np.intp), fast_v1.W_ARG_T : fast_v1.W_ARG_S + 1]  # a C-contiguous copy
+        return np.exp(args)
+
+    def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
+        """Step every row (:func:`amigo_gym.tracking.step_columns` of each, the single robot's compiled step).
+
+        Args:
+            rings: ``(n, L, 2)`` the command rings [rad/s], updated in place. ring_step: their counter.
+            a1, a2: ``(n,)`` float64, the validated actions [-] (clipped in the step).
+            obs: ``(n, D)`` C-contiguous, written (float32 for the env).
+
+        Returns:
+            ``(n, 3)``: ``np.exp`` of the track, speed and smoothness arguments (the rows of :attr:`ws` hold the
+            new states and the other outputs).
+        """
+        c = self.consts
+        ws = self.ws
+        if self._u1.shape[1]:  # normal draws: their uniforms, numpy's logarithms of the whole block
+            self._noise_rows(c, ws, self.keys, self._u1)
+            np.log(self._u1, out=self._logs)
+        elif self.noise_on.any():  # slips only
+            self._noise_rows(c, ws, self.keys, self._u1)
+        a = self.arena
+        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, self._args)
+        return np.exp(self._args)
+
+
+def reward_terms(exps: Array, heading: Array, smooth_weight: float) -> tuple[Array, Array, Array, Array]:
+    """The reward terms ``(track, speed, heading, smooth)`` ``(m,)`` from ``exps (m, 3)`` (:meth:`BatchKernel.step`)
+    and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.reward_term_columns` (as
+    :meth:`amigo_gym.envs.AmigoBotV1Env._kernel_info`). The reward is their product, in that order."""
+    return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), 1.0 - smooth_weight * (1.0 - exps[:, 2])

@@ -1,0 +1,323 @@
+"""The AmigoBot-v1 vector env's compiled step (kernel="numba", :mod:`amigo_gym.fast_v1_batch`) gives the bits of its
+reference column code (kernel="numpy") and of Gymnasium's SyncVectorEnv of single envs (the reference float code):
+observations, rewards, terminations, truncations and every info (keys, dtypes, values, masks), over many steps with
+autoresets in the three autoreset modes, partial resets, reseeding and pickling."""
+
+from __future__ import annotations
+
+import pickle
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import amigo_gym  # noqa: F401
+from amigo_gym import fast_v1
+from amigo_gym.envs import AmigoBotV1VectorEnv
+
+pytest.importorskip("numba")
+if not fast_v1.libm_matches_numpy():  # pragma: no cover - the kernel refuses to run here
+    pytest.skip("numba's cos/sin differ from numpy's on this platform", allow_module_level=True)
+
+MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
+#: the tasks compared (episodes end: short time limits, open paths, hard randomisation)
+TASKS: dict[str, dict[str, Any]] = {
+    "circle": {"max_episode_steps": 35},
+    "figure8-mild": {"path": "figure8", "randomize": "mild", "max_episode_steps": 40},
+    # a short open path, driven forward: episodes end at its end (end_of_path)
+    "lane_change-delay": {
+        "path": "lane_change",
+        "path_params": {"offset": 0.02, "length": 0.8, "lead": 0.1},
+        "actuators": {"delay": 0.25},
+        "speed": 0.35,
+    },
+    "random-hard": {"path": "random", "randomize": "hard", "random_pool": 8, "max_episode_steps": 30},
+    "mixed-hard-speeds": {"path": "mixed", "randomize": "hard", "speed": (0.1, 0.4), "max_episode_steps": 45},
+    "mixed-trapezoid": {
+        "path": "mixed",
+        "speed_profile": "trapezoid",
+        "profile_duration": 3.0,
+        "speed": (0.15, 0.3),
+        "max_episode_steps": 50,
+    },
+    "noise-slip-l3": {
+        "path": "circle",
+        "randomize": {"slip": (0.0, 0.2), "delay": (0.0, 0.3), "wheel_rate_noise": 0.5, "heading_noise": 0.05},
+        "true_robot": {"l3": 0.1},
+        "max_episode_steps": 30,
+    },
+}
+
+
+def _make(n: int, mode: AutoresetMode, kernel: str, **kw: Any) -> gym.vector.VectorEnv:
+    return gym.make_vec(
+        "AmigoBot-v1", n, vectorization_mode="vector_entry_point", autoreset_mode=mode, kernel=kernel, **kw
+    )
+
+
+def _sync(n: int, mode: AutoresetMode, **kw: Any) -> gym.vector.VectorEnv:
+    # the single envs run their reference float code
+    return gym.make_vec(
+        "AmigoBot-v1", n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, kernel="numpy", **kw
+    )
+
+
+def _equal_infos(a: dict[str, Any], b: dict[str, Any], what: str, exact_types: bool = True) -> None:
+    """``a`` (a native env's infos) equals ``b``: every key of ``a`` (all of ``b``'s when ``exact_types``, with
+    the same dtypes and shapes), recursively; ``final_obs`` row by row."""
+    if exact_types:
+        assert list(a) == list(b), (what, list(a), list(b))
+    for key, va in a.items():
+        vb = b[key]
+        if key == "final_obs":
+            assert va.shape == vb.shape
+            for i, (ra, rb) in enumerate(zip(va, vb, strict=True)):
+                assert (ra is None) == (rb is None), (what, key, i)
+                if ra is not None:
+                    np.testing.assert_array_equal(ra, rb, err_msg=f"{what}: final_obs[{i}]")
+        elif isinstance(va, dict):
+            _equal_infos(va, vb, f"{what}: {key}", exact_types)
+        else:
+            np.testing.assert_array_equal(va, vb, err_msg=f"{what}: {key}")
+            if exact_types:
+                assert va.dtype == vb.dtype and va.shape == vb.shape, (what, key, va.dtype, vb.dtype)
+
+
+def _equal_results(a: tuple[Any, ...], b: tuple[Any, ...], what: str, exact_types: bool = True) -> None:
+    for j, name in enumerate(("obs", "reward", "terminated", "truncated")):
+        np.testing.assert_array_equal(a[j], b[j], err_msg=f"{what}: {name}")
+        if exact_types:
+            assert a[j].dtype == b[j].dtype, (what, name)
+    _equal_infos(a[4], b[4], what, exact_types)
+
+
+def _actions(rng: np.random.Generator, n: int, forward: bool = False) -> np.ndarray:
+    a = rng.uniform(-1.0, 1.0, (n, 2))
+    a[:, 1] = 0.5 * a[:, 1] + 0.5 * a[:, 0]  # correlated wheels, so that episodes also last
+    if forward:  # straight ahead at about 0.4 m/s, wobbling
+        a = 0.55 + 0.1 * a
+    return a
+
+
+def _run(
+    envs: list[gym.vector.VectorEnv], n: int, mode: AutoresetMode, steps: int, seed: int, forward: bool = False
+) -> tuple[int, int]:
+    """Step ``envs`` (kernel, numpy, sync) with the same actions and compare them.
+
+    Returns:
+        the episodes ended, and those ended at the end of an open path.
+    """
+    outs = [e.reset(seed=seed) for e in envs]
+    np.testing.assert_array_equal(outs[0][0], outs[1][0])
+    np.testing.assert_array_equal(outs[0][0], outs[2][0])
+    _equal_infos(outs[0][1], outs[1][1], "reset")
+    _equal_infos(outs[0][1], outs[2][1], "reset vs sync", exact_types=False)
+    rng = np.random.default_rng(seed)
+    ended = at_end = 0
+    for t in range(steps):
+        a = _actions(rng, n, forward)
+        r = [e.step(a) for e in envs]
+        _equal_results(r[0], r[1], f"step {t}")
+        _equal_results(r[0], r[2], f"step {t} vs sync", exact_types=False)
+        done = r[0][2] | r[0][3]
+        ended += int(done.sum())
+        last = r[0][4].get("final_info", r[0][4])  # SameStep: the ended episodes' infos
+        at_end += int((done & (last["end_of_path"] != 0.0)).sum())
+        if mode == AutoresetMode.DISABLED and done.any():
+            got = [e.reset(options={"reset_mask": done}) for e in envs]
+            np.testing.assert_array_equal(got[0][0], got[1][0])
+            np.testing.assert_array_equal(got[0][0], got[2][0])
+            _equal_infos(got[0][1], got[1][1], f"partial reset {t}")
+            _equal_infos(got[0][1], got[2][1], f"partial reset {t} vs sync", exact_types=False)
+    return ended, at_end
+
+
+@pytest.mark.parametrize("task", list(TASKS))
+@pytest.mark.parametrize("mode", MODES, ids=[m.value for m in MODES])
+@pytest.mark.parametrize("n", [1, 5, 13, 64])
+def test_kernel_equals_numpy_and_sync(task: str, mode: AutoresetMode, n: int) -> None:
+    kw = TASKS[task]
+    envs = [_make(n, mode, "numba", **kw), _make(n, mode, "numpy", **kw), _sync(n, mode, **kw)]
+    assert envs[0].unwrapped._batch is not None  # type: ignore[attr-defined]
+    assert envs[1].unwrapped._batch is None  # type: ignore[attr-defined]
+    steps = 120 if n < 64 else 70
+    ended, at_end = _run(envs, n, mode, steps, seed=7 + n, forward=task.startswith("lane_change"))
+    assert ended > 0 or n == 1, "the comparison covered no autoreset"
+    if task.startswith("lane_change") and n > 1:
+        assert at_end > 0, "no episode reached the end of its path"
+
+
+def test_parallel_twin_equals_serial() -> None:
+    kw = TASKS["mixed-hard-speeds"]
+    n = 32
+    envs = [_make(n, AutoresetMode.NEXT_STEP, k, **kw) for k in ("numba-parallel", "numba")]
+    assert envs[0].unwrapped._batch.parallel  # type: ignore[attr-defined]
+    outs = [e.reset(seed=5) for e in envs]
+    np.testing.assert_array_equal(outs[0][0], outs[1][0])
+    rng = np.random.default_rng(5)
+    for t in range(60):
+        a = _actions(rng, n)
+        r = [e.step(a) for e in envs]
+        _equal_results(r[0], r[1], f"step {t}")
+
+
+def test_partial_resets_reseeding_and_poses() -> None:
+    n = 13
+    kw = {"path": "mixed", "randomize": "mild", "speed": (0.1, 0.3)}
+    mode = AutoresetMode.NEXT_STEP
+    envs = [_make(n, mode, "numba", **kw), _make(n, mode, "numpy", **kw), _sync(n, mode, **kw)]
+    seeds: list[int | None] = list(range(100, 100 + n))
+    for e in envs:
+        e.reset(seed=seeds)
+    rng = np.random.default_rng(0)
+    for t in range(90):
+        a = _actions(rng, n)
+        r = [e.step(a) for e in envs]
+        _equal_results(r[0], r[1], f"step {t}")
+        _equal_results(r[0], r[2], f"step {t} vs sync", exact_types=False)
+        if t % 15 == 7:  # a partial reset, some rows reseeded, the kernel's rows reloaded mid-episode
+            mask = rng.random(n) < 0.4
+            mask[t % n] = True
+            new = [int(s) if mask[i] and i % 2 else None for i, s in enumerate(rng.integers(0, 10**6, n))]
+            got = [e.reset(seed=new, options={"reset_mask": mask}) for e in envs]
+            np.testing.assert_array_equal(got[0][0], got[1][0])
+            np.testing.assert_array_equal(got[0][0], got[2][0])
+            _equal_infos(got[0][1], got[1][1], f"partial reset {t}")
+        if t == 50:  # start poses: one per robot (the native envs), one for all (and SyncVectorEnv)
+            poses = np.column_stack((rng.uniform(-0.5, 0.5, n), rng.uniform(0.8, 1.2, n), rng.uniform(-0.2, 0.2, n)))
+            got = [e.reset(seed=3, options={"pose": poses}) for e in envs[:2]]
+            np.testing.assert_array_equal(got[0][0], got[1][0])
+            _equal_infos(got[0][1], got[1][1], "reset with poses")
+            pose = (0.05, -0.02, 0.1)
+            got = [e.reset(seed=4, options={"pose": pose}) for e in envs]
+            np.testing.assert_array_equal(got[0][0], got[1][0])
+            np.testing.assert_array_equal(got[0][0], got[2][0])
+            _equal_infos(got[0][1], got[1][1], "reset with a pose")
+            _equal_infos(got[0][1], got[2][1], "reset with a pose vs sync", exact_types=False)
+
+
+def test_pickled_env_continues_identically() -> None:
+    n = 13
+    kw = TASKS["mixed-hard-speeds"]
+    env = _make(n, AutoresetMode.SAME_STEP, "numba", **kw)
+    ref = _make(n, AutoresetMode.SAME_STEP, "numpy", **kw)
+    env.reset(seed=21)
+    ref.reset(seed=21)
+    rng = np.random.default_rng(21)
+    for _ in range(40):
+        a = _actions(rng, n)
+        env.step(a)
+        ref.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    u = clone.unwrapped
+    assert np.shares_memory(u._state.x, u._batch.ws)  # type: ignore[attr-defined]  # views again
+    for t in range(80):
+        a = _actions(rng, n)
+        r = [clone.step(a), env.step(a), ref.step(a)]
+        _equal_results(r[0], r[1], f"clone step {t}")
+        _equal_results(r[0], r[2], f"clone step {t} vs numpy")
+
+
+def test_kernel_keyword() -> None:
+    with pytest.raises(ValueError, match=r"kernel must be 'auto', 'numpy', 'numba' or 'numba-parallel', got 'fast'"):
+        AmigoBotV1VectorEnv(2, kernel="fast")
+    with pytest.raises(ValueError, match="kernel must be"):
+        AmigoBotV1VectorEnv(2, kernel=1)  # type: ignore[arg-type]
+    assert AmigoBotV1VectorEnv(2, kernel="auto")._batch is not None
+    assert AmigoBotV1VectorEnv(2, kernel="numpy")._batch is None
+    envs = gym.make_vec("AmigoBot-v1", 3, vectorization_mode="vector_entry_point", kernel="numpy")
+    assert envs.unwrapped._batch is None  # type: ignore[attr-defined]
+
+
+def test_environment_variable_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("AMIGO_GYM_KERNEL", "numpy")
+    assert AmigoBotV1VectorEnv(2)._batch is None
+    assert AmigoBotV1VectorEnv(2, kernel="numba")._batch is not None
+
+
+class _Wrapped:
+    """A path object of another class (the PathSpec protocol by delegation): runs the reference code."""
+
+    def __init__(self, inner: Any) -> None:
+        self._inner = inner
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._inner, name)
+
+
+def test_path_object_of_another_class_runs_the_reference() -> None:
+    from amigo_gym import tracking
+
+    inner = tracking.fixed_path(tracking.make_tracking_params("t", None, path="figure8"))
+    path = _Wrapped(inner)
+    n = 5
+    mode = AutoresetMode.NEXT_STEP
+    env = _make(n, mode, "numba", path=path, max_episode_steps=30)
+    assert env.unwrapped._batch is None  # type: ignore[attr-defined]
+    envs = [env, _make(n, mode, "numba", path=inner, max_episode_steps=30), _sync(n, mode, path=inner)]
+    envs[2] = _sync(n, mode, path=inner, max_episode_steps=30)
+    assert envs[1].unwrapped._batch is not None  # type: ignore[attr-defined]
+    _run(envs, n, mode, 70, seed=2)
+
+
+def test_path_arena_rows_read_their_paths() -> None:
+    from amigo_gym import tracking
+    from amigo_gym.fast_v1_batch import PathArena
+
+    p = tracking.make_tracking_params("t", None, path="random")
+    pool = [tracking.random_pool_path(p, i) for i in range(40)]
+    n = 16
+    arena = PathArena(n)
+    rows: list[Any] = [None] * n
+    rng = np.random.default_rng(0)
+    compacted = False
+    for _ in range(300):
+        idx = sorted(set(rng.integers(0, n, 5).tolist()))
+        paths = [pool[int(j)] for j in rng.integers(0, len(pool), len(idx))]
+        used = arena.used
+        arena.assign(idx, paths)
+        compacted |= arena.used < used
+        for i, q in zip(idx, paths, strict=True):
+            rows[i] = q
+        for i, q in enumerate(rows):
+            if q is not None:
+                np.testing.assert_array_equal(arena.flat[arena.starts[i] : arena.stops[i]], fast_v1.flat_path(q))
+    assert compacted
+    live = {id(q): q for q in rows if q is not None}
+    assert arena.used - arena._dead == sum(fast_v1.flat_path(q).size for q in live.values())
+
+
+def test_path_arena_survives_pickling() -> None:
+    from amigo_gym import tracking
+    from amigo_gym.fast_v1_batch import PathArena
+
+    p = tracking.make_tracking_params("t", None, path="random")
+    pool = [tracking.random_pool_path(p, i) for i in range(6)]
+    arena = PathArena(4)
+    arena.assign([0, 1, 2, 3], [pool[0], pool[1], pool[0], pool[2]])
+    clone, paths = pickle.loads(pickle.dumps((arena, pool)))
+    assert sorted(clone._live) == sorted({id(paths[0]), id(paths[1]), id(paths[2])})
+    clone.assign([1, 3], [paths[0], paths[5]])  # row 1 joins a live path, row 3 takes a new one
+    for i, q in enumerate([paths[0], paths[0], paths[0], paths[5]]):
+        np.testing.assert_array_equal(clone.flat[clone.starts[i] : clone.stops[i]], fast_v1.flat_path(q))
+    assert clone._live[id(paths[0])][3] == 3 and id(paths[1]) not in clone._live
+
+
+def test_warm_cache_start_is_quick() -> None:
+    """A second process loads the batch loops from numba's disk cache (no compilation): building the env, the first
+    reset and the first step (numba's import and set-up included) in well under two seconds."""
+    import subprocess
+    import sys
+
+    code = (
+        "import time; import numpy as np; from amigo_gym.envs import AmigoBotV1VectorEnv; t = time.perf_counter(); "
+        "e = AmigoBotV1VectorEnv(4, kernel='numba', randomize='hard'); e.reset(seed=0); e.step(np.zeros((4, 2))); "
+        "print(time.perf_counter() - t)"
+    )
+    warm = AmigoBotV1VectorEnv(4, kernel="numba", randomize="hard")  # compiled (and cached) here at the latest
+    warm.reset(seed=0)
+    warm.step(np.zeros((4, 2)))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert float(out.stdout.strip().splitlines()[-1]) < 1.5
