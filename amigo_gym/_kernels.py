@@ -85,6 +85,9 @@ __all__ = [
     "draw_starts",
     "place_starts",
     "count_steps",
+    "single_move",
+    "single_evaluate",
+    "single_finish",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -555,3 +558,66 @@ def count_steps(
         s = steps[i]
         truncated[i] = max_steps >= 0 and s >= max_steps
         time[i] = float(s) * dt
+
+
+# ---------------------------------------------------------------------------------------------- one robot
+# The single env's step (:class:`amigo_gym.fast.SingleStep`): the same three passes on a one-row view of one
+# buffer, so that a call from Python hands over three arrays instead of a dozen (numba's dispatch costs about
+# 0.1 us per array argument; a step's passes at N = 1 cost less than that). Columns of the ``(1, SINGLE_WIDTH)``
+# float64 buffer ``buf``:
+#: the state (:data:`STATE_FIELDS`)
+SINGLE_STATE = 0
+#: the validated action (two columns)
+SINGLE_ACTION = 8
+#: the tangents' arguments, then values (two columns)
+SINGLE_TANS = 10
+#: the turn rate of pass 1
+SINGLE_TURN = 12
+#: the exponentials' arguments, then values (three columns)
+SINGLE_EXPS = 13
+#: the reward
+SINGLE_REWARD = 16
+#: the record (:data:`RECORD_FIELDS`, 16 columns)
+SINGLE_RECORD = 17
+SINGLE_WIDTH = 33
+# ``flags`` ``(1, 2)`` bool: column 0 the restart mask (always False for a step), column 1 ``terminated``.
+
+
+@_serial
+def single_move(c: F64, buf: F64, flags: NDArray[np.bool_], a1: float, a2: float) -> None:
+    """The action ``(a1, a2)`` into ``buf``, then pass 1 (:func:`move_arguments`) of the robot in ``buf``."""
+    buf[0, SINGLE_ACTION] = a1
+    buf[0, SINGLE_ACTION + 1] = a2
+    move_arguments(
+        c,
+        buf[:, SINGLE_STATE:SINGLE_ACTION],
+        buf[:, SINGLE_ACTION:SINGLE_TANS],
+        flags[:, 0],
+        buf[:, SINGLE_TANS:SINGLE_TURN],
+        buf[:, SINGLE_TURN],
+    )
+
+
+@_serial
+def single_evaluate(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating]) -> None:
+    """Pass 2 (:func:`evaluate`) of the robot in ``buf``, its observation into ``obs (1, obs_dim)``."""
+    evaluate(
+        c,
+        preview,
+        buf[:, SINGLE_STATE:SINGLE_ACTION],
+        buf[:, SINGLE_ACTION:SINGLE_TANS],
+        flags[:, 0],
+        buf[:, SINGLE_TANS:SINGLE_TURN],
+        buf[:, SINGLE_TURN],
+        obs,
+        flags[:, 1],
+        buf[:, SINGLE_RECORD:SINGLE_WIDTH],
+        buf[:, SINGLE_EXPS:SINGLE_REWARD],
+    )
+
+
+@_serial
+def single_finish(c: F64, buf: F64) -> int:
+    """Pass 3 (:func:`finish`) of the robot in ``buf``: the number of headings past the limit (0 or 1)."""
+    past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], buf[:, SINGLE_EXPS:SINGLE_REWARD])
+    return past  # type: ignore[return-value]

@@ -25,7 +25,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
-from typing import Literal, NamedTuple, SupportsIndex
+from typing import Any, Literal, NamedTuple, SupportsIndex
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,6 +35,7 @@ from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
 __all__ = [
+    "SingleStep",
     "KERNEL_ENV",
     "kernel_mode",
     "numba_available",
@@ -231,6 +232,84 @@ class StepReport(NamedTuple):
     #: the number of rows whose new heading lies past :data:`amigo_gym.params.HEADING_LIMIT` in absolute
     #: value (those :func:`amigo_gym.task.bound_heading` reduces; the kernel leaves them as they are)
     past_limit: int
+
+
+class SingleStep:
+    """One robot's step by the compiled kernel: the single env's fast path (``AmigoBotEnv(kernel=...)``).
+
+    The three passes of :func:`step_rows` (:func:`amigo_gym._kernels.single_move`, ``single_evaluate``,
+    ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
+    between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
+    and the vector env give the same bits, and both those of :func:`amigo_gym.task.step_float`, the reference
+    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once.
+
+    Attributes:
+        buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
+            (:data:`amigo_gym._kernels.SINGLE_STATE` and the other column offsets).
+        flags: ``(1, 2)`` bool: the restart mask (False) and ``terminated``.
+        obs: ``(1, obs_dim)`` float32: the observation of the last step; ``obs_row`` its row (a view).
+        record: ``(16,)`` view of the buffer's record (:data:`amigo_gym._kernels.RECORD_FIELDS`); ``head`` its
+            first 10 columns (the state's and H's entries of the info).
+    """
+
+    def __init__(self, k: TaskConstants, path: CirclePath | ManoeuvrePath) -> None:
+        kk = kernels()
+        self.consts = kernel_constants(k, path)
+        self.preview = np.array(k.preview, dtype=np.float64)
+        self.buf = np.zeros((1, kk.SINGLE_WIDTH))
+        self.flags = np.zeros((1, 2), dtype=np.bool_)
+        self.obs = np.zeros((1, obs_dim(k.params)), dtype=np.float32)
+        self._bind()
+
+    def _bind(self) -> None:
+        """The compiled functions and the buffer's views (again after unpickling)."""
+        kk = kernels()
+        self._move, self._evaluate, self._finish = kk.single_move, kk.single_evaluate, kk.single_finish
+        b = self.buf
+        self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
+        self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
+        self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
+        self.record = b[0, kk.SINGLE_RECORD : kk.SINGLE_WIDTH]
+        self.obs_row = self.obs[0]
+        self.head = self.record[:10]
+
+    def __getstate__(self) -> dict[str, object]:
+        return {name: getattr(self, name) for name in ("consts", "preview", "buf", "flags", "obs")}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._bind()
+
+    def set_state(self, values: Sequence[Any]) -> None:
+        """Set the state (the 8 columns of :class:`amigo_gym.task.State`)."""
+        self._state[:] = values
+
+    def state(self) -> list[float]:
+        """The state's 8 columns as Python floats."""
+        out: list[float] = self._state.tolist()
+        return out
+
+    def step(self, a1: float, a2: float) -> list[float]:
+        """Step the robot with the validated action ``(a1, a2)``; return the record's 16 columns as floats
+        (:data:`amigo_gym._kernels.RECORD_FIELDS`: the new state, H, the error, the reward terms and the
+        reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. Headings past
+        :data:`amigo_gym.params.HEADING_LIMIT` are left as they are (the caller reduces them, as
+        :func:`amigo_gym.task.bound_heading`)."""
+        b = self.buf
+        c = self.consts
+        tans = self._tans
+        exps = self._exps
+        self._move(c, b, self.flags, a1, a2)
+        _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
+        self._evaluate(c, self.preview, b, self.flags, self.obs)
+        _np_exp(exps, exps)
+        self._finish(c, b)
+        rec: list[float] = self.record.tolist()
+        return rec
+
+
+_np_tan = np.tan
+_np_exp = np.exp
 
 
 def step_rows(

@@ -227,13 +227,17 @@ def test_which_path_runs(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_import_amigo_gym_does_not_load_numba() -> None:
+    """``import amigo_gym`` and the numpy step never load numba (the kernel loads it when first built)."""
     code = (
         "import sys, gymnasium as gym, amigo_gym, amigo_gym.fast\n"
+        "print('numba' in sys.modules)\n"
+        "env = gym.make('AmigoBot-v0', kernel='numpy'); env.reset(seed=0); env.step(env.action_space.sample())\n"
+        "print('numba' in sys.modules)\n"
         "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
         "print('numba' in sys.modules)"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
-    assert out == "False"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "False", "True"]
 
 
 def _same(a: Any, b: Any, where: str) -> None:
@@ -289,3 +293,111 @@ def test_vector_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     assert AmigoBotVectorEnv(num_envs=2)._ws is not None
     monkeypatch.setenv("AMIGO_GYM_KERNEL", "numpy")
     assert AmigoBotVectorEnv(num_envs=2)._ws is None
+
+
+# ---------------------------------------------------------------------------------------------- single env
+
+
+def _bits_equal(a: Any, b: Any) -> bool:
+    """Equal bit for bit and of the same type (dicts recursively)."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_bits_equal(a[k], b[k]) for k in a)
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, tuple | list):
+        return len(a) == len(b) and all(_bits_equal(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+    return bool(np.asarray(a).tobytes() == np.asarray(b).tobytes())
+
+
+@pytest.mark.parametrize("settings", SETTINGS, ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
+def test_single_env_kernel_gives_the_reference_bits(settings: dict[str, Any]) -> None:
+    """``AmigoBotEnv(kernel="numba")`` (fast.SingleStep) returns what ``kernel="numpy"`` (task.step_float) returns:
+    observations, rewards, flags and every info entry bit for bit and of the same types, over whole episodes
+    with random actions (beyond [-1, 1] too), straight runs and turns on the spot, past termination."""
+    import warnings
+
+    import gymnasium as gym
+
+    fast_env = gym.make("AmigoBot-v0", kernel="numba", max_episode_steps=300, **settings)
+    ref_env = gym.make("AmigoBot-v0", kernel="numpy", max_episode_steps=300, **settings)
+    assert fast_env.unwrapped._fast is not None and ref_env.unwrapped._fast is None
+    for seed in range(3):
+        g = np.random.default_rng(seed)
+        assert _bits_equal(fast_env.reset(seed=seed), ref_env.reset(seed=seed))
+        for t in range(300):
+            kind = t % 4
+            if kind == 0:
+                a = g.uniform(-1.3, 1.3, 2)
+            elif kind == 1:
+                a = np.array([0.6, 0.6])
+            elif kind == 2:
+                a = np.array([0.8, -0.8])
+            else:
+                a = g.uniform(-1.0, 1.0, 2).astype(np.float32)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # stepping past termination warns (both envs)
+                out_f = fast_env.unwrapped.step(a)
+                out_r = ref_env.unwrapped.step(a)
+            for x, y in zip(out_f, out_r, strict=True):
+                assert _bits_equal(x, y), (t, x, y)
+        np.testing.assert_array_equal(fast_env.unwrapped.pose, ref_env.unwrapped.pose)
+        np.testing.assert_array_equal(fast_env.unwrapped.wheel_rates, ref_env.unwrapped.wheel_rates)
+
+
+def test_single_env_kernel_equals_the_vector_env_row() -> None:
+    """One robot stepped by the single env's kernel and by the vector env (N = 1) gives the same bits."""
+    import gymnasium as gym
+
+    from amigo_gym.envs import AmigoBotVectorEnv
+
+    single = gym.make("AmigoBot-v0", kernel="numba").unwrapped
+    vec = AmigoBotVectorEnv(1, kernel="numba", max_episode_steps=None)
+    o1, _ = single.reset(seed=5)
+    ov, _ = vec.reset(seed=5)
+    np.testing.assert_array_equal(o1, ov[0])
+    g = np.random.default_rng(1)
+    for _ in range(200):
+        a = g.uniform(-1, 1, 2)
+        o1, r1, t1, _, i1 = single.step(a)
+        ov, rv, _, _, iv = vec.step(a[None])
+        if t1:
+            break
+        np.testing.assert_array_equal(o1, ov[0])
+        assert r1 == rv[0]
+        np.testing.assert_array_equal(i1["pose"], iv["pose"][0])
+
+
+def test_single_env_kernel_survives_pickling_and_bounds_the_heading() -> None:
+    """A pickled env steps on identically (its own buffer); a heading past the limit is reduced as the reference
+    reduces it (task.bound_heading)."""
+    import pickle
+
+    import gymnasium as gym
+
+    env = gym.make("AmigoBot-v0", kernel="numba", termination_distance=10.0).unwrapped
+    ref = gym.make("AmigoBot-v0", kernel="numpy", termination_distance=10.0).unwrapped
+    for e in (env, ref):
+        e.reset(seed=0, options={"pose": (0.0, 0.0, 1e6 - 0.05)})
+    for _ in range(3):
+        a = np.array([1.0, -1.0])  # spin: the heading crosses 1e6 rad
+        assert _bits_equal(env.step(a), ref.step(a))
+    copy = pickle.loads(pickle.dumps(env))
+    for _ in range(5):
+        a = np.array([0.3, -0.2])
+        out_c, out_e = copy.step(a), env.step(a)
+        assert _bits_equal(out_c, out_e)
+    assert copy._fast is not None and copy._fast.buf is not env._fast.buf
+
+
+def test_single_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``kernel`` selects the step; ``"auto"`` follows AMIGO_GYM_KERNEL; a bad value is refused in one line."""
+    import gymnasium as gym
+
+    assert gym.make("AmigoBot-v0").unwrapped._fast is not None  # auto, numba installed
+    monkeypatch.setenv(fast.KERNEL_ENV, "numpy")
+    assert gym.make("AmigoBot-v0").unwrapped._fast is None
+    for bad in ("fast", 1, None, "numba-parallel"):
+        with pytest.raises(ValueError, match=r"^AmigoBotEnv\.kernel must be 'auto', 'numpy' or 'numba', got .*$"):
+            gym.make("AmigoBot-v0", kernel=bad)

@@ -18,7 +18,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym import task
+from amigo_gym import fast, task
 from amigo_gym.kinematics import h_position
 from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -41,6 +41,8 @@ TRAIL_LENGTH = 1000
 
 
 _np_array = np.array
+#: the values of the single env's ``kernel`` keyword
+SINGLE_KERNELS = ("auto", "numpy", "numba")
 
 
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
@@ -279,7 +281,10 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
     ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
-    (``"human"`` or ``"rgb_array"``). Unknown keywords raise ``TypeError``, bad values
+    (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results are the
+    same bits): ``"auto"`` (the default: the compiled step when numba is installed, the extra
+    ``amigo_gym[fast]``, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats) or
+    ``"numba"``. Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
 
     ```python
@@ -302,9 +307,13 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         *,
         params: EnvParams | Mapping[str, Any] | None = None,
         robot: RobotParams | Mapping[str, Any] | None = None,
+        kernel: str = "auto",
         **settings: Any,
     ) -> None:
-        self.params: EnvParams = make_env_params(type(self).__name__, params, robot, **settings)
+        owner = type(self).__name__
+        if not isinstance(kernel, str) or kernel not in SINGLE_KERNELS:
+            raise ValueError(f"{owner}.kernel must be 'auto', 'numpy' or 'numba', got {kernel!r}")
+        self.params: EnvParams = make_env_params(owner, params, robot, **settings)
         self.render_mode = check_render_mode(render_mode)
         p = self.params
         self.path: CirclePath | ManoeuvrePath = make_path(p)
@@ -313,8 +322,13 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._k = task.task_constants(p)
         rate1, rate2 = task.initial_wheel_rates(p).tolist()
         self._initial_state = task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate1, rate2)
+        # the compiled step (kernel="numba", or "auto" with numba installed): the state lives in its buffer
+        self._st: task.State = self._initial_state
+        self._fast: fast.SingleStep | None = None
+        if fast.use_fast_path(None if kernel == "auto" else kernel == "numba"):
+            self._fast = fast.SingleStep(self._k, self.path)
         # state (set by reset): plain scalars, stepped by the same column functions as the vector env
-        self._state: task.State = self._initial_state
+        self._state = self._initial_state
         self._steps = 0
         self._trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
         self._renderer: Any = None
@@ -330,6 +344,19 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         return state
 
     # ------------------------------------------------------------------ state access
+    @property
+    def _state(self) -> task.State:
+        """The robot's state: Python floats (in the compiled step's buffer when it runs)."""
+        if self._fast is not None:
+            return task.State(*self._fast.state())
+        return self._st
+
+    @_state.setter
+    def _state(self, value: task.State) -> None:
+        self._st = value
+        if self._fast is not None:
+            self._fast.set_state(value)
+
     @property
     def pose(self) -> Array:
         """Current pose ``(x_A [m], y_A [m], beta [rad])``, a copy."""
@@ -398,6 +425,8 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         a1, a2 = task.action_pair(action)
         if self._ended:
             self._warn_ended()
+        if self._fast is not None:
+            return self._step_fast(a1, a2)
         st = self._state
         if type(st.x) is float and type(st.beta) is float:  # floats (always, after reset): one flat function
             state, out = task.step_float(self._k, self.path, st, a1, a2)
@@ -434,6 +463,37 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         if terminated and self._ended is False:
             self._ended = True
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+
+    def _step_fast(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """:meth:`step` by the compiled kernel (:class:`amigo_gym.fast.SingleStep`): the same results, bit for bit."""
+        fs = self._fast
+        assert fs is not None
+        rec = fs.step(a1, a2)
+        if not -HEADING_LIMIT <= rec[2] <= HEADING_LIMIT:  # as task.bound_heading, in the state and the info
+            st = task.bound_heading(self._state)
+            self._state = st
+            rec[2] = fs.record[2] = float(st.beta)
+        self._steps += 1
+        if self.render_mode is not None:
+            self._trail.append((rec[3], rec[4]))
+        # record: x, y, beta, h_x, h_y, e, rate1, rate2, alpha1, alpha2, alpha3, track, speed, heading, smooth, reward
+        arr = fs.head.copy()  # the four info arrays are views of one new array
+        info = {
+            "pose": arr[0:3],
+            "h_position": arr[3:5],
+            "cross_track_error": rec[5],
+            "wheel_rates": arr[6:8],
+            "wheel_angles": arr[8:10],
+            "castor_angle": rec[10],
+            "reward_terms": {"track": rec[11], "speed": rec[12], "heading": rec[13], "smooth": rec[14]},
+            "time": float(self._steps * self._k.dt),
+        }
+        if self.render_mode == "human":
+            self.render()
+        terminated = bool(fs.flags[0, 1])
+        if terminated and self._ended is False:
+            self._ended = True
+        return fs.obs_row.copy(), rec[15], terminated, False, info
 
     def _warn_ended(self) -> None:
         gym.logger.warn(
