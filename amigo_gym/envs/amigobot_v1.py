@@ -63,6 +63,9 @@ def validate_action_v1(action: Any) -> tuple[float, float]:
     return a1, a2
 
 
+_np_array = np.array
+
+
 class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
@@ -303,18 +306,40 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         track, speed, ex = np.exp(self._kernel.ws[_W_ARG_T : _W_ARG_S + 1]).tolist()
         v_true = o[_W_VT]
         v_ref = o[_W_VREF]
+        cmd1, cmd2 = self._last_command
+        # the seven info arrays are views of one new array (one allocation instead of seven)
+        arr = _np_array(
+            (
+                o[_W_X],
+                o[_W_Y],
+                o[_W_BETA],
+                o[_W_HX],
+                o[_W_HY],
+                o[_W_W1],
+                o[_W_W2],
+                cmd1,
+                cmd2,
+                o[_W_AL1],
+                o[_W_AL2],
+                o[_W_MX],
+                o[_W_MY],
+                o[_W_MB],
+                slip1,
+                slip2,
+            )
+        )
         return {
-            "pose": np.array((o[_W_X], o[_W_Y], o[_W_BETA])),
-            "h_position": np.array((o[_W_HX], o[_W_HY])),
+            "pose": arr[0:3],
+            "h_position": arr[3:5],
             "cross_track_error": o[_W_E],
             "progress": o[_W_PROGRESS],
             "speed": v_true,
             "reference_speed": v_ref,
             "speed_error": v_true - v_ref,
-            "wheel_rates": np.array((o[_W_W1], o[_W_W2])),
-            "command": np.array(self._last_command),
-            "wheel_angles": np.array((o[_W_AL1], o[_W_AL2])),
-            "measured_pose": np.array((o[_W_MX], o[_W_MY], o[_W_MB])),
+            "wheel_rates": arr[5:7],
+            "command": arr[7:9],
+            "wheel_angles": arr[9:11],
+            "measured_pose": arr[11:14],
             "reward_terms": {
                 "track": track,
                 "speed": speed,
@@ -325,7 +350,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             "path": dict(self._path_info),
             "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
             "delay": self._delay,
-            "slip": np.array((slip1, slip2), dtype=np.float64),
+            "slip": arr[14:16],
             "end_of_path": o[_W_END] != 0.0,
         }
 
