@@ -40,6 +40,7 @@ from __future__ import annotations
 import argparse
 import gc
 import inspect
+import math
 import os
 import platform
 import statistics
@@ -312,6 +313,9 @@ class PPORow:
     amigobot_vec: str
     amigobot: float
     pendulum: float
+    #: share of ``learn``'s wall time spent in the vector env's ``reset``/``step_wait`` (AmigoBot, Pendulum) [-]
+    amigobot_env_share: float = math.nan
+    pendulum_env_share: float = math.nan
 
     @property
     def ratio(self) -> float:
@@ -319,15 +323,39 @@ class PPORow:
         return self.amigobot / self.pendulum
 
 
-def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> float:
+def _timed(venv: Any) -> Any:
+    """``venv`` with the wall time of its ``reset`` and ``step_wait`` calls summed in ``.env_time`` [s]."""
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class _Timed(VecEnvWrapper):
+        env_time = 0.0
+
+        def reset(self) -> Any:
+            t0 = time.perf_counter()
+            out = self.venv.reset()
+            self.env_time += time.perf_counter() - t0
+            return out
+
+        def step_wait(self) -> Any:
+            t0 = time.perf_counter()
+            out = self.venv.step_wait()
+            self.env_time += time.perf_counter() - t0
+            return out
+
+    return _Timed(venv)
+
+
+def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> tuple[float, float]:
+    """PPO ``learn`` throughput [env-steps/s] and the env's share of its wall time [-]."""
     from stable_baselines3 import PPO
 
-    model = PPO("MlpPolicy", venv, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
+    timed = _timed(venv)
+    model = PPO("MlpPolicy", timed, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
     t0 = time.perf_counter()
     model.learn(total_timesteps=timesteps)
-    rate = model.num_timesteps / (time.perf_counter() - t0)
-    venv.close()
-    return float(rate)
+    wall = time.perf_counter() - t0
+    timed.close()
+    return float(model.num_timesteps / wall), float(timed.env_time / wall)
 
 
 def _adapter(monitor: Any, adapter: Any, n: int, kw: dict[str, Any]) -> Callable[[], Any]:
@@ -382,14 +410,15 @@ def bench_ppo(
         for m, kind, make in configs:
             n_steps = max(32, rollout // m)
             budget = max(timesteps, n_steps * m)
-            rates_a, rates_p = [], []
+            runs_a, runs_p = [], []
             for _ in range(repeats):
-                rates_a.append(_ppo_rate(make(), budget, n_steps, seed))
+                runs_a.append(_ppo_rate(make(), budget, n_steps, seed))
                 pend = make_vec_env(lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed)
-                rates_p.append(_ppo_rate(pend, budget, n_steps, seed))
-            a, p = statistics.median(rates_a), statistics.median(rates_p)
-            rows.append(PPORow(m, kind, a, p))
-            say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s, Pendulum {p:.0f}")
+                runs_p.append(_ppo_rate(pend, budget, n_steps, seed))
+            a, p = statistics.median(r for r, _ in runs_a), statistics.median(r for r, _ in runs_p)
+            sa, sp = statistics.median(f for _, f in runs_a), statistics.median(f for _, f in runs_p)
+            rows.append(PPORow(m, kind, a, p, sa, sp))
+            say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s (env {sa:.0%}), Pendulum {p:.0f} (env {sp:.0%})")
     finally:
         torch.set_num_threads(threads)
     return rows
@@ -574,12 +603,16 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
         ]
     if report is not None and report.ppo:
         out += [
-            "| SB3 PPO learn | AmigoBot [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) |",
-            "|---|---:|---:|---:|",
+            "| SB3 PPO learn | AmigoBot [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) "
+            "| env's share of learn: AmigoBot | Pendulum |",
+            "|---|---:|---:|---:|---:|---:|",
         ]
         for pr in report.ppo:
             name = f"{pr.n_envs} env(s), AmigoBot{'' if 'v1' in pr.amigobot_vec else '-v0'} via {pr.amigobot_vec}"
-            out.append(f"| {name} | {pr.amigobot:.0f} | {pr.pendulum:.0f} | {pr.ratio:.2f} |")
+            out.append(
+                f"| {name} | {pr.amigobot:.0f} | {pr.pendulum:.0f} | {pr.ratio:.2f} "
+                f"| {pr.amigobot_env_share:.1%} | {pr.pendulum_env_share:.1%} |"
+            )
         out.append("")
     if report is not None and report.v1 is not None:
         v = report.v1
