@@ -261,9 +261,17 @@ _FIRST_STEP_V1 = (
 
 
 def _wall(code: str, env: dict[str, str] | None = None) -> float:
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True)
-    return time.perf_counter() - t0
+    """Wall time [s] from starting a fresh ``python -c code`` to the end of ``code`` (the child reports the
+    clock when it is done: the interpreter's teardown, about 0.3 s with numba loaded, is not start-up)."""
+    t0 = time.time()
+    out = subprocess.run(
+        [sys.executable, "-c", code + "\nimport time as _t\nprint(repr(_t.time()))"],
+        check=True,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    return float(out.stdout.split()[-1]) - t0
 
 
 def _cold_warm(code: str, repeats: int) -> tuple[float, float]:

@@ -635,8 +635,9 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
     return "\n".join(out).rstrip()
 
 
-def plot_vector(rows: Sequence[VectorRow], path: str) -> None:
-    """Env-steps/s against N (log-log): the native env (per step implementation), CartPole, Sync."""
+def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None) -> None:
+    """Env-steps/s against N (log-log): the native env (per step implementation), CartPole, Sync, and with
+    ``v1`` the native AmigoBot-v1 vector env (its default task and the hard one, :data:`V1_HARD`)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -653,6 +654,12 @@ def plot_vector(rows: Sequence[VectorRow], path: str) -> None:
     sync = [(r.n, r.sync) for r in rows if r.sync is not None]
     if sync:
         ax.plot(*zip(*sync, strict=True), "x:", label="SyncVectorEnv(AmigoBot-v0)")
+    if v1 is not None and v1.vector:
+        n1 = sorted(v1.vector)
+        ax.plot(n1, [v1.vector[n][0] for n in n1], "D-", label="AmigoBotV1VectorEnv (default task)")
+        hard = [(n, v1.vector_hard[n]) for n in n1 if n in v1.vector_hard]
+        if hard:
+            ax.plot(*zip(*hard, strict=True), "d--", label="AmigoBotV1VectorEnv (mixed paths, hard)")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("number of sub-envs N")
@@ -746,7 +753,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
         print(format_report(rep.single, rep.vector, rep))
         if args.plot is not None and rep.vector:
-            plot_vector(rep.vector, args.plot)
+            plot_vector(rep.vector, args.plot, rep.v1)
             _log(f"wrote {args.plot}")
         if args.json is not None:
             atomic_write_json(args.json, rep.to_json())
