@@ -57,7 +57,7 @@ class AmigoBotSB3VecEnv(VecEnv):
         render_mode: ``None`` or ``"rgb_array"``.
         env_id: ``"AmigoBot-v0"`` (default) or ``"AmigoBot-v1"`` (then ``max_episode_steps`` defaults to 600).
         **settings: task settings, as keywords of ``gym.make(env_id, ...)`` (``dt``, ``radius``,
-            ``kernel`` for AmigoBot-v0: ``"auto"`` by default, the compiled step when numba is installed,
+            ``kernel`` (both ids): ``"auto"`` by default, the compiled step when numba is installed,
             ``params``, ``robot``, ...).
     """
 
