@@ -59,7 +59,6 @@ depend on the number of threads.
 from __future__ import annotations
 
 import math
-import types
 from collections.abc import Callable
 from typing import cast
 
@@ -70,6 +69,8 @@ from numba.core import types as nb_types
 from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 from numpy.typing import NDArray
+
+from amigo_gym.fast import twin as _twin
 
 __all__ = [
     "RECORD_FIELDS",
@@ -412,15 +413,6 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
     return past
 
 
-def _twin(fn: Callable[..., object], name: str) -> Callable[..., object]:
-    """A copy of ``fn`` named ``name``: numba caches a compiled function under its name, so the serial
-    and the parallel compilation of one loop need two names (else they would share a cache entry)."""
-    twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
-    twin.__qualname__ = name
-    twin.__doc__ = fn.__doc__
-    return twin
-
-
 # Each loop is written once, with ``prange``: compiled without ``parallel`` it is a plain serial loop.
 # The row's code is written in the loop itself (not in a function called per row), which lets LLVM keep
 # every value in registers; a per-row call with a dozen array arguments cost twice the time.
@@ -620,4 +612,4 @@ def single_evaluate(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], ob
 def single_finish(c: F64, buf: F64) -> int:
     """Pass 3 (:func:`finish`) of the robot in ``buf``: the number of headings past the limit (0 or 1)."""
     past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], buf[:, SINGLE_EXPS:SINGLE_REWARD])
-    return past  # type: ignore[return-value]
+    return int(past)

@@ -54,14 +54,13 @@ this file: see :data:`LAYOUT_FINGERPRINT`.
 from __future__ import annotations
 
 import math
-import types
-from collections.abc import Callable
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.actuators import PIECES
+from amigo_gym.fast import twin as _twin
 from amigo_gym.fast_v1 import (
     C_ACC,
     C_DEC,
@@ -889,16 +888,6 @@ def _step_rows(
         args[i, 0] = row[W_ARG_T]
         args[i, 1] = row[W_ARG_V]
         args[i, 2] = row[W_ARG_S]
-
-
-def _twin(fn: Callable[..., None], name: str) -> Callable[..., None]:
-    """A copy of ``fn`` named ``name`` (numba caches a compiled function under its name: the serial and the
-    parallel compilation of one loop need two names)."""
-    assert isinstance(fn, types.FunctionType)
-    twin = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
-    twin.__qualname__ = name
-    twin.__doc__ = fn.__doc__
-    return twin
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

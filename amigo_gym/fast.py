@@ -21,7 +21,8 @@ from __future__ import annotations
 import ctypes
 import importlib.util
 import os
-from collections.abc import Iterator, Sequence
+import types
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
@@ -35,10 +36,13 @@ from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
 __all__ = [
+    "twin",
     "SingleStep",
     "KERNEL_ENV",
     "kernel_mode",
     "numba_available",
+    "KERNELS",
+    "choices",
     "use_fast_path",
     "kernels",
     "kernel_constants",
@@ -57,6 +61,16 @@ Array = NDArray[np.float64]
 KERNEL_ENV = "AMIGO_GYM_KERNEL"
 
 KernelMode = Literal["auto", "numba", "numpy"]
+
+
+#: the values of every env's ``kernel`` keyword (the vector envs also take ``"numba-parallel"``)
+KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
+
+
+def choices(values: Sequence[str]) -> str:
+    """``"'a', 'b' or 'c'"``: allowed values for a one-line error message."""
+    quoted = [repr(v) for v in values]
+    return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " or " + quoted[-1]
 
 
 def kernel_mode() -> KernelMode:
@@ -234,6 +248,17 @@ class StepReport(NamedTuple):
     past_limit: int
 
 
+def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under
+    its name, so the serial and the parallel compilation of one loop need two names (else they would share a cache
+    entry). Used by :mod:`amigo_gym._kernels` and :mod:`amigo_gym._kernels_v1`."""
+    assert isinstance(fn, types.FunctionType)
+    copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
+    copy.__qualname__ = name
+    copy.__doc__ = fn.__doc__
+    return copy
+
+
 class SingleStep:
     """One robot's step by the compiled kernel: the single env's fast path (``AmigoBotEnv(kernel=...)``).
 
@@ -259,6 +284,7 @@ class SingleStep:
         self.buf = np.zeros((1, kk.SINGLE_WIDTH))
         self.flags = np.zeros((1, 2), dtype=np.bool_)
         self.obs = np.zeros((1, obs_dim(k.params)), dtype=np.float32)
+        self.past_limit = 0
         self._bind()
 
     def _bind(self) -> None:
@@ -274,7 +300,7 @@ class SingleStep:
         self.head = self.record[:10]
 
     def __getstate__(self) -> dict[str, object]:
-        return {name: getattr(self, name) for name in ("consts", "preview", "buf", "flags", "obs")}
+        return {name: getattr(self, name) for name in ("consts", "preview", "buf", "flags", "obs", "past_limit")}
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
@@ -292,9 +318,9 @@ class SingleStep:
     def step(self, a1: float, a2: float) -> list[float]:
         """Step the robot with the validated action ``(a1, a2)``; return the record's 16 columns as floats
         (:data:`amigo_gym._kernels.RECORD_FIELDS`: the new state, H, the error, the reward terms and the
-        reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. Headings past
-        :data:`amigo_gym.params.HEADING_LIMIT` are left as they are (the caller reduces them, as
-        :func:`amigo_gym.task.bound_heading`)."""
+        reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. A heading past
+        :data:`amigo_gym.params.HEADING_LIMIT` is left as it is and counted in :attr:`past_limit` (1, else 0):
+        the caller reduces it, as :func:`amigo_gym.task.bound_heading`."""
         b = self.buf
         c = self.consts
         tans = self._tans
@@ -303,7 +329,7 @@ class SingleStep:
         _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
         self._evaluate(c, self.preview, b, self.flags, self.obs)
         _np_exp(exps, exps)
-        self._finish(c, b)
+        self.past_limit = self._finish(c, b)
         rec: list[float] = self.record.tolist()
         return rec
 

@@ -204,7 +204,7 @@ def layout_fingerprint() -> str:
 # ---------------------------------------------------------------------------- selection and data
 
 #: values of the ``kernel=`` keyword of :class:`amigo_gym.envs.AmigoBotV1Env`
-KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
+KERNELS: tuple[str, ...] = fast.KERNELS
 
 
 def use_kernel(owner: str, kernel: object) -> bool:
@@ -218,7 +218,7 @@ def use_kernel(owner: str, kernel: object) -> bool:
             reference's bits.
     """
     if not isinstance(kernel, str) or kernel not in KERNELS:
-        raise ValueError(f"{owner}.kernel must be 'auto', 'numpy' or 'numba', got {kernel!r}")
+        raise ValueError(f"{owner}.kernel must be {fast.choices(KERNELS)}, got {kernel!r}")
     requested = None if kernel == "auto" else kernel == "numba"
     if not fast.use_fast_path(requested):
         return False

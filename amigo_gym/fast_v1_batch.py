@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, tracking
+from amigo_gym import fast_v1, task, tracking
 from amigo_gym.paths.clothoid import ClothoidPath
 
 __all__ = ["PathArena", "BatchKernel", "reward_terms"]
@@ -77,6 +77,8 @@ class PathArena:
         """Rows ``rows`` take ``paths`` (one each, built-in :class:`ClothoidPath` objects)."""
         for i, path in zip(rows, paths, strict=True):
             old = self._row_ids[i]
+            if old == id(path) and old in self._live:  # the same path again (a fixed path): nothing to do
+                continue
             if old:
                 entry = self._live[old]
                 entry[3] -= 1
@@ -248,4 +250,5 @@ def reward_terms(exps: Array, heading: Array, smooth_weight: float) -> tuple[Arr
     """The reward terms ``(track, speed, heading, smooth)`` ``(m,)`` from ``exps (m, 3)`` (:meth:`BatchKernel.step`)
     and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.reward_term_columns` (as
     :meth:`amigo_gym.envs.AmigoBotV1Env._kernel_info`). The reward is their product, in that order."""
-    return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), 1.0 - smooth_weight * (1.0 - exps[:, 2])
+    smooth: Array = np.asarray(task.smooth_term(exps[:, 2], smooth_weight))
+    return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), smooth

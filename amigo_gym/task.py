@@ -95,6 +95,8 @@ __all__ = [
     "real_array",
     "bound_heading",
     "reward_term_columns",
+    "reward_product",
+    "smooth_term",
     "steady_heading",
     "initial_wheel_rates",
     "start_pose",
@@ -476,8 +478,18 @@ def reward_term_columns(
         col_exp(abs_error / -sigma_track),
         col_exp(abs_dv / -sigma_speed),
         0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
-        1.0 - smooth_weight * (1.0 - col_exp(change_sq / -smooth_scale_sq)),
+        smooth_term(col_exp(change_sq / -smooth_scale_sq), smooth_weight),
     )
+
+
+def smooth_term(ex: Real, smooth_weight: float) -> Real:
+    """The smoothness term ``1 - w_s (1 - ex)`` from ``ex = exp(-c / s^2)`` (:func:`reward_term_columns`)."""
+    return 1.0 - smooth_weight * (1.0 - ex)
+
+
+def reward_product(track: Real, speed: Real, heading: Real, smooth: Real) -> Real:
+    """The reward, the product of the four terms in this order: ``((track * speed) * heading) * smooth``."""
+    return ((track * speed) * heading) * smooth
 
 
 def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
@@ -495,8 +507,8 @@ _steady_heading_scalar = lru_cache(maxsize=256)(_steady_heading)
 
 
 def _product(terms: tuple[Real, Real, Real, Real]) -> Real:
-    """The reward, ``((track * speed) * heading) * smooth``, as :func:`combine_reward` multiplies."""
-    return ((terms[0] * terms[1]) * terms[2]) * terms[3]
+    """The reward of the terms ``(track, speed, heading, smooth)`` (:func:`reward_product`)."""
+    return reward_product(*terms)
 
 
 class State(NamedTuple):

@@ -64,7 +64,7 @@ from amigo_gym.actuators import ActuatorParams
 from amigo_gym.kinematics import Real, col_cos, col_sin
 from amigo_gym.params import RobotParams, check_range
 from amigo_gym.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.task import reward_term_columns, steady_heading
+from amigo_gym.task import reward_product, reward_term_columns, steady_heading
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -812,7 +812,7 @@ def evaluate_columns(
         p.smooth_weight,
         k.smooth_scale_sq,
     )
-    reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
+    reward = reward_product(*terms)
     off_path = _abs(e) > p.termination_distance
     closed = path.closed
     at_end: Any

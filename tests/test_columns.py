@@ -207,8 +207,13 @@ def test_vector_env_equals_sync_on_the_manoeuvre_path(mode: AutoresetMode, n: in
         "max_episode_steps": 30,
     }
     vec = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kw)
-    sync = gym.make_vec(
-        "AmigoBot-v0", num_envs=n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kw
+    sync = gym.make_vec(  # the reference: single envs on the numpy float path
+        "AmigoBot-v0",
+        num_envs=n,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": mode},
+        kernel="numpy",
+        **kw,
     )
     g = np.random.default_rng(3)
     rv, rs = vec.reset(seed=9), sync.reset(seed=9)

@@ -280,17 +280,21 @@ def test_flat_path_cached() -> None:
     assert fast_v1.flat_path(path) is fast_v1.flat_path(path)
 
 
-def test_warm_cache_start_is_quick() -> None:
+def test_warm_cache_start_compiles_nothing() -> None:
     """A second process loads the compiled step from numba's disk cache: building the env, the first reset and the
-    first step (numba's own import and set-up included, no compilation) well under a second."""
+    first step compile nothing (every compiled function it calls is a cache hit). (How long that start takes is the
+    benchmark's business: ``amigo-gym bench-core``.)"""
     AmigoBotV1Env(kernel="numba").reset(seed=0)  # compiled (and cached) in this process at the latest
     code = (
-        "import time; import numpy as np; from amigo_gym.envs import AmigoBotV1Env; t = time.perf_counter(); "
-        "e = AmigoBotV1Env(kernel='numba'); e.reset(seed=0); e.step(np.zeros(2)); "
-        "print(time.perf_counter() - t)"
+        "import numpy as np; from numba.core.registry import CPUDispatcher; from amigo_gym.envs import AmigoBotV1Env\n"
+        "e = AmigoBotV1Env(kernel='numba'); e.reset(seed=0); e.step(np.zeros(2))\n"
+        "import amigo_gym._kernels_v1 as k\n"
+        "ds = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)]\n"
+        "print(sum(sum(d.stats.cache_misses.values()) for d in ds), sum(sum(d.stats.cache_hits.values()) for d in ds))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert float(out.stdout.strip().splitlines()[-1]) < 1.0
+    misses, hits = (int(x) for x in out.stdout.split()[-2:])
+    assert misses == 0 and hits > 0, (misses, hits)
 
 
 def test_layout_fingerprint() -> None:

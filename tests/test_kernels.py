@@ -395,6 +395,7 @@ def test_single_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     """``kernel`` selects the step; ``"auto"`` follows AMIGO_GYM_KERNEL; a bad value is refused in one line."""
     import gymnasium as gym
 
+    monkeypatch.delenv(fast.KERNEL_ENV, raising=False)
     assert gym.make("AmigoBot-v0").unwrapped._fast is not None  # auto, numba installed
     monkeypatch.setenv(fast.KERNEL_ENV, "numpy")
     assert gym.make("AmigoBot-v0").unwrapped._fast is None

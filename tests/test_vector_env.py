@@ -42,8 +42,13 @@ def assert_identical(a: Any, b: Any, where: str = "") -> None:
 
 def make_pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.VectorEnv[Any, Any, Any], SyncVectorEnv]:
     vec = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kw)
+    # the reference: single envs on the numpy float path (the native env runs its default, the compiled step)
     sync = gym.make_vec(
-        "AmigoBot-v0", num_envs=n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kw
+        "AmigoBot-v0",
+        num_envs=n,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": mode},
+        **{**kw, "kernel": "numpy"},
     )
     assert isinstance(vec.unwrapped, AmigoBotVectorEnv) and isinstance(sync, SyncVectorEnv)
     return vec, sync

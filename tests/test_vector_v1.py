@@ -21,8 +21,13 @@ def _pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.VectorEnv,
     steps = kw.pop("max_episode_steps", None)
     extra = {} if steps is None else {"max_episode_steps": steps}
     native = gym.make_vec("AmigoBot-v1", n, vectorization_mode="vector_entry_point", autoreset_mode=mode, **extra, **kw)
-    sync = gym.make_vec(
-        "AmigoBot-v1", n, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **extra, **kw
+    sync = gym.make_vec(  # the reference: single envs on the Python float path
+        "AmigoBot-v1",
+        n,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": mode},
+        **extra,
+        **{**kw, "kernel": "numpy"},
     )
     assert isinstance(native.unwrapped, AmigoBotV1VectorEnv)
     return native, sync

@@ -220,7 +220,8 @@ def test_pickled_env_continues_identically() -> None:
         _equal_results(r[0], r[2], f"clone step {t} vs numpy")
 
 
-def test_kernel_keyword() -> None:
+def test_kernel_keyword(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("AMIGO_GYM_KERNEL", raising=False)  # "auto" as without the variable
     with pytest.raises(ValueError, match=r"kernel must be 'auto', 'numpy', 'numba' or 'numba-parallel', got 'fast'"):
         AmigoBotV1VectorEnv(2, kernel="fast")
     with pytest.raises(ValueError, match="kernel must be"):
@@ -305,19 +306,24 @@ def test_path_arena_survives_pickling() -> None:
     assert clone._live[id(paths[0])][3] == 3 and id(paths[1]) not in clone._live
 
 
-def test_warm_cache_start_is_quick() -> None:
-    """A second process loads the batch loops from numba's disk cache (no compilation): building the env, the first
-    reset and the first step (numba's import and set-up included) in well under two seconds."""
+def test_warm_cache_start_compiles_nothing() -> None:
+    """A second process loads the batch loops from numba's disk cache: building the env, the first reset and the
+    first step compile nothing (every compiled function called is a cache hit; the start's duration is measured by
+    ``amigo-gym bench-core``, not here)."""
     import subprocess
     import sys
 
     code = (
-        "import time; import numpy as np; from amigo_gym.envs import AmigoBotV1VectorEnv; t = time.perf_counter(); "
-        "e = AmigoBotV1VectorEnv(4, kernel='numba', randomize='hard'); e.reset(seed=0); e.step(np.zeros((4, 2))); "
-        "print(time.perf_counter() - t)"
+        "import numpy as np; from numba.core.registry import CPUDispatcher\n"
+        "from amigo_gym.envs import AmigoBotV1VectorEnv\n"
+        "e = AmigoBotV1VectorEnv(4, kernel='numba', randomize='hard'); e.reset(seed=0); e.step(np.zeros((4, 2)))\n"
+        "import amigo_gym._kernels_v1 as k\n"
+        "ds = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)]\n"
+        "print(sum(sum(d.stats.cache_misses.values()) for d in ds), sum(sum(d.stats.cache_hits.values()) for d in ds))"
     )
     warm = AmigoBotV1VectorEnv(4, kernel="numba", randomize="hard")  # compiled (and cached) here at the latest
     warm.reset(seed=0)
     warm.step(np.zeros((4, 2)))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert float(out.stdout.strip().splitlines()[-1]) < 1.5
+    misses, hits = (int(x) for x in out.stdout.split()[-2:])
+    assert misses == 0 and hits > 0, (misses, hits)

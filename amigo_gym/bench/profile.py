@@ -166,7 +166,7 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
         "AmigoBot `gym.make` step": wrapped,
         "AmigoBot unwrapped `env.step`": unwrapped,
         "`task.step_columns` on Python floats": lambda: task.step_columns(raw._k, raw.path, start, 0.27, 0.27, True),
-        "`task.step_float` (what the env's step runs)": lambda: task.step_float(raw._k, raw.path, start, 0.27, 0.27),
+        "`task.step_float` (kernel='numpy')": lambda: task.step_float(raw._k, raw.path, start, 0.27, 0.27),
         "`task.validate_action`": lambda: task.validate_action(a).tolist(),
         "Pendulum `gym.make` step": lambda: pend.step(ap),
         "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),
@@ -191,6 +191,23 @@ def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
     return "\n".join([head, "|---:|---:|---:|---:|---:|---:|", *(_gap_row(n, repeats, min_time) for n in sizes)])
 
 
+def libm(n: int = 100_000, seed: int = 0) -> str:
+    """Markdown table: how many of ``n`` float64 arguments (uniform in [-10, 10]; ``log``: in (0, 20]) get other bits
+    from numpy's ``sin``, ``cos``, ``tan``, ``exp``, ``log`` than from the C library's (Python's ``math``, which the
+    compiled kernels call). Why the kernels compute ``sin``/``cos`` themselves and leave the others to numpy."""
+    import math
+
+    g = np.random.default_rng(seed)
+    x = g.uniform(-10.0, 10.0, n)
+    pos = g.uniform(0.0, 20.0, n) + 1e-300
+    rows = ["| function | arguments | numpy != C library |", "|---|---:|---:|"]
+    for name, args in (("sin", x), ("cos", x), ("tan", x), ("exp", x), ("log", pos)):
+        ours = np.array([getattr(math, name)(v) for v in args.tolist()])
+        theirs = getattr(np, name)(args)
+        rows.append(f"| `{name}` | {n} | {int(np.count_nonzero(ours.view(np.int64) != theirs.view(np.int64)))} |")
+    return "\n".join(rows)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point."""
     p = OneLineParser(prog=PROG, description="cProfile of AmigoBot-v0's single and vector env steps.")
@@ -200,6 +217,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
     p.add_argument("--gap", action="store_true", help="instead: the kernel env against CartPole, with/without restarts")
     p.add_argument("--single-parts", action="store_true", help="instead: a single step and its parts vs Pendulum")
+    p.add_argument("--libm", action="store_true", help="instead: numpy's transcendental functions vs the C library's")
     args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
 
     def go() -> int:
@@ -208,6 +226,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
         if args.single_parts:
             print(single_parts())
+            return 0
+        if args.libm:
+            print(libm())
             return 0
         total, rows = profile_steps(_single(0), args.steps, args.top)
         print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")

@@ -42,7 +42,7 @@ TRAIL_LENGTH = 1000
 
 _np_array = np.array
 #: the values of the single env's ``kernel`` keyword
-SINGLE_KERNELS = ("auto", "numpy", "numba")
+SINGLE_KERNELS = fast.KERNELS
 
 
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
@@ -312,7 +312,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     ) -> None:
         owner = type(self).__name__
         if not isinstance(kernel, str) or kernel not in SINGLE_KERNELS:
-            raise ValueError(f"{owner}.kernel must be 'auto', 'numpy' or 'numba', got {kernel!r}")
+            raise ValueError(f"{owner}.kernel must be {fast.choices(SINGLE_KERNELS)}, got {kernel!r}")
         self.params: EnvParams = make_env_params(owner, params, robot, **settings)
         self.render_mode = check_render_mode(render_mode)
         p = self.params
@@ -469,7 +469,7 @@ class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         fs = self._fast
         assert fs is not None
         rec = fs.step(a1, a2)
-        if not -HEADING_LIMIT <= rec[2] <= HEADING_LIMIT:  # as task.bound_heading, in the state and the info
+        if fs.past_limit:  # |beta| > HEADING_LIMIT: as task.bound_heading, in the state and the info
             st = task.bound_heading(self._state)
             self._state = st
             rec[2] = fs.record[2] = float(st.beta)

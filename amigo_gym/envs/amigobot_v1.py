@@ -14,7 +14,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, tracking
+from amigo_gym import fast_v1, task, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
@@ -284,7 +284,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._last_command = (o[_W_CMD1], o[_W_CMD2])
         info = self._kernel_info(o, o[_W_SLIP1], o[_W_SLIP2])
         terms = info["reward_terms"]
-        reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
+        reward = float(task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"]))
         terminated = o[_W_TERM] != 0.0
         self._done = terminated
         if self.render_mode is not None:
@@ -344,7 +344,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
                 "track": track,
                 "speed": speed,
                 "heading": o[_W_HEADING],
-                "smooth": 1.0 - self.params.smooth_weight * (1.0 - ex),
+                "smooth": task.smooth_term(ex, self.params.smooth_weight),
             },
             "time": self._steps * self.params.dt,
             "path": dict(self._path_info),

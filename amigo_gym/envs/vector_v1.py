@@ -32,7 +32,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, fast_v1_batch, tracking
+from amigo_gym import fast, fast_v1, fast_v1_batch, task, tracking
 from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
 from amigo_gym.envs.vector import (
@@ -130,7 +130,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
         if not isinstance(kernel, str) or kernel not in KERNELS:
-            raise ValueError(f"{owner}.kernel must be 'auto', 'numpy', 'numba' or 'numba-parallel', got {kernel!r}")
+            raise ValueError(f"{owner}.kernel must be {fast.choices(KERNELS)}, got {kernel!r}")
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
@@ -385,7 +385,9 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         np.add(steps, 1, out=steps)
         infos = self._kernel_infos(slice(None), exps, b.ws[:, _W_SLIP1 : _W_SLIP2 + 1].copy())
         terms = infos["reward_terms"]
-        reward = ((terms["track"] * terms["speed"]) * terms["heading"]) * terms["smooth"]
+        reward: Array = np.asarray(
+            task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"])
+        )
         terminated: BoolArray = b.ws[:, _W_TERM] != 0.0
         return obs, reward, terminated, infos, infos["h_position"][:, 0], infos["h_position"][:, 1]
 
