@@ -87,7 +87,7 @@ def test_sqlite_two_worker_processes_share_the_budget(tmp_path: Path) -> None:
     ran = [t for t in trials if t.state in (TrialState.COMPLETE, TrialState.PRUNED)]
     assert len(ran) == 4, [(t.number, t.state, t.user_attrs) for t in trials]
     others = [t for t in trials if t not in ran]
-    assert all(t.state == TrialState.FAIL and t.user_attrs.get("over_budget", True) for t in others)
+    assert all(t.state == TrialState.FAIL and t.user_attrs.get("over_budget") is True for t in others), others
     assert not [t for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
     workers = {t.user_attrs["worker"]: t.user_attrs["sampler_seed"] for t in ran}
     assert len(set(workers.values())) == len(workers)  # distinct sampler seeds per worker
@@ -150,7 +150,13 @@ def test_postgresql_two_concurrent_workers_run_the_seed_grid_once(tmp_path: Path
     assert sorted(t.params["seed"] for t in done) == [0, 1, 2, 3], [(t.number, t.state, t.params) for t in trials]
     assert all(t.params["algo"] == "ppo" for t in done)
     assert not [t for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
-    assert len(trials) == 4  # the grid was enqueued once, no extra trial
+    # the grid was enqueued once: four grid trials; a worker that asked for a trial just after the other took the
+    # last queued one got a fresh trial, which ends FAIL marked over_budget and counts nowhere (module docstring)
+    grid = [t for t in trials if t.user_attrs.get("grid") is True]
+    assert len(grid) == 4 and all(t.state == TrialState.COMPLETE for t in grid), trials
+    extra = [t for t in trials if t not in grid]
+    assert all(t.state == TrialState.FAIL and t.user_attrs.get("over_budget") is True for t in extra), extra
+    assert len(extra) <= 2  # at most one per worker: a worker stops its study loop after the first
     # both workers joined the one study (which of them ran how many trials depends on the machine's load:
     # on a busy machine the first may take them all before the second starts)
     assert sum("Using an existing study" in o for o in outs) >= 1, outs

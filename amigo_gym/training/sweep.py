@@ -344,12 +344,14 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         if cfg.mode == "seeds":
             if "fixed_params" not in study._storage.get_trial_system_attrs(trial._trial_id):
                 study.stop()
+                trial.set_user_attr("over_budget", True)
                 raise _OverBudget("the grid is exhausted")
             algo = str(trial.suggest_categorical("algo", cfg.algos))
             seed = int(trial.suggest_categorical("seed", cfg.seeds))
         else:
             if budget_count(study, before=trial.number) >= cfg.budget:
                 study.stop()
+                trial.set_user_attr("over_budget", True)
                 raise _OverBudget(f"the global budget of {cfg.budget} trials is reached")
             algo, seed = cfg.algos[0], cfg.train_seed
         run_dir = Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}"
