@@ -59,7 +59,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.actuators import PIECES
+from amigo_gym.actuators import PIECES, _ramp_float
 from amigo_gym.fast import twin as _twin
 from amigo_gym.fast_v1 import (
     C_ACC,
@@ -165,15 +165,17 @@ from amigo_gym.paths.clothoid import (
     STATUS_START,
     STATUS_WINDOW,
 )
+from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
 
 __all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
 F64 = NDArray[np.float64]
 
-#: the :func:`amigo_gym.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts and the
-#: constants imported above into the kernels and keys its disk cache on this file alone: when they change, this
-#: line must change too (the check below refuses to load otherwise), which also invalidates the cached code.
-LAYOUT_FINGERPRINT = "11ac7d05305dc062"
+#: the :func:`amigo_gym.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
+#: constants and the reference functions imported above into the kernels and keys its disk cache on this file
+#: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
+#: invalidates the cached code.
+LAYOUT_FINGERPRINT = "467f570db5f88a18"
 if layout_fingerprint() != LAYOUT_FINGERPRINT:
     raise ImportError(
         f"amigo_gym._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.fast_v1 now has "
@@ -207,14 +209,8 @@ def _py_max(a: float, b: float) -> float:
     return b if b > a else a
 
 
-@_jit
-def _np_clip(x: float, lo: float, hi: float) -> float:
-    # clothoid._np_clip: float(np.clip(x, lo, hi)) (NaN propagates, ties take the bound)
-    if not (x != x or x > lo):
-        x = lo
-    if not (x != x or x < hi):
-        x = hi
-    return x
+#: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
+_np_clip = _jit(clothoid_np_clip)
 
 
 @_jit
@@ -234,32 +230,8 @@ def _task_clip(x: float, low: float, high: float) -> float:
 # ----------------------------------------------------------------------------------------- actuators
 
 
-@_jit
-def _ramp(
-    u0: float, target: float, accel: float, decel: float, duration: float
-) -> tuple[float, float, float, float, float, float]:
-    # actuators._ramp_float: (t_a, t_b, u_a, u_b, s_a, s_b)
-    if u0 * target < 0.0:
-        u_z = 0.0
-        t_z = abs(u0) / decel
-        s_a = math.copysign(decel, -u0)
-    else:
-        u_z = u0
-        t_z = 0.0
-        s_a = 0.0
-    d = target - u_z
-    rate = accel if abs(target) > abs(u_z) else decel
-    t_r = t_z + abs(d) / rate
-    s_b = math.copysign(rate, d)
-    z_in = t_z <= duration
-    u_a = u_z if z_in else u0 + s_a * duration
-    if t_r <= duration:
-        u_b = target
-    elif z_in:
-        u_b = u_z + s_b * (duration - t_z)
-    else:
-        u_b = u_a
-    return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
+#: actuators._ramp_float itself, compiled: ``(t_a, t_b, u_a, u_b, s_a, s_b)`` of one firmware ramp
+_ramp = _jit(_ramp_float)
 
 
 @_jit

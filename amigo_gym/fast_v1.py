@@ -24,6 +24,7 @@ it can be imported). numba is imported only when a :class:`StepKernel` is first 
 from __future__ import annotations
 
 import hashlib
+import inspect
 from functools import lru_cache
 from types import ModuleType
 from typing import Any
@@ -179,9 +180,10 @@ S_U2 = S_LOG + 5
 
 
 def layout_fingerprint() -> str:
-    """A short hash of the layouts above and of the constants the kernel takes from their homes
+    """A short hash of the layouts above, of the constants the kernel takes from their homes
     (:data:`amigo_gym.actuators.PIECES`, :data:`amigo_gym.fresnel.NODES`, the projection's Newton iterations,
-    smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`).
+    smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`) and of the source of the reference's
+    float functions the kernel compiles as they are (``actuators._ramp_float``, ``clothoid._np_clip``).
 
     numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
     :mod:`amigo_gym._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
@@ -198,7 +200,9 @@ def layout_fingerprint() -> str:
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
     )
     layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
-    return hashlib.sha256(repr((layout, homes)).encode()).hexdigest()[:16]
+    # the reference's own float functions that the kernel compiles as they are (one source: their text counts)
+    shared = tuple(inspect.getsource(f) for f in (actuators._ramp_float, clothoid._np_clip))
+    return hashlib.sha256(repr((layout, homes, shared)).encode()).hexdigest()[:16]
 
 
 # ---------------------------------------------------------------------------- selection and data
