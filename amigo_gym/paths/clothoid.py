@@ -802,6 +802,8 @@ def _np_clip(x: float, lo: float, hi: float) -> float:
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
+#: a unit-speed pose ``(x, y, theta, cos theta, sin theta)`` (:func:`amigo_gym.fresnel.unit_speed_pose`)
+UnitPose = tuple[float, float, float, float, float]
 
 
 def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
@@ -809,8 +811,9 @@ def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
     return PathPose(*_pose_tuple(t, closed, s))
 
 
-def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
-    """The fields of :func:`_pose_float` as a plain tuple of floats."""
+def _piece_of(t: _Tables, closed: bool, s: float) -> tuple[int, float, float, float]:
+    """The piece ``j`` holding the float arc length ``s``, the distance ``du`` into it, the lap number and the
+    length ``extra`` past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and search)."""
     length = t.length
     lap: float
     if closed:
@@ -823,11 +826,15 @@ def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
         extra = s - u
     s0 = t.s0
     j = min(max(bisect.bisect_right(s0, u) - 1, 0), len(s0) - 1)
-    k0 = t.k0[j]
+    return j, u - s0[j], lap, extra
+
+
+def _placed(t: _Tables, closed: bool, pose: UnitPose, j: int, du: float, lap: float, extra: float) -> FloatPose:
+    """The float pose at ``du`` into piece ``j`` (``pose``: its unit-speed ``x, y, theta, cos, sin``) on the whole
+    path: laps of a closed path add whole turns to the heading, an open path goes straight on past its ends."""
+    x, y, th, cos_t, sin_t = pose
     c = t.c[j]
-    du = u - s0[j]
-    x, y, th, cos_t, sin_t = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], k0, c, du)
-    kappa = k0 + c * du
+    kappa = t.k0[j] + c * du
     if closed:
         return x, y, th + lap * t.turn, kappa, c, cos_t, sin_t
     if extra != 0.0:
@@ -835,37 +842,21 @@ def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
     return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
 
 
+def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
+    """The fields of :func:`_pose_float` as a plain tuple of floats."""
+    j, du, lap, extra = _piece_of(t, closed, s)
+    pose = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j], du)
+    return _placed(t, closed, pose, j, du, lap, extra)
+
+
 def _poses_tuple(t: _Tables, closed: bool, ss: list[float]) -> list[FloatPose]:
     """:func:`_pose_tuple` of several floats, the cosines and sines of all in one numpy call each."""
-    length = t.length
-    s0 = t.s0
-    last = len(s0) - 1
-    starts: list[tuple[float, float, float, float, float, float]] = []
-    rest: list[tuple[float, float, float, float]] = []
-    for s in ss:
-        if closed:
-            lap = float(math.floor(s / length))
-            u = s - lap * length
-            extra = 0.0
-        else:
-            lap = 0.0
-            u = min(max(s, 0.0), length)
-            extra = s - u
-        j = min(max(bisect.bisect_right(s0, u) - 1, 0), last)
-        k0 = t.k0[j]
-        c = t.c[j]
-        du = u - s0[j]
-        starts.append((t.x0[j], t.y0[j], t.th0[j], k0, c, du))
-        rest.append((lap, extra, k0 + c * du, c))
-    out: list[FloatPose] = []
-    for (x, y, th, cos_t, sin_t), (lap, extra, kappa, c) in zip(unit_speed_poses(starts), rest, strict=True):
-        if closed:
-            out.append((x, y, th + lap * t.turn, kappa, c, cos_t, sin_t))
-        elif extra != 0.0:
-            out.append((x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t))
-        else:
-            out.append((x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t))
-    return out
+    where = [_piece_of(t, closed, s) for s in ss]
+    starts = [(t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j], du) for j, du, _, _ in where]
+    return [
+        _placed(t, closed, pose, j, du, lap, extra)
+        for pose, (j, du, lap, extra) in zip(unit_speed_poses(starts), where, strict=True)
+    ]
 
 
 _ARANGE: dict[int, NDArray[np.float64]] = {}
