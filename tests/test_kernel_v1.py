@@ -221,6 +221,7 @@ def test_platform_without_numpy_bits(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_kernel_keyword_and_fallback(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("AMIGO_GYM_KERNEL", raising=False)  # "auto" as without the variable
     with pytest.raises(ValueError, match="kernel must be 'auto', 'numpy' or 'numba'"):
         AmigoBotV1Env(kernel="fast")
     assert AmigoBotV1Env()._kernel is not None  # auto, numba installed

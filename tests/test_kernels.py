@@ -8,6 +8,7 @@ rows are evaluated as task.reset_columns does.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from typing import Any
@@ -236,7 +237,10 @@ def test_import_amigo_gym_does_not_load_numba() -> None:
         "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
         "print('numba' in sys.modules)"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    env = {k: v for k, v in os.environ.items() if k != fast.KERNEL_ENV}  # "auto" as without the variable
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    ).stdout.split()
     assert out == ["False", "False", "True"]
 
 
@@ -285,6 +289,7 @@ def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) ->
 def test_vector_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     from amigo_gym.envs.vector import AmigoBotVectorEnv
 
+    monkeypatch.delenv(fast.KERNEL_ENV, raising=False)  # "auto" as without the variable
     with pytest.raises(ValueError, match="kernel"):
         AmigoBotVectorEnv(num_envs=2, kernel="cuda")
     assert AmigoBotVectorEnv(num_envs=2, kernel="numpy")._ws is None
