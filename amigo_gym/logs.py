@@ -191,7 +191,9 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
         raise LogError(f"{p.name}: missing column(s) {missing}; the header has {names} (a log needs t, cmd_w1, "
                        "cmd_w2 and x, y, theta and/or w1, w2)")  # fmt: skip
     if not any(has_pose) and not any(has_rates):
-        raise LogError(f"{p.name}: no measurement columns: a log needs x, y, theta and/or w1, w2; the header has {names}")
+        raise LogError(
+            f"{p.name}: no measurement columns: a log needs x, y, theta and/or w1, w2; the header has {names}"
+        )
     used = [c for c in CSV_COLUMNS if c in names]
     index = {c: names.index(c) for c in used}
     data = np.empty((len(rows) - 1, len(used)))
@@ -209,8 +211,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
     if bad.size:
         k = int(bad[0]) + 1
         raise LogError(
-            f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} "
-            f"(t = {t[k]!r} after {t[k - 1]!r})"
+            f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} (t = {t[k]!r} after {t[k - 1]!r})"
         )
     pose = np.stack([col["x"], col["y"], np.unwrap(col["theta"])], axis=1) if all(has_pose) else None
     rates = np.stack([col["w1"], col["w2"]], axis=1) if all(has_rates) else None
@@ -282,7 +283,7 @@ def read_bag(
         pose: list[tuple[float, float, float]] = []
         conns = [c for c in reader.connections if c.topic in (cmd_topic, pose_topic)]
         for conn, stamp, raw in reader.messages(connections=conns):
-            msg = reader.deserialize(raw, conn.msgtype)
+            msg: Any = reader.deserialize(raw, conn.msgtype)
             if conn.topic == cmd_topic:
                 tw = msg.twist if conn.msgtype.endswith("Stamped") else msg
                 t_c.append(stamp)
@@ -309,7 +310,9 @@ def read_bag(
     lw = nominal.l1 * vc[:, 1]
     wheel = np.stack([(vc[:, 0] + lw) / nominal.r1, (vc[:, 0] - lw) / nominal.r2], axis=1)
     vp[:, 2] = np.unwrap(vp[:, 2])
-    log = Log((tc - t0) * 1e-9, wheel, (tp - t0) * 1e-9, vp, None, source=f"{p.name} ({cmd_topic}, {pose_topic})")
+    t_cmd = np.asarray((tc - t0) * 1e-9, dtype=np.float64)
+    t_meas = np.asarray((tp - t0) * 1e-9, dtype=np.float64)
+    log = Log(t_cmd, wheel, t_meas, vp, None, source=f"{p.name} ({cmd_topic}, {pose_topic})")
     check_log(log, nominal, names={"t": "bag time", "cmd": f"{cmd_topic} (as wheel rates)", "pose": pose_topic,
                                    "theta": f"{pose_topic} heading", "rates": ""}, where=p.name)  # fmt: skip
     return log
@@ -484,7 +487,7 @@ def simulate(
         if hi == lo:
             s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], cur[0], cur[1], 0.0, tb - ta, nominal, act,
                               r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-            x, y, beta, w1, w2 = s.x, s.y, s.beta, s.w1, s.w2
+            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
         else:
             # the first switch inside the first call; each further switch starts a call of its own
             edges = [*switch[lo + 1 : hi].tolist(), tb]
@@ -492,14 +495,14 @@ def simulate(
             seg_end = edges[0]
             s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], new[0], new[1], float(switch[lo]) - ta,
                               seg_end - ta, nominal, act, r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-            x, y, beta, w1, w2 = s.x, s.y, s.beta, s.w1, s.w2
+            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
             for i in range(1, len(edges)):
                 c = cmds[lo + i]
                 length = edges[i] - edges[i - 1]
                 if length > 0.0:
                     s = actuator_step(x, y, beta, w1, w2, c[0], c[1], c[0], c[1], 0.0, length, nominal, act,
                                       r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-                    x, y, beta, w1, w2 = s.x, s.y, s.beta, s.w1, s.w2
+                    x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
         out[k + 1] = (x, y, beta, w1, w2)
     return Replay(t.copy(), out[:, :3].copy(), out[:, 3:].copy())
 

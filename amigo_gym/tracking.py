@@ -269,7 +269,8 @@ def make_tracking_params(
     ``robot`` a :class:`RobotParams` or a mapping of its fields; ``true_robot`` a mapping of the fields
     that differ from the nominal robot (or a whole ``RobotParams``, or the path of a robot file such as the
     ``robot.json`` of ``amigo-gym identify``: its ``r1``, ``r2``, ``l1`` [m] on the nominal robot, its ``delay``
-    [s] and ramp rates on ``actuators``, where an ``actuators`` mapping's own fields win; :mod:`amigo_gym.logs`); ``actuators`` a mapping of
+    [s] and ramp rates on ``actuators``, where an ``actuators`` mapping's own fields win; :mod:`amigo_gym.logs`);
+    ``actuators`` a mapping of
     :class:`ActuatorParams` fields; ``randomize`` a preset name or a mapping of :class:`Randomization` fields;
     ``path_params`` a mapping; ``params`` a whole :class:`TrackingParams` or a mapping of its fields.
 
