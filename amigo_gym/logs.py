@@ -97,6 +97,7 @@ CSV_COLUMNS: dict[str, str] = {
 FIT_BOUNDS = MAX_TRUE_DEVIATION
 #: search box of the ramp rates in :func:`identify`, as factors of the nominal ones
 RAMP_FACTORS = (0.1, 10.0)
+XTOL = 1e-10
 _ROBOT_FIELDS = frozenset(f.name for f in fields(RobotParams))
 _ACTUATOR_FIELDS = frozenset(f.name for f in fields(ActuatorParams))
 _META_FIELDS = frozenset(
@@ -149,13 +150,13 @@ class Replay:
 # --------------------------------------------------------------------------------------------- reading
 
 
-def _float_cell(text: str, column: str, line: int) -> float:
+def _float_cell(text: str, column: str, line: int, where: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise LogError(f"column {column!r}: {text.strip()!r} at line {line} is not a number") from None
+        raise LogError(f"{where}: column {column!r}: {text.strip()!r} at line {line} is not a number") from None
     if not math.isfinite(value):
-        raise LogError(f"column {column!r}: {text.strip()} at line {line}; every value must be finite")
+        raise LogError(f"{where}: column {column!r}: {text.strip()} at line {line}; every value must be finite")
     return value
 
 
@@ -202,7 +203,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
             i = index[c]
             if i >= len(row) or not row[i].strip():
                 raise LogError(f"{p.name}: column {c!r} is empty at line {line}")
-            data[k, j] = _float_cell(row[i], c, line)
+            data[k, j] = _float_cell(row[i], c, line, p.name)
     if data.shape[0] < 3:
         raise LogError(f"{p.name}: {data.shape[0]} data row(s); a log needs at least 3")
     col = {c: data[:, j] for j, c in enumerate(used)}
@@ -211,7 +212,8 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
     if bad.size:
         k = int(bad[0]) + 1
         raise LogError(
-            f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} (t = {t[k]!r} after {t[k - 1]!r})"
+            f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} "
+            f"(t = {float(t[k])!r} after {float(t[k - 1])!r})"
         )
     pose = np.stack([col["x"], col["y"], np.unwrap(col["theta"])], axis=1) if all(has_pose) else None
     rates = np.stack([col["w1"], col["w2"]], axis=1) if all(has_rates) else None
@@ -812,7 +814,7 @@ def identify(
             best, z_start = c, z
     sol = least_squares(
         residuals, np.asarray(z_start), bounds=(np.asarray(lo), np.asarray(hi)), x_scale=np.asarray(x_scale),
-        method="trf", jac="2-point", xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200,
+        method="trf", jac="2-point", xtol=XTOL, ftol=XTOL, gtol=XTOL, max_nfev=200,
     )  # fmt: skip
     jac = np.asarray(sol.jac, dtype=np.float64)
     n_res = int(sol.fun.size)

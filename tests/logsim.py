@@ -10,6 +10,7 @@ moving the body. Its error against the exact motion is of order ``h`` times the 
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -160,3 +161,32 @@ def write_bag(path: Path, t: np.ndarray, cmd: np.ndarray, pose: np.ndarray, cmd_
                 w = R_NOM * (c1 - c2) / (2 * L1_NOM)
                 tw = Twist(linear=Vector3(x=v, y=0.0, z=0.0), angular=Vector3(x=0.0, y=0.0, z=w))
                 wr.write(c_cmd, stamp + 1_000_000, ts.serialize_cdr(tw, "geometry_msgs/msg/Twist"))
+
+
+#: the robot of the tests and of the example in docs/logs.md: radii, half track [m], delay [s]
+TRUE = {"r1": 0.0515, "r2": 0.0490, "l1": 0.1296, "delay": 0.13}
+#: pose noise of the tests and the example: position per axis [m], heading [rad]
+SIGMA_XY = 0.002
+SIGMA_TH = 0.002
+
+
+def example(out: Path, seconds: float = 20.0, dt: float = 0.1, seed: int = 7) -> None:
+    """Write ``run.csv`` (pose with noise), ``run_bag/`` (the same as a ROS 2 bag) and ``truth.json`` into ``out``."""
+    cmd = commands(seconds, dt)
+    t, pose, _ = run(cmd, dt, TRUE["r1"], TRUE["r2"], TRUE["l1"], TRUE["delay"])
+    rng = np.random.default_rng(seed)
+    noisy = pose + rng.normal(size=pose.shape) * np.array([SIGMA_XY, SIGMA_XY, SIGMA_TH])
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(out / "run.csv", t, cmd, noisy, None)
+    write_bag(out / "run_bag", t, cmd, noisy)
+    (out / "truth.json").write_text(json.dumps({**TRUE, "sigma_xy": SIGMA_XY, "sigma_theta": SIGMA_TH}, indent=2))
+
+
+if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser(description="Write an example robot log made by the independent simulator.")
+    parser.add_argument(
+        "--out", required=True, help="folder for run.csv, run_bag/ and truth.json (must not hold a bag)"
+    )
+    example(Path(parser.parse_args().out))

@@ -25,9 +25,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import logsim
 
 DT = 0.1
-TRUE = {"r1": 0.0515, "r2": 0.0490, "l1": 0.1296, "delay": 0.13}
-SIGMA_XY = 0.002  # pose noise [m] per axis
-SIGMA_TH = 0.002  # heading noise [rad]
+TRUE, SIGMA_XY, SIGMA_TH = logsim.TRUE, logsim.SIGMA_XY, logsim.SIGMA_TH
 
 
 @pytest.fixture(scope="module")
@@ -216,7 +214,7 @@ def _bad_cases(run: tuple[np.ndarray, ...], tmp: Path) -> dict[str, tuple[Path, 
     cases["time backwards"] = (_write_rows(tmp / "c.csv", HEAD, back), "not strictly increasing at line 42")
     nan = [list(r) for r in rows]
     nan[10][3] = float("nan")
-    cases["NaN"] = (_write_rows(tmp / "d.csv", HEAD, nan), "column 'x': nan at line 12")
+    cases["NaN"] = (_write_rows(tmp / "d.csv", HEAD, nan), "d.csv: column 'x': nan at line 12")
     ms = [[r[0] * 1000, *r[1:]] for r in rows]
     cases["time in ms"] = (_write_rows(tmp / "e.csv", HEAD, ms), "seconds")
     mm = [[r[0], r[1], r[2], r[3] * 1000, r[4] * 1000, r[5]] for r in rows]
