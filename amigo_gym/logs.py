@@ -614,16 +614,20 @@ def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dic
 
 
 def robot_from_file(
-    path: str | os.PathLike[str], nominal: RobotParams | None = None
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, actuators: ActuatorParams | None = None
 ) -> tuple[RobotParams, ActuatorParams]:
-    """The true robot and actuators of a robot file: its values on top of ``nominal`` and the default ramps.
+    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``.
+
+    Used for ``--robot`` (the true robot, on the nominal one) and ``--nominal`` (the nominal robot and the
+    firmware's ramps, on :class:`RobotParams` and :class:`ActuatorParams` defaults).
 
     Raises:
         FileNotFoundError, ValueError: as :func:`load_robot_file`, and a value out of its range (one line).
     """
     nominal = RobotParams() if nominal is None else nominal
+    actuators = ActuatorParams() if actuators is None else actuators
     robot, act = load_robot_file(path)
-    return replace(nominal, **robot), replace(ActuatorParams(), **act)
+    return replace(nominal, **robot), replace(actuators, **act)
 
 
 # --------------------------------------------------------------------------------------------- identify
@@ -660,13 +664,13 @@ class Fit:
     excited: dict[str, float]
 
     def robot_json(self, log: Log, nominal: RobotParams) -> dict[str, Any]:
-        """The content of ``robot.json``: the estimates under ``gym.make``'s names, then the report."""
+        """The content of ``robot.json``: the estimates under ``gym.make``'s names (``r1``, ``r2``, ``l1`` [m],
+        ``delay`` [s], the four ramp rates, fitted or nominal: the robot as replayed), then the report."""
         out: dict[str, Any] = {"format": ROBOT_FORMAT}
         out["r1"], out["r2"], out["l1"] = self.robot.r1, self.robot.r2, self.robot.l1
         out["delay"] = self.actuators.delay
-        for k in ("acceleration", "rot_acceleration"):
-            if k in self.fitted:
-                out[k] = getattr(self.actuators, k)
+        for k in ("acceleration", "deceleration", "rot_acceleration", "rot_deceleration"):
+            out[k] = getattr(self.actuators, k)  # fitted or the nominal ramps: the robot as replayed
         out["uncertainty"] = {k: self.uncertainty.get(k) for k in (*self.fitted, "x0", "y0", "theta0")
                               if k in self.uncertainty}  # fmt: skip
         out["fitted"] = list(self.fitted)
@@ -704,6 +708,7 @@ def identify(
     nominal: RobotParams | None = None,
     ramps: str = "auto",
     heading_weight: float | None = None,
+    actuators: ActuatorParams | None = None,
 ) -> Fit:
     r"""Fit the true robot to a log: bounded least squares on the replayed trajectory.
 
@@ -725,8 +730,17 @@ def identify(
     ``s^2 = 2 cost / (N - p)``; they assume independent residuals and so understate the error when the model
     misses something systematic.
 
+    Args:
+        log: the log (:func:`read_log`, read with the same ``nominal``).
+        nominal: the robot the firmware believes in (default :class:`RobotParams`): the start and the centre
+            of the bounds of ``r1``, ``r2``, ``l1``.
+        ramps: ``"auto"``, ``"fit"`` or ``"fixed"`` (above).
+        heading_weight: ``lambda`` [m/rad], > 0; default ``nominal.l1``.
+        actuators: the firmware's nominal ramps (start of the fitted ramp rates, values of the others); its
+            delay is not used (fitted). Default the manufacturer's (:class:`ActuatorParams`).
+
     Raises:
-        LogError: a log with neither pose nor wheel rates' information on the parameters.
+        ValueError: a bad ``ramps``.
     """
     from scipy.optimize import least_squares  # heavy: only here
 
@@ -734,7 +748,7 @@ def identify(
     if ramps not in ("auto", "fit", "fixed"):
         raise ValueError(f"identify: ramps must be 'auto', 'fit' or 'fixed', got {ramps!r}")
     lam = nominal.l1 if heading_weight is None else float(heading_weight)
-    base_act = ActuatorParams()
+    base_act = ActuatorParams() if actuators is None else actuators
     step = float(np.median(np.diff(log.t_meas)))
     excited = ramp_excitation(log, nominal, base_act)
     names: list[str] = []

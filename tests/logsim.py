@@ -42,8 +42,13 @@ def run(
     delay: float,
     acc: tuple[float, float, float, float] = (0.3, 0.75, 0.87, 2.5),
     h: float = 1e-3,
+    r_nom: float = R_NOM,
+    l1_nom: float = L1_NOM,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """True trajectory of A for wheel-rate commands ``(n, 2)`` [rad/s] issued at ``k dt``, starting at rest at 0.
+
+    ``acc``: the ramps' rates (v up, v down [m/s^2], w up, w down [rad/s^2]); ``r_nom``, ``l1_nom``: the nominal
+    wheel radius and half track the firmware converts with [m].
 
     Returns ``(t, pose, rates)``: times ``k dt`` (n + 1), pose ``(x, y, theta)`` and wheel rates at those times.
     """
@@ -57,14 +62,14 @@ def run(
     for i in range(n * per):
         j = (i - lag) // per
         c1, c2 = (0.0, 0.0) if j < 0 else (float(commands[j, 0]), float(commands[j, 1]))
-        vc = R_NOM * (c1 + c2) / 2
-        wc = R_NOM * (c1 - c2) / (2 * L1_NOM)
+        vc = r_nom * (c1 + c2) / 2
+        wc = r_nom * (c1 - c2) / (2 * l1_nom)
         v_new = _ramp(v, vc, acc[0], acc[1], h)
         w_new = _ramp(w, wc, acc[2], acc[3], h)
         vm, wm = (v + v_new) / 2, (w + w_new) / 2
         # true body motion from the wheel rates (nominal inverse of the firmware's speeds)
-        a1 = (vm + L1_NOM * wm) / R_NOM
-        a2 = (vm - L1_NOM * wm) / R_NOM
+        a1 = (vm + l1_nom * wm) / r_nom
+        a2 = (vm - l1_nom * wm) / r_nom
         vt = (r1 * a1 + r2 * a2) / 2
         wt = (r1 * a1 - r2 * a2) / (2 * l1)
         dth = wt * h
@@ -76,11 +81,11 @@ def run(
         v, w = v_new, w_new
         if (i + 1) % per == 0:
             poses.append((x, y, th))
-            rates.append(((v + L1_NOM * w) / R_NOM, (v - L1_NOM * w) / R_NOM))
+            rates.append(((v + l1_nom * w) / r_nom, (v - l1_nom * w) / r_nom))
     return np.arange(n + 1) * dt, np.array(poses), np.array(rates)
 
 
-def commands(seconds: float, dt: float, seed: int = 1) -> np.ndarray:
+def commands(seconds: float, dt: float, seed: int = 1, r_nom: float = R_NOM, l1_nom: float = L1_NOM) -> np.ndarray:
     """Wheel-rate commands [rad/s] rich enough to identify radii and track: segments of 1.5–3 s of random speed
     in [0, 0.3] m/s and turn rate in [-0.8, 0.8] rad/s, a spin in place and a stop; then rest for 1 s."""
     rng = np.random.default_rng(seed)
@@ -95,7 +100,7 @@ def commands(seconds: float, dt: float, seed: int = 1) -> np.ndarray:
             v, w = 0.0, 0.0
         else:
             v, w = rng.uniform(0.05, 0.3), rng.uniform(-0.8, 0.8)
-        out += [((v + L1_NOM * w) / R_NOM, (v - L1_NOM * w) / R_NOM)] * length
+        out += [((v + l1_nom * w) / r_nom, (v - l1_nom * w) / r_nom)] * length
         segment += 1
     out = out[:n] + [(0.0, 0.0)] * round(1.0 / dt)
     return np.array(out)

@@ -183,6 +183,27 @@ def test_replay_is_the_environment_step() -> None:
     assert np.max(np.abs(rep.pose - pose)) < 1e-12
 
 
+def test_another_nominal_robot(tmp_path: Path) -> None:
+    """``--nominal``: a Pioneer-sized robot (r = 0.0975 m, l1 = 0.19 m, slower ramps) whose firmware converts
+    with its own geometry; the replay with its true robot file agrees with the independent integrator."""
+    nominal = {"r1": 0.0975, "r2": 0.0975, "l1": 0.19, "max_speed": 1.2, "acceleration": 0.5, "rot_acceleration": 1.5}
+    true = {"r1": 0.099, "r2": 0.0965, "l1": 0.2, "delay": 0.1}
+    cmd = logsim.commands(8.0, DT, r_nom=0.0975, l1_nom=0.19)
+    t, pose, _ = logsim.run(cmd, DT, 0.099, 0.0965, 0.2, 0.1, acc=(0.5, 0.75, 1.5, 2.5), r_nom=0.0975, l1_nom=0.19)
+    log, nom, tru = tmp_path / "p.csv", tmp_path / "nominal.json", tmp_path / "true.json"
+    logsim.write_csv(log, t, cmd, pose, None)
+    nom.write_text(json.dumps(nominal))
+    tru.write_text(json.dumps(true))
+    out = tmp_path / "out"
+    assert main(["replay", str(log), "--nominal", str(nom), "--robot", str(tru), "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["max_position_error_m"] < 1e-5 and s["max_heading_error_rad"] < 1e-5, s
+    assert s["robot"]["acceleration"] == 0.5 and s["robot"]["delay"] == 0.1
+    # the same log read as an AmigoBot's is far off
+    assert main(["replay", str(log), "--robot", str(tru), "--out", str(tmp_path / "amigo")]) == 0
+    assert json.loads((tmp_path / "amigo" / "summary.json").read_text())["max_position_error_m"] > 0.05
+
+
 # ------------------------------------------------------------------------------------------------ bad logs
 
 

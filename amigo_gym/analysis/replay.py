@@ -31,6 +31,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -200,8 +201,22 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace a non-empty --out folder once the new one is complete")
     p.add_argument("--cmd-topic", default="/cmd_vel", help="bag topic of the velocity commands (Twist) [topic]")
     p.add_argument(
+        "--nominal",
+        default=None,
+        help="the nominal robot and firmware ramps, a JSON of RobotParams and ActuatorParams fields [file] "
+        "(default: the AmigoBot's)",
+    )
+    p.add_argument(
         "--pose-topic", default="/odom", help="bag topic of the measured pose of A (Odometry, PoseStamped) [topic]"
     )
+
+
+def _nominal(path: str | None) -> tuple[RobotParams, ActuatorParams]:
+    """``--nominal``: the nominal robot and ramps of a JSON file (its delay is ignored), or the defaults."""
+    if path is None:
+        return RobotParams(), ActuatorParams()
+    robot, act = robot_from_file(path)
+    return robot, replace(act, delay=0.0)
 
 
 def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
@@ -221,13 +236,13 @@ def main_replay(argv: Sequence[str] | None = None) -> int:
     def go() -> int:
         out = Path(args.out)
         check_out(out, args.force)
-        nominal = RobotParams()
+        nominal, nominal_act = _nominal(args.nominal)
         log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
         if args.robot is None:
-            robot, act = nominal, ActuatorParams()
+            robot, act = nominal, nominal_act
             label = "nominal robot"
         else:
-            robot, act = robot_from_file(args.robot, nominal)
+            robot, act = robot_from_file(args.robot, nominal, nominal_act)
             label = Path(args.robot).name
         rep = simulate(log, robot, act, nominal)
         summary = {**summarize(log, rep), "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
@@ -267,10 +282,10 @@ def main_identify(argv: Sequence[str] | None = None) -> int:
         check_out(out, args.force)
         if args.heading_weight is not None and not 0.0 < args.heading_weight < 1e3:
             raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {args.heading_weight!r}")
-        nominal = RobotParams()
+        nominal, nominal_act = _nominal(args.nominal)
         log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
-        fit = identify(log, nominal, args.ramps, args.heading_weight)
-        before = simulate(log, nominal, ActuatorParams(), nominal)
+        fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
+        before = simulate(log, nominal, nominal_act, nominal)
         after = simulate(log, fit.robot, fit.actuators, nominal)
         files: dict[str, Callable[[str], object]] = {
             "robot.json": _json(fit.robot_json(log, nominal)),
