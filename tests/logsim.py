@@ -123,9 +123,18 @@ def write_csv(path: Path, t: np.ndarray, cmd: np.ndarray, pose: np.ndarray | Non
             wr.writerow([repr(float(v)) for v in row])
 
 
-def write_bag(path: Path, t: np.ndarray, cmd: np.ndarray, pose: np.ndarray, cmd_topic: str = "/cmd_vel",
-              pose_topic: str = "/odom", t0_ns: int = 1_700_000_000_000_000_000) -> None:  # fmt: skip
-    """A ROS 2 bag (sqlite3) with the commands as Twist on ``cmd_topic`` and the pose as Odometry on ``pose_topic``.
+def write_bag(
+    path: Path,
+    t: np.ndarray,
+    cmd: np.ndarray,
+    pose: np.ndarray,
+    cmd_topic: str = "/cmd_vel",
+    pose_topic: str = "/odom",
+    t0_ns: int = 1_700_000_000_000_000_000,
+    stamped: bool = False,
+) -> None:
+    """A ROS 2 bag (sqlite3) with the commands as Twist on ``cmd_topic`` and the pose as Odometry on ``pose_topic``
+    (``stamped``: TwistStamped and PoseStamped).
 
     Twists from the wheel rates with the nominal robot; the command of step k is recorded 1 ms after the pose of
     step k (a controller answering the measurement), both at bag times ``t0_ns + t``.
@@ -145,27 +154,35 @@ def write_bag(path: Path, t: np.ndarray, cmd: np.ndarray, pose: np.ndarray, cmd_
     Point = ts.types["geometry_msgs/msg/Point"]
     Quat = ts.types["geometry_msgs/msg/Quaternion"]
     with Writer(path, version=8) as wr:
-        c_cmd = wr.add_connection(cmd_topic, "geometry_msgs/msg/Twist", typestore=ts)
-        c_pose = wr.add_connection(pose_topic, "nav_msgs/msg/Odometry", typestore=ts)
+        cmd_type = "geometry_msgs/msg/TwistStamped" if stamped else "geometry_msgs/msg/Twist"
+        pose_type = "geometry_msgs/msg/PoseStamped" if stamped else "nav_msgs/msg/Odometry"
+        c_cmd = wr.add_connection(cmd_topic, cmd_type, typestore=ts)
+        c_pose = wr.add_connection(pose_topic, pose_type, typestore=ts)
         zero = Vector3(x=0.0, y=0.0, z=0.0)
         for k in range(t.size):
             stamp = t0_ns + round(t[k] * 1e9)
             x, y, th = (float(v) for v in pose[k])
             hdr = Header(stamp=Time(sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id="odom")
             q = Quat(x=0.0, y=0.0, z=math.sin(th / 2), w=math.cos(th / 2))
-            msg = Odometry(
-                header=hdr,
-                child_frame_id="base_link",
-                pose=PoseCov(pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=q), covariance=np.zeros(36)),
-                twist=TwistCov(twist=Twist(linear=zero, angular=zero), covariance=np.zeros(36)),
-            )
-            wr.write(c_pose, stamp, ts.serialize_cdr(msg, "nav_msgs/msg/Odometry"))
+            pose_msg = Pose(position=Point(x=x, y=y, z=0.0), orientation=q)
+            if stamped:
+                msg = ts.types["geometry_msgs/msg/PoseStamped"](header=hdr, pose=pose_msg)
+            else:
+                msg = Odometry(
+                    header=hdr,
+                    child_frame_id="base_link",
+                    pose=PoseCov(pose=pose_msg, covariance=np.zeros(36)),
+                    twist=TwistCov(twist=Twist(linear=zero, angular=zero), covariance=np.zeros(36)),
+                )
+            wr.write(c_pose, stamp, ts.serialize_cdr(msg, pose_type))
             if k < cmd.shape[0]:
                 c1, c2 = (float(v) for v in cmd[k])
                 v = R_NOM * (c1 + c2) / 2
                 w = R_NOM * (c1 - c2) / (2 * L1_NOM)
                 tw = Twist(linear=Vector3(x=v, y=0.0, z=0.0), angular=Vector3(x=0.0, y=0.0, z=w))
-                wr.write(c_cmd, stamp + 1_000_000, ts.serialize_cdr(tw, "geometry_msgs/msg/Twist"))
+                if stamped:
+                    tw = ts.types["geometry_msgs/msg/TwistStamped"](header=hdr, twist=tw)
+                wr.write(c_cmd, stamp + 1_000_000, ts.serialize_cdr(tw, cmd_type))
 
 
 #: the robot of the tests and of the example in docs/logs.md: radii, half track [m], delay [s]
