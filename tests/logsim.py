@@ -132,9 +132,10 @@ def write_bag(
     pose_topic: str = "/odom",
     t0_ns: int = 1_700_000_000_000_000_000,
     stamped: bool = False,
+    keep: np.ndarray | None = None,
 ) -> None:
     """A ROS 2 bag (sqlite3) with the commands as Twist on ``cmd_topic`` and the pose as Odometry on ``pose_topic``
-    (``stamped``: TwistStamped and PoseStamped).
+    (``stamped``: TwistStamped and PoseStamped; ``keep``: a mask of the poses to record, default all).
 
     Twists from the wheel rates with the nominal robot; the command of step k is recorded 1 ms after the pose of
     step k (a controller answering the measurement), both at bag times ``t0_ns + t``.
@@ -174,7 +175,8 @@ def write_bag(
                     pose=PoseCov(pose=pose_msg, covariance=np.zeros(36)),
                     twist=TwistCov(twist=Twist(linear=zero, angular=zero), covariance=np.zeros(36)),
                 )
-            wr.write(c_pose, stamp, ts.serialize_cdr(msg, pose_type))
+            if keep is None or keep[k]:
+                wr.write(c_pose, stamp, ts.serialize_cdr(msg, pose_type))
             if k < cmd.shape[0]:
                 c1, c2 = (float(v) for v in cmd[k])
                 v = R_NOM * (c1 + c2) / 2
