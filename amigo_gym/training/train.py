@@ -28,7 +28,8 @@ a killed run never leaves a half-written file):
   time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
   last evaluation, versions, command, the model's sha256);
-* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
+* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line);
+  removed when the process ends cleanly.
 
 Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
 (:mod:`amigo_gym.runs`). ``--resume`` loads the newest good checkpoint (falling back to the previous
