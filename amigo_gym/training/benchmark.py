@@ -38,7 +38,8 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 * a zip file or a folder of zips (``agents/pretrained/v1/`` holds ``<algo>/<file>.zip``).
 
 Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
-(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped.
+(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped (named
+``<algo>_v1``; ``amigo-gym compare`` uses the same names).
 
 Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
 -------------------------------------------------------------------------------------------
@@ -488,7 +489,7 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 def default_agents() -> list[AgentSpec]:
     """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
-    (``<algo>_v0``) and v1 generalists (``<algo>``)."""
+    (``<algo>_v0``) and v1 generalists (``<algo>_v1``), named as ``amigo-gym compare`` names them."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
     for algo in ALGOS:
@@ -496,7 +497,7 @@ def default_agents() -> list[AgentSpec]:
             out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
     for algo in ALGOS:
         for i, z in enumerate(sorted((d / "v1" / algo).glob("*.zip"))):
-            out.append(_model_spec(algo, z, i))
+            out.append(_model_spec(f"{algo}_v1", z, i))
     return out
 
 
@@ -821,10 +822,29 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
     if doc["unavailable"]:
         lines += ["", "## Unavailable", ""]
-        for u in doc["unavailable"]:
-            who = "all agents" if u["agent"] is None else f"{u['agent']} (seed {u['seed']})"
-            lines.append(f"- {u['scenario']}, {who}: {u['reason']}")
+        lines += [f"- {line}" for line in unavailable_lines(doc["unavailable"])]
     return "\n".join(lines) + "\n"
+
+
+def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The unavailable (agent, scenario) runs, one line per agent and reason: its seeds and scenarios listed once
+    (an AmigoBot-v0 model on the v1 scenarios is one line, not one per seed and scenario)."""
+    groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
+    for u in unavailable:
+        seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
+        if u.get("seed") not in seeds:
+            seeds.append(u.get("seed"))
+        if u["scenario"] not in scenarios:
+            scenarios.append(u["scenario"])
+    out = []
+    for (agent, reason), (seeds, scenarios) in groups.items():
+        if agent is None:
+            who = "all agents"
+        else:
+            n = len(seeds)
+            who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
+        out.append(f"{who} on {', '.join(scenarios)}: {reason}")
+    return out
 
 
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
