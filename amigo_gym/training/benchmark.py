@@ -848,7 +848,18 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
-    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
+    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
+    (:func:`scenarios_figure`), saved as PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = scenarios_figure(doc, reps, seed)
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
+    """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
+    the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -858,7 +869,8 @@ def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: 
 
     scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
     agents = list(doc["aggregates"])
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.5 * len(scen) * max(1, len(agents)) ** 0.5 + 2), 4.5))
+    size = (min(18.0, max(6.0, 0.45 * len(scen) + 2.0)) + 1.6, 4.8)  # at most 19.6 in wide: fits a page
+    fig, ax = plt.subplots(figsize=size, layout="constrained")
     width = 0.8 / max(1, len(agents))
     floor = 1e-7
     for j, agent in enumerate(agents):
@@ -878,11 +890,14 @@ def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: 
     ax.set_yscale("log")
     ax.set_xticks(range(len(scen)), scen, rotation=60, ha="right", fontsize=8)
     ax.set_ylabel("H cross-track RMS [m]")
-    ax.set_title(f"AmigoBot benchmark {doc['suite_version']}: per scenario (95 % interval over training seeds)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    quick = " (quick subset)" if doc.get("quick") else ""
+    ax.set_title(
+        f"AmigoBot benchmark {doc['suite_version']}{quick}: H error per scenario\n"
+        "mean over training seeds, 95 % bootstrap interval",
+        fontsize=10,
+    )
+    fig.legend(loc="outside right upper", fontsize=8, title="agent", title_fontsize=8)
+    return fig
 
 
 def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
@@ -949,6 +964,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        from amigo_gym.training.evaluate import one_torch_thread
+
+        one_torch_thread()
         suite = SUITES[a.suite]
         if a.list:
             for sc in suite:

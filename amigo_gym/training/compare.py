@@ -534,6 +534,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        from amigo_gym.training.evaluate import one_torch_thread
+
+        one_torch_thread()
         for name in ("train_steps", "seed"):
             if getattr(a, name) < 0:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(a, name)}")

@@ -684,6 +684,19 @@ def write_outputs(
     return doc
 
 
+def one_torch_thread() -> None:
+    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, whose forward pass is
+    fastest on one thread; more threads spin against the environment and other processes for the cores (on a
+    busy 2-core machine ``benchmark --quick`` took 265 s with torch's default threads, most of it in ``linear``).
+    The evaluating commands (evaluate, compare, benchmark) call it; ``train --threads`` does the same for
+    training."""
+    try:
+        import torch
+    except ImportError:
+        return
+    torch.set_num_threads(1)
+
+
 #: evaluate's own default output folder (``amigo-gym compare`` writes to ``results``)
 DEFAULT_OUT = "results/evaluate"
 
@@ -716,6 +729,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        one_torch_thread()
         if a.seeds < 1:
             raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
         proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
