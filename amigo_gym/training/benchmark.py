@@ -3,7 +3,7 @@
 Usage::
 
     amigo-gym benchmark                                  # the whole suite, default agents
-    amigo-gym benchmark --quick                          # a small subset (seconds; used by the tests)
+    amigo-gym benchmark --quick                          # a small subset (16 s of CPU; docs/benchmark.md)
     amigo-gym benchmark --agents analytic sac=runs/sac_s*/model.zip --out results/bench
     amigo-gym benchmark --list                           # print the suite
 
