@@ -132,13 +132,18 @@ def announce_compilation() -> None:
     """Print :data:`COMPILE_NOTICE` once to stderr when numba really compiles a kernel of ``amigo_gym``.
 
     A listener of numba's ``numba:compile`` event, which numba fires only on a compilation, not when it loads the
-    compiled code from its disk cache: a process that finds the cache warm prints nothing. Installed by the first
-    call of :func:`kernels` (here and in :mod:`amigo_gym.fast_v1`); cheap afterwards.
+    compiled code from its disk cache: a process that finds the cache warm prints nothing. Only for a person: when
+    stderr is a terminal, or when the environment sets ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it); a
+    script's captured stderr stays as it was. Installed by the first call of :func:`kernels` (here and in
+    :mod:`amigo_gym.fast_v1`); cheap afterwards.
     """
     global _notice_installed
     if _notice_installed:
         return
     _notice_installed = True
+    wanted = os.environ.get("AMIGO_GYM_COMPILE_NOTICE")
+    if wanted == "0" or (wanted != "1" and not (sys.stderr is not None and sys.stderr.isatty())):
+        return
     from numba.core import event
 
     class _Notice(event.Listener):
