@@ -19,13 +19,16 @@ Steps:
 3. Run the quick subset of the benchmark (``amigo-gym benchmark --quick``:
    :func:`amigo_gym.training.benchmark.quick_suite`, 3 scenarios of 2 episodes of at most 120 steps,
    on AmigoBot-v0 and v1) on the same agents: ``analytic`` and ``analytic_ff`` (built per scenario by
-   the benchmark), the pretrained v0 agents and ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
+   the benchmark), the pretrained v0 agents (named ``<algo>_v0`` here as in the benchmark: :func:`v0_name`) and
+   ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
    under ``<models>/v1/<algo>/*.zip`` (named ``<algo>_v1``, one training seed per zip, checked against
    the sha256 of their manifests). An agent that cannot run a scenario (a v0 model on v1's
    observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
    is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
-4. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
-   run's record, the targets, the quick benchmark's document under ``benchmark``), ``<out>/report.md``
+4. Print a short summary (:func:`summary_text`: the perturbed starts, the targets, the quick benchmark's H
+   error, every agent name explained, where the files went) and write ``<out>/results.json`` (protocol,
+   results, the pretrained agents' training records, the fresh run's record, the targets, the quick
+   benchmark's document under ``benchmark``), ``<out>/report.md``
    (the table, the targets, the training records, the quick benchmark table), ``<out>/eval.md`` and
    the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``, ``<out>/benchmark_scenarios.png``
    and ``<out>/benchmark_profiles.png``.
