@@ -62,3 +62,12 @@ def test_other_pages_link_to_performance_md_instead_of_copying_figures() -> None
         # no measured speed figure: no steps/s or us-per-step table rows, no ratio against a peer
         assert not re.search(r"^\|.*(steps/s|\[us\]|µs|CartPoleVectorEnv \[).*\|$", text, flags=re.MULTILINE), page
         assert not re.search(r"\d\.\d+×|\d\.\d+x\b", text), page
+
+
+def test_readme_v1_table_is_generated_from_the_benchmark_json() -> None:
+    from amigo_gym.training.benchmark import readme_table
+
+    doc = json.loads((ROOT / "docs/benchmark/benchmark.json").read_text())
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert readme_table(doc) in text
+    assert "amigo-gym benchmark --table-from docs/benchmark/benchmark.json" in text

@@ -826,6 +826,57 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: the README's labels of the agents of its v1 table (the generalists under either name, bare or ``_v1``)
+README_ROWS = (
+    ("analytic", "analytic tracking (exact inverse solution + PI feedback)"),
+    ("pure_pursuit", "pure pursuit (of A)"),
+    *((f"{algo}_v1", algo.upper()) for algo in ALGOS),
+)
+
+
+def readme_table(doc: Mapping[str, Any]) -> str:
+    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): H RMS IQM
+    [mm] with its 95 % interval, the same on the held-out scenarios, the speed error IQM [mm/s]; the best of each
+    column in bold. Generalists are found as ``<algo>_v1`` or, in runs before the names were unified, ``<algo>``.
+
+    Raises:
+        ValueError: the document lacks the classical rows or every generalist.
+    """
+    aggs = doc["aggregates"]
+    rows: list[tuple[str, Mapping[str, Any], int]] = []
+    for name, label in README_ROWS:
+        agg = aggs.get(name) or (aggs.get(name.removesuffix("_v1")) if name.endswith("_v1") else None)
+        if agg is None or agg.get("all") is None:
+            continue
+        n = int(agg["n_runs"])
+        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n))
+    if len(rows) < 3:
+        raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
+    cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
+    best = [
+        min(1e3 * agg[g][k]["value"] for _, agg, _ in rows if agg.get(g)) for g, k, _ in cols
+    ]  # the smallest of each column
+    lines = [
+        "| agent | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
+        "|---|---:|---:|---:|",
+    ]
+    for label, agg, n in rows:
+        cells = []
+        for (g, k, fmt), low in zip(cols, best, strict=True):
+            d = agg.get(g)
+            if d is None:
+                cells.append("–")
+                continue
+            v = 1e3 * d[k]["value"]
+            text = f"{v:{fmt}}"
+            if n > 1:
+                lo, hi = (1e3 * x for x in d[k]["ci95"])
+                text += f" [{lo:{fmt}}, {hi:{fmt}}]"
+            cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
     """The unavailable (agent, scenario) runs, one line per agent and reason: its seeds and scenarios listed once
     (an AmigoBot-v0 model on the v1 scenarios is one line, not one per seed and scenario)."""
@@ -961,6 +1012,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-plots", action="store_true", help="skip the plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--list", action="store_true", help="print the suite and exit")
+    p.add_argument(
+        "--table-from",
+        default=None,
+        metavar="FILE",
+        help="run nothing: print the README's v1 table from this benchmark.json [file] (default: none)",
+    )
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
@@ -968,6 +1025,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         one_torch_thread()
         suite = SUITES[a.suite]
+        if a.table_from is not None:
+            print(readme_table(json.loads(Path(a.table_from).read_text(encoding="utf-8"))), end="")
+            return 0
         if a.list:
             for sc in suite:
                 flag = "held out" if sc.held_out else ""
