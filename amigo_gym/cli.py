@@ -262,9 +262,14 @@ def missing_modules(modules: Sequence[str]) -> list[str]:
     return out
 
 
+def install_hint(extra: str) -> str:
+    """The two commands that install ``extra``: from an index, and from a clone of the repository."""
+    return f'pip install "amigo-gym[{extra}]" (from a clone: pip install -e ".[{extra}]")'
+
+
 def _needs_extra(prog: str, extra: str, missing: Sequence[str]) -> int:
     names = ", ".join(missing)
-    line = f'{prog}: error: needs the {extra!r} extra: pip install "amigo-gym[{extra}]" (missing: {names})'
+    line = f"{prog}: error: needs the {extra!r} extra: {install_hint(extra)} (missing: {names})"
     print(line, file=sys.stderr)
     return 2
 

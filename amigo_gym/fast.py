@@ -21,6 +21,7 @@ from __future__ import annotations
 import ctypes
 import importlib.util
 import os
+import sys
 import types
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -45,6 +46,8 @@ __all__ = [
     "choices",
     "use_fast_path",
     "kernels",
+    "COMPILE_NOTICE",
+    "announce_compilation",
     "kernel_constants",
     "Workspace",
     "workspace",
@@ -110,12 +113,58 @@ def use_fast_path(requested: bool | None = None) -> bool:
     if numba_available():
         return True
     if requested:
-        raise ImportError("the fast path needs numba: pip install 'amigo_gym[fast]' (or set AMIGO_GYM_KERNEL=numpy)")
+        raise ImportError(
+            'the fast path needs numba: pip install "amigo-gym[fast]" (from a clone: pip install -e ".[fast]"; '
+            "or set AMIGO_GYM_KERNEL=numpy)"
+        )
     return False
+
+
+#: the one line printed (stderr) when numba starts compiling a kernel of this package in this process
+COMPILE_NOTICE = (
+    "amigo_gym: compiling the numba step (once per machine, a few seconds; "
+    "later runs load it from numba's cache; AMIGO_GYM_KERNEL=numpy skips it)"
+)
+_notice_installed = False
+
+
+def announce_compilation() -> None:
+    """Print :data:`COMPILE_NOTICE` once to stderr when numba really compiles a kernel of ``amigo_gym``.
+
+    A listener of numba's ``numba:compile`` event, which numba fires only on a compilation, not when it loads the
+    compiled code from its disk cache: a process that finds the cache warm prints nothing. Only for a person: when
+    stderr is a terminal, or when the environment sets ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it); a
+    script's captured stderr stays as it was. Installed by the first call of :func:`kernels` (here and in
+    :mod:`amigo_gym.fast_v1`); cheap afterwards.
+    """
+    global _notice_installed
+    if _notice_installed:
+        return
+    _notice_installed = True
+    wanted = os.environ.get("AMIGO_GYM_COMPILE_NOTICE")
+    if wanted == "0" or (wanted != "1" and not (sys.stderr is not None and sys.stderr.isatty())):
+        return
+    from numba.core import event
+
+    class _Notice(event.Listener):
+        done = False
+
+        def on_start(self, ev: Any) -> None:
+            dispatcher = ev.data.get("dispatcher") if isinstance(ev.data, dict) else None
+            module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+            if not self.done and module.startswith("amigo_gym"):
+                self.done = True
+                print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())  # type: ignore[no-untyped-call]
 
 
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym._kernels` (imports numba on the first call)."""
+    announce_compilation()
     import amigo_gym._kernels as k
 
     return k

@@ -252,6 +252,7 @@ def libm_matches_numpy() -> bool:
 
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym._kernels_v1` (imports numba on the first call)."""
+    fast.announce_compilation()
     import amigo_gym._kernels_v1 as kv
 
     return kv

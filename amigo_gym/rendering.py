@@ -110,7 +110,9 @@ class Renderer:
         except ImportError as exc:  # pragma: no cover - pygame is an optional dependency
             from gymnasium.error import DependencyNotInstalled
 
-            raise DependencyNotInstalled('rendering needs pygame: pip install "amigo_gym[render]"') from exc
+            raise DependencyNotInstalled(
+                'rendering needs pygame: pip install "amigo-gym[render]" (from a clone: pip install -e ".[render]")'
+            ) from exc
         self._pg: Any = pygame
         self.params = params
         self.path = path

@@ -7,8 +7,12 @@ Lock
     :class:`RunLock` holds an exclusive ``fcntl.flock`` on ``<folder>/run.lock`` for the life of the run.
     The operating system drops it when the process ends, however it ends (``kill -9`` included), so a
     killed run never blocks its resume; a second process on the same folder (a second ``train``, a
-    ``--resume`` of a running run) stops at once with one line and a non-zero status. The file itself
-    stays (removing a lock file would race with a process about to take it); it holds the owner's pid.
+    ``--resume`` of a running run) stops at once with one line and a non-zero status. The file holds the
+    owner's pid. A clean exit removes it (unlinked while still locked); a killed process leaves it, harmlessly.
+    Removing a lock file races with a process that opened it just before: that process would lock the
+    removed file while a third one creates and locks a new one. So :meth:`RunLock.acquire`, once it holds
+    the lock, checks that the path still names the very file it locked (same device and inode) and
+    otherwise starts again on the new file.
 
 Checkpoints
     ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
@@ -60,6 +64,7 @@ __all__ = [
     "RunLockedError",
     "clean_temporaries",
     "has_run_files",
+    "is_current_lock",
     "load_checkpoint",
     "read_json",
     "restore_snapshot",
@@ -106,25 +111,35 @@ class RunLock:
     def acquire(self) -> RunLock:
         self.folder.mkdir(parents=True, exist_ok=True)
         path = self.folder / LOCK_NAME
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
-        try:
-            _lock_fd(fd)
-        except OSError:
+        while True:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
             try:
-                owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
-            finally:
-                os.close(fd)
-            raise RunLockedError(
-                f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
-                "or stop it, then --resume"
-            ) from None
+                _lock_fd(fd)
+            except OSError:
+                try:
+                    owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
+                finally:
+                    os.close(fd)
+                raise RunLockedError(
+                    f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
+                    "or stop it, then --resume"
+                ) from None
+            if is_current_lock(fd, path):
+                break
+            os.close(fd)  # we locked a file that a finishing owner had just removed: take the new one
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         self._fd = fd
         return self
 
     def release(self) -> None:
+        """Remove the lock file (still locked, so no one holds a lock on it that the removal could break) and
+        unlock it."""
         if self._fd is not None:
+            if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
+                with contextlib.suppress(OSError):
+                    if is_current_lock(self._fd, self.folder / LOCK_NAME):
+                        os.unlink(self.folder / LOCK_NAME)
             with contextlib.suppress(OSError):
                 _unlock_fd(self._fd)
             os.close(self._fd)
@@ -157,6 +172,16 @@ else:
 
     def _unlock_fd(fd: int) -> None:
         fcntl.flock(fd, fcntl.LOCK_UN)
+
+
+def is_current_lock(fd: int, path: Path) -> bool:
+    """Whether ``path`` still names the file open as ``fd`` (same device and inode; ``False`` if it is gone)."""
+    try:
+        named = os.stat(path)
+    except FileNotFoundError:
+        return False
+    held = os.fstat(fd)
+    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
 
 
 def clean_temporaries(folder: Path) -> None:

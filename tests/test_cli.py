@@ -53,17 +53,19 @@ def test_missing_extra_is_one_line_and_exit_2(blocked: str, args: list[str], ext
     assert len(lines) == 1, r.stderr
     prog = f"amigo-gym {args[0]}"
     assert lines[0].startswith(f'{prog}: error: needs the {extra!r} extra: pip install "amigo-gym[{extra}]"')
+    assert f'(from a clone: pip install -e ".[{extra}]")' in lines[0]
     assert module in lines[0]
     assert "Traceback" not in r.stderr
 
 
 def test_a_module_missing_at_run_time_names_its_extra() -> None:
     """``convergence --plot`` needs matplotlib only for the plot: found missing on import, still one line."""
-    r = run_blocked("matplotlib", "convergence", "--gains", "3", "--seed-count", "1", "--steps", "20",
+    r = run_blocked("matplotlib", "convergence", "--gains", "3", "--seeds", "1", "--steps", "20",
                     "--t-from", "0.5", "--t-to", "1.5", "--plot", "x.png")  # fmt: skip
     assert r.returncode == 2, r.stderr
     assert r.stderr.strip() == (
-        "amigo-gym convergence: error: needs the 'plot' extra: pip install \"amigo-gym[plot]\" (missing: matplotlib)"
+        "amigo-gym convergence: error: needs the 'plot' extra: pip install \"amigo-gym[plot]\" "
+        '(from a clone: pip install -e ".[plot]") (missing: matplotlib)'
     )
 
 

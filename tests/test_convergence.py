@@ -20,7 +20,7 @@ def test_convergence_command_writes_table_and_plot(tmp_path: Path) -> None:
             "convergence",
             "--gains",
             "2,3",
-            "--seed-count",
+            "--seeds",
             "2",
             "--plot",
             str(png),
@@ -36,7 +36,7 @@ def test_convergence_command_writes_table_and_plot(tmp_path: Path) -> None:
 
 def test_small_gain_halving_time_near_continuous_law() -> None:
     # for k dt << 1 the sampled loop is close to e(t) = e0 exp(-k t): halving ln2/k (0.69 s at k = 1)
-    row = halving_times(Settings(gains="1", seed_count=3, steps=50))[0]
+    row = halving_times(Settings(gains="1", seeds=3, steps=50))[0]
     assert abs(row.halving_s - math.log(2.0)) / math.log(2.0) < 0.1
 
 

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -75,3 +78,35 @@ def test_readme_quick_start_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     assert small != code
     exec(compile(small, "README.md", "exec"), namespace)
     assert namespace["reference"].predict(namespace["obs"])[0].shape == (2,)  # type: ignore[attr-defined]
+
+
+#: shorter budgets for the README's code (the code is otherwise run as written)
+SMALL_BUDGETS = {
+    "AmigoBotSB3VecEnv(16), n_steps=256).learn(20_000)": (
+        "AmigoBotSB3VecEnv(2), n_steps=16, batch_size=32, n_epochs=1).learn(32)"
+    ),
+}
+
+
+def _python_blocks() -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    return re.findall(r"```python\n(.*?)```", text, flags=re.DOTALL)
+
+
+def test_every_python_block_of_the_readme_runs_when_pasted_alone() -> None:
+    """Each ```python block, alone in a fresh interpreter (no import from another block), as a newcomer pastes it."""
+    blocks = _python_blocks()
+    assert len(blocks) >= 3
+    for block in blocks:
+        code = block
+        for long, short in SMALL_BUDGETS.items():
+            code = code.replace(long, short)
+        r = subprocess.run(
+            [sys.executable, "-c", code],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env={**os.environ, "AMIGO_GYM_KERNEL": "numpy"},
+        )
+        assert r.returncode == 0, f"README block fails:\n{block}\n{r.stderr[-2000:]}"

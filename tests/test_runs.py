@@ -459,3 +459,35 @@ def test_models_are_checked_before_loading(tmp_path: Path) -> None:
     (tmp_path / "td3.json").unlink()  # without a record: one line, not a traceback from SB3
     with pytest.raises(runs.CorruptFileError, match=r"td3\.zip: not a loadable TD3 model"):
         load_agents(tmp_path)
+
+
+# --------------------------------------------------------------------------- the lock file goes with a clean exit
+def test_a_clean_exit_removes_the_lock_file_and_a_kill_leaves_a_harmless_one(tmp_path: Path) -> None:
+    with runs.RunLock(tmp_path):
+        assert (tmp_path / runs.LOCK_NAME).read_text().strip() == str(os.getpid())
+    assert not (tmp_path / runs.LOCK_NAME).exists()
+    script = "import os, sys\nfrom amigo_gym import runs\nruns.RunLock(sys.argv[1]).acquire()\nos._exit(0)\n"
+    r = subprocess.run([sys.executable, "-c", script, str(tmp_path)], env=env_for(None), capture_output=True)
+    assert r.returncode == 0 and (tmp_path / runs.LOCK_NAME).exists()  # died holding it (no release)
+    with runs.RunLock(tmp_path):  # the next process takes the stale file over
+        pass
+    assert not (tmp_path / runs.LOCK_NAME).exists()
+
+
+def test_a_lock_taken_on_a_removed_file_is_not_trusted(tmp_path: Path) -> None:
+    """The race a removed lock file opens: B opened run.lock just before A removed it, then locks the removed file;
+    is_current_lock tells B that the path now names another file (or none), so B starts again on the new one."""
+    path = tmp_path / runs.LOCK_NAME
+    a = runs.RunLock(tmp_path).acquire()
+    fd_b = os.open(path, os.O_RDWR)  # B opens the file A holds
+    try:
+        assert runs.is_current_lock(fd_b, path)
+        a.release()  # A removes it and unlocks
+        assert not runs.is_current_lock(fd_b, path)  # B would lock a file no one else can see
+        c = runs.RunLock(tmp_path).acquire()  # C creates and locks a new one
+        assert not runs.is_current_lock(fd_b, path)  # B's file is still not the current one
+        with pytest.raises(runs.RunLockedError):  # and B, starting again on the path, meets C's lock
+            runs.RunLock(tmp_path).acquire()
+        c.release()
+    finally:
+        os.close(fd_b)

@@ -10,6 +10,7 @@ Markdown table and, with ``--plot FILE``, draws ``|e(t)|`` on a log scale for ev
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from collections.abc import Sequence
@@ -49,8 +50,8 @@ class Settings:
 
     Attributes:
         gains: feedback gains ``k`` to compare [1/s], comma-separated on the command line.
-        seeds: first reset seed of the perturbed starts (seeds ``first``..``first + count - 1``) [-].
-        seed_count: how many seeds [episodes].
+        seeds: how many perturbed starts, as ``--seeds`` of evaluate and compare [episodes].
+        first_seed: reset seed of the first start (seeds ``first_seed``..``first_seed + seeds - 1``) [-].
         t_from: start of the fit window [s].
         t_to: end of the fit window [s].
         steps: steps per episode, dt = 0.1 s [steps].
@@ -58,8 +59,8 @@ class Settings:
     """
 
     gains: str = "1,2,3,5"
-    seeds: int = 100
-    seed_count: int = 10
+    seeds: int = 10
+    first_seed: int = 100
     t_from: float = 1.0
     t_to: float = 4.0
     steps: int = 80
@@ -90,8 +91,8 @@ def halving_times(settings: Settings) -> list[GainFit]:
 
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
-    if settings.seed_count < 1 or settings.steps < 1:
-        raise ValueError("Settings.seed_count and Settings.steps must be >= 1")
+    if settings.seeds < 1 or settings.steps < 1:
+        raise ValueError(f"--seeds and --steps must be >= 1, got {settings.seeds} and {settings.steps}")
     env = gym.make("AmigoBot-v0")
     params = env.unwrapped.params  # type: ignore[attr-defined]
     out: list[GainFit] = []
@@ -100,7 +101,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
         ts: list[float] = []
         logs: list[float] = []
         curves: list[tuple[list[float], list[float]]] = []
-        for seed in range(settings.seeds, settings.seeds + settings.seed_count):
+        for seed in range(settings.first_seed, settings.first_seed + settings.seeds):
             tr = rollout(policy, env, {"seed": seed}, settings.steps, gain=k)
             if tr.terminated:
                 raise ValueError(f"gain {k}: the episode with seed {seed} left the path")
@@ -142,12 +143,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
     parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
     add_dataclass_options(parser, Settings)
-    args = parser.parse_args(argv)
-    settings = Settings(**vars(args))
+    parser.add_argument("--seed-count", type=int, default=None, help=argparse.SUPPRESS)  # deprecated: --seeds
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    args = vars(parser.parse_args(args_list))
+    seed_count = args.pop("seed_count")
+    if seed_count is not None:  # the old spelling: --seeds FIRST --seed-count N
+        old_first = any(a == "--seeds" or a.startswith("--seeds=") for a in args_list)
+        explicit_first = any(a == "--first-seed" or a.startswith("--first-seed=") for a in args_list)
+        if old_first and not explicit_first:
+            args["first_seed"] = args["seeds"]
+        args["seeds"] = seed_count
+        print(
+            "amigo-gym convergence: warning: --seed-count is deprecated and will be removed: --seeds is now the "
+            "number of starts (as in evaluate and compare), --first-seed the first seed"
+            + (f"; read as --first-seed {args['first_seed']} --seeds {seed_count}" if old_first else ""),
+            file=sys.stderr,
+        )
+    settings = Settings(**args)
 
     def run() -> int:
         rows = halving_times(settings)
-        print(f"fit of log|e| over t in [{settings.t_from:g}, {settings.t_to:g}] s, {settings.seed_count} seeds")
+        print(f"fit of log|e| over t in [{settings.t_from:g}, {settings.t_to:g}] s, {settings.seeds} seeds")
         print("| gain k [1/s] | " + " | ".join(f"{r.gain:g}" for r in rows) + " |")
         print("|---|" + "---|" * len(rows))
         print("| error halves every [s] | " + " | ".join(f"{r.halving_s:.2f}" for r in rows) + " |")

@@ -49,6 +49,7 @@ import time
 import tracemalloc
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -672,6 +673,46 @@ def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None
     plt.close(fig)
 
 
+# ---------------------------------------------------------------------------------------------- tables
+def headline_table(env_doc: dict[str, Any], core_doc: dict[str, Any] | None = None) -> str:
+    """The README's performance table (figure, measured, target), generated from the JSON of a
+    ``bench-env --v1 --json`` run (``env_doc``) and of a ``bench-core --json`` run (``core_doc``, for the
+    start-up row), so that no copy of a figure is typed by hand: ``amigo-gym bench-env --table-from FILE``.
+
+    Raises:
+        KeyError: a document without the figures of a full ``--v1`` run.
+    """
+    vec = {int(v["n"]): v for v in env_doc["vector"]}
+    ppo1 = next(p for p in env_doc["ppo"] if p["n_envs"] == 1)
+    ppo8 = next(p for p in env_doc["ppo"] if p["n_envs"] > 1 and "numba" in str(p["amigobot_vec"]))
+    v1 = env_doc["v1"]
+    rows = [
+        ("one `AmigoBot-v0` step via `gym.make` / one `Pendulum-v1` step (time)", f"{env_doc['single']['ratio']:.2f}",
+         "<= 0.5"),
+        (f"one `AmigoBot-v1` step / one `AmigoBot-v0` step (time; mixed paths and hard randomisation: "
+         f"{v1['ratio_hard']:.1f})", f"{v1['ratio']:.2f}", "<= 2"),
+        ("vector env, N = 4096 / `CartPoleVectorEnv` (env-steps/s, one core)", f"{vec[4096]['ratio_cartpole']:.2f}",
+         ">= 0.8"),
+        ("vector env, N = 1024 / the same env under `SyncVectorEnv`", f"{vec[1024]['ratio_sync']:.0f}", ">= 20"),
+        ("vector env, fixed cost per call at N = 1 / `CartPoleVectorEnv` (time)",
+         f"{env_doc['fixed_cost_n1']['ratio']:.2f}", "<= 1"),
+        (f"SB3 PPO training, 1 env / {ppo8['n_envs']} envs, AmigoBot / Pendulum (steps/s)",
+         f"{ppo1['ratio']:.2f} / {ppo8['ratio']:.2f}", ">= 0.95"),
+    ]  # fmt: skip
+    if core_doc is not None and core_doc.get("startup"):
+        st = core_doc["startup"]
+        rows.append(
+            (
+                "second process, import to first compiled step (`amigo-gym bench-core`)",
+                f"{st['kernel_warm_s']:.2f} s (v1: {st['v1_warm_s']:.2f} s)",
+                "< 1 s",
+            )
+        )
+    lines = ["| figure | measured | target |", "|---|---:|---:|"]
+    lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
+    return "\n".join(lines) + "\n"
+
+
 # ---------------------------------------------------------------------------------------------- CLI
 def build_parser() -> argparse.ArgumentParser:
     """Options of ``amigo-gym bench-env``."""
@@ -696,12 +737,39 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
     p.add_argument("--plot", default=None, metavar="PNG", help="plot throughput against N [file] (default: none)")
+    p.add_argument(
+        "--table-from",
+        default=None,
+        metavar="FILE",
+        help="measure nothing: print the README's performance table from this --json file of a --v1 run [file], "
+        "with the start-up row from --core-json (default: none)",
+    )
+    p.add_argument(
+        "--core-json",
+        default=None,
+        metavar="FILE",
+        help="bench-core --json file for --table-from [file] (default: none)",
+    )
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym bench-env``."""
     args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
+    if args.table_from is not None:
+
+        def table() -> int:
+            import json
+
+            env_doc = json.loads(Path(args.table_from).read_text(encoding="utf-8"))
+            core_doc = json.loads(Path(args.core_json).read_text(encoding="utf-8")) if args.core_json else None
+            try:
+                print(headline_table(env_doc, core_doc), end="")
+            except (KeyError, StopIteration) as exc:
+                raise ValueError(f"--table-from {args.table_from}: not the JSON of a full --v1 run ({exc})") from None
+            return 0
+
+        return run_guarded(table, PROG)
 
     def go() -> int:
         if args.quick:

@@ -3,7 +3,7 @@
 Usage::
 
     amigo-gym benchmark                                  # the whole suite, default agents
-    amigo-gym benchmark --quick                          # a small subset (seconds; used by the tests)
+    amigo-gym benchmark --quick                          # a small subset (16 s of CPU; docs/benchmark.md)
     amigo-gym benchmark --agents analytic sac=runs/sac_s*/model.zip --out results/bench
     amigo-gym benchmark --list                           # print the suite
 
@@ -38,7 +38,8 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 * a zip file or a folder of zips (``agents/pretrained/v1/`` holds ``<algo>/<file>.zip``).
 
 Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
-(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped.
+(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped (named
+``<algo>_v1``; ``amigo-gym compare`` uses the same names).
 
 Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
 -------------------------------------------------------------------------------------------
@@ -488,7 +489,7 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 def default_agents() -> list[AgentSpec]:
     """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
-    (``<algo>_v0``) and v1 generalists (``<algo>``)."""
+    (``<algo>_v0``) and v1 generalists (``<algo>_v1``), named as ``amigo-gym compare`` names them."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
     for algo in ALGOS:
@@ -496,7 +497,7 @@ def default_agents() -> list[AgentSpec]:
             out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
     for algo in ALGOS:
         for i, z in enumerate(sorted((d / "v1" / algo).glob("*.zip"))):
-            out.append(_model_spec(algo, z, i))
+            out.append(_model_spec(f"{algo}_v1", z, i))
     return out
 
 
@@ -821,14 +822,95 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
     if doc["unavailable"]:
         lines += ["", "## Unavailable", ""]
-        for u in doc["unavailable"]:
-            who = "all agents" if u["agent"] is None else f"{u['agent']} (seed {u['seed']})"
-            lines.append(f"- {u['scenario']}, {who}: {u['reason']}")
+        lines += [f"- {line}" for line in unavailable_lines(doc["unavailable"])]
     return "\n".join(lines) + "\n"
 
 
+#: the README's labels of the agents of its v1 table (the generalists under either name, bare or ``_v1``)
+README_ROWS = (
+    ("analytic", "analytic tracking (exact inverse solution + PI feedback)"),
+    ("pure_pursuit", "pure pursuit (of A)"),
+    *((f"{algo}_v1", algo.upper()) for algo in ALGOS),
+)
+
+
+def readme_table(doc: Mapping[str, Any]) -> str:
+    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): H RMS IQM
+    [mm] with its 95 % interval, the same on the held-out scenarios, the speed error IQM [mm/s]; the best of each
+    column in bold. Generalists are found as ``<algo>_v1`` or, in runs before the names were unified, ``<algo>``.
+
+    Raises:
+        ValueError: the document lacks the classical rows or every generalist.
+    """
+    aggs = doc["aggregates"]
+    rows: list[tuple[str, Mapping[str, Any], int]] = []
+    for name, label in README_ROWS:
+        agg = aggs.get(name) or (aggs.get(name.removesuffix("_v1")) if name.endswith("_v1") else None)
+        if agg is None or agg.get("all") is None:
+            continue
+        n = int(agg["n_runs"])
+        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n))
+    if len(rows) < 3:
+        raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
+    cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
+    best = [
+        min(1e3 * agg[g][k]["value"] for _, agg, _ in rows if agg.get(g)) for g, k, _ in cols
+    ]  # the smallest of each column
+    lines = [
+        "| agent | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
+        "|---|---:|---:|---:|",
+    ]
+    for label, agg, n in rows:
+        cells = []
+        for (g, k, fmt), low in zip(cols, best, strict=True):
+            d = agg.get(g)
+            if d is None:
+                cells.append("–")
+                continue
+            v = 1e3 * d[k]["value"]
+            text = f"{v:{fmt}}"
+            if n > 1:
+                lo, hi = (1e3 * x for x in d[k]["ci95"])
+                text += f" [{lo:{fmt}}, {hi:{fmt}}]"
+            cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The unavailable (agent, scenario) runs, one line per agent and reason: its seeds and scenarios listed once
+    (an AmigoBot-v0 model on the v1 scenarios is one line, not one per seed and scenario)."""
+    groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
+    for u in unavailable:
+        seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
+        if u.get("seed") not in seeds:
+            seeds.append(u.get("seed"))
+        if u["scenario"] not in scenarios:
+            scenarios.append(u["scenario"])
+    out = []
+    for (agent, reason), (seeds, scenarios) in groups.items():
+        if agent is None:
+            who = "all agents"
+        else:
+            n = len(seeds)
+            who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
+        out.append(f"{who} on {', '.join(scenarios)}: {reason}")
+    return out
+
+
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
-    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
+    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
+    (:func:`scenarios_figure`), saved as PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = scenarios_figure(doc, reps, seed)
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
+    """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
+    the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -838,7 +920,8 @@ def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: 
 
     scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
     agents = list(doc["aggregates"])
-    fig, ax = plt.subplots(figsize=(max(6.0, 0.5 * len(scen) * max(1, len(agents)) ** 0.5 + 2), 4.5))
+    size = (min(18.0, max(6.0, 0.45 * len(scen) + 2.0)) + 1.6, 4.8)  # at most 19.6 in wide: fits a page
+    fig, ax = plt.subplots(figsize=size, layout="constrained")
     width = 0.8 / max(1, len(agents))
     floor = 1e-7
     for j, agent in enumerate(agents):
@@ -858,11 +941,14 @@ def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: 
     ax.set_yscale("log")
     ax.set_xticks(range(len(scen)), scen, rotation=60, ha="right", fontsize=8)
     ax.set_ylabel("H cross-track RMS [m]")
-    ax.set_title(f"AmigoBot benchmark {doc['suite_version']}: per scenario (95 % interval over training seeds)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    quick = " (quick subset)" if doc.get("quick") else ""
+    ax.set_title(
+        f"AmigoBot benchmark {doc['suite_version']}{quick}: H error per scenario\n"
+        "mean over training seeds, 95 % bootstrap interval",
+        fontsize=10,
+    )
+    fig.legend(loc="outside right upper", fontsize=8, title="agent", title_fontsize=8)
+    return fig
 
 
 def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
@@ -926,10 +1012,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-plots", action="store_true", help="skip the plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--list", action="store_true", help="print the suite and exit")
+    p.add_argument(
+        "--table-from",
+        default=None,
+        metavar="FILE",
+        help="run nothing: print the README's v1 table from this benchmark.json [file] (default: none)",
+    )
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        from amigo_gym.training.evaluate import one_torch_thread
+
+        one_torch_thread()
         suite = SUITES[a.suite]
+        if a.table_from is not None:
+            print(readme_table(json.loads(Path(a.table_from).read_text(encoding="utf-8"))), end="")
+            return 0
         if a.list:
             for sc in suite:
                 flag = "held out" if sc.held_out else ""

@@ -19,13 +19,16 @@ Steps:
 3. Run the quick subset of the benchmark (``amigo-gym benchmark --quick``:
    :func:`amigo_gym.training.benchmark.quick_suite`, 3 scenarios of 2 episodes of at most 120 steps,
    on AmigoBot-v0 and v1) on the same agents: ``analytic`` and ``analytic_ff`` (built per scenario by
-   the benchmark), the pretrained v0 agents and ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
+   the benchmark), the pretrained v0 agents (named ``<algo>_v0`` here as in the benchmark: :func:`v0_name`) and
+   ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
    under ``<models>/v1/<algo>/*.zip`` (named ``<algo>_v1``, one training seed per zip, checked against
    the sha256 of their manifests). An agent that cannot run a scenario (a v0 model on v1's
    observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
    is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
-4. Write ``<out>/results.json`` (protocol, results, the pretrained agents' training records, the fresh
-   run's record, the targets, the quick benchmark's document under ``benchmark``), ``<out>/report.md``
+4. Print a short summary (:func:`summary_text`: the perturbed starts, the targets, the quick benchmark's H
+   error, every agent name explained, where the files went) and write ``<out>/results.json`` (protocol,
+   results, the pretrained agents' training records, the fresh run's record, the targets, the quick
+   benchmark's document under ``benchmark``), ``<out>/report.md``
    (the table, the targets, the training records, the quick benchmark table), ``<out>/eval.md`` and
    the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``, ``<out>/benchmark_scenarios.png``
    and ``<out>/benchmark_profiles.png``.
@@ -62,11 +65,15 @@ from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
 __all__ = [
     "MANIFEST",
     "TARGETS",
+    "agent_legend",
+    "display_command",
     "main",
     "publish",
     "quick_benchmark",
     "report_markdown",
     "run_compare",
+    "summary_text",
+    "v0_name",
     "verify_outputs",
 ]
 
@@ -75,6 +82,55 @@ MANIFEST = "manifest.json"
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
 ANALYTIC = ("analytic", "analytic_ff")
+
+
+def v0_name(name: str) -> str:
+    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
+    ``amigo-gym benchmark`` names them; its v1 generalists are ``<algo>_v1``), a run's own name otherwise."""
+    from amigo_gym.training.benchmark import ALGOS
+
+    return f"{name}_v0" if name in ALGOS else name
+
+
+def agent_legend(names: Sequence[str], gain: float) -> list[str]:
+    """One line per agent name of a report: what it is (every name a report prints is explained)."""
+    fixed = {
+        "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
+        "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
+        "pure_pursuit": "pure pursuit of the axle midpoint A (AmigoBot-v1's classical baseline)",
+        "ppo_fresh": "the PPO agent trained by this run (AmigoBot-v0, --train-steps)",
+    }
+    out = []
+    for name in dict.fromkeys(names):
+        if name in fixed:
+            text = fixed[name]
+        elif name.endswith("_v0"):
+            text = f"pretrained {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
+        elif name.endswith("_v1"):
+            text = f"pretrained {name[:-3].upper()} AmigoBot-v1 generalists (agents/pretrained/v1/{name[:-3]}/)"
+        else:
+            text = "a model from --models"
+        out.append(f"`{name}`: {text}")
+    return out
+
+
+def display_command(command: str, root: Path | None = None) -> str:
+    """``command`` with its absolute paths made short: relative to the repository (``root``, default the current
+    folder) when inside it, else their last two parts (a training record's ``--out /tmp/retrain/runs/ppo`` reads
+    ``--out runs/ppo``), so that no printed command shows a machine's temporary folders."""
+    import shlex
+
+    base = (root or Path.cwd()).resolve()
+    words = []
+    for word in shlex.split(command):
+        if word.startswith("/"):
+            p = Path(word)
+            try:
+                word = str(p.resolve().relative_to(base))
+            except ValueError:
+                word = str(Path(*p.parts[-2:])) if len(p.parts) > 2 else p.name
+        words.append(shlex.quote(word))
+    return " ".join(words)
 
 
 def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed") -> dict[str, Any] | None:
@@ -96,6 +152,8 @@ def report_markdown(doc: dict[str, Any]) -> str:
         f"v_ref = {proto['env_params']['speed']} m/s; scenarios `nominal` (H on the circle, steady heading), "
         f"`paper_start` (H at the origin, beta = 0), `perturbed` (seeds {proto['scenarios']['perturbed']['seeds']}). "
         f"Wheel-rate deviation: {proto['wheel_rate_reference']}.",
+        "",
+        "Agents: " + "; ".join(agent_legend([r["agent"] for r in doc["results"]], proto["analytic_gain"])) + ".",
         "",
         markdown_table(doc["results"]),
     ]
@@ -128,7 +186,9 @@ def report_markdown(doc: dict[str, Any]) -> str:
         ]
         for name, rec in doc["training"].items():
             model = f"{rec.get('exported_model', 'final')} @ {rec.get('exported_timesteps', rec['timesteps'])}"
-            cmds = "<br>".join(f"`{c}`" for c in [rec["command"], *(r["command"] for r in rec.get("resumes", []))])
+            cmds = "<br>".join(
+                f"`{display_command(c)}`" for c in [rec["command"], *(r["command"] for r in rec.get("resumes", []))]
+            )
             lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | {model} | {cmds} |")
         lines.append("")
     lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
@@ -144,10 +204,64 @@ def report_markdown(doc: dict[str, Any]) -> str:
             f"{bench['scenarios'][0]['episodes']} episodes each; {bench['wall_time_s']:.0f} s). A smoke-sized view: "
             "the whole suite is `amigo-gym benchmark` (docs/benchmark.md).",
         ]
+        new_names = [a for a in bench["aggregates"] if a not in {r["agent"] for r in doc["results"]}]
+        if new_names:
+            gain = proto["analytic_gain"]
+            lines += ["", "Agents (besides those above): " + "; ".join(agent_legend(new_names, gain)) + "."]
         lines += [("#" + ln if ln.startswith("#") else ln) for ln in table[1:]]
         if doc.get("benchmark_plots"):
             lines += ["", "![benchmark scenarios](benchmark_scenarios.png)", ""]
             lines += ["![benchmark profiles](benchmark_profiles.png)", ""]
+    return "\n".join(lines)
+
+
+def summary_text(doc: dict[str, Any], out: Path) -> str:
+    """What ``amigo-gym compare`` prints: the perturbed starts' table, the targets, the quick benchmark's H error,
+    every agent name explained, and where the files went (the full tables are in ``report.md``)."""
+    proto = doc["protocol"]
+    rows = [r for r in doc["results"] if r["scenario"] == "perturbed"]
+    n = len(proto["scenarios"]["perturbed"]["seeds"])
+    lines = [
+        f"AmigoBot-v0, {n} perturbed starts of {proto['duration_s']:.0f} s on the circle R = "
+        f"{proto['env_params']['radius']} m (H within 2 cm, heading within 0.1 rad):",
+        "",
+        "| agent | H RMS error [mm] | wheel-rate deviation from the analytic policy, RMS [rad/s] |",
+        "|---|---:|---:|",
+        *(f"| {r['agent']} | {r['h_rms_m'] * 1e3:.3f} | {r['wheel_rate_dev_rms']:.3f} |" for r in rows),
+        "",
+    ]
+    best = doc.get("best_learned")
+    if best:
+        ok_h = "met" if best["h_rms_m"] <= TARGETS["h_rms_m"] else "NOT met"
+        ok_w = "met" if best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"] else "NOT met"
+        lines.append(
+            f"Best learned agent: {best['agent']}, {best['h_rms_m'] * 1e3:.3f} mm (target <= "
+            f"{TARGETS['h_rms_m'] * 1e3:g} mm: {ok_h}), {best['wheel_rate_dev_rms']:.3f} rad/s (target <= "
+            f"{TARGETS['wheel_rate_dev_rms']:g} rad/s: {ok_w})."
+        )
+    names = [r["agent"] for r in rows]
+    bench = doc.get("benchmark")
+    if bench:
+        cells = []
+        for agent, a in bench["aggregates"].items():
+            g = a.get("all")
+            if g is not None:
+                runs_ = f" ({a['n_runs']} seeds)" if a["n_runs"] > 1 else ""
+                cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g}{runs_}")
+            names.append(agent)
+        lines.append(
+            f"Quick benchmark ({len(bench['scenarios'])} scenarios x {bench['scenarios'][0]['episodes']} short "
+            f"episodes on v0 and v1, a smoke test, not the benchmark's result), H RMS IQM [mm]: {', '.join(cells)}. "
+            f"{len(bench['unavailable'])} (agent, seed, scenario) runs could not run (a v0 model on a v1 "
+            "scenario or the reverse: other observations); report.md lists them."
+        )
+    lines += ["", "Agents:", *(f"  {x}" for x in agent_legend(names, proto["analytic_gain"])), ""]
+    plots = ", plots eval_*.png" + (", benchmark_*.png" if doc.get("benchmark_plots") else "")
+    has_plots = (out / "eval_trajectories.png").is_file()
+    lines.append(
+        f"Files in {out}/: report.md (every scenario, the training records, the benchmark's tables), results.json "
+        f"(all numbers), eval.md{plots if has_plots else ''}."
+    )
     return "\n".join(lines)
 
 
@@ -327,11 +441,11 @@ def _run_compare(
     if models is not None:
         _say(f"loading pretrained agents from {models}")
         refs = find_models(models)
-        agents.update({ref.name: load_model(ref) for ref in refs})
-        training.update({r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None})
+        agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
+        training.update({v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None})
         for r in refs:
-            rec_seed = training.get(r.name, {}).get("seed")
-            sources[r.name] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
+            rec_seed = training.get(v0_name(r.name), {}).get("seed")
+            sources[v0_name(r.name)] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
     if train_steps > 0:
         from stable_baselines3 import PPO
 
@@ -423,6 +537,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        from amigo_gym.training.evaluate import one_torch_thread
+
+        one_torch_thread()
         for name in ("train_steps", "seed"):
             if getattr(a, name) < 0:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(a, name)}")
@@ -444,8 +561,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             hyperparams=hp,
             benchmark=not a.no_benchmark,
         )
-        print(report_markdown(doc))
-        print(f"wrote {out / 'report.md'}, {out / 'results.json'}")
+        print(summary_text(doc, out))
         return 0
 
     return run_guarded(run, "amigo-gym compare")

@@ -503,7 +503,9 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
         "settle_time_s": proto.settle_time_s,
         "settled_band_m": SETTLED_BAND_M,
         "analytic_gain": proto.analytic_gain,
-        "wheel_rate_reference": "analytic policy (feedback gain analytic_gain) on the agent's own observations",
+        "wheel_rate_reference": (
+            f"the analytic policy (feedback gain k = {proto.analytic_gain:g}/s) on the agent's own observations"
+        ),
         "deterministic": True,
     }
 
@@ -682,6 +684,23 @@ def write_outputs(
     return doc
 
 
+def one_torch_thread() -> None:
+    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, whose forward pass is
+    fastest on one thread; more threads spin against the environment and other processes for the cores (on a
+    busy 2-core machine ``benchmark --quick`` took 265 s with torch's default threads, most of it in ``linear``).
+    The evaluating commands (evaluate, compare, benchmark) call it; ``train --threads`` does the same for
+    training."""
+    try:
+        import torch
+    except ImportError:
+        return
+    torch.set_num_threads(1)
+
+
+#: evaluate's own default output folder (``amigo-gym compare`` writes to ``results``)
+DEFAULT_OUT = "results/evaluate"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     p = OneLineParser(prog="amigo-gym evaluate", description="Evaluate analytic and trained agents (fixed protocol).")
@@ -692,7 +711,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "<algo>.zip [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs "
         "its code, so pass only files you trust; the shipped ones are checked against their sha256",
     )
-    p.add_argument("--out", default="results", help="directory for eval.md and the plots [dir]")
+    p.add_argument(
+        "--out",
+        default=DEFAULT_OUT,
+        help="directory for eval.md and the plots [dir]; a folder holding another command's output set "
+        "(manifest.json, e.g. compare's) is refused unless --force",
+    )
+    p.add_argument("--force", action="store_true", help="write into a folder that holds another command's files")
     p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/results.json)")
     p.add_argument("--markdown", default=None, help="Markdown table file [file] (default: <out>/eval.md)")
     p.add_argument("--steps", type=int, default=400, help="steps per episode [steps] (default 400 = 40 s)")
@@ -704,6 +729,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
+        one_torch_thread()
         if a.seeds < 1:
             raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
         proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
@@ -716,6 +742,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             training = {r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None}
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
+        if (out / "manifest.json").is_file() and not a.force:
+            raise FileExistsError(
+                f"--out {out} holds another command's output set (manifest.json, e.g. amigo-gym compare's); "
+                f"evaluate would overwrite its results.json, eval.md and plots: choose another --out "
+                f"(default {DEFAULT_OUT}) or pass --force"
+            )
         json_path = Path(a.json) if a.json else out / "results.json"
         md_path = Path(a.markdown) if a.markdown else out / "eval.md"
         extra = {"training": training} if training else None

@@ -28,7 +28,8 @@ a killed run never leaves a half-written file):
   time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
   last evaluation, versions, command, the model's sha256);
-* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
+* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line);
+  removed when the process ends cleanly.
 
 Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
 (:mod:`amigo_gym.runs`). ``--resume`` loads the newest good checkpoint (falling back to the previous
@@ -517,6 +518,31 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     return result
 
 
+def rollout_steps(model: Any) -> tuple[int, str] | None:
+    """The environment steps SB3 collects between two checks of the step budget, and how they come about.
+
+    PPO collects ``n_steps`` per env on ``n_envs`` envs; SAC and TD3 collect ``train_freq`` steps per env when
+    their ``train_freq`` counts steps (``None`` when it counts episodes: the rounding then depends on the episodes).
+    """
+    n_envs = int(model.n_envs)
+    if hasattr(model, "n_steps"):
+        return int(model.n_steps) * n_envs, f"n_steps {int(model.n_steps)} x {n_envs} envs"
+    freq = getattr(model, "train_freq", None)
+    unit = getattr(getattr(freq, "unit", None), "value", None)
+    if freq is None or unit != "step":
+        return None
+    return int(freq.frequency) * n_envs, f"train_freq {int(freq.frequency)} x {n_envs} envs"
+
+
+def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None) -> tuple[int, str]:
+    """The step count a run will end at when it has ``done`` steps and ``remaining`` to go: SB3 stops at the first
+    whole rollout (:func:`rollout_steps`) at or past the budget, ``done + ceil(remaining / rollout) * rollout``."""
+    if remaining <= 0 or rollout is None:
+        return done + max(remaining, 0), "" if rollout is None else rollout[1]
+    size, why = rollout
+    return done + -(-remaining // size) * size, why
+
+
 def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
@@ -588,6 +614,14 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
     venv = model.get_env()
 
     remaining = total - int(model.num_timesteps)
+    planned = planned_timesteps(int(model.num_timesteps), remaining, rollout_steps(model))
+    if planned[0] != total:
+        print(
+            f"amigo-gym train: --timesteps {total} becomes {planned[0]} steps: "
+            f"SB3 trains whole rollouts ({planned[1]})",
+            file=sys.stderr,
+            flush=True,
+        )
     t0 = time.perf_counter()
 
     def wall() -> float:
@@ -656,7 +690,11 @@ def parse_args(argv: Sequence[str]) -> Settings:
     p.add_argument("--algo", required=True, choices=ALGOS, help="algorithm (required)")
     p.add_argument("--seed", type=int, default=0, help="master seed [-]")
     p.add_argument(
-        "--timesteps", type=int, default=None, help="total env steps [steps] (default: the YAML's n_timesteps)"
+        "--timesteps",
+        type=int,
+        default=None,
+        help="total env steps [steps], rounded up to whole rollouts (PPO: n_steps x n_envs; SAC/TD3: train_freq x "
+        "n_envs), and the command says so (default: the YAML's n_timesteps)",
     )
     p.add_argument("--out", required=True, help="run directory [dir], must be empty unless --resume (required)")
     p.add_argument(
