@@ -177,15 +177,22 @@ def test_derivation_page_renders_its_math_with_no_console_error(browser: Any, se
 
 
 def test_search_box_finds_the_env_card(browser: Any, served: str) -> None:
+    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
+
+    def result_links(d: Any) -> list[str]:
+        """The hrefs of the search results; [] (wait on) while the list is being re-rendered."""
+        try:
+            hrefs = [a.get_attribute("href") or "" for a in d.find_elements(By.CSS_SELECTOR, ".md-search-result__link")]
+        except StaleElementReferenceException:
+            return []
+        return hrefs if any("env_card" in h for h in hrefs) else []
 
     browser.get(served + "/")
     box = browser.find_element(By.CSS_SELECTOR, "input.md-search__input")  # the search box in the header
     box.click()
     box.send_keys("observation")
-    links = WebDriverWait(browser, 20).until(
-        lambda d: [a.get_attribute("href") for a in d.find_elements(By.CSS_SELECTOR, ".md-search-result__link")]
-    )
+    links = WebDriverWait(browser, 20).until(result_links)
     assert any("env_card" in href for href in links), links
     assert _console_errors(browser) == []
