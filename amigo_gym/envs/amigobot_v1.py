@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import fast_v1, task, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
 
@@ -66,7 +67,7 @@ def validate_action_v1(action: Any) -> tuple[float, float]:
 _np_array = np.array
 
 
-class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
     ## Description
@@ -168,9 +169,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
         self._delay = 0.0
-        fixed = tracking.fixed_path(p)
-        if fixed is not None:
-            tracking.check_feasible(p, fixed)
+        fixed = tracking.check_task(p)  # the fixed path, or None; refuses infeasible tasks, fixed or drawn
         self._fixed_path = fixed
         self.path: Any = fixed
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
