@@ -47,7 +47,8 @@ class SeparateEnvSpec(EnvSpec):
             return NotImplemented
         return _init_fields(self) == _init_fields(other)
 
-    __hash__ = None  # type: ignore[assignment]  (as EnvSpec's: a mutable dataclass)
+    # unhashable, as EnvSpec (a mutable dataclass)
+    __hash__ = None  # type: ignore[assignment]
 
 
 def _init_fields(spec: EnvSpec) -> tuple[Any, ...]:

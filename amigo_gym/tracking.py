@@ -94,8 +94,8 @@ PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change
 MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
 #: how far ahead the reference speed is also observed [s]
 SPEED_LOOKAHEAD = 1.0
-#: smallest control period [s]: the delay ring then keeps ``floor(MAX_DELAY / dt) + 2 = 502`` commands per robot
-#: (8 KiB; :func:`amigo_gym.actuators.ring_length`)
+#: smallest control period [s]: the delay ring then keeps ``ring_length(0.001) = 501`` commands per robot (8 KB;
+#: :func:`amigo_gym.actuators.ring_length`: the whole steps of MAX_DELAY = 0.5 s, 499 in binary, plus 2)
 MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
@@ -128,7 +128,7 @@ class TrackingParams:
         randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
         dt: control period [s], in [MIN_DT = 0.001, 1]. Default 0.1 (the robot's 100 ms cycle). The bound keeps the
-            delay ring small: ``floor(0.5 / dt) + 2`` commands per robot, at most 502 (8 KiB).
+            delay ring small: ``ring_length(dt)``, about ``0.5 / dt + 2`` commands per robot, at most 501 (8 KB).
         path: a family name of :data:`PATH_FAMILIES`, or a path object (:class:`amigo_gym.paths.PathSpec`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
             ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.

@@ -88,7 +88,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
       ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
       ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
     * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
-      acceleration than the robot has is refused at construction.
+      acceleration than the robot has is refused at construction; so is a ``"random"`` or ``"mixed"`` task that
+      can draw such a path (a bound over the family, :func:`amigo_gym.tracking.check_drawn_feasible`).
 
     ## Action Space
 
@@ -137,6 +138,12 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     :mod:`amigo_gym.tracking`) or ``"numba"`` (the compiled step; needs the extra ``amigo_gym[fast]``). The
     compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`); a path object of
     your own runs the reference code. Both give the same results bit for bit.
+
+    Every argument is checked at construction, in one line naming the field, the value and the allowed range:
+    ``dt`` in [0.001, 1] s (the delay ring then keeps at most 501 commands), ``path_params`` against the family's
+    parameters and ranges (unknown, out-of-range and unused ones refused), and settings that conflict are refused,
+    not clipped (a fixed ``actuators.delay`` plus the highest ``randomize.delay`` above 0.5 s; a trapezoid too short
+    to reach its speed).
 
     ```python
     import gymnasium as gym
