@@ -263,11 +263,13 @@ def test_vector_seeds_accepted_as_sync() -> None:
 
 
 # ---------------------------------------------------------------- the render trail
-@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
-def test_render_trail_is_the_h_of_the_infos(mode: str) -> None:
+@pytest.mark.parametrize(("mode", "kernel"), [("NextStep", "auto"), ("SameStep", "auto"), ("NextStep", "numpy")])
+def test_render_trail_is_the_h_of_the_infos(mode: str, kernel: str) -> None:
     """The ring's trail of each robot is H of its infos since its episode started (the last trail_length ones)."""
     n = 5
-    envs = AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array", max_episode_steps=9, autoreset_mode=mode)
+    envs = AmigoBotV1VectorEnv(
+        num_envs=n, render_mode="rgb_array", max_episode_steps=9, autoreset_mode=mode, kernel=kernel, path="mixed"
+    )
     envs.trail_length = 12
     _, info = envs.reset(seed=1)
     want: list[list[tuple[float, float]]] = [[tuple(h)] for h in info["h_position"].tolist()]
