@@ -140,7 +140,8 @@ class TrackingParams:
             ``path="mixed"``, whose ranges are :data:`MIXED_RANGES`, or a path object), and ``radius`` or
             ``direction`` for ``"circle"``/``"manoeuvre"`` (the keywords of those names set them).
         random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each
-            built once per process. Default 1024.
+            built once per process and kept while the process's built paths fit in :data:`PATH_CACHE_BYTES`
+            (64 MiB; the default pool takes about 25 MB). Default 1024.
         speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)``
             drawn per episode. Default 0.2.
         speed_profile: ``"constant"``, or ``"trapezoid"`` (start at 0, accelerate at ``profile_accel``,

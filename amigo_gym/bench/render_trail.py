@@ -4,9 +4,10 @@ The vector env keeps the rendered trail of H in one ``(trail_length, N, 2)`` rin
 step (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`). This measures, at ``--n`` robots (default 1024) on ``--path``
 (default ``"mixed"``, hard randomisation, as training runs):
 
-* **memory growth** over ``--steps`` steps (default 3000) with ``render_mode="rgb_array"``: the memory
-  ``tracemalloc`` counts after a warm-up (``--warmup`` steps and one ``render()`` of the first ``--frames`` robots),
-  and again after the steps and another render; target <= 20 MiB (issue 21);
+* **memory growth** over ``--steps`` steps (default 3000) from ``reset``: the resident memory of the process
+  (``/proc/self/statm``) with ``render_mode="rgb_array"`` and, in a process of its own, without (the same seeds
+  and actions); target <= 20 MiB with rendering (issue 21). Each measurement runs in a fresh subprocess, so
+  that one does not reuse the other's freed memory;
 * **step time** with and without ``render_mode`` (the same seeds and actions; the repeats interleaved,
   :func:`amigo_gym.bench.core.measure_many`): the ratio, target <= 1.1.
 
@@ -18,14 +19,16 @@ from __future__ import annotations
 
 import argparse
 import gc
+import json
+import os
+import subprocess
 import sys
-import tracemalloc
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-__all__ = ["measure_memory", "measure_time", "main"]
+__all__ = ["main", "measure_memory", "measure_time"]
 
 MiB = 2**20
 
@@ -42,35 +45,38 @@ def _actions(n: int, count: int = 16) -> list[np.ndarray]:
     return [rng.uniform(-1.0, 1.0, (n, 2)) for _ in range(count)]
 
 
-def measure_memory(n: int, steps: int, path: str = "mixed", warmup: int = 200, frames: int = 2) -> dict[str, float]:
-    """Growth of ``tracemalloc``'s count [MiB] over ``steps`` rendered steps, after ``warmup`` steps and a render.
-
-    ``frames`` robots are drawn (``render()`` draws all ``N``; here only the trail lists of the first ``frames``
-    are built, what a render of them costs, so that pygame's surfaces of 1024 renderers are not what is measured).
-    """
-    env = _env(n, path, render=True)
-    acts = _actions(n)
-    env.reset(seed=0)
-    for t in range(warmup):
-        env.step(acts[t % len(acts)])
-    trail_of = getattr(env, "_trail_of", None) or (lambda i: list(env._trails[i]))  # (the former lists: to compare)
-    trails = [trail_of(i) for i in range(frames)]
-    gc.collect()
-    tracemalloc.start()
+def _rss() -> int:
+    """Resident memory of this process [bytes] (``/proc/self/statm``; 0 where there is none)."""
     try:
-        first, _ = tracemalloc.get_traced_memory()
-        for t in range(steps):
-            env.step(acts[t % len(acts)])
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True, frames: int = 2) -> dict[str, float]:
+    """Growth of the resident memory [MiB] from ``reset`` to after ``steps`` steps, with or without ``render_mode``.
+
+    With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them (the
+    renderers' pygame surfaces are not what is measured). The growth counts the trail's ring (allocated at reset,
+    its pages resident as they are first written) and whatever else the steps keep (the paths drawn at resets).
+    """
+    env = _env(n, path, render=render)
+    acts = _actions(n)
+    gc.collect()
+    env.reset(seed=0)
+    first = _rss()
+    for t in range(steps):
+        env.step(acts[t % len(acts)])
+    if render:
+        trail_of = getattr(env, "_trail_of", None) or (lambda i: list(env._trails[i]))  # (the former lists: to compare)
         trails = [trail_of(i) for i in range(frames)]
-        gc.collect()
-        second, _ = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    del trails
+        del trails
+    gc.collect()
+    second = _rss()
     ring = getattr(env, "_trail", None)
-    ring = 0 if ring is None else ring.nbytes
     env.close()
-    return {"growth_mib": (second - first) / MiB, "trail_ring_mib": ring / MiB}
+    return {"growth_mib": (second - first) / MiB, "trail_ring_mib": 0.0 if ring is None else ring.nbytes / MiB}
 
 
 def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float = 0.5) -> dict[str, float]:
@@ -102,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m amigo_gym.bench.render_trail", description=__doc__.split("\n")[0])
     p.add_argument("--n", type=int, default=1024, help="robots [envs] (default 1024)")
     p.add_argument("--steps", type=int, default=3000, help="rendered steps of the memory measurement (default 3000)")
-    p.add_argument("--warmup", type=int, default=200, help="steps before the memory is first counted (default 200)")
+    p.add_argument("--memory-only", choices=("render", "plain"), default=None, help=argparse.SUPPRESS)
     p.add_argument("--path", default="mixed", help="path= of the envs (default mixed, with hard randomisation)")
     p.add_argument("--repeats", type=int, default=5, help="interleaved repeats of the timing (median) (default 5)")
     p.add_argument("--min-time", type=float, default=0.5, help="least duration of one timing repeat [s] (default 0.5)")
@@ -119,11 +125,22 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"error: --{name} must be >= 1, got {getattr(args, name)}", file=sys.stderr)
             return 2
     out: dict[str, Any] = {"n": args.n, "steps": args.steps, "path": args.path}
+    if args.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
+        print(json.dumps(measure_memory(args.n, args.steps, args.path, render=args.memory_only == "render")))
+        return 0
     if not args.skip_memory:
-        out |= measure_memory(args.n, args.steps, args.path, args.warmup)
+        for kind in ("render", "plain"):
+            cmd = [sys.executable, os.path.abspath(__file__), "--memory-only", kind]  # this module, as a script
+            cmd += ["--n", str(args.n), "--steps", str(args.steps), "--path", args.path]
+            r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+            got = json.loads(r.stdout.strip().splitlines()[-1])
+            out[f"growth_{kind}_mib"] = got["growth_mib"]
+            if kind == "render":
+                out["trail_ring_mib"] = got["trail_ring_mib"]
         print(
-            f"memory growth over {args.steps} rendered steps at N={args.n}: {out['growth_mib']:.2f} MiB "
-            f"(target <= 20; the trail ring itself: {out['trail_ring_mib']:.2f} MiB, allocated before)"
+            f"resident memory growth over {args.steps} steps at N={args.n} ({args.path}): "
+            f"{out['growth_render_mib']:.1f} MiB with render_mode='rgb_array' (target <= 20; its trail ring: "
+            f"{out['trail_ring_mib']:.1f} MiB), {out['growth_plain_mib']:.1f} MiB without"
         )
     if not args.skip_time:
         out |= measure_time(args.n, args.path, args.repeats, args.min_time)
