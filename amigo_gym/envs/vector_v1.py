@@ -90,9 +90,8 @@ def validate_actions(actions: Any, n: int) -> tuple[Array, Array]:
 
 
 #: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
-#: generator, the path description. ``tracemalloc`` counts 3.1 KB (compiled step) and 2.2 KB (numpy) on the circle
-#: at dt = 0.1 s (the difference between N = 768 and N = 256, over 512; ``tests/test_bad_inputs_v1.py`` checks
-#: :func:`memory_needed` against that count)
+#: generator, the path description (``tests/test_bad_inputs_v1.py::test_memory_estimate_matches_tracemalloc`` holds
+#: :func:`memory_needed` within [0.5, 3] times ``tracemalloc``'s count per robot, N = 96 minus N = 32)
 ROW_BYTES = 3200
 
 
