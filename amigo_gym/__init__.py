@@ -33,8 +33,10 @@ class SeparateEnvSpec(EnvSpec):
     (``gymnasium.envs.registration.find_highest_version``). v0 is not deprecated: it stays the ideal robot of the
     paper comparison, and v1 is a different task (docs/amigobot_v1.md). This spec reports ``name = id``
     (``"AmigoBot-v1"``) and ``version = None``, as an unversioned environment of that name, so that the lookup of
-    v0's versions does not see it; ``gym.make("AmigoBot-v1")`` finds it by its id as before. It compares equal to the
-    plain :class:`EnvSpec` of the same fields (what ``EnvSpec.from_json`` gives back).
+    v0's versions does not see it; ``gym.make("AmigoBot-v1")`` finds it by its id as before (the unversioned
+    ``gym.make("AmigoBot")``, which Gymnasium resolves to the highest version with a warning, now gives v0: name the
+    version). It compares equal to the plain :class:`EnvSpec` of the same fields (what ``EnvSpec.from_json`` gives
+    back), pickles and copies as one.
     """
 
     def __post_init__(self) -> None:
