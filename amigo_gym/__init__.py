@@ -7,14 +7,15 @@ are imported only where they are used.
 
 from __future__ import annotations
 
-import warnings
+import dataclasses
+from typing import Any
 
-from gymnasium.envs.registration import register, registry
+from gymnasium.envs.registration import EnvSpec, register, registry
 
 from amigo_gym.params import EnvParams, RobotParams
 
 __version__ = "0.1.0"
-__all__ = ["EnvParams", "RobotParams", "__version__"]
+__all__ = ["EnvParams", "RobotParams", "SeparateEnvSpec", "__version__"]
 
 #: steps of one episode at the default dt = 0.1 s: 40 s, more than one lap (31.3 s) of the
 #: default circle. Pass ``max_episode_steps`` to ``gym.make`` with other settings.
@@ -22,6 +23,39 @@ MAX_EPISODE_STEPS = 400
 
 #: steps of one AmigoBot-v1 episode at the default dt = 0.1 s: 60 s
 MAX_EPISODE_STEPS_V1 = 600
+
+
+class SeparateEnvSpec(EnvSpec):
+    """The registered spec of ``AmigoBot-v1``: an environment of its own name, not a newer version of ``AmigoBot-v0``.
+
+    Gymnasium warns "The environment AmigoBot-v0 is out of date" (a ``DeprecationWarning``) whenever ``gym.make``
+    makes ``AmigoBot-v0`` while a spec of the same ``name`` with a higher ``version`` is registered
+    (``gymnasium.envs.registration.find_highest_version``). v0 is not deprecated: it stays the ideal robot of the
+    paper comparison, and v1 is a different task (docs/amigobot_v1.md). This spec reports ``name = id``
+    (``"AmigoBot-v1"``) and ``version = None``, as an unversioned environment of that name, so that the lookup of
+    v0's versions does not see it; ``gym.make("AmigoBot-v1")`` finds it by its id as before (the unversioned
+    ``gym.make("AmigoBot")``, which Gymnasium resolves to the highest version with a warning, now gives v0: name the
+    version). It compares equal to the plain :class:`EnvSpec` of the same fields (what ``EnvSpec.from_json`` gives
+    back), pickles and copies as one.
+    """
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self.name = self.id
+        self.version = None
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, EnvSpec):
+            return NotImplemented
+        return _init_fields(self) == _init_fields(other)
+
+    # unhashable, as EnvSpec (a mutable dataclass)
+    __hash__ = None  # type: ignore[assignment]
+
+
+def _init_fields(spec: EnvSpec) -> tuple[Any, ...]:
+    return tuple(getattr(spec, f.name) for f in dataclasses.fields(EnvSpec) if f.init)
+
 
 if "AmigoBot-v0" not in registry:
     register(
@@ -31,12 +65,9 @@ if "AmigoBot-v0" not in registry:
         max_episode_steps=MAX_EPISODE_STEPS,
     )
 
-# AmigoBot-v0 is not deprecated by v1: it stays the ideal robot of the paper comparison (docs/amigobot_v1.md).
-# Gymnasium warns whenever an older version of an id is made; silence that one message, nothing else.
-warnings.filterwarnings("ignore", message=r".*The environment AmigoBot-v0 is out of date", category=DeprecationWarning)
-
 if "AmigoBot-v1" not in registry:
-    register(
+    # gymnasium.register builds a plain EnvSpec; the registry is the dict it writes to (SeparateEnvSpec's docstring)
+    registry["AmigoBot-v1"] = SeparateEnvSpec(
         id="AmigoBot-v1",
         entry_point="amigo_gym.envs:AmigoBotV1Env",
         vector_entry_point="amigo_gym.envs:AmigoBotV1VectorEnv",

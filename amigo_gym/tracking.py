@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Literal, NamedTuple
@@ -64,7 +65,7 @@ from numpy.typing import NDArray
 from amigo_gym import actuators
 from amigo_gym.actuators import ActuatorParams
 from amigo_gym.kinematics import Real, col_cos, col_sin
-from amigo_gym.params import RobotParams, check_range
+from amigo_gym.params import RobotParams, check_range, show_value
 from amigo_gym.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.task import reward_product, reward_term_columns, steady_heading
 
@@ -95,6 +96,9 @@ PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change
 MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
 #: how far ahead the reference speed is also observed [s]
 SPEED_LOOKAHEAD = 1.0
+#: smallest control period [s]: the delay ring then keeps ``ring_length(0.001) = 501`` commands per robot (8 KB;
+#: :func:`amigo_gym.actuators.ring_length`: the whole steps of MAX_DELAY = 0.5 s, 499 in binary, plus 2)
+MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
 
@@ -126,15 +130,21 @@ class TrackingParams:
         actuators: the firmware's ramps (0.3 / 0.75 m/s^2, 0.87 / 2.5 rad/s^2) and a fixed delay [s].
         randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
-        dt: control period [s], in (0, 1]. Default 0.1 (the robot's 100 ms cycle).
+        dt: control period [s], in [MIN_DT = 0.001, 1]. Default 0.1 (the robot's 100 ms cycle). The bound keeps the
+            delay ring small: ``ring_length(dt)``, about ``0.5 / dt + 2`` commands per robot, at most 501 (8 KB).
         path: a family name of :data:`PATH_FAMILIES`, or a path object (:class:`amigo_gym.paths.PathSpec`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
             ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.
         direction: +1 (left turn) or -1 (right) for circles and the manoeuvre. Default +1.
         path_params: further parameters of the family (e.g. ``{"size": 4.0}`` for ``"figure8"``), as
-            sorted ``(name, value)`` pairs; ``gym.make`` takes a mapping.
+            sorted ``(name, value)`` pairs; ``gym.make`` takes a mapping (or the pairs, as JSON gives them back).
+            Checked at construction against the family's ranges (:data:`amigo_gym.paths.FAMILIES`): an unknown
+            or out-of-range parameter is refused, and so is any parameter that would go unused (with
+            ``path="mixed"``, whose ranges are :data:`MIXED_RANGES`, or a path object), and ``radius`` or
+            ``direction`` for ``"circle"``/``"manoeuvre"`` (the keywords of those names set them).
         random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each
-            built once per process. Default 1024.
+            built once per process and kept while the process's built paths fit in :data:`PATH_CACHE_BYTES`
+            (64 MiB; the default pool takes about 25 MB). Default 1024.
         speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)``
             drawn per episode. Default 0.2.
         speed_profile: ``"constant"``, or ``"trapezoid"`` (start at 0, accelerate at ``profile_accel``,
@@ -191,7 +201,7 @@ class TrackingParams:
             raise ValueError(f"{o}.actuators must be an ActuatorParams, got {type(self.actuators).__name__}")
         if not isinstance(self.randomize, Randomization):
             raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
-        s(self, "dt", check_range(o, "dt", self.dt, 0.0, 1.0, low_open=True))
+        s(self, "dt", check_range(o, "dt", self.dt, MIN_DT, 1.0))
         if isinstance(self.path, str):
             if self.path not in PATH_FAMILIES:
                 raise ValueError(f"{o}.path must be one of {list(PATH_FAMILIES)} or a path object, got {self.path!r}")
@@ -242,12 +252,8 @@ class TrackingParams:
         s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, 10.0))
         s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, 10.0))
         s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
-        pp = self.path_params
-        if isinstance(pp, Mapping):
-            pp = tuple(sorted((str(k), v) for k, v in pp.items()))
-        if not isinstance(pp, tuple):
-            raise ValueError(f"{o}.path_params must be a mapping of family parameters, got {type(pp).__name__}")
-        s(self, "path_params", pp)
+        s(self, "path_params", _path_params(o, self.path, self.path_params))
+        _check_combined(o, self)
 
     @property
     def simulated_robot(self) -> RobotParams:
@@ -259,6 +265,86 @@ class TrackingParams:
         """``(low, high)`` of the reference cruise speed [m/s] (equal for a constant)."""
         sp = self.speed
         return sp if isinstance(sp, tuple) else (float(sp), float(sp))
+
+
+def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], ...]:
+    """``path_params`` as sorted ``(name, float)`` pairs, checked against the family of ``path`` (one-line errors).
+
+    Accepts a mapping or a sequence of ``(name, value)`` pairs (what a JSON round trip of the pairs gives).
+
+    Raises:
+        ValueError: not a mapping or pairs; a name the family does not have; a value outside its range
+            (:class:`amigo_gym.paths.ParamRange`); a parameter that would go unused (``path="mixed"``, a path
+            object); ``radius``/``direction`` for circle and manoeuvre (set by the keywords of those names).
+    """
+    from amigo_gym.paths.families import FAMILIES, RANDOM_RANGES
+
+    name = f"{owner}.path_params"
+    if isinstance(value, Mapping):
+        items = list(value.items())
+    elif isinstance(value, (tuple, list)) and all(
+        isinstance(kv, (tuple, list)) and len(kv) == 2 and isinstance(kv[0], str) for kv in value
+    ):
+        items = [(kv[0], kv[1]) for kv in value]
+    else:
+        raise ValueError(f"{name} must be a mapping of family parameters, got {show_value(value)}")
+    keys = [k for k, _ in items]
+    bad_keys = [k for k in keys if not isinstance(k, str)]
+    if bad_keys:
+        raise ValueError(f"{name} keys must be parameter names (strings), got {bad_keys[0]!r}")
+    if len(set(keys)) != len(keys):
+        raise ValueError(f"{name} names a parameter twice: {sorted(keys)}")
+    if not items:
+        return ()
+    given = {k: v for k, v in items}
+    if not isinstance(path, str):
+        raise ValueError(
+            f"{name} is unused with a path object ({type(path).__name__}): give the path its parameters instead, "
+            f"got {given!r}"
+        )
+    if path == "mixed":
+        raise ValueError(
+            f"{name} is unused with path='mixed' (its families and ranges are fixed: tracking.MIXED_RANGES); "
+            f"got {given!r}"
+        )
+    fam = FAMILIES[path]
+    keyword = {"radius", "direction"} if path in ("circle", "manoeuvre") else set()
+    allowed = sorted(set(fam.params) - keyword)
+    for k in keys:
+        if k in keyword:
+            raise ValueError(f"{name}[{k!r}] is not a path parameter of {path!r}: use the keyword {k}= instead")
+        if k not in fam.params:
+            raise ValueError(f"{name}: path {path!r} has no parameter {k!r}; it takes {allowed}")
+    out = tuple(sorted((k, fam.params[k].check(name, k, v)) for k, v in items))
+    if path == "random":
+        vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(out)
+        if vals["min_piece"] > vals["max_piece"]:
+            raise ValueError(f"{name}: min_piece {vals['min_piece']:g} m must be <= max_piece {vals['max_piece']:g} m")
+    return out
+
+
+def _check_combined(owner: str, p: TrackingParams) -> None:
+    """Refuse settings that are each in range but conflict together (they are never clipped silently).
+
+    * the fixed delay plus the highest randomised delay above :data:`amigo_gym.actuators.MAX_DELAY` (0.5 s);
+    * a trapezoid that cannot reach its cruise speed: ``v / profile_accel + v / profile_decel >
+      profile_duration`` at the highest reference speed ``v``.
+    """
+    fixed = p.actuators.delay
+    high = p.randomize.delay[1]
+    if fixed + high > actuators.MAX_DELAY:
+        raise ValueError(
+            f"{owner}: actuators.delay {fixed:g} s + randomize.delay high {high:g} s = {fixed + high:g} s exceeds "
+            f"the largest delay supported, MAX_DELAY = {actuators.MAX_DELAY:g} s; lower one of them"
+        )
+    if p.speed_profile == "trapezoid":
+        v = p.speed_range[1]
+        need = v / p.profile_accel + v / p.profile_decel
+        if need > p.profile_duration:
+            raise ValueError(
+                f"{owner}.profile_duration {p.profile_duration:g} s is too short for the trapezoid to reach speed "
+                f"{v:g} m/s: accelerating and braking take {need:g} s (speed / profile_accel + speed / profile_decel)"
+            )
 
 
 def make_tracking_params(
@@ -563,8 +649,138 @@ def check_feasible(p: TrackingParams, path: Any) -> None:
         raise ValueError(f.message())
 
 
-#: ranges of the family parameters drawn per episode by ``path="mixed"`` (feasible at 0.4 m/s by construction:
-#: ``tests/test_tracking.py`` checks the extremes with :func:`amigo_gym.paths.feasibility`)
+class Envelope(NamedTuple):
+    """Bounds of the paths a drawn task can give (:func:`drawn_envelopes`).
+
+    Attributes:
+        family: the family's name.
+        max_curvature: bound of ``|kappa|`` over its paths [1/m].
+        max_curvature_rate: bound of ``|dkappa/ds|`` [1/m^2].
+        what: the parameters, for messages.
+    """
+
+    family: str
+    max_curvature: float
+    max_curvature_rate: float
+    what: str
+
+
+def _segment_bounds(path: Any) -> tuple[float, float]:
+    """``max |kappa|`` and ``max |dkappa/ds|`` over the segments of a :class:`amigo_gym.paths.ClothoidPath`."""
+    k = max(max(abs(g.curvature), abs(g.curvature + g.curvature_rate * g.length)) for g in path.segments)
+    c = max(abs(g.curvature_rate) for g in path.segments)
+    return float(k), float(c)
+
+
+def drawn_envelopes(p: TrackingParams) -> list[Envelope]:
+    """Curvature and curvature-rate bounds of every path ``path="random"`` or ``"mixed"`` can draw (else ``[]``).
+
+    * random paths (:func:`amigo_gym.paths.random_path`): ``|kappa| <= max_curvature`` and ``|dkappa/ds| <=
+      min(max_curvature_rate, 2 max_curvature / min_piece)`` (a ramp changes the curvature by at most
+      ``2 max_curvature`` over at least ``min_piece``);
+    * mixed: circles of radius >= 0.5 m; figure-8s and lane changes at the corner of :data:`MIXED_RANGES` where
+      they are sharpest (the smallest figure-8, the largest offset over the shortest length: shrinking a path
+      by a factor scales its curvature up by that factor and its rate by the square), read from the segments
+      of those paths; and the default random paths.
+    """
+    from amigo_gym.paths.families import RANDOM_RANGES
+
+    if p.path == "random":
+        vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(p.path_params)
+    elif p.path == "mixed":
+        vals = {k: r.default for k, r in RANDOM_RANGES.items()}
+    else:
+        return []
+    kmax = vals["max_curvature"]
+    rate = min(vals["max_curvature_rate"], 2.0 * kmax / vals["min_piece"])
+    what = f"max_curvature {kmax:g} 1/m, max_curvature_rate {vals['max_curvature_rate']:g} 1/m^2"
+    out = [Envelope("random", kmax, rate, what)]
+    if p.path == "mixed":
+        r_min = MIXED_RANGES["circle"]["radius"][0]
+        out.append(Envelope("circle", 1.0 / r_min, 0.0, f"radius {r_min:g} m"))
+        size = MIXED_RANGES["figure8"]["size"][0]
+        k8, c8 = _segment_bounds(_cached_family("figure8", (("size", size),)))
+        out.append(Envelope("figure8", k8, c8, f"size {size:g} m"))
+        off = max(abs(x) for x in MIXED_RANGES["lane_change"]["offset"])
+        length = MIXED_RANGES["lane_change"]["length"][0]
+        kl, cl = _segment_bounds(_cached_family("lane_change", (("length", length), ("offset", off))))
+        out.append(Envelope("lane_change", kl, cl, f"offset {off:g} m over length {length:g} m"))
+    return out
+
+
+def envelope_needs(e: Envelope, speed: float, robot: RobotParams) -> tuple[float, float]:
+    r"""Upper bounds of the wheel rate [rad/s] and rotational acceleration [rad/s^2] that the exact inverse solution
+    needs on any path within the envelope ``e`` at the constant speed ``speed`` of A (as
+    :func:`amigo_gym.paths.feasibility` computes them on one path); ``inf`` when H may fall 90 degrees behind.
+
+    With the heading lag ``psi`` of :func:`amigo_gym.paths.heading_lag_profile`,
+    ``dpsi/ds = u = kappa - sin(psi) / l3``, starting from the quasi-steady lag (``u = 0``) on a path of continuous
+    curvature: ``sin psi`` can only move towards ``kappa l3``, so ``|sin psi| <= sigma = kappa_max l3`` (needs
+    ``sigma < 1``), and ``du/ds = kappa' - (cos(psi) / l3) u`` keeps ``|u| <= c_max l3 / c`` with
+    ``c = sqrt(1 - sigma^2) <= cos psi``. Then, with ``v_H = v / cos psi``,
+    ``betadot = v tan(psi) / l3`` and ``betaddot = v^2 u / (l3 cos^3 psi)``:
+
+    .. math::
+        |\dot\alpha_i| \le \frac{v + l_1 v \sigma / (l_3 c)}{\min(r_1, r_2)}, \qquad
+        |\ddot\beta| \le \frac{v^2 c_{max}}{c^4}.
+
+    Both are reached on a long enough arc of curvature ``kappa_max`` and a long enough ramp at rate ``c_max``
+    (e.g. 16.8 rad/s and 0.57 rad/s^2 for the default random paths at 0.75 m/s, where the peaks of 100 pool paths
+    reach 16.80 and 0.568).
+    """
+    sigma = e.max_curvature * robot.l3
+    if sigma >= 1.0:
+        return math.inf, math.inf
+    c = math.sqrt(1.0 - sigma * sigma)
+    wheel = (speed + robot.l1 * speed * sigma / (robot.l3 * c)) / min(robot.r1, robot.r2)
+    rot = speed * speed * e.max_curvature_rate / c**4
+    return wheel, rot
+
+
+def check_drawn_feasible(p: TrackingParams) -> None:
+    """Refuse ``path="random"``/``"mixed"`` settings under which a drawn path can need more than the robot has.
+
+    The same limits as :func:`check_feasible` (``robot.max_wheel_rate``, ``actuators.rot_acceleration``) at the
+    highest reference speed, with the bounds of :func:`envelope_needs` over :func:`drawn_envelopes`: a task that
+    passes draws only paths that :func:`check_feasible` would accept. One-line ``ValueError`` naming the family,
+    its parameters, the need and the limit.
+    """
+    v = p.speed_range[1]
+    robot = p.robot
+    for e in drawn_envelopes(p):
+        wheel, rot = envelope_needs(e, v, robot)
+        head = f"path={p.path!r}: its {e.family} paths ({e.what}) at speed {v:g} m/s"
+        if math.isinf(wheel):
+            raise ValueError(
+                f"{head} can turn the heading 90 degrees away from the path (curvature above 1/l3 = "
+                f"{1.0 / robot.l3:g} 1/m): H cannot follow them; lower max_curvature"
+            )
+        if wheel > robot.max_wheel_rate:
+            raise ValueError(
+                f"{head} can need {wheel:.3g} rad/s of wheel rate, above the robot's limit of "
+                f"{robot.max_wheel_rate:g} rad/s; lower the speed or the curvature"
+            )
+        limit = p.actuators.rot_acceleration
+        if rot > limit:
+            raise ValueError(
+                f"{head} can need {rot:.3g} rad/s^2 of rotational acceleration, above the robot's limit of "
+                f"{limit:g} rad/s^2 (actuators.rot_acceleration); lower the speed or max_curvature_rate"
+            )
+
+
+def check_task(p: TrackingParams) -> Any:
+    """The fixed path of ``p`` (:func:`fixed_path`, ``None`` when drawn), after checking the task is feasible:
+    :func:`check_feasible` on a fixed path, :func:`check_drawn_feasible` on drawn ones."""
+    fixed = fixed_path(p)
+    if fixed is not None:
+        check_feasible(p, fixed)
+    else:
+        check_drawn_feasible(p)
+    return fixed
+
+
+#: ranges of the family parameters drawn per episode by ``path="mixed"`` (the environments check at construction
+#: that every path they can draw is feasible at the highest reference speed: :func:`check_drawn_feasible`)
 MIXED_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "circle": {"radius": (0.5, 3.0)},
     "figure8": {"size": (3.0, 6.0)},
@@ -586,34 +802,48 @@ def fixed_path(p: TrackingParams) -> Any:
     return None
 
 
-_FAMILY_CACHE: dict[tuple[Any, ...], Any] = {}
+#: bytes of family paths a process keeps built (:func:`_cached_family`): 64 MiB, e.g. the whole default random pool
+#: (1024 paths of about 25 KB) with room to spare; the least recently used paths are dropped beyond it
+PATH_CACHE_BYTES = 64 * 2**20
+_FAMILY_CACHE: OrderedDict[tuple[Any, ...], tuple[Any, int]] = OrderedDict()
+_cache_bytes = 0
 
 
-def _cached_family(name: str, items: tuple[tuple[str, Any], ...]) -> Any:
-    """A family path, built once per process for each parameter set."""
+def path_nbytes(path: Any) -> int:
+    """An estimate of the memory of a built :class:`amigo_gym.paths.ClothoidPath` [bytes]: its tables' arrays, about
+    400 bytes per segment and 2 KiB for the objects (within a factor 2 of ``tracemalloc``'s count,
+    ``tests/test_bad_inputs_v1.py``)."""
+    t = path._t
+    arrays = sum(int(getattr(t, f).nbytes) for f in t._fields if isinstance(getattr(t, f), np.ndarray))
+    return arrays + 400 * len(path.segments) + 2048
+
+
+def _cached_family(name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None) -> Any:
+    """A family path, built once per process for each parameter set (and seed of a random one), kept while the
+    paths built fit in :data:`PATH_CACHE_BYTES` (least recently used dropped first; a path is rebuilt the same)."""
     from amigo_gym.paths import make_family_path
 
-    key = (name, items)
-    path = _FAMILY_CACHE.get(key)
-    if path is None:
-        path = make_family_path(name, None, **dict(items))
-        if len(_FAMILY_CACHE) > 4096:
-            _FAMILY_CACHE.clear()
-        _FAMILY_CACHE[key] = path
+    global _cache_bytes
+    key = (name, items) if rng_seed is None else (name, (("id", rng_seed), *items))
+    got = _FAMILY_CACHE.get(key)
+    if got is not None:
+        _FAMILY_CACHE.move_to_end(key)
+        return got[0]
+    rng = None if rng_seed is None else np.random.default_rng(rng_seed)
+    path = make_family_path(name, rng, **dict(items))
+    size = path_nbytes(path)
+    _FAMILY_CACHE[key] = (path, size)
+    _cache_bytes += size
+    while _cache_bytes > PATH_CACHE_BYTES and len(_FAMILY_CACHE) > 1:
+        _, (_, old) = _FAMILY_CACHE.popitem(last=False)
+        _cache_bytes -= old
     return path
 
 
 def random_pool_path(p: TrackingParams, path_id: int) -> Any:
     """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
-    from amigo_gym.paths import make_family_path
-
     extra = tuple(sorted(dict(p.path_params).items())) if p.path == "random" else ()
-    key = ("random", (("id", path_id), *extra))
-    path = _FAMILY_CACHE.get(key)
-    if path is None:
-        path = make_family_path("random", np.random.default_rng(path_id), **dict(extra))
-        _FAMILY_CACHE[key] = path
-    return path
+    return _cached_family("random", extra, rng_seed=path_id)
 
 
 def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[str, Any]]:
@@ -622,6 +852,8 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
     Returns:
         the path and a description for ``info`` (family and parameters).
     """
+    from amigo_gym.paths import make_family_path
+
     if p.path == "random":
         pid = int(rng.integers(p.random_pool))
         return random_pool_path(p, pid), {"family": "random", "id": pid}
@@ -637,7 +869,8 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
         values[name] = float(rng.uniform(lo, hi))
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
-    return _cached_family(fam, tuple(sorted(values.items()))), {"family": fam, **values}
+    # parameters drawn from continuous ranges do not repeat: built, not cached
+    return make_family_path(fam, None, **values), {"family": fam, **values}
 
 
 # --------------------------------------------------------------------------- episodes and steps

@@ -92,7 +92,7 @@ def test_sb3_check_env_no_warnings() -> None:
 
 
 def test_making_v0_is_silent() -> None:
-    """v1 does not deprecate v0: ``import amigo_gym`` silences Gymnasium's "out of date" warning for it (only)."""
+    """v1 does not deprecate v0: registered under a name of its own, it makes Gymnasium warn nothing about v0."""
     import subprocess
     import sys
 

@@ -19,6 +19,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from amigo_gym import fast, task
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.kinematics import h_position
 from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -182,7 +183,7 @@ def _single(kind: str, value: Any) -> Any:
     return float(value)
 
 
-class AmigoBotEnv(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
 
     ## Description

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from amigo_gym import fast_v1, task, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
 
@@ -66,7 +67,7 @@ def validate_action_v1(action: Any) -> tuple[float, float]:
 _np_array = np.array
 
 
-class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
     ## Description
@@ -87,7 +88,8 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
       ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
       ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
     * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
-      acceleration than the robot has is refused at construction.
+      acceleration than the robot has is refused at construction; so is a ``"random"`` or ``"mixed"`` task that
+      can draw such a path (a bound over the family, :func:`amigo_gym.tracking.check_drawn_feasible`).
 
     ## Action Space
 
@@ -137,6 +139,12 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`); a path object of
     your own runs the reference code. Both give the same results bit for bit.
 
+    Every argument is checked at construction, in one line naming the field, the value and the allowed range:
+    ``dt`` in [0.001, 1] s (the delay ring then keeps at most 501 commands), ``path_params`` against the family's
+    parameters and ranges (unknown, out-of-range and unused ones refused), and settings that conflict are refused,
+    not clipped (a fixed ``actuators.delay`` plus the highest ``randomize.delay`` above 0.5 s; a trapezoid too short
+    to reach its speed).
+
     ```python
     import gymnasium as gym
     import amigo_gym
@@ -168,9 +176,7 @@ class AmigoBotV1Env(gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
         self._delay = 0.0
-        fixed = tracking.fixed_path(p)
-        if fixed is not None:
-            tracking.check_feasible(p, fixed)
+        fixed = tracking.check_task(p)  # the fixed path, or None; refuses infeasible tasks, fixed or drawn
         self._fixed_path = fixed
         self.path: Any = fixed
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}

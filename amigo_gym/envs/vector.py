@@ -38,8 +38,9 @@ from amigo_gym.envs.amigobot import (
     make_spaces,
     parse_pose_option,
 )
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.params import EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 
 __all__ = [
@@ -65,7 +66,7 @@ def _parse_autoreset_mode(mode: str | AutoresetMode) -> AutoresetMode:
         raise ValueError(f"autoreset_mode must be one of {allowed}, got {mode!r}") from None
 
 
-class AmigoBotVectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
     """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
 
     Args:
@@ -600,17 +601,37 @@ def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_
 
 
 def parse_seeds(seed: Any, n: int) -> list[int | None]:
-    """``reset(seed=...)`` of a vector env: ``None``, an int ``s`` (seeds ``s + i``) or a list of ``n`` ints/None."""
+    """``reset(seed=...)`` of a vector env: ``None``, an int ``s >= 0`` (seeds ``s + i``) or a list/tuple of ``n``
+    ints ``>= 0``/None, as ``SyncVectorEnv`` takes them (numpy integers accepted too; bools refused).
+
+    Raises:
+        TypeError: a seed of another type (a float, a string, ...), naming it and the accepted types.
+        ValueError: a negative seed, or a list of the wrong length.
+    """
+    accepted = f"None, an int >= 0, or a list of num_envs={n} ints >= 0 / None"
     if seed is None:
         return [None] * n
-    if isinstance(seed, bool):
-        raise ValueError(f"seed must be an int, a list of {n} ints/None, or None; got {seed!r}")
-    if isinstance(seed, int | np.integer):
+    if _is_int(seed):
+        if seed < 0:
+            raise ValueError(f"seed must be {accepted}; got {seed!r}")
         return [int(seed) + i for i in range(n)]
-    seeds = list(seed)
-    if len(seeds) != n:
-        raise ValueError(f"seed list must have length num_envs={n}, got length {len(seeds)}")
-    return seeds
+    if not isinstance(seed, list | tuple):
+        raise TypeError(f"seed must be {accepted}; got {show_value(seed)}")
+    if len(seed) != n:
+        raise ValueError(f"seed list must have length num_envs={n}, got length {len(seed)}")
+    for i, s in enumerate(seed):
+        if s is None:
+            continue
+        if not _is_int(s):
+            raise TypeError(f"seed[{i}] must be an int >= 0 or None; got {show_value(s)}")
+        if s < 0:
+            raise ValueError(f"seed[{i}] must be an int >= 0 or None; got {s!r}")
+    return [None if s is None else int(s) for s in seed]
+
+
+def _is_int(x: Any) -> bool:
+    """A Python or numpy integer, not a bool."""
+    return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_)
 
 
 def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict[str, Any]:

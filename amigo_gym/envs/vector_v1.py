@@ -23,6 +23,7 @@ For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mod
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import gymnasium as gym
@@ -32,9 +33,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import fast, fast_v1, fast_v1_batch, task, tracking
-from amigo_gym.envs.amigobot import check_reset_options, parse_pose_option
+from amigo_gym import actuators, fast, fast_v1, fast_v1_batch, task, tracking
+from amigo_gym.envs.amigobot import TRAIL_LENGTH, check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.envs.vector import (
     _parse_autoreset_mode,
     assign_rows,
@@ -87,7 +89,45 @@ def validate_actions(actions: Any, n: int) -> tuple[Array, Array]:
     return a[:, 0].copy(), a[:, 1].copy()
 
 
-class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+#: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
+#: generator, the path description (``tests/test_bad_inputs_v1.py::test_memory_estimate_matches_tracemalloc`` holds
+#: :func:`memory_needed` within [0.5, 3] times ``tracemalloc``'s count per robot, N = 96 minus N = 32)
+ROW_BYTES = 3200
+
+
+def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> int:
+    """An estimate of the memory of ``n`` robots [bytes] (:data:`ROW_BYTES` each, plus the command ring of
+    ``ring_length(dt)`` commands, the render trail's ``TRAIL_LENGTH`` positions, and, for paths drawn per episode,
+    twice the memory of a drawn path: the path and its copy in the compiled step's arena)."""
+    per = ROW_BYTES + 16 * actuators.ring_length(p.dt)
+    if render_mode is not None:
+        per += 16 * TRAIL_LENGTH
+    if tracking.fixed_path(p) is None:
+        per += 2 * tracking.path_nbytes(tracking.random_pool_path(p, 0)) if p.path == "random" else 2 * 25_000
+    return n * per
+
+
+def machine_memory() -> int | None:
+    """This machine's physical memory [bytes] (``os.sysconf``), or None where it is not known."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> None:
+    """Refuse a ``num_envs`` whose robots need more memory than the machine has (:func:`memory_needed`), before
+    anything is allocated; one line naming ``num_envs`` and the bytes."""
+    total = machine_memory()
+    need = memory_needed(n, p, render_mode)
+    if total is not None and need > total:
+        raise ValueError(
+            f"{owner}.num_envs={n} needs about {need:,} bytes ({need // n:,} per robot), more than this machine's "
+            f"memory of {total:,} bytes; use fewer robots"
+        )
+
+
+class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
     """``N`` AmigoBot-v1 tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotV1Env`).
 
     Args:
@@ -106,6 +146,11 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
 
     Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
     of each robot is :attr:`path_infos` (strings are not batched).
+
+    Rendering keeps the last ``trail_length`` (1000) positions of H per robot in one ``(1000, N, 2)`` ring
+    (16 KB per robot, written by two column copies per step), so memory stays flat however many steps are
+    rendered. ``num_envs`` is refused when its robots would need more than the machine's memory
+    (:func:`memory_needed`: about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
     """
 
     metadata: dict[str, Any] = {  # noqa: RUF012
@@ -134,9 +179,8 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
-        fixed = tracking.fixed_path(p)
-        if fixed is not None:
-            tracking.check_feasible(p, fixed)
+        check_memory(owner, int(num_envs), p, render_mode)
+        fixed = tracking.check_task(p)  # the fixed path, or None; refuses infeasible tasks, fixed or drawn
         n = int(num_envs)
         self.num_envs = n
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
@@ -181,7 +225,12 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         self._ring_step = 0
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs.shape[0]), dtype=np.float32)
-        self._trails: list[list[tuple[float, float]]] = [[] for _ in range(n)]
+        # the rendered trail of H: a ring of the last trail_length positions of every robot, (T, N, 2), allocated
+        # when first written (render_mode set); _h_now holds each robot's H to write next
+        self._trail: Array | None = None
+        self._trail_count = 0  # positions written so far
+        self._trail_start = np.zeros(n, dtype=np.int64)  # the count at which each robot's episode started
+        self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
         self._renderers: list[Any] = [None] * n
         self._was_reset = False
 
@@ -227,6 +276,8 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         obs[idx] = rows[0]
         self._obs = obs
         infos = self._scatter(self._infos(rows[1], idx), mask)
+        if self.render_mode is not None:
+            self._append_trail()
         return obs.copy(), infos
 
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
@@ -250,9 +301,10 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             obs[j] = b.outcome.obs
             for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
                 cols.setdefault(key, []).append(value)
-            self._trails[i] = [(float(b.outcome.h_x), float(b.outcome.h_y))]
         self.paths.replace(idx, paths)
-        return obs, {key: _stack(v) for key, v in cols.items()}
+        infos = {key: _stack(v) for key, v in cols.items()}
+        self._start_trails(idx, _array(infos["h_position"]))
+        return obs, infos
 
     def _begin_rows_kernel(
         self, idx: NDArray[np.intp], pose_opt: Array | None = None
@@ -276,8 +328,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
         exps = b.start(rows, paths, states, episodes, obs)
         infos = self._kernel_infos(idx, exps, None)
-        for i, (hx, hy) in zip(rows, infos["h_position"].tolist(), strict=True):
-            self._trails[i] = [(hx, hy)]
+        self._start_trails(idx, infos["h_position"])
         return obs, infos
 
     def _set_row(self, i: int, path_info: dict[str, Any], st: tracking.State, ep: tracking.Episode) -> None:
@@ -312,6 +363,9 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
         else:
             obs, reward, terminated, infos, hx, hy = self._step_columns(a1, a2)
+        if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
+            self._h_now[:, 0] = hx
+            self._h_now[:, 1] = hy
         steps = np.asarray(self._state.steps)
         truncated = (
             steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, dtype=np.bool_)
@@ -344,12 +398,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
                     **infos,
                 }
         if self.render_mode is not None:
-            fresh = set() if restart is None else set(restart.tolist())
-            for i in range(n):
-                if i not in fresh:
-                    self._trails[i].append((float(hx[i]), float(hy[i])))
-                    if len(self._trails[i]) > 4096:
-                        del self._trails[i][:1024]
+            self._append_trail()
         self._autoreset = terminated | truncated
         self._obs = obs
         return obs, reward, terminated, truncated, self._scatter(infos, None)
@@ -505,6 +554,34 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
         return scatter_infos(infos, mask, self.num_envs)
 
     # ------------------------------------------------------------------ rendering
+    #: positions of H kept per robot for the rendered trail (the ring's length, as AmigoBotVectorEnv's)
+    trail_length: int = TRAIL_LENGTH
+
+    def _start_trails(self, idx: NDArray[np.intp], h: Array) -> None:
+        """The robots ``idx`` start episodes at H = ``h`` ``(m, 2)``: their trails start at the next position."""
+        if self.render_mode is not None:
+            self._trail_start[idx] = self._trail_count
+            self._h_now[idx] = h
+
+    def _append_trail(self) -> None:
+        """Write every robot's H (:attr:`_h_now`) into the trail's ring: two column copies, no loop over robots."""
+        length = max(1, int(self.trail_length))
+        if self._trail is None or self._trail.shape[0] != length:
+            self._trail = np.zeros((length, self.num_envs, 2))
+            self._trail_count = 0
+            self._trail_start[:] = 0
+        self._trail[self._trail_count % length] = self._h_now
+        self._trail_count += 1
+
+    def _trail_of(self, i: int) -> list[tuple[float, float]]:
+        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
+        if self._trail is None:
+            return []
+        length = self._trail.shape[0]
+        first = max(int(self._trail_start[i]), self._trail_count - length)
+        rows = np.arange(first, self._trail_count) % length
+        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
+
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
         """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
         if self.render_mode is None:
@@ -524,7 +601,7 @@ class AmigoBotV1VectorEnv(VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray
             frames.append(
                 r.draw(
                     pose,
-                    self._trails[i],
+                    self._trail_of(i),
                     wheel_angles=np.array((alpha1[i], alpha2[i])),
                     time=float(steps[i] * self.params.dt),
                 )
