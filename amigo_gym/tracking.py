@@ -52,6 +52,7 @@ randomization); never the environments, policies, training or the CLI.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Literal, NamedTuple
@@ -95,6 +96,8 @@ MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
 SPEED_LOOKAHEAD = 1.0
 
 SpeedProfile = Literal["constant", "trapezoid"]
+#: values of ``feasibility=``: refuse an infeasible fixed path, warn and run it, or run it silently
+FEASIBILITY_MODES: tuple[str, ...] = ("error", "warn", "off")
 
 
 def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
@@ -148,6 +151,13 @@ class TrackingParams:
         preview: distances ahead of H's closest point at which the path is observed [m], each in (0, 5].
         preview_scale: the observation divides preview coordinates by this [m].
         sigma_track, sigma_speed, sigma_smooth, smooth_weight: reward scales (module docstring).
+        feasibility: what a fixed path the robot cannot track at the highest ``speed`` does at construction
+            (:func:`check_feasible`): ``"error"`` (default) refuses it, ``"warn"`` warns and runs it, ``"off"``
+            runs it silently; the report (where the path exceeds the wheel-rate or acceleration limits) is the
+            env's ``feasibility`` attribute and ``info["feasibility"]`` at reset in every mode.
+        goal_tolerance: an open path's episode terminates as a success when H is within this distance [m] of
+            the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
+            passes the end (``"end_of_path"``).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -176,6 +186,8 @@ class TrackingParams:
     sigma_speed: float = 0.05
     sigma_smooth: float = 0.1
     smooth_weight: float = 0.2
+    feasibility: str = "error"
+    goal_tolerance: float = 0.0
 
     def __post_init__(self) -> None:
         o = "TrackingParams"
@@ -192,11 +204,10 @@ class TrackingParams:
         if isinstance(self.path, str):
             if self.path not in PATH_FAMILIES:
                 raise ValueError(f"{o}.path must be one of {list(PATH_FAMILIES)} or a path object, got {self.path!r}")
-        elif not (hasattr(self.path, "locate") and hasattr(self.path, "pose_columns") and hasattr(self.path, "length")):
-            raise ValueError(
-                f"{o}.path must be a family name or an object with length, closed, pose_columns and locate "
-                f"(amigo_gym.paths.PathSpec), got {type(self.path).__name__}"
-            )
+        else:  # a path object: checked against the protocol, wrapped unless a ClothoidPath (amigo_gym.paths.user)
+            from amigo_gym.paths.user import check_path
+
+            s(self, "path", check_path(self.path, "AmigoBot-v1"))
         s(self, "radius", check_range(o, "radius", self.radius, self.robot.l3, 1e3, low_open=True))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
@@ -239,6 +250,9 @@ class TrackingParams:
         s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, 10.0))
         s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, 10.0))
         s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
+        if not isinstance(self.feasibility, str) or self.feasibility not in FEASIBILITY_MODES:
+            raise ValueError(f"{o}.feasibility must be one of {list(FEASIBILITY_MODES)}, got {self.feasibility!r}")
+        s(self, "goal_tolerance", check_range(o, "goal_tolerance", self.goal_tolerance, 0.0, 10.0))
         pp = self.path_params
         if isinstance(pp, Mapping):
             pp = tuple(sorted((str(k), v) for k, v in pp.items()))
@@ -524,12 +538,17 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
 # --------------------------------------------------------------------------- paths
 
 
-def check_feasible(p: TrackingParams, path: Any) -> None:
-    """Refuse a task whose exact inverse solution needs more than the nominal robot has (one-line ``ValueError``).
+def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
+    """Check a task against what the nominal robot has; refuse it (one-line ``ValueError``), warn or say nothing
+    as ``p.feasibility`` says (``"error"``, ``"warn"``, ``"off"``).
 
     Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
     (``actuators.rot_acceleration``) at the highest reference speed, with the exact heading lag of H
     (:func:`amigo_gym.paths.feasibility`), and the trapezoid's rates against the robot's ramps.
+
+    Returns:
+        the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
+        ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
     """
     from amigo_gym.paths import feasibility
 
@@ -542,7 +561,43 @@ def check_feasible(p: TrackingParams, path: Any) -> None:
         max_rotational_acceleration=p.actuators.rot_acceleration,
     )
     if not f.feasible:
-        raise ValueError(f.message())
+        if p.feasibility == "error":
+            raise ValueError(f"{f.message()} (feasibility='warn' or 'off' runs it anyway)")
+        if p.feasibility == "warn":
+            warnings.warn(f"AmigoBot-v1: {f.message()}; running it (feasibility='warn')", UserWarning, stacklevel=3)
+    return f.report()
+
+
+#: values of ``info["end_condition"]``: ``""`` the episode goes on (or ended by truncation), ``"goal"`` H came within
+#: ``goal_tolerance`` of an open path's end point, ``"end_of_path"`` H passed that end, ``"off_path"`` H was farther
+#: than ``termination_distance`` from the path (the first that applies, in this order)
+END_CONDITIONS: tuple[str, ...] = ("", "goal", "end_of_path", "off_path")
+
+
+def goal_point(p: TrackingParams, path: Any) -> tuple[float, float]:
+    """The end point ``(x, y)`` [m] of an open ``path`` when ``p.goal_tolerance > 0``; else ``(nan, nan)``, which
+    no H reaches (:func:`goal_reached`)."""
+    if p.goal_tolerance <= 0.0 or bool(path.closed):
+        return math.nan, math.nan
+    q = path.pose_columns(float(path.length))
+    return float(q.x), float(q.y)
+
+
+def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> Any:
+    """Whether H ``(hx, hy)`` is within ``p.goal_tolerance`` of the goal ``(gx, gy)`` [m] (:func:`goal_point`):
+    ``(hx - gx)^2 + (hy - gy)^2 <= goal_tolerance^2`` (False for a NaN goal). Floats or columns."""
+    dx = hx - gx
+    dy = hy - gy
+    return dx * dx + dy * dy <= p.goal_tolerance * p.goal_tolerance
+
+
+def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
+    """The entry of :data:`END_CONDITIONS` for one robot's step."""
+    if goal:
+        return "goal"
+    if end_of_path:
+        return "end_of_path"
+    return "off_path" if terminated else ""
 
 
 #: ranges of the family parameters drawn per episode by ``path="mixed"`` (feasible at 0.4 m/s by construction:
@@ -608,7 +663,7 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
         pid = int(rng.integers(p.random_pool))
         return random_pool_path(p, pid), {"family": "random", "id": pid}
     if p.path != "mixed":
-        fam = p.path if isinstance(p.path, str) else type(p.path).__name__
+        fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
     fam = MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
     if fam == "random":

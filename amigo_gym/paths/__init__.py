@@ -10,6 +10,8 @@
   interface of one path on ``(N,)`` columns, row ``i`` bit-identical to path ``i``.
 * :mod:`amigo_gym.paths.points`: :func:`from_points` and :func:`from_file`, a :class:`ClothoidPath` with
   continuous curvature fitted to points of your own (an array, a CSV or a JSON file).
+* :mod:`amigo_gym.paths.user`: the duck-typed protocol of a path object of your own (``length``, ``closed``,
+  ``pose_columns``), :func:`check_path` and :class:`UserPath`, which checks it at ``gym.make`` and every result.
 * :mod:`amigo_gym.paths.analysis`: :func:`preview` (path ahead in the robot frame) and :func:`feasibility`
   (wheel rates and accelerations the exact inverse solution needs).
 
@@ -54,6 +56,7 @@ from amigo_gym.paths.families import (
     random_path,
 )
 from amigo_gym.paths.points import PointsFit, fit_points, from_file, from_points, load_points
+from amigo_gym.paths.user import UserPath, check_path
 
 __all__ = [
     "Projection",
@@ -93,4 +96,6 @@ __all__ = [
     "from_points",
     "from_file",
     "load_points",
+    "UserPath",
+    "check_path",
 ]
