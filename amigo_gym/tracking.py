@@ -127,7 +127,8 @@ class TrackingParams:
         randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
         dt: control period [s], in (0, 1]. Default 0.1 (the robot's 100 ms cycle).
-        path: a family name of :data:`PATH_FAMILIES`, or a path object (:class:`amigo_gym.paths.PathSpec`).
+        path: a family name of :data:`PATH_FAMILIES`, a points file (``.csv`` or ``.json`` with columns ``x``,
+            ``y`` [m]: :func:`amigo_gym.paths.from_file`), or a path object (:mod:`amigo_gym.paths.user`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
             ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.
         direction: +1 (left turn) or -1 (right) for circles and the manoeuvre. Default +1.
@@ -201,10 +202,16 @@ class TrackingParams:
         if not isinstance(self.randomize, Randomization):
             raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
         s(self, "dt", check_range(o, "dt", self.dt, 0.0, 1.0, low_open=True))
-        if isinstance(self.path, str):
-            if self.path not in PATH_FAMILIES:
-                raise ValueError(f"{o}.path must be one of {list(PATH_FAMILIES)} or a path object, got {self.path!r}")
-        else:  # a path object: checked against the protocol, wrapped unless a ClothoidPath (amigo_gym.paths.user)
+        if isinstance(self.path, str) and self.path not in PATH_FAMILIES:
+            from amigo_gym.paths.points import cached_file_path, is_points_file
+
+            if not is_points_file(self.path):
+                raise ValueError(
+                    f"{o}.path must be one of {list(PATH_FAMILIES)}, a points file (.csv, .json) or a path object, "
+                    f"got {self.path!r}"
+                )
+            s(self, "path", cached_file_path(self.path))  # amigo_gym.paths.from_file, fitted once per file
+        if not isinstance(self.path, str):  # a path object: checked, wrapped unless a ClothoidPath (paths.user)
             from amigo_gym.paths.user import check_path
 
             s(self, "path", check_path(self.path, "AmigoBot-v1"))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from typing import Any, NamedTuple
@@ -225,3 +226,47 @@ def test_goal_tolerance_on_a_straight_line(kernel: str, tol: float, step: int, c
 def test_goal_tolerance_is_checked() -> None:
     with pytest.raises(ValueError, match="goal_tolerance"):
         gym.make("AmigoBot-v1", goal_tolerance=-1.0)
+
+
+# --------------------------------------------------------------------------- files and the command line
+
+
+def _tight_csv(folder: Any) -> Any:
+    """Points of a straight, a 0.15 m arc (beyond the robot at 0.2 m/s), a straight, as a CSV."""
+    line = ClothoidSegment.line(1.0)
+    ref = ClothoidPath((line, ClothoidSegment.transition(0.1, 0.0, 1 / 0.15), ClothoidSegment.arc(0.3, 1 / 0.15),
+                        ClothoidSegment.transition(0.1, 1 / 0.15, 0.0), line))  # fmt: skip
+    f = folder / "tight.csv"
+    pts = ref.point(np.arange(0.0, ref.length, 0.02)).tolist()
+    f.write_text("x,y\n" + "".join(f"{x!r},{y!r}\n" for x, y in pts))
+    return f
+
+
+def test_a_points_file_in_one_line(tmp_path: Any) -> None:
+    f = _tight_csv(tmp_path)
+    with pytest.raises(ValueError, match="rotational acceleration"):
+        gym.make("AmigoBot-v1", path=str(f))
+    env = gym.make("AmigoBot-v1", path=str(f), feasibility="off")
+    path = env.unwrapped.params.path  # type: ignore[attr-defined]
+    assert type(path) is ClothoidPath and not path.closed
+    venv = gym.make_vec("AmigoBot-v1", 2, vectorization_mode="vector_entry_point", path=str(f), feasibility="off")
+    assert venv.unwrapped.paths[0] is path  # type: ignore[attr-defined]  # fitted once per file
+    with pytest.raises(ValueError, match=r"a points file \(.csv, .json\)"):
+        gym.make("AmigoBot-v1", path="points.txt")
+    with pytest.raises(FileNotFoundError, match="no such points file"):
+        gym.make("AmigoBot-v1", path=str(tmp_path / "missing.csv"))
+
+
+def test_benchmark_on_a_points_file_reports_the_limits(tmp_path: Any) -> None:
+    from amigo_gym.training import benchmark
+
+    f = _tight_csv(tmp_path)
+    out = tmp_path / "bench"
+    args = ["--path", str(f), "--agents", "analytic", "--quick", "--no-plots", "--no-progress", "--out", str(out)]
+    assert benchmark.main([*args, "--reps", "20", "--profile-reps", "10"]) == 0
+    doc = json.loads((out / "benchmark.json").read_text())
+    rep = doc["feasibility"]["path:tight"]
+    assert not rep["feasible"] and rep["exceeded"]["rotational_acceleration"]
+    assert [r["scenario"] for r in doc["results"]] == ["path:tight"]
+    md = (out / "benchmark.md").read_text()
+    assert "path:tight" in md and "exceeded: rotational acceleration at s = [" in md

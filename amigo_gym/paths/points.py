@@ -60,7 +60,16 @@ from amigo_gym.fresnel import advance
 from amigo_gym.params import show_value
 from amigo_gym.paths.clothoid import MAX_CURVATURE, TWO_PI, ClothoidPath, ClothoidSegment, check_real
 
-__all__ = ["PointsFit", "fit_points", "from_points", "load_points", "from_file", "MAX_REFINEMENTS"]
+__all__ = [
+    "PointsFit",
+    "fit_points",
+    "from_points",
+    "load_points",
+    "from_file",
+    "cached_file_path",
+    "is_points_file",
+    "MAX_REFINEMENTS",
+]
 
 Array = NDArray[np.float64]
 
@@ -493,14 +502,48 @@ def from_file(
     """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`).
 
     Args:
-        closed: None: the JSON's ``"closed"`` if it has one, else open.
+        closed: None: the JSON's ``"closed"`` if it has one, else closed when the last point repeats the first
+            (to 1e-9 m), else open.
 
     Raises:
         ValueError: the file's or the fit's problem, one line naming the file.
     """
     pts, file_closed = load_points(file)
-    use = bool(file_closed) if closed is None else closed
+    if closed is None:
+        repeats = len(pts) > 2 and bool(np.hypot(*(pts[-1] - pts[0])) < MIN_CHORD)
+        use = repeats if file_closed is None else file_closed
+    else:
+        use = closed
     try:
         return from_points(pts, use, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     except ValueError as exc:
         raise ValueError(f"{file}: {exc}") from None
+
+
+#: the suffixes of a points file (``path="points.csv"`` in ``gym.make``)
+POINTS_SUFFIXES: tuple[str, ...] = (".csv", ".json")
+_FILE_CACHE: dict[tuple[str, int, int], ClothoidPath] = {}
+
+
+def is_points_file(name: str) -> bool:
+    """Whether ``name`` (a ``path=`` string that is not a family) names a points file (:data:`POINTS_SUFFIXES`)."""
+    return name.lower().endswith(POINTS_SUFFIXES)
+
+
+def cached_file_path(file: str | os.PathLike[str]) -> ClothoidPath:
+    """:func:`from_file` with the default settings, built once per process for each file version (resolved
+    name, modification time and size): ``gym.make("AmigoBot-v1", path="points.csv")`` and every vector env
+    of a benchmark share one fitted path."""
+    f = Path(file)
+    try:
+        st = f.resolve().stat()
+    except OSError:
+        raise FileNotFoundError(f"{file}: no such points file") from None
+    key = (str(f.resolve()), st.st_mtime_ns, st.st_size)
+    path = _FILE_CACHE.get(key)
+    if path is None:
+        path = from_file(f)
+        if len(_FILE_CACHE) >= 64:
+            _FILE_CACHE.clear()
+        _FILE_CACHE[key] = path
+    return path
