@@ -117,6 +117,18 @@ COMMANDS: dict[str, Command] = {
         extra="bench",
         modules=("optuna", "torch", "stable_baselines3", "yaml"),
     ),
+    "replay": Command(
+        "amigo_gym.analysis.replay:main_replay",
+        "replay a robot's log (CSV or ROS 2 bag) through the model: errors, plot",
+        extra="logs",
+        modules=("matplotlib",),
+    ),
+    "identify": Command(
+        "amigo_gym.analysis.replay:main_identify",
+        "fit wheel radii, half track, delay to a robot's log: robot.json",
+        extra="logs",
+        modules=("matplotlib",),
+    ),
     "bench-core": Command("amigo_gym.bench.core:main", "benchmark the batched exact step"),
     "bench-env": Command("amigo_gym.bench.env:main", "benchmark the environment against peers"),
     "gallery": Command(
@@ -143,6 +155,7 @@ EXTRA_OF_MODULE: dict[str, str] = {
     "nbformat": "notebook",
     "optuna": "bench",
     "psycopg2": "bench",
+    "rosbags": "logs",
 }
 
 

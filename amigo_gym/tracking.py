@@ -46,12 +46,14 @@ End: terminated when ``|e| > termination_distance`` (true H) or when H reaches t
 truncated by the registration's time limit.
 
 This module may import numpy and the core modules (params, kinematics, fresnel, actuators, paths,
-randomization); never the environments, policies, training or the CLI.
+randomization; :mod:`amigo_gym.logs` inside :func:`make_tracking_params`, for a robot file); never the
+environments, policies, training or the CLI.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
@@ -122,7 +124,8 @@ class TrackingParams:
     Attributes:
         robot: the nominal robot: what the action scale, the observation and every policy use.
         true_robot: the robot actually simulated (its ``r1``, ``r2``, ``l1``, ``l3`` matter); ``None``: the
-            nominal one. ``gym.make`` takes a mapping of the fields that differ.
+            nominal one. ``gym.make`` takes a mapping of the fields that differ, or a robot file's path
+            (:func:`make_tracking_params`).
         actuators: the firmware's ramps (0.3 / 0.75 m/s^2, 0.87 / 2.5 rad/s^2) and a fixed delay [s].
         randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
@@ -285,7 +288,10 @@ def make_tracking_params(
     """Settings from the keywords of ``gym.make("AmigoBot-v1", ...)``: every field, mappings accepted.
 
     ``robot`` a :class:`RobotParams` or a mapping of its fields; ``true_robot`` a mapping of the fields
-    that differ from the nominal robot (or a whole ``RobotParams``); ``actuators`` a mapping of
+    that differ from the nominal robot (or a whole ``RobotParams``, or the path of a robot file such as the
+    ``robot.json`` of ``amigo-gym identify``: its ``r1``, ``r2``, ``l1`` [m] on the nominal robot, its ``delay``
+    [s] and ramp rates on ``actuators``, where an ``actuators`` mapping's own fields win; :mod:`amigo_gym.logs`);
+    ``actuators`` a mapping of
     :class:`ActuatorParams` fields; ``randomize`` a preset name or a mapping of :class:`Randomization` fields;
     ``path_params`` a mapping; ``params`` a whole :class:`TrackingParams` or a mapping of its fields.
 
@@ -310,9 +316,21 @@ def make_tracking_params(
         robot = _robot_from_mapping(owner, "robot", RobotParams(), robot)
         settings["robot"] = robot
     tr = settings.get("true_robot")
+    act_file: dict[str, float] = {}
+    if isinstance(tr, str | os.PathLike):
+        # a robot file (robot.json of `amigo-gym identify`): r1, r2, l1 [m] and the actuators' delay [s], ramps
+        from amigo_gym.logs import load_robot_file
+
+        tr, act_file = load_robot_file(tr)
     if isinstance(tr, Mapping):
         settings["true_robot"] = _robot_from_mapping(owner, "true_robot", robot, tr)
     act = settings.get("actuators")
+    if act_file:
+        if isinstance(act, Mapping):
+            act = {**act_file, **act}  # the fields the actuators keyword names win
+        else:
+            act = replace(base.actuators if act is None else act, **act_file)
+        settings["actuators"] = act
     if isinstance(act, Mapping):
         allowed = {f.name for f in fields(ActuatorParams)}
         bad = sorted(str(k) for k in act if k not in allowed)

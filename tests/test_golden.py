@@ -1,9 +1,11 @@
-"""Golden episodes: ``AmigoBot-v0`` keeps its observations, rewards and poses bit for bit.
+"""Golden episodes: ``AmigoBot-v0`` keeps its observations, rewards and poses.
 
 ``tests/data/golden_v0.npz`` was recorded by ``tests/data/make_golden.py`` from the code before the
-refactors of issue 8 (commit 7a293c8); every later version must reproduce it exactly, in the single
-environment and in the native vector environment, for fixed float64 action sequences and for the
-analytic policy (whose float32 actions are recorded too).
+refactors of issue 8 (commit 7a293c8, on an AVX-512 CPU); every later version must reproduce it, in the
+single environment and in the native vector environment, for fixed float64 action sequences and for the
+analytic policy (whose float32 actions are recorded too). Across machines the comparison allows a few
+ulps of each quantity's scale (tests/golden_compare.py says why and how much); on this machine the
+vector env and the single envs are compared bit for bit (test_vector_env_reproduces_golden).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
+from golden_compare import mismatch, mismatches
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
 from amigo_gym.policies import AnalyticPolicy
@@ -36,28 +39,37 @@ def golden() -> dict[str, np.ndarray]:
         return {k: d[k] for k in d.files}
 
 
-def _same(got: Any, want: np.ndarray, what: str) -> None:
-    got = np.asarray(got)
-    assert got.dtype == want.dtype, what
-    np.testing.assert_array_equal(got, want, err_msg=what, strict=True)
+def _close(got: Any, want: np.ndarray, what: str) -> None:
+    """Within the portable tolerance of tests/golden_compare.py (the scale: the whole recorded episode)."""
+    line = mismatch(what, got, want)
+    assert line is None, line
 
 
-@pytest.mark.parametrize("kind", KINDS)
-@pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("config", list(CONFIGS))
-def test_single_env_reproduces_golden(golden: dict[str, np.ndarray], config: str, seed: int, kind: str) -> None:
-    key = f"{config}/{seed}/{kind}"
+def _bits(got: Any, want: Any, what: str) -> None:
+    """The same bits (two code paths on this machine)."""
+    np.testing.assert_array_equal(np.asarray(got), np.asarray(want), err_msg=what, strict=True)
+
+
+def _recorded(golden: dict[str, np.ndarray], key: str, steps: int | None = None) -> dict[str, np.ndarray]:
+    """The recorded episode ``key`` (its first ``steps`` steps if given), by quantity."""
+    out = {}
+    for name in ("reward", "terminated", "obs", "reward_terms", *INFO_KEYS):
+        v = golden[f"{key}/{name}"]
+        out[name] = v if steps is None else v[: steps + (name not in ("reward", "terminated"))]
+    return out
+
+
+def single_episode(config: str, seed: int, actions: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """One episode of ``gym.make`` driven by ``actions``: its quantities, and the analytic policy's actions."""
     env = gym.make("AmigoBot-v0", max_episode_steps=1000, **CONFIGS[config])
     policy = AnalyticPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
-    actions = golden[f"{key}/action"]
     obs, info = env.reset(seed=seed)
     rows: dict[str, list[Any]] = {k: [info[k]] for k in INFO_KEYS}
     rows["obs"] = [obs]
     rows["reward_terms"] = [[info["reward_terms"][n] for n in TERMS]]
-    rewards, terms = [], []
+    rewards, terms, decoded = [], [], []
     for a in actions:
-        if kind == "analytic":  # the policy still decodes the observation into the same action
-            _same(policy.predict(obs)[0].astype(np.float64), a, f"{key} analytic action")
+        decoded.append(policy.predict(obs)[0])
         obs, r, term, trunc, info = env.step(a)
         assert not trunc
         rewards.append(r)
@@ -66,35 +78,60 @@ def test_single_env_reproduces_golden(golden: dict[str, np.ndarray], config: str
         for k in INFO_KEYS:
             rows[k].append(info[k])
         rows["reward_terms"].append([info["reward_terms"][n] for n in TERMS])
-    _same(np.array(rewards, dtype=np.float64), golden[f"{key}/reward"], f"{key} reward")
-    _same(np.array(terms, dtype=np.bool_), golden[f"{key}/terminated"], f"{key} terminated")
-    for k, v in rows.items():
-        _same(np.array(v), golden[f"{key}/{k}"], f"{key} {k}")
+    out = {k: np.array(v) for k, v in rows.items()}
+    out["reward"] = np.array(rewards, dtype=np.float64)
+    out["terminated"] = np.array(terms, dtype=np.bool_)
+    return out, np.array(decoded)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("config", list(CONFIGS))
+def test_single_env_reproduces_golden(golden: dict[str, np.ndarray], config: str, seed: int, kind: str) -> None:
+    key = f"{config}/{seed}/{kind}"
+    actions = golden[f"{key}/action"]
+    got, decoded = single_episode(config, seed, actions)
+    problems = mismatches(got, _recorded(golden, key))
+    if kind == "analytic":  # the policy still decodes the observation into the same (float32) action
+        line = mismatch("analytic action", decoded, actions.astype(np.float32))
+        problems += [line] if line else []
+    assert not problems, f"{key}: " + "; ".join(problems)
 
 
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("config", list(CONFIGS))
 def test_vector_env_reproduces_golden(golden: dict[str, np.ndarray], config: str, kind: str) -> None:
-    """The native vector env, one robot per seed, steps the same episodes (until the first one ends)."""
+    """The native vector env, one robot per seed, steps the same episodes (until the first one ends).
+
+    Against the recording: the portable tolerance. Against single envs stepped here with the same
+    actions: the same bits (both run on this machine).
+    """
     keys = [f"{config}/{s}/{kind}" for s in SEEDS]
     n = min(len(golden[f"{k}/reward"]) for k in keys)
     envs = gym.make_vec("AmigoBot-v0", num_envs=len(SEEDS), autoreset_mode="Disabled", **CONFIGS[config])
     obs, info = envs.reset(seed=list(SEEDS))
+    rows: list[dict[str, list[Any]]] = [{} for _ in keys]
 
-    def check(t: int) -> None:
-        for i, k in enumerate(keys):
-            _same(obs[i], golden[f"{k}/obs"][t], f"{k} vector obs {t}")
+    def record(obs: np.ndarray, info: dict[str, Any], reward: Any = None, term: Any = None) -> None:
+        for i, row in enumerate(rows):
+            row.setdefault("obs", []).append(obs[i])
             for name in INFO_KEYS:
-                _same(info[name][i], golden[f"{k}/{name}"][t], f"{k} vector {name} {t}")
-            got_terms = [info["reward_terms"][m][i] for m in TERMS]
-            _same(np.array(got_terms), golden[f"{k}/reward_terms"][t], f"{k} vector reward terms {t}")
+                row.setdefault(name, []).append(info[name][i])
+            row.setdefault("reward_terms", []).append([info["reward_terms"][m][i] for m in TERMS])
+            if reward is not None:
+                row.setdefault("reward", []).append(reward[i])
+                row.setdefault("terminated", []).append(term[i])
 
-    check(0)
+    record(obs, info)
     for t in range(n):
         actions = np.stack([golden[f"{k}/action"][t] for k in keys])
         obs, reward, term, _trunc, info = envs.step(actions)
-        for i, k in enumerate(keys):
-            _same(reward[i], golden[f"{k}/reward"][t], f"{k} vector reward {t}")
-            _same(term[i], golden[f"{k}/terminated"][t], f"{k} vector terminated {t}")
-        check(t + 1)
+        record(obs, info, reward, term)
     envs.close()
+    for seed, key, row in zip(SEEDS, keys, rows, strict=True):
+        got = {name: np.array(v) for name, v in row.items()}
+        problems = mismatches(got, _recorded(golden, key, n))
+        assert not problems, f"{key} vector: " + "; ".join(problems)
+        single, _ = single_episode(config, seed, golden[f"{key}/action"][:n])
+        for name, value in single.items():
+            _bits(got[name], value, f"{key}: vector env against single env, {name}")

@@ -1,0 +1,852 @@
+r"""Logs of a real robot: read them, replay them through the model, fit the model's parameters to them.
+
+The seed paper checks its simulation against a test rig (its Figs 2–5: wheel angles and rates, simulated
+and measured). This module does that for a user's own robot: a recorded run (the wheel-rate commands and
+the measured pose and/or wheel rates) drives the package's exact actuator step
+(:func:`amigo_gym.actuators.actuator_step`: firmware ramps, delay, true geometry) from the log's first pose,
+and the simulated and measured trajectories are compared (:func:`replay`); the true robot's wheel radii,
+half track, actuation delay (and ramp accelerations, where the log excites them) are fitted by bounded least
+squares on the replayed trajectory (:func:`identify`). ``docs/logs.md`` is the user's page.
+
+Log format (CSV)
+----------------
+One header row, then one row per sample; lines starting with ``#`` are skipped; other columns are ignored.
+
+==========  =====  ===========================================================================
+column      unit   meaning
+==========  =====  ===========================================================================
+``t``       s      time of the sample, strictly increasing (any origin)
+``cmd_w1``  rad/s  wheel-rate setpoint of wheel 1 (right) issued at ``t`` (held until the next row)
+``cmd_w2``  rad/s  wheel-rate setpoint of wheel 2 (left)
+``x, y``    m      measured position of A (the drive axle's midpoint) at ``t``, ground frame
+``theta``   rad    measured heading at ``t`` (wrapped or not: it is unwrapped on reading)
+``w1, w2``  rad/s  measured wheel rates at ``t`` (positive forward)
+==========  =====  ===========================================================================
+
+``t``, ``cmd_w1``, ``cmd_w2`` are required, with all of ``x, y, theta`` or both of ``w1, w2`` (or all five).
+
+ROS 2 bags (:func:`read_bag`, needs the ``rosbags`` package, extra ``amigo_gym[logs]``): a velocity-command
+topic (``geometry_msgs/msg/Twist`` or ``TwistStamped``; default ``/cmd_vel``) converted to wheel rates with
+the nominal robot, ``w1 = (v + l1 w) / r1``, ``w2 = (v - l1 w) / r2``, and a pose topic
+(``nav_msgs/msg/Odometry``, ``geometry_msgs/msg/PoseStamped`` or ``PoseWithCovarianceStamped``; default
+``/odom``) whose pose is that of A. Times are the bag's record times. The pose should be measured
+independently of the wheels (motion capture, localisation): wheel odometry computed with the nominal radii
+cannot reveal the true ones.
+
+Checks (:class:`LogError`, one line naming the problem): missing columns or topics, an empty log, text or
+NaN/inf in a number column, time not strictly increasing, and units wrong by orders of magnitude: the
+median sample interval outside [1e-4, 5] s (milliseconds or nanoseconds as seconds), wheel rates above
+3 times the robot's limit (deg/s or rpm), the measured A faster than 3 times the robot's top speed, and
+the measured travel, turn or wheel rates more than 10 times (or less than a tenth of) what the commands
+give (millimetres, degrees).
+
+This module may import numpy, the standard library and the core modules (params, actuators, io); scipy
+(:func:`identify`) and rosbags (:func:`read_bag`) are imported inside the functions that need them.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
+from amigo_gym.params import RobotParams, show_value
+
+__all__ = [
+    "CSV_COLUMNS",
+    "FIT_BOUNDS",
+    "Fit",
+    "Log",
+    "LogError",
+    "Replay",
+    "identify",
+    "load_robot_file",
+    "read_bag",
+    "read_csv",
+    "read_log",
+    "replay",
+    "robot_file_fields",
+    "simulate",
+    "summarize",
+]
+
+Array = NDArray[np.float64]
+
+#: the columns of the CSV log format, with their units (module docstring)
+CSV_COLUMNS: dict[str, str] = {
+    "t": "s",
+    "cmd_w1": "rad/s",
+    "cmd_w2": "rad/s",
+    "x": "m",
+    "y": "m",
+    "theta": "rad",
+    "w1": "rad/s",
+    "w2": "rad/s",
+}
+
+#: relative half-width of the search box of r1, r2 and l1 around the nominal values in :func:`identify`
+FIT_BOUNDS = MAX_TRUE_DEVIATION
+#: search box of the ramp rates in :func:`identify`, as factors of the nominal ones
+RAMP_FACTORS = (0.1, 10.0)
+XTOL = 1e-10
+_ROBOT_FIELDS = frozenset(f.name for f in fields(RobotParams))
+_ACTUATOR_FIELDS = frozenset(f.name for f in fields(ActuatorParams))
+_META_FIELDS = frozenset(
+    ("format", "uncertainty", "fitted", "fixed", "start_pose", "replay_before", "replay_after", "log", "nominal", "fit")
+)
+ROBOT_FORMAT = "amigo_gym robot 1"
+
+
+class LogError(ValueError):
+    """A log that cannot be used: the message is one line naming the problem (the CLI's exit status 2)."""
+
+
+@dataclass(frozen=True)
+class Log:
+    """A recorded run: commands and measurements on their own time bases.
+
+    Attributes:
+        t_cmd: times at which the commands were issued [s], ``(n,)``, strictly increasing.
+        cmd: wheel-rate setpoints ``(w1c, w2c)`` [rad/s], ``(n, 2)``, each held until the next.
+        t_meas: times of the measurements [s], ``(m,)``, strictly increasing, ``m >= 3``.
+        pose: measured pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas``, ``(m, 3)``, theta unwrapped;
+            ``None`` if not measured.
+        rates: measured wheel rates ``(w1, w2)`` [rad/s] at ``t_meas``, ``(m, 2)``; ``None`` if not measured.
+        source: where the log came from (a file name and topics), for reports.
+    """
+
+    t_cmd: Array
+    cmd: Array
+    t_meas: Array
+    pose: Array | None
+    rates: Array | None
+    source: str = ""
+
+
+@dataclass(frozen=True)
+class Replay:
+    """The model driven by a log's commands (:func:`simulate`), sampled at the log's measurement times.
+
+    Attributes:
+        t: the log's measurement times [s], ``(m,)``.
+        pose: simulated pose of A ``(x, y, theta)`` [m, m, rad], ``(m, 3)``, theta continuous.
+        rates: simulated wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``.
+    """
+
+    t: Array
+    pose: Array
+    rates: Array
+
+
+# --------------------------------------------------------------------------------------------- reading
+
+
+def _float_cell(text: str, column: str, line: int, where: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise LogError(f"{where}: column {column!r}: {text.strip()!r} at line {line} is not a number") from None
+    if not math.isfinite(value):
+        raise LogError(f"{where}: column {column!r}: {text.strip()} at line {line}; every value must be finite")
+    return value
+
+
+def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
+    """A CSV log (module docstring for the format), checked (:func:`check_log`).
+
+    Raises:
+        LogError: one line naming the file's problem (missing column, text, NaN, time not increasing, units).
+        FileNotFoundError: no such file.
+    """
+    nominal = RobotParams() if nominal is None else nominal
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"log {str(p)!r} does not exist or is not a file")
+    with open(p, newline="", encoding="utf-8-sig") as fh:
+        rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh)) if r and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise LogError(f"{p.name}: empty log (no header row)")
+    header_line, header = rows[0]
+    names = [h.strip() for h in header]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise LogError(f"{p.name}: column(s) {dup} appear more than once in the header (line {header_line})")
+    need = ["t", "cmd_w1", "cmd_w2"]
+    missing = [c for c in need if c not in names]
+    has_pose = [c in names for c in ("x", "y", "theta")]
+    has_rates = [c in names for c in ("w1", "w2")]
+    if any(has_pose) and not all(has_pose):
+        missing += [c for c, h in zip(("x", "y", "theta"), has_pose, strict=True) if not h]
+    if any(has_rates) and not all(has_rates):
+        missing += [c for c, h in zip(("w1", "w2"), has_rates, strict=True) if not h]
+    if missing:
+        raise LogError(f"{p.name}: missing column(s) {missing}; the header has {names} (a log needs t, cmd_w1, "
+                       "cmd_w2 and x, y, theta and/or w1, w2)")  # fmt: skip
+    if not any(has_pose) and not any(has_rates):
+        raise LogError(
+            f"{p.name}: no measurement columns: a log needs x, y, theta and/or w1, w2; the header has {names}"
+        )
+    used = [c for c in CSV_COLUMNS if c in names]
+    index = {c: names.index(c) for c in used}
+    data = np.empty((len(rows) - 1, len(used)))
+    for k, (line, row) in enumerate(rows[1:]):
+        for j, c in enumerate(used):
+            i = index[c]
+            if i >= len(row) or not row[i].strip():
+                raise LogError(f"{p.name}: column {c!r} is empty at line {line}")
+            data[k, j] = _float_cell(row[i], c, line, p.name)
+    if data.shape[0] < 3:
+        raise LogError(f"{p.name}: {data.shape[0]} data row(s); a log needs at least 3")
+    col = {c: data[:, j] for j, c in enumerate(used)}
+    t = col["t"]
+    bad = np.flatnonzero(np.diff(t) <= 0.0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise LogError(
+            f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} "
+            f"(t = {float(t[k])!r} after {float(t[k - 1])!r})"
+        )
+    pose = np.stack([col["x"], col["y"], np.unwrap(col["theta"])], axis=1) if all(has_pose) else None
+    rates = np.stack([col["w1"], col["w2"]], axis=1) if all(has_rates) else None
+    cmd = np.stack([col["cmd_w1"], col["cmd_w2"]], axis=1)
+    log = Log(t.copy(), cmd, t.copy(), pose, rates, source=p.name)
+    check_log(log, nominal, names={"t": "t", "cmd": "cmd_w1, cmd_w2", "pose": "x, y", "theta": "theta",
+                                   "rates": "w1, w2"}, where=p.name)  # fmt: skip
+    return log
+
+
+def _yaw(qx: float, qy: float, qz: float, qw: float) -> float:
+    """Heading about z [rad] of the unit quaternion ``(qx, qy, qz, qw)``: ``atan2(2(w z + x y), 1 - 2(y^2 + z^2))``."""
+    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+
+
+_TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
+_POSE_TYPES = (
+    "nav_msgs/msg/Odometry",
+    "geometry_msgs/msg/PoseStamped",
+    "geometry_msgs/msg/PoseWithCovarianceStamped",
+)
+
+
+def read_bag(
+    path: str | os.PathLike[str],
+    nominal: RobotParams | None = None,
+    cmd_topic: str = "/cmd_vel",
+    pose_topic: str = "/odom",
+) -> Log:
+    r"""A ROS 2 bag (a rosbag2 folder, or its ``.db3``/``.mcap`` file) as a :class:`Log`, checked.
+
+    Commands: each Twist (``linear.x`` = v [m/s], ``angular.z`` = w [rad/s]) becomes wheel-rate setpoints with
+    the nominal robot, :math:`w_1 = (v + l_1 w)/r_1`, :math:`w_2 = (v - l_1 w)/r_2`. Measurements: the pose of
+    A from each pose message (``x``, ``y``; heading ``atan2(2(q_w q_z + q_x q_y), 1 - 2(q_y^2 + q_z^2))``).
+    Times: the bag's record times [s] from the first message of either topic. Messages recorded at the same
+    time on one topic: the last one counts.
+
+    Raises:
+        LogError: not a bag, an empty bag, a topic missing or of another type, NaN, units (:func:`check_log`).
+        FileNotFoundError: no such path.
+    """
+    nominal = RobotParams() if nominal is None else nominal
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"log {str(p)!r} does not exist")
+    from rosbags.highlevel import AnyReader  # the 'logs' extra
+
+    folder = p if p.is_dir() else p.parent
+    try:
+        reader = AnyReader([folder])
+        reader.open()
+    except Exception as exc:  # rosbags raises its own errors for a folder that is not a bag
+        raise LogError(f"{p.name}: not a readable ROS 2 bag ({' '.join(str(exc).split())})") from None
+    try:
+        topics = {c.topic: c.msgtype for c in reader.connections}
+        if not topics or reader.message_count == 0:
+            raise LogError(f"{p.name}: empty bag (no messages)")
+        listing = ", ".join(f"{k} [{v}]" for k, v in sorted(topics.items()))
+        for topic, kinds, what in ((cmd_topic, _TWIST_TYPES, "command"), (pose_topic, _POSE_TYPES, "pose")):
+            if topic not in topics:
+                raise LogError(f"{p.name}: {what} topic {topic!r} is not in the bag (topics: {listing})")
+            if topics[topic] not in kinds:
+                raise LogError(
+                    f"{p.name}: {what} topic {topic!r} has type {topics[topic]}, expected one of {list(kinds)}"
+                )
+        t_c: list[int] = []
+        cmd: list[tuple[float, float]] = []
+        t_p: list[int] = []
+        pose: list[tuple[float, float, float]] = []
+        conns = [c for c in reader.connections if c.topic in (cmd_topic, pose_topic)]
+        for conn, stamp, raw in reader.messages(connections=conns):
+            msg: Any = reader.deserialize(raw, conn.msgtype)
+            if conn.topic == cmd_topic:
+                tw = msg.twist if conn.msgtype.endswith("Stamped") else msg
+                t_c.append(stamp)
+                cmd.append((float(tw.linear.x), float(tw.angular.z)))
+            else:
+                ps = msg.pose if conn.msgtype.endswith("PoseStamped") else msg.pose.pose
+                q = ps.orientation
+                t_p.append(stamp)
+                pose.append((float(ps.position.x), float(ps.position.y), _yaw(q.x, q.y, q.z, q.w)))
+    finally:
+        reader.close()
+    for topic, ts, vals in ((cmd_topic, t_c, cmd), (pose_topic, t_p, pose)):
+        if not ts:
+            raise LogError(f"{p.name}: topic {topic!r} has no messages")
+        arr = np.asarray(vals, dtype=np.float64)
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        if bad.size:
+            raise LogError(f"{p.name}: topic {topic!r}: NaN or inf in message {int(bad[0])} (of {len(ts)})")
+    t0 = min(t_c[0], t_p[0])
+    tc, vc = _last_of_equal(np.asarray(t_c, dtype=np.int64), np.asarray(cmd))
+    tp, vp = _last_of_equal(np.asarray(t_p, dtype=np.int64), np.asarray(pose))
+    if tp.size < 3:
+        raise LogError(f"{p.name}: topic {pose_topic!r} has {tp.size} message(s); a log needs at least 3")
+    lw = nominal.l1 * vc[:, 1]
+    wheel = np.stack([(vc[:, 0] + lw) / nominal.r1, (vc[:, 0] - lw) / nominal.r2], axis=1)
+    vp[:, 2] = np.unwrap(vp[:, 2])
+    t_cmd = np.asarray((tc - t0) * 1e-9, dtype=np.float64)
+    t_meas = np.asarray((tp - t0) * 1e-9, dtype=np.float64)
+    log = Log(t_cmd, wheel, t_meas, vp, None, source=f"{p.name} ({cmd_topic}, {pose_topic})")
+    check_log(log, nominal, names={"t": "bag time", "cmd": f"{cmd_topic} (as wheel rates)", "pose": pose_topic,
+                                   "theta": f"{pose_topic} heading", "rates": ""}, where=p.name)  # fmt: skip
+    return log
+
+
+def _last_of_equal(t: NDArray[np.int64], values: Array) -> tuple[NDArray[np.int64], Array]:
+    """Samples in time order with, of equal times, the last one (stable sort keeps the bag's order)."""
+    order = np.argsort(t, kind="stable")
+    t, values = t[order], values[order]
+    keep = np.append(t[1:] != t[:-1], True)
+    return t[keep], values[keep]
+
+
+def read_log(
+    path: str | os.PathLike[str],
+    nominal: RobotParams | None = None,
+    cmd_topic: str = "/cmd_vel",
+    pose_topic: str = "/odom",
+) -> Log:
+    """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked.
+
+    Raises:
+        LogError: one line naming the problem (module docstring); also for an unknown kind of file.
+        FileNotFoundError: no such path.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"log {str(p)!r} does not exist")
+    if p.is_dir() or p.suffix.lower() in (".db3", ".mcap"):
+        return read_bag(p, nominal, cmd_topic, pose_topic)
+    if p.suffix.lower() in (".csv", ".txt"):
+        return read_csv(p, nominal)
+    raise LogError(f"{p.name}: unknown kind of log (a .csv file or a ROS 2 bag folder / .db3 / .mcap file)")
+
+
+def _windows(t: Array, span: float = 1.0) -> NDArray[np.intp]:
+    """Indices of ``t`` splitting it into consecutive windows of about ``span`` seconds (at least 2 indices)."""
+    edges = np.arange(t[0], t[-1] + span, span)
+    idx = np.unique(np.clip(np.searchsorted(t, edges), 0, t.size - 1))
+    return idx if idx.size >= 2 else np.array([0, t.size - 1])
+
+
+def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
+    """Integrals of the commanded speed and turn rate (nominal robot, no ramps, no delay) at the times ``t``."""
+    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
+    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    grid = np.union1d(log.t_cmd, t)
+    j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
+    dt = np.diff(grid)
+    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
+    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
+    sv = np.concatenate([[0.0], np.cumsum(vj * dt)])
+    sw = np.concatenate([[0.0], np.cumsum(wj * dt)])
+    k = np.searchsorted(grid, t)
+    return sv[k], sw[k]
+
+
+def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
+    """Refuse a log whose units look wrong by orders of magnitude (module docstring, *Checks*).
+
+    ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to the names the user knows (columns or topics).
+
+    Raises:
+        LogError: one line naming the quantity, what was found and the likely unit mistake.
+    """
+    t = log.t_meas
+    step = float(np.median(np.diff(t)))
+    if not 1e-4 <= step <= 5.0:
+        guess = "milliseconds or nanoseconds" if step > 5.0 else "a unit smaller than seconds"
+        raise LogError(
+            f"{where}: {names['t']}: the median sample interval is {step:.4g}, outside [1e-4, 5] s; "
+            f"time must be in seconds (is it in {guess}?)"
+        )
+    w_max = nominal.max_wheel_rate
+    for key, arr in (("cmd", log.cmd), ("rates", log.rates)):
+        if arr is None:
+            continue
+        top = float(np.max(np.abs(arr)))
+        if top > 3.0 * w_max:
+            raise LogError(
+                f"{where}: {names[key]}: |wheel rate| up to {top:.4g} rad/s, over 3 times the robot's limit "
+                f"{w_max:g} rad/s; wheel rates must be in rad/s (deg/s or rpm?)"
+            )
+    win = _windows(t)
+    s_v, s_w = _commanded(log, nominal, t[win])
+    cmd_travel = float(np.sum(np.abs(np.diff(s_v))))
+    cmd_turn = float(np.sum(np.abs(np.diff(s_w))))
+    if log.pose is not None:
+        xy = log.pose[win, :2]
+        hops = np.hypot(*np.diff(xy, axis=0).T)
+        speed = float(np.max(hops / np.diff(t[win])))
+        if speed > 3.0 * nominal.max_speed:
+            raise LogError(
+                f"{where}: {names['pose']}: the measured point A moves at up to {speed:.4g} m/s, over 3 times the "
+                f"robot's top speed {nominal.max_speed:g} m/s; positions must be in metres (millimetres?)"
+            )
+        _ratio(where, names["pose"], float(np.sum(hops)), cmd_travel, 0.1, "travel [m]", "millimetres or centimetres")
+        turn = float(np.sum(np.abs(np.diff(log.pose[win, 2]))))
+        _ratio(where, names["theta"], turn, cmd_turn, 0.5, "turn [rad]", "degrees")
+    if log.rates is not None:
+        meas = float(np.mean(np.abs(log.rates)))
+        j = np.searchsorted(log.t_cmd, t, side="right") - 1
+        cmd = float(np.mean(np.abs(log.cmd[np.maximum(j, 0)][j >= 0]))) if np.any(j >= 0) else 0.0
+        _ratio(where, names["rates"], meas, cmd, 0.2, "mean |wheel rate| [rad/s]", "deg/s, rpm or m/s")
+
+
+def _ratio(where: str, name: str, measured: float, commanded: float, floor: float, what: str, guess: str) -> None:
+    """Refuse ``measured`` more than 10 times or less than a tenth of ``commanded`` (both at least ``floor``)."""
+    if max(measured, commanded) < floor:
+        return
+    if measured > 10.0 * max(commanded, floor) or commanded > 10.0 * max(measured, floor):
+        raise LogError(
+            f"{where}: {name}: the measured {what} is {measured:.4g} where the commands give {commanded:.4g}; "
+            f"off by more than 10 times: check the units ({guess}?)"
+        )
+
+
+# --------------------------------------------------------------------------------------------- replay
+
+
+def simulate(
+    log: Log,
+    true_robot: RobotParams | None = None,
+    actuators: ActuatorParams | None = None,
+    nominal: RobotParams | None = None,
+    start: Sequence[float] | None = None,
+) -> Replay:
+    r"""Drive the model with the log's commands and sample it at the log's measurement times.
+
+    The command issued at ``t_cmd[j]`` is in effect from ``t_cmd[j] + delay`` on (``actuators.delay``), so the
+    setpoint at time ``t`` is :math:`c(t) = cmd_j`, ``j`` the last with ``t_cmd[j] + delay <= t``; before the first
+    one the robot executes its start wheel rates. Between consecutive measurement times the step is
+    :func:`amigo_gym.actuators.actuator_step` (the environment's exact step: firmware ramps of the nominal
+    robot, true radii and half track, no slip), once per interval with the setpoint switching inside it, and
+    again from each further switch in the same interval (irregular logs); for a log sampled every ``dt`` with
+    commands at the same times this is exactly the environment's step with ``dt`` and the same delay.
+
+    Args:
+        log: the log (:func:`read_log`).
+        true_robot: the robot that moves (its ``r1``, ``r2``, ``l1`` [m]); default the nominal robot.
+        actuators: ramps and delay [s] (:class:`ActuatorParams`); default the manufacturer's, no delay.
+        nominal: the robot the firmware believes in (default :class:`RobotParams`).
+        start: pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas[0]``; default the log's first measured pose
+            (``(0, 0, 0)`` without a measured pose). The wheel rates start at the log's first measured ones
+            (0, at rest, without them).
+
+    Returns:
+        :class:`Replay` at ``log.t_meas``.
+    """
+    nominal = RobotParams() if nominal is None else nominal
+    robot = nominal if true_robot is None else true_robot
+    act = ActuatorParams() if actuators is None else actuators
+    if start is None:
+        start = (0.0, 0.0, 0.0) if log.pose is None else tuple(log.pose[0].tolist())
+    x, y, beta = (float(v) for v in start)
+    w1, w2 = (0.0, 0.0) if log.rates is None else (float(log.rates[0, 0]), float(log.rates[0, 1]))
+    c0 = (w1, w2)
+    t = log.t_meas
+    switch = log.t_cmd + act.delay
+    cmds = log.cmd.tolist()
+    dev = max(abs(robot.r1 / nominal.r1 - 1), abs(robot.r2 / nominal.r2 - 1), abs(nominal.l1 / robot.l1 - 1))
+    n_sub = step_subintervals(float(np.max(np.diff(t))), nominal, min(max(dev, MAX_TRUE_DEVIATION), 1.0))
+    r1t, r2t, l1t = robot.r1, robot.r2, robot.l1
+    out = np.empty((t.size, 5))
+    out[0] = (x, y, beta, w1, w2)
+    ts = t.tolist()
+    lo_all = np.searchsorted(switch, t, side="left").tolist()  # first switch at or after each t
+    for k in range(t.size - 1):
+        ta, tb = ts[k], ts[k + 1]
+        lo, hi = lo_all[k], lo_all[k + 1]
+        cur = c0 if lo == 0 else cmds[lo - 1]
+        if hi == lo:
+            s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], cur[0], cur[1], 0.0, tb - ta, nominal, act,
+                              r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
+            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
+        else:
+            # the first switch inside the first call; each further switch starts a call of its own
+            edges = [*switch[lo + 1 : hi].tolist(), tb]
+            new = cmds[lo]
+            seg_end = edges[0]
+            s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], new[0], new[1], float(switch[lo]) - ta,
+                              seg_end - ta, nominal, act, r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
+            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
+            for i in range(1, len(edges)):
+                c = cmds[lo + i]
+                length = edges[i] - edges[i - 1]
+                if length > 0.0:
+                    s = actuator_step(x, y, beta, w1, w2, c[0], c[1], c[0], c[1], 0.0, length, nominal, act,
+                                      r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
+                    x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
+        out[k + 1] = (x, y, beta, w1, w2)
+    return Replay(t.copy(), out[:, :3].copy(), out[:, 3:].copy())
+
+
+def _wrap(a: Array) -> Array:
+    """Angles wrapped to ``[-pi, pi)`` [rad]."""
+    return np.asarray(np.mod(a + math.pi, 2.0 * math.pi) - math.pi, dtype=np.float64)
+
+
+def errors(log: Log, rep: Replay) -> dict[str, Array]:
+    """Simulated minus measured, per sample: ``position`` (distance of A [m]), ``heading`` (wrapped [rad]),
+    ``rate1``, ``rate2`` [rad/s]; only what the log measures."""
+    out: dict[str, Array] = {}
+    if log.pose is not None:
+        d = rep.pose - log.pose
+        out["position"] = np.hypot(d[:, 0], d[:, 1])
+        out["heading"] = _wrap(d[:, 2])
+    if log.rates is not None:
+        out["rate1"] = rep.rates[:, 0] - log.rates[:, 0]
+        out["rate2"] = rep.rates[:, 1] - log.rates[:, 1]
+    return out
+
+
+def summarize(log: Log, rep: Replay) -> dict[str, Any]:
+    """RMS and maximum errors of a replay (``null`` for what the log does not measure).
+
+    Keys: ``n_samples``, ``duration_s``, ``rms_position_error_m``, ``max_position_error_m``,
+    ``final_position_error_m``, ``rms_heading_error_rad``, ``max_heading_error_rad``,
+    ``rms_wheel_rate_error_rad_s`` (over both wheels), ``max_wheel_rate_error_rad_s``.
+    """
+    e = errors(log, rep)
+    out: dict[str, Any] = {"n_samples": int(log.t_meas.size), "duration_s": float(log.t_meas[-1] - log.t_meas[0])}
+    for key in ("rms_position_error_m", "max_position_error_m", "final_position_error_m", "rms_heading_error_rad",
+                "max_heading_error_rad", "rms_wheel_rate_error_rad_s", "max_wheel_rate_error_rad_s"):  # fmt: skip
+        out[key] = None
+    if "position" in e:
+        p, h = e["position"], e["heading"]
+        out["rms_position_error_m"] = float(np.sqrt(np.mean(p**2)))
+        out["max_position_error_m"] = float(np.max(p))
+        out["final_position_error_m"] = float(p[-1])
+        out["rms_heading_error_rad"] = float(np.sqrt(np.mean(h**2)))
+        out["max_heading_error_rad"] = float(np.max(np.abs(h)))
+    if "rate1" in e:
+        r = np.concatenate([e["rate1"], e["rate2"]])
+        out["rms_wheel_rate_error_rad_s"] = float(np.sqrt(np.mean(r**2)))
+        out["max_wheel_rate_error_rad_s"] = float(np.max(np.abs(r)))
+    return out
+
+
+def replay(
+    log: Log,
+    true_robot: RobotParams | None = None,
+    actuators: ActuatorParams | None = None,
+    nominal: RobotParams | None = None,
+) -> tuple[Replay, dict[str, Any]]:
+    """:func:`simulate` from the log's first pose, and :func:`summarize` of its errors."""
+    rep = simulate(log, true_robot, actuators, nominal)
+    return rep, summarize(log, rep)
+
+
+# --------------------------------------------------------------------------------------------- robot files
+
+
+def robot_file_fields(data: Any, where: str) -> tuple[dict[str, float], dict[str, float]]:
+    """The robot and actuator fields of a robot file's content (a JSON object, e.g. from :func:`identify`).
+
+    Keys: fields of :class:`RobotParams` (``r1``, ``r2``, ``l1`` [m], ...) and of :class:`ActuatorParams`
+    (``delay`` [s], ``acceleration`` [m/s^2], ...); the report keys :func:`identify` writes (``uncertainty``,
+    ``replay_before``, ...) are ignored. Values are checked by the dataclasses where they are used.
+
+    Raises:
+        ValueError: not an object, an unknown key, a value that is not a number.
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f"{where}: a robot file must hold a JSON object, got {show_value(data)}")
+    unknown = sorted(str(k) for k in data if k not in _ROBOT_FIELDS | _ACTUATOR_FIELDS | _META_FIELDS)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown key(s) {unknown}; allowed: RobotParams fields {sorted(_ROBOT_FIELDS)} and "
+            f"ActuatorParams fields {sorted(_ACTUATOR_FIELDS)}"
+        )
+    robot: dict[str, float] = {}
+    act: dict[str, float] = {}
+    for k, v in data.items():
+        if k in _META_FIELDS:
+            continue
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise ValueError(f"{where}: {k} must be a number, got {show_value(v)}")
+        (robot if k in _ROBOT_FIELDS else act)[str(k)] = float(v)
+    return robot, act
+
+
+def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dict[str, float]]:
+    """:func:`robot_file_fields` of a JSON file (``robot.json`` of ``amigo-gym identify``).
+
+    Raises:
+        FileNotFoundError: no such file. ValueError: not JSON, or bad content (one line).
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"robot file {str(p)!r} does not exist or is not a file")
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{p.name}: not a JSON file ({exc})") from None
+    return robot_file_fields(data, p.name)
+
+
+def robot_from_file(
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, actuators: ActuatorParams | None = None
+) -> tuple[RobotParams, ActuatorParams]:
+    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``.
+
+    Used for ``--robot`` (the true robot, on the nominal one) and ``--nominal`` (the nominal robot and the
+    firmware's ramps, on :class:`RobotParams` and :class:`ActuatorParams` defaults).
+
+    Raises:
+        FileNotFoundError, ValueError: as :func:`load_robot_file`, and a value out of its range (one line).
+    """
+    nominal = RobotParams() if nominal is None else nominal
+    actuators = ActuatorParams() if actuators is None else actuators
+    robot, act = load_robot_file(path)
+    return replace(nominal, **robot), replace(actuators, **act)
+
+
+# --------------------------------------------------------------------------------------------- identify
+
+
+@dataclass(frozen=True)
+class Fit:
+    """Result of :func:`identify`.
+
+    Attributes:
+        robot: the identified true robot (``r1``, ``r2``, ``l1`` fitted when the log measures the pose).
+        actuators: the identified actuators (``delay``; ``acceleration``, ``rot_acceleration`` when fitted).
+        values: the fitted parameters by name [m, s, m/s^2, rad/s^2] (and ``x0``, ``y0`` [m], ``theta0`` [rad],
+            the start pose, a nuisance parameter).
+        uncertainty: their standard errors from the Jacobian, same names and units (``None``: not determined).
+        fitted: the names of the fitted robot parameters; ``fixed``: the others with their values.
+        before, after: :func:`summarize` of the replay (from the log's first pose) with the nominal and the
+            identified robot.
+        cost: ``0.5 * sum(residual^2)`` at the solution [m^2]; ``n_residuals``; ``nfev``: model evaluations.
+        excited: seconds of ramping the log asks of each ramp channel, with the nominal ramps.
+    """
+
+    robot: RobotParams
+    actuators: ActuatorParams
+    values: dict[str, float]
+    uncertainty: dict[str, float | None]
+    fitted: tuple[str, ...]
+    fixed: dict[str, float]
+    before: dict[str, Any]
+    after: dict[str, Any]
+    cost: float
+    n_residuals: int
+    nfev: int
+    excited: dict[str, float]
+
+    def robot_json(self, log: Log, nominal: RobotParams) -> dict[str, Any]:
+        """The content of ``robot.json``: the estimates under ``gym.make``'s names (``r1``, ``r2``, ``l1`` [m],
+        ``delay`` [s], the four ramp rates, fitted or nominal: the robot as replayed), then the report."""
+        out: dict[str, Any] = {"format": ROBOT_FORMAT}
+        out["r1"], out["r2"], out["l1"] = self.robot.r1, self.robot.r2, self.robot.l1
+        out["delay"] = self.actuators.delay
+        for k in ("acceleration", "deceleration", "rot_acceleration", "rot_deceleration"):
+            out[k] = getattr(self.actuators, k)  # fitted or the nominal ramps: the robot as replayed
+        out["uncertainty"] = {k: self.uncertainty.get(k) for k in (*self.fitted, "x0", "y0", "theta0")
+                              if k in self.uncertainty}  # fmt: skip
+        out["fitted"] = list(self.fitted)
+        out["fixed"] = dict(self.fixed)
+        if "x0" in self.values:
+            out["start_pose"] = [self.values["x0"], self.values["y0"], self.values["theta0"]]
+        out["replay_before"] = self.before
+        out["replay_after"] = self.after
+        out["fit"] = {"cost": self.cost, "n_residuals": self.n_residuals, "model_evaluations": self.nfev,
+                      "ramping_s": self.excited}  # fmt: skip
+        out["nominal"] = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1}
+        out["log"] = log.source
+        return out
+
+
+def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | None = None) -> dict[str, float]:
+    r"""Seconds the nominal ramps spend speeding up over the log: ``sum max(|c_k| - |c_{k-1}|, 0) / A``.
+
+    ``c_k`` the commanded translational speed [m/s] (``acceleration``) or turn rate [rad/s] (``rot_acceleration``)
+    of the k-th command (the nominal robot), ``A`` the nominal rate. A ramp that runs for under three log samples
+    in all is not identifiable from the pose; :func:`identify` fits only the ones above that.
+    """
+    act = ActuatorParams() if actuators is None else actuators
+    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
+    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    out = {}
+    for name, c, rate in (("acceleration", v, act.acceleration), ("rot_acceleration", w, act.rot_acceleration)):
+        up = np.maximum(np.diff(np.abs(np.concatenate([[0.0], c]))), 0.0)
+        out[name] = float(np.sum(up) / rate)
+    return out
+
+
+def identify(
+    log: Log,
+    nominal: RobotParams | None = None,
+    ramps: str = "auto",
+    heading_weight: float | None = None,
+    actuators: ActuatorParams | None = None,
+) -> Fit:
+    r"""Fit the true robot to a log: bounded least squares on the replayed trajectory.
+
+    Parameters: ``r1``, ``r2``, ``l1`` [m] (when the log measures the pose), ``delay`` [s], and with
+    ``ramps="auto"`` each ramp rate (``acceleration`` [m/s^2], ``rot_acceleration`` [rad/s^2]) that the log
+    keeps busy for at least three samples (:func:`ramp_excitation`; ``"fit"``: both, ``"fixed"``: neither);
+    nuisance: the start pose ``x0``, ``y0``, ``theta0`` (the log's first pose is itself measured with noise).
+    Residuals, per measurement sample ``k >= 1``:
+
+    .. math:: (x_k^{sim} - x_k,\; y_k^{sim} - y_k,\; \lambda\, \mathrm{wrap}(\theta_k^{sim} - \theta_k),\;
+              r_1 \Delta t\, (w_{1,k}^{sim} - w_{1,k}),\; r_2 \Delta t\, (w_{2,k}^{sim} - w_{2,k}))
+
+    (the measured components only; ``lambda`` = ``heading_weight`` [m/rad], default the nominal half track;
+    wheel rates as rim travel per median sample interval ``Delta t``) minimised by
+    :func:`scipy.optimize.least_squares` (``trf``, finite-difference Jacobian) within ``r, l1`` in nominal
+    ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramp rates in nominal ``* [0.1, 10]``. Start: the nominal
+    robot, the log's first pose, and the best delay of a grid of steps of ``MAX_DELAY / 10`` (the cost is not
+    convex in the delay far from its minimum). Uncertainties: ``sqrt(diag(s^2 (J^T J)^{-1}))``,
+    ``s^2 = 2 cost / (N - p)``; they assume independent residuals and so understate the error when the model
+    misses something systematic.
+
+    Args:
+        log: the log (:func:`read_log`, read with the same ``nominal``).
+        nominal: the robot the firmware believes in (default :class:`RobotParams`): the start and the centre
+            of the bounds of ``r1``, ``r2``, ``l1``.
+        ramps: ``"auto"``, ``"fit"`` or ``"fixed"`` (above).
+        heading_weight: ``lambda`` [m/rad], > 0; default ``nominal.l1``.
+        actuators: the firmware's nominal ramps (start of the fitted ramp rates, values of the others); its
+            delay is not used (fitted). Default the manufacturer's (:class:`ActuatorParams`).
+
+    Raises:
+        ValueError: a bad ``ramps``.
+    """
+    from scipy.optimize import least_squares  # heavy: only here
+
+    nominal = RobotParams() if nominal is None else nominal
+    if ramps not in ("auto", "fit", "fixed"):
+        raise ValueError(f"identify: ramps must be 'auto', 'fit' or 'fixed', got {ramps!r}")
+    lam = nominal.l1 if heading_weight is None else float(heading_weight)
+    base_act = ActuatorParams() if actuators is None else actuators
+    step = float(np.median(np.diff(log.t_meas)))
+    excited = ramp_excitation(log, nominal, base_act)
+    names: list[str] = []
+    if log.pose is not None:
+        names += ["r1", "r2", "l1"]
+    names.append("delay")
+    for k in ("acceleration", "rot_acceleration"):
+        if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step):
+            names.append(k)
+    n_fit = len(names)
+    if log.pose is not None:
+        names += ["x0", "y0", "theta0"]
+    nom = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1, "delay": base_act.delay,
+           "acceleration": base_act.acceleration, "rot_acceleration": base_act.rot_acceleration}  # fmt: skip
+    lo, hi, x_scale = [], [], []
+    for n in names:
+        if n in ("r1", "r2", "l1"):
+            lo.append(nom[n] * (1 - FIT_BOUNDS))
+            hi.append(nom[n] * (1 + FIT_BOUNDS))
+            x_scale.append(nom[n] * 0.01)
+        elif n == "delay":
+            lo.append(0.0)
+            hi.append(MAX_DELAY)
+            x_scale.append(0.01)
+        elif n in ("acceleration", "rot_acceleration"):
+            lo.append(nom[n] * RAMP_FACTORS[0])
+            hi.append(nom[n] * RAMP_FACTORS[1])
+            x_scale.append(nom[n] * 0.1)
+        else:
+            lo.append(-np.inf)
+            hi.append(np.inf)
+            x_scale.append(0.01)
+    pose0 = None if log.pose is None else log.pose[0]
+    rate_w = np.array([nominal.r1, nominal.r2]) * step
+
+    def unpack(z: Sequence[float]) -> tuple[RobotParams, ActuatorParams, tuple[float, float, float] | None]:
+        v = dict(zip(names, (float(a) for a in z), strict=True))
+        robot = replace(nominal, **{k: v[k] for k in ("r1", "r2", "l1") if k in v})
+        act = replace(base_act, **{k: v[k] for k in ("delay", "acceleration", "rot_acceleration") if k in v})
+        start = (v["x0"], v["y0"], v["theta0"]) if "x0" in v else None
+        return robot, act, start
+
+    cache: dict[tuple[float, ...], Replay] = {}
+
+    def residuals(z: Sequence[float]) -> Array:
+        robot, act, start = unpack(z)
+        # the motion from another start pose is the motion from the origin moved rigidly: one simulation per
+        # robot, whatever the start (the finite differences in x0, y0, theta0 reuse it)
+        key = tuple(float(a) for a in z[:n_fit])
+        rep = cache.get(key)
+        if rep is None:
+            rep = cache[key] = simulate(log, robot, act, nominal, (0.0, 0.0, 0.0))
+            if len(cache) > 64:
+                cache.pop(next(iter(cache)))
+        parts = []
+        if log.pose is not None and start is not None:
+            c, s = math.cos(start[2]), math.sin(start[2])
+            px, py = rep.pose[1:, 0], rep.pose[1:, 1]
+            d = np.stack([start[0] + c * px - s * py, start[1] + s * px + c * py, start[2] + rep.pose[1:, 2]], axis=1)
+            d -= log.pose[1:]
+            parts += [d[:, 0], d[:, 1], lam * _wrap(d[:, 2])]
+        if log.rates is not None:
+            d = (rep.rates[1:] - log.rates[1:]) * rate_w
+            parts += [d[:, 0], d[:, 1]]
+        return np.concatenate(parts)
+
+    z0 = [nom.get(n, 0.0) for n in names]
+    if pose0 is not None:
+        z0[-3:] = pose0.tolist()
+    i_delay = names.index("delay")
+    best = math.inf
+    for d in np.linspace(0.0, MAX_DELAY, 11).tolist():
+        z = list(z0)
+        z[i_delay] = d
+        c = float(np.sum(residuals(z) ** 2))
+        if c < best:
+            best, z_start = c, z
+    sol = least_squares(
+        residuals, np.asarray(z_start), bounds=(np.asarray(lo), np.asarray(hi)), x_scale=np.asarray(x_scale),
+        method="trf", jac="2-point", xtol=XTOL, ftol=XTOL, gtol=XTOL, max_nfev=200,
+    )  # fmt: skip
+    jac = np.asarray(sol.jac, dtype=np.float64)
+    n_res = int(sol.fun.size)
+    dof = max(n_res - len(names), 1)
+    s2 = 2.0 * float(sol.cost) / dof
+    jtj = jac.T @ jac
+    unc: dict[str, float | None]
+    try:
+        cov = np.linalg.inv(jtj) * s2
+        diag = np.diag(cov)
+        unc = {n: (float(np.sqrt(v)) if v >= 0 and np.isfinite(v) else None) for n, v in zip(names, diag, strict=True)}
+    except np.linalg.LinAlgError:
+        unc = dict.fromkeys(names)
+    values = {n: float(v) for n, v in zip(names, sol.x, strict=True)}
+    robot, act, _ = unpack(sol.x)
+    fitted = tuple(names[:n_fit])
+    fixed = {k: float(nom[k]) for k in ("r1", "r2", "l1", "delay", "acceleration", "rot_acceleration")
+             if k not in fitted}  # fmt: skip
+    _, before = replay(log, nominal, base_act, nominal)
+    _, after = replay(log, robot, act, nominal)
+    return Fit(robot, act, values, unc, fitted, fixed, before, after, float(sol.cost), n_res, int(sol.nfev), excited)
