@@ -251,6 +251,10 @@ def test_a_points_file_in_one_line(tmp_path: Any) -> None:
     assert type(path) is ClothoidPath and not path.closed
     venv = gym.make_vec("AmigoBot-v1", 2, vectorization_mode="vector_entry_point", path=str(f), feasibility="off")
     assert venv.unwrapped.paths[0] is path  # type: ignore[attr-defined]  # fitted once per file
+    if env.unwrapped._kernel is not None:  # type: ignore[attr-defined]  # numba installed: the compiled steps
+        assert venv.unwrapped._batch is not None  # type: ignore[attr-defined]
+        env.reset(seed=0)
+        assert env.unwrapped._in_kernel  # type: ignore[attr-defined]
     with pytest.raises(ValueError, match=r"a points file \(.csv, .json\)"):
         gym.make("AmigoBot-v1", path="points.txt")
     with pytest.raises(FileNotFoundError, match="no such points file"):
@@ -270,3 +274,40 @@ def test_benchmark_on_a_points_file_reports_the_limits(tmp_path: Any) -> None:
     assert [r["scenario"] for r in doc["results"]] == ["path:tight"]
     md = (out / "benchmark.md").read_text()
     assert "path:tight" in md and "exceeded: rotational acceleration at s = [" in md
+
+
+class Forwarding:
+    """A user class with its own locate (all four members forwarded to a ClothoidPath)."""
+
+    def __init__(self, path: ClothoidPath) -> None:
+        self._p = path
+        self.length = path.length
+        self.closed = path.closed
+
+    def pose_columns(self, s: Any) -> Any:
+        return self._p.pose_columns(s)
+
+    def locate(self, *args: Any) -> Any:
+        return self._p.locate(*args)
+
+
+def test_a_users_own_locate_is_used_and_checked() -> None:
+    ref = from_points(np.c_[np.cos(np.linspace(0, 6, 60)), np.sin(np.linspace(0, 6, 60))])
+    kw: dict[str, Any] = {"speed": 0.2, "randomize": "none", "kernel": "numpy"}
+    e1 = gym.make("AmigoBot-v1", path=Forwarding(ref), **kw)
+    e2 = gym.make("AmigoBot-v1", path=ref, **kw)
+    o1, _ = e1.reset(seed=1)
+    o2, _ = e2.reset(seed=1)
+    for _ in range(30):
+        o1, r1, *_ = e1.step(np.array([0.3, 0.25]))
+        o2, r2, *_ = e2.step(np.array([0.3, 0.25]))
+    np.testing.assert_allclose(o1, o2, atol=1e-6)  # cos/sin of theta by numpy instead of the path's own
+    assert abs(r1 - r2) < 1e-9
+
+    class BadLocate(Forwarding):
+        def locate(self, *args: Any) -> Any:
+            got = self._p.locate(*args)
+            return got._replace(cross_track_error=float("inf")) if isinstance(args[0], float) else got
+
+    with pytest.raises(ValueError, match=r"path BadLocate: locate\(x, y, ...\).cross_track_error must be finite"):
+        gym.make("AmigoBot-v1", path=BadLocate(ref))
