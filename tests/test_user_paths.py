@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 from typing import Any, NamedTuple
 
@@ -311,3 +312,26 @@ def test_a_users_own_locate_is_used_and_checked() -> None:
 
     with pytest.raises(ValueError, match=r"path BadLocate: locate\(x, y, ...\).cross_track_error must be finite"):
         gym.make("AmigoBot-v1", path=BadLocate(ref))
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("bad.csv", "x,z\n0,0\n1,1\n", r"--path .*bad.csv: missing column\(s\) \['y'\]"),
+        ("bad.txt", "x,y\n0,0\n1,1\n", "a points file must end in .csv or .json"),
+        ("missing.csv", None, "no such points file"),
+    ],
+)
+def test_benchmark_refuses_a_bad_points_file(
+    tmp_path: Any, capsys: pytest.CaptureFixture[str], name: str, text: str | None, message: str
+) -> None:
+    from amigo_gym.training import benchmark
+
+    f = tmp_path / name
+    if text is not None:
+        f.write_text(text)
+    out = tmp_path / "bench"
+    assert benchmark.main(["--path", str(f), "--agents", "analytic", "--no-progress", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and re.search(message, err), err
+    assert not out.exists()  # nothing written

@@ -223,12 +223,18 @@ def user_scenarios(
     Raises:
         FileNotFoundError, ValueError: a missing file, a bad value (one line).
     """
+    from amigo_gym.paths.points import cached_file_path, is_points_file
+
     out = []
     for f in files:
+        if not is_points_file(str(f)):
+            raise ValueError(f"--path {f}: a points file must end in .csv or .json")
         if not Path(f).is_file():
             raise FileNotFoundError(f"--path {f}: no such points file")
-        if not str(f).lower().endswith((".csv", ".json")):
-            raise ValueError(f"--path {f}: a points file must end in .csv or .json")
+        try:
+            cached_file_path(f)  # read and fitted now (kept for gym.make): a bad file is the user's error, exit 2
+        except ValueError as exc:
+            raise ValueError(f"--path {exc}") from None
     if not (0.0 < duration <= 3600.0):
         raise ValueError(f"--duration must be in (0, 3600] s, got {duration}")
     names = [Path(f).stem for f in files]
