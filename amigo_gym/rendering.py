@@ -41,7 +41,8 @@ class RenderSettings(Protocol):
 
 
 class DrawablePath(Protocol):
-    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m]."""
+    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m] (``point``; an
+    AmigoBot-v1 path's ``pose_columns`` is used instead when it has one)."""
 
     @property
     def length(self) -> float: ...
@@ -67,6 +68,9 @@ TEXT = (20, 20, 20)
 def path_polyline(path: DrawablePath, n: int = 400) -> NDArray[np.float64]:
     """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
     s = np.linspace(0.0, path.length, n + 1)
+    if hasattr(path, "pose_columns"):  # an AmigoBot-v1 path: its documented members only (amigo_gym.paths.user)
+        q = path.pose_columns(s)
+        return np.stack((np.broadcast_to(q.x, s.shape), np.broadcast_to(q.y, s.shape)), axis=-1).astype(np.float64)
     pts: NDArray[np.float64] = np.asarray(path.point(s), dtype=np.float64)
     return pts
 

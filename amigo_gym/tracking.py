@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
@@ -101,6 +102,8 @@ SPEED_LOOKAHEAD = 1.0
 MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
+#: values of ``feasibility=``: refuse an infeasible fixed path, warn and run it, or run it silently
+FEASIBILITY_MODES: tuple[str, ...] = ("error", "warn", "off")
 
 
 def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
@@ -132,7 +135,8 @@ class TrackingParams:
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
         dt: control period [s], in [MIN_DT = 0.001, 1]. Default 0.1 (the robot's 100 ms cycle). The bound keeps the
             delay ring small: ``ring_length(dt)``, about ``0.5 / dt + 2`` commands per robot, at most 501 (8 KB).
-        path: a family name of :data:`PATH_FAMILIES`, or a path object (:class:`amigo_gym.paths.PathSpec`).
+        path: a family name of :data:`PATH_FAMILIES`, a points file (``.csv`` or ``.json`` with columns ``x``,
+            ``y`` [m]: :func:`amigo_gym.paths.from_file`), or a path object (:mod:`amigo_gym.paths.user`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
             ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.
         direction: +1 (left turn) or -1 (right) for circles and the manoeuvre. Default +1.
@@ -161,6 +165,13 @@ class TrackingParams:
         preview: distances ahead of H's closest point at which the path is observed [m], each in (0, 5].
         preview_scale: the observation divides preview coordinates by this [m].
         sigma_track, sigma_speed, sigma_smooth, smooth_weight: reward scales (module docstring).
+        feasibility: what a fixed path the robot cannot track at the highest ``speed`` does at construction
+            (:func:`check_feasible`): ``"error"`` (default) refuses it, ``"warn"`` warns and runs it, ``"off"``
+            runs it silently; the report (where the path exceeds the wheel-rate or acceleration limits) is the
+            env's ``feasibility`` attribute and ``info["feasibility"]`` at reset in every mode.
+        goal_tolerance: an open path's episode terminates as a success when H is within this distance [m] of
+            the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
+            passes the end (``"end_of_path"``).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -189,6 +200,8 @@ class TrackingParams:
     sigma_speed: float = 0.05
     sigma_smooth: float = 0.1
     smooth_weight: float = 0.2
+    feasibility: str = "error"
+    goal_tolerance: float = 0.0
 
     def __post_init__(self) -> None:
         o = "TrackingParams"
@@ -202,14 +215,19 @@ class TrackingParams:
         if not isinstance(self.randomize, Randomization):
             raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
         s(self, "dt", check_range(o, "dt", self.dt, MIN_DT, 1.0))
-        if isinstance(self.path, str):
-            if self.path not in PATH_FAMILIES:
-                raise ValueError(f"{o}.path must be one of {list(PATH_FAMILIES)} or a path object, got {self.path!r}")
-        elif not (hasattr(self.path, "locate") and hasattr(self.path, "pose_columns") and hasattr(self.path, "length")):
-            raise ValueError(
-                f"{o}.path must be a family name or an object with length, closed, pose_columns and locate "
-                f"(amigo_gym.paths.PathSpec), got {type(self.path).__name__}"
-            )
+        if isinstance(self.path, str) and self.path not in PATH_FAMILIES:
+            from amigo_gym.paths.points import cached_file_path, is_points_file
+
+            if not is_points_file(self.path):
+                raise ValueError(
+                    f"{o}.path must be one of {list(PATH_FAMILIES)}, a points file (.csv, .json) or a path object, "
+                    f"got {self.path!r}"
+                )
+            s(self, "path", cached_file_path(self.path))  # amigo_gym.paths.from_file, fitted once per file
+        if not isinstance(self.path, str):  # a path object: checked, wrapped unless a ClothoidPath (paths.user)
+            from amigo_gym.paths.user import check_path
+
+            s(self, "path", check_path(self.path, "AmigoBot-v1"))
         s(self, "radius", check_range(o, "radius", self.radius, self.robot.l3, 1e3, low_open=True))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
@@ -252,6 +270,9 @@ class TrackingParams:
         s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, 10.0))
         s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, 10.0))
         s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
+        if not isinstance(self.feasibility, str) or self.feasibility not in FEASIBILITY_MODES:
+            raise ValueError(f"{o}.feasibility must be one of {list(FEASIBILITY_MODES)}, got {self.feasibility!r}")
+        s(self, "goal_tolerance", check_range(o, "goal_tolerance", self.goal_tolerance, 0.0, 10.0))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
         _check_combined(o, self)
 
@@ -628,12 +649,17 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
 # --------------------------------------------------------------------------- paths
 
 
-def check_feasible(p: TrackingParams, path: Any) -> None:
-    """Refuse a task whose exact inverse solution needs more than the nominal robot has (one-line ``ValueError``).
+def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
+    """Check a task against what the nominal robot has; refuse it (one-line ``ValueError``), warn or say nothing
+    as ``p.feasibility`` says (``"error"``, ``"warn"``, ``"off"``).
 
     Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
     (``actuators.rot_acceleration``) at the highest reference speed, with the exact heading lag of H
     (:func:`amigo_gym.paths.feasibility`), and the trapezoid's rates against the robot's ramps.
+
+    Returns:
+        the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
+        ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
     """
     from amigo_gym.paths import feasibility
 
@@ -646,7 +672,43 @@ def check_feasible(p: TrackingParams, path: Any) -> None:
         max_rotational_acceleration=p.actuators.rot_acceleration,
     )
     if not f.feasible:
-        raise ValueError(f.message())
+        if p.feasibility == "error":
+            raise ValueError(f"{f.message()} (feasibility='warn' or 'off' runs it anyway)")
+        if p.feasibility == "warn":
+            warnings.warn(f"AmigoBot-v1: {f.message()}; running it (feasibility='warn')", UserWarning, stacklevel=3)
+    return f.report()
+
+
+#: values of ``info["end_condition"]``: ``""`` the episode goes on (or ended by truncation), ``"goal"`` H came within
+#: ``goal_tolerance`` of an open path's end point, ``"end_of_path"`` H passed that end, ``"off_path"`` H was farther
+#: than ``termination_distance`` from the path (the first that applies, in this order)
+END_CONDITIONS: tuple[str, ...] = ("", "goal", "end_of_path", "off_path")
+
+
+def goal_point(p: TrackingParams, path: Any) -> tuple[float, float]:
+    """The end point ``(x, y)`` [m] of an open ``path`` when ``p.goal_tolerance > 0``; else ``(nan, nan)``, which
+    no H reaches (:func:`goal_reached`)."""
+    if p.goal_tolerance <= 0.0 or bool(path.closed):
+        return math.nan, math.nan
+    q = path.pose_columns(float(path.length))
+    return float(q.x), float(q.y)
+
+
+def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> Any:
+    """Whether H ``(hx, hy)`` is within ``p.goal_tolerance`` of the goal ``(gx, gy)`` [m] (:func:`goal_point`):
+    ``(hx - gx)^2 + (hy - gy)^2 <= goal_tolerance^2`` (False for a NaN goal). Floats or columns."""
+    dx = hx - gx
+    dy = hy - gy
+    return dx * dx + dy * dy <= p.goal_tolerance * p.goal_tolerance
+
+
+def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
+    """The entry of :data:`END_CONDITIONS` for one robot's step."""
+    if goal:
+        return "goal"
+    if end_of_path:
+        return "end_of_path"
+    return "off_path" if terminated else ""
 
 
 class Envelope(NamedTuple):
@@ -737,13 +799,13 @@ def envelope_needs(e: Envelope, speed: float, robot: RobotParams) -> tuple[float
     return wheel, rot
 
 
-def check_drawn_feasible(p: TrackingParams) -> None:
-    """Refuse ``path="random"``/``"mixed"`` settings under which a drawn path can need more than the robot has.
+def drawn_feasibility_problem(p: TrackingParams) -> str | None:
+    """Why a path drawn under ``path="random"``/``"mixed"`` settings can need more than the robot has, or ``None``.
 
     The same limits as :func:`check_feasible` (``robot.max_wheel_rate``, ``actuators.rot_acceleration``) at the
-    highest reference speed, with the bounds of :func:`envelope_needs` over :func:`drawn_envelopes`: a task that
-    passes draws only paths that :func:`check_feasible` would accept. One-line ``ValueError`` naming the family,
-    its parameters, the need and the limit.
+    highest reference speed, with the bounds of :func:`envelope_needs` over :func:`drawn_envelopes`: a task without a
+    problem draws only paths that :func:`check_feasible` would accept. One line naming the family, its parameters,
+    the need and the limit.
     """
     v = p.speed_range[1]
     robot = p.robot
@@ -751,32 +813,44 @@ def check_drawn_feasible(p: TrackingParams) -> None:
         wheel, rot = envelope_needs(e, v, robot)
         head = f"path={p.path!r}: its {e.family} paths ({e.what}) at speed {v:g} m/s"
         if math.isinf(wheel):
-            raise ValueError(
+            return (
                 f"{head} can turn the heading 90 degrees away from the path (curvature above 1/l3 = "
                 f"{1.0 / robot.l3:g} 1/m): H cannot follow them; lower max_curvature"
             )
         if wheel > robot.max_wheel_rate:
-            raise ValueError(
+            return (
                 f"{head} can need {wheel:.3g} rad/s of wheel rate, above the robot's limit of "
                 f"{robot.max_wheel_rate:g} rad/s; lower the speed or the curvature"
             )
         limit = p.actuators.rot_acceleration
         if rot > limit:
-            raise ValueError(
+            return (
                 f"{head} can need {rot:.3g} rad/s^2 of rotational acceleration, above the robot's limit of "
                 f"{limit:g} rad/s^2 (actuators.rot_acceleration); lower the speed or max_curvature_rate"
             )
+    return None
 
 
-def check_task(p: TrackingParams) -> Any:
-    """The fixed path of ``p`` (:func:`fixed_path`, ``None`` when drawn), after checking the task is feasible:
-    :func:`check_feasible` on a fixed path, :func:`check_drawn_feasible` on drawn ones."""
+def check_drawn_feasible(p: TrackingParams) -> None:
+    """Apply ``p.feasibility`` to :func:`drawn_feasibility_problem`: ``"error"`` raises a one-line ``ValueError``,
+    ``"warn"`` warns once and runs, ``"off"`` runs."""
+    problem = drawn_feasibility_problem(p)
+    if problem is None or p.feasibility == "off":
+        return
+    if p.feasibility == "error":
+        raise ValueError(f"{problem} (feasibility='warn' or 'off' runs it anyway)")
+    warnings.warn(f"AmigoBot-v1: {problem}; running it (feasibility='warn')", UserWarning, stacklevel=3)
+
+
+def check_task(p: TrackingParams) -> tuple[Any, dict[str, Any] | None]:
+    """The fixed path of ``p`` (:func:`fixed_path`, ``None`` when drawn) and its feasibility report (``None`` for
+    drawn paths), after applying ``p.feasibility``: :func:`check_feasible` on a fixed path,
+    :func:`check_drawn_feasible` on drawn ones."""
     fixed = fixed_path(p)
     if fixed is not None:
-        check_feasible(p, fixed)
-    else:
-        check_drawn_feasible(p)
-    return fixed
+        return fixed, check_feasible(p, fixed)
+    check_drawn_feasible(p)
+    return None, None
 
 
 #: ranges of the family parameters drawn per episode by ``path="mixed"`` (the environments check at construction
@@ -858,7 +932,7 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
         pid = int(rng.integers(p.random_pool))
         return random_pool_path(p, pid), {"family": "random", "id": pid}
     if p.path != "mixed":
-        fam = p.path if isinstance(p.path, str) else type(p.path).__name__
+        fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
     fam = MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
     if fam == "random":

@@ -6,6 +6,7 @@ A thin stateful shell over the column functions of :mod:`amigo_gym.tracking`; th
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Any, SupportsFloat
 
@@ -88,8 +89,10 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
       ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
       ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
     * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
-      acceleration than the robot has is refused at construction; so is a ``"random"`` or ``"mixed"`` task that
-      can draw such a path (a bound over the family, :func:`amigo_gym.tracking.check_drawn_feasible`).
+      acceleration than the robot has is refused at construction (``feasibility="error"``, the default), and so
+      is a ``"random"`` or ``"mixed"`` task that can draw such a path (a bound over the family,
+      :func:`amigo_gym.tracking.check_drawn_feasible`); ``"warn"`` and ``"off"`` run it. The report (where the
+      limits are exceeded) is ``env.feasibility`` and ``info["feasibility"]`` at reset.
 
     ## Action Space
 
@@ -118,7 +121,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     ## Episode End
 
     Terminated when H is farther than ``termination_distance`` from the path, or reaches the end of an
-    open path; truncated by ``max_episode_steps`` (600 by default: 60 s at dt = 0.1 s).
+    open path: passes it, or comes within ``goal_tolerance`` [m] of the end point (when > 0); truncated by
+    ``max_episode_steps`` (600 by default: 60 s at dt = 0.1 s). ``info["end_condition"]`` says which fired.
 
     ## Info
 
@@ -127,7 +131,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     (actual, end of step) and ``command`` (the setpoints) [rad/s], ``wheel_angles`` [rad], ``measured_pose``,
     ``reward_terms``, ``time`` [s], ``path`` (family and parameters), ``true_robot`` (``r1``, ``r2``, ``l1`` [m]),
     ``delay`` [s], ``slip`` (this step's loss of ground speed per wheel), ``end_of_path`` (H reached the end of an
-    open path: the episode terminated as a success).
+    open path: the episode terminated as a success), ``end_condition`` (``""``, ``"goal"``, ``"end_of_path"`` or
+    ``"off_path"``: :data:`amigo_gym.tracking.END_CONDITIONS`); at reset, for a fixed path, ``feasibility``.
 
     ## Arguments
 
@@ -176,8 +181,10 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
         self._delay = 0.0
-        fixed = tracking.check_task(p)  # the fixed path, or None; refuses infeasible tasks, fixed or drawn
+        #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
+        fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         self._fixed_path = fixed
+        self._goal = (math.nan, math.nan)
         self.path: Any = fixed
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
         act_space, obs_space = make_spaces_v1(p)
@@ -217,6 +224,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._done = False
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
+        self._goal = tracking.goal_point(self.params, self.path)
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
         if kern is not None and self._in_kernel:
             # tracking.reset_columns, compiled: the start state without noise, its own previous command
@@ -232,6 +240,9 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             obs = np.array(out.obs, dtype=np.float32)
             self._trail = [(float(out.h_x), float(out.h_y))]
             info = self._info(out, tracking.NO_NOISE)
+        info["end_condition"] = ""
+        if self.feasibility is not None:
+            info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
         if self.render_mode == "human":
             self.render()
         return obs, info
@@ -262,11 +273,12 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._steps = int(st.steps)
         self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
         terminated = bool(out.terminated)
-        self._done = terminated
         self._trail.append((float(out.h_x), float(out.h_y)))
         if len(self._trail) > 4096:
             del self._trail[: len(self._trail) - 4096]
         info = self._info(out, noise)
+        terminated = self._end(terminated, float(out.h_x), float(out.h_y), info)
+        self._done = terminated
         if self.render_mode == "human":
             self.render()
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
@@ -291,7 +303,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         info = self._kernel_info(o, o[_W_SLIP1], o[_W_SLIP2])
         terms = info["reward_terms"]
         reward = float(task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"]))
-        terminated = o[_W_TERM] != 0.0
+        terminated = self._end(o[_W_TERM] != 0.0, o[_W_HX], o[_W_HY], info)
         self._done = terminated
         if self.render_mode is not None:
             self._trail.append((o[_W_HX], o[_W_HY]))
@@ -300,6 +312,17 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             if self.render_mode == "human":
                 self.render()
         return obs, reward, terminated, False, info
+
+    def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
+        """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
+        ``info["end_condition"]`` (:data:`tracking.END_CONDITIONS`); a goal sets ``info["end_of_path"]`` too."""
+        gx, gy = self._goal
+        goal = gx == gx and tracking.goal_reached(self.params, hx, hy, gx, gy)
+        if goal:
+            terminated = True
+            info["end_of_path"] = True
+        info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
+        return terminated
 
     def _kernel_info(self, o: list[float], slip1: float, slip2: float) -> dict[str, Any]:
         """:meth:`_info` from the kernel's outputs ``o`` (:data:`amigo_gym._kernels_v1.WS_FIELDS`): the same entries.

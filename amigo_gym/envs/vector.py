@@ -676,7 +676,8 @@ def _scatter_into(infos: dict[str, Any], mask: BoolArray | None, n: int, masks: 
 
 
 def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
-    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats, ``(N, k)`` rows as arrays.
+    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats (object columns as they are),
+    ``(N, k)`` rows as arrays.
 
     The ``_key`` masks and ``final_obs``/``final_info`` are left out; nested dicts recurse.
     """
@@ -688,7 +689,10 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
             out[k] = info_row(v, i)
         else:
             a = np.asarray(v)
-            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
+            if a.dtype == object:  # e.g. AmigoBot-v1's end_condition (str)
+                out[k] = a[i]
+            else:
+                out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
     return out
 
 

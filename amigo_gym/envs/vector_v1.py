@@ -180,7 +180,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         p = self.params
         self._k = tracking.constants(p)
         check_memory(owner, int(num_envs), p, render_mode)
-        fixed = tracking.check_task(p)  # the fixed path, or None; refuses infeasible tasks, fixed or drawn
+        #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
+        fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         n = int(num_envs)
         self.num_envs = n
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
@@ -223,6 +224,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
         self._ring_step = 0
+        self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs.shape[0]), dtype=np.float32)
         # the rendered trail of H: a ring of the last trail_length positions of every robot, (T, N, 2), allocated
@@ -304,6 +306,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.paths.replace(idx, paths)
         infos = {key: _stack(v) for key, v in cols.items()}
         self._start_trails(idx, _array(infos["h_position"]))
+        self._goal[idx] = [tracking.goal_point(self.params, path) for path in paths]
         return obs, infos
 
     def _begin_rows_kernel(
@@ -325,6 +328,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             states.append(st)
             episodes.append(ep)
         self.paths.replace(idx, paths)
+        self._goal[idx] = [tracking.goal_point(self.params, path) for path in paths]
         obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
         exps = b.start(rows, paths, states, episodes, obs)
         infos = self._kernel_infos(idx, exps, None)
@@ -366,6 +370,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
             self._h_now[:, 0] = hx
             self._h_now[:, 1] = hy
+        terminated = self._end(terminated, infos, hx, hy)
         steps = np.asarray(self._state.steps)
         truncated = (
             steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, dtype=np.bool_)
@@ -379,6 +384,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             terminated[restart] = False
             truncated[restart] = False
             assign_rows(infos, self._infos(info_r, restart), restart)
+            infos["end_condition"][restart] = ""
         elif mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
             if done.any():
@@ -387,9 +393,12 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 for i in restart.tolist():
                     final_obs[i] = obs[i].copy()
                 final_info = self._scatter(take_rows(infos, restart), done)
+                final_info["end_condition"] = np.where(done, final_info["end_condition"], None)  # as SyncVectorEnv
                 obs_r, info_r = self._begin_rows(restart)
                 obs[restart] = obs_r
                 assign_rows(infos, self._infos(info_r, restart), restart)
+                infos["end_condition"] = infos["end_condition"].copy()
+                infos["end_condition"][restart] = ""
                 infos = {
                     "final_obs": final_obs,
                     "_final_obs": done.copy(),
@@ -402,6 +411,26 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._autoreset = terminated | truncated
         self._obs = obs
         return obs, reward, terminated, truncated, self._scatter(infos, None)
+
+    def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
+        """``terminated`` with the goals of open paths (``goal_tolerance``, :func:`tracking.goal_reached`) and
+        ``infos["end_condition"]`` (:data:`tracking.END_CONDITIONS`, an object array of str); a goal sets
+        ``end_of_path``."""
+        cond = np.full(self.num_envs, "", dtype=object)  # as SyncVectorEnv gathers the single env's str
+        if self.params.goal_tolerance > 0.0:
+            goal = tracking.goal_reached(self.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
+            if goal.any():
+                terminated = terminated | goal
+                infos["end_of_path"] = np.where(goal, 1.0, infos["end_of_path"])
+        else:
+            goal = None
+        if terminated.any():
+            cond[terminated] = "off_path"
+            cond[np.asarray(infos["end_of_path"]) != 0.0] = "end_of_path"
+            if goal is not None:
+                cond[goal] = "goal"
+        infos["end_condition"] = cond
+        return terminated
 
     def _step_columns(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
         """The step of every robot by the reference column functions (:func:`tracking.step_columns`; row by row

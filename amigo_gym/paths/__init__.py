@@ -8,10 +8,15 @@
   their registry :data:`FAMILIES`.
 * :mod:`amigo_gym.paths.batch`: :class:`PathBatch`, ``N`` paths (one per sub-environment) behind the column
   interface of one path on ``(N,)`` columns, row ``i`` bit-identical to path ``i``.
+* :mod:`amigo_gym.paths.points`: :func:`from_points` and :func:`from_file`, a :class:`ClothoidPath` with
+  continuous curvature fitted to points of your own (an array, a CSV or a JSON file).
+* :mod:`amigo_gym.paths.user`: the duck-typed protocol of a path object of your own (``length``, ``closed``,
+  ``pose_columns``), :func:`check_path` and :class:`UserPath`, which checks it at ``gym.make`` and every result.
 * :mod:`amigo_gym.paths.analysis`: :func:`preview` (path ahead in the robot frame) and :func:`feasibility`
   (wheel rates and accelerations the exact inverse solution needs).
 
-This package may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and
+This package may import numpy (and, in :mod:`amigo_gym.paths.points`, the standard library's csv and json),
+:mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and
 :mod:`amigo_gym.fresnel` only.
 """
 
@@ -50,6 +55,8 @@ from amigo_gym.paths.families import (
     manoeuvre,
     random_path,
 )
+from amigo_gym.paths.points import PointsFit, fit_points, from_file, from_points, load_points
+from amigo_gym.paths.user import UserPath, check_path
 
 __all__ = [
     "Projection",
@@ -84,4 +91,11 @@ __all__ = [
     "feasibility",
     "heading_lag_profile",
     "preview",
+    "PointsFit",
+    "fit_points",
+    "from_points",
+    "from_file",
+    "load_points",
+    "UserPath",
+    "check_path",
 ]

@@ -12,8 +12,8 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Literal, NamedTuple
+from dataclasses import dataclass, field
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -214,6 +214,10 @@ class Feasibility:
         radius: path radius ``1/|kappa|`` at the binding peak [m] (``inf`` on a straight).
         feasible: every peak within its limit and the lag below 90 degrees.
         max_heading_lag: largest ``|theta - beta|`` [rad].
+        exceeded: where the path needs more than the robot has: for each checked quantity (name as in
+            ``limits``) the arc-length intervals ``(s_from, s_to)`` [m] over whose samples the need exceeds the
+            limit (empty if it never does; at most :data:`MAX_INTERVALS`, the rest merged into the last), and
+            ``"heading lag"`` where the lag reaches 90 degrees.
     """
 
     speed: float
@@ -228,6 +232,22 @@ class Feasibility:
     radius: float
     feasible: bool
     max_heading_lag: float
+    exceeded: dict[str, tuple[tuple[float, float], ...]] = field(default_factory=dict)
+
+    def report(self) -> dict[str, Any]:
+        """A JSON-able summary: ``feasible``, ``message`` (:meth:`message`), ``speed`` [m/s], ``speed_of``,
+        ``binding``, ``peaks``, ``peak_s`` [m], ``limits`` and ``exceeded`` (intervals as ``[s_from, s_to]`` lists)."""
+        return {
+            "feasible": self.feasible,
+            "message": self.message(),
+            "speed": self.speed,
+            "speed_of": self.speed_of,
+            "binding": self.binding,
+            "peaks": dict(self.peaks),
+            "peak_s": dict(self.peak_s),
+            "limits": dict(self.limits),
+            "exceeded": {k: [list(iv) for iv in v] for k, v in self.exceeded.items()},
+        }
 
     def message(self) -> str:
         """One line, e.g. ``path: speed 0.74 m/s on radius 1 m needs 16.6 rad/s on the outer wheel, above the
@@ -362,6 +382,9 @@ def feasibility(
         else:
             peak_wheel[name] = "outer" if one == (bd[i] > 0.0) else "inner"
     singular = not max_lag < math.pi / 2 - 1e-9
+    exceeded = {q: _intervals(prof.s, ~(series[q] <= lim)) for q, lim in limits.items()}
+    if singular:
+        exceeded["heading lag"] = _intervals(prof.s, ~(np.abs(psi) < math.pi / 2 - 1e-9))
     if singular:
         i = int(np.argmax(np.abs(psi)))
         binding, needed, limit, k = "heading lag", max_lag, math.pi / 2, float(kappa[i])
@@ -381,4 +404,22 @@ def feasibility(
         radius=math.inf if k == 0.0 else 1.0 / abs(k),
         feasible=not singular and all(peaks[q] <= limits[q] for q in limits),
         max_heading_lag=max_lag,
+        exceeded=exceeded,
     )
+
+
+#: most intervals listed per quantity in :attr:`Feasibility.exceeded`
+MAX_INTERVALS = 64
+
+
+def _intervals(s: Array, over: NDArray[np.bool_]) -> tuple[tuple[float, float], ...]:
+    """The arc-length intervals ``(s_from, s_to)`` of the runs of consecutive samples ``s`` (sorted) with ``over``."""
+    idx = np.flatnonzero(over)
+    if idx.size == 0:
+        return ()
+    cut = np.flatnonzero(np.diff(idx) > 1)
+    first = np.r_[idx[0], idx[cut + 1]]
+    last = np.r_[idx[cut], idx[-1]]
+    if len(first) > MAX_INTERVALS:
+        first, last = first[:MAX_INTERVALS], np.r_[last[: MAX_INTERVALS - 1], last[-1]]
+    return tuple((float(s[a]), float(s[b])) for a, b in zip(first.tolist(), last.tolist(), strict=True))

@@ -216,10 +216,12 @@ class PathPoint(NamedTuple):
 
 
 class PathSpec(Protocol):
-    """What AmigoBot-v1 needs of a path; implement it to drive the robot along a path of your own.
+    """The full interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it).
 
     A path is parametrised by arc length ``s`` [m] of point H, with a tangent angle continuous in ``s`` and
-    a signed curvature (positive turning left). :class:`ClothoidPath` implements it.
+    a signed curvature (positive turning left). A path object of your own needs only ``length``, ``closed``
+    and a ``pose_columns`` returning ``x``, ``y``, ``theta`` and ``curvature``: :mod:`amigo_gym.paths.user`
+    checks it and completes the rest (``locate`` is optional).
     """
 
     @property

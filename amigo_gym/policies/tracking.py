@@ -463,17 +463,35 @@ class AnalyticTrackingPolicy:
 
 
 class PurePursuitPolicy:
-    """Pure pursuit (Coulter 1992) of the axle midpoint A towards a preview point of the observation.
+    """Pure pursuit (Coulter 1992) towards a preview point of the observation, in the textbook's variants.
 
     Args:
         params: the task's settings.
         lookahead: arc length ahead of H's closest point of the goal point [m]; must be one of ``params.preview``
             (the goal is that preview point, module docstring). Default 0.5 (or the preview distance nearest it).
+        origin: the point that pursues the goal: ``"axle"`` (default; the axle midpoint A, Coulter's rear-axle
+            form: the arc from A tangent to the heading through the goal) or ``"H"`` (the arc from H, ``l3``
+            ahead of A on the heading: the goal in H's frame, ``x_L - l3``, ``y_L``; the turn rate
+            ``omega = v kappa_H`` with ``kappa_H = 2 y_L / ((x_L - l3)^2 + y_L^2)``).
+        max_turn_rate: the turn rate is clipped to ``[-max_turn_rate, max_turn_rate]`` [rad/s] (> 0), as a
+            published controller's rate limit; None (default): no limit but the wheels' (:func:`limit_wheel_rates`).
+        lookahead_time: speed-scaled look-ahead [s] (> 0): per robot the goal is the preview point nearest to
+            ``lookahead_time * v_ref`` ahead (the preview distances are the only goal points the observation
+            holds); None (default): the fixed ``lookahead``.
 
-    ``predict`` is stateless: it returns ``state`` unchanged.
+    ``predict`` is stateless: it returns ``state`` unchanged. The benchmark's ``pure_pursuit`` is the default form
+    (``origin="axle"``, fixed look-ahead 0.5 m, no turn-rate limit; docs/benchmark.md).
     """
 
-    def __init__(self, params: TrackingParams, lookahead: float | None = None) -> None:
+    def __init__(
+        self,
+        params: TrackingParams,
+        lookahead: float | None = None,
+        *,
+        origin: str = "axle",
+        max_turn_rate: float | None = None,
+        lookahead_time: float | None = None,
+    ) -> None:
         o = "PurePursuitPolicy"
         self._dec = _Decoder(o, params)
         self.params = params
@@ -483,9 +501,23 @@ class PurePursuitPolicy:
         la = check_range(o, "lookahead", lookahead, 0.0, 5.0, low_open=True)
         if la not in prev:
             raise ValueError(f"{o}.lookahead must be one of the preview distances {list(prev)} m, got {lookahead!r}")
+        if origin not in ("axle", "H"):
+            raise ValueError(f"{o}.origin must be 'axle' or 'H', got {origin!r}")
+        self.origin = origin
+        self.max_turn_rate = (
+            None if max_turn_rate is None else check_range(o, "max_turn_rate", max_turn_rate, 0.0, 1e3, low_open=True)
+        )
+        self.lookahead_time = (
+            None
+            if lookahead_time is None
+            else check_range(o, "lookahead_time", lookahead_time, 0.0, 60.0, low_open=True)
+        )
         self.lookahead = la
         self._x = f"preview_x_{la:g}m"
         self._y = f"preview_y_{la:g}m"
+        self._prev = np.asarray(prev, dtype=np.float64)
+        self._xs = [f"preview_x_{d:g}m" for d in prev]
+        self._ys = [f"preview_y_{d:g}m" for d in prev]
 
     @property
     def name(self) -> str:
@@ -495,10 +527,24 @@ class PurePursuitPolicy:
     def command(self, obs: Array) -> tuple[Array, Array]:
         """``(v [m/s], omega [rad/s])`` for observations ``(N, d)`` (:func:`pure_pursuit_command`)."""
         p = self.params
-        x = self._dec(obs, self._x) * p.preview_scale
-        y = self._dec(obs, self._y) * p.preview_scale
         v_ref = self._dec(obs, "reference_speed") * p.robot.max_speed
-        return pure_pursuit_command(x, y, v_ref)
+        if self.lookahead_time is None:
+            x = self._dec(obs, self._x) * p.preview_scale
+            y = self._dec(obs, self._y) * p.preview_scale
+        else:  # per row the preview point nearest to lookahead_time * v_ref ahead
+            want = self.lookahead_time * v_ref
+            pick = np.argmin(np.abs(self._prev[None, :] - want[:, None]), axis=1)
+            xs = np.stack([self._dec(obs, n) for n in self._xs], axis=1)
+            ys = np.stack([self._dec(obs, n) for n in self._ys], axis=1)
+            rows = np.arange(len(pick))
+            x = xs[rows, pick] * p.preview_scale
+            y = ys[rows, pick] * p.preview_scale
+        if self.origin == "H":
+            x = x - p.robot.l3
+        v, om = pure_pursuit_command(x, y, v_ref)
+        if self.max_turn_rate is not None:
+            om = np.clip(om, -self.max_turn_rate, self.max_turn_rate)
+        return v, om
 
     def predict(
         self,
@@ -514,4 +560,9 @@ class PurePursuitPolicy:
         return (act[0] if single else act), state
 
     def __repr__(self) -> str:
-        return f"PurePursuitPolicy(lookahead={self.lookahead:g})"
+        extra = "" if self.origin == "axle" else f", origin={self.origin!r}"
+        if self.max_turn_rate is not None:
+            extra += f", max_turn_rate={self.max_turn_rate:g}"
+        if self.lookahead_time is not None:
+            extra += f", lookahead_time={self.lookahead_time:g}"
+        return f"PurePursuitPolicy(lookahead={self.lookahead:g}{extra})"

@@ -215,6 +215,38 @@ class Scenario:
         }
 
 
+def user_scenarios(
+    files: Sequence[str], speed: float, feasibility: str = "off", goal_tolerance: float = 0.0, duration: float = 60.0
+) -> tuple[Scenario, ...]:
+    """One ``AmigoBot-v1`` scenario per points file (``path=file``: :func:`amigo_gym.paths.from_file`), named after
+    the file, at ``speed`` [m/s], ``feasibility`` and ``goal_tolerance`` [m] (``gym.make``'s), ``duration`` [s].
+
+    Raises:
+        FileNotFoundError, ValueError: a missing file, a bad value (one line).
+    """
+    from amigo_gym.paths.points import cached_file_path, is_points_file
+
+    out = []
+    for f in files:
+        if not is_points_file(str(f)):
+            raise ValueError(f"--path {f}: a points file must end in .csv or .json")
+        if not Path(f).is_file():
+            raise FileNotFoundError(f"--path {f}: no such points file")
+        try:
+            cached_file_path(f)  # read and fitted now (kept for gym.make): a bad file is the user's error, exit 2
+        except ValueError as exc:
+            raise ValueError(f"--path {exc}") from None
+    if not (0.0 < duration <= 3600.0):
+        raise ValueError(f"--duration must be in (0, 3600] s, got {duration}")
+    names = [Path(f).stem for f in files]
+    for f, stem in zip(files, names, strict=True):
+        name = f"path:{stem}" if names.count(stem) == 1 else f"path:{f}"
+        kw: dict[str, Any] = {"path": str(f), "speed": speed, "feasibility": feasibility}
+        kw["goal_tolerance"] = goal_tolerance
+        out.append(_v1(name, f"points of {f} at {speed:g} m/s", True, duration=duration, **kw))
+    return tuple(out)
+
+
 def _v0(name: str, desc: str, held_out: bool = False, max_steps: int = 400, **kw: Any) -> Scenario:
     return Scenario(name, "AmigoBot-v0", kw, max_steps=max_steps, held_out=held_out, description=desc)
 
@@ -622,10 +654,14 @@ def run_benchmark(
     t0 = time.perf_counter()
     envs: dict[str, Any] = {}
     status: dict[str, str] = {}
+    feasibility: dict[str, Any] = {}  # AmigoBot-v1's report of a fixed path (where it exceeds the robot's limits)
     for sc in scenarios:
         try:
             envs[sc.name] = make_env(sc)
             status[sc.name] = "ok"
+            report = getattr(envs[sc.name].unwrapped, "feasibility", None)
+            if report is not None:
+                feasibility[sc.name] = report
         except Unavailable as exc:
             status[sc.name] = f"unavailable: {exc}"
     total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
@@ -674,6 +710,7 @@ def run_benchmark(
         "agents": [a.describe() for a in agents],
         "results": results,
         "unavailable": unavailable,
+        "feasibility": feasibility,
     }
     held = {sc.name: sc.held_out for sc in scenarios}
     doc["aggregates"], doc["performance_profiles"] = aggregate(
@@ -820,6 +857,16 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
                 vals = [v for v in vals if v is not None]
                 cells.append(fmt(float(np.mean(vals))) if vals else "–")
             lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+    infeasible = {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}
+    if infeasible:
+        lines += ["", "## Paths beyond the robot's limits (feasibility='warn' or 'off')", ""]
+        for name, r in infeasible.items():
+            where = "; ".join(
+                f"{q.replace('_', ' ')} at s = " + ", ".join(f"[{a:.2f}, {b:.2f}]" for a, b in ivs) + " m"
+                for q, ivs in r["exceeded"].items()
+                if ivs
+            )
+            lines.append(f"- {name}: {r['message']}; exceeded: {where}")
     if doc["unavailable"]:
         lines += ["", "## Unavailable", ""]
         lines += [f"- {line}" for line in unavailable_lines(doc["unavailable"])]
@@ -1018,6 +1065,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         metavar="FILE",
         help="run nothing: print the README's v1 table from this benchmark.json [file] (default: none)",
     )
+    p.add_argument(
+        "--path",
+        nargs="+",
+        default=None,
+        metavar="FILE",
+        help="run on paths of your own instead of the suite: points files (.csv/.json, columns x, y [m]; "
+        "amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files]",
+    )
+    p.add_argument("--speed", type=float, default=0.2, help="reference speed on --path [m/s]")
+    p.add_argument(
+        "--feasibility",
+        choices=("error", "warn", "off"),
+        default="off",
+        help="--path beyond the robot's limits: refuse, warn or run (default off: run; the report lists them)",
+    )
+    p.add_argument("--goal-tolerance", type=float, default=0.0, help="open --path: success within this of the end [m]")
+    p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s]")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
@@ -1035,6 +1099,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
         scenarios = quick_suite(suite) if a.quick else suite
+        if a.path:
+            if a.scenarios:
+                raise ValueError("--path and --scenarios exclude each other")
+            scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
+            if a.quick:  # every path, shorter
+                scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
             bad = [n for n in a.scenarios if n not in known]

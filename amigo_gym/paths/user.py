@@ -1,0 +1,258 @@
+r"""Path objects of your own: the duck-typed protocol ``AmigoBot-v1`` checks, and the wrapper that runs them.
+
+The protocol (the fewest members; :func:`check_path` checks them at ``gym.make``):
+
+* ``length``: arc length of one traversal [m], a finite real number > 0 (an attribute or a property);
+* ``closed``: ``True`` if the path repeats with period ``length`` (laps), else ``False``;
+* ``pose_columns(s)``: for arc lengths ``s`` [m] (a float, or a float64 array of any shape), an object with
+  attributes ``x``, ``y`` [m], ``theta`` (tangent angle [rad], continuous in ``s``) and ``curvature`` [1/m,
+  positive turning left], each of the shape of ``s`` (floats for a float). Beyond the ends of an open path it
+  is called with ``s < 0`` or ``s > length`` too (the preview looks ahead): continue along the end tangent.
+
+Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning an
+:class:`~amigo_gym.paths.PathPoint` (the closest point, keeping progress; see
+:meth:`~amigo_gym.paths.ClothoidPath.locate`). Without it, :class:`UserPath` finds the closest point itself from
+``pose_columns``: samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then the same Newton
+iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.refine`). The
+renderer and the feasibility analysis use ``length``, ``closed`` and ``pose_columns`` only.
+
+:func:`check_path` refuses, in one line naming the path and the member, a missing member, a ``length`` of
+0, -5, NaN or ``"10"``, a ``closed`` that is not a bool, a ``pose_columns`` (or ``locate``) whose fields are
+missing, of the wrong shape or not finite on a probe of the path. :class:`UserPath` then checks every result
+while the env runs: NaN or infinity from the path raises ``ValueError`` at the step that produced it, naming the
+path, the member, the field and the arc length or point.
+
+A :class:`~amigo_gym.paths.ClothoidPath` (every built-in family, :func:`~amigo_gym.paths.from_points`) is
+trusted as it is and runs the compiled step; a :class:`UserPath` runs the reference step.
+
+This module may import numpy, :mod:`amigo_gym.params` and the sibling path modules.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.kinematics import Real
+from amigo_gym.params import show_value
+from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, check_real, refine, window_bounds
+
+__all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]
+
+Array = NDArray[np.float64]
+
+#: the members a path object must have (``locate`` is optional)
+REQUIRED_MEMBERS: tuple[str, ...] = ("length", "closed", "pose_columns")
+#: the fields ``pose_columns`` must return
+POSE_FIELDS: tuple[str, ...] = ("x", "y", "theta", "curvature")
+#: largest spacing of the samples of the closest-point search without ``locate`` [m]
+SAMPLE_SPACING = 0.02
+#: most samples of that search
+MAX_SAMPLES = 200_000
+#: largest accepted ``length`` [m]
+MAX_LENGTH = 1e7
+
+
+def path_name(obj: object) -> str:
+    """How messages name a path object: its ``name`` attribute if it is a string, else its class name."""
+    name = getattr(obj, "name", None)
+    return name if isinstance(name, str) and name else type(obj).__name__
+
+
+def _finite_column(value: Any, shape: tuple[int, ...], where: str) -> Array:
+    """``value`` as a float64 array of ``shape`` (a scalar broadcasts), all finite; else one-line ValueError."""
+    if isinstance(value, str | bytes | bool | np.bool_):
+        raise ValueError(f"{where} must be real numbers, got {show_value(value)}")
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where} must be real numbers, got {show_value(value)}") from None
+    if a.shape != shape:
+        if a.ndim == 0:
+            a = np.broadcast_to(a, shape)
+        else:
+            raise ValueError(f"{where} must have the shape of s, {shape}, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        flat = np.asarray(a).reshape(-1)
+        bad = float(flat[~np.isfinite(flat)][0])
+        raise ValueError(f"{where} must be finite, got {bad!r}")
+    return a
+
+
+class UserPath:
+    """A checked path object of your own (module docstring), with the full interface ``AmigoBot-v1`` uses.
+
+    ``pose_columns`` completes the user's ``x, y, theta, curvature`` to a :class:`~amigo_gym.paths.PathPose`
+    (``cos_theta``, ``sin_theta`` from ``theta``; ``curvature_rate`` from the user's result if it has one, else 0)
+    and ``locate`` is the user's or the sampled search; every result is checked for NaN and infinities.
+
+    Attributes:
+        path: the user's object. name: :func:`path_name` of it. length [m], closed: its values, checked.
+    """
+
+    def __init__(self, path: Any, owner: str = "AmigoBot-v1") -> None:
+        self.path = path
+        self.name = path_name(path)
+        self._owner = owner
+        who = f"{owner}: path {self.name}"
+        missing = [m for m in REQUIRED_MEMBERS if not hasattr(path, m)]
+        if missing:
+            raise ValueError(
+                f"{who} has no {', '.join(repr(m) for m in missing)}; a path must be a family name or an object "
+                "with length [m], closed and pose_columns(s) (amigo_gym.paths.UserPath)"
+            )
+        length = path.length
+        if callable(length):
+            raise ValueError(f"{who}: length must be a number [m] (an attribute or property), got a method")
+        ok = isinstance(length, int | float | np.integer | np.floating) and not isinstance(length, bool | np.bool_)
+        if not (ok and 0.0 < float(length) <= MAX_LENGTH):
+            raise ValueError(
+                f"{who}: length must be a finite number in (0, {MAX_LENGTH:g}] m, got {show_value(length)}"
+            )
+        self.length: float = float(length)
+        closed = path.closed
+        if not isinstance(closed, bool | np.bool_):
+            raise ValueError(f"{who}: closed must be True or False, got {show_value(closed)}")
+        self.closed: bool = bool(closed)
+        if not callable(path.pose_columns):
+            raise ValueError(
+                f"{who}: pose_columns must be a method pose_columns(s), got {show_value(path.pose_columns)}"
+            )
+        self._user_locate = getattr(path, "locate", None)
+        if self._user_locate is not None and not callable(self._user_locate):
+            raise ValueError(f"{who}: locate must be a method (or absent), got {show_value(self._user_locate)}")
+        # probes: pose_columns on a column and on a float, then the closest-point search on points of the path
+        probe = np.linspace(0.0, self.length, 7)
+        pose = self.pose_columns(probe)
+        self.pose_columns(0.0)
+        n = min(MAX_SAMPLES, max(8, math.ceil(self.length / SAMPLE_SPACING)))
+        self._spacing = self.length / n
+        js = np.arange(n + (0 if self.closed else 1), dtype=np.float64)
+        samples = self.pose_columns(js * self._spacing)
+        self._sx = np.asarray(samples.x, dtype=np.float64)
+        self._sy = np.asarray(samples.y, dtype=np.float64)
+        loc = self.locate(np.asarray(pose.x), np.asarray(pose.y), probe, 0.5, 0.5)
+        _finite_column(loc.progress, probe.shape, f"{who}: locate(...).progress")
+        self.locate(float(np.asarray(pose.x)[0]), float(np.asarray(pose.y)[0]), 0.0, 0.5, 0.5)
+
+    # --- checked evaluation ----------------------------------------------------------------------------
+
+    def pose_columns(self, s: Real) -> PathPose:
+        """The user's ``pose_columns(s)``, checked and completed to a :class:`~amigo_gym.paths.PathPose`."""
+        scalar = not isinstance(s, np.ndarray)
+        shape = () if scalar else np.shape(s)
+        got = self.path.pose_columns(s)
+        where = f"{self._owner}: path {self.name}: pose_columns(s)"
+        cols: dict[str, Any] = {}
+        for f in POSE_FIELDS:
+            if not hasattr(got, f):
+                raise ValueError(f"{where} must return an object with {', '.join(POSE_FIELDS)}; it has no {f!r}")
+            try:
+                cols[f] = _finite_column(getattr(got, f), shape, f"{where}.{f}")
+            except ValueError as exc:
+                if scalar:
+                    raise ValueError(f"{exc} (at s = {float(s)!r} m)") from None
+                raise
+        rate = getattr(got, "curvature_rate", None)
+        cr = np.zeros(shape) if rate is None else _finite_column(rate, shape, f"{where}.curvature_rate")
+        th = cols["theta"]
+        c, sn = np.cos(th), np.sin(th)
+        out = PathPose(cols["x"], cols["y"], th, cols["curvature"], cr, c, sn)
+        if scalar:
+            return PathPose(*(float(v) for v in out))
+        return out
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> PathPoint:
+        """The closest path point to ``(x, y)`` [m] (the user's ``locate`` if it has one, else the sampled search),
+        checked (module docstring)."""
+        if self._user_locate is not None:
+            got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
+            return self._checked_point(got, x, y)
+        return self._locate(x, y, s_prev, max_advance, max_retreat)
+
+    def _checked_point(self, got: Any, x: Real, y: Real) -> PathPoint:
+        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray))
+        shape = () if scalar else np.broadcast_shapes(np.shape(x), np.shape(y))
+        where = f"{self._owner}: path {self.name}: locate(x, y, ...)"
+        vals: list[Any] = []
+        for f in PathPoint._fields:
+            if not hasattr(got, f):
+                raise ValueError(f"{where} must return an amigo_gym.paths.PathPoint; it has no {f!r}")
+            try:
+                v = _finite_column(getattr(got, f), shape, f"{where}.{f}")
+            except ValueError as exc:
+                if scalar:
+                    raise ValueError(f"{exc} (at x = {float(x)!r}, y = {float(y)!r} m)") from None
+                raise
+            vals.append(v)
+        return _point(vals, scalar)
+
+    def _locate(
+        self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
+    ) -> PathPoint:
+        """:meth:`~amigo_gym.paths.ClothoidPath.locate`'s coarse search and Newton iteration on the samples and
+        ``pose_columns`` of this path (arrays throughout; floats back for float arguments)."""
+        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
+        h = self._spacing
+        length = self.length
+        n_samp = len(self._sx)
+        xa = np.asarray(x, dtype=np.float64)
+        ya = np.asarray(y, dtype=np.float64)
+        if s_prev is None:
+            d2 = (self._sx - xa[..., None]) ** 2 + (self._sy - ya[..., None]) ** 2
+            s_start = np.argmin(d2, axis=-1) * h
+            lo: Real = 0.0 if not self.closed else -math.inf
+            hi: Real = length if not self.closed else math.inf
+        else:
+            ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+            behind = (
+                ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+            )
+            sp = np.asarray(s_prev, dtype=np.float64)
+            m = math.ceil((ahead + behind) / h) + 2
+            jj = np.floor((sp - behind) / h)[..., None] + np.arange(m, dtype=np.float64)
+            if self.closed:
+                idx = np.mod(jj, n_samp).astype(np.int64)
+            else:
+                jj = np.clip(jj, 0, n_samp - 1)
+                idx = jj.astype(np.int64)
+            xb, yb = np.broadcast_arrays(xa, ya)
+            d2 = (self._sx[idx] - xb[..., None]) ** 2 + (self._sy[idx] - yb[..., None]) ** 2
+            k = np.argmin(d2, axis=-1)
+            s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h
+            lo_a, hi_a = window_bounds(sp, ahead, behind, length, self.closed)
+            s_start = np.clip(s_start, lo_a, hi_a)
+            lo, hi = lo_a, hi_a
+        s0 = np.asarray(s_start, dtype=np.float64)
+        shape = np.broadcast_shapes(xa.shape, ya.shape, s0.shape)
+        xf = np.broadcast_to(xa, shape).reshape(-1)
+        yf = np.broadcast_to(ya, shape).reshape(-1)
+        sf = np.broadcast_to(s0, shape).reshape(-1)
+        lof = np.broadcast_to(np.asarray(lo, dtype=np.float64), shape).reshape(-1)
+        hif = np.broadcast_to(np.asarray(hi, dtype=np.float64), shape).reshape(-1)
+        got = refine(self.pose_columns, xf, yf, sf, lof, hif, h, length, self.closed, False)
+        return _point([np.asarray(v).reshape(shape) for v in got], scalar)
+
+
+def _point(vals: list[Any], scalar: bool) -> PathPoint:
+    """A :class:`~amigo_gym.paths.PathPoint` of the columns ``vals`` (floats and an int status for a point)."""
+    if scalar:
+        return PathPoint._make([*(float(v) for v in vals[:-1]), int(vals[-1])])
+    return PathPoint._make([*vals[:-1], np.asarray(vals[-1]).astype(np.int64)])
+
+
+def check_path(path: Any, owner: str = "AmigoBot-v1") -> Any:
+    """A path object checked against the protocol (module docstring): a :class:`~amigo_gym.paths.ClothoidPath`
+    or a :class:`UserPath` as it is, anything else wrapped in a :class:`UserPath` (which checks it).
+
+    Raises:
+        ValueError: one line naming the path, the member and the value.
+    """
+    if type(path) is ClothoidPath or isinstance(path, UserPath):
+        return path
+    return UserPath(path, owner)

@@ -1,0 +1,157 @@
+"""Paths from data (amigo_gym.paths.points): fits against known curves, files, bad input, the env on a fitted path."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import amigo_gym  # noqa: F401  (registers the environments)
+from amigo_gym.paths import ClothoidPath, ClothoidSegment, fit_points, from_file, from_points, make_family_path
+
+
+def test_circle_points_give_the_circles_length_and_curvature() -> None:
+    """200 points on a circle of radius 1.5 m (closed form: length 3 pi, curvature 2/3)."""
+    r = 1.5
+    u = np.linspace(0.0, 2.0 * math.pi, 200, endpoint=False)
+    pts = np.c_[r * np.cos(u), r * np.sin(u)]
+    fit = fit_points(pts, closed=True)
+    path = fit.path
+    assert type(path) is ClothoidPath and path.closed
+    assert abs(path.length - 2.0 * math.pi * r) < 1e-6
+    s = np.linspace(0.0, path.length, 2000, endpoint=False)
+    assert np.max(np.abs(path.curvature(s) - 1.0 / r)) < 1e-4 / r
+    # the stated bound: every point within max_error <= tolerance of the path (closest point, independent search)
+    assert fit.max_error <= 1e-3
+    loc = path.locate(pts[:, 0], pts[:, 1])
+    assert np.max(loc.distance) <= fit.max_error + 1e-12
+    # every fitted point lies on the true circle
+    q = path.point(s)
+    assert np.max(np.abs(np.hypot(q[:, 0], q[:, 1]) - r)) < 1e-6
+
+
+def test_clothoid_points_give_the_clothoids_curvature() -> None:
+    """61 points on an Euler spiral (curvature 0.2 -> 1.1 1/m over 3 m): curvature, length and shape."""
+    ref = ClothoidPath((ClothoidSegment.transition(3.0, 0.2, 1.1),), start=(0.5, -0.2), start_angle=0.3)
+    pts = ref.point(np.linspace(0.0, 3.0, 61))
+    fit = fit_points(pts)
+    assert abs(fit.path.length - 3.0) < 1e-7
+    s = np.linspace(0.0, 2.999, 300)
+    # the spline's curvature: to 2.5e-3 at the ends (not-a-knot), 3e-4 inside
+    assert np.max(np.abs(fit.path.curvature(s) - ref.curvature(s))) < 2.5e-3
+    assert np.max(np.abs(fit.path.curvature(s[30:-30]) - ref.curvature(s[30:-30]))) < 3e-4
+    assert np.max(np.abs(fit.path.point(s) - ref.point(s))) < 1e-4
+    assert np.allclose(fit.point_s, np.linspace(0.0, 3.0, 61), atol=1e-7)
+
+
+def test_a_figure8_closes_and_keeps_its_shape() -> None:
+    """A closed path whose total turn is 0 (the figure-8 family), sampled every 5 cm."""
+    fig = make_family_path("figure8", None)
+    pts = fig.point(np.arange(0.0, fig.length, 0.05))
+    fit = fit_points(pts, closed=True)
+    assert fit.path.closed and abs(fit.path.total_turn) < 1e-12
+    assert abs(fit.path.length - fig.length) < 1e-5
+    s = np.linspace(0.0, fig.length, 1000, endpoint=False)
+    assert np.max(np.abs(fit.path.point(s) - fig.point(s))) < 1e-4
+
+
+def test_tolerance_is_met_or_refused() -> None:
+    u = np.linspace(0.0, 1.0, 12)
+    pts = np.c_[4.0 * u, np.sin(3.0 * u)]
+    fit = fit_points(pts, tolerance=1e-6)
+    assert fit.max_error <= 1e-6
+    with pytest.raises(ValueError, match="above tolerance"):
+        fit_points(pts, tolerance=1e-9, step=10.0)
+
+
+@pytest.mark.parametrize(
+    ("points", "closed", "message"),
+    [
+        ([[0, 0], [1, float("nan")], [2, 0]], False, r"points\[1\] must be finite"),
+        ([[0, 0, 0], [1, 1, 1]], False, r"shape \(n, 2\)"),
+        ([0.0, 1.0, 2.0], False, r"shape \(n, 2\)"),
+        ([[0, 0]], False, "at least 2"),
+        ([[0, 0], [1, 0], [0, 0]], True, "at least 3"),
+        ([[0, 0], [1, 0], [1, 0], [2, 1]], False, r"points\[2\] repeats points\[1\]"),
+        ([["a", "b"], ["c", "d"]], False, "real numbers"),
+        ("points.csv", False, "from_file"),
+    ],
+)
+def test_bad_points_are_refused_in_one_line(points: object, closed: bool, message: str) -> None:
+    with pytest.raises(ValueError, match=message) as err:
+        from_points(points, closed)
+    assert "\n" not in str(err.value)
+
+
+def test_csv_and_json_files(tmp_path: Path) -> None:
+    u = np.linspace(0.0, 2.0 * math.pi, 40, endpoint=False)
+    pts = np.c_[np.cos(u), np.sin(u)]
+    csv_file = tmp_path / "pts.csv"
+    csv_file.write_text("# a comment\nt,x,y\n" + "".join(f"{i},{x!r},{y!r}\n" for i, (x, y) in enumerate(pts.tolist())))
+    json_file = tmp_path / "pts.json"
+    json_file.write_text(json.dumps({"x": pts[:, 0].tolist(), "y": pts[:, 1].tolist(), "closed": True}))
+    a = from_file(csv_file, closed=True)
+    b = from_file(json_file)  # closed from the file
+    c = from_points(pts, closed=True)
+    assert b.closed and a.closed
+    assert a.segments == c.segments == b.segments
+    rows = tmp_path / "rows.json"
+    rows.write_text(json.dumps([{"x": x, "y": y} for x, y in pts.tolist()]))
+    assert not from_file(rows).closed
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("a.csv", "x,z\n0,0\n1,1\n", r"missing column\(s\) \['y'\]"),
+        ("b.csv", "x,y\n0,0\n1,abc\n", "row 3, column 'y' must be a number"),
+        ("c.csv", "x,y\n0,0\n1,nan\n", "row 3, column 'y' must be finite"),
+        ("d.csv", "", "empty"),
+        ("e.json", '{"x": [0, 1]}', r"missing key\(s\) \['y'\]"),
+        ("f.json", '{"x": [0, 1], "y": [0, "1"]}', "point 1, 'y' must be a finite number"),
+        ("g.json", "{", "not valid JSON"),
+        ("h.csv", "x,y\n0,0\n", "at least 2"),
+    ],
+)
+def test_bad_files_are_refused_naming_the_file(tmp_path: Path, name: str, text: str, message: str) -> None:
+    f = tmp_path / name
+    f.write_text(text)
+    with pytest.raises(ValueError, match=message) as err:
+        from_file(f)
+    assert name in str(err.value) and "\n" not in str(err.value)
+    with pytest.raises(FileNotFoundError, match="no such points file"):
+        from_file(tmp_path / "missing.csv")
+
+
+def test_env_on_fitted_circle_matches_the_builtin_circle() -> None:
+    """A single env on from_points(points of the circle family) steps like the built-in circle family."""
+    fam = make_family_path("circle", None, radius=1.0, direction=1)
+    pts = fam.point(np.arange(0.0, fam.length, 0.05))
+    mine = from_points(pts, closed=True)
+    kw = {"speed": 0.2, "max_episode_steps": 200, "randomize": "none"}
+    e1 = gym.make("AmigoBot-v1", path=mine, **kw)
+    e2 = gym.make("AmigoBot-v1", path="circle", radius=1.0, **kw)
+    o1, _ = e1.reset(seed=3)
+    o2, _ = e2.reset(seed=3)
+    assert np.allclose(o1, o2, atol=1e-4)
+    from amigo_gym.policies import AnalyticTrackingPolicy
+
+    policy = AnalyticTrackingPolicy(e2.unwrapped.params)  # type: ignore[attr-defined]
+    state, start = None, np.array([True])
+    for _ in range(150):
+        act, state = policy.predict(o2[None, :], state, start)  # the built-in env's action drives both
+        start = np.array([False])
+        a = act[0]
+        o1, r1, t1, _, i1 = e1.step(a)
+        o2, r2, t2, _, i2 = e2.step(a)
+        assert np.allclose(i1["pose"], i2["pose"], atol=1e-4)  # the same robot; starts differ by the tangent fit
+        assert abs(i1["cross_track_error"] - i2["cross_track_error"]) < 1e-5
+        assert abs(r1 - r2) < 1e-3 and t1 == t2
+        assert np.allclose(o1, o2, atol=2e-3)
+        assert not t1
+    if e1.unwrapped._kernel is not None:  # type: ignore[attr-defined]
+        assert e1.unwrapped._in_kernel  # type: ignore[attr-defined]  # a fitted path runs the compiled step
