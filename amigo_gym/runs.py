@@ -43,6 +43,7 @@ import os
 import shutil
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
@@ -93,22 +94,34 @@ def warn(message: str) -> None:
 class RunLock:
     """Exclusive lock on a run folder for the life of the process's use of it (module docstring).
 
-    Use as a context manager; the folder is created if missing.
+    Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
+    ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
+    fail at once).
 
     Raises:
         RunLockedError: another process holds it (one line with its pid).
     """
 
-    def __init__(self, folder: str | os.PathLike[str]) -> None:
+    def __init__(self, folder: str | os.PathLike[str], name: str = LOCK_NAME, wait: float = 0.0) -> None:
         self.folder = Path(folder)
+        self.name = name
+        self.wait = float(wait)
         self._fd: int | None = None
 
     def acquire(self) -> RunLock:
         self.folder.mkdir(parents=True, exist_ok=True)
-        path = self.folder / LOCK_NAME
+        path = self.folder / self.name
         fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
+        deadline = time.monotonic() + self.wait
         try:
-            _lock_fd(fd)
+            while True:
+                try:
+                    _lock_fd(fd)
+                    break
+                except OSError:
+                    if time.monotonic() >= deadline:
+                        raise
+                    time.sleep(0.05)
         except OSError:
             try:
                 owner = os.read(fd, 64).decode(errors="replace").strip() or "?"

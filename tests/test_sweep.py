@@ -48,6 +48,10 @@ def _common(tmp: Path, *extra: str) -> list[str]:
         str(tmp / "out"),
         "--n-startup-trials",
         "1",
+        "--val-episodes",
+        "1",
+        "--val-max-steps",
+        "20",
         *extra,
     ]
 
