@@ -392,6 +392,25 @@ def test_no_usable_checkpoint_and_bad_config_are_one_line_errors(finished_sac: P
     assert "\n" not in str(exc.value)
 
 
+
+def test_a_lost_config_json_does_not_make_a_run_unresumable(
+    finished_sac: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    shutil.copytree(finished_sac, out)
+    (out / "config.json").unlink()
+    rec = resume(out, total=200)  # 40 more steps from the intact checkpoint of step 160
+    assert rec["resumed_from"] == 160 and rec["timesteps"] == 200
+    assert "config.json is missing; resuming from the checkpoints" in capsys.readouterr().err
+    cfg = json.loads((out / "config.json").read_text())
+    assert cfg["recovered"] is True and cfg["settings"]["algo"] == "sac" and cfg["resumes"][-1]["from_step"] == 160
+    check_finished(out, "sac", 200, [80, 160])  # evaluations every 80 steps
+    # without checkpoints there is nothing to resume: the one-line error as before
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(FileNotFoundError, match="no checkpoint in"):
+        resume(empty)
+
 # --------------------------------------------------------------------------- result files
 def test_evaluate_writes_null_not_nan(tmp_path: Path) -> None:
     from amigo_gym.training.evaluate import EvalProtocol, markdown_table, write_outputs
