@@ -484,7 +484,7 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
         study = optuna.create_study(direction="minimize", **kw)
         created = True
     except optuna.exceptions.DuplicatedStudyError:
-        study = optuna.load_study(**kw)
+        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)  # logs "Using an existing study"
         created = False
     if created:
         for key, value in (
