@@ -56,9 +56,11 @@ __all__ = [
     "LOCK_NAME",
     "POINTER",
     "Checkpoint",
+    "TRUST_ENV",
     "CorruptFileError",
     "RunLock",
     "RunLockedError",
+    "check_pickle",
     "clean_temporaries",
     "has_run_files",
     "load_checkpoint",
@@ -66,6 +68,7 @@ __all__ = [
     "restore_snapshot",
     "save_checkpoint",
     "sha256_file",
+    "trust_unverified",
     "verify_sha256",
 ]
 
@@ -211,6 +214,41 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
             f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
             "(changed, truncated or replaced)"
         )
+
+
+#: environment variable that, set to ``1``, trusts files that have no recorded sha256 (no warning)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
+_trust_unverified = False
+_warned: set[str] = set()
+
+
+def trust_unverified(trust: bool = True) -> None:
+    """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
+    global _trust_unverified
+    _trust_unverified = bool(trust)
+
+
+def check_pickle(path: Path, expected: str | None, source: str | None) -> None:
+    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled.
+
+    With a recorded sha256 (``expected``, from the manifest ``source``): :func:`verify_sha256` (a mismatch or a
+    missing file raises :class:`CorruptFileError`). Without one: a warning naming the file, once per file and
+    process, that it is loaded unverified; none when the user trusts unverified files (:func:`trust_unverified`,
+    or the environment variable ``AMIGO_GYM_TRUST_UNVERIFIED=1``).
+    """
+    if expected is not None:
+        verify_sha256(path, expected, str(source))
+        return
+    if _trust_unverified or os.environ.get(TRUST_ENV) == "1":
+        return
+    key = str(Path(path).resolve())
+    if key in _warned:
+        return
+    _warned.add(key)
+    warn(
+        f"{path}: no recorded sha256 to check it against; it is a pickle, and loading it runs code: load only "
+        f"files you trust (--trust-unverified or {TRUST_ENV}=1 silences this)"
+    )
 
 
 def read_json(path: Path, what: str = "") -> Any:

@@ -408,8 +408,15 @@ class AgentSpec:
         if self._model is None:
             from stable_baselines3 import PPO, SAC, TD3
 
+            from amigo_gym.runs import check_pickle, corrupt_errors
+
+            # checked before it is unpickled: the manifest's sha256, else a warning naming the file (once)
+            digest = (self.manifest or {}).get("sha256")
+            path = Path(self.path)
+            check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
             cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
-            self._model = cls.load(self.path, device="cpu")
+            with corrupt_errors(path, f"{str(self.algo).upper()} model"):
+                self._model = cls.load(self.path, device="cpu")
         want = getattr(self._model.observation_space, "shape", None)
         got = getattr(env.observation_space, "shape", None)
         if want != got:
@@ -1012,7 +1019,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-plots", action="store_true", help="skip the plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--list", action="store_true", help="print the suite and exit")
+    p.add_argument(
+        "--trust-unverified",
+        action="store_true",
+        help="load model zips without a recorded sha256 without the warning (they are pickles: they run code)",
+    )
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+    if a.trust_unverified:
+        from amigo_gym.runs import trust_unverified
+
+        trust_unverified()
 
     def run() -> int:
         suite = SUITES[a.suite]

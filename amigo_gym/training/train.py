@@ -27,7 +27,8 @@ a killed run never leaves a half-written file):
   policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps; each entry with the steps, the wall
   time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
-  last evaluation, versions, command, the model's sha256);
+  last evaluation, versions, command, the model's sha256, and under ``files`` the sha256 of every file a
+  loader reads beside it: ``model.zip``, ``best_model.zip`` and ``vecnormalize.pkl``);
 * ``run.lock``: the lock held while a process uses the folder (a second process stops with one line).
 
 Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
@@ -645,6 +646,12 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
         "sha256": runs.sha256_file(out / "model.zip"),
+    }
+    # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
+    record["files"] = {
+        name: runs.sha256_file(out / name)
+        for name in ("model.zip", "best_model.zip", VECNORMALIZE)
+        if (out / name).is_file()
     }
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
