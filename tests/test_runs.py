@@ -392,7 +392,6 @@ def test_no_usable_checkpoint_and_bad_config_are_one_line_errors(finished_sac: P
     assert "\n" not in str(exc.value)
 
 
-
 def test_a_lost_config_json_does_not_make_a_run_unresumable(
     finished_sac: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -410,6 +409,63 @@ def test_a_lost_config_json_does_not_make_a_run_unresumable(
     empty.mkdir()
     with pytest.raises(FileNotFoundError, match="no checkpoint in"):
         resume(empty)
+
+
+class _Crafted:
+    """Unpickling this creates the file ``path`` (stands for any code a crafted pickle runs)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = str(path)
+
+    def __reduce__(self) -> tuple[Any, tuple[str, str]]:
+        return (open, (self.path, "w"))
+
+
+def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded(
+    finished_sac: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import pickle
+
+    from amigo_gym.training.benchmark import AgentSpec
+    from amigo_gym.training.evaluate import find_models, load_model
+
+    out = tmp_path / "run"
+    shutil.copytree(finished_sac, out)
+    record = json.loads((out / "run.json").read_text())
+    assert set(record["files"]) == {"model.zip", "best_model.zip"}  # every pickle a loader reads beside it
+    ran = tmp_path / "code_ran"
+    (out / "vecnormalize.pkl").write_bytes(pickle.dumps(_Crafted(ran)))
+    (ref,) = find_models(out)
+    assert ref.vecnormalize == out / "vecnormalize.pkl"
+    with pytest.raises(runs.CorruptFileError, match=r"not covered by the hashes of .*run\.json"):
+        load_model(ref)
+    assert not ran.exists()
+    record["files"]["vecnormalize.pkl"] = "0" * 64  # listed, then replaced: the hash does not match
+    (out / "run.json").write_text(json.dumps(record))
+    with pytest.raises(runs.CorruptFileError, match=r"vecnormalize\.pkl: sha256 .* does not match"):
+        load_model(ref)
+    assert not ran.exists()
+    # the same for a benchmark agent whose manifest names another sha256
+    (out / "sac_s2.zip").write_bytes(pickle.dumps(_Crafted(ran)))
+    spec = AgentSpec("sac", 2, str(out / "sac_s2.zip"), "sac", {"sha256": "0" * 64})
+    with pytest.raises(runs.CorruptFileError, match=r"sac_s2\.zip: sha256 .* does not match"):
+        spec.instantiate(None)
+    assert not ran.exists()
+    # nothing recorded: loaded, with one warning naming the file (once per process), none when trusted
+    (out / "vecnormalize.pkl").unlink()
+    (out / "run.json").unlink()
+    (ref,) = find_models(out)
+    assert ref.record is None
+    capsys.readouterr()
+    load_model(ref)
+    load_model(ref)
+    err = capsys.readouterr().err
+    assert err.count("no recorded sha256") == 1 and f"{out / 'model.zip'}: no recorded sha256" in err, err
+    runs._warned.clear()
+    monkeypatch.setenv(runs.TRUST_ENV, "1")
+    load_model(ref)
+    assert "no recorded sha256" not in capsys.readouterr().err
+
 
 # --------------------------------------------------------------------------- result files
 def test_evaluate_writes_null_not_nan(tmp_path: Path) -> None:
