@@ -20,6 +20,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 optuna = pytest.importorskip("optuna")
@@ -426,3 +427,36 @@ def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.C
     assert rc == 1 and "cannot open the storage postgresql" in captured.err, captured.err
     assert SECRET not in captured.err + captured.out and "someone:***@" in captured.err
     assert not (tmp_path / "out").exists() or not _leaks(SECRET, tmp_path / "out")
+
+
+def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(tmp_path: Path) -> None:
+    from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
+    from amigo_gym.training.sweep import VALIDATION_SEED_BASE
+
+    hp = tmp_path / "tiny_v1.yml"
+    hp.write_text(TINY.replace("AmigoBot-v0", "AmigoBot-v1"))
+    args = _common(tmp_path, "--env", "AmigoBot-v1", "--n-trials", "1", "--study-name", "v1")
+    args[args.index("--hyperparams") + 1] = str(hp)
+    out = _finish(_sweep(args), timeout=300)
+    storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
+    study = optuna.load_study(study_name="v1", storage=storage)
+    (trial,) = study.get_trials()
+    assert trial.state == TrialState.COMPLETE and study.direction == optuna.study.StudyDirection.MINIMIZE
+    assert study.user_attrs["env_id"] == "AmigoBot-v1" and study.user_attrs["objective"] == "validation_h_rms_iqm_m"
+    assert study.user_attrs["env_kwargs"] == TRAINING_DISTRIBUTION["env_kwargs"]  # the default distribution
+    run_dir = Path(trial.user_attrs["run_dir"])
+    import yaml
+
+    assert list(yaml.safe_load((run_dir / "hyperparams.yml").read_text())) == ["AmigoBot-v1"]
+    config = json.loads((run_dir / "run" / "config.json").read_text())
+    assert config["env_id"] == "AmigoBot-v1" and config["env_kwargs"] == TRAINING_DISTRIBUTION["env_kwargs"]
+    val = trial.user_attrs["validation"]
+    held_in = [sc.name for sc in SUITE if sc.env_id == "AmigoBot-v1" and not sc.held_out]
+    assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEED_BASE]
+    assert all(v is not None and v > 0 for v in val["cells"].values())
+    # the value is the IQM (25 % trimmed mean) of the per-cell values
+    cells = np.sort(np.array(list(val["cells"].values())))
+    k = int(0.25 * cells.size)
+    assert trial.value == pytest.approx(float(cells[k : cells.size - k].mean()), rel=1e-12)
+    summary = json.loads((tmp_path / "out" / "v1" / "summary.json").read_text())
+    assert summary["status"] == "complete" and "complete" in out
