@@ -215,6 +215,8 @@ def _wait_running(storage: str, name: str, n: int, procs: list[subprocess.Popen[
         time.sleep(0.5)
         for p in procs:
             assert p.poll() is None, p.communicate()[0][-3000:]
+        if storage.startswith("sqlite:///") and not Path(storage.removeprefix("sqlite:///")).is_file():
+            continue  # the worker has not opened the storage yet
         try:
             trials = optuna.load_study(study_name=name, storage=storage).get_trials()
         except KeyError:  # not created yet
@@ -275,11 +277,11 @@ def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(tmp_path: Path) -
     time.sleep(1)
     os.kill(pids[1], signal.SIGTERM)  # ... the other is stopped (its cell queued again)
     out, _ = parent.communicate(timeout=120)
-    assert parent.returncode != 0, out[-3000:]  # max([130, -9]) is not 0; neither is any mix with a death
+    assert parent.returncode == 1, out[-3000:]  # not max([130, -9]): a death is an error
     assert "killed by SIGKILL" in out, out[-3000:]
     time.sleep(3)  # > grace period: the killed worker's trial is stale
-    rerun = [a for a in base if a != "2"]  # --n-jobs 1 ("--n-jobs" "2" -> "--n-jobs" "1")
-    rerun[rerun.index("--n-jobs") + 1 : rerun.index("--n-jobs") + 1] = ["1"]
+    rerun = list(base)
+    rerun[rerun.index("--n-jobs") + 1] = "1"
     _finish(_sweep(rerun))
     trials = optuna.load_study(study_name="died", storage=storage).get_trials()
     done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
@@ -409,7 +411,6 @@ def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_pat
         assert marker["trial"] == number and len(marker["retried_as"]) == 1
     summary = json.loads((tmp_path / "out" / "faults" / "summary.json").read_text())
     assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 3
-    assert all(o.count("complete") for o in outs[2:])
     # no password anywhere: files, study and trial attributes, every message
     assert not _leaks(SECRET, tmp_path / "out")
     attrs = json.dumps([study.user_attrs, study.system_attrs, [(t.user_attrs, t.system_attrs) for t in trials]])

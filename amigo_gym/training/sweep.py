@@ -995,12 +995,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"best trial {summary['best']['number']}: {summary['best']['value']:.4g} {summary['best']['params']}")
         if status == "running":
             print("the study is still running (trials RUNNING or WAITING on other workers)")
+        if failed:  # a worker that died counts before a stop
+            print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
+            return 1
         if interrupted:
             print("amigo-gym sweep: stopped; the interrupted trial is queued again: rerun to continue", file=sys.stderr)
             return INTERRUPTED
-        if failed:
-            print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
-            return 1
         if status == "incomplete":
             print(
                 "amigo-gym sweep: error: the study is incomplete (trials failed or were lost); see summary.json",
