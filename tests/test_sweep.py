@@ -413,7 +413,8 @@ def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_pat
     assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 3
     # no password anywhere: files, study and trial attributes, every message
     assert not _leaks(SECRET, tmp_path / "out")
-    attrs = json.dumps([study.user_attrs, study.system_attrs, [(t.user_attrs, t.system_attrs) for t in trials]])
+    study_system = study._storage.get_study_system_attrs(study._study_id)
+    attrs = json.dumps([study.user_attrs, study_system, [(t.user_attrs, t.system_attrs) for t in trials]])
     assert SECRET not in attrs and "postgres:***@" in attrs
     assert not [o for o in outs if SECRET in o]
 
