@@ -31,7 +31,8 @@ claim the same queued trial), or any SQLAlchemy URL such as ``postgresql://...``
 (install the ``bench`` extra for the ``psycopg2-binary`` driver). An in-memory SQLite database is private
 to its process: it is refused with ``--n-jobs`` > 1. Every worker opens the study with
 ``create_study(load_if_exists=True)``; the process that actually creates it stores the command line,
-the mode, the environment, the objective and the budget as study user attributes (each worker adds
+the mode, the environment, the objective and the budget as study user attributes, queues the grid
+(seeds mode) and then sets the attribute ``ready``, which joining workers wait for (each worker adds
 ``worker:<host>:<pid>`` with its command, and each trial records its worker, sampler seed and run
 directory).
 
@@ -157,6 +158,8 @@ OBJECTIVE = "validation_h_rms_iqm_m"
 SUMMARY = "summary.json"
 #: exit status of a worker stopped by SIGTERM / Ctrl-C
 INTERRUPTED = 130
+#: how long a worker joining a study waits for its creator to finish setting it up (attributes, grid) [s]
+READY_TIMEOUT_S = 120.0
 
 
 # --------------------------------------------------------------------------- secrets
@@ -504,7 +507,16 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
             for algo in cfg.algos:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
+        study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
     else:
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while not study.user_attrs.get("ready"):
+            if time.monotonic() > deadline:
+                raise RuntimeError(
+                    f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
+                    "stopped while queuing the grid?); delete the study and start again"
+                )
+            time.sleep(0.5)
         attrs = study.user_attrs
         for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
             theirs = attrs.get(key)
