@@ -684,6 +684,12 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
             _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
             raise
+        except optuna.TrialPruned:
+            raise
+        except Exception as exc:  # any other error is the trial's own (never "abandoned")
+            if "fail_reason" not in trial.user_attrs:
+                trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+            raise
 
     def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
         base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
