@@ -408,7 +408,8 @@ def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_pat
         t = next(x for x in trials if x.number == number)
         assert t.state == TrialState.FAIL
         marker = json.loads((Path(t.user_attrs["run_dir"]) / "ABANDONED.json").read_text())
-        assert marker["trial"] == number and len(marker["retried_as"]) == 1
+        detail = [(x.number, x.state, x.user_attrs.get("retry_of"), x.system_attrs.get("failed_trial")) for x in trials]
+        assert marker["trial"] == number and len(marker["retried_as"]) == 1, (marker, detail)
     summary = json.loads((tmp_path / "out" / "faults" / "summary.json").read_text())
     assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 3
     # no password anywhere: files, study and trial attributes, every message

@@ -582,9 +582,10 @@ class _OverBudget(Exception):
 # --------------------------------------------------------------------------- abandoned trials
 def mark_abandoned(study: Any) -> list[int]:
     """Write ``ABANDONED.json`` into the folder of every trial that ended FAIL because its worker was
-    stopped (``interrupted``) or stopped beating (killed), where the folder exists here and has none yet.
+    stopped (``interrupted``) or stopped beating (killed), where the folder exists here; a marker written
+    before the retry was queued is brought up to date (``retried_as``).
 
-    Returns the numbers of the trials marked now.
+    Returns the numbers of the trials marked (or updated) now.
     """
     from optuna.trial import TrialState
 
@@ -595,7 +596,7 @@ def mark_abandoned(study: Any) -> list[int]:
         if t.state != TrialState.FAIL or "fail_reason" in ua or "over_budget" in ua or "run_dir" not in ua:
             continue
         folder = Path(str(ua["run_dir"]))
-        if not folder.is_dir() or (folder / ABANDONED).exists():
+        if not folder.is_dir():
             continue
         origin = t.system_attrs.get("failed_trial")
         if any(u.number == origin != t.number and u.user_attrs.get("run_dir") == ua["run_dir"] for u in trials):
@@ -606,6 +607,12 @@ def mark_abandoned(study: Any) -> list[int]:
             if u.number != t.number
             and (u.system_attrs.get("failed_trial") == t.number or u.user_attrs.get("retry_of") == t.number)
         ]
+        try:  # marked before: rewritten only when a retry appeared since (Optuna queues it just after the FAIL)
+            old = json.loads((folder / ABANDONED).read_text())
+        except (OSError, ValueError):
+            old = None
+        if isinstance(old, dict) and old.get("retried_as") == retries:
+            continue
         reason = ua.get("interrupted") or "its worker stopped sending heartbeats (killed, or its machine lost)"
         doc = {
             "study": study.study_name,
@@ -614,7 +621,7 @@ def mark_abandoned(study: Any) -> list[int]:
             "reason": reason,
             "retried_as": retries,
             "worker": ua.get("worker"),
-            "marked": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "marked": old.get("marked") if isinstance(old, dict) else time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         }
         atomic_write_json(folder / ABANDONED, doc)
         marked.append(t.number)
