@@ -463,3 +463,13 @@ def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_ce
     assert trial.value == pytest.approx(float(cells[k : cells.size - k].mean()), rel=1e-12)
     summary = json.loads((tmp_path / "out" / "v1" / "summary.json").read_text())
     assert summary["status"] == "complete" and "complete" in out
+
+
+def test_in_memory_storage_with_one_job_runs_and_summarises(tmp_path: Path) -> None:
+    from amigo_gym.training.sweep import main
+
+    args = _common(tmp_path, "--storage", "sqlite:///:memory:", "--n-trials", "1", "--study-name", "mem")
+    assert main(args) == 0
+    summary = json.loads((tmp_path / "out" / "mem" / "summary.json").read_text())
+    assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 1
+    assert summary["study_attrs"]["argv"][summary["study_attrs"]["argv"].index("--storage") + 1] == "sqlite:///:memory:"

@@ -760,10 +760,11 @@ def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 
-def run_worker(cfg: SweepConfig) -> dict[str, Any]:
+def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
     """One worker: join the study and run trials until the budget (or the grid) is used up; a summary.
 
     ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
+    ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
     """
     import optuna
     from optuna.study import MaxTrialsCallback
@@ -773,6 +774,8 @@ def run_worker(cfg: SweepConfig) -> dict[str, Any]:
     sampler_seed = _worker_seed(cfg)
     storage = make_storage(cfg)
     study = open_study(cfg, storage, sampler_seed)
+    if opened is not None:
+        opened.append(study)
     study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
     with warnings.catch_warnings():  # experimental in Optuna; used as optimize() itself uses it
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
@@ -990,6 +993,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         interrupted = False
         failed: list[str] = []
+        opened: list[Any] = []
         old = signal.signal(signal.SIGTERM, _raise_interrupt)
         try:
             if cfg.n_jobs > 1:
@@ -1001,13 +1005,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 interrupted = interrupted or INTERRUPTED in codes
             else:
                 try:
-                    run_worker(cfg)
+                    run_worker(cfg, opened)
                 except KeyboardInterrupt:
                     interrupted = True
         finally:
             signal.signal(signal.SIGTERM, old)
-        storage = make_storage(cfg)
-        study = optuna.load_study(study_name=cfg.name, storage=storage)
+        # this process's own study object when it has one (an in-memory storage lives only in it)
+        study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
         mark_abandoned(study)
         summary = summarize(study, cfg.budget)
         write_summary(Path(cfg.out) / cfg.name, summary)
