@@ -221,6 +221,10 @@ def _wait_running(storage: str, name: str, n: int, procs: list[subprocess.Popen[
             trials = optuna.load_study(study_name=name, storage=storage).get_trials()
         except KeyError:  # not created yet
             continue
+        except Exception as exc:  # the workers are creating the tables right now ("table ... already exists")
+            if "already exists" not in str(exc):
+                raise
+            continue
         started = [
             t
             for t in trials
