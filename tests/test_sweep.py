@@ -350,6 +350,7 @@ def test_password_masking_helpers() -> None:
     cleaned = scrub(text, url)
     assert "p@ss" not in cleaned and "p%40ss" not in cleaned and "w0rd" not in cleaned
     assert scrub("nothing secret", "sqlite:///x.db") == "nothing secret"
+    assert masked_url("sqlite:///:memory:") == "sqlite:///:memory:"  # no password: as typed
 
 
 def test_validation_cells_are_held_in_scenarios_on_seeds_the_benchmark_never_tests() -> None:

@@ -164,11 +164,13 @@ READY_TIMEOUT_S = 120.0
 
 # --------------------------------------------------------------------------- secrets
 def masked_url(url: str) -> str:
-    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``)."""
+    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``);
+    a URL without a password is returned as typed."""
     try:
         from sqlalchemy.engine import make_url
 
-        return str(make_url(url).render_as_string(hide_password=True))
+        u = make_url(url)
+        return url if u.password is None else str(u.render_as_string(hide_password=True))
     except Exception:  # not a URL SQLAlchemy parses: mask anything between "user:" and "@"
         return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", url)
 
