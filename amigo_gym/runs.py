@@ -44,9 +44,11 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import shutil
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
@@ -59,9 +61,11 @@ __all__ = [
     "LOCK_NAME",
     "POINTER",
     "Checkpoint",
+    "TRUST_ENV",
     "CorruptFileError",
     "RunLock",
     "RunLockedError",
+    "check_pickle",
     "clean_temporaries",
     "has_run_files",
     "is_current_lock",
@@ -70,6 +74,7 @@ __all__ = [
     "restore_snapshot",
     "save_checkpoint",
     "sha256_file",
+    "trust_unverified",
     "verify_sha256",
 ]
 
@@ -98,24 +103,33 @@ def warn(message: str) -> None:
 class RunLock:
     """Exclusive lock on a run folder for the life of the process's use of it (module docstring).
 
-    Use as a context manager; the folder is created if missing.
+    Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
+    ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
+    fail at once).
 
     Raises:
         RunLockedError: another process holds it (one line with its pid).
     """
 
-    def __init__(self, folder: str | os.PathLike[str]) -> None:
+    def __init__(self, folder: str | os.PathLike[str], name: str = LOCK_NAME, wait: float = 0.0) -> None:
         self.folder = Path(folder)
+        self.name = name
+        self.wait = float(wait)
         self._fd: int | None = None
 
     def acquire(self) -> RunLock:
         self.folder.mkdir(parents=True, exist_ok=True)
-        path = self.folder / LOCK_NAME
+        path = self.folder / self.name
+        deadline = time.monotonic() + self.wait
         while True:
             fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
             try:
                 _lock_fd(fd)
             except OSError:
+                if time.monotonic() < deadline:
+                    os.close(fd)
+                    time.sleep(0.05)
+                    continue
                 try:
                     owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
                 finally:
@@ -138,8 +152,8 @@ class RunLock:
         if self._fd is not None:
             if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
                 with contextlib.suppress(OSError):
-                    if is_current_lock(self._fd, self.folder / LOCK_NAME):
-                        os.unlink(self.folder / LOCK_NAME)
+                    if is_current_lock(self._fd, self.folder / self.name):
+                        os.unlink(self.folder / self.name)
             with contextlib.suppress(OSError):
                 _unlock_fd(self._fd)
             os.close(self._fd)
@@ -184,14 +198,20 @@ def is_current_lock(fd: int, path: Path) -> bool:
     return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
 
 
+#: names of the temporaries this package makes: ``.tmp-*``, ``.staging-*`` folders, ``.trash-*`` checkpoints being
+#: deleted, and :func:`amigo_gym.io.atomic_save`'s ``.<stem>.<8 random characters><suffix>`` files
+TEMPORARY_NAME = re.compile(r"^\.(?:tmp|staging|trash)-.+$|^\..+\.[A-Za-z0-9_]{8}(?:\.[A-Za-z0-9]+)?$")
+
+
 def clean_temporaries(folder: Path) -> None:
-    """Remove what killed processes left: dot-named temporary files and folders in ``folder`` and in
-    its ``checkpoints/``. Call only while holding the folder's :class:`RunLock`."""
+    """Remove what killed processes left: the package's own temporary files and folders (:data:`TEMPORARY_NAME`)
+    in ``folder`` and in its ``checkpoints/``; any other dot-named entry (``.git``, ``.env``) is left alone. Call
+    only while holding the folder's :class:`RunLock`."""
     for d in (folder, folder / CHECKPOINTS):
         if not d.is_dir():
             continue
         for p in d.iterdir():
-            if p.name.startswith("."):
+            if TEMPORARY_NAME.match(p.name):
                 if p.is_dir() and not p.is_symlink():
                     shutil.rmtree(p, ignore_errors=True)
                 else:
@@ -223,6 +243,41 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
             f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
             "(changed, truncated or replaced)"
         )
+
+
+#: environment variable that, set to ``1``, trusts files that have no recorded sha256 (no warning)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
+_trust_unverified = False
+_warned: set[str] = set()
+
+
+def trust_unverified(trust: bool = True) -> None:
+    """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
+    global _trust_unverified
+    _trust_unverified = bool(trust)
+
+
+def check_pickle(path: Path, expected: str | None, source: str | None) -> None:
+    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled.
+
+    With a recorded sha256 (``expected``, from the manifest ``source``): :func:`verify_sha256` (a mismatch or a
+    missing file raises :class:`CorruptFileError`). Without one: a warning naming the file, once per file and
+    process, that it is loaded unverified; none when the user trusts unverified files (:func:`trust_unverified`,
+    or the environment variable ``AMIGO_GYM_TRUST_UNVERIFIED=1``).
+    """
+    if expected is not None:
+        verify_sha256(path, expected, str(source))
+        return
+    if _trust_unverified or os.environ.get(TRUST_ENV) == "1":
+        return
+    key = str(Path(path).resolve())
+    if key in _warned:
+        return
+    _warned.add(key)
+    warn(
+        f"{path}: no recorded sha256 to check it against; it is a pickle, and loading it runs code: load only "
+        f"files you trust (--trust-unverified or {TRUST_ENV}=1 silences this)"
+    )
 
 
 def read_json(path: Path, what: str = "") -> Any:

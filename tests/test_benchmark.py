@@ -342,3 +342,50 @@ def test_training_logs_task_metrics_and_after_eval_can_stop(tmp_path: Path) -> N
     ea.Reload()
     for tag in ("eval/h_rms_m", "eval/speed_err_rms", "eval/failure_rate", "eval/mean_reward"):
         assert tag in ea.Tags()["scalars"], tag
+
+
+def _bench(out: Path, fault: str | None = None) -> subprocess.CompletedProcess[str]:
+    import os
+
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    env.pop("AMIGO_GYM_FAULT", None)
+    if fault is not None:
+        env["AMIGO_GYM_FAULT"] = fault
+    args = ["--agents", "analytic", "--scenarios", "v0_paper_circle", "--quick", "--reps", "20"]
+    args += ["--profile-reps", "20", "--no-progress", "--out", str(out)]
+    return subprocess.run(
+        [sys.executable, "-m", "amigo_gym.cli", "benchmark", *args],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def test_outputs_are_published_as_one_set_temporaries_cleaned_and_out_locked(tmp_path: Path) -> None:
+    from amigo_gym import runs
+
+    out = tmp_path / "bench"
+    killed = _bench(out, "publish:benchmark.md")  # the JSON and the Markdown moved, the plots not, no manifest
+    assert killed.returncode == -9, killed.stderr[-2000:]
+    assert (out / "benchmark.json").is_file() and not (out / bm.MANIFEST).exists()
+    with pytest.raises(FileNotFoundError, match="not a complete set"):
+        bm.verify_outputs(out)
+    assert [p for p in out.iterdir() if p.name.startswith(".staging-benchmark-")]
+    (out / ".benchmark.k2j4.json").write_text("{")  # what a kill inside an atomic write leaves
+    (out / ".mine").write_text("a user's file")
+    with runs.RunLock(out):  # a second benchmark on the same --out is refused while one runs
+        second = _bench(out)
+    assert second.returncode == 2 and "in use by another amigo-gym process" in second.stderr, second.stderr
+    ok = _bench(out)
+    assert ok.returncode == 0, ok.stderr[-2000:]
+    files = bm.verify_outputs(out)
+    assert set(files) == {"benchmark.json", "benchmark.md", "benchmark_scenarios.png", "benchmark_profiles.png"}
+    assert not [p.name for p in out.iterdir() if p.name.startswith((".staging", ".benchmark"))]
+    assert (out / ".mine").read_text() == "a user's file"  # only the benchmark's own temporaries are removed
+    manifest = json.loads((out / bm.MANIFEST).read_text())
+    assert manifest["command"].startswith("amigo-gym benchmark --agents analytic")
+    (out / "benchmark.md").write_text("a table of another run")
+    with pytest.raises(runs.CorruptFileError, match="does not match"):
+        bm.verify_outputs(out)

@@ -392,6 +392,81 @@ def test_no_usable_checkpoint_and_bad_config_are_one_line_errors(finished_sac: P
     assert "\n" not in str(exc.value)
 
 
+def test_a_lost_config_json_does_not_make_a_run_unresumable(
+    finished_sac: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    shutil.copytree(finished_sac, out)
+    (out / "config.json").unlink()
+    rec = resume(out, total=200)  # 40 more steps from the intact checkpoint of step 160
+    assert rec["resumed_from"] == 160 and rec["timesteps"] == 200
+    assert "config.json is missing; resuming from the checkpoints" in capsys.readouterr().err
+    cfg = json.loads((out / "config.json").read_text())
+    assert cfg["recovered"] is True and cfg["settings"]["algo"] == "sac" and cfg["resumes"][-1]["from_step"] == 160
+    check_finished(out, "sac", 200, [80, 160])  # evaluations every 80 steps
+    # without checkpoints there is nothing to resume: the one-line error as before
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(FileNotFoundError, match="no checkpoint in"):
+        resume(empty)
+
+
+class _Crafted:
+    """Unpickling this creates the file ``path`` (stands for any code a crafted pickle runs)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = str(path)
+
+    def __reduce__(self) -> tuple[Any, tuple[str, str]]:
+        return (open, (self.path, "w"))
+
+
+def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded(
+    finished_sac: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import pickle
+
+    from amigo_gym.training.benchmark import AgentSpec
+    from amigo_gym.training.evaluate import find_models, load_model
+
+    out = tmp_path / "run"
+    shutil.copytree(finished_sac, out)
+    record = json.loads((out / "run.json").read_text())
+    assert set(record["files"]) == {"model.zip", "best_model.zip"}  # every pickle a loader reads beside it
+    ran = tmp_path / "code_ran"
+    (out / "vecnormalize.pkl").write_bytes(pickle.dumps(_Crafted(ran)))
+    (ref,) = find_models(out)
+    assert ref.vecnormalize == out / "vecnormalize.pkl"
+    with pytest.raises(runs.CorruptFileError, match=r"not covered by the hashes of .*run\.json"):
+        load_model(ref)
+    assert not ran.exists()
+    record["files"]["vecnormalize.pkl"] = "0" * 64  # listed, then replaced: the hash does not match
+    (out / "run.json").write_text(json.dumps(record))
+    with pytest.raises(runs.CorruptFileError, match=r"vecnormalize\.pkl: sha256 .* does not match"):
+        load_model(ref)
+    assert not ran.exists()
+    # the same for a benchmark agent whose manifest names another sha256
+    (out / "sac_s2.zip").write_bytes(pickle.dumps(_Crafted(ran)))
+    spec = AgentSpec("sac", 2, str(out / "sac_s2.zip"), "sac", {"sha256": "0" * 64})
+    with pytest.raises(runs.CorruptFileError, match=r"sac_s2\.zip: sha256 .* does not match"):
+        spec.instantiate(None)
+    assert not ran.exists()
+    # nothing recorded: loaded, with one warning naming the file (once per process), none when trusted
+    (out / "vecnormalize.pkl").unlink()
+    (out / "run.json").unlink()
+    (ref,) = find_models(out)
+    assert ref.record is None
+    capsys.readouterr()
+    load_model(ref)
+    load_model(ref)
+    err = capsys.readouterr().err
+    assert err.count("no recorded sha256") == 1 and f"{out / 'model.zip'}: no recorded sha256" in err, err
+    runs._warned.clear()
+    monkeypatch.setenv(runs.TRUST_ENV, "1")
+    load_model(ref)
+    assert "no recorded sha256" not in capsys.readouterr().err
+
+
 # --------------------------------------------------------------------------- result files
 def test_evaluate_writes_null_not_nan(tmp_path: Path) -> None:
     from amigo_gym.training.evaluate import EvalProtocol, markdown_table, write_outputs
@@ -491,3 +566,25 @@ def test_a_lock_taken_on_a_removed_file_is_not_trusted(tmp_path: Path) -> None:
         c.release()
     finally:
         os.close(fd_b)
+
+
+def test_clean_temporaries_removes_only_the_package_temporaries(tmp_path: Path) -> None:
+    """A user's dot-files in an --out folder (.git, .env, .gitignore) survive; what killed writers left goes."""
+    import tempfile
+
+    from amigo_gym.runs import clean_temporaries
+
+    keep = [".git", ".env", ".gitignore", ".venv", ".DS_Store", "notes.txt"]
+    for name in keep:
+        (tmp_path / name).mkdir() if name in (".git", ".venv") else (tmp_path / name).write_text("x")
+    (tmp_path / ".git" / "HEAD").write_text("ref: refs/heads/main\n")
+    made = [
+        tempfile.mkstemp(dir=tmp_path, prefix=".model.", suffix=".zip")[1],
+        tempfile.mkstemp(dir=tmp_path, prefix=".benchmark.results.", suffix=".json")[1],
+        tempfile.mkdtemp(dir=tmp_path, prefix=".tmp-"),
+        tempfile.mkdtemp(dir=tmp_path, prefix=".staging-"),
+    ]
+    clean_temporaries(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(keep)
+    assert (tmp_path / ".git" / "HEAD").read_text() == "ref: refs/heads/main\n"
+    assert not any(Path(m).exists() for m in made)

@@ -8,6 +8,7 @@ worker process pays torch's import once.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 import signal
@@ -19,6 +20,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 optuna = pytest.importorskip("optuna")
@@ -48,6 +50,10 @@ def _common(tmp: Path, *extra: str) -> list[str]:
         str(tmp / "out"),
         "--n-startup-trials",
         "1",
+        "--val-episodes",
+        "1",
+        "--val-max-steps",
+        "20",
         *extra,
     ]
 
@@ -199,3 +205,276 @@ def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path) -> No
     assert [t.state for t in trials] == [TrialState.FAIL, TrialState.COMPLETE]
     assert trials[1].system_attrs["failed_trial"] == trials[0].number
     assert trials[1].params == trials[0].params == {"algo": "ppo", "seed": 0}
+
+
+# --------------------------------------------------------------------------- faults, secrets, names (issue 21)
+def _wait_running(storage: str, name: str, n: int, procs: list[subprocess.Popen[str]], timeout: float = 150) -> list:
+    """Wait until ``n`` trials are RUNNING with their training started (``run/config.json``); those trials."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        time.sleep(0.5)
+        for p in procs:
+            assert p.poll() is None, p.communicate()[0][-3000:]
+        if storage.startswith("sqlite:///") and not Path(storage.removeprefix("sqlite:///")).is_file():
+            continue  # the worker has not opened the storage yet
+        try:
+            trials = optuna.load_study(study_name=name, storage=storage).get_trials()
+        except KeyError:  # not created yet
+            continue
+        except Exception as exc:  # the workers are creating the tables right now ("table ... already exists")
+            if "already exists" not in str(exc):
+                raise
+            continue
+        started = [
+            t
+            for t in trials
+            if t.state == TrialState.RUNNING
+            and "run_dir" in t.user_attrs
+            and (Path(t.user_attrs["run_dir"]) / "run" / "config.json").is_file()
+        ]
+        if len(started) >= n:
+            return started
+    raise AssertionError(f"{n} trials never started training")
+
+
+def _long(args: list[str]) -> list[str]:
+    out = list(args)
+    out[out.index("--timesteps") + 1] = "10000000"  # a trial that would run for hours
+    return out
+
+
+def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(tmp_path: Path) -> None:
+    base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "term")
+    storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
+    victim = _sweep(_long(base))
+    (trial,) = _wait_running(storage, "term", 1, [victim])
+    victim.send_signal(signal.SIGTERM)
+    out, _ = victim.communicate(timeout=120)
+    assert victim.returncode == 130, out[-3000:]
+    trials = optuna.load_study(study_name="term", storage=storage).get_trials()
+    stopped = next(t for t in trials if t.number == trial.number)
+    assert stopped.state == TrialState.FAIL and "SIGTERM" in stopped.user_attrs["interrupted"]
+    again = [t for t in trials if t.user_attrs.get("retry_of") == trial.number]
+    assert len(again) == 1 and again[0].state == TrialState.WAITING
+    assert again[0].system_attrs["fixed_params"] == stopped.params and again[0].user_attrs.get("grid") is True
+    marker = json.loads((Path(stopped.user_attrs["run_dir"]) / "ABANDONED.json").read_text())
+    assert marker["trial"] == trial.number and marker["retried_as"] == [again[0].number]
+    summary = json.loads((tmp_path / "out" / "term" / "summary.json").read_text())
+    assert summary["status"] == "running"  # queued cells left: the study is not over
+    # the rerun (the same command, a short budget) takes the re-queued cell and the rest of the grid
+    out = _finish(_sweep(base))
+    trials = optuna.load_study(study_name="term", storage=storage).get_trials()
+    done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
+    assert done == [0, 1], [(t.number, t.state, t.params) for t in trials]
+    summary = json.loads((tmp_path / "out" / "term" / "summary.json").read_text())
+    assert summary["status"] == "complete" and "complete" in out
+
+
+def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(tmp_path: Path) -> None:
+    base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "died", "--n-jobs", "2")
+    base += ["--heartbeat-interval", "1", "--grace-period", "2"]
+    storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
+    parent = _sweep(_long(base))
+    running = _wait_running(storage, "died", 2, [parent])
+    pids = [int(t.user_attrs["worker"].split(":")[1]) for t in running]
+    os.kill(pids[0], signal.SIGKILL)  # one worker dies ...
+    time.sleep(1)
+    os.kill(pids[1], signal.SIGTERM)  # ... the other is stopped (its cell queued again)
+    out, _ = parent.communicate(timeout=120)
+    assert parent.returncode == 1, out[-3000:]  # not max([130, -9]): a death is an error
+    assert "killed by SIGKILL" in out, out[-3000:]
+    time.sleep(3)  # > grace period: the killed worker's trial is stale
+    rerun = list(base)
+    rerun[rerun.index("--n-jobs") + 1] = "1"
+    _finish(_sweep(rerun))
+    trials = optuna.load_study(study_name="died", storage=storage).get_trials()
+    done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
+    assert done == [0, 1], [(t.number, t.state, t.params, t.user_attrs) for t in trials]
+    for t in trials:  # both abandoned folders say so
+        if t.state == TrialState.FAIL and "over_budget" not in t.user_attrs:
+            assert (Path(t.user_attrs["run_dir"]) / "ABANDONED.json").is_file(), t
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--study-name", "../../escaped"], "--study-name must be a name"),
+        (["--study-name", "a/b"], "--study-name must be a name"),
+        (["--study-name", "..x"], "--study-name must be a name"),
+        (["--storage", "sqlite:///:memory:", "--n-jobs", "2"], "in-memory database"),
+        (["--storage", "sqlite://", "--n-jobs", "2"], "in-memory database"),
+        (["--env", "AmigoBot-v1", "--env-kwargs", "[1]"], "--env-kwargs must be a JSON object"),
+    ],
+)
+def test_bad_sweep_settings_are_refused_in_one_line(
+    tmp_path: Path, extra: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from amigo_gym.training.sweep import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--algo", "ppo", "--out", str(tmp_path / "out"), *extra])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "out").exists() and not list(tmp_path.parent.glob("escaped"))
+
+
+def test_bad_sweep_settings_messages(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from amigo_gym.training.sweep import main
+
+    for extra, message in (
+        (["--study-name", "../../escaped"], "--study-name must be a name"),
+        (["--storage", "sqlite:///:memory:", "--n-jobs", "2"], "in-memory database"),
+        (["--storage", "postgresql://u:Hunter2-xyz@host:notaport/db"], "--storage must be a SQLAlchemy URL"),
+    ):
+        with pytest.raises(SystemExit):
+            main(["--algo", "ppo", "--out", str(tmp_path / "out"), *extra])
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+        assert "Hunter2" not in err
+
+
+def test_password_masking_helpers() -> None:
+    from amigo_gym.training.sweep import masked_url, public_argv, scrub
+
+    url = "postgresql://user:p%40ss w0rd@db:5432/amigo"
+    assert masked_url(url) == "postgresql://user:***@db:5432/amigo"
+    assert public_argv(["--storage", url, "--storage=" + url, "--n-jobs", "2"]) == [
+        "--storage",
+        "postgresql://user:***@db:5432/amigo",
+        "--storage=postgresql://user:***@db:5432/amigo",
+        "--n-jobs",
+        "2",
+    ]
+    text = f"failed for {url} (password 'p@ss w0rd', p%40ss+w0rd)"
+    cleaned = scrub(text, url)
+    assert "p@ss" not in cleaned and "p%40ss" not in cleaned and "w0rd" not in cleaned
+    assert scrub("nothing secret", "sqlite:///x.db") == "nothing secret"
+    assert masked_url("sqlite:///:memory:") == "sqlite:///:memory:"  # no password: as typed
+
+
+def test_validation_cells_are_held_in_scenarios_on_seeds_the_benchmark_never_tests() -> None:
+    from amigo_gym.training.benchmark import SUITE
+    from amigo_gym.training.sweep import VALIDATION_SEED_BASE, validation_cells
+
+    test_seeds = {s for sc in SUITE for s in sc.seeds}
+    for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
+        cells = validation_cells(env_id, episodes=3, max_steps=50)
+        by_name = {sc.name: sc for sc in SUITE}
+        held_in = [sc.name for sc in SUITE if sc.env_id == env_id and not sc.held_out]
+        assert [c.name for c in cells] == held_in and held_in
+        for c in cells:
+            assert not by_name[c.name].held_out
+            assert c.seeds == (VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + 1, VALIDATION_SEED_BASE + 2)
+            assert not set(c.seeds) & test_seeds
+            assert c.max_steps == min(50, by_name[c.name].max_steps)
+            assert dict(c.env_kwargs) == dict(by_name[c.name].env_kwargs)
+
+
+SECRET = "Pw-7f3b9cQ"
+
+
+def _leaks(secret: str, *roots: Path) -> list[str]:
+    """Files under ``roots`` whose bytes hold ``secret`` (as typed or URL-quoted)."""
+    forms = {secret.encode(), secret.replace("-", "%2D").encode()}
+    return [str(f) for r in roots for f in r.rglob("*") if f.is_file() and any(x in f.read_bytes() for x in forms)]
+
+
+def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_path: Path, postgres: str) -> None:
+    """Two workers on one PostgreSQL study, one SIGKILLed and one SIGTERMed mid-trial, then restarted: every
+    grid cell COMPLETE exactly once, the summary complete, both abandoned folders marked, and the URL's
+    password (accepted and ignored by the trust authentication) in no file, attribute or message."""
+    url = postgres.replace("postgres@", f"postgres:{SECRET}@")
+    base = _common(tmp_path, "--heartbeat-interval", "1", "--grace-period", "2", "--storage", url)
+    base += ["--study-name", "faults", "--mode", "seeds", "--seeds", "0", "1", "2"]
+    storage = driver_url(postgres)
+    procs = [_sweep([*_long(base), "--worker-index", str(i)]) for i in range(2)]
+    running = _wait_running(storage, "faults", 2, procs)
+    pid_of = {int(t.user_attrs["worker"].split(":")[1]): t.number for t in running}
+    assert set(pid_of) == {p.pid for p in procs}
+    procs[0].send_signal(signal.SIGKILL)
+    procs[1].send_signal(signal.SIGTERM)
+    outs = [p.communicate(timeout=120)[0] for p in procs]
+    assert procs[0].returncode == -signal.SIGKILL and procs[1].returncode == 130, outs[1][-3000:]
+    trials = optuna.load_study(study_name="faults", storage=storage).get_trials()
+    states = {t.number: t.state for t in trials}
+    assert states[pid_of[procs[0].pid]] == TrialState.RUNNING  # stale, not yet found
+    assert states[pid_of[procs[1].pid]] == TrialState.FAIL  # stopped and queued again at once
+    time.sleep(3)  # > grace period
+    again = [_sweep([*base, "--worker-index", str(i)]) for i in range(2)]
+    outs += [_finish(p, timeout=300) for p in again]
+    study = optuna.load_study(study_name="faults", storage=storage)
+    trials = study.get_trials()
+    _no_duplicates(trials)
+    done = [t for t in trials if t.state == TrialState.COMPLETE]
+    assert sorted(t.params["seed"] for t in done) == [0, 1, 2], [(t.number, t.state, t.params) for t in trials]
+    assert not [t for t in trials if t.state in (TrialState.RUNNING, TrialState.WAITING)]
+    for number in pid_of.values():
+        t = next(x for x in trials if x.number == number)
+        assert t.state == TrialState.FAIL
+        marker = json.loads((Path(t.user_attrs["run_dir"]) / "ABANDONED.json").read_text())
+        detail = [(x.number, x.state, x.user_attrs.get("retry_of"), x.system_attrs.get("failed_trial")) for x in trials]
+        assert marker["trial"] == number and len(marker["retried_as"]) == 1, (marker, detail)
+    summary = json.loads((tmp_path / "out" / "faults" / "summary.json").read_text())
+    assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 3
+    # no password anywhere: files, study and trial attributes, every message
+    assert not _leaks(SECRET, tmp_path / "out")
+    study_system = study._storage.get_study_system_attrs(study._study_id)
+    attrs = json.dumps([study.user_attrs, study_system, [(t.user_attrs, t.system_attrs) for t in trials]])
+    assert SECRET not in attrs and "postgres:***@" in attrs
+    assert not [o for o in outs if SECRET in o]
+
+
+def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("psycopg2")
+    from amigo_gym.training.sweep import main
+
+    url = f"postgresql://someone:{SECRET}@127.0.0.1:{_free_port()}/nowhere"
+    rc = main(["--algo", "ppo", "--storage", url, "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert rc == 1 and "cannot open the storage postgresql" in captured.err, captured.err
+    assert SECRET not in captured.err + captured.out and "someone:***@" in captured.err
+    assert not (tmp_path / "out").exists() or not _leaks(SECRET, tmp_path / "out")
+
+
+def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(tmp_path: Path) -> None:
+    from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
+    from amigo_gym.training.sweep import VALIDATION_SEED_BASE
+
+    hp = tmp_path / "tiny_v1.yml"
+    hp.write_text(TINY.replace("AmigoBot-v0", "AmigoBot-v1"))
+    args = _common(tmp_path, "--env", "AmigoBot-v1", "--n-trials", "1", "--study-name", "v1")
+    args[args.index("--hyperparams") + 1] = str(hp)
+    out = _finish(_sweep(args), timeout=300)
+    storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
+    study = optuna.load_study(study_name="v1", storage=storage)
+    (trial,) = study.get_trials()
+    assert trial.state == TrialState.COMPLETE and study.direction == optuna.study.StudyDirection.MINIMIZE
+    assert study.user_attrs["env_id"] == "AmigoBot-v1" and study.user_attrs["objective"] == "validation_h_rms_iqm_m"
+    assert study.user_attrs["env_kwargs"] == TRAINING_DISTRIBUTION["env_kwargs"]  # the default distribution
+    run_dir = Path(trial.user_attrs["run_dir"])
+    import yaml
+
+    assert list(yaml.safe_load((run_dir / "hyperparams.yml").read_text())) == ["AmigoBot-v1"]
+    config = json.loads((run_dir / "run" / "config.json").read_text())
+    assert config["env_id"] == "AmigoBot-v1" and config["env_kwargs"] == TRAINING_DISTRIBUTION["env_kwargs"]
+    val = trial.user_attrs["validation"]
+    held_in = [sc.name for sc in SUITE if sc.env_id == "AmigoBot-v1" and not sc.held_out]
+    assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEED_BASE]
+    assert all(v is not None and v > 0 for v in val["cells"].values())
+    # the value is the IQM (25 % trimmed mean) of the per-cell values
+    cells = np.sort(np.array(list(val["cells"].values())))
+    k = int(0.25 * cells.size)
+    assert trial.value == pytest.approx(float(cells[k : cells.size - k].mean()), rel=1e-12)
+    summary = json.loads((tmp_path / "out" / "v1" / "summary.json").read_text())
+    assert summary["status"] == "complete" and "complete" in out
+
+
+def test_in_memory_storage_with_one_job_runs_and_summarises(tmp_path: Path) -> None:
+    from amigo_gym.training.sweep import main
+
+    args = _common(tmp_path, "--storage", "sqlite:///:memory:", "--n-trials", "1", "--study-name", "mem")
+    assert main(args) == 0
+    summary = json.loads((tmp_path / "out" / "mem" / "summary.json").read_text())
+    assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 1
+    assert summary["study_attrs"]["argv"][summary["study_attrs"]["argv"].index("--storage") + 1] == "sqlite:///:memory:"

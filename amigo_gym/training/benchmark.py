@@ -78,10 +78,12 @@ pairs that could not run, with the reason), ``aggregates`` (per agent: ``iqm`` a
 
 from __future__ import annotations
 
+import functools
 import glob
 import hashlib
 import json
 import math
+import os
 import re
 import sys
 import time
@@ -439,8 +441,15 @@ class AgentSpec:
         if self._model is None:
             from stable_baselines3 import PPO, SAC, TD3
 
+            from amigo_gym.runs import check_pickle, corrupt_errors
+
+            # checked before it is unpickled: the manifest's sha256, else a warning naming the file (once)
+            digest = (self.manifest or {}).get("sha256")
+            path = Path(self.path)
+            check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
             cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
-            self._model = cls.load(self.path, device="cpu")
+            with corrupt_errors(path, f"{str(self.algo).upper()} model"):
+                self._model = cls.load(self.path, device="cpu")
         want = getattr(self._model.observation_space, "shape", None)
         got = getattr(env.observation_space, "shape", None)
         if want != got:
@@ -1022,18 +1031,102 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
+#: the manifest naming a published set of benchmark outputs (in ``--out``)
+MANIFEST = "benchmark_manifest.json"
+#: names of the temporary files and folders a benchmark writes in ``--out`` (removed by the next run)
+_TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_manifest\..*)$")
+
+
+def clean_temporaries(out: Path) -> list[str]:
+    """Remove what killed benchmarks left in ``out``: their staging folders and temporary files (only names a
+    benchmark writes; other dot files are left alone). Call while holding ``out``'s lock. The names removed."""
+    import shutil
+
+    removed = []
+    if out.is_dir():
+        for p in out.iterdir():
+            if _TEMPORARY.match(p.name):
+                if p.is_dir() and not p.is_symlink():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+                removed.append(p.name)
+    return removed
+
+
+def _key(path: Path, out: Path) -> str:
+    """A file's name in the manifest: relative to ``out`` when inside it, else absolute."""
+    try:
+        return str(path.resolve().relative_to(out.resolve()))
+    except ValueError:
+        return str(path.resolve())
+
+
 def write_outputs(
     doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
 ) -> list[Path]:
-    """Write the JSON, the Markdown and (``plots``) the two figures atomically; the paths written."""
-    atomic_write_json(json_path, _jsonable(doc), parents=True)
-    atomic_write(md_path, markdown_report(doc), parents=True)
-    written = [json_path, md_path]
-    if plots and doc["results"]:
-        plot_scenarios(doc, out / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
-        plot_profiles(doc, out / "benchmark_profiles.png")
-        written += [out / "benchmark_scenarios.png", out / "benchmark_profiles.png"]
-    return written
+    """Publish the JSON, the Markdown and (``plots``) the two figures as one set; the paths written.
+
+    Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
+    ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
+    new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
+    last. The set is complete and consistent exactly when the manifest exists and every file matches it
+    (:func:`verify_outputs`): a reader that checks it never mixes files of two runs. Fault stages (tests):
+    ``publish:<file name>`` after each move.
+    """
+    import shutil
+    import tempfile
+
+    from amigo_gym.io import fault_point, fsync_dir
+    from amigo_gym.runs import sha256_file
+
+    out.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
+    try:
+        targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
+        atomic_write_json(targets[json_path], _jsonable(doc))
+        atomic_write(targets[md_path], markdown_report(doc))
+        if plots and doc["results"]:
+            targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"
+            targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
+            plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+            plot_profiles(doc, staging / "benchmark_profiles.png")
+        files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
+        (out / MANIFEST).unlink(missing_ok=True)
+        fsync_dir(out)
+        for dest, src in targets.items():
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            try:
+                os.replace(src, dest)
+            except OSError:  # another file system: copy beside the target, then rename
+                atomic_save(functools.partial(shutil.copyfile, src), dest)
+            fault_point(f"publish:{dest.name}")
+            fsync_dir(dest.parent)
+        manifest = {"files": files, "command": doc.get("command"), "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        atomic_write_json(out / MANIFEST, manifest)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return list(targets)
+
+
+def verify_outputs(out: Path) -> dict[str, str]:
+    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file.
+
+    Raises:
+        FileNotFoundError: no manifest (no complete set: a benchmark was interrupted while publishing).
+        CorruptFileError: a file missing or not the one the manifest lists.
+    """
+    from amigo_gym.runs import CorruptFileError, read_json, verify_sha256
+
+    path = out / MANIFEST
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
+    doc = read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
+        raise CorruptFileError(f"{path}: not a manifest (needs 'files')")
+    for name, digest in doc["files"].items():
+        verify_sha256(out / name, str(digest), str(path))
+    return dict(doc["files"])
 
 
 # --------------------------------------------------------------------------- command line
@@ -1082,7 +1175,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument("--goal-tolerance", type=float, default=0.0, help="open --path: success within this of the end [m]")
     p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s]")
+    p.add_argument(
+        "--trust-unverified",
+        action="store_true",
+        help="load model zips without a recorded sha256 without the warning (they are pickles: they run code)",
+    )
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+    if a.trust_unverified:
+        from amigo_gym.runs import trust_unverified
+
+        trust_unverified()
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread
@@ -1116,20 +1218,24 @@ def main(argv: Sequence[str] | None = None) -> int:
             if getattr(a, name) < 1:
                 raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(a, name)}")
         agents = parse_agents(a.agents) if a.agents else default_agents()
-        doc = run_benchmark(
-            agents,
-            scenarios,
-            progress=not a.no_progress,
-            reps=a.reps,
-            profile_reps=a.profile_reps,
-            bootstrap_seed=a.bootstrap_seed,
-            quick=a.quick,
-        )
-        doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "benchmark.json"
         md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
-        written = write_outputs(doc, out, json_path, md_path, plots=not a.no_plots)
+        from amigo_gym.runs import RunLock
+
+        with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
+            clean_temporaries(out)
+            doc = run_benchmark(
+                agents,
+                scenarios,
+                progress=not a.no_progress,
+                reps=a.reps,
+                profile_reps=a.profile_reps,
+                bootstrap_seed=a.bootstrap_seed,
+                quick=a.quick,
+            )
+            doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
+            written = write_outputs(doc, out, json_path, md_path, plots=not a.no_plots)
         print(markdown_report(doc), end="")
         print("wrote " + ", ".join(map(str, written)))
         return 0

@@ -477,6 +477,8 @@ def _run_compare(
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(s)
         print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
+        # checked against the run's record before it is unpickled, like every model compare loads
+        runs.check_pickle(run_dir / "model.zip", training["ppo_fresh"]["sha256"], str(run_dir / "run.json"))
         agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
         sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
     _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")

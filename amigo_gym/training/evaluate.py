@@ -405,37 +405,59 @@ class NormalizedAgent:
 def load_model(ref: ModelRef) -> Agent:
     """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any).
 
-    Model zips are pickles: loading one runs code, so load only files you trust (docs/reliability.md).
-    When the record beside the zip (``<algo>.json`` or ``run.json``) holds a ``sha256``, the file must match
-    it; the shipped pretrained models (``agents/pretrained``) must have one.
+    Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code, so load only files you trust
+    (docs/reliability.md). Every file is checked before it is unpickled: the zip against the ``sha256`` of the
+    record beside it (``<algo>.json`` or ``run.json``), the statistics against the record's
+    ``files["vecnormalize.pkl"]``. A record that lists ``files`` but not the statistics, or any mismatch, is
+    refused; the shipped pretrained models (``agents/pretrained``) must have every hash. A file without a
+    recorded hash is loaded with a warning naming it, once (:func:`amigo_gym.runs.check_pickle`; none with
+    ``--trust-unverified``).
 
     Raises:
-        CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+        CorruptFileError: a sha256 mismatch, a file the record does not cover, or a file that is not a
+            loadable model (one line naming it).
     """
     import pickle
 
-    from amigo_gym.runs import CorruptFileError, corrupt_errors, read_json, verify_sha256
+    from amigo_gym.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
 
     d = ref.model.parent
     from stable_baselines3 import PPO, SAC, TD3
 
     shipped = d.resolve() == PRETRAINED_DIR.resolve()
     classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
-    # a run's run.json records the sha256 of its final model.zip (not of best_model.zip)
-    recorded = ref.record is not None and (ref.record.name != "run.json" or ref.model.name == "model.zip")
-    digest = read_json(ref.record).get("sha256") if recorded and ref.record is not None else None
-    if digest is not None:
-        verify_sha256(ref.model, str(digest), str(ref.record))
-    elif shipped:
-        manifest = d / f"{ref.algo}.json"
-        raise CorruptFileError(f"{manifest}: no sha256 for the shipped model {ref.model.name}")
+    record = read_json(ref.record) if ref.record is not None else None
+    if record is not None and not isinstance(record, dict):
+        raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
+    # a run's run.json records the sha256 of its final model.zip, and under "files" of every file beside it
+    files = record.get("files") if record is not None else None
+    digest = None
+    if isinstance(files, dict) and ref.record is not None and ref.record.name == "run.json":
+        digest = files.get(ref.model.name)
+    elif record is not None and (ref.record is None or ref.record.name != "run.json" or ref.model.name == "model.zip"):
+        digest = record.get("sha256")
+    if digest is None and shipped:
+        raise CorruptFileError(f"{d / (ref.algo + '.json')}: no sha256 for the shipped model {ref.model.name}")
+    stats_digest = None
+    if ref.vecnormalize is not None:  # checked now, before anything is unpickled
+        if isinstance(files, dict):
+            stats_digest = files.get(ref.vecnormalize.name)
+            if stats_digest is None:
+                raise CorruptFileError(
+                    f"{ref.vecnormalize}: not covered by the hashes of {ref.record} (its 'files' do not list it); "
+                    "refusing to unpickle it"
+                )
+        elif shipped:
+            raise CorruptFileError(f"{ref.vecnormalize}: no sha256 for the shipped statistics in {ref.record}")
+        check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record))
+    check_pickle(ref.model, None if digest is None else str(digest), str(ref.record))
     with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
         model = classes[ref.algo].load(ref.model, device="cpu")
     if ref.vecnormalize is None:
         agent: Agent = model
         return agent
-    with open(ref.vecnormalize, "rb") as f:  # VecNormalize.load without a venv: the statistics only
-        stats = pickle.load(f)
+    with corrupt_errors(ref.vecnormalize, "VecNormalize statistics"), open(ref.vecnormalize, "rb") as f:
+        stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
     stats.training = False
     return NormalizedAgent(model, stats)
 
@@ -726,7 +748,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument("--no-models", action="store_true", help="only the analytic policies")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    p.add_argument(
+        "--trust-unverified",
+        action="store_true",
+        help="load model zips and statistics without a recorded sha256 without the warning (pickles run code)",
+    )
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+    if a.trust_unverified:
+        from amigo_gym.runs import trust_unverified
+
+        trust_unverified()
 
     def run() -> int:
         one_torch_thread()

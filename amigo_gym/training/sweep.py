@@ -2,28 +2,53 @@
 
 Usage (flag names as in rl-baselines3-zoo where they exist)::
 
-    # hyperparameters of PPO, 2 worker processes on this machine, a global budget of 50 trials
-    amigo-gym sweep --algo ppo --n-trials 50 --n-jobs 2 --timesteps 100000 --out runs/sweep
+    # hyperparameters of PPO on AmigoBot-v1's training distribution, 2 worker processes, 50 trials in all
+    amigo-gym sweep --algo ppo --env AmigoBot-v1 --n-trials 50 --n-jobs 2 --timesteps 100000 --out runs/sweep
     # a multi-seed training grid: every (algo, seed) exactly once
     amigo-gym sweep --mode seeds --algo ppo sac td3 --seeds 0 1 2 3 4 --n-jobs 2 --out runs/grid
     # many machines: every machine runs the same command against one PostgreSQL database and joins
-    amigo-gym sweep --algo sac --storage postgresql://user:pw@db-host/amigo --study-name sac-hp --n-trials 200
+    # (the password comes from PGPASSWORD or ~/.pgpass, never from the command line)
+    PGPASSWORD=... amigo-gym sweep --algo sac --storage postgresql://user@db-host/amigo --study-name sac-hp \
+        --n-trials 200
+
+Environment: ``--env`` (``AmigoBot-v0`` or ``AmigoBot-v1``, default v0) and ``--env-kwargs`` (JSON keywords
+of ``gym.make``; default for v1 the generalists' training distribution
+:data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION`, for v0 none). Each trial trains on that
+environment with the hyperparameters under the ``--env`` key of the base YAML and writes its own YAML
+under the same key.
+
+Objective (minimised): the benchmark's own metric, the IQM over cells of H's cross-track RMS [m]
+(:mod:`amigo_gym.training.benchmark`), of the trial's final model on the **validation cells**
+(:func:`validation_cells`): the suite's held-in scenarios (``held_out=False``) of ``--env``, run with
+the validation seeds ``VALIDATION_SEED_BASE + i`` (``i < --val-episodes``) instead of the scenarios'
+test seeds; the held-out scenarios and the test seeds are never evaluated. The trial's per-cell values
+are in its user attribute ``validation``. The pruner sees the periodic evaluations' ``h_rms_m`` (the
+training environment, ``--eval-freq``).
 
 Storage: embedded SQLite by default (``sqlite:///<out>/sweep.db``: one machine, several worker
 processes; transactions take the write lock at their start, ``BEGIN IMMEDIATE``, so two workers never
 claim the same queued trial), or any SQLAlchemy URL such as ``postgresql://...`` for many machines
-(install the ``bench`` extra for the ``psycopg2-binary`` driver). Every worker opens the study with
+(install the ``bench`` extra for the ``psycopg2-binary`` driver). An in-memory SQLite database is private
+to its process: it is refused with ``--n-jobs`` > 1. Every worker opens the study with
 ``create_study(load_if_exists=True)``; the process that actually creates it stores the command line,
-the mode and the budget as study user attributes (each worker adds ``worker:<host>:<pid>`` with its
-command, and each trial records its worker, sampler seed and run directory).
+the mode, the environment, the objective and the budget as study user attributes, queues the grid
+(seeds mode) and then sets the attribute ``ready``, which joining workers wait for (each worker adds
+``worker:<host>:<pid>`` with its command, and each trial records its worker, sampler seed and run
+directory).
+
+Secrets: the storage URL's password is never stored or printed: every command line kept (study and trial
+attributes, ``summary.json``) and every message shows the URL as SQLAlchemy renders it with
+``hide_password=True`` (``postgresql://user:***@host/db``). Put the password in ``PGPASSWORD`` or a
+``~/.pgpass`` file (libpq reads both) and leave it out of the URL, so that it is not on the command line
+either (where ``ps`` shows it). ``--study-name`` is a name, not a path: separators and ``..`` are refused.
 
 Modes:
 
 * ``hyperparams``: each trial samples the algorithm's hyperparameters (:func:`sample_hyperparams`; the
   rest, e.g. ``n_steps``, ``buffer_size``, ``policy_kwargs``, comes from ``--hyperparams``, default
   ``agents/hyperparams/<algo>.yml``), trains ``--timesteps`` steps with ``--train-seed`` and returns the
-  mean reward of the last periodic evaluation (maximised). The evaluations every ``--eval-freq`` steps
-  are reported to the pruner (median pruner by default), which may stop a trial early (PRUNED).
+  objective. The evaluations every ``--eval-freq`` steps are reported to the pruner (median pruner by
+  default), which may stop a trial early (PRUNED).
 * ``seeds``: the study's creator enqueues the grid ``--algo x --seeds`` once (fixed parameters
   ``algo`` and ``seed``, YAML hyperparameters); workers take queued trials until none is left. No
   pruning: every seed trains to the end.
@@ -35,29 +60,53 @@ trial also counts the RUNNING trials with lower numbers, so concurrent workers c
 trial that loses that race ends FAIL with the user attribute ``over_budget`` and does not count (in
 seeds mode: a trial that is not from the grid). ``--n-jobs`` worker processes run on this machine.
 
-Killed workers: RDB storages get a heartbeat (``--heartbeat-interval``, default 60 s) with a grace
-period (``--grace-period``, 120 s): a trial whose worker stopped beating (SIGKILL, a lost machine) is
-set FAIL by the next worker that starts a trial, and ``RetryHeartbeatStaleTrialCallback`` (Optuna >= 4.9;
-``RetryFailedTrialCallback`` before) re-queues it with the same parameters (``--max-retry``, default 1;
-the new trial's system attribute ``failed_trial`` names the original). A worker stopped by SIGTERM or
-Ctrl-C marks its trial FAIL at once. Sampler seeds differ per worker: they are derived from ``--seed``,
-the host name, the process id and the worker index.
+Stopped and killed workers:
+
+* ``SIGTERM`` or ``Ctrl-C``: the trial's training stops at its next rollout start (with a checkpoint),
+  the trial ends FAIL with the user attribute ``interrupted``, and its parameters are queued again at
+  once (a new WAITING trial with the user attribute ``retry_of``): a rerun of the command, or any other
+  worker, completes the grid or the budget. The worker writes the summary and exits with status 130.
+* ``SIGKILL``, a lost machine: RDB storages get a heartbeat (``--heartbeat-interval``, default 60 s)
+  with a grace period (``--grace-period``, 120 s): a trial whose worker stopped beating is set FAIL by
+  the next worker that starts a trial, and ``RetryHeartbeatStaleTrialCallback`` (Optuna >= 4.9;
+  ``RetryFailedTrialCallback`` before) re-queues it with the same parameters (``--max-retry``, default
+  1; the new trial's system attribute ``failed_trial`` names the original).
+* Either way the abandoned trial's folder gets ``ABANDONED.json`` (trial number, reason, the trial that
+  retries it), written by the worker that stopped or by the first worker that finds the stale trial; the
+  folder's ``run.lock`` stays (the operating system released its lock when the process ended). The retry
+  trains in a new folder.
+
+Sampler seeds differ per worker: they are derived from ``--seed``, the host name, the process id and the
+worker index.
+
+Summary and exit status: every worker, when it stops, writes ``<out>/<study>/summary.json`` from the
+study itself (states, counted trials, best trial, every trial, the study's attributes; nothing of the
+worker's own), so that every copy written after the study ended says the same. Its ``status`` is
+``complete`` (the grid has a COMPLETE trial per cell, or the budget is counted, and nothing runs or
+waits), ``running`` (trials still RUNNING or WAITING, e.g. on other workers: a worker that stops early
+says so) or ``incomplete`` (nothing left to run and still not complete: a rerun continues). Writes are
+serialised by a lock on the folder and never replace a summary that saw more finished trials. The exit
+status is 0 when the study is complete or still running elsewhere, 1 when it is incomplete or (``--n-jobs``
+> 1) when a worker process died or failed, 130 when stopped by ``SIGTERM``/``Ctrl-C``.
 
 Browse a study with optuna-dashboard (``pip install optuna-dashboard``, documentation only)::
 
     optuna-dashboard sqlite:///runs/sweep/sweep.db            # then open http://127.0.0.1:8080
-    optuna-dashboard postgresql://user:pw@db-host/amigo
+    PGPASSWORD=... optuna-dashboard postgresql://user@db-host/amigo
 
-Each trial's training run is in ``<out>/<study>/trial_<number>_<id>/`` (config, TensorBoard logs with
-the task metrics, ``eval.json``, models).
+Each trial's training run is in ``<out>/<study>/trial_<number>_<id>/`` (its YAML, and ``run/`` with the
+config, TensorBoard logs with the task metrics, ``eval.json``, models).
 
-Imports optuna (and PyYAML) only when run; may import :mod:`amigo_gym.training.train`.
+Imports optuna, SQLAlchemy (and PyYAML) only when run; may import :mod:`amigo_gym.training.train`,
+:mod:`amigo_gym.training.benchmark` and :mod:`amigo_gym.training.evaluate`.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -66,9 +115,11 @@ import time
 import warnings
 import zlib
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import FrameType
 from typing import Any
+from urllib.parse import quote, quote_plus
 
 import numpy as np
 
@@ -76,20 +127,102 @@ from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write, atomic_write_json
 
 __all__ = [
+    "ABANDONED",
+    "VALIDATION_SEED_BASE",
     "SweepConfig",
     "budget_count",
     "driver_url",
     "main",
     "make_storage",
+    "mark_abandoned",
+    "masked_url",
     "open_study",
     "run_worker",
     "sample_hyperparams",
+    "scrub",
+    "study_status",
+    "summarize",
+    "validation_cells",
+    "write_summary",
 ]
 
 ALGOS = ("ppo", "sac", "td3")
 MODES = ("hyperparams", "seeds")
+ENV_IDS = ("AmigoBot-v0", "AmigoBot-v1")
+#: the marker written into the folder of a trial whose worker was stopped or killed
+ABANDONED = "ABANDONED.json"
+#: first evaluation seed of the validation cells; the benchmark's test seeds are 100..109
+VALIDATION_SEED_BASE = 1_000_000
+#: what the study optimises (stored as the study attribute ``objective``)
+OBJECTIVE = "validation_h_rms_iqm_m"
+SUMMARY = "summary.json"
+#: exit status of a worker stopped by SIGTERM / Ctrl-C
+INTERRUPTED = 130
+#: how long a worker joining a study waits for its creator to finish setting it up (attributes, grid) [s]
+READY_TIMEOUT_S = 120.0
 
 
+# --------------------------------------------------------------------------- secrets
+def masked_url(url: str) -> str:
+    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``);
+    a URL without a password is returned as typed."""
+    try:
+        from sqlalchemy.engine import make_url
+
+        u = make_url(url)
+        return url if u.password is None else str(u.render_as_string(hide_password=True))
+    except Exception:  # not a URL SQLAlchemy parses: mask anything between "user:" and "@"
+        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", url)
+
+
+def _password(url: str | None) -> str | None:
+    if not url:
+        return None
+    try:
+        from sqlalchemy.engine import make_url
+
+        pw = make_url(url).password
+    except Exception:
+        m = re.search(r"://[^/@:]*:([^@]*)@", url)
+        pw = m.group(1) if m else None
+    return str(pw) if pw else None
+
+
+def scrub(text: str, url: str | None) -> str:
+    """``text`` with every form of ``url``'s password (as typed, decoded, URL-quoted) replaced by ``***``."""
+    pw = _password(url)
+    if not pw:
+        return text
+    raw = re.search(r"://[^/@:]*:([^@]*)@", url or "")
+    forms = {pw, quote(pw, safe=""), quote_plus(pw)} | ({raw.group(1)} if raw else set())
+    for form in sorted((f for f in forms if f), key=len, reverse=True):
+        text = text.replace(form, "***")
+    return text
+
+
+def public_argv(argv: Sequence[str]) -> list[str]:
+    """The command line with every URL's password masked (``--storage URL`` and ``--storage=URL``)."""
+    out = []
+    for a in argv:
+        if "://" in a:
+            head, eq, tail = a.partition("=") if a.startswith("--") else ("", "", a)
+            a = head + eq + masked_url(tail)
+        out.append(a)
+    return out
+
+
+def _in_memory(url: str) -> bool:
+    """Whether ``url`` is an in-memory SQLite database (private to the process that opens it)."""
+    from sqlalchemy.engine import make_url
+
+    u = make_url(url)
+    if not u.drivername.startswith("sqlite"):
+        return False
+    db = u.database or ""
+    return db in ("", ":memory:") or db.startswith("file::memory:") or u.query.get("mode") == "memory"
+
+
+# --------------------------------------------------------------------------- settings
 @dataclass
 class SweepConfig:
     """Settings of one ``amigo-gym sweep`` command (see the module docstring)."""
@@ -116,6 +249,10 @@ class SweepConfig:
     max_retry: int = 1
     threads: int = 1
     worker_index: int = 0
+    env_id: str = "AmigoBot-v0"
+    env_kwargs: dict[str, Any] | None = None
+    val_episodes: int = 5
+    val_max_steps: int = 0
     argv: list[str] = field(default_factory=list)
 
     def validate(self) -> None:
@@ -130,6 +267,10 @@ class SweepConfig:
             raise ValueError(f"--sampler must be 'tpe' or 'random', got {self.sampler!r}")
         if self.pruner not in ("median", "none"):
             raise ValueError(f"--pruner must be 'median' or 'none', got {self.pruner!r}")
+        if self.env_id not in ENV_IDS:
+            raise ValueError(f"--env must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        if self.env_kwargs is not None and not isinstance(self.env_kwargs, dict):
+            raise ValueError(f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}")
         for name, low in (
             ("n_trials", 1),
             ("n_jobs", 1),
@@ -143,12 +284,39 @@ class SweepConfig:
             ("n_startup_trials", 0),
             ("worker_index", 0),
             ("train_seed", 0),
+            ("val_episodes", 1),
+            ("val_max_steps", 0),
         ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
             raise ValueError(f"--seeds must be distinct integers, got {self.seeds}")
+        n = self.study_name
+        if n is not None and (
+            not n
+            or n.startswith(".")
+            or ".." in n
+            or any(sep in n for sep in ("/", "\\", os.sep, os.altsep or "/"))
+            or any(ord(c) < 32 or c == "\x7f" for c in n)
+        ):
+            raise ValueError(
+                f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control "
+                f"characters), got {n!r}"
+            )
+        if self.storage is not None:
+            try:
+                memory = _in_memory(self.storage)
+            except ImportError:
+                raise
+            except Exception:
+                raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(self.storage)!r}") from None
+            if memory and self.n_jobs > 1:
+                raise ValueError(
+                    f"--storage {masked_url(self.storage)} is an in-memory database, private to each process: "
+                    f"with --n-jobs {self.n_jobs} the workers would not share one study; use a file "
+                    "(sqlite:///path/sweep.db, the default) or a server"
+                )
 
     @property
     def storage_url(self) -> str:
@@ -167,8 +335,79 @@ class SweepConfig:
 
     @property
     def command(self) -> str:
-        """The command line, as typed."""
-        return "amigo-gym sweep " + " ".join(self.argv)
+        """The command line, as typed, with the storage password masked (:func:`public_argv`)."""
+        return "amigo-gym sweep " + " ".join(public_argv(self.argv))
+
+    @property
+    def train_env_kwargs(self) -> dict[str, Any]:
+        """``--env-kwargs``, default: v1's training distribution (none for v0)."""
+        if self.env_kwargs is not None:
+            return dict(self.env_kwargs)
+        if self.env_id == "AmigoBot-v1":
+            from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
+
+            return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
+        return {}
+
+    def public(self) -> dict[str, Any]:
+        """The settings as JSON data with the storage password masked."""
+        from dataclasses import asdict
+
+        d = asdict(self)
+        d["storage"] = None if self.storage is None else masked_url(self.storage)
+        d["argv"] = public_argv(self.argv)
+        return d
+
+
+# --------------------------------------------------------------------------- validation cells
+def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
+    """The validation cells of ``env_id``: the benchmark suite's held-in scenarios of that environment
+    (``held_out=False``), each with the seeds ``VALIDATION_SEED_BASE .. + episodes - 1`` instead of its
+    test seeds, and (``max_steps`` > 0) episodes cut to ``max_steps`` steps. Never a held-out scenario,
+    never a test seed."""
+    from amigo_gym.training.benchmark import SUITE
+
+    seeds = tuple(range(VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + episodes))
+    cells = []
+    for sc in SUITE:
+        if sc.env_id != env_id or sc.held_out:
+            continue
+        if set(seeds) & set(sc.seeds):  # pragma: no cover - the suite's seeds are far below the base
+            raise ValueError(f"validation seeds overlap the test seeds of {sc.name}")
+        steps = min(sc.max_steps, max_steps) if max_steps > 0 else sc.max_steps
+        cells.append(replace(sc, seeds=seeds, max_steps=steps))
+    if not cells:
+        raise ValueError(f"the benchmark suite has no held-in scenario on {env_id}")
+    return tuple(cells)
+
+
+def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """The objective of a trained run: IQM over ``cells`` of the mean H cross-track RMS [m] of the run's
+    final model (``model.zip``, checked against ``run.json``'s sha256, with its ``vecnormalize.pkl``);
+    and the per-cell values (``None``: no finite value)."""
+    from amigo_gym.training import benchmark
+    from amigo_gym.training.evaluate import ModelRef, _run_algo, load_model
+    from amigo_gym.training.intervals import iqm
+
+    model = run_dir / "model.zip"
+    vecnorm = run_dir / "vecnormalize.pkl"
+    ref = ModelRef(
+        run_dir.name, _run_algo(run_dir), model, run_dir / "run.json", vecnorm if vecnorm.is_file() else None
+    )
+    agent = load_model(ref)
+    per_cell: dict[str, float | None] = {}
+    for sc in cells:
+        env = benchmark.make_env(sc)
+        try:
+            eps = benchmark.evaluate(agent, env, sc)
+        finally:
+            env.close()
+        vals = np.array([e["h_rms_m"] for e in eps], dtype=np.float64)
+        per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
+    finite = [v for v in per_cell.values() if v is not None]
+    if len(finite) != len(per_cell):
+        return math.nan, per_cell
+    return float(iqm(np.array([finite]))), per_cell
 
 
 # --------------------------------------------------------------------------- storage and study
@@ -179,8 +418,9 @@ def make_storage(cfg: SweepConfig) -> Any:
     url = driver_url(cfg.storage_url)
     engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
-    if sqlite:
+    if sqlite and not _in_memory(url):
         Path(url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
+    if sqlite:
         # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
         engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
     retry_cls = getattr(st, "RetryHeartbeatStaleTrialCallback", None)
@@ -200,7 +440,8 @@ def make_storage(cfg: SweepConfig) -> Any:
             last = exc
             time.sleep(0.5 + attempt)
     else:
-        raise RuntimeError(f"cannot open the storage {url}: {last}") from last
+        detail = scrub(" ".join(f"{type(last).__name__}: {last}".split()), url)
+        raise RuntimeError(f"cannot open the storage {masked_url(url)}: {detail}") from None
     if sqlite:
         from sqlalchemy import event
 
@@ -228,7 +469,11 @@ def _worker_seed(cfg: SweepConfig) -> int:
 
 
 def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
-    """Create the study or join it (``load_if_exists``); its creator stores the command and enqueues a grid."""
+    """Create the study or join it (``load_if_exists``); its creator stores the command and enqueues a grid.
+
+    Raises:
+        ValueError: the existing study is of another mode, environment or objective.
+    """
     import optuna
 
     sampler: Any
@@ -239,28 +484,23 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     pruner: Any = optuna.pruners.NopPruner()
     if cfg.pruner == "median" and cfg.mode == "hyperparams":
         pruner = optuna.pruners.MedianPruner(n_startup_trials=cfg.n_startup_trials, n_warmup_steps=cfg.eval_freq)
+    kw: dict[str, Any] = {"storage": storage, "study_name": cfg.name, "sampler": sampler, "pruner": pruner}
     try:  # exactly one process creates the study (unique name in the database) and enqueues the grid
-        study = optuna.create_study(
-            storage=storage, study_name=cfg.name, sampler=sampler, pruner=pruner, direction="maximize"
-        )
+        study = optuna.create_study(direction="minimize", **kw)
         created = True
     except optuna.exceptions.DuplicatedStudyError:
-        study = optuna.create_study(
-            storage=storage,
-            study_name=cfg.name,
-            sampler=sampler,
-            pruner=pruner,
-            direction="maximize",
-            load_if_exists=True,
-        )
+        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)  # logs "Using an existing study"
         created = False
     if created:
         for key, value in (
             ("command", cfg.command),
-            ("argv", cfg.argv),
+            ("argv", public_argv(cfg.argv)),
             ("mode", cfg.mode),
             ("algos", cfg.algos),
             ("budget", cfg.budget),
+            ("env_id", cfg.env_id),
+            ("env_kwargs", cfg.train_env_kwargs),
+            ("objective", OBJECTIVE),
             ("created", time.strftime("%Y-%m-%dT%H:%M:%S%z")),
             ("host", socket.gethostname()),
         ):
@@ -269,14 +509,27 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
             for algo in cfg.algos:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
+        study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
     else:
-        mode = study.user_attrs.get("mode")
-        if mode is not None and mode != cfg.mode:
-            raise ValueError(f"study {cfg.name!r} is a {mode} study, not {cfg.mode}")
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while not study.user_attrs.get("ready"):
+            if time.monotonic() > deadline:
+                raise RuntimeError(
+                    f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
+                    "stopped while queuing the grid?); delete the study and start again"
+                )
+            time.sleep(0.5)
+        attrs = study.user_attrs
+        for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
+            theirs = attrs.get(key)
+            if theirs is not None and theirs != mine:
+                raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
+        if study.direction != optuna.study.StudyDirection.MINIMIZE:
+            raise ValueError(f"study {cfg.name!r} maximises another objective (made by an older amigo-gym)")
     return study
 
 
-# --------------------------------------------------------------------------- budget
+# --------------------------------------------------------------------------- budget and status
 def _counted(t: Any) -> bool:
     from optuna.trial import TrialState
 
@@ -298,16 +551,83 @@ def budget_count(study: Any, before: int | None = None) -> int:
 
 
 def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
-    """No queued grid trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials)."""
+    """No queued trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials) and
+    no re-queued trial waits."""
     from optuna.trial import TrialState
 
+    waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
     if cfg.mode == "seeds":
-        return not study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
-    return budget_count(study, before=sys.maxsize if running else None) >= cfg.budget
+        return not waiting
+    return budget_count(study, before=sys.maxsize if running else None) >= cfg.budget and not waiting
+
+
+def study_status(study: Any, budget: int | None = None) -> str:
+    """``complete``, ``running`` or ``incomplete`` (module docstring), from the study alone."""
+    from optuna.trial import TrialState
+
+    trials = study.get_trials(deepcopy=False)
+    if any(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials):
+        return "running"
+    attrs = study.user_attrs
+    if attrs.get("mode") == "seeds":
+        cells = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.user_attrs.get("grid") is True}
+        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state == TrialState.COMPLETE}
+        return "complete" if cells and cells <= done else "incomplete"
+    want = int(attrs.get("budget", budget or 0))
+    return "complete" if budget_count(study) >= want else "incomplete"
 
 
 class _OverBudget(Exception):
     """This trial lost the race for the last place in the budget (or is not from the grid)."""
+
+
+# --------------------------------------------------------------------------- abandoned trials
+def mark_abandoned(study: Any) -> list[int]:
+    """Write ``ABANDONED.json`` into the folder of every trial that ended FAIL because its worker was
+    stopped (``interrupted``) or stopped beating (killed), where the folder exists here; a marker written
+    before the retry was queued is brought up to date (``retried_as``).
+
+    Returns the numbers of the trials marked (or updated) now.
+    """
+    from optuna.trial import TrialState
+
+    trials = study.get_trials(deepcopy=False)
+    marked = []
+    for t in trials:
+        ua = t.user_attrs
+        if t.state != TrialState.FAIL or "fail_reason" in ua or "over_budget" in ua or "run_dir" not in ua:
+            continue
+        folder = Path(str(ua["run_dir"]))
+        if not folder.is_dir():
+            continue
+        origin = t.system_attrs.get("failed_trial")
+        if any(u.number == origin != t.number and u.user_attrs.get("run_dir") == ua["run_dir"] for u in trials):
+            continue  # a retry that died before it had a folder of its own: the folder is its original's
+        retries = [
+            u.number
+            for u in trials
+            if u.number != t.number
+            and (u.system_attrs.get("failed_trial") == t.number or u.user_attrs.get("retry_of") == t.number)
+        ]
+        try:  # marked before: rewritten only when a retry appeared since (Optuna queues it just after the FAIL)
+            old = json.loads((folder / ABANDONED).read_text())
+        except (OSError, ValueError):
+            old = None
+        if isinstance(old, dict) and old.get("retried_as") == retries:
+            continue
+        reason = ua.get("interrupted") or "its worker stopped sending heartbeats (killed, or its machine lost)"
+        doc = {
+            "study": study.study_name,
+            "trial": t.number,
+            "state": "FAIL",
+            "reason": reason,
+            "retried_as": retries,
+            "worker": ua.get("worker"),
+            "marked": old.get("marked") if isinstance(old, dict) else time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        atomic_write_json(folder / ABANDONED, doc)
+        marked.append(t.number)
+    return marked
 
 
 # --------------------------------------------------------------------------- the objective
@@ -331,13 +651,25 @@ def sample_hyperparams(trial: Any, algo: str) -> dict[str, Any]:
     return hp
 
 
+def _requeue(study: Any, trial: Any, how: str) -> None:
+    """Mark an interrupted trial, queue its parameters again and mark its folder abandoned."""
+    trial.set_user_attr("interrupted", how)
+    frozen = study._storage.get_trial(trial._trial_id)
+    attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
+    study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
+
+
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
     import optuna
     import yaml
 
     from amigo_gym.training.train import HYPERPARAMS_DIR, Settings, load_hyperparams, train
 
+    cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
+    env_kwargs = cfg.train_env_kwargs
+
     def objective(trial: Any) -> float:
+        mark_abandoned(study)  # trials Optuna just found stale (it checks before each new trial)
         trial.set_user_attr("worker", f"{socket.gethostname()}:{os.getpid()}:{cfg.worker_index}")
         trial.set_user_attr("sampler_seed", sampler_seed)
         trial.set_user_attr("command", cfg.command)
@@ -354,21 +686,34 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 trial.set_user_attr("over_budget", True)
                 raise _OverBudget(f"the global budget of {cfg.budget} trials is reached")
             algo, seed = cfg.algos[0], cfg.train_seed
-        run_dir = Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}"
+        run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
         trial.set_user_attr("run_dir", str(run_dir))
+        try:
+            return _train_and_validate(trial, algo, seed, run_dir)
+        except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
+            _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
+            raise
+        except optuna.TrialPruned:
+            raise
+        except Exception as exc:  # any other error is the trial's own (never "abandoned")
+            if "fail_reason" not in trial.user_attrs:
+                trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+            raise
+
+    def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
         base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
-        hp = load_hyperparams(base_file)
+        hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
             hp |= sample_hyperparams(trial, algo)
         hp_file = run_dir / "hyperparams.yml"
-        atomic_write(hp_file, yaml.safe_dump({"AmigoBot-v0": hp}, sort_keys=True), parents=True)
+        atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
         pruned = False
 
         def after_eval(entry: dict[str, Any]) -> bool:
             nonlocal pruned
-            value = float(entry["mean_reward"])
+            value = float(entry.get("h_rms_m", math.nan))
             if not math.isfinite(value):
-                raise FloatingPointError(f"evaluation at step {entry['timesteps']} gave mean reward {value}")
+                raise FloatingPointError(f"evaluation at step {entry['timesteps']} gave h_rms_m {value}")
             if cfg.mode == "hyperparams":
                 trial.report(value, step=int(entry["timesteps"]))
                 if trial.should_prune():
@@ -376,6 +721,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                     return False
             return True
 
+        train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
         s = Settings(
             algo=algo,
             seed=seed,
@@ -387,30 +733,41 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
             threads=cfg.threads,
             progress=False,
             hyperparams=str(hp_file),
-            argv=["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file)],
+            env_id=cfg.env_id,
+            env_kwargs=env_kwargs,
+            argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
         )
         try:
             record = train(s, after_eval=after_eval)
+            last = record.get("last_eval") or {}
+            for key in ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward"):
+                if key in last:
+                    trial.set_user_attr(f"last_eval_{key}", last[key])
+            trial.set_user_attr("wall_time_s", record["wall_time_s"])
+            if pruned:
+                raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
+            value, per_cell = validate_model(run_dir / "run", cells)
         except (ValueError, RuntimeError, FloatingPointError, FileNotFoundError) as exc:
             trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
             raise
-        last = record.get("last_eval") or {}
-        for key in ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps"):
-            if key in last:
-                trial.set_user_attr(f"last_eval_{key}", last[key])
-        trial.set_user_attr("wall_time_s", record["wall_time_s"])
-        if pruned:
-            raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
-        value = float(last.get("mean_reward", math.nan))
+        trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
         if not math.isfinite(value):
-            trial.set_user_attr("fail_reason", f"final mean reward {value}")
+            trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
         return value  # NaN: Optuna marks the trial FAIL (never PRUNED)
 
     return objective
 
 
-def run_worker(cfg: SweepConfig) -> dict[str, Any]:
-    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary."""
+def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
+    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary.
+
+    ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
+    ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
+    """
     import optuna
     from optuna.study import MaxTrialsCallback
     from optuna.trial import TrialState
@@ -419,51 +776,87 @@ def run_worker(cfg: SweepConfig) -> dict[str, Any]:
     sampler_seed = _worker_seed(cfg)
     storage = make_storage(cfg)
     study = open_study(cfg, storage, sampler_seed)
+    if opened is not None:
+        opened.append(study)
     study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
     with warnings.catch_warnings():  # experimental in Optuna; used as optimize() itself uses it
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)  # requeue trials of dead workers before checking the budget
+    mark_abandoned(study)
 
     def stop_when_spent(st: Any, _t: Any) -> None:
         if _exhausted(st, cfg, running=True):
             st.stop()
 
-    if not _exhausted(study, cfg):
-        study.optimize(
-            _objective(cfg, study, sampler_seed),
-            n_trials=None,
-            catch=(ValueError, RuntimeError, FloatingPointError, FileNotFoundError, _OverBudget),
-            callbacks=[MaxTrialsCallback(cfg.budget, states=(TrialState.COMPLETE, TrialState.PRUNED)), stop_when_spent],
-        )
-    return summarize(study)
+    main_thread = __import__("threading").current_thread() is __import__("threading").main_thread()
+    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main_thread else None
+    try:
+        if not _exhausted(study, cfg):
+            study.optimize(
+                _objective(cfg, study, sampler_seed),
+                n_trials=None,
+                catch=(ValueError, RuntimeError, FloatingPointError, FileNotFoundError, _OverBudget),
+                callbacks=[
+                    MaxTrialsCallback(cfg.budget, states=(TrialState.COMPLETE, TrialState.PRUNED)),
+                    stop_when_spent,
+                ],
+            )
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+    return summarize(study, cfg.budget)
 
 
-def summarize(study: Any) -> dict[str, Any]:
-    """States, the counted trials, the best trial and each trial's parameters and value."""
+def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
+    """The study as the summary states it (module docstring): from the study alone, the same for every worker."""
     from optuna.trial import TrialState
 
-    trials = study.get_trials(deepcopy=False)
+    trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
     states = {s.name: sum(t.state == s for t in trials) for s in TrialState}
     best = None
     if any(t.state == TrialState.COMPLETE for t in trials):
         b = study.best_trial
         best = {"number": b.number, "value": b.value, "params": b.params}
+    attrs = dict(sorted(study.user_attrs.items()))
     return {
         "study": study.study_name,
+        "status": study_status(study, budget),
+        "budget": attrs.get("budget", budget),
         "states": states,
+        "finished": sum(t.state not in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
         "counted": budget_count(study),
         "best": best,
+        "study_attrs": attrs,
         "trials": [
             {
                 "number": t.number,
                 "state": t.state.name,
                 "value": t.value,
                 "params": t.params,
-                "user_attrs": {k: v for k, v in t.user_attrs.items() if k != "command"},
+                "user_attrs": {k: v for k, v in sorted(t.user_attrs.items()) if k != "command"},
+                "failed_trial": t.system_attrs.get("failed_trial"),
             }
             for t in trials
         ],
     }
+
+
+def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
+    """Write ``summary.json`` into ``folder`` unless the one there saw more finished trials (module
+    docstring); under a lock on the folder's ``summary.lock``. Whether it was written."""
+    from amigo_gym.runs import RunLock
+
+    path = folder / SUMMARY
+    with RunLock(folder, name="summary.lock", wait=60.0):
+        try:
+            old = json.loads(path.read_text())
+            newer = int(old.get("finished", -1)) > int(summary["finished"])
+        except (OSError, ValueError, TypeError, AttributeError):
+            newer = False
+        if newer:
+            return False
+        atomic_write_json(path, summary, parents=True)
+    return True
 
 
 # --------------------------------------------------------------------------- command line
@@ -472,7 +865,18 @@ def parse_args(argv: Sequence[str]) -> SweepConfig:
     p = OneLineParser(prog="amigo-gym sweep", description="Optuna studies over amigo-gym training runs.")
     p.add_argument("--algo", nargs="+", required=True, choices=ALGOS, help="algorithm(s) (required)")
     p.add_argument("--mode", choices=MODES, default="hyperparams", help="hyperparams (default) or seeds")
-    p.add_argument("--storage", default=None, help="SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db)")
+    p.add_argument("--env", choices=ENV_IDS, default="AmigoBot-v0", help="environment the trials train on")
+    p.add_argument(
+        "--env-kwargs",
+        default=None,
+        help="keywords of gym.make as JSON [json] (default: v1's training distribution; none for v0)",
+    )
+    p.add_argument(
+        "--storage",
+        default=None,
+        help="SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); give a password through PGPASSWORD "
+        "or ~/.pgpass, not in the URL",
+    )
     p.add_argument("--study-name", default=None, help="study name [name] (default: amigo-<algos>-<mode>)")
     p.add_argument("--n-trials", type=int, default=20, help="global trial budget over all workers [trials]")
     p.add_argument("--n-jobs", type=int, default=1, help="worker processes on this machine [processes]")
@@ -480,6 +884,10 @@ def parse_args(argv: Sequence[str]) -> SweepConfig:
     p.add_argument("--timesteps", type=int, default=100_000, help="training steps per trial [steps]")
     p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations (pruning points) [steps]")
     p.add_argument("--eval-episodes", type=int, default=5, help="episodes per evaluation [episodes]")
+    p.add_argument("--val-episodes", type=int, default=5, help="episodes per validation cell (objective) [episodes]")
+    p.add_argument(
+        "--val-max-steps", type=int, default=0, help="cut validation episodes to this length [steps] (0: the cell's)"
+    )
     p.add_argument("--train-seed", type=int, default=0, help="training seed of hyperparameter trials [-]")
     p.add_argument("--hyperparams", default=None, help="base YAML [file] (default: agents/hyperparams/<algo>.yml)")
     p.add_argument("--out", default="runs/sweep", help="folder of the trials' runs (and the default SQLite file) [dir]")
@@ -493,6 +901,14 @@ def parse_args(argv: Sequence[str]) -> SweepConfig:
     p.add_argument("--threads", type=int, default=1, help="torch threads per worker [threads]")
     p.add_argument("--worker-index", type=int, default=0, help=argparse_suppress())
     a = p.parse_args(list(argv))
+    env_kw = None
+    if a.env_kwargs is not None:
+        try:
+            env_kw = json.loads(a.env_kwargs)
+        except ValueError:
+            p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
+        if not isinstance(env_kw, dict):
+            p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
     cfg = SweepConfig(
         algos=list(a.algo),
         mode=a.mode,
@@ -516,6 +932,10 @@ def parse_args(argv: Sequence[str]) -> SweepConfig:
         max_retry=a.max_retry,
         threads=a.threads,
         worker_index=a.worker_index,
+        env_id=a.env,
+        env_kwargs=env_kw,
+        val_episodes=a.val_episodes,
+        val_max_steps=a.val_max_steps,
         argv=[x for x in argv],
     )
     try:
@@ -532,8 +952,10 @@ def argparse_suppress() -> str:
     return argparse.SUPPRESS
 
 
-def _spawn_workers(cfg: SweepConfig) -> int:
-    """Open the study once (tables, grid), then run ``n_jobs`` worker processes of this command and wait."""
+def _spawn_workers(cfg: SweepConfig) -> list[int]:
+    """Open the study once (tables, grid), then run ``n_jobs`` worker processes of this command; their exit
+    statuses (negative: killed by that signal). A stop of this process (``SIGTERM``, ``Ctrl-C``) stops them
+    with ``SIGTERM`` and waits for them (each queues its trial again)."""
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()
@@ -543,7 +965,7 @@ def _spawn_workers(cfg: SweepConfig) -> int:
         for i in range(cfg.n_jobs):
             args = [*base, "--n-jobs", "1", "--worker-index", str(i)]
             procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.cli", "sweep", *args]))
-        codes = [p.wait() for p in procs]
+        return [p.wait() for p in procs]
     except BaseException:
         for p in procs:
             if p.poll() is None:
@@ -551,31 +973,90 @@ def _spawn_workers(cfg: SweepConfig) -> int:
         for p in procs:
             p.wait()
         raise
-    return max(codes) if codes else 0
+
+
+def _describe(code: int) -> str:
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit status {code}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``amigo-gym sweep``."""
+    """Entry point of ``amigo-gym sweep`` (exit status: module docstring)."""
     args = list(sys.argv[1:] if argv is None else argv)
     cfg = parse_args(args)
+    url = cfg.storage_url
 
     def run() -> int:
-        if cfg.n_jobs > 1:
-            rc = _spawn_workers(cfg)
-            storage = make_storage(cfg)
-            import optuna
+        import optuna
 
-            summary = summarize(optuna.load_study(study_name=cfg.name, storage=storage))
-        else:
-            rc = 0
-            summary = run_worker(cfg)
-        atomic_write_json(Path(cfg.out) / cfg.name / "summary.json", summary | {"config": asdict(cfg)}, parents=True)
-        print(f"study {summary['study']}: {summary['states']}; counted {summary['counted']} of budget {cfg.budget}")
+        interrupted = False
+        failed: list[str] = []
+        opened: list[Any] = []
+        old = signal.signal(signal.SIGTERM, _raise_interrupt)
+        try:
+            if cfg.n_jobs > 1:
+                try:
+                    codes = _spawn_workers(cfg)
+                except KeyboardInterrupt:
+                    interrupted, codes = True, []
+                failed = [f"worker {i}: {_describe(c)}" for i, c in enumerate(codes) if c not in (0, INTERRUPTED)]
+                interrupted = interrupted or INTERRUPTED in codes
+            else:
+                try:
+                    run_worker(cfg, opened)
+                except KeyboardInterrupt:
+                    interrupted = True
+        finally:
+            signal.signal(signal.SIGTERM, old)
+        # this process's own study object when it has one (an in-memory storage lives only in it)
+        study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
+        mark_abandoned(study)
+        summary = summarize(study, cfg.budget)
+        write_summary(Path(cfg.out) / cfg.name, summary)
+        status = summary["status"]
+        print(
+            f"study {summary['study']}: {status}; {summary['states']}; counted {summary['counted']} of budget "
+            f"{summary['budget']}"
+        )
         if summary["best"] is not None:
             print(f"best trial {summary['best']['number']}: {summary['best']['value']:.4g} {summary['best']['params']}")
-        return rc
+        if status == "running":
+            print("the study is still running (trials RUNNING or WAITING on other workers)")
+        if failed:  # a worker that died counts before a stop
+            print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
+            return 1
+        if interrupted:
+            print("amigo-gym sweep: stopped; the interrupted trial is queued again: rerun to continue", file=sys.stderr)
+            return INTERRUPTED
+        if status == "incomplete":
+            print(
+                "amigo-gym sweep: error: the study is incomplete (trials failed or were lost); see summary.json",
+                file=sys.stderr,
+            )
+            return 1
+        return 0
 
-    return run_guarded(run, "amigo-gym sweep")
+    def guarded() -> int:
+        try:
+            return run()
+        except ValueError as exc:  # status 2, one line, password masked
+            raise ValueError(scrub(str(exc), url)) from None
+        except (KeyboardInterrupt, FileNotFoundError, FileExistsError):
+            raise
+        except Exception as exc:
+            if os.environ.get("AMIGO_GYM_TRACEBACK"):
+                raise
+            print(
+                f"amigo-gym sweep: error: {scrub(' '.join(f'{type(exc).__name__}: {exc}'.split()), url)}",
+                file=sys.stderr,
+            )
+            return 1
+
+    return run_guarded(guarded, "amigo-gym sweep")
 
 
 if __name__ == "__main__":

@@ -27,7 +27,8 @@ a killed run never leaves a half-written file):
   policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps; each entry with the steps, the wall
   time since the start of this process, the mean reward and the task metrics) and its best model;
 * ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
-  last evaluation, versions, command, the model's sha256);
+  last evaluation, versions, command, the model's sha256, and under ``files`` the sha256 of every file a
+  loader reads beside it: ``model.zip``, ``best_model.zip`` and ``vecnormalize.pkl``);
 * ``run.lock``: the lock held while a process uses the folder (a second process stops with one line);
   removed when the process ends cleanly.
 
@@ -543,6 +544,20 @@ def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None
     return done + -(-remaining // size) * size, why
 
 
+def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[str, Any]) -> dict[str, Any]:
+    """The ``config.json`` of a run started (or recovered) by this command."""
+    return {
+        "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
+        "hyperparams": hp,
+        "env_id": s.env_id,
+        "env_kwargs": env_kwargs(s.env_id, s.env_kwargs),
+        "git_revision": git_revision(),
+        "versions": versions(),
+        "command": "amigo-gym train " + " ".join(s.argv),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+
+
 def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
@@ -557,15 +572,23 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
     n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
 
     config_file = out / "config.json"
-    if s.resume:
-        if not config_file.is_file():
+    recovered = False
+    if s.resume and not config_file.is_file():
+        if not runs.candidates(out, report=False):
             raise FileNotFoundError(f"--resume: no checkpoint in {out} (no run started there: missing config.json)")
+        # the checkpoints are intact: resume from them, recording this command's settings as the configuration
+        runs.warn(
+            f"--resume: {config_file} is missing; resuming from the checkpoints in {out / runs.CHECKPOINTS} "
+            "with the settings of this command (config.json written again, marked 'recovered')"
+        )
+        recovered = True
+    if s.resume and not recovered:
         config = runs.read_json(config_file)
         if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
             raise runs.CorruptFileError(f"{config_file}: not a run configuration (no 'settings')")
         if config["settings"].get("algo") != s.algo:
             raise ValueError(f"--resume: {out} holds a {config['settings'].get('algo')} run, not {s.algo}")
-    elif runs.has_run_files(out):
+    elif not s.resume and runs.has_run_files(out):
         raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
     runs.clean_temporaries(out)  # left by a killed run; we hold the lock
 
@@ -578,6 +601,8 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         if loaded is None:
             runs.warn(f"--resume: no checkpoint yet in {out}; starting from step 0")
         runs.restore_snapshot(out, None if loaded is None else loaded[0])
+        if recovered:
+            config = _new_config(s, total, n_envs, hp_path, hp) | {"recovered": True}
         resume_entry = {
             "command": "amigo-gym train " + " ".join(s.argv),
             "from_step": 0 if loaded is None else loaded[0].step,
@@ -585,16 +610,7 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
         atomic_write_json(config_file, config, parents=True)
     else:
-        config = {
-            "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
-            "hyperparams": hp,
-            "env_id": s.env_id,
-            "env_kwargs": env_kwargs(s.env_id, s.env_kwargs),
-            "git_revision": git_revision(),
-            "versions": versions(),
-            "command": "amigo-gym train " + " ".join(s.argv),
-            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        }
+        config = _new_config(s, total, n_envs, hp_path, hp)
         atomic_write_json(config_file, config, parents=True)
 
     if loaded is not None:
@@ -664,6 +680,12 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
         "sha256": runs.sha256_file(out / "model.zip"),
+    }
+    # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
+    record["files"] = {
+        name: runs.sha256_file(out / name)
+        for name in ("model.zip", "best_model.zip", VECNORMALIZE)
+        if (out / name).is_file()
     }
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
