@@ -34,6 +34,7 @@ DISTRIBUTION = {
     "optuna": "optuna",
     "psycopg2": "psycopg2-binary",
     "numba": "numba",
+    "rosbags": "rosbags",
 }
 
 

@@ -1164,17 +1164,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=None,
         metavar="FILE",
         help="run on paths of your own instead of the suite: points files (.csv/.json, columns x, y [m]; "
-        "amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files]",
+        "amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files] (default: none, the suite)",
     )
-    p.add_argument("--speed", type=float, default=0.2, help="reference speed on --path [m/s]")
+    p.add_argument("--speed", type=float, default=0.2, help="reference speed on --path [m/s] (default 0.2)")
     p.add_argument(
         "--feasibility",
         choices=("error", "warn", "off"),
         default="off",
         help="--path beyond the robot's limits: refuse, warn or run (default off: run; the report lists them)",
     )
-    p.add_argument("--goal-tolerance", type=float, default=0.0, help="open --path: success within this of the end [m]")
-    p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s]")
+    p.add_argument(
+        "--goal-tolerance",
+        type=float,
+        default=0.0,
+        help="open --path: success within this of the end [m] (default 0: off)",
+    )
+    p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
     p.add_argument(
         "--trust-unverified",
         action="store_true",
