@@ -45,7 +45,8 @@ Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's
 ``h_rms_m`` (H's cross-track RMS over the episode), ``h_rms_settled_m`` (over ``t >= 5 s``, the
 documented settling time :data:`~amigo_gym.training.task_metrics.DEFAULT_SETTLE_TIME_S`), ``h_max_m``,
 ``failure_rate`` (fraction of episodes that terminated or whose settled error exceeded 0.10 m,
-:data:`~amigo_gym.training.task_metrics.DEFAULT_FAILURE_TOLERANCE_M`), ``speed_err_rms`` [m/s],
+:data:`~amigo_gym.training.task_metrics.DEFAULT_FAILURE_TOLERANCE_M`), ``speed_err_rms`` [m/s] and
+``speed_err_settled_rms`` (over ``t >= 5 s``),
 ``return``, ``return_per_step`` (return over the scenario's episode length: in [0, 1] for a reward of
 at most 1 per step), ``chatter_rms`` / ``chatter_settled_rms`` (RMS step-to-step change of the
 wheel-rate command [rad/s]), ``effort_rms`` (RMS wheel rate [rad/s]); ``per_episode`` lists the
@@ -589,7 +590,7 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
     col = {k: [e[k] for e in eps] for k in eps[0]}
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
-    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms"):
+    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms", "speed_err_settled_rms"):
         rec[k] = _nanmean(col[k])
     rec["failure_rate"] = _nanmean(col["failure"])
     rec["return"] = _nanmean(col["return"])
@@ -806,6 +807,8 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     per_scenario = (
         ("h_rms_m", "H cross-track RMS per scenario [mm]", _mm),
         ("speed_err_rms", "Speed error RMS per scenario [mm/s]", _mm),
+        ("h_rms_settled_m", "H cross-track RMS after settling (t >= 5 s) per scenario [mm]", _mm),
+        ("speed_err_settled_rms", "Speed error RMS after settling (t >= 5 s) per scenario [mm/s]", _mm),
         ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
     )
     for key, title, fmt in per_scenario:
