@@ -284,3 +284,39 @@ def test_cli_bad_value_is_one_line(tmp_path: Path) -> None:
         text=True,
     )
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "gamma" in r.stderr
+
+
+def test_benchmark_runs_fast_models_as_numpy_policies(tmp_path: Path) -> None:
+    """``amigo-gym benchmark`` takes a fast-PPO zip (not mistaken for SB3's PPO by the 'ppo' in its name) and
+    runs it through the same predict as a direct rollout; a v0 scenario is unavailable (other observation)."""
+    from amigo_gym.training import benchmark as bm
+
+    spec = FeatureSpec({"path": "circle"}, history=1, residual_bound=0.2)
+    dim = FeatureBuilder(spec).dim
+    rng = np.random.default_rng(0)
+    pol = FastPolicy(spec, [(rng.normal(size=(dim, 4)), np.zeros(4)), (rng.normal(size=(4, 2)), np.zeros(2))],
+                     np.zeros(2), RunningMeanStd.zeros(dim))  # fmt: skip
+    z = tmp_path / "ppo_fast_s3.zip"
+    pol.save(z)
+    (agent,) = bm.parse_agents([f"fast={z}"])
+    assert agent.algo == "fastppo" and agent.seed == 3
+    sc = bm.Scenario("c", "AmigoBot-v1", {"path": "circle"}, seeds=(0, 1), max_steps=30, held_out=False,
+                     description="test")  # fmt: skip
+    env = gym.make("AmigoBot-v1", path="circle")
+    got = bm.evaluate(agent.instantiate(env), env, sc)
+    # the same two episodes rolled out directly
+    venv = gym.make_vec("AmigoBot-v1", num_envs=2, path="circle", max_episode_steps=30)
+    obs, _ = venv.reset(seed=[0, 1])
+    fresh = FastPolicy.load(z)
+    state, starts, err = None, np.ones(2, bool), []
+    for _ in range(30):
+        a, state = fresh.predict(obs, state=state, episode_start=starts)
+        starts = np.zeros(2, bool)
+        obs, _, _, _, info = venv.step(a)
+        err.append(info["cross_track_error"])
+    rms = np.sqrt(np.mean(np.square(np.array(err)), axis=0))
+    np.testing.assert_allclose([g["h_rms_m"] for g in got], rms, rtol=1e-12)
+    v0 = gym.make("AmigoBot-v0")
+    with pytest.raises(bm.Unavailable, match="observation"):
+        agent.instantiate(v0)
+    env.close(), venv.close(), v0.close()

@@ -36,6 +36,8 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
   from the names (``ppo``/``sac``/``td3`` in the agent or folder name; ``seed_<n>``/``_s<n>`` in the
   file name), else the seed is the file's index.
 * a zip file or a folder of zips (``agents/pretrained/v1/`` holds ``<algo>/<file>.zip``).
+* models of the fast PPO (``amigo-gym train-fast``; zips holding ``model.json``) in any of these forms: they run
+  as :class:`amigo_gym.policies.learned.FastPolicy` (numpy), algorithm ``fastppo`` / ``fastppo_residual``.
 
 Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
 (named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped.
@@ -125,6 +127,8 @@ __all__ = [
 
 SUITE_VERSION = "1.0"
 ALGOS = ("ppo", "sac", "td3")
+#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.training.fastppo`), run in numpy
+FAST_ALGO = "fastppo"
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]
@@ -404,11 +408,20 @@ class AgentSpec:
         """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
         if self.path is None:
             return CLASSICAL[self.name](env)
+        if self._model is None and str(self.algo).startswith(FAST_ALGO):
+            from amigo_gym.policies.learned import FastPolicy
+
+            self._model = FastPolicy.load(self.path)
         if self._model is None:
             from stable_baselines3 import PPO, SAC, TD3
 
             cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
             self._model = cls.load(self.path, device="cpu")
+        if str(self.algo).startswith(FAST_ALGO):
+            dim = self._model.builder.obs_dim
+            if getattr(env.observation_space, "shape", None) != (dim,):
+                raise Unavailable(f"observation shape {env.observation_space.shape} differs from the model's ({dim},)")
+            return self._model
         want = getattr(self._model.observation_space, "shape", None)
         got = getattr(env.observation_space, "shape", None)
         if want != got:
@@ -421,7 +434,8 @@ class AgentSpec:
         if self.path is None:
             d["kind"] = "classical"
         else:
-            d |= {"kind": "sb3", "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
+            kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
+            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
             if self.manifest is not None:
                 d["manifest"] = self.manifest
         return d
@@ -435,17 +449,30 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
+def _is_fast_model(path: Path) -> bool:
+    """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            return "model.json" in z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
 def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
     manifest_file = path.with_suffix(".json")
     manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else None
     algo = (manifest or {}).get("algo")
-    if algo not in ALGOS:
+    if _is_fast_model(path):  # amigo_gym.training.fastppo's models (numpy; plain or residual)
+        algo = algo if isinstance(algo, str) and algo.startswith(FAST_ALGO) else FAST_ALGO
+    elif algo not in ALGOS:
         for cand in (path.stem, path.parent.name, name or ""):
             hit = next((a for a in ALGOS if a in cand.lower()), None)
             if hit:
                 algo = hit
                 break
-    if algo not in ALGOS:
+    if algo not in ALGOS and not str(algo).startswith(FAST_ALGO):
         raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
     seed = (manifest or {}).get("seed")
     if not isinstance(seed, int):
