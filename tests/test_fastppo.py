@@ -320,3 +320,18 @@ def test_benchmark_runs_fast_models_as_numpy_policies(tmp_path: Path) -> None:
     with pytest.raises(bm.Unavailable, match="observation"):
         agent.instantiate(v0)
     env.close(), venv.close(), v0.close()
+
+
+def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
+    pytest.importorskip("stable_baselines3")
+    from amigo_gym.bench.train import cpu_model, main
+
+    out = tmp_path / "b.json"
+    assert main(["--fast-steps", "16384", "--sb3-steps", "256", "--skip-sb3-fastconfig", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["cpu_model"] == cpu_model() != ""
+    fast, sb3 = doc["runs"]["fastppo"], doc["runs"]["sb3_shipped"]
+    assert fast["env_steps"] == 16384 and sb3["env_steps"] == 16 * 256  # SB3 rounds up to whole rollouts
+    assert fast["sps"] == pytest.approx(fast["env_steps"] / fast["wall_s"], rel=0.01)
+    assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
+    assert main(["--fast-steps", "10", "--json", str(out)]) == 2  # below one rollout: one-line error

@@ -14,7 +14,8 @@ number of torch threads, one after the other in one process:
 * ``sb3_fastconfig``: SB3's ``PPO`` with the fast PPO's configuration (512 envs, ``n_steps=32``,
   ``batch_size=4096``, 4 epochs), which separates the configuration's share of the gap from the per-env Python.
 
-Each rate is ``env-steps / wall seconds`` of the whole call (building the env, resets, rollouts, updates), and the
+Each rate is ``env-steps / wall seconds`` of the whole call (building the env, resets, rollouts, updates), also per
+CPU second of the process (``sps_cpu``, all its threads: less sensitive to other jobs on a shared machine), and the
 ratio fastppo / SB3 is printed with the CPU model, the torch threads and the load average at the start and end
 (the development machine is shared: compare ratios measured in the same run). Writes ``--json`` atomically.
 """
@@ -67,12 +68,24 @@ def bench_fastppo(steps: int, threads: int, seed: int = 0, **overrides: Any) -> 
         **overrides,
     )
     with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         rec = train(s, Path(tmp) / "run", log=None, evaluate_runs=False)
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     n = int(rec["timesteps"])
     cfg = {k: getattr(s, k) for k in ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden")}
-    return {"env_steps": n, "wall_s": round(wall, 2), "sps": round(n / wall, 1), "config": cfg}
+    return _result(n, wall, cpu, cfg)
+
+
+def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
+    """Env-steps per wall second (``sps``) and per CPU second of this process, all threads (``sps_cpu``)."""
+    return {
+        "env_steps": n,
+        "wall_s": round(wall, 2),
+        "cpu_s": round(cpu, 2),
+        "sps": round(n / wall, 1),
+        "sps_cpu": round(n / cpu, 1),
+        "config": cfg,
+    }
 
 
 def bench_sb3(
@@ -88,7 +101,7 @@ def bench_sb3(
 
     torch.set_num_threads(threads)
     kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
     venv.seed(seed)
     model = PPO(
@@ -105,11 +118,15 @@ def bench_sb3(
         verbose=0,
     )
     model.learn(total_timesteps=steps)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     venv.close()
     n = int(model.num_timesteps)
     cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
-    return {"env_steps": n, "wall_s": round(wall, 2), "sps": round(n / wall, 1), "config": cfg}
+    return _result(n, wall, cpu, cfg)
+
+
+def _show(name: str, r: dict[str, Any]) -> None:
+    print(f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)", flush=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -147,12 +164,12 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"load average {head['load_average_start']}", flush=True)  # fmt: skip
         runs: dict[str, Any] = {}
         runs["fastppo"] = bench_fastppo(args.fast_steps, args.threads)
-        print(f"fastppo        {runs['fastppo']['sps']:>10,.0f} env-steps/s of training", flush=True)
+        _show("fastppo", runs["fastppo"])
         runs["sb3_shipped"] = bench_sb3(args.sb3_steps, args.threads, 16, 256, 1024, 10)
-        print(f"sb3_shipped    {runs['sb3_shipped']['sps']:>10,.0f} env-steps/s of training", flush=True)
+        _show("sb3_shipped", runs["sb3_shipped"])
         if not args.skip_sb3_fastconfig:
             runs["sb3_fastconfig"] = bench_sb3(max(args.sb3_steps, 512 * 32), args.threads, 512, 32, 4096, 4)
-            print(f"sb3_fastconfig {runs['sb3_fastconfig']['sps']:>10,.0f} env-steps/s of training", flush=True)
+            _show("sb3_fastconfig", runs["sb3_fastconfig"])
         ratios = {
             f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
         }
