@@ -17,7 +17,9 @@ measures better than what is shipped (``amigo-gym benchmark --agents analytic <a
 
 Distributions (never the benchmark's cells; the evaluations during training use validation seeds 1,000,000+):
 
-* ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``);
+* ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
+  with the low-pass action parameterisation ``--filter-alpha 0.5``: of the smoothness variants measured on the
+  validation seeds (docs/baselines.md, 1.5M steps each) it had both the lowest settled chatter and H error;
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
   actuation delay 0-0.3 s, ``mild``'s noise; the correction is bounded to +-0.3 of the action range and the
   policy observes the last 4 steps' commands and measurements (``--history 4``: 0.4 s, longer than the delays).
@@ -55,7 +57,7 @@ RESIDUAL_ENV_KWARGS: dict[str, object] = {
 
 #: agent -> (env keywords, extra ``amigo-gym train-fast`` options)
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
-    "ppo_fast": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "15000000", "--caps-temporal", "0.3"]),
+    "ppo_fast": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "15000000", "--filter-alpha", "0.5"]),
     "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
 }
 
