@@ -261,8 +261,10 @@ def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch
 
 
 # --------------------------------------------------------------------------- evaluation
-def evaluate_policy(policy: FastPolicy, s: FastPPOSettings) -> dict[str, float]:
-    """Mean task metrics of ``eval_envs`` deterministic episodes of the training distribution (validation seeds).
+def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
+    """Mean task metrics of ``eval_envs`` deterministic episodes of ``s.env_kwargs`` (validation seeds).
+
+    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)`` (its state passed through).
 
     One vector env of ``eval_envs`` robots, ``reset(seed=[eval_seed + i])``, stepped until every robot's first
     episode ended (``NextStep`` autoreset: later steps are ignored); per robot
@@ -282,7 +284,7 @@ def evaluate_policy(policy: FastPolicy, s: FastPPOSettings) -> dict[str, float]:
         length = np.full(n, steps)
         term = np.zeros(n, dtype=bool)
         alive = np.ones(n, dtype=bool)
-        state = policy.builder.initial_state(n)
+        state: Any = None  # any SB3-style predict: FastPolicy, AnalyticTrackingPolicy, an SB3 model
         starts = np.ones(n, dtype=bool)
         for k in range(steps):
             act, state = policy.predict(obs, state=state, episode_start=starts)
