@@ -140,7 +140,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--sb3-steps", type=int, default=32_768, help="env-steps of each SB3 run [steps]")
     p.add_argument("--threads", type=int, default=1, help="torch threads of every run [threads]")
     p.add_argument("--skip-sb3-fastconfig", action="store_true", help="skip SB3 with the fast configuration")
-    p.add_argument("--json", default=None, help="write the results here [file]")
+    p.add_argument("--json", default=None, help="write the results here [file] (default: print only)")
     args = p.parse_args(list(argv) if argv is not None else None)
 
     def run() -> int:

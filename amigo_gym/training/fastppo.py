@@ -110,10 +110,10 @@ class FastPPOSettings:
         caps_temporal: CAPS temporal smoothness weight [-], in [0, 100].
         caps_spatial: CAPS spatial smoothness weight [-], in [0, 100].
         caps_sigma: CAPS spatial perturbation std [normalised feature units], in (0, 10].
-        seed: seed of the networks, the sampling and the training envs, in [0, 2**31).
+        seed: seed of the networks, the sampling and the training envs [-], in [0, 2**31).
         eval_every: env-steps between evaluations [steps], in [1, 1e10].
         eval_envs: evaluation episodes (validation seeds eval_seed + i), in [1, 4096].
-        eval_seed: first validation seed, in [0, 2**31).
+        eval_seed: first validation seed [-], in [0, 2**31).
         checkpoint_every: env-steps between checkpoints [steps], in [1, 1e10].
         threads: torch threads, in [1, 64].
         max_episode_steps: episode time limit [steps], in [1, 100000].
@@ -636,7 +636,7 @@ def _parser() -> argparse.ArgumentParser:
     from amigo_gym.cli import OneLineParser, attribute_help
 
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
-    p.add_argument("--out", required=True, help="run folder [folder]")
+    p.add_argument("--out", required=True, help="run folder [folder] (required)")
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     helps = attribute_help(FastPPOSettings)
