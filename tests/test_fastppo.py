@@ -333,5 +333,7 @@ def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     fast, sb3 = doc["runs"]["fastppo"], doc["runs"]["sb3_shipped"]
     assert fast["env_steps"] == 16384 and sb3["env_steps"] == 16 * 256  # SB3 rounds up to whole rollouts
     assert fast["sps"] == pytest.approx(fast["env_steps"] / fast["wall_s"], rel=0.01)
+    assert 0 < fast["loop_wall_s"] <= fast["wall_s"] and fast["sps_loop"] >= fast["sps"]  # iterations: part of the call
+    assert fast["cpu_s_rollout"] > 0 and fast["cpu_s_update"] > 0
     assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
     assert main(["--fast-steps", "10", "--json", str(out)]) == 2  # below one rollout: one-line error

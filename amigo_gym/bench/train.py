@@ -15,7 +15,9 @@ number of torch threads, one after the other in one process:
   ``batch_size=4096``, 4 epochs), which separates the configuration's share of the gap from the per-env Python.
 
 Each rate is ``env-steps / wall seconds`` of the whole call (building the env, resets, rollouts, updates), also per
-CPU second of the process (``sps_cpu``, all its threads: less sensitive to other jobs on a shared machine), and the
+CPU second of the process (``sps_cpu``, all its threads: less sensitive to other jobs on a shared machine); for the
+fast PPO also of its training iterations alone (``sps_loop``, ``sps_loop_cpu``: without building the env, the first
+resets and the final save, a fixed cost of a few seconds that long runs do not notice); and the
 ratio fastppo / SB3 is printed with the CPU model, the torch threads and the load average at the start and end
 (the development machine is shared: compare ratios measured in the same run). Writes ``--json`` atomically.
 """
@@ -73,7 +75,14 @@ def bench_fastppo(steps: int, threads: int, seed: int = 0, **overrides: Any) -> 
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     n = int(rec["timesteps"])
     cfg = {k: getattr(s, k) for k in ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden")}
-    return _result(n, wall, cpu, cfg)
+    out = _result(n, wall, cpu, cfg)
+    split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
+    out["cpu_s_rollout"], out["cpu_s_update"] = split["rollout"], split["update"]
+    out["loop_wall_s"] = split["loop_wall"]
+    # steady state: the training iterations only, without building the env, the first resets and the final save
+    out["sps_loop"] = round(n / max(split["loop_wall"], 1e-9), 1)
+    out["sps_loop_cpu"] = round(n / max(split["rollout"] + split["update"], 1e-9), 1)
+    return out
 
 
 def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
@@ -126,7 +135,10 @@ def bench_sb3(
 
 
 def _show(name: str, r: dict[str, Any]) -> None:
-    print(f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)", flush=True)
+    line = f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)"
+    if "sps_loop" in r:
+        line += f"; training iterations only: {r['sps_loop']:,.0f} per s ({r['sps_loop_cpu']:,.0f} per CPU second)"
+    print(line, flush=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -498,6 +498,8 @@ def train(
         evaluate()
         r.next_eval += s.eval_every
 
+    # CPU seconds of this call's rollouts and updates (process_time, all threads) and wall seconds of its iterations
+    cpu_split = {"rollout": 0.0, "update": 0.0, "loop_wall": 0.0}
     buf_x = torch.zeros((t_len + 1, n, d))
     buf_u = torch.zeros((t_len, n, 2))
     buf_logp = torch.zeros((t_len, n))
@@ -510,6 +512,7 @@ def train(
         for g in r.opt.param_groups:
             g["lr"] = frac * s.learning_rate
         # ---------------------------------------------------------------- rollout
+        c0, w0 = time.process_time(), time.perf_counter()
         for t in range(t_len):
             feats, base, s_next = builder(r.obs, r.fstate, r.starts)
             r.obs_rms.update(feats)
@@ -549,6 +552,8 @@ def train(
         with torch.no_grad():
             buf_v[t_len] = net.value(x_last)
         r.global_step += batch
+        c1 = time.process_time()
+        cpu_split["rollout"] += c1 - c0
         # ---------------------------------------------------------------- GAE
         adv = torch.zeros((t_len, n))
         last = torch.zeros(n)
@@ -588,6 +593,8 @@ def train(
                 loss.backward()  # type: ignore[no-untyped-call]
                 nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
                 r.opt.step()
+        cpu_split["update"] += time.process_time() - c1
+        cpu_split["loop_wall"] += time.perf_counter() - w0
         wall = wall0 + time.perf_counter() - t_start
         r.wall_s = wall
         if r.iteration % 20 == 0 or r.global_step >= stop:
@@ -623,6 +630,7 @@ def train(
         "versions": _versions(),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
+        "cpu_s_this_call": {k: round(v, 2) for k, v in cpu_split.items()},
     }
     if record["finished"]:
         _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
