@@ -129,6 +129,18 @@ COMMANDS: dict[str, Command] = {
         extra="logs",
         modules=("matplotlib",),
     ),
+    "train-fast": Command(
+        "amigo_gym.training.fastppo:main",
+        "fast PPO (or residual on the analytic controller) over the native AmigoBot-v1 vector env",
+        extra="train",
+        modules=("torch",),
+    ),
+    "bench-train": Command(
+        "amigo_gym.bench.train:main",
+        "training throughput: the fast PPO against SB3 PPO, same run",
+        extra="train",
+        modules=("torch", "stable_baselines3"),
+    ),
     "bench-core": Command("amigo_gym.bench.core:main", "benchmark the batched exact step"),
     "bench-env": Command("amigo_gym.bench.env:main", "benchmark the environment against peers"),
     "gallery": Command(

@@ -3,6 +3,8 @@
 * :mod:`amigo_gym.policies.analytic`: the analytic inverse solution for ``AmigoBot-v0``.
 * :mod:`amigo_gym.policies.tracking`: ``AmigoBot-v1``'s baselines: :class:`AnalyticTrackingPolicy` (the exact
   inverse solution on any path with integral action) and :class:`PurePursuitPolicy`.
+* :mod:`amigo_gym.policies.learned`: learned ``AmigoBot-v1`` policies in numpy (the fast PPO's models, the residual
+  policy on the analytic controller) and :func:`load_pretrained` (a shipped zip, its manifest's sha256 checked).
 
 May import the core (params, kinematics, paths, task, tracking, inverse) and numpy; never envs' internals,
 training, analysis or the CLI.
@@ -11,6 +13,7 @@ training, analysis or the CLI.
 from __future__ import annotations
 
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_body_velocity, analytic_wheel_rates
+from amigo_gym.policies.learned import FastPolicy, load_pretrained
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy, PurePursuitPolicy
 
 __all__ = [
@@ -19,4 +22,6 @@ __all__ = [
     "analytic_wheel_rates",
     "AnalyticTrackingPolicy",
     "PurePursuitPolicy",
+    "FastPolicy",
+    "load_pretrained",
 ]

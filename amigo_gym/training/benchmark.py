@@ -36,6 +36,8 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
   from the names (``ppo``/``sac``/``td3`` in the agent or folder name; ``seed_<n>``/``_s<n>`` in the
   file name), else the seed is the file's index.
 * a zip file or a folder of zips (``agents/pretrained/v1/`` holds ``<algo>/<file>.zip``).
+* models of the fast PPO (``amigo-gym train-fast``; zips holding ``model.json``) in any of these forms: they run
+  as :class:`amigo_gym.policies.learned.FastPolicy` (numpy), algorithm ``fastppo`` / ``fastppo_residual``.
 
 Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
 (named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped (named
@@ -46,7 +48,8 @@ Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's
 ``h_rms_m`` (H's cross-track RMS over the episode), ``h_rms_settled_m`` (over ``t >= 5 s``, the
 documented settling time :data:`~amigo_gym.training.task_metrics.DEFAULT_SETTLE_TIME_S`), ``h_max_m``,
 ``failure_rate`` (fraction of episodes that terminated or whose settled error exceeded 0.10 m,
-:data:`~amigo_gym.training.task_metrics.DEFAULT_FAILURE_TOLERANCE_M`), ``speed_err_rms`` [m/s],
+:data:`~amigo_gym.training.task_metrics.DEFAULT_FAILURE_TOLERANCE_M`), ``speed_err_rms`` [m/s] and
+``speed_err_settled_rms`` (over ``t >= 5 s``),
 ``return``, ``return_per_step`` (return over the scenario's episode length: in [0, 1] for a reward of
 at most 1 per step), ``chatter_rms`` / ``chatter_settled_rms`` (RMS step-to-step change of the
 wheel-rate command [rad/s]), ``effort_rms`` (RMS wheel rate [rad/s]); ``per_episode`` lists the
@@ -127,6 +130,8 @@ __all__ = [
 
 SUITE_VERSION = "1.0"
 ALGOS = ("ppo", "sac", "td3")
+#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.training.fastppo`), run in numpy
+FAST_ALGO = "fastppo"
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]
@@ -439,17 +444,27 @@ class AgentSpec:
         if self.path is None:
             return CLASSICAL[self.name](env)
         if self._model is None:
-            from stable_baselines3 import PPO, SAC, TD3
-
             from amigo_gym.runs import check_pickle, corrupt_errors
 
-            # checked before it is unpickled: the manifest's sha256, else a warning naming the file (once)
+            # checked before it is opened: the manifest's sha256, else a warning naming the file (once)
             digest = (self.manifest or {}).get("sha256")
             path = Path(self.path)
             check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
-            cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
-            with corrupt_errors(path, f"{str(self.algo).upper()} model"):
-                self._model = cls.load(self.path, device="cpu")
+            if str(self.algo).startswith(FAST_ALGO):
+                from amigo_gym.policies.learned import FastPolicy
+
+                self._model = FastPolicy.load(self.path)
+            else:
+                from stable_baselines3 import PPO, SAC, TD3
+
+                cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
+                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
+                    self._model = cls.load(self.path, device="cpu")
+        if str(self.algo).startswith(FAST_ALGO):
+            dim = self._model.builder.obs_dim
+            if getattr(env.observation_space, "shape", None) != (dim,):
+                raise Unavailable(f"observation shape {env.observation_space.shape} differs from the model's ({dim},)")
+            return self._model
         want = getattr(self._model.observation_space, "shape", None)
         got = getattr(env.observation_space, "shape", None)
         if want != got:
@@ -462,7 +477,8 @@ class AgentSpec:
         if self.path is None:
             d["kind"] = "classical"
         else:
-            d |= {"kind": "sb3", "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
+            kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
+            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
             if self.manifest is not None:
                 d["manifest"] = self.manifest
         return d
@@ -476,17 +492,30 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
+def _is_fast_model(path: Path) -> bool:
+    """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            return "model.json" in z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
 def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
     manifest_file = path.with_suffix(".json")
     manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else None
     algo = (manifest or {}).get("algo")
-    if algo not in ALGOS:
+    if _is_fast_model(path):  # amigo_gym.training.fastppo's models (numpy; plain or residual)
+        algo = algo if isinstance(algo, str) and algo.startswith(FAST_ALGO) else FAST_ALGO
+    elif algo not in ALGOS:
         for cand in (path.stem, path.parent.name, name or ""):
             hit = next((a for a in ALGOS if a in cand.lower()), None)
             if hit:
                 algo = hit
                 break
-    if algo not in ALGOS:
+    if algo not in ALGOS and not str(algo).startswith(FAST_ALGO):
         raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
     seed = (manifest or {}).get("seed")
     if not isinstance(seed, int):
@@ -631,7 +660,7 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
     col = {k: [e[k] for e in eps] for k in eps[0]}
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
-    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms"):
+    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms", "speed_err_settled_rms"):
         rec[k] = _nanmean(col[k])
     rec["failure_rate"] = _nanmean(col["failure"])
     rec["return"] = _nanmean(col["return"])
@@ -853,6 +882,8 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     per_scenario = (
         ("h_rms_m", "H cross-track RMS per scenario [mm]", _mm),
         ("speed_err_rms", "Speed error RMS per scenario [mm/s]", _mm),
+        ("h_rms_settled_m", "H cross-track RMS after settling (t >= 5 s) per scenario [mm]", _mm),
+        ("speed_err_settled_rms", "Speed error RMS after settling (t >= 5 s) per scenario [mm/s]", _mm),
         ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
     )
     for key, title, fmt in per_scenario:

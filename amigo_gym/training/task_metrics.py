@@ -21,7 +21,9 @@ Metrics of one episode (:func:`episode_metrics`)
 * ``failure``: the episode terminated by leaving the path (reaching the end of an open path of
   AmigoBot-v1, ``info["end_of_path"]``, is a success, not a failure), or ``|e|`` exceeded ``failure_tolerance_m``
   at some ``t >= settle_time_s``.
-* ``speed_err_rms``: RMS of the speed error of A [m/s] over the episode.
+* ``speed_err_rms``: RMS of the speed error of A [m/s] over the episode; ``speed_err_settled_rms`` the same over
+  ``t >= settle_time_s`` (the whole-episode value is dominated by the firmware's ramp from rest; NaN if the
+  episode ended before).
 * ``return``: sum of the rewards.
 * ``chatter_rms``: RMS of the step-to-step change of the wheel-rate command [rad/s] over both wheels
   (``T - 1`` changes); ``chatter_settled_rms`` the same over changes that end at ``t >= settle_time_s``.
@@ -62,6 +64,7 @@ METRIC_NAMES: tuple[str, ...] = (
     "h_max_m",
     "failure",
     "speed_err_rms",
+    "speed_err_settled_rms",
     "return",
     "chatter_rms",
     "chatter_settled_rms",
@@ -188,6 +191,7 @@ def episode_metrics(
         "h_max_m": float(np.max(np.abs(e))) if e.size else math.nan,
         "failure": float(fail),
         "speed_err_rms": _rms(speed_error),
+        "speed_err_settled_rms": _rms(speed_error[settled]),
         "return": float(np.sum(rewards)),
         "chatter_rms": _rms(dcmd),
         "chatter_settled_rms": _rms(dcmd[settled[1:]]),

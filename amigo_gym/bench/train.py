@@ -1,0 +1,195 @@
+"""``amigo-gym bench-train``: env-steps of *training* per second, the fast PPO against SB3's PPO, same run.
+
+    amigo-gym bench-train --json docs/figures/bench_train.json
+
+Three PPO trainings on ``AmigoBot-v1`` with the training distribution
+(:data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION`), the same 64x64 tanh actor and critic, CPU, the same
+number of torch threads, one after the other in one process:
+
+* ``fastppo``: :func:`amigo_gym.training.fastppo.train` with its defaults (``N = 512`` robots of the native vector
+  env, 32-step rollouts, 4 epochs of 4096-sample minibatches, observation and reward normalisation), no evaluation;
+* ``sb3_shipped``: SB3's ``PPO`` with the configuration the shipped v1 generalists trained with
+  (``agents/hyperparams/ppo.yml``, ``AmigoBot-v1``: 16 envs, ``n_steps=256``, ``batch_size=1024``, 10 epochs)
+  over the project's SB3 adapter of the native vector env (:class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`);
+* ``sb3_fastconfig``: SB3's ``PPO`` with the fast PPO's configuration (512 envs, ``n_steps=32``,
+  ``batch_size=4096``, 4 epochs), which separates the configuration's share of the gap from the per-env Python.
+
+Each rate is ``env-steps / wall seconds`` of the whole call (building the env, resets, rollouts, updates), also per
+CPU second of the process (``sps_cpu``, all its threads: less sensitive to other jobs on a shared machine); for the
+fast PPO also of its training iterations alone (``sps_loop``, ``sps_loop_cpu``: without building the env, the first
+resets and the final save, a fixed cost of a few seconds that long runs do not notice); and the
+ratio fastppo / SB3 is printed with the CPU model, the torch threads and the load average at the start and end
+(the development machine is shared: compare ratios measured in the same run). Writes ``--json`` atomically.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+__all__ = ["bench_fastppo", "bench_sb3", "cpu_model", "main"]
+
+PROG = "amigo-gym bench-train"
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``'s ``model name``; else :func:`platform.processor`)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.lower().startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _load() -> list[float]:
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except OSError:  # pragma: no cover - no load average (Windows)
+        return []
+
+
+def bench_fastppo(steps: int, threads: int, seed: int = 0, **overrides: Any) -> dict[str, Any]:
+    """Train the fast PPO for ``steps`` env-steps (no evaluation) and time it: ``{"env_steps", "wall_s", "sps"}``."""
+    from amigo_gym.training.fastppo import FastPPOSettings, train
+
+    s = FastPPOSettings(
+        total_steps=steps,
+        threads=threads,
+        seed=seed,
+        eval_every=10**10,
+        checkpoint_every=10**10,
+        **overrides,
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        t0, c0 = time.perf_counter(), time.process_time()
+        rec = train(s, Path(tmp) / "run", log=None, evaluate_runs=False)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    n = int(rec["timesteps"])
+    cfg = {k: getattr(s, k) for k in ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden")}
+    out = _result(n, wall, cpu, cfg)
+    split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
+    out["cpu_s_rollout"], out["cpu_s_update"] = split["rollout"], split["update"]
+    out["loop_wall_s"] = split["loop_wall"]
+    # steady state: the training iterations only, without building the env, the first resets and the final save
+    out["sps_loop"] = round(n / max(split["loop_wall"], 1e-9), 1)
+    out["sps_loop_cpu"] = round(n / max(split["rollout"] + split["update"], 1e-9), 1)
+    return out
+
+
+def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
+    """Env-steps per wall second (``sps``) and per CPU second of this process, all threads (``sps_cpu``)."""
+    return {
+        "env_steps": n,
+        "wall_s": round(wall, 2),
+        "cpu_s": round(cpu, 2),
+        "sps": round(n / wall, 1),
+        "sps_cpu": round(n / cpu, 1),
+        "config": cfg,
+    }
+
+
+def bench_sb3(
+    steps: int, threads: int, n_envs: int, n_steps: int, batch_size: int, n_epochs: int, seed: int = 0
+) -> dict[str, Any]:
+    """Train SB3's PPO (``MlpPolicy``, 64x64 tanh) over the SB3 adapter of the native vector env; time ``learn``."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
+    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
+
+    torch.set_num_threads(threads)
+    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
+    t0, c0 = time.perf_counter(), time.process_time()
+    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
+    venv.seed(seed)
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=n_steps,
+        batch_size=batch_size,
+        n_epochs=n_epochs,
+        learning_rate=3e-4,
+        gamma=0.98,
+        policy_kwargs={"net_arch": [64, 64]},
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
+    model.learn(total_timesteps=steps)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    venv.close()
+    n = int(model.num_timesteps)
+    cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
+    return _result(n, wall, cpu, cfg)
+
+
+def _show(name: str, r: dict[str, Any]) -> None:
+    line = f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)"
+    if "sps_loop" in r:
+        line += f"; training iterations only: {r['sps_loop']:,.0f} per s ({r['sps_loop_cpu']:,.0f} per CPU second)"
+    print(line, flush=True)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym bench-train``."""
+    from amigo_gym.cli import OneLineParser, run_guarded
+    from amigo_gym.io import atomic_write_json
+    from amigo_gym.params import check_range
+
+    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
+    p.add_argument("--fast-steps", type=int, default=1_048_576, help="env-steps of the fast PPO [steps]")
+    p.add_argument("--sb3-steps", type=int, default=32_768, help="env-steps of each SB3 run [steps]")
+    p.add_argument("--threads", type=int, default=1, help="torch threads of every run [threads]")
+    p.add_argument("--skip-sb3-fastconfig", action="store_true", help="skip SB3 with the fast configuration")
+    p.add_argument("--json", default=None, help="write the results here [file] (default: print only)")
+    args = p.parse_args(list(argv) if argv is not None else None)
+
+    def run() -> int:
+        check_range(PROG, "fast_steps", args.fast_steps, 16384, 10**9)
+        check_range(PROG, "sb3_steps", args.sb3_steps, 1, 10**8)
+        check_range(PROG, "threads", args.threads, 1, 64)
+        import numpy as np
+        import torch
+
+        head = {
+            "cpu_model": cpu_model(),
+            "cpu_count": os.cpu_count(),
+            "torch_threads": args.threads,
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "torch": torch.__version__,
+            "load_average_start": _load(),
+            "command": "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:]),
+        }
+        print(f"CPU: {head['cpu_model']} ({head['cpu_count']} CPUs visible), torch threads {args.threads}, "
+              f"load average {head['load_average_start']}", flush=True)  # fmt: skip
+        runs: dict[str, Any] = {}
+        runs["fastppo"] = bench_fastppo(args.fast_steps, args.threads)
+        _show("fastppo", runs["fastppo"])
+        runs["sb3_shipped"] = bench_sb3(args.sb3_steps, args.threads, 16, 256, 1024, 10)
+        _show("sb3_shipped", runs["sb3_shipped"])
+        if not args.skip_sb3_fastconfig:
+            runs["sb3_fastconfig"] = bench_sb3(max(args.sb3_steps, 512 * 32), args.threads, 512, 32, 4096, 4)
+            _show("sb3_fastconfig", runs["sb3_fastconfig"])
+        ratios = {
+            f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
+        }
+        for k, v in ratios.items():
+            print(f"ratio {k}: {v:.1f}x", flush=True)
+        doc = head | {"runs": runs, "ratios": ratios, "load_average_end": _load()}
+        if args.json:
+            atomic_write_json(args.json, doc, parents=True)
+        return 0
+
+    return run_guarded(run, PROG)

@@ -1,0 +1,425 @@
+r"""Learned ``AmigoBot-v1`` policies in numpy: the fast PPO's models, the residual policy, and :func:`load_pretrained`.
+
+A model trained by :mod:`amigo_gym.training.fastppo` is a zip of two files, ``model.json`` (format, settings,
+observation layout) and ``weights.npz`` (the actor's layers and the observation normalisation). Running it
+needs numpy only: :class:`FastPolicy` evaluates the 64x64 tanh network itself, so loading a fast-PPO model
+imports no torch. :func:`load_pretrained` also opens the project's SB3 zips (then stable-baselines3 is
+imported, inside the function).
+
+Features (what the network observes), for a batch of raw observations ``o`` ``(N, d)``:
+
+* the raw observation ``o`` (``d = 20`` fields, :func:`amigo_gym.tracking.obs_fields`);
+* with ``history = H > 0``: the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (``7 H``
+  values; at an episode's start the history is filled with the first observation). The observation already
+  holds the previous command and the measured wheel rates; the history adds the commands and measurements of
+  the steps before, which is what an actuation delay of up to ``H dt`` needs to be observable;
+* with a residual (``residual_bound = b > 0``): the analytic controller's action ``a0`` ``(N, 2)``.
+
+All features are normalised by the running mean and standard deviation saved with the model,
+``f = clip((x - mean) / sqrt(var + 1e-8), -10, 10)``.
+
+Actions (:func:`env_action`), from the network's output ``u`` ``(N, 2)`` (its mean when ``deterministic``):
+
+* plain policy: ``a = clip(u, -1, 1)``;
+* residual policy: ``a = clip(a0 + b clip(u, -1, 1), -1, 1)`` with ``a0`` the
+  :class:`~amigo_gym.policies.AnalyticTrackingPolicy` (nominal robot, default gains, its integral state kept
+  per row): the correction ``|a - a0| <= b`` per wheel, in the normalised action units (1 = ``max_wheel_rate``);
+* low-pass parameterisation (``filter_alpha = alpha < 1``): the target above is then approached by
+  ``a = p + alpha (a_target - p)``, ``p`` the previous command read from the observation
+  (``previous_command_1``, ``_2``); the step-to-step command change is at most ``alpha`` times the target's
+  distance. ``alpha = 1`` (default) is no filter.
+
+May import numpy, the standard library and the core (params, tracking, io) and the sibling policies; never
+torch, SB3 (only inside :func:`load_pretrained`), training or the CLI.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io as _io
+import json
+import zipfile
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.io import atomic_save
+from amigo_gym.params import check_range
+from amigo_gym.policies.tracking import AnalyticTrackingPolicy
+from amigo_gym.tracking import TrackingParams, make_tracking_params, obs_fields
+
+__all__ = [
+    "FORMAT",
+    "HISTORY_FIELDS",
+    "FastPolicy",
+    "FeatureSpec",
+    "RunningMeanStd",
+    "env_action",
+    "load_pretrained",
+    "sha256_of",
+]
+
+Array = NDArray[np.float64]
+#: the ``format`` entry of a fast-PPO model's ``model.json``
+FORMAT = "amigo_gym.fastppo/1"
+#: fields of the observation kept for ``history`` previous steps (commands and measurements)
+HISTORY_FIELDS: tuple[str, ...] = (
+    "cross_track_error",
+    "sin_heading_error",
+    "speed_error",
+    "wheel_rate_1",
+    "wheel_rate_2",
+    "previous_command_1",
+    "previous_command_2",
+)
+#: normalised features are clipped to +-this
+OBS_CLIP = 10.0
+_EPS = 1e-8
+
+
+@dataclass
+class RunningMeanStd:
+    """Running mean and variance of ``(B, D)`` batches (Chan et al.'s parallel update, as SB3's ``VecNormalize``).
+
+    Merging a batch of mean ``m_b``, variance ``v_b`` and count ``n_b``: ``d = m_b - m``, ``n' = n + n_b``,
+    ``m' = m + d n_b / n'``, ``v' = (v n + v_b n_b + d^2 n n_b / n') / n'``.
+    """
+
+    mean: Array
+    var: Array
+    count: float = 1e-4
+
+    @classmethod
+    def zeros(cls, dim: int) -> RunningMeanStd:
+        """Mean 0, variance 1, count 1e-4 (SB3's start)."""
+        return cls(np.zeros(dim), np.ones(dim))
+
+    def update(self, x: ArrayLike) -> None:
+        """Merge a batch ``(B, D)`` (or ``(B,)`` for ``D = 1``)."""
+        a = np.asarray(x, dtype=np.float64).reshape(-1, self.mean.size)
+        n_b = a.shape[0]
+        if n_b == 0:
+            return
+        m_b, v_b = a.mean(axis=0), a.var(axis=0)
+        d = m_b - self.mean
+        n = self.count + n_b
+        self.mean = self.mean + d * (n_b / n)
+        self.var = (self.var * self.count + v_b * n_b + d * d * (self.count * n_b / n)) / n
+        self.count = n
+
+    def normalize(self, x: Array) -> Array:
+        """``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``."""
+        out: Array = np.clip((x - self.mean) / np.sqrt(self.var + _EPS), -OBS_CLIP, OBS_CLIP)
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"mean": self.mean.tolist(), "var": self.var.tolist(), "count": float(self.count)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> RunningMeanStd:
+        return cls(np.asarray(d["mean"], dtype=np.float64), np.asarray(d["var"], dtype=np.float64), float(d["count"]))
+
+
+@dataclass(frozen=True)
+class FeatureSpec:
+    """What the network observes and how its output becomes an action (module docstring).
+
+    Attributes:
+        env_kwargs: ``gym.make("AmigoBot-v1", ...)`` keywords of the training task (the observation layout,
+            the nominal robot and ``dt`` of the residual's analytic controller come from them).
+        history: previous steps of :data:`HISTORY_FIELDS` in the features, in [0, 20].
+        residual_bound: bound ``b`` of the learned correction in normalised action units, in [0, 2]; 0: no
+            residual (the network's output is the action).
+        filter_alpha: low-pass factor in (0, 1]; 1: no filter.
+    """
+
+    env_kwargs: Mapping[str, Any]
+    history: int = 0
+    residual_bound: float = 0.0
+    filter_alpha: float = 1.0
+
+    def __post_init__(self) -> None:
+        o = "FeatureSpec"
+        check_range(o, "history", self.history, 0, 20)
+        if isinstance(self.history, bool) or not isinstance(self.history, (int, np.integer)):
+            raise TypeError(f"{o}.history must be an integer in [0, 20], got {self.history!r}")
+        check_range(o, "residual_bound", self.residual_bound, 0.0, 2.0)
+        check_range(o, "filter_alpha", self.filter_alpha, 0.0, 1.0, low_open=True)
+        if not isinstance(self.env_kwargs, Mapping):
+            raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
+        self.params()  # the environment's own checks of the keywords
+
+    def params(self) -> TrackingParams:
+        """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
+        kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in self.env_kwargs.items()}
+        return make_tracking_params("FeatureSpec", None, **kw)
+
+
+class FeatureBuilder:
+    """The features of a batch of raw observations and the analytic base action (module docstring).
+
+    State per row: ``z`` ``(N,)`` (the analytic controller's integral [m s]) and ``hist`` ``(N, H, 7)``.
+    :meth:`__call__` is pure: it returns the new state instead of keeping it.
+    """
+
+    def __init__(self, spec: FeatureSpec) -> None:
+        self.spec = spec
+        p = spec.params()
+        names = obs_fields(p)
+        self.obs_dim = len(names)
+        self._hist_idx = np.array([names.index(f) for f in HISTORY_FIELDS])
+        self._prev_idx = np.array([names.index("previous_command_1"), names.index("previous_command_2")])
+        self.analytic = AnalyticTrackingPolicy(p) if spec.residual_bound > 0 else None
+        h = spec.history
+        self.dim = self.obs_dim + h * len(HISTORY_FIELDS) + (2 if self.analytic is not None else 0)
+        self.state_dim = 1 + h * len(HISTORY_FIELDS)
+
+    def initial_state(self, n: int) -> Array:
+        """``(N, state_dim)`` zeros: ``[z, hist.ravel()]`` (rows are reset at ``episode_start`` anyway)."""
+        return np.zeros((n, self.state_dim))
+
+    def __call__(self, obs: Array, state: Array, starts: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
+        """``(features (N, dim) raw, base action (N, 2) or zeros, new state)`` for obs ``(N, d)``.
+
+        Rows with ``starts`` begin an episode: ``z = 0`` and the history filled with this observation.
+        """
+        n = obs.shape[0]
+        h, f = self.spec.history, len(HISTORY_FIELDS)
+        z = np.where(starts, 0.0, state[:, 0])
+        parts = [obs]
+        new_state = np.empty_like(state)
+        if h:
+            cur = obs[:, self._hist_idx]
+            hist = state[:, 1:].reshape(n, h, f)
+            hist = np.where(starts[:, None, None], cur[:, None, :], hist)
+            parts.append(hist.reshape(n, h * f))
+            new_state[:, 1:] = np.concatenate([hist[:, 1:], cur[:, None, :]], axis=1).reshape(n, h * f)
+        base = np.zeros((n, 2))
+        if self.analytic is not None:
+            a0, z_out = self.analytic.predict(obs, state=z.reshape(n, 1), episode_start=None)
+            base = np.asarray(a0, dtype=np.float64).reshape(n, 2)
+            z = z_out.reshape(n)
+            parts.append(base)
+        new_state[:, 0] = z
+        return np.concatenate(parts, axis=1), base, new_state
+
+    def previous_command(self, obs: Array) -> Array:
+        """``(N, 2)`` previous command of the observation (normalised units)."""
+        out: Array = obs[:, self._prev_idx].astype(np.float64)
+        return out
+
+
+def env_action(u: Array, base: Array, prev: Array, residual_bound: float, filter_alpha: float) -> Array:
+    """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring, Actions).
+
+    ``a_t = clip(u, -1, 1)`` (plain) or ``clip(a0 + b clip(u, -1, 1), -1, 1)`` (residual, ``b > 0``), then
+    ``a = p + alpha (a_t - p)``.
+    """
+    c = np.clip(u, -1.0, 1.0)
+    target = np.clip(base + residual_bound * c, -1.0, 1.0) if residual_bound > 0 else c
+    if filter_alpha < 1.0:
+        target = prev + filter_alpha * (target - prev)
+    out: Array = target
+    return out
+
+
+def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
+    """``tanh`` hidden layers, linear output: ``x W_i + b_i``."""
+    for i, (w, b) in enumerate(layers):
+        x = x @ w + b
+        if i < len(layers) - 1:
+            x = np.tanh(x)
+    return x
+
+
+class FastPolicy:
+    """A fast-PPO model in numpy with SB3's ``predict`` (module docstring).
+
+    ``predict`` keeps, per batch row, the analytic controller's integral and the history, SB3-recurrent style:
+    ``state`` ``(N, state_dim)`` in and out; ``state=None`` uses an internal state (reset where
+    ``episode_start`` is True and whenever the batch size changes). ``episode_start=None`` with ``state=None``
+    treats the first call (and a new batch size) as the start of the episodes.
+    """
+
+    def __init__(
+        self,
+        spec: FeatureSpec,
+        layers: list[tuple[Array, Array]],
+        log_std: Array,
+        obs_rms: RunningMeanStd,
+        info: Mapping[str, Any] | None = None,
+    ) -> None:
+        self.spec = spec
+        self.builder = FeatureBuilder(spec)
+        if layers[0][0].shape[0] != self.builder.dim or layers[-1][0].shape[1] != 2:
+            raise ValueError(
+                f"FastPolicy: the network maps {layers[0][0].shape[0]} -> {layers[-1][0].shape[1]}, the features "
+                f"need {self.builder.dim} -> 2"
+            )
+        self.layers = layers
+        self.log_std = np.asarray(log_std, dtype=np.float64)
+        self.obs_rms = obs_rms
+        self.info: dict[str, Any] = dict(info or {})
+        self._state: Array | None = None
+        self._rng = np.random.default_rng()
+
+    @property
+    def name(self) -> str:
+        return "fastppo_residual" if self.spec.residual_bound > 0 else "fastppo"
+
+    def reset(self) -> None:
+        """Forget the internal state."""
+        self._state = None
+
+    def mean_output(self, features: Array) -> Array:
+        """The network's mean output ``u`` for raw features ``(N, dim)``."""
+        return _mlp(self.layers, self.obs_rms.normalize(features))
+
+    def predict(
+        self,
+        observation: ArrayLike,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Array]:
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1].
+
+        Args:
+            observation: raw ``AmigoBot-v1`` observations ``(d,)`` or ``(N, d)``.
+            state: ``(N, state_dim)`` or None (internal state). episode_start: ``(N,)`` booleans or None.
+            deterministic: the mean action; False adds the Gaussian exploration noise ``exp(log_std)``.
+        """
+        o = np.asarray(observation, dtype=np.float64)
+        single = o.ndim == 1
+        o = o.reshape(1, -1) if single else o
+        b = self.builder
+        if o.ndim != 2 or o.shape[1] != b.obs_dim or not np.isfinite(o).all():
+            raise ValueError(f"FastPolicy: observation must be finite of shape (N, {b.obs_dim}), got {o.shape}")
+        n = o.shape[0]
+        fresh = False
+        if state is None:
+            if self._state is None or self._state.shape[0] != n:
+                self._state, fresh = b.initial_state(n), True
+            s = self._state
+        else:
+            s = np.asarray(state, dtype=np.float64).reshape(n, b.state_dim)
+        if episode_start is None:
+            starts = np.full(n, fresh or (state is not None and not np.any(s)), dtype=bool)
+        else:
+            starts = np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,)).copy()
+        feats, base, s_new = b(o, s, starts)
+        u = self.mean_output(feats)
+        if not deterministic:
+            u = u + np.exp(self.log_std) * self._rng.standard_normal(u.shape)
+        a = env_action(u, base, b.previous_command(o), self.spec.residual_bound, self.spec.filter_alpha)
+        if state is None:
+            self._state = s_new
+        act = a.astype(np.float32)
+        return (act[0] if single else act), s_new.copy()
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> None:
+        """Write the model zip atomically (``model.json`` + ``weights.npz``)."""
+        meta = {
+            "format": FORMAT,
+            "spec": {**asdict(self.spec), "env_kwargs": dict(self.spec.env_kwargs)},
+            "obs_fields": list(obs_fields(self.spec.params())),
+            "n_layers": len(self.layers),
+            "info": self.info,
+        }
+        arrays: dict[str, Array] = {"log_std": self.log_std, "obs_mean": self.obs_rms.mean, "obs_var": self.obs_rms.var}
+        arrays["obs_count"] = np.array([self.obs_rms.count])
+        for i, (w, bias) in enumerate(self.layers):
+            arrays[f"w{i}"], arrays[f"b{i}"] = w, bias
+        buf = _io.BytesIO()
+        np.savez(buf, **arrays)  # type: ignore[arg-type]
+
+        def write(tmp: str) -> None:
+            with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:  # fixed dates: same model, same bytes
+                for name, data in (
+                    ("model.json", json.dumps(meta, indent=2).encode()),
+                    ("weights.npz", buf.getvalue()),
+                ):
+                    z.writestr(zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0)), data, zipfile.ZIP_DEFLATED)
+
+        atomic_save(write, path, parents=True)
+
+    @classmethod
+    def load(cls, path: str | Path) -> FastPolicy:
+        """Read a model zip written by :meth:`save`.
+
+        Raises:
+            ValueError: not a fast-PPO model zip.
+        """
+        with zipfile.ZipFile(path) as z:
+            names = set(z.namelist())
+            if "model.json" not in names or "weights.npz" not in names:
+                raise ValueError(f"{path}: not a fast-PPO model (no model.json / weights.npz)")
+            meta = json.loads(z.read("model.json"))
+            w = np.load(_io.BytesIO(z.read("weights.npz")))
+        if meta.get("format") != FORMAT:
+            raise ValueError(f"{path}: format {meta.get('format')!r}, expected {FORMAT!r}")
+        spec = FeatureSpec(**meta["spec"])
+        layers = [(w[f"w{i}"], w[f"b{i}"]) for i in range(int(meta["n_layers"]))]
+        rms = RunningMeanStd(w["obs_mean"], w["obs_var"], float(w["obs_count"][0]))
+        return cls(spec, layers, w["log_std"], rms, meta.get("info"))
+
+    def __repr__(self) -> str:
+        s = self.spec
+        return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
+
+
+def sha256_of(path: str | Path) -> str:
+    """Hex SHA-256 of a file."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any:
+    """Load a shipped ``AmigoBot-v1`` agent after checking its manifest's SHA-256.
+
+    Args:
+        path: the model zip (a fast-PPO model, residual included, or an SB3 PPO/SAC/TD3 zip).
+        manifest: its manifest JSON (default: ``<zip stem>.json`` beside the zip), with ``sha256`` and, for
+            SB3 zips, ``algo``.
+
+    Returns:
+        An object with SB3's ``predict(obs, state=None, episode_start=None, deterministic=True)`` for a batch of
+        raw ``AmigoBot-v1`` observations: a :class:`FastPolicy`, or the SB3 model (stable-baselines3 is imported
+        only then).
+
+    Raises:
+        FileNotFoundError: no zip or no manifest. ValueError: the manifest has no ``sha256``, the zip's digest
+        differs from it, or an SB3 manifest names an unknown algorithm.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"load_pretrained: no model file {p}")
+    m = Path(manifest) if manifest is not None else p.with_suffix(".json")
+    if not m.is_file():
+        raise FileNotFoundError(f"load_pretrained: no manifest {m} beside {p.name}")
+    meta = json.loads(m.read_text())
+    want = meta.get("sha256") if isinstance(meta, dict) else None
+    if not isinstance(want, str) or len(want) != 64:
+        raise ValueError(f"load_pretrained: manifest {m} has no sha256 (64 hex digits), got {want!r}")
+    got = sha256_of(p)
+    if got != want.lower():
+        raise ValueError(f"load_pretrained: sha256 of {p} is {got}, the manifest {m.name} says {want}")
+    with zipfile.ZipFile(p) as z:
+        fast = "model.json" in z.namelist()
+    if fast:
+        return FastPolicy.load(p)
+    algo = str(meta.get("algo", "")).lower()
+    import stable_baselines3 as sb3  # edge import: only for SB3 zips
+
+    classes: dict[str, Any] = {"ppo": sb3.PPO, "sac": sb3.SAC, "td3": sb3.TD3, "a2c": sb3.A2C, "ddpg": sb3.DDPG}
+    if algo not in classes:
+        raise ValueError(f"load_pretrained: manifest algo must be one of {sorted(classes)}, got {algo!r}")
+    return classes[algo].load(str(p), device="cpu")

@@ -1,0 +1,339 @@
+"""The fast PPO (amigo_gym.training.fastppo) and its numpy policies (amigo_gym.policies.learned); tiny budgets."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from amigo_gym.policies import AnalyticTrackingPolicy, load_pretrained  # noqa: E402
+from amigo_gym.policies.learned import (  # noqa: E402
+    HISTORY_FIELDS,
+    FastPolicy,
+    FeatureBuilder,
+    FeatureSpec,
+    RunningMeanStd,
+    env_action,
+    sha256_of,
+)
+from amigo_gym.tracking import obs_fields  # noqa: E402
+from amigo_gym.training.fastppo import FastPPOSettings, train  # noqa: E402
+
+KW = {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"}
+
+
+def tiny(**kw: object) -> FastPPOSettings:
+    base: dict[str, object] = {
+        "env_kwargs": KW,
+        "total_steps": 512,
+        "num_envs": 16,
+        "rollout_steps": 8,
+        "epochs": 2,
+        "minibatch_size": 64,
+        "eval_every": 256,
+        "eval_envs": 2,
+        "max_episode_steps": 20,
+        "checkpoint_every": 128,
+        "hidden": (8, 8),
+    }
+    base.update(kw)
+    return FastPPOSettings(**base)  # type: ignore[arg-type]
+
+
+def weights(path: Path) -> dict[str, np.ndarray]:
+    ck = torch.load(path / "checkpoint.pt", weights_only=False)
+    return {k: v.numpy().copy() for k, v in ck["net"].items()}
+
+
+# --------------------------------------------------------------------------- settings
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("num_envs", 0, "num_envs"),
+        ("gamma", 1.0, "gamma"),
+        ("learning_rate", float("nan"), "learning_rate"),
+        ("minibatch_size", 100, "minibatch_size"),
+        ("residual_bound", 3.0, "residual_bound"),
+        ("filter_alpha", 0.0, "filter_alpha"),
+        ("history", 21, "history"),
+        ("hidden", (64, 0), "hidden"),
+        ("caps_temporal", -1.0, "caps_temporal"),
+    ],
+)
+def test_settings_refuse_bad_values(field: str, value: object, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        tiny(**{field: value})
+
+
+def test_settings_refuse_wrong_types_and_bad_env_kwargs() -> None:
+    with pytest.raises(TypeError, match="num_envs"):
+        tiny(num_envs=2.5)
+    with pytest.raises(TypeError, match="norm_reward"):
+        tiny(norm_reward="yes")
+    with pytest.raises(ValueError):
+        tiny(env_kwargs={"path": "mixed", "speed": -1.0})
+    s = tiny()
+    assert FastPPOSettings.from_json(json.loads(json.dumps(s.to_json()))) == s
+    with pytest.raises(ValueError, match="unknown"):
+        FastPPOSettings.from_json({"nonsense": 1})
+
+
+# --------------------------------------------------------------------------- normalisation
+def test_running_mean_std_matches_numpy_over_batches() -> None:
+    rng = np.random.default_rng(0)
+    batches = [rng.normal(3.0, 2.0, size=(n, 4)) for n in (5, 17, 1, 40)]
+    rms = RunningMeanStd.zeros(4)
+    for b in batches:
+        rms.update(b)
+    allx = np.concatenate(batches)
+    # the 1e-4 prior count of mean 0 / var 1 shifts the result by O(1e-4 / n)
+    np.testing.assert_allclose(rms.mean, allx.mean(axis=0), rtol=1e-4, atol=1e-4)
+    np.testing.assert_allclose(rms.var, allx.var(axis=0), rtol=1e-3)
+    back = RunningMeanStd.from_dict(json.loads(json.dumps(rms.to_dict())))
+    np.testing.assert_array_equal(back.mean, rms.mean)
+    np.testing.assert_array_equal(back.var, rms.var)
+    assert back.count == rms.count
+    z = rms.normalize(allx)
+    assert abs(z.mean()) < 1e-3 and abs(z.std() - 1) < 1e-2
+
+
+# --------------------------------------------------------------------------- training runs
+def test_same_seed_same_weights_other_seed_other_weights(tmp_path: Path) -> None:
+    for name, seed in (("a", 3), ("b", 3), ("c", 4)):
+        train(tiny(seed=seed), tmp_path / name, log=None)
+    wa, wb, wc = (weights(tmp_path / n) for n in "abc")
+    for k in wa:
+        np.testing.assert_array_equal(wa[k], wb[k])
+    assert any(not np.array_equal(wa[k], wc[k]) for k in wa)
+    assert sha256_of(tmp_path / "a" / "model.zip") != ""
+    ja = json.loads((tmp_path / "a" / "curve.json").read_text())
+    jb = json.loads((tmp_path / "b" / "curve.json").read_text())
+    assert [r["eval_h_rms_m"] for r in ja] == [r["eval_h_rms_m"] for r in jb]
+    assert [r["env_steps"] for r in ja] == [0.0, 256.0, 512.0]
+
+
+def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
+    s = tiny(residual_bound=0.3, history=2, caps_temporal=0.1, caps_spatial=0.1)
+    train(s, tmp_path / "whole", log=None)
+    rec = train(s, tmp_path / "cut", log=None, until_steps=256)
+    assert rec["timesteps"] == 256 and not rec["finished"] and not (tmp_path / "cut" / "model.zip").exists()
+    with pytest.raises(FileExistsError, match="resume"):
+        train(s, tmp_path / "cut", log=None)
+    with pytest.raises(ValueError, match="settings differ"):
+        train(tiny(seed=9, residual_bound=0.3, history=2), tmp_path / "cut", log=None, resume=True)
+    rec = train(s, tmp_path / "cut", log=None, resume=True)
+    assert rec["timesteps"] == 512 and rec["finished"]
+    w1, w2 = weights(tmp_path / "whole"), weights(tmp_path / "cut")
+    for k in w1:
+        np.testing.assert_array_equal(w1[k], w2[k])
+    ck1 = torch.load(tmp_path / "whole" / "checkpoint.pt", weights_only=False)
+    ck2 = torch.load(tmp_path / "cut" / "checkpoint.pt", weights_only=False)
+    assert ck1["obs_rms"] == ck2["obs_rms"] and ck1["ret_rms"] == ck2["ret_rms"]
+    assert sha256_of(tmp_path / "whole" / "model.zip") == sha256_of(tmp_path / "cut" / "model.zip")
+
+
+def test_numpy_policy_matches_the_torch_actor_and_round_trips(tmp_path: Path) -> None:
+    s = tiny(history=1)
+    train(s, tmp_path / "r", log=None)
+    pol = FastPolicy.load(tmp_path / "r" / "model.zip")
+    ck = torch.load(tmp_path / "r" / "checkpoint.pt", weights_only=False)
+    # the checkpoint's normaliser is the one saved in the model
+    np.testing.assert_array_equal(pol.obs_rms.mean, np.asarray(ck["obs_rms"]["mean"]))
+    from amigo_gym.training.fastppo import ActorCritic
+
+    net = ActorCritic(pol.builder.dim, s.hidden, s.log_std_init)
+    net.load_state_dict(ck["net"])
+    x = np.random.default_rng(1).normal(size=(7, pol.builder.dim))
+    with torch.no_grad():
+        ref = net.actor(torch.as_tensor(pol.obs_rms.normalize(x), dtype=torch.float32)).double().numpy()
+    np.testing.assert_allclose(pol.mean_output(x), ref, rtol=1e-5, atol=1e-6)
+    pol.save(tmp_path / "copy.zip")
+    again = FastPolicy.load(tmp_path / "copy.zip")
+    env = gym.make_vec("AmigoBot-v1", num_envs=3, **KW)
+    obs, _ = env.reset(seed=[0, 1, 2])
+    a1, st1 = pol.predict(obs, episode_start=np.ones(3, bool))
+    a2, st2 = again.predict(obs, state=None, episode_start=np.ones(3, bool))
+    np.testing.assert_array_equal(a1, a2)
+    np.testing.assert_array_equal(st1, st2)
+    assert a1.shape == (3, 2) and a1.dtype == np.float32 and np.all(np.abs(a1) <= 1)
+    single, _ = pol.predict(obs[0], state=st1[:1], episode_start=False)
+    assert single.shape == (2,)
+    env.close()
+
+
+# --------------------------------------------------------------------------- features, residual
+def test_history_holds_the_previous_observations() -> None:
+    spec = FeatureSpec(KW, history=3)
+    b = FeatureBuilder(spec)
+    names = obs_fields(spec.params())
+    idx = [names.index(f) for f in HISTORY_FIELDS]
+    rng = np.random.default_rng(0)
+    obs_seq = [rng.normal(size=(2, b.obs_dim)) for _ in range(5)]
+    state = b.initial_state(2)
+    feats = []
+    for k, o in enumerate(obs_seq):
+        f, _, state = b(o, state, np.full(2, k == 0))
+        feats.append(f)
+    d = b.obs_dim
+    # at step 4 the history is steps 1, 2, 3 (oldest first); at step 1 it is step 0 three times (filled at start)
+    expect4 = np.concatenate([obs_seq[j][:, idx] for j in (1, 2, 3)], axis=1)
+    np.testing.assert_array_equal(feats[4][:, d:], expect4)
+    expect1 = np.concatenate([obs_seq[0][:, idx]] * 3, axis=1)
+    np.testing.assert_array_equal(feats[1][:, d:], expect1)
+    # an episode start in row 1 refills that row's history with its own observation
+    f, _, _ = b(obs_seq[0], state, np.array([False, True]))
+    np.testing.assert_array_equal(f[1, d:], np.tile(obs_seq[0][1, idx], 3))
+
+
+def test_env_action_residual_stays_within_bound_and_filter_limits_change() -> None:
+    rng = np.random.default_rng(0)
+    base = rng.uniform(-1, 1, size=(1000, 2))
+    u = rng.normal(scale=5.0, size=(1000, 2))
+    prev = rng.uniform(-1, 1, size=(1000, 2))
+    a = env_action(u, base, prev, 0.3, 1.0)
+    assert np.all(np.abs(a - base) <= 0.3 + 1e-12) and np.all(np.abs(a) <= 1)
+    assert np.max(np.abs(a - base)) > 0.29  # the bound is reached, not just respected
+    f = env_action(u, base, prev, 0.0, 0.25)
+    np.testing.assert_allclose(f, prev + 0.25 * (np.clip(u, -1, 1) - prev))
+
+
+def test_residual_policy_in_an_env_stays_within_its_bound_of_the_analytic_action() -> None:
+    """A residual network with huge random weights (saturated output) in real episodes: every action within
+    0.2 of the analytic controller's, computed independently with its own integral state."""
+    spec = FeatureSpec({"path": "circle", "randomize": {"delay": [0.0, 0.2]}}, history=2, residual_bound=0.2)
+    dim = FeatureBuilder(spec).dim
+    rng = np.random.default_rng(5)
+    layers = [
+        (rng.normal(scale=30, size=(dim, 8)), rng.normal(size=8)),
+        (rng.normal(scale=30, size=(8, 2)), np.zeros(2)),
+    ]
+    pol = FastPolicy(spec, layers, np.zeros(2), RunningMeanStd.zeros(dim))
+    ref = AnalyticTrackingPolicy(spec.params())
+    env = gym.make_vec("AmigoBot-v1", num_envs=4, path="circle", randomize={"delay": [0.0, 0.2]})
+    obs, _ = env.reset(seed=[0, 1, 2, 3])
+    starts = np.ones(4, bool)
+    worst = 0.0
+    for _ in range(60):
+        a, _ = pol.predict(obs, episode_start=starts)
+        a0, _ = ref.predict(obs, episode_start=starts)
+        worst = max(worst, float(np.max(np.abs(a - a0))))
+        obs, _, te, tr, _ = env.step(a)
+        starts = te | tr
+    env.close()
+    assert 0.15 < worst <= 0.2 + 1e-6
+
+
+# --------------------------------------------------------------------------- load_pretrained
+def test_load_pretrained_checks_sha256(tmp_path: Path) -> None:
+    spec = FeatureSpec(KW)
+    dim = FeatureBuilder(spec).dim
+    rng = np.random.default_rng(0)
+    pol = FastPolicy(spec, [(rng.normal(size=(dim, 4)), np.zeros(4)), (rng.normal(size=(4, 2)), np.zeros(2))],
+                     np.zeros(2), RunningMeanStd.zeros(dim))  # fmt: skip
+    z = tmp_path / "m.zip"
+    pol.save(z)
+    with pytest.raises(FileNotFoundError, match="manifest"):
+        load_pretrained(z)
+    (tmp_path / "m.json").write_text(json.dumps({"sha256": "0" * 64}))
+    with pytest.raises(ValueError, match="sha256"):
+        load_pretrained(z)
+    (tmp_path / "m.json").write_text(json.dumps({"algo": "fastppo"}))
+    with pytest.raises(ValueError, match="no sha256"):
+        load_pretrained(z)
+    (tmp_path / "m.json").write_text(json.dumps({"sha256": sha256_of(z)}))
+    got = load_pretrained(z)
+    obs = np.zeros((3, dim), np.float32)
+    obs[:, 2] = 1.0
+    a, _ = got.predict(obs, state=None, episode_start=None, deterministic=True)
+    b, _ = pol.predict(obs, state=None, episode_start=None, deterministic=True)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_load_pretrained_opens_the_shipped_sb3_zips() -> None:
+    pytest.importorskip("stable_baselines3")
+    from amigo_gym.data import pretrained_dir
+
+    z = pretrained_dir() / "v1" / "ppo" / "ppo_s0.zip"
+    if not z.is_file():
+        pytest.fail(f"shipped model {z} missing")
+    model = load_pretrained(z)
+    env = gym.make_vec("AmigoBot-v1", num_envs=2)
+    obs, _ = env.reset(seed=[0, 1])
+    a, _ = model.predict(obs, state=None, episode_start=None, deterministic=True)
+    assert np.asarray(a).shape == (2, 2)
+    env.close()
+
+
+def test_learned_policies_import_no_torch() -> None:
+    code = "import sys, amigo_gym.policies.learned; print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "False"
+
+
+def test_cli_bad_value_is_one_line(tmp_path: Path) -> None:
+    r = subprocess.run(
+        [sys.executable, "-m", "amigo_gym.cli", "train-fast", "--out", str(tmp_path / "x"), "--gamma", "2"],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "gamma" in r.stderr
+
+
+def test_benchmark_runs_fast_models_as_numpy_policies(tmp_path: Path) -> None:
+    """``amigo-gym benchmark`` takes a fast-PPO zip (not mistaken for SB3's PPO by the 'ppo' in its name) and
+    runs it through the same predict as a direct rollout; a v0 scenario is unavailable (other observation)."""
+    from amigo_gym.training import benchmark as bm
+
+    spec = FeatureSpec({"path": "circle"}, history=1, residual_bound=0.2)
+    dim = FeatureBuilder(spec).dim
+    rng = np.random.default_rng(0)
+    pol = FastPolicy(spec, [(rng.normal(size=(dim, 4)), np.zeros(4)), (rng.normal(size=(4, 2)), np.zeros(2))],
+                     np.zeros(2), RunningMeanStd.zeros(dim))  # fmt: skip
+    z = tmp_path / "ppo_fast_s3.zip"
+    pol.save(z)
+    (agent,) = bm.parse_agents([f"fast={z}"])
+    assert agent.algo == "fastppo" and agent.seed == 3
+    sc = bm.Scenario("c", "AmigoBot-v1", {"path": "circle"}, seeds=(0, 1), max_steps=30, held_out=False,
+                     description="test")  # fmt: skip
+    env = gym.make("AmigoBot-v1", path="circle")
+    got = bm.evaluate(agent.instantiate(env), env, sc)
+    # the same two episodes rolled out directly
+    venv = gym.make_vec("AmigoBot-v1", num_envs=2, path="circle", max_episode_steps=30)
+    obs, _ = venv.reset(seed=[0, 1])
+    fresh = FastPolicy.load(z)
+    state, starts, err = None, np.ones(2, bool), []
+    for _ in range(30):
+        a, state = fresh.predict(obs, state=state, episode_start=starts)
+        starts = np.zeros(2, bool)
+        obs, _, _, _, info = venv.step(a)
+        err.append(info["cross_track_error"])
+    rms = np.sqrt(np.mean(np.square(np.array(err)), axis=0))
+    np.testing.assert_allclose([g["h_rms_m"] for g in got], rms, rtol=1e-12)
+    v0 = gym.make("AmigoBot-v0")
+    with pytest.raises(bm.Unavailable, match="observation"):
+        agent.instantiate(v0)
+    env.close(), venv.close(), v0.close()
+
+
+def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
+    pytest.importorskip("stable_baselines3")
+    from amigo_gym.bench.train import cpu_model, main
+
+    out = tmp_path / "b.json"
+    assert main(["--fast-steps", "16384", "--sb3-steps", "256", "--skip-sb3-fastconfig", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["cpu_model"] == cpu_model() != ""
+    fast, sb3 = doc["runs"]["fastppo"], doc["runs"]["sb3_shipped"]
+    assert fast["env_steps"] == 16384 and sb3["env_steps"] == 16 * 256  # SB3 rounds up to whole rollouts
+    assert fast["sps"] == pytest.approx(fast["env_steps"] / fast["wall_s"], rel=0.01)
+    assert 0 < fast["loop_wall_s"] <= fast["wall_s"] and fast["sps_loop"] >= fast["sps"]  # iterations: part of the call
+    assert fast["cpu_s_rollout"] > 0 and fast["cpu_s_update"] > 0
+    assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
+    assert main(["--fast-steps", "10", "--json", str(out)]) == 2  # below one rollout: one-line error
