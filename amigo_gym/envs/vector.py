@@ -468,12 +468,7 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
 
     def _trail_of(self, i: int) -> list[tuple[float, float]]:
         """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        if self._trail is None:
-            return []
-        length = self._trail.shape[0]
-        first = max(int(self._trail_start[i]), self._trail_count - length)
-        rows = np.arange(first, self._trail_count) % length
-        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
+        return trail_of(self._trail, self._trail_start, self._trail_count, i)
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
@@ -706,3 +701,15 @@ def assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.int
             assign_rows(infos[k], v, idx)
         else:
             infos[k][idx] = v
+
+
+def trail_of(trail: Any, start: Any, count: int, i: int) -> list[tuple[float, float]]:
+    """Robot ``i``'s rendered trail from a ring ``trail`` of shape ``(T, N, 2)`` [m] holding the last ``T`` of
+    ``count`` positions written, ``start[i]`` being the count at which its episode began; oldest first.
+    Shared by the v0 and v1 vector envs."""
+    if trail is None:
+        return []
+    length = trail.shape[0]
+    first = max(int(start[i]), count - length)
+    rows = np.arange(first, count) % length
+    return [(float(x), float(y)) for x, y in trail[rows, i].tolist()]

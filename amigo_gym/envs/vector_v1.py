@@ -45,6 +45,7 @@ from amigo_gym.envs.vector import (
     parse_seeds,
     scatter_infos,
     take_rows,
+    trail_of,
 )
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.randomization import StepNoise
@@ -604,12 +605,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def _trail_of(self, i: int) -> list[tuple[float, float]]:
         """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        if self._trail is None:
-            return []
-        length = self._trail.shape[0]
-        first = max(int(self._trail_start[i]), self._trail_count - length)
-        rows = np.arange(first, self._trail_count) % length
-        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
+        return trail_of(self._trail, self._trail_start, self._trail_count, i)
 
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
         """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
