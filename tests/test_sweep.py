@@ -208,22 +208,27 @@ def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path) -> No
 
 
 # --------------------------------------------------------------------------- faults, secrets, names (issue 21)
-def _wait_running(storage: str, name: str, n: int, procs: list[subprocess.Popen[str]], timeout: float = 150) -> list:
-    """Wait until ``n`` trials are RUNNING with their training started (``run/config.json``); those trials."""
+def _wait_running(
+    storage: str, name: str, n: int, procs: list[subprocess.Popen[str]], study_dir: Path, timeout: float = 150
+) -> list:
+    """Wait until ``n`` trials are RUNNING with their training started (``run/config.json``); those trials.
+
+    The storage is read only once ``n`` trial folders under ``study_dir`` hold a ``run/config.json``: by then
+    the workers have created the tables, so this process never races them at schema creation (a plain
+    ``optuna.load_study`` has no retry: SQLite's ``alembic_version`` insert can collide with a worker's).
+    """
     deadline = time.monotonic() + timeout
+    last: Exception | None = None
     while time.monotonic() < deadline:
         time.sleep(0.5)
         for p in procs:
             assert p.poll() is None, p.communicate()[0][-3000:]
-        if storage.startswith("sqlite:///") and not Path(storage.removeprefix("sqlite:///")).is_file():
-            continue  # the worker has not opened the storage yet
+        if len(list(study_dir.glob("trial_*/run/config.json"))) < n:
+            continue  # training has not started in n trials yet
         try:
             trials = optuna.load_study(study_name=name, storage=storage).get_trials()
-        except KeyError:  # not created yet
-            continue
-        except Exception as exc:  # the workers are creating the tables right now ("table ... already exists")
-            if "already exists" not in str(exc):
-                raise
+        except Exception as exc:  # a transient lock; kept to report if it never clears
+            last = exc
             continue
         started = [
             t
@@ -234,7 +239,7 @@ def _wait_running(storage: str, name: str, n: int, procs: list[subprocess.Popen[
         ]
         if len(started) >= n:
             return started
-    raise AssertionError(f"{n} trials never started training")
+    raise AssertionError(f"{n} trials never started training (last storage error: {last!r})")
 
 
 def _long(args: list[str]) -> list[str]:
@@ -247,7 +252,7 @@ def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(tmp_path: Path
     base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "term")
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
     victim = _sweep(_long(base))
-    (trial,) = _wait_running(storage, "term", 1, [victim])
+    (trial,) = _wait_running(storage, "term", 1, [victim], tmp_path / "out" / "term")
     victim.send_signal(signal.SIGTERM)
     out, _ = victim.communicate(timeout=120)
     assert victim.returncode == 130, out[-3000:]
@@ -275,7 +280,7 @@ def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(tmp_path: Path) -
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
     parent = _sweep(_long(base))
-    running = _wait_running(storage, "died", 2, [parent])
+    running = _wait_running(storage, "died", 2, [parent], tmp_path / "out" / "died")
     pids = [int(t.user_attrs["worker"].split(":")[1]) for t in running]
     os.kill(pids[0], signal.SIGKILL)  # one worker dies ...
     time.sleep(1)
@@ -389,7 +394,7 @@ def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_pat
     base += ["--study-name", "faults", "--mode", "seeds", "--seeds", "0", "1", "2"]
     storage = driver_url(postgres)
     procs = [_sweep([*_long(base), "--worker-index", str(i)]) for i in range(2)]
-    running = _wait_running(storage, "faults", 2, procs)
+    running = _wait_running(storage, "faults", 2, procs, tmp_path / "out" / "faults")
     pid_of = {int(t.user_attrs["worker"].split(":")[1]): t.number for t in running}
     assert set(pid_of) == {p.pid for p in procs}
     procs[0].send_signal(signal.SIGKILL)
