@@ -3,7 +3,7 @@ r"""Logs of a real robot: read them, replay them through the model, fit the mode
 The seed paper checks its simulation against a test rig (its Figs 2–5: wheel angles and rates, simulated
 and measured). This module does that for a user's own robot: a recorded run (the wheel-rate commands and
 the measured pose and/or wheel rates) drives the package's exact actuator step
-(:func:`amigo_gym.actuators.actuator_step`: firmware ramps, delay, true geometry) from the log's first pose,
+(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry) from the log's first pose,
 and the simulated and measured trajectories are compared (:func:`replay`); the true robot's wheel radii,
 half track, actuation delay (and ramp accelerations, where the log excites them) are fitted by bounded least
 squares on the replayed trajectory (:func:`identify`). ``docs/logs.md`` is the user's page.
@@ -58,8 +58,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
-from amigo_gym.params import RobotParams, show_value
+from amigo_gym.model.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
+from amigo_gym.model.params import RobotParams, show_value
 
 __all__ = [
     "CSV_COLUMNS",
@@ -447,7 +447,7 @@ def simulate(
     The command issued at ``t_cmd[j]`` is in effect from ``t_cmd[j] + delay`` on (``actuators.delay``), so the
     setpoint at time ``t`` is :math:`c(t) = cmd_j`, ``j`` the last with ``t_cmd[j] + delay <= t``; before the first
     one the robot executes its start wheel rates. Between consecutive measurement times the step is
-    :func:`amigo_gym.actuators.actuator_step` (the environment's exact step: firmware ramps of the nominal
+    :func:`amigo_gym.model.actuators.actuator_step` (the environment's exact step: firmware ramps of the nominal
     robot, true radii and half track, no slip), once per interval with the setpoint switching inside it, and
     again from each further switch in the same interval (irregular logs); for a log sampled every ``dt`` with
     commands at the same times this is exactly the environment's step with ``dt`` and the same delay.

@@ -18,8 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 import amigo_gym  # noqa: F401
-from amigo_gym import tracking
 from amigo_gym.paths import fit_points, make_family_path
+from amigo_gym.task import v1 as tracking
 
 
 def _single(kw: dict[str, Any], steps: int, repeats: int) -> float:

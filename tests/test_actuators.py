@@ -1,4 +1,4 @@
-"""The actuator model of AmigoBot-v1 (:mod:`amigo_gym.actuators`) against independent facts.
+"""The actuator model of AmigoBot-v1 (:mod:`amigo_gym.model.actuators`) against independent facts.
 
 Closed-form motion from rest, step-halving and time-shift invariants (with and without delay), an
 mpmath reference at 40 digits with its own event-by-event ramp, rate limits, the bits of one robot
@@ -17,7 +17,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from amigo_gym.actuators import (
+from amigo_gym.model.actuators import (
     MAX_DELAY,
     PIECES,
     ActuatorParams,
@@ -33,8 +33,8 @@ from amigo_gym.actuators import (
     step_subintervals,
     turn_rate_bound,
 )
-from amigo_gym.kinematics import body_velocity_columns
-from amigo_gym.params import RobotParams
+from amigo_gym.model.kinematics import body_velocity_columns
+from amigo_gym.model.params import RobotParams
 
 ROBOT = RobotParams()
 LIM = ActuatorParams()
@@ -55,9 +55,9 @@ def _state(s: ActuatorStep) -> tuple:
 
 def test_imports_are_restricted() -> None:
     """numpy, the standard library and three amigo_gym modules only (the module docstring's promise)."""
-    import amigo_gym.actuators as mod
+    import amigo_gym.model.actuators as mod
 
-    allowed = {"numpy", "amigo_gym.params", "amigo_gym.kinematics", "amigo_gym.fresnel"}
+    allowed = {"numpy", "amigo_gym.model.params", "amigo_gym.model.kinematics", "amigo_gym.model.fresnel"}
     names: set[str] = set()
     for node in ast.walk(ast.parse(Path(str(mod.__file__)).read_text())):
         if isinstance(node, ast.Import):

@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from amigo_gym import task
-from amigo_gym.kinematics import body_velocity, circle_steady_state
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.model.kinematics import body_velocity, circle_steady_state
+from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import make_path
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_body_velocity
+from amigo_gym.task import v0 as task
 
 
 def steady_pose(p: EnvParams) -> np.ndarray:

@@ -23,8 +23,8 @@ import pytest
 
 import amigo_gym
 from amigo_gym.envs import AmigoBotEnv, AmigoBotVectorEnv
-from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams
-from amigo_gym.task import obs_bounds, validate_action
+from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams
+from amigo_gym.task.v0 import obs_bounds, validate_action
 
 PACKAGE = Path(amigo_gym.__file__).resolve().parent
 

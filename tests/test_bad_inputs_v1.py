@@ -20,9 +20,11 @@ import pytest
 from gymnasium.envs.registration import EnvSpec
 
 import amigo_gym
-from amigo_gym import EnvParams, actuators, tracking
+from amigo_gym import EnvParams
 from amigo_gym.envs import AmigoBotV1Env, AmigoBotV1VectorEnv, vector_v1
+from amigo_gym.model import actuators
 from amigo_gym.paths import feasibility, make_family_path
+from amigo_gym.task import v1 as tracking
 
 NUMPY_DIR = str(Path(np.__file__).resolve().parent)
 ROOT = Path(__file__).resolve().parents[1]

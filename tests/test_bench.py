@@ -56,7 +56,7 @@ def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "kernel/step_columns" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     assert [r["n"] for r in doc["rows"]] == [1, 64]
-    from amigo_gym.fast import numba_available
+    from amigo_gym.sim.fast import numba_available
 
     if numba_available():
         assert all(r["kernel"] > 0 and r["kernel_par"] > 0 for r in doc["rows"])

@@ -152,7 +152,7 @@ def test_suite_is_versioned_data_with_required_coverage() -> None:
     for sc in bm.SUITE:  # the mapping kwargs are valid Randomization ranges
         r = sc.env_kwargs.get("randomize")
         if isinstance(r, dict):
-            from amigo_gym.randomization import make_randomization
+            from amigo_gym.model.randomization import make_randomization
 
             make_randomization(r)
     json.dumps([sc.to_json() for sc in bm.SUITE])
@@ -187,7 +187,7 @@ class _CountingAgent:
     """A stateful policy: counts steps since the episode start (integral action would keep its integral)."""
 
     def __init__(self) -> None:
-        from amigo_gym.params import EnvParams
+        from amigo_gym.model.params import EnvParams
         from amigo_gym.policies.analytic import AnalyticPolicy
 
         self.inner = AnalyticPolicy(EnvParams())

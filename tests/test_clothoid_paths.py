@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.inverse import ConstantSpeed, solve_inverse
-from amigo_gym.kinematics import circle_steady_state
-from amigo_gym.params import RobotParams
+from amigo_gym.model.inverse import ConstantSpeed, solve_inverse
+from amigo_gym.model.kinematics import circle_steady_state
+from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import (
     FAMILIES,
     STATUS_END,

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
 
-from amigo_gym import task
-from amigo_gym.kinematics import (
+from amigo_gym.model.kinematics import (
     arc_step,
     body_velocity,
     body_velocity_columns,
@@ -28,8 +27,9 @@ from amigo_gym.kinematics import (
     pack,
     step_pose,
 )
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+from amigo_gym.task import v0 as task
 
 ROBOT = RobotParams()
 PATHS = [

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from amigo_gym.fast import COMPILE_NOTICE
+from amigo_gym.sim.fast import COMPILE_NOTICE
 
 STEP = (
     "import gymnasium as gym, amigo_gym\n"

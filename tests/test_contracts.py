@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym import EnvParams, task
-from amigo_gym.kinematics import a_from_h, h_from_a, h_position
+from amigo_gym import EnvParams
+from amigo_gym.model.kinematics import a_from_h, h_from_a, h_position
+from amigo_gym.task import v0 as task
 
 ROOT = Path(__file__).resolve().parents[1]
 

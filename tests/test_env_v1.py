@@ -11,8 +11,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import amigo_gym  # noqa: F401  (registers the environments)
-from amigo_gym import tracking
 from amigo_gym.envs import AmigoBotV1Env
+from amigo_gym.task import v1 as tracking
 
 
 def test_registered_with_time_limit() -> None:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym.params import EnvParams
+from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.training.evaluate import (
     EvalProtocol,

@@ -23,7 +23,7 @@ from amigo_gym.policies.learned import (  # noqa: E402
     env_action,
     sha256_of,
 )
-from amigo_gym.tracking import obs_fields  # noqa: E402
+from amigo_gym.task.v1 import obs_fields  # noqa: E402
 from amigo_gym.training.fastppo import FastPPOSettings, train  # noqa: E402
 
 KW = {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"}

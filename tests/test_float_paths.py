@@ -14,11 +14,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from amigo_gym import actuators, fresnel, task
-from amigo_gym.actuators import ActuatorParams
-from amigo_gym.params import EnvParams, RobotParams
+from amigo_gym.model import actuators, fresnel
+from amigo_gym.model.actuators import ActuatorParams
+from amigo_gym.model.params import EnvParams, RobotParams
+from amigo_gym.model.randomization import make_randomization, step_noise
 from amigo_gym.paths import make_family_path, make_path
-from amigo_gym.randomization import make_randomization, step_noise
+from amigo_gym.task import v0 as task
 
 
 def same(a: Any, b: Any) -> bool:

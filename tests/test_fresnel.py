@@ -1,4 +1,5 @@
-"""amigo_gym.fresnel.advance against mpmath at 40 digits, closed forms of lines and arcs, bits of floats vs arrays."""
+"""amigo_gym.model.fresnel.advance against mpmath at 40 digits, closed forms of lines and arcs, bits of floats vs
+arrays."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from amigo_gym.fresnel import MAX_PHASE_PER_SUB, advance, subintervals
+from amigo_gym.model.fresnel import MAX_PHASE_PER_SUB, advance, subintervals
 
 
 def _reference(theta: float, v0: float, a: float, w0: float, alpha: float, t: float) -> tuple[float, float]:

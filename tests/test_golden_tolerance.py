@@ -23,7 +23,7 @@ import pytest
 import test_golden as tg
 from golden_compare import mismatches
 
-import amigo_gym.task as task
+import amigo_gym.task.v0 as task
 
 ROOT = Path(__file__).resolve().parent.parent
 EPISODES = [(c, s, k) for c in tg.CONFIGS for s in tg.SEEDS for k in tg.KINDS]  # the whole golden file

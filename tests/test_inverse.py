@@ -11,7 +11,7 @@ import pytest
 from numpy.typing import NDArray
 
 from amigo_gym.analysis.verify import round_trip_error
-from amigo_gym.inverse import (
+from amigo_gym.model.inverse import (
     COLUMNS,
     ConstantSpeed,
     InverseSolution,
@@ -22,7 +22,7 @@ from amigo_gym.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.params import RobotParams
+from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 ROBOT = RobotParams()

@@ -1,4 +1,4 @@
-"""Start states drawn inside the compiled step (amigo_gym.fast.step_rows with a GeneratorTable's bitgens).
+"""Start states drawn inside the compiled step (amigo_gym.sim.fast.step_rows with a GeneratorTable's bitgens).
 
 The reference is the Python loop the vector env runs without them (and the single env's reset): per
 restarting robot ``Generator.random(out=u[j])`` from its own generator, then task.start_pose of
@@ -19,9 +19,10 @@ import pytest
 from gymnasium.utils import seeding
 from numpy.typing import NDArray
 
-from amigo_gym import fast, task
-from amigo_gym.params import EnvParams
+from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
 
@@ -238,7 +239,7 @@ def test_copies_draw_from_their_own_generators(clone: str) -> None:
 @pytest.mark.parametrize("parallel", [False, True])
 def test_step_report_counts_headings_past_the_limit(parallel: bool) -> None:
     """step_rows reports the rows task.bound_heading would change (|beta| > HEADING_LIMIT; NaN is not)."""
-    from amigo_gym.params import HEADING_LIMIT
+    from amigo_gym.model.params import HEADING_LIMIT
 
     params = EnvParams()
     n = 64

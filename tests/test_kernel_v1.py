@@ -1,6 +1,7 @@
-"""The compiled single-robot step of AmigoBot-v1 (amigo_gym.fast_v1, amigo_gym._kernels_v1) against the reference.
+"""The compiled single-robot step of AmigoBot-v1 (amigo_gym.sim.fast_v1, amigo_gym.sim._kernels_v1) against the
+reference.
 
-The reference is the Python float code of amigo_gym.tracking (``kernel="numpy"``). Whole episodes run side by
+The reference is the Python float code of amigo_gym.task.v1 (``kernel="numpy"``). Whole episodes run side by
 side in both, with the same seeds and actions, on every path family (the circle both ways, the manoeuvre, the
 figure-8, the lane change to its end, random and mixed paths), without and with randomisation, speed ranges and
 the trapezoid profile, fixed delays, a true robot that differs from the nominal one, other control periods,
@@ -20,9 +21,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from amigo_gym import fast_v1, tracking
 from amigo_gym.envs import AmigoBotV1Env
 from amigo_gym.policies import AnalyticTrackingPolicy
+from amigo_gym.sim import fast_v1
+from amigo_gym.task import v1 as tracking
 
 pytest.importorskip("numba", reason="the compiled v1 step needs numba (the extra amigo_gym[fast])")
 
@@ -289,7 +291,7 @@ def test_warm_cache_start_compiles_nothing() -> None:
     code = (
         "import numpy as np; from numba.core.registry import CPUDispatcher; from amigo_gym.envs import AmigoBotV1Env\n"
         "e = AmigoBotV1Env(kernel='numba'); e.reset(seed=0); e.step(np.zeros(2))\n"
-        "import amigo_gym._kernels_v1 as k\n"
+        "import amigo_gym.sim._kernels_v1 as k\n"
         "ds = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)]\n"
         "print(sum(sum(d.stats.cache_misses.values()) for d in ds), sum(sum(d.stats.cache_hits.values()) for d in ds))"
     )

@@ -1,4 +1,4 @@
-"""The compiled fast path (amigo_gym.fast.step_rows) against the reference column functions of amigo_gym.task.
+"""The compiled fast path (amigo_gym.sim.fast.step_rows) against the reference column functions of amigo_gym.task.v0.
 
 Random states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the
 circle and the manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the
@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym import fast, task
-from amigo_gym.params import EnvParams
+from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
 
@@ -230,7 +231,7 @@ def test_which_path_runs(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_import_amigo_gym_does_not_load_numba() -> None:
     """``import amigo_gym`` and the numpy step never load numba (the kernel loads it when first built)."""
     code = (
-        "import sys, gymnasium as gym, amigo_gym, amigo_gym.fast\n"
+        "import sys, gymnasium as gym, amigo_gym, amigo_gym.sim.fast\n"
         "print('numba' in sys.modules)\n"
         "env = gym.make('AmigoBot-v0', kernel='numpy'); env.reset(seed=0); env.step(env.action_space.sample())\n"
         "print('numba' in sys.modules)\n"

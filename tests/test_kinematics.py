@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.kinematics import (
+from amigo_gym.model.kinematics import (
     body_velocity,
     castor_position,
     castor_rate,
@@ -20,7 +20,7 @@ from amigo_gym.kinematics import (
     step_wheel_angles,
     wheel_rates,
 )
-from amigo_gym.params import RobotParams
+from amigo_gym.model.params import RobotParams
 
 ROBOT = RobotParams()
 L1, L3, L5, R1, R2, R3 = ROBOT.l1, ROBOT.l3, ROBOT.l5, ROBOT.r1, ROBOT.r2, ROBOT.r3

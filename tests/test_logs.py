@@ -17,9 +17,9 @@ import pytest
 
 import amigo_gym  # noqa: F401  (registers the environments)
 from amigo_gym import logs
-from amigo_gym.actuators import ActuatorParams
 from amigo_gym.cli import main
-from amigo_gym.params import RobotParams
+from amigo_gym.model.actuators import ActuatorParams
+from amigo_gym.model.params import RobotParams
 
 sys.path.insert(0, str(Path(__file__).parent))
 import logsim

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amigo_gym.params import RobotParams
+from amigo_gym.model.params import RobotParams
 
 ROOT = Path(__file__).resolve().parents[1]
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from amigo_gym.params import EnvParams, RobotParams, check_range
+from amigo_gym.model.params import EnvParams, RobotParams, check_range
 
 # docs/model.md, "Construction data" and "Public data on the real robot"
 TABLE_1 = {"l1": 0.12, "l3": 0.08, "l4": 0.03, "l5": 0.12, "r1": 0.05, "r2": 0.05, "r3": 0.03}

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from amigo_gym.kinematics import Real
+from amigo_gym.model.kinematics import Real
 from amigo_gym.paths import (
     STATUS_END,
     STATUS_START,

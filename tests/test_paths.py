@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.params import EnvParams
+from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path, wrap_angle
 
 Array = NDArray[np.float64]

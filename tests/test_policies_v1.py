@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from amigo_gym import tracking
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
 from amigo_gym.paths import feasibility
 from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
@@ -23,6 +22,7 @@ from amigo_gym.policies.tracking import (
     pure_pursuit_circle_offset,
     zoh_error_bound,
 )
+from amigo_gym.task import v1 as tracking
 
 QUIET = {"init_position_noise": 0.0, "init_heading_noise": 0.0}
 TRUE_PLUS_5 = {"r1": 0.05 * 1.05, "r2": 0.05 * 1.05, "l1": 0.12 * 1.05}

@@ -11,7 +11,7 @@ import pytest
 
 import amigo_gym  # noqa: F401  (registers the environments)
 from amigo_gym.policies import PurePursuitPolicy
-from amigo_gym.tracking import TrackingParams, obs_fields
+from amigo_gym.task.v1 import TrackingParams, obs_fields
 
 
 def _obs(p: TrackingParams, v_ref: float, goals: dict[float, tuple[float, float]]) -> np.ndarray:

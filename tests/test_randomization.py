@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from amigo_gym.randomization import (
+from amigo_gym.model.randomization import (
     PRESETS,
     Randomization,
     counter_normal,

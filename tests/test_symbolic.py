@@ -1,8 +1,9 @@
-"""The symbolic D–H derivation (amigo_gym.symbolic) against the numeric core, docs/model.md and the paper's misprints.
+"""The symbolic D–H derivation (amigo_gym.model.symbolic) against the numeric core, docs/model.md and the paper's
+misprints.
 
-References: the numeric kinematics of :mod:`amigo_gym.kinematics` (an independent implementation), the equations of
-``docs/model.md`` typed here by hand, rigid-body velocities computed here with numpy, and docs/model.md's steady-state
-figures for the circle (v_A = 0.2 m/s, R = 1 m).
+References: the numeric kinematics of :mod:`amigo_gym.model.kinematics` (an independent implementation), the equations
+of ``docs/model.md`` typed here by hand, rigid-body velocities computed here with numpy, and docs/model.md's
+steady-state figures for the circle (v_A = 0.2 m/s, R = 1 m).
 """
 
 from __future__ import annotations
@@ -18,10 +19,10 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from amigo_gym import kinematics as K
-from amigo_gym import symbolic as S
 from amigo_gym.cli import main as cli_main
-from amigo_gym.params import RobotParams
+from amigo_gym.model import kinematics as K
+from amigo_gym.model import symbolic as S
+from amigo_gym.model.params import RobotParams
 
 Array = np.ndarray[Any, np.dtype[np.float64]]
 
@@ -375,9 +376,9 @@ def test_lambdify_refuses_missing_and_nonfinite_values(d: S.Derivation) -> None:
 
 def test_import_amigo_gym_does_not_import_sympy() -> None:
     code = (
-        "import sys, gymnasium as gym, amigo_gym, amigo_gym.kinematics, amigo_gym.paths, amigo_gym.task\n"
+        "import sys, gymnasium as gym, amigo_gym, amigo_gym.model.kinematics, amigo_gym.paths, amigo_gym.task.v0\n"
         "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
-        "print('sympy' in sys.modules, 'amigo_gym.symbolic' in sys.modules)"
+        "print('sympy' in sys.modules, 'amigo_gym.model.symbolic' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False"]

@@ -62,7 +62,7 @@ def test_three_members_are_enough_and_match_the_builtin_circle() -> None:
         np.testing.assert_allclose(o1, o2, atol=1e-6)
         assert abs(r1 - r2) < 1e-6 and t1 == t2
     # rendering draws the path by the documented members only (no `point`)
-    from amigo_gym.rendering import path_polyline
+    from amigo_gym.envs.rendering import path_polyline
 
     pts = path_polyline(e1.unwrapped.params.path, 40)  # type: ignore[attr-defined]
     np.testing.assert_allclose(np.hypot(pts[:, 0], pts[:, 1] - 1.0), 1.0, atol=1e-12)

@@ -1,4 +1,4 @@
-"""The AmigoBot-v1 vector env's compiled step (kernel="numba", :mod:`amigo_gym.fast_v1_batch`) gives the bits of its
+"""The AmigoBot-v1 vector env's compiled step (kernel="numba", :mod:`amigo_gym.sim.fast_v1_batch`) gives the bits of its
 reference column code (kernel="numpy") and of Gymnasium's SyncVectorEnv of single envs (the reference float code):
 observations, rewards, terminations, truncations and every info (keys, dtypes, values, masks), over many steps with
 autoresets in the three autoreset modes, partial resets, reseeding and pickling."""
@@ -14,8 +14,8 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import amigo_gym  # noqa: F401
-from amigo_gym import fast_v1
 from amigo_gym.envs import AmigoBotV1VectorEnv
+from amigo_gym.sim import fast_v1
 
 pytest.importorskip("numba")
 if not fast_v1.libm_matches_numpy():  # pragma: no cover - the kernel refuses to run here
@@ -249,7 +249,7 @@ class _Wrapped:
 
 
 def test_path_object_of_another_class_runs_the_reference() -> None:
-    from amigo_gym import tracking
+    from amigo_gym.task import v1 as tracking
 
     inner = tracking.fixed_path(tracking.make_tracking_params("t", None, path="figure8"))
     path = _Wrapped(inner)
@@ -264,8 +264,8 @@ def test_path_object_of_another_class_runs_the_reference() -> None:
 
 
 def test_path_arena_rows_read_their_paths() -> None:
-    from amigo_gym import tracking
-    from amigo_gym.fast_v1_batch import PathArena
+    from amigo_gym.sim.fast_v1_batch import PathArena
+    from amigo_gym.task import v1 as tracking
 
     p = tracking.make_tracking_params("t", None, path="random")
     pool = [tracking.random_pool_path(p, i) for i in range(40)]
@@ -291,8 +291,8 @@ def test_path_arena_rows_read_their_paths() -> None:
 
 
 def test_path_arena_survives_pickling() -> None:
-    from amigo_gym import tracking
-    from amigo_gym.fast_v1_batch import PathArena
+    from amigo_gym.sim.fast_v1_batch import PathArena
+    from amigo_gym.task import v1 as tracking
 
     p = tracking.make_tracking_params("t", None, path="random")
     pool = [tracking.random_pool_path(p, i) for i in range(6)]
@@ -317,7 +317,7 @@ def test_warm_cache_start_compiles_nothing() -> None:
         "import numpy as np; from numba.core.registry import CPUDispatcher\n"
         "from amigo_gym.envs import AmigoBotV1VectorEnv\n"
         "e = AmigoBotV1VectorEnv(4, kernel='numba', randomize='hard'); e.reset(seed=0); e.step(np.zeros((4, 2)))\n"
-        "import amigo_gym._kernels_v1 as k\n"
+        "import amigo_gym.sim._kernels_v1 as k\n"
         "ds = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)]\n"
         "print(sum(sum(d.stats.cache_misses.values()) for d in ds), sum(sum(d.stats.cache_hits.values()) for d in ds))"
     )

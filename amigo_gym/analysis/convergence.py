@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, add_dataclass_options, run_guarded
 from amigo_gym.io import atomic_save
-from amigo_gym.params import check_range
+from amigo_gym.model.params import check_range
+from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = ["GALLERY", "render_family", "main"]
 
@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from amigo_gym.rendering import headless
+        from amigo_gym.envs.rendering import headless
 
         headless()
         out = Path(args.out)

@@ -37,11 +37,11 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.actuators import ActuatorParams
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import fsync_dir, json_safe
 from amigo_gym.logs import Fit, Log, Replay, errors, identify, read_log, robot_from_file, simulate, summarize
-from amigo_gym.params import RobotParams
+from amigo_gym.model.actuators import ActuatorParams
+from amigo_gym.model.params import RobotParams
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = ["main_identify", "main_replay", "plot", "trajectory_csv", "write_folder"]
 

@@ -5,7 +5,7 @@ bound it must meet; the command prints PASS or FAIL per row and exits with statu
 
 1. the closed-form steady state on the circle against the values tabulated in ``docs/model.md``;
 2. exactness of the step: from the steady pose on the circle (R = 1 m, v_A = 0.2 m/s), the closed-form
-   steady wheel rates held through :func:`amigo_gym.kinematics.step_pose` keep H on the circle over 10
+   steady wheel rates held through :func:`amigo_gym.model.kinematics.step_pose` keep H on the circle over 10
    laps (largest ``| |H - c| - R |``), for dt = 0.01, 0.1, 0.5 s; an explicit Euler step of the same
    unicycle as the counter-example;
 3. the same through ``gym.make("AmigoBot-v0")`` with float64 actions, dt = 0.1 s;
@@ -29,9 +29,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
-from amigo_gym.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
-from amigo_gym.params import RobotParams
+from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
+from amigo_gym.model.params import RobotParams
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = ["Check", "main", "round_trip_error", "rows"]
 
@@ -83,7 +83,7 @@ def _env_laps_error() -> float:
 
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
-    from amigo_gym.inverse import paper_circle
+    from amigo_gym.model.inverse import paper_circle
     from amigo_gym.paths import CirclePath
 
     path = CirclePath(radius=R)
@@ -98,7 +98,7 @@ def round_trip_error(dt: float) -> float:
 
 
 def _symbolic_residual(n: int = 1000, seed: int = 0) -> float:
-    from amigo_gym import symbolic as S
+    from amigo_gym.model import symbolic as S
 
     d = S.derive()
     rng = np.random.default_rng(seed)
@@ -162,7 +162,7 @@ def rows(quick: bool = False) -> list[Check]:
     what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
     out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
     if not quick:
-        from amigo_gym.inverse import paper_circle
+        from amigo_gym.model.inverse import paper_circle
 
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R

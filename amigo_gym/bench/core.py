@@ -2,17 +2,17 @@
 
 For each batch size N it times (median of ``--repeats`` repeats, each at least ``--min-time`` seconds):
 
-* ``transition``: :func:`amigo_gym.task.transition`, the environment's whole pure step (action → wheel
+* ``transition``: :func:`amigo_gym.task.v0.transition`, the environment's whole pure step (action → wheel
   rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms),
   returned as ``(N, k)`` arrays;
-* ``columns``: :func:`amigo_gym.task.step_columns`, the same step in the column form that the environments
+* ``columns``: :func:`amigo_gym.task.v0.step_columns`, the same step in the column form that the environments
   run (state and results as ``(N,)`` columns, ``minimal=True``: no arc length nor closest point);
-* ``step_pose``: :func:`amigo_gym.kinematics.step_pose` alone, the exact closed-form arc step;
+* ``step_pose``: :func:`amigo_gym.model.kinematics.step_pose` alone, the exact closed-form arc step;
 * ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
   (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
 * ``loop``: the other peer, a Python loop of the scalar exact step (``math`` functions) over the N states
   (only up to ``--loop-max`` states, as it is slow);
-* ``kernel``: the compiled fast path, :func:`amigo_gym._kernels.step_rows` (the whole step of
+* ``kernel``: the compiled fast path, :func:`amigo_gym.sim._kernels.step_rows` (the whole step of
   ``step_columns`` plus the float32 observation, fused into one numba loop writing into preallocated
   arrays), and ``kernel_par``, its ``prange`` variant on numba's threads (``--threads``; default all
   CPUs); both only when numba is installed.
@@ -41,12 +41,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write_json
-from amigo_gym.kinematics import body_velocity, step_pose
-from amigo_gym.params import EnvParams, RobotParams, check_range
+from amigo_gym.model.kinematics import body_velocity, step_pose
+from amigo_gym.model.params import EnvParams, RobotParams, check_range
+from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.paths import make_path
-from amigo_gym.task import State, obs_dim, step_columns, task_constants, transition
+from amigo_gym.task.v0 import State, obs_dim, step_columns, task_constants, transition
 
 __all__ = [
     "Row",
@@ -190,7 +190,7 @@ def _kernel_steppers(
     params: EnvParams, path: Any, pose: Array, angles: Array, w: Array, action: Array
 ) -> tuple[Callable[[], object], Callable[[], object]]:
     """Serial and parallel kernel steps of the states (preallocated outputs; the state advances)."""
-    from amigo_gym import fast
+    from amigo_gym.sim import fast
 
     n = len(pose)
     ws = fast.workspace(task_constants(params), path, n)
@@ -218,7 +218,7 @@ def bench(
 
     ``kernels=False`` (or numba missing) leaves the kernel columns ``None``.
     """
-    from amigo_gym.fast import numba_available
+    from amigo_gym.sim.fast import numba_available
 
     rng = np.random.default_rng(seed)
     use = kernels and numba_available()
@@ -288,7 +288,7 @@ def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
 def bench_startup(repeats: int = 3) -> Startup:
     """Time fresh processes: the import, and the first compiled steps (v0 vector, v1 single) from an empty then a
     filled numba cache."""
-    from amigo_gym.fast import numba_available
+    from amigo_gym.sim.fast import numba_available
 
     py = statistics.median(_wall("pass") for _ in range(repeats))
     imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
@@ -360,7 +360,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_range(PROG, "min_time", min_time, 0.0, 60.0, low_open=True)
         check_range(PROG, "loop_max", args.loop_max, 0, 10_000_000)
         threads = None
-        from amigo_gym.fast import numba_available
+        from amigo_gym.sim.fast import numba_available
 
         if not args.skip_kernel and numba_available():
             import numba

@@ -55,9 +55,9 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.bench.core import measure_many
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_save, atomic_write_json
-from amigo_gym.params import check_range
+from amigo_gym.model.params import check_range
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = [
     "SingleResult",
@@ -137,7 +137,7 @@ def _vector_kernels() -> list[str]:
 
     if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
         return []
-    from amigo_gym.fast import numba_available
+    from amigo_gym.sim.fast import numba_available
 
     return ["numpy", "numba"] if numba_available() else ["numpy"]
 

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = ["gap", "profile_steps", "single_parts", "main"]
 
@@ -102,10 +102,10 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
     from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-    from amigo_gym import fast
     from amigo_gym.bench.core import measure_many
     from amigo_gym.bench.env import _vector_stepper
     from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.sim import fast
 
     quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
     bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
@@ -142,8 +142,8 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     import gymnasium as gym
 
     import amigo_gym  # noqa: F401
-    from amigo_gym import task
     from amigo_gym.bench.core import measure_many
+    from amigo_gym.task import v0 as task
 
     env = gym.make("AmigoBot-v0")
     env.reset(seed=0)

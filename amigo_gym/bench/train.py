@@ -143,9 +143,9 @@ def _show(name: str, r: dict[str, Any]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
-    from amigo_gym.cli import OneLineParser, run_guarded
     from amigo_gym.io import atomic_write_json
-    from amigo_gym.params import check_range
+    from amigo_gym.model.params import check_range
+    from amigo_gym.options import OneLineParser, run_guarded
 
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
     p.add_argument("--fast-steps", type=int, default=1_048_576, help="env-steps of the fast PPO [steps]")

@@ -1,7 +1,7 @@
 r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
 
 The environment is a thin stateful shell over the pure, batched functions of
-:mod:`amigo_gym.task` (observation, reward, start, end), :mod:`amigo_gym.kinematics` (the exact
+:mod:`amigo_gym.task.v0` (observation, reward, start, end), :mod:`amigo_gym.model.kinematics` (the exact
 step) and :mod:`amigo_gym.paths`. :class:`AmigoBotEnv` holds one robot; the native vector
 environment :class:`amigo_gym.envs.AmigoBotVectorEnv` holds ``N`` and calls the same functions.
 """
@@ -18,11 +18,12 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym import fast, task
 from amigo_gym.envs.spec import JsonSpecMixin
-from amigo_gym.kinematics import h_position
-from amigo_gym.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
+from amigo_gym.model.kinematics import h_position
+from amigo_gym.model.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
 
 __all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "make_spaces", "parse_pose_option"]
 
@@ -116,7 +117,7 @@ def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
     """Validate ``options["pose"]``: ``(x_A [m], y_A [m], beta [rad])`` as finite numbers.
 
     The coordinates must lie within ``POSE_LIMIT`` (1e6 m) and the heading within ``HEADING_LIMIT``
-    (1e6 rad) of zero, where float64 still resolves a step (:mod:`amigo_gym.params`).
+    (1e6 rad) of zero, where float64 still resolves a step (:mod:`amigo_gym.model.params`).
 
     Args:
         value: the option's value; shape ``(3,)``, or ``batch_shape + (3,)`` when ``batch_shape`` is given.
@@ -166,7 +167,7 @@ def make_spaces(params: EnvParams) -> tuple[spaces.Space[NDArray[np.floating[Any
     """The action and observation spaces of one robot (both environments; the vector env batches them).
 
     Action ``Box(-1, 1, (2,), float32)``; observation ``Box(low, high, (obs_dim,), float32)`` with the
-    bounds of :func:`amigo_gym.task.obs_bounds`.
+    bounds of :func:`amigo_gym.task.v0.obs_bounds`.
     """
     low, high = task.obs_bounds(params)
     action: Any = spaces.Box(-1.0, 1.0, (2,), np.float32)
@@ -175,7 +176,7 @@ def make_spaces(params: EnvParams) -> tuple[spaces.Space[NDArray[np.floating[Any
 
 
 def _single(kind: str, value: Any) -> Any:
-    """One info entry of :func:`amigo_gym.task.info_columns` in the single env's types."""
+    """One info entry of :func:`amigo_gym.task.v0.info_columns` in the single env's types."""
     if kind == "columns":
         return np.array(value)
     if kind == "terms":
@@ -214,11 +215,11 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     ## Observation Space
 
-    ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.obs_bounds`).
+    ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.v0.obs_bounds`).
     ``e`` is H's signed cross-track error (positive left of the path), ``psi = wrap(beta - theta)``
     the heading minus the path tangent at H's closest point, ``kappa`` the signed path curvature.
-    Every reader decodes it by the names of :func:`amigo_gym.task.obs_names` (index by
-    :func:`amigo_gym.task.obs_index`). With the default ``preview = (0.2, 0.4)`` the shape is ``(10,)``:
+    Every reader decodes it by the names of :func:`amigo_gym.task.v0.obs_names` (index by
+    :func:`amigo_gym.task.v0.obs_index`). With the default ``preview = (0.2, 0.4)`` the shape is ``(10,)``:
 
     | Num | Name                  | Observation                              | Min                 | Max               |
     |-----|-----------------------|------------------------------------------|---------------------|-------------------|
@@ -237,7 +238,7 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     ## Rewards
 
-    The product of four terms, each in [0, 1] (:data:`amigo_gym.task.REWARD_TERMS`), so each step
+    The product of four terms, each in [0, 1] (:data:`amigo_gym.task.v0.REWARD_TERMS`), so each step
     earns at most 1 and an episode of ``n`` steps at most ``n``:
 
     ``r = track * speed * heading * smooth`` with
@@ -413,7 +414,7 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
         Raises:
             gymnasium.error.ResetNeeded: before the first ``reset()``.
-            TypeError: an action that is not real numbers (:func:`amigo_gym.task.validate_action`).
+            TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
             ValueError: action of a wrong shape or with NaN/inf entries.
 
         Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
@@ -466,7 +467,8 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
 
     def _step_fast(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:class:`amigo_gym.fast.SingleStep`): the same results, bit for bit."""
+        """:meth:`step` by the compiled kernel (:class:`amigo_gym.sim.fast.SingleStep`): the same results, bit for
+        bit."""
         fs = self._fast
         assert fs is not None
         rec = fs.step(a1, a2)
@@ -509,7 +511,7 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
 
     # ------------------------------------------------------------------ rendering
     def render(self) -> NDArray[np.uint8] | None:
-        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.rendering`).
+        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.envs.rendering`).
 
         Returns:
             ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"``; ``None`` otherwise.
@@ -521,7 +523,7 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             return None
         if self._needs_reset:
             raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before render()")
-        from amigo_gym.rendering import Renderer
+        from amigo_gym.envs.rendering import Renderer
 
         if self._renderer is None:
             self._renderer = Renderer(self.params, self.path, self.render_mode)

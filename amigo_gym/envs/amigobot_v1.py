@@ -1,6 +1,6 @@
 r"""``AmigoBot-v1``: the real robot on many paths: actuator ramps, mismatch, slip, delay and noise, exactly integrated.
 
-A thin stateful shell over the column functions of :mod:`amigo_gym.tracking`; the native vector environment
+A thin stateful shell over the column functions of :mod:`amigo_gym.task.v1`; the native vector environment
 :class:`amigo_gym.envs.AmigoBotV1VectorEnv` calls the same functions on ``(N,)`` columns.
 """
 
@@ -15,17 +15,19 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, task, tracking
 from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
 from amigo_gym.envs.spec import JsonSpecMixin
+from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.randomization import StepNoise
+from amigo_gym.sim import fast_v1
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
 
 ObsArray = NDArray[np.float32]
 
-# entries of the compiled step's workspace (amigo_gym.fast_v1.WS_FIELDS)
+# entries of the compiled step's workspace (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
 _W_AL1, _W_AL2, _W_PROGRESS = fast_v1.W_AL1, fast_v1.W_AL2, fast_v1.W_PROGRESS
 _W_HX, _W_HY, _W_E, _W_VT, _W_VREF = fast_v1.W_HX, fast_v1.W_HY, fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF
@@ -78,20 +80,20 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     * **Actuators.** Actions are wheel-rate *setpoints*; the firmware ramps its translational speed at
       0.3 m/s^2 (speeding up) / 0.75 m/s^2 (slowing down) and its rotational speed at 0.87 / 2.5 rad/s^2
-      towards them, and the wheel rates are limited to 15 rad/s (:mod:`amigo_gym.actuators`). The actual
+      towards them, and the wheel rates are limited to 15 rad/s (:mod:`amigo_gym.model.actuators`). The actual
       wheel rates are part of the state; episodes start with the wheels at rest.
     * **Exact integration.** Within a step the speeds are piecewise linear in time; the pose advances by
-      the exact generalised Fresnel integral on each piece (:mod:`amigo_gym.fresnel`), no Euler or RK step.
+      the exact generalised Fresnel integral on each piece (:mod:`amigo_gym.model.fresnel`), no Euler or RK step.
     * **The robot is not the model.** ``robot`` is the nominal robot (the action scale, the observation,
       every policy); ``true_robot`` is the simulated one; ``randomize`` draws wheel radii, track, slip,
-      actuation delay and measurement noise per episode (:mod:`amigo_gym.randomization`).
+      actuation delay and measurement noise per episode (:mod:`amigo_gym.model.randomization`).
     * **Many paths.** ``path``: ``"circle"``, ``"manoeuvre"``, ``"figure8"``, ``"lane_change"``,
       ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
       ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
     * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
       acceleration than the robot has is refused at construction (``feasibility="error"``, the default), and so
       is a ``"random"`` or ``"mixed"`` task that can draw such a path (a bound over the family,
-      :func:`amigo_gym.tracking.check_drawn_feasible`); ``"warn"`` and ``"off"`` run it. The report (where the
+      :func:`amigo_gym.task.v1.check_drawn_feasible`); ``"warn"`` and ``"off"`` run it. The report (where the
       limits are exceeded) is ``env.feasibility`` and ``info["feasibility"]`` at reset.
 
     ## Action Space
@@ -102,14 +104,14 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     ## Observation Space
 
-    ``Box(low, high, (18 + 3 (len(preview) - 3),), float32)``: the fields of :func:`amigo_gym.tracking.obs_fields`
+    ``Box(low, high, (18 + 3 (len(preview) - 3),), float32)``: the fields of :func:`amigo_gym.task.v1.obs_fields`
     (errors of H, path preview in the robot frame, reference speed now and 1 s ahead, speed error, measured
-    wheel rates, previous command); the table is in :mod:`amigo_gym.tracking`. The true robot, slip and
+    wheel rates, previous command); the table is in :mod:`amigo_gym.task.v1`. The true robot, slip and
     delay are never observed.
 
     ## Rewards
 
-    ``track * speed * heading * smooth``, each in [0, 1], from the true state (:mod:`amigo_gym.tracking`);
+    ``track * speed * heading * smooth``, each in [0, 1], from the true state (:mod:`amigo_gym.task.v1`);
     the terms are in ``info["reward_terms"]``.
 
     ## Starting State
@@ -132,15 +134,15 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     ``reward_terms``, ``time`` [s], ``path`` (family and parameters), ``true_robot`` (``r1``, ``r2``, ``l1`` [m]),
     ``delay`` [s], ``slip`` (this step's loss of ground speed per wheel), ``end_of_path`` (H reached the end of an
     open path: the episode terminated as a success), ``end_condition`` (``""``, ``"goal"``, ``"end_of_path"`` or
-    ``"off_path"``: :data:`amigo_gym.tracking.END_CONDITIONS`); at reset, for a fixed path, ``feasibility``.
+    ``"off_path"``: :data:`amigo_gym.task.v1.END_CONDITIONS`); at reset, for a fixed path, ``feasibility``.
 
     ## Arguments
 
-    Every field of :class:`amigo_gym.tracking.TrackingParams` as a keyword, mappings accepted for ``robot``,
+    Every field of :class:`amigo_gym.task.v1.TrackingParams` as a keyword, mappings accepted for ``robot``,
     ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; ``render_mode``; and
-    ``kernel``, the step's implementation (:mod:`amigo_gym.fast_v1`): ``"auto"`` (default: the compiled step
+    ``kernel``, the step's implementation (:mod:`amigo_gym.sim.fast_v1`): ``"auto"`` (default: the compiled step
     when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference float code of
-    :mod:`amigo_gym.tracking`) or ``"numba"`` (the compiled step; needs the extra ``amigo_gym[fast]``). The
+    :mod:`amigo_gym.task.v1`) or ``"numba"`` (the compiled step; needs the extra ``amigo_gym[fast]``). The
     compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`); a path object of
     your own runs the reference code. Both give the same results bit for bit.
 
@@ -174,7 +176,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self.render_mode = check_render_mode(render_mode)
         p = self.params
         self._k = tracking.constants(p)
-        # the compiled step (amigo_gym.fast_v1), for the episodes on a ClothoidPath; None: the reference code
+        # the compiled step (amigo_gym.sim.fast_v1), for the episodes on a ClothoidPath; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
         if fast_v1.use_kernel(owner, kernel):
             self._kernel = fast_v1.StepKernel(self._k)
@@ -284,10 +286,10 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
 
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, bool, dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:mod:`amigo_gym.fast_v1`): the same results as the reference.
+        """:meth:`step` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
-        The per-step draws' logarithms (:meth:`amigo_gym.fast_v1.StepKernel.draw`) and the reward's exponentials
-        (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.tracking.step_columns`).
+        The per-step draws' logarithms (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's exponentials
+        (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.task.v1.step_columns`).
         """
         kern = self._kernel
         ep = self._episode
@@ -325,10 +327,11 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return terminated
 
     def _kernel_info(self, o: list[float], slip1: float, slip2: float) -> dict[str, Any]:
-        """:meth:`_info` from the kernel's outputs ``o`` (:data:`amigo_gym._kernels_v1.WS_FIELDS`): the same entries.
+        """:meth:`_info` from the kernel's outputs ``o`` (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same
+        entries.
 
         The track, speed and smoothness terms from one ``np.exp`` of their arguments, and the heading term, as
-        :func:`amigo_gym.task.reward_term_columns` computes them.
+        :func:`amigo_gym.task.v0.reward_term_columns` computes them.
         """
         ep = self._episode
         assert self._kernel is not None and ep is not None
@@ -384,7 +387,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         }
 
     def _current_state(self) -> tracking.State:
-        """The state of the episode (:class:`amigo_gym.tracking.State` of floats; from the compiled step's workspace
+        """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace
         when it runs the episode).
 
         Raises:
@@ -430,7 +433,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         if self._state is None:
             raise gym.error.ResetNeeded("call reset() before render()")
         st = self._current_state()
-        from amigo_gym.rendering import Renderer
+        from amigo_gym.envs.rendering import Renderer
 
         if self._renderer is None or self._renderer.path is not self.path:
             if self._renderer is not None:

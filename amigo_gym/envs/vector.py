@@ -2,10 +2,10 @@
 
 ``gym.make_vec("AmigoBot-v0", num_envs=N)`` (or ``vectorization_mode="vector_entry_point"``)
 builds :class:`AmigoBotVectorEnv`: ``N`` robots stepped together by the same pure, batched
-functions of :mod:`amigo_gym.task` that the single environment calls, with no Python loop over
+functions of :mod:`amigo_gym.task.v0` that the single environment calls, with no Python loop over
 the environments on the step path. Restarting robots draw their start perturbations from their own
-generators: with the compiled kernel, inside it (:func:`amigo_gym.fast.step_rows` with the table of
-generators, :class:`amigo_gym.fast.GeneratorTable`); otherwise (the numpy path, or a generator that is
+generators: with the compiled kernel, inside it (:func:`amigo_gym.sim.fast.step_rows` with the table of
+generators, :class:`amigo_gym.sim.fast.GeneratorTable`); otherwise (the numpy path, or a generator that is
 not ``PCG64``) by a Python loop of ``Generator.random`` over them. The two give the same numbers and
 leave the generators in the same states.
 
@@ -29,7 +29,6 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import fast, task
 from amigo_gym.envs.amigobot import (
     TRAIL_LENGTH,
     ObsArray,
@@ -39,9 +38,11 @@ from amigo_gym.envs.amigobot import (
     parse_pose_option,
 )
 from amigo_gym.envs.spec import JsonSpecMixin
-from amigo_gym.kinematics import h_position, pack
-from amigo_gym.params import EnvParams, RobotParams, show_value
+from amigo_gym.model.kinematics import h_position, pack
+from amigo_gym.model.params import EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
 
 __all__ = [
     "AmigoBotVectorEnv",
@@ -76,9 +77,9 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
             (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
-        kernel: the step's implementation (:mod:`amigo_gym.fast`): ``"auto"`` (default: the compiled
+        kernel: the step's implementation (:mod:`amigo_gym.sim.fast`): ``"auto"`` (default: the compiled
             kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
-            reference column functions of :mod:`amigo_gym.task`), ``"numba"`` (the compiled kernel, the
+            reference column functions of :mod:`amigo_gym.task.v0`), ``"numba"`` (the compiled kernel, the
             same results bit for bit; needs the extra ``amigo_gym[fast]``), or ``"numba-parallel"`` (the
             kernel's loops on numba's threads).
         params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
@@ -224,8 +225,8 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         """Start states of the robots ``idx`` (compact columns): a drawn pose (or ``pose_opt``'s rows),
         wheel angles 0, the initial rates.
 
-        The Python loop here is the reference of the draws that :func:`amigo_gym.fast.step_rows` makes
-        in the kernel for ``NEXT_STEP`` restarts (:func:`amigo_gym._kernels.draw_starts`): the same
+        The Python loop here is the reference of the draws that :func:`amigo_gym.sim.fast.step_rows` makes
+        in the kernel for ``NEXT_STEP`` restarts (:func:`amigo_gym.sim._kernels.draw_starts`): the same
         numbers, start states and generator states afterwards (``tests/test_kernel_draws.py``).
         """
         m = len(idx)
@@ -331,10 +332,10 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
     def _step_kernel(
         self, ws: fast.Workspace, a: Array, mode: AutoresetMode
     ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:func:`amigo_gym.fast.step_rows`); the same results.
+        """:meth:`step` by the compiled kernel (:func:`amigo_gym.sim.fast.step_rows`); the same results.
 
         Restarting robots (``NEXT_STEP``) get their start states inside the kernel's step, drawn from
-        their generators' C bit generators (:attr:`amigo_gym.fast.GeneratorTable.bitgens`), when every
+        their generators' C bit generators (:attr:`amigo_gym.sim.fast.GeneratorTable.bitgens`), when every
         generator is a ``PCG64``; otherwise from :meth:`_start_states` (the Python loop). Both give the
         numpy path's numbers and leave the generators in the same states.
         """
@@ -474,7 +475,7 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
 
         The generators are copied with their table, which computes the copies' addresses anew
-        (:class:`amigo_gym.fast.GeneratorTable`): a copy draws from its own generators only.
+        (:class:`amigo_gym.sim.fast.GeneratorTable`): a copy draws from its own generators only.
         """
         state = self.__dict__.copy()
         state["_renderers"] = []
@@ -491,7 +492,7 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
             return None
         if not self._was_reset:
             raise gym.error.ResetNeeded("call reset() before render() on AmigoBotVectorEnv")
-        from amigo_gym.rendering import Renderer
+        from amigo_gym.envs.rendering import Renderer
 
         while len(self._renderers) < self.num_envs:
             self._renderers.append(Renderer(self.params, self.path, "rgb_array"))
@@ -564,7 +565,7 @@ def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None
 
 
 def _batched(kind: str, value: Any, m: int) -> Any:
-    """One info entry of :func:`amigo_gym.task.info_columns` as ``(m, ...)`` arrays (new ones: never the state's)."""
+    """One info entry of :func:`amigo_gym.task.v0.info_columns` as ``(m, ...)`` arrays (new ones: never the state's)."""
     if kind == "columns":
         return pack(*value)
     if kind == "terms":

@@ -2,15 +2,16 @@
 
 ``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with
 its own path (of its own family when ``path="mixed"``), reference speed, true robot, slip, delay and noise,
-stepped together by the column functions of :mod:`amigo_gym.tracking` that the single environment calls,
+stepped together by the column functions of :mod:`amigo_gym.task.v1` that the single environment calls,
 with no Python loop over the robots in the step: the paths are one :class:`amigo_gym.paths.PathBatch`, the
 per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` ring. Loops run only over
 the robots being reset, which draw their episodes from their own generators with the single environment's
-function (:func:`amigo_gym.tracking.begin_episode`).
+function (:func:`amigo_gym.task.v1.begin_episode`).
 
 With numba (``kernel="auto"`` or ``"numba"``, the extra ``amigo_gym[fast]``) and the built-in path families
 (:class:`amigo_gym.paths.ClothoidPath`), the step is instead the single environment's compiled step
-(:mod:`amigo_gym.fast_v1`) run over the robots in one compiled loop (:class:`amigo_gym.fast_v1_batch.BatchKernel`);
+(:mod:`amigo_gym.sim.fast_v1`) run over the robots in one compiled loop
+(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`);
 the state then lives in the rows of its workspace (the ``(N,)`` state columns are views of them). Otherwise
 (``kernel="numpy"``, no numba, a path object of another class) the column functions step the batch; they are
 the reference.
@@ -33,7 +34,6 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from amigo_gym import actuators, fast, fast_v1, fast_v1_batch, task, tracking
 from amigo_gym.envs.amigobot import TRAIL_LENGTH, check_reset_options, parse_pose_option
 from amigo_gym.envs.amigobot_v1 import make_spaces_v1
 from amigo_gym.envs.spec import JsonSpecMixin
@@ -47,8 +47,12 @@ from amigo_gym.envs.vector import (
     take_rows,
     trail_of,
 )
+from amigo_gym.model import actuators
+from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.randomization import StepNoise
+from amigo_gym.sim import fast, fast_v1, fast_v1_batch
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1VectorEnv"]
 
@@ -60,9 +64,9 @@ ObsArray = NDArray[np.float32]
 ROWWISE_MAX_N = 12
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-#: values of the ``kernel=`` keyword (:func:`amigo_gym.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
+#: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
 KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
-# entries of the compiled step's workspace rows (amigo_gym.fast_v1.WS_FIELDS)
+# entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_BETA, _W_HX, _W_HY = fast_v1.W_X, fast_v1.W_BETA, fast_v1.W_HX, fast_v1.W_HY
 _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v1.W_AL2
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
@@ -139,7 +143,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
         kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed and
             gives the reference's bits, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
-            functions of :mod:`amigo_gym.tracking`), ``"numba"`` (the compiled step, :mod:`amigo_gym.fast_v1_batch`)
+            functions of :mod:`amigo_gym.task.v1`), ``"numba"`` (the compiled step, :mod:`amigo_gym.sim.fast_v1_batch`)
             or ``"numba-parallel"`` (its loops on numba's threads), as for :class:`amigo_gym.envs.AmigoBotV1Env`
             and :class:`amigo_gym.envs.AmigoBotVectorEnv`. The compiled step runs the built-in path families;
             a path object of another class runs the reference. All give the same results bit for bit.
@@ -218,7 +222,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             t_brake=z.copy(),
         )
         self._ring = np.zeros((n, self._k.ring_length, 2))
-        # the compiled step (amigo_gym.fast_v1_batch) for built-in paths; None: the reference column functions
+        # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
         if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
@@ -315,7 +319,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     ) -> tuple[ObsArray, dict[str, Any]]:
         """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
         :func:`tracking.start_episode` (H's projections compiled), its start state evaluated by the compiled
-        :func:`amigo_gym.tracking.reset_columns` (:meth:`amigo_gym.fast_v1_batch.BatchKernel.start`), the
+        :func:`amigo_gym.task.v1.reset_columns` (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`), the
         infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
         b = self._batch
         assert b is not None
@@ -453,7 +457,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return obs, reward, terminated, infos, np.asarray(out.h_x), np.asarray(out.h_y)
 
     def _step_kernel(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
-        """:meth:`_step_columns` by the compiled step (:class:`amigo_gym.fast_v1_batch.BatchKernel`): the same
+        """:meth:`_step_columns` by the compiled step (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`): the same
         results, the infos built from the workspace rows (the same keys, dtypes and values as
         :meth:`_batch_info`)."""
         b = self._batch
@@ -612,7 +616,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
             return None
-        from amigo_gym.rendering import Renderer
+        from amigo_gym.envs.rendering import Renderer
 
         frames = []
         x, y, beta, _, _, alpha1, alpha2, *_ = (np.asarray(c) for c in self._state)

@@ -16,8 +16,8 @@
   (wheel rates and accelerations the exact inverse solution needs).
 
 This package may import numpy (and, in :mod:`amigo_gym.paths.points`, the standard library's csv and json),
-:mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and
-:mod:`amigo_gym.fresnel` only.
+:mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
+:mod:`amigo_gym.model.fresnel` only.
 """
 
 from __future__ import annotations

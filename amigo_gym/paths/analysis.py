@@ -4,7 +4,8 @@ accelerations the exact inverse solution needs (:func:`feasibility`).
 Both take any :class:`~amigo_gym.paths.clothoid.PathSpec` (a :class:`~amigo_gym.paths.clothoid.ClothoidPath` or a
 user's own path).
 
-This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
+:mod:`amigo_gym.model.fresnel`.
 """
 
 from __future__ import annotations
@@ -18,8 +19,8 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.kinematics import Real
-from amigo_gym.params import RobotParams
+from amigo_gym.model.kinematics import Real
+from amigo_gym.model.params import RobotParams
 from amigo_gym.paths.clothoid import PathSpec, check_real
 
 __all__ = ["Preview", "preview", "LagProfile", "Feasibility", "feasibility", "heading_lag_profile"]

@@ -27,7 +27,8 @@ Special cases:
 
 Units: arc lengths [m], points [m], angles [rad], curvature [1/m], curvature rate [1/m^2].
 
-This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
+:mod:`amigo_gym.model.fresnel`.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import Real
+from amigo_gym.model.kinematics import Real
 from amigo_gym.paths.clothoid import (
     ClothoidPath,
     ClothoidSegment,

@@ -22,8 +22,8 @@ from typing import NamedTuple, Protocol, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import Real, col_arctan2, col_sqrt, pack
-from amigo_gym.params import EnvParams, check_range
+from amigo_gym.model.kinematics import Real, col_arctan2, col_sqrt, pack
+from amigo_gym.model.params import EnvParams, check_range
 
 __all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
 

@@ -9,7 +9,7 @@ closed (it is then traversed in laps). Along one piece of curvature ``kappa(u) =
     \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
     \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
 
-evaluated by :func:`amigo_gym.fresnel.advance` (speed 1, turn rate ``k0 + c u``), exact to rounding as long as
+evaluated by :func:`amigo_gym.model.fresnel.advance` (speed 1, turn rate ``k0 + c u``), exact to rounding as long as
 ``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``. Segments are therefore split into equal *pieces* that satisfy
 this bound, and the start pose of every piece is computed once, at construction, by chaining the pieces.
 A point then costs one quadrature from its piece's start (no accumulation along the path).
@@ -21,7 +21,8 @@ Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m] from the s
 tangents (curvature 0 there); a closed path repeats (``s`` modulo the lap length). Column arguments are
 floats or float64 arrays of any shape; one code serves both, with bit-identical results.
 
-This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
+:mod:`amigo_gym.model.fresnel`.
 """
 
 from __future__ import annotations
@@ -35,9 +36,9 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
-from amigo_gym.kinematics import Real, col_cos, col_sin, col_sqrt, pack
-from amigo_gym.params import check_range
+from amigo_gym.model.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
+from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
+from amigo_gym.model.params import check_range
 from amigo_gym.paths.classic import ClosestPoint, Projection
 
 __all__ = [
@@ -87,7 +88,7 @@ def check_real(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """:func:`amigo_gym.params.check_range` that also refuses bools, strings and other non-numbers.
+    """:func:`amigo_gym.model.params.check_range` that also refuses bools, strings and other non-numbers.
 
     Raises:
         ValueError: one line naming ``owner.name``, the allowed range and the offending value.
@@ -804,7 +805,7 @@ def _np_clip(x: float, lo: float, hi: float) -> float:
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
-#: a unit-speed pose ``(x, y, theta, cos theta, sin theta)`` (:func:`amigo_gym.fresnel.unit_speed_pose`)
+#: a unit-speed pose ``(x, y, theta, cos theta, sin theta)`` (:func:`amigo_gym.model.fresnel.unit_speed_pose`)
 UnitPose = tuple[float, float, float, float, float]
 
 

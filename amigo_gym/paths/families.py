@@ -12,7 +12,8 @@ naming the field, the value and the allowed range; NaN, infinities, bools and st
 * ``"lane_change"``: :func:`lane_change`, a sideways shift made of four clothoids (continuous curvature).
 * ``"random"``: :func:`random_path`, seeded random smooth paths of bounded curvature and curvature rate.
 
-This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics` and :mod:`amigo_gym.fresnel`.
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
+:mod:`amigo_gym.model.fresnel`.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.fresnel import advance, subintervals
+from amigo_gym.model.fresnel import advance, subintervals
 from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, check_real
 
 __all__ = [

@@ -39,7 +39,8 @@ Files (:func:`load_points`, :func:`from_file`): CSV with a header naming the col
 other columns ignored); JSON as ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of
 ``{"x": ..., "y": ...}`` objects.
 
-This module may import numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.fresnel`, the sibling path modules and
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, the sibling path modules
+and
 the standard library's ``csv``, ``json`` and ``pathlib``.
 """
 
@@ -56,8 +57,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.fresnel import advance
-from amigo_gym.params import show_value
+from amigo_gym.model.fresnel import advance
+from amigo_gym.model.params import show_value
 from amigo_gym.paths.clothoid import MAX_CURVATURE, TWO_PI, ClothoidPath, ClothoidSegment, check_real
 
 __all__ = [

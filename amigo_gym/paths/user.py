@@ -25,7 +25,7 @@ path, the member, the field and the arc length or point.
 A :class:`~amigo_gym.paths.ClothoidPath` (every built-in family, :func:`~amigo_gym.paths.from_points`) is
 trusted as it is and runs the compiled step; a :class:`UserPath` runs the reference step.
 
-This module may import numpy, :mod:`amigo_gym.params` and the sibling path modules.
+This module may import numpy, :mod:`amigo_gym.model.params` and the sibling path modules.
 """
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.kinematics import Real
-from amigo_gym.params import show_value
+from amigo_gym.model.kinematics import Real
+from amigo_gym.model.params import show_value
 from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, check_real, refine, window_bounds
 
 __all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]

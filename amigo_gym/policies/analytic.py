@@ -1,7 +1,7 @@
 r"""The analytic inverse solution as a state-feedback policy for ``AmigoBot-v0``.
 
-The policy reads only the observation, by the field names of :func:`amigo_gym.task.obs_names` (never
-by raw positions), and the constant task settings :class:`~amigo_gym.params.EnvParams`. It takes
+The policy reads only the observation, by the field names of :func:`amigo_gym.task.v0.obs_names` (never
+by raw positions), and the constant task settings :class:`~amigo_gym.model.params.EnvParams`. It takes
 
 * ``e = cross_track_error * error_scale``: signed cross-track error of H [m], positive left of the path;
 * ``psi = atan2(sin_heading_error, cos_heading_error)``: heading error ``beta - theta`` [rad];
@@ -48,11 +48,11 @@ the steady value ``v_ref R / R_A = v_ref / cos(delta_ss)`` with ``sin(delta_ss) 
       \begin{pmatrix} v_{ref}/\cos\delta_{ss} \\ -k\,e \end{pmatrix}.
 
 Both laws have the same steady state on a circle of radius ``R``: ``e = 0``, ``psi = -delta_ss``,
-``v_A = v_ref``, ``betadot = v_ref / R_A`` (:func:`amigo_gym.kinematics.circle_steady_state`); they
+``v_A = v_ref``, ``betadot = v_ref / R_A`` (:func:`amigo_gym.model.kinematics.circle_steady_state`); they
 differ only in transients (the "A" law never changes the speed of A, which the reward's speed term
 asks for, and needs no curvature: the path enters through ``psi``).
 
-Wheel rates follow from the rolling relations (:func:`amigo_gym.kinematics.wheel_rates`)
+Wheel rates follow from the rolling relations (:func:`amigo_gym.model.kinematics.wheel_rates`)
 ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, and the action is
 ``clip(w / max_wheel_rate, -1, 1)``.
 
@@ -80,9 +80,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import wheel_rates
-from amigo_gym.params import EnvParams, check_range
-from amigo_gym.task import obs_dim, obs_index
+from amigo_gym.model.kinematics import wheel_rates
+from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.task.v0 import obs_dim, obs_index
 
 __all__ = ["DEFAULT_GAIN", "AnalyticPolicy", "analytic_body_velocity", "analytic_wheel_rates"]
 
@@ -119,7 +119,7 @@ def analytic_body_velocity(
     ``sin delta_ss = kappa l3``. ``cos psi`` is floored at ``COS_MIN``.
 
     Args:
-        obs: observations ``(obs_dim,)`` or ``(N, obs_dim)`` (layout of :mod:`amigo_gym.task`).
+        obs: observations ``(obs_dim,)`` or ``(N, obs_dim)`` (layout of :mod:`amigo_gym.task.v0`).
         params: the task settings the observations were made with.
         gain: feedback gain ``k`` >= 0 [1/s]; 0 gives the paper's inverse ODE.
         speed_reference: ``"A"`` or ``"H"`` (module docstring).

@@ -8,7 +8,7 @@ imported, inside the function).
 
 Features (what the network observes), for a batch of raw observations ``o`` ``(N, d)``:
 
-* the raw observation ``o`` (``d = 20`` fields, :func:`amigo_gym.tracking.obs_fields`);
+* the raw observation ``o`` (``d = 20`` fields, :func:`amigo_gym.task.v1.obs_fields`);
 * with ``history = H > 0``: the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (``7 H``
   values; at an episode's start the history is filled with the first observation). The observation already
   holds the previous command and the measured wheel rates; the history adds the commands and measurements of
@@ -48,9 +48,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_save
-from amigo_gym.params import check_range
+from amigo_gym.model.params import check_range
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy
-from amigo_gym.tracking import TrackingParams, make_tracking_params, obs_fields
+from amigo_gym.task.v1 import TrackingParams, make_tracking_params, obs_fields
 
 __all__ = [
     "FORMAT",

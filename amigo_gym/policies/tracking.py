@@ -1,10 +1,10 @@
 r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
 
-Both read only the observation (decoded by field name with :func:`amigo_gym.tracking.obs_fields`) and the
-constant settings :class:`~amigo_gym.tracking.TrackingParams`, use the **nominal** robot (``params.robot``),
+Both read only the observation (decoded by field name with :func:`amigo_gym.task.v1.obs_fields`) and the
+constant settings :class:`~amigo_gym.task.v1.TrackingParams`, use the **nominal** robot (``params.robot``),
 and have stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
 
-Fields used (module table of :mod:`amigo_gym.tracking`; ``v_max = robot.max_speed``, ``w_max =
+Fields used (module table of :mod:`amigo_gym.task.v1`; ``v_max = robot.max_speed``, ``w_max =
 robot.max_wheel_rate``, ``l3 = robot.l3``):
 
 * ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
@@ -149,9 +149,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.actuators import wheel_rates_columns
-from amigo_gym.params import check_range
-from amigo_gym.tracking import SPEED_LOOKAHEAD, TrackingParams, obs_fields
+from amigo_gym.model.actuators import wheel_rates_columns
+from amigo_gym.model.params import check_range
+from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams, obs_fields
 
 __all__ = [
     "COS_MIN",
@@ -200,7 +200,7 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) ->
     r = params.robot
     v_a = np.asarray(v, dtype=np.float64)
     om = np.asarray(omega, dtype=np.float64)
-    w1, w2 = wheel_rates_columns(v_a, om, r)  # the firmware's inverse, one home: amigo_gym.actuators
+    w1, w2 = wheel_rates_columns(v_a, om, r)  # the firmware's inverse, one home: amigo_gym.model.actuators
     w_max = r.max_wheel_rate
     m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
     out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max

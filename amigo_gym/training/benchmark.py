@@ -97,9 +97,9 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -399,11 +399,11 @@ def _classical(name: str) -> Callable[[Any], Any]:
         hook = getattr(base, "classical_policy", None)
         if callable(hook):
             return hook(name)
-        from amigo_gym.params import EnvParams
+        from amigo_gym.model.params import EnvParams
         from amigo_gym.policies.analytic import AnalyticPolicy
 
         params = getattr(base, "params", None)
-        from amigo_gym.tracking import TrackingParams
+        from amigo_gym.task.v1 import TrackingParams
 
         if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy

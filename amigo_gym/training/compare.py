@@ -59,8 +59,8 @@ from pathlib import Path
 from typing import Any
 
 from amigo_gym import runs
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = [
     "MANIFEST",
@@ -423,7 +423,7 @@ def _run_compare(
     hyperparams: Path | None = None,
     benchmark: bool = True,
 ) -> dict[str, Any]:
-    from amigo_gym.params import EnvParams
+    from amigo_gym.model.params import EnvParams
     from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.training.evaluate import (
         EvalProtocol,

@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = [
     "AXES",

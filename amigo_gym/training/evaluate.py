@@ -38,7 +38,7 @@ Keys of each entry of ``results`` (pooled over the episodes of the scenario)
   on and ``w_analytic`` :func:`amigo_gym.policies.analytic.analytic_wheel_rates` (gain 3). It says how far the agent's
   command is from what the exact inverse solution would command in the same state; 0 for ``analytic``.
 * ``wheel_rate_dev_steady_rms``: RMS over ``t >= settle_time_s`` of the applied rates minus the
-  closed-form steady-state rates of the circle (:func:`amigo_gym.kinematics.circle_steady_state`,
+  closed-form steady-state rates of the circle (:func:`amigo_gym.model.kinematics.circle_steady_state`,
   4.4815 and 3.5185 rad/s by default) [rad/s].
 * ``mean_return``, ``std_return``: episode return (the env's reward, at most 1 per step).
 * ``mean_length``, ``terminated``: mean steps per episode and the number of episodes that ended by
@@ -74,10 +74,10 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
-from amigo_gym.params import EnvParams
+from amigo_gym.model.params import EnvParams
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = [
     "Agent",
@@ -142,7 +142,7 @@ class EvalProtocol:
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
-        from amigo_gym.params import check_range
+        from amigo_gym.model.params import check_range
 
         check_range("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
         check_range("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
@@ -175,10 +175,10 @@ class Trajectory:
 def steady_start_pose(params: EnvParams) -> Array:
     """Pose ``(x_A, y_A, beta)`` with H at the circle's start point in the closed-form steady state.
 
-    ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.kinematics.circle_steady_state`), A ``l3``
+    ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.model.kinematics.circle_steady_state`), A ``l3``
     behind H.
     """
-    from amigo_gym.kinematics import a_from_h, circle_steady_state
+    from amigo_gym.model.kinematics import a_from_h, circle_steady_state
     from amigo_gym.paths import make_path
 
     path = make_path(params)
@@ -254,7 +254,7 @@ def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None
 
 def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
     """Pooled metrics of one (agent, scenario) (keys documented in the module docstring)."""
-    from amigo_gym.kinematics import circle_steady_state
+    from amigo_gym.model.kinematics import circle_steady_state
 
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
     e = np.concatenate([t.e for t in trajs])
@@ -637,7 +637,7 @@ def plot_wheels(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from amigo_gym.kinematics import circle_steady_state
+    from amigo_gym.model.kinematics import circle_steady_state
 
     if "analytic" not in trajs:
         raise ValueError("plot_wheels needs the 'analytic' agent as the reference")

@@ -67,7 +67,7 @@ from torch import nn
 
 import amigo_gym  # registers the environments
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
-from amigo_gym.params import check_range
+from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action, sha256_of
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
@@ -641,7 +641,7 @@ def train(
 
 # --------------------------------------------------------------------------- CLI
 def _parser() -> argparse.ArgumentParser:
-    from amigo_gym.cli import OneLineParser, attribute_help
+    from amigo_gym.options import OneLineParser, attribute_help
 
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
     p.add_argument("--out", required=True, help="run folder [folder] (required)")
@@ -675,7 +675,7 @@ def _bool(text: str) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``."""
-    from amigo_gym.cli import run_guarded
+    from amigo_gym.options import run_guarded
 
     args = _parser().parse_args(list(sys.argv[1:] if argv is None else argv))
 

@@ -39,7 +39,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices,
 from amigo_gym import MAX_EPISODE_STEPS, MAX_EPISODE_STEPS_V1
 from amigo_gym.envs.vector import AmigoBotVectorEnv, info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
-from amigo_gym.task import INFO_KEYS, REWARD_TERMS
+from amigo_gym.task.v0 import INFO_KEYS, REWARD_TERMS
 
 __all__ = ["AmigoBotSB3VecEnv"]
 
@@ -167,7 +167,7 @@ class AmigoBotSB3VecEnv(VecEnv):
         out = []
         for i in idx:
             d: dict[str, Any] = {}
-            for k, kind in INFO_KEYS.items():  # the schema's one home: amigo_gym.task
+            for k, kind in INFO_KEYS.items():  # the schema's one home: amigo_gym.task.v0
                 v = vinfo[k]
                 if kind == "terms":
                     d[k] = {name: float(v[name][i]) for name in REWARD_TERMS}

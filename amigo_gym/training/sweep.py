@@ -123,8 +123,8 @@ from urllib.parse import quote, quote_plus
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.options import OneLineParser, run_guarded
 
 __all__ = [
     "ABANDONED",

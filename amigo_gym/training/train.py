@@ -72,9 +72,9 @@ from typing import Any
 import numpy as np
 
 from amigo_gym import runs
-from amigo_gym.cli import OneLineParser, run_guarded
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point
+from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
 from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
@@ -217,7 +217,7 @@ def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) ->
     ``AmigoBot-v0``: every field of its ``EnvParams`` (``gym.make``'s defaults updated by ``overrides``);
     ``AmigoBot-v1``: the ``overrides`` as given (the defaults of ``TrackingParams`` apply to the rest).
     """
-    from amigo_gym.params import EnvParams
+    from amigo_gym.model.params import EnvParams
 
     if env_id != ENV_ID:
         return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]

@@ -2,16 +2,16 @@ r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuat
 
 Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
 float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
-as in :mod:`amigo_gym.kinematics`; one robot and a batch run the same code and get the same bits.
-This module may import only numpy, :mod:`amigo_gym.params`, :mod:`amigo_gym.kinematics`,
-:mod:`amigo_gym.fresnel` and the standard library (``tests/test_actuators.py`` checks it).
+as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code and get the same bits.
+This module may import only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics`,
+:mod:`amigo_gym.model.fresnel` and the standard library (``tests/test_actuators.py`` checks it).
 
 The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
 -------------------------------------------------------------------------
 1. **Setpoints.** The action is a wheel-rate setpoint pair ``(w1c, w2c)`` [rad/s] (wheel 1 right,
    wheel 2 left), clipped to ``[-w_max, w_max]`` with ``w_max = RobotParams.max_wheel_rate``
    (``max_speed / r = 0.75 / 0.05 = 15`` rad/s). The firmware (ARCOS) turns it into commanded speeds
-   with the **nominal** robot (:func:`amigo_gym.kinematics.body_velocity_columns`)::
+   with the **nominal** robot (:func:`amigo_gym.model.kinematics.body_velocity_columns`)::
 
        v_c = (r1 w1c + r2 w2c) / 2,        w_c = (r1 w1c - r2 w2c) / (2 l1).
 
@@ -46,7 +46,7 @@ The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
    of the breakpoints of ``v`` and ``w``.
 
 6. **Exact step** (:func:`actuator_step`). On each linear piece the pose of A advances by
-   :func:`amigo_gym.fresnel.advance` (exact: speed and turn rate linear in time); the wheel angles
+   :func:`amigo_gym.model.fresnel.advance` (exact: speed and turn rate linear in time); the wheel angles
    advance by the exact integral of the (piecewise linear) wheel rates.
 
 Sources
@@ -71,9 +71,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym import fresnel
-from amigo_gym.kinematics import Real, body_velocity_columns
-from amigo_gym.params import RobotParams, check_range
+from amigo_gym.model import fresnel
+from amigo_gym.model.kinematics import Real, body_velocity_columns
+from amigo_gym.model.params import RobotParams, check_range
 
 __all__ = [
     "MAX_DELAY",
@@ -285,7 +285,7 @@ def turn_rate_bound(nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION)
 
 
 def step_subintervals(dt: float, nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION) -> int:
-    """``n_sub`` for :func:`amigo_gym.fresnel.advance` on the pieces of a step of ``dt`` [s].
+    """``n_sub`` for :func:`amigo_gym.model.fresnel.advance` on the pieces of a step of ``dt`` [s].
 
     From the bound ``turn_rate_bound(nominal, deviation) * dt`` of the phase change on a piece (1 for
     ``dt = 0.1`` with the default robot). It depends on parameters only, never on the state, so that
@@ -604,7 +604,7 @@ def actuator_step(
 # The expressions of ramp, _channel, _evaluate and actuator_step for Python floats, written out flat (the
 # selections as ``if``, which do no arithmetic): the same bits as the column code (tests/test_actuators.py
 # compares them), without its per-call overhead. The pose advances over all pieces with one np.cos and one
-# np.sin call (:func:`amigo_gym.fresnel.advance_chain_float`).
+# np.sin call (:func:`amigo_gym.model.fresnel.advance_chain_float`).
 
 
 def _ramp_float(

@@ -1,14 +1,14 @@
 r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
 
 The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
-:func:`amigo_gym.task.step_columns` computes (clip and scale the action, exact arc step of pose and
+:func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) with the same formulas in the same order of operations, writing into preallocated
-arrays. :mod:`amigo_gym.task` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
+arrays. :mod:`amigo_gym.task.v0` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
-``np.exp(exps, out=exps)``, :func:`amigo_gym.fast.step_rows`): they are several times faster than the
+``np.exp(exps, out=exps)``, :func:`amigo_gym.sim.fast.step_rows`): they are several times faster than the
 C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
 reference calls, so the results are **bit-identical** to the reference's. Everything else (about a
 hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
@@ -27,12 +27,12 @@ only decides whether a preview point lies before the end of the straight part.
 
 Layouts (all C-contiguous, one row per robot):
 
-* ``consts`` float64: :data:`CONSTANT_FIELDS` (:func:`amigo_gym.fast.kernel_constants`);
-* ``state (N, 8)`` float64, updated in place: the columns of :class:`amigo_gym.task.State`,
+* ``consts`` float64: :data:`CONSTANT_FIELDS` (:func:`amigo_gym.sim.fast.kernel_constants`);
+* ``state (N, 8)`` float64, updated in place: the columns of :class:`amigo_gym.task.v0.State`,
   ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``;
 * ``actions (N, 2)`` float64: the validated, normalised action (clipped to [-1, 1] here);
 * ``restart (N,)`` bool: rows whose ``state`` has just been set to a start state; they do not move
-  and are evaluated as :func:`amigo_gym.task.reset_columns` evaluates them (no smoothness loss); their
+  and are evaluated as :func:`amigo_gym.task.v0.reset_columns` evaluates them (no smoothness loss); their
   ``tans`` row must hold ``(np.cos(beta), np.sin(beta))`` when :func:`evaluate` runs;
 * ``turn (N,)`` float64 scratch: the turn rate ``bdot`` of each row's action, written by
   :func:`move_arguments` and read by :func:`evaluate` (one division per row instead of two);
@@ -45,10 +45,10 @@ Start states of restarting rows (:func:`draw_starts`, :func:`place_starts`): the
 generator inside the compiled loop, by calling the generator's C function ``next_double`` through the
 address of its ``bitgen_t`` (:func:`_next_double`; the call ``Generator.random`` makes per number), so
 the numbers and the generators' states afterwards are those of ``Generator.random(3)`` per robot. The
-start pose is :func:`amigo_gym.task.start_pose`'s arithmetic in its order, with numpy's ``cos`` and
-``sin`` of the headings evaluated between the two loops (:func:`amigo_gym.fast.step_rows`).
+start pose is :func:`amigo_gym.task.v0.start_pose`'s arithmetic in its order, with numpy's ``cos`` and
+``sin`` of the headings evaluated between the two loops (:func:`amigo_gym.sim.fast.step_rows`).
 
-This module imports numba at import time; :mod:`amigo_gym.fast` imports it only when the fast path
+This module imports numba at import time; :mod:`amigo_gym.sim.fast` imports it only when the fast path
 is first used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk
 (``cache=True``, in ``__pycache__`` or ``NUMBA_CACHE_DIR``), so only the first process compiles. The
 ``*_parallel`` variants run their loop on numba's threads (``prange``; ``numba.set_num_threads`` or
@@ -70,7 +70,7 @@ from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from amigo_gym.fast import twin as _twin
+from amigo_gym.sim.fast import twin as _twin
 
 __all__ = [
     "RECORD_FIELDS",
@@ -93,7 +93,7 @@ __all__ = [
 
 TWO_PI = 2.0 * math.pi
 
-#: columns of the ``state`` array (the order of :class:`amigo_gym.task.State`)
+#: columns of the ``state`` array (the order of :class:`amigo_gym.task.v0.State`)
 STATE_FIELDS: tuple[str, ...] = ("x", "y", "beta", "alpha1", "alpha2", "alpha3", "rate1", "rate2")
 
 #: columns of the ``record`` array
@@ -116,7 +116,7 @@ RECORD_FIELDS: tuple[str, ...] = (
     "reward",
 )
 
-#: entries of the ``consts`` vector (built by :func:`amigo_gym.fast.kernel_constants`)
+#: entries of the ``consts`` vector (built by :func:`amigo_gym.sim.fast.kernel_constants`)
 CONSTANT_FIELDS: tuple[str, ...] = (
     "dt",
     "w_max",
@@ -149,8 +149,8 @@ CONSTANT_FIELDS: tuple[str, ...] = (
 )
 
 #: entries of the ``start`` vector of :func:`draw_starts` and :func:`place_starts`
-#: (:func:`amigo_gym.fast.start_constants`): the path's start point and tangent angle, the noise scales of
-#: :func:`amigo_gym.task.start_pose`, ``l3``, and the initial wheel rates
+#: (:func:`amigo_gym.sim.fast.start_constants`): the path's start point and tangent angle, the noise scales of
+#: :func:`amigo_gym.task.v0.start_pose`, ``l3``, and the initial wheel rates
 START_FIELDS: tuple[str, ...] = (
     "x0",
     "y0",
@@ -393,7 +393,7 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
     """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
 
     Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
-    value (the rows :func:`amigo_gym.task.bound_heading` changes; NaN is not past it).
+    value (the rows :func:`amigo_gym.task.v0.bound_heading` changes; NaN is not past it).
     """
     limit = c[HEADING_LIM]
     past = 0
@@ -468,7 +468,7 @@ def draw_starts(
 
     Row ``i`` draws three numbers ``r`` from the generator whose ``bitgen_t`` lies at ``bitgens[i]``
     (what ``Generator.random(3)`` draws; :class:`amigo_gym.envs.AmigoBotEnv` draws ``uniform(-1, 1, 3)``,
-    which is ``-1 + 2 r``) and sets ``state[i]`` to :func:`amigo_gym.task.start_pose` of ``u = -1 + 2 r``
+    which is ``-1 + 2 r``) and sets ``state[i]`` to :func:`amigo_gym.task.v0.start_pose` of ``u = -1 + 2 r``
     with wheel angles 0 and the initial rates, except that ``x, y`` hold H's position until
     :func:`place_starts` moves them to A (it needs ``cos beta, sin beta``). ``rows[:m]`` receives the
     rows, ``beta[:m]`` their headings. Returns ``-1`` (and draws nothing more) at a zero address.
@@ -516,7 +516,7 @@ def place_starts(
 ) -> None:
     """Finish :func:`draw_starts`' rows with ``cos_beta, sin_beta`` of their headings (numpy's ``cos``, ``sin``).
 
-    A lies ``l3`` behind H (:func:`amigo_gym.kinematics.a_from_h`): ``x = x_H - l3 cos beta``, ``y = y_H -
+    A lies ``l3`` behind H (:func:`amigo_gym.model.kinematics.a_from_h`): ``x = x_H - l3 cos beta``, ``y = y_H -
     l3 sin beta``; the row's ``tans`` receive ``(cos beta, sin beta)``, as :func:`evaluate` wants them.
     """
     l3 = start[S_L3]
@@ -553,7 +553,7 @@ def count_steps(
 
 
 # ---------------------------------------------------------------------------------------------- one robot
-# The single env's step (:class:`amigo_gym.fast.SingleStep`): the same three passes on a one-row view of one
+# The single env's step (:class:`amigo_gym.sim.fast.SingleStep`): the same three passes on a one-row view of one
 # buffer, so that a call from Python hands over three arrays instead of a dozen (numba's dispatch costs about
 # 0.1 us per array argument; a step's passes at N = 1 cost less than that). Columns of the ``(1, SINGLE_WIDTH)``
 # float64 buffer ``buf``:

@@ -53,7 +53,7 @@ the only way to set them).
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
 reader decodes the observation by these names), the info dict's schema (:data:`INFO_KEYS`,
 :func:`info_columns`, used by the single env, the vector env and the SB3 adapter) and the start pose
-(A ``l3`` behind H by :func:`amigo_gym.kinematics.a_from_h`).
+(A ``l3`` behind H by :func:`amigo_gym.model.kinematics.a_from_h`).
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -69,7 +69,7 @@ from typing import Any, NamedTuple, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import (
+from amigo_gym.model.kinematics import (
     Real,
     a_from_h,
     arc_step,
@@ -82,7 +82,7 @@ from amigo_gym.kinematics import (
     h_from_a,
     pack,
 )
-from amigo_gym.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
+from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection
 
 __all__ = [
@@ -691,7 +691,7 @@ def step_columns(
 def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
     """:func:`step_columns` (``minimal=True``) for one robot's Python floats, as one flat function: the same bits.
 
-    The expressions of :func:`move_columns`, :func:`amigo_gym.kinematics.arc_step` (with ``cos_sin`` and the
+    The expressions of :func:`move_columns`, :func:`amigo_gym.model.kinematics.arc_step` (with ``cos_sin`` and the
     sinc), ``castor_rate_columns``, ``h_from_a`` and :func:`outcome_columns` written out in their order,
     without the layers of small functions; the two tangents and the three exponentials are numpy's, each
     pair or triple in one call on a small array (numpy gives an element the bits it gives a scalar), so the

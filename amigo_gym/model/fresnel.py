@@ -9,7 +9,7 @@ has the heading ``theta(t) = theta0 + w0 t + alpha t^2 / 2`` (exact, a quadratic
 
 a generalised Fresnel integral. Two things in this package are such motions:
 
-* the robot's point A within a control step when the firmware ramps its speeds (:mod:`amigo_gym.actuators`):
+* the robot's point A within a control step when the firmware ramps its speeds (:mod:`amigo_gym.model.actuators`):
   ``v``, ``w`` are piecewise linear in time, and each linear piece is one call;
 * a clothoid path segment (:mod:`amigo_gym.paths`): arc length plays the time, ``v = 1``, ``a = 0``,
   and the curvature ``kappa0 + c s`` the turn rate.
@@ -35,7 +35,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.kinematics import Real
+from amigo_gym.model.kinematics import Real
 
 __all__ = [
     "NODES",

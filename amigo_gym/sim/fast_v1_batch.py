@@ -1,27 +1,27 @@
 """The compiled step of ``N`` ``AmigoBot-v1`` robots at once (numba): the native vector env's fast path.
 
-:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym._kernels_v1.step`, whose reference
-is the Python float code of :mod:`amigo_gym.tracking`: see :mod:`amigo_gym.fast_v1`) over the rows of an
+:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym.sim._kernels_v1.step`, whose reference
+is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fast_v1`) over the rows of an
 ``(N, W)`` workspace in one compiled loop, with the single robot's split kept exactly:
 
-1. one compiled loop draws every row's uniforms (:func:`amigo_gym._kernels_v1.noise_uniforms`, only when the
+1. one compiled loop draws every row's uniforms (:func:`amigo_gym.sim._kernels_v1.noise_uniforms`, only when the
    task draws per step);
 2. ``np.log`` of the whole ``(N, n_normal)`` block of uniforms (numpy's logarithm, as the reference);
-3. one compiled loop steps every row (:func:`amigo_gym._kernels_v1.step`), each on its own path, ring and
+3. one compiled loop steps every row (:func:`amigo_gym.sim._kernels_v1.step`), each on its own path, ring and
    workspace row, and copies the arguments of the three reward exponentials to an ``(N, 3)`` block;
 4. ``np.exp`` of that block (numpy's, as the reference); the caller forms the reward terms and the reward with
    the single environment's operations (:func:`reward_terms`).
 
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
-compiled :func:`amigo_gym._kernels_v1.evaluate`, as the single environment's reset.
+compiled :func:`amigo_gym.sim._kernels_v1.evaluate`, as the single environment's reset.
 
 Both numpy calls take and write C-contiguous blocks, like the reference's arrays (numpy may pick its loop by
 memory layout). So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv``
 of single envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
-(:func:`amigo_gym.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
+(:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
 ``arena.flat[starts[i]:stops[i]]``.
 
-numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.fast_v1.kernels`).
+numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.sim.fast_v1.kernels`).
 """
 
 from __future__ import annotations
@@ -32,8 +32,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym import fast_v1, task, tracking
 from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.sim import fast_v1
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = ["PathArena", "BatchKernel", "reward_terms"]
 
@@ -125,14 +127,14 @@ class PathArena:
 class BatchKernel:
     """The compiled step of ``n`` robots (module docstring): constants, path arena, workspace rows.
 
-    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.fast_v1.WS_FIELDS`, loaded by
-    :meth:`load` with :meth:`amigo_gym.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
-    every row. The compiled loops are :func:`amigo_gym._kernels_v1.noise_rows` and
-    :func:`amigo_gym._kernels_v1.step_rows` (``parallel``: their ``prange`` twins on numba's threads; the
+    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.fast_v1.WS_FIELDS`, loaded by
+    :meth:`load` with :meth:`amigo_gym.sim.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
+    every row. The compiled loops are :func:`amigo_gym.sim._kernels_v1.noise_rows` and
+    :func:`amigo_gym.sim._kernels_v1.step_rows` (``parallel``: their ``prange`` twins on numba's threads; the
     rows are independent, so the results are the same).
 
     Attributes:
-        consts: :func:`amigo_gym.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
+        consts: :func:`amigo_gym.sim.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
         ws: ``(n, len(WS_FIELDS) + WS_SCRATCH)`` float64, the rows' workspaces.
         keys: ``(n,)`` uint64, the episodes' keys of the per-step draws.
     """
@@ -193,7 +195,8 @@ class BatchKernel:
         self.arena.assign(rows, paths)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
-        """H's progress [m] (:data:`amigo_gym.tracking.ProgressFn`): :meth:`amigo_gym.fast_v1.StepKernel.progress`."""
+        """H's progress [m] (:data:`amigo_gym.task.v1.ProgressFn`):
+        :meth:`amigo_gym.sim.fast_v1.StepKernel.progress`."""
         return self._row.progress(path, x, y, hint)
 
     def start(
@@ -204,8 +207,8 @@ class BatchKernel:
         episodes: Sequence[tracking.Episode],
         obs: NDArray[np.floating[Any]],
     ) -> Array:
-        """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.tracking.reset_columns`,
-        compiled: :func:`amigo_gym._kernels_v1.evaluate`, as the single env's reset).
+        """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.task.v1.reset_columns`,
+        compiled: :func:`amigo_gym.sim._kernels_v1.evaluate`, as the single env's reset).
 
         Args:
             obs: ``(len(rows), D)``, written: the rows' observations.
@@ -223,7 +226,7 @@ class BatchKernel:
         return np.exp(args)
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
-        """Step every row (:func:`amigo_gym.tracking.step_columns` of each, the single robot's compiled step).
+        """Step every row (:func:`amigo_gym.task.v1.step_columns` of each, the single robot's compiled step).
 
         Args:
             rings: ``(n, L, 2)`` the command rings [rad/s], updated in place. ring_step: their counter.
@@ -248,7 +251,7 @@ class BatchKernel:
 
 def reward_terms(exps: Array, heading: Array, smooth_weight: float) -> tuple[Array, Array, Array, Array]:
     """The reward terms ``(track, speed, heading, smooth)`` ``(m,)`` from ``exps (m, 3)`` (:meth:`BatchKernel.step`)
-    and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.reward_term_columns` (as
+    and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.v0.reward_term_columns` (as
     :meth:`amigo_gym.envs.AmigoBotV1Env._kernel_info`). The reward is their product, in that order."""
     smooth: Array = np.asarray(task.smooth_term(exps[:, 2], smooth_weight))
     return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), smooth

@@ -8,8 +8,8 @@ two-state ODE (``docs/model.md``, "The path of H and the inverse problem"):
     \dot s = \frac{v_A}{\cos(\theta(s) - \beta)}, \qquad
     \dot\beta = \frac{v_A \tan(\theta(s) - \beta)}{l_3}.
 
-The wheel rates follow from the rolling constraints (system 29, :func:`~amigo_gym.kinematics.wheel_rates`
-and :func:`~amigo_gym.kinematics.castor_rate`), the wheel angles by integration. This module integrates
+The wheel rates follow from the rolling constraints (system 29, :func:`~amigo_gym.model.kinematics.wheel_rates`
+and :func:`~amigo_gym.model.kinematics.castor_rate`), the wheel angles by integration. This module integrates
 ``(s, psi = theta(s) - beta, x_A, y_A, alpha1, alpha2, alpha3)`` together with SciPy's DOP853 at ``rtol = atol = 1e-12``
 (``x_A, y_A`` from ``xdot_A = v_A cos beta``, ``ydot_A = v_A sin beta``, so that ``r_H`` computed from the
 integrated pose is an independent check that H stays on the path). The integration is split at every
@@ -21,7 +21,7 @@ requested time grid.
 The ODE is singular where ``|theta - beta| = pi/2``; for forward motion the heading error decays, so a
 start with ``|theta(s0) - beta0| < pi/2`` is well defined (the paper's start is ``beta0 = theta(0)``).
 
-The closed-form steady state on a circle is :func:`amigo_gym.kinematics.circle_steady_state`,
+The closed-form steady state on a circle is :func:`amigo_gym.model.kinematics.circle_steady_state`,
 re-exported here.
 
 Units: metres, radians, seconds throughout; arrays of an :class:`InverseSolution` have shape ``(T,)``.
@@ -40,8 +40,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_save
-from amigo_gym.kinematics import SteadyCircle, a_from_h, castor_rate, circle_steady_state, h_position, wheel_rates
-from amigo_gym.params import RobotParams, check_range
+from amigo_gym.model.kinematics import SteadyCircle, a_from_h, castor_rate, circle_steady_state, h_position, wheel_rates
+from amigo_gym.model.params import RobotParams, check_range
 from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
 
 __all__ = [

@@ -25,8 +25,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from amigo_gym.cli import OneLineParser, run_guarded
-from amigo_gym.inverse import (
+from amigo_gym.model.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
     MANOEUVRE_LAPS,
@@ -40,7 +39,8 @@ from amigo_gym.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 __all__ = ["build_parser", "main"]

@@ -25,8 +25,8 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import castor_position, contact_points, h_position
-from amigo_gym.params import RobotParams
+from amigo_gym.model.kinematics import castor_position, contact_points, h_position
+from amigo_gym.model.params import RobotParams
 
 
 class RenderSettings(Protocol):

@@ -2,7 +2,8 @@ r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy),
 
 This module redoes, in SymPy, the Maple derivation of the paper (cited in docs/model.md) and checks it against the
 conventions of ``docs/model.md``. It is **not** on the environment's stepping path: ``import amigo_gym`` never
-imports it (nor SymPy); the numeric model lives in :mod:`amigo_gym.kinematics`. Everything is derived once and cached
+imports it (nor SymPy); the numeric model lives in :mod:`amigo_gym.model.kinematics`. Everything is derived once and
+cached
 (:func:`derive`); ``amigo-gym derive [--latex] [--out FILE]`` prints the result.
 
 Walk-through
@@ -43,7 +44,7 @@ positive lengths and ``v_A`` is the speed of A. A dot is a time derivative.
    heading vanishes identically, and the component along it gives ``r1 alpha1dot = v_A + l1 betadot``; for wheel 2,
    ``r2 alpha2dot = v_A - l1 betadot``. Conversely ``v_A = (r1 alpha1dot + r2 alpha2dot)/2`` and
    ``betadot = (r1 alpha1dot - r2 alpha2dot)/(2 l1)``: the differential-drive relations of docs/model.md and
-   :func:`amigo_gym.kinematics.wheel_rates`.
+   :func:`amigo_gym.model.kinematics.wheel_rates`.
 
 5. **Castor** (the seventh equation; no transform for it is printed in the paper). By analogy: the swivel S on the
    body axis, ``l5`` behind A (``T_{4,0,S}``), a swivel rotation ``gamma`` about the vertical, and the castor wheel
@@ -78,7 +79,7 @@ Where the paper's printing is wrong (cf. docs/model.md):
   (heading along y0). The solution here uses the component along the heading, which is regular everywhere.
 
 Numbers: :func:`lambdify` turns derived expressions into batched numpy functions of named arguments (the names of
-:data:`PLAIN_SYMBOLS`); :func:`robot_values` supplies a :class:`~amigo_gym.params.RobotParams`' lengths by name.
+:data:`PLAIN_SYMBOLS`); :func:`robot_values` supplies a :class:`~amigo_gym.model.params.RobotParams`' lengths by name.
 """
 
 from __future__ import annotations
@@ -94,7 +95,7 @@ import sympy as sp
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_write
-from amigo_gym.params import RobotParams
+from amigo_gym.model.params import RobotParams
 
 __all__ = [
     "PLAIN_SYMBOLS",
@@ -705,7 +706,7 @@ def render(latex: bool = False) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
-    from amigo_gym.cli import OneLineParser, run_guarded
+    from amigo_gym.options import OneLineParser, run_guarded
 
     prog = "amigo-gym derive"
     parser = OneLineParser(

@@ -1,8 +1,8 @@
 r"""The AmigoBot-v1 task as pure, batched functions: settings, start, step, observation, reward, end.
 
 ``AmigoBot-v1`` is the real robot on many paths: actions are wheel-rate *setpoints* that the firmware
-ramps (:mod:`amigo_gym.actuators`), the simulated robot may differ from the nominal one (``true_robot``,
-:mod:`amigo_gym.randomization`), commands may arrive late, wheels may slip, and measurements may be
+ramps (:mod:`amigo_gym.model.actuators`), the simulated robot may differ from the nominal one (``true_robot``,
+:mod:`amigo_gym.model.randomization`), commands may arrive late, wheels may slip, and measurements may be
 noisy; point H follows a path of any family (:mod:`amigo_gym.paths`). Both
 :class:`amigo_gym.envs.AmigoBotV1Env` and :class:`amigo_gym.envs.AmigoBotV1VectorEnv` call the column
 functions here (floats for one robot, ``(N,)`` arrays for a batch), so that they run the same code.
@@ -63,12 +63,12 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym import actuators
-from amigo_gym.actuators import ActuatorParams
-from amigo_gym.kinematics import Real, col_cos, col_sin
-from amigo_gym.params import RobotParams, check_range, show_value
-from amigo_gym.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.task import reward_product, reward_term_columns, steady_heading
+from amigo_gym.model import actuators
+from amigo_gym.model.actuators import ActuatorParams
+from amigo_gym.model.kinematics import Real, col_cos, col_sin
+from amigo_gym.model.params import RobotParams, check_range, show_value
+from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
+from amigo_gym.task.v0 import reward_product, reward_term_columns, steady_heading
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -98,7 +98,7 @@ MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
 #: how far ahead the reference speed is also observed [s]
 SPEED_LOOKAHEAD = 1.0
 #: smallest control period [s]: the delay ring then keeps ``ring_length(0.001) = 501`` commands per robot (8 KB;
-#: :func:`amigo_gym.actuators.ring_length`: the whole steps of MAX_DELAY = 0.5 s, 499 in binary, plus 2)
+#: :func:`amigo_gym.model.actuators.ring_length`: the whole steps of MAX_DELAY = 0.5 s, 499 in binary, plus 2)
 MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
@@ -347,7 +347,7 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
 def _check_combined(owner: str, p: TrackingParams) -> None:
     """Refuse settings that are each in range but conflict together (they are never clipped silently).
 
-    * the fixed delay plus the highest randomised delay above :data:`amigo_gym.actuators.MAX_DELAY` (0.5 s);
+    * the fixed delay plus the highest randomised delay above :data:`amigo_gym.model.actuators.MAX_DELAY` (0.5 s);
     * a trapezoid that cannot reach its cruise speed: ``v / profile_accel + v / profile_decel >
       profile_duration`` at the highest reference speed ``v``.
     """
@@ -953,13 +953,13 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
     """Draw one episode's constants and the start offsets from ``rng``, in a fixed order.
 
-    Order: speed (when a range), randomisation (:func:`amigo_gym.randomization.sample`), start offsets
+    Order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), start offsets
     ``u ~ U[-1, 1]^3``, the key of the per-step draws. (The path is drawn before, by :func:`draw_path`.)
 
     Returns:
         the :class:`Episode` (floats) and ``u``.
     """
-    from amigo_gym.randomization import draw_key, sample
+    from amigo_gym.model.randomization import draw_key, sample
 
     lo, hi = p.speed_range
     v = lo if lo == hi else float(rng.uniform(lo, hi))
@@ -1031,9 +1031,9 @@ def step_columns(
     """One step of AmigoBot-v1 in column form.
 
     1. Clip the normalised action to [-1, 1]; setpoints ``a w_max`` [rad/s] into the command ring; read the
-       setpoints in effect (delay, :func:`amigo_gym.actuators.ring_read`).
-    2. Per-step draws (slip, noise: :func:`amigo_gym.randomization.step_noise`).
-    3. The exact actuator step (:func:`amigo_gym.actuators.actuator_step`).
+       setpoints in effect (delay, :func:`amigo_gym.model.actuators.ring_read`).
+    2. Per-step draws (slip, noise: :func:`amigo_gym.model.randomization.step_noise`).
+    3. The exact actuator step (:func:`amigo_gym.model.actuators.actuator_step`).
     4. Observation, reward and end of the new state (:func:`evaluate_columns`).
 
     Args:
@@ -1043,9 +1043,9 @@ def step_columns(
         a1, a2: the validated action (finite numbers).
 
     Returns:
-        the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.randomization.StepNoise`).
+        the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.model.randomization.StepNoise`).
     """
-    from amigo_gym.randomization import step_noise
+    from amigo_gym.model.randomization import step_noise
 
     p = k.params
     c1 = _clip(a1, -1.0, 1.0)
@@ -1256,7 +1256,7 @@ def start_episode(
     """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
 
     ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``). (The single env's
-    compiled step projects and evaluates the start state itself, :mod:`amigo_gym.fast_v1`.)
+    compiled step projects and evaluates the start state itself, :mod:`amigo_gym.sim.fast_v1`.)
     """
     path, info = draw_path(rng, k.params)
     ep, u = draw_episode(rng, k.params)

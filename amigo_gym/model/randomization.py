@@ -28,7 +28,7 @@ The presets (:data:`PRESETS`) are choices of this project, not measurements: ``"
 calibrated robot on a clean floor, ``"hard"`` an uncalibrated one with worn tyres, a slippery floor and
 a slow link. Held-out conditions for the benchmark lie outside ``"hard"``.
 
-Imports only numpy, :mod:`amigo_gym.params` and :mod:`amigo_gym.kinematics` (column type).
+Imports only numpy, :mod:`amigo_gym.model.params` and :mod:`amigo_gym.model.kinematics` (column type).
 """
 
 from __future__ import annotations
@@ -41,8 +41,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.kinematics import Real
-from amigo_gym.params import check_range
+from amigo_gym.model.kinematics import Real
+from amigo_gym.model.params import check_range
 
 __all__ = [
     "MAX_DELAY",

@@ -2,9 +2,9 @@
 
 Two implementations of one robot's step exist:
 
-* the **reference**, :func:`amigo_gym.tracking.step_columns` / :func:`amigo_gym.tracking.evaluate_columns`
+* the **reference**, :func:`amigo_gym.task.v1.step_columns` / :func:`amigo_gym.task.v1.evaluate_columns`
   on Python floats (numpy, always available, any path object);
-* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym._kernels_v1`, numba, the
+* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym.sim._kernels_v1`, numba, the
   extra ``amigo_gym[fast]``) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family). The
   logarithms of the per-step noise (between a small compiled call that draws the uniforms and the step) and
   the three reward exponentials (after the step) are numpy's, as in the reference, since numpy's ``log`` and
@@ -16,7 +16,7 @@ the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`; :func:`layout_fingerpri
 honest about them), builds the constants and the flattened paths, and loads the kernel.
 
 :func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
-env's keyword (:func:`amigo_gym.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
+env's keyword (:func:`amigo_gym.sim.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
 it can be imported). numba is imported only when a :class:`StepKernel` is first built (never by
 ``import amigo_gym``); its compiled code is cached on disk, so a later process loads it instead of compiling.
 """
@@ -32,8 +32,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym import fast, fresnel, tracking
+from amigo_gym.model import fresnel
 from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.sim import fast
+from amigo_gym.task import v1 as tracking
 
 __all__ = [
     "KERNELS",
@@ -50,7 +52,7 @@ Array = NDArray[np.float64]
 
 # ---------------------------------------------------------------------------- layouts of the kernel's vectors
 
-#: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym._kernels_v1`)
+#: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
     "dt",  # control period [s]
     "w_max",  # nominal max wheel rate [rad/s]
@@ -92,15 +94,15 @@ C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
 C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
 #: where the variable-length parts of ``consts`` start
 C_TAIL = len(CONSTANT_FIELDS)
-#: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.fresnel.NODES`)
+#: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
 PATH_NODES = 10
 
-#: the head of a flattened path (then the arrays: :mod:`amigo_gym._kernels_v1`)
+#: the head of a flattened path (then the arrays: :mod:`amigo_gym.sim._kernels_v1`)
 PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
 P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
 P_TAIL = len(PATH_HEADER)
 
-#: entries of ``ws``: the state (:class:`amigo_gym.tracking.State`), the episode (:class:`amigo_gym.tracking.Episode`;
+#: entries of ``ws``: the state (:class:`amigo_gym.task.v1.State`), the episode (:class:`amigo_gym.task.v1.Episode`;
 #: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
 WS_FIELDS: tuple[str, ...] = (
     # state, updated by step
@@ -181,15 +183,16 @@ S_U2 = S_LOG + 5
 
 def layout_fingerprint() -> str:
     """A short hash of the layouts above, of the constants the kernel takes from their homes
-    (:data:`amigo_gym.actuators.PIECES`, :data:`amigo_gym.fresnel.NODES`, the projection's Newton iterations,
+    (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
+    iterations,
     smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`) and of the source of the reference's
     float functions the kernel compiles as they are (``actuators._ramp_float``, ``clothoid._np_clip``).
 
     numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
-    :mod:`amigo_gym._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
+    :mod:`amigo_gym.sim._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
     a change here must come with a change of that file, which invalidates the cached code.
     """
-    from amigo_gym import actuators
+    from amigo_gym.model import actuators
     from amigo_gym.paths import clothoid
 
     homes = (
@@ -240,7 +243,7 @@ def use_kernel(owner: str, kernel: object) -> bool:
 def libm_matches_numpy() -> bool:
     """Whether the kernel's ``math.cos``/``math.sin`` (the C library's) give numpy's float64 ``np.cos``/``np.sin``
     bits on a fixed sample of 4000 arguments (small ones, and headings of many laps): the premise of the
-    kernel's bit-identity (:mod:`amigo_gym._kernels_v1`). Checked once per process (a millisecond)."""
+    kernel's bit-identity (:mod:`amigo_gym.sim._kernels_v1`). Checked once per process (a millisecond)."""
     g = np.random.default_rng(20240601)
     x = np.concatenate((g.uniform(-10.0, 10.0, 2000), g.uniform(-2000.0, 2000.0, 1000), g.normal(0.0, 1e-3, 1000)))
     c = np.empty_like(x)
@@ -251,18 +254,18 @@ def libm_matches_numpy() -> bool:
 
 
 def kernels() -> ModuleType:
-    """The compiled kernels, :mod:`amigo_gym._kernels_v1` (imports numba on the first call)."""
+    """The compiled kernels, :mod:`amigo_gym.sim._kernels_v1` (imports numba on the first call)."""
     fast.announce_compilation()
-    import amigo_gym._kernels_v1 as kv
+    import amigo_gym.sim._kernels_v1 as kv
 
     return kv
 
 
 def kernel_constants(k: tracking.Constants) -> Array:
-    """The ``consts`` vector of :mod:`amigo_gym._kernels_v1` for the constants ``k``.
+    """The ``consts`` vector of :mod:`amigo_gym.sim._kernels_v1` for the constants ``k``.
 
     Every entry is computed as the reference computes it (``2.0 * l1``, the negated scales the reference
-    divides by), the quadrature nodes are :mod:`amigo_gym.fresnel`'s own lists, so the kernel's arithmetic is
+    divides by), the quadrature nodes are :mod:`amigo_gym.model.fresnel`'s own lists, so the kernel's arithmetic is
     the reference's.
     """
     p = k.params
@@ -314,7 +317,7 @@ _FLAT_MAX = 64
 
 
 def flat_path(path: ClothoidPath) -> Array:
-    """The ``path`` vector of :mod:`amigo_gym._kernels_v1` for a :class:`ClothoidPath` (cached per path object).
+    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1` for a :class:`ClothoidPath` (cached per path object).
 
     The pieces' tables and the coarse samples the reference searches (``path._t``), copied as they are: built
     at a reset, never in a step.
@@ -334,12 +337,12 @@ def flat_path(path: ClothoidPath) -> Array:
 
 
 class StepKernel:
-    """The compiled step of one robot (:mod:`amigo_gym._kernels_v1`): constants, flattened path, workspace.
+    """The compiled step of one robot (:mod:`amigo_gym.sim._kernels_v1`): constants, flattened path, workspace.
 
     The state of an episode lives in :attr:`ws` between steps (:meth:`load` puts a :class:`tracking.State` and a
-    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`step` and :attr:`evaluate` are the
-    compiled :func:`amigo_gym._kernels_v1.step` and :func:`amigo_gym._kernels_v1.evaluate` (dropped when pickled,
-    loaded again when unpickled).
+    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`step` and :attr:`evaluate` are
+    the compiled :func:`amigo_gym.sim._kernels_v1.step` and :func:`amigo_gym.sim._kernels_v1.evaluate` (dropped
+    when pickled, loaded again when unpickled).
 
     Attributes:
         consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
@@ -378,7 +381,7 @@ class StepKernel:
         self._bind()
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
-        """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.tracking.ProgressFn`): compiled on a
+        """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`): compiled on a
         :class:`ClothoidPath`, ``path.locate`` on any other path."""
         if type(path) is ClothoidPath:
             s: float = self.locate_progress(self.consts, flat_path(path), x, y, hint)
@@ -403,9 +406,9 @@ class StepKernel:
         self.key = np.uint64(ep.key)
 
     def draw(self, steps: int) -> None:
-        """This step's draws into the workspace (:func:`amigo_gym.randomization.step_noise` of the step counter
-        ``steps``): the uniforms by :func:`amigo_gym._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
-        (as the reference); :func:`amigo_gym._kernels_v1.step` completes the normals. Only when anything is drawn.
+        """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter
+        ``steps``): the uniforms by :func:`amigo_gym.sim._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
+        (as the reference); :func:`amigo_gym.sim._kernels_v1.step` completes the normals. Only when anything is drawn.
         """
         if self.noise_uniforms(self.consts, self.ws, self.key, steps):
             np.log(self.u1, out=self.logs)

@@ -2,11 +2,11 @@
 
 Two implementations of one step exist:
 
-* the **reference**, :func:`amigo_gym.task.step_columns` and :func:`amigo_gym.task.reset_columns`
+* the **reference**, :func:`amigo_gym.task.v0.step_columns` and :func:`amigo_gym.task.v0.reset_columns`
   (numpy, always available; the single environment runs it on Python floats, the vector environment
   on ``(N,)`` arrays);
 * the **fast path**, :func:`step_rows`: the same formulas fused into three compiled loops over the
-  robots (:mod:`amigo_gym._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan``
+  robots (:mod:`amigo_gym.sim._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan``
   and ``exp`` ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives
   the reference's results (bit for bit on the circle; to 1e-12 everywhere).
 
@@ -32,9 +32,9 @@ from typing import Any, Literal, NamedTuple, SupportsIndex
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.params import HEADING_LIMIT
+from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
-from amigo_gym.task import TaskConstants, _path_start, initial_wheel_rates, obs_dim
+from amigo_gym.task.v0 import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
 __all__ = [
     "twin",
@@ -135,7 +135,7 @@ def announce_compilation() -> None:
     compiled code from its disk cache: a process that finds the cache warm prints nothing. Only for a person: when
     stderr is a terminal, or when the environment sets ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it); a
     script's captured stderr stays as it was. Installed by the first call of :func:`kernels` (here and in
-    :mod:`amigo_gym.fast_v1`); cheap afterwards.
+    :mod:`amigo_gym.sim.fast_v1`); cheap afterwards.
     """
     global _notice_installed
     if _notice_installed:
@@ -163,15 +163,15 @@ def announce_compilation() -> None:
 
 
 def kernels() -> ModuleType:
-    """The compiled kernels, :mod:`amigo_gym._kernels` (imports numba on the first call)."""
+    """The compiled kernels, :mod:`amigo_gym.sim._kernels` (imports numba on the first call)."""
     announce_compilation()
-    import amigo_gym._kernels as k
+    import amigo_gym.sim._kernels as k
 
     return k
 
 
 def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
-    """The ``consts`` vector of the kernels (:data:`amigo_gym._kernels.CONSTANT_FIELDS`).
+    """The ``consts`` vector of the kernels (:data:`amigo_gym.sim._kernels.CONSTANT_FIELDS`).
 
     Every entry is computed as the reference computes it (``2.0 * l1``, ``direction / radius``, the
     negated scales the reference divides by), so the kernel's arithmetic is the reference's.
@@ -263,9 +263,9 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
 
 
 def start_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> Array:
-    """The ``start`` vector of the start-state kernels (:data:`amigo_gym._kernels.START_FIELDS`).
+    """The ``start`` vector of the start-state kernels (:data:`amigo_gym.sim._kernels.START_FIELDS`).
 
-    The very numbers :func:`amigo_gym.task.start_pose` and :func:`amigo_gym.task.initial_wheel_rates`
+    The very numbers :func:`amigo_gym.task.v0.start_pose` and :func:`amigo_gym.task.v0.initial_wheel_rates`
     use: the path's start point and tangent angle, ``init_position_noise``, ``init_heading_noise``,
     the robot's ``l3``, and the initial wheel rates.
     """
@@ -292,15 +292,15 @@ class StepReport(NamedTuple):
     #: the number ``m`` of start states drawn from ``bitgens`` (their rows are ``ws.rows[:m]``, in increasing
     #: order, until the next call); 0 without ``bitgens``
     drawn: int
-    #: the number of rows whose new heading lies past :data:`amigo_gym.params.HEADING_LIMIT` in absolute
-    #: value (those :func:`amigo_gym.task.bound_heading` reduces; the kernel leaves them as they are)
+    #: the number of rows whose new heading lies past :data:`amigo_gym.model.params.HEADING_LIMIT` in absolute
+    #: value (those :func:`amigo_gym.task.v0.bound_heading` reduces; the kernel leaves them as they are)
     past_limit: int
 
 
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under
     its name, so the serial and the parallel compilation of one loop need two names (else they would share a cache
-    entry). Used by :mod:`amigo_gym._kernels` and :mod:`amigo_gym._kernels_v1`."""
+    entry). Used by :mod:`amigo_gym.sim._kernels` and :mod:`amigo_gym.sim._kernels_v1`."""
     assert isinstance(fn, types.FunctionType)
     copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
     copy.__qualname__ = name
@@ -311,18 +311,18 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
 class SingleStep:
     """One robot's step by the compiled kernel: the single env's fast path (``AmigoBotEnv(kernel=...)``).
 
-    The three passes of :func:`step_rows` (:func:`amigo_gym._kernels.single_move`, ``single_evaluate``,
+    The three passes of :func:`step_rows` (:func:`amigo_gym.sim._kernels.single_move`, ``single_evaluate``,
     ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
     between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
-    and the vector env give the same bits, and both those of :func:`amigo_gym.task.step_float`, the reference
+    and the vector env give the same bits, and both those of :func:`amigo_gym.task.v0.step_float`, the reference
     (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once.
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
-            (:data:`amigo_gym._kernels.SINGLE_STATE` and the other column offsets).
+            (:data:`amigo_gym.sim._kernels.SINGLE_STATE` and the other column offsets).
         flags: ``(1, 2)`` bool: the restart mask (False) and ``terminated``.
         obs: ``(1, obs_dim)`` float32: the observation of the last step; ``obs_row`` its row (a view).
-        record: ``(16,)`` view of the buffer's record (:data:`amigo_gym._kernels.RECORD_FIELDS`); ``head`` its
+        record: ``(16,)`` view of the buffer's record (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`); ``head`` its
             first 10 columns (the state's and H's entries of the info).
     """
 
@@ -356,7 +356,7 @@ class SingleStep:
         self._bind()
 
     def set_state(self, values: Sequence[Any]) -> None:
-        """Set the state (the 8 columns of :class:`amigo_gym.task.State`)."""
+        """Set the state (the 8 columns of :class:`amigo_gym.task.v0.State`)."""
         self._state[:] = values
 
     def state(self) -> list[float]:
@@ -366,10 +366,10 @@ class SingleStep:
 
     def step(self, a1: float, a2: float) -> list[float]:
         """Step the robot with the validated action ``(a1, a2)``; return the record's 16 columns as floats
-        (:data:`amigo_gym._kernels.RECORD_FIELDS`: the new state, H, the error, the reward terms and the
+        (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`: the new state, H, the error, the reward terms and the
         reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. A heading past
-        :data:`amigo_gym.params.HEADING_LIMIT` is left as it is and counted in :attr:`past_limit` (1, else 0):
-        the caller reduces it, as :func:`amigo_gym.task.bound_heading`."""
+        :data:`amigo_gym.model.params.HEADING_LIMIT` is left as it is and counted in :attr:`past_limit` (1, else 0):
+        the caller reduces it, as :func:`amigo_gym.task.v0.bound_heading`."""
         b = self.buf
         c = self.consts
         tans = self._tans
@@ -401,16 +401,16 @@ def step_rows(
 ) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
-    The three passes of :mod:`amigo_gym._kernels` with numpy's ``tan`` and ``exp`` between them; rows
+    The three passes of :mod:`amigo_gym.sim._kernels` with numpy's ``tan`` and ``exp`` between them; rows
     where ``restart`` is set (their ``state`` a start state) are evaluated without moving, as
-    :func:`amigo_gym.task.reset_columns` does. Layouts: :mod:`amigo_gym._kernels`. ``parallel`` runs
+    :func:`amigo_gym.task.v0.reset_columns` does. Layouts: :mod:`amigo_gym.sim._kernels`. ``parallel`` runs
     the loops on numba's threads (the same results).
 
     ``bitgens`` (:attr:`GeneratorTable.bitgens`, one address per row) makes the step draw the start
     states of the ``restart`` rows itself, each from its row's generator, before evaluating them
-    (:func:`amigo_gym._kernels.draw_starts`, numpy's ``cos`` and ``sin`` of the headings,
-    :func:`amigo_gym._kernels.place_starts`). The reference is the vector env's ``_start_states``, a
-    Python loop of ``Generator.random(out=u[j])`` over the rows and :func:`amigo_gym.task.start_pose`:
+    (:func:`amigo_gym.sim._kernels.draw_starts`, numpy's ``cos`` and ``sin`` of the headings,
+    :func:`amigo_gym.sim._kernels.place_starts`). The reference is the vector env's ``_start_states``, a
+    Python loop of ``Generator.random(out=u[j])`` over the rows and :func:`amigo_gym.task.v0.start_pose`:
     the start states agree bit for bit, and the generators advance as that loop advances them.
     Without ``bitgens`` the caller has set the start states.
 

@@ -25,7 +25,7 @@ from typing import NamedTuple, TypeAlias
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.params import RobotParams
+from amigo_gym.model.params import RobotParams
 
 __all__ = [
     "body_velocity",

@@ -1,20 +1,20 @@
 r"""Compiled step of ``AmigoBot-v1`` for one robot on a :class:`~amigo_gym.paths.ClothoidPath` (numba).
 
 The optional fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (the extra ``amigo_gym[fast]``, i.e. numba;
-loaded by :mod:`amigo_gym.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.tracking.step_columns`
-does on Python floats, :func:`evaluate` what :func:`amigo_gym.tracking.reset_columns` does, and :func:`progress`
-the projection of :func:`amigo_gym.tracking.start_state`:
+loaded by :mod:`amigo_gym.sim.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.task.v1.step_columns`
+does on Python floats, :func:`evaluate` what :func:`amigo_gym.task.v1.reset_columns` does, and :func:`progress`
+the projection of :func:`amigo_gym.task.v1.start_state`:
 
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
-   :func:`amigo_gym.actuators.ring_write`, :func:`amigo_gym.actuators.ring_read`;
-2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.actuators.PIECES` linear pieces, the
-   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.actuators._actuator_step_float`,
-   :func:`amigo_gym.fresnel.advance_chain_float`);
+   :func:`amigo_gym.model.actuators.ring_write`, :func:`amigo_gym.model.actuators.ring_read`;
+2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
+   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators._actuator_step_float`,
+   :func:`amigo_gym.model.fresnel.advance_chain_float`);
 3. H's projection on the path, and the measured H's when it differs
    (:func:`amigo_gym.paths.clothoid._locate_float`, :func:`amigo_gym.paths.clothoid._pose_tuple`);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
-   and the arguments of the three exponential terms (:func:`amigo_gym.task.reward_term_columns`,
-   :func:`amigo_gym.task.steady_heading`), the reference speed, termination and end of path.
+   and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
+   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
 
 **The reference is the Python float path** (the functions named above); this module is its deliberate
 compiled twin: the same formulas, written again, in the same order of operations, so that every result is
@@ -26,27 +26,27 @@ runs the golden episodes through it). What makes the bits equal:
   reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
 * ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
-  once per process (:func:`amigo_gym.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
+  once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
-  the per-step draws (:func:`amigo_gym.randomization.step_noise`) are split in three: the counter-based uniforms
+  the per-step draws (:func:`amigo_gym.model.randomization.step_noise`) are split in three: the counter-based uniforms
   (integer SplitMix64 on ``uint64``, exact) by :func:`noise_uniforms`, their logarithms by ``np.log`` between the
   calls, the Box–Muller normals (``sqrt``, ``cos``) in :func:`step`; the three reward exponentials are
-  evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.fast_v1`).
+  evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.sim.fast_v1`).
 
-Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.fast_v1`,
+Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.fast_v1`,
 which numba never loads):
 
 * ``consts`` (``CONSTANT_FIELDS``, then the ``n_preview`` preview distances [m], their observation bounds,
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
-  built by :func:`amigo_gym.fast_v1.kernel_constants`);
+  built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
 * ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``; built once per path by :func:`amigo_gym.fast_v1.flat_path`);
-* ``ring (L, 2)``: the command ring of :func:`amigo_gym.actuators.make_ring`, updated in place;
+  ``x, y``; built once per path by :func:`amigo_gym.sim.fast_v1.flat_path`);
+* ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
   the outputs), then scratch space of ``WS_SCRATCH`` entries;
 * ``obs``: the observation (float32 or float64), written.
 
-This module imports numba at import time; :mod:`amigo_gym.fast_v1` imports it only when the kernel is first
+This module imports numba at import time; :mod:`amigo_gym.sim.fast_v1` imports it only when the kernel is first
 used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``), keyed on
 this file: see :data:`LAYOUT_FINGERPRINT`.
 """
@@ -59,9 +59,18 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.actuators import PIECES, _ramp_float
-from amigo_gym.fast import twin as _twin
-from amigo_gym.fast_v1 import (
+from amigo_gym.model.actuators import PIECES, _ramp_float
+from amigo_gym.paths.clothoid import (
+    MIN_NEWTON_DENOMINATOR,
+    NEWTON_ITERATIONS,
+    STATUS_END,
+    STATUS_INTERIOR,
+    STATUS_START,
+    STATUS_WINDOW,
+)
+from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
+from amigo_gym.sim.fast import twin as _twin
+from amigo_gym.sim.fast_v1 import (
     C_ACC,
     C_DEC,
     C_DT,
@@ -157,29 +166,21 @@ from amigo_gym.fast_v1 import (
     W_Y,
     layout_fingerprint,
 )
-from amigo_gym.paths.clothoid import (
-    MIN_NEWTON_DENOMINATOR,
-    NEWTON_ITERATIONS,
-    STATUS_END,
-    STATUS_INTERIOR,
-    STATUS_START,
-    STATUS_WINDOW,
-)
-from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
 
 __all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
 F64 = NDArray[np.float64]
 
-#: the :func:`amigo_gym.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
+#: the :func:`amigo_gym.sim.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
 LAYOUT_FINGERPRINT = "467f570db5f88a18"
 if layout_fingerprint() != LAYOUT_FINGERPRINT:
     raise ImportError(
-        f"amigo_gym._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.fast_v1 now has "
-        f"{layout_fingerprint()}: update the kernels and LAYOUT_FINGERPRINT in amigo_gym/_kernels_v1.py"
+        f"amigo_gym.sim._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.sim.fast_v1 "
+        f"now has "
+        f"{layout_fingerprint()}: update the kernels and LAYOUT_FINGERPRINT in amigo_gym/sim/_kernels_v1.py"
     )
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -188,7 +189,7 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False
 @_jit
 def cos_sin(x: F64, c: F64, s: F64) -> None:
     """``c = cos(x)``, ``s = sin(x)`` elementwise by the functions the kernels use (for
-    :func:`amigo_gym.fast_v1.libm_matches_numpy`)."""
+    :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`)."""
     for i in range(x.shape[0]):
         c[i] = math.cos(x[i])
         s[i] = math.sin(x[i])
@@ -560,14 +561,15 @@ def _counter_uniform(key: np.uint64, step: int, channel: int) -> float:
 
 @_jit
 def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
-    """The uniform numbers of :func:`amigo_gym.randomization.step_noise` (``_step_noise_float``) for step ``step``.
+    """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` (``_step_noise_float``) for step
+    ``step``.
 
     Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
     that is on (in channel order), ``u1`` at ``ws[S_U1:]`` and ``2 pi u2`` at ``ws[S_U2:]``. The caller then
     writes ``np.log`` of the ``u1`` at ``ws[S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
 
     Args:
-        key: the episode's key (:func:`amigo_gym.randomization.draw_key`), step: the state's step counter.
+        key: the episode's key (:func:`amigo_gym.model.randomization.draw_key`), step: the state's step counter.
 
     Returns:
         the number of channels on (the length of the ``u1`` written).
@@ -734,7 +736,7 @@ def evaluate(
     prev2: float,
     t: float,
 ) -> None:
-    """:func:`amigo_gym.tracking.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise.
+    """:func:`amigo_gym.task.v1.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise.
 
     As there, the state keeps its progress (the start's hint): only the outputs of ``ws`` and ``obs`` are written.
 
@@ -758,9 +760,9 @@ def step(
     a1: float,
     a2: float,
 ) -> None:
-    """:func:`amigo_gym.tracking.step_columns` of the state in ``ws`` (updated in place) on Python floats.
+    """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws`` (updated in place) on Python floats.
 
-    This step's draws (:func:`amigo_gym.randomization.step_noise` of the state's step counter) come from
+    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the state's step counter) come from
     :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[W_NOISE_ON]`` is set, else they are zeros;
     they are written to ``ws`` (``slip1`` ... ``noise_rate2``).
 
@@ -811,7 +813,7 @@ def step(
 
 
 # ----------------------------------------------------------------------------------------- N robots
-# The batch of :class:`amigo_gym.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
+# The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
 # :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``
 # between the two loops and numpy's ``exp`` after the second (as for one robot). They live in this file so
 # that numba's disk cache, keyed on this file, is invalidated with the row functions they call. Each loop is

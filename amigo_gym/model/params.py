@@ -1,8 +1,8 @@
 """Robot and task parameters as frozen, validated dataclasses.
 
 Every length is in metres, every angle in radians, every time in seconds. Parameters are passed
-explicitly to the pure functions of :mod:`amigo_gym.kinematics`, :mod:`amigo_gym.paths` and
-:mod:`amigo_gym.task`; there are no module-level settings.
+explicitly to the pure functions of :mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.paths` and
+:mod:`amigo_gym.task.v0`; there are no module-level settings.
 
 Sources
 -------
@@ -216,7 +216,7 @@ class EnvParams:
     The sigmas lie in [1e-6, 1e6]. Numbers are stored as Python floats (``direction`` as an int), so
     ``dt=np.float32(0.1)`` becomes ``0.10000000149011612`` and never makes the state float32. The task
     must be drivable: the straight roll at ``speed`` and the exact steady state on the circle
-    (:func:`amigo_gym.kinematics.circle_steady_state`) must keep both wheel rates within
+    (:func:`amigo_gym.model.kinematics.circle_steady_state`) must keep both wheel rates within
     ``robot.max_wheel_rate``; otherwise a one-line ``ValueError`` names the rate needed and the limit
     (``speed 0.74 m/s on a 1 m circle needs 16.6 rad/s on the outer wheel, over the limit 15 rad/s``).
     """
@@ -276,10 +276,10 @@ class EnvParams:
         """Refuse a task the robot cannot drive: a steady wheel rate above ``robot.max_wheel_rate``.
 
         The start (and the manoeuvre's straight) rolls straight at ``speed``: ``speed / r`` on each wheel.
-        The circle needs the exact steady state's rates (:func:`amigo_gym.kinematics.circle_steady_state`);
+        The circle needs the exact steady state's rates (:func:`amigo_gym.model.kinematics.circle_steady_state`);
         they are linear in the speed, so the largest speed that fits is ``speed * w_max / needed``.
         """
-        from amigo_gym.kinematics import circle_steady_state
+        from amigo_gym.model.kinematics import circle_steady_state
 
         robot, v, w_max = self.robot, self.speed, self.robot.max_wheel_rate
         limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
