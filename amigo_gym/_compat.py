@@ -29,7 +29,7 @@ MOVED: dict[str, str] = {
     "amigo_gym.actuators": "amigo_gym.model.actuators",
     "amigo_gym.fresnel": "amigo_gym.model.fresnel",
     "amigo_gym.symbolic": "amigo_gym.model.symbolic",
-    "amigo_gym.inverse": "amigo_gym.model.inverse",
+    "amigo_gym.inverse": "amigo_gym.task.inverse",
     "amigo_gym.randomization": "amigo_gym.model.randomization",
     "amigo_gym.tracking": "amigo_gym.task.v1",
     "amigo_gym._kernels": "amigo_gym.sim._kernels",

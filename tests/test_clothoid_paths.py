@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.model.inverse import ConstantSpeed, solve_inverse
+from amigo_gym.task.inverse import ConstantSpeed, solve_inverse
 from amigo_gym.model.kinematics import circle_steady_state
 from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import (

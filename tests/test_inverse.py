@@ -11,7 +11,7 @@ import pytest
 from numpy.typing import NDArray
 
 from amigo_gym.analysis.verify import round_trip_error
-from amigo_gym.model.inverse import (
+from amigo_gym.task.inverse import (
     COLUMNS,
     ConstantSpeed,
     InverseSolution,

@@ -1,6 +1,6 @@
 """The paper's manoeuvre, "starting, driving straight, driving on circular curve, braking" (its Figs 2, 3).
 
-``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.model.inverse.solve_inverse`)
+``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`)
 for H on the manoeuvre path and writes
 
 * ``DIR/paper_fig2_angles.png``: wheel angles alpha1 (blue) and alpha2 (red) against time, as Fig. 2;
@@ -14,7 +14,7 @@ Choices (the paper gives v_A = 0.2 m/s and the construction data, not the timing
 
 * path: straight 1 m along x0 from the origin, then a left circle of R = 1 m tangent to it
   (:class:`amigo_gym.paths.ManoeuvrePath`); H starts at the origin with beta = 0;
-* speed of A: trapezoid (:func:`amigo_gym.model.inverse.manoeuvre_profile`): standstill for 1 s, acceleration
+* speed of A: trapezoid (:func:`amigo_gym.task.inverse.manoeuvre_profile`): standstill for 1 s, acceleration
   0.1 m/s^2 (2 s to 0.2 m/s), cruise, deceleration 0.2 m/s^2 (1 s), then 1 s at rest. Both are well inside the
   real robot's limits (0.3 m/s^2 and 0.75 m/s^2, ``RobotParams``), gentle enough to be visible in the
   plots. Braking is timed so that A travels the straight plus one lap of its steady circle
@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_save
-from amigo_gym.model.inverse import (
+from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
     MANOEUVRE_LAPS,

@@ -83,7 +83,7 @@ def _env_laps_error() -> float:
 
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
-    from amigo_gym.model.inverse import paper_circle
+    from amigo_gym.task.inverse import paper_circle
     from amigo_gym.paths import CirclePath
 
     path = CirclePath(radius=R)
@@ -162,7 +162,7 @@ def rows(quick: bool = False) -> list[Check]:
     what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
     out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
     if not quick:
-        from amigo_gym.model.inverse import paper_circle
+        from amigo_gym.task.inverse import paper_circle
 
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R

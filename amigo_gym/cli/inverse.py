@@ -25,7 +25,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from amigo_gym.model.inverse import (
+from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
     MANOEUVRE_LAPS,

@@ -8,10 +8,10 @@ module              holds
 ``fresnel``         Fresnel-type integrals of the pose over a linear ramp of the wheel rates
 ``actuators``       the firmware's wheel-rate ramps, delays and the exact pose over them
 ``randomization``   the true robot drawn around the nominal one, slip and measurement noise
-``inverse``         the analytic inverse solution: wheel angles and rates that drive H along a path
 ``symbolic``        the symbolic D–H derivation (sympy, imported only when used)
 ==================  ==========================================================================================
 
-Imports only numpy (and sympy inside ``symbolic``) and these modules, in the order of the table's layers:
-``params`` < ``kinematics`` < ``fresnel`` < ``actuators``, ``randomization``, ``inverse``, ``symbolic``.
+Imports numpy, these modules and the package's bottom layer (:mod:`amigo_gym.io`, :mod:`amigo_gym.options`); sympy
+only inside ``symbolic``. The analytic inverse solution needs the paths, so it sits above them, in
+:mod:`amigo_gym.task.inverse`.
 """

@@ -1,0 +1,100 @@
+"""The package's layout (issue 19, docs/architecture.md): imports point down the layers, no circles, a small root.
+
+The structure is read from the source by :mod:`tests.layout` (``ast``; imports inside functions count). A test
+that the checker itself sees what it should: a made-up package with a circle and an upward import.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import layout
+import pytest
+
+
+def test_every_import_points_down_the_layers() -> None:
+    mods = layout.modules()
+    assert all(layout.layer_of(m) >= 0 for m in mods), [m for m in mods if layout.layer_of(m) < 0]
+    assert layout.upward(layout.imports(mods)) == []
+
+
+def test_no_import_circles() -> None:
+    assert layout.circles(layout.imports(layout.modules())) == []
+
+
+def test_the_root_holds_at_most_eight_modules() -> None:
+    assert len(layout.root_modules()) <= layout.MAX_ROOT_MODULES, layout.root_modules()
+
+
+def test_nothing_imports_the_cli() -> None:
+    graph = layout.imports(layout.modules())
+    users = sorted(
+        a for a, bs in graph.items() for b in bs if b.startswith("amigo_gym.cli") and not a.startswith("amigo_gym.cli")
+    )
+    assert users == []
+
+
+def test_the_checker_finds_a_circle_and_an_upward_import(tmp_path: Path) -> None:
+    pkg = tmp_path / "amigo_gym"
+    (pkg / "model").mkdir(parents=True)
+    (pkg / "envs").mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "model" / "__init__.py").write_text("")
+    (pkg / "envs" / "__init__.py").write_text("")
+    (pkg / "model" / "a.py").write_text("from amigo_gym.model import b\n")
+    (pkg / "model" / "b.py").write_text(
+        "def f():\n    from amigo_gym.model.a import x\n    from amigo_gym.envs import e\n"
+    )
+    (pkg / "envs" / "e.py").write_text("import amigo_gym.envs\n")
+    graph = layout.imports(layout.modules(pkg))
+    assert layout.circles(graph) == [["amigo_gym.model.a", "amigo_gym.model.b"]]
+    assert layout.upward(graph) == [("amigo_gym.model.b", "amigo_gym.envs.e")]
+
+
+OLD_NAMES = {
+    "amigo_gym.params": "amigo_gym.model.params",
+    "amigo_gym.kinematics": "amigo_gym.model.kinematics",
+    "amigo_gym.tracking": "amigo_gym.task.v1",
+    "amigo_gym.inverse": "amigo_gym.task.inverse",
+    "amigo_gym.fast": "amigo_gym.sim.fast",
+    "amigo_gym.rendering": "amigo_gym.envs.rendering",
+}
+
+
+@pytest.mark.parametrize("old, new", sorted(OLD_NAMES.items()))
+def test_an_old_module_name_imports_the_moved_module_with_a_warning(old: str, new: str) -> None:
+    code = (
+        "import importlib, warnings\n"
+        "import amigo_gym\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    warnings.simplefilter('always')\n"
+        f"    a = importlib.import_module({old!r})\n"
+        f"b = importlib.import_module({new!r})\n"
+        "print(a is b, [str(x.message) for x in w if issubclass(x.category, DeprecationWarning)])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.startswith("True"), out
+    assert f"{old} moved to {new}" in out, out
+
+
+def test_every_old_name_is_mapped_to_a_module_that_exists() -> None:
+    from amigo_gym import _compat
+
+    mods = layout.modules()
+    assert all(new in mods for new in _compat.MOVED.values())
+    assert not any(old in mods for old in _compat.MOVED)  # an old name never shadows a module of today
+
+
+def test_old_task_names_are_found_with_a_warning() -> None:
+    from amigo_gym import task
+    from amigo_gym.task import v0
+
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        assert task.reward_term_columns is v0.reward_term_columns
+    assert any("moved to amigo_gym.task.v0.reward_term_columns" in str(x.message) for x in w)
+    with pytest.raises(AttributeError):
+        task.no_such_name  # noqa: B018
