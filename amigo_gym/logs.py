@@ -52,12 +52,14 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.io import finite_float
 from amigo_gym.model.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
 from amigo_gym.model.params import RobotParams, show_value
 
@@ -150,14 +152,14 @@ class Replay:
 # --------------------------------------------------------------------------------------------- reading
 
 
-def _float_cell(text: str, column: str, line: int, where: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise LogError(f"{where}: column {column!r}: {text.strip()!r} at line {line} is not a number") from None
-    if not math.isfinite(value):
-        raise LogError(f"{where}: column {column!r}: {text.strip()} at line {line}; every value must be finite")
-    return value
+def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: bool) -> str:
+    """One line on a cell that is not a finite number (docs/logs.md's table of messages)."""
+    what = (
+        f"{cell} at line {line}; every value must be finite"
+        if not_finite
+        else f"{cell!r} at line {line} is not a number"
+    )
+    return f"{where}: column {column!r}: {what}"
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
@@ -203,7 +205,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
             i = index[c]
             if i >= len(row) or not row[i].strip():
                 raise LogError(f"{p.name}: column {c!r} is empty at line {line}")
-            data[k, j] = _float_cell(row[i], c, line, p.name)
+            data[k, j] = finite_float(row[i], partial(_cell_problem, p.name, c, row[i].strip(), line), LogError)
     if data.shape[0] < 3:
         raise LogError(f"{p.name}: {data.shape[0]} data row(s); a log needs at least 3")
     col = {c: data[:, j] for j, c in enumerate(used)}
