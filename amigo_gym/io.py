@@ -17,6 +17,7 @@ not yet fsynced) here, and the stages of :mod:`amigo_gym.runs`. Unset, :func:`fa
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -35,6 +36,7 @@ __all__ = [
     "finite_float",
     "fsync_dir",
     "json_safe",
+    "sha256_file",
 ]
 
 FAULT_ENV = "AMIGO_GYM_FAULT"
@@ -94,6 +96,15 @@ def finite_float(text: str, message: Callable[[bool], str], error: type[ValueErr
     if not math.isfinite(value):
         raise error(message(True))
     return value
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a file's bytes (read in 1 MiB blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def file_mode() -> int:

@@ -40,7 +40,7 @@ median sample interval outside [1e-4, 5] s (milliseconds or nanoseconds as secon
 the measured travel, turn or wheel rates more than 10 times (or less than a tenth of) what the commands
 give (millimetres, degrees).
 
-This module may import numpy, the standard library and the core modules (params, actuators, io); scipy
+This module may import numpy, the standard library and the core modules (params, kinematics, actuators, io); scipy
 (:func:`identify`) and rosbags (:func:`read_bag`) are imported inside the functions that need them.
 """
 
@@ -60,7 +60,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.io import finite_float
-from amigo_gym.model.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
+from amigo_gym.model.actuators import (
+    MAX_DELAY,
+    MAX_TRUE_DEVIATION,
+    ActuatorParams,
+    actuator_step,
+    step_subintervals,
+    wheel_rates_columns,
+)
+from amigo_gym.model.kinematics import body_velocity
 from amigo_gym.model.params import RobotParams, show_value
 
 __all__ = [
@@ -154,12 +162,9 @@ class Replay:
 
 def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: bool) -> str:
     """One line on a cell that is not a finite number (docs/logs.md's table of messages)."""
-    what = (
-        f"{cell} at line {line}; every value must be finite"
-        if not_finite
-        else f"{cell!r} at line {line} is not a number"
-    )
-    return f"{where}: column {column!r}: {what}"
+    if not_finite:
+        return f"{where}: column {column!r}: {cell} at line {line}; every value must be finite"
+    return f"{where}: column {column!r}: {cell!r} at line {line} is not a number"
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
@@ -311,8 +316,7 @@ def read_bag(
     tp, vp = _last_of_equal(np.asarray(t_p, dtype=np.int64), np.asarray(pose))
     if tp.size < 3:
         raise LogError(f"{p.name}: topic {pose_topic!r} has {tp.size} message(s); a log needs at least 3")
-    lw = nominal.l1 * vc[:, 1]
-    wheel = np.stack([(vc[:, 0] + lw) / nominal.r1, (vc[:, 0] - lw) / nominal.r2], axis=1)
+    wheel = np.stack(wheel_rates_columns(vc[:, 0], vc[:, 1], nominal), axis=1)
     vp[:, 2] = np.unwrap(vp[:, 2])
     t_cmd = np.asarray((tc - t0) * 1e-9, dtype=np.float64)
     t_meas = np.asarray((tp - t0) * 1e-9, dtype=np.float64)
@@ -361,8 +365,7 @@ def _windows(t: Array, span: float = 1.0) -> NDArray[np.intp]:
 
 def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
     """Integrals of the commanded speed and turn rate (nominal robot, no ramps, no delay) at the times ``t``."""
-    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
-    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    v, w = body_velocity(log.cmd, nominal)
     grid = np.union1d(log.t_cmd, t)
     j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
     dt = np.diff(grid)
@@ -696,8 +699,7 @@ def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | 
     in all is not identifiable from the pose; :func:`identify` fits only the ones above that.
     """
     act = ActuatorParams() if actuators is None else actuators
-    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
-    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    v, w = body_velocity(log.cmd, nominal)
     out = {}
     for name, c, rate in (("acceleration", v, act.acceleration), ("rot_acceleration", w, act.rot_acceleration)):
         up = np.maximum(np.diff(np.abs(np.concatenate([[0.0], c]))), 0.0)

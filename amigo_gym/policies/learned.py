@@ -35,7 +35,6 @@ torch, SB3 (only inside :func:`load_pretrained`), training or the CLI.
 
 from __future__ import annotations
 
-import hashlib
 import io as _io
 import json
 import zipfile
@@ -47,11 +46,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.io import atomic_save
+from amigo_gym.io import atomic_save, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy
-from amigo_gym.task.v1 import TrackingParams, make_tracking_params, obs_fields
+from amigo_gym.task.v1 import TrackingParams, make_tracking_params
 
 __all__ = [
     "FORMAT",
@@ -299,7 +298,7 @@ class FastPolicy(Policy):
         meta = {
             "format": FORMAT,
             "spec": {**asdict(self.spec), "env_kwargs": dict(self.spec.env_kwargs)},
-            "obs_fields": list(obs_fields(self.spec.params())),
+            "obs_fields": list(self.builder.fields.names),
             "n_layers": len(self.layers),
             "info": self.info,
         }
@@ -345,13 +344,8 @@ class FastPolicy(Policy):
         return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
 
 
-def sha256_of(path: str | Path) -> str:
-    """Hex SHA-256 of a file."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+#: Hex SHA-256 of a file (the manifests' checksums): :func:`amigo_gym.io.sha256_file`
+sha256_of = sha256_file
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any:
