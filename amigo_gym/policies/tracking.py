@@ -417,11 +417,8 @@ class PurePursuitPolicy(Policy):
             else check_range(o, "lookahead_time", lookahead_time, 0.0, 60.0, low_open=True)
         )
         self.lookahead = la
-        self._x = f"preview_x_{la:g}m"
-        self._y = f"preview_y_{la:g}m"
         self._prev = np.asarray(prev, dtype=np.float64)
-        self._xs = [f"preview_x_{d:g}m" for d in prev]
-        self._ys = [f"preview_y_{d:g}m" for d in prev]
+        self._ix, self._iy = (np.array([self._fields.index[f"preview_{c}_{d:g}m"] for d in prev]) for c in "xy")
 
     @property
     def name(self) -> str:
@@ -433,16 +430,12 @@ class PurePursuitPolicy(Policy):
         p = self.params
         v_ref = self._fields(obs, "reference_speed") * p.robot.max_speed
         if self.lookahead_time is None:
-            x = self._fields(obs, self._x) * p.preview_scale
-            y = self._fields(obs, self._y) * p.preview_scale
+            pick = np.full(len(obs), list(self.params.preview).index(self.lookahead))
         else:  # per row the preview point nearest to lookahead_time * v_ref ahead
-            want = self.lookahead_time * v_ref
-            pick = np.argmin(np.abs(self._prev[None, :] - want[:, None]), axis=1)
-            xs = np.stack([self._fields(obs, n) for n in self._xs], axis=1)
-            ys = np.stack([self._fields(obs, n) for n in self._ys], axis=1)
-            rows = np.arange(len(pick))
-            x = xs[rows, pick] * p.preview_scale
-            y = ys[rows, pick] * p.preview_scale
+            pick = np.argmin(np.abs(self._prev[None, :] - (self.lookahead_time * v_ref)[:, None]), axis=1)
+        rows = np.arange(len(obs))
+        x = obs[rows, self._ix[pick]] * p.preview_scale
+        y = obs[rows, self._iy[pick]] * p.preview_scale
         if self.origin == "H":
             x = x - p.robot.l3
         v, om = pure_pursuit_command(x, y, v_ref)
