@@ -1,31 +1,20 @@
 r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
 
-Both read only the observation (decoded by field name with :func:`amigo_gym.task.v1.obs_fields`) and the
-constant settings :class:`~amigo_gym.task.v1.TrackingParams`, use the **nominal** robot (``params.robot``),
-and have stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
+Both read only the observation, by field name (:class:`amigo_gym.policies.base.Fields`), and the constant settings
+:class:`~amigo_gym.task.v1.TrackingParams` (:class:`AnalyticTrackingPolicy` also ``AmigoBot-v0``'s
+:class:`~amigo_gym.model.params.EnvParams`), use the **nominal** robot (``params.robot``), and have
+stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
 
-Fields used (module table of :mod:`amigo_gym.task.v1`; ``v_max = robot.max_speed``, ``w_max =
-robot.max_wheel_rate``, ``l3 = robot.l3``):
+Fields used: ``e``, ``psi`` (here from ``sin_heading_error``, ``cos_heading_error`` as they are), ``kappa`` and
+``v_ref`` as in :mod:`amigo_gym.policies.analytic`, whose docstring also derives the velocity of H in the path
+frame: ``edot = Hdot . n = v sin psi + l3 omega cos psi`` for a speed ``v`` of A and turn rate ``omega`` on any
+smooth path, a map ``(v, omega) -> Hdot`` of determinant ``l3 != 0`` (H is steered directly, and the error
+dynamics do not depend on the path's curvature). Besides (module table of :mod:`amigo_gym.task.v1`,
+``v_max = robot.max_speed``):
 
-* ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
-* ``psi = atan2(sin_heading_error, cos_heading_error)``: heading minus the path tangent at H's closest
-  point [rad];
-* ``kappa = curvature / l3``: path curvature there [1/m];
-* ``v_ref = reference_speed * v_max`` and ``v_ahead = reference_speed_ahead * v_max`` (1 s later) [m/s];
+* ``v_ahead = reference_speed_ahead * v_max``: the reference speed 1 s later [m/s];
 * ``(x_d, y_d) = preview_{x,y}_<d> * preview_scale``: the path point ``d`` [m] of arc length ahead of H's
   closest point, in the robot frame (origin A, x along the heading) [m].
-
-Velocity of H in the path frame
--------------------------------
-With ``t``, ``n`` the path's unit tangent and left normal at H's closest point and ``H = A + l3 (cos beta,
-sin beta)``, the velocity of H for a speed ``v`` of A and turn rate ``omega = betadot`` is
-
-.. math::
-    \dot H \cdot t = v\cos\psi - l_3\omega\sin\psi, \qquad \dot H \cdot n = v\sin\psi + l_3\omega\cos\psi,
-
-and ``edot = Hdot . n`` for any smooth path (the derivative of the signed distance at the closest point).
-The map ``(v, omega) -> Hdot`` has determinant ``l3 != 0``: H can be steered directly (feedback
-linearisation), and the error dynamics do not depend on the path's curvature at all.
 
 Analytic law (:func:`analytic_tracking_command`)
 ------------------------------------------------
