@@ -407,6 +407,7 @@ class PurePursuitPolicy(Policy):
         )
         self.lookahead = la
         self._prev = np.asarray(prev, dtype=np.float64)
+        self._fixed = list(prev).index(la)
         self._ix, self._iy = (np.array([self._fields.index[f"preview_{c}_{d:g}m"] for d in prev]) for c in "xy")
 
     @property
@@ -418,13 +419,13 @@ class PurePursuitPolicy(Policy):
         """``(v [m/s], omega [rad/s])`` for observations ``(N, d)`` (:func:`pure_pursuit_command`)."""
         p = self.params
         v_ref = self._fields(obs, "reference_speed") * p.robot.max_speed
-        if self.lookahead_time is None:
-            pick = np.full(len(obs), list(self.params.preview).index(self.lookahead))
+        if self.lookahead_time is None:  # the fixed preview point: two columns
+            x, y = obs[:, self._ix[self._fixed]], obs[:, self._iy[self._fixed]]
         else:  # per row the preview point nearest to lookahead_time * v_ref ahead
             pick = np.argmin(np.abs(self._prev[None, :] - (self.lookahead_time * v_ref)[:, None]), axis=1)
-        rows = np.arange(len(obs))
-        x = obs[rows, self._ix[pick]] * p.preview_scale
-        y = obs[rows, self._iy[pick]] * p.preview_scale
+            rows = np.arange(len(obs))
+            x, y = obs[rows, self._ix[pick]], obs[rows, self._iy[pick]]
+        x, y = x * p.preview_scale, y * p.preview_scale
         if self.origin == "H":
             x = x - p.robot.l3
         v, om = pure_pursuit_command(x, y, v_ref)
