@@ -6,7 +6,8 @@ and fsyncs it, gives it the mode a plain new file would get (``0o666 & ~umask``;
 On any error, ``KeyboardInterrupt`` included, the temporary file is removed and the target is untouched.
 After the move the folder itself is fsynced, so that the new name survives a power loss.
 
-JSON is written strictly (``allow_nan=False``): NaN and infinities become ``null``.
+JSON is written strictly (``allow_nan=False``): NaN and infinities become ``null``. Text files are read
+back through :func:`finite_float`, the one check of a number in a cell (CSV logs, point files).
 
 Fault injection (tests only): with the environment variable ``AMIGO_GYM_FAULT=<stage>[@<n>]`` the process
 kills itself (``SIGKILL``) the ``n``-th time (default 1) it reaches ``<stage>``:
@@ -16,6 +17,7 @@ not yet fsynced) here, and the stages of :mod:`amigo_gym.runs`. Unset, :func:`fa
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -25,7 +27,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_save", "atomic_write", "atomic_write_json", "fault_point", "file_mode", "fsync_dir", "json_safe"]
+__all__ = [
+    "atomic_save",
+    "atomic_write",
+    "atomic_write_json",
+    "fault_point",
+    "file_mode",
+    "finite_float",
+    "fsync_dir",
+    "json_safe",
+    "sha256_file",
+]
 
 FAULT_ENV = "AMIGO_GYM_FAULT"
 _fault_counts: dict[str, int] = {}
@@ -71,6 +83,28 @@ def json_safe(obj: Any) -> Any:
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def finite_float(text: str, message: Callable[[bool], str], error: type[ValueError] = ValueError) -> float:
+    """``float(text)`` of a text cell if it is a finite number; otherwise raises ``error(message(is_number))``, with
+    ``is_number`` False for text that is no number and True for NaN and infinities (the caller's one-line message
+    names the file, the place and the value)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise error(message(False)) from None
+    if not math.isfinite(value):
+        raise error(message(True))
+    return value
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """Hex SHA-256 of a file's bytes (read in 1 MiB blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def file_mode() -> int:

@@ -40,7 +40,7 @@ median sample interval outside [1e-4, 5] s (milliseconds or nanoseconds as secon
 the measured travel, turn or wheel rates more than 10 times (or less than a tenth of) what the commands
 give (millimetres, degrees).
 
-This module may import numpy, the standard library and the core modules (params, actuators, io); scipy
+This module may import numpy, the standard library and the core modules (params, kinematics, actuators, io); scipy
 (:func:`identify`) and rosbags (:func:`read_bag`) are imported inside the functions that need them.
 """
 
@@ -52,13 +52,23 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model.actuators import MAX_DELAY, MAX_TRUE_DEVIATION, ActuatorParams, actuator_step, step_subintervals
+from amigo_gym.io import finite_float
+from amigo_gym.model.actuators import (
+    MAX_DELAY,
+    MAX_TRUE_DEVIATION,
+    ActuatorParams,
+    actuator_step,
+    step_subintervals,
+    wheel_rates_columns,
+)
+from amigo_gym.model.kinematics import body_velocity
 from amigo_gym.model.params import RobotParams, show_value
 
 __all__ = [
@@ -150,14 +160,11 @@ class Replay:
 # --------------------------------------------------------------------------------------------- reading
 
 
-def _float_cell(text: str, column: str, line: int, where: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise LogError(f"{where}: column {column!r}: {text.strip()!r} at line {line} is not a number") from None
-    if not math.isfinite(value):
-        raise LogError(f"{where}: column {column!r}: {text.strip()} at line {line}; every value must be finite")
-    return value
+def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: bool) -> str:
+    """One line on a cell that is not a finite number (docs/logs.md's table of messages)."""
+    if not_finite:
+        return f"{where}: column {column!r}: {cell} at line {line}; every value must be finite"
+    return f"{where}: column {column!r}: {cell!r} at line {line} is not a number"
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
@@ -203,7 +210,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
             i = index[c]
             if i >= len(row) or not row[i].strip():
                 raise LogError(f"{p.name}: column {c!r} is empty at line {line}")
-            data[k, j] = _float_cell(row[i], c, line, p.name)
+            data[k, j] = finite_float(row[i], partial(_cell_problem, p.name, c, row[i].strip(), line), LogError)
     if data.shape[0] < 3:
         raise LogError(f"{p.name}: {data.shape[0]} data row(s); a log needs at least 3")
     col = {c: data[:, j] for j, c in enumerate(used)}
@@ -309,8 +316,7 @@ def read_bag(
     tp, vp = _last_of_equal(np.asarray(t_p, dtype=np.int64), np.asarray(pose))
     if tp.size < 3:
         raise LogError(f"{p.name}: topic {pose_topic!r} has {tp.size} message(s); a log needs at least 3")
-    lw = nominal.l1 * vc[:, 1]
-    wheel = np.stack([(vc[:, 0] + lw) / nominal.r1, (vc[:, 0] - lw) / nominal.r2], axis=1)
+    wheel = np.stack(wheel_rates_columns(vc[:, 0], vc[:, 1], nominal), axis=1)
     vp[:, 2] = np.unwrap(vp[:, 2])
     t_cmd = np.asarray((tc - t0) * 1e-9, dtype=np.float64)
     t_meas = np.asarray((tp - t0) * 1e-9, dtype=np.float64)
@@ -359,8 +365,7 @@ def _windows(t: Array, span: float = 1.0) -> NDArray[np.intp]:
 
 def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
     """Integrals of the commanded speed and turn rate (nominal robot, no ramps, no delay) at the times ``t``."""
-    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
-    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    v, w = body_velocity(log.cmd, nominal)
     grid = np.union1d(log.t_cmd, t)
     j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
     dt = np.diff(grid)
@@ -694,8 +699,7 @@ def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | 
     in all is not identifiable from the pose; :func:`identify` fits only the ones above that.
     """
     act = ActuatorParams() if actuators is None else actuators
-    v = 0.5 * (nominal.r1 * log.cmd[:, 0] + nominal.r2 * log.cmd[:, 1])
-    w = (nominal.r1 * log.cmd[:, 0] - nominal.r2 * log.cmd[:, 1]) / (2.0 * nominal.l1)
+    v, w = body_velocity(log.cmd, nominal)
     out = {}
     for name, c, rate in (("acceleration", v, act.acceleration), ("rot_acceleration", w, act.rot_acceleration)):
         up = np.maximum(np.diff(np.abs(np.concatenate([[0.0], c]))), 0.0)

@@ -31,6 +31,7 @@ import bisect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import NamedTuple, Protocol
 
 import numpy as np
@@ -343,6 +344,49 @@ def window_bounds(sp: Array, ahead: float, behind: float, length: Real, closed: 
         lo_a = np.clip(lo_a, 0.0, length)
         hi_a = np.clip(hi_a, 0.0, length)
     return np.asarray(lo_a), np.asarray(hi_a)
+
+
+def coarse_search(
+    sample_x: Array,
+    sample_y: Array,
+    h: float,
+    length: float,
+    closed: bool,
+    x: Real,
+    y: Real,
+    s_prev: Real | None,
+    max_advance: float,
+    max_retreat: float | None,
+) -> tuple[Array, Real, Real]:
+    """Step 1 of :meth:`ClothoidPath.locate` on samples ``s_j = j h`` at ``(sample_x, sample_y)`` [m].
+
+    Returns ``s`` [m] of the sample nearest to each point ``(x, y)`` (columns) and the bounds ``(lo, hi)`` of the
+    Newton iteration: without a hint, over one lap, bounds ``[0, L]`` (unbounded on a closed path); with a hint
+    ``s_prev``, over the samples of the window :func:`window_bounds` (unwrapped), ``s`` clipped to it, bounds the
+    window's columns.
+    """
+    xa = np.asarray(x, dtype=np.float64)
+    ya = np.asarray(y, dtype=np.float64)
+    if s_prev is None:
+        d2 = (sample_x - xa[..., None]) ** 2 + (sample_y - ya[..., None]) ** 2
+        lo, hi = (0.0, length) if not closed else (-math.inf, math.inf)
+        return np.argmin(d2, axis=-1) * h, lo, hi
+    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+    behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+    sp = np.asarray(s_prev, dtype=np.float64)
+    n_samp = len(sample_x)
+    jj = np.floor((sp - behind) / h)[..., None] + np.arange(math.ceil((ahead + behind) / h) + 2, dtype=np.float64)
+    if closed:
+        idx = np.mod(jj, n_samp).astype(np.int64)
+    else:
+        jj = np.clip(jj, 0, n_samp - 1)
+        idx = jj.astype(np.int64)
+    xb, yb = np.broadcast_arrays(xa, ya)
+    d2 = (sample_x[idx] - xb[..., None]) ** 2 + (sample_y[idx] - yb[..., None]) ** 2
+    k = np.argmin(d2, axis=-1)
+    s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h  # unwrapped sample numbers * h
+    lo_a, hi_a = window_bounds(sp, ahead, behind, length, closed)
+    return np.clip(s_start, lo_a, hi_a), lo_a, hi_a
 
 
 def refine(
@@ -738,54 +782,15 @@ class ClothoidPath:
         t = self._t
         if s_prev is not None and type(x) is float and type(y) is float and type(s_prev) is float:
             return _locate_float(t, self.closed, x, y, s_prev, max_advance, max_retreat)
-        h = t.spacing
-        length = t.length
-        n_samp = len(t.sample_x)
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        xa = np.asarray(x, dtype=np.float64)
-        ya = np.asarray(y, dtype=np.float64)
-        lo: Real
-        hi: Real
-        if s_prev is None:
-            d2 = (t.sample_x - xa[..., None]) ** 2 + (t.sample_y - ya[..., None]) ** 2
-            jbest = np.argmin(d2, axis=-1)
-            s_start = jbest * h
-            lo, hi = (0.0, length) if not self.closed else (-math.inf, math.inf)
-        else:
-            ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-            behind = (
-                ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-            )
-            sp = np.asarray(s_prev, dtype=np.float64)
-            m = math.ceil((ahead + behind) / h) + 2
-            j0 = np.floor((sp - behind) / h)
-            jj = j0[..., None] + np.arange(m, dtype=np.float64)  # unwrapped sample numbers
-            if self.closed:
-                idx = np.mod(jj, n_samp).astype(np.int64)
-            else:
-                jj = np.clip(jj, 0, n_samp - 1)
-                idx = jj.astype(np.int64)
-            xb, yb = np.broadcast_arrays(xa, ya)
-            d2 = (t.sample_x[idx] - xb[..., None]) ** 2 + (t.sample_y[idx] - yb[..., None]) ** 2
-            k = np.argmin(d2, axis=-1)
-            s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h
-            lo_a, hi_a = window_bounds(sp, ahead, behind, length, self.closed)
-            lo, hi = (float(lo_a), float(hi_a)) if scalar else (lo_a, hi_a)
-            s_start = np.clip(s_start, lo_a, hi_a)
-        s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
-        return refine(
-            lambda q: self._pose(t, q),
-            x,
-            y,
-            s,
-            lo,
-            hi,
-            h,
-            length,
-            self.closed,
-            scalar,
-            lambda q, _rows: self._pose(t, q),
+        s_start, lo, hi = coarse_search(
+            t.sample_x, t.sample_y, t.spacing, t.length, self.closed, x, y, s_prev, max_advance, max_retreat
         )
+        if scalar:
+            lo, hi = float(lo), float(hi)
+        s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
+        pose = partial(self._pose, t)
+        return refine(pose, x, y, s, lo, hi, t.spacing, t.length, self.closed, scalar, lambda q, _rows: pose(q))
 
 
 # --------------------------------------------------------------------------- the float path of one point

@@ -39,9 +39,8 @@ Files (:func:`load_points`, :func:`from_file`): CSV with a header naming the col
 other columns ignored); JSON as ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of
 ``{"x": ..., "y": ...}`` objects.
 
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, the sibling path modules
-and
-the standard library's ``csv``, ``json`` and ``pathlib``.
+This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, :mod:`amigo_gym.io`,
+the sibling path modules and the standard library's ``csv``, ``json`` and ``pathlib``.
 """
 
 from __future__ import annotations
@@ -57,6 +56,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.io import finite_float
 from amigo_gym.model.fresnel import advance
 from amigo_gym.model.params import show_value
 from amigo_gym.paths.clothoid import MAX_CURVATURE, TWO_PI, ClothoidPath, ClothoidSegment, check_real
@@ -416,13 +416,8 @@ def from_points(
 
 
 def _number(text: str, file: str, row: int, col: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise ValueError(f"{file}: row {row}, column {col!r} must be a number [m], got {text!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{file}: row {row}, column {col!r} must be finite, got {text!r}")
-    return v
+    what = f"{file}: row {row}, column {col!r} must be"
+    return finite_float(text, lambda inf: f"{what} {'finite' if inf else 'a number [m]'}, got {text!r}")
 
 
 def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:

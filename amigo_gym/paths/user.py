@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import show_value
-from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, check_real, refine, window_bounds
+from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, coarse_search, refine
 
 __all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]
 
@@ -198,36 +198,11 @@ class UserPath:
         """:meth:`~amigo_gym.paths.ClothoidPath.locate`'s coarse search and Newton iteration on the samples and
         ``pose_columns`` of this path (arrays throughout; floats back for float arguments)."""
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        h = self._spacing
-        length = self.length
-        n_samp = len(self._sx)
+        s_start, lo, hi = coarse_search(
+            self._sx, self._sy, self._spacing, self.length, self.closed, x, y, s_prev, max_advance, max_retreat
+        )
         xa = np.asarray(x, dtype=np.float64)
         ya = np.asarray(y, dtype=np.float64)
-        if s_prev is None:
-            d2 = (self._sx - xa[..., None]) ** 2 + (self._sy - ya[..., None]) ** 2
-            s_start = np.argmin(d2, axis=-1) * h
-            lo: Real = 0.0 if not self.closed else -math.inf
-            hi: Real = length if not self.closed else math.inf
-        else:
-            ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-            behind = (
-                ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-            )
-            sp = np.asarray(s_prev, dtype=np.float64)
-            m = math.ceil((ahead + behind) / h) + 2
-            jj = np.floor((sp - behind) / h)[..., None] + np.arange(m, dtype=np.float64)
-            if self.closed:
-                idx = np.mod(jj, n_samp).astype(np.int64)
-            else:
-                jj = np.clip(jj, 0, n_samp - 1)
-                idx = jj.astype(np.int64)
-            xb, yb = np.broadcast_arrays(xa, ya)
-            d2 = (self._sx[idx] - xb[..., None]) ** 2 + (self._sy[idx] - yb[..., None]) ** 2
-            k = np.argmin(d2, axis=-1)
-            s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h
-            lo_a, hi_a = window_bounds(sp, ahead, behind, length, self.closed)
-            s_start = np.clip(s_start, lo_a, hi_a)
-            lo, hi = lo_a, hi_a
         s0 = np.asarray(s_start, dtype=np.float64)
         shape = np.broadcast_shapes(xa.shape, ya.shape, s0.shape)
         xf = np.broadcast_to(xa, shape).reshape(-1)
@@ -235,7 +210,7 @@ class UserPath:
         sf = np.broadcast_to(s0, shape).reshape(-1)
         lof = np.broadcast_to(np.asarray(lo, dtype=np.float64), shape).reshape(-1)
         hif = np.broadcast_to(np.asarray(hi, dtype=np.float64), shape).reshape(-1)
-        got = refine(self.pose_columns, xf, yf, sf, lof, hif, h, length, self.closed, False)
+        got = refine(self.pose_columns, xf, yf, sf, lof, hif, self._spacing, self.length, self.closed, False)
         return _point([np.asarray(v).reshape(shape) for v in got], scalar)
 
 

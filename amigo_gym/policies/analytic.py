@@ -1,7 +1,13 @@
-r"""The analytic inverse solution as a state-feedback policy for ``AmigoBot-v0``.
+r"""The analytic inverse solution as a state-feedback policy: the law of both envs, and ``AmigoBot-v0``'s policy.
 
-The policy reads only the observation, by the field names of :func:`amigo_gym.task.v0.obs_names` (never
-by raw positions), and the constant task settings :class:`~amigo_gym.model.params.EnvParams`. It takes
+:func:`analytic_tracking_command` is the one implementation of the law (turn rate from H's commanded normal
+speed); :class:`AnalyticPolicy` (here) and :class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy` (PI
+feedback and mid-step feedforward, module docstring of :mod:`amigo_gym.policies.tracking`) call it. Both read
+either env's observation through the adapter :class:`amigo_gym.policies.base.Fields`.
+
+The policy reads only the observation, by field name (``AmigoBot-v0``'s :func:`amigo_gym.task.v0.obs_names` or
+``AmigoBot-v1``'s :func:`amigo_gym.task.v1.obs_fields`; never by raw positions), and the constant task settings
+(:class:`~amigo_gym.model.params.EnvParams` or :class:`~amigo_gym.task.v1.TrackingParams`). It takes
 
 * ``e = cross_track_error * error_scale``: signed cross-track error of H [m], positive left of the path;
 * ``psi = atan2(sin_heading_error, cos_heading_error)``: heading error ``beta - theta`` [rad];
@@ -82,9 +88,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import wheel_rates
 from amigo_gym.model.params import EnvParams, check_range
-from amigo_gym.task.v0 import obs_dim, obs_index
+from amigo_gym.policies.base import Fields, Params, Policy
 
-__all__ = ["DEFAULT_GAIN", "AnalyticPolicy", "analytic_body_velocity", "analytic_wheel_rates"]
+__all__ = [
+    "COS_MIN",
+    "DEFAULT_GAIN",
+    "AnalyticPolicy",
+    "analytic_body_velocity",
+    "analytic_tracking_command",
+    "analytic_wheel_rates",
+]
 
 Array = NDArray[np.float64]
 
@@ -96,58 +109,100 @@ COS_MIN = 0.2
 SpeedReference = Literal["A", "H"]
 
 
-def _check_obs(obs: ArrayLike, params: EnvParams) -> Array:
-    o = np.asarray(obs, dtype=np.float64)
-    n = obs_dim(params)
-    if o.ndim not in (1, 2) or o.shape[-1] != n:
-        raise ValueError(f"obs must have shape ({n},) or (N, {n}) for these EnvParams, got {o.shape}")
-    if not np.all(np.isfinite(o)):
-        raise ValueError("obs must be finite; got NaN or infinite values")
-    return o
+def analytic_tracking_command(
+    e: ArrayLike,
+    sin_psi: ArrayLike,
+    cos_psi: ArrayLike,
+    kappa: ArrayLike,
+    v_ref: ArrayLike,
+    c: ArrayLike,
+    l3: float,
+    dt: float,
+    feedforward: bool = True,
+) -> tuple[Array, Array]:
+    r"""Speed of A ``v`` [m/s] and turn rate ``omega`` [rad/s] of the analytic law for H's normal speed ``c``.
+
+    .. math::
+        \dot s = \frac{v - c\sin\psi}{\cos\psi}, \quad \omega_0 = \frac{c - v\sin\psi}{l_3\cos\psi}, \quad
+        \omega = \omega_0 - \frac{\dot s}{l_3\cos\psi}\Bigl(\omega_0 - \frac{\kappa\dot s}{1 - \kappa e}\Bigr)
+        \frac{dt}{2}\ \text{(feedforward)},
+
+    with ``cos psi`` floored at :data:`COS_MIN` and ``kappa e`` at 0.5. ``v = v_ref``. ``c = -k e`` without
+    feedforward is :class:`AnalyticPolicy`'s law (module docstring); the PI form and the feedforward are
+    :class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy`'s (:mod:`amigo_gym.policies.tracking`).
+
+    Args:
+        e: H's cross-track error [m]; sin_psi, cos_psi: of the heading error [-]; kappa: curvature at H's closest
+            point [1/m]; v_ref: speed of A to command [m/s]; c: the commanded normal speed of H [m/s]. Columns of
+            one shape ``(N,)``.
+        l3: distance A to H [m]; dt: control period [s]; feedforward: add the mid-step term.
+
+    Returns:
+        ``(v, omega)``, each ``(N,)``.
+    """
+    e_a = np.asarray(e, dtype=np.float64)
+    sp = np.asarray(sin_psi, dtype=np.float64)
+    cp = np.maximum(np.asarray(cos_psi, dtype=np.float64), COS_MIN)
+    v = np.asarray(v_ref, dtype=np.float64)
+    c_a = np.asarray(c, dtype=np.float64)
+    omega = (c_a - v * sp) / (l3 * cp)
+    if feedforward:
+        sdot = (v - c_a * sp) / cp
+        k = np.asarray(kappa, dtype=np.float64)
+        psidot = omega - k * sdot / np.maximum(1.0 - k * e_a, 0.5)
+        omega = omega - sdot / (l3 * cp) * psidot * (0.5 * dt)
+    return v + 0.0 * omega, omega
+
+
+def _body_velocity(f: Fields, o: Array, gain: float, speed_reference: str) -> tuple[Array, Array]:
+    """:func:`analytic_body_velocity` for checked observations ``(N, d)``."""
+    p = f.params
+    l3 = f.robot.l3
+    e = f(o, "cross_track_error") * p.error_scale
+    psi = np.arctan2(f(o, "sin_heading_error"), f(o, "cos_heading_error"))
+    v_ref = f(o, "reference_speed") * f.robot.max_speed
+    if speed_reference == "A":
+        return analytic_tracking_command(e, np.sin(psi), np.cos(psi), 0.0, v_ref, -gain * e, l3, p.dt, False)
+    if speed_reference == "H":
+        s, c = np.sin(psi), np.maximum(np.cos(psi), COS_MIN)
+        u_n = -gain * e
+        kl3 = np.clip(f(o, "curvature"), -1.0 + 1e-9, 1.0 - 1e-9)
+        u_t = v_ref / np.sqrt(1.0 - kl3 * kl3)
+        return c * u_t + s * u_n, (-s * u_t + c * u_n) / l3
+    raise ValueError(f"speed_reference must be 'A' or 'H', got {speed_reference!r}")
 
 
 def analytic_body_velocity(
     obs: ArrayLike,
-    params: EnvParams,
+    params: Params,
     gain: float = DEFAULT_GAIN,
     speed_reference: SpeedReference = "A",
 ) -> tuple[Array, Array]:
     r"""Commanded ``(v_A [m/s], betadot [rad/s])`` of the analytic law (module docstring) from observations.
 
-    ``speed_reference="A"``: ``v_A = v_ref``, ``betadot = (-k e - v_ref sin psi) / (l3 cos psi)``.
+    ``speed_reference="A"``: ``v_A = v_ref``, ``betadot = (-k e - v_ref sin psi) / (l3 cos psi)``
+    (:func:`analytic_tracking_command` with ``c = -k e``, no feedforward).
     ``speed_reference="H"``: ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)`` with
     ``sin delta_ss = kappa l3``. ``cos psi`` is floored at ``COS_MIN``.
 
     Args:
-        obs: observations ``(obs_dim,)`` or ``(N, obs_dim)`` (layout of :mod:`amigo_gym.task.v0`).
-        params: the task settings the observations were made with.
+        obs: observations ``(obs_dim,)`` or ``(N, obs_dim)`` (the layout of ``params``' env).
+        params: the task settings the observations were made with (v0's or v1's).
         gain: feedback gain ``k`` >= 0 [1/s]; 0 gives the paper's inverse ODE.
         speed_reference: ``"A"`` or ``"H"`` (module docstring).
 
     Returns:
         ``(v_A, betadot)``, each of shape ``()`` or ``(N,)``.
     """
-    o = _check_obs(obs, params)
-    i = obs_index(params)
-    robot = params.robot
-    l3 = robot.l3
-    e = o[..., i["cross_track_error"]] * params.error_scale
-    psi = np.arctan2(o[..., i["sin_heading_error"]], o[..., i["cos_heading_error"]])
-    s, c = np.sin(psi), np.maximum(np.cos(psi), COS_MIN)
-    v_ref = o[..., i["reference_speed"]] * robot.max_speed
-    u_n = -gain * e
-    if speed_reference == "A":
-        return v_ref, (u_n - v_ref * s) / (l3 * c)
-    if speed_reference == "H":
-        kl3 = np.clip(o[..., i["curvature"]], -1.0 + 1e-9, 1.0 - 1e-9)
-        u_t = v_ref / np.sqrt(1.0 - kl3 * kl3)
-        return c * u_t + s * u_n, (-s * u_t + c * u_n) / l3
-    raise ValueError(f"speed_reference must be 'A' or 'H', got {speed_reference!r}")
+    f = Fields("analytic_body_velocity", params)
+    o, single = f.check(obs)
+    v, bd = _body_velocity(f, o, gain, speed_reference)
+    return (v[0], bd[0]) if single else (v, bd)
 
 
 def analytic_wheel_rates(
     obs: ArrayLike,
-    params: EnvParams,
+    params: Params,
     gain: float = DEFAULT_GAIN,
     speed_reference: SpeedReference = "A",
 ) -> Array:
@@ -156,11 +211,13 @@ def analytic_wheel_rates(
     return wheel_rates(v, bd, params.robot)
 
 
-class AnalyticPolicy:
-    """The analytic inverse solution with look-ahead feedback, with an SB3-like ``predict``.
+class AnalyticPolicy(Policy):
+    """The analytic inverse solution with look-ahead feedback, with an SB3-like ``predict`` (stateless: the state
+    returned is None).
 
     Args:
-        params: task settings (geometry, ``error_scale``, ``preview`` for the observation length).
+        params: task settings (geometry, ``error_scale``, the observation layout): ``AmigoBot-v0``'s
+            :class:`~amigo_gym.model.params.EnvParams` or ``AmigoBot-v1``'s :class:`~amigo_gym.task.v1.TrackingParams`.
         gain: feedback gain ``k`` on H's cross-track error [1/s], in [0, 1/dt]; default 3.
         feedforward_only: use ``k = 0``: the paper's inverse ODE in closed loop (no error feedback).
         speed_reference: ``"A"`` (``v_A = v_ref``, default) or ``"H"`` (constant tangential speed of H).
@@ -168,13 +225,12 @@ class AnalyticPolicy:
 
     def __init__(
         self,
-        params: EnvParams,
+        params: Params,
         gain: float = DEFAULT_GAIN,
         feedforward_only: bool = False,
         speed_reference: SpeedReference = "A",
     ) -> None:
-        if not isinstance(params, EnvParams):
-            raise ValueError(f"AnalyticPolicy.params must be an EnvParams, got {type(params).__name__}")
+        self._fields = Fields("AnalyticPolicy", params)
         self.params = params
         self.gain = 0.0 if feedforward_only else check_range("AnalyticPolicy", "gain", gain, 0.0, 1.0 / params.dt)
         self.feedforward_only = bool(feedforward_only)
@@ -193,18 +249,11 @@ class AnalyticPolicy:
 
     def action(self, obs: ArrayLike) -> NDArray[np.float32]:
         """Normalised action ``clip(w / max_wheel_rate, -1, 1)``, float32, shape ``(2,)`` or ``(N, 2)``."""
-        w = self.wheel_rates(obs)
-        return np.clip(w / self.params.robot.max_wheel_rate, -1.0, 1.0).astype(np.float32)
+        return self.predict(obs)[0]
 
-    def predict(
-        self,
-        observation: ArrayLike,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], None]:
-        """SB3-style prediction: ``(action, None)`` for one observation or a batch (the policy is stateless)."""
-        return self.action(observation), None
+    def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, None]:
+        v, bd = _body_velocity(self._fields, obs, self.gain, self.speed_reference)
+        return np.clip(wheel_rates(v, bd, self.params.robot) / self.params.robot.max_wheel_rate, -1.0, 1.0), None
 
     def __repr__(self) -> str:
         return (

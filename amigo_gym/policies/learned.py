@@ -35,7 +35,6 @@ torch, SB3 (only inside :func:`load_pretrained`), training or the CLI.
 
 from __future__ import annotations
 
-import hashlib
 import io as _io
 import json
 import zipfile
@@ -47,10 +46,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.io import atomic_save
+from amigo_gym.io import atomic_save, sha256_file
 from amigo_gym.model.params import check_range
+from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy
-from amigo_gym.task.v1 import TrackingParams, make_tracking_params, obs_fields
+from amigo_gym.task.v1 import TrackingParams, make_tracking_params
 
 __all__ = [
     "FORMAT",
@@ -169,7 +169,8 @@ class FeatureBuilder:
     def __init__(self, spec: FeatureSpec) -> None:
         self.spec = spec
         p = spec.params()
-        names = obs_fields(p)
+        self.fields = Fields("FastPolicy", p, (TrackingParams,))
+        names = self.fields.names
         self.obs_dim = len(names)
         self._hist_idx = np.array([names.index(f) for f in HISTORY_FIELDS])
         self._prev_idx = np.array([names.index("previous_command_1"), names.index("previous_command_2")])
@@ -236,13 +237,14 @@ def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
     return x
 
 
-class FastPolicy:
+class FastPolicy(Policy):
     """A fast-PPO model in numpy with SB3's ``predict`` (module docstring).
 
     ``predict`` keeps, per batch row, the analytic controller's integral and the history, SB3-recurrent style:
     ``state`` ``(N, state_dim)`` in and out; ``state=None`` uses an internal state (reset where
     ``episode_start`` is True and whenever the batch size changes). ``episode_start=None`` with ``state=None``
-    treats the first call (and a new batch size) as the start of the episodes.
+    treats the first call (and a new batch size) as the start of the episodes, and with a given all-zero state
+    every row. ``deterministic=False`` adds the Gaussian exploration noise ``exp(log_std)`` to the mean action.
     """
 
     def __init__(
@@ -255,6 +257,7 @@ class FastPolicy:
     ) -> None:
         self.spec = spec
         self.builder = FeatureBuilder(spec)
+        self._fields = self.builder.fields
         if layers[0][0].shape[0] != self.builder.dim or layers[-1][0].shape[1] != 2:
             raise ValueError(
                 f"FastPolicy: the network maps {layers[0][0].shape[0]} -> {layers[-1][0].shape[1]}, the features "
@@ -264,62 +267,30 @@ class FastPolicy:
         self.log_std = np.asarray(log_std, dtype=np.float64)
         self.obs_rms = obs_rms
         self.info: dict[str, Any] = dict(info or {})
-        self._state: Array | None = None
         self._rng = np.random.default_rng()
 
     @property
     def name(self) -> str:
         return "fastppo_residual" if self.spec.residual_bound > 0 else "fastppo"
 
-    def reset(self) -> None:
-        """Forget the internal state."""
-        self._state = None
-
     def mean_output(self, features: Array) -> Array:
         """The network's mean output ``u`` for raw features ``(N, dim)``."""
         return _mlp(self.layers, self.obs_rms.normalize(features))
 
-    def predict(
-        self,
-        observation: ArrayLike,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Array]:
-        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1].
-
-        Args:
-            observation: raw ``AmigoBot-v1`` observations ``(d,)`` or ``(N, d)``.
-            state: ``(N, state_dim)`` or None (internal state). episode_start: ``(N,)`` booleans or None.
-            deterministic: the mean action; False adds the Gaussian exploration noise ``exp(log_std)``.
-        """
-        o = np.asarray(observation, dtype=np.float64)
-        single = o.ndim == 1
-        o = o.reshape(1, -1) if single else o
+    def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Array]:
         b = self.builder
-        if o.ndim != 2 or o.shape[1] != b.obs_dim or not np.isfinite(o).all():
-            raise ValueError(f"FastPolicy: observation must be finite of shape (N, {b.obs_dim}), got {o.shape}")
-        n = o.shape[0]
-        fresh = False
-        if state is None:
-            if self._state is None or self._state.shape[0] != n:
-                self._state, fresh = b.initial_state(n), True
-            s = self._state
-        else:
-            s = np.asarray(state, dtype=np.float64).reshape(n, b.state_dim)
-        if episode_start is None:
-            starts = np.full(n, fresh or (state is not None and not np.any(s)), dtype=bool)
-        else:
-            starts = np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,)).copy()
-        feats, base, s_new = b(o, s, starts)
+        n = obs.shape[0]
+        s, fresh = self._rows(n, state, b.state_dim)
+        starts = self._starts(episode_start, n, fresh or (state is not None and not np.any(s)))
+        feats, base, s_new = b(obs, s, starts)
         u = self.mean_output(feats)
         if not deterministic:
             u = u + np.exp(self.log_std) * self._rng.standard_normal(u.shape)
-        a = env_action(u, base, b.previous_command(o), self.spec.residual_bound, self.spec.filter_alpha)
         if state is None:
             self._state = s_new
-        act = a.astype(np.float32)
-        return (act[0] if single else act), s_new.copy()
+        return env_action(
+            u, base, b.previous_command(obs), self.spec.residual_bound, self.spec.filter_alpha
+        ), s_new.copy()
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
@@ -327,7 +298,7 @@ class FastPolicy:
         meta = {
             "format": FORMAT,
             "spec": {**asdict(self.spec), "env_kwargs": dict(self.spec.env_kwargs)},
-            "obs_fields": list(obs_fields(self.spec.params())),
+            "obs_fields": list(self.builder.fields.names),
             "n_layers": len(self.layers),
             "info": self.info,
         }
@@ -373,13 +344,8 @@ class FastPolicy:
         return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
 
 
-def sha256_of(path: str | Path) -> str:
-    """Hex SHA-256 of a file."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+#: Hex SHA-256 of a file (the manifests' checksums): :func:`amigo_gym.io.sha256_file`
+sha256_of = sha256_file
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any:

@@ -1,31 +1,20 @@
 r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
 
-Both read only the observation (decoded by field name with :func:`amigo_gym.task.v1.obs_fields`) and the
-constant settings :class:`~amigo_gym.task.v1.TrackingParams`, use the **nominal** robot (``params.robot``),
-and have stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
+Both read only the observation, by field name (:class:`amigo_gym.policies.base.Fields`), and the constant settings
+:class:`~amigo_gym.task.v1.TrackingParams` (:class:`AnalyticTrackingPolicy` also ``AmigoBot-v0``'s
+:class:`~amigo_gym.model.params.EnvParams`), use the **nominal** robot (``params.robot``), and have
+stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
 
-Fields used (module table of :mod:`amigo_gym.task.v1`; ``v_max = robot.max_speed``, ``w_max =
-robot.max_wheel_rate``, ``l3 = robot.l3``):
+Fields used: ``e``, ``psi`` (here from ``sin_heading_error``, ``cos_heading_error`` as they are), ``kappa`` and
+``v_ref`` as in :mod:`amigo_gym.policies.analytic`, whose docstring also derives the velocity of H in the path
+frame: ``edot = Hdot . n = v sin psi + l3 omega cos psi`` for a speed ``v`` of A and turn rate ``omega`` on any
+smooth path, a map ``(v, omega) -> Hdot`` of determinant ``l3 != 0`` (H is steered directly, and the error
+dynamics do not depend on the path's curvature). Besides (module table of :mod:`amigo_gym.task.v1`,
+``v_max = robot.max_speed``):
 
-* ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
-* ``psi = atan2(sin_heading_error, cos_heading_error)``: heading minus the path tangent at H's closest
-  point [rad];
-* ``kappa = curvature / l3``: path curvature there [1/m];
-* ``v_ref = reference_speed * v_max`` and ``v_ahead = reference_speed_ahead * v_max`` (1 s later) [m/s];
+* ``v_ahead = reference_speed_ahead * v_max``: the reference speed 1 s later [m/s];
 * ``(x_d, y_d) = preview_{x,y}_<d> * preview_scale``: the path point ``d`` [m] of arc length ahead of H's
   closest point, in the robot frame (origin A, x along the heading) [m].
-
-Velocity of H in the path frame
--------------------------------
-With ``t``, ``n`` the path's unit tangent and left normal at H's closest point and ``H = A + l3 (cos beta,
-sin beta)``, the velocity of H for a speed ``v`` of A and turn rate ``omega = betadot`` is
-
-.. math::
-    \dot H \cdot t = v\cos\psi - l_3\omega\sin\psi, \qquad \dot H \cdot n = v\sin\psi + l_3\omega\cos\psi,
-
-and ``edot = Hdot . n`` for any smooth path (the derivative of the signed distance at the closest point).
-The map ``(v, omega) -> Hdot`` has determinant ``l3 != 0``: H can be steered directly (feedback
-linearisation), and the error dynamics do not depend on the path's curvature at all.
 
 Analytic law (:func:`analytic_tracking_command`)
 ------------------------------------------------
@@ -151,7 +140,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.actuators import wheel_rates_columns
 from amigo_gym.model.params import check_range
-from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams, obs_fields
+from amigo_gym.policies.analytic import COS_MIN, analytic_tracking_command
+from amigo_gym.policies.base import Fields, Params, Policy
+from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams
 
 __all__ = [
     "COS_MIN",
@@ -169,8 +160,6 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: floor of ``cos psi`` in the analytic law's denominators [-]
-COS_MIN = 0.2
 #: default proportional gain ``k`` on H's cross-track error [1/s] (module docstring: "Gains")
 DEFAULT_TRACKING_GAIN = 1.0
 #: default clamp of the integral term ``k_i |z|`` [m/s]
@@ -179,18 +168,7 @@ DEFAULT_INTEGRAL_LIMIT = 0.1
 DEFAULT_LOOKAHEAD = 0.5
 
 
-def _check_obs(owner: str, obs: ArrayLike, dim: int) -> tuple[Array, bool]:
-    """Observations as float64 ``(N, dim)`` and whether a single ``(dim,)`` was given."""
-    o = np.asarray(obs, dtype=np.float64)
-    if o.ndim not in (1, 2) or o.shape[-1] != dim:
-        raise ValueError(f"{owner}: observation must have shape ({dim},) or (N, {dim}), got {o.shape}")
-    if not np.all(np.isfinite(o)):
-        raise ValueError(f"{owner}: observation must be finite; got NaN or infinite values")
-    single = o.ndim == 1
-    return (o[None, :] if single else o), single
-
-
-def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) -> Array:
+def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: Params) -> Array:
     r"""Normalised wheel-rate setpoints ``(..., 2)`` for speeds ``v`` [m/s] and turn rates ``omega`` [rad/s].
 
     ``w1 = (v + l1 omega) / r1``, ``w2 = (v - l1 omega) / r2`` (nominal robot), both divided by
@@ -205,49 +183,6 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) ->
     m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
     out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max
     return np.clip(out, -1.0, 1.0)
-
-
-def analytic_tracking_command(
-    e: ArrayLike,
-    sin_psi: ArrayLike,
-    cos_psi: ArrayLike,
-    kappa: ArrayLike,
-    v_ref: ArrayLike,
-    c: ArrayLike,
-    l3: float,
-    dt: float,
-    feedforward: bool = True,
-) -> tuple[Array, Array]:
-    r"""Speed of A ``v`` [m/s] and turn rate ``omega`` [rad/s] of the analytic law (module docstring).
-
-    .. math::
-        \dot s = \frac{v - c\sin\psi}{\cos\psi}, \quad \omega_0 = \frac{c - v\sin\psi}{l_3\cos\psi}, \quad
-        \omega = \omega_0 - \frac{\dot s}{l_3\cos\psi}\Bigl(\omega_0 - \frac{\kappa\dot s}{1 - \kappa e}\Bigr)
-        \frac{dt}{2}\ \text{(feedforward)},
-
-    with ``cos psi`` floored at :data:`COS_MIN` and ``kappa e`` at 0.5. ``v = v_ref``.
-
-    Args:
-        e: H's cross-track error [m]; sin_psi, cos_psi: of the heading error [-]; kappa: curvature at H's closest
-            point [1/m]; v_ref: speed of A to command [m/s]; c: the commanded normal speed of H [m/s]. Columns of
-            one shape ``(N,)``.
-        l3: distance A to H [m]; dt: control period [s]; feedforward: add the mid-step term.
-
-    Returns:
-        ``(v, omega)``, each ``(N,)``.
-    """
-    e_a = np.asarray(e, dtype=np.float64)
-    sp = np.asarray(sin_psi, dtype=np.float64)
-    cp = np.maximum(np.asarray(cos_psi, dtype=np.float64), COS_MIN)
-    v = np.asarray(v_ref, dtype=np.float64)
-    c_a = np.asarray(c, dtype=np.float64)
-    sdot = (v - c_a * sp) / cp
-    omega = (c_a - v * sp) / (l3 * cp)
-    if feedforward:
-        k = np.asarray(kappa, dtype=np.float64)
-        psidot = omega - k * sdot / np.maximum(1.0 - k * e_a, 0.5)
-        omega = omega - sdot / (l3 * cp) * psidot * (0.5 * dt)
-    return v + 0.0 * omega, omega
 
 
 def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tuple[Array, Array]:
@@ -320,21 +255,7 @@ def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> 
     return -direction * (math.hypot(radius, l3) - radius)
 
 
-class _Decoder:
-    """Indices of the observation fields the policies read (by name)."""
-
-    def __init__(self, owner: str, params: TrackingParams) -> None:
-        if not isinstance(params, TrackingParams):
-            raise ValueError(f"{owner}.params must be a TrackingParams, got {type(params).__name__}")
-        names = obs_fields(params)
-        self.dim = len(names)
-        self.index = {n: i for i, n in enumerate(names)}
-
-    def __call__(self, o: Array, name: str) -> Array:
-        return o[:, self.index[name]]
-
-
-class AnalyticTrackingPolicy:
+class AnalyticTrackingPolicy(Policy):
     """The exact inverse solution along any path and speed profile, with PI feedback on H (module docstring).
 
     ``predict`` keeps the integral ``z`` [m s] of H's cross-track error per batch row, SB3-recurrent style:
@@ -347,7 +268,9 @@ class AnalyticTrackingPolicy:
       start of new episodes if ``episode_start`` is not passed. The returned state is a copy of it.
 
     Args:
-        params: the task's settings (nominal robot, ``dt``, observation layout).
+        params: the task's settings (nominal robot, ``dt``, observation layout): ``AmigoBot-v1``'s
+            :class:`~amigo_gym.task.v1.TrackingParams`, or ``AmigoBot-v0``'s :class:`~amigo_gym.model.params.EnvParams`
+            (its observation has no speed preview: the reference speed is constant, and is fed forward as it is).
         gain: ``k`` [1/s], in (0, 1/dt]; default 1.
         integral_gain: ``k_i`` [1/s^2] >= 0; default ``k^2/4`` (critically damped); 0 disables the integral.
         integral_limit: clamp of ``k_i |z|`` [m/s] (anti-windup), > 0; default 0.1.
@@ -356,36 +279,31 @@ class AnalyticTrackingPolicy:
 
     def __init__(
         self,
-        params: TrackingParams,
+        params: Params,
         gain: float = DEFAULT_TRACKING_GAIN,
         integral_gain: float | None = None,
         integral_limit: float = DEFAULT_INTEGRAL_LIMIT,
         feedforward: bool = True,
     ) -> None:
         o = "AnalyticTrackingPolicy"
-        self._dec = _Decoder(o, params)
+        self._fields = Fields(o, params)
         self.params = params
         self.gain = check_range(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
         ki = self.gain * self.gain / 4.0 if integral_gain is None else integral_gain
         self.integral_gain = check_range(o, "integral_gain", ki, 0.0, 1.0 / params.dt**2)
         self.integral_limit = check_range(o, "integral_limit", integral_limit, 0.0, 10.0, low_open=True)
         self.feedforward = bool(feedforward)
-        self._z: Array | None = None
 
     @property
     def name(self) -> str:
         """Short label: ``analytic_v1``."""
         return "analytic_v1"
 
-    def reset(self) -> None:
-        """Forget the internal integrator state (used when ``predict`` gets no ``state``)."""
-        self._z = None
-
     def _z_max(self) -> float:
         return math.inf if self.integral_gain == 0.0 else self.integral_limit / self.integral_gain
 
     def next_reference_speed(self, v_ref: Array, v_ahead: Array) -> Array:
-        """The reference speed at the end of the step [m/s], predicted from now and 1 s ahead.
+        """The reference speed at the end of the step [m/s], predicted from now and 1 s ahead (``AmigoBot-v1``).
 
         Rising (``v_ahead > v_ref``): ``min(v_ref + a_up dt, v_ahead)`` with ``a_up = profile_accel`` (exact on a
         trapezoid's ramp and at its corner). Otherwise the chord ``v_ref + (v_ahead - v_ref) dt / 1 s`` (exact on a
@@ -393,6 +311,7 @@ class AnalyticTrackingPolicy:
         chord is off by at most ``profile_decel dt`` there).
         """
         p = self.params
+        assert isinstance(p, TrackingParams)
         rise = np.minimum(v_ref + p.profile_accel * p.dt, v_ahead)
         chord = v_ref + (v_ahead - v_ref) * (p.dt / SPEED_LOOKAHEAD)
         out: Array = np.maximum(np.where(v_ahead > v_ref, rise, chord), 0.0)
@@ -406,13 +325,13 @@ class AnalyticTrackingPolicy:
         """
         p = self.params
         r = p.robot
-        d = self._dec
+        d = self._fields
         e = d(obs, "cross_track_error") * p.error_scale
         sp = d(obs, "sin_heading_error")
         cp = d(obs, "cos_heading_error")
         kappa = d(obs, "curvature") / r.l3
         v_ref = d(obs, "reference_speed") * r.max_speed
-        if self.feedforward:
+        if self.feedforward and "reference_speed_ahead" in d.index:
             v_ref = self.next_reference_speed(v_ref, d(obs, "reference_speed_ahead") * r.max_speed)
         z_max = self._z_max()
         z_new = np.clip(z + p.dt * e, -z_max, z_max)
@@ -420,40 +339,14 @@ class AnalyticTrackingPolicy:
         v, om = analytic_tracking_command(e, sp, cp, kappa, v_ref, c, r.l3, p.dt, self.feedforward)
         return v, om, z_new
 
-    def predict(
-        self,
-        observation: ArrayLike,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Array]:
-        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1], state ``(N, 1)``.
-
-        Args:
-            observation: ``(d,)`` or ``(N, d)``.
-            state: ``(N, 1)`` integrals of the cross-track error [m s], or None (internal state; class docstring).
-            episode_start: ``(N,)`` booleans (or a scalar for a single observation): rows to reset; None: none.
-            deterministic: ignored (the policy is deterministic).
-        """
-        o, single = _check_obs("AnalyticTrackingPolicy", observation, self._dec.dim)
-        n = o.shape[0]
+    def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Array]:
+        n = obs.shape[0]
+        z, _ = self._rows(n, state, 1)
+        z = np.where(self._starts(episode_start, n), 0.0, z[:, 0])
+        v, om, z_new = self.command(obs, z)
         if state is None:
-            if self._z is None or self._z.shape[0] != n:
-                self._z = np.zeros(n)
-            z = self._z
-        else:
-            s = np.asarray(state, dtype=np.float64)
-            if s.size != n:
-                raise ValueError(f"AnalyticTrackingPolicy: state must have shape ({n}, 1), got {s.shape}")
-            z = s.reshape(n).copy()
-        if episode_start is not None:
-            starts = np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,))
-            z = np.where(starts, 0.0, z)
-        v, om, z_new = self.command(o, z)
-        if state is None:
-            self._z = z_new
-        act = limit_wheel_rates(v, om, self.params).astype(np.float32)
-        return (act[0] if single else act), z_new.reshape(n, 1).copy()
+            self._state = z_new.reshape(n, 1)
+        return limit_wheel_rates(v, om, self.params), z_new.reshape(n, 1).copy()
 
     def __repr__(self) -> str:
         return (
@@ -462,7 +355,7 @@ class AnalyticTrackingPolicy:
         )
 
 
-class PurePursuitPolicy:
+class PurePursuitPolicy(Policy):
     """Pure pursuit (Coulter 1992) towards a preview point of the observation, in the textbook's variants.
 
     Args:
@@ -493,7 +386,7 @@ class PurePursuitPolicy:
         lookahead_time: float | None = None,
     ) -> None:
         o = "PurePursuitPolicy"
-        self._dec = _Decoder(o, params)
+        self._fields = Fields(o, params, (TrackingParams,))
         self.params = params
         prev = params.preview
         if lookahead is None:
@@ -513,11 +406,9 @@ class PurePursuitPolicy:
             else check_range(o, "lookahead_time", lookahead_time, 0.0, 60.0, low_open=True)
         )
         self.lookahead = la
-        self._x = f"preview_x_{la:g}m"
-        self._y = f"preview_y_{la:g}m"
         self._prev = np.asarray(prev, dtype=np.float64)
-        self._xs = [f"preview_x_{d:g}m" for d in prev]
-        self._ys = [f"preview_y_{d:g}m" for d in prev]
+        self._fixed = list(prev).index(la)
+        self._ix, self._iy = (np.array([self._fields.index[f"preview_{c}_{d:g}m"] for d in prev]) for c in "xy")
 
     @property
     def name(self) -> str:
@@ -527,18 +418,14 @@ class PurePursuitPolicy:
     def command(self, obs: Array) -> tuple[Array, Array]:
         """``(v [m/s], omega [rad/s])`` for observations ``(N, d)`` (:func:`pure_pursuit_command`)."""
         p = self.params
-        v_ref = self._dec(obs, "reference_speed") * p.robot.max_speed
-        if self.lookahead_time is None:
-            x = self._dec(obs, self._x) * p.preview_scale
-            y = self._dec(obs, self._y) * p.preview_scale
+        v_ref = self._fields(obs, "reference_speed") * p.robot.max_speed
+        if self.lookahead_time is None:  # the fixed preview point: two columns
+            x, y = obs[:, self._ix[self._fixed]], obs[:, self._iy[self._fixed]]
         else:  # per row the preview point nearest to lookahead_time * v_ref ahead
-            want = self.lookahead_time * v_ref
-            pick = np.argmin(np.abs(self._prev[None, :] - want[:, None]), axis=1)
-            xs = np.stack([self._dec(obs, n) for n in self._xs], axis=1)
-            ys = np.stack([self._dec(obs, n) for n in self._ys], axis=1)
-            rows = np.arange(len(pick))
-            x = xs[rows, pick] * p.preview_scale
-            y = ys[rows, pick] * p.preview_scale
+            pick = np.argmin(np.abs(self._prev[None, :] - (self.lookahead_time * v_ref)[:, None]), axis=1)
+            rows = np.arange(len(obs))
+            x, y = obs[rows, self._ix[pick]], obs[rows, self._iy[pick]]
+        x, y = x * p.preview_scale, y * p.preview_scale
         if self.origin == "H":
             x = x - p.robot.l3
         v, om = pure_pursuit_command(x, y, v_ref)
@@ -546,18 +433,9 @@ class PurePursuitPolicy:
             om = np.clip(om, -self.max_turn_rate, self.max_turn_rate)
         return v, om
 
-    def predict(
-        self,
-        observation: ArrayLike,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
-        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1]; ``state`` as given."""
-        o, single = _check_obs("PurePursuitPolicy", observation, self._dec.dim)
-        v, om = self.command(o)
-        act = limit_wheel_rates(v, om, self.params).astype(np.float32)
-        return (act[0] if single else act), state
+    def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Any]:
+        v, om = self.command(obs)
+        return limit_wheel_rates(v, om, self.params), state
 
     def __repr__(self) -> str:
         extra = "" if self.origin == "axle" else f", origin={self.origin!r}"

@@ -1,0 +1,124 @@
+"""What every policy of :mod:`amigo_gym.policies` shares: the observation adapter and SB3's ``predict``.
+
+* :class:`Fields`: the adapter between a controller and an environment. It names the observation's fields
+  for the task settings (``AmigoBot-v0``'s :class:`~amigo_gym.model.params.EnvParams`, layout
+  :func:`amigo_gym.task.v0.obs_names`, or ``AmigoBot-v1``'s :class:`~amigo_gym.task.v1.TrackingParams`, layout
+  :func:`amigo_gym.task.v1.obs_fields`), checks observations and reads columns by name, so one controller
+  reads either env's observation.
+* :class:`Policy`: stable-baselines3's ``predict`` for one observation ``(d,)`` or a batch ``(N, d)``, the
+  per-row recurrent state (SB3 style) and its reset at ``episode_start``; a policy implements ``_act`` on
+  ``(N, d)``.
+
+May import numpy, :mod:`amigo_gym.model.params` and the task modules' observation layouts.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.model.params import EnvParams, RobotParams
+from amigo_gym.task.v0 import obs_names
+from amigo_gym.task.v1 import TrackingParams, obs_fields
+
+__all__ = ["Fields", "Params", "Policy"]
+
+Array = NDArray[np.float64]
+#: the task settings of either environment
+Params = EnvParams | TrackingParams
+
+
+class Fields:
+    """The observation layout of ``params`` (v0 or v1, module docstring) and the constants a controller reads.
+
+    Args:
+        owner: the policy's name, first in every error message.
+        params: the task settings the observations are made with.
+        accept: the settings types this policy can read (a controller that needs v1's preview takes only
+            :class:`~amigo_gym.task.v1.TrackingParams`).
+    """
+
+    def __init__(self, owner: str, params: Any, accept: tuple[type, ...] = (EnvParams, TrackingParams)) -> None:
+        if not (isinstance(params, (EnvParams, TrackingParams)) and issubclass(type(params), accept)):
+            kinds = " or ".join(t.__name__ for t in accept)
+            raise ValueError(f"{owner}.params must be {kinds}, got {type(params).__name__}")
+        self.owner = owner
+        self.params: Params = params
+        self.robot: RobotParams = params.robot
+        self.names = obs_names(params) if isinstance(params, EnvParams) else obs_fields(params)
+        self.dim = len(self.names)
+        self.index = {n: i for i, n in enumerate(self.names)}
+
+    def check(self, obs: ArrayLike) -> tuple[Array, bool]:
+        """Observations as float64 ``(N, dim)`` (shape and finiteness checked) and whether one ``(dim,)`` was given."""
+        o = np.asarray(obs, dtype=np.float64)
+        if o.ndim not in (1, 2) or o.shape[-1] != self.dim:
+            raise ValueError(
+                f"{self.owner}: observation must have shape ({self.dim},) or (N, {self.dim}), got {o.shape}"
+            )
+        if not np.all(np.isfinite(o)):
+            raise ValueError(f"{self.owner}: observation must be finite; got NaN or infinite values")
+        single = o.ndim == 1
+        return (o[None, :] if single else o), single
+
+    def __call__(self, o: Array, name: str) -> Array:
+        """The column ``name`` of observations ``(N, dim)``, ``(N,)``."""
+        return o[:, self.index[name]]
+
+
+class Policy:
+    """SB3's ``predict`` over :meth:`_act` (module docstring); ``self._fields`` is set by the subclass."""
+
+    _fields: Fields
+    _state: Array | None = None
+
+    def reset(self) -> None:
+        """Forget the internal state (used when ``predict`` gets no ``state``)."""
+        self._state = None
+
+    def _rows(self, n: int, state: Any, width: int) -> tuple[Array, bool]:
+        """The state ``(n, width)`` of ``n`` rows: a copy of ``state``, or (``state=None``) the internal state,
+        zeros when new or when the batch size changed; and whether it was made new."""
+        if state is None:
+            fresh = self._state is None or self._state.shape[0] != n
+            if fresh:
+                self._state = np.zeros((n, width))
+            assert self._state is not None
+            return self._state, fresh
+        s = np.asarray(state, dtype=np.float64)
+        if s.size != n * width:
+            raise ValueError(f"{self._fields.owner}: state must have shape ({n}, {width}), got {s.shape}")
+        return s.reshape(n, width).copy(), False
+
+    @staticmethod
+    def _starts(episode_start: Any, n: int, default: bool = False) -> NDArray[np.bool_]:
+        """``episode_start`` as ``(n,)`` booleans (a scalar is broadcast); None: ``default`` for every row."""
+        if episode_start is None:
+            return np.full(n, default)
+        return np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,)).copy()
+
+    def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Any]:
+        """``(actions (N, 2) in [-1, 1], new state)`` for checked observations ``(N, d)``."""
+        raise NotImplementedError
+
+    def predict(
+        self,
+        observation: ArrayLike,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Any]:
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1].
+
+        Args:
+            observation: ``(d,)`` or ``(N, d)`` (the layout of the policy's task settings).
+            state: the policy's recurrent state ``(N, k)`` or None (the internal state; the class docstring).
+            episode_start: ``(N,)`` booleans (or a scalar for a single observation): rows to reset; None: none.
+            deterministic: the mean action (the classical controllers are deterministic and ignore it).
+        """
+        o, single = self._fields.check(observation)
+        act, new_state = self._act(o, state, episode_start, deterministic)
+        a32 = np.asarray(act).astype(np.float32)
+        return (a32[0] if single else a32), new_state
