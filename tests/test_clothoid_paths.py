@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.task.inverse import ConstantSpeed, solve_inverse
 from amigo_gym.model.kinematics import circle_steady_state
 from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import (
@@ -33,6 +32,7 @@ from amigo_gym.paths import (
     preview,
     random_path,
 )
+from amigo_gym.task.inverse import ConstantSpeed, solve_inverse
 
 Array = NDArray[np.float64]
 Seg = ClothoidSegment

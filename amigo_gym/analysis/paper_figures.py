@@ -37,6 +37,9 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_save
+from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded
+from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
@@ -49,9 +52,6 @@ from amigo_gym.task.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.model.params import RobotParams, check_range
-from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded
-from amigo_gym.paths import ManoeuvrePath
 
 __all__ = ["FIG2", "FIG3", "CSV", "Settings", "Phase", "phases", "run", "main"]
 

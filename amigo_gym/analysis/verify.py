@@ -83,8 +83,8 @@ def _env_laps_error() -> float:
 
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
-    from amigo_gym.task.inverse import paper_circle
     from amigo_gym.paths import CirclePath
+    from amigo_gym.task.inverse import paper_circle
 
     path = CirclePath(radius=R)
     sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)

@@ -25,6 +25,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
     MANOEUVRE_DECEL,
@@ -39,9 +42,6 @@ from amigo_gym.task.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.model.params import RobotParams, check_range
-from amigo_gym.options import OneLineParser, run_guarded
-from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 __all__ = ["build_parser", "main"]
 
