@@ -40,6 +40,53 @@ def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
     return box_spaces(tracking.obs_bounds(p))
 
 
+def info_values(
+    dt: float,
+    w_max: float,
+    st: tracking.State,
+    ep: tracking.Episode,
+    out: tracking.Outcome,
+    noise: StepNoise,
+    path_info: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The info of a step (or a start, ``noise = NO_NOISE``) from the reference's state, episode and outcome, as
+    floats and tuples of floats (one robot) or ``(N,)`` columns (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`);
+    ``path`` (a copy of ``path_info``) only when given. ``dt`` [s], ``w_max`` [rad/s] the nominal wheel-rate limit
+    that scales the command."""
+    info: dict[str, Any] = {
+        "pose": (st.x, st.y, st.beta),
+        "h_position": (out.h_x, out.h_y),
+        "cross_track_error": out.error,
+        "progress": st.progress,
+        "speed": out.v_true,
+        "reference_speed": out.v_ref,
+        "speed_error": out.v_true - out.v_ref,
+        "wheel_rates": (st.w1, st.w2),
+        "command": (st.a1 * w_max, st.a2 * w_max),
+        "wheel_angles": (st.alpha1, st.alpha2),
+        "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
+        "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
+        "time": st.steps * dt,
+    }
+    if path_info is not None:
+        info["path"] = dict(path_info)
+    info["true_robot"] = {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1}
+    info["delay"] = ep.lag * dt + ep.t_switch
+    info["slip"] = (noise.slip1, noise.slip2)
+    info["end_of_path"] = out.end_of_path
+    return info
+
+
+def _single(value: Any) -> Any:
+    """A numeric :func:`info_values` entry of one robot in the single env's types: tuples as float64 arrays, dicts
+    of floats, floats."""
+    if isinstance(value, tuple):
+        return np.array(value, dtype=np.float64)
+    if isinstance(value, dict):
+        return {k: float(v) for k, v in value.items()}
+    return float(value)
+
+
 _np_array = np.array
 
 
@@ -330,26 +377,10 @@ class AmigoBotV1Env(AmigoBotBase):
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
         st, ep = self._state, self._episode
         assert st is not None and ep is not None
-        return {
-            "pose": np.array((st.x, st.y, st.beta)),
-            "h_position": np.array((out.h_x, out.h_y)),
-            "cross_track_error": float(out.error),
-            "progress": float(st.progress),
-            "speed": float(out.v_true),
-            "reference_speed": float(out.v_ref),
-            "speed_error": float(out.v_true) - float(out.v_ref),
-            "wheel_rates": np.array((st.w1, st.w2)),
-            "command": np.array(self._last_command),
-            "wheel_angles": np.array((st.alpha1, st.alpha2)),
-            "measured_pose": np.array((out.meas_x, out.meas_y, out.meas_beta)),
-            "reward_terms": {n: float(t) for n, t in zip(tracking.REWARD_TERMS, out.terms, strict=True)},
-            "time": int(st.steps) * self.params.dt,
-            "path": dict(self._path_info),
-            "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
-            "delay": int(ep.lag) * self.params.dt + float(ep.t_switch),
-            "slip": np.array((noise.slip1, noise.slip2), dtype=np.float64),
-            "end_of_path": bool(out.end_of_path),
-        }
+        values = info_values(self.params.dt, self._k.w_max, st, ep, out, noise, self._path_info)
+        info = {key: v if key == "path" else _single(v) for key, v in values.items()}
+        info["end_of_path"] = bool(out.end_of_path)
+        return info
 
     def _render_state(self) -> dict[str, Any]:
         st = self._current_state()

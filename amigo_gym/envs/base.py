@@ -397,8 +397,9 @@ class AmigoBotBase(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         a1, a2 = task.action_pair(action)
         if self._ended:
             gym.logger.warn(
-                f"{type(self).__name__}: step() called after the episode was terminated; call reset() to start a "
-                "new one (the steps go on integrating, outside the task)"
+                f"{type(self).__name__}: step() called after the episode was terminated (the environment has already "
+                "returned terminated = True); call reset() to start a new one (the steps go on integrating, outside "
+                "the task)"
             )
             self._ended = None  # warned: once per episode
         obs, reward, terminated, info = self._advance(a1, a2)

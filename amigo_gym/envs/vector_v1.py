@@ -31,7 +31,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import make_spaces_v1
+from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -418,28 +418,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
 
     # ------------------------------------------------------------------ infos
     def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
-        """One robot's numeric info values (the single env's keys, without ``path``)."""
-        dt = self.params.dt
-        w_max = self._k.w_max
-        return {
-            "pose": (st.x, st.y, st.beta),
-            "h_position": (out.h_x, out.h_y),
-            "cross_track_error": out.error,
-            "progress": st.progress,
-            "speed": out.v_true,
-            "reference_speed": out.v_ref,
-            "speed_error": out.v_true - out.v_ref,
-            "wheel_rates": (st.w1, st.w2),
-            "command": (st.a1 * w_max, st.a2 * w_max),
-            "wheel_angles": (st.alpha1, st.alpha2),
-            "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
-            "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
-            "time": st.steps * dt,
-            "true_robot": {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1},
-            "delay": ep.lag * dt + ep.t_switch,
-            "slip": (noise.slip1, noise.slip2),
-            "end_of_path": out.end_of_path,
-        }
+        """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``)."""
+        return info_values(self.params.dt, self._k.w_max, st, ep, out, noise)
 
     def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
         return {
