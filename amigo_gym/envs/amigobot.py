@@ -8,19 +8,17 @@ environment :class:`amigo_gym.envs.AmigoBotVectorEnv` holds ``N`` and calls the 
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Mapping
 from dataclasses import fields, replace
 from typing import Any, SupportsFloat
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym.envs.spec import JsonSpecMixin
+from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, ObsArray, box_spaces, check_kernel, parse_pose_option
 from amigo_gym.model.kinematics import h_position
-from amigo_gym.model.params import HEADING_LIMIT, POSE_LIMIT, EnvParams, RobotParams, show_value
+from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
@@ -28,19 +26,9 @@ from amigo_gym.task import v0 as task
 __all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "make_spaces", "parse_pose_option"]
 
 Array = NDArray[np.float64]
-ObsArray = NDArray[np.float32]
 
 #: names of the task settings accepted as keywords by the environments (every ``EnvParams`` field)
 ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
-
-#: keys accepted in ``reset(options=...)``
-RESET_OPTIONS: tuple[str, ...] = ("pose",)
-
-RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
-
-#: points of H's trail kept for rendering (the most recent ones; memory stays flat however long the run)
-TRAIL_LENGTH = 1000
-
 
 _np_array = np.array
 #: the values of the single env's ``kernel`` keyword
@@ -113,66 +101,13 @@ def make_env_params(
     return replace(base, **settings) if settings else base
 
 
-def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
-    """Validate ``options["pose"]``: ``(x_A [m], y_A [m], beta [rad])`` as finite numbers.
-
-    The coordinates must lie within ``POSE_LIMIT`` (1e6 m) and the heading within ``HEADING_LIMIT``
-    (1e6 rad) of zero, where float64 still resolves a step (:mod:`amigo_gym.model.params`).
-
-    Args:
-        value: the option's value; shape ``(3,)``, or ``batch_shape + (3,)`` when ``batch_shape`` is given.
-        batch_shape: leading axes a vector environment also accepts.
-
-    Raises:
-        ValueError: not real numbers (strings, bools, complex numbers, objects), a ragged sequence, a
-            wrong shape, NaN/inf, or a value out of range.
-    """
-    try:
-        pose = task.real_array(value, 'options["pose"]').copy()
-    except TypeError as exc:  # reset options are refused with ValueError, whatever is wrong
-        raise ValueError(str(exc)) from None
-    if pose.shape != (3,) and pose.shape != (*batch_shape, 3):
-        want = "(3,)" if not batch_shape else f"(3,) or {(*batch_shape, 3)}"
-        raise ValueError(f'options["pose"] must have shape {want} (x_A, y_A, beta), got shape {pose.shape}')
-    if not np.all(np.isfinite(pose)):
-        raise ValueError(f'options["pose"] must be finite, got {show_value(value)}')
-    if np.abs(pose[..., :2]).max() > POSE_LIMIT or np.abs(pose[..., 2]).max() > HEADING_LIMIT:
-        raise ValueError(
-            f'options["pose"] must have x_A, y_A in [-{POSE_LIMIT:g}, {POSE_LIMIT:g}] m and beta in '
-            f"[-{HEADING_LIMIT:g}, {HEADING_LIMIT:g}] rad, got {show_value(value)}"
-        )
-    return pose
-
-
-def check_reset_options(options: Mapping[str, Any] | None, extra: tuple[str, ...] = ()) -> None:
-    """Refuse unknown ``reset`` option keys (``ValueError`` naming the allowed ones)."""
-    if options is None:
-        return
-    if not isinstance(options, Mapping):
-        raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
-    allowed = (*RESET_OPTIONS, *extra)
-    unknown = sorted(str(k) for k in options if k not in allowed)
-    if unknown:
-        raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(allowed)}")
-
-
-def check_render_mode(render_mode: str | None) -> str | None:
-    """Refuse a render mode other than ``None``, ``"human"`` and ``"rgb_array"`` (``ValueError``)."""
-    if render_mode is not None and render_mode not in RENDER_MODES:
-        raise ValueError(f"render_mode must be one of {list(RENDER_MODES)} or None, got {render_mode!r}")
-    return render_mode
-
-
-def make_spaces(params: EnvParams) -> tuple[spaces.Space[NDArray[np.floating[Any]]], spaces.Space[ObsArray]]:
+def make_spaces(params: EnvParams) -> tuple[spaces.Box, spaces.Box]:
     """The action and observation spaces of one robot (both environments; the vector env batches them).
 
     Action ``Box(-1, 1, (2,), float32)``; observation ``Box(low, high, (obs_dim,), float32)`` with the
     bounds of :func:`amigo_gym.task.v0.obs_bounds`.
     """
-    low, high = task.obs_bounds(params)
-    action: Any = spaces.Box(-1.0, 1.0, (2,), np.float32)
-    observation: Any = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
-    return action, observation
+    return box_spaces(task.obs_bounds(params))
 
 
 def _single(kind: str, value: Any) -> Any:
@@ -184,7 +119,7 @@ def _single(kind: str, value: Any) -> Any:
     return float(value)
 
 
-class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+class AmigoBotEnv(AmigoBotBase):
     r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
 
     ## Description
@@ -301,8 +236,6 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     * v0: initial version.
     """
 
-    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}  # noqa: RUF012
-
     def __init__(
         self,
         render_mode: str | None = None,
@@ -313,14 +246,11 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         **settings: Any,
     ) -> None:
         owner = type(self).__name__
-        if not isinstance(kernel, str) or kernel not in SINGLE_KERNELS:
-            raise ValueError(f"{owner}.kernel must be {fast.choices(SINGLE_KERNELS)}, got {kernel!r}")
+        check_kernel(owner, kernel, SINGLE_KERNELS)
         self.params: EnvParams = make_env_params(owner, params, robot, **settings)
-        self.render_mode = check_render_mode(render_mode)
         p = self.params
+        self._init_base(render_mode, p.dt, make_spaces(p))
         self.path: CirclePath | ManoeuvrePath = make_path(p)
-        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
-        self.action_space, self.observation_space = make_spaces(p)
         self._k = task.task_constants(p)
         rate1, rate2 = task.initial_wheel_rates(p).tolist()
         self._initial_state = task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate1, rate2)
@@ -332,18 +262,6 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         # state (set by reset): plain scalars, stepped by the same column functions as the vector env
         self._state = self._initial_state
         self._steps = 0
-        self._trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_LENGTH)
-        self._renderer: Any = None
-        # order of calls (Gymnasium's classic-control convention): no step before reset; a warning
-        # when a terminated episode is stepped
-        self._needs_reset = True
-        self._ended: bool | None = False  # None: terminated and warned
-
-    def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderer (pygame surfaces); it is recreated when next used."""
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state
 
     # ------------------------------------------------------------------ state access
     @property
@@ -375,22 +293,9 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         """Time since reset [s]: ``steps * dt``."""
         return self._steps * self.params.dt
 
-    # ------------------------------------------------------------------ gym API
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[ObsArray, dict[str, Any]]:
-        """Start an episode (see the class docstring, *Starting State*).
-
-        Args:
-            seed: seeds ``self.np_random`` (as every Gymnasium env).
-            options: ``None`` or ``{"pose": (x_A, y_A, beta)}`` for an exact start pose.
-
-        Raises:
-            ValueError: unknown option key or a bad pose.
-        """
-        check_reset_options(options)  # refuse bad options before touching the state or the generator
-        pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
-        super().reset(seed=seed)
+    # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
+    def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
+        """The start state (a drawn pose, or ``pose_opt``), its observation and info."""
         if pose_opt is not None:
             pose = pose_opt
         else:
@@ -399,34 +304,11 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
         x, y, beta = pose.tolist()
         self._state = self._initial_state._replace(x=x, y=y, beta=beta)
         self._steps = 0
-        self._needs_reset = False
-        self._ended = False
         out = task.reset_columns(self._k, self.path, self._state, minimal=True)
-        self._trail.clear()
-        self._trail.append((float(out.h_x), float(out.h_y)))
-        info = self._info(out)
-        if self.render_mode == "human":
-            self.render()
-        return np.array(out.obs, dtype=np.float32), info
+        return np.array(out.obs, dtype=np.float32), self._info(out)
 
-    def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
-        """Hold the wheel rates ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-            TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
-            ValueError: action of a wrong shape or with NaN/inf entries.
-
-        Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
-        environments do, and goes on integrating. (Truncation belongs to the ``TimeLimit`` wrapper of
-        ``gym.make``, outside this environment; the vector environment truncates itself and autoresets,
-        or refuses to step a finished robot in ``Disabled`` mode.)
-        """
-        if self._needs_reset:
-            raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before step()")
-        a1, a2 = task.action_pair(action)
-        if self._ended:
-            self._warn_ended()
+    def _advance(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, dict[str, Any]]:
+        """Hold the wheel rates ``(a1, a2) * w_max`` for ``dt``: the step's observation, reward, end and info."""
         if self._fast is not None:
             return self._step_fast(a1, a2)
         st = self._state
@@ -436,8 +318,6 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             state, out = task.step_columns(self._k, self.path, st, a1, a2, minimal=True)
         self._state = st = task.bound_heading(state)
         self._steps += 1
-        if self.render_mode is not None:
-            self._trail.append((float(out.h_x), float(out.h_y)))
         if type(st.x) is float:  # task.info_columns in the single env's types, built directly
             terms = out.terms
             # the four arrays are views of one new array (one allocation instead of four)
@@ -459,16 +339,11 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             }
         else:
             info = self._info(out)
-        if self.render_mode == "human":
-            self.render()
-        terminated = bool(out.terminated)
-        if terminated and self._ended is False:
-            self._ended = True
-        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+        return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), info
 
-    def _step_fast(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:class:`amigo_gym.sim.fast.SingleStep`): the same results, bit for
-        bit."""
+    def _step_fast(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, dict[str, Any]]:
+        """:meth:`_advance` by the compiled kernel (:class:`amigo_gym.sim.fast.SingleStep`): the same results, bit
+        for bit."""
         fs = self._fast
         assert fs is not None
         rec = fs.step(a1, a2)
@@ -477,8 +352,6 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             self._state = st
             rec[2] = fs.record[2] = float(st.beta)
         self._steps += 1
-        if self.render_mode is not None:
-            self._trail.append((rec[3], rec[4]))
         # record: x, y, beta, h_x, h_y, e, rate1, rate2, alpha1, alpha2, alpha3, track, speed, heading, smooth, reward
         arr = fs.head.copy()  # the four info arrays are views of one new array
         info = {
@@ -491,57 +364,20 @@ class AmigoBotEnv(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
             "reward_terms": {"track": rec[11], "speed": rec[12], "heading": rec[13], "smooth": rec[14]},
             "time": float(self._steps * self._k.dt),
         }
-        if self.render_mode == "human":
-            self.render()
-        terminated = bool(fs.flags[0, 1])
-        if terminated and self._ended is False:
-            self._ended = True
-        return fs.obs_row.copy(), rec[15], terminated, False, info
-
-    def _warn_ended(self) -> None:
-        gym.logger.warn(
-            "AmigoBotEnv: step() called after the episode was terminated; call reset() to start a new one "
-            "(the steps go on integrating, outside the task)"
-        )
-        self._ended = None  # warned: once per episode
+        return fs.obs_row.copy(), rec[15], bool(fs.flags[0, 1]), info
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
         cols = task.info_columns(self._state, out, self._steps * self._k.dt)
         return {key: _single(kind, cols[key]) for key, kind in task.INFO_KEYS.items()}
 
-    # ------------------------------------------------------------------ rendering
-    def render(self) -> NDArray[np.uint8] | None:
-        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.envs.rendering`).
-
-        Returns:
-            ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"``; ``None`` otherwise.
-        """
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make"
-            )
-            return None
-        if self._needs_reset:
-            raise gym.error.ResetNeeded("AmigoBotEnv: call reset() before render()")
-        from amigo_gym.envs.rendering import Renderer
-
-        if self._renderer is None:
-            self._renderer = Renderer(self.params, self.path, self.render_mode)
+    def _render_state(self) -> dict[str, Any]:
         st = self._state
-        frame: NDArray[np.uint8] | None = self._renderer.draw(
-            self.pose,
-            self._trail,
-            wheel_angles=np.array((st.alpha1, st.alpha2)),
-            time=self.time,
-            cross_track_error=self._last_error(),
-        )
-        return frame
+        return {
+            "pose": self.pose,
+            "wheel_angles": np.array((st.alpha1, st.alpha2)),
+            "time": self.time,
+            "cross_track_error": self._last_error(),
+        }
 
     def _last_error(self) -> float:
         return float(self.path.project(h_position(self.pose, self.params.robot)).cross_track_error)
-
-    def close(self) -> None:
-        """Close the render window, if any."""
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None

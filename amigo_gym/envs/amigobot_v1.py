@@ -8,15 +8,13 @@ from __future__ import annotations
 
 import copy
 import math
-from typing import Any, SupportsFloat
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot import check_render_mode, check_reset_options, parse_pose_option
-from amigo_gym.envs.spec import JsonSpecMixin
+from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast_v1
@@ -24,8 +22,6 @@ from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
-
-ObsArray = NDArray[np.float32]
 
 # entries of the compiled step's workspace (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
@@ -36,41 +32,65 @@ _W_ARG_T, _W_ARG_S, _W_TERM, _W_END = fast_v1.W_ARG_T, fast_v1.W_ARG_S, fast_v1.
 _W_CMD1, _W_CMD2, _W_SLIP1, _W_SLIP2 = fast_v1.W_CMD1, fast_v1.W_CMD2, fast_v1.W_SLIP1, fast_v1.W_SLIP2
 
 #: keys accepted in ``reset(options=...)``
-V1_RESET_OPTIONS: tuple[str, ...] = ("pose",)
+V1_RESET_OPTIONS: tuple[str, ...] = RESET_OPTIONS
 
 
 def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
     """The action space ``Box(-1, 1, (2,), float32)`` and the observation space (:func:`tracking.obs_bounds`)."""
-    low, high = tracking.obs_bounds(p)
-    obs = spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
-    return spaces.Box(-1.0, 1.0, (2,), np.float32), obs
+    return box_spaces(tracking.obs_bounds(p))
 
 
-def validate_action_v1(action: Any) -> tuple[float, float]:
-    """A finite real action of shape (2,), as two floats.
+def info_values(
+    dt: float,
+    w_max: float,
+    st: tracking.State,
+    ep: tracking.Episode,
+    out: tracking.Outcome,
+    noise: StepNoise,
+    path_info: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The info of a step (or a start, ``noise = NO_NOISE``) from the reference's state, episode and outcome, as
+    floats and tuples of floats (one robot) or ``(N,)`` columns (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`);
+    ``path`` (a copy of ``path_info``) only when given. ``dt`` [s], ``w_max`` [rad/s] the nominal wheel-rate limit
+    that scales the command."""
+    info: dict[str, Any] = {
+        "pose": (st.x, st.y, st.beta),
+        "h_position": (out.h_x, out.h_y),
+        "cross_track_error": out.error,
+        "progress": st.progress,
+        "speed": out.v_true,
+        "reference_speed": out.v_ref,
+        "speed_error": out.v_true - out.v_ref,
+        "wheel_rates": (st.w1, st.w2),
+        "command": (st.a1 * w_max, st.a2 * w_max),
+        "wheel_angles": (st.alpha1, st.alpha2),
+        "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
+        "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
+        "time": st.steps * dt,
+    }
+    if path_info is not None:
+        info["path"] = dict(path_info)
+    info["true_robot"] = {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1}
+    info["delay"] = ep.lag * dt + ep.t_switch
+    info["slip"] = (noise.slip1, noise.slip2)
+    info["end_of_path"] = out.end_of_path
+    return info
 
-    Raises:
-        TypeError: not numbers (strings, complex, objects).
-        ValueError: wrong shape, NaN or infinite values.
-    """
-    try:
-        a = np.asarray(action)
-    except ValueError as exc:  # ragged sequences
-        raise ValueError(f"action must be 2 finite numbers (wheel 1, wheel 2), got {action!r}") from exc
-    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
-        raise TypeError(f"action must be real numbers (wheel 1, wheel 2), got dtype {a.dtype} from {action!r}")
-    if a.shape != (2,):
-        raise ValueError(f"action must have shape (2,) (wheel 1, wheel 2), got shape {a.shape}")
-    a1, a2 = a.astype(np.float64).tolist()
-    if not (np.isfinite(a1) and np.isfinite(a2)):
-        raise ValueError(f"action must be finite; got {action!r}")
-    return a1, a2
+
+def _single(value: Any) -> Any:
+    """A numeric :func:`info_values` entry of one robot in the single env's types: tuples as float64 arrays, dicts
+    of floats, floats."""
+    if isinstance(value, tuple):
+        return np.array(value, dtype=np.float64)
+    if isinstance(value, dict):
+        return {k: float(v) for k, v in value.items()}
+    return float(value)
 
 
 _np_array = np.array
 
 
-class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
+class AmigoBotV1Env(AmigoBotBase):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
     ## Description
@@ -166,15 +186,16 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     * v0: the ideal robot on the paper's circle (unchanged, ``AmigoBot-v0``).
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 10.0}  # noqa: RUF012
+    #: points of H kept for the rendered trail (the most recent ones)
+    trail_length: int = 4096
 
     def __init__(
         self, render_mode: str | None = None, *, params: Any = None, kernel: str = "auto", **settings: Any
     ) -> None:
         owner = type(self).__name__
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
-        self.render_mode = check_render_mode(render_mode)
         p = self.params
+        self._init_base(render_mode, p.dt, make_spaces_v1(p))
         self._k = tracking.constants(p)
         # the compiled step (amigo_gym.sim.fast_v1), for the episodes on a ClothoidPath; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
@@ -185,31 +206,18 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._delay = 0.0
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
         fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
-        self._fixed_path = fixed
         self._goal = (math.nan, math.nan)
         self.path: Any = fixed
-        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
-        act_space, obs_space = make_spaces_v1(p)
-        self.action_space = act_space  # type: ignore[assignment]
-        self.observation_space = obs_space  # type: ignore[assignment]
-        self._obs_shape: tuple[int, ...] = obs_space.shape
+        self._obs_shape: tuple[int, ...] = self.observation_space.shape  # type: ignore[assignment]
         self._ring = np.zeros((self._k.ring_length, 2))
         self._state: tracking.State | None = None
         self._episode: tracking.Episode | None = None
         self._path_info: dict[str, Any] = {}
-        self._done = False
         self._last_command = (0.0, 0.0)
-        self._trail: list[tuple[float, float]] = []
-        self._renderer: Any = None
 
-    # ------------------------------------------------------------------ gym API
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[ObsArray, dict[str, Any]]:
-        """Start an episode (class docstring); ``options={"pose": (x_A, y_A, beta)}`` sets the start pose."""
-        check_reset_options(options)
-        pose_opt = parse_pose_option(options["pose"]) if options is not None and "pose" in options else None
-        super().reset(seed=seed)
+    # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
+    def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
+        """A new episode (its path, true robot and noise drawn), its start observation and info."""
         k = self._k
         pose = None if pose_opt is None else tuple(pose_opt.tolist())
         kern = self._kernel
@@ -223,7 +231,6 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._ring[:, 1] = st.a2 * k.w_max
         self._ring_step = 0
         self._steps = int(st.steps)
-        self._done = False
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
         self._goal = tracking.goal_point(self.params, self.path)
@@ -234,59 +241,34 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
             kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
-            o = kern.outputs()
-            info = self._kernel_info(o, 0.0, 0.0)
-            self._trail = [(o[_W_HX], o[_W_HY])]
+            info = self._kernel_info(kern.outputs(), 0.0, 0.0)
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
-            self._trail = [(float(out.h_x), float(out.h_y))]
             info = self._info(out, tracking.NO_NOISE)
         info["end_condition"] = ""
         if self.feasibility is not None:
             info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
-        if self.render_mode == "human":
-            self.render()
         return obs, info
 
-    def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
-        """Advance one control period (class docstring)."""
-        if self._episode is None:
-            raise gym.error.ResetNeeded("call reset() before step() on AmigoBot-v1")
-        if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in "fd":
-            a1, a2 = action.tolist()  # validate_action_v1's floats (float32 to float64 is exact)
-            if not (math.isfinite(a1) and math.isfinite(a2)):
-                validate_action_v1(action)  # raises
-        else:
-            a1, a2 = validate_action_v1(action)
-        if self._done:
-            gym.logger.warn(
-                "You are calling 'step()' even though this environment has already returned terminated = True. "
-                "You should always call 'reset()' once you receive 'terminated = True'."
-            )
+    def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
+        """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
-        assert self._state is not None
+        assert self._state is not None and self._episode is not None
         st, out, noise = tracking.step_columns(
             self._k, self.path, self._state, self._episode, self._ring, self._ring_step, a1, a2
         )
         self._state = st
         self._steps = int(st.steps)
         self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
-        terminated = bool(out.terminated)
-        self._trail.append((float(out.h_x), float(out.h_y)))
-        if len(self._trail) > 4096:
-            del self._trail[: len(self._trail) - 4096]
         info = self._info(out, noise)
-        terminated = self._end(terminated, float(out.h_x), float(out.h_y), info)
-        self._done = terminated
-        if self.render_mode == "human":
-            self.render()
-        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, False, info
+        terminated = self._end(bool(out.terminated), float(out.h_x), float(out.h_y), info)
+        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
 
-    def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, bool, dict[str, Any]]:
-        """:meth:`step` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
+    def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
+        """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
         The per-step draws' logarithms (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's exponentials
         (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.task.v1.step_columns`).
@@ -305,15 +287,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         info = self._kernel_info(o, o[_W_SLIP1], o[_W_SLIP2])
         terms = info["reward_terms"]
         reward = float(task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"]))
-        terminated = self._end(o[_W_TERM] != 0.0, o[_W_HX], o[_W_HY], info)
-        self._done = terminated
-        if self.render_mode is not None:
-            self._trail.append((o[_W_HX], o[_W_HY]))
-            if len(self._trail) > 4096:
-                del self._trail[: len(self._trail) - 4096]
-            if self.render_mode == "human":
-                self.render()
-        return obs, reward, terminated, False, info
+        return obs, reward, self._end(o[_W_TERM] != 0.0, o[_W_HX], o[_W_HY], info), info
 
     def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
@@ -403,56 +377,15 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
         st, ep = self._state, self._episode
         assert st is not None and ep is not None
+        values = info_values(self.params.dt, self._k.w_max, st, ep, out, noise, self._path_info)
+        info = {key: v if key == "path" else _single(v) for key, v in values.items()}
+        info["end_of_path"] = bool(out.end_of_path)
+        return info
+
+    def _render_state(self) -> dict[str, Any]:
+        st = self._current_state()
         return {
             "pose": np.array((st.x, st.y, st.beta)),
-            "h_position": np.array((out.h_x, out.h_y)),
-            "cross_track_error": float(out.error),
-            "progress": float(st.progress),
-            "speed": float(out.v_true),
-            "reference_speed": float(out.v_ref),
-            "speed_error": float(out.v_true) - float(out.v_ref),
-            "wheel_rates": np.array((st.w1, st.w2)),
-            "command": np.array(self._last_command),
             "wheel_angles": np.array((st.alpha1, st.alpha2)),
-            "measured_pose": np.array((out.meas_x, out.meas_y, out.meas_beta)),
-            "reward_terms": {n: float(t) for n, t in zip(tracking.REWARD_TERMS, out.terms, strict=True)},
-            "time": int(st.steps) * self.params.dt,
-            "path": dict(self._path_info),
-            "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
-            "delay": int(ep.lag) * self.params.dt + float(ep.t_switch),
-            "slip": np.array((noise.slip1, noise.slip2), dtype=np.float64),
-            "end_of_path": bool(out.end_of_path),
+            "time": float(int(st.steps) * self.params.dt),
         }
-
-    # ------------------------------------------------------------------ rendering
-    def render(self) -> NDArray[np.uint8] | None:
-        """Draw the path, H, A, the robot outline and H's trail (``rgb_array``: a frame; ``human``: a window)."""
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make")
-            return None
-        if self._state is None:
-            raise gym.error.ResetNeeded("call reset() before render()")
-        st = self._current_state()
-        from amigo_gym.envs.rendering import Renderer
-
-        if self._renderer is None or self._renderer.path is not self.path:
-            if self._renderer is not None:
-                self._renderer.close()
-            self._renderer = Renderer(self.params, self.path, self.render_mode)
-        frame: NDArray[np.uint8] | None = self._renderer.draw(
-            np.array((st.x, st.y, st.beta)),
-            self._trail,
-            wheel_angles=np.array((st.alpha1, st.alpha2)),
-            time=float(int(st.steps) * self.params.dt),
-        )
-        return frame
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state

@@ -19,27 +19,32 @@ masks), across autoresets and truncations, in the ``NEXT_STEP`` (default), ``SAM
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-from gymnasium.utils import seeding
-from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
+from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot import (
-    TRAIL_LENGTH,
+from amigo_gym.envs.amigobot import make_env_params, make_spaces
+from amigo_gym.envs.base import (
+    VECTOR_KERNELS,
+    AmigoBotVectorBase,
+    Array,
+    BoolArray,
     ObsArray,
-    check_reset_options,
-    make_env_params,
-    make_spaces,
-    parse_pose_option,
+    StepResult,
+    assign_rows,
+    check_kernel,
+    check_reset_mask,
+    check_vector_args,
+    info_row,
+    parse_seeds,
+    scatter_infos,
+    take_rows,
 )
-from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import h_position, pack
-from amigo_gym.model.params import EnvParams, RobotParams, show_value
+from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
@@ -55,19 +60,8 @@ __all__ = [
     "take_rows",
 ]
 
-Array = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
-
-def _parse_autoreset_mode(mode: str | AutoresetMode) -> AutoresetMode:
-    try:
-        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
-    except ValueError:
-        allowed = [m.value for m in AutoresetMode]
-        raise ValueError(f"autoreset_mode must be one of {allowed}, got {mode!r}") from None
-
-
-class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+class AmigoBotVectorEnv(AmigoBotVectorBase):
     """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
 
     Args:
@@ -97,15 +91,6 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
     ``render()``: the renderers are dropped and recreated when next used).
     """
 
-    #: positions of H kept per robot for the rendered trail (a fixed-size ring buffer)
-    trail_length: int = TRAIL_LENGTH
-
-    metadata: dict[str, Any] = {  # noqa: RUF012  (gymnasium declares metadata as a plain attribute)
-        "render_modes": ["rgb_array"],
-        "render_fps": 10.0,
-        "autoreset_mode": AutoresetMode.NEXT_STEP,
-    }
-
     def __init__(
         self,
         num_envs: int = 1,
@@ -120,29 +105,19 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
     ) -> None:
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
+        check_kernel(owner, kernel, VECTOR_KERNELS)
         self.params: EnvParams = make_env_params(owner, params, robot, **settings)
         p = self.params
         self.path: CirclePath | ManoeuvrePath = make_path(p)
-        self.num_envs = int(num_envs)
-        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
-        self.render_mode = render_mode
-        self.autoreset_mode = _parse_autoreset_mode(autoreset_mode)
-        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
-
-        n = self.num_envs
-        self.single_action_space, self.single_observation_space = make_spaces(p)
-        self.action_space = batch_space(self.single_action_space, n)
-        self.observation_space = batch_space(self.single_observation_space, n)
-
+        n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces(p))
         self._k = task.task_constants(p)
         self._initial_rates = task.initial_wheel_rates(p)
-        # the generators, with the addresses of their C bit generators for the kernel's draws
-        self._rngs = fast.GeneratorTable([None] * n)
-        self._seeds: list[int | None] = [None] * n
         # the state as (N,) columns, stepped by the same column functions as the single env; with the
         # compiled kernel, the columns are views of one (N, 8) array that the kernel updates in place
         rate1, rate2 = self._initial_rates.tolist()
-        self._ws = _kernel_workspace(owner, kernel, self._k, self.path, n)
+        self._ws: fast.Workspace | None = None
+        if fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
+            self._ws = fast.workspace(self._k, self.path, n)
         self._parallel = kernel == "numba-parallel"
         self._rows = np.zeros((n, 8))
         self._rows[:, 6] = rate1
@@ -153,74 +128,10 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
             z = [np.zeros(n) for _ in range(6)]
             self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
-        self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the kernel's restart mask when none restarts
         self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
-        self._obs: ObsArray = np.zeros((n, task.obs_dim(p)), dtype=np.float32)
-        self._trail: Array | None = None  # ring buffer (trail_length, N, 2), allocated when first used
-        self._trail_count = 0  # positions written so far
-        self._trail_start = np.zeros(n, dtype=np.int64)
-        self._renderers: list[Any] = []
-        self._was_reset = False
 
-    # ------------------------------------------------------------------ seeding
-    @property
-    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
-        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``).
-
-        Before the first reset, as ``Env.np_random_seed``: each generator is made from a random seed
-        on first use, and that seed is reported (and used by a ``reset()`` without a seed).
-        """
-        for i in range(self.num_envs):
-            self._rng(i)
-        return tuple(int(s) for s in self._seeds if s is not None)
-
-    @property
-    def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
-        """The sub-environments' generators (``None`` before the first reset)."""
-        return tuple(self._rngs)
-
-    def _rng(self, i: int) -> np.random.Generator:
-        g = self._rngs[i]
-        if g is None:  # as Env.np_random: a random seed on first use
-            g, self._seeds[i] = seeding.np_random()
-            self._rngs[i] = g
-        return g
-
-    # ------------------------------------------------------------------ reset
-    def reset(
-        self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[ObsArray, dict[str, Any]]:
-        """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
-
-        Raises:
-            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
-            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
-        """
-        n = self.num_envs
-        check_reset_options(options, extra=("reset_mask",))
-        seeds = parse_seeds(seed, n)
-        mask: BoolArray = np.ones(n, dtype=np.bool_)
-        if options is not None and "reset_mask" in options:
-            mask = check_reset_mask(options["reset_mask"], n)
-        pose_opt = None
-        if options is not None and "pose" in options:
-            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
-        if not mask.all() and not self._was_reset:
-            raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
-        self._was_reset = True
-        idx = np.flatnonzero(mask)
-        for i in idx:
-            if seeds[i] is not None:
-                self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
-        self._autoreset[idx] = False
-        obs, infos = self._reset_rows(idx, pose_opt)
-        self._obs = self._obs.copy()  # the last step returned it
-        self._obs[idx] = obs
-        if self.render_mode is not None:
-            self._append_trail()
-        return self._obs.copy(), self._scatter(infos, mask)
-
+    # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
     def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
         """Start states of the robots ``idx`` (compact columns): a drawn pose (or ``pose_opt``'s rows),
         wheel angles 0, the initial rates.
@@ -265,33 +176,9 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         m = len(idx)
         return self._obs_array(out, m), self._info(state, out, np.zeros(m, dtype=np.int64))
 
-    # ------------------------------------------------------------------ step
-    def step(
-        self, actions: NDArray[np.floating[Any]]
-    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Step every robot; autoreset finished ones according to ``autoreset_mode``.
-
-        Raises:
-            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``.
-            ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
-            RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
-        """
+    def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
+        """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""
         n = self.num_envs
-        if not self._was_reset:
-            raise gym.error.ResetNeeded("call reset() before step() on AmigoBotVectorEnv")
-        if _is_scalar(actions):  # TypeError as SyncVectorEnv, which iterates over the actions
-            kind = "a string" if isinstance(actions, str | bytes) else f"a scalar {type(actions).__name__} object"
-            raise TypeError(
-                f"Unable to iterate over the following elements: {actions} "
-                f"(actions must be an array of shape ({n}, 2), got {kind})"
-            )
-        a = task.validate_action(actions, (n,))
-        mode = self.autoreset_mode
-        if mode == AutoresetMode.DISABLED and self._autoreset.any():
-            raise RuntimeError(
-                f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
-                "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
-            )
         if self._ws is not None:
             return self._step_kernel(self._ws, a, mode)
         k = self._k
@@ -323,15 +210,11 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         obs = self._obs_array(out, n)
         reward = _column(out.reward, n)
         terminated: BoolArray = np.asarray(out.terminated)
-        truncated = (
-            self._steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, np.bool_)
-        )
+        truncated = self._truncated(self._steps)
         infos = self._info(state, out, self._steps)
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
-    def _step_kernel(
-        self, ws: fast.Workspace, a: Array, mode: AutoresetMode
-    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
+    def _step_kernel(self, ws: fast.Workspace, a: Array, mode: AutoresetMode) -> StepResult:
         """:meth:`step` by the compiled kernel (:func:`amigo_gym.sim.fast.step_rows`); the same results.
 
         Restarting robots (``NEXT_STEP``) get their start states inside the kernel's step, drawn from
@@ -390,47 +273,6 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         }
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
-    def _finish_step(
-        self,
-        obs: ObsArray,
-        reward: Array,
-        terminated: BoolArray,
-        truncated: BoolArray,
-        infos: dict[str, Any],
-        idx: NDArray[np.intp] | None,
-    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Autoreset bookkeeping of a step (both implementations); ``idx`` the robots that started a new
-        episode at this step instead of stepping (``NEXT_STEP``)."""
-        n = self.num_envs
-        mode = self.autoreset_mode
-        if idx is not None:
-            reward[idx] = 0.0
-            terminated[idx] = False
-            truncated[idx] = False
-        elif mode == AutoresetMode.SAME_STEP:
-            done = terminated | truncated
-            if done.any():
-                idx = np.flatnonzero(done)
-                final_obs = np.full(n, None, dtype=object)
-                for i in idx:
-                    final_obs[i] = obs[i].copy()
-                final_info = self._scatter(take_rows(infos, idx), done)
-                obs_r, info_r = self._reset_rows(idx)
-                obs[idx] = obs_r
-                assign_rows(infos, info_r, idx)
-                infos = {
-                    "final_obs": final_obs,
-                    "_final_obs": done.copy(),
-                    "final_info": final_info,
-                    "_final_info": done.copy(),
-                    **infos,
-                }
-        self._autoreset = terminated | truncated
-        self._obs = obs  # returned as is: reset() copies it before changing rows
-        if self.render_mode is not None:
-            self._append_trail()
-        return obs, reward, terminated, truncated, self._scatter(infos, None)
-
     # ------------------------------------------------------------------ infos
     def _obs_array(self, out: task.Outcome, m: int) -> ObsArray:
         """The float32 observations ``(m, obs_dim)`` of an outcome, filled column by column."""
@@ -452,110 +294,14 @@ class AmigoBotVectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[A
         """The poses ``(N, 3)``."""
         return pack(self._state.x, self._state.y, self._state.beta)
 
-    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos (:func:`scatter_infos`)."""
-        return scatter_infos(infos, mask, self.num_envs)
+    def _step_counts(self) -> NDArray[np.int64]:
+        return self._steps
 
-    # ------------------------------------------------------------------ rendering
-    def _append_trail(self) -> None:
-        """Write the robots' H into the trail's ring buffer."""
-        length = max(1, int(self.trail_length))
-        if self._trail is None or self._trail.shape[0] != length:
-            self._trail = np.zeros((length, self.num_envs, 2))
-            self._trail_count = 0
-            self._trail_start[:] = 0
-        self._trail[self._trail_count % length] = h_position(self._pose(), self.params.robot)
-        self._trail_count += 1
+    def _h_positions(self) -> Array:
+        return h_position(self._pose(), self.params.robot)
 
-    def _trail_of(self, i: int) -> list[tuple[float, float]]:
-        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        return trail_of(self._trail, self._trail_start, self._trail_count, i)
-
-    def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
-
-        The generators are copied with their table, which computes the copies' addresses anew
-        (:class:`amigo_gym.sim.fast.GeneratorTable`): a copy draws from its own generators only.
-        """
-        state = self.__dict__.copy()
-        state["_renderers"] = []
-        return state
-
-    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-        """
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
-            return None
-        if not self._was_reset:
-            raise gym.error.ResetNeeded("call reset() before render() on AmigoBotVectorEnv")
-        from amigo_gym.envs.rendering import Renderer
-
-        while len(self._renderers) < self.num_envs:
-            self._renderers.append(Renderer(self.params, self.path, "rgb_array"))
-        frames = []
-        pose = self._pose()
-        st = self._state
-        for i, r in enumerate(self._renderers):
-            trail = self._trail_of(i)
-            frames.append(
-                r.draw(
-                    pose[i],
-                    trail,
-                    wheel_angles=np.array((np.asarray(st.alpha1)[i], np.asarray(st.alpha2)[i])),
-                    time=float(self._steps[i] * self.params.dt),
-                )
-            )
-        return tuple(frames)
-
-    def close_extras(self, **kwargs: Any) -> None:
-        """Close the renderers."""
-        for r in self._renderers:
-            r.close()
-        self._renderers = []
-
-
-def check_reset_mask(mask: Any, n: int) -> BoolArray:
-    """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
-    if not isinstance(mask, np.ndarray):
-        raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
-    if mask.shape != (n,):
-        raise ValueError(f"`options['reset_mask']` must have shape `({n},)`, got {mask.shape}")
-    if mask.dtype != np.bool_:
-        raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
-    if not np.any(mask):
-        raise ValueError(
-            f"`options['reset_mask']` must contain a boolean array with at least one True value, got reset_mask={mask}"
-        )
-    out: BoolArray = mask.copy()
-    return out
-
-
-def _is_scalar(x: Any) -> bool:
-    """Whether ``x`` is not a sequence of per-robot actions (strings count as scalars)."""
-    if isinstance(x, str | bytes):
-        return True
-    if isinstance(x, np.ndarray):
-        return x.ndim == 0
-    try:
-        iter(x)
-    except TypeError:
-        return True
-    return False
-
-
-def _kernel_workspace(
-    owner: str, kernel: str, k: task.TaskConstants, path: CirclePath | ManoeuvrePath, n: int
-) -> fast.Workspace | None:
-    """The kernel's workspace for ``kernel="numba"`` (or ``"auto"`` with numba), ``None`` for numpy."""
-    if kernel not in ("numpy", "numba", "numba-parallel", "auto"):
-        raise ValueError(f"{owner}.kernel must be 'numpy', 'numba', 'numba-parallel' or 'auto', got {kernel!r}")
-    if not fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
-        return None
-    return fast.workspace(k, path, n)
+    def _path_of(self, i: int) -> CirclePath | ManoeuvrePath:
+        return self.path
 
 
 def _set_rows(full: task.State, rows: task.State, idx: NDArray[np.intp]) -> None:
@@ -580,137 +326,3 @@ def _column(x: Any, m: int) -> Array:
     if isinstance(x, np.ndarray) and x.shape == (m,) and x.dtype == np.float64:
         return x
     return np.full(m, x, dtype=np.float64)
-
-
-def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_mode: Any) -> None:
-    """Refuse a bad ``num_envs`` (an integer >= 1), ``max_episode_steps`` (>= 1 or None) or ``render_mode``."""
-    if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
-        raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
-    if max_episode_steps is not None and (
-        isinstance(max_episode_steps, bool)
-        or not isinstance(max_episode_steps, int | np.integer)
-        or max_episode_steps < 1
-    ):
-        raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
-    if render_mode is not None and render_mode != "rgb_array":
-        raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
-
-
-def parse_seeds(seed: Any, n: int) -> list[int | None]:
-    """``reset(seed=...)`` of a vector env: ``None``, an int ``s >= 0`` (seeds ``s + i``) or a list/tuple of ``n``
-    ints ``>= 0``/None, as ``SyncVectorEnv`` takes them (numpy integers accepted too; bools refused).
-
-    Raises:
-        TypeError: a seed of another type (a float, a string, ...), naming it and the accepted types.
-        ValueError: a negative seed, or a list of the wrong length.
-    """
-    accepted = f"None, an int >= 0, or a list of num_envs={n} ints >= 0 / None"
-    if seed is None:
-        return [None] * n
-    if _is_int(seed):
-        if seed < 0:
-            raise ValueError(f"seed must be {accepted}; got {seed!r}")
-        return [int(seed) + i for i in range(n)]
-    if not isinstance(seed, list | tuple):
-        raise TypeError(f"seed must be {accepted}; got {show_value(seed)}")
-    if len(seed) != n:
-        raise ValueError(f"seed list must have length num_envs={n}, got length {len(seed)}")
-    for i, s in enumerate(seed):
-        if s is None:
-            continue
-        if not _is_int(s):
-            raise TypeError(f"seed[{i}] must be an int >= 0 or None; got {show_value(s)}")
-        if s < 0:
-            raise ValueError(f"seed[{i}] must be an int >= 0 or None; got {s!r}")
-    return [None if s is None else int(s) for s in seed]
-
-
-def _is_int(x: Any) -> bool:
-    """A Python or numpy integer, not a bool."""
-    return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_)
-
-
-def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict[str, Any]:
-    """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
-
-    ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
-    native vector envs of AmigoBot-v0 and -v1. Every ``_key`` mask is an array of its own, as in
-    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once).
-    """
-    masks = np.empty((_mask_count(infos), n), dtype=np.bool_)
-    masks[...] = True if mask is None else mask
-    return _scatter_into(infos, mask, n, iter(masks))
-
-
-def _mask_count(infos: dict[str, Any]) -> int:
-    """How many ``_key`` masks :func:`scatter_infos` gives ``infos`` (nested dicts included)."""
-    count = 0
-    for k, v in infos.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
-            continue
-        count += 1 + (_mask_count(v) if isinstance(v, dict) else 0)
-    return count
-
-
-def _scatter_into(infos: dict[str, Any], mask: BoolArray | None, n: int, masks: Iterator[BoolArray]) -> dict[str, Any]:
-    """:func:`scatter_infos` with the ``_key`` masks taken from ``masks`` in order."""
-    out: dict[str, Any] = {}
-    for k, v in infos.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
-            out[k] = v
-            continue
-        if isinstance(v, dict):
-            out[k] = _scatter_into(v, mask, n, masks)
-        elif mask is None:
-            out[k] = v
-        else:
-            full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
-            full[mask] = v
-            out[k] = full
-        out[f"_{k}"] = next(masks)  # a mask of its own per key
-    return out
-
-
-def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
-    """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats (object columns as they are),
-    ``(N, k)`` rows as arrays.
-
-    The ``_key`` masks and ``final_obs``/``final_info`` are left out; nested dicts recurse.
-    """
-    out: dict[str, Any] = {}
-    for k, v in vinfo.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
-            continue
-        if isinstance(v, dict):
-            out[k] = info_row(v, i)
-        else:
-            a = np.asarray(v)
-            if a.dtype == object:  # e.g. AmigoBot-v1's end_condition (str)
-                out[k] = a[i]
-            else:
-                out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
-    return out
-
-
-def take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:
-    return {k: (take_rows(v, idx) if isinstance(v, dict) else v[idx].copy()) for k, v in infos.items()}
-
-
-def assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.intp]) -> None:
-    for k, v in rows.items():
-        if isinstance(v, dict):
-            assign_rows(infos[k], v, idx)
-        else:
-            infos[k][idx] = v
-
-
-def trail_of(trail: Any, start: Any, count: int, i: int) -> list[tuple[float, float]]:
-    """Robot ``i``'s rendered trail from a ring ``trail`` of shape ``(T, N, 2)`` [m] holding the last ``T`` of
-    ``count`` positions written, ``start[i]`` being the count at which its episode began; oldest first.
-    Shared by the v0 and v1 vector envs."""
-    if trail is None:
-        return []
-    length = trail.shape[0]
-    first = max(int(start[i]), count - length)
-    rows = np.arange(first, count) % length
-    return [(float(x), float(y)) for x, y in trail[rows, i].tolist()]

@@ -27,71 +27,44 @@ from __future__ import annotations
 import os
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-from gymnasium.utils import seeding
-from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
+from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot import TRAIL_LENGTH, check_reset_options, parse_pose_option
-from amigo_gym.envs.amigobot_v1 import make_spaces_v1
-from amigo_gym.envs.spec import JsonSpecMixin
-from amigo_gym.envs.vector import (
-    _parse_autoreset_mode,
+from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1
+from amigo_gym.envs.base import (
+    TRAIL_LENGTH,
+    VECTOR_KERNELS,
+    AmigoBotVectorBase,
+    Array,
+    BoolArray,
+    ObsArray,
+    StepResult,
     assign_rows,
-    check_reset_mask,
+    check_kernel,
     check_vector_args,
-    parse_seeds,
-    scatter_infos,
-    take_rows,
-    trail_of,
 )
 from amigo_gym.model import actuators
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast, fast_v1, fast_v1_batch
+from amigo_gym.sim import fast_v1, fast_v1_batch
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1VectorEnv"]
-
-Array = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
-ObsArray = NDArray[np.float32]
 
 #: up to this many robots a step runs the float code row by row (cheaper than numpy calls on tiny columns)
 ROWWISE_MAX_N = 12
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 #: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
-KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
+KERNELS: tuple[str, ...] = VECTOR_KERNELS
 # entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_BETA, _W_HX, _W_HY = fast_v1.W_X, fast_v1.W_BETA, fast_v1.W_HX, fast_v1.W_HY
 _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v1.W_AL2
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
 _W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
-
-
-def validate_actions(actions: Any, n: int) -> tuple[Array, Array]:
-    """Finite real actions of shape ``(n, 2)`` as two float64 columns.
-
-    Raises:
-        TypeError: not real numbers. ValueError: wrong shape, NaN or infinities.
-    """
-    try:
-        a = np.asarray(actions)
-    except ValueError as exc:
-        raise ValueError(f"actions must be an array of shape ({n}, 2), got {actions!r}") from exc
-    if a.dtype.kind not in "fiu" or a.dtype == np.bool_:
-        raise TypeError(f"actions must be real numbers of shape ({n}, 2), got dtype {a.dtype}")
-    if a.shape != (n, 2):
-        raise ValueError(f"actions must have shape ({n}, 2) (wheel 1, wheel 2), got shape {a.shape}")
-    a = a.astype(np.float64)
-    if not np.isfinite(a).all():
-        raise ValueError("actions must be finite; got NaN or infinite values")
-    return a[:, 0].copy(), a[:, 1].copy()
 
 
 #: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
@@ -132,7 +105,7 @@ def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: st
         )
 
 
-class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
+class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     """``N`` AmigoBot-v1 tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotV1Env`).
 
     Args:
@@ -158,12 +131,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     (:func:`memory_needed`: about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
     """
 
-    metadata: dict[str, Any] = {  # noqa: RUF012
-        "render_modes": ["rgb_array"],
-        "render_fps": 10.0,
-        "autoreset_mode": AutoresetMode.NEXT_STEP,
-    }
-
     def __init__(
         self,
         num_envs: int = 1,
@@ -179,28 +146,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        if not isinstance(kernel, str) or kernel not in KERNELS:
-            raise ValueError(f"{owner}.kernel must be {fast.choices(KERNELS)}, got {kernel!r}")
+        check_kernel(owner, kernel, KERNELS)
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
         check_memory(owner, int(num_envs), p, render_mode)
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
         fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
-        n = int(num_envs)
-        self.num_envs = n
-        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
-        self.render_mode = render_mode
-        self.autoreset_mode = _parse_autoreset_mode(autoreset_mode)
-        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
-        act, obs = make_spaces_v1(p)
-        self.single_action_space = act
-        self.single_observation_space = obs
-        self.action_space = batch_space(act, n)
-        self.observation_space = batch_space(obs, n)
-
-        self._rngs: list[np.random.Generator | None] = [None] * n
-        self._seeds: list[int | None] = [None] * n
+        n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
@@ -230,62 +183,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             self._state = self._state_views(self._state.steps)
         self._ring_step = 0
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
-        self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
-        self._obs: ObsArray = np.zeros((n, obs.shape[0]), dtype=np.float32)
-        # the rendered trail of H: a ring of the last trail_length positions of every robot, (T, N, 2), allocated
-        # when first written (render_mode set); _h_now holds each robot's H to write next
-        self._trail: Array | None = None
-        self._trail_count = 0  # positions written so far
-        self._trail_start = np.zeros(n, dtype=np.int64)  # the count at which each robot's episode started
+        # each robot's H to write next into the rendered trail (render_mode set)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
-        self._renderers: list[Any] = [None] * n
-        self._was_reset = False
 
-    # ------------------------------------------------------------------ seeding
-    @property
-    def np_random_seed(self) -> tuple[int | None, ...]:  # type: ignore[override]
-        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``)."""
-        for i in range(self.num_envs):
-            self._rng(i)
-        return tuple(self._seeds)
-
-    def _rng(self, i: int) -> np.random.Generator:
-        g = self._rngs[i]
-        if g is None:
-            g, self._seeds[i] = seeding.np_random()
-            self._rngs[i] = g
-        return g
-
-    # ------------------------------------------------------------------ reset
-    def reset(
-        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[ObsArray, dict[str, Any]]:
-        """Reset all robots, or those of ``options["reset_mask"]``; ``options["pose"]`` sets start poses."""
-        n = self.num_envs
-        check_reset_options(options, extra=("reset_mask",))
-        seeds = parse_seeds(seed, n)
-        mask: BoolArray = np.ones(n, dtype=np.bool_)
-        if options is not None and "reset_mask" in options:
-            mask = check_reset_mask(options["reset_mask"], n)
-        pose_opt = None
-        if options is not None and "pose" in options:
-            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
-        if not mask.all() and not self._was_reset:
-            raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
-        self._was_reset = True
-        idx = np.flatnonzero(mask)
-        for i in idx.tolist():
-            if seeds[i] is not None:
-                self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
-        self._autoreset[idx] = False
-        rows = self._begin_rows(idx, pose_opt)
-        obs = self._obs.copy()
-        obs[idx] = rows[0]
-        self._obs = obs
-        infos = self._scatter(self._infos(rows[1], idx), mask)
-        if self.render_mode is not None:
-            self._append_trail()
-        return obs.copy(), infos
+    # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
+    def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
+        """New episodes for the robots ``idx``: their observations and compact infos (:meth:`_begin_rows`)."""
+        obs, cols = self._begin_rows(idx, pose_opt)
+        return obs, self._infos(cols, idx)
 
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
@@ -352,21 +257,9 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._ring[i, :, 0] = st.a1 * w_max
         self._ring[i, :, 1] = st.a2 * w_max
 
-    # ------------------------------------------------------------------ step
-    def step(
-        self, actions: NDArray[np.floating[Any]]
-    ) -> tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]:
-        """Step every robot; autoreset finished ones according to ``autoreset_mode``."""
-        n = self.num_envs
-        if not self._was_reset:
-            raise gym.error.ResetNeeded("call reset() before step() on AmigoBotV1VectorEnv")
-        a1, a2 = validate_actions(actions, n)
-        mode = self.autoreset_mode
-        if mode == AutoresetMode.DISABLED and self._autoreset.any():
-            raise RuntimeError(
-                f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
-                "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
-            )
+    def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
+        """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""
+        a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
         if self._batch is not None:
             obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
@@ -376,46 +269,23 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             self._h_now[:, 0] = hx
             self._h_now[:, 1] = hy
         terminated = self._end(terminated, infos, hx, hy)
-        steps = np.asarray(self._state.steps)
-        truncated = (
-            steps >= self.max_episode_steps if self.max_episode_steps is not None else np.zeros(n, dtype=np.bool_)
-        )
+        truncated = self._truncated(np.asarray(self._state.steps))
         restart = None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             restart = np.flatnonzero(self._autoreset)
-            obs_r, info_r = self._begin_rows(restart)
+            obs_r, info_r = self._reset_rows(restart)
             obs[restart] = obs_r
-            reward[restart] = 0.0
-            terminated[restart] = False
-            truncated[restart] = False
-            assign_rows(infos, self._infos(info_r, restart), restart)
-            infos["end_condition"][restart] = ""
-        elif mode == AutoresetMode.SAME_STEP:
-            done = terminated | truncated
-            if done.any():
-                restart = np.flatnonzero(done)
-                final_obs = np.full(n, None, dtype=object)
-                for i in restart.tolist():
-                    final_obs[i] = obs[i].copy()
-                final_info = self._scatter(take_rows(infos, restart), done)
-                final_info["end_condition"] = np.where(done, final_info["end_condition"], None)  # as SyncVectorEnv
-                obs_r, info_r = self._begin_rows(restart)
-                obs[restart] = obs_r
-                assign_rows(infos, self._infos(info_r, restart), restart)
-                infos["end_condition"] = infos["end_condition"].copy()
-                infos["end_condition"][restart] = ""
-                infos = {
-                    "final_obs": final_obs,
-                    "_final_obs": done.copy(),
-                    "final_info": final_info,
-                    "_final_info": done.copy(),
-                    **infos,
-                }
-        if self.render_mode is not None:
-            self._append_trail()
-        self._autoreset = terminated | truncated
-        self._obs = obs
-        return obs, reward, terminated, truncated, self._scatter(infos, None)
+            assign_rows(infos, info_r, restart)
+        return self._finish_step(obs, reward, terminated, truncated, infos, restart)
+
+    def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
+        """The robots ``idx`` started a new episode: no end condition."""
+        infos["end_condition"] = infos["end_condition"].copy()
+        infos["end_condition"][idx] = ""
+
+    def _mark_final(self, final_info: dict[str, Any], done: BoolArray) -> None:
+        """``final_info["end_condition"]`` is ``None`` outside ``done``, as ``SyncVectorEnv`` gathers it."""
+        final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
 
     def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
         """``terminated`` with the goals of open paths (``goal_tolerance``, :func:`tracking.goal_reached`) and
@@ -548,28 +418,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     # ------------------------------------------------------------------ infos
     def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
-        """One robot's numeric info values (the single env's keys, without ``path``)."""
-        dt = self.params.dt
-        w_max = self._k.w_max
-        return {
-            "pose": (st.x, st.y, st.beta),
-            "h_position": (out.h_x, out.h_y),
-            "cross_track_error": out.error,
-            "progress": st.progress,
-            "speed": out.v_true,
-            "reference_speed": out.v_ref,
-            "speed_error": out.v_true - out.v_ref,
-            "wheel_rates": (st.w1, st.w2),
-            "command": (st.a1 * w_max, st.a2 * w_max),
-            "wheel_angles": (st.alpha1, st.alpha2),
-            "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
-            "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
-            "time": st.steps * dt,
-            "true_robot": {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1},
-            "delay": ep.lag * dt + ep.t_switch,
-            "slip": (noise.slip1, noise.slip2),
-            "end_of_path": out.end_of_path,
-        }
+        """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``)."""
+        return info_values(self.params.dt, self._k.w_max, st, ep, out, noise)
 
     def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
         return {
@@ -583,71 +433,21 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             out[key] = self._infos(v, idx) if isinstance(v, dict) else _array(v)
         return out
 
-    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos (:func:`amigo_gym.envs.vector.scatter_infos`)."""
-        return scatter_infos(infos, mask, self.num_envs)
-
     # ------------------------------------------------------------------ rendering
-    #: positions of H kept per robot for the rendered trail (the ring's length, as AmigoBotVectorEnv's)
-    trail_length: int = TRAIL_LENGTH
-
     def _start_trails(self, idx: NDArray[np.intp], h: Array) -> None:
         """The robots ``idx`` start episodes at H = ``h`` ``(m, 2)``: their trails start at the next position."""
         if self.render_mode is not None:
             self._trail_start[idx] = self._trail_count
             self._h_now[idx] = h
 
-    def _append_trail(self) -> None:
-        """Write every robot's H (:attr:`_h_now`) into the trail's ring: two column copies, no loop over robots."""
-        length = max(1, int(self.trail_length))
-        if self._trail is None or self._trail.shape[0] != length:
-            self._trail = np.zeros((length, self.num_envs, 2))
-            self._trail_count = 0
-            self._trail_start[:] = 0
-        self._trail[self._trail_count % length] = self._h_now
-        self._trail_count += 1
+    def _h_positions(self) -> Array:
+        return self._h_now
 
-    def _trail_of(self, i: int) -> list[tuple[float, float]]:
-        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        return trail_of(self._trail, self._trail_start, self._trail_count, i)
+    def _step_counts(self) -> NDArray[np.int64]:
+        return np.asarray(self._state.steps)
 
-    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise."""
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
-            return None
-        from amigo_gym.envs.rendering import Renderer
-
-        frames = []
-        x, y, beta, _, _, alpha1, alpha2, *_ = (np.asarray(c) for c in self._state)
-        steps = np.asarray(self._state.steps)
-        for i in range(self.num_envs):
-            path: Any = self.paths[i]
-            r = self._renderers[i]
-            if r is None or r.path is not path:
-                r = self._renderers[i] = Renderer(self.params, path, "rgb_array")
-            pose = np.array((x[i], y[i], beta[i]))
-            frames.append(
-                r.draw(
-                    pose,
-                    self._trail_of(i),
-                    wheel_angles=np.array((alpha1[i], alpha2[i])),
-                    time=float(steps[i] * self.params.dt),
-                )
-            )
-        return tuple(frames)
-
-    def close_extras(self, **kwargs: Any) -> None:
-        """Close the renderers."""
-        for r in self._renderers:
-            if r is not None:
-                r.close()
-        self._renderers = [None] * self.num_envs
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderers"] = [None] * self.num_envs
-        return state
+    def _path_of(self, i: int) -> Any:
+        return self.paths[i]
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
