@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DISTRIBUTION = {
     "torch": "torch",
     "stable_baselines3": "stable-baselines3",
+    "sb3_contrib": "sb3-contrib",
     "yaml": "pyyaml",
     "tqdm": "tqdm",
     "rich": "rich",

@@ -337,3 +337,70 @@ def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     assert fast["cpu_s_rollout"] > 0 and fast["cpu_s_update"] > 0
     assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
     assert main(["--fast-steps", "10", "--json", str(out)]) == 2  # below one rollout: one-line error
+
+
+def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
+    """Every off-policy entry runs (sb3-contrib is in the train extra: no skip) and writes its rates and config."""
+    import sb3_contrib
+    import stable_baselines3
+    import yaml
+
+    from amigo_gym.bench.offpolicy import algo_class
+    from amigo_gym.bench.train import main
+    from amigo_gym.data import hyperparams_dir
+
+    assert algo_class("crossq") is sb3_contrib.CrossQ and algo_class("tqc") is sb3_contrib.TQC
+    assert algo_class("sac") is stable_baselines3.SAC and algo_class("td3") is stable_baselines3.TD3
+    out = tmp_path / "b.json"
+    argv = ["--fast-steps", "16384", "--sb3-steps", "256", "--skip-sb3-fastconfig", "--json", str(out)]
+    argv += ["--offpolicy", "sac,td3,crossq,tqc", "--offpolicy-steps", "8", "--offpolicy-ht-steps", "128"]
+    assert main(argv) == 0
+    doc = json.loads(out.read_text())
+    sac_yml = yaml.safe_load((hyperparams_dir() / "sac.yml").read_text())["AmigoBot-v1"]
+    for algo in ("sac", "td3", "crossq", "tqc"):
+        for config, n_envs, loop in (("shipped", 1, 8), ("ht", 128, 128)):
+            r = doc["runs"][f"{algo}_{config}"]
+            cfg = r["config"]
+            assert cfg["n_envs"] == n_envs and cfg["net_arch"] == [64, 64]
+            # the warm-up ends exactly at learning_starts (no update: SB3 trains once num_timesteps > learning_starts)
+            assert r["env_steps"] == cfg["learning_starts"] + loop and r["loop_env_steps"] == loop
+            # every gradient step in the loop, as many as the configuration's ratio asks
+            assert r["grad_steps"] == r["loop_grad_steps"] == round(loop * cfg["gradient_steps_per_env_step"]) == 8
+            # the rates are counts over the times; rates rounded to 0.1, times to 0.01 s: the propagated bound
+            for count, rate, t in ((loop, "sps_loop", "loop_wall_s"), (8, "gsps_loop_cpu", "loop_cpu_s")):
+                assert abs(count / r[t] - r[rate]) <= 0.051 + count * 0.0051 / r[t] ** 2, (algo, config, rate)
+            assert 0 < r["loop_wall_s"] <= r["wall_s"] and r["sps"] == pytest.approx(
+                r["env_steps"] / r["wall_s"], rel=0.01
+            )
+            assert doc["ratios"][f"fastppo/{algo}_{config}"] == pytest.approx(
+                doc["runs"]["fastppo"]["sps"] / r["sps"], abs=0.01
+            )
+        shipped = doc["runs"][f"{algo}_shipped"]["config"]
+        assert shipped["batch_size"] == sac_yml["batch_size"] and shipped["gradient_steps"] == sac_yml["gradient_steps"]
+        assert doc["runs"][f"{algo}_ht"]["config"]["batch_size"] == 2048
+    assert "tau" not in doc["runs"]["crossq_shipped"]["config"]  # CrossQ has no target network
+    assert doc["runs"]["td3_shipped"]["config"]["noise_type"] == "normal"
+    assert main(["--offpolicy", "sac,ddpg", "--json", str(out)]) == 2  # unknown algorithm: one-line error
+
+
+def test_offpolicy_models_have_64x64_networks() -> None:
+    """Actor and every critic of each off-policy model: two hidden layers of 64 units (the bench's "same network")."""
+    from amigo_gym.bench.offpolicy import _venv, make_model, offpolicy_config
+
+    venv = _venv(1, 0)
+    try:
+        for algo in ("sac", "td3", "crossq", "tqc"):
+            model = make_model(algo, offpolicy_config(algo, "shipped"), venv)
+            linears = [m for m in model.policy.modules() if isinstance(m, torch.nn.Linear)]
+            n_obs, n_act = venv.observation_space.shape[0], venv.action_space.shape[0]
+            # inputs: the observation (actor) or observation + action (critics); outputs: the action (mean, log std),
+            # one Q value or TQC's 25 quantiles; everything between: 64
+            ins, outs = {m.in_features for m in linears}, {m.out_features for m in linears}
+            assert ins <= {n_obs, n_obs + n_act, 64} and outs <= {64, n_act, 1, 25} and 64 in ins & outs, (
+                algo,
+                ins,
+                outs,
+            )
+            assert sum(m.out_features == 64 for m in linears) >= 2 * 3, algo  # actor and >= 2 critics, 2 layers each
+    finally:
+        venv.close()

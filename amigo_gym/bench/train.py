@@ -20,6 +20,10 @@ fast PPO also of its training iterations alone (``sps_loop``, ``sps_loop_cpu``: 
 resets and the final save, a fixed cost of a few seconds that long runs do not notice); and the
 ratio fastppo / SB3 is printed with the CPU model, the torch threads and the load average at the start and end
 (the development machine is shared: compare ratios measured in the same run). Writes ``--json`` atomically.
+
+``--offpolicy sac,td3,crossq,tqc`` adds the off-policy entries ``<algo>_shipped`` and ``<algo>_ht`` of
+:mod:`amigo_gym.bench.offpolicy` (SB3's SAC/TD3, sb3-contrib's CrossQ/TQC; env-steps and gradient steps per wall and
+CPU second, after the warm-up), ``--offpolicy-steps`` and ``--offpolicy-ht-steps`` env-steps of training each.
 """
 
 from __future__ import annotations
@@ -141,6 +145,52 @@ def _show(name: str, r: dict[str, Any]) -> None:
     print(line, flush=True)
 
 
+def _add_offpolicy_options(p: Any) -> None:
+    """The options of the off-policy entries (:mod:`amigo_gym.bench.offpolicy`): none run unless ``--offpolicy``."""
+    p.add_argument(
+        "--offpolicy",
+        default="",
+        help="off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc (default: none)",
+    )
+    p.add_argument(
+        "--offpolicy-steps", type=int, default=1024, help="env-steps after the warm-up, shipped configuration [steps]"
+    )
+    p.add_argument(
+        "--offpolicy-ht-steps", type=int, default=16384, help="env-steps after the warm-up, ht configuration [steps]"
+    )
+
+
+def _offpolicy_algos(args: Any) -> list[str]:
+    """The checked ``--offpolicy`` names and budgets (``ValueError``: one line), before anything runs."""
+    from amigo_gym.bench.offpolicy import ALGOS
+    from amigo_gym.model.params import check_range
+
+    algos = [a.strip() for a in args.offpolicy.split(",") if a.strip()]
+    bad = [a for a in algos if a not in ALGOS]
+    if bad:
+        raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
+    check_range(PROG, "offpolicy_steps", args.offpolicy_steps, 8, 10**8)
+    check_range(PROG, "offpolicy_ht_steps", args.offpolicy_ht_steps, 128, 10**9)
+    return algos
+
+
+def _run_offpolicy(args: Any) -> dict[str, Any]:
+    """Time each ``--offpolicy`` algorithm in the ``shipped`` and ``ht`` configurations (``<algo>_<config>``)."""
+    from amigo_gym.bench.offpolicy import bench_offpolicy
+
+    algos = _offpolicy_algos(args)
+    runs: dict[str, Any] = {}
+    for algo in algos:
+        for config, steps in (("shipped", args.offpolicy_steps), ("ht", args.offpolicy_ht_steps)):
+            name = f"{algo}_{config}"
+            r = runs[name] = bench_offpolicy(algo, config, steps, args.threads)
+            print(f"{name:<15}{r['sps_loop']:>10,.0f} env-steps/s of training "
+                  f"({r['sps_loop_cpu']:,.0f} per CPU second), "
+                  f"{r['gsps_loop']:,.1f} gradient steps/s ({r['gsps_loop_cpu']:,.1f} per CPU second) after the "
+                  f"warm-up; whole call {r['sps']:,.0f} env-steps/s", flush=True)  # fmt: skip
+    return runs
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
     from amigo_gym.io import atomic_write_json
@@ -153,12 +203,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--threads", type=int, default=1, help="torch threads of every run [threads]")
     p.add_argument("--skip-sb3-fastconfig", action="store_true", help="skip SB3 with the fast configuration")
     p.add_argument("--json", default=None, help="write the results here [file] (default: print only)")
+    _add_offpolicy_options(p)
     args = p.parse_args(list(argv) if argv is not None else None)
 
     def run() -> int:
         check_range(PROG, "fast_steps", args.fast_steps, 16384, 10**9)
         check_range(PROG, "sb3_steps", args.sb3_steps, 1, 10**8)
         check_range(PROG, "threads", args.threads, 1, 64)
+        _offpolicy_algos(args)
         import numpy as np
         import torch
 
@@ -182,6 +234,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if not args.skip_sb3_fastconfig:
             runs["sb3_fastconfig"] = bench_sb3(max(args.sb3_steps, 512 * 32), args.threads, 512, 32, 4096, 4)
             _show("sb3_fastconfig", runs["sb3_fastconfig"])
+        runs |= _run_offpolicy(args)
         ratios = {
             f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
         }

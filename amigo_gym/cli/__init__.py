@@ -164,6 +164,7 @@ COMMANDS: dict[str, Command] = {
 EXTRA_OF_MODULE: dict[str, str] = {
     "torch": "train",
     "stable_baselines3": "train",
+    "sb3_contrib": "train",
     "yaml": "train",
     "tqdm": "train",
     "rich": "train",
