@@ -1,18 +1,19 @@
 """Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
 
 Used by ``amigo-gym train`` (:mod:`amigo_gym.training.train`) and ``amigo-gym compare``; imports only the
-standard library and :mod:`amigo_gym.io` (the SB3 objects are passed in).
+standard library, :mod:`amigo_gym.io` and, when a lock is taken, ``filelock`` (the SB3 objects are passed in).
 
 Lock
-    :class:`RunLock` holds an exclusive ``fcntl.flock`` on ``<folder>/run.lock`` for the life of the run.
+    :class:`RunLock` holds an exclusive ``filelock.FileLock`` (``flock`` on POSIX) on ``<folder>/run.lock``
+    for the life of the run.
     The operating system drops it when the process ends, however it ends (``kill -9`` included), so a
     killed run never blocks its resume; a second process on the same folder (a second ``train``, a
     ``--resume`` of a running run) stops at once with one line and a non-zero status. The file holds the
     owner's pid. A clean exit removes it (unlinked while still locked); a killed process leaves it, harmlessly.
     Removing a lock file races with a process that opened it just before: that process would lock the
-    removed file while a third one creates and locks a new one. So :meth:`RunLock.acquire`, once it holds
-    the lock, checks that the path still names the very file it locked (same device and inode) and
-    otherwise starts again on the new file.
+    removed file while a third one creates and locks a new one. ``filelock`` checks, once it holds the
+    lock, that the file still has a name (``st_nlink > 0``) and otherwise starts again on the new file
+    (:func:`is_current_lock` tells whether a descriptor is still the path's file).
 
 Checkpoints
     ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
@@ -48,7 +49,6 @@ import re
 import shutil
 import sys
 import tempfile
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
@@ -105,7 +105,8 @@ class RunLock:
 
     Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
     ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
-    fail at once).
+    fail at once). The lock is ``filelock.FileLock`` (``flock`` on POSIX, ``msvcrt`` on Windows), imported
+    when the lock is taken.
 
     Raises:
         RunLockedError: another process holds it (one line with its pid).
@@ -115,49 +116,38 @@ class RunLock:
         self.folder = Path(folder)
         self.name = name
         self.wait = float(wait)
-        self._fd: int | None = None
+        self._lock: Any = None
 
     def acquire(self) -> RunLock:
+        import filelock
+
         self.folder.mkdir(parents=True, exist_ok=True)
         path = self.folder / self.name
-        deadline = time.monotonic() + self.wait
-        while True:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
+        lock = filelock.FileLock(path, timeout=self.wait, mode=file_mode(), thread_local=False)
+        try:
+            lock.acquire()
+        except filelock.Timeout:
             try:
-                _lock_fd(fd)
+                owner = path.read_text(errors="replace").strip() or "?"
             except OSError:
-                if time.monotonic() < deadline:
-                    os.close(fd)
-                    time.sleep(0.05)
-                    continue
-                try:
-                    owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
-                finally:
-                    os.close(fd)
-                raise RunLockedError(
-                    f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
-                    "or stop it, then --resume"
-                ) from None
-            if is_current_lock(fd, path):
-                break
-            os.close(fd)  # we locked a file that a finishing owner had just removed: take the new one
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
-        self._fd = fd
+                owner = "?"
+            raise RunLockedError(
+                f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
+                "or stop it, then --resume"
+            ) from None
+        path.write_text(f"{os.getpid()}\n")  # the path names the locked file: only a holder removes it
+        self._lock = lock
         return self
 
     def release(self) -> None:
         """Remove the lock file (still locked, so no one holds a lock on it that the removal could break) and
         unlock it."""
-        if self._fd is not None:
+        if self._lock is not None:
             if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
                 with contextlib.suppress(OSError):
-                    if is_current_lock(self._fd, self.folder / self.name):
-                        os.unlink(self.folder / self.name)
-            with contextlib.suppress(OSError):
-                _unlock_fd(self._fd)
-            os.close(self._fd)
-            self._fd = None
+                    os.unlink(self.folder / self.name)
+            self._lock.release()
+            self._lock = None
 
     def __enter__(self) -> RunLock:
         return self.acquire()
@@ -166,26 +156,6 @@ class RunLock:
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.release()
-
-
-if sys.platform == "win32":  # pragma: no cover - msvcrt locks the first byte; released when the process ends
-    import msvcrt
-
-    def _lock_fd(fd: int) -> None:
-        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
-
-    def _unlock_fd(fd: int) -> None:
-        os.lseek(fd, 0, os.SEEK_SET)
-        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
-
-else:
-    import fcntl
-
-    def _lock_fd(fd: int) -> None:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-
-    def _unlock_fd(fd: int) -> None:
-        fcntl.flock(fd, fcntl.LOCK_UN)
 
 
 def is_current_lock(fd: int, path: Path) -> bool:
