@@ -1,4 +1,4 @@
-"""Atomic file writing: what a user saves is never left half-written by an interrupted run.
+"""Atomic file writing: what a user saves is never left half-written by an interrupted run; file digests.
 
 Every writer puts the data in a temporary file in the target's own folder (same file system), flushes
 and fsyncs it, gives it the mode a plain new file would get (``0o666 & ~umask``; ``mkstemp`` makes
@@ -16,6 +16,7 @@ not yet fsynced) here, and the stages of :mod:`amigo_gym.runs`. Unset, :func:`fa
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -25,7 +26,16 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_save", "atomic_write", "atomic_write_json", "fault_point", "file_mode", "fsync_dir", "json_safe"]
+__all__ = [
+    "atomic_save",
+    "atomic_write",
+    "atomic_write_json",
+    "fault_point",
+    "file_mode",
+    "fsync_dir",
+    "json_safe",
+    "sha256_file",
+]
 
 FAULT_ENV = "AMIGO_GYM_FAULT"
 _fault_counts: dict[str, int] = {}
@@ -126,3 +136,12 @@ def atomic_write(path: str | os.PathLike[str], data: bytes | str, *, parents: bo
 def atomic_write_json(path: str | os.PathLike[str], obj: Any, *, parents: bool = False) -> None:
     """``json.dumps(obj, indent=2)`` plus a newline, written atomically; NaN and inf as ``null`` (:func:`json_safe`)."""
     atomic_write(path, json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n", parents=parents)
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """Hex sha256 of a file's bytes (read in 1 MiB blocks)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()

@@ -42,7 +42,6 @@ dot; :func:`clean_temporaries` removes them while the lock is held.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import re
@@ -54,7 +53,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir
+from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
 
 __all__ = [
     "CHECKPOINTS",
@@ -194,15 +193,6 @@ def has_run_files(folder: Path) -> bool:
 
 
 # --------------------------------------------------------------------------- files
-def sha256_file(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():

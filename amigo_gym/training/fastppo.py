@@ -66,10 +66,10 @@ from numpy.typing import NDArray
 from torch import nn
 
 import amigo_gym  # registers the environments
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.options import cli, json_object
-from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action, sha256_of
+from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
 
@@ -635,7 +635,7 @@ def train(
     }
     if record["finished"]:
         _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
-        record["sha256"] = sha256_of(out / "model.zip")
+        record["sha256"] = sha256_file(out / "model.zip")
         atomic_write_json(out / "run.json", record)
     return record
 
