@@ -99,6 +99,7 @@ import numpy as np
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.runs import add_trust_option
 from amigo_gym.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -1201,16 +1202,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="open --path: success within this of the end [m] (default 0: off)",
     )
     p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
-    p.add_argument(
-        "--trust-unverified",
-        action="store_true",
-        help="load model zips without a recorded sha256 without the warning (they are pickles: they run code)",
-    )
+    add_trust_option(p, "model zips")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
-    if a.trust_unverified:
-        from amigo_gym.runs import trust_unverified
-
-        trust_unverified()
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread

@@ -50,7 +50,6 @@ import json
 import math
 import os
 import pickle
-import platform
 import shlex
 import sys
 import time
@@ -65,13 +64,13 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-import amigo_gym  # registers the environments
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.options import cli, json_object
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
+from amigo_gym.training.train import versions
 
 __all__ = ["FastPPOSettings", "ActorCritic", "evaluate_policy", "main", "train"]
 
@@ -337,18 +336,6 @@ class _Run:
     curve: list[dict[str, float]] = field(default_factory=list)
     episode_returns: list[float] = field(default_factory=list)
     ep_ret: Array = field(default_factory=lambda: np.zeros(0))
-
-
-def _versions() -> dict[str, str]:
-    import gymnasium
-
-    return {
-        "python": platform.python_version(),
-        "amigo_gym": getattr(amigo_gym, "__version__", "?"),
-        "numpy": np.__version__,
-        "gymnasium": gymnasium.__version__,
-        "torch": torch.__version__,
-    }
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
@@ -628,7 +615,7 @@ def train(
         "last_eval": r.curve[-1] if r.curve else None,
         "settings": s.to_json(),
         "command": command,
-        "versions": _versions(),
+        "versions": versions(("gymnasium", "torch")),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
         "cpu_s_this_call": {k: round(v, 2) for k, v in cpu_split.items()},

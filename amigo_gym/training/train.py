@@ -200,22 +200,14 @@ def git_revision() -> str:
     return rev + ("-dirty" if dirty else "")
 
 
-def versions() -> dict[str, str]:
-    """Versions of Python and of the libraries a run depends on."""
-    import gymnasium
-    import stable_baselines3
-    import torch
+def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torch")) -> dict[str, str]:
+    """Versions of Python, amigo_gym, numpy and ``libraries``: the libraries a run depends on."""
+    import importlib
 
     from amigo_gym import __version__
 
-    return {
-        "python": platform.python_version(),
-        "amigo_gym": __version__,
-        "numpy": np.__version__,
-        "gymnasium": gymnasium.__version__,
-        "stable_baselines3": stable_baselines3.__version__,
-        "torch": torch.__version__,
-    }
+    found = {name: str(importlib.import_module(name).__version__) for name in libraries}
+    return {"python": platform.python_version(), "amigo_gym": __version__, "numpy": np.__version__} | found
 
 
 # --------------------------------------------------------------------------- environments
