@@ -184,7 +184,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     the default. Types: ``int``, ``float``, ``str``, ``Path`` and other one-argument classes; ``X | None``
     (default ``None``); ``Literal[...]`` (the choices, in that order); ``list[X]`` and ``tuple[X, ...]``
     (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
-    ``False``, a ``--no-x`` flag that sets ``False``, else an option taking ``true``/``false``; anything else
+    ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
+    taking ``true``/``false``; anything else
     needs ``cli(parse=...)`` and takes a string. A field without a default is a required option.
     """
     helps = attribute_help(cls)
@@ -205,8 +206,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
         if meta["parse"] is not None:
             kw.update(type=str, default=None)
         elif tp is bool:
-            if flag.startswith("--no-"):
-                kw["action"] = "store_false"
+            if flag.startswith("--no-"):  # the help of the flag: what the field's help says after "--no-x: "
+                kw.update(action="store_false", help=help_text.partition(f"{flag}: ")[2] or help_text)
             elif default is False:
                 kw["action"] = "store_true"
             else:
