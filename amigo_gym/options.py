@@ -249,9 +249,12 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     return cls(**kw)
 
 
-def parse_settings(parser: argparse.ArgumentParser, cls: type[T], argv: Sequence[str], /, **extra: Any) -> T:
-    """Parse ``argv`` with ``parser`` into ``cls`` (:func:`settings_from_args`) and call its ``validate()`` if
-    it has one; a bad value is the parser's one-line error (exit status 2)."""
+def parse_settings(cls: type[T], argv: Sequence[str], /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv``: a :class:`OneLineParser` with
+    :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further fields) and ``validate()``
+    when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
+    parser = OneLineParser(prog=prog, description=description)
+    add_dataclass_options(parser, cls)
     namespace = parser.parse_args(list(argv))
     try:
         settings = settings_from_args(cls, namespace, **extra)

@@ -137,7 +137,7 @@ def test_help_is_the_docstring_with_units_and_the_default() -> None:
 )
 def test_bad_values_are_one_line_errors(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as exc:
-        parse_settings(_parser(), Demo, argv)
+        parse_settings(Demo, argv, "demo")
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err == f"demo: error: {message}\n"

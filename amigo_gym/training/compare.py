@@ -62,7 +62,7 @@ from typing import Any
 from amigo_gym import runs
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
-from amigo_gym.options import OneLineParser, add_dataclass_options, cli, parse_settings, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
     "MANIFEST",
@@ -533,9 +533,10 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym compare``."""
-    p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
-    add_dataclass_options(p, CompareSettings)
-    s = parse_settings(p, CompareSettings, sys.argv[1:] if argv is None else argv)
+    args = sys.argv[1:] if argv is None else argv
+    s = parse_settings(
+        CompareSettings, args, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
+    )
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread

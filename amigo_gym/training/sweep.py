@@ -124,7 +124,7 @@ from urllib.parse import quote, quote_plus
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.options import OneLineParser, add_dataclass_options, cli, json_object, parse_settings, run_guarded
+from amigo_gym.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.training.train import ALGOS, ENV_IDS, Algo, EnvId
 
 __all__ = [
@@ -894,9 +894,9 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> SweepConfig:
     """Settings from the command line (``amigo-gym sweep --help``)."""
-    p = OneLineParser(prog="amigo-gym sweep", description="Optuna studies over amigo-gym training runs.")
-    add_dataclass_options(p, SweepConfig)
-    return parse_settings(p, SweepConfig, argv, argv=list(argv))
+    return parse_settings(
+        SweepConfig, argv, "amigo-gym sweep", "Optuna studies over amigo-gym training runs.", argv=list(argv)
+    )
 
 
 def _spawn_workers(cfg: SweepConfig) -> list[int]:

@@ -74,7 +74,7 @@ import numpy as np
 from amigo_gym import runs
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point
-from amigo_gym.options import OneLineParser, add_dataclass_options, cli, json_object, parse_settings, run_guarded
+from amigo_gym.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
 from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
@@ -708,9 +708,9 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> Settings:
     """Settings from the command line (``amigo-gym train --help``)."""
-    p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.")
-    add_dataclass_options(p, Settings)
-    return parse_settings(p, Settings, argv, argv=list(argv))
+    return parse_settings(
+        Settings, argv, "amigo-gym train", "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.", argv=list(argv)
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
