@@ -11,9 +11,9 @@ Lock
     ``--resume`` of a running run) stops at once with one line and a non-zero status. The file holds the
     owner's pid. A clean exit removes it (unlinked while still locked); a killed process leaves it, harmlessly.
     Removing a lock file races with a process that opened it just before: that process would lock the
-    removed file while a third one creates and locks a new one. ``filelock`` checks, once it holds the
-    lock, that the file still has a name (``st_nlink > 0``) and otherwise starts again on the new file
-    (:func:`is_current_lock` tells whether a descriptor is still the path's file).
+    removed file while a third one creates and locks a new one. So :meth:`RunLock.acquire`, once it holds
+    the lock, checks that the path still names the very file it locked (:func:`is_current_lock`: same
+    device and inode; recent ``filelock`` versions check this themselves) and otherwise starts again.
 
 Checkpoints
     ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
@@ -126,7 +126,12 @@ class RunLock:
         path = self.folder / self.name
         lock = filelock.FileLock(path, timeout=self.wait, mode=file_mode(), thread_local=False)
         try:
-            lock.acquire()
+            while True:
+                lock.acquire()
+                fd = getattr(getattr(lock, "_context", None), "lock_file_fd", None)
+                if fd is None or is_current_lock(fd, path):
+                    break
+                lock.release()  # a finishing owner removed the file we locked: take the new one
         except filelock.Timeout:
             try:
                 owner = path.read_text(errors="replace").strip() or "?"
