@@ -185,8 +185,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     (default ``None``); ``Literal[...]`` (the choices, in that order); ``list[X]`` and ``tuple[X, ...]``
     (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
     ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
-    taking ``true``/``false``; anything else
-    needs ``cli(parse=...)`` and takes a string. A field without a default is a required option.
+    taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
+    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none.
     """
     helps = attribute_help(cls)
     hints = get_type_hints(cls)
