@@ -228,13 +228,13 @@ def add_trust_option(parser: argparse.ArgumentParser, what: str) -> None:
     """The ``--trust-unverified`` flag: when given, :func:`trust_unverified` as soon as it is parsed. ``what``: the
     files it concerns, for its help (e.g. ``model zips``)."""
 
-    class Trust(argparse.Action):
-        def __call__(self, *args: object, **kwargs: object) -> None:
+    class Trust(argparse._StoreTrueAction):
+        def __call__(self, *args: Any, **kwargs: Any) -> None:
             trust_unverified()
+            super().__call__(*args, **kwargs)
 
     parser.add_argument(
         "--trust-unverified",
-        nargs=0,
         action=Trust,
         help=f"load {what} without a recorded sha256 without the warning (they are pickles: they run code)",
     )
