@@ -1,4 +1,4 @@
-"""Atomic file writing: what a user saves is never left half-written by an interrupted run.
+"""Atomic file writing: what a user saves is never left half-written by an interrupted run; file digests.
 
 Every writer puts the data in a temporary file in the target's own folder (same file system), flushes
 and fsyncs it, gives it the mode a plain new file would get (``0o666 & ~umask``; ``mkstemp`` makes

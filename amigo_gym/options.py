@@ -10,18 +10,28 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import re
 import sys
+import types
 from collections.abc import Callable, Sequence
-from typing import NoReturn
+from dataclasses import MISSING, Field, fields
+from typing import Any, Literal, NoReturn, TypeVar, Union, get_args, get_origin, get_type_hints
+
+T = TypeVar("T")
 
 __all__ = [
     "HelpFormatter",
     "OneLineParser",
     "add_dataclass_options",
     "attribute_help",
+    "cli",
     "install_hint",
+    "json_object",
     "missing_modules",
+    "parse_bool",
+    "parse_settings",
     "run_guarded",
+    "settings_from_args",
 ]
 
 
@@ -36,7 +46,7 @@ class HelpFormatter(argparse.HelpFormatter):
         text = action.help or ""
         if "default" in text.lower() or not action.option_strings or action.default is argparse.SUPPRESS:
             return text
-        if isinstance(action, argparse._StoreTrueAction):
+        if isinstance(action, argparse._StoreTrueAction | argparse._StoreFalseAction):
             return f"{text} (default: off)"
         if action.default is None:
             return text
@@ -60,7 +70,8 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def attribute_help(cls: type) -> dict[str, str]:
-    """The ``Attributes:`` section of a dataclass's docstring as ``{field: text}`` (continuation lines joined)."""
+    """The ``Attributes:`` section of a dataclass's docstring as ``{field: text}`` (continuation lines joined,
+    reST markup and the final full stop removed)."""
     doc = cls.__doc__ or ""
     out: dict[str, str] = {}
     inside, current = False, ""
@@ -76,26 +87,183 @@ def attribute_help(cls: type) -> dict[str, str]:
         name, colon, text = stripped.partition(": ")
         if colon and name.isidentifier():
             current = name
-            out[name] = text.rstrip(".")
+            out[name] = text
         elif current:
             out[current] += " " + stripped
-    return out
+    return {name: _plain(text).rstrip(".") for name, text in out.items()}
+
+
+def _plain(text: str) -> str:
+    """``text`` without reST markup: ``:class:`x``` and ````x```` become ``x``."""
+    return re.sub(r":\w+:`~?([^`]*)`", r"\1", text).replace("``", "")
+
+
+def cli(
+    flag: str | None = None,
+    *,
+    required: bool = False,
+    hidden: bool = False,
+    parse: Callable[[str], Any] | None = None,
+    skip: bool = False,
+) -> dict[str, Any]:
+    """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``.
+
+    Args:
+        flag: the option's name when it is not ``--field-name`` (e.g. ``--env`` for ``env_id``); a ``--no-x``
+            flag of a ``bool`` field that defaults to ``True`` stores ``False``.
+        required: the option must be given even though the field has a default.
+        hidden: left out of ``--help`` (internal options).
+        parse: turns the option's text into the field's value after parsing (e.g. :func:`json_object`); a
+            ``ValueError`` becomes ``<flag> <message>``; not given: the field's default.
+        skip: no option for this field (set by the command itself).
+    """
+    return {"cli": {"flag": flag, "required": required, "hidden": hidden, "parse": parse, "skip": skip}}
+
+
+def json_object(text: str) -> dict[str, Any]:
+    """``text`` as a JSON object (``ValueError`` ``must be a JSON object, got '<text>'`` otherwise)."""
+    import json
+
+    try:
+        value = json.loads(text)
+    except ValueError:
+        value = None
+    if not isinstance(value, dict):
+        raise ValueError(f"must be a JSON object, got {text!r}")
+    return value
+
+
+def parse_bool(text: str) -> bool:
+    """``true/yes/on/1`` or ``false/no/off/0`` (any case) as a ``bool``."""
+    t = text.strip().lower()
+    if t in ("1", "true", "yes", "on"):
+        return True
+    if t in ("0", "false", "no", "off"):
+        return False
+    raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
+
+
+def _meta(f: Field[Any]) -> dict[str, Any]:
+    return dict(f.metadata.get("cli") or cli()["cli"])
+
+
+def _flag(f: Field[Any]) -> str:
+    return str(_meta(f)["flag"] or "--" + f.name.replace("_", "-"))
+
+
+def _default(f: Field[Any]) -> Any:
+    if f.default is not MISSING:
+        return f.default
+    if f.default_factory is not MISSING:
+        return f.default_factory()
+    return MISSING
+
+
+def _strip_optional(tp: Any) -> Any:
+    if get_origin(tp) in (Union, types.UnionType):
+        args = [a for a in get_args(tp) if a is not type(None)]
+        return args[0] if len(args) == 1 else tp
+    return tp
+
+
+def _scalar(tp: Any) -> dict[str, Any]:
+    """``type``/``choices`` keywords of ``add_argument`` for a scalar type (``Literal`` gives the choices)."""
+    if get_origin(tp) is Literal:
+        choices = get_args(tp)
+        return {"type": type(choices[0]), "choices": choices}
+    if tp in (int, float, str) or isinstance(tp, type):
+        return {"type": tp}
+    raise TypeError(f"no command-line type for {tp!r}")
 
 
 def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
-    """One option ``--field-name`` per field of the dataclass ``cls``, typed and defaulted as the field.
+    """One option per field of the dataclass ``cls``, typed and defaulted as the field (one source for both).
 
-    The help of each option is the field's line in the class docstring's ``Attributes:`` section (which
-    therefore names the unit in brackets); the default is appended by :class:`HelpFormatter`.
+    The option is ``--field-name`` unless :func:`cli` names another flag. Its help is the field's entry in the
+    class docstring's ``Attributes:`` section (which names the unit in brackets); :class:`HelpFormatter` appends
+    the default. Types: ``int``, ``float``, ``str``, ``Path`` and other one-argument classes; ``X | None``
+    (default ``None``); ``Literal[...]`` (the choices, in that order); ``list[X]`` and ``tuple[X, ...]``
+    (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
+    ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
+    taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
+    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none.
     """
-    from dataclasses import fields
-
     helps = attribute_help(cls)
-    defaults = cls()
+    hints = get_type_hints(cls)
     for f in fields(cls):
-        default = getattr(defaults, f.name)
-        flag = "--" + f.name.replace("_", "-")
-        parser.add_argument(flag, type=type(default), default=default, help=helps.get(f.name, ""))
+        meta = _meta(f)
+        if meta["skip"] or not f.init:
+            continue
+        flag, default = _flag(f), _default(f)
+        help_text = argparse.SUPPRESS if meta["hidden"] else helps.get(f.name, "")
+        kw: dict[str, Any] = {"dest": f.name, "help": help_text}
+        if default is MISSING or meta["required"]:
+            kw["required"] = True
+        else:
+            kw["default"] = default
+        tp = _strip_optional(hints[f.name])
+        origin, args = get_origin(tp), get_args(tp)
+        if meta["parse"] is not None:
+            kw.update(type=str, default=None)
+        elif tp is bool:
+            if flag.startswith("--no-"):  # the help of the flag: what the field's help says after "--no-x: "
+                kw.update(action="store_false", help=help_text.partition(f"{flag}: ")[2] or help_text)
+            elif default is False:
+                kw["action"] = "store_true"
+            else:
+                kw.update(type=parse_bool, help=f"{help_text} [true/false]")
+        elif origin in (list, tuple):
+            fixed = origin is tuple and Ellipsis not in args
+            kw.update(_scalar(args[0]), nargs=len(args) if fixed else "+")
+            if "default" in kw and kw["default"] is not None:
+                kw["default"] = list(kw["default"])
+        else:
+            kw.update(_scalar(tp))
+        parser.add_argument(flag, **kw)
+
+
+def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
+    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields).
+
+    Lists become tuples where the field is a tuple; options with ``cli(parse=...)`` are parsed here (a
+    ``ValueError`` becomes ``<flag> <message>``). Raises what ``cls`` raises on a bad value.
+    """
+    hints = get_type_hints(cls)
+    kw: dict[str, Any] = {}
+    for f in fields(cls):  # type: ignore[arg-type]
+        meta = _meta(f)
+        if meta["skip"] or not f.init or not hasattr(namespace, f.name):
+            continue
+        value = getattr(namespace, f.name)
+        if meta["parse"] is not None:
+            if value is None:
+                continue
+            try:
+                value = meta["parse"](value)
+            except ValueError as exc:
+                raise ValueError(f"{_flag(f)} {exc}") from None
+        elif isinstance(value, list):
+            value = tuple(value) if get_origin(_strip_optional(hints[f.name])) is tuple else list(value)
+        kw[f.name] = value
+    kw.update(extra)
+    return cls(**kw)
+
+
+def parse_settings(cls: type[T], argv: Sequence[str], /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv``: a :class:`OneLineParser` with
+    :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further fields) and ``validate()``
+    when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
+    parser = OneLineParser(prog=prog, description=description)
+    add_dataclass_options(parser, cls)
+    namespace = parser.parse_args(list(argv))
+    try:
+        settings = settings_from_args(cls, namespace, **extra)
+        validate = getattr(settings, "validate", None)
+        if validate is not None:
+            validate()
+    except ValueError as exc:
+        parser.error(str(exc))
+    return settings
 
 
 def _one_line(text: object) -> str:

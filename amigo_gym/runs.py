@@ -1,18 +1,19 @@
 """Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
 
 Used by ``amigo-gym train`` (:mod:`amigo_gym.training.train`) and ``amigo-gym compare``; imports only the
-standard library and :mod:`amigo_gym.io` (the SB3 objects are passed in).
+standard library, :mod:`amigo_gym.io` and, when a lock is taken, ``filelock`` (the SB3 objects are passed in).
 
 Lock
-    :class:`RunLock` holds an exclusive ``fcntl.flock`` on ``<folder>/run.lock`` for the life of the run.
+    :class:`RunLock` holds an exclusive ``filelock.FileLock`` (``flock`` on POSIX) on ``<folder>/run.lock``
+    for the life of the run.
     The operating system drops it when the process ends, however it ends (``kill -9`` included), so a
     killed run never blocks its resume; a second process on the same folder (a second ``train``, a
     ``--resume`` of a running run) stops at once with one line and a non-zero status. The file holds the
     owner's pid. A clean exit removes it (unlinked while still locked); a killed process leaves it, harmlessly.
     Removing a lock file races with a process that opened it just before: that process would lock the
     removed file while a third one creates and locks a new one. So :meth:`RunLock.acquire`, once it holds
-    the lock, checks that the path still names the very file it locked (same device and inode) and
-    otherwise starts again on the new file.
+    the lock, checks that the path still names the very file it locked (:func:`is_current_lock`: same
+    device and inode; recent ``filelock`` versions check this themselves) and otherwise starts again.
 
 Checkpoints
     ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
@@ -40,27 +41,27 @@ dot; :func:`clean_temporaries` removes them while the lock is held.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
-import hashlib
 import json
 import os
 import re
 import shutil
 import sys
 import tempfile
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir
+from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
 
 __all__ = [
     "CHECKPOINTS",
     "LOCK_NAME",
     "POINTER",
     "Checkpoint",
+    "add_trust_option",
     "TRUST_ENV",
     "CorruptFileError",
     "RunLock",
@@ -105,7 +106,8 @@ class RunLock:
 
     Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
     ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
-    fail at once).
+    fail at once). The lock is ``filelock.FileLock`` (``flock`` on POSIX, ``msvcrt`` on Windows), imported
+    when the lock is taken.
 
     Raises:
         RunLockedError: another process holds it (one line with its pid).
@@ -115,49 +117,43 @@ class RunLock:
         self.folder = Path(folder)
         self.name = name
         self.wait = float(wait)
-        self._fd: int | None = None
+        self._lock: Any = None
 
     def acquire(self) -> RunLock:
+        import filelock
+
         self.folder.mkdir(parents=True, exist_ok=True)
         path = self.folder / self.name
-        deadline = time.monotonic() + self.wait
-        while True:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
+        lock = filelock.FileLock(path, timeout=self.wait, mode=file_mode(), thread_local=False)
+        try:
+            while True:
+                lock.acquire()
+                fd = getattr(getattr(lock, "_context", None), "lock_file_fd", None)
+                if fd is None or is_current_lock(fd, path):
+                    break
+                lock.release()  # a finishing owner removed the file we locked: take the new one
+        except filelock.Timeout:
             try:
-                _lock_fd(fd)
+                owner = path.read_text(errors="replace").strip() or "?"
             except OSError:
-                if time.monotonic() < deadline:
-                    os.close(fd)
-                    time.sleep(0.05)
-                    continue
-                try:
-                    owner = os.read(fd, 64).decode(errors="replace").strip() or "?"
-                finally:
-                    os.close(fd)
-                raise RunLockedError(
-                    f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
-                    "or stop it, then --resume"
-                ) from None
-            if is_current_lock(fd, path):
-                break
-            os.close(fd)  # we locked a file that a finishing owner had just removed: take the new one
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
-        self._fd = fd
+                owner = "?"
+            raise RunLockedError(
+                f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
+                "or stop it, then --resume"
+            ) from None
+        path.write_text(f"{os.getpid()}\n")  # the path names the locked file: only a holder removes it
+        self._lock = lock
         return self
 
     def release(self) -> None:
         """Remove the lock file (still locked, so no one holds a lock on it that the removal could break) and
         unlock it."""
-        if self._fd is not None:
+        if self._lock is not None:
             if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
                 with contextlib.suppress(OSError):
-                    if is_current_lock(self._fd, self.folder / self.name):
-                        os.unlink(self.folder / self.name)
-            with contextlib.suppress(OSError):
-                _unlock_fd(self._fd)
-            os.close(self._fd)
-            self._fd = None
+                    os.unlink(self.folder / self.name)
+            self._lock.release()
+            self._lock = None
 
     def __enter__(self) -> RunLock:
         return self.acquire()
@@ -166,26 +162,6 @@ class RunLock:
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.release()
-
-
-if sys.platform == "win32":  # pragma: no cover - msvcrt locks the first byte; released when the process ends
-    import msvcrt
-
-    def _lock_fd(fd: int) -> None:
-        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
-
-    def _unlock_fd(fd: int) -> None:
-        os.lseek(fd, 0, os.SEEK_SET)
-        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)
-
-else:
-    import fcntl
-
-    def _lock_fd(fd: int) -> None:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-
-    def _unlock_fd(fd: int) -> None:
-        fcntl.flock(fd, fcntl.LOCK_UN)
 
 
 def is_current_lock(fd: int, path: Path) -> bool:
@@ -224,15 +200,6 @@ def has_run_files(folder: Path) -> bool:
 
 
 # --------------------------------------------------------------------------- files
-def sha256_file(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():
@@ -255,6 +222,22 @@ def trust_unverified(trust: bool = True) -> None:
     """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
     global _trust_unverified
     _trust_unverified = bool(trust)
+
+
+def add_trust_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """The ``--trust-unverified`` flag: when given, :func:`trust_unverified` as soon as it is parsed. ``what``: the
+    files it concerns, for its help (e.g. ``model zips``)."""
+
+    class Trust(argparse._StoreTrueAction):
+        def __call__(self, *args: Any, **kwargs: Any) -> None:
+            trust_unverified()
+            super().__call__(*args, **kwargs)
+
+    parser.add_argument(
+        "--trust-unverified",
+        action=Trust,
+        help=f"load {what} without a recorded sha256 without the warning (they are pickles: they run code)",
+    )
 
 
 def check_pickle(path: Path, expected: str | None, source: str | None) -> None:

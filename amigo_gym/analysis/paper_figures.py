@@ -38,7 +38,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import RobotParams, check_range
-from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded
+from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded, settings_from_args
 from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
@@ -245,7 +245,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
 
     def go() -> int:
-        settings = Settings(**vars(args))
+        settings = settings_from_args(Settings, args)
         sol, ph, files = run(settings)
         robot = RobotParams()
         print(f"settings: {asdict(settings)}")

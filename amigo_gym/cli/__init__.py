@@ -64,7 +64,7 @@ class Command:
     unless: tuple[str, ...] = ()
 
 
-_TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib")
+_TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib", "filelock")
 
 COMMANDS: dict[str, Command] = {
     "inverse": Command("amigo_gym.cli.inverse:main", "analytic inverse solution of H on a path, as CSV"),
@@ -165,6 +165,7 @@ EXTRA_OF_MODULE: dict[str, str] = {
     "torch": "train",
     "stable_baselines3": "train",
     "sb3_contrib": "train",
+    "filelock": "train",
     "yaml": "train",
     "tqdm": "train",
     "rich": "train",

@@ -83,7 +83,6 @@ from __future__ import annotations
 
 import functools
 import glob
-import hashlib
 import json
 import math
 import os
@@ -98,8 +97,9 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.runs import add_trust_option
 from amigo_gym.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -478,18 +478,10 @@ class AgentSpec:
             d["kind"] = "classical"
         else:
             kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
-            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": _sha256(Path(self.path))}
+            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
             if self.manifest is not None:
                 d["manifest"] = self.manifest
         return d
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def _is_fast_model(path: Path) -> bool:
@@ -1109,7 +1101,6 @@ def write_outputs(
     import tempfile
 
     from amigo_gym.io import fault_point, fsync_dir
-    from amigo_gym.runs import sha256_file
 
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
@@ -1211,16 +1202,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="open --path: success within this of the end [m] (default 0: off)",
     )
     p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
-    p.add_argument(
-        "--trust-unverified",
-        action="store_true",
-        help="load model zips without a recorded sha256 without the warning (they are pickles: they run code)",
-    )
+    add_trust_option(p, "model zips")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
-    if a.trust_unverified:
-        from amigo_gym.runs import trust_unverified
-
-        trust_unverified()
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread

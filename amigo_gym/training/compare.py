@@ -55,12 +55,14 @@ import sys
 import tempfile
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from amigo_gym import runs
+from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
     "MANIFEST",
@@ -71,6 +73,7 @@ __all__ = [
     "publish",
     "quick_benchmark",
     "report_markdown",
+    "CompareSettings",
     "run_compare",
     "summary_text",
     "v0_name",
@@ -387,42 +390,58 @@ def _say(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def run_compare(
-    out: Path,
-    models: Path | None,
-    train_steps: int,
-    seeds: int,
-    steps: int,
-    seed: int,
-    plots: bool = True,
-    progress: bool = False,
-    hyperparams: Path | None = None,
-    benchmark: bool = True,
-) -> dict[str, Any]:
-    """Run the main job (module docstring); return the JSON document. ``models=None``: no pretrained agents.
+@dataclass(frozen=True)
+class CompareSettings:
+    """Settings of ``amigo-gym compare``, each the option of the same name (``plots``: ``--no-plots``,
+    ``benchmark``: ``--no-benchmark``, ``progress``: ``--no-progress``).
 
-    ``hyperparams``: the fresh PPO run's YAML (default ``agents/hyperparams/ppo.yml``).
-    ``benchmark``: run the quick benchmark subset (step 3).
-
-    ``progress`` shows the progress bars (training, benchmark); phase lines go to stderr in any case.
+    Attributes:
+        out: output directory [dir].
+        models: pretrained models, as for evaluate --models [path], '' for none. Model zips are pickles that run
+            code when loaded: pass only files you trust (the shipped ones are checked against their sha256).
+        train_steps: steps of a fresh PPO run [steps], 0: none (default 500000).
+        seeds: perturbed starts [episodes].
+        steps: steps per episode [steps].
+        seed: seed of the fresh training run [-].
+        hyperparams: YAML of the fresh PPO run [file] (default: agents/hyperparams/ppo.yml).
+        plots: draw the figures; --no-plots: skip the figures.
+        benchmark: run the quick benchmark subset (step 3); --no-benchmark: skip the quick benchmark table (step 3).
+        progress: show the progress bars (training, benchmark; phase lines go to stderr in any case);
+            --no-progress: no progress bar (default: shown on a terminal).
     """
+
+    out: str = "results"
+    models: str = str(pretrained_dir())
+    train_steps: int = 500_000
+    seeds: int = 10
+    steps: int = 400
+    seed: int = 0
+    hyperparams: str | None = None
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    benchmark: bool = field(default=True, metadata=cli("--no-benchmark"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option and its allowed range on a bad setting."""
+        for name in ("train_steps", "seed"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(self, name)}")
+        if self.seeds < 1:
+            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+
+
+def run_compare(s: CompareSettings) -> dict[str, Any]:
+    """Run the main job (module docstring); return the JSON document."""
+    out = Path(s.out)
     with runs.RunLock(out):
         runs.clean_temporaries(out)
-        return _run_compare(out, models, train_steps, seeds, steps, seed, plots, progress, hyperparams, benchmark)
+        return _run_compare(s)
 
 
-def _run_compare(
-    out: Path,
-    models: Path | None,
-    train_steps: int,
-    seeds: int,
-    steps: int,
-    seed: int,
-    plots: bool,
-    progress: bool,
-    hyperparams: Path | None = None,
-    benchmark: bool = True,
-) -> dict[str, Any]:
+def _run_compare(s: CompareSettings) -> dict[str, Any]:
+    out, models = Path(s.out), Path(s.models) if s.models else None
+    hyperparams = Path(s.hyperparams) if s.hyperparams else None
+    train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
     from amigo_gym.model.params import EnvParams
     from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.training.evaluate import (
@@ -458,7 +477,7 @@ def _run_compare(
             _say(f"retraining: the run in {run_dir} does not match the request ({stale})")
             shutil.rmtree(run_dir)
         argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
-        s = Settings(
+        fresh = Settings(
             algo="ppo",
             seed=seed,
             out=str(run_dir),
@@ -475,7 +494,7 @@ def _run_compare(
         else:
             _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
-        training["ppo_fresh"] = train(s)
+        training["ppo_fresh"] = train(fresh)
         print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
         # checked against the run's record before it is unpickled, like every model compare loads
         runs.check_pickle(run_dir / "model.zip", training["ppo_fresh"]["sha256"], str(run_dir / "run.json"))
@@ -486,7 +505,7 @@ def _run_compare(
     best = best_learned(results)
     extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
     bench: dict[str, Any] | None = None
-    if benchmark:
+    if s.benchmark:
         from amigo_gym.training.benchmark import _jsonable
 
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
@@ -514,56 +533,17 @@ def _run_compare(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym compare``."""
-    from amigo_gym.training.evaluate import PRETRAINED_DIR
-
-    p = OneLineParser(prog="amigo-gym compare", description="Pretrained agents vs the analytic inverse solution.")
-    p.add_argument("--out", default="results", help="output directory [dir]")
-    p.add_argument(
-        "--models",
-        default=str(PRETRAINED_DIR),
-        help="pretrained models, as for evaluate --models [path], '' for none. Model zips are pickles that run "
-        "code when loaded: pass only files you trust (the shipped ones are checked against their sha256)",
+    args = sys.argv[1:] if argv is None else argv
+    s = parse_settings(
+        CompareSettings, args, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
     )
-    p.add_argument(
-        "--train-steps", type=int, default=500_000, help="steps of a fresh PPO run [steps], 0: none (default 500000)"
-    )
-    p.add_argument("--seeds", type=int, default=10, help="perturbed starts [episodes]")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps]")
-    p.add_argument("--seed", type=int, default=0, help="seed of the fresh training run [-]")
-    p.add_argument(
-        "--hyperparams", default=None, help="YAML of the fresh PPO run [file] (default: agents/hyperparams/ppo.yml)"
-    )
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
-    p.add_argument("--no-benchmark", action="store_true", help="skip the quick benchmark table (step 3)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)")
-    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread
 
         one_torch_thread()
-        for name in ("train_steps", "seed"):
-            if getattr(a, name) < 0:
-                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(a, name)}")
-        if a.seeds < 1:
-            raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
-        out = Path(a.out)
-        models = Path(a.models) if a.models else None
-        progress = sys.stderr.isatty() and not a.no_progress
-        hp = Path(a.hyperparams) if a.hyperparams else None
-        doc = run_compare(
-            out,
-            models,
-            a.train_steps,
-            a.seeds,
-            a.steps,
-            a.seed,
-            plots=not a.no_plots,
-            progress=progress,
-            hyperparams=hp,
-            benchmark=not a.no_benchmark,
-        )
-        print(summary_text(doc, out))
+        doc = run_compare(replace(s, progress=s.progress and sys.stderr.isatty()))
+        print(summary_text(doc, Path(s.out)))
         return 0
 
     return run_guarded(run, "amigo-gym compare")

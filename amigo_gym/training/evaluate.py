@@ -78,6 +78,7 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.runs import add_trust_option
 
 __all__ = [
     "Agent",
@@ -748,16 +749,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument("--no-models", action="store_true", help="only the analytic policies")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
-    p.add_argument(
-        "--trust-unverified",
-        action="store_true",
-        help="load model zips and statistics without a recorded sha256 without the warning (pickles run code)",
-    )
+    add_trust_option(p, "model zips and statistics")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
-    if a.trust_unverified:
-        from amigo_gym.runs import trust_unverified
-
-        trust_unverified()
 
     def run() -> int:
         one_torch_thread()

@@ -50,7 +50,6 @@ import json
 import math
 import os
 import pickle
-import platform
 import shlex
 import sys
 import time
@@ -65,12 +64,13 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-import amigo_gym  # registers the environments
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.model.params import check_range
-from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action, sha256_of
+from amigo_gym.options import cli, json_object
+from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
+from amigo_gym.training.train import versions
 
 __all__ = ["FastPPOSettings", "ActorCritic", "evaluate_policy", "main", "train"]
 
@@ -119,7 +119,7 @@ class FastPPOSettings:
         max_episode_steps: episode time limit [steps], in [1, 100000].
     """
 
-    env_kwargs: Mapping[str, Any] = field(default_factory=_default_env_kwargs)
+    env_kwargs: Mapping[str, Any] = field(default_factory=_default_env_kwargs, metadata=cli(parse=json_object))
     total_steps: int = 15_000_000
     num_envs: int = 512
     rollout_steps: int = 32
@@ -336,18 +336,6 @@ class _Run:
     curve: list[dict[str, float]] = field(default_factory=list)
     episode_returns: list[float] = field(default_factory=list)
     ep_ret: Array = field(default_factory=lambda: np.zeros(0))
-
-
-def _versions() -> dict[str, str]:
-    import gymnasium
-
-    return {
-        "python": platform.python_version(),
-        "amigo_gym": getattr(amigo_gym, "__version__", "?"),
-        "numpy": np.__version__,
-        "gymnasium": gymnasium.__version__,
-        "torch": torch.__version__,
-    }
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
@@ -627,64 +615,38 @@ def train(
         "last_eval": r.curve[-1] if r.curve else None,
         "settings": s.to_json(),
         "command": command,
-        "versions": _versions(),
+        "versions": versions(("gymnasium", "torch")),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
         "cpu_s_this_call": {k: round(v, 2) for k, v in cpu_split.items()},
     }
     if record["finished"]:
         _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
-        record["sha256"] = sha256_of(out / "model.zip")
+        record["sha256"] = sha256_file(out / "model.zip")
         atomic_write_json(out / "run.json", record)
     return record
 
 
 # --------------------------------------------------------------------------- CLI
 def _parser() -> argparse.ArgumentParser:
-    from amigo_gym.options import OneLineParser, attribute_help
+    from amigo_gym.options import OneLineParser, add_dataclass_options
 
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
     p.add_argument("--out", required=True, help="run folder [folder] (required)")
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
-    helps = attribute_help(FastPPOSettings)
-    defaults = FastPPOSettings()
-    for f in fields(FastPPOSettings):
-        flag = "--" + f.name.replace("_", "-")
-        default = getattr(defaults, f.name)
-        h = helps.get(f.name, "")
-        if f.name == "env_kwargs":
-            p.add_argument(flag, type=json.loads, default=None, help=h + " (default: the training distribution)")
-        elif f.name == "hidden":
-            p.add_argument(flag, type=int, nargs="+", default=list(default), help=h)
-        elif isinstance(default, bool):
-            p.add_argument(flag, type=_bool, default=default, help=h + " [true/false]")
-        else:
-            p.add_argument(flag, type=type(default), default=default, help=h)
+    add_dataclass_options(p, FastPPOSettings)
     return p
-
-
-def _bool(text: str) -> bool:
-    t = text.strip().lower()
-    if t in ("1", "true", "yes", "on"):
-        return True
-    if t in ("0", "false", "no", "off"):
-        return False
-    raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``."""
-    from amigo_gym.options import run_guarded
+    from amigo_gym.options import run_guarded, settings_from_args
 
     args = _parser().parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
-        kw = {f.name: getattr(args, f.name) for f in fields(FastPPOSettings)}
-        if kw["env_kwargs"] is None:
-            kw["env_kwargs"] = _default_env_kwargs()
-        kw["hidden"] = tuple(kw["hidden"])
-        s = FastPPOSettings(**kw)
+        s = settings_from_args(FastPPOSettings, args)
         cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
         rec = train(s, args.out, resume=args.resume, log=None if args.quiet else _flush_print, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))

@@ -118,13 +118,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import Any, Literal, get_args
 from urllib.parse import quote, quote_plus
 
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, json_object, parse_settings, run_guarded
+from amigo_gym.training.train import ALGOS, ENV_IDS, Algo, EnvId
 
 __all__ = [
     "ABANDONED",
@@ -146,9 +147,8 @@ __all__ = [
     "write_summary",
 ]
 
-ALGOS = ("ppo", "sac", "td3")
-MODES = ("hyperparams", "seeds")
-ENV_IDS = ("AmigoBot-v0", "AmigoBot-v1")
+Mode = Literal["hyperparams", "seeds"]
+MODES = get_args(Mode)
 #: the marker written into the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
 #: first evaluation seed of the validation cells; the benchmark's test seeds are 100..109
@@ -225,10 +225,44 @@ def _in_memory(url: str) -> bool:
 # --------------------------------------------------------------------------- settings
 @dataclass
 class SweepConfig:
-    """Settings of one ``amigo-gym sweep`` command (see the module docstring)."""
+    """Settings of one ``amigo-gym sweep`` command (see the module docstring); each is the option of the same
+    name (``algos``: ``--algo``, ``env_id``: ``--env``).
 
-    algos: list[str]
-    mode: str = "hyperparams"
+    Attributes:
+        algos: algorithm(s) (required).
+        mode: hyperparams (default) or seeds.
+        env_id: environment the trials train on.
+        env_kwargs: keywords of gym.make as JSON [json] (default: v1's training distribution; none for v0).
+        storage: SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); give a password through PGPASSWORD
+            or ~/.pgpass, not in the URL.
+        study_name: study name [name] (default: amigo-<algos>-<mode>).
+        n_trials: global trial budget over all workers [trials].
+        n_jobs: worker processes on this machine [processes].
+        seeds: training seeds (seeds mode) [seeds].
+        timesteps: training steps per trial [steps].
+        eval_freq: steps between evaluations (pruning points) [steps].
+        eval_episodes: episodes per evaluation [episodes].
+        val_episodes: episodes per validation cell (objective) [episodes].
+        val_max_steps: cut validation episodes to this length [steps] (0: the cell's).
+        train_seed: training seed of hyperparameter trials [-].
+        hyperparams: base YAML [file] (default: agents/hyperparams/<algo>.yml).
+        out: folder of the trials' runs (and the default SQLite file) [dir].
+        seed: base of the workers' sampler seeds [-].
+        sampler: Optuna sampler.
+        pruner: Optuna pruner.
+        n_startup_trials: trials before pruning and TPE start [trials].
+        heartbeat_interval: time between heartbeats [s].
+        grace_period: time without heartbeat before FAIL [s].
+        max_retry: retries of a trial whose worker died [retries].
+        threads: torch threads per worker [threads].
+        worker_index: index of a worker process started by ``--n-jobs`` (internal).
+        argv: the command line (not an option).
+    """
+
+    algos: list[Algo] = field(metadata=cli("--algo"))
+    mode: Mode = "hyperparams"
+    env_id: EnvId = field(default="AmigoBot-v0", metadata=cli("--env"))
+    env_kwargs: dict[str, Any] | None = field(default=None, metadata=cli(parse=json_object))
     storage: str | None = None
     study_name: str | None = None
     n_trials: int = 20
@@ -237,23 +271,21 @@ class SweepConfig:
     timesteps: int = 100_000
     eval_freq: int = 10_000
     eval_episodes: int = 5
+    val_episodes: int = 5
+    val_max_steps: int = 0
     train_seed: int = 0
     hyperparams: str | None = None
     out: str = "runs/sweep"
     seed: int = 0
-    sampler: str = "tpe"
-    pruner: str = "median"
+    sampler: Literal["tpe", "random"] = "tpe"
+    pruner: Literal["median", "none"] = "median"
     n_startup_trials: int = 5
     heartbeat_interval: int = 60
     grace_period: int = 120
     max_retry: int = 1
     threads: int = 1
-    worker_index: int = 0
-    env_id: str = "AmigoBot-v0"
-    env_kwargs: dict[str, Any] | None = None
-    val_episodes: int = 5
-    val_max_steps: int = 0
-    argv: list[str] = field(default_factory=list)
+    worker_index: int = field(default=0, metadata=cli(hidden=True))
+    argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming a bad setting."""
@@ -678,7 +710,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 study.stop()
                 trial.set_user_attr("over_budget", True)
                 raise _OverBudget("the grid is exhausted")
-            algo = str(trial.suggest_categorical("algo", cfg.algos))
+            algo: Algo = trial.suggest_categorical("algo", cfg.algos)
             seed = int(trial.suggest_categorical("seed", cfg.seeds))
         else:
             if budget_count(study, before=trial.number) >= cfg.budget:
@@ -700,7 +732,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
             raise
 
-    def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
+    def _train_and_validate(trial: Any, algo: Algo, seed: int, run_dir: Path) -> float:
         base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
         hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
@@ -862,94 +894,9 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> SweepConfig:
     """Settings from the command line (``amigo-gym sweep --help``)."""
-    p = OneLineParser(prog="amigo-gym sweep", description="Optuna studies over amigo-gym training runs.")
-    p.add_argument("--algo", nargs="+", required=True, choices=ALGOS, help="algorithm(s) (required)")
-    p.add_argument("--mode", choices=MODES, default="hyperparams", help="hyperparams (default) or seeds")
-    p.add_argument("--env", choices=ENV_IDS, default="AmigoBot-v0", help="environment the trials train on")
-    p.add_argument(
-        "--env-kwargs",
-        default=None,
-        help="keywords of gym.make as JSON [json] (default: v1's training distribution; none for v0)",
+    return parse_settings(
+        SweepConfig, argv, "amigo-gym sweep", "Optuna studies over amigo-gym training runs.", argv=list(argv)
     )
-    p.add_argument(
-        "--storage",
-        default=None,
-        help="SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); give a password through PGPASSWORD "
-        "or ~/.pgpass, not in the URL",
-    )
-    p.add_argument("--study-name", default=None, help="study name [name] (default: amigo-<algos>-<mode>)")
-    p.add_argument("--n-trials", type=int, default=20, help="global trial budget over all workers [trials]")
-    p.add_argument("--n-jobs", type=int, default=1, help="worker processes on this machine [processes]")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4], help="training seeds (seeds mode) [seeds]")
-    p.add_argument("--timesteps", type=int, default=100_000, help="training steps per trial [steps]")
-    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations (pruning points) [steps]")
-    p.add_argument("--eval-episodes", type=int, default=5, help="episodes per evaluation [episodes]")
-    p.add_argument("--val-episodes", type=int, default=5, help="episodes per validation cell (objective) [episodes]")
-    p.add_argument(
-        "--val-max-steps", type=int, default=0, help="cut validation episodes to this length [steps] (0: the cell's)"
-    )
-    p.add_argument("--train-seed", type=int, default=0, help="training seed of hyperparameter trials [-]")
-    p.add_argument("--hyperparams", default=None, help="base YAML [file] (default: agents/hyperparams/<algo>.yml)")
-    p.add_argument("--out", default="runs/sweep", help="folder of the trials' runs (and the default SQLite file) [dir]")
-    p.add_argument("--seed", type=int, default=0, help="base of the workers' sampler seeds [-]")
-    p.add_argument("--sampler", choices=("tpe", "random"), default="tpe", help="Optuna sampler")
-    p.add_argument("--pruner", choices=("median", "none"), default="median", help="Optuna pruner")
-    p.add_argument("--n-startup-trials", type=int, default=5, help="trials before pruning and TPE start [trials]")
-    p.add_argument("--heartbeat-interval", type=int, default=60, help="time between heartbeats [s]")
-    p.add_argument("--grace-period", type=int, default=120, help="time without heartbeat before FAIL [s]")
-    p.add_argument("--max-retry", type=int, default=1, help="retries of a trial whose worker died [retries]")
-    p.add_argument("--threads", type=int, default=1, help="torch threads per worker [threads]")
-    p.add_argument("--worker-index", type=int, default=0, help=argparse_suppress())
-    a = p.parse_args(list(argv))
-    env_kw = None
-    if a.env_kwargs is not None:
-        try:
-            env_kw = json.loads(a.env_kwargs)
-        except ValueError:
-            p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
-        if not isinstance(env_kw, dict):
-            p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
-    cfg = SweepConfig(
-        algos=list(a.algo),
-        mode=a.mode,
-        storage=a.storage,
-        study_name=a.study_name,
-        n_trials=a.n_trials,
-        n_jobs=a.n_jobs,
-        seeds=list(a.seeds),
-        timesteps=a.timesteps,
-        eval_freq=a.eval_freq,
-        eval_episodes=a.eval_episodes,
-        train_seed=a.train_seed,
-        hyperparams=a.hyperparams,
-        out=a.out,
-        seed=a.seed,
-        sampler=a.sampler,
-        pruner=a.pruner,
-        n_startup_trials=a.n_startup_trials,
-        heartbeat_interval=a.heartbeat_interval,
-        grace_period=a.grace_period,
-        max_retry=a.max_retry,
-        threads=a.threads,
-        worker_index=a.worker_index,
-        env_id=a.env,
-        env_kwargs=env_kw,
-        val_episodes=a.val_episodes,
-        val_max_steps=a.val_max_steps,
-        argv=[x for x in argv],
-    )
-    try:
-        cfg.validate()
-    except ValueError as exc:
-        p.error(str(exc))
-    return cfg
-
-
-def argparse_suppress() -> str:
-    """``argparse.SUPPRESS`` (hides an internal option from ``--help``)."""
-    import argparse
-
-    return argparse.SUPPRESS
 
 
 def _spawn_workers(cfg: SweepConfig) -> list[int]:

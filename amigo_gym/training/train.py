@@ -67,14 +67,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 
 from amigo_gym import runs
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
 from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
@@ -88,10 +88,12 @@ __all__ = [
     "train",
 ]
 
-ALGOS = ("ppo", "sac", "td3")
-ENV_ID = "AmigoBot-v0"
+Algo = Literal["ppo", "sac", "td3"]
 #: the environments a run can train on
-ENV_IDS = ("AmigoBot-v0", "AmigoBot-v1")
+EnvId = Literal["AmigoBot-v0", "AmigoBot-v1"]
+ALGOS = get_args(Algo)
+ENV_ID: EnvId = "AmigoBot-v0"
+ENV_IDS = get_args(EnvId)
 HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
@@ -104,48 +106,54 @@ AfterEvalHook = Callable[[dict[str, Any]], bool]
 # --------------------------------------------------------------------------- settings
 @dataclass
 class Settings:
-    """Everything a run depends on besides the hyperparameter file (saved in ``config.json``).
+    """Everything a run depends on besides the hyperparameter file (saved in ``config.json``); each field is
+    the option of the same name of ``amigo-gym train`` (``env_id``: ``--env``, ``progress``: ``--no-progress``).
 
     Attributes:
-        algo: ``ppo``, ``sac`` or ``td3``.
-        seed: master seed (>= 0).
-        out: run directory.
-        timesteps: total environment steps (``None``: the YAML's ``n_timesteps``).
-        n_envs: parallel environments (``None``: the YAML's ``n_envs``, else 1).
-        vec: ``native`` (:class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3 ``DummyVecEnv``
-            of ``gym.make``); ``auto``: native when ``n_envs > 1``.
-        hyperparams: YAML file (``None``: ``agents/hyperparams/<algo>.yml``).
-        resume: continue from the latest checkpoint in ``out``.
-        eval_freq: environment steps between evaluations (0: none).
-        eval_episodes: episodes per evaluation.
-        checkpoint_freq: environment steps between checkpoints (0: only at the end / on interrupt).
-        threads: ``torch.set_num_threads``.
-        progress: show a progress bar (tqdm + rich).
-        export: directory to copy the model and the record to, as ``<algo>.zip`` / ``<algo>.json``.
-        export_model: which model ``export`` copies: ``final`` (``model.zip``) or ``best`` (``best_model.zip``,
-            the best periodic evaluation; the record names its step).
-        env_id: ``AmigoBot-v0`` (the paper's task) or ``AmigoBot-v1`` (the real robot on many paths).
-        env_kwargs: keyword arguments of ``gym.make(env_id, ...)`` (JSON values): the training distribution.
+        algo: algorithm (required).
+        seed: master seed [-].
+        timesteps: total env steps [steps], rounded up to whole rollouts (PPO: n_steps x n_envs; SAC/TD3:
+            train_freq x n_envs), and the command says so (default: the YAML's n_timesteps).
+        out: run directory [dir], must be empty unless --resume (required).
+        resume: continue from the latest good checkpoint in --out (its model and replay buffer are pickles:
+            resume only runs you trust).
+        n_envs: parallel envs [envs] (default: the YAML's n_envs or 1).
+        vec: vector env: ``native`` (:class:`amigo_gym.training.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3
+            ``DummyVecEnv`` of ``gym.make``); ``auto``: native when ``n_envs > 1``.
+        hyperparams: rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml).
+        eval_freq: steps between evaluations [steps], 0: none.
+        eval_episodes: episodes per evaluation [episodes].
+        checkpoint_freq: steps between checkpoints [steps] (0: only at the end / on interrupt).
+        threads: torch threads [threads].
+        progress: show a progress bar (tqdm + rich); --no-progress: no progress bar.
+        export: copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none).
+        export_model: model to export: ``final`` (``model.zip``) or ``best`` (``best_model.zip``, the best
+            periodic evaluation; the record names its step).
+        env_id: environment id: ``AmigoBot-v0`` (the paper's task) or ``AmigoBot-v1`` (the real robot on many
+            paths).
+        env_kwargs: keywords of gym.make as JSON [json] (default {}), e.g. '{"path": "mixed", "speed": [0.1,
+            0.4]}': the training distribution.
+        argv: the command line (not an option).
     """
 
-    algo: str
+    algo: Algo
     seed: int = 0
-    out: str = "runs/run"
     timesteps: int | None = None
-    n_envs: int | None = None
-    vec: str = "auto"
-    hyperparams: str | None = None
+    out: str = field(default="runs/run", metadata=cli(required=True))
     resume: bool = False
+    n_envs: int | None = None
+    vec: Literal["auto", "native", "dummy"] = "auto"
+    hyperparams: str | None = None
     eval_freq: int = 10_000
     eval_episodes: int = 5
     checkpoint_freq: int = 20_000
     threads: int = 1
-    progress: bool = True
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
     export: str | None = None
-    export_model: str = "final"
-    env_id: str = ENV_ID
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
-    argv: list[str] = field(default_factory=list)
+    export_model: Literal["final", "best"] = "final"
+    env_id: EnvId = field(default=ENV_ID, metadata=cli("--env"))
+    env_kwargs: dict[str, Any] = field(default_factory=dict, metadata=cli(parse=json_object))
+    argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
@@ -192,22 +200,14 @@ def git_revision() -> str:
     return rev + ("-dirty" if dirty else "")
 
 
-def versions() -> dict[str, str]:
-    """Versions of Python and of the libraries a run depends on."""
-    import gymnasium
-    import stable_baselines3
-    import torch
+def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torch")) -> dict[str, str]:
+    """Versions of Python, amigo_gym, numpy and ``libraries``: the libraries a run depends on."""
+    import importlib
 
     from amigo_gym import __version__
 
-    return {
-        "python": platform.python_version(),
-        "amigo_gym": __version__,
-        "numpy": np.__version__,
-        "gymnasium": gymnasium.__version__,
-        "stable_baselines3": stable_baselines3.__version__,
-        "torch": torch.__version__,
-    }
+    found = {name: str(importlib.import_module(name).__version__) for name in libraries}
+    return {"python": platform.python_version(), "amigo_gym": __version__, "numpy": np.__version__} | found
 
 
 # --------------------------------------------------------------------------- environments
@@ -708,73 +708,9 @@ def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) ->
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> Settings:
     """Settings from the command line (``amigo-gym train --help``)."""
-    p = OneLineParser(prog="amigo-gym train", description="Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.")
-    p.add_argument("--algo", required=True, choices=ALGOS, help="algorithm (required)")
-    p.add_argument("--seed", type=int, default=0, help="master seed [-]")
-    p.add_argument(
-        "--timesteps",
-        type=int,
-        default=None,
-        help="total env steps [steps], rounded up to whole rollouts (PPO: n_steps x n_envs; SAC/TD3: train_freq x "
-        "n_envs), and the command says so (default: the YAML's n_timesteps)",
+    return parse_settings(
+        Settings, argv, "amigo-gym train", "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.", argv=list(argv)
     )
-    p.add_argument("--out", required=True, help="run directory [dir], must be empty unless --resume (required)")
-    p.add_argument(
-        "--resume",
-        action="store_true",
-        help="continue from the latest good checkpoint in --out (its model and replay buffer are pickles: "
-        "resume only runs you trust)",
-    )
-    p.add_argument("--n-envs", type=int, default=None, help="parallel envs [envs] (default: the YAML's n_envs or 1)")
-    p.add_argument("--vec", choices=("auto", "native", "dummy"), default="auto", help="vector env")
-    p.add_argument("--hyperparams", default=None, help="rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml)")
-    p.add_argument("--eval-freq", type=int, default=10_000, help="steps between evaluations [steps], 0: none")
-    p.add_argument("--eval-episodes", type=int, default=5, help="episodes per evaluation [episodes]")
-    p.add_argument("--checkpoint-freq", type=int, default=20_000, help="steps between checkpoints [steps]")
-    p.add_argument("--threads", type=int, default=1, help="torch threads [threads]")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--export", default=None, help="copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none)"
-    )
-    p.add_argument("--export-model", choices=("final", "best"), default="final", help="model to export")
-    p.add_argument("--env", choices=ENV_IDS, default=ENV_ID, help="environment id")
-    p.add_argument(
-        "--env-kwargs",
-        default="{}",
-        help='keywords of gym.make as JSON [json] (default {}), e.g. \'{"path": "mixed", "speed": [0.1, 0.4]}\'',
-    )
-    a = p.parse_args(list(argv))
-    try:
-        env_kw = json.loads(a.env_kwargs)
-    except ValueError:
-        p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
-    if not isinstance(env_kw, dict):
-        p.error(f"--env-kwargs must be a JSON object, got {a.env_kwargs!r}")
-    s = Settings(
-        algo=a.algo,
-        seed=a.seed,
-        out=a.out,
-        timesteps=a.timesteps,
-        n_envs=a.n_envs,
-        vec=a.vec,
-        hyperparams=a.hyperparams,
-        resume=a.resume,
-        eval_freq=a.eval_freq,
-        eval_episodes=a.eval_episodes,
-        checkpoint_freq=a.checkpoint_freq,
-        threads=a.threads,
-        progress=not a.no_progress,
-        export=a.export,
-        export_model=a.export_model,
-        env_id=a.env,
-        env_kwargs=env_kw,
-        argv=list(argv),
-    )
-    try:
-        s.validate()
-    except ValueError as exc:
-        p.error(str(exc))
-    return s
 
 
 def main(argv: Sequence[str] | None = None) -> int:
