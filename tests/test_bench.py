@@ -77,3 +77,26 @@ def test_profile_gap_table(capsys: pytest.CaptureFixture[str]) -> None:
 def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
     assert profile.main(["--single-parts"]) == 0
     assert "Pendulum unwrapped step" in capsys.readouterr().out
+
+
+def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
+    """``simd_level`` (numpy's run-time detection) against the flags the kernel lists in /proc/cpuinfo."""
+    from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
+
+    level = simd_level()
+    line = machine_line()
+    assert cpu_model() in line and f"SIMD {level}" in line
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return  # not Linux: nothing independent to compare with
+    flags = set()
+    for row in text.splitlines():
+        if row.lower().startswith(("flags", "features")):
+            flags |= set(row.split(":", 1)[1].split())
+    if "avx512f" in flags:
+        assert level.startswith("AVX-512"), (level, sorted(f for f in flags if "avx" in f))
+    elif "avx2" in flags:
+        assert level == "AVX2"
+    elif "asimd" in flags:
+        assert level in ("NEON (ASIMD)", "SVE")

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.bench.machine import machine_line
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
@@ -369,7 +370,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 check_range(PROG, "threads", args.threads, 1, 4096)
                 numba.set_num_threads(args.threads)
             threads = int(numba.get_num_threads())
-        print(f"numpy {np.__version__}, {os.cpu_count()} CPUs visible; median of {repeats} repeats", flush=True)
+        print(f"{machine_line()}; median of {repeats} repeats", flush=True)
         print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
         rows = bench(sizes, repeats, min_time, args.loop_max, kernels=not args.skip_kernel)
         startup = None

@@ -42,7 +42,6 @@ import gc
 import inspect
 import math
 import os
-import platform
 import statistics
 import sys
 import time
@@ -55,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.model.params import check_range
 from amigo_gym.options import OneLineParser, run_guarded
@@ -517,6 +517,7 @@ class Report:
             for r in self.vector
         ]
         return {
+            "machine": {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()},
             "single": None if self.single is None else {**asdict(self.single), "ratio": self.single.ratio},
             "vector": vector,
             "fixed_cost_n1": _fixed_cost(self.vector),
@@ -789,11 +790,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_range(PROG, "ppo_steps", ppo_steps, 1, 10_000_000)
         check_range(PROG, "ppo_envs", args.ppo_envs, 1, 4096)
         check_range(PROG, "ppo_repeats", args.ppo_repeats, 1, 100)
-        print(
-            f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}, "
-            f"{os.cpu_count()} CPUs visible; median of {repeats} repeats of >= {min_time:g} s",
-            flush=True,
-        )
+        print(f"{machine_line()}; median of {repeats} repeats of >= {min_time:g} s", flush=True)
         rep = Report()
         if not args.skip_single:
             _log("single env: AmigoBot-v0 vs Pendulum-v1")

@@ -37,21 +37,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from amigo_gym.bench.machine import cpu_model, simd_level
+
 __all__ = ["bench_fastppo", "bench_sb3", "cpu_model", "main"]
 
 PROG = "amigo-gym bench-train"
-
-
-def cpu_model() -> str:
-    """The CPU's model name (``/proc/cpuinfo``'s ``model name``; else :func:`platform.processor`)."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.lower().startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def _load() -> list[float]:
@@ -216,6 +206,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         head = {
             "cpu_model": cpu_model(),
+            "simd": simd_level(),
             "cpu_count": os.cpu_count(),
             "torch_threads": args.threads,
             "python": platform.python_version(),
@@ -224,8 +215,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             "load_average_start": _load(),
             "command": "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:]),
         }
-        print(f"CPU: {head['cpu_model']} ({head['cpu_count']} CPUs visible), torch threads {args.threads}, "
-              f"load average {head['load_average_start']}", flush=True)  # fmt: skip
+        print(f"CPU: {head['cpu_model']}, SIMD {head['simd']} ({head['cpu_count']} CPUs visible), "
+              f"torch threads {args.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
         runs: dict[str, Any] = {}
         runs["fastppo"] = bench_fastppo(args.fast_steps, args.threads)
         _show("fastppo", runs["fastppo"])
