@@ -20,12 +20,10 @@ vector environment with ``(N,)`` arrays), so that one piece of code computes eve
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, TypeAlias
+from typing import NamedTuple, Protocol, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from amigo_gym.model.params import RobotParams
 
 __all__ = [
     "body_velocity",
@@ -54,9 +52,30 @@ __all__ = [
     "col_arctan2",
     "SteadyCircle",
     "circle_steady_state",
+    "Geometry",
 ]
 
 Array = NDArray[np.float64]
+
+
+class Geometry(Protocol):
+    """The robot's geometry as this module reads it [m]: :class:`amigo_gym.model.params.RobotParams` (which imports
+    this module to check its settings, so this module names only the attributes it needs)."""
+
+    @property
+    def l1(self) -> float: ...
+    @property
+    def l3(self) -> float: ...
+    @property
+    def l5(self) -> float: ...
+    @property
+    def r1(self) -> float: ...
+    @property
+    def r2(self) -> float: ...
+    @property
+    def r3(self) -> float: ...
+
+
 #: one column of a batch: a float (``np.float64`` included) or a float64 array of any shape
 Real: TypeAlias = float | NDArray[np.float64]
 
@@ -126,14 +145,14 @@ def sinc(x: ArrayLike) -> Array:
     return np.asarray(_sinc(x, np.sin(x)))
 
 
-def body_velocity_columns(w1: Real, w2: Real, robot: RobotParams) -> tuple[Real, Real]:
+def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Real]:
     """Column form of :func:`body_velocity`: ``(v_A, betadot)`` from the wheel rates ``w1``, ``w2`` [rad/s]."""
     u1 = robot.r1 * w1
     u2 = robot.r2 * w2
     return 0.5 * (u1 + u2), (u1 - u2) / (2.0 * robot.l1)
 
 
-def castor_rate_columns(v_a: Real, betadot: Real, robot: RobotParams) -> Real:
+def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
     """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s].
 
     The sign is that of ``v_A`` as a float: negative for ``-0.0`` (where the environments have
@@ -209,7 +228,7 @@ def pack(*columns: Real) -> Array:
     return out
 
 
-def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     r"""Speed of A and turn rate from the wheel rates (inverse of :func:`wheel_rates`).
 
     .. math::
@@ -228,7 +247,7 @@ def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     return np.asarray(v), np.asarray(b)
 
 
-def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
 
     .. math::
@@ -247,7 +266,7 @@ def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     return pack((v + robot.l1 * b) / robot.r1, (v - robot.l1 * b) / robot.r2)
 
 
-def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     r"""Rolling rate of the self-aligned castor (seventh equation of system 29).
 
     .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
@@ -277,7 +296,7 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) ->
     return x_h - l3 * cos_beta, y_h - l3 * sin_beta
 
 
-def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
+def h_position(pose: ArrayLike, robot: Geometry) -> Array:
     """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
 
     ``r_H = (x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
@@ -293,7 +312,7 @@ def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
-def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     """Contact points K (wheel 1, right) and L (wheel 2, left) on the ground (paper eqs 14, 22).
 
     ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
@@ -306,7 +325,7 @@ def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     return p[..., :2] + side, p[..., :2] - side
 
 
-def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
+def castor_position(pose: ArrayLike, robot: Geometry) -> Array:
     """Ground position of the castor swivel, ``l5`` behind A on the body axis ``(..., 2)`` [m].
 
     The paper places the castor on the body axis at distance ``l5`` from A; as on the real robot it
@@ -317,7 +336,7 @@ def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
     return pack(p[..., 0] - robot.l5 * np.cos(b), p[..., 1] - robot.l5 * np.sin(b))
 
 
-def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
     r"""Exact pose after ``dt`` with wheel rates ``w`` held constant (closed-form arc).
 
     With ``(v_A, betadot)`` from :func:`body_velocity` and ``db = betadot dt``, A moves on a circular
@@ -349,7 +368,7 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) 
     return pack(new.x, new.y, new.beta)
 
 
-def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
     """Wheel angles after ``dt`` with drive-wheel rates ``w`` held (exact).
 
     ``alpha1, alpha2`` advance by ``w dt``; the castor ``alpha3`` by ``castor_rate dt``, which is
@@ -391,7 +410,7 @@ class SteadyCircle(NamedTuple):
     speed_h: Array
 
 
-def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: RobotParams, direction: int = 1) -> SteadyCircle:
+def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
     r"""Steady state of H on a circle of radius ``R`` with A at constant speed ``v_A``.
 
     .. math::

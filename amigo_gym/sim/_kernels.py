@@ -70,7 +70,7 @@ from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from amigo_gym.sim.fast import twin as _twin
+from amigo_gym.sim.layout import twin as _twin
 
 __all__ = [
     "RECORD_FIELDS",

@@ -69,8 +69,8 @@ from amigo_gym.paths.clothoid import (
     STATUS_WINDOW,
 )
 from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
-from amigo_gym.sim.fast import twin as _twin
-from amigo_gym.sim.fast_v1 import (
+from amigo_gym.sim.layout import twin as _twin
+from amigo_gym.sim.layout_v1 import (
     C_ACC,
     C_DEC,
     C_DT,
@@ -171,14 +171,14 @@ __all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
 F64 = NDArray[np.float64]
 
-#: the :func:`amigo_gym.sim.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
+#: the :func:`amigo_gym.sim.layout_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "467f570db5f88a18"
+LAYOUT_FINGERPRINT = "ac6da117cb6e0149"
 if layout_fingerprint() != LAYOUT_FINGERPRINT:
     raise ImportError(
-        f"amigo_gym.sim._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.sim.fast_v1 "
+        f"amigo_gym.sim._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.sim.layout_v1 "
         f"now has "
         f"{layout_fingerprint()}: update the kernels and LAYOUT_FINGERPRINT in amigo_gym/sim/_kernels_v1.py"
     )
