@@ -54,12 +54,17 @@ this file: see :data:`LAYOUT_FINGERPRINT`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
 
 import numba
 import numpy as np
+from numba.extending import register_jitable
 from numpy.typing import NDArray
 
-from amigo_gym.model.actuators import PIECES, _ramp_float
+from amigo_gym.model import actuators, kinematics
+from amigo_gym.model.actuators import PIECES
+from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import (
     MIN_NEWTON_DENOMINATOR,
     NEWTON_ITERATIONS,
@@ -68,7 +73,6 @@ from amigo_gym.paths.clothoid import (
     STATUS_START,
     STATUS_WINDOW,
 )
-from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.sim.layout_v1 import (
     C_ACC,
@@ -117,6 +121,7 @@ from amigo_gym.sim.layout_v1 import (
     S_TIMES,
     S_U1,
     S_U2,
+    SHARED,
     W_A1,
     W_A2,
     W_AL1,
@@ -166,6 +171,7 @@ from amigo_gym.sim.layout_v1 import (
     W_Y,
     layout_fingerprint,
 )
+from amigo_gym.task import v0 as task
 
 __all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
@@ -175,7 +181,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "ac6da117cb6e0149"
+LAYOUT_FINGERPRINT = "22f015c99c66380e"
 if layout_fingerprint() != LAYOUT_FINGERPRINT:
     raise ImportError(
         f"amigo_gym.sim._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.sim.layout_v1 "
@@ -184,6 +190,18 @@ if layout_fingerprint() != LAYOUT_FINGERPRINT:
     )
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+for _fn in SHARED:  # callable from compiled code: the shared functions call each other
+    register_jitable(_fn)
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _shared(fn: _F) -> _F:
+    """``fn`` (one of :data:`amigo_gym.sim.layout_v1.SHARED`) compiled."""
+    assert fn in SHARED, f"{fn} is compiled by amigo_gym.sim._kernels_v1 but not in layout_v1.SHARED (fingerprint)"
+    return cast(_F, _jit(fn))
 
 
 @_jit
@@ -211,7 +229,7 @@ def _py_max(a: float, b: float) -> float:
 
 
 #: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
-_np_clip = _jit(clothoid_np_clip)
+_np_clip = _shared(clothoid._np_clip)
 
 
 @_jit
@@ -220,19 +238,23 @@ def _clip(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else (hi if x > hi else x)
 
 
-@_jit
-def _task_clip(x: float, low: float, high: float) -> float:
-    # task._clip of a float
-    if low <= x <= high:
-        return x
-    return low if x < low else high
+#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
+_task_clip = _shared(task.clip_float)
+_heading_error = _shared(task.heading_error)
+_heading_term = _shared(task.heading_term)
+_steady_heading = _shared(task.steady_heading_float)
+_body_velocity = _shared(kinematics.body_velocity_of)
+_wheel_rates = _shared(kinematics.wheel_rates_of)
+_h_from_a = _shared(kinematics.h_from_a)
+_clip_setpoint = _shared(actuators._clip_float)
+_piece_rates = _shared(actuators.piece_rates)
 
 
 # ----------------------------------------------------------------------------------------- actuators
 
 
 #: actuators._ramp_float itself, compiled: ``(t_a, t_b, u_a, u_b, s_a, s_b)`` of one firmware ramp
-_ramp = _jit(_ramp_float)
+_ramp = _shared(actuators._ramp_float)
 
 
 @_jit
@@ -296,24 +318,10 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     dt = c[C_DT]
     t_s = ws[W_TS]
     # 1. commands (clip_setpoints, body_velocity_columns)
-    lo = -w_max
-    w = o1 if o1 >= lo else lo
-    u1 = r1n * (w if w <= w_max else w_max)
-    w = o2 if o2 >= lo else lo
-    u2 = r2n * (w if w <= w_max else w_max)
-    vc_old = 0.5 * (u1 + u2)
-    wc_old = (u1 - u2) / two_l1
-    w = n1 if n1 >= lo else lo
-    u1 = r1n * (w if w <= w_max else w_max)
-    w = n2 if n2 >= lo else lo
-    u2 = r2n * (w if w <= w_max else w_max)
-    vc_new = 0.5 * (u1 + u2)
-    wc_new = (u1 - u2) / two_l1
+    vc_old, wc_old = _body_velocity(_clip_setpoint(o1, w_max), _clip_setpoint(o2, w_max), r1n, r2n, two_l1)
+    vc_new, wc_new = _body_velocity(_clip_setpoint(n1, w_max), _clip_setpoint(n2, w_max), r1n, r2n, two_l1)
     # 2. ramps
-    u1 = r1n * ws[W_W1]
-    u2 = r2n * ws[W_W2]
-    v0 = 0.5 * (u1 + u2)
-    om0 = (u1 - u2) / two_l1
+    v0, om0 = _body_velocity(ws[W_W1], ws[W_W2], r1n, r2n, two_l1)
     v_end = _channel(ws, S_KV, v0, vc_old, vc_new, c[C_ACC], c[C_DEC], t_s, dt)
     w_end = _channel(ws, S_KW, om0, wc_old, wc_new, c[C_RACC], c[C_RDEC], t_s, dt)
     # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
@@ -352,15 +360,12 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate_channel(ws, S_KV, t0, mid)
         om, al = _evaluate_channel(ws, S_KW, t0, mid)
-        p1 = (v + l1n * om) / r1n
-        q1 = (a + l1n * al) / r1n
-        p2 = (v - l1n * om) / r2n
-        q2 = (a - l1n * al) / r2n
+        p1, q1, p2, q2, vt, at, wt, alt = _piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
         pc = S_PIECES + 5 * n_pieces
-        ws[pc] = 0.5 * (g1 * p1 + g2 * p2)
-        ws[pc + 1] = 0.5 * (g1 * q1 + g2 * q2)
-        ws[pc + 2] = (g1 * p1 - g2 * p2) * inv_2l1t
-        ws[pc + 3] = (g1 * q1 - g2 * q2) * inv_2l1t
+        ws[pc] = vt
+        ws[pc + 1] = at
+        ws[pc + 2] = wt
+        ws[pc + 3] = alt
         ws[pc + 4] = length
         n_pieces += 1
         half = 0.5 * length
@@ -391,9 +396,7 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
         y = y + dy * t
         th = th + t * (w0 + half_alpha * t)
     # 4. the new actuator state (wheel_rates_columns) and the true speed at the end
-    lw = l1n * w_end
-    w1n = (v_end + lw) / r1n
-    w2n = (v_end - lw) / r2n
+    w1n, w2n = _wheel_rates(v_end, w_end, l1n, r1n, r2n)
     ws[W_X] = x
     ws[W_Y] = y
     ws[W_BETA] = th
@@ -651,21 +654,18 @@ def _evaluate(
     beta = ws[W_BETA]
     cb = math.cos(beta)
     sb = math.sin(beta)
-    hx = x + ws[W_L3] * cb
-    hy = y + ws[W_L3] * sb
+    hx, hy = _h_from_a(x, y, cb, sb, ws[W_L3])
     s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[W_PROGRESS])
-    cos_psi = cb * ct + sb * st
-    sin_psi = sb * ct - cb * st
+    cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
     # task.steady_heading, task.reward_term_columns (the exponentials' arguments only)
-    sin_ss = -_task_clip(kappa * l3, -1.0, 1.0)
-    cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
+    cos_ss, sin_ss = _steady_heading(kappa, l3)
     da1 = ws[W_A1] - prev1
     da2 = ws[W_A2] - prev2
     abs_e = abs(e)
     ws[W_ARG_T] = abs_e / c[C_NEG_SIG_T]
     ws[W_ARG_V] = abs(v_true - v_ref) / c[C_NEG_SIG_V]
-    ws[W_HEADING] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+    ws[W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     ws[W_ARG_S] = (da1 * da1 + da2 * da2) / c[C_NEG_SMOOTH_SQ]
     closed = pv[P_CLOSED] != 0.0
     at_end = (not closed) and status == STATUS_END
@@ -679,15 +679,17 @@ def _evaluate(
     if c[C_MEAS_NOISE] != 0.0 or ws[W_L3D] != 0.0:
         mcb = math.cos(mb)
         msb = math.sin(mb)
-        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mx + l3 * mcb, my + l3 * msb, s_h)
+        mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)
+        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h)
     else:
         mcb = cb
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
     e_max = c[C_E_MAX]
     obs[0] = _clip(m_e / c[C_ERROR_SCALE], -e_max, e_max)
-    obs[1] = msb * m_ct - mcb * m_st
-    obs[2] = mcb * m_ct + msb * m_st
+    m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
+    obs[1] = m_sin_psi
+    obs[2] = m_cos_psi
     obs[3] = _clip(m_k * l3, -1.0, 1.0)
     n_prev = int(c[C_N_PREVIEW])
     scale = c[C_PREVIEW_SCALE]
@@ -701,7 +703,7 @@ def _evaluate(
         obs[6 + 3 * i] = _clip(qk * l3, -1.0, 1.0)
     v_max = c[C_V_MAX]
     w_max = c[C_W_MAX]
-    v_meas = 0.5 * (c[C_R1] * mw1 + c[C_R2] * mw2)
+    v_meas = _body_velocity(mw1, mw2, c[C_R1], c[C_R2], c[C_TWO_L1])[0]
     k = 4 + 3 * n_prev
     obs[k] = v_ref / v_max
     obs[k + 1] = _reference_speed(c, ws, t + c[C_LOOKAHEAD]) / v_max

@@ -26,7 +26,7 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     return copy
 
 
-def source_fingerprint(values: object, functions: Iterable[object]) -> str:
+def source_fingerprint(values: object, functions: Iterable[Callable[..., Any]]) -> str:
     """A short hash (16 hex digits) of ``repr(values)`` and of the source text of ``functions``.
 
     numba keys its disk cache of a kernel on the kernel's own file, but compiles into it the constants and the
@@ -34,5 +34,5 @@ def source_fingerprint(values: object, functions: Iterable[object]) -> str:
     for and refuses to load when it differs (so that a change of them comes with a change of the kernel's file,
     which invalidates the cached code).
     """
-    shared = tuple(inspect.getsource(f) for f in functions)  # type: ignore[arg-type]
+    shared = tuple(inspect.getsource(f) for f in functions)
     return hashlib.sha256(repr((values, shared)).encode()).hexdigest()[:16]

@@ -10,9 +10,13 @@ May import numpy and the model, paths and task modules the fingerprint names; ne
 
 from __future__ import annotations
 
-from amigo_gym.model import actuators, fresnel
+from collections.abc import Callable
+from typing import Any
+
+from amigo_gym.model import actuators, fresnel, kinematics
 from amigo_gym.paths import clothoid
 from amigo_gym.sim.layout import source_fingerprint
+from amigo_gym.task import v0 as task
 
 __all__ = [
     "CONSTANT_FIELDS",
@@ -251,7 +255,19 @@ S_U2 = S_LOG + 5
 
 #: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
 #: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
-SHARED: tuple[object, ...] = (actuators._ramp_float, clothoid._np_clip)
+SHARED: tuple[Callable[..., Any], ...] = (
+    actuators._ramp_float,
+    actuators._clip_float,
+    actuators.piece_rates,
+    clothoid._np_clip,
+    kinematics.body_velocity_of,
+    kinematics.wheel_rates_of,
+    kinematics.h_from_a,
+    task.clip_float,
+    task.heading_error,
+    task.heading_term,
+    task.steady_heading_float,
+)
 
 
 def layout_fingerprint() -> str:
