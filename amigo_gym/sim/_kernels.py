@@ -3,8 +3,10 @@ r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots,
 The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
 :func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
-termination) with the same formulas in the same order of operations, writing into preallocated
-arrays. :mod:`amigo_gym.task.v0` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
+termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
+reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"), the
+loops and the projection are written here. :mod:`amigo_gym.task.v0` stays the reference:
+``tests/test_kernels.py`` checks that the two agree.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
@@ -60,18 +62,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, TypeVar, cast
+from typing import Any, cast
 
 import numba
 import numpy as np
 from llvmlite import ir
 from numba.core import types as nb_types
 from numba.core.typing.templates import Signature
-from numba.extending import intrinsic, register_jitable
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics
-from amigo_gym.sim.layout import source_fingerprint
+from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 
@@ -207,26 +209,12 @@ def layout_fingerprint() -> str:
     return source_fingerprint((STATE_FIELDS, RECORD_FIELDS, CONSTANT_FIELDS, START_FIELDS), SHARED)
 
 
-if layout_fingerprint() != LAYOUT_FINGERPRINT:
-    raise ImportError(
-        f"amigo_gym.sim._kernels was written for the fingerprint {LAYOUT_FINGERPRINT}, but its shared functions now "
-        f"have {layout_fingerprint()}: update LAYOUT_FINGERPRINT in amigo_gym/sim/_kernels.py"
-    )
+check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 
-for _fn in SHARED:  # callable from compiled code: the shared functions call each other
-    register_jitable(_fn)
-
-
-_F = TypeVar("_F", bound=Callable[..., Any])
-
-
-def _shared(fn: _F) -> _F:
-    """``fn`` (one of :data:`SHARED`) compiled."""
-    assert fn in SHARED, f"{fn} is compiled by amigo_gym.sim._kernels but not in its SHARED (fingerprint)"
-    return cast(_F, _jit(fn))
+_shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit)
 
 
 _clip = _shared(task.clip_float)

@@ -32,23 +32,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast
-from amigo_gym.sim.layout_v1 import *  # noqa: F403  (the layouts, re-exported: the envs read fast_v1.W_*)
-from amigo_gym.sim.layout_v1 import (
-    CONSTANT_FIELDS,
-    S_LOG,
-    S_U1,
-    W_A2,
-    W_L3D,
-    W_NOISE_ON,
-    W_R1,
-    W_SLIP_MAX,
-    W_STEPS,
-    W_X,
-    WS_FIELDS,
-    WS_SCRATCH,
-    layout_fingerprint,
-)
+from amigo_gym.sim import fast, layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -63,6 +47,17 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+
+layout_fingerprint = layout_v1.layout_fingerprint
+
+
+def __getattr__(name: str) -> Any:
+    """The layouts' names (:mod:`amigo_gym.sim.layout_v1`), also read here: ``fast_v1.W_X``."""
+    try:
+        return getattr(layout_v1, name)
+    except AttributeError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+
 
 # ---------------------------------------------------------------------------- selection and data
 
@@ -161,7 +156,7 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "heading_noise": rz.heading_noise,
         "wheel_rate_noise": rz.wheel_rate_noise,
     }
-    head = [values[name] for name in CONSTANT_FIELDS]
+    head = [values[name] for name in layout_v1.CONSTANT_FIELDS]
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
     return np.array(head + tail, dtype=np.float64)
 
@@ -202,12 +197,12 @@ class StepKernel:
 
     Attributes:
         consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
-        ws: the workspace, ``len(WS_FIELDS) + WS_SCRATCH`` float64.
+        ws: the workspace, ``len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH`` float64.
     """
 
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
-        self.ws: Array = np.zeros(len(WS_FIELDS) + WS_SCRATCH)
+        self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
@@ -223,8 +218,8 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
-        self.u1: Array = self.ws[S_U1 : S_U1 + self.n_normal]
-        self.logs: Array = self.ws[S_LOG : S_LOG + self.n_normal]
+        self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
+        self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -249,16 +244,16 @@ class StepKernel:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
         self.path = flat_path(path)
         ws = self.ws
-        ws[W_X : W_STEPS + 1] = (
+        ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
             st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
         )  # fmt: skip
-        ws[W_R1 : W_L3D + 1] = (
+        ws[layout_v1.W_R1 : layout_v1.W_L3D + 1] = (
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
-        ws[W_SLIP_MAX] = ep.slip_max
+        ws[layout_v1.W_SLIP_MAX] = ep.slip_max
         # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
         self.noise_on = float(ep.slip_max) > 0.0 or self.n_normal > 0
-        ws[W_NOISE_ON] = 1.0 if self.noise_on else 0.0
+        ws[layout_v1.W_NOISE_ON] = 1.0 if self.noise_on else 0.0
         self.key = np.uint64(ep.key)
 
     def draw(self, steps: int) -> None:
@@ -271,10 +266,10 @@ class StepKernel:
 
     def state(self, steps: int) -> tracking.State:
         """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""
-        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[W_X : W_A2 + 1].tolist()
+        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[layout_v1.W_X : layout_v1.W_A2 + 1].tolist()
         return tracking.State(x, y, beta, w1, w2, al1, al2, prog, a1, a2, steps)
 
     def outputs(self) -> list[float]:
-        """The entries :data:`WS_FIELDS` of the workspace as Python floats."""
-        out: list[float] = self.ws[: len(WS_FIELDS)].tolist()
+        """The entries :data:`layout_v1.WS_FIELDS` of the workspace as Python floats."""
+        out: list[float] = self.ws[: len(layout_v1.WS_FIELDS)].tolist()
         return out

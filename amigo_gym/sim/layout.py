@@ -10,9 +10,11 @@ import hashlib
 import inspect
 import types
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, TypeVar, cast
 
-__all__ = ["twin", "source_fingerprint"]
+__all__ = ["twin", "source_fingerprint", "check_fingerprint", "shared_compiler"]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
@@ -36,3 +38,35 @@ def source_fingerprint(values: object, functions: Iterable[Callable[..., Any]]) 
     """
     shared = tuple(inspect.getsource(f) for f in functions)
     return hashlib.sha256(repr((values, shared)).encode()).hexdigest()[:16]
+
+
+def check_fingerprint(owner: str, stated: str, actual: str) -> None:
+    """Refuse to load the kernel module ``owner`` (``ImportError``) when the fingerprint it states is not the
+    :func:`source_fingerprint` of what it compiles now (:func:`source_fingerprint`)."""
+    if actual != stated:
+        path = owner.replace(".", "/") + ".py"
+        raise ImportError(
+            f"{owner} was written for the fingerprint {stated}, but its layouts and shared functions now have "
+            f"{actual}: update LAYOUT_FINGERPRINT in {path}"
+        )
+
+
+def shared_compiler(owner: str, shared: tuple[Callable[..., Any], ...], jit: Callable[..., Any]) -> Callable[[_F], _F]:
+    """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
+
+    Registers every function of ``shared`` with numba (``register_jitable``: compiled code may call it, as the
+    shared functions call each other) and returns ``compiled(fn)``: ``jit(fn)`` for a function of ``shared``,
+    an ``ImportError`` for another (so that every function compiled into a kernel counts in its fingerprint).
+    Only the kernel modules call this (they import numba anyway); this module stays numba-free.
+    """
+    from numba.extending import register_jitable
+
+    for fn in shared:
+        register_jitable(fn)
+
+    def compiled(fn: _F) -> _F:
+        if fn not in shared:
+            raise ImportError(f"{owner} compiles {fn.__qualname__} but does not list it in SHARED (its fingerprint)")
+        return cast(_F, jit(fn))
+
+    return compiled

@@ -93,6 +93,7 @@ __all__ = [
     "REWARD_TERMS",
     "obs_dim",
     "obs_bounds",
+    "error_bound",
     "obs_names",
     "validate_action",
     "action_pair",
@@ -170,9 +171,15 @@ def obs_dim(params: EnvParams) -> int:
     return len(OBS_HEAD) + len(params.preview) + len(OBS_TAIL)
 
 
+def error_bound(termination_distance: float, error_scale: float) -> float:
+    """The bound of the observed cross-track error ``e / error_scale`` [-]: ``2 termination_distance / error_scale``
+    (AmigoBot-v0 and -v1; the observation clips to it)."""
+    return 2.0 * termination_distance / error_scale
+
+
 def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
     """Finite ``(low, high)`` bounds of the observation (see the module table)."""
-    e_max = 2.0 * params.termination_distance / params.error_scale
+    e_max = error_bound(params.termination_distance, params.error_scale)
     high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + len(params.preview)) + [1.0, 1.0, 2.0, 1.0])
     low = -high
     low[-1] = 0.0
@@ -355,7 +362,7 @@ class TaskConstants:
             "speed": params.speed,
             "max_speed": robot.max_speed,
             "error_scale": params.error_scale,
-            "e_max": 2.0 * params.termination_distance / params.error_scale,  # obs_bounds(params)[1][0]
+            "e_max": error_bound(params.termination_distance, params.error_scale),  # obs_bounds(params)[1][0]
             "termination_distance": params.termination_distance,
             "sigma_track": params.sigma_track,
             "sigma_speed": params.sigma_speed,

@@ -68,7 +68,14 @@ from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.kinematics import Real, body_velocity_of, col_cos, col_sin, h_from_a
 from amigo_gym.model.params import RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.task.v0 import heading_error, reward_product, reward_term_columns, steady_heading
+from amigo_gym.task.v0 import (
+    OBS_HEAD,
+    error_bound,
+    heading_error,
+    reward_product,
+    reward_term_columns,
+    steady_heading,
+)
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -445,7 +452,7 @@ def _robot_from_mapping(owner: str, name: str, base: RobotParams, values: Mappin
 
 def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     """Names of the observation's components, in order (module table)."""
-    out = ["cross_track_error", "sin_heading_error", "cos_heading_error", "curvature"]
+    out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
     out += [
@@ -462,8 +469,7 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Finite ``(low, high)`` bounds of the observation (module table)."""
-    e_max = 2.0 * p.termination_distance / p.error_scale
-    high = [e_max, 1.0, 1.0, 1.0]
+    high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
     for d in p.preview:
         b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
         high += [b, b, 1.0]
@@ -508,7 +514,7 @@ def constants(p: TrackingParams) -> Constants:
         w_max=w_max,
         v_max=robot.max_speed,
         l3=robot.l3,
-        e_max=2.0 * p.termination_distance / p.error_scale,
+        e_max=error_bound(p.termination_distance, p.error_scale),
         n_sub=actuators.step_subintervals(p.dt, robot),
         ring_length=actuators.ring_length(p.dt),
         window=window,
@@ -643,7 +649,20 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
     v = ep.v_cruise
     if p.speed_profile == "constant":
         return v
+    if not (isinstance(t, np.ndarray) or isinstance(v, np.ndarray) or isinstance(ep.t_brake, np.ndarray)):
+        return trapezoid_speed(v, p.profile_accel, p.profile_decel, ep.t_brake, t)
     return _max0(_min(_min(p.profile_accel * t, v), v - p.profile_decel * (t - ep.t_brake)))
+
+
+def trapezoid_speed(v: float, accel: float, decel: float, t_brake: float, t: float) -> float:
+    """:func:`reference_speed` of the trapezoid for floats [m/s]: ``max(0, min(accel t, v, v - decel (t - t_brake)))``
+    with the ties and the order of the column form. Pure float code, written once: the compiled step
+    (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
+    a = accel * t
+    a = a if a <= v else v
+    b = v - decel * (t - t_brake)
+    a = a if a <= b else b
+    return a if a > 0.0 else 0.0
 
 
 # --------------------------------------------------------------------------- paths
