@@ -15,6 +15,8 @@ from typing import Any, TypeVar, cast
 __all__ = ["twin", "source_fingerprint", "check_fingerprint", "shared_compiler"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
+#: the functions already registered with numba by :func:`shared_compiler`
+_REGISTERED: set[Callable[..., Any]] = set()
 
 
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
@@ -62,7 +64,9 @@ def shared_compiler(owner: str, shared: tuple[Callable[..., Any], ...], jit: Cal
     from numba.extending import register_jitable
 
     for fn in shared:
-        register_jitable(fn)
+        if fn not in _REGISTERED:  # once per process (both kernels share some functions)
+            register_jitable(fn)
+            _REGISTERED.add(fn)
 
     def compiled(fn: _F) -> _F:
         if fn not in shared:
