@@ -66,13 +66,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import NamedTuple
+from typing import NamedTuple, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
-from amigo_gym.model.kinematics import Real, body_velocity_columns
+from amigo_gym.model.kinematics import Real, body_velocity_columns, body_velocity_of, wheel_rates_of
 from amigo_gym.model.params import RobotParams, check_range
 
 __all__ = [
@@ -208,8 +208,7 @@ def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Rea
     Returns:
         ``(alpha1dot, alpha2dot)`` [rad/s], columns.
     """
-    lw = robot.l1 * w
-    return (v + lw) / robot.r1, (v - lw) / robot.r2
+    return wheel_rates_of(v, w, robot.l1, robot.r1, robot.r2)
 
 
 class Ramp(NamedTuple):
@@ -562,14 +561,7 @@ def actuator_step(
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate(kv, uv, sv, t0, mid)
         om, al = _evaluate(kw, uw, sw, t0, mid)
-        p1 = (v + l1n * om) / r1n
-        q1 = (a + l1n * al) / r1n
-        p2 = (v - l1n * om) / r2n
-        q2 = (a - l1n * al) / r2n
-        vt = 0.5 * (g1 * p1 + g2 * p2)
-        at = 0.5 * (g1 * q1 + g2 * q2)
-        wt = (g1 * p1 - g2 * p2) * inv_2l1t
-        alt = (g1 * q1 - g2 * q2) * inv_2l1t
+        p1, q1, p2, q2, vt, at, wt, alt = piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
         nx: Real
         ny: Real
         nb: Real
@@ -659,6 +651,45 @@ def _evaluate_float(
     return val, slope
 
 
+@overload
+def piece_rates(
+    v: float, a: float, om: float, al: float, l1n: float, r1n: float, r2n: float, g1: float, g2: float, inv_2l1t: float
+) -> tuple[float, float, float, float, float, float, float, float]: ...
+@overload
+def piece_rates(
+    v: Real, a: Real, om: Real, al: Real, l1n: float, r1n: float, r2n: float, g1: Real, g2: Real, inv_2l1t: Real
+) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real]: ...
+def piece_rates(
+    v: Real, a: Real, om: Real, al: Real, l1n: float, r1n: float, r2n: float, g1: Real, g2: Real, inv_2l1t: Real
+) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real]:
+    r"""The rates of one linear piece of the ramps: the wheels' commanded rate and its slope, and the true body's.
+
+    From the nominal body velocity ``v + a tau`` [m/s] and turn rate ``om + al tau`` [rad/s] of the piece, the wheel
+    rates ``p_i + q_i tau`` [rad/s] (:func:`~amigo_gym.model.kinematics.wheel_rates_of` of the nominal robot) and the
+    true body's ``vt + at tau``, ``wt + alt tau`` with the true radii times ``1 - slip`` (``g1``, ``g2`` [m]) and
+    ``inv_2l1t = 1 / (2 l_1)`` of the true half track:
+
+    .. math:: v_t = \tfrac12 (g_1 p_1 + g_2 p_2),\quad \omega_t = \frac{g_1 p_1 - g_2 p_2}{2 l_1}
+
+    Pure arithmetic on floats or arrays, written once: the column step, the float step and the compiled step
+    (:mod:`amigo_gym.sim._kernels_v1`) call it. Returns ``(p1, q1, p2, q2, vt, at, wt, alt)``.
+    """
+    p1 = (v + l1n * om) / r1n
+    q1 = (a + l1n * al) / r1n
+    p2 = (v - l1n * om) / r2n
+    q2 = (a - l1n * al) / r2n
+    return (
+        p1,
+        q1,
+        p2,
+        q2,
+        0.5 * (g1 * p1 + g2 * p2),
+        0.5 * (g1 * q1 + g2 * q2),
+        (g1 * p1 - g2 * p2) * inv_2l1t,
+        (g1 * q1 - g2 * q2) * inv_2l1t,
+    )
+
+
 def _clip_float(w: float, w_max: float) -> float:
     """:func:`clip_setpoints` of one setpoint for floats."""
     lo = -w_max
@@ -692,16 +723,10 @@ def _actuator_step_float(
     l1n, r1n, r2n = nominal.l1, nominal.r1, nominal.r2
     two_l1 = 2.0 * l1n
     # 1. commands (clip_setpoints, body_velocity_columns)
-    u1 = r1n * _clip_float(w1c_old, w_max)
-    u2 = r2n * _clip_float(w2c_old, w_max)
-    vc_old, wc_old = 0.5 * (u1 + u2), (u1 - u2) / two_l1
-    u1 = r1n * _clip_float(w1c_new, w_max)
-    u2 = r2n * _clip_float(w2c_new, w_max)
-    vc_new, wc_new = 0.5 * (u1 + u2), (u1 - u2) / two_l1
+    vc_old, wc_old = body_velocity_of(_clip_float(w1c_old, w_max), _clip_float(w2c_old, w_max), r1n, r2n, two_l1)
+    vc_new, wc_new = body_velocity_of(_clip_float(w1c_new, w_max), _clip_float(w2c_new, w_max), r1n, r2n, two_l1)
     # 2. ramps
-    u1 = r1n * w1
-    u2 = r2n * w2
-    v0, om0 = 0.5 * (u1 + u2), (u1 - u2) / two_l1
+    v0, om0 = body_velocity_of(w1, w2, r1n, r2n, two_l1)
     kv, uv, sv, v_end = _channel_float(v0, vc_old, vc_new, limits.acceleration, limits.deceleration, t_s, dt)
     kw, uw, sw, w_end = _channel_float(om0, wc_old, wc_new, limits.rot_acceleration, limits.rot_deceleration, t_s, dt)
     times = [0.0, *sorted([kv[1], kv[2], kv[3], kv[4], kv[5], kw[1], kw[2], kw[4], kw[5]]), dt]
@@ -722,14 +747,7 @@ def _actuator_step_float(
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate_float(kv, uv, sv, t0, mid)
         om, al = _evaluate_float(kw, uw, sw, t0, mid)
-        p1 = (v + l1n * om) / r1n
-        q1 = (a + l1n * al) / r1n
-        p2 = (v - l1n * om) / r2n
-        q2 = (a - l1n * al) / r2n
-        vt = 0.5 * (g1 * p1 + g2 * p2)
-        at = 0.5 * (g1 * q1 + g2 * q2)
-        wt = (g1 * p1 - g2 * p2) * inv_2l1t
-        alt = (g1 * q1 - g2 * q2) * inv_2l1t
+        p1, q1, p2, q2, vt, at, wt, alt = piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
         pieces.append((vt, at, wt, alt, length))
         half = 0.5 * length
         da1 = da1 + length * (p1 + q1 * half)
@@ -737,9 +755,7 @@ def _actuator_step_float(
         dist = dist + length * (vt + at * half)
     x, y, beta = fresnel.advance_chain_float(x, y, beta, pieces, n_sub)
     # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
-    lw = l1n * w_end
-    w1n = (v_end + lw) / r1n
-    w2n = (v_end - lw) / r2n
+    w1n, w2n = wheel_rates_of(v_end, w_end, l1n, r1n, r2n)
     v_true = 0.5 * (g1 * w1n + g2 * w2n)
     w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
     return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)

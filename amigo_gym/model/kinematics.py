@@ -20,12 +20,10 @@ vector environment with ``(N,)`` arrays), so that one piece of code computes eve
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, TypeAlias
+from typing import NamedTuple, Protocol, TypeAlias, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-from amigo_gym.model.params import RobotParams
 
 __all__ = [
     "body_velocity",
@@ -54,9 +52,35 @@ __all__ = [
     "col_arctan2",
     "SteadyCircle",
     "circle_steady_state",
+    "Geometry",
+    "half_tan_cos_sin",
+    "arc_from_tangents",
+    "body_velocity_of",
+    "wheel_rates_of",
+    "castor_rate_float",
 ]
 
 Array = NDArray[np.float64]
+
+
+class Geometry(Protocol):
+    """The robot's geometry as this module reads it [m]: :class:`amigo_gym.model.params.RobotParams` (which imports
+    this module to check its settings, so this module names only the attributes it needs)."""
+
+    @property
+    def l1(self) -> float: ...
+    @property
+    def l3(self) -> float: ...
+    @property
+    def l5(self) -> float: ...
+    @property
+    def r1(self) -> float: ...
+    @property
+    def r2(self) -> float: ...
+    @property
+    def r3(self) -> float: ...
+
+
 #: one column of a batch: a float (``np.float64`` included) or a float64 array of any shape
 Real: TypeAlias = float | NDArray[np.float64]
 
@@ -90,10 +114,83 @@ def cos_sin(x: Real) -> tuple[Real, Real]:
     few units in the last place (absolute error about 2e-16), for any finite ``x`` (``x/2`` is never an
     odd multiple of ``pi/2`` in floating point, so ``t`` is finite).
     """
-    t = col_tan(0.5 * x)
+    return half_tan_cos_sin(col_tan(0.5 * x))
+
+
+# Pure arithmetic, written once: these functions take floats or arrays alike (no numpy call, no branch on a
+# value), so the reference runs them as Python on floats and on ``(N,)`` arrays, and the compiled steps
+# (:mod:`amigo_gym.sim`) compile the very same functions with ``numba.njit`` (docs/architecture.md, "The compiled
+# step"). Keep them so: arithmetic, comparisons and the ``math`` functions numba compiles to the same IEEE
+# operations; any change of their text changes the kernels' fingerprints (:mod:`amigo_gym.sim.layout`).
+
+
+def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:
+    r"""``(cos x, sin x)`` from ``t = tan(x / 2)``: ``((1 - t^2) / (1 + t^2), 2 t / (1 + t^2))`` (:func:`cos_sin`)."""
     t2 = t * t
     r = 1.0 / (1.0 + t2)
     return (1.0 - t2) * r, (t + t) * r
+
+
+@overload
+def arc_from_tangents(
+    x: float, y: float, v_a: float, dt: float, h: float, t_h: float, t_m: float
+) -> tuple[float, float, float, float]: ...
+@overload
+def arc_from_tangents(
+    x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
+) -> tuple[Real, Real, Real, Real]: ...
+def arc_from_tangents(
+    x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
+) -> tuple[Real, Real, Real, Real]:
+    r"""The exact arc step of :func:`arc_step` from the two tangents it needs: ``t_h = tan(h / 2)`` of half the turn
+    ``h = betadot dt / 2`` and ``t_m = tan(m / 2)`` of the mid-step heading ``m = beta + h``.
+
+    .. math:: x' = x + c \cos m,\quad y' = y + c \sin m,\quad c = v_A\,dt\,rac{\sin h}{h},\quad
+        \coseta' = \cos m\cos h - \sin m\sin h,\quad \sineta' = \sin m\cos h + \cos m\sin h
+
+    Returns:
+        ``(x', y', cos beta', sin beta')`` [m, m, -, -].
+    """
+    cos_h, sin_h = half_tan_cos_sin(t_h)
+    cos_mid, sin_mid = half_tan_cos_sin(t_m)
+    zero = h == 0.0  # sin(h) / h, 1 at h = 0 (adds 1 to both sides there; exact elsewhere)
+    chord = v_a * dt * ((sin_h + zero) / (h + zero))
+    return (
+        x + chord * cos_mid,
+        y + chord * sin_mid,
+        cos_mid * cos_h - sin_mid * sin_h,
+        sin_mid * cos_h + cos_mid * sin_h,
+    )
+
+
+@overload
+def body_velocity_of(w1: float, w2: float, r1: float, r2: float, two_l1: float) -> tuple[float, float]: ...
+@overload
+def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]: ...
+def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]:
+    r"""``(v_A, betadot)`` [m/s, rad/s] from the wheel rates [rad/s]: ``v_A = (r_1 w_1 + r_2 w_2) / 2``,
+    ``betadot = (r_1 w_1 - r_2 w_2) / (2 l_1)`` (``two_l1`` is ``2 l_1`` [m])."""
+    u1 = r1 * w1
+    u2 = r2 * w2
+    return 0.5 * (u1 + u2), (u1 - u2) / two_l1
+
+
+@overload
+def wheel_rates_of(v_a: float, betadot: float, l1: float, r1: float, r2: float) -> tuple[float, float]: ...
+@overload
+def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]: ...
+def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]:
+    r"""The wheel rates [rad/s] of a body velocity: ``w_1 = (v_A + l_1 betadot) / r_1``,
+    ``w_2 = (v_A - l_1 betadot) / r_2`` (the inverse of :func:`body_velocity_of`)."""
+    lw = l1 * betadot
+    return (v_a + lw) / r1, (v_a - lw) / r2
+
+
+def castor_rate_float(v_a: float, betadot: float, l5: float, r3: float) -> float:
+    r"""The castor wheel's rate [rad/s] for floats: ``sign(v_A) sqrt(l_5^2 betadot^2 + v_A^2) / r_3``
+    (:func:`castor_rate_columns`)."""
+    lb = l5 * betadot
+    return math.copysign(math.sqrt(lb * lb + v_a * v_a), v_a) / r3
 
 
 def col_sqrt(x: Real) -> Real:
@@ -126,19 +223,19 @@ def sinc(x: ArrayLike) -> Array:
     return np.asarray(_sinc(x, np.sin(x)))
 
 
-def body_velocity_columns(w1: Real, w2: Real, robot: RobotParams) -> tuple[Real, Real]:
+def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Real]:
     """Column form of :func:`body_velocity`: ``(v_A, betadot)`` from the wheel rates ``w1``, ``w2`` [rad/s]."""
-    u1 = robot.r1 * w1
-    u2 = robot.r2 * w2
-    return 0.5 * (u1 + u2), (u1 - u2) / (2.0 * robot.l1)
+    return body_velocity_of(w1, w2, robot.r1, robot.r2, 2.0 * robot.l1)
 
 
-def castor_rate_columns(v_a: Real, betadot: Real, robot: RobotParams) -> Real:
+def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
     """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s].
 
     The sign is that of ``v_A`` as a float: negative for ``-0.0`` (where the environments have
     ``betadot = 0`` too, so a zero rate either way).
     """
+    if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
+        return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
     lb = robot.l5 * betadot
     return _copysign(col_sqrt(lb * lb + v_a * v_a), v_a) / robot.r3
 
@@ -187,18 +284,10 @@ def arc_step(x: Real, y: Real, beta: Real, v_a: Real, betadot: Real, dt: Real, w
     """
     db = betadot * dt
     h = 0.5 * db
-    cos_h, sin_h = cos_sin(h)
-    cos_mid, sin_mid = cos_sin(beta + h)
-    chord = v_a * dt * _sinc(h, sin_h)
+    x1, y1, cos_b, sin_b = arc_from_tangents(x, y, v_a, dt, h, col_tan(0.5 * h), col_tan(0.5 * (beta + h)))
     if not with_heading:
-        return ArcStep(x + chord * cos_mid, y + chord * sin_mid, beta + db, math.nan, math.nan)
-    return ArcStep(
-        x + chord * cos_mid,
-        y + chord * sin_mid,
-        beta + db,
-        cos_mid * cos_h - sin_mid * sin_h,
-        sin_mid * cos_h + cos_mid * sin_h,
-    )
+        return ArcStep(x1, y1, beta + db, math.nan, math.nan)
+    return ArcStep(x1, y1, beta + db, cos_b, sin_b)
 
 
 def pack(*columns: Real) -> Array:
@@ -209,7 +298,7 @@ def pack(*columns: Real) -> Array:
     return out
 
 
-def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     r"""Speed of A and turn rate from the wheel rates (inverse of :func:`wheel_rates`).
 
     .. math::
@@ -228,7 +317,7 @@ def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     return np.asarray(v), np.asarray(b)
 
 
-def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
 
     .. math::
@@ -244,10 +333,10 @@ def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
-    return pack((v + robot.l1 * b) / robot.r1, (v - robot.l1 * b) / robot.r2)
+    return pack(*wheel_rates_of(v, b, robot.l1, robot.r1, robot.r2))
 
 
-def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
+def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     r"""Rolling rate of the self-aligned castor (seventh equation of system 29).
 
     .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
@@ -263,7 +352,11 @@ def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array
     return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
 
 
-def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+@overload
+def h_from_a(x_a: float, y_a: float, cos_beta: float, sin_beta: float, l3: float) -> tuple[float, float]: ...
+@overload
+def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]: ...
+def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
     """Point H from point A in column form: H lies ``l3`` ahead of A along the heading (paper eq. 4).
 
     ``(x_H, y_H) = (x_A + l3 cos beta, y_A + l3 sin beta)``; the inverse of :func:`a_from_h`. The one
@@ -277,7 +370,7 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) ->
     return x_h - l3 * cos_beta, y_h - l3 * sin_beta
 
 
-def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
+def h_position(pose: ArrayLike, robot: Geometry) -> Array:
     """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
 
     ``r_H = (x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
@@ -293,7 +386,7 @@ def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
-def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
+def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     """Contact points K (wheel 1, right) and L (wheel 2, left) on the ground (paper eqs 14, 22).
 
     ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
@@ -306,7 +399,7 @@ def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     return p[..., :2] + side, p[..., :2] - side
 
 
-def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
+def castor_position(pose: ArrayLike, robot: Geometry) -> Array:
     """Ground position of the castor swivel, ``l5`` behind A on the body axis ``(..., 2)`` [m].
 
     The paper places the castor on the body axis at distance ``l5`` from A; as on the real robot it
@@ -317,7 +410,7 @@ def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
     return pack(p[..., 0] - robot.l5 * np.cos(b), p[..., 1] - robot.l5 * np.sin(b))
 
 
-def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
     r"""Exact pose after ``dt`` with wheel rates ``w`` held constant (closed-form arc).
 
     With ``(v_A, betadot)`` from :func:`body_velocity` and ``db = betadot dt``, A moves on a circular
@@ -349,7 +442,7 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) 
     return pack(new.x, new.y, new.beta)
 
 
-def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
+def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
     """Wheel angles after ``dt`` with drive-wheel rates ``w`` held (exact).
 
     ``alpha1, alpha2`` advance by ``w dt``; the castor ``alpha3`` by ``castor_rate dt``, which is
@@ -391,7 +484,7 @@ class SteadyCircle(NamedTuple):
     speed_h: Array
 
 
-def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: RobotParams, direction: int = 1) -> SteadyCircle:
+def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
     r"""Steady state of H on a circle of radius ``R`` with A at constant speed ``v_A``.
 
     .. math::

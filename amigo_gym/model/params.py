@@ -23,6 +23,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any, Literal
 
+from amigo_gym.model.kinematics import circle_steady_state
+
 __all__ = [
     "HEADING_LIMIT",
     "POSE_LIMIT",
@@ -279,8 +281,6 @@ class EnvParams:
         The circle needs the exact steady state's rates (:func:`amigo_gym.model.kinematics.circle_steady_state`);
         they are linear in the speed, so the largest speed that fits is ``speed * w_max / needed``.
         """
-        from amigo_gym.model.kinematics import circle_steady_state
-
         robot, v, w_max = self.robot, self.speed, self.robot.max_wheel_rate
         limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
         r_min = min(robot.r1, robot.r2)

@@ -315,6 +315,14 @@ def _counter_uniform_int(key: int, step: int, channel: int) -> float:
     return (float(z >> 11) + 0.5) * _INV_2_53
 
 
+def box_muller(level: float, log_u1: float, cos_angle: float) -> float:
+    r"""One normal draw of standard deviation ``level`` by Box–Muller from ``log(u1)`` and ``cos(2 pi u2)`` of two
+    uniforms: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`. The logarithm and the cosine are given (numpy's, in
+    the reference); pure float arithmetic, written once: the compiled step (:mod:`amigo_gym.sim._kernels_v1`)
+    compiles this function."""
+    return level * (math.sqrt(-2.0 * log_u1) * cos_angle)
+
+
 def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:
     """:func:`step_noise` for one robot (the same bits): the normals' ``log`` and ``cos`` in one numpy call each."""
     s1 = s2 = 0.0
@@ -330,5 +338,5 @@ def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) ->
         logs = np.log(u1).tolist()
         coss = np.cos(u2).tolist()
         for c, lg, cs in zip(on, logs, coss, strict=True):
-            out[c] = levels[c] * (math.sqrt(-2.0 * lg) * cs)
+            out[c] = box_muller(levels[c], lg, cs)
     return StepNoise(s1, s2, out[0], out[1], out[2], out[3], out[4])

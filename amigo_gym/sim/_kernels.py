@@ -3,8 +3,10 @@ r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots,
 The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
 :func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
-termination) with the same formulas in the same order of operations, writing into preallocated
-arrays. :mod:`amigo_gym.task.v0` stays the reference: ``tests/test_kernels.py`` checks that the two agree.
+termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
+reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"), the
+loops and the projection are written here. :mod:`amigo_gym.task.v0` stays the reference:
+``tests/test_kernels.py`` checks that the two agree.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
@@ -60,7 +62,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import cast
+from typing import Any, cast
 
 import numba
 import numpy as np
@@ -70,7 +72,10 @@ from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from amigo_gym.sim.fast import twin as _twin
+from amigo_gym.model import kinematics
+from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
+from amigo_gym.sim.layout import twin as _twin
+from amigo_gym.task import v0 as task
 
 __all__ = [
     "RECORD_FIELDS",
@@ -175,21 +180,54 @@ HEADING_LIM = _C["heading_limit"]
 
 F64 = NDArray[np.float64]
 
+#: the reference's scalar functions this module compiles as they are (``numba.njit`` of the function itself, called
+#: by the loops below): the one source of each piece of the step (docs/architecture.md, "The compiled step")
+SHARED: tuple[Callable[..., Any], ...] = (
+    task.clip_float,
+    task.heading_error,
+    task.heading_term,
+    task.steady_heading_float,
+    task.smooth_term,
+    task.reward_product,
+    kinematics.body_velocity_of,
+    kinematics.arc_from_tangents,
+    kinematics.castor_rate_float,
+    kinematics.h_from_a,
+    kinematics.a_from_h,
+    kinematics.half_tan_cos_sin,
+)
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
-def _clip(x: float, low: float, high: float) -> float:
-    # as task._clip / np.clip for non-NaN x (x itself when inside, so -0.0 stays -0.0)
-    if low <= x <= high:
-        return x
-    return low if x < low else high
+#: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
+#: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
+#: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
+#: also invalidates the cached code.
+LAYOUT_FINGERPRINT = "48f21fe032a96bdf"
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
-def _cos_sin(t: float) -> tuple[float, float]:
-    # kinematics.cos_sin from t = tan(x / 2)
-    t2 = t * t
-    r = 1.0 / (1.0 + t2)
-    return (1.0 - t2) * r, (t + t) * r
+def layout_fingerprint() -> str:
+    """The fingerprint of this module's layouts and of the source of :data:`SHARED` (:data:`LAYOUT_FINGERPRINT`)."""
+    return source_fingerprint((STATE_FIELDS, RECORD_FIELDS, CONSTANT_FIELDS, START_FIELDS), SHARED)
+
+
+check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+
+_shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit)
+
+
+_clip = _shared(task.clip_float)
+_heading_error = _shared(task.heading_error)
+_heading_term = _shared(task.heading_term)
+_steady_heading = _shared(task.steady_heading_float)
+_smooth_term = _shared(task.smooth_term)
+_reward_product = _shared(task.reward_product)
+_body_velocity = _shared(kinematics.body_velocity_of)
+_arc = _shared(kinematics.arc_from_tangents)
+_castor_rate = _shared(kinematics.castor_rate_float)
+_h_from_a = _shared(kinematics.h_from_a)
+_a_from_h = _shared(kinematics.a_from_h)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -207,10 +245,8 @@ def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, f
     # task.move_columns up to the arc step: (w1, w2, v, bdot, db)
     w1 = _clip(a1, -1.0, 1.0) * c[W_MAX]
     w2 = _clip(a2, -1.0, 1.0) * c[W_MAX]
-    u1 = c[R1] * w1
-    u2 = c[R2] * w2
-    bdot = (u1 - u2) / c[TWO_L1]
-    return w1, w2, 0.5 * (u1 + u2), bdot, bdot * c[DT]
+    v, bdot = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])
+    return w1, w2, v, bdot, bdot * c[DT]
 
 
 def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_], tans: F64, turn: F64) -> None:
@@ -247,10 +283,8 @@ def _evaluate(
     l3 = c[L3]
     kl3_curve = c[CURV] * l3
     kl3_line = 0.0 * l3
-    sin_ss_curve = -_clip(kl3_curve, -1.0, 1.0)
-    cos_ss_curve = math.sqrt(1.0 - sin_ss_curve * sin_ss_curve)
-    sin_ss_line = -_clip(kl3_line, -1.0, 1.0)
-    cos_ss_line = math.sqrt(1.0 - sin_ss_line * sin_ss_line)
+    cos_ss_curve, sin_ss_curve = _steady_heading(c[CURV], l3)
+    cos_ss_line, sin_ss_line = _steady_heading(0.0, l3)
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -264,7 +298,7 @@ def _evaluate(
             # task.start_motion: the start state as it is, np.cos and np.sin of its heading, its speed
             w1 = prev1
             w2 = prev2
-            v = 0.5 * (c[R1] * w1 + c[R2] * w2)
+            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
             cos_beta = tans[i, 0]
             sin_beta = tans[i, 1]
         else:
@@ -273,21 +307,13 @@ def _evaluate(
             # _motion's numbers, bdot from pass 1
             w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
             w2 = _clip(actions[i, 1], -1.0, 1.0) * c[W_MAX]
-            v = 0.5 * (c[R1] * w1 + c[R2] * w2)
+            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
             bdot = turn[i]
             db = bdot * dt
             h = 0.5 * db
-            cos_h, sin_h = _cos_sin(tans[i, 0])
-            cos_mid, sin_mid = _cos_sin(tans[i, 1])
-            sinc = 1.0 if h == 0.0 else sin_h / h  # kinematics._sinc: (sin_h + 1) / (h + 1) = 1 at h = 0
-            chord = v * dt * sinc
-            x = x + chord * cos_mid
-            y = y + chord * sin_mid
+            x, y, cos_beta, sin_beta = _arc(x, y, v, dt, h, tans[i, 0], tans[i, 1])
             beta = beta + db
-            cos_beta = cos_mid * cos_h - sin_mid * sin_h
-            sin_beta = sin_mid * cos_h + cos_mid * sin_h
-            lb = c[L5] * bdot
-            castor = math.copysign(math.sqrt(lb * lb + v * v), v) / c[R3]
+            castor = _castor_rate(v, bdot, c[L5], c[R3])
             al1 = al1 + w1 * dt
             al2 = al2 + w2 * dt
             al3 = al3 + castor * dt
@@ -301,8 +327,7 @@ def _evaluate(
             state[i, 7] = w2
 
         # task.outcome_columns: H, its projection on the path (paths.*.project_xy, minimal)
-        hx = x + l3 * cos_beta
-        hy = y + l3 * sin_beta
+        hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
         d = c[DIRECTION]
         r = c[RADIUS]
         r0x = c[R0X]
@@ -344,8 +369,7 @@ def _evaluate(
                 sin_theta = 0.0
             else:
                 s = big_l + s_circ
-        cos_psi = cos_beta * cos_theta + sin_beta * sin_theta
-        sin_psi = sin_beta * cos_theta - cos_beta * sin_theta
+        cos_psi, sin_psi = _heading_error(cos_beta, sin_beta, cos_theta, sin_theta)
         abs_e = abs(e)
         dv = v - c[SPEED]
         w_max = c[W_MAX]
@@ -386,7 +410,7 @@ def _evaluate(
         record[i, 8] = al1
         record[i, 9] = al2
         record[i, 10] = al3
-        record[i, 13] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+        record[i, 13] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
 
 
 def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
@@ -403,8 +427,8 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
         # task._reward_columns and task._product, from exps = exp(arguments)
         track = exps[i, 0]
         speed = exps[i, 1]
-        smooth = 1.0 - c[SMOOTH_W] * (1.0 - exps[i, 2])
-        rew = ((track * speed) * record[i, 13]) * smooth
+        smooth = _smooth_term(exps[i, 2], c[SMOOTH_W])
+        rew = _reward_product(track, speed, record[i, 13], smooth)
         record[i, 11] = track
         record[i, 12] = speed
         record[i, 14] = smooth
@@ -524,8 +548,7 @@ def place_starts(
         i = rows[j]
         c = cos_beta[j]
         s = sin_beta[j]
-        state[i, 0] = state[i, 0] - l3 * c
-        state[i, 1] = state[i, 1] - l3 * s
+        state[i, 0], state[i, 1] = _a_from_h(state[i, 0], state[i, 1], c, s, l3)
         tans[i, 0] = c
         tans[i, 1] = s
 

@@ -16,10 +16,13 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
 
-**The reference is the Python float path** (the functions named above); this module is its deliberate
-compiled twin: the same formulas, written again, in the same order of operations, so that every result is
-**bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit; ``tests/test_golden_v1.py``
-runs the golden episodes through it). What makes the bits equal:
+**The reference is the Python float path** (the functions named above). The scalar pieces both need (the
+ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
+term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed: :data:`amigo_gym.sim.layout_v1.SHARED`)
+are the reference's own functions, compiled here as they are (docs/architecture.md, "The compiled step"); the
+loops, the projection and the quadrature are written here in the reference's order of operations, so that every
+result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
+``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
 * arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
   Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
@@ -33,8 +36,8 @@ runs the golden episodes through it). What makes the bits equal:
   calls, the Box–Muller normals (``sqrt``, ``cos``) in :func:`step`; the three reward exponentials are
   evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.sim.fast_v1`).
 
-Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.fast_v1`,
-which numba never loads):
+Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
+(``L`` here), which numba never loads):
 
 * ``consts`` (``CONSTANT_FIELDS``, then the ``n_preview`` preview distances [m], their observation bounds,
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
@@ -59,7 +62,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model.actuators import PIECES, _ramp_float
+from amigo_gym.model import actuators, kinematics, randomization
+from amigo_gym.model.actuators import PIECES
+from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import (
     MIN_NEWTON_DENOMINATOR,
     NEWTON_ITERATIONS,
@@ -68,122 +73,26 @@ from amigo_gym.paths.clothoid import (
     STATUS_START,
     STATUS_WINDOW,
 )
-from amigo_gym.paths.clothoid import _np_clip as clothoid_np_clip
-from amigo_gym.sim.fast import twin as _twin
-from amigo_gym.sim.fast_v1 import (
-    C_ACC,
-    C_DEC,
-    C_DT,
-    C_E_MAX,
-    C_ERROR_SCALE,
-    C_HEAD_NOISE,
-    C_L1,
-    C_L3,
-    C_LOOKAHEAD,
-    C_MEAS_NOISE,
-    C_N_NODES,
-    C_N_PREVIEW,
-    C_NEG_SIG_T,
-    C_NEG_SIG_V,
-    C_NEG_SMOOTH_SQ,
-    C_PACC,
-    C_PDEC,
-    C_POS_NOISE,
-    C_PREVIEW_SCALE,
-    C_R1,
-    C_R2,
-    C_RACC,
-    C_RATE_NOISE,
-    C_RDEC,
-    C_TAIL,
-    C_TERM,
-    C_TRAPEZOID,
-    C_TWO_L1,
-    C_V_MAX,
-    C_W_MAX,
-    C_WINDOW,
-    P_CLOSED,
-    P_LENGTH,
-    P_M,
-    P_N,
-    P_SPACING,
-    P_TAIL,
-    P_TURN,
-    PATH_NODES,
-    S_KV,
-    S_KW,
-    S_LOG,
-    S_PIECES,
-    S_TIMES,
-    S_U1,
-    S_U2,
-    W_A1,
-    W_A2,
-    W_AL1,
-    W_AL2,
-    W_ARG_S,
-    W_ARG_T,
-    W_ARG_V,
-    W_BETA,
-    W_CMD1,
-    W_CMD2,
-    W_E,
-    W_END,
-    W_HEADING,
-    W_HX,
-    W_HY,
-    W_L1,
-    W_L3,
-    W_L3D,
-    W_LAG,
-    W_MB,
-    W_MW1,
-    W_MW2,
-    W_MX,
-    W_MY,
-    W_NB,
-    W_NOISE_ON,
-    W_NR1,
-    W_NR2,
-    W_NX,
-    W_NY,
-    W_PROGRESS,
-    W_R1,
-    W_R2,
-    W_SLIP1,
-    W_SLIP2,
-    W_SLIP_MAX,
-    W_STEPS,
-    W_TB,
-    W_TERM,
-    W_TS,
-    W_VC,
-    W_VREF,
-    W_VT,
-    W_W1,
-    W_W2,
-    W_X,
-    W_Y,
-    layout_fingerprint,
-)
+from amigo_gym.sim import layout_v1 as L
+from amigo_gym.sim.layout import check_fingerprint, shared_compiler
+from amigo_gym.sim.layout import twin as _twin
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
 
 F64 = NDArray[np.float64]
 
-#: the :func:`amigo_gym.sim.fast_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
+#: the :func:`amigo_gym.sim.layout_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "467f570db5f88a18"
-if layout_fingerprint() != LAYOUT_FINGERPRINT:
-    raise ImportError(
-        f"amigo_gym.sim._kernels_v1 was written for the layouts {LAYOUT_FINGERPRINT}, but amigo_gym.sim.fast_v1 "
-        f"now has "
-        f"{layout_fingerprint()}: update the kernels and LAYOUT_FINGERPRINT in amigo_gym/sim/_kernels_v1.py"
-    )
+LAYOUT_FINGERPRINT = "aece5b5b28b4ec5e"
+check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit)
 
 
 @_jit
@@ -211,7 +120,7 @@ def _py_max(a: float, b: float) -> float:
 
 
 #: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
-_np_clip = _jit(clothoid_np_clip)
+_np_clip = _shared(clothoid._np_clip)
 
 
 @_jit
@@ -220,19 +129,25 @@ def _clip(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else (hi if x > hi else x)
 
 
-@_jit
-def _task_clip(x: float, low: float, high: float) -> float:
-    # task._clip of a float
-    if low <= x <= high:
-        return x
-    return low if x < low else high
+#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
+_task_clip = _shared(task.clip_float)
+_heading_error = _shared(task.heading_error)
+_heading_term = _shared(task.heading_term)
+_steady_heading = _shared(task.steady_heading_float)
+_body_velocity = _shared(kinematics.body_velocity_of)
+_wheel_rates = _shared(kinematics.wheel_rates_of)
+_h_from_a = _shared(kinematics.h_from_a)
+_clip_setpoint = _shared(actuators._clip_float)
+_piece_rates = _shared(actuators.piece_rates)
 
 
 # ----------------------------------------------------------------------------------------- actuators
 
 
 #: actuators._ramp_float itself, compiled: ``(t_a, t_b, u_a, u_b, s_a, s_b)`` of one firmware ramp
-_ramp = _jit(_ramp_float)
+_ramp = _shared(actuators._ramp_float)
+_box_muller = _shared(randomization.box_muller)
+_trapezoid_speed = _shared(tracking.trapezoid_speed)
 
 
 @_jit
@@ -288,46 +203,32 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 
     Returns the true speed of A at the end of the step [m/s].
     """
-    w_max = c[C_W_MAX]
-    l1n = c[C_L1]
-    r1n = c[C_R1]
-    r2n = c[C_R2]
-    two_l1 = c[C_TWO_L1]
-    dt = c[C_DT]
-    t_s = ws[W_TS]
+    w_max = c[L.C_W_MAX]
+    l1n = c[L.C_L1]
+    r1n = c[L.C_R1]
+    r2n = c[L.C_R2]
+    two_l1 = c[L.C_TWO_L1]
+    dt = c[L.C_DT]
+    t_s = ws[L.W_TS]
     # 1. commands (clip_setpoints, body_velocity_columns)
-    lo = -w_max
-    w = o1 if o1 >= lo else lo
-    u1 = r1n * (w if w <= w_max else w_max)
-    w = o2 if o2 >= lo else lo
-    u2 = r2n * (w if w <= w_max else w_max)
-    vc_old = 0.5 * (u1 + u2)
-    wc_old = (u1 - u2) / two_l1
-    w = n1 if n1 >= lo else lo
-    u1 = r1n * (w if w <= w_max else w_max)
-    w = n2 if n2 >= lo else lo
-    u2 = r2n * (w if w <= w_max else w_max)
-    vc_new = 0.5 * (u1 + u2)
-    wc_new = (u1 - u2) / two_l1
+    vc_old, wc_old = _body_velocity(_clip_setpoint(o1, w_max), _clip_setpoint(o2, w_max), r1n, r2n, two_l1)
+    vc_new, wc_new = _body_velocity(_clip_setpoint(n1, w_max), _clip_setpoint(n2, w_max), r1n, r2n, two_l1)
     # 2. ramps
-    u1 = r1n * ws[W_W1]
-    u2 = r2n * ws[W_W2]
-    v0 = 0.5 * (u1 + u2)
-    om0 = (u1 - u2) / two_l1
-    v_end = _channel(ws, S_KV, v0, vc_old, vc_new, c[C_ACC], c[C_DEC], t_s, dt)
-    w_end = _channel(ws, S_KW, om0, wc_old, wc_new, c[C_RACC], c[C_RDEC], t_s, dt)
+    v0, om0 = _body_velocity(ws[L.W_W1], ws[L.W_W2], r1n, r2n, two_l1)
+    v_end = _channel(ws, L.S_KV, v0, vc_old, vc_new, c[L.C_ACC], c[L.C_DEC], t_s, dt)
+    w_end = _channel(ws, L.S_KW, om0, wc_old, wc_new, c[L.C_RACC], c[L.C_RDEC], t_s, dt)
     # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
-    tm = S_TIMES
+    tm = L.S_TIMES
     ws[tm] = 0.0
-    ws[tm + 1] = ws[S_KV + 1]
-    ws[tm + 2] = ws[S_KV + 2]
-    ws[tm + 3] = ws[S_KV + 3]
-    ws[tm + 4] = ws[S_KV + 4]
-    ws[tm + 5] = ws[S_KV + 5]
-    ws[tm + 6] = ws[S_KW + 1]
-    ws[tm + 7] = ws[S_KW + 2]
-    ws[tm + 8] = ws[S_KW + 4]
-    ws[tm + 9] = ws[S_KW + 5]
+    ws[tm + 1] = ws[L.S_KV + 1]
+    ws[tm + 2] = ws[L.S_KV + 2]
+    ws[tm + 3] = ws[L.S_KV + 3]
+    ws[tm + 4] = ws[L.S_KV + 4]
+    ws[tm + 5] = ws[L.S_KV + 5]
+    ws[tm + 6] = ws[L.S_KW + 1]
+    ws[tm + 7] = ws[L.S_KW + 2]
+    ws[tm + 8] = ws[L.S_KW + 4]
+    ws[tm + 9] = ws[L.S_KW + 5]
     ws[tm + 10] = dt
     for i in range(2, 10):
         key = ws[tm + i]
@@ -337,9 +238,9 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
             j -= 1
         ws[tm + j + 1] = key
     # 3. pieces
-    g1 = (1.0 - s1) * ws[W_R1]
-    g2 = (1.0 - s2) * ws[W_R2]
-    inv_2l1t = 0.5 / ws[W_L1]
+    g1 = (1.0 - s1) * ws[L.W_R1]
+    g2 = (1.0 - s2) * ws[L.W_R2]
+    inv_2l1t = 0.5 / ws[L.W_L1]
     da1 = 0.0
     da2 = 0.0
     n_pieces = 0
@@ -350,30 +251,27 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
         if not length > 0.0:
             continue
         mid = 0.5 * (t0 + t1)
-        v, a = _evaluate_channel(ws, S_KV, t0, mid)
-        om, al = _evaluate_channel(ws, S_KW, t0, mid)
-        p1 = (v + l1n * om) / r1n
-        q1 = (a + l1n * al) / r1n
-        p2 = (v - l1n * om) / r2n
-        q2 = (a - l1n * al) / r2n
-        pc = S_PIECES + 5 * n_pieces
-        ws[pc] = 0.5 * (g1 * p1 + g2 * p2)
-        ws[pc + 1] = 0.5 * (g1 * q1 + g2 * q2)
-        ws[pc + 2] = (g1 * p1 - g2 * p2) * inv_2l1t
-        ws[pc + 3] = (g1 * q1 - g2 * q2) * inv_2l1t
+        v, a = _evaluate_channel(ws, L.S_KV, t0, mid)
+        om, al = _evaluate_channel(ws, L.S_KW, t0, mid)
+        p1, q1, p2, q2, vt, at, wt, alt = _piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
+        pc = L.S_PIECES + 5 * n_pieces
+        ws[pc] = vt
+        ws[pc + 1] = at
+        ws[pc + 2] = wt
+        ws[pc + 3] = alt
         ws[pc + 4] = length
         n_pieces += 1
         half = 0.5 * length
         da1 = da1 + length * (p1 + q1 * half)
         da2 = da2 + length * (p2 + q2 * half)
     # fresnel.advance_chain_float: the heading of each piece's start in closed form, the nodes' sums in order
-    x = ws[W_X]
-    y = ws[W_Y]
-    th = ws[W_BETA]
-    nn = int(c[C_N_NODES])
-    base = C_TAIL + 2 * int(c[C_N_PREVIEW])
+    x = ws[L.W_X]
+    y = ws[L.W_Y]
+    th = ws[L.W_BETA]
+    nn = int(c[L.C_N_NODES])
+    base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
     for q in range(n_pieces):
-        pc = S_PIECES + 5 * q
+        pc = L.S_PIECES + 5 * q
         v0p = ws[pc]
         ap = ws[pc + 1]
         w0 = ws[pc + 2]
@@ -391,16 +289,14 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
         y = y + dy * t
         th = th + t * (w0 + half_alpha * t)
     # 4. the new actuator state (wheel_rates_columns) and the true speed at the end
-    lw = l1n * w_end
-    w1n = (v_end + lw) / r1n
-    w2n = (v_end - lw) / r2n
-    ws[W_X] = x
-    ws[W_Y] = y
-    ws[W_BETA] = th
-    ws[W_W1] = w1n
-    ws[W_W2] = w2n
-    ws[W_AL1] = ws[W_AL1] + da1
-    ws[W_AL2] = ws[W_AL2] + da2
+    w1n, w2n = _wheel_rates(v_end, w_end, l1n, r1n, r2n)
+    ws[L.W_X] = x
+    ws[L.W_Y] = y
+    ws[L.W_BETA] = th
+    ws[L.W_W1] = w1n
+    ws[L.W_W2] = w2n
+    ws[L.W_AL1] = ws[L.W_AL1] + da1
+    ws[L.W_AL2] = ws[L.W_AL2] + da2
     v_true: float = 0.5 * (g1 * w1n + g2 * w2n)
     return v_true
 
@@ -411,9 +307,9 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 @_jit
 def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
     # clothoid._pose_tuple: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s
-    n = int(pv[P_N])
-    length = pv[P_LENGTH]
-    closed = pv[P_CLOSED] != 0.0
+    n = int(pv[L.P_N])
+    length = pv[L.P_LENGTH]
+    closed = pv[L.P_CLOSED] != 0.0
     if closed:
         lap = np.floor(s / length)
         u = s - lap * length
@@ -423,7 +319,7 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
         u = _py_min(_py_max(s, 0.0), length)
         extra = s - u
     # bisect.bisect_right(s0, u) - 1, clamped to [0, n - 1]
-    s0 = P_TAIL
+    s0 = L.P_TAIL
     lo = 0
     hi = n
     while lo < hi:
@@ -437,22 +333,22 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
         j = 0
     if j > n - 1:
         j = n - 1
-    x0 = pv[P_TAIL + n + j]
-    y0 = pv[P_TAIL + 2 * n + j]
-    theta = pv[P_TAIL + 3 * n + j]
-    w0 = pv[P_TAIL + 4 * n + j]
-    cr = pv[P_TAIL + 5 * n + j]
+    x0 = pv[L.P_TAIL + n + j]
+    y0 = pv[L.P_TAIL + 2 * n + j]
+    theta = pv[L.P_TAIL + 3 * n + j]
+    w0 = pv[L.P_TAIL + 4 * n + j]
+    cr = pv[L.P_TAIL + 5 * n + j]
     t = u - pv[s0 + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
     half_alpha = 0.5 * cr
     th = theta + t * (w0 + half_alpha * t)
-    nb = C_TAIL + 2 * int(c[C_N_PREVIEW]) + 2 * int(c[C_N_NODES])
+    nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
     dx = 0.0
     dy = 0.0
-    for i in range(PATH_NODES):
+    for i in range(L.PATH_NODES):
         tau = c[nb + i] * t
         phase = theta + tau * (w0 + half_alpha * tau)
-        wi = c[nb + PATH_NODES + i]
+        wi = c[nb + L.PATH_NODES + i]
         dx = dx + wi * math.cos(phase)
         dy = dy + wi * math.sin(phase)
     x = x0 + dx * t
@@ -461,7 +357,7 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     sin_t = math.sin(th)
     kappa = w0 + cr * t
     if closed:
-        return x, y, th + lap * pv[P_TURN], kappa, cr, cos_t, sin_t
+        return x, y, th + lap * pv[L.P_TURN], kappa, cr, cos_t, sin_t
     if extra != 0.0:
         return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
     return x + extra * cos_t, y + extra * sin_t, th, kappa, cr, cos_t, sin_t
@@ -469,18 +365,18 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
 
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """clothoid._locate_float with the window ``c[C_WINDOW]`` ahead and behind.
+    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind.
 
     Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
     """
-    ahead = c[C_WINDOW]
+    ahead = c[L.C_WINDOW]
     behind = ahead
-    h = pv[P_SPACING]
-    length = pv[P_LENGTH]
-    closed = pv[P_CLOSED] != 0.0
-    n = int(pv[P_N])
-    n_samp = int(pv[P_M])
-    sx = P_TAIL + 6 * n
+    h = pv[L.P_SPACING]
+    length = pv[L.P_LENGTH]
+    closed = pv[L.P_CLOSED] != 0.0
+    n = int(pv[L.P_N])
+    n_samp = int(pv[L.P_M])
+    sx = L.P_TAIL + 6 * n
     sy = sx + n_samp
     m = math.ceil((ahead + behind) / h) + 2
     j0 = np.floor((sp - behind) / h)
@@ -560,13 +456,20 @@ def _counter_uniform(key: np.uint64, step: int, channel: int) -> float:
 
 
 @_jit
+def _noise_level(c: F64, ch: int) -> float:
+    # the standard deviation of measurement channel ch (x, y, beta, rate1, rate2): randomization's levels
+    level: float = c[L.C_POS_NOISE] if ch < 2 else (c[L.C_HEAD_NOISE] if ch == 2 else c[L.C_RATE_NOISE])
+    return level
+
+
+@_jit
 def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
     """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` (``_step_noise_float``) for step
     ``step``.
 
     Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
-    that is on (in channel order), ``u1`` at ``ws[S_U1:]`` and ``2 pi u2`` at ``ws[S_U2:]``. The caller then
-    writes ``np.log`` of the ``u1`` at ``ws[S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
+    that is on (in channel order), ``u1`` at ``ws[L.S_U1:]`` and ``2 pi u2`` at ``ws[L.S_U2:]``. The caller then
+    writes ``np.log`` of the ``u1`` at ``ws[L.S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
 
     Args:
         key: the episode's key (:func:`amigo_gym.model.randomization.draw_key`), step: the state's step counter.
@@ -574,19 +477,18 @@ def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
     Returns:
         the number of channels on (the length of the ``u1`` written).
     """
-    slip_max = ws[W_SLIP_MAX]
+    slip_max = ws[L.W_SLIP_MAX]
     if slip_max > 0.0:
-        ws[W_SLIP1] = slip_max * _counter_uniform(key, step, 0)
-        ws[W_SLIP2] = slip_max * _counter_uniform(key, step, 1)
+        ws[L.W_SLIP1] = slip_max * _counter_uniform(key, step, 0)
+        ws[L.W_SLIP2] = slip_max * _counter_uniform(key, step, 1)
     else:
-        ws[W_SLIP1] = 0.0
-        ws[W_SLIP2] = 0.0
+        ws[L.W_SLIP1] = 0.0
+        ws[L.W_SLIP2] = 0.0
     on = 0
     for ch in range(5):
-        level = c[C_POS_NOISE] if ch < 2 else (c[C_HEAD_NOISE] if ch == 2 else c[C_RATE_NOISE])
-        if level > 0.0:
-            ws[S_U1 + on] = _counter_uniform(key, step, 2 * (ch + 1))
-            ws[S_U2 + on] = _TWO_PI * _counter_uniform(key, step, 2 * (ch + 1) + 1)
+        if _noise_level(c, ch) > 0.0:
+            ws[L.S_U1 + on] = _counter_uniform(key, step, 2 * (ch + 1))
+            ws[L.S_U2 + on] = _TWO_PI * _counter_uniform(key, step, 2 * (ch + 1) + 1)
             on += 1
     return on
 
@@ -596,12 +498,12 @@ def _normals(c: F64, ws: F64) -> None:
     # the rest of randomization._step_noise_float: level * (sqrt(-2 log u1) cos(2 pi u2)) per channel that is on
     on = 0
     for ch in range(5):
-        level = c[C_POS_NOISE] if ch < 2 else (c[C_HEAD_NOISE] if ch == 2 else c[C_RATE_NOISE])
+        level = _noise_level(c, ch)
         value = 0.0
         if level > 0.0:
-            value = level * (math.sqrt(-2.0 * ws[S_LOG + on]) * math.cos(ws[S_U2 + on]))
+            value = _box_muller(level, ws[L.S_LOG + on], math.cos(ws[L.S_U2 + on]))
             on += 1
-        ws[W_NX + ch] = value
+        ws[L.W_NX + ch] = value
 
 
 @_jit
@@ -617,14 +519,10 @@ def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
 @_jit
 def _reference_speed(c: F64, ws: F64, t: float) -> float:
     # tracking.reference_speed
-    v: float = ws[W_VC]
-    if c[C_TRAPEZOID] == 0.0:
+    v: float = ws[L.W_VC]
+    if c[L.C_TRAPEZOID] == 0.0:
         return v
-    a = c[C_PACC] * t
-    a = a if a <= v else v
-    b = v - c[C_PDEC] * (t - ws[W_TB])
-    a = a if a <= b else b
-    return a if a > 0.0 else 0.0
+    return _trapezoid_speed(v, c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
 
 
 @_jit
@@ -645,84 +543,83 @@ def _evaluate(
 ) -> None:
     # tracking.evaluate_columns of the state in ws (true H, its projection, measurements, observation, reward
     # arguments, end), with the noise (nx, ny, nbeta, nr1, nr2); the new progress into ws
-    l3 = c[C_L3]
-    x = ws[W_X]
-    y = ws[W_Y]
-    beta = ws[W_BETA]
+    l3 = c[L.C_L3]
+    x = ws[L.W_X]
+    y = ws[L.W_Y]
+    beta = ws[L.W_BETA]
     cb = math.cos(beta)
     sb = math.sin(beta)
-    hx = x + ws[W_L3] * cb
-    hy = y + ws[W_L3] * sb
-    s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[W_PROGRESS])
-    cos_psi = cb * ct + sb * st
-    sin_psi = sb * ct - cb * st
+    hx, hy = _h_from_a(x, y, cb, sb, ws[L.W_L3])
+    s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
+    cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
     # task.steady_heading, task.reward_term_columns (the exponentials' arguments only)
-    sin_ss = -_task_clip(kappa * l3, -1.0, 1.0)
-    cos_ss = math.sqrt(1.0 - sin_ss * sin_ss)
-    da1 = ws[W_A1] - prev1
-    da2 = ws[W_A2] - prev2
+    cos_ss, sin_ss = _steady_heading(kappa, l3)
+    da1 = ws[L.W_A1] - prev1
+    da2 = ws[L.W_A2] - prev2
     abs_e = abs(e)
-    ws[W_ARG_T] = abs_e / c[C_NEG_SIG_T]
-    ws[W_ARG_V] = abs(v_true - v_ref) / c[C_NEG_SIG_V]
-    ws[W_HEADING] = 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
-    ws[W_ARG_S] = (da1 * da1 + da2 * da2) / c[C_NEG_SMOOTH_SQ]
-    closed = pv[P_CLOSED] != 0.0
+    ws[L.W_ARG_T] = abs_e / c[L.C_NEG_SIG_T]
+    ws[L.W_ARG_V] = abs(v_true - v_ref) / c[L.C_NEG_SIG_V]
+    ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
+    ws[L.W_ARG_S] = (da1 * da1 + da2 * da2) / c[L.C_NEG_SMOOTH_SQ]
+    closed = pv[L.P_CLOSED] != 0.0
     at_end = (not closed) and status == STATUS_END
-    terminated = abs_e > c[C_TERM] or at_end
+    terminated = abs_e > c[L.C_TERM] or at_end
     # measurements
     mx = x + nx
     my = y + ny
     mb = beta + nbeta
-    mw1 = ws[W_W1] + nr1
-    mw2 = ws[W_W2] + nr2
-    if c[C_MEAS_NOISE] != 0.0 or ws[W_L3D] != 0.0:
+    mw1 = ws[L.W_W1] + nr1
+    mw2 = ws[L.W_W2] + nr2
+    if c[L.C_MEAS_NOISE] != 0.0 or ws[L.W_L3D] != 0.0:
         mcb = math.cos(mb)
         msb = math.sin(mb)
-        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mx + l3 * mcb, my + l3 * msb, s_h)
+        mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)
+        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h)
     else:
         mcb = cb
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
-    e_max = c[C_E_MAX]
-    obs[0] = _clip(m_e / c[C_ERROR_SCALE], -e_max, e_max)
-    obs[1] = msb * m_ct - mcb * m_st
-    obs[2] = mcb * m_ct + msb * m_st
+    e_max = c[L.C_E_MAX]
+    obs[0] = _clip(m_e / c[L.C_ERROR_SCALE], -e_max, e_max)
+    m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
+    obs[1] = m_sin_psi
+    obs[2] = m_cos_psi
     obs[3] = _clip(m_k * l3, -1.0, 1.0)
-    n_prev = int(c[C_N_PREVIEW])
-    scale = c[C_PREVIEW_SCALE]
+    n_prev = int(c[L.C_N_PREVIEW])
+    scale = c[L.C_PREVIEW_SCALE]
     for i in range(n_prev):
-        qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[C_TAIL + i])
-        bound = c[C_TAIL + n_prev + i]
+        qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[L.C_TAIL + i])
+        bound = c[L.C_TAIL + n_prev + i]
         dx = qx - mx
         dy = qy - my
         obs[4 + 3 * i] = _clip((mcb * dx + msb * dy) / scale, -bound, bound)
         obs[5 + 3 * i] = _clip((mcb * dy - msb * dx) / scale, -bound, bound)
         obs[6 + 3 * i] = _clip(qk * l3, -1.0, 1.0)
-    v_max = c[C_V_MAX]
-    w_max = c[C_W_MAX]
-    v_meas = 0.5 * (c[C_R1] * mw1 + c[C_R2] * mw2)
+    v_max = c[L.C_V_MAX]
+    w_max = c[L.C_W_MAX]
+    v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
     k = 4 + 3 * n_prev
     obs[k] = v_ref / v_max
-    obs[k + 1] = _reference_speed(c, ws, t + c[C_LOOKAHEAD]) / v_max
+    obs[k + 1] = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD]) / v_max
     obs[k + 2] = _clip((v_meas - v_ref) / v_max, -2.0, 2.0)
     obs[k + 3] = _clip(mw1 / w_max, -2.0, 2.0)
     obs[k + 4] = _clip(mw2 / w_max, -2.0, 2.0)
-    obs[k + 5] = ws[W_A1]
-    obs[k + 6] = ws[W_A2]
-    ws[W_PROGRESS] = s_h
-    ws[W_HX] = hx
-    ws[W_HY] = hy
-    ws[W_E] = e
-    ws[W_VT] = v_true
-    ws[W_VREF] = v_ref
-    ws[W_MX] = mx
-    ws[W_MY] = my
-    ws[W_MB] = mb
-    ws[W_MW1] = mw1
-    ws[W_MW2] = mw2
-    ws[W_TERM] = 1.0 if terminated else 0.0
-    ws[W_END] = 1.0 if at_end else 0.0
+    obs[k + 5] = ws[L.W_A1]
+    obs[k + 6] = ws[L.W_A2]
+    ws[L.W_PROGRESS] = s_h
+    ws[L.W_HX] = hx
+    ws[L.W_HY] = hy
+    ws[L.W_E] = e
+    ws[L.W_VT] = v_true
+    ws[L.W_VREF] = v_ref
+    ws[L.W_MX] = mx
+    ws[L.W_MY] = my
+    ws[L.W_MB] = mb
+    ws[L.W_MW1] = mw1
+    ws[L.W_MW2] = mw2
+    ws[L.W_TERM] = 1.0 if terminated else 0.0
+    ws[L.W_END] = 1.0 if at_end else 0.0
 
 
 @_jit
@@ -744,9 +641,9 @@ def evaluate(
         c, pv, ws, obs: the layouts of the module docstring.
         v_true: the true speed of A [m/s]; prev1, prev2: the previous normalised command [-]; t: time [s].
     """
-    progress = ws[W_PROGRESS]
+    progress = ws[L.W_PROGRESS]
     _evaluate(c, pv, ws, obs, v_true, prev1, prev2, t, 0.0, 0.0, 0.0, 0.0, 0.0)
-    ws[W_PROGRESS] = progress
+    ws[L.W_PROGRESS] = progress
 
 
 @_jit
@@ -763,7 +660,7 @@ def step(
     """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws`` (updated in place) on Python floats.
 
     This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the state's step counter) come from
-    :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[W_NOISE_ON]`` is set, else they are zeros;
+    :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[L.W_NOISE_ON]`` is set, else they are zeros;
     they are written to ``ws`` (``slip1`` ... ``noise_rate2``).
 
     Args:
@@ -771,17 +668,17 @@ def step(
         ring_step: the ring's counter (one more than at the previous step).
         a1, a2: the validated action (finite) [-], clipped here.
     """
-    if ws[W_NOISE_ON] != 0.0:
+    if ws[L.W_NOISE_ON] != 0.0:
         _normals(c, ws)
     else:
-        ws[W_SLIP1] = 0.0
-        ws[W_SLIP2] = 0.0
-        ws[W_NX] = 0.0
-        ws[W_NY] = 0.0
-        ws[W_NB] = 0.0
-        ws[W_NR1] = 0.0
-        ws[W_NR2] = 0.0
-    w_max = c[C_W_MAX]
+        ws[L.W_SLIP1] = 0.0
+        ws[L.W_SLIP2] = 0.0
+        ws[L.W_NX] = 0.0
+        ws[L.W_NY] = 0.0
+        ws[L.W_NB] = 0.0
+        ws[L.W_NR1] = 0.0
+        ws[L.W_NR2] = 0.0
+    w_max = c[L.C_W_MAX]
     c1 = _clip(a1, -1.0, 1.0)
     c2 = _clip(a2, -1.0, 1.0)
     # actuators.ring_write, ring_read (Python's modulo: never negative)
@@ -791,7 +688,7 @@ def step(
     cmd2 = c2 * w_max
     ring[slot, 0] = cmd1
     ring[slot, 1] = cmd2
-    lag = int(ws[W_LAG])
+    lag = int(ws[L.W_LAG])
     i_new = (ring_step - lag) % length
     i_old = (ring_step - lag - 1) % length
     if i_new < 0:
@@ -800,16 +697,30 @@ def step(
         i_old += length
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
-    v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[W_SLIP1], ws[W_SLIP2])
-    prev1 = ws[W_A1]
-    prev2 = ws[W_A2]
-    steps = ws[W_STEPS] + 1.0
-    ws[W_A1] = c1
-    ws[W_A2] = c2
-    ws[W_STEPS] = steps
-    ws[W_CMD1] = cmd1
-    ws[W_CMD2] = cmd2
-    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, steps * c[C_DT], ws[W_NX], ws[W_NY], ws[W_NB], ws[W_NR1], ws[W_NR2])
+    v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[L.W_SLIP1], ws[L.W_SLIP2])
+    prev1 = ws[L.W_A1]
+    prev2 = ws[L.W_A2]
+    steps = ws[L.W_STEPS] + 1.0
+    ws[L.W_A1] = c1
+    ws[L.W_A2] = c2
+    ws[L.W_STEPS] = steps
+    ws[L.W_CMD1] = cmd1
+    ws[L.W_CMD2] = cmd2
+    _evaluate(
+        c,
+        pv,
+        ws,
+        obs,
+        v_true,
+        prev1,
+        prev2,
+        steps * c[L.C_DT],
+        ws[L.W_NX],
+        ws[L.W_NY],
+        ws[L.W_NB],
+        ws[L.W_NR1],
+        ws[L.W_NR2],
+    )
 
 
 # ----------------------------------------------------------------------------------------- N robots
@@ -828,10 +739,10 @@ def _noise_rows(c: F64, ws: F64, keys: NDArray[np.uint64], u1: F64) -> None:
     """
     for i in numba.prange(ws.shape[0]):
         row = ws[i]
-        if row[W_NOISE_ON] != 0.0:
-            on = noise_uniforms(c, row, keys[i], int(row[W_STEPS]))
+        if row[L.W_NOISE_ON] != 0.0:
+            on = noise_uniforms(c, row, keys[i], int(row[L.W_STEPS]))
             for j in range(on):
-                u1[i, j] = row[S_U1 + j]
+                u1[i, j] = row[L.S_U1 + j]
 
 
 def _step_rows(
@@ -857,11 +768,11 @@ def _step_rows(
     for i in numba.prange(ws.shape[0]):
         row = ws[i]
         for j in range(logs.shape[1]):
-            row[S_LOG + j] = logs[i, j]
+            row[L.S_LOG + j] = logs[i, j]
         step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
-        args[i, 0] = row[W_ARG_T]
-        args[i, 1] = row[W_ARG_V]
-        args[i, 2] = row[W_ARG_S]
+        args[i, 0] = row[L.W_ARG_T]
+        args[i, 1] = row[L.W_ARG_V]
+        args[i, 2] = row[L.W_ARG_S]
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

@@ -22,8 +22,7 @@ import ctypes
 import importlib.util
 import os
 import sys
-import types
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from types import ModuleType
@@ -34,6 +33,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
+from amigo_gym.sim.layout import twin
 from amigo_gym.task.v0 import TaskConstants, _path_start, initial_wheel_rates, obs_dim
 
 __all__ = [
@@ -295,17 +295,6 @@ class StepReport(NamedTuple):
     #: the number of rows whose new heading lies past :data:`amigo_gym.model.params.HEADING_LIMIT` in absolute
     #: value (those :func:`amigo_gym.task.v0.bound_heading` reduces; the kernel leaves them as they are)
     past_limit: int
-
-
-def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
-    """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under
-    its name, so the serial and the parallel compilation of one loop need two names (else they would share a cache
-    entry). Used by :mod:`amigo_gym.sim._kernels` and :mod:`amigo_gym.sim._kernels_v1`."""
-    assert isinstance(fn, types.FunctionType)
-    copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
-    copy.__qualname__ = name
-    copy.__doc__ = fn.__doc__
-    return copy
 
 
 class SingleStep:

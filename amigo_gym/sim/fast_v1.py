@@ -23,8 +23,6 @@ it can be imported). numba is imported only when a :class:`StepKernel` is first 
 
 from __future__ import annotations
 
-import hashlib
-import inspect
 from functools import lru_cache
 from types import ModuleType
 from typing import Any
@@ -34,7 +32,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast
+from amigo_gym.sim import fast, layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -50,162 +48,15 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-# ---------------------------------------------------------------------------- layouts of the kernel's vectors
-
-#: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
-CONSTANT_FIELDS: tuple[str, ...] = (
-    "dt",  # control period [s]
-    "w_max",  # nominal max wheel rate [rad/s]
-    "r1",  # nominal wheel radii [m] and half track [m]
-    "r2",
-    "l1",
-    "two_l1",  # 2 l1 [m]
-    "accel",  # firmware ramps [m/s^2], [rad/s^2]
-    "decel",
-    "rot_accel",
-    "rot_decel",
-    "l3",  # nominal l3 [m]
-    "error_scale",  # [m]
-    "e_max",  # observation bound of the cross-track error [-]
-    "termination_distance",  # [m]
-    "preview_scale",  # [m]
-    "v_max",  # nominal max speed [m/s]
-    "neg_sigma_track",  # -sigma_track [m]
-    "neg_sigma_speed",  # -sigma_speed [m/s]
-    "neg_smooth_scale_sq",  # -smooth_scale_sq [-]
-    "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
-    "profile_accel",  # [m/s^2]
-    "profile_decel",  # [m/s^2]
-    "window",  # projection window ahead and behind [m]
-    "measured_noise",  # 1.0 when position or heading noise is on (the measured H is projected again)
-    "speed_lookahead",  # [s]
-    "n_preview",  # number of preview distances
-    "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
-    "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
-    "heading_noise",
-    "wheel_rate_noise",
-)
-_C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
-C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
-C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
-C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
-C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
-C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
-C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
-#: where the variable-length parts of ``consts`` start
-C_TAIL = len(CONSTANT_FIELDS)
-#: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
-PATH_NODES = 10
-
-#: the head of a flattened path (then the arrays: :mod:`amigo_gym.sim._kernels_v1`)
-PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
-P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
-P_TAIL = len(PATH_HEADER)
-
-#: entries of ``ws``: the state (:class:`amigo_gym.task.v1.State`), the episode (:class:`amigo_gym.task.v1.Episode`;
-#: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
-WS_FIELDS: tuple[str, ...] = (
-    # state, updated by step
-    "x",
-    "y",
-    "beta",
-    "w1",
-    "w2",
-    "alpha1",
-    "alpha2",
-    "progress",
-    "a1",
-    "a2",
-    "steps",
-    # episode, read only
-    "r1",
-    "r2",
-    "l1",
-    "l3",
-    "lag",
-    "t_switch",
-    "v_cruise",
-    "t_brake",
-    "l3_differs",
-    # outputs
-    "h_x",
-    "h_y",
-    "error",
-    "v_true",
-    "v_ref",
-    "meas_x",
-    "meas_y",
-    "meas_beta",
-    "meas_w1",
-    "meas_w2",
-    "heading",  # the heading reward term
-    "arg_track",  # arguments of the exponentials of the track, speed and smoothness terms
-    "arg_speed",
-    "arg_smooth",
-    "terminated",  # 1.0 / 0.0
-    "end_of_path",  # 1.0 / 0.0
-    "command1",  # the setpoints written into the ring this step [rad/s]
-    "command2",
-    # the per-step draws (randomization.step_noise): the episode's slip bound and whether anything is drawn (1.0 /
-    # 0.0), then this step's draws
-    "slip_max",
-    "noise_on",
-    "slip1",
-    "slip2",
-    "noise_x",
-    "noise_y",
-    "noise_beta",
-    "noise_rate1",
-    "noise_rate2",
-)
-_W = {name: i for i, name in enumerate(WS_FIELDS)}
-W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
-W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[11:20])
-W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[20:30])
-W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
-W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
-W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
-#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5,
-#: then the normal draws' uniforms ``u1``, their logarithms and the angles ``2 pi u2`` (5 each)
-WS_SCRATCH = 2 * 19 + 11 + 10 * 5 + 3 * 5
-S_KV = len(WS_FIELDS)
-S_UV = S_KV + 7
-S_SV = S_UV + 6
-S_KW = S_SV + 6
-S_UW = S_KW + 7
-S_SW = S_UW + 6
-S_TIMES = S_SW + 6
-S_PIECES = S_TIMES + 11
-S_U1 = S_PIECES + 10 * 5
-S_LOG = S_U1 + 5
-S_U2 = S_LOG + 5
+layout_fingerprint = layout_v1.layout_fingerprint
 
 
-def layout_fingerprint() -> str:
-    """A short hash of the layouts above, of the constants the kernel takes from their homes
-    (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
-    iterations,
-    smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`) and of the source of the reference's
-    float functions the kernel compiles as they are (``actuators._ramp_float``, ``clothoid._np_clip``).
-
-    numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
-    :mod:`amigo_gym.sim._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
-    a change here must come with a change of that file, which invalidates the cached code.
-    """
-    from amigo_gym.model import actuators
-    from amigo_gym.paths import clothoid
-
-    homes = (
-        actuators.PIECES,
-        fresnel.NODES,
-        clothoid.NEWTON_ITERATIONS,
-        clothoid.MIN_NEWTON_DENOMINATOR,
-        (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
-    )
-    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
-    # the reference's own float functions that the kernel compiles as they are (one source: their text counts)
-    shared = tuple(inspect.getsource(f) for f in (actuators._ramp_float, clothoid._np_clip))
-    return hashlib.sha256(repr((layout, homes, shared)).encode()).hexdigest()[:16]
+def __getattr__(name: str) -> Any:
+    """The layouts' names (:mod:`amigo_gym.sim.layout_v1`), also read here: ``fast_v1.W_X``."""
+    try:
+        return getattr(layout_v1, name)
+    except AttributeError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
 
 
 # ---------------------------------------------------------------------------- selection and data
@@ -305,7 +156,7 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "heading_noise": rz.heading_noise,
         "wheel_rate_noise": rz.wheel_rate_noise,
     }
-    head = [values[name] for name in CONSTANT_FIELDS]
+    head = [values[name] for name in layout_v1.CONSTANT_FIELDS]
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
     return np.array(head + tail, dtype=np.float64)
 
@@ -346,12 +197,12 @@ class StepKernel:
 
     Attributes:
         consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
-        ws: the workspace, ``len(WS_FIELDS) + WS_SCRATCH`` float64.
+        ws: the workspace, ``len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH`` float64.
     """
 
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
-        self.ws: Array = np.zeros(len(WS_FIELDS) + WS_SCRATCH)
+        self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
@@ -367,8 +218,8 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
-        self.u1: Array = self.ws[S_U1 : S_U1 + self.n_normal]
-        self.logs: Array = self.ws[S_LOG : S_LOG + self.n_normal]
+        self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
+        self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -393,16 +244,16 @@ class StepKernel:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
         self.path = flat_path(path)
         ws = self.ws
-        ws[W_X : W_STEPS + 1] = (
+        ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
             st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
         )  # fmt: skip
-        ws[W_R1 : W_L3D + 1] = (
+        ws[layout_v1.W_R1 : layout_v1.W_L3D + 1] = (
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
-        ws[W_SLIP_MAX] = ep.slip_max
+        ws[layout_v1.W_SLIP_MAX] = ep.slip_max
         # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
         self.noise_on = float(ep.slip_max) > 0.0 or self.n_normal > 0
-        ws[W_NOISE_ON] = 1.0 if self.noise_on else 0.0
+        ws[layout_v1.W_NOISE_ON] = 1.0 if self.noise_on else 0.0
         self.key = np.uint64(ep.key)
 
     def draw(self, steps: int) -> None:
@@ -415,10 +266,10 @@ class StepKernel:
 
     def state(self, steps: int) -> tracking.State:
         """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""
-        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[W_X : W_A2 + 1].tolist()
+        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[layout_v1.W_X : layout_v1.W_A2 + 1].tolist()
         return tracking.State(x, y, beta, w1, w2, al1, al2, prog, a1, a2, steps)
 
     def outputs(self) -> list[float]:
-        """The entries :data:`WS_FIELDS` of the workspace as Python floats."""
-        out: list[float] = self.ws[: len(WS_FIELDS)].tolist()
+        """The entries :data:`layout_v1.WS_FIELDS` of the workspace as Python floats."""
+        out: list[float] = self.ws[: len(layout_v1.WS_FIELDS)].tolist()
         return out

@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, NamedTuple, cast
@@ -72,9 +73,12 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import (
     Real,
     a_from_h,
+    arc_from_tangents,
     arc_step,
     body_velocity_columns,
+    body_velocity_of,
     castor_rate_columns,
+    castor_rate_float,
     col_cos,
     col_exp,
     col_sin,
@@ -89,6 +93,7 @@ __all__ = [
     "REWARD_TERMS",
     "obs_dim",
     "obs_bounds",
+    "error_bound",
     "obs_names",
     "validate_action",
     "action_pair",
@@ -97,7 +102,11 @@ __all__ = [
     "reward_term_columns",
     "reward_product",
     "smooth_term",
+    "heading_term",
     "steady_heading",
+    "steady_heading_float",
+    "clip_float",
+    "heading_error",
     "initial_wheel_rates",
     "start_pose",
     "Evaluation",
@@ -162,9 +171,15 @@ def obs_dim(params: EnvParams) -> int:
     return len(OBS_HEAD) + len(params.preview) + len(OBS_TAIL)
 
 
+def error_bound(termination_distance: float, error_scale: float) -> float:
+    """The bound of the observed cross-track error ``e / error_scale`` [-]: ``2 termination_distance / error_scale``
+    (AmigoBot-v0 and -v1; the observation clips to it)."""
+    return 2.0 * termination_distance / error_scale
+
+
 def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
     """Finite ``(low, high)`` bounds of the observation (see the module table)."""
-    e_max = 2.0 * params.termination_distance / params.error_scale
+    e_max = error_bound(params.termination_distance, params.error_scale)
     high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + len(params.preview)) + [1.0, 1.0, 2.0, 1.0])
     low = -high
     low[-1] = 0.0
@@ -347,7 +362,7 @@ class TaskConstants:
             "speed": params.speed,
             "max_speed": robot.max_speed,
             "error_scale": params.error_scale,
-            "e_max": 2.0 * params.termination_distance / params.error_scale,  # obs_bounds(params)[1][0]
+            "e_max": error_bound(params.termination_distance, params.error_scale),  # obs_bounds(params)[1][0]
             "termination_distance": params.termination_distance,
             "sigma_track": params.sigma_track,
             "sigma_speed": params.sigma_speed,
@@ -367,21 +382,44 @@ def task_constants(params: EnvParams) -> TaskConstants:
 
 
 def _clip(x: Real, low: float, high: float) -> Real:
-    """``np.clip`` of an array; of a scalar, the same value by comparisons."""
+    """``np.clip`` of an array; of a scalar, the same value by comparisons (:func:`clip_float`)."""
     if isinstance(x, np.ndarray):
         out: Real = np.clip(x, low, high)
         return out
+    return clip_float(x, low, high)
+
+
+# The scalar pieces of the step, written once in numba's subset (plain floats and ``math``; the arithmetic ones
+# take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels`,
+# :mod:`amigo_gym.sim._kernels_v1`) compiles these very functions (docs/architecture.md, "The compiled step").
+
+
+def clip_float(x: float, low: float, high: float) -> float:
+    """``np.clip`` of one float by comparisons: ``x`` itself when inside (``-0.0`` stays), else the bound."""
     return x if low <= x <= high else (low if x < low else high)
+
+
+def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
+    """``(cos(psi), sin(psi))`` of ``psi = beta - theta`` from the unit vectors: ``u . t`` and ``t x u``."""
+    return cos_beta * cos_theta + sin_beta * sin_theta, sin_beta * cos_theta - cos_beta * sin_theta
+
+
+def heading_term(cos_psi: Real, sin_psi: Real, cos_ss: Real, sin_ss: Real) -> Real:
+    r"""The heading reward term ``(1 + cos(psi - psi_ss)) / 2`` [-]:
+    :math:`\tfrac12(1 + (\cos\psi\cos\psi_{ss} + \sin\psi\sin\psi_{ss}))`."""
+    return 0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss))
+
+
+def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
+    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` for floats
+    (``kappa l3`` clipped to [-1, 1]; :func:`steady_heading`)."""
+    sin_ss = -clip_float(curvature * l3, -1.0, 1.0)
+    return math.sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
 def _abs(x: Real) -> Real:
     """``|x|`` of a float or an array."""
     return cast(Real, abs(x))
-
-
-def _heading_error_columns(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
-    """``(cos(psi), sin(psi))`` of ``psi = beta - theta`` from the unit vectors: ``u . t`` and ``t x u``."""
-    return cos_beta * cos_theta + sin_beta * sin_theta, sin_beta * cos_theta - cos_beta * sin_theta
 
 
 def _observe_columns(
@@ -477,7 +515,7 @@ def reward_term_columns(
     return (
         col_exp(abs_error / -sigma_track),
         col_exp(abs_dv / -sigma_speed),
-        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
+        heading_term(cos_psi, sin_psi, cos_ss, sin_ss),
         smooth_term(col_exp(change_sq / -smooth_scale_sq), smooth_weight),
     )
 
@@ -503,7 +541,7 @@ def _steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
-_steady_heading_scalar = lru_cache(maxsize=256)(_steady_heading)
+_steady_heading_scalar: Callable[[float, float], tuple[Real, Real]] = lru_cache(maxsize=256)(steady_heading_float)
 
 
 def _product(terms: tuple[Real, Real, Real, Real]) -> Real:
@@ -642,7 +680,7 @@ def outcome_columns(
     w1, w2 = state.rate1, state.rate2
     hx, hy = h_from_a(state.x, state.y, cos_beta, sin_beta, k.l3)
     cp = path.project_xy(hx, hy, minimal)
-    cos_psi, sin_psi = _heading_error_columns(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
+    cos_psi, sin_psi = heading_error(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
     e = cp.cross_track_error
     abs_e = _abs(e)
     dv = v - k.speed
@@ -691,9 +729,10 @@ def step_columns(
 def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
     """:func:`step_columns` (``minimal=True``) for one robot's Python floats, as one flat function: the same bits.
 
-    The expressions of :func:`move_columns`, :func:`amigo_gym.model.kinematics.arc_step` (with ``cos_sin`` and the
-    sinc), ``castor_rate_columns``, ``h_from_a`` and :func:`outcome_columns` written out in their order,
-    without the layers of small functions; the two tangents and the three exponentials are numpy's, each
+    The scalar functions of :func:`move_columns`, :func:`amigo_gym.model.kinematics.arc_step`
+    (:func:`~amigo_gym.model.kinematics.arc_from_tangents`), ``castor_rate_columns``, ``h_from_a`` and
+    :func:`outcome_columns` called in their order, without the layers of column functions (the compiled step
+    compiles the same scalar functions); the two tangents and the three exponentials are numpy's, each
     pair or triple in one call on a small array (numpy gives an element the bits it gives a scalar), so the
     single env and the vector env (:func:`step_columns` on ``(N,)`` columns) agree bit for bit
     (``tests/test_columns.py`` checks it). The path's projection and curvature are the path's own methods.
@@ -702,33 +741,16 @@ def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: flo
     dt = k.dt
     w_max = k.w_max
     # move_columns: clip and scale, body velocity
-    c1 = a1 if -1.0 <= a1 <= 1.0 else (-1.0 if a1 < -1.0 else 1.0)
-    c2 = a2 if -1.0 <= a2 <= 1.0 else (-1.0 if a2 < -1.0 else 1.0)
-    w1 = c1 * w_max
-    w2 = c2 * w_max
-    u1 = robot.r1 * w1
-    u2 = robot.r2 * w2
-    v = 0.5 * (u1 + u2)
-    bdot = (u1 - u2) / (2.0 * robot.l1)
-    # arc_step: cos_sin of the half turn and of the mid-step heading from one np.tan call
+    w1 = clip_float(a1, -1.0, 1.0) * w_max
+    w2 = clip_float(a2, -1.0, 1.0) * w_max
+    v, bdot = body_velocity_of(w1, w2, robot.r1, robot.r2, 2.0 * robot.l1)
+    # arc_step: the tangents of the half turn and of the mid-step heading from one np.tan call
     beta = state.beta
     db = bdot * dt
     h = 0.5 * db
     t_h, t_m = _np_tan(_np_array((0.5 * h, 0.5 * (beta + h)))).tolist()
-    t2 = t_h * t_h
-    r = 1.0 / (1.0 + t2)
-    cos_h, sin_h = (1.0 - t2) * r, (t_h + t_h) * r
-    t2 = t_m * t_m
-    r = 1.0 / (1.0 + t2)
-    cos_mid, sin_mid = (1.0 - t2) * r, (t_m + t_m) * r
-    zero = h == 0.0
-    chord = v * dt * ((sin_h + zero) / (h + zero))
-    x = state.x + chord * cos_mid
-    y = state.y + chord * sin_mid
-    cos_b = cos_mid * cos_h - sin_mid * sin_h
-    sin_b = sin_mid * cos_h + cos_mid * sin_h
-    lb = robot.l5 * bdot
-    castor = math.copysign(math.sqrt(lb * lb + v * v), v) / robot.r3
+    x, y, cos_b, sin_b = arc_from_tangents(state.x, state.y, v, dt, h, t_h, t_m)
+    castor = castor_rate_float(v, bdot, robot.l5, robot.r3)
     new = State(
         x,
         y,
@@ -741,19 +763,15 @@ def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: flo
     )
     # outcome_columns
     l3 = k.l3
-    hx = x + l3 * cos_b
-    hy = y + l3 * sin_b
+    hx, hy = h_from_a(x, y, cos_b, sin_b, l3)
     cp = path.project_xy(hx, hy, True)
-    cos_psi = cos_b * cp.cos_theta + sin_b * cp.sin_theta
-    sin_psi = sin_b * cp.cos_theta - cos_b * cp.sin_theta
+    cos_psi, sin_psi = heading_error(cos_b, sin_b, cp.cos_theta, cp.sin_theta)
     e = cast(float, cp.cross_track_error)
     abs_e = abs(e)
     dv = v - k.speed
     curvature = cp.curvature
-    eo = e / k.error_scale
-    e_max = k.e_max
     obs = (
-        eo if -e_max <= eo <= e_max else (-e_max if eo < -e_max else e_max),
+        clip_float(e / k.error_scale, -k.e_max, k.e_max),
         sin_psi,
         cos_psi,
         curvature * l3,
@@ -776,14 +794,8 @@ def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: flo
     ex = _np_exp(
         _np_array((abs_e / -k.sigma_track, abs(dv) / -k.sigma_speed, (dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq))
     ).tolist()
-    terms = (
-        ex[0],
-        ex[1],
-        0.5 * (1.0 + (cos_psi * cos_ss + sin_psi * sin_ss)),
-        1.0 - k.smooth_weight * (1.0 - ex[2]),
-    )
-    reward = ((terms[0] * terms[1]) * terms[2]) * terms[3]
-    return new, Outcome(hx, hy, cp, obs, terms, reward, abs_e > k.termination_distance)
+    terms = (ex[0], ex[1], heading_term(cos_psi, sin_psi, cos_ss, sin_ss), smooth_term(ex[2], k.smooth_weight))
+    return new, Outcome(hx, hy, cp, obs, terms, reward_product(*terms), abs_e > k.termination_distance)
 
 
 _np_array = np.array

@@ -65,10 +65,17 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import actuators
 from amigo_gym.model.actuators import ActuatorParams
-from amigo_gym.model.kinematics import Real, col_cos, col_sin
+from amigo_gym.model.kinematics import Real, body_velocity_of, col_cos, col_sin, h_from_a
 from amigo_gym.model.params import RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.task.v0 import reward_product, reward_term_columns, steady_heading
+from amigo_gym.task.v0 import (
+    OBS_HEAD,
+    error_bound,
+    heading_error,
+    reward_product,
+    reward_term_columns,
+    steady_heading,
+)
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -445,7 +452,7 @@ def _robot_from_mapping(owner: str, name: str, base: RobotParams, values: Mappin
 
 def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     """Names of the observation's components, in order (module table)."""
-    out = ["cross_track_error", "sin_heading_error", "cos_heading_error", "curvature"]
+    out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
     out += [
@@ -462,8 +469,7 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Finite ``(low, high)`` bounds of the observation (module table)."""
-    e_max = 2.0 * p.termination_distance / p.error_scale
-    high = [e_max, 1.0, 1.0, 1.0]
+    high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
     for d in p.preview:
         b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
         high += [b, b, 1.0]
@@ -508,7 +514,7 @@ def constants(p: TrackingParams) -> Constants:
         w_max=w_max,
         v_max=robot.max_speed,
         l3=robot.l3,
-        e_max=2.0 * p.termination_distance / p.error_scale,
+        e_max=error_bound(p.termination_distance, p.error_scale),
         n_sub=actuators.step_subintervals(p.dt, robot),
         ring_length=actuators.ring_length(p.dt),
         window=window,
@@ -643,7 +649,20 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
     v = ep.v_cruise
     if p.speed_profile == "constant":
         return v
+    if not (isinstance(t, np.ndarray) or isinstance(v, np.ndarray) or isinstance(ep.t_brake, np.ndarray)):
+        return trapezoid_speed(v, p.profile_accel, p.profile_decel, ep.t_brake, t)
     return _max0(_min(_min(p.profile_accel * t, v), v - p.profile_decel * (t - ep.t_brake)))
+
+
+def trapezoid_speed(v: float, accel: float, decel: float, t_brake: float, t: float) -> float:
+    """:func:`reference_speed` of the trapezoid for floats [m/s]: ``max(0, min(accel t, v, v - decel (t - t_brake)))``
+    with the ties and the order of the column form. Pure float code, written once: the compiled step
+    (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
+    a = accel * t
+    a = a if a <= v else v
+    b = v - decel * (t - t_brake)
+    a = a if a <= b else b
+    return a if a > 0.0 else 0.0
 
 
 # --------------------------------------------------------------------------- paths
@@ -1114,12 +1133,10 @@ def evaluate_columns(
     p = k.params
     l3 = k.l3
     cb, sb = col_cos(st.beta), col_sin(st.beta)
-    hx = st.x + ep.l3 * cb
-    hy = st.y + ep.l3 * sb
+    hx, hy = h_from_a(st.x, st.y, cb, sb, ep.l3)
     loc = path.locate(hx, hy, st.progress, k.window, k.window)
     e = loc.cross_track_error
-    cos_psi = cb * loc.cos_theta + sb * loc.sin_theta
-    sin_psi = sb * loc.cos_theta - cb * loc.sin_theta
+    cos_psi, sin_psi = heading_error(cb, sb, loc.cos_theta, loc.sin_theta)
     v_ref = reference_speed(p, ep, t)
     cos_ss, sin_ss = steady_heading(loc.curvature, l3)
     da1 = st.a1 - prev1
@@ -1152,7 +1169,7 @@ def evaluate_columns(
     mw1, mw2 = st.w1 + noise.rate1, st.w2 + noise.rate2
     if p.randomize.position_noise > 0 or p.randomize.heading_noise > 0 or ep_l3_differs(k, ep):
         mcb, msb = col_cos(mb), col_sin(mb)
-        mloc = path.locate(mx + l3 * mcb, my + l3 * msb, loc.progress, k.window, k.window)
+        mloc = path.locate(*h_from_a(mx, my, mcb, msb, l3), loc.progress, k.window, k.window)
         m_e, m_ct, m_st, m_k, m_s = (
             mloc.cross_track_error,
             mloc.cos_theta,
@@ -1163,10 +1180,11 @@ def evaluate_columns(
     else:
         mcb, msb = cb, sb
         m_e, m_ct, m_st, m_k, m_s = e, loc.cos_theta, loc.sin_theta, loc.curvature, loc.progress
+    m_cos_psi, m_sin_psi = heading_error(mcb, msb, m_ct, m_st)
     obs: list[Real] = [
         _clip(m_e / p.error_scale, -k.e_max, k.e_max),
-        msb * m_ct - mcb * m_st,
-        mcb * m_ct + msb * m_st,
+        m_sin_psi,
+        m_cos_psi,
         _clip(m_k * l3, -1.0, 1.0),
     ]
     if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
@@ -1181,7 +1199,7 @@ def evaluate_columns(
             _clip((mcb * dy - msb * dx) / p.preview_scale, -bound, bound),
             _clip(q.curvature * l3, -1.0, 1.0),
         ]
-    v_meas = 0.5 * (k.nominal.r1 * mw1 + k.nominal.r2 * mw2)
+    v_meas, _ = body_velocity_of(mw1, mw2, k.nominal.r1, k.nominal.r2, 2.0 * k.nominal.l1)
     obs += [
         v_ref / k.v_max,
         reference_speed(p, ep, t + SPEED_LOOKAHEAD) / k.v_max,
@@ -1219,9 +1237,7 @@ def start_speed_time(st: State, ep: Episode) -> tuple[Real, Real]:
 
 def _body(w1: Real, w2: Real, ep: Episode) -> tuple[Real, Real]:
     """True speed of A and turn rate for wheel rates ``w1``, ``w2`` (no slip) [m/s, rad/s]."""
-    g1 = ep.r1 * w1
-    g2 = ep.r2 * w2
-    return 0.5 * (g1 + g2), (g1 - g2) / (2.0 * ep.l1)
+    return body_velocity_of(w1, w2, ep.r1, ep.r2, 2.0 * ep.l1)
 
 
 NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)

@@ -1,0 +1,76 @@
+"""What the compiled steps' modules share and numba need not load: :func:`twin` and :func:`source_fingerprint`.
+
+Imported by :mod:`amigo_gym.sim._kernels`, :mod:`amigo_gym.sim._kernels_v1` and :mod:`amigo_gym.sim.layout_v1`;
+imports nothing of the package, never numba.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import types
+from collections.abc import Callable, Iterable
+from typing import Any, TypeVar, cast
+
+__all__ = ["twin", "source_fingerprint", "check_fingerprint", "shared_compiler"]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+#: the functions already registered with numba by :func:`shared_compiler`
+_REGISTERED: set[Callable[..., Any]] = set()
+
+
+def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
+    """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under
+    its name, so the serial and the parallel compilation of one loop need two names (else they would share a cache
+    entry). Used by :mod:`amigo_gym.sim._kernels` and :mod:`amigo_gym.sim._kernels_v1`."""
+    assert isinstance(fn, types.FunctionType)
+    copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
+    copy.__qualname__ = name
+    copy.__doc__ = fn.__doc__
+    return copy
+
+
+def source_fingerprint(values: object, functions: Iterable[Callable[..., Any]]) -> str:
+    """A short hash (16 hex digits) of ``repr(values)`` and of the source text of ``functions``.
+
+    numba keys its disk cache of a kernel on the kernel's own file, but compiles into it the constants and the
+    reference functions it calls from other files: a kernel module states the fingerprint of those it was written
+    for and refuses to load when it differs (so that a change of them comes with a change of the kernel's file,
+    which invalidates the cached code).
+    """
+    shared = tuple(inspect.getsource(f) for f in functions)
+    return hashlib.sha256(repr((values, shared)).encode()).hexdigest()[:16]
+
+
+def check_fingerprint(owner: str, stated: str, actual: str) -> None:
+    """Refuse to load the kernel module ``owner`` (``ImportError``) when the fingerprint it states is not the
+    :func:`source_fingerprint` of what it compiles now (:func:`source_fingerprint`)."""
+    if actual != stated:
+        path = owner.replace(".", "/") + ".py"
+        raise ImportError(
+            f"{owner} was written for the fingerprint {stated}, but its layouts and shared functions now have "
+            f"{actual}: update LAYOUT_FINGERPRINT in {path}"
+        )
+
+
+def shared_compiler(owner: str, shared: tuple[Callable[..., Any], ...], jit: Callable[..., Any]) -> Callable[[_F], _F]:
+    """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
+
+    Registers every function of ``shared`` with numba (``register_jitable``: compiled code may call it, as the
+    shared functions call each other) and returns ``compiled(fn)``: ``jit(fn)`` for a function of ``shared``,
+    an ``ImportError`` for another (so that every function compiled into a kernel counts in its fingerprint).
+    Only the kernel modules call this (they import numba anyway); this module stays numba-free.
+    """
+    from numba.extending import register_jitable
+
+    for fn in shared:
+        if fn not in _REGISTERED:  # once per process (both kernels share some functions)
+            register_jitable(fn)
+            _REGISTERED.add(fn)
+
+    def compiled(fn: _F) -> _F:
+        if fn not in shared:
+            raise ImportError(f"{owner} compiles {fn.__qualname__} but does not list it in SHARED (its fingerprint)")
+        return cast(_F, jit(fn))
+
+    return compiled

@@ -1,0 +1,188 @@
+"""The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free), with their fingerprint.
+
+The index constants below are read by the kernel (:mod:`amigo_gym.sim._kernels_v1`, which numba compiles them into
+as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors and re-exports every name here) and by the
+environments. :func:`layout_fingerprint` keeps numba's disk cache honest about them and about the reference's
+float functions the kernel compiles (:data:`SHARED`).
+
+May import numpy and the model, paths and task modules the fingerprint names; never numba.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from amigo_gym.model import actuators, fresnel, kinematics, randomization
+from amigo_gym.paths import clothoid
+from amigo_gym.sim.layout import source_fingerprint
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
+
+#: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
+CONSTANT_FIELDS: tuple[str, ...] = (
+    "dt",  # control period [s]
+    "w_max",  # nominal max wheel rate [rad/s]
+    "r1",  # nominal wheel radii [m] and half track [m]
+    "r2",
+    "l1",
+    "two_l1",  # 2 l1 [m]
+    "accel",  # firmware ramps [m/s^2], [rad/s^2]
+    "decel",
+    "rot_accel",
+    "rot_decel",
+    "l3",  # nominal l3 [m]
+    "error_scale",  # [m]
+    "e_max",  # observation bound of the cross-track error [-]
+    "termination_distance",  # [m]
+    "preview_scale",  # [m]
+    "v_max",  # nominal max speed [m/s]
+    "neg_sigma_track",  # -sigma_track [m]
+    "neg_sigma_speed",  # -sigma_speed [m/s]
+    "neg_smooth_scale_sq",  # -smooth_scale_sq [-]
+    "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
+    "profile_accel",  # [m/s^2]
+    "profile_decel",  # [m/s^2]
+    "window",  # projection window ahead and behind [m]
+    "measured_noise",  # 1.0 when position or heading noise is on (the measured H is projected again)
+    "speed_lookahead",  # [s]
+    "n_preview",  # number of preview distances
+    "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
+    "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
+    "heading_noise",
+    "wheel_rate_noise",
+)
+_C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
+C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
+C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
+C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
+C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
+C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
+C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
+#: where the variable-length parts of ``consts`` start
+C_TAIL = len(CONSTANT_FIELDS)
+#: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
+PATH_NODES = 10
+
+#: the head of a flattened path (then the arrays: :mod:`amigo_gym.sim._kernels_v1`)
+PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
+P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
+P_TAIL = len(PATH_HEADER)
+
+#: entries of ``ws``: the state (:class:`amigo_gym.task.v1.State`), the episode (:class:`amigo_gym.task.v1.Episode`;
+#: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
+WS_FIELDS: tuple[str, ...] = (
+    # state, updated by step
+    "x",
+    "y",
+    "beta",
+    "w1",
+    "w2",
+    "alpha1",
+    "alpha2",
+    "progress",
+    "a1",
+    "a2",
+    "steps",
+    # episode, read only
+    "r1",
+    "r2",
+    "l1",
+    "l3",
+    "lag",
+    "t_switch",
+    "v_cruise",
+    "t_brake",
+    "l3_differs",
+    # outputs
+    "h_x",
+    "h_y",
+    "error",
+    "v_true",
+    "v_ref",
+    "meas_x",
+    "meas_y",
+    "meas_beta",
+    "meas_w1",
+    "meas_w2",
+    "heading",  # the heading reward term
+    "arg_track",  # arguments of the exponentials of the track, speed and smoothness terms
+    "arg_speed",
+    "arg_smooth",
+    "terminated",  # 1.0 / 0.0
+    "end_of_path",  # 1.0 / 0.0
+    "command1",  # the setpoints written into the ring this step [rad/s]
+    "command2",
+    # the per-step draws (randomization.step_noise): the episode's slip bound and whether anything is drawn (1.0 /
+    # 0.0), then this step's draws
+    "slip_max",
+    "noise_on",
+    "slip1",
+    "slip2",
+    "noise_x",
+    "noise_y",
+    "noise_beta",
+    "noise_rate1",
+    "noise_rate2",
+)
+_W = {name: i for i, name in enumerate(WS_FIELDS)}
+W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
+W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[11:20])
+W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[20:30])
+W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
+W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
+W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
+#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5,
+#: then the normal draws' uniforms ``u1``, their logarithms and the angles ``2 pi u2`` (5 each)
+WS_SCRATCH = 2 * 19 + 11 + 10 * 5 + 3 * 5
+S_KV = len(WS_FIELDS)
+S_UV = S_KV + 7
+S_SV = S_UV + 6
+S_KW = S_SV + 6
+S_UW = S_KW + 7
+S_SW = S_UW + 6
+S_TIMES = S_SW + 6
+S_PIECES = S_TIMES + 11
+S_U1 = S_PIECES + 10 * 5
+S_LOG = S_U1 + 5
+S_U2 = S_LOG + 5
+
+
+#: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
+#: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
+SHARED: tuple[Callable[..., Any], ...] = (
+    actuators._ramp_float,
+    actuators._clip_float,
+    actuators.piece_rates,
+    clothoid._np_clip,
+    kinematics.body_velocity_of,
+    kinematics.wheel_rates_of,
+    kinematics.h_from_a,
+    randomization.box_muller,
+    task.clip_float,
+    task.heading_error,
+    task.heading_term,
+    task.steady_heading_float,
+    tracking.trapezoid_speed,
+)
+
+
+def layout_fingerprint() -> str:
+    """A short hash of the layouts above, of the constants the kernel takes from their homes
+    (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
+    iterations, smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`) and of the source of the
+    reference's float functions the kernel compiles as they are (:data:`SHARED`).
+
+    numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
+    :mod:`amigo_gym.sim._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
+    a change here must come with a change of that file, which invalidates the cached code.
+    """
+    homes = (
+        actuators.PIECES,
+        fresnel.NODES,
+        clothoid.NEWTON_ITERATIONS,
+        clothoid.MIN_NEWTON_DENOMINATOR,
+        (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
+    )
+    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
+    return source_fingerprint((layout, homes), SHARED)
