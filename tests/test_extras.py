@@ -22,6 +22,7 @@ DISTRIBUTION = {
     "torch": "torch",
     "stable_baselines3": "stable-baselines3",
     "sb3_contrib": "sb3-contrib",
+    "filelock": "filelock",
     "yaml": "pyyaml",
     "tqdm": "tqdm",
     "rich": "rich",

@@ -140,7 +140,7 @@ def _add_offpolicy_options(p: Any) -> None:
     p.add_argument(
         "--offpolicy",
         default="",
-        help="off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc (default: none)",
+        help="off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc [names] (default: none)",
     )
     p.add_argument(
         "--offpolicy-steps", type=int, default=1024, help="env-steps after the warm-up, shipped configuration [steps]"
