@@ -1,7 +1,7 @@
 """Issue 18's targets read off a benchmark.json: IQM of H RMS on the ideal-robot cells with 95 % intervals, the
 ratio to the analytic controller, settled figures, chatter, speed error, and seeds against their algorithm's median.
 
-    amigo-gym benchmark --agents analytic 'ppo_fast=experiments/candidates/ppo_fast_s*.zip' ... --out runs/bench
+    amigo-gym benchmark --agents analytic 'ppo_fast=agents/pretrained/v1/ppo_fast/*.zip' ... --out runs/bench
     python experiments/targets_v1.py runs/bench/benchmark.json [--markdown out.md]
 
 The ideal-robot cells are the suite's v1 scenarios with the nominal robot, no delay, no noise and dt 0.1 s (the

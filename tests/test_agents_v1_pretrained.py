@@ -7,6 +7,7 @@ import hashlib
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from amigo_gym.data import pretrained_dir
@@ -27,9 +28,41 @@ def test_manifest_is_complete_and_matches_the_model(manifest: Path) -> None:
     m = json.loads(manifest.read_text())
     for key in ("algo", "seed", "timesteps", "wall_time_s", "versions", "sha256", "training_command", "env_id"):
         assert key in m, key
-    assert m["env_id"] == "AmigoBot-v1" and m["algo"] in manifest.parent.name
+    assert m["env_id"] == "AmigoBot-v1" and manifest.parent.name in (m["algo"], m.get("agent"))
     assert hashlib.sha256(manifest.with_suffix(".zip").read_bytes()).hexdigest() == m["sha256"]
-    assert "--env AmigoBot-v1" in m["training_command"] and f"--seed {m['seed']}" in m["training_command"]
+    if m["algo"] == "fastppo":  # amigo-gym train-fast trains AmigoBot-v1 only: its command names no --env
+        assert m["training_command"].startswith("amigo-gym train-fast ") and m["timesteps"] >= 15_000_000
+    else:
+        assert "--env AmigoBot-v1" in m["training_command"]
+    assert f"--seed {m['seed']}" in m["training_command"]
+
+
+FAST = sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.zip"))
+
+
+def test_five_seeds_of_the_fast_ppo_generalist_are_shipped() -> None:
+    seeds = sorted(json.loads(z.with_suffix(".json").read_text())["seed"] for z in FAST)
+    assert seeds == [0, 1, 2, 3, 4]
+
+
+@pytest.mark.parametrize("model", FAST, ids=[z.stem for z in FAST])
+def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -> None:
+    """``load_pretrained`` checks the sha256 and gives SB3's ``predict`` on a batch of raw v1 observations; the
+    actions are finite and inside the action space, and deterministic."""
+    import gymnasium as gym
+
+    from amigo_gym.policies import load_pretrained
+
+    policy = load_pretrained(model)
+    env = gym.make_vec("AmigoBot-v1", num_envs=8, vectorization_mode="vector_entry_point", path="mixed")
+    obs, _ = env.reset(seed=123)
+    for _ in range(20):
+        a, _ = policy.predict(obs, deterministic=True)
+        b, _ = policy.predict(obs, deterministic=True)
+        assert a.shape == (8, 2) and np.all(np.isfinite(a)) and np.array_equal(a, b)
+        assert np.all(a >= env.single_action_space.low) and np.all(a <= env.single_action_space.high)
+        obs, *_ = env.step(a)
+    env.close()
 
 
 CLAIMED = [m for m in MANIFESTS if "claimed" in json.loads(m.read_text())]
