@@ -52,7 +52,7 @@ def _same(a: Any, b: Any, what: str) -> None:
         },
     ],
 )
-@pytest.mark.parametrize("n", [5, 2])  # 2: the float code row by row (ROWWISE_MAX_N), 5: the columns
+@pytest.mark.parametrize("n", [5, 2])
 def test_native_equals_sync_bit_for_bit(mode: AutoresetMode, kwargs: dict[str, Any], n: int) -> None:
     native, sync = _pair(n, mode, **dict(kwargs))
     o1, i1 = native.reset(seed=11)
