@@ -25,6 +25,7 @@ For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mod
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any
 
 import numpy as np
@@ -62,6 +63,19 @@ _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
 _W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
+
+
+def __getattr__(name: str) -> Any:
+    """``ROWWISE_MAX_N`` (removed in 0.2 with the row-by-row step route; goes in 0.3): 0, with a warning."""
+    if name == "ROWWISE_MAX_N":
+        warnings.warn(
+            "amigo_gym.envs.vector_v1.ROWWISE_MAX_N is deprecated: since amigo_gym 0.2 no robots are stepped row by "
+            "row (one step route: the compiled step, or the column functions with kernel='numpy'); it goes in 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return 0
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 #: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
