@@ -4,8 +4,9 @@ The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes 
 :func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
-reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"), the
-loops and the projection are written here. :mod:`amigo_gym.task.v0` stays the reference:
+reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
+docs/architecture.md, "The compiled step"), the loops and the manoeuvre path's choice between its line and its
+circle are written here. :mod:`amigo_gym.task.v0` stays the reference:
 ``tests/test_kernels.py`` checks that the two agree.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are

@@ -18,9 +18,10 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed: :data:`amigo_gym.sim.layout_v1.SHARED`)
-are the reference's own functions, compiled here as they are (docs/architecture.md, "The compiled step"); the
-loops, the projection and the quadrature are written here in the reference's order of operations, so that every
+term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the projection's wrap, placement,
+window, Newton step and status: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled
+here as they are (docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece
+search, the quadrature's node sums) are written here in the reference's order of operations, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
