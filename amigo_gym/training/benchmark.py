@@ -573,19 +573,25 @@ def default_agents() -> list[AgentSpec]:
 
 def agent_label(name: str, algo: str | None = None) -> str:
     """What an agent is, in words: ``ppo_v1`` -> "SB3 PPO generalist", ``ppo_fast_v1`` -> "fast PPO generalist"
-    (:data:`V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy -> "classical"; another name
-    by its algorithm ``algo`` (the manifest's: ``fastppo*`` -> "fast PPO", ``ppo`` -> "SB3 PPO"), else "model"."""
+    (:data:`V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy -> "classical", another name
+    -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the name: ``fastppo*`` -> "fast PPO"
+    (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3 PPO"/..., so a fast-PPO zip passed
+    as ``--agents ppo_v1=...`` still reads "fast PPO"."""
     if name in CLASSICAL:
         return "classical"
-    if name.endswith("_v1") and name[:-3] in V1_AGENTS:
-        return f"{V1_AGENTS[name[:-3]]} generalist"
-    if name.endswith("_v0") and name[:-3] in ALGOS:
-        return f"SB3 {name[:-3].upper()} v0 specialist"
+    v1 = name.endswith("_v1") and name[:-3] in V1_AGENTS
+    v0 = name.endswith("_v0") and name[:-3] in ALGOS
     if algo is not None and str(algo).startswith(FAST_ALGO):
-        return "fast PPO" + (" residual" if "residual" in str(algo) else "")
-    if algo in ALGOS:
-        return f"SB3 {str(algo).upper()}"
-    return "model"
+        kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
+    elif algo in ALGOS:
+        kind = f"SB3 {str(algo).upper()}"
+    elif v1:
+        kind = V1_AGENTS[name[:-3]]
+    elif v0:
+        kind = f"SB3 {name[:-3].upper()}"
+    else:
+        return "model"
+    return kind + (" generalist" if v1 else " v0 specialist" if v0 else "")
 
 
 # --------------------------------------------------------------------------- evaluation
