@@ -6,6 +6,9 @@ Usage (flag names as in rl-baselines3-zoo where they exist)::
     amigo-gym sweep --algo ppo --env AmigoBot-v1 --n-trials 50 --n-jobs 2 --timesteps 100000 --out runs/sweep
     # a multi-seed training grid: every (algo, seed) exactly once
     amigo-gym sweep --mode seeds --algo ppo sac td3 --seeds 0 1 2 3 4 --n-jobs 2 --out runs/grid
+    # the fast PPO (amigo-gym train-fast), its winners written into its settings file
+    amigo-gym sweep --algo fastppo --env AmigoBot-v1 --timesteps 2000000 --eval-freq 250000 --eval-episodes 32 \
+        --n-trials 50 --out runs/sweep_fastppo --save-best agents/hyperparams/fastppo.yml
     # many machines: every machine runs the same command against one PostgreSQL database and joins
     # (the password comes from PGPASSWORD or ~/.pgpass, never from the command line)
     PGPASSWORD=... amigo-gym sweep --algo sac --storage postgresql://user@db-host/amigo --study-name sac-hp \
@@ -35,6 +38,30 @@ the mode, the environment, the objective and the budget as study user attributes
 (seeds mode) and then sets the attribute ``ready``, which joining workers wait for (each worker adds
 ``worker:<host>:<pid>`` with its command, and each trial records its worker, sampler seed and run
 directory).
+
+Fast PPO (``--algo fastppo``, :mod:`amigo_gym.training.fastppo`; ``--env AmigoBot-v1`` only, its native vector
+env). A trial trains in the worker's own process (no subprocess: the worker's ``SIGTERM`` handling, heartbeat and
+``trial.report`` reach the training directly, and torch is imported once per worker, not once per trial). Its
+settings are the base file's (``--hyperparams``, default ``agents/hyperparams/fastppo.yml``, keys of
+:class:`~amigo_gym.training.fastppo.FastPPOSettings`) with, in hyperparams mode, the sampled ones
+(:func:`sample_fastppo`: learning rate, epochs, ``num_envs`` x ``rollout_steps``, minibatches, gamma, GAE lambda,
+clip, entropy, initial log std, action filter, CAPS temporal weight); the run's own options are ``--timesteps``
+(``total_steps``), ``--eval-freq`` (``eval_every``), ``--eval-episodes`` (``eval_envs``, the training
+distribution on the validation seeds ``1000000 + i``), ``--threads``, the seed and ``--env-kwargs``. Every
+evaluation's ``h_rms_m`` is reported to the pruner at its scheduled step (a multiple of ``--eval-freq``, equal in
+every trial whatever its batch), and a prune stops the training at once. The objective is the one above: the run's
+``model.zip`` (checked against ``run.json``'s sha256) runs as :class:`amigo_gym.policies.learned.FastPolicy` on the
+validation cells through the benchmark's own loop (:func:`validate_agent`). The run folder is ``trial_*/run/`` as
+``amigo-gym train-fast --out`` writes it (``config.json`` holds the equivalent ``train-fast`` command,
+``train.log`` the progress). A stopped trial stops at the end of its iteration after a checkpoint; the trial that
+retries it (same parameters) copies the newest checkpoint of the abandoned trials with the same settings into its
+own folder and continues it (user attribute ``resumed_from``; bit for bit as an uninterrupted run).
+
+Winners (``--save-best FILE``, hyperparams mode, any algorithm): when the command ends, the best COMPLETE trial's
+hyperparameters (the base file's with the sampled ones: the trial attribute ``hyperparams``) are written under the
+``--env`` key of ``FILE`` with comment lines naming the study's command, the trial and its value; the file's
+other keys and their comments stay as written (:func:`write_best_yaml`). Rerunning a finished study's command
+runs no trial and writes the file again.
 
 Secrets: the storage URL's password is never stored or printed: every command line kept (study and trial
 attributes, ``summary.json``) and every message shows the URL as SQLAlchemy renders it with
@@ -98,7 +125,8 @@ Each trial's training run is in ``<out>/<study>/trial_<number>_<id>/`` (its YAML
 config, TensorBoard logs with the task metrics, ``eval.json``, models).
 
 Imports optuna, SQLAlchemy (and PyYAML) only when run; may import :mod:`amigo_gym.training.train`,
-:mod:`amigo_gym.training.benchmark` and :mod:`amigo_gym.training.evaluate`.
+:mod:`amigo_gym.training.benchmark`, :mod:`amigo_gym.training.evaluate` and (inside functions, for
+``--algo fastppo``) :mod:`amigo_gym.training.fastppo` and :mod:`amigo_gym.policies.learned`.
 """
 
 from __future__ import annotations
