@@ -286,7 +286,7 @@ class SweepConfig:
         train_seed: training seed of hyperparameter trials [-].
         hyperparams: base YAML [file] (default: agents/hyperparams/<algo>.yml).
         save_best: when the command ends, write the best COMPLETE trial's hyperparameters under the --env key
-            of this YAML file, other keys kept (hyperparams mode) [file].
+            of this YAML file, other keys kept (hyperparams mode) [file] (default: none).
         out: folder of the trials' runs (and the default SQLite file) [dir].
         seed: base of the workers' sampler seeds [-].
         sampler: Optuna sampler.
