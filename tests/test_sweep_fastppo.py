@@ -243,3 +243,42 @@ def test_replace_yaml_block_keeps_the_other_blocks_as_written() -> None:
         "AmigoBot-v1": {"b": 2},
         "X": {"c": 3},
     }
+
+
+def test_a_retry_resumes_the_newest_abandoned_checkpoint_of_the_same_settings(tmp_path: Path) -> None:
+    """What a retry continues from, whichever way its original ended (SIGTERM, or killed and found stale by the
+    heartbeat: FAIL without a reason of its own): the newest checkpoint of an abandoned trial with the same
+    parameters and settings; never that of a trial that failed by its own error or trained other settings."""
+    from optuna.distributions import CategoricalDistribution
+
+    from amigo_gym.training.fastppo import FastPPOSettings, train
+    from amigo_gym.training.sweep import _resume_fastppo
+
+    kw = {**TINY, "hidden": (16,), "rollout_steps": 8, "total_steps": 2048, "eval_envs": 2}
+    s, other = FastPPOSettings(**kw), FastPPOSettings(**kw, seed=1)  # type: ignore[arg-type]
+    study = optuna.create_study()
+    dist = {"seed": CategoricalDistribution([0, 1])}
+
+    def abandoned(name: str, settings: FastPPOSettings, steps: int, **attrs: object) -> Path:
+        run = tmp_path / name / "run"
+        train(settings, run, until_steps=steps, log=None)
+        study.add_trial(
+            optuna.trial.create_trial(
+                state=TrialState.FAIL, params={"seed": 0}, distributions=dist,
+                user_attrs={"run_dir": str(run.parent), **attrs},
+            )
+        )  # fmt: skip
+        return run
+
+    abandoned("old", s, 512, interrupted="stopped by SIGTERM or Ctrl-C")
+    newest = abandoned("killed", s, 1024)  # stale heartbeat: no attribute of its own
+    abandoned("error", s, 1536, fail_reason="ValueError: ...")
+    abandoned("other_settings", other, 1536)
+    trial = study.ask({"seed": CategoricalDistribution([0, 1])})
+    out = tmp_path / "retry" / "run"
+    assert _resume_fastppo(study, trial, s, out) == {"trial": 1, "run_dir": str(newest)}
+    assert (out / "checkpoint.pt").read_bytes() == (newest / "checkpoint.pt").read_bytes()
+    assert (newest / "checkpoint.pt").is_file()  # the abandoned folder keeps its files
+    rec = train(s, out, resume=True, log=None)
+    assert rec["finished"] and rec["timesteps"] == 2048
+    assert _resume_fastppo(study, trial, FastPPOSettings(**{**kw, "epochs": 2}), tmp_path / "x") is None  # type: ignore[arg-type]
