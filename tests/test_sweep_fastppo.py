@@ -53,7 +53,11 @@ def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(tmp_
     target = tmp_path / "hp.yml"  # a file with another block, whose comment and values must survive
     other = "# kept as written\nAmigoBot-v0:\n  n_steps: 32  # a comment\n\n"
     target.write_text(other + "# replaced\nAmigoBot-v1:\n  num_envs: 1\n")
-    args = _args(tmp_path, "--n-trials", "2", "--study-name", "fp", "--save-best", str(target))
+    # two startup trials: the median pruner prunes nothing before two trials have completed (it would otherwise
+    # compare the second trial with the first; a pruned trial is test_a_pruned_fastppo_trial_...'s subject)
+    args = _args(
+        tmp_path, "--n-trials", "2", "--n-startup-trials", "2", "--study-name", "fp", "--save-best", str(target)
+    )
     out = ts._finish(ts._sweep(args), timeout=600)
     study = optuna.load_study(study_name="fp", storage=f"sqlite:///{tmp_path / 'out' / 'sweep.db'}")
     trials = study.get_trials()
