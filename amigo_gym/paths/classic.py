@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple, Protocol, cast
+from typing import Any, NamedTuple, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -87,6 +87,33 @@ class ClosestPoint(NamedTuple):
             cos_theta=np.asarray(self.cos_theta),
             sin_theta=np.asarray(self.sin_theta),
         )
+
+
+class CirclePose(NamedTuple):
+    """:meth:`CirclePath.pose_columns`: the circle at arc lengths ``s``; ``x``, ``y`` [m], ``theta`` [rad],
+    ``curvature`` [1/m]."""
+
+    x: Real
+    y: Real
+    theta: Real
+    curvature: Real
+
+
+class Located(NamedTuple):
+    """:meth:`CirclePath.locate`: the fields of :class:`amigo_gym.paths.PathPoint` (same names and order)."""
+
+    s: Real
+    progress: Real
+    x: Real
+    y: Real
+    tangent_angle: Real
+    curvature: Real
+    curvature_rate: Real
+    cross_track_error: Real
+    cos_theta: Real
+    sin_theta: Real
+    distance: Real
+    status: Any
 
 
 class Path(Protocol):
@@ -193,6 +220,46 @@ class CirclePath:
 
     def curvature_columns(self, s: Real) -> Real:
         return self.direction / self.radius
+
+    #: a circle repeats with period :attr:`length` (the path protocol of ``AmigoBot-v1``, :mod:`amigo_gym.paths.user`)
+    closed = True
+
+    def pose_columns(self, s: Real) -> CirclePose:
+        """The circle at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
+        ``theta`` [rad] and ``curvature`` [1/m] as floats for a float ``s``, else arrays of the shape of ``s``."""
+        th = self.tangent_angle(s)
+        cx, cy = self.center
+        dr = self.direction * self.radius
+        x = cx + dr * np.sin(th)
+        y = cy - dr * np.cos(th)
+        k = np.full(np.shape(th), self.direction / self.radius)
+        if not isinstance(s, np.ndarray):
+            return CirclePose(float(x), float(y), float(th), float(k))
+        return CirclePose(x, y, th, k)
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> Located:
+        r"""The closest point of the circle to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (the fields of
+        :class:`amigo_gym.paths.PathPoint`), by :meth:`project_xy` itself: the cross-track error, unit tangent
+        and curvature are AmigoBot-v0's bits. ``progress`` is ``s`` plus the whole laps ``2 pi R k`` that bring it
+        nearest to ``s_prev`` (``s`` without a hint); the window (``max_advance``, ``max_retreat``) is not
+        needed, the projection being unique (the start point at the centre); ``status`` 0 (interior).
+        """
+        cp = self.project_xy(x, y)
+        s = cp.s
+        progress = s
+        if s_prev is not None:
+            lap = self.length
+            progress = s + lap * np.round((s_prev - s) / lap)
+            if not isinstance(progress, np.ndarray) or progress.ndim == 0:
+                progress = float(progress)
+        e = cp.cross_track_error
+        zero = 0.0 * e
+        return Located(
+            s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+            cp.cos_theta, cp.sin_theta, abs(e), 0 if isinstance(zero, float) else np.zeros(np.shape(e), np.int64),
+        )  # fmt: skip
 
     @cached_property
     def _frame(self) -> tuple[float, float, float, float]:
