@@ -256,9 +256,14 @@ class CirclePath:
                 progress = float(progress)
         e = cp.cross_track_error
         zero = 0.0 * e
+        if isinstance(e, np.ndarray):
+            return Located(
+                s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+                cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
+            )  # fmt: skip
         return Located(
             s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
-            cp.cos_theta, cp.sin_theta, abs(e), 0 if isinstance(zero, float) else np.zeros(np.shape(e), np.int64),
+            cp.cos_theta, cp.sin_theta, abs(e), 0,
         )  # fmt: skip
 
     @cached_property

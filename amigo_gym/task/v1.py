@@ -769,8 +769,9 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
     as ``p.feasibility`` says (``"error"``, ``"warn"``, ``"off"``).
 
     Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
-    (``actuators.rot_acceleration``) at the highest reference speed, with the exact heading lag of H
-    (:func:`amigo_gym.paths.feasibility`), and the trapezoid's rates against the robot's ramps.
+    (``actuators.rot_acceleration``; none with ``ideal_actuators``, whose accelerations are unbounded) at the
+    highest reference speed, with the exact heading lag of H (:func:`amigo_gym.paths.feasibility`), and the
+    trapezoid's rates against the robot's ramps.
 
     Returns:
         the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
@@ -784,7 +785,7 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
         v,
         p.robot,
         "A",
-        max_rotational_acceleration=p.actuators.rot_acceleration,
+        max_rotational_acceleration=None if p.ideal_actuators else p.actuators.rot_acceleration,
     )
     if not f.feasible:
         if p.feasibility == "error":
