@@ -109,6 +109,10 @@ def test_observation_names_and_bounds_are_v0s() -> None:
     v1 = gym.make("AmigoBot-v1", **V0_CONFIG).unwrapped
     assert list(tracking.obs_fields(v1.params)) == task_v0.obs_names(v0.params)
     assert v1.observation_space == v0.observation_space
+    # a controller reads the layout by name from either settings: the same action on the same observation
+    o0, _ = v0.reset(seed=1)
+    o1, _ = v1.reset(seed=1)
+    np.testing.assert_array_equal(AnalyticPolicy(v1.params).action(o1), AnalyticPolicy(v0.params).action(o0))
 
 
 def test_vector_env_configured_as_v0_steps_as_v0s_vector_env() -> None:
