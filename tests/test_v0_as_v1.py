@@ -18,7 +18,7 @@ import pytest
 from golden_compare import mismatches
 
 import amigo_gym  # noqa: F401  (registers the envs)
-from amigo_gym.paths import CirclePath
+from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.policies import AnalyticPolicy
 from amigo_gym.task import v0 as task_v0
 from amigo_gym.task import v1 as tracking
@@ -186,3 +186,33 @@ def test_circle_locate_is_its_projection() -> None:
     assert type(one.progress) is float and one.cross_track_error == loc.cross_track_error[0]
     pose = c.pose_columns(np.array([0.0, 1.0]))
     np.testing.assert_allclose(np.stack([pose.x, pose.y], -1), c.point([0.0, 1.0]), atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("v0_kwargs", "path"),
+    [
+        (
+            {"radius": 1.5, "direction": -1, "speed": 0.3, "dt": 0.05, "preview": (0.3,), "sigma_smooth": 0.2},
+            CirclePath(radius=1.5, direction=-1),
+        ),
+        ({"path": "manoeuvre"}, ManoeuvrePath()),
+        (
+            {"path": "manoeuvre", "radius": 0.8, "direction": -1, "straight_length": 0.5, "speed": 0.15},
+            ManoeuvrePath(radius=0.8, straight_length=0.5, direction=-1),
+        ),
+    ],
+)
+@pytest.mark.parametrize("policy", ["random", "analytic"])
+def test_other_v0_settings(v0_kwargs: dict[str, Any], path: Any, policy: str) -> None:
+    """Other radii, directions, speeds, periods, previews, scales and the manoeuvre path: the same agreement."""
+    v0 = gym.make("AmigoBot-v0", **v0_kwargs).unwrapped
+    same = {k: v for k, v in v0_kwargs.items() if k not in ("path", "radius", "direction", "straight_length")}
+    config = {**V0_CONFIG, **same, "path": path}
+    actions = _random
+    if policy == "analytic":
+        pol = AnalyticPolicy(v0.params)
+        actions = lambda obs, rng: pol.action(obs)  # noqa: E731
+    for seed in range(3):
+        want = _episode("AmigoBot-v0", v0_kwargs, seed, actions)
+        got = _episode("AmigoBot-v1", config, seed, actions)
+        assert mismatches(got, want) == []

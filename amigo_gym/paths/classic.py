@@ -254,17 +254,7 @@ class CirclePath:
             progress = s + lap * np.round((s_prev - s) / lap)
             if not isinstance(progress, np.ndarray) or progress.ndim == 0:
                 progress = float(progress)
-        e = cp.cross_track_error
-        zero = 0.0 * e
-        if isinstance(e, np.ndarray):
-            return Located(
-                s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
-                cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
-            )  # fmt: skip
-        return Located(
-            s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
-            cp.cos_theta, cp.sin_theta, abs(e), 0,
-        )  # fmt: skip
+        return _located(cp, progress)
 
     @cached_property
     def _frame(self) -> tuple[float, float, float, float]:
@@ -403,6 +393,31 @@ class ManoeuvrePath:
     def curvature_columns(self, s: Real) -> Real:
         return _where(s <= self.straight_length, 0.0, self.direction / self.radius)
 
+    #: the manoeuvre is an open path for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): its projection never
+    #: reports the end (the circle's laps repeat), as in AmigoBot-v0
+    closed = False
+
+    def pose_columns(self, s: Real) -> CirclePose:
+        """The path at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
+        ``theta`` [rad] and ``curvature`` [1/m] (:meth:`curvature_columns`), floats for a float ``s``."""
+        xy = self.point(s)
+        th = self.tangent_angle(s)
+        k = np.where(np.asarray(s) <= self.straight_length, 0.0, self.direction / self.radius)
+        if not isinstance(s, np.ndarray):
+            return CirclePose(float(xy[0]), float(xy[1]), float(th), float(k))
+        return CirclePose(xy[..., 0], xy[..., 1], th, k)
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> Located:
+        """The closest point to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (:class:`amigo_gym.paths.PathPoint`'s
+        fields) by :meth:`project_xy` itself (AmigoBot-v0's bits); ``progress`` is ``s`` (the hint and the window
+        are not needed), ``status`` 0: the path does not end."""
+        cp = self.project_xy(x, y)
+        if not isinstance(cp.cross_track_error, np.ndarray) or np.ndim(cp.cross_track_error) == 0:
+            cp = ClosestPoint(*(float(v) for v in cp))
+        return _located(cp, cp.s)
+
     def project(self, p: ArrayLike) -> Projection:
         p = np.asarray(p, dtype=np.float64)
         return self.project_xy(p[..., 0], p[..., 1]).projection()
@@ -426,6 +441,22 @@ class ManoeuvrePath:
             cos_theta=_where(use_line, 1.0, circ.cos_theta),
             sin_theta=_where(use_line, 0.0, circ.sin_theta),
         )
+
+
+def _located(cp: ClosestPoint, progress: Real) -> Located:
+    """The :class:`Located` of a projection ``cp`` with its ``progress`` [m]: curvature rate 0, ``distance = |e|``,
+    status 0 (interior)."""
+    e = cp.cross_track_error
+    zero = 0.0 * e
+    if isinstance(e, np.ndarray):
+        return Located(
+            cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+            cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
+        )  # fmt: skip
+    return Located(
+        cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+        cp.cos_theta, cp.sin_theta, abs(e), 0,
+    )  # fmt: skip
 
 
 def _where(condition: ArrayLike, a: ArrayLike, b: ArrayLike) -> Real:
