@@ -14,7 +14,8 @@ over the episode (tests/golden_compare.py's measure; the golden tolerance is 8),
 * ``v0-config``: ``ideal_actuators=True, observation="v0", reward="v0"`` and ``path=CirclePath(...)``
   (tests/test_v0_as_v1.py).
 
-Then the formula differences one by one on the same inputs (start pose, arc step, wheel rates, projection).
+Then the formula differences one by one on the same inputs (start pose, arc step, wheel rates, projection), and the
+time per step of the single envs.
 Observation fields are compared by v0's names (``curvature_ahead_i`` against v1's ``preview_curvature_<d>m``).
 """
 
@@ -159,6 +160,29 @@ def formulas(n: int = 2000) -> list[str]:
     return out
 
 
+def speed(steps: int = 3000) -> str:
+    """Time per step [us] of one env (best of 3 runs of ``steps`` constant actions): v0, v1 as v0, v1's default."""
+    import time
+
+    def best(env_id: str, kw: dict[str, Any]) -> float:
+        env = gym.make(env_id, max_episode_steps=10**9, **kw).unwrapped
+        a = np.array([0.27, 0.25], dtype=np.float32)
+        out = math.inf
+        for _ in range(3):
+            env.reset(seed=0)
+            t = time.perf_counter()
+            for _ in range(steps):
+                if env.step(a)[2]:
+                    env.reset()
+            out = min(out, (time.perf_counter() - t) / steps)
+        return out * 1e6
+
+    v0 = best("AmigoBot-v0", {})
+    v1v0 = best("AmigoBot-v1", v1_kwargs("v0-config"))
+    v1 = best("AmigoBot-v1", {})
+    return f"single env, us per step: AmigoBot-v0 {v0:.1f}, AmigoBot-v1 as v0 (reference step) {v1v0:.1f}, AmigoBot-v1 {v1:.1f}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5, help="seeds per policy (default 5)")
@@ -170,6 +194,7 @@ def main() -> None:
         print("  " + ", ".join(f"{k} {v:.3g}" for k, v in worst.items()))
     for line in formulas():
         print(line)
+    print(speed())
 
 
 if __name__ == "__main__":

@@ -90,13 +90,25 @@ class ClosestPoint(NamedTuple):
 
 
 class CirclePose(NamedTuple):
-    """:meth:`CirclePath.pose_columns`: the circle at arc lengths ``s``; ``x``, ``y`` [m], ``theta`` [rad],
-    ``curvature`` [1/m]."""
+    """:meth:`CirclePath.pose_columns`, :meth:`ManoeuvrePath.pose_columns`: the path at arc lengths ``s``, the fields
+    of :class:`amigo_gym.paths.PathPose` (same names and order): ``x``, ``y`` [m], ``theta`` [rad], ``curvature``
+    [1/m], ``curvature_rate`` [1/m^2] (0 but at the manoeuvre's joint), ``cos_theta``, ``sin_theta``."""
 
     x: Real
     y: Real
     theta: Real
     curvature: Real
+    curvature_rate: Real
+    cos_theta: Real
+    sin_theta: Real
+
+
+def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> CirclePose:
+    """A :class:`CirclePose` of arrays, or of floats for a float ``s``."""
+    c, sn = np.cos(th), np.sin(th)
+    if not isinstance(s, np.ndarray):
+        return CirclePose(float(x), float(y), float(th), float(k), 0.0, float(c), float(sn))
+    return CirclePose(x, y, th, k, np.zeros(np.shape(th)), c, sn)
 
 
 class Located(NamedTuple):
@@ -230,12 +242,8 @@ class CirclePath:
         th = self.tangent_angle(s)
         cx, cy = self.center
         dr = self.direction * self.radius
-        x = cx + dr * np.sin(th)
-        y = cy - dr * np.cos(th)
         k = np.full(np.shape(th), self.direction / self.radius)
-        if not isinstance(s, np.ndarray):
-            return CirclePose(float(x), float(y), float(th), float(k))
-        return CirclePose(x, y, th, k)
+        return _pose(cx + dr * np.sin(th), cy - dr * np.cos(th), th, k, s)
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
@@ -401,11 +409,8 @@ class ManoeuvrePath:
         """The path at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
         ``theta`` [rad] and ``curvature`` [1/m] (:meth:`curvature_columns`), floats for a float ``s``."""
         xy = self.point(s)
-        th = self.tangent_angle(s)
         k = np.where(np.asarray(s) <= self.straight_length, 0.0, self.direction / self.radius)
-        if not isinstance(s, np.ndarray):
-            return CirclePose(float(xy[0]), float(xy[1]), float(th), float(k))
-        return CirclePose(xy[..., 0], xy[..., 1], th, k)
+        return _pose(xy[..., 0], xy[..., 1], self.tangent_angle(s), k, s)
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
