@@ -180,7 +180,10 @@ def speed(steps: int = 3000) -> str:
     v0 = best("AmigoBot-v0", {})
     v1v0 = best("AmigoBot-v1", v1_kwargs("v0-config"))
     v1 = best("AmigoBot-v1", {})
-    return f"single env, us per step: AmigoBot-v0 {v0:.1f}, AmigoBot-v1 as v0 (reference step) {v1v0:.1f}, AmigoBot-v1 {v1:.1f}"
+    return (
+        f"single env, us per step: AmigoBot-v0 {v0:.1f}, AmigoBot-v1 as v0 (reference step) {v1v0:.1f}, "
+        f"AmigoBot-v1 {v1:.1f}"
+    )
 
 
 def main() -> None:
