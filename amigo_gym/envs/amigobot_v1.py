@@ -199,7 +199,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._k = tracking.constants(p)
         # the compiled step (amigo_gym.sim.fast_v1), for the episodes on a ClothoidPath; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
-        if fast_v1.use_kernel(owner, kernel):
+        if fast_v1.use_kernel(owner, tracking.kernel_choice(owner, p, kernel)):
             self._kernel = fast_v1.StepKernel(self._k)
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0

@@ -189,7 +189,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
-        if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
+        choice = tracking.kernel_choice(owner, self._k.params, "numba" if kernel == "numba-parallel" else kernel)
+        if fast_v1.use_kernel(owner, choice) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
         self._ring_step = 0

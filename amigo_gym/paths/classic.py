@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple, Protocol, cast
+from typing import Any, NamedTuple, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -87,6 +87,45 @@ class ClosestPoint(NamedTuple):
             cos_theta=np.asarray(self.cos_theta),
             sin_theta=np.asarray(self.sin_theta),
         )
+
+
+class CirclePose(NamedTuple):
+    """:meth:`CirclePath.pose_columns`, :meth:`ManoeuvrePath.pose_columns`: the path at arc lengths ``s``, the fields
+    of :class:`amigo_gym.paths.PathPose` (same names and order): ``x``, ``y`` [m], ``theta`` [rad], ``curvature``
+    [1/m], ``curvature_rate`` [1/m^2] (0 but at the manoeuvre's joint), ``cos_theta``, ``sin_theta``."""
+
+    x: Real
+    y: Real
+    theta: Real
+    curvature: Real
+    curvature_rate: Real
+    cos_theta: Real
+    sin_theta: Real
+
+
+def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> CirclePose:
+    """A :class:`CirclePose` of arrays, or of floats for a float ``s``."""
+    c, sn = np.cos(th), np.sin(th)
+    if not isinstance(s, np.ndarray):
+        return CirclePose(float(x), float(y), float(th), float(k), 0.0, float(c), float(sn))
+    return CirclePose(x, y, th, k, np.zeros(np.shape(th)), c, sn)
+
+
+class Located(NamedTuple):
+    """:meth:`CirclePath.locate`: the fields of :class:`amigo_gym.paths.PathPoint` (same names and order)."""
+
+    s: Real
+    progress: Real
+    x: Real
+    y: Real
+    tangent_angle: Real
+    curvature: Real
+    curvature_rate: Real
+    cross_track_error: Real
+    cos_theta: Real
+    sin_theta: Real
+    distance: Real
+    status: Any
 
 
 class Path(Protocol):
@@ -193,6 +232,37 @@ class CirclePath:
 
     def curvature_columns(self, s: Real) -> Real:
         return self.direction / self.radius
+
+    #: a circle repeats with period :attr:`length` (the path protocol of ``AmigoBot-v1``, :mod:`amigo_gym.paths.user`)
+    closed = True
+
+    def pose_columns(self, s: Real) -> CirclePose:
+        """The circle at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
+        ``theta`` [rad] and ``curvature`` [1/m] as floats for a float ``s``, else arrays of the shape of ``s``."""
+        th = self.tangent_angle(s)
+        cx, cy = self.center
+        dr = self.direction * self.radius
+        k = np.full(np.shape(th), self.direction / self.radius)
+        return _pose(cx + dr * np.sin(th), cy - dr * np.cos(th), th, k, s)
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> Located:
+        r"""The closest point of the circle to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (the fields of
+        :class:`amigo_gym.paths.PathPoint`), by :meth:`project_xy` itself: the cross-track error, unit tangent
+        and curvature are AmigoBot-v0's bits. ``progress`` is ``s`` plus the whole laps ``2 pi R k`` that bring it
+        nearest to ``s_prev`` (``s`` without a hint); the window (``max_advance``, ``max_retreat``) is not
+        needed, the projection being unique (the start point at the centre); ``status`` 0 (interior).
+        """
+        cp = self.project_xy(x, y)
+        s = cp.s
+        progress = s
+        if s_prev is not None:
+            lap = self.length
+            progress = s + lap * np.round((s_prev - s) / lap)
+            if not isinstance(progress, np.ndarray) or progress.ndim == 0:
+                progress = float(progress)
+        return _located(cp, progress)
 
     @cached_property
     def _frame(self) -> tuple[float, float, float, float]:
@@ -331,6 +401,28 @@ class ManoeuvrePath:
     def curvature_columns(self, s: Real) -> Real:
         return _where(s <= self.straight_length, 0.0, self.direction / self.radius)
 
+    #: the manoeuvre is an open path for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): its projection never
+    #: reports the end (the circle's laps repeat), as in AmigoBot-v0
+    closed = False
+
+    def pose_columns(self, s: Real) -> CirclePose:
+        """The path at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
+        ``theta`` [rad] and ``curvature`` [1/m] (:meth:`curvature_columns`), floats for a float ``s``."""
+        xy = self.point(s)
+        k = np.where(np.asarray(s) <= self.straight_length, 0.0, self.direction / self.radius)
+        return _pose(xy[..., 0], xy[..., 1], self.tangent_angle(s), k, s)
+
+    def locate(
+        self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
+    ) -> Located:
+        """The closest point to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (:class:`amigo_gym.paths.PathPoint`'s
+        fields) by :meth:`project_xy` itself (AmigoBot-v0's bits); ``progress`` is ``s`` (the hint and the window
+        are not needed), ``status`` 0: the path does not end."""
+        cp = self.project_xy(x, y)
+        if not isinstance(cp.cross_track_error, np.ndarray) or np.ndim(cp.cross_track_error) == 0:
+            cp = ClosestPoint(*(float(v) for v in cp))
+        return _located(cp, cp.s)
+
     def project(self, p: ArrayLike) -> Projection:
         p = np.asarray(p, dtype=np.float64)
         return self.project_xy(p[..., 0], p[..., 1]).projection()
@@ -354,6 +446,22 @@ class ManoeuvrePath:
             cos_theta=_where(use_line, 1.0, circ.cos_theta),
             sin_theta=_where(use_line, 0.0, circ.sin_theta),
         )
+
+
+def _located(cp: ClosestPoint, progress: Real) -> Located:
+    """The :class:`Located` of a projection ``cp`` with its ``progress`` [m]: curvature rate 0, ``distance = |e|``,
+    status 0 (interior)."""
+    e = cp.cross_track_error
+    zero = 0.0 * e
+    if isinstance(e, np.ndarray):
+        return Located(
+            cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+            cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
+        )  # fmt: skip
+    return Located(
+        cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
+        cp.cos_theta, cp.sin_theta, abs(e), 0,
+    )  # fmt: skip
 
 
 def _where(condition: ArrayLike, a: ArrayLike, b: ArrayLike) -> Real:

@@ -23,7 +23,9 @@ while the env runs: NaN or infinity from the path raises ``ValueError`` at the s
 path, the member, the field and the arc length or point.
 
 A :class:`~amigo_gym.paths.ClothoidPath` (every built-in family, :func:`~amigo_gym.paths.from_points`) is
-trusted as it is and runs the compiled step; a :class:`UserPath` runs the reference step.
+trusted as it is and runs the compiled step; AmigoBot-v0's :class:`~amigo_gym.paths.CirclePath` and
+:class:`~amigo_gym.paths.ManoeuvrePath` are trusted as they are and run the reference step (their ``locate`` is
+AmigoBot-v0's projection); a :class:`UserPath` runs the reference step.
 
 This module may import numpy, :mod:`amigo_gym.model.params` and the sibling path modules.
 """
@@ -38,6 +40,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import show_value
+from amigo_gym.paths.classic import CirclePath, ManoeuvrePath
 from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, coarse_search, refine
 
 __all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]
@@ -228,6 +231,6 @@ def check_path(path: Any, owner: str = "AmigoBot-v1") -> Any:
     Raises:
         ValueError: one line naming the path, the member and the value.
     """
-    if type(path) is ClothoidPath or isinstance(path, UserPath):
+    if type(path) in (ClothoidPath, CirclePath, ManoeuvrePath) or isinstance(path, UserPath):
         return path
     return UserPath(path, owner)

@@ -65,11 +65,20 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import actuators
 from amigo_gym.model.actuators import ActuatorParams
-from amigo_gym.model.kinematics import Real, body_velocity_of, col_cos, col_sin, h_from_a
+from amigo_gym.model.kinematics import (
+    Real,
+    arc_step,
+    body_velocity_columns,
+    body_velocity_of,
+    col_cos,
+    col_sin,
+    h_from_a,
+)
 from amigo_gym.model.params import RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.task.v0 import (
     OBS_HEAD,
+    OBS_TAIL,
     error_bound,
     heading_error,
     reward_product,
@@ -109,6 +118,8 @@ SPEED_LOOKAHEAD = 1.0
 MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
+#: values of ``observation=`` and ``reward=``: AmigoBot-v1's own, or AmigoBot-v0's
+LAYOUTS: tuple[str, ...] = ("v1", "v0")
 #: values of ``feasibility=``: refuse an infeasible fixed path, warn and run it, or run it silently
 FEASIBILITY_MODES: tuple[str, ...] = ("error", "warn", "off")
 
@@ -179,6 +190,22 @@ class TrackingParams:
         goal_tolerance: an open path's episode terminates as a success when H is within this distance [m] of
             the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
             passes the end (``"end_of_path"``).
+        ideal_actuators: ``True``: the wheels take the commanded rates ``a w_max`` at once and hold them over the
+            step (AmigoBot-v0's actuators): the pose advances by the exact arc
+            (:func:`amigo_gym.model.kinematics.arc_step`), the heading's cosine and sine by angle addition, the
+            ramps of ``actuators`` are not used. Requires no delay (``actuators.delay`` 0, ``randomize.delay``
+            (0, 0)), no slip, no ``true_robot`` and no randomised geometry. Default False (the firmware's ramps).
+        observation: the observation layout: ``"v1"`` (default, module table) or ``"v0"``, AmigoBot-v0's
+            (:func:`amigo_gym.task.v0.obs_names`: error, heading error, curvature, the curvature at each
+            ``preview`` distance, the two wheel rates, speed error, reference speed), from the measured state.
+        reward: ``"v1"`` (default): the smoothness term's change is that of the normalised command over
+            ``2 sigma_smooth``; ``"v0"``: AmigoBot-v0's, the change of the wheel rates over ``w_max sigma_smooth``
+            (4 times the loss of a given change).
+
+    With ``ideal_actuators=True, observation="v0", reward="v0"``, ``randomize="none"``, ``start_at_rest=False``,
+    a constant ``speed``, v0's ``preview`` (0.2, 0.4) and the path ``amigo_gym.paths.CirclePath(radius, direction=...)``
+    (a path object: its projection is v0's), ``AmigoBot-v1`` steps as ``AmigoBot-v0``
+    (``tests/test_v0_as_v1.py``). These settings run the reference step (the compiled step has only the defaults).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -209,6 +236,9 @@ class TrackingParams:
     smooth_weight: float = 0.2
     feasibility: str = "error"
     goal_tolerance: float = 0.0
+    ideal_actuators: bool = False
+    observation: str = "v1"
+    reward: str = "v1"
 
     def __post_init__(self) -> None:
         o = "TrackingParams"
@@ -281,7 +311,18 @@ class TrackingParams:
             raise ValueError(f"{o}.feasibility must be one of {list(FEASIBILITY_MODES)}, got {self.feasibility!r}")
         s(self, "goal_tolerance", check_range(o, "goal_tolerance", self.goal_tolerance, 0.0, 10.0))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
+        if not isinstance(self.ideal_actuators, bool):
+            raise ValueError(f"{o}.ideal_actuators must be True or False, got {self.ideal_actuators!r}")
+        for name in ("observation", "reward"):
+            value = getattr(self, name)
+            if not isinstance(value, str) or value not in LAYOUTS:
+                raise ValueError(f"{o}.{name} must be one of {list(LAYOUTS)}, got {value!r}")
         _check_combined(o, self)
+
+    @property
+    def reference_only(self) -> bool:
+        """Whether these settings need the reference step (``ideal_actuators``, ``observation`` or ``reward`` v0)."""
+        return self.ideal_actuators or self.observation != "v1" or self.reward != "v1"
 
     @property
     def simulated_robot(self) -> RobotParams:
@@ -356,10 +397,24 @@ def _check_combined(owner: str, p: TrackingParams) -> None:
 
     * the fixed delay plus the highest randomised delay above :data:`amigo_gym.model.actuators.MAX_DELAY` (0.5 s);
     * a trapezoid that cannot reach its cruise speed: ``v / profile_accel + v / profile_decel >
-      profile_duration`` at the highest reference speed ``v``.
+      profile_duration`` at the highest reference speed ``v``;
+    * ``ideal_actuators`` with a delay, slip, a true robot or randomised geometry (ideal actuators have none).
     """
     fixed = p.actuators.delay
     high = p.randomize.delay[1]
+    if p.ideal_actuators:
+        r = p.randomize
+        nominal = {"wheel_radius": (1.0, 1.0), "track": (1.0, 1.0), "slip": (0.0, 0.0), "delay": (0.0, 0.0)}
+        bad = [f"randomize.{k} {tuple(getattr(r, k))!r}" for k, v in nominal.items() if tuple(getattr(r, k)) != v]
+        if fixed != 0.0:
+            bad.insert(0, f"actuators.delay {fixed!r}")
+        if p.true_robot is not None:
+            bad.append("a true_robot")
+        if bad:
+            raise ValueError(
+                f"{owner}.ideal_actuators needs the nominal robot without delay, slip or randomised geometry; got "
+                + ", ".join(bad)
+            )
     if fixed + high > actuators.MAX_DELAY:
         raise ValueError(
             f"{owner}: actuators.delay {fixed:g} s + randomize.delay high {high:g} s = {fixed + high:g} s exceeds "
@@ -451,7 +506,9 @@ def _robot_from_mapping(owner: str, name: str, base: RobotParams, values: Mappin
 
 
 def obs_fields(p: TrackingParams) -> tuple[str, ...]:
-    """Names of the observation's components, in order (module table)."""
+    """Names of the observation's components, in order (module table; ``observation="v0"``: AmigoBot-v0's)."""
+    if p.observation == "v0":
+        return (*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(p.preview))), *OBS_TAIL)
     out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
@@ -468,7 +525,13 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
 
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Finite ``(low, high)`` bounds of the observation (module table)."""
+    """Finite ``(low, high)`` bounds of the observation (module table; ``observation="v0"``: AmigoBot-v0's)."""
+    if p.observation == "v0":
+        e_max = error_bound(p.termination_distance, p.error_scale)
+        hi0 = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + len(p.preview)) + [1.0, 1.0, 2.0, 1.0])
+        lo0 = -hi0
+        lo0[-1] = 0.0
+        return lo0, hi0
     high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
     for d in p.preview:
         b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
@@ -519,8 +582,35 @@ def constants(p: TrackingParams) -> Constants:
         ring_length=actuators.ring_length(p.dt),
         window=window,
         preview_bounds=tuple((d + robot.l3 + 2.0 * p.termination_distance) / p.preview_scale for d in p.preview),
-        smooth_scale_sq=4.0 * p.sigma_smooth * p.sigma_smooth,
+        smooth_scale_sq=_smooth_scale_sq(p, w_max),
     )
+
+
+def kernel_choice(owner: str, p: TrackingParams, kernel: Any) -> Any:
+    """The ``kernel=`` keyword the env uses: ``"numpy"`` for settings only the reference step has
+    (:attr:`TrackingParams.reference_only`), else ``kernel`` itself.
+
+    Raises:
+        ValueError: ``kernel="numba"`` with such settings (one line naming them).
+    """
+    if not p.reference_only:
+        return kernel
+    if kernel == "numba":
+        raise ValueError(
+            f"{owner}: kernel='numba' has only the default ideal_actuators=False, observation='v1', reward='v1'; got "
+            f"ideal_actuators={p.ideal_actuators!r}, observation={p.observation!r}, reward={p.reward!r}: use 'auto' or "
+            "'numpy'"
+        )
+    return "numpy" if kernel == "auto" else kernel
+
+
+def _smooth_scale_sq(p: TrackingParams, w_max: float) -> float:
+    """The smoothness term's squared scale: ``(2 sigma_smooth)^2`` of the command's change (``reward="v1"``), or
+    ``(w_max sigma_smooth)^2`` [rad^2/s^2] of the wheel rates' change (``reward="v0"``, AmigoBot-v0's)."""
+    if p.reward == "v0":
+        scale = w_max * p.sigma_smooth
+        return scale * scale
+    return 4.0 * p.sigma_smooth * p.sigma_smooth
 
 
 class Episode(NamedTuple):
@@ -679,8 +769,9 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
     as ``p.feasibility`` says (``"error"``, ``"warn"``, ``"off"``).
 
     Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
-    (``actuators.rot_acceleration``) at the highest reference speed, with the exact heading lag of H
-    (:func:`amigo_gym.paths.feasibility`), and the trapezoid's rates against the robot's ramps.
+    (``actuators.rot_acceleration``; none with ``ideal_actuators``, whose accelerations are unbounded) at the
+    highest reference speed, with the exact heading lag of H (:func:`amigo_gym.paths.feasibility`), and the
+    trapezoid's rates against the robot's ramps.
 
     Returns:
         the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
@@ -694,7 +785,7 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
         v,
         p.robot,
         "A",
-        max_rotational_acceleration=p.actuators.rot_acceleration,
+        max_rotational_acceleration=None if p.ideal_actuators else p.actuators.rot_acceleration,
     )
     if not f.feasible:
         if p.feasibility == "error":
@@ -979,7 +1070,8 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     """Draw one episode's constants and the start offsets from ``rng``, in a fixed order.
 
     Order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), start offsets
-    ``u ~ U[-1, 1]^3``, the key of the per-step draws. (The path is drawn before, by :func:`draw_path`.)
+    ``u ~ U[-1, 1]^3``, the key of the per-step draws (not with ``ideal_actuators`` and no noise: key 0). (The path
+    is drawn before, by :func:`draw_path`.)
 
     Returns:
         the :class:`Episode` (floats) and ``u``.
@@ -990,7 +1082,9 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     v = lo if lo == hi else float(rng.uniform(lo, hi))
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    key = draw_key(rng)
+    # the per-step draws' key; with ideal actuators and no noise there are no per-step draws and no key is drawn
+    # (AmigoBot-v0's stream: three uniforms per episode)
+    key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
     true = p.simulated_robot
     delay = p.actuators.delay + d.delay
     delay = min(delay, actuators.MAX_DELAY)
@@ -1075,6 +1169,8 @@ def step_columns(
     p = k.params
     c1 = _clip(a1, -1.0, 1.0)
     c2 = _clip(a2, -1.0, 1.0)
+    if p.ideal_actuators:
+        return _ideal_step(k, path, state, ep, c1, c2)
     actuators.ring_write(ring, ring_step, c1 * k.w_max, c2 * k.w_max)
     o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
     noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
@@ -1113,7 +1209,45 @@ def step_columns(
         c2,
         steps,
     )
-    out, progress = evaluate_columns(k, path, new, ep, noise, act.v_true, state.a1, state.a2, steps * p.dt)
+    out, progress = evaluate_columns(
+        k, path, new, ep, noise, act.v_true, state.a1, state.a2, steps * p.dt, prev_rates=(state.w1, state.w2)
+    )
+    return new._replace(progress=progress), out, noise
+
+
+def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2: Real) -> tuple[State, Outcome, Any]:
+    r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (:func:`amigo_gym.task.v0.move_columns`).
+
+    The wheel rates ``w_i = c_i w_max`` [rad/s] are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
+    (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
+    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``.
+    """
+    from amigo_gym.model.randomization import step_noise
+
+    p = k.params
+    dt = p.dt
+    w1 = c1 * k.w_max
+    w2 = c2 * k.w_max
+    noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
+    v, bdot = body_velocity_columns(w1, w2, k.nominal)
+    arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
+    steps = state.steps + 1
+    new = State(
+        arc.x, arc.y, arc.beta, w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1, c2, steps
+    )  # fmt: skip
+    out, progress = evaluate_columns(
+        k,
+        path,
+        new,
+        ep,
+        noise,
+        v,
+        state.a1,
+        state.a2,
+        steps * dt,
+        prev_rates=(state.w1, state.w2),
+        heading=(arc.cos_beta, arc.sin_beta),
+    )
     return new._replace(progress=progress), out, noise
 
 
@@ -1127,26 +1261,35 @@ def evaluate_columns(
     prev1: Real,
     prev2: Real,
     t: Real,
+    prev_rates: tuple[Real, Real] | None = None,
+    heading: tuple[Real, Real] | None = None,
 ) -> tuple[Outcome, Real]:
     """Observation, reward and end of the state ``st`` at time ``t`` (module docstring).
 
     The true H is projected with the hint ``st.progress``; the measured pose (true pose plus ``noise``) is
     projected again only when it differs (noise on, or a true ``l3`` other than the nominal).
+    ``prev_rates``: the wheel rates before the step [rad/s] (``reward="v0"``; default the state's own: no change);
+    ``heading``: ``(cos beta, sin beta)`` of the state when known (the ideal step's; default ``cos``, ``sin`` of it).
 
     Returns:
         the :class:`Outcome` and H's new progress [m].
     """
     p = k.params
     l3 = k.l3
-    cb, sb = col_cos(st.beta), col_sin(st.beta)
+    cb, sb = (col_cos(st.beta), col_sin(st.beta)) if heading is None else heading
     hx, hy = h_from_a(st.x, st.y, cb, sb, ep.l3)
     loc = path.locate(hx, hy, st.progress, k.window, k.window)
     e = loc.cross_track_error
     cos_psi, sin_psi = heading_error(cb, sb, loc.cos_theta, loc.sin_theta)
     v_ref = reference_speed(p, ep, t)
     cos_ss, sin_ss = steady_heading(loc.curvature, l3)
-    da1 = st.a1 - prev1
-    da2 = st.a2 - prev2
+    if p.reward == "v0":  # AmigoBot-v0's: the change of the wheel rates [rad/s]
+        pw1, pw2 = (st.w1, st.w2) if prev_rates is None else prev_rates
+        da1 = st.w1 - pw1
+        da2 = st.w2 - pw2
+    else:
+        da1 = st.a1 - prev1
+        da2 = st.a2 - prev2
     terms = reward_term_columns(  # the reward of AmigoBot-v0, from the true state
         _abs(e),
         _abs(v_true - v_ref),
@@ -1187,6 +1330,13 @@ def evaluate_columns(
         mcb, msb = cb, sb
         m_e, m_ct, m_st, m_k, m_s = e, loc.cos_theta, loc.sin_theta, loc.curvature, loc.progress
     m_cos_psi, m_sin_psi = heading_error(mcb, msb, m_ct, m_st)
+    v_meas, _ = body_velocity_of(mw1, mw2, k.nominal.r1, k.nominal.r2, 2.0 * k.nominal.l1)
+    if p.observation == "v0":
+        out0 = Outcome(
+            _observe_v0(k, path, m_e, m_sin_psi, m_cos_psi, m_k, m_s, mw1, mw2, v_meas, v_ref),
+            terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end,
+        )  # fmt: skip
+        return out0, loc.progress
     obs: list[Real] = [
         _clip(m_e / p.error_scale, -k.e_max, k.e_max),
         m_sin_psi,
@@ -1205,7 +1355,6 @@ def evaluate_columns(
             _clip((mcb * dy - msb * dx) / p.preview_scale, -bound, bound),
             _clip(q.curvature * l3, -1.0, 1.0),
         ]
-    v_meas, _ = body_velocity_of(mw1, mw2, k.nominal.r1, k.nominal.r2, 2.0 * k.nominal.l1)
     obs += [
         v_ref / k.v_max,
         reference_speed(p, ep, t + SPEED_LOOKAHEAD) / k.v_max,
@@ -1217,6 +1366,40 @@ def evaluate_columns(
     ]
     out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
+
+
+def _observe_v0(
+    k: Constants,
+    path: Any,
+    e: Real,
+    sin_psi: Real,
+    cos_psi: Real,
+    curvature: Real,
+    s: Real,
+    w1: Real,
+    w2: Real,
+    v: Real,
+    v_ref: Real,
+) -> tuple[Real, ...]:
+    """AmigoBot-v0's observation (``observation="v0"``, :func:`amigo_gym.task.v0.obs_names`) of the measured state.
+
+    ``(clip(e / error_scale), sin psi, cos psi, kappa l3, kappa(s + d_i) l3 ..., w1 / w_max, w2 / w_max,
+    (v - v_ref) / v_max, v_ref / v_max)``, each clipped to its bound (:func:`obs_bounds`; a no-op on v0's task).
+    """
+    p = k.params
+    l3 = k.l3
+    ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
+    return (
+        _clip(e / p.error_scale, -k.e_max, k.e_max),
+        sin_psi,
+        cos_psi,
+        _clip(curvature * l3, -1.0, 1.0),
+        *ahead,
+        _clip(w1 / k.w_max, -1.0, 1.0),
+        _clip(w2 / k.w_max, -1.0, 1.0),
+        _clip((v - v_ref) / k.v_max, -2.0, 2.0),
+        v_ref / k.v_max,
+    )
 
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:

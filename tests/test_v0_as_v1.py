@@ -1,0 +1,218 @@
+"""AmigoBot-v0 as a configuration of AmigoBot-v1 (issue 19, item 1): side by side, within the golden tolerance.
+
+``gym.make("AmigoBot-v1", **V0_CONFIG)`` (ideal actuators, v0's observation layout and reward, no randomisation,
+wheels rolling at the start, v0's preview and the circle as a :class:`~amigo_gym.paths.CirclePath`) is stepped
+beside ``gym.make("AmigoBot-v0")`` on the same seeds and actions (random ones and the analytic policy's); every
+quantity both report (observation, reward, its terms, pose, H, cross-track error, wheel rates, the end) must
+agree within tests/golden_compare.py's rule (8 ulp of each quantity's scale over the episode): the tolerance
+v0's own golden tests allow, an independent implementation of the same task (v0's step, task and envs).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from golden_compare import mismatches
+
+import amigo_gym  # noqa: F401  (registers the envs)
+from amigo_gym.paths import CirclePath, ManoeuvrePath
+from amigo_gym.policies import AnalyticPolicy
+from amigo_gym.task import v0 as task_v0
+from amigo_gym.task import v1 as tracking
+
+#: the settings of AmigoBot-v1 that make it AmigoBot-v0 (its defaults: a 1 m left circle at 0.2 m/s)
+V0_CONFIG: dict[str, Any] = {
+    "path": CirclePath(radius=1.0, direction=1),
+    "ideal_actuators": True,
+    "observation": "v0",
+    "reward": "v0",
+    "randomize": "none",
+    "start_at_rest": False,
+    "preview": (0.2, 0.4),
+    "speed": 0.2,
+}
+
+STEPS = 120
+
+
+def _record(env: Any, obs: Any, info: dict[str, Any], rec: dict[str, list[Any]], reward: float | None) -> None:
+    rec["obs"].append(np.asarray(obs))
+    for key in ("pose", "h_position", "wheel_rates"):
+        rec[key].append(np.asarray(info[key], dtype=np.float64))
+    rec["cross_track_error"].append(float(info["cross_track_error"]))
+    for name, value in info["reward_terms"].items():
+        rec[name].append(float(value))
+    if reward is not None:
+        rec["reward"].append(float(reward))
+
+
+def _episode(env_id: str, kwargs: dict[str, Any], seed: int, actions: Any) -> dict[str, np.ndarray]:
+    """One episode of ``STEPS`` steps (or until it ends): every quantity per step, as arrays."""
+    env = gym.make(env_id, **kwargs).unwrapped
+    rec: dict[str, list[Any]] = {
+        k: []
+        for k in (
+            "obs",
+            "pose",
+            "h_position",
+            "wheel_rates",
+            "cross_track_error",
+            "track",
+            "speed",
+            "heading",
+            "smooth",
+            "reward",
+            "terminated",
+        )
+    }
+    obs, info = env.reset(seed=seed)
+    _record(env, obs, info, rec, None)
+    rng = np.random.default_rng(seed + 100)
+    for _ in range(STEPS):
+        obs, reward, terminated, _, info = env.step(actions(obs, rng))
+        _record(env, obs, info, rec, reward)
+        rec["terminated"].append(bool(terminated))
+        if terminated:
+            break
+    return {k: np.array(v) for k, v in rec.items()}
+
+
+def _random(obs: Any, rng: np.random.Generator) -> Any:
+    """Random actions around the steady state's (most episodes last tens of steps, some end early)."""
+    return (0.27 + 0.3 * rng.uniform(-1.0, 1.0, 2)).astype(np.float32)
+
+
+def _wild(obs: Any, rng: np.random.Generator) -> Any:
+    """Uniform actions in [-1.2, 1.2] (clipped by both envs), float64."""
+    return rng.uniform(-1.2, 1.2, 2)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("policy", ["random", "wild", "analytic"])
+def test_v1_configured_as_v0_steps_as_v0(seed: int, policy: str) -> None:
+    v0 = gym.make("AmigoBot-v0").unwrapped
+    actions = {"random": _random, "wild": _wild}.get(policy)
+    if actions is None:
+        pol = AnalyticPolicy(v0.params)
+        actions = lambda obs, rng: pol.action(obs)  # noqa: E731
+    want = _episode("AmigoBot-v0", {}, seed, actions)
+    got = _episode("AmigoBot-v1", V0_CONFIG, seed, actions)
+    assert len(want["reward"]) >= 10
+    assert mismatches(got, want) == []
+
+
+def test_observation_names_and_bounds_are_v0s() -> None:
+    v0 = gym.make("AmigoBot-v0").unwrapped
+    v1 = gym.make("AmigoBot-v1", **V0_CONFIG).unwrapped
+    assert list(tracking.obs_fields(v1.params)) == task_v0.obs_names(v0.params)
+    assert v1.observation_space == v0.observation_space
+    # a controller reads the layout by name from either settings: the same action on the same observation
+    o0, _ = v0.reset(seed=1)
+    o1, _ = v1.reset(seed=1)
+    np.testing.assert_array_equal(AnalyticPolicy(v1.params).action(o1), AnalyticPolicy(v0.params).action(o0))
+
+
+def test_vector_env_configured_as_v0_steps_as_v0s_vector_env() -> None:
+    n = 6
+    e0 = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point")
+    e1 = gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **V0_CONFIG)
+    o0, _ = e0.reset(seed=3)
+    o1, _ = e1.reset(seed=3)
+    rng = np.random.default_rng(0)
+    want: dict[str, list[Any]] = {"obs": [o0], "reward": []}
+    got: dict[str, list[Any]] = {"obs": [o1], "reward": []}
+    for _ in range(30):
+        a = (0.27 + 0.2 * rng.uniform(-1.0, 1.0, (n, 2))).astype(np.float32)
+        o0, r0, t0, _, _ = e0.step(a)
+        o1, r1, t1, _, _ = e1.step(a)
+        np.testing.assert_array_equal(t1, t0)
+        want["obs"].append(o0)
+        got["obs"].append(o1)
+        want["reward"].append(r0)
+        got["reward"].append(r1)
+    assert mismatches({k: np.array(v) for k, v in got.items()}, {k: np.array(v) for k, v in want.items()}) == []
+
+
+def test_v0_settings_are_checked() -> None:
+    with pytest.raises(ValueError, match=r"TrackingParams.observation must be one of \['v1', 'v0'\], got 'v2'"):
+        tracking.TrackingParams(observation="v2")
+    with pytest.raises(ValueError, match=r"TrackingParams.reward must be one of"):
+        tracking.TrackingParams(reward=0)
+    with pytest.raises(ValueError, match=r"ideal_actuators must be True or False, got 1"):
+        tracking.TrackingParams(ideal_actuators=1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"ideal_actuators needs .* randomize.slip \(0.0, 0.05\)"):
+        tracking.make_tracking_params("t", ideal_actuators=True, randomize={"slip": (0.0, 0.05)})
+    with pytest.raises(ValueError, match=r"ideal_actuators needs .* actuators.delay 0.1"):
+        tracking.make_tracking_params("t", ideal_actuators=True, actuators={"delay": 0.1})
+    with pytest.raises(ValueError, match=r"kernel='numba' has only the default"):
+        tracking.kernel_choice("AmigoBotV1Env", tracking.TrackingParams(observation="v0"), "numba")
+    assert tracking.kernel_choice("E", tracking.TrackingParams(reward="v0"), "auto") == "numpy"
+    assert tracking.kernel_choice("E", tracking.TrackingParams(), "auto") == "auto"
+
+
+def test_v0_reward_setting_quarters_the_smoothness_scale() -> None:
+    """The two smoothness settings on one change of command: v0's loss is v1's with the change doubled."""
+    k1 = tracking.constants(tracking.TrackingParams())
+    k0 = tracking.constants(tracking.TrackingParams(reward="v0"))
+    w_max = k1.w_max
+    da = 0.05  # a change of the normalised command
+    v1_arg = (da * da) / k1.smooth_scale_sq
+    v0_arg = (da * w_max) ** 2 / k0.smooth_scale_sq
+    assert v0_arg == pytest.approx(4.0 * v1_arg, rel=1e-12)
+
+
+def test_circle_locate_is_its_projection() -> None:
+    """:meth:`CirclePath.locate` (what AmigoBot-v1 calls) against the closed form, floats and columns, with laps."""
+    c = CirclePath(radius=2.0, direction=-1)
+    rng = np.random.default_rng(1)
+    phi = rng.uniform(0.0, 2.0 * np.pi, 50)
+    rho = 2.0 + rng.uniform(-0.3, 0.3, 50)
+    cx, cy = c.center
+    x = cx + rho * np.sin(phi)
+    y = cy + rho * np.cos(phi)
+    hint = rng.uniform(-30.0, 30.0, 50)
+    loc = c.locate(x, y, hint, 0.5, 0.5)
+    np.testing.assert_allclose(np.abs(loc.cross_track_error), np.abs(rho - 2.0), atol=1e-12)
+    np.testing.assert_allclose(loc.distance, np.abs(rho - 2.0), atol=1e-12)
+    assert np.all(np.abs(loc.progress - hint) <= np.pi * 2.0 + 1e-9)  # the lap nearest the hint
+    np.testing.assert_allclose(np.mod(loc.progress, c.length), np.mod(loc.s, c.length), atol=1e-9)
+    px, py = c.point(loc.s).T
+    np.testing.assert_allclose(loc.x, px, atol=1e-12)
+    np.testing.assert_allclose(loc.y, py, atol=1e-12)
+    one = c.locate(float(x[0]), float(y[0]), float(hint[0]), 0.5, 0.5)
+    assert type(one.progress) is float and one.cross_track_error == loc.cross_track_error[0]
+    pose = c.pose_columns(np.array([0.0, 1.0]))
+    np.testing.assert_allclose(np.stack([pose.x, pose.y], -1), c.point([0.0, 1.0]), atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("v0_kwargs", "path"),
+    [
+        (
+            {"radius": 1.5, "direction": -1, "speed": 0.3, "dt": 0.05, "preview": (0.3,), "sigma_smooth": 0.2},
+            CirclePath(radius=1.5, direction=-1),
+        ),
+        ({"path": "manoeuvre"}, ManoeuvrePath()),
+        (
+            {"path": "manoeuvre", "radius": 0.8, "direction": -1, "straight_length": 0.5, "speed": 0.15},
+            ManoeuvrePath(radius=0.8, straight_length=0.5, direction=-1),
+        ),
+    ],
+)
+@pytest.mark.parametrize("policy", ["random", "analytic"])
+def test_other_v0_settings(v0_kwargs: dict[str, Any], path: Any, policy: str) -> None:
+    """Other radii, directions, speeds, periods, previews, scales and the manoeuvre path: the same agreement."""
+    v0 = gym.make("AmigoBot-v0", **v0_kwargs).unwrapped
+    same = {k: v for k, v in v0_kwargs.items() if k not in ("path", "radius", "direction", "straight_length")}
+    config = {**V0_CONFIG, **same, "path": path}
+    actions = _random
+    if policy == "analytic":
+        pol = AnalyticPolicy(v0.params)
+        actions = lambda obs, rng: pol.action(obs)  # noqa: E731
+    for seed in range(3):
+        want = _episode("AmigoBot-v0", v0_kwargs, seed, actions)
+        got = _episode("AmigoBot-v1", config, seed, actions)
+        assert mismatches(got, want) == []
