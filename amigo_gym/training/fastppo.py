@@ -230,7 +230,9 @@ class FastPPOSettings:
         start = {k: r.default for k, r in RANDOM_RANGES.items() if k in ("max_curvature", "max_curvature_rate")}
         start |= given
         k_end = float(self.curriculum_max_curvature)
-        c_end = float(self.curriculum_max_curvature_rate) or start["max_curvature_rate"] * k_end / start["max_curvature"]
+        c_end = (
+            float(self.curriculum_max_curvature_rate) or start["max_curvature_rate"] * k_end / start["max_curvature"]
+        )
         return start, {**start, "max_curvature": k_end, "max_curvature_rate": c_end}
 
     def spec(self) -> FeatureSpec:
