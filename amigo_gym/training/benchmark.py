@@ -1202,6 +1202,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="open --path: success within this of the end [m] (default 0: off)",
     )
     p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
+    p.add_argument(
+        "--curvature",
+        action="store_true",
+        help="run the curvature cells instead of the suite: failure rate per path-curvature bin "
+        "(amigo_gym.training.curvature; writes <out>/curvature.json and .md)",
+    )
+    p.add_argument("--curvature-episodes", type=int, default=50, help="episodes per curvature cell [episodes]")
     add_trust_option(p, "model zips")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
@@ -1219,6 +1226,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
+        if a.curvature:
+            return _run_curvature(a, argv)
         scenarios = quick_suite(suite) if a.quick else suite
         if a.path:
             if a.scenarios:
@@ -1260,6 +1269,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
+
+
+def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
+    """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.training.curvature`)."""
+    from amigo_gym.runs import RunLock
+    from amigo_gym.training import curvature
+
+    if a.path or a.scenarios:
+        raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+    scenarios = curvature.curvature_scenarios(episodes=a.curvature_episodes)
+    if a.quick:
+        scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+    agents = parse_agents(a.agents) if a.agents else default_agents()
+    out = Path(a.out)
+    with RunLock(out):
+        doc = curvature.run_curvature(agents, scenarios, progress=not a.no_progress)
+        doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
+        written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
+    print(curvature.markdown_curvature(doc), end="")
+    print("wrote " + ", ".join(written))
+    return 0
 
 
 if __name__ == "__main__":
