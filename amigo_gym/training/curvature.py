@@ -29,6 +29,7 @@ score interval (:func:`wilson_interval`), the episodes of every training seed of
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -113,12 +114,9 @@ def curvature_scenarios(
                 "path_params": {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S},
             }
             desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{levels} of K = {k_v:.4g} 1/m), {v:g} m/s"
-            out.append(
-                Scenario(
-                    f"curv_v{v:g}_k{j}", "AmigoBot-v1", kw, seeds=tuple(range(100, 100 + episodes)),
-                    max_steps=round(DURATION_S / DT_S), held_out=True, description=desc,
-                )  # fmt: skip
-            )
+            seeds = tuple(range(100, 100 + episodes))
+            steps = round(DURATION_S / DT_S)
+            out.append(Scenario(f"curv_v{v:g}_k{j}", "AmigoBot-v1", kw, seeds, steps, True, desc))
     return tuple(out)
 
 
@@ -261,16 +259,16 @@ def run_curvature(
                     on_cell(sc.name)
     finally:
         bar.close()
+    bins = [f"[{a:g}, {b:g})" for a, b in itertools.pairwise(BIN_EDGES)]
+    bins[-1] = bins[-1][:-1] + "]"
     return {
         "protocol": {
-            "speeds_m_s": [float(sc.env_kwargs["speed"]) for sc in scenarios[::LEVELS]] if scenarios else [],
-            "bins": "path_max_kappa / K(v) in " + ", ".join(
-                f"[{a:g}, {b:g}{']' if i == len(BIN_EDGES) - 2 else ')'}" for i, (a, b) in
-                enumerate(zip(BIN_EDGES[:-1], BIN_EDGES[1:], strict=True))),
+            "speeds_m_s": sorted({float(sc.env_kwargs["speed"]) for sc in scenarios}),
+            "bins": "path_max_kappa / K(v) in " + ", ".join(bins),
             "k_limit": "amigo_gym.task.v1.feasible_random_curvature(v) (max_curvature_rate = max_curvature x 1 m^-1)",
             "failure": "terminated off the path, or |e| > 0.10 m at some t >= 5 s",
             "interval": "Wilson score 95 %, episodes of every training seed pooled",
-        },  # fmt: skip
+        },
         "scenarios": [sc.to_json() for sc in scenarios],
         "agents": [a.describe() for a in agents],
         "episodes": episodes,
