@@ -16,11 +16,12 @@ import pytest
 
 from amigo_gym.paths import random_path
 from amigo_gym.task.v1 import feasible_random_curvature
+from amigo_gym.training.benchmark import curvature_scenarios
 from amigo_gym.training.curvature import (
     BIN_EDGES,
     Z95,
     bin_table,
-    curvature_scenarios,
+    cell_specs,
     evaluate_tagged,
     markdown_curvature,
     wilson_interval,
@@ -101,7 +102,9 @@ def test_cells_follow_the_feasible_limit_and_the_env_accepts_them() -> None:
         assert c.seeds == (100, 101, 102) and c.max_steps == 600
         gym.make("AmigoBot-v1", **c.env_kwargs).close()  # feasibility="error": refused if infeasible
     with pytest.raises(ValueError, match="levels"):
-        curvature_scenarios(levels=0)
+        cell_specs(levels=0)
+    with pytest.raises(ValueError, match="episodes"):
+        curvature_scenarios(episodes=0)
 
 
 @pytest.mark.parametrize("cell", [3, 7])  # the sharpest level at 0.1 and at 0.4 m/s

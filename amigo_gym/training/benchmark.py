@@ -1271,6 +1271,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     return run_guarded(run, "amigo-gym benchmark")
 
 
+def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
+    """The cells of ``--curvature`` (:func:`amigo_gym.training.curvature.cell_specs`: random paths up to the feasible
+    curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the suite."""
+    from amigo_gym.training.curvature import cell_specs
+
+    return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
+
+
 def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
     """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.training.curvature`)."""
     from amigo_gym.runs import RunLock
@@ -1278,13 +1286,15 @@ def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
 
     if a.path or a.scenarios:
         raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
-    scenarios = curvature.curvature_scenarios(episodes=a.curvature_episodes)
+    scenarios = curvature_scenarios(a.curvature_episodes)
     if a.quick:
         scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
     agents = parse_agents(a.agents) if a.agents else default_agents()
     out = Path(a.out)
     with RunLock(out):
-        doc = curvature.run_curvature(agents, scenarios, progress=not a.no_progress)
+        doc = curvature.run_curvature(
+            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=not a.no_progress
+        )
         doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
         written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
     print(curvature.markdown_curvature(doc), end="")

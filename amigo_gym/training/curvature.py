@@ -1,5 +1,8 @@
 r"""Failure rate binned by path curvature (issue 18, item 6): ``amigo-gym benchmark --curvature``.
 
+This module never imports :mod:`amigo_gym.training.benchmark` (which calls it): the benchmark passes its
+scenario class and environment factory in.
+
     amigo-gym benchmark --curvature --out results/curvature                     # the default agents
     amigo-gym benchmark --curvature --agents analytic ppo_fast=agents/pretrained/v1/ppo_fast/*.zip --out ...
 
@@ -46,7 +49,7 @@ __all__ = [
     "CURVATURE_SPEEDS",
     "LEVELS",
     "bin_table",
-    "curvature_scenarios",
+    "cell_specs",
     "markdown_curvature",
     "run_curvature",
     "wilson_interval",
@@ -88,18 +91,18 @@ def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float
     return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
 
 
-def curvature_scenarios(
+def cell_specs(
     speeds: Sequence[float] = CURVATURE_SPEEDS, levels: int = LEVELS, episodes: int = CURVATURE_EPISODES
-) -> tuple[Any, ...]:
-    """The cells (module docstring) as :class:`amigo_gym.training.benchmark.Scenario` objects; ``Scenario.description``
-    names ``K(v)``, the level and the curvature; the ``env_kwargs`` are ``gym.make``'s."""
+) -> list[dict[str, Any]]:
+    """The cells (module docstring) as keywords of :class:`amigo_gym.training.benchmark.Scenario` (``name``,
+    ``env_id``, ``env_kwargs``: ``gym.make``'s, ``seeds``, ``max_steps``, ``held_out``, ``description``: naming
+    ``K(v)``, the level and the curvature); :func:`amigo_gym.training.benchmark.curvature_scenarios` builds them."""
     from amigo_gym.task.v1 import feasible_random_curvature
-    from amigo_gym.training.benchmark import Scenario
 
     if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
-        raise ValueError(f"curvature_scenarios: levels must be an integer in [1, 100], got {levels!r}")
+        raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
-        raise ValueError(f"curvature_scenarios: episodes must be an integer in [1, 10000], got {episodes!r}")
+        raise ValueError(f"curvature cells: episodes must be an integer in [1, 10000], got {episodes!r}")
     out = []
     for v in speeds:
         k_v = feasible_random_curvature(v)
@@ -114,10 +117,12 @@ def curvature_scenarios(
                 "path_params": {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S},
             }
             desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{levels} of K = {k_v:.4g} 1/m), {v:g} m/s"
-            seeds = tuple(range(100, 100 + episodes))
-            steps = round(DURATION_S / DT_S)
-            out.append(Scenario(f"curv_v{v:g}_k{j}", "AmigoBot-v1", kw, seeds, steps, True, desc))
-    return tuple(out)
+            out.append({
+                "name": f"curv_v{v:g}_k{j}", "env_id": "AmigoBot-v1", "env_kwargs": kw,
+                "seeds": tuple(range(100, 100 + episodes)), "max_steps": round(DURATION_S / DT_S), "held_out": True,
+                "description": desc,
+            })  # fmt: skip
+    return out
 
 
 def _cell_limit(sc: Any) -> tuple[float, float]:
@@ -132,14 +137,15 @@ def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
     """Run ``agent`` deterministically, one episode per seed of the cell ``sc`` (all side by side in the native vector
     env, as :func:`amigo_gym.training.benchmark.evaluate`); per episode the benchmark's metrics plus the tags
     ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
-    from amigo_gym.envs.vector import info_row
-    from amigo_gym.training.benchmark import _vector_env
+    import gymnasium as gym
 
-    venv = _vector_env(sc)
+    from amigo_gym.envs.vector import info_row
+
+    venv: Any = gym.make_vec(sc.env_id, num_envs=len(sc.seeds), max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
     try:
         n = len(sc.seeds)
         obs, _ = venv.reset(seed=list(sc.seeds))
-        u = venv.unwrapped
+        u: Any = venv.unwrapped
         adapter = InfoAdapter(u.params.robot, float(u.params.speed))
         paths = list(u.paths.paths)
         ids = [int(d["id"]) for d in u.path_infos]
@@ -224,14 +230,19 @@ def run_curvature(
     agents: Sequence[Any],
     scenarios: Sequence[Any],
     *,
+    make_env: Callable[[Any], Any],
+    unavailable_errors: tuple[type[BaseException], ...],
     progress: bool = True,
     on_cell: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Every agent seed on every cell; the JSON document: ``protocol``, ``scenarios``, ``agents``, ``episodes``
-    (tagged, one record per episode), ``table`` (:func:`bin_table`), ``unavailable``, ``wall_time_s``."""
-    from tqdm.auto import tqdm
+    (tagged, one record per episode), ``table`` (:func:`bin_table`), ``unavailable``, ``wall_time_s``.
 
-    from amigo_gym.training.benchmark import Unavailable, make_env
+    ``make_env(scenario)``: the single env the agents are built for; an agent that raises one of
+    ``unavailable_errors`` on a cell is listed in ``unavailable`` with the reason (the benchmark's
+    :func:`~amigo_gym.training.benchmark.make_env` and ``Unavailable``, passed in by ``amigo-gym benchmark``).
+    """
+    from tqdm.auto import tqdm
 
     t0 = time.perf_counter()
     episodes: list[dict[str, Any]] = []
@@ -246,7 +257,7 @@ def run_curvature(
                 try:
                     agent = spec.instantiate(env)
                     eps = evaluate_tagged(agent, sc)
-                except Unavailable as exc:
+                except unavailable_errors as exc:
                     unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
                     continue
                 finally:
