@@ -68,6 +68,10 @@ distribution of ``-h_rms``), with bootstrap bands of ``--profile-reps`` (2 000) 
 training seed (the classical policies are deterministic) the intervals have zero width: they measure
 training-seed variation only.
 
+Failure rate per curvature bin (opt-in, outside the released suite): ``--curvature`` runs instead the cells of
+:mod:`amigo_gym.training.curvature` (random paths up to the feasible curvature at 0.1 and 0.4 m/s) and writes
+``<out>/curvature.json`` and ``<out>/curvature.md``.
+
 Outputs (every file written atomically, :mod:`amigo_gym.io`)
 -----------------------------------------------------------
 ``--json`` (default ``<out>/benchmark.json``): ``suite_version``, ``protocol``, ``scenarios`` (each
