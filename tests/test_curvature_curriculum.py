@@ -204,3 +204,18 @@ def rec_curve(run: Path) -> list[dict[str, float]]:
 
     out: list[dict[str, float]] = json.loads((run / "curve.json").read_text())
     return out
+
+
+def test_a_checkpoint_without_the_curriculum_fields_resumes(tmp_path: Path) -> None:
+    """A checkpoint written before the curriculum fields existed (settings without them) resumes as their defaults."""
+    s = tiny(curriculum_max_curvature=0.0)
+    train(s, tmp_path / "r", log=None, until_steps=128)
+    ck_path = tmp_path / "r" / "checkpoint.pt"
+    ck = torch.load(ck_path, weights_only=False)
+    for k in ("curriculum_max_curvature", "curriculum_max_curvature_rate", "curriculum_fraction", "curriculum_stages"):
+        del ck["settings"][k]
+    torch.save(ck, ck_path)
+    rec = train(s, tmp_path / "r", log=None, resume=True)
+    assert rec["finished"]
+    with pytest.raises(ValueError, match="settings differ"):
+        train(tiny(), tmp_path / "r", log=None, resume=True)  # with a curriculum: other settings

@@ -458,7 +458,8 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     ck = torch.load(path, weights_only=False)
-    if ck["settings"] != s.to_json():
+    # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
+    if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
     net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
     net.load_state_dict(ck["net"])
