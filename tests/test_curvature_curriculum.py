@@ -208,7 +208,7 @@ def rec_curve(run: Path) -> list[dict[str, float]]:
 
 def test_a_checkpoint_without_the_curriculum_fields_resumes(tmp_path: Path) -> None:
     """A checkpoint written before the curriculum fields existed (settings without them) resumes as their defaults."""
-    s = tiny(curriculum_max_curvature=0.0)
+    s = tiny(curriculum_max_curvature=0.0, curriculum_stages=8)  # the fields' defaults
     train(s, tmp_path / "r", log=None, until_steps=128)
     ck_path = tmp_path / "r" / "checkpoint.pt"
     ck = torch.load(ck_path, weights_only=False)
