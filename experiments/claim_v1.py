@@ -1,7 +1,8 @@
 """Write the claimed benchmark numbers of the shipped AmigoBot-v1 generalists into their manifests.
 
 Reads the JSON of a full benchmark run (``amigo-gym benchmark --out docs/benchmark``) and, for every
-model under ``agents/pretrained/v1/<algo>/`` that the run evaluated, stores its per-scenario figures
+model under ``agents/pretrained/v1/<folder>/`` (the SB3 ``ppo``, ``sac``, ``td3`` and the fast PPO's
+``ppo_fast``, matched by the sha256 of the zip) that the run evaluated, stores its per-scenario figures
 (``h_rms_m``, ``h_rms_settled_m``, ``speed_err_rms``, ``failure_rate``, ``return``, ``chatter_settled_rms``)
 under ``"claimed"`` in its manifest, with the suite version and the benchmark command.
 ``tests/test_agents_v1_pretrained.py`` re-runs some scenarios and asserts the same numbers exactly.
@@ -18,6 +19,7 @@ import sys
 from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
+from amigo_gym.io import atomic_write_json
 
 KEYS = ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "return", "chatter_settled_rms", "episodes")
 
@@ -48,7 +50,7 @@ def main() -> int:
             "torch_threads": int(doc.get("torch_threads", 2)),
             "scenarios": by_sha[sha],
         }
-        manifest.write_text(json.dumps(m, indent=2) + "\n")
+        atomic_write_json(manifest, m)  # json.dumps(indent=2) + newline, via a temporary file and os.replace
         done += 1
     print(f"claimed numbers written for {done} models", file=sys.stderr)
     return 0

@@ -68,6 +68,20 @@ def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -
 CLAIMED = [m for m in MANIFESTS if "claimed" in json.loads(m.read_text())]
 
 
+@pytest.mark.parametrize("manifest", MANIFESTS, ids=[m.stem for m in MANIFESTS])
+def test_every_shipped_generalist_claims_every_scenario_of_its_environment(manifest: Path) -> None:
+    """Every shipped v1 generalist (SB3's and the fast PPO's) carries claimed numbers on every scenario of the suite
+    for its environment (experiments/claim_v1.py from the committed docs/benchmark run), so none escapes the re-run."""
+    m = json.loads(manifest.read_text())
+    assert "claimed" in m, f"{manifest}: no claimed numbers (python experiments/claim_v1.py)"
+    claimed = m["claimed"]
+    assert claimed["suite_version"] == bm.SUITE_VERSION and claimed["command"].startswith("amigo-gym benchmark")
+    assert set(claimed["scenarios"]) == {sc.name for sc in bm.SUITE if sc.env_id == m["env_id"]}
+    bench = json.loads((Path(__file__).resolve().parents[1] / "docs/benchmark/benchmark.json").read_text())
+    shipped = {a.get("sha256") for a in bench["agents"]}
+    assert m["sha256"] in shipped, "the committed benchmark did not evaluate this model"
+
+
 @pytest.mark.parametrize("manifest", CLAIMED, ids=[m.stem for m in CLAIMED])
 def test_benchmark_reproduces_claimed_numbers(manifest: Path) -> None:
     m = json.loads(manifest.read_text())

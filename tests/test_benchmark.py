@@ -270,6 +270,28 @@ def test_parse_agents(tmp_path: Path) -> None:
     assert [(a.name, a.seed) for a in specs] == [("gen", 3), ("gen", 11)]
 
 
+def test_default_agents_include_the_fast_ppo_generalist_labelled_apart_from_sb3s() -> None:
+    """The shipped fast-PPO seeds are default agents (``ppo_fast_v1``, algorithm ``fastppo`` from the manifest, five
+    training seeds, sha256 in the manifest), beside the SB3 generalists, and every label tells them apart."""
+    specs = bm.default_agents()
+    fast = [a for a in specs if a.name == "ppo_fast_v1"]
+    assert sorted(a.seed for a in fast) == [0, 1, 2, 3, 4]
+    assert all(a.algo == "fastppo" and (a.manifest or {}).get("agent") == "ppo_fast" for a in fast)
+    assert all(a.path is not None and a.path.endswith(f"ppo_fast/ppo_fast_s{a.seed}.zip") for a in fast)
+    assert {a.name for a in specs} >= {"ppo_v1", "sac_v1", "td3_v1", "ppo_fast_v1"}
+    assert bm.agent_label("ppo_fast_v1") == "fast PPO generalist" and bm.agent_label("ppo_v1") == "SB3 PPO generalist"
+    assert bm.agent_label("mine", "fastppo") == "fast PPO" and bm.agent_label("mine", "ppo") == "SB3 PPO"
+    assert bm.agent_label("mine", "fastppo_residual") == "fast PPO residual" and bm.agent_label("x") == "model"
+    assert bm.agent_label("ppo_v0") == "SB3 PPO v0 specialist" and bm.agent_label("analytic") == "classical"
+    assert bm.agent_label("ppo_v1", "fastppo") == "fast PPO generalist"  # the manifest's algorithm decides
+    assert ("ppo_fast_v1", "fast PPO") in bm.README_ROWS and ("ppo_v1", "SB3 PPO") in bm.README_ROWS
+    # it runs, and the report's legend names it: one short episode
+    sc = bm.Scenario("tiny_circle", "AmigoBot-v1", {"path": "circle", "radius": 1.0, "speed": 0.2}, (3,), 30)
+    doc = bm.run_benchmark([bm.AgentSpec("analytic"), fast[0]], [sc], progress=False, reps=50, profile_reps=10)
+    assert not doc["unavailable"] and {r["agent"] for r in doc["results"]} == {"analytic", "ppo_fast_v1"}
+    assert "`ppo_fast_v1`: fast PPO generalist" in bm.markdown_report(doc)
+
+
 def test_cli_quick(tmp_path: Path) -> None:
     sac = ROOT / "agents" / "pretrained" / "sac.zip"
     cmd = [sys.executable, "-m", "amigo_gym.cli", "benchmark", "--quick", "--out", str(tmp_path), "--reps", "500"]

@@ -106,3 +106,41 @@ def test_quick_benchmark_table_in_the_published_set(tmp_path: Path) -> None:
     assert doc["benchmark"]["aggregates"]["analytic"]["n_runs"] == 1
     files = verify_outputs(out)
     assert {"benchmark_scenarios.png", "benchmark_profiles.png", "report.md", "results.json"} <= set(files)
+
+
+def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_path: Path) -> None:
+    """``--models`` in the pretrained layout with a v1 SB3 PPO seed and a fast-PPO seed: the quick benchmark runs
+    both (``ppo_v1``, ``ppo_fast_v1``) on its v1 scenarios, and the report and the summary tell "SB3 PPO" from
+    "fast PPO"."""
+    import shutil
+
+    from amigo_gym.data import pretrained_dir
+
+    src, models = pretrained_dir(), tmp_path / "models"
+    for rel in ("ppo.zip", "ppo.json", "v1/ppo/ppo_s0.zip", "v1/ppo/ppo_s0.json"):
+        (models / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(src / rel, models / rel)
+    for rel in ("v1/ppo_fast/ppo_fast_s0.zip", "v1/ppo_fast/ppo_fast_s0.json"):
+        (models / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(src / rel, models / rel)
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", str(models)]
+    cmd += ["--train-steps", "0", "--seeds", "1", "--steps", "20", "--no-progress", "--no-plots"]
+    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((out / "results.json").read_text())
+    bench = doc["benchmark"]
+    v1 = [s["name"] for s in bench["scenarios"] if s["env_id"] == "AmigoBot-v1"]
+    assert v1
+    runs = {(x["agent"], x["scenario"]) for x in bench["results"]}
+    for agent in ("ppo_v1", "ppo_fast_v1"):
+        assert {(agent, sc) for sc in v1} <= runs, agent  # every v1 scenario ran, none unavailable
+        assert bench["aggregates"][agent]["n_runs"] == 1
+    kinds = {a["agent"]: (a["kind"], a.get("algo")) for a in bench["agents"]}
+    assert kinds["ppo_fast_v1"] == ("fastppo", "fastppo") and kinds["ppo_v1"] == ("sb3", "ppo")
+    report = (out / "report.md").read_text()
+    assert "`ppo_fast_v1`: pretrained fast PPO AmigoBot-v1 generalists" in report
+    assert "`ppo_v1`: pretrained SB3 PPO AmigoBot-v1 generalists" in report
+    assert "`ppo_fast_v1`: fast PPO generalist" in report  # the benchmark table's own legend
+    assert "ppo_fast_v1 " in r.stdout and "fast PPO" in r.stdout

@@ -52,7 +52,7 @@ def _same(a: Any, b: Any, what: str) -> None:
         },
     ],
 )
-@pytest.mark.parametrize("n", [5, 2])  # 2: the float code row by row (ROWWISE_MAX_N), 5: the columns
+@pytest.mark.parametrize("n", [5, 2])
 def test_native_equals_sync_bit_for_bit(mode: AutoresetMode, kwargs: dict[str, Any], n: int) -> None:
     native, sync = _pair(n, mode, **dict(kwargs))
     o1, i1 = native.reset(seed=11)
@@ -121,3 +121,13 @@ def test_pickle_after_render() -> None:
     clone = pickle.loads(pickle.dumps(envs))
     a = np.full((2, 2), 0.3)
     _same(clone.step(a)[0], envs.step(a)[0], "clone steps like the original")
+
+
+def test_removed_rowwise_route_name_warns() -> None:
+    """``ROWWISE_MAX_N`` (the row-by-row route, removed in 0.2) still reads, as 0 robots, with a deprecation warning."""
+    import amigo_gym.envs.vector_v1 as vector_v1
+
+    with pytest.warns(DeprecationWarning, match="ROWWISE_MAX_N is deprecated"):
+        assert vector_v1.ROWWISE_MAX_N == 0
+    with pytest.raises(AttributeError, match="NO_SUCH_NAME"):
+        _ = vector_v1.NO_SUCH_NAME

@@ -25,6 +25,7 @@ For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mod
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any
 
 import numpy as np
@@ -45,7 +46,6 @@ from amigo_gym.envs.base import (
     check_vector_args,
 )
 from amigo_gym.model import actuators
-from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast_v1, fast_v1_batch
 from amigo_gym.task import v0 as task
@@ -53,8 +53,6 @@ from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1VectorEnv"]
 
-#: up to this many robots a step runs the float code row by row (cheaper than numpy calls on tiny columns)
-ROWWISE_MAX_N = 12
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 #: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
@@ -65,6 +63,19 @@ _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
 _W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
+
+
+def __getattr__(name: str) -> Any:
+    """``ROWWISE_MAX_N`` (removed in 0.2 with the row-by-row step route; goes in 0.3): 0, with a warning."""
+    if name == "ROWWISE_MAX_N":
+        warnings.warn(
+            "amigo_gym.envs.vector_v1.ROWWISE_MAX_N is deprecated: since amigo_gym 0.2 no robots are stepped row by "
+            "row (one step route: the compiled step, or the column functions with kernel='numpy'); it goes in 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return 0
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 #: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
@@ -332,15 +343,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         return terminated
 
     def _step_columns(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
-        """The step of every robot by the reference column functions (:func:`tracking.step_columns`; row by row
-        up to :data:`ROWWISE_MAX_N` robots): ``(obs, reward, terminated, infos, h_x, h_y)``, infos compact."""
+        """The step of every robot by the reference column functions (:func:`tracking.step_columns` on ``(N,)``
+        columns, the single env's reference): ``(obs, reward, terminated, infos, h_x, h_y)``, infos compact."""
         n = self.num_envs
-        if n <= ROWWISE_MAX_N and all(isinstance(p, ClothoidPath) for p in self.paths.paths):
-            st, out, noise = self._step_rowwise(a1, a2)
-        else:
-            st, out, noise = tracking.step_columns(
-                self._k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
-            )
+        st, out, noise = tracking.step_columns(
+            self._k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
+        )
         self._state = tracking.State(*(np.asarray(c) for c in st))
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
@@ -411,35 +419,6 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         cols: list[Any] = [ws[:, fast_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
         return tracking.State._make([*cols, steps])
 
-    def _step_rowwise(self, a1: Array, a2: Array) -> tuple[tracking.State, tracking.Outcome, StepNoise]:
-        """:func:`tracking.step_columns` row by row on Python floats (the single env's code), stacked as columns.
-
-        The float path gives each row the bits of the column code (``tests/test_float_paths.py``), at a
-        fraction of the fixed cost of numpy calls on ``(1,)`` arrays: the step of a few robots (``N <=``
-        :data:`ROWWISE_MAX_N`).
-        """
-        k = self._k
-        rows = []
-        for i in range(self.num_envs):
-            st_i = tracking.State(*(_item(c, i) for c in self._state))
-            ep_i = tracking.Episode(*(_item(c, i) for c in self._episode))
-            rows.append(
-                tracking.step_columns(
-                    k, self.paths[i], st_i, ep_i, self._ring[i], self._ring_step, float(a1[i]), float(a2[i])
-                )
-            )
-        st = tracking.State(*(np.array(col) for col in zip(*(r[0] for r in rows), strict=True)))
-        outs = [r[1] for r in rows]
-        cols: list[Any] = []
-        for f, first in zip(tracking.Outcome._fields, outs[0], strict=True):
-            values = [getattr(o, f) for o in outs]
-            if isinstance(first, tuple):
-                cols.append(tuple(np.array(c, dtype=np.float64) for c in zip(*values, strict=True)))
-            else:
-                cols.append(np.array(values))
-        noise = StepNoise(*(np.array(c, dtype=np.float64) for c in zip(*(r[2] for r in rows), strict=True)))
-        return st, tracking.Outcome(*cols), noise
-
     # ------------------------------------------------------------------ infos
     def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
         """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``)."""
@@ -477,12 +456,6 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.__dict__.update(state)
         if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
             self._state = self._state_views(np.asarray(self._state.steps))
-
-
-def _item(c: Any, i: int) -> Any:
-    """Row ``i`` of a column as a Python scalar (a column that is a scalar: itself)."""
-    a = np.asarray(c)
-    return a[i].item() if a.ndim == 1 else a.item()
 
 
 def _as_columns(v: Any, n: int) -> Any:

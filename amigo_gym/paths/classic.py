@@ -219,15 +219,8 @@ class CirclePath:
         if minimal and type(x) is float and type(y) is float:
             # one point of Python floats (the single env's step): the same expressions without the column
             # dispatch (math.sqrt rounds as np.sqrt: IEEE 754 square roots are exact)
-            fx = x - cx
-            fy = y - cy
-            frho = math.sqrt(fx * fx + fy * fy)
-            if frho != 0.0:
-                fnx = fx / frho
-                fny = fy / frho
-                if d > 0:
-                    return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, r - frho, -fny, fnx)
-                return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, frho - r, fny, -fnx)
+            fe, fct, fst, _ux, _uy = circle_foot(x, y, cx, cy, r0x, r0y, float(d), r)
+            return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, fe, fct, fst)
         ux = x - cx
         uy = y - cy
         rho = col_sqrt(ux * ux + uy * uy)
@@ -257,6 +250,32 @@ class CirclePath:
             cos_theta=cos_theta,
             sin_theta=sin_theta,
         )
+
+
+def circle_foot(
+    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
+) -> tuple[float, float, float, float, float]:
+    r"""The foot of the point ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m] and direction
+    ``d`` (+1 left, -1 right), for floats (:meth:`CirclePath.project_xy`'s expressions, ``minimal``).
+
+    With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho`` (at the centre ``u = r0``, the unit start radius,
+    and ``n = r0``): returns ``(e, cos theta, sin theta, u_x, u_y)`` with the cross-track error
+    ``e = d (r - rho)`` and the unit tangent ``d (-n_y, n_x)``. In numba's subset: the compiled step of
+    AmigoBot-v0 compiles this function (:data:`amigo_gym.sim._kernels.SHARED`).
+    """
+    ux = x - cx
+    uy = y - cy
+    rho = math.sqrt(ux * ux + uy * uy)
+    norm = rho
+    if rho == 0.0:  # at the centre: the start point
+        ux = r0x
+        uy = r0y
+        norm = 1.0
+    nx = ux / norm
+    ny = uy / norm
+    if d > 0.0:
+        return r - rho, -ny, nx, ux, uy
+    return rho - r, ny, -nx, ux, uy
 
 
 @dataclass(frozen=True)

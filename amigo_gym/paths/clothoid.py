@@ -798,6 +798,12 @@ class ClothoidPath:
 # The same expressions as pose_from_pieces, refine, window_bounds and locate_status for Python floats,
 # written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
 # (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
+#
+# The scalar pieces below (from _np_clip to locate_status_float) are in numba's subset (floats, comparisons,
+# math.floor/copysign, no numpy call, no object): the compiled step of AmigoBot-v1 compiles these very functions
+# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection's arithmetic is
+# written once. What stays apart: the cosines and sines of the quadrature nodes (numpy's here, the C library's in
+# the kernel, checked equal per process), the piece search (bisect here) and the coarse search (numpy here).
 
 
 def _np_clip(x: float, lo: float, hi: float) -> float:
@@ -807,6 +813,105 @@ def _np_clip(x: float, lo: float, hi: float) -> float:
     if not (x != x or x < hi):
         x = hi
     return x
+
+
+def py_min(a: float, b: float) -> float:
+    """Python's ``min(a, b)`` of two floats: ``a`` unless ``b < a`` (the first on ties and NaN), for compiled code."""
+    return b if b < a else a
+
+
+def py_max(a: float, b: float) -> float:
+    """Python's ``max(a, b)`` of two floats: ``a`` unless ``b > a`` (the first on ties and NaN), for compiled code."""
+    return b if b > a else a
+
+
+def wrap_arc(s: float, length: float, closed: bool) -> tuple[float, float, float]:
+    """Arc length ``s`` [m] on a path of lap ``length`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the
+    lap number (closed: ``u = s - lap length``) and the length past an open path's ends (``s = u + extra``)."""
+    if closed:
+        lap = float(math.floor(s / length))
+        return s - lap * length, lap, 0.0
+    u = py_min(py_max(s, 0.0), length)
+    return u, 0.0, s - u
+
+
+def placed_pose(
+    x: float,
+    y: float,
+    th: float,
+    cos_t: float,
+    sin_t: float,
+    kappa: float,
+    c: float,
+    closed: bool,
+    lap: float,
+    turn: float,
+    extra: float,
+) -> tuple[float, float, float, float, float, float, float]:
+    """The pose ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` on the whole path from the pose at ``u``
+    in its piece (:func:`wrap_arc`): laps of a closed path add whole turns ``turn`` [rad] to the heading, an open
+    path goes straight on past its ends (curvature 0 there)."""
+    if closed:
+        return x, y, th + lap * turn, kappa, c, cos_t, sin_t
+    if extra != 0.0:
+        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
+    return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
+
+
+def locate_window(sp: float, ahead: float, behind: float, length: float, closed: bool) -> tuple[float, float]:
+    """The search window ``[lo, hi]`` [m] around the hint ``sp`` (:func:`window_bounds` for floats), kept in
+    ``[0, length]`` on an open path."""
+    lo = sp - behind
+    hi = sp + ahead
+    if not closed:
+        lo = _np_clip(lo, 0.0, length)
+        hi = _np_clip(hi, 0.0, length)
+    return lo, hi
+
+
+def foot_terms(x: float, y: float, px: float, py: float, ct: float, st: float) -> tuple[float, float, float, float]:
+    """``(dx, dy, g, e)`` of the point ``(x, y)`` against the path point ``(px, py)`` of tangent ``(ct, st)``:
+    ``d = p - c``, ``g = d . t`` (zero at a foot point), ``e = d . n`` (the cross-track error)."""
+    dx = x - px
+    dy = y - py
+    return dx, dy, dx * ct + dy * st, dy * ct - dx * st
+
+
+def newton_step(
+    x: float,
+    y: float,
+    px: float,
+    py: float,
+    kappa: float,
+    ct: float,
+    st: float,
+    s: float,
+    h: float,
+    lo: float,
+    hi: float,
+) -> tuple[float, bool]:
+    """One iteration of the projection's Newton method (:func:`_newton`) from ``s`` [m] with the pose there:
+    ``s' = clip(s + clip(g / max(1 - kappa e, MIN_NEWTON_DENOMINATOR), -h, h), lo, hi)``, and whether ``s'`` is
+    ``s`` bit for bit (a fixed point: the remaining iterations would repeat it)."""
+    _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
+    den = 1.0 - kappa * e
+    if den < MIN_NEWTON_DENOMINATOR:
+        den = MIN_NEWTON_DENOMINATOR
+    s_new = py_min(py_max(s + py_min(py_max(g / den, -h), h), lo), hi)
+    return s_new, s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s)
+
+
+def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
+    """:func:`locate_status` of one projection ``s`` [m] with residual ``g`` in the window ``[lo, hi]``."""
+    status = STATUS_INTERIOR
+    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
+        status = STATUS_WINDOW
+    if not closed:
+        if s <= 0.0 and g < 0.0:
+            status = STATUS_START
+        if s >= length and g > 0.0:
+            status = STATUS_END
+    return status
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
@@ -822,16 +927,7 @@ def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
 def _piece_of(t: _Tables, closed: bool, s: float) -> tuple[int, float, float, float]:
     """The piece ``j`` holding the float arc length ``s``, the distance ``du`` into it, the lap number and the
     length ``extra`` past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and search)."""
-    length = t.length
-    lap: float
-    if closed:
-        lap = float(math.floor(s / length))
-        u = s - lap * length
-        extra = 0.0
-    else:
-        lap = 0.0
-        u = min(max(s, 0.0), length)
-        extra = s - u
+    u, lap, extra = wrap_arc(s, t.length, closed)
     s0 = t.s0
     j = min(max(bisect.bisect_right(s0, u) - 1, 0), len(s0) - 1)
     return j, u - s0[j], lap, extra
@@ -842,12 +938,7 @@ def _placed(t: _Tables, closed: bool, pose: UnitPose, j: int, du: float, lap: fl
     path: laps of a closed path add whole turns to the heading, an open path goes straight on past its ends."""
     x, y, th, cos_t, sin_t = pose
     c = t.c[j]
-    kappa = t.k0[j] + c * du
-    if closed:
-        return x, y, th + lap * t.turn, kappa, c, cos_t, sin_t
-    if extra != 0.0:
-        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
-    return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
+    return placed_pose(x, y, th, cos_t, sin_t, t.k0[j] + c * du, c, closed, lap, t.turn, extra)
 
 
 def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
@@ -899,45 +990,24 @@ def _locate_float(
         idx = jj.astype(np.int64)
     d2 = (t.sample_x[idx] - x) ** 2 + (t.sample_y[idx] - y) ** 2
     s_start = float(jj[int(np.argmin(d2))]) * h
-    lo = sp - behind
-    hi = sp + ahead
-    if not closed:
-        lo = _np_clip(lo, 0.0, length)
-        hi = _np_clip(hi, 0.0, length)
+    lo, hi = locate_window(sp, ahead, behind, length, closed)
     s = _np_clip(s_start, lo, hi)
     # Newton's method (refine), stopped at a fixed point as there
     pose = _pose_tuple(t, closed, s)
     for _ in range(NEWTON_ITERATIONS):
         px, py, _th, kappa, _c, ct, st = pose
-        dx = x - px
-        dy = y - py
-        g = dx * ct + dy * st
-        e = dy * ct - dx * st
-        den = 1.0 - kappa * e
-        if den < MIN_NEWTON_DENOMINATOR:
-            den = MIN_NEWTON_DENOMINATOR
-        s_new = min(max(s + min(max(g / den, -h), h), lo), hi)
-        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
+        s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
+        if settled:
             break
         s = s_new
         pose = _pose_tuple(t, closed, s)
     px, py, th, kappa, c, ct, st = pose
-    dx = x - px
-    dy = y - py
-    g = dx * ct + dy * st
-    e = dy * ct - dx * st
+    dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
     dist = math.sqrt(dx * dx + dy * dy)
-    status = STATUS_INTERIOR
-    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
-        status = STATUS_WINDOW
+    status = locate_status_float(s, g, lo, hi, length, closed)
     s_lap = s
     if closed:
         s_lap = s - float(math.floor(s / length)) * length
         if s_lap >= length:
             s_lap = s_lap - length
-    else:
-        if s <= 0.0 and g < 0.0:
-            status = STATUS_START
-        if s >= length and g > 0.0:
-            status = STATUS_END
     return PathPoint(s_lap, s, px, py, th, kappa, c, e, ct, st, dist, status)

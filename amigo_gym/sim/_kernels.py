@@ -4,8 +4,9 @@ The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes 
 :func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
-reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"), the
-loops and the projection are written here. :mod:`amigo_gym.task.v0` stays the reference:
+reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
+docs/architecture.md, "The compiled step"), the loops and the manoeuvre path's choice between its line and its
+circle are written here. :mod:`amigo_gym.task.v0` stays the reference:
 ``tests/test_kernels.py`` checks that the two agree.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
@@ -73,6 +74,7 @@ from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics
+from amigo_gym.paths import classic
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -195,13 +197,14 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.h_from_a,
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
+    classic.circle_foot,
 )
 
 #: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "48f21fe032a96bdf"
+LAYOUT_FINGERPRINT = "7d1ed4db037256ee"
 
 
 def layout_fingerprint() -> str:
@@ -228,6 +231,7 @@ _arc = _shared(kinematics.arc_from_tangents)
 _castor_rate = _shared(kinematics.castor_rate_float)
 _h_from_a = _shared(kinematics.h_from_a)
 _a_from_h = _shared(kinematics.a_from_h)
+_circle_foot = _shared(classic.circle_foot)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -332,24 +336,7 @@ def _evaluate(
         r = c[RADIUS]
         r0x = c[R0X]
         r0y = c[R0Y]
-        ux = hx - c[CX]
-        uy = hy - c[CY]
-        rho = math.sqrt(ux * ux + uy * uy)
-        norm = rho
-        if rho == 0.0:  # H at the centre: the start point
-            ux = r0x
-            uy = r0y
-            norm = 1.0
-        nx = ux / norm
-        ny = uy / norm
-        if d > 0.0:
-            e = r - rho
-            cos_theta = -ny
-            sin_theta = nx
-        else:
-            e = rho - r
-            cos_theta = ny
-            sin_theta = -nx
+        e, cos_theta, sin_theta, ux, uy = _circle_foot(hx, hy, c[CX], c[CY], r0x, r0y, d, r)
         on_line = False  # on the manoeuvre's straight part: curvature 0 (else the path's)
         s = 0.0
         manoeuvre = c[MANOEUVRE] != 0.0

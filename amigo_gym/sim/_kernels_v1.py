@@ -18,9 +18,10 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed: :data:`amigo_gym.sim.layout_v1.SHARED`)
-are the reference's own functions, compiled here as they are (docs/architecture.md, "The compiled step"); the
-loops, the projection and the quadrature are written here in the reference's order of operations, so that every
+term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the projection's wrap, placement,
+window, Newton step and status: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled
+here as they are (docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece
+search, the quadrature's node sums) are written here in the reference's order of operations, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
@@ -66,12 +67,8 @@ from amigo_gym.model import actuators, kinematics, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import (
-    MIN_NEWTON_DENOMINATOR,
     NEWTON_ITERATIONS,
     STATUS_END,
-    STATUS_INTERIOR,
-    STATUS_START,
-    STATUS_WINDOW,
 )
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
@@ -87,7 +84,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "aece5b5b28b4ec5e"
+LAYOUT_FINGERPRINT = "6b2e8695ea12ae66"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -107,29 +104,19 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 # ----------------------------------------------------------------------------------------- small rules
 
 
-@_jit
-def _py_min(a: float, b: float) -> float:
-    # Python's min(a, b): a unless b < a
-    return b if b < a else a
-
-
-@_jit
-def _py_max(a: float, b: float) -> float:
-    # Python's max(a, b): a unless b > a
-    return b if b > a else a
-
-
 #: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
 _np_clip = _shared(clothoid._np_clip)
-
-
-@_jit
-def _clip(x: float, lo: float, hi: float) -> float:
-    # tracking._clip of a float
-    return lo if x < lo else (hi if x > hi else x)
+#: the projection's scalar pieces (clothoid's float path; they call clothoid.py_min, py_max), compiled
+_wrap_arc = _shared(clothoid.wrap_arc)
+_placed_pose = _shared(clothoid.placed_pose)
+_locate_window = _shared(clothoid.locate_window)
+_foot_terms = _shared(clothoid.foot_terms)
+_newton_step = _shared(clothoid.newton_step)
+_locate_status = _shared(clothoid.locate_status_float)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
+_clip = _shared(tracking.clip_scalar)
 _task_clip = _shared(task.clip_float)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
@@ -308,16 +295,8 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
     # clothoid._pose_tuple: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s
     n = int(pv[L.P_N])
-    length = pv[L.P_LENGTH]
     closed = pv[L.P_CLOSED] != 0.0
-    if closed:
-        lap = np.floor(s / length)
-        u = s - lap * length
-        extra = 0.0
-    else:
-        lap = 0.0
-        u = _py_min(_py_max(s, 0.0), length)
-        extra = s - u
+    u, lap, extra = _wrap_arc(s, pv[L.P_LENGTH], closed)
     # bisect.bisect_right(s0, u) - 1, clamped to [0, n - 1]
     s0 = L.P_TAIL
     lo = 0
@@ -353,14 +332,8 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
         dy = dy + wi * math.sin(phase)
     x = x0 + dx * t
     y = y0 + dy * t
-    cos_t = math.cos(th)
-    sin_t = math.sin(th)
-    kappa = w0 + cr * t
-    if closed:
-        return x, y, th + lap * pv[L.P_TURN], kappa, cr, cos_t, sin_t
-    if extra != 0.0:
-        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
-    return x + extra * cos_t, y + extra * sin_t, th, kappa, cr, cos_t, sin_t
+    # clothoid._placed
+    return _placed_pose(x, y, th, math.cos(th), math.sin(th), w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
 
 
 @_jit
@@ -399,39 +372,17 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
             best = d2
             best_j = jj
     s_start = best_j * h
-    lo = sp - behind
-    hi = sp + ahead
-    if not closed:
-        lo = _np_clip(lo, 0.0, length)
-        hi = _np_clip(hi, 0.0, length)
+    lo, hi = _locate_window(sp, ahead, behind, length, closed)
     s = _np_clip(s_start, lo, hi)
     px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
     for _ in range(NEWTON_ITERATIONS):
-        dx = x - px
-        dy = y - py
-        g = dx * ct + dy * st
-        e = dy * ct - dx * st
-        den = 1.0 - kappa * e
-        if den < MIN_NEWTON_DENOMINATOR:
-            den = MIN_NEWTON_DENOMINATOR
-        s_new = _py_min(_py_max(s + _py_min(_py_max(g / den, -h), h), lo), hi)
-        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
+        s_new, settled = _newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
+        if settled:
             break
         s = s_new
         px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
-    dx = x - px
-    dy = y - py
-    g = dx * ct + dy * st
-    e = dy * ct - dx * st
-    status = STATUS_INTERIOR
-    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
-        status = STATUS_WINDOW
-    if not closed:
-        if s <= 0.0 and g < 0.0:
-            status = STATUS_START
-        if s >= length and g > 0.0:
-            status = STATUS_END
-    return s, kappa, e, ct, st, status
+    _dx, _dy, g, e = _foot_terms(x, y, px, py, ct, st)
+    return s, kappa, e, ct, st, _locate_status(s, g, lo, hi, length, closed)
 
 
 # ----------------------------------------------------------------------------------------- per-step draws

@@ -155,6 +155,14 @@ SHARED: tuple[Callable[..., Any], ...] = (
     actuators._clip_float,
     actuators.piece_rates,
     clothoid._np_clip,
+    clothoid.py_min,
+    clothoid.py_max,
+    clothoid.wrap_arc,
+    clothoid.placed_pose,
+    clothoid.locate_window,
+    clothoid.foot_terms,
+    clothoid.newton_step,
+    clothoid.locate_status_float,
     kinematics.body_velocity_of,
     kinematics.wheel_rates_of,
     kinematics.h_from_a,
@@ -164,6 +172,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.heading_term,
     task.steady_heading_float,
     tracking.trapezoid_speed,
+    tracking.clip_scalar,
 )
 
 

@@ -610,11 +610,17 @@ class Outcome(NamedTuple):
 # --------------------------------------------------------------------------- column helpers
 
 
+def clip_scalar(x: float, lo: float, hi: float) -> float:
+    """``np.minimum(np.maximum(x, lo), hi)`` of one float by comparisons (NaN stays NaN); in numba's subset, the
+    compiled step compiles it (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    return lo if x < lo else (hi if x > hi else x)
+
+
 def _clip(x: Real, lo: float, hi: float) -> Real:
     if isinstance(x, np.ndarray):
         out: Real = np.minimum(np.maximum(x, lo), hi)
         return out
-    return lo if x < lo else (hi if x > hi else x)
+    return clip_scalar(x, lo, hi)
 
 
 def _min(a: Real, b: Real) -> Real:

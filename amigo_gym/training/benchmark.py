@@ -39,9 +39,12 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 * models of the fast PPO (``amigo-gym train-fast``; zips holding ``model.json``) in any of these forms: they run
   as :class:`amigo_gym.policies.learned.FastPolicy` (numpy), algorithm ``fastppo`` / ``fastppo_residual``.
 
-Default agents: ``analytic``, ``analytic_ff``, the v0 specialists ``agents/pretrained/<algo>.zip``
-(named ``<algo>_v0``) and the v1 generalists ``agents/pretrained/v1/<algo>/*.zip`` when shipped (named
-``<algo>_v1``; ``amigo-gym compare`` uses the same names).
+Default agents: ``analytic``, ``analytic_ff``, ``pure_pursuit``, the v0 specialists
+``agents/pretrained/<algo>.zip`` (named ``<algo>_v0``) and the v1 generalists
+``agents/pretrained/v1/<folder>/*.zip`` when shipped, one folder per entry of :data:`V1_AGENTS` (named
+``<folder>_v1``: ``ppo_v1``, ``sac_v1``, ``td3_v1`` for SB3's algorithms and ``ppo_fast_v1`` for the fast PPO
+of ``amigo-gym train-fast``; ``amigo-gym compare`` uses the same names). :func:`agent_label` says which is
+which ("SB3 PPO" against "fast PPO"); the Markdown report lists every agent with its label.
 
 Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
 -------------------------------------------------------------------------------------------
@@ -119,8 +122,10 @@ __all__ = [
     "SUITES",
     "SUITE_VERSION",
     "TRAINING_DISTRIBUTION",
+    "V1_AGENTS",
     "AgentSpec",
     "Scenario",
+    "agent_label",
     "aggregate",
     "default_agents",
     "evaluate",
@@ -136,6 +141,8 @@ SUITE_VERSION = "1.0"
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
+#: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
+V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3", "ppo_fast": "fast PPO"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]
@@ -555,16 +562,40 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 def default_agents() -> list[AgentSpec]:
     """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
-    (``<algo>_v0``) and v1 generalists (``<algo>_v1``), named as ``amigo-gym compare`` names them."""
+    (``<algo>_v0``) and v1 generalists (``<folder>_v1`` for every folder of :data:`V1_AGENTS`: the SB3 ones and
+    the fast PPO's ``ppo_fast_v1``), named as ``amigo-gym compare`` names them."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
     for algo in ALGOS:
         if (d / f"{algo}.zip").is_file():
             out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
-    for algo in ALGOS:
-        for i, z in enumerate(sorted((d / "v1" / algo).glob("*.zip"))):
-            out.append(_model_spec(f"{algo}_v1", z, i))
+    for folder in V1_AGENTS:
+        for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip"))):
+            out.append(_model_spec(f"{folder}_v1", z, i))
     return out
+
+
+def agent_label(name: str, algo: str | None = None) -> str:
+    """What an agent is, in words: ``ppo_v1`` -> "SB3 PPO generalist", ``ppo_fast_v1`` -> "fast PPO generalist"
+    (:data:`V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy -> "classical", another name
+    -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the name: ``fastppo*`` -> "fast PPO"
+    (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3 PPO"/..., so a fast-PPO zip passed
+    as ``--agents ppo_v1=...`` still reads "fast PPO"."""
+    if name in CLASSICAL:
+        return "classical"
+    v1 = name.endswith("_v1") and name[:-3] in V1_AGENTS
+    v0 = name.endswith("_v0") and name[:-3] in ALGOS
+    if algo is not None and str(algo).startswith(FAST_ALGO):
+        kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
+    elif algo in ALGOS:
+        kind = f"SB3 {str(algo).upper()}"
+    elif v1:
+        kind = V1_AGENTS[name[:-3]]
+    elif v0:
+        kind = f"SB3 {name[:-3].upper()}"
+    else:
+        return "model"
+    return kind + (" generalist" if v1 else " v0 specialist" if v0 else "")
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -874,6 +905,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
             f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
         )
+    algos = {a["agent"]: a.get("algo") for a in doc.get("agents", [])}
+    legend = [f"`{name}`: {agent_label(name, algos.get(name))}" for name in doc["aggregates"]]
+    lines += ["", "Agents: " + "; ".join(legend) + "."]
     agents = list(doc["aggregates"])
     per_scenario = (
         ("h_rms_m", "H cross-track RMS per scenario [mm]", _mm),
@@ -913,7 +947,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 README_ROWS = (
     ("analytic", "analytic tracking (exact inverse solution + PI feedback)"),
     ("pure_pursuit", "pure pursuit (of A)"),
-    *((f"{algo}_v1", algo.upper()) for algo in ALGOS),
+    *((f"{folder}_v1", label) for folder, label in V1_AGENTS.items()),
 )
 
 

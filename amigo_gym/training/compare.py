@@ -2,7 +2,7 @@
 
 Usage::
 
-    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3 + a 500k-step PPO run
+    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3/fast PPO + a 500k-step PPO run
     amigo-gym compare --out results/ --train-steps 0     # evaluation only (about 20 s)
 
 Steps:
@@ -21,8 +21,10 @@ Steps:
    on AmigoBot-v0 and v1) on the same agents: ``analytic`` and ``analytic_ff`` (built per scenario by
    the benchmark), the pretrained v0 agents (named ``<algo>_v0`` here as in the benchmark: :func:`v0_name`) and
    ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
-   under ``<models>/v1/<algo>/*.zip`` (named ``<algo>_v1``, one training seed per zip, checked against
-   the sha256 of their manifests). An agent that cannot run a scenario (a v0 model on v1's
+   under ``<models>/v1/<folder>/*.zip`` for every folder of :data:`amigo_gym.training.benchmark.V1_AGENTS`
+   (named ``<folder>_v1``: the SB3 generalists ``ppo_v1``, ``sac_v1``, ``td3_v1`` and the fast PPO's
+   ``ppo_fast_v1``, a numpy policy; one training seed per zip, checked against the sha256 of their
+   manifests). An agent that cannot run a scenario (a v0 model on v1's
    observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
    is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
 4. Print a short summary (:func:`summary_text`: the perturbed starts, the targets, the quick benchmark's H
@@ -96,7 +98,10 @@ def v0_name(name: str) -> str:
 
 
 def agent_legend(names: Sequence[str], gain: float) -> list[str]:
-    """One line per agent name of a report: what it is (every name a report prints is explained)."""
+    """One line per agent name of a report: what it is (every name a report prints is explained; the v1
+    generalists by the label of :data:`amigo_gym.training.benchmark.V1_AGENTS`: "SB3 PPO", "fast PPO")."""
+    from amigo_gym.training.benchmark import V1_AGENTS
+
     fixed = {
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
         "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
@@ -108,9 +113,12 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         if name in fixed:
             text = fixed[name]
         elif name.endswith("_v0"):
-            text = f"pretrained {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
+            text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
         elif name.endswith("_v1"):
-            text = f"pretrained {name[:-3].upper()} AmigoBot-v1 generalists (agents/pretrained/v1/{name[:-3]}/)"
+            folder = name[:-3]
+            label = V1_AGENTS.get(folder, folder.upper())
+            how = " (amigo-gym train-fast; a numpy policy)" if folder == "ppo_fast" else ""
+            text = f"pretrained {label} AmigoBot-v1 generalists{how} (agents/pretrained/v1/{folder}/)"
         else:
             text = "a model from --models"
         out.append(f"`{name}`: {text}")
@@ -284,9 +292,10 @@ def quick_benchmark(
             per scenario by the benchmark, the others are used as loaded.
         sources: ``{name: (model zip, algo, training seed)}`` of the loaded models (an agent without one
             is left out).
-        generalists: a folder ``<algo>/*.zip`` of AmigoBot-v1 generalists (``<models>/v1``), if any.
+        generalists: a folder of AmigoBot-v1 generalists (``<models>/v1``), if any: its ``<folder>/*.zip`` for
+            every folder of :data:`amigo_gym.training.benchmark.V1_AGENTS`, named ``<folder>_v1``.
     """
-    from amigo_gym.training.benchmark import ALGOS, CLASSICAL, AgentSpec, parse_agents, quick_suite, run_benchmark
+    from amigo_gym.training.benchmark import CLASSICAL, V1_AGENTS, AgentSpec, parse_agents, quick_suite, run_benchmark
 
     specs: list[AgentSpec] = []
     for name, agent in agents.items():
@@ -296,9 +305,9 @@ def quick_benchmark(
             path, algo, seed = sources[name]
             specs.append(AgentSpec(name, seed, str(path), algo, None, _model=agent))
     if generalists is not None:
-        for algo in ALGOS:
-            if any((generalists / algo).glob("*.zip")):
-                for spec in parse_agents([f"{algo}_v1={glob.escape(str(generalists / algo))}/*.zip"]):
+        for folder in V1_AGENTS:
+            if any((generalists / folder).glob("*.zip")):
+                for spec in parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"]):
                     digest = (spec.manifest or {}).get("sha256")
                     if digest is not None and spec.path is not None:  # checked before the pickle is loaded
                         manifest = Path(spec.path).with_suffix(".json")

@@ -2,6 +2,7 @@ r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL/PufferLib style
 
     amigo-gym train-fast --out runs/fast_s0                              # the training distribution, 15M steps
     amigo-gym train-fast --out runs/fast_s0 --resume                     # continue after an interruption
+    amigo-gym train-fast --out runs/fast_s1 --hyperparams agents/hyperparams/fastppo.yml --seed 1
     amigo-gym train-fast --out runs/res_s0 --residual-bound 0.3 --history 4 \
         --env-kwargs '{"path": "mixed", "speed": [0.1, 0.4], "randomize": {"delay": [0, 0.3]}}'
 
@@ -38,6 +39,16 @@ cells); ``model.zip`` (the final policy, :class:`amigo_gym.policies.learned.Fast
 ``best.zip`` (the evaluation with the lowest mean H cross-track RMS); ``run.json`` (steps, wall time, versions,
 sha256 of ``model.zip``).
 
+Hyperparameter file (``--hyperparams``, :func:`load_settings_yaml`): the ``AmigoBot-v1`` mapping of an rl-zoo style
+YAML file whose keys are :class:`FastPPOSettings` fields (``agents/hyperparams/fastppo.yml``, written by
+``amigo-gym sweep --algo fastppo --save-best``); the run's own ``env_kwargs`` and ``seed`` are refused there (they
+are options of the run). The file's values replace the defaults; options given on the command line override the
+file.
+
+Interruption: the first ``SIGTERM`` or ``SIGINT`` (Ctrl-C) stops the run at the end of the current iteration, after a
+checkpoint (``KeyboardInterrupt``, status 130; ``--resume`` continues it bit for bit); a second one stops at once
+(the last periodic checkpoint stays). Signal handlers are installed only when training runs in the main thread.
+
 Imports torch (this module is an edge of the package; ``import amigo_gym`` never imports it).
 """
 
@@ -51,11 +62,14 @@ import math
 import os
 import pickle
 import shlex
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 import gymnasium as gym
@@ -72,7 +86,17 @@ from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
 from amigo_gym.training.train import versions
 
-__all__ = ["FastPPOSettings", "ActorCritic", "curriculum_path_params", "evaluate_policy", "main", "train"]
+__all__ = [
+    "YAML_ENV_ID",
+    "YAML_RUN_KEYS",
+    "FastPPOSettings",
+    "ActorCritic",
+    "curriculum_path_params",
+    "evaluate_policy",
+    "load_settings_yaml",
+    "main",
+    "train",
+]
 
 Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
@@ -297,6 +321,45 @@ def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, floa
             for k, v in start.items()}  # fmt: skip
 
 
+#: the key of a fast-PPO hyperparameter file's mapping (rl-zoo layout: one mapping per environment id)
+YAML_ENV_ID = "AmigoBot-v1"
+#: settings a hyperparameter file may not hold: they belong to a run (its command line), not to tuned settings
+YAML_RUN_KEYS = ("env_kwargs", "seed")
+
+
+def check_settings_mapping(hp: Mapping[str, Any], where: str = "hyperparams") -> dict[str, Any]:
+    """``hp`` (a hyperparameter file's mapping) checked as :class:`FastPPOSettings` values; a plain copy.
+
+    Raises:
+        ValueError / TypeError: one line naming the file, the unknown keys (all of them) or the first bad value.
+    """
+    names = [f.name for f in fields(FastPPOSettings)]
+    run_keys = sorted(str(k) for k in hp if k in YAML_RUN_KEYS)
+    if run_keys:
+        raise ValueError(f"{where}: {', '.join(run_keys)} belong to a run's command line, not a hyperparameter file")
+    unknown = sorted(str(k) for k in hp if k not in names)
+    if unknown:
+        allowed = ", ".join(n for n in names if n not in YAML_RUN_KEYS)
+        raise ValueError(f"{where}: unknown key(s) for fastppo: {', '.join(unknown)} (allowed: {allowed})")
+    out = {str(k): (list(v) if isinstance(v, (list, tuple)) else v) for k, v in hp.items()}
+    try:
+        FastPPOSettings.from_json(out)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {' '.join(str(exc).split())}") from None
+    return out
+
+
+def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The checked :data:`YAML_ENV_ID` mapping of a fast-PPO hyperparameter file (module docstring).
+
+    Raises:
+        FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, or a bad key or value.
+    """
+    from amigo_gym.training.hyperparams import load_hyperparams
+
+    return check_settings_mapping(load_hyperparams(path, YAML_ENV_ID), str(path))
+
+
 # --------------------------------------------------------------------------- networks
 def _layer(n_in: int, n_out: int, gain: float) -> nn.Linear:
     lin = nn.Linear(n_in, n_out)
@@ -501,6 +564,7 @@ def train(
     log: Callable[[str], None] | None = print,
     command: str | None = None,
     evaluate_runs: bool = True,
+    after_eval: Callable[[dict[str, float]], bool] | None = None,
 ) -> dict[str, Any]:
     """Train (or continue) a fast-PPO run in ``out`` (module docstring); returns the run record (``run.json``).
 
@@ -511,10 +575,52 @@ def train(
             ``None``: train to ``total_steps``.
         log: progress lines (``None``: quiet). command: the command line recorded in ``run.json``.
         evaluate_runs: run the evaluations (False: none, no curve, no ``best.zip``; for throughput benchmarks).
+        after_eval: called with each evaluation's ``curve.csv`` row (``env_steps``, ``eval_h_rms_m``, ...); ``False``
+            stops training at once (no checkpoint, no ``model.zip``: the record says ``finished`` False and
+            ``stopped_by`` ``after_eval``); used by ``amigo-gym sweep`` for pruning.
 
     Raises:
         FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
+        KeyboardInterrupt: stopped by ``SIGTERM``/``SIGINT`` (module docstring), after a checkpoint.
     """
+    stop = _Stop()
+    main_thread = threading.current_thread() is threading.main_thread()
+    old = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
+    try:
+        record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+    if stop.requested and record.get("stopped_by") == "signal":
+        raise KeyboardInterrupt
+    return record
+
+
+class _Stop:
+    """``SIGTERM``/``SIGINT``: the first asks for a stop at the end of the iteration (after a checkpoint), a second
+    one stops at once (``KeyboardInterrupt``)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print(f"{PROG}: stopping at the end of this iteration (checkpoint first)", file=sys.stderr, flush=True)
+
+
+def _train(
+    s: FastPPOSettings,
+    out: str | Path,
+    resume: bool,
+    until_steps: int | None,
+    log: Callable[[str], None] | None,
+    command: str | None,
+    evaluate_runs: bool,
+    after_eval: Callable[[dict[str, float]], bool] | None,
+    stop_request: _Stop,
+) -> dict[str, Any]:
     out = Path(out)
     ckpt = out / "checkpoint.pt"
     if ckpt.exists() and not resume:
@@ -541,7 +647,7 @@ def train(
         if log is not None:
             log(msg)
 
-    def evaluate() -> None:
+    def evaluate() -> bool:
         t0 = time.perf_counter()
         pol = _policy(s, r)
         m = evaluate_policy(pol, s)
@@ -564,9 +670,12 @@ def train(
             f"{1e3 * m['h_rms_settled_m']:.2f} mm  chatter(settled) {m['chatter_settled_rms']:.2f} rad/s  speed err"
             f"(settled) {1e3 * m.get('speed_err_settled_rms', math.nan):.1f} mm/s  fail {m['failure']:.2f}"
         )
+        return True if after_eval is None else bool(after_eval(dict(row)))
 
+    stopped_by: str | None = None
     if evaluate_runs and r.global_step >= r.next_eval:
-        evaluate()
+        if not evaluate():
+            stopped_by = "after_eval"
         r.next_eval += s.eval_every
 
     # CPU seconds of this call's rollouts and updates (process_time, all threads) and wall seconds of its iterations
@@ -577,7 +686,7 @@ def train(
     buf_v = torch.zeros((t_len + 1, n))
     buf_r = torch.zeros((t_len, n))
     buf_done = torch.zeros((t_len, n))
-    while r.global_step < stop:
+    while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw
             r.env.set_path_params(stage)
@@ -681,10 +790,14 @@ def train(
                 f"std {float(net.log_std.detach().exp().mean()):.3f}"
             )
         if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
-            evaluate()
+            if not evaluate():
+                stopped_by = "after_eval"
+                break
             while r.next_eval <= r.global_step:
                 r.next_eval += s.eval_every
-        if r.global_step >= r.next_ckpt or r.global_step >= stop:
+        if stop_request.requested and r.global_step < stop:
+            stopped_by = "signal"
+        if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
             r.wall_s = wall0 + time.perf_counter() - t_start
             _save_checkpoint(ckpt, s, r)
             while r.next_ckpt <= r.global_step:
@@ -695,7 +808,8 @@ def train(
         "algo": "fastppo_residual" if s.residual_bound > 0 else "fastppo",
         "seed": s.seed,
         "timesteps": r.global_step,
-        "finished": r.global_step >= s.total_steps,
+        "finished": r.global_step >= s.total_steps and stopped_by is None,
+        "stopped_by": stopped_by,
         "n_envs": s.num_envs,
         "wall_time_s": round(r.wall_s, 1),
         "train_sps": round(r.global_step / max(r.wall_s, 1e-9), 1),
@@ -715,14 +829,23 @@ def train(
 
 
 # --------------------------------------------------------------------------- CLI
-def _parser() -> argparse.ArgumentParser:
+def _parser(defaults: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
+    """The command line; ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
     from amigo_gym.options import OneLineParser, add_dataclass_options
 
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
     p.add_argument("--out", required=True, help="run folder [folder] (required)")
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument(
+        "--hyperparams",
+        default=None,
+        help="settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options given "
+        "here override it (e.g. agents/hyperparams/fastppo.yml)",
+    )
     add_dataclass_options(p, FastPPOSettings)
+    if defaults:
+        p.set_defaults(**defaults)
     return p
 
 
@@ -730,11 +853,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``."""
     from amigo_gym.options import run_guarded, settings_from_args
 
-    args = _parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    args_in = list(sys.argv[1:] if argv is None else argv)
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--hyperparams", default=None)
+    known, _ = pre.parse_known_args(args_in)
+    defaults: dict[str, Any] = {}
+    if known.hyperparams is not None:
+        rc = run_guarded(lambda: defaults.update(load_settings_yaml(known.hyperparams)), PROG)
+        if rc:
+            return rc
+    args = _parser(defaults).parse_args(args_in)
 
     def run() -> int:
         s = settings_from_args(FastPPOSettings, args)
-        cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
+        cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in args_in)
         rec = train(s, args.out, resume=args.resume, log=None if args.quiet else _flush_print, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
         return 0

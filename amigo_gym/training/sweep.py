@@ -6,6 +6,9 @@ Usage (flag names as in rl-baselines3-zoo where they exist)::
     amigo-gym sweep --algo ppo --env AmigoBot-v1 --n-trials 50 --n-jobs 2 --timesteps 100000 --out runs/sweep
     # a multi-seed training grid: every (algo, seed) exactly once
     amigo-gym sweep --mode seeds --algo ppo sac td3 --seeds 0 1 2 3 4 --n-jobs 2 --out runs/grid
+    # the fast PPO (amigo-gym train-fast), its winners written into its settings file
+    amigo-gym sweep --algo fastppo --env AmigoBot-v1 --timesteps 2000000 --eval-freq 250000 --eval-episodes 32 \
+        --n-trials 50 --out runs/sweep_fastppo --save-best agents/hyperparams/fastppo.yml
     # many machines: every machine runs the same command against one PostgreSQL database and joins
     # (the password comes from PGPASSWORD or ~/.pgpass, never from the command line)
     PGPASSWORD=... amigo-gym sweep --algo sac --storage postgresql://user@db-host/amigo --study-name sac-hp \
@@ -35,6 +38,30 @@ the mode, the environment, the objective and the budget as study user attributes
 (seeds mode) and then sets the attribute ``ready``, which joining workers wait for (each worker adds
 ``worker:<host>:<pid>`` with its command, and each trial records its worker, sampler seed and run
 directory).
+
+Fast PPO (``--algo fastppo``, :mod:`amigo_gym.training.fastppo`; ``--env AmigoBot-v1`` only, its native vector
+env). A trial trains in the worker's own process (no subprocess: the worker's ``SIGTERM`` handling, heartbeat and
+``trial.report`` reach the training directly, and torch is imported once per worker, not once per trial). Its
+settings are the base file's (``--hyperparams``, default ``agents/hyperparams/fastppo.yml``, keys of
+:class:`~amigo_gym.training.fastppo.FastPPOSettings`) with, in hyperparams mode, the sampled ones
+(:func:`sample_fastppo`: learning rate, epochs, ``num_envs`` x ``rollout_steps``, minibatches, gamma, GAE lambda,
+clip, entropy, initial log std, action filter, CAPS temporal weight); the run's own options are ``--timesteps``
+(``total_steps``), ``--eval-freq`` (``eval_every``), ``--eval-episodes`` (``eval_envs``, the training
+distribution on the validation seeds ``1000000 + i``), ``--threads``, the seed and ``--env-kwargs``. Every
+evaluation's ``h_rms_m`` is reported to the pruner at its scheduled step (a multiple of ``--eval-freq``, equal in
+every trial whatever its batch), and a prune stops the training at once. The objective is the one above: the run's
+``model.zip`` (checked against ``run.json``'s sha256) runs as :class:`amigo_gym.policies.learned.FastPolicy` on the
+validation cells through the benchmark's own loop (:func:`validate_agent`). The run folder is ``trial_*/run/`` as
+``amigo-gym train-fast --out`` writes it (``config.json`` holds the equivalent ``train-fast`` command,
+``train.log`` the progress). A stopped trial stops at the end of its iteration after a checkpoint; the trial that
+retries it (same parameters) copies the newest checkpoint of the abandoned trials with the same settings into its
+own folder and continues it (user attribute ``resumed_from``; bit for bit as an uninterrupted run).
+
+Winners (``--save-best FILE``, hyperparams mode, any algorithm): when the command ends, the best COMPLETE trial's
+hyperparameters (the base file's with the sampled ones: the trial attribute ``hyperparams``) are written under the
+``--env`` key of ``FILE`` with comment lines naming the study's command, the trial and its value; the file's
+other keys and their comments stay as written (:func:`write_best_yaml`). Rerunning a finished study's command
+runs no trial and writes the file again.
 
 Secrets: the storage URL's password is never stored or printed: every command line kept (study and trial
 attributes, ``summary.json``) and every message shows the URL as SQLAlchemy renders it with
@@ -98,7 +125,8 @@ Each trial's training run is in ``<out>/<study>/trial_<number>_<id>/`` (its YAML
 config, TensorBoard logs with the task metrics, ``eval.json``, models).
 
 Imports optuna, SQLAlchemy (and PyYAML) only when run; may import :mod:`amigo_gym.training.train`,
-:mod:`amigo_gym.training.benchmark` and :mod:`amigo_gym.training.evaluate`.
+:mod:`amigo_gym.training.benchmark`, :mod:`amigo_gym.training.evaluate` and (inside functions, for
+``--algo fastppo``) :mod:`amigo_gym.training.fastppo` and :mod:`amigo_gym.policies.learned`.
 """
 
 from __future__ import annotations
@@ -125,11 +153,12 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.training.train import ALGOS, ENV_IDS, Algo, EnvId
+from amigo_gym.training.train import ENV_IDS, EnvId
 
 __all__ = [
     "ABANDONED",
     "VALIDATION_SEED_BASE",
+    "SWEEP_ALGOS",
     "SweepConfig",
     "budget_count",
     "driver_url",
@@ -139,16 +168,26 @@ __all__ = [
     "masked_url",
     "open_study",
     "run_worker",
+    "sample_fastppo",
     "sample_hyperparams",
     "scrub",
     "study_status",
     "summarize",
+    "validate_agent",
     "validation_cells",
+    "write_best_yaml",
     "write_summary",
 ]
 
 Mode = Literal["hyperparams", "seeds"]
 MODES = get_args(Mode)
+#: the algorithms a sweep trains: SB3's (:mod:`amigo_gym.training.train`) and the fast PPO
+#: (:mod:`amigo_gym.training.fastppo`)
+SweepAlgo = Literal["ppo", "sac", "td3", "fastppo"]
+SWEEP_ALGOS = get_args(SweepAlgo)
+FASTPPO = "fastppo"
+#: a fast-PPO trial's rollout batch ``num_envs * rollout_steps`` is at most ``--timesteps / MIN_ITERATIONS``
+MIN_ITERATIONS = 8
 #: the marker written into the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
 #: first evaluation seed of the validation cells; the benchmark's test seeds are 100..109
@@ -246,6 +285,8 @@ class SweepConfig:
         val_max_steps: cut validation episodes to this length [steps] (0: the cell's).
         train_seed: training seed of hyperparameter trials [-].
         hyperparams: base YAML [file] (default: agents/hyperparams/<algo>.yml).
+        save_best: when the command ends, write the best COMPLETE trial's hyperparameters under the --env key
+            of this YAML file, other keys kept (hyperparams mode) [file] (default: none).
         out: folder of the trials' runs (and the default SQLite file) [dir].
         seed: base of the workers' sampler seeds [-].
         sampler: Optuna sampler.
@@ -259,7 +300,7 @@ class SweepConfig:
         argv: the command line (not an option).
     """
 
-    algos: list[Algo] = field(metadata=cli("--algo"))
+    algos: list[SweepAlgo] = field(metadata=cli("--algo"))
     mode: Mode = "hyperparams"
     env_id: EnvId = field(default="AmigoBot-v0", metadata=cli("--env"))
     env_kwargs: dict[str, Any] | None = field(default=None, metadata=cli(parse=json_object))
@@ -275,6 +316,7 @@ class SweepConfig:
     val_max_steps: int = 0
     train_seed: int = 0
     hyperparams: str | None = None
+    save_best: str | None = None
     out: str = "runs/sweep"
     seed: int = 0
     sampler: Literal["tpe", "random"] = "tpe"
@@ -289,8 +331,8 @@ class SweepConfig:
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming a bad setting."""
-        if not self.algos or any(a not in ALGOS for a in self.algos):
-            raise ValueError(f"--algo must be among {list(ALGOS)}, got {self.algos}")
+        if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
+            raise ValueError(f"--algo must be among {list(SWEEP_ALGOS)}, got {self.algos}")
         if self.mode not in MODES:
             raise ValueError(f"--mode must be one of {list(MODES)}, got {self.mode!r}")
         if self.mode == "hyperparams" and len(self.algos) != 1:
@@ -324,6 +366,10 @@ class SweepConfig:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
             raise ValueError(f"--seeds must be distinct integers, got {self.seeds}")
+        if self.save_best is not None and self.mode != "hyperparams":
+            raise ValueError(f"--save-best applies to --mode hyperparams, not {self.mode}")
+        if FASTPPO in self.algos:
+            self._validate_fastppo()
         n = self.study_name
         if n is not None and (
             not n
@@ -349,6 +395,27 @@ class SweepConfig:
                     f"with --n-jobs {self.n_jobs} the workers would not share one study; use a file "
                     "(sqlite:///path/sweep.db, the default) or a server"
                 )
+
+    def _validate_fastppo(self) -> None:
+        """``--algo fastppo``: AmigoBot-v1 only, its own settings file, checked (with ``--env-kwargs``) up front."""
+        if self.env_id != "AmigoBot-v1":
+            raise ValueError(
+                f"--algo fastppo trains the native AmigoBot-v1 vector env: add --env AmigoBot-v1 "
+                f"(got --env {self.env_id})"
+            )
+        if self.hyperparams is not None and len(set(self.algos)) > 1:
+            raise ValueError(
+                f"--hyperparams {self.hyperparams}: one file cannot hold the settings of fastppo and of "
+                f"{', '.join(a for a in self.algos if a != FASTPPO)}; leave it out (agents/hyperparams/<algo>.yml each)"
+            )
+        from amigo_gym.training.fastppo import FastPPOSettings, load_settings_yaml
+        from amigo_gym.training.train import HYPERPARAMS_DIR
+
+        base = load_settings_yaml(Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / "fastppo.yml")
+        try:
+            FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
 
     @property
     def storage_url(self) -> str:
@@ -417,16 +484,37 @@ def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str
     """The objective of a trained run: IQM over ``cells`` of the mean H cross-track RMS [m] of the run's
     final model (``model.zip``, checked against ``run.json``'s sha256, with its ``vecnormalize.pkl``);
     and the per-cell values (``None``: no finite value)."""
-    from amigo_gym.training import benchmark
     from amigo_gym.training.evaluate import ModelRef, _run_algo, load_model
-    from amigo_gym.training.intervals import iqm
 
     model = run_dir / "model.zip"
     vecnorm = run_dir / "vecnormalize.pkl"
     ref = ModelRef(
         run_dir.name, _run_algo(run_dir), model, run_dir / "run.json", vecnorm if vecnorm.is_file() else None
     )
-    agent = load_model(ref)
+    return validate_agent(load_model(ref), cells)
+
+
+def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """:func:`validate_model` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
+    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy` (numpy; SB3's ``predict``)."""
+    from amigo_gym.io import sha256_file
+    from amigo_gym.policies.learned import FastPolicy
+    from amigo_gym.runs import CorruptFileError
+
+    model = run_dir / "model.zip"
+    want = json.loads((run_dir / "run.json").read_text()).get("sha256")
+    if want != sha256_file(model):
+        raise CorruptFileError(f"{model}: sha256 differs from {run_dir / 'run.json'}")
+    return validate_agent(FastPolicy.load(model), cells)
+
+
+def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` (SB3's ``predict``) run by the benchmark's
+    own loop (:func:`amigo_gym.training.benchmark.evaluate`) on each cell's seeds; and the per-cell values (``None``:
+    no finite value; then the IQM is NaN)."""
+    from amigo_gym.training import benchmark
+    from amigo_gym.training.intervals import iqm
+
     per_cell: dict[str, float | None] = {}
     for sc in cells:
         env = benchmark.make_env(sc)
@@ -683,6 +771,69 @@ def sample_hyperparams(trial: Any, algo: str) -> dict[str, Any]:
     return hp
 
 
+#: fast-PPO sampling choices (powers of two, so that every minibatch count divides the batch ``N T``)
+FAST_NUM_ENVS = (64, 128, 256, 512, 1024)
+FAST_ROLLOUT_STEPS = (8, 16, 32, 64, 128)
+FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
+
+
+def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
+    """Sampled :class:`~amigo_gym.training.fastppo.FastPPOSettings` of a fast-PPO trial of ``timesteps`` env-steps.
+
+    The space (rl-zoo's ``sample_ppo_params`` ranges, log-uniform where a parameter spans decades, narrowed where
+    this task and the large-batch regime say so; Optuna parameter name, then the setting it gives):
+
+    * ``learning_rate`` log-uniform [3e-5, 3e-3] (annealed linearly to 0 by the trainer): rl-zoo's 1e-5..1 cut to
+      what Adam with 1e3-1e5-sample batches tolerates; the shipped 3e-4 sits in the middle (log scale).
+    * ``epochs`` integer [1, 10] (rl-zoo: 1, 5, 10, 20): more passes reuse each sample more but cost CPU per
+      env-step, which is the budget here.
+    * ``num_envs`` ``N`` in {64, ..., 1024} and ``rollout_steps`` ``T`` in {8, ..., 128} (powers of two; rl-zoo's
+      ``n_steps`` 8..2048 for one env): the batch ``N T`` spans 512..131072. Only choices with ``N T_min`` and
+      ``N_min T`` at most ``timesteps / MIN_ITERATIONS`` are offered, and ``T`` is lowered to the largest choice
+      with ``N T <= timesteps / MIN_ITERATIONS`` (at least the smallest): a trial runs at least ``MIN_ITERATIONS``
+      updates (for 2M env-steps every pair qualifies; a tiny test budget keeps the smallest batch).
+    * ``n_minibatches`` in {1, 2, 4, 8, 16, 32} gives ``minibatch_size = N T / n_minibatches``: the minibatch
+      size is sampled as a divisor of the batch, so the constraint ``N T % minibatch_size == 0`` always holds.
+    * ``gamma = 1 - one_minus_gamma``, ``one_minus_gamma`` log-uniform [1e-3, 0.1]: horizons of 10 to 1000 steps
+      (1 s to an episode of 60 s at dt = 0.1 s); rl-zoo's 0.9..0.9999.
+    * ``gae_lambda`` uniform [0.8, 1.0] (rl-zoo's 0.8..1.0).
+    * ``clip_coef`` in {0.1, 0.2, 0.3, 0.4} (rl-zoo's clip_range).
+    * ``ent_coef`` log-uniform [1e-8, 1e-2] (rl-zoo: 1e-8..0.1, cut: the entropy here is that of a
+      state-independent ``log_std``, which a large bonus only inflates).
+    * ``log_std_init`` uniform [-3, 0] (rl-zoo: -4..1; the shipped -1): exploration noise 0.05..1 in normalised
+      action units.
+    * ``filter_alpha`` uniform [0.2, 1.0]: the low-pass action parameterisation (1: none; the shipped 0.5); below
+      0.2 the command lags by more than 0.5 s.
+    * ``caps_temporal`` log-uniform [1e-4, 1] (Mysore et al. 2021 use weights of order 0.01..1; 1e-4 is
+      practically off).
+
+    Everything else (``hidden``, ``vf_coef``, ``max_grad_norm``, ``norm_reward``, ``history``, ...) comes from the
+    base file (``--hyperparams``). Returns the settings (not the Optuna parameters).
+    """
+    cap = max(timesteps // MIN_ITERATIONS, 1)
+    t_min, n_min = min(FAST_ROLLOUT_STEPS), min(FAST_NUM_ENVS)
+    n_choices = [n for n in FAST_NUM_ENVS if n * t_min <= cap] or [n_min]
+    t_choices = [t for t in FAST_ROLLOUT_STEPS if n_min * t <= cap] or [t_min]
+    n = int(trial.suggest_categorical("num_envs", n_choices))
+    t_len = int(trial.suggest_categorical("rollout_steps", t_choices))
+    t_len = max([t for t in FAST_ROLLOUT_STEPS if t <= t_len and n * t <= cap] or [t_min])
+    n_mb = int(trial.suggest_categorical("n_minibatches", FAST_MINIBATCHES))
+    return {
+        "learning_rate": trial.suggest_float("learning_rate", 3e-5, 3e-3, log=True),
+        "epochs": trial.suggest_int("epochs", 1, 10),
+        "num_envs": n,
+        "rollout_steps": t_len,
+        "minibatch_size": n * t_len // n_mb,
+        "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-3, 0.1, log=True),
+        "gae_lambda": trial.suggest_float("gae_lambda", 0.8, 1.0),
+        "clip_coef": trial.suggest_categorical("clip_coef", [0.1, 0.2, 0.3, 0.4]),
+        "ent_coef": trial.suggest_float("ent_coef", 1e-8, 1e-2, log=True),
+        "log_std_init": trial.suggest_float("log_std_init", -3.0, 0.0),
+        "filter_alpha": trial.suggest_float("filter_alpha", 0.2, 1.0),
+        "caps_temporal": trial.suggest_float("caps_temporal", 1e-4, 1.0, log=True),
+    }
+
+
 def _requeue(study: Any, trial: Any, how: str) -> None:
     """Mark an interrupted trial, queue its parameters again and mark its folder abandoned."""
     trial.set_user_attr("interrupted", how)
@@ -710,7 +861,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 study.stop()
                 trial.set_user_attr("over_budget", True)
                 raise _OverBudget("the grid is exhausted")
-            algo: Algo = trial.suggest_categorical("algo", cfg.algos)
+            algo: str = trial.suggest_categorical("algo", cfg.algos)
             seed = int(trial.suggest_categorical("seed", cfg.seeds))
         else:
             if budget_count(study, before=trial.number) >= cfg.budget:
@@ -721,6 +872,8 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
         trial.set_user_attr("run_dir", str(run_dir))
         try:
+            if algo == FASTPPO:
+                return _fastppo_trial(cfg, study, trial, seed, run_dir, cells)
             return _train_and_validate(trial, algo, seed, run_dir)
         except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
             _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
@@ -732,11 +885,12 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
             raise
 
-    def _train_and_validate(trial: Any, algo: Algo, seed: int, run_dir: Path) -> float:
+    def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
         base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
         hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
             hp |= sample_hyperparams(trial, algo)
+        trial.set_user_attr("hyperparams", hp)
         hp_file = run_dir / "hyperparams.yml"
         atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
         pruned = False
@@ -755,7 +909,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
 
         train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
         s = Settings(
-            algo=algo,
+            algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here (fastppo has its own trial)
             seed=seed,
             out=str(run_dir / "run"),
             timesteps=cfg.timesteps,
@@ -788,6 +942,126 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         return value  # NaN: Optuna marks the trial FAIL (never PRUNED)
 
     return objective
+
+
+def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir: Path, cells: Sequence[Any]) -> float:
+    """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
+    sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
+    import optuna
+    import yaml
+
+    from amigo_gym.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
+    from amigo_gym.training.fastppo import train as train_fast
+    from amigo_gym.training.train import HYPERPARAMS_DIR
+
+    base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{FASTPPO}.yml"
+    hp = load_settings_yaml(base_file)
+    if cfg.mode == "hyperparams":
+        hp |= sample_fastppo(trial, cfg.timesteps)
+    trial.set_user_attr("hyperparams", hp)
+    hp_file = run_dir / "hyperparams.yml"
+    atomic_write(hp_file, yaml.safe_dump({YAML_ENV_ID: hp}, sort_keys=True), parents=True)
+    run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
+    run["threads"] = cfg.threads
+    env_kwargs = cfg.train_env_kwargs
+    s = FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
+    out = run_dir / "run"
+    resumed = _resume_fastppo(study, trial, s, out)
+    if resumed is not None:
+        trial.set_user_attr("resumed_from", resumed)
+    flags = [f"--{k.replace('_', '-')} {v}" for k, v in run.items()]
+    command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {' '.join(flags)} --env-kwargs " + repr(
+        json.dumps(env_kwargs)
+    )
+    train_command = command + (" --resume" if resumed else "")
+    config = {
+        "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
+        "fastppo_settings": s.to_json(),
+        "env_id": cfg.env_id,
+        "env_kwargs": env_kwargs,
+        "command": train_command,
+        "resumed_from": resumed,
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
+    pruned = False
+    reported: set[int] = set()
+
+    def after_eval(row: dict[str, float]) -> bool:
+        nonlocal pruned
+        value = float(row.get("eval_h_rms_m", math.nan))
+        if not math.isfinite(value):
+            raise FloatingPointError(f"evaluation at step {int(row['env_steps'])} gave h_rms_m {value}")
+        if cfg.mode == "hyperparams":
+            # the pruner compares trials at equal steps: report at the evaluation's scheduled step (a multiple of
+            # --eval-freq), which is the same in every trial whatever its batch size N T
+            step = int(row["env_steps"]) // cfg.eval_freq * cfg.eval_freq
+            if step not in reported:  # the last evaluation (at the budget) may share the step of the one before
+                reported.add(step)
+                trial.report(value, step=step)
+                if trial.should_prune():
+                    pruned = True
+                    return False
+        return True
+
+    def log(msg: str) -> None:
+        with open(out / "train.log", "a", encoding="utf-8") as f:
+            f.write(msg + "\n")
+
+    try:
+        record = train_fast(s, out, resume=resumed is not None, log=log, command=train_command, after_eval=after_eval)
+        last = record.get("last_eval") or {}
+        for key in ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure"):
+            if f"eval_{key}" in last:
+                trial.set_user_attr(f"last_eval_{key}", last[f"eval_{key}"])
+        trial.set_user_attr("last_eval_timesteps", record["timesteps"])
+        trial.set_user_attr("wall_time_s", record["wall_time_s"])
+        trial.set_user_attr("train_sps", record["train_sps"])
+        if pruned:
+            raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
+        value, per_cell = validate_fast_model(out, cells)
+    except (ValueError, RuntimeError, FloatingPointError, FileNotFoundError) as exc:
+        trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+        raise
+    trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
+    if not math.isfinite(value):
+        trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
+    return value  # NaN: Optuna marks the trial FAIL (never PRUNED)
+
+
+def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
+    """Continue an abandoned fast-PPO trial: the newest ``checkpoint.pt`` among this study's trials with the same
+    parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
+    ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
+    was); which trial it came from (``None``: none found, the run starts afresh)."""
+    import shutil
+
+    from optuna.trial import TrialState
+
+    best: tuple[float, Any, Path] | None = None
+    for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
+        ua = t.user_attrs
+        if t.number == trial.number or t.params != trial.params or "run_dir" not in ua:
+            continue
+        if "fail_reason" in ua or "over_budget" in ua:
+            continue
+        src = Path(str(ua["run_dir"])) / "run"
+        ckpt = src / "checkpoint.pt"
+        try:
+            same = json.loads((src / "settings.json").read_text()) == s.to_json()
+            mtime = ckpt.stat().st_mtime
+        except (OSError, ValueError):
+            continue
+        if same and (best is None or mtime > best[0]):
+            best = (mtime, t, src)
+    if best is None:
+        return None
+    _, t, src = best
+    out.mkdir(parents=True, exist_ok=True)
+    for f in src.iterdir():
+        if f.is_file() and f.name not in ("config.json", "run.lock", ABANDONED):
+            shutil.copy2(f, out / f.name)
+    return {"trial": t.number, "run_dir": str(src)}
 
 
 def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
@@ -891,6 +1165,79 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
     return True
 
 
+# --------------------------------------------------------------------------- the winners into a YAML file
+_TOP_KEY = re.compile(r"^([^\s#:-][^:]*|'[^']*'|\"[^\"]*\"):")
+
+
+def _block_start(lines: list[str], i: int) -> int:
+    """First line of the comment lines right above line ``i`` (``i`` itself without any)."""
+    while i > 0 and lines[i - 1].startswith("#"):
+        i -= 1
+    return i
+
+
+def replace_yaml_block(text: str, key: str, block: str) -> str:
+    """``text`` (a YAML file of top-level mappings) with the top-level ``key`` and the comment lines right above it
+    replaced by ``block``; the other keys, their comments and the blank lines between them are kept as written.
+    A missing key is appended."""
+    lines = text.splitlines(keepends=True)
+    keys = [(i, m.group(1).strip("'\"")) for i, line in enumerate(lines) if (m := _TOP_KEY.match(line))]
+    at = [n for n, (_, k) in enumerate(keys) if k == key]
+    if not block.endswith("\n"):
+        block += "\n"
+    if not at:
+        head = "".join(lines)
+        return head + ("\n" if head and not head.endswith("\n\n") else "") + block
+    n = at[0]
+    start = _block_start(lines, keys[n][0])
+    end = _block_start(lines, keys[n + 1][0]) if n + 1 < len(keys) else len(lines)
+    while end > start and not lines[end - 1].strip():  # keep the blank lines before the next block
+        end -= 1
+    return "".join(lines[:start]) + block + "".join(lines[end:])
+
+
+def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
+    """Write the hyperparameters of ``study``'s best COMPLETE trial under ``env_id`` in the YAML file ``path``
+    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the
+    file's other keys stay as they were (:func:`replace_yaml_block`); written atomically and read back. The mapping
+    written (``None``: no COMPLETE trial, nothing written).
+
+    The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
+    trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
+    file's)."""
+    import yaml
+    from optuna.trial import TrialState
+
+    done = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE and t.value is not None]
+    if not done:
+        return None
+    best = study.best_trial
+    hp = best.user_attrs.get("hyperparams")
+    if not isinstance(hp, dict):  # a study from before the attribute: the trial's own file
+        hp = yaml.safe_load((Path(str(best.user_attrs["run_dir"])) / "hyperparams.yml").read_text())[env_id]
+    attrs = study.user_attrs
+    finished = sum(t.state in (TrialState.COMPLETE, TrialState.PRUNED) for t in study.get_trials(deepcopy=False))
+    seeds = (best.user_attrs.get("validation") or {}).get("seeds", [])
+    comment = [
+        f"# {env_id}: the best of {finished} finished trials (COMPLETE or PRUNED) of the study {study.study_name!r}",
+        f"# ({attrs.get('objective', OBJECTIVE)}, held-in validation cells, seeds {seeds[0] if seeds else '?'}.."
+        f"{seeds[-1] if seeds else '?'}): "
+        f"trial {best.number}, {1e3 * float(best.value):.4g} mm; written {time.strftime('%Y-%m-%d %H:%M %Z')}.",
+        f"# Found by: {attrs.get('command', '?')}",
+    ]
+    body = yaml.safe_dump({env_id: hp}, sort_keys=False, default_flow_style=None)
+    path = Path(path)
+    old = path.read_text(encoding="utf-8") if path.is_file() else ""
+    new = replace_yaml_block(old, env_id, "\n".join(comment) + "\n" + body)
+    before, after = (yaml.safe_load(old) or {}) if old else {}, yaml.safe_load(new)
+    if after.get(env_id) != hp or {k: v for k, v in after.items() if k != env_id} != {
+        k: v for k, v in before.items() if k != env_id
+    }:  # pragma: no cover - a file layout replace_yaml_block does not understand
+        raise ValueError(f"--save-best {path}: could not replace the {env_id} block of this file safely")
+    atomic_write(path, new, parents=True)
+    return dict(hp)
+
+
 # --------------------------------------------------------------------------- command line
 def parse_args(argv: Sequence[str]) -> SweepConfig:
     """Settings from the command line (``amigo-gym sweep --help``)."""
@@ -973,6 +1320,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"best trial {summary['best']['number']}: {summary['best']['value']:.4g} {summary['best']['params']}")
         if status == "running":
             print("the study is still running (trials RUNNING or WAITING on other workers)")
+        if cfg.save_best is not None:
+            saved = write_best_yaml(cfg.save_best, study, cfg.env_id)
+            print(
+                f"wrote the best trial's hyperparameters under {cfg.env_id} in {cfg.save_best}"
+                if saved is not None
+                else f"no COMPLETE trial yet: {cfg.save_best} not written"
+            )
         if failed:  # a worker that died counts before a stop
             print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
             return 1
