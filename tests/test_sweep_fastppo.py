@@ -231,7 +231,9 @@ def test_shipped_fastppo_file_gives_the_shipped_generalists_settings() -> None:
     for manifest in sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.json")):
         shipped = json.loads(manifest.read_text())["settings"]
         mine = FastPPOSettings.from_json({**file, "seed": shipped["seed"], "env_kwargs": shipped["env_kwargs"]})
-        assert mine.to_json() == shipped, manifest
+        # fields added after the seeds were trained hold their defaults (from_json fills them in)
+        assert mine.to_json() == FastPPOSettings.from_json(shipped).to_json(), manifest
+        assert {k: v for k, v in mine.to_json().items() if k in shipped} == shipped, manifest
 
 
 def test_replace_yaml_block_keeps_the_other_blocks_as_written() -> None:

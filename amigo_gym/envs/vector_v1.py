@@ -198,6 +198,30 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         # each robot's H to write next into the rendered trail (render_mode set)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
 
+    def set_path_params(self, path_params: Any) -> None:
+        """Draw the next episodes' paths with the family parameters ``path_params`` (a curriculum between rollouts).
+
+        Only for drawn paths (``path="random"`` or ``"mixed"``, whose random paths alone take them, e.g.
+        ``{"max_curvature": 3.0, "max_curvature_rate": 3.0}`` [1/m, 1/m^2]). The new settings are checked as at
+        construction (ranges, one-line errors; the drawn paths' feasibility at the highest speed, as
+        ``feasibility=`` says) before anything changes. Episodes under way keep their paths; robots draw from the
+        new pool (:func:`amigo_gym.task.v1.random_pool_path`: the same ids, built with these parameters) at their
+        next reset. No random number is drawn: a run that sets the same parameters at the same steps gives the
+        same bits.
+        """
+        from dataclasses import replace
+
+        owner = f"{type(self).__name__}.set_path_params"
+        if not isinstance(self.params.path, str) or self.params.path not in ("random", "mixed"):
+            raise ValueError(f"{owner}: only drawn paths (path='random' or 'mixed') take new parameters, got "
+                             f"path={self.params.path!r}")  # fmt: skip
+        p = replace(self.params, path_params=path_params)  # checked by TrackingParams (one-line ValueError)
+        tracking.check_task(p)
+        self.params = p
+        self._k = tracking.constants(p)
+        if self._batch is not None:
+            self._batch._k = self._k
+
     # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: their observations and compact infos (:meth:`_begin_rows`)."""

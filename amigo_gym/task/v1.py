@@ -162,7 +162,8 @@ class TrackingParams:
             sorted ``(name, value)`` pairs; ``gym.make`` takes a mapping (or the pairs, as JSON gives them back).
             Checked at construction against the family's ranges (:data:`amigo_gym.paths.FAMILIES`): an unknown
             or out-of-range parameter is refused, and so is any parameter that would go unused (with
-            ``path="mixed"``, whose ranges are :data:`MIXED_RANGES`, or a path object), and ``radius`` or
+            ``path="mixed"``, whose circle, figure-8 and lane-change ranges are :data:`MIXED_RANGES` and whose
+            random paths alone take the ``"random"`` family's parameters, or a path object), and ``radius`` or
             ``direction`` for ``"circle"``/``"manoeuvre"`` (the keywords of those names set them).
         random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each
             built once per process and kept while the process's built paths fit in :data:`PATH_CACHE_BYTES`
@@ -371,12 +372,14 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
             f"{name} is unused with a path object ({type(path).__name__}): give the path its parameters instead, "
             f"got {given!r}"
         )
-    if path == "mixed":
-        raise ValueError(
-            f"{name} is unused with path='mixed' (its families and ranges are fixed: tracking.MIXED_RANGES); "
-            f"got {given!r}"
-        )
-    fam = FAMILIES[path]
+    if path == "mixed":  # only its random family takes parameters (e.g. a curvature curriculum)
+        unused = sorted(k for k in keys if k not in RANDOM_RANGES)
+        if unused:
+            raise ValueError(
+                f"{name}[{unused[0]!r}] is unused with path='mixed' (only its random paths take parameters, "
+                f"{sorted(RANDOM_RANGES)}; the other families' ranges are fixed: tracking.MIXED_RANGES); got {given!r}"
+            )
+    fam = FAMILIES["random" if path == "mixed" else path]
     keyword = {"radius", "direction"} if path in ("circle", "manoeuvre") else set()
     allowed = sorted(set(fam.params) - keyword)
     for k in keys:
@@ -385,7 +388,7 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
         if k not in fam.params:
             raise ValueError(f"{name}: path {path!r} has no parameter {k!r}; it takes {allowed}")
     out = tuple(sorted((k, fam.params[k].check(name, k, v)) for k, v in items))
-    if path == "random":
+    if path in ("random", "mixed"):
         vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(out)
         if vals["min_piece"] > vals["max_piece"]:
             raise ValueError(f"{name}: min_piece {vals['min_piece']:g} m must be <= max_piece {vals['max_piece']:g} m")
@@ -859,14 +862,12 @@ def drawn_envelopes(p: TrackingParams) -> list[Envelope]:
     * mixed: circles of radius >= 0.5 m; figure-8s and lane changes at the corner of :data:`MIXED_RANGES` where
       they are sharpest (the smallest figure-8, the largest offset over the shortest length: shrinking a path
       by a factor scales its curvature up by that factor and its rate by the square), read from the segments
-      of those paths; and the default random paths.
+      of those paths; and its random paths (the defaults, or ``path_params``, which apply to them only).
     """
     from amigo_gym.paths.families import RANDOM_RANGES
 
-    if p.path == "random":
+    if p.path in ("random", "mixed"):
         vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(p.path_params)
-    elif p.path == "mixed":
-        vals = {k: r.default for k, r in RANDOM_RANGES.items()}
     else:
         return []
     kmax = vals["max_curvature"]
@@ -913,6 +914,57 @@ def envelope_needs(e: Envelope, speed: float, robot: RobotParams) -> tuple[float
     wheel = (speed + robot.l1 * speed * sigma / (robot.l3 * c)) / min(robot.r1, robot.r2)
     rot = speed * speed * e.max_curvature_rate / c**4
     return wheel, rot
+
+
+def feasible_random_curvature(
+    speed: float,
+    robot: RobotParams | None = None,
+    rot_acceleration: float | None = None,
+    rate_per_curvature: float = 1.0,
+    min_piece: float = 0.5,
+) -> float:
+    r"""The largest ``max_curvature`` [1/m] of ``path="random"`` paths with ``max_curvature_rate = rate_per_curvature
+    max_curvature`` that the environments accept at the constant speed ``speed`` [m/s] of A
+    (:func:`drawn_feasibility_problem`: :func:`envelope_needs` within ``robot.max_wheel_rate`` and
+    ``rot_acceleration``).
+
+    With ``sigma = kappa l3``, ``c = sqrt(1 - sigma^2)`` and the envelope's rate ``c_max = min(rho, 2 / min_piece)
+    kappa`` (``rho = rate_per_curvature`` [1/m]), both needs grow with ``kappa``:
+
+    .. math::
+        \frac{v (1 + l_1 \sigma / (l_3 c))}{\min(r_1, r_2)} \le \dot\alpha_{max}, \qquad
+        \frac{v^2 c_{max}}{c^4} \le \ddot\beta_{max},
+
+    so the limit is found by bisection on ``kappa`` in ``(0, 1/l3)`` (to a relative 1e-12). The default ratio
+    ``rho = 1`` 1/m is the random family's (``max_curvature`` 1 1/m, ``max_curvature_rate`` 1 1/m^2). E.g. 10.1 1/m at
+    0.1 m/s and 4.26 1/m at 0.4 m/s on the nominal AmigoBot (the rotational ramp binds at both).
+
+    Args:
+        speed: A's reference speed [m/s], in (0, robot.max_speed]. robot: the nominal robot (default
+            :class:`RobotParams`). rot_acceleration: the ramp of the rotational speed [rad/s^2] (default
+            :class:`ActuatorParams`'s 0.87). rate_per_curvature: ``rho`` [1/m], in (0, 1e3]. min_piece: the random
+            family's ``min_piece`` [m], in [0.01, 100].
+    """
+    robot = RobotParams() if robot is None else robot
+    acc = ActuatorParams().rot_acceleration if rot_acceleration is None else rot_acceleration
+    o = "feasible_random_curvature"
+    check_range(o, "speed", speed, 0.0, robot.max_speed, low_open=True)
+    check_range(o, "rot_acceleration", acc, 0.0, 100.0, low_open=True)
+    check_range(o, "rate_per_curvature", rate_per_curvature, 0.0, 1e3, low_open=True)
+    check_range(o, "min_piece", min_piece, 0.01, 100.0)
+    slope = min(rate_per_curvature, 2.0 / min_piece)
+
+    def ok(kappa: float) -> bool:
+        wheel, rot = envelope_needs(Envelope("random", kappa, slope * kappa, ""), speed, robot)
+        return wheel <= robot.max_wheel_rate and rot <= acc
+
+    lo, hi = 0.0, 1.0 / robot.l3
+    if not ok(1e-12 * hi):
+        return 0.0
+    while hi - lo > 1e-12 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
 
 
 def drawn_feasibility_problem(p: TrackingParams) -> str | None:
@@ -1032,7 +1084,7 @@ def _cached_family(name: str, items: tuple[tuple[str, Any], ...], rng_seed: int 
 
 def random_pool_path(p: TrackingParams, path_id: int) -> Any:
     """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
-    extra = tuple(sorted(dict(p.path_params).items())) if p.path == "random" else ()
+    extra = tuple(sorted(dict(p.path_params).items())) if p.path in ("random", "mixed") else ()
     return _cached_family("random", extra, rng_seed=path_id)
 
 

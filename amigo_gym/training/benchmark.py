@@ -71,6 +71,10 @@ distribution of ``-h_rms``), with bootstrap bands of ``--profile-reps`` (2 000) 
 training seed (the classical policies are deterministic) the intervals have zero width: they measure
 training-seed variation only.
 
+Failure rate per curvature bin (opt-in, outside the released suite): ``--curvature`` runs instead the cells of
+:mod:`amigo_gym.training.curvature` (random paths up to the feasible curvature at 0.1 and 0.4 m/s) and writes
+``<out>/curvature.json`` and ``<out>/curvature.md``.
+
 Outputs (every file written atomically, :mod:`amigo_gym.io`)
 -----------------------------------------------------------
 ``--json`` (default ``<out>/benchmark.json``): ``suite_version``, ``protocol``, ``scenarios`` (each
@@ -1236,6 +1240,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="open --path: success within this of the end [m] (default 0: off)",
     )
     p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
+    p.add_argument(
+        "--curvature",
+        action="store_true",
+        help="run the curvature cells instead of the suite: failure rate per path-curvature bin "
+        "(amigo_gym.training.curvature; writes <out>/curvature.json and .md)",
+    )
+    p.add_argument("--curvature-episodes", type=int, default=50, help="episodes per curvature cell [episodes]")
     add_trust_option(p, "model zips")
     a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
@@ -1253,6 +1264,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
+        if a.curvature:
+            return _run_curvature(a, argv)
         scenarios = quick_suite(suite) if a.quick else suite
         if a.path:
             if a.scenarios:
@@ -1294,6 +1307,37 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
+
+
+def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
+    """The cells of ``--curvature`` (:func:`amigo_gym.training.curvature.cell_specs`: random paths up to the feasible
+    curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the suite."""
+    from amigo_gym.training.curvature import cell_specs
+
+    return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
+
+
+def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
+    """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.training.curvature`)."""
+    from amigo_gym.runs import RunLock
+    from amigo_gym.training import curvature
+
+    if a.path or a.scenarios:
+        raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+    scenarios = curvature_scenarios(a.curvature_episodes)
+    if a.quick:
+        scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+    agents = parse_agents(a.agents) if a.agents else default_agents()
+    out = Path(a.out)
+    with RunLock(out):
+        doc = curvature.run_curvature(
+            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=not a.no_progress
+        )
+        doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
+        written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
+    print(curvature.markdown_curvature(doc), end="")
+    print("wrote " + ", ".join(written))
+    return 0
 
 
 if __name__ == "__main__":

@@ -91,6 +91,7 @@ __all__ = [
     "YAML_RUN_KEYS",
     "FastPPOSettings",
     "ActorCritic",
+    "curriculum_path_params",
     "evaluate_policy",
     "load_settings_yaml",
     "main",
@@ -140,6 +141,15 @@ class FastPPOSettings:
         checkpoint_every: env-steps between checkpoints [steps], in [1, 1e10].
         threads: torch threads, in [1, 64].
         max_episode_steps: episode time limit [steps], in [1, 100000].
+        curriculum_max_curvature: final bound of ``|kappa|`` of the random paths [1/m] of a curvature curriculum
+            (:func:`curriculum_path_params`), in [0, 100]; 0 (default): no curriculum. Needs ``path`` "random" or
+            "mixed" (whose random paths it changes), a value above the start (``env_kwargs``'s ``path_params``, else
+            the family's 1 1/m), and the final paths feasible at the highest speed (the env's check).
+        curriculum_max_curvature_rate: final bound of ``|dkappa/ds|`` [1/m^2], in [0, 1000]; 0: the start rate
+            times ``curriculum_max_curvature`` / the start curvature (the family's ratio kept).
+        curriculum_fraction: fraction of ``total_steps`` over which the bounds rise linearly from the start to the
+            final values [-], in (0, 1].
+        curriculum_stages: number of raises [-], in [1, 1000] (the pool of random paths is rebuilt at each).
     """
 
     env_kwargs: Mapping[str, Any] = field(default_factory=_default_env_kwargs, metadata=cli(parse=json_object))
@@ -171,6 +181,10 @@ class FastPPOSettings:
     checkpoint_every: int = 2_000_000
     threads: int = 1
     max_episode_steps: int = 600
+    curriculum_max_curvature: float = 0.0
+    curriculum_max_curvature_rate: float = 0.0
+    curriculum_fraction: float = 0.5
+    curriculum_stages: int = 8
 
     def __post_init__(self) -> None:
         o = "FastPPOSettings"
@@ -188,6 +202,7 @@ class FastPPOSettings:
             "checkpoint_every": (1, 10**10),
             "threads": (1, 64),
             "max_episode_steps": (1, 100000),
+            "curriculum_stages": (1, 1000),
         }
         for name, (lo, hi) in ints.items():
             v = getattr(self, name)
@@ -222,6 +237,27 @@ class FastPPOSettings:
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
         object.__setattr__(self, "env_kwargs", json.loads(json.dumps(dict(self.env_kwargs))))
         self.spec()  # checks history, residual_bound, filter_alpha and the env keywords
+        check_range(o, "curriculum_max_curvature", self.curriculum_max_curvature, 0.0, 100.0)
+        check_range(o, "curriculum_max_curvature_rate", self.curriculum_max_curvature_rate, 0.0, 1000.0)
+        check_range(o, "curriculum_fraction", self.curriculum_fraction, 0.0, 1.0, low_open=True)
+        if self.curriculum_max_curvature > 0:
+            _check_curriculum(self)
+
+    def curriculum(self) -> tuple[dict[str, float], dict[str, float]] | None:
+        """``(start, final)`` random-path parameters of the curvature curriculum (``max_curvature`` [1/m],
+        ``max_curvature_rate`` [1/m^2] and the ``env_kwargs``' other ``path_params``), or None without one."""
+        if self.curriculum_max_curvature <= 0:
+            return None
+        from amigo_gym.paths.families import RANDOM_RANGES
+
+        given = {str(k): float(v) for k, v in dict(self.env_kwargs.get("path_params") or {}).items()}
+        start = {k: r.default for k, r in RANDOM_RANGES.items() if k in ("max_curvature", "max_curvature_rate")}
+        start |= given
+        k_end = float(self.curriculum_max_curvature)
+        c_end = (
+            float(self.curriculum_max_curvature_rate) or start["max_curvature_rate"] * k_end / start["max_curvature"]
+        )
+        return start, {**start, "max_curvature": k_end, "max_curvature_rate": c_end}
 
     def spec(self) -> FeatureSpec:
         """The policy's :class:`~amigo_gym.policies.learned.FeatureSpec`."""
@@ -238,6 +274,51 @@ class FastPPOSettings:
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
         kw: dict[str, Any] = {k: (tuple(v) if k == "hidden" else v) for k, v in d.items()}
         return cls(**kw)
+
+
+def _check_curriculum(s: FastPPOSettings) -> None:
+    """One-line errors for a curriculum the env cannot run: a fixed path, a final curvature not above the start, a
+    final stage the env's feasibility check refuses (at the highest reference speed)."""
+    from amigo_gym.task import v1 as tracking
+
+    o = "FastPPOSettings"
+    path = s.env_kwargs.get("path", tracking.TrackingParams.path)
+    if path not in ("random", "mixed"):
+        raise ValueError(
+            f"{o}.curriculum_max_curvature needs env_kwargs path 'random' or 'mixed' (drawn paths), got path={path!r}"
+        )
+    ends = s.curriculum()
+    assert ends is not None
+    start, final = ends
+    if final["max_curvature"] <= start["max_curvature"]:
+        raise ValueError(
+            f"{o}.curriculum_max_curvature must exceed the start max_curvature {start['max_curvature']:g} 1/m, "
+            f"got {s.curriculum_max_curvature!r}"
+        )
+    kw = {k: v for k, v in s.env_kwargs.items() if k != "path_params"}
+    p = tracking.make_tracking_params(o, path_params=final, **kw)
+    problem = tracking.drawn_feasibility_problem(p)
+    if problem is not None and p.feasibility != "off":
+        raise ValueError(f"{o}.curriculum_max_curvature {s.curriculum_max_curvature:g} 1/m: {problem}")
+
+
+def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, float] | None:
+    r"""The random paths' parameters of the curvature curriculum after ``env_steps`` env-steps (None without one).
+
+    Stage ``j = min(S, floor(S g / (f T)))`` of ``S = curriculum_stages`` after ``g`` env-steps of ``T =
+    total_steps`` (``f = curriculum_fraction``), and each bound ``b_j = b_0 + (b_S - b_0) j / S`` between the
+    start ``b_0`` and the final ``b_S`` (:meth:`FastPPOSettings.curriculum`): ``max_curvature`` [1/m] and
+    ``max_curvature_rate`` [1/m^2]. ``j`` depends on ``g`` alone: a resumed run raises at the same steps.
+    """
+    ends = s.curriculum()
+    if ends is None:
+        return None
+    start, final = ends
+    n = s.curriculum_stages
+    span = s.curriculum_fraction * s.total_steps
+    j = n if env_steps >= span else min(n, int(n * env_steps // span))
+    return {k: start[k] + (final[k] - start[k]) * j / n if k in ("max_curvature", "max_curvature_rate") else v
+            for k, v in start.items()}  # fmt: skip
 
 
 #: the key of a fast-PPO hyperparameter file's mapping (rl-zoo layout: one mapping per environment id)
@@ -440,7 +521,8 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     ck = torch.load(path, weights_only=False)
-    if ck["settings"] != s.to_json():
+    # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
+    if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
     net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
     net.load_state_dict(ck["net"])
@@ -573,6 +655,8 @@ def _train(
         row = {"env_steps": float(r.global_step), "wall_s": round(wall, 2), "train_sps": 0.0}
         train_wall = max(wall - sum(c.get("eval_s", 0.0) for c in r.curve), 1e-9)
         row["train_sps"] = round(r.global_step / train_wall, 1)
+        if s.curriculum_max_curvature > 0:  # the random paths' bound being trained on [1/m]
+            row["curriculum_max_curvature"] = float(dict(r.env.params.path_params).get("max_curvature", 1.0))
         row |= {f"eval_{k}": v for k, v in m.items()}
         row["eval_s"] = round(time.perf_counter() - t0, 2)
         r.curve.append(row)
@@ -603,6 +687,10 @@ def _train(
     buf_r = torch.zeros((t_len, n))
     buf_done = torch.zeros((t_len, n))
     while r.global_step < stop and stopped_by is None:
+        stage = curriculum_path_params(s, r.global_step)
+        if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw
+            r.env.set_path_params(stage)
+            say(f"[curriculum] {r.global_step:>11,d} steps: random paths {stage}")
         r.iteration += 1
         frac = 1.0 - (r.iteration - 1.0) / n_iter
         for g in r.opt.param_groups:
