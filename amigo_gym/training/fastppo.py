@@ -28,6 +28,9 @@ Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robo
 * Smoothness (CAPS, Mysore et al. 2021), on the mean output ``mu``: temporal ``caps_temporal * mean ||mu(x_t) -
   mu(x_{t+1})||^2`` over steps within an episode, spatial ``caps_spatial * mean ||mu(x) - mu(x + sigma n)||^2`` with
   ``n ~ N(0, I)`` in normalised feature units, ``sigma = caps_sigma``.
+* Residual penalty (residual policies only): ``residual_penalty * mean ||mu(x)||^2`` over the minibatch, ``mu`` in
+  units of the bound (the correction is ``residual_bound * clip(mu, -1, 1)``): pulls the correction to 0 where
+  the advantages do not ask for one, so that the policy keeps the analytic action where that is already at its floor.
 
 Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything needed to continue bit for bit: networks,
 optimiser, normalisers, the pickled vector env, the current observations and policy state, torch's RNG; written
@@ -106,6 +109,8 @@ class FastPPOSettings:
         history: previous steps of commands and measurements in the features [steps], in [0, 20].
         residual_bound: bound of the learned correction to the analytic action [normalised action units], in
             [0, 2]; 0: plain policy.
+        residual_penalty: weight of the L2 penalty on the residual policy's mean correction [-, per (bound units)^2],
+            in [0, 100]; needs residual_bound > 0 when > 0 (module docstring).
         filter_alpha: low-pass factor of the action parameterisation [-], in (0, 1]; 1: none.
         caps_temporal: CAPS temporal smoothness weight [-], in [0, 100].
         caps_spatial: CAPS spatial smoothness weight [-], in [0, 100].
@@ -137,6 +142,7 @@ class FastPPOSettings:
     norm_reward: bool = True
     history: int = 0
     residual_bound: float = 0.0
+    residual_penalty: float = 0.0
     filter_alpha: float = 1.0
     caps_temporal: float = 0.0
     caps_spatial: float = 0.0
@@ -187,6 +193,12 @@ class FastPPOSettings:
         check_range(o, "caps_temporal", self.caps_temporal, 0.0, 100.0)
         check_range(o, "caps_spatial", self.caps_spatial, 0.0, 100.0)
         check_range(o, "caps_sigma", self.caps_sigma, 0.0, 10.0, low_open=True)
+        check_range(o, "residual_penalty", self.residual_penalty, 0.0, 100.0)
+        if self.residual_penalty > 0 and not self.residual_bound > 0:
+            raise ValueError(
+                f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
+                f"got residual_bound = {self.residual_bound}"
+            )
         if not isinstance(self.norm_reward, bool):
             raise TypeError(f"{o}.norm_reward must be True or False, got {self.norm_reward!r}")
         hid = tuple(self.hidden)
@@ -378,7 +390,8 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     ck = torch.load(path, weights_only=False)
-    if ck["settings"] != s.to_json():
+    # settings saved before a field existed get its default (the default reproduces the older code's run)
+    if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
     net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
     net.load_state_dict(ck["net"])
@@ -574,6 +587,8 @@ def train(
                     same = bsame[idx]
                     dmu = (net.actor(bnext[idx]) - mu).pow(2).sum(-1)
                     loss = loss + s.caps_temporal * (dmu * same).sum() / same.sum().clamp(min=1.0)
+                if s.residual_penalty > 0:
+                    loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
                 if s.caps_spatial > 0:
                     mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
                     loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()
