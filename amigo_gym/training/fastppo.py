@@ -28,6 +28,9 @@ Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robo
 * Smoothness (CAPS, Mysore et al. 2021), on the mean output ``mu``: temporal ``caps_temporal * mean ||mu(x_t) -
   mu(x_{t+1})||^2`` over steps within an episode, spatial ``caps_spatial * mean ||mu(x) - mu(x + sigma n)||^2`` with
   ``n ~ N(0, I)`` in normalised feature units, ``sigma = caps_sigma``.
+* Nominal robots (``nominal_fraction = f > 0``): the last ``round(f N)`` of the ``N`` training robots are simulated
+  with ``env_kwargs`` without ``randomize`` and ``true_robot`` (the nominal robot: no mismatch, delay, slip or
+  noise), the others with ``env_kwargs``; the evaluations stay on ``env_kwargs``.
 * Residual penalty (residual policies only): ``residual_penalty * mean ||mu(x)||^2`` over the minibatch, ``mu`` in
   units of the bound (the correction is ``residual_bound * clip(mu, -1, 1)``): pulls the correction to 0 where
   the advantages do not ask for one, so that the policy keeps the analytic action where that is already at its floor.
@@ -49,6 +52,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io as _io
+import itertools
 import json
 import math
 import os
@@ -111,6 +115,8 @@ class FastPPOSettings:
             [0, 2]; 0: plain policy.
         residual_penalty: weight of the L2 penalty on the residual policy's mean correction [-, per (bound units)^2],
             in [0, 100]; needs residual_bound > 0 when > 0 (module docstring).
+        nominal_fraction: share of the N training robots simulated as the nominal robot [-], in [0, 1)
+            (module docstring); 0: all robots from env_kwargs.
         filter_alpha: low-pass factor of the action parameterisation [-], in (0, 1]; 1: none.
         caps_temporal: CAPS temporal smoothness weight [-], in [0, 100].
         caps_spatial: CAPS spatial smoothness weight [-], in [0, 100].
@@ -143,6 +149,7 @@ class FastPPOSettings:
     history: int = 0
     residual_bound: float = 0.0
     residual_penalty: float = 0.0
+    nominal_fraction: float = 0.0
     filter_alpha: float = 1.0
     caps_temporal: float = 0.0
     caps_spatial: float = 0.0
@@ -194,6 +201,7 @@ class FastPPOSettings:
         check_range(o, "caps_spatial", self.caps_spatial, 0.0, 100.0)
         check_range(o, "caps_sigma", self.caps_sigma, 0.0, 10.0, low_open=True)
         check_range(o, "residual_penalty", self.residual_penalty, 0.0, 100.0)
+        check_range(o, "nominal_fraction", self.nominal_fraction, 0.0, 1.0, high_open=True)
         if self.residual_penalty > 0 and not self.residual_bound > 0:
             raise ValueError(
                 f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
@@ -350,19 +358,68 @@ class _Run:
     ep_ret: Array = field(default_factory=lambda: np.zeros(0))
 
 
+class _ConcatVectorEnv:
+    """Vector envs side by side as one of ``sum(n_i)`` robots (the rows of ``envs[0]`` first), for the trainer only.
+
+    ``step``'s info holds only ``final_obs`` (an object array of ``(obs_dim,)`` arrays, ``None`` where no episode
+    ended), the one info field the trainer reads.
+    """
+
+    def __init__(self, envs: Sequence[Any]) -> None:
+        self.envs = list(envs)
+        self.sizes = [int(e.num_envs) for e in self.envs]
+        self.num_envs = sum(self.sizes)
+
+    def _split(self, x: Sequence[Any] | Array) -> list[Any]:
+        edges = [0, *itertools.accumulate(self.sizes)]
+        return [x[a:b] for a, b in itertools.pairwise(edges)]
+
+    def reset(self, seed: list[int]) -> tuple[Array, dict[str, Any]]:
+        obs = [e.reset(seed=part)[0] for e, part in zip(self.envs, self._split(seed), strict=True)]
+        return np.concatenate(obs), {}
+
+    def step(self, action: Array) -> tuple[Array, Array, Array, Array, dict[str, Any]]:
+        outs = [e.step(a) for e, a in zip(self.envs, self._split(action), strict=True)]
+        final = np.full(self.num_envs, None, dtype=object)
+        k = 0
+        for (*_, info), n in zip(outs, self.sizes, strict=True):
+            if "final_obs" in info:
+                mask = np.asarray(info["_final_obs"], dtype=bool)
+                for i in np.flatnonzero(mask):
+                    final[k + i] = info["final_obs"][i]
+            k += n
+        cat = [np.concatenate([o[j] for o in outs]) for j in range(4)]
+        return cat[0], cat[1], cat[2], cat[3], {"final_obs": final}
+
+    def close(self) -> None:
+        for e in self.envs:
+            e.close()
+
+
+def _training_env(s: FastPPOSettings) -> Any:
+    """The training robots: one native vector env of ``env_kwargs``, or that and one of nominal robots."""
+
+    def make(n: int, kw: Mapping[str, Any]) -> Any:
+        return gym.make_vec(
+            "AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, autoreset_mode="SameStep", **kw
+        )
+
+    k = round(s.nominal_fraction * s.num_envs)
+    if k == 0:
+        return make(s.num_envs, s.env_kwargs)
+    nominal = {key: v for key, v in s.env_kwargs.items() if key not in ("randomize", "true_robot")}
+    if k == s.num_envs:
+        return make(k, nominal)
+    return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
+
+
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     torch.manual_seed(s.seed)
     net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
     opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
-    env = gym.make_vec(
-        "AmigoBot-v1",
-        num_envs=s.num_envs,
-        max_episode_steps=s.max_episode_steps,
-        autoreset_mode="SameStep",
-        **s.env_kwargs,
-    )
+    env = _training_env(s)
     seeds = np.random.SeedSequence(s.seed).generate_state(s.num_envs, dtype=np.uint32)
-    obs, _ = env.reset(seed=[int(x) for x in seeds])  # type: ignore[arg-type]  # gymnasium accepts a list
+    obs, _ = env.reset(seed=[int(x) for x in seeds])  # gymnasium accepts a list
     n = s.num_envs
     return _Run(
         net, opt, env, RunningMeanStd.zeros(builder.dim), RunningMeanStd.zeros(1), np.zeros(n),
