@@ -4,6 +4,8 @@ r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL/PufferLib style
     amigo-gym train-fast --out runs/fast_s0 --resume                     # continue after an interruption
     amigo-gym train-fast --out runs/res_s0 --residual-bound 0.3 --history 4 \
         --env-kwargs '{"path": "mixed", "speed": [0.1, 0.4], "randomize": {"delay": [0, 0.3]}}'
+    amigo-gym train-fast --out runs/res2_s0 --residual-bound 0.15 --residual-penalty 3 --nominal-fraction 0.3 \
+        --history 4 --env-kwargs '{"path": "mixed", "sigma_track": 0.005, "randomize": {"delay": [0, 0.3]}}'
 
 Why. SB3's PPO steps a handful of envs and runs small minibatches: on two cores it trains at ~600 env-steps/s
 on this task. Here one ``gym.make_vec("AmigoBot-v1", num_envs=N)`` (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`,
