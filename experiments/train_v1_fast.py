@@ -23,6 +23,11 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
   actuation delay 0-0.3 s, ``mild``'s noise; the correction is bounded to +-0.3 of the action range and the
   policy observes the last 4 steps' commands and measurements (``--history 4``: 0.4 s, longer than the delays).
+* ``residual2``: the same robots, delays and paths without measurement noise and with a 4x sharper tracking
+  reward (``sigma_track`` 5 mm); correction bound 0.15, an L2 penalty on the correction (``--residual-penalty 3``),
+  30 % of the training robots nominal (``--nominal-fraction 0.3``), 3M steps; the kept model is ``best.zip``
+  (:data:`KEEP_BEST`), chosen on validation versions of the benchmark's cells (docs/baselines.md, "Residual
+  policy, second round"; ``experiments/residual_val_cells.py``).
 """
 
 from __future__ import annotations
@@ -34,11 +39,13 @@ import shutil
 import subprocess
 import sys
 import time
+import zipfile
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
+from amigo_gym.io import sha256_file
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 
 RESIDUAL_ENV_KWARGS: dict[str, object] = {
@@ -55,11 +62,37 @@ RESIDUAL_ENV_KWARGS: dict[str, object] = {
     },
 }
 
+#: the second residual (docs/baselines.md, "Residual policy, second round"): no measurement noise, a tracking reward
+#: 4x sharper (sigma_track 5 mm), the same robots, delays and paths as RESIDUAL_ENV_KWARGS
+RESIDUAL2_ENV_KWARGS: dict[str, object] = {
+    "path": "mixed",
+    "sigma_track": 0.005,
+    "speed": [0.1, 0.4],
+    "randomize": {"wheel_radius": [0.93, 1.07], "track": [0.93, 1.07], "slip": [0.0, 0.02], "delay": [0.0, 0.3]},
+}
+
 #: agent -> (env keywords, extra ``amigo-gym train-fast`` options)
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
     "ppo_fast": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "15000000", "--filter-alpha", "0.5"]),
     "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
+    "residual2": (
+        RESIDUAL2_ENV_KWARGS,
+        [
+            "--total-steps",
+            "3000000",
+            "--residual-bound",
+            "0.15",
+            "--residual-penalty",
+            "3.0",
+            "--history",
+            "4",
+            "--nominal-fraction",
+            "0.3",
+        ],
+    ),
 }
+#: agents whose kept model is ``best.zip`` (the lowest H RMS of the evaluations on the validation seeds)
+KEEP_BEST = {"residual2"}
 
 
 @dataclass(frozen=True)
@@ -71,6 +104,7 @@ class Settings:
     runs: Path = Path("runs/fast_v1")
     workers: int = 1
     export: bool = False
+    nice: int = 5
 
 
 def command(s: Settings, agent: str, seed: int) -> list[str]:
@@ -89,12 +123,16 @@ def manifest(s: Settings, agent: str, seed: int, cmd: list[str]) -> Path:
     out = s.runs / f"{agent}_s{seed}"
     record = json.loads((out / "run.json").read_text())
     env_kwargs, _ = AGENTS[agent]
+    model = out / ("best.zip" if agent in KEEP_BEST else "model.zip")
+    if agent in KEEP_BEST:
+        info = json.loads(zipfile.ZipFile(model).read("model.json"))["info"]
+        record |= {"sha256": sha256_file(model), "kept": "best.zip", "kept_env_steps": info.get("env_steps")}
     doc = record | {
         "agent": agent,
         "env_id": "AmigoBot-v1",
         "env_kwargs": env_kwargs,
         "training_command": " ".join(shlex.quote(c) for c in cmd if c != "--resume"),
-        "training_distribution": TRAINING_DISTRIBUTION if agent == "ppo_fast" else RESIDUAL_ENV_KWARGS,
+        "training_distribution": TRAINING_DISTRIBUTION if agent == "ppo_fast" else env_kwargs,
         "loader": "amigo_gym.policies.load_pretrained",
     }
     path = s.runs / f"{agent}_s{seed}.manifest.json"
@@ -102,7 +140,7 @@ def manifest(s: Settings, agent: str, seed: int, cmd: list[str]) -> Path:
     if s.export:
         dest = pretrained_dir() / "v1" / agent
         dest.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(out / "model.zip", dest / f"{agent}_s{seed}.zip")
+        shutil.copyfile(model, dest / f"{agent}_s{seed}.zip")
         (dest / f"{agent}_s{seed}.json").write_text(json.dumps(doc, indent=2) + "\n")
     return path
 
@@ -112,7 +150,7 @@ def run_one(s: Settings, agent: str, seed: int) -> str:
     cmd = command(s, agent, seed)
     if not (out / "run.json").is_file():
         t0 = time.perf_counter()
-        r = subprocess.run(["nice", "-n", "5", *cmd], capture_output=True, text=True)
+        r = subprocess.run(["nice", "-n", str(s.nice), *cmd], capture_output=True, text=True)
         (s.runs / f"{agent}_s{seed}.log").write_text(r.stdout + r.stderr)
         if r.returncode != 0:
             return f"{agent} seed {seed}: FAILED ({r.returncode}): {r.stderr.strip().splitlines()[-1:]}"
@@ -129,8 +167,9 @@ def main() -> int:
     p.add_argument("--runs", default="runs/fast_v1", help="folder of the run folders (default runs/fast_v1)")
     p.add_argument("--workers", type=int, default=1, help="runs at a time (default 1)")
     p.add_argument("--export", action="store_true", help="copy models + manifests to agents/pretrained/v1/<agent>/")
+    p.add_argument("--nice", type=int, default=5, help="niceness of the runs (default 5)")
     a = p.parse_args()
-    s = Settings(tuple(a.agents), tuple(a.seeds), Path(a.runs), a.workers, a.export)
+    s = Settings(tuple(a.agents), tuple(a.seeds), Path(a.runs), a.workers, a.export, a.nice)
     s.runs.mkdir(parents=True, exist_ok=True)
     jobs = [(agent, seed) for seed in s.seeds for agent in s.agents]
     with ThreadPoolExecutor(max_workers=s.workers) as pool:

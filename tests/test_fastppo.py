@@ -65,6 +65,11 @@ def weights(path: Path) -> dict[str, np.ndarray]:
         ("history", 21, "history"),
         ("hidden", (64, 0), "hidden"),
         ("caps_temporal", -1.0, "caps_temporal"),
+        ("residual_penalty", -0.1, "residual_penalty"),
+        ("residual_penalty", float("nan"), "residual_penalty"),
+        ("residual_penalty", 101.0, "residual_penalty"),
+        ("nominal_fraction", -0.1, "nominal_fraction"),
+        ("nominal_fraction", 1.0, "nominal_fraction"),
     ],
 )
 def test_settings_refuse_bad_values(field: str, value: object, match: str) -> None:
@@ -79,6 +84,8 @@ def test_settings_refuse_wrong_types_and_bad_env_kwargs() -> None:
         tiny(norm_reward="yes")
     with pytest.raises(ValueError):
         tiny(env_kwargs={"path": "mixed", "speed": -1.0})
+    with pytest.raises(ValueError, match=r"residual_penalty.*residual_bound"):
+        tiny(residual_penalty=0.1)  # a penalty on the correction of a policy that has none
     s = tiny()
     assert FastPPOSettings.from_json(json.loads(json.dumps(s.to_json()))) == s
     with pytest.raises(ValueError, match="unknown"):
@@ -120,7 +127,9 @@ def test_same_seed_same_weights_other_seed_other_weights(tmp_path: Path) -> None
 
 
 def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
-    s = tiny(residual_bound=0.3, history=2, caps_temporal=0.1, caps_spatial=0.1)
+    s = tiny(
+        residual_bound=0.3, history=2, caps_temporal=0.1, caps_spatial=0.1, residual_penalty=0.5, nominal_fraction=0.25
+    )
     train(s, tmp_path / "whole", log=None)
     rec = train(s, tmp_path / "cut", log=None, until_steps=256)
     assert rec["timesteps"] == 256 and not rec["finished"] and not (tmp_path / "cut" / "model.zip").exists()
@@ -137,6 +146,84 @@ def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
     ck2 = torch.load(tmp_path / "cut" / "checkpoint.pt", weights_only=False)
     assert ck1["obs_rms"] == ck2["obs_rms"] and ck1["ret_rms"] == ck2["ret_rms"]
     assert sha256_of(tmp_path / "whole" / "model.zip") == sha256_of(tmp_path / "cut" / "model.zip")
+
+
+def test_checkpoint_written_before_a_new_field_resumes_with_its_default(tmp_path: Path) -> None:
+    """A checkpoint whose settings lack ``residual_penalty`` (older code) resumes as the default (0)."""
+    s = tiny(residual_bound=0.3, history=2)
+    train(s, tmp_path / "whole", log=None)
+    train(s, tmp_path / "cut", log=None, until_steps=256)
+    ck = torch.load(tmp_path / "cut" / "checkpoint.pt", weights_only=False)
+    del ck["settings"]["residual_penalty"]
+    torch.save(ck, tmp_path / "cut" / "checkpoint.pt")
+    train(s, tmp_path / "cut", log=None, resume=True)
+    w1, w2 = weights(tmp_path / "whole"), weights(tmp_path / "cut")
+    for k in w1:
+        np.testing.assert_array_equal(w1[k], w2[k])
+    with pytest.raises(ValueError, match="settings differ"):  # a non-default value is still a different run
+        train(tiny(residual_bound=0.3, history=2, residual_penalty=0.5), tmp_path / "cut", log=None, resume=True)
+
+
+def test_nominal_fraction_steps_the_last_robots_as_the_nominal_robot() -> None:
+    """The trainer's robots equal two separately stepped vector envs: env_kwargs, then the nominal robot."""
+    from amigo_gym.training.fastppo import _training_env
+
+    kw = {"path": "mixed", "speed": [0.1, 0.4], "randomize": {"wheel_radius": [0.9, 1.1], "delay": [0.1, 0.3]}}
+    s = tiny(env_kwargs=kw, nominal_fraction=0.25, max_episode_steps=7)
+    env = _training_env(s)
+    nominal = {"path": "mixed", "speed": [0.1, 0.4]}
+    refs = [
+        gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=7, autoreset_mode="SameStep", **k)
+        for n, k in ((12, kw), (4, nominal))
+    ]
+    seeds = list(range(50, 66))
+    obs, _ = env.reset(seed=seeds)
+    ref_obs = np.concatenate([refs[0].reset(seed=seeds[:12])[0], refs[1].reset(seed=seeds[12:])[0]])
+    np.testing.assert_array_equal(obs, ref_obs)
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(10):  # past the time limit: autoresets and final observations
+        a = rng.uniform(-1, 1, (16, 2))
+        got = env.step(a)
+        want = [refs[0].step(a[:12]), refs[1].step(a[12:])]
+        for j in range(4):
+            np.testing.assert_array_equal(got[j], np.concatenate([w[j] for w in want]))
+        for i in range(16):
+            part, row = (0, i) if i < 12 else (1, i - 12)
+            info = want[part][4]
+            if "final_obs" in info and info["_final_obs"][row]:
+                np.testing.assert_array_equal(got[4]["final_obs"][i], info["final_obs"][row])
+                ended += 1
+            else:
+                assert got[4]["final_obs"][i] is None
+    assert ended >= 16  # every robot hit the 7-step limit at least once
+    # the nominal rows differ from what env_kwargs' randomised robots would do with the same seeds
+    alt = gym.make_vec("AmigoBot-v1", num_envs=4, max_episode_steps=7, autoreset_mode="SameStep", **kw)
+    alt.reset(seed=seeds[12:])
+    env.reset(seed=seeds)
+    a = np.full((16, 2), 0.5)
+    for _ in range(3):
+        o_alt = alt.step(a[12:])[0]
+        o = env.step(a)[0]
+    assert not np.array_equal(o[12:], o_alt)
+    env.close()
+    for e in (*refs, alt):
+        e.close()
+
+
+def test_residual_penalty_shrinks_the_mean_correction(tmp_path: Path) -> None:
+    """Same seed and data stream: the L2 penalty on mu leaves a smaller mean correction than none."""
+    mags = []
+    for pen in (0.0, 20.0):
+        s = tiny(residual_bound=0.3, history=2, residual_penalty=pen, learning_rate=3e-3, total_steps=2048,
+                 eval_every=10**6, log_std_init=0.0)  # fmt: skip
+        train(s, tmp_path / f"p{pen}", log=None)
+        pol = FastPolicy.load(tmp_path / f"p{pen}" / "model.zip")
+        z = np.random.default_rng(0).standard_normal((256, pol.builder.dim))
+        feats = pol.obs_rms.mean + z * np.sqrt(pol.obs_rms.var)  # normalised features ~ N(0, I)
+        mags.append(float(np.sqrt((pol.mean_output(feats) ** 2).sum(-1).mean())))
+    assert mags[0] > 0.02  # without the penalty the correction has grown from its ~0 start
+    assert mags[1] < 0.5 * mags[0]
 
 
 def test_numpy_policy_matches_the_torch_actor_and_round_trips(tmp_path: Path) -> None:

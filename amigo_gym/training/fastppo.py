@@ -5,6 +5,8 @@ r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL/PufferLib style
     amigo-gym train-fast --out runs/fast_s1 --hyperparams agents/hyperparams/fastppo.yml --seed 1
     amigo-gym train-fast --out runs/res_s0 --residual-bound 0.3 --history 4 \
         --env-kwargs '{"path": "mixed", "speed": [0.1, 0.4], "randomize": {"delay": [0, 0.3]}}'
+    amigo-gym train-fast --out runs/res2_s0 --residual-bound 0.15 --residual-penalty 3 --nominal-fraction 0.3 \
+        --history 4 --env-kwargs '{"path": "mixed", "sigma_track": 0.005, "randomize": {"delay": [0, 0.3]}}'
 
 Why. SB3's PPO steps a handful of envs and runs small minibatches: on two cores it trains at ~600 env-steps/s
 on this task. Here one ``gym.make_vec("AmigoBot-v1", num_envs=N)`` (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`,
@@ -29,6 +31,12 @@ Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robo
 * Smoothness (CAPS, Mysore et al. 2021), on the mean output ``mu``: temporal ``caps_temporal * mean ||mu(x_t) -
   mu(x_{t+1})||^2`` over steps within an episode, spatial ``caps_spatial * mean ||mu(x) - mu(x + sigma n)||^2`` with
   ``n ~ N(0, I)`` in normalised feature units, ``sigma = caps_sigma``.
+* Nominal robots (``nominal_fraction = f > 0``): the last ``round(f N)`` of the ``N`` training robots are simulated
+  with ``env_kwargs`` without ``randomize`` and ``true_robot`` (the nominal robot: no mismatch, delay, slip or
+  noise), the others with ``env_kwargs``; the evaluations stay on ``env_kwargs``.
+* Residual penalty (residual policies only): ``residual_penalty * mean ||mu(x)||^2`` over the minibatch, ``mu`` in
+  units of the bound (the correction is ``residual_bound * clip(mu, -1, 1)``): pulls the correction to 0 where
+  the advantages do not ask for one, so that the policy keeps the analytic action where that is already at its floor.
 
 Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything needed to continue bit for bit: networks,
 optimiser, normalisers, the pickled vector env, the current observations and policy state, torch's RNG; written
@@ -57,6 +65,7 @@ from __future__ import annotations
 import argparse
 import csv
 import io as _io
+import itertools
 import json
 import math
 import os
@@ -130,6 +139,10 @@ class FastPPOSettings:
         history: previous steps of commands and measurements in the features [steps], in [0, 20].
         residual_bound: bound of the learned correction to the analytic action [normalised action units], in
             [0, 2]; 0: plain policy.
+        residual_penalty: weight of the L2 penalty on the residual policy's mean correction [-, per (bound units)^2],
+            in [0, 100]; needs residual_bound > 0 when > 0 (module docstring).
+        nominal_fraction: share of the N training robots simulated as the nominal robot [-], in [0, 1)
+            (module docstring); 0: all robots from env_kwargs.
         filter_alpha: low-pass factor of the action parameterisation [-], in (0, 1]; 1: none.
         caps_temporal: CAPS temporal smoothness weight [-], in [0, 100].
         caps_spatial: CAPS spatial smoothness weight [-], in [0, 100].
@@ -170,6 +183,8 @@ class FastPPOSettings:
     norm_reward: bool = True
     history: int = 0
     residual_bound: float = 0.0
+    residual_penalty: float = 0.0
+    nominal_fraction: float = 0.0
     filter_alpha: float = 1.0
     caps_temporal: float = 0.0
     caps_spatial: float = 0.0
@@ -225,6 +240,13 @@ class FastPPOSettings:
         check_range(o, "caps_temporal", self.caps_temporal, 0.0, 100.0)
         check_range(o, "caps_spatial", self.caps_spatial, 0.0, 100.0)
         check_range(o, "caps_sigma", self.caps_sigma, 0.0, 10.0, low_open=True)
+        check_range(o, "residual_penalty", self.residual_penalty, 0.0, 100.0)
+        check_range(o, "nominal_fraction", self.nominal_fraction, 0.0, 1.0, high_open=True)
+        if self.residual_penalty > 0 and not self.residual_bound > 0:
+            raise ValueError(
+                f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
+                f"got residual_bound = {self.residual_bound}"
+            )
         if not isinstance(self.norm_reward, bool):
             raise TypeError(f"{o}.norm_reward must be True or False, got {self.norm_reward!r}")
         hid = tuple(self.hidden)
@@ -481,19 +503,68 @@ class _Run:
     ep_ret: Array = field(default_factory=lambda: np.zeros(0))
 
 
+class _ConcatVectorEnv:
+    """Vector envs side by side as one of ``sum(n_i)`` robots (the rows of ``envs[0]`` first), for the trainer only.
+
+    ``step``'s info holds only ``final_obs`` (an object array of ``(obs_dim,)`` arrays, ``None`` where no episode
+    ended), the one info field the trainer reads.
+    """
+
+    def __init__(self, envs: Sequence[Any]) -> None:
+        self.envs = list(envs)
+        self.sizes = [int(e.num_envs) for e in self.envs]
+        self.num_envs = sum(self.sizes)
+
+    def _split(self, x: Sequence[Any] | Array) -> list[Any]:
+        edges = [0, *itertools.accumulate(self.sizes)]
+        return [x[a:b] for a, b in itertools.pairwise(edges)]
+
+    def reset(self, seed: list[int]) -> tuple[Array, dict[str, Any]]:
+        obs = [e.reset(seed=part)[0] for e, part in zip(self.envs, self._split(seed), strict=True)]
+        return np.concatenate(obs), {}
+
+    def step(self, action: Array) -> tuple[Array, Array, Array, Array, dict[str, Any]]:
+        outs = [e.step(a) for e, a in zip(self.envs, self._split(action), strict=True)]
+        final = np.full(self.num_envs, None, dtype=object)
+        k = 0
+        for (*_, info), n in zip(outs, self.sizes, strict=True):
+            if "final_obs" in info:
+                mask = np.asarray(info["_final_obs"], dtype=bool)
+                for i in np.flatnonzero(mask):
+                    final[k + i] = info["final_obs"][i]
+            k += n
+        cat = [np.concatenate([o[j] for o in outs]) for j in range(4)]
+        return cat[0], cat[1], cat[2], cat[3], {"final_obs": final}
+
+    def close(self) -> None:
+        for e in self.envs:
+            e.close()
+
+
+def _training_env(s: FastPPOSettings) -> Any:
+    """The training robots: one native vector env of ``env_kwargs``, or that and one of nominal robots."""
+
+    def make(n: int, kw: Mapping[str, Any]) -> Any:
+        return gym.make_vec(
+            "AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, autoreset_mode="SameStep", **kw
+        )
+
+    k = round(s.nominal_fraction * s.num_envs)
+    if k == 0:
+        return make(s.num_envs, s.env_kwargs)
+    nominal = {key: v for key, v in s.env_kwargs.items() if key not in ("randomize", "true_robot")}
+    if k == s.num_envs:
+        return make(k, nominal)
+    return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
+
+
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     torch.manual_seed(s.seed)
     net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
     opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
-    env = gym.make_vec(
-        "AmigoBot-v1",
-        num_envs=s.num_envs,
-        max_episode_steps=s.max_episode_steps,
-        autoreset_mode="SameStep",
-        **s.env_kwargs,
-    )
+    env = _training_env(s)
     seeds = np.random.SeedSequence(s.seed).generate_state(s.num_envs, dtype=np.uint32)
-    obs, _ = env.reset(seed=[int(x) for x in seeds])  # type: ignore[arg-type]  # gymnasium accepts a list
+    obs, _ = env.reset(seed=[int(x) for x in seeds])  # gymnasium accepts a list
     n = s.num_envs
     return _Run(
         net, opt, env, RunningMeanStd.zeros(builder.dim), RunningMeanStd.zeros(1), np.zeros(n),
@@ -770,6 +841,8 @@ def _train(
                     same = bsame[idx]
                     dmu = (net.actor(bnext[idx]) - mu).pow(2).sum(-1)
                     loss = loss + s.caps_temporal * (dmu * same).sum() / same.sum().clamp(min=1.0)
+                if s.residual_penalty > 0:
+                    loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
                 if s.caps_spatial > 0:
                     mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
                     loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()

@@ -1,0 +1,81 @@
+"""Validation versions of benchmark cells: same env keywords, other seeds (never the benchmark's 100-109).
+
+    python experiments/residual_val_cells.py --models res=experiments/candidates/residual_s0.zip \
+        [--cells delay_0.1 delay_0.25 ...] [--seeds 20] [--first-seed 2000000] [--json out.json]
+
+For each cell of :data:`amigo_gym.training.benchmark.SUITE` named in ``--cells`` (default: the ideal-robot, the
+delay and the wheel-mismatch cells), the scenario with ``seeds = first_seed .. first_seed + seeds - 1`` (one episode
+each, :func:`amigo_gym.training.benchmark.evaluate`, deterministic) for the analytic controller
+(:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot) and every ``NAME=ZIP`` fast-PPO model.
+Prints one Markdown row per cell: the mean H cross-track RMS over the episodes [mm] with a 95 % bootstrap interval
+over episodes (2 000 resamples, seed 0), and the ratio of each model's mean to the analytic's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import replace
+
+import numpy as np
+
+from amigo_gym.training.benchmark import SUITE, AgentSpec, evaluate, make_env
+
+IDEAL = ("circle_r1_ccw", "circle_r0.5_ccw", "circle_r0.5_cw", "circle_r2_cw", "circle_v0.1", "circle_v0.4",
+         "circle_v_random", "figure8", "random_paths", "lane_change", "mixed")  # fmt: skip
+DELAY = ("delay_0.1", "delay_0.25")
+MISMATCH = ("wheels_plus5", "wheels_minus5", "wheels_unequal")
+
+
+def ci(x: np.ndarray, reps: int = 2000) -> tuple[float, float]:
+    """95 % percentile bootstrap interval of the mean of ``x``."""
+    rng = np.random.default_rng(0)
+    means = x[rng.integers(0, x.size, (reps, x.size))].mean(axis=1)
+    return float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="*", default=[], help="NAME=ZIP fast-PPO models")
+    p.add_argument("--cells", nargs="*", default=list(DELAY + MISMATCH + IDEAL))
+    p.add_argument("--seeds", type=int, default=20)
+    p.add_argument("--first-seed", type=int, default=2_000_000)
+    p.add_argument("--json", default=None)
+    a = p.parse_args()
+    if a.first_seed < 1000:
+        p.error("--first-seed must be >= 1000 (the benchmark's test seeds are 100-109)")
+    specs = [AgentSpec("analytic")]
+    for m in a.models:
+        name, path = m.split("=", 1)
+        specs.append(AgentSpec(name, 0, path, "fastppo_residual"))
+    by = {sc.name: sc for sc in SUITE}
+    out: dict[str, dict[str, list[float]]] = {}
+    print("| cell | " + " | ".join(f"{s.name} H RMS [mm]" for s in specs) + " | " +
+          " | ".join(f"{s.name}/analytic" for s in specs[1:]) + " |")  # fmt: skip
+    print("|---" * (2 * len(specs)) + "|")
+    for cell in a.cells:
+        sc = replace(by[cell], seeds=tuple(range(a.first_seed, a.first_seed + a.seeds)))
+        env = make_env(sc)
+        row = {}
+        for s in specs:
+            eps = evaluate(s.instantiate(env), env, sc)
+            row[s.name] = [1e3 * e["h_rms_m"] for e in eps]
+        env.close()
+        out[cell] = row
+        base = float(np.mean(row["analytic"]))
+        cells = []
+        for s in specs:
+            x = np.array(row[s.name])
+            lo, hi = ci(x)
+            cells.append(f"{x.mean():.2f} [{lo:.2f}, {hi:.2f}]")
+        ratios = [f"{np.mean(row[s.name]) / base:.2f}" for s in specs[1:]]
+        print(f"| {cell} | " + " | ".join(cells) + " | " + " | ".join(ratios) + " |", flush=True)
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(out, f)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
