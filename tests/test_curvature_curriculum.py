@@ -219,3 +219,16 @@ def test_a_checkpoint_without_the_curriculum_fields_resumes(tmp_path: Path) -> N
     assert rec["finished"]
     with pytest.raises(ValueError, match="settings differ"):
         train(tiny(), tmp_path / "r", log=None, resume=True)  # with a curriculum: other settings
+
+
+def test_curriculum_raises_the_nominal_robots_paths_too(tmp_path: Path) -> None:
+    """With ``nominal_fraction`` the trainer steps two vector envs; each stage reaches both."""
+    import pickle
+
+    s = tiny(nominal_fraction=0.25)
+    rec = train(s, tmp_path / "run", log=None)
+    assert rec["finished"]
+    env = pickle.loads(torch.load(tmp_path / "run" / "checkpoint.pt", weights_only=False)["env"])
+    assert [e.num_envs for e in env.envs] == [12, 4]
+    for e in env.envs:
+        assert dict(e.params.path_params) == {"max_curvature": 4.0, "max_curvature_rate": 4.0}

@@ -536,6 +536,16 @@ class _ConcatVectorEnv:
         cat = [np.concatenate([o[j] for o in outs]) for j in range(4)]
         return cat[0], cat[1], cat[2], cat[3], {"final_obs": final}
 
+    @property
+    def params(self) -> Any:
+        """The first env's task settings (all envs share ``path_params``: :meth:`set_path_params` sets them all)."""
+        return self.envs[0].params
+
+    def set_path_params(self, path_params: Mapping[str, Any]) -> None:
+        """The curriculum's stage, for every env (randomised and nominal robots alike)."""
+        for e in self.envs:
+            e.set_path_params(path_params)
+
     def close(self) -> None:
         for e in self.envs:
             e.close()
