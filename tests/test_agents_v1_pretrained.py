@@ -30,22 +30,29 @@ def test_manifest_is_complete_and_matches_the_model(manifest: Path) -> None:
         assert key in m, key
     assert m["env_id"] == "AmigoBot-v1" and manifest.parent.name in (m["algo"], m.get("agent"))
     assert hashlib.sha256(manifest.with_suffix(".zip").read_bytes()).hexdigest() == m["sha256"]
-    if m["algo"] == "fastppo":  # amigo-gym train-fast trains AmigoBot-v1 only: its command names no --env
-        assert m["training_command"].startswith("amigo-gym train-fast ") and m["timesteps"] >= 15_000_000
+    if str(m["algo"]).startswith("fastppo"):  # amigo-gym train-fast trains AmigoBot-v1 only: no --env
+        assert m["training_command"].startswith("amigo-gym train-fast ")
+        # the generalist 15M env-steps; the residual 3M (its best evaluation kept, at kept_env_steps)
+        assert m["timesteps"] >= (15_000_000 if m["algo"] == "fastppo" else 3_000_000)
     else:
         assert "--env AmigoBot-v1" in m["training_command"]
     assert f"--seed {m['seed']}" in m["training_command"]
 
 
 FAST = sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.zip"))
+RESIDUAL = sorted((pretrained_dir() / "v1" / "residual").glob("*.zip"))
 
 
-def test_five_seeds_of_the_fast_ppo_generalist_are_shipped() -> None:
-    seeds = sorted(json.loads(z.with_suffix(".json").read_text())["seed"] for z in FAST)
-    assert seeds == [0, 1, 2, 3, 4]
+@pytest.mark.parametrize(
+    ("models", "algo"), [(FAST, "fastppo"), (RESIDUAL, "fastppo_residual")], ids=["fast", "residual"]
+)
+def test_five_seeds_of_the_fast_ppo_generalist_are_shipped(models: list[Path], algo: str) -> None:
+    docs = [json.loads(z.with_suffix(".json").read_text()) for z in models]
+    assert sorted(d["seed"] for d in docs) == [0, 1, 2, 3, 4]
+    assert {d["algo"] for d in docs} == {algo}
 
 
-@pytest.mark.parametrize("model", FAST, ids=[z.stem for z in FAST])
+@pytest.mark.parametrize("model", FAST + RESIDUAL, ids=[z.stem for z in FAST + RESIDUAL])
 def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -> None:
     """``load_pretrained`` checks the sha256 and gives SB3's ``predict`` on a batch of raw v1 observations; the
     actions are finite and inside the action space, and deterministic."""

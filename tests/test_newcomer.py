@@ -112,7 +112,7 @@ def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
     names = {a.name for a in default_agents()}
     assert {"analytic", "analytic_ff"} <= names
     learned = names - {"analytic", "analytic_ff", "pure_pursuit"}
-    assert learned and all(re.fullmatch(r"(ppo|sac|td3)_v[01]|ppo_fast_v1", n) for n in learned), learned
+    assert learned and all(re.fullmatch(r"(ppo|sac|td3)_v[01]|ppo_fast_v1|residual_v1", n) for n in learned), learned
     assert {v0_name(a) for a in ALGOS} == {f"{a}_v0" for a in ALGOS}  # compare's names of agents/pretrained/*.zip
     assert v0_name("ppo_s0") == "ppo_s0"  # a run of one's own keeps its name
 

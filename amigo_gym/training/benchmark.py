@@ -42,9 +42,10 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 Default agents: ``analytic``, ``analytic_ff``, ``pure_pursuit``, the v0 specialists
 ``agents/pretrained/<algo>.zip`` (named ``<algo>_v0``) and the v1 generalists
 ``agents/pretrained/v1/<folder>/*.zip`` when shipped, one folder per entry of :data:`V1_AGENTS` (named
-``<folder>_v1``: ``ppo_v1``, ``sac_v1``, ``td3_v1`` for SB3's algorithms and ``ppo_fast_v1`` for the fast PPO
-of ``amigo-gym train-fast``; ``amigo-gym compare`` uses the same names). :func:`agent_label` says which is
-which ("SB3 PPO" against "fast PPO"); the Markdown report lists every agent with its label.
+``<folder>_v1``: ``ppo_v1``, ``sac_v1``, ``td3_v1`` for SB3's algorithms, ``ppo_fast_v1`` for the fast PPO
+of ``amigo-gym train-fast`` and ``residual_v1`` for its residual on the analytic controller; ``amigo-gym
+compare`` uses the same names). :func:`agent_label` says which is which ("SB3 PPO" against "fast PPO"); the
+Markdown report lists every agent with its label.
 
 Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
 -------------------------------------------------------------------------------------------
@@ -142,7 +143,13 @@ ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
-V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3", "ppo_fast": "fast PPO"}
+V1_AGENTS: dict[str, str] = {
+    "ppo": "SB3 PPO",
+    "sac": "SB3 SAC",
+    "td3": "SB3 TD3",
+    "ppo_fast": "fast PPO",
+    "residual": "fast PPO residual",
+}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]

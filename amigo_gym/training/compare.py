@@ -23,7 +23,8 @@ Steps:
    ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
    under ``<models>/v1/<folder>/*.zip`` for every folder of :data:`amigo_gym.training.benchmark.V1_AGENTS`
    (named ``<folder>_v1``: the SB3 generalists ``ppo_v1``, ``sac_v1``, ``td3_v1`` and the fast PPO's
-   ``ppo_fast_v1``, a numpy policy; one training seed per zip, checked against the sha256 of their
+   ``ppo_fast_v1`` and its residual on the analytic controller ``residual_v1``, numpy policies; one training
+   seed per zip, checked against the sha256 of their
    manifests). An agent that cannot run a scenario (a v0 model on v1's
    observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
    is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
@@ -117,7 +118,11 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         elif name.endswith("_v1"):
             folder = name[:-3]
             label = V1_AGENTS.get(folder, folder.upper())
-            how = " (amigo-gym train-fast; a numpy policy)" if folder == "ppo_fast" else ""
+            how = {
+                "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
+                "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
+                " controller's command; a numpy policy)",
+            }.get(folder, "")
             text = f"pretrained {label} AmigoBot-v1 generalists{how} (agents/pretrained/v1/{folder}/)"
         else:
             text = "a model from --models"
