@@ -86,6 +86,7 @@ def main() -> int:
     ax1.axhline(1e3 * ref["h_rms_m"], color="k", lw=1, label=f"analytic ({1e3 * ref['h_rms_m']:.2f} mm)")
     ax1.axhline(1e3 * level, color="k", ls="--", lw=1, label="1.5x analytic")
     ax1.set_yscale("log")
+    ax1.set_yticks([t for t in (1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0) if t <= 1.2e3 * c["eval_h_rms_m"].max()])
     ax1.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
     ax1.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax1.set_ylabel("validation H cross-track RMS [mm]")

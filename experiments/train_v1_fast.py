@@ -20,6 +20,8 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 * ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
   with the low-pass action parameterisation ``--filter-alpha 0.5``: of the smoothness variants measured on the
   validation seeds (docs/baselines.md, 1.5M steps each) it had both the lowest settled chatter and H error;
+* ``ppo_fast_30m``: the same for 30M env-steps (the learning rate anneals over the longer run): the settled chatter
+  keeps falling (docs/baselines.md, "Time to quality"; ``experiments/time_to_quality.py``);
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
   actuation delay 0-0.3 s, ``mild``'s noise; the correction is bounded to +-0.3 of the action range and the
   policy observes the last 4 steps' commands and measurements (``--history 4``: 0.4 s, longer than the delays).
@@ -74,6 +76,7 @@ RESIDUAL2_ENV_KWARGS: dict[str, object] = {
 #: agent -> (env keywords, extra ``amigo-gym train-fast`` options)
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
     "ppo_fast": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "15000000", "--filter-alpha", "0.5"]),
+    "ppo_fast_30m": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "30000000", "--filter-alpha", "0.5"]),
     "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
     "residual2": (
         RESIDUAL2_ENV_KWARGS,
@@ -132,7 +135,7 @@ def manifest(s: Settings, agent: str, seed: int, cmd: list[str]) -> Path:
         "env_id": "AmigoBot-v1",
         "env_kwargs": env_kwargs,
         "training_command": " ".join(shlex.quote(c) for c in cmd if c != "--resume"),
-        "training_distribution": TRAINING_DISTRIBUTION if agent == "ppo_fast" else env_kwargs,
+        "training_distribution": TRAINING_DISTRIBUTION if agent.startswith("ppo_fast") else env_kwargs,
         "loader": "amigo_gym.policies.load_pretrained",
     }
     path = s.runs / f"{agent}_s{seed}.manifest.json"
