@@ -55,17 +55,18 @@ def test_five_seeds_of_the_fast_ppo_generalist_are_shipped(models: list[Path], a
 @pytest.mark.parametrize("model", FAST + RESIDUAL, ids=[z.stem for z in FAST + RESIDUAL])
 def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -> None:
     """``load_pretrained`` checks the sha256 and gives SB3's ``predict`` on a batch of raw v1 observations; the
-    actions are finite and inside the action space, and deterministic."""
+    actions are finite and inside the action space, and deterministic: two loaded copies act alike (a policy keeps
+    state between calls, e.g. the residual's analytic integral and history, so one copy called twice would not)."""
     import gymnasium as gym
 
     from amigo_gym.policies import load_pretrained
 
-    policy = load_pretrained(model)
+    policy, twin = load_pretrained(model), load_pretrained(model)
     env = gym.make_vec("AmigoBot-v1", num_envs=8, vectorization_mode="vector_entry_point", path="mixed")
     obs, _ = env.reset(seed=123)
     for _ in range(20):
         a, _ = policy.predict(obs, deterministic=True)
-        b, _ = policy.predict(obs, deterministic=True)
+        b, _ = twin.predict(obs, deterministic=True)
         assert a.shape == (8, 2) and np.all(np.isfinite(a)) and np.array_equal(a, b)
         assert np.all(a >= env.single_action_space.low) and np.all(a <= env.single_action_space.high)
         obs, *_ = env.step(a)

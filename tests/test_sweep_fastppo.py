@@ -280,7 +280,9 @@ def test_a_retry_resumes_the_newest_abandoned_checkpoint_of_the_same_settings(tm
     newest = abandoned("killed", s, 1024)  # stale heartbeat: no attribute of its own
     abandoned("error", s, 1536, fail_reason="ValueError: ...")
     abandoned("other_settings", other, 1536)
+    study.enqueue_trial({"seed": 0})  # the retry of seed 0 (ask alone would sample the seed: 0 or 1 at random)
     trial = study.ask({"seed": CategoricalDistribution([0, 1])})
+    assert trial.params == {"seed": 0}
     out = tmp_path / "retry" / "run"
     assert _resume_fastppo(study, trial, s, out) == {"trial": 1, "run_dir": str(newest)}
     assert (out / "checkpoint.pt").read_bytes() == (newest / "checkpoint.pt").read_bytes()
