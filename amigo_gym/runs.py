@@ -87,6 +87,22 @@ META = "meta.json"
 SNAPSHOT = ("eval.json", "best_model.zip")
 
 
+class StopRequest:
+    """A signal handler for ``SIGTERM``/``SIGINT`` while a run holds its folder: the first signal sets
+    :attr:`requested` (the run stops at its next safe point, after a checkpoint) and prints ``message`` to
+    stderr; a second one stops at once (``KeyboardInterrupt``)."""
+
+    def __init__(self, message: str) -> None:
+        self.message = message
+        self.requested = False
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print(self.message, file=sys.stderr, flush=True)
+
+
 class RunLockedError(FileExistsError):
     """Another process holds the run folder's lock."""
 

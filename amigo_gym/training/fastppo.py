@@ -78,7 +78,6 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 import gymnasium as gym
@@ -91,6 +90,7 @@ from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_fi
 from amigo_gym.model.params import check_range
 from amigo_gym.options import cli, json_object
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
+from amigo_gym.runs import StopRequest
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
 from amigo_gym.training.train import versions
@@ -664,7 +664,7 @@ def train(
         FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
         KeyboardInterrupt: stopped by ``SIGTERM``/``SIGINT`` (module docstring), after a checkpoint.
     """
-    stop = _Stop()
+    stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     main_thread = threading.current_thread() is threading.main_thread()
     old = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     try:
@@ -677,20 +677,6 @@ def train(
     return record
 
 
-class _Stop:
-    """``SIGTERM``/``SIGINT``: the first asks for a stop at the end of the iteration (after a checkpoint), a second
-    one stops at once (``KeyboardInterrupt``)."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def __call__(self, signum: int, frame: FrameType | None) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-        print(f"{PROG}: stopping at the end of this iteration (checkpoint first)", file=sys.stderr, flush=True)
-
-
 def _train(
     s: FastPPOSettings,
     out: str | Path,
@@ -700,7 +686,7 @@ def _train(
     command: str | None,
     evaluate_runs: bool,
     after_eval: Callable[[dict[str, float]], bool] | None,
-    stop_request: _Stop,
+    stop_request: StopRequest,
 ) -> dict[str, Any]:
     out = Path(out)
     ckpt = out / "checkpoint.pt"

@@ -66,7 +66,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from types import FrameType
 from typing import Any, Literal, get_args
 
 import numpy as np
@@ -280,20 +279,6 @@ class _StopAtBoundary(Exception):
     """Raised at a rollout boundary, after the checkpoint, when a stop was asked for."""
 
 
-class _Stop:
-    """``SIGTERM``/``SIGINT`` while a run holds its folder: the first asks for a stop at the next rollout
-    start (after a checkpoint), a second one stops at once (``KeyboardInterrupt``)."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def __call__(self, signum: int, frame: FrameType | None) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-        print("amigo-gym train: stopping at the end of this rollout (checkpoint first)", file=sys.stderr, flush=True)
-
-
 def _callbacks(
     s: Settings,
     out: Path,
@@ -301,7 +286,7 @@ def _callbacks(
     eval_seed: int,
     done_steps: int,
     wall: Callable[[], float],
-    stop: _Stop,
+    stop: runs.StopRequest,
     normalize: bool = False,
     after_eval: AfterEvalHook | None = None,
 ) -> list[Any]:
@@ -503,7 +488,7 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     s.validate()
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
-    stop = _Stop()
+    stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
     main = threading.current_thread() is threading.main_thread()  # signals can only be handled there
     old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
     try:
@@ -558,7 +543,7 @@ def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[st
     }
 
 
-def _train(s: Settings, stop: _Stop, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
+def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
     from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
