@@ -409,6 +409,15 @@ def test_benchmark_runs_fast_models_as_numpy_policies(tmp_path: Path) -> None:
     env.close(), venv.close(), v0.close()
 
 
+def _rate_matches(count: float, t: float, rate: float) -> bool:
+    """``rate`` (rounded to 0.1) is ``count / t`` for some true time within the 0.01 s rounding of ``t``.
+
+    On a short run (0.2 s) the rounding of the time alone moves the rate by a few per cent, so a relative
+    tolerance is wrong; this is the propagated bound.
+    """
+    return t > 0.005 and abs(count / t - rate) <= 0.051 + count * 0.0051 / (t * (t - 0.005))
+
+
 def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")
     from amigo_gym.bench.train import cpu_model, main
@@ -419,7 +428,7 @@ def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     assert doc["cpu_model"] == cpu_model() != ""
     fast, sb3 = doc["runs"]["fastppo"], doc["runs"]["sb3_shipped"]
     assert fast["env_steps"] == 16384 and sb3["env_steps"] == 16 * 256  # SB3 rounds up to whole rollouts
-    assert fast["sps"] == pytest.approx(fast["env_steps"] / fast["wall_s"], rel=0.01)
+    assert _rate_matches(fast["env_steps"], fast["wall_s"], fast["sps"])
     assert 0 < fast["loop_wall_s"] <= fast["wall_s"] and fast["sps_loop"] >= fast["sps"]  # iterations: part of the call
     assert fast["cpu_s_rollout"] > 0 and fast["cpu_s_update"] > 0
     assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
@@ -455,10 +464,9 @@ def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
             assert r["grad_steps"] == r["loop_grad_steps"] == round(loop * cfg["gradient_steps_per_env_step"]) == 8
             # the rates are counts over the times; rates rounded to 0.1, times to 0.01 s: the propagated bound
             for count, rate, t in ((loop, "sps_loop", "loop_wall_s"), (8, "gsps_loop_cpu", "loop_cpu_s")):
-                assert abs(count / r[t] - r[rate]) <= 0.051 + count * 0.0051 / r[t] ** 2, (algo, config, rate)
-            assert 0 < r["loop_wall_s"] <= r["wall_s"] and r["sps"] == pytest.approx(
-                r["env_steps"] / r["wall_s"], rel=0.01
-            )
+                assert _rate_matches(count, r[t], r[rate]), (algo, config, rate)
+            assert 0 < r["loop_wall_s"] <= r["wall_s"]
+            assert _rate_matches(r["env_steps"], r["wall_s"], r["sps"]), (algo, config, "sps")
             assert doc["ratios"][f"fastppo/{algo}_{config}"] == pytest.approx(
                 doc["runs"]["fastppo"]["sps"] / r["sps"], abs=0.01
             )
