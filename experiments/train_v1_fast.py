@@ -18,8 +18,11 @@ measures better than what is shipped (``amigo-gym benchmark --agents analytic <a
 Distributions (never the benchmark's cells; the evaluations during training use validation seeds 1,000,000+):
 
 * ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
-  with the low-pass action parameterisation ``--filter-alpha 0.5``: of the smoothness variants measured on the
-  validation seeds (docs/baselines.md, 1.5M steps each) it had both the lowest settled chatter and H error;
+  with the settings the sweep found (``agents/hyperparams/fastppo.yml``: its best trial, including the low-pass
+  action filter and the CAPS smoothness weight), 10M env-steps; run from the repository's root (the relative path);
+* ``ppo_fast_hand``: the previous release's ``ppo_fast``, before the sweep: the module's defaults with the low-pass
+  action parameterisation ``--filter-alpha 0.5`` (of the smoothness variants measured on the validation seeds,
+  docs/baselines.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
 * ``ppo_fast_30m``: the same for 30M env-steps (the learning rate anneals over the longer run): the settled chatter
   keeps falling (docs/baselines.md, "Time to quality"; ``experiments/time_to_quality.py``);
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
@@ -75,7 +78,14 @@ RESIDUAL2_ENV_KWARGS: dict[str, object] = {
 
 #: agent -> (env keywords, extra ``amigo-gym train-fast`` options)
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
-    "ppo_fast": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "15000000", "--filter-alpha", "0.5"]),
+    "ppo_fast": (
+        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
+        ["--hyperparams", "agents/hyperparams/fastppo.yml", "--total-steps", "10000000"],
+    ),
+    "ppo_fast_hand": (
+        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
+        ["--total-steps", "15000000", "--filter-alpha", "0.5"],
+    ),
     "ppo_fast_30m": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "30000000", "--filter-alpha", "0.5"]),
     "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
     "residual2": (
