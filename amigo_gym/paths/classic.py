@@ -25,10 +25,12 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import Real, col_arctan2, col_sqrt, pack
 from amigo_gym.model.params import EnvParams, check_range
 
-__all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
+__all__ = ["Projection", "ClosestPoint", "PathPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
+#: an int status (one point) or an int64 column
+IntColumn = int | NDArray[np.int64]
 
 
 def wrap_angle(x: ArrayLike) -> Array:
@@ -111,8 +113,26 @@ def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> CirclePose:
     return CirclePose(x, y, th, k, np.zeros(np.shape(th)), c, sn)
 
 
-class Located(NamedTuple):
-    """:meth:`CirclePath.locate`: the fields of :class:`amigo_gym.paths.PathPoint` (same names and order)."""
+class PathPoint(NamedTuple):
+    """Result of :meth:`amigo_gym.paths.clothoid.ClothoidPath.locate` (and :meth:`CirclePath.locate`,
+    :meth:`ManoeuvrePath.locate`): the closest path point to query points, as columns.
+
+    Attributes:
+        s: arc length of the closest point within one traversal [m]: in ``[0, length)`` on a closed path
+            (``[0, length]`` on an open one).
+        progress: the unwrapped arc length [m]: ``s`` plus whole laps on a closed path (continuing from the
+            hint ``s_prev``); equal to ``s`` on an open path.
+        x, y: the closest point [m].
+        tangent_angle: path tangent angle there [rad], ``theta(progress)`` (continuous, unwrapped).
+        curvature: signed curvature there [1/m].
+        curvature_rate: ``dkappa/ds`` there [1/m^2].
+        cross_track_error: ``(p - c) . n``, positive left of the path direction [m] (at a clamped end, the
+            lateral part of the offset only; ``distance`` is the full distance).
+        cos_theta, sin_theta: the unit tangent there [-].
+        distance: ``|p - c|`` [m].
+        status: :data:`~amigo_gym.paths.clothoid.STATUS_INTERIOR` (0), ``STATUS_START``, ``STATUS_END`` or
+            ``STATUS_WINDOW`` (:mod:`amigo_gym.paths.clothoid`).
+    """
 
     s: Real
     progress: Real
@@ -125,7 +145,24 @@ class Located(NamedTuple):
     cos_theta: Real
     sin_theta: Real
     distance: Real
-    status: Any
+    status: IntColumn
+
+    def closest_point(self) -> ClosestPoint:
+        """The :class:`ClosestPoint` of these columns (``s`` within one lap)."""
+        return ClosestPoint(
+            self.s,
+            self.x,
+            self.y,
+            self.tangent_angle,
+            self.curvature,
+            self.cross_track_error,
+            self.cos_theta,
+            self.sin_theta,
+        )
+
+
+#: the name :meth:`CirclePath.locate` and :meth:`ManoeuvrePath.locate` used for :class:`PathPoint`
+Located = PathPoint
 
 
 class Path(Protocol):
