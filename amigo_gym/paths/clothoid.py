@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
 from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.model.params import check_range
-from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, Projection
+from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
 
 __all__ = [
     "STATUS_INTERIOR",
@@ -148,26 +148,6 @@ class ClothoidSegment:
         """Change of tangent angle over the segment, ``k0 L + c L^2 / 2`` [rad]."""
         length = float(self.length)
         return length * (float(self.curvature) + 0.5 * float(self.curvature_rate) * length)
-
-
-class PathPose(NamedTuple):
-    """The path at arc lengths ``s``: columns of the shape of ``s``.
-
-    Attributes:
-        x, y: the point [m].
-        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
-        curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2].
-        cos_theta, sin_theta: the unit tangent [-].
-    """
-
-    x: Real
-    y: Real
-    theta: Real
-    curvature: Real
-    curvature_rate: Real
-    cos_theta: Real
-    sin_theta: Real
 
 
 class PathSpec(Protocol):
