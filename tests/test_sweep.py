@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import shutil
 import signal
@@ -19,6 +20,7 @@ import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -483,3 +485,39 @@ def test_in_memory_storage_with_one_job_runs_and_summarises(tmp_path: Path) -> N
     summary = json.loads((tmp_path / "out" / "mem" / "summary.json").read_text())
     assert summary["status"] == "complete" and summary["states"]["COMPLETE"] == 1
     assert summary["study_attrs"]["argv"][summary["study_attrs"]["argv"].index("--storage") + 1] == "sqlite:///:memory:"
+
+
+def test_a_trials_end_records_validation_errors_and_a_nan_objective() -> None:
+    """The end both kinds of trial share (``_validated_trial``): the per-cell values as ``validation`` and the value
+    (COMPLETE); an error of the training or validation as ``fail_reason``, raised again (FAIL); a NaN objective
+    with a ``fail_reason`` naming it (Optuna: FAIL, never PRUNED)."""
+    from types import SimpleNamespace
+
+    from amigo_gym.training.sweep import OBJECTIVE, _validated_trial
+
+    cells = [SimpleNamespace(seeds=(1_000_000, 1_000_001))]
+    outcomes: list[Any] = [(0.25, {"a": 0.2, "b": 0.3}), ValueError("no model.zip"), (math.nan, {"a": None})]
+
+    def fit_and_validate() -> tuple[float, dict[str, float | None]]:
+        got = outcomes.pop(0)
+        if isinstance(got, Exception):
+            raise got
+        return got
+
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+    study = optuna.create_study()
+    study.optimize(lambda t: _validated_trial(t, cells, fit_and_validate), n_trials=3, catch=(ValueError,))
+    ok, err, nan = study.get_trials()
+    assert ok.state == TrialState.COMPLETE and ok.value == 0.25 and "fail_reason" not in ok.user_attrs
+    assert ok.user_attrs["validation"] == {
+        "metric": OBJECTIVE,
+        "seeds": [1_000_000, 1_000_001],
+        "cells": {"a": 0.2, "b": 0.3},
+    }
+    assert err.state == TrialState.FAIL and err.user_attrs["fail_reason"] == "ValueError: no model.zip"
+    assert "validation" not in err.user_attrs
+    assert (
+        nan.state == TrialState.FAIL
+        and nan.user_attrs["fail_reason"] == "validation H RMS IQM nan (cells: {'a': None})"
+    )
+    assert nan.user_attrs["validation"]["cells"] == {"a": None}

@@ -29,6 +29,8 @@ __all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", 
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
+#: an int status (one point) or an int64 column
+IntColumn = int | NDArray[np.int64]
 
 
 def wrap_angle(x: ArrayLike) -> Array:
@@ -89,10 +91,16 @@ class ClosestPoint(NamedTuple):
         )
 
 
-class CirclePose(NamedTuple):
-    """:meth:`CirclePath.pose_columns`, :meth:`ManoeuvrePath.pose_columns`: the path at arc lengths ``s``, the fields
-    of :class:`amigo_gym.paths.PathPose` (same names and order): ``x``, ``y`` [m], ``theta`` [rad], ``curvature``
-    [1/m], ``curvature_rate`` [1/m^2] (0 but at the manoeuvre's joint), ``cos_theta``, ``sin_theta``."""
+class PathPose(NamedTuple):
+    """The path at arc lengths ``s``: columns of the shape of ``s`` (``pose_columns`` of every path family).
+
+    Attributes:
+        x, y: the point [m].
+        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
+        curvature: signed curvature [1/m].
+        curvature_rate: ``dkappa/ds`` [1/m^2] (0 on a circle, and on the manoeuvre path but at its joint).
+        cos_theta, sin_theta: the unit tangent [-].
+    """
 
     x: Real
     y: Real
@@ -103,16 +111,38 @@ class CirclePose(NamedTuple):
     sin_theta: Real
 
 
-def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> CirclePose:
-    """A :class:`CirclePose` of arrays, or of floats for a float ``s``."""
+#: the name of :meth:`CirclePath.pose_columns`' and :meth:`ManoeuvrePath.pose_columns`' result, :class:`PathPose`
+CirclePose = PathPose
+
+
+def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> PathPose:
+    """A :class:`PathPose` of arrays, or of floats for a float ``s``."""
     c, sn = np.cos(th), np.sin(th)
     if not isinstance(s, np.ndarray):
-        return CirclePose(float(x), float(y), float(th), float(k), 0.0, float(c), float(sn))
-    return CirclePose(x, y, th, k, np.zeros(np.shape(th)), c, sn)
+        return PathPose(float(x), float(y), float(th), float(k), 0.0, float(c), float(sn))
+    return PathPose(x, y, th, k, np.zeros(np.shape(th)), c, sn)
 
 
-class Located(NamedTuple):
-    """:meth:`CirclePath.locate`: the fields of :class:`amigo_gym.paths.PathPoint` (same names and order)."""
+class PathPoint(NamedTuple):
+    """Result of :meth:`amigo_gym.paths.clothoid.ClothoidPath.locate` (and :meth:`CirclePath.locate`,
+    :meth:`ManoeuvrePath.locate`): the closest path point to query points, as columns.
+
+    Attributes:
+        s: arc length of the closest point within one traversal [m]: in ``[0, length)`` on a closed path
+            (``[0, length]`` on an open one).
+        progress: the unwrapped arc length [m]: ``s`` plus whole laps on a closed path (continuing from the
+            hint ``s_prev``); equal to ``s`` on an open path.
+        x, y: the closest point [m].
+        tangent_angle: path tangent angle there [rad], ``theta(progress)`` (continuous, unwrapped).
+        curvature: signed curvature there [1/m].
+        curvature_rate: ``dkappa/ds`` there [1/m^2].
+        cross_track_error: ``(p - c) . n``, positive left of the path direction [m] (at a clamped end, the
+            lateral part of the offset only; ``distance`` is the full distance).
+        cos_theta, sin_theta: the unit tangent there [-].
+        distance: ``|p - c|`` [m].
+        status: :data:`~amigo_gym.paths.clothoid.STATUS_INTERIOR` (0), ``STATUS_START``, ``STATUS_END`` or
+            ``STATUS_WINDOW`` (:mod:`amigo_gym.paths.clothoid`).
+    """
 
     s: Real
     progress: Real
@@ -125,7 +155,24 @@ class Located(NamedTuple):
     cos_theta: Real
     sin_theta: Real
     distance: Real
-    status: Any
+    status: IntColumn
+
+    def closest_point(self) -> ClosestPoint:
+        """The :class:`ClosestPoint` of these columns (``s`` within one lap)."""
+        return ClosestPoint(
+            self.s,
+            self.x,
+            self.y,
+            self.tangent_angle,
+            self.curvature,
+            self.cross_track_error,
+            self.cos_theta,
+            self.sin_theta,
+        )
+
+
+#: the name :meth:`CirclePath.locate` and :meth:`ManoeuvrePath.locate` used for :class:`PathPoint`
+Located = PathPoint
 
 
 class Path(Protocol):
@@ -236,7 +283,7 @@ class CirclePath:
     #: a circle repeats with period :attr:`length` (the path protocol of ``AmigoBot-v1``, :mod:`amigo_gym.paths.user`)
     closed = True
 
-    def pose_columns(self, s: Real) -> CirclePose:
+    def pose_columns(self, s: Real) -> PathPose:
         """The circle at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
         ``theta`` [rad] and ``curvature`` [1/m] as floats for a float ``s``, else arrays of the shape of ``s``."""
         th = self.tangent_angle(s)
@@ -247,7 +294,7 @@ class CirclePath:
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
-    ) -> Located:
+    ) -> PathPoint:
         r"""The closest point of the circle to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (the fields of
         :class:`amigo_gym.paths.PathPoint`), by :meth:`project_xy` itself: the cross-track error, unit tangent
         and curvature are AmigoBot-v0's bits. ``progress`` is ``s`` plus the whole laps ``2 pi R k`` that bring it
@@ -405,7 +452,7 @@ class ManoeuvrePath:
     #: reports the end (the circle's laps repeat), as in AmigoBot-v0
     closed = False
 
-    def pose_columns(self, s: Real) -> CirclePose:
+    def pose_columns(self, s: Real) -> PathPose:
         """The path at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
         ``theta`` [rad] and ``curvature`` [1/m] (:meth:`curvature_columns`), floats for a float ``s``."""
         xy = self.point(s)
@@ -414,7 +461,7 @@ class ManoeuvrePath:
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
-    ) -> Located:
+    ) -> PathPoint:
         """The closest point to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (:class:`amigo_gym.paths.PathPoint`'s
         fields) by :meth:`project_xy` itself (AmigoBot-v0's bits); ``progress`` is ``s`` (the hint and the window
         are not needed), ``status`` 0: the path does not end."""
@@ -448,17 +495,17 @@ class ManoeuvrePath:
         )
 
 
-def _located(cp: ClosestPoint, progress: Real) -> Located:
-    """The :class:`Located` of a projection ``cp`` with its ``progress`` [m]: curvature rate 0, ``distance = |e|``,
+def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
+    """The :class:`PathPoint` of a projection ``cp`` with its ``progress`` [m]: curvature rate 0, ``distance = |e|``,
     status 0 (interior)."""
     e = cp.cross_track_error
     zero = 0.0 * e
     if isinstance(e, np.ndarray):
-        return Located(
+        return PathPoint(
             cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
             cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
         )  # fmt: skip
-    return Located(
+    return PathPoint(
         cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
         cp.cos_theta, cp.sin_theta, abs(e), 0,
     )  # fmt: skip

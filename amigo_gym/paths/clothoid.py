@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
 from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.model.params import check_range
-from amigo_gym.paths.classic import ClosestPoint, Projection
+from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
 
 __all__ = [
     "STATUS_INTERIOR",
@@ -56,7 +56,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-IntColumn = int | NDArray[np.int64]
 TWO_PI = 2.0 * math.pi
 
 #: the closest point is an orthogonal foot point inside the searched range
@@ -149,72 +148,6 @@ class ClothoidSegment:
         """Change of tangent angle over the segment, ``k0 L + c L^2 / 2`` [rad]."""
         length = float(self.length)
         return length * (float(self.curvature) + 0.5 * float(self.curvature_rate) * length)
-
-
-class PathPose(NamedTuple):
-    """The path at arc lengths ``s``: columns of the shape of ``s``.
-
-    Attributes:
-        x, y: the point [m].
-        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
-        curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2].
-        cos_theta, sin_theta: the unit tangent [-].
-    """
-
-    x: Real
-    y: Real
-    theta: Real
-    curvature: Real
-    curvature_rate: Real
-    cos_theta: Real
-    sin_theta: Real
-
-
-class PathPoint(NamedTuple):
-    """Result of :meth:`ClothoidPath.locate`: the closest path point to query points, as columns.
-
-    Attributes:
-        s: arc length of the closest point within one traversal [m]: in ``[0, length)`` on a closed path
-            (``[0, length]`` on an open one).
-        progress: the unwrapped arc length [m]: ``s`` plus whole laps on a closed path (continuing from the
-            hint ``s_prev``); equal to ``s`` on an open path.
-        x, y: the closest point [m].
-        tangent_angle: path tangent angle there [rad], ``theta(progress)`` (continuous, unwrapped).
-        curvature: signed curvature there [1/m].
-        curvature_rate: ``dkappa/ds`` there [1/m^2].
-        cross_track_error: ``(p - c) . n``, positive left of the path direction [m] (at a clamped end, the
-            lateral part of the offset only; ``distance`` is the full distance).
-        cos_theta, sin_theta: the unit tangent there [-].
-        distance: ``|p - c|`` [m].
-        status: :data:`STATUS_INTERIOR`, :data:`STATUS_START`, :data:`STATUS_END` or :data:`STATUS_WINDOW`.
-    """
-
-    s: Real
-    progress: Real
-    x: Real
-    y: Real
-    tangent_angle: Real
-    curvature: Real
-    curvature_rate: Real
-    cross_track_error: Real
-    cos_theta: Real
-    sin_theta: Real
-    distance: Real
-    status: IntColumn
-
-    def closest_point(self) -> ClosestPoint:
-        """The :class:`~amigo_gym.paths.classic.ClosestPoint` of these columns (``s`` within one lap)."""
-        return ClosestPoint(
-            self.s,
-            self.x,
-            self.y,
-            self.tangent_angle,
-            self.curvature,
-            self.cross_track_error,
-            self.cos_theta,
-            self.sin_theta,
-        )
 
 
 class PathSpec(Protocol):

@@ -113,6 +113,7 @@ from amigo_gym.training.task_metrics import (
     DEFAULT_SETTLE_TIME_S,
     EpisodeRecorder,
     InfoAdapter,
+    run_vector_episodes,
 )
 
 __all__ = [
@@ -649,36 +650,21 @@ def evaluate(
 
     The episodes run side by side in the environment's native vector env (robot ``i`` reset with seed
     ``sc.seeds[i]``; the native vector env reproduces the single env bit for bit, tests/test_vector_v1.py),
-    the agent predicting for the whole batch at every step (a constant batch size, so that a network's
-    outputs do not depend on how many episodes are still running). A robot's episode is its steps up to its
-    first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
+    by :func:`amigo_gym.training.task_metrics.run_vector_episodes` (the whole batch predicted at every step; a
+    robot's episode is its steps up to its first end). ``on_episode()`` is called as each episode ends.
     """
-    from amigo_gym.envs.vector import info_row
-
     adapter = InfoAdapter.for_env(env)
     dt = _dt(env, sc)
     venv = _vector_env(sc)
     try:
-        n = len(sc.seeds)
         obs, _ = venv.reset(seed=list(sc.seeds))
-        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in range(n)]
-        live = np.ones(n, dtype=np.bool_)
-        state: Any = None
-        start = np.ones(n, dtype=np.bool_)
-        while live.any():
-            action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
-            start = np.zeros(n, dtype=np.bool_)
-            obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
-            for i in np.flatnonzero(live).tolist():
-                info = info_row(vinfo, i)
-                recs[i].add(adapter.read(info), float(reward[i]))
-                if terminated[i] or truncated[i]:
-                    # reaching the end of an open path (AmigoBot-v1) ends the episode as a success, not a failure
-                    recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
-                    live[i] = False
-                    if on_episode is not None:
-                        on_episode()
-            start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
+        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
+
+        def episode_ended(_i: int, _info: dict[str, Any], ended: bool) -> None:
+            if ended and on_episode is not None:
+                on_episode()
+
+        run_vector_episodes(agent, venv, obs, recs, adapter, episode_ended)
     finally:
         venv.close()
     return [r.metrics() for r in recs]

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
+from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
 
 __all__ = [
     "BIN_EDGES",
@@ -139,33 +139,20 @@ def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
     ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
     import gymnasium as gym
 
-    from amigo_gym.envs.vector import info_row
-
     venv: Any = gym.make_vec(sc.env_id, num_envs=len(sc.seeds), max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
     try:
-        n = len(sc.seeds)
         obs, _ = venv.reset(seed=list(sc.seeds))
         u: Any = venv.unwrapped
         adapter = InfoAdapter(u.params.robot, float(u.params.speed))
         paths = list(u.paths.paths)
         ids = [int(d["id"]) for d in u.path_infos]
-        recs = [EpisodeRecorder(DT_S) for _ in range(n)]
-        progress = np.zeros(n)
-        live = np.ones(n, dtype=np.bool_)
-        state: Any = None
-        start = np.ones(n, dtype=np.bool_)
-        while live.any():
-            action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
-            start = np.zeros(n, dtype=np.bool_)
-            obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
-            for i in np.flatnonzero(live).tolist():
-                info = info_row(vinfo, i)
-                recs[i].add(adapter.read(info), float(reward[i]))
-                progress[i] = float(info["progress"])
-                if terminated[i] or truncated[i]:
-                    recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
-                    live[i] = False
-            start = ~live
+        recs = [EpisodeRecorder(DT_S) for _ in sc.seeds]
+        progress = np.zeros(len(sc.seeds))
+
+        def read_progress(i: int, info: dict[str, Any], _ended: bool) -> None:
+            progress[i] = float(info["progress"])
+
+        run_vector_episodes(agent, venv, obs, recs, adapter, read_progress)
     finally:
         venv.close()
     out = []

@@ -142,7 +142,7 @@ import sys
 import time
 import warnings
 import zlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
@@ -842,6 +842,29 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
+#: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
+_TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
+
+
+def _validated_trial(
+    trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
+) -> float:
+    """The end shared by both kinds of trial (SB3's and the fast PPO's): ``fit_and_validate()`` trains and
+    validates, giving the objective and its per-cell values (:func:`validate_agent`); an error of
+    :data:`_TRIAL_ERRORS` is recorded as the trial's ``fail_reason`` and raised again; the cells go to the user
+    attribute ``validation``; a non-finite objective gets a ``fail_reason`` and is returned as it is (NaN: Optuna
+    marks the trial FAIL, never PRUNED)."""
+    try:
+        value, per_cell = fit_and_validate()
+    except _TRIAL_ERRORS as exc:
+        trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+        raise
+    trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
+    if not math.isfinite(value):
+        trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
+    return value
+
+
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
     import optuna
     import yaml
@@ -923,7 +946,8 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
             env_kwargs=env_kwargs,
             argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
         )
-        try:
+
+        def fit_and_validate() -> tuple[float, dict[str, float | None]]:
             record = train(s, after_eval=after_eval)
             last = record.get("last_eval") or {}
             for key in ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward"):
@@ -932,14 +956,9 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
             trial.set_user_attr("wall_time_s", record["wall_time_s"])
             if pruned:
                 raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
-            value, per_cell = validate_model(run_dir / "run", cells)
-        except (ValueError, RuntimeError, FloatingPointError, FileNotFoundError) as exc:
-            trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
-            raise
-        trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
-        if not math.isfinite(value):
-            trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
-        return value  # NaN: Optuna marks the trial FAIL (never PRUNED)
+            return validate_model(run_dir / "run", cells)
+
+        return _validated_trial(trial, cells, fit_and_validate)
 
     return objective
 
@@ -1008,7 +1027,7 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         with open(out / "train.log", "a", encoding="utf-8") as f:
             f.write(msg + "\n")
 
-    try:
+    def fit_and_validate() -> tuple[float, dict[str, float | None]]:
         record = train_fast(s, out, resume=resumed is not None, log=log, command=train_command, after_eval=after_eval)
         last = record.get("last_eval") or {}
         for key in ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure"):
@@ -1019,14 +1038,9 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         trial.set_user_attr("train_sps", record["train_sps"])
         if pruned:
             raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
-        value, per_cell = validate_fast_model(out, cells)
-    except (ValueError, RuntimeError, FloatingPointError, FileNotFoundError) as exc:
-        trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
-        raise
-    trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
-    if not math.isfinite(value):
-        trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
-    return value  # NaN: Optuna marks the trial FAIL (never PRUNED)
+        return validate_fast_model(out, cells)
+
+    return _validated_trial(trial, cells, fit_and_validate)
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:

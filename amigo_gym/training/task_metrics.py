@@ -2,7 +2,8 @@
 
 Used by the benchmark (:mod:`amigo_gym.training.benchmark`) and by the training's evaluation
 callback (:mod:`amigo_gym.training.train`), so that a learning curve and a benchmark table report
-the same numbers. Imports only numpy and the standard library.
+the same numbers. Imports only numpy and the standard library (and, inside :func:`run_vector_episodes`,
+:func:`amigo_gym.envs.vector.info_row`).
 
 The ``info`` of one step, as both environment versions report it
 -----------------------------------------------------------------
@@ -34,7 +35,7 @@ Metrics of one episode (:func:`episode_metrics`)
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,6 +50,7 @@ __all__ = [
     "InfoAdapter",
     "StepSample",
     "episode_metrics",
+    "run_vector_episodes",
 ]
 
 Array = NDArray[np.float64]
@@ -199,3 +201,51 @@ def episode_metrics(
         "steps": float(e.size),
         "terminated": float(bool(terminated)),
     }
+
+
+def run_vector_episodes(
+    agent: Any,
+    venv: Any,
+    obs: Any,
+    recorders: Sequence[EpisodeRecorder],
+    adapter: InfoAdapter,
+    on_row: Callable[[int, dict[str, Any], bool], object] | None = None,
+) -> None:
+    """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
+    ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
+
+    The loop of :func:`amigo_gym.training.benchmark.evaluate` and of
+    :func:`amigo_gym.training.curvature.evaluate_tagged`: the agent predicts for the whole batch at every step
+    (a constant batch size, so that a network's outputs do not depend on how many episodes are still running;
+    ``episode_start`` marks the rows that ended, which the autoreset restarted). A row's episode is its steps up
+    to its first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
+    Reaching the end of an open path (AmigoBot-v1's ``info["end_of_path"]``) ends an episode as a success: its
+    recorder's ``terminated`` stays False.
+
+    Args:
+        agent: ``predict(obs, state=, episode_start=, deterministic=True) -> (actions, state)`` (SB3's form).
+        recorders: one :class:`EpisodeRecorder` per row (``N``).
+        adapter: reads a row's ``info`` (:class:`InfoAdapter`).
+        on_row: called as ``on_row(i, info, ended)`` after each recorded step of row ``i`` (``info``: that row's,
+            :func:`amigo_gym.envs.vector.info_row`; ``ended``: it was the episode's last step).
+    """
+    from amigo_gym.envs.vector import info_row
+
+    n = len(recorders)
+    live = np.ones(n, dtype=np.bool_)
+    state: Any = None
+    start = np.ones(n, dtype=np.bool_)
+    while live.any():
+        action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
+        start = np.zeros(n, dtype=np.bool_)
+        obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
+        for i in np.flatnonzero(live).tolist():
+            info = info_row(vinfo, i)
+            recorders[i].add(adapter.read(info), float(reward[i]))
+            ended = bool(terminated[i] or truncated[i])
+            if ended:
+                recorders[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
+                live[i] = False
+            if on_row is not None:
+                on_row(i, info, ended)
+        start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
