@@ -148,6 +148,43 @@ def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
     assert sha256_of(tmp_path / "whole" / "model.zip") == sha256_of(tmp_path / "cut" / "model.zip")
 
 
+def test_a_second_process_on_the_run_folder_is_refused_and_changes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """train-fast locks its run folder (amigo_gym.runs.RunLock): a second train-fast or --resume on a folder in use
+    stops with one line and leaves the running run's files as they were; once the lock is free the resume runs."""
+    import yaml
+
+    from amigo_gym import runs
+    from amigo_gym.training.fastppo import main
+
+    s = tiny()
+    out = tmp_path / "run"
+    train(s, out, log=None, until_steps=256)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    hp = {k: v for k, v in s.to_json().items() if k not in ("env_kwargs", "seed")}
+    (tmp_path / "hp.yml").write_text(yaml.safe_dump({"AmigoBot-v1": hp}))
+    argv = [
+        "--out",
+        str(out),
+        "--resume",
+        "--quiet",
+        "--env-kwargs",
+        json.dumps(KW),
+        "--hyperparams",
+        str(tmp_path / "hp.yml"),
+    ]
+    with runs.RunLock(out):  # as another process holds it (flock: a second open file description conflicts)
+        assert main(argv) != 0
+        err = capsys.readouterr().err.strip()
+        assert "in use by another amigo-gym process" in err and len(err.splitlines()) == 1, err
+        with pytest.raises(runs.RunLockedError):
+            train(s, out, log=None, resume=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != runs.LOCK_NAME} == before
+    rec = train(s, out, log=None, resume=True)
+    assert rec["finished"] and rec["timesteps"] == 512
+
+
 def test_checkpoint_written_before_a_new_field_resumes_with_its_default(tmp_path: Path) -> None:
     """A checkpoint whose settings lack ``residual_penalty`` (older code) resumes as the default (0)."""
     s = tiny(residual_bound=0.3, history=2)

@@ -56,6 +56,9 @@ file.
 Interruption: the first ``SIGTERM`` or ``SIGINT`` (Ctrl-C) stops the run at the end of the current iteration, after a
 checkpoint (``KeyboardInterrupt``, status 130; ``--resume`` continues it bit for bit); a second one stops at once
 (the last periodic checkpoint stays). Signal handlers are installed only when training runs in the main thread.
+The run folder is locked for the whole run (:class:`amigo_gym.runs.RunLock`, ``<out>/run.lock``): a second
+``train-fast`` or ``--resume`` on a folder in use stops at once with one line and touches nothing; a killed run
+leaves no lock behind (the operating system drops it).
 
 Imports torch (this module is an edge of the package; ``import amigo_gym`` never imports it).
 """
@@ -90,7 +93,7 @@ from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_fi
 from amigo_gym.model.params import check_range
 from amigo_gym.options import cli, json_object
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
-from amigo_gym.runs import StopRequest
+from amigo_gym.runs import RunLock, StopRequest
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
 from amigo_gym.training.train import versions
@@ -636,6 +639,15 @@ def _write_curve(out: Path, curve: list[dict[str, float]]) -> None:
         atomic_write(out / "curve.csv", buf.getvalue())
 
 
+def _check_start(out: Path, resume: bool) -> None:
+    """Refuse to overwrite a run (a checkpoint without ``resume``) or to resume nothing."""
+    ckpt = out / "checkpoint.pt"
+    if ckpt.exists() and not resume:
+        raise FileExistsError(f"{ckpt} exists: pass --resume to continue it or choose another --out")
+    if resume and not ckpt.exists():
+        raise FileNotFoundError(f"--resume: no checkpoint {ckpt}")
+
+
 def train(
     s: FastPPOSettings,
     out: str | Path,
@@ -662,16 +674,21 @@ def train(
 
     Raises:
         FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
+        amigo_gym.runs.RunLockedError: another process trains in ``out`` (the folder is locked for the whole call).
         KeyboardInterrupt: stopped by ``SIGTERM``/``SIGINT`` (module docstring), after a checkpoint.
     """
+    out = Path(out)
+    _check_start(out, resume)
+    out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     main_thread = threading.current_thread() is threading.main_thread()
-    old = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
-    try:
-        record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
+    with RunLock(out):  # one process per run folder: a second train-fast (or --resume) on it stops with one line
+        old = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
+        try:
+            record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
+        finally:
+            for sig, handler in old.items():
+                signal.signal(sig, handler)
     if stop.requested and record.get("stopped_by") == "signal":
         raise KeyboardInterrupt
     return record
@@ -690,11 +707,7 @@ def _train(
 ) -> dict[str, Any]:
     out = Path(out)
     ckpt = out / "checkpoint.pt"
-    if ckpt.exists() and not resume:
-        raise FileExistsError(f"{ckpt} exists: pass --resume to continue it or choose another --out")
-    if resume and not ckpt.exists():
-        raise FileNotFoundError(f"--resume: no checkpoint {ckpt}")
-    out.mkdir(parents=True, exist_ok=True)
+    _check_start(out, resume)  # again, under the lock: another process may have written a checkpoint meanwhile
     torch.set_num_threads(s.threads)
     builder = FeatureBuilder(s.spec())
     r = _load_checkpoint(ckpt, s, builder) if resume else _new_run(s, builder)
