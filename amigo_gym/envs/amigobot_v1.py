@@ -301,11 +301,11 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
+        if self._v0 is not None:
+            return self._step_v0(self._v0, a1, a2)
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
-        if self._v0 is not None:
-            return self._step_v0(self._v0, a1, a2)
         assert self._state is not None and self._episode is not None
         st, out, noise = tracking.step_columns(
             self._k, self.path, self._state, self._episode, self._ring, self._ring_step, a1, a2

@@ -206,6 +206,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._v0 = fast.workspace(task.task_constants(self.v0_params), fixed, n)
             self._state = self._v0_views(self._state)
         self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the v0 kernel's restart mask when none restarts
+        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._ring_step = 0
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
@@ -336,16 +337,19 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         report = fast.step_rows_unchecked(
             ws, self._rows, np.ascontiguousarray(a), restart, obs, reward, terminated, record, self._parallel, bitgens
         )
-        steps = np.asarray(self._state.steps)
-        steps += 1
+        drawn = self._no_rows
+        if bitgens is not None:  # the rows restarted in the step (ws.rows is its scratch)
+            idx = drawn = ws.rows[: report.drawn].copy()
+        # steps += 1, 0 for the rows restarted in the step; truncated = steps >= max_episode_steps; time = steps * dt
+        truncated: BoolArray = np.empty(n, dtype=np.bool_)
+        time = np.empty(n)
+        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
+        fast.kernels().count_steps(np.asarray(self._state.steps), drawn, limit, self.params.dt, truncated, time)
         if report.past_limit:  # headings past the limit reduced by whole turns (task.bound_heading), as AmigoBot-v0
             self._rows[:, 2] = record[:, 2] = task.bound_heading(task.State(*self._rows.T)).beta
         if self.render_mode is not None:
             self._h_now[:] = record[:, 3:5]
-        if bitgens is not None:
-            idx = ws.rows[: report.drawn].copy()  # the rows restarted in the step (ws.rows is its scratch)
-            steps[idx] = 0
-            self._start_trails(idx, record[idx, 3:5])
+            self._start_trails(drawn, record[drawn, 3:5])
         infos = {
             "pose": record[:, 0:3],
             "h_position": record[:, 3:5],
@@ -354,12 +358,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             "wheel_angles": record[:, 8:10],
             "castor_angle": record[:, 10],
             "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(tracking.REWARD_TERMS)},
-            "time": steps * self.params.dt,
+            "time": time,
         }
         if bitgens is None and idx is not None:
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)
-        return self._finish_step(obs, reward, terminated, self._truncated(steps), infos, idx)
+        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""

@@ -208,7 +208,9 @@ class TrackingParams:
     With ``ideal_actuators=True, observation="v0", reward="v0"``, ``randomize="none"``, ``start_at_rest=False``,
     a constant ``speed``, v0's ``preview`` (0.2, 0.4) and the path ``amigo_gym.paths.CirclePath(radius, direction=...)``
     (a path object: its projection is v0's), ``AmigoBot-v1`` steps as ``AmigoBot-v0``
-    (``tests/test_v0_as_v1.py``). These settings run the reference step (the compiled step has only the defaults).
+    (``tests/test_v0_as_v1.py``). These settings (:func:`v0_settings`) run AmigoBot-v0's compiled step
+    (:mod:`amigo_gym.sim.fast`), or this module's reference step with ``kernel="numpy"``; AmigoBot-v1's compiled step
+    has only ``ideal_actuators=False, observation="v1", reward="v1"``.
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
