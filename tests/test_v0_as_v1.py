@@ -219,6 +219,22 @@ def test_vector_routes_agree_with_other_generators_and_copies() -> None:
     assert mismatches({k: np.array(v) for k, v in got.items()}, {k: np.array(v) for k, v in want.items()}) == []
 
 
+@pytest.mark.parametrize("kernel", ROUTES)
+def test_heading_past_the_limit_is_reduced_as_v0_reduces_it(kernel: str) -> None:
+    """A robot spinning past |beta| = 1e6 rad: its heading reduced by whole turns on both routes, as AmigoBot-v0."""
+    v0 = gym.make("AmigoBot-v0", termination_distance=10.0).unwrapped
+    v1 = gym.make("AmigoBot-v1", **{**V0_CONFIG, "termination_distance": 10.0}, kernel=kernel).unwrapped
+    for e in (v0, v1):
+        e.reset(seed=0, options={"pose": (0.0, 0.0, 1e6 - 0.05)})
+    a = np.array([1.0, -1.0])  # spin: the heading crosses 1e6 rad
+    for _ in range(3):
+        (o0, r0, t0, _, i0), (o1, r1, t1, _, i1) = v0.step(a), v1.step(a)
+        np.testing.assert_array_equal(o1, o0)
+        assert (r1, t1) == (r0, t0)
+        np.testing.assert_array_equal(i1["pose"], i0["pose"])
+    assert abs(i1["pose"][2]) < 7.0
+
+
 def test_v0_settings_are_checked() -> None:
     with pytest.raises(ValueError, match=r"TrackingParams.observation must be one of \['v1', 'v0'\], got 'v2'"):
         tracking.TrackingParams(observation="v2")

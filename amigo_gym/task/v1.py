@@ -80,6 +80,7 @@ from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
+    bound_angle,
     error_bound,
     heading_error,
     reward_product,
@@ -1328,7 +1329,8 @@ def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2
 
     The wheel rates ``w_i = c_i w_max`` [rad/s] are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
     (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
-    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``.
+    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``. A heading past
+    ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
     """
     from amigo_gym.model.randomization import step_noise
 
@@ -1341,7 +1343,8 @@ def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2
     arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
     steps = state.steps + 1
     new = State(
-        arc.x, arc.y, arc.beta, w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1, c2, steps
+        arc.x, arc.y, bound_angle(arc.beta), w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1,
+        c2, steps,
     )  # fmt: skip
     out, progress = evaluate_columns(
         k,
