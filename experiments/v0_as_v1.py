@@ -1,6 +1,6 @@
 """How far AmigoBot-v1 is from AmigoBot-v0 in its closest configurations (issue 19, item 1; docs/architecture.md).
 
-    PYTHONPATH=. python experiments/v0_as_v1.py [--seeds 5] [--steps 200]
+    PYTHONPATH=. python experiments/v0_as_v1.py [--seeds 5] [--steps 200] [--speed-only]
 
 Steps ``AmigoBot-v0`` and ``AmigoBot-v1`` side by side on the same seeds and actions (random ones, and a smooth
 proportional controller on v0's observation) and prints, per quantity, the largest difference in ulp of v0's scale
@@ -15,7 +15,7 @@ over the episode (tests/golden_compare.py's measure; the golden tolerance is 8),
   (tests/test_v0_as_v1.py).
 
 Then the formula differences one by one on the same inputs (start pose, arc step, wheel rates, projection), and the
-time per step of the single envs.
+speed of the envs (:func:`speed`: v1 configured as v0 runs AmigoBot-v0's compiled step).
 Observation fields are compared by v0's names (``curvature_ahead_i`` against v1's ``preview_curvature_<d>m``).
 """
 
@@ -160,44 +160,94 @@ def formulas(n: int = 2000) -> list[str]:
     return out
 
 
-def speed(steps: int = 3000) -> str:
-    """Time per step [us] of one env (best of 3 runs of ``steps`` constant actions): v0, v1 as v0, v1's default."""
+def speed(steps: int = 3000, n: int = 4096) -> list[str]:
+    """The speed of AmigoBot-v0 and of AmigoBot-v1 configured as v0, on its two routes (AmigoBot-v0's compiled step,
+    ``kernel="auto"``, and the reference, ``kernel="numpy"``), and of AmigoBot-v1's defaults, with the machine's load.
+
+    Single env: time per step [us], resets excluded (each step timed alone; best of 5 runs of ``steps`` actions
+    around the steady state's, the last two alternating between the envs). Vector env of ``n`` robots
+    (``vector_entry_point``, autoreset in the step): robot-steps per second, median of 3 runs of at least 0.5 s, the
+    two envs alternating.
+    """
+    import os
+    import statistics
     import time
 
-    def best(env_id: str, kw: dict[str, Any]) -> float:
-        env = gym.make(env_id, max_episode_steps=10**9, **kw).unwrapped
-        a = np.array([0.27, 0.25], dtype=np.float32)
-        out = math.inf
-        for _ in range(3):
-            env.reset(seed=0)
-            t = time.perf_counter()
-            for _ in range(steps):
-                if env.step(a)[2]:
-                    env.reset()
-            out = min(out, (time.perf_counter() - t) / steps)
-        return out * 1e6
+    from amigo_gym.bench.machine import machine_line
 
-    v0 = best("AmigoBot-v0", {})
-    v1v0 = best("AmigoBot-v1", v1_kwargs("v0-config"))
-    v1 = best("AmigoBot-v1", {})
-    return (
-        f"single env, us per step: AmigoBot-v0 {v0:.1f}, AmigoBot-v1 as v0 (reference step) {v1v0:.1f}, "
-        f"AmigoBot-v1 {v1:.1f}"
+    clock = time.perf_counter_ns
+    acts = (0.27 + 0.1 * np.random.default_rng(0).uniform(-1.0, 1.0, (steps, 2))).astype(np.float32)
+
+    def run(env: Any) -> float:
+        env.reset(seed=0)
+        total = 0
+        for a in acts:
+            t = clock()
+            ended = env.step(a)[2]
+            total += clock() - t
+            if ended:
+                env.reset()
+        return total / steps / 1e3
+
+    v0_config = v1_kwargs("v0-config")
+    single = {
+        name: gym.make(env_id, **kw).unwrapped
+        for name, env_id, kw in (
+            ("AmigoBot-v0", "AmigoBot-v0", {}),
+            ("AmigoBot-v1 as v0 (v0's compiled step)", "AmigoBot-v1", v0_config),
+            ("AmigoBot-v1 as v0 (reference step)", "AmigoBot-v1", {**v0_config, "kernel": "numpy"}),
+            ("AmigoBot-v1", "AmigoBot-v1", {}),
+        )
+    }
+    times = {name: min(run(env) for _ in range(3)) for name, env in single.items()}  # warm-up and best
+    for _ in range(2):  # the envs alternating, so that a busy moment does not hit one of them only
+        times = {name: min(times[name], run(env)) for name, env in single.items()}
+    lines = [
+        f"{machine_line()}, load average {os.getloadavg()[0]:.2f} (1 min)",
+        "single env, us per step: " + ", ".join(f"{name} {t:.1f}" for name, t in times.items()),
+    ]
+    vec = {
+        name: gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kw)
+        for name, env_id, kw in (("AmigoBot-v0", "AmigoBot-v0", {}), ("AmigoBot-v1 as v0", "AmigoBot-v1", v0_config))
+    }
+    batch = [np.broadcast_to(a, (n, 2)).copy() for a in acts[:16]]
+    rates: dict[str, list[float]] = {name: [] for name in vec}
+    for env in vec.values():
+        env.reset(seed=0)
+        for a in batch:
+            env.step(a)
+    for _ in range(3):
+        for name, env in vec.items():
+            k = 0
+            t0 = time.perf_counter()
+            while (elapsed := time.perf_counter() - t0) < 0.5:
+                env.step(batch[k % 16])
+                k += 1
+            rates[name].append(k * n / elapsed)
+    lines.append(
+        f"vector env, N = {n}, M robot-steps/s: "
+        + ", ".join(f"{name} {statistics.median(r) / 1e6:.2f}" for name, r in rates.items())
     )
+    lines.append(f"load average {os.getloadavg()[0]:.2f} (1 min) after")
+    return lines
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5, help="seeds per policy (default 5)")
     ap.add_argument("--steps", type=int, default=200, help="steps per episode at most (default 200)")
+    ap.add_argument("--speed-only", action="store_true", help="only the speed of the envs (about 10 s)")
     a = ap.parse_args()
+    if a.speed_only:
+        print("\n".join(speed()))
+        return
     for config in ("ramps", "inf-ramps", "v0-config"):
         worst = measure(config, a.seeds, a.steps)
         print(f"{config}: largest |v1 - v0| in ulp of v0's scale (tolerance 8)")
         print("  " + ", ".join(f"{k} {v:.3g}" for k, v in worst.items()))
     for line in formulas():
         print(line)
-    print(speed())
+    print("\n".join(speed()))
 
 
 if __name__ == "__main__":

@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 from golden_compare import mismatches
 
-import amigo_gym  # noqa: F401  (registers the envs)
+import amigo_gym  # registers the envs
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.policies import AnalyticPolicy
+from amigo_gym.sim.fast import numba_available
 from amigo_gym.task import v0 as task_v0
 from amigo_gym.task import v1 as tracking
 
@@ -38,11 +39,20 @@ V0_CONFIG: dict[str, Any] = {
 STEPS = 120
 
 
+#: AmigoBot-v0's info keys (its env card), which AmigoBot-v1 with these settings reports too
+V0_INFO_KEYS = {"pose", "h_position", "cross_track_error", "wheel_rates", "wheel_angles", "castor_angle"}
+V0_INFO_KEYS |= {"reward_terms", "time"}
+
+
 def _record(env: Any, obs: Any, info: dict[str, Any], rec: dict[str, list[Any]], reward: float | None) -> None:
+    assert set(info) == V0_INFO_KEYS
+    assert all(type(info[k]) is float for k in ("cross_track_error", "castor_angle", "time"))
     rec["obs"].append(np.asarray(obs))
-    for key in ("pose", "h_position", "wheel_rates"):
+    for key in ("pose", "h_position", "wheel_rates", "wheel_angles"):
+        assert info[key].dtype == np.float64
         rec[key].append(np.asarray(info[key], dtype=np.float64))
-    rec["cross_track_error"].append(float(info["cross_track_error"]))
+    for key in ("cross_track_error", "castor_angle", "time"):
+        rec[key].append(info[key])
     for name, value in info["reward_terms"].items():
         rec[name].append(float(value))
     if reward is not None:
@@ -59,6 +69,9 @@ def _episode(env_id: str, kwargs: dict[str, Any], seed: int, actions: Any) -> di
             "pose",
             "h_position",
             "wheel_rates",
+            "wheel_angles",
+            "castor_angle",
+            "time",
             "cross_track_error",
             "track",
             "speed",
@@ -90,16 +103,21 @@ def _wild(obs: Any, rng: np.random.Generator) -> Any:
     return rng.uniform(-1.2, 1.2, 2)
 
 
+#: AmigoBot-v1's two routes for these settings: the reference (task/v1.py) and AmigoBot-v0's compiled step
+ROUTES = ["numpy", pytest.param("numba", marks=pytest.mark.skipif(not numba_available(), reason="needs numba"))]
+
+
+@pytest.mark.parametrize("kernel", ROUTES)
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("policy", ["random", "wild", "analytic"])
-def test_v1_configured_as_v0_steps_as_v0(seed: int, policy: str) -> None:
+def test_v1_configured_as_v0_steps_as_v0(seed: int, policy: str, kernel: str) -> None:
     v0 = gym.make("AmigoBot-v0").unwrapped
     actions = {"random": _random, "wild": _wild}.get(policy)
     if actions is None:
         pol = AnalyticPolicy(v0.params)
         actions = lambda obs, rng: pol.action(obs)  # noqa: E731
     want = _episode("AmigoBot-v0", {}, seed, actions)
-    got = _episode("AmigoBot-v1", V0_CONFIG, seed, actions)
+    got = _episode("AmigoBot-v1", {**V0_CONFIG, "kernel": kernel}, seed, actions)
     assert len(want["reward"]) >= 10
     assert mismatches(got, want) == []
 
@@ -115,25 +133,106 @@ def test_observation_names_and_bounds_are_v0s() -> None:
     np.testing.assert_array_equal(AnalyticPolicy(v1.params).action(o1), AnalyticPolicy(v0.params).action(o0))
 
 
-def test_vector_env_configured_as_v0_steps_as_v0s_vector_env() -> None:
+def _flat_info(info: dict[str, Any], rec: dict[str, list[Any]]) -> None:
+    """Record a vector info's arrays by key (reward terms by their names), the ``_key`` masks and final infos left."""
+    for key, value in info.items():
+        if key.startswith("_") or key in ("final_obs", "final_info"):
+            continue
+        if isinstance(value, dict):
+            _flat_info(value, rec)
+        else:
+            assert value.dtype == np.float64, key
+            rec.setdefault(key, []).append(value)
+
+
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
+@pytest.mark.parametrize("kernel", [*ROUTES, pytest.param("numba-parallel", marks=ROUTES[1].marks)])
+def test_vector_env_configured_as_v0_steps_as_v0s_vector_env(kernel: str, mode: str) -> None:
+    """Observations, rewards, ends and every info entry (v0's keys) beside AmigoBot-v0's vector env, with
+    autoresets (wide random actions end episodes every few steps)."""
     n = 6
-    e0 = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point")
-    e1 = gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **V0_CONFIG)
-    o0, _ = e0.reset(seed=3)
-    o1, _ = e1.reset(seed=3)
+    kw: dict[str, Any] = {"num_envs": n, "vectorization_mode": "vector_entry_point", "autoreset_mode": mode}
+    kw["max_episode_steps"] = 25  # truncations too
+    e0 = gym.make_vec("AmigoBot-v0", **kw)
+    e1 = gym.make_vec("AmigoBot-v1", **kw, **V0_CONFIG, kernel=kernel)
+    o0, i0 = e0.reset(seed=3)
+    o1, i1 = e1.reset(seed=3)
+    assert set(i1) == set(i0)
     rng = np.random.default_rng(0)
     want: dict[str, list[Any]] = {"obs": [o0], "reward": []}
     got: dict[str, list[Any]] = {"obs": [o1], "reward": []}
-    for _ in range(30):
-        a = (0.27 + 0.2 * rng.uniform(-1.0, 1.0, (n, 2))).astype(np.float32)
-        o0, r0, t0, _, _ = e0.step(a)
-        o1, r1, t1, _, _ = e1.step(a)
+    _flat_info(i0, want)
+    _flat_info(i1, got)
+    ends = truncations = 0
+    for _ in range(60):
+        a = (0.27 + 0.9 * rng.uniform(-1.0, 1.0, (n, 2))).astype(np.float32)
+        o0, r0, t0, u0, i0 = e0.step(a)
+        o1, r1, t1, u1, i1 = e1.step(a)
         np.testing.assert_array_equal(t1, t0)
+        np.testing.assert_array_equal(u1, u0)
+        assert set(i1) == set(i0)
+        if "final_obs" in i0:  # SameStep: the last observation and info of the episodes that ended
+            np.testing.assert_array_equal(i1["_final_obs"], i0["_final_obs"])
+            for k in np.flatnonzero(i0["_final_obs"]):
+                np.testing.assert_array_equal(i1["final_obs"][k], i0["final_obs"][k])
+            _flat_info(i0["final_info"], want)
+            _flat_info(i1["final_info"], got)
+        ends += int(t0.sum())
+        truncations += int(u0.sum())
         want["obs"].append(o0)
         got["obs"].append(o1)
         want["reward"].append(r0)
         got["reward"].append(r1)
+        _flat_info(i0, want)
+        _flat_info(i1, got)
+    assert ends >= 2 and truncations >= 2, (ends, truncations)
     assert mismatches({k: np.array(v) for k, v in got.items()}, {k: np.array(v) for k, v in want.items()}) == []
+
+
+@pytest.mark.skipif(not numba_available(), reason="needs numba")
+def test_vector_routes_agree_with_other_generators_and_copies() -> None:
+    """The compiled route (v0's kernel) beside the reference with one generator the kernel cannot draw from
+    (MT19937: its restarts are drawn by the reference) and after a pickled copy: the same steps."""
+    import pickle
+
+    kw: dict[str, Any] = {"num_envs": 8, "vectorization_mode": "vector_entry_point", **V0_CONFIG}
+    fast_env = gym.make_vec("AmigoBot-v1", kernel="numba", **kw).unwrapped
+    ref = gym.make_vec("AmigoBot-v1", kernel="numpy", **kw).unwrapped
+    assert fast_env._v0 is not None and ref._v0 is None
+    for e in (fast_env, ref):
+        e.reset(seed=1)
+        e._rngs[4] = np.random.Generator(np.random.MT19937(9))
+    rng = np.random.default_rng(2)
+    want: dict[str, list[Any]] = {"obs": [], "reward": [], "ends": []}
+    got: dict[str, list[Any]] = {"obs": [], "reward": [], "ends": []}
+    for t in range(60):
+        if t == 30:
+            fast_env = pickle.loads(pickle.dumps(fast_env))
+        a = 0.27 + 0.6 * rng.uniform(-1.0, 1.0, (8, 2))
+        for e, rec in ((fast_env, got), (ref, want)):
+            obs, reward, terminated, _, info = e.step(a)
+            rec["obs"].append(obs)
+            rec["reward"].append(reward)
+            rec["ends"].append(terminated.astype(float))
+            _flat_info(info, rec)
+    assert np.sum(want["ends"]) >= 5
+    assert mismatches({k: np.array(v) for k, v in got.items()}, {k: np.array(v) for k, v in want.items()}) == []
+
+
+@pytest.mark.parametrize("kernel", ROUTES)
+def test_heading_past_the_limit_is_reduced_as_v0_reduces_it(kernel: str) -> None:
+    """A robot spinning past |beta| = 1e6 rad: its heading reduced by whole turns on both routes, as AmigoBot-v0."""
+    v0 = gym.make("AmigoBot-v0", termination_distance=10.0).unwrapped
+    v1 = gym.make("AmigoBot-v1", **{**V0_CONFIG, "termination_distance": 10.0}, kernel=kernel).unwrapped
+    for e in (v0, v1):
+        e.reset(seed=0, options={"pose": (0.0, 0.0, 1e6 - 0.05)})
+    a = np.array([1.0, -1.0])  # spin: the heading crosses 1e6 rad
+    for _ in range(3):
+        (o0, r0, t0, _, i0), (o1, r1, t1, _, i1) = v0.step(a), v1.step(a)
+        np.testing.assert_array_equal(o1, o0)
+        assert (r1, t1) == (r0, t0)
+        np.testing.assert_array_equal(i1["pose"], i0["pose"])
+    assert abs(i1["pose"][2]) < 7.0
 
 
 def test_v0_settings_are_checked() -> None:
@@ -149,6 +248,12 @@ def test_v0_settings_are_checked() -> None:
         tracking.make_tracking_params("t", ideal_actuators=True, actuators={"delay": 0.1})
     with pytest.raises(ValueError, match=r"kernel='numba' has only the default"):
         tracking.kernel_choice("AmigoBotV1Env", tracking.TrackingParams(observation="v0"), "numba")
+    # v0's settings: AmigoBot-v0's compiled step, not AmigoBot-v1's
+    v0p = tracking.make_tracking_params("t", **V0_CONFIG)
+    assert tracking.v0_settings(v0p) == amigo_gym.EnvParams()
+    assert tracking.kernel_choice("E", v0p, "numba") == "numpy"
+    for off in ({"start_at_rest": True}, {"path": CirclePath(radius=1.0, start_angle=0.1)}, {"goal_tolerance": 0.1}):
+        assert tracking.v0_settings(tracking.make_tracking_params("t", **{**V0_CONFIG, **off})) is None
     assert tracking.kernel_choice("E", tracking.TrackingParams(reward="v0"), "auto") == "numpy"
     assert tracking.kernel_choice("E", tracking.TrackingParams(), "auto") == "auto"
 
@@ -203,11 +308,12 @@ def test_circle_locate_is_its_projection() -> None:
     ],
 )
 @pytest.mark.parametrize("policy", ["random", "analytic"])
-def test_other_v0_settings(v0_kwargs: dict[str, Any], path: Any, policy: str) -> None:
+@pytest.mark.parametrize("kernel", ROUTES)
+def test_other_v0_settings(v0_kwargs: dict[str, Any], path: Any, policy: str, kernel: str) -> None:
     """Other radii, directions, speeds, periods, previews, scales and the manoeuvre path: the same agreement."""
     v0 = gym.make("AmigoBot-v0", **v0_kwargs).unwrapped
     same = {k: v for k, v in v0_kwargs.items() if k not in ("path", "radius", "direction", "straight_length")}
-    config = {**V0_CONFIG, **same, "path": path}
+    config = {**V0_CONFIG, **same, "path": path, "kernel": kernel}
     actions = _random
     if policy == "analytic":
         pol = AnalyticPolicy(v0.params)

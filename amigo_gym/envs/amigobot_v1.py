@@ -15,13 +15,14 @@ import numpy as np
 from gymnasium import spaces
 
 from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces
+from amigo_gym.model.kinematics import body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast_v1
+from amigo_gym.sim import fast, fast_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS"]
+__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values", "v0_record_info"]
 
 # entries of the compiled step's workspace (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
@@ -75,6 +76,40 @@ def info_values(
     info["slip"] = (noise.slip1, noise.slip2)
     info["end_of_path"] = out.end_of_path
     return info
+
+
+def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor: Any) -> dict[str, Any]:
+    """AmigoBot-v0's info (:data:`amigo_gym.task.v0.INFO_KEYS`) of a step or start of the reference with v0's
+    settings (:func:`amigo_gym.task.v1.v0_settings`), as :func:`info_values` gives AmigoBot-v1's: floats and tuples
+    (one robot) or ``(N,)`` columns. ``dt`` [s]; ``castor`` the castor wheel's rolling angle [rad] (the reference
+    of AmigoBot-v1 does not integrate it: the envs do, as AmigoBot-v0's step)."""
+    return {
+        "pose": (st.x, st.y, st.beta),
+        "h_position": (out.h_x, out.h_y),
+        "cross_track_error": out.error,
+        "wheel_rates": (st.w1, st.w2),
+        "wheel_angles": (st.alpha1, st.alpha2),
+        "castor_angle": castor,
+        "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
+        "time": st.steps * dt,
+    }
+
+
+def v0_record_info(fs: fast.SingleStep, rec: list[float], time: float) -> dict[str, Any]:
+    """AmigoBot-v0's info (:data:`amigo_gym.task.v0.INFO_KEYS`) of a step of its compiled step ``fs``: ``rec`` the
+    record of :meth:`amigo_gym.sim.fast.SingleStep.step` (x, y, beta, h_x, h_y, e, rate1, rate2, alpha1, alpha2,
+    alpha3, track, speed, heading, smooth, reward), ``time`` [s]."""
+    arr = fs.head.copy()  # the four info arrays are views of one new array
+    return {
+        "pose": arr[0:3],
+        "h_position": arr[3:5],
+        "cross_track_error": rec[5],
+        "wheel_rates": arr[6:8],
+        "wheel_angles": arr[8:10],
+        "castor_angle": rec[10],
+        "reward_terms": {"track": rec[11], "speed": rec[12], "heading": rec[13], "smooth": rec[14]},
+        "time": time,
+    }
 
 
 def _single(value: Any) -> Any:
@@ -206,6 +241,13 @@ class AmigoBotV1Env(AmigoBotBase):
         self._delay = 0.0
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
         fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
+        self.v0_params = tracking.v0_settings(p)
+        # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings: the state lives in its buffer
+        self._v0: fast.SingleStep | None = None
+        if self.v0_params is not None and fast.use_fast_path(None if kernel == "auto" else kernel == "numba"):
+            self._v0 = fast.SingleStep(task.task_constants(self.v0_params), fixed)
+        self._castor = 0.0  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._goal = (math.nan, math.nan)
         self.path: Any = fixed
         self._obs_shape: tuple[int, ...] = self.observation_space.shape  # type: ignore[assignment]
@@ -235,6 +277,12 @@ class AmigoBotV1Env(AmigoBotBase):
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
         self._goal = tracking.goal_point(self.params, self.path)
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
+        if self.v0_params is not None:  # AmigoBot-v0's settings: its start (the reference's) and its info
+            out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
+            self._castor = 0.0
+            if self._v0 is not None:
+                self._v0.set_state((st.x, st.y, st.beta, st.alpha1, st.alpha2, 0.0, st.w1, st.w2))
+            return np.array(out.obs, dtype=np.float32), self._v0_info(st, out)
         if kern is not None and self._in_kernel:
             # tracking.reset_columns, compiled: the start state without noise, its own previous command
             kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
@@ -253,6 +301,8 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
+        if self._v0 is not None:
+            return self._step_v0(self._v0, a1, a2)
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
@@ -263,6 +313,11 @@ class AmigoBotV1Env(AmigoBotBase):
         self._state = st
         self._steps = int(st.steps)
         self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
+        if self.v0_params is not None:  # AmigoBot-v0's settings on the reference route: v0's info
+            robot = self._k.nominal
+            v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
+            self._castor = self._castor + castor_rate_float(v, bdot, robot.l5, robot.r3) * self.params.dt
+            return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._v0_info(st, out)
         info = self._info(out, noise)
         terminated = self._end(bool(out.terminated), float(out.h_x), float(out.h_y), info)
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
@@ -288,6 +343,22 @@ class AmigoBotV1Env(AmigoBotBase):
         terms = info["reward_terms"]
         reward = float(task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"]))
         return obs, reward, self._end(o[_W_TERM] != 0.0, o[_W_HX], o[_W_HY], info), info
+
+    def _step_v0(self, fs: fast.SingleStep, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
+        """:meth:`_advance` with AmigoBot-v0's settings by AmigoBot-v0's compiled step (:class:`amigo_gym.sim.fast.
+        SingleStep`): the reference's results (:func:`amigo_gym.task.v1.step_columns` with ideal actuators) and v0's
+        info."""
+        rec = fs.step(a1, a2)
+        if fs.past_limit:  # |beta| > HEADING_LIMIT: reduced by whole turns (task.bound_heading), as AmigoBot-v0
+            st = task.bound_heading(task.State(*fs.state()))
+            fs.set_state(st)
+            rec[2] = fs.record[2] = float(st.beta)
+        self._steps += 1
+        return fs.obs_row.copy(), rec[15], bool(fs.flags[0, 1]), v0_record_info(fs, rec, self._steps * self.params.dt)
+
+    def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
+        """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""
+        return {key: _single(v) for key, v in v0_info_values(self.params.dt, st, out, self._castor).items()}
 
     def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
@@ -371,6 +442,10 @@ class AmigoBotV1Env(AmigoBotBase):
             raise gym.error.ResetNeeded("call reset() before _current_state() on AmigoBot-v1")
         if self._kernel is not None and self._in_kernel:
             return self._kernel.state(self._steps)
+        if self._v0 is not None:  # AmigoBot-v0's compiled step: its state (H's progress is not tracked)
+            x, y, beta, alpha1, alpha2, _, w1, w2 = self._v0.state()
+            w_max = self._k.w_max
+            return tracking.State(x, y, beta, w1, w2, alpha1, alpha2, math.nan, w1 / w_max, w2 / w_max, self._steps)
         return self._state
 
     # ------------------------------------------------------------------ info

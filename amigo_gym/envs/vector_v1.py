@@ -32,7 +32,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1
+from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, v0_info_values
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -46,8 +46,9 @@ from amigo_gym.envs.base import (
     check_vector_args,
 )
 from amigo_gym.model import actuators
+from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast_v1, fast_v1_batch
+from amigo_gym.sim import fast, fast_v1, fast_v1_batch
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
@@ -193,6 +194,19 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if fast_v1.use_kernel(owner, choice) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
+        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
+        self.v0_params = tracking.v0_settings(p)
+        # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings, on its rows (N, 8): x, y, beta, alpha1,
+        # alpha2, alpha3, w1, w2 (the state columns are views of them)
+        self._v0: fast.Workspace | None = None
+        self._parallel = kernel == "numba-parallel"
+        self._rows = np.zeros((n, 8))
+        self._castor = z.copy()  # the castor's rolling angle [rad] (v0's info)
+        if self.v0_params is not None and fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
+            self._v0 = fast.workspace(task.task_constants(self.v0_params), fixed, n)
+            self._state = self._v0_views(self._state)
+        self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the v0 kernel's restart mask when none restarts
+        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._ring_step = 0
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
@@ -250,6 +264,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
                 cols.setdefault(key, []).append(value)
         self.paths.replace(idx, paths)
+        self._castor[idx] = 0.0
         infos = {key: _stack(v) for key, v in cols.items()}
         self._start_trails(idx, _array(infos["h_position"]))
         self._goal[idx] = [tracking.goal_point(self.params, path) for path in paths]
@@ -293,8 +308,67 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._ring[i, :, 0] = st.a1 * w_max
         self._ring[i, :, 1] = st.a2 * w_max
 
+    def _v0_views(self, st: tracking.State) -> tracking.State:
+        """The state columns with the pose, wheel rates and wheel angles as views of AmigoBot-v0's rows (its
+        compiled step, v0's settings); the castor angle :attr:`_castor` too."""
+        r = self._rows
+        self._castor = r[:, 5]
+        return st._replace(x=r[:, 0], y=r[:, 1], beta=r[:, 2], alpha1=r[:, 3], alpha2=r[:, 4], w1=r[:, 6], w2=r[:, 7])
+
+    def _step_v0(self, ws: fast.Workspace, a: Array, mode: AutoresetMode) -> StepResult:
+        """:meth:`_step` with AmigoBot-v0's settings by AmigoBot-v0's compiled step (:func:`amigo_gym.sim.fast.
+        step_rows`): the reference's results, v0's infos.
+
+        Robots restarting (``NEXT_STEP``) get their start states inside the step, drawn from their generators' C bit
+        generators as :func:`amigo_gym.task.v1.begin_episode` draws them (``tests/test_v0_as_v1.py``) when every
+        generator is a ``PCG64``; otherwise after it, by :meth:`_reset_rows` (the reference).
+        """
+        n = self.num_envs
+        restart, bitgens, idx = self._no_restart, None, None
+        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+            if self._rngs.drawable:
+                restart, bitgens = self._autoreset, self._rngs.bitgens
+            else:
+                idx = np.flatnonzero(self._autoreset)
+        obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
+        reward = np.empty(n)
+        terminated: BoolArray = np.empty(n, dtype=np.bool_)
+        record = np.empty((n, 16))
+        report = fast.step_rows_unchecked(
+            ws, self._rows, np.ascontiguousarray(a), restart, obs, reward, terminated, record, self._parallel, bitgens
+        )
+        drawn = self._no_rows
+        if bitgens is not None:  # the rows restarted in the step (ws.rows is its scratch)
+            idx = drawn = ws.rows[: report.drawn].copy()
+        # steps += 1, 0 for the rows restarted in the step; truncated = steps >= max_episode_steps; time = steps * dt
+        truncated: BoolArray = np.empty(n, dtype=np.bool_)
+        time = np.empty(n)
+        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
+        fast.kernels().count_steps(np.asarray(self._state.steps), drawn, limit, self.params.dt, truncated, time)
+        if report.past_limit:  # headings past the limit reduced by whole turns (task.bound_heading), as AmigoBot-v0
+            self._rows[:, 2] = record[:, 2] = task.bound_heading(task.State(*self._rows.T)).beta
+        if self.render_mode is not None:
+            self._h_now[:] = record[:, 3:5]
+            self._start_trails(drawn, record[drawn, 3:5])
+        infos = {
+            "pose": record[:, 0:3],
+            "h_position": record[:, 3:5],
+            "cross_track_error": record[:, 5],
+            "wheel_rates": record[:, 6:8],
+            "wheel_angles": record[:, 8:10],
+            "castor_angle": record[:, 10],
+            "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(tracking.REWARD_TERMS)},
+            "time": time,
+        }
+        if bitgens is None and idx is not None:
+            obs[idx], info_r = self._reset_rows(idx)
+            assign_rows(infos, info_r, idx)
+        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
+
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""
+        if self._v0 is not None:
+            return self._step_v0(self._v0, a, mode)
         a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
         if self._batch is not None:
@@ -304,7 +378,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
             self._h_now[:, 0] = hx
             self._h_now[:, 1] = hy
-        terminated = self._end(terminated, infos, hx, hy)
+        if self.v0_params is None:  # (AmigoBot-v0's settings: no goal, no end condition in the infos)
+            terminated = self._end(terminated, infos, hx, hy)
         truncated = self._truncated(np.asarray(self._state.steps))
         restart = None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
@@ -316,11 +391,15 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
         """The robots ``idx`` started a new episode: no end condition."""
+        if self.v0_params is not None:
+            return
         infos["end_condition"] = infos["end_condition"].copy()
         infos["end_condition"][idx] = ""
 
     def _mark_final(self, final_info: dict[str, Any], done: BoolArray) -> None:
         """``final_info["end_condition"]`` is ``None`` outside ``done``, as ``SyncVectorEnv`` gathers it."""
+        if self.v0_params is not None:
+            return
         final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
 
     def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
@@ -351,6 +430,10 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
         )
         self._state = tracking.State(*(np.asarray(c) for c in st))
+        if self.v0_params is not None:  # the castor angle of v0's info, as AmigoBot-v0's step integrates it
+            robot = self._k.nominal
+            v, bdot = body_velocity_columns(self._state.w1, self._state.w2, robot)
+            self._castor = self._castor + castor_rate_columns(v, bdot, robot) * self.params.dt
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
             obs[:, j] = c
@@ -421,13 +504,19 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         return tracking.State._make([*cols, steps])
 
     # ------------------------------------------------------------------ infos
-    def _row_info(self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
-        """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``)."""
+    def _row_info(
+        self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any, castor: Any = 0.0
+    ) -> dict[str, Any]:
+        """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``;
+        AmigoBot-v0's, :func:`v0_info_values`, with its settings)."""
+        if self.v0_params is not None:
+            return v0_info_values(self.params.dt, st, out, castor)
         return info_values(self.params.dt, self._k.w_max, st, ep, out, noise)
 
     def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
         return {
-            k: _as_columns(v, self.num_envs) for k, v in self._row_info(self._state, self._episode, out, noise).items()
+            k: _as_columns(v, self.num_envs)
+            for k, v in self._row_info(self._state, self._episode, out, noise, self._castor).items()
         }
 
     def _infos(self, cols: dict[str, Any], idx: NDArray[np.intp] | None) -> dict[str, Any]:
@@ -457,6 +546,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.__dict__.update(state)
         if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
             self._state = self._state_views(np.asarray(self._state.steps))
+        if self._v0 is not None:  # and of AmigoBot-v0's rows
+            self._state = self._v0_views(self._state)
 
 
 def _as_columns(v: Any, n: int) -> Any:

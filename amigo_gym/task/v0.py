@@ -258,23 +258,30 @@ _PAIR_CHARS = ("f", "d")
 
 
 def bound_heading(state: State) -> State:
-    """``state`` with its heading reduced by whole turns where ``|beta| > HEADING_LIMIT`` (1e6 rad).
+    """``state`` with its heading reduced by whole turns where ``|beta| > HEADING_LIMIT`` (1e6 rad)
+    (:func:`bound_angle`); a no-op (the same object) otherwise."""
+    b = state.beta
+    nb = bound_angle(b)
+    return state if nb is b else state._replace(beta=nb)
+
+
+def bound_angle(b: Real) -> Real:
+    """A heading ``b`` [rad] (a float or a column) reduced by whole turns where ``|b| > HEADING_LIMIT`` (1e6 rad).
 
     The heading is kept unwrapped (continuous) along an episode; only a robot that has spun more than
     159 155 turns gets ``beta - 2 pi round(beta / 2 pi)``, so that float64 keeps resolving a step's turn.
-    Cosine and sine are unchanged up to rounding. A no-op (the same object) otherwise.
+    Cosine and sine are unchanged up to rounding. ``b`` itself (the same object) when nothing is reduced.
     """
-    b = state.beta
     if isinstance(b, np.ndarray):
         if b.size == 0 or (b.max() <= HEADING_LIMIT and b.min() >= -HEADING_LIMIT):
-            return state
+            return b
         big = np.abs(b) > HEADING_LIMIT
         nb = b.copy()
         nb[big] = b[big] - TWO_PI * np.round(b[big] / TWO_PI)
-        return state._replace(beta=nb)
+        return nb
     if -HEADING_LIMIT <= b <= HEADING_LIMIT:
-        return state
-    return state._replace(beta=b - TWO_PI * round(b / TWO_PI))
+        return b
+    return b - TWO_PI * round(b / TWO_PI)
 
 
 def initial_wheel_rates(params: EnvParams) -> Array:

@@ -74,11 +74,13 @@ from amigo_gym.model.kinematics import (
     col_sin,
     h_from_a,
 )
-from amigo_gym.model.params import RobotParams, check_range, show_value
+from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
+from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
+    bound_angle,
     error_bound,
     heading_error,
     reward_product,
@@ -98,6 +100,7 @@ __all__ = [
     "obs_bounds",
     "Constants",
     "constants",
+    "v0_settings",
     "Episode",
     "State",
     "Outcome",
@@ -206,7 +209,9 @@ class TrackingParams:
     With ``ideal_actuators=True, observation="v0", reward="v0"``, ``randomize="none"``, ``start_at_rest=False``,
     a constant ``speed``, v0's ``preview`` (0.2, 0.4) and the path ``amigo_gym.paths.CirclePath(radius, direction=...)``
     (a path object: its projection is v0's), ``AmigoBot-v1`` steps as ``AmigoBot-v0``
-    (``tests/test_v0_as_v1.py``). These settings run the reference step (the compiled step has only the defaults).
+    (``tests/test_v0_as_v1.py``). These settings (:func:`v0_settings`) run AmigoBot-v0's compiled step
+    (:mod:`amigo_gym.sim.fast`), or this module's reference step with ``kernel="numpy"``; AmigoBot-v1's compiled step
+    has only ``ideal_actuators=False, observation="v1", reward="v1"``.
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -589,15 +594,67 @@ def constants(p: TrackingParams) -> Constants:
     )
 
 
+def v0_settings(p: TrackingParams) -> EnvParams | None:
+    """The AmigoBot-v0 task that ``p`` describes, or ``None``: the settings whose steps AmigoBot-v0's compiled
+    step (:mod:`amigo_gym.sim.fast`) gives bit for bit, and whose info has AmigoBot-v0's keys.
+
+    They are ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise (the ideal actuators
+    already exclude delay, slip, a true robot and randomised geometry), ``start_at_rest=False``, a constant
+    ``speed`` with the constant profile, ``goal_tolerance=0`` and a path object equal to the path of the returned
+    :class:`amigo_gym.model.params.EnvParams` (``CirclePath(radius, direction=...)`` or
+    ``ManoeuvrePath(radius, straight_length, direction)``, from the origin along x0); settings that
+    :class:`~amigo_gym.model.params.EnvParams` refuses (e.g. a speed the circle cannot be driven at) are not v0's.
+    """
+    path = p.path
+    kind: Literal["circle", "manoeuvre"] = "circle" if type(path) is CirclePath else "manoeuvre"
+    if (
+        type(path) not in (CirclePath, ManoeuvrePath)
+        or not (p.ideal_actuators and p.observation == "v0" and p.reward == "v0")
+        or p.randomize.has_noise
+        or p.start_at_rest
+        or isinstance(p.speed, tuple)
+        or p.speed_profile != "constant"
+        or p.goal_tolerance != 0.0
+    ):
+        return None
+    try:
+        e = EnvParams(
+            robot=p.robot,
+            dt=p.dt,
+            radius=path.radius,
+            speed=p.speed,
+            direction=path.direction,
+            path=kind,
+            straight_length=getattr(path, "straight_length", 1.0),
+            termination_distance=p.termination_distance,
+            init_position_noise=p.init_position_noise,
+            init_heading_noise=p.init_heading_noise,
+            error_scale=p.error_scale,
+            preview=p.preview,
+            sigma_track=p.sigma_track,
+            sigma_speed=p.sigma_speed,
+            sigma_smooth=p.sigma_smooth,
+            smooth_weight=p.smooth_weight,
+        )
+    except ValueError:
+        return None
+    return e if make_path(e) == path else None
+
+
 def kernel_choice(owner: str, p: TrackingParams, kernel: Any) -> Any:
-    """The ``kernel=`` keyword the env uses: ``"numpy"`` for settings only the reference step has
-    (:attr:`TrackingParams.reference_only`), else ``kernel`` itself.
+    """The ``kernel=`` keyword of AmigoBot-v1's compiled step (:mod:`amigo_gym.sim.fast_v1`): ``"numpy"`` for
+    settings only the reference step has (:attr:`TrackingParams.reference_only`), else ``kernel`` itself.
+
+    (Settings that are AmigoBot-v0's, :func:`v0_settings`, accept ``kernel="numba"``: the envs then run AmigoBot-v0's
+    compiled step, :mod:`amigo_gym.sim.fast`.)
 
     Raises:
-        ValueError: ``kernel="numba"`` with such settings (one line naming them).
+        ValueError: ``kernel="numba"`` with settings neither compiled step has (one line naming them).
     """
     if not p.reference_only:
         return kernel
+    if kernel == "numba" and v0_settings(p) is not None:
+        return "numpy"
     if kernel == "numba":
         raise ValueError(
             f"{owner}: kernel='numba' has only the default ideal_actuators=False, observation='v1', reward='v1'; got "
@@ -1272,7 +1329,8 @@ def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2
 
     The wheel rates ``w_i = c_i w_max`` [rad/s] are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
     (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
-    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``.
+    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``. A heading past
+    ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
     """
     from amigo_gym.model.randomization import step_noise
 
@@ -1285,7 +1343,8 @@ def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2
     arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
     steps = state.steps + 1
     new = State(
-        arc.x, arc.y, arc.beta, w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1, c2, steps
+        arc.x, arc.y, bound_angle(arc.beta), w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1,
+        c2, steps,
     )  # fmt: skip
     out, progress = evaluate_columns(
         k,
