@@ -23,8 +23,9 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 * ``ppo_fast_hand``: the previous release's ``ppo_fast``, before the sweep: the module's defaults with the low-pass
   action parameterisation ``--filter-alpha 0.5`` (of the smoothness variants measured on the validation seeds,
   docs/baselines.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
-* ``ppo_fast_30m``: the same for 30M env-steps (the learning rate anneals over the longer run): the settled chatter
-  keeps falling (docs/baselines.md, "Time to quality"; ``experiments/time_to_quality.py``);
+* ``ppo_fast_30m``: ``ppo_fast_hand`` for 30M env-steps (the learning rate anneals over the longer run): the
+  settled chatter keeps falling; seeds 1-4 not continued, superseded by the tuned ``ppo_fast`` (docs/baselines.md,
+  "Time to quality"; ``experiments/time_to_quality.py``);
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
   actuation delay 0-0.3 s, ``mild``'s noise; the correction is bounded to +-0.3 of the action range and the
   policy observes the last 4 steps' commands and measurements (``--history 4``: 0.4 s, longer than the delays).
