@@ -23,6 +23,8 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 * ``ppo_fast_hand``: the previous release's ``ppo_fast``, before the sweep: the module's defaults with the low-pass
   action parameterisation ``--filter-alpha 0.5`` (of the smoothness variants measured on the validation seeds,
   docs/baselines.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
+* ``ppo_fast_curv``: ``ppo_fast`` with the curvature curriculum up to 4.25 1/m (K(0.4), the most the env accepts
+  at the top speed; docs/baselines.md, "Failure rate per curvature bin");
 * ``ppo_fast_30m``: ``ppo_fast_hand`` for 30M env-steps (the learning rate anneals over the longer run): the
   settled chatter keeps falling; seeds 1-4 not continued, superseded by the tuned ``ppo_fast`` (docs/baselines.md,
   "Time to quality"; ``experiments/time_to_quality.py``);
@@ -86,6 +88,17 @@ AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
     "ppo_fast_hand": (
         dict(TRAINING_DISTRIBUTION["env_kwargs"]),
         ["--total-steps", "15000000", "--filter-alpha", "0.5"],
+    ),
+    "ppo_fast_curv": (
+        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
+        [
+            "--hyperparams",
+            "agents/hyperparams/fastppo.yml",
+            "--total-steps",
+            "10000000",
+            "--curriculum-max-curvature",
+            "4.25",
+        ],
     ),
     "ppo_fast_30m": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "30000000", "--filter-alpha", "0.5"]),
     "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
