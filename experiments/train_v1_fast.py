@@ -19,7 +19,11 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 
 * ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
   with the settings the sweep found (``agents/hyperparams/fastppo.yml``: its best trial, including the low-pass
-  action filter and the CAPS smoothness weight), 10M env-steps; run from the repository's root (the relative path);
+  action filter and the CAPS smoothness weight) and the curvature curriculum to 4.25 1/m, 10M env-steps; run from
+  the repository's root (the relative path). The shipped seeds ran under the name ``ppo_fast_curv`` (the same
+  command) and were exported as ``ppo_fast``;
+* ``ppo_fast_nocurv``: the same without the curriculum (the first tuned seeds; they failed half the paths above
+  2 1/m at 0.4 m/s);
 * ``ppo_fast_hand``: the previous release's ``ppo_fast``, before the sweep: the module's defaults with the low-pass
   action parameterisation ``--filter-alpha 0.5`` (of the smoothness variants measured on the validation seeds,
   docs/baselines.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
@@ -83,7 +87,25 @@ RESIDUAL2_ENV_KWARGS: dict[str, object] = {
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
     "ppo_fast": (
         dict(TRAINING_DISTRIBUTION["env_kwargs"]),
-        ["--hyperparams", "agents/hyperparams/fastppo.yml", "--total-steps", "10000000"],
+        [
+            "--hyperparams",
+            "agents/hyperparams/fastppo.yml",
+            "--total-steps",
+            "10000000",
+            "--curriculum-max-curvature",
+            "4.25",
+        ],
+    ),
+    "ppo_fast_nocurv": (
+        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
+        [
+            "--hyperparams",
+            "agents/hyperparams/fastppo.yml",
+            "--total-steps",
+            "10000000",
+            "--curriculum-max-curvature",
+            "0",
+        ],
     ),
     "ppo_fast_hand": (
         dict(TRAINING_DISTRIBUTION["env_kwargs"]),
