@@ -352,18 +352,8 @@ class AmigoBotEnv(AmigoBotBase):
             self._state = st
             rec[2] = fs.record[2] = float(st.beta)
         self._steps += 1
-        # record: x, y, beta, h_x, h_y, e, rate1, rate2, alpha1, alpha2, alpha3, track, speed, heading, smooth, reward
-        arr = fs.head.copy()  # the four info arrays are views of one new array
-        info = {
-            "pose": arr[0:3],
-            "h_position": arr[3:5],
-            "cross_track_error": rec[5],
-            "wheel_rates": arr[6:8],
-            "wheel_angles": arr[8:10],
-            "castor_angle": rec[10],
-            "reward_terms": {"track": rec[11], "speed": rec[12], "heading": rec[13], "smooth": rec[14]},
-            "time": float(self._steps * self._k.dt),
-        }
+        # the four info arrays are views of one new array
+        info = task.record_info(fs.head.copy(), rec, float(self._steps * self._k.dt))
         return fs.obs_row.copy(), rec[15], bool(fs.flags[0, 1]), info
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:

@@ -22,7 +22,7 @@ from amigo_gym.sim import fast, fast_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values", "v0_record_info"]
+__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values"]
 
 # entries of the compiled step's workspace (amigo_gym.sim.fast_v1.WS_FIELDS)
 _W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
@@ -92,23 +92,6 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
         "castor_angle": castor,
         "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
         "time": st.steps * dt,
-    }
-
-
-def v0_record_info(fs: fast.SingleStep, rec: list[float], time: float) -> dict[str, Any]:
-    """AmigoBot-v0's info (:data:`amigo_gym.task.v0.INFO_KEYS`) of a step of its compiled step ``fs``: ``rec`` the
-    record of :meth:`amigo_gym.sim.fast.SingleStep.step` (x, y, beta, h_x, h_y, e, rate1, rate2, alpha1, alpha2,
-    alpha3, track, speed, heading, smooth, reward), ``time`` [s]."""
-    arr = fs.head.copy()  # the four info arrays are views of one new array
-    return {
-        "pose": arr[0:3],
-        "h_position": arr[3:5],
-        "cross_track_error": rec[5],
-        "wheel_rates": arr[6:8],
-        "wheel_angles": arr[8:10],
-        "castor_angle": rec[10],
-        "reward_terms": {"track": rec[11], "speed": rec[12], "heading": rec[13], "smooth": rec[14]},
-        "time": time,
     }
 
 
@@ -354,7 +337,12 @@ class AmigoBotV1Env(AmigoBotBase):
             fs.set_state(st)
             rec[2] = fs.record[2] = float(st.beta)
         self._steps += 1
-        return fs.obs_row.copy(), rec[15], bool(fs.flags[0, 1]), v0_record_info(fs, rec, self._steps * self.params.dt)
+        return (
+            fs.obs_row.copy(),
+            rec[15],
+            bool(fs.flags[0, 1]),
+            task.record_info(fs.head.copy(), rec, self._steps * self.params.dt),
+        )
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""

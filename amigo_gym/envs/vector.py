@@ -261,16 +261,7 @@ class AmigoBotVectorEnv(AmigoBotVectorBase):
             self._rows[:, 2] = bounded
             record[:, 2] = bounded
         # the infos are views of the record, a new array at every step (the single env's keys)
-        infos = {
-            "pose": record[:, 0:3],
-            "h_position": record[:, 3:5],
-            "cross_track_error": record[:, 5],
-            "wheel_rates": record[:, 6:8],
-            "wheel_angles": record[:, 8:10],
-            "castor_angle": record[:, 10],
-            "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(task.REWARD_TERMS)},
-            "time": time,
-        }
+        infos = task.record_info(record, record.T, time)
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
     # ------------------------------------------------------------------ infos

@@ -350,16 +350,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if self.render_mode is not None:
             self._h_now[:] = record[:, 3:5]
             self._start_trails(drawn, record[drawn, 3:5])
-        infos = {
-            "pose": record[:, 0:3],
-            "h_position": record[:, 3:5],
-            "cross_track_error": record[:, 5],
-            "wheel_rates": record[:, 6:8],
-            "wheel_angles": record[:, 8:10],
-            "castor_angle": record[:, 10],
-            "reward_terms": {name: record[:, 11 + j] for j, name in enumerate(tracking.REWARD_TERMS)},
-            "time": time,
-        }
+        infos = task.record_info(record, record.T, time)
         if bitgens is None and idx is not None:
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)

@@ -121,6 +121,7 @@ __all__ = [
     "OBS_HEAD",
     "OBS_TAIL",
     "info_columns",
+    "record_info",
     "obs_index",
     "Motion",
     "move_columns",
@@ -615,6 +616,33 @@ def info_columns(state: State, out: Outcome, time: Any) -> dict[str, Any]:
         "wheel_angles": (state.alpha1, state.alpha2),
         "castor_angle": state.alpha3,
         "reward_terms": dict(zip(REWARD_TERMS, out.terms, strict=True)),
+        "time": time,
+    }
+
+
+def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
+    """The info dict (:data:`INFO_KEYS`) of a step record of the compiled step: the one builder of AmigoBot-v0's
+    info from a record (single and vector env, AmigoBot-v1 with v0's settings).
+
+    The record's 16 columns (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`): ``x, y, beta`` [m, m, rad], ``h_x, h_y``
+    [m], ``e`` [m], ``rate1, rate2`` [rad/s], ``alpha1, alpha2, alpha3`` [rad], the reward terms ``track, speed,
+    heading, smooth`` (:data:`REWARD_TERMS`) and the reward.
+
+    Args:
+        record: the record as an array, ``(16,)`` for one robot (or its first 10 columns) or ``(N, 16)``: the
+            ``"columns"`` entries are views of its last axis (hand over a new array at every step).
+        values: the record indexed by column for the ``"scalar"`` entries and the reward terms: its 16 floats (one
+            robot) or ``record.T`` (``(N,)`` views).
+        time: time since the episode's reset [s] (a float, or a column).
+    """
+    return {
+        "pose": record[..., 0:3],
+        "h_position": record[..., 3:5],
+        "cross_track_error": values[5],
+        "wheel_rates": record[..., 6:8],
+        "wheel_angles": record[..., 8:10],
+        "castor_angle": values[10],
+        "reward_terms": {name: values[11 + j] for j, name in enumerate(REWARD_TERMS)},
         "time": time,
     }
 
