@@ -83,62 +83,41 @@ RESIDUAL2_ENV_KWARGS: dict[str, object] = {
     "randomize": {"wheel_radius": [0.93, 1.07], "track": [0.93, 1.07], "slip": [0.0, 0.02], "delay": [0.0, 0.3]},
 }
 
-#: agent -> (env keywords, extra ``amigo-gym train-fast`` options)
+
+def steps(n: int) -> list[str]:
+    """The ``--total-steps`` option: ``n`` env-steps."""
+    return ["--total-steps", str(n)]
+
+
+def curriculum(max_curvature: str) -> list[str]:
+    """The curvature curriculum up to ``max_curvature`` [1/m] (``"0"``: none; docs/baselines.md)."""
+    return ["--curriculum-max-curvature", max_curvature]
+
+
+def mixed() -> dict[str, object]:
+    """A copy of the training distribution's env keywords (mixed paths, 0.1-0.4 m/s, ``mild``)."""
+    return dict(TRAINING_DISTRIBUTION["env_kwargs"])
+
+
+#: the settings the sweep found (its best trial, agents/hyperparams/fastppo.yml, a path from the repository's root)
+#: for 10M env-steps
+TUNED = ["--hyperparams", "agents/hyperparams/fastppo.yml", *steps(10_000_000)]
+#: the hand-set options before the sweep: the low-pass action parameterisation
+HAND = ["--filter-alpha", "0.5"]
+#: the residual's correction bound and history (RESIDUAL_ENV_KWARGS)
+RESIDUAL = ["--residual-bound", "0.3", "--history", "4"]
+#: the second residual's (RESIDUAL2_ENV_KWARGS)
+RESIDUAL2 = ["--residual-bound", "0.15", "--residual-penalty", "3.0", "--history", "4", "--nominal-fraction", "0.3"]
+
+#: agent -> (env keywords, extra ``amigo-gym train-fast`` options): one line an agent
 AGENTS: dict[str, tuple[dict[str, object], list[str]]] = {
-    "ppo_fast": (
-        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
-        [
-            "--hyperparams",
-            "agents/hyperparams/fastppo.yml",
-            "--total-steps",
-            "10000000",
-            "--curriculum-max-curvature",
-            "4.25",
-        ],
-    ),
-    "ppo_fast_nocurv": (
-        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
-        [
-            "--hyperparams",
-            "agents/hyperparams/fastppo.yml",
-            "--total-steps",
-            "10000000",
-            "--curriculum-max-curvature",
-            "0",
-        ],
-    ),
-    "ppo_fast_hand": (
-        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
-        ["--total-steps", "15000000", "--filter-alpha", "0.5"],
-    ),
-    "ppo_fast_curv": (
-        dict(TRAINING_DISTRIBUTION["env_kwargs"]),
-        [
-            "--hyperparams",
-            "agents/hyperparams/fastppo.yml",
-            "--total-steps",
-            "10000000",
-            "--curriculum-max-curvature",
-            "4.25",
-        ],
-    ),
-    "ppo_fast_30m": (dict(TRAINING_DISTRIBUTION["env_kwargs"]), ["--total-steps", "30000000", "--filter-alpha", "0.5"]),
-    "residual": (RESIDUAL_ENV_KWARGS, ["--total-steps", "10000000", "--residual-bound", "0.3", "--history", "4"]),
-    "residual2": (
-        RESIDUAL2_ENV_KWARGS,
-        [
-            "--total-steps",
-            "3000000",
-            "--residual-bound",
-            "0.15",
-            "--residual-penalty",
-            "3.0",
-            "--history",
-            "4",
-            "--nominal-fraction",
-            "0.3",
-        ],
-    ),
+    "ppo_fast": (mixed(), [*TUNED, *curriculum("4.25")]),
+    "ppo_fast_nocurv": (mixed(), [*TUNED, *curriculum("0")]),
+    "ppo_fast_hand": (mixed(), [*steps(15_000_000), *HAND]),
+    "ppo_fast_curv": (mixed(), [*TUNED, *curriculum("4.25")]),
+    "ppo_fast_30m": (mixed(), [*steps(30_000_000), *HAND]),
+    "residual": (RESIDUAL_ENV_KWARGS, [*steps(10_000_000), *RESIDUAL]),
+    "residual2": (RESIDUAL2_ENV_KWARGS, [*steps(3_000_000), *RESIDUAL2]),
 }
 #: agents whose kept model is ``best.zip`` (the lowest H RMS of the evaluations on the validation seeds)
 KEEP_BEST = {"residual2"}
