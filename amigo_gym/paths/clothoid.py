@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
 from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
 
 __all__ = [
@@ -78,28 +78,6 @@ MAX_CURVATURE = 1.0e4
 CLOSURE_TOLERANCE = 1e-9
 
 
-def check_real(
-    owner: str,
-    name: str,
-    value: object,
-    low: float = -math.inf,
-    high: float = math.inf,
-    *,
-    low_open: bool = False,
-    high_open: bool = False,
-) -> float:
-    """:func:`amigo_gym.model.params.check_range` that also refuses bools, strings and other non-numbers.
-
-    Raises:
-        ValueError: one line naming ``owner.name``, the allowed range and the offending value.
-    """
-    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer | np.floating):
-        lo_b = "(" if low_open else "["
-        hi_b = ")" if high_open else "]"
-        raise ValueError(f"{owner}.{name} must be a real number in {lo_b}{low:g}, {high:g}{hi_b}, got {value!r}")
-    return check_range(owner, name, float(value), low, high, low_open=low_open, high_open=high_open)
-
-
 @dataclass(frozen=True)
 class ClothoidSegment:
     r"""One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` for ``0 <= u <= length``.
@@ -117,9 +95,11 @@ class ClothoidSegment:
     curvature_rate: float = 0.0
 
     def __post_init__(self) -> None:
-        check_real("ClothoidSegment", "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True)
-        check_real("ClothoidSegment", "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE)
-        check_real("ClothoidSegment", "curvature_rate", self.curvature_rate)
+        # stored as Python floats (check_real also accepts Fractions and 0-d arrays)
+        o = "ClothoidSegment"
+        object.__setattr__(self, "length", check_real(o, "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True))
+        object.__setattr__(self, "curvature", check_real(o, "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE))
+        object.__setattr__(self, "curvature_rate", check_real(o, "curvature_rate", self.curvature_rate))
         check_range("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
 
     @classmethod
@@ -542,12 +522,13 @@ class ClothoidPath:
             raise ValueError(f"ClothoidPath.segments must be a non-empty tuple of ClothoidSegment, got {segs!r}")
         if not isinstance(self.start, tuple) or len(self.start) != 2:
             raise ValueError(f"ClothoidPath.start must be a pair (x, y), got {self.start!r}")
-        for i, v in enumerate(self.start):
-            check_real("ClothoidPath", f"start[{i}]", v)
-        check_real("ClothoidPath", "start_angle", self.start_angle)
+        start = tuple(check_real("ClothoidPath", f"start[{i}]", v) for i, v in enumerate(self.start))
+        object.__setattr__(self, "start", start)
+        object.__setattr__(self, "start_angle", check_real("ClothoidPath", "start_angle", self.start_angle))
         if not isinstance(self.closed, bool):
             raise ValueError(f"ClothoidPath.closed must be True or False, got {self.closed!r}")
-        check_real("ClothoidPath", "sample_spacing", self.sample_spacing, 1e-4, 1.0)
+        spacing = check_real("ClothoidPath", "sample_spacing", self.sample_spacing, 1e-4, 1.0)
+        object.__setattr__(self, "sample_spacing", spacing)
         object.__setattr__(self, "_t", self._build())
 
     def _build(self) -> _Tables:
