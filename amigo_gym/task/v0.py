@@ -93,6 +93,7 @@ __all__ = [
     "REWARD_TERMS",
     "obs_dim",
     "obs_bounds",
+    "obs_bounds_of",
     "error_bound",
     "obs_names",
     "validate_action",
@@ -180,8 +181,14 @@ def error_bound(termination_distance: float, error_scale: float) -> float:
 
 def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
     """Finite ``(low, high)`` bounds of the observation (see the module table)."""
-    e_max = error_bound(params.termination_distance, params.error_scale)
-    high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + len(params.preview)) + [1.0, 1.0, 2.0, 1.0])
+    return obs_bounds_of(params.termination_distance, params.error_scale, len(params.preview))
+
+
+def obs_bounds_of(termination_distance: float, error_scale: float, n_preview: int) -> tuple[Array, Array]:
+    """:func:`obs_bounds` from the three settings it depends on (also AmigoBot-v1's ``observation="v0"``):
+    ``termination_distance``, ``error_scale`` [m] and the number of preview distances."""
+    e_max = error_bound(termination_distance, error_scale)
+    high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + n_preview) + [1.0, 1.0, 2.0, 1.0])
     low = -high
     low[-1] = 0.0
     return low, high

@@ -83,6 +83,7 @@ from amigo_gym.task.v0 import (
     bound_angle,
     error_bound,
     heading_error,
+    obs_bounds_of,
     reward_product,
     reward_term_columns,
     steady_heading,
@@ -535,11 +536,7 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Finite ``(low, high)`` bounds of the observation (module table; ``observation="v0"``: AmigoBot-v0's)."""
     if p.observation == "v0":
-        e_max = error_bound(p.termination_distance, p.error_scale)
-        hi0 = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + len(p.preview)) + [1.0, 1.0, 2.0, 1.0])
-        lo0 = -hi0
-        lo0[-1] = 0.0
-        return lo0, hi0
+        return obs_bounds_of(p.termination_distance, p.error_scale, len(p.preview))
     high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
     for d in p.preview:
         b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
