@@ -68,6 +68,7 @@ __all__ = [
     "RunLockedError",
     "check_pickle",
     "clean_temporaries",
+    "remove_matching",
     "has_run_files",
     "is_current_lock",
     "load_checkpoint",
@@ -200,14 +201,22 @@ def clean_temporaries(folder: Path) -> None:
     in ``folder`` and in its ``checkpoints/``; any other dot-named entry (``.git``, ``.env``) is left alone. Call
     only while holding the folder's :class:`RunLock`."""
     for d in (folder, folder / CHECKPOINTS):
-        if not d.is_dir():
-            continue
-        for p in d.iterdir():
-            if TEMPORARY_NAME.match(p.name):
+        remove_matching(d, TEMPORARY_NAME)
+
+
+def remove_matching(folder: Path, pattern: re.Pattern[str]) -> list[str]:
+    """Remove the entries of ``folder`` (if it is one) whose names ``pattern`` matches: folders with their contents,
+    files and links (never what a link points to). The names removed."""
+    removed = []
+    if folder.is_dir():
+        for p in folder.iterdir():
+            if pattern.match(p.name):
                 if p.is_dir() and not p.is_symlink():
                     shutil.rmtree(p, ignore_errors=True)
                 else:
                     p.unlink(missing_ok=True)
+                removed.append(p.name)
+    return removed
 
 
 def has_run_files(folder: Path) -> bool:

@@ -107,7 +107,7 @@ import numpy as np
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.options import OneLineParser, run_guarded
-from amigo_gym.runs import add_trust_option
+from amigo_gym.runs import add_trust_option, remove_matching
 from amigo_gym.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -1094,18 +1094,7 @@ _TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_man
 def clean_temporaries(out: Path) -> list[str]:
     """Remove what killed benchmarks left in ``out``: their staging folders and temporary files (only names a
     benchmark writes; other dot files are left alone). Call while holding ``out``'s lock. The names removed."""
-    import shutil
-
-    removed = []
-    if out.is_dir():
-        for p in out.iterdir():
-            if _TEMPORARY.match(p.name):
-                if p.is_dir() and not p.is_symlink():
-                    shutil.rmtree(p, ignore_errors=True)
-                else:
-                    p.unlink(missing_ok=True)
-                removed.append(p.name)
-    return removed
+    return remove_matching(out, _TEMPORARY)
 
 
 def _key(path: Path, out: Path) -> str:
