@@ -318,25 +318,13 @@ class AmigoBotEnv(AmigoBotBase):
             state, out = task.step_columns(self._k, self.path, st, a1, a2, minimal=True)
         self._state = st = task.bound_heading(state)
         self._steps += 1
-        if type(st.x) is float:  # task.info_columns in the single env's types, built directly
-            terms = out.terms
-            # the four arrays are views of one new array (one allocation instead of four)
-            rec = _np_array((st.x, st.y, st.beta, out.h_x, out.h_y, st.rate1, st.rate2, st.alpha1, st.alpha2))
-            info = {
-                "pose": rec[0:3],
-                "h_position": rec[3:5],
-                "cross_track_error": float(out.closest.cross_track_error),
-                "wheel_rates": rec[5:7],
-                "wheel_angles": rec[7:9],
-                "castor_angle": float(st.alpha3),
-                "reward_terms": {
-                    "track": float(terms[0]),
-                    "speed": float(terms[1]),
-                    "heading": float(terms[2]),
-                    "smooth": float(terms[3]),
-                },
-                "time": float(self._steps * self._k.dt),
-            }
+        if type(st.x) is float:  # task.info_columns in the single env's types, as a record (task.record_info)
+            t = out.terms
+            e = float(out.closest.cross_track_error)
+            row = [st.x, st.y, st.beta, out.h_x, out.h_y, e, st.rate1, st.rate2, st.alpha1, st.alpha2]
+            values = [*row, float(st.alpha3), float(t[0]), float(t[1]), float(t[2]), float(t[3])]
+            # the four info arrays are views of one new array (one allocation instead of four)
+            info = task.record_info(_np_array(row), values, float(self._steps * self._k.dt))
         else:
             info = self._info(out)
         return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), info

@@ -638,8 +638,8 @@ def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
     Args:
         record: the record as an array, ``(16,)`` for one robot (or its first 10 columns) or ``(N, 16)``: the
             ``"columns"`` entries are views of its last axis (hand over a new array at every step).
-        values: the record indexed by column for the ``"scalar"`` entries and the reward terms: its 16 floats (one
-            robot) or ``record.T`` (``(N,)`` views).
+        values: the record indexed by column for the ``"scalar"`` entries and the reward terms: its floats (one
+            robot; the first 15 columns suffice) or ``record.T`` (``(N,)`` views).
         time: time since the episode's reset [s] (a float, or a column).
     """
     return {
