@@ -129,7 +129,6 @@ class AmigoBotVectorEnv(AmigoBotVectorBase):
             self._state = task.State(z[0], z[1], z[2], z[3], z[4], z[5], np.full(n, rate1), np.full(n, rate2))
         self._steps = np.zeros(n, dtype=np.int64)
         self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the kernel's restart mask when none restarts
-        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
 
     # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
     def _start_states(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> task.State:
@@ -222,7 +221,6 @@ class AmigoBotVectorEnv(AmigoBotVectorBase):
         generator is a ``PCG64``; otherwise from :meth:`_start_states` (the Python loop). Both give the
         numpy path's numbers and leave the generators in the same states.
         """
-        n = self.num_envs
         restart = self._no_restart
         bitgens = None
         idx = None
@@ -234,34 +232,12 @@ class AmigoBotVectorEnv(AmigoBotVectorBase):
             else:
                 idx = np.flatnonzero(restart)
                 _set_rows(self._state, self._start_states(idx), idx)
-        obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
-        reward = np.empty(n)
-        terminated: BoolArray = np.empty(n, dtype=np.bool_)
-        record = np.empty((n, 16))
-        a = np.ascontiguousarray(a)
         # the env's own arrays, of the workspace's shapes and dtypes (validated actions): no checks per step
-        report = fast.step_rows_unchecked(
-            ws, self._rows, a, restart, obs, reward, terminated, record, self._parallel, bitgens
-        )
-        if bitgens is not None:
-            idx = ws.rows[: report.drawn].copy()  # the rows restarted in the kernel (ws.rows is its scratch)
-        # steps += 1, 0 for the restarted rows; truncated = steps >= max_episode_steps; time = steps * dt
-        truncated: BoolArray = np.empty(n, dtype=np.bool_)
-        time = np.empty(n)
-        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
-        fast.kernels().count_steps(
-            self._steps, self._no_rows if idx is None else idx, limit, self._k.dt, truncated, time
-        )
+        dt, limit = self._k.dt, self.max_episode_steps
+        r = fast.step_env_rows(ws, self._rows, a, restart, bitgens, self._parallel, self._steps, idx, limit, dt)
+        obs, reward, terminated, truncated, infos, idx = r
         if idx is not None and self.render_mode is not None:
             self._trail_start[idx] = self._trail_count
-        if report.past_limit:
-            # as the numpy path: headings past the limit reduced by whole turns (task.bound_heading), in the
-            # state and in the info's pose
-            bounded = np.asarray(task.bound_heading(self._state).beta)
-            self._rows[:, 2] = bounded
-            record[:, 2] = bounded
-        # the infos are views of the record, a new array at every step (the single env's keys)
-        infos = task.record_info(record, record.T, time)
         return self._finish_step(obs, reward, terminated, truncated, infos, idx)
 
     # ------------------------------------------------------------------ infos

@@ -323,34 +323,22 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         generators as :func:`amigo_gym.task.v1.begin_episode` draws them (``tests/test_v0_as_v1.py``) when every
         generator is a ``PCG64``; otherwise after it, by :meth:`_reset_rows` (the reference).
         """
-        n = self.num_envs
         restart, bitgens, idx = self._no_restart, None, None
         if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
             if self._rngs.drawable:
                 restart, bitgens = self._autoreset, self._rngs.bitgens
             else:
                 idx = np.flatnonzero(self._autoreset)
-        obs: ObsArray = np.empty((n, ws.obs_dim), dtype=np.float32)
-        reward = np.empty(n)
-        terminated: BoolArray = np.empty(n, dtype=np.bool_)
-        record = np.empty((n, 16))
-        report = fast.step_rows_unchecked(
-            ws, self._rows, np.ascontiguousarray(a), restart, obs, reward, terminated, record, self._parallel, bitgens
-        )
-        drawn = self._no_rows
-        if bitgens is not None:  # the rows restarted in the step (ws.rows is its scratch)
-            idx = drawn = ws.rows[: report.drawn].copy()
-        # steps += 1, 0 for the rows restarted in the step; truncated = steps >= max_episode_steps; time = steps * dt
-        truncated: BoolArray = np.empty(n, dtype=np.bool_)
-        time = np.empty(n)
-        limit = -1 if self.max_episode_steps is None else self.max_episode_steps
-        fast.kernels().count_steps(np.asarray(self._state.steps), drawn, limit, self.params.dt, truncated, time)
-        if report.past_limit:  # headings past the limit reduced by whole turns (task.bound_heading), as AmigoBot-v0
-            self._rows[:, 2] = record[:, 2] = task.bound_heading(task.State(*self._rows.T)).beta
+        steps, limit = np.asarray(self._state.steps), self.max_episode_steps
+        r = fast.step_env_rows(ws, self._rows, a, restart, bitgens, self._parallel, steps, None, limit, self.params.dt)
+        obs, reward, terminated, truncated, infos, drawn = r
+        if drawn is None:
+            drawn = self._no_rows
+        else:  # the rows restarted in the step
+            idx = drawn
         if self.render_mode is not None:
-            self._h_now[:] = record[:, 3:5]
-            self._start_trails(drawn, record[drawn, 3:5])
-        infos = task.record_info(record, record.T, time)
+            self._h_now[:] = infos["h_position"]
+            self._start_trails(drawn, infos["h_position"][drawn])
         if bitgens is None and idx is not None:
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.sim.layout import twin
-from amigo_gym.task.v0 import TaskConstants, _path_start, initial_wheel_rates, obs_dim
+from amigo_gym.task.v0 import TaskConstants, _path_start, bound_angle, initial_wheel_rates, obs_dim, record_info
 
 __all__ = [
     "twin",
@@ -56,6 +56,8 @@ __all__ = [
     "GeneratorTable",
     "StepReport",
     "step_rows_unchecked",
+    "EnvStep",
+    "step_env_rows",
 ]
 
 Array = NDArray[np.float64]
@@ -459,6 +461,63 @@ def step_rows_unchecked(
     np.exp(exps, out=exps)
     past = finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
+
+
+class EnvStep(NamedTuple):
+    """What :func:`step_env_rows` returns: a vector env's step of AmigoBot-v0's task, before its autoreset
+    bookkeeping."""
+
+    obs: NDArray[np.float32]
+    reward: Array
+    terminated: NDArray[np.bool_]
+    truncated: NDArray[np.bool_]
+    #: AmigoBot-v0's infos (:func:`amigo_gym.task.v0.record_info`): views of the step's record
+    infos: dict[str, Any]
+    #: the rows that started an episode at this step (``reset_rows``, or those drawn with ``bitgens``), or None
+    restarted: NDArray[np.intp] | None
+
+
+_NO_ROWS: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
+
+
+def step_env_rows(
+    ws: Workspace,
+    rows: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    bitgens: NDArray[np.uintp] | None,
+    parallel: bool,
+    steps: NDArray[np.int64],
+    reset_rows: NDArray[np.intp] | None,
+    max_steps: int | None,
+    dt: float,
+) -> EnvStep:
+    """The vector env's step of AmigoBot-v0's task by the compiled kernel (AmigoBot-v0, and AmigoBot-v1 with v0's
+    settings): :func:`step_rows_unchecked` of the state ``rows (N, 8)`` (in place) with the new output arrays, then
+    the step counters (``steps += 1``, 0 for the restarted rows; ``truncated = steps >= max_steps``, never for
+    ``None``; ``time = steps * dt`` [s]), the headings past the limit reduced by whole turns in the state and the
+    record (:func:`amigo_gym.task.v0.bound_angle`, as the numpy path) and the infos.
+
+    Args:
+        reset_rows: rows the caller set to start states before the step (``restart`` set there), or None.
+        ws, actions, restart, bitgens, parallel: as :func:`step_rows_unchecked` (the caller's own arrays).
+    """
+    n = rows.shape[0]
+    obs = np.empty((n, ws.obs_dim), dtype=np.float32)
+    reward = np.empty(n)
+    terminated = np.empty(n, dtype=np.bool_)
+    record = np.empty((n, 16))
+    a = np.ascontiguousarray(actions)
+    report = step_rows_unchecked(ws, rows, a, restart, obs, reward, terminated, record, parallel, bitgens)
+    if bitgens is not None:
+        reset_rows = ws.rows[: report.drawn].copy()  # the rows restarted in the step (ws.rows is its scratch)
+    truncated = np.empty(n, dtype=np.bool_)
+    time = np.empty(n)
+    limit = -1 if max_steps is None else max_steps
+    kernels().count_steps(steps, _NO_ROWS if reset_rows is None else reset_rows, limit, dt, truncated, time)
+    if report.past_limit:
+        rows[:, 2] = record[:, 2] = bound_angle(rows[:, 2])
+    return EnvStep(obs, reward, terminated, truncated, record_info(record, record.T, time), reset_rows)
 
 
 def _check(
