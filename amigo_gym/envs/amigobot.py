@@ -334,15 +334,8 @@ class AmigoBotEnv(AmigoBotBase):
         for bit."""
         fs = self._fast
         assert fs is not None
-        rec = fs.step(a1, a2)
-        if fs.past_limit:  # |beta| > HEADING_LIMIT: as task.bound_heading, in the state and the info
-            st = task.bound_heading(self._state)
-            self._state = st
-            rec[2] = fs.record[2] = float(st.beta)
         self._steps += 1
-        # the four info arrays are views of one new array
-        info = task.record_info(fs.head.copy(), rec, float(self._steps * self._k.dt))
-        return fs.obs_row.copy(), rec[15], bool(fs.flags[0, 1]), info
+        return fs.env_step(a1, a2, float(self._steps * self._k.dt))
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
         cols = task.info_columns(self._state, out, self._steps * self._k.dt)

@@ -331,18 +331,8 @@ class AmigoBotV1Env(AmigoBotBase):
         """:meth:`_advance` with AmigoBot-v0's settings by AmigoBot-v0's compiled step (:class:`amigo_gym.sim.fast.
         SingleStep`): the reference's results (:func:`amigo_gym.task.v1.step_columns` with ideal actuators) and v0's
         info."""
-        rec = fs.step(a1, a2)
-        if fs.past_limit:  # |beta| > HEADING_LIMIT: reduced by whole turns (task.bound_heading), as AmigoBot-v0
-            st = task.bound_heading(task.State(*fs.state()))
-            fs.set_state(st)
-            rec[2] = fs.record[2] = float(st.beta)
         self._steps += 1
-        return (
-            fs.obs_row.copy(),
-            rec[15],
-            bool(fs.flags[0, 1]),
-            task.record_info(fs.head.copy(), rec, self._steps * self.params.dt),
-        )
+        return fs.env_step(a1, a2, self._steps * self.params.dt)
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""

@@ -373,6 +373,18 @@ class SingleStep:
         rec: list[float] = self.record.tolist()
         return rec
 
+    def env_step(self, a1: float, a2: float, time: float) -> tuple[NDArray[np.float32], float, bool, dict[str, Any]]:
+        """The single env's step of AmigoBot-v0's task (AmigoBot-v0, and AmigoBot-v1 with v0's settings):
+        :meth:`step`, a heading past the limit reduced by whole turns in the state and the record
+        (:func:`amigo_gym.task.v0.bound_angle`, as the reference), then the observation (a new array), the reward,
+        ``terminated`` and the info (:func:`amigo_gym.task.v0.record_info`; ``time`` since the reset [s])."""
+        rec = self.step(a1, a2)
+        if self.past_limit:
+            beta = float(bound_angle(float(self._state[2])))
+            rec[2] = self.record[2] = self._state[2] = beta
+        # the four info arrays are views of one new array
+        return self.obs_row.copy(), rec[15], bool(self.flags[0, 1]), record_info(self.head.copy(), rec, time)
+
 
 _np_tan = np.tan
 _np_exp = np.exp
