@@ -24,7 +24,7 @@ import os
 import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, partial
 from types import ModuleType
 from typing import Any, Literal, NamedTuple, SupportsIndex
 
@@ -401,6 +401,8 @@ def step_rows(
     record: Array,
     parallel: bool = False,
     bitgens: NDArray[np.uintp] | None = None,
+    *,
+    check: bool = True,
 ) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
@@ -417,6 +419,10 @@ def step_rows(
     the start states agree bit for bit, and the generators advance as that loop advances them.
     Without ``bitgens`` the caller has set the start states.
 
+    ``check=False`` skips the checks of the arguments, for a caller that built them for ``ws`` itself (the vector
+    env: its own state, buffers it has just allocated, validated actions, its generator table;
+    :func:`step_rows_unchecked`): wrong shapes, dtypes or layouts then make numba read or write out of bounds.
+
     Returns:
         :class:`StepReport`: how many start states were drawn, how many headings are past the limit.
 
@@ -424,27 +430,11 @@ def step_rows(
         ValueError: arrays of the wrong shape, dtype or layout for ``ws`` (numba would read past them),
             or a zero address in ``bitgens`` for a restarting row.
     """
-    _check(ws, state, actions, restart, obs, reward, terminated, record)
-    if bitgens is not None and (bitgens.shape != restart.shape or bitgens.dtype != np.uintp):
-        raise ValueError(f"bitgens must be a uintp array of shape {restart.shape}, got {bitgens.dtype} {bitgens.shape}")
-    return step_rows_unchecked(ws, state, actions, restart, obs, reward, terminated, record, parallel, bitgens)
-
-
-def step_rows_unchecked(
-    ws: Workspace,
-    state: Array,
-    actions: Array,
-    restart: NDArray[np.bool_],
-    obs: NDArray[np.floating],
-    reward: Array,
-    terminated: NDArray[np.bool_],
-    record: Array,
-    parallel: bool = False,
-    bitgens: NDArray[np.uintp] | None = None,
-) -> StepReport:
-    """:func:`step_rows` without checking its arguments, for a caller that built them for ``ws`` itself
-    (the vector env: its own state, buffers it has just allocated, validated actions, its generator
-    table). Wrong shapes, dtypes or layouts make numba read or write out of bounds."""
+    if check:
+        _check(ws, state, actions, restart, obs, reward, terminated, record)
+        if bitgens is not None and (bitgens.shape != restart.shape or bitgens.dtype != np.uintp):
+            msg = f"bitgens must be a uintp array of shape {restart.shape}, got {bitgens.dtype} {bitgens.shape}"
+            raise ValueError(msg)
     k = kernels()
     c, tans, exps = ws.consts, ws.tans, ws.exps
     move, evaluate, finish = (
@@ -473,6 +463,10 @@ def step_rows_unchecked(
     np.exp(exps, out=exps)
     past = finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
+
+
+#: :func:`step_rows` without the checks of its arguments (``check=False``)
+step_rows_unchecked = partial(step_rows, check=False)
 
 
 class EnvStep(NamedTuple):
@@ -505,14 +499,14 @@ def step_env_rows(
     dt: float,
 ) -> EnvStep:
     """The vector env's step of AmigoBot-v0's task by the compiled kernel (AmigoBot-v0, and AmigoBot-v1 with v0's
-    settings): :func:`step_rows_unchecked` of the state ``rows (N, 8)`` (in place) with the new output arrays, then
+    settings): :func:`step_rows` (unchecked) of the state ``rows (N, 8)`` (in place) with the new output arrays, then
     the step counters (``steps += 1``, 0 for the restarted rows; ``truncated = steps >= max_steps``, never for
     ``None``; ``time = steps * dt`` [s]), the headings past the limit reduced by whole turns in the state and the
     record (:func:`amigo_gym.task.v0.bound_angle`, as the numpy path) and the infos.
 
     Args:
         reset_rows: rows the caller set to start states before the step (``restart`` set there), or None.
-        ws, actions, restart, bitgens, parallel: as :func:`step_rows_unchecked` (the caller's own arrays).
+        ws, actions, restart, bitgens, parallel: as :func:`step_rows` (the caller's own arrays).
     """
     n = rows.shape[0]
     obs = np.empty((n, ws.obs_dim), dtype=np.float32)
@@ -520,7 +514,7 @@ def step_env_rows(
     terminated = np.empty(n, dtype=np.bool_)
     record = np.empty((n, 16))
     a = np.ascontiguousarray(actions)
-    report = step_rows_unchecked(ws, rows, a, restart, obs, reward, terminated, record, parallel, bitgens)
+    report = step_rows(ws, rows, a, restart, obs, reward, terminated, record, parallel, bitgens, check=False)
     if bitgens is not None:
         reset_rows = ws.rows[: report.drawn].copy()  # the rows restarted in the step (ws.rows is its scratch)
     truncated = np.empty(n, dtype=np.bool_)
