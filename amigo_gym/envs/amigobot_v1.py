@@ -83,16 +83,8 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
     settings (:func:`amigo_gym.task.v1.v0_settings`), as :func:`info_values` gives AmigoBot-v1's: floats and tuples
     (one robot) or ``(N,)`` columns. ``dt`` [s]; ``castor`` the castor wheel's rolling angle [rad] (the reference
     of AmigoBot-v1 does not integrate it: the envs do, as AmigoBot-v0's step)."""
-    return {
-        "pose": (st.x, st.y, st.beta),
-        "h_position": (out.h_x, out.h_y),
-        "cross_track_error": out.error,
-        "wheel_rates": (st.w1, st.w2),
-        "wheel_angles": (st.alpha1, st.alpha2),
-        "castor_angle": castor,
-        "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
-        "time": st.steps * dt,
-    }
+    pose, h, rates, angles = (st.x, st.y, st.beta), (out.h_x, out.h_y), (st.w1, st.w2), (st.alpha1, st.alpha2)
+    return task.info_dict(pose, h, out.error, rates, angles, castor, out.terms, st.steps * dt)
 
 
 def _single(value: Any) -> Any:
