@@ -16,7 +16,15 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, ObsArray, box_spaces, check_kernel, parse_pose_option
+from amigo_gym.envs.base import (
+    RESET_OPTIONS,
+    AmigoBotBase,
+    ObsArray,
+    box_spaces,
+    check_kernel,
+    one_robot,
+    parse_pose_option,
+)
 from amigo_gym.model.kinematics import h_position
 from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
@@ -108,15 +116,6 @@ def make_spaces(params: EnvParams) -> tuple[spaces.Box, spaces.Box]:
     bounds of :func:`amigo_gym.task.v0.obs_bounds`.
     """
     return box_spaces(task.obs_bounds(params))
-
-
-def _single(kind: str, value: Any) -> Any:
-    """One info entry of :func:`amigo_gym.task.v0.info_columns` in the single env's types."""
-    if kind == "columns":
-        return np.array(value)
-    if kind == "terms":
-        return {name: float(v) for name, v in value.items()}
-    return float(value)
 
 
 class AmigoBotEnv(AmigoBotBase):
@@ -339,7 +338,7 @@ class AmigoBotEnv(AmigoBotBase):
 
     def _info(self, out: task.Outcome) -> dict[str, Any]:
         cols = task.info_columns(self._state, out, self._steps * self._k.dt)
-        return {key: _single(kind, cols[key]) for key, kind in task.INFO_KEYS.items()}
+        return {key: one_robot(value) for key, value in cols.items()}
 
     def _render_state(self) -> dict[str, Any]:
         st = self._state

@@ -14,7 +14,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces
+from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces, one_robot
 from amigo_gym.model.kinematics import body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
@@ -85,16 +85,6 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
     of AmigoBot-v1 does not integrate it: the envs do, as AmigoBot-v0's step)."""
     pose, h, rates, angles = (st.x, st.y, st.beta), (out.h_x, out.h_y), (st.w1, st.w2), (st.alpha1, st.alpha2)
     return task.info_dict(pose, h, out.error, rates, angles, castor, out.terms, st.steps * dt)
-
-
-def _single(value: Any) -> Any:
-    """A numeric :func:`info_values` entry of one robot in the single env's types: tuples as float64 arrays, dicts
-    of floats, floats."""
-    if isinstance(value, tuple):
-        return np.array(value, dtype=np.float64)
-    if isinstance(value, dict):
-        return {k: float(v) for k, v in value.items()}
-    return float(value)
 
 
 _np_array = np.array
@@ -328,7 +318,7 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""
-        return {key: _single(v) for key, v in v0_info_values(self.params.dt, st, out, self._castor).items()}
+        return {key: one_robot(v) for key, v in v0_info_values(self.params.dt, st, out, self._castor).items()}
 
     def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
@@ -423,7 +413,7 @@ class AmigoBotV1Env(AmigoBotBase):
         st, ep = self._state, self._episode
         assert st is not None and ep is not None
         values = info_values(self.params.dt, self._k.w_max, st, ep, out, noise, self._path_info)
-        info = {key: v if key == "path" else _single(v) for key, v in values.items()}
+        info = {key: v if key == "path" else one_robot(v) for key, v in values.items()}
         info["end_of_path"] = bool(out.end_of_path)
         return info
 
