@@ -350,8 +350,15 @@ class AmigoBotV1Env(AmigoBotBase):
         )
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
-        """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""
-        return {key: _single(v) for key, v in v0_info_values(self.params.dt, st, out, self._castor).items()}
+        """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
+        builder of the compiled step's info (:func:`amigo_gym.task.v0.record_info`): the arrays are views of one
+        new array."""
+        rec = _np_array(
+            (st.x, st.y, st.beta, out.h_x, out.h_y, out.error, st.w1, st.w2, st.alpha1, st.alpha2, self._castor,
+             *out.terms),
+            dtype=np.float64,
+        )  # fmt: skip
+        return task.record_info(rec, rec.tolist(), float(st.steps * self.params.dt))
 
     def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and

@@ -1550,7 +1550,10 @@ def _observe_v0(
     """
     p = k.params
     l3 = k.l3
-    ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
+    if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
+        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in p.preview]
+    else:
+        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
     return (
         _clip(e / p.error_scale, -k.e_max, k.e_max),
         sin_psi,
