@@ -39,6 +39,7 @@ MOVED: dict[str, str] = {
     "amigo_gym.fast_v1_batch": "amigo_gym.sim.fast_v1_batch",
     "amigo_gym.cli_inverse": "amigo_gym.cli.inverse",
     "amigo_gym.rendering": "amigo_gym.envs.rendering",
+    "amigo_gym.envs.vector": "amigo_gym.envs.amigobot",
 }
 
 

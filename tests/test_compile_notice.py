@@ -16,7 +16,7 @@ from amigo_gym.sim.fast import COMPILE_NOTICE
 STEP = (
     "import gymnasium as gym, amigo_gym\n"
     "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
-    "print(type(env.unwrapped._fast).__name__ if getattr(env.unwrapped, '_fast', None) else 'numpy')\n"
+    "print(type(env.unwrapped._v0).__name__ if getattr(env.unwrapped, '_v0', None) else 'numpy')\n"
 )
 
 

@@ -62,7 +62,7 @@ def test_strict_build_has_every_page_the_api_and_the_local_math_renderer(site: P
         assert (site / page).is_file(), page
     api = (site / "api/index.html").read_text(encoding="utf-8")
     # generated from the docstrings: the class and a sentence of amigo_gym.envs.amigobot's module docstring
-    assert "AmigoBotEnv" in api and "thin stateful shell" in api
+    assert "AmigoBotEnv" in api and "a configuration of the one robot and task" in api
     assert (site / "assets/mathjax/tex-svg-full.js").stat().st_size > 1_000_000
     derivation = (site / "derivation/index.html").read_text(encoding="utf-8")
     assert derivation.count('class="arithmatex"') >= 3

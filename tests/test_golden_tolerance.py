@@ -23,7 +23,7 @@ import pytest
 import test_golden as tg
 from golden_compare import mismatches
 
-import amigo_gym.task.v0 as task
+import amigo_gym.task.v1 as tracking
 
 ROOT = Path(__file__).resolve().parent.parent
 EPISODES = [(c, s, k) for c in tg.CONFIGS for s in tg.SEEDS for k in tg.KINDS]  # the whole golden file
@@ -83,7 +83,8 @@ def test_a_reordered_reward_product_is_caught_by_the_same_machine_comparison(mon
     golden = dict(np.load(tg.GOLDEN))
     actions = golden["manoeuvre_right_fine/1/noisy/action"]
     single, _ = tg.single_episode("manoeuvre_right_fine", 1, actions)  # the single env's step (unchanged)
-    monkeypatch.setattr(task, "reward_product", lambda a, b, c, d: ((d * c) * b) * a)
+    # the numpy reference of AmigoBot-v0 (its configuration of task.v1) takes the product by this name
+    monkeypatch.setattr(tracking, "reward_product", lambda a, b, c, d: ((d * c) * b) * a)
     envs = gym.make_vec("AmigoBot-v0", num_envs=1, kernel="numpy", **tg.CONFIGS["manoeuvre_right_fine"])
     envs.reset(seed=1)
     rewards = [envs.step(a[None, :])[1][0] for a in actions]

@@ -132,7 +132,7 @@ def test_generator_table_addresses_and_refusals() -> None:
 
 def _pair(mode: str = "NextStep", n: int = 24, **kw: Any) -> tuple[Any, Any]:
     """A kernel env that draws in the kernel and the numpy env (the Python loop), same settings."""
-    from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.envs import AmigoBotVectorEnv
 
     args: dict[str, Any] = {"num_envs": n, "max_episode_steps": 9, "autoreset_mode": mode, **kw}
     return AmigoBotVectorEnv(kernel="numba", **args), AmigoBotVectorEnv(kernel="numpy", **args)

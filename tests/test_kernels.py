@@ -264,7 +264,7 @@ def _same(a: Any, b: Any, where: str) -> None:
 @pytest.mark.parametrize("path", ["circle", "manoeuvre"])
 def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) -> None:
     """AmigoBotVectorEnv(kernel="numba") against the numpy path: every output, across autoresets."""
-    from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.envs import AmigoBotVectorEnv
 
     n = 16
     kw: dict[str, Any] = {"num_envs": n, "max_episode_steps": 25, "autoreset_mode": mode, "path": path}
@@ -284,21 +284,21 @@ def test_vector_env_with_the_kernel_gives_the_same_bits(mode: str, path: str) ->
         outs = [e.step(a.astype(np.float32) if t % 2 else a) for e in (ref, *envs)]
         for o in outs[1:]:
             _same(o, outs[0], f"step {t}")
-    assert ref._steps.max() < 25  # episodes ended (terminated or truncated) and restarted
+    assert ref._step_counts().max() < 25  # episodes ended (terminated or truncated) and restarted
 
 
 def test_vector_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
-    from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.envs import AmigoBotVectorEnv
 
     monkeypatch.delenv(fast.KERNEL_ENV, raising=False)  # "auto" as without the variable
     with pytest.raises(ValueError, match="kernel"):
         AmigoBotVectorEnv(num_envs=2, kernel="cuda")
-    assert AmigoBotVectorEnv(num_envs=2, kernel="numpy")._ws is None
-    assert AmigoBotVectorEnv(num_envs=2, kernel="numba")._ws is not None
+    assert AmigoBotVectorEnv(num_envs=2, kernel="numpy")._v0 is None
+    assert AmigoBotVectorEnv(num_envs=2, kernel="numba")._v0 is not None
     # the default is "auto": the kernel when numba is installed (it is, here), unless AMIGO_GYM_KERNEL=numpy
-    assert AmigoBotVectorEnv(num_envs=2)._ws is not None
+    assert AmigoBotVectorEnv(num_envs=2)._v0 is not None
     monkeypatch.setenv("AMIGO_GYM_KERNEL", "numpy")
-    assert AmigoBotVectorEnv(num_envs=2)._ws is None
+    assert AmigoBotVectorEnv(num_envs=2)._v0 is None
 
 
 # ---------------------------------------------------------------------------------------------- single env
@@ -328,7 +328,7 @@ def test_single_env_kernel_gives_the_reference_bits(settings: dict[str, Any]) ->
 
     fast_env = gym.make("AmigoBot-v0", kernel="numba", max_episode_steps=300, **settings)
     ref_env = gym.make("AmigoBot-v0", kernel="numpy", max_episode_steps=300, **settings)
-    assert fast_env.unwrapped._fast is not None and ref_env.unwrapped._fast is None
+    assert fast_env.unwrapped._v0 is not None and ref_env.unwrapped._v0 is None
     for seed in range(3):
         g = np.random.default_rng(seed)
         assert _bits_equal(fast_env.reset(seed=seed), ref_env.reset(seed=seed))
@@ -394,7 +394,7 @@ def test_single_env_kernel_survives_pickling_and_bounds_the_heading() -> None:
         a = np.array([0.3, -0.2])
         out_c, out_e = copy.step(a), env.step(a)
         assert _bits_equal(out_c, out_e)
-    assert copy._fast is not None and copy._fast.buf is not env._fast.buf
+    assert copy._v0 is not None and copy._v0.buf is not env._v0.buf
 
 
 def test_single_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -402,9 +402,9 @@ def test_single_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     import gymnasium as gym
 
     monkeypatch.delenv(fast.KERNEL_ENV, raising=False)
-    assert gym.make("AmigoBot-v0").unwrapped._fast is not None  # auto, numba installed
+    assert gym.make("AmigoBot-v0").unwrapped._v0 is not None  # auto, numba installed
     monkeypatch.setenv(fast.KERNEL_ENV, "numpy")
-    assert gym.make("AmigoBot-v0").unwrapped._fast is None
+    assert gym.make("AmigoBot-v0").unwrapped._v0 is None
     for bad in ("fast", 1, None, "numba-parallel"):
         with pytest.raises(ValueError, match=r"^AmigoBotEnv\.kernel must be 'auto', 'numpy' or 'numba', got .*$"):
             gym.make("AmigoBot-v0", kernel=bad)

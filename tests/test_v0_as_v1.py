@@ -258,6 +258,47 @@ def test_v0_settings_are_checked() -> None:
     assert tracking.kernel_choice("E", tracking.TrackingParams(), "auto") == "auto"
 
 
+@pytest.mark.parametrize(
+    "edge",
+    [
+        {"dt": 1e-6},
+        {"dt": 2.0, "radius": 3.0},
+        {"error_scale": 1e-6},
+        {"preview": (0.0, 10.0)},
+        {"sigma_track": 1e6, "sigma_speed": 1e6, "sigma_smooth": 1e6},
+        {"path": "manoeuvre", "straight_length": 0.0, "direction": -1},
+    ],
+)
+def test_v0_configuration_keeps_v0s_ranges_and_v1s_messages(edge: dict[str, Any]) -> None:
+    """AmigoBot-v0's settings at the edges of EnvParams' ranges are its configuration of AmigoBot-v1
+    (v0_configuration and v0_settings are inverse), and gym.make("AmigoBot-v0") runs them; the same values without
+    v0's configuration keep AmigoBot-v1's ranges and messages."""
+    e = amigo_gym.EnvParams(**edge)
+    p = tracking.v0_configuration(e)
+    assert tracking.v0_settings(p) == e
+    assert tracking.constants(p).ring_length == 2  # ideal actuators: no delay to keep, whatever dt
+    env = gym.make("AmigoBot-v0", max_episode_steps=3, **edge)
+    env.reset(seed=0)
+    for _ in range(3):
+        obs, reward, *_ = env.step(np.array([0.3, 0.3]))
+        assert np.all(np.isfinite(obs)) and np.isfinite(reward)
+    assert env.unwrapped.params == e  # type: ignore[attr-defined]
+    v1_only = {k: v for k, v in edge.items() if k in ("dt", "error_scale", "preview", "sigma_track")}
+    messages = {
+        "dt": r"^TrackingParams.dt must be a finite number in \[0.001, 1\], got ",
+        "error_scale": r"^TrackingParams.error_scale must be a finite number in \[0.0001, 10\], got 1e-06$",
+        "preview": r"^TrackingParams.preview\[0\] must be a finite number in \(0, 5\], got 0.0$",
+        "sigma_track": r"^TrackingParams.sigma_track must be a finite number in \[1e-06, 10\], got 1000000.0$",
+    }
+    for name, value in v1_only.items():
+        with pytest.raises(ValueError, match=messages[name]):
+            tracking.TrackingParams(**{name: value})
+        with pytest.raises(ValueError, match=messages[name]):  # v0's layouts alone do not widen them
+            tracking.TrackingParams(observation="v0", reward="v0", **{name: value})
+    with pytest.raises(ValueError, match=r"^TrackingParams.dt must be a finite number in \[1e-06, 2\], got 2.5$"):
+        tracking.TrackingParams(ideal_actuators=True, observation="v0", reward="v0", dt=2.5)
+
+
 def test_v0_reward_setting_quarters_the_smoothness_scale() -> None:
     """The two smoothness settings on one change of command: v0's loss is v1's with the change doubled."""
     k1 = tracking.constants(tracking.TrackingParams())

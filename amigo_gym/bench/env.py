@@ -133,7 +133,7 @@ def _vector_stepper(envs: Any, seed: int) -> Callable[[], object]:
 
 def _vector_kernels() -> list[str]:
     """The step implementations the native vector env lets a caller choose (``[]``: only its default)."""
-    from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 
     if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
         return []

@@ -104,12 +104,12 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
 
     from amigo_gym.bench.core import measure_many
     from amigo_gym.bench.env import _vector_stepper
-    from amigo_gym.envs.vector import AmigoBotVectorEnv
+    from amigo_gym.envs.amigobot import AmigoBotVectorEnv
     from amigo_gym.sim import fast
 
     quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
     bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
-    ws = quiet._ws
+    ws = quiet._v0  # AmigoBot-v0's compiled step (its configuration of AmigoBotV1VectorEnv)
     assert ws is not None
     rows = np.zeros((n, 8))
     rows[:, 6:] = 4.0
@@ -152,21 +152,27 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     pend.reset(seed=0)
     a = np.array([0.27, 0.27], np.float32)
     ap = np.array([0.5], np.float32)
-    start = raw._state
+    k = task.task_constants(raw.params)
+    fs = raw._v0  # AmigoBot-v0's compiled step (None without numba: the steps then go on from the last state)
+    start = task.State(*fs.state()) if fs is not None else task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0, 4.0)
+
+    def restart() -> None:
+        if fs is not None:
+            fs.set_state(start)
 
     def wrapped() -> None:
-        raw._state = start
+        restart()
         env.step(a)
 
     def unwrapped() -> None:
-        raw._state = start
+        restart()
         raw.step(a)
 
     fns = {
         "AmigoBot `gym.make` step": wrapped,
         "AmigoBot unwrapped `env.step`": unwrapped,
-        "`task.step_columns` on Python floats": lambda: task.step_columns(raw._k, raw.path, start, 0.27, 0.27, True),
-        "`task.step_float` (kernel='numpy')": lambda: task.step_float(raw._k, raw.path, start, 0.27, 0.27),
+        "`task.step_columns` on Python floats": lambda: task.step_columns(k, raw.path, start, 0.27, 0.27, True),
+        "`task.step_float` (numpy, v0's own reference)": lambda: task.step_float(k, raw.path, start, 0.27, 0.27),
         "`task.validate_action`": lambda: task.validate_action(a).tolist(),
         "Pendulum `gym.make` step": lambda: pend.step(ap),
         "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),

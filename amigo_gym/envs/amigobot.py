@@ -1,46 +1,61 @@
 r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
 
-The environment is a thin stateful shell over the pure, batched functions of
-:mod:`amigo_gym.task.v0` (observation, reward, start, end), :mod:`amigo_gym.model.kinematics` (the exact
-step) and :mod:`amigo_gym.paths`. :class:`AmigoBotEnv` holds one robot; the native vector
-environment :class:`amigo_gym.envs.AmigoBotVectorEnv` holds ``N`` and calls the same functions.
+AmigoBot-v0 is a configuration of the one robot and task (issue 19): :class:`AmigoBotEnv` and
+:class:`AmigoBotVectorEnv` are the AmigoBot-v1 classes (:class:`amigo_gym.envs.AmigoBotV1Env`,
+:class:`amigo_gym.envs.AmigoBotV1VectorEnv`) built with AmigoBot-v0's settings. They take AmigoBot-v0's keywords,
+check them as :class:`amigo_gym.model.params.EnvParams` (its ranges and one-line errors), and pass
+:func:`amigo_gym.task.v1.v0_configuration` of it: ideal actuators, v0's observation layout and reward, no
+randomisation, the wheels rolling at the start, the circle or manoeuvre as a path object. With these settings the
+v1 classes run AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`; ``kernel="numpy"``: the reference,
+:mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is the ``EnvParams``; the
+AmigoBot-v1 settings it runs are ``env.tracking_params``.
+
+Old name: ``amigo_gym.envs.vector`` (this module, with a warning, until 0.3).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import fields, replace
-from typing import Any, SupportsFloat
+from typing import Any
 
 import numpy as np
-from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
+from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
 from amigo_gym.envs.base import (
     RESET_OPTIONS,
-    AmigoBotBase,
-    ObsArray,
-    box_spaces,
+    TRAIL_LENGTH,
+    VECTOR_KERNELS,
     check_kernel,
-    one_robot,
+    check_vector_args,
+    info_row,
     parse_pose_option,
 )
+from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.model.kinematics import h_position
 from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
 from amigo_gym.sim import fast
-from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
-__all__ = ["ENV_SETTINGS", "RESET_OPTIONS", "AmigoBotEnv", "make_env_params", "make_spaces", "parse_pose_option"]
+__all__ = [
+    "ENV_SETTINGS",
+    "RESET_OPTIONS",
+    "AmigoBotEnv",
+    "AmigoBotVectorEnv",
+    "info_row",
+    "make_env_params",
+    "parse_pose_option",
+]
 
 Array = NDArray[np.float64]
 
 #: names of the task settings accepted as keywords by the environments (every ``EnvParams`` field)
 ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
 
-_np_array = np.array
 #: the values of the single env's ``kernel`` keyword
-SINGLE_KERNELS = fast.KERNELS
+SINGLE_KERNELS: tuple[str, ...] = fast.KERNELS
 
 
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
@@ -109,16 +124,7 @@ def make_env_params(
     return replace(base, **settings) if settings else base
 
 
-def make_spaces(params: EnvParams) -> tuple[spaces.Box, spaces.Box]:
-    """The action and observation spaces of one robot (both environments; the vector env batches them).
-
-    Action ``Box(-1, 1, (2,), float32)``; observation ``Box(low, high, (obs_dim,), float32)`` with the
-    bounds of :func:`amigo_gym.task.v0.obs_bounds`.
-    """
-    return box_spaces(task.obs_bounds(params))
-
-
-class AmigoBotEnv(AmigoBotBase):
+class AmigoBotEnv(AmigoBotV1Env):
     r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
 
     ## Description
@@ -219,8 +225,9 @@ class AmigoBotEnv(AmigoBotBase):
     ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
     (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results are the
     same bits): ``"auto"`` (the default: the compiled step when numba is installed, the extra
-    ``amigo_gym[fast]``, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats) or
-    ``"numba"``. Unknown keywords raise ``TypeError``, bad values
+    ``amigo_gym[fast]``, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats:
+    :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (AmigoBot-v0's compiled step,
+    :mod:`amigo_gym.sim.fast`). Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
 
     ```python
@@ -235,6 +242,9 @@ class AmigoBotEnv(AmigoBotBase):
     * v0: initial version.
     """
 
+    #: points of H kept for the rendered trail (the most recent ones)
+    trail_length: int = TRAIL_LENGTH
+
     def __init__(
         self,
         render_mode: str | None = None,
@@ -246,108 +256,97 @@ class AmigoBotEnv(AmigoBotBase):
     ) -> None:
         owner = type(self).__name__
         check_kernel(owner, kernel, SINGLE_KERNELS)
-        self.params: EnvParams = make_env_params(owner, params, robot, **settings)
-        p = self.params
-        self._init_base(render_mode, p.dt, make_spaces(p))
-        self.path: CirclePath | ManoeuvrePath = make_path(p)
-        self._k = task.task_constants(p)
-        rate1, rate2 = task.initial_wheel_rates(p).tolist()
-        self._initial_state = task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, rate1, rate2)
-        # the compiled step (kernel="numba", or "auto" with numba installed): the state lives in its buffer
-        self._st: task.State = self._initial_state
-        self._fast: fast.SingleStep | None = None
-        if fast.use_fast_path(None if kernel == "auto" else kernel == "numba"):
-            self._fast = fast.SingleStep(self._k, self.path)
-        # state (set by reset): plain scalars, stepped by the same column functions as the vector env
-        self._state = self._initial_state
-        self._steps = 0
+        e = make_env_params(owner, params, robot, **settings)
+        super().__init__(render_mode, params=tracking.v0_configuration(e), kernel=kernel)
+        #: the AmigoBot-v1 settings this env runs (:func:`amigo_gym.task.v1.v0_configuration` of :attr:`params`)
+        self.tracking_params: tracking.TrackingParams = self._k.params
+        self.params = e  # type: ignore[assignment]
 
-    # ------------------------------------------------------------------ state access
-    @property
-    def _state(self) -> task.State:
-        """The robot's state: Python floats (in the compiled step's buffer when it runs)."""
-        if self._fast is not None:
-            return task.State(*self._fast.state())
-        return self._st
-
-    @_state.setter
-    def _state(self, value: task.State) -> None:
-        self._st = value
-        if self._fast is not None:
-            self._fast.set_state(value)
+    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
+        """The path, and no feasibility report: :class:`~amigo_gym.model.params.EnvParams` checked that the task is
+        drivable (AmigoBot-v0's check, its messages)."""
+        return p.path, None
 
     @property
     def pose(self) -> Array:
         """Current pose ``(x_A [m], y_A [m], beta [rad])``, a copy."""
-        st = self._state
-        return np.array((st.x, st.y, st.beta))
+        st = self._current_state()
+        return np.array((st.x, st.y, st.beta), dtype=np.float64)
 
     @property
     def wheel_rates(self) -> Array:
         """Wheel rates applied during the last step (at reset: the initial rates) [rad/s], a copy."""
-        return np.array((self._state.rate1, self._state.rate2))
+        st = self._current_state()
+        return np.array((st.w1, st.w2), dtype=np.float64)
 
     @property
     def time(self) -> float:
         """Time since reset [s]: ``steps * dt``."""
         return self._steps * self.params.dt
 
-    # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
-    def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
-        """The start state (a drawn pose, or ``pose_opt``), its observation and info."""
-        if pose_opt is not None:
-            pose = pose_opt
-        else:
-            u = self.np_random.uniform(-1.0, 1.0, size=3)
-            pose = task.start_pose(u, self.params, self.path)
-        x, y, beta = pose.tolist()
-        self._state = self._initial_state._replace(x=x, y=y, beta=beta)
-        self._steps = 0
-        out = task.reset_columns(self._k, self.path, self._state, minimal=True)
-        return np.array(out.obs, dtype=np.float32), self._info(out)
-
-    def _advance(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, dict[str, Any]]:
-        """Hold the wheel rates ``(a1, a2) * w_max`` for ``dt``: the step's observation, reward, end and info."""
-        if self._fast is not None:
-            return self._step_fast(a1, a2)
-        st = self._state
-        if type(st.x) is float and type(st.beta) is float:  # floats (always, after reset): one flat function
-            state, out = task.step_float(self._k, self.path, st, a1, a2)
-        else:
-            state, out = task.step_columns(self._k, self.path, st, a1, a2, minimal=True)
-        self._state = st = task.bound_heading(state)
-        self._steps += 1
-        if type(st.x) is float:  # task.info_columns in the single env's types, as a record (task.record_info)
-            t = out.terms
-            e = float(out.closest.cross_track_error)
-            row = [st.x, st.y, st.beta, out.h_x, out.h_y, e, st.rate1, st.rate2, st.alpha1, st.alpha2]
-            values = [*row, float(st.alpha3), float(t[0]), float(t[1]), float(t[2]), float(t[3])]
-            # the four info arrays are views of one new array (one allocation instead of four)
-            info = task.record_info(_np_array(row), values, float(self._steps * self._k.dt))
-        else:
-            info = self._info(out)
-        return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), info
-
-    def _step_fast(self, a1: float, a2: float) -> tuple[ObsArray, SupportsFloat, bool, dict[str, Any]]:
-        """:meth:`_advance` by the compiled kernel (:class:`amigo_gym.sim.fast.SingleStep`): the same results, bit
-        for bit."""
-        fs = self._fast
-        assert fs is not None
-        self._steps += 1
-        return fs.env_step(a1, a2, float(self._steps * self._k.dt))
-
-    def _info(self, out: task.Outcome) -> dict[str, Any]:
-        cols = task.info_columns(self._state, out, self._steps * self._k.dt)
-        return {key: one_robot(value) for key, value in cols.items()}
-
     def _render_state(self) -> dict[str, Any]:
-        st = self._state
-        return {
-            "pose": self.pose,
-            "wheel_angles": np.array((st.alpha1, st.alpha2)),
-            "time": self.time,
-            "cross_track_error": self._last_error(),
-        }
+        """AmigoBot-v1's, with H's cross-track error (drawn in the frame, as AmigoBot-v0 always drew it)."""
+        out = super()._render_state()
+        h = h_position(out["pose"], self.params.robot)
+        out["cross_track_error"] = float(self.path.project(h).cross_track_error)
+        return out
 
-    def _last_error(self) -> float:
-        return float(self.path.project(h_position(self.pose, self.params.robot)).cross_track_error)
+
+class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
+    """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
+
+    Args:
+        num_envs: number of robots ``N`` >= 1.
+        max_episode_steps: truncation after this many steps (``None``: never); ``gym.make_vec``
+            passes the registration's 400 unless given.
+        render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
+        autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
+            (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
+        kernel: the step's implementation (:mod:`amigo_gym.sim.fast`): ``"auto"`` (default: the compiled
+            kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
+            reference column functions of :mod:`amigo_gym.task.v1`, ideal actuators), ``"numba"`` (the compiled
+            kernel, the same results bit for bit; needs the extra ``amigo_gym[fast]``), or ``"numba-parallel"``
+            (the kernel's loops on numba's threads).
+        params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
+
+    Spaces: ``single_action_space = Box(-1, 1, (2,), float32)``, ``action_space`` its batch
+    ``(N, 2)``; ``single_observation_space`` as the single env's, ``observation_space`` ``(N, obs_dim)``.
+    ``step`` accepts actions of shape ``(N, 2)`` (float64 applied exactly; NaN/inf or a wrong
+    shape raise ``ValueError``) and returns rewards ``(N,)`` float64, terminations and truncations
+    ``(N,)`` bool, and infos with the single env's keys as ``(N, ...)`` arrays plus ``_key`` masks.
+    ``reset`` accepts ``seed`` (``None``, an int ``s`` for seeds ``s + i``, or a list of ``N``) and
+    ``options`` with ``"pose"`` (``(3,)`` for all or ``(N, 3)``) and ``"reset_mask"`` (``(N,)`` bool).
+
+    Rendering keeps the last ``trail_length`` (1000) positions of H per robot in a ring buffer, so memory
+    stays flat however many steps are rendered. The environment pickles and deep-copies (also after
+    ``render()``: the renderers are dropped and recreated when next used).
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        kernel: str = "auto",
+        *,
+        params: EnvParams | Mapping[str, Any] | None = None,
+        robot: RobotParams | Mapping[str, Any] | None = None,
+        **settings: Any,
+    ) -> None:
+        owner = type(self).__name__
+        check_vector_args(owner, num_envs, max_episode_steps, render_mode)
+        check_kernel(owner, kernel, VECTOR_KERNELS)
+        e = make_env_params(owner, params, robot, **settings)
+        p = tracking.v0_configuration(e)
+        super().__init__(num_envs, max_episode_steps, render_mode, autoreset_mode, kernel, params=p)
+        #: the AmigoBot-v1 settings this env runs (:func:`amigo_gym.task.v1.v0_configuration` of :attr:`params`)
+        self.tracking_params: tracking.TrackingParams = p
+        #: the path every robot follows (:func:`amigo_gym.paths.make_path` of :attr:`params`)
+        self.path: Any = p.path
+        self.params = e  # type: ignore[assignment]
+
+    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
+        """The path, and no feasibility report: :class:`~amigo_gym.model.params.EnvParams` checked that the task is
+        drivable (AmigoBot-v0's check, its messages)."""
+        return p.path, None

@@ -205,7 +205,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = 0
         self._delay = 0.0
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
         # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings: the state lives in its buffer
@@ -221,6 +221,11 @@ class AmigoBotV1Env(AmigoBotBase):
         self._episode: tracking.Episode | None = None
         self._path_info: dict[str, Any] = {}
         self._last_command = (0.0, 0.0)
+
+    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
+        """The fixed path (``None``: drawn) and its feasibility report: :func:`amigo_gym.task.v1.check_task`, which
+        refuses an infeasible task as ``p.feasibility`` says."""
+        return tracking.check_task(p)
 
     # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
     def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
@@ -240,7 +245,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = int(st.steps)
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
-        self._goal = tracking.goal_point(self.params, self.path)
+        self._goal = tracking.goal_point(self._k.params, self.path)
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
         if self.v0_params is not None:  # AmigoBot-v0's settings: its start (the reference's) and its info
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
@@ -317,14 +322,21 @@ class AmigoBotV1Env(AmigoBotBase):
         return fs.env_step(a1, a2, self._steps * self.params.dt)
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
-        """AmigoBot-v0's info (:func:`v0_info_values`) from the reference's state and outcome."""
-        return {key: one_robot(v) for key, v in v0_info_values(self.params.dt, st, out, self._castor).items()}
+        """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
+        builder of the compiled step's info (:func:`amigo_gym.task.v0.record_info`): the arrays are views of one
+        new array."""
+        rec = _np_array(
+            (st.x, st.y, st.beta, out.h_x, out.h_y, out.error, st.w1, st.w2, st.alpha1, st.alpha2, self._castor,
+             *out.terms),
+            dtype=np.float64,
+        )  # fmt: skip
+        return task.record_info(rec, rec.tolist(), float(st.steps * self.params.dt))
 
     def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
         ``info["end_condition"]`` (:data:`tracking.END_CONDITIONS`); a goal sets ``info["end_of_path"]`` too."""
         gx, gy = self._goal
-        goal = gx == gx and tracking.goal_reached(self.params, hx, hy, gx, gy)
+        goal = gx == gx and tracking.goal_reached(self._k.params, hx, hy, gx, gy)
         if goal:
             terminated = True
             info["end_of_path"] = True

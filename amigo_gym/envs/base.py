@@ -4,9 +4,8 @@
 reset options, seeding, the order of calls (no step before reset, the warning when a terminated episode is
 stepped), autoreset in the three :class:`gymnasium.vector.AutoresetMode` modes with infos in the vector format,
 the rendered trail of H, rendering and pickling. A task version supplies only what really differs, through a
-few hooks: ``AmigoBot-v0`` (:mod:`amigo_gym.envs.amigobot`, :mod:`amigo_gym.envs.vector`) and ``AmigoBot-v1``
-(:mod:`amigo_gym.envs.amigobot_v1`, :mod:`amigo_gym.envs.vector_v1`), each over its task module
-(:mod:`amigo_gym.task.v0`, :mod:`amigo_gym.task.v1`).
+few hooks: ``AmigoBot-v1``'s classes (:mod:`amigo_gym.envs.amigobot_v1`, :mod:`amigo_gym.envs.vector_v1`) over
+:mod:`amigo_gym.task.v1`, of which ``AmigoBot-v0`` is a configuration (:mod:`amigo_gym.envs.amigobot`).
 
 Hooks of the single env: ``_begin(pose) -> (obs, info)`` starts an episode (``pose``: the ``options["pose"]`` of
 ``reset`` or ``None``), ``_advance(a1, a2) -> (obs, reward, terminated, info)`` steps it, ``_render_state()``
@@ -295,7 +294,7 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
 
 
 def one_robot(value: Any) -> Any:
-    """A numeric info entry of one robot (:func:`amigo_gym.task.v0.info_columns`, AmigoBot-v1's ``info_values``) in
+    """A numeric info entry of one robot (AmigoBot-v1's ``info_values`` and ``v0_info_values``) in
     the single envs' types: tuples as float64 arrays, dicts of floats, floats."""
     if isinstance(value, tuple):
         return np.array(value, dtype=np.float64)

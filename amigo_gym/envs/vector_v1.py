@@ -45,7 +45,6 @@ from amigo_gym.envs.base import (
     check_kernel,
     check_vector_args,
 )
-from amigo_gym.model import actuators
 from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, fast_v1, fast_v1_batch
@@ -87,9 +86,9 @@ ROW_BYTES = 3200
 
 def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> int:
     """An estimate of the memory of ``n`` robots [bytes] (:data:`ROW_BYTES` each, plus the command ring of
-    ``ring_length(dt)`` commands, the render trail's ``TRAIL_LENGTH`` positions, and, for paths drawn per episode,
-    twice the memory of a drawn path: the path and its copy in the compiled step's arena)."""
-    per = ROW_BYTES + 16 * actuators.ring_length(p.dt)
+    ``command_ring_length(p)`` commands, the render trail's ``TRAIL_LENGTH`` positions, and, for paths drawn per
+    episode, twice the memory of a drawn path: the path and its copy in the compiled step's arena)."""
+    per = ROW_BYTES + 16 * tracking.command_ring_length(p)
     if render_mode is not None:
         per += 16 * TRAIL_LENGTH
     if tracking.fixed_path(p) is None:
@@ -164,7 +163,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._k = tracking.constants(p)
         check_memory(owner, int(num_envs), p, render_mode)
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = tracking.check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
@@ -211,6 +210,11 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
+
+    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
+        """The fixed path (``None``: drawn) and its feasibility report: :func:`amigo_gym.task.v1.check_task`, which
+        refuses an infeasible task as ``p.feasibility`` says."""
+        return tracking.check_task(p)
 
     def set_path_params(self, path_params: Any) -> None:
         """Draw the next episodes' paths with the family parameters ``path_params`` (a curriculum between rollouts).
@@ -267,7 +271,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._castor[idx] = 0.0
         infos = {key: _stack(v) for key, v in cols.items()}
         self._start_trails(idx, _array(infos["h_position"]))
-        self._goal[idx] = [tracking.goal_point(self.params, path) for path in paths]
+        self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         return obs, infos
 
     def _begin_rows_kernel(
@@ -289,7 +293,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             states.append(st)
             episodes.append(ep)
         self.paths.replace(idx, paths)
-        self._goal[idx] = [tracking.goal_point(self.params, path) for path in paths]
+        self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
         exps = b.start(rows, paths, states, episodes, obs)
         infos = self._kernel_infos(idx, exps, None)
@@ -386,8 +390,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         ``infos["end_condition"]`` (:data:`tracking.END_CONDITIONS`, an object array of str); a goal sets
         ``end_of_path``."""
         cond = np.full(self.num_envs, "", dtype=object)  # as SyncVectorEnv gathers the single env's str
-        if self.params.goal_tolerance > 0.0:
-            goal = tracking.goal_reached(self.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
+        if self._k.params.goal_tolerance > 0.0:
+            goal = tracking.goal_reached(self._k.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
             if goal.any():
                 terminated = terminated | goal
                 infos["end_of_path"] = np.where(goal, 1.0, infos["end_of_path"])

@@ -1,7 +1,8 @@
 r"""The tracking task as pure, batched functions: actions, observation, reward, start, end.
 
-Both :class:`amigo_gym.envs.AmigoBotEnv` and :class:`amigo_gym.envs.AmigoBotVectorEnv` (and the
-agents) call these functions; nothing here keeps state. Shapes: a leading batch axis is optional
+AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`, which the environments run in AmigoBot-v0's
+configuration) compiles these functions and is tested against them; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`)
+and the agents call them too; nothing here keeps state. Shapes: a leading batch axis is optional
 everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
 
 Observation (all dimensionless, ``psi = wrap(beta - theta)`` is the heading error against the path
@@ -45,14 +46,15 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
 reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
 quantity the environments report (:class:`Outcome`); :func:`transition` and :func:`evaluate` are thin
-array wrappers over the same column functions. The single environment calls them with plain scalars,
-the vector environment with ``(N,)`` arrays, so that both run the same code. The constants of a step
+array wrappers over the same column functions. They take plain scalars (:func:`step_float`: one flat
+function of floats) or ``(N,)`` arrays alike, the reference of the compiled step (``tests/test_kernels.py``,
+``tests/test_columns.py``). The constants of a step
 are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache: ``EnvParams`` is
 the only way to set them).
 
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
 reader decodes the observation by these names), the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
-:func:`info_columns`, :func:`record_info`: the single env, the vector env, the SB3 adapter) and the start pose
+:func:`record_info`, used by the single env, the vector env and the SB3 adapter) and the start pose
 (A ``l3`` behind H by :func:`amigo_gym.model.kinematics.a_from_h`).
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
@@ -121,7 +123,6 @@ __all__ = [
     "INFO_KEYS",
     "OBS_HEAD",
     "OBS_TAIL",
-    "info_columns",
     "info_dict",
     "record_info",
     "obs_index",
@@ -605,27 +606,11 @@ class Outcome(NamedTuple):
     terminated: Any
 
 
-def info_columns(state: State, out: Outcome, time: Any) -> dict[str, Any]:
-    """The info dict's entries as columns, keyed as :data:`INFO_KEYS` (:func:`info_dict`).
-
-    ``"columns"`` entries are tuples of columns, ``"scalar"`` ones a column, ``reward_terms`` a dict
-    of columns; the single env turns them into arrays and floats, the vector env into ``(N, ...)`` arrays.
-
-    Args:
-        state: the state reported on (its rates are those applied to reach it).
-        out: its :class:`Outcome`.
-        time: time since the episode's reset [s] (a float, or a column).
-    """
-    pose, rates, angles = (state.x, state.y, state.beta), (state.rate1, state.rate2), (state.alpha1, state.alpha2)
-    e = out.closest.cross_track_error
-    return info_dict(pose, (out.h_x, out.h_y), e, rates, angles, state.alpha3, out.terms, time)
-
-
 def info_dict(
     pose: Any, h_position: Any, error: Any, rates: Any, angles: Any, castor: Any, terms: Any, time: Any
 ) -> dict[str, Any]:
-    """The info dict keyed as :data:`INFO_KEYS`, from its entries (:func:`info_columns` and AmigoBot-v1's
-    ``v0_info_values`` call it; :func:`record_info` writes the same keys out, on the compiled step's hot path).
+    """The info dict keyed as :data:`INFO_KEYS`, from its entries (AmigoBot-v1's ``v0_info_values`` calls it;
+    :func:`record_info` writes the same keys out, on the compiled step's hot path).
 
     ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m], ``error`` H's cross-track error [m], ``rates`` the
     wheel rates [rad/s], ``angles`` the wheel angles and ``castor`` the castor's [rad], ``terms`` the 4 reward

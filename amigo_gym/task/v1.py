@@ -102,6 +102,8 @@ __all__ = [
     "Constants",
     "constants",
     "v0_settings",
+    "v0_configuration",
+    "command_ring_length",
     "Episode",
     "State",
     "Outcome",
@@ -157,6 +159,9 @@ class TrackingParams:
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
         dt: control period [s], in [MIN_DT = 0.001, 1]. Default 0.1 (the robot's 100 ms cycle). The bound keeps the
             delay ring small: ``ring_length(dt)``, about ``0.5 / dt + 2`` commands per robot, at most 501 (8 KB).
+            AmigoBot-v0's configuration (``ideal_actuators=True, observation="v0", reward="v0"``: no delay ring)
+            keeps AmigoBot-v0's ranges (:class:`amigo_gym.model.params.EnvParams`): ``dt`` in [1e-6, 2] s,
+            ``error_scale`` in [1e-6, 10] m, each ``preview`` in [0, 10] m, the sigmas in [1e-6, 1e6].
         path: a family name of :data:`PATH_FAMILIES`, a points file (``.csv`` or ``.json`` with columns ``x``,
             ``y`` [m]: :func:`amigo_gym.paths.from_file`), or a path object (:mod:`amigo_gym.paths.user`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
@@ -258,7 +263,10 @@ class TrackingParams:
             raise ValueError(f"{o}.actuators must be an ActuatorParams, got {type(self.actuators).__name__}")
         if not isinstance(self.randomize, Randomization):
             raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
-        s(self, "dt", check_range(o, "dt", self.dt, MIN_DT, 1.0))
+        # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
+        # (EnvParams's, which AmigoBot-v0's envs check first): its steps need no delay ring, so dt in [1e-6, 2] s
+        v0 = self.ideal_actuators is True and self.observation == "v0" and self.reward == "v0"
+        s(self, "dt", check_range(o, "dt", self.dt, *((1e-6, 2.0) if v0 else (MIN_DT, 1.0))))
         if isinstance(self.path, str) and self.path not in PATH_FAMILIES:
             from amigo_gym.paths.points import cached_file_path, is_points_file
 
@@ -304,15 +312,19 @@ class TrackingParams:
             check_range(o, "init_position_noise", self.init_position_noise, 0.0, self.termination_distance / 2),
         )
         s(self, "init_heading_noise", check_range(o, "init_heading_noise", self.init_heading_noise, 0.0, math.pi / 4))
-        s(self, "error_scale", check_range(o, "error_scale", self.error_scale, 1e-4, 10.0))
+        s(self, "error_scale", check_range(o, "error_scale", self.error_scale, 1e-6 if v0 else 1e-4, 10.0))
         if isinstance(self.preview, (str, bytes)) or not hasattr(self.preview, "__iter__"):
             raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
-        prev = tuple(check_range(o, f"preview[{i}]", d, 0.0, 5.0, low_open=True) for i, d in enumerate(self.preview))
+        far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
+        prev = tuple(
+            check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview)
+        )
         s(self, "preview", prev)
         s(self, "preview_scale", check_range(o, "preview_scale", self.preview_scale, 1e-2, 10.0))
-        s(self, "sigma_track", check_range(o, "sigma_track", self.sigma_track, 1e-6, 10.0))
-        s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, 10.0))
-        s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, 10.0))
+        sigma_high = 1e6 if v0 else 10.0  # v0's sigmas: [1e-6, 1e6]
+        s(self, "sigma_track", check_range(o, "sigma_track", self.sigma_track, 1e-6, sigma_high))
+        s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, sigma_high))
+        s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, sigma_high))
         s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
         if not isinstance(self.feasibility, str) or self.feasibility not in FEASIBILITY_MODES:
             raise ValueError(f"{o}.feasibility must be one of {list(FEASIBILITY_MODES)}, got {self.feasibility!r}")
@@ -569,6 +581,12 @@ class Constants:
     smooth_scale_sq: float
 
 
+def command_ring_length(p: TrackingParams) -> int:
+    """Commands kept per robot in the delay ring: ``ring_length(dt)`` (delays up to ``MAX_DELAY``), or 2 with
+    ``ideal_actuators`` (no delay: the ring is never read, and ``dt`` may be as small as AmigoBot-v0's 1e-6 s)."""
+    return actuators.ring_length(p.dt, 0.0 if p.ideal_actuators else actuators.MAX_DELAY)
+
+
 def constants(p: TrackingParams) -> Constants:
     """The :class:`Constants` of ``p``."""
     robot = p.robot
@@ -584,7 +602,7 @@ def constants(p: TrackingParams) -> Constants:
         l3=robot.l3,
         e_max=error_bound(p.termination_distance, p.error_scale),
         n_sub=actuators.step_subintervals(p.dt, robot),
-        ring_length=actuators.ring_length(p.dt),
+        ring_length=command_ring_length(p),
         window=window,
         preview_bounds=tuple((d + robot.l3 + 2.0 * p.termination_distance) / p.preview_scale for d in p.preview),
         smooth_scale_sq=_smooth_scale_sq(p, w_max),
@@ -636,6 +654,39 @@ def v0_settings(p: TrackingParams) -> EnvParams | None:
     except ValueError:
         return None
     return e if make_path(e) == path else None
+
+
+def v0_configuration(e: EnvParams) -> TrackingParams:
+    """AmigoBot-v0's task ``e`` as AmigoBot-v1's settings: the inverse of :func:`v0_settings`
+    (``v0_settings(v0_configuration(e)) == e``), what ``gym.make("AmigoBot-v0", ...)`` runs.
+
+    Ideal actuators, v0's observation and reward, no randomisation, wheels rolling at the start, the path of ``e``
+    as a path object (:func:`amigo_gym.paths.make_path`), ``feasibility="off"`` (``e`` is drivable:
+    :class:`~amigo_gym.model.params.EnvParams` checked it) and every other setting of ``e``.
+    """
+    return TrackingParams(
+        robot=e.robot,
+        randomize=make_randomization("none"),
+        dt=e.dt,
+        path=make_path(e),
+        radius=e.radius,
+        direction=e.direction,
+        speed=e.speed,
+        start_at_rest=False,
+        termination_distance=e.termination_distance,
+        init_position_noise=e.init_position_noise,
+        init_heading_noise=e.init_heading_noise,
+        error_scale=e.error_scale,
+        preview=e.preview,
+        sigma_track=e.sigma_track,
+        sigma_speed=e.sigma_speed,
+        sigma_smooth=e.sigma_smooth,
+        smooth_weight=e.smooth_weight,
+        feasibility="off",
+        ideal_actuators=True,
+        observation="v0",
+        reward="v0",
+    )
 
 
 def kernel_choice(owner: str, p: TrackingParams, kernel: Any) -> Any:
@@ -1496,7 +1547,10 @@ def _observe_v0(
     """
     p = k.params
     l3 = k.l3
-    ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
+    if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
+        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in p.preview]
+    else:
+        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
     return (
         _clip(e / p.error_scale, -k.e_max, k.e_max),
         sin_psi,

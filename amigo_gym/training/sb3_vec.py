@@ -37,7 +37,8 @@ from numpy.typing import NDArray
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from amigo_gym import MAX_EPISODE_STEPS, MAX_EPISODE_STEPS_V1
-from amigo_gym.envs.vector import AmigoBotVectorEnv, info_row
+from amigo_gym.envs.amigobot import AmigoBotVectorEnv
+from amigo_gym.envs.base import info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.task.v0 import INFO_KEYS, REWARD_TERMS
 
@@ -158,7 +159,7 @@ class AmigoBotSB3VecEnv(VecEnv):
 
     @staticmethod
     def _split_generic(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts of AmigoBot-v1 (:func:`amigo_gym.envs.vector.info_row`)."""
+        """Per-env info dicts of AmigoBot-v1 (:func:`amigo_gym.envs.base.info_row`)."""
         return [info_row(vinfo, i) for i in idx]
 
     @staticmethod

@@ -3,7 +3,7 @@
 Used by the benchmark (:mod:`amigo_gym.training.benchmark`) and by the training's evaluation
 callback (:mod:`amigo_gym.training.train`), so that a learning curve and a benchmark table report
 the same numbers. Imports only numpy and the standard library (and, inside :func:`run_vector_episodes`,
-:func:`amigo_gym.envs.vector.info_row`).
+:func:`amigo_gym.envs.base.info_row`).
 
 The ``info`` of one step, as both environment versions report it
 -----------------------------------------------------------------
@@ -227,9 +227,9 @@ def run_vector_episodes(
         recorders: one :class:`EpisodeRecorder` per row (``N``).
         adapter: reads a row's ``info`` (:class:`InfoAdapter`).
         on_row: called as ``on_row(i, info, ended)`` after each recorded step of row ``i`` (``info``: that row's,
-            :func:`amigo_gym.envs.vector.info_row`; ``ended``: it was the episode's last step).
+            :func:`amigo_gym.envs.base.info_row`; ``ended``: it was the episode's last step).
     """
-    from amigo_gym.envs.vector import info_row
+    from amigo_gym.envs.base import info_row
 
     n = len(recorders)
     live = np.ones(n, dtype=np.bool_)
