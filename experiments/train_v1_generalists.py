@@ -83,6 +83,7 @@ def export(s: Settings, algo: str, seed: int, cmd: list[str], wall_s: float) -> 
     zip_path = dest / f"{algo}_s{seed}.zip"
     shutil.copyfile(out / "model.zip", zip_path)
     manifest = record | {
+        "agent": algo,  # the folder's name (the SB3 algorithm is the record's "algo")
         "env_id": "AmigoBot-v1",
         "env_kwargs": s.env_kwargs,
         # as typed from the repository root (the run folder named relative to --runs)
