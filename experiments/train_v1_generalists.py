@@ -14,7 +14,7 @@ exported to ``agents/pretrained/v1/<algo>/<algo>_s<seed>.zip`` with a manifest `
 
 Agents (:data:`AGENTS`): ``ppo``, ``sac``, ``td3`` (the SB3 generalists, ``agents/hyperparams/<algo>.yml``, the
 v0 settings on small budgets: references, not tuned); ``td3lp``: the off-policy choice of issue 18, SB3's TD3 in
-the high-throughput configuration with the low-pass actor (``agents/hyperparams/td3_lowpass.yml``, 750k
+the high-throughput configuration with the low-pass actor (``agents/hyperparams/td3_lowpass.yml``, 500k
 env-steps, evaluated every 100k; docs/baselines.md, "TD3 with a low-pass actor").
 
 The claimed benchmark numbers are added to the manifests by ``amigo-gym benchmark --claim`` afterwards.
