@@ -81,10 +81,10 @@ def main() -> int:
     atomic_write_json(Path(a.out) / "curves_summary.json", summary, parents=True)
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
-    ax1.fill_between(steps, h.min(0) * 1e3, h.max(0) * 1e3, alpha=0.25, label="min-max over seeds")
-    ax1.plot(steps, h_iqm * 1e3, "o-", label=f"IQM over {len(a.seeds)} seeds")
+    ax1.fill_between(steps / 1e6, h.min(0) * 1e3, h.max(0) * 1e3, alpha=0.25, label="min-max over seeds")
+    ax1.plot(steps / 1e6, h_iqm * 1e3, "o-", label=f"IQM over {len(a.seeds)} seeds")
     ax1.axhline(ref["h_rms_m"] * 1e3, color="k", ls="--", label="analytic (32 validation episodes)")
-    ax1.set(xlabel="env-steps", ylabel="H RMS [mm] (16 episodes per evaluation)", yscale="log")
+    ax1.set(xlabel="env-steps [millions]", ylabel="H RMS [mm] (16 episodes per evaluation)", yscale="log")
     ax1.set_title("low-pass TD3: learning curve")
     ax1.legend(fontsize=8)
     for i, s in enumerate(a.seeds):
