@@ -10,6 +10,12 @@ exported to ``agents/pretrained/v1/<algo>/<algo>_s<seed>.zip`` with a manifest `
 
     python experiments/train_v1_generalists.py --runs runs_v1 --workers 2
     python experiments/train_v1_generalists.py --algos sac --seeds 0 1 --workers 1   # a subset
+    python experiments/train_v1_generalists.py --algos td3lp --runs runs/td3lp --workers 2   # the low-pass TD3
+
+Agents (:data:`AGENTS`): ``ppo``, ``sac``, ``td3`` (the SB3 generalists, ``agents/hyperparams/<algo>.yml``, the
+v0 settings on small budgets: references, not tuned); ``td3lp``: the off-policy choice of issue 18, SB3's TD3 in
+the high-throughput configuration with the low-pass actor (``agents/hyperparams/td3_lowpass.yml``, 500k
+env-steps, evaluated every 100k; docs/baselines.md, "TD3 with a low-pass actor").
 
 The claimed benchmark numbers are added to the manifests by ``amigo-gym benchmark --claim`` afterwards.
 """
@@ -30,6 +36,18 @@ from pathlib import Path
 from amigo_gym.data import pretrained_dir
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 
+#: agent -> (SB3 algorithm, hyperparameter file or None for ``agents/hyperparams/<algo>.yml``, extra options)
+AGENTS: dict[str, tuple[str, str | None, list[str]]] = {
+    "ppo": ("ppo", None, []),
+    "sac": ("sac", None, []),
+    "td3": ("td3", None, []),
+    "td3lp": (
+        "td3",
+        "agents/hyperparams/td3_lowpass.yml",
+        ["--eval-freq", "100000", "--eval-episodes", "16", "--checkpoint-freq", "250000"],
+    ),
+}
+
 
 @dataclass(frozen=True)
 class Settings:
@@ -44,10 +62,13 @@ class Settings:
 
 
 def command(s: Settings, algo: str, seed: int) -> list[str]:
-    """The ``amigo-gym train`` command of one run (resumed if its folder exists)."""
+    """The ``amigo-gym train`` command of one run of agent ``algo`` (:data:`AGENTS`; resumed if its folder exists)."""
     out = s.runs / f"{algo}_s{seed}"
-    cmd = ["amigo-gym", "train", "--algo", algo, "--seed", str(seed), "--env", "AmigoBot-v1"]
-    cmd += ["--env-kwargs", json.dumps(s.env_kwargs), "--out", str(out), "--no-progress"]
+    sb3_algo, hyperparams, extra = AGENTS[algo]
+    cmd = ["amigo-gym", "train", "--algo", sb3_algo, "--seed", str(seed), "--env", "AmigoBot-v1"]
+    cmd += ["--env-kwargs", json.dumps(s.env_kwargs)]
+    cmd += ["--hyperparams", hyperparams] if hyperparams else []
+    cmd += ["--out", str(out), *extra, "--no-progress"]
     if (out / "config.json").is_file():
         cmd.append("--resume")
     return cmd
@@ -62,6 +83,7 @@ def export(s: Settings, algo: str, seed: int, cmd: list[str], wall_s: float) -> 
     zip_path = dest / f"{algo}_s{seed}.zip"
     shutil.copyfile(out / "model.zip", zip_path)
     manifest = record | {
+        "agent": algo,  # the folder's name (the SB3 algorithm is the record's "algo")
         "env_id": "AmigoBot-v1",
         "env_kwargs": s.env_kwargs,
         # as typed from the repository root (the run folder named relative to --runs)
@@ -79,6 +101,9 @@ def run_one(s: Settings, algo: str, seed: int) -> str:
         return f"{algo} seed {seed}: done before, skipped"
     cmd = command(s, algo, seed)
     t0 = time.perf_counter()
+    if (out / "run.json").is_file():  # trained (perhaps by an earlier call), not yet exported
+        cmd = [c for c in cmd if c != "--resume"]
+        return f"{algo} seed {seed}: trained before -> {export(s, algo, seed, cmd, 0.0)}"
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         return f"{algo} seed {seed}: FAILED ({r.returncode}): {r.stderr.strip().splitlines()[-1:]}"
@@ -88,7 +113,9 @@ def run_one(s: Settings, algo: str, seed: int) -> str:
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--algos", nargs="+", default=list(Settings.algos), help="algorithms (default ppo sac td3)")
+    p.add_argument(
+        "--algos", nargs="+", default=list(Settings.algos), choices=list(AGENTS), help="agents (default ppo sac td3)"
+    )
     p.add_argument("--seeds", nargs="+", type=int, default=list(Settings.seeds), help="seeds (default 0-4)")
     p.add_argument("--runs", default="runs_v1", help="folder of the run folders (default runs_v1)")
     p.add_argument("--workers", type=int, default=2, help="runs at a time (default 2)")

@@ -112,3 +112,38 @@ def test_benchmark_reproduces_claimed_numbers(manifest: Path) -> None:
         want = claimed["scenarios"][r["scenario"]]
         for key in KEYS:
             assert r[key] == want[key], (r["scenario"], key, r[key], want[key])  # exactly
+
+
+TD3LP = sorted((pretrained_dir() / "v1" / "td3lp").glob("*.zip"))
+
+
+def test_five_seeds_of_the_low_pass_td3_are_shipped() -> None:
+    docs = [json.loads(z.with_suffix(".json").read_text()) for z in TD3LP]
+    assert sorted(d["seed"] for d in docs) == [0, 1, 2, 3, 4]
+    assert {d["algo"] for d in docs} == {"td3"} and {d["agent"] for d in docs} == {"td3lp"}
+    assert all(d["timesteps"] >= 500_000 and "td3_lowpass.yml" in d["training_command"] for d in docs)
+
+
+@pytest.mark.parametrize("model", TD3LP, ids=[z.stem for z in TD3LP])
+def test_low_pass_td3_loads_checked_and_bounds_its_command_change(model: Path) -> None:
+    """``load_pretrained`` gives the SB3 model with the low-pass actor; on raw v1 observations its command moves from
+    the observed previous command by at most ``alpha`` times the distance to a target in [-1, 1] (so ``2 alpha``)."""
+    import gymnasium as gym
+
+    from amigo_gym.policies import load_pretrained
+    from amigo_gym.task.v1 import obs_fields
+    from amigo_gym.training.sb3_lowpass import LowPassTD3Policy
+
+    policy = load_pretrained(model)
+    assert isinstance(policy.policy, LowPassTD3Policy)
+    alpha = policy.policy.filter_alpha
+    env = gym.make_vec("AmigoBot-v1", num_envs=8, vectorization_mode="vector_entry_point", path="mixed")
+    names = obs_fields(env.params)  # type: ignore[attr-defined]
+    idx = [names.index("previous_command_1"), names.index("previous_command_2")]
+    obs, _ = env.reset(seed=321)
+    for _ in range(20):
+        a, _ = policy.predict(obs, deterministic=True)
+        assert a.shape == (8, 2) and np.all(np.isfinite(a)) and np.all(np.abs(a) <= 1.0)
+        assert np.all(np.abs(a - obs[:, idx]) <= 2 * alpha + 1e-5)
+        obs, *_ = env.step(a)
+    env.close()

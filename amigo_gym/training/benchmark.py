@@ -148,6 +148,7 @@ V1_AGENTS: dict[str, str] = {
     "ppo": "SB3 PPO",
     "sac": "SB3 SAC",
     "td3": "SB3 TD3",
+    "td3lp": "SB3 TD3 low-pass",
     "ppo_fast": "fast PPO",
     "residual": "fast PPO residual",
 }
@@ -597,6 +598,8 @@ def agent_label(name: str, algo: str | None = None) -> str:
         kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
     elif algo in ALGOS:
         kind = f"SB3 {str(algo).upper()}"
+        if v1 and V1_AGENTS[name[:-3]].startswith(kind):  # a variant of the algorithm, e.g. "SB3 TD3 low-pass"
+            kind = V1_AGENTS[name[:-3]]
     elif v1:
         kind = V1_AGENTS[name[:-3]]
     elif v0:

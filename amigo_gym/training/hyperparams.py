@@ -37,6 +37,8 @@ __all__ = [
 ENV_ID = "AmigoBot-v0"
 
 #: keys of the file that are not keyword arguments of the algorithm class
+#: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.training.sb3_lowpass.POLICY_NAME`)
+LOWPASS_POLICY = "LowPassMlpPolicy"
 META_KEYS = ("n_timesteps", "n_envs", "policy", "normalize", "noise_type", "noise_std", "normalize_kwargs")
 
 #: keyword arguments of the algorithm class that a file may not set (train sets them, or they need objects)
@@ -170,7 +172,8 @@ class Hyperparams:
         raw: the ``AmigoBot-v0`` mapping as read (written to ``config.json``).
         n_timesteps: the file's ``n_timesteps`` (``None`` if absent).
         n_envs: the file's ``n_envs`` (``None`` if absent).
-        policy: the policy name (default ``MlpPolicy``).
+        policy: the policy name: ``MlpPolicy`` (default), or ``LowPassMlpPolicy`` (TD3 with the low-pass action
+            parameterisation, :mod:`amigo_gym.training.sb3_lowpass`; ``policy_kwargs.filter_alpha`` in (0, 1]).
         normalize: ``VecNormalize`` keywords, or ``None`` for no normalisation.
         kwargs: keyword arguments of the algorithm class (``policy_kwargs`` parsed, schedules made),
             without the action noise (:meth:`action_noise` makes it for the action size).
@@ -246,8 +249,21 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
                 raise ValueError(f"{where}: {name} must be an integer >= 1, got {v!r}")
             setattr(out, name, v)
     policy = hp.get("policy", "MlpPolicy")
-    if policy != "MlpPolicy":
-        raise ValueError(f"{where}: policy must be MlpPolicy (the observation is a vector), got {policy!r}")
+    if policy == LOWPASS_POLICY:
+        if algo != "td3":
+            raise ValueError(f"{where}: policy {LOWPASS_POLICY} is for td3, not {algo}")
+        pk0 = hp.get("policy_kwargs")
+        pk0 = parse_python_literal(pk0) if isinstance(pk0, str) else pk0
+        alpha = pk0.get("filter_alpha") if isinstance(pk0, Mapping) else None
+        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not 0.0 < float(alpha) <= 1.0:
+            raise ValueError(f"{where}: policy_kwargs.filter_alpha must be in (0, 1] for {policy}, got {alpha!r}")
+        if isinstance(pk0, Mapping) and "prev_index" in pk0:
+            raise ValueError(f"{where}: policy_kwargs.prev_index comes from the env's observation, not the file")
+        out.policy = LOWPASS_POLICY
+    elif policy != "MlpPolicy":
+        raise ValueError(
+            f"{where}: policy must be MlpPolicy (the observation is a vector) or {LOWPASS_POLICY} (td3), got {policy!r}"
+        )
     normalize = hp.get("normalize", hp.get("normalize_kwargs"))
     out.normalize = _normalize(normalize, hp.get("gamma"))
     noise = hp.get("noise_type")

@@ -74,7 +74,7 @@ from amigo_gym import runs
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point
 from amigo_gym.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.training.hyperparams import Hyperparams, load_hyperparams, parse_hyperparams
+from amigo_gym.training.hyperparams import LOWPASS_POLICY, Hyperparams, load_hyperparams, parse_hyperparams
 from amigo_gym.training.task_metrics import EpisodeRecorder, InfoAdapter
 
 __all__ = [
@@ -608,9 +608,12 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         noise = parsed.action_noise(int(venv.action_space.shape[0]))
         if noise is not None:
             kw["action_noise"] = noise
-        model = algo_cls(
-            parsed.policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw
-        )
+        policy: Any = parsed.policy
+        if policy == LOWPASS_POLICY:  # TD3 with the low-pass actor: the previous command's place from the env
+            from amigo_gym.training.sb3_lowpass import policy_for
+
+            policy, kw["policy_kwargs"] = policy_for(venv, kw.get("policy_kwargs"))
+        model = algo_cls(policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw)
         done_steps, previous_wall = 0, 0.0
     venv = model.get_env()
 
