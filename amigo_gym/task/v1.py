@@ -609,6 +609,24 @@ def constants(p: TrackingParams) -> Constants:
     )
 
 
+#: the settings AmigoBot-v0's ``EnvParams`` and AmigoBot-v1's ``TrackingParams`` share, under the same name and meaning
+#: (:func:`v0_settings`, :func:`v0_configuration`)
+V0_SHARED_SETTINGS: tuple[str, ...] = (
+    "robot",
+    "dt",
+    "speed",
+    "termination_distance",
+    "init_position_noise",
+    "init_heading_noise",
+    "error_scale",
+    "preview",
+    "sigma_track",
+    "sigma_speed",
+    "sigma_smooth",
+    "smooth_weight",
+)
+
+
 def v0_settings(p: TrackingParams) -> EnvParams | None:
     """The AmigoBot-v0 task that ``p`` describes, or ``None``: the settings whose steps AmigoBot-v0's compiled
     step (:mod:`amigo_gym.sim.fast`) gives bit for bit, and whose info has AmigoBot-v0's keys.
@@ -634,22 +652,11 @@ def v0_settings(p: TrackingParams) -> EnvParams | None:
         return None
     try:
         e = EnvParams(
-            robot=p.robot,
-            dt=p.dt,
+            **{name: getattr(p, name) for name in V0_SHARED_SETTINGS},
             radius=path.radius,
-            speed=p.speed,
             direction=path.direction,
             path=kind,
             straight_length=getattr(path, "straight_length", 1.0),
-            termination_distance=p.termination_distance,
-            init_position_noise=p.init_position_noise,
-            init_heading_noise=p.init_heading_noise,
-            error_scale=p.error_scale,
-            preview=p.preview,
-            sigma_track=p.sigma_track,
-            sigma_speed=p.sigma_speed,
-            sigma_smooth=p.sigma_smooth,
-            smooth_weight=p.smooth_weight,
         )
     except ValueError:
         return None
@@ -665,23 +672,12 @@ def v0_configuration(e: EnvParams) -> TrackingParams:
     :class:`~amigo_gym.model.params.EnvParams` checked it) and every other setting of ``e``.
     """
     return TrackingParams(
-        robot=e.robot,
+        **{name: getattr(e, name) for name in V0_SHARED_SETTINGS},
         randomize=make_randomization("none"),
-        dt=e.dt,
         path=make_path(e),
         radius=e.radius,
         direction=e.direction,
-        speed=e.speed,
         start_at_rest=False,
-        termination_distance=e.termination_distance,
-        init_position_noise=e.init_position_noise,
-        init_heading_noise=e.init_heading_noise,
-        error_scale=e.error_scale,
-        preview=e.preview,
-        sigma_track=e.sigma_track,
-        sigma_speed=e.sigma_speed,
-        sigma_smooth=e.sigma_smooth,
-        smooth_weight=e.smooth_weight,
         feasibility="off",
         ideal_actuators=True,
         observation="v0",
