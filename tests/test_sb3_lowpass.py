@@ -86,11 +86,11 @@ def test_command_change_is_bounded_in_a_rollout() -> None:
 @pytest.mark.parametrize(
     ("alpha", "index", "match"),
     [
-        (0.0, (0, 1), "filter_alpha must be in"),
-        (1.5, (0, 1), "filter_alpha must be in"),
-        (math.nan, (0, 1), "filter_alpha must be in"),
-        ("0.3", (0, 1), "filter_alpha must be a number"),
-        (True, (0, 1), "filter_alpha must be a number"),
+        (0.0, (0, 1), "filter_alpha must be a finite number in"),
+        (1.5, (0, 1), "filter_alpha must be a finite number in"),
+        (math.nan, (0, 1), "filter_alpha must be a finite number in"),
+        ("0.3", (0, 1), "filter_alpha must be a real number in"),
+        (True, (0, 1), "filter_alpha must be a real number in"),
         (0.3, (1, 1), "prev_index must be two distinct"),
         (0.3, (0, 99), "prev_index must be two distinct"),
         (0.3, (0,), "prev_index must be two distinct"),
@@ -105,8 +105,12 @@ def test_check_filter_refuses(alpha: Any, index: Any, match: str) -> None:
     ("algo", "hp", "match"),
     [
         ("sac", {"policy": "LowPassMlpPolicy", "policy_kwargs": {"filter_alpha": 0.3}}, "is for td3, not sac"),
-        ("td3", {"policy": "LowPassMlpPolicy"}, "filter_alpha must be in"),
-        ("td3", {"policy": "LowPassMlpPolicy", "policy_kwargs": {"filter_alpha": 2}}, "filter_alpha must be in"),
+        ("td3", {"policy": "LowPassMlpPolicy"}, "filter_alpha must be a real number in"),
+        (
+            "td3",
+            {"policy": "LowPassMlpPolicy", "policy_kwargs": {"filter_alpha": 2}},
+            "filter_alpha must be a finite number in",
+        ),
         (
             "td3",
             {"policy": "LowPassMlpPolicy", "policy_kwargs": {"filter_alpha": 0.3, "prev_index": [0, 1]}},

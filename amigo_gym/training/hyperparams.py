@@ -24,11 +24,14 @@ from typing import Any
 
 import numpy as np
 
+from amigo_gym.model.params import check_real
+
 __all__ = [
     "ENV_ID",
     "META_KEYS",
     "TORCH_NAMES",
     "Hyperparams",
+    "check_filter_alpha",
     "load_hyperparams",
     "parse_hyperparams",
     "parse_python_literal",
@@ -36,9 +39,9 @@ __all__ = [
 
 ENV_ID = "AmigoBot-v0"
 
-#: keys of the file that are not keyword arguments of the algorithm class
 #: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.training.sb3_lowpass.POLICY_NAME`)
 LOWPASS_POLICY = "LowPassMlpPolicy"
+#: keys of the file that are not keyword arguments of the algorithm class
 META_KEYS = ("n_timesteps", "n_envs", "policy", "normalize", "noise_type", "noise_std", "normalize_kwargs")
 
 #: keyword arguments of the algorithm class that a file may not set (train sets them, or they need objects)
@@ -227,6 +230,17 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
     return kw
 
 
+def check_filter_alpha(value: object, owner: str = "policy_kwargs") -> float:
+    """The low-pass filter factor ``alpha`` of :data:`LOWPASS_POLICY` as a float, checked to be a finite real
+    number in (0, 1] (``a = p + alpha (u - p)``: 1 is no filter, 0 would freeze the command).
+
+    Raises:
+        ValueError: one line ``<owner>.filter_alpha must be a ... number in (0, 1], got <value>`` (also for
+            ``None``, ``bool``, strings, NaN and inf).
+    """
+    return check_real(owner, "filter_alpha", value, 0.0, 1.0, low_open=True)
+
+
 def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
     """Check the ``AmigoBot-v0`` mapping of a file for ``algo`` and turn it into :class:`Hyperparams`.
 
@@ -254,9 +268,7 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
             raise ValueError(f"{where}: policy {LOWPASS_POLICY} is for td3, not {algo}")
         pk0 = hp.get("policy_kwargs")
         pk0 = parse_python_literal(pk0) if isinstance(pk0, str) else pk0
-        alpha = pk0.get("filter_alpha") if isinstance(pk0, Mapping) else None
-        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not 0.0 < float(alpha) <= 1.0:
-            raise ValueError(f"{where}: policy_kwargs.filter_alpha must be in (0, 1] for {policy}, got {alpha!r}")
+        check_filter_alpha(pk0.get("filter_alpha") if isinstance(pk0, Mapping) else None, f"{where}: policy_kwargs")
         if isinstance(pk0, Mapping) and "prev_index" in pk0:
             raise ValueError(f"{where}: policy_kwargs.prev_index comes from the env's observation, not the file")
         out.policy = LOWPASS_POLICY

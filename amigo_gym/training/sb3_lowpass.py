@@ -25,7 +25,6 @@ Imports torch and stable-baselines3 (an edge module of the training layer, like 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -35,6 +34,7 @@ from gymnasium import spaces
 from stable_baselines3.td3.policies import Actor, TD3Policy
 
 from amigo_gym.training.hyperparams import LOWPASS_POLICY as POLICY_NAME
+from amigo_gym.training.hyperparams import check_filter_alpha
 
 __all__ = ["POLICY_NAME", "LowPassActor", "LowPassTD3Policy", "policy_for", "previous_command_index"]
 
@@ -42,11 +42,7 @@ __all__ = ["POLICY_NAME", "LowPassActor", "LowPassTD3Policy", "policy_for", "pre
 def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
     """The checked ``(alpha, (i1, i2))``: ``alpha`` a finite number in (0, 1], two distinct indices in
     [0, ``obs_dim``); ``ValueError`` naming the field and the value otherwise."""
-    if isinstance(filter_alpha, bool) or not isinstance(filter_alpha, int | float):
-        raise ValueError(f"policy_kwargs.filter_alpha must be a number in (0, 1], got {filter_alpha!r}")
-    a = float(filter_alpha)
-    if not math.isfinite(a) or not 0.0 < a <= 1.0:
-        raise ValueError(f"policy_kwargs.filter_alpha must be in (0, 1], got {filter_alpha!r}")
+    a = check_filter_alpha(filter_alpha)
     idx = tuple(prev_index) if isinstance(prev_index, Sequence) and not isinstance(prev_index, str) else None
     if (
         idx is None
