@@ -521,3 +521,50 @@ def test_a_trials_end_records_validation_errors_and_a_nan_objective() -> None:
         and nan.user_attrs["fail_reason"] == "validation H RMS IQM nan (cells: {'a': None})"
     )
     assert nan.user_attrs["validation"]["cells"] == {"a": None}
+
+
+def test_enqueue_base_runs_the_base_files_values_first() -> None:
+    """``--enqueue-base``: the study's first trial is the base YAML's own values (read back by the same
+    sampling code as every trial), and the high-throughput file samples its batch sizes from its own range."""
+    from amigo_gym.training.hyperparams import load_hyperparams
+    from amigo_gym.training.sweep import HT_BATCH_SIZES, SweepConfig, base_params, open_study, sample_hyperparams
+
+    base_file = Path(__file__).resolve().parents[1] / "agents" / "hyperparams" / "td3_lowpass.yml"
+    base = load_hyperparams(base_file, "AmigoBot-v1")
+    # the file's literal values (agents/hyperparams/td3_lowpass.yml)
+    want = {"learning_rate": 0.001, "gamma": 0.98, "tau": 0.005, "batch_size": 2048, "noise_std": 0.1}
+    got = sample_hyperparams(optuna.trial.FixedTrial(base_params("td3", base)), "td3", base)
+    assert {k: got[k] for k in want} == pytest.approx(want, rel=1e-12)
+    cfg = SweepConfig(
+        algos=["td3"], env_id="AmigoBot-v1", hyperparams=str(base_file), enqueue_base=True, study_name="base"
+    )
+    cfg.validate()
+    study = open_study(cfg, "sqlite:///:memory:")
+    (first,) = study.get_trials()
+    assert first.state == TrialState.WAITING and first.user_attrs["base"] is True
+    run = study.ask()  # the worker's next trial is the enqueued one: it samples the file's values
+    assert run.number == first.number
+    assert {k: v for k, v in sample_hyperparams(run, "td3", base).items() if k in want} == pytest.approx(want)
+    # many sub-envs: batch sizes from the high-throughput range; one env: rl-zoo's
+    rs, rs1 = (optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0)) for _ in range(2))
+    ht = {sample_hyperparams(rs.ask(), "td3", base)["batch_size"] for _ in range(40)}
+    small = {sample_hyperparams(rs1.ask(), "sac", {"n_envs": 1})["batch_size"] for _ in range(40)}
+    assert ht == set(HT_BATCH_SIZES) and small == {64, 128, 256}
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"algos": ["td3"], "mode": "seeds"}, "--enqueue-base is for --mode hyperparams"),
+        ({"algos": ["fastppo"]}, "--enqueue-base is for --mode hyperparams of an SB3 algorithm"),
+    ],
+)
+def test_enqueue_base_refuses_seeds_mode_and_fastppo(kw: dict[str, Any], match: str) -> None:
+    from amigo_gym.training.sweep import SweepConfig, base_params
+
+    with pytest.raises(ValueError, match=match):
+        SweepConfig(enqueue_base=True, **kw).validate()  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="the base file has no noise_std for td3"):
+        base_params("td3", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256})
+    with pytest.raises(ValueError, match=r"batch_size must be one of \[512, 1024, 2048, 4096\], got 256"):
+        base_params("sac", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256, "n_envs": 128})

@@ -142,7 +142,7 @@ import sys
 import time
 import warnings
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
@@ -296,6 +296,8 @@ class SweepConfig:
         grace_period: time without heartbeat before FAIL [s].
         max_retry: retries of a trial whose worker died [retries].
         threads: torch threads per worker [threads].
+        enqueue_base: run the base YAML's own values as the study's first trial (hyperparams mode, an SB3
+            algorithm), so the winner is compared with the file it starts from.
         worker_index: index of a worker process started by ``--n-jobs`` (internal).
         argv: the command line (not an option).
     """
@@ -326,6 +328,7 @@ class SweepConfig:
     grace_period: int = 120
     max_retry: int = 1
     threads: int = 1
+    enqueue_base: bool = False
     worker_index: int = field(default=0, metadata=cli(hidden=True))
     argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
@@ -335,6 +338,10 @@ class SweepConfig:
             raise ValueError(f"--algo must be among {list(SWEEP_ALGOS)}, got {self.algos}")
         if self.mode not in MODES:
             raise ValueError(f"--mode must be one of {list(MODES)}, got {self.mode!r}")
+        if self.enqueue_base and (self.mode != "hyperparams" or FASTPPO in self.algos):
+            raise ValueError(
+                f"--enqueue-base is for --mode hyperparams of an SB3 algorithm, got {self.mode} {self.algos}"
+            )
         if self.mode == "hyperparams" and len(self.algos) != 1:
             raise ValueError(f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}")
         if self.sampler not in ("tpe", "random"):
@@ -629,6 +636,12 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
             for algo in cfg.algos:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
+        elif cfg.enqueue_base:
+            from amigo_gym.training.train import HYPERPARAMS_DIR, load_hyperparams
+
+            algo = cfg.algos[0]
+            base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+            study.enqueue_trial(base_params(algo, load_hyperparams(base_file, cfg.env_id)), user_attrs={"base": True})
         study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
     else:
         deadline = time.monotonic() + READY_TIMEOUT_S
@@ -751,8 +764,18 @@ def mark_abandoned(study: Any) -> list[int]:
 
 
 # --------------------------------------------------------------------------- the objective
-def sample_hyperparams(trial: Any, algo: str) -> dict[str, Any]:
-    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; the other keys come from the base YAML)."""
+#: off-policy batch sizes sampled when the base YAML is a high-throughput configuration (``n_envs`` >= 64: many
+#: sub-envs, a few large gradient steps per vector step, docs/baselines.md "Off-policy per wall-second")
+HT_BATCH_SIZES = (512, 1024, 2048, 4096)
+HT_MIN_ENVS = 64
+
+
+def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; the other keys come from the base YAML ``base``).
+
+    SAC/TD3 sample ``batch_size`` from 64-256, or from :data:`HT_BATCH_SIZES` when ``base`` has ``n_envs`` >=
+    :data:`HT_MIN_ENVS`. The low-pass factor of ``policy: LowPassMlpPolicy`` is not sampled: the objective is H's
+    error alone, which would trade the smoothness the filter is there for (its value stays the base file's)."""
     hp: dict[str, Any] = {
         "learning_rate": trial.suggest_float("learning_rate", 1e-5, 3e-3, log=True),
         "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-4, 0.1, log=True),
@@ -764,11 +787,37 @@ def sample_hyperparams(trial: Any, algo: str) -> dict[str, Any]:
         hp["n_epochs"] = trial.suggest_int("n_epochs", 1, 10)
     else:
         hp["tau"] = trial.suggest_float("tau", 1e-3, 5e-2, log=True)
-        hp["batch_size"] = trial.suggest_categorical("batch_size", [64, 128, 256])
+        ht = int((base or {}).get("n_envs", 1)) >= HT_MIN_ENVS
+        hp["batch_size"] = trial.suggest_categorical("batch_size", list(HT_BATCH_SIZES) if ht else [64, 128, 256])
         if algo == "td3":
             hp["noise_type"] = "normal"
             hp["noise_std"] = trial.suggest_float("noise_std", 0.05, 0.5)
     return hp
+
+
+def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
+    """The Optuna parameters of :func:`sample_hyperparams` that reproduce the base YAML ``base`` (for
+    ``--enqueue-base``: the study's first trial is the file it starts from).
+
+    Raises:
+        ValueError: a sampled key is missing from ``base`` or outside its sampled range.
+    """
+    names = ["learning_rate", "gamma"] + (
+        ["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo" else ["tau", "batch_size"]
+    )
+    if algo == "td3":
+        names.append("noise_std")
+    missing = [n for n in names if n not in base]
+    if missing:
+        raise ValueError(f"--enqueue-base: the base file has no {', '.join(missing)} for {algo}")
+    out = {n: base[n] for n in names if n != "gamma"}
+    out["one_minus_gamma"] = 1.0 - float(base["gamma"])
+    if algo != "ppo":
+        ht = int(base.get("n_envs", 1)) >= HT_MIN_ENVS
+        choices = HT_BATCH_SIZES if ht else (64, 128, 256)
+        if base["batch_size"] not in choices:
+            raise ValueError(f"--enqueue-base: batch_size must be one of {list(choices)}, got {base['batch_size']!r}")
+    return out
 
 
 #: fast-PPO sampling choices (powers of two, so that every minibatch count divides the batch ``N T``)
@@ -912,7 +961,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
         hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
-            hp |= sample_hyperparams(trial, algo)
+            hp |= sample_hyperparams(trial, algo, hp)
         trial.set_user_attr("hyperparams", hp)
         hp_file = run_dir / "hyperparams.yml"
         atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
