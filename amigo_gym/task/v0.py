@@ -1,8 +1,9 @@
 r"""The tracking task as pure, batched functions: actions, observation, reward, start, end.
 
 AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`, which the environments run in AmigoBot-v0's
-configuration) compiles these functions and is tested against them; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`)
-and the agents call them too; nothing here keeps state. Shapes: a leading batch axis is optional
+configuration) compiles the scalar functions here; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`, whose ideal step
+is the reference the compiled step is tested against, ``tests/test_kernels.py``) and the agents call them too;
+nothing here keeps state. Shapes: a leading batch axis is optional
 everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
 
 Observation (all dimensionless, ``psi = wrap(beta - theta)`` is the heading error against the path
@@ -46,9 +47,8 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
 reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
 quantity the environments report (:class:`Outcome`); :func:`transition` and :func:`evaluate` are thin
-array wrappers over the same column functions. They take plain scalars (:func:`step_float`: one flat
-function of floats) or ``(N,)`` arrays alike, the reference of the compiled step (``tests/test_kernels.py``,
-``tests/test_columns.py``). The constants of a step
+array wrappers over the same column functions. They take plain scalars or ``(N,)`` arrays alike with the same bits
+(``tests/test_columns.py``); the speed benchmarks time them (:mod:`amigo_gym.bench.core`). The constants of a step
 are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache: ``EnvParams`` is
 the only way to set them).
 
@@ -75,12 +75,9 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import (
     Real,
     a_from_h,
-    arc_from_tangents,
     arc_step,
     body_velocity_columns,
-    body_velocity_of,
     castor_rate_columns,
-    castor_rate_float,
     col_cos,
     col_exp,
     col_sin,
@@ -769,80 +766,9 @@ def step_columns(
 
 
 def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
-    """:func:`step_columns` (``minimal=True``) for one robot's Python floats, as one flat function: the same bits.
-
-    The scalar functions of :func:`move_columns`, :func:`amigo_gym.model.kinematics.arc_step`
-    (:func:`~amigo_gym.model.kinematics.arc_from_tangents`), ``castor_rate_columns``, ``h_from_a`` and
-    :func:`outcome_columns` called in their order, without the layers of column functions (the compiled step
-    compiles the same scalar functions); the two tangents and the three exponentials are numpy's, each
-    pair or triple in one call on a small array (numpy gives an element the bits it gives a scalar), so the
-    single env and the vector env (:func:`step_columns` on ``(N,)`` columns) agree bit for bit
-    (``tests/test_columns.py`` checks it). The path's projection and curvature are the path's own methods.
-    """
-    robot = k.robot
-    dt = k.dt
-    w_max = k.w_max
-    # move_columns: clip and scale, body velocity
-    w1 = clip_float(a1, -1.0, 1.0) * w_max
-    w2 = clip_float(a2, -1.0, 1.0) * w_max
-    v, bdot = body_velocity_of(w1, w2, robot.r1, robot.r2, 2.0 * robot.l1)
-    # arc_step: the tangents of the half turn and of the mid-step heading from one np.tan call
-    beta = state.beta
-    db = bdot * dt
-    h = 0.5 * db
-    t_h, t_m = _np_tan(_np_array((0.5 * h, 0.5 * (beta + h)))).tolist()
-    x, y, cos_b, sin_b = arc_from_tangents(state.x, state.y, v, dt, h, t_h, t_m)
-    castor = castor_rate_float(v, bdot, robot.l5, robot.r3)
-    new = State(
-        x,
-        y,
-        beta + db,
-        state.alpha1 + w1 * dt,
-        state.alpha2 + w2 * dt,
-        state.alpha3 + castor * dt,
-        w1,
-        w2,
-    )
-    # outcome_columns
-    l3 = k.l3
-    hx, hy = h_from_a(x, y, cos_b, sin_b, l3)
-    cp = path.project_xy(hx, hy, True)
-    cos_psi, sin_psi = heading_error(cos_b, sin_b, cp.cos_theta, cp.sin_theta)
-    e = cast(float, cp.cross_track_error)
-    abs_e = abs(e)
-    dv = v - k.speed
-    curvature = cp.curvature
-    obs = (
-        clip_float(e / k.error_scale, -k.e_max, k.e_max),
-        sin_psi,
-        cos_psi,
-        curvature * l3,
-        *(
-            (curvature * l3,) * len(k.preview)  # a circle: the curvature of every preview point (d / r)
-            if type(path) is CirclePath
-            else [path.curvature_columns(cp.s + d) * l3 for d in k.preview]
-        ),
-        w1 / w_max,
-        w2 / w_max,
-        dv / k.max_speed,
-        k.reference_obs,
-    )
-    if isinstance(curvature, float):
-        cos_ss, sin_ss = _steady_heading_scalar(curvature, l3)
-    else:
-        cos_ss, sin_ss = _steady_heading(curvature, l3)
-    dw1 = w1 - state.rate1
-    dw2 = w2 - state.rate2
-    ex = _np_exp(
-        _np_array((abs_e / -k.sigma_track, abs(dv) / -k.sigma_speed, (dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq))
-    ).tolist()
-    terms = (ex[0], ex[1], heading_term(cos_psi, sin_psi, cos_ss, sin_ss), smooth_term(ex[2], k.smooth_weight))
-    return new, Outcome(hx, hy, cp, obs, terms, reward_product(*terms), abs_e > k.termination_distance)
-
-
-_np_array = np.array
-_np_tan = np.tan
-_np_exp = np.exp
+    """:func:`step_columns` (``minimal=True``) of one robot's Python floats (the name kept from 0.1; the column
+    functions take floats as they take ``(N,)`` arrays, with the same bits: ``tests/test_columns.py``)."""
+    return step_columns(k, path, state, a1, a2, True)
 
 
 class Evaluation(NamedTuple):
