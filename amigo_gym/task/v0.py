@@ -123,6 +123,7 @@ __all__ = [
     "info_dict",
     "record_info",
     "obs_index",
+    "observe_columns",
     "Motion",
     "move_columns",
     "start_motion",
@@ -396,9 +397,10 @@ def task_constants(params: EnvParams) -> TaskConstants:
 
 
 def _clip(x: Real, low: float, high: float) -> Real:
-    """``np.clip`` of an array; of a scalar, the same value by comparisons (:func:`clip_float`)."""
+    """``np.clip`` of an array (as ``np.minimum(np.maximum(x, low), high)``: the same values, less overhead); of a
+    scalar, the same value by comparisons (:func:`clip_float`)."""
     if isinstance(x, np.ndarray):
-        out: Real = np.clip(x, low, high)
+        out: Real = np.minimum(np.maximum(x, low), high)
         return out
     return clip_float(x, low, high)
 
@@ -436,30 +438,46 @@ def _abs(x: Real) -> Real:
     return cast(Real, abs(x))
 
 
-def _observe_columns(
-    k: TaskConstants,
-    path: AnyPath,
-    s: Real,
-    error: Real,
-    curvature: Real,
-    cos_psi: Real,
+def observe_columns(
+    path: Any,
+    preview: tuple[float, ...],
+    l3: float,
+    error_scale: float,
+    e_max: float,
+    w_max: float,
+    v_max: float,
+    e: Real,
     sin_psi: Real,
-    dv: Real,
+    cos_psi: Real,
+    curvature: Real,
+    s: Real,
     w1: Real,
     w2: Real,
+    v: Real,
+    v_ref: Real,
 ) -> tuple[Real, ...]:
-    """The observation's columns, in the order of the module table (``dv = v_A - v_ref``)."""
-    l3 = k.l3
+    """AmigoBot-v0's observation, in the order of the module table (also AmigoBot-v1's ``observation="v0"``).
+
+    ``(clip(e / error_scale, +-e_max), sin psi, cos psi, kappa l3, kappa(s + d_i) l3 ..., w1 / w_max, w2 / w_max,
+    (v - v_ref) / v_max, v_ref / v_max)``, each clipped to its bound (:func:`obs_bounds_of`; a no-op on v0's task).
+    ``path``: the path, ``s`` [m] H's arc length on it (the preview points lie ``preview`` [m] ahead), ``e`` [m] and
+    ``curvature`` [1/m] at H; ``w1, w2`` the wheel rates [rad/s], ``v`` the speed of A and ``v_ref`` the reference
+    speed [m/s]; ``l3``, ``error_scale`` [m], ``e_max`` [-], ``w_max`` [rad/s], ``v_max`` [m/s] the scales.
+    """
+    if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
+        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in preview]
+    else:
+        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in preview]
     return (
-        _clip(error / k.error_scale, -k.e_max, k.e_max),
+        _clip(e / error_scale, -e_max, e_max),
         sin_psi,
         cos_psi,
-        curvature * l3,
-        *[path.curvature_columns(s + d) * l3 for d in k.preview],
-        w1 / k.w_max,
-        w2 / k.w_max,
-        dv / k.max_speed,
-        k.reference_obs,
+        _clip(curvature * l3, -1.0, 1.0),
+        *ahead,
+        _clip(w1 / w_max, -1.0, 1.0),
+        _clip(w2 / w_max, -1.0, 1.0),
+        _clip((v - v_ref) / v_max, -2.0, 2.0),
+        v_ref / v_max,
     )
 
 
@@ -723,7 +741,10 @@ def outcome_columns(
     e = cp.cross_track_error
     abs_e = _abs(e)
     dv = v - k.speed
-    obs = _observe_columns(k, path, cp.s, e, cp.curvature, cos_psi, sin_psi, dv, w1, w2)
+    obs = observe_columns(
+        path, k.preview, k.l3, k.error_scale, k.e_max, k.w_max, k.max_speed, e, sin_psi, cos_psi, cp.curvature, cp.s,
+        w1, w2, v, k.speed,
+    )  # fmt: skip
     terms = _reward_columns(k, abs_e, cp.curvature, cos_psi, sin_psi, dv, w1, w2, prev1, prev2)
     return Outcome(hx, hy, cp, obs, terms, _product(terms), abs_e > k.termination_distance)
 
