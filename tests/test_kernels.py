@@ -1,14 +1,14 @@
 """The compiled step of AmigoBot-v0 (amigo_gym.sim.fast.step_rows) against AmigoBot-v1's reference with v0's settings.
 
 The reference is the route ``kernel="numpy"`` runs: :func:`amigo_gym.task.v1.step_columns` with ideal actuators
-(``_ideal_step``, ``_observe_v0``) and :func:`amigo_gym.task.v1.reset_columns` of
-:func:`amigo_gym.task.v1.v0_configuration`, on ``(N,)`` columns: another code path than the kernel's loops (it
-projects H by ``path.locate`` and evaluates by ``evaluate_columns``). Random states and actions (actions beyond
-[-1, 1] too, straight motion, turning on the spot) on the circle and the manoeuvre path, both directions, several
-dt: every output agrees to 1e-12 (the contract) and is in fact bit-identical on this machine (the same numpy
-``tan`` and ``exp``); the parallel variant gives the serial one's bits; restart rows are evaluated as the
-reference's reset evaluates a start state. The golden episodes (``tests/test_golden.py``) hold both routes to
-recorded numbers.
+(``_ideal_step``; the observation by :func:`amigo_gym.task.v0.observe_columns`) and
+:func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`, on ``(N,)`` columns: another
+code path than the kernel's loops (it projects H by ``path.locate`` and evaluates by ``evaluate_columns``). Random
+states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the circle and the
+manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the contract) and is in fact
+bit-identical on this machine (the same numpy ``tan`` and ``exp``); the parallel variant gives the serial one's bits;
+restart rows are evaluated as the reference's reset evaluates a start state. The golden episodes
+(``tests/test_golden.py``) hold both routes to recorded numbers.
 """
 
 from __future__ import annotations

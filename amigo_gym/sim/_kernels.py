@@ -282,7 +282,7 @@ def _evaluate(
     exps: F64,
 ) -> None:
     """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
-    # task._steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
+    # task.steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
     # of the manoeuvre), computed once with the same operations instead of a square root per row
     l3 = c[L3]
     kl3_curve = c[CURV] * l3
@@ -376,7 +376,7 @@ def _evaluate(
         obs[i, m + 2] = dv / c[MAX_SPEED]
         obs[i, m + 3] = c[REF_OBS]
 
-        # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
+        # task._reward_columns, task.steady_heading: the heading term, the arguments of the exponentials
         sin_ss = sin_ss_line if on_line else sin_ss_curve
         cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1

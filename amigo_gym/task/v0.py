@@ -501,7 +501,7 @@ def _reward_columns(
     if isinstance(curvature, float):  # the same for every robot (a circle): from a cache
         cos_ss, sin_ss = _steady_heading_scalar(curvature, k.l3)
     else:
-        cos_ss, sin_ss = _steady_heading(curvature, k.l3)
+        cos_ss, sin_ss = steady_heading(curvature, k.l3)
     dw1 = w1 - prev1
     dw2 = w2 - prev2
     return reward_term_columns(
@@ -563,12 +563,8 @@ def reward_product(track: Real, speed: Real, heading: Real, smooth: Real) -> Rea
 
 
 def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
-    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (the public name)."""
-    return _steady_heading(curvature, l3)
-
-
-def _steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
-    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)``."""
+    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (``kappa l3`` clipped to
+    [-1, 1]): ``cos psi_ss = sqrt(1 - (kappa l3)^2)``, ``sin psi_ss = -kappa l3``; floats or columns."""
     sin_ss = -_clip(curvature * l3, -1.0, 1.0)
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
