@@ -1,6 +1,6 @@
 """The float paths of one robot give the bits of the column code on arrays (issue 12, part 2).
 
-The single environments run flat functions on Python floats (``task.step_float``, the float branches of
+The single environments run the column code on Python floats (``task.step_float``, the float branches of
 ``fresnel.advance``, ``actuators.actuator_step``, ``ClothoidPath.locate``/``pose_columns`` and
 ``randomization.step_noise``); the vector environments run the column code on ``(N,)`` arrays. Each float
 result here must equal the array result of its row bit for bit (signs of zeros included).

@@ -1,11 +1,11 @@
 """Start states drawn inside the compiled step (amigo_gym.sim.fast.step_rows with a GeneratorTable's bitgens).
 
 The reference is the Python loop the vector env runs without them (and the single env's reset): per
-restarting robot ``Generator.random(out=u[j])`` from its own generator, then task.start_pose of
-``-1 + 2 u``. The compiled draws must give the same start states bit for bit and leave every generator
-in the same state (compared as ``bit_generator.state`` dicts and by the numbers drawn next), with
-masks, partial resets, reseeding, generators drawn from outside, non-PCG64 generators, pickling and
-deep copies (a copy computes its own generators' addresses and never touches the original's).
+restarting robot, AmigoBot-v1's start with v0's settings (:func:`amigo_gym.task.v1.start_episode` of
+:func:`amigo_gym.task.v1.v0_configuration`) from its own generator. The compiled draws must give the same start
+states bit for bit and leave every generator in the same state (compared as ``bit_generator.state`` dicts and by
+the numbers drawn next), with masks, partial resets, reseeding, generators drawn from outside, non-PCG64
+generators, pickling and deep copies (a copy computes its own generators' addresses and never touches the original's).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 pytest.importorskip("numba")
 
@@ -53,15 +54,12 @@ def _same_generators(a: Any, b: Any) -> None:
 
 
 def _reference_starts(params: EnvParams, gens: list[np.random.Generator], idx: NDArray[np.intp], rows: Array) -> Array:
-    """The vector env's Python loop (``_start_states``): ``random(out=u[j])`` per robot, task.start_pose."""
-    u = np.empty((len(idx), 3))
-    for j, i in enumerate(idx.tolist()):
-        gens[i].random(out=u[j])
-    pose = task.start_pose(-1.0 + 2.0 * u, params, make_path(params))
+    """The vector env's Python loop: :func:`amigo_gym.task.v1.start_episode` per robot, from its generator."""
+    k = tracking.constants(tracking.v0_configuration(params))
     out = rows.copy()
-    out[idx, 0:3] = pose
-    out[idx, 3:6] = 0.0
-    out[idx, 6:8] = task.initial_wheel_rates(params)
+    for i in idx.tolist():
+        st = tracking.start_episode(gens[i], k)[3]
+        out[i] = (st.x, st.y, st.beta, st.alpha1, st.alpha2, 0.0, st.w1, st.w2)
     return out
 
 
@@ -238,7 +236,7 @@ def test_copies_draw_from_their_own_generators(clone: str) -> None:
 
 @pytest.mark.parametrize("parallel", [False, True])
 def test_step_report_counts_headings_past_the_limit(parallel: bool) -> None:
-    """step_rows reports the rows task.bound_heading would change (|beta| > HEADING_LIMIT; NaN is not)."""
+    """step_rows reports the rows task.bound_angle would change (|beta| > HEADING_LIMIT; NaN is not)."""
     from amigo_gym.model.params import HEADING_LIMIT
 
     params = EnvParams()
@@ -252,7 +250,7 @@ def test_step_report_counts_headings_past_the_limit(parallel: bool) -> None:
     out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
     report = fast.step_rows(ws, state, actions, np.zeros(n, np.bool_), *out, parallel=parallel)
     assert report == fast.StepReport(drawn=0, past_limit=2)
-    changed = np.asarray(task.bound_heading(task.State(*(state[:, j].copy() for j in range(8)))).beta) != state[:, 2]
+    changed = task.bound_angle(state[:, 2].copy()) != state[:, 2]
     assert int(np.sum(changed & ~np.isnan(state[:, 2]))) == 2
 
 

@@ -1,9 +1,14 @@
-"""The compiled fast path (amigo_gym.sim.fast.step_rows) against the reference column functions of amigo_gym.task.v0.
+"""The compiled step of AmigoBot-v0 (amigo_gym.sim.fast.step_rows) against AmigoBot-v1's reference with v0's settings.
 
-Random states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the
-circle and the manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the
-contract) and is in fact bit-identical; the parallel variant gives the serial one's bits; restart
-rows are evaluated as task.reset_columns does.
+The reference is the route ``kernel="numpy"`` runs: :func:`amigo_gym.task.v1.step_columns` with ideal actuators
+(``_ideal_step``; the observation by :func:`amigo_gym.task.v0.observe_columns`) and
+:func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`, on ``(N,)`` columns: another
+code path than the kernel's loops (it projects H by ``path.locate`` and evaluates by ``evaluate_columns``). Random
+states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the circle and the
+manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the contract) and is in fact
+bit-identical on this machine (the same numpy ``tan`` and ``exp``); the parallel variant gives the serial one's bits;
+restart rows are evaluated as the reference's reset evaluates a start state. The golden episodes
+(``tests/test_golden.py``) hold both routes to recorded numbers.
 """
 
 from __future__ import annotations
@@ -17,10 +22,12 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 pytest.importorskip("numba")
 
@@ -67,10 +74,6 @@ def _states(params: EnvParams, n: int, seed: int) -> tuple[Array, Array]:
     return np.ascontiguousarray(state), np.ascontiguousarray(actions)
 
 
-def _columns(state: Array) -> task.State:
-    return task.State(*(state[:, j].copy() for j in range(8)))
-
-
 def _run(
     params: EnvParams, state: Array, actions: Array, restart: NDArray[np.bool_], parallel: bool = False
 ) -> tuple[Array, Array, Array, NDArray[np.bool_], Array]:
@@ -85,58 +88,92 @@ def _run(
     return st, obs, reward, terminated, record
 
 
-def _reference_record(new: task.State, out: task.Outcome, n: int) -> Array:
-    cols: list[Any] = [new.x, new.y, new.beta, out.h_x, out.h_y, out.closest.cross_track_error]
-    cols += [new.rate1, new.rate2, new.alpha1, new.alpha2, new.alpha3, *out.terms, out.reward]
-    return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in cols])
+class Reference:
+    """AmigoBot-v1's reference with ``params``'s settings (:func:`amigo_gym.task.v1.v0_configuration`) on the rows of
+    ``state (N, 8)`` (the kernel's columns ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``)."""
+
+    def __init__(self, params: EnvParams, state: Array) -> None:
+        n = len(state)
+        self.k = tracking.constants(tracking.v0_configuration(params))
+        self.path = self.k.params.path
+        ep = tracking.begin_episode(np.random.default_rng(0), self.k).episode  # the nominal robot's episode
+        self.ep = tracking.Episode(*(np.full(n, v) for v in ep))
+        self.ring = np.zeros((n, self.k.ring_length, 2))
+        self.dt = self.k.params.dt
+        c = [state[:, j].copy() for j in range(8)]
+        z = np.zeros(n)
+        self.st = tracking.State(c[0], c[1], c[2], c[6], c[7], c[3], c[4], z, z, z, np.zeros(n, dtype=np.int64))
+        self.castor = c[5]
+
+    def step(self, actions: Array) -> tuple[Array, Array, tracking.Outcome]:
+        """One step of every row: ``(state (N, 8), record (N, 16), outcome)``; the castor angle integrated as the
+        vector env's reference route integrates it."""
+        st, out, _ = tracking.step_columns(
+            self.k, self.path, self.st, self.ep, self.ring, 0, actions[:, 0], actions[:, 1]
+        )
+        self.st = tracking.State(*(np.asarray(col) for col in st))
+        v, bdot = body_velocity_columns(self.st.w1, self.st.w2, self.k.nominal)
+        self.castor = self.castor + castor_rate_columns(v, bdot, self.k.nominal) * self.dt
+        return self.rows(), self.record(out), out
+
+    def start(self) -> tuple[Array, tracking.Outcome]:
+        """The evaluation of the rows as start states: ``(record (N, 16), outcome)``."""
+        out = tracking.reset_columns(self.k, self.path, self.st, self.ep, tracking.NO_NOISE)
+        return self.record(out), out
+
+    def rows(self) -> Array:
+        s = self.st
+        return np.column_stack([s.x, s.y, s.beta, s.alpha1, s.alpha2, self.castor, s.w1, s.w2])
+
+    def record(self, out: tracking.Outcome) -> Array:
+        s = self.st
+        cols: list[Any] = [s.x, s.y, s.beta, out.h_x, out.h_y, out.error, s.w1, s.w2, s.alpha1, s.alpha2, self.castor]
+        cols += [*out.terms, out.reward]
+        n = len(self.castor)
+        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in cols])
 
 
-def _obs(out: task.Outcome, n: int) -> Array:
+def _obs(out: tracking.Outcome, n: int) -> Array:
     return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in out.obs])
 
 
 @pytest.mark.parametrize("settings", SETTINGS, ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
-def test_kernel_step_agrees_with_step_columns(settings: dict[str, Any]) -> None:
+def test_kernel_step_agrees_with_the_reference(settings: dict[str, Any]) -> None:
     params = EnvParams(**settings)
     n = 3000
     state, actions = _states(params, n, seed=len(str(settings)))
-    kt = task.task_constants(params)
-    path = make_path(params)
-    new, out = task.step_columns(kt, path, _columns(state), actions[:, 0], actions[:, 1], minimal=True)
+    ref_state, ref_record, out = Reference(params, state).step(actions)
     st, obs, reward, terminated, record = _run(params, state, actions, np.zeros(n, dtype=np.bool_))
 
-    ref_state = np.column_stack([np.asarray(c) for c in new])
     np.testing.assert_allclose(st, ref_state, rtol=0, atol=ATOL)
-    np.testing.assert_array_equal(st[:, 3:], ref_state[:, 3:])  # wheel angles and rates: no transcendentals
+    np.testing.assert_array_equal(st[:, 3:5], ref_state[:, 3:5])  # wheel angles and rates: no transcendentals
+    np.testing.assert_array_equal(st[:, 6:], ref_state[:, 6:])
     np.testing.assert_allclose(obs, _obs(out, n), rtol=0, atol=ATOL)
     np.testing.assert_allclose(reward, out.reward, rtol=0, atol=ATOL)
-    np.testing.assert_allclose(record, _reference_record(new, out, n), rtol=0, atol=ATOL)
+    np.testing.assert_allclose(record, ref_record, rtol=0, atol=ATOL)
     np.testing.assert_array_equal(terminated, out.terminated)
     assert terminated.any() and not terminated.all()
-    # the same numpy tan and exp, the same IEEE operations: the same bits. (The manoeuvre's arc length
-    # comes from the C library's atan2, which differs from numpy's AVX-512 arctan2 by an ulp at times;
-    # it only decides whether a preview point lies before the end of the straight part.)
+    # the same numpy tan and exp, the same IEEE operations: the same bits on this machine. (The manoeuvre's arc
+    # length comes from the C library's atan2 in the kernel, numpy's arctan2 in the reference, which may differ by
+    # an ulp; it only decides whether a preview point lies before the end of the straight part.)
     np.testing.assert_array_equal(st, ref_state)
     np.testing.assert_array_equal(obs, _obs(out, n))
-    np.testing.assert_array_equal(record, _reference_record(new, out, n))
+    np.testing.assert_array_equal(record, ref_record)
 
 
 @pytest.mark.parametrize("settings", SETTINGS[:4], ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
-def test_kernel_restart_rows_agree_with_reset_columns(settings: dict[str, Any]) -> None:
+def test_kernel_restart_rows_agree_with_the_reference_start(settings: dict[str, Any]) -> None:
     params = EnvParams(**settings)
     n = 500
     state, actions = _states(params, n, seed=5)
     restart = np.random.default_rng(1).random(n) < 0.5
     st, obs, _, terminated, record = _run(params, state, actions, restart)
-    kt = task.task_constants(params)
-    path = make_path(params)
-    start = _columns(state[restart])
-    out = task.reset_columns(kt, path, start, minimal=True)
+    ref_record, out = Reference(params, state[restart]).start()
     m = int(restart.sum())
     np.testing.assert_array_equal(st[restart], state[restart])  # not moved
     np.testing.assert_allclose(obs[restart], _obs(out, m), rtol=0, atol=ATOL)
-    np.testing.assert_allclose(record[restart], _reference_record(start, out, m), rtol=0, atol=ATOL)
-    np.testing.assert_array_equal(record[restart], _reference_record(start, out, m))
+    np.testing.assert_allclose(record[restart], ref_record, rtol=0, atol=ATOL)
+    np.testing.assert_array_equal(record[restart], ref_record)
     np.testing.assert_array_equal(terminated[restart], out.terminated)
     assert np.all(record[restart, 14] == 1.0)  # no smoothness loss at a start
     # the other rows stepped as without restarts
@@ -198,16 +235,14 @@ def test_a_trajectory_stays_with_the_reference() -> None:
     state, _ = _states(params, n, seed=6)
     state[:, 0:3] = np.random.default_rng(0).normal(0.0, [0.02, 0.02, 0.1], (n, 3))
     g = np.random.default_rng(7)
-    kt = task.task_constants(params)
-    path = make_path(params)
-    ref = _columns(state)
+    ref = Reference(params, state)
     st = state.copy()
     for _ in range(200):
         a = np.ascontiguousarray(0.27 + 0.05 * g.normal(size=(n, 2)))
-        ref, out = task.step_columns(kt, path, ref, a[:, 0], a[:, 1], minimal=True)
+        _, _, out = ref.step(a)
         st, _, reward, *_ = _run(params, st, a, np.zeros(n, dtype=np.bool_))
         np.testing.assert_allclose(reward, out.reward, rtol=0, atol=ATOL)
-    np.testing.assert_allclose(st, np.column_stack([np.asarray(c) for c in ref]), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(st, ref.rows(), rtol=0, atol=1e-11)
 
 
 def test_which_path_runs(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -319,7 +354,7 @@ def _bits_equal(a: Any, b: Any) -> bool:
 
 @pytest.mark.parametrize("settings", SETTINGS, ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
 def test_single_env_kernel_gives_the_reference_bits(settings: dict[str, Any]) -> None:
-    """``AmigoBotEnv(kernel="numba")`` (fast.SingleStep) returns what ``kernel="numpy"`` (task.step_float) returns:
+    """``AmigoBotEnv(kernel="numba")`` (fast.SingleStep) returns what ``kernel="numpy"`` (task.v1's ideal step) returns:
     observations, rewards, flags and every info entry bit for bit and of the same types, over whole episodes
     with random actions (beyond [-1, 1] too), straight runs and turns on the spot, past termination."""
     import warnings
@@ -377,7 +412,7 @@ def test_single_env_kernel_equals_the_vector_env_row() -> None:
 
 def test_single_env_kernel_survives_pickling_and_bounds_the_heading() -> None:
     """A pickled env steps on identically (its own buffer); a heading past the limit is reduced as the reference
-    reduces it (task.bound_heading)."""
+    reduces it (task.v0.bound_angle)."""
     import pickle
 
     import gymnasium as gym

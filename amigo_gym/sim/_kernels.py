@@ -6,8 +6,8 @@ wheel angles, projection of H on the circle or the manoeuvre path, observation, 
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
 reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
 docs/architecture.md, "The compiled step"), the loops and the manoeuvre path's choice between its line and its
-circle are written here. :mod:`amigo_gym.task.v0` stays the reference:
-``tests/test_kernels.py`` checks that the two agree.
+circle are written here. ``tests/test_kernels.py`` checks it against the reference the environments run with
+``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns`).
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
@@ -282,7 +282,7 @@ def _evaluate(
     exps: F64,
 ) -> None:
     """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
-    # task._steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
+    # task.steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
     # of the manoeuvre), computed once with the same operations instead of a square root per row
     l3 = c[L3]
     kl3_curve = c[CURV] * l3
@@ -361,7 +361,7 @@ def _evaluate(
         dv = v - c[SPEED]
         w_max = c[W_MAX]
 
-        # task._observe_columns
+        # task.observe_columns (its clips are no-ops on these values)
         kl3 = kl3_line if on_line else kl3_curve  # curvature * l3
         obs[i, 0] = _clip(e / c[ERROR_SCALE], -c[E_MAX], c[E_MAX])
         obs[i, 1] = sin_psi
@@ -376,7 +376,7 @@ def _evaluate(
         obs[i, m + 2] = dv / c[MAX_SPEED]
         obs[i, m + 3] = c[REF_OBS]
 
-        # task._reward_columns, task._steady_heading: the heading term, the arguments of the exponentials
+        # task._reward_columns, task.steady_heading: the heading term, the arguments of the exponentials
         sin_ss = sin_ss_line if on_line else sin_ss_curve
         cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1

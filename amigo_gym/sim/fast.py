@@ -2,13 +2,13 @@
 
 Two implementations of one step exist:
 
-* the **reference**, :func:`amigo_gym.task.v0.step_columns` and :func:`amigo_gym.task.v0.reset_columns`
-  (numpy, always available; the single environment runs it on Python floats, the vector environment
-  on ``(N,)`` arrays);
-* the **fast path**, :func:`step_rows`: the same formulas fused into three compiled loops over the
-  robots (:mod:`amigo_gym.sim._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan``
-  and ``exp`` ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives
-  the reference's results (bit for bit on the circle; to 1e-12 everywhere).
+* the **reference**, AmigoBot-v1's step with AmigoBot-v0's settings (:func:`amigo_gym.task.v1.step_columns` with
+  ideal actuators and :func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`; numpy,
+  always available: ``kernel="numpy"``, Python floats in the single environment, ``(N,)`` arrays in the vector one);
+* the **fast path**, :func:`step_rows`: AmigoBot-v0's step fused into three compiled loops over the robots
+  (:mod:`amigo_gym.sim._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan`` and ``exp``
+  ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
+  (to 1e-12, and bit for bit on this machine).
 
 :func:`use_fast_path` decides: ``AMIGO_GYM_KERNEL=numpy`` forces the reference, ``=numba`` requires
 the fast path (an ``ImportError`` if numba is missing), unset or ``auto`` uses numba when it can be
@@ -305,7 +305,7 @@ class SingleStep:
     The three passes of :func:`step_rows` (:func:`amigo_gym.sim._kernels.single_move`, ``single_evaluate``,
     ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
     between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
-    and the vector env give the same bits, and both those of :func:`amigo_gym.task.v0.step_float`, the reference
+    and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
     (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once.
 
     Attributes:
@@ -408,15 +408,15 @@ def step_rows(
 
     The three passes of :mod:`amigo_gym.sim._kernels` with numpy's ``tan`` and ``exp`` between them; rows
     where ``restart`` is set (their ``state`` a start state) are evaluated without moving, as
-    :func:`amigo_gym.task.v0.reset_columns` does. Layouts: :mod:`amigo_gym.sim._kernels`. ``parallel`` runs
-    the loops on numba's threads (the same results).
+    :func:`amigo_gym.task.v1.reset_columns` evaluates a start state. Layouts: :mod:`amigo_gym.sim._kernels`.
+    ``parallel`` runs the loops on numba's threads (the same results).
 
     ``bitgens`` (:attr:`GeneratorTable.bitgens`, one address per row) makes the step draw the start
     states of the ``restart`` rows itself, each from its row's generator, before evaluating them
     (:func:`amigo_gym.sim._kernels.draw_starts`, numpy's ``cos`` and ``sin`` of the headings,
-    :func:`amigo_gym.sim._kernels.place_starts`). The reference is the vector env's ``_start_states``, a
-    Python loop of ``Generator.random(out=u[j])`` over the rows and :func:`amigo_gym.task.v0.start_pose`:
-    the start states agree bit for bit, and the generators advance as that loop advances them.
+    :func:`amigo_gym.sim._kernels.place_starts`). The reference is the vector env's loop over the rows of
+    :func:`amigo_gym.task.v1.begin_episode`: the start states agree bit for bit, and the generators advance as that
+    loop advances them (``tests/test_kernel_draws.py``).
     Without ``bitgens`` the caller has set the start states.
 
     ``check=False`` skips the checks of the arguments, for a caller that built them for ``ws`` itself (the vector

@@ -1,8 +1,9 @@
 r"""The tracking task as pure, batched functions: actions, observation, reward, start, end.
 
 AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`, which the environments run in AmigoBot-v0's
-configuration) compiles these functions and is tested against them; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`)
-and the agents call them too; nothing here keeps state. Shapes: a leading batch axis is optional
+configuration) compiles the scalar functions here; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`, whose ideal step
+is the reference the compiled step is tested against, ``tests/test_kernels.py``) and the agents call them too;
+nothing here keeps state. Shapes: a leading batch axis is optional
 everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
 
 Observation (all dimensionless, ``psi = wrap(beta - theta)`` is the heading error against the path
@@ -46,9 +47,8 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
 reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
 quantity the environments report (:class:`Outcome`); :func:`transition` and :func:`evaluate` are thin
-array wrappers over the same column functions. They take plain scalars (:func:`step_float`: one flat
-function of floats) or ``(N,)`` arrays alike, the reference of the compiled step (``tests/test_kernels.py``,
-``tests/test_columns.py``). The constants of a step
+array wrappers over the same column functions. They take plain scalars or ``(N,)`` arrays alike with the same bits
+(``tests/test_columns.py``); the speed benchmarks time them (:mod:`amigo_gym.bench.core`). The constants of a step
 are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache: ``EnvParams`` is
 the only way to set them).
 
@@ -75,12 +75,9 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import (
     Real,
     a_from_h,
-    arc_from_tangents,
     arc_step,
     body_velocity_columns,
-    body_velocity_of,
     castor_rate_columns,
-    castor_rate_float,
     col_cos,
     col_exp,
     col_sin,
@@ -126,6 +123,7 @@ __all__ = [
     "info_dict",
     "record_info",
     "obs_index",
+    "observe_columns",
     "Motion",
     "move_columns",
     "start_motion",
@@ -399,9 +397,10 @@ def task_constants(params: EnvParams) -> TaskConstants:
 
 
 def _clip(x: Real, low: float, high: float) -> Real:
-    """``np.clip`` of an array; of a scalar, the same value by comparisons (:func:`clip_float`)."""
+    """``np.clip`` of an array (as ``np.minimum(np.maximum(x, low), high)``: the same values, less overhead); of a
+    scalar, the same value by comparisons (:func:`clip_float`)."""
     if isinstance(x, np.ndarray):
-        out: Real = np.clip(x, low, high)
+        out: Real = np.minimum(np.maximum(x, low), high)
         return out
     return clip_float(x, low, high)
 
@@ -439,30 +438,46 @@ def _abs(x: Real) -> Real:
     return cast(Real, abs(x))
 
 
-def _observe_columns(
-    k: TaskConstants,
-    path: AnyPath,
-    s: Real,
-    error: Real,
-    curvature: Real,
-    cos_psi: Real,
+def observe_columns(
+    path: Any,
+    preview: tuple[float, ...],
+    l3: float,
+    error_scale: float,
+    e_max: float,
+    w_max: float,
+    v_max: float,
+    e: Real,
     sin_psi: Real,
-    dv: Real,
+    cos_psi: Real,
+    curvature: Real,
+    s: Real,
     w1: Real,
     w2: Real,
+    v: Real,
+    v_ref: Real,
 ) -> tuple[Real, ...]:
-    """The observation's columns, in the order of the module table (``dv = v_A - v_ref``)."""
-    l3 = k.l3
+    """AmigoBot-v0's observation, in the order of the module table (also AmigoBot-v1's ``observation="v0"``).
+
+    ``(clip(e / error_scale, +-e_max), sin psi, cos psi, kappa l3, kappa(s + d_i) l3 ..., w1 / w_max, w2 / w_max,
+    (v - v_ref) / v_max, v_ref / v_max)``, each clipped to its bound (:func:`obs_bounds_of`; a no-op on v0's task).
+    ``path``: the path, ``s`` [m] H's arc length on it (the preview points lie ``preview`` [m] ahead), ``e`` [m] and
+    ``curvature`` [1/m] at H; ``w1, w2`` the wheel rates [rad/s], ``v`` the speed of A and ``v_ref`` the reference
+    speed [m/s]; ``l3``, ``error_scale`` [m], ``e_max`` [-], ``w_max`` [rad/s], ``v_max`` [m/s] the scales.
+    """
+    if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
+        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in preview]
+    else:
+        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in preview]
     return (
-        _clip(error / k.error_scale, -k.e_max, k.e_max),
+        _clip(e / error_scale, -e_max, e_max),
         sin_psi,
         cos_psi,
-        curvature * l3,
-        *[path.curvature_columns(s + d) * l3 for d in k.preview],
-        w1 / k.w_max,
-        w2 / k.w_max,
-        dv / k.max_speed,
-        k.reference_obs,
+        _clip(curvature * l3, -1.0, 1.0),
+        *ahead,
+        _clip(w1 / w_max, -1.0, 1.0),
+        _clip(w2 / w_max, -1.0, 1.0),
+        _clip((v - v_ref) / v_max, -2.0, 2.0),
+        v_ref / v_max,
     )
 
 
@@ -486,7 +501,7 @@ def _reward_columns(
     if isinstance(curvature, float):  # the same for every robot (a circle): from a cache
         cos_ss, sin_ss = _steady_heading_scalar(curvature, k.l3)
     else:
-        cos_ss, sin_ss = _steady_heading(curvature, k.l3)
+        cos_ss, sin_ss = steady_heading(curvature, k.l3)
     dw1 = w1 - prev1
     dw2 = w2 - prev2
     return reward_term_columns(
@@ -548,12 +563,8 @@ def reward_product(track: Real, speed: Real, heading: Real, smooth: Real) -> Rea
 
 
 def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
-    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (the public name)."""
-    return _steady_heading(curvature, l3)
-
-
-def _steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
-    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)``."""
+    """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (``kappa l3`` clipped to
+    [-1, 1]): ``cos psi_ss = sqrt(1 - (kappa l3)^2)``, ``sin psi_ss = -kappa l3``; floats or columns."""
     sin_ss = -_clip(curvature * l3, -1.0, 1.0)
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
@@ -726,7 +737,10 @@ def outcome_columns(
     e = cp.cross_track_error
     abs_e = _abs(e)
     dv = v - k.speed
-    obs = _observe_columns(k, path, cp.s, e, cp.curvature, cos_psi, sin_psi, dv, w1, w2)
+    obs = observe_columns(
+        path, k.preview, k.l3, k.error_scale, k.e_max, k.w_max, k.max_speed, e, sin_psi, cos_psi, cp.curvature, cp.s,
+        w1, w2, v, k.speed,
+    )  # fmt: skip
     terms = _reward_columns(k, abs_e, cp.curvature, cos_psi, sin_psi, dv, w1, w2, prev1, prev2)
     return Outcome(hx, hy, cp, obs, terms, _product(terms), abs_e > k.termination_distance)
 
@@ -769,80 +783,9 @@ def step_columns(
 
 
 def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
-    """:func:`step_columns` (``minimal=True``) for one robot's Python floats, as one flat function: the same bits.
-
-    The scalar functions of :func:`move_columns`, :func:`amigo_gym.model.kinematics.arc_step`
-    (:func:`~amigo_gym.model.kinematics.arc_from_tangents`), ``castor_rate_columns``, ``h_from_a`` and
-    :func:`outcome_columns` called in their order, without the layers of column functions (the compiled step
-    compiles the same scalar functions); the two tangents and the three exponentials are numpy's, each
-    pair or triple in one call on a small array (numpy gives an element the bits it gives a scalar), so the
-    single env and the vector env (:func:`step_columns` on ``(N,)`` columns) agree bit for bit
-    (``tests/test_columns.py`` checks it). The path's projection and curvature are the path's own methods.
-    """
-    robot = k.robot
-    dt = k.dt
-    w_max = k.w_max
-    # move_columns: clip and scale, body velocity
-    w1 = clip_float(a1, -1.0, 1.0) * w_max
-    w2 = clip_float(a2, -1.0, 1.0) * w_max
-    v, bdot = body_velocity_of(w1, w2, robot.r1, robot.r2, 2.0 * robot.l1)
-    # arc_step: the tangents of the half turn and of the mid-step heading from one np.tan call
-    beta = state.beta
-    db = bdot * dt
-    h = 0.5 * db
-    t_h, t_m = _np_tan(_np_array((0.5 * h, 0.5 * (beta + h)))).tolist()
-    x, y, cos_b, sin_b = arc_from_tangents(state.x, state.y, v, dt, h, t_h, t_m)
-    castor = castor_rate_float(v, bdot, robot.l5, robot.r3)
-    new = State(
-        x,
-        y,
-        beta + db,
-        state.alpha1 + w1 * dt,
-        state.alpha2 + w2 * dt,
-        state.alpha3 + castor * dt,
-        w1,
-        w2,
-    )
-    # outcome_columns
-    l3 = k.l3
-    hx, hy = h_from_a(x, y, cos_b, sin_b, l3)
-    cp = path.project_xy(hx, hy, True)
-    cos_psi, sin_psi = heading_error(cos_b, sin_b, cp.cos_theta, cp.sin_theta)
-    e = cast(float, cp.cross_track_error)
-    abs_e = abs(e)
-    dv = v - k.speed
-    curvature = cp.curvature
-    obs = (
-        clip_float(e / k.error_scale, -k.e_max, k.e_max),
-        sin_psi,
-        cos_psi,
-        curvature * l3,
-        *(
-            (curvature * l3,) * len(k.preview)  # a circle: the curvature of every preview point (d / r)
-            if type(path) is CirclePath
-            else [path.curvature_columns(cp.s + d) * l3 for d in k.preview]
-        ),
-        w1 / w_max,
-        w2 / w_max,
-        dv / k.max_speed,
-        k.reference_obs,
-    )
-    if isinstance(curvature, float):
-        cos_ss, sin_ss = _steady_heading_scalar(curvature, l3)
-    else:
-        cos_ss, sin_ss = _steady_heading(curvature, l3)
-    dw1 = w1 - state.rate1
-    dw2 = w2 - state.rate2
-    ex = _np_exp(
-        _np_array((abs_e / -k.sigma_track, abs(dv) / -k.sigma_speed, (dw1 * dw1 + dw2 * dw2) / -k.smooth_scale_sq))
-    ).tolist()
-    terms = (ex[0], ex[1], heading_term(cos_psi, sin_psi, cos_ss, sin_ss), smooth_term(ex[2], k.smooth_weight))
-    return new, Outcome(hx, hy, cp, obs, terms, reward_product(*terms), abs_e > k.termination_distance)
-
-
-_np_array = np.array
-_np_tan = np.tan
-_np_exp = np.exp
+    """:func:`step_columns` (``minimal=True``) of one robot's Python floats (the name kept from 0.1; the column
+    functions take floats as they take ``(N,)`` arrays, with the same bits: ``tests/test_columns.py``)."""
+    return step_columns(k, path, state, a1, a2, True)
 
 
 class Evaluation(NamedTuple):

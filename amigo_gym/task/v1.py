@@ -84,6 +84,7 @@ from amigo_gym.task.v0 import (
     error_bound,
     heading_error,
     obs_bounds_of,
+    observe_columns,
     reward_product,
     reward_term_columns,
     steady_heading,
@@ -1488,7 +1489,10 @@ def evaluate_columns(
     v_meas, _ = body_velocity_of(mw1, mw2, k.nominal.r1, k.nominal.r2, 2.0 * k.nominal.l1)
     if p.observation == "v0":
         out0 = Outcome(
-            _observe_v0(k, path, m_e, m_sin_psi, m_cos_psi, m_k, m_s, mw1, mw2, v_meas, v_ref),
+            observe_columns(
+                path, p.preview, l3, p.error_scale, k.e_max, k.w_max, k.v_max, m_e, m_sin_psi, m_cos_psi, m_k, m_s,
+                mw1, mw2, v_meas, v_ref,
+            ),
             terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end,
         )  # fmt: skip
         return out0, loc.progress
@@ -1521,43 +1525,6 @@ def evaluate_columns(
     ]
     out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
-
-
-def _observe_v0(
-    k: Constants,
-    path: Any,
-    e: Real,
-    sin_psi: Real,
-    cos_psi: Real,
-    curvature: Real,
-    s: Real,
-    w1: Real,
-    w2: Real,
-    v: Real,
-    v_ref: Real,
-) -> tuple[Real, ...]:
-    """AmigoBot-v0's observation (``observation="v0"``, :func:`amigo_gym.task.v0.obs_names`) of the measured state.
-
-    ``(clip(e / error_scale), sin psi, cos psi, kappa l3, kappa(s + d_i) l3 ..., w1 / w_max, w2 / w_max,
-    (v - v_ref) / v_max, v_ref / v_max)``, each clipped to its bound (:func:`obs_bounds`; a no-op on v0's task).
-    """
-    p = k.params
-    l3 = k.l3
-    if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
-        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in p.preview]
-    else:
-        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in p.preview]
-    return (
-        _clip(e / p.error_scale, -k.e_max, k.e_max),
-        sin_psi,
-        cos_psi,
-        _clip(curvature * l3, -1.0, 1.0),
-        *ahead,
-        _clip(w1 / k.w_max, -1.0, 1.0),
-        _clip(w2 / k.w_max, -1.0, 1.0),
-        _clip((v - v_ref) / k.v_max, -2.0, 2.0),
-        v_ref / k.v_max,
-    )
 
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
