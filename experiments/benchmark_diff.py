@@ -1,7 +1,7 @@
 """Are two benchmark.json files the same on the agents they share? Exact comparison, no tolerance.
 
-    git show 8f0a874:docs/benchmark/benchmark.json > /tmp/old.json
-    python experiments/benchmark_diff.py /tmp/old.json docs/benchmark/benchmark.json
+    git show 8f0a874:docs/benchmark/benchmark.json > old.json
+    python experiments/benchmark_diff.py old.json docs/benchmark/benchmark.json
 
 For the agents both documents ran, compares with ``==`` on the parsed JSON (floats are written by ``json`` as
 their shortest round-tripping repr, so equal parsed floats are equal bits): every ``results`` record (per-episode
