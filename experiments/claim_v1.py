@@ -1,10 +1,10 @@
 """Write the claimed benchmark numbers of the shipped AmigoBot-v1 generalists into their manifests.
 
 Reads the JSON of a full benchmark run (``amigo-gym benchmark --out docs/benchmark``) and, for every
-model under ``agents/pretrained/v1/<folder>/`` (the SB3 ``ppo``, ``sac``, ``td3`` and the fast PPO's
-``ppo_fast``, matched by the sha256 of the zip) that the run evaluated, stores its per-scenario figures
-(``h_rms_m``, ``h_rms_settled_m``, ``speed_err_rms``, ``failure_rate``, ``return``, ``chatter_settled_rms``)
-under ``"claimed"`` in its manifest, with the suite version and the benchmark command.
+model under ``agents/pretrained/v1/<folder>/`` (the SB3 TD3 with a low-pass actor ``td3lp``, the fast PPO's
+``ppo_fast`` and its ``residual``, matched by the sha256 of the zip) that the run evaluated, stores its
+per-scenario figures (``h_rms_m``, ``h_rms_settled_m``, ``speed_err_rms``, ``failure_rate``, ``return``,
+``chatter_settled_rms``) under ``"claimed"`` in its manifest, with the suite version and the benchmark command.
 ``tests/test_agents_v1_pretrained.py`` re-runs some scenarios and asserts the same numbers exactly.
 
     python experiments/claim_v1.py --benchmark docs/benchmark/benchmark.json

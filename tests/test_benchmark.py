@@ -272,14 +272,19 @@ def test_parse_agents(tmp_path: Path) -> None:
 
 def test_default_agents_include_the_fast_ppo_generalist_labelled_apart_from_sb3s() -> None:
     """The shipped fast-PPO seeds are default agents (``ppo_fast_v1``, algorithm ``fastppo`` from the manifest, five
-    training seeds, sha256 in the manifest), beside the SB3 generalists, and every label tells them apart."""
+    training seeds, sha256 in the manifest), beside the SB3 generalist (``td3lp_v1``) and the residual, the retired
+    SB3 references (``ppo_v1``, ``sac_v1``, ``td3_v1``) are not, and every label tells them apart."""
     specs = bm.default_agents()
     fast = [a for a in specs if a.name == "ppo_fast_v1"]
     assert sorted(a.seed for a in fast) == [0, 1, 2, 3, 4]
     assert all(a.algo == "fastppo" and (a.manifest or {}).get("agent") == "ppo_fast" for a in fast)
     assert all(a.path is not None and a.path.endswith(f"ppo_fast/ppo_fast_s{a.seed}.zip") for a in fast)
-    assert {a.name for a in specs} >= {"ppo_v1", "sac_v1", "td3_v1", "ppo_fast_v1"}
-    assert bm.agent_label("ppo_fast_v1") == "fast PPO generalist" and bm.agent_label("ppo_v1") == "SB3 PPO generalist"
+    assert {a.name for a in specs} >= {"td3lp_v1", "ppo_fast_v1", "residual_v1"}
+    assert not {a.name for a in specs} & {"ppo_v1", "sac_v1", "td3_v1"}  # retired: not shipped, not benchmarked
+    assert set(bm.RETIRED_V1_AGENTS) == {"ppo", "sac", "td3"} and not set(bm.RETIRED_V1_AGENTS) & set(bm.V1_AGENTS)
+    assert bm.agent_label("ppo_fast_v1") == "fast PPO generalist"
+    # a retired generalist (restored from git history, or in an older benchmark document) keeps its label
+    assert bm.agent_label("ppo_v1") == "SB3 PPO generalist" and bm.agent_label("sac_v1", "sac") == "SB3 SAC generalist"
     assert bm.agent_label("mine", "fastppo") == "fast PPO" and bm.agent_label("mine", "ppo") == "SB3 PPO"
     assert bm.agent_label("mine", "fastppo_residual") == "fast PPO residual" and bm.agent_label("x") == "model"
     assert bm.agent_label("ppo_v0") == "SB3 PPO v0 specialist" and bm.agent_label("analytic") == "classical"
@@ -287,7 +292,8 @@ def test_default_agents_include_the_fast_ppo_generalist_labelled_apart_from_sb3s
     # a variant of the manifest's algorithm keeps its folder's label; another algorithm's zip under it does not
     assert bm.agent_label("td3lp_v1", "td3") == "SB3 TD3 low-pass generalist"
     assert bm.agent_label("td3lp_v1", "sac") == "SB3 SAC generalist"
-    assert ("ppo_fast_v1", "fast PPO") in bm.README_ROWS and ("ppo_v1", "SB3 PPO") in bm.README_ROWS
+    assert ("ppo_fast_v1", "fast PPO") in bm.README_ROWS and ("td3lp_v1", "SB3 TD3 low-pass") in bm.README_ROWS
+    assert not {name for name, _ in bm.README_ROWS} & {"ppo_v1", "sac_v1", "td3_v1"}  # the README shows what ships
     # it runs, and the report's legend names it: one short episode
     sc = bm.Scenario("tiny_circle", "AmigoBot-v1", {"path": "circle", "radius": 1.0, "speed": 0.2}, (3,), 30)
     doc = bm.run_benchmark([bm.AgentSpec("analytic"), fast[0]], [sc], progress=False, reps=50, profile_reps=10)

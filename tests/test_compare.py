@@ -109,15 +109,15 @@ def test_quick_benchmark_table_in_the_published_set(tmp_path: Path) -> None:
 
 
 def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_path: Path) -> None:
-    """``--models`` in the pretrained layout with a v1 SB3 PPO seed and a fast-PPO seed: the quick benchmark runs
-    both (``ppo_v1``, ``ppo_fast_v1``) on its v1 scenarios, and the report and the summary tell "SB3 PPO" from
-    "fast PPO"."""
+    """``--models`` in the pretrained layout with a v1 SB3 seed (the low-pass TD3, an SB3 TD3 zip) and a fast-PPO seed:
+    the quick benchmark runs both (``td3lp_v1``, ``ppo_fast_v1``) on its v1 scenarios, and the report and the summary
+    tell "SB3 TD3 low-pass" from "fast PPO"."""
     import shutil
 
     from amigo_gym.data import pretrained_dir
 
     src, models = pretrained_dir(), tmp_path / "models"
-    for rel in ("ppo.zip", "ppo.json", "v1/ppo/ppo_s0.zip", "v1/ppo/ppo_s0.json"):
+    for rel in ("ppo.zip", "ppo.json", "v1/td3lp/td3lp_s0.zip", "v1/td3lp/td3lp_s0.json"):
         (models / rel).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(src / rel, models / rel)
     for rel in ("v1/ppo_fast/ppo_fast_s0.zip", "v1/ppo_fast/ppo_fast_s0.json"):
@@ -134,13 +134,14 @@ def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_pa
     v1 = [s["name"] for s in bench["scenarios"] if s["env_id"] == "AmigoBot-v1"]
     assert v1
     runs = {(x["agent"], x["scenario"]) for x in bench["results"]}
-    for agent in ("ppo_v1", "ppo_fast_v1"):
+    for agent in ("td3lp_v1", "ppo_fast_v1"):
         assert {(agent, sc) for sc in v1} <= runs, agent  # every v1 scenario ran, none unavailable
         assert bench["aggregates"][agent]["n_runs"] == 1
     kinds = {a["agent"]: (a["kind"], a.get("algo")) for a in bench["agents"]}
-    assert kinds["ppo_fast_v1"] == ("fastppo", "fastppo") and kinds["ppo_v1"] == ("sb3", "ppo")
+    assert kinds["ppo_fast_v1"] == ("fastppo", "fastppo") and kinds["td3lp_v1"] == ("sb3", "td3")
     report = (out / "report.md").read_text()
     assert "`ppo_fast_v1`: pretrained fast PPO AmigoBot-v1 generalists" in report
-    assert "`ppo_v1`: pretrained SB3 PPO AmigoBot-v1 generalists" in report
+    assert "`td3lp_v1`: pretrained SB3 TD3 low-pass AmigoBot-v1 generalists" in report
+    assert "`td3lp_v1`: SB3 TD3 low-pass generalist" in report
     assert "`ppo_fast_v1`: fast PPO generalist" in report  # the benchmark table's own legend
     assert "ppo_fast_v1 " in r.stdout and "fast PPO" in r.stdout

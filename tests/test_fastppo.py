@@ -384,10 +384,13 @@ def test_load_pretrained_opens_the_shipped_sb3_zips() -> None:
     pytest.importorskip("stable_baselines3")
     from amigo_gym.data import pretrained_dir
 
-    z = pretrained_dir() / "v1" / "ppo" / "ppo_s0.zip"
+    z = pretrained_dir() / "v1" / "td3lp" / "td3lp_s0.zip"  # an SB3 TD3 zip (low-pass actor)
     if not z.is_file():
         pytest.fail(f"shipped model {z} missing")
     model = load_pretrained(z)
+    from stable_baselines3 import TD3
+
+    assert isinstance(model, TD3)  # the SB3 model itself, loaded by the manifest's algo
     env = gym.make_vec("AmigoBot-v1", num_envs=2)
     obs, _ = env.reset(seed=[0, 1])
     a, _ = model.predict(obs, state=None, episode_start=None, deterministic=True)

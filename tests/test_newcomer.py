@@ -106,7 +106,7 @@ def test_the_old_convergence_spelling_still_works_with_a_warning() -> None:
 
 # --------------------------------------------------------------------------- one naming of the agents
 def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
-    from amigo_gym.training.benchmark import ALGOS, V1_AGENTS, default_agents
+    from amigo_gym.training.benchmark import ALGOS, RETIRED_V1_AGENTS, V1_AGENTS, default_agents
     from amigo_gym.training.compare import v0_name
 
     names = {a.name for a in default_agents()}
@@ -115,7 +115,8 @@ def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
     # v0 specialists <algo>_v0, v1 generalists <folder>_v1 (one per shipped folder of agents/pretrained/v1)
     allowed = {f"{a}_v0" for a in ALGOS} | {f"{folder}_v1" for folder in V1_AGENTS}
     assert learned and learned <= allowed, learned - allowed
-    assert {"ppo_v0", "ppo_v1", "td3lp_v1", "ppo_fast_v1", "residual_v1"} <= learned
+    assert {"ppo_v0", "td3lp_v1", "ppo_fast_v1", "residual_v1"} <= learned
+    assert not learned & {f"{folder}_v1" for folder in RETIRED_V1_AGENTS}  # retired references: not shipped
     assert {v0_name(a) for a in ALGOS} == {f"{a}_v0" for a in ALGOS}  # compare's names of agents/pretrained/*.zip
     assert v0_name("ppo_s0") == "ppo_s0"  # a run of one's own keeps its name
 

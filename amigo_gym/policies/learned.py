@@ -352,7 +352,8 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any
     """Load a shipped ``AmigoBot-v1`` agent after checking its manifest's SHA-256.
 
     Args:
-        path: the model zip (a fast-PPO model, residual included, or an SB3 PPO/SAC/TD3 zip).
+        path: the model zip (a fast-PPO model, residual included, or an SB3 PPO/SAC/TD3 zip such as the shipped
+            ``agents/pretrained/v1/td3lp/td3lp_s0.zip``).
         manifest: its manifest JSON (default: ``<zip stem>.json`` beside the zip), with ``sha256`` and, for
             SB3 zips, ``algo``.
 

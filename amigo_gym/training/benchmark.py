@@ -42,10 +42,11 @@ passes ``state`` and ``episode_start`` through, so stateful policies (integral a
 Default agents: ``analytic``, ``analytic_ff``, ``pure_pursuit``, the v0 specialists
 ``agents/pretrained/<algo>.zip`` (named ``<algo>_v0``) and the v1 generalists
 ``agents/pretrained/v1/<folder>/*.zip`` when shipped, one folder per entry of :data:`V1_AGENTS` (named
-``<folder>_v1``: ``ppo_v1``, ``sac_v1``, ``td3_v1`` for SB3's algorithms, ``ppo_fast_v1`` for the fast PPO
+``<folder>_v1``: ``td3lp_v1`` for SB3's TD3 with a low-pass actor, ``ppo_fast_v1`` for the fast PPO
 of ``amigo-gym train-fast`` and ``residual_v1`` for its residual on the analytic controller; ``amigo-gym
-compare`` uses the same names). :func:`agent_label` says which is which ("SB3 PPO" against "fast PPO"); the
-Markdown report lists every agent with its label.
+compare`` uses the same names). The untuned SB3 references ``ppo_v1``, ``sac_v1``, ``td3_v1`` are retired
+(:data:`RETIRED_V1_AGENTS`: labels kept, zips in git history only). :func:`agent_label` says which is which
+("SB3 PPO" against "fast PPO"); the Markdown report lists every agent with its label.
 
 Per episode (:mod:`amigo_gym.training.task_metrics`), averaged over a scenario's episodes
 -------------------------------------------------------------------------------------------
@@ -124,6 +125,7 @@ __all__ = [
     "SUITES",
     "SUITE_VERSION",
     "TRAINING_DISTRIBUTION",
+    "RETIRED_V1_AGENTS",
     "V1_AGENTS",
     "AgentSpec",
     "Scenario",
@@ -145,12 +147,18 @@ ALGOS = ("ppo", "sac", "td3")
 FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
 V1_AGENTS: dict[str, str] = {
-    "ppo": "SB3 PPO",
-    "sac": "SB3 SAC",
-    "td3": "SB3 TD3",
     "td3lp": "SB3 TD3 low-pass",
     "ppo_fast": "fast PPO",
     "residual": "fast PPO residual",
+}
+#: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
+#: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
+#: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
+#: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
+RETIRED_V1_AGENTS: dict[str, str] = {
+    "ppo": "SB3 PPO",
+    "sac": "SB3 SAC",
+    "td3": "SB3 TD3",
 }
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
@@ -571,8 +579,8 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 def default_agents() -> list[AgentSpec]:
     """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
-    (``<algo>_v0``) and v1 generalists (``<folder>_v1`` for every folder of :data:`V1_AGENTS`: the SB3 ones and
-    the fast PPO's ``ppo_fast_v1``), named as ``amigo-gym compare`` names them."""
+    (``<algo>_v0``) and v1 generalists (``<folder>_v1`` for every folder of :data:`V1_AGENTS`: ``td3lp_v1``,
+    ``ppo_fast_v1``, ``residual_v1``), named as ``amigo-gym compare`` names them."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
     for algo in ALGOS:
@@ -586,22 +594,23 @@ def default_agents() -> list[AgentSpec]:
 
 def agent_label(name: str, algo: str | None = None) -> str:
     """What an agent is, in words: ``ppo_v1`` -> "SB3 PPO generalist", ``ppo_fast_v1`` -> "fast PPO generalist"
-    (:data:`V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy -> "classical", another name
-    -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the name: ``fastppo*`` -> "fast PPO"
-    (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3 PPO"/..., so a fast-PPO zip passed
-    as ``--agents ppo_v1=...`` still reads "fast PPO"."""
+    (:data:`V1_AGENTS`, :data:`RETIRED_V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy ->
+    "classical", another name -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the
+    name: ``fastppo*`` -> "fast PPO" (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3
+    PPO"/..., so a fast-PPO zip passed as ``--agents ppo_v1=...`` still reads "fast PPO"."""
     if name in CLASSICAL:
         return "classical"
-    v1 = name.endswith("_v1") and name[:-3] in V1_AGENTS
+    labels = {**RETIRED_V1_AGENTS, **V1_AGENTS}
+    v1 = name.endswith("_v1") and name[:-3] in labels
     v0 = name.endswith("_v0") and name[:-3] in ALGOS
     if algo is not None and str(algo).startswith(FAST_ALGO):
         kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
     elif algo in ALGOS:
         kind = f"SB3 {str(algo).upper()}"
-        if v1 and V1_AGENTS[name[:-3]].startswith(kind):  # a variant of the algorithm, e.g. "SB3 TD3 low-pass"
-            kind = V1_AGENTS[name[:-3]]
+        if v1 and labels[name[:-3]].startswith(kind):  # a variant of the algorithm, e.g. "SB3 TD3 low-pass"
+            kind = labels[name[:-3]]
     elif v1:
-        kind = V1_AGENTS[name[:-3]]
+        kind = labels[name[:-3]]
     elif v0:
         kind = f"SB3 {name[:-3].upper()}"
     else:

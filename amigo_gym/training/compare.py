@@ -2,7 +2,7 @@
 
 Usage::
 
-    amigo-gym compare --out results/                     # pretrained PPO/SAC/TD3/fast PPO + a 500k-step PPO run
+    amigo-gym compare --out results/                     # the pretrained agents + a 500k-step PPO run
     amigo-gym compare --out results/ --train-steps 0     # evaluation only (about 20 s)
 
 Steps:
@@ -22,10 +22,10 @@ Steps:
    the benchmark), the pretrained v0 agents (named ``<algo>_v0`` here as in the benchmark: :func:`v0_name`) and
    ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
    under ``<models>/v1/<folder>/*.zip`` for every folder of :data:`amigo_gym.training.benchmark.V1_AGENTS`
-   (named ``<folder>_v1``: the SB3 generalists ``ppo_v1``, ``sac_v1``, ``td3_v1`` and the fast PPO's
-   ``ppo_fast_v1`` and its residual on the analytic controller ``residual_v1``, numpy policies; one training
-   seed per zip, checked against the sha256 of their
-   manifests). An agent that cannot run a scenario (a v0 model on v1's
+   (named ``<folder>_v1``: the SB3 TD3 with a low-pass actor ``td3lp_v1``, the fast PPO's ``ppo_fast_v1`` and
+   its residual on the analytic controller ``residual_v1``, numpy policies; one training seed per zip, checked
+   against the sha256 of their manifests; the retired SB3 references ``ppo_v1``, ``sac_v1``, ``td3_v1`` ship no
+   more, docs/baselines.md "Retired references"). An agent that cannot run a scenario (a v0 model on v1's
    observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
    is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
 4. Print a short summary (:func:`summary_text`: the perturbed starts, the targets, the quick benchmark's H
@@ -100,8 +100,9 @@ def v0_name(name: str) -> str:
 
 def agent_legend(names: Sequence[str], gain: float) -> list[str]:
     """One line per agent name of a report: what it is (every name a report prints is explained; the v1
-    generalists by the label of :data:`amigo_gym.training.benchmark.V1_AGENTS`: "SB3 PPO", "fast PPO")."""
-    from amigo_gym.training.benchmark import V1_AGENTS
+    generalists by the label of :data:`amigo_gym.training.benchmark.V1_AGENTS` or, retired,
+    :data:`~amigo_gym.training.benchmark.RETIRED_V1_AGENTS`: "SB3 TD3 low-pass", "fast PPO", "SB3 PPO")."""
+    from amigo_gym.training.benchmark import RETIRED_V1_AGENTS, V1_AGENTS
 
     fixed = {
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
@@ -117,7 +118,7 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
             text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
         elif name.endswith("_v1"):
             folder = name[:-3]
-            label = V1_AGENTS.get(folder, folder.upper())
+            label = {**RETIRED_V1_AGENTS, **V1_AGENTS}.get(folder, folder.upper())
             how = {
                 "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
                 "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
