@@ -108,6 +108,19 @@ def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
         assert all(r["kernel"] > 0 and r["kernel_par"] > 0 for r in doc["rows"])
 
 
+def test_bench_core_startup_rows_name_both_routes() -> None:
+    """The start-up table has the reference's first step (no numba) beside the compiled one's, and the
+    reference's snippets are the compiled ones with only the kernel changed."""
+    for code in (core._FIRST_STEP, core._FIRST_STEP_V1):
+        ref = core._numpy_route(code)
+        assert "kernel='numpy'" in ref and "numba" not in ref and ref.replace("numpy'", "numba'") == code
+    st = core.Startup(0.5, 0.02, 3.0, 0.8, 4.0, 0.9, numba_import_s=0.7, numpy_first_s=0.6, v1_numpy_first_s=0.65)
+    table = core.format_table([], st)
+    assert '| python -c "import amigo_gym, numba" | 0.700 |' in table
+    assert "| import + first v0 vector step, kernel=numpy (no numba) | 0.600 |" in table
+    assert "| import + first AmigoBot-v1 step, kernel=numpy | 0.650 |" in table
+
+
 def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:
     assert profile.main(["--steps", "30", "--top", "3", "--sizes", "2"]) == 0
     out = capsys.readouterr().out
