@@ -1002,6 +1002,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             if numba_available():
                 import numba
 
+                # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
+                check_range(PROG, "threads", args.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
                 numba.set_num_threads(args.threads)
         rep = Report()
         rep.load = (load_average(), "-")
