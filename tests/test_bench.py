@@ -37,7 +37,7 @@ def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.Ca
     doc = json.loads(out.read_text())
     assert [r["n"] for r in doc["vector"]] == [1, 4]
     assert all(r["sync"] > 0 and r["native"] > 0 and r["cartpole"] > 0 for r in doc["vector"])
-    assert set(doc["vector"][0]["kernels"]) <= {"numpy", "numba"}
+    assert set(doc["vector"][0]["kernels"]) <= {"numpy", "numba", "numba-parallel"}
     assert doc["fixed_cost_n1"]["cartpole_us"] > 0
     assert doc["memory"]["n"] >= 2 and doc["memory"]["amigobot_retained"] > 0
     assert [r["n_envs"] for r in doc["ppo"]][:2] == [1, 2] and all(r["ratio"] > 0 for r in doc["ppo"])
@@ -48,6 +48,52 @@ def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.Ca
 def test_bench_env_refuses_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
     assert env.main(["--quick", "--memory-n", "1", "--skip-single", "--skip-vector", "--skip-ppo"]) == 2
     assert "memory_n" in capsys.readouterr().err
+    assert env.main(["--quick", "--threads", "0", "--skip-single", "--skip-vector", "--skip-ppo"]) == 2
+    assert "threads" in capsys.readouterr().err
+
+
+def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--kernels`` times each step implementation; the targets table names the CPU and judges each ratio."""
+    pytest.importorskip("numba")
+    from amigo_gym.bench.machine import cpu_model
+
+    out = tmp_path / "bench.json"
+    argv = ["--quick", "--sizes", "1", "8", "--skip-memory", "--skip-ppo", "--v1", "--kernels", "--threads", "1"]
+    assert env.main([*argv, "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "1 thread(s)" in printed.splitlines()[0] and "load average" in printed.splitlines()[0]
+    assert f"| issue 19 item 5 on {cpu_model()} (SIMD " in printed and "kernel=numba-parallel" in printed
+    doc = json.loads(out.read_text())
+    assert doc["machine"]["numba"].startswith("numba ") and doc["machine"]["load_average"]["end"]
+    want = {(e, n) for e in ("AmigoBot-v0", "AmigoBot-v1") for n in (0, 8)}
+    assert {(r["env_id"], r["n"]) for r in doc["kernels"]} == want
+    for r in doc["kernels"]:
+        assert r["speedup"] == pytest.approx(r["us"]["numpy"] / r["us"]["numba"])
+        assert ("numba-parallel" in r["us"]) == (r["n"] > 0)
+    names = [t["name"] for t in doc["targets"]]
+    assert names == ["single", "call_n1", "v1_v0"]  # no N = 4096 in this run
+    single = doc["targets"][0]
+    assert single["ratio"] == pytest.approx(doc["single"]["amigobot_us"] / doc["single"]["pendulum_us"])
+    assert single["met"] == (single["ratio"] <= 0.4)
+
+
+def test_targets_judge_each_ratio_against_its_bound() -> None:
+    """:func:`env.targets` on hand-made results: the ratios, the bounds of issue 19 item 5, met or not."""
+    rows = [
+        env.VectorRow(1, native=1e5, cartpole=2e4, sync=None),  # call: 10 us against 50 us -> 0.2, met
+        env.VectorRow(4096, native=3e6, cartpole=6e6, sync=None, kernels={"numba-parallel": 9e6}),
+    ]
+    v1 = env.V1Result(v1_us=30.0, v0_us=10.0, vector={4096: (1e6, 2e6)})
+    rep = env.Report(single=env.SingleResult(4.0, 10.0), vector=rows, v1=v1)
+    got = {t.name: (round(t.ratio, 6), t.met) for t in env.targets(rep)}
+    assert got == {
+        "single": (0.4, True),
+        "vector_4096": (0.5, False),
+        "vector_4096_threads": (1.5, None),
+        "call_n1": (0.2, True),
+        "v1_v0": (3.0, False),
+        "v1_v0_vector": (2.0, None),
+    }
 
 
 def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -60,6 +106,19 @@ def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
 
     if numba_available():
         assert all(r["kernel"] > 0 and r["kernel_par"] > 0 for r in doc["rows"])
+
+
+def test_bench_core_startup_rows_name_both_routes() -> None:
+    """The start-up table has the reference's first step (no numba) beside the compiled one's, and the
+    reference's snippets are the compiled ones with only the kernel changed."""
+    for code in (core._FIRST_STEP, core._FIRST_STEP_V1):
+        ref = core._numpy_route(code)
+        assert "kernel='numpy'" in ref and "numba" not in ref and ref.replace("numpy'", "numba'") == code
+    st = core.Startup(0.5, 0.02, 3.0, 0.8, 4.0, 0.9, numba_import_s=0.7, numpy_first_s=0.6, v1_numpy_first_s=0.65)
+    table = core.format_table([], st)
+    assert '| python -c "import amigo_gym, numba" | 0.700 |' in table
+    assert "| import + first v0 vector step, kernel=numpy (no numba) | 0.600 |" in table
+    assert "| import + first AmigoBot-v1 step, kernel=numpy | 0.650 |" in table
 
 
 def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:

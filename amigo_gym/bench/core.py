@@ -20,7 +20,8 @@ For each batch size N it times (median of ``--repeats`` repeats, each at least `
 It prints env-steps per second (N states advanced once = N steps) and the ratios ``step_pose/euler``,
 ``step_pose/loop`` and ``kernel/step_columns``, which are less sensitive to the machine's load than the
 absolute figures. It also times start-up in fresh processes (``--skip-startup`` to skip):
-``python -c "import amigo_gym"``, and import plus the first kernel step with an empty numba cache
+``python -c "import amigo_gym"`` (and with ``numba`` imported too), import plus the first step of the reference
+(``kernel="numpy"``: what runs without numba), and import plus the first kernel step with an empty numba cache
 (compilation) and again with the cache the first process wrote (what every later process pays).
 """
 
@@ -239,6 +240,10 @@ class Startup:
         v1_cold_s: import, ``gym.make("AmigoBot-v1")`` (the compiled v1 step), reset and the first step, with an
             empty numba cache.
         v1_warm_s: the same, second process.
+        numba_import_s: ``python -c "import amigo_gym, numba"`` (what loading numba adds to the import).
+        numpy_first_s: import, ``gym.make_vec("AmigoBot-v0", num_envs=4, kernel="numpy")`` (the reference, what
+            runs without numba), reset and the first step.
+        v1_numpy_first_s: import, ``gym.make("AmigoBot-v1", kernel="numpy")``, reset and the first step.
     """
 
     import_s: float
@@ -247,6 +252,9 @@ class Startup:
     kernel_warm_s: float | None
     v1_cold_s: float | None = None
     v1_warm_s: float | None = None
+    numba_import_s: float | None = None
+    numpy_first_s: float | None = None
+    v1_numpy_first_s: float | None = None
 
 
 _FIRST_STEP = (
@@ -259,6 +267,11 @@ _FIRST_STEP_V1 = (
     "e = gym.make('AmigoBot-v1', kernel='numba')\n"
     "e.reset(seed=0); e.step(np.zeros(2, np.float32))\n"
 )
+
+
+def _numpy_route(code: str) -> str:
+    """``code`` with the reference step (``kernel='numpy'``) instead of the compiled one."""
+    return code.replace("kernel='numba'", "kernel='numpy'")
 
 
 def _wall(code: str, env: dict[str, str] | None = None) -> float:
@@ -293,11 +306,14 @@ def bench_startup(repeats: int = 3) -> Startup:
 
     py = statistics.median(_wall("pass") for _ in range(repeats))
     imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
+    first = statistics.median(_wall(_numpy_route(_FIRST_STEP)) for _ in range(repeats))
+    first1 = statistics.median(_wall(_numpy_route(_FIRST_STEP_V1)) for _ in range(repeats))
     if not numba_available():
-        return Startup(imp, py, None, None)
+        return Startup(imp, py, None, None, numpy_first_s=first, v1_numpy_first_s=first1)
+    with_numba = statistics.median(_wall("import amigo_gym, numba") for _ in range(repeats))
     cold, warm = _cold_warm(_FIRST_STEP, repeats)
     cold1, warm1 = _cold_warm(_FIRST_STEP_V1, repeats)
-    return Startup(imp, py, cold, warm, cold1, warm1)
+    return Startup(imp, py, cold, warm, cold1, warm1, with_numba, first, first1)
 
 
 def _fmt(x: float | None, spec: str = ".3g") -> str:
@@ -325,10 +341,13 @@ def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: i
             "|---|---:|",
             f'| python -c "pass" | {startup.python_s:.3f} |',
             f'| python -c "import amigo_gym" | {startup.import_s:.3f} |',
+            f'| python -c "import amigo_gym, numba" | {_fmt(startup.numba_import_s, ".3f")} |',
+            f"| import + first v0 vector step, kernel=numpy (no numba) | {_fmt(startup.numpy_first_s, '.3f')} |",
             f"| import + first v0 vector step (kernel), empty numba cache | {_fmt(startup.kernel_cold_s, '.3f')} |",
             f"| the same, second process (cached; target < 1) | {_fmt(startup.kernel_warm_s, '.3f')} |",
             f"| import + first AmigoBot-v1 step (compiled), empty numba cache | {_fmt(startup.v1_cold_s, '.3f')} |",
             f"| the same, second process (cached; target < 1) | {_fmt(startup.v1_warm_s, '.3f')} |",
+            f"| import + first AmigoBot-v1 step, kernel=numpy | {_fmt(startup.v1_numpy_first_s, '.3f')} |",
         ]
     return "\n".join(lines)
 

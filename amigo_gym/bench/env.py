@@ -24,6 +24,19 @@ read (ratios move less with the machine's load than absolute figures). From one 
 * ``--v1``: ``AmigoBot-v1`` against ``AmigoBot-v0`` (single step, and the vector env at the sizes up to
   :data:`V1_MAX_N`), both v1's default task and :data:`V1_HARD` (mixed paths, hard randomisation),
   when ``"AmigoBot-v1"`` is in Gymnasium's registry; otherwise a note says it was skipped.
+* ``--kernels``: each step implementation (``kernel="numpy"``, the reference; ``"numba"``, the compiled step;
+  ``"numba-parallel"``, its loops on numba's threads, vector env only) of AmigoBot-v0 and AmigoBot-v1 (default
+  task), single env and vector env, timed against each other: what numba buys per step.
+* **issue 19 item 5's targets** (one core: single step <= 0.4 x Pendulum-v1's time, vector env at N = 4096 >=
+  1.0 x ``CartPoleVectorEnv``'s throughput, fixed cost per call at N = 1 <= 0.5 x CartPole's, AmigoBot-v1 <=
+  1.5 x AmigoBot-v0's single step), each with its measured ratio and whether it is met, the CPU model, its SIMD
+  level and numba's threads in the table's header; ``kernel="numba-parallel"`` against CartPole at N = 4096 and
+  v1 against v0 in the vector env are reported beside them. The vector comparison also times
+  ``kernel="numba-parallel"`` (numba's threads: ``--threads`` or ``NUMBA_NUM_THREADS``, default all CPUs); the
+  default kernel (``"auto"``: the serial compiled step) uses one core.
+
+The header names the CPU, its SIMD level, numba's version, threads and whether it uses Intel SVML, and the
+load average (also at the end of the report: the machine may be shared).
 
 Actions are uniform random in the action space, drawn in advance (a pool of 16 batches cycled), so
 episodes end and autoreset at the rate of an untrained policy. One env-step is one robot advanced by
@@ -65,13 +78,21 @@ __all__ = [
     "MemoryResult",
     "PPORow",
     "V1Result",
+    "KernelRow",
+    "Target",
     "Report",
     "bench_single",
     "bench_vector",
     "bench_memory",
     "bench_ppo",
     "bench_v1",
+    "bench_kernels",
+    "targets",
     "format_report",
+    "format_kernels",
+    "format_targets",
+    "numba_state",
+    "load_average",
     "plot_vector",
     "main",
 ]
@@ -131,15 +152,18 @@ def _vector_stepper(envs: Any, seed: int) -> Callable[[], object]:
     return step
 
 
-def _vector_kernels() -> list[str]:
-    """The step implementations the native vector env lets a caller choose (``[]``: only its default)."""
+def _vector_kernels(parallel: bool = False) -> list[str]:
+    """The step implementations the native vector env lets a caller choose (``[]``: only its default);
+    ``parallel`` adds ``"numba-parallel"`` (the kernel's loops on numba's threads) when numba is installed."""
     from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 
     if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
         return []
     from amigo_gym.sim.fast import numba_available
 
-    return ["numpy", "numba"] if numba_available() else ["numpy"]
+    if not numba_available():
+        return ["numpy"]
+    return ["numpy", "numba", "numba-parallel"] if parallel else ["numpy", "numba"]
 
 
 # ---------------------------------------------------------------------------------------------- single
@@ -224,7 +248,7 @@ def bench_vector(
     import amigo_gym  # noqa: F401
 
     say = log or _quiet
-    choices = _vector_kernels()
+    choices = _vector_kernels(parallel=True)
     rows = []
     for n in sizes:
         # every competitor built first, then timed in interleaved repeats (measure_many)
@@ -492,6 +516,168 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
     return V1Result(ts["v1"] * 1e6, ts["v0"] * 1e6, vector, ts["v1_hard"] * 1e6, hard)
 
 
+# ---------------------------------------------------------------------------------------------- kernels
+#: the step implementations ``--kernels`` compares (the vector envs also run ``"numba-parallel"``)
+KERNEL_CHOICES = ("numpy", "numba")
+
+
+@dataclass(frozen=True)
+class KernelRow:
+    """Time of one env-step [us] of ``env_id`` per step implementation, timed in interleaved repeats.
+
+    ``n = 0`` is the single env of ``gym.make``; ``n >= 1`` the native vector env of ``gym.make_vec`` with
+    ``n`` robots (the time of one call divided by ``n``). ``us`` maps ``kernel=`` values to the time.
+    """
+
+    env_id: str
+    n: int
+    us: dict[str, float]
+
+    @property
+    def speedup(self) -> float | None:
+        """The reference's time over the compiled step's (``kernel="numpy"`` / ``kernel="numba"``)."""
+        if "numpy" not in self.us or "numba" not in self.us:
+            return None
+        return self.us["numpy"] / self.us["numba"]
+
+
+def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[KernelRow]:
+    """AmigoBot-v0 and AmigoBot-v1 (default task) with each step implementation: one single-env step and one
+    env-step of the vector env at ``n`` robots (``"numba-parallel"`` too), ``[]`` without numba."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+    from amigo_gym.sim.fast import numba_available
+
+    if not numba_available():
+        return []
+    rows = []
+    for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
+        if env_id not in gym.registry:
+            continue
+        single = {k: _single_stepper(gym.make(env_id, kernel=k), seed) for k in KERNEL_CHOICES}
+        t = measure_many(single, repeats, min_time)
+        rows.append(KernelRow(env_id, 0, {k: v * 1e6 for k, v in t.items()}))
+        vec = "vector_entry_point"
+        venvs = {
+            k: gym.make_vec(env_id, num_envs=n, vectorization_mode=vec, kernel=k)
+            for k in (*KERNEL_CHOICES, "numba-parallel")
+        }
+        t = measure_many({k: _vector_stepper(e, seed) for k, e in venvs.items()}, repeats, min_time)
+        for e in venvs.values():
+            e.close()
+        rows.append(KernelRow(env_id, n, {k: v * 1e6 / n for k, v in t.items()}))
+    return rows
+
+
+def format_kernels(rows: Sequence[KernelRow]) -> list[str]:
+    """Markdown table of :func:`bench_kernels`' rows."""
+    if not rows:
+        return []
+    names = list(dict.fromkeys(k for r in rows for k in r.us))
+    out = [
+        "| step implementation: time per env-step [us] | " + " | ".join(f"kernel={k}" for k in names)
+        + " | numpy / numba |",
+        "|---|" + "---:|" * (len(names) + 1),
+    ]  # fmt: skip
+    for r in rows:
+        where = "single env (gym.make)" if r.n == 0 else f"vector env, N = {r.n}"
+        cells = " | ".join(_fmt(r.us.get(k), ".3g") for k in names)
+        out.append(f"| {r.env_id}, {where} | {cells} | {_fmt(r.speedup, '.2f')} |")
+    return [*out, ""]
+
+
+# ---------------------------------------------------------------------------------------------- targets
+#: issue 19 item 5's targets for one core: name -> (comparison, bound)
+TARGETS: dict[str, tuple[str, float]] = {
+    "single": ("<=", 0.4),
+    "vector_4096": (">=", 1.0),
+    "call_n1": ("<=", 0.5),
+    "v1_v0": ("<=", 1.5),
+}
+
+
+@dataclass(frozen=True)
+class Target:
+    """One figure of issue 19 item 5: measured ratio, target (``None``: reported only) and whether it is met."""
+
+    name: str
+    label: str
+    ratio: float
+    op: str | None = None
+    bound: float | None = None
+
+    @property
+    def met(self) -> bool | None:
+        """``ratio op bound``; ``None`` for a figure without a target."""
+        if self.op is None or self.bound is None:
+            return None
+        return self.ratio <= self.bound if self.op == "<=" else self.ratio >= self.bound
+
+
+def _target(name: str, label: str, ratio: float) -> Target:
+    op, bound = TARGETS[name]
+    return Target(name, label, ratio, op, bound)
+
+
+def targets(rep: Report, n_vector: int = 4096) -> list[Target]:
+    """Issue 19 item 5's figures that ``rep`` measured: the single step against Pendulum-v1, the vector env at
+    ``n_vector`` against ``CartPoleVectorEnv`` (serial compiled step, and with numba's threads, reported only), the
+    fixed cost per call at N = 1, and AmigoBot-v1 against AmigoBot-v0 (single step; vector env, reported only)."""
+    out = []
+    if rep.single is not None:
+        out.append(_target("single", "single step, AmigoBot-v0 / Pendulum-v1 (time)", rep.single.ratio))
+    big = [r for r in rep.vector if r.n == n_vector]
+    if big:
+        r = big[0]
+        label = f"vector env, N = {n_vector}, native (default kernel) / CartPoleVectorEnv (env-steps/s)"
+        out.append(_target("vector_4096", label, r.ratio_cartpole))
+        if "numba-parallel" in r.kernels:
+            label = f"vector env, N = {n_vector}, kernel=numba-parallel / CartPoleVectorEnv (env-steps/s)"
+            out.append(Target("vector_4096_threads", label, r.kernels["numba-parallel"] / r.cartpole))
+    fc = _fixed_cost(rep.vector)
+    if fc is not None:
+        out.append(_target("call_n1", "fixed cost per call at N = 1, native / CartPoleVectorEnv (time)", fc["ratio"]))
+    if rep.v1 is not None:
+        out.append(_target("v1_v0", "single step, AmigoBot-v1 / AmigoBot-v0 (time)", rep.v1.ratio))
+        if n_vector in rep.v1.vector:
+            a, b = rep.v1.vector[n_vector]
+            out.append(Target("v1_v0_vector", f"vector env, N = {n_vector}, AmigoBot-v1 / AmigoBot-v0 (time)", b / a))
+    return out
+
+
+def format_targets(items: Sequence[Target], machine: str) -> list[str]:
+    """Markdown table of :func:`targets` with the machine (CPU, SIMD level, numba threads) in its header."""
+    if not items:
+        return []
+    out = [f"| issue 19 item 5 on {machine} | measured | target | met |", "|---|---:|---:|---|"]
+    for t in items:
+        bound = "reported" if t.op is None else f"{t.op} {t.bound:g}"
+        met = "-" if t.met is None else ("yes" if t.met else "no")
+        out.append(f"| {t.label} | {t.ratio:.2f} | {bound} | {met} |")
+    return [*out, ""]
+
+
+def numba_state() -> str:
+    """numba's version, its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel SVML."""
+    from amigo_gym.sim.fast import numba_available
+
+    if not numba_available():
+        return "numba not installed"
+    import numba
+
+    svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"
+    return f"numba {numba.__version__}, {numba.get_num_threads()} thread(s), SVML {svml}"
+
+
+def load_average() -> str:
+    """The machine's load average over 1, 5 and 15 minutes (``"-"`` where the OS has none)."""
+    try:
+        return " ".join(f"{x:.2f}" for x in os.getloadavg())
+    except OSError:
+        return "-"
+
+
 # ---------------------------------------------------------------------------------------------- report
 @dataclass
 class Report:
@@ -502,7 +688,10 @@ class Report:
     memory: MemoryResult | None = None
     ppo: list[PPORow] = field(default_factory=list)
     v1: V1Result | None = None
+    kernels: list[KernelRow] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: the load average at the start and at the end of the run (:func:`load_average`)
+    load: tuple[str, str] = ("-", "-")
 
     def to_json(self) -> dict[str, Any]:
         """A JSON document of the figures, with the ratios."""
@@ -517,7 +706,13 @@ class Report:
             for r in self.vector
         ]
         return {
-            "machine": {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()},
+            "machine": {
+                "cpu_model": cpu_model(),
+                "simd": simd_level(),
+                "cpu_count": os.cpu_count(),
+                "numba": numba_state(),
+                "load_average": {"start": self.load[0], "end": self.load[1]},
+            },
             "single": None if self.single is None else {**asdict(self.single), "ratio": self.single.ratio},
             "vector": vector,
             "fixed_cost_n1": _fixed_cost(self.vector),
@@ -537,6 +732,8 @@ class Report:
                     for n, (a, b) in self.v1.vector.items()
                 },
             },
+            "kernels": [{**asdict(r), "speedup": r.speedup} for r in self.kernels],
+            "targets": [{**asdict(t), "met": t.met} for t in targets(self)],
             "notes": self.notes,
         }
 
@@ -565,7 +762,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             "|---|---:|",
             f"| AmigoBot-v0 | {single.amigobot_us:.1f} |",
             f"| Pendulum-v1 | {single.pendulum_us:.1f} |",
-            f"| ratio AmigoBot / Pendulum (target <= 0.5, goal <= 0.3) | {single.ratio:.2f} |",
+            f"| ratio AmigoBot / Pendulum (target <= 0.4) | {single.ratio:.2f} |",
             "",
         ]
     if rows:
@@ -591,7 +788,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             out += [f"| AmigoBotVectorEnv, {k} | {1e6 / v:.1f} |" for k, v in rows[0].kernels.items() if rows[0].n == 1]
             out += [
                 f"| CartPoleVectorEnv | {fc['cartpole_us']:.1f} |",
-                f"| ratio AmigoBot / CartPole (target <= 1) | {fc['ratio']:.2f} |",
+                f"| ratio AmigoBot / CartPole (target <= 0.5) | {fc['ratio']:.2f} |",
             ]
         out.append("")
     if report is not None and report.memory is not None:
@@ -622,7 +819,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
         out += [
             f"| AmigoBot-v1 vs v0 | v1 | v1 ({hard}) | v0 | v1 / v0 | v1 hard / v0 |",
             "|---|---:|---:|---:|---:|---:|",
-            f"| single step [us] (target <= 2) | {v.v1_us:.1f} | {_fmt(v.v1_hard_us, '.1f')} | {v.v0_us:.1f} "
+            f"| single step [us] (target <= 1.5) | {v.v1_us:.1f} | {_fmt(v.v1_hard_us, '.1f')} | {v.v0_us:.1f} "
             f"| {v.ratio:.2f} | {_fmt(v.ratio_hard, '.2f')} |",
         ]
         for n, (a, b) in v.vector.items():
@@ -633,6 +830,10 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             )
         out.append("")
     if report is not None:
+        out += format_kernels(report.kernels)
+        machine = f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})"
+        out += format_targets(targets(report), machine)
+        out.append(f"load average (1, 5, 15 min): {report.load[0]} at the start, {report.load[1]} at the end")
         out += [f"note: {n}" for n in report.notes]
     return "\n".join(out).rstrip()
 
@@ -734,6 +935,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--skip-ppo", action="store_true", help="skip the SB3 PPO comparison")
     p.add_argument("--v1", action="store_true", help="also AmigoBot-v1 against v0 (when registered)")
     p.add_argument(
+        "--kernels",
+        action="store_true",
+        help="also each step implementation (numpy, numba, numba-parallel) of AmigoBot-v0 and v1, single and vector "
+        "env at the largest of --sizes up to 4096 (needs numba)",
+    )
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=None,
+        help="numba's threads for kernel=numba-parallel [threads] (default: NUMBA_NUM_THREADS, else all CPUs)",
+    )
+    p.add_argument(
         "--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s, tiny memory/PPO runs"
     )
     p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
@@ -790,8 +1003,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_range(PROG, "ppo_steps", ppo_steps, 1, 10_000_000)
         check_range(PROG, "ppo_envs", args.ppo_envs, 1, 4096)
         check_range(PROG, "ppo_repeats", args.ppo_repeats, 1, 100)
-        print(f"{machine_line()}; median of {repeats} repeats of >= {min_time:g} s", flush=True)
+        if args.threads is not None:
+            from amigo_gym.sim.fast import numba_available
+
+            check_range(PROG, "threads", args.threads, 1, os.cpu_count() or 1)
+            if numba_available():
+                import numba
+
+                # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
+                check_range(PROG, "threads", args.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
+                numba.set_num_threads(args.threads)
         rep = Report()
+        rep.load = (load_average(), "-")
+        print(f"{machine_line()}; {numba_state()}; load average {rep.load[0]}", flush=True)
+        print(f"median of {repeats} repeats of >= {min_time:g} s", flush=True)
         if not args.skip_single:
             _log("single env: AmigoBot-v0 vs Pendulum-v1")
             rep.single = bench_single(repeats, min_time)
@@ -816,6 +1041,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             rep.v1 = bench_v1(sizes, repeats, min_time)
             if rep.v1 is None:
                 rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
+        if args.kernels:
+            n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
+            _log(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
+            rep.kernels = bench_kernels(n_k, repeats, min_time)
+            if not rep.kernels:
+                rep.notes.append("--kernels: numba is not installed; only the numpy step exists")
+        rep.load = (rep.load[0], load_average())
         print(format_report(rep.single, rep.vector, rep))
         if args.plot is not None and rep.vector:
             plot_vector(rep.vector, args.plot, rep.v1)
