@@ -224,8 +224,8 @@ class AmigoBotEnv(AmigoBotV1Env):
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
     ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
     (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results are the
-    same bits): ``"auto"`` (the default: the compiled step when numba is installed, the extra
-    ``amigo_gym[fast]``, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats:
+    same bits): ``"auto"`` (the default: the compiled step when numba is installed, a core
+    dependency where it ships wheels, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats:
     :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (AmigoBot-v0's compiled step,
     :mod:`amigo_gym.sim.fast`). Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
@@ -305,7 +305,7 @@ class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
         kernel: the step's implementation (:mod:`amigo_gym.sim.fast`): ``"auto"`` (default: the compiled
             kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
             reference column functions of :mod:`amigo_gym.task.v1`, ideal actuators), ``"numba"`` (the compiled
-            kernel, the same results bit for bit; needs the extra ``amigo_gym[fast]``), or ``"numba-parallel"``
+            kernel, the same results bit for bit; needs numba), or ``"numba-parallel"``
             (the kernel's loops on numba's threads).
         params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
 

@@ -162,7 +162,7 @@ class AmigoBotV1Env(AmigoBotBase):
     ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; ``render_mode``; and
     ``kernel``, the step's implementation (:mod:`amigo_gym.sim.fast_v1`): ``"auto"`` (default: the compiled step
     when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference float code of
-    :mod:`amigo_gym.task.v1`) or ``"numba"`` (the compiled step; needs the extra ``amigo_gym[fast]``). The
+    :mod:`amigo_gym.task.v1`) or ``"numba"`` (the compiled step; needs numba). The
     compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`); a path object of
     your own runs the reference code. Both give the same results bit for bit.
 

@@ -8,7 +8,7 @@ per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` r
 the robots being reset, which draw their episodes from their own generators with the single environment's
 function (:func:`amigo_gym.task.v1.begin_episode`).
 
-With numba (``kernel="auto"`` or ``"numba"``, the extra ``amigo_gym[fast]``) and the built-in path families
+With numba (``kernel="auto"`` or ``"numba"``; a core dependency where it ships wheels) and the built-in path families
 (:class:`amigo_gym.paths.ClothoidPath`), the step is instead the single environment's compiled step
 (:mod:`amigo_gym.sim.fast_v1`) run over the robots in one compiled loop
 (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`);

@@ -2,5 +2,6 @@
 Python float reference in :mod:`amigo_gym.task` (``kernel="numpy"``).
 
 ``fast`` / ``_kernels`` are AmigoBot-v0's; ``fast_v1`` / ``_kernels_v1`` / ``fast_v1_batch`` AmigoBot-v1's.
-numba is optional (the ``fast`` extra): without it every env runs the reference.
+numba is a core dependency where it ships wheels (the ``fast`` extra elsewhere): without it every env runs the
+reference.
 """

@@ -1,6 +1,6 @@
 r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
 
-The optional fast path (the extra ``amigo_gym[fast]``, i.e. numba). It computes what
+The fast path (numba, a core dependency where it ships wheels). It computes what
 :func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the

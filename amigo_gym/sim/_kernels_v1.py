@@ -1,6 +1,6 @@
 r"""Compiled step of ``AmigoBot-v1`` for one robot on a :class:`~amigo_gym.paths.ClothoidPath` (numba).
 
-The optional fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (the extra ``amigo_gym[fast]``, i.e. numba;
+The fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (numba, a core dependency where it ships wheels;
 loaded by :mod:`amigo_gym.sim.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.task.v1.step_columns`
 does on Python floats, :func:`evaluate` what :func:`amigo_gym.task.v1.reset_columns` does, and :func:`progress`
 the projection of :func:`amigo_gym.task.v1.start_state`:

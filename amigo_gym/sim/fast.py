@@ -6,7 +6,7 @@ Two implementations of one step exist:
   ideal actuators and :func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`; numpy,
   always available: ``kernel="numpy"``, Python floats in the single environment, ``(N,)`` arrays in the vector one);
 * the **fast path**, :func:`step_rows`: AmigoBot-v0's step fused into three compiled loops over the robots
-  (:mod:`amigo_gym.sim._kernels`, numba, the extra ``amigo_gym[fast]``) around numpy's own ``tan`` and ``exp``
+  (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels) around numpy's own ``tan`` and ``exp``
   ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
   (to 1e-12, and bit for bit on this machine).
 
@@ -116,8 +116,8 @@ def use_fast_path(requested: bool | None = None) -> bool:
         return True
     if requested:
         raise ImportError(
-            'the fast path needs numba: pip install "amigo-gym[fast]" (from a clone: pip install -e ".[fast]"; '
-            "or set AMIGO_GYM_KERNEL=numpy)"
+            "the fast path needs numba: pip install numba (amigo-gym installs it on the platforms numba ships wheels "
+            'for; elsewhere pip install "amigo-gym[fast]"), or set AMIGO_GYM_KERNEL=numpy'
         )
     return False
 

@@ -4,8 +4,8 @@ Two implementations of one robot's step exist:
 
 * the **reference**, :func:`amigo_gym.task.v1.step_columns` / :func:`amigo_gym.task.v1.evaluate_columns`
   on Python floats (numpy, always available, any path object);
-* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym.sim._kernels_v1`, numba, the
-  extra ``amigo_gym[fast]``) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family). The
+* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym.sim._kernels_v1`, numba, a
+  core dependency where it ships wheels) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family). The
   logarithms of the per-step noise (between a small compiled call that draws the uniforms and the step) and
   the three reward exponentials (after the step) are numpy's, as in the reference, since numpy's ``log`` and
   ``exp`` are not the C library's. The results are the reference's bit for bit (``tests/test_kernel_v1.py``).
