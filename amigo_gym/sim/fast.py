@@ -267,9 +267,9 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
 def start_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> Array:
     """The ``start`` vector of the start-state kernels (:data:`amigo_gym.sim._kernels.START_FIELDS`).
 
-    The very numbers the start (:func:`amigo_gym.task.v1.start_state`) and :func:`amigo_gym.task.v0.initial_wheel_rates`
-    use: the path's start point and tangent angle, ``init_position_noise``, ``init_heading_noise``,
-    the robot's ``l3``, and the initial wheel rates.
+    The numbers of the start state (:func:`amigo_gym.task.v1.start_state` with v0's settings): the path's start
+    point and tangent angle, ``init_position_noise``, ``init_heading_noise``, the robot's ``l3``, and the initial
+    wheel rates (:func:`amigo_gym.task.v0.initial_wheel_rates`).
     """
     p = k.params
     x0, y0, theta0 = _path_start(path)
