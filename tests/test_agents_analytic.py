@@ -2,7 +2,8 @@
 
 References: the closed-form steady state on a circle, the continuous-time error law
 ``e(t) = e0 exp(-k t)``, and the paper's inverse ODE integrated independently with SciPy.
-Rollouts use the pure task functions (the same ones the environment wraps).
+Rollouts use AmigoBot-v0's reference column step (AmigoBot-v1's ideal step with v0's settings, what the environment
+runs with ``kernel="numpy"``; tests/v0_reference.py).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from v0_reference import Reference, start_pose
 
 from amigo_gym.model.kinematics import body_velocity, circle_steady_state
 from amigo_gym.model.params import EnvParams, RobotParams
@@ -27,24 +29,33 @@ def steady_pose(p: EnvParams) -> np.ndarray:
     return np.array([-p.robot.l3 * math.cos(beta), -p.robot.l3 * math.sin(beta), beta])
 
 
+def observe(p: EnvParams, pose: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """The observation of start states ``pose (..., 3)`` with wheel rates ``rates (..., 2)`` (float64), by AmigoBot-v0's
+    reference evaluation (tests/v0_reference.py)."""
+    pose = np.atleast_2d(pose)
+    rows = np.column_stack((pose, np.zeros((len(pose), 3)), np.broadcast_to(rates, (len(pose), 2))))
+    ref = Reference(p, rows)
+    return ref.obs(ref.start()[1])
+
+
 def rollout(
     policy: AnalyticPolicy, p: EnvParams, pose: np.ndarray, n: int, rates: np.ndarray | None = None
 ) -> dict[str, np.ndarray]:
-    """Closed loop with the task's exact transition; observations cast to float32 like the env."""
-    path = make_path(p)
+    """Closed loop with AmigoBot-v0's exact reference step (tests/v0_reference.py, what
+    ``gym.make("AmigoBot-v0", kernel="numpy")`` runs) from ``pose`` and ``rates``; observations cast to float32 like
+    the env."""
     rates = task.initial_wheel_rates(p) if rates is None else rates
-    angles = np.zeros(3)
-    ev = task.evaluate(pose, rates, p, path)
-    obs = ev.obs.astype(np.float32)
-    es, poses, ws = [float(ev.projection.cross_track_error)], [pose], []
+    ref = Reference(p, np.concatenate((pose, np.zeros(3), rates)))
+    _, out = ref.start()
+    obs = ref.obs(out).astype(np.float32)
+    es, poses, ws = [out.error], [pose], []
     for _ in range(n):
         action, _ = policy.predict(obs)
-        tr = task.transition(pose, angles, rates, action, p, path)
-        pose, angles, rates = tr.pose, tr.wheel_angles, tr.rates
-        obs = tr.evaluation.obs.astype(np.float32)
-        es.append(float(tr.evaluation.projection.cross_track_error))
-        poses.append(pose)
-        ws.append(rates)
+        rows, _, out = ref.step(action)
+        obs = ref.obs(out).astype(np.float32)
+        es.append(out.error)
+        poses.append(rows[:3])
+        ws.append(rows[6:8])
     return {"e": np.array(es), "pose": np.array(poses), "rates": np.array(ws)}
 
 
@@ -59,8 +70,7 @@ CASES = [
 @pytest.mark.parametrize("speed_reference", ["A", "H"])
 def test_steady_state_rates_match_closed_form(p: EnvParams, speed_reference: str) -> None:
     ss = circle_steady_state(p.radius, p.speed, p.robot, p.direction)
-    path = make_path(p)
-    obs = task.evaluate(steady_pose(p), ss.wheel_rates, p, path).obs.astype(np.float32)
+    obs = observe(p, steady_pose(p), ss.wheel_rates)[0].astype(np.float32)
     for feedforward_only in (False, True):
         pol = AnalyticPolicy(p, feedforward_only=feedforward_only, speed_reference=speed_reference)  # type: ignore[arg-type]
         np.testing.assert_allclose(pol.wheel_rates(obs), ss.wheel_rates, atol=1e-5)
@@ -70,7 +80,7 @@ def test_steady_state_rates_match_closed_form(p: EnvParams, speed_reference: str
 def test_modelmd_example_rates() -> None:
     # docs/model.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
     p = EnvParams()
-    obs = task.evaluate(steady_pose(p), np.array([4.481543, 3.518457]), p, make_path(p)).obs
+    obs = observe(p, steady_pose(p), np.array([4.481543, 3.518457]))[0]
     np.testing.assert_allclose(AnalyticPolicy(p).wheel_rates(obs), [4.481543, 3.518457], atol=1e-5)
 
 
@@ -92,7 +102,7 @@ def test_error_follows_continuous_decay(speed_reference: str) -> None:
     devs = []
     for dt in (0.01, 0.005):
         p = EnvParams(dt=dt)
-        pose = task.start_pose(np.array([0.5, 1.0, -1.0]), p, make_path(p))
+        pose = start_pose(p, [0.5, 1.0, -1.0])
         n = round(2.0 / dt)
         e = rollout(AnalyticPolicy(p, gain=k, speed_reference=speed_reference), p, pose, n)["e"]  # type: ignore[arg-type]
         t = np.arange(n + 1) * dt
@@ -103,10 +113,9 @@ def test_error_follows_continuous_decay(speed_reference: str) -> None:
 
 def test_perturbed_start_converges_at_default_dt() -> None:
     p = EnvParams()
-    path = make_path(p)
     rng = np.random.default_rng(0)
     for u in rng.uniform(-1, 1, size=(5, 3)):
-        e = rollout(AnalyticPolicy(p), p, task.start_pose(u, p, path), 60)["e"]
+        e = rollout(AnalyticPolicy(p), p, start_pose(p, u), 60)["e"]
         # halves at least every 0.5 s between 1 s and 4 s (measured about every 0.33 s)
         assert abs(e[40]) <= abs(e[10]) * 2.0**-6 + 1e-9
         assert np.abs(e).max() <= abs(e[0]) + 2e-3
@@ -116,7 +125,7 @@ def test_feedforward_only_keeps_offset_and_aligns_heading() -> None:
     """k = 0 keeps Hdot . n = 0: H keeps its offset while psi -> psi_ss at rate v/l3 (small dt)."""
     p = EnvParams(dt=0.005)
     path = make_path(p)
-    pose = task.start_pose(np.array([0.0, 1.0, 1.0]), p, path)
+    pose = start_pose(p, [0.0, 1.0, 1.0])
     out = rollout(AnalyticPolicy(p, feedforward_only=True), p, pose, round(3.0 / p.dt))
     e = out["e"]
     assert np.abs(e - e[0]).max() < 0.01 * abs(e[0])
@@ -156,11 +165,10 @@ def test_feedforward_only_is_the_papers_inverse_ode() -> None:
 
 def test_batch_equals_loop() -> None:
     p = EnvParams()
-    path = make_path(p)
     rng = np.random.default_rng(1)
-    poses = task.start_pose(rng.uniform(-1, 1, size=(7, 3)), p, path)
+    poses = start_pose(p, rng.uniform(-1, 1, size=(7, 3)))
     rates = rng.uniform(0, 8, size=(7, 2))
-    obs = task.evaluate(poses, rates, p, path).obs.astype(np.float32)
+    obs = observe(p, poses, rates).astype(np.float32)
     for pol in (AnalyticPolicy(p), AnalyticPolicy(p, feedforward_only=True), AnalyticPolicy(p, speed_reference="H")):
         batch, state = pol.predict(obs)
         assert state is None and batch.shape == (7, 2) and batch.dtype == np.float32
@@ -204,9 +212,9 @@ def test_law_from_plain_geometry(direction: int) -> None:
     robot, k = p.robot, 3.0
     rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, size=(6, 3))
-    pose = task.start_pose(u, p, make_path(p))
+    pose = start_pose(p, u)
     rates = np.full((6, 2), 4.0)
-    obs = task.evaluate(pose, rates, p, make_path(p)).obs
+    obs = observe(p, pose, rates)
     cx, cy = 0.0, direction * p.radius  # eq. 6: through the origin, tangent to x0, centre left (or right)
     hx = pose[:, 0] + robot.l3 * np.cos(pose[:, 2])
     hy = pose[:, 1] + robot.l3 * np.sin(pose[:, 2])

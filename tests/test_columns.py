@@ -1,5 +1,6 @@
 """The column functions the environments run: scalars and arrays give the same bits, and the array
-functions (step_pose, project, transition, evaluate) are thin wrappers over them."""
+functions (step_pose, project) are thin wrappers over them; AmigoBot-v0's reference step (AmigoBot-v1's ideal
+column step with v0's settings) against the closed forms of its motion and reward."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
+from v0_reference import Reference, start_pose
 
 from amigo_gym.model.kinematics import (
     arc_step,
@@ -28,7 +30,7 @@ from amigo_gym.model.kinematics import (
     step_pose,
 )
 from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import v0 as task
 
 ROBOT = RobotParams()
@@ -147,41 +149,49 @@ def test_circle_projection_at_the_centre_is_the_start_point() -> None:
 
 
 @pytest.mark.parametrize("path_name", ["circle", "manoeuvre"])
-def test_step_columns_scalars_equal_arrays_and_transition(path_name: str) -> None:
+def test_v0_reference_step_scalars_equal_arrays_and_the_closed_forms(path_name: str) -> None:
+    """AmigoBot-v0's reference step (AmigoBot-v1's ideal column step with v0's settings, tests/v0_reference.py):
+    the motion is the exact arc step of the clipped, scaled action (:func:`step_pose`), the wheel angles advance by
+    ``w dt``; the reward is the product of its four terms, each in [0, 1]; one robot's Python floats give the bits of
+    its row of the ``(N,)`` columns; a start state's H is ``A + l3 (cos b, sin b)``."""
     p = EnvParams(path=path_name, dt=0.2)
-    path = make_path(p)
-    k = task.task_constants(p)
     g = rng()
     n = 64
-    pose = task.start_pose(g.uniform(-1, 1, (n, 3)), p, path)
+    pose = start_pose(p, g.uniform(-1, 1, (n, 3)))
     pose[:, 0] += g.uniform(0.0, 2.0, n)  # along the straight part and onto the circle
     angles = g.normal(size=(n, 3))
     prev = g.uniform(-15, 15, (n, 2))
     action = g.uniform(-1.3, 1.3, (n, 2))
-    tr = task.transition(pose, angles, prev, action, p, path)
-    state = task.State(*pose.T, *angles.T, *prev.T)
-    new, out = task.step_columns(k, path, state, action[:, 0], action[:, 1])
-    np.testing.assert_array_equal(pack(new.x, new.y, new.beta), tr.pose)
-    np.testing.assert_array_equal(pack(new.alpha1, new.alpha2, new.alpha3), tr.wheel_angles)
-    np.testing.assert_array_equal(pack(*out.obs), tr.evaluation.obs)
-    np.testing.assert_array_equal(out.reward, tr.reward)
-    t = tr.terms  # the reward is the product of its named terms, each in [0, 1]
+    state = np.column_stack((pose, angles, prev))
+    rows, record, out = Reference(p, state).step(action)
+    w = np.clip(action, -1.0, 1.0) * p.robot.max_wheel_rate
+    np.testing.assert_array_equal(rows[:, :3], step_pose(pose, w, p.dt, p.robot))
+    np.testing.assert_array_equal(rows[:, 3:5], angles[:, :2] + w * p.dt)
+    np.testing.assert_array_equal(rows[:, 6:], w)
+    t = dict(zip(task.REWARD_TERMS, out.terms, strict=True))  # the reward is the product of its named terms
     np.testing.assert_array_equal(out.reward, ((t["track"] * t["speed"]) * t["heading"]) * t["smooth"])
-    assert all(np.all((t[n] >= 0.0) & (t[n] <= 1.0)) for n in task.REWARD_TERMS)
-    _, mini = task.step_columns(k, path, state, action[:, 0], action[:, 1], minimal=True)
-    np.testing.assert_array_equal(pack(*mini.obs), tr.evaluation.obs)
+    assert all(np.all((t[name] >= 0.0) & (t[name] <= 1.0)) for name in task.REWARD_TERMS)
+    assert np.any(t["smooth"] < 1.0)  # the rates changed
+    obs = Reference(p, state).obs(out)
     for i in range(n):
-        one_state = task.State(*(float(c[i]) for c in state))
-        one_new, one_out = task.step_columns(k, path, one_state, float(action[i, 0]), float(action[i, 1]), True)
-        assert tuple(map(float, one_new)) == tuple(float(c[i]) for c in new)
-        np.testing.assert_array_equal(np.array(one_out.obs, dtype=np.float32), tr.evaluation.obs[i].astype(np.float32))
-        assert float(one_out.reward) == tr.reward[i]
-        assert tuple(map(float, one_out.terms)) == tuple(float(tr.terms[name][i]) for name in task.REWARD_TERMS)
-    # the evaluation of a start state
-    ev = task.evaluate(pose, prev, p, path)
-    reset = task.reset_columns(k, path, task.State(*pose.T, *angles.T, *prev.T))
-    np.testing.assert_array_equal(pack(*reset.obs), ev.obs)
-    np.testing.assert_array_equal(pack(reset.h_x, reset.h_y), ev.h)
+        one = Reference(p, state[i])
+        one_rows, one_record, one_out = one.step(action[i])
+        assert all(np.ndim(c) == 0 for c in one_out.obs)
+        np.testing.assert_array_equal(one_rows, rows[i])
+        np.testing.assert_array_equal(one_record, record[i])
+        np.testing.assert_array_equal(one.obs(one_out), obs[i])
+        assert one_out.terminated == out.terminated[i]
+    # the evaluation of a start state: H l3 ahead of A, no smoothness loss, floats = arrays
+    ref = Reference(p, state)
+    start_record, start = ref.start()
+    np.testing.assert_array_equal(start_record[:, 3], pose[:, 0] + p.robot.l3 * np.cos(pose[:, 2]))
+    np.testing.assert_array_equal(start_record[:, 4], pose[:, 1] + p.robot.l3 * np.sin(pose[:, 2]))
+    np.testing.assert_array_equal(start_record[:, 14], 1.0)
+    for i in (0, 17, n - 1):
+        one = Reference(p, state[i])
+        one_record, one_start = one.start()
+        np.testing.assert_array_equal(one_record, start_record[i])
+        np.testing.assert_array_equal(one.obs(one_start), ref.obs(start)[i])
 
 
 def test_task_constants_are_cached_and_derived() -> None:

@@ -1,9 +1,10 @@
 """The float paths of one robot give the bits of the column code on arrays (issue 12, part 2).
 
-The single environments run the column code on Python floats (``task.step_float``, the float branches of
-``fresnel.advance``, ``actuators.actuator_step``, ``ClothoidPath.locate``/``pose_columns`` and
-``randomization.step_noise``); the vector environments run the column code on ``(N,)`` arrays. Each float
-result here must equal the array result of its row bit for bit (signs of zeros included).
+The single environments run the column code on Python floats (``task.v1.step_columns``, with v0's settings
+AmigoBot-v0's reference; the float branches of ``fresnel.advance``, ``actuators.actuator_step``,
+``ClothoidPath.locate``/``pose_columns`` and ``randomization.step_noise``); the vector environments run the column
+code on ``(N,)`` arrays. Each float result here must equal the array result of its row bit for bit (signs of zeros
+included).
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from typing import Any
 
 import numpy as np
 import pytest
+from v0_reference import Reference, start_pose
 
 from amigo_gym.model import actuators, fresnel
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.model.randomization import make_randomization, step_noise
-from amigo_gym.paths import make_family_path, make_path
+from amigo_gym.paths import make_family_path
 from amigo_gym.task import v0 as task
 
 
@@ -160,28 +162,30 @@ def test_step_noise_float_equals_arrays(preset: str) -> None:
 
 
 @pytest.mark.parametrize("path_name", ["circle", "manoeuvre"])
-def test_v0_step_float_equals_step_columns(path_name: str) -> None:
+def test_v0_reference_step_on_floats_equals_the_columns(path_name: str) -> None:
+    """AmigoBot-v0's reference step (AmigoBot-v1's ideal step with v0's settings, what the single env runs with
+    ``kernel="numpy"``) on one robot's Python floats gives its row of the ``(N,)`` columns, every field."""
     p = EnvParams(path=path_name, dt=0.2)
-    path = make_path(p)
-    k = task.task_constants(p)
     g = np.random.default_rng(4)
     n = 200
-    pose = task.start_pose(g.uniform(-1, 1, (n, 3)), p, path)
+    pose = start_pose(p, g.uniform(-1, 1, (n, 3)))
     pose[:, 0] += g.uniform(0.0, 2.0, n)
     angles = g.normal(size=(n, 3))
     prev = g.uniform(-15, 15, (n, 2))
     action = g.uniform(-1.3, 1.3, (n, 2))
     action[::5, 0] = action[::5, 1]  # straight lines: a zero turn
     action[::7] = 0.0
-    state = task.State(*pose.T, *angles.T, *prev.T)
-    new, out = task.step_columns(k, path, state, action[:, 0], action[:, 1], minimal=True)
+    state = np.column_stack((pose, angles, prev))
+    ref = Reference(p, state)
+    _, _, out = ref.step(action)
     for i in range(n):
-        one = task.State(*(float(c[i]) for c in state))
-        got_new, got = task.step_float(k, path, one, float(action[i, 0]), float(action[i, 1]))
-        rows_equal(got_new, new, i)
+        one = Reference(p, state[i])
+        _, _, got = one.step(action[i])
+        rows_equal(one.st, ref.st, i)
+        rows_equal((one.castor,), (ref.castor,), i)
         rows_equal(got.obs, out.obs, i)
         rows_equal(got.terms, out.terms, i)
-        rows_equal((got.h_x, got.h_y, got.reward, got.terminated), (out.h_x, out.h_y, out.reward, out.terminated), i)
+        rows_equal(got[2:], out[2:], i)  # reward, terminated, H, the error, speeds, measurements, end of path
 
 
 def test_path_batch_locate_rows_equal_each_path_on_floats() -> None:

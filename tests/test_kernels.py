@@ -7,8 +7,8 @@ code path than the kernel's loops (it projects H by ``path.locate`` and evaluate
 states and actions (actions beyond [-1, 1] too, straight motion, turning on the spot) on the circle and the
 manoeuvre path, both directions, several dt: every output agrees to 1e-12 (the contract) and is in fact
 bit-identical on this machine (the same numpy ``tan`` and ``exp``); the parallel variant gives the serial one's bits;
-restart rows are evaluated as the reference's reset evaluates a start state. The golden episodes
-(``tests/test_golden.py``) hold both routes to recorded numbers.
+restart rows are evaluated as the reference's reset evaluates a start state (the reference: ``tests/v0_reference.py``).
+The golden episodes (``tests/test_golden.py``) hold both routes to recorded numbers.
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 import pytest
 from numpy.typing import NDArray
+from v0_reference import Reference
 
-from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
 from amigo_gym.sim import fast
@@ -86,51 +86,6 @@ def _run(
     ws = fast.workspace(task.task_constants(params), make_path(params), n)
     fast.step_rows(ws, st, actions, restart, obs, reward, terminated, record, parallel=parallel)
     return st, obs, reward, terminated, record
-
-
-class Reference:
-    """AmigoBot-v1's reference with ``params``'s settings (:func:`amigo_gym.task.v1.v0_configuration`) on the rows of
-    ``state (N, 8)`` (the kernel's columns ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``)."""
-
-    def __init__(self, params: EnvParams, state: Array) -> None:
-        n = len(state)
-        self.k = tracking.constants(tracking.v0_configuration(params))
-        self.path = self.k.params.path
-        ep = tracking.begin_episode(np.random.default_rng(0), self.k).episode  # the nominal robot's episode
-        self.ep = tracking.Episode(*(np.full(n, v) for v in ep))
-        self.ring = np.zeros((n, self.k.ring_length, 2))
-        self.dt = self.k.params.dt
-        c = [state[:, j].copy() for j in range(8)]
-        z = np.zeros(n)
-        self.st = tracking.State(c[0], c[1], c[2], c[6], c[7], c[3], c[4], z, z, z, np.zeros(n, dtype=np.int64))
-        self.castor = c[5]
-
-    def step(self, actions: Array) -> tuple[Array, Array, tracking.Outcome]:
-        """One step of every row: ``(state (N, 8), record (N, 16), outcome)``; the castor angle integrated as the
-        vector env's reference route integrates it."""
-        st, out, _ = tracking.step_columns(
-            self.k, self.path, self.st, self.ep, self.ring, 0, actions[:, 0], actions[:, 1]
-        )
-        self.st = tracking.State(*(np.asarray(col) for col in st))
-        v, bdot = body_velocity_columns(self.st.w1, self.st.w2, self.k.nominal)
-        self.castor = self.castor + castor_rate_columns(v, bdot, self.k.nominal) * self.dt
-        return self.rows(), self.record(out), out
-
-    def start(self) -> tuple[Array, tracking.Outcome]:
-        """The evaluation of the rows as start states: ``(record (N, 16), outcome)``."""
-        out = tracking.reset_columns(self.k, self.path, self.st, self.ep, tracking.NO_NOISE)
-        return self.record(out), out
-
-    def rows(self) -> Array:
-        s = self.st
-        return np.column_stack([s.x, s.y, s.beta, s.alpha1, s.alpha2, self.castor, s.w1, s.w2])
-
-    def record(self, out: tracking.Outcome) -> Array:
-        s = self.st
-        cols: list[Any] = [s.x, s.y, s.beta, out.h_x, out.h_y, out.error, s.w1, s.w2, s.alpha1, s.alpha2, self.castor]
-        cols += [*out.terms, out.reward]
-        n = len(self.castor)
-        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (n,)) for c in cols])
 
 
 def _obs(out: tracking.Outcome, n: int) -> Array:

@@ -2,18 +2,19 @@
 
 For each batch size N it times (median of ``--repeats`` repeats, each at least ``--min-time`` seconds):
 
-* ``transition``: :func:`amigo_gym.task.v0.transition`, the environment's whole pure step (action → wheel
-  rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms),
-  returned as ``(N, k)`` arrays;
-* ``columns``: :func:`amigo_gym.task.v0.step_columns`, the same step in the column form that the environments
-  run (state and results as ``(N,)`` columns, ``minimal=True``: no arc length nor closest point);
+* ``transition``: AmigoBot-v0's whole reference step, what ``kernel="numpy"`` runs (AmigoBot-v1's ideal column
+  step, :func:`amigo_gym.task.v1.step_columns` with :func:`amigo_gym.task.v1.v0_configuration`: action → wheel
+  rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms), its results
+  returned as ``(N, k)`` arrays (:func:`reference_transition`);
+* ``columns``: the same step alone, in the column form the vector env runs with ``kernel="numpy"`` (state and
+  results as ``(N,)`` columns, :func:`reference_columns`);
 * ``step_pose``: :func:`amigo_gym.model.kinematics.step_pose` alone, the exact closed-form arc step;
 * ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
   (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
 * ``loop``: the other peer, a Python loop of the scalar exact step (``math`` functions) over the N states
   (only up to ``--loop-max`` states, as it is slow);
-* ``kernel``: the compiled fast path, :func:`amigo_gym.sim._kernels.step_rows` (the whole step of
-  ``step_columns`` plus the float32 observation, fused into one numba loop writing into preallocated
+* ``kernel``: the compiled fast path, :func:`amigo_gym.sim._kernels.step_rows` (the whole reference step
+  plus the float32 observation, fused into one numba loop writing into preallocated
   arrays), and ``kernel_par``, its ``prange`` variant on numba's threads (``--threads``; default all
   CPUs); both only when numba is installed.
 
@@ -37,22 +38,26 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.bench.machine import machine_line
 from amigo_gym.io import atomic_write_json
-from amigo_gym.model.kinematics import body_velocity, step_pose
+from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, pack, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
 from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.paths import make_path
-from amigo_gym.task.v0 import State, obs_dim, step_columns, task_constants, transition
+from amigo_gym.task import v1 as tracking
+from amigo_gym.task.v0 import obs_dim, task_constants
 
 __all__ = [
+    "Reference",
     "Row",
     "Startup",
+    "reference_columns",
+    "reference_transition",
     "euler_step",
     "loop_step",
     "measure",
@@ -88,6 +93,62 @@ def loop_step(
         chord = v * dt * (math.sin(h) / h if h != 0.0 else 1.0)
         out.append((x + chord * math.cos(b + h), y + chord * math.sin(b + h), b + db))
     return out
+
+
+class Reference(NamedTuple):
+    """AmigoBot-v0's reference step on ``N`` states (:func:`reference_columns`): AmigoBot-v1's constants with v0's
+    settings, the path, the state and the episode as ``(N,)`` columns, the (unread) command ring, the castor angles."""
+
+    k: tracking.Constants
+    path: Any
+    state: tracking.State
+    episode: tracking.Episode
+    ring: Array
+    castor: Array
+
+
+def reference_columns(params: EnvParams, pose: Array, angles: Array, rates: Array) -> Reference:
+    """AmigoBot-v0's reference on ``N`` states: what ``gym.make_vec("AmigoBot-v0", kernel="numpy")`` steps,
+    AmigoBot-v1's ideal column step (:func:`amigo_gym.task.v1.step_columns`) with ``params``'s settings
+    (:func:`amigo_gym.task.v1.v0_configuration`), the nominal robot's episode.
+
+    Args:
+        params: AmigoBot-v0's settings.
+        pose: ``(N, 3)`` poses ``(x_A, y_A, beta)`` [m, m, rad].
+        angles: ``(N, 3)`` wheel angles (right, left, castor) [rad].
+        rates: ``(N, 2)`` wheel rates of the last step [rad/s].
+    """
+    k = tracking.constants(tracking.v0_configuration(params))
+    n = len(pose)
+    ep, _ = tracking.draw_episode(np.random.default_rng(0), k.params)  # v0's settings draw nothing that matters
+    zero = np.zeros(n)
+    w1, w2 = (np.ascontiguousarray(c) for c in rates.T)
+    x, y, beta = (np.ascontiguousarray(c) for c in pose.T)
+    al1, al2 = np.ascontiguousarray(angles[:, 0]), np.ascontiguousarray(angles[:, 1])
+    state = tracking.State(x, y, beta, w1, w2, al1, al2, zero, w1 / k.w_max, w2 / k.w_max, np.zeros(n, dtype=np.int64))
+    episode = tracking.Episode(*(np.full(n, v) for v in ep))
+    ring = np.zeros((n, k.ring_length, 2))
+    return Reference(k, k.params.path, state, episode, ring, np.ascontiguousarray(angles[:, 2]))
+
+
+def reference_transition(ref: Reference, a1: Array, a2: Array) -> dict[str, Array]:
+    """One reference step of ``ref``'s states (not advanced) with the actions ``a1``, ``a2`` ``(N,)``, its results as
+    arrays: ``pose (N, 3)``, ``wheel_angles (N, 3)`` (the castor's integrated as the vector env does), ``rates (N,
+    2)``, ``obs (N, obs_dim)``, ``h (N, 2)``, ``reward``, ``terminated`` and the four reward terms ``(N,)``."""
+    k = ref.k
+    new, out, _ = tracking.step_columns(k, ref.path, ref.state, ref.episode, ref.ring, 0, a1, a2)
+    v, bdot = body_velocity_columns(new.w1, new.w2, k.nominal)
+    castor = ref.castor + castor_rate_columns(v, bdot, k.nominal) * k.params.dt
+    arrays = {
+        "pose": pack(new.x, new.y, new.beta),
+        "wheel_angles": pack(new.alpha1, new.alpha2, castor),
+        "rates": pack(new.w1, new.w2),
+        "obs": pack(*out.obs),
+        "h": pack(out.h_x, out.h_y),
+        "reward": np.asarray(out.reward),
+        "terminated": np.asarray(out.terminated),
+    }
+    return {**arrays, **{f"term_{j}": np.asarray(t) for j, t in enumerate(out.terms)}}
 
 
 def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
@@ -168,11 +229,11 @@ def _bench_one(
     angles = np.zeros((n, 3))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
-    t_tr = measure(lambda: transition(pose, angles, w, action, params, path), repeats, min_time)
-    k = task_constants(params)
-    state = State(*(np.ascontiguousarray(c) for c in (*pose.T, *angles.T, *w.T)))
+    ref = reference_columns(params, pose, angles, w)
+    k, st, ep, ring = ref.k, ref.state, ref.episode, ref.ring
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
-    t_co = measure(lambda: step_columns(k, path, state, a1, a2, minimal=True), repeats, min_time)
+    t_tr = measure(lambda: reference_transition(ref, a1, a2), repeats, min_time)
+    t_co = measure(lambda: tracking.step_columns(k, ref.path, st, ep, ring, 0, a1, a2), repeats, min_time)
     t_sp = measure(lambda: step_pose(pose, w, params.dt, robot), repeats, min_time)
     t_eu = measure(lambda: euler_step(pose, w, params.dt, robot), repeats, min_time)
     loop = None

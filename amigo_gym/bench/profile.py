@@ -144,21 +144,28 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     import amigo_gym  # noqa: F401
     from amigo_gym.bench.core import measure_many
     from amigo_gym.task import v0 as task
+    from amigo_gym.task import v1 as tracking
 
     env = gym.make("AmigoBot-v0")
     env.reset(seed=0)
     raw: Any = env.unwrapped
+    ref: Any = gym.make("AmigoBot-v0", kernel="numpy").unwrapped  # v0's reference: AmigoBot-v1's ideal step
+    ref.reset(seed=0)
     pend = gym.make("Pendulum-v1")
     pend.reset(seed=0)
     a = np.array([0.27, 0.27], np.float32)
     ap = np.array([0.5], np.float32)
-    k = task.task_constants(raw.params)
     fs = raw._v0  # AmigoBot-v0's compiled step (None without numba: the steps then go on from the last state)
-    start = task.State(*fs.state()) if fs is not None else task.State(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0, 4.0)
+    start = fs.state() if fs is not None else None
+    k, ref_start, ep, ring = ref._k, ref._state, ref._episode, ref._ring  # the reference's start state (floats)
 
     def restart() -> None:
         if fs is not None:
             fs.set_state(start)
+
+    def reference() -> None:
+        ref._state = ref_start
+        ref.step(a)
 
     def wrapped() -> None:
         restart()
@@ -171,8 +178,10 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     fns = {
         "AmigoBot `gym.make` step": wrapped,
         "AmigoBot unwrapped `env.step`": unwrapped,
-        "`task.step_columns` on Python floats": lambda: task.step_columns(k, raw.path, start, 0.27, 0.27, True),
-        "`task.step_float` (numpy, v0's own reference)": lambda: task.step_float(k, raw.path, start, 0.27, 0.27),
+        "AmigoBot unwrapped `env.step`, kernel=numpy (v0's reference)": reference,
+        "`task.v1.step_columns` on Python floats (v0's reference step)": lambda: tracking.step_columns(
+            k, ref.path, ref_start, ep, ring, 0, 0.27, 0.27
+        ),
         "`task.validate_action`": lambda: task.validate_action(a).tolist(),
         "Pendulum `gym.make` step": lambda: pend.step(ap),
         "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),

@@ -1,7 +1,7 @@
 r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
 
-The fast path (numba, a core dependency where it ships wheels). It computes what
-:func:`amigo_gym.task.v0.step_columns` computes (clip and scale the action, exact arc step of pose and
+The fast path (numba, a core dependency where it ships wheels). It computes AmigoBot-v0's reference step
+(AmigoBot-v1's ideal step with v0's settings: clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
 reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
@@ -31,11 +31,11 @@ only decides whether a preview point lies before the end of the straight part.
 Layouts (all C-contiguous, one row per robot):
 
 * ``consts`` float64: :data:`CONSTANT_FIELDS` (:func:`amigo_gym.sim.fast.kernel_constants`);
-* ``state (N, 8)`` float64, updated in place: the columns of :class:`amigo_gym.task.v0.State`,
+* ``state (N, 8)`` float64, updated in place: the columns :data:`STATE_FIELDS`,
   ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``;
 * ``actions (N, 2)`` float64: the validated, normalised action (clipped to [-1, 1] here);
 * ``restart (N,)`` bool: rows whose ``state`` has just been set to a start state; they do not move
-  and are evaluated as :func:`amigo_gym.task.v0.reset_columns` evaluates them (no smoothness loss); their
+  and are evaluated as :func:`amigo_gym.task.v1.reset_columns` evaluates them (no smoothness loss); their
   ``tans`` row must hold ``(np.cos(beta), np.sin(beta))`` when :func:`evaluate` runs;
 * ``turn (N,)`` float64 scratch: the turn rate ``bdot`` of each row's action, written by
   :func:`move_arguments` and read by :func:`evaluate` (one division per row instead of two);
@@ -48,7 +48,7 @@ Start states of restarting rows (:func:`draw_starts`, :func:`place_starts`): the
 generator inside the compiled loop, by calling the generator's C function ``next_double`` through the
 address of its ``bitgen_t`` (:func:`_next_double`; the call ``Generator.random`` makes per number), so
 the numbers and the generators' states afterwards are those of ``Generator.random(3)`` per robot. The
-start pose is :func:`amigo_gym.task.v0.start_pose`'s arithmetic in its order, with numpy's ``cos`` and
+start pose is :func:`amigo_gym.task.v1.start_state`'s arithmetic in its order, with numpy's ``cos`` and
 ``sin`` of the headings evaluated between the two loops (:func:`amigo_gym.sim.fast.step_rows`).
 
 This module imports numba at import time; :mod:`amigo_gym.sim.fast` imports it only when the fast path
@@ -100,7 +100,7 @@ __all__ = [
 
 TWO_PI = 2.0 * math.pi
 
-#: columns of the ``state`` array (the order of :class:`amigo_gym.task.v0.State`)
+#: columns of the ``state`` array: pose [m, m, rad], wheel angles [rad], wheel rates of the last step [rad/s]
 STATE_FIELDS: tuple[str, ...] = ("x", "y", "beta", "alpha1", "alpha2", "alpha3", "rate1", "rate2")
 
 #: columns of the ``record`` array
@@ -157,7 +157,7 @@ CONSTANT_FIELDS: tuple[str, ...] = (
 
 #: entries of the ``start`` vector of :func:`draw_starts` and :func:`place_starts`
 #: (:func:`amigo_gym.sim.fast.start_constants`): the path's start point and tangent angle, the noise scales of
-#: :func:`amigo_gym.task.v0.start_pose`, ``l3``, and the initial wheel rates
+#: the start pose (:func:`amigo_gym.task.v1.start_state`), ``l3``, and the initial wheel rates
 START_FIELDS: tuple[str, ...] = (
     "x0",
     "y0",
@@ -246,7 +246,7 @@ def _sign(y: float) -> float:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, float]:
-    # task.move_columns up to the arc step: (w1, w2, v, bdot, db)
+    # the reference's motion (task.v1._ideal_step) up to the arc step: (w1, w2, v, bdot, db)
     w1 = _clip(a1, -1.0, 1.0) * c[W_MAX]
     w2 = _clip(a2, -1.0, 1.0) * c[W_MAX]
     v, bdot = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])
@@ -299,14 +299,14 @@ def _evaluate(
         prev1 = state[i, 6]
         prev2 = state[i, 7]
         if restart[i]:
-            # task.start_motion: the start state as it is, np.cos and np.sin of its heading, its speed
+            # a start state (task.v1.reset_columns): as it is, np.cos and np.sin of its heading, its speed
             w1 = prev1
             w2 = prev2
             v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
             cos_beta = tans[i, 0]
             sin_beta = tans[i, 1]
         else:
-            # task.move_columns: kinematics.arc_step from the two tangents, the wheel angles
+            # task.v1._ideal_step: kinematics.arc_step from the two tangents, the wheel angles
             dt = c[DT]
             # _motion's numbers, bdot from pass 1
             w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
@@ -330,7 +330,7 @@ def _evaluate(
             state[i, 6] = w1
             state[i, 7] = w2
 
-        # task.outcome_columns: H, its projection on the path (paths.*.project_xy, minimal)
+        # task.v1.evaluate_columns: H, its projection on the path (paths.*.project_xy, minimal)
         hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
         d = c[DIRECTION]
         r = c[RADIUS]
@@ -376,7 +376,7 @@ def _evaluate(
         obs[i, m + 2] = dv / c[MAX_SPEED]
         obs[i, m + 3] = c[REF_OBS]
 
-        # task._reward_columns, task.steady_heading: the heading term, the arguments of the exponentials
+        # task.v0.reward_term_columns, steady_heading: the heading term, the arguments of the exponentials
         sin_ss = sin_ss_line if on_line else sin_ss_curve
         cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1
@@ -404,14 +404,14 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
     """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
 
     Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
-    value (the rows :func:`amigo_gym.task.v0.bound_heading` changes; NaN is not past it).
+    value (the rows :func:`amigo_gym.task.v0.bound_angle` changes; NaN is not past it).
     """
     limit = c[HEADING_LIM]
     past = 0
     for i in numba.prange(reward.shape[0]):
         if abs(record[i, 2]) > limit:
             past += 1
-        # task._reward_columns and task._product, from exps = exp(arguments)
+        # task.v0.reward_term_columns and reward_product, from exps = exp(arguments)
         track = exps[i, 0]
         speed = exps[i, 1]
         smooth = _smooth_term(exps[i, 2], c[SMOOTH_W])
@@ -479,7 +479,7 @@ def draw_starts(
 
     Row ``i`` draws three numbers ``r`` from the generator whose ``bitgen_t`` lies at ``bitgens[i]``
     (what ``Generator.random(3)`` draws; :class:`amigo_gym.envs.AmigoBotEnv` draws ``uniform(-1, 1, 3)``,
-    which is ``-1 + 2 r``) and sets ``state[i]`` to :func:`amigo_gym.task.v0.start_pose` of ``u = -1 + 2 r``
+    which is ``-1 + 2 r``) and sets ``state[i]`` to the start pose of ``u = -1 + 2 r`` (``task.v1.start_state``)
     with wheel angles 0 and the initial rates, except that ``x, y`` hold H's position until
     :func:`place_starts` moves them to A (it needs ``cos beta, sin beta``). ``rows[:m]`` receives the
     rows, ``beta[:m]`` their headings. Returns ``-1`` (and draws nothing more) at a zero address.

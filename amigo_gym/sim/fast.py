@@ -267,9 +267,9 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
 def start_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> Array:
     """The ``start`` vector of the start-state kernels (:data:`amigo_gym.sim._kernels.START_FIELDS`).
 
-    The very numbers :func:`amigo_gym.task.v0.start_pose` and :func:`amigo_gym.task.v0.initial_wheel_rates`
-    use: the path's start point and tangent angle, ``init_position_noise``, ``init_heading_noise``,
-    the robot's ``l3``, and the initial wheel rates.
+    The numbers of the start state (:func:`amigo_gym.task.v1.start_state` with v0's settings): the path's start
+    point and tangent angle, ``init_position_noise``, ``init_heading_noise``, the robot's ``l3``, and the initial
+    wheel rates (:func:`amigo_gym.task.v0.initial_wheel_rates`).
     """
     p = k.params
     x0, y0, theta0 = _path_start(path)
@@ -295,7 +295,7 @@ class StepReport(NamedTuple):
     #: order, until the next call); 0 without ``bitgens``
     drawn: int
     #: the number of rows whose new heading lies past :data:`amigo_gym.model.params.HEADING_LIMIT` in absolute
-    #: value (those :func:`amigo_gym.task.v0.bound_heading` reduces; the kernel leaves them as they are)
+    #: value (those :func:`amigo_gym.task.v0.bound_angle` reduces; the kernel leaves them as they are)
     past_limit: int
 
 
@@ -347,7 +347,7 @@ class SingleStep:
         self._bind()
 
     def set_state(self, values: Sequence[Any]) -> None:
-        """Set the state (the 8 columns of :class:`amigo_gym.task.v0.State`)."""
+        """Set the state (the 8 columns :data:`amigo_gym.sim._kernels.STATE_FIELDS`)."""
         self._state[:] = values
 
     def state(self) -> list[float]:
@@ -360,7 +360,7 @@ class SingleStep:
         (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`: the new state, H, the error, the reward terms and the
         reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. A heading past
         :data:`amigo_gym.model.params.HEADING_LIMIT` is left as it is and counted in :attr:`past_limit` (1, else 0):
-        the caller reduces it, as :func:`amigo_gym.task.v0.bound_heading`."""
+        the caller reduces it by :func:`amigo_gym.task.v0.bound_angle`."""
         b = self.buf
         c = self.consts
         tans = self._tans
@@ -449,7 +449,7 @@ def step_rows(
         m = k.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
         if m < 0:
             raise ValueError("bitgens has no generator for a restarting row (address 0)")
-        # numpy's cos and sin of the (m,) headings, as task.start_pose calls them on its (m,) column
+        # numpy's cos and sin of the (m,) headings, as task.v1.start_state calls them on its (m,) column
         beta, cos_beta, sin_beta = ws.beta[:m], ws.cos_beta[:m], ws.sin_beta[:m]
         np.cos(beta, out=cos_beta)
         np.sin(beta, out=sin_beta)

@@ -8,7 +8,8 @@ Both import :mod:`amigo_gym.model` and :mod:`amigo_gym.paths`; the envs, policie
 (:mod:`amigo_gym.sim`) import them.
 
 The names of ``amigo_gym.task`` of 0.1 (now :mod:`amigo_gym.task.v0`) are still found here, with a
-:class:`DeprecationWarning`, until 0.3.
+:class:`DeprecationWarning`, until 0.3; those removed in 0.2 (:data:`amigo_gym.task.v0.REMOVED`) raise an
+``AttributeError`` naming their replacement.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ def __getattr__(name: str) -> Any:
     if name.startswith("__"):
         raise AttributeError(name)
     v0 = importlib.import_module("amigo_gym.task.v0")
+    if name in v0.REMOVED:  # removed, not moved: v0's AttributeError names the replacement
+        return getattr(v0, name)
     if not hasattr(v0, name):
         raise AttributeError(f"module 'amigo_gym.task' has no attribute {name!r}")
     warnings.warn(

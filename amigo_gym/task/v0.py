@@ -44,18 +44,18 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
 ``Delta w`` of the wheel rates.
 
-Column form: :func:`step_columns` and :func:`reset_columns` compute a whole step (or the state at
-reset) from the state as columns (:class:`State`, floats or arrays of any shape) and return every
-quantity the environments report (:class:`Outcome`); :func:`transition` and :func:`evaluate` are thin
-array wrappers over the same column functions. They take plain scalars or ``(N,)`` arrays alike with the same bits
-(``tests/test_columns.py``); the speed benchmarks time them (:mod:`amigo_gym.bench.core`). The constants of a step
-are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache: ``EnvParams`` is
-the only way to set them).
+The step is written once: AmigoBot-v0's reference step is AmigoBot-v1's ideal step with v0's settings
+(:func:`amigo_gym.task.v1.step_columns` and ``reset_columns`` of :func:`amigo_gym.task.v1.v0_configuration`, what
+``kernel="numpy"`` runs and what the compiled step is tested against), which calls the pieces here
+(:func:`observe_columns`, :func:`reward_term_columns`, :func:`steady_heading`, :func:`bound_angle`); they take plain
+scalars or ``(N,)`` arrays alike with the same bits (``tests/test_columns.py``, ``tests/test_float_paths.py``). The
+constants of the compiled step are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache:
+``EnvParams`` is the only way to set them). The names of the second column step removed in 0.2 (:data:`REMOVED`:
+``step_columns``, ``transition``, ``State``, ...) raise an ``AttributeError`` naming their replacement.
 
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
-reader decodes the observation by these names), the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
-:func:`record_info`, used by the single env, the vector env and the SB3 adapter) and the start pose
-(A ``l3`` behind H by :func:`amigo_gym.model.kinematics.a_from_h`).
+reader decodes the observation by these names) and the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
+:func:`record_info`, used by the single env, the vector env and the SB3 adapter).
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -64,29 +64,16 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, NamedTuple, cast
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.kinematics import (
-    Real,
-    a_from_h,
-    arc_step,
-    body_velocity_columns,
-    castor_rate_columns,
-    col_cos,
-    col_exp,
-    col_sin,
-    col_sqrt,
-    h_from_a,
-    pack,
-)
+from amigo_gym.model.kinematics import Real, col_exp, col_sqrt
 from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
-from amigo_gym.paths import CirclePath, ClosestPoint, ManoeuvrePath, Projection
+from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 __all__ = [
     "REWARD_TERMS",
@@ -98,7 +85,6 @@ __all__ = [
     "validate_action",
     "action_pair",
     "real_array",
-    "bound_heading",
     "reward_term_columns",
     "reward_product",
     "smooth_term",
@@ -108,15 +94,8 @@ __all__ = [
     "clip_float",
     "heading_error",
     "initial_wheel_rates",
-    "start_pose",
-    "Evaluation",
-    "evaluate",
-    "Transition",
-    "transition",
     "TaskConstants",
     "task_constants",
-    "State",
-    "Outcome",
     "INFO_KEYS",
     "OBS_HEAD",
     "OBS_TAIL",
@@ -124,13 +103,6 @@ __all__ = [
     "record_info",
     "obs_index",
     "observe_columns",
-    "Motion",
-    "move_columns",
-    "start_motion",
-    "outcome_columns",
-    "reset_columns",
-    "step_columns",
-    "step_float",
 ]
 
 Array = NDArray[np.float64]
@@ -265,14 +237,6 @@ def action_pair(action: ArrayLike) -> tuple[float, float]:
 _PAIR_CHARS = ("f", "d")
 
 
-def bound_heading(state: State) -> State:
-    """``state`` with its heading reduced by whole turns where ``|beta| > HEADING_LIMIT`` (1e6 rad)
-    (:func:`bound_angle`); a no-op (the same object) otherwise."""
-    b = state.beta
-    nb = bound_angle(b)
-    return state if nb is b else state._replace(beta=nb)
-
-
 def bound_angle(b: Real) -> Real:
     """A heading ``b`` [rad] (a float or a column) reduced by whole turns where ``|b| > HEADING_LIMIT`` (1e6 rad).
 
@@ -295,24 +259,6 @@ def bound_angle(b: Real) -> Real:
 def initial_wheel_rates(params: EnvParams) -> Array:
     """Wheel rates at the start: rolling straight at the reference speed, ``(v/r1, v/r2)`` [rad/s]."""
     return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
-
-
-def start_pose(u: ArrayLike, params: EnvParams, path: AnyPath) -> Array:
-    """Start pose from uniform draws ``u`` in [-1, 1], shape ``(..., 3)``.
-
-    H starts at the path's start point (arc length 0) shifted by ``u[..., :2] *
-    init_position_noise`` [m] per axis, with heading ``theta(0) + u[..., 2] * init_heading_noise``;
-    A is placed ``l3`` behind H. ``u = 0`` gives the paper's start: H at the origin, ``beta = 0``.
-
-    Returns:
-        pose ``(..., 3)`` as ``(x_A, y_A, beta)``.
-    """
-    u = np.asarray(u, dtype=np.float64)
-    x0, y0, theta0 = _path_start(path)
-    beta = theta0 + u[..., 2] * params.init_heading_noise
-    hx = x0 + u[..., 0] * params.init_position_noise
-    hy = y0 + u[..., 1] * params.init_position_noise
-    return pack(*a_from_h(hx, hy, col_cos(beta), col_sin(beta), params.robot.l3), beta)
 
 
 @lru_cache(maxsize=64)
@@ -433,11 +379,6 @@ def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
     return math.sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
-def _abs(x: Real) -> Real:
-    """``|x|`` of a float or an array."""
-    return cast(Real, abs(x))
-
-
 def observe_columns(
     path: Any,
     preview: tuple[float, ...],
@@ -478,44 +419,6 @@ def observe_columns(
         _clip(w2 / w_max, -1.0, 1.0),
         _clip((v - v_ref) / v_max, -2.0, 2.0),
         v_ref / v_max,
-    )
-
-
-def _reward_columns(
-    k: TaskConstants,
-    abs_error: Real,
-    curvature: Real,
-    cos_psi: Real,
-    sin_psi: Real,
-    dv: Real,
-    w1: Real,
-    w2: Real,
-    prev1: Real,
-    prev2: Real,
-) -> tuple[Real, Real, Real, Real]:
-    """The reward terms ``(track, speed, heading, smooth)`` (:data:`REWARD_TERMS`), module docstring.
-
-    Given ``|e|`` and ``dv = v_A - v_ref``; ``(||Delta a|| / sigma_a)^2 = (dw_1^2 + dw_2^2) / (w_max
-    sigma_a)^2`` with ``dw`` the change of the wheel rates.
-    """
-    if isinstance(curvature, float):  # the same for every robot (a circle): from a cache
-        cos_ss, sin_ss = _steady_heading_scalar(curvature, k.l3)
-    else:
-        cos_ss, sin_ss = steady_heading(curvature, k.l3)
-    dw1 = w1 - prev1
-    dw2 = w2 - prev2
-    return reward_term_columns(
-        abs_error,
-        _abs(dv),
-        cos_psi,
-        sin_psi,
-        cos_ss,
-        sin_ss,
-        dw1 * dw1 + dw2 * dw2,
-        k.sigma_track,
-        k.sigma_speed,
-        k.smooth_weight,
-        k.smooth_scale_sq,
     )
 
 
@@ -569,54 +472,6 @@ def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
-_steady_heading_scalar: Callable[[float, float], tuple[Real, Real]] = lru_cache(maxsize=256)(steady_heading_float)
-
-
-def _product(terms: tuple[Real, Real, Real, Real]) -> Real:
-    """The reward of the terms ``(track, speed, heading, smooth)`` (:func:`reward_product`)."""
-    return reward_product(*terms)
-
-
-class State(NamedTuple):
-    """The state of one robot or of a batch, as columns (floats, or arrays of one shape).
-
-    Attributes:
-        x, y, beta: the pose ``(x_A [m], y_A [m], beta [rad])``.
-        alpha1, alpha2, alpha3: the wheel angles [rad] (right, left, castor).
-        rate1, rate2: the wheel rates applied during the last step [rad/s] (at reset: the initial ones).
-    """
-
-    x: Real
-    y: Real
-    beta: Real
-    alpha1: Real
-    alpha2: Real
-    alpha3: Real
-    rate1: Real
-    rate2: Real
-
-
-class Outcome(NamedTuple):
-    """What the environments report about a state, as columns (:func:`step_columns`, :func:`reset_columns`).
-
-    Attributes:
-        h_x, h_y: point H [m].
-        closest: H's projection on the path (:meth:`amigo_gym.paths.CirclePath.project_xy`).
-        obs: the observation's columns (float64; scalars where constant), module table.
-        terms: the reward terms in the order of :data:`REWARD_TERMS`.
-        reward: their product.
-        terminated: ``|e| > termination_distance``.
-    """
-
-    h_x: Real
-    h_y: Real
-    closest: ClosestPoint
-    obs: tuple[Real, ...]
-    terms: tuple[Real, Real, Real, Real]
-    reward: Real
-    terminated: Any
-
-
 def info_dict(
     pose: Any, h_position: Any, error: Any, rates: Any, angles: Any, castor: Any, terms: Any, time: Any
 ) -> dict[str, Any]:
@@ -665,191 +520,25 @@ def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
     }
 
 
-class Motion(NamedTuple):
-    """Result of :func:`move_columns`: the state after a step, with what its evaluation needs.
-
-    Attributes:
-        state: the new state.
-        cos_beta, sin_beta: cosine and sine of the new heading (by angle addition, :func:`arc_step`).
-        v: speed of A during the step [m/s].
-    """
-
-    state: State
-    cos_beta: Real
-    sin_beta: Real
-    v: Real
+#: the names removed in amigo_gym 0.2 (issue 19: AmigoBot-v0's step written once, as AmigoBot-v1's ideal step with
+#: v0's settings) and what replaces each; reading one raises an ``AttributeError`` that says so (:func:`__getattr__`)
+REMOVED: dict[str, str] = {
+    **dict.fromkeys(("State", "Outcome", "Motion", "move_columns", "outcome_columns", "step_columns", "step_float",
+                     "Transition", "transition"), "amigo_gym.task.v1.step_columns (State, Outcome)"),
+    **dict.fromkeys(("start_motion", "reset_columns", "Evaluation", "evaluate"), "amigo_gym.task.v1.reset_columns"),
+    "start_pose": "amigo_gym.task.v1.start_state",
+    "bound_heading": "amigo_gym.task.v0.bound_angle of the heading",
+}  # fmt: skip
 
 
-def move_columns(k: TaskConstants, state: State, a1: Real, a2: Real) -> Motion:
-    """The motion part of a step: clip and scale the action, advance pose and wheel angles exactly.
+if not TYPE_CHECKING:  # hidden from mypy, for which a removed name stays an error
 
-    Args:
-        k: constants of the settings.
-        state: the state before the step.
-        a1, a2: the validated, normalised action (wheel 1, wheel 2); clipped to [-1, 1] here.
-    """
-    robot = k.robot
-    dt = k.dt
-    w1 = _clip(a1, -1.0, 1.0) * k.w_max
-    w2 = _clip(a2, -1.0, 1.0) * k.w_max
-    v, bdot = body_velocity_columns(w1, w2, robot)
-    arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
-    new = State(
-        arc.x,
-        arc.y,
-        arc.beta,
-        state.alpha1 + w1 * dt,
-        state.alpha2 + w2 * dt,
-        state.alpha3 + castor_rate_columns(v, bdot, robot) * dt,
-        w1,
-        w2,
-    )
-    return Motion(new, arc.cos_beta, arc.sin_beta, v)
-
-
-def outcome_columns(
-    k: TaskConstants,
-    path: AnyPath,
-    state: State,
-    cos_beta: Real,
-    sin_beta: Real,
-    v: Real,
-    prev1: Real,
-    prev2: Real,
-    minimal: bool = False,
-) -> Outcome:
-    """Observation, reward and end of ``state`` (the evaluation part of a step, or of a reset).
-
-    Args:
-        k: constants of the settings.
-        path: the path of H.
-        state: the state to evaluate; its ``rate1``, ``rate2`` are the rates applied to reach it.
-        cos_beta, sin_beta: cosine and sine of ``state.beta``.
-        v: speed of A for ``state``'s rates [m/s].
-        prev1, prev2: the rates of the step before (equal to ``state``'s at a reset).
-        minimal: project H with ``minimal=True`` (the projection's fields the environments do not
-            report are left as NaN); nothing else changes.
-    """
-    w1, w2 = state.rate1, state.rate2
-    hx, hy = h_from_a(state.x, state.y, cos_beta, sin_beta, k.l3)
-    cp = path.project_xy(hx, hy, minimal)
-    cos_psi, sin_psi = heading_error(cos_beta, sin_beta, cp.cos_theta, cp.sin_theta)
-    e = cp.cross_track_error
-    abs_e = _abs(e)
-    dv = v - k.speed
-    obs = observe_columns(
-        path, k.preview, k.l3, k.error_scale, k.e_max, k.w_max, k.max_speed, e, sin_psi, cos_psi, cp.curvature, cp.s,
-        w1, w2, v, k.speed,
-    )  # fmt: skip
-    terms = _reward_columns(k, abs_e, cp.curvature, cos_psi, sin_psi, dv, w1, w2, prev1, prev2)
-    return Outcome(hx, hy, cp, obs, terms, _product(terms), abs_e > k.termination_distance)
-
-
-def start_motion(k: TaskConstants, state: State) -> Motion:
-    """The :class:`Motion` of a start state, for its evaluation: ``cos``, ``sin`` of its heading, its speed.
-
-    The start heading's cosine and sine are ``np.cos``, ``np.sin`` themselves (so that H at a reset is
-    exactly ``A + l3 (cos beta, sin beta)``).
-    """
-    b = state.beta
-    cos_b, sin_b = col_cos(b), col_sin(b)
-    v, _ = body_velocity_columns(state.rate1, state.rate2, k.robot)
-    return Motion(state, cos_b, sin_b, v)
-
-
-def reset_columns(k: TaskConstants, path: AnyPath, state: State, minimal: bool = False) -> Outcome:
-    """The :class:`Outcome` of a start state (the smoothness term is 1: no change of the rates)."""
-    m = start_motion(k, state)
-    return outcome_columns(k, path, state, m.cos_beta, m.sin_beta, m.v, state.rate1, state.rate2, minimal)
-
-
-def step_columns(
-    k: TaskConstants, path: AnyPath, state: State, a1: Real, a2: Real, minimal: bool = False
-) -> tuple[State, Outcome]:
-    """One environment step in column form: :func:`move_columns`, then :func:`outcome_columns`.
-
-    Args:
-        k: constants of the settings.
-        path: the path of H.
-        state: the state before the step.
-        a1, a2: the validated, normalised action (wheel 1, wheel 2); clipped to [-1, 1] here.
-        minimal: as for :func:`outcome_columns`.
-
-    Returns:
-        the new state and its :class:`Outcome` (see :func:`transition`).
-    """
-    m = move_columns(k, state, a1, a2)
-    return m.state, outcome_columns(k, path, m.state, m.cos_beta, m.sin_beta, m.v, state.rate1, state.rate2, minimal)
-
-
-def step_float(k: TaskConstants, path: AnyPath, state: State, a1: float, a2: float) -> tuple[State, Outcome]:
-    """:func:`step_columns` (``minimal=True``) of one robot's Python floats (the name kept from 0.1; the column
-    functions take floats as they take ``(N,)`` arrays, with the same bits: ``tests/test_columns.py``)."""
-    return step_columns(k, path, state, a1, a2, True)
-
-
-class Evaluation(NamedTuple):
-    """Everything the environment reports about a state (leading axes as the pose)."""
-
-    obs: Array
-    projection: Projection
-    h: Array
-    terminated: NDArray[np.bool_]
-
-
-def _evaluation(out: Outcome) -> Evaluation:
-    return Evaluation(pack(*out.obs), out.closest.projection(), pack(out.h_x, out.h_y), np.asarray(out.terminated))
-
-
-def evaluate(pose: ArrayLike, rates: ArrayLike, params: EnvParams, path: AnyPath) -> Evaluation:
-    """Observation, projection of H, H itself and the termination flag of a state.
-
-    Terminated when ``|e| > termination_distance``.
-    """
-    k = task_constants(params)
-    p = np.asarray(pose, dtype=np.float64)
-    r = np.asarray(rates, dtype=np.float64)
-    zero = np.zeros(np.broadcast_shapes(p.shape[:-1], r.shape[:-1]))
-    state = State(p[..., 0], p[..., 1], p[..., 2], zero, zero, zero, r[..., 0], r[..., 1])
-    return _evaluation(reset_columns(k, path, state))
-
-
-class Transition(NamedTuple):
-    """Result of :func:`transition` (leading axes as the inputs)."""
-
-    pose: Array
-    wheel_angles: Array
-    rates: Array
-    reward: Array
-    terms: dict[str, Array]
-    evaluation: Evaluation
-
-
-def transition(
-    pose: ArrayLike,
-    wheel_angles: ArrayLike,
-    prev_rates: ArrayLike,
-    action: ArrayLike,
-    params: EnvParams,
-    path: AnyPath,
-) -> Transition:
-    """One environment step: clip and scale the action, step exactly, observe and reward.
-
-    The action must already be validated (:func:`validate_action`). The pose and the wheel angles
-    advance by the closed-form solution for rates held over ``params.dt`` (no Euler step).
-    """
-    k = task_constants(params)
-    p = np.asarray(pose, dtype=np.float64)
-    al = np.asarray(wheel_angles, dtype=np.float64)
-    pr = np.asarray(prev_rates, dtype=np.float64)
-    a = np.asarray(action, dtype=np.float64)
-    state = State(p[..., 0], p[..., 1], p[..., 2], al[..., 0], al[..., 1], al[..., 2], pr[..., 0], pr[..., 1])
-    new, out = step_columns(k, path, state, a[..., 0], a[..., 1])
-    return Transition(
-        pack(new.x, new.y, new.beta),
-        pack(new.alpha1, new.alpha2, new.alpha3),
-        pack(new.rate1, new.rate2),
-        np.asarray(out.reward),
-        {name: np.asarray(t) for name, t in zip(REWARD_TERMS, out.terms, strict=True)},
-        _evaluation(out),
-    )
+    def __getattr__(name: str) -> NoReturn:
+        """A name of :data:`REMOVED` raises an ``AttributeError`` naming its replacement (one line)."""
+        if name in REMOVED:
+            raise AttributeError(
+                f"amigo_gym.task.v0.{name} was removed in amigo_gym 0.2: AmigoBot-v0's step is AmigoBot-v1's ideal "
+                f"step with v0's settings; use {REMOVED[name]} with amigo_gym.task.v1.constants(amigo_gym.task.v1."
+                "v0_configuration(params)), or gym.make('AmigoBot-v0', kernel='numpy')"
+            )
+        raise AttributeError(f"module 'amigo_gym.task.v0' has no attribute {name!r}")

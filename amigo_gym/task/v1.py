@@ -1370,7 +1370,7 @@ def step_columns(
 
 
 def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2: Real) -> tuple[State, Outcome, Any]:
-    r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (:func:`amigo_gym.task.v0.move_columns`).
+    r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (its one home: AmigoBot-v0's reference).
 
     The wheel rates ``w_i = c_i w_max`` [rad/s] are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
     (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
