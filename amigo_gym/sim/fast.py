@@ -116,8 +116,8 @@ def use_fast_path(requested: bool | None = None) -> bool:
         return True
     if requested:
         raise ImportError(
-            "the fast path needs numba: pip install numba (amigo-gym installs it on the platforms numba ships wheels "
-            'for; elsewhere pip install "amigo-gym[fast]"), or set AMIGO_GYM_KERNEL=numpy'
+            "the fast path needs numba, which amigo-gym installs where numba ships wheels: "
+            'pip install "amigo-gym[fast]" (from a clone: pip install -e ".[fast]"; or set AMIGO_GYM_KERNEL=numpy)'
         )
     return False
 
