@@ -31,6 +31,12 @@ from typing import Any
 import numpy as np
 
 
+def _is_baseline(t: Any) -> bool:
+    """The trial that ran the base settings: user attribute ``baseline`` (``amigo-gym sweep --enqueue-base``; the
+    first TD3 study, started at commit 738908a, named it ``base``)."""
+    return bool(t.user_attrs.get("baseline") or t.user_attrs.get("base"))
+
+
 def _last_report(t: Any) -> tuple[int | None, float | None]:
     """(env-step, value) of a trial's last intermediate report, or (None, None)."""
     if not t.intermediate_values:
@@ -82,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
                     t.state.name,
                     "" if value is None else f"{1e3 * value:.4f}",
                     step if t.state == TrialState.PRUNED else "",
-                    int(bool(t.user_attrs.get("baseline"))),
+                    int(bool(_is_baseline(t))),
                     *[t.params.get(k, "") for k in names],
                 ]
             )
@@ -144,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
             best = min(best, 1e3 * t.value)
         elif t.state == TrialState.PRUNED and _last_report(t)[1] is not None:
             ax.plot(t.number, 1e3 * float(_last_report(t)[1] or 0.0), "x", color="tab:gray", ms=5)
-        if t.user_attrs.get("baseline") and t.value is not None:
+        if _is_baseline(t) and t.value is not None:
             ax.plot(
                 t.number, 1e3 * t.value, "s", mfc="none", mec="tab:red", ms=10, label="baseline (hand-set settings)"
             )
@@ -175,9 +181,9 @@ def main(argv: list[str] | None = None) -> int:
     ]
     for t in top:
         cells = [f"{v:.3g}" if isinstance(v, float) else str(v) for v in (t.params.get(k, "") for k in names)]
-        mark = " (baseline)" if t.user_attrs.get("baseline") else ""
+        mark = " (baseline)" if _is_baseline(t) else ""
         lines.append(f"| {t.number}{mark} | {1e3 * float(t.value or 0.0):.3f} | " + " | ".join(cells) + " |")
-    base = [t for t in trials if t.user_attrs.get("baseline") and t.value is not None]
+    base = [t for t in trials if _is_baseline(t) and t.value is not None]
     if base:
         lines += ["", f"Baseline (hand-set settings, trial {base[0].number}): {1e3 * float(base[0].value):.3f} mm."]
     lines += [

@@ -541,7 +541,7 @@ def test_enqueue_base_runs_the_base_files_values_first() -> None:
     cfg.validate()
     study = open_study(cfg, "sqlite:///:memory:")
     (first,) = study.get_trials()
-    assert first.state == TrialState.WAITING and first.user_attrs["base"] is True
+    assert first.state == TrialState.WAITING and first.user_attrs["baseline"] is True
     run = study.ask()  # the worker's next trial is the enqueued one: it samples the file's values
     assert run.number == first.number
     assert {k: v for k, v in sample_hyperparams(run, "td3", base).items() if k in want} == pytest.approx(want)

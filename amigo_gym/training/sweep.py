@@ -641,7 +641,9 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
 
             algo = cfg.algos[0]
             base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
-            study.enqueue_trial(base_params(algo, load_hyperparams(base_file, cfg.env_id)), user_attrs={"base": True})
+            study.enqueue_trial(
+                base_params(algo, load_hyperparams(base_file, cfg.env_id)), user_attrs={"baseline": True}
+            )
         study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
     else:
         deadline = time.monotonic() + READY_TIMEOUT_S
