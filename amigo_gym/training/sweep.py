@@ -770,6 +770,14 @@ def mark_abandoned(study: Any) -> list[int]:
 #: sub-envs, a few large gradient steps per vector step, docs/baselines.md "Off-policy per wall-second")
 HT_BATCH_SIZES = (512, 1024, 2048, 4096)
 HT_MIN_ENVS = 64
+#: rl-zoo's off-policy batch sizes, sampled over a base YAML of few sub-envs
+BATCH_SIZES = (64, 128, 256)
+
+
+def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
+    """The batch sizes SAC/TD3 sample over the base YAML ``base``: :data:`HT_BATCH_SIZES` when it has ``n_envs`` >=
+    :data:`HT_MIN_ENVS`, else :data:`BATCH_SIZES`."""
+    return HT_BATCH_SIZES if int((base or {}).get("n_envs", 1)) >= HT_MIN_ENVS else BATCH_SIZES
 
 
 def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
@@ -789,8 +797,7 @@ def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = N
         hp["n_epochs"] = trial.suggest_int("n_epochs", 1, 10)
     else:
         hp["tau"] = trial.suggest_float("tau", 1e-3, 5e-2, log=True)
-        ht = int((base or {}).get("n_envs", 1)) >= HT_MIN_ENVS
-        hp["batch_size"] = trial.suggest_categorical("batch_size", list(HT_BATCH_SIZES) if ht else [64, 128, 256])
+        hp["batch_size"] = trial.suggest_categorical("batch_size", list(batch_choices(base)))
         if algo == "td3":
             hp["noise_type"] = "normal"
             hp["noise_std"] = trial.suggest_float("noise_std", 0.05, 0.5)
@@ -815,8 +822,7 @@ def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
     out = {n: base[n] for n in names if n != "gamma"}
     out["one_minus_gamma"] = 1.0 - float(base["gamma"])
     if algo != "ppo":
-        ht = int(base.get("n_envs", 1)) >= HT_MIN_ENVS
-        choices = HT_BATCH_SIZES if ht else (64, 128, 256)
+        choices = batch_choices(base)
         if base["batch_size"] not in choices:
             raise ValueError(f"--enqueue-base: batch_size must be one of {list(choices)}, got {base['batch_size']!r}")
     return out
