@@ -122,8 +122,9 @@ def test_bench_core_startup_rows_name_both_routes() -> None:
 
 
 def test_bench_core_times_the_v0_step_of_the_kernel() -> None:
-    """What bench-core times as ``transition`` (and ``columns``) is AmigoBot-v0's step: the compiled kernel's results
-    on the same states (an independent code path; the kernel agrees with the reference to 1e-12, test_kernels.py)."""
+    """What bench-core times as ``transition`` (and ``columns``; ``task.v1.V0Reference``) is AmigoBot-v0's step: the
+    compiled kernel's results on the same states (an independent code path; the kernel agrees with the reference to
+    1e-12, test_kernels.py)."""
     pytest.importorskip("numba")
     import numpy as np
 
@@ -131,14 +132,18 @@ def test_bench_core_times_the_v0_step_of_the_kernel() -> None:
     from amigo_gym.paths import make_path
     from amigo_gym.sim import fast
     from amigo_gym.task import v0
+    from amigo_gym.task.v1 import V0Reference
 
     params = EnvParams(path="manoeuvre", dt=0.3)
     g = np.random.default_rng(5)
     n = 200
     pose = np.column_stack((g.uniform(-0.5, 2.5, (n, 2)), g.uniform(-4.0, 4.0, n)))
     angles, rates, action = g.normal(size=(n, 3)), g.uniform(-15, 15, (n, 2)), g.uniform(-1.2, 1.2, (n, 2))
-    got = core.reference_transition(core.reference_columns(params, pose, angles, rates), action[:, 0], action[:, 1])
     state = np.ascontiguousarray(np.column_stack((pose, angles, rates)))
+    ref = V0Reference(params, state)
+    rows, rec, out = ref.step(action)  # (it copies the state the kernel then advances in place)
+    got = dict(pose=rows[:, :3], wheel_angles=rows[:, 3:6], rates=rows[:, 6:], obs=ref.obs(out), h=rec[:, 3:5])
+    got |= {f"term_{j}": rec[:, 11 + j] for j in range(4)} | {"reward": rec[:, 15], "terminated": out.terminated}
     obs = np.empty((n, v0.obs_dim(params)), np.float32)
     reward, term, record = np.empty(n), np.empty(n, np.bool_), np.empty((n, 16))
     ws = fast.workspace(v0.task_constants(params), make_path(params), n)
