@@ -48,6 +48,7 @@ from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
+from amigo_gym.sim.fast import numba_available
 from amigo_gym.task import v1 as tracking
 from amigo_gym.task.v0 import obs_dim, task_constants
 
@@ -94,19 +95,8 @@ def loop_step(
 
 
 def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
-    """Median time of one call [s]: each repeat runs ``fn`` enough times to last ``min_time``."""
-    fn()  # warm-up
-    t0 = time.perf_counter()
-    fn()
-    once = max(time.perf_counter() - t0, 1e-7)
-    inner = max(1, math.ceil(min_time / once))
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        samples.append((time.perf_counter() - t0) / inner)
-    return statistics.median(samples)
+    """Median time of one call [s]: each repeat runs ``fn`` enough times to last ``min_time`` (:func:`measure_many`)."""
+    return measure_many({"fn": fn}, repeats, min_time)["fn"]
 
 
 def measure_many(fns: dict[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
@@ -228,8 +218,6 @@ def bench(
 
     ``kernels=False`` (or numba missing) leaves the kernel columns ``None``.
     """
-    from amigo_gym.sim.fast import numba_available
-
     rng = np.random.default_rng(seed)
     use = kernels and numba_available()
     return [_bench_one(n, repeats, min_time, loop_max, rng, use) for n in sizes]
@@ -310,8 +298,6 @@ def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
 def bench_startup(repeats: int = 3) -> Startup:
     """Time fresh processes: the import, and the first compiled steps (v0 vector, v1 single) from an empty then a
     filled numba cache."""
-    from amigo_gym.sim.fast import numba_available
-
     py = statistics.median(_wall("pass") for _ in range(repeats))
     imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
     first = statistics.median(_wall(_numpy_route(_FIRST_STEP)) for _ in range(repeats))
@@ -398,8 +384,6 @@ class CoreSettings:
 
 def run(s: CoreSettings) -> int:
     """``amigo-gym bench-core`` with the settings ``s``: the table on stdout (progress on stderr), ``--json``."""
-    from amigo_gym.sim.fast import numba_available
-
     sizes = list(s.sizes or ((1, 64) if s.quick else DEFAULT_SIZES))
     repeats, min_time = (1, 0.01) if s.quick else (s.repeats, s.min_time)
     threads = None

@@ -63,13 +63,16 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.bench import run_command
-from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.core import _fmt, measure_many
 from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.model.params import check_range
+from amigo_gym.sim.fast import numba_available
 
 __all__ = [
     "EnvSettings",
@@ -160,8 +163,6 @@ def _vector_kernels(parallel: bool = False) -> list[str]:
 
     if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
         return []
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return ["numpy"]
     return ["numpy", "numba", "numba-parallel"] if parallel else ["numpy", "numba"]
@@ -183,10 +184,6 @@ class SingleResult:
 
 def bench_single(repeats: int, min_time: float, seed: int = 0) -> SingleResult:
     """Time one step of ``gym.make("AmigoBot-v0")`` and of ``gym.make("Pendulum-v1")``."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-
     t = measure_many(
         {
             "amigo": _single_stepper(gym.make("AmigoBot-v0"), seed),
@@ -243,11 +240,6 @@ def bench_vector(
     log: Log | None = None,
 ) -> list[VectorRow]:
     """Env-steps per second of the native vector env, CartPole's native one, and Sync of AmigoBot."""
-    import gymnasium as gym
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    import amigo_gym  # noqa: F401
-
     say = log or _quiet
     choices = _vector_kernels(parallel=True)
     rows = []
@@ -311,10 +303,6 @@ def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, in
 
 def bench_memory(n: int, seed: int = 0) -> MemoryResult:
     """Memory per sub-env of the native vector env and of ``CartPoleVectorEnv`` (differences ``n`` vs 1)."""
-    import gymnasium as gym
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    import amigo_gym  # noqa: F401
 
     def amigo(m: int) -> Callable[[], Any]:
         return lambda: gym.make_vec("AmigoBot-v0", num_envs=m, vectorization_mode="vector_entry_point")
@@ -405,12 +393,10 @@ def bench_ppo(
     times; the medians are reported. ``v1=True`` adds ``AmigoBot-v1`` with the task of :data:`V1_HARD` through
     the native adapter (``n_envs`` envs, the default step implementation).
     """
-    import gymnasium as gym
     import torch
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecMonitor
 
-    import amigo_gym  # noqa: F401
     from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     say = log or _quiet
@@ -486,10 +472,6 @@ class V1Result:
 def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> V1Result | None:
     """v1 (default and :data:`V1_HARD`) against v0, single step and vector env at ``sizes`` up to
     :data:`V1_MAX_N`; ``None`` when ``AmigoBot-v1`` is not registered."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
     if "AmigoBot-v1" not in gym.registry:
         return None
     tasks: dict[str, tuple[str, dict[str, Any]]] = {
@@ -545,11 +527,6 @@ class KernelRow:
 def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[KernelRow]:
     """AmigoBot-v0 and AmigoBot-v1 (default task) with each step implementation: one single-env step and one
     env-step of the vector env at ``n`` robots (``"numba-parallel"`` too), ``[]`` without numba."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return []
     rows = []
@@ -661,8 +638,6 @@ def format_targets(items: Sequence[Target], machine: str) -> list[str]:
 
 def numba_state() -> str:
     """numba's version, its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel SVML."""
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return "numba not installed"
     import numba
@@ -750,13 +725,10 @@ def _fixed_cost(rows: Sequence[VectorRow]) -> dict[str, float] | None:
     return out
 
 
-def _fmt(x: float | None, spec: str = ".3g") -> str:
-    return "-" if x is None else format(x, spec)
-
-
-def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report: Report | None = None) -> str:
-    """Markdown tables of every figure with its ratio (``report`` adds memory, PPO, v1 and notes)."""
+def format_report(report: Report) -> str:
+    """Markdown tables of every figure of ``report`` with its ratio, the targets, the load average and the notes."""
     out: list[str] = []
+    single, rows = report.single, report.vector
     if single is not None:
         out += [
             "| single env (gym.make) | time per step [us] |",
@@ -792,7 +764,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| ratio AmigoBot / CartPole (target <= 0.5) | {fc['ratio']:.2f} |",
             ]
         out.append("")
-    if report is not None and report.memory is not None:
+    if report.memory is not None:
         m = report.memory
         out += [
             f"| memory per sub-env (N = {m.n} vs 1, tracemalloc) | retained [bytes] | peak of one step [bytes] |",
@@ -801,7 +773,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             f"| CartPoleVectorEnv | {m.cartpole_retained:.0f} | {m.cartpole_step_peak:.0f} |",
             "",
         ]
-    if report is not None and report.ppo:
+    if report.ppo:
         out += [
             "| SB3 PPO learn | AmigoBot [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) "
             "| env's share of learn: AmigoBot | Pendulum |",
@@ -814,7 +786,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| {pr.amigobot_env_share:.1%} | {pr.pendulum_env_share:.1%} |"
             )
         out.append("")
-    if report is not None and report.v1 is not None:
+    if report.v1 is not None:
         v = report.v1
         hard = "path=mixed, speed=(0.1, 0.4), randomize=hard"
         out += [
@@ -830,12 +802,10 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| {_fmt(None if h is None else b / h, '.2f')} (time) |"
             )
         out.append("")
-    if report is not None:
-        out += format_kernels(report.kernels)
-        machine = f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})"
-        out += format_targets(targets(report), machine)
-        out.append(f"load average (1, 5, 15 min): {report.load[0]} at the start, {report.load[1]} at the end")
-        out += [f"note: {n}" for n in report.notes]
+    out += format_kernels(report.kernels)
+    out += format_targets(targets(report), f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})")
+    out.append(f"load average (1, 5, 15 min): {report.load[0]} at the start, {report.load[1]} at the end")
+    out += [f"note: {n}" for n in report.notes]
     return "\n".join(out).rstrip()
 
 
@@ -970,9 +940,9 @@ class EnvSettings:
     def __post_init__(self) -> None:
         for i, n in enumerate(self.sizes or ()):
             check_range(PROG, f"sizes[{i}]", n, 1, 1_000_000)
-        check_range(PROG, "repeats", self.repeats, 1, 1000)
         check_range(PROG, "min_time", self.min_time, 0.0, 60.0, low_open=True)
         for name, low, high in (
+            ("repeats", 1, 1000),
             ("sync_max", 0, 1_000_000),
             ("memory_n", 2, 10_000_000),
             ("ppo_steps", 1, 10_000_000),
@@ -984,25 +954,19 @@ class EnvSettings:
             check_range(PROG, "threads", self.threads, 1, os.cpu_count() or 1)
 
 
-def table(s: EnvSettings) -> int:
-    """``--table-from``: print :func:`headline_table` of the JSON files (``ValueError``: not a full ``--v1`` run)."""
-    import json
-
-    assert s.table_from is not None
-    env_doc = json.loads(Path(s.table_from).read_text(encoding="utf-8"))
-    core_doc = json.loads(Path(s.core_json).read_text(encoding="utf-8")) if s.core_json else None
-    try:
-        print(headline_table(env_doc, core_doc), end="")
-    except (KeyError, StopIteration) as exc:
-        raise ValueError(f"--table-from {s.table_from}: not the JSON of a full --v1 run ({exc})") from None
-    return 0
-
-
 def run(s: EnvSettings) -> int:
     """``amigo-gym bench-env`` with the settings ``s``: the report on stdout (progress on stderr), ``--plot``,
-    ``--json``; with ``--table-from``, :func:`table` instead."""
+    ``--json``; with ``--table-from``, only :func:`headline_table` of the JSON files."""
     if s.table_from is not None:
-        return table(s)
+        import json
+
+        env_doc = json.loads(Path(s.table_from).read_text(encoding="utf-8"))
+        core_doc = json.loads(Path(s.core_json).read_text(encoding="utf-8")) if s.core_json else None
+        try:
+            print(headline_table(env_doc, core_doc), end="")
+        except (KeyError, StopIteration) as exc:
+            raise ValueError(f"--table-from {s.table_from}: not the JSON of a full --v1 run ({exc})") from None
+        return 0
     if s.quick:
         sizes = list(s.sizes or QUICK_SIZES)
         repeats, min_time, sync_max = 1, 0.02, min(s.sync_max, SYNC_MAX)
@@ -1011,15 +975,12 @@ def run(s: EnvSettings) -> int:
         sizes = list(s.sizes or DEFAULT_SIZES)
         repeats, min_time, sync_max = s.repeats, s.min_time, s.sync_max
         memory_n, ppo_steps = s.memory_n, s.ppo_steps
-    if s.threads is not None:
-        from amigo_gym.sim.fast import numba_available
+    if s.threads is not None and numba_available():
+        import numba
 
-        if numba_available():
-            import numba
-
-            # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
-            check_range(PROG, "threads", s.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
-            numba.set_num_threads(s.threads)
+        # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
+        check_range(PROG, "threads", s.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
+        numba.set_num_threads(s.threads)
     rep = Report()
     rep.load = (load_average(), "-")
     print(f"{machine_line()}; {numba_state()}; load average {rep.load[0]}", flush=True)
@@ -1055,7 +1016,7 @@ def run(s: EnvSettings) -> int:
         if not rep.kernels:
             rep.notes.append("--kernels: numba is not installed; only the numpy step exists")
     rep.load = (rep.load[0], load_average())
-    print(format_report(rep.single, rep.vector, rep))
+    print(format_report(rep))
     if s.plot is not None and rep.vector:
         plot_vector(rep.vector, s.plot, rep.v1)
         _log(f"wrote {s.plot}")

@@ -18,10 +18,16 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.bench import run_command
+from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.env import _single_stepper, _vector_stepper
 from amigo_gym.model.params import check_range
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = ["ProfileSettings", "gap", "profile_steps", "single_parts", "main", "run"]
 
@@ -55,45 +61,6 @@ def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[flo
     return total, rows[:top]
 
 
-def _single(seed: int) -> Callable[[], object]:
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
-    env = gym.make("AmigoBot-v0")
-    env.reset(seed=seed)
-    pool = np.random.default_rng(seed).uniform(-1, 1, (16, 2)).astype(np.float32)
-    k = [0]
-
-    def step() -> object:
-        k[0] = (k[0] + 1) % 16
-        _, _, term, trunc, _ = env.step(pool[k[0]])
-        if term or trunc:
-            env.reset()
-        return None
-
-    return step
-
-
-def _vector(n: int, seed: int, kernel: str | None) -> Callable[[], object]:
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
-    kw: dict[str, Any] = {} if kernel is None else {"kernel": kernel}
-    envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
-    envs.reset(seed=seed)
-    pool = list(np.random.default_rng(seed).uniform(-1, 1, (16, n, 2)).astype(np.float32))
-    k = [0]
-
-    def step() -> object:
-        k[0] = (k[0] + 1) % 16
-        envs.step(pool[k[0]])
-        return None
-
-    return step
-
-
 def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
     out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
     out += ["| function | own time | calls per step |", "|---|---:|---:|"]
@@ -102,10 +69,6 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    from amigo_gym.bench.core import measure_many
-    from amigo_gym.bench.env import _vector_stepper
     from amigo_gym.envs.amigobot import AmigoBotVectorEnv
     from amigo_gym.sim import fast
 
@@ -141,13 +104,6 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
 
 def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-    from amigo_gym.bench.core import measure_many
-    from amigo_gym.task import v0 as task
-    from amigo_gym.task import v1 as tracking
-
     env = gym.make("AmigoBot-v0")
     env.reset(seed=0)
     raw: Any = env.unwrapped
@@ -265,11 +221,13 @@ def run(s: ProfileSettings) -> int:
     if s.libm:
         print(libm())
         return 0
-    total, rows = profile_steps(_single(0), s.steps, s.top)
+    total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
     print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
     for n in s.sizes:
         steps = max(20, s.steps // max(1, n // 64))
-        total, rows = profile_steps(_vector(n, 0, s.kernel), steps, s.top)
+        kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
+        envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
+        total, rows = profile_steps(_vector_stepper(envs, 0), steps, s.top)
         name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if s.kernel is None else f", kernel={s.kernel}")
         print(_table(name, steps, total, rows), end="\n\n")
     return 0

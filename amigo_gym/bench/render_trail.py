@@ -26,9 +26,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-import numpy as np
-
 from amigo_gym.bench import run_command
+from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.env import _vector_stepper
+from amigo_gym.io import atomic_write_json
 from amigo_gym.options import cli
 
 __all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
@@ -43,11 +44,6 @@ def _env(n: int, path: str, render: bool) -> Any:
 
     kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
     return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
-
-
-def _actions(n: int, count: int = 16) -> list[np.ndarray]:
-    rng = np.random.default_rng(0)
-    return [rng.uniform(-1.0, 1.0, (n, 2)) for _ in range(count)]
 
 
 def _rss() -> int:
@@ -67,12 +63,11 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
     its pages resident as they are first written) and whatever else the steps keep (the paths drawn at resets).
     """
     env = _env(n, path, render=render)
-    acts = _actions(n)
+    step = _vector_stepper(env, 0)  # reset, random actions (the same in both processes)
     gc.collect()
-    env.reset(seed=0)
     first = _rss()
-    for t in range(steps):
-        env.step(acts[t % len(acts)])
+    for _ in range(steps):
+        step()
     if render:
         trail_of = getattr(env, "_trail_of", None) or (lambda i: list(env._trails[i]))  # (the former lists: to compare)
         trails = [trail_of(i) for i in range(frames)]
@@ -86,24 +81,8 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
 
 def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float = 0.5) -> dict[str, float]:
     """Median time of one ``step`` [s] with and without ``render_mode`` (interleaved repeats), and their ratio."""
-    from amigo_gym.bench.core import measure_many
-
-    acts = _actions(n)
     envs = {"plain": _env(n, path, render=False), "rgb_array": _env(n, path, render=True)}
-    counters = {name: [0] for name in envs}
-    for env in envs.values():
-        env.reset(seed=0)
-
-    def stepper(name: str) -> Any:
-        env, c = envs[name], counters[name]
-
-        def fn() -> None:
-            env.step(acts[c[0] % len(acts)])
-            c[0] += 1
-
-        return fn
-
-    t = measure_many({name: stepper(name) for name in envs}, repeats, min_time)
+    t = measure_many({name: _vector_stepper(env, 0) for name, env in envs.items()}, repeats, min_time)
     for env in envs.values():
         env.close()
     return {"step_s": t["plain"], "step_render_s": t["rgb_array"], "ratio": t["rgb_array"] / t["plain"]}
@@ -168,8 +147,6 @@ def run(s: RenderTrailSettings) -> int:
             f"render_mode='rgb_array': ratio {out['ratio']:.3f} (target <= 1.1)"
         )
     if s.json:
-        from amigo_gym.io import atomic_write_json
-
         atomic_write_json(s.json, out)
     return 0
 

@@ -40,6 +40,8 @@ from typing import Any
 
 from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import cpu_model, simd_level
+from amigo_gym.bench.offpolicy import _venv, bench_offpolicy
+from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 
 __all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
@@ -100,16 +102,10 @@ def bench_sb3(
     """Train SB3's PPO (``MlpPolicy``, 64x64 tanh) over the SB3 adapter of the native vector env; time ``learn``."""
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecMonitor
-
-    from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
-    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     torch.set_num_threads(threads)
-    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
     t0, c0 = time.perf_counter(), time.process_time()
-    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
-    venv.seed(seed)
+    venv = _venv(n_envs, seed)
     model = PPO(
         "MlpPolicy",
         venv,
@@ -140,8 +136,6 @@ def _show(name: str, r: dict[str, Any]) -> None:
 
 def _run_offpolicy(s: TrainSettings) -> dict[str, Any]:
     """Time each ``--offpolicy`` algorithm in the ``shipped`` and ``ht`` configurations (``<algo>_<config>``)."""
-    from amigo_gym.bench.offpolicy import bench_offpolicy
-
     runs: dict[str, Any] = {}
     for algo in s.offpolicy_algos:
         for config, steps in (("shipped", s.offpolicy_steps), ("ht", s.offpolicy_ht_steps)):
@@ -198,7 +192,6 @@ class TrainSettings:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
-    from amigo_gym.io import atomic_write_json
 
     def run(s: TrainSettings) -> int:
         import numpy as np

@@ -694,33 +694,23 @@ class V0Reference:
 
     The state is AmigoBot-v0's 8 columns ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2`` [m, m, rad, rad, rad, rad,
     rad/s, rad/s] (:data:`amigo_gym.sim._kernels.STATE_FIELDS`, the compiled step's rows): ``(N, 8)`` rows give
-    ``(N,)`` columns, one ``(8,)`` row Python floats (the single env's float route). The castor angle ``alpha3``,
-    which :class:`State` does not hold, is integrated as the vector env's reference route does: ``alpha3 +=
-    castor_rate(v_A, betadot) dt`` with the new wheel rates (:func:`~amigo_gym.model.kinematics.castor_rate`).
-
-    Attributes:
-        k, path, dt: the constants, the path and the step [s] of v0's settings; ``ep``: the episode (columns);
-        ``ring``: the (unread) command ring; ``n``: robots (0: one, as floats); ``st``, ``castor``: the state.
+    ``(N,)`` columns (``n = N``), one ``(8,)`` row Python floats (``n = 0``, the single env's float route). The castor
+    angle ``alpha3``, which :class:`State` (``st``) does not hold, is integrated as the vector env's reference route
+    does: ``alpha3 += castor_rate(v_A, betadot) dt`` [rad] with the new wheel rates (``castor``;
+    :func:`~amigo_gym.model.kinematics.castor_rate`). ``k``, ``path``, ``dt`` [s], ``ep``: v0's constants, path, step
+    and episode; ``ring``: the (unread) command ring.
     """
 
     def __init__(self, params: EnvParams, state: Any) -> None:
         rows = np.asarray(state, dtype=np.float64)
         self.k = k = constants(v0_configuration(params))
-        self.path, self.dt = k.params.path, k.params.dt
+        self.path, self.dt, self.n = k.params.path, k.params.dt, 0 if rows.ndim == 1 else len(rows)
         ep = begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
-        c: list[Any]
-        z: Any
-        steps: Any
-        if rows.ndim == 1:  # one robot: Python floats
-            self.n, self.ep, z, steps = 0, ep, 0.0, 0
-            self.ring = np.zeros((k.ring_length, 2))
-            c = rows.tolist()
-        else:
-            self.n = n = len(rows)
-            self.ep = Episode(*(np.full(n, v) for v in ep))
-            self.ring = np.zeros((n, k.ring_length, 2))
-            c = [rows[:, j].copy() for j in range(8)]
-            z, steps = np.zeros(n), np.zeros(n, dtype=np.int64)
+        self.ep = ep if self.n == 0 else Episode(*(np.full(self.n, v) for v in ep))
+        self.ring = np.zeros((*rows.shape[:-1], k.ring_length, 2))
+        c: list[Any] = rows.tolist() if self.n == 0 else [rows[:, j].copy() for j in range(8)]
+        z: Any = 0.0 if self.n == 0 else np.zeros(self.n)
+        steps: Any = 0 if self.n == 0 else np.zeros(self.n, dtype=np.int64)
         self.st = State(c[0], c[1], c[2], c[6], c[7], c[3], c[4], z, z, z, steps)
         self.castor: Any = c[5]
 
