@@ -40,7 +40,7 @@ from typing import Any
 
 from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import cpu_model, simd_level
-from amigo_gym.bench.offpolicy import _venv, bench_offpolicy
+from amigo_gym.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 
@@ -173,8 +173,6 @@ class TrainSettings:
     offpolicy_ht_steps: int = 16384
 
     def __post_init__(self) -> None:
-        from amigo_gym.bench.offpolicy import ALGOS
-
         check_range(PROG, "fast_steps", self.fast_steps, 16384, 10**9)
         check_range(PROG, "sb3_steps", self.sb3_steps, 1, 10**8)
         check_range(PROG, "threads", self.threads, 1, 64)
