@@ -122,8 +122,9 @@ def test_bench_core_startup_rows_name_both_routes() -> None:
 
 
 def test_bench_core_times_the_v0_step_of_the_kernel() -> None:
-    """What bench-core times as ``transition`` (and ``columns``) is AmigoBot-v0's step: the compiled kernel's results
-    on the same states (an independent code path; the kernel agrees with the reference to 1e-12, test_kernels.py)."""
+    """What bench-core times as ``transition`` (and ``columns``; ``task.v1.V0Reference``) is AmigoBot-v0's step: the
+    compiled kernel's results on the same states (an independent code path; the kernel agrees with the reference to
+    1e-12, test_kernels.py)."""
     pytest.importorskip("numba")
     import numpy as np
 
@@ -131,14 +132,18 @@ def test_bench_core_times_the_v0_step_of_the_kernel() -> None:
     from amigo_gym.paths import make_path
     from amigo_gym.sim import fast
     from amigo_gym.task import v0
+    from amigo_gym.task.v1 import V0Reference
 
     params = EnvParams(path="manoeuvre", dt=0.3)
     g = np.random.default_rng(5)
     n = 200
     pose = np.column_stack((g.uniform(-0.5, 2.5, (n, 2)), g.uniform(-4.0, 4.0, n)))
     angles, rates, action = g.normal(size=(n, 3)), g.uniform(-15, 15, (n, 2)), g.uniform(-1.2, 1.2, (n, 2))
-    got = core.reference_transition(core.reference_columns(params, pose, angles, rates), action[:, 0], action[:, 1])
     state = np.ascontiguousarray(np.column_stack((pose, angles, rates)))
+    ref = V0Reference(params, state)
+    rows, rec, out = ref.step(action)  # (it copies the state the kernel then advances in place)
+    got = dict(pose=rows[:, :3], wheel_angles=rows[:, 3:6], rates=rows[:, 6:], obs=ref.obs(out), h=rec[:, 3:5])
+    got |= {f"term_{j}": rec[:, 11 + j] for j in range(4)} | {"reward": rec[:, 15], "terminated": out.terminated}
     obs = np.empty((n, v0.obs_dim(params)), np.float32)
     reward, term, record = np.empty(n), np.empty(n, np.bool_), np.empty((n, 16))
     ws = fast.workspace(v0.task_constants(params), make_path(params), n)
@@ -190,3 +195,51 @@ def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
         assert level == "AVX2"
     elif "asimd" in flags:
         assert level in ("NEON (ASIMD)", "SVE")
+
+
+@pytest.mark.parametrize(
+    ("cls", "bad"),
+    [
+        (core.CoreSettings, {"repeats": 0}),
+        (core.CoreSettings, {"sizes": (1, 0)}),
+        (env.EnvSettings, {"min_time": float("nan")}),
+        (env.EnvSettings, {"ppo_envs": 5000}),
+        (profile.ProfileSettings, {"top": 0}),
+    ],
+)
+def test_bench_settings_refuse_a_bad_value_in_one_line(cls: type, bad: dict[str, object]) -> None:
+    """Every benchmark's settings dataclass checks its ranges itself (command line or not): one line naming the
+    field, the allowed range and the value."""
+    name, value = next(iter(bad.items()))
+    with pytest.raises(ValueError) as exc:
+        cls(**bad)
+    text = str(exc.value)
+    assert "\n" not in text and name in text and "must be" in text and str(value if name != "sizes" else 0) in text
+
+
+def test_bench_options_come_from_the_settings(capsys: pytest.CaptureFixture[str]) -> None:
+    """The parsers are derived from the settings dataclasses: the defaults parsed from an empty command line are the
+    dataclass's, the help text of ``--sizes`` names the default the code uses, and a refused value is one line and
+    status 2 (not a traceback), also for the commands run as modules."""
+    from dataclasses import fields
+
+    from amigo_gym.bench import render_trail, train
+    from amigo_gym.options import OneLineParser, add_dataclass_options, attribute_help, settings_from_args
+
+    for cls in (core.CoreSettings, env.EnvSettings, profile.ProfileSettings, render_trail.RenderTrailSettings):
+        p = OneLineParser(prog="x")
+        add_dataclass_options(p, cls)
+        assert settings_from_args(cls, p.parse_args([])) == cls()
+        assert {a.dest for a in p._actions} - {"help"} == {f.name for f in fields(cls)}
+    assert str(core.DEFAULT_SIZES) in attribute_help(core.CoreSettings)["sizes"]
+    assert str(env.DEFAULT_SIZES) in attribute_help(env.EnvSettings)["sizes"]
+    assert str(env.QUICK_SIZES) in attribute_help(env.EnvSettings)["quick"]
+    assert train.TrainSettings(offpolicy=" sac, tqc ,").offpolicy_algos == ["sac", "tqc"]
+    for main, argv, name in (
+        (profile.main, ["--steps", "0"], "steps"),
+        (render_trail.main, ["--n", "0", "--skip-memory", "--skip-time"], "--n"),
+        (train.main, ["--offpolicy", "ddpg"], "offpolicy"),
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and name in err and "error:" in err

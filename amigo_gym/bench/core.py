@@ -5,9 +5,9 @@ For each batch size N it times (median of ``--repeats`` repeats, each at least `
 * ``transition``: AmigoBot-v0's whole reference step, what ``kernel="numpy"`` runs (AmigoBot-v1's ideal column
   step, :func:`amigo_gym.task.v1.step_columns` with :func:`amigo_gym.task.v1.v0_configuration`: action → wheel
   rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms), its results
-  returned as ``(N, k)`` arrays (:func:`reference_transition`);
+  returned as ``(N, k)`` rows (:class:`amigo_gym.task.v1.V0Reference`'s ``step``);
 * ``columns``: the same step alone, in the column form the vector env runs with ``kernel="numpy"`` (state and
-  results as ``(N,)`` columns, :func:`reference_columns`);
+  results as ``(N,)`` columns, :func:`amigo_gym.task.v1.step_columns`);
 * ``step_pose``: :func:`amigo_gym.model.kinematics.step_pose` alone, the exact closed-form arc step;
 * ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
   (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
@@ -28,7 +28,6 @@ absolute figures. It also times start-up in fresh processes (``--skip-startup`` 
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import statistics
@@ -38,26 +37,25 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import machine_line
 from amigo_gym.io import atomic_write_json
-from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, pack, step_pose
+from amigo_gym.model.kinematics import body_velocity, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
-from amigo_gym.options import OneLineParser, run_guarded
 from amigo_gym.paths import make_path
+from amigo_gym.sim.fast import numba_available
 from amigo_gym.task import v1 as tracking
 from amigo_gym.task.v0 import obs_dim, task_constants
 
 __all__ = [
-    "Reference",
+    "CoreSettings",
     "Row",
     "Startup",
-    "reference_columns",
-    "reference_transition",
     "euler_step",
     "loop_step",
     "measure",
@@ -66,6 +64,7 @@ __all__ = [
     "bench_startup",
     "format_table",
     "main",
+    "run",
 ]
 
 PROG = "amigo-gym bench-core"
@@ -95,76 +94,9 @@ def loop_step(
     return out
 
 
-class Reference(NamedTuple):
-    """AmigoBot-v0's reference step on ``N`` states (:func:`reference_columns`): AmigoBot-v1's constants with v0's
-    settings, the path, the state and the episode as ``(N,)`` columns, the (unread) command ring, the castor angles."""
-
-    k: tracking.Constants
-    path: Any
-    state: tracking.State
-    episode: tracking.Episode
-    ring: Array
-    castor: Array
-
-
-def reference_columns(params: EnvParams, pose: Array, angles: Array, rates: Array) -> Reference:
-    """AmigoBot-v0's reference on ``N`` states: what ``gym.make_vec("AmigoBot-v0", kernel="numpy")`` steps,
-    AmigoBot-v1's ideal column step (:func:`amigo_gym.task.v1.step_columns`) with ``params``'s settings
-    (:func:`amigo_gym.task.v1.v0_configuration`), the nominal robot's episode.
-
-    Args:
-        params: AmigoBot-v0's settings.
-        pose: ``(N, 3)`` poses ``(x_A, y_A, beta)`` [m, m, rad].
-        angles: ``(N, 3)`` wheel angles (right, left, castor) [rad].
-        rates: ``(N, 2)`` wheel rates of the last step [rad/s].
-    """
-    k = tracking.constants(tracking.v0_configuration(params))
-    n = len(pose)
-    ep, _ = tracking.draw_episode(np.random.default_rng(0), k.params)  # v0's settings draw nothing that matters
-    zero = np.zeros(n)
-    w1, w2 = (np.ascontiguousarray(c) for c in rates.T)
-    x, y, beta = (np.ascontiguousarray(c) for c in pose.T)
-    al1, al2 = np.ascontiguousarray(angles[:, 0]), np.ascontiguousarray(angles[:, 1])
-    state = tracking.State(x, y, beta, w1, w2, al1, al2, zero, w1 / k.w_max, w2 / k.w_max, np.zeros(n, dtype=np.int64))
-    episode = tracking.Episode(*(np.full(n, v) for v in ep))
-    ring = np.zeros((n, k.ring_length, 2))
-    return Reference(k, k.params.path, state, episode, ring, np.ascontiguousarray(angles[:, 2]))
-
-
-def reference_transition(ref: Reference, a1: Array, a2: Array) -> dict[str, Array]:
-    """One reference step of ``ref``'s states (not advanced) with the actions ``a1``, ``a2`` ``(N,)``, its results as
-    arrays: ``pose (N, 3)``, ``wheel_angles (N, 3)`` (the castor's integrated as the vector env does), ``rates (N,
-    2)``, ``obs (N, obs_dim)``, ``h (N, 2)``, ``reward``, ``terminated`` and the four reward terms ``(N,)``."""
-    k = ref.k
-    new, out, _ = tracking.step_columns(k, ref.path, ref.state, ref.episode, ref.ring, 0, a1, a2)
-    v, bdot = body_velocity_columns(new.w1, new.w2, k.nominal)
-    castor = ref.castor + castor_rate_columns(v, bdot, k.nominal) * k.params.dt
-    arrays = {
-        "pose": pack(new.x, new.y, new.beta),
-        "wheel_angles": pack(new.alpha1, new.alpha2, castor),
-        "rates": pack(new.w1, new.w2),
-        "obs": pack(*out.obs),
-        "h": pack(out.h_x, out.h_y),
-        "reward": np.asarray(out.reward),
-        "terminated": np.asarray(out.terminated),
-    }
-    return {**arrays, **{f"term_{j}": np.asarray(t) for j, t in enumerate(out.terms)}}
-
-
 def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
-    """Median time of one call [s]: each repeat runs ``fn`` enough times to last ``min_time``."""
-    fn()  # warm-up
-    t0 = time.perf_counter()
-    fn()
-    once = max(time.perf_counter() - t0, 1e-7)
-    inner = max(1, math.ceil(min_time / once))
-    samples = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        samples.append((time.perf_counter() - t0) / inner)
-    return statistics.median(samples)
+    """Median time of one call [s]: each repeat runs ``fn`` enough times to last ``min_time`` (:func:`measure_many`)."""
+    return measure_many({"fn": fn}, repeats, min_time)["fn"]
 
 
 def measure_many(fns: dict[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
@@ -229,11 +161,16 @@ def _bench_one(
     angles = np.zeros((n, 3))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
-    ref = reference_columns(params, pose, angles, w)
-    k, st, ep, ring = ref.k, ref.state, ref.episode, ref.ring
+    ref = tracking.V0Reference(params, np.column_stack((pose, angles, w)))
+    st, castor = ref.st, ref.castor
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
-    t_tr = measure(lambda: reference_transition(ref, a1, a2), repeats, min_time)
-    t_co = measure(lambda: tracking.step_columns(k, ref.path, st, ep, ring, 0, a1, a2), repeats, min_time)
+
+    def transition() -> object:
+        ref.st, ref.castor = st, castor  # every call steps the same states
+        return ref.step(action)
+
+    t_tr = measure(transition, repeats, min_time)
+    t_co = measure(lambda: tracking.step_columns(ref.k, ref.path, st, ref.ep, ref.ring, 0, a1, a2), repeats, min_time)
     t_sp = measure(lambda: step_pose(pose, w, params.dt, robot), repeats, min_time)
     t_eu = measure(lambda: euler_step(pose, w, params.dt, robot), repeats, min_time)
     loop = None
@@ -281,8 +218,6 @@ def bench(
 
     ``kernels=False`` (or numba missing) leaves the kernel columns ``None``.
     """
-    from amigo_gym.sim.fast import numba_available
-
     rng = np.random.default_rng(seed)
     use = kernels and numba_available()
     return [_bench_one(n, repeats, min_time, loop_max, rng, use) for n in sizes]
@@ -363,8 +298,6 @@ def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
 def bench_startup(repeats: int = 3) -> Startup:
     """Time fresh processes: the import, and the first compiled steps (v0 vector, v1 single) from an empty then a
     filled numba cache."""
-    from amigo_gym.sim.fast import numba_available
-
     py = statistics.median(_wall("pass") for _ in range(repeats))
     imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
     first = statistics.median(_wall(_numpy_route(_FIRST_STEP)) for _ in range(repeats))
@@ -413,61 +346,74 @@ def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: i
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Options of ``amigo-gym bench-core``."""
-    p = OneLineParser(prog=PROG, description="Env-steps per second of the batched exact step, with peers.")
-    p.add_argument("--sizes", type=int, nargs="+", default=None, help=f"batch sizes [envs] (default: {DEFAULT_SIZES})")
-    p.add_argument("--repeats", type=int, default=7, help="repeats per measurement [repeats]; the median is reported")
-    p.add_argument("--min-time", type=float, default=0.05, help="least duration of one repeat [s]")
-    p.add_argument("--loop-max", type=int, default=4096, help="largest N for the Python-loop peer [envs]")
-    p.add_argument("--threads", type=int, default=None, help="numba threads [threads] (default: all)")
-    p.add_argument("--skip-kernel", action="store_true", help="skip the compiled kernel (numba)")
-    p.add_argument("--skip-startup", action="store_true", help="skip the fresh-process start-up times")
-    p.add_argument("--quick", action="store_true", help="smoke run: sizes 1 64, 1 repeat of 0.01 s, one start-up run")
-    p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
-    return p
+@dataclass(frozen=True)
+class CoreSettings:
+    """Settings of ``amigo-gym bench-core``, each the option of the same name (``--min-time`` for ``min_time``).
+
+    Attributes:
+        sizes: batch sizes [envs] (default: (1, 64, 1024, 4096, 16384, 65536)).
+        repeats: repeats per measurement [repeats]; the median is reported.
+        min_time: least duration of one repeat [s].
+        loop_max: largest N for the Python-loop peer [envs].
+        threads: numba threads [threads] (default: all).
+        skip_kernel: skip the compiled kernel (numba).
+        skip_startup: skip the fresh-process start-up times.
+        quick: smoke run: sizes 1 64, 1 repeat of 0.01 s, one start-up run.
+        json: JSON output [file] (default: none).
+    """
+
+    sizes: tuple[int, ...] | None = None
+    repeats: int = 7
+    min_time: float = 0.05
+    loop_max: int = 4096
+    threads: int | None = None
+    skip_kernel: bool = False
+    skip_startup: bool = False
+    quick: bool = False
+    json: str | None = None
+
+    def __post_init__(self) -> None:
+        for i, n in enumerate(self.sizes or ()):
+            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
+        check_range(PROG, "repeats", self.repeats, 1, 1000)
+        check_range(PROG, "min_time", self.min_time, 0.0, 60.0, low_open=True)
+        check_range(PROG, "loop_max", self.loop_max, 0, 10_000_000)
+        if self.threads is not None:
+            check_range(PROG, "threads", self.threads, 1, 4096)
+
+
+def run(s: CoreSettings) -> int:
+    """``amigo-gym bench-core`` with the settings ``s``: the table on stdout (progress on stderr), ``--json``."""
+    sizes = list(s.sizes or ((1, 64) if s.quick else DEFAULT_SIZES))
+    repeats, min_time = (1, 0.01) if s.quick else (s.repeats, s.min_time)
+    threads = None
+    if not s.skip_kernel and numba_available():
+        import numba
+
+        if s.threads is not None:
+            numba.set_num_threads(s.threads)
+        threads = int(numba.get_num_threads())
+    print(f"{machine_line()}; median of {repeats} repeats", flush=True)
+    print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
+    rows = bench(sizes, repeats, min_time, s.loop_max, kernels=not s.skip_kernel)
+    startup = None
+    if not s.skip_startup:
+        print(f"{PROG}: start-up of fresh processes", file=sys.stderr, flush=True)
+        startup = bench_startup(1 if s.quick else 3)
+    print(format_table(rows, startup, threads))
+    if s.json is not None:
+        doc = {
+            "rows": [{**asdict(r), "ratio_kernel": r.ratio_kernel} for r in rows],
+            "threads": threads,
+            "startup": None if startup is None else asdict(startup),
+        }
+        atomic_write_json(s.json, doc)
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym bench-core``."""
-    args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
-
-    def go() -> int:
-        sizes = list(args.sizes or ((1, 64) if args.quick else DEFAULT_SIZES))
-        repeats, min_time = (1, 0.01) if args.quick else (args.repeats, args.min_time)
-        for i, n in enumerate(sizes):
-            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
-        check_range(PROG, "repeats", repeats, 1, 1000)
-        check_range(PROG, "min_time", min_time, 0.0, 60.0, low_open=True)
-        check_range(PROG, "loop_max", args.loop_max, 0, 10_000_000)
-        threads = None
-        from amigo_gym.sim.fast import numba_available
-
-        if not args.skip_kernel and numba_available():
-            import numba
-
-            if args.threads is not None:
-                check_range(PROG, "threads", args.threads, 1, 4096)
-                numba.set_num_threads(args.threads)
-            threads = int(numba.get_num_threads())
-        print(f"{machine_line()}; median of {repeats} repeats", flush=True)
-        print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
-        rows = bench(sizes, repeats, min_time, args.loop_max, kernels=not args.skip_kernel)
-        startup = None
-        if not args.skip_startup:
-            print(f"{PROG}: start-up of fresh processes", file=sys.stderr, flush=True)
-            startup = bench_startup(1 if args.quick else 3)
-        print(format_table(rows, startup, threads))
-        if args.json is not None:
-            doc = {
-                "rows": [{**asdict(r), "ratio_kernel": r.ratio_kernel} for r in rows],
-                "threads": threads,
-                "startup": None if startup is None else asdict(startup),
-            }
-            atomic_write_json(args.json, doc)
-        return 0
-
-    return run_guarded(go, PROG)
+    return run_command(CoreSettings, run, argv, PROG, "Env-steps per second of the batched exact step, with peers.")
 
 
 if __name__ == "__main__":

@@ -50,7 +50,6 @@ stderr, the report to stdout.
 
 from __future__ import annotations
 
-import argparse
 import gc
 import inspect
 import math
@@ -64,15 +63,19 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.bench.core import measure_many
+from amigo_gym.bench import run_command
+from amigo_gym.bench.core import _fmt, measure_many
 from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.model.params import check_range
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.sim.fast import numba_available
 
 __all__ = [
+    "EnvSettings",
     "SingleResult",
     "VectorRow",
     "MemoryResult",
@@ -95,6 +98,7 @@ __all__ = [
     "load_average",
     "plot_vector",
     "main",
+    "run",
 ]
 
 PROG = "amigo-gym bench-env"
@@ -159,8 +163,6 @@ def _vector_kernels(parallel: bool = False) -> list[str]:
 
     if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
         return []
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return ["numpy"]
     return ["numpy", "numba", "numba-parallel"] if parallel else ["numpy", "numba"]
@@ -182,10 +184,6 @@ class SingleResult:
 
 def bench_single(repeats: int, min_time: float, seed: int = 0) -> SingleResult:
     """Time one step of ``gym.make("AmigoBot-v0")`` and of ``gym.make("Pendulum-v1")``."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-
     t = measure_many(
         {
             "amigo": _single_stepper(gym.make("AmigoBot-v0"), seed),
@@ -242,11 +240,6 @@ def bench_vector(
     log: Log | None = None,
 ) -> list[VectorRow]:
     """Env-steps per second of the native vector env, CartPole's native one, and Sync of AmigoBot."""
-    import gymnasium as gym
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    import amigo_gym  # noqa: F401
-
     say = log or _quiet
     choices = _vector_kernels(parallel=True)
     rows = []
@@ -310,10 +303,6 @@ def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, in
 
 def bench_memory(n: int, seed: int = 0) -> MemoryResult:
     """Memory per sub-env of the native vector env and of ``CartPoleVectorEnv`` (differences ``n`` vs 1)."""
-    import gymnasium as gym
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    import amigo_gym  # noqa: F401
 
     def amigo(m: int) -> Callable[[], Any]:
         return lambda: gym.make_vec("AmigoBot-v0", num_envs=m, vectorization_mode="vector_entry_point")
@@ -404,12 +393,10 @@ def bench_ppo(
     times; the medians are reported. ``v1=True`` adds ``AmigoBot-v1`` with the task of :data:`V1_HARD` through
     the native adapter (``n_envs`` envs, the default step implementation).
     """
-    import gymnasium as gym
     import torch
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecMonitor
 
-    import amigo_gym  # noqa: F401
     from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     say = log or _quiet
@@ -485,10 +472,6 @@ class V1Result:
 def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> V1Result | None:
     """v1 (default and :data:`V1_HARD`) against v0, single step and vector env at ``sizes`` up to
     :data:`V1_MAX_N`; ``None`` when ``AmigoBot-v1`` is not registered."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
     if "AmigoBot-v1" not in gym.registry:
         return None
     tasks: dict[str, tuple[str, dict[str, Any]]] = {
@@ -544,11 +527,6 @@ class KernelRow:
 def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[KernelRow]:
     """AmigoBot-v0 and AmigoBot-v1 (default task) with each step implementation: one single-env step and one
     env-step of the vector env at ``n`` robots (``"numba-parallel"`` too), ``[]`` without numba."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return []
     rows = []
@@ -660,8 +638,6 @@ def format_targets(items: Sequence[Target], machine: str) -> list[str]:
 
 def numba_state() -> str:
     """numba's version, its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel SVML."""
-    from amigo_gym.sim.fast import numba_available
-
     if not numba_available():
         return "numba not installed"
     import numba
@@ -749,13 +725,10 @@ def _fixed_cost(rows: Sequence[VectorRow]) -> dict[str, float] | None:
     return out
 
 
-def _fmt(x: float | None, spec: str = ".3g") -> str:
-    return "-" if x is None else format(x, spec)
-
-
-def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report: Report | None = None) -> str:
-    """Markdown tables of every figure with its ratio (``report`` adds memory, PPO, v1 and notes)."""
+def format_report(report: Report) -> str:
+    """Markdown tables of every figure of ``report`` with its ratio, the targets, the load average and the notes."""
     out: list[str] = []
+    single, rows = report.single, report.vector
     if single is not None:
         out += [
             "| single env (gym.make) | time per step [us] |",
@@ -791,7 +764,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| ratio AmigoBot / CartPole (target <= 0.5) | {fc['ratio']:.2f} |",
             ]
         out.append("")
-    if report is not None and report.memory is not None:
+    if report.memory is not None:
         m = report.memory
         out += [
             f"| memory per sub-env (N = {m.n} vs 1, tracemalloc) | retained [bytes] | peak of one step [bytes] |",
@@ -800,7 +773,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
             f"| CartPoleVectorEnv | {m.cartpole_retained:.0f} | {m.cartpole_step_peak:.0f} |",
             "",
         ]
-    if report is not None and report.ppo:
+    if report.ppo:
         out += [
             "| SB3 PPO learn | AmigoBot [steps/s] | Pendulum-v1 [steps/s] | AmigoBot / Pendulum (target >= 0.95) "
             "| env's share of learn: AmigoBot | Pendulum |",
@@ -813,7 +786,7 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| {pr.amigobot_env_share:.1%} | {pr.pendulum_env_share:.1%} |"
             )
         out.append("")
-    if report is not None and report.v1 is not None:
+    if report.v1 is not None:
         v = report.v1
         hard = "path=mixed, speed=(0.1, 0.4), randomize=hard"
         out += [
@@ -829,12 +802,10 @@ def format_report(single: SingleResult | None, rows: Sequence[VectorRow], report
                 f"| {_fmt(None if h is None else b / h, '.2f')} (time) |"
             )
         out.append("")
-    if report is not None:
-        out += format_kernels(report.kernels)
-        machine = f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})"
-        out += format_targets(targets(report), machine)
-        out.append(f"load average (1, 5, 15 min): {report.load[0]} at the start, {report.load[1]} at the end")
-        out += [f"note: {n}" for n in report.notes]
+    out += format_kernels(report.kernels)
+    out += format_targets(targets(report), f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})")
+    out.append(f"load average (1, 5, 15 min): {report.load[0]} at the start, {report.load[1]} at the end")
+    out += [f"note: {n}" for n in report.notes]
     return "\n".join(out).rstrip()
 
 
@@ -916,147 +887,148 @@ def headline_table(env_doc: dict[str, Any], core_doc: dict[str, Any] | None = No
 
 
 # ---------------------------------------------------------------------------------------------- CLI
-def build_parser() -> argparse.ArgumentParser:
-    """Options of ``amigo-gym bench-env``."""
-    p = OneLineParser(
-        prog=PROG, description="Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and SyncVectorEnv."
-    )
-    p.add_argument("--sizes", type=int, nargs="+", default=None, help=f"vector sizes [envs] (default: {DEFAULT_SIZES})")
-    p.add_argument("--repeats", type=int, default=5, help="repeats per measurement [repeats]; the median is reported")
-    p.add_argument("--min-time", type=float, default=0.2, help="least duration of one repeat [s]")
-    p.add_argument("--sync-max", type=int, default=SYNC_MAX, help="largest N for the SyncVectorEnv peer [envs]")
-    p.add_argument("--memory-n", type=int, default=65536, help="N of the memory measurement (against N = 1) [envs]")
-    p.add_argument("--ppo-steps", type=int, default=8192, help="PPO budget per run [env-steps]")
-    p.add_argument("--ppo-envs", type=int, default=8, help="envs of the vectorised PPO comparison [envs]")
-    p.add_argument("--ppo-repeats", type=int, default=3, help="alternating AmigoBot/Pendulum PPO runs (median) [runs]")
-    p.add_argument("--skip-single", action="store_true", help="skip the single-env comparison")
-    p.add_argument("--skip-vector", action="store_true", help="skip the vector-env comparison")
-    p.add_argument("--skip-memory", action="store_true", help="skip the memory measurement")
-    p.add_argument("--skip-ppo", action="store_true", help="skip the SB3 PPO comparison")
-    p.add_argument("--v1", action="store_true", help="also AmigoBot-v1 against v0 (when registered)")
-    p.add_argument(
-        "--kernels",
-        action="store_true",
-        help="also each step implementation (numpy, numba, numba-parallel) of AmigoBot-v0 and v1, single and vector "
-        "env at the largest of --sizes up to 4096 (needs numba)",
-    )
-    p.add_argument(
-        "--threads",
-        type=int,
-        default=None,
-        help="numba's threads for kernel=numba-parallel [threads] (default: NUMBA_NUM_THREADS, else all CPUs)",
-    )
-    p.add_argument(
-        "--quick", action="store_true", help=f"smoke run: sizes {QUICK_SIZES}, 1 repeat of 0.02 s, tiny memory/PPO runs"
-    )
-    p.add_argument("--json", default=None, metavar="FILE", help="JSON output [file] (default: none)")
-    p.add_argument("--plot", default=None, metavar="PNG", help="plot throughput against N [file] (default: none)")
-    p.add_argument(
-        "--table-from",
-        default=None,
-        metavar="FILE",
-        help="measure nothing: print the README's performance table from this --json file of a --v1 run [file], "
-        "with the start-up row from --core-json (default: none)",
-    )
-    p.add_argument(
-        "--core-json",
-        default=None,
-        metavar="FILE",
-        help="bench-core --json file for --table-from [file] (default: none)",
-    )
-    return p
+@dataclass(frozen=True)
+class EnvSettings:
+    """Settings of ``amigo-gym bench-env``, each the option of the same name (``--min-time`` for ``min_time``).
+
+    Attributes:
+        sizes: vector sizes [envs] (default: (1, 64, 1024, 4096, 65536)).
+        repeats: repeats per measurement [repeats]; the median is reported.
+        min_time: least duration of one repeat [s].
+        sync_max: largest N for the SyncVectorEnv peer [envs].
+        memory_n: N of the memory measurement (against N = 1) [envs].
+        ppo_steps: PPO budget per run [env-steps].
+        ppo_envs: envs of the vectorised PPO comparison [envs].
+        ppo_repeats: alternating AmigoBot/Pendulum PPO runs (median) [runs].
+        skip_single: skip the single-env comparison.
+        skip_vector: skip the vector-env comparison.
+        skip_memory: skip the memory measurement.
+        skip_ppo: skip the SB3 PPO comparison.
+        v1: also AmigoBot-v1 against v0 (when registered).
+        kernels: also each step implementation (numpy, numba, numba-parallel) of AmigoBot-v0 and v1, single and vector
+            env at the largest of --sizes up to 4096 (needs numba).
+        threads: numba's threads for kernel=numba-parallel [threads] (default: NUMBA_NUM_THREADS, else all CPUs).
+        quick: smoke run: sizes (1, 64, 1024), 1 repeat of 0.02 s, tiny memory/PPO runs.
+        json: JSON output [file] (default: none).
+        plot: plot throughput against N [file] (default: none).
+        table_from: measure nothing: print the README's performance table from this --json file of a --v1 run
+            [file], with the start-up row from --core-json (default: none).
+        core_json: bench-core --json file for --table-from [file] (default: none).
+    """
+
+    sizes: tuple[int, ...] | None = None
+    repeats: int = 5
+    min_time: float = 0.2
+    sync_max: int = SYNC_MAX
+    memory_n: int = 65536
+    ppo_steps: int = 8192
+    ppo_envs: int = 8
+    ppo_repeats: int = 3
+    skip_single: bool = False
+    skip_vector: bool = False
+    skip_memory: bool = False
+    skip_ppo: bool = False
+    v1: bool = False
+    kernels: bool = False
+    threads: int | None = None
+    quick: bool = False
+    json: str | None = None
+    plot: str | None = None
+    table_from: str | None = None
+    core_json: str | None = None
+
+    def __post_init__(self) -> None:
+        for i, n in enumerate(self.sizes or ()):
+            check_range(PROG, f"sizes[{i}]", n, 1, 1_000_000)
+        check_range(PROG, "min_time", self.min_time, 0.0, 60.0, low_open=True)
+        for name, low, high in (
+            ("repeats", 1, 1000),
+            ("sync_max", 0, 1_000_000),
+            ("memory_n", 2, 10_000_000),
+            ("ppo_steps", 1, 10_000_000),
+            ("ppo_envs", 1, 4096),
+            ("ppo_repeats", 1, 100),
+        ):
+            check_range(PROG, name, getattr(self, name), low, high)
+        if self.threads is not None:
+            check_range(PROG, "threads", self.threads, 1, os.cpu_count() or 1)
+
+
+def run(s: EnvSettings) -> int:
+    """``amigo-gym bench-env`` with the settings ``s``: the report on stdout (progress on stderr), ``--plot``,
+    ``--json``; with ``--table-from``, only :func:`headline_table` of the JSON files."""
+    if s.table_from is not None:
+        import json
+
+        env_doc = json.loads(Path(s.table_from).read_text(encoding="utf-8"))
+        core_doc = json.loads(Path(s.core_json).read_text(encoding="utf-8")) if s.core_json else None
+        try:
+            print(headline_table(env_doc, core_doc), end="")
+        except (KeyError, StopIteration) as exc:
+            raise ValueError(f"--table-from {s.table_from}: not the JSON of a full --v1 run ({exc})") from None
+        return 0
+    if s.quick:
+        sizes = list(s.sizes or QUICK_SIZES)
+        repeats, min_time, sync_max = 1, 0.02, min(s.sync_max, SYNC_MAX)
+        memory_n, ppo_steps = min(s.memory_n, 256), min(s.ppo_steps, 128)
+    else:
+        sizes = list(s.sizes or DEFAULT_SIZES)
+        repeats, min_time, sync_max = s.repeats, s.min_time, s.sync_max
+        memory_n, ppo_steps = s.memory_n, s.ppo_steps
+    if s.threads is not None and numba_available():
+        import numba
+
+        # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
+        check_range(PROG, "threads", s.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
+        numba.set_num_threads(s.threads)
+    rep = Report()
+    rep.load = (load_average(), "-")
+    print(f"{machine_line()}; {numba_state()}; load average {rep.load[0]}", flush=True)
+    print(f"median of {repeats} repeats of >= {min_time:g} s", flush=True)
+    if not s.skip_single:
+        _log("single env: AmigoBot-v0 vs Pendulum-v1")
+        rep.single = bench_single(repeats, min_time)
+    if not s.skip_vector:
+        _log(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
+        rep.vector = bench_vector(sizes, repeats, min_time, sync_max, log=_log)
+    if not s.skip_memory:
+        _log(f"memory per sub-env (N = {memory_n} vs 1)")
+        rep.memory = bench_memory(memory_n)
+    if not s.skip_ppo:
+        try:
+            import stable_baselines3  # noqa: F401
+            import torch  # noqa: F401
+        except ImportError:
+            rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
+        else:
+            _log(f"SB3 PPO learn, {ppo_steps} steps per run")
+            rollout, rounds = (64, 1) if s.quick else (2048, s.ppo_repeats)
+            rep.ppo = bench_ppo(ppo_steps, s.ppo_envs, log=_log, rollout=rollout, repeats=rounds, v1=s.v1)
+    if s.v1:
+        _log("AmigoBot-v1 vs v0")
+        rep.v1 = bench_v1(sizes, repeats, min_time)
+        if rep.v1 is None:
+            rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
+    if s.kernels:
+        n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
+        _log(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
+        rep.kernels = bench_kernels(n_k, repeats, min_time)
+        if not rep.kernels:
+            rep.notes.append("--kernels: numba is not installed; only the numpy step exists")
+    rep.load = (rep.load[0], load_average())
+    print(format_report(rep))
+    if s.plot is not None and rep.vector:
+        plot_vector(rep.vector, s.plot, rep.v1)
+        _log(f"wrote {s.plot}")
+    if s.json is not None:
+        atomic_write_json(s.json, rep.to_json())
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym bench-env``."""
-    args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
-    if args.table_from is not None:
-
-        def table() -> int:
-            import json
-
-            env_doc = json.loads(Path(args.table_from).read_text(encoding="utf-8"))
-            core_doc = json.loads(Path(args.core_json).read_text(encoding="utf-8")) if args.core_json else None
-            try:
-                print(headline_table(env_doc, core_doc), end="")
-            except (KeyError, StopIteration) as exc:
-                raise ValueError(f"--table-from {args.table_from}: not the JSON of a full --v1 run ({exc})") from None
-            return 0
-
-        return run_guarded(table, PROG)
-
-    def go() -> int:
-        if args.quick:
-            sizes = list(args.sizes or QUICK_SIZES)
-            repeats, min_time, sync_max = 1, 0.02, min(args.sync_max, SYNC_MAX)
-            memory_n, ppo_steps = min(args.memory_n, 256), min(args.ppo_steps, 128)
-        else:
-            sizes = list(args.sizes or DEFAULT_SIZES)
-            repeats, min_time, sync_max = args.repeats, args.min_time, args.sync_max
-            memory_n, ppo_steps = args.memory_n, args.ppo_steps
-        for i, n in enumerate(sizes):
-            check_range(PROG, f"sizes[{i}]", n, 1, 1_000_000)
-        check_range(PROG, "repeats", repeats, 1, 1000)
-        check_range(PROG, "min_time", min_time, 0.0, 60.0, low_open=True)
-        check_range(PROG, "sync_max", sync_max, 0, 1_000_000)
-        check_range(PROG, "memory_n", memory_n, 2, 10_000_000)
-        check_range(PROG, "ppo_steps", ppo_steps, 1, 10_000_000)
-        check_range(PROG, "ppo_envs", args.ppo_envs, 1, 4096)
-        check_range(PROG, "ppo_repeats", args.ppo_repeats, 1, 100)
-        if args.threads is not None:
-            from amigo_gym.sim.fast import numba_available
-
-            check_range(PROG, "threads", args.threads, 1, os.cpu_count() or 1)
-            if numba_available():
-                import numba
-
-                # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
-                check_range(PROG, "threads", args.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
-                numba.set_num_threads(args.threads)
-        rep = Report()
-        rep.load = (load_average(), "-")
-        print(f"{machine_line()}; {numba_state()}; load average {rep.load[0]}", flush=True)
-        print(f"median of {repeats} repeats of >= {min_time:g} s", flush=True)
-        if not args.skip_single:
-            _log("single env: AmigoBot-v0 vs Pendulum-v1")
-            rep.single = bench_single(repeats, min_time)
-        if not args.skip_vector:
-            _log(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
-            rep.vector = bench_vector(sizes, repeats, min_time, sync_max, log=_log)
-        if not args.skip_memory:
-            _log(f"memory per sub-env (N = {memory_n} vs 1)")
-            rep.memory = bench_memory(memory_n)
-        if not args.skip_ppo:
-            try:
-                import stable_baselines3  # noqa: F401
-                import torch  # noqa: F401
-            except ImportError:
-                rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
-            else:
-                _log(f"SB3 PPO learn, {ppo_steps} steps per run")
-                rollout, rounds = (64, 1) if args.quick else (2048, args.ppo_repeats)
-                rep.ppo = bench_ppo(ppo_steps, args.ppo_envs, log=_log, rollout=rollout, repeats=rounds, v1=args.v1)
-        if args.v1:
-            _log("AmigoBot-v1 vs v0")
-            rep.v1 = bench_v1(sizes, repeats, min_time)
-            if rep.v1 is None:
-                rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
-        if args.kernels:
-            n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
-            _log(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
-            rep.kernels = bench_kernels(n_k, repeats, min_time)
-            if not rep.kernels:
-                rep.notes.append("--kernels: numba is not installed; only the numpy step exists")
-        rep.load = (rep.load[0], load_average())
-        print(format_report(rep.single, rep.vector, rep))
-        if args.plot is not None and rep.vector:
-            plot_vector(rep.vector, args.plot, rep.v1)
-            _log(f"wrote {args.plot}")
-        if args.json is not None:
-            atomic_write_json(args.json, rep.to_json())
-        return 0
-
-    return run_guarded(go, PROG)
+    description = "Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and SyncVectorEnv."
+    return run_command(EnvSettings, run, argv, PROG, description)
 
 
 if __name__ == "__main__":

@@ -15,13 +15,21 @@ import cProfile
 import pstats
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.bench import run_command
+from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.env import _single_stepper, _vector_stepper
+from amigo_gym.model.params import check_range
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
-__all__ = ["gap", "profile_steps", "single_parts", "main"]
+__all__ = ["ProfileSettings", "gap", "profile_steps", "single_parts", "main", "run"]
 
 PROG = "python -m amigo_gym.bench.profile"
 
@@ -53,45 +61,6 @@ def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[flo
     return total, rows[:top]
 
 
-def _single(seed: int) -> Callable[[], object]:
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
-    env = gym.make("AmigoBot-v0")
-    env.reset(seed=seed)
-    pool = np.random.default_rng(seed).uniform(-1, 1, (16, 2)).astype(np.float32)
-    k = [0]
-
-    def step() -> object:
-        k[0] = (k[0] + 1) % 16
-        _, _, term, trunc, _ = env.step(pool[k[0]])
-        if term or trunc:
-            env.reset()
-        return None
-
-    return step
-
-
-def _vector(n: int, seed: int, kernel: str | None) -> Callable[[], object]:
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-
-    kw: dict[str, Any] = {} if kernel is None else {"kernel": kernel}
-    envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
-    envs.reset(seed=seed)
-    pool = list(np.random.default_rng(seed).uniform(-1, 1, (16, n, 2)).astype(np.float32))
-    k = [0]
-
-    def step() -> object:
-        k[0] = (k[0] + 1) % 16
-        envs.step(pool[k[0]])
-        return None
-
-    return step
-
-
 def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
     out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
     out += ["| function | own time | calls per step |", "|---|---:|---:|"]
@@ -100,10 +69,6 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    from amigo_gym.bench.core import measure_many
-    from amigo_gym.bench.env import _vector_stepper
     from amigo_gym.envs.amigobot import AmigoBotVectorEnv
     from amigo_gym.sim import fast
 
@@ -139,13 +104,6 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
 
 def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401
-    from amigo_gym.bench.core import measure_many
-    from amigo_gym.task import v0 as task
-    from amigo_gym.task import v1 as tracking
-
     env = gym.make("AmigoBot-v0")
     env.reset(seed=0)
     raw: Any = env.unwrapped
@@ -223,38 +181,61 @@ def libm(n: int = 100_000, seed: int = 0) -> str:
     return "\n".join(rows)
 
 
+@dataclass(frozen=True)
+class ProfileSettings:
+    """Settings of ``python -m amigo_gym.bench.profile``, each the option of the same name.
+
+    Attributes:
+        steps: profiled steps per case (vector: divided by N/64).
+        top: functions listed per case.
+        sizes: vector env sizes N.
+        kernel: the vector env's kernel argument, when it has one.
+        gap: instead: the kernel env against CartPole, with/without restarts.
+        single_parts: instead: a single step and its parts vs Pendulum.
+        libm: instead: numpy's transcendental functions vs the C library's.
+    """
+
+    steps: int = 3000
+    top: int = 12
+    sizes: tuple[int, ...] = (1, 4096)
+    kernel: str | None = None
+    gap: bool = False
+    single_parts: bool = False
+    libm: bool = False
+
+    def __post_init__(self) -> None:
+        check_range(PROG, "steps", self.steps, 1, 10**9)
+        check_range(PROG, "top", self.top, 1, 10**6)
+        for i, n in enumerate(self.sizes):
+            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
+
+
+def run(s: ProfileSettings) -> int:
+    """The tables of the settings ``s`` on stdout (module docstring; ``--gap``, ``--single-parts``, ``--libm``)."""
+    if s.gap:
+        print(gap(s.sizes))
+        return 0
+    if s.single_parts:
+        print(single_parts())
+        return 0
+    if s.libm:
+        print(libm())
+        return 0
+    total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
+    print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
+    for n in s.sizes:
+        steps = max(20, s.steps // max(1, n // 64))
+        kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
+        envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
+        total, rows = profile_steps(_vector_stepper(envs, 0), steps, s.top)
+        name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if s.kernel is None else f", kernel={s.kernel}")
+        print(_table(name, steps, total, rows), end="\n\n")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point."""
-    p = OneLineParser(prog=PROG, description="cProfile of AmigoBot-v0's single and vector env steps.")
-    p.add_argument("--steps", type=int, default=3000, help="profiled steps per case (vector: divided by N/64)")
-    p.add_argument("--top", type=int, default=12, help="functions listed per case")
-    p.add_argument("--sizes", type=int, nargs="+", default=[1, 4096], help="vector env sizes N")
-    p.add_argument("--kernel", default=None, help="the vector env's kernel argument, when it has one")
-    p.add_argument("--gap", action="store_true", help="instead: the kernel env against CartPole, with/without restarts")
-    p.add_argument("--single-parts", action="store_true", help="instead: a single step and its parts vs Pendulum")
-    p.add_argument("--libm", action="store_true", help="instead: numpy's transcendental functions vs the C library's")
-    args = p.parse_args(sys.argv[1:] if argv is None else list(argv))
-
-    def go() -> int:
-        if args.gap:
-            print(gap(args.sizes))
-            return 0
-        if args.single_parts:
-            print(single_parts())
-            return 0
-        if args.libm:
-            print(libm())
-            return 0
-        total, rows = profile_steps(_single(0), args.steps, args.top)
-        print(_table('`gym.make("AmigoBot-v0")`, one step', args.steps, total, rows), end="\n\n")
-        for n in args.sizes:
-            steps = max(20, args.steps // max(1, n // 64))
-            total, rows = profile_steps(_vector(n, 0, args.kernel), steps, args.top)
-            name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if args.kernel is None else f", kernel={args.kernel}")
-            print(_table(name, steps, total, rows), end="\n\n")
-        return 0
-
-    return run_guarded(go, PROG)
+    return run_command(ProfileSettings, run, argv, PROG, "cProfile of AmigoBot-v0's single and vector env steps.")
 
 
 if __name__ == "__main__":

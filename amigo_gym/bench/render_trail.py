@@ -17,18 +17,24 @@ sizes (``tests/test_bad_inputs_v1.py``).
 
 from __future__ import annotations
 
-import argparse
 import gc
 import json
 import os
 import subprocess
 import sys
 from collections.abc import Sequence
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
-import numpy as np
+from amigo_gym.bench import run_command
+from amigo_gym.bench.core import measure_many
+from amigo_gym.bench.env import _vector_stepper
+from amigo_gym.io import atomic_write_json
+from amigo_gym.options import cli
 
-__all__ = ["main", "measure_memory", "measure_time"]
+__all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
+
+PROG = "python -m amigo_gym.bench.render_trail"
 
 MiB = 2**20
 
@@ -38,11 +44,6 @@ def _env(n: int, path: str, render: bool) -> Any:
 
     kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
     return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
-
-
-def _actions(n: int, count: int = 16) -> list[np.ndarray]:
-    rng = np.random.default_rng(0)
-    return [rng.uniform(-1.0, 1.0, (n, 2)) for _ in range(count)]
 
 
 def _rss() -> int:
@@ -62,12 +63,11 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
     its pages resident as they are first written) and whatever else the steps keep (the paths drawn at resets).
     """
     env = _env(n, path, render=render)
-    acts = _actions(n)
+    step = _vector_stepper(env, 0)  # reset, random actions (the same in both processes)
     gc.collect()
-    env.reset(seed=0)
     first = _rss()
-    for t in range(steps):
-        env.step(acts[t % len(acts)])
+    for _ in range(steps):
+        step()
     if render:
         trail_of = getattr(env, "_trail_of", None) or (lambda i: list(env._trails[i]))  # (the former lists: to compare)
         trails = [trail_of(i) for i in range(frames)]
@@ -81,78 +81,79 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
 
 def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float = 0.5) -> dict[str, float]:
     """Median time of one ``step`` [s] with and without ``render_mode`` (interleaved repeats), and their ratio."""
-    from amigo_gym.bench.core import measure_many
-
-    acts = _actions(n)
     envs = {"plain": _env(n, path, render=False), "rgb_array": _env(n, path, render=True)}
-    counters = {name: [0] for name in envs}
-    for env in envs.values():
-        env.reset(seed=0)
-
-    def stepper(name: str) -> Any:
-        env, c = envs[name], counters[name]
-
-        def fn() -> None:
-            env.step(acts[c[0] % len(acts)])
-            c[0] += 1
-
-        return fn
-
-    t = measure_many({name: stepper(name) for name in envs}, repeats, min_time)
+    t = measure_many({name: _vector_stepper(env, 0) for name, env in envs.items()}, repeats, min_time)
     for env in envs.values():
         env.close()
     return {"step_s": t["plain"], "step_render_s": t["rgb_array"], "ratio": t["rgb_array"] / t["plain"]}
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m amigo_gym.bench.render_trail", description=__doc__.split("\n")[0])
-    p.add_argument("--n", type=int, default=1024, help="robots [envs] (default 1024)")
-    p.add_argument("--steps", type=int, default=3000, help="rendered steps of the memory measurement (default 3000)")
-    p.add_argument("--memory-only", choices=("render", "plain"), default=None, help=argparse.SUPPRESS)
-    p.add_argument("--path", default="mixed", help="path= of the envs (default mixed, with hard randomisation)")
-    p.add_argument("--repeats", type=int, default=5, help="interleaved repeats of the timing (median) (default 5)")
-    p.add_argument("--min-time", type=float, default=0.5, help="least duration of one timing repeat [s] (default 0.5)")
-    p.add_argument("--skip-memory", action="store_true", help="time only")
-    p.add_argument("--skip-time", action="store_true", help="measure the memory only")
-    p.add_argument("--json", default=None, metavar="FILE", help="write the figures as JSON [file]")
-    return p
+@dataclass(frozen=True)
+class RenderTrailSettings:
+    """Settings of ``python -m amigo_gym.bench.render_trail``, each the option of the same name.
+
+    Attributes:
+        n: robots [envs] (default 1024).
+        steps: rendered steps of the memory measurement (default 3000).
+        memory_only: the subprocess of one memory measurement, ``render`` or ``plain`` (internal).
+        path: path= of the envs (default mixed, with hard randomisation).
+        repeats: interleaved repeats of the timing (median) (default 5).
+        min_time: least duration of one timing repeat [s] (default 0.5).
+        skip_memory: time only.
+        skip_time: measure the memory only.
+        json: write the figures as JSON [file].
+    """
+
+    n: int = 1024
+    steps: int = 3000
+    memory_only: Literal["render", "plain"] | None = field(default=None, metadata=cli(hidden=True))
+    path: str = "mixed"
+    repeats: int = 5
+    min_time: float = 0.5
+    skip_memory: bool = False
+    skip_time: bool = False
+    json: str | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("n", "steps", "repeats"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"--{name} must be >= 1, got {getattr(self, name)}")
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    for name in ("n", "steps", "repeats"):
-        if getattr(args, name) < 1:
-            print(f"error: --{name} must be >= 1, got {getattr(args, name)}", file=sys.stderr)
-            return 2
-    out: dict[str, Any] = {"n": args.n, "steps": args.steps, "path": args.path}
-    if args.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
-        print(json.dumps(measure_memory(args.n, args.steps, args.path, render=args.memory_only == "render")))
+def run(s: RenderTrailSettings) -> int:
+    """The measurements of the settings ``s``, one line per figure on stdout (module docstring), ``--json``."""
+    out: dict[str, Any] = {"n": s.n, "steps": s.steps, "path": s.path}
+    if s.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
+        print(json.dumps(measure_memory(s.n, s.steps, s.path, render=s.memory_only == "render")))
         return 0
-    if not args.skip_memory:
+    if not s.skip_memory:
         for kind in ("render", "plain"):
             cmd = [sys.executable, os.path.abspath(__file__), "--memory-only", kind]  # this module, as a script
-            cmd += ["--n", str(args.n), "--steps", str(args.steps), "--path", args.path]
+            cmd += ["--n", str(s.n), "--steps", str(s.steps), "--path", s.path]
             r = subprocess.run(cmd, capture_output=True, text=True, check=True)
             got = json.loads(r.stdout.strip().splitlines()[-1])
             out[f"growth_{kind}_mib"] = got["growth_mib"]
             if kind == "render":
                 out["trail_ring_mib"] = got["trail_ring_mib"]
         print(
-            f"resident memory growth over {args.steps} steps at N={args.n} ({args.path}): "
+            f"resident memory growth over {s.steps} steps at N={s.n} ({s.path}): "
             f"{out['growth_render_mib']:.1f} MiB with render_mode='rgb_array' (target <= 20; its trail ring: "
             f"{out['trail_ring_mib']:.1f} MiB), {out['growth_plain_mib']:.1f} MiB without"
         )
-    if not args.skip_time:
-        out |= measure_time(args.n, args.path, args.repeats, args.min_time)
+    if not s.skip_time:
+        out |= measure_time(s.n, s.path, s.repeats, s.min_time)
         print(
-            f"step time at N={args.n}: {out['step_s'] * 1e3:.3g} ms plain, {out['step_render_s'] * 1e3:.3g} ms with "
+            f"step time at N={s.n}: {out['step_s'] * 1e3:.3g} ms plain, {out['step_render_s'] * 1e3:.3g} ms with "
             f"render_mode='rgb_array': ratio {out['ratio']:.3f} (target <= 1.1)"
         )
-    if args.json:
-        from amigo_gym.io import atomic_write_json
-
-        atomic_write_json(args.json, out)
+    if s.json:
+        atomic_write_json(s.json, out)
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``python -m amigo_gym.bench.render_trail``."""
+    return run_command(RenderTrailSettings, run, argv, PROG, (__doc__ or "").split("\n")[0])
 
 
 if __name__ == "__main__":

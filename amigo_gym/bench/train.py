@@ -34,12 +34,17 @@ import sys
 import tempfile
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import cpu_model, simd_level
+from amigo_gym.bench.offpolicy import ALGOS, _venv, bench_offpolicy
+from amigo_gym.io import atomic_write_json
+from amigo_gym.model.params import check_range
 
-__all__ = ["bench_fastppo", "bench_sb3", "cpu_model", "main"]
+__all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
 
 PROG = "amigo-gym bench-train"
 
@@ -97,16 +102,10 @@ def bench_sb3(
     """Train SB3's PPO (``MlpPolicy``, 64x64 tanh) over the SB3 adapter of the native vector env; time ``learn``."""
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecMonitor
-
-    from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
-    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     torch.set_num_threads(threads)
-    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
     t0, c0 = time.perf_counter(), time.process_time()
-    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
-    venv.seed(seed)
+    venv = _venv(n_envs, seed)
     model = PPO(
         "MlpPolicy",
         venv,
@@ -135,45 +134,13 @@ def _show(name: str, r: dict[str, Any]) -> None:
     print(line, flush=True)
 
 
-def _add_offpolicy_options(p: Any) -> None:
-    """The options of the off-policy entries (:mod:`amigo_gym.bench.offpolicy`): none run unless ``--offpolicy``."""
-    p.add_argument(
-        "--offpolicy",
-        default="",
-        help="off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc [names] (default: none)",
-    )
-    p.add_argument(
-        "--offpolicy-steps", type=int, default=1024, help="env-steps after the warm-up, shipped configuration [steps]"
-    )
-    p.add_argument(
-        "--offpolicy-ht-steps", type=int, default=16384, help="env-steps after the warm-up, ht configuration [steps]"
-    )
-
-
-def _offpolicy_algos(args: Any) -> list[str]:
-    """The checked ``--offpolicy`` names and budgets (``ValueError``: one line), before anything runs."""
-    from amigo_gym.bench.offpolicy import ALGOS
-    from amigo_gym.model.params import check_range
-
-    algos = [a.strip() for a in args.offpolicy.split(",") if a.strip()]
-    bad = [a for a in algos if a not in ALGOS]
-    if bad:
-        raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
-    check_range(PROG, "offpolicy_steps", args.offpolicy_steps, 8, 10**8)
-    check_range(PROG, "offpolicy_ht_steps", args.offpolicy_ht_steps, 128, 10**9)
-    return algos
-
-
-def _run_offpolicy(args: Any) -> dict[str, Any]:
+def _run_offpolicy(s: TrainSettings) -> dict[str, Any]:
     """Time each ``--offpolicy`` algorithm in the ``shipped`` and ``ht`` configurations (``<algo>_<config>``)."""
-    from amigo_gym.bench.offpolicy import bench_offpolicy
-
-    algos = _offpolicy_algos(args)
     runs: dict[str, Any] = {}
-    for algo in algos:
-        for config, steps in (("shipped", args.offpolicy_steps), ("ht", args.offpolicy_ht_steps)):
+    for algo in s.offpolicy_algos:
+        for config, steps in (("shipped", s.offpolicy_steps), ("ht", s.offpolicy_ht_steps)):
             name = f"{algo}_{config}"
-            r = runs[name] = bench_offpolicy(algo, config, steps, args.threads)
+            r = runs[name] = bench_offpolicy(algo, config, steps, s.threads)
             print(f"{name:<15}{r['sps_loop']:>10,.0f} env-steps/s of training "
                   f"({r['sps_loop_cpu']:,.0f} per CPU second), "
                   f"{r['gsps_loop']:,.1f} gradient steps/s ({r['gsps_loop_cpu']:,.1f} per CPU second) after the "
@@ -181,26 +148,50 @@ def _run_offpolicy(args: Any) -> dict[str, Any]:
     return runs
 
 
+@dataclass(frozen=True)
+class TrainSettings:
+    """Settings of ``amigo-gym bench-train``, each the option of the same name (``--fast-steps`` for ``fast_steps``).
+
+    Attributes:
+        fast_steps: env-steps of the fast PPO [steps].
+        sb3_steps: env-steps of each SB3 run [steps].
+        threads: torch threads of every run [threads].
+        skip_sb3_fastconfig: skip SB3 with the fast configuration.
+        json: write the results here [file] (default: print only).
+        offpolicy: off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc [names] (default: none).
+        offpolicy_steps: env-steps after the warm-up, shipped configuration [steps].
+        offpolicy_ht_steps: env-steps after the warm-up, ht configuration [steps].
+    """
+
+    fast_steps: int = 1_048_576
+    sb3_steps: int = 32_768
+    threads: int = 1
+    skip_sb3_fastconfig: bool = False
+    json: str | None = None
+    offpolicy: str = ""
+    offpolicy_steps: int = 1024
+    offpolicy_ht_steps: int = 16384
+
+    def __post_init__(self) -> None:
+        check_range(PROG, "fast_steps", self.fast_steps, 16384, 10**9)
+        check_range(PROG, "sb3_steps", self.sb3_steps, 1, 10**8)
+        check_range(PROG, "threads", self.threads, 1, 64)
+        bad = [a for a in self.offpolicy_algos if a not in ALGOS]
+        if bad:
+            raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
+        check_range(PROG, "offpolicy_steps", self.offpolicy_steps, 8, 10**8)
+        check_range(PROG, "offpolicy_ht_steps", self.offpolicy_ht_steps, 128, 10**9)
+
+    @property
+    def offpolicy_algos(self) -> list[str]:
+        """The names of ``--offpolicy`` (:mod:`amigo_gym.bench.offpolicy`'s ``ALGOS``; none run without it)."""
+        return [a.strip() for a in self.offpolicy.split(",") if a.strip()]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
-    from amigo_gym.io import atomic_write_json
-    from amigo_gym.model.params import check_range
-    from amigo_gym.options import OneLineParser, run_guarded
 
-    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
-    p.add_argument("--fast-steps", type=int, default=1_048_576, help="env-steps of the fast PPO [steps]")
-    p.add_argument("--sb3-steps", type=int, default=32_768, help="env-steps of each SB3 run [steps]")
-    p.add_argument("--threads", type=int, default=1, help="torch threads of every run [threads]")
-    p.add_argument("--skip-sb3-fastconfig", action="store_true", help="skip SB3 with the fast configuration")
-    p.add_argument("--json", default=None, help="write the results here [file] (default: print only)")
-    _add_offpolicy_options(p)
-    args = p.parse_args(list(argv) if argv is not None else None)
-
-    def run() -> int:
-        check_range(PROG, "fast_steps", args.fast_steps, 16384, 10**9)
-        check_range(PROG, "sb3_steps", args.sb3_steps, 1, 10**8)
-        check_range(PROG, "threads", args.threads, 1, 64)
-        _offpolicy_algos(args)
+    def run(s: TrainSettings) -> int:
         import numpy as np
         import torch
 
@@ -208,7 +199,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "cpu_model": cpu_model(),
             "simd": simd_level(),
             "cpu_count": os.cpu_count(),
-            "torch_threads": args.threads,
+            "torch_threads": s.threads,
             "python": platform.python_version(),
             "numpy": np.__version__,
             "torch": torch.__version__,
@@ -216,24 +207,24 @@ def main(argv: Sequence[str] | None = None) -> int:
             "command": "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:]),
         }
         print(f"CPU: {head['cpu_model']}, SIMD {head['simd']} ({head['cpu_count']} CPUs visible), "
-              f"torch threads {args.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
+              f"torch threads {s.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
         runs: dict[str, Any] = {}
-        runs["fastppo"] = bench_fastppo(args.fast_steps, args.threads)
+        runs["fastppo"] = bench_fastppo(s.fast_steps, s.threads)
         _show("fastppo", runs["fastppo"])
-        runs["sb3_shipped"] = bench_sb3(args.sb3_steps, args.threads, 16, 256, 1024, 10)
+        runs["sb3_shipped"] = bench_sb3(s.sb3_steps, s.threads, 16, 256, 1024, 10)
         _show("sb3_shipped", runs["sb3_shipped"])
-        if not args.skip_sb3_fastconfig:
-            runs["sb3_fastconfig"] = bench_sb3(max(args.sb3_steps, 512 * 32), args.threads, 512, 32, 4096, 4)
+        if not s.skip_sb3_fastconfig:
+            runs["sb3_fastconfig"] = bench_sb3(max(s.sb3_steps, 512 * 32), s.threads, 512, 32, 4096, 4)
             _show("sb3_fastconfig", runs["sb3_fastconfig"])
-        runs |= _run_offpolicy(args)
+        runs |= _run_offpolicy(s)
         ratios = {
             f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
         }
         for k, v in ratios.items():
             print(f"ratio {k}: {v:.1f}x", flush=True)
         doc = head | {"runs": runs, "ratios": ratios, "load_average_end": _load()}
-        if args.json:
-            atomic_write_json(args.json, doc, parents=True)
+        if s.json:
+            atomic_write_json(s.json, doc, parents=True)
         return 0
 
-    return run_guarded(run, PROG)
+    return run_command(TrainSettings, run, argv, PROG, __doc__.splitlines()[0] if __doc__ else "")
