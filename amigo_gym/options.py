@@ -79,8 +79,9 @@ def attribute_help(cls: type) -> dict[str, str]:
 
 
 def _attributes(doc: str) -> dict[str, str]:
+    """``{field: text}`` of the ``Attributes:`` section of ``doc`` (an entry starts at the first entry's indent)."""
     out: dict[str, str] = {}
-    inside, current = False, ""
+    inside, current, indent = False, "", -1
     for line in doc.splitlines():
         stripped = line.strip()
         if stripped == "Attributes:":
@@ -91,8 +92,9 @@ def _attributes(doc: str) -> dict[str, str]:
         if not stripped:
             break
         name, colon, text = stripped.partition(": ")
-        if colon and name.isidentifier():
-            current = name
+        at = len(line) - len(line.lstrip())
+        if colon and name.isidentifier() and indent in (-1, at):
+            current, indent = name, at
             out[name] = text
         elif current:
             out[current] += " " + stripped

@@ -178,7 +178,8 @@ class Child(Base):
         at: brake at [s].
         laps: laps [laps].
         suite: suite version.
-        csv: a CSV file [file].
+        csv: a CSV file [file], written whole (they are
+            files: a continuation line).
     """
 
     at: float | None = field(default=None, metadata=cli(group="brake"))
@@ -194,7 +195,8 @@ def test_positional_group_metavar_choices_nargs_and_inherited_help(capsys: pytes
     p = OneLineParser(prog="child")
     add_dataclass_options(p, Child)
     text = " ".join(p.format_help().split())
-    assert "[--at AT | --laps LAPS]" in text and "--csv FILE a CSV file [file]" in text
+    assert "[--at AT | --laps LAPS]" in text
+    assert "--csv FILE a CSV file [file], written whole (they are files: a continuation line)" in text
     assert "log the log [file]" in text  # the base class's docstring
     assert "families, as the child says [names] (default: all)" in text  # the child's entry replaces the base's
     assert "--suite {v1,v2} suite version (default: v2)" in text
