@@ -282,6 +282,9 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
         if meta["parse"] is not None:
             if value is None:
                 continue
+            if not isinstance(value, str):  # a default set on the parser (``set_defaults``): already parsed
+                kw[f.name] = value
+                continue
             try:
                 value = meta["parse"](value)
             except ValueError as exc:
