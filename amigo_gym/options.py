@@ -135,20 +135,7 @@ def cli(
         nargs: argparse's ``nargs`` in place of the type's (e.g. ``"*"`` for a list that may be empty).
         group: the name of a mutually exclusive group: at most one option of the group may be given.
     """
-    return {
-        "cli": {
-            "flag": flag,
-            "required": required,
-            "hidden": hidden,
-            "parse": parse,
-            "skip": skip,
-            "positional": positional,
-            "metavar": metavar,
-            "choices": choices,
-            "nargs": nargs,
-            "group": group,
-        }
-    }
+    return {"cli": dict(locals())}  # the arguments above, by name
 
 
 def json_object(text: str) -> dict[str, Any]:
@@ -296,13 +283,13 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     return cls(**kw)
 
 
-def parse_settings(cls: type[T], argv: Sequence[str], /, prog: str, description: str = "", **extra: Any) -> T:
-    """The settings ``cls`` of the command ``prog`` from its command line ``argv``: a :class:`OneLineParser` with
-    :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further fields) and ``validate()``
-    when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
+def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``): a
+    :class:`OneLineParser` with :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further
+    fields) and ``validate()`` when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
     parser = OneLineParser(prog=prog, description=description)
     add_dataclass_options(parser, cls)
-    namespace = parser.parse_args(list(argv))
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
     try:
         settings = settings_from_args(cls, namespace, **extra)
         validate = getattr(settings, "validate", None)

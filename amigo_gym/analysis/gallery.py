@@ -82,7 +82,7 @@ class GallerySettings:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym gallery [--out DIR] [--only NAME ...]`` (module docstring)."""
-    args = parse_settings(GallerySettings, sys.argv[1:] if argv is None else argv, PROG, __doc__.splitlines()[0])
+    args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
 
     def run() -> int:
         import matplotlib

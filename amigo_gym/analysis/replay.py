@@ -28,7 +28,6 @@ import csv
 import io
 import os
 import shutil
-import sys
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -255,10 +254,6 @@ class IdentifySettings(LogSettings):
             raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {self.heading_weight!r}")
 
 
-def _argv(argv: Sequence[str] | None) -> list[str]:
-    return list(sys.argv[1:] if argv is None else argv)
-
-
 def _nominal(path: str | None) -> tuple[RobotParams, ActuatorParams]:
     """``--nominal``: the nominal robot and ramps of a JSON file (its delay is ignored), or the defaults."""
     if path is None:
@@ -274,9 +269,7 @@ def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
 
 def main_replay(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym replay`` (module docstring)."""
-    args = parse_settings(
-        ReplaySettings, _argv(argv), "amigo-gym replay", "Replay a robot's log through the model; compare."
-    )
+    args = parse_settings(ReplaySettings, argv, "amigo-gym replay", "Replay a robot's log through the model; compare.")
 
     def go() -> int:
         out = Path(args.out)
@@ -314,9 +307,7 @@ def _fit_summary(fit: Fit) -> dict[str, Any]:
 
 def main_identify(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym identify`` (module docstring)."""
-    args = parse_settings(
-        IdentifySettings, _argv(argv), "amigo-gym identify", "Fit the robot's radii, track, delay to a log."
-    )
+    args = parse_settings(IdentifySettings, argv, "amigo-gym identify", "Fit the robot's radii, track, delay to a log.")
 
     def go() -> int:
         out = Path(args.out)

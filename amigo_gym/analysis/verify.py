@@ -193,9 +193,7 @@ class VerifySettings:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym verify [--quick]``: print the table of residuals with PASS/FAIL; status 1 if one fails."""
-    args = parse_settings(
-        VerifySettings, sys.argv[1:] if argv is None else argv, "amigo-gym verify", __doc__.splitlines()[0]
-    )
+    args = parse_settings(VerifySettings, argv, "amigo-gym verify", __doc__.splitlines()[0])
 
     def run() -> int:
         checks = rows(args.quick)

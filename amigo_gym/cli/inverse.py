@@ -202,7 +202,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym inverse`` (returns the exit status)."""
     args = parse_settings(
         InverseSettings,
-        sys.argv[1:] if argv is None else argv,
+        argv,
         PROG,
         "Analytic inverse solution of point H on a path (CSV or summary).",
     )

@@ -724,7 +724,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     prog = "amigo-gym derive"
     args = parse_settings(
         DeriveSettings,
-        sys.argv[1:] if argv is None else argv,
+        argv,
         prog,
         "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point "
         "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",

@@ -768,7 +768,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     a = parse_settings(
         EvaluateSettings,
-        sys.argv[1:] if argv is None else argv,
+        argv,
         "amigo-gym evaluate",
         "Evaluate analytic and trained agents (fixed protocol).",
     )
