@@ -78,11 +78,8 @@ class Settings:
 
 @dataclass(frozen=True)
 class _CommandLine(Settings):
-    """The command line of ``amigo-gym convergence``: :class:`Settings` and a deprecated option.
-
-    Attributes:
-        seed_count: deprecated (hidden): the number of starts when --seeds was the first seed [episodes].
-    """
+    """:class:`Settings` and the deprecated, hidden ``--seed-count`` (the number of starts when --seeds was the first
+    seed)."""
 
     seed_count: int | None = field(default=None, metadata=cli(hidden=True))
 

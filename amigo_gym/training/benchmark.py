@@ -1187,8 +1187,7 @@ def verify_outputs(out: Path) -> dict[str, str]:
 # --------------------------------------------------------------------------- command line
 @dataclass(frozen=True)
 class BenchmarkSettings:
-    """Options of ``amigo-gym benchmark``, each the option of the same name (``plots``: ``--no-plots``,
-    ``progress``: ``--no-progress``, ``list_suite``: ``--list``).
+    """Options of ``amigo-gym benchmark``, each the option of the same name unless its ``cli(flag)`` names one.
 
     Attributes:
         agents: classical names, NAME=GLOB of zips, zips or folders [agents] (default: the classical policies and

@@ -458,8 +458,8 @@ def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> l
 # --------------------------------------------------------------------------- command line
 @dataclass(frozen=True)
 class CurvesSettings:
-    """Options of ``amigo-gym curves``, each the option of the same name (``plots``: ``--no-plots``, ``progress``:
-    ``--no-progress``); :func:`learning_curves` checks the values.
+    """Options of ``amigo-gym curves`` (the option of the same name, or its ``cli(flag)``); checked by
+    :func:`learning_curves`.
 
     Attributes:
         runs: folders of run folders, or run folders (with eval.json) [dir] (required).

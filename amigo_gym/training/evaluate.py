@@ -727,8 +727,7 @@ DEFAULT_OUT = "results/evaluate"
 
 @dataclass(frozen=True)
 class EvaluateSettings:
-    """Options of ``amigo-gym evaluate``, each the option of the same name (``load_models``: ``--no-models``,
-    ``plots``: ``--no-plots``).
+    """Options of ``amigo-gym evaluate``, each the option of the same name unless its ``cli(flag)`` names one.
 
     Attributes:
         models: what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of <algo>.zip
