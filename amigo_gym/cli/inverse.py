@@ -89,9 +89,9 @@ class InverseSettings:
     no_brake: bool = field(default=False, metadata=cli(group="brake"))
     csv: str | None = field(default=None, metadata=cli(metavar="FILE"))
 
-    def validate(self, robot: RobotParams | None = None) -> None:
-        """Raise ``ValueError`` naming the option, its allowed range and the value (``robot``: the limits)."""
-        robot = robot or RobotParams()
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value (the limits: the AmigoBot's)."""
+        robot = RobotParams()
         _check("--radius", self.radius, robot.l3, 1e3, low_open=True)
         _check("--speed", self.speed, 0.0, robot.max_speed, low_open=True)
         _check("--dt", self.dt, 0.0, 10.0, low_open=True)
@@ -101,9 +101,9 @@ class InverseSettings:
             _check_csv_target(self.csv)
         if self.path == "manoeuvre":
             _check("--straight-length", self.straight_length, 0.0, 1e3)
-        for flag, value, high in (("--accel", self.accel, math.inf), ("--decel", self.decel, math.inf)):
+        for flag, value in (("--accel", self.accel), ("--decel", self.decel)):
             if value is not None:
-                _check(flag, value, 0.0, high, low_open=True)
+                _check(flag, value, 0.0, low_open=True)
         if self.t_start is not None:
             _check("--t-start", self.t_start, 0.0)
         if self.laps is not None:
