@@ -102,6 +102,7 @@ __all__ = [
     "YAML_ENV_ID",
     "YAML_RUN_KEYS",
     "FastPPOSettings",
+    "HyperparamsFile",
     "TrainFastRun",
     "ActorCritic",
     "curriculum_path_params",
@@ -913,47 +914,57 @@ def _train(
 
 # --------------------------------------------------------------------------- CLI
 @dataclass(frozen=True)
-class TrainFastRun:
+class HyperparamsFile:
+    """The option of ``amigo-gym train-fast`` read first: the file whose values become the defaults of the others.
+
+    Attributes:
+        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options
+            given here override it (e.g. agents/hyperparams/fastppo.yml) (default: none).
+    """
+
+    hyperparams: str | None = None
+
+
+@dataclass(frozen=True)
+class TrainFastRun(HyperparamsFile):
     """Options of ``amigo-gym train-fast`` besides the :class:`FastPPOSettings` (the run, not the training).
 
     Attributes:
         out: run folder [folder] (required).
         resume: continue the run in --out from its checkpoint.
         quiet: no progress lines.
-        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options
-            given here override it (e.g. agents/hyperparams/fastppo.yml) (default: none).
     """
 
-    out: str
+    out: str = field(kw_only=True)
     resume: bool = False
     quiet: bool = False
-    hyperparams: str | None = None
 
 
-def _parser(defaults: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
-    """The command line; ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
+def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> argparse.ArgumentParser:
+    """The options of ``cls`` (and the :class:`FastPPOSettings`' unless ``cls`` is :class:`HyperparamsFile`);
+    ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
     from amigo_gym.options import OneLineParser, add_dataclass_options
 
-    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
-    add_dataclass_options(p, TrainFastRun)
-    add_dataclass_options(p, FastPPOSettings)
-    if defaults:
-        p.set_defaults(**defaults)
+    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "", **kw)
+    add_dataclass_options(p, cls)
+    if cls is not HyperparamsFile:
+        add_dataclass_options(p, FastPPOSettings)
+    p.set_defaults(**(defaults or {}))
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``amigo-gym train-fast``: parsed once for ``--hyperparams``, then again over the file's defaults."""
+    """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
     from amigo_gym.options import run_guarded, settings_from_args
 
     args_in = list(sys.argv[1:] if argv is None else argv)
-    args = _parser().parse_args(args_in)
-    if args.hyperparams is not None:
-        defaults: dict[str, Any] = {}
-        rc = run_guarded(lambda: defaults.update(load_settings_yaml(args.hyperparams)), PROG)
+    known, _ = _parser(HyperparamsFile, add_help=False).parse_known_args(args_in)
+    defaults: dict[str, Any] = {}
+    if known.hyperparams is not None:
+        rc = run_guarded(lambda: defaults.update(load_settings_yaml(known.hyperparams)), PROG)
         if rc:
             return rc
-        args = _parser(defaults).parse_args(args_in)
+    args = _parser(TrainFastRun, defaults).parse_args(args_in)
     run_opts = settings_from_args(TrainFastRun, args)
 
     def run() -> int:
