@@ -70,11 +70,18 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def attribute_help(cls: type) -> dict[str, str]:
-    """The ``Attributes:`` section of a dataclass's docstring as ``{field: text}`` (continuation lines joined,
-    reST markup and the final full stop removed)."""
-    doc = cls.__doc__ or ""
+    """The ``Attributes:`` sections of a dataclass's docstring and its bases' as ``{field: text}`` (continuation
+    lines joined, reST markup and the final full stop removed; a class's entry replaces its bases')."""
     out: dict[str, str] = {}
-    inside, current = False, ""
+    for klass in reversed(cls.__mro__):
+        out.update(_attributes(klass.__dict__.get("__doc__") or ""))
+    return {name: _plain(text).rstrip(".") for name, text in out.items()}
+
+
+def _attributes(doc: str) -> dict[str, str]:
+    """``{field: text}`` of the ``Attributes:`` section of ``doc`` (an entry starts at the first entry's indent)."""
+    out: dict[str, str] = {}
+    inside, current, indent = False, "", -1
     for line in doc.splitlines():
         stripped = line.strip()
         if stripped == "Attributes:":
@@ -85,12 +92,13 @@ def attribute_help(cls: type) -> dict[str, str]:
         if not stripped:
             break
         name, colon, text = stripped.partition(": ")
-        if colon and name.isidentifier():
-            current = name
+        at = len(line) - len(line.lstrip())
+        if colon and name.isidentifier() and indent in (-1, at):
+            current, indent = name, at
             out[name] = text
         elif current:
             out[current] += " " + stripped
-    return {name: _plain(text).rstrip(".") for name, text in out.items()}
+    return out
 
 
 def _plain(text: str) -> str:
@@ -105,6 +113,11 @@ def cli(
     hidden: bool = False,
     parse: Callable[[str], Any] | None = None,
     skip: bool = False,
+    positional: bool = False,
+    metavar: str | None = None,
+    choices: Sequence[Any] | None = None,
+    nargs: str | int | None = None,
+    group: str | None = None,
 ) -> dict[str, Any]:
     """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``.
 
@@ -116,8 +129,13 @@ def cli(
         parse: turns the option's text into the field's value after parsing (e.g. :func:`json_object`); a
             ``ValueError`` becomes ``<flag> <message>``; not given: the field's default.
         skip: no option for this field (set by the command itself).
+        positional: a positional argument named as the field (``nargs`` as for an option).
+        metavar: the value's name in ``--help`` (default: argparse's, the field's name in capitals).
+        choices: the values allowed (a ``Literal`` type gives them otherwise).
+        nargs: argparse's ``nargs`` in place of the type's (e.g. ``"*"`` for a list that may be empty).
+        group: the name of a mutually exclusive group: at most one option of the group may be given.
     """
-    return {"cli": {"flag": flag, "required": required, "hidden": hidden, "parse": parse, "skip": skip}}
+    return {"cli": dict(locals())}  # the arguments above, by name
 
 
 def json_object(text: str) -> dict[str, Any]:
@@ -144,7 +162,7 @@ def parse_bool(text: str) -> bool:
 
 
 def _meta(f: Field[Any]) -> dict[str, Any]:
-    return dict(f.metadata.get("cli") or cli()["cli"])
+    return {**cli()["cli"], **f.metadata.get("cli", {})}
 
 
 def _flag(f: Field[Any]) -> str:
@@ -186,10 +204,12 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
     ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
     taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
-    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none.
+    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none. :func:`cli` may
+    make it positional, name its metavar, choices or nargs, or put it in a mutually exclusive group.
     """
     helps = attribute_help(cls)
     hints = get_type_hints(cls)
+    groups: dict[str, Any] = {}
     for f in fields(cls):
         meta = _meta(f)
         if meta["skip"] or not f.init:
@@ -219,7 +239,18 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
                 kw["default"] = list(kw["default"])
         else:
             kw.update(_scalar(tp))
-        parser.add_argument(flag, **kw)
+        kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
+        target: Any = parser
+        if meta["group"] is not None:
+            if meta["group"] not in groups:
+                groups[meta["group"]] = parser.add_mutually_exclusive_group()
+            target = groups[meta["group"]]
+        if meta["positional"]:
+            del kw["dest"]
+            kw.pop("required", None)
+            target.add_argument(f.name, **kw)
+        else:
+            target.add_argument(flag, **kw)
 
 
 def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
@@ -238,6 +269,9 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
         if meta["parse"] is not None:
             if value is None:
                 continue
+            if not isinstance(value, str):  # a default set on the parser (``set_defaults``): already parsed
+                kw[f.name] = value
+                continue
             try:
                 value = meta["parse"](value)
             except ValueError as exc:
@@ -249,13 +283,13 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     return cls(**kw)
 
 
-def parse_settings(cls: type[T], argv: Sequence[str], /, prog: str, description: str = "", **extra: Any) -> T:
-    """The settings ``cls`` of the command ``prog`` from its command line ``argv``: a :class:`OneLineParser` with
-    :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further fields) and ``validate()``
-    when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
+def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``): a
+    :class:`OneLineParser` with :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further
+    fields) and ``validate()`` when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
     parser = OneLineParser(prog=prog, description=description)
     add_dataclass_options(parser, cls)
-    namespace = parser.parse_args(list(argv))
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
     try:
         settings = settings_from_args(cls, namespace, **extra)
         validate = getattr(settings, "validate", None)

@@ -41,7 +41,6 @@ dot; :func:`clean_temporaries` removes them while the lock is held.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import os
@@ -61,7 +60,6 @@ __all__ = [
     "LOCK_NAME",
     "POINTER",
     "Checkpoint",
-    "add_trust_option",
     "TRUST_ENV",
     "CorruptFileError",
     "RunLock",
@@ -247,22 +245,6 @@ def trust_unverified(trust: bool = True) -> None:
     """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
     global _trust_unverified
     _trust_unverified = bool(trust)
-
-
-def add_trust_option(parser: argparse.ArgumentParser, what: str) -> None:
-    """The ``--trust-unverified`` flag: when given, :func:`trust_unverified` as soon as it is parsed. ``what``: the
-    files it concerns, for its help (e.g. ``model zips``)."""
-
-    class Trust(argparse._StoreTrueAction):
-        def __call__(self, *args: Any, **kwargs: Any) -> None:
-            trust_unverified()
-            super().__call__(*args, **kwargs)
-
-    parser.add_argument(
-        "--trust-unverified",
-        action=Trust,
-        help=f"load {what} without a recorded sha256 without the warning (they are pickles: they run code)",
-    )
 
 
 def check_pickle(path: Path, expected: str | None, source: str | None) -> None:

@@ -10,17 +10,16 @@ Markdown table and, with ``--plot FILE``, draws ``|e(t)|`` on a log scale for ev
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
-from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded
+from amigo_gym.options import OneLineParser, add_dataclass_options, cli, run_guarded
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
 
@@ -75,6 +74,14 @@ class Settings:
         if not gains:
             raise ValueError("--gains must name at least one gain")
         return [check_range("Settings", "gains", g, 0.0, 10.0, low_open=True) for g in gains]
+
+
+@dataclass(frozen=True)
+class _CommandLine(Settings):
+    """:class:`Settings` and the deprecated, hidden ``--seed-count`` (the number of starts when --seeds was the first
+    seed)."""
+
+    seed_count: int | None = field(default=None, metadata=cli(hidden=True))
 
 
 def halving_times(settings: Settings) -> list[GainFit]:
@@ -142,8 +149,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
     parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
-    add_dataclass_options(parser, Settings)
-    parser.add_argument("--seed-count", type=int, default=None, help=argparse.SUPPRESS)  # deprecated: --seeds
+    add_dataclass_options(parser, _CommandLine)
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = vars(parser.parse_args(args_list))
     seed_count = args.pop("seed_count")

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 
-__all__ = ["GALLERY", "render_family", "main"]
+__all__ = ["GALLERY", "GallerySettings", "render_family", "main"]
 
 PROG = "amigo-gym gallery"
 
@@ -60,13 +61,28 @@ def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np
     return frame, worst
 
 
+@dataclass(frozen=True)
+class GallerySettings:
+    __doc__ = f"""Options of ``amigo-gym gallery``, each the option of the same name.
+
+    Attributes:
+        out: output folder [dir].
+        only: families to draw [names] (default: all, {", ".join(GALLERY)}).
+    """
+
+    out: str = "docs/figures"
+    only: list[str] | None = field(default=None, metadata=cli(nargs="*"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming an unknown family and the known ones."""
+        for name in self.only or ():
+            if name not in GALLERY:
+                raise ValueError(f"--only: unknown family {name!r}; choose from {', '.join(GALLERY)}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="docs/figures", help="output folder [dir]")
-    p.add_argument(
-        "--only", nargs="*", default=None, help=f"families to draw [names] (default: all, {', '.join(GALLERY)})"
-    )
-    args = p.parse_args(argv)
+    """``amigo-gym gallery [--out DIR] [--only NAME ...]`` (module docstring)."""
+    args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
 
     def run() -> int:
         import matplotlib
@@ -79,10 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         headless()
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        names = list(GALLERY) if not args.only else args.only
-        for name in names:
-            if name not in GALLERY:
-                raise ValueError(f"--only: unknown family {name!r}; choose from {', '.join(GALLERY)}")
+        for name in args.only or GALLERY:
             kwargs, steps = GALLERY[name]
             frame, worst = render_family(kwargs, steps)
             target = out / f"v1_{name}.png"

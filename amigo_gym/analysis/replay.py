@@ -24,16 +24,15 @@ A bad log gives one line naming the problem and exit status 2, before anything i
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import os
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -41,9 +40,18 @@ from amigo_gym.io import fsync_dir, json_safe
 from amigo_gym.logs import Fit, Log, Replay, errors, identify, read_log, robot_from_file, simulate, summarize
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 
-__all__ = ["main_identify", "main_replay", "plot", "trajectory_csv", "write_folder"]
+__all__ = [
+    "IdentifySettings",
+    "LogSettings",
+    "ReplaySettings",
+    "main_identify",
+    "main_replay",
+    "plot",
+    "trajectory_csv",
+    "write_folder",
+]
 
 
 def trajectory_csv(log: Log, rep: Replay) -> str:
@@ -195,20 +203,55 @@ def _json(obj: Any) -> Callable[[str], object]:
     return _text(json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
 
 
-def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("log", help="the log: a CSV file or a ROS 2 bag (folder, .db3 or .mcap) [file] (required)")
-    p.add_argument("--out", required=True, help="output folder, written whole or not at all [dir] (required)")
-    p.add_argument("--force", action="store_true", help="replace a non-empty --out folder once the new one is complete")
-    p.add_argument("--cmd-topic", default="/cmd_vel", help="bag topic of the velocity commands (Twist) [topic]")
-    p.add_argument(
-        "--nominal",
-        default=None,
-        help="the nominal robot and firmware ramps, a JSON of RobotParams and ActuatorParams fields [file] "
-        "(default: the AmigoBot's)",
-    )
-    p.add_argument(
-        "--pose-topic", default="/odom", help="bag topic of the measured pose of A (Odometry, PoseStamped) [topic]"
-    )
+@dataclass(frozen=True)
+class LogSettings:
+    """Options of ``amigo-gym replay`` and ``amigo-gym identify``, each the option of the same name.
+
+    Attributes:
+        log: the log: a CSV file or a ROS 2 bag (folder, .db3 or .mcap) [file] (required).
+        out: output folder, written whole or not at all [dir] (required).
+        force: replace a non-empty --out folder once the new one is complete.
+        cmd_topic: bag topic of the velocity commands (Twist) [topic].
+        nominal: the nominal robot and firmware ramps, a JSON of RobotParams and ActuatorParams fields [file]
+            (default: the AmigoBot's).
+        pose_topic: bag topic of the measured pose of A (Odometry, PoseStamped) [topic].
+    """
+
+    log: str = field(metadata=cli(positional=True))
+    out: str
+    force: bool = False
+    cmd_topic: str = "/cmd_vel"
+    nominal: str | None = None
+    pose_topic: str = "/odom"
+
+
+@dataclass(frozen=True)
+class ReplaySettings(LogSettings):
+    """Options of ``amigo-gym replay``.
+
+    Attributes:
+        robot: robot file (robot.json of identify) [file] (default: the nominal robot).
+    """
+
+    robot: str | None = None
+
+
+@dataclass(frozen=True)
+class IdentifySettings(LogSettings):
+    """Options of ``amigo-gym identify``.
+
+    Attributes:
+        ramps: fit the ramp rates: where the log excites them, always, never.
+        heading_weight: weight of heading errors in the fit [m/rad], in (0, 1000) (default: the nominal half track).
+    """
+
+    ramps: Literal["auto", "fit", "fixed"] = "auto"
+    heading_weight: float | None = None
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        if self.heading_weight is not None and not 0.0 < self.heading_weight < 1e3:
+            raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {self.heading_weight!r}")
 
 
 def _nominal(path: str | None) -> tuple[RobotParams, ActuatorParams]:
@@ -226,12 +269,7 @@ def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
 
 def main_replay(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym replay`` (module docstring)."""
-    p = OneLineParser(prog="amigo-gym replay", description="Replay a robot's log through the model; compare.")
-    _common(p)
-    p.add_argument(
-        "--robot", default=None, help="robot file (robot.json of identify) [file] (default: the nominal robot)"
-    )
-    args = p.parse_args(argv)
+    args = parse_settings(ReplaySettings, argv, "amigo-gym replay", "Replay a robot's log through the model; compare.")
 
     def go() -> int:
         out = Path(args.out)
@@ -269,19 +307,11 @@ def _fit_summary(fit: Fit) -> dict[str, Any]:
 
 def main_identify(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym identify`` (module docstring)."""
-    p = OneLineParser(prog="amigo-gym identify", description="Fit the robot's radii, track, delay to a log.")
-    _common(p)
-    p.add_argument("--ramps", choices=("auto", "fit", "fixed"), default="auto",
-                   help="fit the ramp rates: where the log excites them, always, never")  # fmt: skip
-    p.add_argument("--heading-weight", type=float, default=None,
-                   help="weight of heading errors in the fit [m/rad] (default: the nominal half track)")  # fmt: skip
-    args = p.parse_args(argv)
+    args = parse_settings(IdentifySettings, argv, "amigo-gym identify", "Fit the robot's radii, track, delay to a log.")
 
     def go() -> int:
         out = Path(args.out)
         check_out(out, args.force)
-        if args.heading_weight is not None and not 0.0 < args.heading_weight < 1e3:
-            raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {args.heading_weight!r}")
         nominal, nominal_act = _nominal(args.nominal)
         log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
         fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)

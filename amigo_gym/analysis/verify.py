@@ -25,15 +25,16 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
 from amigo_gym.model.params import RobotParams
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import parse_settings, run_guarded
 
-__all__ = ["Check", "main", "round_trip_error", "rows"]
+__all__ = ["Check", "VerifySettings", "main", "round_trip_error", "rows"]
 
 #: the steady state of the default circle (R = 1 m, v_A = 0.2 m/s), to 6 decimals as docs/model.md tabulates it
 STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
@@ -179,13 +180,20 @@ def rows(quick: bool = False) -> list[Check]:
     return out
 
 
+@dataclass(frozen=True)
+class VerifySettings:
+    """Options of ``amigo-gym verify``.
+
+    Attributes:
+        quick: skip the inverse solution, the round trip and the symbolic check.
+    """
+
+    quick: bool = False
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym verify [--quick]``: print the table of residuals with PASS/FAIL; status 1 if one fails."""
-    parser = OneLineParser(prog="amigo-gym verify", description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--quick", action="store_true", help="skip the inverse solution, the round trip and the symbolic check"
-    )
-    args = parser.parse_args(argv)
+    args = parse_settings(VerifySettings, argv, "amigo-gym verify", __doc__.splitlines()[0])
 
     def run() -> int:
         checks = rows(args.quick)

@@ -17,16 +17,17 @@ alpha1_dot, alpha2_dot, alpha3_dot, x_H, y_H``. Bad options give a one-line erro
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
 from amigo_gym.model.params import RobotParams, check_range
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
@@ -43,7 +44,7 @@ from amigo_gym.task.inverse import (
     time_grid,
 )
 
-__all__ = ["build_parser", "main"]
+__all__ = ["InverseSettings", "main"]
 
 PROG = "amigo-gym inverse"
 
@@ -51,51 +52,62 @@ PROG = "amigo-gym inverse"
 DEFAULT_DURATION = 40.0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The option parser (one-line errors)."""
-    p = OneLineParser(prog=PROG, description="Analytic inverse solution of point H on a path (CSV or summary).")
-    p.add_argument("--path", choices=("circle", "manoeuvre"), default="circle", help="path of H (default circle)")
-    p.add_argument("--radius", type=float, default=1.0, help="circle radius R [m], > l3 (default 1)")
-    p.add_argument("--speed", type=float, default=0.2, help="cruise speed of A, v_A [m/s] (default 0.2)")
-    p.add_argument(
-        "--direction", type=int, choices=(1, -1), default=1, help="+1 left turn (eq. 6), -1 right (default 1)"
-    )
-    p.add_argument("--straight-length", type=float, default=1.0, help="manoeuvre: straight part [m] (default 1)")
-    p.add_argument(
-        "--duration", type=float, default=None, help="simulated time [s] (default: 40, or until 1 s after stopping)"
-    )
-    p.add_argument("--dt", type=float, default=0.1, help="output time step [s] (default 0.1)")
-    p.add_argument(
-        "--accel",
-        type=float,
-        default=None,
-        help=f"acceleration [m/s^2] (default: circle: step to v_A at t=0; manoeuvre: {MANOEUVRE_ACCEL})",
-    )
-    p.add_argument(
-        "--decel", type=float, default=None, help=f"braking deceleration [m/s^2] (default {MANOEUVRE_DECEL})"
-    )
-    p.add_argument(
-        "--t-start",
-        type=float,
-        default=None,
-        help=f"start of motion [s] (default: circle 0, else {MANOEUVRE_T_START})",
-    )
-    brake = p.add_mutually_exclusive_group()
-    brake.add_argument("--brake-at", type=float, default=None, help="time at which braking starts [s] (default: none)")
-    brake.add_argument(
-        "--laps",
-        type=float,
-        default=None,
-        help=f"manoeuvre: stop after the straight plus this many laps of A's circle [laps] (default {MANOEUVRE_LAPS})",
-    )
-    brake.add_argument("--no-brake", action="store_true", help="manoeuvre: never brake")
-    p.add_argument(
-        "--csv",
-        default=None,
-        metavar="FILE",
-        help="write the solution as CSV, atomically [file] (default: none, a summary)",
-    )
-    return p
+@dataclass(frozen=True)
+class InverseSettings:
+    __doc__ = f"""Options of ``amigo-gym inverse``, each the option of the same name (checked by :meth:`validate`).
+
+    Attributes:
+        path: path of H.
+        radius: circle radius R [m], > l3, at most 1000.
+        speed: cruise speed of A, v_A [m/s], in (0, the robot's max speed].
+        direction: +1 left turn (eq. 6), -1 right.
+        straight_length: manoeuvre: straight part [m], in [0, 1000].
+        duration: simulated time [s], in (0, 1e5] (default: {DEFAULT_DURATION:g}, or until 1 s after stopping).
+        dt: output time step [s], in (0, 10], at most the duration.
+        accel: acceleration [m/s^2], > 0 (default: circle: step to v_A at t=0; manoeuvre: {MANOEUVRE_ACCEL}).
+        decel: braking deceleration [m/s^2], > 0 (default {MANOEUVRE_DECEL}).
+        t_start: start of motion [s], >= 0 (default: circle 0, else {MANOEUVRE_T_START}).
+        brake_at: time at which braking starts [s], once cruising (default: none).
+        laps: manoeuvre: stop after the straight plus this many laps of A's circle [laps], in [0, 1000] (default
+            {MANOEUVRE_LAPS}).
+        no_brake: manoeuvre: never brake.
+        csv: write the solution as CSV, atomically [file] (default: none, a summary).
+    """
+
+    path: Literal["circle", "manoeuvre"] = "circle"
+    radius: float = 1.0
+    speed: float = 0.2
+    direction: Literal[1, -1] = 1
+    straight_length: float = 1.0
+    duration: float | None = None
+    dt: float = 0.1
+    accel: float | None = None
+    decel: float | None = None
+    t_start: float | None = None
+    brake_at: float | None = field(default=None, metadata=cli(group="brake"))
+    laps: float | None = field(default=None, metadata=cli(group="brake"))
+    no_brake: bool = field(default=False, metadata=cli(group="brake"))
+    csv: str | None = field(default=None, metadata=cli(metavar="FILE"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value (the limits: the AmigoBot's)."""
+        robot = RobotParams()
+        _check("--radius", self.radius, robot.l3, 1e3, low_open=True)
+        _check("--speed", self.speed, 0.0, robot.max_speed, low_open=True)
+        _check("--dt", self.dt, 0.0, 10.0, low_open=True)
+        if self.duration is not None:
+            _check("--duration", self.duration, 0.0, 1e5, low_open=True)
+        if self.csv is not None:
+            _check_csv_target(self.csv)
+        if self.path == "manoeuvre":
+            _check("--straight-length", self.straight_length, 0.0, 1e3)
+        for flag, value in (("--accel", self.accel), ("--decel", self.decel)):
+            if value is not None:
+                _check(flag, value, 0.0, low_open=True)
+        if self.t_start is not None:
+            _check("--t-start", self.t_start, 0.0)
+        if self.laps is not None:
+            _check("--laps", self.laps, 0.0, 1e3)
 
 
 def _check(flag: str, value: float, low: float, high: float = math.inf, **kw: bool) -> float:
@@ -116,16 +128,8 @@ def _check_csv_target(path: str) -> None:
         raise ValueError(f"--csv: folder {folder!r} is not writable")
 
 
-def _profile(args: argparse.Namespace, path: CirclePath | ManoeuvrePath, robot: RobotParams) -> SpeedProfile:
+def _profile(args: InverseSettings, path: CirclePath | ManoeuvrePath, robot: RobotParams) -> SpeedProfile:
     manoeuvre = isinstance(path, ManoeuvrePath)
-    if args.accel is not None:
-        _check("--accel", args.accel, 0.0, low_open=True)
-    if args.decel is not None:
-        _check("--decel", args.decel, 0.0, low_open=True)
-    if args.t_start is not None:
-        _check("--t-start", args.t_start, 0.0)
-    if args.laps is not None:
-        _check("--laps", args.laps, 0.0, 1e3)
     accel = args.accel if args.accel is not None or not manoeuvre else MANOEUVRE_ACCEL
     decel = MANOEUVRE_DECEL if args.decel is None else args.decel
     t_start = args.t_start if args.t_start is not None else (MANOEUVRE_T_START if manoeuvre else 0.0)
@@ -168,20 +172,12 @@ def _summary(sol: InverseSolution, path: CirclePath | ManoeuvrePath, robot: Robo
     return "\n".join(lines)
 
 
-def _run(args: argparse.Namespace) -> int:
+def _run(args: InverseSettings) -> int:
     robot = RobotParams()
-    _check("--radius", args.radius, robot.l3, 1e3, low_open=True)
-    _check("--speed", args.speed, 0.0, robot.max_speed, low_open=True)
-    _check("--dt", args.dt, 0.0, 10.0, low_open=True)
-    if args.duration is not None:
-        _check("--duration", args.duration, 0.0, 1e5, low_open=True)
-    if args.csv is not None:
-        _check_csv_target(args.csv)
     path: CirclePath | ManoeuvrePath
     if args.path == "circle":
         path = CirclePath(radius=args.radius, direction=args.direction)
     else:
-        _check("--straight-length", args.straight_length, 0.0, 1e3)
         path = ManoeuvrePath(radius=args.radius, straight_length=args.straight_length, direction=args.direction)
     profile = _profile(args, path, robot)
     duration = args.duration
@@ -204,7 +200,12 @@ def _run(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym inverse`` (returns the exit status)."""
-    args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
+    args = parse_settings(
+        InverseSettings,
+        argv,
+        PROG,
+        "Analytic inverse solution of point H on a path (CSV or summary).",
+    )
     return run_guarded(lambda: _run(args), PROG)
 
 

@@ -87,7 +87,7 @@ from __future__ import annotations
 import functools
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -96,10 +96,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_write
 from amigo_gym.model.params import RobotParams
+from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
     "PLAIN_SYMBOLS",
     "SYSTEM_29_LABELS",
+    "DeriveSettings",
     "Derivation",
     "Misprints",
     "Transforms",
@@ -704,19 +706,29 @@ def render(latex: bool = False) -> str:
     return "\n".join(out) + "\n"
 
 
+@dataclass(frozen=True)
+class DeriveSettings:
+    """Options of ``amigo-gym derive``, each the option of the same name.
+
+    Attributes:
+        latex: emit LaTeX (amsmath align environments).
+        out: write to FILE, atomically [file] (default: standard output; '-' too).
+    """
+
+    latex: bool = False
+    out: str | None = field(default=None, metadata=cli(metavar="FILE"))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
-    from amigo_gym.options import OneLineParser, run_guarded
-
     prog = "amigo-gym derive"
-    parser = OneLineParser(
-        prog=prog,
-        description="Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point "
+    args = parse_settings(
+        DeriveSettings,
+        argv,
+        prog,
+        "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point "
         "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",
     )
-    parser.add_argument("--latex", action="store_true", help="emit LaTeX (amsmath align environments)")
-    parser.add_argument("--out", metavar="FILE", help="write to FILE, atomically [file] (default: standard output)")
-    args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
         text = render(latex=args.latex)

@@ -101,14 +101,14 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
-from amigo_gym.options import OneLineParser, run_guarded
-from amigo_gym.runs import add_trust_option, remove_matching
+from amigo_gym.options import cli, parse_settings, run_guarded
+from amigo_gym.runs import remove_matching, trust_unverified
 from amigo_gym.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -128,6 +128,7 @@ __all__ = [
     "RETIRED_V1_AGENTS",
     "V1_AGENTS",
     "AgentSpec",
+    "BenchmarkSettings",
     "Scenario",
     "agent_label",
     "aggregate",
@@ -1184,65 +1185,77 @@ def verify_outputs(out: Path) -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- command line
+@dataclass(frozen=True)
+class BenchmarkSettings:
+    """Options of ``amigo-gym benchmark``, each the option of the same name unless its ``cli(flag)`` names one.
+
+    Attributes:
+        agents: classical names, NAME=GLOB of zips, zips or folders [agents] (default: the classical policies and
+            the shipped models).
+        scenarios: scenario names [names] (default: the whole suite).
+        suite: suite version.
+        quick: small subset: 3 scenarios, 2 episodes of <= 120 steps.
+        out: output folder [dir].
+        json: JSON file [file] (default: <out>/benchmark.json).
+        markdown: Markdown file [file] (default: <out>/benchmark.md).
+        reps: bootstrap replications of the intervals [reps], >= 1.
+        profile_reps: bootstrap replications of the profiles [reps], >= 1.
+        bootstrap_seed: seed of the bootstrap [-].
+        plots: draw the plots; --no-plots: skip the plots.
+        progress: show a progress bar; --no-progress: no progress bar.
+        list_suite: print the suite and exit.
+        table_from: run nothing: print the README's v1 table from this benchmark.json [file] (default: none).
+        path: run on paths of your own instead of the suite: points files (.csv/.json, columns x, y [m];
+            amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files] (default: none, the suite).
+        speed: reference speed on --path [m/s].
+        feasibility: --path beyond the robot's limits: refuse, warn or run (default off: run; the report lists
+            them).
+        goal_tolerance: open --path: success within this of the end [m] (default 0: off).
+        duration: episode length on --path [s].
+        curvature: run the curvature cells instead of the suite: failure rate per path-curvature bin
+            (amigo_gym.training.curvature; writes <out>/curvature.json and .md).
+        curvature_episodes: episodes per curvature cell [episodes], >= 1.
+        trust_unverified: load model zips without a recorded sha256 without the warning (they are pickles: they
+            run code).
+    """
+
+    agents: list[str] | None = None
+    scenarios: list[str] | None = None
+    suite: str = field(default=SUITE_VERSION, metadata=cli(choices=tuple(sorted(SUITES))))
+    quick: bool = False
+    out: str = "results/benchmark"
+    json: str | None = None
+    markdown: str | None = None
+    reps: int = 10_000
+    profile_reps: int = 2_000
+    bootstrap_seed: int = 0
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+    list_suite: bool = field(default=False, metadata=cli("--list"))
+    table_from: str | None = field(default=None, metadata=cli(metavar="FILE"))
+    path: list[str] | None = field(default=None, metadata=cli(metavar="FILE"))
+    speed: float = 0.2
+    feasibility: Literal["error", "warn", "off"] = "off"
+    goal_tolerance: float = 0.0
+    duration: float = 60.0
+    curvature: bool = False
+    curvature_episodes: int = 50
+    trust_unverified: bool = False
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        for name in ("reps", "profile_reps", "curvature_episodes"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(self, name)}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym benchmark``."""
-    p = OneLineParser(prog="amigo-gym benchmark", description="Run the AmigoBot benchmark suite.")
-    p.add_argument(
-        "--agents",
-        nargs="+",
-        default=None,
-        help="classical names, NAME=GLOB of zips, zips or folders [agents] "
-        "(default: the classical policies and the shipped models)",
-    )
-    p.add_argument("--scenarios", nargs="+", default=None, help="scenario names [names] (default: the whole suite)")
-    p.add_argument("--suite", default=SUITE_VERSION, choices=sorted(SUITES), help="suite version")
-    p.add_argument("--quick", action="store_true", help="small subset: 3 scenarios, 2 episodes of <= 120 steps")
-    p.add_argument("--out", default="results/benchmark", help="output folder [dir]")
-    p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/benchmark.json)")
-    p.add_argument("--markdown", default=None, help="Markdown file [file] (default: <out>/benchmark.md)")
-    p.add_argument("--reps", type=int, default=10_000, help="bootstrap replications of the intervals [reps]")
-    p.add_argument("--profile-reps", type=int, default=2_000, help="bootstrap replications of the profiles [reps]")
-    p.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the bootstrap [-]")
-    p.add_argument("--no-plots", action="store_true", help="skip the plots")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--list", action="store_true", help="print the suite and exit")
-    p.add_argument(
-        "--table-from",
-        default=None,
-        metavar="FILE",
-        help="run nothing: print the README's v1 table from this benchmark.json [file] (default: none)",
-    )
-    p.add_argument(
-        "--path",
-        nargs="+",
-        default=None,
-        metavar="FILE",
-        help="run on paths of your own instead of the suite: points files (.csv/.json, columns x, y [m]; "
-        "amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files] (default: none, the suite)",
-    )
-    p.add_argument("--speed", type=float, default=0.2, help="reference speed on --path [m/s] (default 0.2)")
-    p.add_argument(
-        "--feasibility",
-        choices=("error", "warn", "off"),
-        default="off",
-        help="--path beyond the robot's limits: refuse, warn or run (default off: run; the report lists them)",
-    )
-    p.add_argument(
-        "--goal-tolerance",
-        type=float,
-        default=0.0,
-        help="open --path: success within this of the end [m] (default 0: off)",
-    )
-    p.add_argument("--duration", type=float, default=60.0, help="episode length on --path [s] (default 60)")
-    p.add_argument(
-        "--curvature",
-        action="store_true",
-        help="run the curvature cells instead of the suite: failure rate per path-curvature bin "
-        "(amigo_gym.training.curvature; writes <out>/curvature.json and .md)",
-    )
-    p.add_argument("--curvature-episodes", type=int, default=50, help="episodes per curvature cell [episodes]")
-    add_trust_option(p, "model zips")
-    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+    args = list(sys.argv[1:] if argv is None else argv)
+    a = parse_settings(BenchmarkSettings, args, "amigo-gym benchmark", "Run the AmigoBot benchmark suite.")
+    if a.trust_unverified:
+        trust_unverified()
+    command = "amigo-gym benchmark " + " ".join(args)
 
     def run() -> int:
         from amigo_gym.training.evaluate import one_torch_thread
@@ -1252,14 +1265,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         if a.table_from is not None:
             print(readme_table(json.loads(Path(a.table_from).read_text(encoding="utf-8"))), end="")
             return 0
-        if a.list:
+        if a.list_suite:
             for sc in suite:
                 flag = "held out" if sc.held_out else ""
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
         if a.curvature:
-            return _run_curvature(a, argv)
+            return _run_curvature(a, command)
         scenarios = quick_suite(suite) if a.quick else suite
         if a.path:
             if a.scenarios:
@@ -1274,9 +1287,6 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise ValueError(f"--scenarios: unknown {bad}; see amigo-gym benchmark --list")
             chosen = {sc.name: sc for sc in scenarios}
             scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)
-        for name in ("reps", "profile_reps"):
-            if getattr(a, name) < 1:
-                raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(a, name)}")
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "benchmark.json"
@@ -1288,14 +1298,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             doc = run_benchmark(
                 agents,
                 scenarios,
-                progress=not a.no_progress,
+                progress=a.progress,
                 reps=a.reps,
                 profile_reps=a.profile_reps,
                 bootstrap_seed=a.bootstrap_seed,
                 quick=a.quick,
             )
-            doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
-            written = write_outputs(doc, out, json_path, md_path, plots=not a.no_plots)
+            doc["command"] = command
+            written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
         print(markdown_report(doc), end="")
         print("wrote " + ", ".join(map(str, written)))
         return 0
@@ -1311,7 +1321,7 @@ def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
     return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
 
 
-def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
+def _run_curvature(a: BenchmarkSettings, command: str) -> int:
     """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.training.curvature`)."""
     from amigo_gym.runs import RunLock
     from amigo_gym.training import curvature
@@ -1325,9 +1335,9 @@ def _run_curvature(a: Any, argv: Sequence[str] | None) -> int:
     out = Path(a.out)
     with RunLock(out):
         doc = curvature.run_curvature(
-            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=not a.no_progress
+            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=a.progress
         )
-        doc["command"] = "amigo-gym benchmark " + " ".join(sys.argv[1:] if argv is None else argv)
+        doc["command"] = command
         written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
     print(curvature.markdown_curvature(doc), end="")
     print("wrote " + ", ".join(written))

@@ -57,17 +57,18 @@ import re
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from amigo_gym.options import OneLineParser, run_guarded
+from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
     "AXES",
     "CURVE_METRICS",
+    "CurvesSettings",
     "DEFAULT_THRESHOLD_M",
     "THRESHOLD_METRIC",
     "Run",
@@ -455,25 +456,38 @@ def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> l
 
 
 # --------------------------------------------------------------------------- command line
+@dataclass(frozen=True)
+class CurvesSettings:
+    """Options of ``amigo-gym curves`` (the option of the same name, or its ``cli(flag)``); checked by
+    :func:`learning_curves`.
+
+    Attributes:
+        runs: folders of run folders, or run folders (with eval.json) [dir] (required).
+        out: output folder [dir].
+        metric: metric of the threshold.
+        threshold: tracking threshold [m], > 0.
+        reps: bootstrap replications of the bands [reps], >= 1.
+        bootstrap_seed: seed of the bootstrap [-].
+        plots: draw the plots; --no-plots: skip the plots.
+        progress: show a progress bar on a terminal; --no-progress: no progress bar.
+    """
+
+    runs: list[str]
+    out: str = "results/curves"
+    metric: str = field(default=THRESHOLD_METRIC, metadata=cli(choices=("h_rms_settled_m", "h_rms_m")))
+    threshold: float = DEFAULT_THRESHOLD_M
+    reps: int = 10_000
+    bootstrap_seed: int = 0
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym curves``."""
-    p = OneLineParser(prog="amigo-gym curves", description="Learning curves over training seeds, time to threshold.")
-    p.add_argument(
-        "--runs",
-        nargs="+",
-        required=True,
-        help="folders of run folders, or run folders (with eval.json) [dir] (required)",
+    args = list(sys.argv[1:] if argv is None else argv)
+    a = parse_settings(
+        CurvesSettings, args, "amigo-gym curves", "Learning curves over training seeds, time to threshold."
     )
-    p.add_argument("--out", default="results/curves", help="output folder [dir]")
-    p.add_argument(
-        "--metric", default=THRESHOLD_METRIC, choices=["h_rms_settled_m", "h_rms_m"], help="metric of the threshold"
-    )
-    p.add_argument("--threshold", type=float, default=DEFAULT_THRESHOLD_M, help="tracking threshold [m]")
-    p.add_argument("--reps", type=int, default=10_000, help="bootstrap replications of the bands [reps]")
-    p.add_argument("--bootstrap-seed", type=int, default=0, help="seed of the bootstrap [-]")
-    p.add_argument("--no-plots", action="store_true", help="skip the plots")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
 
     def run() -> int:
         doc = learning_curves(
@@ -482,10 +496,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             threshold=a.threshold,
             reps=a.reps,
             bootstrap_seed=a.bootstrap_seed,
-            progress=not a.no_progress and sys.stderr.isatty(),
+            progress=a.progress and sys.stderr.isatty(),
         )
-        doc["command"] = "amigo-gym curves " + " ".join(sys.argv[1:] if argv is None else argv)
-        written = write_outputs(doc, Path(a.out), plots=not a.no_plots)
+        doc["command"] = "amigo-gym curves " + " ".join(args)
+        written = write_outputs(doc, Path(a.out), plots=a.plots)
         print(markdown_report(doc), end="")
         print("wrote " + ", ".join(map(str, written)))
         return 0

@@ -77,12 +77,13 @@ from numpy.typing import NDArray
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.model.params import EnvParams
-from amigo_gym.options import OneLineParser, run_guarded
-from amigo_gym.runs import add_trust_option
+from amigo_gym.options import cli, parse_settings, run_guarded
+from amigo_gym.runs import trust_unverified
 
 __all__ = [
     "Agent",
     "EvalProtocol",
+    "EvaluateSettings",
     "Trajectory",
     "default_agents",
     "evaluate_agents",
@@ -724,42 +725,61 @@ def one_torch_thread() -> None:
 DEFAULT_OUT = "results/evaluate"
 
 
+@dataclass(frozen=True)
+class EvaluateSettings:
+    """Options of ``amigo-gym evaluate``, each the option of the same name unless its ``cli(flag)`` names one.
+
+    Attributes:
+        models: what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of <algo>.zip
+            [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs its code,
+            so pass only files you trust; the shipped ones are checked against their sha256.
+        out: directory for eval.md and the plots [dir]; a folder holding another command's output set
+            (manifest.json, e.g. compare's) is refused unless --force.
+        force: write into a folder that holds another command's files.
+        json: JSON file [file] (default: <out>/results.json).
+        markdown: Markdown table file [file] (default: <out>/eval.md).
+        steps: steps per episode [steps] (dt = 0.1 s).
+        seeds: number of perturbed starts, seeds 100.. [episodes], >= 1.
+        load_models: evaluate the trained models too; --no-models: only the analytic policies.
+        plots: draw the figures; --no-plots: skip the figures.
+        trust_unverified: load model zips and statistics without a recorded sha256 without the warning (they are
+            pickles: they run code).
+    """
+
+    models: str | None = None
+    out: str = DEFAULT_OUT
+    force: bool = False
+    json: str | None = None
+    markdown: str | None = None
+    steps: int = 400
+    seeds: int = 10
+    load_models: bool = field(default=True, metadata=cli("--no-models"))
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    trust_unverified: bool = False
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        if self.seeds < 1:
+            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
-    p = OneLineParser(prog="amigo-gym evaluate", description="Evaluate analytic and trained agents (fixed protocol).")
-    p.add_argument(
-        "--models",
-        default=None,
-        help="what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of "
-        "<algo>.zip [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs "
-        "its code, so pass only files you trust; the shipped ones are checked against their sha256",
+    a = parse_settings(
+        EvaluateSettings,
+        argv,
+        "amigo-gym evaluate",
+        "Evaluate analytic and trained agents (fixed protocol).",
     )
-    p.add_argument(
-        "--out",
-        default=DEFAULT_OUT,
-        help="directory for eval.md and the plots [dir]; a folder holding another command's output set "
-        "(manifest.json, e.g. compare's) is refused unless --force",
-    )
-    p.add_argument("--force", action="store_true", help="write into a folder that holds another command's files")
-    p.add_argument("--json", default=None, help="JSON file [file] (default: <out>/results.json)")
-    p.add_argument("--markdown", default=None, help="Markdown table file [file] (default: <out>/eval.md)")
-    p.add_argument("--steps", type=int, default=400, help="steps per episode [steps] (default 400 = 40 s)")
-    p.add_argument(
-        "--seeds", type=int, default=10, help="number of perturbed starts, seeds 100.. [episodes] (default 10)"
-    )
-    p.add_argument("--no-models", action="store_true", help="only the analytic policies")
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
-    add_trust_option(p, "model zips and statistics")
-    a = p.parse_args(list(sys.argv[1:] if argv is None else argv))
+    if a.trust_unverified:
+        trust_unverified()
 
     def run() -> int:
         one_torch_thread()
-        if a.seeds < 1:
-            raise ValueError(f"--seeds must be an integer >= 1, got {a.seeds}")
         proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
         agents = default_agents(EnvParams(), proto.analytic_gain)
         training: dict[str, Any] = {}
-        if not a.no_models:
+        if a.load_models:
             models = a.models if a.models is not None else PRETRAINED_DIR
             refs = find_models(models)
             agents.update({ref.name: load_model(ref) for ref in refs})
@@ -775,9 +795,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         json_path = Path(a.json) if a.json else out / "results.json"
         md_path = Path(a.markdown) if a.markdown else out / "eval.md"
         extra = {"training": training} if training else None
-        write_outputs(results, trajs, proto, out, json_path, extra, plots=not a.no_plots, markdown_path=md_path)
+        write_outputs(results, trajs, proto, out, json_path, extra, plots=a.plots, markdown_path=md_path)
         print(markdown_table(results), end="")
-        print(f"wrote {json_path}, {md_path}" + ("" if a.no_plots else f", {out}/eval_*.png"))
+        print(f"wrote {json_path}, {md_path}" + (f", {out}/eval_*.png" if a.plots else ""))
         return 0
 
     return run_guarded(run, "amigo-gym evaluate")

@@ -102,6 +102,8 @@ __all__ = [
     "YAML_ENV_ID",
     "YAML_RUN_KEYS",
     "FastPPOSettings",
+    "HyperparamsFile",
+    "TrainFastRun",
     "ActorCritic",
     "curriculum_path_params",
     "evaluate_policy",
@@ -911,45 +913,65 @@ def _train(
 
 
 # --------------------------------------------------------------------------- CLI
-def _parser(defaults: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
-    """The command line; ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
+@dataclass(frozen=True)
+class HyperparamsFile:
+    """The option of ``amigo-gym train-fast`` read first: the file whose values become the defaults of the others.
+
+    Attributes:
+        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options
+            given here override it (e.g. agents/hyperparams/fastppo.yml) (default: none).
+    """
+
+    hyperparams: str | None = None
+
+
+@dataclass(frozen=True)
+class TrainFastRun(HyperparamsFile):
+    """Options of ``amigo-gym train-fast`` besides the :class:`FastPPOSettings` (the run, not the training).
+
+    Attributes:
+        out: run folder [folder] (required).
+        resume: continue the run in --out from its checkpoint.
+        quiet: no progress lines.
+    """
+
+    out: str = field(kw_only=True)
+    resume: bool = False
+    quiet: bool = False
+
+
+def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> argparse.ArgumentParser:
+    """The options of ``cls`` (and the :class:`FastPPOSettings`' unless ``cls`` is :class:`HyperparamsFile`);
+    ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
     from amigo_gym.options import OneLineParser, add_dataclass_options
 
-    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
-    p.add_argument("--out", required=True, help="run folder [folder] (required)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
-    p.add_argument(
-        "--hyperparams",
-        default=None,
-        help="settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options given "
-        "here override it (e.g. agents/hyperparams/fastppo.yml)",
-    )
-    add_dataclass_options(p, FastPPOSettings)
-    if defaults:
-        p.set_defaults(**defaults)
+    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "", **kw)
+    add_dataclass_options(p, cls)
+    if cls is not HyperparamsFile:
+        add_dataclass_options(p, FastPPOSettings)
+    p.set_defaults(**(defaults or {}))
     return p
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``amigo-gym train-fast``."""
+    """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
     from amigo_gym.options import run_guarded, settings_from_args
 
     args_in = list(sys.argv[1:] if argv is None else argv)
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--hyperparams", default=None)
-    known, _ = pre.parse_known_args(args_in)
+    known, _ = _parser(HyperparamsFile, add_help=False).parse_known_args(args_in)
     defaults: dict[str, Any] = {}
     if known.hyperparams is not None:
         rc = run_guarded(lambda: defaults.update(load_settings_yaml(known.hyperparams)), PROG)
         if rc:
             return rc
-    args = _parser(defaults).parse_args(args_in)
+    args = _parser(TrainFastRun, defaults).parse_args(args_in)
+    run_opts = settings_from_args(TrainFastRun, args)
 
     def run() -> int:
         s = settings_from_args(FastPPOSettings, args)
         cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in args_in)
-        rec = train(s, args.out, resume=args.resume, log=None if args.quiet else _flush_print, command=cmd)
+        log = None if run_opts.quiet else _flush_print
+        rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
         return 0
 
