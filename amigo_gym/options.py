@@ -30,6 +30,7 @@ __all__ = [
     "missing_modules",
     "parse_bool",
     "parse_settings",
+    "run_command",
     "run_guarded",
     "settings_from_args",
 ]
@@ -298,6 +299,19 @@ def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, descr
     except ValueError as exc:
         parser.error(str(exc))
     return settings
+
+
+def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str] | None, prog: str, doc: str) -> int:
+    """``run(settings)`` with the settings dataclass ``cls`` from the command line ``argv`` (default ``sys.argv[1:]``):
+    a malformed option exits with the parser's one-line error (status 2), a value ``cls`` refuses (or a bad input met
+    by ``run``) is one line and the returned status 2 (:func:`run_guarded`), unlike :func:`parse_settings`, which
+    exits. An option whose unit is ``[file]`` shows ``FILE`` as its argument in ``--help``."""
+    parser = OneLineParser(prog=prog, description=doc)
+    add_dataclass_options(parser, cls)
+    for action in parser._actions:
+        action.metavar = "FILE" if "[file]" in str(action.help) else action.metavar
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
 
 
 def _one_line(text: object) -> str:

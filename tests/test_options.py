@@ -219,12 +219,11 @@ def test_a_parsed_default_set_on_the_parser_is_kept() -> None:
 
 
 def test_no_command_builds_its_options_by_hand() -> None:
-    """Every sub-command derives its parser from a settings dataclass (issue 19: one source for each setting);
-    amigo_gym/bench is converted on its own branch."""
+    """Every sub-command derives its parser from a settings dataclass (issue 19: one source for each setting)."""
     root = Path(__file__).resolve().parents[1] / "amigo_gym"
     hand_made = [
         str(f.relative_to(root))
         for f in sorted(root.rglob("*.py"))
-        if f.name != "options.py" and "bench" not in f.relative_to(root).parts and ".add_argument(" in f.read_text()
+        if f.name != "options.py" and ".add_argument(" in f.read_text()
     ]
     assert hand_made == []

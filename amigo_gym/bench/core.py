@@ -42,11 +42,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import machine_line
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
+from amigo_gym.options import run_command
 from amigo_gym.paths import make_path
 from amigo_gym.sim.fast import numba_available
 from amigo_gym.task import v1 as tracking

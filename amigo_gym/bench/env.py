@@ -67,11 +67,11 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.bench import run_command
 from amigo_gym.bench.core import _fmt, measure_many
 from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.model.params import check_range
+from amigo_gym.options import run_command
 from amigo_gym.sim.fast import numba_available
 
 __all__ = [

@@ -22,10 +22,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.bench import run_command
 from amigo_gym.bench.core import measure_many
 from amigo_gym.bench.env import _single_stepper, _vector_stepper
 from amigo_gym.model.params import check_range
+from amigo_gym.options import run_command
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 

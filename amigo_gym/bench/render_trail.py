@@ -26,11 +26,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from amigo_gym.bench import run_command
 from amigo_gym.bench.core import measure_many
 from amigo_gym.bench.env import _vector_stepper
 from amigo_gym.io import atomic_write_json
-from amigo_gym.options import cli
+from amigo_gym.options import cli, run_command
 
 __all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
 

@@ -38,11 +38,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from amigo_gym.bench import run_command
 from amigo_gym.bench.machine import cpu_model, simd_level
 from amigo_gym.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
+from amigo_gym.options import run_command
 
 __all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
 
