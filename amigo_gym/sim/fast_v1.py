@@ -218,12 +218,17 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
+        # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
+        # the observation (D,) float32 of the single env, the step counters Python ints
+        ring, obs = np.zeros((1, 2)), np.zeros(1, dtype=np.float32)
+        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, obs, 0, 0.0, 0.0)
+        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("step", "evaluate", "noise_uniforms", "locate_progress", "u1", "logs"):
+        for name in ("step", "evaluate", "noise_uniforms", "locate_progress", "u1", "logs", "run", "_uniforms"):
             del state[name]
         return state
 
@@ -261,7 +266,7 @@ class StepKernel:
         ``steps``): the uniforms by :func:`amigo_gym.sim._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
         (as the reference); :func:`amigo_gym.sim._kernels_v1.step` completes the normals. Only when anything is drawn.
         """
-        if self.noise_uniforms(self.consts, self.ws, self.key, steps):
+        if self._uniforms(self.consts, self.ws, self.key, steps):
             np.log(self.u1, out=self.logs)
 
     def state(self, steps: int) -> tracking.State:
