@@ -1,0 +1,80 @@
+"""The compiled steps called without numba's dispatch (amigo_gym.sim.fast.direct_call, issue 19 item 5).
+
+The entries are compiled for one set of argument types; these tests hold the callers to what they promise: the same
+bits as numba's dispatcher (which finds the types at each call), actions of any layout and dtype made C-contiguous
+float64 before an entry reads them, and environments that still pickle (an entry is not picklable).
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import amigo_gym  # noqa: F401  (registers the envs)
+from amigo_gym.model.params import EnvParams
+from amigo_gym.paths import make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
+
+pytest.importorskip("numba")
+
+
+def _workspace(n: int) -> tuple[fast.Workspace, np.ndarray]:
+    params = EnvParams()
+    ws = fast.workspace(task.task_constants(params), make_path(params), n)
+    g = np.random.default_rng(3)
+    rows = np.column_stack((g.normal(0.0, 0.05, n), g.normal(0.0, 0.05, n), g.normal(0.0, 0.1, n), np.zeros((n, 3)),
+                            np.full(n, 4.0), np.full(n, 4.0)))  # fmt: skip
+    return ws, np.ascontiguousarray(rows)
+
+
+def test_direct_call_is_not_the_dispatcher_and_gives_its_bits() -> None:
+    k = fast.kernels()
+    ws, rows = _workspace(5)
+    a = np.random.default_rng(4).uniform(-1.2, 1.2, (5, 2))
+    no = np.zeros(5, dtype=np.bool_)
+    entry = fast.direct_call(k.move_arguments, ws.consts, rows, a, no, ws.tans, ws.turn)
+    assert entry is not k.move_arguments and not hasattr(entry, "py_func")
+    tans_d, turn_d = np.zeros_like(ws.tans), np.zeros_like(ws.turn)
+    k.move_arguments(ws.consts, rows, a, no, tans_d, turn_d)
+    entry(ws.consts, rows, a, no, ws.tans, ws.turn)
+    assert ws.tans.tobytes() == tans_d.tobytes() and ws.turn.tobytes() == turn_d.tobytes()
+
+
+@pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
+def test_step_env_rows_takes_actions_of_any_layout(layout: str) -> None:
+    """The entries assume C-contiguous float64 actions: step_env_rows makes them so (a Fortran-ordered array, a
+    strided view or float32 values give the bits of the C-contiguous float64 copy)."""
+    n = 7
+    a = np.random.default_rng(5).uniform(-1.0, 1.0, (n, 2)).astype(np.float32).astype(np.float64)
+    given = {
+        "C": a,
+        "F": np.asfortranarray(a),
+        "strided": np.repeat(a, 2, axis=1)[:, ::2],
+        "float32": a.astype(np.float32),
+    }[layout]
+    outs = []
+    for actions in (a, given):
+        ws, rows = _workspace(n)
+        steps = np.zeros(n, dtype=np.int64)
+        r = fast.step_env_rows(ws, rows, actions, np.zeros(n, dtype=np.bool_), None, False, steps, None, 400, 0.1)
+        outs.append((rows.tobytes(), r.obs.tobytes(), r.reward.tobytes(), r.terminated.tobytes(), r.infos["time"]))
+    assert outs[0][:4] == outs[1][:4]
+    np.testing.assert_array_equal(outs[0][4], outs[1][4])
+
+
+@pytest.mark.parametrize("env_id", ["AmigoBot-v0", "AmigoBot-v1"])
+def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=1)
+    a = np.array([0.4, 0.3], dtype=np.float32)
+    env.step(a)
+    twin = pickle.loads(pickle.dumps(env))
+    for _ in range(5):
+        o1, r1, t1, _, i1 = env.step(a)
+        o2, r2, t2, _, i2 = twin.step(a)
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+        assert i1["h_position"].tobytes() == i2["h_position"].tobytes()
