@@ -318,14 +318,12 @@ class AmigoBotV1Env(AmigoBotBase):
         kern = self._kernel
         assert kern is not None
         steps = self._steps
-        obs = np.empty(self._obs_shape, dtype=np.float32)
         if kern.noise_on:
             kern.draw(steps)
-        kern.run(kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2)
+        kern.run(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2)
         self._steps = steps + 1
-        info, track, speed, heading, smooth, terminated, hx, hy = self._kernel_info(False)
-        reward = float(task.reward_product(track, speed, heading, smooth))
-        return obs, reward, self._end(terminated, hx, hy, info), info
+        info, reward, terminated, hx, hy = self._kernel_info(False)
+        return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
@@ -349,18 +347,19 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, float, float, float, bool, float, float]:
+    def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, bool, float, float]:
         """:meth:`_info` from the kernel's workspace (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same entries;
-        with the reward's terms (track, speed, heading, smoothness), ``terminated`` and H.
+        with the reward (the product of the terms, :func:`amigo_gym.task.v0.reward_product`), ``terminated`` and H.
 
         ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
         else of the step just taken (its slips and commands, also into :attr:`_last_command`). The track, speed and
         smoothness terms from one ``np.exp`` of their arguments, and the heading term, as
         :func:`amigo_gym.task.v0.reward_term_columns` computes them.
         """
-        assert self._kernel is not None
-        ws = self._kernel.ws
-        track, speed, ex = _np_exp(ws[_W_ARG_T : _W_ARG_S + 1]).tolist()
+        kern = self._kernel
+        assert kern is not None
+        ws = kern.ws
+        track, speed, ex = _np_exp(kern.reward_args).tolist()
         e, progress, v_true, v_ref, heading, end, term, hx, hy, cmd1, cmd2 = ws.take(_INFO_SCALARS).tolist()
         # the seven info arrays are views of one new array (one allocation instead of seven)
         arr = ws.take(_INFO_ROWS)
@@ -390,7 +389,7 @@ class AmigoBotV1Env(AmigoBotBase):
             "slip": arr[14:16],
             "end_of_path": end != 0.0,
         }
-        return info, track, speed, heading, smooth, term != 0.0, hx, hy
+        return info, float(task.reward_product(track, speed, heading, smooth)), term != 0.0, hx, hy
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace

@@ -203,6 +203,8 @@ class StepKernel:
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
         self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
+        #: the single env's observation, written by each step (:attr:`run`; the env hands out a copy)
+        self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
@@ -220,15 +222,27 @@ class StepKernel:
         self.locate_progress: Any = kv.progress
         # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
-        ring, obs = np.zeros((1, 2)), np.zeros(1, dtype=np.float32)
-        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, obs, 0, 0.0, 0.0)
+        ring = np.zeros((1, 2))
+        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        #: the arguments of the reward's three exponentials (track, speed, smoothness), a view of :attr:`ws`
+        self.reward_args: Array = self.ws[layout_v1.W_ARG_T : layout_v1.W_ARG_S + 1]
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("step", "evaluate", "noise_uniforms", "locate_progress", "u1", "logs", "run", "_uniforms"):
+        for name in (
+            "step",
+            "evaluate",
+            "noise_uniforms",
+            "locate_progress",
+            "u1",
+            "logs",
+            "run",
+            "_uniforms",
+            "reward_args",
+        ):
             del state[name]
         return state
 
