@@ -78,3 +78,51 @@ def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
         o2, r2, t2, _, i2 = twin.step(a)
         assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
         assert i1["h_position"].tobytes() == i2["h_position"].tobytes()
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
+)
+def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
+    """kernels.single_step (math.tan, math.exp inside) against the three passes with numpy's tan and exp between them,
+    on one machine (two code paths): random states, actions beyond [-1, 1] too, 300 steps each. Where the C
+    library's tan and exp differ from numpy's (the gate is False), the single env must not use it."""
+    params = EnvParams(**settings)  # type: ignore[arg-type]
+    whole = fast.SingleStep(task.task_constants(params), make_path(params))
+    passes = fast.SingleStep(task.task_constants(params), make_path(params))
+    if not fast.libm_tan_exp_match_numpy():
+        assert whole._whole is None
+        return
+    assert whole._whole is not None
+    passes._whole = None
+    g = np.random.default_rng(11)
+    for _ in range(20):
+        state = np.concatenate((g.normal(0.0, 0.5, 2), g.uniform(-50.0, 50.0, 1), g.normal(0.0, 30.0, 3),
+                                g.uniform(-15.0, 15.0, 2)))  # fmt: skip
+        whole.set_state(state)
+        passes.set_state(state)
+        for a1, a2 in g.uniform(-1.3, 1.3, (15, 2)).tolist():
+            assert whole.step(a1, a2) == passes.step(a1, a2)
+            assert whole.buf.tobytes() == passes.buf.tobytes() and whole.obs.tobytes() == passes.obs.tobytes()
+            assert whole.past_limit == passes.past_limit
+
+
+def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch: pytest.MonkeyPatch) -> None:
+    fast.libm_tan_exp_match_numpy.cache_clear()
+    monkeypatch.setattr(np, "tan", lambda x, *a, **k: np.sin(x) / np.cos(x))  # a numpy tan the C library does not give
+    try:
+        assert fast.libm_tan_exp_match_numpy() is False
+    finally:
+        monkeypatch.undo()
+        fast.libm_tan_exp_match_numpy.cache_clear()
+    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    env = gym.make("AmigoBot-v0").unwrapped
+    assert env._v0._whole is None
+    ref = gym.make("AmigoBot-v0", kernel="numpy").unwrapped
+    env.reset(seed=2)
+    ref.reset(seed=2)
+    for a in np.random.default_rng(6).uniform(-1.0, 1.0, (30, 2)):
+        o1, r1, t1, _, _ = env.step(a)
+        o2, r2, t2, _, _ = ref.step(a)
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2

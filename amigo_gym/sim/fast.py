@@ -59,6 +59,7 @@ __all__ = [
     "EnvStep",
     "step_env_rows",
     "direct_call",
+    "libm_tan_exp_match_numpy",
 ]
 
 Array = NDArray[np.float64]
@@ -192,6 +193,31 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
         return dispatcher.get_overload(sig)
     except (AttributeError, KeyError):  # pragma: no cover  (numba's API moved)
         return dispatcher
+
+
+@lru_cache(maxsize=1)
+def libm_tan_exp_match_numpy() -> bool:
+    """Whether the compiled ``math.tan`` and ``math.exp`` (the C library's) give numpy's float64 ``np.tan`` and
+    ``np.exp`` bits on a fixed sample of the step's arguments (5000 tangents' of half turns and of headings of many
+    laps up to :data:`amigo_gym.model.params.HEADING_LIMIT`, 3000 exponentials' of the reward's arguments, never
+    positive), as :func:`amigo_gym.sim.fast_v1.libm_matches_numpy` checks ``cos`` and ``sin``: the premise of
+    :func:`amigo_gym.sim._kernels.single_step`. Checked once per process (a millisecond)."""
+    g = np.random.default_rng(20261126)
+    xt = np.concatenate(
+        (
+            g.uniform(-2.0, 2.0, 2000),
+            g.normal(0.0, 1e-3, 1000),
+            g.uniform(-2000.0, 2000.0, 1000),
+            g.uniform(-HEADING_LIMIT, HEADING_LIMIT, 1000),
+        )
+    )
+    xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
+    k = kernels()
+    t, e, spare = np.empty_like(xt), np.empty_like(xe), np.empty_like(xt)
+    k.tan_exp(xt, t, spare)
+    k.tan_exp(xe, spare[: len(xe)], e)
+    same_t = np.array_equal(t.view(np.int64), np.tan(xt).view(np.int64))
+    return bool(same_t and np.array_equal(e.view(np.int64), np.exp(xe).view(np.int64)))
 
 
 def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
@@ -328,7 +354,9 @@ class SingleStep:
     ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
     between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
     and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
-    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once.
+    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once; or,
+    where the C library's ``tan`` and ``exp`` give numpy's bits (:func:`libm_tan_exp_match_numpy`), one compiled
+    call that computes them in between (:func:`amigo_gym.sim._kernels.single_step`: the same bits).
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
@@ -357,6 +385,10 @@ class SingleStep:
         self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
         self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
         self._finish = direct_call(kk.single_finish, self.consts, b)
+        # the whole step in one call where the C library's tan and exp give numpy's bits (else the three passes)
+        self._whole: Any = None
+        if libm_tan_exp_match_numpy():
+            self._whole = direct_call(kk.single_step, self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
@@ -388,13 +420,17 @@ class SingleStep:
         the caller reduces it by :func:`amigo_gym.task.v0.bound_angle`."""
         b = self.buf
         c = self.consts
-        tans = self._tans
-        exps = self._exps
-        self._move(c, b, self.flags, a1, a2)
-        _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
-        self._evaluate(c, self.preview, b, self.flags, self.obs)
-        _np_exp(exps, exps)
-        self.past_limit = self._finish(c, b)
+        whole = self._whole
+        if whole is not None:
+            self.past_limit = whole(c, self.preview, b, self.flags, self.obs, a1, a2)
+        else:
+            tans = self._tans
+            exps = self._exps
+            self._move(c, b, self.flags, a1, a2)
+            _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
+            self._evaluate(c, self.preview, b, self.flags, self.obs)
+            _np_exp(exps, exps)
+            self.past_limit = self._finish(c, b)
         rec: list[float] = self.record.tolist()
         return rec
 
