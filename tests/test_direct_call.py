@@ -126,3 +126,27 @@ def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch:
         o1, r1, t1, _, _ = env.step(a)
         o2, r2, t2, _, _ = ref.step(a)
         assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+
+
+@pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])
+def test_v1_reward_exponentials_in_the_step_give_numpys_bits(
+    monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
+) -> None:
+    """AmigoBot-v1's single step with the reward's exponentials in the compiled call (kernels_v1.step_exps, the C
+    library's exp) against the step followed by numpy's exp (the gate off), same seeds: the same bits."""
+    envs = [gym.make("AmigoBot-v1", **settings).unwrapped]
+    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    envs.append(gym.make("AmigoBot-v1", **settings).unwrapped)
+    monkeypatch.undo()
+    assert envs[1]._kernel.run_exps is None
+    assert (envs[0]._kernel.run_exps is not None) == fast.libm_tan_exp_match_numpy()
+    for e in envs:
+        e.reset(seed=8)
+    for a in np.random.default_rng(9).uniform(-1.0, 1.0, (200, 2)):
+        out = [e.step(a) for e in envs]
+        (o1, r1, t1, _, i1), (o2, r2, t2, _, i2) = out
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+        assert i1["reward_terms"] == i2["reward_terms"]
+        if t1:
+            for e in envs:
+                e.reset()

@@ -320,9 +320,13 @@ class AmigoBotV1Env(AmigoBotBase):
         steps = self._steps
         if kern.noise_on:
             kern.draw(steps)
-        kern.run(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2)
+        run_exps = kern.run_exps
+        if run_exps is not None:  # the reward's exponentials in the same call (the C library's exp: numpy's bits)
+            run_exps(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, kern.exps)
+        else:
+            kern.run(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2)
         self._steps = steps + 1
-        info, reward, terminated, hx, hy = self._kernel_info(False)
+        info, reward, terminated, hx, hy = self._kernel_info(False, run_exps is not None)
         return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
@@ -347,19 +351,20 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, bool, float, float]:
+    def _kernel_info(self, start: bool, exps: bool = False) -> tuple[dict[str, Any], float, bool, float, float]:
         """:meth:`_info` from the kernel's workspace (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same entries;
         with the reward (the product of the terms, :func:`amigo_gym.task.v0.reward_product`), ``terminated`` and H.
 
         ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
-        else of the step just taken (its slips and commands, also into :attr:`_last_command`). The track, speed and
-        smoothness terms from one ``np.exp`` of their arguments, and the heading term, as
+        else of the step just taken (its slips and commands, also into :attr:`_last_command`). ``exps``: the kernel
+        has written the exponentials of the reward's arguments (:attr:`amigo_gym.sim.fast_v1.StepKernel.run_exps`),
+        else one ``np.exp`` takes them: the track, speed and smoothness terms from them, and the heading term, as
         :func:`amigo_gym.task.v0.reward_term_columns` computes them.
         """
         kern = self._kernel
         assert kern is not None
         ws = kern.ws
-        track, speed, ex = _np_exp(kern.reward_args).tolist()
+        track, speed, ex = (kern.exps if exps else _np_exp(kern.reward_args)).tolist()
         e, progress, v_true, v_ref, heading, end, term, hx, hy, cmd1, cmd2 = ws.take(_INFO_SCALARS).tolist()
         # the seven info arrays are views of one new array (one allocation instead of seven)
         arr = ws.take(_INFO_ROWS)
