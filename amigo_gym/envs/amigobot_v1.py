@@ -88,6 +88,17 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
 
 
 _np_array = np.array
+_np_exp = np.exp
+#: the workspace's entries of the compiled step's info arrays, in their order (pose, H, wheel rates, command, wheel
+#: angles, measured pose, slip: :meth:`AmigoBotV1Env._kernel_info`, one ``take``) and of its scalars
+_INFO_ROWS = np.array(
+    (_W_X, _W_Y, _W_BETA, _W_HX, _W_HY, _W_W1, _W_W2, _W_CMD1, _W_CMD2, _W_AL1, _W_AL2, _W_MX, _W_MY, _W_MB, _W_SLIP1,
+     _W_SLIP2),
+    dtype=np.intp,
+)  # fmt: skip
+_INFO_SCALARS = np.array(
+    (_W_E, _W_PROGRESS, _W_VT, _W_VREF, _W_HEADING, _W_END, _W_TERM, _W_HX, _W_HY, _W_CMD1, _W_CMD2), dtype=np.intp
+)
 
 
 class AmigoBotV1Env(AmigoBotBase):
@@ -221,6 +232,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._episode: tracking.Episode | None = None
         self._path_info: dict[str, Any] = {}
         self._last_command = (0.0, 0.0)
+        self._true_robot: dict[str, float] = {}
 
     def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
         """The fixed path (``None``: drawn) and its feasibility report: :func:`amigo_gym.task.v1.check_task`, which
@@ -245,6 +257,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = int(st.steps)
         self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
+        self._true_robot = {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)}  # info["true_robot"]'s values
         self._goal = tracking.goal_point(self._k.params, self.path)
         self._in_kernel = kern is not None and type(self.path) is ClothoidPath
         if self.v0_params is not None:  # AmigoBot-v0's settings: its start (the reference's) and its info
@@ -259,7 +272,7 @@ class AmigoBotV1Env(AmigoBotBase):
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
             kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
-            info = self._kernel_info(kern.outputs(), 0.0, 0.0)
+            info = self._kernel_info(True)[0]
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
@@ -271,8 +284,12 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
-        if self._v0 is not None:
-            return self._step_v0(self._v0, a1, a2)
+        fs = self._v0
+        if fs is not None:
+            # AmigoBot-v0's settings by AmigoBot-v0's compiled step (fast.SingleStep.env_step): the reference's results
+            # (tracking.step_columns with ideal actuators) and v0's info
+            self._steps += 1
+            return fs.env_step(a1, a2, self._steps * self.params.dt)
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
@@ -299,27 +316,18 @@ class AmigoBotV1Env(AmigoBotBase):
         (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.task.v1.step_columns`).
         """
         kern = self._kernel
-        ep = self._episode
-        assert kern is not None and ep is not None
+        assert kern is not None
         steps = self._steps
-        obs = np.empty(self._obs_shape, dtype=np.float32)
         if kern.noise_on:
             kern.draw(steps)
-        kern.step(kern.consts, kern.path, self._ring, kern.ws, obs, self._ring_step, a1, a2)
+        run_exps = kern.run_exps
+        if run_exps is not None:  # the reward's exponentials in the same call (the C library's exp: numpy's bits)
+            run_exps(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, kern.exps)
+        else:
+            kern.run(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2)
         self._steps = steps + 1
-        o = kern.outputs()
-        self._last_command = (o[_W_CMD1], o[_W_CMD2])
-        info = self._kernel_info(o, o[_W_SLIP1], o[_W_SLIP2])
-        terms = info["reward_terms"]
-        reward = float(task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"]))
-        return obs, reward, self._end(o[_W_TERM] != 0.0, o[_W_HX], o[_W_HY], info), info
-
-    def _step_v0(self, fs: fast.SingleStep, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
-        """:meth:`_advance` with AmigoBot-v0's settings by AmigoBot-v0's compiled step (:class:`amigo_gym.sim.fast.
-        SingleStep`): the reference's results (:func:`amigo_gym.task.v1.step_columns` with ideal actuators) and v0's
-        info."""
-        self._steps += 1
-        return fs.env_step(a1, a2, self._steps * self.params.dt)
+        info, reward, terminated, hx, hy = self._kernel_info(False, run_exps is not None)
+        return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
@@ -343,45 +351,34 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self, o: list[float], slip1: float, slip2: float) -> dict[str, Any]:
-        """:meth:`_info` from the kernel's outputs ``o`` (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same
-        entries.
+    def _kernel_info(self, start: bool, exps: bool = False) -> tuple[dict[str, Any], float, bool, float, float]:
+        """:meth:`_info` from the kernel's workspace (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same entries;
+        with the reward (the product of the terms, :func:`amigo_gym.task.v0.reward_product`), ``terminated`` and H.
 
-        The track, speed and smoothness terms from one ``np.exp`` of their arguments, and the heading term, as
+        ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
+        else of the step just taken (its slips and commands, also into :attr:`_last_command`). ``exps``: the kernel
+        has written the exponentials of the reward's arguments (:attr:`amigo_gym.sim.fast_v1.StepKernel.run_exps`),
+        else one ``np.exp`` takes them: the track, speed and smoothness terms from them, and the heading term, as
         :func:`amigo_gym.task.v0.reward_term_columns` computes them.
         """
-        ep = self._episode
-        assert self._kernel is not None and ep is not None
-        track, speed, ex = np.exp(self._kernel.ws[_W_ARG_T : _W_ARG_S + 1]).tolist()
-        v_true = o[_W_VT]
-        v_ref = o[_W_VREF]
-        cmd1, cmd2 = self._last_command
+        kern = self._kernel
+        assert kern is not None
+        ws = kern.ws
+        track, speed, ex = (kern.exps if exps else _np_exp(kern.reward_args)).tolist()
+        e, progress, v_true, v_ref, heading, end, term, hx, hy, cmd1, cmd2 = ws.take(_INFO_SCALARS).tolist()
         # the seven info arrays are views of one new array (one allocation instead of seven)
-        arr = _np_array(
-            (
-                o[_W_X],
-                o[_W_Y],
-                o[_W_BETA],
-                o[_W_HX],
-                o[_W_HY],
-                o[_W_W1],
-                o[_W_W2],
-                cmd1,
-                cmd2,
-                o[_W_AL1],
-                o[_W_AL2],
-                o[_W_MX],
-                o[_W_MY],
-                o[_W_MB],
-                slip1,
-                slip2,
-            )
-        )
-        return {
+        arr = ws.take(_INFO_ROWS)
+        if start:
+            arr[7:9] = self._last_command
+            arr[14:16] = 0.0
+        else:
+            self._last_command = (cmd1, cmd2)
+        smooth = float(task.smooth_term(ex, self.params.smooth_weight))
+        info = {
             "pose": arr[0:3],
             "h_position": arr[3:5],
-            "cross_track_error": o[_W_E],
-            "progress": o[_W_PROGRESS],
+            "cross_track_error": e,
+            "progress": progress,
             "speed": v_true,
             "reference_speed": v_ref,
             "speed_error": v_true - v_ref,
@@ -389,19 +386,15 @@ class AmigoBotV1Env(AmigoBotBase):
             "command": arr[7:9],
             "wheel_angles": arr[9:11],
             "measured_pose": arr[11:14],
-            "reward_terms": {
-                "track": track,
-                "speed": speed,
-                "heading": o[_W_HEADING],
-                "smooth": task.smooth_term(ex, self.params.smooth_weight),
-            },
+            "reward_terms": {"track": track, "speed": speed, "heading": heading, "smooth": smooth},
             "time": self._steps * self.params.dt,
             "path": dict(self._path_info),
-            "true_robot": {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)},
+            "true_robot": dict(self._true_robot),
             "delay": self._delay,
             "slip": arr[14:16],
-            "end_of_path": o[_W_END] != 0.0,
+            "end_of_path": end != 0.0,
         }
+        return info, float(task.reward_product(track, speed, heading, smooth)), term != 0.0, hx, hy
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace

@@ -21,7 +21,7 @@ This module may import numpy, gymnasium, :mod:`amigo_gym.envs.spec`, :mod:`amigo
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -236,39 +236,53 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
 
     ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
     native vector envs of AmigoBot-v0 and -v1. Every ``_key`` mask is an array of its own, as in
-    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once).
+    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once, after one walk over ``infos``
+    that leaves a place for each).
     """
-    masks = np.empty((_mask_count(infos), n), dtype=np.bool_)
+    slots: list[tuple[dict[str, Any], str]] = []
+    out = _scatter_into(infos, mask, n, slots)
+    masks = np.empty((len(slots), n), dtype=np.bool_)
     masks[...] = True if mask is None else mask
-    return _scatter_into(infos, mask, n, iter(masks))
+    for (d, name), row in zip(slots, masks, strict=True):
+        d[name] = row
+    return out
 
 
-def _mask_count(infos: dict[str, Any]) -> int:
-    """How many ``_key`` masks :func:`scatter_infos` gives ``infos`` (nested dicts included)."""
-    count = 0
-    for k, v in infos.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
-            continue
-        count += 1 + (_mask_count(v) if isinstance(v, dict) else 0)
-    return count
+#: the ``_key`` mask's name of each info key (``""``: a key passed on without a mask), memoised (a step's hot path)
+_MASK_NAMES: dict[str, str] = {}
 
 
-def _scatter_into(infos: dict[str, Any], mask: BoolArray | None, n: int, masks: Iterator[BoolArray]) -> dict[str, Any]:
-    """:func:`scatter_infos` with the ``_key`` masks taken from ``masks`` in order."""
+def _mask_name(k: str) -> str:
+    """``"_" + k``, or ``""`` for a key that gets no mask (a mask itself, ``final_obs``, ``final_info``)."""
+    name = _MASK_NAMES.get(k)
+    if name is None:
+        name = "" if k.startswith("_") or k in ("final_obs", "final_info") else f"_{k}"
+        if len(_MASK_NAMES) < 4096:  # the envs' few keys; a bound for other callers' ones
+            _MASK_NAMES[k] = name
+    return name
+
+
+def _scatter_into(
+    infos: dict[str, Any], mask: BoolArray | None, n: int, slots: list[tuple[dict[str, Any], str]]
+) -> dict[str, Any]:
+    """:func:`scatter_infos` without the masks: each ``_key`` entry is a place (``None``) recorded in ``slots``, in
+    the order of the masks' rows."""
     out: dict[str, Any] = {}
     for k, v in infos.items():
-        if k.startswith("_") or k in ("final_obs", "final_info"):
+        name = _MASK_NAMES.get(k) or _mask_name(k)
+        if not name:
             out[k] = v
             continue
         if isinstance(v, dict):
-            out[k] = _scatter_into(v, mask, n, masks)
+            out[k] = _scatter_into(v, mask, n, slots)
         elif mask is None:
             out[k] = v
         else:
             full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
             full[mask] = v
             out[k] = full
-        out[f"_{k}"] = next(masks)  # a mask of its own per key
+        out[name] = None  # a mask of its own per key, set by scatter_infos
+        slots.append((out, name))
     return out
 
 

@@ -65,6 +65,9 @@ _W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
 
 
+_np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
+
+
 def __getattr__(name: str) -> Any:
     """``ROWWISE_MAX_N`` (removed in 0.2 with the row-by-row step route; goes in 0.3): 0, with a warning."""
     if name == "ROWWISE_MAX_N":
@@ -328,7 +331,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         generator is a ``PCG64``; otherwise after it, by :meth:`_reset_rows` (the reference).
         """
         restart, bitgens, idx = self._no_restart, None, None
-        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
             if self._rngs.drawable:
                 restart, bitgens = self._autoreset, self._rngs.bitgens
             else:

@@ -13,7 +13,9 @@ Why three loops and not one: the transcendental functions of a step (two ``tan``
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
 ``np.exp(exps, out=exps)``, :func:`amigo_gym.sim.fast.step_rows`): they are several times faster than the
 C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
-reference calls, so the results are **bit-identical** to the reference's. Everything else (about a
+reference calls, so the results are **bit-identical** to the reference's (where numpy's float64 ``tan`` and ``exp``
+are the C library's, as on AVX2 x86-64, the single env's step runs in one call instead, :func:`single_step`, with the
+same bits: :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). Everything else (about a
 hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
 would run as as many passes over temporary arrays) is fused into the loops:
 
@@ -96,6 +98,8 @@ __all__ = [
     "single_move",
     "single_evaluate",
     "single_finish",
+    "single_step",
+    "tan_exp",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -623,3 +627,29 @@ def single_finish(c: F64, buf: F64) -> int:
     """Pass 3 (:func:`finish`) of the robot in ``buf``: the number of headings past the limit (0 or 1)."""
     past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], buf[:, SINGLE_EXPS:SINGLE_REWARD])
     return int(past)
+
+
+@_serial
+def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
+                a2: float) -> int:  # fmt: skip
+    """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate`, the
+    three exponentials and :func:`single_finish`, the transcendental functions the C library's (``math.tan``,
+    ``math.exp``) instead of numpy's between the passes. The same bits where those give numpy's:
+    :class:`amigo_gym.sim.fast.SingleStep` calls it only then (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`).
+    Returns what :func:`single_finish` returns."""
+    single_move(c, buf, flags, a1, a2)
+    for j in range(SINGLE_TANS, SINGLE_TURN):
+        buf[0, j] = math.tan(buf[0, j])
+    single_evaluate(c, preview, buf, flags, obs)
+    for j in range(SINGLE_EXPS, SINGLE_REWARD):
+        buf[0, j] = math.exp(buf[0, j])
+    return single_finish(c, buf)
+
+
+@_serial
+def tan_exp(x: F64, t: F64, e: F64) -> None:
+    """``t = tan(x)``, ``e = exp(x)`` elementwise by the functions :func:`single_step` calls (for
+    :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`)."""
+    for i in range(x.shape[0]):
+        t[i] = math.tan(x[i])
+        e[i] = math.exp(x[i])

@@ -674,6 +674,27 @@ def step(
     )
 
 
+@_jit
+def step_exps(
+    c: F64,
+    pv: F64,
+    ring: F64,
+    ws: F64,
+    obs: NDArray[np.floating],
+    ring_step: int,
+    a1: float,
+    a2: float,
+    exps: F64,
+) -> None:
+    """:func:`step`, then ``exps (3,)``: the exponentials of the reward's track, speed and smoothness arguments by the
+    C library's ``math.exp``: the single env's step and reward in one call, where that gives numpy's bits
+    (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`; else the env takes ``np.exp`` of the arguments)."""
+    step(c, pv, ring, ws, obs, ring_step, a1, a2)
+    exps[0] = math.exp(ws[L.W_ARG_T])
+    exps[1] = math.exp(ws[L.W_ARG_V])
+    exps[2] = math.exp(ws[L.W_ARG_S])
+
+
 # ----------------------------------------------------------------------------------------- N robots
 # The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
 # :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``

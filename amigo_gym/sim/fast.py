@@ -58,6 +58,8 @@ __all__ = [
     "step_rows_unchecked",
     "EnvStep",
     "step_env_rows",
+    "direct_call",
+    "libm_tan_exp_match_numpy",
 ]
 
 Array = NDArray[np.float64]
@@ -170,6 +172,52 @@ def kernels() -> ModuleType:
     import amigo_gym.sim._kernels as k
 
     return k
+
+
+def direct_call(dispatcher: Any, *args: Any) -> Any:
+    """The compiled code of the numba function ``dispatcher`` for the types of ``args``, called without numba's
+    dispatch.
+
+    A call of a numba function first finds the type of each argument and the compiled code for them (about 0.1 us per
+    argument: more than one robot's step); this returns that code, compiled or loaded from numba's disk cache now as
+    the first call would, so that a step pays for it once. The same machine code runs, so the results are the same
+    bits. Only for arguments of exactly these types at every call (the same dtypes, dimensions, C-contiguity and
+    writeability; numbers of the same kind): the callers pass their own buffers, allocated once, of the types
+    ``args`` have. Returns ``dispatcher`` itself where numba gives no such entry (another numba version).
+    """
+    import numba
+
+    sig = tuple(numba.typeof(a) for a in args)  # type: ignore[no-untyped-call]
+    dispatcher.compile(sig)
+    try:
+        return dispatcher.get_overload(sig)
+    except (AttributeError, KeyError):  # pragma: no cover  (numba's API moved)
+        return dispatcher
+
+
+@lru_cache(maxsize=1)
+def libm_tan_exp_match_numpy() -> bool:
+    """Whether the compiled ``math.tan`` and ``math.exp`` (the C library's) give numpy's float64 ``np.tan`` and
+    ``np.exp`` bits on a fixed sample of the step's arguments (5000 tangents' of half turns and of headings of many
+    laps up to :data:`amigo_gym.model.params.HEADING_LIMIT`, 3000 exponentials' of the reward's arguments, never
+    positive), as :func:`amigo_gym.sim.fast_v1.libm_matches_numpy` checks ``cos`` and ``sin``: the premise of
+    :func:`amigo_gym.sim._kernels.single_step`. Checked once per process (a millisecond)."""
+    g = np.random.default_rng(20261126)
+    xt = np.concatenate(
+        (
+            g.uniform(-2.0, 2.0, 2000),
+            g.normal(0.0, 1e-3, 1000),
+            g.uniform(-2000.0, 2000.0, 1000),
+            g.uniform(-HEADING_LIMIT, HEADING_LIMIT, 1000),
+        )
+    )
+    xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
+    k = kernels()
+    t, e, spare = np.empty_like(xt), np.empty_like(xe), np.empty_like(xt)
+    k.tan_exp(xt, t, spare)
+    k.tan_exp(xe, spare[: len(xe)], e)
+    same_t = np.array_equal(t.view(np.int64), np.tan(xt).view(np.int64))
+    return bool(same_t and np.array_equal(e.view(np.int64), np.exp(xe).view(np.int64)))
 
 
 def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
@@ -306,7 +354,9 @@ class SingleStep:
     ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
     between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
     and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
-    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once.
+    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once; or,
+    where the C library's ``tan`` and ``exp`` give numpy's bits (:func:`libm_tan_exp_match_numpy`), one compiled
+    call that computes them in between (:func:`amigo_gym.sim._kernels.single_step`: the same bits).
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
@@ -330,8 +380,15 @@ class SingleStep:
     def _bind(self) -> None:
         """The compiled functions and the buffer's views (again after unpickling)."""
         kk = kernels()
-        self._move, self._evaluate, self._finish = kk.single_move, kk.single_evaluate, kk.single_finish
         b = self.buf
+        # the compiled passes for exactly these buffers' types (direct_call: no dispatch per call)
+        self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
+        self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
+        self._finish = direct_call(kk.single_finish, self.consts, b)
+        # the whole step in one call where the C library's tan and exp give numpy's bits (else the three passes)
+        self._whole: Any = None
+        if libm_tan_exp_match_numpy():
+            self._whole = direct_call(kk.single_step, self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
@@ -363,13 +420,17 @@ class SingleStep:
         the caller reduces it by :func:`amigo_gym.task.v0.bound_angle`."""
         b = self.buf
         c = self.consts
-        tans = self._tans
-        exps = self._exps
-        self._move(c, b, self.flags, a1, a2)
-        _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
-        self._evaluate(c, self.preview, b, self.flags, self.obs)
-        _np_exp(exps, exps)
-        self.past_limit = self._finish(c, b)
+        whole = self._whole
+        if whole is not None:
+            self.past_limit = whole(c, self.preview, b, self.flags, self.obs, a1, a2)
+        else:
+            tans = self._tans
+            exps = self._exps
+            self._move(c, b, self.flags, a1, a2)
+            _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
+            self._evaluate(c, self.preview, b, self.flags, self.obs)
+            _np_exp(exps, exps)
+            self.past_limit = self._finish(c, b)
         rec: list[float] = self.record.tolist()
         return rec
 
@@ -435,33 +496,90 @@ def step_rows(
         if bitgens is not None and (bitgens.shape != restart.shape or bitgens.dtype != np.uintp):
             msg = f"bitgens must be a uintp array of shape {restart.shape}, got {bitgens.dtype} {bitgens.shape}"
             raise ValueError(msg)
+    return _step_rows(_dispatched(parallel), ws, state, actions, restart, obs, reward, terminated, record, bitgens)
+
+
+class _Passes(NamedTuple):
+    """The compiled functions of a step (:mod:`amigo_gym.sim._kernels`): numba's dispatchers, or their
+    :func:`direct_call` entries for the types :func:`step_env_rows` passes."""
+
+    move: Any
+    evaluate: Any
+    finish: Any
+    draw_starts: Any
+    place_starts: Any
+    count_steps: Any
+
+
+def _dispatched(parallel: bool) -> _Passes:
+    """The kernels' dispatchers (any argument types numba accepts)."""
     k = kernels()
-    c, tans, exps = ws.consts, ws.tans, ws.exps
-    move, evaluate, finish = (
-        (k.move_arguments_parallel, k.evaluate_parallel, k.finish_parallel)
-        if parallel
-        else (k.move_arguments, k.evaluate, k.finish)
+    if parallel:
+        return _Passes(k.move_arguments_parallel, k.evaluate_parallel, k.finish_parallel, k.draw_starts,
+                       k.place_starts, k.count_steps)  # fmt: skip
+    return _Passes(k.move_arguments, k.evaluate, k.finish, k.draw_starts, k.place_starts, k.count_steps)
+
+
+@lru_cache(maxsize=2)
+def _direct(parallel: bool) -> _Passes:
+    """:func:`_dispatched`'s functions as :func:`direct_call` entries for the argument types of :func:`step_env_rows`:
+    C-contiguous float64 constants, state, actions, scratch, record and times, bool masks, a float32 observation,
+    int64 step counters, intp rows and the read-only uintp addresses of :attr:`GeneratorTable.bitgens`."""
+    d = _dispatched(parallel)
+    k = kernels()
+    c = np.zeros(len(k.CONSTANT_FIELDS))
+    f1, f2, f3, f8, f16 = np.zeros(1), np.zeros((1, 2)), np.zeros((1, 3)), np.zeros((1, 8)), np.zeros((1, 16))
+    mask, obs = np.zeros(1, dtype=np.bool_), np.zeros((1, 1), dtype=np.float32)
+    rows, steps = np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.int64)
+    bitgens = np.zeros(1, dtype=np.uintp)
+    bitgens.flags.writeable = False
+    return _Passes(
+        direct_call(d.move, c, f8, f2, mask, f2, f1),
+        direct_call(d.evaluate, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3),
+        direct_call(d.finish, c, f1, f16, f3),
+        direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
+        direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
+        direct_call(d.count_steps, steps, rows, 0, 0.0, mask, f1),
     )
-    move(c, state, actions, restart, tans, ws.turn)
+
+
+_np_count_nonzero = np.count_nonzero
+
+
+def _step_rows(
+    p: _Passes,
+    ws: Workspace,
+    state: Array,
+    actions: Array,
+    restart: NDArray[np.bool_],
+    obs: NDArray[np.floating],
+    reward: Array,
+    terminated: NDArray[np.bool_],
+    record: Array,
+    bitgens: NDArray[np.uintp] | None,
+) -> StepReport:
+    """:func:`step_rows` (unchecked) with the compiled functions ``p``."""
+    c, tans, exps = ws.consts, ws.tans, ws.exps
+    p.move(c, state, actions, restart, tans, ws.turn)
     np.tan(tans, out=tans)
     m = 0
     if bitgens is not None:
-        m = k.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
+        m = p.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
         if m < 0:
             raise ValueError("bitgens has no generator for a restarting row (address 0)")
         # numpy's cos and sin of the (m,) headings, as task.v1.start_state calls them on its (m,) column
         beta, cos_beta, sin_beta = ws.beta[:m], ws.cos_beta[:m], ws.sin_beta[:m]
         np.cos(beta, out=cos_beta)
         np.sin(beta, out=sin_beta)
-        k.place_starts(ws.start, ws.rows[:m], cos_beta, sin_beta, state, tans)
-    elif restart.any():
+        p.place_starts(ws.start, ws.rows[:m], cos_beta, sin_beta, state, tans)
+    elif _np_count_nonzero(restart):
         idx = np.flatnonzero(restart)
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
+    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
     np.exp(exps, out=exps)
-    past = finish(c, reward, record, exps)
+    past = p.finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
 
 
@@ -504,23 +622,28 @@ def step_env_rows(
     ``None``; ``time = steps * dt`` [s]), the headings past the limit reduced by whole turns in the state and the
     record (:func:`amigo_gym.task.v0.bound_angle`, as the numpy path) and the infos.
 
+    The compiled functions are called without numba's dispatch (:func:`direct_call`), for the types of the vector
+    env's own arrays: ``rows`` C-contiguous float64 ``(N, 8)``, ``restart`` C-contiguous bool ``(N,)``, ``steps``
+    C-contiguous int64 ``(N,)``, ``bitgens`` :attr:`GeneratorTable.bitgens`; ``actions`` is made C-contiguous float64.
+
     Args:
         reset_rows: rows the caller set to start states before the step (``restart`` set there), or None.
         ws, actions, restart, bitgens, parallel: as :func:`step_rows` (the caller's own arrays).
     """
     n = rows.shape[0]
+    p = _direct(parallel)
     obs = np.empty((n, ws.obs_dim), dtype=np.float32)
     reward = np.empty(n)
     terminated = np.empty(n, dtype=np.bool_)
     record = np.empty((n, 16))
-    a = np.ascontiguousarray(actions)
-    report = step_rows(ws, rows, a, restart, obs, reward, terminated, record, parallel, bitgens, check=False)
+    a = np.ascontiguousarray(actions, dtype=np.float64)  # the type of _direct's entries
+    report = _step_rows(p, ws, rows, a, restart, obs, reward, terminated, record, bitgens)
     if bitgens is not None:
         reset_rows = ws.rows[: report.drawn].copy()  # the rows restarted in the step (ws.rows is its scratch)
     truncated = np.empty(n, dtype=np.bool_)
     time = np.empty(n)
     limit = -1 if max_steps is None else max_steps
-    kernels().count_steps(steps, _NO_ROWS if reset_rows is None else reset_rows, limit, dt, truncated, time)
+    p.count_steps(steps, _NO_ROWS if reset_rows is None else reset_rows, limit, float(dt), truncated, time)
     if report.past_limit:
         rows[:, 2] = record[:, 2] = bound_angle(rows[:, 2])
     return EnvStep(obs, reward, terminated, truncated, record_info(record, record.T, time), reset_rows)

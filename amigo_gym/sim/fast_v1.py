@@ -203,6 +203,10 @@ class StepKernel:
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
         self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
+        #: the single env's observation, written by each step (:attr:`run`; the env hands out a copy)
+        self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
+        #: the exponentials of the reward's three arguments, written by :attr:`run_exps`
+        self.exps: Array = np.zeros(3)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
@@ -218,12 +222,36 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
+        # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
+        # the observation (D,) float32 of the single env, the step counters Python ints
+        ring = np.zeros((1, 2))
+        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
+        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        #: the step and its reward's exponentials in one call (into :attr:`exps`) where the C library's ``exp`` gives
+        #: numpy's bits (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`); else None (the env takes ``np.exp``)
+        self.run_exps: Any = None
+        if fast.libm_tan_exp_match_numpy():
+            args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.exps)
+            self.run_exps = fast.direct_call(kv.step_exps, *args)
+        #: the arguments of the reward's three exponentials (track, speed, smoothness), a view of :attr:`ws`
+        self.reward_args: Array = self.ws[layout_v1.W_ARG_T : layout_v1.W_ARG_S + 1]
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("step", "evaluate", "noise_uniforms", "locate_progress", "u1", "logs"):
+        for name in (
+            "step",
+            "evaluate",
+            "noise_uniforms",
+            "locate_progress",
+            "u1",
+            "logs",
+            "run",
+            "_uniforms",
+            "reward_args",
+            "run_exps",
+        ):
             del state[name]
         return state
 
@@ -261,7 +289,7 @@ class StepKernel:
         ``steps``): the uniforms by :func:`amigo_gym.sim._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
         (as the reference); :func:`amigo_gym.sim._kernels_v1.step` completes the normals. Only when anything is drawn.
         """
-        if self.noise_uniforms(self.consts, self.ws, self.key, steps):
+        if self._uniforms(self.consts, self.ws, self.key, steps):
             np.log(self.u1, out=self.logs)
 
     def state(self, steps: int) -> tracking.State:

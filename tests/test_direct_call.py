@@ -1,0 +1,152 @@
+"""The compiled steps called without numba's dispatch (amigo_gym.sim.fast.direct_call, issue 19 item 5).
+
+The entries are compiled for one set of argument types; these tests hold the callers to what they promise: the same
+bits as numba's dispatcher (which finds the types at each call), actions of any layout and dtype made C-contiguous
+float64 before an entry reads them, and environments that still pickle (an entry is not picklable).
+"""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import amigo_gym  # noqa: F401  (registers the envs)
+from amigo_gym.model.params import EnvParams
+from amigo_gym.paths import make_path
+from amigo_gym.sim import fast
+from amigo_gym.task import v0 as task
+
+pytest.importorskip("numba")
+
+
+def _workspace(n: int) -> tuple[fast.Workspace, np.ndarray]:
+    params = EnvParams()
+    ws = fast.workspace(task.task_constants(params), make_path(params), n)
+    g = np.random.default_rng(3)
+    rows = np.column_stack((g.normal(0.0, 0.05, n), g.normal(0.0, 0.05, n), g.normal(0.0, 0.1, n), np.zeros((n, 3)),
+                            np.full(n, 4.0), np.full(n, 4.0)))  # fmt: skip
+    return ws, np.ascontiguousarray(rows)
+
+
+def test_direct_call_is_not_the_dispatcher_and_gives_its_bits() -> None:
+    k = fast.kernels()
+    ws, rows = _workspace(5)
+    a = np.random.default_rng(4).uniform(-1.2, 1.2, (5, 2))
+    no = np.zeros(5, dtype=np.bool_)
+    entry = fast.direct_call(k.move_arguments, ws.consts, rows, a, no, ws.tans, ws.turn)
+    assert entry is not k.move_arguments and not hasattr(entry, "py_func")
+    tans_d, turn_d = np.zeros_like(ws.tans), np.zeros_like(ws.turn)
+    k.move_arguments(ws.consts, rows, a, no, tans_d, turn_d)
+    entry(ws.consts, rows, a, no, ws.tans, ws.turn)
+    assert ws.tans.tobytes() == tans_d.tobytes() and ws.turn.tobytes() == turn_d.tobytes()
+
+
+@pytest.mark.parametrize("layout", ["C", "F", "strided", "float32"])
+def test_step_env_rows_takes_actions_of_any_layout(layout: str) -> None:
+    """The entries assume C-contiguous float64 actions: step_env_rows makes them so (a Fortran-ordered array, a
+    strided view or float32 values give the bits of the C-contiguous float64 copy)."""
+    n = 7
+    a = np.random.default_rng(5).uniform(-1.0, 1.0, (n, 2)).astype(np.float32).astype(np.float64)
+    given = {
+        "C": a,
+        "F": np.asfortranarray(a),
+        "strided": np.repeat(a, 2, axis=1)[:, ::2],
+        "float32": a.astype(np.float32),
+    }[layout]
+    outs = []
+    for actions in (a, given):
+        ws, rows = _workspace(n)
+        steps = np.zeros(n, dtype=np.int64)
+        r = fast.step_env_rows(ws, rows, actions, np.zeros(n, dtype=np.bool_), None, False, steps, None, 400, 0.1)
+        outs.append((rows.tobytes(), r.obs.tobytes(), r.reward.tobytes(), r.terminated.tobytes(), r.infos["time"]))
+    assert outs[0][:4] == outs[1][:4]
+    np.testing.assert_array_equal(outs[0][4], outs[1][4])
+
+
+@pytest.mark.parametrize("env_id", ["AmigoBot-v0", "AmigoBot-v1"])
+def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=1)
+    a = np.array([0.4, 0.3], dtype=np.float32)
+    env.step(a)
+    twin = pickle.loads(pickle.dumps(env))
+    for _ in range(5):
+        o1, r1, t1, _, i1 = env.step(a)
+        o2, r2, t2, _, i2 = twin.step(a)
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+        assert i1["h_position"].tobytes() == i2["h_position"].tobytes()
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
+)
+def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
+    """kernels.single_step (math.tan, math.exp inside) against the three passes with numpy's tan and exp between them,
+    on one machine (two code paths): random states, actions beyond [-1, 1] too, 300 steps each. Where the C
+    library's tan and exp differ from numpy's (the gate is False), the single env must not use it."""
+    params = EnvParams(**settings)  # type: ignore[arg-type]
+    whole = fast.SingleStep(task.task_constants(params), make_path(params))
+    passes = fast.SingleStep(task.task_constants(params), make_path(params))
+    if not fast.libm_tan_exp_match_numpy():
+        assert whole._whole is None
+        return
+    assert whole._whole is not None
+    passes._whole = None
+    g = np.random.default_rng(11)
+    for _ in range(20):
+        state = np.concatenate((g.normal(0.0, 0.5, 2), g.uniform(-50.0, 50.0, 1), g.normal(0.0, 30.0, 3),
+                                g.uniform(-15.0, 15.0, 2)))  # fmt: skip
+        whole.set_state(state)
+        passes.set_state(state)
+        for a1, a2 in g.uniform(-1.3, 1.3, (15, 2)).tolist():
+            assert whole.step(a1, a2) == passes.step(a1, a2)
+            assert whole.buf.tobytes() == passes.buf.tobytes() and whole.obs.tobytes() == passes.obs.tobytes()
+            assert whole.past_limit == passes.past_limit
+
+
+def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch: pytest.MonkeyPatch) -> None:
+    fast.libm_tan_exp_match_numpy.cache_clear()
+    monkeypatch.setattr(np, "tan", lambda x, *a, **k: np.sin(x) / np.cos(x))  # a numpy tan the C library does not give
+    try:
+        assert fast.libm_tan_exp_match_numpy() is False
+    finally:
+        monkeypatch.undo()
+        fast.libm_tan_exp_match_numpy.cache_clear()
+    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    env = gym.make("AmigoBot-v0").unwrapped
+    assert env._v0._whole is None
+    ref = gym.make("AmigoBot-v0", kernel="numpy").unwrapped
+    env.reset(seed=2)
+    ref.reset(seed=2)
+    for a in np.random.default_rng(6).uniform(-1.0, 1.0, (30, 2)):
+        o1, r1, t1, _, _ = env.step(a)
+        o2, r2, t2, _, _ = ref.step(a)
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+
+
+@pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])
+def test_v1_reward_exponentials_in_the_step_give_numpys_bits(
+    monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
+) -> None:
+    """AmigoBot-v1's single step with the reward's exponentials in the compiled call (kernels_v1.step_exps, the C
+    library's exp) against the step followed by numpy's exp (the gate off), same seeds: the same bits."""
+    envs = [gym.make("AmigoBot-v1", **settings).unwrapped]
+    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    envs.append(gym.make("AmigoBot-v1", **settings).unwrapped)
+    monkeypatch.undo()
+    assert envs[1]._kernel.run_exps is None
+    assert (envs[0]._kernel.run_exps is not None) == fast.libm_tan_exp_match_numpy()
+    for e in envs:
+        e.reset(seed=8)
+    for a in np.random.default_rng(9).uniform(-1.0, 1.0, (200, 2)):
+        out = [e.step(a) for e in envs]
+        (o1, r1, t1, _, i1), (o2, r2, t2, _, i2) = out
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
+        assert i1["reward_terms"] == i2["reward_terms"]
+        if t1:
+            for e in envs:
+                e.reset()
