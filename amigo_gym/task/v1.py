@@ -58,7 +58,8 @@ import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Any, Literal, NamedTuple
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -77,7 +78,7 @@ from amigo_gym.model.kinematics import (
 )
 from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path
+from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath, make_path
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
@@ -90,6 +91,9 @@ from amigo_gym.task.v0 import (
     reward_term_columns,
     steady_heading,
 )
+
+if TYPE_CHECKING:
+    from amigo_gym.paths import Feasibility
 
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
@@ -948,22 +952,32 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
         the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
         ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
     """
-    from amigo_gym.paths import feasibility
-
-    v = p.speed_range[1]
-    f = feasibility(
-        path,
-        v,
-        p.robot,
-        "A",
-        max_rotational_acceleration=None if p.ideal_actuators else p.actuators.rot_acceleration,
-    )
+    f = _feasibility(path, p.speed_range[1], p.robot, None if p.ideal_actuators else p.actuators.rot_acceleration)
     if not f.feasible:
         if p.feasibility == "error":
             raise ValueError(f"{f.message()} (feasibility='warn' or 'off' runs it anyway)")
         if p.feasibility == "warn":
             warnings.warn(f"AmigoBot-v1: {f.message()}; running it (feasibility='warn')", UserWarning, stacklevel=3)
     return f.report()
+
+
+@lru_cache(maxsize=256)
+def _cached_feasibility(path: ClothoidPath, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
+    from amigo_gym.paths import feasibility
+
+    return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
+
+
+def _feasibility(path: Any, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
+    """:func:`amigo_gym.paths.feasibility` of ``path`` at the speed ``v`` [m/s] of A, with the ramp limit ``rot``
+    [rad/s^2] (``None``: unbounded), remembered per process for a :class:`~amigo_gym.paths.ClothoidPath` (frozen: its
+    value is its key), since every env of a vector of single envs checks the same task (an RK4 lag profile each,
+    tens of ms); another path object (a user's, which may change) is analysed each time."""
+    if type(path) is ClothoidPath:
+        return _cached_feasibility(path, v, robot, rot)
+    from amigo_gym.paths import feasibility
+
+    return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
 
 
 #: values of ``info["end_condition"]``: ``""`` the episode goes on (or ended by truncation), ``"goal"`` H came within
