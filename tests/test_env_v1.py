@@ -106,6 +106,24 @@ def test_infeasible_tasks_are_refused_in_one_line(kwargs: dict[str, object], mes
     assert "\n" not in str(err.value)
 
 
+def test_remembered_feasibility_is_the_analysis_and_still_refuses() -> None:
+    """The per-process memory of a fixed path's feasibility (task.v1._feasibility) gives the report a fresh
+    analysis gives, and refuses or warns at every construction, not only the first."""
+    from amigo_gym.paths import feasibility
+
+    for _ in range(2):
+        with pytest.raises(ValueError, match=r"needs 16\.6 rad/s"):
+            gym.make("AmigoBot-v1", speed=0.74)
+        with pytest.warns(UserWarning, match=r"needs 16\.6 rad/s"):
+            gym.make("AmigoBot-v1", speed=0.74, feasibility="warn")
+    env = gym.make("AmigoBot-v1", speed=0.3)
+    u = env.unwrapped
+    p = u.params  # type: ignore[attr-defined]
+    fresh = feasibility(u.path, 0.3, p.robot, "A", max_rotational_acceleration=p.actuators.rot_acceleration)  # type: ignore[attr-defined]
+    assert u.feasibility == fresh.report()  # type: ignore[attr-defined]
+    assert gym.make("AmigoBot-v1", speed=0.3).unwrapped.feasibility == fresh.report()  # type: ignore[attr-defined]
+
+
 def test_mixed_families_are_feasible_at_the_highest_speed() -> None:
     """The extremes of the ranges drawn by path="mixed" (and the random pool's defaults) are feasible at 0.4 m/s."""
     from amigo_gym.paths import feasibility, make_family_path
