@@ -115,7 +115,9 @@ def test_a_pruned_fastppo_trial_stops_training_at_the_pruned_evaluation(tmp_path
 
 
 # --------------------------------------------------------------------------- seeds grid, interruption
-def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_grid(tmp_path: Path) -> None:
+def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A SIGTERM'd fastppo trial stops after a checkpoint and is queued again; the rerun continues it from that
     checkpoint (curve rows from before the stop kept) to the model an uninterrupted run gives, bit for bit, and
     trains the rest of the grid with the file's settings."""
@@ -137,7 +139,7 @@ def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_g
     assert 0 < ck["global_step"] < 40960  # stopped part-way, after a checkpoint at an iteration's end
     assert (Path(stopped.user_attrs["run_dir"]) / "ABANDONED.json").is_file()
 
-    ts._finish(ts._sweep(base), timeout=600)
+    ts._sweep_here(capsys, base)  # the rerun, not killed: in this process
     trials = optuna.load_study(study_name="grid", storage=storage).get_trials()
     done = {t.params["seed"]: t for t in trials if t.state == TrialState.COMPLETE}
     assert sorted(done) == [0, 1], [(t.number, t.state, t.params) for t in trials]
