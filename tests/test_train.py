@@ -1,6 +1,6 @@
 """``amigo-gym train`` with tiny budgets: outputs, resume, interruption, bad input.
 
-The interruption (SIGTERM) and the bad-argument checks run the command by subprocess; the others call
+The interrupted run (SIGTERM) and the bad-argument checks run the command by subprocess; the other runs call
 ``amigo_gym.cli.main`` in this process (the same dispatcher, without paying torch's import per run)."""
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def test_sac_train_then_resume(tmp_path: Path, train_here: Callable[..., Ran]) -
     assert no_temp_files(out)
 
 
-def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
+def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
     from stable_baselines3 import PPO
 
     out = tmp_path / "ppo"
@@ -172,7 +172,7 @@ def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
     assert not (out / "model.zip").exists()  # the final model is written only at the end
     assert no_temp_files(out)
 
-    r = run_train(*common, "--timesteps", str(done + 256), "--resume")
+    r = train_here(*common, "--timesteps", str(done + 256), "--resume")  # not stopped: in this process
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == done + 256 and rec["resumed_from"] == done and rec["n_envs"] == 4
