@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
+
+from amigo_gym.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY_PPO = """AmigoBot-v0:
@@ -21,23 +22,46 @@ TINY_PPO = """AmigoBot-v0:
 """
 
 
-def compare(out: Path, hp: Path, *args: str, bench: bool = False) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", "", "--no-plots"]
+@dataclass
+class Ran:
+    """What one ``amigo-gym`` command returned and printed."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def cli(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Any:
+    """``amigo-gym ARGS`` in this process (``amigo_gym.cli.main``, from the checkout's root as the subprocess ran it):
+    the test is about what compare does, not about starting Python; each process paid torch's import (about 5 s)."""
+    monkeypatch.chdir(ROOT)
+
+    def run(*args: str) -> Ran:
+        capsys.readouterr()
+        rc = main(list(args))
+        out, err = capsys.readouterr()
+        return Ran(rc, out, err)
+
+    return run
+
+
+def compare(cli: Any, out: Path, hp: Path, *args: str, bench: bool = False) -> Ran:
+    cmd = ["compare", "--out", str(out), "--models", "", "--no-plots"]
     cmd += ["--seeds", "1", "--steps", "10", "--no-progress", "--hyperparams", str(hp), *args]
     cmd += [] if bench else ["--no-benchmark"]
-    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    r = cli(*cmd)
     assert r.returncode == 0, r.stderr
     return r
 
 
-def test_reuse_only_the_same_configuration(tmp_path: Path) -> None:
+def test_reuse_only_the_same_configuration(tmp_path: Path, cli: Any) -> None:
     hp = tmp_path / "ppo.yml"
     hp.write_text(TINY_PPO)
     out = tmp_path / "out"
     model = out / "train_ppo" / "model.zip"
 
-    r = compare(out, hp, "--train-steps", "128", "--seed", "0", bench=True)
+    r = compare(cli, out, hp, "--train-steps", "128", "--seed", "0", bench=True)
     assert "training a fresh PPO agent" in r.stderr
     first = model.stat().st_mtime_ns
     # the quick benchmark ran on the fresh agent too (a v0 model: unavailable on the v1 scenario, said so)
@@ -47,19 +71,19 @@ def test_reuse_only_the_same_configuration(tmp_path: Path) -> None:
     fresh = next(a for a in bench["agents"] if a["agent"] == "ppo_fresh")
     assert fresh["sha256"] == json.loads((out / "train_ppo" / "run.json").read_text())["sha256"]
 
-    r = compare(out, hp, "--train-steps", "128", "--seed", "0")
+    r = compare(cli, out, hp, "--train-steps", "128", "--seed", "0")
     assert "reusing the PPO run" in r.stderr and "retraining" not in r.stderr
     cfg = json.loads((out / "train_ppo" / "config.json").read_text())
     assert (cfg["settings"]["seed"], cfg["settings"]["timesteps"]) == (0, 128)
     assert "resumes" not in cfg or all(r["from_step"] >= 128 for r in cfg["resumes"])
 
-    r = compare(out, hp, "--train-steps", "192", "--seed", "0")
+    r = compare(cli, out, hp, "--train-steps", "192", "--seed", "0")
     assert "retraining" in r.stderr and "timesteps 128 != 192" in r.stderr
     cfg = json.loads((out / "train_ppo" / "config.json").read_text())
     assert cfg["settings"]["timesteps"] == 192 and "resumes" not in cfg
     assert model.stat().st_mtime_ns != first
 
-    r = compare(out, hp, "--train-steps", "192", "--seed", "1")
+    r = compare(cli, out, hp, "--train-steps", "192", "--seed", "1")
     assert "retraining" in r.stderr and "seed 0 != 1" in r.stderr
     doc = json.loads((out / "results.json").read_text())
     assert doc["training"]["ppo_fresh"]["seed"] == 1
@@ -87,16 +111,15 @@ def test_any_recorded_difference_is_a_mismatch(tmp_path: Path, key: str) -> None
     assert reuse_mismatch(run, request) == f"{key} differ"
 
 
-def test_quick_benchmark_table_in_the_published_set(tmp_path: Path) -> None:
+def test_quick_benchmark_table_in_the_published_set(tmp_path: Path, cli: Any) -> None:
     """Without ``--no-benchmark`` the report and results.json carry the quick benchmark; the set verifies."""
     from amigo_gym.training.benchmark import QUICK_SCENARIOS
     from amigo_gym.training.compare import verify_outputs
 
     out = tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", "", "--train-steps", "0"]
+    cmd = ["compare", "--out", str(out), "--models", "", "--train-steps", "0"]
     cmd += ["--seeds", "1", "--steps", "20", "--no-progress"]
-    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    r = cli(*cmd)
     assert r.returncode == 0, r.stderr
     report = (out / "report.md").read_text()
     assert "## AmigoBot benchmark, suite 1.0 (quick subset)" in report
@@ -108,7 +131,7 @@ def test_quick_benchmark_table_in_the_published_set(tmp_path: Path) -> None:
     assert {"benchmark_scenarios.png", "benchmark_profiles.png", "report.md", "results.json"} <= set(files)
 
 
-def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_path: Path) -> None:
+def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_path: Path, cli: Any) -> None:
     """``--models`` in the pretrained layout with a v1 SB3 seed (the low-pass TD3, an SB3 TD3 zip) and a fast-PPO seed:
     the quick benchmark runs both (``td3lp_v1``, ``ppo_fast_v1``) on its v1 scenarios, and the report and the summary
     tell "SB3 TD3 low-pass" from "fast PPO"."""
@@ -124,10 +147,9 @@ def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_pa
         (models / rel).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(src / rel, models / rel)
     out = tmp_path / "out"
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(out), "--models", str(models)]
+    cmd = ["compare", "--out", str(out), "--models", str(models)]
     cmd += ["--train-steps", "0", "--seeds", "1", "--steps", "20", "--no-progress", "--no-plots"]
-    r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    r = cli(*cmd)
     assert r.returncode == 0, r.stderr
     doc = json.loads((out / "results.json").read_text())
     bench = doc["benchmark"]

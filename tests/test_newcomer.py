@@ -12,9 +12,13 @@ import os
 import re
 import subprocess
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+
+from amigo_gym.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,22 +44,52 @@ def cli(*args: str, cwd: Path = ROOT, timeout: float = 240) -> subprocess.Comple
     )
 
 
+@dataclass
+class Ran:
+    """What one ``amigo-gym`` command returned and printed."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
+    """``amigo-gym ARGS`` in this process (``amigo_gym.cli.main``), from ``cwd`` as :func:`cli` runs it: for the
+    commands whose output is the point, not the process (each process paid torch's import, about 5 s). ``--help``
+    (its wrapping follows the terminal) and the torch-thread check (a process's state) stay with :func:`cli`."""
+
+    def run(*args: str, cwd: Path = ROOT) -> Ran:
+        monkeypatch.chdir(cwd)
+        capsys.readouterr()
+        try:
+            rc = main(list(args))
+        except SystemExit as exc:  # argparse's refusals
+            rc = exc.code if isinstance(exc.code, int) else 1
+        out, err = capsys.readouterr()
+        return Ran(rc, out, err)
+
+    return run
+
+
 # --------------------------------------------------------------------------- evaluate does not overwrite compare
-def test_evaluate_has_its_own_default_folder_and_refuses_a_compare_output_set(tmp_path: Path) -> None:
+def test_evaluate_has_its_own_default_folder_and_refuses_a_compare_output_set(
+    tmp_path: Path, here: Callable[..., Ran]
+) -> None:
     results = tmp_path / "results"  # what `amigo-gym compare --out results` left
     results.mkdir()
     (results / "manifest.json").write_text("{}")
     (results / "results.json").write_text('{"from": "compare"}')
     args = ("evaluate", "--no-models", "--no-plots", "--steps", "20", "--seeds", "1")
-    r = cli(*args, "--out", str(results))
+    r = here(*args, "--out", str(results))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "--force" in r.stderr and "manifest.json" in r.stderr
     assert (results / "results.json").read_text() == '{"from": "compare"}'  # untouched
-    r = cli(*args, cwd=tmp_path)  # the default folder
+    r = here(*args, cwd=tmp_path)  # the default folder
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "results" / "evaluate" / "results.json").is_file()
     assert (results / "results.json").read_text() == '{"from": "compare"}'
-    r = cli(*args, "--out", str(results), "--force")
+    r = here(*args, "--out", str(results), "--force")
     assert r.returncode == 0, r.stderr
     assert "protocol" in json.loads((results / "results.json").read_text())
 
@@ -71,11 +105,11 @@ def test_planned_timesteps_is_the_next_whole_rollout() -> None:
     assert planned_timesteps(0, 10, None)[0] == 10
 
 
-def test_train_timesteps_1_says_it_trains_a_whole_rollout(tmp_path: Path) -> None:
+def test_train_timesteps_1_says_it_trains_a_whole_rollout(tmp_path: Path, here: Callable[..., Ran]) -> None:
     hp = tmp_path / "ppo.yml"
     hp.write_text(TINY_PPO)
     out = tmp_path / "run"
-    r = cli("train", "--algo", "ppo", "--out", str(out), "--hyperparams", str(hp), "--timesteps", "1",
+    r = here("train", "--algo", "ppo", "--out", str(out), "--hyperparams", str(hp), "--timesteps", "1",
             "--eval-freq", "0", "--no-progress")  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "--timesteps 1 becomes 128 steps" in r.stderr and "n_steps 32 x 4 envs" in r.stderr
@@ -150,9 +184,11 @@ def test_printed_commands_show_no_temporary_paths(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_compare_prints_a_short_report_that_explains_its_names_and_ends_with_the_files(tmp_path: Path) -> None:
+def test_compare_prints_a_short_report_that_explains_its_names_and_ends_with_the_files(
+    tmp_path: Path, here: Callable[..., Ran]
+) -> None:
     out = tmp_path / "results"
-    r = cli("compare", "--out", str(out), "--train-steps", "0", "--steps", "20", "--seeds", "1", "--no-plots",
+    r = here("compare", "--out", str(out), "--train-steps", "0", "--steps", "20", "--seeds", "1", "--no-plots",
             "--no-benchmark", "--no-progress")  # fmt: skip
     assert r.returncode == 0, r.stderr
     lines = r.stdout.strip().splitlines()

@@ -3,7 +3,9 @@
 Kills are real: a training process is started with ``AMIGO_GYM_FAULT=<stage>[@n]`` and SIGKILLs itself
 there (:func:`amigo_gym.io.fault_point`). After every fault the folder must hold a complete checkpoint
 (or none yet), and the resumed run must reach the same final step count with no lost or half-written
-file and no duplicate evaluation.
+file and no duplicate evaluation. The runs that are not killed (the final resumes, the refused second
+process) call ``amigo_gym.cli.main`` in the test's process: another process than the killed or running one,
+without paying torch's import again.
 """
 
 from __future__ import annotations
@@ -16,12 +18,14 @@ import subprocess
 import sys
 import time
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from amigo_gym import runs
+from amigo_gym.cli import main
 from amigo_gym.training.compare import verify_outputs
 
 ROOT = Path(__file__).resolve().parent.parent  # the checkout under test (also in CI's editable install)
@@ -62,6 +66,30 @@ def run(args: list[str], fault: str | None = None, timeout: float = 120) -> subp
     return subprocess.run(
         train_cmd(*args), cwd=ROOT, env=env_for(fault), capture_output=True, text=True, timeout=timeout
     )
+
+
+@dataclass
+class Ran:
+    """What one ``amigo-gym`` command returned and printed."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Any:
+    """``amigo-gym ARGS`` in this process, as :func:`run` and :func:`compare` start it but without a fault."""
+    monkeypatch.chdir(ROOT)
+    monkeypatch.delenv("AMIGO_GYM_FAULT", raising=False)
+
+    def run_here(*args: str) -> Ran:
+        capsys.readouterr()
+        rc = main(list(args))
+        out, err = capsys.readouterr()
+        return Ran(rc, out, err)
+
+    return run_here
 
 
 def hp(tmp_path: Path, text: str, name: str) -> str:
@@ -120,29 +148,33 @@ SAC_CHAIN: list[tuple[bool, str | None]] = [
 ]
 
 
-def test_sac_survives_a_kill_at_every_stage(tmp_path: Path) -> None:
+def test_sac_survives_a_kill_at_every_stage(tmp_path: Path, here: Any) -> None:
     out = tmp_path / "sac"
     common = ["--algo", "sac", "--seed", "1", "--out", str(out), "--hyperparams", hp(tmp_path, SAC, "sac.yml")]
     common += ["--timesteps", "600", "--checkpoint-freq", "50", "--eval-freq", "100", "--eval-episodes", "1"]
     resumes = 0
     for resume, fault in SAC_CHAIN:
-        r = run([*common, *(["--resume"] if resume else [])], fault)
+        args = [*common, *(["--resume"] if resume else [])]
         resumes += resume
-        if fault is None:
+        if fault is None:  # the last resume, not killed: in this process
+            r = here("train", "--no-progress", *args)
             assert r.returncode == 0, r.stderr
         else:
+            r = run(args, fault)
             assert r.returncode == -signal.SIGKILL, (fault, r.returncode, r.stderr)
             check_consistent(out, "sac")
     check_finished(out, "sac", 600, [100, 200, 300, 400, 500, 600])
     assert len(json.loads((out / "config.json").read_text())["resumes"]) == resumes
 
 
-def test_ppo_survives_kills_and_counts_only_trained_steps(tmp_path: Path) -> None:
+def test_ppo_survives_kills_and_counts_only_trained_steps(tmp_path: Path, here: Any) -> None:
     out = tmp_path / "ppo"
     common = ["--algo", "ppo", "--seed", "0", "--out", str(out), "--hyperparams", hp(tmp_path, PPO, "ppo.yml")]
     common += ["--timesteps", "512", "--checkpoint-freq", "100", "--eval-freq", "128", "--eval-episodes", "1"]
     for resume, fault in [(False, "checkpoint:model@2"), (True, "rename:checkpoint.json"), (True, None)]:
-        r = run([*common, *(["--resume"] if resume else [])], fault)
+        args = [*common, *(["--resume"] if resume else [])]
+        # the last resume, not killed: in this process
+        r = run(args, fault) if fault else here("train", "--no-progress", *args)
         if fault is None:
             assert r.returncode == 0, r.stderr
         else:
@@ -217,7 +249,7 @@ for n in range(3):
 
 
 # --------------------------------------------------------------------------- two processes on one folder
-def test_second_train_and_resume_while_running_are_refused(tmp_path: Path) -> None:
+def test_second_train_and_resume_while_running_are_refused(tmp_path: Path, here: Any) -> None:
     out = tmp_path / "run"
     common = ["--algo", "ppo", "--seed", "0", "--out", str(out), "--hyperparams", hp(tmp_path, PPO, "ppo.yml")]
     common += ["--eval-freq", "0"]
@@ -234,8 +266,8 @@ def test_second_train_and_resume_while_running_are_refused(tmp_path: Path) -> No
         while not (out / "config.json").is_file() and time.monotonic() < deadline:
             time.sleep(0.1)
         assert (out / "config.json").is_file()
-        for extra in ([], ["--resume"]):
-            r = run([*common, "--timesteps", "1000", *extra])
+        for extra in ([], ["--resume"]):  # a second process (this one) on the folder
+            r = here("train", "--no-progress", *common, "--timesteps", "1000", *extra)
             assert r.returncode == 2, r.stderr
             lines = r.stderr.strip().splitlines()
             assert len(lines) == 1 and "in use by another amigo-gym process" in lines[0], r.stderr
@@ -249,7 +281,7 @@ def test_second_train_and_resume_while_running_are_refused(tmp_path: Path) -> No
     assert proc.returncode == 130 and "interrupted" in err, err
     done = json.loads((out / "checkpoint.json").read_text())["num_timesteps"]
     assert done % 64 == 0  # stopped at a rollout start
-    r = run([*common, "--timesteps", str(done + 128), "--resume"])
+    r = here("train", "--no-progress", *common, "--timesteps", str(done + 128), "--resume")
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "run.json").read_text())["timesteps"] == done + 128
 
@@ -496,16 +528,18 @@ def compare(out: Path, fault: str | None = None) -> subprocess.CompletedProcess[
     )
 
 
-def test_compare_publishes_its_outputs_as_one_set(tmp_path: Path) -> None:
+def test_compare_publishes_its_outputs_as_one_set(tmp_path: Path, here: Any) -> None:
     out = tmp_path / "results"
-    assert compare(out).returncode == 0
+    args = ["compare", "--out", str(out), "--models", "", "--train-steps", "0", "--seeds", "1", "--steps", "20"]
+    args += ["--no-plots"]  # compare()'s command, run in this process when it is not killed
+    assert here(*args).returncode == 0
     first = verify_outputs(out)
     assert set(first) == {"results.json", "report.md", "eval.md"}
     r = compare(out, "publish:report.md")  # killed halfway through publishing a new set
     assert r.returncode == -signal.SIGKILL, r.stderr
     with pytest.raises(FileNotFoundError, match="not a complete set"):
         verify_outputs(out)
-    r = compare(out)
+    r = here(*args)
     assert r.returncode == 0, r.stderr
     verify_outputs(out)
     assert not dot_files(out), dot_files(out)

@@ -78,6 +78,24 @@ def _finish(p: subprocess.Popen[str], timeout: float = 120) -> str:
     return out
 
 
+def _sweep_here(capsys: pytest.CaptureFixture[str], args: list[str]) -> str:
+    """``amigo-gym sweep ARGS`` with one job in this process (``amigo_gym.cli.main``; one job runs its trials in
+    the calling process, as :func:`_sweep`'s process did): for the runs that nobody kills, without another
+    process paying torch's import. Its printed output (stdout and stderr). Optuna's experimental-feature warnings
+    (the heartbeat) are ignored, as :func:`_sweep`'s ``PYTHONWARNINGS=ignore`` does; every other warning counts."""
+    import warnings
+
+    from amigo_gym.cli import main
+
+    capsys.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        rc = main(["sweep", *args])
+    out, err = capsys.readouterr()
+    assert rc == 0, (out + err)[-3000:]
+    return out + err
+
+
 def _no_duplicates(trials: list[optuna.trial.FrozenTrial]) -> None:
     numbers = [t.number for t in trials]
     assert len(numbers) == len(set(numbers)), numbers
@@ -183,7 +201,7 @@ def test_postgresql_hyperparameter_budget_is_global(tmp_path: Path, postgres: st
 
 
 # --------------------------------------------------------------------------- a killed worker
-def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path) -> None:
+def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "--study-name", "kill")
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
     long = list(base)
@@ -202,7 +220,7 @@ def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path) -> No
     study = optuna.load_study(study_name="kill", storage=storage)
     assert [t.state for t in study.get_trials()] == [TrialState.RUNNING]  # stale, not yet detected
     time.sleep(3)  # > grace period
-    _finish(_sweep(base))
+    _sweep_here(capsys, base)
     trials = optuna.load_study(study_name="kill", storage=storage).get_trials()
     assert [t.state for t in trials] == [TrialState.FAIL, TrialState.COMPLETE]
     assert trials[1].system_attrs["failed_trial"] == trials[0].number
@@ -250,7 +268,9 @@ def _long(args: list[str]) -> list[str]:
     return out
 
 
-def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(tmp_path: Path) -> None:
+def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "term")
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
     victim = _sweep(_long(base))
@@ -269,7 +289,7 @@ def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(tmp_path: Path
     summary = json.loads((tmp_path / "out" / "term" / "summary.json").read_text())
     assert summary["status"] == "running"  # queued cells left: the study is not over
     # the rerun (the same command, a short budget) takes the re-queued cell and the rest of the grid
-    out = _finish(_sweep(base))
+    out = _sweep_here(capsys, base)
     trials = optuna.load_study(study_name="term", storage=storage).get_trials()
     done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
     assert done == [0, 1], [(t.number, t.state, t.params) for t in trials]
@@ -277,7 +297,9 @@ def test_sigterm_requeues_the_cell_and_a_rerun_completes_the_grid(tmp_path: Path
     assert summary["status"] == "complete" and "complete" in out
 
 
-def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(tmp_path: Path) -> None:
+def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "died", "--n-jobs", "2")
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
@@ -293,7 +315,7 @@ def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(tmp_path: Path) -
     time.sleep(3)  # > grace period: the killed worker's trial is stale
     rerun = list(base)
     rerun[rerun.index("--n-jobs") + 1] = "1"
-    _finish(_sweep(rerun))
+    _sweep_here(capsys, rerun)  # one job: in this process
     trials = optuna.load_study(study_name="died", storage=storage).get_trials()
     done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
     assert done == [0, 1], [(t.number, t.state, t.params, t.user_attrs) for t in trials]
@@ -444,7 +466,9 @@ def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.C
     assert not (tmp_path / "out").exists() or not _leaks(SECRET, tmp_path / "out")
 
 
-def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(tmp_path: Path) -> None:
+def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
     from amigo_gym.training.sweep import VALIDATION_SEED_BASE
 
@@ -452,7 +476,7 @@ def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_ce
     hp.write_text(TINY.replace("AmigoBot-v0", "AmigoBot-v1"))
     args = _common(tmp_path, "--env", "AmigoBot-v1", "--n-trials", "1", "--study-name", "v1")
     args[args.index("--hyperparams") + 1] = str(hp)
-    out = _finish(_sweep(args), timeout=300)
+    out = _sweep_here(capsys, args)
     storage = f"sqlite:///{tmp_path / 'out' / 'sweep.db'}"
     study = optuna.load_study(study_name="v1", storage=storage)
     (trial,) = study.get_trials()

@@ -1,8 +1,9 @@
 """``amigo-gym sweep --algo fastppo`` (issue 18, item 2) and ``amigo-gym train-fast --hyperparams``.
 
 Tiny budgets: 64 robots, 8- or 16-step rollouts, a 16-unit network, 100-step training episodes, one validation
-episode of 20 steps per held-in cell. The sweep runs as the console command would (a subprocess) where the test is
-about the command, and in this process where it needs a pruner of its own.
+episode of 20 steps per held-in cell. The sweep runs as the console command would (a subprocess) where it is
+stopped by a signal; the other commands run through ``amigo_gym.cli.main`` in this process, and the pruned trial
+calls the objective directly (it needs a pruner of its own).
 """
 
 from __future__ import annotations
@@ -45,7 +46,9 @@ def _weights(model: Path) -> list[np.ndarray]:
 
 
 # --------------------------------------------------------------------------- hyperparameter study
-def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(tmp_path: Path) -> None:
+def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
     from amigo_gym.training.fastppo import FastPPOSettings, load_settings_yaml
     from amigo_gym.training.sweep import VALIDATION_SEED_BASE
@@ -58,7 +61,7 @@ def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(tmp_
     args = _args(
         tmp_path, "--n-trials", "2", "--n-startup-trials", "2", "--study-name", "fp", "--save-best", str(target)
     )
-    out = ts._finish(ts._sweep(args), timeout=600)
+    out = ts._sweep_here(capsys, args)  # one job: the command's trials run in this process
     study = optuna.load_study(study_name="fp", storage=f"sqlite:///{tmp_path / 'out' / 'sweep.db'}")
     trials = study.get_trials()
     assert [t.state for t in trials] == [TrialState.COMPLETE] * 2, [(t.state, t.user_attrs) for t in trials]
@@ -115,7 +118,9 @@ def test_a_pruned_fastppo_trial_stops_training_at_the_pruned_evaluation(tmp_path
 
 
 # --------------------------------------------------------------------------- seeds grid, interruption
-def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_grid(tmp_path: Path) -> None:
+def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_grid(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """A SIGTERM'd fastppo trial stops after a checkpoint and is queued again; the rerun continues it from that
     checkpoint (curve rows from before the stop kept) to the model an uninterrupted run gives, bit for bit, and
     trains the rest of the grid with the file's settings."""
@@ -137,7 +142,7 @@ def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_g
     assert 0 < ck["global_step"] < 40960  # stopped part-way, after a checkpoint at an iteration's end
     assert (Path(stopped.user_attrs["run_dir"]) / "ABANDONED.json").is_file()
 
-    ts._finish(ts._sweep(base), timeout=600)
+    ts._sweep_here(capsys, base)  # the rerun, not killed: in this process
     trials = optuna.load_study(study_name="grid", storage=storage).get_trials()
     done = {t.params["seed"]: t for t in trials if t.state == TrialState.COMPLETE}
     assert sorted(done) == [0, 1], [(t.number, t.state, t.params) for t in trials]

@@ -1,4 +1,7 @@
-"""``amigo-gym train`` by subprocess with tiny budgets: outputs, resume, interruption, bad input."""
+"""``amigo-gym train`` with tiny budgets: outputs, resume, interruption, bad input.
+
+The interrupted run (SIGTERM) and the bad-argument checks run the command by subprocess; the other runs call
+``amigo_gym.cli.main`` in this process (the same dispatcher, without paying torch's import per run)."""
 
 from __future__ import annotations
 
@@ -8,10 +11,14 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from amigo_gym.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -61,6 +68,32 @@ def run_train(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[s
     )
 
 
+@dataclass
+class Ran:
+    """What one ``amigo-gym`` command returned and printed."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+@pytest.fixture
+def train_here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
+    """``amigo-gym train --no-progress ARGS`` in this process, from the checkout's root as :func:`run_train` runs it."""
+    monkeypatch.chdir(ROOT)
+
+    def run(*args: str) -> Ran:
+        capsys.readouterr()
+        try:
+            rc = main(["train", "--no-progress", *args])
+        except SystemExit as exc:  # argparse's refusals
+            rc = exc.code if isinstance(exc.code, int) else 1
+        out, err = capsys.readouterr()
+        return Ran(rc, out, err)
+
+    return run
+
+
 def hp_file(tmp_path: Path, algo: str) -> str:
     f = tmp_path / f"{algo}.yml"
     f.write_text(TINY[algo])
@@ -71,13 +104,13 @@ def no_temp_files(d: Path) -> bool:
     return not [p for p in d.rglob(".*") if p.is_file() or p.is_dir()]
 
 
-def test_sac_train_then_resume(tmp_path: Path) -> None:
+def test_sac_train_then_resume(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
     from stable_baselines3 import SAC
 
     out = tmp_path / "run"
     hp = hp_file(tmp_path, "sac")
     common = ["--algo", "sac", "--seed", "3", "--out", str(out), "--hyperparams", hp, "--eval-freq", "200"]
-    r = run_train(*common, "--timesteps", "400", "--eval-episodes", "1", "--checkpoint-freq", "200")
+    r = train_here(*common, "--timesteps", "400", "--eval-episodes", "1", "--checkpoint-freq", "200")
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == 400 and rec["seed"] == 3 and rec["resumed_from"] is None
@@ -92,7 +125,7 @@ def test_sac_train_then_resume(tmp_path: Path) -> None:
     assert action.shape == (2,)
 
     # resume to 600: the remaining 200 steps, the step counter and the evaluation history continue
-    r = run_train(*common, "--timesteps", "600", "--eval-episodes", "1", "--resume", "--export", str(tmp_path / "exp"))
+    r = train_here(*common, "--timesteps", "600", "--eval-episodes", "1", "--resume", "--export", str(tmp_path / "exp"))
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == 600 and rec["resumed_from"] == 400
@@ -105,7 +138,7 @@ def test_sac_train_then_resume(tmp_path: Path) -> None:
     assert no_temp_files(out)
 
 
-def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
+def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
     from stable_baselines3 import PPO
 
     out = tmp_path / "ppo"
@@ -139,16 +172,16 @@ def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path) -> None:
     assert not (out / "model.zip").exists()  # the final model is written only at the end
     assert no_temp_files(out)
 
-    r = run_train(*common, "--timesteps", str(done + 256), "--resume")
+    r = train_here(*common, "--timesteps", str(done + 256), "--resume")  # not stopped: in this process
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == done + 256 and rec["resumed_from"] == done and rec["n_envs"] == 4
 
 
-def test_td3_runs_with_noise_and_schedule(tmp_path: Path) -> None:
+def test_td3_runs_with_noise_and_schedule(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
     out = tmp_path / "td3"
     exp = tmp_path / "exp"
-    r = run_train(
+    r = train_here(
         "--algo", "td3", "--out", str(out), "--hyperparams", hp_file(tmp_path, "td3"), "--timesteps", "200",
         "--eval-freq", "100", "--eval-episodes", "1", "--export", str(exp), "--export-model", "best",
     )  # fmt: skip
@@ -175,9 +208,9 @@ def test_bad_arguments(args: list[str], message: str) -> None:
     assert message in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
-def test_refuses_non_empty_out_and_missing_checkpoint(tmp_path: Path) -> None:
+def test_refuses_non_empty_out_and_missing_checkpoint(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
     (tmp_path / "junk").write_text("x")
-    r = run_train("--algo", "sac", "--out", str(tmp_path), "--timesteps", "10")
+    r = train_here("--algo", "sac", "--out", str(tmp_path), "--timesteps", "10")
     assert r.returncode == 2 and "not empty" in r.stderr
-    r = run_train("--algo", "sac", "--out", str(tmp_path / "none"), "--timesteps", "10", "--resume")
+    r = train_here("--algo", "sac", "--out", str(tmp_path / "none"), "--timesteps", "10", "--resume")
     assert r.returncode == 2 and "no checkpoint" in r.stderr
