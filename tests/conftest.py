@@ -11,8 +11,10 @@ the other files follow in their collection order. Only the order changes: every 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 import pytest
+from cli_here import Ran, runner
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
@@ -56,3 +58,9 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     """The files of :data:`LONGEST_FILES` first, in that order; the tests inside a file keep their order."""
     rank = {name: k for k, name in enumerate(LONGEST_FILES)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: the rest keep collection order
+
+
+@pytest.fixture
+def in_process(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
+    """``amigo-gym ARGS`` in the test's process (tests/cli_here.py)."""
+    return runner(capsys, monkeypatch)

@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
+from cli_here import Ran
 
-from amigo_gym.cli import main
-
-ROOT = Path(__file__).resolve().parents[1]
 TINY_PPO = """AmigoBot-v0:
   n_envs: 2
   policy: MlpPolicy
@@ -22,28 +19,10 @@ TINY_PPO = """AmigoBot-v0:
 """
 
 
-@dataclass
-class Ran:
-    """What one ``amigo-gym`` command returned and printed."""
-
-    returncode: int
-    stdout: str
-    stderr: str
-
-
 @pytest.fixture
-def cli(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Any:
-    """``amigo-gym ARGS`` in this process (``amigo_gym.cli.main``, from the checkout's root as the subprocess ran it):
-    the test is about what compare does, not about starting Python; each process paid torch's import (about 5 s)."""
-    monkeypatch.chdir(ROOT)
-
-    def run(*args: str) -> Ran:
-        capsys.readouterr()
-        rc = main(list(args))
-        out, err = capsys.readouterr()
-        return Ran(rc, out, err)
-
-    return run
+def cli(in_process: Any) -> Any:
+    """``amigo-gym ARGS`` in this process (tests/cli_here.py): the test is about what compare does."""
+    return in_process
 
 
 def compare(cli: Any, out: Path, hp: Path, *args: str, bench: bool = False) -> Ran:

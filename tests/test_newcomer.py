@@ -13,12 +13,10 @@ import re
 import subprocess
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-
-from amigo_gym.cli import main
+from cli_here import Ran
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -44,32 +42,12 @@ def cli(*args: str, cwd: Path = ROOT, timeout: float = 240) -> subprocess.Comple
     )
 
 
-@dataclass
-class Ran:
-    """What one ``amigo-gym`` command returned and printed."""
-
-    returncode: int
-    stdout: str
-    stderr: str
-
-
 @pytest.fixture
-def here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
-    """``amigo-gym ARGS`` in this process (``amigo_gym.cli.main``), from ``cwd`` as :func:`cli` runs it: for the
-    commands whose output is the point, not the process (each process paid torch's import, about 5 s). ``--help``
-    (its wrapping follows the terminal) and the torch-thread check (a process's state) stay with :func:`cli`."""
-
-    def run(*args: str, cwd: Path = ROOT) -> Ran:
-        monkeypatch.chdir(cwd)
-        capsys.readouterr()
-        try:
-            rc = main(list(args))
-        except SystemExit as exc:  # argparse's refusals
-            rc = exc.code if isinstance(exc.code, int) else 1
-        out, err = capsys.readouterr()
-        return Ran(rc, out, err)
-
-    return run
+def here(in_process: Callable[..., Ran]) -> Callable[..., Ran]:
+    """``amigo-gym ARGS`` in this process (tests/cli_here.py), from ``cwd`` as :func:`cli` runs it: for the commands
+    whose output is the point, not the process. ``--help`` (its wrapping follows the terminal) and the torch-thread
+    check (a process's state) stay with :func:`cli`."""
+    return in_process
 
 
 # --------------------------------------------------------------------------- evaluate does not overwrite compare

@@ -18,14 +18,12 @@ import subprocess
 import sys
 import time
 import zipfile
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from amigo_gym import runs
-from amigo_gym.cli import main
 from amigo_gym.training.compare import verify_outputs
 
 ROOT = Path(__file__).resolve().parent.parent  # the checkout under test (also in CI's editable install)
@@ -68,28 +66,11 @@ def run(args: list[str], fault: str | None = None, timeout: float = 120) -> subp
     )
 
 
-@dataclass
-class Ran:
-    """What one ``amigo-gym`` command returned and printed."""
-
-    returncode: int
-    stdout: str
-    stderr: str
-
-
 @pytest.fixture
-def here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Any:
-    """``amigo-gym ARGS`` in this process, as :func:`run` and :func:`compare` start it but without a fault."""
-    monkeypatch.chdir(ROOT)
-    monkeypatch.delenv("AMIGO_GYM_FAULT", raising=False)
-
-    def run_here(*args: str) -> Ran:
-        capsys.readouterr()
-        rc = main(list(args))
-        out, err = capsys.readouterr()
-        return Ran(rc, out, err)
-
-    return run_here
+def here(in_process: Any) -> Any:
+    """``amigo-gym ARGS`` in this process (tests/cli_here.py), as :func:`run` and :func:`compare` start it but
+    without a fault."""
+    return in_process
 
 
 def hp(tmp_path: Path, text: str, name: str) -> str:

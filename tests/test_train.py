@@ -12,13 +12,11 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
-
-from amigo_gym.cli import main
+from cli_here import Ran
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -68,30 +66,11 @@ def run_train(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[s
     )
 
 
-@dataclass
-class Ran:
-    """What one ``amigo-gym`` command returned and printed."""
-
-    returncode: int
-    stdout: str
-    stderr: str
-
-
 @pytest.fixture
-def train_here(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
-    """``amigo-gym train --no-progress ARGS`` in this process, from the checkout's root as :func:`run_train` runs it."""
-    monkeypatch.chdir(ROOT)
-
-    def run(*args: str) -> Ran:
-        capsys.readouterr()
-        try:
-            rc = main(["train", "--no-progress", *args])
-        except SystemExit as exc:  # argparse's refusals
-            rc = exc.code if isinstance(exc.code, int) else 1
-        out, err = capsys.readouterr()
-        return Ran(rc, out, err)
-
-    return run
+def train_here(in_process: Callable[..., Ran]) -> Callable[..., Ran]:
+    """``amigo-gym train --no-progress ARGS`` in this process (tests/cli_here.py), from the checkout's root as
+    :func:`run_train` runs it."""
+    return lambda *args: in_process("train", "--no-progress", *args)
 
 
 def hp_file(tmp_path: Path, algo: str) -> str:
