@@ -501,6 +501,7 @@ def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_ce
     assert summary["status"] == "complete" and "complete" in out
 
 
+@pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")  # the heartbeat thread's own DB
 def test_in_memory_storage_with_one_job_runs_and_summarises(tmp_path: Path) -> None:
     from amigo_gym.training.sweep import main
 

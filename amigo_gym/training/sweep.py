@@ -539,7 +539,8 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
 
 # --------------------------------------------------------------------------- storage and study
 def make_storage(cfg: SweepConfig) -> Any:
-    """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring)."""
+    """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
+    SQLite database, private to its one process, without them."""
     import optuna.storages as st
 
     url = driver_url(cfg.storage_url)
@@ -551,11 +552,15 @@ def make_storage(cfg: SweepConfig) -> Any:
         # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
         engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
     retry_cls = getattr(st, "RetryHeartbeatStaleTrialCallback", None)
-    kwargs: dict[str, Any] = {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
-    if retry_cls is not None:
-        kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
-    else:  # Optuna < 4.9
-        kwargs["failed_trial_callback"] = st.RetryFailedTrialCallback(max_retry=cfg.max_retry)
+    kwargs: dict[str, Any] = {}
+    # an in-memory database lives and dies with its one process: no other worker's death to detect, and the
+    # heartbeat's thread would get a connection, hence a database, of its own (without the study's tables)
+    if not _in_memory(url):
+        kwargs = {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
+        if retry_cls is not None:
+            kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
+        else:  # Optuna < 4.9
+            kwargs["failed_trial_callback"] = st.RetryFailedTrialCallback(max_retry=cfg.max_retry)
     last: Exception | None = None
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
