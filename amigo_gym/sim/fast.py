@@ -60,6 +60,7 @@ __all__ = [
     "step_env_rows",
     "direct_call",
     "libm_tan_exp_match_numpy",
+    "same_bits_as_numpy",
 ]
 
 Array = NDArray[np.float64]
@@ -212,12 +213,18 @@ def libm_tan_exp_match_numpy() -> bool:
         )
     )
     xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
-    k = kernels()
-    t, e, spare = np.empty_like(xt), np.empty_like(xe), np.empty_like(xt)
-    k.tan_exp(xt, t, spare)
-    k.tan_exp(xe, spare[: len(xe)], e)
-    same_t = np.array_equal(t.view(np.int64), np.tan(xt).view(np.int64))
-    return bool(same_t and np.array_equal(e.view(np.int64), np.exp(xe).view(np.int64)))
+    return same_bits_as_numpy(kernels().tan_exp, np.concatenate((xt, xe)), np.tan, np.exp)
+
+
+def same_bits_as_numpy(compiled: Any, x: NDArray[np.float64], f0: Any, f1: Any) -> bool:
+    """Whether ``compiled(x, y0, y1)``, a kernel's elementwise loop of two C library functions, writes numpy's
+    ``f0(x)`` and ``f1(x)`` bit for bit (overflows to ``inf`` compared as bits, without numpy's warning): the check
+    behind :func:`libm_tan_exp_match_numpy` and :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`."""
+    y0, y1 = np.empty_like(x), np.empty_like(x)
+    compiled(x, y0, y1)
+    with np.errstate(all="ignore"):
+        same0 = np.array_equal(y0.view(np.int64), f0(x).view(np.int64))
+        return bool(same0 and np.array_equal(y1.view(np.int64), f1(x).view(np.int64)))
 
 
 def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
