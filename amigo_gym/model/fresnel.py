@@ -31,6 +31,7 @@ same kind, so one robot and a batch run the same code.
 from __future__ import annotations
 
 import math
+from typing import Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,6 +46,15 @@ __all__ = [
     "advance_float",
     "advance_chain_float",
     "unit_speed_pose",
+    "unit_speed_poses",
+    "Buffer",
+    "cos_sin_nodes",
+    "node_phases",
+    "node_sums",
+    "advance_nodes",
+    "unit_speed_phases",
+    "unit_speed_sums",
+    "unit_speed_nodes",
 ]
 
 #: Gauss–Legendre nodes per sub-interval
@@ -139,28 +149,148 @@ def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
     return got
 
 
+# -- the node sums of the float path and the compiled step, written once ------------------------------------
+#
+# Plain Python on buffers (``list`` of floats in the float path, where indexing is cheapest; float64 arrays in the
+# compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim.layout_v1.SHARED). Their
+# expressions and order of operations are :func:`advance`'s, so a float and an array element get the same bits
+# (tests/test_float_paths.py). A node buffer ``buf`` of stride ``m`` holds the phases in ``buf[0:m]``, their
+# cosines in ``buf[m:2m]`` and sines in ``buf[2m:3m]``.
+
+
+class Buffer(Protocol):
+    """What the node functions index: a ``list`` of floats (float path) or a float64 array (compiled step)."""
+
+    def __getitem__(self, i: int, /) -> float: ...
+    def __setitem__(self, i: int, v: float, /) -> None: ...
+    def __len__(self) -> int: ...
+
+
+def cos_sin_nodes(buf: Buffer, n: int, m: int) -> None:
+    """``buf[m + i] = cos(buf[i])``, ``buf[2 m + i] = sin(buf[i])`` for ``i < n``: numpy's ``np.cos``/``np.sin`` of
+    the phases as one array (a ``list`` buffer; numpy gives each element the bits it gives a scalar).
+
+    The compiled step does not compile this body: it overloads this function with the loop of the C library's
+    ``math.cos``/``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`; the same bits where
+    :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`, which the environment checks before using the kernel).
+    """
+    b = cast("list[float]", buf)
+    arr = _np_array(b[:n])
+    b[m : m + n] = _np_cos(arr).tolist()
+    b[2 * m : 2 * m + n] = _np_sin(arr).tolist()
+
+
+def node_phases(buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, u: Buffer) -> float:
+    r"""The phases at the nodes of one piece into ``buf[k : k + len(u)]``; returns the heading at its end.
+
+    .. math:: \phi_i = \theta + \tau_i (w_0 + \tfrac12\alpha\tau_i),\quad \tau_i = u_i t, \qquad
+        \theta' = \theta + t (w_0 + \tfrac12\alpha t)
+
+    Args:
+        buf: node buffer; k: where this piece's phases start.
+        theta, w0, alpha, t: start heading [rad], turn rate [rad/s] and its rate [rad/s^2], duration [s].
+        u: the nodes on [0, 1] (:func:`nodes_for`).
+    """
+    half_alpha = 0.5 * alpha
+    for i in range(len(u)):
+        tau = u[i] * t
+        buf[k + i] = theta + tau * (w0 + half_alpha * tau)
+    return theta + t * (w0 + half_alpha * t)
+
+
+def node_sums(buf: Buffer, k: int, m: int, v0: float, a: float, t: float, u: Buffer, uw: Buffer) -> tuple[float, float]:
+    r"""The weighted sums of one piece's node cosines and sines (``buf[m + k + i]``, ``buf[2 m + k + i]``), in order.
+
+    .. math:: (d_x, d_y) = \sum_i (v_0 + a \tau_i) w_i (\cos, \sin)\phi_i, \quad \tau_i = u_i t
+
+    so that the position advances by ``(dx t, dy t)``. ``v0 = 1``, ``a = 0`` (a path piece) weights by ``w_i``
+    exactly.
+    """
+    dx = 0.0
+    dy = 0.0
+    for i in range(len(u)):
+        weight = (v0 + a * (u[i] * t)) * uw[i]
+        dx = dx + weight * buf[m + k + i]
+        dy = dy + weight * buf[2 * m + k + i]
+    return dx, dy
+
+
+def advance_nodes(
+    buf: Buffer,
+    m: int,
+    x: float,
+    y: float,
+    theta: float,
+    pieces: Buffer,
+    p: int,
+    n_pieces: int,
+    u: Buffer,
+    uw: Buffer,
+) -> tuple[float, float, float]:
+    """:func:`advance` applied piece after piece: the phases of all pieces' nodes first (the heading at each piece's
+    start is closed form), one :func:`cos_sin_nodes`, then the sums in order.
+
+    Args:
+        buf: node buffer of stride ``m >= n_pieces * len(u)`` (length ``3 m``).
+        x, y, theta: start pose [m, m, rad].
+        pieces: ``(v0, a, w0, alpha, t)`` of each piece (as :func:`advance`'s arguments) at ``pieces[p + 5 q]``.
+        n_pieces: number of pieces (0: the start pose).
+        u, uw: nodes on [0, 1] and weights (:func:`nodes_for`).
+
+    Returns:
+        the pose after the last piece.
+    """
+    nn = len(u)
+    th = theta
+    for q in range(n_pieces):
+        o = p + 5 * q
+        th = node_phases(buf, q * nn, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], u)
+    cos_sin_nodes(buf, n_pieces * nn, m)
+    for q in range(n_pieces):
+        o = p + 5 * q
+        t = pieces[o + 4]
+        dx, dy = node_sums(buf, q * nn, m, pieces[o], pieces[o + 1], t, u, uw)
+        x = x + dx * t
+        y = y + dy * t
+    return x, y, th
+
+
+def unit_speed_phases(buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, u: Buffer) -> None:
+    """:func:`node_phases` of a path piece (arc length as time) into ``buf[k : k + len(u)]``, its end heading at
+    ``buf[k + len(u)]`` (so that one :func:`cos_sin_nodes` gives its cosine and sine too)."""
+    buf[k + len(u)] = node_phases(buf, k, theta, w0, alpha, t, u)
+
+
+def unit_speed_sums(
+    buf: Buffer, m: int, k: int, x: float, y: float, t: float, u: Buffer, uw: Buffer
+) -> tuple[float, float, float, float, float]:
+    """The pose ``(x', y', theta', cos theta', sin theta')`` after :func:`unit_speed_phases` at ``k`` and
+    :func:`cos_sin_nodes` (the position's sums by :func:`node_sums` with unit speed)."""
+    nn = len(u)
+    dx, dy = node_sums(buf, k, m, 1.0, 0.0, t, u, uw)
+    return x + dx * t, y + dy * t, buf[k + nn], buf[m + k + nn], buf[2 * m + k + nn]
+
+
+def unit_speed_nodes(
+    buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, u: Buffer, uw: Buffer
+) -> tuple[float, float, float, float, float]:
+    """:func:`unit_speed_pose` on a node buffer of stride ``len(u) + 1`` (length ``3 (len(u) + 1)``)."""
+    m = len(u) + 1
+    unit_speed_phases(buf, 0, theta, w0, alpha, t, u)
+    cos_sin_nodes(buf, m, m)
+    return unit_speed_sums(buf, m, 0, x, y, t, u, uw)
+
+
+# -- the float path's entry points: thin wrappers on lists --------------------------------------------------
+
+
 def advance_float(
     x: float, y: float, theta: float, v0: float, a: float, w0: float, alpha: float, t: float, n_sub: int = 1
 ) -> tuple[float, float, float]:
-    """:func:`advance` for Python floats: the same bits, computed faster.
-
-    The same expressions node by node (Python floats round each operation as numpy does), the node phases'
-    cosines and sines from one ``np.cos`` and one ``np.sin`` call on an array (numpy gives each element the
-    bits it gives a scalar), and the sums in the same order.
-    """
+    """:func:`advance` for Python floats: the same bits, computed faster (:func:`advance_nodes` of one piece)."""
     u, uw = _nodes(n_sub)
-    half_alpha = 0.5 * alpha
-    taus = [ui * t for ui in u]
-    phases = _np_array([theta + tau * (w0 + half_alpha * tau) for tau in taus])
-    cs = _np_cos(phases).tolist()
-    sn = _np_sin(phases).tolist()
-    dx = 0.0
-    dy = 0.0
-    for tau, wi, ci, si in zip(taus, uw, cs, sn, strict=True):
-        weight = (v0 + a * tau) * wi
-        dx = dx + weight * ci
-        dy = dy + weight * si
-    return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
+    m = len(u)
+    return advance_nodes([0.0] * (3 * m), m, x, y, theta, [v0, a, w0, alpha, t], 0, 1, u, uw)
 
 
 def unit_speed_pose(
@@ -168,32 +298,17 @@ def unit_speed_pose(
 ) -> tuple[float, float, float, float, float]:
     """``advance(x, y, theta, 1.0, 0.0, w0, alpha, t, 1)`` for Python floats (a path piece: arc length as time),
     with ``cos`` and ``sin`` of the new heading: ``(x', y', theta', cos theta', sin theta')``, the same bits as
-    :func:`advance` and ``np.cos``/``np.sin`` of ``theta'`` (one ``np.cos`` and one ``np.sin`` call for all).
+    :func:`advance` and ``np.cos``/``np.sin`` of ``theta'`` (:func:`unit_speed_nodes`).
 
     With unit speed the weights ``(1 + 0 tau) w_i`` are exactly ``w_i``.
     """
-    half_alpha = 0.5 * alpha
-    taus = [ui * t for ui in _U_LIST]
-    th = theta + t * (w0 + half_alpha * t)
-    phases = [theta + tau * (w0 + half_alpha * tau) for tau in taus]
-    phases.append(th)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    dx = 0.0
-    dy = 0.0
-    for i in range(NODES):
-        wi = _UW_LIST[i]
-        dx = dx + wi * cs[i]
-        dy = dy + wi * sn[i]
-    return x + dx * t, y + dy * t, th, cs[NODES], sn[NODES]
+    return unit_speed_nodes([0.0] * (3 * NODES + 3), x, y, theta, w0, alpha, t, _U_LIST, _UW_LIST)
 
 
 def advance_chain_float(
     x: float, y: float, theta: float, pieces: list[tuple[float, float, float, float, float]], n_sub: int = 1
 ) -> tuple[float, float, float]:
-    """:func:`advance` applied piece after piece, for Python floats: the same bits, one ``np.cos`` and one
-    ``np.sin`` call for the nodes of all pieces.
+    """:func:`advance` applied piece after piece, for Python floats: the same bits (:func:`advance_nodes`).
 
     Args:
         x, y, theta: start pose [m, m, rad].
@@ -203,35 +318,10 @@ def advance_chain_float(
     Returns:
         the pose after the last piece (the start pose for no pieces).
     """
-    if not pieces:
-        return x, y, theta
     u, uw = _nodes(n_sub)
-    # the heading at the start of each piece only needs the headings before (closed form), so all node
-    # phases are known before any cosine
-    phases: list[float] = []
-    taus: list[list[float]] = []
-    th = theta
-    for _v0, _a, w0, alpha, t in pieces:
-        half_alpha = 0.5 * alpha
-        tj = [ui * t for ui in u]
-        taus.append(tj)
-        phases += [th + tau * (w0 + half_alpha * tau) for tau in tj]
-        th = th + t * (w0 + half_alpha * t)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    i = 0
-    for (v0, a, _w0, _alpha, t), tj in zip(pieces, taus, strict=True):
-        dx = 0.0
-        dy = 0.0
-        for tau, wi in zip(tj, uw, strict=True):
-            weight = (v0 + a * tau) * wi
-            dx = dx + weight * cs[i]
-            dy = dy + weight * sn[i]
-            i += 1
-        x = x + dx * t
-        y = y + dy * t
-    return x, y, th
+    m = len(pieces) * len(u)
+    flat = [v for piece in pieces for v in piece]
+    return advance_nodes([0.0] * (3 * m), m, x, y, theta, flat, 0, len(pieces), u, uw)
 
 
 def unit_speed_poses(
@@ -239,26 +329,12 @@ def unit_speed_poses(
 ) -> list[tuple[float, float, float, float, float]]:
     """:func:`unit_speed_pose` of several independent ``(x, y, theta, w0, alpha, t)``, with one ``np.cos`` and one
     ``np.sin`` call for all (the same bits as one call each)."""
-    phases: list[float] = []
-    ends: list[float] = []
-    for _x, _y, theta, w0, alpha, t in starts:
-        half_alpha = 0.5 * alpha
-        phases += [theta + tau * (w0 + half_alpha * tau) for tau in [ui * t for ui in _U_LIST]]
-        th = theta + t * (w0 + half_alpha * t)
-        phases.append(th)
-        ends.append(th)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    out: list[tuple[float, float, float, float, float]] = []
-    base = 0
-    for (x, y, _theta, _w0, _alpha, t), th in zip(starts, ends, strict=True):
-        dx = 0.0
-        dy = 0.0
-        for i in range(NODES):
-            wi = _UW_LIST[i]
-            dx = dx + wi * cs[base + i]
-            dy = dy + wi * sn[base + i]
-        out.append((x + dx * t, y + dy * t, th, cs[base + NODES], sn[base + NODES]))
-        base += NODES + 1
-    return out
+    nn = NODES + 1
+    m = len(starts) * nn
+    buf = [0.0] * (3 * m)
+    for i, (_x, _y, theta, w0, alpha, t) in enumerate(starts):
+        unit_speed_phases(buf, i * nn, theta, w0, alpha, t, _U_LIST)
+    cos_sin_nodes(buf, m, m)
+    return [
+        unit_speed_sums(buf, m, i * nn, x, y, t, _U_LIST, _UW_LIST) for i, (x, y, _th, _w, _al, t) in enumerate(starts)
+    ]

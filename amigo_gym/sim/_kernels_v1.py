@@ -58,12 +58,14 @@ this file: see :data:`LAYOUT_FINGERPRINT`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numba
 import numpy as np
+from numba.extending import overload
 from numpy.typing import NDArray
 
-from amigo_gym.model import actuators, kinematics, randomization
+from amigo_gym.model import actuators, fresnel, kinematics, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import (
@@ -84,12 +86,25 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "6b2e8695ea12ae66"
+LAYOUT_FINGERPRINT = "3857430e7a2b1616"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 _shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit)
+
+
+@overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"})
+def _cos_sin_nodes(buf: F64, n: int, m: int) -> Callable[[F64, int, int], None]:
+    """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: the C library's ``math.cos``/``math.sin``
+    node by node (numpy's bits where :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`; no array temporaries)."""
+
+    def impl(buf: F64, n: int, m: int) -> None:
+        for i in range(n):
+            buf[m + i] = math.cos(buf[i])
+            buf[2 * m + i] = math.sin(buf[i])
+
+    return impl
 
 
 @_jit
@@ -122,169 +137,44 @@ _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
 _body_velocity = _shared(kinematics.body_velocity_of)
-_wheel_rates = _shared(kinematics.wheel_rates_of)
 _h_from_a = _shared(kinematics.h_from_a)
-_clip_setpoint = _shared(actuators._clip_float)
-_piece_rates = _shared(actuators.piece_rates)
 
 
 # ----------------------------------------------------------------------------------------- actuators
 
 
-#: actuators._ramp_float itself, compiled: ``(t_a, t_b, u_a, u_b, s_a, s_b)`` of one firmware ramp
-_ramp = _shared(actuators._ramp_float)
+#: the actuator step and the path pose of the float path, compiled as they are (their node sums' cosines and sines
+#: by the overload of fresnel.cos_sin_nodes below)
+_actuator_step_ws = _shared(actuators.actuator_step_ws)
+_unit_speed_nodes = _shared(fresnel.unit_speed_nodes)
 _box_muller = _shared(randomization.box_muller)
 _trapezoid_speed = _shared(tracking.trapezoid_speed)
 
 
 @_jit
-def _channel(
-    ws: F64, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
-) -> float:
-    # actuators._channel_float: knots ws[k:k+7], values ws[k+7:k+13], slopes ws[k+13:k+19]; returns u at dt
-    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp(u0, c_old, accel, decel, t_s)
-    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp(ub1, c_new, accel, decel, dt - t_s)
-    k4 = t_s + ta2
-    k5 = t_s + tb2
-    ws[k] = 0.0
-    ws[k + 1] = ta1
-    ws[k + 2] = tb1
-    ws[k + 3] = t_s
-    ws[k + 4] = k4 if k4 <= dt else dt
-    ws[k + 5] = k5 if k5 <= dt else dt
-    ws[k + 6] = dt
-    v = k + 7
-    ws[v] = u0
-    ws[v + 1] = ua1
-    ws[v + 2] = ub1
-    ws[v + 3] = ub1
-    ws[v + 4] = ua2
-    ws[v + 5] = ub2
-    s = k + 13
-    ws[s] = sa1
-    ws[s + 1] = sb1
-    ws[s + 2] = 0.0
-    ws[s + 3] = sa2
-    ws[s + 4] = sb2
-    ws[s + 5] = 0.0
-    return ub2
-
-
-@_jit
-def _evaluate_channel(ws: F64, k: int, t: float, mid: float) -> tuple[float, float]:
-    # actuators._evaluate_float on the channel at ws[k:]
-    v = k + 7
-    s = k + 13
-    val = ws[v] + ws[s] * t
-    slope = ws[s]
-    for i in range(1, 6):
-        if mid >= ws[k + i]:
-            val = ws[v + i] + ws[s + i] * (t - ws[k + i])
-            slope = ws[s + i]
-    return val, slope
-
-
-@_jit
 def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
-    """actuators._actuator_step_float from the state in ``ws``: the new pose, wheel rates and angles into ``ws``.
+    """:func:`amigo_gym.model.actuators.actuator_step_ws` (the float path's own source) from the state in ``ws``: the
+    new pose, wheel rates and angles into ``ws``.
 
     Returns the true speed of A at the end of the step [m/s].
     """
-    w_max = c[L.C_W_MAX]
-    l1n = c[L.C_L1]
-    r1n = c[L.C_R1]
-    r2n = c[L.C_R2]
-    two_l1 = c[L.C_TWO_L1]
-    dt = c[L.C_DT]
-    t_s = ws[L.W_TS]
-    # 1. commands (clip_setpoints, body_velocity_columns)
-    vc_old, wc_old = _body_velocity(_clip_setpoint(o1, w_max), _clip_setpoint(o2, w_max), r1n, r2n, two_l1)
-    vc_new, wc_new = _body_velocity(_clip_setpoint(n1, w_max), _clip_setpoint(n2, w_max), r1n, r2n, two_l1)
-    # 2. ramps
-    v0, om0 = _body_velocity(ws[L.W_W1], ws[L.W_W2], r1n, r2n, two_l1)
-    v_end = _channel(ws, L.S_KV, v0, vc_old, vc_new, c[L.C_ACC], c[L.C_DEC], t_s, dt)
-    w_end = _channel(ws, L.S_KW, om0, wc_old, wc_new, c[L.C_RACC], c[L.C_RDEC], t_s, dt)
-    # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
-    tm = L.S_TIMES
-    ws[tm] = 0.0
-    ws[tm + 1] = ws[L.S_KV + 1]
-    ws[tm + 2] = ws[L.S_KV + 2]
-    ws[tm + 3] = ws[L.S_KV + 3]
-    ws[tm + 4] = ws[L.S_KV + 4]
-    ws[tm + 5] = ws[L.S_KV + 5]
-    ws[tm + 6] = ws[L.S_KW + 1]
-    ws[tm + 7] = ws[L.S_KW + 2]
-    ws[tm + 8] = ws[L.S_KW + 4]
-    ws[tm + 9] = ws[L.S_KW + 5]
-    ws[tm + 10] = dt
-    for i in range(2, 10):
-        key = ws[tm + i]
-        j = i - 1
-        while j >= 1 and key < ws[tm + j]:
-            ws[tm + j + 1] = ws[tm + j]
-            j -= 1
-        ws[tm + j + 1] = key
-    # 3. pieces
-    g1 = (1.0 - s1) * ws[L.W_R1]
-    g2 = (1.0 - s2) * ws[L.W_R2]
-    inv_2l1t = 0.5 / ws[L.W_L1]
-    da1 = 0.0
-    da2 = 0.0
-    n_pieces = 0
-    for j in range(PIECES):
-        t0 = ws[tm + j]
-        t1 = ws[tm + j + 1]
-        length = t1 - t0
-        if not length > 0.0:
-            continue
-        mid = 0.5 * (t0 + t1)
-        v, a = _evaluate_channel(ws, L.S_KV, t0, mid)
-        om, al = _evaluate_channel(ws, L.S_KW, t0, mid)
-        p1, q1, p2, q2, vt, at, wt, alt = _piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
-        pc = L.S_PIECES + 5 * n_pieces
-        ws[pc] = vt
-        ws[pc + 1] = at
-        ws[pc + 2] = wt
-        ws[pc + 3] = alt
-        ws[pc + 4] = length
-        n_pieces += 1
-        half = 0.5 * length
-        da1 = da1 + length * (p1 + q1 * half)
-        da2 = da2 + length * (p2 + q2 * half)
-    # fresnel.advance_chain_float: the heading of each piece's start in closed form, the nodes' sums in order
-    x = ws[L.W_X]
-    y = ws[L.W_Y]
-    th = ws[L.W_BETA]
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
-    for q in range(n_pieces):
-        pc = L.S_PIECES + 5 * q
-        v0p = ws[pc]
-        ap = ws[pc + 1]
-        w0 = ws[pc + 2]
-        half_alpha = 0.5 * ws[pc + 3]
-        t = ws[pc + 4]
-        dx = 0.0
-        dy = 0.0
-        for i in range(nn):
-            tau = c[base + i] * t
-            phase = th + tau * (w0 + half_alpha * tau)
-            weight = (v0p + ap * tau) * c[base + nn + i]
-            dx = dx + weight * math.cos(phase)
-            dy = dy + weight * math.sin(phase)
-        x = x + dx * t
-        y = y + dy * t
-        th = th + t * (w0 + half_alpha * t)
-    # 4. the new actuator state (wheel_rates_columns) and the true speed at the end
-    w1n, w2n = _wheel_rates(v_end, w_end, l1n, r1n, r2n)
+    nodes = np.empty(3 * PIECES * nn)
+    x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = _actuator_step_ws(
+        ws, L.S_ACT, nodes, c[base : base + nn], c[base + nn : base + 2 * nn],
+        ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
+        c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
+        c[L.C_ACC], c[L.C_DEC], c[L.C_RACC], c[L.C_RDEC],
+        ws[L.W_R1], ws[L.W_R2], ws[L.W_L1], s1, s2,
+    )  # fmt: skip
     ws[L.W_X] = x
     ws[L.W_Y] = y
-    ws[L.W_BETA] = th
+    ws[L.W_BETA] = beta
     ws[L.W_W1] = w1n
     ws[L.W_W2] = w2n
     ws[L.W_AL1] = ws[L.W_AL1] + da1
     ws[L.W_AL2] = ws[L.W_AL2] + da2
-    v_true: float = 0.5 * (g1 * w1n + g2 * w2n)
     return v_true
 
 
@@ -319,21 +209,13 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     cr = pv[L.P_TAIL + 5 * n + j]
     t = u - pv[s0 + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
-    half_alpha = 0.5 * cr
-    th = theta + t * (w0 + half_alpha * t)
     nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
-    dx = 0.0
-    dy = 0.0
-    for i in range(L.PATH_NODES):
-        tau = c[nb + i] * t
-        phase = theta + tau * (w0 + half_alpha * tau)
-        wi = c[nb + L.PATH_NODES + i]
-        dx = dx + wi * math.cos(phase)
-        dy = dy + wi * math.sin(phase)
-    x = x0 + dx * t
-    y = y0 + dy * t
+    nodes = np.empty(3 * (L.PATH_NODES + 1))
+    nodes_u = c[nb : nb + L.PATH_NODES]
+    nodes_w = c[nb + L.PATH_NODES : nb + 2 * L.PATH_NODES]
+    x, y, th, cos_th, sin_th = _unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, nodes_u, nodes_w)
     # clothoid._placed
-    return _placed_pose(x, y, th, math.cos(th), math.sin(th), w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
+    return _placed_pose(x, y, th, cos_th, sin_th, w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
 
 
 @_jit
