@@ -694,10 +694,9 @@ def _actuator_step_float(
     n_sub: int,
 ) -> ActuatorStep:
     """:func:`actuator_step` for Python floats (the same bits): :func:`actuator_step_ws` on scratch lists."""
-    u, uw = fresnel._nodes(n_sub)
-    m = PIECES * len(u)
+    nn = fresnel.NODES * n_sub
     out = actuator_step_ws(
-        [0.0] * SCRATCH, 0, [0.0] * (3 * m), u, uw,
+        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.node_table(n_sub), 0, nn,
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, dt,
         nominal.max_wheel_rate, nominal.l1, nominal.r1, nominal.r2, 2.0 * nominal.l1,
         limits.acceleration, limits.deceleration, limits.rot_acceleration, limits.rot_deceleration,
@@ -773,8 +772,10 @@ def actuator_step_ws(
     ws: fresnel.Buffer,
     k: int,
     buf: fresnel.Buffer,
-    u: fresnel.Buffer,
-    uw: fresnel.Buffer,
+    b: int,
+    nodes: fresnel.Buffer,
+    node_at: int,
+    nn: int,
     x: float,
     y: float,
     beta: float,
@@ -806,8 +807,10 @@ def actuator_step_ws(
 
     Args:
         ws: scratch of :data:`SCRATCH` entries from ``ws[k]`` (offsets :data:`SCRATCH_V` ...).
-        buf: node buffer of ``3 PIECES len(u)`` entries (:func:`amigo_gym.model.fresnel.advance_nodes`).
-        u, uw: the quadrature's nodes on [0, 1] and weights for ``n_sub`` sub-intervals (``fresnel._nodes``).
+        buf, b: node buffer of ``3 PIECES nn`` entries from ``buf[b]`` (:func:`amigo_gym.model.fresnel.advance_nodes`;
+            the compiled step passes ``ws`` itself).
+        nodes, node_at, nn: the quadrature's ``nn = NODES n_sub`` nodes on [0, 1] from ``nodes[node_at]``, then
+            their weights (:func:`amigo_gym.model.fresnel.node_table`).
         x ... t_s: as :func:`actuator_step` [m, m, rad, rad/s, ..., s]; dt: the step [s].
         w_max, l1n, r1n, r2n, two_l1: the nominal robot's wheel-rate limit [rad/s], half track, radii, ``2 l1`` [m].
         accel, decel, rot_accel, rot_decel: the ramps (:class:`ActuatorParams`).
@@ -875,7 +878,7 @@ def actuator_step_ws(
         da1 = da1 + length * (p1 + q1 * half)
         da2 = da2 + length * (p2 + q2 * half)
         dist = dist + length * (vt + at * half)
-    x, y, beta = fresnel.advance_nodes(buf, PIECES * len(u), x, y, beta, ws, pcs, n_pieces, u, uw)
+    x, y, beta = fresnel.advance_nodes(buf, b, PIECES * nn, x, y, beta, ws, pcs, n_pieces, nodes, node_at, nn)
     # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
     w1n, w2n = wheel_rates_of(v_end, w_end, l1n, r1n, r2n)
     v_true = 0.5 * (g1 * w1n + g2 * w2n)

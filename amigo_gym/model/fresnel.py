@@ -55,6 +55,7 @@ __all__ = [
     "unit_speed_phases",
     "unit_speed_sums",
     "unit_speed_nodes",
+    "node_table",
 ]
 
 #: Gauss–Legendre nodes per sub-interval
@@ -70,6 +71,9 @@ _U_LIST: list[float] = _U.tolist()
 _UW_LIST: list[float] = _UW.tolist()
 #: nodes and weights on [0, 1] for ``n_sub`` sub-intervals (lists, built once per ``n_sub``)
 _NODE_CACHE: dict[int, tuple[list[float], list[float]]] = {1: (_U_LIST, _UW_LIST)}
+#: :func:`node_table` for one sub-interval (a path piece's quadrature), and the cache of the others
+_TABLE_1: list[float] = _U_LIST + _UW_LIST
+_TABLE_CACHE: dict[int, list[float]] = {1: _TABLE_1}
 
 _np_array = np.array
 _np_cos = np.cos
@@ -166,22 +170,25 @@ class Buffer(Protocol):
     def __len__(self) -> int: ...
 
 
-def cos_sin_nodes(buf: Buffer, n: int, m: int) -> None:
-    """``buf[m + i] = cos(buf[i])``, ``buf[2 m + i] = sin(buf[i])`` for ``i < n``: numpy's ``np.cos``/``np.sin`` of
-    the phases as one array (a ``list`` buffer; numpy gives each element the bits it gives a scalar).
+def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
+    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``: numpy's
+    ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer; numpy gives each element the bits it gives a
+    scalar).
 
     The compiled step does not compile this body: it overloads this function with the loop of the C library's
     ``math.cos``/``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`; the same bits where
     :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`, which the environment checks before using the kernel).
     """
-    b = cast("list[float]", buf)
-    arr = _np_array(b[:n])
-    b[m : m + n] = _np_cos(arr).tolist()
-    b[2 * m : 2 * m + n] = _np_sin(arr).tolist()
+    lst = cast("list[float]", buf)
+    arr = _np_array(lst[b : b + n])
+    lst[b + m : b + m + n] = _np_cos(arr).tolist()
+    lst[b + 2 * m : b + 2 * m + n] = _np_sin(arr).tolist()
 
 
-def node_phases(buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, u: Buffer) -> float:
-    r"""The phases at the nodes of one piece into ``buf[k : k + len(u)]``; returns the heading at its end.
+def node_phases(
+    buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
+) -> float:
+    r"""The phases at the nodes of one piece into ``buf[k : k + nn]``; returns the heading at its end.
 
     .. math:: \phi_i = \theta + \tau_i (w_0 + \tfrac12\alpha\tau_i),\quad \tau_i = u_i t, \qquad
         \theta' = \theta + t (w_0 + \tfrac12\alpha t)
@@ -189,27 +196,30 @@ def node_phases(buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: f
     Args:
         buf: node buffer; k: where this piece's phases start.
         theta, w0, alpha, t: start heading [rad], turn rate [rad/s] and its rate [rad/s^2], duration [s].
-        u: the nodes on [0, 1] (:func:`nodes_for`).
+        nodes, j, nn: the ``nn`` nodes ``u_i`` on [0, 1] at ``nodes[j + i]``, their weights at ``nodes[j + nn + i]``
+            (:func:`node_table`).
     """
     half_alpha = 0.5 * alpha
-    for i in range(len(u)):
-        tau = u[i] * t
+    for i in range(nn):
+        tau = nodes[j + i] * t
         buf[k + i] = theta + tau * (w0 + half_alpha * tau)
     return theta + t * (w0 + half_alpha * t)
 
 
-def node_sums(buf: Buffer, k: int, m: int, v0: float, a: float, t: float, u: Buffer, uw: Buffer) -> tuple[float, float]:
+def node_sums(
+    buf: Buffer, k: int, m: int, v0: float, a: float, t: float, nodes: Buffer, j: int, nn: int
+) -> tuple[float, float]:
     r"""The weighted sums of one piece's node cosines and sines (``buf[m + k + i]``, ``buf[2 m + k + i]``), in order.
 
     .. math:: (d_x, d_y) = \sum_i (v_0 + a \tau_i) w_i (\cos, \sin)\phi_i, \quad \tau_i = u_i t
 
     so that the position advances by ``(dx t, dy t)``. ``v0 = 1``, ``a = 0`` (a path piece) weights by ``w_i``
-    exactly.
+    exactly. ``nodes, j, nn`` as :func:`node_phases`.
     """
     dx = 0.0
     dy = 0.0
-    for i in range(len(u)):
-        weight = (v0 + a * (u[i] * t)) * uw[i]
+    for i in range(nn):
+        weight = (v0 + a * (nodes[j + i] * t)) * nodes[j + nn + i]
         dx = dx + weight * buf[m + k + i]
         dy = dy + weight * buf[2 * m + k + i]
     return dx, dy
@@ -217,6 +227,7 @@ def node_sums(buf: Buffer, k: int, m: int, v0: float, a: float, t: float, u: Buf
 
 def advance_nodes(
     buf: Buffer,
+    b: int,
     m: int,
     x: float,
     y: float,
@@ -224,61 +235,74 @@ def advance_nodes(
     pieces: Buffer,
     p: int,
     n_pieces: int,
-    u: Buffer,
-    uw: Buffer,
+    nodes: Buffer,
+    j: int,
+    nn: int,
 ) -> tuple[float, float, float]:
     """:func:`advance` applied piece after piece: the phases of all pieces' nodes first (the heading at each piece's
     start is closed form), one :func:`cos_sin_nodes`, then the sums in order.
 
     Args:
-        buf: node buffer of stride ``m >= n_pieces * len(u)`` (length ``3 m``).
+        buf, b, m: node buffer of stride ``m >= n_pieces * nn`` from ``buf[b]`` (``3 m`` entries).
         x, y, theta: start pose [m, m, rad].
         pieces: ``(v0, a, w0, alpha, t)`` of each piece (as :func:`advance`'s arguments) at ``pieces[p + 5 q]``.
         n_pieces: number of pieces (0: the start pose).
-        u, uw: nodes on [0, 1] and weights (:func:`nodes_for`).
+        nodes, j, nn: the nodes and weights (:func:`node_phases`).
 
     Returns:
         the pose after the last piece.
     """
-    nn = len(u)
     th = theta
     for q in range(n_pieces):
         o = p + 5 * q
-        th = node_phases(buf, q * nn, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], u)
-    cos_sin_nodes(buf, n_pieces * nn, m)
+        th = node_phases(buf, b + q * nn, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], nodes, j, nn)
+    cos_sin_nodes(buf, b, n_pieces * nn, m)
     for q in range(n_pieces):
         o = p + 5 * q
         t = pieces[o + 4]
-        dx, dy = node_sums(buf, q * nn, m, pieces[o], pieces[o + 1], t, u, uw)
+        dx, dy = node_sums(buf, b + q * nn, m, pieces[o], pieces[o + 1], t, nodes, j, nn)
         x = x + dx * t
         y = y + dy * t
     return x, y, th
 
 
-def unit_speed_phases(buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, u: Buffer) -> None:
-    """:func:`node_phases` of a path piece (arc length as time) into ``buf[k : k + len(u)]``, its end heading at
-    ``buf[k + len(u)]`` (so that one :func:`cos_sin_nodes` gives its cosine and sine too)."""
-    buf[k + len(u)] = node_phases(buf, k, theta, w0, alpha, t, u)
+def unit_speed_phases(
+    buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
+) -> None:
+    """:func:`node_phases` of a path piece (arc length as time) into ``buf[k : k + nn]``, its end heading at
+    ``buf[k + nn]`` (so that one :func:`cos_sin_nodes` gives its cosine and sine too)."""
+    buf[k + nn] = node_phases(buf, k, theta, w0, alpha, t, nodes, j, nn)
 
 
 def unit_speed_sums(
-    buf: Buffer, m: int, k: int, x: float, y: float, t: float, u: Buffer, uw: Buffer
+    buf: Buffer, m: int, k: int, x: float, y: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
     """The pose ``(x', y', theta', cos theta', sin theta')`` after :func:`unit_speed_phases` at ``k`` and
     :func:`cos_sin_nodes` (the position's sums by :func:`node_sums` with unit speed)."""
-    nn = len(u)
-    dx, dy = node_sums(buf, k, m, 1.0, 0.0, t, u, uw)
+    dx, dy = node_sums(buf, k, m, 1.0, 0.0, t, nodes, j, nn)
     return x + dx * t, y + dy * t, buf[k + nn], buf[m + k + nn], buf[2 * m + k + nn]
 
 
 def unit_speed_nodes(
-    buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, u: Buffer, uw: Buffer
+    buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
-    """:func:`unit_speed_pose` on a node buffer of stride ``len(u) + 1`` (length ``3 (len(u) + 1)``)."""
-    m = len(u) + 1
-    unit_speed_phases(buf, 0, theta, w0, alpha, t, u)
-    cos_sin_nodes(buf, m, m)
-    return unit_speed_sums(buf, m, 0, x, y, t, u, uw)
+    """:func:`unit_speed_pose` on a node buffer of stride ``nn + 1`` (length ``3 (nn + 1)``)."""
+    m = nn + 1
+    unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
+    cos_sin_nodes(buf, 0, m, m)
+    return unit_speed_sums(buf, m, 0, x, y, t, nodes, j, nn)
+
+
+def node_table(n_sub: int) -> list[float]:
+    """The nodes on [0, 1] for ``n_sub`` equal sub-intervals, then their weights (``2 NODES n_sub`` floats, cached):
+    the ``nodes`` of :func:`node_phases` with ``j = 0``, ``nn = NODES n_sub``."""
+    got = _TABLE_CACHE.get(n_sub)
+    if got is None:
+        u, uw = _nodes(n_sub)
+        got = u + uw
+        if len(_TABLE_CACHE) < 64:
+            _TABLE_CACHE[n_sub] = got
+    return got
 
 
 # -- the float path's entry points: thin wrappers on lists --------------------------------------------------
@@ -288,9 +312,9 @@ def advance_float(
     x: float, y: float, theta: float, v0: float, a: float, w0: float, alpha: float, t: float, n_sub: int = 1
 ) -> tuple[float, float, float]:
     """:func:`advance` for Python floats: the same bits, computed faster (:func:`advance_nodes` of one piece)."""
-    u, uw = _nodes(n_sub)
-    m = len(u)
-    return advance_nodes([0.0] * (3 * m), m, x, y, theta, [v0, a, w0, alpha, t], 0, 1, u, uw)
+    table = node_table(n_sub)
+    m = NODES * n_sub
+    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, [v0, a, w0, alpha, t], 0, 1, table, 0, m)
 
 
 def unit_speed_pose(
@@ -302,7 +326,7 @@ def unit_speed_pose(
 
     With unit speed the weights ``(1 + 0 tau) w_i`` are exactly ``w_i``.
     """
-    return unit_speed_nodes([0.0] * (3 * NODES + 3), x, y, theta, w0, alpha, t, _U_LIST, _UW_LIST)
+    return unit_speed_nodes([0.0] * (3 * NODES + 3), x, y, theta, w0, alpha, t, _TABLE_1, 0, NODES)
 
 
 def advance_chain_float(
@@ -318,10 +342,10 @@ def advance_chain_float(
     Returns:
         the pose after the last piece (the start pose for no pieces).
     """
-    u, uw = _nodes(n_sub)
-    m = len(pieces) * len(u)
+    nn = NODES * n_sub
+    m = len(pieces) * nn
     flat = [v for piece in pieces for v in piece]
-    return advance_nodes([0.0] * (3 * m), m, x, y, theta, flat, 0, len(pieces), u, uw)
+    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, flat, 0, len(pieces), node_table(n_sub), 0, nn)
 
 
 def unit_speed_poses(
@@ -333,8 +357,8 @@ def unit_speed_poses(
     m = len(starts) * nn
     buf = [0.0] * (3 * m)
     for i, (_x, _y, theta, w0, alpha, t) in enumerate(starts):
-        unit_speed_phases(buf, i * nn, theta, w0, alpha, t, _U_LIST)
-    cos_sin_nodes(buf, m, m)
+        unit_speed_phases(buf, i * nn, theta, w0, alpha, t, _TABLE_1, 0, NODES)
+    cos_sin_nodes(buf, 0, m, m)
     return [
-        unit_speed_sums(buf, m, i * nn, x, y, t, _U_LIST, _UW_LIST) for i, (x, y, _th, _w, _al, t) in enumerate(starts)
+        unit_speed_sums(buf, m, i * nn, x, y, t, _TABLE_1, 0, NODES) for i, (x, y, _th, _w, _al, t) in enumerate(starts)
     ]

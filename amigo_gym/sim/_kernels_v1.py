@@ -66,7 +66,6 @@ from numba.extending import overload
 from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, randomization
-from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import (
     NEWTON_ITERATIONS,
@@ -86,7 +85,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "3857430e7a2b1616"
+LAYOUT_FINGERPRINT = "e2cb823445416964"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -95,14 +94,17 @@ _shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit)
 
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"})
-def _cos_sin_nodes(buf: F64, n: int, m: int) -> Callable[[F64, int, int], None]:
+def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
     """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: the C library's ``math.cos``/``math.sin``
     node by node (numpy's bits where :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`; no array temporaries)."""
 
-    def impl(buf: F64, n: int, m: int) -> None:
-        for i in range(n):
-            buf[m + i] = math.cos(buf[i])
-            buf[2 * m + i] = math.sin(buf[i])
+    def impl(buf: F64, b: int, n: int, m: int) -> None:
+        for i in range(b, b + n):
+            phase = buf[i]  # one load: the cosine and sine of one value (LLVM fuses them into one sincos call)
+            cos_p = math.cos(phase)
+            sin_p = math.sin(phase)
+            buf[m + i] = cos_p
+            buf[2 * m + i] = sin_p
 
     return impl
 
@@ -160,9 +162,8 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     """
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
-    nodes = np.empty(3 * PIECES * nn)
     x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = _actuator_step_ws(
-        ws, L.S_ACT, nodes, c[base : base + nn], c[base + nn : base + 2 * nn],
+        ws, L.S_ACT, ws, L.S_NODES, c, base, nn,
         ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
         c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
         c[L.C_ACC], c[L.C_DEC], c[L.C_RACC], c[L.C_RDEC],
@@ -211,9 +212,7 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
     nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
     nodes = np.empty(3 * (L.PATH_NODES + 1))
-    nodes_u = c[nb : nb + L.PATH_NODES]
-    nodes_w = c[nb + L.PATH_NODES : nb + 2 * L.PATH_NODES]
-    x, y, th, cos_th, sin_th = _unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, nodes_u, nodes_w)
+    x, y, th, cos_th, sin_th = _unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
     # clothoid._placed
     return _placed_pose(x, y, th, cos_th, sin_th, w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
 
