@@ -59,10 +59,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
-from numba.extending import overload
+from llvmlite import ir as llvm_ir
+from numba.core import cgutils
+from numba.extending import intrinsic, overload
+from numba.np import numpy_support
 from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, randomization
@@ -90,10 +94,10 @@ check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
-_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit)
+_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit, inline=L.SHARED_INLINE)
 
 
-@overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"})
+@overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
 def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
     """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: the C library's ``math.cos``/``math.sin``
     node by node (numpy's bits where :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`; no array temporaries)."""
@@ -107,6 +111,32 @@ def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int,
             buf[2 * m + i] = sin_p
 
     return impl
+
+
+#: entries of the path pose's node buffer (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: stride ``NODES + 1``)
+_POSE_NODES = 3 * (L.PATH_NODES + 1)
+
+
+def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
+    """Typing and code of :data:`_stack_ptr` (``numba.extending.intrinsic``)."""
+    if not isinstance(n, numba.types.IntegerLiteral):
+        return None
+    size = n.literal_value
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        ptr = _alloca_once(builder, llvm_ir.ArrayType(llvm_ir.DoubleType(), size))
+        return builder.bitcast(ptr, llvm_ir.DoubleType().as_pointer())
+
+    return _cpointer(numba.types.float64)(n), codegen
+
+
+_alloca_once: Any = cgutils.alloca_once
+_cpointer: Any = numba.types.CPointer
+_carray: Any = numpy_support.carray
+#: ``_stack_ptr(n)``: a pointer to ``n`` float64 (a compile-time constant) on the stack of the compiled function that
+#: calls it; ``_carray(_stack_ptr(n), n)`` is the path pose's node buffer without an allocation per pose (used within
+#: that call only)
+_stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
 @_jit
@@ -145,10 +175,10 @@ _h_from_a = _shared(kinematics.h_from_a)
 # ----------------------------------------------------------------------------------------- actuators
 
 
-#: the actuator step and the path pose of the float path, compiled as they are (their node sums' cosines and sines
-#: by the overload of fresnel.cos_sin_nodes below)
-_actuator_step_ws = _shared(actuators.actuator_step_ws)
-_unit_speed_nodes = _shared(fresnel.unit_speed_nodes)
+# The actuator step and the path pose are the float path's own functions (actuators.actuator_step_ws,
+# fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
+# by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
+# no call.
 _box_muller = _shared(randomization.box_muller)
 _trapezoid_speed = _shared(tracking.trapezoid_speed)
 
@@ -162,7 +192,7 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     """
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
-    x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = _actuator_step_ws(
+    x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = actuators.actuator_step_ws(
         ws, L.S_ACT, ws, L.S_NODES, c, base, nn,
         ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
         c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
@@ -211,8 +241,8 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     t = u - pv[s0 + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
     nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
-    nodes = np.empty(3 * (L.PATH_NODES + 1))
-    x, y, th, cos_th, sin_th = _unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
+    nodes = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    x, y, th, cos_th, sin_th = fresnel.unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
     # clothoid._placed
     return _placed_pose(x, y, th, cos_th, sin_th, w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
 

@@ -193,6 +193,17 @@ SHARED: tuple[Callable[..., Any], ...] = (
 )
 
 
+#: the functions of :data:`SHARED` that numba inlines into their callers (the node loops, called per path pose)
+SHARED_INLINE: tuple[Callable[..., Any], ...] = (
+    fresnel.advance_nodes,
+    fresnel.node_phases,
+    fresnel.node_sums,
+    fresnel.unit_speed_phases,
+    fresnel.unit_speed_sums,
+    fresnel.unit_speed_nodes,
+)
+
+
 def layout_fingerprint() -> str:
     """A short hash of the layouts above, of the constants the kernel takes from their homes
     (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
