@@ -8,8 +8,8 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
    :func:`amigo_gym.model.actuators.ring_write`, :func:`amigo_gym.model.actuators.ring_read`;
 2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
-   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators._actuator_step_float`,
-   :func:`amigo_gym.model.fresnel.advance_chain_float`);
+   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
+   :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
 3. H's projection on the path, and the measured H's when it differs
    (:func:`amigo_gym.paths.clothoid._locate_float`, :func:`amigo_gym.paths.clothoid._pose_tuple`);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
@@ -19,16 +19,18 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
 term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the projection's wrap, placement,
-window, Newton step and status: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled
-here as they are (docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece
-search, the quadrature's node sums) are written here in the reference's order of operations, so that every
+window, Newton step and status, the quadrature's node sums and the actuator step:
+:data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
+(docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece search) are
+written here in the reference's order of operations, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
 * arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
   Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
   reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
-* ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
+* ``math.cos``/``math.sin`` here are the C library's (the node sums' through the overload of
+  :func:`amigo_gym.model.fresnel.cos_sin_nodes` below), which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
@@ -47,7 +49,8 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   ``x, y``; built once per path by :func:`amigo_gym.sim.fast_v1.flat_path`);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
-  the outputs), then scratch space of ``WS_SCRATCH`` entries;
+  the outputs), then scratch space of ``WS_SCRATCH`` entries, then the actuator step's node buffer (``S_NODES``;
+  length ``ws_length(n_sub)`` in all);
 * ``obs``: the observation (float32 or float64), written.
 
 This module imports numba at import time; :mod:`amigo_gym.sim.fast_v1` imports it only when the kernel is first
