@@ -58,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     import numba
 
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    print(f"# {cpu_model()} ({platform.machine()}, SIMD {simd_level()}), numba {numba.__version__}, {numba.get_num_threads()} threads, load {load}")
+    machine = f"{cpu_model()} ({platform.machine()}, SIMD {simd_level()})"
+    print(f"# {machine}, numba {numba.__version__}, {numba.get_num_threads()} threads, load {load}")
     print("| env | N | serial env-steps/s | parallel env-steps/s | parallel / serial, median (range) |")
     print("|---|---:|---:|---:|---|")
     for n in args.sizes:
