@@ -61,15 +61,13 @@ import math
 
 import numba
 import numpy as np
+from numba.extending import overload
 from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, kinematics, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
-from amigo_gym.paths.clothoid import (
-    NEWTON_ITERATIONS,
-    STATUS_END,
-)
+from amigo_gym.paths.clothoid import STATUS_END
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
 from amigo_gym.sim.layout import twin as _twin
@@ -84,7 +82,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "6b2e8695ea12ae66"
+LAYOUT_FINGERPRINT = "7537ea29d12a232d"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -104,15 +102,11 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 # ----------------------------------------------------------------------------------------- small rules
 
 
-#: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
-_np_clip = _shared(clothoid._np_clip)
-#: the projection's scalar pieces (clothoid's float path; they call clothoid.py_min, py_max), compiled
-_wrap_arc = _shared(clothoid.wrap_arc)
-_placed_pose = _shared(clothoid.placed_pose)
-_locate_window = _shared(clothoid.locate_window)
-_foot_terms = _shared(clothoid.foot_terms)
-_newton_step = _shared(clothoid.newton_step)
-_locate_status = _shared(clothoid.locate_status_float)
+#: the projection (clothoid's float path: the piece search, wrap and placement of a pose, the coarse search, the Newton
+#: loop and the status, calling clothoid's other shared functions), compiled
+_piece_at = _shared(clothoid.piece_at)
+_place = _shared(clothoid.place)
+_locate_flat = _shared(clothoid.locate_flat)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
@@ -293,31 +287,15 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 
 @_jit
 def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
-    # clothoid._pose_tuple: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s
+    # clothoid._pose_flat: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s: the piece
+    # (clothoid.piece_at), the quadrature from its start, the placement on the whole path (clothoid.place)
+    j, t, lap, extra = _piece_at(pv, s)
     n = int(pv[L.P_N])
-    closed = pv[L.P_CLOSED] != 0.0
-    u, lap, extra = _wrap_arc(s, pv[L.P_LENGTH], closed)
-    # bisect.bisect_right(s0, u) - 1, clamped to [0, n - 1]
-    s0 = L.P_TAIL
-    lo = 0
-    hi = n
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if u < pv[s0 + mid]:
-            hi = mid
-        else:
-            lo = mid + 1
-    j = lo - 1
-    if j < 0:
-        j = 0
-    if j > n - 1:
-        j = n - 1
     x0 = pv[L.P_TAIL + n + j]
     y0 = pv[L.P_TAIL + 2 * n + j]
     theta = pv[L.P_TAIL + 3 * n + j]
     w0 = pv[L.P_TAIL + 4 * n + j]
     cr = pv[L.P_TAIL + 5 * n + j]
-    t = u - pv[s0 + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
     half_alpha = 0.5 * cr
     th = theta + t * (w0 + half_alpha * t)
@@ -332,57 +310,30 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
         dy = dy + wi * math.sin(phase)
     x = x0 + dx * t
     y = y0 + dy * t
-    # clothoid._placed
-    return _placed_pose(x, y, th, math.cos(th), math.sin(th), w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
+    return _place(pv, j, t, lap, extra, x, y, th, math.cos(th), math.sin(th))
+
+
+@overload(clothoid._pose_flat)
+def _pose_flat_compiled(q: F64, pv: F64, s: float) -> object:
+    """The pose clothoid.locate_flat evaluates, in compiled code: :func:`_pose` (the float path's is
+    clothoid._pose_flat, with numpy's cosines and sines of the nodes)."""
+
+    def impl(q: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
+        return _pose(q, pv, s)
+
+    return impl
 
 
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind.
+    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself with
+    :func:`_pose`.
 
     Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
     """
-    ahead = c[L.C_WINDOW]
-    behind = ahead
-    h = pv[L.P_SPACING]
-    length = pv[L.P_LENGTH]
-    closed = pv[L.P_CLOSED] != 0.0
-    n = int(pv[L.P_N])
-    n_samp = int(pv[L.P_M])
-    sx = L.P_TAIL + 6 * n
-    sy = sx + n_samp
-    m = math.ceil((ahead + behind) / h) + 2
-    j0 = np.floor((sp - behind) / h)
-    top = float(n_samp - 1)
-    best = 0.0
-    best_j = 0.0
-    for k in range(m):
-        jj = j0 + float(k)
-        if closed:
-            idx = int(jj) % n_samp  # np.mod(jj, n_samp) of a whole number jj, as an integer: exact
-            if idx < 0:
-                idx += n_samp
-        else:
-            jj = _np_clip(jj, 0.0, top)
-            idx = int(jj)
-        ddx = pv[sx + idx] - x
-        ddy = pv[sy + idx] - y
-        d2 = ddx * ddx + ddy * ddy
-        if k == 0 or d2 < best or (d2 != d2 and best == best):  # np.argmin: the first minimum (or NaN)
-            best = d2
-            best_j = jj
-    s_start = best_j * h
-    lo, hi = _locate_window(sp, ahead, behind, length, closed)
-    s = _np_clip(s_start, lo, hi)
-    px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
-    for _ in range(NEWTON_ITERATIONS):
-        s_new, settled = _newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
-        if settled:
-            break
-        s = s_new
-        px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
-    _dx, _dy, g, e = _foot_terms(x, y, px, py, ct, st)
-    return s, kappa, e, ct, st, _locate_status(s, g, lo, hi, length, closed)
+    window = c[L.C_WINDOW]
+    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(c, pv, x, y, sp, window, window)
+    return s, kappa, e, ct, st, status
 
 
 # ----------------------------------------------------------------------------------------- per-step draws
