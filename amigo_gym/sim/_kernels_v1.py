@@ -11,23 +11,24 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators._actuator_step_float`,
    :func:`amigo_gym.model.fresnel.advance_chain_float`);
 3. H's projection on the path, and the measured H's when it differs
-   (:func:`amigo_gym.paths.clothoid._locate_float`, :func:`amigo_gym.paths.clothoid._pose_tuple`);
+   (:func:`amigo_gym.paths.clothoid.locate_flat`, compiled here as it is, with this module's :func:`_pose`);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the projection's wrap, placement,
-window, Newton step and status: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled
-here as they are (docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece
-search, the quadrature's node sums) are written here in the reference's order of operations, so that every
+term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the whole projection on the flat
+path vector: piece search, wrap, placement, coarse search, Newton loop, status: :data:`amigo_gym.sim.layout_v1.SHARED`)
+are the reference's own functions, compiled here as they are (docs/architecture.md, "The compiled step"); the loops
+left here (the quadrature's node sums) are written in the reference's order of operations, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
 * arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
-  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
-  reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
+  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``argmin`` and ``bisect.bisect_right``
+  are reproduced with their tie and NaN rules (by the shared functions); numba does not contract ``a * b + c``
+  into an FMA (no fastmath);
 * ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
@@ -44,7 +45,7 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
   built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
 * ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``; built once per path by :func:`amigo_gym.sim.fast_v1.flat_path`);
+  ``x, y``: the path's own flat vector, :func:`amigo_gym.paths.clothoid.flat_tables`, built with the path);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
   the outputs), then scratch space of ``WS_SCRATCH`` entries;

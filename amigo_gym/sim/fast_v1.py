@@ -13,7 +13,7 @@ Two implementations of one robot's step exist:
 
 This module is numba-free: it holds the layouts of the kernel's vectors (the index constants below, used by
 the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`; :func:`layout_fingerprint` keeps numba's disk cache
-honest about them), builds the constants and the flattened paths, and loads the kernel.
+honest about them), builds the constants, hands out the paths' flat vectors and loads the kernel.
 
 :func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
 env's keyword (:func:`amigo_gym.sim.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
