@@ -258,6 +258,7 @@ def _search_cases(path: Any) -> tuple[list[float], list[tuple[float, float, floa
         y = float(0.5 * (t.sample_y[j] + t.sample_y[j + 1]))
         cases += [(x, y, (j + 0.5) * h), (x, y, -0.7), (x, y, length + 0.9), (x, y, 5.0 * length + j * h)]
     cases += [(math.nan, 0.0, 0.3), (0.0, math.nan, 0.3), (math.inf, 0.0, 0.3), (1e6, -1e6, 0.3)]
+    cases += [(0.1, 0.2, 1e17), (0.1, 0.2, -3e16), (0.1, 0.2, 1e300)]  # sample numbers beyond 2^53
     return us, cases
 
 

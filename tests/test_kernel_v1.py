@@ -331,9 +331,9 @@ def test_shared_projection_compiled_equals_the_float_path() -> None:
             assert piece_index(flat, u) == clothoid.piece_index(pv, u)
         s = g.uniform(-0.3, 1.3, 200) * length
         p = path.pose_columns(s)
-        xs = [*(p.x + g.normal(size=200) * 0.2).tolist(), math.nan, 0.3, 1e6]
-        ys = [*(p.y + g.normal(size=200) * 0.2).tolist(), 0.0, math.nan, -1e6]
-        hints = [*(s + g.normal(size=200) * 0.3).tolist(), 0.3, -7.0, 1e9]
+        xs = [*(p.x + g.normal(size=200) * 0.2).tolist(), math.nan, 0.3, 1e6, 0.1, 0.2]
+        ys = [*(p.y + g.normal(size=200) * 0.2).tolist(), 0.0, math.nan, -1e6, 0.2, 0.1]
+        hints = [*(s + g.normal(size=200) * 0.3).tolist(), 0.3, -7.0, 1e9, 1e17, -3e16]  # the last: beyond 2^53 h
         for x, y, hint in zip(xs, ys, hints, strict=True):
             for ahead, behind in ((0.475, 0.475), (0.05, 1.3)):
                 assert same(

@@ -939,12 +939,22 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
     j0 = float(np.floor((sp - behind) / h))
     m_f = float(m)
     top = m_f - 1.0
+    # the sample numbers j0 + k are whole numbers computed exactly below 2^53: then j mod m steps by one (a float
+    # modulo per sample otherwise)
+    stepping = abs(j0) + float(count) < 9007199254740992.0
+    idx = int(j0 % m_f) if closed else 0
     best = 0.0
     best_j = 0.0
     for k in range(count):
         jj = j0 + float(k)
         if closed:
-            idx = int(jj % m_f)
+            if k > 0:
+                if stepping:
+                    idx += 1
+                    if idx == m:
+                        idx = 0
+                else:
+                    idx = int(jj % m_f)
         else:
             jj = _np_clip(jj, 0.0, top)
             idx = int(jj)
