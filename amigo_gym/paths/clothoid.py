@@ -735,9 +735,9 @@ class ClothoidPath:
 # copysign/sqrt, np.floor of a float, indexing of the flat path vector, no object, no exception): the compiled step
 # of AmigoBot-v1 compiles these very functions (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled
 # step"), so the projection is written once: the piece search, wrap and placement of a pose, the coarse search, the
-# Newton loop, the foot terms and the status. What stays apart is the pose's quadrature (locate_flat takes the
-# pose function: here _pose_flat, numpy's cosines and sines of the nodes; the kernel's, the C library's, checked
-# equal per process).
+# Newton loop, the foot terms and the status. What stays apart is the pose's quadrature: locate_flat calls
+# _pose_flat (numpy's cosines and sines of the nodes), for which compiled code substitutes the kernel's pose (a numba
+# overload; the C library's cosines and sines, checked equal per process).
 
 
 def _np_clip(x: float, lo: float, hi: float) -> float:
@@ -849,8 +849,6 @@ def locate_status_float(s: float, g: float, lo: float, hi: float, length: float,
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
-#: a unit-speed pose ``(x, y, theta, cos theta, sin theta)`` (:func:`amigo_gym.model.fresnel.unit_speed_pose`)
-UnitPose = tuple[float, float, float, float, float]
 #: the fields of :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta,
 #: distance, status)``
 FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
