@@ -206,7 +206,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
     taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
     default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none. :func:`cli` may
-    make it positional, name its metavar, choices or nargs, or put it in a mutually exclusive group.
+    make it positional, name its metavar, choices or nargs, or put it in a mutually exclusive group; an option whose
+    unit is ``[file]`` shows ``FILE`` as its argument (a positional its name) unless :func:`cli` names another metavar.
     """
     helps = attribute_help(cls)
     hints = get_type_hints(cls)
@@ -240,6 +241,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
                 kw["default"] = list(kw["default"])
         else:
             kw.update(_scalar(tp))
+        if meta["metavar"] is None and "[file]" in help_text and not meta["positional"] and "action" not in kw:
+            kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
         kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
         target: Any = parser
         if meta["group"] is not None:
@@ -305,11 +308,9 @@ def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str
     """``run(settings)`` with the settings dataclass ``cls`` from the command line ``argv`` (default ``sys.argv[1:]``):
     a malformed option exits with the parser's one-line error (status 2), a value ``cls`` refuses (or a bad input met
     by ``run``) is one line and the returned status 2 (:func:`run_guarded`), unlike :func:`parse_settings`, which
-    exits. An option whose unit is ``[file]`` shows ``FILE`` as its argument in ``--help``."""
+    exits."""
     parser = OneLineParser(prog=prog, description=doc)
     add_dataclass_options(parser, cls)
-    for action in parser._actions:
-        action.metavar = "FILE" if "[file]" in str(action.help) else action.metavar
     namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
     return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
 

@@ -238,3 +238,68 @@ def test_action_pair_is_validate_action() -> None:
         task.action_pair(np.zeros(3, dtype=np.float32))
     with pytest.raises(TypeError):
         task.action_pair(np.array(["a", "b"]))
+
+
+def _search_cases(path: Any) -> tuple[list[float], list[tuple[float, float, float]]]:
+    """Arc lengths for the piece search (piece starts exactly, between them, outside [0, L], -0.0, NaN) and points
+    with hints for the coarse search (exact ties between two samples, NaN, hints before, beyond and laps away)."""
+    t = path._t
+    g = np.random.default_rng(11)
+    length = path.length
+    us = [*t.s0, *(g.uniform(-0.2, 1.2, 200) * length).tolist(), 0.0, -0.0, length, -1.0, 2.0 * length, math.nan]
+    h = t.spacing
+    cases = []
+    for _ in range(150):
+        s = float(g.uniform(-0.3, 1.3) * length)
+        p = path.pose_columns(s)
+        cases.append((float(p.x + g.normal() * 0.2), float(p.y + g.normal() * 0.2), s + float(g.normal() * 0.3)))
+    for j in (0, 3, len(t.sample_x) - 3):  # midway between two samples: d2 ties when the geometry is exact
+        x = float(0.5 * (t.sample_x[j] + t.sample_x[j + 1]))
+        y = float(0.5 * (t.sample_y[j] + t.sample_y[j + 1]))
+        cases += [(x, y, (j + 0.5) * h), (x, y, -0.7), (x, y, length + 0.9), (x, y, 5.0 * length + j * h)]
+    cases += [(math.nan, 0.0, 0.3), (0.0, math.nan, 0.3), (math.inf, 0.0, 0.3), (1e6, -1e6, 0.3)]
+    cases += [(0.1, 0.2, 1e17), (0.1, 0.2, -3e16), (0.1, 0.2, 1e300)]  # sample numbers beyond 2^53
+    return us, cases
+
+
+SEARCH_PATHS = [*PATHS, ("line", {})]
+
+
+def _search_path(name: str, kw: dict[str, Any]) -> Any:
+    from amigo_gym.paths import ClothoidPath, ClothoidSegment
+
+    if name == "line":  # samples 1/64 m apart exactly: the points midway between two tie exactly
+        return ClothoidPath((ClothoidSegment.line(1.0),), sample_spacing=1.0 / 64.0)
+    return make_family_path(name, np.random.default_rng(5) if name == "random" else None, **kw)
+
+
+@pytest.mark.parametrize(("name", "kw"), SEARCH_PATHS)
+def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[str, Any]) -> None:
+    """The projection's shared loops on the flat path (run by the float path, compiled by v1's kernel) against the
+    column code: piece_index is bisect_right - 1 clamped (numpy's searchsorted in the column code), coarse_start
+    the column code's coarse search (np.mod / np.clip of the sample numbers, np.argmin's first minimum and NaN)."""
+    from amigo_gym.paths import clothoid
+
+    path = _search_path(name, kw)
+    t = path._t
+    pv = path._flat_list
+    assert pv == t.flat.tolist() and t.flat[clothoid.P_CLOSED] == float(path.closed)
+    us, cases = _search_cases(path)
+    n = len(t.s0)
+    col = np.clip(np.searchsorted(t.s0_a, np.array(us), side="right") - 1, 0, n - 1)
+    for u, want in zip(us, col, strict=True):
+        assert clothoid.piece_index(pv, u) == int(want), u
+    for s in us[:-1]:  # the pose's piece, wrap and placement: the column code's (NaN: the wrap's error, as before)
+        rows_equal(clothoid._pose_flat(None, pv, s), path.pose_columns(np.array([s])), 0)
+    ties = 0
+    for x, y, hint in cases:
+        for ahead, behind in ((0.475, 0.475), (0.475, 0.3), (0.05, 1.3)):
+            s_col, lo, hi = clothoid.coarse_search(
+                t.sample_x, t.sample_y, t.spacing, t.length, path.closed, x, y, hint, ahead, behind
+            )
+            got = clothoid._np_clip(clothoid.coarse_start(pv, x, y, hint, ahead, behind), float(lo), float(hi))
+            assert same(got, s_col), (x, y, hint, ahead, behind, got, s_col)
+            d2 = (t.sample_x - x) ** 2 + (t.sample_y - y) ** 2
+            ties += int(np.sum(d2 == d2.min()) > 1)
+    if name == "line":
+        assert ties > 0  # the tie rule was exercised

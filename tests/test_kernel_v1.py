@@ -303,3 +303,44 @@ def test_warm_cache_start_compiles_nothing() -> None:
 def test_layout_fingerprint() -> None:
     """The kernel module states the layouts it was written for (numba's cache keys on its own file only)."""
     assert fast_v1.layout_fingerprint() == fast_v1.kernels().LAYOUT_FINGERPRINT
+
+
+def test_shared_projection_compiled_equals_the_float_path() -> None:
+    """The projection's loops written once in amigo_gym.paths.clothoid (piece_index, coarse_start, locate_flat): the
+    kernel's compilation of them gives the float path's bits (which tests/test_float_paths.py compares with the
+    column code), with ties, NaN and hints far outside the path; locate_flat with windows other than the env's."""
+    import math
+
+    import numba
+
+    from amigo_gym.paths import clothoid, make_family_path
+
+    kv = fast_v1.kernels()
+    consts = fast_v1.kernel_constants(tracking.constants(tracking.make_tracking_params("t", path="figure8")))
+    piece_index = numba.njit(clothoid.piece_index)
+    coarse_start = numba.njit(clothoid.coarse_start)
+    g = np.random.default_rng(7)
+
+    def same(a: float, b: float) -> bool:
+        return (a != a and b != b) or (a == b and math.copysign(1.0, a) == math.copysign(1.0, b))
+
+    for name in ("circle", "figure8", "lane_change", "random"):
+        path = make_family_path(name, np.random.default_rng(2) if name == "random" else None)
+        flat, pv, length = fast_v1.flat_path(path), path._flat_list, path.length
+        for u in [*path._t.s0, *(g.uniform(-0.2, 1.2, 100) * length).tolist(), -0.0, length, math.nan]:
+            assert piece_index(flat, u) == clothoid.piece_index(pv, u)
+        s = g.uniform(-0.3, 1.3, 200) * length
+        p = path.pose_columns(s)
+        xs = [*(p.x + g.normal(size=200) * 0.2).tolist(), math.nan, 0.3, 1e6, 0.1, 0.2]
+        ys = [*(p.y + g.normal(size=200) * 0.2).tolist(), 0.0, math.nan, -1e6, 0.2, 0.1]
+        hints = [*(s + g.normal(size=200) * 0.3).tolist(), 0.3, -7.0, 1e9, 1e17, -3e16]  # the last: beyond 2^53 h
+        for x, y, hint in zip(xs, ys, hints, strict=True):
+            for ahead, behind in ((0.475, 0.475), (0.05, 1.3)):
+                assert same(
+                    coarse_start(flat, x, y, hint, ahead, behind), clothoid.coarse_start(pv, x, y, hint, ahead, behind)
+                )
+                if (x != x or y != y) and path.closed:
+                    continue  # NaN progress: the float path's wrap raises (math.floor), the kernel's goes on
+                got = kv._locate_flat(consts, flat, x, y, hint, ahead, behind)
+                want = clothoid.locate_flat(None, pv, x, y, hint, ahead, behind)
+                assert all(same(a, b) for a, b in zip(got, want, strict=True)), (name, x, y, hint, got, want)

@@ -227,3 +227,29 @@ def test_no_command_builds_its_options_by_hand() -> None:
         if f.name != "options.py" and ".add_argument(" in f.read_text()
     ]
     assert hand_made == []
+
+
+@dataclass(frozen=True)
+class _Files:
+    """Settings with files.
+
+    Attributes:
+        log: the log [file].
+        out: output [file] (default: none).
+        table: a table [file], named by cli.
+        rows: rows [rows].
+    """
+
+    log: str
+    out: str | None = None
+    table: str | None = field(default=None, metadata=cli(metavar="CSV"))
+    rows: int = 3
+
+
+def test_an_option_whose_unit_is_a_file_shows_file() -> None:
+    """``--out FILE`` (unit ``[file]``), not ``--out OUT``; a metavar named by ``cli``, a positional and other units
+    keep theirs."""
+    p = OneLineParser(prog="files")
+    add_dataclass_options(p, _Files)
+    usage = " ".join(p.format_usage().split())
+    assert usage == "usage: files [-h] --log FILE [--out FILE] [--table CSV] [--rows ROWS]"

@@ -28,10 +28,11 @@ This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.mod
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cached_property, partial
 from typing import NamedTuple, Protocol
 
 import numpy as np
@@ -481,6 +482,9 @@ class _Tables(NamedTuple):
     sample_x: Array
     sample_y: Array
     max_abs_curvature: float
+    #: the flat path vector (:data:`PATH_HEADER`, the pieces, the samples; :func:`flat_tables`): the arrays above
+    #: are views of it
+    flat: Array
 
 
 def _piece(t: _Tables, u: Real) -> Piece:
@@ -582,12 +586,26 @@ class ClothoidPath:
 
         t = _Tables(
             s0, x0, y0, th0, k0, c, arr(s0), arr(x0), arr(y0), arr(th0), arr(k0), arr(c),
-            total, turn, spacing, np.empty(0), np.empty(0), kmax,
+            total, turn, spacing, np.empty(0), np.empty(0), kmax, np.empty(0),
         )  # fmt: skip
         # coarse samples: s_j = j * spacing, j = 0..n (open) or 0..n-1 (closed, periodic)
         js = np.arange(n_samples + (0 if self.closed else 1), dtype=np.float64)
         sx, sy, *_ = self._pose(t, js * spacing)
-        return t._replace(sample_x=np.asarray(sx), sample_y=np.asarray(sy))
+        flat = flat_tables(t._replace(sample_x=np.asarray(sx), sample_y=np.asarray(sy)), self.closed)
+        n, m = len(s0), len(js)
+        cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
+        s0_a, x0_a, y0_a, th0_a, k0_a, c_a, sample_x, sample_y = (flat[a:b] for a, b in itertools.pairwise(cut))
+        return t._replace(
+            s0_a=s0_a, x0_a=x0_a, y0_a=y0_a, th0_a=th0_a, k0_a=k0_a, c_a=c_a,
+            sample_x=sample_x, sample_y=sample_y, flat=flat,
+        )  # fmt: skip
+
+    @cached_property
+    def _flat_list(self) -> list[float]:
+        """The flat path vector as a list of Python floats, what the float path reads (indexing a list is faster
+        than an array and gives floats); built at its first use (4 times the array's memory)."""
+        out: list[float] = self._t.flat.tolist()
+        return out
 
     # --- evaluation -------------------------------------------------------------------------------------
 
@@ -614,9 +632,9 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`_pose_float` for a float)."""
+        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`_pose_flat` for a float)."""
         if type(s) is float:
-            return _pose_float(t, self.closed, s)
+            return PathPose(*_pose_flat(None, self._flat_list, s))
         return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
 
     def pose_columns(self, s: Real) -> PathPose:
@@ -625,7 +643,7 @@ class ClothoidPath:
 
     def pose_floats(self, ss: list[float]) -> list[PathPose]:
         """:meth:`pose_columns` of each float in ``ss`` (the same bits), computed together (one robot's preview)."""
-        return [PathPose(*q) for q in _poses_tuple(self._t, self.closed, ss)]
+        return [PathPose(*q) for q in _poses_flat(self._flat_list, ss)]
 
     def _array_pose(self, s: ArrayLike) -> PathPose:
         a = np.asarray(s, dtype=np.float64)
@@ -695,7 +713,7 @@ class ClothoidPath:
         """
         t = self._t
         if s_prev is not None and type(x) is float and type(y) is float and type(s_prev) is float:
-            return _locate_float(t, self.closed, x, y, s_prev, max_advance, max_retreat)
+            return _locate_float(self._flat_list, x, y, s_prev, max_advance, max_retreat)
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
         s_start, lo, hi = coarse_search(
             t.sample_x, t.sample_y, t.spacing, t.length, self.closed, x, y, s_prev, max_advance, max_retreat
@@ -713,11 +731,13 @@ class ClothoidPath:
 # written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
 # (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
 #
-# The scalar pieces below (from _np_clip to locate_status_float) are in numba's subset (floats, comparisons,
-# math.floor/copysign, no numpy call, no object): the compiled step of AmigoBot-v1 compiles these very functions
-# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection's arithmetic is
-# written once. What stays apart: the cosines and sines of the quadrature nodes (numpy's here, the C library's in
-# the kernel, checked equal per process), the piece search (bisect here) and the coarse search (numpy here).
+# The functions below from _np_clip to locate_flat are in numba's subset (floats, ints, comparisons, math.floor/
+# copysign/sqrt, np.floor of a float, indexing of the flat path vector, no object, no exception): the compiled step
+# of AmigoBot-v1 compiles these very functions (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled
+# step"), so the projection is written once: the piece search, wrap and placement of a pose, the coarse search, the
+# Newton loop, the foot terms and the status. What stays apart is the pose's quadrature: locate_flat calls
+# _pose_flat (numpy's cosines and sines of the nodes), for which compiled code substitutes the kernel's pose (a numba
+# overload; the C library's cosines and sines, checked equal per process).
 
 
 def _np_clip(x: float, lo: float, hi: float) -> float:
@@ -829,56 +849,182 @@ def locate_status_float(s: float, g: float, lo: float, hi: float, length: float,
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
-#: a unit-speed pose ``(x, y, theta, cos theta, sin theta)`` (:func:`amigo_gym.model.fresnel.unit_speed_pose`)
-UnitPose = tuple[float, float, float, float, float]
+#: the fields of :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta,
+#: distance, status)``
+FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
+
+# --------------------------------------------------------------------------- the flat path vector
+#
+# One path as one vector of floats: the header below, then the n pieces' s0, x0, y0, th0, k0, c (n each), then the
+# m coarse samples' x, y (m each). The compiled step reads it as a float64 array (amigo_gym.sim.fast_v1.flat_path),
+# the float path as a list of the same Python floats (_Tables.flat_list); the functions below read either.
+
+#: the head of a flat path vector (then the arrays)
+PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
+P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
+#: where the pieces' arrays start
+P_TAIL = len(PATH_HEADER)
+#: a flat path vector: a float64 array (compiled code) or a list of Python floats (the float path)
+FlatPath = list[float] | NDArray[np.float64]
 
 
-def _pose_float(t: _Tables, closed: bool, s: float) -> PathPose:
-    """:func:`pose_from_pieces` for a float ``s`` on the tables ``t`` (the same bits)."""
-    return PathPose(*_pose_tuple(t, closed, s))
+def flat_tables(t: _Tables, closed: bool) -> Array:
+    """The flat path vector of the tables ``t`` of a path (``closed`` or not): :data:`PATH_HEADER` (``closed`` as
+    1.0 / 0.0), the pieces' ``s0, x0, y0, th0, k0, c`` and the coarse samples' ``x, y``, copied as they are."""
+    header = [float(len(t.s0)), float(len(t.sample_x)), t.length, t.turn, t.spacing, 1.0 if closed else 0.0]
+    flat = np.concatenate(
+        (np.array(header, dtype=np.float64), t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a, t.sample_x, t.sample_y)
+    )
+    return flat.astype(np.float64, copy=False)
 
 
-def _piece_of(t: _Tables, closed: bool, s: float) -> tuple[int, float, float, float]:
-    """The piece ``j`` holding the float arc length ``s``, the distance ``du`` into it, the lap number and the
-    length ``extra`` past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and search)."""
-    u, lap, extra = wrap_arc(s, t.length, closed)
-    s0 = t.s0
-    j = min(max(bisect.bisect_right(s0, u) - 1, 0), len(s0) - 1)
-    return j, u - s0[j], lap, extra
+def piece_index(pv: FlatPath, u: float) -> int:
+    """The piece of the flat path ``pv`` holding ``u`` [m]: ``bisect.bisect_right(s0, u) - 1`` clamped to
+    ``[0, n - 1]`` (the last piece whose start ``s0`` is ``<= u``; NaN gives the last piece, as bisect)."""
+    n = int(pv[P_N])
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if u < pv[P_TAIL + mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    j = lo - 1
+    if j < 0:
+        j = 0
+    if j > n - 1:
+        j = n - 1
+    return j
 
 
-def _placed(t: _Tables, closed: bool, pose: UnitPose, j: int, du: float, lap: float, extra: float) -> FloatPose:
-    """The float pose at ``du`` into piece ``j`` (``pose``: its unit-speed ``x, y, theta, cos, sin``) on the whole
-    path: laps of a closed path add whole turns to the heading, an open path goes straight on past its ends."""
-    x, y, th, cos_t, sin_t = pose
-    c = t.c[j]
-    return placed_pose(x, y, th, cos_t, sin_t, t.k0[j] + c * du, c, closed, lap, t.turn, extra)
+def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
+    """The piece ``j`` holding the arc length ``s`` [m] on the flat path ``pv``, the distance ``du`` [m] into it, the
+    lap number and the length ``extra`` [m] past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and
+    search: :func:`wrap_arc`, :func:`piece_index`)."""
+    u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
+    j = piece_index(pv, u)
+    return j, u - pv[P_TAIL + j], lap, extra
 
 
-def _pose_tuple(t: _Tables, closed: bool, s: float) -> FloatPose:
-    """The fields of :func:`_pose_float` as a plain tuple of floats."""
-    j, du, lap, extra = _piece_of(t, closed, s)
-    pose = unit_speed_pose(t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j], du)
-    return _placed(t, closed, pose, j, du, lap, extra)
+def place(
+    pv: FlatPath, j: int, du: float, lap: float, extra: float, x: float, y: float, th: float, ct: float, st: float
+) -> FloatPose:
+    """The pose at ``du`` [m] into piece ``j`` of the flat path ``pv`` (``x, y, th, ct, st``: its unit-speed pose from
+    the piece's start, :func:`amigo_gym.model.fresnel.unit_speed_pose`) on the whole path (:func:`placed_pose`):
+    curvature ``k0 + c du``, laps of a closed path add whole turns, an open path goes straight on past its ends."""
+    n = int(pv[P_N])
+    c = pv[P_TAIL + 5 * n + j]
+    kappa = pv[P_TAIL + 4 * n + j] + c * du
+    return placed_pose(x, y, th, ct, st, kappa, c, pv[P_CLOSED] != 0.0, lap, pv[P_TURN], extra)
 
 
-def _poses_tuple(t: _Tables, closed: bool, ss: list[float]) -> list[FloatPose]:
-    """:func:`_pose_tuple` of several floats, the cosines and sines of all in one numpy call each."""
-    where = [_piece_of(t, closed, s) for s in ss]
-    starts = [(t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j], du) for j, du, _, _ in where]
+def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> float:
+    """Step 1 of :meth:`ClothoidPath.locate` with a hint (:func:`coarse_search` for floats): ``s`` [m] of the sample
+    nearest to ``(x, y)`` among the samples ``s_j = j h``, ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead +
+    behind) / h) + 2`` (unwrapped: a closed path reads sample ``j mod m``, an open one sample ``clip(j, 0, m - 1)``).
+
+    The rules of the column code: the squared distance ``dx^2 + dy^2``, the first minimum (``np.argmin``; the first
+    NaN if any), ``np.mod`` (the float modulo of a whole number, exact) and ``np.clip`` of the sample numbers.
+    """
+    h = pv[P_SPACING]
+    n = int(pv[P_N])
+    m = int(pv[P_M])
+    sx = P_TAIL + 6 * n
+    sy = sx + m
+    closed = pv[P_CLOSED] != 0.0
+    count = math.ceil((ahead + behind) / h) + 2
+    j0 = float(np.floor((sp - behind) / h))
+    m_f = float(m)
+    top = m_f - 1.0
+    # the sample numbers j0 + k are whole numbers computed exactly below 2^53: then j mod m steps by one (a float
+    # modulo per sample otherwise)
+    stepping = abs(j0) + float(count) < 9007199254740992.0
+    idx = int(j0 % m_f) if closed else 0
+    best = 0.0
+    best_j = 0.0
+    for k in range(count):
+        jj = j0 + float(k)
+        if closed:
+            if k > 0:
+                if stepping:
+                    idx += 1
+                    if idx == m:
+                        idx = 0
+                else:
+                    idx = int(jj % m_f)
+        else:
+            jj = _np_clip(jj, 0.0, top)
+            idx = int(jj)
+        ddx = pv[sx + idx] - x
+        ddy = pv[sy + idx] - y
+        d2 = ddx * ddx + ddy * ddy
+        if k == 0 or d2 < best or (d2 != d2 and best == best):  # np.argmin: the first minimum (or NaN)
+            best = d2
+            best_j = jj
+    return best_j * h
+
+
+def locate_flat(q: object, pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> FlatPoint:
+    """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with the hint ``sp`` [m] and the window ``ahead``,
+    ``behind`` [m] (> 0, finite) on the flat path ``pv``: the coarse search (:func:`coarse_start`), Newton's method
+    (:func:`newton_step`, stopped at a fixed point as :func:`_newton`), the foot terms and the status.
+
+    The poses are :func:`_pose_flat`'s (``q``: passed on to it): here numpy's ``cos``/``sin`` of the quadrature
+    nodes; in compiled code the kernel's own quadrature, which numba substitutes for :func:`_pose_flat` (an
+    overload: :mod:`amigo_gym.sim._kernels_v1`, with ``q`` its constants). Returns :data:`FlatPoint` (the fields
+    of :class:`PathPoint` but the lap's ``s``).
+    """
+    h = pv[P_SPACING]
+    length = pv[P_LENGTH]
+    closed = pv[P_CLOSED] != 0.0
+    lo, hi = locate_window(sp, ahead, behind, length, closed)
+    s = _np_clip(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
+    px, py, th, kappa, c, ct, st = _pose_flat(q, pv, s)
+    for _ in range(NEWTON_ITERATIONS):
+        s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
+        if settled:
+            break
+        s = s_new
+        px, py, th, kappa, c, ct, st = _pose_flat(q, pv, s)
+    dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
+    dist = math.sqrt(dx * dx + dy * dy)
+    return s, px, py, th, kappa, c, e, ct, st, dist, locate_status_float(s, g, lo, hi, length, closed)
+
+
+def _pose_flat(q: object, pv: FlatPath, s: float) -> FloatPose:
+    """The float pose at ``s`` [m] on the flat path ``pv`` (:func:`pose_from_pieces`' bits): :func:`piece_at`, the
+    quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_pose`), :func:`place`.
+
+    ``q`` is not read here; compiled code runs the kernel's pose instead (its ``_pose(q, pv, s)``, ``q`` the
+    kernel's constants with the quadrature nodes: the same steps around its own node sum)."""
+    j, du, lap, extra = piece_at(pv, s)
+    n = int(pv[P_N])
+    b = P_TAIL + n + j
+    x, y, th, ct, st = unit_speed_pose(pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du)
+    return place(pv, j, du, lap, extra, x, y, th, ct, st)
+
+
+def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
+    """:func:`_pose_flat` of several floats, the cosines and sines of all in one numpy call each
+    (:func:`amigo_gym.model.fresnel.unit_speed_poses`)."""
+    n = int(pv[P_N])
+    where = [piece_at(pv, s) for s in ss]
+    starts = []
+    for j, du, _, _ in where:
+        b = P_TAIL + n + j
+        starts.append((pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du))
     return [
-        _placed(t, closed, pose, j, du, lap, extra)
+        place(pv, j, du, lap, extra, *pose)
         for pose, (j, du, lap, extra) in zip(unit_speed_poses(starts), where, strict=True)
     ]
 
 
-_ARANGE: dict[int, NDArray[np.float64]] = {}
-
-
 def _locate_float(
-    t: _Tables, closed: bool, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
+    pv: FlatPath, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
 ) -> PathPoint:
-    """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` (the same bits)."""
+    """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` on the flat path ``pv`` (the same
+    bits): the window checked, :func:`locate_flat`, the lap's ``s`` added."""
     if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
         ahead = max_advance  # what check_real returns for a finite positive float
     else:
@@ -889,38 +1035,12 @@ def _locate_float(
         behind = max_retreat
     else:
         behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-    h = t.spacing
-    length = t.length
-    n_samp = len(t.sample_x)
-    m = math.ceil((ahead + behind) / h) + 2
-    steps = _ARANGE.get(m)
-    if steps is None:
-        steps = _ARANGE[m] = np.arange(m, dtype=np.float64)
-    jj = float(math.floor((sp - behind) / h)) + steps  # unwrapped sample numbers
-    if closed:
-        idx = np.mod(jj, n_samp).astype(np.int64)
-    else:
-        jj = np.clip(jj, 0, n_samp - 1)
-        idx = jj.astype(np.int64)
-    d2 = (t.sample_x[idx] - x) ** 2 + (t.sample_y[idx] - y) ** 2
-    s_start = float(jj[int(np.argmin(d2))]) * h
-    lo, hi = locate_window(sp, ahead, behind, length, closed)
-    s = _np_clip(s_start, lo, hi)
-    # Newton's method (refine), stopped at a fixed point as there
-    pose = _pose_tuple(t, closed, s)
-    for _ in range(NEWTON_ITERATIONS):
-        px, py, _th, kappa, _c, ct, st = pose
-        s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
-        if settled:
-            break
-        s = s_new
-        pose = _pose_tuple(t, closed, s)
-    px, py, th, kappa, c, ct, st = pose
-    dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
-    dist = math.sqrt(dx * dx + dy * dy)
-    status = locate_status_float(s, g, lo, hi, length, closed)
+    if sp - sp != 0.0:
+        check_real("locate", "s_prev", sp)  # NaN or infinite: the clear error
+    s, px, py, th, kappa, c, e, ct, st, dist, status = locate_flat(None, pv, x, y, sp, ahead, behind)
     s_lap = s
-    if closed:
+    if pv[P_CLOSED] != 0.0:
+        length = pv[P_LENGTH]
         s_lap = s - float(math.floor(s / length)) * length
         if s_lap >= length:
             s_lap = s_lap - length

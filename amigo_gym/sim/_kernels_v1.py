@@ -11,24 +11,24 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
    :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
 3. H's projection on the path, and the measured H's when it differs
-   (:func:`amigo_gym.paths.clothoid._locate_float`, :func:`amigo_gym.paths.clothoid._pose_tuple`);
+   (:func:`amigo_gym.paths.clothoid.locate_flat`, compiled here as it is, with this module's :func:`_pose`);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the projection's wrap, placement,
-window, Newton step and status, the quadrature's node sums and the actuator step:
-:data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
-(docs/architecture.md, "The compiled step"); the loops around them (the coarse search, the piece search) are
-written here in the reference's order of operations, so that every
+term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the whole projection on the flat
+path vector (piece search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the
+actuator step: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
+(docs/architecture.md, "The compiled step"), so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
 * arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
-  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``bisect.bisect_right`` are
-  reproduced with their tie and NaN rules; numba does not contract ``a * b + c`` into an FMA (no fastmath);
+  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``argmin`` and ``bisect.bisect_right``
+  are reproduced with their tie and NaN rules (by the shared functions); numba does not contract ``a * b + c``
+  into an FMA (no fastmath);
 * ``math.cos``/``math.sin`` here are the C library's (the node sums' through the overload of
   :func:`amigo_gym.model.fresnel.cos_sin_nodes` below), which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
@@ -46,7 +46,7 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
   built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
 * ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``; built once per path by :func:`amigo_gym.sim.fast_v1.flat_path`);
+  ``x, y``: the path's own flat vector, :func:`amigo_gym.paths.clothoid.flat_tables`, built with the path);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
   the outputs), then scratch space of ``WS_SCRATCH`` entries, then the actuator step's node buffer (``S_NODES``;
@@ -74,10 +74,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, randomization
 from amigo_gym.paths import clothoid
-from amigo_gym.paths.clothoid import (
-    NEWTON_ITERATIONS,
-    STATUS_END,
-)
+from amigo_gym.paths.clothoid import STATUS_END
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
 from amigo_gym.sim.layout import twin as _twin
@@ -92,7 +89,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "e2cb823445416964"
+LAYOUT_FINGERPRINT = "941ddf8fcf32d7d5"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -154,15 +151,11 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 # ----------------------------------------------------------------------------------------- small rules
 
 
-#: clothoid._np_clip itself, compiled: ``float(np.clip(x, lo, hi))`` (NaN propagates, ties take the bound)
-_np_clip = _shared(clothoid._np_clip)
-#: the projection's scalar pieces (clothoid's float path; they call clothoid.py_min, py_max), compiled
-_wrap_arc = _shared(clothoid.wrap_arc)
-_placed_pose = _shared(clothoid.placed_pose)
-_locate_window = _shared(clothoid.locate_window)
-_foot_terms = _shared(clothoid.foot_terms)
-_newton_step = _shared(clothoid.newton_step)
-_locate_status = _shared(clothoid.locate_status_float)
+#: the projection (clothoid's float path: the piece search, wrap and placement of a pose, the coarse search, the Newton
+#: loop and the status, calling clothoid's other shared functions), compiled
+_piece_at = _shared(clothoid.piece_at)
+_place = _shared(clothoid.place)
+_locate_flat = _shared(clothoid.locate_flat)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
@@ -217,86 +210,43 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 
 @_jit
 def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
-    # clothoid._pose_tuple: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s
+    # clothoid._pose_flat: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s: the piece
+    # (clothoid.piece_at), the quadrature from its start, the placement on the whole path (clothoid.place)
+    j, t, lap, extra = _piece_at(pv, s)
     n = int(pv[L.P_N])
-    closed = pv[L.P_CLOSED] != 0.0
-    u, lap, extra = _wrap_arc(s, pv[L.P_LENGTH], closed)
-    # bisect.bisect_right(s0, u) - 1, clamped to [0, n - 1]
-    s0 = L.P_TAIL
-    lo = 0
-    hi = n
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if u < pv[s0 + mid]:
-            hi = mid
-        else:
-            lo = mid + 1
-    j = lo - 1
-    if j < 0:
-        j = 0
-    if j > n - 1:
-        j = n - 1
     x0 = pv[L.P_TAIL + n + j]
     y0 = pv[L.P_TAIL + 2 * n + j]
     theta = pv[L.P_TAIL + 3 * n + j]
     w0 = pv[L.P_TAIL + 4 * n + j]
     cr = pv[L.P_TAIL + 5 * n + j]
-    t = u - pv[s0 + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
     nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
     nodes = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     x, y, th, cos_th, sin_th = fresnel.unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
-    # clothoid._placed
-    return _placed_pose(x, y, th, cos_th, sin_th, w0 + cr * t, cr, closed, lap, pv[L.P_TURN], extra)
+    return _place(pv, j, t, lap, extra, x, y, th, cos_th, sin_th)
+
+
+@overload(clothoid._pose_flat)
+def _pose_flat_compiled(q: F64, pv: F64, s: float) -> object:
+    """The pose clothoid.locate_flat evaluates, in compiled code: :func:`_pose` (the float path's is
+    clothoid._pose_flat, with numpy's cosines and sines of the nodes)."""
+
+    def impl(q: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
+        return _pose(q, pv, s)
+
+    return impl
 
 
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind.
+    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself with
+    :func:`_pose`.
 
     Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
     """
-    ahead = c[L.C_WINDOW]
-    behind = ahead
-    h = pv[L.P_SPACING]
-    length = pv[L.P_LENGTH]
-    closed = pv[L.P_CLOSED] != 0.0
-    n = int(pv[L.P_N])
-    n_samp = int(pv[L.P_M])
-    sx = L.P_TAIL + 6 * n
-    sy = sx + n_samp
-    m = math.ceil((ahead + behind) / h) + 2
-    j0 = np.floor((sp - behind) / h)
-    top = float(n_samp - 1)
-    best = 0.0
-    best_j = 0.0
-    for k in range(m):
-        jj = j0 + float(k)
-        if closed:
-            idx = int(jj) % n_samp  # np.mod(jj, n_samp) of a whole number jj, as an integer: exact
-            if idx < 0:
-                idx += n_samp
-        else:
-            jj = _np_clip(jj, 0.0, top)
-            idx = int(jj)
-        ddx = pv[sx + idx] - x
-        ddy = pv[sy + idx] - y
-        d2 = ddx * ddx + ddy * ddy
-        if k == 0 or d2 < best or (d2 != d2 and best == best):  # np.argmin: the first minimum (or NaN)
-            best = d2
-            best_j = jj
-    s_start = best_j * h
-    lo, hi = _locate_window(sp, ahead, behind, length, closed)
-    s = _np_clip(s_start, lo, hi)
-    px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
-    for _ in range(NEWTON_ITERATIONS):
-        s_new, settled = _newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
-        if settled:
-            break
-        s = s_new
-        px, py, _th, kappa, _cr, ct, st = _pose(c, pv, s)
-    _dx, _dy, g, e = _foot_terms(x, y, px, py, ct, st)
-    return s, kappa, e, ct, st, _locate_status(s, g, lo, hi, length, closed)
+    window = c[L.C_WINDOW]
+    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(c, pv, x, y, sp, window, window)
+    return s, kappa, e, ct, st, status
 
 
 # ----------------------------------------------------------------------------------------- per-step draws

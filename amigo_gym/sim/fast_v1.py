@@ -13,7 +13,7 @@ Two implementations of one robot's step exist:
 
 This module is numba-free: it holds the layouts of the kernel's vectors (the index constants below, used by
 the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`; :func:`layout_fingerprint` keeps numba's disk cache
-honest about them), builds the constants and the flattened paths, and loads the kernel.
+honest about them), builds the constants, hands out the paths' flat vectors and loads the kernel.
 
 :func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
 env's keyword (:func:`amigo_gym.sim.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
@@ -157,29 +157,11 @@ def kernel_constants(k: tracking.Constants) -> Array:
     return np.array(head + tail, dtype=np.float64)
 
 
-#: the last flattened paths by ``id`` (each kept with its array, so that its id is not reused meanwhile); a few
-#: dozen: the array is a copy of the path's tables, cheap to rebuild (one concatenation) when evicted
-_FLAT: dict[int, tuple[ClothoidPath, Array]] = {}
-_FLAT_MAX = 64
-
-
 def flat_path(path: ClothoidPath) -> Array:
-    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1` for a :class:`ClothoidPath` (cached per path object).
-
-    The pieces' tables and the coarse samples the reference searches (``path._t``), copied as they are: built
-    at a reset, never in a step.
-    """
-    got = _FLAT.get(id(path))
-    if got is not None and got[0] is path:
-        return got[1]
-    t = path._t
-    header = [float(len(t.s0)), float(len(t.sample_x)), t.length, t.turn, t.spacing, 1.0 if path.closed else 0.0]
-    flat = np.concatenate(
-        (np.array(header, dtype=np.float64), t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a, t.sample_x, t.sample_y)
-    ).astype(np.float64, copy=False)
-    if len(_FLAT) >= _FLAT_MAX:
-        del _FLAT[next(iter(_FLAT))]  # the oldest
-    _FLAT[id(path)] = (path, flat)
+    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1` for a :class:`ClothoidPath`: the path's own flat vector
+    (:func:`amigo_gym.paths.clothoid.flat_tables`, built with the path; the pieces' tables and the coarse samples the
+    reference searches). Read only by the kernels."""
+    flat: Array = path._t.flat
     return flat
 
 

@@ -64,10 +64,12 @@ C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
 PATH_NODES = 10
 
-#: the head of a flattened path (then the arrays: :mod:`amigo_gym.sim._kernels_v1`)
-PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
-P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
-P_TAIL = len(PATH_HEADER)
+#: the head of a flattened path (then the arrays), defined with the path: :data:`amigo_gym.paths.clothoid.PATH_HEADER`
+PATH_HEADER: tuple[str, ...] = clothoid.PATH_HEADER
+P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = (
+    clothoid.P_N, clothoid.P_M, clothoid.P_LENGTH, clothoid.P_TURN, clothoid.P_SPACING, clothoid.P_CLOSED,
+)  # fmt: skip
+P_TAIL = clothoid.P_TAIL
 
 #: entries of ``ws``: the state (:class:`amigo_gym.task.v1.State`), the episode (:class:`amigo_gym.task.v1.Episode`;
 #: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
@@ -174,6 +176,11 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.foot_terms,
     clothoid.newton_step,
     clothoid.locate_status_float,
+    clothoid.piece_index,
+    clothoid.piece_at,
+    clothoid.place,
+    clothoid.coarse_start,
+    clothoid.locate_flat,
     fresnel.node_phases,
     fresnel.node_sums,
     fresnel.advance_nodes,

@@ -1238,7 +1238,9 @@ def path_nbytes(path: Any) -> int:
     400 bytes per segment and 2 KiB for the objects (within a factor 2 of ``tracemalloc``'s count,
     ``tests/test_bad_inputs_v1.py``)."""
     t = path._t
-    arrays = sum(int(getattr(t, f).nbytes) for f in t._fields if isinstance(getattr(t, f), np.ndarray))
+    # the tables' arrays are views of one flat vector (t.flat): count the arrays that own their memory
+    owned = [v for v in t if isinstance(v, np.ndarray) and v.base is None]
+    arrays = sum(int(v.nbytes) for v in owned)
     return arrays + 400 * len(path.segments) + 2048
 
 
