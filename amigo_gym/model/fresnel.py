@@ -25,7 +25,9 @@ branch: lines (``w0 = alpha = 0``), arcs (``alpha = 0``) and clothoids are the s
 Callers choose ``n_sub`` with :func:`subintervals` from a bound of the phase change they can meet.
 
 Every function takes columns (floats, or float64 arrays that broadcast together) and returns the
-same kind, so one robot and a batch run the same code.
+same kind, so one robot and a batch run the same code; the node functions (:func:`advance_nodes`,
+:func:`unit_speed_nodes` and their parts) are the float path's loops on buffers, which AmigoBot-v1's compiled
+step compiles as they are.
 """
 
 from __future__ import annotations
@@ -158,8 +160,8 @@ def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
 # Plain Python on buffers (``list`` of floats in the float path, where indexing is cheapest; float64 arrays in the
 # compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim.layout_v1.SHARED). Their
 # expressions and order of operations are :func:`advance`'s, so a float and an array element get the same bits
-# (tests/test_float_paths.py). A node buffer ``buf`` of stride ``m`` holds the phases in ``buf[0:m]``, their
-# cosines in ``buf[m:2m]`` and sines in ``buf[2m:3m]``.
+# (tests/test_float_paths.py). A node buffer ``buf`` of stride ``m`` from ``buf[b]`` holds the phases in
+# ``buf[b : b + m]``, their cosines in ``buf[b + m : b + 2m]`` and sines in ``buf[b + 2m : b + 3m]``.
 
 
 class Buffer(Protocol):
