@@ -808,7 +808,7 @@ def actuator_step_ws(
     Args:
         ws: scratch of :data:`SCRATCH` entries from ``ws[k]`` (offsets :data:`SCRATCH_V` ...).
         buf, b: node buffer of ``3 PIECES nn`` entries from ``buf[b]`` (:func:`amigo_gym.model.fresnel.advance_nodes`;
-            the compiled step passes ``ws`` itself).
+            the compiled step's is on its stack).
         nodes, node_at, nn: the quadrature's ``nn = NODES n_sub`` nodes on [0, 1] from ``nodes[node_at]``, then
             their weights (:func:`amigo_gym.model.fresnel.node_table`).
         x ... t_s: as :func:`actuator_step` [m, m, rad, rad/s, ..., s]; dt: the step [s].

@@ -49,8 +49,7 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   ``x, y``: the path's own flat vector, :func:`amigo_gym.paths.clothoid.flat_tables`, built with the path);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
-  the outputs), then scratch space of ``WS_SCRATCH`` entries, then the actuator step's node buffer (``S_NODES``;
-  length ``ws_length(n_sub)`` in all);
+  the outputs), then scratch space of ``WS_SCRATCH`` entries;
 * ``obs``: the observation (float32 or float64), written.
 
 This module imports numba at import time; :mod:`amigo_gym.sim.fast_v1` imports it only when the kernel is first
@@ -73,6 +72,7 @@ from numba.np import numpy_support
 from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, randomization
+from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import STATUS_END
 from amigo_gym.sim import layout_v1 as L
@@ -89,7 +89,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "941ddf8fcf32d7d5"
+LAYOUT_FINGERPRINT = "d2eeba549df834a6"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -115,6 +115,9 @@ def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int,
 
 #: entries of the path pose's node buffer (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: stride ``NODES + 1``)
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
+#: entries of the actuator step's node buffer on the stack (:func:`amigo_gym.model.fresnel.advance_nodes`, one
+#: sub-interval per piece; more sub-intervals allocate theirs)
+_STEP_NODES = 3 * PIECES * L.PATH_NODES
 
 
 def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
@@ -134,8 +137,8 @@ _alloca_once: Any = cgutils.alloca_once
 _cpointer: Any = numba.types.CPointer
 _carray: Any = numpy_support.carray
 #: ``_stack_ptr(n)``: a pointer to ``n`` float64 (a compile-time constant) on the stack of the compiled function that
-#: calls it; ``_carray(_stack_ptr(n), n)`` is the path pose's node buffer without an allocation per pose (used within
-#: that call only)
+#: calls it; ``_carray(_stack_ptr(n), n)`` is a node buffer without an allocation per pose or step (used within that
+#: call only)
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
@@ -188,8 +191,11 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     """
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
+    size = 3 * PIECES * nn
+    # on the stack for n_sub = 1 (the default dt = 0.1 s: fresnel.subintervals of 19.5 rad/s x dt), else allocated
+    nodes = _carray(_stack_ptr(_STEP_NODES), _STEP_NODES) if size <= _STEP_NODES else np.empty(size)
     x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = actuators.actuator_step_ws(
-        ws, L.S_ACT, ws, L.S_NODES, c, base, nn,
+        ws, L.S_ACT, nodes, 0, c, base, nn,
         ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
         c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
         c[L.C_ACC], c[L.C_DEC], c[L.C_RACC], c[L.C_RDEC],

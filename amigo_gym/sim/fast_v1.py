@@ -175,12 +175,12 @@ class StepKernel:
 
     Attributes:
         consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
-        ws: the workspace, ``layout_v1.ws_length(n_sub)`` float64.
+        ws: the workspace, ``len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH`` float64.
     """
 
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
-        self.ws: Array = np.zeros(layout_v1.ws_length(k.n_sub))
+        self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
         #: the single env's observation, written by each step (:attr:`run`; the env hands out a copy)
         self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
         #: the exponentials of the reward's three arguments, written by :attr:`run_exps`

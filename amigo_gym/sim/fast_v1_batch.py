@@ -135,7 +135,7 @@ class BatchKernel:
 
     Attributes:
         consts: :func:`amigo_gym.sim.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
-        ws: ``(n, layout_v1.ws_length(n_sub))`` float64, the rows' workspaces.
+        ws: ``(n, len(WS_FIELDS) + WS_SCRATCH)`` float64, the rows' workspaces.
         keys: ``(n,)`` uint64, the episodes' keys of the per-step draws.
     """
 
@@ -145,7 +145,7 @@ class BatchKernel:
         self.consts: Array = self._row.consts
         self.parallel = parallel
         self.arena = PathArena(n)
-        self.ws: Array = np.zeros((n, fast_v1.ws_length(k.n_sub)))
+        self.ws: Array = np.zeros((n, len(fast_v1.WS_FIELDS) + fast_v1.WS_SCRATCH))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         m = self._row.n_normal
         self.noise_on = np.zeros(n, dtype=np.bool_)

@@ -147,15 +147,6 @@ S_PIECES = S_ACT + actuators.SCRATCH_PIECES
 S_U1 = S_ACT + actuators.SCRATCH
 S_LOG = S_U1 + 5
 S_U2 = S_LOG + 5
-#: where the actuator step's node buffer starts (:func:`amigo_gym.model.fresnel.advance_nodes`): after the scratch,
-#: ``3 PIECES NODES n_sub`` entries (:func:`ws_length`)
-S_NODES = len(WS_FIELDS) + WS_SCRATCH
-
-
-def ws_length(n_sub: int) -> int:
-    """Length of ``ws`` for ``n_sub`` quadrature sub-intervals per actuator piece: the fields, the scratch, the node
-    buffer (phases, cosines, sines of ``PIECES NODES n_sub`` nodes)."""
-    return S_NODES + 3 * actuators.PIECES * fresnel.NODES * n_sub
 
 
 #: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
@@ -228,6 +219,6 @@ def layout_fingerprint() -> str:
         clothoid.MIN_NEWTON_DENOMINATOR,
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
     )
-    offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2, S_NODES)
+    offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
     layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets)
     return source_fingerprint((layout, homes), SHARED)
