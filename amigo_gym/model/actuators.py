@@ -594,9 +594,9 @@ def actuator_step(
 # -- the float path of one robot ------------------------------------------------------------------------
 #
 # The expressions of ramp, _channel, _evaluate and actuator_step for Python floats, written out flat (the
-# selections as ``if``, which do no arithmetic): the same bits as the column code (tests/test_actuators.py
+# selections as ``if``, which do no arithmetic): the same bits as the column code (tests/test_float_paths.py
 # compares them), without its per-call overhead. The pose advances over all pieces with one np.cos and one
-# np.sin call (:func:`amigo_gym.model.fresnel.advance_chain_float`).
+# np.sin call (:func:`amigo_gym.model.fresnel.advance_nodes`).
 
 
 def _ramp_float(
@@ -624,31 +624,6 @@ def _ramp_float(
     else:
         u_b = u_a
     return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
-
-
-def _channel_float(
-    u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
-) -> tuple[list[float], list[float], list[float], float]:
-    """:func:`_channel` for floats."""
-    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp_float(u0, c_old, accel, decel, t_s)
-    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp_float(ub1, c_new, accel, decel, dt - t_s)
-    k4 = t_s + ta2
-    k5 = t_s + tb2
-    knots = [0.0, ta1, tb1, t_s, k4 if k4 <= dt else dt, k5 if k5 <= dt else dt, dt]
-    return knots, [u0, ua1, ub1, ub1, ua2, ub2], [sa1, sb1, 0.0, sa2, sb2, 0.0], ub2
-
-
-def _evaluate_float(
-    knots: list[float], values: list[float], slopes: list[float], t: float, mid: float
-) -> tuple[float, float]:
-    """:func:`_evaluate` for floats."""
-    val = values[0] + slopes[0] * t
-    slope = slopes[0]
-    for i in range(1, 6):
-        if mid >= knots[i]:
-            val = values[i] + slopes[i] * (t - knots[i])
-            slope = slopes[i]
-    return val, slope
 
 
 @overload
@@ -718,44 +693,194 @@ def _actuator_step_float(
     s2: float,
     n_sub: int,
 ) -> ActuatorStep:
-    """:func:`actuator_step` for Python floats (the same bits)."""
-    w_max = nominal.max_wheel_rate
-    l1n, r1n, r2n = nominal.l1, nominal.r1, nominal.r2
-    two_l1 = 2.0 * l1n
+    """:func:`actuator_step` for Python floats (the same bits): :func:`actuator_step_ws` on scratch lists."""
+    nn = fresnel.NODES * n_sub
+    out = actuator_step_ws(
+        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.node_table(n_sub), 0, nn,
+        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, dt,
+        nominal.max_wheel_rate, nominal.l1, nominal.r1, nominal.r2, 2.0 * nominal.l1,
+        limits.acceleration, limits.deceleration, limits.rot_acceleration, limits.rot_deceleration,
+        r1t, r2t, l1t, s1, s2,
+    )  # fmt: skip
+    return ActuatorStep(*out)
+
+
+# The step of one robot written once on a scratch buffer ``ws`` (a list of floats in the float path; the
+# workspace array of AmigoBot-v1's compiled step, which compiles these functions as they are:
+# amigo_gym.sim.layout_v1.SHARED). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
+# 6 values and 6 slopes (:func:`_channel`'s lists), the 11 piece boundaries, then ``(vt, at, wt, alt, length)``
+# of each live piece.
+
+#: scratch entries of one speed channel: 7 knots, 6 values, 6 slopes
+CHANNEL_SCRATCH = 19
+#: offsets in the scratch of :func:`actuator_step_ws`: the v and w channels, the piece boundaries, the pieces
+SCRATCH_V = 0
+SCRATCH_W = SCRATCH_V + CHANNEL_SCRATCH
+SCRATCH_TIMES = SCRATCH_W + CHANNEL_SCRATCH
+SCRATCH_PIECES = SCRATCH_TIMES + PIECES + 1
+#: length of the scratch of :func:`actuator_step_ws`
+SCRATCH = SCRATCH_PIECES + 5 * PIECES
+
+
+def _channel_ws(
+    ws: fresnel.Buffer, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
+) -> float:
+    """:func:`_channel` on floats into ``ws``: knots ``ws[k : k + 7]``, values ``ws[k + 7 : k + 13]``, slopes
+    ``ws[k + 13 : k + 19]``; returns the value at ``dt``."""
+    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp_float(u0, c_old, accel, decel, t_s)
+    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp_float(ub1, c_new, accel, decel, dt - t_s)
+    k4 = t_s + ta2
+    k5 = t_s + tb2
+    ws[k] = 0.0
+    ws[k + 1] = ta1
+    ws[k + 2] = tb1
+    ws[k + 3] = t_s
+    ws[k + 4] = k4 if k4 <= dt else dt
+    ws[k + 5] = k5 if k5 <= dt else dt
+    ws[k + 6] = dt
+    v = k + 7
+    ws[v] = u0
+    ws[v + 1] = ua1
+    ws[v + 2] = ub1
+    ws[v + 3] = ub1
+    ws[v + 4] = ua2
+    ws[v + 5] = ub2
+    s = k + 13
+    ws[s] = sa1
+    ws[s + 1] = sb1
+    ws[s + 2] = 0.0
+    ws[s + 3] = sa2
+    ws[s + 4] = sb2
+    ws[s + 5] = 0.0
+    return ub2
+
+
+def _evaluate_ws(ws: fresnel.Buffer, k: int, t: float, mid: float) -> tuple[float, float]:
+    """:func:`_evaluate` on floats for the channel at ``ws[k:]`` (:func:`_channel_ws`)."""
+    v = k + 7
+    s = k + 13
+    val = ws[v] + ws[s] * t
+    slope = ws[s]
+    for i in range(1, 6):
+        if mid >= ws[k + i]:
+            val = ws[v + i] + ws[s + i] * (t - ws[k + i])
+            slope = ws[s + i]
+    return val, slope
+
+
+def actuator_step_ws(
+    ws: fresnel.Buffer,
+    k: int,
+    buf: fresnel.Buffer,
+    b: int,
+    nodes: fresnel.Buffer,
+    node_at: int,
+    nn: int,
+    x: float,
+    y: float,
+    beta: float,
+    w1: float,
+    w2: float,
+    w1c_old: float,
+    w2c_old: float,
+    w1c_new: float,
+    w2c_new: float,
+    t_s: float,
+    dt: float,
+    w_max: float,
+    l1n: float,
+    r1n: float,
+    r2n: float,
+    two_l1: float,
+    accel: float,
+    decel: float,
+    rot_accel: float,
+    rot_decel: float,
+    r1t: float,
+    r2t: float,
+    l1t: float,
+    s1: float,
+    s2: float,
+) -> tuple[float, float, float, float, float, float, float, float, float, float]:
+    """:func:`actuator_step` of one robot on floats (the same expressions, the selections as ``if``): the float path
+    and the compiled step of ``AmigoBot-v1`` run this one source.
+
+    Args:
+        ws: scratch of :data:`SCRATCH` entries from ``ws[k]`` (offsets :data:`SCRATCH_V` ...).
+        buf, b: node buffer of ``3 PIECES nn`` entries from ``buf[b]`` (:func:`amigo_gym.model.fresnel.advance_nodes`;
+            the compiled step's is on its stack).
+        nodes, node_at, nn: the quadrature's ``nn = NODES n_sub`` nodes on [0, 1] from ``nodes[node_at]``, then
+            their weights (:func:`amigo_gym.model.fresnel.node_table`).
+        x ... t_s: as :func:`actuator_step` [m, m, rad, rad/s, ..., s]; dt: the step [s].
+        w_max, l1n, r1n, r2n, two_l1: the nominal robot's wheel-rate limit [rad/s], half track, radii, ``2 l1`` [m].
+        accel, decel, rot_accel, rot_decel: the ramps (:class:`ActuatorParams`).
+        r1t, r2t, l1t, s1, s2: the true geometry [m] and the slips [-].
+
+    Returns:
+        the fields of :class:`ActuatorStep` as a tuple of floats.
+    """
     # 1. commands (clip_setpoints, body_velocity_columns)
     vc_old, wc_old = body_velocity_of(_clip_float(w1c_old, w_max), _clip_float(w2c_old, w_max), r1n, r2n, two_l1)
     vc_new, wc_new = body_velocity_of(_clip_float(w1c_new, w_max), _clip_float(w2c_new, w_max), r1n, r2n, two_l1)
     # 2. ramps
     v0, om0 = body_velocity_of(w1, w2, r1n, r2n, two_l1)
-    kv, uv, sv, v_end = _channel_float(v0, vc_old, vc_new, limits.acceleration, limits.deceleration, t_s, dt)
-    kw, uw, sw, w_end = _channel_float(om0, wc_old, wc_new, limits.rot_acceleration, limits.rot_deceleration, t_s, dt)
-    times = [0.0, *sorted([kv[1], kv[2], kv[3], kv[4], kv[5], kw[1], kw[2], kw[4], kw[5]]), dt]
-    # 3. pieces
+    kv = k + SCRATCH_V
+    kw = k + SCRATCH_W
+    v_end = _channel_ws(ws, kv, v0, vc_old, vc_new, accel, decel, t_s, dt)
+    w_end = _channel_ws(ws, kw, om0, wc_old, wc_new, rot_accel, rot_decel, t_s, dt)
+    # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
+    tm = k + SCRATCH_TIMES
+    ws[tm] = 0.0
+    ws[tm + 1] = ws[kv + 1]
+    ws[tm + 2] = ws[kv + 2]
+    ws[tm + 3] = ws[kv + 3]
+    ws[tm + 4] = ws[kv + 4]
+    ws[tm + 5] = ws[kv + 5]
+    ws[tm + 6] = ws[kw + 1]
+    ws[tm + 7] = ws[kw + 2]
+    ws[tm + 8] = ws[kw + 4]
+    ws[tm + 9] = ws[kw + 5]
+    ws[tm + 10] = dt
+    for i in range(2, 10):
+        key = ws[tm + i]
+        j = i - 1
+        while j >= 1 and key < ws[tm + j]:
+            ws[tm + j + 1] = ws[tm + j]
+            j -= 1
+        ws[tm + j + 1] = key
+    # 3. pieces: their rates, the wheel angles and the distance; then the pose over all (fresnel.advance_nodes)
     g1 = (1.0 - s1) * r1t
     g2 = (1.0 - s2) * r2t
     inv_2l1t = 0.5 / l1t
     da1 = 0.0
     da2 = 0.0
     dist = 0.0
-    pieces: list[tuple[float, float, float, float, float]] = []
+    pcs = k + SCRATCH_PIECES
+    n_pieces = 0
     for j in range(PIECES):
-        t0 = times[j]
-        t1 = times[j + 1]
+        t0 = ws[tm + j]
+        t1 = ws[tm + j + 1]
         length = t1 - t0
         if not length > 0.0:
             continue
         mid = 0.5 * (t0 + t1)
-        v, a = _evaluate_float(kv, uv, sv, t0, mid)
-        om, al = _evaluate_float(kw, uw, sw, t0, mid)
+        v, a = _evaluate_ws(ws, kv, t0, mid)
+        om, al = _evaluate_ws(ws, kw, t0, mid)
         p1, q1, p2, q2, vt, at, wt, alt = piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
-        pieces.append((vt, at, wt, alt, length))
+        pc = pcs + 5 * n_pieces
+        ws[pc] = vt
+        ws[pc + 1] = at
+        ws[pc + 2] = wt
+        ws[pc + 3] = alt
+        ws[pc + 4] = length
+        n_pieces += 1
         half = 0.5 * length
         da1 = da1 + length * (p1 + q1 * half)
         da2 = da2 + length * (p2 + q2 * half)
         dist = dist + length * (vt + at * half)
-    x, y, beta = fresnel.advance_chain_float(x, y, beta, pieces, n_sub)
+    x, y, beta = fresnel.advance_nodes(buf, b, PIECES * nn, x, y, beta, ws, pcs, n_pieces, nodes, node_at, nn)
     # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
     w1n, w2n = wheel_rates_of(v_end, w_end, l1n, r1n, r2n)
     v_true = 0.5 * (g1 * w1n + g2 * w2n)
     w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
-    return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)
+    return x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true

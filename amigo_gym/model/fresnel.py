@@ -25,12 +25,15 @@ branch: lines (``w0 = alpha = 0``), arcs (``alpha = 0``) and clothoids are the s
 Callers choose ``n_sub`` with :func:`subintervals` from a bound of the phase change they can meet.
 
 Every function takes columns (floats, or float64 arrays that broadcast together) and returns the
-same kind, so one robot and a batch run the same code.
+same kind, so one robot and a batch run the same code; the node functions (:func:`advance_nodes`,
+:func:`unit_speed_nodes` and their parts) are the float path's loops on buffers, which AmigoBot-v1's compiled
+step compiles as they are.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,6 +48,16 @@ __all__ = [
     "advance_float",
     "advance_chain_float",
     "unit_speed_pose",
+    "unit_speed_poses",
+    "Buffer",
+    "cos_sin_nodes",
+    "node_phases",
+    "node_sums",
+    "advance_nodes",
+    "unit_speed_phases",
+    "unit_speed_sums",
+    "unit_speed_nodes",
+    "node_table",
 ]
 
 #: Gauss–Legendre nodes per sub-interval
@@ -60,6 +73,9 @@ _U_LIST: list[float] = _U.tolist()
 _UW_LIST: list[float] = _UW.tolist()
 #: nodes and weights on [0, 1] for ``n_sub`` sub-intervals (lists, built once per ``n_sub``)
 _NODE_CACHE: dict[int, tuple[list[float], list[float]]] = {1: (_U_LIST, _UW_LIST)}
+#: :func:`node_table` for one sub-interval (a path piece's quadrature), and the cache of the others
+_TABLE_1: list[float] = _U_LIST + _UW_LIST
+_TABLE_CACHE: dict[int, list[float]] = {1: _TABLE_1}
 
 _np_array = np.array
 _np_cos = np.cos
@@ -139,28 +155,168 @@ def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
     return got
 
 
+# -- the node sums of the float path and the compiled step, written once ------------------------------------
+#
+# Plain Python on buffers (``list`` of floats in the float path, where indexing is cheapest; float64 arrays in the
+# compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim.layout_v1.SHARED). Their
+# expressions and order of operations are :func:`advance`'s, so a float and an array element get the same bits
+# (tests/test_float_paths.py). A node buffer ``buf`` of stride ``m`` from ``buf[b]`` holds the phases in
+# ``buf[b : b + m]``, their cosines in ``buf[b + m : b + 2m]`` and sines in ``buf[b + 2m : b + 3m]``.
+
+
+class Buffer(Protocol):
+    """What the node functions index: a ``list`` of floats (float path) or a float64 array (compiled step)."""
+
+    def __getitem__(self, i: int, /) -> float: ...
+    def __setitem__(self, i: int, v: float, /) -> None: ...
+    def __len__(self) -> int: ...
+
+
+def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
+    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``: numpy's
+    ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer; numpy gives each element the bits it gives a
+    scalar).
+
+    The compiled step does not compile this body: it overloads this function with the loop of the C library's
+    ``math.cos``/``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`; the same bits where
+    :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`, which the environment checks before using the kernel).
+    """
+    lst = cast("list[float]", buf)
+    arr = _np_array(lst[b : b + n])
+    lst[b + m : b + m + n] = _np_cos(arr).tolist()
+    lst[b + 2 * m : b + 2 * m + n] = _np_sin(arr).tolist()
+
+
+def node_phases(
+    buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
+) -> float:
+    r"""The phases at the nodes of one piece into ``buf[k : k + nn]``; returns the heading at its end.
+
+    .. math:: \phi_i = \theta + \tau_i (w_0 + \tfrac12\alpha\tau_i),\quad \tau_i = u_i t, \qquad
+        \theta' = \theta + t (w_0 + \tfrac12\alpha t)
+
+    Args:
+        buf: node buffer; k: where this piece's phases start.
+        theta, w0, alpha, t: start heading [rad], turn rate [rad/s] and its rate [rad/s^2], duration [s].
+        nodes, j, nn: the ``nn`` nodes ``u_i`` on [0, 1] at ``nodes[j + i]``, their weights at ``nodes[j + nn + i]``
+            (:func:`node_table`).
+    """
+    half_alpha = 0.5 * alpha
+    for i in range(nn):
+        tau = nodes[j + i] * t
+        buf[k + i] = theta + tau * (w0 + half_alpha * tau)
+    return theta + t * (w0 + half_alpha * t)
+
+
+def node_sums(
+    buf: Buffer, k: int, m: int, v0: float, a: float, t: float, nodes: Buffer, j: int, nn: int
+) -> tuple[float, float]:
+    r"""The weighted sums of one piece's node cosines and sines (``buf[m + k + i]``, ``buf[2 m + k + i]``), in order.
+
+    .. math:: (d_x, d_y) = \sum_i (v_0 + a \tau_i) w_i (\cos, \sin)\phi_i, \quad \tau_i = u_i t
+
+    so that the position advances by ``(dx t, dy t)``. ``v0 = 1``, ``a = 0`` (a path piece) weights by ``w_i``
+    exactly. ``nodes, j, nn`` as :func:`node_phases`.
+    """
+    dx = 0.0
+    dy = 0.0
+    for i in range(nn):
+        weight = (v0 + a * (nodes[j + i] * t)) * nodes[j + nn + i]
+        dx = dx + weight * buf[m + k + i]
+        dy = dy + weight * buf[2 * m + k + i]
+    return dx, dy
+
+
+def advance_nodes(
+    buf: Buffer,
+    b: int,
+    m: int,
+    x: float,
+    y: float,
+    theta: float,
+    pieces: Buffer,
+    p: int,
+    n_pieces: int,
+    nodes: Buffer,
+    j: int,
+    nn: int,
+) -> tuple[float, float, float]:
+    """:func:`advance` applied piece after piece: the phases of all pieces' nodes first (the heading at each piece's
+    start is closed form), one :func:`cos_sin_nodes`, then the sums in order.
+
+    Args:
+        buf, b, m: node buffer of stride ``m >= n_pieces * nn`` from ``buf[b]`` (``3 m`` entries).
+        x, y, theta: start pose [m, m, rad].
+        pieces: ``(v0, a, w0, alpha, t)`` of each piece (as :func:`advance`'s arguments) at ``pieces[p + 5 q]``.
+        n_pieces: number of pieces (0: the start pose).
+        nodes, j, nn: the nodes and weights (:func:`node_phases`).
+
+    Returns:
+        the pose after the last piece.
+    """
+    th = theta
+    for q in range(n_pieces):
+        o = p + 5 * q
+        th = node_phases(buf, b + q * nn, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], nodes, j, nn)
+    cos_sin_nodes(buf, b, n_pieces * nn, m)
+    for q in range(n_pieces):
+        o = p + 5 * q
+        t = pieces[o + 4]
+        dx, dy = node_sums(buf, b + q * nn, m, pieces[o], pieces[o + 1], t, nodes, j, nn)
+        x = x + dx * t
+        y = y + dy * t
+    return x, y, th
+
+
+def unit_speed_phases(
+    buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
+) -> None:
+    """:func:`node_phases` of a path piece (arc length as time) into ``buf[k : k + nn]``, its end heading at
+    ``buf[k + nn]`` (so that one :func:`cos_sin_nodes` gives its cosine and sine too)."""
+    buf[k + nn] = node_phases(buf, k, theta, w0, alpha, t, nodes, j, nn)
+
+
+def unit_speed_sums(
+    buf: Buffer, m: int, k: int, x: float, y: float, t: float, nodes: Buffer, j: int, nn: int
+) -> tuple[float, float, float, float, float]:
+    """The pose ``(x', y', theta', cos theta', sin theta')`` after :func:`unit_speed_phases` at ``k`` and
+    :func:`cos_sin_nodes` (the position's sums by :func:`node_sums` with unit speed)."""
+    dx, dy = node_sums(buf, k, m, 1.0, 0.0, t, nodes, j, nn)
+    return x + dx * t, y + dy * t, buf[k + nn], buf[m + k + nn], buf[2 * m + k + nn]
+
+
+def unit_speed_nodes(
+    buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
+) -> tuple[float, float, float, float, float]:
+    """:func:`unit_speed_pose` on a node buffer of stride ``nn + 1`` (length ``3 (nn + 1)``)."""
+    m = nn + 1
+    unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
+    cos_sin_nodes(buf, 0, m, m)
+    return unit_speed_sums(buf, m, 0, x, y, t, nodes, j, nn)
+
+
+def node_table(n_sub: int) -> list[float]:
+    """The nodes on [0, 1] for ``n_sub`` equal sub-intervals, then their weights (``2 NODES n_sub`` floats, cached):
+    the ``nodes`` of :func:`node_phases` with ``j = 0``, ``nn = NODES n_sub``."""
+    got = _TABLE_CACHE.get(n_sub)
+    if got is None:
+        u, uw = _nodes(n_sub)
+        got = u + uw
+        if len(_TABLE_CACHE) < 64:
+            _TABLE_CACHE[n_sub] = got
+    return got
+
+
+# -- the float path's entry points: thin wrappers on lists --------------------------------------------------
+
+
 def advance_float(
     x: float, y: float, theta: float, v0: float, a: float, w0: float, alpha: float, t: float, n_sub: int = 1
 ) -> tuple[float, float, float]:
-    """:func:`advance` for Python floats: the same bits, computed faster.
-
-    The same expressions node by node (Python floats round each operation as numpy does), the node phases'
-    cosines and sines from one ``np.cos`` and one ``np.sin`` call on an array (numpy gives each element the
-    bits it gives a scalar), and the sums in the same order.
-    """
-    u, uw = _nodes(n_sub)
-    half_alpha = 0.5 * alpha
-    taus = [ui * t for ui in u]
-    phases = _np_array([theta + tau * (w0 + half_alpha * tau) for tau in taus])
-    cs = _np_cos(phases).tolist()
-    sn = _np_sin(phases).tolist()
-    dx = 0.0
-    dy = 0.0
-    for tau, wi, ci, si in zip(taus, uw, cs, sn, strict=True):
-        weight = (v0 + a * tau) * wi
-        dx = dx + weight * ci
-        dy = dy + weight * si
-    return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
+    """:func:`advance` for Python floats: the same bits, computed faster (:func:`advance_nodes` of one piece)."""
+    table = node_table(n_sub)
+    m = NODES * n_sub
+    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, [v0, a, w0, alpha, t], 0, 1, table, 0, m)
 
 
 def unit_speed_pose(
@@ -168,32 +324,17 @@ def unit_speed_pose(
 ) -> tuple[float, float, float, float, float]:
     """``advance(x, y, theta, 1.0, 0.0, w0, alpha, t, 1)`` for Python floats (a path piece: arc length as time),
     with ``cos`` and ``sin`` of the new heading: ``(x', y', theta', cos theta', sin theta')``, the same bits as
-    :func:`advance` and ``np.cos``/``np.sin`` of ``theta'`` (one ``np.cos`` and one ``np.sin`` call for all).
+    :func:`advance` and ``np.cos``/``np.sin`` of ``theta'`` (:func:`unit_speed_nodes`).
 
     With unit speed the weights ``(1 + 0 tau) w_i`` are exactly ``w_i``.
     """
-    half_alpha = 0.5 * alpha
-    taus = [ui * t for ui in _U_LIST]
-    th = theta + t * (w0 + half_alpha * t)
-    phases = [theta + tau * (w0 + half_alpha * tau) for tau in taus]
-    phases.append(th)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    dx = 0.0
-    dy = 0.0
-    for i in range(NODES):
-        wi = _UW_LIST[i]
-        dx = dx + wi * cs[i]
-        dy = dy + wi * sn[i]
-    return x + dx * t, y + dy * t, th, cs[NODES], sn[NODES]
+    return unit_speed_nodes([0.0] * (3 * NODES + 3), x, y, theta, w0, alpha, t, _TABLE_1, 0, NODES)
 
 
 def advance_chain_float(
     x: float, y: float, theta: float, pieces: list[tuple[float, float, float, float, float]], n_sub: int = 1
 ) -> tuple[float, float, float]:
-    """:func:`advance` applied piece after piece, for Python floats: the same bits, one ``np.cos`` and one
-    ``np.sin`` call for the nodes of all pieces.
+    """:func:`advance` applied piece after piece, for Python floats: the same bits (:func:`advance_nodes`).
 
     Args:
         x, y, theta: start pose [m, m, rad].
@@ -203,35 +344,10 @@ def advance_chain_float(
     Returns:
         the pose after the last piece (the start pose for no pieces).
     """
-    if not pieces:
-        return x, y, theta
-    u, uw = _nodes(n_sub)
-    # the heading at the start of each piece only needs the headings before (closed form), so all node
-    # phases are known before any cosine
-    phases: list[float] = []
-    taus: list[list[float]] = []
-    th = theta
-    for _v0, _a, w0, alpha, t in pieces:
-        half_alpha = 0.5 * alpha
-        tj = [ui * t for ui in u]
-        taus.append(tj)
-        phases += [th + tau * (w0 + half_alpha * tau) for tau in tj]
-        th = th + t * (w0 + half_alpha * t)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    i = 0
-    for (v0, a, _w0, _alpha, t), tj in zip(pieces, taus, strict=True):
-        dx = 0.0
-        dy = 0.0
-        for tau, wi in zip(tj, uw, strict=True):
-            weight = (v0 + a * tau) * wi
-            dx = dx + weight * cs[i]
-            dy = dy + weight * sn[i]
-            i += 1
-        x = x + dx * t
-        y = y + dy * t
-    return x, y, th
+    nn = NODES * n_sub
+    m = len(pieces) * nn
+    flat = [v for piece in pieces for v in piece]
+    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, flat, 0, len(pieces), node_table(n_sub), 0, nn)
 
 
 def unit_speed_poses(
@@ -239,26 +355,12 @@ def unit_speed_poses(
 ) -> list[tuple[float, float, float, float, float]]:
     """:func:`unit_speed_pose` of several independent ``(x, y, theta, w0, alpha, t)``, with one ``np.cos`` and one
     ``np.sin`` call for all (the same bits as one call each)."""
-    phases: list[float] = []
-    ends: list[float] = []
-    for _x, _y, theta, w0, alpha, t in starts:
-        half_alpha = 0.5 * alpha
-        phases += [theta + tau * (w0 + half_alpha * tau) for tau in [ui * t for ui in _U_LIST]]
-        th = theta + t * (w0 + half_alpha * t)
-        phases.append(th)
-        ends.append(th)
-    arr = _np_array(phases)
-    cs = _np_cos(arr).tolist()
-    sn = _np_sin(arr).tolist()
-    out: list[tuple[float, float, float, float, float]] = []
-    base = 0
-    for (x, y, _theta, _w0, _alpha, t), th in zip(starts, ends, strict=True):
-        dx = 0.0
-        dy = 0.0
-        for i in range(NODES):
-            wi = _UW_LIST[i]
-            dx = dx + wi * cs[base + i]
-            dy = dy + wi * sn[base + i]
-        out.append((x + dx * t, y + dy * t, th, cs[base + NODES], sn[base + NODES]))
-        base += NODES + 1
-    return out
+    nn = NODES + 1
+    m = len(starts) * nn
+    buf = [0.0] * (3 * m)
+    for i, (_x, _y, theta, w0, alpha, t) in enumerate(starts):
+        unit_speed_phases(buf, i * nn, theta, w0, alpha, t, _TABLE_1, 0, NODES)
+    cos_sin_nodes(buf, 0, m, m)
+    return [
+        unit_speed_sums(buf, m, i * nn, x, y, t, _TABLE_1, 0, NODES) for i, (x, y, _th, _w, _al, t) in enumerate(starts)
+    ]

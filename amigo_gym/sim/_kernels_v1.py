@@ -8,8 +8,8 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
    :func:`amigo_gym.model.actuators.ring_write`, :func:`amigo_gym.model.actuators.ring_read`;
 2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
-   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators._actuator_step_float`,
-   :func:`amigo_gym.model.fresnel.advance_chain_float`);
+   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
+   :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
 3. H's projection on the path, and the measured H's when it differs
    (:func:`amigo_gym.paths.clothoid.locate_flat`, compiled here as it is, with this module's :func:`_pose`);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
@@ -19,9 +19,9 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
 term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the whole projection on the flat
-path vector: piece search, wrap, placement, coarse search, Newton loop, status: :data:`amigo_gym.sim.layout_v1.SHARED`)
-are the reference's own functions, compiled here as they are (docs/architecture.md, "The compiled step"); the loops
-left here (the quadrature's node sums) are written in the reference's order of operations, so that every
+path vector (piece search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the
+actuator step: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
+(docs/architecture.md, "The compiled step"), so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
@@ -29,7 +29,8 @@ result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes
   Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``argmin`` and ``bisect.bisect_right``
   are reproduced with their tie and NaN rules (by the shared functions); numba does not contract ``a * b + c``
   into an FMA (no fastmath);
-* ``math.cos``/``math.sin`` here are the C library's, which numpy's float64 ``np.cos``/``np.sin`` (used by the
+* ``math.cos``/``math.sin`` here are the C library's (the node sums' through the overload of
+  :func:`amigo_gym.model.fresnel.cos_sin_nodes` below), which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
@@ -59,13 +60,18 @@ this file: see :data:`LAYOUT_FINGERPRINT`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
-from numba.extending import overload
+from llvmlite import ir as llvm_ir
+from numba.core import cgutils
+from numba.extending import intrinsic, overload
+from numba.np import numpy_support
 from numpy.typing import NDArray
 
-from amigo_gym.model import actuators, kinematics, randomization
+from amigo_gym.model import actuators, fresnel, kinematics, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.paths.clothoid import STATUS_END
@@ -83,12 +89,57 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "de4689ba15447765"
+LAYOUT_FINGERPRINT = "d2eeba549df834a6"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
-_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit)
+_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit, inline=L.SHARED_INLINE)
+
+
+@overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
+def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
+    """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: the C library's ``math.cos``/``math.sin``
+    node by node (numpy's bits where :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`; no array temporaries)."""
+
+    def impl(buf: F64, b: int, n: int, m: int) -> None:
+        for i in range(b, b + n):
+            phase = buf[i]  # one load: the cosine and sine of one value (LLVM fuses them into one sincos call)
+            cos_p = math.cos(phase)
+            sin_p = math.sin(phase)
+            buf[m + i] = cos_p
+            buf[2 * m + i] = sin_p
+
+    return impl
+
+
+#: entries of the path pose's node buffer (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: stride ``NODES + 1``)
+_POSE_NODES = 3 * (L.PATH_NODES + 1)
+#: entries of the actuator step's node buffer on the stack (:func:`amigo_gym.model.fresnel.advance_nodes`, one
+#: sub-interval per piece; more sub-intervals allocate theirs)
+_STEP_NODES = 3 * PIECES * L.PATH_NODES
+
+
+def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
+    """Typing and code of :data:`_stack_ptr` (``numba.extending.intrinsic``)."""
+    if not isinstance(n, numba.types.IntegerLiteral):
+        return None
+    size = n.literal_value
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        ptr = _alloca_once(builder, llvm_ir.ArrayType(llvm_ir.DoubleType(), size))
+        return builder.bitcast(ptr, llvm_ir.DoubleType().as_pointer())
+
+    return _cpointer(numba.types.float64)(n), codegen
+
+
+_alloca_once: Any = cgutils.alloca_once
+_cpointer: Any = numba.types.CPointer
+_carray: Any = numpy_support.carray
+#: ``_stack_ptr(n)``: a pointer to ``n`` float64 (a compile-time constant) on the stack of the compiled function that
+#: calls it; ``_carray(_stack_ptr(n), n)`` is a node buffer without an allocation per pose or step (used within that
+#: call only)
+_stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
 @_jit
@@ -117,169 +168,46 @@ _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
 _body_velocity = _shared(kinematics.body_velocity_of)
-_wheel_rates = _shared(kinematics.wheel_rates_of)
 _h_from_a = _shared(kinematics.h_from_a)
-_clip_setpoint = _shared(actuators._clip_float)
-_piece_rates = _shared(actuators.piece_rates)
 
 
 # ----------------------------------------------------------------------------------------- actuators
 
 
-#: actuators._ramp_float itself, compiled: ``(t_a, t_b, u_a, u_b, s_a, s_b)`` of one firmware ramp
-_ramp = _shared(actuators._ramp_float)
+# The actuator step and the path pose are the float path's own functions (actuators.actuator_step_ws,
+# fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
+# by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
+# no call.
 _box_muller = _shared(randomization.box_muller)
 _trapezoid_speed = _shared(tracking.trapezoid_speed)
 
 
 @_jit
-def _channel(
-    ws: F64, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
-) -> float:
-    # actuators._channel_float: knots ws[k:k+7], values ws[k+7:k+13], slopes ws[k+13:k+19]; returns u at dt
-    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp(u0, c_old, accel, decel, t_s)
-    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp(ub1, c_new, accel, decel, dt - t_s)
-    k4 = t_s + ta2
-    k5 = t_s + tb2
-    ws[k] = 0.0
-    ws[k + 1] = ta1
-    ws[k + 2] = tb1
-    ws[k + 3] = t_s
-    ws[k + 4] = k4 if k4 <= dt else dt
-    ws[k + 5] = k5 if k5 <= dt else dt
-    ws[k + 6] = dt
-    v = k + 7
-    ws[v] = u0
-    ws[v + 1] = ua1
-    ws[v + 2] = ub1
-    ws[v + 3] = ub1
-    ws[v + 4] = ua2
-    ws[v + 5] = ub2
-    s = k + 13
-    ws[s] = sa1
-    ws[s + 1] = sb1
-    ws[s + 2] = 0.0
-    ws[s + 3] = sa2
-    ws[s + 4] = sb2
-    ws[s + 5] = 0.0
-    return ub2
-
-
-@_jit
-def _evaluate_channel(ws: F64, k: int, t: float, mid: float) -> tuple[float, float]:
-    # actuators._evaluate_float on the channel at ws[k:]
-    v = k + 7
-    s = k + 13
-    val = ws[v] + ws[s] * t
-    slope = ws[s]
-    for i in range(1, 6):
-        if mid >= ws[k + i]:
-            val = ws[v + i] + ws[s + i] * (t - ws[k + i])
-            slope = ws[s + i]
-    return val, slope
-
-
-@_jit
 def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
-    """actuators._actuator_step_float from the state in ``ws``: the new pose, wheel rates and angles into ``ws``.
+    """:func:`amigo_gym.model.actuators.actuator_step_ws` (the float path's own source) from the state in ``ws``: the
+    new pose, wheel rates and angles into ``ws``.
 
     Returns the true speed of A at the end of the step [m/s].
     """
-    w_max = c[L.C_W_MAX]
-    l1n = c[L.C_L1]
-    r1n = c[L.C_R1]
-    r2n = c[L.C_R2]
-    two_l1 = c[L.C_TWO_L1]
-    dt = c[L.C_DT]
-    t_s = ws[L.W_TS]
-    # 1. commands (clip_setpoints, body_velocity_columns)
-    vc_old, wc_old = _body_velocity(_clip_setpoint(o1, w_max), _clip_setpoint(o2, w_max), r1n, r2n, two_l1)
-    vc_new, wc_new = _body_velocity(_clip_setpoint(n1, w_max), _clip_setpoint(n2, w_max), r1n, r2n, two_l1)
-    # 2. ramps
-    v0, om0 = _body_velocity(ws[L.W_W1], ws[L.W_W2], r1n, r2n, two_l1)
-    v_end = _channel(ws, L.S_KV, v0, vc_old, vc_new, c[L.C_ACC], c[L.C_DEC], t_s, dt)
-    w_end = _channel(ws, L.S_KW, om0, wc_old, wc_new, c[L.C_RACC], c[L.C_RDEC], t_s, dt)
-    # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
-    tm = L.S_TIMES
-    ws[tm] = 0.0
-    ws[tm + 1] = ws[L.S_KV + 1]
-    ws[tm + 2] = ws[L.S_KV + 2]
-    ws[tm + 3] = ws[L.S_KV + 3]
-    ws[tm + 4] = ws[L.S_KV + 4]
-    ws[tm + 5] = ws[L.S_KV + 5]
-    ws[tm + 6] = ws[L.S_KW + 1]
-    ws[tm + 7] = ws[L.S_KW + 2]
-    ws[tm + 8] = ws[L.S_KW + 4]
-    ws[tm + 9] = ws[L.S_KW + 5]
-    ws[tm + 10] = dt
-    for i in range(2, 10):
-        key = ws[tm + i]
-        j = i - 1
-        while j >= 1 and key < ws[tm + j]:
-            ws[tm + j + 1] = ws[tm + j]
-            j -= 1
-        ws[tm + j + 1] = key
-    # 3. pieces
-    g1 = (1.0 - s1) * ws[L.W_R1]
-    g2 = (1.0 - s2) * ws[L.W_R2]
-    inv_2l1t = 0.5 / ws[L.W_L1]
-    da1 = 0.0
-    da2 = 0.0
-    n_pieces = 0
-    for j in range(PIECES):
-        t0 = ws[tm + j]
-        t1 = ws[tm + j + 1]
-        length = t1 - t0
-        if not length > 0.0:
-            continue
-        mid = 0.5 * (t0 + t1)
-        v, a = _evaluate_channel(ws, L.S_KV, t0, mid)
-        om, al = _evaluate_channel(ws, L.S_KW, t0, mid)
-        p1, q1, p2, q2, vt, at, wt, alt = _piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
-        pc = L.S_PIECES + 5 * n_pieces
-        ws[pc] = vt
-        ws[pc + 1] = at
-        ws[pc + 2] = wt
-        ws[pc + 3] = alt
-        ws[pc + 4] = length
-        n_pieces += 1
-        half = 0.5 * length
-        da1 = da1 + length * (p1 + q1 * half)
-        da2 = da2 + length * (p2 + q2 * half)
-    # fresnel.advance_chain_float: the heading of each piece's start in closed form, the nodes' sums in order
-    x = ws[L.W_X]
-    y = ws[L.W_Y]
-    th = ws[L.W_BETA]
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
-    for q in range(n_pieces):
-        pc = L.S_PIECES + 5 * q
-        v0p = ws[pc]
-        ap = ws[pc + 1]
-        w0 = ws[pc + 2]
-        half_alpha = 0.5 * ws[pc + 3]
-        t = ws[pc + 4]
-        dx = 0.0
-        dy = 0.0
-        for i in range(nn):
-            tau = c[base + i] * t
-            phase = th + tau * (w0 + half_alpha * tau)
-            weight = (v0p + ap * tau) * c[base + nn + i]
-            dx = dx + weight * math.cos(phase)
-            dy = dy + weight * math.sin(phase)
-        x = x + dx * t
-        y = y + dy * t
-        th = th + t * (w0 + half_alpha * t)
-    # 4. the new actuator state (wheel_rates_columns) and the true speed at the end
-    w1n, w2n = _wheel_rates(v_end, w_end, l1n, r1n, r2n)
+    size = 3 * PIECES * nn
+    # on the stack for n_sub = 1 (the default dt = 0.1 s: fresnel.subintervals of 19.5 rad/s x dt), else allocated
+    nodes = _carray(_stack_ptr(_STEP_NODES), _STEP_NODES) if size <= _STEP_NODES else np.empty(size)
+    x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = actuators.actuator_step_ws(
+        ws, L.S_ACT, nodes, 0, c, base, nn,
+        ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
+        c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
+        c[L.C_ACC], c[L.C_DEC], c[L.C_RACC], c[L.C_RDEC],
+        ws[L.W_R1], ws[L.W_R2], ws[L.W_L1], s1, s2,
+    )  # fmt: skip
     ws[L.W_X] = x
     ws[L.W_Y] = y
-    ws[L.W_BETA] = th
+    ws[L.W_BETA] = beta
     ws[L.W_W1] = w1n
     ws[L.W_W2] = w2n
     ws[L.W_AL1] = ws[L.W_AL1] + da1
     ws[L.W_AL2] = ws[L.W_AL2] + da2
-    v_true: float = 0.5 * (g1 * w1n + g2 * w2n)
     return v_true
 
 
@@ -298,20 +226,10 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     w0 = pv[L.P_TAIL + 4 * n + j]
     cr = pv[L.P_TAIL + 5 * n + j]
     # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
-    half_alpha = 0.5 * cr
-    th = theta + t * (w0 + half_alpha * t)
     nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
-    dx = 0.0
-    dy = 0.0
-    for i in range(L.PATH_NODES):
-        tau = c[nb + i] * t
-        phase = theta + tau * (w0 + half_alpha * tau)
-        wi = c[nb + L.PATH_NODES + i]
-        dx = dx + wi * math.cos(phase)
-        dy = dy + wi * math.sin(phase)
-    x = x0 + dx * t
-    y = y0 + dy * t
-    return _place(pv, j, t, lap, extra, x, y, th, math.cos(th), math.sin(th))
+    nodes = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    x, y, th, cos_th, sin_th = fresnel.unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
+    return _place(pv, j, t, lap, extra, x, y, th, cos_th, sin_th)
 
 
 @overload(clothoid._pose_flat)

@@ -53,19 +53,29 @@ def check_fingerprint(owner: str, stated: str, actual: str) -> None:
         )
 
 
-def shared_compiler(owner: str, shared: tuple[Callable[..., Any], ...], jit: Callable[..., Any]) -> Callable[[_F], _F]:
+def shared_compiler(
+    owner: str,
+    shared: tuple[Callable[..., Any], ...],
+    jit: Callable[..., Any],
+    inline: tuple[Callable[..., Any], ...] = (),
+) -> Callable[[_F], _F]:
     """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
 
     Registers every function of ``shared`` with numba (``register_jitable``: compiled code may call it, as the
     shared functions call each other) and returns ``compiled(fn)``: ``jit(fn)`` for a function of ``shared``,
     an ``ImportError`` for another (so that every function compiled into a kernel counts in its fingerprint).
+    The functions of ``inline`` (a part of ``shared``) are inlined into their callers by numba itself
+    (``inline="always"``: small loops that LLVM would otherwise leave as calls).
     Only the kernel modules call this (they import numba anyway); this module stays numba-free.
     """
     from numba.extending import register_jitable
 
     for fn in shared:
         if fn not in _REGISTERED:  # once per process (both kernels share some functions)
-            register_jitable(fn)
+            if fn in inline:
+                register_jitable(inline="always")(fn)
+            else:
+                register_jitable(fn)
             _REGISTERED.add(fn)
 
     def compiled(fn: _F) -> _F:

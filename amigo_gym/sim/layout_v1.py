@@ -134,18 +134,17 @@ W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in 
 W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
 W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
 W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
-#: scratch entries after :data:`WS_FIELDS`: 2 channels x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5,
-#: then the normal draws' uniforms ``u1``, their logarithms and the angles ``2 pi u2`` (5 each)
-WS_SCRATCH = 2 * 19 + 11 + 10 * 5 + 3 * 5
-S_KV = len(WS_FIELDS)
-S_UV = S_KV + 7
-S_SV = S_UV + 6
-S_KW = S_SV + 6
-S_UW = S_KW + 7
-S_SW = S_UW + 6
-S_TIMES = S_SW + 6
-S_PIECES = S_TIMES + 11
-S_U1 = S_PIECES + 10 * 5
+#: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
+#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1``, their logarithms
+#: and the angles ``2 pi u2`` (5 each)
+WS_SCRATCH = actuators.SCRATCH + 3 * 5
+#: where :func:`amigo_gym.model.actuators.actuator_step_ws`'s scratch starts, and its parts
+S_ACT = len(WS_FIELDS)
+S_KV = S_ACT + actuators.SCRATCH_V
+S_KW = S_ACT + actuators.SCRATCH_W
+S_TIMES = S_ACT + actuators.SCRATCH_TIMES
+S_PIECES = S_ACT + actuators.SCRATCH_PIECES
+S_U1 = S_ACT + actuators.SCRATCH
 S_LOG = S_U1 + 5
 S_U2 = S_LOG + 5
 
@@ -156,6 +155,9 @@ SHARED: tuple[Callable[..., Any], ...] = (
     actuators._ramp_float,
     actuators._clip_float,
     actuators.piece_rates,
+    actuators._channel_ws,
+    actuators._evaluate_ws,
+    actuators.actuator_step_ws,
     clothoid._np_clip,
     clothoid.py_min,
     clothoid.py_max,
@@ -170,6 +172,12 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.place,
     clothoid.coarse_start,
     clothoid.locate_flat,
+    fresnel.node_phases,
+    fresnel.node_sums,
+    fresnel.advance_nodes,
+    fresnel.unit_speed_phases,
+    fresnel.unit_speed_sums,
+    fresnel.unit_speed_nodes,
     kinematics.body_velocity_of,
     kinematics.wheel_rates_of,
     kinematics.h_from_a,
@@ -180,6 +188,17 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.steady_heading_float,
     tracking.trapezoid_speed,
     tracking.clip_scalar,
+)
+
+
+#: the functions of :data:`SHARED` that numba inlines into their callers (the node loops, called per path pose)
+SHARED_INLINE: tuple[Callable[..., Any], ...] = (
+    fresnel.advance_nodes,
+    fresnel.node_phases,
+    fresnel.node_sums,
+    fresnel.unit_speed_phases,
+    fresnel.unit_speed_sums,
+    fresnel.unit_speed_nodes,
 )
 
 
@@ -200,5 +219,6 @@ def layout_fingerprint() -> str:
         clothoid.MIN_NEWTON_DENOMINATOR,
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
     )
-    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
+    offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
+    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets)
     return source_fingerprint((layout, homes), SHARED)
