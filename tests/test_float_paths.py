@@ -290,7 +290,7 @@ def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[
     for u, want in zip(us, col, strict=True):
         assert clothoid.piece_index(pv, u) == int(want), u
     for s in us[:-1]:  # the pose's piece, wrap and placement: the column code's (NaN: the wrap's error, as before)
-        rows_equal(clothoid._pose_flat(None, pv, s), path.pose_columns(np.array([s])), 0)
+        rows_equal(clothoid._pose_float(pv, s), path.pose_columns(np.array([s])), 0)
     ties = 0
     for x, y, hint in cases:
         for ahead, behind in ((0.475, 0.475), (0.475, 0.3), (0.05, 1.3)):

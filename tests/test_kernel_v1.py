@@ -341,6 +341,6 @@ def test_shared_projection_compiled_equals_the_float_path() -> None:
                 )
                 if (x != x or y != y) and path.closed:
                     continue  # NaN progress: the float path's wrap raises (math.floor), the kernel's goes on
-                got = kv._locate_flat(consts, flat, x, y, hint, ahead, behind)
-                want = clothoid.locate_flat(None, pv, x, y, hint, ahead, behind)
+                got = kv._locate_flat(np.zeros(33), consts, kv._path_nodes(consts), flat, x, y, hint, ahead, behind)
+                want = clothoid.locate_flat([0.0] * 33, clothoid._PATH_TABLE, 0, pv, x, y, hint, ahead, behind)
                 assert all(same(a, b) for a, b in zip(got, want, strict=True)), (name, x, y, hint, got, want)

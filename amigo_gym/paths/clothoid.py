@@ -38,7 +38,15 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.fresnel import advance, subintervals, unit_speed_pose, unit_speed_poses
+from amigo_gym.model.fresnel import (
+    NODES,
+    Buffer,
+    advance,
+    node_table,
+    subintervals,
+    unit_speed_nodes,
+    unit_speed_poses,
+)
 from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
@@ -632,9 +640,9 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`_pose_flat` for a float)."""
+        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`pose_flat` for a float)."""
         if type(s) is float:
-            return PathPose(*_pose_flat(None, self._flat_list, s))
+            return PathPose(*_pose_float(self._flat_list, s))
         return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
 
     def pose_columns(self, s: Real) -> PathPose:
@@ -735,9 +743,9 @@ class ClothoidPath:
 # copysign/sqrt, np.floor of a float, indexing of the flat path vector, no object, no exception): the compiled step
 # of AmigoBot-v1 compiles these very functions (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled
 # step"), so the projection is written once: the piece search, wrap and placement of a pose, the coarse search, the
-# Newton loop, the foot terms and the status. What stays apart is the pose's quadrature: locate_flat calls
-# _pose_flat (numpy's cosines and sines of the nodes), for which compiled code substitutes the kernel's pose (a numba
-# overload; the C library's cosines and sines, checked equal per process).
+# Newton loop, the foot terms, the status and the pose (pose_flat, whose quadrature is fresnel's node functions:
+# numpy's cosines and sines of the nodes here, the C library's in compiled code, fresnel.cos_sin_nodes' overload,
+# checked equal per process).
 
 
 def _np_clip(x: float, lo: float, hi: float) -> float:
@@ -965,48 +973,61 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
     return best_j * h
 
 
-def locate_flat(q: object, pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> FlatPoint:
+def locate_flat(
+    buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float
+) -> FlatPoint:
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with the hint ``sp`` [m] and the window ``ahead``,
     ``behind`` [m] (> 0, finite) on the flat path ``pv``: the coarse search (:func:`coarse_start`), Newton's method
-    (:func:`newton_step`, stopped at a fixed point as :func:`_newton`), the foot terms and the status.
-
-    The poses are :func:`_pose_flat`'s (``q``: passed on to it): here numpy's ``cos``/``sin`` of the quadrature
-    nodes; in compiled code the kernel's own quadrature, which numba substitutes for :func:`_pose_flat` (an
-    overload: :mod:`amigo_gym.sim._kernels_v1`, with ``q`` its constants). Returns :data:`FlatPoint` (the fields
-    of :class:`PathPoint` but the lap's ``s``).
+    (:func:`newton_step`, stopped at a fixed point as :func:`_newton`), the foot terms and the status; the poses by
+    :func:`pose_flat` (``buf``, ``nodes``, ``nb``: passed on to it). Returns :data:`FlatPoint` (the fields of
+    :class:`PathPoint` but the lap's ``s``).
     """
     h = pv[P_SPACING]
     length = pv[P_LENGTH]
     closed = pv[P_CLOSED] != 0.0
     lo, hi = locate_window(sp, ahead, behind, length, closed)
     s = _np_clip(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
-    px, py, th, kappa, c, ct, st = _pose_flat(q, pv, s)
+    px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
         s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
         if settled:
             break
         s = s_new
-        px, py, th, kappa, c, ct, st = _pose_flat(q, pv, s)
+        px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
     dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
     dist = math.sqrt(dx * dx + dy * dy)
     return s, px, py, th, kappa, c, e, ct, st, dist, locate_status_float(s, g, lo, hi, length, closed)
 
 
-def _pose_flat(q: object, pv: FlatPath, s: float) -> FloatPose:
-    """The float pose at ``s`` [m] on the flat path ``pv`` (:func:`pose_from_pieces`' bits): :func:`piece_at`, the
-    quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_pose`), :func:`place`.
+def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
+    """The pose at the arc length ``s`` [m] on the flat path ``pv`` (:func:`pose_from_pieces`' bits):
+    ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -] by :func:`piece_at`, the
+    quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_nodes`) and :func:`place`.
 
-    ``q`` is not read here; compiled code runs the kernel's pose instead (its ``_pose(q, pv, s)``, ``q`` the
-    kernel's constants with the quadrature nodes: the same steps around its own node sum)."""
+    ``buf``: a node buffer of ``3 (NODES + 1)`` floats (scratch); ``nodes[nb:]``: the path quadrature's ``NODES``
+    nodes then weights on [0, 1] (:func:`amigo_gym.model.fresnel.node_table` of 1). The float path passes lists
+    (:func:`_pose_float`), the compiled step a buffer on its stack and its constants (:mod:`amigo_gym.sim._kernels_v1`).
+    """
     j, du, lap, extra = piece_at(pv, s)
     n = int(pv[P_N])
     b = P_TAIL + n + j
-    x, y, th, ct, st = unit_speed_pose(pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du)
+    x, y, th, ct, st = unit_speed_nodes(
+        buf, pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du, nodes, nb, NODES
+    )
     return place(pv, j, du, lap, extra, x, y, th, ct, st)
 
 
+#: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes`` on the float path)
+_PATH_TABLE: list[float] = node_table(1)
+
+
+def _pose_float(pv: FlatPath, s: float) -> FloatPose:
+    """:func:`pose_flat` on the float path: a new scratch list, the path quadrature's nodes."""
+    return pose_flat([0.0] * (3 * NODES + 3), _PATH_TABLE, 0, pv, s)
+
+
 def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
-    """:func:`_pose_flat` of several floats, the cosines and sines of all in one numpy call each
+    """:func:`_pose_float` of several floats, the cosines and sines of all in one numpy call each
     (:func:`amigo_gym.model.fresnel.unit_speed_poses`)."""
     n = int(pv[P_N])
     where = [piece_at(pv, s) for s in ss]
@@ -1037,7 +1058,8 @@ def _locate_float(
         behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
     if sp - sp != 0.0:
         check_real("locate", "s_prev", sp)  # NaN or infinite: the clear error
-    s, px, py, th, kappa, c, e, ct, st, dist, status = locate_flat(None, pv, x, y, sp, ahead, behind)
+    buf = [0.0] * (3 * NODES + 3)
+    s, px, py, th, kappa, c, e, ct, st, dist, status = locate_flat(buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
     s_lap = s
     if pv[P_CLOSED] != 0.0:
         length = pv[P_LENGTH]

@@ -11,7 +11,7 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
    :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
 3. H's projection on the path, and the measured H's when it differs
-   (:func:`amigo_gym.paths.clothoid.locate_flat`, compiled here as it is, with this module's :func:`_pose`);
+   (:func:`amigo_gym.paths.clothoid.locate_flat` and :func:`amigo_gym.paths.clothoid.pose_flat`, compiled as they are);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
@@ -89,7 +89,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "d2eeba549df834a6"
+LAYOUT_FINGERPRINT = "77b18b43c2491318"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -159,6 +159,7 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 _piece_at = _shared(clothoid.piece_at)
 _place = _shared(clothoid.place)
 _locate_flat = _shared(clothoid.locate_flat)
+_pose_flat = _shared(clothoid.pose_flat)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
@@ -215,43 +216,32 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
 
 
 @_jit
+def _path_nodes(c: F64) -> int:
+    # where the path quadrature's nodes and weights start in the constants
+    nodes: int = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
+    return nodes
+
+
+@_jit
 def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
-    # clothoid._pose_flat: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s: the piece
-    # (clothoid.piece_at), the quadrature from its start, the placement on the whole path (clothoid.place)
-    j, t, lap, extra = _piece_at(pv, s)
-    n = int(pv[L.P_N])
-    x0 = pv[L.P_TAIL + n + j]
-    y0 = pv[L.P_TAIL + 2 * n + j]
-    theta = pv[L.P_TAIL + 3 * n + j]
-    w0 = pv[L.P_TAIL + 4 * n + j]
-    cr = pv[L.P_TAIL + 5 * n + j]
-    # fresnel.unit_speed_pose(x0, y0, theta, w0, cr, t)
-    nb = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
-    nodes = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    x, y, th, cos_th, sin_th = fresnel.unit_speed_nodes(nodes, x0, y0, theta, w0, cr, t, c, nb, L.PATH_NODES)
-    return _place(pv, j, t, lap, extra, x, y, th, cos_th, sin_th)
-
-
-@overload(clothoid._pose_flat)
-def _pose_flat_compiled(q: F64, pv: F64, s: float) -> object:
-    """The pose clothoid.locate_flat evaluates, in compiled code: :func:`_pose` (the float path's is
-    clothoid._pose_flat, with numpy's cosines and sines of the nodes)."""
-
-    def impl(q: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
-        return _pose(q, pv, s)
-
-    return impl
+    # clothoid.pose_flat itself: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s, its node
+    # buffer on the stack
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    return _pose_flat(buf, c, _path_nodes(c), pv, s)
 
 
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself with
-    :func:`_pose`.
+    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself, its
+    node buffer on the stack.
 
     Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
     """
     window = c[L.C_WINDOW]
-    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(c, pv, x, y, sp, window, window)
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(
+        buf, c, _path_nodes(c), pv, x, y, sp, window, window
+    )
     return s, kappa, e, ct, st, status
 
 

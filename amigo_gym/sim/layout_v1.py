@@ -172,6 +172,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.place,
     clothoid.coarse_start,
     clothoid.locate_flat,
+    clothoid.pose_flat,
     fresnel.node_phases,
     fresnel.node_sums,
     fresnel.advance_nodes,
