@@ -410,3 +410,17 @@ def test_feasibility_accelerations_by_finite_differences() -> None:
     assert f.peaks["wheel_acceleration"] == pytest.approx(acc.max(), rel=2e-3)
     # the documented sampling accuracy of a smooth peak (samples l3/64 apart against l3/256)
     assert f.peaks["wheel_rate"] == pytest.approx(max(np.abs(w1).max(), np.abs(w2).max()), rel=1e-5)
+
+
+@pytest.mark.parametrize("name", ["figure8", "lane_change"])
+@pytest.mark.parametrize(
+    "hint", [math.nan, math.inf, np.array([0.1, math.nan]), np.array([[0.2], [-math.inf]])], ids=str
+)
+def test_a_nan_or_infinite_hint_is_refused_on_both_routes(name: str, hint: float | NDArray[np.float64]) -> None:
+    """``locate(x, y, s_prev)`` with a non-finite ``s_prev``: the one-line error naming the value, on the float route
+    and on the column route alike (the column route used to fail with an IndexError of a garbage sample number)."""
+    path = make_family_path(name)
+    bad = float(np.asarray(hint)[~np.isfinite(hint)].flat[0])
+    x = 0.1 if isinstance(hint, float) else np.full(np.shape(hint), 0.1)
+    with pytest.raises(ValueError, match=rf"^locate\.s_prev must be a finite number in \[-inf, inf\], got {bad}$"):
+        path.locate(x, 0.0 * x, hint)

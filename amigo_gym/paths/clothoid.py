@@ -268,6 +268,15 @@ def window_bounds(sp: Array, ahead: float, behind: float, length: Real, closed: 
     return np.asarray(lo_a), np.asarray(hi_a)
 
 
+def _check_hint(sp: Real) -> None:
+    """Refuse a NaN or infinite hint ``s_prev`` [m] of :meth:`ClothoidPath.locate` (a float or a column, both
+    routes): the one-line error of :func:`check_real` naming the first such value."""
+    a = np.asarray(sp, dtype=np.float64)
+    bad = a[~np.isfinite(a)]
+    if bad.size:
+        check_real("locate", "s_prev", float(bad.flat[0]))
+
+
 def coarse_search(
     sample_x: Array,
     sample_y: Array,
@@ -296,6 +305,7 @@ def coarse_search(
     ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
     behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
     sp = np.asarray(s_prev, dtype=np.float64)
+    _check_hint(sp)
     n_samp = len(sample_x)
     jj = np.floor((sp - behind) / h)[..., None] + np.arange(math.ceil((ahead + behind) / h) + 2, dtype=np.float64)
     if closed:
@@ -1057,7 +1067,7 @@ def _locate_float(
     else:
         behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
     if sp - sp != 0.0:
-        check_real("locate", "s_prev", sp)  # NaN or infinite: the clear error
+        _check_hint(sp)
     buf = [0.0] * (3 * NODES + 3)
     s, px, py, th, kappa, c, e, ct, st, dist, status = locate_flat(buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
     s_lap = s
