@@ -4,10 +4,15 @@ The fast path (numba, a core dependency where it ships wheels). It computes Amig
 (AmigoBot-v1's ideal step with v0's settings: clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
-reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
-docs/architecture.md, "The compiled step"), the loops and the manoeuvre path's choice between its line and its
-circle are written here. ``tests/test_kernels.py`` checks it against the reference the environments run with
-``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns`).
+reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"): the
+projection on the circle and on the manoeuvre path (``paths/classic.py``'s ``circle_foot``, ``manoeuvre_foot``,
+``manoeuvre_curvature``, which the paths run on floats), the observation (``task/v0.py``'s ``observe_head``,
+``curvature_feature``, ``observe_tail``, which ``observe_columns`` calls, clips included), the reward's terms and the
+arguments of its exponentials (``reward_arguments``, which ``reward_term_columns`` calls) and the termination
+(``off_path``). Written here: the loops, the reading and writing of the rows, and what is computed once per call
+instead of per row (the steady heading of the two curvatures a row can have). ``tests/test_kernels.py`` checks it
+against the reference the environments run with ``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings
+(:func:`amigo_gym.task.v1.step_columns`), and the compiled pieces against themselves run as Python.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
@@ -26,9 +31,13 @@ would run as as many passes over temporary arrays) is fused into the loops:
    into ``exps (N, 3)``;
 3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
 
-Only ``math.atan2`` and ``math.hypot`` (the manoeuvre path's arc length and its distance to the
-segment's end) are the C library's; they agree with numpy's to an ulp or better, and the arc length
-only decides whether a preview point lies before the end of the straight part.
+The manoeuvre path's ``np.arctan2`` and ``np.hypot`` (its arc length on the circle and the distance to the
+straight part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled by numba to the C library's
+``atan2`` and ``hypot``, which numpy's float64 ufuncs call where numpy does not vectorise them (here: the same bits on
+10^6 random pairs, and ``tests/test_kernels.py``); where a build vectorises ``arctan2`` (numpy's AVX-512 SVML loops)
+they may differ in the last bit of the arc length, which only decides whether a preview point lies before the end of
+the straight part. The observation's clips (``task.v0.clip_real``, which dispatches on the type) are compiled as
+:func:`amigo_gym.task.v0.clip_float` (an ``overload`` below), what ``clip_real`` runs on a float.
 
 Layouts (all C-contiguous, one row per robot):
 
@@ -305,6 +314,12 @@ def _evaluate(
     cos_ss_line, sin_ss_line = _steady_heading(0.0, l3)
     manoeuvre = c[MANOEUVRE] != 0.0
     m = 4 + preview.shape[0]
+    # the constants as locals (LLVM cannot tell that the rows' stores leave ``c`` alone: read in the loop, they are
+    # loaded again per row, and what depends on them alone, e.g. observe_tail's v_ref / v_max, is not hoisted)
+    dt, w_max, r1, r2, two_l1, l5, r3 = c[DT], c[W_MAX], c[R1], c[R2], c[TWO_L1], c[L5], c[R3]
+    cx, cy, r0x, r0y, d, r, big_l, curv = c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS], c[STRAIGHT], c[CURV]
+    speed, v_max, error_scale, e_max, term = c[SPEED], c[MAX_SPEED], c[ERROR_SCALE], c[E_MAX], c[TERM]
+    sigma_t, sigma_v, smooth_sq = c[SIG_T], c[SIG_V], c[SMOOTH_SQ]
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -318,22 +333,21 @@ def _evaluate(
             # a start state (task.v1.reset_columns): as it is, np.cos and np.sin of its heading, its speed
             w1 = prev1
             w2 = prev2
-            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
+            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
             cos_beta = tans[i, 0]
             sin_beta = tans[i, 1]
         else:
             # task.v1._ideal_step: kinematics.arc_step from the two tangents, the wheel angles
-            dt = c[DT]
             # _motion's numbers, bdot from pass 1
-            w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
-            w2 = _clip(actions[i, 1], -1.0, 1.0) * c[W_MAX]
-            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
+            w1 = _clip(actions[i, 0], -1.0, 1.0) * w_max
+            w2 = _clip(actions[i, 1], -1.0, 1.0) * w_max
+            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
             bdot = turn[i]
             db = bdot * dt
             h = 0.5 * db
             x, y, cos_beta, sin_beta = _arc(x, y, v, dt, h, tans[i, 0], tans[i, 1])
             beta = beta + db
-            castor = _castor_rate(v, bdot, c[L5], c[R3])
+            castor = _castor_rate(v, bdot, l5, r3)
             al1 = al1 + w1 * dt
             al2 = al2 + w2 * dt
             al3 = al3 + castor * dt
@@ -349,27 +363,25 @@ def _evaluate(
         # task.v1.evaluate_columns: H, its projection on the path (paths.classic's project_xy on floats)
         hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
         if manoeuvre:
-            e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(
-                hx, hy, c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS], c[STRAIGHT]
-            )
+            e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(hx, hy, cx, cy, r0x, r0y, d, r, big_l)
         else:
-            e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS])
+            e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, cx, cy, r0x, r0y, d, r)
             s = 0.0
             on_line = False
-        curvature = 0.0 if on_line else c[CURV]  # the straight part's, else the circle's
+        curvature = 0.0 if on_line else curv  # the straight part's, else the circle's
         cos_psi, sin_psi = _heading_error(cos_beta, sin_beta, cos_theta, sin_theta)
         abs_e = abs(e)
 
         # task.v0.observe_columns: its head, the preview's curvatures, its tail
-        o0, o1, o2, o3 = _observe_head(e, sin_psi, cos_psi, curvature, l3, c[ERROR_SCALE], c[E_MAX])
+        o0, o1, o2, o3 = _observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max)
         obs[i, 0] = o0
         obs[i, 1] = o1
         obs[i, 2] = o2
         obs[i, 3] = o3
         for j in range(preview.shape[0]):
-            kj = _manoeuvre_curvature(s + preview[j], c[STRAIGHT], c[CURV]) if manoeuvre else c[CURV]
+            kj = _manoeuvre_curvature(s + preview[j], big_l, curv) if manoeuvre else curv
             obs[i, 4 + j] = _curvature_feature(kj, l3)
-        o0, o1, o2, o3 = _observe_tail(w1, w2, v, c[SPEED], c[W_MAX], c[MAX_SPEED])
+        o0, o1, o2, o3 = _observe_tail(w1, w2, v, speed, w_max, v_max)
         obs[i, m] = o0
         obs[i, m + 1] = o1
         obs[i, m + 2] = o2
@@ -381,9 +393,9 @@ def _evaluate(
         dw1 = w1 - prev1
         dw2 = w2 - prev2
         exps[i, 0], exps[i, 1], exps[i, 2] = _reward_arguments(
-            abs_e, abs(v - c[SPEED]), dw1 * dw1 + dw2 * dw2, c[SIG_T], c[SIG_V], c[SMOOTH_SQ]
+            abs_e, abs(v - speed), dw1 * dw1 + dw2 * dw2, sigma_t, sigma_v, smooth_sq
         )
-        terminated[i] = _off_path(abs_e, c[TERM])
+        terminated[i] = _off_path(abs_e, term)
 
         record[i, 0] = x
         record[i, 1] = y
