@@ -430,7 +430,8 @@ def test_compiled_shared_pieces_give_the_python_bits() -> None:
         args = (row[0], row[1], row[2], row[3], 0.3, 0.25, 1.6)
         assert _bits_equal(k._observe_head(*args), task.observe_head(*args)), args
         args = (row[4], row[5], row[6], row[7], 1.7, 0.8)
-        assert _bits_equal(k._observe_tail(*args), task.observe_tail(*args)), args
+        assert _bits_equal(k._observe_rates(*args), task.observe_rates(*args)), args
+        assert _bits_equal(k._observe_reference(row[7], 0.8), task.observe_reference(row[7], 0.8))
         assert _bits_equal(k._curvature_feature(row[3], 0.3), task.curvature_feature(row[3], 0.3))
         args = (abs(row[0]), abs(row[6]), row[4] * row[4] + row[5] * row[5], 0.2, 0.4, 3.5)
         assert _bits_equal(k._reward_arguments(*args), task.reward_arguments(*args)), args

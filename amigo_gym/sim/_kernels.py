@@ -7,10 +7,11 @@ termination) in the same order of operations, writing into preallocated arrays: 
 reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"): the
 projection on the circle and on the manoeuvre path (``paths/classic.py``'s ``circle_foot``, ``manoeuvre_foot``,
 ``manoeuvre_curvature``, which the paths run on floats), the observation (``task/v0.py``'s ``observe_head``,
-``curvature_feature``, ``observe_tail``, which ``observe_columns`` calls, clips included), the reward's terms and the
-arguments of its exponentials (``reward_arguments``, which ``reward_term_columns`` calls) and the termination
-(``off_path``). Written here: the loops, the reading and writing of the rows, and what is computed once per call
-instead of per row (the steady heading of the two curvatures a row can have). ``tests/test_kernels.py`` checks it
+``curvature_feature``, ``observe_rates``, ``observe_reference``, which ``observe_columns`` calls, clips included),
+the reward's terms and the arguments of its exponentials (``reward_arguments``, which ``reward_term_columns`` calls)
+and the termination (``off_path``). Written here: the loops, the reading and writing of the rows, and what is
+computed once per call instead of per row (the steady heading of the two curvatures a row can have, the observed
+reference speed). ``tests/test_kernels.py`` checks it
 against the reference the environments run with ``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings
 (:func:`amigo_gym.task.v1.step_columns`), and the compiled pieces against themselves run as Python.
 
@@ -205,7 +206,8 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.off_path,
     task.observe_head,
     task.curvature_feature,
-    task.observe_tail,
+    task.observe_rates,
+    task.observe_reference,
     kinematics.body_velocity_of,
     kinematics.arc_from_tangents,
     kinematics.castor_rate_float,
@@ -221,7 +223,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "0672822ff899009e"
+LAYOUT_FINGERPRINT = "5c0d903b1548a01d"
 
 
 def layout_fingerprint() -> str:
@@ -266,7 +268,8 @@ _reward_arguments = _shared(task.reward_arguments)
 _off_path = _shared(task.off_path)
 _observe_head = _shared(task.observe_head)
 _curvature_feature = _shared(task.curvature_feature)
-_observe_tail = _shared(task.observe_tail)
+_observe_rates = _shared(task.observe_rates)
+_observe_reference = _shared(task.observe_reference)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -315,11 +318,12 @@ def _evaluate(
     manoeuvre = c[MANOEUVRE] != 0.0
     m = 4 + preview.shape[0]
     # the constants as locals (LLVM cannot tell that the rows' stores leave ``c`` alone: read in the loop, they are
-    # loaded again per row, and what depends on them alone, e.g. observe_tail's v_ref / v_max, is not hoisted)
+    # loaded again per row, and what depends on them alone, is recomputed per row)
     dt, w_max, r1, r2, two_l1, l5, r3 = c[DT], c[W_MAX], c[R1], c[R2], c[TWO_L1], c[L5], c[R3]
     cx, cy, r0x, r0y, d, r, big_l, curv = c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS], c[STRAIGHT], c[CURV]
     speed, v_max, error_scale, e_max, term = c[SPEED], c[MAX_SPEED], c[ERROR_SCALE], c[E_MAX], c[TERM]
     sigma_t, sigma_v, smooth_sq = c[SIG_T], c[SIG_V], c[SMOOTH_SQ]
+    reference_obs = _observe_reference(speed, v_max)  # observe_tail's last field: the same for every row
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -381,11 +385,11 @@ def _evaluate(
         for j in range(preview.shape[0]):
             kj = _manoeuvre_curvature(s + preview[j], big_l, curv) if manoeuvre else curv
             obs[i, 4 + j] = _curvature_feature(kj, l3)
-        o0, o1, o2, o3 = _observe_tail(w1, w2, v, speed, w_max, v_max)
+        o0, o1, o2 = _observe_rates(w1, w2, v, speed, w_max, v_max)
         obs[i, m] = o0
         obs[i, m + 1] = o1
         obs[i, m + 2] = o2
-        obs[i, m + 3] = o3
+        obs[i, m + 3] = reference_obs
 
         # task.v0.reward_term_columns, steady_heading: the heading term, the arguments of the exponentials
         sin_ss = sin_ss_line if on_line else sin_ss_curve

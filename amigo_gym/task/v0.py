@@ -91,6 +91,8 @@ __all__ = [
     "off_path",
     "observe_head",
     "observe_tail",
+    "observe_rates",
+    "observe_reference",
     "curvature_feature",
     "clip_real",
     "smooth_term",
@@ -406,16 +408,27 @@ def curvature_feature(curvature: Real, l3: float) -> Real:
 
 
 def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real, Real]:
-    """The observation's last four fields (:data:`OBS_TAIL`): ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1),
-    clip((v - v_ref) / v_max, +-2), v_ref / v_max)`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and
-    the reference speed ``v_ref`` [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the
-    compiled step (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    """The observation's last four fields (:data:`OBS_TAIL`): :func:`observe_rates`, then :func:`observe_reference`."""
+    rate1, rate2, speed_error = observe_rates(w1, w2, v, v_ref, w_max, v_max)
+    return rate1, rate2, speed_error, observe_reference(v_ref, v_max)
+
+
+def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
+    """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
+    v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
+    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
+    (:data:`amigo_gym.sim._kernels.SHARED`)."""
     return (
         clip_real(w1 / w_max, -1.0, 1.0),
         clip_real(w2 / w_max, -1.0, 1.0),
         clip_real((v - v_ref) / v_max, -2.0, 2.0),
-        v_ref / v_max,
     )
+
+
+def observe_reference(v_ref: Real, v_max: float) -> Real:
+    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]); the compiled step, where
+    ``v_ref`` is a constant, computes it once per call. Floats or columns."""
+    return v_ref / v_max
 
 
 def observe_columns(
