@@ -303,3 +303,82 @@ def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[
             ties += int(np.sum(d2 == d2.min()) > 1)
     if name == "line":
         assert ties > 0  # the tie rule was exercised
+
+
+def _manoeuvre_points(path: Any, g: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray, slice]:
+    """Points around a manoeuvre path: random ones, the circle's centre, exact ties between the line and the circle
+    (``x = L``, ``|y|`` in ``[r/2, r)`` on the circle's side: ``d_line = |e_circle| = |y|``; returned as a slice), the
+    segment's end and an ulp past it, signed zeros, NaN and infinities."""
+    big_l, r, d = path.straight_length, path.radius, path.direction
+    cx, cy, _, _ = path.circle._frame
+    x = g.uniform(-2.0, big_l + 2.5 * r, n)
+    y = g.uniform(-2.5 * r, 2.5 * r, n)
+    ties = slice(0, 40)
+    x[ties] = big_l
+    y[ties] = d * g.uniform(0.5 * r, r, 40)
+    x[40:44], y[40:44] = cx, cy
+    x[44:50] = np.nextafter(big_l, np.inf)
+    x[50:56] = big_l
+    y[50:53], y[53:56] = 0.0, -0.0
+    x[56], x[57], y[58], y[59] = -0.0, math.nan, math.nan, math.inf
+    x[60], y[61] = -math.inf, -math.inf
+    x[62:70], y[62:70] = -0.0, d * g.uniform(0.5 * r, r, 8)  # ties where L = 0 (np.minimum(-0.0, 0.0) is 0.0)
+    return x, y, ties
+
+
+@pytest.mark.parametrize("shape", [(1.0, 1.0, 1), (0.6, 0.0, -1), (1.7, 2.5, -1), (0.25, 0.75, 1)])
+def test_manoeuvre_projection_on_floats_equals_the_column_code(shape: tuple[float, float, int]) -> None:
+    """``ManoeuvrePath`` on one point of floats runs ``classic.manoeuvre_foot`` (what AmigoBot-v0's compiled step
+    compiles); on columns, numpy's ``minimum``, ``hypot``, ``where`` and the circle's column projection: every field
+    the same bits, ties between the line and the circle (to the line), the centre, NaN and infinities included."""
+    from amigo_gym.paths import ManoeuvrePath
+
+    path = ManoeuvrePath(*shape)
+    x, y, ties = _manoeuvre_points(path, np.random.default_rng(7), 3000)
+    for minimal in (False, True):
+        with np.errstate(invalid="ignore"):  # NaN and infinite points
+            ref = path.project_xy(x, y, minimal)
+        for i in range(x.size):
+            got = path.project_xy(float(x[i]), float(y[i]), minimal)
+            assert all(type(v) is float for v in got)
+            rows_equal(got, ref, i)
+    assert np.all(np.asarray(ref.curvature)[ties] == 0.0)  # the ties took the line
+    with np.errstate(invalid="ignore"):
+        loc = path.locate(x, y, x)
+    for i in range(0, x.size, 7):
+        rows_equal(path.locate(float(x[i]), float(y[i]), float(x[i])), loc, i)
+    s = np.concatenate((np.random.default_rng(8).uniform(-1.0, 2.0 * path.length, 500), [path.straight_length]))
+    s[:3] = (-0.0, math.nan, np.nextafter(path.straight_length, np.inf))
+    k = path.curvature_columns(s)
+    for i in range(s.size):
+        rows_equal((path.curvature_columns(float(s[i])),), (k,), i)
+
+
+def test_observation_and_reward_pieces_on_floats_equal_columns() -> None:
+    """``task/v0.py``'s observation pieces (``observe_head``, ``curvature_feature``, ``observe_tail``, what
+    ``observe_columns`` and the compiled step call) and ``reward_arguments`` on floats give their columns' bits, the
+    clips active (values beyond every bound, infinities, signed zeros); the reward's arguments are ``-x / sigma``.
+    (Not NaN: on a float the clip, ``clip_float``, gives the upper bound for NaN where ``np.clip`` keeps NaN.)"""
+    g = np.random.default_rng(9)
+    n = 2000
+    cols = [g.normal(size=n) * 3.0 for _ in range(8)]
+    for j, c in enumerate(cols):  # the infinities of two columns never meet (inf - inf: NaN, below)
+        c[:2] = (0.0, -0.0)
+        c[2 + 2 * j : 4 + 2 * j] = (math.inf, -math.inf)
+    e, sin_psi, cos_psi, kappa, w1, w2, v, v_ref = cols
+    head = task.observe_head(e, sin_psi, cos_psi, kappa, 0.3, 0.25, 1.6)
+    tail = task.observe_tail(w1, w2, v, v_ref, 1.7, 0.8)
+    feature = task.curvature_feature(kappa, 0.3)
+    assert np.all(np.abs(head[0]) <= 1.6) and np.any(np.abs(head[0]) == 1.6)  # the clips do clip
+    assert np.any(np.abs(tail[0]) == 1.0) and np.any(np.abs(tail[2]) == 2.0)
+    args = task.reward_arguments(np.abs(e), np.abs(v), w1 * w1 + w2 * w2, 0.2, 0.4, 3.5)
+    np.testing.assert_array_equal(args[0], -(np.abs(e) / 0.2))
+    np.testing.assert_array_equal(args[1], -(np.abs(v) / 0.4))
+    np.testing.assert_array_equal(args[2], -((w1 * w1 + w2 * w2) / 3.5))
+    for i in range(n):
+        f = [float(c[i]) for c in cols]
+        rows_equal(task.observe_head(f[0], f[1], f[2], f[3], 0.3, 0.25, 1.6), head, i)
+        rows_equal(task.observe_tail(f[4], f[5], f[6], f[7], 1.7, 0.8), tail, i)
+        rows_equal((task.curvature_feature(f[3], 0.3),), (feature,), i)
+        got = task.reward_arguments(abs(f[0]), abs(f[6]), f[4] * f[4] + f[5] * f[5], 0.2, 0.4, 3.5)
+        rows_equal(got, args, i)

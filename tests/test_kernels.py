@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from v0_reference import Reference
 
 from amigo_gym.model.params import EnvParams
-from amigo_gym.paths import make_path
+from amigo_gym.paths import classic, make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -398,3 +398,41 @@ def test_single_env_kernel_argument(monkeypatch: pytest.MonkeyPatch) -> None:
     for bad in ("fast", 1, None, "numba-parallel"):
         with pytest.raises(ValueError, match=r"^AmigoBotEnv\.kernel must be 'auto', 'numpy' or 'numba', got .*$"):
             gym.make("AmigoBot-v0", kernel=bad)
+
+
+def test_compiled_shared_pieces_give_the_python_bits() -> None:
+    """The functions the kernel compiles from ``paths/classic.py`` and ``task/v0.py`` (its :data:`SHARED`), called
+    compiled and as Python on the same floats: the same bits. For ``manoeuvre_foot`` this compares numba's ``atan2``
+    and ``hypot`` (the C library's) with numpy's ``arctan2`` and ``hypot`` (the reference's) on points around the path,
+    ties between the line and the circle, the centre and NaN included; for the observation's pieces, the kernel's
+    ``clip_real`` (an overload: ``clip_float``) with the Python one on values beyond the bounds and NaN."""
+    from amigo_gym.paths import ManoeuvrePath
+
+    k = fast.kernels()
+    g = np.random.default_rng(12)
+    for path in (ManoeuvrePath(1.0, 1.0, 1), ManoeuvrePath(0.6, 0.0, -1), ManoeuvrePath(1.7, 2.5, -1)):
+        big_l, r, d = path.straight_length, path.radius, float(path.direction)
+        frame = path.circle._frame
+        n = 4000
+        x = g.uniform(-2.0, big_l + 2.5 * r, n)
+        y = g.uniform(-2.5 * r, 2.5 * r, n)
+        x[:40], y[:40] = big_l, d * g.uniform(0.5 * r, r, 40)  # ties: d_line = |e_circle| = |y|
+        x[40:44], y[40:44] = frame[0], frame[1]  # the centre
+        x[44], y[45], x[46] = np.nan, np.nan, -0.0
+        for i in range(n):
+            args = (float(x[i]), float(y[i]), *frame, d, r, big_l)
+            assert _bits_equal(k._manoeuvre_foot(*args), classic.manoeuvre_foot(*args)), args
+            s = float(x[i]) + 0.5
+            assert _bits_equal(k._manoeuvre_curvature(s, big_l, d / r), classic.manoeuvre_curvature(s, big_l, d / r))
+    v = g.normal(size=(n, 8)) * 3.0
+    v[::9, 3] = np.nan
+    for row in v.tolist():
+        args = (row[0], row[1], row[2], row[3], 0.3, 0.25, 1.6)
+        assert _bits_equal(k._observe_head(*args), task.observe_head(*args)), args
+        args = (row[4], row[5], row[6], row[7], 1.7, 0.8)
+        assert _bits_equal(k._observe_rates(*args), task.observe_rates(*args)), args
+        assert _bits_equal(k._observe_reference(row[7], 0.8), task.observe_reference(row[7], 0.8))
+        assert _bits_equal(k._curvature_feature(row[3], 0.3), task.curvature_feature(row[3], 0.3))
+        args = (abs(row[0]), abs(row[6]), row[4] * row[4] + row[5] * row[5], 0.2, 0.4, 3.5)
+        assert _bits_equal(k._reward_arguments(*args), task.reward_arguments(*args)), args
+        assert k._off_path(abs(row[0]), 2.0) == task.off_path(abs(row[0]), 2.0)

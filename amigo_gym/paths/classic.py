@@ -446,6 +446,10 @@ class ManoeuvrePath:
         return np.where((s <= self.straight_length)[..., None], straight, arc)
 
     def curvature_columns(self, s: Real) -> Real:
+        """The curvature [1/m] at arc lengths ``s`` [m]: 0 on the straight part (``s <= straight_length``), the
+        circle's ``direction / radius`` beyond (:func:`manoeuvre_curvature` for a float ``s``)."""
+        if type(s) is float:
+            return manoeuvre_curvature(s, self.straight_length, self.direction / self.radius)
         return _where(s <= self.straight_length, 0.0, self.direction / self.radius)
 
     #: the manoeuvre is an open path for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): its projection never
@@ -475,7 +479,18 @@ class ManoeuvrePath:
         return self.project_xy(p[..., 0], p[..., 1]).projection()
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
+        """Closest point of the path to ``(x, y)`` [m]: the closer of the straight half-line (``y = 0``, ``x <=
+        straight_length``) and the circle (:meth:`CirclePath.project_xy`), ties to the line.
+
+        The line's distance is ``hypot(x - s_line, y)`` with ``s_line = min(x, L)``, its cross-track error ``y``
+        (``sign(y)`` times that distance beyond the segment's end). One point of Python floats runs
+        :func:`manoeuvre_foot` (the function AmigoBot-v0's compiled step compiles); columns run the same
+        operations on arrays (``tests/test_float_paths.py`` compares the two bit for bit).
+        ``minimal=True``: the point and the tangent angle are not computed (NaN).
+        """
         L = self.straight_length
+        if type(x) is float and type(y) is float:
+            return self._project_float(x, y, minimal)
         s_line = np.minimum(x, L)
         d_line = np.hypot(x - s_line, y)
         circ = self.circle.project_xy(x, y)
@@ -493,6 +508,68 @@ class ManoeuvrePath:
             cos_theta=_where(use_line, 1.0, circ.cos_theta),
             sin_theta=_where(use_line, 0.0, circ.sin_theta),
         )
+
+    def _project_float(self, x: float, y: float, minimal: bool) -> ClosestPoint:
+        """:meth:`project_xy` of one point of Python floats, by :func:`manoeuvre_foot` (Python floats out)."""
+        circle = self.circle
+        cx, cy, r0x, r0y = circle._frame
+        d, r = self.direction, self.radius
+        e, cos_theta, sin_theta, s, s_circ, on_line = manoeuvre_foot(
+            x, y, cx, cy, r0x, r0y, float(d), r, self.straight_length
+        )
+        curvature = 0.0 if on_line else d / r
+        if minimal:
+            return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
+        if on_line:
+            return ClosestPoint(s, s, 0.0, 0.0, curvature, e, cos_theta, sin_theta)
+        # the circle's foot point c + r n, with n from its unit tangent d (-n_y, n_x) (a negation is exact)
+        nx = sin_theta if d > 0 else -sin_theta
+        ny = -cos_theta if d > 0 else cos_theta
+        theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
+        return ClosestPoint(s, cx + r * nx, cy + r * ny, theta, curvature, e, cos_theta, sin_theta)
+
+
+def manoeuvre_foot(
+    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
+) -> tuple[float, float, float, float, float, bool]:
+    r"""The foot of the point ``(x, y)`` [m] on the manoeuvre path, for floats (:meth:`ManoeuvrePath.project_xy`).
+
+    The path: the half-line ``y = 0, x <= L`` (``L = big_l`` [m], the straight part, tangent angle 0), then the circle
+    of centre ``(cx, cy)``, radius ``r`` [m] and direction ``d`` (+1 left, -1 right) that starts at ``(L, 0)``, its
+    unit start radius ``(r0x, r0y)`` (:func:`circle_foot`). On the circle, the arc length from its start is
+    ``s_circ = r a`` with ``a = atan2(d (r0 x u), r0 . u)`` in ``[0, 2 pi)`` (``u`` from the centre to the point);
+    on the line, the foot is ``s_line = min(x, L)`` at the distance ``d_line = hypot(x - s_line, y)``, the
+    cross-track error ``y`` (``sign(y) d_line`` past the end). The line wins where ``d_line <= |e_circle|``.
+
+    Returns ``(e, cos theta, sin theta, s, s_circ, on_line)``: the cross-track error [m] (positive left), the unit
+    tangent, the arc length ``s`` [m] on the whole path (``s_line``, or ``L + s_circ``), the circle's ``s_circ`` [m]
+    and whether the line won (curvature 0; else the circle's ``d / r``).
+
+    In numba's subset: AmigoBot-v0's compiled step compiles this function (:data:`amigo_gym.sim._kernels.SHARED`).
+    ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: as Python, numpy's ufuncs, the column code's
+    functions; Python's ``math.hypot`` is its own algorithm and differs from them in the last bit of some 0.2 % of
+    arguments), which numba compiles to the C library's ``atan2`` and ``hypot``; numpy's float64 ``arctan2`` and
+    ``hypot`` call those where they are not vectorised (here: equal on 10^6 random pairs; ``tests/test_kernels.py``).
+    ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
+    ``0.0`` for ``+-0.0``, NaN for NaN).
+    """
+    e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
+    cross = r0x * uy - r0y * ux
+    a = float(np.arctan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy))
+    s_circ = r * (a + (TWO_PI if a < 0.0 else 0.0))  # a + 2 pi where a < 0: in [0, 2 pi r]
+    s_line = x if (x < big_l or x != x) else big_l  # np.minimum(x, big_l)
+    d_line = float(np.hypot(x - s_line, y))
+    if d_line <= abs(e):  # the line (ties to it)
+        sign_y = 1.0 if y > 0.0 else (-1.0 if y < 0.0 else (0.0 if y == 0.0 else y))  # np.sign(y)
+        return (y if x <= big_l else sign_y * d_line), 1.0, 0.0, s_line, s_circ, True
+    return e, cos_theta, sin_theta, big_l + s_circ, s_circ, False
+
+
+def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
+    """The manoeuvre path's curvature [1/m] at the arc length ``s`` [m], for floats: 0 where ``s <= big_l`` (the
+    straight part, ``big_l`` [m] long), else the circle's ``curvature`` [1/m] (NaN ``s``: the circle's, as the
+    column code). In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    return 0.0 if s <= big_l else curvature
 
 
 def _located(cp: ClosestPoint, progress: Real) -> PathPoint:

@@ -4,10 +4,16 @@ The fast path (numba, a core dependency where it ships wheels). It computes Amig
 (AmigoBot-v1's ideal step with v0's settings: clip and scale the action, exact arc step of pose and
 wheel angles, projection of H on the circle or the manoeuvre path, observation, reward terms,
 termination) in the same order of operations, writing into preallocated arrays: the scalar pieces are the
-reference's own functions compiled as they are (:data:`SHARED`, the circle's foot point included;
-docs/architecture.md, "The compiled step"), the loops and the manoeuvre path's choice between its line and its
-circle are written here. ``tests/test_kernels.py`` checks it against the reference the environments run with
-``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns`).
+reference's own functions compiled as they are (:data:`SHARED`; docs/architecture.md, "The compiled step"): the
+projection on the circle and on the manoeuvre path (``paths/classic.py``'s ``circle_foot``, ``manoeuvre_foot``,
+``manoeuvre_curvature``, which the paths run on floats), the observation (``task/v0.py``'s ``observe_head``,
+``curvature_feature``, ``observe_rates``, ``observe_reference``, which ``observe_columns`` calls, clips included),
+the reward's terms and the arguments of its exponentials (``reward_arguments``, which ``reward_term_columns`` calls)
+and the termination (``off_path``). Written here: the loops, the reading and writing of the rows, and what is
+computed once per call instead of per row (the steady heading of the two curvatures a row can have, the observed
+reference speed). ``tests/test_kernels.py`` checks it
+against the reference the environments run with ``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings
+(:func:`amigo_gym.task.v1.step_columns`), and the compiled pieces against themselves run as Python.
 
 Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
@@ -26,9 +32,13 @@ would run as as many passes over temporary arrays) is fused into the loops:
    into ``exps (N, 3)``;
 3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
 
-Only ``math.atan2`` and ``math.hypot`` (the manoeuvre path's arc length and its distance to the
-segment's end) are the C library's; they agree with numpy's to an ulp or better, and the arc length
-only decides whether a preview point lies before the end of the straight part.
+The manoeuvre path's ``np.arctan2`` and ``np.hypot`` (its arc length on the circle and the distance to the
+straight part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled by numba to the C library's
+``atan2`` and ``hypot``, which numpy's float64 ufuncs call where numpy does not vectorise them (here: the same bits on
+10^6 random pairs, and ``tests/test_kernels.py``); where a build vectorises ``arctan2`` (numpy's AVX-512 SVML loops)
+they may differ in the last bit of the arc length, which only decides whether a preview point lies before the end of
+the straight part. The observation's clips (``task.v0.clip_real``, which dispatches on the type) are compiled as
+:func:`amigo_gym.task.v0.clip_float` (an ``overload`` below), what ``clip_real`` runs on a float.
 
 Layouts (all C-contiguous, one row per robot):
 
@@ -72,7 +82,7 @@ import numpy as np
 from llvmlite import ir
 from numba.core import types as nb_types
 from numba.core.typing.templates import Signature
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics
@@ -101,8 +111,6 @@ __all__ = [
     "single_step",
     "tan_exp",
 ]
-
-TWO_PI = 2.0 * math.pi
 
 #: columns of the ``state`` array: pose [m, m, rad], wheel angles [rad], wheel rates of the last step [rad/s]
 STATE_FIELDS: tuple[str, ...] = ("x", "y", "beta", "alpha1", "alpha2", "alpha3", "rate1", "rate2")
@@ -142,11 +150,10 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "error_scale",
     "e_max",
     "termination_distance",
-    "neg_sigma_track",
-    "neg_sigma_speed",
-    "neg_smooth_scale_sq",
+    "sigma_track",
+    "sigma_speed",
+    "smooth_scale_sq",
     "smooth_weight",
-    "reference_obs",
     "manoeuvre",
     "direction",
     "radius",
@@ -179,8 +186,8 @@ S_X0, S_Y0, S_THETA0, S_POS_NOISE, S_HEADING_NOISE, S_L3, S_RATE1, S_RATE2 = (_S
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 DT, W_MAX, R1, R2, TWO_L1, L3, L5, R3 = (_C[n] for n in CONSTANT_FIELDS[:8])
 SPEED, MAX_SPEED, ERROR_SCALE, E_MAX, TERM = (_C[n] for n in CONSTANT_FIELDS[8:13])
-NEG_SIG_T, NEG_SIG_V, NEG_SMOOTH_SQ, SMOOTH_W, REF_OBS = (_C[n] for n in CONSTANT_FIELDS[13:18])
-MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[18:27])
+SIG_T, SIG_V, SMOOTH_SQ, SMOOTH_W = (_C[n] for n in CONSTANT_FIELDS[13:17])
+MANOEUVRE, DIRECTION, RADIUS, CX, CY, R0X, R0Y, STRAIGHT, CURV = (_C[n] for n in CONSTANT_FIELDS[17:26])
 HEADING_LIM = _C["heading_limit"]
 
 
@@ -195,6 +202,12 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.steady_heading_float,
     task.smooth_term,
     task.reward_product,
+    task.reward_arguments,
+    task.off_path,
+    task.observe_head,
+    task.curvature_feature,
+    task.observe_rates,
+    task.observe_reference,
     kinematics.body_velocity_of,
     kinematics.arc_from_tangents,
     kinematics.castor_rate_float,
@@ -202,13 +215,15 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
     classic.circle_foot,
+    classic.manoeuvre_foot,
+    classic.manoeuvre_curvature,
 )
 
 #: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "7d1ed4db037256ee"
+LAYOUT_FINGERPRINT = "5c0d903b1548a01d"
 
 
 def layout_fingerprint() -> str:
@@ -219,6 +234,17 @@ def layout_fingerprint() -> str:
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+
+
+@overload(task.clip_real, jit_options={"error_model": "numpy"}, inline="always")
+def _clip_real(x: float, low: float, high: float) -> Callable[[float, float, float], float]:
+    """The compiled form of :func:`amigo_gym.task.v0.clip_real` (which the observation's pieces call): on a float it
+    is :func:`amigo_gym.task.v0.clip_float`, what ``clip_real`` runs on a float as Python."""
+
+    def impl(x: float, low: float, high: float) -> float:
+        return task.clip_float(x, low, high)
+
+    return impl
 
 
 _shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit)
@@ -236,16 +262,14 @@ _castor_rate = _shared(kinematics.castor_rate_float)
 _h_from_a = _shared(kinematics.h_from_a)
 _a_from_h = _shared(kinematics.a_from_h)
 _circle_foot = _shared(classic.circle_foot)
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
-def _sign(y: float) -> float:
-    # np.sign of a float: 1, -1, 0 (for +-0.0; NaN stays NaN)
-    if y > 0.0:
-        return 1.0
-    if y < 0.0:
-        return -1.0
-    return 0.0 if y == 0.0 else y
+_manoeuvre_foot = _shared(classic.manoeuvre_foot)
+_manoeuvre_curvature = _shared(classic.manoeuvre_curvature)
+_reward_arguments = _shared(task.reward_arguments)
+_off_path = _shared(task.off_path)
+_observe_head = _shared(task.observe_head)
+_curvature_feature = _shared(task.curvature_feature)
+_observe_rates = _shared(task.observe_rates)
+_observe_reference = _shared(task.observe_reference)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -289,10 +313,17 @@ def _evaluate(
     # task.steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
     # of the manoeuvre), computed once with the same operations instead of a square root per row
     l3 = c[L3]
-    kl3_curve = c[CURV] * l3
-    kl3_line = 0.0 * l3
     cos_ss_curve, sin_ss_curve = _steady_heading(c[CURV], l3)
     cos_ss_line, sin_ss_line = _steady_heading(0.0, l3)
+    manoeuvre = c[MANOEUVRE] != 0.0
+    m = 4 + preview.shape[0]
+    # the constants as locals (LLVM cannot tell that the rows' stores leave ``c`` alone: read in the loop, they are
+    # loaded again per row, and what depends on them alone, is recomputed per row)
+    dt, w_max, r1, r2, two_l1, l5, r3 = c[DT], c[W_MAX], c[R1], c[R2], c[TWO_L1], c[L5], c[R3]
+    cx, cy, r0x, r0y, d, r, big_l, curv = c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS], c[STRAIGHT], c[CURV]
+    speed, v_max, error_scale, e_max, term = c[SPEED], c[MAX_SPEED], c[ERROR_SCALE], c[E_MAX], c[TERM]
+    sigma_t, sigma_v, smooth_sq = c[SIG_T], c[SIG_V], c[SMOOTH_SQ]
+    reference_obs = _observe_reference(speed, v_max)  # observe_tail's last field: the same for every row
     for i in numba.prange(state.shape[0]):
         x = state[i, 0]
         y = state[i, 1]
@@ -306,22 +337,21 @@ def _evaluate(
             # a start state (task.v1.reset_columns): as it is, np.cos and np.sin of its heading, its speed
             w1 = prev1
             w2 = prev2
-            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
+            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
             cos_beta = tans[i, 0]
             sin_beta = tans[i, 1]
         else:
             # task.v1._ideal_step: kinematics.arc_step from the two tangents, the wheel angles
-            dt = c[DT]
             # _motion's numbers, bdot from pass 1
-            w1 = _clip(actions[i, 0], -1.0, 1.0) * c[W_MAX]
-            w2 = _clip(actions[i, 1], -1.0, 1.0) * c[W_MAX]
-            v = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])[0]
+            w1 = _clip(actions[i, 0], -1.0, 1.0) * w_max
+            w2 = _clip(actions[i, 1], -1.0, 1.0) * w_max
+            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
             bdot = turn[i]
             db = bdot * dt
             h = 0.5 * db
             x, y, cos_beta, sin_beta = _arc(x, y, v, dt, h, tans[i, 0], tans[i, 1])
             beta = beta + db
-            castor = _castor_rate(v, bdot, c[L5], c[R3])
+            castor = _castor_rate(v, bdot, l5, r3)
             al1 = al1 + w1 * dt
             al2 = al2 + w2 * dt
             al3 = al3 + castor * dt
@@ -334,61 +364,42 @@ def _evaluate(
             state[i, 6] = w1
             state[i, 7] = w2
 
-        # task.v1.evaluate_columns: H, its projection on the path (paths.*.project_xy, minimal)
+        # task.v1.evaluate_columns: H, its projection on the path (paths.classic's project_xy on floats)
         hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
-        d = c[DIRECTION]
-        r = c[RADIUS]
-        r0x = c[R0X]
-        r0y = c[R0Y]
-        e, cos_theta, sin_theta, ux, uy = _circle_foot(hx, hy, c[CX], c[CY], r0x, r0y, d, r)
-        on_line = False  # on the manoeuvre's straight part: curvature 0 (else the path's)
-        s = 0.0
-        manoeuvre = c[MANOEUVRE] != 0.0
         if manoeuvre:
-            # paths.ManoeuvrePath.project_xy: the closer of the straight half-line and the circle
-            big_l = c[STRAIGHT]
-            cross = r0x * uy - r0y * ux
-            a = math.atan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
-            s_circ = r * (a + (TWO_PI if a < 0.0 else 0.0))
-            s_line = min(hx, big_l)
-            d_line = math.hypot(hx - s_line, hy)
-            if d_line <= abs(e):
-                e = hy if hx <= big_l else _sign(hy) * d_line
-                s = s_line
-                on_line = True
-                cos_theta = 1.0
-                sin_theta = 0.0
-            else:
-                s = big_l + s_circ
+            e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(hx, hy, cx, cy, r0x, r0y, d, r, big_l)
+        else:
+            e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, cx, cy, r0x, r0y, d, r)
+            s = 0.0
+            on_line = False
+        curvature = 0.0 if on_line else curv  # the straight part's, else the circle's
         cos_psi, sin_psi = _heading_error(cos_beta, sin_beta, cos_theta, sin_theta)
         abs_e = abs(e)
-        dv = v - c[SPEED]
-        w_max = c[W_MAX]
 
-        # task.observe_columns (its clips are no-ops on these values)
-        kl3 = kl3_line if on_line else kl3_curve  # curvature * l3
-        obs[i, 0] = _clip(e / c[ERROR_SCALE], -c[E_MAX], c[E_MAX])
-        obs[i, 1] = sin_psi
-        obs[i, 2] = cos_psi
-        obs[i, 3] = kl3
+        # task.v0.observe_columns: its head, the preview's curvatures, its tail
+        o0, o1, o2, o3 = _observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max)
+        obs[i, 0] = o0
+        obs[i, 1] = o1
+        obs[i, 2] = o2
+        obs[i, 3] = o3
         for j in range(preview.shape[0]):
-            kj = (0.0 if s + preview[j] <= c[STRAIGHT] else c[CURV]) if manoeuvre else c[CURV]
-            obs[i, 4 + j] = kj * l3
-        m = 4 + preview.shape[0]
-        obs[i, m] = w1 / w_max
-        obs[i, m + 1] = w2 / w_max
-        obs[i, m + 2] = dv / c[MAX_SPEED]
-        obs[i, m + 3] = c[REF_OBS]
+            kj = _manoeuvre_curvature(s + preview[j], big_l, curv) if manoeuvre else curv
+            obs[i, 4 + j] = _curvature_feature(kj, l3)
+        o0, o1, o2 = _observe_rates(w1, w2, v, speed, w_max, v_max)
+        obs[i, m] = o0
+        obs[i, m + 1] = o1
+        obs[i, m + 2] = o2
+        obs[i, m + 3] = reference_obs
 
         # task.v0.reward_term_columns, steady_heading: the heading term, the arguments of the exponentials
         sin_ss = sin_ss_line if on_line else sin_ss_curve
         cos_ss = cos_ss_line if on_line else cos_ss_curve
         dw1 = w1 - prev1
         dw2 = w2 - prev2
-        exps[i, 0] = abs_e / c[NEG_SIG_T]
-        exps[i, 1] = abs(dv) / c[NEG_SIG_V]
-        exps[i, 2] = (dw1 * dw1 + dw2 * dw2) / c[NEG_SMOOTH_SQ]
-        terminated[i] = abs_e > c[TERM]
+        exps[i, 0], exps[i, 1], exps[i, 2] = _reward_arguments(
+            abs_e, abs(v - speed), dw1 * dw1 + dw2 * dw2, sigma_t, sigma_v, smooth_sq
+        )
+        terminated[i] = _off_path(abs_e, term)
 
         record[i, 0] = x
         record[i, 1] = y

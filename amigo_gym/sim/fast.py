@@ -230,8 +230,8 @@ def same_bits_as_numpy(compiled: Any, x: NDArray[np.float64], f0: Any, f1: Any) 
 def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDArray[np.float64]:
     """The ``consts`` vector of the kernels (:data:`amigo_gym.sim._kernels.CONSTANT_FIELDS`).
 
-    Every entry is computed as the reference computes it (``2.0 * l1``, ``direction / radius``, the
-    negated scales the reference divides by), so the kernel's arithmetic is the reference's.
+    Every entry is computed as the reference computes it (``2.0 * l1``, ``direction / radius``), so the kernel's
+    arithmetic is the reference's.
     """
     robot = k.robot
     if isinstance(path, CirclePath):
@@ -253,11 +253,10 @@ def kernel_constants(k: TaskConstants, path: CirclePath | ManoeuvrePath) -> NDAr
         "error_scale": k.error_scale,
         "e_max": k.e_max,
         "termination_distance": k.termination_distance,
-        "neg_sigma_track": -k.sigma_track,
-        "neg_sigma_speed": -k.sigma_speed,
-        "neg_smooth_scale_sq": -k.smooth_scale_sq,
+        "sigma_track": k.sigma_track,
+        "sigma_speed": k.sigma_speed,
+        "smooth_scale_sq": k.smooth_scale_sq,
         "smooth_weight": k.smooth_weight,
-        "reference_obs": k.reference_obs,
         "manoeuvre": manoeuvre,
         "direction": float(circle.direction),
         "radius": circle.radius,

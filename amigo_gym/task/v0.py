@@ -87,6 +87,14 @@ __all__ = [
     "real_array",
     "reward_term_columns",
     "reward_product",
+    "reward_arguments",
+    "off_path",
+    "observe_head",
+    "observe_tail",
+    "observe_rates",
+    "observe_reference",
+    "curvature_feature",
+    "clip_real",
     "smooth_term",
     "heading_term",
     "steady_heading",
@@ -342,9 +350,13 @@ def task_constants(params: EnvParams) -> TaskConstants:
     return TaskConstants(params)
 
 
-def _clip(x: Real, low: float, high: float) -> Real:
+def clip_real(x: Real, low: float, high: float) -> Real:
     """``np.clip`` of an array (as ``np.minimum(np.maximum(x, low), high)``: the same values, less overhead); of a
-    scalar, the same value by comparisons (:func:`clip_float`)."""
+    scalar, the same value by comparisons (:func:`clip_float`).
+
+    The polymorphic pieces below (:func:`observe_head`, :func:`curvature_feature`, :func:`observe_tail`) call it; the
+    compiled step, which compiles them, replaces it by :func:`clip_float` (an ``overload`` in
+    :mod:`amigo_gym.sim._kernels`), what it runs on a float here."""
     if isinstance(x, np.ndarray):
         out: Real = np.minimum(np.maximum(x, low), high)
         return out
@@ -379,6 +391,46 @@ def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
     return math.sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
+def observe_head(
+    e: Real, sin_psi: Real, cos_psi: Real, curvature: Real, l3: float, error_scale: float, e_max: float
+) -> tuple[Real, Real, Real, Real]:
+    """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
+    clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
+    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns; compiled by the
+    compiled step (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    return clip_real(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
+
+
+def curvature_feature(curvature: Real, l3: float) -> Real:
+    """A curvature field of the observation (at H, and at each preview point): ``clip(kappa l3, -1, 1)`` [-] of the
+    curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns; compiled by the compiled step."""
+    return clip_real(curvature * l3, -1.0, 1.0)
+
+
+def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real, Real]:
+    """The observation's last four fields (:data:`OBS_TAIL`): :func:`observe_rates`, then :func:`observe_reference`."""
+    rate1, rate2, speed_error = observe_rates(w1, w2, v, v_ref, w_max, v_max)
+    return rate1, rate2, speed_error, observe_reference(v_ref, v_max)
+
+
+def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
+    """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
+    v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
+    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
+    (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    return (
+        clip_real(w1 / w_max, -1.0, 1.0),
+        clip_real(w2 / w_max, -1.0, 1.0),
+        clip_real((v - v_ref) / v_max, -2.0, 2.0),
+    )
+
+
+def observe_reference(v_ref: Real, v_max: float) -> Real:
+    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]); the compiled step, where
+    ``v_ref`` is a constant, computes it once per call. Floats or columns."""
+    return v_ref / v_max
+
+
 def observe_columns(
     path: Any,
     preview: tuple[float, ...],
@@ -406,19 +458,13 @@ def observe_columns(
     speed [m/s]; ``l3``, ``error_scale`` [m], ``e_max`` [-], ``w_max`` [rad/s], ``v_max`` [m/s] the scales.
     """
     if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
-        ahead = [_clip(path.curvature_columns(s + d) * l3, -1.0, 1.0) for d in preview]
+        ahead = [curvature_feature(path.curvature_columns(s + d), l3) for d in preview]
     else:
-        ahead = [_clip(path.pose_columns(s + d).curvature * l3, -1.0, 1.0) for d in preview]
+        ahead = [curvature_feature(path.pose_columns(s + d).curvature, l3) for d in preview]
     return (
-        _clip(e / error_scale, -e_max, e_max),
-        sin_psi,
-        cos_psi,
-        _clip(curvature * l3, -1.0, 1.0),
+        *observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max),
         *ahead,
-        _clip(w1 / w_max, -1.0, 1.0),
-        _clip(w2 / w_max, -1.0, 1.0),
-        _clip((v - v_ref) / v_max, -2.0, 2.0),
-        v_ref / v_max,
+        *observe_tail(w1, w2, v, v_ref, w_max, v_max),
     )
 
 
@@ -447,12 +493,34 @@ def reward_term_columns(
         change_sq: squared change of the command, in the units of ``smooth_scale_sq``.
         sigma_track [m], sigma_speed [m/s], smooth_weight [-], smooth_scale_sq: the scales.
     """
-    return (
-        col_exp(abs_error / -sigma_track),
-        col_exp(abs_dv / -sigma_speed),
-        heading_term(cos_psi, sin_psi, cos_ss, sin_ss),
-        smooth_term(col_exp(change_sq / -smooth_scale_sq), smooth_weight),
+    arg_track, arg_speed, arg_smooth = reward_arguments(
+        abs_error, abs_dv, change_sq, sigma_track, sigma_speed, smooth_scale_sq
     )
+    return (
+        col_exp(arg_track),
+        col_exp(arg_speed),
+        heading_term(cos_psi, sin_psi, cos_ss, sin_ss),
+        smooth_term(col_exp(arg_smooth), smooth_weight),
+    )
+
+
+def reward_arguments(
+    abs_error: Real, abs_dv: Real, change_sq: Real, sigma_track: float, sigma_speed: float, smooth_scale_sq: float
+) -> tuple[Real, Real, Real]:
+    r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`):
+    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, computed as ``abs_error / -sigma_track``, ``abs_dv /
+    -sigma_speed``, ``change_sq / -smooth_scale_sq`` (a division by the negated scale: the bits of the compiled
+    steps, which compile this function). ``abs_error`` [m], ``abs_dv`` [m/s], ``change_sq`` in the units of
+    ``smooth_scale_sq``; the scales ``sigma_track`` [m], ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive.
+    Floats or columns (numba's subset: :data:`amigo_gym.sim._kernels.SHARED`)."""
+    return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
+
+
+def off_path(abs_error: Real, termination_distance: float) -> Any:
+    """The termination of AmigoBot-v0's task: H farther than ``termination_distance`` [m] from the path, ``|e| >
+    termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool for a float, a bool
+    column for a column; compiled by the compiled step (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    return abs_error > termination_distance
 
 
 def smooth_term(ex: Real, smooth_weight: float) -> Real:
@@ -468,7 +536,7 @@ def reward_product(track: Real, speed: Real, heading: Real, smooth: Real) -> Rea
 def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
     """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (``kappa l3`` clipped to
     [-1, 1]): ``cos psi_ss = sqrt(1 - (kappa l3)^2)``, ``sin psi_ss = -kappa l3``; floats or columns."""
-    sin_ss = -_clip(curvature * l3, -1.0, 1.0)
+    sin_ss = -clip_real(curvature * l3, -1.0, 1.0)
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
