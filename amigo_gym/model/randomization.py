@@ -340,9 +340,10 @@ def channels_on(position: float, heading: float, rate: float) -> int:
 
 
 def step_uniforms(
-    buf: Any, u1_at: int, u2_at: int, key: int, step: int, slip_max: float, position: float, heading: float, rate: float
+    buf: Any, u1_at: int, u2_at: int, key: Any, step: int, slip_max: float, position: float, heading: float, rate: float
 ) -> tuple[float, float, int]:
-    """The uniform draws of :func:`step_noise` for one robot: the slips ``slip_max u`` (0.0 when ``slip_max`` is 0)
+    """The uniform draws of :func:`step_noise` for one robot (``key`` a Python ``int``, or ``uint64`` in the compiled
+    step): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0)
     and, for each measurement-noise channel on (in channel order, :func:`noise_level`), ``u1`` into
     ``buf[u1_at + j]`` and the angle ``2 pi u2`` into ``buf[u2_at + j]`` (``j`` counting the channels on).
 

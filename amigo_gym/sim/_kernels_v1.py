@@ -61,7 +61,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
@@ -88,7 +88,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "260822213625d011"
+LAYOUT_FINGERPRINT = "c65ea9fe2a29044a"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -173,7 +173,7 @@ _min_scalar = _shared(tracking.min_scalar)
 _max0_scalar = _shared(tracking.max0_scalar)
 #: the task's pieces (task.v1: floats or columns there), compiled
 _action_commands = _shared(tracking.action_commands)
-_measurements = _shared(tracking.measurements)
+_measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
 _end_flags = _shared(tracking.end_flags)
 _observation_head = _shared(tracking.observation_head)
 _preview_entry = _shared(tracking.preview_entry)
@@ -248,7 +248,7 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
 # fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
 # by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
 # no call.
-_trapezoid_speed = _shared(tracking.trapezoid_speed)
+_trapezoid_speed = cast(Callable[..., float], _shared(tracking.trapezoid_speed))
 
 
 @_jit

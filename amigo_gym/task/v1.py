@@ -1531,10 +1531,11 @@ def _ideal_step(
 ) -> tuple[State, Outcome, Any]:
     r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (its one home: AmigoBot-v0's reference).
 
-    The wheel rates ``w_i = c_i w_max`` [rad/s] (:func:`action_commands`) are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
-    (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
-    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``. A heading past
-    ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
+    The wheel rates ``w_i = c_i w_max`` [rad/s] (:func:`action_commands`) are held over ``dt``; with
+    ``(v, \dot\beta)`` their body velocity (nominal robot), the pose advances by the exact arc
+    (:func:`amigo_gym.model.kinematics.arc_step`), whose heading cosine and sine (angle addition) the evaluation uses;
+    wheel angles advance by ``w_i dt``. A heading past ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns
+    (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
     """
     from amigo_gym.model.randomization import step_noise
 
