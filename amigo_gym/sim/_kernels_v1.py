@@ -6,7 +6,8 @@ does on Python floats, :func:`evaluate` what :func:`amigo_gym.task.v1.reset_colu
 the projection of :func:`amigo_gym.task.v1.start_state`:
 
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
-   :func:`amigo_gym.model.actuators.ring_write`, :func:`amigo_gym.model.actuators.ring_read`;
+   :func:`amigo_gym.task.v1.action_commands`, :func:`amigo_gym.model.actuators.ring_slot` and
+   :func:`amigo_gym.model.actuators.ring_read_slots` (those of ``ring_write`` and ``ring_read``);
 2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
    :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
@@ -14,14 +15,20 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    (:func:`amigo_gym.paths.clothoid.locate_flat` and :func:`amigo_gym.paths.clothoid.pose_flat`, compiled as they are);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
-   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
+   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path: the pieces of
+   :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``observation_head``,
+   ``preview_entry``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
+   only read and write ``ws`` and call them (the four lines of the reward's arguments excepted, still written here).
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the whole projection on the flat
-path vector (piece search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the
-actuator step: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
-(docs/architecture.md, "The compiled step"), so that every
+term, the steady heading, the clips, the per-step draws (SplitMix64, the channels, the Box–Muller normals), the
+trapezoid speed, the evaluation's pieces, the ring's slots, the whole projection on the flat path vector (piece
+search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the actuator step:
+:data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
+(docs/architecture.md, "The compiled step"). The evaluation's pieces run on floats and on columns in the reference:
+the polymorphic helpers they call (``task.v1._clip``, ``_min``, ``_max0``, ``_abs``; ``randomization._uint64``) are
+overloaded below with their scalar forms, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
@@ -35,9 +42,11 @@ result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
   the per-step draws (:func:`amigo_gym.model.randomization.step_noise`) are split in three: the counter-based uniforms
-  (integer SplitMix64 on ``uint64``, exact) by :func:`noise_uniforms`, their logarithms by ``np.log`` between the
-  calls, the Box–Muller normals (``sqrt``, ``cos``) in :func:`step`; the three reward exponentials are
-  evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.sim.fast_v1`).
+  (integer SplitMix64 on ``uint64``, exact: :func:`amigo_gym.model.randomization.step_uniforms`) by
+  :func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals (``sqrt``, the C
+  library's ``cos``; :func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the three reward
+  exponentials are evaluated by ``np.exp`` after the call, on the arguments written here
+  (:mod:`amigo_gym.sim.fast_v1`).
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
