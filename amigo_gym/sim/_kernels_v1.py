@@ -97,7 +97,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "c65ea9fe2a29044a"
+LAYOUT_FINGERPRINT = "f475b6bffc6026a1"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -182,6 +182,7 @@ _min_scalar = _shared(tracking.min_scalar)
 _max0_scalar = _shared(tracking.max0_scalar)
 #: the task's pieces (task.v1: floats or columns there), compiled
 _action_commands = _shared(tracking.action_commands)
+_measured_differs = _shared(tracking.measured_differs)
 _measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
 _end_flags = _shared(tracking.end_flags)
 _observation_head = _shared(tracking.observation_head)
@@ -350,8 +351,7 @@ def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
     )
     ws[L.W_SLIP1] = s1
     ws[L.W_SLIP2] = s2
-    on_: int = on
-    return on_
+    return on
 
 
 @_jit
@@ -424,7 +424,7 @@ def _evaluate(
     ws[L.W_ARG_S] = (da1 * da1 + da2 * da2) / c[L.C_NEG_SMOOTH_SQ]
     terminated, at_end = _end_flags(e, c[L.C_TERM], pv[L.P_CLOSED], status)
     mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
-    if c[L.C_MEAS_NOISE] != 0.0 or ws[L.W_L3D] != 0.0:
+    if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
         mcb = math.cos(mb)
         msb = math.sin(mb)
         mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)

@@ -144,7 +144,6 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "profile_accel": p.profile_accel,
         "profile_decel": p.profile_decel,
         "window": k.window,
-        "measured_noise": 1.0 if (rz.position_noise > 0 or rz.heading_noise > 0) else 0.0,
         "speed_lookahead": tracking.SPEED_LOOKAHEAD,
         "n_preview": float(len(p.preview)),
         "n_nodes": float(len(u)),

@@ -44,7 +44,6 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "profile_accel",  # [m/s^2]
     "profile_decel",  # [m/s^2]
     "window",  # projection window ahead and behind [m]
-    "measured_noise",  # 1.0 when position or heading noise is on (the measured H is projected again)
     "speed_lookahead",  # [s]
     "n_preview",  # number of preview distances
     "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
@@ -56,9 +55,9 @@ _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
 C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
 C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
-C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
-C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
-C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
+C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
+C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[23:26])
+C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[26:29])
 #: where the variable-length parts of ``consts`` start
 C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
@@ -200,6 +199,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     tracking.max0_scalar,
     tracking.action_commands,
     tracking.measurements,
+    tracking.measured_differs,
     tracking.end_flags,
     tracking.observation_head,
     tracking.preview_entry,

@@ -964,6 +964,13 @@ def measurements(
     return x + nx, y + ny, beta + nbeta, w1 + nr1, w2 + nr2
 
 
+def measured_differs(position_noise: float, heading_noise: float, l3_differs: bool) -> bool:
+    """Whether the measured H differs from the true one, so that it is projected on its own: noise on the position
+    [m] or heading [rad], or a true ``l3`` other than the nominal (:func:`ep_l3_differs`). Compiled by the compiled
+    step."""
+    return position_noise > 0.0 or heading_noise > 0.0 or l3_differs
+
+
 def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) -> tuple[Any, Any]:
     """``(terminated, at_end)``: H is farther than ``termination_distance`` [m] from the path (``|e|``, true H) or has
     reached the end of an open path (``status`` is :data:`STATUS_END`, ``closed`` false or 0). Floats (bools) or
@@ -1623,7 +1630,7 @@ def evaluate_columns(
     mx, my, mb, mw1, mw2 = measurements(
         st.x, st.y, st.beta, st.w1, st.w2, noise.x, noise.y, noise.beta, noise.rate1, noise.rate2
     )
-    if p.randomize.position_noise > 0 or p.randomize.heading_noise > 0 or ep_l3_differs(k, ep):
+    if measured_differs(p.randomize.position_noise, p.randomize.heading_noise, ep_l3_differs(k, ep)):
         mcb, msb = col_cos(mb), col_sin(mb)
         mloc = path.locate(*h_from_a(mx, my, mcb, msb, l3), loc.progress, k.window, k.window)
         m_e, m_ct, m_st, m_k, m_s = (
