@@ -110,9 +110,10 @@ def test_end_flags_three_routes() -> None:
             assert type(f) is bool and f == bool(col[i]) == bool(k), (i, e[i], status[i], closed[i])
 
 
-def test_trapezoid_speed_three_routes() -> None:
-    """Finite times and speeds (the min's NaN rule differs between ``min_scalar`` and ``np.minimum``, as it always
-    has between the float and the column route; neither ever sees a NaN time)."""
+def test_reference_speed_three_routes() -> None:
+    """The trapezoid and the constant speed, at finite times and speeds (the min's NaN rule differs between
+    ``min_scalar`` and ``np.minimum``, as it always has between the float and the column route; neither ever sees a
+    NaN time)."""
     kv = _kernels()
     rng = np.random.default_rng(2)
     v = rng.uniform(0.0, 0.75, N)
@@ -121,7 +122,15 @@ def test_trapezoid_speed_three_routes() -> None:
     t[:4] = (0.0, -0.0, t_brake[4] + v[4] / 0.3, 5.0)  # the brake ends exactly at t: v - decel (t - t_b) = 0
     t_brake[3] = math.inf  # a constant speed after the start
     args = [v, 0.4, 0.3, t_brake, t]
-    check_routes(lambda *a: (tracking.trapezoid_speed(*a),), lambda *a: (kv._trapezoid_speed(*a),), args, args)
+    for trapezoid in (True, False):
+
+        def piece(*a: Any, flag: bool = trapezoid) -> tuple[Any]:
+            return (tracking.reference_speed_of(flag, *a),)
+
+        def compiled(*a: Any, flag: bool = trapezoid) -> tuple[Any]:
+            return (kv._reference_speed_of(flag, *a),)
+
+        check_routes(piece, compiled, args, args)
 
 
 def test_step_draws_compiled_equal_python_ints() -> None:

@@ -97,7 +97,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "f475b6bffc6026a1"
+LAYOUT_FINGERPRINT = "ae98147bff8929d3"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -258,7 +258,7 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
 # fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
 # by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
 # no call.
-_trapezoid_speed = cast(Callable[..., float], _shared(tracking.trapezoid_speed))
+_reference_speed_of = cast(Callable[..., float], _shared(tracking.reference_speed_of))
 
 
 @_jit
@@ -378,11 +378,8 @@ def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
 
 @_jit
 def _reference_speed(c: F64, ws: F64, t: float) -> float:
-    # tracking.reference_speed: the cruise speed, or tracking.trapezoid_speed itself
-    v: float = ws[L.W_VC]
-    if c[L.C_TRAPEZOID] == 0.0:
-        return v
-    return _trapezoid_speed(v, c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
+    # tracking.reference_speed: tracking.reference_speed_of itself
+    return _reference_speed_of(c[L.C_TRAPEZOID] != 0.0, ws[L.W_VC], c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
 
 
 @_jit

@@ -194,6 +194,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.heading_term,
     task.steady_heading_float,
     tracking.trapezoid_speed,
+    tracking.reference_speed_of,
     tracking.clip_scalar,
     tracking.min_scalar,
     tracking.max0_scalar,

@@ -928,10 +928,14 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
     Constant: ``v_ref = v``. Trapezoid (start, cruise, brake): :func:`trapezoid_speed` with ``a_up =
     profile_accel``, ``a_down = profile_decel``, ``t_b`` = :attr:`Episode.t_brake`. Floats or columns.
     """
-    v = ep.v_cruise
-    if p.speed_profile == "constant":
-        return v
-    return trapezoid_speed(v, p.profile_accel, p.profile_decel, ep.t_brake, t)
+    trapezoid = p.speed_profile == "trapezoid"
+    return reference_speed_of(trapezoid, ep.v_cruise, p.profile_accel, p.profile_decel, ep.t_brake, t)
+
+
+def reference_speed_of(trapezoid: bool, v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
+    """:func:`reference_speed` from numbers: the cruise speed ``v`` [m/s], or :func:`trapezoid_speed` when
+    ``trapezoid``. Floats or columns; compiled by the compiled step."""
+    return trapezoid_speed(v, accel, decel, t_brake, t) if trapezoid else v
 
 
 def trapezoid_speed(v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
