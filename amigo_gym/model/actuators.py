@@ -66,7 +66,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import NamedTuple, overload
+from typing import Any, NamedTuple, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -92,6 +92,8 @@ __all__ = [
     "make_ring",
     "ring_write",
     "ring_read",
+    "ring_slot",
+    "ring_read_slots",
     "actuator_step",
 ]
 
@@ -355,9 +357,22 @@ def ring_write(ring: NDArray[np.float64], step: int, w1c: Real, w2c: Real) -> No
         step: the step counter ``k`` (>= 0).
         w1c, w2c: the command [rad/s] (columns matching the ring's leading shape).
     """
-    slot = step % ring.shape[-2]
+    slot = ring_slot(step, ring.shape[-2])
     ring[..., slot, 0] = w1c
     ring[..., slot, 1] = w2c
+
+
+def ring_slot(step: Any, length: int) -> Any:
+    """The slot of the command issued at ``step`` in a ring of ``length`` commands: ``step % length`` (Python's
+    modulo: never negative). Written once: :func:`ring_write`, and the compiled step compiles it."""
+    return step % length
+
+
+def ring_read_slots(step: Any, lag: Any, length: int) -> tuple[Any, Any]:
+    """The slots of the setpoints in effect during step ``step`` with a lag of ``lag`` whole steps: those of steps
+    ``step - lag - 1`` (old) and ``step - lag`` (new), ``(old, new)``. Ints or int columns (Python's and numpy's
+    modulo: never negative); written once: :func:`ring_read`, and the compiled step compiles it."""
+    return ring_slot(step - lag - 1, length), ring_slot(step - lag, length)
 
 
 def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]) -> tuple[Real, Real, Real, Real]:
@@ -380,13 +395,13 @@ def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]
     if ring.ndim == 2 and type(lag) is int:  # one robot: no array arithmetic
         if lag + 2 > length or lag < 0:
             raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
-        w1_new, w2_new = ring[(step - lag) % length].tolist()
-        w1_old, w2_old = ring[(step - lag - 1) % length].tolist()
+        j_old, j_new = ring_read_slots(step, lag, length)
+        w1_new, w2_new = ring[j_new].tolist()
+        w1_old, w2_old = ring[j_old].tolist()
         return w1_old, w2_old, w1_new, w2_new
     if np.any(np.asarray(lag) + 2 > length) or np.any(np.asarray(lag) < 0):
         raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
-    i_new = (step - np.asarray(lag)) % length
-    i_old = (step - np.asarray(lag) - 1) % length
+    i_old, i_new = ring_read_slots(step, np.asarray(lag), length)
     if ring.ndim == 2:
         new, old = ring[int(i_new)], ring[int(i_old)]
         return float(old[0]), float(old[1]), float(new[0]), float(new[1])

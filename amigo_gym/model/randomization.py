@@ -306,13 +306,78 @@ _INV_2_53 = 1.0 / 9007199254740992.0
 _TWO_PI = 2.0 * math.pi
 
 
+def _uint64(n: int) -> int:
+    """``n`` as an unsigned 64-bit integer: ``n mod 2**64`` as a Python ``int``. The compiled step overloads it with
+    numba's ``np.uint64(n)`` (:mod:`amigo_gym.sim._kernels_v1`), so that :func:`_counter_uniform_int` runs its
+    integer arithmetic on ``uint64`` there (wrapping, logical shifts) and on exact Python ints here: the same bits."""
+    return n & _M64
+
+
 def _counter_uniform_int(key: int, step: int, channel: int) -> float:
-    """:func:`counter_uniform` for one Python ``int`` key and step (``0 <= key < 2**64``, ``step >= 0``)."""
-    z = (key + ((step * 256 + channel + 1) & _M64) * _GAMMA) & _M64
+    """:func:`counter_uniform` for one key and step (a Python ``int`` with ``0 <= key < 2**64``, or ``uint64`` in the
+    compiled step, which compiles this function; ``step >= 0``): SplitMix64, every product and sum taken mod
+    ``2**64`` (``& _M64``)."""
+    z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64
     z = z ^ (z >> 31)
     return (float(z >> 11) + 0.5) * _INV_2_53
+
+
+def noise_level(channel: int, position: float, heading: float, rate: float) -> float:
+    """The standard deviation of measurement-noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) from the
+    three levels of :class:`Randomization` [m, m, rad, rad/s, rad/s]."""
+    return position if channel < 2 else (heading if channel == 2 else rate)
+
+
+def channels_on(position: float, heading: float, rate: float) -> int:
+    """How many of the five measurement-noise channels are on (a level above 0): the normal draws per step."""
+    on = 0
+    for ch in range(5):
+        if noise_level(ch, position, heading, rate) > 0.0:
+            on += 1
+    return on
+
+
+def step_uniforms(
+    buf: Any, u1_at: int, u2_at: int, key: Any, step: int, slip_max: float, position: float, heading: float, rate: float
+) -> tuple[float, float, int]:
+    """The uniform draws of :func:`step_noise` for one robot (``key`` a Python ``int``, or ``uint64`` in the compiled
+    step): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0)
+    and, for each measurement-noise channel on (in channel order, :func:`noise_level`), ``u1`` into
+    ``buf[u1_at + j]`` and the angle ``2 pi u2`` into ``buf[u2_at + j]`` (``j`` counting the channels on).
+
+    Returns:
+        ``(slip1, slip2, on)``, ``on`` the number of channels on.
+    """
+    s1 = 0.0
+    s2 = 0.0
+    if slip_max > 0.0:
+        s1 = slip_max * _counter_uniform_int(key, step, 0)
+        s2 = slip_max * _counter_uniform_int(key, step, 1)
+    on = 0
+    for ch in range(5):
+        if noise_level(ch, position, heading, rate) > 0.0:
+            buf[u1_at + on] = _counter_uniform_int(key, step, 2 * (ch + 1))
+            buf[u2_at + on] = _TWO_PI * _counter_uniform_int(key, step, 2 * (ch + 1) + 1)
+            on += 1
+    return s1, s2, on
+
+
+def step_normals(
+    out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
+) -> None:
+    """The normal draws of :func:`step_noise` for one robot, into ``out[out_at : out_at + 5]`` (``x, y, beta, rate1,
+    rate2``; 0.0 for a channel off): :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]``
+    (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given (:func:`step_uniforms`' draws)."""
+    on = 0
+    for ch in range(5):
+        level = noise_level(ch, position, heading, rate)
+        value = 0.0
+        if level > 0.0:
+            value = box_muller(level, logs[log_at + on], coss[cos_at + on])
+            on += 1
+        out[out_at + ch] = value
 
 
 def box_muller(level: float, log_u1: float, cos_angle: float) -> float:
@@ -324,19 +389,14 @@ def box_muller(level: float, log_u1: float, cos_angle: float) -> float:
 
 
 def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:
-    """:func:`step_noise` for one robot (the same bits): the normals' ``log`` and ``cos`` in one numpy call each."""
-    s1 = s2 = 0.0
-    if slip_max > 0.0:
-        s1 = slip_max * _counter_uniform_int(key, step, 0)
-        s2 = slip_max * _counter_uniform_int(key, step, 1)
-    levels = (r.position_noise, r.position_noise, r.heading_noise, r.wheel_rate_noise, r.wheel_rate_noise)
-    on = [c for c in range(5) if levels[c] > 0.0]
+    """:func:`step_noise` for one robot (the same bits): :func:`step_uniforms`, the normals' ``log`` and ``cos`` in one
+    numpy call each, :func:`step_normals` (the functions the compiled step compiles)."""
+    levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
+    buf = [0.0] * 10
+    s1, s2, on = step_uniforms(buf, 0, 5, key, step, slip_max, *levels)
     out = [0.0, 0.0, 0.0, 0.0, 0.0]
     if on:
-        u1 = np.array([_counter_uniform_int(key, step, 2 * (c + 1)) for c in on])
-        u2 = np.array([_TWO_PI * _counter_uniform_int(key, step, 2 * (c + 1) + 1) for c in on])
-        logs = np.log(u1).tolist()
-        coss = np.cos(u2).tolist()
-        for c, lg, cs in zip(on, logs, coss, strict=True):
-            out[c] = box_muller(levels[c], lg, cs)
+        logs = np.log(buf[:on]).tolist()
+        coss = np.cos(buf[5 : 5 + on]).tolist()
+        step_normals(out, 0, logs, 0, coss, 0, *levels)
     return StepNoise(s1, s2, out[0], out[1], out[2], out[3], out[4])

@@ -6,7 +6,8 @@ does on Python floats, :func:`evaluate` what :func:`amigo_gym.task.v1.reset_colu
 the projection of :func:`amigo_gym.task.v1.start_state`:
 
 1. clip the action, write it into the command ring and read the setpoints in effect (delay):
-   :func:`amigo_gym.model.actuators.ring_write`, :func:`amigo_gym.model.actuators.ring_read`;
+   :func:`amigo_gym.task.v1.action_commands`, :func:`amigo_gym.model.actuators.ring_slot` and
+   :func:`amigo_gym.model.actuators.ring_read_slots` (those of ``ring_write`` and ``ring_read``);
 2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
    :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
@@ -14,14 +15,20 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
    (:func:`amigo_gym.paths.clothoid.locate_flat` and :func:`amigo_gym.paths.clothoid.pose_flat`, compiled as they are);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
-   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path.
+   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path: the pieces of
+   :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``observation_head``,
+   ``preview_entry``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
+   only read and write ``ws`` and call them (the four lines of the reward's arguments excepted, still written here).
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the Box–Muller normal, the trapezoid speed, the whole projection on the flat
-path vector (piece search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the
-actuator step: :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
-(docs/architecture.md, "The compiled step"), so that every
+term, the steady heading, the clips, the per-step draws (SplitMix64, the channels, the Box–Muller normals), the
+trapezoid speed, the evaluation's pieces, the ring's slots, the whole projection on the flat path vector (piece
+search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the actuator step:
+:data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
+(docs/architecture.md, "The compiled step"). The evaluation's pieces run on floats and on columns in the reference:
+the polymorphic helpers they call (``task.v1._clip``, ``_min``, ``_max0``, ``_abs``; ``randomization._uint64``) are
+overloaded below with their scalar forms, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
@@ -35,9 +42,11 @@ result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
 * the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
   the per-step draws (:func:`amigo_gym.model.randomization.step_noise`) are split in three: the counter-based uniforms
-  (integer SplitMix64 on ``uint64``, exact) by :func:`noise_uniforms`, their logarithms by ``np.log`` between the
-  calls, the Box–Muller normals (``sqrt``, ``cos``) in :func:`step`; the three reward exponentials are
-  evaluated by ``np.exp`` after the call, on the arguments written here (:mod:`amigo_gym.sim.fast_v1`).
+  (integer SplitMix64 on ``uint64``, exact: :func:`amigo_gym.model.randomization.step_uniforms`) by
+  :func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals (``sqrt``, the C
+  library's ``cos``; :func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the three reward
+  exponentials are evaluated by ``np.exp`` after the call, on the arguments written here
+  (:mod:`amigo_gym.sim.fast_v1`).
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
@@ -61,7 +70,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
@@ -74,7 +83,6 @@ from numpy.typing import NDArray
 from amigo_gym.model import actuators, fresnel, kinematics, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
-from amigo_gym.paths.clothoid import STATUS_END
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
 from amigo_gym.sim.layout import twin as _twin
@@ -89,7 +97,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "77b18b43c2491318"
+LAYOUT_FINGERPRINT = "ae98147bff8929d3"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -170,6 +178,77 @@ _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
 _body_velocity = _shared(kinematics.body_velocity_of)
 _h_from_a = _shared(kinematics.h_from_a)
+_min_scalar = _shared(tracking.min_scalar)
+_max0_scalar = _shared(tracking.max0_scalar)
+#: the task's pieces (task.v1: floats or columns there), compiled
+_action_commands = _shared(tracking.action_commands)
+_measured_differs = _shared(tracking.measured_differs)
+_measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
+_end_flags = _shared(tracking.end_flags)
+_observation_head = _shared(tracking.observation_head)
+_preview_entry = _shared(tracking.preview_entry)
+_speed_observations = _shared(tracking.speed_observations)
+_ring_slot = _shared(actuators.ring_slot)
+_ring_read_slots = _shared(actuators.ring_read_slots)
+
+
+# The polymorphic helpers the task's pieces call (numpy's elementwise form on columns, a scalar function on floats)
+# are overloaded here with that scalar function: the pieces compile to the float route's operations.
+
+
+@overload(tracking._clip, jit_options={"error_model": "numpy"})
+def _clip_of(x: float, lo: float, hi: float) -> Callable[[float, float, float], float]:
+    """The compiled form of :func:`amigo_gym.task.v1._clip`: :func:`amigo_gym.task.v1.clip_scalar`."""
+
+    def impl(x: float, lo: float, hi: float) -> float:
+        out: float = _clip(x, lo, hi)
+        return out
+
+    return impl
+
+
+@overload(tracking._min, jit_options={"error_model": "numpy"})
+def _min_of(a: float, b: float) -> Callable[[float, float], float]:
+    """The compiled form of :func:`amigo_gym.task.v1._min`: :func:`amigo_gym.task.v1.min_scalar`."""
+
+    def impl(a: float, b: float) -> float:
+        out: float = _min_scalar(a, b)
+        return out
+
+    return impl
+
+
+@overload(tracking._max0, jit_options={"error_model": "numpy"})
+def _max0_of(x: float) -> Callable[[float], float]:
+    """The compiled form of :func:`amigo_gym.task.v1._max0`: :func:`amigo_gym.task.v1.max0_scalar`."""
+
+    def impl(x: float) -> float:
+        out: float = _max0_scalar(x)
+        return out
+
+    return impl
+
+
+@overload(tracking._abs, jit_options={"error_model": "numpy"})
+def _abs_of(x: float) -> Callable[[float], float]:
+    """The compiled form of :func:`amigo_gym.task.v1._abs`: ``abs`` of a float."""
+
+    def impl(x: float) -> float:
+        out: float = abs(x)
+        return out
+
+    return impl
+
+
+@overload(randomization._uint64, jit_options={"error_model": "numpy"})
+def _uint64_of(n: int) -> Callable[[int], np.uint64]:
+    """The compiled form of :func:`amigo_gym.model.randomization._uint64`: ``np.uint64(n)`` (the counter generator's
+    arithmetic on ``uint64``: wrapping products and sums, logical shifts)."""
+
+    def impl(n: int) -> np.uint64:
+        return np.uint64(n)
+
+    return impl
 
 
 # ----------------------------------------------------------------------------------------- actuators
@@ -179,8 +258,7 @@ _h_from_a = _shared(kinematics.h_from_a)
 # fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
 # by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
 # no call.
-_box_muller = _shared(randomization.box_muller)
-_trapezoid_speed = _shared(tracking.trapezoid_speed)
+_reference_speed_of = cast(Callable[..., float], _shared(tracking.reference_speed_of))
 
 
 @_jit
@@ -247,36 +325,16 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
 
 # ----------------------------------------------------------------------------------------- per-step draws
 
-_GAMMA = np.uint64(0x9E3779B97F4A7C15)
-_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
-_MIX2 = np.uint64(0x94D049BB133111EB)
-_INV_2_53 = 1.0 / 9007199254740992.0
-_TWO_PI = 2.0 * math.pi
-
-
-@_jit
-def _counter_uniform(key: np.uint64, step: int, channel: int) -> float:
-    # randomization._counter_uniform_int: SplitMix64 on uint64 (wrapping as the reference's "& (2**64 - 1)")
-    n = np.uint64(step) * np.uint64(256) + np.uint64(channel + 1)
-    z = key + n * _GAMMA
-    z = (z ^ (z >> np.uint64(30))) * _MIX1
-    z = (z ^ (z >> np.uint64(27))) * _MIX2
-    z = z ^ (z >> np.uint64(31))
-    u: float = (float(z >> np.uint64(11)) + 0.5) * _INV_2_53
-    return u
-
-
-@_jit
-def _noise_level(c: F64, ch: int) -> float:
-    # the standard deviation of measurement channel ch (x, y, beta, rate1, rate2): randomization's levels
-    level: float = c[L.C_POS_NOISE] if ch < 2 else (c[L.C_HEAD_NOISE] if ch == 2 else c[L.C_RATE_NOISE])
-    return level
+#: the per-step draws (randomization._step_noise_float's pieces), compiled
+_step_uniforms = _shared(randomization.step_uniforms)
+_step_normals = _shared(randomization.step_normals)
+_channels_on = _shared(randomization.channels_on)
 
 
 @_jit
 def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
-    """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` (``_step_noise_float``) for step
-    ``step``.
+    """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` for step ``step``:
+    :func:`amigo_gym.model.randomization.step_uniforms` itself (SplitMix64 on ``uint64``).
 
     Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
     that is on (in channel order), ``u1`` at ``ws[L.S_U1:]`` and ``2 pi u2`` at ``ws[L.S_U2:]``. The caller then
@@ -288,33 +346,24 @@ def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
     Returns:
         the number of channels on (the length of the ``u1`` written).
     """
-    slip_max = ws[L.W_SLIP_MAX]
-    if slip_max > 0.0:
-        ws[L.W_SLIP1] = slip_max * _counter_uniform(key, step, 0)
-        ws[L.W_SLIP2] = slip_max * _counter_uniform(key, step, 1)
-    else:
-        ws[L.W_SLIP1] = 0.0
-        ws[L.W_SLIP2] = 0.0
-    on = 0
-    for ch in range(5):
-        if _noise_level(c, ch) > 0.0:
-            ws[L.S_U1 + on] = _counter_uniform(key, step, 2 * (ch + 1))
-            ws[L.S_U2 + on] = _TWO_PI * _counter_uniform(key, step, 2 * (ch + 1) + 1)
-            on += 1
+    s1, s2, on = _step_uniforms(
+        ws, L.S_U1, L.S_U2, key, step, ws[L.W_SLIP_MAX], c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], c[L.C_RATE_NOISE]
+    )
+    ws[L.W_SLIP1] = s1
+    ws[L.W_SLIP2] = s2
     return on
 
 
 @_jit
 def _normals(c: F64, ws: F64) -> None:
-    # the rest of randomization._step_noise_float: level * (sqrt(-2 log u1) cos(2 pi u2)) per channel that is on
-    on = 0
-    for ch in range(5):
-        level = _noise_level(c, ch)
-        value = 0.0
-        if level > 0.0:
-            value = _box_muller(level, ws[L.S_LOG + on], math.cos(ws[L.S_U2 + on]))
-            on += 1
-        ws[L.W_NX + ch] = value
+    # randomization.step_normals itself, on the logarithms in ws and the cosines of the angles (the C library's
+    # math.cos, numpy's bits where fast_v1.libm_matches_numpy), written over the angles
+    position = c[L.C_POS_NOISE]
+    heading = c[L.C_HEAD_NOISE]
+    rate = c[L.C_RATE_NOISE]
+    for j in range(_channels_on(position, heading, rate)):
+        ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
+    _step_normals(ws, L.W_NX, ws, L.S_LOG, ws, L.S_U2, position, heading, rate)
 
 
 @_jit
@@ -329,11 +378,8 @@ def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
 
 @_jit
 def _reference_speed(c: F64, ws: F64, t: float) -> float:
-    # tracking.reference_speed
-    v: float = ws[L.W_VC]
-    if c[L.C_TRAPEZOID] == 0.0:
-        return v
-    return _trapezoid_speed(v, c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
+    # tracking.reference_speed: tracking.reference_speed_of itself
+    return _reference_speed_of(c[L.C_TRAPEZOID] != 0.0, ws[L.W_VC], c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
 
 
 @_jit
@@ -353,7 +399,7 @@ def _evaluate(
     nr2: float,
 ) -> None:
     # tracking.evaluate_columns of the state in ws (true H, its projection, measurements, observation, reward
-    # arguments, end), with the noise (nx, ny, nbeta, nr1, nr2); the new progress into ws
+    # arguments, end), with the noise (nx, ny, nbeta, nr1, nr2): its pieces, compiled; the new progress into ws
     l3 = c[L.C_L3]
     x = ws[L.W_X]
     y = ws[L.W_Y]
@@ -373,16 +419,9 @@ def _evaluate(
     ws[L.W_ARG_V] = abs(v_true - v_ref) / c[L.C_NEG_SIG_V]
     ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     ws[L.W_ARG_S] = (da1 * da1 + da2 * da2) / c[L.C_NEG_SMOOTH_SQ]
-    closed = pv[L.P_CLOSED] != 0.0
-    at_end = (not closed) and status == STATUS_END
-    terminated = abs_e > c[L.C_TERM] or at_end
-    # measurements
-    mx = x + nx
-    my = y + ny
-    mb = beta + nbeta
-    mw1 = ws[L.W_W1] + nr1
-    mw2 = ws[L.W_W2] + nr2
-    if c[L.C_MEAS_NOISE] != 0.0 or ws[L.W_L3D] != 0.0:
+    terminated, at_end = _end_flags(e, c[L.C_TERM], pv[L.P_CLOSED], status)
+    mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
+    if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
         mcb = math.cos(mb)
         msb = math.sin(mb)
         mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)
@@ -391,31 +430,29 @@ def _evaluate(
         mcb = cb
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
-    e_max = c[L.C_E_MAX]
-    obs[0] = _clip(m_e / c[L.C_ERROR_SCALE], -e_max, e_max)
     m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
-    obs[1] = m_sin_psi
-    obs[2] = m_cos_psi
-    obs[3] = _clip(m_k * l3, -1.0, 1.0)
+    o0, o1, o2, o3 = _observation_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
+    obs[0] = o0
+    obs[1] = o1
+    obs[2] = o2
+    obs[3] = o3
     n_prev = int(c[L.C_N_PREVIEW])
     scale = c[L.C_PREVIEW_SCALE]
     for i in range(n_prev):
         qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[L.C_TAIL + i])
-        bound = c[L.C_TAIL + n_prev + i]
-        dx = qx - mx
-        dy = qy - my
-        obs[4 + 3 * i] = _clip((mcb * dx + msb * dy) / scale, -bound, bound)
-        obs[5 + 3 * i] = _clip((mcb * dy - msb * dx) / scale, -bound, bound)
-        obs[6 + 3 * i] = _clip(qk * l3, -1.0, 1.0)
-    v_max = c[L.C_V_MAX]
-    w_max = c[L.C_W_MAX]
+        px, py, pk = _preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
+        obs[4 + 3 * i] = px
+        obs[5 + 3 * i] = py
+        obs[6 + 3 * i] = pk
     v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
+    v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
+    s0, s1, s2, s3, s4 = _speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
     k = 4 + 3 * n_prev
-    obs[k] = v_ref / v_max
-    obs[k + 1] = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD]) / v_max
-    obs[k + 2] = _clip((v_meas - v_ref) / v_max, -2.0, 2.0)
-    obs[k + 3] = _clip(mw1 / w_max, -2.0, 2.0)
-    obs[k + 4] = _clip(mw2 / w_max, -2.0, 2.0)
+    obs[k] = s0
+    obs[k + 1] = s1
+    obs[k + 2] = s2
+    obs[k + 3] = s3
+    obs[k + 4] = s4
     obs[k + 5] = ws[L.W_A1]
     obs[k + 6] = ws[L.W_A2]
     ws[L.W_PROGRESS] = s_h
@@ -489,23 +526,13 @@ def step(
         ws[L.W_NB] = 0.0
         ws[L.W_NR1] = 0.0
         ws[L.W_NR2] = 0.0
-    w_max = c[L.C_W_MAX]
-    c1 = _clip(a1, -1.0, 1.0)
-    c2 = _clip(a2, -1.0, 1.0)
-    # actuators.ring_write, ring_read (Python's modulo: never negative)
+    # tracking.action_commands; actuators.ring_write, ring_read: their slots
+    c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     length = ring.shape[0]
-    slot = ring_step % length
-    cmd1 = c1 * w_max
-    cmd2 = c2 * w_max
+    slot = _ring_slot(ring_step, length)
     ring[slot, 0] = cmd1
     ring[slot, 1] = cmd2
-    lag = int(ws[L.W_LAG])
-    i_new = (ring_step - lag) % length
-    i_old = (ring_step - lag - 1) % length
-    if i_new < 0:
-        i_new += length
-    if i_old < 0:
-        i_old += length
+    i_old, i_new = _ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
     v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[L.W_SLIP1], ws[L.W_SLIP2])

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model import fresnel
+from amigo_gym.model import fresnel, randomization
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, layout_v1
 from amigo_gym.task import v1 as tracking
@@ -144,7 +144,6 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "profile_accel": p.profile_accel,
         "profile_decel": p.profile_decel,
         "window": k.window,
-        "measured_noise": 1.0 if (rz.position_noise > 0 or rz.heading_noise > 0) else 0.0,
         "speed_lookahead": tracking.SPEED_LOOKAHEAD,
         "n_preview": float(len(p.preview)),
         "n_nodes": float(len(u)),
@@ -188,8 +187,8 @@ class StepKernel:
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
-        levels = (rz.position_noise, rz.position_noise, rz.heading_noise, rz.wheel_rate_noise, rz.wheel_rate_noise)
-        self.n_normal = sum(1 for level in levels if level > 0.0)  # normal draws per step
+        # normal draws per step
+        self.n_normal = randomization.channels_on(rz.position_noise, rz.heading_noise, rz.wheel_rate_noise)
         self.window = k.window
         self.noise_on = False  # this episode draws per step (:meth:`draw` before :attr:`step`)
         self._bind()

@@ -44,7 +44,6 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "profile_accel",  # [m/s^2]
     "profile_decel",  # [m/s^2]
     "window",  # projection window ahead and behind [m]
-    "measured_noise",  # 1.0 when position or heading noise is on (the measured H is projected again)
     "speed_lookahead",  # [s]
     "n_preview",  # number of preview distances
     "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
@@ -56,9 +55,9 @@ _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
 C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
 C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
-C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW, C_MEAS_NOISE = (_C[n] for n in CONSTANT_FIELDS[18:24])
-C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[24:27])
-C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[27:30])
+C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
+C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[23:26])
+C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[26:29])
 #: where the variable-length parts of ``consts`` start
 C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
@@ -136,7 +135,7 @@ W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
 W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
 #: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
 #: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1``, their logarithms
-#: and the angles ``2 pi u2`` (5 each)
+#: and the angles ``2 pi u2`` (5 each; the step replaces the angles by their cosines)
 WS_SCRATCH = actuators.SCRATCH + 3 * 5
 #: where :func:`amigo_gym.model.actuators.actuator_step_ws`'s scratch starts, and its parts
 S_ACT = len(WS_FIELDS)
@@ -158,6 +157,8 @@ SHARED: tuple[Callable[..., Any], ...] = (
     actuators._channel_ws,
     actuators._evaluate_ws,
     actuators.actuator_step_ws,
+    actuators.ring_slot,
+    actuators.ring_read_slots,
     clothoid._np_clip,
     clothoid.py_min,
     clothoid.py_max,
@@ -183,12 +184,27 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.wheel_rates_of,
     kinematics.h_from_a,
     randomization.box_muller,
+    randomization._counter_uniform_int,
+    randomization.noise_level,
+    randomization.channels_on,
+    randomization.step_uniforms,
+    randomization.step_normals,
     task.clip_float,
     task.heading_error,
     task.heading_term,
     task.steady_heading_float,
     tracking.trapezoid_speed,
+    tracking.reference_speed_of,
     tracking.clip_scalar,
+    tracking.min_scalar,
+    tracking.max0_scalar,
+    tracking.action_commands,
+    tracking.measurements,
+    tracking.measured_differs,
+    tracking.end_flags,
+    tracking.observation_head,
+    tracking.preview_entry,
+    tracking.speed_observations,
 )
 
 
@@ -206,8 +222,9 @@ SHARED_INLINE: tuple[Callable[..., Any], ...] = (
 def layout_fingerprint() -> str:
     """A short hash of the layouts above, of the constants the kernel takes from their homes
     (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
-    iterations, smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`) and of the source of the
-    reference's float functions the kernel compiles as they are (:data:`SHARED`).
+    iterations, smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`, the end status of
+    :mod:`amigo_gym.task.v1`, the counter generator's constants in :mod:`amigo_gym.model.randomization`) and of the
+    source of the reference's float functions the kernel compiles as they are (:data:`SHARED`).
 
     numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
     :mod:`amigo_gym.sim._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
@@ -219,6 +236,9 @@ def layout_fingerprint() -> str:
         clothoid.NEWTON_ITERATIONS,
         clothoid.MIN_NEWTON_DENOMINATOR,
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
+        tracking.STATUS_END,
+        (randomization._M64, randomization._GAMMA, randomization._MIX1, randomization._MIX2),
+        (randomization._INV_2_53, randomization._TWO_PI),
     )
     offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
     layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets)

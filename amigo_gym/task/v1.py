@@ -878,6 +878,22 @@ def clip_scalar(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else (hi if x > hi else x)
 
 
+def min_scalar(a: float, b: float) -> float:
+    """``np.minimum(a, b)`` of two floats by a comparison (``b`` when ``a`` is NaN: as ``min`` of the trapezoid has
+    always done on floats); compiled by the compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    return a if a <= b else b
+
+
+def max0_scalar(x: float) -> float:
+    """``max(x, 0)`` of one float by a comparison (``0.0`` for NaN and for ``-0.0``); compiled by the compiled step."""
+    return x if x > 0.0 else 0.0
+
+
+# The polymorphic helpers of the shared pieces below: numpy's elementwise form on columns, the scalar functions above
+# on floats. The compiled step overloads each with its scalar function (numba.extending.overload in
+# sim/_kernels_v1.py), so that a piece calling them is one source for floats, columns and the kernel.
+
+
 def _clip(x: Real, lo: float, hi: float) -> Real:
     if isinstance(x, np.ndarray):
         out: Real = np.minimum(np.maximum(x, lo), hi)
@@ -889,7 +905,7 @@ def _min(a: Real, b: Real) -> Real:
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         out: Real = np.minimum(a, b)
         return out
-    return a if a <= b else b
+    return min_scalar(a, b)
 
 
 def _abs(x: Real) -> Real:
@@ -903,37 +919,108 @@ def _max0(x: Real) -> Real:
     if isinstance(x, np.ndarray):
         out: Real = np.maximum(x, 0.0)
         return out
-    return x if x > 0.0 else 0.0
+    return max0_scalar(x)
 
 
 def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
     r"""Reference speed of A at episode time ``t`` [s], in [m/s].
 
-    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake):
+    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake): :func:`trapezoid_speed` with ``a_up =
+    profile_accel``, ``a_down = profile_decel``, ``t_b`` = :attr:`Episode.t_brake`. Floats or columns.
+    """
+    trapezoid = p.speed_profile == "trapezoid"
+    return reference_speed_of(trapezoid, ep.v_cruise, p.profile_accel, p.profile_decel, ep.t_brake, t)
+
+
+def reference_speed_of(trapezoid: bool, v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
+    """:func:`reference_speed` from numbers: the cruise speed ``v`` [m/s], or :func:`trapezoid_speed` when
+    ``trapezoid``. Floats or columns; compiled by the compiled step."""
+    return trapezoid_speed(v, accel, decel, t_brake, t) if trapezoid else v
+
+
+def trapezoid_speed(v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
+    r"""The trapezoid reference speed [m/s] (start, cruise, brake):
 
     .. math:: v_{ref}(t) = \max\bigl(0, \min(a_{up} t,\; v,\; v - a_{down} (t - t_b))\bigr),
         \qquad t_b = T - v / a_{down}
 
-    with ``a_up = profile_accel``, ``a_down = profile_decel``, ``T = profile_duration`` (``t_b`` is
-    :attr:`Episode.t_brake`).
-    """
-    v = ep.v_cruise
-    if p.speed_profile == "constant":
-        return v
-    if not (isinstance(t, np.ndarray) or isinstance(v, np.ndarray) or isinstance(ep.t_brake, np.ndarray)):
-        return trapezoid_speed(v, p.profile_accel, p.profile_decel, ep.t_brake, t)
-    return _max0(_min(_min(p.profile_accel * t, v), v - p.profile_decel * (t - ep.t_brake)))
+    (``T = profile_duration``), the minima left to right. Floats or columns (``_min``, ``_max0``); written once: the
+    compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
+    return _max0(_min(_min(accel * t, v), v - decel * (t - t_brake)))
 
 
-def trapezoid_speed(v: float, accel: float, decel: float, t_brake: float, t: float) -> float:
-    """:func:`reference_speed` of the trapezoid for floats [m/s]: ``max(0, min(accel t, v, v - decel (t - t_brake)))``
-    with the ties and the order of the column form. Pure float code, written once: the compiled step
-    (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
-    a = accel * t
-    a = a if a <= v else v
-    b = v - decel * (t - t_brake)
-    a = a if a <= b else b
-    return a if a > 0.0 else 0.0
+# The pieces of :func:`evaluate_columns` (floats or columns; the compiled step compiles them: one source).
+
+
+def action_commands(a1: Real, a2: Real, w_max: float) -> tuple[Real, Real, Real, Real]:
+    """The action clipped to [-1, 1] and the setpoints it asks for: ``(c1, c2, c1 w_max, c2 w_max)`` [-, -, rad/s,
+    rad/s]. Floats or columns; compiled by the compiled step."""
+    c1 = _clip(a1, -1.0, 1.0)
+    c2 = _clip(a2, -1.0, 1.0)
+    return c1, c2, c1 * w_max, c2 * w_max
+
+
+def measurements(
+    x: Real, y: Real, beta: Real, w1: Real, w2: Real, nx: Real, ny: Real, nbeta: Real, nr1: Real, nr2: Real
+) -> tuple[Real, Real, Real, Real, Real]:
+    """The measured pose of A and wheel rates: the true ones plus the step's noise [m, m, rad, rad/s, rad/s]. Floats
+    or columns; compiled by the compiled step."""
+    return x + nx, y + ny, beta + nbeta, w1 + nr1, w2 + nr2
+
+
+def measured_differs(position_noise: float, heading_noise: float, l3_differs: bool) -> bool:
+    """Whether the measured H differs from the true one, so that it is projected on its own: noise on the position
+    [m] or heading [rad], or a true ``l3`` other than the nominal (:func:`ep_l3_differs`). Compiled by the compiled
+    step."""
+    return position_noise > 0.0 or heading_noise > 0.0 or l3_differs
+
+
+def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) -> tuple[Any, Any]:
+    """``(terminated, at_end)``: H is farther than ``termination_distance`` [m] from the path (``|e|``, true H) or has
+    reached the end of an open path (``status`` is :data:`STATUS_END`, ``closed`` false or 0). Floats (bools) or
+    columns (bool arrays); compiled by the compiled step."""
+    at_end = (status == STATUS_END) & (closed == 0)
+    terminated = (_abs(e) > termination_distance) | at_end
+    return terminated, at_end
+
+
+def observation_head(
+    m_e: Real, m_sin_psi: Real, m_cos_psi: Real, m_k: Real, l3: float, error_scale: float, e_max: float
+) -> tuple[Real, Real, Real, Real]:
+    """The observation's first four fields (module docstring) from the measured H's error [m], heading error and
+    curvature [1/m]: ``clip(e / error_scale, +-e_max)``, ``sin psi``, ``cos psi``, ``clip(kappa l3, +-1)``. Floats or
+    columns; compiled by the compiled step."""
+    return _clip(m_e / error_scale, -e_max, e_max), m_sin_psi, m_cos_psi, _clip(m_k * l3, -1.0, 1.0)
+
+
+def preview_entry(
+    mcb: Real, msb: Real, mx: Real, my: Real, qx: Real, qy: Real, q_k: Real, l3: float, scale: float, bound: float
+) -> tuple[Real, Real, Real]:
+    """One preview point's three fields: the path point ``(qx, qy)`` [m] in the measured robot frame (origin A
+    ``(mx, my)``, heading cosine and sine ``mcb``, ``msb``) over ``preview_scale``, clipped to ``+-bound``, and its
+    curvature ``clip(q_k l3, +-1)``. Floats or columns; compiled by the compiled step."""
+    dx = qx - mx
+    dy = qy - my
+    return (
+        _clip((mcb * dx + msb * dy) / scale, -bound, bound),
+        _clip((mcb * dy - msb * dx) / scale, -bound, bound),
+        _clip(q_k * l3, -1.0, 1.0),
+    )
+
+
+def speed_observations(
+    v_ref: Real, v_ahead: Real, v_meas: Real, mw1: Real, mw2: Real, v_max: float, w_max: float
+) -> tuple[Real, Real, Real, Real, Real]:
+    """The observation's speed fields: ``v_ref / v_max``, ``v_ref(t + lookahead) / v_max``, ``clip((v_meas -
+    v_ref) / v_max, +-2)``, ``clip(w_i / w_max, +-2)`` of the measured wheel rates. Floats or columns; compiled by
+    the compiled step."""
+    return (
+        v_ref / v_max,
+        v_ahead / v_max,
+        _clip((v_meas - v_ref) / v_max, -2.0, 2.0),
+        _clip(mw1 / w_max, -2.0, 2.0),
+        _clip(mw2 / w_max, -2.0, 2.0),
+    )
 
 
 # --------------------------------------------------------------------------- paths
@@ -1403,11 +1490,10 @@ def step_columns(
     from amigo_gym.model.randomization import step_noise
 
     p = k.params
-    c1 = _clip(a1, -1.0, 1.0)
-    c2 = _clip(a2, -1.0, 1.0)
+    c1, c2, cmd1, cmd2 = action_commands(a1, a2, k.w_max)
     if p.ideal_actuators:
-        return _ideal_step(k, path, state, ep, c1, c2)
-    actuators.ring_write(ring, ring_step, c1 * k.w_max, c2 * k.w_max)
+        return _ideal_step(k, path, state, ep, c1, c2, cmd1, cmd2)
+    actuators.ring_write(ring, ring_step, cmd1, cmd2)
     o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
     noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
     act = actuators.actuator_step(
@@ -1451,20 +1537,21 @@ def step_columns(
     return new._replace(progress=progress), out, noise
 
 
-def _ideal_step(k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2: Real) -> tuple[State, Outcome, Any]:
+def _ideal_step(
+    k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2: Real, w1: Real, w2: Real
+) -> tuple[State, Outcome, Any]:
     r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (its one home: AmigoBot-v0's reference).
 
-    The wheel rates ``w_i = c_i w_max`` [rad/s] are held over ``dt``; with ``(v, \dot\beta)`` their body velocity
-    (nominal robot), the pose advances by the exact arc (:func:`amigo_gym.model.kinematics.arc_step`), whose
-    heading cosine and sine (angle addition) the evaluation uses; wheel angles advance by ``w_i dt``. A heading past
-    ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
+    The wheel rates ``w_i = c_i w_max`` [rad/s] (:func:`action_commands`) are held over ``dt``; with
+    ``(v, \dot\beta)`` their body velocity (nominal robot), the pose advances by the exact arc
+    (:func:`amigo_gym.model.kinematics.arc_step`), whose heading cosine and sine (angle addition) the evaluation uses;
+    wheel angles advance by ``w_i dt``. A heading past ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns
+    (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
     """
     from amigo_gym.model.randomization import step_noise
 
     p = k.params
     dt = p.dt
-    w1 = c1 * k.w_max
-    w2 = c2 * k.w_max
     noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
     v, bdot = body_velocity_columns(w1, w2, k.nominal)
     arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
@@ -1542,19 +1629,12 @@ def evaluate_columns(
         k.smooth_scale_sq,
     )
     reward = reward_product(*terms)
-    off_path = _abs(e) > p.termination_distance
-    closed = path.closed
-    at_end: Any
-    if isinstance(e, np.ndarray):  # a batch: per-row paths, open ones end when H passes their end
-        at_end = ~np.asarray(closed, dtype=np.bool_) & (np.asarray(loc.status) == STATUS_END)
-        terminated = off_path | at_end
-    else:
-        at_end = (not bool(closed)) and int(loc.status) == STATUS_END
-        terminated = off_path or at_end
-    # measurements
-    mx, my, mb = st.x + noise.x, st.y + noise.y, st.beta + noise.beta
-    mw1, mw2 = st.w1 + noise.rate1, st.w2 + noise.rate2
-    if p.randomize.position_noise > 0 or p.randomize.heading_noise > 0 or ep_l3_differs(k, ep):
+    # on a batch, per-row paths: the open ones end when H passes their end
+    terminated, at_end = end_flags(e, p.termination_distance, path.closed, loc.status)
+    mx, my, mb, mw1, mw2 = measurements(
+        st.x, st.y, st.beta, st.w1, st.w2, noise.x, noise.y, noise.beta, noise.rate1, noise.rate2
+    )
+    if measured_differs(p.randomize.position_noise, p.randomize.heading_noise, ep_l3_differs(k, ep)):
         mcb, msb = col_cos(mb), col_sin(mb)
         mloc = path.locate(*h_from_a(mx, my, mcb, msb, l3), loc.progress, k.window, k.window)
         m_e, m_ct, m_st, m_k, m_s = (
@@ -1578,33 +1658,16 @@ def evaluate_columns(
             terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end,
         )  # fmt: skip
         return out0, loc.progress
-    obs: list[Real] = [
-        _clip(m_e / p.error_scale, -k.e_max, k.e_max),
-        m_sin_psi,
-        m_cos_psi,
-        _clip(m_k * l3, -1.0, 1.0),
-    ]
+    obs: list[Real] = [*observation_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
     if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
         ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
     else:
         ahead = [path.pose_columns(m_s + d) for d in p.preview]
     for q, bound in zip(ahead, k.preview_bounds, strict=True):
-        dx = q.x - mx
-        dy = q.y - my
-        obs += [
-            _clip((mcb * dx + msb * dy) / p.preview_scale, -bound, bound),
-            _clip((mcb * dy - msb * dx) / p.preview_scale, -bound, bound),
-            _clip(q.curvature * l3, -1.0, 1.0),
-        ]
-    obs += [
-        v_ref / k.v_max,
-        reference_speed(p, ep, t + SPEED_LOOKAHEAD) / k.v_max,
-        _clip((v_meas - v_ref) / k.v_max, -2.0, 2.0),
-        _clip(mw1 / k.w_max, -2.0, 2.0),
-        _clip(mw2 / k.w_max, -2.0, 2.0),
-        st.a1,
-        st.a2,
-    ]
+        obs += preview_entry(mcb, msb, mx, my, q.x, q.y, q.curvature, l3, p.preview_scale, bound)
+    v_ahead = reference_speed(p, ep, t + SPEED_LOOKAHEAD)
+    obs += speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, k.v_max, k.w_max)
+    obs += [st.a1, st.a2]
     out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
 
