@@ -56,14 +56,10 @@ def any_array(*cols: object) -> bool:
 
 
 def clip_float(x: float, low: float, high: float) -> float:
-    """``np.minimum(np.maximum(x, low), high)`` of one float, by comparisons: NaN stays NaN, a tie takes the bound
-    (``clip_float(-0.0, 0.0, 1.0)`` is ``0.0``, as numpy's). Equal to ``float(np.clip(x, low, high))`` but for the
-    sign of a zero at a bound."""
-    if not (x != x or x > low):
-        x = low
-    if not (x != x or x < high):
-        x = high
-    return x
+    """``np.minimum(np.maximum(x, low), high)`` of one float (``low <= high``), by two comparisons: NaN stays NaN, a
+    tie takes the bound (``clip_float(-0.0, 0.0, 1.0)`` is ``0.0``, as numpy's on x86-64; which zero numpy returns
+    for two zeros is its SIMD loop's choice and may differ on other CPUs)."""
+    return low if x <= low else (high if x >= high else x)
 
 
 def clip_real(x: Real, low: float, high: float) -> Real:

@@ -226,7 +226,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "84ba0d81273c252e"
+LAYOUT_FINGERPRINT = "b3795ec5aac2d27d"
 
 
 def layout_fingerprint() -> str:
