@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from v0_reference import Reference, start_pose
 
-from amigo_gym.model import actuators, fresnel
+from amigo_gym.model import actuators, fresnel, numeric
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.model.randomization import make_randomization, step_noise
@@ -297,7 +297,7 @@ def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[
             s_col, lo, hi = clothoid.coarse_search(
                 t.sample_x, t.sample_y, t.spacing, t.length, path.closed, x, y, hint, ahead, behind
             )
-            got = clothoid._np_clip(clothoid.coarse_start(pv, x, y, hint, ahead, behind), float(lo), float(hi))
+            got = numeric.clip_float(clothoid.coarse_start(pv, x, y, hint, ahead, behind), float(lo), float(hi))
             assert same(got, s_col), (x, y, hint, ahead, behind, got, s_col)
             d2 = (t.sample_x - x) ** 2 + (t.sample_y - y) ** 2
             ties += int(np.sum(d2 == d2.min()) > 1)

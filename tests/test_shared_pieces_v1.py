@@ -25,15 +25,18 @@ pytest.importorskip("numba", reason="the compiled v1 step needs numba (the extra
 N = 257
 
 
-def same(a: Any, b: Any) -> bool:
-    """Bit for bit, the sign of a zero included (NaN equal to NaN); bools as bools."""
+def same(a: Any, b: Any, zero_sign: bool = True) -> bool:
+    """Bit for bit, the sign of a zero included unless ``zero_sign`` is false (NaN equal to NaN); bools as bools.
+
+    Between the float route and the column route the sign of a zero that a clip or a minimum returns for two zeros is
+    numpy's SIMD loop's choice, which differs between CPUs (x86-64, ARM): not compared there."""
     if isinstance(a, (bool, np.bool_)) or isinstance(b, (bool, np.bool_)):
         return bool(a) == bool(b)
     a = float(a)
     b = float(b)
     if math.isnan(a) or math.isnan(b):
         return math.isnan(a) and math.isnan(b)
-    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+    return a == b and (not zero_sign or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
 def _column(rng: np.random.Generator, scale: float, special: tuple[float, ...] = ()) -> np.ndarray:
@@ -63,7 +66,7 @@ def check_routes(
             want = np.asarray(col).reshape(-1)
             want_i = want[i] if want.size > 1 else want[0]
             assert type(f) in (float, bool), (piece.__name__, j, type(f))  # the float route stays on Python scalars
-            assert same(f, want_i) and same(k, want_i), (piece.__name__, i, j, f, k, want_i)
+            assert same(f, k) and same(f, want_i, zero_sign=False), (piece.__name__, i, j, f, k, want_i)
 
 
 EDGES = (math.nan, math.inf, -math.inf, 0.0, -0.0, 1.0, -1.0, 2.0, -2.0, 1e300, -1e300)

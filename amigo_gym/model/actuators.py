@@ -3,8 +3,9 @@ r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuat
 Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
 float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
 as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code and get the same bits.
-This module may import only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics`,
-:mod:`amigo_gym.model.fresnel` and the standard library (``tests/test_actuators.py`` checks it).
+This module may import only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.numeric`,
+:mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.model.fresnel` and the standard library (``tests/test_actuators.py``
+checks it).
 
 The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
 -------------------------------------------------------------------------
@@ -73,6 +74,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
 from amigo_gym.model.kinematics import Real, body_velocity_columns, body_velocity_of, wheel_rates_of
+from amigo_gym.model.numeric import abs_real, any_array, copysign_real, max_real, min_real, where_real
 from amigo_gym.model.params import RobotParams, check_range
 
 __all__ = [
@@ -141,47 +143,13 @@ class ActuatorParams:
             object.__setattr__(self, f.name, v)
 
 
-# Column helpers: the same values for floats and arrays (selection and comparison do no arithmetic).
-
-
-def _any_array(*cols: object) -> bool:
-    for c in cols:  # noqa: SIM110  (a loop: a third of the time of any() over a generator)
-        if isinstance(c, np.ndarray):
-            return True
-    return False
-
-
-def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
-    """``a`` where ``cond`` else ``b`` (``np.where`` for arrays)."""
-    if isinstance(cond, np.ndarray) or _any_array(a, b):
-        out: Real = np.where(cond, a, b)
-        return out
-    return a if cond else b
-
-
-def _abs(x: Real) -> Real:
-    return np.abs(x) if isinstance(x, np.ndarray) else abs(x)
-
-
-def _min(a: Real, b: Real) -> Real:
-    if _any_array(a, b):
-        out: Real = np.minimum(a, b)
-        return out
-    return a if a <= b else b
-
-
-def _max(a: Real, b: Real) -> Real:
-    if _any_array(a, b):
-        out: Real = np.maximum(a, b)
-        return out
-    return a if a >= b else b
-
-
-def _copysign(x: Real, y: Real) -> Real:
-    if _any_array(x, y):
-        out: Real = np.copysign(x, y)
-        return out
-    return math.copysign(x, y)
+# Column helpers (the same values for floats and arrays): amigo_gym.model.numeric.
+_where = where_real
+_abs = abs_real
+_min = min_real
+_max = max_real
+_copysign = copysign_real
+_any_array = any_array
 
 
 def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Real]:

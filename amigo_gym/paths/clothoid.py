@@ -48,6 +48,7 @@ from amigo_gym.model.fresnel import (
     unit_speed_poses,
 )
 from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
+from amigo_gym.model.numeric import clip_float
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
 
@@ -749,22 +750,13 @@ class ClothoidPath:
 # written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
 # (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
 #
-# The functions below from _np_clip to locate_flat are in numba's subset (floats, ints, comparisons, math.floor/
-# copysign/sqrt, np.floor of a float, indexing of the flat path vector, no object, no exception): the compiled step
-# of AmigoBot-v1 compiles these very functions (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled
-# step"), so the projection is written once: the piece search, wrap and placement of a pose, the coarse search, the
-# Newton loop, the foot terms, the status and the pose (pose_flat, whose quadrature is fresnel's node functions:
-# numpy's cosines and sines of the nodes here, the C library's in compiled code, fresnel.cos_sin_nodes' overload,
-# checked equal per process).
-
-
-def _np_clip(x: float, lo: float, hi: float) -> float:
-    """``float(np.clip(x, lo, hi))`` for floats (numpy's rule: NaN propagates, ties take the bound)."""
-    if not (x != x or x > lo):
-        x = lo
-    if not (x != x or x < hi):
-        x = hi
-    return x
+# The functions below from py_min to locate_flat (and numeric.clip_float, numpy's clip of a float) are in numba's
+# subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
+# no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
+# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection is written once: the
+# piece search, wrap and placement of a pose, the coarse search, the Newton loop, the foot terms, the status and the
+# pose (pose_flat, whose quadrature is fresnel's node functions: numpy's cosines and sines of the nodes here, the C
+# library's in compiled code, fresnel.cos_sin_nodes' overload, checked equal per process).
 
 
 def py_min(a: float, b: float) -> float:
@@ -816,8 +808,8 @@ def locate_window(sp: float, ahead: float, behind: float, length: float, closed:
     lo = sp - behind
     hi = sp + ahead
     if not closed:
-        lo = _np_clip(lo, 0.0, length)
-        hi = _np_clip(hi, 0.0, length)
+        lo = clip_float(lo, 0.0, length)
+        hi = clip_float(hi, 0.0, length)
     return lo, hi
 
 
@@ -972,7 +964,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
                 else:
                     idx = int(jj % m_f)
         else:
-            jj = _np_clip(jj, 0.0, top)
+            jj = clip_float(jj, 0.0, top)
             idx = int(jj)
         ddx = pv[sx + idx] - x
         ddy = pv[sy + idx] - y
@@ -996,7 +988,7 @@ def locate_flat(
     length = pv[P_LENGTH]
     closed = pv[P_CLOSED] != 0.0
     lo, hi = locate_window(sp, ahead, behind, length, closed)
-    s = _np_clip(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
+    s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
     px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
         s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)

@@ -37,8 +37,9 @@ straight part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled b
 ``atan2`` and ``hypot``, which numpy's float64 ufuncs call where numpy does not vectorise them (here: the same bits on
 10^6 random pairs, and ``tests/test_kernels.py``); where a build vectorises ``arctan2`` (numpy's AVX-512 SVML loops)
 they may differ in the last bit of the arc length, which only decides whether a preview point lies before the end of
-the straight part. The observation's clips (``task.v0.clip_real``, which dispatches on the type) are compiled as
-:func:`amigo_gym.task.v0.clip_float` (an ``overload`` below), what ``clip_real`` runs on a float.
+the straight part. The observation's clips (:func:`amigo_gym.model.numeric.clip_real`, which dispatches on the
+type) are compiled as :func:`amigo_gym.model.numeric.clip_float`, what ``clip_real`` runs on a float
+(:data:`amigo_gym.model.numeric.SCALAR_FORMS`, registered by :func:`amigo_gym.sim.layout.shared_compiler`).
 
 Layouts (all C-contiguous, one row per robot):
 
@@ -82,14 +83,15 @@ import numpy as np
 from llvmlite import ir
 from numba.core import types as nb_types
 from numba.core.typing.templates import Signature
-from numba.extending import intrinsic, overload
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
-from amigo_gym.model import kinematics
+from amigo_gym.model import kinematics, numeric
 from amigo_gym.paths import classic
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
 
 __all__ = [
     "RECORD_FIELDS",
@@ -196,7 +198,8 @@ F64 = NDArray[np.float64]
 #: the reference's scalar functions this module compiles as they are (``numba.njit`` of the function itself, called
 #: by the loops below): the one source of each piece of the step (docs/architecture.md, "The compiled step")
 SHARED: tuple[Callable[..., Any], ...] = (
-    task.clip_float,
+    *numeric.SCALAR_FORMS.values(),
+    tracking.action_commands,
     task.heading_error,
     task.heading_term,
     task.steady_heading_float,
@@ -223,7 +226,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "5c0d903b1548a01d"
+LAYOUT_FINGERPRINT = "b3795ec5aac2d27d"
 
 
 def layout_fingerprint() -> str:
@@ -236,21 +239,10 @@ check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 
-@overload(task.clip_real, jit_options={"error_model": "numpy"}, inline="always")
-def _clip_real(x: float, low: float, high: float) -> Callable[[float, float, float], float]:
-    """The compiled form of :func:`amigo_gym.task.v0.clip_real` (which the observation's pieces call): on a float it
-    is :func:`amigo_gym.task.v0.clip_float`, what ``clip_real`` runs on a float as Python."""
-
-    def impl(x: float, low: float, high: float) -> float:
-        return task.clip_float(x, low, high)
-
-    return impl
+_shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit, scalar_forms=numeric.SCALAR_FORMS)
 
 
-_shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit)
-
-
-_clip = _shared(task.clip_float)
+_action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
@@ -275,8 +267,7 @@ _observe_reference = _shared(task.observe_reference)
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 def _motion(c: F64, a1: float, a2: float) -> tuple[float, float, float, float, float]:
     # the reference's motion (task.v1._ideal_step) up to the arc step: (w1, w2, v, bdot, db)
-    w1 = _clip(a1, -1.0, 1.0) * c[W_MAX]
-    w2 = _clip(a2, -1.0, 1.0) * c[W_MAX]
+    w1, w2 = _action_commands(a1, a2, c[W_MAX])[2:]
     v, bdot = _body_velocity(w1, w2, c[R1], c[R2], c[TWO_L1])
     return w1, w2, v, bdot, bdot * c[DT]
 
@@ -343,8 +334,7 @@ def _evaluate(
         else:
             # task.v1._ideal_step: kinematics.arc_step from the two tangents, the wheel angles
             # _motion's numbers, bdot from pass 1
-            w1 = _clip(actions[i, 0], -1.0, 1.0) * w_max
-            w2 = _clip(actions[i, 1], -1.0, 1.0) * w_max
+            w1, w2 = _action_commands(actions[i, 0], actions[i, 1], w_max)[2:]
             v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
             bdot = turn[i]
             db = bdot * dt

@@ -14,11 +14,11 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 3. H's projection on the path, and the measured H's when it differs
    (:func:`amigo_gym.paths.clothoid.locate_flat` and :func:`amigo_gym.paths.clothoid.pose_flat`, compiled as they are);
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
-   and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_term_columns`,
+   and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_arguments`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path: the pieces of
    :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``observation_head``,
    ``preview_entry``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
-   only read and write ``ws`` and call them (the four lines of the reward's arguments excepted, still written here).
+   only read and write ``ws`` and call them.
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
 ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
@@ -27,8 +27,9 @@ trapezoid speed, the evaluation's pieces, the ring's slots, the whole projection
 search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the actuator step:
 :data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
 (docs/architecture.md, "The compiled step"). The evaluation's pieces run on floats and on columns in the reference:
-the polymorphic helpers they call (``task.v1._clip``, ``_min``, ``_max0``, ``_abs``; ``randomization._uint64``) are
-overloaded below with their scalar forms, so that every
+the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`'s ``clip_real``, ``min_real``, ``max0_real``,
+``abs_real``) are compiled as their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`, registered by
+:func:`amigo_gym.sim.layout.shared_compiler`), and ``randomization._uint64`` is overloaded below, so that every
 result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
 ``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
 
@@ -80,7 +81,7 @@ from numba.extending import intrinsic, overload
 from numba.np import numpy_support
 from numpy.typing import NDArray
 
-from amigo_gym.model import actuators, fresnel, kinematics, randomization
+from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.sim import layout_v1 as L
@@ -97,12 +98,14 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "ae98147bff8929d3"
+LAYOUT_FINGERPRINT = "093bc738b6a791ae"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
-_shared = shared_compiler("amigo_gym.sim._kernels_v1", L.SHARED, _jit, inline=L.SHARED_INLINE)
+_shared = shared_compiler(
+    "amigo_gym.sim._kernels_v1", L.SHARED, _jit, inline=L.SHARED_INLINE, scalar_forms=numeric.SCALAR_FORMS
+)
 
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
@@ -171,15 +174,13 @@ _pose_flat = _shared(clothoid.pose_flat)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
-_clip = _shared(tracking.clip_scalar)
-_task_clip = _shared(task.clip_float)
+_clip = _shared(numeric.clip_float)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
+_reward_arguments = _shared(task.reward_arguments)
 _steady_heading = _shared(task.steady_heading_float)
 _body_velocity = _shared(kinematics.body_velocity_of)
 _h_from_a = _shared(kinematics.h_from_a)
-_min_scalar = _shared(tracking.min_scalar)
-_max0_scalar = _shared(tracking.max0_scalar)
 #: the task's pieces (task.v1: floats or columns there), compiled
 _action_commands = _shared(tracking.action_commands)
 _measured_differs = _shared(tracking.measured_differs)
@@ -190,54 +191,6 @@ _preview_entry = _shared(tracking.preview_entry)
 _speed_observations = _shared(tracking.speed_observations)
 _ring_slot = _shared(actuators.ring_slot)
 _ring_read_slots = _shared(actuators.ring_read_slots)
-
-
-# The polymorphic helpers the task's pieces call (numpy's elementwise form on columns, a scalar function on floats)
-# are overloaded here with that scalar function: the pieces compile to the float route's operations.
-
-
-@overload(tracking._clip, jit_options={"error_model": "numpy"})
-def _clip_of(x: float, lo: float, hi: float) -> Callable[[float, float, float], float]:
-    """The compiled form of :func:`amigo_gym.task.v1._clip`: :func:`amigo_gym.task.v1.clip_scalar`."""
-
-    def impl(x: float, lo: float, hi: float) -> float:
-        out: float = _clip(x, lo, hi)
-        return out
-
-    return impl
-
-
-@overload(tracking._min, jit_options={"error_model": "numpy"})
-def _min_of(a: float, b: float) -> Callable[[float, float], float]:
-    """The compiled form of :func:`amigo_gym.task.v1._min`: :func:`amigo_gym.task.v1.min_scalar`."""
-
-    def impl(a: float, b: float) -> float:
-        out: float = _min_scalar(a, b)
-        return out
-
-    return impl
-
-
-@overload(tracking._max0, jit_options={"error_model": "numpy"})
-def _max0_of(x: float) -> Callable[[float], float]:
-    """The compiled form of :func:`amigo_gym.task.v1._max0`: :func:`amigo_gym.task.v1.max0_scalar`."""
-
-    def impl(x: float) -> float:
-        out: float = _max0_scalar(x)
-        return out
-
-    return impl
-
-
-@overload(tracking._abs, jit_options={"error_model": "numpy"})
-def _abs_of(x: float) -> Callable[[float], float]:
-    """The compiled form of :func:`amigo_gym.task.v1._abs`: ``abs`` of a float."""
-
-    def impl(x: float) -> float:
-        out: float = abs(x)
-        return out
-
-    return impl
 
 
 @overload(randomization._uint64, jit_options={"error_model": "numpy"})
@@ -410,15 +363,17 @@ def _evaluate(
     s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
     cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
-    # task.steady_heading, task.reward_term_columns (the exponentials' arguments only)
+    # task.steady_heading, task.reward_term_columns (the heading term; the exponentials' arguments only)
     cos_ss, sin_ss = _steady_heading(kappa, l3)
     da1 = ws[L.W_A1] - prev1
     da2 = ws[L.W_A2] - prev2
-    abs_e = abs(e)
-    ws[L.W_ARG_T] = abs_e / c[L.C_NEG_SIG_T]
-    ws[L.W_ARG_V] = abs(v_true - v_ref) / c[L.C_NEG_SIG_V]
+    arg_t, arg_v, arg_s = _reward_arguments(
+        abs(e), abs(v_true - v_ref), da1 * da1 + da2 * da2, c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
+    )
+    ws[L.W_ARG_T] = arg_t
+    ws[L.W_ARG_V] = arg_v
     ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
-    ws[L.W_ARG_S] = (da1 * da1 + da2 * da2) / c[L.C_NEG_SMOOTH_SQ]
+    ws[L.W_ARG_S] = arg_s
     terminated, at_end = _end_flags(e, c[L.C_TERM], pv[L.P_CLOSED], status)
     mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
     if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):

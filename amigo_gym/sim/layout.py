@@ -9,7 +9,7 @@ from __future__ import annotations
 import hashlib
 import inspect
 import types
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, TypeVar, cast
 
 __all__ = ["twin", "source_fingerprint", "check_fingerprint", "shared_compiler"]
@@ -53,11 +53,23 @@ def check_fingerprint(owner: str, stated: str, actual: str) -> None:
         )
 
 
+def _returns(scalar: Callable[..., Any]) -> Callable[..., Any]:
+    """The typing function of an ``overload`` whose implementation is ``scalar`` for any argument types (numba
+    requires the typing function's signature to be the implementation's)."""
+
+    def typer(*args: Any) -> Callable[..., Any]:
+        return scalar
+
+    typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
+    return typer
+
+
 def shared_compiler(
     owner: str,
     shared: tuple[Callable[..., Any], ...],
     jit: Callable[..., Any],
     inline: tuple[Callable[..., Any], ...] = (),
+    scalar_forms: Mapping[Callable[..., Any], Callable[..., Any]] | None = None,
 ) -> Callable[[_F], _F]:
     """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
 
@@ -66,9 +78,12 @@ def shared_compiler(
     an ``ImportError`` for another (so that every function compiled into a kernel counts in its fingerprint).
     The functions of ``inline`` (a part of ``shared``) are inlined into their callers by numba itself
     (``inline="always"``: small loops that LLVM would otherwise leave as calls).
+    ``scalar_forms`` maps polymorphic helpers (floats or columns, dispatching on ``isinstance``, which numba cannot
+    compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
+    runs its float form (an ``overload``), which must be in ``shared`` (its source counts in the fingerprint).
     Only the kernel modules call this (they import numba anyway); this module stays numba-free.
     """
-    from numba.extending import register_jitable
+    from numba.extending import overload, register_jitable
 
     for fn in shared:
         if fn not in _REGISTERED:  # once per process (both kernels share some functions)
@@ -77,6 +92,14 @@ def shared_compiler(
             else:
                 register_jitable(fn)
             _REGISTERED.add(fn)
+    for poly, scalar in (scalar_forms or {}).items():
+        if scalar not in shared:
+            raise ImportError(
+                f"{owner} compiles {scalar.__qualname__} for {poly.__qualname__} but does not list it in SHARED"
+            )
+        if poly not in _REGISTERED:
+            overload(poly, jit_options={"error_model": "numpy"})(_returns(scalar))
+            _REGISTERED.add(poly)
 
     def compiled(fn: _F) -> _F:
         if fn not in shared:

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from amigo_gym.model import actuators, fresnel, kinematics, randomization
+from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.paths import clothoid
 from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
@@ -37,9 +37,9 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "termination_distance",  # [m]
     "preview_scale",  # [m]
     "v_max",  # nominal max speed [m/s]
-    "neg_sigma_track",  # -sigma_track [m]
-    "neg_sigma_speed",  # -sigma_speed [m/s]
-    "neg_smooth_scale_sq",  # -smooth_scale_sq [-]
+    "sigma_track",  # the reward's scales: [m]
+    "sigma_speed",  # [m/s]
+    "smooth_scale_sq",  # [-]
     "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
     "profile_accel",  # [m/s^2]
     "profile_decel",  # [m/s^2]
@@ -54,8 +54,8 @@ CONSTANT_FIELDS: tuple[str, ...] = (
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
 C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
-C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_NEG_SIG_T, C_NEG_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
-C_NEG_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
+C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_SIG_T, C_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
+C_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
 C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[23:26])
 C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[26:29])
 #: where the variable-length parts of ``consts`` start
@@ -151,6 +151,7 @@ S_U2 = S_LOG + 5
 #: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
 #: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
 SHARED: tuple[Callable[..., Any], ...] = (
+    *numeric.SCALAR_FORMS.values(),
     actuators._ramp_float,
     actuators._clip_float,
     actuators.piece_rates,
@@ -159,7 +160,6 @@ SHARED: tuple[Callable[..., Any], ...] = (
     actuators.actuator_step_ws,
     actuators.ring_slot,
     actuators.ring_read_slots,
-    clothoid._np_clip,
     clothoid.py_min,
     clothoid.py_max,
     clothoid.wrap_arc,
@@ -189,15 +189,13 @@ SHARED: tuple[Callable[..., Any], ...] = (
     randomization.channels_on,
     randomization.step_uniforms,
     randomization.step_normals,
-    task.clip_float,
     task.heading_error,
     task.heading_term,
+    task.reward_arguments,
+    task.off_path,
     task.steady_heading_float,
     tracking.trapezoid_speed,
     tracking.reference_speed_of,
-    tracking.clip_scalar,
-    tracking.min_scalar,
-    tracking.max0_scalar,
     tracking.action_commands,
     tracking.measurements,
     tracking.measured_differs,

@@ -72,6 +72,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, col_exp, col_sqrt
+from amigo_gym.model.numeric import clip_float, clip_real
 from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
@@ -350,27 +351,9 @@ def task_constants(params: EnvParams) -> TaskConstants:
     return TaskConstants(params)
 
 
-def clip_real(x: Real, low: float, high: float) -> Real:
-    """``np.clip`` of an array (as ``np.minimum(np.maximum(x, low), high)``: the same values, less overhead); of a
-    scalar, the same value by comparisons (:func:`clip_float`).
-
-    The polymorphic pieces below (:func:`observe_head`, :func:`curvature_feature`, :func:`observe_tail`) call it; the
-    compiled step, which compiles them, replaces it by :func:`clip_float` (an ``overload`` in
-    :mod:`amigo_gym.sim._kernels`), what it runs on a float here."""
-    if isinstance(x, np.ndarray):
-        out: Real = np.minimum(np.maximum(x, low), high)
-        return out
-    return clip_float(x, low, high)
-
-
 # The scalar pieces of the step, written once in numba's subset (plain floats and ``math``; the arithmetic ones
 # take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels`,
 # :mod:`amigo_gym.sim._kernels_v1`) compiles these very functions (docs/architecture.md, "The compiled step").
-
-
-def clip_float(x: float, low: float, high: float) -> float:
-    """``np.clip`` of one float by comparisons: ``x`` itself when inside (``-0.0`` stays), else the bound."""
-    return x if low <= x <= high else (low if x < low else high)
 
 
 def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:

@@ -76,6 +76,7 @@ from amigo_gym.model.kinematics import (
     col_sin,
     h_from_a,
 )
+from amigo_gym.model.numeric import abs_real, clip_real, max0_real, min_real
 from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath, make_path
@@ -87,6 +88,7 @@ from amigo_gym.task.v0 import (
     heading_error,
     obs_bounds_of,
     observe_columns,
+    off_path,
     reward_product,
     reward_term_columns,
     steady_heading,
@@ -872,54 +874,12 @@ class Outcome(NamedTuple):
 # --------------------------------------------------------------------------- column helpers
 
 
-def clip_scalar(x: float, lo: float, hi: float) -> float:
-    """``np.minimum(np.maximum(x, lo), hi)`` of one float by comparisons (NaN stays NaN); in numba's subset, the
-    compiled step compiles it (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
-    return lo if x < lo else (hi if x > hi else x)
-
-
-def min_scalar(a: float, b: float) -> float:
-    """``np.minimum(a, b)`` of two floats by a comparison (``b`` when ``a`` is NaN: as ``min`` of the trapezoid has
-    always done on floats); compiled by the compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
-    return a if a <= b else b
-
-
-def max0_scalar(x: float) -> float:
-    """``max(x, 0)`` of one float by a comparison (``0.0`` for NaN and for ``-0.0``); compiled by the compiled step."""
-    return x if x > 0.0 else 0.0
-
-
-# The polymorphic helpers of the shared pieces below: numpy's elementwise form on columns, the scalar functions above
-# on floats. The compiled step overloads each with its scalar function (numba.extending.overload in
-# sim/_kernels_v1.py), so that a piece calling them is one source for floats, columns and the kernel.
-
-
-def _clip(x: Real, lo: float, hi: float) -> Real:
-    if isinstance(x, np.ndarray):
-        out: Real = np.minimum(np.maximum(x, lo), hi)
-        return out
-    return clip_scalar(x, lo, hi)
-
-
-def _min(a: Real, b: Real) -> Real:
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        out: Real = np.minimum(a, b)
-        return out
-    return min_scalar(a, b)
-
-
-def _abs(x: Real) -> Real:
-    if isinstance(x, np.ndarray):
-        out: Real = np.abs(x)
-        return out
-    return abs(x)
-
-
-def _max0(x: Real) -> Real:
-    if isinstance(x, np.ndarray):
-        out: Real = np.maximum(x, 0.0)
-        return out
-    return max0_scalar(x)
+# The polymorphic helpers of the shared pieces below (numpy's elementwise form on columns, the float form on floats;
+# the compiled step runs the float form): amigo_gym.model.numeric, one home for both tasks and the model.
+_clip = clip_real
+_min = min_real
+_abs = abs_real
+_max0 = max0_real
 
 
 def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
@@ -980,7 +940,7 @@ def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) ->
     reached the end of an open path (``status`` is :data:`STATUS_END`, ``closed`` false or 0). Floats (bools) or
     columns (bool arrays); compiled by the compiled step."""
     at_end = (status == STATUS_END) & (closed == 0)
-    terminated = (_abs(e) > termination_distance) | at_end
+    terminated = off_path(_abs(e), termination_distance) | at_end
     return terminated, at_end
 
 

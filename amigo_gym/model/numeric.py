@@ -1,0 +1,147 @@
+r"""Elementwise helpers written once for Python floats, numpy columns and the compiled steps.
+
+The reference's pieces of physics and of the task are *polymorphic*: one function computes one robot on Python
+floats (the single env) and ``N`` robots on ``(N,)`` columns (the vector env), and the compiled steps
+(:mod:`amigo_gym.sim._kernels`, :mod:`amigo_gym.sim._kernels_v1`) compile the very same function
+(docs/architecture.md, "The compiled step"). What differs between floats and columns is confined to the helpers
+below: each ``*_real`` function dispatches on the type (numpy's ufunc on an array, its ``*_float`` form on a
+float), and each ``*_float`` form is plain float code in numba's subset with **numpy's rules** (NaN, ties, signed
+zeros), so that a float and a column give the same bits.
+
+numba cannot dispatch on ``isinstance``; the compiled steps replace each ``*_real`` function by its ``*_float``
+form (:data:`SCALAR_FORMS`, registered once per process by :func:`amigo_gym.sim.layout.shared_compiler`).
+
+Shapes: floats, or arrays of any shape (broadcast as numpy does). Units: those of the arguments.
+
+May import numpy and the standard library only.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, TypeAlias
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "Real",
+    "any_array",
+    "clip_float",
+    "clip_real",
+    "min_float",
+    "min_real",
+    "max_float",
+    "max_real",
+    "max0_float",
+    "max0_real",
+    "abs_float",
+    "abs_real",
+    "where_real",
+    "copysign_real",
+    "SCALAR_FORMS",
+]
+
+#: a float or a column of floats
+Real: TypeAlias = float | NDArray[np.float64]
+
+
+def any_array(*cols: object) -> bool:
+    """Whether any argument is a numpy array."""
+    for c in cols:  # noqa: SIM110  (a loop: a third of the time of any() over a generator)
+        if isinstance(c, np.ndarray):
+            return True
+    return False
+
+
+def clip_float(x: float, low: float, high: float) -> float:
+    """``np.minimum(np.maximum(x, low), high)`` of one float (``low <= high``), by two comparisons: NaN stays NaN, a
+    tie takes the bound (``clip_float(-0.0, 0.0, 1.0)`` is ``0.0``, as numpy's on x86-64; which zero numpy returns
+    for two zeros is its SIMD loop's choice and may differ on other CPUs)."""
+    return low if x <= low else (high if x >= high else x)
+
+
+def clip_real(x: Real, low: float, high: float) -> Real:
+    """``x`` clipped to ``[low, high]``: ``np.minimum(np.maximum(x, low), high)`` of an array (``np.clip``'s values,
+    less overhead), :func:`clip_float` of a float."""
+    if isinstance(x, np.ndarray):
+        out: Real = np.minimum(np.maximum(x, low), high)
+        return out
+    return clip_float(x, low, high)
+
+
+def min_float(a: float, b: float) -> float:
+    """The smaller of two floats by one comparison, ``a`` on a tie (``b`` when either is NaN but ``a`` alone)."""
+    return a if a <= b else b
+
+
+def min_real(a: Real, b: Real) -> Real:
+    """``np.minimum(a, b)`` of arrays, :func:`min_float` of floats."""
+    if any_array(a, b):
+        out: Real = np.minimum(a, b)
+        return out
+    return min_float(a, b)  # type: ignore[arg-type]
+
+
+def max_float(a: float, b: float) -> float:
+    """The larger of two floats by one comparison, ``a`` on a tie (``b`` when either is NaN but ``a`` alone)."""
+    return a if a >= b else b
+
+
+def max_real(a: Real, b: Real) -> Real:
+    """``np.maximum(a, b)`` of arrays, :func:`max_float` of floats."""
+    if any_array(a, b):
+        out: Real = np.maximum(a, b)
+        return out
+    return max_float(a, b)  # type: ignore[arg-type]
+
+
+def max0_float(x: float) -> float:
+    """``max(x, 0)`` of one float by a comparison: ``0.0`` for ``-0.0`` and for NaN."""
+    return x if x > 0.0 else 0.0
+
+
+def max0_real(x: Real) -> Real:
+    """``np.maximum(x, 0.0)`` of an array, :func:`max0_float` of a float."""
+    if isinstance(x, np.ndarray):
+        out: Real = np.maximum(x, 0.0)
+        return out
+    return max0_float(x)
+
+
+def abs_float(x: float) -> float:
+    """``|x|`` of one float."""
+    return abs(x)
+
+
+def abs_real(x: Real) -> Real:
+    """``np.abs`` of an array, ``abs`` of a float."""
+    return np.abs(x) if isinstance(x, np.ndarray) else abs(x)
+
+
+def where_real(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
+    """``a`` where ``cond`` else ``b`` (``np.where`` when any argument is an array)."""
+    if isinstance(cond, np.ndarray) or any_array(a, b):
+        out: Real = np.where(cond, a, b)
+        return out
+    return a if cond else b
+
+
+def copysign_real(x: Real, y: Real) -> Real:
+    """``|x|`` with the sign of ``y`` (``np.copysign`` of arrays, ``math.copysign`` of floats)."""
+    if any_array(x, y):
+        out: Real = np.copysign(x, y)
+        return out
+    return math.copysign(x, y)
+
+
+#: the polymorphic helpers the compiled steps' shared pieces call, each with the float form numba compiles in its
+#: place (:func:`amigo_gym.sim.layout.shared_compiler` registers them)
+SCALAR_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
+    clip_real: clip_float,
+    min_real: min_float,
+    max_real: max_float,
+    max0_real: max0_float,
+    abs_real: abs_float,
+}
