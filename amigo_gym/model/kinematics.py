@@ -194,6 +194,12 @@ def castor_rate_float(v_a: float, betadot: float, l5: float, r3: float) -> float
     return math.copysign(math.sqrt(lb * lb + v_a * v_a), v_a) / r3
 
 
+@overload
+def advance_angle(alpha: float, rate: float, dt: float) -> float: ...
+@overload
+def advance_angle(alpha: NDArray[np.float64], rate: Real, dt: float) -> NDArray[np.float64]: ...
+@overload
+def advance_angle(alpha: Real, rate: Real, dt: float) -> Real: ...
 def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
     r"""A wheel's angle [rad] after ``dt`` [s] at the rate ``rate`` [rad/s] held over the step (exact):
     :math:`\alpha + \dot\alpha\, dt`. Floats or columns; both compiled steps compile it (the drive wheels' and the
