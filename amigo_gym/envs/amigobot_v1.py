@@ -15,7 +15,7 @@ import numpy as np
 from gymnasium import spaces
 
 from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces, one_robot
-from amigo_gym.model.kinematics import body_velocity_of, castor_rate_float
+from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, fast_v1
@@ -303,7 +303,7 @@ class AmigoBotV1Env(AmigoBotBase):
         if self.v0_params is not None:  # AmigoBot-v0's settings on the reference route: v0's info
             robot = self._k.nominal
             v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
-            self._castor = self._castor + castor_rate_float(v, bdot, robot.l5, robot.r3) * self.params.dt
+            self._castor = advance_angle(self._castor, castor_rate_float(v, bdot, robot.l5, robot.r3), self.params.dt)
             return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._v0_info(st, out)
         info = self._info(out, noise)
         terminated = self._end(bool(out.terminated), float(out.h_x), float(out.h_y), info)

@@ -45,7 +45,7 @@ from amigo_gym.envs.base import (
     check_kernel,
     check_vector_args,
 )
-from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
+from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, fast_v1, fast_v1_batch
 from amigo_gym.task import v0 as task
@@ -419,7 +419,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if self.v0_params is not None:  # the castor angle of v0's info, as AmigoBot-v0's step integrates it
             robot = self._k.nominal
             v, bdot = body_velocity_columns(self._state.w1, self._state.w2, robot)
-            self._castor = self._castor + castor_rate_columns(v, bdot, robot) * self.params.dt
+            self._castor = advance_angle(self._castor, castor_rate_columns(v, bdot, robot), self.params.dt)
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
             obs[:, j] = c

@@ -36,6 +36,7 @@ __all__ = [
     "castor_position",
     "step_pose",
     "step_wheel_angles",
+    "advance_angle",
     "sinc",
     "Real",
     "ArcStep",
@@ -191,6 +192,19 @@ def castor_rate_float(v_a: float, betadot: float, l5: float, r3: float) -> float
     (:func:`castor_rate_columns`)."""
     lb = l5 * betadot
     return math.copysign(math.sqrt(lb * lb + v_a * v_a), v_a) / r3
+
+
+@overload
+def advance_angle(alpha: float, rate: float, dt: float) -> float: ...
+@overload
+def advance_angle(alpha: NDArray[np.float64], rate: Real, dt: float) -> NDArray[np.float64]: ...
+@overload
+def advance_angle(alpha: Real, rate: Real, dt: float) -> Real: ...
+def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
+    r"""A wheel's angle [rad] after ``dt`` [s] at the rate ``rate`` [rad/s] held over the step (exact):
+    :math:`\alpha + \dot\alpha\, dt`. Floats or columns; both compiled steps compile it (the drive wheels' and the
+    castor's angles of AmigoBot-v0's step)."""
+    return alpha + rate * dt
 
 
 def col_sqrt(x: Real) -> Real:

@@ -214,6 +214,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.body_velocity_of,
     kinematics.arc_from_tangents,
     kinematics.castor_rate_float,
+    kinematics.advance_angle,
     kinematics.h_from_a,
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
@@ -226,7 +227,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "b3795ec5aac2d27d"
+LAYOUT_FINGERPRINT = "414cd9c522ca7c8a"
 
 
 def layout_fingerprint() -> str:
@@ -250,6 +251,7 @@ _smooth_term = _shared(task.smooth_term)
 _reward_product = _shared(task.reward_product)
 _body_velocity = _shared(kinematics.body_velocity_of)
 _arc = _shared(kinematics.arc_from_tangents)
+_advance_angle = _shared(kinematics.advance_angle)
 _castor_rate = _shared(kinematics.castor_rate_float)
 _h_from_a = _shared(kinematics.h_from_a)
 _a_from_h = _shared(kinematics.a_from_h)
@@ -342,9 +344,9 @@ def _evaluate(
             x, y, cos_beta, sin_beta = _arc(x, y, v, dt, h, tans[i, 0], tans[i, 1])
             beta = beta + db
             castor = _castor_rate(v, bdot, l5, r3)
-            al1 = al1 + w1 * dt
-            al2 = al2 + w2 * dt
-            al3 = al3 + castor * dt
+            al1 = _advance_angle(al1, w1, dt)
+            al2 = _advance_angle(al2, w2, dt)
+            al3 = _advance_angle(al3, castor, dt)
             state[i, 0] = x
             state[i, 1] = y
             state[i, 2] = beta

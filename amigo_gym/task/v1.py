@@ -68,6 +68,7 @@ from amigo_gym.model import actuators
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.kinematics import (
     Real,
+    advance_angle,
     arc_step,
     body_velocity_columns,
     body_velocity_of,
@@ -1516,10 +1517,9 @@ def _ideal_step(
     v, bdot = body_velocity_columns(w1, w2, k.nominal)
     arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
     steps = state.steps + 1
-    new = State(
-        arc.x, arc.y, bound_angle(arc.beta), w1, w2, state.alpha1 + w1 * dt, state.alpha2 + w2 * dt, state.progress, c1,
-        c2, steps,
-    )  # fmt: skip
+    alpha1 = advance_angle(state.alpha1, w1, dt)
+    alpha2 = advance_angle(state.alpha2, w2, dt)
+    new = State(arc.x, arc.y, bound_angle(arc.beta), w1, w2, alpha1, alpha2, state.progress, c1, c2, steps)
     out, progress = evaluate_columns(
         k,
         path,
