@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from amigo_gym.model import actuators, randomization
+from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
 pytest.importorskip("numba", reason="the compiled v1 step needs numba (the extra amigo_gym[fast])")
@@ -80,7 +81,7 @@ def test_observation_pieces_three_routes() -> None:
     m_k = _column(rng, 5.0, (*EDGES, 5.0, -5.0))  # +-1 / l3
     sin_psi, cos_psi = _column(rng, 1.0, EDGES), _column(rng, 1.0)
     head = [m_e, sin_psi, cos_psi, m_k, l3, error_scale, e_max]
-    check_routes(tracking.observation_head, kv._observation_head, head, head)
+    check_routes(task.observe_head, kv._observe_head, head, head)
 
     cols = [_column(rng, 1.0, EDGES) for _ in range(7)]
     preview = [*cols, l3, scale, bound]

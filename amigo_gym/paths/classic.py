@@ -547,9 +547,9 @@ def manoeuvre_foot(
 
     In numba's subset: AmigoBot-v0's compiled step compiles this function (:data:`amigo_gym.sim._kernels.SHARED`).
     ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: as Python, numpy's ufuncs, the column code's
-    functions; Python's ``math.hypot`` is its own algorithm and differs from them in the last bit of some 0.2 % of
-    arguments), which numba compiles to the C library's ``atan2`` and ``hypot``; numpy's float64 ``arctan2`` and
-    ``hypot`` call those where they are not vectorised (here: equal on 10^6 random pairs; ``tests/test_kernels.py``).
+    functions; Python's ``math.hypot`` is its own algorithm, not the C library's), which numba compiles to the C
+    library's ``atan2`` and ``hypot``; numpy's float64 ``arctan2`` and ``hypot`` call those where they are not
+    vectorised (``tests/test_kernels.py`` compares the compiled function with this one, ties, centre and NaN included).
     ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
     ``0.0`` for ``+-0.0``, NaN for NaN).
     """

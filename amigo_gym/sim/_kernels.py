@@ -32,13 +32,13 @@ would run as as many passes over temporary arrays) is fused into the loops:
    into ``exps (N, 3)``;
 3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
 
-The manoeuvre path's ``np.arctan2`` and ``np.hypot`` (its arc length on the circle and the distance to the
-straight part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled by numba to the C library's
-``atan2`` and ``hypot``, which numpy's float64 ufuncs call where numpy does not vectorise them (here: the same bits on
-10^6 random pairs, and ``tests/test_kernels.py``); where a build vectorises ``arctan2`` (numpy's AVX-512 SVML loops)
-they may differ in the last bit of the arc length, which only decides whether a preview point lies before the end of
-the straight part. The observation's clips (:func:`amigo_gym.model.numeric.clip_real`, which dispatches on the
-type) are compiled as :func:`amigo_gym.model.numeric.clip_float`, what ``clip_real`` runs on a float
+The manoeuvre path's ``np.arctan2`` and ``np.hypot`` (its arc length on the circle and the distance to the straight
+part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled by numba to the C library's ``atan2`` and
+``hypot``, which numpy's float64 ufuncs call where numpy does not vectorise them (``tests/test_kernels.py`` compares
+the compiled function with the Python one); where a build vectorises ``arctan2`` (numpy's AVX-512 SVML loops) they may
+differ in the last bit of the arc length, which only decides whether a preview point lies before the end of the
+straight part. The observation's clips (:func:`amigo_gym.model.numeric.clip_real`, which dispatches on the type) are
+compiled as :func:`amigo_gym.model.numeric.clip_float`, what ``clip_real`` runs on a float
 (:data:`amigo_gym.model.numeric.SCALAR_FORMS`, registered by :func:`amigo_gym.sim.layout.shared_compiler`).
 
 Layouts (all C-contiguous, one row per robot):
@@ -227,7 +227,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "414cd9c522ca7c8a"
+LAYOUT_FINGERPRINT = "31ad6be54aab1592"
 
 
 def layout_fingerprint() -> str:

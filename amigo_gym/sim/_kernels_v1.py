@@ -16,8 +16,8 @@ the projection of :func:`amigo_gym.task.v1.start_state`:
 4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
    and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_arguments`,
    :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path: the pieces of
-   :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``observation_head``,
-   ``preview_entry``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
+   :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``preview_entry``,
+   ``task.v0.observe_head``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
    only read and write ``ws`` and call them.
 
 **The reference is the Python float path** (the functions named above). The scalar pieces both need (the
@@ -98,7 +98,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "093bc738b6a791ae"
+LAYOUT_FINGERPRINT = "dbe7c4c0751e3846"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -174,7 +174,6 @@ _pose_flat = _shared(clothoid.pose_flat)
 
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
-_clip = _shared(numeric.clip_float)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _reward_arguments = _shared(task.reward_arguments)
@@ -186,7 +185,7 @@ _action_commands = _shared(tracking.action_commands)
 _measured_differs = _shared(tracking.measured_differs)
 _measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
 _end_flags = _shared(tracking.end_flags)
-_observation_head = _shared(tracking.observation_head)
+_observe_head = _shared(task.observe_head)
 _preview_entry = _shared(tracking.preview_entry)
 _speed_observations = _shared(tracking.speed_observations)
 _ring_slot = _shared(actuators.ring_slot)
@@ -386,7 +385,7 @@ def _evaluate(
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
     m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
-    o0, o1, o2, o3 = _observation_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
+    o0, o1, o2, o3 = _observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
     obs[0] = o0
     obs[1] = o1
     obs[2] = o2

@@ -200,7 +200,8 @@ SHARED: tuple[Callable[..., Any], ...] = (
     tracking.measurements,
     tracking.measured_differs,
     tracking.end_flags,
-    tracking.observation_head,
+    task.observe_head,
+    task.curvature_feature,
     tracking.preview_entry,
     tracking.speed_observations,
 )

@@ -85,10 +85,12 @@ from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
     bound_angle,
+    curvature_feature,
     error_bound,
     heading_error,
     obs_bounds_of,
     observe_columns,
+    observe_head,
     off_path,
     reward_product,
     reward_term_columns,
@@ -945,27 +947,18 @@ def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) ->
     return terminated, at_end
 
 
-def observation_head(
-    m_e: Real, m_sin_psi: Real, m_cos_psi: Real, m_k: Real, l3: float, error_scale: float, e_max: float
-) -> tuple[Real, Real, Real, Real]:
-    """The observation's first four fields (module docstring) from the measured H's error [m], heading error and
-    curvature [1/m]: ``clip(e / error_scale, +-e_max)``, ``sin psi``, ``cos psi``, ``clip(kappa l3, +-1)``. Floats or
-    columns; compiled by the compiled step."""
-    return _clip(m_e / error_scale, -e_max, e_max), m_sin_psi, m_cos_psi, _clip(m_k * l3, -1.0, 1.0)
-
-
 def preview_entry(
     mcb: Real, msb: Real, mx: Real, my: Real, qx: Real, qy: Real, q_k: Real, l3: float, scale: float, bound: float
 ) -> tuple[Real, Real, Real]:
     """One preview point's three fields: the path point ``(qx, qy)`` [m] in the measured robot frame (origin A
     ``(mx, my)``, heading cosine and sine ``mcb``, ``msb``) over ``preview_scale``, clipped to ``+-bound``, and its
-    curvature ``clip(q_k l3, +-1)``. Floats or columns; compiled by the compiled step."""
+    curvature field (:func:`amigo_gym.task.v0.curvature_feature`). Floats or columns; compiled by the compiled step."""
     dx = qx - mx
     dy = qy - my
     return (
         _clip((mcb * dx + msb * dy) / scale, -bound, bound),
         _clip((mcb * dy - msb * dx) / scale, -bound, bound),
-        _clip(q_k * l3, -1.0, 1.0),
+        curvature_feature(q_k, l3),
     )
 
 
@@ -1618,7 +1611,7 @@ def evaluate_columns(
             terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end,
         )  # fmt: skip
         return out0, loc.progress
-    obs: list[Real] = [*observation_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
+    obs: list[Real] = [*observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
     if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
         ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
     else:
