@@ -1,5 +1,6 @@
 """The shipped AmigoBot-v1 generalists: manifests complete, sha256 right, and the benchmark reproduces their
-claimed numbers exactly on re-run scenarios (experiments/claim_v1.py wrote them from a full benchmark run)."""
+claimed numbers on re-run scenarios, to 1e-5 relative (the last bits are the CPU's; experiments/claim_v1.py wrote
+them from a full benchmark run)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from amigo_gym.training import benchmark as bm
 
 MANIFESTS = sorted((pretrained_dir() / "v1").glob("*/*.json"))
 #: the scenarios re-run here (the full benchmark holds the others)
-RERUN = ("lane_change",)  # short episodes (the path ends after about 5 m): a cheap exact re-run
+RERUN = ("lane_change",)  # short episodes (the path ends after about 5 m): a cheap re-run
 KEYS = ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "return")
 
 
@@ -111,7 +112,10 @@ def test_benchmark_reproduces_claimed_numbers(manifest: Path) -> None:
     for r in doc["results"]:
         want = claimed["scenarios"][r["scenario"]]
         for key in KEYS:
-            assert r[key] == want[key], (r["scenario"], key, r[key], want[key])  # exactly
+            # the claims' machine's last bits are not this machine's (numpy's float64 arctan2 is vectorised on AVX-512
+            # and not on AVX2, torch's kernels differ between CPUs): 2e-16 relative seen between an AVX2 and an AVX-512
+            # AMD EPYC on 2026-11-26; 1e-5 is still 50 times tighter than the 3 significant figures published
+            assert r[key] == pytest.approx(want[key], rel=1e-5, abs=1e-12), (r["scenario"], key, r[key], want[key])
 
 
 TD3LP = sorted((pretrained_dir() / "v1" / "td3lp").glob("*.zip"))

@@ -549,7 +549,9 @@ def manoeuvre_foot(
     ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: as Python, numpy's ufuncs, the column code's
     functions; Python's ``math.hypot`` is its own algorithm, not the C library's), which numba compiles to the C
     library's ``atan2`` and ``hypot``; numpy's float64 ``arctan2`` and ``hypot`` call those where they are not
-    vectorised (``tests/test_kernels.py`` compares the compiled function with this one, ties, centre and NaN included).
+    vectorised. numpy vectorises ``arctan2`` on AVX-512 (its SVML): there the compiled ``s`` and ``s_circ`` may differ
+    from this function's by an ulp (``tests/test_kernels.py`` compares the compiled function with this one, ties,
+    centre and NaN included, and allows that difference only where the two ``atan2`` differ).
     ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
     ``0.0`` for ``+-0.0``, NaN for NaN).
     """

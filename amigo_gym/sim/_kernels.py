@@ -227,7 +227,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "31ad6be54aab1592"
+LAYOUT_FINGERPRINT = "6b111bf479295312"
 
 
 def layout_fingerprint() -> str:

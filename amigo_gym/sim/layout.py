@@ -6,13 +6,15 @@ imports nothing of the package, never numba.
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import inspect
+import textwrap
 import types
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, TypeVar, cast
 
-__all__ = ["twin", "source_fingerprint", "check_fingerprint", "shared_compiler"]
+__all__ = ["twin", "code_text", "source_fingerprint", "check_fingerprint", "shared_compiler"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 #: the functions already registered with numba by :func:`shared_compiler`
@@ -31,15 +33,31 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
 
 
 def source_fingerprint(values: object, functions: Iterable[Callable[..., Any]]) -> str:
-    """A short hash (16 hex digits) of ``repr(values)`` and of the source text of ``functions``.
+    """A short hash (16 hex digits) of ``repr(values)`` and of the code of ``functions`` (:func:`code_text`).
 
     numba keys its disk cache of a kernel on the kernel's own file, but compiles into it the constants and the
     reference functions it calls from other files: a kernel module states the fingerprint of those it was written
     for and refuses to load when it differs (so that a change of them comes with a change of the kernel's file,
-    which invalidates the cached code).
+    which invalidates the cached code). Docstrings, comments and formatting do not count.
     """
-    shared = tuple(inspect.getsource(f) for f in functions)
+    shared = tuple(code_text(f) for f in functions)
     return hashlib.sha256(repr((values, shared)).encode()).hexdigest()[:16]
+
+
+def code_text(fn: Callable[..., Any]) -> str:
+    """The code of the function ``fn`` as text, without its docstrings, comments and layout: ``ast.dump`` of its
+    source's syntax tree, the docstrings of it and of the functions and classes inside it removed."""
+    tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef) and node.body:
+            first = node.body[0]
+            if (
+                isinstance(first, ast.Expr)
+                and isinstance(first.value, ast.Constant)
+                and isinstance(first.value.value, str)
+            ):
+                node.body = node.body[1:] or [ast.Pass()]
+    return ast.dump(tree)
 
 
 def check_fingerprint(owner: str, stated: str, actual: str) -> None:
