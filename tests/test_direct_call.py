@@ -16,7 +16,7 @@ import pytest
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
-from amigo_gym.sim import fast
+from amigo_gym.sim import fast, numpy_loops
 from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
@@ -85,17 +85,30 @@ def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
     [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
 )
 def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
-    """kernels.single_step (math.tan, math.exp inside) against the three passes with numpy's tan and exp between them,
-    on one machine (two code paths): random states, actions beyond [-1, 1] too, 300 steps each. Where the C
-    library's tan and exp differ from numpy's (the gate is False), the single env must not use it."""
+    """The single step in one call against the three passes with numpy's tan and exp between them, on one machine (two
+    code paths): random states, actions beyond [-1, 1] too, 300 steps each. The one call is kernels.single_step_numpy
+    (numpy's own tan and exp loops inside: sim/numpy_loops.py, found on CPython) and, with those loops not found,
+    kernels.single_step (the C library's tan and exp), which the single env must not use where those differ from
+    numpy's (the gate is False)."""
     params = EnvParams(**settings)  # type: ignore[arg-type]
-    whole = fast.SingleStep(task.task_constants(params), make_path(params))
-    passes = fast.SingleStep(task.task_constants(params), make_path(params))
-    if not fast.libm_tan_exp_match_numpy():
-        assert whole._whole is None
-        return
-    assert whole._whole is not None
-    passes._whole = None
+    assert numpy_loops.numpy_loops() is not None  # CPython's numpy: the loops are found and give numpy's bits
+    for loops in (True, False):
+        if not loops:
+            with pytest.MonkeyPatch.context() as mp:
+                mp.setattr(fast, "numpy_loops", lambda: None)
+                whole = fast.SingleStep(task.task_constants(params), make_path(params))
+            if not fast.libm_tan_exp_match_numpy():
+                assert whole._whole is None
+                continue
+        else:
+            whole = fast.SingleStep(task.task_constants(params), make_path(params))
+        assert whole._whole is not None and (whole._loops is not None) == loops
+        passes = fast.SingleStep(task.task_constants(params), make_path(params))
+        passes._whole = passes._loops = None
+        _same_steps(whole, passes)
+
+
+def _same_steps(whole: fast.SingleStep, passes: fast.SingleStep) -> None:
     g = np.random.default_rng(11)
     for _ in range(20):
         state = np.concatenate((g.normal(0.0, 0.5, 2), g.uniform(-50.0, 50.0, 1), g.normal(0.0, 30.0, 3),
@@ -117,8 +130,9 @@ def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch:
         monkeypatch.undo()
         fast.libm_tan_exp_match_numpy.cache_clear()
     monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    monkeypatch.setattr(fast, "numpy_loops", lambda: None)  # numpy's loops not found either
     env = gym.make("AmigoBot-v0").unwrapped
-    assert env._v0._whole is None
+    assert env._v0._whole is None and env._v0._loops is None
     ref = gym.make("AmigoBot-v0", kernel="numpy").unwrapped
     env.reset(seed=2)
     ref.reset(seed=2)

@@ -649,6 +649,59 @@ def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: N
     return single_finish(c, buf)
 
 
+def _loop_call_typing(
+    typingctx: object, loop: nb_types.Type, args: nb_types.Type, dims: nb_types.Type, steps: nb_types.Type,
+    data: nb_types.Type,
+) -> tuple[Signature, Callable[..., ir.Value]] | None:  # fmt: skip
+    """``loop(args, dims, steps, data)`` for ``loop`` the address (an integer) of a numpy inner loop, ``void
+    (char **args, npy_intp const *dimensions, npy_intp const *steps, void *data)`` (numpy's C API, ``ufuncobject.h``),
+    and its arguments as addresses (integers). As :func:`_next_double_typing`: the address is an argument, never a
+    constant of the compiled code, so the on-disk cache holds nothing of one process."""
+    if not all(isinstance(a, nb_types.Integer) for a in (loop, args, dims, steps, data)):
+        return None
+
+    def codegen(context: object, builder: ir.IRBuilder, signature: Signature, values: list[ir.Value]) -> ir.Value:
+        char_p, intp_p = ir.IntType(8).as_pointer(), ir.IntType(64).as_pointer()
+        fn_t = ir.FunctionType(ir.VoidType(), [char_p.as_pointer(), intp_p, intp_p, char_p])
+        fn = builder.inttoptr(values[0], fn_t.as_pointer())
+        kinds = (char_p.as_pointer(), intp_p, intp_p, char_p)
+        builder.call(fn, [builder.inttoptr(v, kind) for v, kind in zip(values[1:], kinds, strict=True)])
+        return ir.Constant(ir.IntType(8), 0)
+
+    return nb_types.none(loop, args, dims, steps, data), codegen
+
+
+#: :func:`_loop_call_typing` as numba's intrinsic: ``_loop_call(loop, args, dims, steps, data)`` in compiled code
+_loop_call = cast(Callable[[int, int, int, int, int], None], intrinsic(_loop_call_typing))
+
+
+@_serial
+def numpy_loop_in_place(loop: int, data: int, x: F64, meta: NDArray[np.int64]) -> None:
+    """``x = f(x)`` in place by numpy's own float64 inner loop of a unary ufunc ``f`` at the address ``loop`` (with its
+    ``data`` pointer: :func:`amigo_gym.sim.numpy_loops.numpy_loops`), called as numpy calls it for ``f(x, out=x)``:
+    the arguments' addresses, ``x``'s length and strides in ``meta`` (5 entries, scratch)."""
+    meta[0] = x.ctypes.data
+    meta[1] = x.ctypes.data
+    meta[2] = x.shape[0]
+    meta[3] = x.strides[0]
+    meta[4] = x.strides[0]
+    base = meta.ctypes.data
+    _loop_call(loop, base, base + 16, base + 24, data)
+
+
+@_serial
+def single_step_numpy(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
+                      a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
+                      meta: NDArray[np.int64]) -> int:  # fmt: skip
+    """:func:`single_step` with numpy's own ``tan`` and ``exp`` loops (:func:`numpy_loop_in_place`) in place of the
+    C library's: the three passes' bits on every CPU, in one call. Returns what :func:`single_finish` returns."""
+    single_move(c, buf, flags, a1, a2)
+    numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
+    single_evaluate(c, preview, buf, flags, obs)
+    numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
+    return single_finish(c, buf)
+
+
 @_serial
 def tan_exp(x: F64, t: F64, e: F64) -> None:
     """``t = tan(x)``, ``e = exp(x)`` elementwise by the functions :func:`single_step` calls (for

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.sim.layout import twin
+from amigo_gym.sim.numpy_loops import numpy_loops, tan_exp_sample
 from amigo_gym.task.v0 import TaskConstants, _path_start, bound_angle, initial_wheel_rates, obs_dim, record_info
 
 __all__ = [
@@ -203,16 +204,7 @@ def libm_tan_exp_match_numpy() -> bool:
     laps up to :data:`amigo_gym.model.params.HEADING_LIMIT`, 3000 exponentials' of the reward's arguments, never
     positive), as :func:`amigo_gym.sim.fast_v1.libm_matches_numpy` checks ``cos`` and ``sin``: the premise of
     :func:`amigo_gym.sim._kernels.single_step`. Checked once per process (a millisecond)."""
-    g = np.random.default_rng(20261126)
-    xt = np.concatenate(
-        (
-            g.uniform(-2.0, 2.0, 2000),
-            g.normal(0.0, 1e-3, 1000),
-            g.uniform(-2000.0, 2000.0, 1000),
-            g.uniform(-HEADING_LIMIT, HEADING_LIMIT, 1000),
-        )
-    )
-    xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
+    xt, xe = tan_exp_sample()
     return same_bits_as_numpy(kernels().tan_exp, np.concatenate((xt, xe)), np.tan, np.exp)
 
 
@@ -391,9 +383,17 @@ class SingleStep:
         self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
         self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
         self._finish = direct_call(kk.single_finish, self.consts, b)
-        # the whole step in one call where the C library's tan and exp give numpy's bits (else the three passes)
+        # the whole step in one call: with numpy's own tan and exp loops called inside (numpy_loops), else where the C
+        # library's tan and exp give numpy's bits; else the three passes with numpy's ufuncs between them
         self._whole: Any = None
-        if libm_tan_exp_match_numpy():
+        self._loops: tuple[Any, ...] | None = None
+        loops = numpy_loops()
+        if loops is not None:
+            meta = np.zeros(5, dtype=np.int64)
+            args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *loops, meta)
+            self._whole = direct_call(kk.single_step_numpy, *args)
+            self._loops = (*loops, meta)
+        elif libm_tan_exp_match_numpy():
             self._whole = direct_call(kk.single_step, self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
@@ -427,7 +427,13 @@ class SingleStep:
         b = self.buf
         c = self.consts
         whole = self._whole
-        if whole is not None:
+        loops = self._loops
+        if loops is not None:
+            tan, exp, tan_data, exp_data, meta = loops
+            self.past_limit = whole(
+                c, self.preview, b, self.flags, self.obs, a1, a2, tan, exp, tan_data, exp_data, meta
+            )
+        elif whole is not None:
             self.past_limit = whole(c, self.preview, b, self.flags, self.obs, a1, a2)
         else:
             tans = self._tans

@@ -560,11 +560,11 @@ def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
         time: time since the episode's reset [s] (a float, or a column).
     """
     return {  # the keys of info_dict, written out: a step's hot path (a call and a zip cost ~1 us more)
-        "pose": record[..., 0:3],
-        "h_position": record[..., 3:5],
+        "pose": record[_POSE],
+        "h_position": record[_H_POSITION],
         "cross_track_error": values[5],
-        "wheel_rates": record[..., 6:8],
-        "wheel_angles": record[..., 8:10],
+        "wheel_rates": record[_WHEEL_RATES],
+        "wheel_angles": record[_WHEEL_ANGLES],
         "castor_angle": values[10],
         "reward_terms": {_TRACK: values[11], _SPEED: values[12], _HEADING: values[13], _SMOOTH: values[14]},
         "time": time,
@@ -572,6 +572,9 @@ def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
 
 
 _TRACK, _SPEED, _HEADING, _SMOOTH = REWARD_TERMS  # record_info's keys of the terms (a dict display: the fastest)
+#: record_info's indices of the record's last axis, built once (``record[..., 0:3]`` builds its slice and tuple at
+#: every call: 50 ns of a view's 160)
+_POSE, _H_POSITION, _WHEEL_RATES, _WHEEL_ANGLES = ((..., slice(a, b)) for a, b in ((0, 3), (3, 5), (6, 8), (8, 10)))
 
 
 #: the names removed in amigo_gym 0.2 (issue 19: AmigoBot-v0's step written once, as AmigoBot-v1's ideal step with

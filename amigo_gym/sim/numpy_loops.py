@@ -1,0 +1,114 @@
+"""numpy's own float64 inner loops of ``np.tan`` and ``np.exp``, for the compiled single step to call in place.
+
+The reference computes the step's tangents and the reward's exponentials with numpy's ufuncs, whose float64 loops
+numpy picks at run time for the CPU (its SIMD code: on AVX-512, numpy's SVML ``tan`` and its own ``exp``), so their
+bits are the CPU's and the C library's ``tan`` and ``exp`` give other bits on some CPUs
+(:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). numpy keeps the loop it picked for each type signature in its
+ufunc object (``PyUFuncObject.functions``, with ``data`` and ``types``: numpy's public C API, ``ufuncobject.h``,
+unchanged from numpy 1.0 to 2.x). :func:`ufunc_loop` reads the address of a ufunc's ``float64 -> float64`` loop,
+which the compiled step receives as an integer and calls (``amigo_gym.sim._kernels._loop_call``, an intrinsic): a
+compiled function that calls it (:func:`amigo_gym.sim._kernels.numpy_loop_in_place`) runs numpy's own machine code,
+so it gives numpy's bits on every CPU, in one compiled call instead of a ufunc call from Python (about 0.3 us each).
+
+Where the object does not look as expected (another Python implementation, a numpy that moved the fields, no
+``float64`` loop), :func:`ufunc_loop` returns None and the caller keeps numpy's ufunc calls between compiled
+passes; where the loop found does not give the ufunc's bits on a sample, too (:func:`numpy_loops`).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+from functools import lru_cache
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.model.params import HEADING_LIMIT
+
+__all__ = ["UfuncLoop", "numpy_loops", "tan_exp_sample", "ufunc_loop"]
+
+#: numpy's type number of float64 (``NPY_DOUBLE``)
+_NPY_DOUBLE = 12
+#: offsets of the fields read from ``PyUFuncObject`` on a 64-bit CPython: ``PyObject_HEAD`` (16 bytes), then
+#: ``int nin, nout, nargs, identity``, ``functions``, ``data`` (pointers), ``int ntypes, reserved1``,
+#: ``const char *name``, ``const char *types``
+_NIN, _NOUT, _NARGS, _FUNCTIONS, _DATA, _NTYPES, _NAME, _TYPES = 16, 20, 24, 32, 40, 48, 56, 64
+
+
+class UfuncLoop(NamedTuple):
+    """The inner loop numpy runs for a unary ufunc on float64: ``void loop(char **args, npy_intp *dimensions,
+    npy_intp *steps, void *data)`` at ``address``, with its ``data`` pointer (0 for none)."""
+
+    address: int
+    data: int
+
+
+def ufunc_loop(ufunc: np.ufunc) -> UfuncLoop | None:
+    """The ``float64 -> float64`` loop of the unary ``ufunc`` (the first for that signature, the one numpy's type
+    resolution picks), read from its ``PyUFuncObject``; None where the object does not look as expected."""
+    if sys.implementation.name != "cpython" or ctypes.sizeof(ctypes.c_void_p) != 8 or not isinstance(ufunc, np.ufunc):
+        return None
+    base = id(ufunc)
+
+    def read(offset: int, kind: type[Any]) -> Any:
+        return kind.from_address(base + offset).value
+
+    if (read(_NIN, ctypes.c_int), read(_NOUT, ctypes.c_int), read(_NARGS, ctypes.c_int)) != (1, 1, 2):
+        return None
+    ntypes, functions, data = (
+        read(_NTYPES, ctypes.c_int),
+        read(_FUNCTIONS, ctypes.c_void_p),
+        read(_DATA, ctypes.c_void_p),
+    )
+    name, types = read(_NAME, ctypes.c_void_p), read(_TYPES, ctypes.c_void_p)
+    if ntypes != ufunc.ntypes or not functions or not types or not name:
+        return None
+    if ctypes.string_at(name) != ufunc.__name__.encode():
+        return None
+    codes = ctypes.string_at(types, 2 * ntypes)
+    for i in range(ntypes):
+        if codes[2 * i] == codes[2 * i + 1] == _NPY_DOUBLE:
+            address = ctypes.c_void_p.from_address(functions + 8 * i).value
+            extra = ctypes.c_void_p.from_address(data + 8 * i).value if data else None
+            return UfuncLoop(address, extra or 0) if address else None
+    return None
+
+
+def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The fixed sample of :func:`numpy_loops` (and :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`):
+    5000 arguments of ``tan`` (half turns, and headings of many laps up to
+    :data:`amigo_gym.model.params.HEADING_LIMIT`) and 3000 of ``exp`` (the reward's arguments, never positive)."""
+    g = np.random.default_rng(20261126)
+    xt = np.concatenate(
+        (
+            g.uniform(-2.0, 2.0, 2000),
+            g.normal(0.0, 1e-3, 1000),
+            g.uniform(-2000.0, 2000.0, 1000),
+            g.uniform(-HEADING_LIMIT, HEADING_LIMIT, 1000),
+        )
+    )
+    xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
+    return xt, xe
+
+
+@lru_cache(maxsize=1)
+def numpy_loops() -> tuple[int, int, int, int] | None:
+    """``(tan, exp, tan_data, exp_data)``: the addresses of numpy's float64 loops of ``np.tan`` and ``np.exp`` and
+    their ``data`` pointers, checked once per process: each, called by the compiled
+    :func:`amigo_gym.sim._kernels.numpy_loop_in_place`, gives the ufunc's bits on the sample of
+    :func:`tan_exp_sample`. None where a loop is not found or gives other bits."""
+    from amigo_gym.sim import _kernels as k  # numba, at the first use
+
+    tan, exp = ufunc_loop(np.tan), ufunc_loop(np.exp)
+    if tan is None or exp is None:
+        return None
+    meta = np.zeros(5, dtype=np.int64)
+    for (loop, data), ufunc, x in zip((tan, exp), (np.tan, np.exp), tan_exp_sample(), strict=True):
+        y = x.copy()
+        k.numpy_loop_in_place(loop, data, y, meta)
+        with np.errstate(all="ignore"):
+            if not np.array_equal(y.view(np.int64), ufunc(x).view(np.int64)):
+                return None
+    return tan.address, exp.address, tan.data, exp.data
