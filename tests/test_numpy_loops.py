@@ -5,6 +5,8 @@ with the three passes bit for bit)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -33,6 +35,11 @@ def test_a_loop_called_in_place_gives_the_ufuncs_bits(ufunc: np.ufunc) -> None:
     assert loop is not None
     k = fast.kernels()
     meta = np.zeros(5, dtype=np.int64)
+    for call in (k.numpy_loop_in_place, numpy_loops.numpy_loop_in_place):  # compiled, and Python (ctypes)
+        _in_place(call, ufunc, loop, meta)
+
+
+def _in_place(call: Any, ufunc: np.ufunc, loop: numpy_loops.UfuncLoop, meta: np.ndarray) -> None:
     g = np.random.default_rng(3)
     pool = np.concatenate((g.uniform(-4.0, 4.0, 500), g.uniform(-800.0, 800.0, 500), g.normal(0.0, 1e-3, 100), SPECIAL))
     g.shuffle(pool)
@@ -40,13 +47,13 @@ def test_a_loop_called_in_place_gives_the_ufuncs_bits(ufunc: np.ufunc) -> None:
         for n in range(41):
             x = pool[n : 2 * n].copy()
             want = ufunc(x)
-            k.numpy_loop_in_place(loop.address, loop.data, x, meta)
+            call(loop.address, loop.data, x, meta)
             assert x.tobytes() == want.tobytes(), n
         for step in (2, 3):
             base = pool[:600].copy()
             view = base[::step]
             want = ufunc(view)
-            k.numpy_loop_in_place(loop.address, loop.data, view, meta)
+            call(loop.address, loop.data, view, meta)
             assert view.tobytes() == want.tobytes()
             assert base[1::step].tobytes() == pool[1:600:step].tobytes()  # the rows between untouched
 

@@ -88,6 +88,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics, numeric
 from amigo_gym.paths import classic
+from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -221,13 +222,15 @@ SHARED: tuple[Callable[..., Any], ...] = (
     classic.circle_foot,
     classic.manoeuvre_foot,
     classic.manoeuvre_curvature,
+    numpy_loops.numpy_loop_in_place,
+    numpy_loops.loop_call_typing,
 )
 
 #: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "6b111bf479295312"
+LAYOUT_FINGERPRINT = "b70555a5c7e7dd85"
 
 
 def layout_fingerprint() -> str:
@@ -240,10 +243,19 @@ check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 
-_shared = shared_compiler("amigo_gym.sim._kernels", SHARED, _jit, scalar_forms=numeric.SCALAR_FORMS)
+_shared = shared_compiler(
+    "amigo_gym.sim._kernels",
+    SHARED,
+    _jit,
+    scalar_forms=numeric.SCALAR_FORMS,
+    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
+)
 
 
 _action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
+#: numpy's own inner loop of a unary ufunc called in place (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`),
+#: compiled on its own (the single step calls the shared function itself; tests call this)
+numpy_loop_in_place = _shared(numpy_loops.numpy_loop_in_place)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
@@ -649,56 +661,17 @@ def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: N
     return single_finish(c, buf)
 
 
-def _loop_call_typing(
-    typingctx: object, loop: nb_types.Type, args: nb_types.Type, dims: nb_types.Type, steps: nb_types.Type,
-    data: nb_types.Type,
-) -> tuple[Signature, Callable[..., ir.Value]] | None:  # fmt: skip
-    """``loop(args, dims, steps, data)`` for ``loop`` the address (an integer) of a numpy inner loop, ``void
-    (char **args, npy_intp const *dimensions, npy_intp const *steps, void *data)`` (numpy's C API, ``ufuncobject.h``),
-    and its arguments as addresses (integers). As :func:`_next_double_typing`: the address is an argument, never a
-    constant of the compiled code, so the on-disk cache holds nothing of one process."""
-    if not all(isinstance(a, nb_types.Integer) for a in (loop, args, dims, steps, data)):
-        return None
-
-    def codegen(context: object, builder: ir.IRBuilder, signature: Signature, values: list[ir.Value]) -> ir.Value:
-        char_p, intp_p = ir.IntType(8).as_pointer(), ir.IntType(64).as_pointer()
-        fn_t = ir.FunctionType(ir.VoidType(), [char_p.as_pointer(), intp_p, intp_p, char_p])
-        fn = builder.inttoptr(values[0], fn_t.as_pointer())
-        kinds = (char_p.as_pointer(), intp_p, intp_p, char_p)
-        builder.call(fn, [builder.inttoptr(v, kind) for v, kind in zip(values[1:], kinds, strict=True)])
-        return ir.Constant(ir.IntType(8), 0)
-
-    return nb_types.none(loop, args, dims, steps, data), codegen
-
-
-#: :func:`_loop_call_typing` as numba's intrinsic: ``_loop_call(loop, args, dims, steps, data)`` in compiled code
-_loop_call = cast(Callable[[int, int, int, int, int], None], intrinsic(_loop_call_typing))
-
-
-@_serial
-def numpy_loop_in_place(loop: int, data: int, x: F64, meta: NDArray[np.int64]) -> None:
-    """``x = f(x)`` in place by numpy's own float64 inner loop of a unary ufunc ``f`` at the address ``loop`` (with its
-    ``data`` pointer: :func:`amigo_gym.sim.numpy_loops.numpy_loops`), called as numpy calls it for ``f(x, out=x)``:
-    the arguments' addresses, ``x``'s length and strides in ``meta`` (5 entries, scratch)."""
-    meta[0] = x.ctypes.data
-    meta[1] = x.ctypes.data
-    meta[2] = x.shape[0]
-    meta[3] = x.strides[0]
-    meta[4] = x.strides[0]
-    base = meta.ctypes.data
-    _loop_call(loop, base, base + 16, base + 24, data)
-
-
 @_serial
 def single_step_numpy(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
                       a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
                       meta: NDArray[np.int64]) -> int:  # fmt: skip
-    """:func:`single_step` with numpy's own ``tan`` and ``exp`` loops (:func:`numpy_loop_in_place`) in place of the
+    """:func:`single_step` with numpy's own ``tan`` and ``exp`` loops (:func:`amigo_gym.sim.numpy_loops.
+    numpy_loop_in_place`) in place of the
     C library's: the three passes' bits on every CPU, in one call. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
-    numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
+    numpy_loops.numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
     single_evaluate(c, preview, buf, flags, obs)
-    numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
+    numpy_loops.numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
     return single_finish(c, buf)
 
 

@@ -71,6 +71,15 @@ def check_fingerprint(owner: str, stated: str, actual: str) -> None:
         )
 
 
+def _calls(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """A function of any arguments that calls ``fn`` with them (an ``overload``'s implementation of an intrinsic)."""
+
+    def call(*args: Any) -> Any:
+        return fn(*args)
+
+    return call
+
+
 def _returns(scalar: Callable[..., Any]) -> Callable[..., Any]:
     """The typing function of an ``overload`` whose implementation is ``scalar`` for any argument types (numba
     requires the typing function's signature to be the implementation's)."""
@@ -88,6 +97,7 @@ def shared_compiler(
     jit: Callable[..., Any],
     inline: tuple[Callable[..., Any], ...] = (),
     scalar_forms: Mapping[Callable[..., Any], Callable[..., Any]] | None = None,
+    intrinsics: Mapping[Callable[..., Any], Callable[..., Any]] | None = None,
 ) -> Callable[[_F], _F]:
     """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
 
@@ -99,9 +109,12 @@ def shared_compiler(
     ``scalar_forms`` maps polymorphic helpers (floats or columns, dispatching on ``isinstance``, which numba cannot
     compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
     runs its float form (an ``overload``), which must be in ``shared`` (its source counts in the fingerprint).
+    ``intrinsics`` maps Python functions to the typing functions of numba intrinsics that compiled code calls in their
+    place (:func:`amigo_gym.sim.numpy_loops.call_loop`, whose Python form uses ``ctypes``); the typing functions must be
+    in ``shared`` too.
     Only the kernel modules call this (they import numba anyway); this module stays numba-free.
     """
-    from numba.extending import overload, register_jitable
+    from numba.extending import intrinsic, overload, register_jitable
 
     for fn in shared:
         if fn not in _REGISTERED:  # once per process (both kernels share some functions)
@@ -118,6 +131,12 @@ def shared_compiler(
         if poly not in _REGISTERED:
             overload(poly, jit_options={"error_model": "numpy"})(_returns(scalar))
             _REGISTERED.add(poly)
+    for python_form, typing in (intrinsics or {}).items():
+        if typing not in shared:
+            raise ImportError(f"{owner} compiles {typing.__qualname__} but does not list it in SHARED")
+        if python_form not in _REGISTERED:
+            overload(python_form)(_returns(_calls(intrinsic(typing))))
+            _REGISTERED.add(python_form)
 
     def compiled(fn: _F) -> _F:
         if fn not in shared:

@@ -6,9 +6,9 @@ bits are the CPU's and the C library's ``tan`` and ``exp`` give other bits on so
 (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). numpy keeps the loop it picked for each type signature in its
 ufunc object (``PyUFuncObject.functions``, with ``data`` and ``types``: numpy's public C API, ``ufuncobject.h``,
 unchanged from numpy 1.0 to 2.x). :func:`ufunc_loop` reads the address of a ufunc's ``float64 -> float64`` loop,
-which the compiled step receives as an integer and calls (``amigo_gym.sim._kernels._loop_call``, an intrinsic): a
-compiled function that calls it (:func:`amigo_gym.sim._kernels.numpy_loop_in_place`) runs numpy's own machine code,
-so it gives numpy's bits on every CPU, in one compiled call instead of a ufunc call from Python (about 0.3 us each).
+which the compiled steps receive as an integer and call (:func:`numpy_loop_in_place`, which the kernels compile, its
+:func:`call_loop` an intrinsic there: :func:`loop_call_typing`). That runs numpy's own machine code, so it gives
+numpy's bits on every CPU, inside one compiled call instead of a ufunc call from Python (about 0.3 us each).
 
 Where the object does not look as expected (another Python implementation, a numpy that moved the fields, no
 ``float64`` loop), :func:`ufunc_loop` returns None and the caller keeps numpy's ufunc calls between compiled
@@ -27,7 +27,15 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.params import HEADING_LIMIT
 
-__all__ = ["UfuncLoop", "numpy_loops", "tan_exp_sample", "ufunc_loop"]
+__all__ = [
+    "UfuncLoop",
+    "call_loop",
+    "loop_call_typing",
+    "numpy_loop_in_place",
+    "numpy_loops",
+    "tan_exp_sample",
+    "ufunc_loop",
+]
 
 #: numpy's type number of float64 (``NPY_DOUBLE``)
 _NPY_DOUBLE = 12
@@ -76,6 +84,53 @@ def ufunc_loop(ufunc: np.ufunc) -> UfuncLoop | None:
     return None
 
 
+#: the C type of a numpy inner loop, for :func:`call_loop` in Python
+_LOOP_T = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+
+
+def call_loop(loop: int, args: int, dims: int, steps: int, data: int) -> None:
+    """``loop(args, dims, steps, data)``: the numpy inner loop at the address ``loop``, ``void (char **args, npy_intp
+    const *dimensions, npy_intp const *steps, void *data)`` (numpy's C API, ``ufuncobject.h``), its arguments given as
+    addresses. In Python by ``ctypes``; compiled code calls it directly (:func:`loop_call_typing`, which the kernels
+    register in its place: ``amigo_gym.sim.layout.shared_compiler``'s ``intrinsics``)."""
+    _LOOP_T(loop)(args, dims, steps, data or None)
+
+
+def numpy_loop_in_place(loop: int, data: int, x: Any, meta: Any) -> None:
+    """``x = f(x)`` in place, ``x`` a float64 ``(n,)`` array, by numpy's own float64 loop of a unary ufunc ``f`` at
+    the address ``loop`` (with its ``data`` pointer: :func:`numpy_loops`), called as numpy calls it for ``f(x,
+    out=x)``: the arguments' addresses, ``x``'s length and strides in ``meta`` (an int64 ``(5,)`` scratch array). The
+    same code in Python and compiled (the kernels list it in their ``SHARED``)."""
+    meta[0] = x.ctypes.data
+    meta[1] = x.ctypes.data
+    meta[2] = x.shape[0]
+    meta[3] = x.strides[0]
+    meta[4] = x.strides[0]
+    base = meta.ctypes.data
+    call_loop(loop, base, base + 16, base + 24, data)
+
+
+def loop_call_typing(typingctx: object, loop: Any, args: Any, dims: Any, steps: Any, data: Any) -> Any:
+    """The typing and code of :func:`call_loop` in compiled code (numba's ``intrinsic``): the loop called at its address
+    (an argument, never a constant of the compiled code, so numba's disk cache holds nothing of one process), its
+    arguments integers turned into pointers. numba imported here, when a kernel is compiled."""
+    from llvmlite import ir
+    from numba.core import types
+
+    if not all(isinstance(a, types.Integer) for a in (loop, args, dims, steps, data)):
+        return None
+
+    def codegen(context: object, builder: Any, signature: object, values: list[Any]) -> Any:
+        char_p, intp_p = ir.IntType(8).as_pointer(), ir.IntType(64).as_pointer()
+        fn_t = ir.FunctionType(ir.VoidType(), [char_p.as_pointer(), intp_p, intp_p, char_p])
+        fn = builder.inttoptr(values[0], fn_t.as_pointer())
+        kinds = (char_p.as_pointer(), intp_p, intp_p, char_p)
+        builder.call(fn, [builder.inttoptr(v, kind) for v, kind in zip(values[1:], kinds, strict=True)])
+        return context.get_dummy_value()  # type: ignore[attr-defined]
+
+    return types.none(loop, args, dims, steps, data), codegen
+
+
 def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The fixed sample of :func:`numpy_loops` (and :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`):
     5000 arguments of ``tan`` (half turns, and headings of many laps up to
@@ -96,18 +151,15 @@ def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
 @lru_cache(maxsize=1)
 def numpy_loops() -> tuple[int, int, int, int] | None:
     """``(tan, exp, tan_data, exp_data)``: the addresses of numpy's float64 loops of ``np.tan`` and ``np.exp`` and
-    their ``data`` pointers, checked once per process: each, called by the compiled
-    :func:`amigo_gym.sim._kernels.numpy_loop_in_place`, gives the ufunc's bits on the sample of
-    :func:`tan_exp_sample`. None where a loop is not found or gives other bits."""
-    from amigo_gym.sim import _kernels as k  # numba, at the first use
-
+    their ``data`` pointers, checked once per process: each, called by :func:`numpy_loop_in_place`, gives the ufunc's
+    bits on the sample of :func:`tan_exp_sample`. None where a loop is not found or gives other bits."""
     tan, exp = ufunc_loop(np.tan), ufunc_loop(np.exp)
     if tan is None or exp is None:
         return None
     meta = np.zeros(5, dtype=np.int64)
     for (loop, data), ufunc, x in zip((tan, exp), (np.tan, np.exp), tan_exp_sample(), strict=True):
         y = x.copy()
-        k.numpy_loop_in_place(loop, data, y, meta)
+        numpy_loop_in_place(loop, data, y, meta)  # in Python (ctypes): the same call as compiled
         with np.errstate(all="ignore"):
             if not np.array_equal(y.view(np.int64), ufunc(x).view(np.int64)):
                 return None
