@@ -16,7 +16,7 @@ import pytest
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
-from amigo_gym.sim import fast, numpy_loops
+from amigo_gym.sim import fast, fast_v1, numpy_loops
 from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
@@ -146,21 +146,36 @@ def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch:
 def test_v1_reward_exponentials_in_the_step_give_numpys_bits(
     monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
 ) -> None:
-    """AmigoBot-v1's single step with the reward's exponentials in the compiled call (kernels_v1.step_exps, the C
-    library's exp) against the step followed by numpy's exp (the gate off), same seeds: the same bits."""
+    """AmigoBot-v1's single step with the reward's exponentials, smoothness term and reward in the compiled call
+    (kernels_v1.step_record: numpy's own exp loop) against the step followed by numpy's exp and the terms in Python
+    (numpy's loops not found), same seeds: the same bits, resets included."""
     envs = [gym.make("AmigoBot-v1", **settings).unwrapped]
-    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
+    monkeypatch.setattr(fast_v1, "numpy_loops", lambda: None)
     envs.append(gym.make("AmigoBot-v1", **settings).unwrapped)
     monkeypatch.undo()
-    assert envs[1]._kernel.run_exps is None
-    assert (envs[0]._kernel.run_exps is not None) == fast.libm_tan_exp_match_numpy()
-    for e in envs:
-        e.reset(seed=8)
+    assert envs[0]._kernel.exps_done and not envs[1]._kernel.exps_done
+    assert envs[1]._kernel.exp_loop == (0, 0)
+    infos = [e.reset(seed=8)[1] for e in envs]
+    assert _same_info(*infos)
     for a in np.random.default_rng(9).uniform(-1.0, 1.0, (200, 2)):
         out = [e.step(a) for e in envs]
         (o1, r1, t1, _, i1), (o2, r2, t2, _, i2) = out
         assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
-        assert i1["reward_terms"] == i2["reward_terms"]
+        assert _same_info(i1, i2)
         if t1:
             for e in envs:
                 e.reset()
+
+
+def _same_info(a: dict[str, object], b: dict[str, object]) -> bool:
+    """The same keys, arrays of the same bits, the same other values."""
+    if a.keys() != b.keys():
+        return False
+    for k, va in a.items():
+        vb = b[k]
+        if isinstance(va, np.ndarray):
+            if not (isinstance(vb, np.ndarray) and va.dtype == vb.dtype and va.tobytes() == vb.tobytes()):
+                return False
+        elif va != vb:
+            return False
+    return True

@@ -19,6 +19,7 @@ from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_r
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, fast_v1
+from amigo_gym.sim import layout_v1 as _L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
@@ -89,16 +90,14 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
 
 _np_array = np.array
 _np_exp = np.exp
-#: the workspace's entries of the compiled step's info arrays, in their order (pose, H, wheel rates, command, wheel
-#: angles, measured pose, slip: :meth:`AmigoBotV1Env._kernel_info`, one ``take``) and of its scalars
-_INFO_ROWS = np.array(
-    (_W_X, _W_Y, _W_BETA, _W_HX, _W_HY, _W_W1, _W_W2, _W_CMD1, _W_CMD2, _W_AL1, _W_AL2, _W_MX, _W_MY, _W_MB, _W_SLIP1,
-     _W_SLIP2),
-    dtype=np.intp,
-)  # fmt: skip
-_INFO_SCALARS = np.array(
-    (_W_E, _W_PROGRESS, _W_VT, _W_VREF, _W_HEADING, _W_END, _W_TERM, _W_HX, _W_HY, _W_CMD1, _W_CMD2), dtype=np.intp
+#: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, the
+#: exponentials, the smoothness term, the reward and the heading term
+_R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
+    slice(a, b) for a, b in ((0, 3), (3, 5), (5, 7), (7, 9), (9, 11), (11, 14), (14, 16))
 )
+_R_EXPS = slice(_L.R_TRACK, _L.R_SMOOTH)
+_R_SCALARS = slice(_L.R_ERROR, _L.RECORD_WIDTH)
+_R_SMOOTH, _R_REWARD, _R_HEADING = _L.R_SMOOTH, _L.R_REWARD, _L.R_ERROR + _L.RECORD_SCALARS.index("heading")
 
 
 class AmigoBotV1Env(AmigoBotBase):
@@ -272,6 +271,7 @@ class AmigoBotV1Env(AmigoBotBase):
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
             kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
+            kern.fill()
             info = self._kernel_info(True)[0]
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
@@ -320,13 +320,12 @@ class AmigoBotV1Env(AmigoBotBase):
         steps = self._steps
         if kern.noise_on:
             kern.draw(steps)
-        run_exps = kern.run_exps
-        if run_exps is not None:  # the reward's exponentials in the same call (the C library's exp: numpy's bits)
-            run_exps(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, kern.exps)
-        else:
-            kern.run(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2)
+        t_loop, t_data = kern.exp_loop
+        rec = kern.record
+        kern.run_record(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, rec, t_loop,
+                        t_data, kern.meta, kern.smooth_weight)  # fmt: skip
         self._steps = steps + 1
-        info, reward, terminated, hx, hy = self._kernel_info(False, run_exps is not None)
+        info, reward, terminated, hx, hy = self._kernel_info(False)
         return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
@@ -351,50 +350,55 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self, start: bool, exps: bool = False) -> tuple[dict[str, Any], float, bool, float, float]:
-        """:meth:`_info` from the kernel's workspace (:data:`amigo_gym.sim._kernels_v1.WS_FIELDS`): the same entries;
-        with the reward (the product of the terms, :func:`amigo_gym.task.v0.reward_product`), ``terminated`` and H.
+    def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, bool, float, float]:
+        """:meth:`_info` from the compiled step's info record (:attr:`amigo_gym.sim.fast_v1.StepKernel.record`,
+        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the workspace's entries, the reward's exponentials by numpy's own
+        ``exp`` loop, its smoothness term and the reward, :func:`amigo_gym.task.v0.reward_product`): the same entries;
+        with the reward, ``terminated`` and H.
 
         ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
-        else of the step just taken (its slips and commands, also into :attr:`_last_command`). ``exps``: the kernel
-        has written the exponentials of the reward's arguments (:attr:`amigo_gym.sim.fast_v1.StepKernel.run_exps`),
-        else one ``np.exp`` takes them: the track, speed and smoothness terms from them, and the heading term, as
-        :func:`amigo_gym.task.v0.reward_term_columns` computes them.
+        else of the step just taken (its slips and commands, also into :attr:`_last_command`). Where numpy's loops
+        were not found (:attr:`amigo_gym.sim.fast_v1.StepKernel.exps_done` False) the record holds the exponentials'
+        arguments: ``np.exp`` of them, and the terms and the reward as :func:`amigo_gym.task.v0.reward_term_columns`
+        computes them.
         """
         kern = self._kernel
         assert kern is not None
-        ws = kern.ws
-        track, speed, ex = (kern.exps if exps else _np_exp(kern.reward_args)).tolist()
-        e, progress, v_true, v_ref, heading, end, term, hx, hy, cmd1, cmd2 = ws.take(_INFO_SCALARS).tolist()
-        # the seven info arrays are views of one new array (one allocation instead of seven)
-        arr = ws.take(_INFO_ROWS)
+        rec = kern.record.copy()  # the info's seven arrays are views of this one new array
         if start:
-            arr[7:9] = self._last_command
-            arr[14:16] = 0.0
-        else:
+            rec[_R_COMMAND] = self._last_command
+            rec[_R_SLIP] = 0.0
+        if not kern.exps_done:
+            exps = rec[_R_EXPS]
+            _np_exp(exps, out=exps)
+            rec[_R_SMOOTH] = smooth = float(task.smooth_term(float(exps[2]), self.params.smooth_weight))
+            rec[_R_REWARD] = task.reward_product(float(exps[0]), float(exps[1]), float(rec[_R_HEADING]), smooth)
+        v = rec.tolist()
+        hx, hy, cmd1, cmd2 = v[3], v[4], v[7], v[8]
+        e, progress, v_true, v_ref, heading, end, term, track, speed, _, smooth, reward = v[_R_SCALARS]
+        if not start:
             self._last_command = (cmd1, cmd2)
-        smooth = float(task.smooth_term(ex, self.params.smooth_weight))
         info = {
-            "pose": arr[0:3],
-            "h_position": arr[3:5],
+            "pose": rec[_R_POSE],
+            "h_position": rec[_R_H],
             "cross_track_error": e,
             "progress": progress,
             "speed": v_true,
             "reference_speed": v_ref,
             "speed_error": v_true - v_ref,
-            "wheel_rates": arr[5:7],
-            "command": arr[7:9],
-            "wheel_angles": arr[9:11],
-            "measured_pose": arr[11:14],
+            "wheel_rates": rec[_R_RATES],
+            "command": rec[_R_COMMAND],
+            "wheel_angles": rec[_R_ANGLES],
+            "measured_pose": rec[_R_MEASURED],
             "reward_terms": {"track": track, "speed": speed, "heading": heading, "smooth": smooth},
             "time": self._steps * self.params.dt,
             "path": dict(self._path_info),
             "true_robot": dict(self._true_robot),
             "delay": self._delay,
-            "slip": arr[14:16],
+            "slip": rec[_R_SLIP],
             "end_of_path": end != 0.0,
         }
-        return info, float(task.reward_product(track, speed, heading, smooth)), term != 0.0, hx, hy
+        return info, reward, term != 0.0, hx, hy
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace

@@ -85,6 +85,7 @@ from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomizati
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid
 from amigo_gym.sim import layout_v1 as L
+from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -98,13 +99,18 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "afa0c457932c04ed"
+LAYOUT_FINGERPRINT = "cd9c7b30cf883186"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 
 _shared = shared_compiler(
-    "amigo_gym.sim._kernels_v1", L.SHARED, _jit, inline=L.SHARED_INLINE, scalar_forms=numeric.SCALAR_FORMS
+    "amigo_gym.sim._kernels_v1",
+    L.SHARED,
+    _jit,
+    inline=L.SHARED_INLINE,
+    scalar_forms=numeric.SCALAR_FORMS,
+    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
 )
 
 
@@ -515,8 +521,34 @@ def step(
     )
 
 
+_RECORD_WS = L.RECORD_WS
+_N_RECORD_WS = len(L.RECORD_WS)
+_smooth_term = _shared(task.smooth_term)
+_reward_product = _shared(task.reward_product)
+
+
 @_jit
-def step_exps(
+def fill_record(ws: F64, rec: F64, exp: int, exp_data: int, meta: NDArray[np.int64], smooth_weight: float) -> None:
+    """The single env's info record ``rec (RECORD_WIDTH,)`` from the workspace (:data:`layout_v1.RECORD_ROWS`,
+    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments by numpy's own ``exp``
+    loop at the address ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`: numpy's bits), the smoothness
+    term and the reward (:func:`amigo_gym.task.v0.smooth_term`, :func:`amigo_gym.task.v0.reward_product`). With
+    ``exp == 0`` (numpy's loops not found) it leaves the arguments in their places and the last two entries alone:
+    the caller takes ``np.exp`` and the rest."""
+    for j in range(_N_RECORD_WS):
+        rec[j] = ws[_RECORD_WS[j]]
+    rec[L.R_TRACK] = ws[L.W_ARG_T]
+    rec[L.R_SPEED] = ws[L.W_ARG_V]
+    rec[L.R_SMOOTH_EXP] = ws[L.W_ARG_S]
+    if exp != 0:
+        numpy_loops.numpy_loop_in_place(exp, exp_data, rec[L.R_TRACK : L.R_SMOOTH], meta)
+        smooth = _smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
+        rec[L.R_SMOOTH] = smooth
+        rec[L.R_REWARD] = _reward_product(rec[L.R_TRACK], rec[L.R_SPEED], ws[L.W_HEADING], smooth)
+
+
+@_jit
+def step_record(
     c: F64,
     pv: F64,
     ring: F64,
@@ -525,15 +557,15 @@ def step_exps(
     ring_step: int,
     a1: float,
     a2: float,
-    exps: F64,
+    rec: F64,
+    exp: int,
+    exp_data: int,
+    meta: NDArray[np.int64],
+    smooth_weight: float,
 ) -> None:
-    """:func:`step`, then ``exps (3,)``: the exponentials of the reward's track, speed and smoothness arguments by the
-    C library's ``math.exp``: the single env's step and reward in one call, where that gives numpy's bits
-    (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`; else the env takes ``np.exp`` of the arguments)."""
+    """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call."""
     step(c, pv, ring, ws, obs, ring_step, a1, a2)
-    exps[0] = math.exp(ws[L.W_ARG_T])
-    exps[1] = math.exp(ws[L.W_ARG_V])
-    exps[2] = math.exp(ws[L.W_ARG_S])
+    fill_record(ws, rec, exp, exp_data, meta, smooth_weight)
 
 
 # ----------------------------------------------------------------------------------------- N robots

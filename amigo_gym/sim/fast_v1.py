@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from amigo_gym.model import fresnel, randomization
 from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast, layout_v1
+from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -182,8 +183,11 @@ class StepKernel:
         self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
         #: the single env's observation, written by each step (:attr:`run`; the env hands out a copy)
         self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
-        #: the exponentials of the reward's three arguments, written by :attr:`run_exps`
-        self.exps: Array = np.zeros(3)
+        #: the single env's info record (:data:`layout_v1.RECORD_WIDTH`, :func:`amigo_gym.sim._kernels_v1.fill_record`),
+        #: written by :attr:`run_record` and :meth:`fill`
+        self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
+        self.meta = np.zeros(5, dtype=np.int64)
+        self.smooth_weight = float(k.params.smooth_weight)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
@@ -204,14 +208,15 @@ class StepKernel:
         ring = np.zeros((1, 2))
         self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
-        #: the step and its reward's exponentials in one call (into :attr:`exps`) where the C library's ``exp`` gives
-        #: numpy's bits (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`); else None (the env takes ``np.exp``)
-        self.run_exps: Any = None
-        if fast.libm_tan_exp_match_numpy():
-            args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.exps)
-            self.run_exps = fast.direct_call(kv.step_exps, *args)
-        #: the arguments of the reward's three exponentials (track, speed, smoothness), a view of :attr:`ws`
-        self.reward_args: Array = self.ws[layout_v1.W_ARG_T : layout_v1.W_ARG_S + 1]
+        #: numpy's own ``exp`` loop (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: its address and data), ``(0, 0)``
+        #: where not found (then the env takes ``np.exp`` of the record's arguments: :attr:`exps_done` False)
+        loops = numpy_loops()
+        self.exp_loop = (0, 0) if loops is None else (loops[1], loops[3])
+        self.exps_done = loops is not None
+        #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
+        args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop, self.meta)
+        self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
+        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
@@ -226,8 +231,8 @@ class StepKernel:
             "logs",
             "run",
             "_uniforms",
-            "reward_args",
-            "run_exps",
+            "run_record",
+            "_fill",
         ):
             del state[name]
         return state
@@ -260,6 +265,10 @@ class StepKernel:
         self.noise_on = float(ep.slip_max) > 0.0 or self.n_normal > 0
         ws[layout_v1.W_NOISE_ON] = 1.0 if self.noise_on else 0.0
         self.key = np.uint64(ep.key)
+
+    def fill(self) -> None:
+        """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
+        self._fill(self.ws, self.record, *self.exp_loop, self.meta, self.smooth_weight)
 
     def draw(self, steps: int) -> None:
         """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter

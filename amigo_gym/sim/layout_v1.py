@@ -15,6 +15,7 @@ from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.paths import clothoid
+from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -133,6 +134,20 @@ W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in 
 W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
 W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
 W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
+#: the single env's info record (:func:`amigo_gym.sim._kernels_v1.fill_record`; the env hands out a new copy per step
+#: and the info's seven arrays are views of it): the workspace entries of those arrays in their order (pose, H, wheel
+#: rates, command, wheel angles, measured pose, slip), then those of the info's scalars, then the exponentials of the
+#: reward's track, speed and smoothness arguments, the smoothness term and the reward
+RECORD_ROWS = ("x", "y", "beta", "h_x", "h_y", "w1", "w2", "command1", "command2", "alpha1", "alpha2", "meas_x",
+               "meas_y", "meas_beta", "slip1", "slip2")  # fmt: skip
+RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated")
+R_ERROR = len(RECORD_ROWS)
+R_TRACK = R_ERROR + len(RECORD_SCALARS)
+R_SPEED, R_SMOOTH_EXP, R_SMOOTH, R_REWARD = R_TRACK + 1, R_TRACK + 2, R_TRACK + 3, R_TRACK + 4
+RECORD_WIDTH = R_REWARD + 1
+#: :data:`RECORD_ROWS` and :data:`RECORD_SCALARS` as workspace indices
+RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
+
 #: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
 #: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1``, their logarithms
 #: and the angles ``2 pi u2`` (5 each; the step replaces the angles by their cosines)
@@ -204,6 +219,10 @@ SHARED: tuple[Callable[..., Any], ...] = (
     task.curvature_feature,
     tracking.preview_entry,
     tracking.speed_observations,
+    task.smooth_term,
+    task.reward_product,
+    numpy_loops.numpy_loop_in_place,
+    numpy_loops.loop_call_typing,
 )
 
 
@@ -240,5 +259,5 @@ def layout_fingerprint() -> str:
         (randomization._INV_2_53, randomization._TWO_PI),
     )
     offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
-    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets)
+    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets, RECORD_WS, RECORD_WIDTH)
     return source_fingerprint((layout, homes), SHARED)
