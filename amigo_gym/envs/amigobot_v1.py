@@ -312,8 +312,10 @@ class AmigoBotV1Env(AmigoBotBase):
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
-        The per-step draws' logarithms (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's exponentials
-        (:meth:`_kernel_info`) by numpy, as the reference evaluates them (:func:`amigo_gym.task.v1.step_columns`).
+        The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
+        exponentials by numpy's own ``exp`` loop inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`; by
+        ``np.exp`` in :meth:`_kernel_info` where that loop was not found), as the reference evaluates them
+        (:func:`amigo_gym.task.v1.step_columns`).
         """
         kern = self._kernel
         assert kern is not None
