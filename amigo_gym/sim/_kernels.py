@@ -301,6 +301,152 @@ def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_]
         tans[i, 1] = 0.5 * (state[i, 2] + h)
 
 
+#: rows per block of :func:`evaluate`: its stages run over one block at a time, in the block's columns of the scratch
+#: ``cols`` (:func:`scratch_size`)
+BLOCK = 128
+
+#: the columns of a block of :func:`evaluate`'s scratch (one float per row of the block each)
+SCRATCH_FIELDS: tuple[str, ...] = (
+    "x",
+    "y",
+    "beta",
+    "alpha1",
+    "alpha2",
+    "alpha3",
+    "w1",
+    "w2",
+    "cos_beta",
+    "sin_beta",
+    "abs_dv",
+    "change_sq",
+    "rate1_obs",
+    "rate2_obs",
+    "speed_obs",
+    "h_x",
+    "h_y",
+    "e",
+    "cos_theta",
+    "sin_theta",
+    "s",
+    "on_line",
+    "error_obs",
+    "sin_psi",
+    "cos_psi",
+    "curvature_obs",
+    "heading",
+)
+_K = {name: i * BLOCK for i, name in enumerate(SCRATCH_FIELDS)}
+K_X, K_Y, K_BETA, K_AL1, K_AL2, K_AL3, K_W1, K_W2, K_COS, K_SIN = (_K[n] for n in SCRATCH_FIELDS[:10])
+K_ADV, K_CHG, K_OR1, K_OR2, K_OR3, K_HX, K_HY, K_E, K_CT, K_ST = (_K[n] for n in SCRATCH_FIELDS[10:20])
+K_S, K_LINE, K_OE, K_SPSI, K_CPSI, K_OK, K_HEAD = (_K[n] for n in SCRATCH_FIELDS[20:])
+#: floats of one block's scratch
+BLOCK_WIDTH = BLOCK * len(SCRATCH_FIELDS)
+
+
+def scratch_size(n: int) -> int:
+    """The length of :func:`evaluate`'s scratch ``cols`` for ``n`` rows: one block's columns per block."""
+    return -(-n // BLOCK) * BLOCK_WIDTH
+
+
+# The row's code of pass 2 in four pieces (the constants ``q`` of :func:`_row_constants`), called by the two drivers:
+# :func:`evaluate`'s stages (one loop per piece over a block's rows) and :func:`_evaluate_rows` (the single env's row).
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _row_constants(c: F64) -> tuple[float, ...]:
+    # the constants of pass 2 as a tuple of locals (LLVM cannot tell that the rows' stores leave ``c`` alone: read in
+    # a loop, they are loaded again per row, and what depends on them alone, is recomputed per row); with
+    # task.steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part of the
+    # manoeuvre), computed once with the same operations instead of a square root per row
+    l3 = c[L3]
+    cos_ss_curve, sin_ss_curve = _steady_heading(c[CURV], l3)
+    cos_ss_line, sin_ss_line = _steady_heading(0.0, l3)
+    return (c[DT], c[W_MAX], c[R1], c[R2], c[TWO_L1], c[L5], c[R3], l3, c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION],
+            c[RADIUS], c[STRAIGHT], c[CURV], c[SPEED], c[MAX_SPEED], c[ERROR_SCALE], c[E_MAX], c[TERM], c[SIG_T],
+            c[SIG_V], c[SMOOTH_SQ], cos_ss_curve, sin_ss_curve, cos_ss_line, sin_ss_line)  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _moved(
+    q: tuple[float, ...], start: bool, x: float, y: float, beta: float, al1: float, al2: float, al3: float,
+    prev1: float, prev2: float, a1: float, a2: float, bdot: float, t0: float, t1: float,
+) -> tuple[float, ...]:  # fmt: skip
+    # task.v1._ideal_step: kinematics.arc_step from the two tangents t0, t1, the wheel angles, bdot from pass 1; a
+    # start state (task.v1.reset_columns, ``start``) as it is, t0, t1 np.cos and np.sin of its heading, its speed.
+    # Selects, not branches (the stages vectorise). Returns the new state, cos and sin of its heading, the reward's
+    # speed and smoothness inputs and task.v0.observe_columns' rates.
+    dt, w_max, r1, r2, two_l1, l5, r3 = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    speed, v_max = q[16], q[17]
+    w1, w2 = _action_commands(a1, a2, w_max)[2:]
+    w1 = prev1 if start else w1
+    w2 = prev2 if start else w2
+    v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
+    db = bdot * dt
+    h = 0.5 * db
+    x1, y1, cos1, sin1 = _arc(x, y, v, dt, h, t0, t1)
+    castor = _castor_rate(v, bdot, l5, r3)
+    dw1 = w1 - prev1
+    dw2 = w2 - prev2
+    o0, o1, o2 = _observe_rates(w1, w2, v, speed, w_max, v_max)
+    return (
+        x if start else x1,
+        y if start else y1,
+        beta if start else beta + db,
+        al1 if start else _advance_angle(al1, w1, dt),
+        al2 if start else _advance_angle(al2, w2, dt),
+        al3 if start else _advance_angle(al3, castor, dt),
+        w1,
+        w2,
+        t0 if start else cos1,
+        t1 if start else sin1,
+        abs(v - speed),
+        dw1 * dw1 + dw2 * dw2,
+        o0,
+        o1,
+        o2,
+    )
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _projected(
+    q: tuple[float, ...], manoeuvre: bool, x: float, y: float, cos_beta: float, sin_beta: float
+) -> tuple[float, float, float, float, float, float, bool]:
+    # task.v1.evaluate_columns: H, its projection on the path (paths.classic's project_xy on floats):
+    # (h_x, h_y, e, cos theta, sin theta, s, on_line)
+    l3, cx, cy, r0x, r0y, d, r, big_l = q[7], q[8], q[9], q[10], q[11], q[12], q[13], q[14]
+    hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
+    if manoeuvre:
+        e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(hx, hy, cx, cy, r0x, r0y, d, r, big_l)
+        return hx, hy, e, cos_theta, sin_theta, s, on_line
+    e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, cx, cy, r0x, r0y, d, r)
+    return hx, hy, e, cos_theta, sin_theta, 0.0, False
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _terms(
+    q: tuple[float, ...], on_line: bool, e: float, cos_beta: float, sin_beta: float, cos_theta: float,
+    sin_theta: float, abs_dv: float, change_sq: float,
+) -> tuple[float, float, float, float, float, float, float, float, bool]:  # fmt: skip
+    # task.v0.observe_columns' head, task.v0.reward_term_columns (steady_heading): the heading term and the
+    # arguments of the exponentials, the termination
+    l3, curv = q[7], q[15]
+    error_scale, e_max, term, sigma_t, sigma_v, smooth_sq = q[18], q[19], q[20], q[21], q[22], q[23]
+    curvature = 0.0 if on_line else curv  # the straight part's, else the circle's
+    cos_psi, sin_psi = _heading_error(cos_beta, sin_beta, cos_theta, sin_theta)
+    abs_e = abs(e)
+    o0, o1, o2, o3 = _observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max)
+    cos_ss = q[26] if on_line else q[24]
+    sin_ss = q[27] if on_line else q[25]
+    ex0, ex1, ex2 = _reward_arguments(abs_e, abs_dv, change_sq, sigma_t, sigma_v, smooth_sq)
+    heading = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
+    return o0, o1, o2, o3, heading, ex0, ex1, ex2, _off_path(abs_e, term)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _preview_feature(q: tuple[float, ...], manoeuvre: bool, s: float, ahead: float) -> float:
+    # the curvature field of the preview point ``ahead`` of the foot at the arc length s (task.v0.observe_columns)
+    l3, big_l, curv = q[7], q[14], q[15]
+    return _curvature_feature(_manoeuvre_curvature(s + ahead, big_l, curv) if manoeuvre else curv, l3)
+
+
 def _evaluate(
     c: F64,
     preview: F64,
@@ -313,110 +459,155 @@ def _evaluate(
     terminated: NDArray[np.bool_],
     record: F64,
     exps: F64,
+    cols: F64,
 ) -> None:
-    """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe."""
-    # task.steady_heading of the only two curvatures a row can have (the path's; 0 on the straight part
-    # of the manoeuvre), computed once with the same operations instead of a square root per row
-    l3 = c[L3]
-    cos_ss_curve, sin_ss_curve = _steady_heading(c[CURV], l3)
-    cos_ss_line, sin_ss_line = _steady_heading(0.0, l3)
+    """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe.
+
+    By blocks of :data:`BLOCK` rows, each in stages: loops over the rows of the block that read and write the block's
+    columns of the scratch ``cols`` (:data:`SCRATCH_FIELDS`, at fixed distances), so that LLVM vectorises them (SIMD
+    divisions and square roots: the scalar ones' bits); restart rows are selected in them, not branched to.
+    """
+    q = _row_constants(c)
     manoeuvre = c[MANOEUVRE] != 0.0
     m = 4 + preview.shape[0]
-    # the constants as locals (LLVM cannot tell that the rows' stores leave ``c`` alone: read in the loop, they are
-    # loaded again per row, and what depends on them alone, is recomputed per row)
-    dt, w_max, r1, r2, two_l1, l5, r3 = c[DT], c[W_MAX], c[R1], c[R2], c[TWO_L1], c[L5], c[R3]
-    cx, cy, r0x, r0y, d, r, big_l, curv = c[CX], c[CY], c[R0X], c[R0Y], c[DIRECTION], c[RADIUS], c[STRAIGHT], c[CURV]
-    speed, v_max, error_scale, e_max, term = c[SPEED], c[MAX_SPEED], c[ERROR_SCALE], c[E_MAX], c[TERM]
-    sigma_t, sigma_v, smooth_sq = c[SIG_T], c[SIG_V], c[SMOOTH_SQ]
-    reference_obs = _observe_reference(speed, v_max)  # observe_tail's last field: the same for every row
-    for i in numba.prange(state.shape[0]):
-        x = state[i, 0]
-        y = state[i, 1]
-        beta = state[i, 2]
-        al1 = state[i, 3]
-        al2 = state[i, 4]
-        al3 = state[i, 5]
-        prev1 = state[i, 6]
-        prev2 = state[i, 7]
-        if restart[i]:
-            # a start state (task.v1.reset_columns): as it is, np.cos and np.sin of its heading, its speed
-            w1 = prev1
-            w2 = prev2
-            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
-            cos_beta = tans[i, 0]
-            sin_beta = tans[i, 1]
-        else:
-            # task.v1._ideal_step: kinematics.arc_step from the two tangents, the wheel angles
-            # _motion's numbers, bdot from pass 1
-            w1, w2 = _action_commands(actions[i, 0], actions[i, 1], w_max)[2:]
-            v = _body_velocity(w1, w2, r1, r2, two_l1)[0]
-            bdot = turn[i]
-            db = bdot * dt
-            h = 0.5 * db
-            x, y, cos_beta, sin_beta = _arc(x, y, v, dt, h, tans[i, 0], tans[i, 1])
-            beta = beta + db
-            castor = _castor_rate(v, bdot, l5, r3)
-            al1 = _advance_angle(al1, w1, dt)
-            al2 = _advance_angle(al2, w2, dt)
-            al3 = _advance_angle(al3, castor, dt)
-            state[i, 0] = x
-            state[i, 1] = y
-            state[i, 2] = beta
-            state[i, 3] = al1
-            state[i, 4] = al2
-            state[i, 5] = al3
-            state[i, 6] = w1
-            state[i, 7] = w2
-
-        # task.v1.evaluate_columns: H, its projection on the path (paths.classic's project_xy on floats)
-        hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
+    reference_obs = _observe_reference(c[SPEED], c[MAX_SPEED])  # observe_tail's last field: the same for every row
+    n = state.shape[0]
+    # the rows' arrays as flat views: their rows at a distance LLVM knows (8, 2, 2, 3, 16), so that it can tell the
+    # loops' loads and stores apart (a row length read from the array hides it)
+    st = state.reshape(n * 8)
+    ac = actions.reshape(n * 2)
+    tn = tans.reshape(n * 2)
+    ex = exps.reshape(n * 3)
+    rc = record.reshape(n * 16)
+    for b in numba.prange((n + BLOCK - 1) // BLOCK):
+        lo = b * BLOCK
+        count = min(BLOCK, n - lo)
+        k = cols[b * BLOCK_WIDTH : (b + 1) * BLOCK_WIDTH]  # this block's columns
+        for j in range(count):  # 1. the motion
+            i = lo + j
+            (k[K_X + j], k[K_Y + j], k[K_BETA + j], k[K_AL1 + j], k[K_AL2 + j], k[K_AL3 + j], k[K_W1 + j],
+             k[K_W2 + j], k[K_COS + j], k[K_SIN + j], k[K_ADV + j], k[K_CHG + j], k[K_OR1 + j], k[K_OR2 + j],
+             k[K_OR3 + j]) = _moved(q, restart[i], st[8 * i], st[8 * i + 1], st[8 * i + 2], st[8 * i + 3],
+                                    st[8 * i + 4], st[8 * i + 5], st[8 * i + 6], st[8 * i + 7], ac[2 * i],
+                                    ac[2 * i + 1], turn[i], tn[2 * i], tn[2 * i + 1])  # fmt: skip
+        # 2. the projection: the circle's loop vectorises, the manoeuvre's calls the C library's atan2 and hypot
         if manoeuvre:
-            e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(hx, hy, cx, cy, r0x, r0y, d, r, big_l)
+            for j in range(count):
+                hx, hy, e, cos_theta, sin_theta, s, on_line = _projected(
+                    q, True, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j]
+                )
+                k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j] = (
+                    hx,
+                    hy,
+                    e,
+                    cos_theta,
+                    sin_theta,
+                    s,
+                )
+                k[K_LINE + j] = 1.0 if on_line else 0.0
         else:
-            e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, cx, cy, r0x, r0y, d, r)
-            s = 0.0
-            on_line = False
-        curvature = 0.0 if on_line else curv  # the straight part's, else the circle's
-        cos_psi, sin_psi = _heading_error(cos_beta, sin_beta, cos_theta, sin_theta)
-        abs_e = abs(e)
+            for j in range(count):
+                hx, hy, e, cos_theta, sin_theta, s, on_line = _projected(
+                    q, False, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j]
+                )
+                k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j] = (
+                    hx,
+                    hy,
+                    e,
+                    cos_theta,
+                    sin_theta,
+                    s,
+                )
+                k[K_LINE + j] = 1.0 if on_line else 0.0
+        for j in range(count):  # 3. the observation's head, the heading term, the exponentials' arguments, termination
+            i = lo + j
+            (k[K_OE + j], k[K_SPSI + j], k[K_CPSI + j], k[K_OK + j], k[K_HEAD + j], ex[3 * i], ex[3 * i + 1],
+             ex[3 * i + 2], terminated[i]) = _terms(q, k[K_LINE + j] != 0.0, k[K_E + j], k[K_COS + j], k[K_SIN + j],
+                                                    k[K_CT + j], k[K_ST + j], k[K_ADV + j], k[K_CHG + j])  # fmt: skip
+        for j in range(count):  # 4. the new state and the record
+            i = lo + j
+            st[8 * i] = rc[16 * i] = k[K_X + j]
+            st[8 * i + 1] = rc[16 * i + 1] = k[K_Y + j]
+            st[8 * i + 2] = rc[16 * i + 2] = k[K_BETA + j]
+            st[8 * i + 3] = rc[16 * i + 8] = k[K_AL1 + j]
+            st[8 * i + 4] = rc[16 * i + 9] = k[K_AL2 + j]
+            st[8 * i + 5] = rc[16 * i + 10] = k[K_AL3 + j]
+            st[8 * i + 6] = rc[16 * i + 6] = k[K_W1 + j]
+            st[8 * i + 7] = rc[16 * i + 7] = k[K_W2 + j]
+            rc[16 * i + 3] = k[K_HX + j]
+            rc[16 * i + 4] = k[K_HY + j]
+            rc[16 * i + 5] = k[K_E + j]
+            rc[16 * i + 13] = k[K_HEAD + j]
+        for j in range(count):  # 5. the observation: its head, its tail
+            i = lo + j
+            obs[i, 0] = k[K_OE + j]
+            obs[i, 1] = k[K_SPSI + j]
+            obs[i, 2] = k[K_CPSI + j]
+            obs[i, 3] = k[K_OK + j]
+            obs[i, m] = k[K_OR1 + j]
+            obs[i, m + 1] = k[K_OR2 + j]
+            obs[i, m + 2] = k[K_OR3 + j]
+            obs[i, m + 3] = reference_obs
+        for p in range(preview.shape[0]):  # the preview's curvatures
+            ahead = preview[p]
+            for j in range(count):
+                obs[lo + j, 4 + p] = _preview_feature(q, manoeuvre, k[K_S + j], ahead)
 
-        # task.v0.observe_columns: its head, the preview's curvatures, its tail
-        o0, o1, o2, o3 = _observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max)
+
+def _evaluate_rows(
+    c: F64,
+    preview: F64,
+    state: F64,
+    actions: F64,
+    restart: NDArray[np.bool_],
+    tans: F64,
+    turn: F64,
+    obs: NDArray[np.floating],
+    terminated: NDArray[np.bool_],
+    record: F64,
+    exps: F64,
+) -> None:
+    """Pass 2 row by row, the pieces of :func:`evaluate` called in turn per row, without scratch: the single env's
+    (arrays of any layout; for one row, :func:`evaluate`'s stages cost more than they save)."""
+    q = _row_constants(c)
+    manoeuvre = c[MANOEUVRE] != 0.0
+    m = 4 + preview.shape[0]
+    reference_obs = _observe_reference(c[SPEED], c[MAX_SPEED])
+    for i in range(state.shape[0]):
+        (x, y, beta, al1, al2, al3, w1, w2, cos_beta, sin_beta, abs_dv, change_sq, r0, r1, r2) = _moved(
+            q, restart[i], state[i, 0], state[i, 1], state[i, 2], state[i, 3], state[i, 4], state[i, 5],
+            state[i, 6], state[i, 7], actions[i, 0], actions[i, 1], turn[i], tans[i, 0], tans[i, 1]
+        )  # fmt: skip
+        hx, hy, e, cos_theta, sin_theta, s, on_line = _projected(q, manoeuvre, x, y, cos_beta, sin_beta)
+        o0, o1, o2, o3, heading, ex0, ex1, ex2, off = _terms(
+            q, on_line, e, cos_beta, sin_beta, cos_theta, sin_theta, abs_dv, change_sq
+        )
+        state[i, 0] = record[i, 0] = x
+        state[i, 1] = record[i, 1] = y
+        state[i, 2] = record[i, 2] = beta
+        state[i, 3] = record[i, 8] = al1
+        state[i, 4] = record[i, 9] = al2
+        state[i, 5] = record[i, 10] = al3
+        state[i, 6] = record[i, 6] = w1
+        state[i, 7] = record[i, 7] = w2
+        record[i, 3] = hx
+        record[i, 4] = hy
+        record[i, 5] = e
+        record[i, 13] = heading
+        exps[i, 0] = ex0
+        exps[i, 1] = ex1
+        exps[i, 2] = ex2
+        terminated[i] = off
         obs[i, 0] = o0
         obs[i, 1] = o1
         obs[i, 2] = o2
         obs[i, 3] = o3
-        for j in range(preview.shape[0]):
-            kj = _manoeuvre_curvature(s + preview[j], big_l, curv) if manoeuvre else curv
-            obs[i, 4 + j] = _curvature_feature(kj, l3)
-        o0, o1, o2 = _observe_rates(w1, w2, v, speed, w_max, v_max)
-        obs[i, m] = o0
-        obs[i, m + 1] = o1
-        obs[i, m + 2] = o2
+        for p in range(preview.shape[0]):
+            obs[i, 4 + p] = _preview_feature(q, manoeuvre, s, preview[p])
+        obs[i, m] = r0
+        obs[i, m + 1] = r1
+        obs[i, m + 2] = r2
         obs[i, m + 3] = reference_obs
-
-        # task.v0.reward_term_columns, steady_heading: the heading term, the arguments of the exponentials
-        sin_ss = sin_ss_line if on_line else sin_ss_curve
-        cos_ss = cos_ss_line if on_line else cos_ss_curve
-        dw1 = w1 - prev1
-        dw2 = w2 - prev2
-        exps[i, 0], exps[i, 1], exps[i, 2] = _reward_arguments(
-            abs_e, abs(v - speed), dw1 * dw1 + dw2 * dw2, sigma_t, sigma_v, smooth_sq
-        )
-        terminated[i] = _off_path(abs_e, term)
-
-        record[i, 0] = x
-        record[i, 1] = y
-        record[i, 2] = beta
-        record[i, 3] = hx
-        record[i, 4] = hy
-        record[i, 5] = e
-        record[i, 6] = w1
-        record[i, 7] = w2
-        record[i, 8] = al1
-        record[i, 9] = al2
-        record[i, 10] = al3
-        record[i, 13] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
 
 
 def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
@@ -452,6 +643,7 @@ move_arguments = _serial(_twin(_move_arguments, "move_arguments"))
 move_arguments_parallel = _parallel(_twin(_move_arguments, "move_arguments_parallel"))
 evaluate = _serial(_twin(_evaluate, "evaluate"))
 evaluate_parallel = _parallel(_twin(_evaluate, "evaluate_parallel"))
+evaluate_rows = _serial(_evaluate_rows)
 finish = _serial(_twin(_finish, "finish"))
 finish_parallel = _parallel(_twin(_finish, "finish_parallel"))
 
@@ -621,8 +813,8 @@ def single_move(c: F64, buf: F64, flags: NDArray[np.bool_], a1: float, a2: float
 
 @_serial
 def single_evaluate(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating]) -> None:
-    """Pass 2 (:func:`evaluate`) of the robot in ``buf``, its observation into ``obs (1, obs_dim)``."""
-    evaluate(
+    """Pass 2 (:func:`evaluate_rows`) of the robot in ``buf``, its observation into ``obs (1, obs_dim)``."""
+    evaluate_rows(
         c,
         preview,
         buf[:, SINGLE_STATE:SINGLE_ACTION],

@@ -278,6 +278,7 @@ class Workspace:
         start: :func:`start_constants`, for start states drawn in :func:`step_rows`.
         rows, beta, cos_beta, sin_beta: ``(n,)`` scratch of those draws: the restarting rows, their
             headings and numpy's cosines and sines of them.
+        cols: the evaluate pass's scratch (:func:`amigo_gym.sim._kernels.scratch_size`: blocks of columns).
     """
 
     consts: Array
@@ -291,6 +292,7 @@ class Workspace:
     beta: Array
     cos_beta: Array
     sin_beta: Array
+    cols: Array
 
 
 def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Workspace:
@@ -307,6 +309,7 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
         np.zeros(n),
         np.zeros(n),
         np.zeros(n),
+        np.zeros(kernels().scratch_size(n)),
     )
 
 
@@ -547,7 +550,7 @@ def _direct(parallel: bool) -> _Passes:
     bitgens.flags.writeable = False
     return _Passes(
         direct_call(d.move, c, f8, f2, mask, f2, f1),
-        direct_call(d.evaluate, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3),
+        direct_call(d.evaluate, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3, f1),
         direct_call(d.finish, c, f1, f16, f3),
         direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
         direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
@@ -589,7 +592,7 @@ def _step_rows(
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
+    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, ws.cols)
     np.exp(exps, out=exps)
     past = p.finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
