@@ -87,7 +87,8 @@ def main() -> None:
     r = a.repeats
     print(f"{a.label} CPU: {cpu_model()}, numpy {np.__version__}", flush=True)
     for path_name in ("circle", "manoeuvre"):
-        print(f"{a.label} evaluate pass, {path_name}, N={N}: {evaluate_pass(path_name, 5 * r):.2f} ns/robot", flush=True)
+        per_robot = evaluate_pass(path_name, 5 * r)
+        print(f"{a.label} evaluate pass, {path_name}, N={N}: {per_robot:.2f} ns/robot", flush=True)
     amigo = gym.make_vec("AmigoBot-v0", num_envs=N, vectorization_mode="vector_entry_point")
     cart = CartPoleVectorEnv(num_envs=N)
     cart.action_space.seed(0)
