@@ -67,8 +67,8 @@ def evaluate_pass(path_name: str, repeats: int) -> float:
     kernels.move_arguments(ws.consts, state, actions, restart, ws.tans, ws.turn)
     np.tan(ws.tans, out=ws.tans)
     args = [ws.consts, ws.preview, state, actions, restart, ws.tans, ws.turn, obs, terminated, record, ws.exps]
-    if hasattr(ws, "cols"):  # the blocked pass's scratch (absent before it)
-        args.append(ws.cols)
+    if hasattr(ws, "cols"):  # the blocked pass's scratch (absent before it): the serial pass's slot
+        args.append(getattr(ws, "block_cols", ws.cols))
 
     def run() -> None:
         state[:] = s0

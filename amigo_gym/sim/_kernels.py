@@ -344,7 +344,8 @@ BLOCK_WIDTH = BLOCK * len(SCRATCH_FIELDS)
 
 
 def scratch_size(n: int) -> int:
-    """The length of :func:`evaluate`'s scratch ``cols`` for ``n`` rows: one block's columns per block."""
+    """The length of :func:`evaluate_parallel`'s scratch ``cols`` for ``n`` rows: one slot (:data:`BLOCK_WIDTH`
+    floats) per block, so that the threads never share one; :func:`evaluate` needs one slot."""
     return -(-n // BLOCK) * BLOCK_WIDTH
 
 
@@ -368,7 +369,7 @@ def _row_constants(c: F64) -> tuple[float, ...]:
 def _moved(
     q: tuple[float, ...], start: bool, x: float, y: float, beta: float, al1: float, al2: float, al3: float,
     prev1: float, prev2: float, a1: float, a2: float, bdot: float, t0: float, t1: float,
-) -> tuple[float, ...]:  # fmt: skip
+) -> tuple[Any, ...]:  # fmt: skip
     # task.v1._ideal_step: kinematics.arc_step from the two tangents t0, t1, the wheel angles, bdot from pass 1; a
     # start state (task.v1.reset_columns, ``start``) as it is, t0, t1 np.cos and np.sin of its heading, its speed.
     # Selects, not branches (the stages vectorise). Returns the new state, cos and sin of its heading, the reward's
@@ -424,7 +425,7 @@ def _projected(
 def _terms(
     q: tuple[float, ...], on_line: bool, e: float, cos_beta: float, sin_beta: float, cos_theta: float,
     sin_theta: float, abs_dv: float, change_sq: float,
-) -> tuple[float, float, float, float, float, float, float, float, bool]:  # fmt: skip
+) -> tuple[Any, ...]:  # fmt: skip
     # task.v0.observe_columns' head, task.v0.reward_term_columns (steady_heading): the heading term and the
     # arguments of the exponentials, the termination
     l3, curv = q[7], q[15]
@@ -441,7 +442,7 @@ def _terms(
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
-def _preview_feature(q: tuple[float, ...], manoeuvre: bool, s: float, ahead: float) -> float:
+def _preview_feature(q: tuple[float, ...], manoeuvre: bool, s: float, ahead: float) -> Any:
     # the curvature field of the preview point ``ahead`` of the foot at the arc length s (task.v0.observe_columns)
     l3, big_l, curv = q[7], q[14], q[15]
     return _curvature_feature(_manoeuvre_curvature(s + ahead, big_l, curv) if manoeuvre else curv, l3)
@@ -479,10 +480,12 @@ def _evaluate(
     tn = tans.reshape(n * 2)
     ex = exps.reshape(n * 3)
     rc = record.reshape(n * 16)
+    slots = cols.shape[0] // BLOCK_WIDTH  # block b uses the columns of slot b % slots
     for b in numba.prange((n + BLOCK - 1) // BLOCK):
         lo = b * BLOCK
         count = min(BLOCK, n - lo)
-        k = cols[b * BLOCK_WIDTH : (b + 1) * BLOCK_WIDTH]  # this block's columns
+        o = (b % slots) * BLOCK_WIDTH
+        k = cols[o : o + BLOCK_WIDTH]  # this block's columns
         for j in range(count):  # 1. the motion
             i = lo + j
             (k[K_X + j], k[K_Y + j], k[K_BETA + j], k[K_AL1 + j], k[K_AL2 + j], k[K_AL3 + j], k[K_W1 + j],
@@ -493,31 +496,13 @@ def _evaluate(
         # 2. the projection: the circle's loop vectorises, the manoeuvre's calls the C library's atan2 and hypot
         if manoeuvre:
             for j in range(count):
-                hx, hy, e, cos_theta, sin_theta, s, on_line = _projected(
-                    q, True, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j]
-                )
-                k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j] = (
-                    hx,
-                    hy,
-                    e,
-                    cos_theta,
-                    sin_theta,
-                    s,
-                )
+                (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
+                 on_line) = _projected(q, True, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
                 k[K_LINE + j] = 1.0 if on_line else 0.0
         else:
             for j in range(count):
-                hx, hy, e, cos_theta, sin_theta, s, on_line = _projected(
-                    q, False, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j]
-                )
-                k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j] = (
-                    hx,
-                    hy,
-                    e,
-                    cos_theta,
-                    sin_theta,
-                    s,
-                )
+                (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
+                 on_line) = _projected(q, False, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
                 k[K_LINE + j] = 1.0 if on_line else 0.0
         for j in range(count):  # 3. the observation's head, the heading term, the exponentials' arguments, termination
             i = lo + j

@@ -278,7 +278,10 @@ class Workspace:
         start: :func:`start_constants`, for start states drawn in :func:`step_rows`.
         rows, beta, cos_beta, sin_beta: ``(n,)`` scratch of those draws: the restarting rows, their
             headings and numpy's cosines and sines of them.
-        cols: the evaluate pass's scratch (:func:`amigo_gym.sim._kernels.scratch_size`: blocks of columns).
+        cols: the evaluate pass's scratch for ``n`` rows (:func:`amigo_gym.sim._kernels.scratch_size`: a slot of
+            columns per block of rows, for the parallel pass; pages never written stay unmapped).
+        block_cols: its first slot (a view), the serial pass's scratch: one block's columns, reused by every block
+            (they stay in the L1 cache).
     """
 
     consts: Array
@@ -293,10 +296,13 @@ class Workspace:
     cos_beta: Array
     sin_beta: Array
     cols: Array
+    block_cols: Array
 
 
 def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Workspace:
     """A :class:`Workspace` for ``n`` robots with the settings ``k`` on ``path``."""
+    kk = kernels()
+    cols = np.zeros(kk.scratch_size(n))
     return Workspace(
         kernel_constants(k, path),
         np.array(k.preview, dtype=np.float64),
@@ -309,7 +315,8 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
         np.zeros(n),
         np.zeros(n),
         np.zeros(n),
-        np.zeros(kernels().scratch_size(n)),
+        cols,
+        cols[: kk.BLOCK_WIDTH],
     )
 
 
@@ -524,6 +531,8 @@ class _Passes(NamedTuple):
     draw_starts: Any
     place_starts: Any
     count_steps: Any
+    #: whether the passes run on numba's threads (the evaluate pass then needs a scratch slot per block)
+    parallel: bool
 
 
 def _dispatched(parallel: bool) -> _Passes:
@@ -531,8 +540,8 @@ def _dispatched(parallel: bool) -> _Passes:
     k = kernels()
     if parallel:
         return _Passes(k.move_arguments_parallel, k.evaluate_parallel, k.finish_parallel, k.draw_starts,
-                       k.place_starts, k.count_steps)  # fmt: skip
-    return _Passes(k.move_arguments, k.evaluate, k.finish, k.draw_starts, k.place_starts, k.count_steps)
+                       k.place_starts, k.count_steps, True)  # fmt: skip
+    return _Passes(k.move_arguments, k.evaluate, k.finish, k.draw_starts, k.place_starts, k.count_steps, False)
 
 
 @lru_cache(maxsize=2)
@@ -555,6 +564,7 @@ def _direct(parallel: bool) -> _Passes:
         direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
         direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
         direct_call(d.count_steps, steps, rows, 0, 0.0, mask, f1),
+        parallel,
     )
 
 
@@ -592,7 +602,8 @@ def _step_rows(
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, ws.cols)
+    cols = ws.cols if p.parallel else ws.block_cols
+    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, cols)
     np.exp(exps, out=exps)
     past = p.finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
