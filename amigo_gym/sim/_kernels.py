@@ -464,13 +464,12 @@ def _evaluate(
 ) -> None:
     """Pass 2: with ``tans`` the tangents (or, where ``restart``, ``cos beta, sin beta``): move, observe.
 
-    By blocks of :data:`BLOCK` rows, each in stages: loops over the rows of the block that read and write the block's
-    columns of the scratch ``cols`` (:data:`SCRATCH_FIELDS`, at fixed distances), so that LLVM vectorises them (SIMD
-    divisions and square roots: the scalar ones' bits); restart rows are selected in them, not branched to.
+    By blocks of :data:`BLOCK` rows (:func:`_evaluate_block`); block ``b`` works in the slot ``b % slots`` of the
+    scratch ``cols`` (``slots`` of :data:`BLOCK_WIDTH` floats: one for the serial loop, one per block for the
+    parallel one, whose threads must not share a slot). C-contiguous arrays.
     """
     q = _row_constants(c)
     manoeuvre = c[MANOEUVRE] != 0.0
-    m = 4 + preview.shape[0]
     reference_obs = _observe_reference(c[SPEED], c[MAX_SPEED])  # observe_tail's last field: the same for every row
     n = state.shape[0]
     # the rows' arrays as flat views: their rows at a distance LLVM knows (8, 2, 2, 3, 16), so that it can tell the
@@ -480,63 +479,89 @@ def _evaluate(
     tn = tans.reshape(n * 2)
     ex = exps.reshape(n * 3)
     rc = record.reshape(n * 16)
-    slots = cols.shape[0] // BLOCK_WIDTH  # block b uses the columns of slot b % slots
+    slots = cols.shape[0] // BLOCK_WIDTH
     for b in numba.prange((n + BLOCK - 1) // BLOCK):
         lo = b * BLOCK
-        count = min(BLOCK, n - lo)
         o = (b % slots) * BLOCK_WIDTH
-        k = cols[o : o + BLOCK_WIDTH]  # this block's columns
-        for j in range(count):  # 1. the motion
-            i = lo + j
-            (k[K_X + j], k[K_Y + j], k[K_BETA + j], k[K_AL1 + j], k[K_AL2 + j], k[K_AL3 + j], k[K_W1 + j],
-             k[K_W2 + j], k[K_COS + j], k[K_SIN + j], k[K_ADV + j], k[K_CHG + j], k[K_OR1 + j], k[K_OR2 + j],
-             k[K_OR3 + j]) = _moved(q, restart[i], st[8 * i], st[8 * i + 1], st[8 * i + 2], st[8 * i + 3],
-                                    st[8 * i + 4], st[8 * i + 5], st[8 * i + 6], st[8 * i + 7], ac[2 * i],
-                                    ac[2 * i + 1], turn[i], tn[2 * i], tn[2 * i + 1])  # fmt: skip
-        # 2. the projection: the circle's loop vectorises, the manoeuvre's calls the C library's atan2 and hypot
-        if manoeuvre:
-            for j in range(count):
-                (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
-                 on_line) = _projected(q, True, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
-                k[K_LINE + j] = 1.0 if on_line else 0.0
-        else:
-            for j in range(count):
-                (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
-                 on_line) = _projected(q, False, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
-                k[K_LINE + j] = 1.0 if on_line else 0.0
-        for j in range(count):  # 3. the observation's head, the heading term, the exponentials' arguments, termination
-            i = lo + j
-            (k[K_OE + j], k[K_SPSI + j], k[K_CPSI + j], k[K_OK + j], k[K_HEAD + j], ex[3 * i], ex[3 * i + 1],
-             ex[3 * i + 2], terminated[i]) = _terms(q, k[K_LINE + j] != 0.0, k[K_E + j], k[K_COS + j], k[K_SIN + j],
-                                                    k[K_CT + j], k[K_ST + j], k[K_ADV + j], k[K_CHG + j])  # fmt: skip
-        for j in range(count):  # 4. the new state and the record
-            i = lo + j
-            st[8 * i] = rc[16 * i] = k[K_X + j]
-            st[8 * i + 1] = rc[16 * i + 1] = k[K_Y + j]
-            st[8 * i + 2] = rc[16 * i + 2] = k[K_BETA + j]
-            st[8 * i + 3] = rc[16 * i + 8] = k[K_AL1 + j]
-            st[8 * i + 4] = rc[16 * i + 9] = k[K_AL2 + j]
-            st[8 * i + 5] = rc[16 * i + 10] = k[K_AL3 + j]
-            st[8 * i + 6] = rc[16 * i + 6] = k[K_W1 + j]
-            st[8 * i + 7] = rc[16 * i + 7] = k[K_W2 + j]
-            rc[16 * i + 3] = k[K_HX + j]
-            rc[16 * i + 4] = k[K_HY + j]
-            rc[16 * i + 5] = k[K_E + j]
-            rc[16 * i + 13] = k[K_HEAD + j]
-        for j in range(count):  # 5. the observation: its head, its tail
-            i = lo + j
-            obs[i, 0] = k[K_OE + j]
-            obs[i, 1] = k[K_SPSI + j]
-            obs[i, 2] = k[K_CPSI + j]
-            obs[i, 3] = k[K_OK + j]
-            obs[i, m] = k[K_OR1 + j]
-            obs[i, m + 1] = k[K_OR2 + j]
-            obs[i, m + 2] = k[K_OR3 + j]
-            obs[i, m + 3] = reference_obs
-        for p in range(preview.shape[0]):  # the preview's curvatures
-            ahead = preview[p]
-            for j in range(count):
-                obs[lo + j, 4 + p] = _preview_feature(q, manoeuvre, k[K_S + j], ahead)
+        hi = min(lo + BLOCK, n)
+        _evaluate_block(q, manoeuvre, reference_obs, preview, hi - lo, st[8 * lo : 8 * hi], ac[2 * lo : 2 * hi],
+                        restart[lo:hi], tn[2 * lo : 2 * hi], turn[lo:hi], obs[lo:hi], terminated[lo:hi],
+                        ex[3 * lo : 3 * hi], rc[16 * lo : 16 * hi], cols[o : o + BLOCK_WIDTH])  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _evaluate_block(
+    q: tuple[float, ...],
+    manoeuvre: bool,
+    reference_obs: Any,
+    preview: F64,
+    count: int,
+    st: F64,
+    ac: F64,
+    restart: NDArray[np.bool_],
+    tn: F64,
+    turn: F64,
+    obs: NDArray[np.floating],
+    terminated: NDArray[np.bool_],
+    ex: F64,
+    rc: F64,
+    k: F64,
+) -> None:
+    """:func:`evaluate` of a block of ``count`` rows (``st, ac, tn, ex, rc``: flat views of its rows of the state,
+    actions, tans, exps and record; the other arrays, views of its rows), in stages: loops over the block's rows that
+    read and write its columns in ``k`` (:data:`SCRATCH_FIELDS`, at fixed distances), so that LLVM vectorises them
+    (SIMD divisions and square roots: the scalar ones' bits); restart rows are selected in them, not branched to.
+
+    A function of its own, not the body of :func:`evaluate`'s loop, so that the parallel loop's body is compiled as
+    the serial one's; indexed from the block's first row (LLVM sees that no index is negative)."""
+    m = 4 + preview.shape[0]
+    for j in range(count):  # 1. the motion
+        (k[K_X + j], k[K_Y + j], k[K_BETA + j], k[K_AL1 + j], k[K_AL2 + j], k[K_AL3 + j], k[K_W1 + j],
+         k[K_W2 + j], k[K_COS + j], k[K_SIN + j], k[K_ADV + j], k[K_CHG + j], k[K_OR1 + j], k[K_OR2 + j],
+         k[K_OR3 + j]) = _moved(q, restart[j], st[8 * j], st[8 * j + 1], st[8 * j + 2], st[8 * j + 3],
+                                st[8 * j + 4], st[8 * j + 5], st[8 * j + 6], st[8 * j + 7], ac[2 * j],
+                                ac[2 * j + 1], turn[j], tn[2 * j], tn[2 * j + 1])  # fmt: skip
+    # 2. the projection: the circle's loop vectorises, the manoeuvre's calls the C library's atan2 and hypot
+    if manoeuvre:
+        for j in range(count):
+            (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
+             on_line) = _projected(q, True, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
+            k[K_LINE + j] = 1.0 if on_line else 0.0
+    else:
+        for j in range(count):
+            (k[K_HX + j], k[K_HY + j], k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j],
+             on_line) = _projected(q, False, k[K_X + j], k[K_Y + j], k[K_COS + j], k[K_SIN + j])  # fmt: skip
+            k[K_LINE + j] = 1.0 if on_line else 0.0
+    for j in range(count):  # 3. the observation's head, the heading term, the exponentials' arguments, termination
+        (k[K_OE + j], k[K_SPSI + j], k[K_CPSI + j], k[K_OK + j], k[K_HEAD + j], ex[3 * j], ex[3 * j + 1],
+         ex[3 * j + 2], terminated[j]) = _terms(q, k[K_LINE + j] != 0.0, k[K_E + j], k[K_COS + j], k[K_SIN + j],
+                                                k[K_CT + j], k[K_ST + j], k[K_ADV + j], k[K_CHG + j])  # fmt: skip
+    for j in range(count):  # 4. the new state and the record
+        st[8 * j] = rc[16 * j] = k[K_X + j]
+        st[8 * j + 1] = rc[16 * j + 1] = k[K_Y + j]
+        st[8 * j + 2] = rc[16 * j + 2] = k[K_BETA + j]
+        st[8 * j + 3] = rc[16 * j + 8] = k[K_AL1 + j]
+        st[8 * j + 4] = rc[16 * j + 9] = k[K_AL2 + j]
+        st[8 * j + 5] = rc[16 * j + 10] = k[K_AL3 + j]
+        st[8 * j + 6] = rc[16 * j + 6] = k[K_W1 + j]
+        st[8 * j + 7] = rc[16 * j + 7] = k[K_W2 + j]
+        rc[16 * j + 3] = k[K_HX + j]
+        rc[16 * j + 4] = k[K_HY + j]
+        rc[16 * j + 5] = k[K_E + j]
+        rc[16 * j + 13] = k[K_HEAD + j]
+    for j in range(count):  # 5. the observation: its head, its tail
+        obs[j, 0] = k[K_OE + j]
+        obs[j, 1] = k[K_SPSI + j]
+        obs[j, 2] = k[K_CPSI + j]
+        obs[j, 3] = k[K_OK + j]
+        obs[j, m] = k[K_OR1 + j]
+        obs[j, m + 1] = k[K_OR2 + j]
+        obs[j, m + 2] = k[K_OR3 + j]
+        obs[j, m + 3] = reference_obs
+    for p in range(preview.shape[0]):  # the preview's curvatures
+        ahead = preview[p]
+        for j in range(count):
+            obs[j, 4 + p] = _preview_feature(q, manoeuvre, k[K_S + j], ahead)
 
 
 def _evaluate_rows(
