@@ -1,4 +1,4 @@
-r"""Compiled step of ``AmigoBot-v0`` (numba): three fused loops over the robots, no temporaries.
+r"""Compiled step of ``AmigoBot-v0`` (numba): three compiled passes over the robots, no temporaries.
 
 The fast path (numba, a core dependency where it ships wheels). It computes AmigoBot-v0's reference step
 (AmigoBot-v1's ideal step with v0's settings: clip and scale the action, exact arc step of pose and
@@ -9,13 +9,14 @@ projection on the circle and on the manoeuvre path (``paths/classic.py``'s ``cir
 ``manoeuvre_curvature``, which the paths run on floats), the observation (``task/v0.py``'s ``observe_head``,
 ``curvature_feature``, ``observe_rates``, ``observe_reference``, which ``observe_columns`` calls, clips included),
 the reward's terms and the arguments of its exponentials (``reward_arguments``, which ``reward_term_columns`` calls)
-and the termination (``off_path``). Written here: the loops, the reading and writing of the rows, and what is
-computed once per call instead of per row (the steady heading of the two curvatures a row can have, the observed
-reference speed). ``tests/test_kernels.py`` checks it
+and the termination (``off_path``). Written here: the loops, the reading and writing of the rows, the row's glue
+between the shared functions (once, in the pieces :func:`_moved`, :func:`_projected`, :func:`_terms`,
+:func:`_preview_feature`), and what is computed once per call instead of per row (the steady heading of the two
+curvatures a row can have, the observed reference speed). ``tests/test_kernels.py`` checks it
 against the reference the environments run with ``kernel="numpy"``, AmigoBot-v1's ideal step with v0's settings
 (:func:`amigo_gym.task.v1.step_columns`), and the compiled pieces against themselves run as Python.
 
-Why three loops and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
+Why three passes and not one: the transcendental functions of a step (two ``tan``, three ``exp``) are
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
 ``np.exp(exps, out=exps)``, :func:`amigo_gym.sim.fast.step_rows`): they are several times faster than the
 C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
@@ -23,7 +24,7 @@ reference calls, so the results are **bit-identical** to the reference's (where 
 are the C library's, as on AVX2 x86-64, the single env's step runs in one call instead, :func:`single_step`, with the
 same bits: :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). Everything else (about a
 hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
-would run as as many passes over temporary arrays) is fused into the loops:
+would run as as many passes over temporary arrays) is compiled into the passes:
 
 1. :func:`move_arguments`: the arguments of the two tangents of the arc step, ``0.5 h`` and
    ``0.5 (beta + h)``, into ``tans (N, 2)``;
@@ -31,6 +32,16 @@ would run as as many passes over temporary arrays) is fused into the loops:
    the observation, the heading term, the termination, and the arguments of the three exponentials
    into ``exps (N, 3)``;
 3. :func:`finish`: the track, speed and smoothness terms from the exponentials and the reward.
+
+The evaluate pass is where a step's divisions and square roots are (about thirteen and two per robot), and a scalar
+division takes the divider several cycles, so it runs in a form that LLVM vectorises: by blocks of :data:`BLOCK`
+rows (:func:`_evaluate_block`), each in stages, loops over the block's rows that call the pieces above and keep what
+they hand on in the block's columns of a scratch (:data:`SCRATCH_FIELDS`, contiguous and at fixed distances, so that
+LLVM can tell its loads and stores apart; the rows' arrays are read through flat views, their row lengths known), the
+restart rows and the path's branches selected rather than branched to. SIMD divisions and square roots are correctly
+rounded as the scalar ones are: the same bits. The manoeuvre path's projection stage stays scalar (it calls the C
+library's ``atan2`` and ``hypot``). The single env evaluates its one row by :func:`evaluate_rows`, the same pieces
+called in turn without the stages (for one row the stages cost more than they save).
 
 The manoeuvre path's ``np.arctan2`` and ``np.hypot`` (its arc length on the circle and the distance to the straight
 part, in :func:`amigo_gym.paths.classic.manoeuvre_foot`) are compiled by numba to the C library's ``atan2`` and
@@ -54,7 +65,10 @@ Layouts (all C-contiguous, one row per robot):
   :func:`move_arguments` and read by :func:`evaluate` (one division per row instead of two);
 * outputs ``obs (N, obs_dim)`` float32 or float64, ``reward (N,)`` float64, ``terminated (N,)`` bool
   and ``record (N, 16)`` float64 with the columns :data:`RECORD_FIELDS` (the new state and what the
-  infos report about it).
+  infos report about it);
+* ``cols`` float64 scratch of :func:`evaluate`: a whole number of slots of :data:`BLOCK_WIDTH` floats (block ``b``
+  of the rows works in slot ``b % slots``): one slot for :func:`evaluate`, :func:`scratch_size` for
+  :func:`evaluate_parallel` (a slot per block, which its threads never share).
 
 Start states of restarting rows (:func:`draw_starts`, :func:`place_starts`): the native vector env's
 ``NEXT_STEP`` autoreset draws each restarting robot's start perturbation from that robot's own numpy
@@ -102,6 +116,11 @@ __all__ = [
     "move_arguments_parallel",
     "evaluate",
     "evaluate_parallel",
+    "evaluate_rows",
+    "BLOCK",
+    "BLOCK_WIDTH",
+    "SCRATCH_FIELDS",
+    "scratch_size",
     "finish",
     "finish_parallel",
     "START_FIELDS",
@@ -645,8 +664,8 @@ def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
 
 
 # Each loop is written once, with ``prange``: compiled without ``parallel`` it is a plain serial loop.
-# The row's code is written in the loop itself (not in a function called per row), which lets LLVM keep
-# every value in registers; a per-row call with a dozen array arguments cost twice the time.
+# The row's code is the loop's own or that of the pieces (functions of floats, which LLVM inlines): a per-row call
+# with a dozen array arguments cost twice the time. The evaluate pass calls a function per block (_evaluate_block).
 _serial = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 _parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
 move_arguments = _serial(_twin(_move_arguments, "move_arguments"))
