@@ -149,6 +149,37 @@ def test_parallel_variant_gives_the_same_bits() -> None:
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("settings", SETTINGS, ids=lambda s: "-".join(f"{k}={v}" for k, v in s.items()))
+def test_blocked_evaluate_gives_the_row_loops_bits(settings: dict[str, Any]) -> None:
+    """The evaluate pass by blocks of rows in vectorised stages (``evaluate``, serial with one scratch slot and parallel
+    with one per block) writes the row loop's bits (``evaluate_rows``, the single env's and small batches'), at sizes
+    around the block's, with restart rows among the others."""
+    k = fast.kernels()
+    params = EnvParams(**settings)
+    for n in (1, k.BLOCK - 1, k.BLOCK, k.BLOCK + 1, 3 * k.BLOCK + 5):
+        state, actions = _states(params, max(n, 60), seed=n)
+        state, actions = np.ascontiguousarray(state[:n]), np.ascontiguousarray(actions[:n])
+        restart = np.random.default_rng(n).random(n) < 0.3
+        ws = fast.workspace(task.task_constants(params), make_path(params), n)
+        k.move_arguments(ws.consts, state, actions, restart, ws.tans, ws.turn)
+        np.tan(ws.tans, out=ws.tans)
+        ws.tans[restart, 0] = np.cos(state[restart, 2])
+        ws.tans[restart, 1] = np.sin(state[restart, 2])
+        outs = []
+        for run, cols in ((k.evaluate_rows, None), (k.evaluate, ws.block_cols), (k.evaluate_parallel, ws.cols)):
+            st = state.copy()
+            out = (st, np.full((n, ws.obs_dim), np.nan, np.float32), np.zeros(n, np.bool_), np.full((n, 16), np.nan),
+                   np.full((n, 3), np.nan))  # fmt: skip
+            args: tuple[Any, ...] = (ws.consts, ws.preview, st, actions, restart, ws.tans, ws.turn, *out[1:])
+            if cols is not None:
+                args += (cols,)
+            run(*args)
+            outs.append(out)
+        for other in outs[1:]:
+            for a, b in zip(outs[0], other, strict=True):
+                assert a.tobytes() == b.tobytes()
+
+
 def test_float32_observations_are_the_float64_ones_rounded() -> None:
     params = EnvParams()
     state, actions = _states(params, 1000, seed=4)

@@ -121,6 +121,7 @@ __all__ = [
     "BLOCK_WIDTH",
     "SCRATCH_FIELDS",
     "scratch_size",
+    "ROWS_BELOW",
     "finish",
     "finish_parallel",
     "START_FIELDS",
@@ -362,6 +363,11 @@ K_S, K_LINE, K_OE, K_SPSI, K_CPSI, K_OK, K_HEAD = (_K[n] for n in SCRATCH_FIELDS
 BLOCK_WIDTH = BLOCK * len(SCRATCH_FIELDS)
 
 
+#: below this many rows the row loop (:func:`evaluate_rows`, the same bits) is faster than :func:`evaluate`'s stages
+#: (their fixed cost per call, about 0.5 us here, against their gain per row; :func:`amigo_gym.sim.fast.step_rows`)
+ROWS_BELOW = 48
+
+
 def scratch_size(n: int) -> int:
     """The length of :func:`evaluate_parallel`'s scratch ``cols`` for ``n`` rows: one slot (:data:`BLOCK_WIDTH`
     floats) per block, so that the threads never share one; :func:`evaluate` needs one slot."""
@@ -596,8 +602,9 @@ def _evaluate_rows(
     record: F64,
     exps: F64,
 ) -> None:
-    """Pass 2 row by row, the pieces of :func:`evaluate` called in turn per row, without scratch: the single env's
-    (arrays of any layout; for one row, :func:`evaluate`'s stages cost more than they save)."""
+    """Pass 2 row by row, the pieces of :func:`evaluate` called in turn per row, without scratch (arrays of any
+    layout): the same bits. The single env's, and the vector step's below :data:`ROWS_BELOW` rows, where
+    :func:`evaluate`'s stages cost more than they save."""
     q = _row_constants(c)
     manoeuvre = c[MANOEUVRE] != 0.0
     m = 4 + preview.shape[0]

@@ -531,6 +531,9 @@ class _Passes(NamedTuple):
     draw_starts: Any
     place_starts: Any
     count_steps: Any
+    #: the evaluate pass's row loop (:func:`amigo_gym.sim._kernels.evaluate_rows`), for fewer rows than ``rows_below``
+    evaluate_rows: Any
+    rows_below: int
     #: whether the passes run on numba's threads (the evaluate pass then needs a scratch slot per block)
     parallel: bool
 
@@ -540,8 +543,9 @@ def _dispatched(parallel: bool) -> _Passes:
     k = kernels()
     if parallel:
         return _Passes(k.move_arguments_parallel, k.evaluate_parallel, k.finish_parallel, k.draw_starts,
-                       k.place_starts, k.count_steps, True)  # fmt: skip
-    return _Passes(k.move_arguments, k.evaluate, k.finish, k.draw_starts, k.place_starts, k.count_steps, False)
+                       k.place_starts, k.count_steps, k.evaluate_rows, k.ROWS_BELOW, True)  # fmt: skip
+    return _Passes(k.move_arguments, k.evaluate, k.finish, k.draw_starts, k.place_starts, k.count_steps,
+                   k.evaluate_rows, k.ROWS_BELOW, False)  # fmt: skip
 
 
 @lru_cache(maxsize=2)
@@ -564,6 +568,8 @@ def _direct(parallel: bool) -> _Passes:
         direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
         direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
         direct_call(d.count_steps, steps, rows, 0, 0.0, mask, f1),
+        direct_call(d.evaluate_rows, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3),
+        d.rows_below,
         parallel,
     )
 
@@ -602,8 +608,11 @@ def _step_rows(
         beta = state[idx, 2]
         tans[idx, 0] = np.cos(beta)
         tans[idx, 1] = np.sin(beta)
-    cols = ws.cols if p.parallel else ws.block_cols
-    p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, cols)
+    if state.shape[0] < p.rows_below:  # the row loop: faster for a few rows, the same bits
+        p.evaluate_rows(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
+    else:
+        cols = ws.cols if p.parallel else ws.block_cols
+        p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, cols)
     np.exp(exps, out=exps)
     past = p.finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
