@@ -46,8 +46,8 @@ def main() -> None:
         kernels.move_arguments(ws.consts, state, actions, restart, ws.tans, ws.turn)
         np.tan(ws.tans, out=ws.tans)
         args = [ws.consts, ws.preview, state, actions, restart, ws.tans, ws.turn, obs, terminated, record, ws.exps]
-        if hasattr(ws, "cols"):  # the blocked pass's scratch (absent before it): the serial pass's slot
-            args.append(getattr(ws, "block_cols", ws.cols))
+        if hasattr(ws, "block_cols"):  # the blocked pass's scratch (absent before it)
+            args.append(ws.block_cols)
         best = 1 << 62
         for _ in range(400):
             state[:] = s0

@@ -10,8 +10,8 @@ with random actions, per robot, on the circle (the default path) and the manoeuv
 ``gym.make_vec("AmigoBot-v0", num_envs=4096, vectorization_mode="vector_entry_point")`` and of
 ``CartPoleVectorEnv(num_envs=4096)`` (random actions, autoreset inside; the two interleaved in each repeat, 20 steps a
 repeat) and their ratio; one ``step`` of ``gym.make("AmigoBot-v0")`` and of ``gym.make("Pendulum-v1")`` (2000 steps a
-repeat). Runs on a tree without the evaluate pass's scratch (``Workspace.cols``) too: run it on two trees alternately
-(``PYTHONPATH``) to compare them.
+repeat). Runs on a tree without the evaluate pass's scratch (``Workspace.block_cols``) too: run it on two trees
+alternately (``PYTHONPATH``) to compare them.
 """
 
 from __future__ import annotations
@@ -67,8 +67,8 @@ def evaluate_pass(path_name: str, repeats: int) -> float:
     kernels.move_arguments(ws.consts, state, actions, restart, ws.tans, ws.turn)
     np.tan(ws.tans, out=ws.tans)
     args = [ws.consts, ws.preview, state, actions, restart, ws.tans, ws.turn, obs, terminated, record, ws.exps]
-    if hasattr(ws, "cols"):  # the blocked pass's scratch (absent before it): the serial pass's slot
-        args.append(getattr(ws, "block_cols", ws.cols))
+    if hasattr(ws, "block_cols"):  # the blocked pass's scratch (absent before it)
+        args.append(ws.block_cols)
 
     def run() -> None:
         state[:] = s0

@@ -166,7 +166,9 @@ def test_blocked_evaluate_gives_the_row_loops_bits(settings: dict[str, Any]) -> 
         ws.tans[restart, 0] = np.cos(state[restart, 2])
         ws.tans[restart, 1] = np.sin(state[restart, 2])
         outs = []
-        for run, cols in ((k.evaluate_rows, None), (k.evaluate, ws.block_cols), (k.evaluate_parallel, ws.cols)):
+        per_block = np.zeros(k.scratch_size(n))  # the parallel pass: a slot per block
+        runs = ((k.evaluate_rows, None), (k.evaluate, ws.block_cols), (k.evaluate_parallel, per_block))
+        for run, cols in runs:
             st = state.copy()
             out = (st, np.full((n, ws.obs_dim), np.nan, np.float32), np.zeros(n, np.bool_), np.full((n, 16), np.nan),
                    np.full((n, 3), np.nan))  # fmt: skip

@@ -278,10 +278,11 @@ class Workspace:
         start: :func:`start_constants`, for start states drawn in :func:`step_rows`.
         rows, beta, cos_beta, sin_beta: ``(n,)`` scratch of those draws: the restarting rows, their
             headings and numpy's cosines and sines of them.
-        cols: the evaluate pass's scratch for ``n`` rows (:func:`amigo_gym.sim._kernels.scratch_size`: a slot of
-            columns per block of rows, for the parallel pass; pages never written stay unmapped).
-        block_cols: its first slot (a view), the serial pass's scratch: one block's columns, reused by every block
-            (they stay in the L1 cache).
+        block_cols: the serial evaluate pass's scratch: one block's columns
+            (:data:`amigo_gym.sim._kernels.BLOCK_WIDTH` floats), reused by every block of rows (they stay in the L1
+            cache).
+        parallel_cols: the parallel evaluate pass's scratch, a slot per block of rows
+            (:func:`amigo_gym.sim._kernels.scratch_size`), allocated by its first call (empty until then).
     """
 
     consts: Array
@@ -295,14 +296,12 @@ class Workspace:
     beta: Array
     cos_beta: Array
     sin_beta: Array
-    cols: Array
     block_cols: Array
+    parallel_cols: list[Array]
 
 
 def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Workspace:
     """A :class:`Workspace` for ``n`` robots with the settings ``k`` on ``path``."""
-    kk = kernels()
-    cols = np.zeros(kk.scratch_size(n))
     return Workspace(
         kernel_constants(k, path),
         np.array(k.preview, dtype=np.float64),
@@ -315,8 +314,8 @@ def workspace(k: TaskConstants, path: CirclePath | ManoeuvrePath, n: int) -> Wor
         np.zeros(n),
         np.zeros(n),
         np.zeros(n),
-        cols,
-        cols[: kk.BLOCK_WIDTH],
+        np.zeros(kernels().BLOCK_WIDTH),
+        [],
     )
 
 
@@ -611,7 +610,11 @@ def _step_rows(
     if state.shape[0] < p.rows_below:  # the row loop: faster for a few rows, the same bits
         p.evaluate_rows(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps)
     else:
-        cols = ws.cols if p.parallel else ws.block_cols
+        cols = ws.block_cols
+        if p.parallel:  # a slot per block: the threads never share one
+            if not ws.parallel_cols:
+                ws.parallel_cols.append(np.zeros(kernels().scratch_size(state.shape[0])))
+            cols = ws.parallel_cols[0]
         p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, cols)
     np.exp(exps, out=exps)
     past = p.finish(c, reward, record, exps)
