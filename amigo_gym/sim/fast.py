@@ -5,7 +5,7 @@ Two implementations of one step exist:
 * the **reference**, AmigoBot-v1's step with AmigoBot-v0's settings (:func:`amigo_gym.task.v1.step_columns` with
   ideal actuators and :func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`; numpy,
   always available: ``kernel="numpy"``, Python floats in the single environment, ``(N,)`` arrays in the vector one);
-* the **fast path**, :func:`step_rows`: AmigoBot-v0's step fused into three compiled loops over the robots
+* the **fast path**, :func:`step_rows`: AmigoBot-v0's step in three compiled passes over the robots
   (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels) around numpy's own ``tan`` and ``exp``
   ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
   (to 1e-12, and bit for bit on this machine).
