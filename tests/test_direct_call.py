@@ -85,27 +85,16 @@ def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
     [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
 )
 def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
-    """The single step in one call against the three passes with numpy's tan and exp between them, on one machine (two
-    code paths): random states, actions beyond [-1, 1] too, 300 steps each. The one call is kernels.single_step_numpy
-    (numpy's own tan and exp loops inside: sim/numpy_loops.py, found on CPython) and, with those loops not found,
-    kernels.single_step (the C library's tan and exp), which the single env must not use where those differ from
-    numpy's (the gate is False)."""
+    """The single step in one call (kernels.single_step: numpy's own tan and exp loops inside, sim/numpy_loops.py,
+    found on CPython) against the three passes with numpy's tan and exp between them, on one machine (two code
+    paths): random states, actions beyond [-1, 1] too, 300 steps each."""
     params = EnvParams(**settings)  # type: ignore[arg-type]
     assert numpy_loops.numpy_loops() is not None  # CPython's numpy: the loops are found and give numpy's bits
-    for loops in (True, False):
-        if not loops:
-            with pytest.MonkeyPatch.context() as mp:
-                mp.setattr(fast, "numpy_loops", lambda: None)
-                whole = fast.SingleStep(task.task_constants(params), make_path(params))
-            if not fast.libm_tan_exp_match_numpy():
-                assert whole._whole is None
-                continue
-        else:
-            whole = fast.SingleStep(task.task_constants(params), make_path(params))
-        assert whole._whole is not None and (whole._loops is not None) == loops
-        passes = fast.SingleStep(task.task_constants(params), make_path(params))
-        passes._whole = passes._loops = None
-        _same_steps(whole, passes)
+    whole = fast.SingleStep(task.task_constants(params), make_path(params))
+    assert whole._whole is not None and whole._loops is not None
+    passes = fast.SingleStep(task.task_constants(params), make_path(params))
+    passes._whole = passes._loops = None
+    _same_steps(whole, passes)
 
 
 def _same_steps(whole: fast.SingleStep, passes: fast.SingleStep) -> None:
@@ -121,16 +110,8 @@ def _same_steps(whole: fast.SingleStep, passes: fast.SingleStep) -> None:
             assert whole.past_limit == passes.past_limit
 
 
-def test_without_the_c_librarys_bits_the_single_env_runs_the_passes(monkeypatch: pytest.MonkeyPatch) -> None:
-    fast.libm_tan_exp_match_numpy.cache_clear()
-    monkeypatch.setattr(np, "tan", lambda x, *a, **k: np.sin(x) / np.cos(x))  # a numpy tan the C library does not give
-    try:
-        assert fast.libm_tan_exp_match_numpy() is False
-    finally:
-        monkeypatch.undo()
-        fast.libm_tan_exp_match_numpy.cache_clear()
-    monkeypatch.setattr(fast, "libm_tan_exp_match_numpy", lambda: False)
-    monkeypatch.setattr(fast, "numpy_loops", lambda: None)  # numpy's loops not found either
+def test_without_numpys_loops_the_single_env_runs_the_passes(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(fast, "numpy_loops", lambda: None)  # numpy's loops not found
     env = gym.make("AmigoBot-v0").unwrapped
     assert env._v0._whole is None and env._v0._loops is None
     ref = gym.make("AmigoBot-v0", kernel="numpy").unwrapped

@@ -89,15 +89,12 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
 
 
 _np_array = np.array
-_np_exp = np.exp
-#: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, the
-#: exponentials, the smoothness term, the reward and the heading term
+#: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, then its
+#: scalars, the exponentials, the smoothness term and the reward
 _R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
     slice(a, b) for a, b in ((0, 3), (3, 5), (5, 7), (7, 9), (9, 11), (11, 14), (14, 16))
 )
-_R_EXPS = slice(_L.R_TRACK, _L.R_SMOOTH)
 _R_SCALARS = slice(_L.R_ERROR, _L.RECORD_WIDTH)
-_R_SMOOTH, _R_REWARD, _R_HEADING = _L.R_SMOOTH, _L.R_REWARD, _L.R_ERROR + _L.RECORD_SCALARS.index("heading")
 
 
 class AmigoBotV1Env(AmigoBotBase):
@@ -326,6 +323,8 @@ class AmigoBotV1Env(AmigoBotBase):
         rec = kern.record
         kern.run_record(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, rec, t_loop,
                         t_data, kern.meta, kern.smooth_weight)  # fmt: skip
+        if not kern.exps_done:
+            kern.complete()
         self._steps = steps + 1
         info, reward, terminated, hx, hy = self._kernel_info(False)
         return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
@@ -359,10 +358,8 @@ class AmigoBotV1Env(AmigoBotBase):
         with the reward, ``terminated`` and H.
 
         ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
-        else of the step just taken (its slips and commands, also into :attr:`_last_command`). Where numpy's loops
-        were not found (:attr:`amigo_gym.sim.fast_v1.StepKernel.exps_done` False) the record holds the exponentials'
-        arguments: ``np.exp`` of them, and the terms and the reward as :func:`amigo_gym.task.v0.reward_term_columns`
-        computes them.
+        else of the step just taken (its slips and commands, also into :attr:`_last_command`). (Where numpy's loops
+        were not found, :meth:`amigo_gym.sim.fast_v1.StepKernel.complete` has finished the record with ``np.exp``.)
         """
         kern = self._kernel
         assert kern is not None
@@ -370,11 +367,6 @@ class AmigoBotV1Env(AmigoBotBase):
         if start:
             rec[_R_COMMAND] = self._last_command
             rec[_R_SLIP] = 0.0
-        if not kern.exps_done:
-            exps = rec[_R_EXPS]
-            _np_exp(exps, out=exps)
-            rec[_R_SMOOTH] = smooth = float(task.smooth_term(float(exps[2]), self.params.smooth_weight))
-            rec[_R_REWARD] = task.reward_product(float(exps[0]), float(exps[1]), float(rec[_R_HEADING]), smooth)
         v = rec.tolist()
         hx, hy, cmd1, cmd2 = v[3], v[4], v[7], v[8]
         e, progress, v_true, v_ref, heading, end, term, track, speed, _, smooth, reward = v[_R_SCALARS]

@@ -20,9 +20,9 @@ Why three passes and not one: the transcendental functions of a step (two ``tan`
 evaluated by numpy's own vectorised ufuncs between the loops (``np.tan(tans, out=tans)``,
 ``np.exp(exps, out=exps)``, :func:`amigo_gym.sim.fast.step_rows`): they are several times faster than the
 C library's scalar functions that a numba loop calls (SIMD), and they are the very functions the
-reference calls, so the results are **bit-identical** to the reference's (where numpy's float64 ``tan`` and ``exp``
-are the C library's, as on AVX2 x86-64, the single env's step runs in one call instead, :func:`single_step`, with the
-same bits: :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). Everything else (about a
+reference calls, so the results are **bit-identical** to the reference's (the single env's step runs in one call
+instead, :func:`single_step`, which calls numpy's own loops of the two functions inside: the same bits).
+Everything else (about a
 hundred additions, multiplications, divisions, comparisons and square roots per robot, which numpy
 would run as as many passes over temporary arrays) is compiled into the passes:
 
@@ -88,7 +88,6 @@ depend on the number of threads.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -132,7 +131,6 @@ __all__ = [
     "single_evaluate",
     "single_finish",
     "single_step",
-    "tan_exp",
 ]
 
 #: columns of the ``state`` array: pose [m, m, rad], wheel angles [rad], wheel rates of the last step [rad/s]
@@ -874,39 +872,14 @@ def single_finish(c: F64, buf: F64) -> int:
 
 @_serial
 def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                a2: float) -> int:  # fmt: skip
+                a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
+                meta: NDArray[np.int64]) -> int:  # fmt: skip
     """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate`, the
-    three exponentials and :func:`single_finish`, the transcendental functions the C library's (``math.tan``,
-    ``math.exp``) instead of numpy's between the passes. The same bits where those give numpy's:
-    :class:`amigo_gym.sim.fast.SingleStep` calls it only then (:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`).
-    Returns what :func:`single_finish` returns."""
-    single_move(c, buf, flags, a1, a2)
-    for j in range(SINGLE_TANS, SINGLE_TURN):
-        buf[0, j] = math.tan(buf[0, j])
-    single_evaluate(c, preview, buf, flags, obs)
-    for j in range(SINGLE_EXPS, SINGLE_REWARD):
-        buf[0, j] = math.exp(buf[0, j])
-    return single_finish(c, buf)
-
-
-@_serial
-def single_step_numpy(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                      a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
-                      meta: NDArray[np.int64]) -> int:  # fmt: skip
-    """:func:`single_step` with numpy's own ``tan`` and ``exp`` loops (:func:`amigo_gym.sim.numpy_loops.
-    numpy_loop_in_place`) in place of the
-    C library's: the three passes' bits on every CPU, in one call. Returns what :func:`single_finish` returns."""
+    three exponentials and :func:`single_finish`, the tangents and exponentials by numpy's own float64 loops at the
+    addresses ``tan`` and ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the three passes' bits with
+    numpy's ufuncs between them, on every CPU. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
     numpy_loops.numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
     single_evaluate(c, preview, buf, flags, obs)
     numpy_loops.numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
     return single_finish(c, buf)
-
-
-@_serial
-def tan_exp(x: F64, t: F64, e: F64) -> None:
-    """``t = tan(x)``, ``e = exp(x)`` elementwise by the functions :func:`single_step` calls (for
-    :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`)."""
-    for i in range(x.shape[0]):
-        t[i] = math.tan(x[i])
-        e[i] = math.exp(x[i])

@@ -534,7 +534,7 @@ def fill_record(ws: F64, rec: F64, exp: int, exp_data: int, meta: NDArray[np.int
     loop at the address ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`: numpy's bits), the smoothness
     term and the reward (:func:`amigo_gym.task.v0.smooth_term`, :func:`amigo_gym.task.v0.reward_product`). With
     ``exp == 0`` (numpy's loops not found) it leaves the arguments in their places and the last two entries alone:
-    the caller takes ``np.exp`` and the rest."""
+    the caller takes ``np.exp`` of them, then :func:`record_terms`."""
     for j in range(_N_RECORD_WS):
         rec[j] = ws[_RECORD_WS[j]]
     rec[L.R_TRACK] = ws[L.W_ARG_T]
@@ -542,9 +542,16 @@ def fill_record(ws: F64, rec: F64, exp: int, exp_data: int, meta: NDArray[np.int
     rec[L.R_SMOOTH_EXP] = ws[L.W_ARG_S]
     if exp != 0:
         numpy_loops.numpy_loop_in_place(exp, exp_data, rec[L.R_TRACK : L.R_SMOOTH], meta)
-        smooth = _smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
-        rec[L.R_SMOOTH] = smooth
-        rec[L.R_REWARD] = _reward_product(rec[L.R_TRACK], rec[L.R_SPEED], ws[L.W_HEADING], smooth)
+        record_terms(rec, smooth_weight)
+
+
+@_jit
+def record_terms(rec: F64, smooth_weight: float) -> None:
+    """The smoothness term and the reward of the info record ``rec`` from its exponentials and its heading term
+    (:func:`amigo_gym.task.v0.smooth_term`, :func:`amigo_gym.task.v0.reward_product`)."""
+    smooth = _smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
+    rec[L.R_SMOOTH] = smooth
+    rec[L.R_REWARD] = _reward_product(rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING], smooth)
 
 
 @_jit

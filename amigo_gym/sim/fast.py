@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.sim.layout import twin
-from amigo_gym.sim.numpy_loops import numpy_loops, tan_exp_sample
+from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task.v0 import TaskConstants, _path_start, bound_angle, initial_wheel_rates, obs_dim, record_info
 
 __all__ = [
@@ -60,7 +60,6 @@ __all__ = [
     "EnvStep",
     "step_env_rows",
     "direct_call",
-    "libm_tan_exp_match_numpy",
     "same_bits_as_numpy",
 ]
 
@@ -197,21 +196,10 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
         return dispatcher
 
 
-@lru_cache(maxsize=1)
-def libm_tan_exp_match_numpy() -> bool:
-    """Whether the compiled ``math.tan`` and ``math.exp`` (the C library's) give numpy's float64 ``np.tan`` and
-    ``np.exp`` bits on a fixed sample of the step's arguments (5000 tangents' of half turns and of headings of many
-    laps up to :data:`amigo_gym.model.params.HEADING_LIMIT`, 3000 exponentials' of the reward's arguments, never
-    positive), as :func:`amigo_gym.sim.fast_v1.libm_matches_numpy` checks ``cos`` and ``sin``: the premise of
-    :func:`amigo_gym.sim._kernels.single_step`. Checked once per process (a millisecond)."""
-    xt, xe = tan_exp_sample()
-    return same_bits_as_numpy(kernels().tan_exp, np.concatenate((xt, xe)), np.tan, np.exp)
-
-
 def same_bits_as_numpy(compiled: Any, x: NDArray[np.float64], f0: Any, f1: Any) -> bool:
     """Whether ``compiled(x, y0, y1)``, a kernel's elementwise loop of two C library functions, writes numpy's
     ``f0(x)`` and ``f1(x)`` bit for bit (overflows to ``inf`` compared as bits, without numpy's warning): the check
-    behind :func:`libm_tan_exp_match_numpy` and :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`."""
+    behind :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`."""
     y0, y1 = np.empty_like(x), np.empty_like(x)
     compiled(x, y0, y1)
     with np.errstate(all="ignore"):
@@ -361,9 +349,10 @@ class SingleStep:
     ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
     between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
     and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
-    (``tests/test_kernels.py``). Three compiled calls and two numpy calls per step, on buffers allocated once; or,
-    where the C library's ``tan`` and ``exp`` give numpy's bits (:func:`libm_tan_exp_match_numpy`), one compiled
-    call that computes them in between (:func:`amigo_gym.sim._kernels.single_step`: the same bits).
+    (``tests/test_kernels.py``), on buffers allocated once. One compiled call per step
+    (:func:`amigo_gym.sim._kernels.single_step`), which calls numpy's own ``tan`` and ``exp`` loops between the passes
+    (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: the same bits); where those loops are not found, three compiled
+    calls with numpy's ufuncs between them.
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
@@ -392,18 +381,15 @@ class SingleStep:
         self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
         self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
         self._finish = direct_call(kk.single_finish, self.consts, b)
-        # the whole step in one call: with numpy's own tan and exp loops called inside (numpy_loops), else where the C
-        # library's tan and exp give numpy's bits; else the three passes with numpy's ufuncs between them
+        # the whole step in one call, numpy's own tan and exp loops called inside (numpy_loops: their addresses and
+        # data pointers, and a scratch); where they are not found, the three passes with numpy's ufuncs between them
         self._whole: Any = None
         self._loops: tuple[Any, ...] | None = None
         loops = numpy_loops()
         if loops is not None:
-            meta = np.zeros(5, dtype=np.int64)
-            args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *loops, meta)
-            self._whole = direct_call(kk.single_step_numpy, *args)
-            self._loops = (*loops, meta)
-        elif libm_tan_exp_match_numpy():
-            self._whole = direct_call(kk.single_step, self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0)
+            self._loops = (loops.tan.address, loops.exp.address, loops.tan.data, loops.exp.data, np.zeros(5, np.int64))
+            args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
+            self._whole = direct_call(kk.single_step, *args)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
@@ -435,15 +421,12 @@ class SingleStep:
         the caller reduces it by :func:`amigo_gym.task.v0.bound_angle`."""
         b = self.buf
         c = self.consts
-        whole = self._whole
         loops = self._loops
         if loops is not None:
             tan, exp, tan_data, exp_data, meta = loops
-            self.past_limit = whole(
+            self.past_limit = self._whole(
                 c, self.preview, b, self.flags, self.obs, a1, a2, tan, exp, tan_data, exp_data, meta
             )
-        elif whole is not None:
-            self.past_limit = whole(c, self.preview, b, self.flags, self.obs, a1, a2)
         else:
             tans = self._tans
             exps = self._exps

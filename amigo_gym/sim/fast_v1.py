@@ -209,14 +209,15 @@ class StepKernel:
         self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         #: numpy's own ``exp`` loop (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: its address and data), ``(0, 0)``
-        #: where not found (then the env takes ``np.exp`` of the record's arguments: :attr:`exps_done` False)
+        #: where not found (then :meth:`complete` finishes the record after each call: :attr:`exps_done` False)
         loops = numpy_loops()
-        self.exp_loop = (0, 0) if loops is None else (loops[1], loops[3])
+        self.exp_loop = (0, 0) if loops is None else (loops.exp.address, loops.exp.data)
         self.exps_done = loops is not None
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
         args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop, self.meta)
         self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
         self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
+        self._terms: Any = fast.direct_call(kv.record_terms, self.record, 0.0)
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
@@ -233,6 +234,7 @@ class StepKernel:
             "_uniforms",
             "run_record",
             "_fill",
+            "_terms",
         ):
             del state[name]
         return state
@@ -269,6 +271,15 @@ class StepKernel:
     def fill(self) -> None:
         """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
         self._fill(self.ws, self.record, *self.exp_loop, self.meta, self.smooth_weight)
+        if not self.exps_done:
+            self.complete()
+
+    def complete(self) -> None:
+        """The record's exponentials by ``np.exp`` and its terms (:func:`amigo_gym.sim._kernels_v1.record_terms`),
+        where numpy's ``exp`` loop was not found (:attr:`exps_done` False: :attr:`run_record` left the arguments)."""
+        exps = self.record[layout_v1.R_TRACK : layout_v1.R_SMOOTH]
+        np.exp(exps, out=exps)
+        self._terms(self.record, self.smooth_weight)
 
     def draw(self, steps: int) -> None:
         """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter

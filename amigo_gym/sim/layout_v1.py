@@ -142,6 +142,7 @@ RECORD_ROWS = ("x", "y", "beta", "h_x", "h_y", "w1", "w2", "command1", "command2
                "meas_y", "meas_beta", "slip1", "slip2")  # fmt: skip
 RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated")
 R_ERROR = len(RECORD_ROWS)
+R_HEADING = R_ERROR + RECORD_SCALARS.index("heading")
 R_TRACK = R_ERROR + len(RECORD_SCALARS)
 R_SPEED, R_SMOOTH_EXP, R_SMOOTH, R_REWARD = R_TRACK + 1, R_TRACK + 2, R_TRACK + 3, R_TRACK + 4
 RECORD_WIDTH = R_REWARD + 1

@@ -2,17 +2,18 @@
 
 The reference computes the step's tangents and the reward's exponentials with numpy's ufuncs, whose float64 loops
 numpy picks at run time for the CPU (its SIMD code: on AVX-512, numpy's SVML ``tan`` and its own ``exp``), so their
-bits are the CPU's and the C library's ``tan`` and ``exp`` give other bits on some CPUs
-(:func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`). numpy keeps the loop it picked for each type signature in its
-ufunc object (``PyUFuncObject.functions``, with ``data`` and ``types``: numpy's public C API, ``ufuncobject.h``,
-unchanged from numpy 1.0 to 2.x). :func:`ufunc_loop` reads the address of a ufunc's ``float64 -> float64`` loop,
-which the compiled steps receive as an integer and call (:func:`numpy_loop_in_place`, which the kernels compile, its
-:func:`call_loop` an intrinsic there: :func:`loop_call_typing`). That runs numpy's own machine code, so it gives
+bits are the CPU's and the C library's ``tan`` and ``exp`` give other bits on some CPUs (AVX-512). numpy keeps the
+loop it picked for each type signature in its ufunc object (``PyUFuncObject.functions``, with ``data`` and
+``types``: numpy's public C API, ``ufuncobject.h``, unchanged from numpy 1.0 to 2.x). :func:`ufunc_loop` reads the
+address of a ufunc's ``float64 -> float64`` loop, which the compiled steps receive as an integer and call
+(:func:`numpy_loop_in_place`, which the kernels compile, its :func:`call_loop` an intrinsic there:
+:func:`loop_call_typing`). That runs numpy's own machine code, so it gives
 numpy's bits on every CPU, inside one compiled call instead of a ufunc call from Python (about 0.3 us each).
 
 Where the object does not look as expected (another Python implementation, a numpy that moved the fields, no
-``float64`` loop), :func:`ufunc_loop` returns None and the caller keeps numpy's ufunc calls between compiled
-passes; where the loop found does not give the ufunc's bits on a sample, too (:func:`numpy_loops`).
+``float64`` loop), :func:`ufunc_loop` returns None and the callers use numpy's ufuncs from Python instead (v0's single
+step its three passes, v1's an ``np.exp`` after its call); so they do where the loop found does not give the ufunc's
+bits on a sample (:func:`numpy_loops`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 
 __all__ = [
+    "TanExp",
     "UfuncLoop",
     "call_loop",
     "loop_call_typing",
@@ -51,6 +53,13 @@ class UfuncLoop(NamedTuple):
 
     address: int
     data: int
+
+
+class TanExp(NamedTuple):
+    """The loops of ``np.tan`` and ``np.exp`` (:func:`numpy_loops`)."""
+
+    tan: UfuncLoop
+    exp: UfuncLoop
 
 
 def ufunc_loop(ufunc: np.ufunc) -> UfuncLoop | None:
@@ -132,7 +141,7 @@ def loop_call_typing(typingctx: object, loop: Any, args: Any, dims: Any, steps: 
 
 
 def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The fixed sample of :func:`numpy_loops` (and :func:`amigo_gym.sim.fast.libm_tan_exp_match_numpy`):
+    """The fixed sample of :func:`numpy_loops`:
     5000 arguments of ``tan`` (half turns, and headings of many laps up to
     :data:`amigo_gym.model.params.HEADING_LIMIT`) and 3000 of ``exp`` (the reward's arguments, never positive)."""
     g = np.random.default_rng(20261126)
@@ -149,10 +158,10 @@ def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
 
 
 @lru_cache(maxsize=1)
-def numpy_loops() -> tuple[int, int, int, int] | None:
-    """``(tan, exp, tan_data, exp_data)``: the addresses of numpy's float64 loops of ``np.tan`` and ``np.exp`` and
-    their ``data`` pointers, checked once per process: each, called by :func:`numpy_loop_in_place`, gives the ufunc's
-    bits on the sample of :func:`tan_exp_sample`. None where a loop is not found or gives other bits."""
+def numpy_loops() -> TanExp | None:
+    """numpy's float64 loops of ``np.tan`` and ``np.exp`` (:func:`ufunc_loop`), checked once per process: each,
+    called by :func:`numpy_loop_in_place`, gives the ufunc's bits on the sample of :func:`tan_exp_sample`. None where a
+    loop is not found or gives other bits."""
     tan, exp = ufunc_loop(np.tan), ufunc_loop(np.exp)
     if tan is None or exp is None:
         return None
@@ -163,4 +172,4 @@ def numpy_loops() -> tuple[int, int, int, int] | None:
         with np.errstate(all="ignore"):
             if not np.array_equal(y.view(np.int64), ufunc(x).view(np.int64)):
                 return None
-    return tan.address, exp.address, tan.data, exp.data
+    return TanExp(tan, exp)
