@@ -471,6 +471,43 @@ def _preview_feature(q: tuple[float, ...], manoeuvre: bool, s: float, ahead: flo
     return _curvature_feature(_manoeuvre_curvature(s + ahead, big_l, curv) if manoeuvre else curv, l3)
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _stored(
+    st: F64, rc: F64, so: int, ro: int, x: float, y: float, beta: float, al1: float, al2: float, al3: float,
+    w1: float, w2: float, hx: float, hy: float, e: float, heading: float,
+) -> None:  # fmt: skip
+    # a row's new state into st[so : so + 8] (STATE_FIELDS) and its record's columns into rc[ro : ro + 16]
+    # (RECORD_FIELDS; the reward terms and the reward by finish)
+    st[so] = rc[ro] = x
+    st[so + 1] = rc[ro + 1] = y
+    st[so + 2] = rc[ro + 2] = beta
+    st[so + 3] = rc[ro + 8] = al1
+    st[so + 4] = rc[ro + 9] = al2
+    st[so + 5] = rc[ro + 10] = al3
+    st[so + 6] = rc[ro + 6] = w1
+    st[so + 7] = rc[ro + 7] = w2
+    rc[ro + 3] = hx
+    rc[ro + 4] = hy
+    rc[ro + 5] = e
+    rc[ro + 13] = heading
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+def _observed(
+    obs: NDArray[np.floating], i: int, m: int, o0: float, o1: float, o2: float, o3: float, r0: float, r1: float,
+    r2: float, reference: Any,
+) -> None:  # fmt: skip
+    # row i's observation but the preview's curvatures (task.v0.observe_columns): its head, its tail from column m
+    obs[i, 0] = o0
+    obs[i, 1] = o1
+    obs[i, 2] = o2
+    obs[i, 3] = o3
+    obs[i, m] = r0
+    obs[i, m + 1] = r1
+    obs[i, m + 2] = r2
+    obs[i, m + 3] = reference
+
+
 def _evaluate(
     c: F64,
     preview: F64,
@@ -560,27 +597,12 @@ def _evaluate_block(
          ex[3 * j + 2], terminated[j]) = _terms(q, k[K_LINE + j] != 0.0, k[K_E + j], k[K_COS + j], k[K_SIN + j],
                                                 k[K_CT + j], k[K_ST + j], k[K_ADV + j], k[K_CHG + j])  # fmt: skip
     for j in range(count):  # 4. the new state and the record
-        st[8 * j] = rc[16 * j] = k[K_X + j]
-        st[8 * j + 1] = rc[16 * j + 1] = k[K_Y + j]
-        st[8 * j + 2] = rc[16 * j + 2] = k[K_BETA + j]
-        st[8 * j + 3] = rc[16 * j + 8] = k[K_AL1 + j]
-        st[8 * j + 4] = rc[16 * j + 9] = k[K_AL2 + j]
-        st[8 * j + 5] = rc[16 * j + 10] = k[K_AL3 + j]
-        st[8 * j + 6] = rc[16 * j + 6] = k[K_W1 + j]
-        st[8 * j + 7] = rc[16 * j + 7] = k[K_W2 + j]
-        rc[16 * j + 3] = k[K_HX + j]
-        rc[16 * j + 4] = k[K_HY + j]
-        rc[16 * j + 5] = k[K_E + j]
-        rc[16 * j + 13] = k[K_HEAD + j]
+        _stored(st, rc, 8 * j, 16 * j, k[K_X + j], k[K_Y + j], k[K_BETA + j], k[K_AL1 + j], k[K_AL2 + j],
+                k[K_AL3 + j], k[K_W1 + j], k[K_W2 + j], k[K_HX + j], k[K_HY + j], k[K_E + j],
+                k[K_HEAD + j])  # fmt: skip
     for j in range(count):  # 5. the observation: its head, its tail
-        obs[j, 0] = k[K_OE + j]
-        obs[j, 1] = k[K_SPSI + j]
-        obs[j, 2] = k[K_CPSI + j]
-        obs[j, 3] = k[K_OK + j]
-        obs[j, m] = k[K_OR1 + j]
-        obs[j, m + 1] = k[K_OR2 + j]
-        obs[j, m + 2] = k[K_OR3 + j]
-        obs[j, m + 3] = reference_obs
+        _observed(obs, j, m, k[K_OE + j], k[K_SPSI + j], k[K_CPSI + j], k[K_OK + j], k[K_OR1 + j], k[K_OR2 + j],
+                  k[K_OR3 + j], reference_obs)  # fmt: skip
     for p in range(preview.shape[0]):  # the preview's curvatures
         ahead = preview[p]
         for j in range(count):
@@ -616,32 +638,14 @@ def _evaluate_rows(
         o0, o1, o2, o3, heading, ex0, ex1, ex2, off = _terms(
             q, on_line, e, cos_beta, sin_beta, cos_theta, sin_theta, abs_dv, change_sq
         )
-        state[i, 0] = record[i, 0] = x
-        state[i, 1] = record[i, 1] = y
-        state[i, 2] = record[i, 2] = beta
-        state[i, 3] = record[i, 8] = al1
-        state[i, 4] = record[i, 9] = al2
-        state[i, 5] = record[i, 10] = al3
-        state[i, 6] = record[i, 6] = w1
-        state[i, 7] = record[i, 7] = w2
-        record[i, 3] = hx
-        record[i, 4] = hy
-        record[i, 5] = e
-        record[i, 13] = heading
+        _stored(state[i], record[i], 0, 0, x, y, beta, al1, al2, al3, w1, w2, hx, hy, e, heading)
         exps[i, 0] = ex0
         exps[i, 1] = ex1
         exps[i, 2] = ex2
         terminated[i] = off
-        obs[i, 0] = o0
-        obs[i, 1] = o1
-        obs[i, 2] = o2
-        obs[i, 3] = o3
+        _observed(obs, i, m, o0, o1, o2, o3, r0, r1, r2, reference_obs)
         for p in range(preview.shape[0]):
             obs[i, 4 + p] = _preview_feature(q, manoeuvre, s, preview[p])
-        obs[i, m] = r0
-        obs[i, m + 1] = r1
-        obs[i, m + 2] = r2
-        obs[i, m + 3] = reference_obs
 
 
 def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
