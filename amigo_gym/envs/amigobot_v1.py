@@ -92,8 +92,8 @@ _np_array = np.array
 #: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, then its
 #: scalars, the exponentials, the smoothness term and the reward
 _R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
-    slice(a, b) for a, b in ((0, 3), (3, 5), (5, 7), (7, 9), (9, 11), (11, 14), (14, 16))
-)
+    _L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP
+)  # fmt: skip
 _R_SCALARS = slice(_L.R_ERROR, _L.RECORD_WIDTH)
 
 

@@ -609,22 +609,33 @@ def _step_rows(
     a1: F64,
     a2: F64,
     logs: F64,
-    args: F64,
+    rec: F64,
+    exp: int,
+    exp_data: int,
+    meta: NDArray[np.int64],
+    smooth_weight: float,
 ) -> None:
-    """:func:`step` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L, 2)``,
-    its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``.
+    """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
+    2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
+    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials by numpy's ``exp`` loop at
+    ``exp``, with ``meta[i] (5,)`` its scratch; with ``exp == 0`` the caller finishes the records).
 
-    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first;
-    the arguments of the three reward exponentials are copied to ``args (N, 3)`` (track, speed, smoothness).
+    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
     """
     for i in numba.prange(ws.shape[0]):
         row = ws[i]
         for j in range(logs.shape[1]):
             row[L.S_LOG + j] = logs[i, j]
         step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
-        args[i, 0] = row[L.W_ARG_T]
-        args[i, 1] = row[L.W_ARG_V]
-        args[i, 2] = row[L.W_ARG_S]
+        fill_record(row, rec[i], exp, exp_data, meta[i], smooth_weight)
+
+
+@_jit
+def terms_rows(rec: F64, smooth_weight: float) -> None:
+    """:func:`record_terms` of every row of ``rec (N, RECORD_WIDTH)`` (where numpy's ``exp`` loop was not found: the
+    caller has taken ``np.exp`` of the exponentials' arguments)."""
+    for i in range(rec.shape[0]):
+        record_terms(rec[i], smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

@@ -146,6 +146,16 @@ R_HEADING = R_ERROR + RECORD_SCALARS.index("heading")
 R_TRACK = R_ERROR + len(RECORD_SCALARS)
 R_SPEED, R_SMOOTH_EXP, R_SMOOTH, R_REWARD = R_TRACK + 1, R_TRACK + 2, R_TRACK + 3, R_TRACK + 4
 RECORD_WIDTH = R_REWARD + 1
+#: the record's slices of the info's seven arrays (:data:`RECORD_ROWS`), in their order; the index of each scalar
+R_POSE, R_H, R_RATES, R_COMMAND, R_ANGLES, R_MEASURED, R_SLIP = (
+    slice(RECORD_ROWS.index(a), RECORD_ROWS.index(b) + 1)
+    for a, b in (("x", "beta"), ("h_x", "h_y"), ("w1", "w2"), ("command1", "command2"), ("alpha1", "alpha2"),
+                 ("meas_x", "meas_beta"), ("slip1", "slip2"))
+)  # fmt: skip
+R_HX, R_HY = RECORD_ROWS.index("h_x"), RECORD_ROWS.index("h_y")
+R_PROGRESS, R_VT, R_VREF, R_END, R_TERM = (
+    R_ERROR + RECORD_SCALARS.index(n) for n in ("progress", "v_true", "v_ref", "end_of_path", "terminated")
+)
 #: :data:`RECORD_ROWS` and :data:`RECORD_SCALARS` as workspace indices
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
 
