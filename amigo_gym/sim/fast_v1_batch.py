@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast_v1, layout_v1
+from amigo_gym.sim import fast, fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = ["PathArena", "BatchKernel"]
@@ -152,22 +152,34 @@ class BatchKernel:
         self.noise_on = np.zeros(n, dtype=np.bool_)
         self._u1: Array = np.ones((n, m))
         self._logs: Array = np.zeros((n, m))
-        #: numpy's ``exp`` loop (:attr:`amigo_gym.sim.fast_v1.StepKernel.exp_loop`; ``(0, 0)``: not found) and a scratch
-        #: of its call per row (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`: rows on numba's threads each
-        #: their own)
-        self._exp_loop = self._row.exp_loop
+        #: a scratch of the call of numpy's ``exp`` loop per row (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`:
+        #: rows on numba's threads each their own)
         self._metas: NDArray[np.int64] = np.zeros((n, 5), dtype=np.int64)
         self._bind()
 
     def _bind(self) -> None:
+        """The compiled loops for exactly the types of :meth:`step`'s arguments (:func:`amigo_gym.sim.fast.direct_call`:
+        compiled, or loaded from numba's disk cache, now; no dispatch per call): C-contiguous float64 constants,
+        arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records, int64 starts and stops, uint64 keys,
+        int64 loop scratch, a float32 observation, Python ints and floats."""
         kv = fast_v1.kernels()
-        self._noise_rows: Any = kv.noise_rows_parallel if self.parallel else kv.noise_rows
-        self._step_rows: Any = kv.step_rows_parallel if self.parallel else kv.step_rows
-        self._terms_rows: Any = kv.terms_rows
+        #: numpy's ``exp`` loop (:attr:`amigo_gym.sim.fast_v1.StepKernel.exp_loop`, this process's address; ``(0, 0)``:
+        #: not found)
+        self._exp_loop = self._row.exp_loop
+        f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
+        i1, i2, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 5), dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
+        keys = np.zeros(1, dtype=np.uint64)
+        noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
+        step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
+        with fast.compile_notice("AmigoBot-v1's vector step" + (" (numba's threads)" if self.parallel else "")):
+            self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
+            args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, *self._exp_loop, i2, 0.0)
+            self._step_rows: Any = fast.direct_call(step_rows, *args)
+            self._terms_rows: Any = fast.direct_call(kv.terms_rows, f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        del state["_noise_rows"], state["_step_rows"], state["_terms_rows"]
+        del state["_noise_rows"], state["_step_rows"], state["_terms_rows"], state["_exp_loop"]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
