@@ -241,9 +241,10 @@ class AmigoBotV1Env(AmigoBotBase):
         k = self._k
         pose = None if pose_opt is None else tuple(pose_opt.tolist())
         kern = self._kernel
-        self.path, self._path_info, ep, st = tracking.start_episode(
-            self.np_random, k, pose, None if kern is None else kern.progress
-        )
+        # with the compiled step, H's projections, a drawn path's building loops and its start pose compiled (the
+        # same results)
+        progress, loops, at = (None, None, None) if kern is None else (kern.progress, fast_v1.path_loops(), kern.pose)
+        self.path, self._path_info, ep, st = tracking.start_episode(self.np_random, k, pose, progress, loops, at)
         self._episode = ep
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)

@@ -291,16 +291,18 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self, idx: NDArray[np.intp], pose_opt: Array | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
         """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
-        :func:`tracking.start_episode` (H's projections compiled), its start state evaluated by the compiled
+        :func:`tracking.start_episode` (H's projections, a new path's building loops and its start pose compiled), its
+        start state evaluated by the compiled
         :func:`amigo_gym.task.v1.reset_columns` (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`), the
         infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
         b = self._batch
         assert b is not None
         rows = idx.tolist()
         paths, states, episodes = [], [], []
+        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled (the same paths)
         for i in rows:
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
-            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress)
+            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress, loops, b.pose)
             self._set_row(i, info, st, ep)
             paths.append(path)
             states.append(st)

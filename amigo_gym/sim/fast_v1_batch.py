@@ -217,6 +217,11 @@ class BatchKernel:
         :meth:`amigo_gym.sim.fast_v1.StepKernel.progress`."""
         return self._row.progress(path, x, y, hint)
 
+    def pose(self, path: Any, s: float) -> Any:
+        """The path's pose at ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`):
+        :meth:`amigo_gym.sim.fast_v1.StepKernel.pose`."""
+        return self._row.pose(path, s)
+
     def start(
         self,
         rows: Sequence[int],

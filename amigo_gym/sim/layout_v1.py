@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
-from amigo_gym.paths import clothoid
+from amigo_gym.paths import clothoid, families
 from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
@@ -200,6 +200,12 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.coarse_start,
     clothoid.locate_flat,
     clothoid.pose_flat,
+    clothoid.chain_pieces,
+    clothoid.sample_points,
+    families.run_segments,
+    families.s_curve_half,
+    families.lane_change_shape,
+    fresnel.subinterval_count,
     fresnel.node_phases,
     fresnel.node_sums,
     fresnel.advance_nodes,
@@ -266,6 +272,7 @@ def layout_fingerprint() -> str:
         clothoid.MIN_NEWTON_DENOMINATOR,
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
         tracking.STATUS_END,
+        (families.RUN_MAX_SUB, families.LANE_CHANGE_MAX_HEADING, fresnel.MAX_PHASE_PER_SUB),
         (randomization._M64, randomization._GAMMA, randomization._MIX1, randomization._MIX2),
         (randomization._INV_2_53, randomization._TWO_PI),
     )
