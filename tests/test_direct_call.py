@@ -7,11 +7,7 @@ float64 before an entry reads them, and environments that still pickle (an entry
 
 from __future__ import annotations
 
-import contextlib
 import pickle
-import re
-import time
-from collections.abc import Iterator
 
 import gymnasium as gym
 import numpy as np
@@ -222,36 +218,3 @@ def test_v1_vector_infos_are_new_memory_at_every_step() -> None:
     _, r_ref, _, _, second_ref = ref.step(a)
     assert r2.tobytes() == r_ref.tobytes() and _same_tree(second, second_ref)
     assert not any(np.shares_memory(v, w) for v in arrays for w in (second["pose"], second["reward_terms"]["track"]))
-
-
-def test_compile_notice_speaks_only_when_the_block_is_slow(capsys: pytest.CaptureFixture[str]) -> None:
-    """numba's first compile of a kernel (after an install or upgrade) takes 10 to 30 s: a line on stderr says so
-    while it happens and a second one when it is done; a quick block (code loaded from numba's disk cache) prints
-    nothing; an error in the block propagates, the notice's timer stopped."""
-    with fast.compile_notice("a kernel", after=0.05):
-        time.sleep(0.4)
-    lines = capsys.readouterr().err.splitlines()
-    assert len(lines) == 2
-    assert lines[0].startswith("amigo_gym: compiling a kernel with numba (once")
-    assert re.fullmatch(r"amigo_gym: compiled a kernel in \d+ s", lines[1])
-    with fast.compile_notice("a kernel", after=5.0):
-        pass
-    with pytest.raises(KeyError), fast.compile_notice("a kernel", after=0.05):
-        raise KeyError("inside")
-    time.sleep(0.2)
-    assert capsys.readouterr().err == ""
-
-
-def test_the_compiled_steps_are_built_under_the_notice(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The single and vector envs of AmigoBot-v1 get their compiled code inside :func:`fast.compile_notice`."""
-    seen: list[str] = []
-
-    @contextlib.contextmanager
-    def record(what: str, after: float = 2.0) -> Iterator[None]:
-        seen.append(what)
-        yield
-
-    monkeypatch.setattr(fast, "compile_notice", record)
-    gym.make("AmigoBot-v1")
-    gym.make_vec("AmigoBot-v1", num_envs=2, vectorization_mode="vector_entry_point")
-    assert seen[0] == "AmigoBot-v1's step" and "AmigoBot-v1's vector step" in seen

@@ -22,10 +22,7 @@ import ctypes
 import importlib.util
 import os
 import sys
-import threading
-import time
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache, partial
 from types import ModuleType
@@ -197,38 +194,6 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
         return dispatcher.get_overload(sig)
     except (AttributeError, KeyError):  # pragma: no cover  (numba's API moved)
         return dispatcher
-
-
-@contextmanager
-def compile_notice(what: str, after: float = 2.0) -> Iterator[None]:
-    """Say on stderr, as it happens, that ``what`` is being compiled when the block takes longer than ``after`` [s].
-
-    numba compiles a kernel on its first use after an install or an upgrade (10 to 30 s for AmigoBot-v1's step) and
-    caches the machine code on disk, so later processes load it in well under a second: the lines appear only on the
-    slow first run, which would otherwise look like a hang. Two lines: one after ``after`` seconds, one with the time
-    taken when the block ends.
-    """
-    start = time.perf_counter()
-    said = threading.Event()
-
-    def say() -> None:
-        said.set()
-        print(
-            f"amigo_gym: compiling {what} with numba (once: the next runs load it from numba's disk cache) ...",
-            file=sys.stderr,
-            flush=True,
-        )
-
-    timer = threading.Timer(after, say)
-    timer.daemon = True
-    timer.start()
-    try:
-        yield
-    finally:
-        timer.cancel()
-        timer.join()  # a notice being written is finished before the second line
-        if said.is_set():
-            print(f"amigo_gym: compiled {what} in {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
 
 
 def same_bits_as_numpy(compiled: Any, x: NDArray[np.float64], f0: Any, f1: Any) -> bool:
@@ -412,22 +377,19 @@ class SingleStep:
         """The compiled functions and the buffer's views (again after unpickling)."""
         kk = kernels()
         b = self.buf
+        # the compiled passes for exactly these buffers' types (direct_call: no dispatch per call)
+        self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
+        self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
+        self._finish = direct_call(kk.single_finish, self.consts, b)
+        # the whole step in one call, numpy's own tan and exp loops called inside (numpy_loops: their addresses and
+        # data pointers, and a scratch); where they are not found, the three passes with numpy's ufuncs between them
         self._whole: Any = None
         self._loops: tuple[Any, ...] | None = None
         loops = numpy_loops()
-        with compile_notice("AmigoBot-v0's step"):
-            # the compiled passes for exactly these buffers' types (direct_call: no dispatch per call)
-            self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
-            self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
-            self._finish = direct_call(kk.single_finish, self.consts, b)
-            # the whole step in one call, numpy's own tan and exp loops called inside (numpy_loops: their addresses
-            # and data pointers, and a scratch); where they are not found, the three passes with numpy's ufuncs
-            # between them
-            if loops is not None:
-                tan, exp = loops.tan, loops.exp
-                self._loops = (tan.address, exp.address, tan.data, exp.data, np.zeros(5, np.int64))
-                args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
-                self._whole = direct_call(kk.single_step, *args)
+        if loops is not None:
+            self._loops = (loops.tan.address, loops.exp.address, loops.tan.data, loops.exp.data, np.zeros(5, np.int64))
+            args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
+            self._whole = direct_call(kk.single_step, *args)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
@@ -581,18 +543,17 @@ def _direct(parallel: bool) -> _Passes:
     rows, steps = np.zeros(1, dtype=np.intp), np.zeros(1, dtype=np.int64)
     bitgens = np.zeros(1, dtype=np.uintp)
     bitgens.flags.writeable = False
-    with compile_notice("AmigoBot-v0's vector step" + (" (numba's threads)" if parallel else "")):
-        return _Passes(
-            direct_call(d.move, c, f8, f2, mask, f2, f1),
-            direct_call(d.evaluate, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3, f1),
-            direct_call(d.finish, c, f1, f16, f3),
-            direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
-            direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
-            direct_call(d.count_steps, steps, rows, 0, 0.0, mask, f1),
-            direct_call(d.evaluate_rows, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3),
-            d.rows_below,
-            parallel,
-        )
+    return _Passes(
+        direct_call(d.move, c, f8, f2, mask, f2, f1),
+        direct_call(d.evaluate, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3, f1),
+        direct_call(d.finish, c, f1, f16, f3),
+        direct_call(d.draw_starts, bitgens, mask, f1, f8, rows, f1),
+        direct_call(d.place_starts, f1, rows, f1, f1, f8, f2),
+        direct_call(d.count_steps, steps, rows, 0, 0.0, mask, f1),
+        direct_call(d.evaluate_rows, c, f1, f8, f2, mask, f2, f1, obs, mask, f16, f3),
+        d.rows_below,
+        parallel,
+    )
 
 
 _np_count_nonzero = np.count_nonzero

@@ -237,18 +237,13 @@ class StepKernel:
         loops = numpy_loops()
         self.exp_loop = (0, 0) if loops is None else (loops.exp.address, loops.exp.data)
         self.exps_done = loops is not None
-        with fast.compile_notice("AmigoBot-v1's step"):
-            self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
-            self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
-            #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
-            args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop,
-                    self.meta)  # fmt: skip
-            self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
-            self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
-            self._terms: Any = fast.direct_call(kv.record_terms, self.record, 0.0)
-            # the path's projection (H's progress at a start) and the start's evaluation: compiled now too
-            fast.direct_call(kv.progress, self.consts, self.path, 0.0, 0.0, 0.0)
-            fast.direct_call(kv.evaluate, self.consts, self.path, self.ws, self.obs, 0.0, 0.0, 0.0, 0.0)
+        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
+        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
+        args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop, self.meta)
+        self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
+        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
+        self._terms: Any = fast.direct_call(kv.record_terms, self.record, 0.0)
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 

@@ -171,11 +171,10 @@ class BatchKernel:
         keys = np.zeros(1, dtype=np.uint64)
         noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
         step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
-        with fast.compile_notice("AmigoBot-v1's vector step" + (" (numba's threads)" if self.parallel else "")):
-            self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
-            args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, *self._exp_loop, i2, 0.0)
-            self._step_rows: Any = fast.direct_call(step_rows, *args)
-            self._terms_rows: Any = fast.direct_call(kv.terms_rows, f2, 0.0)
+        self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
+        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, *self._exp_loop, i2, 0.0)
+        self._step_rows: Any = fast.direct_call(step_rows, *args)
+        self._terms_rows: Any = fast.direct_call(kv.terms_rows, f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
