@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -189,7 +190,10 @@ def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
     for row in text.splitlines():
         if row.lower().startswith(("flags", "features")):
             flags |= set(row.split(":", 1)[1].split())
-    if "avx512f" in flags:
+    restricted = os.environ.get("NPY_DISABLE_CPU_FEATURES", "").split()
+    if "avx512f" in flags and "X86_V4" in restricted:  # numpy's AVX2 code on an AVX-512 machine (numpy >= 2.4's names)
+        assert level == "AVX2", (level, restricted)
+    elif "avx512f" in flags:
         assert level.startswith("AVX-512"), (level, sorted(f for f in flags if "avx" in f))
     elif "avx2" in flags:
         assert level == "AVX2"

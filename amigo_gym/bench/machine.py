@@ -12,14 +12,18 @@ import numpy as np
 
 __all__ = ["cpu_model", "machine_line", "simd_level"]
 
-#: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, then ARM)
+#: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, numpy >= 2.4 naming them
+#: ``X86_V4`` ... too, then ARM)
 _LEVELS = (
     ("AVX512_SPR", "AVX-512 (Sapphire Rapids)"),
     ("AVX512_ICL", "AVX-512 (Ice Lake)"),
     ("AVX512_SKX", "AVX-512 (Skylake-X)"),
+    ("X86_V4", "AVX-512"),
     ("AVX512F", "AVX-512"),
+    ("X86_V3", "AVX2"),
     ("AVX2", "AVX2"),
     ("AVX", "AVX"),
+    ("X86_V2", "SSE4.2"),
     ("SSE42", "SSE4.2"),
     ("SVE", "SVE"),
     ("ASIMD", "NEON (ASIMD)"),
@@ -41,23 +45,26 @@ def cpu_model() -> str:
 def simd_level() -> str:
     """The widest SIMD level that numpy found on this CPU and may dispatch to, e.g. ``"AVX2"``.
 
-    Read from numpy's own run-time detection (``__cpu_features__``), which also honours
-    ``NPY_DISABLE_CPU_FEATURES``; ``"unknown"`` if this numpy does not expose it.
+    Read from numpy's own run-time detection (``__cpu_features__``) among the levels numpy dispatches to or was built
+    for (``__cpu_dispatch__``, ``__cpu_baseline__``), which also honours ``NPY_DISABLE_CPU_FEATURES`` (numpy's AVX2
+    code on an AVX-512 machine says ``"AVX2"``); ``"unknown"`` if this numpy does not expose it.
     """
     import importlib
 
-    features: dict[str, bool] | None = None
+    module = None
     for name in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):  # numpy 2, numpy 1
         try:
-            features = getattr(importlib.import_module(name), "__cpu_features__", None)
+            module = importlib.import_module(name)
         except ImportError:
             continue
-        if features is not None:
-            break
+        break
+    features: dict[str, bool] | None = getattr(module, "__cpu_features__", None)
     if features is None:
         return "unknown"
+    dispatch = getattr(module, "__cpu_dispatch__", None)
+    levels = None if dispatch is None else {*dispatch, *getattr(module, "__cpu_baseline__", ())}
     for key, name in _LEVELS:
-        if features.get(key):
+        if features.get(key) and (levels is None or key in levels):
             return name
     return "none"
 
