@@ -40,6 +40,10 @@ __all__ = [
     "abs_real",
     "where_real",
     "copysign_real",
+    "sqrt_float",
+    "sqrt_real",
+    "any_float",
+    "any_real",
     "SCALAR_FORMS",
 ]
 
@@ -136,6 +140,33 @@ def copysign_real(x: Real, y: Real) -> Real:
     return math.copysign(x, y)
 
 
+def sqrt_float(x: float) -> float:
+    """``np.sqrt`` of one float: ``math.sqrt`` (IEEE 754 rounds square roots exactly: numpy's bits), NaN below 0
+    (where ``math.sqrt`` would raise; the sign bit of that NaN may differ from numpy's, which is the CPU's)."""
+    return math.sqrt(x) if x >= 0.0 else math.nan
+
+
+def sqrt_real(x: Real) -> Real:
+    """``np.sqrt`` of an array, :func:`sqrt_float` of a float."""
+    if isinstance(x, np.ndarray):
+        out: Real = np.sqrt(x)
+        return out
+    return sqrt_float(x)
+
+
+def any_float(cond: bool) -> bool:
+    """Whether the one condition ``cond`` holds (:func:`any_real` of a bool)."""
+    return cond
+
+
+def any_real(cond: bool | NDArray[np.bool_]) -> bool:
+    """Whether any element of ``cond`` holds (``np.any`` of an array, the bool itself): a branch that a column takes
+    when any of its rows would."""
+    if isinstance(cond, np.ndarray):
+        return bool(cond.any())
+    return any_float(cond)
+
+
 #: the polymorphic helpers the compiled steps' shared pieces call, each with the float form numba compiles in its
 #: place (:func:`amigo_gym.sim.layout.shared_compiler` registers them)
 SCALAR_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
@@ -144,4 +175,6 @@ SCALAR_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     max_real: max_float,
     max0_real: max0_float,
     abs_real: abs_float,
+    sqrt_real: sqrt_float,
+    any_real: any_float,
 }

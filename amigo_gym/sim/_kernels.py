@@ -248,7 +248,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "b70555a5c7e7dd85"
+LAYOUT_FINGERPRINT = "b3c8b5d9db51a106"
 
 
 def layout_fingerprint() -> str:
