@@ -370,8 +370,9 @@ def step_normals(
     out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
 ) -> None:
     """The normal draws of :func:`step_noise` for one robot (or columns: ``logs``, ``coss`` rows of columns), into
-    ``out[out_at : out_at + 5]`` (``x, y, beta, rate1, rate2``; 0.0 for a channel off): :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]``
-    (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given (:func:`step_uniforms`' draws)."""
+    ``out[out_at : out_at + 5]`` (``x, y, beta, rate1, rate2``; 0.0 for a channel off): :func:`box_muller` of the
+    ``j``-th channel on from ``logs[log_at + j]`` (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given
+    (:func:`step_uniforms`' draws)."""
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
