@@ -349,15 +349,49 @@ def _manoeuvre_points(path: Any, g: np.random.Generator, n: int) -> tuple[np.nda
     return x, y, ties
 
 
+def _manoeuvre_columns(path: Any, x: Any, y: Any) -> tuple[Any, ...]:
+    """The former column form of ``ManoeuvrePath.project_xy`` (numpy's ``minimum``, ``hypot``, ``sign``, ``where``
+    and the circle's projection written on arrays), an independent reference for ``classic.manoeuvre_foot``, which
+    now runs on columns too: ``(s, x, y, tangent_angle, curvature, e, cos_theta, sin_theta)``."""
+    c, big_l, d, r = path.circle, path.straight_length, path.direction, path.radius
+    cx, cy, r0x, r0y = c._frame
+    ux, uy = x - cx, y - cy
+    rho = np.sqrt(ux * ux + uy * uy)
+    at_centre = rho == 0.0
+    ux, uy, norm = np.where(at_centre, r0x, ux), np.where(at_centre, r0y, uy), np.where(at_centre, 1.0, rho)
+    nx, ny = ux / norm, uy / norm
+    e = r - rho if d > 0 else rho - r
+    cos_theta, sin_theta = (-ny, nx) if d > 0 else (ny, -nx)
+    cross = r0x * uy - r0y * ux
+    a = np.arctan2(cross if d > 0 else -cross, r0x * ux + r0y * uy)
+    s = r * (a + 2.0 * math.pi * (a < 0.0))
+    s_line = np.minimum(x, big_l)
+    d_line = np.hypot(x - s_line, y)
+    line = d_line <= np.abs(e)
+    e_line = np.where(x <= big_l, y, np.sign(y) * d_line)
+    theta = c.start_angle + (s if d > 0 else -s) / r
+    return (
+        np.where(line, s_line, big_l + s), np.where(line, s_line, cx + r * nx), np.where(line, 0.0, cy + r * ny),
+        np.where(line, 0.0, theta), np.where(line, 0.0, d / r), np.where(line, e_line, e),
+        np.where(line, 1.0, cos_theta), np.where(line, 0.0, sin_theta),
+    )  # fmt: skip
+
+
 @pytest.mark.parametrize("shape", [(1.0, 1.0, 1), (0.6, 0.0, -1), (1.7, 2.5, -1), (0.25, 0.75, 1)])
 def test_manoeuvre_projection_on_floats_equals_the_column_code(shape: tuple[float, float, int]) -> None:
-    """``ManoeuvrePath`` on one point of floats runs ``classic.manoeuvre_foot`` (what AmigoBot-v0's compiled step
-    compiles); on columns, numpy's ``minimum``, ``hypot``, ``where`` and the circle's column projection: every field
-    the same bits, ties between the line and the circle (to the line), the centre, NaN and infinities included."""
+    """``ManoeuvrePath.project_xy`` runs ``classic.manoeuvre_foot`` (what AmigoBot-v0's compiled step compiles) on one
+    point of floats and on columns: every field the same bits as the former column code (numpy's ``minimum``,
+    ``hypot``, ``where`` and the circle's column projection), ties between the line and the circle (to the line), the
+    centre, NaN and infinities included."""
     from amigo_gym.paths import ManoeuvrePath
 
     path = ManoeuvrePath(*shape)
     x, y, ties = _manoeuvre_points(path, np.random.default_rng(7), 3000)
+    with np.errstate(invalid="ignore"):
+        want = _manoeuvre_columns(path, x, y)
+        got_cols = path.project_xy(x, y)
+    for got_col, want_col in zip(got_cols, want, strict=True):
+        assert np.asarray(got_col).tobytes() == np.asarray(want_col).tobytes()
     for minimal in (False, True):
         with np.errstate(invalid="ignore"):  # NaN and infinite points
             ref = path.project_xy(x, y, minimal)

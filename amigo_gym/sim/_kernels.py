@@ -238,6 +238,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
     classic.circle_foot,
+    classic.circle_arc,
     classic.manoeuvre_foot,
     classic.manoeuvre_curvature,
     numpy_loops.numpy_loop_in_place,
@@ -248,7 +249,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "b3c8b5d9db51a106"
+LAYOUT_FINGERPRINT = "478402c526ef333e"
 
 
 def layout_fingerprint() -> str:
