@@ -163,7 +163,14 @@ def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Re
         the clipped setpoints [rad/s], columns of the broadcast shape.
     """
     w_max = nominal.max_wheel_rate
-    return _min(_max(w1c, -w_max), w_max), _min(_max(w2c, -w_max), w_max)
+    return clip_setpoint(w1c, w_max), clip_setpoint(w2c, w_max)
+
+
+def clip_setpoint(w: Real, w_max: float) -> Real:
+    """One setpoint (float or column) clipped to ``[-w_max, w_max]`` [rad/s]: ``min(max(w, -w_max), w_max)`` by the
+    helpers of :mod:`amigo_gym.model.numeric` (a NaN float gives ``-w_max``, a NaN element NaN). Written once: the
+    column step, the float step and the compiled step (:func:`actuator_step_ws`)."""
+    return _min(_max(w, -w_max), w_max)
 
 
 def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Real]:
@@ -582,33 +589,6 @@ def actuator_step(
 # np.sin call (:func:`amigo_gym.model.fresnel.advance_nodes`).
 
 
-def _ramp_float(
-    u0: float, target: float, accel: float, decel: float, duration: float
-) -> tuple[float, float, float, float, float, float]:
-    """:func:`ramp` for floats: ``(t_a, t_b, u_a, u_b, s_a, s_b)``."""
-    if u0 * target < 0.0:
-        u_z = 0.0
-        t_z = abs(u0) / decel
-        s_a = math.copysign(decel, -u0)
-    else:
-        u_z = u0
-        t_z = 0.0
-        s_a = 0.0
-    d = target - u_z
-    rate = accel if abs(target) > abs(u_z) else decel
-    t_r = t_z + abs(d) / rate
-    s_b = math.copysign(rate, d)
-    z_in = t_z <= duration
-    u_a = u_z if z_in else u0 + s_a * duration
-    if t_r <= duration:
-        u_b = target
-    elif z_in:
-        u_b = u_z + s_b * (duration - t_z)
-    else:
-        u_b = u_a
-    return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
-
-
 @overload
 def piece_rates(
     v: float, a: float, om: float, al: float, l1n: float, r1n: float, r2n: float, g1: float, g2: float, inv_2l1t: float
@@ -646,13 +626,6 @@ def piece_rates(
         (g1 * p1 - g2 * p2) * inv_2l1t,
         (g1 * q1 - g2 * q2) * inv_2l1t,
     )
-
-
-def _clip_float(w: float, w_max: float) -> float:
-    """:func:`clip_setpoints` of one setpoint for floats."""
-    lo = -w_max
-    w = w if w >= lo else lo
-    return w if w <= w_max else w_max
 
 
 def _actuator_step_float(
@@ -710,8 +683,8 @@ def _channel_ws(
 ) -> float:
     """:func:`_channel` on floats into ``ws``: knots ``ws[k : k + 7]``, values ``ws[k + 7 : k + 13]``, slopes
     ``ws[k + 13 : k + 19]``; returns the value at ``dt``."""
-    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp_float(u0, c_old, accel, decel, t_s)
-    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp_float(ub1, c_new, accel, decel, dt - t_s)
+    ta1, tb1, ua1, ub1, sa1, sb1 = ramp(u0, c_old, accel, decel, t_s)
+    ta2, tb2, ua2, ub2, sa2, sb2 = ramp(ub1, c_new, accel, decel, dt - t_s)
     k4 = t_s + ta2
     k5 = t_s + tb2
     ws[k] = 0.0
@@ -803,8 +776,8 @@ def actuator_step_ws(
         the fields of :class:`ActuatorStep` as a tuple of floats.
     """
     # 1. commands (clip_setpoints, body_velocity_columns)
-    vc_old, wc_old = body_velocity_of(_clip_float(w1c_old, w_max), _clip_float(w2c_old, w_max), r1n, r2n, two_l1)
-    vc_new, wc_new = body_velocity_of(_clip_float(w1c_new, w_max), _clip_float(w2c_new, w_max), r1n, r2n, two_l1)
+    vc_old, wc_old = body_velocity_of(clip_setpoint(w1c_old, w_max), clip_setpoint(w2c_old, w_max), r1n, r2n, two_l1)
+    vc_new, wc_new = body_velocity_of(clip_setpoint(w1c_new, w_max), clip_setpoint(w2c_new, w_max), r1n, r2n, two_l1)
     # 2. ramps
     v0, om0 = body_velocity_of(w1, w2, r1n, r2n, two_l1)
     kv = k + SCRATCH_V

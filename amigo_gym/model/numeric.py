@@ -40,6 +40,7 @@ __all__ = [
     "abs_real",
     "where_float",
     "where_real",
+    "copysign_float",
     "copysign_real",
     "arctan2_float",
     "arctan2_real",
@@ -145,12 +146,17 @@ def where_real(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
     return a if cond else b
 
 
+def copysign_float(x: float, y: float) -> float:
+    """``|x|`` with the sign of ``y``, of floats (``math.copysign``)."""
+    return math.copysign(x, y)
+
+
 def copysign_real(x: Real, y: Real) -> Real:
-    """``|x|`` with the sign of ``y`` (``np.copysign`` of arrays, ``math.copysign`` of floats)."""
+    """``|x|`` with the sign of ``y`` (``np.copysign`` of arrays, :func:`copysign_float` of floats)."""
     if any_array(x, y):
         out: Real = np.copysign(x, y)
         return out
-    return math.copysign(x, y)
+    return copysign_float(x, y)  # type: ignore[arg-type]
 
 
 def arctan2_float(y: float, x: float) -> float:
@@ -219,6 +225,7 @@ SCALAR_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     sqrt_real: sqrt_float,
     any_real: any_float,
     where_real: where_float,
+    copysign_real: copysign_float,
     arctan2_real: arctan2_float,
     hypot_real: hypot_float,
 }

@@ -249,7 +249,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "478402c526ef333e"
+LAYOUT_FINGERPRINT = "679efb04e9ca36fb"
 
 
 def layout_fingerprint() -> str:
