@@ -99,7 +99,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "d8b74d6729478153"
+LAYOUT_FINGERPRINT = "4b47d3dbc98adc87"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -109,7 +109,7 @@ _shared = shared_compiler(
     L.SHARED,
     _jit,
     inline=L.SHARED_INLINE,
-    scalar_forms=numeric.SCALAR_FORMS,
+    scalar_forms={**numeric.SCALAR_FORMS, **actuators.SCALAR_FORMS},
     intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
 )
 

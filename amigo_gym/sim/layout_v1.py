@@ -170,6 +170,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     *numeric.SCALAR_FORMS.values(),
     actuators.ramp,
     actuators.clip_setpoint,
+    actuators.sort_knots_float,
     actuators.piece_rates,
     actuators._channel_ws,
     actuators._evaluate_ws,
