@@ -614,8 +614,8 @@ SCALAR_FORMS: dict[Any, Any] = {sort_knots: sort_knots_float, advance_pieces: fr
 
 
 def _channel_ws(
-    ws: fresnel.Buffer, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
-) -> float:
+    ws: Any, k: int, u0: Real, c_old: Real, c_new: Real, accel: float, decel: float, t_s: Real, dt: float
+) -> Real:
     """One speed channel over the step, targets ``c_old`` on ``[0, t_s)``, ``c_new`` on ``[t_s, dt]`` (:func:`ramp`
     twice), into ``ws``: the 7 knots ``0 <= ... <= dt`` (0, 4 ramp breakpoints, ``t_s``, ``dt`` in order) at
     ``ws[k : k + 7]``, the value and slope at the start of each of the 6 pieces at ``ws[k + 7 : k + 13]`` and
@@ -646,7 +646,7 @@ def _channel_ws(
     return ub2
 
 
-def _evaluate_ws(ws: fresnel.Buffer, k: int, t: float, mid: float) -> tuple[float, float]:
+def _evaluate_ws(ws: Any, k: int, t: Real, mid: Real) -> tuple[Real, Real]:
     """Value at ``t`` and slope of the piece of the channel at ``ws[k:]`` (:func:`_channel_ws`) that contains ``mid``
     (``t <= mid``, the same piece)."""
     v = k + 7
@@ -661,23 +661,23 @@ def _evaluate_ws(ws: fresnel.Buffer, k: int, t: float, mid: float) -> tuple[floa
 
 
 def actuator_step_ws(
-    ws: fresnel.Buffer,
+    ws: Any,
     k: int,
-    buf: fresnel.Buffer,
+    buf: Any,
     b: int,
     nodes: fresnel.Buffer,
     node_at: int,
     nn: int,
-    x: float,
-    y: float,
-    beta: float,
-    w1: float,
-    w2: float,
-    w1c_old: float,
-    w2c_old: float,
-    w1c_new: float,
-    w2c_new: float,
-    t_s: float,
+    x: Real,
+    y: Real,
+    beta: Real,
+    w1: Real,
+    w2: Real,
+    w1c_old: Real,
+    w2c_old: Real,
+    w1c_new: Real,
+    w2c_new: Real,
+    t_s: Real,
     dt: float,
     w_max: float,
     l1n: float,
@@ -688,12 +688,12 @@ def actuator_step_ws(
     decel: float,
     rot_accel: float,
     rot_decel: float,
-    r1t: float,
-    r2t: float,
-    l1t: float,
-    s1: float,
-    s2: float,
-) -> tuple[float, float, float, float, float, float, float, float, float, float]:
+    r1t: Real,
+    r2t: Real,
+    l1t: Real,
+    s1: Real,
+    s2: Real,
+) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real, Real, Real]:
     """:func:`actuator_step` on floats (one robot) or columns of one shape (a batch; ``ws`` and ``buf`` lists): the
     float path, the column route and the compiled step of ``AmigoBot-v1`` run this one source.
 
@@ -738,9 +738,9 @@ def actuator_step_ws(
     g1 = (1.0 - s1) * r1t
     g2 = (1.0 - s2) * r2t
     inv_2l1t = 0.5 / l1t
-    da1 = 0.0
-    da2 = 0.0
-    dist = 0.0
+    da1: Real = 0.0
+    da2: Real = 0.0
+    dist: Real = 0.0
     pcs = k + SCRATCH_PIECES
     n_pieces = 0
     for j in range(PIECES):

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -258,8 +258,7 @@ def counter_normal(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.
     """
     u1 = counter_uniform(key, step, 2 * channel)
     u2 = counter_uniform(key, step, 2 * channel + 1)
-    z: NDArray[np.float64] = box_muller(1.0, np.log(u1), np.cos(_TWO_PI * u2))
-    return z
+    return cast("NDArray[np.float64]", box_muller(1.0, np.log(u1), np.cos(_TWO_PI * u2)))
 
 
 def draw_key(rng: np.random.Generator) -> int:
@@ -340,8 +339,8 @@ def channels_on(position: float, heading: float, rate: float) -> int:
 
 
 def step_uniforms(
-    buf: Any, u1_at: int, u2_at: int, key: Any, step: int, slip_max: float, position: float, heading: float, rate: float
-) -> tuple[float, float, int]:
+    buf: Any, u1_at: int, u2_at: int, key: Any, step: Any, slip_max: Real, position: float, heading: float, rate: float
+) -> tuple[Real, Real, int]:
     """The uniform draws of :func:`step_noise` for one robot (``key`` a Python ``int``, or ``uint64`` in the compiled
     step) or for columns (``key``, ``step`` ``uint64`` columns, ``slip_max`` a float or a column, ``buf`` a list whose
     entries become columns): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0; on columns, ``slip_max u`` of
@@ -376,14 +375,14 @@ def step_normals(
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
-        value = 0.0
+        value: Real = 0.0
         if level > 0.0:
             value = box_muller(level, logs[log_at + on], coss[cos_at + on])
             on += 1
         out[out_at + ch] = value
 
 
-def box_muller(level: float, log_u1: float, cos_angle: float) -> float:
+def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
     r"""One normal draw of standard deviation ``level`` by Box–Muller from ``log(u1)`` and ``cos(2 pi u2)`` of two
     uniforms: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`. The logarithm and the cosine are given (numpy's, in
     the reference); pure arithmetic on floats or columns (:func:`amigo_gym.model.numeric.sqrt_real`), written once:

@@ -354,8 +354,8 @@ class CirclePath:
 
 
 def circle_foot(
-    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
-) -> tuple[float, float, float, float, float]:
+    x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""The foot of the point ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m] and direction
     ``d`` (+1 left, -1 right), for floats (:meth:`CirclePath.project_xy`'s expressions, ``minimal``).
 
@@ -380,13 +380,13 @@ def circle_foot(
     return rho - r, ny, -nx, ux, uy
 
 
-def circle_arc(ux: float, uy: float, r0x: float, r0y: float, d: float, r: float) -> float:
+def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
     r"""The arc length ``s = r a`` [m] from the circle's start to the direction ``u`` from its centre (floats or
     columns; :func:`circle_foot`'s ``u``): ``a = atan2(d (r0 x u), r0 . u)`` plus ``2 pi`` where negative, in
     ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
     cross = r0x * uy - r0y * ux
     a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
-    return r * (a + where_real(a < 0.0, TWO_PI, 0.0))  # type: ignore[no-any-return]
+    return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
 
 
 @dataclass(frozen=True)
@@ -507,8 +507,8 @@ class ManoeuvrePath:
 
 
 def manoeuvre_foot(
-    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
-) -> tuple[float, float, float, float, float, bool]:
+    x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
+) -> tuple[Real, Real, Real, Real, Real, bool | NDArray[np.bool_]]:
     r"""The foot of the point ``(x, y)`` [m] on the manoeuvre path, for floats (:meth:`ManoeuvrePath.project_xy`).
 
     The path: the half-line ``y = 0, x <= L`` (``L = big_l`` [m], the straight part, tangent angle 0), then the circle
