@@ -1,10 +1,12 @@
 """The float paths of one robot give the bits of the column code on arrays (issue 12, part 2).
 
 The single environments run the column code on Python floats (``task.v1.step_columns``, with v0's settings
-AmigoBot-v0's reference; the float branches of ``fresnel.advance``, ``actuators.actuator_step``,
-``ClothoidPath.locate``/``pose_columns`` and ``randomization.step_noise``); the vector environments run the column
-code on ``(N,)`` arrays. Each float result here must equal the array result of its row bit for bit (signs of zeros
-included).
+AmigoBot-v0's reference; the float branches of ``ClothoidPath.locate``/``pose_columns``); the vector environments run
+the column code on ``(N,)`` arrays. Each float result here must equal the array result of its row bit for bit (signs
+of zeros included). ``fresnel.advance``, ``actuators.actuator_step``, ``randomization.step_noise`` and the v0 paths'
+projections are one function for floats and columns since issue 19's ``h19-cols`` branch (the same code on both,
+checked here all the same; the fresnel and manoeuvre tests also against the former column code, kept below as
+independent references).
 """
 
 from __future__ import annotations
