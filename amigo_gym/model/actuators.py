@@ -591,7 +591,7 @@ def advance_pieces(
     a piece of length ``t <= 0`` (or NaN) leaving a row unchanged: on floats (every piece is live: its float form,
     which the compiled step runs) all pieces at once; on columns piece by piece, each advancing the rows where it is
     live (on those rows alone when they are fewer than half), the same bits per row."""
-    if not _any_array(x, y, theta, *pieces[p : p + 5 * n_pieces]):
+    if not _any_array(x):  # floats (actuator_step makes every input a column when one is)
         return fresnel.advance_nodes(buf, b, m, x, y, theta, pieces, p, n_pieces, nodes, j, nn)
     for q in range(n_pieces):
         piece = pieces[p + 5 * q : p + 5 * q + 5]
