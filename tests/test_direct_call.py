@@ -160,3 +160,61 @@ def _same_info(a: dict[str, object], b: dict[str, object]) -> bool:
         elif va != vb:
             return False
     return True
+
+
+def _same_tree(a: object, b: object) -> bool:
+    """:func:`_same_info` of nested dicts (vector infos): the same keys, arrays of the same dtype and bits (object
+    arrays compared by value), the same other values."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_same_tree(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray):
+        if not (isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape):
+            return False
+        return bool(np.array_equal(a, b)) if a.dtype == object else a.tobytes() == b.tobytes()
+    return bool(a == b)
+
+
+@pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])
+def test_v1_vector_records_give_the_same_bits_without_numpys_loops(
+    monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
+) -> None:
+    """The native vector env's step writes each robot's info record in its compiled loop (kernels_v1.step_rows:
+    fill_record, numpy's own exp loop per row) and hands out views of it; with numpy's loops not found it takes
+    np.exp of the block and the terms after the loop. Same seeds: the same bits of observations, rewards, flags and
+    infos (the `_key` masks, final infos and autoresets included)."""
+    n = 6
+    envs = [gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **settings)]
+    monkeypatch.setattr(fast_v1, "numpy_loops", lambda: None)
+    envs.append(gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **settings))
+    monkeypatch.undo()
+    assert envs[0].unwrapped._batch._exp_loop[0] != 0 and envs[1].unwrapped._batch._exp_loop == (0, 0)
+    starts = [e.reset(seed=11) for e in envs]
+    assert starts[0][0].tobytes() == starts[1][0].tobytes() and _same_tree(starts[0][1], starts[1][1])
+    for a in np.random.default_rng(12).uniform(-1.0, 1.0, (150, n, 2)):
+        (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) = (e.step(a) for e in envs)
+        assert o1.tobytes() == o2.tobytes() and r1.tobytes() == r2.tobytes()
+        assert (t1 == t2).all() and (u1 == u2).all() and _same_tree(i1, i2)
+
+
+def test_v1_vector_infos_are_new_memory_at_every_step() -> None:
+    """The vector infos' arrays are views of a record made for the step: nothing of one step's infos is shared with
+    the next step's or with the env's state, so writing into them changes nothing the env does."""
+    n = 4
+    env = gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point")
+    ref = gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point")
+    env.reset(seed=3)
+    ref.reset(seed=3)
+    a = np.full((n, 2), 0.3)
+    _, reward, _, _, first = env.step(a)
+    ref.step(a)
+    arrays = [v for v in first.values() if isinstance(v, np.ndarray) and v.dtype != np.bool_ and v.dtype != object]
+    arrays += [v for d in (first["reward_terms"], first["true_robot"]) for v in d.values()]
+    assert len(arrays) >= 20
+    for v in arrays:
+        assert not np.shares_memory(v, env.unwrapped._batch.ws) and not np.shares_memory(v, reward)
+        v[...] = np.nan  # a user's scribbles
+    reward[...] = np.nan
+    _, r2, _, _, second = env.step(a)
+    _, r_ref, _, _, second_ref = ref.step(a)
+    assert r2.tobytes() == r_ref.tobytes() and _same_tree(second, second_ref)
+    assert not any(np.shares_memory(v, w) for v in arrays for w in (second["pose"], second["reward_terms"]["track"]))

@@ -96,7 +96,8 @@ def test_a_reordered_reward_product_is_caught_by_the_same_machine_comparison(mon
 def test_golden_tests_pass_with_numpy_dispatch_restricted() -> None:
     """Another machine's SIMD functions, simulated: the golden tests run again with numpy's dispatch off."""
     features = _dispatched_features()
-    env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": " ".join(features)}
+    already = os.environ.get("NPY_DISABLE_CPU_FEATURES", "").split()  # a run restricted already keeps its own
+    env = {**os.environ, "NPY_DISABLE_CPU_FEATURES": " ".join([*already, *features])}
     probe = (
         "import numpy; from numpy._core import _multiarray_umath as u; "
         "print(' '.join(f for f in u.__cpu_dispatch__ if u.__cpu_features__.get(f)) or 'none')"

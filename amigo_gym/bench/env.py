@@ -637,13 +637,17 @@ def format_targets(items: Sequence[Target], machine: str) -> list[str]:
 
 
 def numba_state() -> str:
-    """numba's version, its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel SVML."""
+    """numba's version, the CPU it compiles for (``NUMBA_CPU_NAME``, else the host's: e.g. ``znver4``; ``haswell`` makes
+    AVX2 code on an AVX-512 machine), its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel
+    SVML."""
     if not numba_available():
         return "numba not installed"
     import numba
+    from llvmlite import binding
 
+    target = getattr(numba.config, "CPU_NAME", None) or binding.get_host_cpu_name()
     svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"
-    return f"numba {numba.__version__}, {numba.get_num_threads()} thread(s), SVML {svml}"
+    return f"numba {numba.__version__} for {target}, {numba.get_num_threads()} thread(s), SVML {svml}"
 
 
 def load_average() -> str:

@@ -92,8 +92,8 @@ _np_array = np.array
 #: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, then its
 #: scalars, the exponentials, the smoothness term and the reward
 _R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
-    slice(a, b) for a, b in ((0, 3), (3, 5), (5, 7), (7, 9), (9, 11), (11, 14), (14, 16))
-)
+    _L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP
+)  # fmt: skip
 _R_SCALARS = slice(_L.R_ERROR, _L.RECORD_WIDTH)
 
 
@@ -241,9 +241,10 @@ class AmigoBotV1Env(AmigoBotBase):
         k = self._k
         pose = None if pose_opt is None else tuple(pose_opt.tolist())
         kern = self._kernel
-        self.path, self._path_info, ep, st = tracking.start_episode(
-            self.np_random, k, pose, None if kern is None else kern.progress
-        )
+        # with the compiled step, H's projections, a drawn path's building loops and its start pose compiled (the
+        # same results)
+        progress, loops, at = (None, None, None) if kern is None else (kern.progress, fast_v1.path_loops(), kern.pose)
+        self.path, self._path_info, ep, st = tracking.start_episode(self.np_random, k, pose, progress, loops, at)
         self._episode = ep
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)

@@ -623,7 +623,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
             )
         a = task.validate_action(actions, (n,))
         mode = self.autoreset_mode
-        if mode == AutoresetMode.DISABLED and self._autoreset.any():
+        if mode == AutoresetMode.DISABLED and np.count_nonzero(self._autoreset):
             raise RuntimeError(
                 f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
                 "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
@@ -649,7 +649,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
             self._mark_restarted(infos, idx)
         elif self.autoreset_mode == AutoresetMode.SAME_STEP:
             done = terminated | truncated
-            if done.any():
+            if np.count_nonzero(done):
                 idx = np.flatnonzero(done)
                 final_obs = np.full(n, None, dtype=object)
                 for i in idx.tolist():

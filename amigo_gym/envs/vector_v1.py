@@ -47,7 +47,7 @@ from amigo_gym.envs.base import (
 )
 from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast, fast_v1, fast_v1_batch
+from amigo_gym.sim import fast, fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
@@ -63,6 +63,16 @@ _W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v
 _W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
 _W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
 _W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
+# the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
+_R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
+    layout_v1.R_POSE, layout_v1.R_H, layout_v1.R_RATES, layout_v1.R_COMMAND, layout_v1.R_ANGLES, layout_v1.R_MEASURED,
+    layout_v1.R_SLIP,
+)  # fmt: skip
+_R_HX, _R_HY, _R_ERROR, _R_PROGRESS = layout_v1.R_HX, layout_v1.R_HY, layout_v1.R_ERROR, layout_v1.R_PROGRESS
+_R_VT, _R_VREF, _R_HEADING, _R_END, _R_TERM = (
+    layout_v1.R_VT, layout_v1.R_VREF, layout_v1.R_HEADING, layout_v1.R_END, layout_v1.R_TERM
+)  # fmt: skip
+_R_TRACK, _R_SPEED, _R_SMOOTH, _R_REWARD = layout_v1.R_TRACK, layout_v1.R_SPEED, layout_v1.R_SMOOTH, layout_v1.R_REWARD
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
@@ -281,16 +291,18 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self, idx: NDArray[np.intp], pose_opt: Array | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
         """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
-        :func:`tracking.start_episode` (H's projections compiled), its start state evaluated by the compiled
+        :func:`tracking.start_episode` (H's projections, a new path's building loops and its start pose compiled), its
+        start state evaluated by the compiled
         :func:`amigo_gym.task.v1.reset_columns` (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`), the
         infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
         b = self._batch
         assert b is not None
         rows = idx.tolist()
         paths, states, episodes = [], [], []
+        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled (the same paths)
         for i in rows:
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
-            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress)
+            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress, loops, b.pose)
             self._set_row(i, info, st, ep)
             paths.append(path)
             states.append(st)
@@ -298,8 +310,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.paths.replace(idx, paths)
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
-        exps = b.start(rows, paths, states, episodes, obs)
-        infos = self._kernel_infos(idx, exps, None)
+        infos = self._kernel_infos(idx, b.start(rows, paths, states, episodes, obs), True)[0]
         self._start_trails(idx, infos["h_position"])
         return obs, infos
 
@@ -368,7 +379,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             terminated = self._end(terminated, infos, hx, hy)
         truncated = self._truncated(np.asarray(self._state.steps))
         restart = None
-        if mode == AutoresetMode.NEXT_STEP and self._autoreset.any():
+        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
             restart = np.flatnonzero(self._autoreset)
             obs_r, info_r = self._reset_rows(restart)
             obs[restart] = obs_r
@@ -395,12 +406,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         cond = np.full(self.num_envs, "", dtype=object)  # as SyncVectorEnv gathers the single env's str
         if self._k.params.goal_tolerance > 0.0:
             goal = tracking.goal_reached(self._k.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
-            if goal.any():
+            if _np_count_nonzero(goal):
                 terminated = terminated | goal
                 infos["end_of_path"] = np.where(goal, 1.0, infos["end_of_path"])
         else:
             goal = None
-        if terminated.any():
+        if _np_count_nonzero(terminated):
             cond[terminated] = "off_path"
             cond[np.asarray(infos["end_of_path"]) != 0.0] = "end_of_path"
             if goal is not None:
@@ -435,51 +446,57 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         b = self._batch
         assert b is not None
         obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
-        exps = b.step(self._ring, self._ring_step, a1, a2, obs)
+        rec = b.step(self._ring, self._ring_step, a1, a2, obs)
         steps = self._state.steps
         np.add(steps, 1, out=steps)
-        infos = self._kernel_infos(slice(None), exps, b.ws[:, _W_SLIP1 : _W_SLIP2 + 1].copy())
-        terms = infos["reward_terms"]
-        reward: Array = np.asarray(
-            task.reward_product(terms["track"], terms["speed"], terms["heading"], terms["smooth"])
-        )
-        terminated: BoolArray = b.ws[:, _W_TERM] != 0.0
-        return obs, reward, terminated, infos, infos["h_position"][:, 0], infos["h_position"][:, 1]
+        infos, reward, terminated = self._kernel_infos(slice(None), rec, False)
+        return obs, reward, terminated, infos, rec[:, _R_HX], rec[:, _R_HY]
 
-    def _kernel_infos(self, rows: NDArray[np.intp] | slice, exps: Array, slip: Array | None) -> dict[str, Any]:
-        """The compact infos of ``rows`` from the compiled step's workspace rows: :meth:`_row_info`'s entries with
-        the same dtypes and values, as the reference forms them.
+    def _kernel_infos(
+        self, rows: NDArray[np.intp] | slice, rec: Array, start: bool
+    ) -> tuple[dict[str, Any], Array, BoolArray]:
+        """The compact infos of ``rows`` from their info records (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.step`,
+        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the single env's record, :meth:`AmigoBotV1Env._kernel_info`),
+        :meth:`_row_info`'s entries with the same dtypes and values as the reference forms them (the arrays views of
+        ``rec``, a new array); with the rewards and ``terminated``.
 
         Args:
-            rows: the robots (``slice(None)``: all). exps: ``(m, 3)`` ``exp`` of their reward arguments (track,
-                speed, smoothness). slip: ``(m, 2)`` this step's slips; ``None``: zeros (a start state).
+            rows: the robots (``slice(None)``: all). rec: ``(m, RECORD_WIDTH)``, new. start: the records of start
+                states (no slip; the command the robot was executing, from its state), else of a step.
         """
         assert self._batch is not None
-        ws = self._batch.ws[rows]
         ep = self._episode
         dt = self.params.dt
-        v_true = ws[:, _W_VT].copy()
-        v_ref = ws[:, _W_VREF].copy()
-        terms = fast_v1_batch.reward_terms(exps, ws[:, fast_v1.W_HEADING], self.params.smooth_weight)
-        return {
-            "pose": ws[:, _W_X : _W_BETA + 1].copy(),
-            "h_position": ws[:, _W_HX : _W_HY + 1].copy(),
-            "cross_track_error": ws[:, _W_E].copy(),
-            "progress": ws[:, _W_PROGRESS].copy(),
+        if start:
+            rec[:, _R_COMMAND] = self._batch.ws[rows, _W_A1 : _W_A2 + 1] * self._k.w_max
+            rec[:, _R_SLIP] = 0.0
+        v_true = rec[:, _R_VT]
+        v_ref = rec[:, _R_VREF]
+        infos = {
+            "pose": rec[:, _R_POSE],
+            "h_position": rec[:, _R_H],
+            "cross_track_error": rec[:, _R_ERROR],
+            "progress": rec[:, _R_PROGRESS],
             "speed": v_true,
             "reference_speed": v_ref,
             "speed_error": v_true - v_ref,
-            "wheel_rates": ws[:, _W_W1 : _W_W2 + 1].copy(),
-            "command": ws[:, _W_A1 : _W_A2 + 1] * self._k.w_max,
-            "wheel_angles": ws[:, _W_AL1 : _W_AL2 + 1].copy(),
-            "measured_pose": ws[:, _W_MX : _W_MB + 1].copy(),
-            "reward_terms": dict(zip(tracking.REWARD_TERMS, terms, strict=True)),
+            "wheel_rates": rec[:, _R_RATES],
+            "command": rec[:, _R_COMMAND],
+            "wheel_angles": rec[:, _R_ANGLES],
+            "measured_pose": rec[:, _R_MEASURED],
+            "reward_terms": {
+                "track": rec[:, _R_TRACK],
+                "speed": rec[:, _R_SPEED],
+                "heading": rec[:, _R_HEADING],
+                "smooth": rec[:, _R_SMOOTH],
+            },
             "time": np.asarray(self._state.steps)[rows] * dt,
             "true_robot": {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
             "delay": np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
-            "slip": np.zeros((ws.shape[0], 2)) if slip is None else slip,
-            "end_of_path": ws[:, _W_END].copy(),
+            "slip": rec[:, _R_SLIP],
+            "end_of_path": rec[:, _R_END],
         }
+        return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
         """The state columns as views of the compiled step's workspace rows (``steps``: the int64 counter,

@@ -45,6 +45,7 @@ __all__ = [
     "NODES",
     "MAX_PHASE_PER_SUB",
     "subintervals",
+    "subinterval_count",
     "advance",
     "advance_chain_float",
     "unit_speed_pose",
@@ -90,6 +91,12 @@ def subintervals(max_phase_change: float) -> int:
     """
     if not math.isfinite(max_phase_change) or max_phase_change < 0:
         raise ValueError(f"max_phase_change must be a finite number >= 0, got {max_phase_change!r}")
+    return subinterval_count(max_phase_change)
+
+
+def subinterval_count(max_phase_change: float) -> int:
+    """:func:`subintervals` of a finite ``max_phase_change >= 0`` [rad], unchecked (in numba's subset: the compiled
+    path builders call it, :func:`amigo_gym.paths.families.run_segments`)."""
     return max(1, math.ceil(max_phase_change / MAX_PHASE_PER_SUB))
 
 

@@ -99,18 +99,24 @@ def check_real(
         ValueError: one line naming ``owner.name``, the allowed range and the offending value (also for
             a wrong type: ``bool``, ``str``, complex, ``None``, sequences).
     """
-    lo_b = "(" if low_open else "["
-    hi_b = ")" if high_open else "]"
-    rng = f"{lo_b}{low:g}, {high:g}{hi_b}"
-    v = _real(value)
+    v = value if type(value) is float else _real(value)  # (a float as it is: the common case, no call)
     if v is None:
+        rng = _interval(low, high, low_open, high_open)
         raise ValueError(f"{owner}.{name} must be a real number in {rng}, got {show_value(value)}")
     ok = math.isfinite(v)
     ok = ok and (v > low if low_open else v >= low)
     ok = ok and (v < high if high_open else v <= high)
     if not ok:
+        rng = _interval(low, high, low_open, high_open)
         raise ValueError(f"{owner}.{name} must be a finite number in {rng}, got {value!r}")
     return v
+
+
+def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
+    """The interval of :func:`check_real`'s messages, e.g. ``(0, inf]``."""
+    lo_b = "(" if low_open else "["
+    hi_b = ")" if high_open else "]"
+    return f"{lo_b}{low:g}, {high:g}{hi_b}"
 
 
 #: the former name of :func:`check_real`

@@ -31,7 +31,7 @@ import bisect
 import itertools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from functools import cached_property, partial
 from typing import NamedTuple, Protocol
 
@@ -62,6 +62,7 @@ __all__ = [
     "PathPose",
     "PathPoint",
     "PathSpec",
+    "PathLoops",
     "check_real",
 ]
 
@@ -515,6 +516,26 @@ def _piece(t: _Tables, u: Real) -> Piece:
     return t.s0[j], t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j]
 
 
+class PathLoops(NamedTuple):
+    """The compiled forms of the path-building loops, which a compiled route hands to the path constructors
+    (``loops=``; :func:`amigo_gym.sim.fast_v1.path_loops`). Without them the constructors run the same functions as
+    Python (the reference); both give the same bits (``tests/test_path_loops.py``).
+
+    Attributes:
+        chain: :func:`chain_pieces` ``(out, n, segs, n_segs, x, y, theta) -> (x, y, theta, length)`` (its scratch and
+            nodes supplied).
+        samples: :func:`sample_points` ``(pv, o, count, spacing)``: the coarse samples written into the flat path
+            vector ``pv`` itself (the float route takes them from the column pose, :func:`pose_from_pieces`).
+        run: :func:`amigo_gym.paths.families.run_segments` ``(segs, n_segs, x, y, theta) -> (x, y, theta)``.
+        lane: :func:`amigo_gym.paths.families.lane_change_shape` ``(ratio) -> (x1, y1, theta_m, x_m)``.
+    """
+
+    chain: Callable[..., tuple[float, float, float, float]]
+    samples: Callable[..., None]
+    run: Callable[..., tuple[float, float, float]]
+    lane: Callable[..., tuple[float, float, float, float]]
+
+
 @dataclass(frozen=True)
 class ClothoidPath:
     r"""A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
@@ -527,6 +548,8 @@ class ClothoidPath:
             ``max(1 m, length)`` in position and 1e-9 rad in angle modulo ``2 pi``).
         sample_spacing: largest spacing [m] of the samples of the coarse projection search, in
             [1e-4, 1]; the samples are also at most ``0.1 / max|kappa|`` apart. Default 0.02.
+        loops: (an argument of the constructor only, not stored) the compiled path-building loops
+            (:class:`PathLoops`), or None (default): the float route; the same path either way.
     """
 
     segments: tuple[ClothoidSegment, ...]
@@ -535,8 +558,9 @@ class ClothoidPath:
     closed: bool = False
     sample_spacing: float = 0.02
     _t: _Tables = field(init=False, repr=False, compare=False)
+    loops: InitVar[PathLoops | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, loops: PathLoops | None) -> None:
         segs = self.segments
         if isinstance(segs, list):
             segs = tuple(segs)
@@ -552,39 +576,33 @@ class ClothoidPath:
             raise ValueError(f"ClothoidPath.closed must be True or False, got {self.closed!r}")
         spacing = check_real("ClothoidPath", "sample_spacing", self.sample_spacing, 1e-4, 1.0)
         object.__setattr__(self, "sample_spacing", spacing)
-        object.__setattr__(self, "_t", self._build())
+        object.__setattr__(self, "_t", self._build(loops))
 
-    def _build(self) -> _Tables:
-        """Split the segments into pieces of phase change <= MAX_PHASE_PER_SUB and chain their start poses."""
-        s0: list[float] = []
-        x0: list[float] = []
-        y0: list[float] = []
-        th0: list[float] = []
-        k0: list[float] = []
-        c: list[float] = []
-        x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
-        s_seg = 0.0
+    def _build(self, loops: PathLoops | None = None) -> _Tables:
+        """Split the segments into pieces of phase change <= MAX_PHASE_PER_SUB and chain their start poses
+        (:func:`chain_pieces`), then sample the path for the coarse search; ``loops``: their compiled forms."""
+        segs: list[float] = []
+        n = 0
         kmax = 0.0
         for g in self.segments:
             length, k, rate = float(g.length), float(g.curvature), float(g.curvature_rate)
             kabs = max(abs(k), abs(g.curvature_end))
             kmax = max(kmax, kabs)
             # piece j of n: |k_j| h + |c| h^2 / 2 <= (kabs L + |c| L^2 / 2) / n <= MAX_PHASE_PER_SUB
-            n = subintervals(kabs * length + 0.5 * abs(rate) * length * length)
-            h = length / n
-            for j in range(n):
-                kj = k + rate * (j * h)
-                hj = h if j < n - 1 else length - (n - 1) * h
-                s0.append(s_seg + j * h)
-                x0.append(x)
-                y0.append(y)
-                th0.append(th)
-                k0.append(kj)
-                c.append(rate)
-                xa, ya, tha = advance(x, y, th, 1.0, 0.0, kj, rate, hj, 1)
-                x, y, th = float(xa), float(ya), float(tha)
-            s_seg += length
-        total = s_seg
+            count = subintervals(kabs * length + 0.5 * abs(rate) * length * length)
+            segs += (length, k, rate, float(count))
+            n += count
+        n_segs = len(self.segments)
+        x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
+        out_a: Array | None = None
+        if loops is None:
+            out = [0.0] * (6 * n)
+            x, y, th, total = chain_pieces(out, n, segs, n_segs, x, y, th, [0.0] * (3 * NODES + 3), _PATH_TABLE)
+        else:
+            out_a = np.empty(6 * n)
+            x, y, th, total = loops.chain(out_a, n, np.array(segs), n_segs, x, y, th)
+            out = out_a.tolist()
+        s0, x0, y0, th0, k0, c = (out[i * n : (i + 1) * n] for i in range(6))
         raw_turn = th - float(self.start_angle)
         turn = raw_turn
         if self.closed:
@@ -599,6 +617,9 @@ class ClothoidPath:
         spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
         n_samples = max(8, math.ceil(total / spacing))
         spacing = total / n_samples
+
+        if out_a is not None and loops is not None:
+            return self._sampled(loops, out_a, s0, x0, y0, th0, k0, c, total, turn, spacing, n_samples, kmax)
 
         def arr(v: list[float]) -> Array:
             return np.array(v, dtype=np.float64)
@@ -617,6 +638,38 @@ class ClothoidPath:
         return t._replace(
             s0_a=s0_a, x0_a=x0_a, y0_a=y0_a, th0_a=th0_a, k0_a=k0_a, c_a=c_a,
             sample_x=sample_x, sample_y=sample_y, flat=flat,
+        )  # fmt: skip
+
+    def _sampled(
+        self,
+        loops: PathLoops,
+        pieces: Array,
+        s0: list[float],
+        x0: list[float],
+        y0: list[float],
+        th0: list[float],
+        k0: list[float],
+        c: list[float],
+        total: float,
+        turn: float,
+        spacing: float,
+        n_samples: int,
+        kmax: float,
+    ) -> _Tables:
+        """The tables of :meth:`_build` on the compiled route: the flat path vector (:func:`flat_tables`' layout)
+        written directly, its pieces ``pieces`` (:func:`chain_pieces`' ``out``), its coarse samples by
+        ``loops.samples`` (:func:`sample_points`: the float path's pose, :func:`pose_flat`, at each sample)."""
+        n = len(s0)
+        m = n_samples + (0 if self.closed else 1)
+        flat = np.empty(P_TAIL + 6 * n + 2 * m)
+        flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0)
+        flat[P_TAIL : P_TAIL + 6 * n] = pieces
+        loops.samples(flat, P_TAIL + 6 * n, m, spacing)
+        cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
+        s0_a, x0_a, y0_a, th0_a, k0_a, c_a, sample_x, sample_y = (flat[a:b] for a, b in itertools.pairwise(cut))
+        return _Tables(
+            s0, x0, y0, th0, k0, c, s0_a, x0_a, y0_a, th0_a, k0_a, c_a,
+            total, turn, spacing, sample_x, sample_y, kmax, flat,
         )  # fmt: skip
 
     @cached_property
@@ -1021,6 +1074,73 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
 
 #: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes`` on the float path)
 _PATH_TABLE: list[float] = node_table(1)
+
+
+# --------------------------------------------------------------------------- building a path
+#
+# The loops of ClothoidPath._build, in numba's subset as the projection above: the float route runs them as Python on
+# lists, a compiled route (PathLoops, amigo_gym.sim.fast_v1.path_loops) compiles these very functions (SHARED of
+# amigo_gym.sim.layout_v1) with the C library's cosines and sines of the nodes (fresnel.cos_sin_nodes' overload,
+# numpy's bits where amigo_gym.sim.fast_v1.libm_matches_numpy: the route is offered only there).
+
+
+def chain_pieces(
+    out: Buffer,
+    n: int,
+    segs: Buffer,
+    n_segs: int,
+    x: float,
+    y: float,
+    th: float,
+    buf: Buffer,
+    nodes: Buffer,
+) -> tuple[float, float, float, float]:
+    """The pieces of a path and their start poses, chained (:meth:`ClothoidPath._build`).
+
+    Segment ``g`` (``segs[4 g : 4 g + 4]``: length [m], curvature [1/m], curvature rate [1/m^2] and its number of
+    pieces, as a float) is split into equal pieces; piece ``q``'s ``s0, x0, y0, th0, k0, c`` are written at ``out[q],
+    out[n + q], ..., out[5 n + q]`` (``n`` pieces in all), its start pose the previous piece's end, one quadrature
+    from ``(x, y, th)`` (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: :func:`amigo_gym.model.fresnel.advance`'s
+    bits; ``buf``: ``3 (NODES + 1)`` scratch, ``nodes``: :func:`amigo_gym.model.fresnel.node_table` of 1).
+
+    Returns:
+        the end pose and the length, ``(x, y, theta, length)``.
+    """
+    q = 0
+    s_seg = 0.0
+    for g in range(n_segs):
+        length = segs[4 * g]
+        k = segs[4 * g + 1]
+        rate = segs[4 * g + 2]
+        m = int(segs[4 * g + 3])
+        h = length / m
+        for j in range(m):
+            kj = k + rate * (j * h)
+            hj = h if j < m - 1 else length - (m - 1) * h
+            out[q] = s_seg + j * h
+            out[n + q] = x
+            out[2 * n + q] = y
+            out[3 * n + q] = th
+            out[4 * n + q] = kj
+            out[5 * n + q] = rate
+            x, y, th, _ct, _st = unit_speed_nodes(buf, x, y, th, kj, rate, hj, nodes, 0, NODES)
+            q += 1
+        s_seg += length
+    return x, y, th, s_seg
+
+
+def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
+    """The coarse samples of the flat path ``pv`` written into it: the points at ``s_j = j spacing`` [m],
+    ``j < count``, by :func:`pose_flat` (the float path's pose, the bits of :func:`pose_from_pieces`' columns), their
+    ``x`` at ``pv[o + j]``, ``y`` at ``pv[o + count + j]`` (``pv``'s header and pieces written before).
+
+    The compiled route's samples (:class:`PathLoops`); the float route takes them from the column pose of all at
+    once (:meth:`ClothoidPath._build`), faster in numpy than this loop in Python.
+    """
+    for j in range(count):
+        x, y, _th, _k, _c, _ct, _st = pose_flat(buf, nodes, 0, pv, j * spacing)
+        pv[o + j] = x
+        pv[o + count + j] = y
 
 
 def _pose_float(pv: FlatPath, s: float) -> FloatPose:

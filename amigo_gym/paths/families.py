@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.model.fresnel import advance, subintervals
-from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, check_real
+from amigo_gym.model.fresnel import NODES, Buffer, node_table, subinterval_count, unit_speed_nodes
+from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, PathLoops, check_real, py_max
 
 __all__ = [
     "ParamRange",
@@ -38,6 +38,12 @@ __all__ = [
     "lane_change",
     "random_path",
     "make_family_path",
+    "run_segments",
+    "s_curve_half",
+    "lane_change_shape",
+    "RUN_MAX_SUB",
+    "RUN_NODES",
+    "RUN_SCRATCH",
 ]
 
 
@@ -99,7 +105,12 @@ RANDOM_RANGES = {
 
 
 def circle(
-    radius: float = 1.0, direction: int = 1, start: tuple[float, float] = (0.0, 0.0), start_angle: float = 0.0
+    radius: float = 1.0,
+    direction: int = 1,
+    start: tuple[float, float] = (0.0, 0.0),
+    start_angle: float = 0.0,
+    *,
+    loops: PathLoops | None = None,
 ) -> ClothoidPath:
     r"""A closed circle of ``radius`` [m] entered at ``start`` [m] with heading ``start_angle`` [rad].
 
@@ -109,13 +120,22 @@ def circle(
     Args:
         radius: R [m], in (0, 1000].
         direction: +1 turns left (counter-clockwise), -1 right.
+        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
+            path either way.
     """
     r = CIRCLE_RANGES["radius"].check("circle", "radius", radius)
     d = _direction("circle", direction)
-    return ClothoidPath((ClothoidSegment.arc(2.0 * math.pi * r, d / r),), start, start_angle, closed=True)
+    return ClothoidPath((ClothoidSegment.arc(2.0 * math.pi * r, d / r),), start, start_angle, closed=True, loops=loops)
 
 
-def manoeuvre(radius: float = 1.0, straight_length: float = 1.0, direction: int = 1, laps: float = 1.0) -> ClothoidPath:
+def manoeuvre(
+    radius: float = 1.0,
+    straight_length: float = 1.0,
+    direction: int = 1,
+    laps: float = 1.0,
+    *,
+    loops: PathLoops | None = None,
+) -> ClothoidPath:
     """The paper's manoeuvre path: ``straight_length`` [m] along x0 from the origin, then ``laps`` laps of the circle.
 
     The geometry of :class:`~amigo_gym.paths.ManoeuvrePath` (an open path: it ends after ``laps`` laps).
@@ -125,6 +145,8 @@ def manoeuvre(radius: float = 1.0, straight_length: float = 1.0, direction: int 
         straight_length: [m], in [0, 1000] (0: the circle alone).
         direction: +1 (left) or -1 (right).
         laps: laps of the circle, in (0, 100].
+        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
+            path either way.
     """
     r = MANOEUVRE_RANGES["radius"].check("manoeuvre", "radius", radius)
     sl = MANOEUVRE_RANGES["straight_length"].check("manoeuvre", "straight_length", straight_length)
@@ -132,21 +154,105 @@ def manoeuvre(radius: float = 1.0, straight_length: float = 1.0, direction: int 
     d = _direction("manoeuvre", direction)
     arc = ClothoidSegment.arc(2.0 * math.pi * r * n, d / r)
     segs = (ClothoidSegment.line(sl), arc) if sl > 0.0 else (arc,)
-    return ClothoidPath(segs)
+    return ClothoidPath(segs, loops=loops)
 
 
-def _run(segs: list[tuple[float, float, float]], pose: tuple[float, float, float]) -> tuple[float, float, float]:
-    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (exact quadrature, split by phase)."""
-    x, y, th = pose
-    for length, k, c in segs:
-        kabs = max(abs(k), abs(k + c * length))
-        n = subintervals(kabs * length + 0.5 * abs(c) * length * length)
-        xa, ya, ta = advance(x, y, th, 1.0, 0.0, k, c, length, n)
-        x, y, th = float(xa), float(ya), float(ta)
+# -- the families' construction loops, written once ----------------------------------------------------------
+#
+# In numba's subset (floats, ints, buffers, a constant exception): the float route runs them as Python on lists, a
+# compiled route (clothoid.PathLoops) compiles these very functions (amigo_gym.sim.layout_v1.SHARED), with the C
+# library's cosines and sines of the nodes where they give numpy's bits (fresnel.cos_sin_nodes).
+
+#: largest heading reached in a lane change [rad]
+LANE_CHANGE_MAX_HEADING = 1.2
+#: most sub-intervals of one segment of :func:`run_segments` (a turn of up to 8 rad; the families' take 1 or 2)
+RUN_MAX_SUB = 4
+#: the node tables of 1 to :data:`RUN_MAX_SUB` sub-intervals one after another (:func:`amigo_gym.model.fresnel.
+#: node_table`; that of ``n`` from ``NODES n (n - 1)``): :func:`run_segments`' ``nodes`` on the float route
+RUN_NODES: list[float] = [v for n in range(1, RUN_MAX_SUB + 1) for v in node_table(n)]
+#: entries of :func:`run_segments`' scratch ``buf`` (a node buffer of the most sub-intervals) and of its segments
+RUN_SCRATCH = 3 * (NODES * RUN_MAX_SUB + 1)
+
+
+def run_segments(
+    buf: Buffer, nodes: Buffer, segs: Buffer, n_segs: int, x: float, y: float, th: float
+) -> tuple[float, float, float]:
+    """End pose after the segments ``segs[3 g : 3 g + 3] = (length, curvature, rate)`` from ``(x, y, th)``: each one
+    quadrature of as many sub-intervals as its phase change needs (:func:`amigo_gym.model.fresnel.subintervals`; the
+    bits of :func:`amigo_gym.model.fresnel.advance`, by :func:`amigo_gym.model.fresnel.unit_speed_nodes`).
+
+    ``buf``: :data:`RUN_SCRATCH` scratch; ``nodes``: :data:`RUN_NODES`.
+
+    Raises:
+        ValueError: a segment turns by more than ``2 RUN_MAX_SUB`` rad (or by NaN).
+    """
+    for g in range(n_segs):
+        length = segs[3 * g]
+        k = segs[3 * g + 1]
+        c = segs[3 * g + 2]
+        kabs = py_max(abs(k), abs(k + c * length))
+        phase = kabs * length + 0.5 * abs(c) * length * length
+        if not phase <= 2.0 * RUN_MAX_SUB:
+            raise ValueError("run_segments: a segment turns by more than 2 RUN_MAX_SUB rad")
+        n = subinterval_count(phase)
+        x, y, th, _ct, _st = unit_speed_nodes(buf, x, y, th, k, c, length, nodes, NODES * n * (n - 1), NODES * n)
     return x, y, th
 
 
-def figure8(size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5) -> ClothoidPath:
+def s_curve_half(buf: Buffer, nodes: Buffer, segs: Buffer, theta_max: float) -> tuple[float, float]:
+    """End point of the first half of the unit S-curve: clothoids 0 -> theta_max -> 0 curvature over length 1 each
+    (:func:`run_segments` from the origin along x0; ``segs``: 6 entries of scratch)."""
+    segs[0] = 1.0
+    segs[1] = 0.0
+    segs[2] = theta_max
+    segs[3] = 1.0
+    segs[4] = theta_max
+    segs[5] = -theta_max
+    x, y, _th = run_segments(buf, nodes, segs, 2, 0.0, 0.0, 0.0)
+    return x, y
+
+
+def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) -> tuple[float, float, float, float]:
+    """The shape of a lane change of ``|offset| / length = ratio`` (:func:`lane_change`): ``(x1, y1, theta_m, xm)``.
+
+    ``(x1, y1)``: the end of the half S-curve at the largest heading :data:`LANE_CHANGE_MAX_HEADING` (the steepest
+    lane change has ``ratio = y1 / x1``); then, when ``ratio <= y1 / x1`` (else ``theta_m = xm = NaN``), the heading
+    ``theta_m`` whose half S-curve has ``y / x = ratio``, by bisection to rounding, and that half's ``x``,
+    ``xm``. ``buf``, ``nodes``: :func:`run_segments`'; ``segs``: 6 entries of scratch.
+    """
+    x1, y1 = s_curve_half(buf, nodes, segs, LANE_CHANGE_MAX_HEADING)
+    if ratio > y1 / x1:
+        return x1, y1, math.nan, math.nan
+    lo = 0.0
+    hi = LANE_CHANGE_MAX_HEADING
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if mid == lo or mid == hi:  # noqa: SIM109  (numba's subset: no tuple built)
+            break
+        xm, ym = s_curve_half(buf, nodes, segs, mid)
+        if ym / xm < ratio:
+            lo = mid
+        else:
+            hi = mid
+    theta_m = 0.5 * (lo + hi)
+    xm, _ym = s_curve_half(buf, nodes, segs, theta_m)
+    return x1, y1, theta_m, xm
+
+
+def _run(
+    segs: list[tuple[float, float, float]], pose: tuple[float, float, float], loops: PathLoops | None = None
+) -> tuple[float, float, float]:
+    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (exact quadrature, split by phase):
+    :func:`run_segments`, compiled when ``loops``."""
+    flat = [v for seg in segs for v in seg]
+    if loops is not None:
+        return loops.run(np.array(flat), len(segs), *pose)
+    return run_segments([0.0] * RUN_SCRATCH, RUN_NODES, flat, len(segs), *pose)
+
+
+def figure8(
+    size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
+) -> ClothoidPath:
     r"""A closed figure-8 crossing itself at the origin, with continuous curvature.
 
     Construction (lobe radius ``R`` first taken as 1, then everything scaled so that the width is ``size``):
@@ -164,6 +270,8 @@ def figure8(size: float = 4.0, crossing_angle: float = math.pi / 2, transition: 
         size: overall width along x0 [m], in (0, 1000].
         crossing_angle: angle between the crossing lines [rad], in [0.3, 2.0].
         transition: clothoid length over lobe radius [-], in [0, 1.5].
+        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (the float
+            route); the same path either way.
     """
     size = FIGURE8_RANGES["size"].check("figure8", "size", size)
     phi = 0.5 * FIGURE8_RANGES["crossing_angle"].check("figure8", "crossing_angle", crossing_angle)
@@ -175,7 +283,7 @@ def figure8(size: float = 4.0, crossing_angle: float = math.pi / 2, transition: 
         raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
     pieces = [(b, 0.0, -1.0 / b)] if b > 0.0 else []
     pieces.append((arc_half, -1.0, 0.0))
-    xm, ym, _ = _run(pieces, (0.0, 0.0, phi))
+    xm, ym, _ = _run(pieces, (0.0, 0.0, phi), loops)
     a = -ym / math.sin(phi)
     if a < 0.0:
         raise ValueError(
@@ -202,20 +310,12 @@ def figure8(size: float = 4.0, crossing_angle: float = math.pi / 2, transition: 
         *right_in,
         seg.arc(lc, -k),
     )
-    return ClothoidPath(segs, (size / 2.0, 0.0), -math.pi / 2, closed=True)
+    return ClothoidPath(segs, (size / 2.0, 0.0), -math.pi / 2, closed=True, loops=loops)
 
 
-def _s_curve_half(theta_max: float) -> tuple[float, float]:
-    """End point of the first half of the unit S-curve: clothoids 0 -> theta_max -> 0 curvature over length 1 each."""
-    x, y, _ = _run([(1.0, 0.0, theta_max), (1.0, theta_max, -theta_max)], (0.0, 0.0, 0.0))
-    return x, y
-
-
-#: largest heading reached in a lane change [rad]
-LANE_CHANGE_MAX_HEADING = 1.2
-
-
-def lane_change(offset: float = 0.5, length: float = 3.0, lead: float = 1.0) -> ClothoidPath:
+def lane_change(
+    offset: float = 0.5, length: float = 3.0, lead: float = 1.0, *, loops: PathLoops | None = None
+) -> ClothoidPath:
     r"""A lane change: straight along x0, a sideways shift by ``offset`` over ``length``, straight again.
 
     The shift is four clothoids of equal length ``q``: curvature ``0 -> k -> 0 -> -k -> 0`` (for a left shift),
@@ -230,29 +330,22 @@ def lane_change(offset: float = 0.5, length: float = 3.0, lead: float = 1.0) -> 
         offset: sideways shift [m], positive to the left, in [-100, 100] (0 gives a straight line).
         length: extent of the shift along x0 [m], in (0, 1000].
         lead: straight run before and after [m], in [0, 1000].
+        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (the float
+            route: :func:`lane_change_shape` as Python); the same path either way.
     """
     off = LANE_CHANGE_RANGES["offset"].check("lane_change", "offset", offset)
     ln = LANE_CHANGE_RANGES["length"].check("lane_change", "length", length)
     lead = LANE_CHANGE_RANGES["lead"].check("lane_change", "lead", lead)
     ratio = abs(off) / ln
-    x1, y1 = _s_curve_half(LANE_CHANGE_MAX_HEADING)
+    if loops is not None:
+        x1, y1, theta_m, xm = loops.lane(ratio)
+    else:
+        x1, y1, theta_m, xm = lane_change_shape([0.0] * RUN_SCRATCH, RUN_NODES, [0.0] * 6, ratio)
     if ratio > y1 / x1:
         raise ValueError(
             f"lane_change.offset must satisfy |offset| <= {y1 / x1:.4f} length = {y1 / x1 * ln:.4g} m, got {offset!r}"
         )
-    lo, hi = 0.0, LANE_CHANGE_MAX_HEADING
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if mid in (lo, hi):
-            break
-        xm, ym = _s_curve_half(mid)
-        if ym / xm < ratio:
-            lo = mid
-        else:
-            hi = mid
-    theta_m = 0.5 * (lo + hi)
-    x1, _ = _s_curve_half(theta_m)
-    q = ln / (2.0 * x1)
+    q = ln / (2.0 * xm)
     k = math.copysign(theta_m / q, off) if off != 0.0 else 0.0
     seg = ClothoidSegment
     shift = (
@@ -262,7 +355,7 @@ def lane_change(offset: float = 0.5, length: float = 3.0, lead: float = 1.0) -> 
         seg.transition(q, -k, 0.0),
     )
     lines = (seg.line(lead),) if lead > 0.0 else ()
-    return ClothoidPath((*lines, *shift, *lines))
+    return ClothoidPath((*lines, *shift, *lines), loops=loops)
 
 
 def random_path(
@@ -272,6 +365,8 @@ def random_path(
     max_curvature_rate: float = 1.0,
     min_piece: float = 0.5,
     max_piece: float = 3.0,
+    *,
+    loops: PathLoops | None = None,
 ) -> ClothoidPath:
     r"""A random smooth open path from the origin along x0: continuous curvature, ``|kappa| <= max_curvature``,
     ``|dkappa/ds| <= max_curvature_rate``.
@@ -290,6 +385,8 @@ def random_path(
         max_curvature: [1/m], in (0, 100].
         max_curvature_rate: [1/m^2], in (0, 1000].
         min_piece, max_piece: ramp lengths [m], in [0.01, 100], ``min_piece <= max_piece``.
+        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
+            path either way.
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
@@ -316,7 +413,7 @@ def random_path(
             hold = min(hold, total - s)
             segs.append(ClothoidSegment.arc(hold, k))
             s += hold
-    return ClothoidPath(tuple(segs))
+    return ClothoidPath(tuple(segs), loops=loops)
 
 
 @dataclass(frozen=True)
@@ -349,8 +446,13 @@ FAMILIES: dict[str, Family] = {
 }
 
 
-def make_family_path(name: str, rng: np.random.Generator | None = None, **params: Any) -> ClothoidPath:
+def make_family_path(
+    name: str, rng: np.random.Generator | None = None, *, loops: PathLoops | None = None, **params: Any
+) -> ClothoidPath:
     """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at their defaults).
+
+    ``loops``: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`), or None (the float
+    route); the same path either way.
 
     Raises:
         ValueError: unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``.
@@ -365,5 +467,5 @@ def make_family_path(name: str, rng: np.random.Generator | None = None, **params
     if fam.random:
         if rng is None:
             raise ValueError(f"path family {name!r} needs a numpy.random.Generator rng")
-        return fam.build(rng, **params)
-    return fam.build(**params)
+        return fam.build(rng, loops=loops, **params)
+    return fam.build(loops=loops, **params)

@@ -83,7 +83,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.model.actuators import PIECES
-from amigo_gym.paths import clothoid
+from amigo_gym.paths import clothoid, families
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
@@ -91,7 +91,18 @@ from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["step", "evaluate", "noise_uniforms", "progress", "cos_sin"]
+__all__ = [
+    "step",
+    "evaluate",
+    "noise_uniforms",
+    "progress",
+    "pose",
+    "cos_sin",
+    "build_chain",
+    "build_samples",
+    "build_run",
+    "build_lane",
+]
 
 F64 = NDArray[np.float64]
 
@@ -99,7 +110,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "e053c61859740807"
+LAYOUT_FINGERPRINT = "bf612c41ecdc6ffb"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -266,6 +277,11 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
     return _pose_flat(buf, c, _path_nodes(c), pv, s)
 
 
+#: the path's pose at an arc length (:func:`amigo_gym.paths.clothoid.pose_flat`, as the float path's ``pose_columns``
+#: of a float): the environments' start pose (:meth:`amigo_gym.sim.fast_v1.StepKernel.pose`)
+pose = _pose
+
+
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
     """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself, its
@@ -322,6 +338,48 @@ def _normals(c: F64, ws: F64) -> None:
     for j in range(_channels_on(position, heading, rate)):
         ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
     _step_normals(ws, L.W_NX, ws, L.S_LOG, ws, L.S_U2, position, heading, rate)
+
+
+# ----------------------------------------------------------------------------------------- building paths
+
+#: entries of the families' quadrature scratch (:data:`amigo_gym.paths.families.RUN_SCRATCH`) on the stack
+_RUN_NODES = families.RUN_SCRATCH
+
+
+# The path-building loops of the float route (clothoid.PathLoops: clothoid.chain_pieces and sample_points,
+# families.run_segments and lane_change_shape), compiled as they are, their scratch on the stack; ``nodes``: the
+# quadrature's node tables (fresnel.node_table of 1; families.RUN_NODES). amigo_gym.sim.fast_v1.path_loops binds them.
+
+
+@_jit
+def build_chain(
+    nodes: F64, out: F64, n: int, segs: F64, n_segs: int, x: float, y: float, th: float
+) -> tuple[float, float, float, float]:
+    """:func:`amigo_gym.paths.clothoid.chain_pieces` itself: the pieces into ``out``; ``(x, y, theta, length)``."""
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    return clothoid.chain_pieces(out, n, segs, n_segs, x, y, th, buf, nodes)
+
+
+@_jit
+def build_samples(nodes: F64, pv: F64, o: int, count: int, spacing: float) -> None:
+    """:func:`amigo_gym.paths.clothoid.sample_points` itself: the coarse samples written into ``pv``."""
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    clothoid.sample_points(buf, nodes, pv, o, count, spacing)
+
+
+@_jit
+def build_run(nodes: F64, segs: F64, n_segs: int, x: float, y: float, th: float) -> tuple[float, float, float]:
+    """:func:`amigo_gym.paths.families.run_segments` itself: the end pose after the segments."""
+    buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
+    return families.run_segments(buf, nodes, segs, n_segs, x, y, th)
+
+
+@_jit
+def build_lane(nodes: F64, ratio: float) -> tuple[float, float, float, float]:
+    """:func:`amigo_gym.paths.families.lane_change_shape` itself: ``(x1, y1, theta_m, xm)``."""
+    buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
+    segs = _carray(_stack_ptr(6), 6)
+    return families.lane_change_shape(buf, nodes, segs, ratio)
 
 
 @_jit
@@ -609,22 +667,33 @@ def _step_rows(
     a1: F64,
     a2: F64,
     logs: F64,
-    args: F64,
+    rec: F64,
+    exp: int,
+    exp_data: int,
+    meta: NDArray[np.int64],
+    smooth_weight: float,
 ) -> None:
-    """:func:`step` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L, 2)``,
-    its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``.
+    """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
+    2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
+    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials by numpy's ``exp`` loop at
+    ``exp``, with ``meta[i] (5,)`` its scratch; with ``exp == 0`` the caller finishes the records).
 
-    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first;
-    the arguments of the three reward exponentials are copied to ``args (N, 3)`` (track, speed, smoothness).
+    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
     """
     for i in numba.prange(ws.shape[0]):
         row = ws[i]
         for j in range(logs.shape[1]):
             row[L.S_LOG + j] = logs[i, j]
         step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
-        args[i, 0] = row[L.W_ARG_T]
-        args[i, 1] = row[L.W_ARG_V]
-        args[i, 2] = row[L.W_ARG_S]
+        fill_record(row, rec[i], exp, exp_data, meta[i], smooth_weight)
+
+
+@_jit
+def terms_rows(rec: F64, smooth_weight: float) -> None:
+    """:func:`record_terms` of every row of ``rec (N, RECORD_WIDTH)`` (where numpy's ``exp`` loop was not found: the
+    caller has taken ``np.exp`` of the exponentials' arguments)."""
+    for i in range(rec.shape[0]):
+        record_terms(rec[i], smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

@@ -127,7 +127,7 @@ def use_fast_path(requested: bool | None = None) -> bool:
 
 #: the one line printed (stderr) when numba starts compiling a kernel of this package in this process
 COMPILE_NOTICE = (
-    "amigo_gym: compiling the numba step (once per machine, a few seconds; "
+    "amigo_gym: compiling the numba step (once per install, up to about 20 s; "
     "later runs load it from numba's cache; AMIGO_GYM_KERNEL=numpy skips it)"
 )
 _notice_installed = False

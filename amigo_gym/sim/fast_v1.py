@@ -23,7 +23,7 @@ it can be imported). numba is imported only when a :class:`StepKernel` is first 
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
 from types import ModuleType
 from typing import Any
 
@@ -31,7 +31,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel, randomization
-from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.paths import families
+from amigo_gym.paths.classic import PathPose
+from amigo_gym.paths.clothoid import ClothoidPath, PathLoops
 from amigo_gym.sim import fast, layout_v1
 from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task import v1 as tracking
@@ -44,6 +46,7 @@ __all__ = [
     "kernels",
     "kernel_constants",
     "flat_path",
+    "path_loops",
     "StepKernel",
 ]
 
@@ -99,6 +102,28 @@ def libm_matches_numpy() -> bool:
     g = np.random.default_rng(20240601)
     x = np.concatenate((g.uniform(-10.0, 10.0, 2000), g.uniform(-2000.0, 2000.0, 1000), g.normal(0.0, 1e-3, 1000)))
     return fast.same_bits_as_numpy(kernels().cos_sin, x, np.cos, np.sin)
+
+
+@lru_cache(maxsize=1)
+def path_loops() -> PathLoops | None:
+    """The compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`: the float route's
+    :func:`~amigo_gym.paths.clothoid.chain_pieces`, :func:`~amigo_gym.paths.clothoid.sample_points`,
+    :func:`~amigo_gym.paths.families.run_segments` and :func:`~amigo_gym.paths.families.lane_change_shape`, compiled
+    by :mod:`amigo_gym.sim._kernels_v1` with their node tables bound), which the environments with the compiled step
+    hand to the path constructors at resets; None where the C library's ``cos``/``sin`` do not give numpy's bits
+    (:func:`libm_matches_numpy`: then the float route builds the paths). The same paths either way
+    (``tests/test_path_loops.py``). Loads the kernels (numba) on the first call."""
+    if not libm_matches_numpy():
+        return None
+    kv = kernels()
+    nodes = np.array(fresnel.node_table(1), dtype=np.float64)
+    run_nodes = np.array(families.RUN_NODES, dtype=np.float64)
+    return PathLoops(
+        chain=partial(kv.build_chain, nodes),
+        samples=partial(kv.build_samples, nodes),
+        run=partial(kv.build_run, run_nodes),
+        lane=partial(kv.build_lane, run_nodes),
+    )
 
 
 def kernels() -> ModuleType:
@@ -203,16 +228,17 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
+        self.path_pose: Any = kv.pose
         # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
         ring = np.zeros((1, 2))
-        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
-        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         #: numpy's own ``exp`` loop (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: its address and data), ``(0, 0)``
         #: where not found (then :meth:`complete` finishes the record after each call: :attr:`exps_done` False)
         loops = numpy_loops()
         self.exp_loop = (0, 0) if loops is None else (loops.exp.address, loops.exp.data)
         self.exps_done = loops is not None
+        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
+        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
         args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop, self.meta)
         self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
@@ -228,6 +254,7 @@ class StepKernel:
             "evaluate",
             "noise_uniforms",
             "locate_progress",
+            "path_pose",
             "u1",
             "logs",
             "run",
@@ -250,6 +277,15 @@ class StepKernel:
             s: float = self.locate_progress(self.consts, flat_path(path), x, y, hint)
             return s
         got: float = path.locate(x, y, hint, self.window, self.window).progress
+        return got
+
+    def pose(self, path: Any, s: float) -> PathPose:
+        """The path's pose at the arc length ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`): compiled on a
+        :class:`ClothoidPath` (:func:`amigo_gym.paths.clothoid.pose_flat`, as its float path), ``path.pose_columns``
+        on any other path."""
+        if type(path) is ClothoidPath:
+            return PathPose(*self.path_pose(self.consts, flat_path(path), s))
+        got: PathPose = path.pose_columns(s)
         return got
 
     def load(self, path: ClothoidPath, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:

@@ -7,17 +7,19 @@ is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fa
 1. one compiled loop draws every row's uniforms (:func:`amigo_gym.sim._kernels_v1.noise_uniforms`, only when the
    task draws per step);
 2. ``np.log`` of the whole ``(N, n_normal)`` block of uniforms (numpy's logarithm, as the reference);
-3. one compiled loop steps every row (:func:`amigo_gym.sim._kernels_v1.step`), each on its own path, ring and
-   workspace row, and copies the arguments of the three reward exponentials to an ``(N, 3)`` block;
-4. ``np.exp`` of that block (numpy's, as the reference); the caller forms the reward terms and the reward with
-   the single environment's operations (:func:`reward_terms`).
+3. one compiled loop steps every row (:func:`amigo_gym.sim._kernels_v1.step_record`'s parts), each on its own path,
+   ring and workspace row, and writes its info record: the single environment's record, with the reward's
+   exponentials by numpy's own ``exp`` loop (:mod:`amigo_gym.sim.numpy_loops`), its terms and the reward.
 
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
-compiled :func:`amigo_gym.sim._kernels_v1.evaluate`, as the single environment's reset.
+compiled :func:`amigo_gym.sim._kernels_v1.evaluate` and :func:`amigo_gym.sim._kernels_v1.fill_record`, as the
+single environment's reset.
 
-Both numpy calls take and write C-contiguous blocks, like the reference's arrays (numpy may pick its loop by
-memory layout). So every row gets the bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv``
-of single envs (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
+The records are the single environment's: the same compiled :func:`amigo_gym.sim._kernels_v1.fill_record` on each
+row, numpy's ``exp`` loop called on each row's three arguments as in one robot's step; ``np.log`` takes and writes
+a C-contiguous block, like the reference's arrays (numpy may pick its loop by memory layout). So every row gets the
+bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv`` of single envs
+(``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
 (:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
 ``arena.flat[starts[i]:stops[i]]``.
 
@@ -33,11 +35,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast_v1
-from amigo_gym.task import v0 as task
+from amigo_gym.sim import fast, fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["PathArena", "BatchKernel", "reward_terms"]
+__all__ = ["PathArena", "BatchKernel"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -151,17 +152,33 @@ class BatchKernel:
         self.noise_on = np.zeros(n, dtype=np.bool_)
         self._u1: Array = np.ones((n, m))
         self._logs: Array = np.zeros((n, m))
-        self._args: Array = np.zeros((n, 3))
+        #: a scratch of the call of numpy's ``exp`` loop per row (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`:
+        #: rows on numba's threads each their own)
+        self._metas: NDArray[np.int64] = np.zeros((n, 5), dtype=np.int64)
         self._bind()
 
     def _bind(self) -> None:
+        """The compiled loops for exactly the types of :meth:`step`'s arguments (:func:`amigo_gym.sim.fast.direct_call`:
+        compiled, or loaded from numba's disk cache, now; no dispatch per call): C-contiguous float64 constants,
+        arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records, int64 starts and stops, uint64 keys,
+        int64 loop scratch, a float32 observation, Python ints and floats."""
         kv = fast_v1.kernels()
-        self._noise_rows: Any = kv.noise_rows_parallel if self.parallel else kv.noise_rows
-        self._step_rows: Any = kv.step_rows_parallel if self.parallel else kv.step_rows
+        #: numpy's ``exp`` loop (:attr:`amigo_gym.sim.fast_v1.StepKernel.exp_loop`, this process's address; ``(0, 0)``:
+        #: not found)
+        self._exp_loop = self._row.exp_loop
+        f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
+        i1, i2, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 5), dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
+        keys = np.zeros(1, dtype=np.uint64)
+        noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
+        step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
+        self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
+        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, *self._exp_loop, i2, 0.0)
+        self._step_rows: Any = fast.direct_call(step_rows, *args)
+        self._terms_rows: Any = fast.direct_call(kv.terms_rows, f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        del state["_noise_rows"], state["_step_rows"]
+        del state["_noise_rows"], state["_step_rows"], state["_terms_rows"], state["_exp_loop"]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -199,6 +216,11 @@ class BatchKernel:
         :meth:`amigo_gym.sim.fast_v1.StepKernel.progress`."""
         return self._row.progress(path, x, y, hint)
 
+    def pose(self, path: Any, s: float) -> Any:
+        """The path's pose at ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`):
+        :meth:`amigo_gym.sim.fast_v1.StepKernel.pose`."""
+        return self._row.pose(path, s)
+
     def start(
         self,
         rows: Sequence[int],
@@ -214,16 +236,22 @@ class BatchKernel:
             obs: ``(len(rows), D)``, written: the rows' observations.
 
         Returns:
-            ``(len(rows), 3)``: ``np.exp`` of the rows' track, speed and smoothness arguments.
+            ``(len(rows), RECORD_WIDTH)``, new: the rows' info records (:func:`amigo_gym.sim._kernels_v1.fill_record`,
+            as the single env's :meth:`amigo_gym.sim.fast_v1.StepKernel.fill`; the command and slip entries are the
+            workspace's, which the caller replaces by a start's).
         """
         self.load(rows, paths, states, episodes)
         c = self.consts
         flat, starts, stops = self.arena.flat, self.arena.starts, self.arena.stops
+        rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
+        one, meta, sw = self._row, self._metas[0], self._row.smooth_weight
         for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
             v_true, t = tracking.start_speed_time(st, ep)
-            self._row.evaluate(c, flat[starts[i] : stops[i]], self.ws[i], obs[j], v_true, st.a1, st.a2, t)
-        args = self.ws[np.asarray(rows, dtype=np.intp), fast_v1.W_ARG_T : fast_v1.W_ARG_S + 1]  # a C-contiguous copy
-        return np.exp(args)
+            ws = self.ws[i]
+            one.evaluate(c, flat[starts[i] : stops[i]], ws, obs[j], v_true, st.a1, st.a2, t)
+            one._fill(ws, rec[j], *self._exp_loop, meta, sw)
+        self._complete(rec)
+        return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
         """Step every row (:func:`amigo_gym.task.v1.step_columns` of each, the single robot's compiled step).
@@ -234,8 +262,9 @@ class BatchKernel:
             obs: ``(n, D)`` C-contiguous, written (float32 for the env).
 
         Returns:
-            ``(n, 3)``: ``np.exp`` of the track, speed and smoothness arguments (the rows of :attr:`ws` hold the
-            new states and the other outputs).
+            ``(n, RECORD_WIDTH)``, new: every row's info record (:func:`amigo_gym.sim._kernels_v1.fill_record`, the
+            single env's record: its entries, the reward's exponentials and terms, the reward). The rows of
+            :attr:`ws` hold the new states.
         """
         c = self.consts
         ws = self.ws
@@ -245,13 +274,17 @@ class BatchKernel:
         elif self.noise_on.any():  # slips only
             self._noise_rows(c, ws, self.keys, self._u1)
         a = self.arena
-        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, self._args)
-        return np.exp(self._args)
+        rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
+        sw = self._row.smooth_weight
+        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, rec,
+                        *self._exp_loop, self._metas, sw)  # fmt: skip
+        self._complete(rec)
+        return rec
 
-
-def reward_terms(exps: Array, heading: Array, smooth_weight: float) -> tuple[Array, Array, Array, Array]:
-    """The reward terms ``(track, speed, heading, smooth)`` ``(m,)`` from ``exps (m, 3)`` (:meth:`BatchKernel.step`)
-    and the heading term ``(m,)``, by the operations of :func:`amigo_gym.task.v0.reward_term_columns` (as
-    :meth:`amigo_gym.envs.AmigoBotV1Env._kernel_info`). The reward is their product, in that order."""
-    smooth: Array = np.asarray(task.smooth_term(exps[:, 2], smooth_weight))
-    return exps[:, 0].copy(), exps[:, 1].copy(), heading.copy(), smooth
+    def _complete(self, rec: Array) -> None:
+        """Where numpy's ``exp`` loop was not found: the records' exponentials by ``np.exp`` (a C-contiguous block,
+        as the single env's :meth:`amigo_gym.sim.fast_v1.StepKernel.complete` takes them) and their terms."""
+        if self._exp_loop[0] == 0:
+            part = slice(layout_v1.R_TRACK, layout_v1.R_SMOOTH)
+            rec[:, part] = np.exp(np.ascontiguousarray(rec[:, part]))
+            self._terms_rows(rec, self._row.smooth_weight)

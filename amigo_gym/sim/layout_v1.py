@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
-from amigo_gym.paths import clothoid
+from amigo_gym.paths import clothoid, families
 from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
@@ -146,6 +146,16 @@ R_HEADING = R_ERROR + RECORD_SCALARS.index("heading")
 R_TRACK = R_ERROR + len(RECORD_SCALARS)
 R_SPEED, R_SMOOTH_EXP, R_SMOOTH, R_REWARD = R_TRACK + 1, R_TRACK + 2, R_TRACK + 3, R_TRACK + 4
 RECORD_WIDTH = R_REWARD + 1
+#: the record's slices of the info's seven arrays (:data:`RECORD_ROWS`), in their order; the index of each scalar
+R_POSE, R_H, R_RATES, R_COMMAND, R_ANGLES, R_MEASURED, R_SLIP = (
+    slice(RECORD_ROWS.index(a), RECORD_ROWS.index(b) + 1)
+    for a, b in (("x", "beta"), ("h_x", "h_y"), ("w1", "w2"), ("command1", "command2"), ("alpha1", "alpha2"),
+                 ("meas_x", "meas_beta"), ("slip1", "slip2"))
+)  # fmt: skip
+R_HX, R_HY = RECORD_ROWS.index("h_x"), RECORD_ROWS.index("h_y")
+R_PROGRESS, R_VT, R_VREF, R_END, R_TERM = (
+    R_ERROR + RECORD_SCALARS.index(n) for n in ("progress", "v_true", "v_ref", "end_of_path", "terminated")
+)
 #: :data:`RECORD_ROWS` and :data:`RECORD_SCALARS` as workspace indices
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
 
@@ -191,6 +201,12 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.coarse_start,
     clothoid.locate_flat,
     clothoid.pose_flat,
+    clothoid.chain_pieces,
+    clothoid.sample_points,
+    families.run_segments,
+    families.s_curve_half,
+    families.lane_change_shape,
+    fresnel.subinterval_count,
     fresnel.node_phases,
     fresnel.node_sums,
     fresnel.advance_nodes,
@@ -257,6 +273,7 @@ def layout_fingerprint() -> str:
         clothoid.MIN_NEWTON_DENOMINATOR,
         (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
         tracking.STATUS_END,
+        (families.RUN_MAX_SUB, families.LANE_CHANGE_MAX_HEADING, fresnel.MAX_PHASE_PER_SUB),
         (randomization._M64, randomization._GAMMA, randomization._MIX1, randomization._MIX2),
         (randomization._INV_2_53, randomization._TWO_PI),
     )

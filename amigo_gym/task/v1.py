@@ -81,6 +81,7 @@ from amigo_gym.model.numeric import abs_real, clip_real, max0_real, min_real
 from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath, make_path
+from amigo_gym.paths.clothoid import PathLoops
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
@@ -1285,9 +1286,13 @@ def path_nbytes(path: Any) -> int:
     return arrays + 400 * len(path.segments) + 2048
 
 
-def _cached_family(name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None) -> Any:
+def _cached_family(
+    name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None, loops: PathLoops | None = None
+) -> Any:
     """A family path, built once per process for each parameter set (and seed of a random one), kept while the
-    paths built fit in :data:`PATH_CACHE_BYTES` (least recently used dropped first; a path is rebuilt the same)."""
+    paths built fit in :data:`PATH_CACHE_BYTES` (least recently used dropped first; a path is rebuilt the same).
+    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`) or None; the same path
+    either way."""
     from amigo_gym.paths import make_family_path
 
     global _cache_bytes
@@ -1297,7 +1302,7 @@ def _cached_family(name: str, items: tuple[tuple[str, Any], ...], rng_seed: int 
         _FAMILY_CACHE.move_to_end(key)
         return got[0]
     rng = None if rng_seed is None else np.random.default_rng(rng_seed)
-    path = make_family_path(name, rng, **dict(items))
+    path = make_family_path(name, rng, loops=loops, **dict(items))
     size = path_nbytes(path)
     _FAMILY_CACHE[key] = (path, size)
     _cache_bytes += size
@@ -1307,14 +1312,21 @@ def _cached_family(name: str, items: tuple[tuple[str, Any], ...], rng_seed: int 
     return path
 
 
-def random_pool_path(p: TrackingParams, path_id: int) -> Any:
-    """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
+def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = None) -> Any:
+    """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached
+    (``loops``: as :func:`draw_path`)."""
     extra = tuple(sorted(dict(p.path_params).items())) if p.path in ("random", "mixed") else ()
-    return _cached_family("random", extra, rng_seed=path_id)
+    return _cached_family("random", extra, rng_seed=path_id, loops=loops)
 
 
-def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[str, Any]]:
+def draw_path(
+    rng: np.random.Generator, p: TrackingParams, loops: PathLoops | None = None
+) -> tuple[Any, dict[str, Any]]:
     """The episode's path, drawn from ``rng`` for ``"random"`` and ``"mixed"`` (else the fixed path, no draw).
+
+    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`,
+    :func:`amigo_gym.sim.fast_v1.path_loops`) that build a new path, or None (the float route); the same path either
+    way.
 
     Returns:
         the path and a description for ``info`` (family and parameters).
@@ -1323,21 +1335,21 @@ def draw_path(rng: np.random.Generator, p: TrackingParams) -> tuple[Any, dict[st
 
     if p.path == "random":
         pid = int(rng.integers(p.random_pool))
-        return random_pool_path(p, pid), {"family": "random", "id": pid}
+        return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
     if p.path != "mixed":
         fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
     fam = MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
     if fam == "random":
         pid = int(rng.integers(p.random_pool))
-        return random_pool_path(p, pid), {"family": "random", "id": pid}
+        return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
     values: dict[str, Any] = {}
     for name, (lo, hi) in MIXED_RANGES[fam].items():
         values[name] = float(rng.uniform(lo, hi))
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
     # parameters drawn from continuous ranges do not repeat: built, not cached
-    return make_family_path(fam, None, **values), {"family": fam, **values}
+    return make_family_path(fam, None, loops=loops, **values), {"family": fam, **values}
 
 
 # --------------------------------------------------------------------------- episodes and steps
@@ -1385,6 +1397,9 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
 #: ``(path, x, y, hint) -> progress``: H's progress [m] at ``(x, y)`` from the hint, as
 #: ``path.locate(x, y, hint, k.window, k.window).progress`` (the single env passes its compiled twin)
 ProgressFn = Callable[[Any, Any, Any, Any], Real]
+#: ``(path, s) -> PathPose``: the path's pose at the arc length ``s``, as ``path.pose_columns(s)`` (the compiled step's
+#: environments pass its compiled twin)
+PoseFn = Callable[[Any, Any], Any]
 
 
 def _progress(k: Constants, path: Any, x: Real, y: Real, hint: Real, progress: ProgressFn | None) -> Real:
@@ -1396,16 +1411,22 @@ def _progress(k: Constants, path: Any, x: Real, y: Real, hint: Real, progress: P
 
 
 def start_state(
-    k: Constants, path: Any, ep: Episode, u: tuple[Real, Real, Real], progress: ProgressFn | None = None
+    k: Constants,
+    path: Any,
+    ep: Episode,
+    u: tuple[Real, Real, Real],
+    progress: ProgressFn | None = None,
+    path_pose: PoseFn | None = None,
 ) -> State:
     """The start state: H at the path's start plus ``u[:2] * init_position_noise``, heading along the tangent
     plus ``u[2] * init_heading_noise``, A ``l3`` (true) behind H; wheels at rest (or rolling at the reference
     speed), wheel angles 0; the previous command is the wheels' state (0 at rest).
 
-    ``progress`` replaces the projection of H (:data:`ProgressFn`; default ``path.locate``).
+    ``progress`` replaces the projection of H (:data:`ProgressFn`; default ``path.locate``), ``path_pose`` the path's
+    start pose (:data:`PoseFn`; default ``path.pose_columns``).
     """
     p = k.params
-    start = path.pose_columns(0.0 * u[0])
+    start = path.pose_columns(0.0 * u[0]) if path_pose is None else path_pose(path, 0.0 * u[0])
     beta = start.theta + u[2] * p.init_heading_noise
     hx = start.x + u[0] * p.init_position_noise
     hy = start.y + u[1] * p.init_position_noise
@@ -1680,15 +1701,19 @@ def start_episode(
     k: Constants,
     pose: tuple[float, float, float] | None = None,
     progress: ProgressFn | None = None,
+    loops: PathLoops | None = None,
+    path_pose: PoseFn | None = None,
 ) -> tuple[Any, dict[str, Any], Episode, State]:
     """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
 
-    ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``). (The single env's
-    compiled step projects and evaluates the start state itself, :mod:`amigo_gym.sim.fast_v1`.)
+    ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``), ``loops`` builds a
+    drawn path (:func:`draw_path`), ``path_pose`` gives the path's start pose (:data:`PoseFn`; default
+    ``path.pose_columns``). (The single env's compiled step projects and evaluates the start state itself,
+    :mod:`amigo_gym.sim.fast_v1`.)
     """
-    path, info = draw_path(rng, k.params)
+    path, info = draw_path(rng, k.params, loops)
     ep, u = draw_episode(rng, k.params)
-    st = start_state(k, path, ep, u, progress)
+    st = start_state(k, path, ep, u, progress, path_pose)
     if pose is not None:
         x, y, b = (float(c) for c in pose)
         hx = x + ep.l3 * col_cos(b)
