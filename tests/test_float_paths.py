@@ -1,10 +1,12 @@
 """The float paths of one robot give the bits of the column code on arrays (issue 12, part 2).
 
 The single environments run the column code on Python floats (``task.v1.step_columns``, with v0's settings
-AmigoBot-v0's reference; the float branches of ``fresnel.advance``, ``actuators.actuator_step``,
-``ClothoidPath.locate``/``pose_columns`` and ``randomization.step_noise``); the vector environments run the column
-code on ``(N,)`` arrays. Each float result here must equal the array result of its row bit for bit (signs of zeros
-included).
+AmigoBot-v0's reference; the float branches of ``ClothoidPath.locate``/``pose_columns``); the vector environments run
+the column code on ``(N,)`` arrays. Each float result here must equal the array result of its row bit for bit (signs
+of zeros included). ``fresnel.advance``, ``actuators.actuator_step``, ``randomization.step_noise`` and the v0 paths'
+projections are one function for floats and columns since issue 19's ``h19-cols`` branch (the same code on both,
+checked here all the same; the fresnel and manoeuvre tests also against the former column code, kept below as
+independent references).
 """
 
 from __future__ import annotations
@@ -41,6 +43,28 @@ def rows_equal(floats: Any, arrays: Any, i: int) -> None:
         assert same(f, want), (name, f, want)
 
 
+def _advance_all_nodes_at_once(*args: Any) -> tuple[Any, Any, Any]:
+    """The former column form of ``fresnel.advance`` (all nodes as one array of shape ``(nodes, N)``, then the sums
+    node by node in order), an independent reference for the node loop that ``fresnel.advance`` now runs on columns."""
+    x, y, theta, v0, a, w0, alpha, t, n_sub = args
+    table = fresnel.node_table(n_sub)
+    nn = len(table) // 2
+    u = np.asarray(table[:nn]).reshape(nn, 1)
+    uw = np.asarray(table[nn:]).reshape(nn, 1)
+    half_alpha = 0.5 * alpha
+    tau = u * t
+    phase = theta + tau * (w0 + half_alpha * tau)
+    weight = (v0 + a * tau) * uw
+    px = weight * np.cos(phase)
+    py = weight * np.sin(phase)
+    dx = 0.0 + px[0]
+    dy = 0.0 + py[0]
+    for k in range(1, nn):
+        dx = dx + px[k]
+        dy = dy + py[k]
+    return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
+
+
 @pytest.mark.parametrize("n_sub", [1, 3])
 def test_fresnel_float_paths_equal_the_node_loop_on_arrays(n_sub: int) -> None:
     g = np.random.default_rng(1)
@@ -52,9 +76,10 @@ def test_fresnel_float_paths_equal_the_node_loop_on_arrays(n_sub: int) -> None:
     t = np.abs(g.normal(size=n)) * 0.3
     t[::11] = 0.0
     ref = fresnel.advance(*cols, t, n_sub)
+    for got, want in zip(ref, _advance_all_nodes_at_once(*cols, t, n_sub), strict=True):
+        assert got.tobytes() == want.tobytes()
     for i in range(n):
         args = [float(c[i]) for c in cols]
-        rows_equal(fresnel.advance_float(*args, float(t[i]), n_sub), ref, i)
         rows_equal(fresnel.advance(*args, float(t[i]), n_sub), ref, i)
     # unit speed: a path piece, with the cosine and sine of the end heading
     ref = fresnel.advance(cols[0], cols[1], cols[2], 1.0, 0.0, cols[5], cols[6], t, 1)
@@ -326,15 +351,49 @@ def _manoeuvre_points(path: Any, g: np.random.Generator, n: int) -> tuple[np.nda
     return x, y, ties
 
 
+def _manoeuvre_columns(path: Any, x: Any, y: Any) -> tuple[Any, ...]:
+    """The former column form of ``ManoeuvrePath.project_xy`` (numpy's ``minimum``, ``hypot``, ``sign``, ``where``
+    and the circle's projection written on arrays), an independent reference for ``classic.manoeuvre_foot``, which
+    now runs on columns too: ``(s, x, y, tangent_angle, curvature, e, cos_theta, sin_theta)``."""
+    c, big_l, d, r = path.circle, path.straight_length, path.direction, path.radius
+    cx, cy, r0x, r0y = c._frame
+    ux, uy = x - cx, y - cy
+    rho = np.sqrt(ux * ux + uy * uy)
+    at_centre = rho == 0.0
+    ux, uy, norm = np.where(at_centre, r0x, ux), np.where(at_centre, r0y, uy), np.where(at_centre, 1.0, rho)
+    nx, ny = ux / norm, uy / norm
+    e = r - rho if d > 0 else rho - r
+    cos_theta, sin_theta = (-ny, nx) if d > 0 else (ny, -nx)
+    cross = r0x * uy - r0y * ux
+    a = np.arctan2(cross if d > 0 else -cross, r0x * ux + r0y * uy)
+    s = r * (a + 2.0 * math.pi * (a < 0.0))
+    s_line = np.minimum(x, big_l)
+    d_line = np.hypot(x - s_line, y)
+    line = d_line <= np.abs(e)
+    e_line = np.where(x <= big_l, y, np.sign(y) * d_line)
+    theta = c.start_angle + (s if d > 0 else -s) / r
+    return (
+        np.where(line, s_line, big_l + s), np.where(line, s_line, cx + r * nx), np.where(line, 0.0, cy + r * ny),
+        np.where(line, 0.0, theta), np.where(line, 0.0, d / r), np.where(line, e_line, e),
+        np.where(line, 1.0, cos_theta), np.where(line, 0.0, sin_theta),
+    )  # fmt: skip
+
+
 @pytest.mark.parametrize("shape", [(1.0, 1.0, 1), (0.6, 0.0, -1), (1.7, 2.5, -1), (0.25, 0.75, 1)])
 def test_manoeuvre_projection_on_floats_equals_the_column_code(shape: tuple[float, float, int]) -> None:
-    """``ManoeuvrePath`` on one point of floats runs ``classic.manoeuvre_foot`` (what AmigoBot-v0's compiled step
-    compiles); on columns, numpy's ``minimum``, ``hypot``, ``where`` and the circle's column projection: every field
-    the same bits, ties between the line and the circle (to the line), the centre, NaN and infinities included."""
+    """``ManoeuvrePath.project_xy`` runs ``classic.manoeuvre_foot`` (what AmigoBot-v0's compiled step compiles) on one
+    point of floats and on columns: every field the same bits as the former column code (numpy's ``minimum``,
+    ``hypot``, ``where`` and the circle's column projection), ties between the line and the circle (to the line), the
+    centre, NaN and infinities included."""
     from amigo_gym.paths import ManoeuvrePath
 
     path = ManoeuvrePath(*shape)
     x, y, ties = _manoeuvre_points(path, np.random.default_rng(7), 3000)
+    with np.errstate(invalid="ignore"):
+        want = _manoeuvre_columns(path, x, y)
+        got_cols = path.project_xy(x, y)
+    for got_col, want_col in zip(got_cols, want, strict=True):
+        assert np.asarray(got_col).tobytes() == np.asarray(want_col).tobytes()
     for minimal in (False, True):
         with np.errstate(invalid="ignore"):  # NaN and infinite points
             ref = path.project_xy(x, y, minimal)

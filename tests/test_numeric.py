@@ -72,6 +72,27 @@ def test_max0_and_abs_of_floats_match_columns() -> None:
     assert numeric.max0_float(math.nan) == 0.0
 
 
+def test_sqrt_and_any_of_floats_match_columns() -> None:
+    xs = np.array([v for v in EDGES if not v < 0.0])
+    assert _same([numeric.sqrt_real(float(x)) for x in xs], numeric.sqrt_real(xs))
+    with np.errstate(invalid="ignore"):  # below 0: NaN (its sign bit is the CPU's)
+        assert np.isnan(numeric.sqrt_real(np.array([-1.0, -math.inf]))).all()
+    assert math.isnan(numeric.sqrt_real(-1.0)) and math.isnan(numeric.sqrt_real(-math.inf))
+    assert numeric.any_real(np.array([False, True])) is True
+    assert numeric.any_real(np.array([False, False])) is False
+    assert numeric.any_real(True) and not numeric.any_real(False)
+
+
+def test_arctan2_and_hypot_of_floats_match_columns_and_stay_python_floats() -> None:
+    pairs = list(itertools.product(EDGES, EDGES))
+    a = np.array([p[0] for p in pairs])
+    b = np.array([p[1] for p in pairs])
+    for real in (numeric.arctan2_real, numeric.hypot_real):
+        floats = [real(x, y) for x, y in pairs]
+        assert all(type(v) is float for v in floats)
+        assert _same(floats, real(a, b))
+
+
 def test_where_of_floats_and_columns() -> None:
     assert numeric.where_real(True, 1.0, 2.0) == 1.0
     assert numeric.where_real(False, 1.0, 2.0) == 2.0
@@ -86,13 +107,17 @@ def test_compiled_float_forms_give_the_helpers_bits() -> None:
 
     from amigo_gym.sim import _kernels  # noqa: F401  (registers the float forms)
 
-    def piece(x: float, y: float) -> tuple[float, float, float, float, float]:
+    def piece(x: float, y: float) -> tuple[float, ...]:
         return (
             numeric.clip_real(x, -1.0, 1.0),
             numeric.min_real(x, y),
             numeric.max_real(x, y),
             numeric.max0_real(x),
             numeric.abs_real(y),
+            numeric.sqrt_real(x) if numeric.any_real(x > y) else -1.0,
+            numeric.where_real(x < y, x, y),
+            numeric.arctan2_real(y, x),
+            numeric.hypot_real(x, y),
         )
 
     compiled = numba.njit(piece)

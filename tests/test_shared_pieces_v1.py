@@ -179,3 +179,22 @@ def test_ring_slots_compiled_equal_python() -> None:
                 assert kv._ring_read_slots(step, lag, length) == want
                 cols = actuators.ring_read_slots(step, np.array([lag, lag]), length)
                 assert [int(c[0]) for c in cols] == list(want)
+
+
+def test_actuator_helpers_have_their_float_forms_compiled() -> None:
+    """The actuator step's two helpers that differ between floats and columns (``actuators.SCALAR_FORMS``) have float
+    forms that the kernel lists (its fingerprint) and compiles in their place; the sort of columns gives each row the
+    float sort's values, ties included (the piece boundaries are never -0.0 or NaN: ramp times from ``|u| / rate``
+    and ``fmod`` of a delay >= 0)."""
+    from amigo_gym.sim import layout_v1
+
+    for form in actuators.SCALAR_FORMS.values():
+        assert form in layout_v1.SHARED
+    g = np.random.default_rng(4)
+    cols = [g.choice([0.0, 0.05, 0.1, 0.07, 0.1 / 3.0], 64) for _ in range(9)]
+    ws: list[Any] = [0.0, *cols]
+    actuators.sort_knots(ws, 1, 9)
+    for i in range(64):
+        row = [0.0, *(float(c[i]) for c in cols)]
+        actuators.sort_knots(row, 1, 9)
+        assert row[1:] == [float(c[i]) for c in ws[1:]]

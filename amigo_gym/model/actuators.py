@@ -73,8 +73,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
-from amigo_gym.model.kinematics import Real, body_velocity_columns, body_velocity_of, wheel_rates_of
-from amigo_gym.model.numeric import abs_real, any_array, copysign_real, max_real, min_real, where_real
+from amigo_gym.model.kinematics import Real, body_velocity_of, wheel_rates_of
+from amigo_gym.model.numeric import abs_real, any_array, any_real, copysign_real, max_real, min_real, where_real
 from amigo_gym.model.params import RobotParams, check_range
 
 __all__ = [
@@ -163,7 +163,14 @@ def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Re
         the clipped setpoints [rad/s], columns of the broadcast shape.
     """
     w_max = nominal.max_wheel_rate
-    return _min(_max(w1c, -w_max), w_max), _min(_max(w2c, -w_max), w_max)
+    return clip_setpoint(w1c, w_max), clip_setpoint(w2c, w_max)
+
+
+def clip_setpoint(w: Real, w_max: float) -> Real:
+    """One setpoint (float or column) clipped to ``[-w_max, w_max]`` [rad/s]: ``min(max(w, -w_max), w_max)`` by the
+    helpers of :mod:`amigo_gym.model.numeric` (a NaN float gives ``-w_max``, a NaN element NaN). Written once: the
+    column step, the float step and the compiled step (:func:`actuator_step_ws`)."""
+    return _min(_max(w, -w_max), w_max)
 
 
 def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Real]:
@@ -405,33 +412,6 @@ class ActuatorStep(NamedTuple):
     w_true: Real
 
 
-def _channel(
-    u0: Real, c_old: Real, c_new: Real, accel: float, decel: float, t_s: Real, dt: float
-) -> tuple[list[Real], list[Real], list[Real], Real]:
-    """One speed channel over the step: targets ``c_old`` on ``[0, t_s)``, ``c_new`` on ``[t_s, dt]``.
-
-    Returns the 7 breakpoints ``0 <= b_1 <= ... <= b_5 <= dt`` (as 0, 4 ramp breakpoints, t_s, dt in
-    order), the value and slope at the start of each of the 6 pieces, and the value at ``dt``.
-    """
-    r1 = ramp(u0, c_old, accel, decel, t_s)
-    r2 = ramp(r1.u_b, c_new, accel, decel, dt - t_s)
-    knots: list[Real] = [0.0, r1.t_a, r1.t_b, t_s, _min(t_s + r2.t_a, dt), _min(t_s + r2.t_b, dt), dt]
-    values: list[Real] = [u0, r1.u_a, r1.u_b, r1.u_b, r2.u_a, r2.u_b]
-    slopes: list[Real] = [r1.s_a, r1.s_b, 0.0, r2.s_a, r2.s_b, 0.0]
-    return knots, values, slopes, r2.u_b
-
-
-def _evaluate(knots: list[Real], values: list[Real], slopes: list[Real], t: Real, mid: Real) -> tuple[Real, Real]:
-    """Value at ``t`` and slope of the channel piece that contains ``mid`` (``t <= mid``, same piece)."""
-    val = values[0] + slopes[0] * t
-    slope = slopes[0]
-    for i in range(1, len(values)):
-        inside = mid >= knots[i]
-        val = _where(inside, values[i] + slopes[i] * (t - knots[i]), val)
-        slope = _where(inside, slopes[i], slope)
-    return val, slope
-
-
 def actuator_step(
     x: Real,
     y: Real,
@@ -491,122 +471,27 @@ def actuator_step(
     """
     if n_sub is None:
         n_sub = step_subintervals(dt, nominal)
-    if not _any_array(
-        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
-    ):
-        return _actuator_step_float(
-            float(x), float(y), float(beta), float(w1), float(w2), float(w1c_old), float(w2c_old),
-            float(w1c_new), float(w2c_new), float(t_switch), dt, nominal, limits, float(r1_true),
-            float(r2_true), float(l1_true), float(slip1), float(slip2), n_sub,
-        )  # fmt: skip
     cols: tuple[Real, ...] = (
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
     )  # fmt: skip
-    batch = _any_array(*cols)
-    if batch:
+    if _any_array(*cols):  # columns: every input and output an array of the broadcast shape
         arrays = np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols))
         cols = tuple(np.array(a, dtype=np.float64) for a in arrays)
     else:
         cols = tuple(float(c) for c in cols)
     x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, r1t, r2t, l1t, s1, s2 = cols
-
-    # 1. commands from the clipped setpoints, with the nominal robot
-    vc_old, wc_old = body_velocity_columns(*clip_setpoints(w1c_old, w2c_old, nominal), nominal)
-    vc_new, wc_new = body_velocity_columns(*clip_setpoints(w1c_new, w2c_new, nominal), nominal)
-    # 2. ramps of the firmware's speeds
-    v0, om0 = body_velocity_columns(w1, w2, nominal)
-    kv, uv, sv, v_end = _channel(v0, vc_old, vc_new, limits.acceleration, limits.deceleration, t_s, dt)
-    kw, uw, sw, w_end = _channel(om0, wc_old, wc_new, limits.rot_acceleration, limits.rot_deceleration, t_s, dt)
-    inner = [kv[1], kv[2], kv[3], kv[4], kv[5], kw[1], kw[2], kw[4], kw[5]]
-    if batch:
-        srt = np.sort(np.stack(inner), axis=0)
-        times: list[Real] = [0.0, *(srt[i] for i in range(len(inner))), dt]
-    else:
-        times = [0.0, *sorted(inner), dt]
-
-    # 3. pieces
-    g1 = (1.0 - s1) * r1t
-    g2 = (1.0 - s2) * r2t
-    inv_2l1t = 0.5 / l1t
-    l1n, r1n, r2n = nominal.l1, nominal.r1, nominal.r2
-    da1: Real = 0.0
-    da2: Real = 0.0
-    dist: Real = 0.0
-    for j in range(PIECES):
-        t0, t1 = times[j], times[j + 1]
-        length = t1 - t0
-        if batch:
-            live = length > 0.0
-            if not np.any(live):
-                continue
-        elif not length > 0.0:
-            continue
-        mid = 0.5 * (t0 + t1)
-        v, a = _evaluate(kv, uv, sv, t0, mid)
-        om, al = _evaluate(kw, uw, sw, t0, mid)
-        p1, q1, p2, q2, vt, at, wt, alt = piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
-        nx: Real
-        ny: Real
-        nb: Real
-        if batch and 2 * int(np.count_nonzero(live)) < np.size(live):
-            # most rows have no piece here: the quadrature on the live rows only (the same bits per row)
-            m = np.asarray(live)
-            xa, ya, ba = np.array(x), np.array(y), np.array(beta)
-            v_m, a_m, w_m, al_m, t_m = (np.asarray(c)[m] for c in (vt, at, wt, alt, length))
-            xa[m], ya[m], ba[m] = fresnel.advance(xa[m], ya[m], ba[m], v_m, a_m, w_m, al_m, t_m, n_sub)
-            nx, ny, nb = xa, ya, ba
-        else:
-            nx, ny, nb = fresnel.advance(x, y, beta, vt, at, wt, alt, length, n_sub)
-        half = 0.5 * length
-        nda1 = da1 + length * (p1 + q1 * half)
-        nda2 = da2 + length * (p2 + q2 * half)
-        ndist = dist + length * (vt + at * half)
-        if batch:
-            x, y, beta = np.where(live, nx, x), np.where(live, ny, y), np.where(live, nb, beta)
-            da1, da2, dist = np.where(live, nda1, da1), np.where(live, nda2, da2), np.where(live, ndist, dist)
-        else:
-            x, y, beta, da1, da2, dist = nx, ny, nb, nda1, nda2, ndist
-
-    # 4. the new actuator state and the true speeds at the end
-    w1n, w2n = wheel_rates_columns(v_end, w_end, nominal)
-    v_true = 0.5 * (g1 * w1n + g2 * w2n)
-    w_true = (g1 * w1n - g2 * w2n) * inv_2l1t
-    return ActuatorStep(x, y, beta, w1n, w2n, da1, da2, dist, v_true, w_true)
+    nn = fresnel.NODES * n_sub
+    out = actuator_step_ws(
+        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.node_table(n_sub), 0, nn,
+        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, dt,
+        nominal.max_wheel_rate, nominal.l1, nominal.r1, nominal.r2, 2.0 * nominal.l1,
+        limits.acceleration, limits.deceleration, limits.rot_acceleration, limits.rot_deceleration,
+        r1t, r2t, l1t, s1, s2,
+    )  # fmt: skip
+    return ActuatorStep(*out)
 
 
-# -- the float path of one robot ------------------------------------------------------------------------
-#
-# The expressions of ramp, _channel, _evaluate and actuator_step for Python floats, written out flat (the
-# selections as ``if``, which do no arithmetic): the same bits as the column code (tests/test_float_paths.py
-# compares them), without its per-call overhead. The pose advances over all pieces with one np.cos and one
-# np.sin call (:func:`amigo_gym.model.fresnel.advance_nodes`).
-
-
-def _ramp_float(
-    u0: float, target: float, accel: float, decel: float, duration: float
-) -> tuple[float, float, float, float, float, float]:
-    """:func:`ramp` for floats: ``(t_a, t_b, u_a, u_b, s_a, s_b)``."""
-    if u0 * target < 0.0:
-        u_z = 0.0
-        t_z = abs(u0) / decel
-        s_a = math.copysign(decel, -u0)
-    else:
-        u_z = u0
-        t_z = 0.0
-        s_a = 0.0
-    d = target - u_z
-    rate = accel if abs(target) > abs(u_z) else decel
-    t_r = t_z + abs(d) / rate
-    s_b = math.copysign(rate, d)
-    z_in = t_z <= duration
-    u_a = u_z if z_in else u0 + s_a * duration
-    if t_r <= duration:
-        u_b = target
-    elif z_in:
-        u_b = u_z + s_b * (duration - t_z)
-    else:
-        u_b = u_a
-    return (t_z if t_z <= duration else duration), (t_r if t_r <= duration else duration), u_a, u_b, s_a, s_b
+# -- the step written once: floats, columns and the compiled step ----------------------------------------
 
 
 @overload
@@ -648,51 +533,13 @@ def piece_rates(
     )
 
 
-def _clip_float(w: float, w_max: float) -> float:
-    """:func:`clip_setpoints` of one setpoint for floats."""
-    lo = -w_max
-    w = w if w >= lo else lo
-    return w if w <= w_max else w_max
-
-
-def _actuator_step_float(
-    x: float,
-    y: float,
-    beta: float,
-    w1: float,
-    w2: float,
-    w1c_old: float,
-    w2c_old: float,
-    w1c_new: float,
-    w2c_new: float,
-    t_s: float,
-    dt: float,
-    nominal: RobotParams,
-    limits: ActuatorParams,
-    r1t: float,
-    r2t: float,
-    l1t: float,
-    s1: float,
-    s2: float,
-    n_sub: int,
-) -> ActuatorStep:
-    """:func:`actuator_step` for Python floats (the same bits): :func:`actuator_step_ws` on scratch lists."""
-    nn = fresnel.NODES * n_sub
-    out = actuator_step_ws(
-        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.node_table(n_sub), 0, nn,
-        x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, dt,
-        nominal.max_wheel_rate, nominal.l1, nominal.r1, nominal.r2, 2.0 * nominal.l1,
-        limits.acceleration, limits.deceleration, limits.rot_acceleration, limits.rot_deceleration,
-        r1t, r2t, l1t, s1, s2,
-    )  # fmt: skip
-    return ActuatorStep(*out)
-
-
-# The step of one robot written once on a scratch buffer ``ws`` (a list of floats in the float path; the
-# workspace array of AmigoBot-v1's compiled step, which compiles these functions as they are:
-# amigo_gym.sim.layout_v1.SHARED). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
-# 6 values and 6 slopes (:func:`_channel`'s lists), the 11 piece boundaries, then ``(vt, at, wt, alt, length)``
-# of each live piece.
+# The step written once on a scratch buffer ``ws``: a list of floats (one robot) or of columns (a batch: the vector
+# env's numpy route), or the workspace array of AmigoBot-v1's compiled step, which compiles these functions as they
+# are (amigo_gym.sim.layout_v1.SHARED). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
+# 6 values and 6 slopes, the 11 piece boundaries, then ``(vt, at, wt, alt, length)`` of each live piece (on columns:
+# of each piece live in some row). Two steps differ between floats and columns, each a helper with a float form
+# that the kernel compiles in its place (:data:`SCALAR_FORMS`): the sort of the piece boundaries
+# (:func:`sort_knots`) and the pose over the pieces (:func:`advance_pieces`).
 
 #: scratch entries of one speed channel: 7 knots, 6 values, 6 slopes
 CHANNEL_SCRATCH = 19
@@ -705,21 +552,82 @@ SCRATCH_PIECES = SCRATCH_TIMES + PIECES + 1
 SCRATCH = SCRATCH_PIECES + 5 * PIECES
 
 
+def sort_knots_float(ws: fresnel.Buffer, i0: int, n: int) -> None:
+    """Sort the floats ``ws[i0 : i0 + n]`` in place, ascending (an insertion sort: stable, as ``sorted()``): the float
+    form of :func:`sort_knots`."""
+    for i in range(i0 + 1, i0 + n):
+        key = ws[i]
+        j = i - 1
+        while j >= i0 and key < ws[j]:
+            ws[j + 1] = ws[j]
+            j -= 1
+        ws[j + 1] = key
+
+
+def sort_knots(ws: Any, i0: int, n: int) -> None:
+    """Sort ``ws[i0 : i0 + n]`` in place, ascending: row by row for a list of columns (``np.sort``; the same values as
+    :func:`sort_knots_float`, which sorts floats and which the compiled step runs in its place)."""
+    if not _any_array(*ws[i0 : i0 + n]):
+        sort_knots_float(ws, i0, n)
+        return
+    ws[i0 : i0 + n] = list(np.sort(np.stack(np.broadcast_arrays(*ws[i0 : i0 + n])), axis=0))
+
+
+def advance_pieces(
+    buf: Any,
+    b: int,
+    m: int,
+    x: Any,
+    y: Any,
+    theta: Any,
+    pieces: Any,
+    p: int,
+    n_pieces: int,
+    nodes: Any,
+    j: int,
+    nn: int,
+) -> tuple[Any, Any, Any]:
+    """:func:`amigo_gym.model.fresnel.advance_nodes` of the pieces ``(v0, a, w0, alpha, t)`` at ``pieces[p + 5 q]``,
+    a piece of length ``t <= 0`` (or NaN) leaving a row unchanged: on floats (every piece is live: its float form,
+    which the compiled step runs) all pieces at once; on columns piece by piece, each advancing the rows where it is
+    live (on those rows alone when they are fewer than half), the same bits per row."""
+    if not _any_array(x):  # floats (actuator_step makes every input a column when one is)
+        return fresnel.advance_nodes(buf, b, m, x, y, theta, pieces, p, n_pieces, nodes, j, nn)
+    for q in range(n_pieces):
+        piece = pieces[p + 5 * q : p + 5 * q + 5]
+        live = np.asarray(piece[4] > 0.0)
+        if 2 * int(np.count_nonzero(live)) < live.size:  # few rows: the quadrature of the live rows alone
+            x, y, theta = np.array(x), np.array(y), np.array(theta)
+            rows = [np.asarray(c)[live] for c in (x, y, theta, *piece)]
+            x[live], y[live], theta[live] = fresnel.advance_nodes(
+                [0.0] * (3 * nn), 0, nn, rows[0], rows[1], rows[2], rows[3:], 0, 1, nodes, j, nn
+            )
+            continue
+        nx, ny, nb = fresnel.advance_nodes([0.0] * (3 * nn), 0, nn, x, y, theta, piece, 0, 1, nodes, j, nn)
+        x, y, theta = np.where(live, nx, x), np.where(live, ny, y), np.where(live, nb, theta)
+    return x, y, theta
+
+
+#: the helpers of the step that differ between floats and columns, each with the float form that the compiled step
+#: runs in its place (:func:`amigo_gym.sim.layout.shared_compiler`)
+SCALAR_FORMS: dict[Any, Any] = {sort_knots: sort_knots_float, advance_pieces: fresnel.advance_nodes}
+
+
 def _channel_ws(
-    ws: fresnel.Buffer, k: int, u0: float, c_old: float, c_new: float, accel: float, decel: float, t_s: float, dt: float
-) -> float:
-    """:func:`_channel` on floats into ``ws``: knots ``ws[k : k + 7]``, values ``ws[k + 7 : k + 13]``, slopes
+    ws: Any, k: int, u0: Real, c_old: Real, c_new: Real, accel: float, decel: float, t_s: Real, dt: float
+) -> Real:
+    """One speed channel over the step, targets ``c_old`` on ``[0, t_s)``, ``c_new`` on ``[t_s, dt]`` (:func:`ramp`
+    twice), into ``ws``: the 7 knots ``0 <= ... <= dt`` (0, 4 ramp breakpoints, ``t_s``, ``dt`` in order) at
+    ``ws[k : k + 7]``, the value and slope at the start of each of the 6 pieces at ``ws[k + 7 : k + 13]`` and
     ``ws[k + 13 : k + 19]``; returns the value at ``dt``."""
-    ta1, tb1, ua1, ub1, sa1, sb1 = _ramp_float(u0, c_old, accel, decel, t_s)
-    ta2, tb2, ua2, ub2, sa2, sb2 = _ramp_float(ub1, c_new, accel, decel, dt - t_s)
-    k4 = t_s + ta2
-    k5 = t_s + tb2
+    ta1, tb1, ua1, ub1, sa1, sb1 = ramp(u0, c_old, accel, decel, t_s)
+    ta2, tb2, ua2, ub2, sa2, sb2 = ramp(ub1, c_new, accel, decel, dt - t_s)
     ws[k] = 0.0
     ws[k + 1] = ta1
     ws[k + 2] = tb1
     ws[k + 3] = t_s
-    ws[k + 4] = k4 if k4 <= dt else dt
-    ws[k + 5] = k5 if k5 <= dt else dt
+    ws[k + 4] = _min(t_s + ta2, dt)
+    ws[k + 5] = _min(t_s + tb2, dt)
     ws[k + 6] = dt
     v = k + 7
     ws[v] = u0
@@ -738,37 +646,38 @@ def _channel_ws(
     return ub2
 
 
-def _evaluate_ws(ws: fresnel.Buffer, k: int, t: float, mid: float) -> tuple[float, float]:
-    """:func:`_evaluate` on floats for the channel at ``ws[k:]`` (:func:`_channel_ws`)."""
+def _evaluate_ws(ws: Any, k: int, t: Real, mid: Real) -> tuple[Real, Real]:
+    """Value at ``t`` and slope of the piece of the channel at ``ws[k:]`` (:func:`_channel_ws`) that contains ``mid``
+    (``t <= mid``, the same piece)."""
     v = k + 7
     s = k + 13
     val = ws[v] + ws[s] * t
     slope = ws[s]
     for i in range(1, 6):
-        if mid >= ws[k + i]:
-            val = ws[v + i] + ws[s + i] * (t - ws[k + i])
-            slope = ws[s + i]
+        inside = mid >= ws[k + i]
+        val = _where(inside, ws[v + i] + ws[s + i] * (t - ws[k + i]), val)
+        slope = _where(inside, ws[s + i], slope)
     return val, slope
 
 
 def actuator_step_ws(
-    ws: fresnel.Buffer,
+    ws: Any,
     k: int,
-    buf: fresnel.Buffer,
+    buf: Any,
     b: int,
     nodes: fresnel.Buffer,
     node_at: int,
     nn: int,
-    x: float,
-    y: float,
-    beta: float,
-    w1: float,
-    w2: float,
-    w1c_old: float,
-    w2c_old: float,
-    w1c_new: float,
-    w2c_new: float,
-    t_s: float,
+    x: Real,
+    y: Real,
+    beta: Real,
+    w1: Real,
+    w2: Real,
+    w1c_old: Real,
+    w2c_old: Real,
+    w1c_new: Real,
+    w2c_new: Real,
+    t_s: Real,
     dt: float,
     w_max: float,
     l1n: float,
@@ -779,14 +688,14 @@ def actuator_step_ws(
     decel: float,
     rot_accel: float,
     rot_decel: float,
-    r1t: float,
-    r2t: float,
-    l1t: float,
-    s1: float,
-    s2: float,
-) -> tuple[float, float, float, float, float, float, float, float, float, float]:
-    """:func:`actuator_step` of one robot on floats (the same expressions, the selections as ``if``): the float path
-    and the compiled step of ``AmigoBot-v1`` run this one source.
+    r1t: Real,
+    r2t: Real,
+    l1t: Real,
+    s1: Real,
+    s2: Real,
+) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real, Real, Real]:
+    """:func:`actuator_step` on floats (one robot) or columns of one shape (a batch; ``ws`` and ``buf`` lists): the
+    float path, the column route and the compiled step of ``AmigoBot-v1`` run this one source.
 
     Args:
         ws: scratch of :data:`SCRATCH` entries from ``ws[k]`` (offsets :data:`SCRATCH_V` ...).
@@ -803,15 +712,15 @@ def actuator_step_ws(
         the fields of :class:`ActuatorStep` as a tuple of floats.
     """
     # 1. commands (clip_setpoints, body_velocity_columns)
-    vc_old, wc_old = body_velocity_of(_clip_float(w1c_old, w_max), _clip_float(w2c_old, w_max), r1n, r2n, two_l1)
-    vc_new, wc_new = body_velocity_of(_clip_float(w1c_new, w_max), _clip_float(w2c_new, w_max), r1n, r2n, two_l1)
+    vc_old, wc_old = body_velocity_of(clip_setpoint(w1c_old, w_max), clip_setpoint(w2c_old, w_max), r1n, r2n, two_l1)
+    vc_new, wc_new = body_velocity_of(clip_setpoint(w1c_new, w_max), clip_setpoint(w2c_new, w_max), r1n, r2n, two_l1)
     # 2. ramps
     v0, om0 = body_velocity_of(w1, w2, r1n, r2n, two_l1)
     kv = k + SCRATCH_V
     kw = k + SCRATCH_W
     v_end = _channel_ws(ws, kv, v0, vc_old, vc_new, accel, decel, t_s, dt)
     w_end = _channel_ws(ws, kw, om0, wc_old, wc_new, rot_accel, rot_decel, t_s, dt)
-    # times = [0, *sorted(9 inner breakpoints), dt] (an insertion sort: stable, as sorted())
+    # times = [0, *sorted(9 inner breakpoints), dt]
     tm = k + SCRATCH_TIMES
     ws[tm] = 0.0
     ws[tm + 1] = ws[kv + 1]
@@ -824,27 +733,22 @@ def actuator_step_ws(
     ws[tm + 8] = ws[kw + 4]
     ws[tm + 9] = ws[kw + 5]
     ws[tm + 10] = dt
-    for i in range(2, 10):
-        key = ws[tm + i]
-        j = i - 1
-        while j >= 1 and key < ws[tm + j]:
-            ws[tm + j + 1] = ws[tm + j]
-            j -= 1
-        ws[tm + j + 1] = key
+    sort_knots(ws, tm + 1, 9)
     # 3. pieces: their rates, the wheel angles and the distance; then the pose over all (fresnel.advance_nodes)
     g1 = (1.0 - s1) * r1t
     g2 = (1.0 - s2) * r2t
     inv_2l1t = 0.5 / l1t
-    da1 = 0.0
-    da2 = 0.0
-    dist = 0.0
+    da1: Real = 0.0
+    da2: Real = 0.0
+    dist: Real = 0.0
     pcs = k + SCRATCH_PIECES
     n_pieces = 0
     for j in range(PIECES):
         t0 = ws[tm + j]
         t1 = ws[tm + j + 1]
         length = t1 - t0
-        if not length > 0.0:
+        live = length > 0.0
+        if not any_real(live):
             continue
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate_ws(ws, kv, t0, mid)
@@ -858,10 +762,10 @@ def actuator_step_ws(
         ws[pc + 4] = length
         n_pieces += 1
         half = 0.5 * length
-        da1 = da1 + length * (p1 + q1 * half)
-        da2 = da2 + length * (p2 + q2 * half)
-        dist = dist + length * (vt + at * half)
-    x, y, beta = fresnel.advance_nodes(buf, b, PIECES * nn, x, y, beta, ws, pcs, n_pieces, nodes, node_at, nn)
+        da1 = _where(live, da1 + length * (p1 + q1 * half), da1)
+        da2 = _where(live, da2 + length * (p2 + q2 * half), da2)
+        dist = _where(live, dist + length * (vt + at * half), dist)
+    x, y, beta = advance_pieces(buf, b, PIECES * nn, x, y, beta, ws, pcs, n_pieces, nodes, node_at, nn)
     # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
     w1n, w2n = wheel_rates_of(v_end, w_end, l1n, r1n, r2n)
     v_true = 0.5 * (g1 * w1n + g2 * w2n)

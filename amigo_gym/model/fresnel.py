@@ -33,7 +33,8 @@ step compiles as they are.
 from __future__ import annotations
 
 import math
-from typing import Protocol, cast
+import warnings
+from typing import Any, Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,7 +47,6 @@ __all__ = [
     "subintervals",
     "subinterval_count",
     "advance",
-    "advance_float",
     "advance_chain_float",
     "unit_speed_pose",
     "unit_speed_poses",
@@ -120,34 +120,30 @@ def advance(
 
     Returns:
         ``(x', y', theta')``, columns of the broadcast shape of the inputs.
+
+    One source for floats, columns and the compiled step: :func:`advance_nodes` of one piece on a node buffer (a list
+    whose entries are floats, or columns of the broadcast shape).
     """
-    if not isinstance(t, np.ndarray) and not _any_array(x, y, theta, v0, a, w0, alpha):
-        return advance_float(x, y, theta, v0, a, w0, alpha, t, n_sub)  # type: ignore[arg-type]
-    u, uw = _nodes(n_sub)
-    # all nodes at once: arrays of shape (nodes, *shape), the same expressions element by element; then the
-    # sums node by node in a fixed order, so that a float and an array element get the same bits
-    nd = max(np.ndim(c) for c in (x, y, theta, v0, a, w0, alpha, t))
-    col = (len(u),) + (1,) * nd
-    u_col = np.asarray(u).reshape(col)
-    half_alpha = 0.5 * alpha
-    tau = u_col * t
-    phase = theta + tau * (w0 + half_alpha * tau)
-    weight = (v0 + a * tau) * np.asarray(uw).reshape(col)
-    px = weight * np.cos(phase)
-    py = weight * np.sin(phase)
-    dx = 0.0 + px[0]
-    dy = 0.0 + py[0]
-    for k in range(1, len(u)):
-        dx = dx + px[k]
-        dy = dy + py[k]
-    return x + dx * t, y + dy * t, theta + t * (w0 + half_alpha * t)
+    table = node_table(n_sub)
+    m = NODES * n_sub
+    buf: list[Any] = [0.0] * (3 * m)
+    pieces: list[Any] = [v0, a, w0, alpha, t]
+    out: tuple[Real, Real, Real] = advance_nodes(buf, 0, m, x, y, theta, pieces, 0, 1, table, 0, m)  # type: ignore[arg-type]
+    return out
 
 
-def _any_array(*cols: object) -> bool:
-    for c in cols:  # noqa: SIM110  (a loop: a third of the time of any() over a generator)
-        if isinstance(c, np.ndarray):
-            return True
-    return False
+def __getattr__(name: str) -> Any:
+    """``advance_float`` (removed in 0.2: :func:`advance` runs floats and columns alike; goes in 0.3): :func:`advance`,
+    with a warning."""
+    if name == "advance_float":
+        warnings.warn(
+            "amigo_gym.model.fresnel.advance_float is deprecated: since amigo_gym 0.2 fresnel.advance runs Python "
+            "floats and columns alike (the same bits); it goes in 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return advance
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
@@ -181,17 +177,23 @@ class Buffer(Protocol):
 
 def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
     """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``: numpy's
-    ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer; numpy gives each element the bits it gives a
-    scalar).
+    ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer of floats, or of columns of one shape: then
+    one 2-D array; numpy gives each element the bits it gives a scalar).
 
     The compiled step does not compile this body: it overloads this function with the loop of the C library's
     ``math.cos``/``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`; the same bits where
     :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`, which the environment checks before using the kernel).
     """
-    lst = cast("list[float]", buf)
+    lst = cast("list[Any]", buf)
     arr = _np_array(lst[b : b + n])
-    lst[b + m : b + m + n] = _np_cos(arr).tolist()
-    lst[b + 2 * m : b + 2 * m + n] = _np_sin(arr).tolist()
+    cos = _np_cos(arr)
+    sin = _np_sin(arr)
+    if arr.ndim > 1:  # a list of columns (fresnel.advance of columns): the rows
+        lst[b + m : b + m + n] = list(cos)
+        lst[b + 2 * m : b + 2 * m + n] = list(sin)
+        return
+    lst[b + m : b + m + n] = cos.tolist()
+    lst[b + 2 * m : b + 2 * m + n] = sin.tolist()
 
 
 def node_phases(
@@ -315,15 +317,6 @@ def node_table(n_sub: int) -> list[float]:
 
 
 # -- the float path's entry points: thin wrappers on lists --------------------------------------------------
-
-
-def advance_float(
-    x: float, y: float, theta: float, v0: float, a: float, w0: float, alpha: float, t: float, n_sub: int = 1
-) -> tuple[float, float, float]:
-    """:func:`advance` for Python floats: the same bits, computed faster (:func:`advance_nodes` of one piece)."""
-    table = node_table(n_sub)
-    m = NODES * n_sub
-    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, [v0, a, w0, alpha, t], 0, 1, table, 0, m)
 
 
 def unit_speed_pose(

@@ -25,6 +25,8 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.model.numeric import arctan2_real, sqrt_real
+
 __all__ = [
     "body_velocity",
     "wheel_rates",
@@ -207,9 +209,8 @@ def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
     return alpha + rate * dt
 
 
-def col_sqrt(x: Real) -> Real:
-    """``np.sqrt(x)``; ``math.sqrt(x)`` for a scalar ``x`` (the same value: IEEE 754 rounds sqrt exactly)."""
-    return np.sqrt(x) if isinstance(x, np.ndarray) else math.sqrt(x)
+#: ``np.sqrt(x)``; ``math.sqrt(x)`` for a scalar ``x`` (the same value: IEEE 754 rounds sqrt exactly)
+col_sqrt = sqrt_real
 
 
 def col_exp(x: Real) -> Real:
@@ -217,12 +218,8 @@ def col_exp(x: Real) -> Real:
     return np.exp(x) if isinstance(x, np.ndarray) else float(np.exp(x))
 
 
-def col_arctan2(y: Real, x: Real) -> Real:
-    """``np.arctan2(y, x)``; a Python float for scalar ``y`` and ``x``."""
-    if isinstance(y, np.ndarray) or isinstance(x, np.ndarray):
-        out: Real = np.arctan2(y, x)
-        return out
-    return float(np.arctan2(y, x))
+#: ``np.arctan2(y, x)``; a Python float for scalar ``y`` and ``x``
+col_arctan2 = arctan2_real
 
 
 def _sinc(x: Real, sin_x: Real) -> Real:

@@ -38,19 +38,31 @@ __all__ = [
     "max0_real",
     "abs_float",
     "abs_real",
+    "where_float",
     "where_real",
+    "copysign_float",
     "copysign_real",
+    "arctan2_float",
+    "arctan2_real",
+    "hypot_float",
+    "hypot_real",
+    "sqrt_float",
+    "sqrt_real",
+    "any_float",
+    "any_real",
     "SCALAR_FORMS",
 ]
 
 #: a float or a column of floats
 Real: TypeAlias = float | NDArray[np.float64]
 
+_ndarray = np.ndarray  # a module global: isinstance against it is cheaper than against np.ndarray
+
 
 def any_array(*cols: object) -> bool:
     """Whether any argument is a numpy array."""
     for c in cols:  # noqa: SIM110  (a loop: a third of the time of any() over a generator)
-        if isinstance(c, np.ndarray):
+        if isinstance(c, _ndarray):
             return True
     return False
 
@@ -65,7 +77,7 @@ def clip_float(x: float, low: float, high: float) -> float:
 def clip_real(x: Real, low: float, high: float) -> Real:
     """``x`` clipped to ``[low, high]``: ``np.minimum(np.maximum(x, low), high)`` of an array (``np.clip``'s values,
     less overhead), :func:`clip_float` of a float."""
-    if isinstance(x, np.ndarray):
+    if isinstance(x, _ndarray):
         out: Real = np.minimum(np.maximum(x, low), high)
         return out
     return clip_float(x, low, high)
@@ -104,7 +116,7 @@ def max0_float(x: float) -> float:
 
 def max0_real(x: Real) -> Real:
     """``np.maximum(x, 0.0)`` of an array, :func:`max0_float` of a float."""
-    if isinstance(x, np.ndarray):
+    if isinstance(x, _ndarray):
         out: Real = np.maximum(x, 0.0)
         return out
     return max0_float(x)
@@ -117,23 +129,89 @@ def abs_float(x: float) -> float:
 
 def abs_real(x: Real) -> Real:
     """``np.abs`` of an array, ``abs`` of a float."""
-    return np.abs(x) if isinstance(x, np.ndarray) else abs(x)
+    return np.abs(x) if isinstance(x, _ndarray) else abs(x)
+
+
+def where_float(cond: bool, a: float, b: float) -> float:
+    """``a`` if ``cond`` else ``b``, of floats (:func:`where_real`)."""
+    return a if cond else b
 
 
 def where_real(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
-    """``a`` where ``cond`` else ``b`` (``np.where`` when any argument is an array)."""
-    if isinstance(cond, np.ndarray) or any_array(a, b):
+    """``a`` where ``cond`` else ``b`` (``np.where`` when any argument is an array, else :func:`where_float`'s
+    expression, inline: the float path calls this often)."""
+    if isinstance(cond, _ndarray) or isinstance(a, _ndarray) or isinstance(b, _ndarray):
         out: Real = np.where(cond, a, b)
         return out
     return a if cond else b
 
 
+def copysign_float(x: float, y: float) -> float:
+    """``|x|`` with the sign of ``y``, of floats (``math.copysign``)."""
+    return math.copysign(x, y)
+
+
 def copysign_real(x: Real, y: Real) -> Real:
-    """``|x|`` with the sign of ``y`` (``np.copysign`` of arrays, ``math.copysign`` of floats)."""
+    """``|x|`` with the sign of ``y`` (``np.copysign`` of arrays, :func:`copysign_float` of floats)."""
     if any_array(x, y):
         out: Real = np.copysign(x, y)
         return out
-    return math.copysign(x, y)
+    return copysign_float(x, y)  # type: ignore[arg-type]
+
+
+def arctan2_float(y: float, x: float) -> float:
+    """``np.arctan2`` of two floats as a Python float (numpy's function; compiled, the C library's ``atan2``, which
+    numpy calls where it does not vectorise: AVX-512 builds of numpy vectorise it and may differ by an ulp)."""
+    return float(np.arctan2(y, x))
+
+
+def arctan2_real(y: Real, x: Real) -> Real:
+    """``np.arctan2(y, x)`` of arrays, :func:`arctan2_float` of floats."""
+    if any_array(y, x):
+        out: Real = np.arctan2(y, x)
+        return out
+    return arctan2_float(y, x)  # type: ignore[arg-type]
+
+
+def hypot_float(x: float, y: float) -> float:
+    """``np.hypot`` of two floats as a Python float (numpy's, the C library's ``hypot``; Python's ``math.hypot`` is its
+    own algorithm)."""
+    return float(np.hypot(x, y))
+
+
+def hypot_real(x: Real, y: Real) -> Real:
+    """``np.hypot(x, y)`` of arrays, :func:`hypot_float` of floats."""
+    if any_array(x, y):
+        out: Real = np.hypot(x, y)
+        return out
+    return hypot_float(x, y)  # type: ignore[arg-type]
+
+
+def sqrt_float(x: float) -> float:
+    """``np.sqrt`` of one float: ``math.sqrt`` (IEEE 754 rounds square roots exactly: numpy's bits), NaN below 0
+    (where ``math.sqrt`` would raise; the sign bit of that NaN may differ from numpy's, which is the CPU's)."""
+    return math.sqrt(x) if (x >= 0.0 or x != x) else math.nan
+
+
+def sqrt_real(x: Real) -> Real:
+    """``np.sqrt`` of an array, :func:`sqrt_float` of a float."""
+    if isinstance(x, _ndarray):
+        out: Real = np.sqrt(x)
+        return out
+    return sqrt_float(x)
+
+
+def any_float(cond: bool) -> bool:
+    """Whether the one condition ``cond`` holds (:func:`any_real` of a bool)."""
+    return cond
+
+
+def any_real(cond: bool | NDArray[np.bool_]) -> bool:
+    """Whether any element of ``cond`` holds (``np.any`` of an array, the bool itself): a branch that a column takes
+    when any of its rows would."""
+    if isinstance(cond, _ndarray):
+        return bool(cond.any())
+    return any_float(cond)
 
 
 #: the polymorphic helpers the compiled steps' shared pieces call, each with the float form numba compiles in its
@@ -144,4 +222,10 @@ SCALAR_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     max_real: max_float,
     max0_real: max0_float,
     abs_real: abs_float,
+    sqrt_real: sqrt_float,
+    any_real: any_float,
+    where_real: where_float,
+    copysign_real: copysign_float,
+    arctan2_real: arctan2_float,
+    hypot_real: hypot_float,
 }

@@ -28,7 +28,12 @@ The presets (:data:`PRESETS`) are choices of this project, not measurements: ``"
 calibrated robot on a clean floor, ``"hard"`` an uncalibrated one with worn tyres, a slippery floor and
 a slow link. Held-out conditions for the benchmark lie outside ``"hard"``.
 
-Imports only numpy, :mod:`amigo_gym.model.params` and :mod:`amigo_gym.model.kinematics` (column type).
+The per-step draws are written once (issue 19): :func:`step_uniforms`, :func:`step_normals`, :func:`box_muller` and
+the counter generator run on Python floats (one robot), on columns (the vector env's numpy route) and compiled
+(AmigoBot-v1's kernel).
+
+Imports only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` (column type) and
+:mod:`amigo_gym.model.numeric` (the polymorphic helpers).
 """
 
 from __future__ import annotations
@@ -36,12 +41,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real
+from amigo_gym.model.numeric import any_real, sqrt_real
 from amigo_gym.model.params import check_range
 
 __all__ = [
@@ -220,13 +226,6 @@ class StepNoise(NamedTuple):
 _M64 = 0xFFFFFFFFFFFFFFFF
 
 
-def _splitmix64(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
-    """The SplitMix64 finaliser (Steele, Lea & Flood 2014), elementwise on uint64 with wrap-around."""
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return z ^ (z >> np.uint64(31))
-
-
 def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
     r"""Uniform numbers in ``(0, 1)`` from a counter-based generator: a pure function of ``(key, step, channel)``.
 
@@ -236,27 +235,30 @@ def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np
     with the golden-ratio increment ``gamma = 0x9E3779B97F4A7C15`` (SplitMix64's sequence). Being a pure function
     of its arguments, the same draw comes out for one robot and for row ``i`` of a batch with no per-robot
     generator call in the step; the episode's ``key`` is drawn at reset from the env's ``np_random``.
+    :func:`_counter_uniform_int` on ``uint64`` columns (the one source of the formula).
 
     Args:
         key: per-episode 64-bit keys, shape ``(...)`` (uint64).
         step: step counters, shape ``(...)``.
         channel: which quantity, in ``[0, 256)``.
     """
-    k = np.asarray(key, dtype=np.uint64)
-    n = np.asarray(step, dtype=np.uint64) * np.uint64(256) + np.uint64(channel + 1)
-    with np.errstate(over="ignore"):
-        h = _splitmix64(k + n * np.uint64(0x9E3779B97F4A7C15))
-    return ((h >> np.uint64(11)).astype(np.float64) + 0.5) * (1.0 / 9007199254740992.0)
+    with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
+        u: NDArray[np.float64] = _counter_uniform_int(
+            np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64), channel
+        )
+    return u
 
 
 def counter_normal(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
     r"""Standard normal numbers by Box–Muller from uniform channels ``2 channel`` and ``2 channel + 1``.
 
     .. math:: z = \sqrt{-2 \ln u_1}\,\cos(2\pi u_2)
+
+    (:func:`box_muller` of level 1 on columns).
     """
     u1 = counter_uniform(key, step, 2 * channel)
     u2 = counter_uniform(key, step, 2 * channel + 1)
-    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * math.pi * u2)
+    return cast("NDArray[np.float64]", box_muller(1.0, np.log(u1), np.cos(_TWO_PI * u2)))
 
 
 def draw_key(rng: np.random.Generator) -> int:
@@ -278,23 +280,19 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
     """
     if type(key) is int and type(step) is int and type(slip_max) is float:
         return _step_noise_float(key, step, r, slip_max)
-    zero: Real = 0.0
-    s1 = s2 = zero
-    if np.any(np.asarray(slip_max) > 0.0):
-        s1 = slip_max * counter_uniform(key, step, 0)
-        s2 = slip_max * counter_uniform(key, step, 1)
-    nx = ny = nb = n1 = n2 = zero
-    if r.position_noise > 0.0:
-        nx = r.position_noise * counter_normal(key, step, 1)
-        ny = r.position_noise * counter_normal(key, step, 2)
-    if r.heading_noise > 0.0:
-        nb = r.heading_noise * counter_normal(key, step, 3)
-    if r.wheel_rate_noise > 0.0:
-        n1 = r.wheel_rate_noise * counter_normal(key, step, 4)
-        n2 = r.wheel_rate_noise * counter_normal(key, step, 5)
+    # columns: the float path's functions on uint64 and float64 columns (a list of rows as the buffer)
+    levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
+    buf: list[Any] = [0.0] * 10
+    with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
+        s1, s2, on = step_uniforms(
+            buf, 0, 5, np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64), slip_max, *levels
+        )
+    out: list[Any] = [0.0, 0.0, 0.0, 0.0, 0.0]
+    if on:
+        step_normals(out, 0, np.log(buf[:on]), 0, np.cos(buf[5 : 5 + on]), 0, *levels)
     if np.ndim(key) == 0 and np.ndim(step) == 0 and np.ndim(slip_max) == 0:  # one robot: plain floats
-        return StepNoise(*(float(c) for c in (s1, s2, nx, ny, nb, n1, n2)))
-    return StepNoise(s1, s2, nx, ny, nb, n1, n2)
+        return StepNoise(*(float(c) for c in (s1, s2, *out)))
+    return StepNoise(s1, s2, *out)
 
 
 # -- the float path of one robot: the same bits with Python integers (wrapping as uint64 does) -------------
@@ -313,15 +311,16 @@ def _uint64(n: int) -> int:
     return n & _M64
 
 
-def _counter_uniform_int(key: int, step: int, channel: int) -> float:
-    """:func:`counter_uniform` for one key and step (a Python ``int`` with ``0 <= key < 2**64``, or ``uint64`` in the
-    compiled step, which compiles this function; ``step >= 0``): SplitMix64, every product and sum taken mod
-    ``2**64`` (``& _M64``)."""
+def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
+    """:func:`counter_uniform`'s formula, written once: for one key and step (Python ``int`` with ``0 <= key < 2**64``
+    and ``step >= 0``; ``uint64`` in the compiled step, which compiles this function) or for ``uint64`` columns
+    (:func:`counter_uniform`, the column route of :func:`step_noise`): SplitMix64, every product and sum taken mod
+    ``2**64`` (``& _M64``; numpy's ``uint64`` wraps). Returns a float, or a float64 column."""
     z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64
     z = z ^ (z >> 31)
-    return (float(z >> 11) + 0.5) * _INV_2_53
+    return ((z >> 11) + 0.5) * _INV_2_53
 
 
 def noise_level(channel: int, position: float, heading: float, rate: float) -> float:
@@ -340,10 +339,12 @@ def channels_on(position: float, heading: float, rate: float) -> int:
 
 
 def step_uniforms(
-    buf: Any, u1_at: int, u2_at: int, key: Any, step: int, slip_max: float, position: float, heading: float, rate: float
-) -> tuple[float, float, int]:
+    buf: Any, u1_at: int, u2_at: int, key: Any, step: Any, slip_max: Real, position: float, heading: float, rate: float
+) -> tuple[Real, Real, int]:
     """The uniform draws of :func:`step_noise` for one robot (``key`` a Python ``int``, or ``uint64`` in the compiled
-    step): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0)
+    step) or for columns (``key``, ``step`` ``uint64`` columns, ``slip_max`` a float or a column, ``buf`` a list whose
+    entries become columns): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0; on columns, ``slip_max u`` of
+    every row when any row's ``slip_max`` is above 0, which is 0.0 where it is 0)
     and, for each measurement-noise channel on (in channel order, :func:`noise_level`), ``u1`` into
     ``buf[u1_at + j]`` and the angle ``2 pi u2`` into ``buf[u2_at + j]`` (``j`` counting the channels on).
 
@@ -352,7 +353,7 @@ def step_uniforms(
     """
     s1 = 0.0
     s2 = 0.0
-    if slip_max > 0.0:
+    if any_real(slip_max > 0.0):
         s1 = slip_max * _counter_uniform_int(key, step, 0)
         s2 = slip_max * _counter_uniform_int(key, step, 1)
     on = 0
@@ -367,25 +368,26 @@ def step_uniforms(
 def step_normals(
     out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
 ) -> None:
-    """The normal draws of :func:`step_noise` for one robot, into ``out[out_at : out_at + 5]`` (``x, y, beta, rate1,
-    rate2``; 0.0 for a channel off): :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]``
-    (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given (:func:`step_uniforms`' draws)."""
+    """The normal draws of :func:`step_noise` for one robot (or columns: ``logs``, ``coss`` rows of columns), into
+    ``out[out_at : out_at + 5]`` (``x, y, beta, rate1, rate2``; 0.0 for a channel off): :func:`box_muller` of the
+    ``j``-th channel on from ``logs[log_at + j]`` (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given
+    (:func:`step_uniforms`' draws)."""
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
-        value = 0.0
+        value: Real = 0.0
         if level > 0.0:
             value = box_muller(level, logs[log_at + on], coss[cos_at + on])
             on += 1
         out[out_at + ch] = value
 
 
-def box_muller(level: float, log_u1: float, cos_angle: float) -> float:
+def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
     r"""One normal draw of standard deviation ``level`` by Box–Muller from ``log(u1)`` and ``cos(2 pi u2)`` of two
     uniforms: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`. The logarithm and the cosine are given (numpy's, in
-    the reference); pure float arithmetic, written once: the compiled step (:mod:`amigo_gym.sim._kernels_v1`)
-    compiles this function."""
-    return level * (math.sqrt(-2.0 * log_u1) * cos_angle)
+    the reference); pure arithmetic on floats or columns (:func:`amigo_gym.model.numeric.sqrt_real`), written once:
+    the compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
+    return level * (sqrt_real(-2.0 * log_u1) * cos_angle)
 
 
 def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:

@@ -17,12 +17,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, NamedTuple, Protocol, cast
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.kinematics import Real, col_arctan2, col_sqrt, pack
+from amigo_gym.model.kinematics import Real, pack
+from amigo_gym.model.numeric import abs_real, any_real, arctan2_real, hypot_real, sqrt_real, where_real
 from amigo_gym.model.params import EnvParams, check_range
 
 __all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
@@ -333,30 +334,13 @@ class CirclePath:
         """
         cx, cy, r0x, r0y = self._frame
         d, r = self.direction, self.radius
-        if minimal and type(x) is float and type(y) is float:
-            # one point of Python floats (the single env's step): the same expressions without the column
-            # dispatch (math.sqrt rounds as np.sqrt: IEEE 754 square roots are exact)
-            fe, fct, fst, _ux, _uy = circle_foot(x, y, cx, cy, r0x, r0y, float(d), r)
-            return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, fe, fct, fst)
-        ux = x - cx
-        uy = y - cy
-        rho = col_sqrt(ux * ux + uy * uy)
-        norm = rho
-        at_centre = rho == 0.0
-        if at_centre.any() if isinstance(at_centre, np.ndarray) else at_centre:  # H at the centre
-            ux = np.where(at_centre, r0x, ux)
-            uy = np.where(at_centre, r0y, uy)
-            norm = np.where(at_centre, 1.0, rho)
-        nx = ux / norm
-        ny = uy / norm
-        e = r - rho if d > 0 else rho - r
-        cos_theta = -ny if d > 0 else ny
-        sin_theta = nx if d > 0 else -nx
+        e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, float(d), r)
         if minimal:
             return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, e, cos_theta, sin_theta)
-        cross = r0x * uy - r0y * ux
-        a = col_arctan2(cross if d > 0 else -cross, r0x * ux + r0y * uy)
-        s = cast(Real, r * (a + TWO_PI * (a < 0.0)))  # a + 2 pi where a < 0: in [0, 2 pi R]
+        s = circle_arc(ux, uy, r0x, r0y, float(d), r)
+        # the foot point c + r n, with n from the unit tangent d (-n_y, n_x) (a negation is exact)
+        nx = sin_theta if d > 0 else -sin_theta
+        ny = -cos_theta if d > 0 else cos_theta
         return ClosestPoint(
             s=s,
             x=cx + r * nx,
@@ -370,8 +354,8 @@ class CirclePath:
 
 
 def circle_foot(
-    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
-) -> tuple[float, float, float, float, float]:
+    x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""The foot of the point ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m] and direction
     ``d`` (+1 left, -1 right), for floats (:meth:`CirclePath.project_xy`'s expressions, ``minimal``).
 
@@ -382,17 +366,27 @@ def circle_foot(
     """
     ux = x - cx
     uy = y - cy
-    rho = math.sqrt(ux * ux + uy * uy)
+    rho = sqrt_real(ux * ux + uy * uy)
     norm = rho
-    if rho == 0.0:  # at the centre: the start point
-        ux = r0x
-        uy = r0y
-        norm = 1.0
+    at_centre = rho == 0.0
+    if any_real(at_centre):  # at the centre: the start point
+        ux = where_real(at_centre, r0x, ux)
+        uy = where_real(at_centre, r0y, uy)
+        norm = where_real(at_centre, 1.0, rho)
     nx = ux / norm
     ny = uy / norm
     if d > 0.0:
         return r - rho, -ny, nx, ux, uy
     return rho - r, ny, -nx, ux, uy
+
+
+def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
+    r"""The arc length ``s = r a`` [m] from the circle's start to the direction ``u`` from its centre (floats or
+    columns; :func:`circle_foot`'s ``u``): ``a = atan2(d (r0 x u), r0 . u)`` plus ``2 pi`` where negative, in
+    ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    cross = r0x * uy - r0y * ux
+    a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
+    return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
 
 
 @dataclass(frozen=True)
@@ -448,9 +442,7 @@ class ManoeuvrePath:
     def curvature_columns(self, s: Real) -> Real:
         """The curvature [1/m] at arc lengths ``s`` [m]: 0 on the straight part (``s <= straight_length``), the
         circle's ``direction / radius`` beyond (:func:`manoeuvre_curvature` for a float ``s``)."""
-        if type(s) is float:
-            return manoeuvre_curvature(s, self.straight_length, self.direction / self.radius)
-        return _where(s <= self.straight_length, 0.0, self.direction / self.radius)
+        return manoeuvre_curvature(s, self.straight_length, self.direction / self.radius)  # type: ignore[arg-type]
 
     #: the manoeuvre is an open path for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): its projection never
     #: reports the end (the circle's laps repeat), as in AmigoBot-v0
@@ -488,50 +480,35 @@ class ManoeuvrePath:
         operations on arrays (``tests/test_float_paths.py`` compares the two bit for bit).
         ``minimal=True``: the point and the tangent angle are not computed (NaN).
         """
-        L = self.straight_length
-        if type(x) is float and type(y) is float:
-            return self._project_float(x, y, minimal)
-        s_line = np.minimum(x, L)
-        d_line = np.hypot(x - s_line, y)
-        circ = self.circle.project_xy(x, y)
-        use_line = d_line <= np.abs(circ.cross_track_error)
-        # for the line: e = (p - q) . (0, 1) = y (exact beyond the segment end too, as the distance
-        # there is measured to the end point only in the rare case it is the closer feature)
-        e_line = np.where(x <= L, y, np.sign(y) * d_line)
-        return ClosestPoint(
-            s=_where(use_line, s_line, L + circ.s),
-            x=math.nan if minimal else _where(use_line, s_line, circ.x),
-            y=math.nan if minimal else _where(use_line, 0.0, circ.y),
-            tangent_angle=math.nan if minimal else _where(use_line, 0.0, circ.tangent_angle),
-            curvature=_where(use_line, 0.0, circ.curvature),
-            cross_track_error=_where(use_line, e_line, circ.cross_track_error),
-            cos_theta=_where(use_line, 1.0, circ.cos_theta),
-            sin_theta=_where(use_line, 0.0, circ.sin_theta),
-        )
-
-    def _project_float(self, x: float, y: float, minimal: bool) -> ClosestPoint:
-        """:meth:`project_xy` of one point of Python floats, by :func:`manoeuvre_foot` (Python floats out)."""
         circle = self.circle
         cx, cy, r0x, r0y = circle._frame
         d, r = self.direction, self.radius
         e, cos_theta, sin_theta, s, s_circ, on_line = manoeuvre_foot(
             x, y, cx, cy, r0x, r0y, float(d), r, self.straight_length
         )
-        curvature = 0.0 if on_line else d / r
+        curvature = where_real(on_line, 0.0, d / r)
         if minimal:
             return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
-        if on_line:
-            return ClosestPoint(s, s, 0.0, 0.0, curvature, e, cos_theta, sin_theta)
-        # the circle's foot point c + r n, with n from its unit tangent d (-n_y, n_x) (a negation is exact)
+        # the circle's foot point c + r n, with n from its unit tangent d (-n_y, n_x) (a negation is exact); the
+        # line's (s, 0) where it won
         nx = sin_theta if d > 0 else -sin_theta
         ny = -cos_theta if d > 0 else cos_theta
         theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
-        return ClosestPoint(s, cx + r * nx, cy + r * ny, theta, curvature, e, cos_theta, sin_theta)
+        return ClosestPoint(
+            s,
+            where_real(on_line, s, cx + r * nx),
+            where_real(on_line, 0.0, cy + r * ny),
+            where_real(on_line, 0.0, theta),
+            curvature,
+            e,
+            cos_theta,
+            sin_theta,
+        )
 
 
 def manoeuvre_foot(
-    x: float, y: float, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
-) -> tuple[float, float, float, float, float, bool]:
+    x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
+) -> tuple[Real, Real, Real, Real, Real, bool | NDArray[np.bool_]]:
     r"""The foot of the point ``(x, y)`` [m] on the manoeuvre path, for floats (:meth:`ManoeuvrePath.project_xy`).
 
     The path: the half-line ``y = 0, x <= L`` (``L = big_l`` [m], the straight part, tangent angle 0), then the circle
@@ -556,22 +533,27 @@ def manoeuvre_foot(
     ``0.0`` for ``+-0.0``, NaN for NaN).
     """
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
-    cross = r0x * uy - r0y * ux
-    a = float(np.arctan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy))
-    s_circ = r * (a + (TWO_PI if a < 0.0 else 0.0))  # a + 2 pi where a < 0: in [0, 2 pi r]
-    s_line = x if (x < big_l or x != x) else big_l  # np.minimum(x, big_l)
-    d_line = float(np.hypot(x - s_line, y))
-    if d_line <= abs(e):  # the line (ties to it)
-        sign_y = 1.0 if y > 0.0 else (-1.0 if y < 0.0 else (0.0 if y == 0.0 else y))  # np.sign(y)
-        return (y if x <= big_l else sign_y * d_line), 1.0, 0.0, s_line, s_circ, True
-    return e, cos_theta, sin_theta, big_l + s_circ, s_circ, False
+    s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
+    s_line = where_real((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)
+    d_line = hypot_real(x - s_line, y)
+    on_line = d_line <= abs_real(e)  # the line (ties to it)
+    sign_y = where_real(y > 0.0, 1.0, where_real(y < 0.0, -1.0, where_real(y == 0.0, 0.0, y)))  # np.sign(y)
+    e_line = where_real(x <= big_l, y, sign_y * d_line)
+    return (
+        where_real(on_line, e_line, e),
+        where_real(on_line, 1.0, cos_theta),
+        where_real(on_line, 0.0, sin_theta),
+        where_real(on_line, s_line, big_l + s_circ),
+        s_circ,
+        on_line,
+    )
 
 
 def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
     """The manoeuvre path's curvature [1/m] at the arc length ``s`` [m], for floats: 0 where ``s <= big_l`` (the
     straight part, ``big_l`` [m] long), else the circle's ``curvature`` [1/m] (NaN ``s``: the circle's, as the
     column code). In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
-    return 0.0 if s <= big_l else curvature
+    return where_real(s <= big_l, 0.0, curvature)  # type: ignore[return-value]
 
 
 def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
@@ -588,12 +570,6 @@ def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
         cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
         cp.cos_theta, cp.sin_theta, abs(e), 0,
     )  # fmt: skip
-
-
-def _where(condition: ArrayLike, a: ArrayLike, b: ArrayLike) -> Real:
-    """``np.where`` that gives a scalar, not a 0-d array, for scalar arguments."""
-    out: Real = np.where(condition, a, b)[()]
-    return out
 
 
 def make_path(params: EnvParams) -> CirclePath | ManoeuvrePath:

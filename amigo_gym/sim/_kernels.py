@@ -238,6 +238,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
     classic.circle_foot,
+    classic.circle_arc,
     classic.manoeuvre_foot,
     classic.manoeuvre_curvature,
     numpy_loops.numpy_loop_in_place,
@@ -248,7 +249,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "b70555a5c7e7dd85"
+LAYOUT_FINGERPRINT = "ba755cec94f72d37"
 
 
 def layout_fingerprint() -> str:
@@ -439,9 +440,9 @@ def _projected(
     hx, hy = _h_from_a(x, y, cos_beta, sin_beta, l3)
     if manoeuvre:
         e, cos_theta, sin_theta, s, _, on_line = _manoeuvre_foot(hx, hy, cx, cy, r0x, r0y, d, r, big_l)
-        return hx, hy, e, cos_theta, sin_theta, s, on_line
+        return hx, hy, e, cos_theta, sin_theta, s, on_line  # type: ignore[return-value]  # floats here
     e, cos_theta, sin_theta, _, _ = _circle_foot(hx, hy, cx, cy, r0x, r0y, d, r)
-    return hx, hy, e, cos_theta, sin_theta, 0.0, False
+    return hx, hy, e, cos_theta, sin_theta, 0.0, False  # type: ignore[return-value]  # floats here
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)

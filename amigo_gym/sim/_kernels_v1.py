@@ -110,7 +110,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "0f8efaf5d9ed08be"
+LAYOUT_FINGERPRINT = "bf612c41ecdc6ffb"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -120,7 +120,7 @@ _shared = shared_compiler(
     L.SHARED,
     _jit,
     inline=L.SHARED_INLINE,
-    scalar_forms=numeric.SCALAR_FORMS,
+    scalar_forms={**numeric.SCALAR_FORMS, **actuators.SCALAR_FORMS},
     intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
 )
 
@@ -256,7 +256,7 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     ws[L.W_W2] = w2n
     ws[L.W_AL1] = ws[L.W_AL1] + da1
     ws[L.W_AL2] = ws[L.W_AL2] + da2
-    return v_true
+    return v_true  # type: ignore[return-value]  # a float here
 
 
 # ----------------------------------------------------------------------------------------- the path

@@ -178,8 +178,9 @@ S_U2 = S_LOG + 5
 #: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
 SHARED: tuple[Callable[..., Any], ...] = (
     *numeric.SCALAR_FORMS.values(),
-    actuators._ramp_float,
-    actuators._clip_float,
+    actuators.ramp,
+    actuators.clip_setpoint,
+    actuators.sort_knots_float,
     actuators.piece_rates,
     actuators._channel_ws,
     actuators._evaluate_ws,
