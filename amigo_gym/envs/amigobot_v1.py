@@ -89,12 +89,67 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
 
 
 _np_array = np.array
-#: the compiled step's info record's slices (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): the info's arrays, then its
-#: scalars, the exponentials, the smoothness term and the reward
-_R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
-    _L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP
-)  # fmt: skip
-_R_SCALARS = slice(_L.R_ERROR, _L.RECORD_WIDTH)
+#: the compiled step's info record's arrays (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) as indices of its last axis,
+#: built once (one robot's record or ``(N, RECORD_WIDTH)`` records); the command's and the slip's
+_POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
+    (..., r) for r in (_L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP)
+)
+_R_COMMAND, _R_SLIP = _L.R_COMMAND, _L.R_SLIP
+_E, _PROGRESS, _VT, _VREF, _HEADING = _L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING
+_TRACK, _SPEED, _SMOOTH = _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH
+
+
+def record_info(
+    record: Any,
+    values: Any,
+    time: Any,
+    true_robot: dict[str, Any],
+    delay: Any,
+    end_of_path: Any,
+    path: dict[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The info of the compiled step's info records (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`,
+    :func:`amigo_gym.sim._kernels_v1.fill_record`): the one builder of AmigoBot-v1's info from a record, for the
+    single env (one robot) and the vector env (its compact infos), as :func:`info_values` builds it from the
+    reference's state and outcome (the same entries; :func:`amigo_gym.task.v0.record_info` is AmigoBot-v0's).
+
+    Args:
+        record: ``(RECORD_WIDTH,)`` (one robot) or ``(N, RECORD_WIDTH)``, a new array: the info's seven arrays are
+            views of its last axis.
+        values: the record indexed by entry for the scalars: its floats (one robot) or ``record.T`` (``(N,)``
+            views).
+        time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: as the
+            env gives them (floats or columns). path: the path's description (the single env's only), or None.
+    """
+    v_true = values[_VT]
+    v_ref = values[_VREF]
+    info = {
+        "pose": record[_POSE],
+        "h_position": record[_H],
+        "cross_track_error": values[_E],
+        "progress": values[_PROGRESS],
+        "speed": v_true,
+        "reference_speed": v_ref,
+        "speed_error": v_true - v_ref,
+        "wheel_rates": record[_RATES],
+        "command": record[_COMMAND],
+        "wheel_angles": record[_ANGLES],
+        "measured_pose": record[_MEASURED],
+        "reward_terms": {
+            "track": values[_TRACK],
+            "speed": values[_SPEED],
+            "heading": values[_HEADING],
+            "smooth": values[_SMOOTH],
+        },
+        "time": time,
+    }
+    if path is not None:
+        info["path"] = path
+    info["true_robot"] = true_robot
+    info["delay"] = delay
+    info["slip"] = record[_SLIP]
+    info["end_of_path"] = end_of_path
+    return info
 
 
 class AmigoBotV1Env(AmigoBotBase):
@@ -369,30 +424,13 @@ class AmigoBotV1Env(AmigoBotBase):
             rec[_R_COMMAND] = self._last_command
             rec[_R_SLIP] = 0.0
         v = rec.tolist()
-        hx, hy, cmd1, cmd2 = v[3], v[4], v[7], v[8]
-        e, progress, v_true, v_ref, heading, end, term, track, speed, _, smooth, reward = v[_R_SCALARS]
         if not start:
-            self._last_command = (cmd1, cmd2)
-        info = {
-            "pose": rec[_R_POSE],
-            "h_position": rec[_R_H],
-            "cross_track_error": e,
-            "progress": progress,
-            "speed": v_true,
-            "reference_speed": v_ref,
-            "speed_error": v_true - v_ref,
-            "wheel_rates": rec[_R_RATES],
-            "command": rec[_R_COMMAND],
-            "wheel_angles": rec[_R_ANGLES],
-            "measured_pose": rec[_R_MEASURED],
-            "reward_terms": {"track": track, "speed": speed, "heading": heading, "smooth": smooth},
-            "time": self._steps * self.params.dt,
-            "path": dict(self._path_info),
-            "true_robot": dict(self._true_robot),
-            "delay": self._delay,
-            "slip": rec[_R_SLIP],
-            "end_of_path": end != 0.0,
-        }
+            self._last_command = (v[_L.R_COMMAND.start], v[_L.R_COMMAND.start + 1])
+        info = record_info(
+            rec, v, self._steps * self.params.dt, dict(self._true_robot), self._delay, v[_L.R_END] != 0.0,
+            dict(self._path_info),
+        )  # fmt: skip
+        reward, term, hx, hy = v[_L.R_REWARD], v[_L.R_TERM], v[_L.R_HX], v[_L.R_HY]
         return info, reward, term != 0.0, hx, hy
 
     def _current_state(self) -> tracking.State:

@@ -32,7 +32,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, v0_info_values
+from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, record_info, v0_info_values
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -57,22 +57,11 @@ _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 #: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
 KERNELS: tuple[str, ...] = VECTOR_KERNELS
-# entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS)
-_W_X, _W_BETA, _W_HX, _W_HY = fast_v1.W_X, fast_v1.W_BETA, fast_v1.W_HX, fast_v1.W_HY
-_W_W1, _W_W2, _W_AL1, _W_AL2 = fast_v1.W_W1, fast_v1.W_W2, fast_v1.W_AL1, fast_v1.W_AL2
-_W_E, _W_VT, _W_VREF, _W_PROGRESS = fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF, fast_v1.W_PROGRESS
-_W_MX, _W_MB, _W_A1, _W_A2 = fast_v1.W_MX, fast_v1.W_MB, fast_v1.W_A1, fast_v1.W_A2
-_W_SLIP1, _W_SLIP2, _W_TERM, _W_END = fast_v1.W_SLIP1, fast_v1.W_SLIP2, fast_v1.W_TERM, fast_v1.W_END
+# entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS): the normalised command
+_W_A1, _W_A2 = fast_v1.W_A1, fast_v1.W_A2
 # the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
-_R_POSE, _R_H, _R_RATES, _R_COMMAND, _R_ANGLES, _R_MEASURED, _R_SLIP = (
-    layout_v1.R_POSE, layout_v1.R_H, layout_v1.R_RATES, layout_v1.R_COMMAND, layout_v1.R_ANGLES, layout_v1.R_MEASURED,
-    layout_v1.R_SLIP,
-)  # fmt: skip
-_R_HX, _R_HY, _R_ERROR, _R_PROGRESS = layout_v1.R_HX, layout_v1.R_HY, layout_v1.R_ERROR, layout_v1.R_PROGRESS
-_R_VT, _R_VREF, _R_HEADING, _R_END, _R_TERM = (
-    layout_v1.R_VT, layout_v1.R_VREF, layout_v1.R_HEADING, layout_v1.R_END, layout_v1.R_TERM
-)  # fmt: skip
-_R_TRACK, _R_SPEED, _R_SMOOTH, _R_REWARD = layout_v1.R_TRACK, layout_v1.R_SPEED, layout_v1.R_SMOOTH, layout_v1.R_REWARD
+_R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
+_R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
@@ -457,8 +446,9 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     ) -> tuple[dict[str, Any], Array, BoolArray]:
         """The compact infos of ``rows`` from their info records (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.step`,
         :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the single env's record, :meth:`AmigoBotV1Env._kernel_info`),
-        :meth:`_row_info`'s entries with the same dtypes and values as the reference forms them (the arrays views of
-        ``rec``, a new array); with the rewards and ``terminated``.
+        :meth:`_row_info`'s entries with the same dtypes and values as the reference forms them
+        (:func:`amigo_gym.envs.amigobot_v1.record_info`, the single env's builder: the arrays views of ``rec``, a new
+        array); with the rewards and ``terminated``.
 
         Args:
             rows: the robots (``slice(None)``: all). rec: ``(m, RECORD_WIDTH)``, new. start: the records of start
@@ -470,32 +460,14 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if start:
             rec[:, _R_COMMAND] = self._batch.ws[rows, _W_A1 : _W_A2 + 1] * self._k.w_max
             rec[:, _R_SLIP] = 0.0
-        v_true = rec[:, _R_VT]
-        v_ref = rec[:, _R_VREF]
-        infos = {
-            "pose": rec[:, _R_POSE],
-            "h_position": rec[:, _R_H],
-            "cross_track_error": rec[:, _R_ERROR],
-            "progress": rec[:, _R_PROGRESS],
-            "speed": v_true,
-            "reference_speed": v_ref,
-            "speed_error": v_true - v_ref,
-            "wheel_rates": rec[:, _R_RATES],
-            "command": rec[:, _R_COMMAND],
-            "wheel_angles": rec[:, _R_ANGLES],
-            "measured_pose": rec[:, _R_MEASURED],
-            "reward_terms": {
-                "track": rec[:, _R_TRACK],
-                "speed": rec[:, _R_SPEED],
-                "heading": rec[:, _R_HEADING],
-                "smooth": rec[:, _R_SMOOTH],
-            },
-            "time": np.asarray(self._state.steps)[rows] * dt,
-            "true_robot": {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
-            "delay": np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
-            "slip": rec[:, _R_SLIP],
-            "end_of_path": rec[:, _R_END],
-        }
+        infos = record_info(
+            rec,
+            rec.T,
+            np.asarray(self._state.steps)[rows] * dt,
+            {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
+            np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
+            rec[:, _R_END],
+        )
         return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
