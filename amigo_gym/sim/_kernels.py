@@ -237,6 +237,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.h_from_a,
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
+    kinematics.col_tan,
     classic.circle_foot,
     classic.circle_arc,
     classic.manoeuvre_foot,
@@ -249,7 +250,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "ba755cec94f72d37"
+LAYOUT_FINGERPRINT = "ac9d87a0dd3568e7"
 
 
 def layout_fingerprint() -> str:
@@ -286,6 +287,7 @@ _advance_angle = _shared(kinematics.advance_angle)
 _castor_rate = _shared(kinematics.castor_rate_float)
 _h_from_a = _shared(kinematics.h_from_a)
 _a_from_h = _shared(kinematics.a_from_h)
+_tan = _shared(kinematics.col_tan)
 _circle_foot = _shared(classic.circle_foot)
 _manoeuvre_foot = _shared(classic.manoeuvre_foot)
 _manoeuvre_curvature = _shared(classic.manoeuvre_curvature)
@@ -316,8 +318,8 @@ def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_]
         bdot, db = _motion(c, actions[i, 0], actions[i, 1])[3:]
         turn[i] = bdot
         h = 0.5 * db
-        tans[i, 0] = 0.5 * h
-        tans[i, 1] = 0.5 * (state[i, 2] + h)
+        tans[i, 0] = _tan(0.5 * h)
+        tans[i, 1] = _tan(0.5 * (state[i, 2] + h))
 
 
 #: rows per block of :func:`evaluate`: its stages run over one block at a time, in the block's columns of the scratch
@@ -877,14 +879,12 @@ def single_finish(c: F64, buf: F64) -> int:
 
 @_serial
 def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
-                meta: NDArray[np.int64]) -> int:  # fmt: skip
-    """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate`, the
-    three exponentials and :func:`single_finish`, the tangents and exponentials by numpy's own float64 loops at the
-    addresses ``tan`` and ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the three passes' bits with
-    numpy's ufuncs between them, on every CPU. Returns what :func:`single_finish` returns."""
+                a2: float, exp: int, exp_data: int, meta: NDArray[np.int64]) -> int:  # fmt: skip
+    """The single env's whole step in one call: :func:`single_move` (the tangents included), :func:`single_evaluate`,
+    the three exponentials and :func:`single_finish`, the exponentials by numpy's own float64 loop at the address
+    ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the three passes' bits with numpy's ``exp``
+    between them, on every CPU. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
-    numpy_loops.numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
     single_evaluate(c, preview, buf, flags, obs)
     numpy_loops.numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
     return single_finish(c, buf)

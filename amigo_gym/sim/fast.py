@@ -387,10 +387,9 @@ class SingleStep:
         self._loops: tuple[Any, ...] | None = None
         loops = numpy_loops()
         if loops is not None:
-            self._loops = (loops.tan.address, loops.exp.address, loops.tan.data, loops.exp.data, np.zeros(5, np.int64))
+            self._loops = (loops.exp.address, loops.exp.data, np.zeros(5, np.int64))
             args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
             self._whole = direct_call(kk.single_step, *args)
-        self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
         self.record = b[0, kk.SINGLE_RECORD : kk.SINGLE_WIDTH]
@@ -423,15 +422,11 @@ class SingleStep:
         c = self.consts
         loops = self._loops
         if loops is not None:
-            tan, exp, tan_data, exp_data, meta = loops
-            self.past_limit = self._whole(
-                c, self.preview, b, self.flags, self.obs, a1, a2, tan, exp, tan_data, exp_data, meta
-            )
+            exp, exp_data, meta = loops
+            self.past_limit = self._whole(c, self.preview, b, self.flags, self.obs, a1, a2, exp, exp_data, meta)
         else:
-            tans = self._tans
             exps = self._exps
             self._move(c, b, self.flags, a1, a2)
-            _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
             self._evaluate(c, self.preview, b, self.flags, self.obs)
             _np_exp(exps, exps)
             self.past_limit = self._finish(c, b)
@@ -451,7 +446,6 @@ class SingleStep:
         return self.obs_row.copy(), rec[15], bool(self.flags[0, 1]), record_info(self.head.copy(), rec, time)
 
 
-_np_tan = np.tan
 _np_exp = np.exp
 
 
@@ -574,7 +568,6 @@ def _step_rows(
     """:func:`step_rows` (unchecked) with the compiled functions ``p``."""
     c, tans, exps = ws.consts, ws.tans, ws.exps
     p.move(c, state, actions, restart, tans, ws.turn)
-    np.tan(tans, out=tans)
     m = 0
     if bitgens is not None:
         m = p.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)
