@@ -153,8 +153,8 @@ def col_tan(x: Real) -> Real:
     r = r + _T[0] * s
     w = y + r
     iy = where_real(odd, -1.0, 1.0)
-    t_far = sgn * (iy - 2.0 * (y - (w * w / (w + iy) - r)))
-    a = -1.0 / where_real(odd, w, 1.0)
+    a = where_real(far, w * w, -1.0) / where_real(far, w + iy, where_real(odd, w, 1.0))  # one division
+    t_far = sgn * (iy - 2.0 * (y - (a - r)))
     c = _SPLIT * w
     wh = c - (c - w)
     c = _SPLIT * a

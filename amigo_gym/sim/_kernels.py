@@ -250,7 +250,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "ac9d87a0dd3568e7"
+LAYOUT_FINGERPRINT = "48965ec910a8a39b"
 
 
 def layout_fingerprint() -> str:
@@ -267,6 +267,7 @@ _shared = shared_compiler(
     "amigo_gym.sim._kernels",
     SHARED,
     _jit,
+    inline=(kinematics.col_tan,),
     scalar_forms=numeric.SCALAR_FORMS,
     intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
 )
@@ -287,7 +288,6 @@ _advance_angle = _shared(kinematics.advance_angle)
 _castor_rate = _shared(kinematics.castor_rate_float)
 _h_from_a = _shared(kinematics.h_from_a)
 _a_from_h = _shared(kinematics.a_from_h)
-_tan = _shared(kinematics.col_tan)
 _circle_foot = _shared(classic.circle_foot)
 _manoeuvre_foot = _shared(classic.manoeuvre_foot)
 _manoeuvre_curvature = _shared(classic.manoeuvre_curvature)
@@ -318,8 +318,11 @@ def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_]
         bdot, db = _motion(c, actions[i, 0], actions[i, 1])[3:]
         turn[i] = bdot
         h = 0.5 * db
-        tans[i, 0] = _tan(0.5 * h)
-        tans[i, 1] = _tan(0.5 * (state[i, 2] + h))
+        tans[i, 0] = 0.5 * h
+        tans[i, 1] = 0.5 * (state[i, 2] + h)
+    flat = tans.reshape(2 * state.shape[0])
+    for j in numba.prange(flat.shape[0]):  # the tangents in a loop of their own, over a flat view: LLVM vectorises it
+        flat[j] = kinematics.col_tan(flat[j])
 
 
 #: rows per block of :func:`evaluate`: its stages run over one block at a time, in the block's columns of the scratch
