@@ -33,8 +33,7 @@ def best(f: Callable[[], Any], number: int = 2000) -> float:
 
 
 @numba.njit(cache=False)
-def _empty(c: Any, pv: Any, ring: Any, ws: Any, obs: Any, k: Any, a1: Any, a2: Any, rec: Any, e: Any, d: Any,
-           meta: Any, w: Any) -> None:  # fmt: skip
+def _empty(c: Any, pv: Any, ring: Any, ws: Any, obs: Any, k: Any, a1: Any, a2: Any, rec: Any, w: Any) -> None:
     return None
 
 
@@ -44,8 +43,7 @@ def main() -> None:
     u = v1.unwrapped
     step_v0, step_v1, step_own = _single_stepper(v0, 0), _single_stepper(v1, 0), _single_stepper(u, 1)
     kern = u._kernel
-    args = [kern.consts, kern.path, u._ring, kern.ws, kern.obs, u._ring_step, 0.5, 0.5, kern.record, *kern.exp_loop,
-            kern.meta, kern.smooth_weight]  # fmt: skip
+    args = [kern.consts, kern.path, u._ring, kern.ws, kern.obs, u._ring_step, 0.5, 0.5, kern.record, kern.smooth_weight]
     empty = fast.direct_call(_empty, *args)
     rec = kern.record
 

@@ -366,21 +366,16 @@ class AmigoBotV1Env(AmigoBotBase):
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
         The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
-        exponentials by numpy's own ``exp`` loop inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`; by
-        ``np.exp`` in :meth:`_kernel_info` where that loop was not found), as the reference evaluates them
-        (:func:`amigo_gym.task.v1.step_columns`).
+        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates
+        them (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`).
         """
         kern = self._kernel
         assert kern is not None
         steps = self._steps
         if kern.noise_on:
             kern.draw(steps)
-        t_loop, t_data = kern.exp_loop
-        rec = kern.record
-        kern.run_record(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, rec, t_loop,
-                        t_data, kern.meta, kern.smooth_weight)  # fmt: skip
-        if not kern.exps_done:
-            kern.complete()
+        kern.run_record(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, kern.record,
+                        kern.smooth_weight)  # fmt: skip
         self._steps = steps + 1
         info, reward, terminated, hx, hy = self._kernel_info(False)
         return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
@@ -409,13 +404,12 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, bool, float, float]:
         """:meth:`_info` from the compiled step's info record (:attr:`amigo_gym.sim.fast_v1.StepKernel.record`,
-        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the workspace's entries, the reward's exponentials by numpy's own
-        ``exp`` loop, its smoothness term and the reward, :func:`amigo_gym.task.v0.reward_product`): the same entries;
+        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the workspace's entries, the reward's exponentials, its
+        smoothness term and the reward, :func:`amigo_gym.task.v0.reward_product`): the same entries;
         with the reward, ``terminated`` and H.
 
         ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
-        else of the step just taken (its slips and commands, also into :attr:`_last_command`). (Where numpy's loops
-        were not found, :meth:`amigo_gym.sim.fast_v1.StepKernel.complete` has finished the record with ``np.exp``.)
+        else of the step just taken (its slips and commands, also into :attr:`_last_command`).
         """
         kern = self._kernel
         assert kern is not None

@@ -101,7 +101,6 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics, numeric
 from amigo_gym.paths import classic
-from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -238,19 +237,19 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
     kinematics.col_tan,
+    kinematics.col_exp,
+    numeric.pow2_typing,
     classic.circle_foot,
     classic.circle_arc,
     classic.manoeuvre_foot,
     classic.manoeuvre_curvature,
-    numpy_loops.numpy_loop_in_place,
-    numpy_loops.loop_call_typing,
 )
 
 #: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "48965ec910a8a39b"
+LAYOUT_FINGERPRINT = "c7b4d59112023802"
 
 
 def layout_fingerprint() -> str:
@@ -267,16 +266,13 @@ _shared = shared_compiler(
     "amigo_gym.sim._kernels",
     SHARED,
     _jit,
-    inline=(kinematics.col_tan,),
+    inline=(kinematics.col_tan, kinematics.col_exp),
     scalar_forms=numeric.SCALAR_FORMS,
-    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
+    intrinsics={numeric.pow2_real: numeric.pow2_typing},
 )
 
 
 _action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
-#: numpy's own inner loop of a unary ufunc called in place (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`),
-#: compiled on its own (the single step calls the shared function itself; tests call this)
-numpy_loop_in_place = _shared(numpy_loops.numpy_loop_in_place)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
@@ -655,11 +651,15 @@ def _evaluate_rows(
 
 
 def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
-    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
+    """Pass 3: the exponentials of ``exps`` (their arguments, :func:`amigo_gym.model.kinematics.col_exp` in place),
+    then the track, speed and smoothness terms and the reward.
 
     Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
     value (the rows :func:`amigo_gym.task.v0.bound_angle` changes; NaN is not past it).
     """
+    flat = exps.reshape(3 * reward.shape[0])
+    for j in numba.prange(flat.shape[0]):  # in a loop of their own, over a flat view: LLVM vectorises it
+        flat[j] = kinematics.col_exp(flat[j])
     limit = c[HEADING_LIM]
     past = 0
     for i in numba.prange(reward.shape[0]):
@@ -882,12 +882,9 @@ def single_finish(c: F64, buf: F64) -> int:
 
 @_serial
 def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                a2: float, exp: int, exp_data: int, meta: NDArray[np.int64]) -> int:  # fmt: skip
-    """The single env's whole step in one call: :func:`single_move` (the tangents included), :func:`single_evaluate`,
-    the three exponentials and :func:`single_finish`, the exponentials by numpy's own float64 loop at the address
-    ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the three passes' bits with numpy's ``exp``
-    between them, on every CPU. Returns what :func:`single_finish` returns."""
+                a2: float) -> int:  # fmt: skip
+    """The single env's whole step in one call: :func:`single_move`, :func:`single_evaluate` and
+    :func:`single_finish`. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
     single_evaluate(c, preview, buf, flags, obs)
-    numpy_loops.numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
     return single_finish(c, buf)

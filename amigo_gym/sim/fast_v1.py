@@ -35,7 +35,6 @@ from amigo_gym.paths import families
 from amigo_gym.paths.classic import PathPose
 from amigo_gym.paths.clothoid import ClothoidPath, PathLoops
 from amigo_gym.sim import fast, layout_v1
-from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -211,7 +210,6 @@ class StepKernel:
         #: the single env's info record (:data:`layout_v1.RECORD_WIDTH`, :func:`amigo_gym.sim._kernels_v1.fill_record`),
         #: written by :attr:`run_record` and :meth:`fill`
         self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
-        self.meta = np.zeros(5, dtype=np.int64)
         self.smooth_weight = float(k.params.smooth_weight)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
@@ -232,18 +230,12 @@ class StepKernel:
         # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
         ring = np.zeros((1, 2))
-        #: numpy's own ``exp`` loop (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: its address and data), ``(0, 0)``
-        #: where not found (then :meth:`complete` finishes the record after each call: :attr:`exps_done` False)
-        loops = numpy_loops()
-        self.exp_loop = (0, 0) if loops is None else (loops.exp.address, loops.exp.data)
-        self.exps_done = loops is not None
         self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
-        args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, *self.exp_loop, self.meta)
-        self.run_record: Any = fast.direct_call(kv.step_record, *args, self.smooth_weight)
-        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
-        self._terms: Any = fast.direct_call(kv.record_terms, self.record, 0.0)
+        args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, self.smooth_weight)
+        self.run_record: Any = fast.direct_call(kv.step_record, *args)
+        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, 0.0)
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
@@ -261,7 +253,6 @@ class StepKernel:
             "_uniforms",
             "run_record",
             "_fill",
-            "_terms",
         ):
             del state[name]
         return state
@@ -306,16 +297,7 @@ class StepKernel:
 
     def fill(self) -> None:
         """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
-        self._fill(self.ws, self.record, *self.exp_loop, self.meta, self.smooth_weight)
-        if not self.exps_done:
-            self.complete()
-
-    def complete(self) -> None:
-        """The record's exponentials by ``np.exp`` and its terms (:func:`amigo_gym.sim._kernels_v1.record_terms`),
-        where numpy's ``exp`` loop was not found (:attr:`exps_done` False: :attr:`run_record` left the arguments)."""
-        exps = self.record[layout_v1.R_TRACK : layout_v1.R_SMOOTH]
-        np.exp(exps, out=exps)
-        self._terms(self.record, self.smooth_weight)
+        self._fill(self.ws, self.record, self.smooth_weight)
 
     def draw(self, steps: int) -> None:
         """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter
