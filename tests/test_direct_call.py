@@ -16,7 +16,7 @@ import pytest
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
-from amigo_gym.sim import fast
+from amigo_gym.sim import fast, numpy_loops
 from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
@@ -85,22 +85,15 @@ def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
     [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
 )
 def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
-    """The single step in one call (kernels.single_step) against its three passes called in turn (single_move,
-    single_evaluate, single_finish), on one machine (two code paths): random states, actions beyond [-1, 1] too, 300
-    steps each."""
+    """The single step in one call (kernels.single_step: numpy's own tan loop inside, sim/numpy_loops.py, found on
+    CPython) against the three passes with numpy's tan between them, on one machine (two code paths): random states,
+    actions beyond [-1, 1] too, 300 steps each."""
     params = EnvParams(**settings)  # type: ignore[arg-type]
+    assert numpy_loops.numpy_loops() is not None  # CPython's numpy: the loops are found and give numpy's bits
     whole = fast.SingleStep(task.task_constants(params), make_path(params))
+    assert whole._whole is not None and whole._loops is not None
     passes = fast.SingleStep(task.task_constants(params), make_path(params))
-    kk = fast.kernels()
-
-    def three(a1: float, a2: float) -> list[float]:
-        kk.single_move(passes.consts, passes.buf, passes.flags, a1, a2)
-        kk.single_evaluate(passes.consts, passes.preview, passes.buf, passes.flags, passes.obs)
-        passes.past_limit = kk.single_finish(passes.consts, passes.buf)
-        out: list[float] = passes.record.tolist()
-        return out
-
-    passes.step = three  # type: ignore[method-assign]
+    passes._whole = passes._loops = None
     _same_steps(whole, passes)
 
 
@@ -115,6 +108,19 @@ def _same_steps(whole: fast.SingleStep, passes: fast.SingleStep) -> None:
             assert whole.step(a1, a2) == passes.step(a1, a2)
             assert whole.buf.tobytes() == passes.buf.tobytes() and whole.obs.tobytes() == passes.obs.tobytes()
             assert whole.past_limit == passes.past_limit
+
+
+def test_without_numpys_loops_the_single_env_runs_the_passes(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(fast, "numpy_loops", lambda: None)  # numpy's loops not found
+    env = gym.make("AmigoBot-v0").unwrapped
+    assert env._v0._whole is None and env._v0._loops is None
+    ref = gym.make("AmigoBot-v0", kernel="numpy").unwrapped
+    env.reset(seed=2)
+    ref.reset(seed=2)
+    for a in np.random.default_rng(6).uniform(-1.0, 1.0, (30, 2)):
+        o1, r1, t1, _, _ = env.step(a)
+        o2, r2, t2, _, _ = ref.step(a)
+        assert o1.tobytes() == o2.tobytes() and r1 == r2 and t1 == t2
 
 
 @pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])

@@ -162,6 +162,7 @@ def test_blocked_evaluate_gives_the_row_loops_bits(settings: dict[str, Any]) -> 
         restart = np.random.default_rng(n).random(n) < 0.3
         ws = fast.workspace(task.task_constants(params), make_path(params), n)
         k.move_arguments(ws.consts, state, actions, restart, ws.tans, ws.turn)
+        np.tan(ws.tans, out=ws.tans)
         ws.tans[restart, 0] = np.cos(state[restart, 2])
         ws.tans[restart, 1] = np.sin(state[restart, 2])
         outs = []

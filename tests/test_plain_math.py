@@ -1,8 +1,7 @@
-"""The step's ``tan`` and ``exp`` in plain float64 arithmetic (``amigo_gym/model/kinematics.py``: ``col_tan``,
-``col_exp``) against a 120-bit ``mpmath`` reference: within :data:`BOUND` ulp over the arguments the step sees (half
-turns near 0, half headings of many laps up to :data:`amigo_gym.model.params.HEADING_LIMIT` / 2, the reward's
-arguments, never positive, down to underflow), the edge cases (zeros, tiny, near multiples of ``pi / 2``, subnormal
-results, NaN, infinities); the same bits for a float, a column and compiled (numba, as the kernels compile them).
+"""The reward's ``exp`` in plain float64 arithmetic (``amigo_gym/model/kinematics.py``: ``col_exp``) against a 120-bit
+``mpmath`` reference: within :data:`BOUND` ulp over the arguments the step sees (the reward's arguments, never
+positive, down to underflow; small and positive ones too), the edge cases (zeros, subnormal results, exact zeros
+below them, NaN, infinities); the same bits for a float, a column and compiled (numba, as the kernels compile it).
 """
 
 from __future__ import annotations
@@ -13,11 +12,10 @@ import mpmath
 import numpy as np
 import pytest
 
-from amigo_gym.model.kinematics import col_exp, col_tan
+from amigo_gym.model.kinematics import col_exp
 from amigo_gym.model.numeric import pow2_real
-from amigo_gym.model.params import HEADING_LIMIT
 
-#: the largest error allowed [ulp of the true value] (measured: 0.8 for both functions)
+#: the largest error allowed [ulp of the true value] (measured: 0.85; numpy's AVX-512 ``exp``: 0.68)
 BOUND = 1.0
 #: the smallest subnormal float64, the ulp of results below the smallest normal
 TINY = 5e-324
@@ -35,19 +33,6 @@ def _ulps(got: np.ndarray, xs: np.ndarray, fn: object) -> float:
     return worst
 
 
-def _tan_args() -> dict[str, np.ndarray]:
-    g = np.random.default_rng(19)
-    k = np.arange(1.0, 6e5, 71.0)
-    near = (k * np.pi / 2, np.nextafter(k * np.pi / 2, 0.0), np.nextafter(k * np.pi / 2, np.inf))
-    return {
-        "half turns": g.uniform(-2.0, 2.0, 6000),
-        "small": g.normal(0.0, 1e-3, 2000) * np.logspace(-300, 0, 2000),
-        "laps": g.uniform(-1e4, 1e4, 4000),
-        "half headings at the limit": g.uniform(-HEADING_LIMIT / 2, HEADING_LIMIT / 2, 3000),
-        "near multiples of pi/2": np.concatenate(near)[::3],
-    }
-
-
 def _exp_args() -> dict[str, np.ndarray]:
     g = np.random.default_rng(20)
     return {
@@ -59,14 +44,6 @@ def _exp_args() -> dict[str, np.ndarray]:
     }
 
 
-@pytest.mark.parametrize("name", list(_tan_args()))
-def test_tan_within_the_bound(name: str) -> None:
-    xs = _tan_args()[name]
-    got = col_tan(xs)
-    assert _ulps(got, xs, mpmath.tan) <= BOUND
-    assert np.array_equal(np.array([col_tan(x) for x in xs[:400].tolist()]), got[:400])
-
-
 @pytest.mark.parametrize("name", list(_exp_args()))
 def test_exp_within_the_bound(name: str) -> None:
     xs = _exp_args()[name]
@@ -76,14 +53,8 @@ def test_exp_within_the_bound(name: str) -> None:
 
 
 def test_edge_cases() -> None:
-    """Signed zeros, subnormals, NaN and infinities as numpy's ``tan`` and ``exp`` give them; ``exp`` exactly 0 below
-    half the smallest subnormal."""
-    for x, t in ((0.0, 0.0), (-0.0, -0.0), (TINY, TINY), (-TINY, -TINY), (1e-300, 1e-300)):
-        for v in (col_tan(x), float(col_tan(np.array([x]))[0])):
-            assert v == t and math.copysign(1.0, v) == math.copysign(1.0, t)
-    with np.errstate(invalid="ignore"):
-        for x in (math.nan, math.inf, -math.inf):
-            assert math.isnan(col_tan(x)) and np.isnan(col_tan(np.array([x]))).all()
+    """Zeros, subnormal results, NaN and infinities as numpy's ``exp`` gives them; exactly 0 below half the smallest
+    subnormal."""
     cases = ((0.0, 1.0), (-0.0, 1.0), (TINY, 1.0), (-745.1332191019411, TINY), (-745.1332191019412, 0.0),
              (-746.0, 0.0), (-1e300, 0.0), (-math.inf, 0.0), (709.79, math.inf), (math.inf, math.inf))  # fmt: skip
     with np.errstate(over="ignore"):
@@ -100,8 +71,8 @@ def test_pow2_is_exact() -> None:
 
 
 def test_compiled_gives_the_same_bits() -> None:
-    """Compiled as the kernels compile them (their registration: ``numeric.where_real`` as its float form,
-    ``numeric.pow2_real`` as an intrinsic), in a loop LLVM vectorises: the bits of the Python functions."""
+    """Compiled as the kernels compile it (their registration: ``numeric.where_real`` as its float form,
+    ``numeric.pow2_real`` as an intrinsic), in a loop LLVM vectorises: the bits of the Python function."""
     pytest.importorskip("numba")
     import numba
 
@@ -110,15 +81,12 @@ def test_compiled_gives_the_same_bits() -> None:
     fast.kernels()  # registers the shared functions with numba
 
     @numba.njit(error_model="numpy")
-    def both(t: np.ndarray, e: np.ndarray) -> None:
-        for i in range(t.shape[0]):
-            t[i] = col_tan(t[i])
+    def loop(e: np.ndarray) -> None:
         for i in range(e.shape[0]):
             e[i] = col_exp(e[i])
 
-    xt = np.concatenate([*_tan_args().values(), [0.0, -0.0, math.nan, math.inf]])
     xe = np.concatenate([*_exp_args().values(), [0.0, -1e300, -math.inf, math.nan, 800.0]])
-    t, e = xt.copy(), xe.copy()
-    both(t, e)
-    with np.errstate(invalid="ignore", over="ignore"):
-        assert t.tobytes() == col_tan(xt).tobytes() and e.tobytes() == col_exp(xe).tobytes()
+    e = xe.copy()
+    loop(e)
+    with np.errstate(over="ignore"):
+        assert e.tobytes() == col_exp(xe).tobytes()

@@ -103,64 +103,9 @@ def col_cos(x: Real) -> Real:
     return np.cos(x) if isinstance(x, np.ndarray) else float(np.cos(x))
 
 
-#: ``2 / pi``; ``1.5 * 2**52``, which rounds a float below ``2**51`` in magnitude to an integer (``(t + R) - R``)
-_INV_PIO2, _ROUND = 6.36619772367581382433e-01, 6755399441055744.0
-#: ``pi / 2`` in four parts (fdlibm's ``pio2_1``, ``pio2_2``, ``pio2_3``, ``pio2_3t``), the first three of 33 bits
-_PIO2 = (1.57079632673412561417e00, 6.07710050630396597660e-11, 2.02226624871116645580e-21, 8.47842766036889956997e-32)
-#: ``pi / 4`` in two parts, and the reduced argument above which the kernel works on ``pi / 4 - |y|`` (fdlibm's)
-_PIO4, _PIO4LO, _TAN_FAR = 7.85398163397448278999e-01, 3.06161699786838301793e-17, 0.6743354797363281
-#: the coefficients of fdlibm's ``__kernel_tan``: ``tan y = y + T0 y^3 + T1 y^5 + ...`` on ``|y| <= 0.6744``
-_T = (
-    3.33333333333334091986e-01, 1.33333333333201242699e-01, 5.39682539762260521377e-02, 2.18694882948595424599e-02,
-    8.86323982359930005737e-03, 3.59207910759131235356e-03, 1.45620945432529025516e-03, 5.88041240820264096874e-04,
-    2.46463134818469906812e-04, 7.81794442939557092300e-05, 7.14072491382608190305e-05, -1.85586374855275456654e-05,
-    2.59073051863633712884e-05,
-)  # fmt: skip
-#: ``2**27 + 1``: ``c - (c - w)`` with ``c = w * _SPLIT`` keeps the high 26 bits of ``w`` (Veltkamp's split)
-_SPLIT = 134217729.0
-
-
 def col_tan(x: Real) -> Real:
-    r"""``tan(x)`` in plain float64 arithmetic (``+ - * /`` and selects): the same bits on every CPU, for a float
-    (a Python float), a column and in the compiled steps (which compile this function), within 1 ulp of the true
-    tangent for ``|x| <= 2**19 pi / 2`` (``tests/test_plain_math.py``: at most 0.8 ulp there; numpy's bits in about
-    96 % of arguments). fdlibm's ``tan`` without its branches: ``x`` less the nearest multiple ``n pi / 2`` in
-    double-double (``pi / 2`` in four parts, exact products for ``|n| < 2**20``; the two differences' rounding
-    errors carried), then ``__kernel_tan`` of it (``-1 / tan`` for odd ``n`` with Dekker's correction, the low
-    words fdlibm clears here Veltkamp splits). ``tan(+-0) = +-0``, NaN for NaN and infinities; beyond the range
-    above the reduction loses accuracy."""
-    fn = (x * _INV_PIO2 + _ROUND) - _ROUND
-    r1 = x - fn * _PIO2[0]
-    w2 = fn * _PIO2[1]
-    r2 = r1 - w2
-    w3 = fn * _PIO2[2]
-    r3 = r2 - w3
-    tail = (((r1 - r2) - w2) + ((r2 - r3) - w3)) - fn * _PIO2[3]
-    y0 = r3 + tail
-    y1 = (r3 - y0) + tail
-    half = 0.5 * fn
-    odd = ((half + _ROUND) - _ROUND) != half
-    far = abs(y0) >= _TAN_FAR
-    sgn = where_real(y0 < 0.0, -1.0, 1.0)
-    y = where_real(far, (_PIO4 - sgn * y0) + (_PIO4LO - sgn * y1), y0)
-    y1 = where_real(far, 0.0, y1)
-    z = y * y
-    w = z * z
-    r = _T[1] + w * (_T[3] + w * (_T[5] + w * (_T[7] + w * (_T[9] + w * _T[11]))))
-    v = z * (_T[2] + w * (_T[4] + w * (_T[6] + w * (_T[8] + w * (_T[10] + w * _T[12])))))
-    s = z * y
-    r = y1 + z * (s * (r + v) + y1)
-    r = r + _T[0] * s
-    w = y + r
-    iy = where_real(odd, -1.0, 1.0)
-    a = where_real(far, w * w, -1.0) / where_real(far, w + iy, where_real(odd, w, 1.0))  # one division
-    t_far = sgn * (iy - 2.0 * (y - (a - r)))
-    c = _SPLIT * w
-    wh = c - (c - w)
-    c = _SPLIT * a
-    ah = c - (c - a)
-    t_near = ah + a * ((1.0 + ah * wh) + ah * (r - (wh - y)))
-    return where_real(x == 0.0, x, where_real(far, t_far, where_real(odd, t_near, w)))
+    """``np.tan(x)``; a Python float for a scalar ``x``."""
+    return np.tan(x) if isinstance(x, np.ndarray) else float(np.tan(x))
 
 
 def cos_sin(x: Real) -> tuple[Real, Real]:
@@ -268,6 +213,8 @@ def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
 col_sqrt = sqrt_real
 
 
+#: ``1.5 * 2**52``: ``(t + _ROUND) - _ROUND`` rounds a float below ``2**51`` in magnitude to an integer
+_ROUND = 6755399441055744.0
 #: ``1 / ln 2``, and ``ln 2`` in two parts (fdlibm's ``ln2HI``, of 32 bits, and ``ln2LO``)
 _INV_LN2, _LN2_HI, _LN2_LO = 1.44269504088896338700e00, 6.93147180369123816490e-01, 1.90821492927058770002e-10
 #: fdlibm's ``exp`` coefficients: ``r (e^r + 1) / (e^r - 1) = 2 + r^2 / 6 + P2 r^4 + ...`` on ``|r| <= ln 2 / 2``

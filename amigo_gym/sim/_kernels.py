@@ -101,6 +101,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import kinematics, numeric
 from amigo_gym.paths import classic
+from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -236,20 +237,21 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.h_from_a,
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
-    kinematics.col_tan,
     kinematics.col_exp,
     numeric.pow2_typing,
     classic.circle_foot,
     classic.circle_arc,
     classic.manoeuvre_foot,
     classic.manoeuvre_curvature,
+    numpy_loops.numpy_loop_in_place,
+    numpy_loops.loop_call_typing,
 )
 
 #: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "c7b4d59112023802"
+LAYOUT_FINGERPRINT = "ebf47a6888da259a"
 
 
 def layout_fingerprint() -> str:
@@ -266,13 +268,16 @@ _shared = shared_compiler(
     "amigo_gym.sim._kernels",
     SHARED,
     _jit,
-    inline=(kinematics.col_tan, kinematics.col_exp),
+    inline=(kinematics.col_exp,),
     scalar_forms=numeric.SCALAR_FORMS,
-    intrinsics={numeric.pow2_real: numeric.pow2_typing},
+    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing, numeric.pow2_real: numeric.pow2_typing},
 )
 
 
 _action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
+#: numpy's own inner loop of a unary ufunc called in place (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`),
+#: compiled on its own (the single step calls the shared function itself; tests call this)
+numpy_loop_in_place = _shared(numpy_loops.numpy_loop_in_place)
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _steady_heading = _shared(task.steady_heading_float)
@@ -316,9 +321,6 @@ def _move_arguments(c: F64, state: F64, actions: F64, restart: NDArray[np.bool_]
         h = 0.5 * db
         tans[i, 0] = 0.5 * h
         tans[i, 1] = 0.5 * (state[i, 2] + h)
-    flat = tans.reshape(2 * state.shape[0])
-    for j in numba.prange(flat.shape[0]):  # the tangents in a loop of their own, over a flat view: LLVM vectorises it
-        flat[j] = kinematics.col_tan(flat[j])
 
 
 #: rows per block of :func:`evaluate`: its stages run over one block at a time, in the block's columns of the scratch
@@ -876,15 +878,19 @@ def single_evaluate(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], ob
 @_serial
 def single_finish(c: F64, buf: F64) -> int:
     """Pass 3 (:func:`finish`) of the robot in ``buf``: the number of headings past the limit (0 or 1)."""
-    past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], buf[:, SINGLE_EXPS:SINGLE_REWARD])
+    exps = buf[0, SINGLE_EXPS:SINGLE_REWARD].reshape((1, 3))  # contiguous, as finish reshapes it
+    past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], exps)
     return int(past)
 
 
 @_serial
 def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                a2: float) -> int:  # fmt: skip
-    """The single env's whole step in one call: :func:`single_move`, :func:`single_evaluate` and
-    :func:`single_finish`. Returns what :func:`single_finish` returns."""
+                a2: float, tan: int, tan_data: int, meta: NDArray[np.int64]) -> int:  # fmt: skip
+    """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate` and
+    :func:`single_finish` (the exponentials), the tangents by numpy's own float64 loop at the address ``tan``
+    (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the passes' bits with ``np.tan`` between them, on every
+    CPU. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
+    numpy_loops.numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
     single_evaluate(c, preview, buf, flags, obs)
     return single_finish(c, buf)

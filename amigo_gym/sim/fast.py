@@ -6,9 +6,10 @@ Two implementations of one step exist:
   ideal actuators and :func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`; numpy,
   always available: ``kernel="numpy"``, Python floats in the single environment, ``(N,)`` arrays in the vector one);
 * the **fast path**, :func:`step_rows`: AmigoBot-v0's step in three compiled passes over the robots
-  (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels), writing into preallocated arrays
-  (its ``tan`` and ``exp`` the reference's, in plain arithmetic: :func:`amigo_gym.model.kinematics.col_tan`).
-  ``tests/test_kernels.py`` checks that it gives the reference's results (to 1e-12, and bit for bit on this machine).
+  (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels) around numpy's own ``tan`` ufunc
+  (its ``exp`` the reference's, in plain arithmetic: :func:`amigo_gym.model.kinematics.col_exp`), writing into
+  preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
+  (to 1e-12, and bit for bit on this machine).
 
 :func:`use_fast_path` decides: ``AMIGO_GYM_KERNEL=numpy`` forces the reference, ``=numba`` requires
 the fast path (an ``ImportError`` if numba is missing), unset or ``auto`` uses numba when it can be
@@ -34,6 +35,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.sim.layout import twin
+from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task.v0 import TaskConstants, _path_start, bound_angle, initial_wheel_rates, obs_dim, record_info
 
 __all__ = [
@@ -345,10 +347,13 @@ class SingleStep:
     """One robot's step by the compiled kernel: the single env's fast path (``AmigoBotEnv(kernel=...)``).
 
     The three passes of :func:`step_rows` (:func:`amigo_gym.sim._kernels.single_move`, ``single_evaluate``,
-    ``single_finish``: the vector kernel's own loops on a one-row view) on one preallocated buffer: the same
-    operations as a row of the vector env, so the single env and the vector env give the same bits, and both those of
-    the reference, AmigoBot-v1's ideal step (``tests/test_kernels.py``), on buffers allocated once. One compiled call
-    per step (:func:`amigo_gym.sim._kernels.single_step`).
+    ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` between the first
+    two, on one preallocated buffer: the same operations as a row of the vector env, so the single env
+    and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
+    (``tests/test_kernels.py``), on buffers allocated once. One compiled call per step
+    (:func:`amigo_gym.sim._kernels.single_step`), which calls numpy's own ``tan`` loop between the passes
+    (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: the same bits); where it is not found, three compiled
+    calls with ``np.tan`` between the first two.
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
@@ -374,7 +379,19 @@ class SingleStep:
         kk = kernels()
         b = self.buf
         # the compiled passes for exactly these buffers' types (direct_call: no dispatch per call)
-        self._whole = direct_call(kk.single_step, self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0)
+        self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
+        self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
+        self._finish = direct_call(kk.single_finish, self.consts, b)
+        # the whole step in one call, numpy's own tan loop called inside (numpy_loops: its address and data pointer,
+        # and a scratch); where it is not found, the three passes with np.tan between the first two
+        self._whole: Any = None
+        self._loops: tuple[Any, ...] | None = None
+        loops = numpy_loops()
+        if loops is not None:
+            self._loops = (loops.tan.address, loops.tan.data, np.zeros(5, np.int64))
+            args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
+            self._whole = direct_call(kk.single_step, *args)
+        self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
         self.record = b[0, kk.SINGLE_RECORD : kk.SINGLE_WIDTH]
         self.obs_row = self.obs[0]
@@ -402,7 +419,18 @@ class SingleStep:
         reward). The observation is in :attr:`obs`, ``terminated`` in ``flags[0, 1]``. A heading past
         :data:`amigo_gym.model.params.HEADING_LIMIT` is left as it is and counted in :attr:`past_limit` (1, else 0):
         the caller reduces it by :func:`amigo_gym.task.v0.bound_angle`."""
-        self.past_limit = self._whole(self.consts, self.preview, self.buf, self.flags, self.obs, a1, a2)
+        b = self.buf
+        c = self.consts
+        loops = self._loops
+        if loops is not None:
+            tan, tan_data, meta = loops
+            self.past_limit = self._whole(c, self.preview, b, self.flags, self.obs, a1, a2, tan, tan_data, meta)
+        else:
+            tans = self._tans
+            self._move(c, b, self.flags, a1, a2)
+            _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
+            self._evaluate(c, self.preview, b, self.flags, self.obs)
+            self.past_limit = self._finish(c, b)
         rec: list[float] = self.record.tolist()
         return rec
 
@@ -417,6 +445,9 @@ class SingleStep:
             rec[2] = self.record[2] = self._state[2] = beta
         # the four info arrays are views of one new array
         return self.obs_row.copy(), rec[15], bool(self.flags[0, 1]), record_info(self.head.copy(), rec, time)
+
+
+_np_tan = np.tan
 
 
 def step_rows(
@@ -435,7 +466,7 @@ def step_rows(
 ) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
-    The three passes of :mod:`amigo_gym.sim._kernels`; rows
+    The three passes of :mod:`amigo_gym.sim._kernels` with numpy's ``tan`` between the first two; rows
     where ``restart`` is set (their ``state`` a start state) are evaluated without moving, as
     :func:`amigo_gym.task.v1.reset_columns` evaluates a start state. Layouts: :mod:`amigo_gym.sim._kernels`.
     ``parallel`` runs the loops on numba's threads (the same results).
@@ -538,6 +569,7 @@ def _step_rows(
     """:func:`step_rows` (unchecked) with the compiled functions ``p``."""
     c, tans, exps = ws.consts, ws.tans, ws.exps
     p.move(c, state, actions, restart, tans, ws.turn)
+    np.tan(tans, out=tans)
     m = 0
     if bitgens is not None:
         m = p.draw_starts(bitgens, restart, ws.start, state, ws.rows, ws.beta)

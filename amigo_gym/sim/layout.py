@@ -110,7 +110,7 @@ def shared_compiler(
     compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
     runs its float form (an ``overload``), which must be in ``shared`` (its source counts in the fingerprint).
     ``intrinsics`` maps Python functions to the typing functions of numba intrinsics that compiled code calls in their
-    place (:func:`amigo_gym.model.numeric.pow2_real`, whose Python form is ``math.ldexp``); the typing functions must be
+    place (:func:`amigo_gym.sim.numpy_loops.call_loop`, whose Python form uses ``ctypes``); the typing functions must be
     in ``shared`` too.
     Only the kernel modules call this (they import numba anyway); this module stays numba-free.
     """
