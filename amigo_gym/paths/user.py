@@ -213,7 +213,7 @@ class UserPath:
         sf = np.broadcast_to(s0, shape).reshape(-1)
         lof = np.broadcast_to(np.asarray(lo, dtype=np.float64), shape).reshape(-1)
         hif = np.broadcast_to(np.asarray(hi, dtype=np.float64), shape).reshape(-1)
-        got = refine(self.pose_columns, xf, yf, sf, lof, hif, self._spacing, self.length, self.closed, False)
+        got = refine(self.pose_columns, xf, yf, sf, lof, hif, self._spacing, self.length, self.closed)
         return _point([np.asarray(v).reshape(shape) for v in got], scalar)
 
 
