@@ -32,7 +32,7 @@ import math
 from collections.abc import Callable
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
-from typing import NamedTuple, Protocol, cast
+from typing import Any, NamedTuple, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -177,110 +177,6 @@ def _check_hint(sp: Real) -> None:
     bad = a[~np.isfinite(a)]
     if bad.size:
         check_real("locate", "s_prev", float(bad.flat[0]))
-
-
-def coarse_search(
-    sample_x: Array,
-    sample_y: Array,
-    h: float,
-    length: float,
-    closed: bool,
-    x: Real,
-    y: Real,
-    s_prev: Real | None,
-    max_advance: float,
-    max_retreat: float | None,
-) -> tuple[Array, Real, Real]:
-    """Step 1 of :meth:`ClothoidPath.locate` on samples ``s_j = j h`` at ``(sample_x, sample_y)`` [m].
-
-    Returns ``s`` [m] of the sample nearest to each point ``(x, y)`` (columns) and the bounds ``(lo, hi)`` of the
-    Newton iteration: without a hint, over one lap, bounds ``[0, L]`` (unbounded on a closed path); with a hint
-    ``s_prev``, over the samples of the window :func:`window_bounds` (unwrapped), ``s`` clipped to it, bounds the
-    window's columns.
-    """
-    xa = np.asarray(x, dtype=np.float64)
-    ya = np.asarray(y, dtype=np.float64)
-    if s_prev is None:
-        d2 = (sample_x - xa[..., None]) ** 2 + (sample_y - ya[..., None]) ** 2
-        lo, hi = (0.0, length) if not closed else (-math.inf, math.inf)
-        return np.argmin(d2, axis=-1) * h, lo, hi
-    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-    behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-    sp = np.asarray(s_prev, dtype=np.float64)
-    _check_hint(sp)
-    n_samp = len(sample_x)
-    jj = np.floor((sp - behind) / h)[..., None] + np.arange(math.ceil((ahead + behind) / h) + 2, dtype=np.float64)
-    if closed:
-        idx = np.mod(jj, n_samp).astype(np.int64)
-    else:
-        jj = np.clip(jj, 0, n_samp - 1)
-        idx = jj.astype(np.int64)
-    xb, yb = np.broadcast_arrays(xa, ya)
-    d2 = (sample_x[idx] - xb[..., None]) ** 2 + (sample_y[idx] - yb[..., None]) ** 2
-    k = np.argmin(d2, axis=-1)
-    s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h  # unwrapped sample numbers * h
-    lo_a, hi_a = sp - behind, sp + ahead
-    if not closed:
-        lo_a, hi_a = np.clip(lo_a, 0.0, length), np.clip(hi_a, 0.0, length)
-    return np.clip(s_start, lo_a, hi_a), lo_a, hi_a
-
-
-def refine(
-    pose: Callable[[Real], PathPose],
-    x: Real,
-    y: Real,
-    s: Real,
-    lo: Real,
-    hi: Real,
-    h: Real,
-    length: float,
-    closed: bool,
-) -> PathPoint:
-    r"""Newton's method from the coarse estimate ``s`` [m], then the :class:`PathPoint` (step 2 and 3 of
-    :meth:`ClothoidPath.locate`, :func:`project_flat`, on columns for a path given by its ``pose`` alone:
-    :class:`amigo_gym.paths.user.UserPath`).
-
-    Args:
-        pose: ``s -> PathPose`` of the path.
-        x, y: query points [m]; s: start values [m], inside ``[lo, hi]``.
-        lo, hi: the search range [m]; h: the sample spacing, the largest Newton step [m].
-        length: lap length [m]; closed: whether the path is closed.
-
-    Returns:
-        :class:`PathPoint` of columns of the broadcast shape.
-    """
-    x = np.asarray(x + 0.0 * s)
-    y = np.asarray(y + 0.0 * s)
-    p = pose(s)
-    for _ in range(NEWTON_ITERATIONS):
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = np.asarray(1.0 - p.curvature * e)
-        den = np.where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s_new = np.minimum(np.maximum(s + np.minimum(np.maximum(g / den, -h), h), lo), hi)
-        if np.array_equal(s_new, s) and np.array_equal(np.signbit(s_new), np.signbit(s)):
-            break  # a fixed point: the remaining iterations would repeat this one
-        s = s_new
-        p = pose(s)
-    dx = x - p.x
-    dy = y - p.y
-    g = dx * p.cos_theta + dy * p.sin_theta
-    e = dy * p.cos_theta - dx * p.sin_theta
-    out = np.full(np.shape(s), STATUS_INTERIOR, dtype=np.int64)
-    out[((s <= lo) & (g < 0.0)) | ((s >= hi) & (g > 0.0))] = STATUS_WINDOW
-    if not closed:
-        out[(s <= 0.0) & (g < 0.0)] = STATUS_START
-        out[(s >= length) & (g > 0.0)] = STATUS_END
-    s_lap = s
-    if closed:
-        s_lap = s - np.floor(s / length) * length
-        s_lap = np.where(s_lap >= length, s_lap - length, s_lap)
-    return PathPoint(
-        s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta,
-        np.sqrt(dx * dx + dy * dy), out,
-    )  # fmt: skip
 
 
 class _Tables(NamedTuple):
@@ -586,16 +482,7 @@ class ClothoidPath:
         if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray)):
             sp = None if s_prev is None else float(s_prev)
             return _locate_float(self._flat_list, float(x), float(y), sp, max_advance, max_retreat)
-        ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
-        if s_prev is not None:
-            _check_hint(s_prev)
-        hints = 0.0 if s_prev is None else s_prev
-        cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, hints)))
-        xf, yf, sf = (np.ascontiguousarray(v).reshape(-1) for v in cols)
-        got = locate_columns(
-            self._t.flat, np.zeros(xf.size, dtype=np.int64), xf, yf, None if s_prev is None else sf, ahead, behind
-        )
-        return PathPoint._make([np.reshape(v, cols[0].shape) for v in got])
+        return locate_points(self._t.flat, x, y, s_prev, max_advance, max_retreat)
 
 
 # --------------------------------------------------------------------------- the float path of one point
@@ -713,6 +600,8 @@ def locate_status_float(s: float, g: float, lo: float, hi: float, length: float,
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
+#: a path's pose on floats, ``(buf, nodes, nb, pv, s) -> FloatPose`` (:func:`pose_flat`'s arguments)
+PoseOf = Callable[[Buffer, Buffer, int, Any, float], FloatPose]
 #: the fields of :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta,
 #: distance, status)``
 FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
@@ -830,26 +719,28 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
 
 
 def locate_flat(
-    buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float
-) -> FlatPoint:
+    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float,
+    behind: float,
+) -> FlatPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with the hint ``sp`` [m] and the window ``ahead``,
     ``behind`` [m] (> 0, finite) on the flat path ``pv``: the window (:func:`locate_window`), the coarse search
-    (:func:`coarse_start`) clipped to it, then :func:`project_flat` (``buf``, ``nodes``, ``nb``: passed on to
-    :func:`pose_flat`). Returns :data:`FlatPoint` (the fields of :class:`PathPoint` but the lap's ``s``).
+    (:func:`coarse_start`) clipped to it, then :func:`project_flat` (``pose``, ``buf``, ``nodes``, ``nb``: the pose
+    function and what it is passed, :func:`pose_flat`'s). Returns :data:`FlatPoint` (the fields of
+    :class:`PathPoint` but the lap's ``s``).
     """
     lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
-    return project_flat(buf, nodes, nb, pv, x, y, s, lo, hi)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
 
 
-def locate_global(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
+def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] without a hint: from the nearest of all samples
     (:func:`coarse_global`), :func:`project_flat` in ``[0, length]`` (open) or unbounded (closed)."""
     if pv[P_CLOSED] != 0.0:
         lo, hi = -math.inf, math.inf
     else:
         lo, hi = 0.0, pv[P_LENGTH]
-    return project_flat(buf, nodes, nb, pv, x, y, coarse_global(pv, x, y), lo, hi)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, coarse_global(pv, x, y), lo, hi)
 
 
 def coarse_global(pv: FlatPath, x: float, y: float) -> float:
@@ -871,19 +762,20 @@ def coarse_global(pv: FlatPath, x: float, y: float) -> float:
 
 
 def project_flat(
-    buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
+    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
     """Steps 2 and 3 of :meth:`ClothoidPath.locate` from the coarse estimate ``s`` [m] in the range ``[lo, hi]``:
     Newton's method (:func:`newton_step`, :data:`NEWTON_ITERATIONS` iterations, stopped at a fixed point: the
-    remaining ones would repeat it), the foot terms and the status; the poses by :func:`pose_flat`."""
+    remaining ones would repeat it), the foot terms and the status; the poses by ``pose(buf, nodes, nb, pv, s)``
+    (:func:`pose_flat`; a :class:`~amigo_gym.paths.user.UserPath`'s on floats)."""
     h = pv[P_SPACING]
-    px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
+    px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
         s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
         if settled:
             break
         s = s_new
-        px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
+        px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
     dist = math.sqrt(dx * dx + dy * dy)
     status = locate_status_float(s, g, lo, hi, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
@@ -907,6 +799,7 @@ def _floor_float(q: float) -> float:
 
 
 def locate_rows(
+    pose: PoseOf,
     out: Array,
     buf: Buffer,
     nodes: Buffer,
@@ -920,15 +813,16 @@ def locate_rows(
     hinted: bool,
 ) -> None:
     """:meth:`ClothoidPath.locate` of the points ``(x[i], y[i])`` [m] on the flat paths starting at ``flat[start[i]]``,
-    row by row: :func:`locate_flat` with the hints ``sp[i]`` (``hinted``) else :func:`locate_global`; row ``i`` of
+    row by row: :func:`locate_flat` with the hints ``sp[i]`` (``hinted``) else :func:`locate_global` (``pose``: as
+    theirs); row ``i`` of
     ``out`` ``(12, N)``: the fields of :class:`PathPoint` (the status as a float). The column form of the projection:
     Python runs it on lists (a memoryview for ``flat``), compiled code on arrays (:class:`PathLoops`)."""
     for i in range(len(x)):
         pv = flat[start[i] :]
         if hinted:
-            r = locate_flat(buf, nodes, 0, pv, x[i], y[i], sp[i], ahead, behind)
+            r = locate_flat(pose, buf, nodes, 0, pv, x[i], y[i], sp[i], ahead, behind)
         else:
-            r = locate_global(buf, nodes, 0, pv, x[i], y[i])
+            r = locate_global(pose, buf, nodes, 0, pv, x[i], y[i])
         out[0, i] = lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0)
         out[1, i] = r[0]
         out[2, i] = r[1]
@@ -1086,12 +980,12 @@ def _locate_float(
     checked, :func:`locate_flat` (:func:`locate_global` without a hint), the lap's ``s`` added."""
     buf = [0.0] * (3 * NODES + 3)
     if sp is None:
-        r = locate_global(buf, _PATH_TABLE, 0, pv, x, y)
+        r = locate_global(pose_flat, buf, _PATH_TABLE, 0, pv, x, y)
     else:
         ahead, behind = _window(max_advance, max_retreat)
         if sp - sp != 0.0:
             _check_hint(sp)
-        r = locate_flat(buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
+        r = locate_flat(pose_flat, buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
     return PathPoint(lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0), *r)
 
 
@@ -1109,19 +1003,44 @@ def use_compiled_rows(loops: PathLoops) -> None:
 
 
 def locate_columns(
-    flat: Array, start: IntArray, x: Array, y: Array, sp: Array | None, ahead: float, behind: float
+    flat: Array,
+    start: IntArray,
+    x: Array,
+    y: Array,
+    sp: Array | None,
+    ahead: float,
+    behind: float,
+    pose: PoseOf | None = None,
 ) -> PathPoint:
     """:func:`locate_rows` on ``(N,)`` float64 columns, the flat path of row ``i`` at ``flat[start[i]:]``: compiled
-    where registered (:func:`use_compiled_rows`), else in Python; a :class:`PathPoint` of ``(N,)`` columns."""
+    where registered (:func:`use_compiled_rows`), else in Python (always for a ``pose`` other than
+    :func:`pose_flat`); a :class:`PathPoint` of ``(N,)`` columns."""
     out = np.empty((12, x.shape[0]))
     hints = x if sp is None else sp
-    if _COMPILED:
+    if _COMPILED and pose is None:
         _COMPILED[0].locate(out, flat, start, x, y, hints, ahead, behind, sp is not None)
     else:
         rows = (start.tolist(), x.tolist(), y.tolist(), hints.tolist())
         pv = cast(FlatPath, flat.data)  # a memoryview: its slices are views, its entries Python floats
-        locate_rows(out, [0.0] * (3 * NODES + 3), _PATH_TABLE, pv, *rows, ahead, behind, sp is not None)
+        of = pose_flat if pose is None else pose
+        locate_rows(of, out, [0.0] * (3 * NODES + 3), _PATH_TABLE, pv, *rows, ahead, behind, sp is not None)
     return PathPoint._make([*out[:11], out[11].astype(np.int64)])
+
+
+def locate_points(
+    flat: Array, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None,
+    pose: PoseOf | None = None,
+) -> PathPoint:  # fmt: skip
+    """:meth:`ClothoidPath.locate` of points of any shape on the flat path ``flat`` (the window and the hints checked,
+    the arguments broadcast): :func:`locate_columns`; ``pose``: as there. Arrays of the broadcast shape."""
+    ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
+    if s_prev is not None:
+        _check_hint(s_prev)
+    cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, 0.0 if s_prev is None else s_prev)))
+    xf, yf, sf = (np.ascontiguousarray(v).reshape(-1) for v in cols)
+    start = np.zeros(xf.size, dtype=np.int64)
+    got = locate_columns(flat, start, xf, yf, None if s_prev is None else sf, ahead, behind, pose)
+    return PathPoint._make([np.reshape(v, cols[0].shape) for v in got])
 
 
 def pose_columns_of(flat: Array, start: IntArray, s: Array) -> PathPose:

@@ -112,7 +112,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "016a5ea5d615140d"
+LAYOUT_FINGERPRINT = "aa3351e09cb05cfb"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -188,7 +188,6 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 #: loop and the status, calling clothoid's other shared functions), compiled
 _piece_at = _shared(clothoid.piece_at)
 _place = _shared(clothoid.place)
-_locate_flat = _shared(clothoid.locate_flat)
 _pose_flat = _shared(clothoid.pose_flat)
 
 
@@ -293,8 +292,8 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     """
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(
-        buf, c, _path_nodes(c), pv, x, y, sp, window, window
+    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = clothoid.locate_flat(
+        clothoid.pose_flat, buf, c, _path_nodes(c), pv, x, y, sp, window, window
     )
     return s, kappa, e, ct, st, status
 
@@ -377,7 +376,7 @@ def rows_locate(
 ) -> None:
     """:func:`amigo_gym.paths.clothoid.locate_rows` itself: the column projection, row by row, into ``out``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    clothoid.locate_rows(out, buf, nodes, flat, start, x, y, sp, ahead, behind, on)
+    clothoid.locate_rows(clothoid.pose_flat, out, buf, nodes, flat, start, x, y, sp, ahead, behind, on)
 
 
 @_jit
