@@ -6,14 +6,11 @@ paths, ...) and offers what AmigoBot-v1 needs of a path (:class:`~amigo_gym.path
 
 Exactness: row ``i`` of :meth:`PathBatch.locate` and :meth:`PathBatch.pose_columns` is *bit-identical* to
 ``paths[i].locate(float(x[i]), float(y[i]), float(s_prev[i]), ...)`` and ``paths[i].pose_columns(float(s[i]))``.
-There is no loop over rows: the piece tables of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s are
-stacked into padded ``(N, P_max)`` arrays and their coarse samples into ``(N, S_max)`` arrays, with per-row
-piece and sample counts, sample spacings, lengths, turns and closed flags as ``(N,)`` columns; every
-evaluation gathers a row's entries and runs the *same* expressions as :class:`ClothoidPath` (the module-level
-functions :func:`~amigo_gym.paths.clothoid.pose_from_pieces`, :func:`~amigo_gym.paths.clothoid.refine`,
-:func:`~amigo_gym.paths.clothoid.window_bounds` are the one home of those formulas). The piece of ``u`` in
-row ``r`` is found by one :func:`numpy.searchsorted` over the keys ``r + 1j s0`` of all rows (NumPy orders
-complex numbers lexicographically, so this is each row's own ``searchsorted`` of its piece starts, exactly).
+The flat path vectors of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s (their pieces and coarse samples,
+:func:`~amigo_gym.paths.clothoid.flat_tables`) are stacked into a padded ``(N, W)`` array, and every evaluation
+runs a ClothoidPath's own float functions on each row's vector, row by row
+(:func:`~amigo_gym.paths.clothoid.locate_rows`, :func:`~amigo_gym.paths.clothoid.pose_rows`: compiled where a
+compiled route registered them, else a Python loop).
 
 Special cases:
 

@@ -19,7 +19,9 @@ Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m] from the s
 [1/m] positive turning left, signed cross-track error ``e = (p - c(s)) . n`` [m] with the left normal
 ``n = (-sin theta, cos theta)``. An open path continues beyond its ends as the straight lines along its end
 tangents (curvature 0 there); a closed path repeats (``s`` modulo the lap length). Column arguments are
-floats or float64 arrays of any shape; one code serves both, with bit-identical results.
+floats or float64 arrays of any shape; one code serves both, with bit-identical results: the float functions below
+(``pose_flat``, ``locate_flat``), on an array entry by entry (``locate_rows``, ``pose_rows``: Python, or compiled by
+the v1 kernels once a compiled route registered them, ``use_compiled_rows``).
 
 This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
 :mod:`amigo_gym.model.fresnel`.
@@ -214,7 +216,7 @@ class PathLoops(NamedTuple):
         chain: :func:`chain_pieces` ``(out, n, segs, n_segs, x, y, theta) -> (x, y, theta, length)`` (its scratch and
             nodes supplied).
         samples: :func:`sample_points` ``(pv, o, count, spacing)``: the coarse samples written into the flat path
-            vector ``pv`` itself (the float route takes them from the column pose, :func:`pose_from_pieces`).
+            vector ``pv`` itself (the float route takes them from :func:`_poses_flat`, the same poses).
         run: :func:`amigo_gym.paths.families.run_segments` ``(segs, n_segs, x, y, theta) -> (x, y, theta)``.
         lane: :func:`amigo_gym.paths.families.lane_change_shape` ``(ratio) -> (x1, y1, theta_m, x_m)``.
         locate, pose: :func:`locate_rows` and :func:`pose_rows` (their scratch and nodes supplied), the column
@@ -323,8 +325,13 @@ class ClothoidPath:
         )  # fmt: skip
         # coarse samples: s_j = j * spacing, j = 0..n (open) or 0..n-1 (closed, periodic)
         js = np.arange(n_samples + (0 if self.closed else 1), dtype=np.float64)
-        poses = _poses_flat(flat_tables(t, self.closed).tolist(), (js * spacing).tolist())
-        sx, sy = (np.array([q[k] for q in poses], dtype=np.float64) for k in (0, 1))
+        pv = flat_tables(t, self.closed)
+        if _COMPILED:  # compiled pose_flat at each sample (the same bits)
+            q = pose_columns_of(pv, np.zeros(js.size, dtype=np.int64), js * spacing)
+            sx, sy = np.asarray(q.x), np.asarray(q.y)
+        else:
+            poses = _poses_flat(pv.tolist(), (js * spacing).tolist())
+            sx, sy = (np.array([q[k] for q in poses], dtype=np.float64) for k in (0, 1))
         flat = flat_tables(t._replace(sample_x=sx, sample_y=sy), self.closed)
         n, m = len(s0), len(js)
         cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
@@ -487,11 +494,11 @@ class ClothoidPath:
 
 # --------------------------------------------------------------------------- the float path of one point
 #
-# The same expressions as pose_from_pieces, refine, window_bounds and locate_status for Python floats,
-# written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
-# (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
+# The pose and the projection on Python floats (one robot's step evaluates about 15 poses), and on arrays entry by
+# entry (locate_rows, pose_rows): the bits of the former vectorised column code, which tests/clothoid_columns.py
+# keeps as a reference (tests/test_float_paths.py compares them, ties and NaN included).
 #
-# The functions below from py_min to locate_flat (and numeric.clip_float, numpy's clip of a float) are in numba's
+# The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
 # subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
 # no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
 # (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection is written once: the
@@ -544,7 +551,7 @@ def placed_pose(
 
 
 def locate_window(sp: float, ahead: float, behind: float, length: float, closed: bool) -> tuple[float, float]:
-    """The search window ``[lo, hi]`` [m] around the hint ``sp`` (:func:`window_bounds` for floats), kept in
+    """The search window ``[lo, hi]`` [m] around the hint ``sp``, kept in
     ``[0, length]`` on an open path."""
     lo = sp - behind
     hi = sp + ahead
@@ -587,7 +594,8 @@ def newton_step(
 
 
 def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
-    """:func:`locate_status` of one projection ``s`` [m] with residual ``g`` in the window ``[lo, hi]``."""
+    """The status (:data:`STATUS_INTERIOR`, ...) of one projection ``s`` [m] with residual ``g = (p - c) . t`` in the
+    range ``[lo, hi]``: clamped at a window edge, or at an end of an open path."""
     status = STATUS_INTERIOR
     if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
         status = STATUS_WINDOW
@@ -653,7 +661,7 @@ def piece_index(pv: FlatPath, u: float) -> int:
 
 def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
     """The piece ``j`` holding the arc length ``s`` [m] on the flat path ``pv``, the distance ``du`` [m] into it, the
-    lap number and the length ``extra`` [m] past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and
+    lap number and the length ``extra`` [m] past an open path's ends (the wrap, clamp and
     search: :func:`wrap_arc`, :func:`piece_index`)."""
     u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     j = piece_index(pv, u)
@@ -673,7 +681,7 @@ def place(
 
 
 def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> float:
-    """Step 1 of :meth:`ClothoidPath.locate` with a hint (:func:`coarse_search` for floats): ``s`` [m] of the sample
+    """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample
     nearest to ``(x, y)`` among the samples ``s_j = j h``, ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead +
     behind) / h) + 2`` (unwrapped: a closed path reads sample ``j mod m``, an open one sample ``clip(j, 0, m - 1)``).
 
@@ -852,7 +860,7 @@ def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: lis
 
 
 def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
-    """The pose at the arc length ``s`` [m] on the flat path ``pv`` (:func:`pose_from_pieces`' bits):
+    """The pose at the arc length ``s`` [m] on the flat path ``pv``:
     ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -] by :func:`piece_at`, the
     quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_nodes`) and :func:`place`.
 
@@ -928,7 +936,7 @@ def chain_pieces(
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
     """The coarse samples of the flat path ``pv`` written into it: the points at ``s_j = j spacing`` [m],
-    ``j < count``, by :func:`pose_flat` (the float path's pose, the bits of :func:`pose_from_pieces`' columns), their
+    ``j < count``, by :func:`pose_flat` (the float path's pose), their
     ``x`` at ``pv[o + j]``, ``y`` at ``pv[o + count + j]`` (``pv``'s header and pieces written before).
 
     The compiled route's samples (:class:`PathLoops`); the float route takes them from the column pose of all at

@@ -13,7 +13,8 @@ Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning an
 :class:`~amigo_gym.paths.PathPoint` (the closest point, keeping progress; see
 :meth:`~amigo_gym.paths.ClothoidPath.locate`). Without it, :class:`UserPath` finds the closest point itself from
 ``pose_columns``: samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then the same Newton
-iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.refine`). The
+iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.locate_points`, row by
+row, with this path's ``pose_columns`` on floats). The
 renderer and the feasibility analysis use ``length``, ``closed`` and ``pose_columns`` only.
 
 :func:`check_path` refuses, in one line naming the path and the member, a missing member, a ``length`` of
