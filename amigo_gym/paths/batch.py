@@ -140,7 +140,7 @@ class PathBatch:
         return out
 
     def _set(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> None:
-        """Rows ``rows`` take ``paths``: bookkeeping O(len(rows)), tables O(len(rows) (P + S)) when they exist."""
+        """Rows ``rows`` take ``paths``: bookkeeping O(len(rows)), tables O(len(rows) W) when they exist."""
         for r in rows.tolist():
             old = self._counts.get(int(self._ids[r]))
             if old is not None:  # (at construction the ids are 0: no object has id 0)
@@ -171,7 +171,7 @@ class PathBatch:
         t.write(np.asarray(rows, dtype=np.int64), p if isinstance(p, ClothoidPath) else _PLACEHOLDER)
 
     def _padded(self) -> _Padded:
-        """The padded tables, built on first need (O(N (P + S)), once; kept up to date by :meth:`replace`)."""
+        """The padded tables, built on first need (O(N W), once; kept up to date by :meth:`replace`)."""
         if self._tables is None:
             clothoids = [p for p in self._objects.values() if isinstance(p, ClothoidPath)] + [_PLACEHOLDER]
             t = _Padded.empty(len(self._paths), max(p._t.flat.size for p in clothoids))
@@ -186,8 +186,8 @@ class PathBatch:
     def replace(self, rows: ArrayLike, paths: Sequence[PathSpec]) -> None:
         """Rows ``rows`` (distinct row numbers, ``(k,)``) take ``paths`` (``k`` paths), in place (autoreset).
 
-        Cost O(k (P_max + S_max)); the padded arrays grow (O(N (P_max + S_max))) only when a new path has more
-        pieces or samples than any before, and are first built when the rows stop all using one object.
+        Cost O(k W) (``W``: the longest flat path vector); the padded array grows (O(N W)) only when a new path's
+        vector is longer than any before, and is first built when the rows stop all using one object.
         """
         ra = np.asarray(rows)
         if ra.ndim != 1 or not (ra.size == 0 or np.issubdtype(ra.dtype, np.integer)):
