@@ -524,6 +524,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.__dict__.update(state)
         if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
             self._state = self._state_views(np.asarray(self._state.steps))
+        elif fast.use_fast_path(None):  # the column route's projection compiled in this process too
+            fast_v1.path_loops()
         if self._v0 is not None:  # and of AmigoBot-v0's rows
             self._state = self._v0_views(self._state)
 
