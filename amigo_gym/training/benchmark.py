@@ -106,7 +106,7 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import remove_matching, trust_unverified
 from amigo_gym.training.task_metrics import (
@@ -239,7 +239,7 @@ class Scenario:
         return {
             "name": self.name,
             "env_id": self.env_id,
-            "env_kwargs": _jsonable(dict(self.env_kwargs)),
+            "env_kwargs": json_safe(self.env_kwargs),
             "seeds": list(self.seeds),
             "episodes": self.episodes,
             "max_steps": self.max_steps,
@@ -401,20 +401,6 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
         for sc in suite
         if sc.name in QUICK_SCENARIOS
     )
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return None if not math.isfinite(float(x)) else float(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    return x
 
 
 # --------------------------------------------------------------------------- agents
@@ -702,7 +688,7 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
         rec[k] = _nanmean(col[k])
     rec["mean_steps"] = _nanmean(col["steps"])
     rec["terminated"] = int(sum(col["terminated"]))
-    rec["per_episode"] = {k: _jsonable(v) for k, v in col.items()}
+    rec["per_episode"] = {k: json_safe(v) for k, v in col.items()}
     return rec
 
 
@@ -1139,7 +1125,7 @@ def write_outputs(
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
     try:
         targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
-        atomic_write_json(targets[json_path], _jsonable(doc))
+        atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
             targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"

@@ -64,7 +64,7 @@ from typing import Any
 
 from amigo_gym import runs
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
+from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir, json_safe
 from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
@@ -521,15 +521,13 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
     bench: dict[str, Any] | None = None
     if s.benchmark:
-        from amigo_gym.training.benchmark import _jsonable
-
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
         _say(
             "quick benchmark (amigo-gym benchmark --quick) on these agents"
             + (f" and {generalists}" if generalists else "")
         )
         bench = quick_benchmark(agents, sources, generalists, progress=progress)
-        extra["benchmark"] = _jsonable(bench)
+        extra["benchmark"] = json_safe(bench)
         extra["benchmark_plots"] = plots and bool(bench["results"])
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
     try:

@@ -75,7 +75,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, json_safe
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import trust_unverified
@@ -511,7 +511,7 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
     """The protocol as written to the JSON (with the env settings and the start poses)."""
     return {
         "env_id": ENV_ID,
-        "env_params": _jsonable(asdict(params)),
+        "env_params": json_safe(asdict(params)),
         "steps": proto.steps,
         "duration_s": proto.steps * params.dt,
         "lap_time_s": params.lap_time,
@@ -532,11 +532,6 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
         ),
         "deterministic": True,
     }
-
-
-def _jsonable(x: Any) -> Any:
-    """``x`` for strict JSON: numpy scalars as Python numbers, NaN and inf as ``None`` (``null``)."""
-    return json_safe(x)
 
 
 # --------------------------------------------------------------------------- table and plots
@@ -700,7 +695,7 @@ def write_outputs(
     """
     params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
-    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2, allow_nan=False) + "\n").encode(), parents=True)
+    atomic_write_json(json_path, doc, parents=True)
     atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")
