@@ -90,11 +90,9 @@ pairs that could not run, with the reason), ``aggregates`` (per agent: ``iqm`` a
 
 from __future__ import annotations
 
-import functools
 import glob
 import json
 import math
-import os
 import re
 import sys
 import time
@@ -1096,14 +1094,6 @@ def clean_temporaries(out: Path) -> list[str]:
     return remove_matching(out, _TEMPORARY)
 
 
-def _key(path: Path, out: Path) -> str:
-    """A file's name in the manifest: relative to ``out`` when inside it, else absolute."""
-    try:
-        return str(path.resolve().relative_to(out.resolve()))
-    except ValueError:
-        return str(path.resolve())
-
-
 def write_outputs(
     doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
 ) -> list[Path]:
@@ -1112,14 +1102,13 @@ def write_outputs(
     Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
     ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
     new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
-    last. The set is complete and consistent exactly when the manifest exists and every file matches it
-    (:func:`verify_outputs`): a reader that checks it never mixes files of two runs. Fault stages (tests):
+    last (:func:`amigo_gym.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
     ``publish:<file name>`` after each move.
     """
     import shutil
     import tempfile
 
-    from amigo_gym.io import fault_point, fsync_dir
+    from amigo_gym.runs import publish
 
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
@@ -1132,42 +1121,18 @@ def write_outputs(
             targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
             plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
             plot_profiles(doc, staging / "benchmark_profiles.png")
-        files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
-        (out / MANIFEST).unlink(missing_ok=True)
-        fsync_dir(out)
-        for dest, src in targets.items():
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                os.replace(src, dest)
-            except OSError:  # another file system: copy beside the target, then rename
-                atomic_save(functools.partial(shutil.copyfile, src), dest)
-            fault_point(f"publish:{dest.name}")
-            fsync_dir(dest.parent)
-        manifest = {"files": files, "command": doc.get("command"), "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-        atomic_write_json(out / MANIFEST, manifest)
+        publish(targets, out, MANIFEST, command=doc.get("command"))
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return list(targets)
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
-    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file.
+    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
+    (:func:`amigo_gym.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
+    from amigo_gym.runs import verify_manifest
 
-    Raises:
-        FileNotFoundError: no manifest (no complete set: a benchmark was interrupted while publishing).
-        CorruptFileError: a file missing or not the one the manifest lists.
-    """
-    from amigo_gym.runs import CorruptFileError, read_json, verify_sha256
-
-    path = out / MANIFEST
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
-    doc = read_json(path)
-    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
-        raise CorruptFileError(f"{path}: not a manifest (needs 'files')")
-    for name, digest in doc["files"].items():
-        verify_sha256(out / name, str(digest), str(path))
-    return dict(doc["files"])
+    return verify_manifest(out, MANIFEST)
 
 
 # --------------------------------------------------------------------------- command line
