@@ -108,11 +108,12 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
-def file_mode() -> int:
-    """The mode of a new plain file under the current umask, ``0o666 & ~umask``."""
+def file_mode(folder: bool = False) -> int:
+    """The mode of a new plain file (``folder``: a new folder) under the current umask, ``0o666 & ~umask``
+    (``0o777 & ~umask``)."""
     umask = os.umask(0)
     os.umask(umask)
-    return 0o666 & ~umask
+    return (0o777 if folder else 0o666) & ~umask
 
 
 def _target(path: str | os.PathLike[str], parents: bool) -> Path:

@@ -51,8 +51,10 @@ import json
 import os
 import re
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
@@ -73,6 +75,7 @@ __all__ = [
     "check_pickle",
     "clean_temporaries",
     "remove_matching",
+    "handling",
     "has_run_files",
     "is_current_lock",
     "load_checkpoint",
@@ -108,6 +111,19 @@ class StopRequest:
             raise KeyboardInterrupt
         self.requested = True
         print(self.message, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def handling(handler: Callable[[int, Any], None], *signals: signal.Signals) -> Iterator[None]:
+    """``handler`` on ``signals`` (default ``SIGTERM`` and ``SIGINT``) inside the block, the previous handlers
+    restored after it; nothing outside the main thread (signals are handled only there)."""
+    main = threading.current_thread() is threading.main_thread()
+    old = {sig: signal.signal(sig, handler) for sig in signals or (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        yield
+    finally:
+        for sig, previous in old.items():
+            signal.signal(sig, previous)
 
 
 class RunLockedError(FileExistsError):
@@ -338,13 +354,6 @@ def read_json(path: Path, what: str = "") -> Any:
         raise CorruptFileError(f"{path}: not valid JSON{' ' + what if what else ''} ({detail})") from None
 
 
-def _dir_mode() -> int:
-    """The mode of a new folder under the current umask, ``0o777 & ~umask``."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o777 & ~umask
-
-
 def _fsync_file(path: Path) -> None:
     with open(path, "rb+") as fh:
         os.fsync(fh.fileno())
@@ -517,7 +526,7 @@ def save_checkpoint(
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
     try:
-        os.chmod(tmp, _dir_mode())
+        os.chmod(tmp, file_mode(folder=True))
         names = list(write(tmp))
         for name in SNAPSHOT:  # the run's evaluation record as of this step
             src = out / name

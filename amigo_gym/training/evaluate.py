@@ -201,7 +201,7 @@ def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, ga
     wmax = params.robot.max_wheel_rate
     obs, info = env.reset(**reset_kwargs)
     h0 = np.asarray(info["h_position"], dtype=np.float64)
-    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref", "s")}
+    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref_rates", "arc")}
     ret, terminated = 0.0, False
     s_prev = float(path.project(h0).s)
     s_unwrapped = 0.0
@@ -216,27 +216,15 @@ def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, ga
             ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
         s_unwrapped += ds
         s_prev = s
-        cols["time"].append(info["time"])
-        cols["e"].append(info["cross_track_error"])
-        cols["h"].append(info["h_position"])
-        cols["rates"].append(info["wheel_rates"])
-        cols["angles"].append(info["wheel_angles"])
-        cols["ref"].append(ref)
-        cols["s"].append(s_unwrapped)
+        row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
+        for col, value in zip(cols.values(), (*row, ref, s_unwrapped), strict=True):
+            col.append(value)
         if terminated or truncated:
             break
-    return Trajectory(
-        time=np.asarray(cols["time"], dtype=np.float64),
-        e=np.asarray(cols["e"], dtype=np.float64),
-        h=np.asarray(cols["h"], dtype=np.float64).reshape(-1, 2),
-        rates=np.asarray(cols["rates"], dtype=np.float64).reshape(-1, 2),
-        angles=np.asarray(cols["angles"], dtype=np.float64).reshape(-1, 2),
-        ref_rates=np.asarray(cols["ref"], dtype=np.float64).reshape(-1, 2),
-        arc=np.asarray(cols["s"], dtype=np.float64),
-        ret=ret,
-        terminated=bool(terminated),
-        h0=h0,
-    )
+    arrays = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
+    for k in ("h", "rates", "angles", "ref_rates"):
+        arrays[k] = arrays[k].reshape(-1, 2)
+    return Trajectory(**arrays, ret=ret, terminated=bool(terminated), h0=h0)
 
 
 def _rms(x: Array) -> float:
