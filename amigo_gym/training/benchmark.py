@@ -97,7 +97,7 @@ import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -233,20 +233,8 @@ class Scenario:
         return len(self.seeds)
 
     def to_json(self) -> dict[str, Any]:
-        """The scenario as JSON data (tuples as lists)."""
-        return {
-            "name": self.name,
-            "env_id": self.env_id,
-            "env_kwargs": json_safe(self.env_kwargs),
-            "seeds": list(self.seeds),
-            "episodes": self.episodes,
-            "max_steps": self.max_steps,
-            "held_out": self.held_out,
-            "description": self.description,
-            "version": self.version,
-            "settle_time_s": self.settle_time_s,
-            "failure_tolerance_m": self.failure_tolerance_m,
-        }
+        """The scenario as JSON data (its fields and ``episodes``; tuples as lists)."""
+        return json_safe({**asdict(self), "episodes": self.episodes})  # type: ignore[no-any-return]
 
 
 def user_scenarios(

@@ -79,6 +79,7 @@ from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import trust_unverified
+from amigo_gym.training.task_metrics import _rms
 
 __all__ = [
     "Agent",
@@ -225,10 +226,6 @@ def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, ga
     for k in ("h", "rates", "angles", "ref_rates"):
         arrays[k] = arrays[k].reshape(-1, 2)
     return Trajectory(**arrays, ret=ret, terminated=bool(terminated), h0=h0)
-
-
-def _rms(x: Array) -> float:
-    return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
 
 
 def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
