@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import io as _io
 import itertools
 import json
@@ -962,13 +963,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     def run() -> int:
         s = settings_from_args(FastPPOSettings, args)
         cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in args_in)
-        log = None if run_opts.quiet else _flush_print
+        log = None if run_opts.quiet else functools.partial(print, flush=True)
         rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
         return 0
 
     return run_guarded(run, PROG)
-
-
-def _flush_print(msg: str) -> None:
-    print(msg, flush=True)
