@@ -61,7 +61,6 @@ file is written to a temporary name, then ``os.replace``d.
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
@@ -75,7 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, atomic_write_json, json_safe
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import trust_unverified
@@ -549,9 +548,7 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def _save_fig(fig: Any, path: Path) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    atomic_write(path, buf.getvalue(), parents=True)
+    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=110), path, parents=True)
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
