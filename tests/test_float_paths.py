@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import clothoid_columns
 import numpy as np
 import pytest
 from v0_reference import Reference, start_pose
@@ -159,12 +160,23 @@ def test_locate_and_pose_float_equal_arrays(name: str, kw: dict[str, Any]) -> No
     hint = s + g.normal(size=n) * 0.2
     ref = path.locate(x, y, hint, 0.475, 0.3)
     ref_default = path.locate(x, y, hint, 0.475)
+    ref_global = path.locate(x, y)
+    # the arrays (the float functions row by row) against the former vectorised code (an independent reference)
+    for got_cols, want_cols in (
+        (q, clothoid_columns.pose(path, s)),
+        (ref, clothoid_columns.locate(path, x, y, hint, 0.475, 0.3)),
+        (ref_default, clothoid_columns.locate(path, x, y, hint, 0.475)),
+        (ref_global, clothoid_columns.locate(path, x, y)),
+    ):
+        for i in range(n):
+            rows_equal([np.asarray(v)[i] for v in got_cols], want_cols, i)
     for i in range(n):
         rows_equal(path.pose_columns(float(s[i])), q, i)
         got = path.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475, 0.3)
         assert type(got.status) is int
         rows_equal(got, ref, i)
         rows_equal(path.locate(float(x[i]), float(y[i]), float(hint[i]), 0.475), ref_default, i)
+        rows_equal(path.locate(float(x[i]), float(y[i])), ref_global, i)
     for i in range(0, n - 3, 3):
         for j, got_pose in enumerate(path.pose_floats([float(v) for v in s[i : i + 3]])):
             rows_equal(got_pose, q, i + j)
@@ -302,7 +314,8 @@ def _search_path(name: str, kw: dict[str, Any]) -> Any:
 def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[str, Any]) -> None:
     """The projection's shared loops on the flat path (run by the float path, compiled by v1's kernel) against the
     column code: piece_index is bisect_right - 1 clamped (numpy's searchsorted in the column code), coarse_start
-    the column code's coarse search (np.mod / np.clip of the sample numbers, np.argmin's first minimum and NaN)."""
+    the column code's coarse search (np.mod / np.clip of the sample numbers, np.argmin's first minimum and NaN), and
+    the whole projection with and without a hint on these ties, NaN and far points (tests/clothoid_columns.py)."""
     from amigo_gym.paths import clothoid
 
     path = _search_path(name, kw)
@@ -315,17 +328,18 @@ def test_flat_piece_and_coarse_search_equal_the_column_code(name: str, kw: dict[
     for u, want in zip(us, col, strict=True):
         assert clothoid.piece_index(pv, u) == int(want), u
     for s in us[:-1]:  # the pose's piece, wrap and placement: the column code's (NaN: the wrap's error, as before)
-        rows_equal(clothoid._pose_float(pv, s), path.pose_columns(np.array([s])), 0)
+        rows_equal(clothoid._pose_float(pv, s), clothoid_columns.pose(path, np.array([s])), 0)
     ties = 0
     for x, y, hint in cases:
         for ahead, behind in ((0.475, 0.475), (0.475, 0.3), (0.05, 1.3)):
-            s_col, lo, hi = clothoid.coarse_search(
-                t.sample_x, t.sample_y, t.spacing, t.length, path.closed, x, y, hint, ahead, behind
-            )
+            s_col, lo, hi = clothoid_columns.coarse(path, np.array(x), np.array(y), np.array(hint), ahead, behind)
             got = numeric.clip_float(clothoid.coarse_start(pv, x, y, hint, ahead, behind), float(lo), float(hi))
             assert same(got, s_col), (x, y, hint, ahead, behind, got, s_col)
+            want = clothoid_columns.locate(path, np.array([x]), np.array([y]), np.array([hint]), ahead, behind)
+            rows_equal(path.locate(x, y, hint, ahead, behind), want, 0)
             d2 = (t.sample_x - x) ** 2 + (t.sample_y - y) ** 2
             ties += int(np.sum(d2 == d2.min()) > 1)
+        rows_equal(path.locate(x, y), clothoid_columns.locate(path, np.array([x]), np.array([y])), 0)
     if name == "line":
         assert ties > 0  # the tie rule was exercised
 

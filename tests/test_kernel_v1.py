@@ -306,9 +306,10 @@ def test_layout_fingerprint() -> None:
 
 
 def test_shared_projection_compiled_equals_the_float_path() -> None:
-    """The projection's loops written once in amigo_gym.paths.clothoid (piece_index, coarse_start, locate_flat): the
-    kernel's compilation of them gives the float path's bits (which tests/test_float_paths.py compares with the
-    column code), with ties, NaN and hints far outside the path; locate_flat with windows other than the env's."""
+    """The projection's loops written once in amigo_gym.paths.clothoid (piece_index, coarse_start, locate_flat and
+    locate_global through the row loop locate_rows): the kernel's compilation of them gives the float path's bits
+    (which tests/test_float_paths.py compares with the former column code), with ties, NaN (on closed paths too) and
+    hints far outside the path; windows other than the env's."""
     import math
 
     import numba
@@ -316,7 +317,8 @@ def test_shared_projection_compiled_equals_the_float_path() -> None:
     from amigo_gym.paths import clothoid, make_family_path
 
     kv = fast_v1.kernels()
-    consts = fast_v1.kernel_constants(tracking.constants(tracking.make_tracking_params("t", path="figure8")))
+    nodes_list, buf = clothoid._PATH_TABLE, [0.0] * 33
+    nodes = np.array(nodes_list)
     piece_index = numba.njit(clothoid.piece_index)
     coarse_start = numba.njit(clothoid.coarse_start)
     g = np.random.default_rng(7)
@@ -339,8 +341,14 @@ def test_shared_projection_compiled_equals_the_float_path() -> None:
                 assert same(
                     coarse_start(flat, x, y, hint, ahead, behind), clothoid.coarse_start(pv, x, y, hint, ahead, behind)
                 )
-                if (x != x or y != y) and path.closed:
-                    continue  # NaN progress: the float path's wrap raises (math.floor), the kernel's goes on
-                got = kv._locate_flat(np.zeros(33), consts, kv._path_nodes(consts), flat, x, y, hint, ahead, behind)
-                want = clothoid.locate_flat([0.0] * 33, clothoid._PATH_TABLE, 0, pv, x, y, hint, ahead, behind)
-                assert all(same(a, b) for a, b in zip(got, want, strict=True)), (name, x, y, hint, got, want)
+                # the compiled row loop (the column route's projection) against the float path, with and without a hint
+                got = np.empty((12, 1))
+                cols = (np.zeros(1, dtype=np.int64), np.array([x]), np.array([y]), np.array([hint]))
+                kv.rows_locate(nodes, got, flat, *cols, ahead, behind, True)
+                want = clothoid.locate_flat(
+                    clothoid.pose_flat, [0.0] * 33, nodes_list, 0, pv, x, y, hint, ahead, behind
+                )
+                assert all(same(a, b) for a, b in zip(got[1:, 0], want, strict=True)), (name, x, y, hint, got, want)
+            kv.rows_locate(nodes, got, flat, *cols, 0.5, 0.5, False)
+            want = clothoid.locate_global(clothoid.pose_flat, buf, nodes_list, 0, pv, x, y)
+            assert all(same(a, b) for a, b in zip(got[1:, 0], want, strict=True)), (name, x, y, got, want)

@@ -176,7 +176,7 @@ def test_replace_grows_and_keeps_rows_exact() -> None:
     x, y, sp = _queries(rng, paths)
     batch.locate(x, y, sp)  # builds the tables
     assert batch._tables is not None
-    p_before = batch._tables.key.shape[1]
+    p_before = batch._tables.flat.shape[1]
     big = manoeuvre(0.5, 2.0, 1, 40.0)  # many pieces, many samples: the padded arrays grow
     rows = np.array([1, 7, 4], dtype=np.intp)
     new = [big, circle(2.5, -1), paths[5]]
@@ -184,7 +184,7 @@ def test_replace_grows_and_keeps_rows_exact() -> None:
     for r, p in zip(rows, new, strict=True):
         paths[r] = p
         assert batch[int(r)] is p
-    assert batch._tables.key.shape[1] > p_before
+    assert batch._tables.flat.shape[1] > p_before
     assert np.array_equal(batch.length, [p.length for p in paths])
     assert np.array_equal(batch.closed, [p.closed for p in paths])
     x, y, sp = _queries(rng, paths)

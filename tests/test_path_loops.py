@@ -2,7 +2,7 @@
 the float route, bit for bit.
 
 The float route runs ``clothoid.chain_pieces``, ``families.run_segments`` and ``families.lane_change_shape`` as
-Python and takes the coarse samples from the column pose (``clothoid.pose_from_pieces``); the compiled route compiles
+Python and takes the coarse samples from ``clothoid._poses_flat`` (``pose_flat``'s bits); the compiled route compiles
 the same functions (and ``clothoid.sample_points``: ``pose_flat`` at each sample) with the C library's cosines and
 sines of the nodes. On many random paths of every family, with the ranges of ``path="mixed"`` and beyond them, every
 table of the path (the flat vector, the pieces' lists, the length, turn, spacing and largest curvature) is equal bit

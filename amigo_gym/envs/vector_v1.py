@@ -14,7 +14,8 @@ With numba (``kernel="auto"`` or ``"numba"``; a core dependency where it ships w
 (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`);
 the state then lives in the rows of its workspace (the ``(N,)`` state columns are views of them). Otherwise
 (``kernel="numpy"``, no numba, a path object of another class) the column functions step the batch; they are
-the reference.
+the reference. Their path projection and pose run a ClothoidPath's float functions row by row
+(:func:`amigo_gym.paths.clothoid.locate_rows`), compiled where numba is installed (unless ``AMIGO_GYM_KERNEL=numpy``).
 
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` bit for bit
 (observations, rewards, terminations, truncations and the numeric infos), randomisation included, in the
@@ -195,6 +196,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if fast_v1.use_kernel(owner, choice) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
+        elif fast.use_fast_path(None):  # the column route's projection and pose: the float functions, compiled
+            fast_v1.path_loops()
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
         # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings, on its rows (N, 8): x, y, beta, alpha1,
@@ -521,6 +524,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.__dict__.update(state)
         if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
             self._state = self._state_views(np.asarray(self._state.steps))
+        elif fast.use_fast_path(None):  # the column route's projection compiled in this process too
+            fast_v1.path_loops()
         if self._v0 is not None:  # and of AmigoBot-v0's rows
             self._state = self._v0_views(self._state)
 

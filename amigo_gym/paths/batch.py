@@ -6,14 +6,11 @@ paths, ...) and offers what AmigoBot-v1 needs of a path (:class:`~amigo_gym.path
 
 Exactness: row ``i`` of :meth:`PathBatch.locate` and :meth:`PathBatch.pose_columns` is *bit-identical* to
 ``paths[i].locate(float(x[i]), float(y[i]), float(s_prev[i]), ...)`` and ``paths[i].pose_columns(float(s[i]))``.
-There is no loop over rows: the piece tables of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s are
-stacked into padded ``(N, P_max)`` arrays and their coarse samples into ``(N, S_max)`` arrays, with per-row
-piece and sample counts, sample spacings, lengths, turns and closed flags as ``(N,)`` columns; every
-evaluation gathers a row's entries and runs the *same* expressions as :class:`ClothoidPath` (the module-level
-functions :func:`~amigo_gym.paths.clothoid.pose_from_pieces`, :func:`~amigo_gym.paths.clothoid.refine`,
-:func:`~amigo_gym.paths.clothoid.window_bounds` are the one home of those formulas). The piece of ``u`` in
-row ``r`` is found by one :func:`numpy.searchsorted` over the keys ``r + 1j s0`` of all rows (NumPy orders
-complex numbers lexicographically, so this is each row's own ``searchsorted`` of its piece starts, exactly).
+The flat path vectors of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s (their pieces and coarse samples,
+:func:`~amigo_gym.paths.clothoid.flat_tables`) are stacked into a padded ``(N, W)`` array, and every evaluation
+runs a ClothoidPath's own float functions on each row's vector, row by row
+(:func:`~amigo_gym.paths.clothoid.locate_rows`, :func:`~amigo_gym.paths.clothoid.pose_rows`: compiled where a
+compiled route registered them, else a Python loop).
 
 Special cases:
 
@@ -33,7 +30,6 @@ This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.mod
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -48,11 +44,10 @@ from amigo_gym.paths.clothoid import (
     PathPoint,
     PathPose,
     PathSpec,
-    Piece,
+    _check_hint,
     check_real,
-    pose_from_pieces,
-    refine,
-    window_bounds,
+    locate_columns,
+    pose_columns_of,
 )
 
 __all__ = ["PathBatch"]
@@ -71,118 +66,30 @@ def _is_path(obj: object) -> bool:
 
 @dataclass
 class _Padded:
-    """The stacked tables of the rows (``N`` rows, ``P`` piece columns, ``S`` sample columns).
+    """The rows' flat path vectors (:func:`~amigo_gym.paths.clothoid.flat_tables`): row ``i``'s in ``flat[i]``
+    (``N`` rows of ``W`` entries, the longest vector's), starting at ``start[i] = i W`` in ``flat.reshape(-1)``."""
 
-    Attributes:
-        key: ``(N, P)`` complex, ``row + 1j s0`` (``+inf`` imaginary part in the padding): lexicographically sorted.
-        piece: ``(N, P, 6)`` piece starts ``(s0, x0, y0, theta0, kappa0, c)`` (0 in the padding).
-        sx, sy: ``(N, S)`` coarse samples [m] (0 in the padding).
-        npieces, nsamp: ``(N,)`` numbers of pieces and samples of each row.
-        length, turn, spacing: ``(N,)`` lap length [m], total turn [rad], sample spacing [m].
-        closed: ``(N,)`` closed flags.
-        base: ``(N,)`` ``row * P``, the flat index of each row's first piece.
-    """
-
-    key: NDArray[np.complex128]
-    piece: Array
-    sx: Array
-    sy: Array
-    npieces: IntArray
-    nsamp: IntArray
-    length: Array
-    turn: Array
-    spacing: Array
-    closed: BoolArray
-    base: IntArray
+    flat: Array
+    start: IntArray
 
     @classmethod
-    def empty(cls, n: int, p: int, s: int) -> _Padded:
-        key = np.empty((n, p), dtype=np.complex128)
-        key.real = np.arange(n, dtype=np.float64)[:, None]
-        key.imag = math.inf
-        return cls(
-            key,
-            np.zeros((n, p, 6)),
-            np.zeros((n, s)),
-            np.zeros((n, s)),
-            np.ones(n, dtype=np.int64),
-            np.ones(n, dtype=np.int64),
-            np.ones(n),
-            np.zeros(n),
-            np.ones(n),
-            np.zeros(n, dtype=np.bool_),
-            np.arange(n, dtype=np.int64) * p,
-        )
-
-    def grow(self, p: int, s: int) -> None:
-        """Widen to at least ``p`` piece and ``s`` sample columns (O(N (P + S)); only when a path needs it)."""
-        n, p_old = self.key.shape
-        s_old = self.sx.shape[1]
-        if p > p_old:
-            key = np.empty((n, p), dtype=np.complex128)
-            key.real = np.arange(n, dtype=np.float64)[:, None]
-            key.imag = math.inf
-            key[:, :p_old] = self.key
-            piece = np.zeros((n, p, 6))
-            piece[:, :p_old] = self.piece
-            self.key, self.piece, self.base = key, piece, np.arange(n, dtype=np.int64) * p
-        if s > s_old:
-            sx = np.zeros((n, s))
-            sy = np.zeros((n, s))
-            sx[:, :s_old] = self.sx
-            sy[:, :s_old] = self.sy
-            self.sx, self.sy = sx, sy
+    def empty(cls, n: int, w: int) -> _Padded:
+        return cls(np.zeros((n, w)), np.arange(n, dtype=np.int64) * w)
 
     def write(self, rows: IntArray, path: ClothoidPath) -> None:
-        """Rows ``rows`` take the tables of ``path`` (O(len(rows) (P + S)))."""
-        t = path._t  # same package: the batch stacks the path's own tables
-        n_p, n_s = len(t.s0), len(t.sample_x)
-        self.grow(n_p, n_s)
-        self.key.imag[rows, :n_p] = t.s0_a
-        self.key.imag[rows, n_p:] = math.inf
-        self.piece[rows, :n_p] = np.stack([t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a], axis=1)
-        self.piece[rows, n_p:] = 0.0
-        self.sx[rows, :n_s] = t.sample_x
-        self.sy[rows, :n_s] = t.sample_y
-        self.sx[rows, n_s:] = 0.0
-        self.sy[rows, n_s:] = 0.0
-        self.npieces[rows] = n_p
-        self.nsamp[rows] = n_s
-        self.length[rows] = t.length
-        self.turn[rows] = t.turn
-        self.spacing[rows] = t.spacing
-        self.closed[rows] = path.closed
+        """Rows ``rows`` take the flat vector of ``path`` (O(len(rows) W); the rows widen, O(N W), when it is longer
+        than any before)."""
+        f = path._t.flat  # same package: the batch stacks the path's own vector
+        n, w = self.flat.shape
+        if f.size > w:
+            wide = np.zeros((n, f.size))
+            wide[:, :w] = self.flat
+            self.flat, self.start = wide, np.arange(n, dtype=np.int64) * f.size
+        self.flat[rows, : f.size] = f
 
-    def piece_of(self, u: Array) -> Piece:
-        """The piece of each row holding ``u`` [m] ``(N,)``: as ``ClothoidPath``'s ``searchsorted`` on the row."""
-        q = np.empty(u.shape, dtype=np.complex128)
-        q.real = self.key[:, 0].real
-        q.imag = u
-        j = np.searchsorted(self.key.reshape(-1), q, side="right") - 1 - self.base
-        j = np.clip(j, 0, self.npieces - 1)
-        g = self.piece.reshape(-1, 6)[self.base + j]
-        return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
-
-    def piece_of_rows(self, u: Array, rows: NDArray[np.intp]) -> Piece:
-        """:meth:`piece_of` for the rows ``rows`` only (``u``: ``(k,)``, one per listed row)."""
-        q = np.empty(u.shape, dtype=np.complex128)
-        q.real = self.key[rows, 0].real
-        q.imag = u
-        base = self.base[rows]
-        j = np.searchsorted(self.key.reshape(-1), q, side="right") - 1 - base
-        j = np.clip(j, 0, self.npieces[rows] - 1)
-        g = self.piece.reshape(-1, 6)[base + j]
-        return g[:, 0], g[:, 1], g[:, 2], g[:, 3], g[:, 4], g[:, 5]
-
-    def pose_rows(self, s: Array, rows: NDArray[np.intp]) -> PathPose:
-        """:meth:`pose` of the rows ``rows`` only (``s``: ``(k,)``)."""
-        return pose_from_pieces(
-            s, self.length[rows], self.turn[rows], self.closed[rows], lambda u: self.piece_of_rows(np.asarray(u), rows)
-        )
-
-    def pose(self, s: Real) -> PathPose:
-        """:func:`pose_from_pieces` with each row's own tables (``s``: ``(N,)`` [m])."""
-        return pose_from_pieces(s, self.length, self.turn, self.closed, lambda u: self.piece_of(np.asarray(u)))
+    def pose(self, s: Array) -> PathPose:
+        """:func:`~amigo_gym.paths.clothoid.pose_flat` of each row's path at ``s`` ``(N,)`` [m]."""
+        return pose_columns_of(self.flat.reshape(-1), self.start, s)
 
 
 class PathBatch:
@@ -233,7 +140,7 @@ class PathBatch:
         return out
 
     def _set(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> None:
-        """Rows ``rows`` take ``paths``: bookkeeping O(len(rows)), tables O(len(rows) (P + S)) when they exist."""
+        """Rows ``rows`` take ``paths``: bookkeeping O(len(rows)), tables O(len(rows) W) when they exist."""
         for r in rows.tolist():
             old = self._counts.get(int(self._ids[r]))
             if old is not None:  # (at construction the ids are 0: no object has id 0)
@@ -264,12 +171,10 @@ class PathBatch:
         t.write(np.asarray(rows, dtype=np.int64), p if isinstance(p, ClothoidPath) else _PLACEHOLDER)
 
     def _padded(self) -> _Padded:
-        """The padded tables, built on first need (O(N (P + S)), once; kept up to date by :meth:`replace`)."""
+        """The padded tables, built on first need (O(N W), once; kept up to date by :meth:`replace`)."""
         if self._tables is None:
             clothoids = [p for p in self._objects.values() if isinstance(p, ClothoidPath)] + [_PLACEHOLDER]
-            p_max = max(len(p._t.s0) for p in clothoids)
-            s_max = max(len(p._t.sample_x) for p in clothoids)
-            t = _Padded.empty(len(self._paths), p_max, s_max)
+            t = _Padded.empty(len(self._paths), max(p._t.flat.size for p in clothoids))
             order = np.argsort(self._ids, kind="stable")  # rows grouped by object: O(N log N), not O(N * objects)
             ids = self._ids[order]
             starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
@@ -281,8 +186,8 @@ class PathBatch:
     def replace(self, rows: ArrayLike, paths: Sequence[PathSpec]) -> None:
         """Rows ``rows`` (distinct row numbers, ``(k,)``) take ``paths`` (``k`` paths), in place (autoreset).
 
-        Cost O(k (P_max + S_max)); the padded arrays grow (O(N (P_max + S_max))) only when a new path has more
-        pieces or samples than any before, and are first built when the rows stop all using one object.
+        Cost O(k W) (``W``: the longest flat path vector); the padded array grows (O(N W)) only when a new path's
+        vector is longer than any before, and is first built when the rows stop all using one object.
         """
         ra = np.asarray(rows)
         if ra.ndim != 1 or not (ra.size == 0 or np.issubdtype(ra.dtype, np.integer)):
@@ -418,7 +323,7 @@ class PathBatch:
             out: list[NDArray[Any]] = [np.zeros(xa.shape) for _ in PathPoint._fields]
             out[-1] = out[-1].astype(np.int64)
         else:
-            out = [np.asarray(v) for v in self._locate_padded(self._padded(), xa, ya, sp, ahead, behind)]
+            out = [np.asarray(v) for v in self._locate_padded(xa, ya, sp, ahead, behind)]
         for p, rows in foreign:
             got = p.locate(xa[rows], ya[rows], None if sp is None else sp[rows], max_advance, max_retreat)
             for o, v in zip(out, self._full(got, rows), strict=True):
@@ -430,46 +335,10 @@ class PathBatch:
         f[-1] = f[-1].astype(np.int64)
         return PathPoint(*f)
 
-    @staticmethod
-    def _locate_padded(t: _Padded, x: Array, y: Array, sp: Array | None, ahead: float, behind: float) -> PathPoint:
-        """:meth:`ClothoidPath.locate` on every row with its own tables (same expressions, row by row)."""
-        h = t.spacing
-        nsamp = t.nsamp[:, None]
-        lo: Array
-        hi: Array
-        if sp is None:
-            d2 = (t.sx - x[:, None]) ** 2 + (t.sy - y[:, None]) ** 2
-            d2 = np.where(np.arange(t.sx.shape[1]) < nsamp, d2, math.inf)
-            jbest = np.argmin(d2, axis=-1)
-            s_start = jbest * h
-            lo = np.where(t.closed, -math.inf, 0.0)
-            hi = np.where(t.closed, math.inf, t.length)
-        else:
-            m = np.ceil((ahead + behind) / h) + 2  # samples in each row's window
-            m_max = int(m.max())
-            # unwrapped sample numbers as integers (exact: the float code's values are whole numbers), clipped
-            # to [0, nsamp - 1] on open rows; the sample index is then jj mod nsamp on every row (a no-op where
-            # clipped)
-            jj = np.floor((sp - behind) / h).astype(np.int64)[:, None] + np.arange(m_max, dtype=np.int64)
-            if not t.closed.all():
-                big = np.iinfo(np.int64).max
-                np.clip(
-                    jj, np.where(t.closed, -big, 0)[:, None], np.where(t.closed, big, nsamp[:, 0] - 1)[:, None], out=jj
-                )
-            idx = jj % nsamp if t.closed.any() else jj.copy()
-            idx += np.arange(len(h), dtype=np.int64)[:, None] * t.sx.shape[1]  # flat index into (N * S)
-            d2 = t.sx.reshape(-1)[idx]
-            d2 -= x[:, None]
-            np.square(d2, out=d2)
-            dy2 = t.sy.reshape(-1)[idx]
-            dy2 -= y[:, None]
-            np.square(dy2, out=dy2)
-            d2 += dy2
-            if (m != m_max).any():
-                d2[np.arange(m_max) >= m[:, None]] = math.inf
-            k = np.argmin(d2, axis=-1)
-            s_start = np.take_along_axis(jj, k[:, None], axis=-1)[:, 0].astype(np.float64) * h
-            lo, hi = window_bounds(sp, ahead, behind, t.length, t.closed)
-            s_start = np.clip(s_start, lo, hi)
-        s = np.asarray(s_start, dtype=np.float64)
-        return refine(t.pose, x, y, s, lo, hi, h, t.length, t.closed, False, t.pose_rows)
+    def _locate_padded(self, x: Array, y: Array, sp: Array | None, ahead: float, behind: float) -> PathPoint:
+        """:meth:`ClothoidPath.locate` on every row with its own flat path (its functions, row by row)."""
+        if sp is not None and not np.isfinite(sp).all():  # refused on a ClothoidPath's row, ignored on another's
+            _check_hint(sp[~np.isin(self._ids, list(self._foreign_objects))])
+            sp = np.where(np.isfinite(sp), sp, 0.0)
+        t = self._padded()
+        return locate_columns(t.flat.reshape(-1), t.start, x, y, sp, ahead, behind)

@@ -19,7 +19,9 @@ Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m] from the s
 [1/m] positive turning left, signed cross-track error ``e = (p - c(s)) . n`` [m] with the left normal
 ``n = (-sin theta, cos theta)``. An open path continues beyond its ends as the straight lines along its end
 tangents (curvature 0 there); a closed path repeats (``s`` modulo the lap length). Column arguments are
-floats or float64 arrays of any shape; one code serves both, with bit-identical results.
+floats or float64 arrays of any shape; one code serves both, with bit-identical results: the float functions below
+(``pose_flat``, ``locate_flat``), on an array entry by entry (``locate_rows``, ``pose_rows``: Python, or compiled by
+the v1 kernels once a compiled route registered them, ``use_compiled_rows``).
 
 This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
 :mod:`amigo_gym.model.fresnel`.
@@ -27,13 +29,12 @@ This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.mod
 
 from __future__ import annotations
 
-import bisect
 import itertools
 import math
 from collections.abc import Callable
 from dataclasses import InitVar, dataclass, field
-from functools import cached_property, partial
-from typing import NamedTuple, Protocol
+from functools import cached_property
+from typing import Any, NamedTuple, Protocol, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,16 +42,15 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.fresnel import (
     NODES,
     Buffer,
-    advance,
     node_table,
     subintervals,
     unit_speed_nodes,
     unit_speed_poses,
 )
-from amigo_gym.model.kinematics import Real, col_cos, col_sin, col_sqrt, pack
+from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.numeric import clip_float
 from amigo_gym.model.params import check_range, check_real
-from amigo_gym.paths.classic import ClosestPoint, IntColumn, PathPoint, PathPose, Projection
+from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, Projection
 
 __all__ = [
     "STATUS_INTERIOR",
@@ -67,6 +67,7 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 TWO_PI = 2.0 * math.pi
 
 #: the closest point is an orthogonal foot point inside the searched range
@@ -171,105 +172,6 @@ class PathSpec(Protocol):
         ...
 
 
-def _floor(x: Real) -> Real:
-    return np.floor(x) if isinstance(x, np.ndarray) else float(math.floor(x))
-
-
-def _clip(x: Real, lo: Real, hi: Real) -> Real:
-    if isinstance(x, np.ndarray) or isinstance(lo, np.ndarray) or isinstance(hi, np.ndarray):
-        out: Real = np.minimum(np.maximum(x, lo), hi)
-        return out
-    return min(max(x, lo), hi)
-
-
-def _where(cond: bool | NDArray[np.bool_], a: Real, b: Real) -> Real:
-    if isinstance(cond, np.ndarray):
-        out: Real = np.where(cond, a, b)
-        return out
-    return a if cond else b
-
-
-#: ``closed`` of one path (a bool) or of a batch of paths (a bool column, one per row)
-Closed = bool | NDArray[np.bool_]
-#: the start of the piece holding ``u``: ``(s0, x0, y0, theta0, kappa0, c)`` [m, m, m, rad, 1/m, 1/m^2]
-Piece = tuple[Real, Real, Real, Real, Real, Real]
-
-
-def pose_from_pieces(s: Real, length: Real, turn: Real, closed: Closed, piece: Callable[[Real], Piece]) -> PathPose:
-    r"""Pose at ``s`` [m]: find the piece, then one quadrature from its start (:func:`advance`).
-
-    Closed: ``s = lap L + u`` with ``0 <= u < L``; ``theta(s) = theta(u) + lap * turn``. Open: ``u`` is ``s``
-    clipped to ``[0, L]`` and the path continues along the end tangent by ``s - u`` (curvature 0 there).
-
-    The one home of this formula: :class:`ClothoidPath` calls it with its own length, turn and ``closed``
-    (floats, a bool), :class:`amigo_gym.paths.batch.PathBatch` with ``(N,)`` columns of them (one path per
-    row); an element of the latter gets the bits the former gives for its row's path.
-
-    Args:
-        s: arc lengths [m], a column.
-        length, turn: lap length [m] and total turn [rad] (floats, or columns broadcasting with ``s``).
-        closed: a bool, or a bool column broadcasting with ``s`` (both branches computed, then selected).
-        piece: ``u -> (s0, x0, y0, theta0, kappa0, c)``, the piece holding ``u`` in ``[0, length]``.
-    """
-    lap: Real
-    u: Real
-    extra: Real
-    if isinstance(closed, np.ndarray):
-        lap = np.floor(s / length)
-        u_open = np.minimum(np.maximum(s, 0.0), length)
-        u = np.where(closed, s - lap * length, u_open)
-        extra = np.where(closed, 0.0, s - u_open)
-    elif closed:
-        lap = _floor(s / length)
-        u = s - lap * length
-        extra = 0.0
-    else:
-        lap = 0.0
-        u = _clip(s, 0.0, length)
-        extra = s - u
-    s0, x0, y0, th0, k0, c = piece(u)
-    du = u - s0
-    x, y, th = advance(x0, y0, th0, 1.0, 0.0, k0, c, du, 1)
-    kappa = k0 + c * du
-    cos_t, sin_t = col_cos(th), col_sin(th)
-    if isinstance(closed, np.ndarray):
-        beyond_a = extra != 0.0  # False on closed rows
-        return PathPose(
-            np.where(closed, x, x + extra * cos_t),
-            np.where(closed, y, y + extra * sin_t),
-            np.where(closed, th + lap * turn, th),
-            np.where(beyond_a, 0.0, kappa),
-            np.where(beyond_a, 0.0, c),
-            cos_t,
-            sin_t,
-        )
-    if closed:
-        return PathPose(x, y, th + lap * turn, kappa, c, cos_t, sin_t)
-    beyond = extra != 0.0
-    return PathPose(
-        x + extra * cos_t,
-        y + extra * sin_t,
-        th,
-        _where(beyond, 0.0, kappa),
-        _where(beyond, 0.0, c),
-        cos_t,
-        sin_t,
-    )
-
-
-def window_bounds(sp: Array, ahead: float, behind: float, length: Real, closed: Closed) -> tuple[Array, Array]:
-    """The search window ``[sp - behind, sp + ahead]`` [m] around hints ``sp``, clipped to ``[0, length]`` if open."""
-    lo_a = sp - behind
-    hi_a = sp + ahead
-    if isinstance(closed, np.ndarray):
-        lo_a = np.where(closed, lo_a, np.clip(lo_a, 0.0, length))
-        hi_a = np.where(closed, hi_a, np.clip(hi_a, 0.0, length))
-    elif not closed:
-        lo_a = np.clip(lo_a, 0.0, length)
-        hi_a = np.clip(hi_a, 0.0, length)
-    return np.asarray(lo_a), np.asarray(hi_a)
-
-
 def _check_hint(sp: Real) -> None:
     """Refuse a NaN or infinite hint ``s_prev`` [m] of :meth:`ClothoidPath.locate` (a float or a column, both
     routes): the one-line error of :func:`check_real` naming the first such value."""
@@ -277,208 +179,6 @@ def _check_hint(sp: Real) -> None:
     bad = a[~np.isfinite(a)]
     if bad.size:
         check_real("locate", "s_prev", float(bad.flat[0]))
-
-
-def coarse_search(
-    sample_x: Array,
-    sample_y: Array,
-    h: float,
-    length: float,
-    closed: bool,
-    x: Real,
-    y: Real,
-    s_prev: Real | None,
-    max_advance: float,
-    max_retreat: float | None,
-) -> tuple[Array, Real, Real]:
-    """Step 1 of :meth:`ClothoidPath.locate` on samples ``s_j = j h`` at ``(sample_x, sample_y)`` [m].
-
-    Returns ``s`` [m] of the sample nearest to each point ``(x, y)`` (columns) and the bounds ``(lo, hi)`` of the
-    Newton iteration: without a hint, over one lap, bounds ``[0, L]`` (unbounded on a closed path); with a hint
-    ``s_prev``, over the samples of the window :func:`window_bounds` (unwrapped), ``s`` clipped to it, bounds the
-    window's columns.
-    """
-    xa = np.asarray(x, dtype=np.float64)
-    ya = np.asarray(y, dtype=np.float64)
-    if s_prev is None:
-        d2 = (sample_x - xa[..., None]) ** 2 + (sample_y - ya[..., None]) ** 2
-        lo, hi = (0.0, length) if not closed else (-math.inf, math.inf)
-        return np.argmin(d2, axis=-1) * h, lo, hi
-    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-    behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-    sp = np.asarray(s_prev, dtype=np.float64)
-    _check_hint(sp)
-    n_samp = len(sample_x)
-    jj = np.floor((sp - behind) / h)[..., None] + np.arange(math.ceil((ahead + behind) / h) + 2, dtype=np.float64)
-    if closed:
-        idx = np.mod(jj, n_samp).astype(np.int64)
-    else:
-        jj = np.clip(jj, 0, n_samp - 1)
-        idx = jj.astype(np.int64)
-    xb, yb = np.broadcast_arrays(xa, ya)
-    d2 = (sample_x[idx] - xb[..., None]) ** 2 + (sample_y[idx] - yb[..., None]) ** 2
-    k = np.argmin(d2, axis=-1)
-    s_start = np.take_along_axis(jj, k[..., None], axis=-1)[..., 0] * h  # unwrapped sample numbers * h
-    lo_a, hi_a = window_bounds(sp, ahead, behind, length, closed)
-    return np.clip(s_start, lo_a, hi_a), lo_a, hi_a
-
-
-def refine(
-    pose: Callable[[Real], PathPose],
-    x: Real,
-    y: Real,
-    s: Real,
-    lo: Real,
-    hi: Real,
-    h: Real,
-    length: Real,
-    closed: Closed,
-    scalar: bool,
-    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose] | None = None,
-) -> PathPoint:
-    r"""Newton's method from the coarse estimate ``s`` [m], then the :class:`PathPoint` (step 2 and 3 of
-    :meth:`ClothoidPath.locate`; shared with :class:`amigo_gym.paths.batch.PathBatch`).
-
-    Args:
-        pose: ``s -> PathPose`` of the path (or the batch).
-        x, y: query points [m]; s: start values [m], inside ``[lo, hi]``.
-        lo, hi: the search range [m]; h: the sample spacing, the largest Newton step [m].
-        length: lap length [m]; closed: a bool or a bool column (as :func:`pose_from_pieces`).
-        scalar: floats in, floats out (else arrays of the broadcast shape).
-        pose_rows: ``(s, rows) -> PathPose`` of the rows ``rows`` only (``(k,)`` columns), for ``(N,)`` columns:
-            then each iteration evaluates only the rows that have not reached a fixed point.
-    """
-    if not scalar:
-        x = np.asarray(x + 0.0 * s)
-        y = np.asarray(y + 0.0 * s)
-    p: PathPose
-    if pose_rows is not None and not scalar and np.ndim(s) == 1:
-        s, p = _newton_rows(pose, pose_rows, np.asarray(x), np.asarray(y), np.asarray(s, dtype=np.float64), lo, hi, h)
-    else:
-        s, p = _newton(pose, x, y, s, lo, hi, h)
-    dx = x - p.x
-    dy = y - p.y
-    g = dx * p.cos_theta + dy * p.sin_theta
-    e = dy * p.cos_theta - dx * p.sin_theta
-    dist = col_sqrt(dx * dx + dy * dy)
-    status = locate_status(s, g, lo, hi, length, closed, scalar)
-    s_lap: Real
-    if isinstance(closed, np.ndarray):
-        s_c = s - np.floor(s / length) * length
-        s_lap = np.where(closed, np.where(s_c >= length, s_c - length, s_c), s)
-    elif closed:
-        s_lap = s - _floor(s / length) * length
-        s_lap = _where(s_lap >= length, s_lap - length, s_lap)
-    else:
-        s_lap = s
-    return PathPoint(
-        s_lap, s, p.x, p.y, p.theta, p.curvature, p.curvature_rate, e, p.cos_theta, p.sin_theta, dist, status
-    )
-
-
-def _newton(
-    pose: Callable[[Real], PathPose], x: Real, y: Real, s: Real, lo: Real, hi: Real, h: Real
-) -> tuple[Real, PathPose]:
-    """:data:`NEWTON_ITERATIONS` steps of Newton's method (:meth:`ClothoidPath.locate`); ``s`` and its pose."""
-    p = pose(s)
-    for _ in range(NEWTON_ITERATIONS):
-        dx = x - p.x
-        dy = y - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = 1.0 - p.curvature * e
-        den = _where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s_new = _clip(s + _clip(g / den, -h, h), lo, hi)
-        if _same_bits(s_new, s):
-            # a fixed point: the iteration is a function of s alone, so the remaining ones would repeat
-            # this one; stopping gives the bits of all NEWTON_ITERATIONS
-            break
-        s = s_new
-        p = pose(s)
-    return s, p
-
-
-def _newton_rows(
-    pose: Callable[[Real], PathPose],
-    pose_rows: Callable[[Array, NDArray[np.intp]], PathPose],
-    x: Array,
-    y: Array,
-    s: Array,
-    lo: Real,
-    hi: Real,
-    h: Real,
-) -> tuple[Array, PathPose]:
-    """:func:`_newton` on ``(N,)`` columns, each iteration on the rows still moving only.
-
-    A row's iteration depends on that row alone, and a row at a fixed point (``s`` unchanged, bit for bit)
-    stays there: its remaining iterations are skipped, its pose is the one computed last. The same bits as
-    every row through all :data:`NEWTON_ITERATIONS` iterations.
-    """
-    n = s.shape[0]
-    s = s.copy()
-    full = [np.array(np.broadcast_to(np.asarray(f, dtype=np.float64), (n,))) for f in pose(s)]
-    act = np.arange(n, dtype=np.intp)
-    s_act = s.copy()
-    p = PathPose(*full)
-    xs: Array = x
-    ys: Array = y
-    los, his, hs = lo, hi, h
-    for _ in range(NEWTON_ITERATIONS):
-        dx = xs - p.x
-        dy = ys - p.y
-        g = dx * p.cos_theta + dy * p.sin_theta
-        e = dy * p.cos_theta - dx * p.sin_theta
-        den = np.asarray(1.0 - p.curvature * e)
-        den = np.where(den < MIN_NEWTON_DENOMINATOR, MIN_NEWTON_DENOMINATOR, den)
-        s_new: Array = np.asarray(_clip(s_act + _clip(g / den, -hs, hs), los, his), dtype=np.float64)
-        moving = (s_new != s_act) | (np.signbit(s_new) != np.signbit(s_act)) | np.isnan(s_new)
-        s[act] = s_new
-        if not moving.any():
-            break
-        if not moving.all():
-            keep = np.flatnonzero(moving)
-            act = act[keep]
-            s_new = s_new[keep]
-            xs, ys = xs[keep], ys[keep]
-            los, his, hs = (_rows(v, keep) for v in (los, his, hs))
-        s_act = s_new
-        got = pose_rows(s_act, act)
-        for f, v in zip(full, got, strict=True):
-            f[act] = v
-        p = PathPose(*(np.broadcast_to(np.asarray(v, dtype=np.float64), act.shape) for v in got))
-    return s, PathPose(*full)
-
-
-def _rows(v: Real, keep: NDArray[np.intp]) -> Real:
-    """The entries ``keep`` of a column (a float stays a float)."""
-    if isinstance(v, np.ndarray) and v.ndim == 1:
-        out: Real = v[keep]
-        return out
-    return v
-
-
-def _same_bits(a: Real, b: Real) -> bool:
-    """Whether ``a`` and ``b`` are equal bit for bit (zeros of one sign; NaN never: then the caller goes on)."""
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        aa, ba = np.asarray(a), np.asarray(b)
-        return aa.shape == ba.shape and bool(np.array_equal(aa, ba) and np.array_equal(np.signbit(aa), np.signbit(ba)))
-    return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)
-
-
-def locate_status(s: Real, g: Real, lo: Real, hi: Real, length: Real, closed: Closed, scalar: bool) -> IntColumn:
-    """Status of a projection ``s`` with residual ``g = (p - c) . t`` in the range ``[lo, hi]`` (a column)."""
-    sa, ga = np.asarray(s), np.asarray(g)
-    out = np.full(sa.shape, STATUS_INTERIOR, dtype=np.int64)
-    at_lo = (sa <= lo) & (ga < 0.0)
-    at_hi = (sa >= hi) & (ga > 0.0)
-    out[at_lo | at_hi] = STATUS_WINDOW
-    if isinstance(closed, np.ndarray):
-        out[~closed & (sa <= 0.0) & (ga < 0.0)] = STATUS_START
-        out[~closed & (sa >= length) & (ga > 0.0)] = STATUS_END
-    elif not closed:
-        out[(sa <= 0.0) & (ga < 0.0)] = STATUS_START
-        out[(sa >= length) & (ga > 0.0)] = STATUS_END
-    return int(out) if scalar else out
 
 
 class _Tables(NamedTuple):
@@ -507,15 +207,6 @@ class _Tables(NamedTuple):
     flat: Array
 
 
-def _piece(t: _Tables, u: Real) -> Piece:
-    """The piece of the path of tables ``t`` holding ``u`` [m] (the last piece whose start is <= ``u``)."""
-    if isinstance(u, np.ndarray):
-        i = np.clip(np.searchsorted(t.s0_a, u, side="right") - 1, 0, len(t.s0) - 1)
-        return t.s0_a[i], t.x0_a[i], t.y0_a[i], t.th0_a[i], t.k0_a[i], t.c_a[i]
-    j = min(max(bisect.bisect_right(t.s0, u) - 1, 0), len(t.s0) - 1)
-    return t.s0[j], t.x0[j], t.y0[j], t.th0[j], t.k0[j], t.c[j]
-
-
 class PathLoops(NamedTuple):
     """The compiled forms of the path-building loops, which a compiled route hands to the path constructors
     (``loops=``; :func:`amigo_gym.sim.fast_v1.path_loops`). Without them the constructors run the same functions as
@@ -525,15 +216,19 @@ class PathLoops(NamedTuple):
         chain: :func:`chain_pieces` ``(out, n, segs, n_segs, x, y, theta) -> (x, y, theta, length)`` (its scratch and
             nodes supplied).
         samples: :func:`sample_points` ``(pv, o, count, spacing)``: the coarse samples written into the flat path
-            vector ``pv`` itself (the float route takes them from the column pose, :func:`pose_from_pieces`).
+            vector ``pv`` itself (the float route takes them from :func:`_poses_flat`, the same poses).
         run: :func:`amigo_gym.paths.families.run_segments` ``(segs, n_segs, x, y, theta) -> (x, y, theta)``.
         lane: :func:`amigo_gym.paths.families.lane_change_shape` ``(ratio) -> (x1, y1, theta_m, x_m)``.
+        locate, pose: :func:`locate_rows` and :func:`pose_rows` (their scratch and nodes supplied), the column
+            projection and pose of every path once registered (:func:`use_compiled_rows`).
     """
 
     chain: Callable[..., tuple[float, float, float, float]]
     samples: Callable[..., None]
     run: Callable[..., tuple[float, float, float]]
     lane: Callable[..., tuple[float, float, float, float]]
+    locate: Callable[..., None]
+    pose: Callable[..., None]
 
 
 @dataclass(frozen=True)
@@ -630,8 +325,14 @@ class ClothoidPath:
         )  # fmt: skip
         # coarse samples: s_j = j * spacing, j = 0..n (open) or 0..n-1 (closed, periodic)
         js = np.arange(n_samples + (0 if self.closed else 1), dtype=np.float64)
-        sx, sy, *_ = self._pose(t, js * spacing)
-        flat = flat_tables(t._replace(sample_x=np.asarray(sx), sample_y=np.asarray(sy)), self.closed)
+        pv = flat_tables(t, self.closed)
+        if _COMPILED:  # compiled pose_flat at each sample (the same bits)
+            q = pose_columns_of(pv, np.zeros(js.size, dtype=np.int64), js * spacing)
+            sx, sy = np.asarray(q.x), np.asarray(q.y)
+        else:
+            poses = _poses_flat(pv.tolist(), (js * spacing).tolist())
+            sx, sy = (np.array([q[k] for q in poses], dtype=np.float64) for k in (0, 1))
+        flat = flat_tables(t._replace(sample_x=sx, sample_y=sy), self.closed)
         n, m = len(s0), len(js)
         cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
         s0_a, x0_a, y0_a, th0_a, k0_a, c_a, sample_x, sample_y = (flat[a:b] for a, b in itertools.pairwise(cut))
@@ -704,10 +405,12 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_from_pieces` with this path's pieces; :func:`pose_flat` for a float)."""
-        if type(s) is float:
-            return PathPose(*_pose_float(self._flat_list, s))
-        return pose_from_pieces(s, t.length, t.turn, self.closed, lambda u: _piece(t, u))
+        """Pose at ``s`` (:func:`pose_flat`: of a float, or of each entry of an array, :func:`pose_columns_of`)."""
+        if not isinstance(s, np.ndarray):
+            return PathPose(*_pose_float(self._flat_list, s if type(s) is float else float(s)))
+        a = np.ascontiguousarray(s, dtype=np.float64).reshape(-1)
+        p = pose_columns_of(t.flat, np.zeros(a.size, dtype=np.int64), a)
+        return PathPose(*(np.reshape(v, np.shape(s)) for v in p))
 
     def pose_columns(self, s: Real) -> PathPose:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
@@ -783,27 +486,19 @@ class ClothoidPath:
         Returns:
             :class:`PathPoint` columns of the broadcast shape of ``x``, ``y`` (and ``s_prev``).
         """
-        t = self._t
-        if s_prev is not None and type(x) is float and type(y) is float and type(s_prev) is float:
-            return _locate_float(self._flat_list, x, y, s_prev, max_advance, max_retreat)
-        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        s_start, lo, hi = coarse_search(
-            t.sample_x, t.sample_y, t.spacing, t.length, self.closed, x, y, s_prev, max_advance, max_retreat
-        )
-        if scalar:
-            lo, hi = float(lo), float(hi)
-        s: Real = float(s_start) if scalar else np.asarray(s_start, dtype=np.float64)
-        pose = partial(self._pose, t)
-        return refine(pose, x, y, s, lo, hi, t.spacing, t.length, self.closed, scalar, lambda q, _rows: pose(q))
+        if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray)):
+            sp = None if s_prev is None else float(s_prev)
+            return _locate_float(self._flat_list, float(x), float(y), sp, max_advance, max_retreat)
+        return locate_points(self._t.flat, x, y, s_prev, max_advance, max_retreat)
 
 
 # --------------------------------------------------------------------------- the float path of one point
 #
-# The same expressions as pose_from_pieces, refine, window_bounds and locate_status for Python floats,
-# written out flat (one robot's step evaluates about 15 poses): the bits are those of the column code
-# (tests/test_clothoid_paths.py compares them), only the Python overhead is gone.
+# The pose and the projection on Python floats (one robot's step evaluates about 15 poses), and on arrays entry by
+# entry (locate_rows, pose_rows): the bits of the former vectorised column code, which tests/clothoid_columns.py
+# keeps as a reference (tests/test_float_paths.py compares them, ties and NaN included).
 #
-# The functions below from py_min to locate_flat (and numeric.clip_float, numpy's clip of a float) are in numba's
+# The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
 # subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
 # no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
 # (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection is written once: the
@@ -826,7 +521,7 @@ def wrap_arc(s: float, length: float, closed: bool) -> tuple[float, float, float
     """Arc length ``s`` [m] on a path of lap ``length`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the
     lap number (closed: ``u = s - lap length``) and the length past an open path's ends (``s = u + extra``)."""
     if closed:
-        lap = float(math.floor(s / length))
+        lap = _floor_float(s / length)
         return s - lap * length, lap, 0.0
     u = py_min(py_max(s, 0.0), length)
     return u, 0.0, s - u
@@ -856,7 +551,7 @@ def placed_pose(
 
 
 def locate_window(sp: float, ahead: float, behind: float, length: float, closed: bool) -> tuple[float, float]:
-    """The search window ``[lo, hi]`` [m] around the hint ``sp`` (:func:`window_bounds` for floats), kept in
+    """The search window ``[lo, hi]`` [m] around the hint ``sp``, kept in
     ``[0, length]`` on an open path."""
     lo = sp - behind
     hi = sp + ahead
@@ -899,7 +594,8 @@ def newton_step(
 
 
 def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
-    """:func:`locate_status` of one projection ``s`` [m] with residual ``g`` in the window ``[lo, hi]``."""
+    """The status (:data:`STATUS_INTERIOR`, ...) of one projection ``s`` [m] with residual ``g = (p - c) . t`` in the
+    range ``[lo, hi]``: clamped at a window edge, or at an end of an open path."""
     status = STATUS_INTERIOR
     if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
         status = STATUS_WINDOW
@@ -912,6 +608,8 @@ def locate_status_float(s: float, g: float, lo: float, hi: float, length: float,
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
+#: a path's pose on floats, ``(buf, nodes, nb, pv, s) -> FloatPose`` (:func:`pose_flat`'s arguments)
+PoseOf = Callable[[Buffer, Buffer, int, Any, float], FloatPose]
 #: the fields of :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta,
 #: distance, status)``
 FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
@@ -963,7 +661,7 @@ def piece_index(pv: FlatPath, u: float) -> int:
 
 def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
     """The piece ``j`` holding the arc length ``s`` [m] on the flat path ``pv``, the distance ``du`` [m] into it, the
-    lap number and the length ``extra`` [m] past an open path's ends (:func:`pose_from_pieces`' wrap, clamp and
+    lap number and the length ``extra`` [m] past an open path's ends (the wrap, clamp and
     search: :func:`wrap_arc`, :func:`piece_index`)."""
     u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     j = piece_index(pv, u)
@@ -983,7 +681,7 @@ def place(
 
 
 def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> float:
-    """Step 1 of :meth:`ClothoidPath.locate` with a hint (:func:`coarse_search` for floats): ``s`` [m] of the sample
+    """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample
     nearest to ``(x, y)`` among the samples ``s_j = j h``, ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead +
     behind) / h) + 2`` (unwrapped: a closed path reads sample ``j mod m``, an open one sample ``clip(j, 0, m - 1)``).
 
@@ -1029,33 +727,140 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
 
 
 def locate_flat(
-    buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float
-) -> FlatPoint:
+    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float,
+    behind: float,
+) -> FlatPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with the hint ``sp`` [m] and the window ``ahead``,
-    ``behind`` [m] (> 0, finite) on the flat path ``pv``: the coarse search (:func:`coarse_start`), Newton's method
-    (:func:`newton_step`, stopped at a fixed point as :func:`_newton`), the foot terms and the status; the poses by
-    :func:`pose_flat` (``buf``, ``nodes``, ``nb``: passed on to it). Returns :data:`FlatPoint` (the fields of
+    ``behind`` [m] (> 0, finite) on the flat path ``pv``: the window (:func:`locate_window`), the coarse search
+    (:func:`coarse_start`) clipped to it, then :func:`project_flat` (``pose``, ``buf``, ``nodes``, ``nb``: the pose
+    function and what it is passed, :func:`pose_flat`'s). Returns :data:`FlatPoint` (the fields of
     :class:`PathPoint` but the lap's ``s``).
     """
-    h = pv[P_SPACING]
-    length = pv[P_LENGTH]
-    closed = pv[P_CLOSED] != 0.0
-    lo, hi = locate_window(sp, ahead, behind, length, closed)
+    lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
-    px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
+
+
+def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
+    """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] without a hint: from the nearest of all samples
+    (:func:`coarse_global`), :func:`project_flat` in ``[0, length]`` (open) or unbounded (closed)."""
+    if pv[P_CLOSED] != 0.0:
+        lo, hi = -math.inf, math.inf
+    else:
+        lo, hi = 0.0, pv[P_LENGTH]
+    return project_flat(pose, buf, nodes, nb, pv, x, y, coarse_global(pv, x, y), lo, hi)
+
+
+def coarse_global(pv: FlatPath, x: float, y: float) -> float:
+    """Step 1 of :meth:`ClothoidPath.locate` without a hint: ``s = j h`` [m] of the sample ``j`` nearest to ``(x, y)``
+    among all of the flat path ``pv`` (squared distances, the first minimum or the first NaN, as ``np.argmin``)."""
+    n = int(pv[P_N])
+    m = int(pv[P_M])
+    sx = P_TAIL + 6 * n
+    best = 0.0
+    best_j = 0
+    for j in range(m):
+        ddx = pv[sx + j] - x
+        ddy = pv[sx + m + j] - y
+        d2 = ddx * ddx + ddy * ddy
+        if j == 0 or d2 < best or (d2 != d2 and best == best):
+            best = d2
+            best_j = j
+    return float(best_j) * pv[P_SPACING]
+
+
+def project_flat(
+    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
+) -> FlatPoint:
+    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from the coarse estimate ``s`` [m] in the range ``[lo, hi]``:
+    Newton's method (:func:`newton_step`, :data:`NEWTON_ITERATIONS` iterations, stopped at a fixed point: the
+    remaining ones would repeat it), the foot terms and the status; the poses by ``pose(buf, nodes, nb, pv, s)``
+    (:func:`pose_flat`; a :class:`~amigo_gym.paths.user.UserPath`'s on floats)."""
+    h = pv[P_SPACING]
+    px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
         s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
         if settled:
             break
         s = s_new
-        px, py, th, kappa, c, ct, st = pose_flat(buf, nodes, nb, pv, s)
+        px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
     dist = math.sqrt(dx * dx + dy * dy)
-    return s, px, py, th, kappa, c, e, ct, st, dist, locate_status_float(s, g, lo, hi, length, closed)
+    status = locate_status_float(s, g, lo, hi, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
+    return s, px, py, th, kappa, c, e, ct, st, dist, status
+
+
+def lap_arc(s: float, length: float, closed: bool) -> float:
+    """The arc length ``s`` [m] within one lap, in ``[0, length)``, on a closed path (``s`` itself on an open one):
+    :attr:`PathPoint.s` of the progress ``s``."""
+    if not closed:
+        return s
+    s_lap = s - _floor_float(s / length) * length
+    if s_lap >= length:
+        s_lap = s_lap - length
+    return s_lap
+
+
+def _floor_float(q: float) -> float:
+    """``np.floor`` of a float: ``math.floor`` where finite, NaN and infinities as they are."""
+    return float(math.floor(q)) if q - q == 0.0 else q
+
+
+def locate_rows(
+    pose: PoseOf,
+    out: Array,
+    buf: Buffer,
+    nodes: Buffer,
+    flat: FlatPath,
+    start: list[int] | IntArray,
+    x: FlatPath,
+    y: FlatPath,
+    sp: FlatPath,
+    ahead: float,
+    behind: float,
+    hinted: bool,
+) -> None:
+    """:meth:`ClothoidPath.locate` of the points ``(x[i], y[i])`` [m] on the flat paths starting at ``flat[start[i]]``,
+    row by row: :func:`locate_flat` with the hints ``sp[i]`` (``hinted``) else :func:`locate_global` (``pose``: as
+    theirs); row ``i`` of
+    ``out`` ``(12, N)``: the fields of :class:`PathPoint` (the status as a float). The column form of the projection:
+    Python runs it on lists (a memoryview for ``flat``), compiled code on arrays (:class:`PathLoops`)."""
+    for i in range(len(x)):
+        pv = flat[start[i] :]
+        if hinted:
+            r = locate_flat(pose, buf, nodes, 0, pv, x[i], y[i], sp[i], ahead, behind)
+        else:
+            r = locate_global(pose, buf, nodes, 0, pv, x[i], y[i])
+        out[0, i] = lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0)
+        out[1, i] = r[0]
+        out[2, i] = r[1]
+        out[3, i] = r[2]
+        out[4, i] = r[3]
+        out[5, i] = r[4]
+        out[6, i] = r[5]
+        out[7, i] = r[6]
+        out[8, i] = r[7]
+        out[9, i] = r[8]
+        out[10, i] = r[9]
+        out[11, i] = r[10]
+
+
+def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: list[int] | IntArray, s: FlatPath) -> None:
+    """:func:`pose_flat` at the arc lengths ``s[i]`` [m] on the flat paths starting at ``flat[start[i]]``, row by row,
+    into the rows of ``out`` ``(7, N)`` (the fields of :class:`PathPose`), as :func:`locate_rows`."""
+    for i in range(len(s)):
+        x, y, th, kappa, c, ct, st = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
+        out[0, i] = x
+        out[1, i] = y
+        out[2, i] = th
+        out[3, i] = kappa
+        out[4, i] = c
+        out[5, i] = ct
+        out[6, i] = st
 
 
 def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
-    """The pose at the arc length ``s`` [m] on the flat path ``pv`` (:func:`pose_from_pieces`' bits):
+    """The pose at the arc length ``s`` [m] on the flat path ``pv``:
     ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -] by :func:`piece_at`, the
     quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_nodes`) and :func:`place`.
 
@@ -1131,7 +936,7 @@ def chain_pieces(
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
     """The coarse samples of the flat path ``pv`` written into it: the points at ``s_j = j spacing`` [m],
-    ``j < count``, by :func:`pose_flat` (the float path's pose, the bits of :func:`pose_from_pieces`' columns), their
+    ``j < count``, by :func:`pose_flat` (the float path's pose), their
     ``x`` at ``pv[o + j]``, ``y`` at ``pv[o + count + j]`` (``pv``'s header and pieces written before).
 
     The compiled route's samples (:class:`PathLoops`); the float route takes them from the column pose of all at
@@ -1163,29 +968,94 @@ def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
     ]
 
 
-def _locate_float(
-    pv: FlatPath, x: float, y: float, sp: float, max_advance: float, max_retreat: float | None
-) -> PathPoint:
-    """:meth:`ClothoidPath.locate` with a hint for float ``x``, ``y``, ``s_prev`` on the flat path ``pv`` (the same
-    bits): the window checked, :func:`locate_flat`, the lap's ``s`` added."""
+def _window(max_advance: float, max_retreat: float | None) -> tuple[float, float]:
+    """The search window ``ahead``, ``behind`` [m] of :meth:`ClothoidPath.locate`, checked (> 0, finite)."""
     if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
         ahead = max_advance  # what check_real returns for a finite positive float
     else:
         ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
     if max_retreat is None:
-        behind = ahead
-    elif type(max_retreat) is float and max_retreat > 0.0 and max_retreat < math.inf:
-        behind = max_retreat
-    else:
-        behind = check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
-    if sp - sp != 0.0:
-        _check_hint(sp)
+        return ahead, ahead
+    if type(max_retreat) is float and max_retreat > 0.0 and max_retreat < math.inf:
+        return ahead, max_retreat
+    return ahead, check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+
+
+def _locate_float(
+    pv: FlatPath, x: float, y: float, sp: float | None, max_advance: float, max_retreat: float | None
+) -> PathPoint:
+    """:meth:`ClothoidPath.locate` for float ``x``, ``y``, ``s_prev`` (or None) on the flat path ``pv``: the window
+    checked, :func:`locate_flat` (:func:`locate_global` without a hint), the lap's ``s`` added."""
     buf = [0.0] * (3 * NODES + 3)
-    s, px, py, th, kappa, c, e, ct, st, dist, status = locate_flat(buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
-    s_lap = s
-    if pv[P_CLOSED] != 0.0:
-        length = pv[P_LENGTH]
-        s_lap = s - float(math.floor(s / length)) * length
-        if s_lap >= length:
-            s_lap = s_lap - length
-    return PathPoint(s_lap, s, px, py, th, kappa, c, e, ct, st, dist, status)
+    if sp is None:
+        r = locate_global(pose_flat, buf, _PATH_TABLE, 0, pv, x, y)
+    else:
+        ahead, behind = _window(max_advance, max_retreat)
+        if sp - sp != 0.0:
+            _check_hint(sp)
+        r = locate_flat(pose_flat, buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
+    return PathPoint(lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0), *r)
+
+
+#: the compiled :func:`locate_rows` and :func:`pose_rows` (:class:`PathLoops`) once a compiled route registered them
+#: (:func:`use_compiled_rows`); else Python runs them
+_COMPILED: list[PathLoops] = []
+
+
+def use_compiled_rows(loops: PathLoops) -> None:
+    """From now on, run the column projection and pose (:func:`locate_columns`, :func:`pose_columns_of`) by the
+    compiled :func:`locate_rows` and :func:`pose_rows` of ``loops`` (the same bits:
+    :func:`amigo_gym.sim.fast_v1.path_loops` offers them only where the C library's ``cos``/``sin`` are numpy's)."""
+    if not _COMPILED:
+        _COMPILED.append(loops)
+
+
+def locate_columns(
+    flat: Array,
+    start: IntArray,
+    x: Array,
+    y: Array,
+    sp: Array | None,
+    ahead: float,
+    behind: float,
+    pose: PoseOf | None = None,
+) -> PathPoint:
+    """:func:`locate_rows` on ``(N,)`` float64 columns, the flat path of row ``i`` at ``flat[start[i]:]``: compiled
+    where registered (:func:`use_compiled_rows`), else in Python (always for a ``pose`` other than
+    :func:`pose_flat`); a :class:`PathPoint` of ``(N,)`` columns."""
+    out = np.empty((12, x.shape[0]))
+    hints = x if sp is None else sp
+    if _COMPILED and pose is None:
+        _COMPILED[0].locate(out, flat, start, x, y, hints, ahead, behind, sp is not None)
+    else:
+        rows = (start.tolist(), x.tolist(), y.tolist(), hints.tolist())
+        pv = cast(FlatPath, flat.data)  # a memoryview: its slices are views, its entries Python floats
+        of = pose_flat if pose is None else pose
+        locate_rows(of, out, [0.0] * (3 * NODES + 3), _PATH_TABLE, pv, *rows, ahead, behind, sp is not None)
+    return PathPoint._make([*out[:11], out[11].astype(np.int64)])
+
+
+def locate_points(
+    flat: Array, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None,
+    pose: PoseOf | None = None,
+) -> PathPoint:  # fmt: skip
+    """:meth:`ClothoidPath.locate` of points of any shape on the flat path ``flat`` (the window and the hints checked,
+    the arguments broadcast): :func:`locate_columns`; ``pose``: as there. Arrays of the broadcast shape."""
+    ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
+    if s_prev is not None:
+        _check_hint(s_prev)
+    cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, 0.0 if s_prev is None else s_prev)))
+    xf, yf, sf = (np.ascontiguousarray(v).reshape(-1) for v in cols)
+    start = np.zeros(xf.size, dtype=np.int64)
+    got = locate_columns(flat, start, xf, yf, None if s_prev is None else sf, ahead, behind, pose)
+    return PathPoint._make([np.reshape(v, cols[0].shape) for v in got])
+
+
+def pose_columns_of(flat: Array, start: IntArray, s: Array) -> PathPose:
+    """:func:`pose_rows` on a ``(N,)`` float64 column, as :func:`locate_columns`; a :class:`PathPose` of columns."""
+    out = np.empty((7, s.shape[0]))
+    if _COMPILED:
+        _COMPILED[0].pose(out, flat, start, s)
+    else:
+        pose_rows(out, [0.0] * (3 * NODES + 3), _PATH_TABLE, cast(FlatPath, flat.data), start.tolist(), s.tolist())
+    return PathPose(*out)

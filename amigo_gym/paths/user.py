@@ -13,7 +13,8 @@ Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning an
 :class:`~amigo_gym.paths.PathPoint` (the closest point, keeping progress; see
 :meth:`~amigo_gym.paths.ClothoidPath.locate`). Without it, :class:`UserPath` finds the closest point itself from
 ``pose_columns``: samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then the same Newton
-iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.refine`). The
+iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.locate_points`, row by
+row, with this path's ``pose_columns`` on floats). The
 renderer and the feasibility analysis use ``length``, ``closed`` and ``pose_columns`` only.
 
 :func:`check_path` refuses, in one line naming the path and the member, a missing member, a ``length`` of
@@ -41,7 +42,7 @@ from numpy.typing import NDArray
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import show_value
 from amigo_gym.paths.classic import CirclePath, ManoeuvrePath
-from amigo_gym.paths.clothoid import ClothoidPath, PathPoint, PathPose, coarse_search, refine
+from amigo_gym.paths.clothoid import ClothoidPath, FloatPose, PathPoint, PathPose, locate_points
 
 __all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]
 
@@ -135,8 +136,10 @@ class UserPath:
         self._spacing = self.length / n
         js = np.arange(n + (0 if self.closed else 1), dtype=np.float64)
         samples = self.pose_columns(js * self._spacing)
-        self._sx = np.asarray(samples.x, dtype=np.float64)
-        self._sy = np.asarray(samples.y, dtype=np.float64)
+        sx, sy = (np.asarray(v, dtype=np.float64) for v in (samples.x, samples.y))
+        # a flat path vector (amigo_gym.paths.clothoid.PATH_HEADER) of no pieces: the samples the projection searches
+        head = [0.0, float(sx.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0]
+        self._flat = np.concatenate((head, sx, sy))
         loc = self.locate(np.asarray(pose.x), np.asarray(pose.y), probe, 0.5, 0.5)
         _finite_column(loc.progress, probe.shape, f"{who}: locate(...).progress")
         self.locate(float(np.asarray(pose.x)[0]), float(np.asarray(pose.y)[0]), 0.0, 0.5, 0.5)
@@ -198,23 +201,18 @@ class UserPath:
     def _locate(
         self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
     ) -> PathPoint:
-        """:meth:`~amigo_gym.paths.ClothoidPath.locate`'s coarse search and Newton iteration on the samples and
-        ``pose_columns`` of this path (arrays throughout; floats back for float arguments)."""
+        """:meth:`~amigo_gym.paths.ClothoidPath.locate`'s projection on the samples and ``pose_columns`` of this path
+        (:func:`~amigo_gym.paths.clothoid.locate_points`: its float functions row by row, the poses this path's;
+        floats back for float arguments)."""
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        s_start, lo, hi = coarse_search(
-            self._sx, self._sy, self._spacing, self.length, self.closed, x, y, s_prev, max_advance, max_retreat
-        )
-        xa = np.asarray(x, dtype=np.float64)
-        ya = np.asarray(y, dtype=np.float64)
-        s0 = np.asarray(s_start, dtype=np.float64)
-        shape = np.broadcast_shapes(xa.shape, ya.shape, s0.shape)
-        xf = np.broadcast_to(xa, shape).reshape(-1)
-        yf = np.broadcast_to(ya, shape).reshape(-1)
-        sf = np.broadcast_to(s0, shape).reshape(-1)
-        lof = np.broadcast_to(np.asarray(lo, dtype=np.float64), shape).reshape(-1)
-        hif = np.broadcast_to(np.asarray(hi, dtype=np.float64), shape).reshape(-1)
-        got = refine(self.pose_columns, xf, yf, sf, lof, hif, self._spacing, self.length, self.closed, False)
-        return _point([np.asarray(v).reshape(shape) for v in got], scalar)
+        got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
+        return _point(list(got), scalar)
+
+    def _pose_of(self, _buf: Any, _nodes: Any, _nb: int, _pv: Any, s: float) -> FloatPose:
+        """:meth:`pose_columns` of a float as the projection's pose function
+        (:func:`~amigo_gym.paths.clothoid.project_flat`)."""
+        x, y, th, kappa, rate, ct, st = self.pose_columns(s)  # floats for a float
+        return float(x), float(y), float(th), float(kappa), float(rate), float(ct), float(st)
 
 
 def _point(vals: list[Any], scalar: bool) -> PathPoint:

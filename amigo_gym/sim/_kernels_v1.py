@@ -99,6 +99,8 @@ __all__ = [
     "cos_sin",
     "build_chain",
     "build_samples",
+    "rows_locate",
+    "rows_pose",
     "build_run",
     "build_lane",
 ]
@@ -109,7 +111,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "663e6b935edb164b"
+LAYOUT_FINGERPRINT = "e32bfe6cfe85e118"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -185,7 +187,6 @@ def cos_sin(x: F64, c: F64, s: F64) -> None:
 #: loop and the status, calling clothoid's other shared functions), compiled
 _piece_at = _shared(clothoid.piece_at)
 _place = _shared(clothoid.place)
-_locate_flat = _shared(clothoid.locate_flat)
 _pose_flat = _shared(clothoid.pose_flat)
 
 
@@ -290,8 +291,8 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     """
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = _locate_flat(
-        buf, c, _path_nodes(c), pv, x, y, sp, window, window
+    s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = clothoid.locate_flat(
+        clothoid.pose_flat, buf, c, _path_nodes(c), pv, x, y, sp, window, window
     )
     return s, kappa, e, ct, st, status
 
@@ -357,6 +358,31 @@ def build_chain(
     """:func:`amigo_gym.paths.clothoid.chain_pieces` itself: the pieces into ``out``; ``(x, y, theta, length)``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     return clothoid.chain_pieces(out, n, segs, n_segs, x, y, th, buf, nodes)
+
+
+@_jit
+def rows_locate(
+    nodes: F64,
+    out: F64,
+    flat: F64,
+    start: NDArray[np.int64],
+    x: F64,
+    y: F64,
+    sp: F64,
+    ahead: float,
+    behind: float,
+    on: bool,
+) -> None:
+    """:func:`amigo_gym.paths.clothoid.locate_rows` itself: the column projection, row by row, into ``out``."""
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    clothoid.locate_rows(clothoid.pose_flat, out, buf, nodes, flat, start, x, y, sp, ahead, behind, on)
+
+
+@_jit
+def rows_pose(nodes: F64, out: F64, flat: F64, start: NDArray[np.int64], s: F64) -> None:
+    """:func:`amigo_gym.paths.clothoid.pose_rows` itself: the column pose, row by row, into ``out``."""
+    buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
+    clothoid.pose_rows(out, buf, nodes, flat, start, s)
 
 
 @_jit

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from amigo_gym.model import fresnel, randomization
 from amigo_gym.paths import families
 from amigo_gym.paths.classic import PathPose
-from amigo_gym.paths.clothoid import ClothoidPath, PathLoops
+from amigo_gym.paths.clothoid import ClothoidPath, PathLoops, use_compiled_rows
 from amigo_gym.sim import fast, layout_v1
 from amigo_gym.task import v1 as tracking
 
@@ -117,12 +117,16 @@ def path_loops() -> PathLoops | None:
     kv = kernels()
     nodes = np.array(fresnel.node_table(1), dtype=np.float64)
     run_nodes = np.array(families.RUN_NODES, dtype=np.float64)
-    return PathLoops(
+    loops = PathLoops(
         chain=partial(kv.build_chain, nodes),
         samples=partial(kv.build_samples, nodes),
         run=partial(kv.build_run, run_nodes),
         lane=partial(kv.build_lane, run_nodes),
+        locate=partial(kv.rows_locate, nodes),
+        pose=partial(kv.rows_pose, nodes),
     )
+    use_compiled_rows(loops)
+    return loops
 
 
 def kernels() -> ModuleType:
