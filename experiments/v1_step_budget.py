@@ -12,7 +12,7 @@ them (``record_info``), the new ``true_robot`` and ``path`` dicts, the end condi
 of the env's own step: the calls between them); last a dict of the same 18 entries built from a copy of the record with
 nothing else (the floor of that info); and AmigoBot-v0's compiled call (``fast.SingleStep.step``, with its record's
 floats) beside v1's, both with the same random actions (v1's compiled step does more: actuator ramps integrated piece
-by piece, a projection onto a clothoid path and three preview poses by quadrature).
+by piece, a projection onto a clothoid path and three preview poses by quadrature), and v0's info from its record.
 """
 
 from __future__ import annotations
@@ -62,6 +62,8 @@ def main() -> None:
     pool = np.random.default_rng(0).uniform(-1.0, 1.0, (16, 2)).tolist()  # random actions, as bench-env's
     k = [0]
 
+    v0_rec = fs.record.tolist()
+
     def call_v0() -> None:
         i = k[0] = (k[0] + 1) % 16
         fs.step(*pool[i])
@@ -102,6 +104,10 @@ def main() -> None:
         ("  the observation's copy", best(lambda: kern.obs.copy())),
         ("the floor of the info (18 entries from a copy of the record)", best(floor)),
         ("AmigoBot-v0's compiled call and its record's floats (SingleStep.step), random actions", best(call_v0)),
+        (
+            "AmigoBot-v0's info: its record's copy and task.record_info",
+            best(lambda: task.record_info(fs.head.copy(), v0_rec, 0.1)),
+        ),
     ]
     print("| AmigoBot-v1's single step | [us] |\n|---|---:|")
     for label, t in rows:
