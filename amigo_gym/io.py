@@ -23,7 +23,7 @@ import math
 import os
 import signal
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -73,13 +73,14 @@ def fsync_dir(folder: str | os.PathLike[str]) -> None:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` with every non-finite float (NaN, inf) replaced by ``None`` and numpy scalars as Python ones."""
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
+    """``obj`` for strict JSON: every non-finite float (NaN, inf) replaced by ``None``, numpy scalars and arrays as
+    Python numbers and lists, mappings as dicts with ``str`` keys, tuples as lists."""
+    if isinstance(obj, Mapping):
+        return {str(k): json_safe(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
         return [json_safe(v) for v in obj]
-    if hasattr(obj, "item") and getattr(obj, "shape", None) == ():
-        obj = obj.item()
+    if hasattr(obj, "tolist") and hasattr(obj, "shape"):  # a numpy scalar or array
+        return json_safe(obj.tolist())
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
@@ -107,11 +108,12 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
-def file_mode() -> int:
-    """The mode of a new plain file under the current umask, ``0o666 & ~umask``."""
+def file_mode(folder: bool = False) -> int:
+    """The mode of a new plain file (``folder``: a new folder) under the current umask, ``0o666 & ~umask``
+    (``0o777 & ~umask``)."""
     umask = os.umask(0)
     os.umask(umask)
-    return 0o666 & ~umask
+    return (0o777 if folder else 0o666) & ~umask
 
 
 def _target(path: str | os.PathLike[str], parents: bool) -> Path:

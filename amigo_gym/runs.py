@@ -37,23 +37,31 @@ Corrupt files
 
 Files left by a killed process (temporary files, half-deleted checkpoints) carry names starting with a
 dot; :func:`clean_temporaries` removes them while the lock is held.
+
+Output sets
+    :func:`publish` moves staged files to their places as one set with a manifest of their sha256, written last;
+    :func:`verify_manifest` checks a set (``amigo-gym compare`` and ``amigo-gym benchmark``).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import re
 import shutil
+import signal
 import sys
 import tempfile
-from collections.abc import Callable, Iterator
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from amigo_gym.io import atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
 
 __all__ = [
     "CHECKPOINTS",
@@ -67,14 +75,17 @@ __all__ = [
     "check_pickle",
     "clean_temporaries",
     "remove_matching",
+    "handling",
     "has_run_files",
     "is_current_lock",
     "load_checkpoint",
+    "publish",
     "read_json",
     "restore_snapshot",
     "save_checkpoint",
     "sha256_file",
     "trust_unverified",
+    "verify_manifest",
     "verify_sha256",
 ]
 
@@ -100,6 +111,19 @@ class StopRequest:
             raise KeyboardInterrupt
         self.requested = True
         print(self.message, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def handling(handler: Callable[[int, Any], None], *signals: signal.Signals) -> Iterator[None]:
+    """``handler`` on ``signals`` (default ``SIGTERM`` and ``SIGINT``) inside the block, the previous handlers
+    restored after it; nothing outside the main thread (signals are handled only there)."""
+    main = threading.current_thread() is threading.main_thread()
+    old = {sig: signal.signal(sig, handler) for sig in signals or (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        yield
+    finally:
+        for sig, previous in old.items():
+            signal.signal(sig, previous)
 
 
 class RunLockedError(FileExistsError):
@@ -235,6 +259,55 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
         )
 
 
+def _key(path: Path, out: Path) -> str:
+    """A file's name in a manifest: relative to ``out`` when inside it, else absolute."""
+    try:
+        return str(path.resolve().relative_to(out.resolve()))
+    except ValueError:
+        return str(path.resolve())
+
+
+def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
+    """Move the staged files ``{target: staged file}`` to their targets as one set; the manifest's ``{file: sha256}``.
+
+    The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``, a file named relative
+    to ``out`` when inside it) is removed first and written atomically last: the set is complete and consistent
+    exactly when the manifest exists and every file matches it (:func:`verify_manifest`), so a reader that checks
+    it never mixes files of two runs. Fault stages (tests): ``publish:<file name>`` after each move.
+    """
+    files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
+    (out / manifest).unlink(missing_ok=True)
+    fsync_dir(out)
+    for dest, src in targets.items():
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            os.replace(src, dest)
+        except OSError:  # another file system: copy beside the target, then rename
+            atomic_save(functools.partial(shutil.copyfile, src), dest)
+        fault_point(f"publish:{dest.name}")
+        fsync_dir(dest.parent)
+    atomic_write_json(out / manifest, {"files": files, **extra, "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+    return files
+
+
+def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
+    """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file.
+
+    Raises:
+        FileNotFoundError: no manifest (no complete set: the command was interrupted while publishing).
+        CorruptFileError: a file missing or not the one the manifest lists.
+    """
+    path = out / manifest
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
+    doc = read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
+        raise CorruptFileError(f"{path}: not a manifest (needs 'files')")
+    for name, digest in doc["files"].items():
+        verify_sha256(out / name, str(digest), str(path))
+    return dict(doc["files"])
+
+
 #: environment variable that, set to ``1``, trusts files that have no recorded sha256 (no warning)
 TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
 _trust_unverified = False
@@ -279,13 +352,6 @@ def read_json(path: Path, what: str = "") -> Any:
     except (ValueError, UnicodeDecodeError) as exc:
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise CorruptFileError(f"{path}: not valid JSON{' ' + what if what else ''} ({detail})") from None
-
-
-def _dir_mode() -> int:
-    """The mode of a new folder under the current umask, ``0o777 & ~umask``."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o777 & ~umask
 
 
 def _fsync_file(path: Path) -> None:
@@ -460,7 +526,7 @@ def save_checkpoint(
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
     try:
-        os.chmod(tmp, _dir_mode())
+        os.chmod(tmp, file_mode(folder=True))
         names = list(write(tmp))
         for name in SNAPSHOT:  # the run's evaluation record as of this step
             src = out / name

@@ -26,7 +26,6 @@ Every setting is an option (``--help``).
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
@@ -38,7 +37,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import RobotParams, check_range
-from amigo_gym.options import OneLineParser, add_dataclass_options, run_guarded, settings_from_args
+from amigo_gym.options import run_command
 from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
@@ -233,37 +232,29 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
     return sol, ph, files
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Options: one per field of :class:`Settings`, with its default."""
-    p = OneLineParser(prog=PROG, description="The paper's manoeuvre: Fig. 2/3-style plots and a CSV.")
-    add_dataclass_options(p, Settings)
-    return p
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym paper``."""
-    args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
+    return run_command(Settings, _report, argv, PROG, "The paper's manoeuvre: Fig. 2/3-style plots and a CSV.")
 
-    def go() -> int:
-        settings = settings_from_args(Settings, args)
-        sol, ph, files = run(settings)
-        robot = RobotParams()
-        print(f"settings: {asdict(settings)}")
-        print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
-        print(
-            f"peak wheel rates: alpha1_dot {float(np.max(np.abs(sol.alpha1_dot))):.4f}, "
-            f"alpha2_dot {float(np.max(np.abs(sol.alpha2_dot))):.4f} rad/s (limit {robot.max_wheel_rate:g}); "
-            f"peak |betadot| {float(np.max(np.abs(sol.betadot))):.4f} rad/s (limit {robot.max_rotation_rate:g})"
-        )
-        print(
-            f"end: alpha1 = {sol.alpha1[-1]:.4f} rad, alpha2 = {sol.alpha2[-1]:.4f} rad, "
-            f"s = {sol.s[-1]:.4f} m, beta = {sol.beta[-1]:.4f} rad ({math.degrees(sol.beta[-1]):.2f} deg)"
-        )
-        for v in files.values():
-            print(f"wrote {v}")
-        return 0
 
-    return run_guarded(go, PROG)
+def _report(settings: Settings) -> int:
+    """:func:`run`, then what it found on stdout."""
+    sol, ph, files = run(settings)
+    robot = RobotParams()
+    print(f"settings: {asdict(settings)}")
+    print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
+    print(
+        f"peak wheel rates: alpha1_dot {float(np.max(np.abs(sol.alpha1_dot))):.4f}, "
+        f"alpha2_dot {float(np.max(np.abs(sol.alpha2_dot))):.4f} rad/s (limit {robot.max_wheel_rate:g}); "
+        f"peak |betadot| {float(np.max(np.abs(sol.betadot))):.4f} rad/s (limit {robot.max_rotation_rate:g})"
+    )
+    print(
+        f"end: alpha1 = {sol.alpha1[-1]:.4f} rad, alpha2 = {sol.alpha2[-1]:.4f} rad, "
+        f"s = {sol.s[-1]:.4f} m, beta = {sol.beta[-1]:.4f} rad ({math.degrees(sol.beta[-1]):.2f} deg)"
+    )
+    for v in files.values():
+        print(f"wrote {v}")
+    return 0
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from amigo_gym.io import fsync_dir, json_safe
+from amigo_gym.io import file_mode, fsync_dir, json_safe
 from amigo_gym.logs import Fit, Log, Replay, errors, identify, read_log, robot_from_file, simulate, summarize
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
@@ -170,7 +170,7 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
             writer(target)
             with open(target, "rb+") as fh:
                 os.fsync(fh.fileno())
-        os.chmod(tmp, 0o777 & ~_umask())
+        os.chmod(tmp, file_mode(folder=True))
         fsync_dir(tmp)
         if out.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".old", dir=parent))
@@ -185,12 +185,6 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     fsync_dir(parent)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _text(data: str) -> Callable[[str], object]:

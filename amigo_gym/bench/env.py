@@ -51,7 +51,6 @@ stderr, the report to stdout.
 from __future__ import annotations
 
 import gc
-import inspect
 import math
 import os
 import statistics
@@ -157,12 +156,8 @@ def _vector_stepper(envs: Any, seed: int) -> Callable[[], object]:
 
 
 def _vector_kernels(parallel: bool = False) -> list[str]:
-    """The step implementations the native vector env lets a caller choose (``[]``: only its default);
-    ``parallel`` adds ``"numba-parallel"`` (the kernel's loops on numba's threads) when numba is installed."""
-    from amigo_gym.envs.amigobot import AmigoBotVectorEnv
-
-    if "kernel" not in inspect.signature(AmigoBotVectorEnv.__init__).parameters:
-        return []
+    """The step implementations of the native vector env (its ``kernel``); ``parallel`` adds ``"numba-parallel"``
+    (the kernel's loops on numba's threads) when numba is installed."""
     if not numba_available():
         return ["numpy"]
     return ["numpy", "numba", "numba-parallel"] if parallel else ["numpy", "numba"]
@@ -410,11 +405,9 @@ def bench_ppo(
             (1, "DummyVecEnv", lambda: make_vec_env("AmigoBot-v0", n_envs=1, seed=seed))
         ]
         if n_envs > 1:
-            kernels: list[str | None] = [*_vector_kernels()] or [None]
-            for kern in kernels:
-                label = "AmigoBotSB3VecEnv" + ("" if kern is None else f"(kernel={kern})")
-                kw: dict[str, Any] = {} if kern is None else {"kernel": kern}
-                configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, kw)))
+            for kern in _vector_kernels():
+                label = f"AmigoBotSB3VecEnv(kernel={kern})"
+                configs.append((n_envs, label, _adapter(VecMonitor, AmigoBotSB3VecEnv, n_envs, {"kernel": kern})))
         if v1:
             v1_kw: dict[str, Any] = {"env_id": "AmigoBot-v1", **V1_HARD}
             label = "AmigoBotSB3VecEnv(AmigoBot-v1, mixed paths, hard randomisation)"

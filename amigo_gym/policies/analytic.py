@@ -80,14 +80,13 @@ across the path; the clipped action then turns the robot at the largest rate the
 
 from __future__ import annotations
 
-import math
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import wheel_rates
-from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.model.params import check_range
 from amigo_gym.policies.base import Fields, Params, Policy
 
 __all__ = [
@@ -260,8 +259,3 @@ class AnalyticPolicy(Policy):
             f"AnalyticPolicy(gain={self.gain:g}, feedforward_only={self.feedforward_only}, "
             f"speed_reference={self.speed_reference!r})"
         )
-
-
-def steady_lag(params: EnvParams) -> float:
-    """Steady heading error ``psi_ss = -asin(kappa l3)`` on the task's circle [rad] (``-delta_ss``)."""
-    return -params.direction * math.asin(params.robot.l3 / params.radius)

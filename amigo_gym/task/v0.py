@@ -55,7 +55,7 @@ constants of the compiled step are derived once per :class:`EnvParams` (:func:`t
 
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
 reader decodes the observation by these names) and the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
-:func:`record_info`, used by the single env, the vector env and the SB3 adapter).
+:func:`record_info`, used by the single env and the vector env).
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """

@@ -90,23 +90,21 @@ pairs that could not run, with the reason), ``aggregates`` (per agent: ``iqm`` a
 
 from __future__ import annotations
 
-import functools
 import glob
 import json
 import math
-import os
 import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import remove_matching, trust_unverified
 from amigo_gym.training.task_metrics import (
@@ -235,20 +233,8 @@ class Scenario:
         return len(self.seeds)
 
     def to_json(self) -> dict[str, Any]:
-        """The scenario as JSON data (tuples as lists)."""
-        return {
-            "name": self.name,
-            "env_id": self.env_id,
-            "env_kwargs": _jsonable(dict(self.env_kwargs)),
-            "seeds": list(self.seeds),
-            "episodes": self.episodes,
-            "max_steps": self.max_steps,
-            "held_out": self.held_out,
-            "description": self.description,
-            "version": self.version,
-            "settle_time_s": self.settle_time_s,
-            "failure_tolerance_m": self.failure_tolerance_m,
-        }
+        """The scenario as JSON data (its fields and ``episodes``; tuples as lists)."""
+        return json_safe({**asdict(self), "episodes": self.episodes})  # type: ignore[no-any-return]
 
 
 def user_scenarios(
@@ -401,20 +387,6 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
         for sc in suite
         if sc.name in QUICK_SCENARIOS
     )
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return None if not math.isfinite(float(x)) else float(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    return x
 
 
 # --------------------------------------------------------------------------- agents
@@ -702,7 +674,7 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
         rec[k] = _nanmean(col[k])
     rec["mean_steps"] = _nanmean(col["steps"])
     rec["terminated"] = int(sum(col["terminated"]))
-    rec["per_episode"] = {k: _jsonable(v) for k, v in col.items()}
+    rec["per_episode"] = {k: json_safe(v) for k, v in col.items()}
     return rec
 
 
@@ -1110,14 +1082,6 @@ def clean_temporaries(out: Path) -> list[str]:
     return remove_matching(out, _TEMPORARY)
 
 
-def _key(path: Path, out: Path) -> str:
-    """A file's name in the manifest: relative to ``out`` when inside it, else absolute."""
-    try:
-        return str(path.resolve().relative_to(out.resolve()))
-    except ValueError:
-        return str(path.resolve())
-
-
 def write_outputs(
     doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
 ) -> list[Path]:
@@ -1126,62 +1090,37 @@ def write_outputs(
     Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
     ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
     new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
-    last. The set is complete and consistent exactly when the manifest exists and every file matches it
-    (:func:`verify_outputs`): a reader that checks it never mixes files of two runs. Fault stages (tests):
+    last (:func:`amigo_gym.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
     ``publish:<file name>`` after each move.
     """
     import shutil
     import tempfile
 
-    from amigo_gym.io import fault_point, fsync_dir
+    from amigo_gym.runs import publish
 
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
     try:
         targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
-        atomic_write_json(targets[json_path], _jsonable(doc))
+        atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
             targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"
             targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
             plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
             plot_profiles(doc, staging / "benchmark_profiles.png")
-        files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
-        (out / MANIFEST).unlink(missing_ok=True)
-        fsync_dir(out)
-        for dest, src in targets.items():
-            dest.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                os.replace(src, dest)
-            except OSError:  # another file system: copy beside the target, then rename
-                atomic_save(functools.partial(shutil.copyfile, src), dest)
-            fault_point(f"publish:{dest.name}")
-            fsync_dir(dest.parent)
-        manifest = {"files": files, "command": doc.get("command"), "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-        atomic_write_json(out / MANIFEST, manifest)
+        publish(targets, out, MANIFEST, command=doc.get("command"))
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return list(targets)
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
-    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file.
+    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
+    (:func:`amigo_gym.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
+    from amigo_gym.runs import verify_manifest
 
-    Raises:
-        FileNotFoundError: no manifest (no complete set: a benchmark was interrupted while publishing).
-        CorruptFileError: a file missing or not the one the manifest lists.
-    """
-    from amigo_gym.runs import CorruptFileError, read_json, verify_sha256
-
-    path = out / MANIFEST
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
-    doc = read_json(path)
-    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
-        raise CorruptFileError(f"{path}: not a manifest (needs 'files')")
-    for name, digest in doc["files"].items():
-        verify_sha256(out / name, str(digest), str(path))
-    return dict(doc["files"])
+    return verify_manifest(out, MANIFEST)
 
 
 # --------------------------------------------------------------------------- command line

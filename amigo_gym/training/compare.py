@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import glob
 import json
-import os
 import shutil
 import sys
 import tempfile
@@ -64,7 +63,7 @@ from typing import Any
 
 from amigo_gym import runs
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, atomic_write_json, fault_point, fsync_dir
+from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.options import cli, parse_settings, run_guarded
 
 __all__ = [
@@ -366,38 +365,15 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
 
 
 def publish(staging: Path, out: Path) -> dict[str, str]:
-    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring).
-
-    Fault stages (tests): ``publish:<file name>`` after each move, ``write:``/``rename:manifest.json``.
-    Returns the manifest's ``{file name: sha256}``.
-    """
-    files = {p.name: runs.sha256_file(p) for p in sorted(staging.iterdir()) if p.is_file()}
-    (out / MANIFEST).unlink(missing_ok=True)
-    fsync_dir(out)
-    for name in files:
-        os.replace(staging / name, out / name)
-        fault_point(f"publish:{name}")
-    fsync_dir(out)
-    atomic_write_json(out / MANIFEST, {"files": files, "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
-    return files
+    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring,
+    :func:`amigo_gym.runs.publish`); the manifest's ``{file name: sha256}``."""
+    return runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
-    """The manifest of a compare's output set, after checking every file against it.
-
-    Raises:
-        FileNotFoundError: no ``manifest.json`` (no complete set: a compare was interrupted).
-        CorruptFileError: a file missing or not the one the manifest lists.
-    """
-    path = out / MANIFEST
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
-    doc = runs.read_json(path)
-    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
-        raise runs.CorruptFileError(f"{path}: not a manifest (needs 'files')")
-    for name, digest in doc["files"].items():
-        runs.verify_sha256(out / name, str(digest), str(path))
-    return dict(doc["files"])
+    """The manifest of a compare's output set, after checking every file against it
+    (:func:`amigo_gym.runs.verify_manifest`: ``FileNotFoundError`` without ``manifest.json``, ``CorruptFileError``)."""
+    return runs.verify_manifest(out, MANIFEST)
 
 
 def _say(message: str) -> None:
@@ -521,15 +497,13 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
     bench: dict[str, Any] | None = None
     if s.benchmark:
-        from amigo_gym.training.benchmark import _jsonable
-
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
         _say(
             "quick benchmark (amigo-gym benchmark --quick) on these agents"
             + (f" and {generalists}" if generalists else "")
         )
         bench = quick_benchmark(agents, sources, generalists, progress=progress)
-        extra["benchmark"] = _jsonable(bench)
+        extra["benchmark"] = json_safe(bench)
         extra["benchmark_plots"] = plots and bool(bench["results"])
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
     try:

@@ -61,7 +61,6 @@ file is written to a temporary name, then ``os.replace``d.
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import os
@@ -75,10 +74,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, json_safe
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.options import cli, parse_settings, run_guarded
 from amigo_gym.runs import trust_unverified
+from amigo_gym.training.task_metrics import _rms
 
 __all__ = [
     "Agent",
@@ -201,7 +201,7 @@ def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, ga
     wmax = params.robot.max_wheel_rate
     obs, info = env.reset(**reset_kwargs)
     h0 = np.asarray(info["h_position"], dtype=np.float64)
-    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref", "s")}
+    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref_rates", "arc")}
     ret, terminated = 0.0, False
     s_prev = float(path.project(h0).s)
     s_unwrapped = 0.0
@@ -216,31 +216,15 @@ def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, ga
             ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
         s_unwrapped += ds
         s_prev = s
-        cols["time"].append(info["time"])
-        cols["e"].append(info["cross_track_error"])
-        cols["h"].append(info["h_position"])
-        cols["rates"].append(info["wheel_rates"])
-        cols["angles"].append(info["wheel_angles"])
-        cols["ref"].append(ref)
-        cols["s"].append(s_unwrapped)
+        row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
+        for col, value in zip(cols.values(), (*row, ref, s_unwrapped), strict=True):
+            col.append(value)
         if terminated or truncated:
             break
-    return Trajectory(
-        time=np.asarray(cols["time"], dtype=np.float64),
-        e=np.asarray(cols["e"], dtype=np.float64),
-        h=np.asarray(cols["h"], dtype=np.float64).reshape(-1, 2),
-        rates=np.asarray(cols["rates"], dtype=np.float64).reshape(-1, 2),
-        angles=np.asarray(cols["angles"], dtype=np.float64).reshape(-1, 2),
-        ref_rates=np.asarray(cols["ref"], dtype=np.float64).reshape(-1, 2),
-        arc=np.asarray(cols["s"], dtype=np.float64),
-        ret=ret,
-        terminated=bool(terminated),
-        h0=h0,
-    )
-
-
-def _rms(x: Array) -> float:
-    return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
+    arrays = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
+    for k in ("h", "rates", "angles", "ref_rates"):
+        arrays[k] = arrays[k].reshape(-1, 2)
+    return Trajectory(**arrays, ret=ret, terminated=bool(terminated), h0=h0)
 
 
 def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
@@ -511,7 +495,7 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
     """The protocol as written to the JSON (with the env settings and the start poses)."""
     return {
         "env_id": ENV_ID,
-        "env_params": _jsonable(asdict(params)),
+        "env_params": json_safe(asdict(params)),
         "steps": proto.steps,
         "duration_s": proto.steps * params.dt,
         "lap_time_s": params.lap_time,
@@ -532,11 +516,6 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
         ),
         "deterministic": True,
     }
-
-
-def _jsonable(x: Any) -> Any:
-    """``x`` for strict JSON: numpy scalars as Python numbers, NaN and inf as ``None`` (``null``)."""
-    return json_safe(x)
 
 
 # --------------------------------------------------------------------------- table and plots
@@ -569,9 +548,7 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def _save_fig(fig: Any, path: Path) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    atomic_write(path, buf.getvalue(), parents=True)
+    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=110), path, parents=True)
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
@@ -700,7 +677,7 @@ def write_outputs(
     """
     params = EnvParams()
     doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
-    atomic_write(json_path, (json.dumps(_jsonable(doc), indent=2, allow_nan=False) + "\n").encode(), parents=True)
+    atomic_write_json(json_path, doc, parents=True)
     atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:
         plot_trajectories(trajs, params, out / "eval_trajectories.png")

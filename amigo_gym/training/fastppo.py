@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import io as _io
 import itertools
 import json
@@ -74,9 +75,7 @@ import math
 import os
 import pickle
 import shlex
-import signal
 import sys
-import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
@@ -93,7 +92,7 @@ from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_fi
 from amigo_gym.model.params import check_range
 from amigo_gym.options import cli, json_object
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
-from amigo_gym.runs import RunLock, StopRequest
+from amigo_gym.runs import RunLock, StopRequest, handling
 from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.training.task_metrics import episode_metrics
 from amigo_gym.training.train import versions
@@ -683,14 +682,8 @@ def train(
     _check_start(out, resume)
     out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
-    main_thread = threading.current_thread() is threading.main_thread()
-    with RunLock(out):  # one process per run folder: a second train-fast (or --resume) on it stops with one line
-        old = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
-        try:
-            record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
-        finally:
-            for sig, handler in old.items():
-                signal.signal(sig, handler)
+    with RunLock(out), handling(stop):  # one process per run folder: a second train-fast on it stops with one line
+        record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
     if stop.requested and record.get("stopped_by") == "signal":
         raise KeyboardInterrupt
     return record
@@ -970,13 +963,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     def run() -> int:
         s = settings_from_args(FastPPOSettings, args)
         cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in args_in)
-        log = None if run_opts.quiet else _flush_print
+        log = None if run_opts.quiet else functools.partial(print, flush=True)
         rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
         return 0
 
     return run_guarded(run, PROG)
-
-
-def _flush_print(msg: str) -> None:
-    print(msg, flush=True)

@@ -40,7 +40,6 @@ from amigo_gym import MAX_EPISODE_STEPS, MAX_EPISODE_STEPS_V1
 from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 from amigo_gym.envs.base import info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
-from amigo_gym.task.v0 import INFO_KEYS, REWARD_TERMS
 
 __all__ = ["AmigoBotSB3VecEnv"]
 
@@ -153,28 +152,7 @@ class AmigoBotSB3VecEnv(VecEnv):
         return [False for _ in self._get_indices(indices)]
 
     # ------------------------------------------------------------------ helpers
-    def _split_infos(self, vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts: v0's schema (:func:`_split`), or v1's numeric keys (:func:`_split_generic`)."""
-        return self._split(vinfo, idx) if self.env_id == "AmigoBot-v0" else self._split_generic(vinfo, idx)
-
     @staticmethod
-    def _split_generic(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts of AmigoBot-v1 (:func:`amigo_gym.envs.base.info_row`)."""
+    def _split_infos(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
+        """Per-env info dicts (the single env's keys and types: :func:`amigo_gym.envs.base.info_row`)."""
         return [info_row(vinfo, i) for i in idx]
-
-    @staticmethod
-    def _split(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts (the single env's keys and types) from vector-format infos."""
-        out = []
-        for i in idx:
-            d: dict[str, Any] = {}
-            for k, kind in INFO_KEYS.items():  # the schema's one home: amigo_gym.task.v0
-                v = vinfo[k]
-                if kind == "terms":
-                    d[k] = {name: float(v[name][i]) for name in REWARD_TERMS}
-                elif kind == "scalar":
-                    d[k] = float(v[i])
-                else:
-                    d[k] = v[i].copy()
-            out.append(d)
-        return out

@@ -153,6 +153,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.options import cli, json_object, parse_settings, run_guarded
+from amigo_gym.runs import handling
 from amigo_gym.training.train import ENV_IDS, EnvId
 
 __all__ = [
@@ -455,15 +456,6 @@ class SweepConfig:
             return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
         return {}
 
-    def public(self) -> dict[str, Any]:
-        """The settings as JSON data with the storage password masked."""
-        from dataclasses import asdict
-
-        d = asdict(self)
-        d["storage"] = None if self.storage is None else masked_url(self.storage)
-        d["argv"] = public_argv(self.argv)
-        return d
-
 
 # --------------------------------------------------------------------------- validation cells
 def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
@@ -504,14 +496,11 @@ def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_model` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
     ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy` (numpy; SB3's ``predict``)."""
-    from amigo_gym.io import sha256_file
     from amigo_gym.policies.learned import FastPolicy
-    from amigo_gym.runs import CorruptFileError
+    from amigo_gym.runs import verify_sha256
 
-    model = run_dir / "model.zip"
-    want = json.loads((run_dir / "run.json").read_text()).get("sha256")
-    if want != sha256_file(model):
-        raise CorruptFileError(f"{model}: sha256 differs from {run_dir / 'run.json'}")
+    model, record = run_dir / "model.zip", run_dir / "run.json"
+    verify_sha256(model, str(json.loads(record.read_text()).get("sha256")), str(record))
     return validate_agent(FastPolicy.load(model), cells)
 
 
@@ -1170,9 +1159,7 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
         if _exhausted(st, cfg, running=True):
             st.stop()
 
-    main_thread = __import__("threading").current_thread() is __import__("threading").main_thread()
-    old = signal.signal(signal.SIGTERM, _raise_interrupt) if main_thread else None
-    try:
+    with handling(_raise_interrupt, signal.SIGTERM):
         if not _exhausted(study, cfg):
             study.optimize(
                 _objective(cfg, study, sampler_seed),
@@ -1183,9 +1170,6 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
                     stop_when_spent,
                 ],
             )
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
     return summarize(study, cfg.budget)
 
 
@@ -1366,8 +1350,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         interrupted = False
         failed: list[str] = []
         opened: list[Any] = []
-        old = signal.signal(signal.SIGTERM, _raise_interrupt)
-        try:
+        with handling(_raise_interrupt, signal.SIGTERM):
             if cfg.n_jobs > 1:
                 try:
                     codes = _spawn_workers(cfg)
@@ -1380,8 +1363,6 @@ def main(argv: Sequence[str] | None = None) -> int:
                     run_worker(cfg, opened)
                 except KeyboardInterrupt:
                     interrupted = True
-        finally:
-            signal.signal(signal.SIGTERM, old)
         # this process's own study object when it has one (an in-memory storage lives only in it)
         study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
         mark_abandoned(study)

@@ -58,10 +58,8 @@ import json
 import os
 import platform
 import shutil
-import signal
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -182,18 +180,12 @@ def git_revision() -> str:
     root = repository_root()
     if root is None:
         return "not a git checkout"
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True, timeout=10).stdout
+
     try:
-        rev = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True, timeout=10
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=root,
-            capture_output=True,
-            text=True,
-            check=True,
-            timeout=10,
-        ).stdout.strip()
+        rev, dirty = git("rev-parse", "HEAD").strip(), git("status", "--porcelain", "--untracked-files=no").strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     return rev + ("-dirty" if dirty else "")
@@ -292,10 +284,6 @@ def _callbacks(
 ) -> list[Any]:
     import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
-    from stable_baselines3.common.monitor import Monitor
-    from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
-
-    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
 
     class Checkpoint(BaseCallback):
         """At the start of a rollout (a consistent state: module docstring of :mod:`amigo_gym.runs`): a
@@ -379,13 +367,8 @@ def _callbacks(
                 rec.terminated = ended and not bool(info.get("end_of_path", False))  # v1: path end = success
                 self.episodes.append(rec.metrics())
                 del self.recorders[i]
-                for key, src in (
-                    ("h_rms_m", "h_rms_m"),
-                    ("h_rms_settled_m", "h_rms_settled_m"),
-                    ("speed_err_rms", "speed_err_rms"),
-                    ("failure_rate", "failure"),
-                ):
-                    vals = np.array([e[src] for e in self.episodes])
+                for key in ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate"):
+                    vals = np.array([e["failure" if key == "failure_rate" else key] for e in self.episodes])
                     vals = vals[np.isfinite(vals)]
                     value = float(vals.mean()) if vals.size else float("nan")
                     self.task_metrics[key] = value
@@ -393,16 +376,11 @@ def _callbacks(
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
     if s.eval_freq > 0:
-        eval_env: Any
-        if _native(s.vec, n_envs):  # the same VecEnv type as training (SB3 warns otherwise); same rollouts
-            eval_env = VecMonitor(AmigoBotSB3VecEnv(1, env_id=s.env_id, **_make_kwargs(s.env_kwargs)))
-        else:
-            eval_env = DummyVecEnv([lambda: Monitor(gym.make(s.env_id, **_make_kwargs(s.env_kwargs)))])
-        eval_env.seed(eval_seed)
-        if normalize:  # EvalCallback copies the training statistics into it before each evaluation
-            from stable_baselines3.common.vec_env import VecNormalize
-
-            eval_env = VecNormalize(eval_env, training=False, norm_reward=False)
+        # the same VecEnv type as training (SB3 warns otherwise); with normalize, EvalCallback copies the training
+        # statistics into its VecNormalize before each evaluation
+        vec = "native" if _native(s.vec, n_envs) else "dummy"
+        stats = {"training": False, "norm_reward": False} if normalize else None
+        eval_env = make_train_env(1, vec, eval_seed, stats, s.env_id, s.env_kwargs)
         after = AfterEval()
         ev = TaskEvalCallback(
             eval_env,
@@ -489,14 +467,8 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
-    main = threading.current_thread() is threading.main_thread()  # signals can only be handled there
-    old_handlers = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)} if main else {}
-    try:
-        with runs.RunLock(s.out):
-            result = _train(s, stop, after_eval)
-    finally:
-        for sig, handler in old_handlers.items():
-            signal.signal(sig, handler)
+    with runs.handling(stop), runs.RunLock(s.out):
+        result = _train(s, stop, after_eval)
     if stop.requested and result is None:
         raise KeyboardInterrupt
     if result is None:  # pragma: no cover - _train returns None only on a stop
