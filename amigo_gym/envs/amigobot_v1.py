@@ -25,14 +25,6 @@ from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values"]
 
-# entries of the compiled step's workspace (amigo_gym.sim.fast_v1.WS_FIELDS)
-_W_X, _W_Y, _W_BETA, _W_W1, _W_W2 = fast_v1.W_X, fast_v1.W_Y, fast_v1.W_BETA, fast_v1.W_W1, fast_v1.W_W2
-_W_AL1, _W_AL2, _W_PROGRESS = fast_v1.W_AL1, fast_v1.W_AL2, fast_v1.W_PROGRESS
-_W_HX, _W_HY, _W_E, _W_VT, _W_VREF = fast_v1.W_HX, fast_v1.W_HY, fast_v1.W_E, fast_v1.W_VT, fast_v1.W_VREF
-_W_MX, _W_MY, _W_MB, _W_HEADING = fast_v1.W_MX, fast_v1.W_MY, fast_v1.W_MB, fast_v1.W_HEADING
-_W_ARG_T, _W_ARG_S, _W_TERM, _W_END = fast_v1.W_ARG_T, fast_v1.W_ARG_S, fast_v1.W_TERM, fast_v1.W_END
-_W_CMD1, _W_CMD2, _W_SLIP1, _W_SLIP2 = fast_v1.W_CMD1, fast_v1.W_CMD2, fast_v1.W_SLIP1, fast_v1.W_SLIP2
-
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = RESET_OPTIONS
 
@@ -94,9 +86,11 @@ _np_array = np.array
 _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
     (..., r) for r in (_L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP)
 )
-_R_COMMAND, _R_SLIP = _L.R_COMMAND, _L.R_SLIP
-_E, _PROGRESS, _VT, _VREF, _HEADING = _L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING
-_TRACK, _SPEED, _SMOOTH = _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH
+_R_COMMAND, _R_SLIP, _R_H = _L.R_COMMAND, _L.R_SLIP, _L.R_H
+#: the record's scalars (from ``R_ERROR`` on: ``record[R_ERROR:]``, record_info's ``values``) by index
+_E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _TRACK, _SPEED, _SMOOTH, _REWARD = (i - _L.R_ERROR for i in (
+    _L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM, _L.R_TRACK, _L.R_SPEED,
+    _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
 
 
 def record_info(
@@ -116,8 +110,8 @@ def record_info(
     Args:
         record: ``(RECORD_WIDTH,)`` (one robot) or ``(N, RECORD_WIDTH)``, a new array: the info's seven arrays are
             views of its last axis.
-        values: the record indexed by entry for the scalars: its floats (one robot) or ``record.T`` (``(N,)``
-            views).
+        values: the record's scalars (``record[..., R_ERROR:]``) indexed by entry: their floats (one robot) or
+            ``record.T[R_ERROR:]`` (``(N,)`` views).
         time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: as the
             env gives them (floats or columns). path: the path's description (the single env's only), or None.
     """
@@ -278,11 +272,10 @@ class AmigoBotV1Env(AmigoBotBase):
         self._goal = (math.nan, math.nan)
         self.path: Any = fixed
         self._obs_shape: tuple[int, ...] = self.observation_space.shape  # type: ignore[assignment]
-        self._ring = np.zeros((self._k.ring_length, 2))
+        self._ring = np.zeros((self._k.ring_length, 2)) if self._kernel is None else self._kernel.ring
         self._state: tracking.State | None = None
         self._episode: tracking.Episode | None = None
         self._path_info: dict[str, Any] = {}
-        self._last_command = (0.0, 0.0)
         self._true_robot: dict[str, float] = {}
 
     def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
@@ -307,7 +300,6 @@ class AmigoBotV1Env(AmigoBotBase):
         self._ring[:, 1] = st.a2 * k.w_max
         self._ring_step = 0
         self._steps = int(st.steps)
-        self._last_command = (float(self._ring[0, 0]), float(self._ring[0, 1]))
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
         self._true_robot = {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)}  # info["true_robot"]'s values
         self._goal = tracking.goal_point(self._k.params, self.path)
@@ -325,7 +317,7 @@ class AmigoBotV1Env(AmigoBotBase):
             obs = np.empty(self._obs_shape, dtype=np.float32)
             kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
             kern.fill()
-            info = self._kernel_info(True)[0]
+            info = self._kernel_info()
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
@@ -352,7 +344,6 @@ class AmigoBotV1Env(AmigoBotBase):
         )
         self._state = st
         self._steps = int(st.steps)
-        self._last_command = (float(st.a1) * self._k.w_max, float(st.a2) * self._k.w_max)
         if self.v0_params is not None:  # AmigoBot-v0's settings on the reference route: v0's info
             robot = self._k.nominal
             v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
@@ -366,19 +357,30 @@ class AmigoBotV1Env(AmigoBotBase):
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
         The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
-        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates
-        them (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`).
+        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates them
+        (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`); the info by
+        :func:`record_info` from a copy of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
         """
         kern = self._kernel
         assert kern is not None
         steps = self._steps
         if kern.noise_on:
             kern.draw(steps)
-        kern.run_record(kern.consts, kern.path, self._ring, kern.ws, kern.obs, self._ring_step, a1, a2, kern.record,
-                        kern.smooth_weight)  # fmt: skip
-        self._steps = steps + 1
-        info, reward, terminated, hx, hy = self._kernel_info(False)
-        return kern.obs.copy(), reward, self._end(terminated, hx, hy, info), info
+        kern.run_record(self._ring_step, a1, a2, *kern.args)
+        self._steps = steps = steps + 1
+        rec = kern.record.copy()  # the info's seven arrays are views of this one new array
+        v = kern.scalars.tolist()
+        end = v[_END] != 0.0
+        info = record_info(
+            rec, v, steps * self.params.dt, self._true_robot.copy(), self._delay, end, self._path_info.copy()
+        )
+        terminated = v[_TERM] != 0.0
+        if self._goal[0] == self._goal[0]:  # an open path's goal (goal_tolerance > 0): _end
+            hx, hy = rec[_R_H].tolist()
+            terminated = self._end(terminated, hx, hy, info)
+        else:  # _end without a goal
+            info["end_condition"] = tracking.end_condition(terminated, end, False)
+        return kern.obs.copy(), v[_REWARD], terminated, info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
@@ -402,30 +404,20 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self, start: bool) -> tuple[dict[str, Any], float, bool, float, float]:
-        """:meth:`_info` from the compiled step's info record (:attr:`amigo_gym.sim.fast_v1.StepKernel.record`,
-        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the workspace's entries, the reward's exponentials, its
-        smoothness term and the reward, :func:`amigo_gym.task.v0.reward_product`): the same entries;
-        with the reward, ``terminated`` and H.
-
-        ``start``: the info of a start state (no slip; the command the robot was executing, :attr:`_last_command`);
-        else of the step just taken (its slips and commands, also into :attr:`_last_command`).
-        """
+    def _kernel_info(self) -> dict[str, Any]:
+        """:meth:`_info` of a start state from the compiled step's info record (:attr:`amigo_gym.sim.fast_v1.StepKernel.
+        record` after :meth:`amigo_gym.sim.fast_v1.StepKernel.fill`, :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): no
+        slip, the command the robot was executing (the delay ring's); :meth:`_step_kernel` builds a step's."""
         kern = self._kernel
         assert kern is not None
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array
-        if start:
-            rec[_R_COMMAND] = self._last_command
-            rec[_R_SLIP] = 0.0
-        v = rec.tolist()
-        if not start:
-            self._last_command = (v[_L.R_COMMAND.start], v[_L.R_COMMAND.start + 1])
-        info = record_info(
-            rec, v, self._steps * self.params.dt, dict(self._true_robot), self._delay, v[_L.R_END] != 0.0,
-            dict(self._path_info),
+        rec[_R_COMMAND] = self._ring[0]
+        rec[_R_SLIP] = 0.0
+        v = kern.scalars.tolist()
+        return record_info(
+            rec, v, self._steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
+            self._path_info.copy(),
         )  # fmt: skip
-        reward, term, hx, hy = v[_L.R_REWARD], v[_L.R_TERM], v[_L.R_HX], v[_L.R_HY]
-        return info, reward, term != 0.0, hx, hy
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace

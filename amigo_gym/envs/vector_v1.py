@@ -465,7 +465,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             rec[:, _R_SLIP] = 0.0
         infos = record_info(
             rec,
-            rec.T,
+            rec.T[layout_v1.R_ERROR :],
             np.asarray(self._state.steps)[rows] * dt,
             {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
             np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],

@@ -635,18 +635,19 @@ def record_terms(rec: F64, smooth_weight: float) -> None:
 
 @_jit
 def step_record(
+    ring_step: int,
+    a1: float,
+    a2: float,
     c: F64,
     pv: F64,
     ring: F64,
     ws: F64,
     obs: NDArray[np.floating],
-    ring_step: int,
-    a1: float,
-    a2: float,
     rec: F64,
     smooth_weight: float,
 ) -> None:
-    """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call."""
+    """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
+    (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
     step(c, pv, ring, ws, obs, ring_step, a1, a2)
     fill_record(ws, rec, smooth_weight)
 

@@ -197,9 +197,9 @@ class StepKernel:
     """The compiled step of one robot (:mod:`amigo_gym.sim._kernels_v1`): constants, flattened path, workspace.
 
     The state of an episode lives in :attr:`ws` between steps (:meth:`load` puts a :class:`tracking.State` and a
-    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`step` and :attr:`evaluate` are
-    the compiled :func:`amigo_gym.sim._kernels_v1.step` and :func:`amigo_gym.sim._kernels_v1.evaluate` (dropped
-    when pickled, loaded again when unpickled).
+    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`run_record` (a step: ``run_record(ring_step,
+    a1, a2, *args)``) and :attr:`evaluate` are the compiled :func:`amigo_gym.sim._kernels_v1.step_record` and
+    :func:`amigo_gym.sim._kernels_v1.evaluate` (dropped when pickled, loaded again when unpickled).
 
     Attributes:
         consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
@@ -214,6 +214,8 @@ class StepKernel:
         #: the single env's info record (:data:`layout_v1.RECORD_WIDTH`, :func:`amigo_gym.sim._kernels_v1.fill_record`),
         #: written by :attr:`run_record` and :meth:`fill`
         self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
+        #: the single env's delay ring of commands (:func:`amigo_gym.model.actuators.ring_write`), ``(L, 2)``
+        self.ring: Array = np.zeros((k.ring_length, 2))
         self.smooth_weight = float(k.params.smooth_weight)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
@@ -226,34 +228,33 @@ class StepKernel:
 
     def _bind(self) -> None:
         kv = kernels()
-        self.step: Any = kv.step
         self.evaluate: Any = kv.evaluate
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
         self.path_pose: Any = kv.pose
         # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
-        ring = np.zeros((1, 2))
-        self.run: Any = fast.direct_call(kv.step, self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0)
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        self._args()
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
-        args = (self.consts, self.path, ring, self.ws, self.obs, 0, 0.0, 0.0, self.record, self.smooth_weight)
-        self.run_record: Any = fast.direct_call(kv.step_record, *args)
+        self.run_record: Any = fast.direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
         self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, 0.0)
+        #: the record's scalars (``record[R_ERROR:]``: a view, for their floats)
+        self.scalars: Array = self.record[layout_v1.R_ERROR :]
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
         self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for name in (
-            "step",
             "evaluate",
             "noise_uniforms",
             "locate_progress",
             "path_pose",
+            "scalars",
             "u1",
             "logs",
-            "run",
+            "args",
             "_uniforms",
             "run_record",
             "_fill",
@@ -264,6 +265,10 @@ class StepKernel:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._bind()
+
+    def _args(self) -> None:
+        #: :attr:`run_record`'s arguments after the step's own (the episode's path: set again by :meth:`load`)
+        self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, self.smooth_weight)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
         """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`): compiled on a
@@ -286,6 +291,7 @@ class StepKernel:
     def load(self, path: ClothoidPath, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
         self.path = flat_path(path)
+        self._args()
         ws = self.ws
         ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
             st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
