@@ -42,8 +42,7 @@ def best(f: Callable[[], Any], number: int = 2000) -> float:
 
 
 @numba.njit(cache=False)
-def _empty(k: Any, a1: Any, a2: Any, c: Any, pv: Any, ring: Any, ws: Any, obs: Any, rec: Any, e: Any, d: Any,
-           meta: Any, w: Any) -> None:  # fmt: skip
+def _empty(k: Any, a1: Any, a2: Any, c: Any, pv: Any, ring: Any, ws: Any, obs: Any, rec: Any, w: Any) -> None:
     return None
 
 

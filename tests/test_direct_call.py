@@ -16,7 +16,7 @@ import pytest
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
-from amigo_gym.sim import fast, fast_v1, numpy_loops
+from amigo_gym.sim import fast, numpy_loops
 from amigo_gym.task import v0 as task
 
 pytest.importorskip("numba")
@@ -85,9 +85,9 @@ def test_single_envs_pickle_and_step_alike_after(env_id: str) -> None:
     [{}, {"direction": -1, "radius": 0.5, "dt": 0.05}, {"path": "manoeuvre", "dt": 0.3}, {"preview": (), "dt": 1.5}],
 )
 def test_single_step_in_one_call_gives_the_three_passes_bits(settings: dict[str, object]) -> None:
-    """The single step in one call (kernels.single_step: numpy's own tan and exp loops inside, sim/numpy_loops.py,
-    found on CPython) against the three passes with numpy's tan and exp between them, on one machine (two code
-    paths): random states, actions beyond [-1, 1] too, 300 steps each."""
+    """The single step in one call (kernels.single_step: numpy's own tan loop inside, sim/numpy_loops.py, found on
+    CPython) against the three passes with numpy's tan between them, on one machine (two code paths): random states,
+    actions beyond [-1, 1] too, 300 steps each."""
     params = EnvParams(**settings)  # type: ignore[arg-type]
     assert numpy_loops.numpy_loops() is not None  # CPython's numpy: the loops are found and give numpy's bits
     whole = fast.SingleStep(task.task_constants(params), make_path(params))
@@ -124,18 +124,15 @@ def test_without_numpys_loops_the_single_env_runs_the_passes(monkeypatch: pytest
 
 
 @pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])
-def test_v1_reward_exponentials_in_the_step_give_numpys_bits(
-    monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
-) -> None:
+def test_v1_reward_exponentials_in_the_step_give_the_references_bits(settings: dict[str, object]) -> None:
     """AmigoBot-v1's single step with the reward's exponentials, smoothness term and reward in the compiled call
-    (kernels_v1.step_record: numpy's own exp loop) against the step followed by numpy's exp and the terms in Python
-    (numpy's loops not found), same seeds: the same bits, resets included."""
-    envs = [gym.make("AmigoBot-v1", **settings).unwrapped]
-    monkeypatch.setattr(fast_v1, "numpy_loops", lambda: None)
-    envs.append(gym.make("AmigoBot-v1", **settings).unwrapped)
-    monkeypatch.undo()
-    assert envs[0]._kernel.exps_done and not envs[1]._kernel.exps_done
-    assert envs[1]._kernel.exp_loop == (0, 0)
+    (kernels_v1.step_record: kinematics.col_exp compiled) against the reference (kernel="numpy"), same seeds: the
+    same bits, resets included."""
+    envs = [
+        gym.make("AmigoBot-v1", **settings).unwrapped,
+        gym.make("AmigoBot-v1", kernel="numpy", **settings).unwrapped,
+    ]
+    assert envs[0]._kernel is not None and envs[1]._kernel is None
     infos = [e.reset(seed=8)[1] for e in envs]
     assert _same_info(*infos)
     for a in np.random.default_rng(9).uniform(-1.0, 1.0, (200, 2)):
@@ -172,28 +169,6 @@ def _same_tree(a: object, b: object) -> bool:
             return False
         return bool(np.array_equal(a, b)) if a.dtype == object else a.tobytes() == b.tobytes()
     return bool(a == b)
-
-
-@pytest.mark.parametrize("settings", [{}, {"path": "mixed", "speed": (0.1, 0.4), "randomize": "hard"}])
-def test_v1_vector_records_give_the_same_bits_without_numpys_loops(
-    monkeypatch: pytest.MonkeyPatch, settings: dict[str, object]
-) -> None:
-    """The native vector env's step writes each robot's info record in its compiled loop (kernels_v1.step_rows:
-    fill_record, numpy's own exp loop per row) and hands out views of it; with numpy's loops not found it takes
-    np.exp of the block and the terms after the loop. Same seeds: the same bits of observations, rewards, flags and
-    infos (the `_key` masks, final infos and autoresets included)."""
-    n = 6
-    envs = [gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **settings)]
-    monkeypatch.setattr(fast_v1, "numpy_loops", lambda: None)
-    envs.append(gym.make_vec("AmigoBot-v1", num_envs=n, vectorization_mode="vector_entry_point", **settings))
-    monkeypatch.undo()
-    assert envs[0].unwrapped._batch._exp_loop[0] != 0 and envs[1].unwrapped._batch._exp_loop == (0, 0)
-    starts = [e.reset(seed=11) for e in envs]
-    assert starts[0][0].tobytes() == starts[1][0].tobytes() and _same_tree(starts[0][1], starts[1][1])
-    for a in np.random.default_rng(12).uniform(-1.0, 1.0, (150, n, 2)):
-        (o1, r1, t1, u1, i1), (o2, r2, t2, u2, i2) = (e.step(a) for e in envs)
-        assert o1.tobytes() == o2.tobytes() and r1.tobytes() == r2.tobytes()
-        assert (t1 == t2).all() and (u1 == u2).all() and _same_tree(i1, i2)
 
 
 def test_v1_vector_infos_are_new_memory_at_every_step() -> None:

@@ -5,8 +5,9 @@ numba compiles for the host's CPU, so the code that runs there is not the code t
 tests that compare the compiled steps with their references bit for bit (same machine, two code paths) in a new
 process where numpy's run-time dispatch is restricted to its baseline (``NPY_DISABLE_CPU_FEATURES`` naming every
 dispatched feature this CPU has) and numba compiles for a generic CPU of this architecture (``NUMBA_CPU_NAME=generic``:
-no AVX, no FMA), into a numba cache of its own: the kernels' calls of numpy's own loops (``sim/numpy_loops.py``), their
-checks of the C library against numpy and their fallbacks meet numpy's baseline loops there. (The golden files under
+no AVX, no FMA), into a numba cache of its own: the kernels' calls of numpy's own ``tan`` loop (``sim/numpy_loops.py``),
+their checks of the C library against numpy and their fallbacks meet numpy's baseline loops there, and the plain
+``exp`` (``model/kinematics.py``) gives its bits there too. (The golden files under
 the same restriction: ``tests/test_golden_tolerance.py``.)
 """
 
@@ -26,6 +27,7 @@ FILES = (
     "tests/test_kernel_v1.py",
     "tests/test_direct_call.py",
     "tests/test_numpy_loops.py",
+    "tests/test_plain_math.py",
     "tests/test_path_loops.py",
     "tests/test_shared_pieces_v1.py",
 )

@@ -357,10 +357,9 @@ class AmigoBotV1Env(AmigoBotBase):
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
         The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
-        exponentials by numpy's own ``exp`` loop inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`; by
-        ``np.exp`` after it where that loop was not found, :meth:`amigo_gym.sim.fast_v1.StepKernel.complete`), as the
-        reference evaluates them (:func:`amigo_gym.task.v1.step_columns`); the info by :func:`record_info` from a copy
-        of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
+        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates them
+        (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`); the info by
+        :func:`record_info` from a copy of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
         """
         kern = self._kernel
         assert kern is not None
@@ -368,8 +367,6 @@ class AmigoBotV1Env(AmigoBotBase):
         if kern.noise_on:
             kern.draw(steps)
         kern.run_record(self._ring_step, a1, a2, *kern.args)
-        if not kern.exps_done:
-            kern.complete()
         self._steps = steps = steps + 1
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array
         v = kern.scalars.tolist()

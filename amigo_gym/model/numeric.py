@@ -50,6 +50,8 @@ __all__ = [
     "sqrt_real",
     "any_float",
     "any_real",
+    "pow2_real",
+    "pow2_typing",
     "SCALAR_FORMS",
 ]
 
@@ -212,6 +214,33 @@ def any_real(cond: bool | NDArray[np.bool_]) -> bool:
     if isinstance(cond, _ndarray):
         return bool(cond.any())
     return any_float(cond)
+
+
+def pow2_real(k: Real) -> Real:
+    """``2**k`` of a whole number ``k`` in ``[-1022, 1023]`` held in a float or a column, exactly: ``np.ldexp`` of a
+    column, ``math.ldexp`` of a float; compiled, the bits ``(k + 1023) << 52`` of a float64 (:func:`pow2_typing`)."""
+    if isinstance(k, _ndarray):
+        out: Real = np.ldexp(1.0, k.astype(np.int64))
+        return out
+    return math.ldexp(1.0, int(k))
+
+
+def pow2_typing(typingctx: object, k: Any) -> Any:
+    """The typing and code of :func:`pow2_real` on a float in compiled code (numba's ``intrinsic``, which the kernels
+    register in its place: :func:`amigo_gym.sim.layout.shared_compiler`'s ``intrinsics``): the float ``k`` to an
+    integer, plus 1023, shifted into a float64's exponent field. numba imported here, when a kernel is compiled."""
+    from llvmlite import ir
+    from numba.core import types
+
+    if not isinstance(k, types.Float):
+        return None
+
+    def codegen(context: object, builder: Any, signature: object, values: list[Any]) -> Any:
+        i64 = ir.IntType(64)
+        bits = builder.shl(builder.add(builder.fptosi(values[0], i64), ir.Constant(i64, 1023)), ir.Constant(i64, 52))
+        return builder.bitcast(bits, ir.DoubleType())
+
+    return types.float64(k), codegen
 
 
 #: the polymorphic helpers the compiled steps' shared pieces call, each with the float form numba compiles in its

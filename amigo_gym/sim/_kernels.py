@@ -237,6 +237,8 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.h_from_a,
     kinematics.a_from_h,
     kinematics.half_tan_cos_sin,
+    kinematics.col_exp,
+    numeric.pow2_typing,
     classic.circle_foot,
     classic.circle_arc,
     classic.manoeuvre_foot,
@@ -249,7 +251,7 @@ SHARED: tuple[Callable[..., Any], ...] = (
 #: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
 #: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
 #: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "ba755cec94f72d37"
+LAYOUT_FINGERPRINT = "ebf47a6888da259a"
 
 
 def layout_fingerprint() -> str:
@@ -266,8 +268,9 @@ _shared = shared_compiler(
     "amigo_gym.sim._kernels",
     SHARED,
     _jit,
+    inline=(kinematics.col_exp,),
     scalar_forms=numeric.SCALAR_FORMS,
-    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
+    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing, numeric.pow2_real: numeric.pow2_typing},
 )
 
 
@@ -650,11 +653,15 @@ def _evaluate_rows(
 
 
 def _finish(c: F64, reward: F64, record: F64, exps: F64) -> int:
-    """Pass 3: with ``exps`` the exponentials: the track, speed and smoothness terms and the reward.
+    """Pass 3: the exponentials of ``exps`` (their arguments, :func:`amigo_gym.model.kinematics.col_exp` in place),
+    then the track, speed and smoothness terms and the reward.
 
     Returns the number of rows whose heading (``record[i, 2]``) lies past ``heading_limit`` in absolute
     value (the rows :func:`amigo_gym.task.v0.bound_angle` changes; NaN is not past it).
     """
+    flat = exps.reshape(3 * reward.shape[0])
+    for j in numba.prange(flat.shape[0]):  # in a loop of their own, over a flat view: LLVM vectorises it
+        flat[j] = kinematics.col_exp(flat[j])
     limit = c[HEADING_LIM]
     past = 0
     for i in numba.prange(reward.shape[0]):
@@ -871,20 +878,19 @@ def single_evaluate(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], ob
 @_serial
 def single_finish(c: F64, buf: F64) -> int:
     """Pass 3 (:func:`finish`) of the robot in ``buf``: the number of headings past the limit (0 or 1)."""
-    past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], buf[:, SINGLE_EXPS:SINGLE_REWARD])
+    exps = buf[0, SINGLE_EXPS:SINGLE_REWARD].reshape((1, 3))  # contiguous, as finish reshapes it
+    past = finish(c, buf[:, SINGLE_REWARD], buf[:, SINGLE_RECORD:SINGLE_WIDTH], exps)
     return int(past)
 
 
 @_serial
 def single_step(c: F64, preview: F64, buf: F64, flags: NDArray[np.bool_], obs: NDArray[np.floating], a1: float,
-                a2: float, tan: int, exp: int, tan_data: int, exp_data: int,
-                meta: NDArray[np.int64]) -> int:  # fmt: skip
-    """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate`, the
-    three exponentials and :func:`single_finish`, the tangents and exponentials by numpy's own float64 loops at the
-    addresses ``tan`` and ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the three passes' bits with
-    numpy's ufuncs between them, on every CPU. Returns what :func:`single_finish` returns."""
+                a2: float, tan: int, tan_data: int, meta: NDArray[np.int64]) -> int:  # fmt: skip
+    """The single env's whole step in one call: :func:`single_move`, the two tangents, :func:`single_evaluate` and
+    :func:`single_finish` (the exponentials), the tangents by numpy's own float64 loop at the address ``tan``
+    (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`): the passes' bits with ``np.tan`` between them, on every
+    CPU. Returns what :func:`single_finish` returns."""
     single_move(c, buf, flags, a1, a2)
     numpy_loops.numpy_loop_in_place(tan, tan_data, buf[0, SINGLE_TANS:SINGLE_TURN], meta)
     single_evaluate(c, preview, buf, flags, obs)
-    numpy_loops.numpy_loop_in_place(exp, exp_data, buf[0, SINGLE_EXPS:SINGLE_REWARD], meta)
     return single_finish(c, buf)

@@ -41,13 +41,13 @@ result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes
   :func:`amigo_gym.model.fresnel.cos_sin_nodes` below), which numpy's float64 ``np.cos``/``np.sin`` (used by the
   reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
   once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
-* the functions whose numpy version differs from the C library's (``exp``, ``log``) are not evaluated here:
+* ``log``, whose numpy version differs from the C library's, is not evaluated here:
   the per-step draws (:func:`amigo_gym.model.randomization.step_noise`) are split in three: the counter-based uniforms
   (integer SplitMix64 on ``uint64``, exact: :func:`amigo_gym.model.randomization.step_uniforms`) by
   :func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals (``sqrt``, the C
   library's ``cos``; :func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the three reward
-  exponentials are evaluated by ``np.exp`` after the call, on the arguments written here
-  (:mod:`amigo_gym.sim.fast_v1`).
+  exponentials are the reference's :func:`amigo_gym.model.kinematics.col_exp` (plain arithmetic: the same bits
+  compiled, :func:`fill_record`).
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
@@ -85,7 +85,6 @@ from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomizati
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid, families
 from amigo_gym.sim import layout_v1 as L
-from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import check_fingerprint, shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
@@ -112,7 +111,7 @@ F64 = NDArray[np.float64]
 #: constants and the reference functions imported above into the kernels and keys its disk cache on this file
 #: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
 #: invalidates the cached code.
-LAYOUT_FINGERPRINT = "aa3351e09cb05cfb"
+LAYOUT_FINGERPRINT = "e32bfe6cfe85e118"
 check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -123,7 +122,7 @@ _shared = shared_compiler(
     _jit,
     inline=L.SHARED_INLINE,
     scalar_forms={**numeric.SCALAR_FORMS, **actuators.SCALAR_FORMS},
-    intrinsics={numpy_loops.call_loop: numpy_loops.loop_call_typing},
+    intrinsics={numeric.pow2_real: numeric.pow2_typing},
 )
 
 
@@ -612,21 +611,17 @@ _reward_product = _shared(task.reward_product)
 
 
 @_jit
-def fill_record(ws: F64, rec: F64, exp: int, exp_data: int, meta: NDArray[np.int64], smooth_weight: float) -> None:
+def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
     """The single env's info record ``rec (RECORD_WIDTH,)`` from the workspace (:data:`layout_v1.RECORD_ROWS`,
-    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments by numpy's own ``exp``
-    loop at the address ``exp`` (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`: numpy's bits), the smoothness
-    term and the reward (:func:`amigo_gym.task.v0.smooth_term`, :func:`amigo_gym.task.v0.reward_product`). With
-    ``exp == 0`` (numpy's loops not found) it leaves the arguments in their places and the last two entries alone:
-    the caller takes ``np.exp`` of them, then :func:`record_terms`."""
+    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments
+    (:func:`amigo_gym.model.kinematics.col_exp`, the reference's), the smoothness term and the reward
+    (:func:`record_terms`)."""
     for j in range(_N_RECORD_WS):
         rec[j] = ws[_RECORD_WS[j]]
-    rec[L.R_TRACK] = ws[L.W_ARG_T]
-    rec[L.R_SPEED] = ws[L.W_ARG_V]
-    rec[L.R_SMOOTH_EXP] = ws[L.W_ARG_S]
-    if exp != 0:
-        numpy_loops.numpy_loop_in_place(exp, exp_data, rec[L.R_TRACK : L.R_SMOOTH], meta)
-        record_terms(rec, smooth_weight)
+    rec[L.R_TRACK] = kinematics.col_exp(ws[L.W_ARG_T])
+    rec[L.R_SPEED] = kinematics.col_exp(ws[L.W_ARG_V])
+    rec[L.R_SMOOTH_EXP] = kinematics.col_exp(ws[L.W_ARG_S])
+    record_terms(rec, smooth_weight)
 
 
 @_jit
@@ -649,21 +644,18 @@ def step_record(
     ws: F64,
     obs: NDArray[np.floating],
     rec: F64,
-    exp: int,
-    exp_data: int,
-    meta: NDArray[np.int64],
     smooth_weight: float,
 ) -> None:
     """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
     (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
     step(c, pv, ring, ws, obs, ring_step, a1, a2)
-    fill_record(ws, rec, exp, exp_data, meta, smooth_weight)
+    fill_record(ws, rec, smooth_weight)
 
 
 # ----------------------------------------------------------------------------------------- N robots
 # The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
 # :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``
-# between the two loops and numpy's ``exp`` after the second (as for one robot). They live in this file so
+# between the two loops (as for one robot). They live in this file so
 # that numba's disk cache, keyed on this file, is invalidated with the row functions they call. Each loop is
 # written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under another name).
 
@@ -695,15 +687,11 @@ def _step_rows(
     a2: F64,
     logs: F64,
     rec: F64,
-    exp: int,
-    exp_data: int,
-    meta: NDArray[np.int64],
     smooth_weight: float,
 ) -> None:
     """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
     2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
-    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials by numpy's ``exp`` loop at
-    ``exp``, with ``meta[i] (5,)`` its scratch; with ``exp == 0`` the caller finishes the records).
+    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms).
 
     The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
     """
@@ -712,15 +700,7 @@ def _step_rows(
         for j in range(logs.shape[1]):
             row[L.S_LOG + j] = logs[i, j]
         step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
-        fill_record(row, rec[i], exp, exp_data, meta[i], smooth_weight)
-
-
-@_jit
-def terms_rows(rec: F64, smooth_weight: float) -> None:
-    """:func:`record_terms` of every row of ``rec (N, RECORD_WIDTH)`` (where numpy's ``exp`` loop was not found: the
-    caller has taken ``np.exp`` of the exponentials' arguments)."""
-    for i in range(rec.shape[0]):
-        record_terms(rec[i], smooth_weight)
+        fill_record(row, rec[i], smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

@@ -6,8 +6,9 @@ Two implementations of one step exist:
   ideal actuators and :func:`amigo_gym.task.v1.reset_columns` of :func:`amigo_gym.task.v1.v0_configuration`; numpy,
   always available: ``kernel="numpy"``, Python floats in the single environment, ``(N,)`` arrays in the vector one);
 * the **fast path**, :func:`step_rows`: AmigoBot-v0's step in three compiled passes over the robots
-  (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels) around numpy's own ``tan`` and ``exp``
-  ufuncs, writing into preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
+  (:mod:`amigo_gym.sim._kernels`, numba, a core dependency where it ships wheels) around numpy's own ``tan`` ufunc
+  (its ``exp`` the reference's, in plain arithmetic: :func:`amigo_gym.model.kinematics.col_exp`), writing into
+  preallocated arrays. ``tests/test_kernels.py`` checks that it gives the reference's results
   (to 1e-12, and bit for bit on this machine).
 
 :func:`use_fast_path` decides: ``AMIGO_GYM_KERNEL=numpy`` forces the reference, ``=numba`` requires
@@ -346,13 +347,13 @@ class SingleStep:
     """One robot's step by the compiled kernel: the single env's fast path (``AmigoBotEnv(kernel=...)``).
 
     The three passes of :func:`step_rows` (:func:`amigo_gym.sim._kernels.single_move`, ``single_evaluate``,
-    ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` and ``exp``
-    between them, on one preallocated buffer: the same operations as a row of the vector env, so the single env
+    ``single_finish``: the vector kernel's own loops on a one-row view) with numpy's ``tan`` between the first
+    two, on one preallocated buffer: the same operations as a row of the vector env, so the single env
     and the vector env give the same bits, and both those of the reference, AmigoBot-v1's ideal step
     (``tests/test_kernels.py``), on buffers allocated once. One compiled call per step
-    (:func:`amigo_gym.sim._kernels.single_step`), which calls numpy's own ``tan`` and ``exp`` loops between the passes
-    (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: the same bits); where those loops are not found, three compiled
-    calls with numpy's ufuncs between them.
+    (:func:`amigo_gym.sim._kernels.single_step`), which calls numpy's own ``tan`` loop between the passes
+    (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: the same bits); where it is not found, three compiled
+    calls with ``np.tan`` between the first two.
 
     Attributes:
         buf: ``(1, SINGLE_WIDTH)`` float64: state, action, scratch, reward and record
@@ -381,17 +382,16 @@ class SingleStep:
         self._move = direct_call(kk.single_move, self.consts, b, self.flags, 0.0, 0.0)
         self._evaluate = direct_call(kk.single_evaluate, self.consts, self.preview, b, self.flags, self.obs)
         self._finish = direct_call(kk.single_finish, self.consts, b)
-        # the whole step in one call, numpy's own tan and exp loops called inside (numpy_loops: their addresses and
-        # data pointers, and a scratch); where they are not found, the three passes with numpy's ufuncs between them
+        # the whole step in one call, numpy's own tan loop called inside (numpy_loops: its address and data pointer,
+        # and a scratch); where it is not found, the three passes with np.tan between the first two
         self._whole: Any = None
         self._loops: tuple[Any, ...] | None = None
         loops = numpy_loops()
         if loops is not None:
-            self._loops = (loops.tan.address, loops.exp.address, loops.tan.data, loops.exp.data, np.zeros(5, np.int64))
+            self._loops = (loops.tan.address, loops.tan.data, np.zeros(5, np.int64))
             args = (self.consts, self.preview, b, self.flags, self.obs, 0.0, 0.0, *self._loops)
             self._whole = direct_call(kk.single_step, *args)
         self._tans = b[:, kk.SINGLE_TANS : kk.SINGLE_TURN]
-        self._exps = b[:, kk.SINGLE_EXPS : kk.SINGLE_REWARD]
         self._state = b[0, kk.SINGLE_STATE : kk.SINGLE_ACTION]
         self.record = b[0, kk.SINGLE_RECORD : kk.SINGLE_WIDTH]
         self.obs_row = self.obs[0]
@@ -423,17 +423,13 @@ class SingleStep:
         c = self.consts
         loops = self._loops
         if loops is not None:
-            tan, exp, tan_data, exp_data, meta = loops
-            self.past_limit = self._whole(
-                c, self.preview, b, self.flags, self.obs, a1, a2, tan, exp, tan_data, exp_data, meta
-            )
+            tan, tan_data, meta = loops
+            self.past_limit = self._whole(c, self.preview, b, self.flags, self.obs, a1, a2, tan, tan_data, meta)
         else:
             tans = self._tans
-            exps = self._exps
             self._move(c, b, self.flags, a1, a2)
             _np_tan(tans, tans)  # out= positionally: numpy parses no keywords
             self._evaluate(c, self.preview, b, self.flags, self.obs)
-            _np_exp(exps, exps)
             self.past_limit = self._finish(c, b)
         rec: list[float] = self.record.tolist()
         return rec
@@ -452,7 +448,6 @@ class SingleStep:
 
 
 _np_tan = np.tan
-_np_exp = np.exp
 
 
 def step_rows(
@@ -471,7 +466,7 @@ def step_rows(
 ) -> StepReport:
     """One step of every row of ``state`` (in place), the outputs written into the arrays given.
 
-    The three passes of :mod:`amigo_gym.sim._kernels` with numpy's ``tan`` and ``exp`` between them; rows
+    The three passes of :mod:`amigo_gym.sim._kernels` with numpy's ``tan`` between the first two; rows
     where ``restart`` is set (their ``state`` a start state) are evaluated without moving, as
     :func:`amigo_gym.task.v1.reset_columns` evaluates a start state. Layouts: :mod:`amigo_gym.sim._kernels`.
     ``parallel`` runs the loops on numba's threads (the same results).
@@ -599,7 +594,6 @@ def _step_rows(
                 ws.parallel_cols.append(np.zeros(kernels().scratch_size(state.shape[0])))
             cols = ws.parallel_cols[0]
         p.evaluate(c, ws.preview, state, actions, restart, tans, ws.turn, obs, terminated, record, exps, cols)
-    np.exp(exps, out=exps)
     past = p.finish(c, reward, record, exps)
     return StepReport(int(m), int(past))
 

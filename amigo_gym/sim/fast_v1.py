@@ -35,7 +35,6 @@ from amigo_gym.paths import families
 from amigo_gym.paths.classic import PathPose
 from amigo_gym.paths.clothoid import ClothoidPath, PathLoops, use_compiled_rows
 from amigo_gym.sim import fast, layout_v1
-from amigo_gym.sim.numpy_loops import numpy_loops
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -217,7 +216,6 @@ class StepKernel:
         self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
         #: the single env's delay ring of commands (:func:`amigo_gym.model.actuators.ring_write`), ``(L, 2)``
         self.ring: Array = np.zeros((k.ring_length, 2))
-        self.meta = np.zeros(5, dtype=np.int64)
         self.smooth_weight = float(k.params.smooth_weight)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
@@ -236,17 +234,11 @@ class StepKernel:
         self.path_pose: Any = kv.pose
         # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
-        #: numpy's own ``exp`` loop (:func:`amigo_gym.sim.numpy_loops.numpy_loops`: its address and data), ``(0, 0)``
-        #: where not found (then :meth:`complete` finishes the record after each call: :attr:`exps_done` False)
-        loops = numpy_loops()
-        self.exp_loop = (0, 0) if loops is None else (loops.exp.address, loops.exp.data)
-        self.exps_done = loops is not None
         self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         self._args()
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
         self.run_record: Any = fast.direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
-        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, *self.exp_loop, self.meta, 0.0)
-        self._terms: Any = fast.direct_call(kv.record_terms, self.record, 0.0)
+        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, 0.0)
         #: the record's scalars (``record[R_ERROR:]``: a view, for their floats)
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
@@ -266,7 +258,6 @@ class StepKernel:
             "_uniforms",
             "run_record",
             "_fill",
-            "_terms",
         ):
             del state[name]
         return state
@@ -277,8 +268,7 @@ class StepKernel:
 
     def _args(self) -> None:
         #: :attr:`run_record`'s arguments after the step's own (the episode's path: set again by :meth:`load`)
-        self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, *self.exp_loop, self.meta,
-                     self.smooth_weight)  # fmt: skip
+        self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, self.smooth_weight)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
         """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`): compiled on a
@@ -317,16 +307,7 @@ class StepKernel:
 
     def fill(self) -> None:
         """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
-        self._fill(self.ws, self.record, *self.exp_loop, self.meta, self.smooth_weight)
-        if not self.exps_done:
-            self.complete()
-
-    def complete(self) -> None:
-        """The record's exponentials by ``np.exp`` and its terms (:func:`amigo_gym.sim._kernels_v1.record_terms`),
-        where numpy's ``exp`` loop was not found (:attr:`exps_done` False: :attr:`run_record` left the arguments)."""
-        exps = self.record[layout_v1.R_TRACK : layout_v1.R_SMOOTH]
-        np.exp(exps, out=exps)
-        self._terms(self.record, self.smooth_weight)
+        self._fill(self.ws, self.record, self.smooth_weight)
 
     def draw(self, steps: int) -> None:
         """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter

@@ -9,14 +9,14 @@ is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fa
 2. ``np.log`` of the whole ``(N, n_normal)`` block of uniforms (numpy's logarithm, as the reference);
 3. one compiled loop steps every row (:func:`amigo_gym.sim._kernels_v1.step_record`'s parts), each on its own path,
    ring and workspace row, and writes its info record: the single environment's record, with the reward's
-   exponentials by numpy's own ``exp`` loop (:mod:`amigo_gym.sim.numpy_loops`), its terms and the reward.
+   exponentials (:func:`amigo_gym.model.kinematics.col_exp`), its terms and the reward.
 
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
 compiled :func:`amigo_gym.sim._kernels_v1.evaluate` and :func:`amigo_gym.sim._kernels_v1.fill_record`, as the
 single environment's reset.
 
 The records are the single environment's: the same compiled :func:`amigo_gym.sim._kernels_v1.fill_record` on each
-row, numpy's ``exp`` loop called on each row's three arguments as in one robot's step; ``np.log`` takes and writes
+row, as in one robot's step; ``np.log`` takes and writes
 a C-contiguous block, like the reference's arrays (numpy may pick its loop by memory layout). So every row gets the
 bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv`` of single envs
 (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
@@ -152,9 +152,6 @@ class BatchKernel:
         self.noise_on = np.zeros(n, dtype=np.bool_)
         self._u1: Array = np.ones((n, m))
         self._logs: Array = np.zeros((n, m))
-        #: a scratch of the call of numpy's ``exp`` loop per row (:func:`amigo_gym.sim.numpy_loops.numpy_loop_in_place`:
-        #: rows on numba's threads each their own)
-        self._metas: NDArray[np.int64] = np.zeros((n, 5), dtype=np.int64)
         self._bind()
 
     def _bind(self) -> None:
@@ -163,22 +160,18 @@ class BatchKernel:
         arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records, int64 starts and stops, uint64 keys,
         int64 loop scratch, a float32 observation, Python ints and floats."""
         kv = fast_v1.kernels()
-        #: numpy's ``exp`` loop (:attr:`amigo_gym.sim.fast_v1.StepKernel.exp_loop`, this process's address; ``(0, 0)``:
-        #: not found)
-        self._exp_loop = self._row.exp_loop
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
-        i1, i2, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 5), dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
+        i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
         noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
         step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
         self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
-        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, *self._exp_loop, i2, 0.0)
+        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, 0.0)
         self._step_rows: Any = fast.direct_call(step_rows, *args)
-        self._terms_rows: Any = fast.direct_call(kv.terms_rows, f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        del state["_noise_rows"], state["_step_rows"], state["_terms_rows"], state["_exp_loop"]
+        del state["_noise_rows"], state["_step_rows"]
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -244,13 +237,12 @@ class BatchKernel:
         c = self.consts
         flat, starts, stops = self.arena.flat, self.arena.starts, self.arena.stops
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
-        one, meta, sw = self._row, self._metas[0], self._row.smooth_weight
+        one, sw = self._row, self._row.smooth_weight
         for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
             v_true, t = tracking.start_speed_time(st, ep)
             ws = self.ws[i]
             one.evaluate(c, flat[starts[i] : stops[i]], ws, obs[j], v_true, st.a1, st.a2, t)
-            one._fill(ws, rec[j], *self._exp_loop, meta, sw)
-        self._complete(rec)
+            one._fill(ws, rec[j], sw)
         return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
@@ -276,15 +268,5 @@ class BatchKernel:
         a = self.arena
         rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
         sw = self._row.smooth_weight
-        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, rec,
-                        *self._exp_loop, self._metas, sw)  # fmt: skip
-        self._complete(rec)
+        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, rec, sw)
         return rec
-
-    def _complete(self, rec: Array) -> None:
-        """Where numpy's ``exp`` loop was not found: the records' exponentials by ``np.exp`` (a C-contiguous block,
-        as the single env's :meth:`amigo_gym.sim.fast_v1.StepKernel.complete` takes them) and their terms."""
-        if self._exp_loop[0] == 0:
-            part = slice(layout_v1.R_TRACK, layout_v1.R_SMOOTH)
-            rec[:, part] = np.exp(np.ascontiguousarray(rec[:, part]))
-            self._terms_rows(rec, self._row.smooth_weight)

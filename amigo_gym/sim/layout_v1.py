@@ -15,7 +15,6 @@ from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.paths import clothoid, families
-from amigo_gym.sim import numpy_loops
 from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -246,13 +245,14 @@ SHARED: tuple[Callable[..., Any], ...] = (
     tracking.speed_observations,
     task.smooth_term,
     task.reward_product,
-    numpy_loops.numpy_loop_in_place,
-    numpy_loops.loop_call_typing,
+    kinematics.col_exp,
+    numeric.pow2_typing,
 )
 
 
 #: the functions of :data:`SHARED` that numba inlines into their callers (the node loops, called per path pose)
 SHARED_INLINE: tuple[Callable[..., Any], ...] = (
+    kinematics.col_exp,
     fresnel.advance_nodes,
     fresnel.node_phases,
     fresnel.node_sums,
