@@ -1,4 +1,4 @@
-"""numpy's own float64 loops of ``np.tan`` and ``np.exp`` called from compiled code (``amigo_gym/sim/numpy_loops.py``,
+"""numpy's own float64 loops (the step calls np.tan's; np.exp's and np.sin's test the mechanism) called from compiled code (``amigo_gym/sim/numpy_loops.py``,
 ``_kernels.numpy_loop_in_place``): the ufunc's bits on every length, stride and special value; the checks that
 refuse a wrong loop; the single env's step in one call with them (``tests/test_direct_call.py`` compares that step
 with the three passes bit for bit)."""

@@ -1,8 +1,9 @@
-"""numpy's own float64 inner loops of ``np.tan`` and ``np.exp``, for the compiled single step to call in place.
+"""numpy's own float64 inner loop of ``np.tan``, for the compiled single step to call in place.
 
-The reference computes the step's tangents and the reward's exponentials with numpy's ufuncs, whose float64 loops
-numpy picks at run time for the CPU (its SIMD code: on AVX-512, numpy's SVML ``tan`` and its own ``exp``), so their
-bits are the CPU's and the C library's ``tan`` and ``exp`` give other bits on some CPUs (AVX-512). numpy keeps the
+The reference computes the step's tangents with numpy's ufunc, whose float64 loop numpy picks at run time for the CPU
+(its SIMD code: on AVX-512, numpy's SVML ``tan``), so its bits are the CPU's and the C library's ``tan`` gives other
+bits on some CPUs (AVX-512). (The reward's exponentials are the package's own, in plain arithmetic:
+:func:`amigo_gym.model.kinematics.col_exp`.) numpy keeps the
 loop it picked for each type signature in its ufunc object (``PyUFuncObject.functions``, with ``data`` and
 ``types``: numpy's public C API, ``ufuncobject.h``, unchanged from numpy 1.0 to 2.x). :func:`ufunc_loop` reads the
 address of a ufunc's ``float64 -> float64`` loop, which the compiled steps receive as an integer and call
@@ -12,7 +13,7 @@ numpy's bits on every CPU, inside one compiled call instead of a ufunc call from
 
 Where the object does not look as expected (another Python implementation, a numpy that moved the fields, no
 ``float64`` loop), :func:`ufunc_loop` returns None and the callers use numpy's ufuncs from Python instead (v0's single
-step its three passes, v1's an ``np.exp`` after its call); so they do where the loop found does not give the ufunc's
+step its three passes); so they do where the loop found does not give the ufunc's
 bits on a sample (:func:`numpy_loops`).
 """
 
@@ -29,13 +30,13 @@ from numpy.typing import NDArray
 from amigo_gym.model.params import HEADING_LIMIT
 
 __all__ = [
-    "TanExp",
     "UfuncLoop",
     "call_loop",
     "loop_call_typing",
     "numpy_loop_in_place",
     "numpy_loops",
-    "tan_exp_sample",
+    "tan_sample",
+    "TanLoop",
     "ufunc_loop",
 ]
 
@@ -55,11 +56,10 @@ class UfuncLoop(NamedTuple):
     data: int
 
 
-class TanExp(NamedTuple):
-    """The loops of ``np.tan`` and ``np.exp`` (:func:`numpy_loops`)."""
+class TanLoop(NamedTuple):
+    """The loop of ``np.tan`` (:func:`numpy_loops`)."""
 
     tan: UfuncLoop
-    exp: UfuncLoop
 
 
 def ufunc_loop(ufunc: np.ufunc) -> UfuncLoop | None:
@@ -140,12 +140,11 @@ def loop_call_typing(typingctx: object, loop: Any, args: Any, dims: Any, steps: 
     return types.none(loop, args, dims, steps, data), codegen
 
 
-def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The fixed sample of :func:`numpy_loops`:
-    5000 arguments of ``tan`` (half turns, and headings of many laps up to
-    :data:`amigo_gym.model.params.HEADING_LIMIT`) and 3000 of ``exp`` (the reward's arguments, never positive)."""
+def tan_sample() -> NDArray[np.float64]:
+    """The fixed sample of :func:`numpy_loops`: 5000 arguments of ``tan`` (half turns, and headings of many laps up to
+    :data:`amigo_gym.model.params.HEADING_LIMIT`)."""
     g = np.random.default_rng(20261126)
-    xt = np.concatenate(
+    return np.concatenate(
         (
             g.uniform(-2.0, 2.0, 2000),
             g.normal(0.0, 1e-3, 1000),
@@ -153,23 +152,20 @@ def tan_exp_sample() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
             g.uniform(-HEADING_LIMIT, HEADING_LIMIT, 1000),
         )
     )
-    xe = np.concatenate((-g.exponential(2.0, 2000), g.uniform(-800.0, 0.0, 1000)))
-    return xt, xe
 
 
 @lru_cache(maxsize=1)
-def numpy_loops() -> TanExp | None:
-    """numpy's float64 loops of ``np.tan`` and ``np.exp`` (:func:`ufunc_loop`), checked once per process: each,
-    called by :func:`numpy_loop_in_place`, gives the ufunc's bits on the sample of :func:`tan_exp_sample`. None where a
-    loop is not found or gives other bits."""
-    tan, exp = ufunc_loop(np.tan), ufunc_loop(np.exp)
-    if tan is None or exp is None:
+def numpy_loops() -> TanLoop | None:
+    """numpy's float64 loop of ``np.tan`` (:func:`ufunc_loop`), checked once per process: called by
+    :func:`numpy_loop_in_place`, it gives the ufunc's bits on the sample of :func:`tan_sample`. None where the loop is
+    not found or gives other bits."""
+    tan = ufunc_loop(np.tan)
+    if tan is None:
         return None
-    meta = np.zeros(5, dtype=np.int64)
-    for (loop, data), ufunc, x in zip((tan, exp), (np.tan, np.exp), tan_exp_sample(), strict=True):
-        y = x.copy()
-        numpy_loop_in_place(loop, data, y, meta)  # in Python (ctypes): the same call as compiled
-        with np.errstate(all="ignore"):
-            if not np.array_equal(y.view(np.int64), ufunc(x).view(np.int64)):
-                return None
-    return TanExp(tan, exp)
+    x = tan_sample()
+    y = x.copy()
+    numpy_loop_in_place(tan.address, tan.data, y, np.zeros(5, dtype=np.int64))  # in Python (ctypes): as compiled
+    with np.errstate(all="ignore"):
+        if not np.array_equal(y.view(np.int64), np.tan(x).view(np.int64)):
+            return None
+    return TanLoop(tan)
