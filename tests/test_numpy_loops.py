@@ -1,7 +1,7 @@
-"""numpy's own float64 loops (the step calls np.tan's; np.exp's and np.sin's test the mechanism) called from compiled code (``amigo_gym/sim/numpy_loops.py``,
-``_kernels.numpy_loop_in_place``): the ufunc's bits on every length, stride and special value; the checks that
-refuse a wrong loop; the single env's step in one call with them (``tests/test_direct_call.py`` compares that step
-with the three passes bit for bit)."""
+"""numpy's own float64 loops called from compiled code (the step calls ``np.tan``'s; ``np.exp``'s and ``np.sin``'s
+test the mechanism; ``amigo_gym/sim/numpy_loops.py``, ``_kernels.numpy_loop_in_place``): the ufunc's bits on every
+length, stride and special value; the checks that refuse a wrong loop; the single env's step in one call with them
+(``tests/test_direct_call.py`` compares that step with the three passes bit for bit)."""
 
 from __future__ import annotations
 
