@@ -86,7 +86,7 @@ _np_array = np.array
 _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
     (..., r) for r in (_L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP)
 )
-_R_COMMAND, _R_SLIP, _R_H = _L.R_COMMAND, _L.R_SLIP, _L.R_H
+_R_COMMAND, _R_SLIP = _L.R_COMMAND, _L.R_SLIP
 #: the record's scalars (from ``R_ERROR`` on: ``record[R_ERROR:]``, record_info's ``values``) by index
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _TRACK, _SPEED, _SMOOTH, _REWARD = (i - _L.R_ERROR for i in (
     _L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM, _L.R_TRACK, _L.R_SPEED,
@@ -350,7 +350,7 @@ class AmigoBotV1Env(AmigoBotBase):
             self._castor = advance_angle(self._castor, castor_rate_float(v, bdot, robot.l5, robot.r3), self.params.dt)
             return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._v0_info(st, out)
         info = self._info(out, noise)
-        terminated = self._end(bool(out.terminated), float(out.h_x), float(out.h_y), info)
+        terminated = self._end(bool(out.terminated), info)
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
 
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
@@ -370,17 +370,11 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = steps = steps + 1
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array
         v = kern.scalars.tolist()
-        end = v[_END] != 0.0
         info = record_info(
-            rec, v, steps * self.params.dt, self._true_robot.copy(), self._delay, end, self._path_info.copy()
-        )
-        terminated = v[_TERM] != 0.0
-        if self._goal[0] == self._goal[0]:  # an open path's goal (goal_tolerance > 0): _end
-            hx, hy = rec[_R_H].tolist()
-            terminated = self._end(terminated, hx, hy, info)
-        else:  # _end without a goal
-            info["end_condition"] = tracking.end_condition(terminated, end, False)
-        return kern.obs.copy(), v[_REWARD], terminated, info
+            rec, v, steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
+            self._path_info.copy(),
+        )  # fmt: skip
+        return kern.obs.copy(), v[_REWARD], self._end(v[_TERM] != 0.0, info), info
 
     def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
         """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
@@ -393,11 +387,15 @@ class AmigoBotV1Env(AmigoBotBase):
         )  # fmt: skip
         return task.record_info(rec, rec.tolist(), float(st.steps * self.params.dt))
 
-    def _end(self, terminated: bool, hx: float, hy: float, info: dict[str, Any]) -> bool:
-        """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`) and
-        ``info["end_condition"]`` (:data:`tracking.END_CONDITIONS`); a goal sets ``info["end_of_path"]`` too."""
+    def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
+        """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`, of H at
+        ``info["h_position"]``, read only where the path has a goal) and ``info["end_condition"]``
+        (:data:`tracking.END_CONDITIONS`); a goal sets ``info["end_of_path"]`` too."""
         gx, gy = self._goal
-        goal = gx == gx and tracking.goal_reached(self._k.params, hx, hy, gx, gy)
+        goal = False
+        if gx == gx:
+            hx, hy = info["h_position"].tolist()
+            goal = tracking.goal_reached(self._k.params, hx, hy, gx, gy)
         if goal:
             terminated = True
             info["end_of_path"] = True
