@@ -44,7 +44,7 @@ from amigo_gym.paths.clothoid import (
     PathPoint,
     PathPose,
     PathSpec,
-    _check_hint,
+    check_hint,
     check_real,
     locate_columns,
     pose_columns_of,
@@ -338,7 +338,7 @@ class PathBatch:
     def _locate_padded(self, x: Array, y: Array, sp: Array | None, ahead: float, behind: float) -> PathPoint:
         """:meth:`ClothoidPath.locate` on every row with its own flat path (its functions, row by row)."""
         if sp is not None and not np.isfinite(sp).all():  # refused on a ClothoidPath's row, ignored on another's
-            _check_hint(sp[~np.isin(self._ids, list(self._foreign_objects))])
+            check_hint(sp[~np.isin(self._ids, list(self._foreign_objects))])
             sp = np.where(np.isfinite(sp), sp, 0.0)
         t = self._padded()
         return locate_columns(t.flat.reshape(-1), t.start, x, y, sp, ahead, behind)

@@ -172,7 +172,7 @@ class PathSpec(Protocol):
         ...
 
 
-def _check_hint(sp: Real) -> None:
+def check_hint(sp: Real) -> None:
     """Refuse a NaN or infinite hint ``s_prev`` [m] of :meth:`ClothoidPath.locate` (a float or a column, both
     routes): the one-line error of :func:`check_real` naming the first such value."""
     a = np.asarray(sp, dtype=np.float64)
@@ -992,7 +992,7 @@ def _locate_float(
     else:
         ahead, behind = _window(max_advance, max_retreat)
         if sp - sp != 0.0:
-            _check_hint(sp)
+            check_hint(sp)
         r = locate_flat(pose_flat, buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
     return PathPoint(lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0), *r)
 
@@ -1043,7 +1043,7 @@ def locate_points(
     the arguments broadcast): :func:`locate_columns`; ``pose``: as there. Arrays of the broadcast shape."""
     ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
     if s_prev is not None:
-        _check_hint(s_prev)
+        check_hint(s_prev)
     cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, 0.0 if s_prev is None else s_prev)))
     xf, yf, sf = (np.ascontiguousarray(v).reshape(-1) for v in cols)
     start = np.zeros(xf.size, dtype=np.int64)
