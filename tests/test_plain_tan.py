@@ -132,7 +132,7 @@ def test_disagreements_with_the_c_library_and_numpy_are_theirs() -> None:
         assert _cr(xs[differ]).tobytes() == ours[differ].tobytes()
 
 
-@pytest.mark.filterwarnings("ignore:invalid value encountered")
+@pytest.mark.filterwarnings("ignore:invalid value encountered", "ignore:overflow encountered")
 def test_float_column_and_compiled_give_the_same_bits() -> None:
     """A Python float, a column and compiled (numeric's float forms and its FMA intrinsic registered as the kernels
     register theirs, :func:`amigo_gym.sim.layout.shared_compiler`), in a loop LLVM vectorises."""
