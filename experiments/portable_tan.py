@@ -13,7 +13,7 @@ vectorises:
 
 - ``ulp tan``: Cody–Waite reduction by pi/4 in three parts, Cephes' rational approximation (as Go's ``math.Tan``),
   about 1 ulp; numpy's bits on about 96 % of arguments (its errors printed against a 120-bit ``mpmath`` tangent);
-- ``tan_dd``, ``tan_fast``, ``tan_cr`` of ``amigo_gym/model/tangent.py``: correctly rounded almost always
+- ``tan_dd``, ``tan_fast``, ``tan_cr`` of ``experiments/cr_tan.py``: correctly rounded almost always
   (double-double; ``tan_fast`` with a rounding test, ``tan_cr`` = ``tan_fast`` then ``tan_dd`` for the arguments whose
   test fails, in a second loop).
 
@@ -56,9 +56,10 @@ def plain_tan(x: float) -> float:
 
 def loops() -> dict[str, Callable[[np.ndarray, np.ndarray], None]]:
     """The compiled loops ``f(xs, out)``: ``tangent``'s functions registered as the kernels register theirs."""
+    import cr_tan as tangent
     import numba
 
-    from amigo_gym.model import numeric, tangent
+    from amigo_gym.model import numeric
     from amigo_gym.sim.layout import shared_compiler
 
     own = (tangent.two_sum, tangent.two_prod, tangent.tan_fast, tangent.tan_dd)
@@ -99,11 +100,11 @@ def loops() -> dict[str, Callable[[np.ndarray, np.ndarray], None]]:
 
 def measure() -> None:
     """In this process: ns per value of the compiled loops and of ``np.tan``, the ulp tan's errors."""
+    import cr_tan as tangent
     import mpmath
     import numba
 
     from amigo_gym.bench.machine import machine_line
-    from amigo_gym.model import tangent
 
     compiled = loops()
 
@@ -140,10 +141,10 @@ def measure() -> None:
 
 def agree(n: int) -> None:
     """``tan_cr`` against ``math.tan`` and ``np.tan`` on ``n`` arguments, disagreements checked with mpmath."""
+    import cr_tan as tangent
     import mpmath
 
     from amigo_gym.bench.machine import machine_line
-    from amigo_gym.model import tangent
 
     mpmath.mp.prec = 160
     cr = loops()["tan_cr"]

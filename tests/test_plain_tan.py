@@ -1,22 +1,40 @@
-"""The ``tan`` of ``amigo_gym/model/tangent.py`` against ``mpmath`` at 160 bits: correctly rounded on 10^5 random
-arguments over the ranges AmigoBot-v0's step sees and on hard cases (near multiples of pi/2 and pi/4, tiny,
-subnormal, signed zeros, NaN, infinities, the limit of its reduction); its constants re-derived; the fast path's
-value where its rounding test passes; every disagreement with ``math.tan`` (the C library) and ``np.tan`` on a sample
-is theirs; the same bits for a float, a column and compiled. The full comparison (10^7 arguments) and its speed:
-``experiments/portable_tan.py``.
+"""The ``tan`` of ``experiments/cr_tan.py`` (an experiment, not in the package) against ``mpmath`` at 160 bits:
+correctly rounded on 10^5 random arguments over the ranges AmigoBot-v0's step sees and on hard cases (near multiples
+of pi/2 and pi/4, tiny, subnormal, signed zeros, NaN, infinities, the limit of its reduction); its constants
+re-derived; the fast path's value where its rounding test passes; every disagreement with ``math.tan`` (the C library)
+and ``np.tan`` on a sample is theirs; the same bits for a float, a column and compiled. The full comparison (10^7
+arguments) and its speed: ``experiments/portable_tan.py``.
 
-    python tests/test_plain_tan.py      # prints the module's constants from mpmath (the literals of tangent.py)
+    python tests/test_plain_tan.py      # prints the module's constants from mpmath (the literals of cr_tan.py)
 """
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import sys
+from pathlib import Path
+from types import ModuleType
 
 import mpmath
 import numpy as np
 import pytest
 
-from amigo_gym.model import numeric, tangent
+from amigo_gym.model import numeric
+
+
+def _load() -> ModuleType:
+    """``experiments/cr_tan.py`` as a module (the experiments are scripts, not a package)."""
+    path = Path(__file__).resolve().parents[1] / "experiments" / "cr_tan.py"
+    spec = importlib.util.spec_from_file_location("cr_tan", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["cr_tan"] = mod  # numba compiles its functions by their module
+    spec.loader.exec_module(mod)
+    return mod
+
+
+tangent = _load()
 
 mpmath.mp.prec = 160
 #: the random arguments of the correct-rounding test, per range (3 x 35000 >= 10^5)

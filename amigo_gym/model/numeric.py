@@ -50,12 +50,8 @@ __all__ = [
     "sqrt_real",
     "any_float",
     "any_real",
-    "lookup_float",
-    "lookup_real",
     "pow2_real",
     "pow2_typing",
-    "product_error",
-    "product_error_typing",
     "SCALAR_FORMS",
 ]
 
@@ -220,20 +216,6 @@ def any_real(cond: bool | NDArray[np.bool_]) -> bool:
     return any_float(cond)
 
 
-def lookup_float(table: NDArray[np.float64], i: float) -> float:
-    """``table[i]`` of a whole number ``i`` held in a float, as a float (:func:`lookup_real`)."""
-    return float(table[int(i)])
-
-
-def lookup_real(table: NDArray[np.float64], i: Real) -> Real:
-    """``table[i]`` elementwise, ``i`` whole numbers held in a float or a column (in the table's range: compiled code
-    does not check it)."""
-    if isinstance(i, _ndarray):
-        out: Real = table[i.astype(np.intp)]
-        return out
-    return lookup_float(table, i)
-
-
 def pow2_real(k: Real) -> Real:
     """``2**k`` of a whole number ``k`` in ``[-1022, 1023]`` held in a float or a column, exactly: ``np.ldexp`` of a
     column, ``math.ldexp`` of a float; compiled, the bits ``(k + 1023) << 52`` of a float64 (:func:`pow2_typing`)."""
@@ -259,34 +241,6 @@ def pow2_typing(typingctx: object, k: Any) -> Any:
         return builder.bitcast(bits, ir.DoubleType())
 
     return types.float64(k), codegen
-
-
-def product_error(a: Real, b: Real, p: Real) -> Real:
-    """The exact error ``a b - p`` of the rounded product ``p = a * b`` (``|a|, |b| < 2**995``, no underflow), by
-    Veltkamp's split of each factor into 26 bits and the rest and Dekker's product; compiled, one fused multiply-add
-    ``fma(a, b, -p)``, the same value (:func:`product_error_typing`)."""
-    ca = 134217729.0 * a
-    ah = ca - (ca - a)
-    cb = 134217729.0 * b
-    bh = cb - (cb - b)
-    al = a - ah
-    bl = b - bh
-    return ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
-def product_error_typing(typingctx: object, a: Any, b: Any, p: Any) -> Any:
-    """The typing and code of :func:`product_error` on floats in compiled code (numba's ``intrinsic``, registered in
-    its place like :func:`pow2_typing`): ``llvm.fma(a, b, -p)``, exact as Dekker's product is (an FMA instruction
-    where the CPU has one, else the C library's ``fma``, correctly rounded too)."""
-    from numba.core import types
-
-    if not all(isinstance(v, types.Float) for v in (a, b, p)):
-        return None
-
-    def codegen(context: object, builder: Any, signature: object, values: list[Any]) -> Any:
-        return builder.fma(values[0], values[1], builder.fneg(values[2]))
-
-    return types.float64(a, b, p), codegen
 
 
 #: the polymorphic helpers the compiled steps' shared pieces call, each with the float form numba compiles in its

@@ -1,9 +1,11 @@
-r"""``tan`` correctly rounded almost always, in plain float64 arithmetic: the same bits on every CPU (not used yet).
+r"""``tan`` correctly rounded almost always, in plain float64 arithmetic: the same bits on every CPU.
 
-A candidate for AmigoBot-v0's step's tangent (:func:`amigo_gym.model.kinematics.col_tan`, numpy's ``tan``; branch
-``h19-crtan``: it is not, its compiled cost is above the aim, ``experiments/portable_tan.py``). Like
+An experiment, not part of the package: a candidate for AmigoBot-v0's step's tangent
+(:func:`amigo_gym.model.kinematics.col_tan`, numpy's ``tan``), not adopted because compiled it costs more than the
+aim (``experiments/portable_tan.py``; docs/architecture.md, "Speed"). Kept here with its test
+(``tests/test_plain_tan.py``) as the measured answer to "could the step's tangent be the project's own?". Like
 :func:`amigo_gym.model.kinematics.col_exp` it is written once for a Python float, a numpy column and compiled code
-(``+ - * /``, selects and a table lookup through :mod:`amigo_gym.model.numeric`; no C library call, no FMA
+(``+ - * /``, selects and a table lookup (:func:`lookup_real`); no C library call, no FMA
 contraction), but it evaluates in double-double before its one final rounding, so it gives the correctly rounded
 value unless the exact tangent lies extremely close to a rounding midpoint (``tests/test_plain_tan.py``).
 
@@ -17,30 +19,67 @@ parts, whose products with ``k`` are exact for ``|k| < 2**20``, and a rounded la
 j/64`` and ``|s| <= 1/128``, ``tan s`` by its Taylor series (:func:`tan_dd`: double-double up to the ``s^5`` term),
 ``tan(c + s) = (T + t) / (1 - T t)`` with ``T = tan c`` from a double-double table (``tests/test_plain_tan.py``
 derives it with mpmath), and ``-1 / tan r`` for odd ``k`` by swapping numerator and denominator: one double-double
-division. Exact products: :func:`amigo_gym.model.numeric.product_error` (Dekker's product; compiled, an FMA, the
+division. Exact products: :func:`product_error` (Dekker's product; compiled, an FMA, the
 same value). ``|x| >= 2**20 pi/2`` (1.647e6 rad, beyond any heading the envs allow, halved), infinities and NaN give
 NaN; ``|x| < 2**-27`` gives ``x`` (signed zeros kept).
 
-May import numpy and the model's numeric helpers only.
+Imports numpy and :mod:`amigo_gym.model.numeric` only; compiled code registers :data:`SCALAR_FORMS` and
+:data:`INTRINSICS` beside numeric's (``tests/test_plain_tan.py``, ``experiments/portable_tan.py``).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model.numeric import (
-    Real,
-    abs_real,
-    any_real,
-    lookup_float,
-    lookup_real,
-    product_error,
-    product_error_typing,
-    where_real,
-)
+from amigo_gym.model.numeric import Real, abs_real, any_real, where_real
 
 __all__ = ["tan_cr", "tan_dd", "tan_fast", "two_sum", "two_prod", "TAN_LIMIT", "SCALAR_FORMS", "INTRINSICS"]
+
+
+def lookup_float(table: NDArray[np.float64], i: float) -> float:
+    """``table[i]`` of a whole number ``i`` held in a float, as a float (:func:`lookup_real`)."""
+    return float(table[int(i)])
+
+
+def lookup_real(table: NDArray[np.float64], i: Real) -> Real:
+    """``table[i]`` elementwise, ``i`` whole numbers held in a float or a column (in the table's range: compiled code
+    does not check it)."""
+    if isinstance(i, np.ndarray):
+        out: Real = table[i.astype(np.intp)]
+        return out
+    return lookup_float(table, i)
+
+
+def product_error(a: Real, b: Real, p: Real) -> Real:
+    """The exact error ``a b - p`` of the rounded product ``p = a * b`` (``|a|, |b| < 2**995``, no underflow), by
+    Veltkamp's split of each factor into 26 bits and the rest and Dekker's product; compiled, one fused multiply-add
+    ``fma(a, b, -p)``, the same value (:func:`product_error_typing`)."""
+    ca = 134217729.0 * a
+    ah = ca - (ca - a)
+    cb = 134217729.0 * b
+    bh = cb - (cb - b)
+    al = a - ah
+    bl = b - bh
+    return ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def product_error_typing(typingctx: object, a: Any, b: Any, p: Any) -> Any:
+    """The typing and code of :func:`product_error` on floats in compiled code (numba's ``intrinsic``, registered in
+    its place like :func:`pow2_typing`): ``llvm.fma(a, b, -p)``, exact as Dekker's product is (an FMA instruction
+    where the CPU has one, else the C library's ``fma``, correctly rounded too)."""
+    from numba.core import types
+
+    if not all(isinstance(v, types.Float) for v in (a, b, p)):
+        return None
+
+    def codegen(context: object, builder: Any, signature: object, values: list[Any]) -> Any:
+        return builder.fma(values[0], values[1], builder.fneg(values[2]))
+
+    return types.float64(a, b, p), codegen
+
 
 #: ``|x|`` from which :func:`tan_dd` gives NaN: ``2**20 pi/2`` (``k * P`` of a 33-bit part ``P`` exact below)
 TAN_LIMIT = 1647099.3291652855
@@ -95,7 +134,7 @@ def two_sum(a: Real, b: Real) -> tuple[Real, Real]:
 
 def two_prod(a: Real, b: Real) -> tuple[Real, Real]:
     """``(p, e)``: ``p = a b`` rounded and its exact error, ``a b = p + e``
-    (:func:`amigo_gym.model.numeric.product_error`: Dekker's product, an FMA compiled)."""
+    (:func:`product_error`: Dekker's product, an FMA compiled)."""
     p = a * b
     return p, product_error(a, b, p)
 
