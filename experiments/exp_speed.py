@@ -6,7 +6,8 @@ Least ``time.thread_time_ns`` of 3000 calls, per robot at N = 4096: the exponent
 third pass (:func:`amigo_gym.sim._kernels.finish`; on a tree whose ``finish`` takes numpy's ``exp`` first, that
 ``np.exp`` call included), less the copy of the arguments; then ``kinematics.col_exp`` of a float and of a column of
 4096 (``timeit``). Run it on two trees alternately, with this CPU's code and with AVX2 code
-(``NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=haswell``), to compare them.
+(``NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=haswell NUMBA_CPU_FEATURES=""``: the name
+alone keeps the host's AVX-512 features), to compare them.
 """
 
 from __future__ import annotations

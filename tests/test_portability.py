@@ -4,11 +4,12 @@ A CI or user machine may be an AVX-512 Intel, an AVX2 AMD or an ARM: numpy dispa
 numba compiles for the host's CPU, so the code that runs there is not the code that runs here. This test runs the
 tests that compare the compiled steps with their references bit for bit (same machine, two code paths) in a new
 process where numpy's run-time dispatch is restricted to its baseline (``NPY_DISABLE_CPU_FEATURES`` naming every
-dispatched feature this CPU has) and numba compiles for a generic CPU of this architecture (``NUMBA_CPU_NAME=generic``:
-no AVX, no FMA), into a numba cache of its own: the kernels' calls of numpy's own ``tan`` loop (``sim/numpy_loops.py``),
-their checks of the C library against numpy and their fallbacks meet numpy's baseline loops there, and the plain
-``exp`` (``model/kinematics.py``) gives its bits there too. (The golden files under
-the same restriction: ``tests/test_golden_tolerance.py``.)
+dispatched feature this CPU has) and numba compiles for a generic CPU of this architecture (``NUMBA_CPU_NAME=generic``
+with ``NUMBA_CPU_FEATURES=""``: no AVX, no FMA; the name alone keeps the host's features, AVX-512 here), into a numba
+cache of its own: the kernels' calls of numpy's own ``tan`` loop (``sim/numpy_loops.py``), their checks of the C
+library against numpy and their fallbacks meet numpy's baseline loops there, and the plain ``exp``
+(``model/kinematics.py``) gives its bits there too. (The golden files under the same restriction:
+``tests/test_golden_tolerance.py``.)
 """
 
 from __future__ import annotations
@@ -39,14 +40,16 @@ def test_compiled_steps_match_their_references_on_baseline_code(tmp_path: Path) 
         **os.environ,
         "NPY_DISABLE_CPU_FEATURES": " ".join([*already, *_dispatched_features()]),
         "NUMBA_CPU_NAME": "generic",
+        "NUMBA_CPU_FEATURES": "",
         "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
     }
     probe = (
         "import numba, numpy; from numpy._core import _multiarray_umath as u; "
-        "print(' '.join(f for f in u.__cpu_dispatch__ if u.__cpu_features__.get(f)) or 'none', numba.config.CPU_NAME)"
+        "print(' '.join(f for f in u.__cpu_dispatch__ if u.__cpu_features__.get(f)) or 'none', numba.config.CPU_NAME, "
+        "repr(numba.config.CPU_FEATURES))"
     )
     left = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True)
-    assert left.stdout.split() == ["none", "generic"], left.stdout  # the restriction took effect
+    assert left.stdout.split() == ["none", "generic", "''"], left.stdout  # the restriction took effect
     run = subprocess.run(
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist", *FILES],
         env=env,
@@ -55,6 +58,6 @@ def test_compiled_steps_match_their_references_on_baseline_code(tmp_path: Path) 
         text=True,
         timeout=1200,
     )
-    where = f"NPY_DISABLE_CPU_FEATURES={env['NPY_DISABLE_CPU_FEATURES']!r}, NUMBA_CPU_NAME=generic"
+    where = f"NPY_DISABLE_CPU_FEATURES={env['NPY_DISABLE_CPU_FEATURES']!r}, numba generic (no features)"
     assert run.returncode == 0, f"{where}:\n{run.stdout[-4000:]}\n{run.stderr[-2000:]}"
     assert " passed" in run.stdout and "failed" not in run.stdout and "skipped" not in run.stdout

@@ -630,9 +630,10 @@ def format_targets(items: Sequence[Target], machine: str) -> list[str]:
 
 
 def numba_state() -> str:
-    """numba's version, the CPU it compiles for (``NUMBA_CPU_NAME``, else the host's: e.g. ``znver4``; ``haswell`` makes
-    AVX2 code on an AVX-512 machine), its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it uses Intel
-    SVML."""
+    """numba's version, the CPU it compiles for (``NUMBA_CPU_NAME``, else the host's: e.g. ``znver4``) and with which
+    features (``NUMBA_CPU_FEATURES``, else the host's: ``haswell`` with ``NUMBA_CPU_FEATURES=""`` makes AVX2 code on an
+    AVX-512 machine, the name alone keeps AVX-512), its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it
+    uses Intel SVML."""
     if not numba_available():
         return "numba not installed"
     import numba
@@ -640,7 +641,9 @@ def numba_state() -> str:
 
     target = getattr(numba.config, "CPU_NAME", None) or binding.get_host_cpu_name()
     svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"
-    return f"numba {numba.__version__} for {target}, {numba.get_num_threads()} thread(s), SVML {svml}"
+    features = getattr(numba.config, "CPU_FEATURES", None)
+    own = "the host's features" if features is None else (f"features {features}" if features else "its own features")
+    return f"numba {numba.__version__} for {target} ({own}), {numba.get_num_threads()} thread(s), SVML {svml}"
 
 
 def load_average() -> str:
