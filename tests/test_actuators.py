@@ -474,10 +474,9 @@ def _mp_reference(state: tuple, old: tuple, new: tuple, t_s: float, dt: float, t
 
 def test_against_mpmath() -> None:
     """Random steps (delay switch, reversal, clipping, slip, true robot) against the 40-digit reference."""
-    mpmath.mp.dps = 40
     rng = np.random.default_rng(7)
     worst = dict.fromkeys(("x", "y", "beta", "w", "dalpha"), 0.0)
-    try:
+    with mpmath.workdps(40):  # restores the caller's precision (another test module may rely on its own)
         for i in range(24):
             dt = float(rng.choice([0.1, 0.25, 1.0, 2.0]))
             state = (*rng.uniform(-1, 1, 2), rng.uniform(-4, 4), *rng.uniform(-15, 15, 2))
@@ -494,8 +493,6 @@ def test_against_mpmath() -> None:
             worst["beta"] = max(worst["beta"], abs(float(beta - s.beta)))
             worst["w"] = max(worst["w"], abs(float(w1 - s.w1)), abs(float(w2 - s.w2)))
             worst["dalpha"] = max(worst["dalpha"], abs(float(da1 - s.dalpha1)))
-    finally:
-        mpmath.mp.dps = 15
     assert worst["x"] < 1e-13 and worst["y"] < 1e-13 and worst["beta"] < 1e-13, worst
     assert worst["w"] < 1e-12 and worst["dalpha"] < 1e-12, worst
 

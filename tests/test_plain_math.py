@@ -20,16 +20,15 @@ BOUND = 1.0
 #: the smallest subnormal float64, the ulp of results below the smallest normal
 TINY = 5e-324
 
-mpmath.mp.prec = 120
-
 
 def _ulps(got: np.ndarray, xs: np.ndarray, fn: object) -> float:
     """The largest ``|got - fn(x)| / ulp(fn(x))`` with ``fn`` evaluated by mpmath at 120 bits."""
     worst = 0.0
-    for g, x in zip(got.tolist(), xs.tolist(), strict=True):
-        true = fn(mpmath.mpf(x))  # type: ignore[operator]
-        ulp = max(float(np.spacing(abs(float(true)))), TINY)
-        worst = max(worst, float(abs(mpmath.mpf(g) - true) / ulp))
+    with mpmath.workprec(120):  # its own precision, whatever another test module set mpmath's global one to
+        for g, x in zip(got.tolist(), xs.tolist(), strict=True):
+            true = fn(mpmath.mpf(x))  # type: ignore[operator]
+            ulp = max(float(np.spacing(abs(float(true)))), TINY)
+            worst = max(worst, float(abs(mpmath.mpf(g) - true) / ulp))
     return worst
 
 
