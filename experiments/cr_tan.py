@@ -36,7 +36,17 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.numeric import Real, abs_real, any_real, where_real
 
-__all__ = ["tan_cr", "tan_dd", "tan_fast", "two_sum", "two_prod", "TAN_LIMIT", "SCALAR_FORMS", "INTRINSICS"]
+__all__ = [
+    "tan_cr",
+    "tan_dd",
+    "tan_fast",
+    "quotient_parts",
+    "two_sum",
+    "two_prod",
+    "TAN_LIMIT",
+    "SCALAR_FORMS",
+    "INTRINSICS",
+]
 
 
 def lookup_float(table: NDArray[np.float64], i: float) -> float:
@@ -143,6 +153,20 @@ def two_prod(a: Real, b: Real) -> tuple[Real, Real]:
 _P3R = 2.0222662487959506e-21
 
 
+def quotient_parts(k: Real, j: Real, th: Real, tl: Real) -> tuple[Real, Real, Real, Real]:
+    """``tan(c + s) = (T + t) / (1 - T t)`` (``-1 / tan(c + s)`` for odd ``k``) as the double-double numerator
+    ``(uh, ul)`` and denominator ``(bh, bl)``: ``T = tan(j / 64)`` from the table, ``t = th + tl``."""
+    i = where_real(abs_real(j) <= 50.0, j, 0.0) + 50.0  # in the table for NaN and large x too
+    big, small = lookup_real(_T_HI, i), lookup_real(_T_LO, i)
+    nh, nl = two_sum(big, th)
+    nl = nl + (small + tl)
+    ph, pl = two_prod(big, th)
+    dh = 1.0 - ph
+    dl = (((1.0 - dh) - ph) - pl) - (big * tl + small * th)
+    odd = k != 2.0 * ((0.5 * k + _ROUND) - _ROUND)
+    return where_real(odd, -dh, nh), where_real(odd, -dl, nl), where_real(odd, nh, dh), where_real(odd, nl, dl)
+
+
 def tan_fast(x: Real) -> tuple[Real, bool | NDArray[np.bool_]]:
     """``(y, bad)``: ``tan(x)`` correctly rounded where ``bad`` is false (about 999 arguments in 1000), from a
     double-double of relative error below about ``2**-65`` and Ziv's rounding test with the bound ``2**-62``."""
@@ -154,16 +178,7 @@ def tan_fast(x: Real) -> tuple[Real, bool | NDArray[np.bool_]]:
     z = sh * sh
     th, tl = two_sum(sh, rl + (rl * z + sh * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * _C5))))))
     a = abs_real(x)
-    i = where_real(abs_real(j) <= 50.0, j, 0.0) + 50.0  # in the table for NaN and large x too
-    big, small = lookup_real(_T_HI, i), lookup_real(_T_LO, i)
-    nh, nl = two_sum(big, th)
-    nl = nl + (small + tl)
-    ph, pl = two_prod(big, th)
-    dh = 1.0 - ph
-    dl = (((1.0 - dh) - ph) - pl) - (big * tl + small * th)
-    odd = k != 2.0 * ((0.5 * k + _ROUND) - _ROUND)
-    uh, ul = where_real(odd, -dh, nh), where_real(odd, -dl, nl)
-    bh, bl = where_real(odd, nh, dh), where_real(odd, nl, dl)
+    uh, ul, bh, bl = quotient_parts(k, j, th, tl)
     q = uh / bh
     ph, pl = two_prod(q, bh)
     ql = (((uh - ph) - pl) + ul - q * bl) / bh
@@ -200,16 +215,7 @@ def tan_dd(x: Real) -> Real:
     tl = tl + (sl + ((vl + sh * wl) + sl * wh))
     # tan(c + s) = (T + t) / (1 - T t); -1 / tan(c + s) for odd k
     a = abs_real(x)
-    i = where_real(abs_real(j) <= 50.0, j, 0.0) + 50.0  # in the table for NaN and large x too
-    big, small = lookup_real(_T_HI, i), lookup_real(_T_LO, i)
-    nh, nl = two_sum(big, th)
-    nl = nl + (small + tl)
-    ph, pl = two_prod(big, th)
-    dh = 1.0 - ph
-    dl = (((1.0 - dh) - ph) - pl) - (big * tl + small * th)
-    odd = k != 2.0 * ((0.5 * k + _ROUND) - _ROUND)
-    uh, ul = where_real(odd, -dh, nh), where_real(odd, -dl, nl)
-    bh, bl = where_real(odd, nh, dh), where_real(odd, nl, dl)
+    uh, ul, bh, bl = quotient_parts(k, j, th, tl)
     q = uh / bh
     ph, pl = two_prod(q, bh)
     y = q + ((((uh - ph) - pl) + ul) - q * bl) / bh

@@ -62,7 +62,7 @@ def loops() -> dict[str, Callable[[np.ndarray, np.ndarray], None]]:
     from amigo_gym.model import numeric
     from amigo_gym.sim.layout import shared_compiler
 
-    own = (tangent.two_sum, tangent.two_prod, tangent.tan_fast, tangent.tan_dd)
+    own = (tangent.two_sum, tangent.two_prod, tangent.quotient_parts, tangent.tan_fast, tangent.tan_dd)
     forms = {**numeric.SCALAR_FORMS, **tangent.SCALAR_FORMS}
     shared = (*forms.values(), *own, *tangent.INTRINSICS.values())
     shared_compiler("experiments.portable_tan", shared, numba.njit, own, forms, tangent.INTRINSICS)

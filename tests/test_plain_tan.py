@@ -161,7 +161,7 @@ def test_float_column_and_compiled_give_the_same_bits() -> None:
     from amigo_gym.sim.layout import shared_compiler
 
     t = tangent
-    own = (t.two_sum, t.two_prod, t.tan_fast, t.tan_dd)
+    own = (t.two_sum, t.two_prod, t.quotient_parts, t.tan_fast, t.tan_dd)
     forms = {**numeric.SCALAR_FORMS, **tangent.SCALAR_FORMS}
     shared = (*forms.values(), *own, *tangent.INTRINSICS.values())
     shared_compiler("tests.plain_tan", shared, numba.njit, own, forms, tangent.INTRINSICS)
