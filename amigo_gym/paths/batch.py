@@ -7,7 +7,7 @@ paths, ...) and offers what AmigoBot-v1 needs of a path (:class:`~amigo_gym.path
 Exactness: row ``i`` of :meth:`PathBatch.locate` and :meth:`PathBatch.pose_columns` is *bit-identical* to
 ``paths[i].locate(float(x[i]), float(y[i]), float(s_prev[i]), ...)`` and ``paths[i].pose_columns(float(s[i]))``.
 The flat path vectors of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s (their pieces and coarse samples,
-:func:`~amigo_gym.paths.clothoid.flat_tables`) are stacked into a padded ``(N, W)`` array, and every evaluation
+after :data:`~amigo_gym.paths.clothoid.PATH_HEADER`) are stacked into a padded ``(N, W)`` array, and every evaluation
 runs a ClothoidPath's own float functions on each row's vector, row by row
 (:func:`~amigo_gym.paths.clothoid.locate_rows`, :func:`~amigo_gym.paths.clothoid.pose_rows`: compiled where a
 compiled route registered them, else a Python loop).
@@ -66,8 +66,8 @@ def _is_path(obj: object) -> bool:
 
 @dataclass
 class _Padded:
-    """The rows' flat path vectors (:func:`~amigo_gym.paths.clothoid.flat_tables`): row ``i``'s in ``flat[i]``
-    (``N`` rows of ``W`` entries, the longest vector's), starting at ``start[i] = i W`` in ``flat.reshape(-1)``."""
+    """The rows' flat path vectors (``ClothoidPath._t.flat``): row ``i``'s in ``flat[i]`` (``N`` rows of ``W``
+    entries, the longest vector's), starting at ``start[i] = i W`` in ``flat.reshape(-1)``."""
 
     flat: Array
     start: IntArray

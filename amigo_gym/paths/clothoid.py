@@ -29,7 +29,6 @@ This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.mod
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable
 from dataclasses import InitVar, dataclass, field
@@ -181,30 +180,42 @@ def check_hint(sp: Real) -> None:
         check_real("locate", "s_prev", float(bad.flat[0]))
 
 
-class _Tables(NamedTuple):
-    """Precomputed pieces and coarse samples of a :class:`ClothoidPath` (lists for floats, arrays for batches)."""
+@dataclass(frozen=True)
+class _Tables:
+    """A built :class:`ClothoidPath`: its flat path vector (:data:`PATH_HEADER`, the pieces, the coarse samples) and
+    its largest ``|curvature|`` [1/m]; the header's values are read from the vector once, the pieces' and the samples'
+    columns are views of it (arrays) or its entries as Python floats (lists)."""
 
-    s0: list[float]
-    x0: list[float]
-    y0: list[float]
-    th0: list[float]
-    k0: list[float]
-    c: list[float]
-    s0_a: Array
-    x0_a: Array
-    y0_a: Array
-    th0_a: Array
-    k0_a: Array
-    c_a: Array
+    flat: Array
+    max_abs_curvature: float
     length: float
     turn: float
     spacing: float
-    sample_x: Array
-    sample_y: Array
-    max_abs_curvature: float
-    #: the flat path vector (:data:`PATH_HEADER`, the pieces, the samples; :func:`flat_tables`): the arrays above
-    #: are views of it
-    flat: Array
+
+    @classmethod
+    def of(cls, flat: Array, max_abs_curvature: float) -> _Tables:
+        return cls(flat, max_abs_curvature, *(float(flat[i]) for i in (P_LENGTH, P_TURN, P_SPACING)))
+
+    def column(self, k: int) -> Array:
+        """Column ``k`` (view): ``0 ... 5`` the pieces' ``s0, x0, y0, th0, k0, c``, ``6``, ``7`` the samples' x, y."""
+        n, m = int(self.flat[P_N]), int(self.flat[P_M])
+        a = P_TAIL + k * n if k < 6 else P_TAIL + 6 * n + (k - 6) * m
+        return self.flat[a : a + (n if k < 6 else m)]
+
+    s0_a = property(lambda self: self.column(0))
+    x0_a = property(lambda self: self.column(1))
+    y0_a = property(lambda self: self.column(2))
+    th0_a = property(lambda self: self.column(3))
+    k0_a = property(lambda self: self.column(4))
+    c_a = property(lambda self: self.column(5))
+    sample_x = property(lambda self: self.column(6))
+    sample_y = property(lambda self: self.column(7))
+    s0 = property(lambda self: self.column(0).tolist())
+    x0 = property(lambda self: self.column(1).tolist())
+    y0 = property(lambda self: self.column(2).tolist())
+    th0 = property(lambda self: self.column(3).tolist())
+    k0 = property(lambda self: self.column(4).tolist())
+    c = property(lambda self: self.column(5).tolist())
 
 
 class PathLoops(NamedTuple):
@@ -289,15 +300,12 @@ class ClothoidPath:
             n += count
         n_segs = len(self.segments)
         x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
-        out_a: Array | None = None
         if loops is None:
-            out = [0.0] * (6 * n)
+            out: Any = [0.0] * (6 * n)
             x, y, th, total = chain_pieces(out, n, segs, n_segs, x, y, th, [0.0] * (3 * NODES + 3), _PATH_TABLE)
         else:
-            out_a = np.empty(6 * n)
-            x, y, th, total = loops.chain(out_a, n, np.array(segs), n_segs, x, y, th)
-            out = out_a.tolist()
-        s0, x0, y0, th0, k0, c = (out[i * n : (i + 1) * n] for i in range(6))
+            out = np.empty(6 * n)
+            x, y, th, total = loops.chain(out, n, np.array(segs), n_segs, x, y, th)
         raw_turn = th - float(self.start_angle)
         turn = raw_turn
         if self.closed:
@@ -312,66 +320,22 @@ class ClothoidPath:
         spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
         n_samples = max(8, math.ceil(total / spacing))
         spacing = total / n_samples
-
-        if out_a is not None and loops is not None:
-            return self._sampled(loops, out_a, s0, x0, y0, th0, k0, c, total, turn, spacing, n_samples, kmax)
-
-        def arr(v: list[float]) -> Array:
-            return np.array(v, dtype=np.float64)
-
-        t = _Tables(
-            s0, x0, y0, th0, k0, c, arr(s0), arr(x0), arr(y0), arr(th0), arr(k0), arr(c),
-            total, turn, spacing, np.empty(0), np.empty(0), kmax, np.empty(0),
-        )  # fmt: skip
-        # coarse samples: s_j = j * spacing, j = 0..n (open) or 0..n-1 (closed, periodic)
-        js = np.arange(n_samples + (0 if self.closed else 1), dtype=np.float64)
-        pv = flat_tables(t, self.closed)
-        if _COMPILED:  # compiled pose_flat at each sample (the same bits)
-            q = pose_columns_of(pv, np.zeros(js.size, dtype=np.int64), js * spacing)
-            sx, sy = np.asarray(q.x), np.asarray(q.y)
-        else:
-            poses = _poses_flat(pv.tolist(), (js * spacing).tolist())
-            sx, sy = (np.array([q[k] for q in poses], dtype=np.float64) for k in (0, 1))
-        flat = flat_tables(t._replace(sample_x=sx, sample_y=sy), self.closed)
-        n, m = len(s0), len(js)
-        cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
-        s0_a, x0_a, y0_a, th0_a, k0_a, c_a, sample_x, sample_y = (flat[a:b] for a, b in itertools.pairwise(cut))
-        return t._replace(
-            s0_a=s0_a, x0_a=x0_a, y0_a=y0_a, th0_a=th0_a, k0_a=k0_a, c_a=c_a,
-            sample_x=sample_x, sample_y=sample_y, flat=flat,
-        )  # fmt: skip
-
-    def _sampled(
-        self,
-        loops: PathLoops,
-        pieces: Array,
-        s0: list[float],
-        x0: list[float],
-        y0: list[float],
-        th0: list[float],
-        k0: list[float],
-        c: list[float],
-        total: float,
-        turn: float,
-        spacing: float,
-        n_samples: int,
-        kmax: float,
-    ) -> _Tables:
-        """The tables of :meth:`_build` on the compiled route: the flat path vector (:func:`flat_tables`' layout)
-        written directly, its pieces ``pieces`` (:func:`chain_pieces`' ``out``), its coarse samples by
-        ``loops.samples`` (:func:`sample_points`: the float path's pose, :func:`pose_flat`, at each sample)."""
-        n = len(s0)
+        # the flat path vector: the header, the pieces, then the coarse samples at s_j = j * spacing, j = 0..n_samples
+        # (open) or 0..n_samples - 1 (closed, periodic), the path's own pose at each (pose_flat reads no sample)
         m = n_samples + (0 if self.closed else 1)
-        flat = np.empty(P_TAIL + 6 * n + 2 * m)
+        o = P_TAIL + 6 * n
+        flat = np.zeros(o + 2 * m)
         flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0)
-        flat[P_TAIL : P_TAIL + 6 * n] = pieces
-        loops.samples(flat, P_TAIL + 6 * n, m, spacing)
-        cut = [P_TAIL + k * n for k in range(7)] + [P_TAIL + 6 * n + m, P_TAIL + 6 * n + 2 * m]
-        s0_a, x0_a, y0_a, th0_a, k0_a, c_a, sample_x, sample_y = (flat[a:b] for a, b in itertools.pairwise(cut))
-        return _Tables(
-            s0, x0, y0, th0, k0, c, s0_a, x0_a, y0_a, th0_a, k0_a, c_a,
-            total, turn, spacing, sample_x, sample_y, kmax, flat,
-        )  # fmt: skip
+        flat[P_TAIL:o] = out
+        if loops is not None:
+            loops.samples(flat, o, m, spacing)
+        elif _COMPILED:  # compiled pose_flat at each sample (the same bits)
+            q = pose_columns_of(flat, np.zeros(m, dtype=np.int64), np.arange(m, dtype=np.float64) * spacing)
+            flat[o : o + m], flat[o + m :] = q.x, q.y
+        else:
+            poses = _poses_flat(flat.tolist(), (np.arange(m, dtype=np.float64) * spacing).tolist())
+            flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]
+        return _Tables.of(flat, kmax)
 
     @cached_property
     def _flat_list(self) -> list[float]:
@@ -618,7 +582,7 @@ FlatPoint = tuple[float, float, float, float, float, float, float, float, float,
 #
 # One path as one vector of floats: the header below, then the n pieces' s0, x0, y0, th0, k0, c (n each), then the
 # m coarse samples' x, y (m each). The compiled step reads it as a float64 array (amigo_gym.sim.fast_v1.flat_path),
-# the float path as a list of the same Python floats (_Tables.flat_list); the functions below read either.
+# the float path as a list of the same Python floats (ClothoidPath._flat_list); the functions below read either.
 
 #: the head of a flat path vector (then the arrays)
 PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
@@ -627,16 +591,6 @@ P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
 P_TAIL = len(PATH_HEADER)
 #: a flat path vector: a float64 array (compiled code) or a list of Python floats (the float path)
 FlatPath = list[float] | NDArray[np.float64]
-
-
-def flat_tables(t: _Tables, closed: bool) -> Array:
-    """The flat path vector of the tables ``t`` of a path (``closed`` or not): :data:`PATH_HEADER` (``closed`` as
-    1.0 / 0.0), the pieces' ``s0, x0, y0, th0, k0, c`` and the coarse samples' ``x, y``, copied as they are."""
-    header = [float(len(t.s0)), float(len(t.sample_x)), t.length, t.turn, t.spacing, 1.0 if closed else 0.0]
-    flat = np.concatenate(
-        (np.array(header, dtype=np.float64), t.s0_a, t.x0_a, t.y0_a, t.th0_a, t.k0_a, t.c_a, t.sample_x, t.sample_y)
-    )
-    return flat.astype(np.float64, copy=False)
 
 
 def piece_index(pv: FlatPath, u: float) -> int:

@@ -56,7 +56,7 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
   built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
 * ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``: the path's own flat vector, :func:`amigo_gym.paths.clothoid.flat_tables`, built with the path);
+  ``x, y``: the path's own flat vector, ``ClothoidPath._t.flat``, built with the path);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
   the outputs), then scratch space of ``WS_SCRATCH`` entries;

@@ -187,7 +187,7 @@ def kernel_constants(k: tracking.Constants) -> Array:
 
 def flat_path(path: ClothoidPath) -> Array:
     """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1` for a :class:`ClothoidPath`: the path's own flat vector
-    (:func:`amigo_gym.paths.clothoid.flat_tables`, built with the path; the pieces' tables and the coarse samples the
+    (``ClothoidPath._t.flat``, built with the path; the pieces' tables and the coarse samples the
     reference searches). Read only by the kernels."""
     flat: Array = path._t.flat
     return flat

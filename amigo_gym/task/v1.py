@@ -1279,11 +1279,8 @@ def path_nbytes(path: Any) -> int:
     """An estimate of the memory of a built :class:`amigo_gym.paths.ClothoidPath` [bytes]: its tables' arrays, about
     400 bytes per segment and 2 KiB for the objects (within a factor 2 of ``tracemalloc``'s count,
     ``tests/test_bad_inputs_v1.py``)."""
-    t = path._t
-    # the tables' arrays are views of one flat vector (t.flat): count the arrays that own their memory
-    owned = [v for v in t if isinstance(v, np.ndarray) and v.base is None]
-    arrays = sum(int(v.nbytes) for v in owned)
-    return arrays + 400 * len(path.segments) + 2048
+    # the tables are one flat vector (their arrays are views of it)
+    return int(path._t.flat.nbytes) + 400 * len(path.segments) + 2048
 
 
 def _cached_family(
