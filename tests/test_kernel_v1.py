@@ -11,10 +11,12 @@ are equal bit for bit (and of the same types).
 
 from __future__ import annotations
 
+import os
 import pickle
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -300,9 +302,37 @@ def test_warm_cache_start_compiles_nothing() -> None:
     assert misses == 0 and hits > 0, (misses, hits)
 
 
-def test_layout_fingerprint() -> None:
-    """The kernel module states the layouts it was written for (numba's cache keys on its own file only)."""
-    assert fast_v1.layout_fingerprint() == fast_v1.kernels().LAYOUT_FINGERPRINT
+def test_kernel_cache_is_keyed_by_the_source_bytes(tmp_path: Path) -> None:
+    """numba keys a cached function on its own file only; the kernels' cache folder is named by a hash of every
+    source file's bytes (the same on every Python), so a change of a shared function in another file (here one byte
+    of model/fresnel.py in a copy of the package) gives another folder, and the kernels compile into it."""
+    import shutil
+
+    from amigo_gym.sim import layout
+
+    copy = tmp_path / "amigo_gym"
+    shutil.copytree(Path(layout.__file__).parents[1], copy, ignore=shutil.ignore_patterns("__pycache__"))
+    code = "from amigo_gym.sim.layout import source_digest; print(source_digest())"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    run = {"env": env, "cwd": tmp_path, "capture_output": True, "text": True, "check": True}
+    digest = subprocess.run([sys.executable, "-c", code], **run).stdout  # type: ignore[call-overload]
+    assert digest.strip() == layout.source_digest()
+    fresnel = copy / "model" / "fresnel.py"
+    fresnel.write_text(fresnel.read_text() + "\n")
+    changed = subprocess.run([sys.executable, "-c", code], **run).stdout  # type: ignore[call-overload]
+    assert changed.strip() != digest.strip()
+    cache = tmp_path / "cache"
+    fast_v1.kernels()
+    code = (
+        "from amigo_gym.sim import fast_v1, layout; kv = fast_v1.kernels(); import numba\n"
+        "print(kv.step._cache._cache_path); print(layout.source_digest()); print(numba.config.CACHE_DIR)"
+    )
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    path, digest, restored = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert Path(path).is_relative_to(cache / "amigo_gym" / digest), path
+    assert restored == str(cache)  # the user's setting, restored for their own functions
 
 
 def test_shared_projection_compiled_equals_the_float_path() -> None:

@@ -96,3 +96,40 @@ def test_making_v0_gives_no_out_of_date_warning_under_the_projects_settings() ->
         gym.make("AmigoBot-v0").close()
         gym.make_vec("AmigoBot-v0", num_envs=2).close()
     assert not [w for w in seen if "out of date" in str(w.message)], [str(w.message) for w in seen]
+
+
+def test_the_readme_envs_step_on_the_compiled_route() -> None:
+    """What the README promises on every Python it names (.ci/run runs this file on CPython 3.10-3.13, each in a
+    fresh venv with the core install): AmigoBot-v0, AmigoBot-v1 and a mixed-path v1 vector env of 256 make, reset
+    and step, and their steps ran numba-compiled code of the package (a compiled function of amigo_gym with at
+    least one compiled signature after the steps, none before)."""
+    import subprocess
+    import sys
+
+    code = """
+import sys
+import gymnasium as gym, numpy as np
+import amigo_gym
+from numba.core.registry import CPUDispatcher
+
+def compiled():
+    return sorted(f"{m}.{k}" for m, mod in list(sys.modules.items()) if m.startswith("amigo_gym")
+                  for k, v in vars(mod).items() if isinstance(v, CPUDispatcher) and v.signatures)
+
+print(len(compiled()))
+for env in (gym.make("AmigoBot-v0"), gym.make("AmigoBot-v1")):
+    env.reset(seed=0)
+    for _ in range(3):
+        obs, r, term, trunc, info = env.step(env.action_space.sample())
+    assert np.isfinite(r) and obs in env.observation_space
+vec = gym.make_vec("AmigoBot-v1", 256, path="mixed")
+vec.reset(seed=0)
+for _ in range(3):
+    obs, r, term, trunc, info = vec.step(vec.action_space.sample())
+assert r.shape == (256,) and np.isfinite(r).all()
+print(len(compiled()))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    before, after = (int(x) for x in out.stdout.split()[-2:])
+    assert before == 0 and after > 0, (before, after)

@@ -124,7 +124,7 @@ def cos_sin(x: Real) -> tuple[Real, Real]:
 # value), so the reference runs them as Python on floats and on ``(N,)`` arrays, and the compiled steps
 # (:mod:`amigo_gym.sim`) compile the very same functions with ``numba.njit`` (docs/architecture.md, "The compiled
 # step"). Keep them so: arithmetic, comparisons and the ``math`` functions numba compiles to the same IEEE
-# operations; any change of their text changes the kernels' fingerprints (:mod:`amigo_gym.sim.layout`).
+# operations; a change of any source file gives the kernels a fresh disk cache (`sim.layout.kernel_cache`).
 
 
 def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:

@@ -102,7 +102,7 @@ from numpy.typing import NDArray
 from amigo_gym.model import kinematics, numeric
 from amigo_gym.paths import classic
 from amigo_gym.sim import numpy_loops
-from amigo_gym.sim.layout import check_fingerprint, shared_compiler, source_fingerprint
+from amigo_gym.sim.layout import shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -246,20 +246,6 @@ SHARED: tuple[Callable[..., Any], ...] = (
     numpy_loops.numpy_loop_in_place,
     numpy_loops.loop_call_typing,
 )
-
-#: the :func:`amigo_gym.sim.layout.source_fingerprint` of this module's layouts and :data:`SHARED` it was written
-#: for. numba keys its disk cache on this file alone, but compiles the functions of :data:`SHARED` (other files)
-#: into the loops: when one changes, this line must change too (the check below refuses to load otherwise), which
-#: also invalidates the cached code.
-LAYOUT_FINGERPRINT = "ebf47a6888da259a"
-
-
-def layout_fingerprint() -> str:
-    """The fingerprint of this module's layouts and of the source of :data:`SHARED` (:data:`LAYOUT_FINGERPRINT`)."""
-    return source_fingerprint((STATE_FIELDS, RECORD_FIELDS, CONSTANT_FIELDS, START_FIELDS), SHARED)
-
-
-check_fingerprint(__name__, LAYOUT_FINGERPRINT, layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 

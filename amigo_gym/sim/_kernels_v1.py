@@ -63,8 +63,8 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
 * ``obs``: the observation (float32 or float64), written.
 
 This module imports numba at import time; :mod:`amigo_gym.sim.fast_v1` imports it only when the kernel is first
-used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``), keyed on
-this file: see :data:`LAYOUT_FINGERPRINT`.
+used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``) in a
+folder keyed by the package's source bytes (:func:`amigo_gym.sim.layout.kernel_cache`).
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomizati
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import clothoid, families
 from amigo_gym.sim import layout_v1 as L
-from amigo_gym.sim.layout import check_fingerprint, shared_compiler
+from amigo_gym.sim.layout import shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -106,13 +106,6 @@ __all__ = [
 ]
 
 F64 = NDArray[np.float64]
-
-#: the :func:`amigo_gym.sim.layout_v1.layout_fingerprint` this file is written for. numba compiles the layouts, the
-#: constants and the reference functions imported above into the kernels and keys its disk cache on this file
-#: alone: when they change, this line must change too (the check below refuses to load otherwise), which also
-#: invalidates the cached code.
-LAYOUT_FINGERPRINT = "e32bfe6cfe85e118"
-check_fingerprint(__name__, LAYOUT_FINGERPRINT, L.layout_fingerprint())
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 

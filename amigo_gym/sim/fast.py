@@ -171,7 +171,10 @@ def announce_compilation() -> None:
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym.sim._kernels` (imports numba on the first call)."""
     announce_compilation()
-    import amigo_gym.sim._kernels as k
+    from amigo_gym.sim.layout import kernel_cache
+
+    with kernel_cache():
+        import amigo_gym.sim._kernels as k
 
     return k
 

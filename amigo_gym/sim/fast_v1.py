@@ -12,8 +12,8 @@ Two implementations of one robot's step exist:
   A path object of another class runs the reference.
 
 This module is numba-free: it holds the layouts of the kernel's vectors (the index constants below, used by
-the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`; :func:`layout_fingerprint` keeps numba's disk cache
-honest about them), builds the constants, hands out the paths' flat vectors and loads the kernel.
+the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`), builds the constants, hands out the paths' flat vectors
+and loads the kernel.
 
 :func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
 env's keyword (:func:`amigo_gym.sim.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
@@ -39,7 +39,6 @@ from amigo_gym.task import v1 as tracking
 
 __all__ = [
     "KERNELS",
-    "layout_fingerprint",
     "use_kernel",
     "libm_matches_numpy",
     "kernels",
@@ -50,8 +49,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-layout_fingerprint = layout_v1.layout_fingerprint
 
 
 def __getattr__(name: str) -> Any:
@@ -132,7 +129,10 @@ def path_loops() -> PathLoops | None:
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym.sim._kernels_v1` (imports numba on the first call)."""
     fast.announce_compilation()
-    import amigo_gym.sim._kernels_v1 as kv
+    from amigo_gym.sim.layout import kernel_cache
+
+    with kernel_cache():
+        import amigo_gym.sim._kernels_v1 as kv
 
     return kv
 

@@ -1,20 +1,23 @@
-"""What the compiled steps' modules share and numba need not load: :func:`twin` and :func:`source_fingerprint`.
+"""What the compiled steps' modules share: :func:`twin`, :func:`shared_compiler` and :func:`kernel_cache` (numba's
+disk cache in a folder keyed by the package's source bytes, so that a change of any file it compiles is seen).
 
-Imported by :mod:`amigo_gym.sim._kernels`, :mod:`amigo_gym.sim._kernels_v1` and :mod:`amigo_gym.sim.layout_v1`;
-imports nothing of the package, never numba.
+Imported by :mod:`amigo_gym.sim._kernels`, :mod:`amigo_gym.sim._kernels_v1` and their loaders; imports nothing of
+the package; numba only inside :func:`kernel_cache` and :func:`shared_compiler`.
 """
 
 from __future__ import annotations
 
-import ast
 import hashlib
 import inspect
-import textwrap
+import os
+import shutil
 import types
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any, TypeVar, cast
 
-__all__ = ["twin", "code_text", "source_fingerprint", "check_fingerprint", "shared_compiler"]
+__all__ = ["twin", "source_digest", "cache_root", "kernel_cache", "shared_compiler"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 #: the functions already registered with numba by :func:`shared_compiler`
@@ -32,43 +35,57 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     return copy
 
 
-def source_fingerprint(values: object, functions: Iterable[Callable[..., Any]]) -> str:
-    """A short hash (16 hex digits) of ``repr(values)`` and of the code of ``functions`` (:func:`code_text`).
+def source_digest() -> str:
+    """A short hash (16 hex digits) of the bytes of every ``.py`` file of the package, in path order.
 
-    numba keys its disk cache of a kernel on the kernel's own file, but compiles into it the constants and the
-    reference functions it calls from other files: a kernel module states the fingerprint of those it was written
-    for and refuses to load when it differs (so that a change of them comes with a change of the kernel's file,
-    which invalidates the cached code). Docstrings, comments and formatting do not count.
+    numba keys its disk cache of a compiled function on the function's own file, but compiles into it the constants
+    and functions it uses from other files: :func:`kernel_cache` puts the cache in a folder named by this digest, so
+    that a change of any source file gives a fresh cache. Bytes, not syntax trees: the same on every Python.
     """
-    shared = tuple(code_text(f) for f in functions)
-    return hashlib.sha256(repr((values, shared)).encode()).hexdigest()[:16]
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        digest.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
 
 
-def code_text(fn: Callable[..., Any]) -> str:
-    """The code of the function ``fn`` as text, without its docstrings, comments and layout: ``ast.dump`` of its
-    source's syntax tree, the docstrings of it and of the functions and classes inside it removed."""
-    tree = ast.parse(textwrap.dedent(inspect.getsource(fn)))
-    for node in ast.walk(tree):
-        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef) and node.body:
-            first = node.body[0]
-            if (
-                isinstance(first, ast.Expr)
-                and isinstance(first.value, ast.Constant)
-                and isinstance(first.value.value, str)
-            ):
-                node.body = node.body[1:] or [ast.Pass()]
-    return ast.dump(tree)
+def cache_root() -> Path:
+    """Where the kernels' compiled code is kept: ``$NUMBA_CACHE_DIR/amigo_gym`` when the user sets numba's cache
+    folder, else ``$XDG_CACHE_HOME/amigo_gym/numba`` (``~/.cache/amigo_gym/numba``)."""
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        return Path(user) / "amigo_gym"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "amigo_gym" / "numba"
 
 
-def check_fingerprint(owner: str, stated: str, actual: str) -> None:
-    """Refuse to load the kernel module ``owner`` (``ImportError``) when the fingerprint it states is not the
-    :func:`source_fingerprint` of what it compiles now (:func:`source_fingerprint`)."""
-    if actual != stated:
-        path = owner.replace(".", "/") + ".py"
-        raise ImportError(
-            f"{owner} was written for the fingerprint {stated}, but its layouts and shared functions now have "
-            f"{actual}: update LAYOUT_FINGERPRINT in {path}"
-        )
+#: how many source digests' caches :func:`kernel_cache` keeps (the most recently used; one per install or edit)
+KEEP_CACHES = 8
+
+
+@contextmanager
+def kernel_cache() -> Iterator[Path]:
+    """Import a kernel module inside this block: numba's disk cache for the functions it compiles with
+    ``cache=True`` is ``cache_root() / source_digest()`` (numba reads ``config.CACHE_DIR`` when a function is
+    decorated); numba's setting is restored after. Caches of other digests beyond :data:`KEEP_CACHES` are removed,
+    least recently used first. Yields the folder.
+    """
+    from numba.core import config as numba_config
+
+    config = cast(Any, numba_config)  # its settings are set at run time
+
+    root = cache_root()
+    folder = root / source_digest()
+    folder.mkdir(parents=True, exist_ok=True)
+    folder.touch()
+    others = sorted((p for p in root.iterdir() if p.is_dir() and p != folder), key=lambda p: p.stat().st_mtime)
+    for old in others[: max(0, len(others) - (KEEP_CACHES - 1))]:
+        shutil.rmtree(old, ignore_errors=True)
+    previous = config.CACHE_DIR
+    config.CACHE_DIR = str(folder)
+    try:
+        yield folder
+    finally:
+        config.CACHE_DIR = previous
 
 
 def _calls(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -103,12 +120,12 @@ def shared_compiler(
 
     Registers every function of ``shared`` with numba (``register_jitable``: compiled code may call it, as the
     shared functions call each other) and returns ``compiled(fn)``: ``jit(fn)`` for a function of ``shared``,
-    an ``ImportError`` for another (so that every function compiled into a kernel counts in its fingerprint).
+    an ``ImportError`` for another (so that what a kernel compiles is listed in one place).
     The functions of ``inline`` (a part of ``shared``) are inlined into their callers by numba itself
     (``inline="always"``: small loops that LLVM would otherwise leave as calls).
     ``scalar_forms`` maps polymorphic helpers (floats or columns, dispatching on ``isinstance``, which numba cannot
     compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
-    runs its float form (an ``overload``), which must be in ``shared`` (its source counts in the fingerprint).
+    runs its float form (an ``overload``), which must be in ``shared``.
     ``intrinsics`` maps Python functions to the typing functions of numba intrinsics that compiled code calls in their
     place (:func:`amigo_gym.sim.numpy_loops.call_loop`, whose Python form uses ``ctypes``); the typing functions must be
     in ``shared`` too.
@@ -140,7 +157,7 @@ def shared_compiler(
 
     def compiled(fn: _F) -> _F:
         if fn not in shared:
-            raise ImportError(f"{owner} compiles {fn.__qualname__} but does not list it in SHARED (its fingerprint)")
+            raise ImportError(f"{owner} compiles {fn.__qualname__} but does not list it in SHARED")
         return cast(_F, jit(fn))
 
     return compiled

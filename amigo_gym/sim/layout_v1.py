@@ -1,11 +1,10 @@
-"""The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free), with their fingerprint.
+"""The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free).
 
 The index constants below are read by the kernel (:mod:`amigo_gym.sim._kernels_v1`, which numba compiles them into
 as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors and re-exports every name here) and by the
-environments. :func:`layout_fingerprint` keeps numba's disk cache honest about them and about the reference's
-float functions the kernel compiles (:data:`SHARED`).
+environments; :data:`SHARED` lists the reference's float functions the kernel compiles.
 
-May import numpy and the model, paths and task modules the fingerprint names; never numba.
+May import numpy and the model, paths and task modules; never numba.
 """
 
 from __future__ import annotations
@@ -15,7 +14,6 @@ from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.paths import clothoid, families
-from amigo_gym.sim.layout import source_fingerprint
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
@@ -260,30 +258,3 @@ SHARED_INLINE: tuple[Callable[..., Any], ...] = (
     fresnel.unit_speed_sums,
     fresnel.unit_speed_nodes,
 )
-
-
-def layout_fingerprint() -> str:
-    """A short hash of the layouts above, of the constants the kernel takes from their homes
-    (:data:`amigo_gym.model.actuators.PIECES`, :data:`amigo_gym.model.fresnel.NODES`, the projection's Newton
-    iterations, smallest denominator and status codes in :mod:`amigo_gym.paths.clothoid`, the end status of
-    :mod:`amigo_gym.task.v1`, the counter generator's constants in :mod:`amigo_gym.model.randomization`) and of the
-    source of the reference's float functions the kernel compiles as they are (:data:`SHARED`).
-
-    numba compiles them into the kernel as constants and keys its disk cache on the kernel's own file only, so
-    :mod:`amigo_gym.sim._kernels_v1` states the fingerprint it was written for and refuses to load when it differs:
-    a change here must come with a change of that file, which invalidates the cached code.
-    """
-    homes = (
-        actuators.PIECES,
-        fresnel.NODES,
-        clothoid.NEWTON_ITERATIONS,
-        clothoid.MIN_NEWTON_DENOMINATOR,
-        (clothoid.STATUS_INTERIOR, clothoid.STATUS_START, clothoid.STATUS_END, clothoid.STATUS_WINDOW),
-        tracking.STATUS_END,
-        (families.RUN_MAX_SUB, families.LANE_CHANGE_MAX_HEADING, fresnel.MAX_PHASE_PER_SUB),
-        (randomization._M64, randomization._GAMMA, randomization._MIX1, randomization._MIX2),
-        (randomization._INV_2_53, randomization._TWO_PI),
-    )
-    offsets = (S_KW, S_TIMES, S_PIECES, S_U1, S_U2)
-    layout = (CONSTANT_FIELDS, PATH_HEADER, PATH_NODES, WS_FIELDS, WS_SCRATCH, *offsets, RECORD_WS, RECORD_WIDTH)
-    return source_fingerprint((layout, homes), SHARED)
