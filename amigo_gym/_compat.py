@@ -2,7 +2,7 @@
 
 The layout of 0.2 (docs/architecture.md) grouped the root modules into subpackages: the robot model in
 :mod:`amigo_gym.model`, the tasks in :mod:`amigo_gym.task`, the compiled step in :mod:`amigo_gym.sim`, the
-command line in :mod:`amigo_gym.cli`. ``import amigo_gym.kinematics`` (or unpickling an object saved under an
+command line in :mod:`amigo_gym.tools.cli`. ``import amigo_gym.kinematics`` (or unpickling an object saved under an
 old name) still works: a finder on ``sys.meta_path`` maps the old name to the new module, the *same* module
 object, and warns once with a :class:`DeprecationWarning` naming the new place. The names go in 0.3.
 
@@ -28,7 +28,7 @@ MOVED: dict[str, str] = {
     "amigo_gym.kinematics": "amigo_gym.model.kinematics",
     "amigo_gym.actuators": "amigo_gym.model.actuators",
     "amigo_gym.fresnel": "amigo_gym.model.fresnel",
-    "amigo_gym.symbolic": "amigo_gym.model.symbolic",
+    "amigo_gym.symbolic": "amigo_gym.tools.symbolic",
     "amigo_gym.inverse": "amigo_gym.task.inverse",
     "amigo_gym.randomization": "amigo_gym.model.randomization",
     "amigo_gym.tracking": "amigo_gym.task.v1",
@@ -37,7 +37,7 @@ MOVED: dict[str, str] = {
     "amigo_gym.fast": "amigo_gym.sim.fast",
     "amigo_gym.fast_v1": "amigo_gym.sim.fast_v1",
     "amigo_gym.fast_v1_batch": "amigo_gym.sim.fast_v1_batch",
-    "amigo_gym.cli_inverse": "amigo_gym.cli.inverse",
+    "amigo_gym.cli_inverse": "amigo_gym.tools.cli.inverse",
     "amigo_gym.rendering": "amigo_gym.envs.rendering",
     "amigo_gym.envs.vector": "amigo_gym.envs.amigobot",
 }

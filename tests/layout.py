@@ -24,12 +24,12 @@ MAX_ROOT_MODULES = 8
 LAYERS: list[tuple[str, str, tuple[str, ...]]] = [
     (
         "base",
-        "files, run folders, command-line helpers, old names",
-        ("amigo_gym.io", "amigo_gym.data", "amigo_gym.options", "amigo_gym.runs", "amigo_gym._compat"),
+        "files, package data, old names",
+        ("amigo_gym.io", "amigo_gym.data", "amigo_gym._compat"),
     ),
     (
         "model",
-        "the robot: parameters, kinematics, Fresnel integrals, actuators, randomisation, D-H derivation",
+        "the robot: parameters, kinematics, Fresnel integrals, actuators, randomisation",
         ("amigo_gym.model",),
     ),
     ("registry", "import amigo_gym: the registered env ids", ("amigo_gym",)),
@@ -38,9 +38,14 @@ LAYERS: list[tuple[str, str, tuple[str, ...]]] = [
     ("sim", "the compiled step (numba)", ("amigo_gym.sim",)),
     ("envs", "Gymnasium single and vector envs, rendering", ("amigo_gym.envs",)),
     ("policies", "controllers and learned policies", ("amigo_gym.policies",)),
-    ("training", "training, evaluation, benchmark, sweeps", ("amigo_gym.training",)),
-    ("tools", "analysis, figures and speed benchmarks", ("amigo_gym.analysis", "amigo_gym.bench")),
-    ("cli", "the amigo-gym command (imported by nothing)", ("amigo_gym.cli",)),
+    (
+        "tools",
+        "the tools layer's base: run folders, command-line helpers, the D-H derivation (sympy)",
+        ("amigo_gym.tools",),
+    ),
+    ("training", "training, evaluation, benchmark, sweeps", ("amigo_gym.tools.training",)),
+    ("analysis", "analysis, figures and speed benchmarks", ("amigo_gym.tools.analysis", "amigo_gym.tools.bench")),
+    ("cli", "the amigo-gym command (imported by nothing)", ("amigo_gym.tools.cli",)),
 ]
 
 
