@@ -22,11 +22,7 @@ MAX_ROOT_MODULES = 8
 
 #: (layer, what it holds, module prefixes) from the bottom up; a module belongs to its longest matching prefix
 LAYERS: list[tuple[str, str, tuple[str, ...]]] = [
-    (
-        "base",
-        "files, package data, old names",
-        ("amigo_gym.io", "amigo_gym.data", "amigo_gym._compat"),
-    ),
+    ("base", "files, package data", ("amigo_gym.io", "amigo_gym.data")),
     (
         "model",
         "the robot: parameters, kinematics, Fresnel integrals, actuators, randomisation",

@@ -6,8 +6,6 @@ that the checker itself sees what it should: a made-up package with a circle and
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -51,40 +49,6 @@ def test_the_checker_finds_a_circle_and_an_upward_import(tmp_path: Path) -> None
     graph = layout.imports(layout.modules(pkg))
     assert layout.circles(graph) == [["amigo_gym.model.a", "amigo_gym.model.b"]]
     assert layout.upward(graph) == [("amigo_gym.model.b", "amigo_gym.envs.e")]
-
-
-OLD_NAMES = {
-    "amigo_gym.params": "amigo_gym.model.params",
-    "amigo_gym.kinematics": "amigo_gym.model.kinematics",
-    "amigo_gym.tracking": "amigo_gym.task.v1",
-    "amigo_gym.inverse": "amigo_gym.task.inverse",
-    "amigo_gym.fast": "amigo_gym.sim.fast",
-    "amigo_gym.rendering": "amigo_gym.envs.rendering",
-}
-
-
-@pytest.mark.parametrize("old, new", sorted(OLD_NAMES.items()))
-def test_an_old_module_name_imports_the_moved_module_with_a_warning(old: str, new: str) -> None:
-    code = (
-        "import importlib, warnings\n"
-        "import amigo_gym\n"
-        "with warnings.catch_warnings(record=True) as w:\n"
-        "    warnings.simplefilter('always')\n"
-        f"    a = importlib.import_module({old!r})\n"
-        f"b = importlib.import_module({new!r})\n"
-        "print(a is b, [str(x.message) for x in w if issubclass(x.category, DeprecationWarning)])\n"
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.startswith("True"), out
-    assert f"{old} moved to {new}" in out, out
-
-
-def test_every_old_name_is_mapped_to_a_module_that_exists() -> None:
-    from amigo_gym import _compat
-
-    mods = layout.modules()
-    assert all(new in mods for new in _compat.MOVED.values())
-    assert not any(old in mods for old in _compat.MOVED)  # an old name never shadows a module of today
 
 
 def test_old_task_names_are_found_with_a_warning() -> None:

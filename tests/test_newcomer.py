@@ -106,16 +106,6 @@ def test_seeds_counts_the_starts_in_convergence_as_in_evaluate_and_compare() -> 
         assert re.search(r"--seeds SEEDS [^-]*(number|how many|perturbed starts)", help_text), (command, help_text)
 
 
-def test_the_old_convergence_spelling_still_works_with_a_warning() -> None:
-    quick = ("--gains", "3", "--steps", "45", "--t-from", "1", "--t-to", "4")
-    old = cli("convergence", *quick, "--seeds", "101", "--seed-count", "2")  # --seeds was the first seed
-    new = cli("convergence", *quick, "--first-seed", "101", "--seeds", "2")
-    assert old.returncode == 0 and new.returncode == 0, old.stderr + new.stderr
-    assert old.stdout == new.stdout  # the same starts, the same table
-    assert "deprecated" in old.stderr and "--first-seed 101 --seeds 2" in old.stderr
-    assert len(old.stderr.strip().splitlines()) == 1 and new.stderr == ""
-
-
 # --------------------------------------------------------------------------- one naming of the agents
 def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
     from amigo_gym.tools.training.benchmark import ALGOS, RETIRED_V1_AGENTS, V1_AGENTS, default_agents

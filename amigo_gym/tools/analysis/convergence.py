@@ -13,13 +13,13 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
-from amigo_gym.tools.options import OneLineParser, add_dataclass_options, cli, run_guarded
+from amigo_gym.tools.options import OneLineParser, add_dataclass_options, run_guarded
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
 
@@ -74,14 +74,6 @@ class Settings:
         if not gains:
             raise ValueError("--gains must name at least one gain")
         return [check_range("Settings", "gains", g, 0.0, 10.0, low_open=True) for g in gains]
-
-
-@dataclass(frozen=True)
-class _CommandLine(Settings):
-    """:class:`Settings` and the deprecated, hidden ``--seed-count`` (the number of starts when --seeds was the first
-    seed)."""
-
-    seed_count: int | None = field(default=None, metadata=cli(hidden=True))
 
 
 def halving_times(settings: Settings) -> list[GainFit]:
@@ -149,23 +141,8 @@ def _plot(rows: list[GainFit], path: str) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
     parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
-    add_dataclass_options(parser, _CommandLine)
-    args_list = list(sys.argv[1:] if argv is None else argv)
-    args = vars(parser.parse_args(args_list))
-    seed_count = args.pop("seed_count")
-    if seed_count is not None:  # the old spelling: --seeds FIRST --seed-count N
-        old_first = any(a == "--seeds" or a.startswith("--seeds=") for a in args_list)
-        explicit_first = any(a == "--first-seed" or a.startswith("--first-seed=") for a in args_list)
-        if old_first and not explicit_first:
-            args["first_seed"] = args["seeds"]
-        args["seeds"] = seed_count
-        print(
-            "amigo-gym convergence: warning: --seed-count is deprecated and will be removed: --seeds is now the "
-            "number of starts (as in evaluate and compare), --first-seed the first seed"
-            + (f"; read as --first-seed {args['first_seed']} --seeds {seed_count}" if old_first else ""),
-            file=sys.stderr,
-        )
-    settings = Settings(**args)
+    add_dataclass_options(parser, Settings)
+    settings = Settings(**vars(parser.parse_args(argv)))
 
     def run() -> int:
         rows = halving_times(settings)
