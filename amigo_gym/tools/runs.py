@@ -1,46 +1,8 @@
 """Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
 
-Used by ``amigo-gym train`` (:mod:`amigo_gym.tools.training.train`) and ``amigo-gym compare``; imports only the
-standard library, :mod:`amigo_gym.io` and, when a lock is taken, ``filelock`` (the SB3 objects are passed in).
-
-Lock
-    :class:`RunLock` holds an exclusive ``filelock.FileLock`` (``flock`` on POSIX) on ``<folder>/run.lock``
-    for the life of the run.
-    The operating system drops it when the process ends, however it ends (``kill -9`` included), so a
-    killed run never blocks its resume; a second process on the same folder (a second ``train``, a
-    ``--resume`` of a running run) stops at once with one line and a non-zero status. The file holds the
-    owner's pid. A clean exit removes it (unlinked while still locked); a killed process leaves it, harmlessly.
-    Removing a lock file races with a process that opened it just before: that process would lock the
-    removed file while a third one creates and locks a new one. So :meth:`RunLock.acquire`, once it holds
-    the lock, checks that the path still names the very file it locked (:func:`is_current_lock`: same
-    device and inode; recent ``filelock`` versions check this themselves) and otherwise starts again.
-
-Checkpoints
-    ``checkpoints/step_<n>/`` holds ``model.zip``, for SAC/TD3 ``replay_buffer.pkl``, a snapshot of the
-    evaluation history ``eval.json`` and of ``best_model.zip`` as of that step, and ``meta.json`` (step,
-    algorithm, wall time, the sha256 of every file), written last. :func:`save_checkpoint` writes the
-    folder under a temporary name, fsyncs every file and the folder, renames it, then switches
-    ``checkpoint.json`` atomically (``os.replace`` + fsync of the folder) to name it and the one before,
-    and only then deletes the older ones (renamed to a temporary name first). The last two are kept, so
-    a kill at any point leaves a pointer naming a complete checkpoint.
-
-    A checkpoint is taken at the start of a rollout (SB3's ``on_rollout_start``): every collected step
-    is in the replay buffer and every completed rollout has been trained on, so the step count, the
-    weights and the data agree. (Inside a rollout they do not: PPO's weights have not seen the partial
-    rollout, and SB3 calls ``on_step`` before it stores the step's transition.) A resumed run therefore
-    continues exactly where the checkpoint's step count says.
-
-Corrupt files
-    :func:`load_checkpoint` checks ``checkpoint.json`` and each checkpoint's ``meta.json`` and sha256
-    sums before unpickling anything; a damaged checkpoint gives one line naming the file and what is
-    wrong, and the resume falls back to the previous good checkpoint with a warning.
-
-Files left by a killed process (temporary files, half-deleted checkpoints) carry names starting with a
-dot; :func:`clean_temporaries` removes them while the lock is held.
-
-Output sets
-    :func:`publish` moves staged files to their places as one set with a manifest of their sha256, written last;
-    :func:`verify_manifest` checks a set (``amigo-gym compare`` and ``amigo-gym benchmark``).
+Used by ``amigo-gym train`` and ``amigo-gym compare``; imports only the standard library, :mod:`amigo_gym.io` and,
+when a lock is taken, ``filelock``. The lock, checkpoints, corrupt files, temporaries and output sets:
+docs/reliability.md, "Reference: run folders".
 """
 
 from __future__ import annotations

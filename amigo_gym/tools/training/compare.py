@@ -1,51 +1,7 @@
 """The main job: the pretrained agents (and optionally a freshly trained one) against the analytic solution.
 
-Usage::
-
-    amigo-gym compare --out results/                     # the pretrained agents + a 500k-step PPO run
-    amigo-gym compare --out results/ --train-steps 0     # evaluation only (about 20 s)
-
-Steps:
-
-1. Optionally train a PPO agent for ``--train-steps`` steps on the native vector env (``amigo-gym
-   train --algo ppo``, hyperparameters of ``agents/hyperparams/ppo.yml`` or ``--hyperparams``, in
-   ``<out>/train_ppo``); the default 500 000 steps take about a minute on 2 CPU cores and already
-   track to a fraction of a millimetre. The fresh agent (its final model) is evaluated as
-   ``ppo_fresh``. A rerun reuses (or resumes) the run in ``<out>/train_ppo`` only when its recorded
-   configuration (algorithm, steps, seed, environment settings, hyperparameters, package versions)
-   equals the request; otherwise that folder is removed and the agent trained again.
-2. Evaluate the analytic policies (with feedback and feed-forward only) and the pretrained agents of
-   ``--models`` (default ``agents/pretrained``) on the fixed protocol of :mod:`amigo_gym.tools.training.evaluate`.
-3. Run the quick subset of the benchmark (``amigo-gym benchmark --quick``:
-   :func:`amigo_gym.tools.training.benchmark.quick_suite`, 3 scenarios of 2 episodes of at most 120 steps,
-   on AmigoBot-v0 and v1) on the same agents: ``analytic`` and ``analytic_ff`` (built per scenario by
-   the benchmark), the pretrained v0 agents (named ``<algo>_v0`` here as in the benchmark: :func:`v0_name`) and
-   ``ppo_fresh``, and the AmigoBot-v1 generalists shipped
-   under ``<models>/v1/<folder>/*.zip`` for every folder of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`
-   (named ``<folder>_v1``: the SB3 TD3 with a low-pass actor ``td3lp_v1``, the fast PPO's ``ppo_fast_v1`` and
-   its residual on the analytic controller ``residual_v1``, numpy policies; one training seed per zip, checked
-   against the sha256 of their manifests; the retired SB3 references ``ppo_v1``, ``sac_v1``, ``td3_v1`` ship no
-   more, docs/baselines.md "Retired references"). An agent that cannot run a scenario (a v0 model on v1's
-   observation) is listed as unavailable there. ``--no-benchmark`` skips this step; the quick table
-   is a smoke-sized view of the benchmark, not its result (``docs/benchmark.md``).
-4. Print a short summary (:func:`summary_text`: the perturbed starts, the targets, the quick benchmark's H
-   error, every agent name explained, where the files went) and write ``<out>/results.json`` (protocol,
-   results, the pretrained agents' training records, the fresh run's record, the targets, the quick
-   benchmark's document under ``benchmark``), ``<out>/report.md``
-   (the table, the targets, the training records, the quick benchmark table), ``<out>/eval.md`` and
-   the plots ``<out>/eval_trajectories.png``, ``<out>/eval_wheels.png``, ``<out>/benchmark_scenarios.png``
-   and ``<out>/benchmark_profiles.png``.
-
-The output set is published as a whole, with a manifest written last that readers trust: every file is
-first written into a staging folder ``<out>/.staging-*``; then ``<out>/manifest.json`` is removed, the
-files are moved into ``<out>`` one by one (``os.replace``) and a new ``manifest.json`` listing each
-file's sha256 is written atomically. A set is complete and consistent exactly when ``manifest.json``
-exists and every file matches it (:func:`verify_outputs`); a compare killed halfway leaves no manifest
-(and, after the next run, no staging folder or temporary file). ``<out>`` is locked while a compare
-runs (:class:`amigo_gym.tools.runs.RunLock`), so two compares never mix their files.
-
-Targets checked (best learned agent on the perturbed starts): H RMS error <= 2 mm and RMS wheel-rate
-deviation from the analytic inverse solution <= 0.1 rad/s.
+Usage, the training run reused or started, the output set and its manifest, the lock and the targets checked:
+docs/baselines.md, "Reference: `amigo-gym compare`".
 """
 
 from __future__ import annotations

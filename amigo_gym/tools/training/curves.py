@@ -1,53 +1,7 @@
 """``amigo-gym curves``: learning curves over training seeds and the time to reach a tracking threshold.
 
-Usage::
-
-    amigo-gym curves --runs runs_v1 --out results/curves        # every <algo>_s<seed> run folder in runs_v1
-    amigo-gym curves --runs runs_v1 runs_extra --threshold 0.002 --out results/curves
-
-Input
------
-``--runs`` names folders of run folders (or run folders themselves) written by ``amigo-gym train``
-(e.g. by ``experiments/train_v1_generalists.py``). A run folder is one holding ``eval.json``: the
-periodic evaluations, a list of ``{timesteps, mean_reward, best_mean_reward, wall_time_s, h_rms_m,
-h_rms_settled_m, speed_err_rms, failure_rate}``. Its algorithm and training seed come from its
-``config.json`` (``settings.algo``, ``settings.seed``), else from the folder name ``<algo>_s<seed>``;
-a folder without ``eval.json``, or whose algorithm and seed cannot be told, is listed as skipped (with
-the reason) and not used. Runs are grouped by algorithm (by algorithm and environment id when the
-runs' ``config.json`` files name several environment ids); the same (group, seed) twice is an error.
-An evaluation repeated at the same step (a run resumed from an earlier checkpoint) counts once, the
-later one.
-
-Curves (:func:`curve`)
-----------------------
-For every group, metric (``h_rms_m``: H's cross-track RMS over the evaluation episodes [m], plotted on
-a log scale; ``mean_reward``: the evaluation return) and axis (``timesteps``: environment steps;
-``wall_time_s``: the run's wall time [s], summed over resumes):
-
-* a seed's value at ``x`` is its latest evaluation at or before ``x`` (a step function: what one would
-  have stopping the run at ``x``);
-* the curve is drawn where every seed of the group has evaluations (from the latest first evaluation
-  to the earliest last one), at every evaluation point of any seed in that range;
-* the line is the **mean over training seeds**; the band is a pointwise **95 % percentile bootstrap
-  interval over seeds** (seeds resampled with replacement, independently at each point; ``--reps``
-  replications, seeded by ``--bootstrap-seed``; :func:`amigo_gym.tools.training.intervals.stratified_bootstrap`
-  with one point per stratum). With one seed the band has zero width.
-
-Time to threshold (:func:`threshold_time`)
-------------------------------------------
-The tracking threshold is fixed in advance, not tuned to results: **settled H cross-track RMS
-``h_rms_settled_m`` <= 5 mm** (:data:`DEFAULT_THRESHOLD_M`; half the benchmark's H-error target
-:data:`amigo_gym.tools.training.benchmark.H_TARGET_M` of 10 mm; "settled": ``t >= 5 s`` of each evaluation
-episode). For each seed: the steps and wall time of its first evaluation meeting it (``None``: never).
-Per group: how many seeds reached it and the median over **all** seeds, a seed that never reached it
-counting as later than any that did (so the median is "not reached" when fewer than half did).
-
-Outputs (written atomically)
-----------------------------
-``<out>/curves.json`` (``runs``, ``skipped``, ``protocol``, ``curves[group][axis][metric]`` with
-``x``, ``mean``, ``ci95_low``, ``ci95_high``, ``seeds`` and each seed's own series, and
-``threshold[group]``), ``<out>/curves.md`` (the threshold table and the final values) and the plots
-``<out>/curves_steps.png`` and ``<out>/curves_wall.png`` (H error and return, one line per group).
+Usage, the run folders read, the aggregation over seeds, the threshold and the output files: docs/benchmark.md,
+"Reference: `amigo-gym curves`".
 """
 
 from __future__ import annotations

@@ -1,62 +1,7 @@
 """Evaluate the analytic policies and trained agents on one fixed protocol; JSON, Markdown table, plots.
 
-Usage::
-
-    amigo-gym evaluate                                   # analytic policies + agents/pretrained/*.zip
-    amigo-gym evaluate --models runs/ --out results/ --json results/results.json
-
-Protocol (``protocol`` in the JSON; every rollout is deterministic)
--------------------------------------------------------------------
-* Environment: ``gym.make("AmigoBot-v0")`` with its default settings (circle of R = 1 m through the
-  origin, eq. 6; v_ref = 0.2 m/s; dt = 0.1 s) and ``--steps`` steps per episode (default 400 = 40 s,
-  1.28 laps of 31.3 s).
-* Scenario ``nominal``: H starts exactly on the circle in the closed-form steady state: H at the
-  paper's start point (the origin), heading ``beta = theta - atan(l3 / R_A)`` (the steady lag),
-  ``reset(options={"pose": ...})``. The exact inverse solution keeps H on the circle from here.
-* Scenario ``paper_start``: the paper's start: H at the origin, ``beta = 0`` (along the tangent, not
-  the steady lag), so even the exact solution has a short heading transient.
-* Scenario ``perturbed``: ``reset(seed=s)`` for the seeds ``--seeds`` (default 100..109): the
-  environment's random start, H within +-2 cm per axis of the origin, heading +-0.1 rad.
-* Agents: ``analytic`` (:class:`amigo_gym.policies.analytic.AnalyticPolicy`, gain 3 1/s), ``analytic_ff`` (the
-  paper's inverse ODE in closed loop, gain 0), and every model :func:`find_models` finds in ``--models``
-  (what ``amigo-gym train`` writes: a run folder, a folder of runs, a model zip; or a folder of
-  ``<algo>.zip``), acting deterministically; a model trained with ``normalize`` sees its observations
-  through the ``vecnormalize.pkl`` statistics saved beside it.
-
-Keys of each entry of ``results`` (pooled over the episodes of the scenario)
--------------------------------------------------------------------------
-* ``agent``, ``scenario``, ``episodes``: names and number of episodes.
-* ``h_rms_m``: RMS of H's signed cross-track error ``e`` [m] over every step ``t = dt .. T`` of every
-  episode (the state after each action).
-* ``h_rms_settled_m``: the same over ``t >= settle_time_s`` (default 5 s): the steady tracking error.
-* ``h_max_m``: largest ``|e|`` [m]; ``h_max_settled_m``: the same over ``t >= settle_time_s``.
-* ``settling_time_s``: mean over episodes of the first time after which ``|e| <= 1 mm`` for the rest
-  of the episode (``null`` if some episode never settles).
-* ``wheel_rate_dev_rms``: RMS over steps and both wheels of the applied wheel rates minus those of the
-  analytic inverse solution with feedback *on the agent's own observations*:
-  ``w_t - clip(w_analytic(o_t), -w_max, w_max)`` [rad/s], with ``o_t`` the observation the agent acted
-  on and ``w_analytic`` :func:`amigo_gym.policies.analytic.analytic_wheel_rates` (gain 3). It says how far the agent's
-  command is from what the exact inverse solution would command in the same state; 0 for ``analytic``.
-* ``wheel_rate_dev_steady_rms``: RMS over ``t >= settle_time_s`` of the applied rates minus the
-  closed-form steady-state rates of the circle (:func:`amigo_gym.model.kinematics.circle_steady_state`,
-  4.4815 and 3.5185 rad/s by default) [rad/s].
-* ``mean_return``, ``std_return``: episode return (the env's reward, at most 1 per step).
-* ``mean_length``, ``terminated``: mean steps per episode and the number of episodes that ended by
-  leaving the path (``|e| > 0.25 m``).
-* ``laps``: mean number of laps of the circle travelled by H (arc length of H's closest point / 2 pi R).
-
-``training`` (when the models directory holds ``<algo>.json`` records): each model's training record
-(command, seed, steps, wall time, git revision, versions).
-
-Metrics that do not exist (e.g. ``h_rms_settled_m`` of an episode that ended before ``settle_time_s``)
-are written as ``null``; the JSON is strict (no bare ``NaN``).
-
-Outputs: ``--json`` (default ``<out>/results.json``), ``--markdown`` (default ``<out>/eval.md``, the
-table) and the plots
-``<out>/eval_trajectories.png`` (H's path around the circle and ``|e|`` over time, every agent) and
-``<out>/eval_wheels.png`` (each agent's wheel angles and rates over time against the analytic
-policy's from the same start: the paper's Figs. 2–5 with the test rig replaced by the agent). Every
-file is written to a temporary name, then ``os.replace``d.
+Usage, the protocol, the agents and models read, the metrics and the output files: docs/baselines.md,
+"Reference: `amigo-gym evaluate`".
 """
 
 from __future__ import annotations

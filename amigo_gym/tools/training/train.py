@@ -1,55 +1,7 @@
 """Train a PPO, SAC or TD3 baseline on ``AmigoBot-v0`` (one readable file, cleanrl style).
 
-Usage::
-
-    amigo-gym train --algo sac --seed 0 --timesteps 60000 --out runs/sac_s0
-    amigo-gym train --algo ppo --seed 0 --n-envs 16 --out runs/ppo_s0     # native vector env
-    amigo-gym train --algo sac --seed 0 --timesteps 60000 --out runs/sac_s0 --resume   # continue
-
-Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (rl-zoo format: the mapping under the key
-``AmigoBot-v0``, with rl-zoo's idioms, :mod:`amigo_gym.tools.training.hyperparams`); ``--timesteps`` and
-``--n-envs`` override its ``n_timesteps`` and ``n_envs``. The file is checked before anything is
-written: an unknown key or a bad value gives one line and leaves no ``--out`` folder behind.
-``normalize`` wraps the training env in SB3's ``VecNormalize``; its statistics are saved beside the
-model as ``vecnormalize.pkl`` (and in every checkpoint), and ``amigo-gym evaluate`` uses them.
-
-What a run writes in ``--out`` (every file written to a temporary name, then ``os.replace``d, so that
-a killed run never leaves a half-written file):
-
-* ``config.json``: the settings, the hyperparameters, the command line, the git revision, versions
-  (and, for each ``--resume``, its command line, step and git revision);
-* ``tb/``: TensorBoard logs (training and ``eval/`` scalars, including the task metrics ``eval/h_rms_m``,
-  ``eval/h_rms_settled_m``, ``eval/speed_err_rms`` and ``eval/failure_rate`` of the evaluation episodes);
-* ``checkpoint.json`` + ``checkpoints/step_<n>/``: the last two checkpoints (model, for SAC/TD3 the
-  replay buffer, the evaluation record as of that step, ``meta.json`` with sha256 sums);
-  ``checkpoint.json`` is switched atomically to a complete checkpoint (:mod:`amigo_gym.tools.runs`);
-* ``best_model.zip`` and ``eval.json``: the periodic evaluation (SB3 ``EvalCallback``: deterministic
-  policy, ``--eval-episodes`` episodes every ``--eval-freq`` steps; each entry with the steps, the wall
-  time since the start of this process, the mean reward and the task metrics) and its best model;
-* ``model.zip`` and ``run.json`` at the end: the final model and the run's record (wall time, steps,
-  last evaluation, versions, command, the model's sha256, and under ``files`` the sha256 of every file a
-  loader reads beside it: ``model.zip``, ``best_model.zip`` and ``vecnormalize.pkl``);
-* ``run.lock``: the lock held while a process uses the folder (a second process stops with one line);
-  removed when the process ends cleanly.
-
-Checkpoints are taken at the start of a rollout, where step count, weights and replay buffer agree
-(:mod:`amigo_gym.tools.runs`). ``--resume`` loads the newest good checkpoint (falling back to the previous
-one, with a warning, if a file is damaged), restores the evaluation record of that step and trains the
-remaining ``timesteps - num_timesteps`` steps with ``reset_num_timesteps=False`` (same TensorBoard
-curve, same step counter, evaluations at the same steps); the replay buffer is restored, so an
-off-policy run loses no data. ``Ctrl-C`` or ``SIGTERM`` stops at the next rollout start with a
-checkpoint (status 130): a PPO run collects its interrupted rollout again, so its step count only ever
-counts steps it has trained on. SB3 collects whole rollouts (``train_freq`` steps per env for SAC/TD3,
-``n_steps`` per env for PPO), so a run may end up to one rollout beyond ``--timesteps``. Model zips and
-replay buffers are pickles: resume only runs you trust (``docs/reliability.md``).
-
-Seeding: ``seed`` seeds Python, NumPy and torch (SB3's ``set_random_seed``), the training envs
-(sub-env ``i``: ``seed + i``), the evaluation env (``seed + 10_000``) and the action space. A run
-resumed from a checkpoint reseeds its environments with ``seed + num_timesteps``; it is reproducible
-but not bit-identical to an uninterrupted run.
-
-Threads: ``torch.set_num_threads(--threads)`` (default 1): the networks are small, and on a 2-core
-machine one thread for torch leaves the other for the environment and the rest of the system.
+Usage, hyperparameters, the run folder, checkpoints and resuming, seeds and threads: docs/baselines.md,
+"Reference: `amigo-gym train`".
 """
 
 from __future__ import annotations
