@@ -63,7 +63,7 @@ def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFix
     assert env.main([*argv, "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "1 thread(s)" in printed.splitlines()[0] and "load average" in printed.splitlines()[0]
-    assert f"| issue 19 item 5 on {cpu_model()} (SIMD " in printed and "kernel=numba-parallel" in printed
+    assert f"| speed targets on {cpu_model()} (SIMD " in printed and "kernel=numba-parallel" in printed
     doc = json.loads(out.read_text())
     assert doc["machine"]["numba"].startswith("numba ") and doc["machine"]["load_average"]["end"]
     want = {(e, n) for e in ("AmigoBot-v0", "AmigoBot-v1") for n in (0, 8)}
@@ -79,7 +79,7 @@ def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_targets_judge_each_ratio_against_its_bound() -> None:
-    """:func:`env.targets` on hand-made results: the ratios, the bounds of issue 19 item 5, met or not."""
+    """:func:`env.targets` on hand-made results: the ratios, the bounds of the speed targets, met or not."""
     rows = [
         env.VectorRow(1, native=1e5, cartpole=2e4, sync=None),  # call: 10 us against 50 us -> 0.2, met
         env.VectorRow(4096, native=3e6, cartpole=6e6, sync=None, kernels={"numba-parallel": 9e6}),

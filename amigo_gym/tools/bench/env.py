@@ -27,7 +27,7 @@ read (ratios move less with the machine's load than absolute figures). From one 
 * ``--kernels``: each step implementation (``kernel="numpy"``, the reference; ``"numba"``, the compiled step;
   ``"numba-parallel"``, its loops on numba's threads, vector env only) of AmigoBot-v0 and AmigoBot-v1 (default
   task), single env and vector env, timed against each other: what numba buys per step.
-* **issue 19 item 5's targets** (one core: single step <= 0.4 x Pendulum-v1's time, vector env at N = 4096 >=
+* **the speed targets** (one core: single step <= 0.4 x Pendulum-v1's time, vector env at N = 4096 >=
   1.0 x ``CartPoleVectorEnv``'s throughput, fixed cost per call at N = 1 <= 0.5 x CartPole's, AmigoBot-v1 <=
   1.5 x AmigoBot-v0's single step), each with its measured ratio and whether it is met, the CPU model, its SIMD
   level and numba's threads in the table's header; ``kernel="numba-parallel"`` against CartPole at N = 4096 and
@@ -559,7 +559,7 @@ def format_kernels(rows: Sequence[KernelRow]) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------------- targets
-#: issue 19 item 5's targets for one core: name -> (comparison, bound)
+#: the speed targets for one core: name -> (comparison, bound)
 TARGETS: dict[str, tuple[str, float]] = {
     "single": ("<=", 0.4),
     "vector_4096": (">=", 1.0),
@@ -570,7 +570,7 @@ TARGETS: dict[str, tuple[str, float]] = {
 
 @dataclass(frozen=True)
 class Target:
-    """One figure of issue 19 item 5: measured ratio, target (``None``: reported only) and whether it is met."""
+    """One speed target: measured ratio, target (``None``: reported only) and whether it is met."""
 
     name: str
     label: str
@@ -592,7 +592,7 @@ def _target(name: str, label: str, ratio: float) -> Target:
 
 
 def targets(rep: Report, n_vector: int = 4096) -> list[Target]:
-    """Issue 19 item 5's figures that ``rep`` measured: the single step against Pendulum-v1, the vector env at
+    """The speed targets' figures that ``rep`` measured: the single step against Pendulum-v1, the vector env at
     ``n_vector`` against ``CartPoleVectorEnv`` (serial compiled step, and with numba's threads, reported only), the
     fixed cost per call at N = 1, and AmigoBot-v1 against AmigoBot-v0 (single step; vector env, reported only)."""
     out = []
@@ -621,7 +621,7 @@ def format_targets(items: Sequence[Target], machine: str) -> list[str]:
     """Markdown table of :func:`targets` with the machine (CPU, SIMD level, numba threads) in its header."""
     if not items:
         return []
-    out = [f"| issue 19 item 5 on {machine} | measured | target | met |", "|---|---:|---:|---|"]
+    out = [f"| speed targets on {machine} | measured | target | met |", "|---|---:|---:|---|"]
     for t in items:
         bound = "reported" if t.op is None else f"{t.op} {t.bound:g}"
         met = "-" if t.met is None else ("yes" if t.met else "no")

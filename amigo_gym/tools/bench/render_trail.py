@@ -6,7 +6,7 @@ step (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`). This measures, at ``--n`` ro
 
 * **memory growth** over ``--steps`` steps (default 3000) from ``reset``: the resident memory of the process
   (``/proc/self/statm``) with ``render_mode="rgb_array"`` and, in a process of its own, without (the same seeds
-  and actions); target <= 20 MiB with rendering (issue 21). Each measurement runs in a fresh subprocess, so
+  and actions); target <= 20 MiB with rendering. Each measurement runs in a fresh subprocess, so
   that one does not reuse the other's freed memory;
 * **step time** with and without ``render_mode`` (the same seeds and actions; the repeats interleaved,
   :func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
@@ -68,8 +68,7 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
     for _ in range(steps):
         step()
     if render:
-        trail_of = getattr(env, "_trail_of", None) or (lambda i: list(env._trails[i]))  # (the former lists: to compare)
-        trails = [trail_of(i) for i in range(frames)]
+        trails = [env._trail_of(i) for i in range(frames)]
         del trails
     gc.collect()
     second = _rss()

@@ -1,4 +1,4 @@
-r"""Failure rate binned by path curvature (issue 18, item 6): ``amigo-gym benchmark --curvature``.
+r"""Failure rate binned by path curvature: ``amigo-gym benchmark --curvature``.
 
 This module never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its
 scenario class and environment factory in.
