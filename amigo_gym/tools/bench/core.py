@@ -1,29 +1,7 @@
 """``amigo-gym bench-core``: throughput of the batched exact step, with peers measured in the same run.
 
-For each batch size N it times (median of ``--repeats`` repeats, each at least ``--min-time`` seconds):
-
-* ``transition``: AmigoBot-v0's whole reference step, what ``kernel="numpy"`` runs (AmigoBot-v1's ideal column
-  step, :func:`amigo_gym.task.v1.step_columns` with :func:`amigo_gym.task.v1.v0_configuration`: action → wheel
-  rates, exact arc step of pose and wheel angles, projection on the path, observation, reward terms), its results
-  returned as ``(N, k)`` rows (:class:`amigo_gym.task.v1.V0Reference`'s ``step``);
-* ``columns``: the same step alone, in the column form the vector env runs with ``kernel="numpy"`` (state and
-  results as ``(N,)`` columns, :func:`amigo_gym.task.v1.step_columns`);
-* ``step_pose``: :func:`amigo_gym.model.kinematics.step_pose` alone, the exact closed-form arc step;
-* ``euler``: the peer, a plain explicit-Euler step of the same unicycle written in numpy
-  (``x += v cos(b) dt; y += v sin(b) dt; b += betadot dt``), the cheapest step one could write;
-* ``loop``: the other peer, a Python loop of the scalar exact step (``math`` functions) over the N states
-  (only up to ``--loop-max`` states, as it is slow);
-* ``kernel``: the compiled fast path, :func:`amigo_gym.sim._kernels.step_rows` (the whole reference step
-  plus the float32 observation, fused into one numba loop writing into preallocated
-  arrays), and ``kernel_par``, its ``prange`` variant on numba's threads (``--threads``; default all
-  CPUs); both only when numba is installed.
-
-It prints env-steps per second (N states advanced once = N steps) and the ratios ``step_pose/euler``,
-``step_pose/loop`` and ``kernel/step_columns``, which are less sensitive to the machine's load than the
-absolute figures. It also times start-up in fresh processes (``--skip-startup`` to skip):
-``python -c "import amigo_gym"`` (and with ``numba`` imported too), import plus the first step of the reference
-(``kernel="numpy"``: what runs without numba), and import plus the first kernel step with an empty numba cache
-(compilation) and again with the cache the first process wrote (what every later process pays).
+What it times per batch size, the ratios and the start-up times: docs/performance.md, "Reference: `amigo-gym
+bench-core`".
 """
 
 from __future__ import annotations

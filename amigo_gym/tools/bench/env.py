@@ -1,51 +1,7 @@
 """``amigo-gym bench-env``: speed of ``AmigoBot-v0`` against peers measured in the same run.
 
-Every figure is set beside a peer timed back to back on the same machine, and the ratio is what to
-read (ratios move less with the machine's load than absolute figures). From one run it prints:
-
-* **single env**: time of one ``step`` of ``gym.make("AmigoBot-v0")`` against one of
-  ``gym.make("Pendulum-v1")`` (both with the wrappers of ``gym.make``: ``TimeLimit``,
-  ``OrderEnforcing``, ``PassiveEnvChecker``); the loop resets on episode end, as training does.
-* **vector env**: env-steps per second of the native :class:`amigo_gym.envs.AmigoBotVectorEnv`
-  (``gym.make_vec``) at N = 1, 64, 1024, 4096, 65536 against Gymnasium's native ``CartPoleVectorEnv``
-  and against ``SyncVectorEnv`` of ``AmigoBot-v0`` itself (a Python loop over N single envs, measured
-  only up to ``--sync-max`` = 1024 envs: it is slow to build and to step, and its throughput no longer
-  changes with N there). Where the vector env offers the compiled fast path (a ``kernel`` argument),
-  the numpy and the numba step are both measured.
-* **fixed cost per call** at N = 1 [us]: the time of one ``step`` of one robot, against
-  ``CartPoleVectorEnv``'s.
-* **memory per sub-env** [bytes]: what ``tracemalloc`` sees retained after ``reset`` and a few steps at
-  ``--memory-n`` robots minus at 1 robot, divided by the difference, and the transient peak of one
-  ``step`` per robot; the same for ``CartPoleVectorEnv``.
-* **SB3 PPO training throughput** [env-steps/s of ``learn``]: the same PPO settings on ``AmigoBot-v0``
-  and on ``Pendulum-v1``, with one env (``make_vec_env``, ``DummyVecEnv``) and with ``--ppo-envs``
-  envs (AmigoBot through the native adapter :class:`amigo_gym.tools.training.sb3_vec.AmigoBotSB3VecEnv`,
-  Pendulum through ``DummyVecEnv``). Needs torch and stable-baselines3 (skipped with a note otherwise).
-* ``--v1``: ``AmigoBot-v1`` against ``AmigoBot-v0`` (single step, and the vector env at the sizes up to
-  :data:`V1_MAX_N`), both v1's default task and :data:`V1_HARD` (mixed paths, hard randomisation),
-  when ``"AmigoBot-v1"`` is in Gymnasium's registry; otherwise a note says it was skipped.
-* ``--kernels``: each step implementation (``kernel="numpy"``, the reference; ``"numba"``, the compiled step;
-  ``"numba-parallel"``, its loops on numba's threads, vector env only) of AmigoBot-v0 and AmigoBot-v1 (default
-  task), single env and vector env, timed against each other: what numba buys per step.
-* **the speed targets** (one core: single step <= 0.4 x Pendulum-v1's time, vector env at N = 4096 >=
-  1.0 x ``CartPoleVectorEnv``'s throughput, fixed cost per call at N = 1 <= 0.5 x CartPole's, AmigoBot-v1 <=
-  1.5 x AmigoBot-v0's single step), each with its measured ratio and whether it is met, the CPU model, its SIMD
-  level and numba's threads in the table's header; ``kernel="numba-parallel"`` against CartPole at N = 4096 and
-  v1 against v0 in the vector env are reported beside them. The vector comparison also times
-  ``kernel="numba-parallel"`` (numba's threads: ``--threads`` or ``NUMBA_NUM_THREADS``, default all CPUs); the
-  default kernel (``"auto"``: the serial compiled step) uses one core.
-
-The header names the CPU, its SIMD level, numba's version, threads and whether it uses Intel SVML, and the
-load average (also at the end of the report: the machine may be shared).
-
-Actions are uniform random in the action space, drawn in advance (a pool of 16 batches cycled), so
-episodes end and autoreset at the rate of an untrained policy. One env-step is one robot advanced by
-one ``dt``. Each time is the median over ``--repeats`` repeats, each lasting at least ``--min-time``
-seconds; the competitors of one comparison are timed in interleaved repeats
-(:func:`amigo_gym.tools.bench.core.measure_many`), so that a change of the machine's load affects them alike.
-``--plot FILE`` draws throughput against N (log-log) with the peers; ``--json FILE`` writes
-every figure. ``--quick`` is a smoke run (small sizes, short times, tiny PPO budget). Progress goes to
-stderr, the report to stdout.
+What it times, against which peers, the speed targets, the header and the options: docs/performance.md,
+"Reference: `amigo-gym bench-env`".
 """
 
 from __future__ import annotations

@@ -1,27 +1,7 @@
 """Off-policy entries of ``amigo-gym bench-train``: SB3's SAC and TD3, sb3-contrib's CrossQ and TQC, timed.
 
-    amigo-gym bench-train --offpolicy sac,td3,crossq,tqc --json docs/figures/offpolicy/bench_train.json
-
-Each algorithm trains on ``AmigoBot-v1`` with the training distribution
-(:data:`amigo_gym.tools.training.benchmark.TRAINING_DISTRIBUTION`) over the project's SB3 adapter of the native vector
-env (:class:`amigo_gym.tools.training.sb3_vec.AmigoBotSB3VecEnv`), 64x64 networks (actor and every critic), CPU, in two
-configurations (:data:`CONFIGS`):
-
-* ``shipped``: the configuration the shipped v1 SAC/TD3 generalists trained with (``agents/hyperparams/sac.yml`` and
-  ``td3.yml``, key ``AmigoBot-v1``: one env, ``train_freq = gradient_steps = 8``, batch 256, ``learning_starts``
-  1000: one gradient step per env-step); CrossQ and TQC take SAC's file (both are SAC variants; CrossQ has no
-  target network, so no ``tau``);
-* ``ht`` (high throughput, as off-policy methods are run at scale): 128 envs, one gradient step per 16 env-steps
-  (``train_freq = 1`` vector step of 128 env-steps, ``gradient_steps = 8``), batch 2048, ``learning_starts``
-  10,240 env-steps, buffer 500,000; the other settings as ``shipped``.
-
-The time is split: the warm-up (``learn`` up to ``learning_starts``: building the env and model, random actions, no
-gradient step) and the training loop (a second ``learn`` of ``steps`` env-steps after the warm-up, every one with
-updates). Rates of the whole (``sps``, ``sps_cpu``) and of the loop alone (``sps_loop``, ``sps_loop_cpu``,
-``gsps_loop``, ``gsps_loop_cpu``: gradient steps, i.e. critic updates, per second) are reported; the CPU seconds are
-the process's (all threads). The loop's rates are the ones to compare: a long run is almost all loop.
-
-Imports torch, stable-baselines3 and sb3-contrib inside the functions (the ``train`` extra installs them).
+The algorithms, the two configurations and the rates: docs/performance.md, "Reference: `amigo-gym bench-train
+--offpolicy`". Imports torch, stable-baselines3 and sb3-contrib inside the functions (the ``train`` extra).
 """
 
 from __future__ import annotations

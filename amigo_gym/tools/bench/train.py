@@ -1,29 +1,7 @@
 """``amigo-gym bench-train``: env-steps of *training* per second, the fast PPO against SB3's PPO, same run.
 
-    amigo-gym bench-train --json docs/figures/bench_train.json
-
-Three PPO trainings on ``AmigoBot-v1`` with the training distribution
-(:data:`amigo_gym.tools.training.benchmark.TRAINING_DISTRIBUTION`), the same 64x64 tanh actor and critic, CPU, the same
-number of torch threads, one after the other in one process:
-
-* ``fastppo``: :func:`amigo_gym.tools.training.fastppo.train` with its defaults (``N = 512`` robots of the native vector
-  env, 32-step rollouts, 4 epochs of 4096-sample minibatches, observation and reward normalisation), no evaluation;
-* ``sb3_shipped``: SB3's ``PPO`` with the configuration the shipped v1 generalists trained with
-  (``agents/hyperparams/ppo.yml``, ``AmigoBot-v1``: 16 envs, ``n_steps=256``, ``batch_size=1024``, 10 epochs)
-  over the project's SB3 adapter of the native vector env (:class:`amigo_gym.tools.training.sb3_vec.AmigoBotSB3VecEnv`);
-* ``sb3_fastconfig``: SB3's ``PPO`` with the fast PPO's configuration (512 envs, ``n_steps=32``,
-  ``batch_size=4096``, 4 epochs), which separates the configuration's share of the gap from the per-env Python.
-
-Each rate is ``env-steps / wall seconds`` of the whole call (building the env, resets, rollouts, updates), also per
-CPU second of the process (``sps_cpu``, all its threads: less sensitive to other jobs on a shared machine); for the
-fast PPO also of its training iterations alone (``sps_loop``, ``sps_loop_cpu``: without building the env, the first
-resets and the final save, a fixed cost of a few seconds that long runs do not notice); and the
-ratio fastppo / SB3 is printed with the CPU model, the torch threads and the load average at the start and end
-(the development machine is shared: compare ratios measured in the same run). Writes ``--json`` atomically.
-
-``--offpolicy sac,td3,crossq,tqc`` adds the off-policy entries ``<algo>_shipped`` and ``<algo>_ht`` of
-:mod:`amigo_gym.tools.bench.offpolicy` (SB3's SAC/TD3, sb3-contrib's CrossQ/TQC; env-steps and gradient steps per wall
-and CPU second, after the warm-up), ``--offpolicy-steps`` and ``--offpolicy-ht-steps`` env-steps of training each.
+The three trainings, the rates and the off-policy entries: docs/performance.md, "Reference: `amigo-gym
+bench-train`".
 """
 
 from __future__ import annotations

@@ -1,33 +1,8 @@
 r"""Failure rate binned by path curvature: ``amigo-gym benchmark --curvature``.
 
-This module never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its
-scenario class and environment factory in.
-
-    amigo-gym benchmark --curvature --out results/curvature                     # the default agents
-    amigo-gym benchmark --curvature --agents analytic ppo_fast=agents/pretrained/v1/ppo_fast/*.zip --out ...
-
-Cells (fixed before any agent was run, from the robot's limits alone; never tuned to the agents)
------------------------------------------------------------------------------------------------
-At each speed ``v`` of :data:`CURVATURE_SPEEDS` (0.1 and 0.4 m/s, the ends of the training distribution's speed
-range), ``K(v)`` is the largest ``max_curvature`` of random paths (``max_curvature_rate = max_curvature x 1 m^-1``, the
-family's own ratio) that the environment accepts as feasible at ``v``
-(:func:`amigo_gym.task.v1.feasible_random_curvature`: the wheel-rate limit ``v (1 + l1 sigma / (l3 c)) / r <= 15``
-rad/s and the rotational ramp ``v^2 kappa' / c^4 <= 0.87`` rad/s^2, ``sigma = kappa l3``, ``c = sqrt(1 - sigma^2)``;
-10.14 1/m at 0.1 m/s, 4.25 1/m at 0.4 m/s). For ``j = 1 .. LEVELS`` (4) the cell ``curv_v<v>_k<j>`` draws random paths
-(``path="random"``) with ``max_curvature = max_curvature_rate x 1 m = K(v) j / LEVELS``, ``length = v x 60 s`` (the
-distance the reference covers in the episode: the path is driven to its end), from a pool of ``2**20`` path ids (the
-training pool's ids 0-1023 come up with probability 1/1024), no randomisation, ``dt`` 0.1 s, 600 steps, one episode
-per seed ``100, 101, ...`` (:data:`CURVATURE_EPISODES` = 50 per cell; the benchmark's test seeds).
-
-Tags and bins
--------------
-Each episode is tagged with ``path_max_kappa``, the largest ``|kappa|`` of its whole path [1/m] (from the segments of
-the path, :meth:`amigo_gym.paths.ClothoidPath.max_abs_curvature`), and ``kappa_end``, ``|kappa|`` at H's progress on
-the last step (for a failed episode, the curvature where it failed). ``failure``: the benchmark's (terminated off the
-path, or ``|e| > 0.10`` m after the 5 s settling time, :class:`amigo_gym.tools.training.task_metrics.EpisodeRecorder`).
-Bins (per speed): ``x = path_max_kappa / K(v)`` in ``[0, 1/4), [1/4, 1/2), [1/2, 3/4), [3/4, 1]``
-(:data:`BIN_EDGES`). Per agent, speed and bin: episodes ``n``, failures ``f``, the rate ``f / n`` and its 95 % Wilson
-score interval (:func:`wilson_interval`), the episodes of every training seed of the agent pooled.
+Never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its scenario class
+and environment factory in. The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
+--curvature`".
 """
 
 from __future__ import annotations

@@ -1,35 +1,8 @@
 """Task metrics of path-tracking episodes, read from the environments' ``info`` (numpy only).
 
-Used by the benchmark (:mod:`amigo_gym.tools.training.benchmark`) and by the training's evaluation
-callback (:mod:`amigo_gym.tools.training.train`), so that a learning curve and a benchmark table report
-the same numbers. Imports only numpy and the standard library (and, inside :func:`run_vector_episodes`,
-:func:`amigo_gym.envs.base.info_row`).
-
-The ``info`` of one step, as both environment versions report it
------------------------------------------------------------------
-* ``AmigoBot-v1``: ``cross_track_error`` [m] (signed, of H), ``speed_error`` [m/s] (true speed of A
-  minus the reference), ``command`` (the wheel-rate setpoints ``(2,)`` [rad/s]), ``wheel_rates``
-  (the actual rates ``(2,)`` [rad/s]).
-* ``AmigoBot-v0``: ``cross_track_error`` and ``wheel_rates`` (which *are* the command: v0's wheels
-  take any commanded rate at once); no ``speed_error``: :class:`InfoAdapter` computes it from the
-  wheel rates with the env's robot, ``v_A = (r1 w1 + r2 w2) / 2``, minus ``params.speed``.
-
-Metrics of one episode (:func:`episode_metrics`)
-------------------------------------------------
-* ``h_rms_m``: RMS of H's cross-track error over every step of the episode (the state after each action).
-* ``h_rms_settled_m``: the same over ``t >= settle_time_s`` (the steady tracking error; NaN if the
-  episode ended before). ``h_max_m``: largest ``|e|`` over the episode.
-* ``failure``: the episode terminated by leaving the path (reaching the end of an open path of
-  AmigoBot-v1, ``info["end_of_path"]``, is a success, not a failure), or ``|e|`` exceeded ``failure_tolerance_m``
-  at some ``t >= settle_time_s``.
-* ``speed_err_rms``: RMS of the speed error of A [m/s] over the episode; ``speed_err_settled_rms`` the same over
-  ``t >= settle_time_s`` (the whole-episode value is dominated by the firmware's ramp from rest; NaN if the
-  episode ended before).
-* ``return``: sum of the rewards.
-* ``chatter_rms``: RMS of the step-to-step change of the wheel-rate command [rad/s] over both wheels
-  (``T - 1`` changes); ``chatter_settled_rms`` the same over changes that end at ``t >= settle_time_s``.
-* ``effort_rms``: RMS of the actual wheel rates over both wheels [rad/s].
-* ``steps``, ``terminated``.
+Used by the benchmark and by the training's evaluation callback, so that a learning curve and a benchmark table
+report the same numbers. Imports only numpy and the standard library. The info read and the metrics of one episode:
+docs/benchmark.md, "Reference: task metrics".
 """
 
 from __future__ import annotations
