@@ -12,10 +12,7 @@ from typing import Any
 
 from gymnasium.envs.registration import EnvSpec, register, registry
 
-from amigo_gym import _compat
 from amigo_gym.model.params import EnvParams, RobotParams
-
-_compat.install()
 
 __version__ = "0.1.0"
 __all__ = ["EnvParams", "RobotParams", "SeparateEnvSpec", "__version__"]

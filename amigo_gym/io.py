@@ -12,7 +12,7 @@ back through :func:`finite_float`, the one check of a number in a cell (CSV logs
 Fault injection (tests only): with the environment variable ``AMIGO_GYM_FAULT=<stage>[@<n>]`` the process
 kills itself (``SIGKILL``) the ``n``-th time (default 1) it reaches ``<stage>``:
 ``write:<file name>`` (temporary file complete, not yet moved) and ``rename:<file name>`` (moved, folder
-not yet fsynced) here, and the stages of :mod:`amigo_gym.runs`. Unset, :func:`fault_point` does nothing.
+not yet fsynced) here, and the stages of :mod:`amigo_gym.tools.runs`. Unset, :func:`fault_point` does nothing.
 """
 
 from __future__ import annotations

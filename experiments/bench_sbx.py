@@ -4,7 +4,7 @@
     XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" PYTHONPATH=$PWD \\
         nice -n 10 /tmp/sbxenv/bin/python experiments/bench_sbx.py --json docs/figures/offpolicy/bench_sbx.json
 
-The same function as the bench (:func:`amigo_gym.bench.offpolicy.bench_offpolicy`: the same env, adapter,
+The same function as the bench (:func:`amigo_gym.tools.bench.offpolicy.bench_offpolicy`: the same env, adapter,
 configurations, 64x64 networks, warm-up/loop split; one round of updates after the warm-up (8 env-steps per env,
 while JAX compiles) is left out of the loop's time), with sbx's classes in place of SB3's / sb3-contrib's, JAX on
 the CPU (one XLA thread with the flags above). Budgets as the bench's defaults: 1024 env-steps after the warm-up in the
@@ -16,9 +16,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from amigo_gym.bench import offpolicy
-from amigo_gym.bench.train import _load, cpu_model
 from amigo_gym.io import atomic_write_json
+from amigo_gym.tools.bench import offpolicy
+from amigo_gym.tools.bench.train import _load, cpu_model
 
 
 def main() -> int:

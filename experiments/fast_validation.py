@@ -5,7 +5,7 @@
 For each run folder: its ``settings.json`` gives the distribution (``env_kwargs``) and the validation seeds
 (``eval_seed + i``); the analytic controller (:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot)
 and the run's ``model.zip`` (else ``best.zip``) are evaluated with
-:func:`amigo_gym.training.fastppo.evaluate_policy` on ``--eval-envs`` episodes. Prints one Markdown row per agent:
+:func:`amigo_gym.tools.training.fastppo.evaluate_policy` on ``--eval-envs`` episodes. Prints one Markdown row per agent:
 H cross-track RMS (whole episode and settled, t >= 5 s) [mm], settled chatter [rad/s], settled speed error [mm/s],
 failure rate.
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.policies.learned import FastPolicy
-from amigo_gym.training.fastppo import FastPPOSettings, evaluate_policy
+from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
 
 def row(name: str, m: dict[str, float]) -> str:

@@ -7,16 +7,16 @@
 
 Trains on ``AmigoBot-v1`` with the training distribution (``TRAINING_DISTRIBUTION``), one torch thread, seed 0:
 
-* ``sac``, ``td3``, ``crossq``, ``tqc``: the configuration ``--config`` of :mod:`amigo_gym.bench.offpolicy`
+* ``sac``, ``td3``, ``crossq``, ``tqc``: the configuration ``--config`` of :mod:`amigo_gym.tools.bench.offpolicy`
   (``shipped`` or ``ht``) over the SB3 adapter of the native vector env, in chunks of ``--eval-every`` env-steps;
-* ``fastppo``: :func:`amigo_gym.training.fastppo.train` with its defaults, ``--filter-alpha 0.5`` and
+* ``fastppo``: :func:`amigo_gym.tools.training.fastppo.train` with its defaults, ``--filter-alpha 0.5`` and
   ``--total-steps 15000000`` (the learning-rate schedule of the published fast-PPO curve,
   ``docs/figures/fastppo/ppo_fast_s0.curve.csv``), resumed chunk after chunk; its times are those of the training
   iterations (rollouts and updates, ``cpu_s_this_call``), without the evaluations and the chunking's
   checkpoint save/load.
 
-After each chunk the policy (deterministic) is evaluated with :func:`amigo_gym.training.fastppo.evaluate_policy` on
-the fast PPO's validation episodes (32 robots, seeds 1,000,000 + i: the seeds of the published fast-PPO curve, not
+After each chunk the policy (deterministic) is evaluated with :func:`amigo_gym.tools.training.fastppo.evaluate_policy`
+on the fast PPO's validation episodes (32 robots, seeds 1,000,000 + i: the seeds of the published fast-PPO curve, not
 the benchmark's test seeds). Training stops at the first chunk end past ``--cpu-budget`` CPU seconds of training
 (process time, all threads; the evaluations excluded) or ``--wall-budget`` wall seconds. Each row: ``env_steps``,
 ``grad_steps``, ``wall_s`` and ``cpu_s`` of training so far, then the validation metrics (``eval_h_rms_m`` ...).
@@ -36,11 +36,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from amigo_gym.bench.offpolicy import DeterministicPolicy, _venv, make_model, offpolicy_config
-from amigo_gym.bench.train import _load, cpu_model
 from amigo_gym.io import atomic_write_json
-from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
-from amigo_gym.training.fastppo import FastPPOSettings, evaluate_policy
+from amigo_gym.tools.bench.offpolicy import DeterministicPolicy, _venv, make_model, offpolicy_config
+from amigo_gym.tools.bench.train import _load, cpu_model
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
 EVAL = {"eval_envs": 32, "eval_seed": 1_000_000, "max_episode_steps": 600}
 
@@ -98,7 +98,7 @@ def main() -> int:
               f"chatter {m['chatter_settled_rms']:.2f} failure {m['failure']:.2f}", flush=True)  # fmt: skip
 
     if a.algo == "fastppo":
-        from amigo_gym.training.fastppo import train
+        from amigo_gym.tools.training.fastppo import train
 
         chunk = a.eval_every or 262_144
         s = FastPPOSettings(

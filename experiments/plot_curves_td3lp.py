@@ -11,10 +11,10 @@ episodes: the curve carries that sampling noise.
 Final models: every seed's zip (loaded with :func:`amigo_gym.policies.load_pretrained`) and the analytic controller
 (:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot) on the same 32 validation episodes of the
 training distribution (seeds 1 000 000 + j, never the benchmark's), with the function the fast PPO's curves use,
-:func:`amigo_gym.training.fastppo.evaluate_policy`: H RMS, settled H RMS, settled chatter and settled speed error.
+:func:`amigo_gym.tools.training.fastppo.evaluate_policy`: H RMS, settled H RMS, settled chatter and settled speed error.
 
 Aggregation over the seeds at each evaluation (all seeds evaluate at the same env-steps): the IQM
-(:func:`amigo_gym.training.intervals.iqm`, with five seeds the mean of the middle three) and the min-max band;
+(:func:`amigo_gym.tools.training.intervals.iqm`, with five seeds the mean of the middle three) and the min-max band;
 against wall-clock, each seed's latest evaluation at or before ``t``.
 """
 
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_save, atomic_write_json
-from amigo_gym.training.intervals import iqm
+from amigo_gym.tools.training.intervals import iqm
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -48,8 +48,8 @@ def main() -> int:
     import matplotlib.pyplot as plt
 
     from amigo_gym.policies import AnalyticTrackingPolicy, load_pretrained
-    from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
-    from amigo_gym.training.fastppo import FastPPOSettings, evaluate_policy
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
     evals = [json.loads((Path(a.curves) / f"td3lp_s{s}.eval.json").read_text()) for s in a.seeds]
     steps = np.array([e["timesteps"] for e in evals[0]], dtype=float)

@@ -12,10 +12,10 @@ manifest's ``last_eval`` (the curves are those of the shipped models), else the 
 Validation metric: the mean over ``eval_envs`` (32) deterministic episodes on the validation seeds
 1 000 000 + j of the training distribution (never the benchmark's cells), as ``amigo-gym train-fast`` evaluates.
 The analytic reference (:class:`amigo_gym.policies.AnalyticTrackingPolicy` on the nominal robot) is evaluated here
-with the same function, :func:`amigo_gym.training.fastppo.evaluate_policy`, on the same settings: the same episodes.
+with the same function, :func:`amigo_gym.tools.training.fastppo.evaluate_policy`, on the same settings.
 
 Aggregation over the five seeds at each evaluation (all seeds evaluate at the same env-steps): the IQM
-(:func:`amigo_gym.training.intervals.iqm`: with five seeds the mean of the middle three) and the min-max band.
+(:func:`amigo_gym.tools.training.intervals.iqm`: with five seeds the mean of the middle three) and the min-max band.
 Against wall-clock, each seed's value at ``t`` is its latest evaluation at or before ``t`` (what stopping the run at
 ``t`` gives; a finished seed keeps its last value), on a grid of 1 s from the latest first evaluation to the latest
 last one.
@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_save, atomic_write_json
-from amigo_gym.training.intervals import iqm
+from amigo_gym.tools.training.intervals import iqm
 
 ROOT = Path(__file__).resolve().parents[1]
 FACTOR = 1.5  # "quality": within 1.5x the analytic controller's validation H RMS
@@ -76,7 +76,7 @@ def main() -> int:
     a = p.parse_args()
 
     from amigo_gym.policies import AnalyticTrackingPolicy
-    from amigo_gym.training.fastppo import FastPPOSettings, evaluate_policy
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
     curves, settings = [], []
     for seed in a.seeds:

@@ -3,9 +3,9 @@
     python experiments/residual_val_cells.py --models res=experiments/candidates/residual_s0.zip \
         [--cells delay_0.1 delay_0.25 ...] [--seeds 20] [--first-seed 2000000] [--json out.json]
 
-For each cell of :data:`amigo_gym.training.benchmark.SUITE` named in ``--cells`` (default: the ideal-robot, the
+For each cell of :data:`amigo_gym.tools.training.benchmark.SUITE` named in ``--cells`` (default: the ideal-robot, the
 delay and the wheel-mismatch cells), the scenario with ``seeds = first_seed .. first_seed + seeds - 1`` (one episode
-each, :func:`amigo_gym.training.benchmark.evaluate`, deterministic) for the analytic controller
+each, :func:`amigo_gym.tools.training.benchmark.evaluate`, deterministic) for the analytic controller
 (:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot) and every ``NAME=ZIP`` fast-PPO model.
 Prints one Markdown row per cell: the mean H cross-track RMS over the episodes [mm] with a 95 % bootstrap interval
 over episodes (2 000 resamples, seed 0), and the ratio of each model's mean to the analytic's.
@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from amigo_gym.training.benchmark import SUITE, AgentSpec, evaluate, make_env
+from amigo_gym.tools.training.benchmark import SUITE, AgentSpec, evaluate, make_env
 
 IDEAL = ("circle_r1_ccw", "circle_r0.5_ccw", "circle_r0.5_cw", "circle_r2_cw", "circle_v0.1", "circle_v0.4",
          "circle_v_random", "figure8", "random_paths", "lane_change", "mixed")  # fmt: skip

@@ -13,7 +13,7 @@ cells (the v0 specialists' own environment):
 
 Settled chatter is the RMS step-to-step change of the wheel-rate command over ``t >= 5 s`` [rad/s], settled speed
 error the RMS of the speed error over ``t >= 5 s`` [m/s, printed in mm/s]
-(:mod:`amigo_gym.training.task_metrics`). Nothing is computed here beyond maxima and counts of the benchmark's own
+(:mod:`amigo_gym.tools.training.task_metrics`). Nothing is computed here beyond maxima and counts of the benchmark's own
 records (``results[].chatter_settled_rms``, ``speed_err_settled_rms`` and their ``per_episode`` lists).
 """
 

@@ -1,7 +1,7 @@
 """The sweep's objective for any models: IQM of H RMS over the held-in v1 validation cells (5 episodes each).
 
-The number ``amigo-gym sweep --env AmigoBot-v1`` minimises (:func:`amigo_gym.training.sweep.validation_cells`,
-:func:`~amigo_gym.training.sweep.validate_agent`: the benchmark's held-in cells on validation seeds, never a test
+The number ``amigo-gym sweep --env AmigoBot-v1`` minimises (:func:`amigo_gym.tools.training.sweep.validation_cells`,
+:func:`~amigo_gym.tools.training.sweep.validate_agent`: the benchmark's held-in cells on validation seeds, never a test
 seed or a held-out cell), computed for models trained outside the sweep, e.g. the shipped seeds against the sweep's
 trials, which ran a shorter budget:
 
@@ -19,7 +19,7 @@ import sys
 
 def main(argv: list[str] | None = None) -> int:
     from amigo_gym.policies import load_pretrained
-    from amigo_gym.training.sweep import validate_agent, validation_cells
+    from amigo_gym.tools.training.sweep import validate_agent, validation_cells
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("models", nargs="*", help="model zips or glob patterns (quoted)")

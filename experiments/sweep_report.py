@@ -2,7 +2,7 @@
 
 Read-only on the study (it never adds, changes or resumes a trial). Writes into ``--out``:
 
-* ``summary.json``: the sweep's own summary (:func:`amigo_gym.training.sweep.summarize`: states, best trial, every
+* ``summary.json``: the sweep's own summary (:func:`amigo_gym.tools.training.sweep.summarize`: states, best trial, every
   trial with its parameters and attributes);
 * ``trials.csv``: one row per trial (number, state, objective in mm, the env-step it was pruned at, parameters);
 * ``importance.json`` / ``importance.png``: Optuna's PED-ANOVA importance of each parameter (how far its
@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     from optuna.trial import TrialState
 
     from amigo_gym.io import atomic_write_json
-    from amigo_gym.training.sweep import summarize
+    from amigo_gym.tools.training.sweep import summarize
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--storage", required=True, help="the study's storage URL (e.g. sqlite:////path/sweep.db)")

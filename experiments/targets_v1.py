@@ -6,7 +6,7 @@ ratio to the analytic controller, settled figures, chatter, speed error, and see
 
 The ideal-robot cells are the suite's v1 scenarios with the nominal robot, no delay, no noise and dt 0.1 s (the
 11 of :data:`IDEAL`); intervals are the benchmark's own stratified bootstrap over training seeds
-(:func:`amigo_gym.training.intervals.stratified_bootstrap`, 10 000 replications, seed 0). Nothing is tuned here:
+(:func:`amigo_gym.tools.training.intervals.stratified_bootstrap`, 10 000 replications, seed 0). Nothing is tuned here:
 the cells are fixed by the suite and the figures are those of the test seeds the benchmark ran.
 """
 
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from amigo_gym.training.intervals import iqm, stratified_bootstrap
+from amigo_gym.tools.training.intervals import iqm, stratified_bootstrap
 
 IDEAL = (
     "circle_r1_ccw",

@@ -8,7 +8,7 @@ Reads the run's ``curve.csv`` (one row per ``--eval-every`` env-steps: ``env_ste
 start of training, ``eval_h_rms_m`` [m], ``eval_chatter_settled_rms`` [rad/s], ``eval_speed_err_settled_rms``
 [m/s] over the validation episodes) and its ``settings.json``; evaluates the analytic controller
 (:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot) with the same function,
-:func:`amigo_gym.training.fastppo.evaluate_policy`, on the same validation episodes (seeds ``eval_seed + j``,
+:func:`amigo_gym.tools.training.fastppo.evaluate_policy`, on the same validation episodes (seeds ``eval_seed + j``,
 ``j < eval_envs``, of the training distribution: never the benchmark's cells). "Quality" is both at once: H RMS
 <= 1.5x the analytic value and settled chatter <= 1 rad/s, at one evaluation.
 
@@ -44,9 +44,9 @@ def main() -> int:
     p.add_argument("--name", default="time_to_quality_run", help="stem of the output files")
     a = p.parse_args()
 
-    from amigo_gym.bench.machine import machine_line
     from amigo_gym.policies import AnalyticTrackingPolicy
-    from amigo_gym.training.fastppo import FastPPOSettings, evaluate_policy
+    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
     run = Path(a.run)
     c = read_curve(run / "curve.csv")

@@ -17,7 +17,7 @@ measures better than what is shipped (``amigo-gym benchmark --agents analytic <a
 
 Distributions (never the benchmark's cells; the evaluations during training use validation seeds 1,000,000+):
 
-* ``ppo_fast``: :data:`amigo_gym.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
+* ``ppo_fast``: :data:`amigo_gym.tools.training.benchmark.TRAINING_DISTRIBUTION` (mixed paths, 0.1-0.4 m/s, ``mild``),
   with the settings the sweep found (``agents/hyperparams/fastppo.yml``: its best trial, including the low-pass
   action filter and the CAPS smoothness weight) and the curvature curriculum to 4.25 1/m, 10M env-steps; run from
   the repository's root (the relative path). The shipped seeds ran under the name ``ppo_fast_curv`` (the same
@@ -58,7 +58,7 @@ from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import sha256_file
-from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 
 RESIDUAL_ENV_KWARGS: dict[str, object] = {
     "path": "mixed",

@@ -1,8 +1,8 @@
 """Train the SB3 AmigoBot-v1 generalists (PPO, SAC, TD3, the low-pass TD3 x 5 seeds) and export them with manifests.
 
 One readable file, cleanrl style: a settings dataclass, explicit seeds, and the library's training
-function (``amigo_gym.training.train``) run as ``amigo-gym train`` subprocesses, ``--workers`` at a time.
-Each run trains on the training distribution of ``amigo_gym.training.benchmark.TRAINING_DISTRIBUTION``
+function (``amigo_gym.tools.training.train``) run as ``amigo-gym train`` subprocesses, ``--workers`` at a time.
+Each run trains on the training distribution of ``amigo_gym.tools.training.benchmark.TRAINING_DISTRIBUTION``
 with the ``AmigoBot-v1`` hyperparameters of ``agents/hyperparams/<algo>.yml``, checkpoints as it goes
 (a killed script is simply started again: finished runs are skipped, unfinished ones resumed) and is
 exported to ``agents/pretrained/v1/<algo>/<algo>_s<seed>.zip`` with a manifest ``<algo>_s<seed>.json``
@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 
 #: agent -> (SB3 algorithm, hyperparameter file or None for ``agents/hyperparams/<algo>.yml``, extra options);
 #: ``ppo``, ``sac``, ``td3``: the retired untuned references (not shipped; module docstring), ``td3lp``: shipped

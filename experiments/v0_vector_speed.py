@@ -25,12 +25,12 @@ import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 import amigo_gym  # noqa: F401  (registers the envs)
-from amigo_gym.bench.env import _single_stepper, _vector_stepper
-from amigo_gym.bench.machine import cpu_model
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths import make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
+from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
+from amigo_gym.tools.bench.machine import cpu_model
 
 N = 4096
 

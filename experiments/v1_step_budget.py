@@ -27,13 +27,13 @@ import numba
 import numpy as np
 
 import amigo_gym  # noqa: F401  (registers the envs)
-from amigo_gym.bench.env import _single_stepper
-from amigo_gym.bench.machine import machine_line
 from amigo_gym.envs.amigobot_v1 import record_info
 from amigo_gym.sim import fast
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
+from amigo_gym.tools.bench.env import _single_stepper
+from amigo_gym.tools.bench.machine import machine_line
 
 
 def best(f: Callable[[], Any], number: int = 2000) -> float:

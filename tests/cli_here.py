@@ -27,10 +27,10 @@ class Ran:
 
 
 def runner(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Callable[..., Ran]:
-    """``run(*args, cwd=ROOT)``: ``amigo_gym.cli.main(args)`` from ``cwd`` (the checkout's root by default, where the
-    subprocesses run), without an injected fault (``AMIGO_GYM_FAULT`` unset), its output captured; argparse's refusals
-    (``SystemExit``) give their exit status as the return code."""
-    from amigo_gym.cli import main
+    """``run(*args, cwd=ROOT)``: ``amigo_gym.tools.cli.main(args)`` from ``cwd`` (the checkout's root by default, where
+    the subprocesses run), without an injected fault (``AMIGO_GYM_FAULT`` unset), its output captured; argparse's
+    refusals (``SystemExit``) give their exit status as the return code."""
+    from amigo_gym.tools.cli import main
 
     monkeypatch.delenv("AMIGO_GYM_FAULT", raising=False)
 

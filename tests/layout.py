@@ -2,8 +2,9 @@
 
 :data:`LAYERS` is the architecture of docs/architecture.md as data, from the bottom up. Every import of one
 ``amigo_gym`` module by another (at module level or inside a function: both run) must point to the same layer
-or a lower one; ``tests/test_layout.py`` asserts that, that no circle of modules exists, and that the package's
-root holds at most :data:`MAX_ROOT_MODULES` modules.
+or a lower one; ``tests/test_layout.py`` asserts that, that no circle of modules exists, that no module of the
+environment core (outside :data:`TOOLS`) imports the tools layer, and that the package's root holds at most
+:data:`MAX_ROOT_MODULES` modules.
 
     python tests/layout.py                                   # the layers, their modules and lines, any breach
     python tests/layout.py --plot docs/figures/layers.png    # the picture of docs/architecture.md
@@ -19,17 +20,17 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "amigo_gym"
 MAX_ROOT_MODULES = 8
+#: the tools layer (training, benchmarks, sweeps, figures, the CLI); every other module is the environment core
+TOOLS = "amigo_gym.tools"
+#: the ``amigo-gym`` command, imported by nothing
+CLI = "amigo_gym.tools.cli"
 
 #: (layer, what it holds, module prefixes) from the bottom up; a module belongs to its longest matching prefix
 LAYERS: list[tuple[str, str, tuple[str, ...]]] = [
-    (
-        "base",
-        "files, run folders, command-line helpers, old names",
-        ("amigo_gym.io", "amigo_gym.data", "amigo_gym.options", "amigo_gym.runs", "amigo_gym._compat"),
-    ),
+    ("base", "files, package data", ("amigo_gym.io", "amigo_gym.data")),
     (
         "model",
-        "the robot: parameters, kinematics, Fresnel integrals, actuators, randomisation, D-H derivation",
+        "the robot: parameters, kinematics, Fresnel integrals, actuators, randomisation",
         ("amigo_gym.model",),
     ),
     ("registry", "import amigo_gym: the registered env ids", ("amigo_gym",)),
@@ -38,9 +39,14 @@ LAYERS: list[tuple[str, str, tuple[str, ...]]] = [
     ("sim", "the compiled step (numba)", ("amigo_gym.sim",)),
     ("envs", "Gymnasium single and vector envs, rendering", ("amigo_gym.envs",)),
     ("policies", "controllers and learned policies", ("amigo_gym.policies",)),
-    ("training", "training, evaluation, benchmark, sweeps", ("amigo_gym.training",)),
-    ("tools", "analysis, figures and speed benchmarks", ("amigo_gym.analysis", "amigo_gym.bench")),
-    ("cli", "the amigo-gym command (imported by nothing)", ("amigo_gym.cli",)),
+    (
+        "tools",
+        "the tools layer's base: run folders, command-line helpers, the D-H derivation (sympy)",
+        ("amigo_gym.tools",),
+    ),
+    ("training", "training, evaluation, benchmark, sweeps", ("amigo_gym.tools.training",)),
+    ("analysis", "analysis, figures and speed benchmarks", ("amigo_gym.tools.analysis", "amigo_gym.tools.bench")),
+    ("cli", "the amigo-gym command (imported by nothing)", ("amigo_gym.tools.cli",)),
 ]
 
 
@@ -58,7 +64,8 @@ def modules(package: Path = PACKAGE) -> dict[str, Path]:
 
 
 def imports(mods: dict[str, Path]) -> dict[str, set[str]]:
-    """``{module: the package modules it imports}``; ``from P import name`` counts P.name when that is a module."""
+    """``{module: the package modules it imports}``; ``from P import name`` counts P.name when that is a module, and
+    ``importlib.import_module("...")`` / ``__import__("...")`` with a literal name count as imports."""
 
     def resolve(name: str) -> str:
         while name and name not in mods:
@@ -73,10 +80,34 @@ def imports(mods: dict[str, Path]) -> dict[str, set[str]]:
                 targets = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
                 targets = [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Call) and _dynamic_import(node.func) and node.args:
+                arg = node.args[0]
+                if isinstance(arg, ast.Constant) and isinstance(arg.value, str):
+                    targets = [arg.value]
             for t in targets:
                 if t.split(".")[0] == "amigo_gym" and (r := resolve(t)) and r != m:
                     out[m].add(r)
     return out
+
+
+def _dynamic_import(func: ast.expr) -> bool:
+    name = func.attr if isinstance(func, ast.Attribute) else func.id if isinstance(func, ast.Name) else ""
+    return name in ("import_module", "__import__")
+
+
+def within(module: str, package: str) -> bool:
+    """``module`` is ``package`` or inside it."""
+    return module == package or module.startswith(package + ".")
+
+
+def core_imports_of_tools(graph: dict[str, set[str]]) -> list[tuple[str, str]]:
+    """Imports from a module of the environment core to one of the tools layer (:data:`TOOLS`): there must be none."""
+    return sorted((a, b) for a, bs in graph.items() for b in bs if not within(a, TOOLS) and within(b, TOOLS))
+
+
+def imports_of_the_cli(graph: dict[str, set[str]]) -> list[tuple[str, str]]:
+    """Imports of the CLI (:data:`CLI`) from outside it: there must be none."""
+    return sorted((a, b) for a, bs in graph.items() for b in bs if not within(a, CLI) and within(b, CLI))
 
 
 def layer_of(module: str) -> int:
@@ -84,7 +115,7 @@ def layer_of(module: str) -> int:
     best, best_len = -1, -1
     for i, (_, _, prefixes) in enumerate(LAYERS):
         for p in prefixes:
-            if (module == p or module.startswith(p + ".")) and len(p) > best_len:
+            if within(module, p) and len(p) > best_len:
                 best, best_len = i, len(p)
     return best
 
@@ -163,7 +194,7 @@ def _plot(path: Path, mods: dict[str, Path], graph: dict[str, set[str]]) -> None
         ax.text(0.12, ys[i] + 0.1, f"{name}", fontsize=11, weight="bold", va="center")
         ax.text(1.25, ys[i] + 0.1, what, fontsize=8.5, va="center")
         shown = sorted(
-            {m.removeprefix("amigo_gym.").split(".")[0] if m != "amigo_gym" else "__init__" for m in by_layer[i]}
+            {".".join(m.split(".")[1:3] if within(m, TOOLS) else m.split(".")[1:2]) or "__init__" for m in by_layer[i]}
         )
         ax.text(
             1.25,
@@ -212,11 +243,12 @@ def main(argv: list[str] | None = None) -> int:
     print(f"package: {len(mods)} modules, {lines(list(mods.values()))} lines; root modules: {root_modules()}")
     bad = upward(graph)
     loops = circles(graph)
-    print(f"upward imports: {len(bad)} {bad}\ncircles: {len(loops)} {loops}")
+    core = core_imports_of_tools(graph)
+    print(f"upward imports: {len(bad)} {bad}\ncircles: {len(loops)} {loops}\ncore -> tools: {len(core)} {core}")
     if args.plot:
         _plot(args.plot, mods, graph)
         print(f"wrote {args.plot}")
-    return 1 if bad or loops else 0
+    return 1 if bad or loops or core else 0
 
 
 if __name__ == "__main__":

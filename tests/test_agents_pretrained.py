@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from amigo_gym.training.evaluate import ALGOS, PRETRAINED_DIR, EvalProtocol, evaluate_agents, load_agents
+from amigo_gym.tools.training.evaluate import ALGOS, PRETRAINED_DIR, EvalProtocol, evaluate_agents, load_agents
 
 CLAIMED = PRETRAINED_DIR / "claimed.json"
 TOLERANCE = {

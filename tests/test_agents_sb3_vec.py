@@ -10,7 +10,7 @@ import pytest
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
+from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
 SETTINGS: dict[str, Any] = {"max_episode_steps": 25, "termination_distance": 0.05, "init_position_noise": 0.02}
 

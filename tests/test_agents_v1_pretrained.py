@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.training import benchmark as bm
+from amigo_gym.tools.training import benchmark as bm
 
 MANIFESTS = sorted((pretrained_dir() / "v1").glob("*/*.json"))
 #: the scenarios re-run here (the full benchmark holds the others)
@@ -136,7 +136,7 @@ def test_low_pass_td3_loads_checked_and_bounds_its_command_change(model: Path) -
 
     from amigo_gym.policies import load_pretrained
     from amigo_gym.task.v1 import obs_fields
-    from amigo_gym.training.sb3_lowpass import LowPassTD3Policy
+    from amigo_gym.tools.training.sb3_lowpass import LowPassTD3Policy
 
     policy = load_pretrained(model)
     assert isinstance(policy.policy, LowPassTD3Policy)

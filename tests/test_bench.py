@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from amigo_gym.bench import core, env, profile
+from amigo_gym.tools.bench import core, env, profile
 
 
 def test_measure_many_times_every_function() -> None:
@@ -56,14 +56,14 @@ def test_bench_env_refuses_bad_arguments(capsys: pytest.CaptureFixture[str]) -> 
 def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``--kernels`` times each step implementation; the targets table names the CPU and judges each ratio."""
     pytest.importorskip("numba")
-    from amigo_gym.bench.machine import cpu_model
+    from amigo_gym.tools.bench.machine import cpu_model
 
     out = tmp_path / "bench.json"
     argv = ["--quick", "--sizes", "1", "8", "--skip-memory", "--skip-ppo", "--v1", "--kernels", "--threads", "1"]
     assert env.main([*argv, "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "1 thread(s)" in printed.splitlines()[0] and "load average" in printed.splitlines()[0]
-    assert f"| issue 19 item 5 on {cpu_model()} (SIMD " in printed and "kernel=numba-parallel" in printed
+    assert f"| speed targets on {cpu_model()} (SIMD " in printed and "kernel=numba-parallel" in printed
     doc = json.loads(out.read_text())
     assert doc["machine"]["numba"].startswith("numba ") and doc["machine"]["load_average"]["end"]
     want = {(e, n) for e in ("AmigoBot-v0", "AmigoBot-v1") for n in (0, 8)}
@@ -79,7 +79,7 @@ def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_targets_judge_each_ratio_against_its_bound() -> None:
-    """:func:`env.targets` on hand-made results: the ratios, the bounds of issue 19 item 5, met or not."""
+    """:func:`env.targets` on hand-made results: the ratios, the bounds of the speed targets, met or not."""
     rows = [
         env.VectorRow(1, native=1e5, cartpole=2e4, sync=None),  # call: 10 us against 50 us -> 0.2, met
         env.VectorRow(4096, native=3e6, cartpole=6e6, sync=None, kernels={"numba-parallel": 9e6}),
@@ -177,7 +177,7 @@ def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
     """``simd_level`` (numpy's run-time detection) against the flags the kernel lists in /proc/cpuinfo."""
-    from amigo_gym.bench.machine import cpu_model, machine_line, simd_level
+    from amigo_gym.tools.bench.machine import cpu_model, machine_line, simd_level
 
     level = simd_level()
     line = machine_line()
@@ -227,8 +227,8 @@ def test_bench_options_come_from_the_settings(capsys: pytest.CaptureFixture[str]
     status 2 (not a traceback), also for the commands run as modules."""
     from dataclasses import fields
 
-    from amigo_gym.bench import render_trail, train
-    from amigo_gym.options import OneLineParser, add_dataclass_options, attribute_help, settings_from_args
+    from amigo_gym.tools.bench import render_trail, train
+    from amigo_gym.tools.options import OneLineParser, add_dataclass_options, attribute_help, settings_from_args
 
     for cls in (core.CoreSettings, env.EnvSettings, profile.ProfileSettings, render_trail.RenderTrailSettings):
         p = OneLineParser(prog="x")

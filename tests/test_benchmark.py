@@ -15,15 +15,15 @@ import pytest
 from scipy import stats
 
 import amigo_gym  # noqa: F401
-from amigo_gym.training import benchmark as bm
-from amigo_gym.training.intervals import (
+from amigo_gym.tools.training import benchmark as bm
+from amigo_gym.tools.training.intervals import (
     iqm,
     optimality_gap,
     performance_profile,
     score_distribution,
     stratified_bootstrap,
 )
-from amigo_gym.training.task_metrics import InfoAdapter, episode_metrics
+from amigo_gym.tools.training.task_metrics import InfoAdapter, episode_metrics
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -303,7 +303,7 @@ def test_default_agents_include_the_fast_ppo_generalist_labelled_apart_from_sb3s
 
 def test_cli_quick(tmp_path: Path) -> None:
     sac = ROOT / "agents" / "pretrained" / "sac.zip"
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "benchmark", "--quick", "--out", str(tmp_path), "--reps", "500"]
+    cmd = [sys.executable, "-m", "amigo_gym.tools.cli", "benchmark", "--quick", "--out", str(tmp_path), "--reps", "500"]
     cmd += ["--agents", "analytic", f"sac_v0={sac}"]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
@@ -328,10 +328,12 @@ def test_cli_quick(tmp_path: Path) -> None:
 
 
 def test_cli_list_and_errors(tmp_path: Path) -> None:
-    r = subprocess.run([sys.executable, "-m", "amigo_gym.cli", "benchmark", "--list"], capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "amigo_gym.tools.cli", "benchmark", "--list"], capture_output=True, text=True
+    )
     assert r.returncode == 0 and "v0_paper_circle" in r.stdout and "held out" in r.stdout
     r = subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "benchmark", "--scenarios", "nope", "--out", str(tmp_path)],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "benchmark", "--scenarios", "nope", "--out", str(tmp_path)],
         capture_output=True,
         text=True,
     )
@@ -342,7 +344,7 @@ def test_cli_list_and_errors(tmp_path: Path) -> None:
 def test_training_logs_task_metrics_and_after_eval_can_stop(tmp_path: Path) -> None:
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-    from amigo_gym.training.train import Settings, train
+    from amigo_gym.tools.training.train import Settings, train
 
     hp = tmp_path / "tiny.yml"
     hp.write_text("AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [8]\n")
@@ -385,7 +387,7 @@ def _bench(out: Path, fault: str | None = None) -> subprocess.CompletedProcess[s
     args = ["--agents", "analytic", "--scenarios", "v0_paper_circle", "--quick", "--reps", "20"]
     args += ["--profile-reps", "20", "--no-progress", "--out", str(out)]
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "benchmark", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "benchmark", *args],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -395,7 +397,7 @@ def _bench(out: Path, fault: str | None = None) -> subprocess.CompletedProcess[s
 
 
 def test_outputs_are_published_as_one_set_temporaries_cleaned_and_out_locked(tmp_path: Path) -> None:
-    from amigo_gym import runs
+    from amigo_gym.tools import runs
 
     out = tmp_path / "bench"
     killed = _bench(out, "publish:benchmark.md")  # the JSON and the Markdown moved, the plots not, no manifest

@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.mark.parametrize("quick", [False, True])
 def test_title_and_legend_stay_clear(quick: bool) -> None:
-    from amigo_gym.training.benchmark import scenarios_figure
+    from amigo_gym.tools.training.benchmark import scenarios_figure
 
     doc = json.loads((ROOT / "docs/benchmark/benchmark.json").read_text())
     if quick:  # compare's quick subset: 3 scenarios, a narrow figure (where the title was cut)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from amigo_gym.cli import COMMANDS, main
+from amigo_gym.tools.cli import COMMANDS, main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -23,7 +23,7 @@ class Block:
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
         return None
 sys.meta_path.insert(0, Block())
-from amigo_gym.cli import main
+from amigo_gym.tools.cli import main
 sys.exit(main(sys.argv[2:]))
 """
 
@@ -76,7 +76,7 @@ def test_verify_quick_needs_no_sympy() -> None:
 
 
 def test_unexpected_error_is_one_line(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
-    import amigo_gym.bench.core as bench
+    import amigo_gym.tools.bench.core as bench
 
     def boom(argv: object) -> int:
         raise RuntimeError("something\nbroke")

@@ -16,7 +16,11 @@ REQUIRED = ["t", "x_A", "y_A", "beta", "alpha1", "alpha2", "alpha3", "alpha1_dot
 
 def _run(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "inverse", *args], cwd=cwd, capture_output=True, text=True, timeout=120
+        [sys.executable, "-m", "amigo_gym.tools.cli", "inverse", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
 
 

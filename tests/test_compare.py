@@ -71,7 +71,7 @@ def test_reuse_only_the_same_configuration(tmp_path: Path, cli: Any) -> None:
 
 @pytest.mark.parametrize("key", ["versions", "env_kwargs", "hyperparams"])
 def test_any_recorded_difference_is_a_mismatch(tmp_path: Path, key: str) -> None:
-    from amigo_gym.training.compare import fresh_run_request, reuse_mismatch
+    from amigo_gym.tools.training.compare import fresh_run_request, reuse_mismatch
 
     request = fresh_run_request(100, 0)
     run = tmp_path / "train_ppo"
@@ -92,8 +92,8 @@ def test_any_recorded_difference_is_a_mismatch(tmp_path: Path, key: str) -> None
 
 def test_quick_benchmark_table_in_the_published_set(tmp_path: Path, cli: Any) -> None:
     """Without ``--no-benchmark`` the report and results.json carry the quick benchmark; the set verifies."""
-    from amigo_gym.training.benchmark import QUICK_SCENARIOS
-    from amigo_gym.training.compare import verify_outputs
+    from amigo_gym.tools.training.benchmark import QUICK_SCENARIOS
+    from amigo_gym.tools.training.compare import verify_outputs
 
     out = tmp_path / "out"
     cmd = ["compare", "--out", str(out), "--models", "", "--train-steps", "0"]

@@ -46,7 +46,7 @@ def test_observation_fields_mean_what_their_names_say() -> None:
 
 
 def test_info_schema_is_the_same_everywhere() -> None:
-    from amigo_gym.training.sb3_vec import AmigoBotSB3VecEnv
+    from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
     single = gym.make("AmigoBot-v0")
     _, info = single.reset(seed=0)

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from amigo_gym.analysis.convergence import Settings, halving_times
+from amigo_gym.tools.analysis.convergence import Settings, halving_times
 
 
 def test_convergence_command_writes_table_and_plot(tmp_path: Path) -> None:
@@ -16,7 +16,7 @@ def test_convergence_command_writes_table_and_plot(tmp_path: Path) -> None:
         [
             sys.executable,
             "-m",
-            "amigo_gym.cli",
+            "amigo_gym.tools.cli",
             "convergence",
             "--gains",
             "2,3",
@@ -42,7 +42,7 @@ def test_small_gain_halving_time_near_continuous_law() -> None:
 
 def test_bad_gain_is_one_line_error() -> None:
     r = subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "convergence", "--gains", "-1"], capture_output=True, text=True
+        [sys.executable, "-m", "amigo_gym.tools.cli", "convergence", "--gains", "-1"], capture_output=True, text=True
     )
     assert r.returncode == 2
     assert len(r.stderr.strip().splitlines()) == 1 and "gains" in r.stderr

@@ -1,4 +1,4 @@
-"""Failure rate per curvature bin (amigo_gym.training.curvature, ``amigo-gym benchmark --curvature``); tiny budgets.
+"""Failure rate per curvature bin (tools/training/curvature.py, ``amigo-gym benchmark --curvature``); tiny budgets.
 
 References: the Wilson interval's closed forms, hand-made episodes for the binning, and the cells' paths rebuilt
 independently from their seeds with :func:`amigo_gym.paths.random_path` (curvature read from the segments)."""
@@ -16,8 +16,8 @@ import pytest
 
 from amigo_gym.paths import random_path
 from amigo_gym.task.v1 import feasible_random_curvature
-from amigo_gym.training.benchmark import curvature_scenarios
-from amigo_gym.training.curvature import (
+from amigo_gym.tools.training.benchmark import curvature_scenarios
+from amigo_gym.tools.training.curvature import (
     BIN_EDGES,
     Z95,
     bin_table,
@@ -125,7 +125,7 @@ def test_cells_paths_have_the_claimed_curvature(cell: int) -> None:
 
 
 def test_tags_of_a_run_match_the_paths_rebuilt_independently() -> None:
-    from amigo_gym.training.benchmark import make_env, parse_agents
+    from amigo_gym.tools.training.benchmark import make_env, parse_agents
 
     sc = replace(curvature_scenarios(episodes=3)[7], max_steps=80)
     env = make_env(sc)
@@ -141,7 +141,7 @@ def test_tags_of_a_run_match_the_paths_rebuilt_independently() -> None:
 
 
 def test_cli_curvature_quick(tmp_path: Path) -> None:
-    from amigo_gym.training.benchmark import main
+    from amigo_gym.tools.training.benchmark import main
 
     assert main(["--curvature", "--quick", "--agents", "analytic", "--out", str(tmp_path), "--no-progress"]) == 0
     doc = json.loads((tmp_path / "curvature.json").read_text())

@@ -129,7 +129,7 @@ def test_set_path_params_refuses_bad_input_and_changes_nothing() -> None:
 # --------------------------------------------------------------------------- fast PPO's curriculum
 torch = pytest.importorskip("torch")
 
-from amigo_gym.training.fastppo import FastPPOSettings, curriculum_path_params, train  # noqa: E402
+from amigo_gym.tools.training.fastppo import FastPPOSettings, curriculum_path_params, train  # noqa: E402
 
 RKW = {"path": "random", "speed": [0.1, 0.4], "randomize": "mild"}
 

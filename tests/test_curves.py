@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from amigo_gym.cli import main as cli_main
-from amigo_gym.training.curves import find_runs, learning_curves, write_outputs
+from amigo_gym.tools.cli import main as cli_main
+from amigo_gym.tools.training.curves import find_runs, learning_curves, write_outputs
 
 STEPS = [1000, 2000, 3000, 4000]
 #: h_rms_m per seed of "ppo" at STEPS (settled values are 0.8 of these)

@@ -14,7 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from amigo_gym.bench.env import headline_table
+from amigo_gym.tools.bench.env import headline_table
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_JSON = ROOT / "docs/figures/bench_env.json"
@@ -42,14 +42,14 @@ def test_readme_performance_table_is_generated_from_the_committed_json() -> None
 
 def test_the_table_command_prints_it() -> None:
     r = subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "bench-env", "--table-from", str(ENV_JSON), "--core-json",
+        [sys.executable, "-m", "amigo_gym.tools.cli", "bench-env", "--table-from", str(ENV_JSON), "--core-json",
          str(CORE_JSON)],
         cwd=ROOT, capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)},
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert r.stdout == _readme_table()
     bad = subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "bench-env", "--table-from", str(CORE_JSON)],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "bench-env", "--table-from", str(CORE_JSON)],
         cwd=ROOT, capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)},
     )  # fmt: skip
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
@@ -65,7 +65,7 @@ def test_other_pages_link_to_performance_md_instead_of_copying_figures() -> None
 
 
 def test_readme_v1_table_is_generated_from_the_benchmark_json() -> None:
-    from amigo_gym.training.benchmark import readme_table
+    from amigo_gym.tools.training.benchmark import readme_table
 
     doc = json.loads((ROOT / "docs/benchmark/benchmark.json").read_text())
     text = (ROOT / "README.md").read_text(encoding="utf-8")

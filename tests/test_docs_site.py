@@ -75,7 +75,7 @@ def test_strict_build_has_every_page_the_api_and_the_local_math_renderer(site: P
 def test_derivation_page_math_is_the_symbolic_modules_output() -> None:
     """The typeset system (29) in docs/derivation.md is what ``symbolic.system_29_latex()`` prints, not a copy by
     hand that could drift."""
-    import amigo_gym.model.symbolic as sym  # sympy: the dev extra
+    import amigo_gym.tools.symbolic as sym  # sympy: the dev extra
 
     text = (ROOT / "docs/derivation.md").read_text(encoding="utf-8")
     block = text.split("\\begin{aligned}", 1)[1].split("\\end{aligned}", 1)[0]

@@ -1,4 +1,4 @@
-"""``amigo_gym/training/evaluate.py``: protocol, metrics against independent computations, outputs."""
+"""``amigo_gym/tools/training/evaluate.py``: protocol, metrics against independent computations, outputs."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import pytest
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
 from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy
-from amigo_gym.training.evaluate import (
+from amigo_gym.tools.training.evaluate import (
     EvalProtocol,
     default_agents,
     evaluate_agents,
@@ -123,7 +123,7 @@ def test_protocol_refuses_bad_values() -> None:
 
 def test_cli_writes_json_table_and_plots(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "evaluate", "--no-models", "--steps", "60", "--seeds", "2"]
+    cmd = [sys.executable, "-m", "amigo_gym.tools.cli", "evaluate", "--no-models", "--steps", "60", "--seeds", "2"]
     r = subprocess.run([*cmd, "--out", str(tmp_path)], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "results.json").read_text())
@@ -148,7 +148,7 @@ def test_cli_writes_json_table_and_plots(tmp_path: Path) -> None:
 def test_compare_main_job_smoke(tmp_path: Path) -> None:
     """``amigo-gym compare`` with a tiny fresh PPO run and short episodes: report, JSON, plots."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.cli", "compare", "--out", str(tmp_path), "--models", ""]
+    cmd = [sys.executable, "-m", "amigo_gym.tools.cli", "compare", "--out", str(tmp_path), "--models", ""]
     cmd += ["--train-steps", "1000", "--seeds", "1", "--steps", "40"]
     r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
     assert r.returncode == 0, r.stderr

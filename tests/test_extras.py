@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 import tomllib
 
-from amigo_gym.cli import COMMANDS, EXTRA_OF_MODULE, install_hint
+from amigo_gym.tools.cli import COMMANDS, EXTRA_OF_MODULE, install_hint
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,4 +1,4 @@
-"""The fast PPO (amigo_gym.training.fastppo) and its numpy policies (amigo_gym.policies.learned); tiny budgets."""
+"""The fast PPO (amigo_gym.tools.training.fastppo) and its numpy policies (amigo_gym.policies.learned); tiny budgets."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from amigo_gym.policies.learned import (  # noqa: E402
     sha256_of,
 )
 from amigo_gym.task.v1 import obs_fields  # noqa: E402
-from amigo_gym.training.fastppo import FastPPOSettings, train  # noqa: E402
+from amigo_gym.tools.training.fastppo import FastPPOSettings, train  # noqa: E402
 
 KW = {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"}
 
@@ -151,12 +151,12 @@ def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
 def test_a_second_process_on_the_run_folder_is_refused_and_changes_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """train-fast locks its run folder (amigo_gym.runs.RunLock): a second train-fast or --resume on a folder in use
+    """train-fast locks its run folder (tools.runs.RunLock): a second train-fast or --resume on a folder in use
     stops with one line and leaves the running run's files as they were; once the lock is free the resume runs."""
     import yaml
 
-    from amigo_gym import runs
-    from amigo_gym.training.fastppo import main
+    from amigo_gym.tools import runs
+    from amigo_gym.tools.training.fastppo import main
 
     s = tiny()
     out = tmp_path / "run"
@@ -203,7 +203,7 @@ def test_checkpoint_written_before_a_new_field_resumes_with_its_default(tmp_path
 
 def test_nominal_fraction_steps_the_last_robots_as_the_nominal_robot() -> None:
     """The trainer's robots equal two separately stepped vector envs: env_kwargs, then the nominal robot."""
-    from amigo_gym.training.fastppo import _training_env
+    from amigo_gym.tools.training.fastppo import _training_env
 
     kw = {"path": "mixed", "speed": [0.1, 0.4], "randomize": {"wheel_radius": [0.9, 1.1], "delay": [0.1, 0.3]}}
     s = tiny(env_kwargs=kw, nominal_fraction=0.25, max_episode_steps=7)
@@ -270,7 +270,7 @@ def test_numpy_policy_matches_the_torch_actor_and_round_trips(tmp_path: Path) ->
     ck = torch.load(tmp_path / "r" / "checkpoint.pt", weights_only=False)
     # the checkpoint's normaliser is the one saved in the model
     np.testing.assert_array_equal(pol.obs_rms.mean, np.asarray(ck["obs_rms"]["mean"]))
-    from amigo_gym.training.fastppo import ActorCritic
+    from amigo_gym.tools.training.fastppo import ActorCritic
 
     net = ActorCritic(pol.builder.dim, s.hidden, s.log_std_init)
     net.load_state_dict(ck["net"])
@@ -405,7 +405,7 @@ def test_learned_policies_import_no_torch() -> None:
 
 
 def test_cli_bad_value_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from amigo_gym.cli import main  # in this process: the check is the message, not the process (torch's import)
+    from amigo_gym.tools.cli import main  # in this process: the check is the message, not the process (torch's import)
 
     capsys.readouterr()
     try:
@@ -420,7 +420,7 @@ def test_cli_bad_value_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture
 def test_benchmark_runs_fast_models_as_numpy_policies(tmp_path: Path) -> None:
     """``amigo-gym benchmark`` takes a fast-PPO zip (not mistaken for SB3's PPO by the 'ppo' in its name) and
     runs it through the same predict as a direct rollout; a v0 scenario is unavailable (other observation)."""
-    from amigo_gym.training import benchmark as bm
+    from amigo_gym.tools.training import benchmark as bm
 
     spec = FeatureSpec({"path": "circle"}, history=1, residual_bound=0.2)
     dim = FeatureBuilder(spec).dim
@@ -464,7 +464,7 @@ def _rate_matches(count: float, t: float, rate: float) -> bool:
 
 def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")
-    from amigo_gym.bench.train import cpu_model, main
+    from amigo_gym.tools.bench.train import cpu_model, main
 
     out = tmp_path / "b.json"
     assert main(["--fast-steps", "16384", "--sb3-steps", "256", "--skip-sb3-fastconfig", "--json", str(out)]) == 0
@@ -485,9 +485,9 @@ def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
     import stable_baselines3
     import yaml
 
-    from amigo_gym.bench.offpolicy import algo_class
-    from amigo_gym.bench.train import main
     from amigo_gym.data import hyperparams_dir
+    from amigo_gym.tools.bench.offpolicy import algo_class
+    from amigo_gym.tools.bench.train import main
 
     assert algo_class("crossq") is sb3_contrib.CrossQ and algo_class("tqc") is sb3_contrib.TQC
     assert algo_class("sac") is stable_baselines3.SAC and algo_class("td3") is stable_baselines3.TD3
@@ -524,7 +524,7 @@ def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
 
 def test_offpolicy_models_have_64x64_networks() -> None:
     """Actor and every critic of each off-policy model: two hidden layers of 64 units (the bench's "same network")."""
-    from amigo_gym.bench.offpolicy import _venv, make_model, offpolicy_config
+    from amigo_gym.tools.bench.offpolicy import _venv, make_model, offpolicy_config
 
     venv = _venv(1, 0)
     try:

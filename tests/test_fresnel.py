@@ -83,12 +83,3 @@ def test_subintervals_refuses_bad_input() -> None:
     for bad in (math.nan, -1.0, math.inf):
         with pytest.raises(ValueError, match="max_phase_change"):
             subintervals(bad)
-
-
-def test_advance_float_is_a_deprecated_alias_of_advance() -> None:
-    """``fresnel.advance_float`` (removed in 0.2: ``advance`` runs floats and columns alike) warns, is ``advance``."""
-    import amigo_gym.model.fresnel as fresnel
-
-    with pytest.warns(DeprecationWarning, match="advance_float"):
-        alias = fresnel.advance_float
-    assert alias is fresnel.advance

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import torch
 
-from amigo_gym.training.hyperparams import _Linear, parse_hyperparams, parse_python_literal
+from amigo_gym.tools.training.hyperparams import _Linear, parse_hyperparams, parse_python_literal
 
 
 def test_policy_kwargs_string_is_parsed_not_evaluated() -> None:

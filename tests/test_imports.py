@@ -42,14 +42,14 @@ def test_steps_load_only_what_they_use() -> None:
 
 
 def test_cli_help_lists_commands() -> None:
-    r = subprocess.run([sys.executable, "-m", "amigo_gym.cli", "--help"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "amigo_gym.tools.cli", "--help"], capture_output=True, text=True)
     assert r.returncode == 0
     for cmd in ("inverse", "paper", "train", "evaluate", "compare"):
         assert cmd in r.stdout
 
 
 def test_cli_unknown_command_is_one_line_error() -> None:
-    r = subprocess.run([sys.executable, "-m", "amigo_gym.cli", "nonsense"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "amigo_gym.tools.cli", "nonsense"], capture_output=True, text=True)
     assert r.returncode == 2
     assert len(r.stderr.strip().splitlines()) == 1
     assert "unknown command" in r.stderr

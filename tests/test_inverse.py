@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.analysis.verify import round_trip_error
 from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task.inverse import (
@@ -24,6 +23,7 @@ from amigo_gym.task.inverse import (
     solve_inverse,
     time_grid,
 )
+from amigo_gym.tools.analysis.verify import round_trip_error
 
 ROBOT = RobotParams()
 L1, L3, R1, R2 = ROBOT.l1, ROBOT.l3, ROBOT.r1, ROBOT.r2

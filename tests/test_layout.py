@@ -1,13 +1,13 @@
-"""The package's layout (issue 19, docs/architecture.md): imports point down the layers, no circles, a small root.
+"""The package's layout (docs/architecture.md): imports point down the layers, no circles, the core never imports
+the tools layer, nothing imports the CLI, a small root.
 
 The structure is read from the source by :mod:`tests.layout` (``ast``; imports inside functions count). A test
-that the checker itself sees what it should: a made-up package with a circle and an upward import.
+that the checker itself sees what it should: made-up packages with a circle, an upward import and core modules
+importing the tools.
 """
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -30,62 +30,65 @@ def test_the_root_holds_at_most_eight_modules() -> None:
 
 
 def test_nothing_imports_the_cli() -> None:
-    graph = layout.imports(layout.modules())
-    users = sorted(
-        a for a, bs in graph.items() for b in bs if b.startswith("amigo_gym.cli") and not a.startswith("amigo_gym.cli")
-    )
-    assert users == []
+    assert layout.imports_of_the_cli(layout.imports(layout.modules())) == []
+
+
+def test_the_core_never_imports_the_tools_layer() -> None:
+    mods = layout.modules()
+    assert any(layout.within(m, layout.TOOLS) for m in mods) and any(not layout.within(m, layout.TOOLS) for m in mods)
+    assert layout.core_imports_of_tools(layout.imports(mods)) == []
+
+
+def _package(root: Path, files: dict[str, str]) -> dict[str, set[str]]:
+    """The import graph of a made-up ``amigo_gym`` under ``root`` of ``{relative path: source}`` (empty
+    ``__init__.py`` files added where missing)."""
+    pkg = root / "amigo_gym"
+    for rel, src in files.items():
+        f = pkg / rel
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_text(src)
+    for d in [pkg, *(p for p in pkg.rglob("*") if p.is_dir())]:
+        if not (d / "__init__.py").exists():
+            (d / "__init__.py").write_text("")
+    return layout.imports(layout.modules(pkg))
 
 
 def test_the_checker_finds_a_circle_and_an_upward_import(tmp_path: Path) -> None:
-    pkg = tmp_path / "amigo_gym"
-    (pkg / "model").mkdir(parents=True)
-    (pkg / "envs").mkdir()
-    (pkg / "__init__.py").write_text("")
-    (pkg / "model" / "__init__.py").write_text("")
-    (pkg / "envs" / "__init__.py").write_text("")
-    (pkg / "model" / "a.py").write_text("from amigo_gym.model import b\n")
-    (pkg / "model" / "b.py").write_text(
-        "def f():\n    from amigo_gym.model.a import x\n    from amigo_gym.envs import e\n"
+    graph = _package(
+        tmp_path,
+        {
+            "model/a.py": "from amigo_gym.model import b\n",
+            "model/b.py": "def f():\n    from amigo_gym.model.a import x\n    from amigo_gym.envs import e\n",
+            "envs/e.py": "import amigo_gym.envs\n",
+        },
     )
-    (pkg / "envs" / "e.py").write_text("import amigo_gym.envs\n")
-    graph = layout.imports(layout.modules(pkg))
     assert layout.circles(graph) == [["amigo_gym.model.a", "amigo_gym.model.b"]]
     assert layout.upward(graph) == [("amigo_gym.model.b", "amigo_gym.envs.e")]
 
 
-OLD_NAMES = {
-    "amigo_gym.params": "amigo_gym.model.params",
-    "amigo_gym.kinematics": "amigo_gym.model.kinematics",
-    "amigo_gym.tracking": "amigo_gym.task.v1",
-    "amigo_gym.inverse": "amigo_gym.task.inverse",
-    "amigo_gym.fast": "amigo_gym.sim.fast",
-    "amigo_gym.rendering": "amigo_gym.envs.rendering",
-}
-
-
-@pytest.mark.parametrize("old, new", sorted(OLD_NAMES.items()))
-def test_an_old_module_name_imports_the_moved_module_with_a_warning(old: str, new: str) -> None:
-    code = (
-        "import importlib, warnings\n"
-        "import amigo_gym\n"
-        "with warnings.catch_warnings(record=True) as w:\n"
-        "    warnings.simplefilter('always')\n"
-        f"    a = importlib.import_module({old!r})\n"
-        f"b = importlib.import_module({new!r})\n"
-        "print(a is b, [str(x.message) for x in w if issubclass(x.category, DeprecationWarning)])\n"
+def test_the_checker_finds_a_core_module_that_imports_the_tools(tmp_path: Path) -> None:
+    """Each way a core module can reach the tools (import, from-import of a module or a name, inside a function,
+    importlib with a literal name) is found; the tools importing the core and each other are not reported."""
+    graph = _package(
+        tmp_path,
+        {
+            "envs/a.py": "import amigo_gym.tools.training.train\n",
+            "envs/b.py": "from amigo_gym.tools import runs\n",
+            "policies/c.py": "def f():\n    from amigo_gym.tools.runs import RunLock\n",
+            "logs.py": "import importlib\nm = importlib.import_module('amigo_gym.tools.cli')\n",
+            "model/ok.py": "import amigo_gym.envs.a\n",
+            "tools/runs.py": "import amigo_gym.model.ok\n",
+            "tools/training/train.py": "from amigo_gym.tools import runs\n",
+            "tools/cli/__init__.py": "import amigo_gym.tools.training.train\n",
+        },
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.startswith("True"), out
-    assert f"{old} moved to {new}" in out, out
-
-
-def test_every_old_name_is_mapped_to_a_module_that_exists() -> None:
-    from amigo_gym import _compat
-
-    mods = layout.modules()
-    assert all(new in mods for new in _compat.MOVED.values())
-    assert not any(old in mods for old in _compat.MOVED)  # an old name never shadows a module of today
+    assert layout.core_imports_of_tools(graph) == [
+        ("amigo_gym.envs.a", "amigo_gym.tools.training.train"),
+        ("amigo_gym.envs.b", "amigo_gym.tools.runs"),
+        ("amigo_gym.logs", "amigo_gym.tools.cli"),
+        ("amigo_gym.policies.c", "amigo_gym.tools.runs"),
+    ]
+    assert layout.imports_of_the_cli(graph) == [("amigo_gym.logs", "amigo_gym.tools.cli")]
 
 
 def test_old_task_names_are_found_with_a_warning() -> None:

@@ -17,9 +17,9 @@ import pytest
 
 import amigo_gym  # noqa: F401  (registers the environments)
 from amigo_gym import logs
-from amigo_gym.cli import main
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
+from amigo_gym.tools.cli import main
 
 sys.path.insert(0, str(Path(__file__).parent))
 import logsim
@@ -360,7 +360,7 @@ def test_out_folder_is_refused_when_not_empty_and_replaced_with_force(csv_log: P
 
 
 def test_a_failing_writer_leaves_nothing(tmp_path: Path) -> None:
-    from amigo_gym.analysis.replay import write_folder
+    from amigo_gym.tools.analysis.replay import write_folder
 
     def fail(path: str) -> None:
         Path(path).write_text("half")

@@ -33,7 +33,7 @@ TINY_PPO = """AmigoBot-v0:
 def cli(*args: str, cwd: Path = ROOT, timeout: float = 240) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", *args],
         cwd=cwd,
         env=env,
         capture_output=True,
@@ -74,7 +74,7 @@ def test_evaluate_has_its_own_default_folder_and_refuses_a_compare_output_set(
 
 # --------------------------------------------------------------------------- train says what it rounds to
 def test_planned_timesteps_is_the_next_whole_rollout() -> None:
-    from amigo_gym.training.train import planned_timesteps
+    from amigo_gym.tools.training.train import planned_timesteps
 
     assert planned_timesteps(0, 1, (4096, "n_steps 256 x 16 envs")) == (4096, "n_steps 256 x 16 envs")
     assert planned_timesteps(0, 4096, (4096, "x"))[0] == 4096
@@ -106,20 +106,10 @@ def test_seeds_counts_the_starts_in_convergence_as_in_evaluate_and_compare() -> 
         assert re.search(r"--seeds SEEDS [^-]*(number|how many|perturbed starts)", help_text), (command, help_text)
 
 
-def test_the_old_convergence_spelling_still_works_with_a_warning() -> None:
-    quick = ("--gains", "3", "--steps", "45", "--t-from", "1", "--t-to", "4")
-    old = cli("convergence", *quick, "--seeds", "101", "--seed-count", "2")  # --seeds was the first seed
-    new = cli("convergence", *quick, "--first-seed", "101", "--seeds", "2")
-    assert old.returncode == 0 and new.returncode == 0, old.stderr + new.stderr
-    assert old.stdout == new.stdout  # the same starts, the same table
-    assert "deprecated" in old.stderr and "--first-seed 101 --seeds 2" in old.stderr
-    assert len(old.stderr.strip().splitlines()) == 1 and new.stderr == ""
-
-
 # --------------------------------------------------------------------------- one naming of the agents
 def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
-    from amigo_gym.training.benchmark import ALGOS, RETIRED_V1_AGENTS, V1_AGENTS, default_agents
-    from amigo_gym.training.compare import v0_name
+    from amigo_gym.tools.training.benchmark import ALGOS, RETIRED_V1_AGENTS, V1_AGENTS, default_agents
+    from amigo_gym.tools.training.compare import v0_name
 
     names = {a.name for a in default_agents()}
     assert {"analytic", "analytic_ff"} <= names
@@ -135,7 +125,7 @@ def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
 
 # --------------------------------------------------------------------------- reports
 def test_unavailable_runs_are_one_line_per_agent_and_reason() -> None:
-    from amigo_gym.training.benchmark import unavailable_lines
+    from amigo_gym.tools.training.benchmark import unavailable_lines
 
     reason = "observation shape (10,) of the scenario differs from the model's (20,)"
     rows = [
@@ -152,7 +142,7 @@ def test_unavailable_runs_are_one_line_per_agent_and_reason() -> None:
 
 
 def test_printed_commands_show_no_temporary_paths(tmp_path: Path) -> None:
-    from amigo_gym.training.compare import display_command
+    from amigo_gym.tools.training.compare import display_command
 
     cmd = "amigo-gym train --algo ppo --out /tmp/retrain/runs/ppo --export /tmp/retrain/export --export-model best"
     shown = display_command(cmd, root=tmp_path)

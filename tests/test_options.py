@@ -1,4 +1,4 @@
-"""Options derived from a settings dataclass (amigo_gym.options): one source for each default and help."""
+"""Options derived from a settings dataclass (amigo_gym.tools.options): one source for each default and help."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Any, Literal
 
 import pytest
 
-from amigo_gym.options import (
+from amigo_gym.tools.options import (
     OneLineParser,
     add_dataclass_options,
     attribute_help,

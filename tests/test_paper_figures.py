@@ -17,7 +17,11 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "paper", *args], cwd=ROOT, capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "amigo_gym.tools.cli", "paper", *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
 
 

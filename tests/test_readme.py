@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from amigo_gym.cli import COMMANDS
+from amigo_gym.tools.cli import COMMANDS
 
 ROOT = Path(__file__).resolve().parents[1]
 

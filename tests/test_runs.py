@@ -4,7 +4,7 @@ Kills are real: a training process is started with ``AMIGO_GYM_FAULT=<stage>[@n]
 there (:func:`amigo_gym.io.fault_point`). After every fault the folder must hold a complete checkpoint
 (or none yet), and the resumed run must reach the same final step count with no lost or half-written
 file and no duplicate evaluation. The runs that are not killed (the final resumes, the refused second
-process) call ``amigo_gym.cli.main`` in the test's process: another process than the killed or running one,
+process) call ``amigo_gym.tools.cli.main`` in the test's process: another process than the killed or running one,
 without paying torch's import again.
 """
 
@@ -23,8 +23,8 @@ from typing import Any
 
 import pytest
 
-from amigo_gym import runs
-from amigo_gym.training.compare import verify_outputs
+from amigo_gym.tools import runs
+from amigo_gym.tools.training.compare import verify_outputs
 
 ROOT = Path(__file__).resolve().parent.parent  # the checkout under test (also in CI's editable install)
 
@@ -57,7 +57,7 @@ def env_for(fault: str | None) -> dict[str, str]:
 
 
 def train_cmd(*args: str) -> list[str]:
-    return [sys.executable, "-m", "amigo_gym.cli", "train", "--no-progress", *args]
+    return [sys.executable, "-m", "amigo_gym.tools.cli", "train", "--no-progress", *args]
 
 
 def run(args: list[str], fault: str | None = None, timeout: float = 120) -> subprocess.CompletedProcess[str]:
@@ -178,7 +178,7 @@ def test_every_stage_of_a_checkpoint_save(tmp_path: Path) -> None:
     script = """
 import sys
 from pathlib import Path
-from amigo_gym import runs
+from amigo_gym.tools import runs
 out = Path(sys.argv[1])
 def writer(step):
     def write(folder):
@@ -274,7 +274,7 @@ HP_FILE: list[str] = []
 @pytest.fixture(scope="module")
 def finished_sac(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished tiny SAC run (in process) with two checkpoints, 96 and 160."""
-    from amigo_gym.training.train import Settings, train
+    from amigo_gym.tools.training.train import Settings, train
 
     d = tmp_path_factory.mktemp("sac")
     hp_file = hp(d, SAC, "sac.yml")
@@ -291,7 +291,7 @@ def finished_sac(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def resume(out: Path, total: int = 160) -> dict[str, Any]:
-    from amigo_gym.training.train import Settings, train
+    from amigo_gym.tools.training.train import Settings, train
 
     s = Settings(
         algo="sac", seed=2, out=str(out), timesteps=total, hyperparams=HP_FILE[0], eval_freq=80,
@@ -439,8 +439,8 @@ def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded
 ) -> None:
     import pickle
 
-    from amigo_gym.training.benchmark import AgentSpec
-    from amigo_gym.training.evaluate import find_models, load_model
+    from amigo_gym.tools.training.benchmark import AgentSpec
+    from amigo_gym.tools.training.evaluate import find_models, load_model
 
     out = tmp_path / "run"
     shutil.copytree(finished_sac, out)
@@ -482,7 +482,7 @@ def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded
 
 # --------------------------------------------------------------------------- result files
 def test_evaluate_writes_null_not_nan(tmp_path: Path) -> None:
-    from amigo_gym.training.evaluate import EvalProtocol, markdown_table, write_outputs
+    from amigo_gym.tools.training.evaluate import EvalProtocol, markdown_table, write_outputs
 
     row = {"agent": "a", "scenario": "nominal", "h_rms_m": 1e-3, "h_rms_settled_m": float("nan")}
     row |= {"h_max_m": 1e-3, "settling_time_s": None, "wheel_rate_dev_rms": 0.0, "wheel_rate_dev_steady_rms": 0.0}
@@ -500,7 +500,7 @@ def test_evaluate_writes_null_not_nan(tmp_path: Path) -> None:
 def compare(out: Path, fault: str | None = None) -> subprocess.CompletedProcess[str]:
     args = ["--out", str(out), "--models", "", "--train-steps", "0", "--seeds", "1", "--steps", "20", "--no-plots"]
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "compare", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "compare", *args],
         cwd=ROOT,
         env=env_for(fault),
         capture_output=True,
@@ -537,7 +537,7 @@ def test_shipped_models_match_their_manifests() -> None:
 
 def test_models_are_checked_before_loading(tmp_path: Path) -> None:
     from amigo_gym.data import pretrained_dir
-    from amigo_gym.training.evaluate import load_agents
+    from amigo_gym.tools.training.evaluate import load_agents
 
     shutil.copy(pretrained_dir() / "td3.zip", tmp_path / "td3.zip")
     shutil.copy(pretrained_dir() / "td3.json", tmp_path / "td3.json")
@@ -556,7 +556,7 @@ def test_a_clean_exit_removes_the_lock_file_and_a_kill_leaves_a_harmless_one(tmp
     with runs.RunLock(tmp_path):
         assert (tmp_path / runs.LOCK_NAME).read_text().strip() == str(os.getpid())
     assert not (tmp_path / runs.LOCK_NAME).exists()
-    script = "import os, sys\nfrom amigo_gym import runs\nruns.RunLock(sys.argv[1]).acquire()\nos._exit(0)\n"
+    script = "import os, sys\nfrom amigo_gym.tools import runs\nruns.RunLock(sys.argv[1]).acquire()\nos._exit(0)\n"
     r = subprocess.run([sys.executable, "-c", script, str(tmp_path)], env=env_for(None), capture_output=True)
     assert r.returncode == 0 and (tmp_path / runs.LOCK_NAME).exists()  # died holding it (no release)
     with runs.RunLock(tmp_path):  # the next process takes the stale file over
@@ -587,7 +587,7 @@ def test_clean_temporaries_removes_only_the_package_temporaries(tmp_path: Path) 
     """A user's dot-files in an --out folder (.git, .env, .gitignore) survive; what killed writers left goes."""
     import tempfile
 
-    from amigo_gym.runs import clean_temporaries
+    from amigo_gym.tools.runs import clean_temporaries
 
     keep = [".git", ".env", ".gitignore", ".venv", ".DS_Store", "notes.txt"]
     for name in keep:

@@ -1,4 +1,4 @@
-"""TD3 with the low-pass actor (``policy: LowPassMlpPolicy``, :mod:`amigo_gym.training.sb3_lowpass`).
+"""TD3 with the low-pass actor (``policy: LowPassMlpPolicy``, :mod:`amigo_gym.tools.training.sb3_lowpass`).
 
 References: the filter recomputed in numpy from the saved weights (not through the module), and the env's own
 ``previous_command`` field over a rollout.
@@ -17,9 +17,9 @@ from stable_baselines3 import TD3
 
 import amigo_gym  # noqa: F401
 from amigo_gym.task.v1 import obs_fields
-from amigo_gym.training.hyperparams import parse_hyperparams
-from amigo_gym.training.sb3_lowpass import LowPassTD3Policy, check_filter, policy_for
-from amigo_gym.training.train import make_train_env
+from amigo_gym.tools.training.hyperparams import parse_hyperparams
+from amigo_gym.tools.training.sb3_lowpass import LowPassTD3Policy, check_filter, policy_for
+from amigo_gym.tools.training.train import make_train_env
 
 ALPHA = 0.3
 

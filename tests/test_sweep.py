@@ -28,7 +28,7 @@ import pytest
 optuna = pytest.importorskip("optuna")
 from optuna.trial import TrialState  # noqa: E402
 
-from amigo_gym.training.sweep import driver_url  # noqa: E402
+from amigo_gym.tools.training.sweep import driver_url  # noqa: E402
 
 TINY = "AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [16]\n"
 PG_ROOT = Path("/usr/lib/postgresql")  # Debian's layout: <version>/bin/initdb (15 here; any version works)
@@ -63,7 +63,7 @@ def _common(tmp: Path, *extra: str) -> list[str]:
 def _sweep(args: list[str], **kw: object) -> subprocess.Popen[str]:
     env = dict(os.environ, PYTHONWARNINGS="ignore")
     return subprocess.Popen(  # type: ignore[call-overload, no-any-return]
-        [sys.executable, "-m", "amigo_gym.cli", "sweep", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -79,13 +79,13 @@ def _finish(p: subprocess.Popen[str], timeout: float = 120) -> str:
 
 
 def _sweep_here(capsys: pytest.CaptureFixture[str], args: list[str]) -> str:
-    """``amigo-gym sweep ARGS`` with one job in this process (``amigo_gym.cli.main``; one job runs its trials in
+    """``amigo-gym sweep ARGS`` with one job in this process (``amigo_gym.tools.cli.main``; one job runs its trials in
     the calling process, as :func:`_sweep`'s process did): for the runs that nobody kills, without another
     process paying torch's import. Its printed output (stdout and stderr). Optuna's experimental-feature warnings
     (the heartbeat) are ignored, as :func:`_sweep`'s ``PYTHONWARNINGS=ignore`` does; every other warning counts."""
     import warnings
 
-    from amigo_gym.cli import main
+    from amigo_gym.tools.cli import main
 
     capsys.readouterr()
     with warnings.catch_warnings():
@@ -338,7 +338,7 @@ def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(
 def test_bad_sweep_settings_are_refused_in_one_line(
     tmp_path: Path, extra: list[str], message: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.training.sweep import main
+    from amigo_gym.tools.training.sweep import main
 
     with pytest.raises(SystemExit) as exc:
         main(["--algo", "ppo", "--out", str(tmp_path / "out"), *extra])
@@ -349,7 +349,7 @@ def test_bad_sweep_settings_are_refused_in_one_line(
 
 
 def test_bad_sweep_settings_messages(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from amigo_gym.training.sweep import main
+    from amigo_gym.tools.training.sweep import main
 
     for extra, message in (
         (["--study-name", "../../escaped"], "--study-name must be a name"),
@@ -364,7 +364,7 @@ def test_bad_sweep_settings_messages(tmp_path: Path, capsys: pytest.CaptureFixtu
 
 
 def test_password_masking_helpers() -> None:
-    from amigo_gym.training.sweep import masked_url, public_argv, scrub
+    from amigo_gym.tools.training.sweep import masked_url, public_argv, scrub
 
     url = "postgresql://user:p%40ss w0rd@db:5432/amigo"
     assert masked_url(url) == "postgresql://user:***@db:5432/amigo"
@@ -383,8 +383,8 @@ def test_password_masking_helpers() -> None:
 
 
 def test_validation_cells_are_held_in_scenarios_on_seeds_the_benchmark_never_tests() -> None:
-    from amigo_gym.training.benchmark import SUITE
-    from amigo_gym.training.sweep import VALIDATION_SEED_BASE, validation_cells
+    from amigo_gym.tools.training.benchmark import SUITE
+    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE, validation_cells
 
     test_seeds = {s for sc in SUITE for s in sc.seeds}
     for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
@@ -456,7 +456,7 @@ def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_pat
 
 def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("psycopg2")
-    from amigo_gym.training.sweep import main
+    from amigo_gym.tools.training.sweep import main
 
     url = f"postgresql://someone:{SECRET}@127.0.0.1:{_free_port()}/nowhere"
     rc = main(["--algo", "ppo", "--storage", url, "--out", str(tmp_path / "out")])
@@ -469,8 +469,8 @@ def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.C
 def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
-    from amigo_gym.training.sweep import VALIDATION_SEED_BASE
+    from amigo_gym.tools.training.benchmark import SUITE, TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE
 
     hp = tmp_path / "tiny_v1.yml"
     hp.write_text(TINY.replace("AmigoBot-v0", "AmigoBot-v1"))
@@ -503,7 +503,7 @@ def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_ce
 
 @pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")  # the heartbeat thread's own DB
 def test_in_memory_storage_with_one_job_runs_and_summarises(tmp_path: Path) -> None:
-    from amigo_gym.training.sweep import main
+    from amigo_gym.tools.training.sweep import main
 
     args = _common(tmp_path, "--storage", "sqlite:///:memory:", "--n-trials", "1", "--study-name", "mem")
     assert main(args) == 0
@@ -518,7 +518,7 @@ def test_a_trials_end_records_validation_errors_and_a_nan_objective() -> None:
     with a ``fail_reason`` naming it (Optuna: FAIL, never PRUNED)."""
     from types import SimpleNamespace
 
-    from amigo_gym.training.sweep import OBJECTIVE, _validated_trial
+    from amigo_gym.tools.training.sweep import OBJECTIVE, _validated_trial
 
     cells = [SimpleNamespace(seeds=(1_000_000, 1_000_001))]
     outcomes: list[Any] = [(0.25, {"a": 0.2, "b": 0.3}), ValueError("no model.zip"), (math.nan, {"a": None})]
@@ -551,8 +551,8 @@ def test_a_trials_end_records_validation_errors_and_a_nan_objective() -> None:
 def test_enqueue_base_runs_the_base_files_values_first() -> None:
     """``--enqueue-base``: the study's first trial is the base YAML's own values (read back by the same
     sampling code as every trial), and the high-throughput file samples its batch sizes from its own range."""
-    from amigo_gym.training.hyperparams import load_hyperparams
-    from amigo_gym.training.sweep import HT_BATCH_SIZES, SweepConfig, base_params, open_study, sample_hyperparams
+    from amigo_gym.tools.training.hyperparams import load_hyperparams
+    from amigo_gym.tools.training.sweep import HT_BATCH_SIZES, SweepConfig, base_params, open_study, sample_hyperparams
 
     base_file = Path(__file__).resolve().parents[1] / "agents" / "hyperparams" / "td3_lowpass.yml"
     base = load_hyperparams(base_file, "AmigoBot-v1")
@@ -585,7 +585,7 @@ def test_enqueue_base_runs_the_base_files_values_first() -> None:
     ],
 )
 def test_enqueue_base_refuses_seeds_mode_and_fastppo(kw: dict[str, Any], match: str) -> None:
-    from amigo_gym.training.sweep import SweepConfig, base_params
+    from amigo_gym.tools.training.sweep import SweepConfig, base_params
 
     with pytest.raises(ValueError, match=match):
         SweepConfig(enqueue_base=True, **kw).validate()  # type: ignore[arg-type]

@@ -2,7 +2,7 @@
 
 Tiny budgets: 64 robots, 8- or 16-step rollouts, a 16-unit network, 100-step training episodes, one validation
 episode of 20 steps per held-in cell. The sweep runs as the console command would (a subprocess) where it is
-stopped by a signal; the other commands run through ``amigo_gym.cli.main`` in this process, and the pruned trial
+stopped by a signal; the other commands run through ``amigo_gym.tools.cli.main`` in this process, and the pruned trial
 calls the objective directly (it needs a pruner of its own).
 """
 
@@ -49,9 +49,9 @@ def _weights(model: Path) -> list[np.ndarray]:
 def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.training.benchmark import SUITE, TRAINING_DISTRIBUTION
-    from amigo_gym.training.fastppo import FastPPOSettings, load_settings_yaml
-    from amigo_gym.training.sweep import VALIDATION_SEED_BASE
+    from amigo_gym.tools.training.benchmark import SUITE, TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
+    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE
 
     target = tmp_path / "hp.yml"  # a file with another block, whose comment and values must survive
     other = "# kept as written\nAmigoBot-v0:\n  n_steps: 32  # a comment\n\n"
@@ -99,7 +99,7 @@ def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
 def test_a_pruned_fastppo_trial_stops_training_at_the_pruned_evaluation(tmp_path: Path) -> None:
     """The pruner's verdict stops the training itself: a threshold pruner that prunes any value above 0 from step
     2048 on leaves three reports and three evaluations, and no model."""
-    from amigo_gym.training.sweep import SweepConfig, _objective
+    from amigo_gym.tools.training.sweep import SweepConfig, _objective
 
     cfg = SweepConfig(
         algos=["fastppo"], env_id="AmigoBot-v1", hyperparams=str(_tiny_file(tmp_path)), timesteps=8192,
@@ -124,7 +124,7 @@ def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_g
     """A SIGTERM'd fastppo trial stops after a checkpoint and is queued again; the rerun continues it from that
     checkpoint (curve rows from before the stop kept) to the model an uninterrupted run gives, bit for bit, and
     trains the rest of the grid with the file's settings."""
-    from amigo_gym.training.fastppo import FastPPOSettings, train
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, train
 
     base = _args(tmp_path, "--mode", "seeds", "--seeds", "0", "1", "--study-name", "grid")
     base[base.index("--timesteps") + 1] = "40960"  # 40 iterations: long enough to be stopped part-way
@@ -177,7 +177,7 @@ def test_sigterm_requeues_a_fastppo_cell_and_the_rerun_resumes_it_and_runs_the_g
 def test_bad_fastppo_sweeps_are_refused_in_one_line(
     tmp_path: Path, extra: list[str], yml: dict[str, object] | None, message: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.training.sweep import main
+    from amigo_gym.tools.training.sweep import main
 
     args = _args(tmp_path)
     if yml is not None:
@@ -195,7 +195,7 @@ def test_bad_fastppo_sweeps_are_refused_in_one_line(
 
 # --------------------------------------------------------------------------- train-fast --hyperparams
 def test_train_fast_takes_a_settings_file_and_the_command_line_overrides_it(tmp_path: Path) -> None:
-    from amigo_gym.training.fastppo import main
+    from amigo_gym.tools.training.fastppo import main
 
     f = _tiny_file(tmp_path, epochs=3)
     rc = main(["--out", str(tmp_path / "run"), "--hyperparams", str(f), "--epochs", "2", "--total-steps", "1024",
@@ -210,7 +210,7 @@ def test_train_fast_takes_a_settings_file_and_the_command_line_overrides_it(tmp_
 
 
 def test_train_fast_refuses_a_bad_settings_file_in_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from amigo_gym.training.fastppo import main
+    from amigo_gym.tools.training.fastppo import main
 
     for content, message in (
         ({"AmigoBot-v1": {"n_steps": 8}}, "unknown key(s) for fastppo: n_steps"),
@@ -230,7 +230,7 @@ def test_train_fast_refuses_a_bad_settings_file_in_one_line(tmp_path: Path, caps
 def test_shipped_fastppo_file_gives_the_shipped_generalists_settings() -> None:
     """agents/hyperparams/fastppo.yml holds the settings the shipped ppo_fast seeds were trained with."""
     from amigo_gym.data import hyperparams_dir, pretrained_dir
-    from amigo_gym.training.fastppo import FastPPOSettings, load_settings_yaml
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
 
     file = load_settings_yaml(hyperparams_dir() / "fastppo.yml")
     for manifest in sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.json")):
@@ -242,7 +242,7 @@ def test_shipped_fastppo_file_gives_the_shipped_generalists_settings() -> None:
 
 
 def test_replace_yaml_block_keeps_the_other_blocks_as_written() -> None:
-    from amigo_gym.training.sweep import replace_yaml_block
+    from amigo_gym.tools.training.sweep import replace_yaml_block
 
     text = "# head of v0\nAmigoBot-v0:\n  a: 1\n\n# v1 says\n# more\nAmigoBot-v1:\n  b: 2\n\n# tail key\nX:\n  c: 3\n"
     new = replace_yaml_block(text, "AmigoBot-v1", "# new\nAmigoBot-v1:\n  b: 5\n")
@@ -262,8 +262,8 @@ def test_a_retry_resumes_the_newest_abandoned_checkpoint_of_the_same_settings(tm
     parameters and settings; never that of a trial that failed by its own error or trained other settings."""
     from optuna.distributions import CategoricalDistribution
 
-    from amigo_gym.training.fastppo import FastPPOSettings, train
-    from amigo_gym.training.sweep import _resume_fastppo
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, train
+    from amigo_gym.tools.training.sweep import _resume_fastppo
 
     kw = {**TINY, "hidden": (16,), "rollout_steps": 8, "total_steps": 2048, "eval_envs": 2}
     s, other = FastPPOSettings(**kw), FastPPOSettings(**kw, seed=1)  # type: ignore[arg-type]

@@ -1,4 +1,4 @@
-"""The symbolic D–H derivation (amigo_gym.model.symbolic) against the numeric core, docs/model.md and the paper's
+"""The symbolic D–H derivation (amigo_gym.tools.symbolic) against the numeric core, docs/model.md and the paper's
 misprints.
 
 References: the numeric kinematics of :mod:`amigo_gym.model.kinematics` (an independent implementation), the equations
@@ -19,10 +19,10 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from amigo_gym.cli import main as cli_main
 from amigo_gym.model import kinematics as K
-from amigo_gym.model import symbolic as S
 from amigo_gym.model.params import RobotParams
+from amigo_gym.tools import symbolic as S
+from amigo_gym.tools.cli import main as cli_main
 
 Array = np.ndarray[Any, np.dtype[np.float64]]
 
@@ -378,7 +378,7 @@ def test_import_amigo_gym_does_not_import_sympy() -> None:
     code = (
         "import sys, gymnasium as gym, amigo_gym, amigo_gym.model.kinematics, amigo_gym.paths, amigo_gym.task.v0\n"
         "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
-        "print('sympy' in sys.modules, 'amigo_gym.model.symbolic' in sys.modules)"
+        "print('sympy' in sys.modules, 'amigo_gym.tools.symbolic' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False"]

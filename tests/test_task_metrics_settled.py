@@ -1,4 +1,4 @@
-"""Settled task metrics (t >= settle time) against closed forms (amigo_gym.training.task_metrics)."""
+"""Settled task metrics (t >= settle time) against closed forms (amigo_gym.tools.training.task_metrics)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from amigo_gym.training.task_metrics import METRIC_NAMES, episode_metrics
+from amigo_gym.tools.training.task_metrics import METRIC_NAMES, episode_metrics
 
 
 def test_settled_metrics_of_a_ramp_then_a_square_wave() -> None:

@@ -1,7 +1,7 @@
 """``amigo-gym train`` with tiny budgets: outputs, resume, interruption, bad input.
 
 The interrupted run (SIGTERM) and the bad-argument checks run the command by subprocess; the other runs call
-``amigo_gym.cli.main`` in this process (the same dispatcher, without paying torch's import per run)."""
+``amigo_gym.tools.cli.main`` in this process (the same dispatcher, without paying torch's import per run)."""
 
 from __future__ import annotations
 
@@ -57,7 +57,7 @@ TINY = {
 def run_train(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "train", "--no-progress", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "train", "--no-progress", *args],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -125,7 +125,7 @@ def test_sigterm_leaves_checkpoint_and_resume_finishes(tmp_path: Path, train_her
     common = ["--algo", "ppo", "--seed", "0", "--out", str(out), "--hyperparams", hp, "--eval-freq", "0"]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     proc = subprocess.Popen(
-        [sys.executable, "-m", "amigo_gym.cli", "train", "--no-progress", *common, "--timesteps", "10000000"],
+        [sys.executable, "-m", "amigo_gym.tools.cli", "train", "--no-progress", *common, "--timesteps", "10000000"],
         cwd=ROOT,
         env=env,
         stdout=subprocess.PIPE,

@@ -42,7 +42,7 @@ TD3_OU = """AmigoBot-v0:
 def cli(*args: str, timeout: float = 180) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", *args],
+        [sys.executable, "-m", "amigo_gym.tools.cli", *args],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -83,7 +83,7 @@ def test_run_folder_is_evaluated(runs: Path, tmp_path: Path) -> None:
 
 def test_folder_of_runs_model_zip_and_pretrained_layout(runs: Path, tmp_path: Path) -> None:
     from amigo_gym.data import pretrained_dir
-    from amigo_gym.training.evaluate import find_models
+    from amigo_gym.tools.training.evaluate import find_models
 
     def found(p: Path) -> set[tuple[str, str, str]]:
         return {(r.name, r.algo, r.model.name) for r in find_models(p)}
@@ -100,7 +100,7 @@ def test_normalized_model_sees_normalized_observations(runs: Path) -> None:
 
     from stable_baselines3 import PPO
 
-    from amigo_gym.training.evaluate import load_agents
+    from amigo_gym.tools.training.evaluate import load_agents
 
     agent = load_agents(runs / "ppo_run")["ppo_run"]
     with open(runs / "ppo_run" / "vecnormalize.pkl", "rb") as f:

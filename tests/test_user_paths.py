@@ -263,7 +263,7 @@ def test_a_points_file_in_one_line(tmp_path: Any) -> None:
 
 
 def test_benchmark_on_a_points_file_reports_the_limits(tmp_path: Any) -> None:
-    from amigo_gym.training import benchmark
+    from amigo_gym.tools.training import benchmark
 
     f = _tight_csv(tmp_path)
     out = tmp_path / "bench"
@@ -325,7 +325,7 @@ def test_a_users_own_locate_is_used_and_checked() -> None:
 def test_benchmark_refuses_a_bad_points_file(
     tmp_path: Any, capsys: pytest.CaptureFixture[str], name: str, text: str | None, message: str
 ) -> None:
-    from amigo_gym.training import benchmark
+    from amigo_gym.tools.training import benchmark
 
     f = tmp_path / name
     if text is not None:

@@ -208,7 +208,7 @@ def test_disabled_mode_refuses_stepping_finished_envs() -> None:
 def test_bench_env_smoke_and_bad_arguments(tmp_path: Any, capsys: pytest.CaptureFixture[str]) -> None:
     import json
 
-    from amigo_gym.bench.env import main
+    from amigo_gym.tools.bench.env import main
 
     out = tmp_path / "bench.json"
     assert main(["--quick", "--sizes", "1", "8", "--sync-max", "8", "--json", str(out)]) == 0

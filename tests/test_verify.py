@@ -7,12 +7,12 @@ import sys
 
 import pytest
 
-from amigo_gym.analysis import verify
+from amigo_gym.tools.analysis import verify
 
 
 def test_verify_quick_passes_and_prints_the_bounds_it_claims() -> None:
     r = subprocess.run(
-        [sys.executable, "-m", "amigo_gym.cli", "verify", "--quick"], capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "amigo_gym.tools.cli", "verify", "--quick"], capture_output=True, text=True, timeout=300
     )
     assert r.returncode == 0, r.stderr
     rows = [ln.split("|")[1:5] for ln in r.stdout.splitlines() if ln.startswith("| ") and "---" not in ln][1:]

@@ -8,10 +8,9 @@ module              holds
 ``fresnel``         Fresnel-type integrals of the pose over a linear ramp of the wheel rates
 ``actuators``       the firmware's wheel-rate ramps, delays and the exact pose over them
 ``randomization``   the true robot drawn around the nominal one, slip and measurement noise
-``symbolic``        the symbolic D–H derivation (sympy, imported only when used)
 ==================  ==========================================================================================
 
-Imports numpy, these modules and the package's bottom layer (:mod:`amigo_gym.io`, :mod:`amigo_gym.options`); sympy
-only inside ``symbolic``. The analytic inverse solution needs the paths, so it sits above them, in
-:mod:`amigo_gym.task.inverse`.
+Imports numpy, these modules and the package's bottom layer (:mod:`amigo_gym.io`); the symbolic D–H derivation
+(sympy) is a tool, :mod:`amigo_gym.tools.symbolic`. The analytic inverse solution needs the paths, so it sits above
+them, in :mod:`amigo_gym.task.inverse`.
 """

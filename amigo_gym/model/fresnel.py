@@ -33,7 +33,6 @@ step compiles as they are.
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any, Protocol, cast
 
 import numpy as np
@@ -130,20 +129,6 @@ def advance(
     pieces: list[Any] = [v0, a, w0, alpha, t]
     out: tuple[Real, Real, Real] = advance_nodes(buf, 0, m, x, y, theta, pieces, 0, 1, table, 0, m)  # type: ignore[arg-type]
     return out
-
-
-def __getattr__(name: str) -> Any:
-    """``advance_float`` (removed in 0.2: :func:`advance` runs floats and columns alike; goes in 0.3): :func:`advance`,
-    with a warning."""
-    if name == "advance_float":
-        warnings.warn(
-            "amigo_gym.model.fresnel.advance_float is deprecated: since amigo_gym 0.2 fresnel.advance runs Python "
-            "floats and columns alike (the same bits); it goes in 0.3",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return advance
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _nodes(n_sub: int) -> tuple[list[float], list[float]]:

@@ -1,6 +1,6 @@
 r"""Learned ``AmigoBot-v1`` policies in numpy: the fast PPO's models, the residual policy, and :func:`load_pretrained`.
 
-A model trained by :mod:`amigo_gym.training.fastppo` is a zip of two files, ``model.json`` (format, settings,
+A model trained by :mod:`amigo_gym.tools.training.fastppo` is a zip of two files, ``model.json`` (format, settings,
 observation layout) and ``weights.npz`` (the actor's layers and the observation normalisation). Running it
 needs numpy only: :class:`FastPolicy` evaluates the 64x64 tanh network itself, so loading a fast-PPO model
 imports no torch. :func:`load_pretrained` also opens the project's SB3 zips (then stable-baselines3 is

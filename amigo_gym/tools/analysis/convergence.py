@@ -1,0 +1,163 @@
+"""Convergence of the analytic policy from perturbed starts, for several feedback gains.
+
+``amigo-gym convergence`` rolls out :class:`amigo_gym.policies.analytic.AnalyticPolicy` with each gain ``k`` on the
+evaluation protocol's perturbed starts (``reset(seed=s)``, s = 100..109: H within +-2 cm per axis,
+heading +-0.1 rad) and fits, by least squares over all episodes, the slope of ``log|e(t)|`` over a time
+window (default [1, 4] s, after the heading transient and before rounding noise). The halving time
+of H's error is ``ln 2 / -slope``; the continuous-time law alone would give ``ln 2 / k``. Prints a
+Markdown table and, with ``--plot FILE``, draws ``|e(t)|`` on a log scale for every gain.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from amigo_gym.io import atomic_save
+from amigo_gym.model.params import check_range
+from amigo_gym.tools.options import OneLineParser, add_dataclass_options, run_guarded
+
+__all__ = ["GainFit", "Settings", "halving_times", "main"]
+
+
+@dataclass(frozen=True)
+class GainFit:
+    """The fitted decay for one gain.
+
+    Attributes:
+        gain: feedback gain k [1/s].
+        slope: least-squares slope of ``log|e|`` over the window [1/s].
+        halving_s: ``ln 2 / -slope`` [s] (``inf`` if the error does not decay).
+        continuous_halving_s: ``ln 2 / k`` [s], the continuous-time law's.
+        curves: per episode, ``(t [s], |e| [m])``.
+    """
+
+    gain: float
+    slope: float
+    halving_s: float
+    continuous_halving_s: float
+    curves: list[tuple[list[float], list[float]]]
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Options of ``amigo-gym convergence``.
+
+    Attributes:
+        gains: feedback gains ``k`` to compare [1/s], comma-separated on the command line.
+        seeds: how many perturbed starts, as ``--seeds`` of evaluate and compare [episodes].
+        first_seed: reset seed of the first start (seeds ``first_seed``..``first_seed + seeds - 1``) [-].
+        t_from: start of the fit window [s].
+        t_to: end of the fit window [s].
+        steps: steps per episode, dt = 0.1 s [steps].
+        plot: PNG for the ``|e(t)|`` plot [file], '' for none.
+    """
+
+    gains: str = "1,2,3,5"
+    seeds: int = 10
+    first_seed: int = 100
+    t_from: float = 1.0
+    t_to: float = 4.0
+    steps: int = 80
+    plot: str = ""
+
+    def gain_list(self) -> list[float]:
+        """The gains as floats, each validated in (0, 10] 1/s."""
+        try:
+            gains = [float(g) for g in self.gains.split(",") if g.strip()]
+        except ValueError:
+            raise ValueError(f"--gains must be comma-separated numbers, got {self.gains!r}") from None
+        if not gains:
+            raise ValueError("--gains must name at least one gain")
+        return [check_range("Settings", "gains", g, 0.0, 10.0, low_open=True) for g in gains]
+
+
+def halving_times(settings: Settings) -> list[GainFit]:
+    """Fit the error's decay for every gain.
+
+    Raises:
+        ValueError: on a bad window, or if an episode leaves the path.
+    """
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
+    from amigo_gym.policies.analytic import AnalyticPolicy
+    from amigo_gym.tools.training.evaluate import rollout
+
+    check_range("Settings", "t_from", settings.t_from, 0.0)
+    check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
+    if settings.seeds < 1 or settings.steps < 1:
+        raise ValueError(f"--seeds and --steps must be >= 1, got {settings.seeds} and {settings.steps}")
+    env = gym.make("AmigoBot-v0")
+    params = env.unwrapped.params  # type: ignore[attr-defined]
+    out: list[GainFit] = []
+    for k in settings.gain_list():
+        policy = AnalyticPolicy(params, gain=k)
+        ts: list[float] = []
+        logs: list[float] = []
+        curves: list[tuple[list[float], list[float]]] = []
+        for seed in range(settings.first_seed, settings.first_seed + settings.seeds):
+            tr = rollout(policy, env, {"seed": seed}, settings.steps, gain=k)
+            if tr.terminated:
+                raise ValueError(f"gain {k}: the episode with seed {seed} left the path")
+            curves.append((tr.time.tolist(), np.abs(tr.e).tolist()))
+            win = (tr.time >= settings.t_from) & (tr.time <= settings.t_to) & (np.abs(tr.e) > 0)
+            ts += tr.time[win].tolist()
+            logs += np.log(np.abs(tr.e[win])).tolist()
+        # one slope, a separate intercept per episode would be finer; pooled is what the table states
+        slope = float(np.polyfit(np.asarray(ts), np.asarray(logs), 1)[0])
+        halving = math.log(2.0) / -slope if slope < 0 else math.inf
+        out.append(GainFit(k, slope, halving, math.log(2.0) / k, curves))
+    env.close()
+    return out
+
+
+def _plot(rows: list[GainFit], path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.0, 3.8), layout="constrained")
+    for i, row in enumerate(rows):
+        color = f"C{i}"
+        for j, (t, e) in enumerate(row.curves):
+            label = f"k = {row.gain:g} 1/s (halves every {row.halving_s:.2f} s)" if j == 0 else None
+            ax.semilogy(t, np.maximum(e, 1e-12), color=color, lw=0.8, alpha=0.7, label=label)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("|cross-track error of H| [m]")
+    ax.set_title("Analytic policy from perturbed starts (seeds 100-109), dt = 0.1 s")
+    ax.set_ylim(1e-12, 0.05)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
+    parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
+    add_dataclass_options(parser, Settings)
+    settings = Settings(**vars(parser.parse_args(argv)))
+
+    def run() -> int:
+        rows = halving_times(settings)
+        print(f"fit of log|e| over t in [{settings.t_from:g}, {settings.t_to:g}] s, {settings.seeds} seeds")
+        print("| gain k [1/s] | " + " | ".join(f"{r.gain:g}" for r in rows) + " |")
+        print("|---|" + "---|" * len(rows))
+        print("| error halves every [s] | " + " | ".join(f"{r.halving_s:.2f}" for r in rows) + " |")
+        print("| continuous-time ln2/k [s] | " + " | ".join(f"{r.continuous_halving_s:.2f}" for r in rows) + " |")
+        if settings.plot:
+            _plot(rows, settings.plot)
+            print(f"plot: {settings.plot}")
+        return 0
+
+    return run_guarded(run, "amigo-gym convergence")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

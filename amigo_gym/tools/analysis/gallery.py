@@ -1,0 +1,108 @@
+"""``amigo-gym gallery``: a picture of every AmigoBot-v1 path family, driven by the analytic policy.
+
+For each family (circle, manoeuvre, figure-8, lane change, random, and a "hard" randomised robot on a
+figure-8), one episode of ``AmigoBot-v1`` with :class:`amigo_gym.policies.AnalyticTrackingPolicy`,
+rendered with ``render_mode="rgb_array"`` (the reference path, H and its trail, A, the robot outline) at
+the end of the episode, written as ``<out>/v1_<family>.png``. Needs the ``render`` extra (pygame) and
+matplotlib only to write PNG files (``plot`` extra).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+
+__all__ = ["GALLERY", "GallerySettings", "render_family", "main"]
+
+PROG = "amigo-gym gallery"
+
+#: name -> (keyword arguments of gym.make("AmigoBot-v1"), steps)
+GALLERY: dict[str, tuple[dict[str, Any], int]] = {
+    "circle": ({"path": "circle", "radius": 1.0, "speed": 0.3}, 260),
+    "manoeuvre": ({"path": "manoeuvre", "speed_profile": "trapezoid", "profile_duration": 30.0}, 300),
+    "figure8": ({"path": "figure8", "speed": 0.3}, 600),
+    "lane_change": ({"path": "lane_change", "speed": 0.3}, 200),
+    "random": ({"path": "random", "speed": 0.3}, 600),
+    "figure8_hard": ({"path": "figure8", "speed": 0.3, "randomize": "hard"}, 600),
+}
+
+
+def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray, float]:
+    """Run one episode with the analytic policy and return the last frame and H's largest settled error [m]."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+    from amigo_gym.policies import AnalyticTrackingPolicy
+
+    env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
+    policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
+    obs, _ = env.reset(seed=seed)
+    state = None
+    start = np.array([True])
+    worst = 0.0
+    for t in range(steps):
+        action, state = policy.predict(obs[None, :], state, start)
+        start = np.array([False])
+        obs, _, term, trunc, info = env.step(action[0])
+        if t * env.unwrapped.params.dt > 5.0:  # type: ignore[attr-defined]
+            worst = max(worst, abs(info["cross_track_error"]))
+        if term or trunc:
+            break
+    frame = env.render()
+    env.close()
+    assert isinstance(frame, np.ndarray)
+    return frame, worst
+
+
+@dataclass(frozen=True)
+class GallerySettings:
+    __doc__ = f"""Options of ``amigo-gym gallery``, each the option of the same name.
+
+    Attributes:
+        out: output folder [dir].
+        only: families to draw [names] (default: all, {", ".join(GALLERY)}).
+    """
+
+    out: str = "docs/figures"
+    only: list[str] | None = field(default=None, metadata=cli(nargs="*"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming an unknown family and the known ones."""
+        for name in self.only or ():
+            if name not in GALLERY:
+                raise ValueError(f"--only: unknown family {name!r}; choose from {', '.join(GALLERY)}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym gallery [--out DIR] [--only NAME ...]`` (module docstring)."""
+    args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
+
+    def run() -> int:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from amigo_gym.envs.rendering import headless
+
+        headless()
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        for name in args.only or GALLERY:
+            kwargs, steps = GALLERY[name]
+            frame, worst = render_family(kwargs, steps)
+            target = out / f"v1_{name}.png"
+            tmp = target.with_suffix(".tmp.png")
+            plt.imsave(tmp, frame)
+            tmp.replace(target)
+            print(f"{target}: max |e| of H after 5 s = {worst:.3g} m", file=sys.stderr)
+        return 0
+
+    return run_guarded(run, PROG)

@@ -1,0 +1,330 @@
+"""``amigo-gym replay`` and ``amigo-gym identify``: a robot's log against the model (:mod:`amigo_gym.logs`).
+
+``amigo-gym replay LOG --out DIR [--robot robot.json]`` drives the model with the log's commands from its first
+pose and writes, into ``DIR``:
+
+* ``trajectory.csv``: per measurement time ``t`` [s], the measured and simulated pose of A (``x_meas``,
+  ``y_meas``, ``theta_meas``, ``x_sim``, ``y_sim``, ``theta_sim`` [m, rad]), the ``position_error`` [m] and
+  ``heading_error`` [rad] (simulated minus measured, wrapped), and the wheel rates ``w1_sim``, ``w2_sim`` (and
+  ``w1_meas``, ``w2_meas`` when measured) [rad/s];
+* ``replay.png``: the paths of A in the plane, the wheel rates over time (simulated against measured, as the
+  paper's Figs 3 and 5) and the size of the errors over time (log scale);
+* ``summary.json``: :func:`amigo_gym.logs.summarize` (``rms_position_error_m`` among them), the robot used.
+
+``amigo-gym identify LOG --out DIR`` fits the true robot (:func:`amigo_gym.logs.identify`) and writes
+``robot.json`` (``r1``, ``r2``, ``l1`` [m], ``delay`` [s] under the names ``gym.make("AmigoBot-v1",
+true_robot="robot.json")`` and ``replay --robot`` accept, their uncertainties, the replay errors before and after),
+``trajectory.csv`` and ``identify.png`` of the replay with the identified robot (the nominal one's errors beside),
+and ``summary.json``.
+
+The folder is written whole or not at all: everything goes to a temporary folder beside it, which then takes its
+name (an existing ``DIR`` is refused unless ``--force``, which replaces it only once the new one is complete).
+A bad log gives one line naming the problem and exit status 2, before anything is written.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from amigo_gym.io import file_mode, fsync_dir, json_safe
+from amigo_gym.logs import Fit, Log, Replay, errors, identify, read_log, robot_from_file, simulate, summarize
+from amigo_gym.model.actuators import ActuatorParams
+from amigo_gym.model.params import RobotParams
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+
+__all__ = [
+    "IdentifySettings",
+    "LogSettings",
+    "ReplaySettings",
+    "main_identify",
+    "main_replay",
+    "plot",
+    "trajectory_csv",
+    "write_folder",
+]
+
+
+def trajectory_csv(log: Log, rep: Replay) -> str:
+    """The side-by-side table of ``trajectory.csv`` (module docstring) as CSV text."""
+    e = errors(log, rep)
+    cols: dict[str, Any] = {"t": rep.t}
+    if log.pose is not None:
+        for i, n in enumerate(("x", "y", "theta")):
+            cols[f"{n}_meas"] = log.pose[:, i]
+        for i, n in enumerate(("x", "y", "theta")):
+            cols[f"{n}_sim"] = rep.pose[:, i]
+        cols["position_error"] = e["position"]
+        cols["heading_error"] = e["heading"]
+    else:
+        for i, n in enumerate(("x", "y", "theta")):
+            cols[f"{n}_sim"] = rep.pose[:, i]
+    if log.rates is not None:
+        cols["w1_meas"], cols["w2_meas"] = log.rates[:, 0], log.rates[:, 1]
+    cols["w1_sim"], cols["w2_sim"] = rep.rates[:, 0], rep.rates[:, 1]
+    buf = io.StringIO()
+    wr = csv.writer(buf, lineterminator="\n")
+    wr.writerow(list(cols))
+    for row in zip(*cols.values(), strict=True):
+        wr.writerow([repr(float(v)) for v in row])
+    return buf.getvalue()
+
+
+def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) -> None:
+    """The comparison figure: A's path in the plane, wheel rates over time, errors over time (module docstring).
+
+    ``reps``: ``(label, replay)`` pairs; the last one is drawn in full colour, the others thin.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(10.0, 7.0), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.4))
+    ax_xy = fig.add_subplot(grid[:, 0])
+    ax_w = fig.add_subplot(grid[0, 1])
+    ax_e = fig.add_subplot(grid[1, 1], sharex=ax_w)
+    styles: list[dict[str, Any]] = [{"lw": 0.9, "ls": "--", "alpha": 0.8}] * (len(reps) - 1) + [
+        {"lw": 1.4, "ls": "-", "alpha": 1.0}
+    ]
+    if log.pose is not None:
+        ax_xy.plot(log.pose[:, 0], log.pose[:, 1], ".", color="k", ms=2.5, label="measured")
+    for (label, rep), st in zip(reps, styles, strict=True):
+        ax_xy.plot(rep.pose[:, 0], rep.pose[:, 1], color="tab:green" if st["ls"] == "-" else "tab:orange",
+                   label=f"simulated, {label}", lw=st["lw"], ls=st["ls"])  # fmt: skip
+    ax_xy.set_aspect("equal", adjustable="datalim")
+    ax_xy.set_xlabel("x of A [m]")
+    ax_xy.set_ylabel("y of A [m]")
+    ax_xy.legend(fontsize=8, loc="best")
+    ax_xy.set_title("path of A", fontsize=9)
+
+    label, rep = reps[-1]
+    t = rep.t - rep.t[0]
+    ax_w.plot(t, rep.rates[:, 0], color="tab:blue", lw=1.2, label=f"α̇1 simulated ({label})")
+    ax_w.plot(t, rep.rates[:, 1], color="tab:red", lw=1.2, label=f"α̇2 simulated ({label})")
+    if log.rates is not None:
+        ax_w.plot(t, log.rates[:, 0], ".", color="tab:blue", ms=2.5, label="α̇1 measured")
+        ax_w.plot(t, log.rates[:, 1], ".", color="tab:red", ms=2.5, label="α̇2 measured")
+    tc = log.t_cmd - rep.t[0]
+    ax_w.step(tc, log.cmd[:, 0], where="post", color="tab:blue", lw=0.6, alpha=0.5, label="α̇1 command")
+    ax_w.step(tc, log.cmd[:, 1], where="post", color="tab:red", lw=0.6, alpha=0.5, label="α̇2 command")
+    ax_w.set_ylabel("wheel rate [rad/s]")
+    ax_w.legend(fontsize=7, ncol=2, loc="best")
+    ax_w.set_title("wheel rates (cf. the paper's Figs 3 and 5)", fontsize=9)
+    ax_w.set_xlim(t[0], t[-1])
+
+    for (label, rep), st in zip(reps, styles, strict=True):
+        e = errors(log, rep)
+        if "position" in e:
+            ax_e.plot(t, 1e3 * e["position"], color="k", label=f"position [mm], {label}", **st)
+            ax_e.plot(t, 1e3 * np.abs(e["heading"]), color="tab:purple", label=f"heading [mrad], {label}", **st)
+        else:
+            ax_e.plot(t, np.abs(e["rate1"]), color="tab:blue", label=f"α̇1 [rad/s], {label}", **st)
+            ax_e.plot(t, np.abs(e["rate2"]), color="tab:red", label=f"α̇2 [rad/s], {label}", **st)
+    ax_e.set_yscale("log")
+    ax_e.set_xlabel("t [s]")
+    ax_e.set_ylabel("|simulated − measured|")
+    ax_e.legend(fontsize=7, loc="best")
+    ax_e.set_title("error over time", fontsize=9)
+    fig.suptitle(title, fontsize=9)
+    fig.savefig(path, format="png", dpi=120)
+    plt.close(fig)
+
+
+def check_out(out: Path, force: bool) -> None:
+    """Refuse ``--out`` if it is a file, or a folder that is not empty without ``force`` (nothing written).
+
+    Raises:
+        FileExistsError: one line naming the folder and ``--force``.
+    """
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(f"--out {str(out)!r} is a file, not a folder")
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise FileExistsError(f"--out folder {str(out)!r} exists and is not empty; choose another or pass --force")
+
+
+def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bool) -> None:
+    """Write every file by its writer ``files[name](path)`` into a temporary folder beside ``out``, then move it
+    to ``out`` (replacing an existing ``out`` only when ``force``, after the new folder is complete).
+
+    Interrupted or failing, the temporary folder is removed and ``out`` is untouched.
+    """
+    check_out(out, force)
+    parent = out.resolve().parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent))
+    old: Path | None = None
+    try:
+        for name, writer in files.items():
+            target = str(tmp / name)
+            writer(target)
+            with open(target, "rb+") as fh:
+                os.fsync(fh.fileno())
+        os.chmod(tmp, file_mode(folder=True))
+        fsync_dir(tmp)
+        if out.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".old", dir=parent))
+            os.replace(out, old / "x")
+        os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if old is not None and (old / "x").exists() and not out.exists():
+            os.replace(old / "x", out)
+        raise
+    finally:
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    fsync_dir(parent)
+
+
+def _text(data: str) -> Callable[[str], object]:
+    return lambda p: Path(p).write_text(data, encoding="utf-8")
+
+
+def _json(obj: Any) -> Callable[[str], object]:
+    import json
+
+    return _text(json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
+
+
+@dataclass(frozen=True)
+class LogSettings:
+    """Options of ``amigo-gym replay`` and ``amigo-gym identify``, each the option of the same name.
+
+    Attributes:
+        log: the log: a CSV file or a ROS 2 bag (folder, .db3 or .mcap) [file] (required).
+        out: output folder, written whole or not at all [dir] (required).
+        force: replace a non-empty --out folder once the new one is complete.
+        cmd_topic: bag topic of the velocity commands (Twist) [topic].
+        nominal: the nominal robot and firmware ramps, a JSON of RobotParams and ActuatorParams fields [file]
+            (default: the AmigoBot's).
+        pose_topic: bag topic of the measured pose of A (Odometry, PoseStamped) [topic].
+    """
+
+    log: str = field(metadata=cli(positional=True))
+    out: str
+    force: bool = False
+    cmd_topic: str = "/cmd_vel"
+    nominal: str | None = None
+    pose_topic: str = "/odom"
+
+
+@dataclass(frozen=True)
+class ReplaySettings(LogSettings):
+    """Options of ``amigo-gym replay``.
+
+    Attributes:
+        robot: robot file (robot.json of identify) [file] (default: the nominal robot).
+    """
+
+    robot: str | None = None
+
+
+@dataclass(frozen=True)
+class IdentifySettings(LogSettings):
+    """Options of ``amigo-gym identify``.
+
+    Attributes:
+        ramps: fit the ramp rates: where the log excites them, always, never.
+        heading_weight: weight of heading errors in the fit [m/rad], in (0, 1000) (default: the nominal half track).
+    """
+
+    ramps: Literal["auto", "fit", "fixed"] = "auto"
+    heading_weight: float | None = None
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        if self.heading_weight is not None and not 0.0 < self.heading_weight < 1e3:
+            raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {self.heading_weight!r}")
+
+
+def _nominal(path: str | None) -> tuple[RobotParams, ActuatorParams]:
+    """``--nominal``: the nominal robot and ramps of a JSON file (its delay is ignored), or the defaults."""
+    if path is None:
+        return RobotParams(), ActuatorParams()
+    robot, act = robot_from_file(path)
+    return robot, replace(act, delay=0.0)
+
+
+def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
+    return {"r1": robot.r1, "r2": robot.r2, "l1": robot.l1, "delay": act.delay, "acceleration": act.acceleration,
+            "rot_acceleration": act.rot_acceleration}  # fmt: skip
+
+
+def main_replay(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym replay`` (module docstring)."""
+    args = parse_settings(ReplaySettings, argv, "amigo-gym replay", "Replay a robot's log through the model; compare.")
+
+    def go() -> int:
+        out = Path(args.out)
+        check_out(out, args.force)
+        nominal, nominal_act = _nominal(args.nominal)
+        log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
+        if args.robot is None:
+            robot, act = nominal, nominal_act
+            label = "nominal robot"
+        else:
+            robot, act = robot_from_file(args.robot, nominal, nominal_act)
+            label = Path(args.robot).name
+        rep = simulate(log, robot, act, nominal)
+        summary = {**summarize(log, rep), "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
+        files: dict[str, Callable[[str], object]] = {
+            "trajectory.csv": _text(trajectory_csv(log, rep)),
+            "replay.png": lambda path: plot(path, log, [(label, rep)], f"replay of {log.source}: {label}"),
+            "summary.json": _json(summary),
+        }
+        write_folder(out, files, args.force)
+        rms = summary["rms_position_error_m"]
+        shown = f"rms position error {rms:.4g} m" if rms is not None else (
+            f"rms wheel-rate error {summary['rms_wheel_rate_error_rad_s']:.4g} rad/s")  # fmt: skip
+        print(f"replay: {log.t_meas.size} samples, {shown}; wrote {out}/trajectory.csv, replay.png, summary.json")
+        return 0
+
+    return run_guarded(go, "amigo-gym replay")
+
+
+def _fit_summary(fit: Fit) -> dict[str, Any]:
+    return {"values": fit.values, "uncertainty": fit.uncertainty, "fitted": list(fit.fitted), "fixed": fit.fixed,
+            "replay_before": fit.before, "replay_after": fit.after, "cost": fit.cost,
+            "n_residuals": fit.n_residuals, "model_evaluations": fit.nfev, "ramping_s": fit.excited}  # fmt: skip
+
+
+def main_identify(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym identify`` (module docstring)."""
+    args = parse_settings(IdentifySettings, argv, "amigo-gym identify", "Fit the robot's radii, track, delay to a log.")
+
+    def go() -> int:
+        out = Path(args.out)
+        check_out(out, args.force)
+        nominal, nominal_act = _nominal(args.nominal)
+        log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
+        fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
+        before = simulate(log, nominal, nominal_act, nominal)
+        after = simulate(log, fit.robot, fit.actuators, nominal)
+        files: dict[str, Callable[[str], object]] = {
+            "robot.json": _json(fit.robot_json(log, nominal)),
+            "trajectory.csv": _text(trajectory_csv(log, after)),
+            "identify.png": lambda path: plot(
+                path, log, [("nominal", before), ("identified", after)], f"identification from {log.source}"
+            ),
+            "summary.json": _json({**_fit_summary(fit), "log": log.source}),
+        }
+        write_folder(out, files, args.force)
+        parts = [f"{k} = {fit.values[k]:.5g} ± {u:.2g}" if (u := fit.uncertainty.get(k)) is not None
+                 else f"{k} = {fit.values[k]:.5g}" for k in fit.fitted]  # fmt: skip
+        b, a = fit.before["rms_position_error_m"], fit.after["rms_position_error_m"]
+        err = f"; rms position error {b:.4g} m -> {a:.4g} m" if a is not None else ""
+        print(f"identify: {', '.join(parts)}{err}; wrote {out}/robot.json, trajectory.csv, identify.png, summary.json")
+        return 0
+
+    return run_guarded(go, "amigo-gym identify")

@@ -1,0 +1,211 @@
+"""``amigo-gym verify``: the project's exactness checks, measured against references, PASS/FAIL per row.
+
+Each row is a residual against an independent reference (nothing is compared with itself) and the
+bound it must meet; the command prints PASS or FAIL per row and exits with status 1 when a row fails:
+
+1. the closed-form steady state on the circle against the values tabulated in ``docs/model.md``;
+2. exactness of the step: from the steady pose on the circle (R = 1 m, v_A = 0.2 m/s), the closed-form
+   steady wheel rates held through :func:`amigo_gym.model.kinematics.step_pose` keep H on the circle over 10
+   laps (largest ``| |H - c| - R |``), for dt = 0.01, 0.1, 0.5 s; an explicit Euler step of the same
+   unicycle as the counter-example;
+3. the same through ``gym.make("AmigoBot-v0")`` with float64 actions, dt = 0.1 s;
+4. the inverse solution (SciPy DOP853) of the paper's case: largest cross-track error of H along 60 s;
+5. the transient round trip: the inverse solution's wheel-angle increments per step, held through the
+   exact step, keep H near the circle over a lap (dt = 0.1 and 0.05 s; their ratio ~4: second order);
+6. the symbolic derivation (SymPy): the rolling constraints of system 29 (both components of v_K and
+   v_L, eqs 11-12 and the castor) evaluated on 1000 random states of the numeric kinematics.
+
+The tests assert bounds on the same quantities (``tests/test_kinematics.py``, ``test_env.py``,
+``test_inverse.py``, ``test_symbolic.py``); this command prints the measured values and the verdicts.
+May import the core, the envs (through ``gym.make``) and, for the slow checks, scipy and sympy.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
+from amigo_gym.model.params import RobotParams
+from amigo_gym.tools.options import parse_settings, run_guarded
+
+__all__ = ["Check", "VerifySettings", "main", "round_trip_error", "rows"]
+
+#: the steady state of the default circle (R = 1 m, v_A = 0.2 m/s), to 6 decimals as docs/model.md tabulates it
+STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
+ROBOT = RobotParams()
+R, V = 1.0, 0.2
+
+
+def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
+    """Steady pose with H at the origin on the circle of eq. 6 (centre (0, R)), and the steady rates."""
+    ss = circle_steady_state(R, V, ROBOT)
+    beta = -float(ss.heading_lag)
+    pose = np.array([*a_from_h(0.0, 0.0, math.cos(beta), math.sin(beta), ROBOT.l3), beta])
+    return pose, np.asarray(ss.wheel_rates)
+
+
+def _laps_error(dt: float, euler: bool) -> float:
+    pose, w = _steady_pose()
+    v, bd = body_velocity(w, ROBOT)
+    n = math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / dt)
+    err = 0.0
+    for _ in range(n):
+        if euler:
+            b = pose[2]
+            pose = pose + dt * np.array([v * math.cos(b), v * math.sin(b), bd])
+        else:
+            pose = step_pose(pose, w, dt, ROBOT)
+        h = h_position(pose, ROBOT)
+        err = max(err, abs(math.hypot(h[0], h[1] - R) - R))
+    return err
+
+
+def _env_laps_error() -> float:
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401
+
+    pose, w = _steady_pose()
+    env = gym.make("AmigoBot-v0", max_episode_steps=None)
+    env.reset(options={"pose": pose})
+    action = w / ROBOT.max_wheel_rate
+    err = 0.0
+    for _ in range(math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / 0.1)):
+        _, _, _, _, info = env.step(action)
+        err = max(err, abs(info["cross_track_error"]))
+    return err
+
+
+def round_trip_error(dt: float) -> float:
+    """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
+    from amigo_gym.paths import CirclePath
+    from amigo_gym.task.inverse import paper_circle
+
+    path = CirclePath(radius=R)
+    sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)
+    w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt
+    pose = sol.pose[0]
+    err = 0.0
+    for k in range(w.shape[0]):
+        pose = step_pose(pose, w[k], dt, ROBOT)
+        err = max(err, abs(float(path.project(h_position(pose, ROBOT)).cross_track_error)))
+    return err
+
+
+def _symbolic_residual(n: int = 1000, seed: int = 0) -> float:
+    from amigo_gym.tools import symbolic as S
+
+    d = S.derive()
+    rng = np.random.default_rng(seed)
+    x, y, b = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n)
+    w = rng.uniform(-15, 15, (n, 2))
+    v, bd = body_velocity(w, ROBOT)
+    values = {
+        "x_A": x,
+        "y_A": y,
+        "beta": b,
+        "xdot_A": v * np.cos(b),
+        "ydot_A": v * np.sin(b),
+        "betadot": bd,
+        "alphadot_1": w[:, 0],
+        "alphadot_2": w[:, 1],
+        "v_A": v,
+        **S.robot_values(ROBOT),
+    }
+    rolling = S.lambdify([d.eq11, d.eq12, d.eq19, d.eq20, d.eq27, d.eq28])(**values)
+    # the castor's equation is written for forward motion: speed |v_A| and rolling rate |alpha3dot|
+    castor = S.lambdify([d.eq_castor])(**{**values, "v_A": np.abs(v), "alphadot_3": np.abs(castor_rate(v, bd, ROBOT))})
+    return float(max(np.max(np.abs(rolling)), np.max(np.abs(castor))))
+
+
+class Check(NamedTuple):
+    """One row of the table: what is measured, the value, the bound it must meet and the verdict."""
+
+    what: str
+    value: float
+    bound: str
+    passed: bool
+
+
+def _check(what: str, value: float, bound: str, ok: Callable[[float], bool]) -> Check:
+    return Check(what, value, bound, bool(math.isfinite(value) and ok(value)))
+
+
+def rows(quick: bool = False) -> list[Check]:
+    """Every check with its verdict (``quick``: skip the slow ones)."""
+    ss = circle_steady_state(R, V, ROBOT)
+    got = {
+        "betadot": float(ss.betadot),
+        "alpha1_dot": float(ss.wheel_rates[0]),
+        "alpha2_dot": float(ss.wheel_rates[1]),
+        "alpha3_dot": float(ss.castor_rate),
+    }
+    out = [
+        _check(
+            f"steady {k} [rad/s] - docs/model.md's {STEADY_REFERENCE[k]}",
+            got[k] - STEADY_REFERENCE[k],
+            "abs < 5e-7 (6 decimals)",
+            lambda v: abs(v) < 5e-7,
+        )
+        for k in STEADY_REFERENCE
+    ]
+    for dt in (0.01, 0.1, 0.5):
+        what = f"exact step, 10 laps, dt = {dt} s: max H off circle [m]"
+        out.append(_check(what, _laps_error(dt, False), "<= 1e-9", lambda v: v <= 1e-9))
+        what = f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]"
+        out.append(_check(what, _laps_error(dt, True), "> 1e-4: not exact", lambda v: v > 1e-4))
+    what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
+    out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
+    if not quick:
+        from amigo_gym.task.inverse import paper_circle
+
+        sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
+        e = np.hypot(sol.x_H, sol.y_H - R) - R
+        what = "inverse solution, 60 s: max abs(e) of H [m]"
+        out.append(_check(what, float(np.max(np.abs(e))), "<= 1e-8", lambda v: v <= 1e-8))
+        e1, e2 = round_trip_error(0.1), round_trip_error(0.05)
+        out.append(_check("round trip, 1 lap, dt = 0.1 s: max abs(e) [m]", e1, "<= 1e-4", lambda v: v <= 1e-4))
+        out.append(_check("round trip, 1 lap, dt = 0.05 s: max abs(e) [m]", e2, "<= 1e-4", lambda v: v <= 1e-4))
+        out.append(
+            _check("round trip ratio dt 0.1 / 0.05 (second order)", e1 / e2, "in [3.5, 4.5]", lambda v: 3.5 <= v <= 4.5)
+        )
+        what = "symbolic system 29 on 1000 random states: max residual"
+        out.append(_check(what, _symbolic_residual(), "<= 1e-12", lambda v: v <= 1e-12))
+    return out
+
+
+@dataclass(frozen=True)
+class VerifySettings:
+    """Options of ``amigo-gym verify``.
+
+    Attributes:
+        quick: skip the inverse solution, the round trip and the symbolic check.
+    """
+
+    quick: bool = False
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym verify [--quick]``: print the table of residuals with PASS/FAIL; status 1 if one fails."""
+    args = parse_settings(VerifySettings, argv, "amigo-gym verify", __doc__.splitlines()[0])
+
+    def run() -> int:
+        checks = rows(args.quick)
+        print("| check | measured | bound | verdict |\n|---|---:|---|---|")
+        for c in checks:
+            print(f"| {c.what} | {c.value:.3g} | {c.bound} | {'PASS' if c.passed else 'FAIL'} |")
+        failed = [c for c in checks if not c.passed]
+        print(f"{len(checks) - len(failed)} of {len(checks)} checks passed" + (": FAIL" if failed else ""))
+        return 1 if failed else 0
+
+    return run_guarded(run, "amigo-gym verify")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,166 @@
+"""Off-policy entries of ``amigo-gym bench-train``: SB3's SAC and TD3, sb3-contrib's CrossQ and TQC, timed.
+
+The algorithms, the two configurations and the rates: docs/performance.md, "Reference: `amigo-gym bench-train
+--offpolicy`". Imports torch, stable-baselines3 and sb3-contrib inside the functions (the ``train`` extra).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["ALGOS", "CONFIGS", "DeterministicPolicy", "algo_class", "bench_offpolicy", "make_model", "offpolicy_config"]
+
+#: the off-policy algorithms measured: name -> (module, class)
+ALGOS: dict[str, tuple[str, str]] = {
+    "sac": ("stable_baselines3", "SAC"),
+    "td3": ("stable_baselines3", "TD3"),
+    "crossq": ("sb3_contrib", "CrossQ"),
+    "tqc": ("sb3_contrib", "TQC"),
+}
+
+#: the two configurations: ``shipped`` reads the v1 YAML; ``ht`` overrides these keys of it
+CONFIGS: dict[str, dict[str, Any]] = {
+    "shipped": {},
+    "ht": {
+        "n_envs": 128,
+        "train_freq": 1,
+        "gradient_steps": 8,
+        "batch_size": 2048,
+        "learning_starts": 10_240,
+        "buffer_size": 500_000,
+    },
+}
+
+
+def algo_class(algo: str) -> Any:
+    """The SB3 / sb3-contrib class of ``algo`` (:data:`ALGOS`); ``ValueError`` for another name."""
+    import importlib
+
+    if algo not in ALGOS:
+        raise ValueError(f"offpolicy: algorithm must be one of {', '.join(ALGOS)}, got {algo!r}")
+    module, name = ALGOS[algo]
+    return getattr(importlib.import_module(module), name)
+
+
+def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
+    """The rl-zoo style mapping of ``algo`` in ``config`` (:data:`CONFIGS`): the v1 YAML, then the overrides.
+
+    SAC and TD3 read ``agents/hyperparams/<algo>.yml``; CrossQ and TQC read ``sac.yml`` (CrossQ without ``tau``).
+    The result has ``n_envs``, ``noise_type``/``noise_std`` (TD3) and the keyword arguments of the class.
+    """
+    from amigo_gym.data import hyperparams_dir
+    from amigo_gym.tools.training.hyperparams import load_hyperparams
+
+    if config not in CONFIGS:
+        raise ValueError(f"offpolicy: configuration must be one of {', '.join(CONFIGS)}, got {config!r}")
+    algo_class(algo)  # checks the name
+    source = algo if algo in ("sac", "td3") else "sac"
+    hp = dict(load_hyperparams(hyperparams_dir() / f"{source}.yml", "AmigoBot-v1"))
+    hp.pop("n_timesteps", None)
+    hp.pop("policy", None)
+    if algo == "crossq":
+        hp.pop("tau", None)
+    hp.update(CONFIGS[config])
+    return hp
+
+
+def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> Any:
+    """The ``algo`` model of the mapping ``hp`` (:func:`offpolicy_config`) on ``venv``, CPU, ``MlpPolicy``."""
+    import numpy as np
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    kw = {k: v for k, v in hp.items() if k not in ("n_envs", "noise_type", "noise_std")}
+    if isinstance(kw.get("train_freq"), list):
+        kw["train_freq"] = tuple(kw["train_freq"])
+    noise = None
+    if hp.get("noise_type") is not None:
+        if hp["noise_type"] != "normal":
+            raise ValueError(f"offpolicy: noise_type must be 'normal', got {hp['noise_type']!r}")
+        n = int(np.prod(venv.action_space.shape))
+        noise = NormalActionNoise(np.zeros(n), float(hp.get("noise_std", 0.1)) * np.ones(n))
+    return algo_class(algo)("MlpPolicy", venv, action_noise=noise, seed=seed, device="cpu", verbose=0, **kw)
+
+
+def _venv(n_envs: int, seed: int) -> Any:
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
+
+    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
+    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
+    venv.seed(seed)
+    return venv
+
+
+def bench_offpolicy(
+    algo: str, config: str, steps: int, threads: int, seed: int = 0, pre_steps: int = 0
+) -> dict[str, Any]:
+    """Train ``algo`` in ``config`` for its warm-up and then ``steps`` env-steps of training; time both (module doc).
+
+    ``pre_steps``: env-steps of training after the warm-up that are counted in the whole call but not in the loop
+    (for JIT-compiled implementations such as sbx, whose first update compiles; 0 for SB3 and sb3-contrib).
+
+    Returns ``env_steps`` (all, warm-up included), ``grad_steps`` (gradient steps: critic updates), ``wall_s``,
+    ``cpu_s``, ``sps``, ``sps_cpu`` (whole call), ``loop_env_steps``, ``loop_wall_s``, ``loop_cpu_s``, ``sps_loop``,
+    ``sps_loop_cpu``, ``gsps_loop``, ``gsps_loop_cpu`` (the loop after the warm-up) and ``config`` (the mapping,
+    the network, ``gradient_steps_per_env_step``).
+    """
+    import torch
+
+    hp = offpolicy_config(algo, config)
+    torch.set_num_threads(threads)
+    n_envs = int(hp.get("n_envs", 1))
+    t0, c0 = time.perf_counter(), time.process_time()
+    venv = _venv(n_envs, seed)
+    model = make_model(algo, hp, venv, seed)
+    model.learn(total_timesteps=int(hp["learning_starts"]))  # warm-up: random actions, no update
+    if pre_steps > 0:
+        model.learn(total_timesteps=pre_steps, reset_num_timesteps=False)
+    t1, c1 = time.perf_counter(), time.process_time()
+    n1, g1 = int(model.num_timesteps), int(model._n_updates)
+    model.learn(total_timesteps=steps, reset_num_timesteps=False)
+    t2, c2 = time.perf_counter(), time.process_time()
+    venv.close()
+    n, g = int(model.num_timesteps), int(model._n_updates)
+    lw, lc = t2 - t1, c2 - c1
+    train_freq = hp["train_freq"][0] if isinstance(hp["train_freq"], list | tuple) else hp["train_freq"]
+    cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in hp.items()} | {
+        "net_arch": [64, 64],
+        "gradient_steps_per_env_step": round(float(hp["gradient_steps"]) / (float(train_freq) * n_envs), 4),
+    }
+    return {
+        "algo": algo,
+        "env_steps": n,
+        "grad_steps": g,
+        "wall_s": round(t2 - t0, 2),
+        "cpu_s": round(c2 - c0, 2),
+        "sps": round(n / (t2 - t0), 1),
+        "sps_cpu": round(n / max(c2 - c0, 1e-9), 1),
+        "warmup_wall_s": round(t1 - t0, 2),
+        "loop_env_steps": n - n1,
+        "loop_grad_steps": g - g1,
+        "loop_wall_s": round(lw, 2),
+        "loop_cpu_s": round(lc, 2),
+        "sps_loop": round((n - n1) / max(lw, 1e-9), 1),
+        "sps_loop_cpu": round((n - n1) / max(lc, 1e-9), 1),
+        "gsps_loop": round((g - g1) / max(lw, 1e-9), 1),
+        "gsps_loop_cpu": round((g - g1) / max(lc, 1e-9), 1),
+        "config": cfg,
+    }
+
+
+class DeterministicPolicy:
+    """An SB3 model's deterministic ``predict`` with the signature
+    :func:`amigo_gym.tools.training.fastppo.evaluate_policy` calls (SB3's own default is stochastic)."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+
+    def predict(
+        self, obs: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]:
+        action, _ = self.model.predict(obs, deterministic=deterministic)
+        return action, state

@@ -1,0 +1,242 @@
+"""Where the time of a step goes: cProfile of the single env and of the native vector env.
+
+``python -m amigo_gym.tools.bench.profile [--steps K] [--top T]`` profiles, with random actions and
+autoreset, ``K`` steps of ``gym.make("AmigoBot-v0")`` (wrappers included) and of
+``gym.make_vec("AmigoBot-v0", num_envs=N)`` at N = 1 and N = 4096 (``--sizes``), and prints for each
+the ``T`` functions with the largest own time (``tottime``), as a share of the total, in Markdown.
+cProfile adds a fixed cost to every Python call, so the shares overstate small Python functions
+against numpy's C loops; read them as "where", and the benchmarks (``amigo-gym bench-env``) as "how
+much".
+"""
+
+from __future__ import annotations
+
+import cProfile
+import pstats
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+from amigo_gym.model.params import check_range
+from amigo_gym.task import v0 as task
+from amigo_gym.task import v1 as tracking
+from amigo_gym.tools.bench.core import measure_many
+from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
+from amigo_gym.tools.options import run_command
+
+__all__ = ["ProfileSettings", "gap", "profile_steps", "single_parts", "main", "run"]
+
+PROG = "python -m amigo_gym.tools.bench.profile"
+
+
+def _label(func: tuple[str, int, str]) -> str:
+    file, line, name = func
+    if file == "~":  # a built-in
+        return name
+    parts = file.replace("\\", "/").split("/")
+    for root in ("amigo_gym", "gymnasium", "numpy"):
+        if root in parts:
+            return f"{'/'.join(parts[parts.index(root) :])}:{line}({name})"
+    return f"{parts[-1]}:{line}({name})"
+
+
+def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[float, list[tuple[str, float, int]]]:
+    """``(total seconds, [(function, share of the total, calls), ...])`` of ``steps`` calls of ``step``."""
+    for _ in range(min(steps, 50)):  # warm-up
+        step()
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(steps):
+        step()
+    prof.disable()
+    st = pstats.Stats(prof)
+    raw: dict[Any, Any] = st.stats  # type: ignore[attr-defined]
+    total = sum(v[2] for v in raw.values())
+    rows = sorted(((_label(f), v[2] / total, v[1]) for f, v in raw.items()), key=lambda r: -r[1])
+    return total, rows[:top]
+
+
+def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
+    out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
+    out += ["| function | own time | calls per step |", "|---|---:|---:|"]
+    out += [f"| `{name}` | {100 * share:.1f} % | {calls / steps:.3g} |" for name, share, calls in rows]
+    return "\n".join(out)
+
+
+def _gap_row(n: int, repeats: int, min_time: float) -> str:
+    from amigo_gym.envs.amigobot import AmigoBotVectorEnv
+    from amigo_gym.sim import fast
+
+    quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
+    bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
+    ws = quiet._v0  # AmigoBot-v0's compiled step (its configuration of AmigoBotV1VectorEnv)
+    assert ws is not None
+    rows = np.zeros((n, 8))
+    rows[:, 6:] = 4.0
+    a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
+    no = np.zeros(n, dtype=np.bool_)
+    out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
+
+    def kernel() -> None:
+        fast.step_rows(ws, rows, a, no, *out)
+
+    def fresh() -> None:
+        obs = np.empty((n, ws.obs_dim), np.float32)
+        fast.step_rows(ws, rows, a, no, obs, np.empty(n), no.copy(), np.empty((n, 16)))
+
+    fns = {
+        "kernel": kernel,
+        "fresh": fresh,
+        "quiet": _vector_stepper(quiet, 0),
+        "bench": _vector_stepper(bench, 0),
+        "cart": _vector_stepper(CartPoleVectorEnv(num_envs=n), 0),
+    }
+    t = measure_many(fns, repeats, min_time)
+    c = t["cart"]
+    cells = " | ".join(f"{1e6 * t[k]:.0f} ({c / t[k]:.2f})" for k in ("kernel", "fresh", "quiet", "bench"))
+    return f"| {n} | {cells} | {1e6 * c:.0f} |"
+
+
+def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
+    """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
+    env = gym.make("AmigoBot-v0")
+    env.reset(seed=0)
+    raw: Any = env.unwrapped
+    ref: Any = gym.make("AmigoBot-v0", kernel="numpy").unwrapped  # v0's reference: AmigoBot-v1's ideal step
+    ref.reset(seed=0)
+    pend = gym.make("Pendulum-v1")
+    pend.reset(seed=0)
+    a = np.array([0.27, 0.27], np.float32)
+    ap = np.array([0.5], np.float32)
+    fs = raw._v0  # AmigoBot-v0's compiled step (None without numba: the steps then go on from the last state)
+    start = fs.state() if fs is not None else None
+    k, ref_start, ep, ring = ref._k, ref._state, ref._episode, ref._ring  # the reference's start state (floats)
+
+    def restart() -> None:
+        if fs is not None:
+            fs.set_state(start)
+
+    def reference() -> None:
+        ref._state = ref_start
+        ref.step(a)
+
+    def wrapped() -> None:
+        restart()
+        env.step(a)
+
+    def unwrapped() -> None:
+        restart()
+        raw.step(a)
+
+    fns = {
+        "AmigoBot `gym.make` step": wrapped,
+        "AmigoBot unwrapped `env.step`": unwrapped,
+        "AmigoBot unwrapped `env.step`, kernel=numpy (v0's reference)": reference,
+        "`task.v1.step_columns` on Python floats (v0's reference step)": lambda: tracking.step_columns(
+            k, ref.path, ref_start, ep, ring, 0, 0.27, 0.27
+        ),
+        "`task.validate_action`": lambda: task.validate_action(a).tolist(),
+        "Pendulum `gym.make` step": lambda: pend.step(ap),
+        "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),
+    }
+    t = measure_many(fns, repeats, min_time)
+    ref = t["Pendulum `gym.make` step"]
+    lines = ["| part | [us] | / Pendulum step |", "|---|---:|---:|"]
+    lines += [f"| {k} | {1e6 * v:.1f} | {v / ref:.2f} |" for k, v in t.items()]
+    return "\n".join(lines)
+
+
+def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
+    """Markdown table: the kernel alone, the kernel env without and with episode restarts, against CartPole.
+
+    Times per ``step`` call [us] in interleaved repeats, with CartPole's time over each in brackets.
+    "No episode ends": ``termination_distance=10``, ``max_episode_steps=None``. Needs numba.
+    """
+    head = (
+        "| N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
+        "| env.step, random actions (benchmark) | CartPoleVectorEnv |"
+    )
+    return "\n".join([head, "|---:|---:|---:|---:|---:|---:|", *(_gap_row(n, repeats, min_time) for n in sizes)])
+
+
+def libm(n: int = 100_000, seed: int = 0) -> str:
+    """Markdown table: how many of ``n`` float64 arguments (uniform in [-10, 10]; ``log``: in (0, 20]) get other bits
+    from numpy's ``sin``, ``cos``, ``tan``, ``exp``, ``log`` than from the C library's (Python's ``math``, which the
+    compiled kernels call). Why the kernels compute ``sin``/``cos`` themselves and leave the others to numpy."""
+    import math
+
+    g = np.random.default_rng(seed)
+    x = g.uniform(-10.0, 10.0, n)
+    pos = g.uniform(0.0, 20.0, n) + 1e-300
+    rows = ["| function | arguments | numpy != C library |", "|---|---:|---:|"]
+    for name, args in (("sin", x), ("cos", x), ("tan", x), ("exp", x), ("log", pos)):
+        ours = np.array([getattr(math, name)(v) for v in args.tolist()])
+        theirs = getattr(np, name)(args)
+        rows.append(f"| `{name}` | {n} | {int(np.count_nonzero(ours.view(np.int64) != theirs.view(np.int64)))} |")
+    return "\n".join(rows)
+
+
+@dataclass(frozen=True)
+class ProfileSettings:
+    """Settings of ``python -m amigo_gym.tools.bench.profile``, each the option of the same name.
+
+    Attributes:
+        steps: profiled steps per case (vector: divided by N/64).
+        top: functions listed per case.
+        sizes: vector env sizes N.
+        kernel: the vector env's kernel argument, when it has one.
+        gap: instead: the kernel env against CartPole, with/without restarts.
+        single_parts: instead: a single step and its parts vs Pendulum.
+        libm: instead: numpy's transcendental functions vs the C library's.
+    """
+
+    steps: int = 3000
+    top: int = 12
+    sizes: tuple[int, ...] = (1, 4096)
+    kernel: str | None = None
+    gap: bool = False
+    single_parts: bool = False
+    libm: bool = False
+
+    def __post_init__(self) -> None:
+        check_range(PROG, "steps", self.steps, 1, 10**9)
+        check_range(PROG, "top", self.top, 1, 10**6)
+        for i, n in enumerate(self.sizes):
+            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
+
+
+def run(s: ProfileSettings) -> int:
+    """The tables of the settings ``s`` on stdout (module docstring; ``--gap``, ``--single-parts``, ``--libm``)."""
+    if s.gap:
+        print(gap(s.sizes))
+        return 0
+    if s.single_parts:
+        print(single_parts())
+        return 0
+    if s.libm:
+        print(libm())
+        return 0
+    total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
+    print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
+    for n in s.sizes:
+        steps = max(20, s.steps // max(1, n // 64))
+        kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
+        envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
+        total, rows = profile_steps(_vector_stepper(envs, 0), steps, s.top)
+        name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if s.kernel is None else f", kernel={s.kernel}")
+        print(_table(name, steps, total, rows), end="\n\n")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point."""
+    return run_command(ProfileSettings, run, argv, PROG, "cProfile of AmigoBot-v0's single and vector env steps.")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,158 @@
+"""``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
+
+The vector env keeps the rendered trail of H in one ``(trail_length, N, 2)`` ring written by two column copies per
+step (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`). This measures, at ``--n`` robots (default 1024) on ``--path``
+(default ``"mixed"``, hard randomisation, as training runs):
+
+* **memory growth** over ``--steps`` steps (default 3000) from ``reset``: the resident memory of the process
+  (``/proc/self/statm``) with ``render_mode="rgb_array"`` and, in a process of its own, without (the same seeds
+  and actions); target <= 20 MiB with rendering. Each measurement runs in a fresh subprocess, so
+  that one does not reuse the other's freed memory;
+* **step time** with and without ``render_mode`` (the same seeds and actions; the repeats interleaved,
+  :func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
+
+Prints one line per figure; ``--json FILE`` writes them (atomically). A measurement, not a test: the tests use tiny
+sizes (``tests/test_bad_inputs_v1.py``).
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from amigo_gym.io import atomic_write_json
+from amigo_gym.tools.bench.core import measure_many
+from amigo_gym.tools.bench.env import _vector_stepper
+from amigo_gym.tools.options import cli, run_command
+
+__all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
+
+PROG = "python -m amigo_gym.tools.bench.render_trail"
+
+MiB = 2**20
+
+
+def _env(n: int, path: str, render: bool) -> Any:
+    from amigo_gym.envs import AmigoBotV1VectorEnv
+
+    kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
+    return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
+
+
+def _rss() -> int:
+    """Resident memory of this process [bytes] (``/proc/self/statm``; 0 where there is none)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True, frames: int = 2) -> dict[str, float]:
+    """Growth of the resident memory [MiB] from ``reset`` to after ``steps`` steps, with or without ``render_mode``.
+
+    With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them (the
+    renderers' pygame surfaces are not what is measured). The growth counts the trail's ring (allocated at reset,
+    its pages resident as they are first written) and whatever else the steps keep (the paths drawn at resets).
+    """
+    env = _env(n, path, render=render)
+    step = _vector_stepper(env, 0)  # reset, random actions (the same in both processes)
+    gc.collect()
+    first = _rss()
+    for _ in range(steps):
+        step()
+    if render:
+        trails = [env._trail_of(i) for i in range(frames)]
+        del trails
+    gc.collect()
+    second = _rss()
+    ring = getattr(env, "_trail", None)
+    env.close()
+    return {"growth_mib": (second - first) / MiB, "trail_ring_mib": 0.0 if ring is None else ring.nbytes / MiB}
+
+
+def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float = 0.5) -> dict[str, float]:
+    """Median time of one ``step`` [s] with and without ``render_mode`` (interleaved repeats), and their ratio."""
+    envs = {"plain": _env(n, path, render=False), "rgb_array": _env(n, path, render=True)}
+    t = measure_many({name: _vector_stepper(env, 0) for name, env in envs.items()}, repeats, min_time)
+    for env in envs.values():
+        env.close()
+    return {"step_s": t["plain"], "step_render_s": t["rgb_array"], "ratio": t["rgb_array"] / t["plain"]}
+
+
+@dataclass(frozen=True)
+class RenderTrailSettings:
+    """Settings of ``python -m amigo_gym.tools.bench.render_trail``, each the option of the same name.
+
+    Attributes:
+        n: robots [envs] (default 1024).
+        steps: rendered steps of the memory measurement (default 3000).
+        memory_only: the subprocess of one memory measurement, ``render`` or ``plain`` (internal).
+        path: path= of the envs (default mixed, with hard randomisation).
+        repeats: interleaved repeats of the timing (median) (default 5).
+        min_time: least duration of one timing repeat [s] (default 0.5).
+        skip_memory: time only.
+        skip_time: measure the memory only.
+        json: write the figures as JSON [file].
+    """
+
+    n: int = 1024
+    steps: int = 3000
+    memory_only: Literal["render", "plain"] | None = field(default=None, metadata=cli(hidden=True))
+    path: str = "mixed"
+    repeats: int = 5
+    min_time: float = 0.5
+    skip_memory: bool = False
+    skip_time: bool = False
+    json: str | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("n", "steps", "repeats"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"--{name} must be >= 1, got {getattr(self, name)}")
+
+
+def run(s: RenderTrailSettings) -> int:
+    """The measurements of the settings ``s``, one line per figure on stdout (module docstring), ``--json``."""
+    out: dict[str, Any] = {"n": s.n, "steps": s.steps, "path": s.path}
+    if s.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
+        print(json.dumps(measure_memory(s.n, s.steps, s.path, render=s.memory_only == "render")))
+        return 0
+    if not s.skip_memory:
+        for kind in ("render", "plain"):
+            cmd = [sys.executable, os.path.abspath(__file__), "--memory-only", kind]  # this module, as a script
+            cmd += ["--n", str(s.n), "--steps", str(s.steps), "--path", s.path]
+            r = subprocess.run(cmd, capture_output=True, text=True, check=True)
+            got = json.loads(r.stdout.strip().splitlines()[-1])
+            out[f"growth_{kind}_mib"] = got["growth_mib"]
+            if kind == "render":
+                out["trail_ring_mib"] = got["trail_ring_mib"]
+        print(
+            f"resident memory growth over {s.steps} steps at N={s.n} ({s.path}): "
+            f"{out['growth_render_mib']:.1f} MiB with render_mode='rgb_array' (target <= 20; its trail ring: "
+            f"{out['trail_ring_mib']:.1f} MiB), {out['growth_plain_mib']:.1f} MiB without"
+        )
+    if not s.skip_time:
+        out |= measure_time(s.n, s.path, s.repeats, s.min_time)
+        print(
+            f"step time at N={s.n}: {out['step_s'] * 1e3:.3g} ms plain, {out['step_render_s'] * 1e3:.3g} ms with "
+            f"render_mode='rgb_array': ratio {out['ratio']:.3f} (target <= 1.1)"
+        )
+    if s.json:
+        atomic_write_json(s.json, out)
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``python -m amigo_gym.tools.bench.render_trail``."""
+    return run_command(RenderTrailSettings, run, argv, PROG, (__doc__ or "").split("\n")[0])
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

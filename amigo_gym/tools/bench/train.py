@@ -1,0 +1,208 @@
+"""``amigo-gym bench-train``: env-steps of *training* per second, the fast PPO against SB3's PPO, same run.
+
+The three trainings, the rates and the off-policy entries: docs/performance.md, "Reference: `amigo-gym
+bench-train`".
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from amigo_gym.io import atomic_write_json
+from amigo_gym.model.params import check_range
+from amigo_gym.tools.bench.machine import cpu_model, simd_level
+from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
+from amigo_gym.tools.options import run_command
+
+__all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
+
+PROG = "amigo-gym bench-train"
+
+
+def _load() -> list[float]:
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except OSError:  # pragma: no cover - no load average (Windows)
+        return []
+
+
+def bench_fastppo(steps: int, threads: int, seed: int = 0, **overrides: Any) -> dict[str, Any]:
+    """Train the fast PPO for ``steps`` env-steps (no evaluation) and time it: ``{"env_steps", "wall_s", "sps"}``."""
+    from amigo_gym.tools.training.fastppo import FastPPOSettings, train
+
+    s = FastPPOSettings(
+        total_steps=steps,
+        threads=threads,
+        seed=seed,
+        eval_every=10**10,
+        checkpoint_every=10**10,
+        **overrides,
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        t0, c0 = time.perf_counter(), time.process_time()
+        rec = train(s, Path(tmp) / "run", log=None, evaluate_runs=False)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    n = int(rec["timesteps"])
+    cfg = {k: getattr(s, k) for k in ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden")}
+    out = _result(n, wall, cpu, cfg)
+    split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
+    out["cpu_s_rollout"], out["cpu_s_update"] = split["rollout"], split["update"]
+    out["loop_wall_s"] = split["loop_wall"]
+    # steady state: the training iterations only, without building the env, the first resets and the final save
+    out["sps_loop"] = round(n / max(split["loop_wall"], 1e-9), 1)
+    out["sps_loop_cpu"] = round(n / max(split["rollout"] + split["update"], 1e-9), 1)
+    return out
+
+
+def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
+    """Env-steps per wall second (``sps``) and per CPU second of this process, all threads (``sps_cpu``)."""
+    return {
+        "env_steps": n,
+        "wall_s": round(wall, 2),
+        "cpu_s": round(cpu, 2),
+        "sps": round(n / wall, 1),
+        "sps_cpu": round(n / cpu, 1),
+        "config": cfg,
+    }
+
+
+def bench_sb3(
+    steps: int, threads: int, n_envs: int, n_steps: int, batch_size: int, n_epochs: int, seed: int = 0
+) -> dict[str, Any]:
+    """Train SB3's PPO (``MlpPolicy``, 64x64 tanh) over the SB3 adapter of the native vector env; time ``learn``."""
+    import torch
+    from stable_baselines3 import PPO
+
+    torch.set_num_threads(threads)
+    t0, c0 = time.perf_counter(), time.process_time()
+    venv = _venv(n_envs, seed)
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=n_steps,
+        batch_size=batch_size,
+        n_epochs=n_epochs,
+        learning_rate=3e-4,
+        gamma=0.98,
+        policy_kwargs={"net_arch": [64, 64]},
+        seed=seed,
+        device="cpu",
+        verbose=0,
+    )
+    model.learn(total_timesteps=steps)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    venv.close()
+    n = int(model.num_timesteps)
+    cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
+    return _result(n, wall, cpu, cfg)
+
+
+def _show(name: str, r: dict[str, Any]) -> None:
+    line = f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)"
+    if "sps_loop" in r:
+        line += f"; training iterations only: {r['sps_loop']:,.0f} per s ({r['sps_loop_cpu']:,.0f} per CPU second)"
+    print(line, flush=True)
+
+
+def _run_offpolicy(s: TrainSettings) -> dict[str, Any]:
+    """Time each ``--offpolicy`` algorithm in the ``shipped`` and ``ht`` configurations (``<algo>_<config>``)."""
+    runs: dict[str, Any] = {}
+    for algo in s.offpolicy_algos:
+        for config, steps in (("shipped", s.offpolicy_steps), ("ht", s.offpolicy_ht_steps)):
+            name = f"{algo}_{config}"
+            r = runs[name] = bench_offpolicy(algo, config, steps, s.threads)
+            print(f"{name:<15}{r['sps_loop']:>10,.0f} env-steps/s of training "
+                  f"({r['sps_loop_cpu']:,.0f} per CPU second), "
+                  f"{r['gsps_loop']:,.1f} gradient steps/s ({r['gsps_loop_cpu']:,.1f} per CPU second) after the "
+                  f"warm-up; whole call {r['sps']:,.0f} env-steps/s", flush=True)  # fmt: skip
+    return runs
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """Settings of ``amigo-gym bench-train``, each the option of the same name (``--fast-steps`` for ``fast_steps``).
+
+    Attributes:
+        fast_steps: env-steps of the fast PPO [steps].
+        sb3_steps: env-steps of each SB3 run [steps].
+        threads: torch threads of every run [threads].
+        skip_sb3_fastconfig: skip SB3 with the fast configuration.
+        json: write the results here [file] (default: print only).
+        offpolicy: off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc [names] (default: none).
+        offpolicy_steps: env-steps after the warm-up, shipped configuration [steps].
+        offpolicy_ht_steps: env-steps after the warm-up, ht configuration [steps].
+    """
+
+    fast_steps: int = 1_048_576
+    sb3_steps: int = 32_768
+    threads: int = 1
+    skip_sb3_fastconfig: bool = False
+    json: str | None = None
+    offpolicy: str = ""
+    offpolicy_steps: int = 1024
+    offpolicy_ht_steps: int = 16384
+
+    def __post_init__(self) -> None:
+        check_range(PROG, "fast_steps", self.fast_steps, 16384, 10**9)
+        check_range(PROG, "sb3_steps", self.sb3_steps, 1, 10**8)
+        check_range(PROG, "threads", self.threads, 1, 64)
+        bad = [a for a in self.offpolicy_algos if a not in ALGOS]
+        if bad:
+            raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
+        check_range(PROG, "offpolicy_steps", self.offpolicy_steps, 8, 10**8)
+        check_range(PROG, "offpolicy_ht_steps", self.offpolicy_ht_steps, 128, 10**9)
+
+    @property
+    def offpolicy_algos(self) -> list[str]:
+        """The names of ``--offpolicy`` (:mod:`amigo_gym.tools.bench.offpolicy`'s ``ALGOS``; none run without it)."""
+        return [a.strip() for a in self.offpolicy.split(",") if a.strip()]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym bench-train``."""
+
+    def run(s: TrainSettings) -> int:
+        import numpy as np
+        import torch
+
+        head = {
+            "cpu_model": cpu_model(),
+            "simd": simd_level(),
+            "cpu_count": os.cpu_count(),
+            "torch_threads": s.threads,
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "torch": torch.__version__,
+            "load_average_start": _load(),
+            "command": "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:]),
+        }
+        print(f"CPU: {head['cpu_model']}, SIMD {head['simd']} ({head['cpu_count']} CPUs visible), "
+              f"torch threads {s.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
+        runs: dict[str, Any] = {}
+        runs["fastppo"] = bench_fastppo(s.fast_steps, s.threads)
+        _show("fastppo", runs["fastppo"])
+        runs["sb3_shipped"] = bench_sb3(s.sb3_steps, s.threads, 16, 256, 1024, 10)
+        _show("sb3_shipped", runs["sb3_shipped"])
+        if not s.skip_sb3_fastconfig:
+            runs["sb3_fastconfig"] = bench_sb3(max(s.sb3_steps, 512 * 32), s.threads, 512, 32, 4096, 4)
+            _show("sb3_fastconfig", runs["sb3_fastconfig"])
+        runs |= _run_offpolicy(s)
+        ratios = {
+            f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
+        }
+        for k, v in ratios.items():
+            print(f"ratio {k}: {v:.1f}x", flush=True)
+        doc = head | {"runs": runs, "ratios": ratios, "load_average_end": _load()}
+        if s.json:
+            atomic_write_json(s.json, doc, parents=True)
+        return 0
+
+    return run_command(TrainSettings, run, argv, PROG, __doc__.splitlines()[0] if __doc__ else "")

@@ -1,0 +1,250 @@
+"""The ``amigo-gym`` command: a thin dispatcher; each sub-command lives in its own module.
+
+Every sub-command declares the optional extra it needs and the modules that extra provides; they are
+looked up (``importlib.util.find_spec``, nothing imported) *before* the sub-command's module is
+imported, so that a missing one gives one line naming the extra to install and exit status 2, never a
+traceback. Every other error path also ends in one line on stderr and a non-zero exit status
+(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs
+nothing but the standard library.
+
+May import the standard library only at module level; the sub-commands are imported by name when
+they run (arrows point from here down into the package, never back).
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from amigo_gym.tools.options import (
+    HelpFormatter,
+    OneLineParser,
+    _one_line,
+    add_dataclass_options,
+    attribute_help,
+    install_hint,
+    missing_modules,
+    run_guarded,
+)
+
+__all__ = [
+    "COMMANDS",
+    "EXTRA_OF_MODULE",
+    "Command",
+    "add_dataclass_options",
+    "attribute_help",
+    "HelpFormatter",
+    "OneLineParser",
+    "main",
+    "missing_modules",
+    "run_guarded",
+]
+
+
+@dataclass(frozen=True)
+class Command:
+    """A sub-command of ``amigo-gym``.
+
+    Attributes:
+        target: ``module:function`` taking the remaining arguments and returning the exit status.
+        summary: one line for ``amigo-gym --help``.
+        extra: the optional extra of ``pip install "amigo-gym[<extra>]"`` it needs (``None``: none).
+        modules: the top-level modules that extra provides and the command imports.
+        unless: flags that lift the need (e.g. ``verify --quick`` needs no SymPy).
+    """
+
+    target: str
+    summary: str
+    extra: str | None = None
+    modules: tuple[str, ...] = ()
+    unless: tuple[str, ...] = ()
+
+
+_TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib", "filelock")
+
+COMMANDS: dict[str, Command] = {
+    "inverse": Command("amigo_gym.tools.cli.inverse:main", "analytic inverse solution of H on a path, as CSV"),
+    "paper": Command(
+        "amigo_gym.tools.analysis.paper_figures:main",
+        "the paper's manoeuvre: Fig. 2/3-style plots and CSV",
+        extra="plot",
+        modules=("matplotlib",),
+    ),
+    "derive": Command(
+        "amigo_gym.tools.symbolic:main",
+        "symbolic D-H derivation; print the equations (LaTeX)",
+        extra="symbolic",
+        modules=("sympy",),
+    ),
+    "train": Command(
+        "amigo_gym.tools.training.train:main",
+        "train a PPO/SAC/TD3 baseline on AmigoBot-v0",
+        extra="train",
+        modules=("torch", "stable_baselines3", "yaml", "tqdm", "rich"),
+    ),
+    "evaluate": Command(
+        "amigo_gym.tools.training.evaluate:main",
+        "evaluate analytic and trained agents on the fixed protocol",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "verify": Command(
+        "amigo_gym.tools.analysis.verify:main",
+        "exactness checks against references, PASS/FAIL (exit 1 on a FAIL)",
+        extra="symbolic",
+        modules=("sympy",),
+        unless=("--quick",),
+    ),
+    "convergence": Command(
+        "amigo_gym.tools.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"
+    ),
+    "compare": Command(
+        "amigo_gym.tools.training.compare:main",
+        "main job: pretrained agents vs analytic solution, report + plots",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "benchmark": Command(
+        "amigo_gym.tools.training.benchmark:main",
+        "scenario suite x agents x seeds: IQM, bootstrap CIs, plots",
+        extra="train",
+        modules=_TRAIN,
+    ),
+    "curves": Command(
+        "amigo_gym.tools.training.curves:main",
+        "learning curves over training seeds (eval.json), time to a tracking threshold",
+        extra="train",
+        modules=("tqdm", "matplotlib"),
+    ),
+    "sweep": Command(
+        "amigo_gym.tools.training.sweep:main",
+        "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL",
+        extra="bench",
+        modules=("optuna", "torch", "stable_baselines3", "yaml"),
+    ),
+    "replay": Command(
+        "amigo_gym.tools.analysis.replay:main_replay",
+        "replay a robot's log (CSV or ROS 2 bag) through the model: errors, plot",
+        extra="logs",
+        modules=("matplotlib",),
+    ),
+    "identify": Command(
+        "amigo_gym.tools.analysis.replay:main_identify",
+        "fit wheel radii, half track, delay to a robot's log: robot.json",
+        extra="logs",
+        modules=("matplotlib",),
+    ),
+    "train-fast": Command(
+        "amigo_gym.tools.training.fastppo:main",
+        "fast PPO (or residual on the analytic controller) over the native AmigoBot-v1 vector env",
+        extra="train",
+        modules=("torch",),
+    ),
+    "bench-train": Command(
+        "amigo_gym.tools.bench.train:main",
+        "training throughput: the fast PPO against SB3 PPO, same run",
+        extra="train",
+        modules=("torch", "stable_baselines3"),
+    ),
+    "bench-core": Command("amigo_gym.tools.bench.core:main", "benchmark the batched exact step"),
+    "bench-env": Command("amigo_gym.tools.bench.env:main", "benchmark the environment against peers"),
+    "gallery": Command(
+        "amigo_gym.tools.analysis.gallery:main",
+        "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)",
+        extra="render",
+        modules=("pygame", "matplotlib"),
+    ),
+}
+
+#: optional top-level module -> the extra that installs it (for a module missing at run time)
+EXTRA_OF_MODULE: dict[str, str] = {
+    "torch": "train",
+    "stable_baselines3": "train",
+    "sb3_contrib": "train",
+    "filelock": "train",
+    "yaml": "train",
+    "tqdm": "train",
+    "rich": "train",
+    "tensorboard": "train",
+    "sympy": "symbolic",
+    "matplotlib": "plot",
+    "pygame": "render",
+    "moviepy": "video",
+    "nbclient": "notebook",
+    "nbformat": "notebook",
+    "optuna": "bench",
+    "psycopg2": "bench",
+    "rosbags": "logs",
+}
+
+
+def _needs_extra(prog: str, extra: str, missing: Sequence[str]) -> int:
+    names = ", ".join(missing)
+    line = f"{prog}: error: needs the {extra!r} extra: {install_hint(extra)} (missing: {names})"
+    print(line, file=sys.stderr)
+    return 2
+
+
+def _load(target: str) -> Callable[[Sequence[str]], int | None]:
+    mod, _, fn = target.partition(":")
+    func: Callable[[Sequence[str]], int | None] = getattr(importlib.import_module(mod), fn)
+    return func
+
+
+def _usage() -> str:
+    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", "", "commands:"]
+    lines += [f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else "") for name, c in COMMANDS.items()]
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if not args or args[0] in ("-h", "--help"):
+        print(_usage())
+        return 0 if args else 2
+    if args[0] == "--version":
+        from amigo_gym import __version__
+
+        print(__version__)
+        return 0
+    name, rest = args[0], args[1:]
+    if name not in COMMANDS:
+        print(f"amigo-gym: error: unknown command {name!r} (choose from {', '.join(COMMANDS)})", file=sys.stderr)
+        return 2
+    cmd = COMMANDS[name]
+    prog = f"amigo-gym {name}"
+    if cmd.extra is not None and not any(flag in rest for flag in cmd.unless):
+        missing = missing_modules(cmd.modules)
+        if missing:
+            return _needs_extra(prog, cmd.extra, missing)
+    try:
+        rc = _load(cmd.target)(rest)
+    except SystemExit:
+        raise
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    except ModuleNotFoundError as exc:
+        top = (exc.name or "").partition(".")[0]
+        if top in EXTRA_OF_MODULE:
+            return _needs_extra(prog, EXTRA_OF_MODULE[top], [top])
+        if os.environ.get("AMIGO_GYM_TRACEBACK"):
+            raise
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except Exception as exc:  # an unexpected error: still one line unless asked for the traceback
+        if os.environ.get("AMIGO_GYM_TRACEBACK"):
+            raise
+        hint = "(AMIGO_GYM_TRACEBACK=1 shows the traceback)"
+        print(f"{prog}: error: {type(exc).__name__}: {_one_line(exc)} {hint}", file=sys.stderr)
+        return 1
+    return 0 if rc is None else int(rc)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

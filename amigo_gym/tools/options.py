@@ -1,0 +1,350 @@
+"""Command-line helpers shared by every ``amigo-gym`` sub-command: one-line errors, option help with defaults,
+options derived from a settings dataclass, and the extra-module probe.
+
+Sits at the bottom of the package (standard library only), so that the sub-commands in ``training``,
+``analysis``, ``bench`` and ``model`` import it downwards; the dispatcher :mod:`amigo_gym.tools.cli` imports it too
+and is imported by nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import re
+import sys
+import types
+from collections.abc import Callable, Sequence
+from dataclasses import MISSING, Field, fields
+from typing import Any, Literal, NoReturn, TypeVar, Union, get_args, get_origin, get_type_hints
+
+T = TypeVar("T")
+
+__all__ = [
+    "HelpFormatter",
+    "OneLineParser",
+    "add_dataclass_options",
+    "attribute_help",
+    "cli",
+    "install_hint",
+    "json_object",
+    "missing_modules",
+    "parse_bool",
+    "parse_settings",
+    "run_command",
+    "run_guarded",
+    "settings_from_args",
+]
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Appends ``(default: X)`` to an option's help unless the help already names its default.
+
+    Flags (``store_true``) say ``(default: off)``. Units stay the help text's job: every option taking a
+    value names its unit in brackets, e.g. ``[m]``, ``[s]``, ``[steps]``, ``[file]``.
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if "default" in text.lower() or not action.option_strings or action.default is argparse.SUPPRESS:
+            return text
+        if isinstance(action, argparse._StoreTrueAction | argparse._StoreFalseAction):
+            return f"{text} (default: off)"
+        if action.default is None:
+            return text
+        default = action.default
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else str(default)
+        return f"{text} (default: {shown!r})" if shown == "" else f"{text} (default: {shown})"
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump).
+
+    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise.
+    """
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def attribute_help(cls: type) -> dict[str, str]:
+    """The ``Attributes:`` sections of a dataclass's docstring and its bases' as ``{field: text}`` (continuation
+    lines joined, reST markup and the final full stop removed; a class's entry replaces its bases')."""
+    out: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        out.update(_attributes(klass.__dict__.get("__doc__") or ""))
+    return {name: _plain(text).rstrip(".") for name, text in out.items()}
+
+
+def _attributes(doc: str) -> dict[str, str]:
+    """``{field: text}`` of the ``Attributes:`` section of ``doc`` (an entry starts at the first entry's indent)."""
+    out: dict[str, str] = {}
+    inside, current, indent = False, "", -1
+    for line in doc.splitlines():
+        stripped = line.strip()
+        if stripped == "Attributes:":
+            inside = True
+            continue
+        if not inside:
+            continue
+        if not stripped:
+            break
+        name, colon, text = stripped.partition(": ")
+        at = len(line) - len(line.lstrip())
+        if colon and name.isidentifier() and indent in (-1, at):
+            current, indent = name, at
+            out[name] = text
+        elif current:
+            out[current] += " " + stripped
+    return out
+
+
+def _plain(text: str) -> str:
+    """``text`` without reST markup: ``:class:`x``` and ````x```` become ``x``."""
+    return re.sub(r":\w+:`~?([^`]*)`", r"\1", text).replace("``", "")
+
+
+def cli(
+    flag: str | None = None,
+    *,
+    required: bool = False,
+    hidden: bool = False,
+    parse: Callable[[str], Any] | None = None,
+    skip: bool = False,
+    positional: bool = False,
+    metavar: str | None = None,
+    choices: Sequence[Any] | None = None,
+    nargs: str | int | None = None,
+    group: str | None = None,
+) -> dict[str, Any]:
+    """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``.
+
+    Args:
+        flag: the option's name when it is not ``--field-name`` (e.g. ``--env`` for ``env_id``); a ``--no-x``
+            flag of a ``bool`` field that defaults to ``True`` stores ``False``.
+        required: the option must be given even though the field has a default.
+        hidden: left out of ``--help`` (internal options).
+        parse: turns the option's text into the field's value after parsing (e.g. :func:`json_object`); a
+            ``ValueError`` becomes ``<flag> <message>``; not given: the field's default.
+        skip: no option for this field (set by the command itself).
+        positional: a positional argument named as the field (``nargs`` as for an option).
+        metavar: the value's name in ``--help`` (default: argparse's, the field's name in capitals).
+        choices: the values allowed (a ``Literal`` type gives them otherwise).
+        nargs: argparse's ``nargs`` in place of the type's (e.g. ``"*"`` for a list that may be empty).
+        group: the name of a mutually exclusive group: at most one option of the group may be given.
+    """
+    return {"cli": dict(locals())}  # the arguments above, by name
+
+
+def json_object(text: str) -> dict[str, Any]:
+    """``text`` as a JSON object (``ValueError`` ``must be a JSON object, got '<text>'`` otherwise)."""
+    import json
+
+    try:
+        value = json.loads(text)
+    except ValueError:
+        value = None
+    if not isinstance(value, dict):
+        raise ValueError(f"must be a JSON object, got {text!r}")
+    return value
+
+
+def parse_bool(text: str) -> bool:
+    """``true/yes/on/1`` or ``false/no/off/0`` (any case) as a ``bool``."""
+    t = text.strip().lower()
+    if t in ("1", "true", "yes", "on"):
+        return True
+    if t in ("0", "false", "no", "off"):
+        return False
+    raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
+
+
+def _meta(f: Field[Any]) -> dict[str, Any]:
+    return {**cli()["cli"], **f.metadata.get("cli", {})}
+
+
+def _flag(f: Field[Any]) -> str:
+    return str(_meta(f)["flag"] or "--" + f.name.replace("_", "-"))
+
+
+def _default(f: Field[Any]) -> Any:
+    if f.default is not MISSING:
+        return f.default
+    if f.default_factory is not MISSING:
+        return f.default_factory()
+    return MISSING
+
+
+def _strip_optional(tp: Any) -> Any:
+    if get_origin(tp) in (Union, types.UnionType):
+        args = [a for a in get_args(tp) if a is not type(None)]
+        return args[0] if len(args) == 1 else tp
+    return tp
+
+
+def _scalar(tp: Any) -> dict[str, Any]:
+    """``type``/``choices`` keywords of ``add_argument`` for a scalar type (``Literal`` gives the choices)."""
+    if get_origin(tp) is Literal:
+        choices = get_args(tp)
+        return {"type": type(choices[0]), "choices": choices}
+    if tp in (int, float, str) or isinstance(tp, type):
+        return {"type": tp}
+    raise TypeError(f"no command-line type for {tp!r}")
+
+
+def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
+    """One option per field of the dataclass ``cls``, typed and defaulted as the field (one source for both).
+
+    The option is ``--field-name`` unless :func:`cli` names another flag. Its help is the field's entry in the
+    class docstring's ``Attributes:`` section (which names the unit in brackets); :class:`HelpFormatter` appends
+    the default. Types: ``int``, ``float``, ``str``, ``Path`` and other one-argument classes; ``X | None``
+    (default ``None``); ``Literal[...]`` (the choices, in that order); ``list[X]`` and ``tuple[X, ...]``
+    (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
+    ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
+    taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
+    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none. :func:`cli` may
+    make it positional, name its metavar, choices or nargs, or put it in a mutually exclusive group; an option whose
+    unit is ``[file]`` shows ``FILE`` as its argument (a positional its name) unless :func:`cli` names another metavar.
+    """
+    helps = attribute_help(cls)
+    hints = get_type_hints(cls)
+    groups: dict[str, Any] = {}
+    for f in fields(cls):
+        meta = _meta(f)
+        if meta["skip"] or not f.init:
+            continue
+        flag, default = _flag(f), _default(f)
+        help_text = argparse.SUPPRESS if meta["hidden"] else helps.get(f.name, "")
+        kw: dict[str, Any] = {"dest": f.name, "help": help_text}
+        if default is MISSING or meta["required"]:
+            kw["required"] = True
+        else:
+            kw["default"] = default
+        tp = _strip_optional(hints[f.name])
+        origin, args = get_origin(tp), get_args(tp)
+        if meta["parse"] is not None:
+            kw.update(type=str, default=None)
+        elif tp is bool:
+            if flag.startswith("--no-"):  # the help of the flag: what the field's help says after "--no-x: "
+                kw.update(action="store_false", help=help_text.partition(f"{flag}: ")[2] or help_text)
+            elif default is False:
+                kw["action"] = "store_true"
+            else:
+                kw.update(type=parse_bool, help=f"{help_text} [true/false]")
+        elif origin in (list, tuple):
+            fixed = origin is tuple and Ellipsis not in args
+            kw.update(_scalar(args[0]), nargs=len(args) if fixed else "+")
+            if "default" in kw and kw["default"] is not None:
+                kw["default"] = list(kw["default"])
+        else:
+            kw.update(_scalar(tp))
+        if meta["metavar"] is None and "[file]" in help_text and not meta["positional"] and "action" not in kw:
+            kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
+        kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
+        target: Any = parser
+        if meta["group"] is not None:
+            if meta["group"] not in groups:
+                groups[meta["group"]] = parser.add_mutually_exclusive_group()
+            target = groups[meta["group"]]
+        if meta["positional"]:
+            del kw["dest"]
+            kw.pop("required", None)
+            target.add_argument(f.name, **kw)
+        else:
+            target.add_argument(flag, **kw)
+
+
+def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
+    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields).
+
+    Lists become tuples where the field is a tuple; options with ``cli(parse=...)`` are parsed here (a
+    ``ValueError`` becomes ``<flag> <message>``). Raises what ``cls`` raises on a bad value.
+    """
+    hints = get_type_hints(cls)
+    kw: dict[str, Any] = {}
+    for f in fields(cls):  # type: ignore[arg-type]
+        meta = _meta(f)
+        if meta["skip"] or not f.init or not hasattr(namespace, f.name):
+            continue
+        value = getattr(namespace, f.name)
+        if meta["parse"] is not None:
+            if value is None:
+                continue
+            if not isinstance(value, str):  # a default set on the parser (``set_defaults``): already parsed
+                kw[f.name] = value
+                continue
+            try:
+                value = meta["parse"](value)
+            except ValueError as exc:
+                raise ValueError(f"{_flag(f)} {exc}") from None
+        elif isinstance(value, list):
+            value = tuple(value) if get_origin(_strip_optional(hints[f.name])) is tuple else list(value)
+        kw[f.name] = value
+    kw.update(extra)
+    return cls(**kw)
+
+
+def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``): a
+    :class:`OneLineParser` with :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further
+    fields) and ``validate()`` when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
+    parser = OneLineParser(prog=prog, description=description)
+    add_dataclass_options(parser, cls)
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    try:
+        settings = settings_from_args(cls, namespace, **extra)
+        validate = getattr(settings, "validate", None)
+        if validate is not None:
+            validate()
+    except ValueError as exc:
+        parser.error(str(exc))
+    return settings
+
+
+def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str] | None, prog: str, doc: str) -> int:
+    """``run(settings)`` with the settings dataclass ``cls`` from the command line ``argv`` (default ``sys.argv[1:]``):
+    a malformed option exits with the parser's one-line error (status 2), a value ``cls`` refuses (or a bad input met
+    by ``run``) is one line and the returned status 2 (:func:`run_guarded`), unlike :func:`parse_settings`, which
+    exits."""
+    parser = OneLineParser(prog=prog, description=doc)
+    add_dataclass_options(parser, cls)
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+def run_guarded(fn: Callable[[], int | None], prog: str) -> int:
+    """Run ``fn``; a bad input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``) gives one line, status 2."""
+    try:
+        rc = fn()
+    except (ValueError, FileNotFoundError, FileExistsError) as exc:
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    return 0 if rc is None else int(rc)
+
+
+def missing_modules(modules: Sequence[str]) -> list[str]:
+    """The modules of ``modules`` that cannot be found (``importlib.util.find_spec``; nothing is imported)."""
+    out = []
+    for m in modules:
+        try:
+            found = importlib.util.find_spec(m) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            out.append(m)
+    return out
+
+
+def install_hint(extra: str) -> str:
+    """The two commands that install ``extra``: from an index, and from a clone of the repository."""
+    return f'pip install "amigo-gym[{extra}]" (from a clone: pip install -e ".[{extra}]")'

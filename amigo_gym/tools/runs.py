@@ -1,0 +1,590 @@
+"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
+
+Used by ``amigo-gym train`` and ``amigo-gym compare``; imports only the standard library, :mod:`amigo_gym.io` and,
+when a lock is taken, ``filelock``. The lock, checkpoints, corrupt files, temporaries and output sets:
+docs/reliability.md, "Reference: run folders".
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import os
+import re
+import shutil
+import signal
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
+
+__all__ = [
+    "CHECKPOINTS",
+    "LOCK_NAME",
+    "POINTER",
+    "Checkpoint",
+    "TRUST_ENV",
+    "CorruptFileError",
+    "RunLock",
+    "RunLockedError",
+    "check_pickle",
+    "clean_temporaries",
+    "remove_matching",
+    "handling",
+    "has_run_files",
+    "is_current_lock",
+    "load_checkpoint",
+    "publish",
+    "read_json",
+    "restore_snapshot",
+    "save_checkpoint",
+    "sha256_file",
+    "trust_unverified",
+    "verify_manifest",
+    "verify_sha256",
+]
+
+LOCK_NAME = "run.lock"
+POINTER = "checkpoint.json"
+CHECKPOINTS = "checkpoints"
+META = "meta.json"
+#: files of a run folder that a checkpoint snapshots and a resume restores
+SNAPSHOT = ("eval.json", "best_model.zip")
+
+
+class StopRequest:
+    """A signal handler for ``SIGTERM``/``SIGINT`` while a run holds its folder: the first signal sets
+    :attr:`requested` (the run stops at its next safe point, after a checkpoint) and prints ``message`` to
+    stderr; a second one stops at once (``KeyboardInterrupt``)."""
+
+    def __init__(self, message: str) -> None:
+        self.message = message
+        self.requested = False
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print(self.message, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def handling(handler: Callable[[int, Any], None], *signals: signal.Signals) -> Iterator[None]:
+    """``handler`` on ``signals`` (default ``SIGTERM`` and ``SIGINT``) inside the block, the previous handlers
+    restored after it; nothing outside the main thread (signals are handled only there)."""
+    main = threading.current_thread() is threading.main_thread()
+    old = {sig: signal.signal(sig, handler) for sig in signals or (signal.SIGTERM, signal.SIGINT)} if main else {}
+    try:
+        yield
+    finally:
+        for sig, previous in old.items():
+            signal.signal(sig, previous)
+
+
+class RunLockedError(FileExistsError):
+    """Another process holds the run folder's lock."""
+
+
+class CorruptFileError(ValueError):
+    """A file of a run (or a model) is damaged or not what it should be; the message names it."""
+
+
+def warn(message: str) -> None:
+    """A one-line warning on stderr."""
+    print(f"amigo-gym: warning: {message}", file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------- lock
+class RunLock:
+    """Exclusive lock on a run folder for the life of the process's use of it (module docstring).
+
+    Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
+    ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
+    fail at once). The lock is ``filelock.FileLock`` (``flock`` on POSIX, ``msvcrt`` on Windows), imported
+    when the lock is taken.
+
+    Raises:
+        RunLockedError: another process holds it (one line with its pid).
+    """
+
+    def __init__(self, folder: str | os.PathLike[str], name: str = LOCK_NAME, wait: float = 0.0) -> None:
+        self.folder = Path(folder)
+        self.name = name
+        self.wait = float(wait)
+        self._lock: Any = None
+
+    def acquire(self) -> RunLock:
+        import filelock
+
+        self.folder.mkdir(parents=True, exist_ok=True)
+        path = self.folder / self.name
+        lock = filelock.FileLock(path, timeout=self.wait, mode=file_mode(), thread_local=False)
+        try:
+            while True:
+                lock.acquire()
+                fd = getattr(getattr(lock, "_context", None), "lock_file_fd", None)
+                if fd is None or is_current_lock(fd, path):
+                    break
+                lock.release()  # a finishing owner removed the file we locked: take the new one
+        except filelock.Timeout:
+            try:
+                owner = path.read_text(errors="replace").strip() or "?"
+            except OSError:
+                owner = "?"
+            raise RunLockedError(
+                f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
+                "or stop it, then --resume"
+            ) from None
+        path.write_text(f"{os.getpid()}\n")  # the path names the locked file: only a holder removes it
+        self._lock = lock
+        return self
+
+    def release(self) -> None:
+        """Remove the lock file (still locked, so no one holds a lock on it that the removal could break) and
+        unlock it."""
+        if self._lock is not None:
+            if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
+                with contextlib.suppress(OSError):
+                    os.unlink(self.folder / self.name)
+            self._lock.release()
+            self._lock = None
+
+    def __enter__(self) -> RunLock:
+        return self.acquire()
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.release()
+
+
+def is_current_lock(fd: int, path: Path) -> bool:
+    """Whether ``path`` still names the file open as ``fd`` (same device and inode; ``False`` if it is gone)."""
+    try:
+        named = os.stat(path)
+    except FileNotFoundError:
+        return False
+    held = os.fstat(fd)
+    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
+
+
+#: names of the temporaries this package makes: ``.tmp-*``, ``.staging-*`` folders, ``.trash-*`` checkpoints being
+#: deleted, and :func:`amigo_gym.io.atomic_save`'s ``.<stem>.<8 random characters><suffix>`` files
+TEMPORARY_NAME = re.compile(r"^\.(?:tmp|staging|trash)-.+$|^\..+\.[A-Za-z0-9_]{8}(?:\.[A-Za-z0-9]+)?$")
+
+
+def clean_temporaries(folder: Path) -> None:
+    """Remove what killed processes left: the package's own temporary files and folders (:data:`TEMPORARY_NAME`)
+    in ``folder`` and in its ``checkpoints/``; any other dot-named entry (``.git``, ``.env``) is left alone. Call
+    only while holding the folder's :class:`RunLock`."""
+    for d in (folder, folder / CHECKPOINTS):
+        remove_matching(d, TEMPORARY_NAME)
+
+
+def remove_matching(folder: Path, pattern: re.Pattern[str]) -> list[str]:
+    """Remove the entries of ``folder`` (if it is one) whose names ``pattern`` matches: folders with their contents,
+    files and links (never what a link points to). The names removed."""
+    removed = []
+    if folder.is_dir():
+        for p in folder.iterdir():
+            if pattern.match(p.name):
+                if p.is_dir() and not p.is_symlink():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+                removed.append(p.name)
+    return removed
+
+
+def has_run_files(folder: Path) -> bool:
+    """Whether ``folder`` holds anything besides the lock file and temporaries."""
+    return folder.is_dir() and any(p.name != LOCK_NAME and not p.name.startswith(".") for p in folder.iterdir())
+
+
+# --------------------------------------------------------------------------- files
+def verify_sha256(path: Path, expected: str, source: str) -> None:
+    """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
+    if not path.is_file():
+        raise CorruptFileError(f"{path}: missing (listed in {source})")
+    got = sha256_file(path)
+    if got != expected:
+        raise CorruptFileError(
+            f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
+            "(changed, truncated or replaced)"
+        )
+
+
+def _key(path: Path, out: Path) -> str:
+    """A file's name in a manifest: relative to ``out`` when inside it, else absolute."""
+    try:
+        return str(path.resolve().relative_to(out.resolve()))
+    except ValueError:
+        return str(path.resolve())
+
+
+def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
+    """Move the staged files ``{target: staged file}`` to their targets as one set; the manifest's ``{file: sha256}``.
+
+    The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``, a file named relative
+    to ``out`` when inside it) is removed first and written atomically last: the set is complete and consistent
+    exactly when the manifest exists and every file matches it (:func:`verify_manifest`), so a reader that checks
+    it never mixes files of two runs. Fault stages (tests): ``publish:<file name>`` after each move.
+    """
+    files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
+    (out / manifest).unlink(missing_ok=True)
+    fsync_dir(out)
+    for dest, src in targets.items():
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            os.replace(src, dest)
+        except OSError:  # another file system: copy beside the target, then rename
+            atomic_save(functools.partial(shutil.copyfile, src), dest)
+        fault_point(f"publish:{dest.name}")
+        fsync_dir(dest.parent)
+    atomic_write_json(out / manifest, {"files": files, **extra, "written": time.strftime("%Y-%m-%dT%H:%M:%S%z")})
+    return files
+
+
+def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
+    """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file.
+
+    Raises:
+        FileNotFoundError: no manifest (no complete set: the command was interrupted while publishing).
+        CorruptFileError: a file missing or not the one the manifest lists.
+    """
+    path = out / manifest
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
+    doc = read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
+        raise CorruptFileError(f"{path}: not a manifest (needs 'files')")
+    for name, digest in doc["files"].items():
+        verify_sha256(out / name, str(digest), str(path))
+    return dict(doc["files"])
+
+
+#: environment variable that, set to ``1``, trusts files that have no recorded sha256 (no warning)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
+_trust_unverified = False
+_warned: set[str] = set()
+
+
+def trust_unverified(trust: bool = True) -> None:
+    """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
+    global _trust_unverified
+    _trust_unverified = bool(trust)
+
+
+def check_pickle(path: Path, expected: str | None, source: str | None) -> None:
+    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled.
+
+    With a recorded sha256 (``expected``, from the manifest ``source``): :func:`verify_sha256` (a mismatch or a
+    missing file raises :class:`CorruptFileError`). Without one: a warning naming the file, once per file and
+    process, that it is loaded unverified; none when the user trusts unverified files (:func:`trust_unverified`,
+    or the environment variable ``AMIGO_GYM_TRUST_UNVERIFIED=1``).
+    """
+    if expected is not None:
+        verify_sha256(path, expected, str(source))
+        return
+    if _trust_unverified or os.environ.get(TRUST_ENV) == "1":
+        return
+    key = str(Path(path).resolve())
+    if key in _warned:
+        return
+    _warned.add(key)
+    warn(
+        f"{path}: no recorded sha256 to check it against; it is a pickle, and loading it runs code: load only "
+        f"files you trust (--trust-unverified or {TRUST_ENV}=1 silences this)"
+    )
+
+
+def read_json(path: Path, what: str = "") -> Any:
+    """Parse a JSON file; :class:`CorruptFileError` naming the file on a decoding error."""
+    try:
+        return json.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise
+    except (ValueError, UnicodeDecodeError) as exc:
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CorruptFileError(f"{path}: not valid JSON{' ' + what if what else ''} ({detail})") from None
+
+
+def _fsync_file(path: Path) -> None:
+    with open(path, "rb+") as fh:
+        os.fsync(fh.fileno())
+
+
+# --------------------------------------------------------------------------- checkpoints
+class Checkpoint:
+    """A checkpoint folder whose ``meta.json`` and sha256 sums have been verified.
+
+    Attributes:
+        folder: ``<run>/checkpoints/step_<n>[.<k>]``.
+        step: its ``num_timesteps``.
+        meta: the parsed ``meta.json``.
+    """
+
+    def __init__(self, folder: Path, step: int, meta: dict[str, Any]) -> None:
+        self.folder = folder
+        self.step = step
+        self.meta = meta
+
+    @property
+    def wall_time_s(self) -> float:
+        return float(self.meta.get("wall_time_s", 0.0))
+
+
+def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
+    """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling).
+
+    Raises:
+        CorruptFileError: missing or damaged ``meta.json``, another algorithm, a file missing or changed.
+    """
+    meta_path = folder / META
+    if not meta_path.is_file():
+        raise CorruptFileError(f"{meta_path}: missing (the checkpoint is incomplete)")
+    meta = read_json(meta_path)
+    if (
+        not isinstance(meta, dict)
+        or not isinstance(meta.get("num_timesteps"), int)
+        or not isinstance(meta.get("files"), dict)
+    ):
+        raise CorruptFileError(f"{meta_path}: not a checkpoint record (needs num_timesteps and files)")
+    if meta.get("algo") != algo:
+        raise CorruptFileError(f"{meta_path}: a checkpoint of {meta.get('algo')!r}, not {algo!r}")
+    if "model.zip" not in meta["files"]:
+        raise CorruptFileError(f"{meta_path}: lists no model.zip")
+    for name, digest in meta["files"].items():
+        if not isinstance(name, str) or "/" in name or name.startswith("."):
+            raise CorruptFileError(f"{meta_path}: bad file name {name!r}")
+        verify_sha256(folder / name, str(digest), str(meta_path))
+    return Checkpoint(folder, int(meta["num_timesteps"]), meta)
+
+
+def _read_pointer(out: Path) -> dict[str, Any] | None:
+    """The parsed ``checkpoint.json`` (``None`` if absent); :class:`CorruptFileError` if damaged."""
+    path = out / POINTER
+    if not path.is_file():
+        return None
+    doc = read_json(path)
+    if not isinstance(doc, dict) or not isinstance(doc.get("path"), str):
+        raise CorruptFileError(f"{path}: not a checkpoint pointer (needs a 'path')")
+    return doc
+
+
+def _inside(out: Path, rel: Any) -> Path | None:
+    """``out / rel`` if ``rel`` names a checkpoint folder inside ``out/checkpoints`` (else ``None``)."""
+    if not isinstance(rel, str):
+        return None
+    p = Path(rel)
+    if len(p.parts) != 2 or p.parts[0] != CHECKPOINTS or p.name.startswith("."):
+        return None
+    return out / p
+
+
+def _step_of(folder: Path) -> tuple[int, int]:
+    """Sort key of ``step_<n>[.<k>]``: ``(n, k)`` (``(-1, 0)`` if the name does not parse)."""
+    name = folder.name.removeprefix("step_")
+    n, _, k = name.partition(".")
+    try:
+        return int(n), int(k or 0)
+    except ValueError:
+        return -1, 0
+
+
+def candidates(out: Path, report: bool = True) -> list[Path]:
+    """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first.
+
+    A damaged pointer is reported with a warning (the folders are still found by name).
+    """
+    found: list[Path] = []
+    try:
+        ptr = _read_pointer(out)
+    except CorruptFileError as exc:
+        if report:
+            warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
+        ptr = None
+    if ptr is not None:
+        for key in ("path", "previous"):
+            p = _inside(out, ptr.get(key))
+            if p is not None and p.is_dir() and p not in found:
+                found.append(p)
+    root = out / CHECKPOINTS
+    if root.is_dir():
+        rest = [p for p in root.iterdir() if p.is_dir() and p.name.startswith("step_") and p not in found]
+        found += sorted(rest, key=_step_of, reverse=True)
+    return found
+
+
+def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> tuple[Checkpoint, Any] | None:
+    """Load the newest good checkpoint of the run in ``out`` with ``load`` (which unpickles the model etc.).
+
+    Each candidate (:func:`candidates`) is verified (:func:`verify_checkpoint`) and then passed to
+    ``load``; a :class:`CorruptFileError` (from either) prints a warning and falls back to the next.
+    A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
+
+    Returns:
+        ``(checkpoint, load's result)``, or ``None`` if the run has no checkpoint folder at all.
+
+    Raises:
+        CorruptFileError: checkpoints exist but none is usable (one line listing why).
+    """
+    tried: list[str] = []
+    cands = candidates(out)
+    for i, folder in enumerate(cands):
+        try:
+            ck = verify_checkpoint(folder, algo)
+            result = load(ck)
+        except CorruptFileError as exc:
+            tried.append(str(exc))
+            nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
+            warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
+            continue
+        try:
+            ptr = _read_pointer(out)
+        except CorruptFileError:
+            ptr = None
+        if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
+            _write_pointer(out, algo, folder, ck.step)
+        return ck, result
+    if tried:
+        raise CorruptFileError(f"no usable checkpoint in {out}: " + "; ".join(tried))
+    return None
+
+
+def save_checkpoint(
+    out: Path,
+    algo: str,
+    step: int,
+    write: Callable[[Path], list[str]],
+    wall_time_s: float,
+) -> Path:
+    """Write a complete checkpoint, switch ``checkpoint.json`` to it, then delete all but the last two.
+
+    Args:
+        out: the run folder (its :class:`RunLock` held).
+        algo: algorithm name, recorded in ``meta.json``.
+        step: the model's ``num_timesteps``.
+        write: writes the model files into the folder it is given; returns their names.
+        wall_time_s: training wall time so far [s], recorded in ``meta.json``.
+
+    Fault stages (``AMIGO_GYM_FAULT``, see :mod:`amigo_gym.io`): those of ``write`` (train.py:
+    ``checkpoint:model``, ``checkpoint:replay``), ``checkpoint:files`` (every file written and fsynced),
+    ``checkpoint:meta`` (``meta.json`` written), ``checkpoint:rename`` (folder renamed, pointer
+    not switched), ``write:checkpoint.json`` / ``rename:checkpoint.json`` (the pointer's atomic write),
+    ``checkpoint:trash`` (an old checkpoint renamed for deletion, not yet deleted).
+
+    Returns:
+        the new checkpoint folder.
+    """
+    root = out / CHECKPOINTS
+    root.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=root, prefix=".tmp-"))
+    try:
+        os.chmod(tmp, file_mode(folder=True))
+        names = list(write(tmp))
+        for name in SNAPSHOT:  # the run's evaluation record as of this step
+            src = out / name
+            if src.is_file():
+                try:
+                    os.link(src, tmp / name)  # the run replaces these files atomically: a link is a snapshot
+                except OSError:
+                    shutil.copyfile(src, tmp / name)
+                names.append(name)
+        for name in names:
+            _fsync_file(tmp / name)
+        fault_point("checkpoint:files")
+        meta = {
+            "num_timesteps": int(step),
+            "algo": algo,
+            "wall_time_s": float(wall_time_s),
+            "files": {name: sha256_file(tmp / name) for name in names},
+        }
+        (tmp / META).write_text(json.dumps(meta, indent=2) + "\n")
+        _fsync_file(tmp / META)
+        fsync_dir(tmp)
+        fault_point("checkpoint:meta")
+        final = root / f"step_{step}"
+        k = 0
+        while final.exists():
+            k += 1
+            final = root / f"step_{step}.{k}"
+        os.replace(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    fsync_dir(root)
+    fault_point("checkpoint:rename")
+    rel, previous = _write_pointer(out, algo, final, step)
+    keep = {rel, previous}
+    for old in list(root.iterdir()):
+        name = str(old.relative_to(out))
+        if name in keep or old.name.startswith("."):
+            continue
+        trash = root / f".trash-{old.name}"
+        os.replace(old, trash)
+        fault_point("checkpoint:trash")
+        shutil.rmtree(trash, ignore_errors=True)
+    fsync_dir(root)
+    return final
+
+
+def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, str | None]:
+    """Switch ``checkpoint.json`` atomically to ``folder`` (and the previous good checkpoint)."""
+    previous = _previous_good(out, algo, folder)
+    rel = str(folder.relative_to(out))
+    atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
+    return rel, previous
+
+
+def _previous_good(out: Path, algo: str, new: Path) -> str | None:
+    """The checkpoint to keep beside ``new``: the first of the pointer's, its previous one and the
+    others (newest first) that verifies (a damaged one a resume fell back from is not kept)."""
+    for folder in (p for p in candidates(out, report=False) if p != new):
+        try:
+            verify_checkpoint(folder, algo)
+        except CorruptFileError:
+            continue
+        return str(folder.relative_to(out))
+    return None
+
+
+def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
+    """Put the run's evaluation record (``eval.json``, ``best_model.zip``) back to the checkpoint's.
+
+    Evaluations made after the checkpoint by a run that was then killed are dropped (the resumed run
+    makes them again at the same steps), so the history holds no duplicate. ``ck=None``: no record.
+    """
+    for name in SNAPSHOT:
+        src = None if ck is None else ck.folder / name
+        dst = out / name
+        if src is not None and src.is_file():
+            tmp = out / f".{name}.restore"
+            shutil.copyfile(src, tmp)
+            _fsync_file(tmp)
+            os.replace(tmp, dst)
+        else:
+            dst.unlink(missing_ok=True)
+    fsync_dir(out)
+
+
+@contextlib.contextmanager
+def corrupt_errors(path: Path, what: str) -> Iterator[None]:
+    """Turn any exception while loading ``path`` (unpickling, unzipping, SB3's checks) into one
+    :class:`CorruptFileError` line naming the file."""
+    try:
+        yield
+    except CorruptFileError:
+        raise
+    except FileNotFoundError:
+        raise CorruptFileError(f"{path}: missing") from None
+    except Exception as exc:
+        detail = " ".join(str(exc).split())[:160] or "no detail"
+        raise CorruptFileError(f"{path}: not a loadable {what} ({type(exc).__name__}: {detail})") from None

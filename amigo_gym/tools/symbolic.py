@@ -1,0 +1,746 @@
+r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy), from the transforms to system (29).
+
+This module redoes, in SymPy, the Maple derivation of the paper (cited in docs/model.md) and checks it against the
+conventions of ``docs/model.md``. It is **not** on the environment's stepping path: ``import amigo_gym`` never
+imports it (nor SymPy); the numeric model lives in :mod:`amigo_gym.model.kinematics`. Everything is derived once and
+cached
+(:func:`derive`); ``amigo-gym derive [--latex] [--out FILE]`` prints the result.
+
+Walk-through
+------------
+Frames: 0 is the ground frame (z up), 4 the vehicle frame (heading ``beta`` about z, x4 forward), 1 and 2 the
+frames of the right and left drive wheels, turning with the wheel angles ``alpha1``, ``alpha2``. The coordinates
+``x_A, y_A, beta, alpha1, alpha2, alpha3, phi`` are functions of time ``t``; ``l1, l3, l4, l5, r1, r2, r3, R`` are
+positive lengths and ``v_A`` is the speed of A. A dot is a time derivative.
+
+1. **Point H** (eqs 1–4). ``r_H = T_{4,0,H} rho_H`` with the transform of eq. 2 (rotation ``beta`` about z,
+   translation ``(x_A + l3 cos b, y_A + l3 sin b, r1)``) and ``rho_H = (0, 0, -l4, 1)`` (eq. 3) gives
+   ``r_H = (x_A + l3 cos b, y_A + l3 sin b, r1 - l4, 1)`` (eq. 4).
+
+2. **Contact points** (eqs 13–16, 21–24). ``r_K = T_{4,0,K} T_{1,4} rho_K``: eq. 14 puts the centre of wheel 1 at
+   ``A + l1 (sin b, -cos b)`` at axle height ``r1``, eq. 15 turns frame 1 with the wheel (a proper rotation by
+   ``alpha1``), and eq. 16 writes the contact point in the wheel frame as ``rho_K = (-r1 cos a1, r1 sin a1, 0, 1)``,
+   which depends on ``alpha1`` exactly so that ``T_{1,4} rho_K = (0, 0, -r1, 1)``: the contact point is always the
+   bottom of the wheel, ``r_K = (x_A + l1 sin b, y_A - l1 cos b, 0, 1)``. Likewise ``r_L`` (wheel 2, radius ``r2``,
+   on the other side).
+
+3. **Velocity of the material point in contact** (what eqs 17 and 25 should say). Rolling without slipping asks
+   that the *material point of the wheel* now at K be at rest. That point is fixed in frame 1, so its velocity is
+   the time derivative of the chain applied to ``rho_K`` *frozen* at its current value, with the product rule:
+
+   .. math::
+       \bar v_K = \frac{d}{dt}\left(T_{4,0,K}\,T_{1,4}\right)\bar\rho_K
+               = \left(\dot T_{4,0,K}\,T_{1,4} + T_{4,0,K}\,\dot T_{1,4}\right)\bar\rho_K
+               = \begin{pmatrix}\dot x_A - r_1\dot\alpha_1\cos\beta + l_1\dot\beta\cos\beta\\
+                 \dot y_A - r_1\dot\alpha_1\sin\beta + l_1\dot\beta\sin\beta\\ 0\\ 0\end{pmatrix}
+
+   (eq. 18 with velocities). Differentiating ``rho_K`` as well gives instead the velocity of the *geometric*
+   contact point, ``(xdot_A + l1 betadot cos b, ydot_A + l1 betadot sin b, 0)``, which slides along the ground
+   with the robot and is not zero when the wheel rolls; the difference ``T_{4,0,K} T_{1,4} rhodot_K =
+   r1 alpha1dot (cos b, sin b, 0)`` is the rolling itself.
+
+4. **Rolling constraints** (eqs 19, 20, 27, 28): ``v_K = 0`` and ``v_L = 0``. With the motion of A (eqs 11, 12:
+   ``xdot_A = v_A cos b``, ``ydot_A = v_A sin b``, no side slip of A) the component of ``v_K`` across the
+   heading vanishes identically, and the component along it gives ``r1 alpha1dot = v_A + l1 betadot``; for wheel 2,
+   ``r2 alpha2dot = v_A - l1 betadot``. Conversely ``v_A = (r1 alpha1dot + r2 alpha2dot)/2`` and
+   ``betadot = (r1 alpha1dot - r2 alpha2dot)/(2 l1)``: the differential-drive relations of docs/model.md and
+   :func:`amigo_gym.model.kinematics.wheel_rates`.
+
+5. **Castor** (the seventh equation; no transform for it is printed in the paper). By analogy: the swivel S on the
+   body axis, ``l5`` behind A (``T_{4,0,S}``), a swivel rotation ``gamma`` about the vertical, and the castor wheel
+   turning with ``alpha3`` (``T_{3,S}``, ``rho_C`` as eqs 15–16 with ``r3``). Rolling without slipping of its
+   material contact point gives ``v_S = r3 alpha3dot (cos(b + gamma), sin(b + gamma))``: the castor aligns with the
+   velocity of its swivel, ``gamma = atan2(-l5 betadot, v_A)`` (trail neglected), and
+   ``r3 alpha3dot = sqrt(l5^2 betadot^2 + v_A^2)`` moving forward.
+
+6. **The path of H and the inverse problem** (eqs 6–10). H on the circle of eq. 6, ``x_H = R sin phi``,
+   ``y_H = R (1 - cos phi)``, gives eqs 7–8, and their time derivatives eqs 9–10:
+   ``xdot_A - l3 betadot sin b - R phidot cos phi = 0``, ``ydot_A + l3 betadot cos b - R phidot sin phi = 0``.
+   For any path with tangent angle ``theta(s)`` at arc length ``s`` (the circle: ``theta = phi``,
+   ``sdot = R phidot``) eqs 9–12 solve to the inverse-kinematics ODE
+
+   .. math:: \dot s = \frac{v_A}{\cos(\theta - \beta)}, \qquad \dot\beta = \frac{v_A \tan(\theta - \beta)}{l_3}.
+
+   On a circle the heading lag ``delta = theta - beta`` is steady where ``sdot / R = betadot``, i.e.
+   ``sin delta = l3 / R``, giving ``betadot = v_A / sqrt(R^2 - l3^2)``.
+
+7. **System (29), corrected**: the seven equations (9), (10), (11), (12), (19), (27) and the castor's, each ``= 0``.
+
+Where the paper's printing is wrong (cf. docs/model.md):
+
+* eqs 17 and 25 print the derivative of a product as the product of the derivatives,
+  ``Tdot_{4,0,K} Tdot_{1,4} rho_K``; that is ``r1 alpha1dot betadot (sin b, -cos b, 0, 0)``, not eq. 18;
+* eqs 18 and 26 print the positions ``x_A``, ``y_A`` where the velocities ``xdot_A``, ``ydot_A`` belong, and
+  eq. 28 prints ``y_A``;
+* eqs 19, 20, 27, 28 lack ``= 0``;
+* the text calls system 29 "six equations"; it has seven;
+* system 29 keeps only the x-components of ``v_K = 0`` and ``v_L = 0``; with eq. 11 these read
+  ``cos b (v_A + l1 betadot - r1 alpha1dot) = 0`` and say nothing about ``alpha1dot`` where ``cos b = 0``
+  (heading along y0). The solution here uses the component along the heading, which is regular everywhere.
+
+Numbers: :func:`lambdify` turns derived expressions into batched numpy functions of named arguments (the names of
+:data:`PLAIN_SYMBOLS`); :func:`robot_values` supplies a :class:`~amigo_gym.model.params.RobotParams`' lengths by name.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import sympy as sp
+from numpy.typing import ArrayLike, NDArray
+
+from amigo_gym.io import atomic_write
+from amigo_gym.model.params import RobotParams
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+
+__all__ = [
+    "PLAIN_SYMBOLS",
+    "SYSTEM_29_LABELS",
+    "DeriveSettings",
+    "Derivation",
+    "Misprints",
+    "Transforms",
+    "derive",
+    "lambdify",
+    "main",
+    "material_velocity",
+    "render",
+    "robot_values",
+    "system_29_latex",
+    "to_plain",
+    "transforms",
+]
+
+Array = NDArray[np.float64]
+
+# --------------------------------------------------------------------------------------------------------------------
+# Symbols
+# --------------------------------------------------------------------------------------------------------------------
+
+#: time [s]
+t = sp.Symbol("t", real=True)
+
+
+def _q(name: str) -> Any:
+    return sp.Function(name, real=True)(t)
+
+
+# generalised coordinates as functions of time (the paper's Maple variables)
+xA_t, yA_t, beta_t = _q("x_A"), _q("y_A"), _q("beta")
+alpha1_t, alpha2_t, alpha3_t = _q("alpha_1"), _q("alpha_2"), _q("alpha_3")
+phi_t, s_t, gamma_t = _q("phi"), _q("s"), _q("gamma")
+
+# constants: lengths [m] and the speed of A [m/s]
+l1, l3, l4, l5, r1, r2, r3, R = sp.symbols("l_1 l_3 l_4 l_5 r_1 r_2 r_3 R", positive=True)
+v_A = sp.Symbol("v_A", real=True)
+
+# plain symbols standing for the coordinates and their rates at one instant (for printing and numbers)
+x_A, y_A, beta, alpha_1, alpha_2, alpha_3, phi, s, gamma = sp.symbols(
+    "x_A y_A beta alpha_1 alpha_2 alpha_3 phi s gamma", real=True
+)
+xdot_A, ydot_A, betadot, alphadot_1, alphadot_2, alphadot_3, phidot, sdot, gammadot = sp.symbols(
+    "xdot_A ydot_A betadot alphadot_1 alphadot_2 alphadot_3 phidot sdot gammadot", real=True
+)
+#: path tangent angle at H [rad] and heading lag ``theta - beta`` [rad]
+theta, delta = sp.symbols("theta delta", real=True)
+
+_COORDS = (
+    (xA_t, x_A, xdot_A),
+    (yA_t, y_A, ydot_A),
+    (beta_t, beta, betadot),
+    (alpha1_t, alpha_1, alphadot_1),
+    (alpha2_t, alpha_2, alphadot_2),
+    (alpha3_t, alpha_3, alphadot_3),
+    (phi_t, phi, phidot),
+    (s_t, s, sdot),
+    (gamma_t, gamma, gammadot),
+)
+_TO_PLAIN: dict[Any, Any] = {}
+for _f, _p, _pd in _COORDS:
+    _TO_PLAIN[sp.Derivative(_f, t)] = _pd
+    _TO_PLAIN[_f] = _p
+
+#: every plain symbol an expression of :func:`derive` may contain, by name (the keyword names of :func:`lambdify`)
+PLAIN_SYMBOLS: dict[str, Any] = {
+    str(sym): sym
+    for sym in (
+        *(p for _, p, _ in _COORDS),
+        *(pd for _, _, pd in _COORDS),
+        l1,
+        l3,
+        l4,
+        l5,
+        r1,
+        r2,
+        r3,
+        R,
+        v_A,
+        theta,
+        delta,
+    )
+}
+
+
+def to_plain(expr: Any) -> Any:
+    """Replace the time functions ``q(t)`` and their derivatives ``dq/dt`` by the plain symbols ``q``, ``qdot``.
+
+    Works on expressions and matrices (returns an immutable matrix for a matrix).
+    """
+    if isinstance(expr, sp.MatrixBase):
+        return sp.ImmutableMatrix(expr.applyfunc(lambda e: e.xreplace(_TO_PLAIN)))
+    return sp.sympify(expr).xreplace(_TO_PLAIN)
+
+
+def _simp(expr: Any) -> Any:
+    """Trigonometric simplification to an expanded canonical form (expressions or matrices)."""
+    if isinstance(expr, sp.MatrixBase):
+        return sp.ImmutableMatrix(expr.applyfunc(_simp))
+    return sp.expand(sp.trigsimp(sp.expand(expr)))
+
+
+# --------------------------------------------------------------------------------------------------------------------
+# The transforms (eqs 2-3, 14-16, 22-24; the castor's by analogy)
+# --------------------------------------------------------------------------------------------------------------------
+
+
+def _frame(angle: Any, x: Any, y: Any, z: Any) -> Any:
+    """Homogeneous transform: rotation ``angle`` about z, then translation ``(x, y, z)``."""
+    c, si = sp.cos(angle), sp.sin(angle)
+    return sp.ImmutableMatrix([[c, -si, 0, x], [si, c, 0, y], [0, 0, 1, z], [0, 0, 0, 1]])
+
+
+def _wheel(alpha: Any) -> Any:
+    """The wheel's D–H transform (eqs 15, 23): frame of a wheel turned by ``alpha`` into the vehicle frame."""
+    c, si = sp.cos(alpha), sp.sin(alpha)
+    return sp.ImmutableMatrix([[si, c, 0, 0], [0, 0, 1, 0], [c, -si, 0, 0], [0, 0, 0, 1]])
+
+
+def _rim(radius: Any, alpha: Any) -> Any:
+    """Contact point in the wheel frame (eqs 16, 24): ``(-r cos alpha, r sin alpha, 0, 1)``."""
+    return sp.ImmutableMatrix([-radius * sp.cos(alpha), radius * sp.sin(alpha), 0, 1])
+
+
+@dataclass(frozen=True)
+class Transforms:
+    """The paper's homogeneous transforms (4x4) and point vectors (4x1), coordinates as functions of ``t``.
+
+    Attributes:
+        T40H: eq. 2, vehicle frame 4 placed at H's vertical, into frame 0.
+        rho_H: eq. 3, H in that frame: ``(0, 0, -l4, 1)``.
+        T40K: eq. 14, frame 4 placed at the centre of wheel 1 (right), into frame 0.
+        T14: eq. 15, the frame of wheel 1 (turned by ``alpha1``) into frame 4.
+        rho_K: eq. 16, the contact point K in the frame of wheel 1.
+        T40L: eq. 22, frame 4 placed at the centre of wheel 2 (left).
+        T24: eq. 23, the frame of wheel 2 (``alpha2``).
+        rho_L: eq. 24, the contact point L in the frame of wheel 2.
+        T40S: frame 4 placed at the castor's swivel, ``l5`` behind A at height ``r3`` (not printed in the paper).
+        TSw: the swivel's rotation ``gamma`` about the vertical.
+        T3S: the castor wheel's frame (``alpha3``), as eq. 15.
+        rho_C: the castor's contact point in its wheel frame, as eq. 16 with ``r3``.
+    """
+
+    T40H: Any
+    rho_H: Any
+    T40K: Any
+    T14: Any
+    rho_K: Any
+    T40L: Any
+    T24: Any
+    rho_L: Any
+    T40S: Any
+    TSw: Any
+    T3S: Any
+    rho_C: Any
+
+
+@functools.lru_cache(maxsize=1)
+def transforms() -> Transforms:
+    """Build the transforms of the paper (eqs 2, 3, 14, 15, 16, 22, 23, 24) and the castor's, in time-function form."""
+    b = beta_t
+    cb, sb = sp.cos(b), sp.sin(b)
+    return Transforms(
+        T40H=_frame(b, xA_t + l3 * cb, yA_t + l3 * sb, r1),
+        rho_H=sp.ImmutableMatrix([0, 0, -l4, 1]),
+        T40K=_frame(b, xA_t + l1 * sb, yA_t - l1 * cb, r1),
+        T14=_wheel(alpha1_t),
+        rho_K=_rim(r1, alpha1_t),
+        T40L=_frame(b, xA_t - l1 * sb, yA_t + l1 * cb, r2),
+        T24=_wheel(alpha2_t),
+        rho_L=_rim(r2, alpha2_t),
+        T40S=_frame(b, xA_t - l5 * cb, yA_t - l5 * sb, r3),
+        TSw=_frame(gamma_t, 0, 0, 0),
+        T3S=_wheel(alpha3_t),
+        rho_C=_rim(r3, alpha3_t),
+    )
+
+
+def material_velocity(chain: Sequence[Any], rho: Any) -> Any:
+    r"""Velocity of the material point at ``rho``, fixed in the last frame of ``chain``, by the product rule.
+
+    .. math:: \bar v = \frac{d}{dt}\Big(\prod_i T_i\Big)\bar\rho
+              = \sum_i T_1 \cdots \dot T_i \cdots T_n\,\bar\rho
+
+    ``rho`` is *frozen*: it is not differentiated (it names the point currently in contact, and the velocity
+    wanted is that of the wheel's material point there). Time-function form in, time-function form out.
+    """
+    total = sp.zeros(4, 1)
+    for i in range(len(chain)):
+        prod = sp.eye(4)
+        for j, m in enumerate(chain):
+            prod = prod * (sp.diff(m, t) if i == j else m)
+        total += prod * rho
+    return sp.ImmutableMatrix(total)
+
+
+# --------------------------------------------------------------------------------------------------------------------
+# The derivation
+# --------------------------------------------------------------------------------------------------------------------
+
+#: labels of the seven equations of system (29): the paper's numbers, and the castor's
+SYSTEM_29_LABELS: tuple[str, ...] = ("9", "10", "11", "12", "19", "27", "castor")
+
+
+@dataclass(frozen=True)
+class Misprints:
+    """The paper's misprinted forms, as printed (plain symbols), for showing that they are not identities.
+
+    Attributes:
+        eq17: ``Tdot_{4,0,K} Tdot_{1,4} rho_K`` (product of derivatives) as a 4-vector.
+        eq25: ``Tdot_{4,0,L} Tdot_{2,4} rho_L``.
+        eq18: eq. 18's right-hand side with ``x_A``, ``y_A`` (positions) in place of velocities.
+        eq26: eq. 26's right-hand side likewise.
+        eq28: eq. 28, ``y_A - r2 alpha2dot sin b - l1 betadot sin b``.
+        contact_point_velocity_K: full derivative of ``r_K`` (``rho_K`` differentiated too): the velocity of the
+            geometric contact point, not of the wheel's material point; it is not zero when the wheel rolls.
+    """
+
+    eq17: Any
+    eq25: Any
+    eq18: Any
+    eq26: Any
+    eq28: Any
+    contact_point_velocity_K: Any
+
+
+@dataclass(frozen=True)
+class Derivation:
+    """Everything derived from the transforms, in plain symbols (``x_A``, ``xdot_A``, ``alphadot_1``, ...).
+
+    Vectors are 4x1 immutable matrices in homogeneous coordinates of frame 0; every ``eq*`` is a left-hand side
+    whose equation is ``eq = 0``.
+
+    Attributes:
+        r_H: eq. 4, ``T_{4,0,H} rho_H``.
+        r_K: contact point of wheel 1, ``T_{4,0,K} T_{1,4} rho_K``.
+        r_L: contact point of wheel 2, ``T_{4,0,L} T_{2,4} rho_L``.
+        v_K: velocity of wheel 1's material point at K (eq. 18 corrected), product rule with frozen ``rho_K``.
+        v_L: the same for wheel 2 at L (eq. 26 corrected).
+        v_S: velocity of the castor's swivel S (a body point).
+        v_C: velocity of the castor wheel's material point in contact.
+        eq7, eq8: H on the path of eq. 6 (``r_H - path = 0``), x and y.
+        eq9, eq10: their time derivatives.
+        eq11, eq12: ``xdot_A - v_A cos b``, ``ydot_A - v_A sin b``.
+        eq19, eq20: ``v_K = 0``, x and y.
+        eq27, eq28: ``v_L = 0``, x and y.
+        eq_castor: ``sqrt(l5^2 betadot^2 + v_A^2) - r3 alphadot_3`` (forward motion).
+        system_29: the seven equations (9, 10, 11, 12, 19, 27, castor), left-hand sides.
+        slip_K, slip_L: the components of ``v_K``, ``v_L`` across the heading after eqs 11–12 (identically 0).
+        roll_K, roll_L: their components along the heading after eqs 11–12.
+        wheel_rates: ``{alphadot_1: ..., alphadot_2: ...}`` solving ``roll_K = roll_L = 0``.
+        body_velocity: ``{v_A: ..., betadot: ...}`` solving the same for the motion.
+        castor_swivel: the castor's swivel angle ``gamma`` relative to the body that makes it roll.
+        castor_rate: ``alphadot_3`` from rolling of the castor (forward motion).
+        eq9_path, eq10_path: eqs 9–10 for a general path with tangent angle ``theta`` and arc rate ``sdot``.
+        inverse_ode: ``{sdot: ..., betadot: ...}`` from eqs 9–12 for a general path.
+        heading_lag_rate: ``d(theta - beta)/dt`` on a circle of radius ``R`` as a function of ``delta``.
+        steady_lag: steady heading lag ``delta`` on the circle (``asin(l3/R)``).
+        steady: steady-state values on the circle: ``{betadot, sdot, alphadot_1, alphadot_2, alphadot_3}``.
+        misprints: the paper's misprinted forms.
+    """
+
+    r_H: Any
+    r_K: Any
+    r_L: Any
+    v_K: Any
+    v_L: Any
+    v_S: Any
+    v_C: Any
+    eq7: Any
+    eq8: Any
+    eq9: Any
+    eq10: Any
+    eq11: Any
+    eq12: Any
+    eq19: Any
+    eq20: Any
+    eq27: Any
+    eq28: Any
+    eq_castor: Any
+    system_29: tuple[Any, ...]
+    slip_K: Any
+    slip_L: Any
+    roll_K: Any
+    roll_L: Any
+    wheel_rates: dict[Any, Any]
+    body_velocity: dict[Any, Any]
+    castor_swivel: Any
+    castor_rate: Any
+    eq9_path: Any
+    eq10_path: Any
+    inverse_ode: dict[Any, Any]
+    heading_lag_rate: Any
+    steady_lag: Any
+    steady: dict[str, Any]
+    misprints: Misprints
+
+
+def _solve_one(eqs: Sequence[Any], unknowns: Sequence[Any]) -> dict[Any, Any]:
+    sols = sp.solve(list(eqs), list(unknowns), dict=True)
+    if len(sols) != 1:  # pragma: no cover - a property of the derivation, checked by the tests
+        raise RuntimeError(f"expected one solution for {unknowns}, got {sols}")
+    return {k: sp.simplify(v) for k, v in sols[0].items()}
+
+
+@functools.lru_cache(maxsize=1)
+def derive() -> Derivation:
+    """Carry out the whole derivation (a few seconds; cached). See the module docstring for the steps."""
+    T = transforms()
+    cb, sb = sp.cos(beta), sp.sin(beta)
+    on_heading = sp.ImmutableMatrix([cb, sb, 0, 0])
+    across = sp.ImmutableMatrix([-sb, cb, 0, 0])
+    motion_of_a = {xdot_A: v_A * cb, ydot_A: v_A * sb}  # eqs 11-12 solved
+
+    # 1-2: positions
+    r_H_t = T.T40H * T.rho_H
+    r_H = _simp(to_plain(r_H_t))
+    r_K = _simp(to_plain(T.T40K * T.T14 * T.rho_K))
+    r_L = _simp(to_plain(T.T40L * T.T24 * T.rho_L))
+
+    # 3: material-point velocities (product rule, rho frozen)
+    v_K = _simp(to_plain(material_velocity([T.T40K, T.T14], T.rho_K)))
+    v_L = _simp(to_plain(material_velocity([T.T40L, T.T24], T.rho_L)))
+    v_S = _simp(to_plain(material_velocity([T.T40S], sp.ImmutableMatrix([0, 0, -r3, 1]))))
+    v_C = _simp(to_plain(material_velocity([T.T40S, T.TSw, T.T3S], T.rho_C)))
+
+    # 4: rolling constraints, reduced with the motion of A
+    slip_K = _simp((across.T * v_K)[0].subs(motion_of_a))
+    slip_L = _simp((across.T * v_L)[0].subs(motion_of_a))
+    roll_K = _simp((on_heading.T * v_K)[0].subs(motion_of_a))
+    roll_L = _simp((on_heading.T * v_L)[0].subs(motion_of_a))
+    wheel_rates = _solve_one([roll_K, roll_L], [alphadot_1, alphadot_2])
+    body_velocity = _solve_one([roll_K, roll_L], [v_A, betadot])
+
+    # 5: castor: v_C = 0 <=> v_S = r3 alphadot_3 (cos(b + gamma), sin(b + gamma))
+    castor_dir = sp.ImmutableMatrix([sp.cos(beta + gamma), sp.sin(beta + gamma), 0, 0])
+    castor_normal = sp.ImmutableMatrix([-sp.sin(beta + gamma), sp.cos(beta + gamma), 0, 0])
+    c_across = _simp((castor_normal.T * v_C)[0].subs(motion_of_a))  # = -v_A sin g - l5 betadot cos g
+    castor_swivel = sp.atan2(-l5 * betadot, v_A)
+    c_along = (castor_dir.T * v_C)[0].subs(motion_of_a)
+    castor_rate = _solve_one([sp.simplify(c_along.subs(gamma, castor_swivel))], [alphadot_3])[alphadot_3]
+    if sp.simplify(c_across.subs(gamma, castor_swivel)) != 0:  # pragma: no cover
+        raise RuntimeError("castor swivel angle does not cancel the lateral slip")
+    eq_castor = r3 * castor_rate - r3 * alphadot_3
+
+    # 6: H on the circle (eq 6), eqs 7-10
+    path_t = sp.ImmutableMatrix([R * sp.sin(phi_t), R * (1 - sp.cos(phi_t))])
+    eq7_t, eq8_t = r_H_t[0] - path_t[0], r_H_t[1] - path_t[1]
+    eq7, eq8 = to_plain(eq7_t), to_plain(eq8_t)
+    eq9, eq10 = _simp(to_plain(sp.diff(eq7_t, t))), _simp(to_plain(sp.diff(eq8_t, t)))
+    eq11, eq12 = xdot_A - v_A * cb, ydot_A - v_A * sb
+
+    # a general path: d/dt path(s(t)) = sdot (cos theta, sin theta)
+    eq9_path = _simp(to_plain(sp.diff(r_H_t[0], t)) - sdot * sp.cos(theta))
+    eq10_path = _simp(to_plain(sp.diff(r_H_t[1], t)) - sdot * sp.sin(theta))
+    ode = _solve_one([eq9_path.subs(motion_of_a), eq10_path.subs(motion_of_a)], [sdot, betadot])
+    inverse_ode = {k: sp.trigsimp(v) for k, v in ode.items()}
+
+    # steady state on a circle (curvature 1/R): d(theta - beta)/dt = sdot / R - betadot = 0
+    in_lag = {theta: beta + delta}
+    lag_rate = sp.simplify((inverse_ode[sdot] / R - inverse_ode[betadot]).subs(in_lag))
+    roots = [d for d in sp.solve(sp.simplify(lag_rate * sp.cos(delta)), delta) if not d.has(sp.pi)]
+    if len(roots) != 1:  # pragma: no cover
+        raise RuntimeError(f"expected one steady heading lag in (-pi/2, pi/2), got {roots}")
+    steady_lag = roots[0]
+    bd_ss = sp.simplify(inverse_ode[betadot].subs(in_lag).subs(delta, steady_lag))
+    forward = sp.Symbol("v_A", positive=True)  # the steady state is driven forward: |v_A| = v_A
+
+    def steady_value(e: Any) -> Any:
+        return sp.simplify(e.subs(v_A, forward)).subs(forward, v_A)
+
+    steady = {
+        "betadot": bd_ss,
+        "sdot": steady_value(inverse_ode[sdot].subs(in_lag).subs(delta, steady_lag)),
+        "alphadot_1": steady_value(wheel_rates[alphadot_1].subs(betadot, bd_ss)),
+        "alphadot_2": steady_value(wheel_rates[alphadot_2].subs(betadot, bd_ss)),
+        "alphadot_3": steady_value(castor_rate.subs(betadot, bd_ss)),
+    }
+
+    eq19, eq20, eq27, eq28 = v_K[0], v_K[1], v_L[0], v_L[1]
+
+    # the paper's printed (wrong) forms
+    def dot_product_chain(chain: Sequence[Any], rho: Any) -> Any:
+        prod = sp.eye(4)
+        for m in chain:
+            prod = prod * sp.diff(m, t)
+        return _simp(to_plain(prod * rho))
+
+    misprints = Misprints(
+        eq17=dot_product_chain([T.T40K, T.T14], T.rho_K),
+        eq25=dot_product_chain([T.T40L, T.T24], T.rho_L),
+        eq18=sp.ImmutableMatrix(
+            [x_A - r1 * alphadot_1 * cb + l1 * betadot * cb, y_A - r1 * alphadot_1 * sb + l1 * betadot * sb, 0, 0]
+        ),
+        eq26=sp.ImmutableMatrix(
+            [x_A - r2 * alphadot_2 * cb - l1 * betadot * cb, y_A - r2 * alphadot_2 * sb - l1 * betadot * sb, 0, 0]
+        ),
+        eq28=y_A - r2 * alphadot_2 * sb - l1 * betadot * sb,
+        contact_point_velocity_K=_simp(to_plain(sp.diff(T.T40K * T.T14 * T.rho_K, t))),
+    )
+
+    return Derivation(
+        r_H=r_H,
+        r_K=r_K,
+        r_L=r_L,
+        v_K=v_K,
+        v_L=v_L,
+        v_S=v_S,
+        v_C=v_C,
+        eq7=eq7,
+        eq8=eq8,
+        eq9=eq9,
+        eq10=eq10,
+        eq11=eq11,
+        eq12=eq12,
+        eq19=eq19,
+        eq20=eq20,
+        eq27=eq27,
+        eq28=eq28,
+        eq_castor=eq_castor,
+        system_29=(eq9, eq10, eq11, eq12, eq19, eq27, eq_castor),
+        slip_K=slip_K,
+        slip_L=slip_L,
+        roll_K=roll_K,
+        roll_L=roll_L,
+        wheel_rates=wheel_rates,
+        body_velocity=body_velocity,
+        castor_swivel=castor_swivel,
+        castor_rate=castor_rate,
+        eq9_path=eq9_path,
+        eq10_path=eq10_path,
+        inverse_ode=inverse_ode,
+        heading_lag_rate=lag_rate,
+        steady_lag=steady_lag,
+        steady=steady,
+        misprints=misprints,
+    )
+
+
+# --------------------------------------------------------------------------------------------------------------------
+# Numbers
+# --------------------------------------------------------------------------------------------------------------------
+
+
+def robot_values(robot: RobotParams) -> dict[str, float]:
+    """The lengths of ``robot`` [m] by symbol name, for :func:`lambdify`'s keyword arguments."""
+    return {
+        "l_1": robot.l1,
+        "l_3": robot.l3,
+        "l_4": robot.l4,
+        "l_5": robot.l5,
+        "r_1": robot.r1,
+        "r_2": robot.r2,
+        "r_3": robot.r3,
+    }
+
+
+def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
+    """Batched numpy function of derived expressions.
+
+    Args:
+        exprs: ``n`` SymPy expressions in plain symbols (see :data:`PLAIN_SYMBOLS`).
+
+    Returns:
+        ``f(**values)``: keyword arguments named after the symbols the expressions contain (e.g. ``x_A``,
+        ``betadot``, ``l_1``; extra names are ignored), each a finite scalar or array; the values broadcast and the
+        result has shape ``(..., n)``.
+
+    Raises:
+        ValueError: (when called) a needed value is missing or not finite.
+    """
+    exprs = [sp.sympify(e) for e in exprs]
+    syms = sorted(set().union(*(e.free_symbols for e in exprs)), key=str)
+    unknown = [str(x) for x in syms if str(x) not in PLAIN_SYMBOLS]
+    if unknown:
+        raise ValueError(f"expressions contain symbols outside PLAIN_SYMBOLS: {unknown}")
+    fn = sp.lambdify(syms, exprs, modules="numpy")
+    names = [str(x) for x in syms]
+
+    def call(**values: ArrayLike) -> Array:
+        args = []
+        for name in names:
+            if name not in values:
+                raise ValueError(f"missing value for {name!r} (needed: {', '.join(names)})")
+            a = np.asarray(values[name], dtype=np.float64)
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name} must be finite, got {values[name]!r}")
+            args.append(a)
+        out = [np.asarray(o, dtype=np.float64) for o in fn(*args)]
+        return np.stack(np.broadcast_arrays(*out, *args), axis=-1)[..., : len(out)]
+
+    return call
+
+
+# --------------------------------------------------------------------------------------------------------------------
+# Output
+# --------------------------------------------------------------------------------------------------------------------
+
+
+def system_29_latex() -> list[str]:
+    """The seven equations of system (29) as LaTeX, one string ``"<lhs> = 0"`` each (order of
+    :data:`SYSTEM_29_LABELS`)."""
+    return [f"{sp.latex(e)} = 0" for e in derive().system_29]
+
+
+_Row = tuple[str | None, str, str]  # (equation label or None, left-hand side, right-hand side)
+
+
+def _sections(latex: bool) -> list[tuple[str, list[_Row]]]:
+    d = derive()
+    mp = d.misprints
+
+    def f(e: Any) -> str:
+        if isinstance(e, sp.MatrixBase):
+            return str(sp.latex(e)) if latex else "(" + ", ".join(sp.sstr(x) for x in e) + ")"
+        return str(sp.latex(e)) if latex else str(sp.sstr(e))
+
+    def name(text: str, tex: str) -> str:
+        return tex if latex else text
+
+    def eq(label: str | None, lhs: Any, rhs: Any) -> _Row:
+        return (label, f(lhs), f(rhs))
+
+    lag = {theta: beta + delta}
+    return [
+        (
+            "Positions (eqs 4, 13, 21): H, and the contact points K (wheel 1, right) and L (wheel 2, left)",
+            [
+                ("4", name("r_H", r"\bar r_H"), f(d.r_H)),
+                ("13", name("r_K", r"\bar r_K"), f(d.r_K)),
+                ("21", name("r_L", r"\bar r_L"), f(d.r_L)),
+            ],
+        ),
+        (
+            "Velocities of the wheels' material points in contact (eqs 18, 26 corrected): "
+            "d/dt(T40 T14) rho with rho frozen",
+            [
+                ("18", name("v_K", r"\bar v_K"), f(d.v_K)),
+                ("26", name("v_L", r"\bar v_L"), f(d.v_L)),
+            ],
+        ),
+        (
+            "System (29), corrected: seven equations",
+            [eq(lab, e, 0) for lab, e in zip(SYSTEM_29_LABELS, d.system_29, strict=True)],
+        ),
+        (
+            "Solution of v_K = v_L = 0 with eqs 11-12: no side slip, and the differential-drive relations",
+            [
+                (None, name("v_K across the heading", r"\bar v_K \cdot \bar e_\perp"), f(d.slip_K)),
+                (None, name("v_L across the heading", r"\bar v_L \cdot \bar e_\perp"), f(d.slip_L)),
+                *[eq(None, k, v) for k, v in d.wheel_rates.items()],
+                *[eq(None, k, v) for k, v in d.body_velocity.items()],
+            ],
+        ),
+        (
+            "Castor: rolling of its material contact point (swivel gamma relative to the body, trail neglected)",
+            [eq(None, gamma, d.castor_swivel), eq(None, alphadot_3, d.castor_rate)],
+        ),
+        (
+            "Inverse kinematics from eqs 9-12: H on a path with tangent angle theta(s), delta = theta - beta",
+            [eq(None, k, sp.simplify(v.subs(lag))) for k, v in sorted(d.inverse_ode.items(), key=str, reverse=True)],
+        ),
+        (
+            "Steady state of H on a circle of radius R",
+            [eq(None, delta, d.steady_lag), *[eq(None, PLAIN_SYMBOLS[k], v) for k, v in d.steady.items()]],
+        ),
+        (
+            "The paper's misprinted forms (not identities)",
+            [
+                ("17", name("Tdot40K Tdot14 rho_K", r"\dot T_{4,0,K}\,\dot T_{1,4}\,\bar\rho_K"), f(mp.eq17)),
+                ("18", name("printed v_K", r"\text{printed } \bar v_K"), f(mp.eq18)),
+                ("26", name("printed v_L", r"\text{printed } \bar v_L"), f(mp.eq26)),
+                eq("28", mp.eq28, 0),
+            ],
+        ),
+    ]
+
+
+def render(latex: bool = False) -> str:
+    """The derivation as text: positions, contact velocities, system (29), its solution and the paper's misprints.
+
+    Args:
+        latex: a LaTeX fragment (amsmath ``align`` environments; the paper's equation numbers as tags) instead
+            of plain text.
+    """
+    out: list[str] = []
+    if latex:
+        out.append("% Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive --latex); needs amsmath")
+        for title, rows in _sections(latex=True):
+            out.append(f"% {title}")
+            out.append(r"\begin{align}")
+            lines = [f"{lhs} &= {rhs} " + (f"\\tag{{{lab}}}" if lab else r"\notag") for lab, lhs, rhs in rows]
+            out.append(" \\\\\n".join(lines))
+            out.append(r"\end{align}")
+        return "\n".join(out) + "\n"
+    out.append("Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive)")
+    for title, rows in _sections(latex=False):
+        out.append("")
+        out.append(title + ":")
+        for lab, lhs, rhs in rows:
+            tag = f"({lab})" if lab else ""
+            out.append(f"  {tag:<9}{lhs} = {rhs}")
+    return "\n".join(out) + "\n"
+
+
+@dataclass(frozen=True)
+class DeriveSettings:
+    """Options of ``amigo-gym derive``, each the option of the same name.
+
+    Attributes:
+        latex: emit LaTeX (amsmath align environments).
+        out: write to FILE, atomically [file] (default: standard output; '-' too).
+    """
+
+    latex: bool = False
+    out: str | None = field(default=None, metadata=cli(metavar="FILE"))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
+    prog = "amigo-gym derive"
+    args = parse_settings(
+        DeriveSettings,
+        argv,
+        prog,
+        "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point "
+        "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",
+    )
+
+    def run() -> int:
+        text = render(latex=args.latex)
+        if args.out is None or args.out == "-":
+            sys.stdout.write(text)
+        else:
+            atomic_write(args.out, text)
+            print(f"wrote {args.out}", file=sys.stderr)
+        return 0
+
+    return run_guarded(run, prog)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

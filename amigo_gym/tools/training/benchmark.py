@@ -1,0 +1,1204 @@
+"""``amigo-gym benchmark``: a versioned scenario suite, many agents and training seeds, rliable statistics.
+
+Usage, the suite and its versions, agents, seeds, metrics, statistics and the output files:
+docs/benchmark.md, "Reference: `amigo-gym benchmark`".
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import math
+import re
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from amigo_gym.data import pretrained_dir
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.runs import remove_matching, trust_unverified
+from amigo_gym.tools.training.task_metrics import (
+    DEFAULT_FAILURE_TOLERANCE_M,
+    DEFAULT_SETTLE_TIME_S,
+    EpisodeRecorder,
+    InfoAdapter,
+    run_vector_episodes,
+)
+
+__all__ = [
+    "CLASSICAL",
+    "H_TARGET_M",
+    "QUICK_SCENARIOS",
+    "SUITE",
+    "SUITES",
+    "SUITE_VERSION",
+    "TRAINING_DISTRIBUTION",
+    "RETIRED_V1_AGENTS",
+    "V1_AGENTS",
+    "AgentSpec",
+    "BenchmarkSettings",
+    "Scenario",
+    "agent_label",
+    "aggregate",
+    "default_agents",
+    "evaluate",
+    "main",
+    "markdown_report",
+    "parse_agents",
+    "quick_suite",
+    "run_benchmark",
+    "write_outputs",
+]
+
+SUITE_VERSION = "1.0"
+ALGOS = ("ppo", "sac", "td3")
+#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
+FAST_ALGO = "fastppo"
+#: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
+V1_AGENTS: dict[str, str] = {
+    "td3lp": "SB3 TD3 low-pass",
+    "ppo_fast": "fast PPO",
+    "residual": "fast PPO residual",
+}
+#: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
+#: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
+#: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
+#: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
+RETIRED_V1_AGENTS: dict[str, str] = {
+    "ppo": "SB3 PPO",
+    "sac": "SB3 SAC",
+    "td3": "SB3 TD3",
+}
+#: target of the H-error optimality gap [m]
+H_TARGET_M = 0.01
+#: thresholds of the H-error performance profile [m]
+PROFILE_TAUS = tuple(float(x) for x in np.logspace(-6, math.log10(0.25), 41))
+
+#: the training distribution of the v1 generalists; "held out" scenarios lie outside it
+TRAINING_DISTRIBUTION: dict[str, Any] = {
+    "env_id": "AmigoBot-v1",
+    "env_kwargs": {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"},
+    "paths": "mixed: circles R 0.5-3 m either direction, figure-8 size 3-6 m, lane change +-1 m over 3-6 m, "
+    "random paths of the default pool (ids 0-1023, |kappa| <= 1 1/m, |dkappa/ds| <= 1 1/m^2)",
+    "speed_m_s": [0.1, 0.4],
+    "speed_profile": "constant",
+    "dt_s": 0.1,
+    "randomize": "mild (wheel radii and track +-2 %, slip <= 2 %, delay <= 50 ms, small noise)",
+    "not_trained_on": [
+        "the manoeuvre path",
+        "random paths of higher curvature",
+        "the trapezoid speed profile",
+        "dt other than 0.1 s",
+        "wheel radii and track beyond +-2 %",
+        "slip beyond 2 %",
+        "delays beyond 50 ms",
+        "noise beyond 'mild'",
+        "'hard'",
+        "AmigoBot-v0 (another observation)",
+    ],
+}
+
+
+# --------------------------------------------------------------------------- scenarios
+@dataclass(frozen=True)
+class Scenario:
+    """One benchmark scenario (data; never edited once released: bump :data:`SUITE_VERSION`).
+
+    Attributes:
+        name: unique name.
+        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
+        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
+        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
+        max_steps: episode length (``max_episode_steps``).
+        held_out: outside the generalists' training distribution (:data:`TRAINING_DISTRIBUTION`).
+        description: one line for the tables.
+        version: the suite version the scenario belongs to.
+        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
+    """
+
+    name: str
+    env_id: str
+    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    seeds: tuple[int, ...] = tuple(range(100, 110))
+    max_steps: int = 400
+    held_out: bool = False
+    description: str = ""
+    version: str = SUITE_VERSION
+    settle_time_s: float = DEFAULT_SETTLE_TIME_S
+    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError(f"Scenario.name must be a non-empty string, got {self.name!r}")
+        if not self.seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be non-negative integers, got {self.seeds!r}")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
+            raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    @property
+    def episodes(self) -> int:
+        """Number of evaluation episodes (one per seed)."""
+        return len(self.seeds)
+
+    def to_json(self) -> dict[str, Any]:
+        """The scenario as JSON data (its fields and ``episodes``; tuples as lists)."""
+        return json_safe({**asdict(self), "episodes": self.episodes})  # type: ignore[no-any-return]
+
+
+def user_scenarios(
+    files: Sequence[str], speed: float, feasibility: str = "off", goal_tolerance: float = 0.0, duration: float = 60.0
+) -> tuple[Scenario, ...]:
+    """One ``AmigoBot-v1`` scenario per points file (``path=file``: :func:`amigo_gym.paths.from_file`), named after
+    the file, at ``speed`` [m/s], ``feasibility`` and ``goal_tolerance`` [m] (``gym.make``'s), ``duration`` [s].
+
+    Raises:
+        FileNotFoundError, ValueError: a missing file, a bad value (one line).
+    """
+    from amigo_gym.paths.points import cached_file_path, is_points_file
+
+    out = []
+    for f in files:
+        if not is_points_file(str(f)):
+            raise ValueError(f"--path {f}: a points file must end in .csv or .json")
+        if not Path(f).is_file():
+            raise FileNotFoundError(f"--path {f}: no such points file")
+        try:
+            cached_file_path(f)  # read and fitted now (kept for gym.make): a bad file is the user's error, exit 2
+        except ValueError as exc:
+            raise ValueError(f"--path {exc}") from None
+    if not (0.0 < duration <= 3600.0):
+        raise ValueError(f"--duration must be in (0, 3600] s, got {duration}")
+    names = [Path(f).stem for f in files]
+    for f, stem in zip(files, names, strict=True):
+        name = f"path:{stem}" if names.count(stem) == 1 else f"path:{f}"
+        kw: dict[str, Any] = {"path": str(f), "speed": speed, "feasibility": feasibility}
+        kw["goal_tolerance"] = goal_tolerance
+        out.append(_v1(name, f"points of {f} at {speed:g} m/s", True, duration=duration, **kw))
+    return tuple(out)
+
+
+def _v0(name: str, desc: str, held_out: bool = False, max_steps: int = 400, **kw: Any) -> Scenario:
+    return Scenario(name, "AmigoBot-v0", kw, max_steps=max_steps, held_out=held_out, description=desc)
+
+
+def _v1(name: str, desc: str, held_out: bool = False, dt: float = 0.1, duration: float = 40.0, **kw: Any) -> Scenario:
+    kwargs = {"dt": dt, "randomize": "none", **kw}
+    return Scenario(name, "AmigoBot-v1", kwargs, max_steps=round(duration / dt), held_out=held_out, description=desc)
+
+
+_WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
+_WHEELS_MINUS5 = {"r1": 0.0475, "r2": 0.0475, "l1": 0.114}
+_WHEELS_UNEQUAL = {"r1": 0.0525, "r2": 0.0475}
+
+SUITE_1_0: tuple[Scenario, ...] = (
+    # the paper's task on the exact v0 environment (the v0 specialists were trained on it)
+    _v0("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s"),
+    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", held_out=True, speed=0.1),
+    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", held_out=True, speed=0.4),
+    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", held_out=True, dt=0.2, max_steps=200),
+    # circles: radii and both directions
+    _v1("circle_r1_ccw", "paper circle on v1 (actuator limits)", path="circle", radius=1.0, direction=1, speed=0.2),
+    _v1("circle_r0.5_ccw", "circle R 0.5 m, left", path="circle", radius=0.5, direction=1, speed=0.2),
+    _v1("circle_r0.5_cw", "circle R 0.5 m, right", path="circle", radius=0.5, direction=-1, speed=0.2),
+    _v1("circle_r2_cw", "circle R 2 m, right", path="circle", radius=2.0, direction=-1, speed=0.3),
+    # speeds
+    _v1("circle_v0.1", "circle R 1 m at 0.1 m/s", path="circle", radius=1.0, speed=0.1),
+    _v1("circle_v0.4", "circle R 1 m at 0.4 m/s", path="circle", radius=1.0, speed=0.4),
+    _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
+    _v1(
+        "manoeuvre_trapezoid",
+        "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)",
+        True,
+        path="manoeuvre",
+        speed=0.2,
+        speed_profile="trapezoid",
+    ),
+    # path families
+    _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s (held out)", True, path="manoeuvre", speed=0.2),
+    _v1("figure8", "figure-8, 0.2 m/s", path="figure8", speed=0.2),
+    _v1("random_paths", "seeded random smooth paths, 0.2 m/s", path="random", speed=0.2),
+    _v1(
+        "random_paths_sharp",
+        "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
+        True,
+        path="random",
+        speed=0.2,
+        path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5},
+    ),
+    _v1("lane_change", "lane change, 0.3 m/s", path="lane_change", speed=0.3),
+    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", path="mixed", speed=(0.1, 0.4)),
+    # control period
+    _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s (held out)", True, dt=0.05, path="circle", radius=1.0, speed=0.2),
+    _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s (held out)", True, dt=0.2, path="circle", radius=1.0, speed=0.2),
+    # the robot is not the model
+    _v1(
+        "wheels_plus5",
+        "true wheel radii and track +5 % (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        true_robot=_WHEELS_PLUS5,
+    ),
+    _v1(
+        "wheels_minus5",
+        "true wheel radii and track -5 % (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        true_robot=_WHEELS_MINUS5,
+    ),
+    _v1(
+        "wheels_unequal",
+        "right wheel +5 %, left -5 % (held out)",
+        True,
+        path="figure8",
+        speed=0.2,
+        true_robot=_WHEELS_UNEQUAL,
+    ),
+    _v1(
+        "slip",
+        "wheel slip up to 5 % per step (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        randomize={"slip": (0.0, 0.05)},
+    ),
+    _v1(
+        "delay_0.1", "actuation delay 0.1 s (held out)", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}
+    ),
+    _v1("delay_0.25", "actuation delay 0.25 s (held out)", True, path="figure8", randomize={"delay": (0.25, 0.25)}),
+    _v1(
+        "noise",
+        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)",
+        True,
+        path="circle",
+        speed=0.2,
+        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2},
+    ),
+    _v1("mild", "'mild' randomisation on mixed paths", path="mixed", speed=(0.1, 0.4), randomize="mild"),
+    _v1(
+        "hard", "'hard' randomisation on mixed paths (held out)", True, path="mixed", speed=(0.1, 0.4), randomize="hard"
+    ),
+)
+
+#: released suites by version (never edited)
+SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0}
+SUITE: tuple[Scenario, ...] = SUITES[SUITE_VERSION]
+#: the scenarios of ``--quick`` (run with 2 episodes of at most 120 steps)
+QUICK_SCENARIOS: tuple[str, ...] = ("v0_paper_circle", "v0_speed_0.4", "circle_r1_ccw")
+
+
+def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps: int = 120) -> tuple[Scenario, ...]:
+    """The ``--quick`` subset: :data:`QUICK_SCENARIOS` with at most ``episodes`` seeds and ``max_steps`` steps."""
+    return tuple(
+        replace(sc, seeds=sc.seeds[:episodes], max_steps=min(sc.max_steps, max_steps))
+        for sc in suite
+        if sc.name in QUICK_SCENARIOS
+    )
+
+
+# --------------------------------------------------------------------------- agents
+class Unavailable(Exception):
+    """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
+
+
+def _classical(name: str) -> Callable[[Any], Any]:
+    def make(env: Any) -> Any:
+        base = env.unwrapped
+        hook = getattr(base, "classical_policy", None)
+        if callable(hook):
+            return hook(name)
+        from amigo_gym.model.params import EnvParams
+        from amigo_gym.policies.analytic import AnalyticPolicy
+
+        params = getattr(base, "params", None)
+        from amigo_gym.task.v1 import TrackingParams
+
+        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
+            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
+
+            if name == "analytic":
+                return AnalyticTrackingPolicy(params)
+            if name == "pure_pursuit":
+                return PurePursuitPolicy(params)
+            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
+        if not isinstance(params, EnvParams):
+            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
+        if name == "analytic":
+            return AnalyticPolicy(params)
+        if name == "analytic_ff":
+            return AnalyticPolicy(params, feedforward_only=True)
+        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
+
+    return make
+
+
+#: classical policies by name: built per scenario from the environment
+CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
+
+
+@dataclass
+class AgentSpec:
+    """One training seed of one agent: a classical policy (``path is None``) or an SB3 model zip."""
+
+    name: str
+    seed: int = 0
+    path: str | None = None
+    algo: str | None = None
+    manifest: dict[str, Any] | None = None
+    _model: Any = field(default=None, repr=False)
+
+    def instantiate(self, env: Any) -> Any:
+        """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
+        if self.path is None:
+            return CLASSICAL[self.name](env)
+        if self._model is None:
+            from amigo_gym.tools.runs import check_pickle, corrupt_errors
+
+            # checked before it is opened: the manifest's sha256, else a warning naming the file (once)
+            digest = (self.manifest or {}).get("sha256")
+            path = Path(self.path)
+            check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
+            if str(self.algo).startswith(FAST_ALGO):
+                from amigo_gym.policies.learned import FastPolicy
+
+                self._model = FastPolicy.load(self.path)
+            else:
+                from stable_baselines3 import PPO, SAC, TD3
+
+                cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
+                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
+                    self._model = cls.load(self.path, device="cpu")
+        if str(self.algo).startswith(FAST_ALGO):
+            dim = self._model.builder.obs_dim
+            if getattr(env.observation_space, "shape", None) != (dim,):
+                raise Unavailable(f"observation shape {env.observation_space.shape} differs from the model's ({dim},)")
+            return self._model
+        want = getattr(self._model.observation_space, "shape", None)
+        got = getattr(env.observation_space, "shape", None)
+        if want != got:
+            raise Unavailable(f"observation shape {got} of the scenario differs from the model's {want}")
+        return self._model
+
+    def describe(self) -> dict[str, Any]:
+        """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
+        d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
+        if self.path is None:
+            d["kind"] = "classical"
+        else:
+            kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
+            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
+            if self.manifest is not None:
+                d["manifest"] = self.manifest
+        return d
+
+
+def _is_fast_model(path: Path) -> bool:
+    """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            return "model.json" in z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
+def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
+    manifest_file = path.with_suffix(".json")
+    manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else None
+    algo = (manifest or {}).get("algo")
+    if _is_fast_model(path):  # amigo_gym.tools.training.fastppo's models (numpy; plain or residual)
+        algo = algo if isinstance(algo, str) and algo.startswith(FAST_ALGO) else FAST_ALGO
+    elif algo not in ALGOS:
+        for cand in (path.stem, path.parent.name, name or ""):
+            hit = next((a for a in ALGOS if a in cand.lower()), None)
+            if hit:
+                algo = hit
+                break
+    if algo not in ALGOS and not str(algo).startswith(FAST_ALGO):
+        raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
+    seed = (manifest or {}).get("seed")
+    if not isinstance(seed, int):
+        m = re.search(r"(?:seed_?|_s)(\d+)", path.stem)
+        seed = int(m.group(1)) if m else index
+    return AgentSpec(name or str(algo), int(seed), str(path), str(algo), manifest)
+
+
+def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
+    """Agent specs from ``--agents`` (module docstring). Raises ``ValueError`` / ``FileNotFoundError``."""
+    out: list[AgentSpec] = []
+    for spec in specs:
+        if spec in CLASSICAL:
+            out.append(AgentSpec(spec))
+            continue
+        name, sep, pattern = spec.partition("=")
+        if not sep:
+            name, pattern = "", spec
+        p = Path(pattern)
+        if p.is_dir():
+            zips = sorted(p.glob("*.zip")) + sorted(p.glob("*/*.zip"))
+            if not zips:
+                raise FileNotFoundError(f"--agents {spec}: no .zip in {p}")
+            for i, z in enumerate(zips):
+                label = name or (z.parent.name if z.parent != p else z.stem)
+                out.append(_model_spec(label, z, i))
+            continue
+        files = sorted(glob.glob(pattern))
+        if not files:
+            if not sep and not pattern.endswith(".zip"):
+                raise ValueError(f"--agents: unknown classical policy {spec!r} (choose from {', '.join(CLASSICAL)})")
+            raise FileNotFoundError(f"--agents {spec}: no file matches {pattern!r}")
+        for i, f in enumerate(files):
+            out.append(_model_spec(name or None, Path(f), i))
+    names_seeds = [(a.name, a.seed) for a in out]
+    dup = sorted({x for x in names_seeds if names_seeds.count(x) > 1})
+    if dup:
+        raise ValueError(f"--agents: the same (agent, seed) twice: {dup}")
+    return out
+
+
+def default_agents() -> list[AgentSpec]:
+    """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
+    (``<algo>_v0``) and v1 generalists (``<folder>_v1`` for every folder of :data:`V1_AGENTS`: ``td3lp_v1``,
+    ``ppo_fast_v1``, ``residual_v1``), named as ``amigo-gym compare`` names them."""
+    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
+    d = pretrained_dir()
+    for algo in ALGOS:
+        if (d / f"{algo}.zip").is_file():
+            out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
+    for folder in V1_AGENTS:
+        for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip"))):
+            out.append(_model_spec(f"{folder}_v1", z, i))
+    return out
+
+
+def agent_label(name: str, algo: str | None = None) -> str:
+    """What an agent is, in words: ``ppo_v1`` -> "SB3 PPO generalist", ``ppo_fast_v1`` -> "fast PPO generalist"
+    (:data:`V1_AGENTS`, :data:`RETIRED_V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy ->
+    "classical", another name -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the
+    name: ``fastppo*`` -> "fast PPO" (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3
+    PPO"/..., so a fast-PPO zip passed as ``--agents ppo_v1=...`` still reads "fast PPO"."""
+    if name in CLASSICAL:
+        return "classical"
+    labels = {**RETIRED_V1_AGENTS, **V1_AGENTS}
+    v1 = name.endswith("_v1") and name[:-3] in labels
+    v0 = name.endswith("_v0") and name[:-3] in ALGOS
+    if algo is not None and str(algo).startswith(FAST_ALGO):
+        kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
+    elif algo in ALGOS:
+        kind = f"SB3 {str(algo).upper()}"
+        if v1 and labels[name[:-3]].startswith(kind):  # a variant of the algorithm, e.g. "SB3 TD3 low-pass"
+            kind = labels[name[:-3]]
+    elif v1:
+        kind = labels[name[:-3]]
+    elif v0:
+        kind = f"SB3 {name[:-3].upper()}"
+    else:
+        return "model"
+    return kind + (" generalist" if v1 else " v0 specialist" if v0 else "")
+
+
+# --------------------------------------------------------------------------- evaluation
+def make_env(sc: Scenario) -> Any:
+    """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
+
+    if sc.env_id not in gym.registry:
+        raise Unavailable(f"environment {sc.env_id} is not registered")
+    try:
+        return gym.make(sc.env_id, max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
+    except (TypeError, ValueError) as exc:
+        raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
+
+
+def _dt(env: Any, sc: Scenario) -> float:
+    params = getattr(env.unwrapped, "params", None)
+    dt = getattr(params, "dt", None)
+    if isinstance(dt, (int, float)) and not isinstance(dt, bool):
+        return float(dt)
+    return float(sc.env_kwargs.get("dt", 0.1))
+
+
+def _vector_env(sc: Scenario) -> Any:
+    """The native vector env of ``sc`` (``SyncVectorEnv`` if it has none): one robot per evaluation seed."""
+    import gymnasium as gym
+
+    native = gym.spec(sc.env_id).vector_entry_point is not None  # else Gymnasium's SyncVectorEnv
+    return gym.make_vec(
+        sc.env_id,
+        num_envs=len(sc.seeds),
+        vectorization_mode="vector_entry_point" if native else "sync",
+        max_episode_steps=sc.max_steps,
+        **dict(sc.env_kwargs),
+    )
+
+
+def evaluate(
+    agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
+) -> list[dict[str, float]]:
+    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics.
+
+    The episodes run side by side in the environment's native vector env (robot ``i`` reset with seed
+    ``sc.seeds[i]``; the native vector env reproduces the single env bit for bit, tests/test_vector_v1.py),
+    by :func:`amigo_gym.tools.training.task_metrics.run_vector_episodes` (the whole batch predicted at every step; a
+    robot's episode is its steps up to its first end). ``on_episode()`` is called as each episode ends.
+    """
+    adapter = InfoAdapter.for_env(env)
+    dt = _dt(env, sc)
+    venv = _vector_env(sc)
+    try:
+        obs, _ = venv.reset(seed=list(sc.seeds))
+        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
+
+        def episode_ended(_i: int, _info: dict[str, Any], ended: bool) -> None:
+            if ended and on_episode is not None:
+                on_episode()
+
+        run_vector_episodes(agent, venv, obs, recs, adapter, episode_ended)
+    finally:
+        venv.close()
+    return [r.metrics() for r in recs]
+
+
+def _nanmean(x: Sequence[float]) -> float | None:
+    a = np.asarray(x, dtype=np.float64)
+    a = a[np.isfinite(a)]
+    return float(a.mean()) if a.size else None
+
+
+def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[str, Any]:
+    col = {k: [e[k] for e in eps] for k in eps[0]}
+    rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
+    rec["episodes"] = len(eps)
+    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms", "speed_err_settled_rms"):
+        rec[k] = _nanmean(col[k])
+    rec["failure_rate"] = _nanmean(col["failure"])
+    rec["return"] = _nanmean(col["return"])
+    rec["return_per_step"] = None if rec["return"] is None else rec["return"] / sc.max_steps
+    for k in ("chatter_rms", "chatter_settled_rms", "effort_rms"):
+        rec[k] = _nanmean(col[k])
+    rec["mean_steps"] = _nanmean(col["steps"])
+    rec["terminated"] = int(sum(col["terminated"]))
+    rec["per_episode"] = {k: json_safe(v) for k, v in col.items()}
+    return rec
+
+
+def run_benchmark(
+    agents: Sequence[AgentSpec],
+    scenarios: Sequence[Scenario],
+    *,
+    progress: bool = True,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+    bootstrap_seed: int = 0,
+    quick: bool = False,
+) -> dict[str, Any]:
+    """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
+    from tqdm.auto import tqdm
+
+    names = [sc.name for sc in scenarios]
+    if len(set(names)) != len(names):
+        raise ValueError(f"scenario names must be unique, got {names}")
+    t0 = time.perf_counter()
+    envs: dict[str, Any] = {}
+    status: dict[str, str] = {}
+    feasibility: dict[str, Any] = {}  # AmigoBot-v1's report of a fixed path (where it exceeds the robot's limits)
+    for sc in scenarios:
+        try:
+            envs[sc.name] = make_env(sc)
+            status[sc.name] = "ok"
+            report = getattr(envs[sc.name].unwrapped, "feasibility", None)
+            if report is not None:
+                feasibility[sc.name] = report
+        except Unavailable as exc:
+            status[sc.name] = f"unavailable: {exc}"
+    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
+    results: list[dict[str, Any]] = []
+    unavailable: list[dict[str, Any]] = [
+        {"agent": None, "seed": None, "scenario": n, "reason": s.removeprefix("unavailable: ")}
+        for n, s in status.items()
+        if s != "ok"
+    ]
+    bar = tqdm(total=total, desc="benchmark", unit="ep", file=sys.stderr, disable=not progress)
+    try:
+        for spec in agents:
+            for sc in scenarios:
+                env = envs.get(sc.name)
+                if env is None:
+                    continue
+                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
+                try:
+                    agent = spec.instantiate(env)
+                    eps = evaluate(agent, env, sc, on_episode=lambda: bar.update(1))
+                except Unavailable as exc:
+                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
+                    bar.update(sc.episodes)
+                    continue
+                results.append(_record(spec, sc, eps))
+    finally:
+        bar.close()
+        for env in envs.values():
+            env.close()
+    doc: dict[str, Any] = {
+        "suite_version": SUITE_VERSION,
+        "quick": quick,
+        "protocol": {
+            "deterministic": True,
+            "episode_metric_average": "mean over the scenario's episodes (NaN-free)",
+            "settle_time_s": "per scenario (default 5 s)",
+            "failure": "terminated, or |e| > failure_tolerance_m at some t >= settle_time_s",
+            "h_target_m": H_TARGET_M,
+            "bootstrap": "stratified over training seeds within each scenario (rliable), percentile 95 % intervals",
+            "reps": reps,
+            "profile_reps": profile_reps,
+            "bootstrap_seed": bootstrap_seed,
+            "training_distribution": TRAINING_DISTRIBUTION,
+        },
+        "scenarios": [sc.to_json() | {"status": status[sc.name]} for sc in scenarios],
+        "agents": [a.describe() for a in agents],
+        "results": results,
+        "unavailable": unavailable,
+        "feasibility": feasibility,
+    }
+    held = {sc.name: sc.held_out for sc in scenarios}
+    doc["aggregates"], doc["performance_profiles"] = aggregate(
+        results, held, reps=reps, profile_reps=profile_reps, seed=bootstrap_seed
+    )
+    doc["wall_time_s"] = round(time.perf_counter() - t0, 2)
+    if "torch" in sys.modules:  # a network's outputs depend on torch's thread count in the last bits
+        doc["torch_threads"] = int(sys.modules["torch"].get_num_threads())
+    return doc
+
+
+# --------------------------------------------------------------------------- aggregation
+def _score_matrix(
+    results: Sequence[dict[str, Any]], agent: str, scen: Sequence[str], key: str
+) -> tuple[np.ndarray, list[int]]:
+    seeds = sorted({r["seed"] for r in results if r["agent"] == agent})
+    table = {(r["seed"], r["scenario"]): r[key] for r in results if r["agent"] == agent}
+    m = np.array([[table[(s, c)] for c in scen] for s in seeds], dtype=np.float64)
+    return m, seeds
+
+
+def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
+    return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
+
+
+def aggregate(
+    results: Sequence[dict[str, Any]],
+    held_out: Mapping[str, bool],
+    *,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+    seed: int = 0,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Per-agent aggregates and H-error performance profiles (module docstring)."""
+    from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
+
+    aggregates: dict[str, Any] = {}
+    profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
+    keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
+    for agent in dict.fromkeys(r["agent"] for r in results):
+        rs = [r for r in results if r["agent"] == agent and all(r[k] is not None for k in keys)]
+        seeds = sorted({r["seed"] for r in rs})
+        common = [
+            c
+            for c in dict.fromkeys(r["scenario"] for r in rs)
+            if all((s, c) in {(x["seed"], x["scenario"]) for x in rs} for s in seeds)
+        ]
+        groups = {
+            "all": common,
+            "in_distribution": [c for c in common if not held_out.get(c, False)],
+            "held_out": [c for c in common if held_out.get(c, False)],
+        }
+        entry: dict[str, Any] = {"n_runs": len(seeds), "seeds": seeds}
+        for g, scen in groups.items():
+            if not scen:
+                entry[g] = None
+                continue
+            h, _ = _score_matrix(rs, agent, scen, "h_rms_m")
+            v, _ = _score_matrix(rs, agent, scen, "speed_err_rms")
+            f, _ = _score_matrix(rs, agent, scen, "failure_rate")
+            ret, _ = _score_matrix(rs, agent, scen, "return_per_step")
+            gi = {"n_scenarios": len(scen), "scenarios": scen}
+            gi["h_rms_m_iqm"] = _interval(*stratified_bootstrap(h, iqm, reps=reps, seed=seed))
+            gi["h_rms_m_optimality_gap"] = _interval(
+                *stratified_bootstrap(-h, lambda s: optimality_gap(s, -H_TARGET_M), reps=reps, seed=seed)
+            )
+            gi["speed_err_rms_iqm"] = _interval(*stratified_bootstrap(v, iqm, reps=reps, seed=seed))
+            gi["failure_rate_mean"] = _interval(
+                *stratified_bootstrap(f, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
+            )
+            gi["return_per_step_iqm"] = _interval(*stratified_bootstrap(ret, iqm, reps=reps, seed=seed))
+            gi["return_per_step_optimality_gap"] = _interval(
+                *stratified_bootstrap(ret, optimality_gap, reps=reps, seed=seed)
+            )
+            entry[g] = gi
+            if g == "all":
+                prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
+                profiles["agents"][agent] = {
+                    "fraction_below": prof.tolist(),
+                    "ci95_low": band[0].tolist(),
+                    "ci95_high": band[1].tolist(),
+                }
+        top = entry["all"]
+        if top is not None:
+            entry = {
+                "metric": "h_rms_m",
+                "iqm": top["h_rms_m_iqm"]["value"],
+                "ci95": top["h_rms_m_iqm"]["ci95"],
+                **entry,
+            }
+        aggregates[str(agent)] = entry
+    return aggregates, profiles
+
+
+# --------------------------------------------------------------------------- reports
+def _mm(x: float | None) -> str:
+    return "–" if x is None else f"{1e3 * x:.3g}"
+
+
+def markdown_report(doc: Mapping[str, Any]) -> str:
+    """Markdown: the aggregate table, the per-scenario table of H RMS, the unavailable scenarios."""
+    lines = [
+        f"# AmigoBot benchmark, suite {doc['suite_version']}" + (" (quick subset)" if doc.get("quick") else ""),
+        "",
+        f"IQM and optimality gap over (training seed, scenario) runs; [95 % stratified-bootstrap interval, "
+        f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
+        "",
+        "| agent | seeds | scenarios | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] | failure rate "
+        "| return/step IQM | held-out H RMS IQM [mm] |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+
+    def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
+        if d is None:
+            return "–"
+        lo, hi = d["ci95"]
+        return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
+
+    for agent, a in doc["aggregates"].items():
+        g = a.get("all")
+        if g is None:
+            continue
+        h = a.get("held_out")
+        lines.append(
+            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {iv(g['h_rms_m_iqm'])} | "
+            f"{iv(g['h_rms_m_optimality_gap'])} | {iv(g['speed_err_rms_iqm'])} | "
+            f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
+            f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
+        )
+    algos = {a["agent"]: a.get("algo") for a in doc.get("agents", [])}
+    legend = [f"`{name}`: {agent_label(name, algos.get(name))}" for name in doc["aggregates"]]
+    lines += ["", "Agents: " + "; ".join(legend) + "."]
+    agents = list(doc["aggregates"])
+    per_scenario = (
+        ("h_rms_m", "H cross-track RMS per scenario [mm]", _mm),
+        ("speed_err_rms", "Speed error RMS per scenario [mm/s]", _mm),
+        ("h_rms_settled_m", "H cross-track RMS after settling (t >= 5 s) per scenario [mm]", _mm),
+        ("speed_err_settled_rms", "Speed error RMS after settling (t >= 5 s) per scenario [mm/s]", _mm),
+        ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
+    )
+    for key, title, fmt in per_scenario:
+        lines += ["", f"## {title} (mean over training seeds)", ""]
+        lines.append("| scenario | held out | " + " | ".join(agents) + " |")
+        lines.append("|---|---|" + "---|" * len(agents))
+        for sc in doc["scenarios"]:
+            cells = []
+            for agent in agents:
+                vals = [r.get(key) for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
+                vals = [v for v in vals if v is not None]
+                cells.append(fmt(float(np.mean(vals))) if vals else "–")
+            lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+    infeasible = {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}
+    if infeasible:
+        lines += ["", "## Paths beyond the robot's limits (feasibility='warn' or 'off')", ""]
+        for name, r in infeasible.items():
+            where = "; ".join(
+                f"{q.replace('_', ' ')} at s = " + ", ".join(f"[{a:.2f}, {b:.2f}]" for a, b in ivs) + " m"
+                for q, ivs in r["exceeded"].items()
+                if ivs
+            )
+            lines.append(f"- {name}: {r['message']}; exceeded: {where}")
+    if doc["unavailable"]:
+        lines += ["", "## Unavailable", ""]
+        lines += [f"- {line}" for line in unavailable_lines(doc["unavailable"])]
+    return "\n".join(lines) + "\n"
+
+
+#: the README's labels of the agents of its v1 table (the generalists under either name, bare or ``_v1``)
+README_ROWS = (
+    ("analytic", "analytic tracking (exact inverse solution + PI feedback)"),
+    ("pure_pursuit", "pure pursuit (of A)"),
+    *((f"{folder}_v1", label) for folder, label in V1_AGENTS.items()),
+)
+
+
+def readme_table(doc: Mapping[str, Any]) -> str:
+    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): H RMS IQM
+    [mm] with its 95 % interval, the same on the held-out scenarios, the speed error IQM [mm/s]; the best of each
+    column in bold. Generalists are found as ``<algo>_v1`` or, in runs before the names were unified, ``<algo>``.
+
+    Raises:
+        ValueError: the document lacks the classical rows or every generalist.
+    """
+    aggs = doc["aggregates"]
+    rows: list[tuple[str, Mapping[str, Any], int]] = []
+    for name, label in README_ROWS:
+        agg = aggs.get(name) or (aggs.get(name.removesuffix("_v1")) if name.endswith("_v1") else None)
+        if agg is None or agg.get("all") is None:
+            continue
+        n = int(agg["n_runs"])
+        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n))
+    if len(rows) < 3:
+        raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
+    cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
+    best = [
+        min(1e3 * agg[g][k]["value"] for _, agg, _ in rows if agg.get(g)) for g, k, _ in cols
+    ]  # the smallest of each column
+    lines = [
+        "| agent | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
+        "|---|---:|---:|---:|",
+    ]
+    for label, agg, n in rows:
+        cells = []
+        for (g, k, fmt), low in zip(cols, best, strict=True):
+            d = agg.get(g)
+            if d is None:
+                cells.append("–")
+                continue
+            v = 1e3 * d[k]["value"]
+            text = f"{v:{fmt}}"
+            if n > 1:
+                lo, hi = (1e3 * x for x in d[k]["ci95"])
+                text += f" [{lo:{fmt}}, {hi:{fmt}}]"
+            cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The unavailable (agent, scenario) runs, one line per agent and reason: its seeds and scenarios listed once
+    (an AmigoBot-v0 model on the v1 scenarios is one line, not one per seed and scenario)."""
+    groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
+    for u in unavailable:
+        seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
+        if u.get("seed") not in seeds:
+            seeds.append(u.get("seed"))
+        if u["scenario"] not in scenarios:
+            scenarios.append(u["scenario"])
+    out = []
+    for (agent, reason), (seeds, scenarios) in groups.items():
+        if agent is None:
+            who = "all agents"
+        else:
+            n = len(seeds)
+            who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
+        out.append(f"{who} on {', '.join(scenarios)}: {reason}")
+    return out
+
+
+def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
+    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
+    (:func:`scenarios_figure`), saved as PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = scenarios_figure(doc, reps, seed)
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
+    """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
+    the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from amigo_gym.tools.training.intervals import stratified_bootstrap
+
+    scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
+    agents = list(doc["aggregates"])
+    size = (min(18.0, max(6.0, 0.45 * len(scen) + 2.0)) + 1.6, 4.8)  # at most 19.6 in wide: fits a page
+    fig, ax = plt.subplots(figsize=size, layout="constrained")
+    width = 0.8 / max(1, len(agents))
+    floor = 1e-7
+    for j, agent in enumerate(agents):
+        xs, ys, lo, hi = [], [], [], []
+        for i, name in enumerate(scen):
+            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == name]
+            vals = [v for v in vals if v is not None]
+            if not vals:
+                continue
+            m = np.asarray(vals, dtype=np.float64).reshape(-1, 1)
+            pt, ci = stratified_bootstrap(m, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
+            xs.append(i + (j - (len(agents) - 1) / 2) * width)
+            ys.append(max(float(pt), floor))
+            lo.append(max(float(pt), floor) - max(float(ci[0]), floor))
+            hi.append(max(float(ci[1]), floor) - max(float(pt), floor))
+        ax.bar(xs, ys, width, yerr=[lo, hi], capsize=2, label=agent)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(scen)), scen, rotation=60, ha="right", fontsize=8)
+    ax.set_ylabel("H cross-track RMS [m]")
+    quick = " (quick subset)" if doc.get("quick") else ""
+    ax.set_title(
+        f"AmigoBot benchmark {doc['suite_version']}{quick}: H error per scenario\n"
+        "mean over training seeds, 95 % bootstrap interval",
+        fontsize=10,
+    )
+    fig.legend(loc="outside right upper", fontsize=8, title="agent", title_fontsize=8)
+    return fig
+
+
+def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
+    """Performance profiles: fraction of (seed, scenario) runs with H RMS below tau, with bootstrap bands."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    prof = doc["performance_profiles"]
+    taus = np.asarray(prof["taus_m"])
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for agent, p in prof["agents"].items():
+        (line,) = ax.plot(taus, p["fraction_below"], label=agent)
+        ax.fill_between(taus, p["ci95_low"], p["ci95_high"], color=line.get_color(), alpha=0.2)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"threshold $\tau$ on H cross-track RMS [m]")
+    ax.set_ylabel(r"fraction of runs with RMS $< \tau$")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_title("Performance profiles (rliable score distributions)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+#: the manifest naming a published set of benchmark outputs (in ``--out``)
+MANIFEST = "benchmark_manifest.json"
+#: names of the temporary files and folders a benchmark writes in ``--out`` (removed by the next run)
+_TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_manifest\..*)$")
+
+
+def clean_temporaries(out: Path) -> list[str]:
+    """Remove what killed benchmarks left in ``out``: their staging folders and temporary files (only names a
+    benchmark writes; other dot files are left alone). Call while holding ``out``'s lock. The names removed."""
+    return remove_matching(out, _TEMPORARY)
+
+
+def write_outputs(
+    doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
+) -> list[Path]:
+    """Publish the JSON, the Markdown and (``plots``) the two figures as one set; the paths written.
+
+    Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
+    ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
+    new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
+    last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
+    ``publish:<file name>`` after each move.
+    """
+    import shutil
+    import tempfile
+
+    from amigo_gym.tools.runs import publish
+
+    out.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
+    try:
+        targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
+        atomic_write_json(targets[json_path], doc)
+        atomic_write(targets[md_path], markdown_report(doc))
+        if plots and doc["results"]:
+            targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"
+            targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
+            plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+            plot_profiles(doc, staging / "benchmark_profiles.png")
+        publish(targets, out, MANIFEST, command=doc.get("command"))
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return list(targets)
+
+
+def verify_outputs(out: Path) -> dict[str, str]:
+    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
+    (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
+    from amigo_gym.tools.runs import verify_manifest
+
+    return verify_manifest(out, MANIFEST)
+
+
+# --------------------------------------------------------------------------- command line
+@dataclass(frozen=True)
+class BenchmarkSettings:
+    """Options of ``amigo-gym benchmark``, each the option of the same name unless its ``cli(flag)`` names one.
+
+    Attributes:
+        agents: classical names, NAME=GLOB of zips, zips or folders [agents] (default: the classical policies and
+            the shipped models).
+        scenarios: scenario names [names] (default: the whole suite).
+        suite: suite version.
+        quick: small subset: 3 scenarios, 2 episodes of <= 120 steps.
+        out: output folder [dir].
+        json: JSON file [file] (default: <out>/benchmark.json).
+        markdown: Markdown file [file] (default: <out>/benchmark.md).
+        reps: bootstrap replications of the intervals [reps], >= 1.
+        profile_reps: bootstrap replications of the profiles [reps], >= 1.
+        bootstrap_seed: seed of the bootstrap [-].
+        plots: draw the plots; --no-plots: skip the plots.
+        progress: show a progress bar; --no-progress: no progress bar.
+        list_suite: print the suite and exit.
+        table_from: run nothing: print the README's v1 table from this benchmark.json [file] (default: none).
+        path: run on paths of your own instead of the suite: points files (.csv/.json, columns x, y [m];
+            amigo_gym.paths.from_file), one AmigoBot-v1 scenario each [files] (default: none, the suite).
+        speed: reference speed on --path [m/s].
+        feasibility: --path beyond the robot's limits: refuse, warn or run (default off: run; the report lists
+            them).
+        goal_tolerance: open --path: success within this of the end [m] (default 0: off).
+        duration: episode length on --path [s].
+        curvature: run the curvature cells instead of the suite: failure rate per path-curvature bin
+            (amigo_gym.tools.training.curvature; writes <out>/curvature.json and .md).
+        curvature_episodes: episodes per curvature cell [episodes], >= 1.
+        trust_unverified: load model zips without a recorded sha256 without the warning (they are pickles: they
+            run code).
+    """
+
+    agents: list[str] | None = None
+    scenarios: list[str] | None = None
+    suite: str = field(default=SUITE_VERSION, metadata=cli(choices=tuple(sorted(SUITES))))
+    quick: bool = False
+    out: str = "results/benchmark"
+    json: str | None = None
+    markdown: str | None = None
+    reps: int = 10_000
+    profile_reps: int = 2_000
+    bootstrap_seed: int = 0
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+    list_suite: bool = field(default=False, metadata=cli("--list"))
+    table_from: str | None = field(default=None, metadata=cli(metavar="FILE"))
+    path: list[str] | None = field(default=None, metadata=cli(metavar="FILE"))
+    speed: float = 0.2
+    feasibility: Literal["error", "warn", "off"] = "off"
+    goal_tolerance: float = 0.0
+    duration: float = 60.0
+    curvature: bool = False
+    curvature_episodes: int = 50
+    trust_unverified: bool = False
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        for name in ("reps", "profile_reps", "curvature_episodes"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(self, name)}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym benchmark``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    a = parse_settings(BenchmarkSettings, args, "amigo-gym benchmark", "Run the AmigoBot benchmark suite.")
+    if a.trust_unverified:
+        trust_unverified()
+    command = "amigo-gym benchmark " + " ".join(args)
+
+    def run() -> int:
+        from amigo_gym.tools.training.evaluate import one_torch_thread
+
+        one_torch_thread()
+        suite = SUITES[a.suite]
+        if a.table_from is not None:
+            print(readme_table(json.loads(Path(a.table_from).read_text(encoding="utf-8"))), end="")
+            return 0
+        if a.list_suite:
+            for sc in suite:
+                flag = "held out" if sc.held_out else ""
+                size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
+                print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
+            return 0
+        if a.curvature:
+            return _run_curvature(a, command)
+        scenarios = quick_suite(suite) if a.quick else suite
+        if a.path:
+            if a.scenarios:
+                raise ValueError("--path and --scenarios exclude each other")
+            scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
+            if a.quick:  # every path, shorter
+                scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+        if a.scenarios:
+            known = {sc.name: sc for sc in suite}
+            bad = [n for n in a.scenarios if n not in known]
+            if bad:
+                raise ValueError(f"--scenarios: unknown {bad}; see amigo-gym benchmark --list")
+            chosen = {sc.name: sc for sc in scenarios}
+            scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)
+        agents = parse_agents(a.agents) if a.agents else default_agents()
+        out = Path(a.out)
+        json_path = Path(a.json) if a.json else out / "benchmark.json"
+        md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
+        from amigo_gym.tools.runs import RunLock
+
+        with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
+            clean_temporaries(out)
+            doc = run_benchmark(
+                agents,
+                scenarios,
+                progress=a.progress,
+                reps=a.reps,
+                profile_reps=a.profile_reps,
+                bootstrap_seed=a.bootstrap_seed,
+                quick=a.quick,
+            )
+            doc["command"] = command
+            written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
+        print(markdown_report(doc), end="")
+        print("wrote " + ", ".join(map(str, written)))
+        return 0
+
+    return run_guarded(run, "amigo-gym benchmark")
+
+
+def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
+    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`: random paths up to the
+    feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
+    suite."""
+    from amigo_gym.tools.training.curvature import cell_specs
+
+    return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
+
+
+def _run_curvature(a: BenchmarkSettings, command: str) -> int:
+    """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.tools.training.curvature`)."""
+    from amigo_gym.tools.runs import RunLock
+    from amigo_gym.tools.training import curvature
+
+    if a.path or a.scenarios:
+        raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+    scenarios = curvature_scenarios(a.curvature_episodes)
+    if a.quick:
+        scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+    agents = parse_agents(a.agents) if a.agents else default_agents()
+    out = Path(a.out)
+    with RunLock(out):
+        doc = curvature.run_curvature(
+            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=a.progress
+        )
+        doc["command"] = command
+        written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
+    print(curvature.markdown_curvature(doc), end="")
+    print("wrote " + ", ".join(written))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

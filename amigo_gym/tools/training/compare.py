@@ -1,0 +1,506 @@
+"""The main job: the pretrained agents (and optionally a freshly trained one) against the analytic solution.
+
+Usage, the training run reused or started, the output set and its manifest, the lock and the targets checked:
+docs/baselines.md, "Reference: `amigo-gym compare`".
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from amigo_gym.data import pretrained_dir
+from amigo_gym.io import atomic_write, json_safe
+from amigo_gym.tools import runs
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+
+__all__ = [
+    "MANIFEST",
+    "TARGETS",
+    "agent_legend",
+    "display_command",
+    "main",
+    "publish",
+    "quick_benchmark",
+    "report_markdown",
+    "CompareSettings",
+    "run_compare",
+    "summary_text",
+    "v0_name",
+    "verify_outputs",
+]
+
+MANIFEST = "manifest.json"
+
+#: targets for the best learned agent on the perturbed scenario
+TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
+ANALYTIC = ("analytic", "analytic_ff")
+
+
+def v0_name(name: str) -> str:
+    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
+    ``amigo-gym benchmark`` names them; its v1 generalists are ``<algo>_v1``), a run's own name otherwise."""
+    from amigo_gym.tools.training.benchmark import ALGOS
+
+    return f"{name}_v0" if name in ALGOS else name
+
+
+def agent_legend(names: Sequence[str], gain: float) -> list[str]:
+    """One line per agent name of a report: what it is (every name a report prints is explained; the v1
+    generalists by the label of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS` or, retired,
+    :data:`~amigo_gym.tools.training.benchmark.RETIRED_V1_AGENTS`: "SB3 TD3 low-pass", "fast PPO", "SB3 PPO")."""
+    from amigo_gym.tools.training.benchmark import RETIRED_V1_AGENTS, V1_AGENTS
+
+    fixed = {
+        "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
+        "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
+        "pure_pursuit": "pure pursuit of the axle midpoint A (AmigoBot-v1's classical baseline)",
+        "ppo_fresh": "the PPO agent trained by this run (AmigoBot-v0, --train-steps)",
+    }
+    out = []
+    for name in dict.fromkeys(names):
+        if name in fixed:
+            text = fixed[name]
+        elif name.endswith("_v0"):
+            text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
+        elif name.endswith("_v1"):
+            folder = name[:-3]
+            label = {**RETIRED_V1_AGENTS, **V1_AGENTS}.get(folder, folder.upper())
+            how = {
+                "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
+                "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
+                " controller's command; a numpy policy)",
+            }.get(folder, "")
+            text = f"pretrained {label} AmigoBot-v1 generalists{how} (agents/pretrained/v1/{folder}/)"
+        else:
+            text = "a model from --models"
+        out.append(f"`{name}`: {text}")
+    return out
+
+
+def display_command(command: str, root: Path | None = None) -> str:
+    """``command`` with its absolute paths made short: relative to the repository (``root``, default the current
+    folder) when inside it, else their last two parts (a training record's ``--out /tmp/retrain/runs/ppo`` reads
+    ``--out runs/ppo``), so that no printed command shows a machine's temporary folders."""
+    import shlex
+
+    base = (root or Path.cwd()).resolve()
+    words = []
+    for word in shlex.split(command):
+        if word.startswith("/"):
+            p = Path(word)
+            try:
+                word = str(p.resolve().relative_to(base))
+            except ValueError:
+                word = str(Path(*p.parts[-2:])) if len(p.parts) > 2 else p.name
+        words.append(shlex.quote(word))
+    return " ".join(words)
+
+
+def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed") -> dict[str, Any] | None:
+    """The learned agent with the smallest H RMS error on ``scenario`` (``None`` if there is none)."""
+    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ANALYTIC]
+    return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
+
+
+def report_markdown(doc: dict[str, Any]) -> str:
+    """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
+    from amigo_gym.tools.training.evaluate import markdown_table
+
+    proto = doc["protocol"]
+    lines = [
+        "# AmigoBot-v0: learned agents against the analytic inverse solution",
+        "",
+        f"Protocol: {proto['steps']} steps of {proto['env_params']['dt']} s ({proto['duration_s']:.0f} s, "
+        f"one lap = {proto['lap_time_s']:.1f} s) on the circle R = {proto['env_params']['radius']} m at "
+        f"v_ref = {proto['env_params']['speed']} m/s; scenarios `nominal` (H on the circle, steady heading), "
+        f"`paper_start` (H at the origin, beta = 0), `perturbed` (seeds {proto['scenarios']['perturbed']['seeds']}). "
+        f"Wheel-rate deviation: {proto['wheel_rate_reference']}.",
+        "",
+        "Agents: " + "; ".join(agent_legend([r["agent"] for r in doc["results"]], proto["analytic_gain"])) + ".",
+        "",
+        markdown_table(doc["results"]),
+    ]
+    best = doc.get("best_learned")
+    if best:
+        ok_h = best["h_rms_m"] <= TARGETS["h_rms_m"]
+        ok_w = best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"]
+        lines += [
+            "## Targets (best learned agent, perturbed starts)",
+            "",
+            f"- agent: **{best['agent']}**",
+            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): "
+            + ("met" if ok_h else "NOT met"),
+            f"- RMS wheel-rate deviation: {best['wheel_rate_dev_rms']:.4f} rad/s (target <= "
+            f"{TARGETS['wheel_rate_dev_rms']} rad/s): " + ("met" if ok_w else "NOT met"),
+        ]
+        rec = doc.get("training", {}).get(best["agent"])
+        if rec:
+            lines.append(
+                f"- training: {rec['timesteps']} steps in {rec['wall_time_s']:.0f} s wall time "
+                f"({rec.get('cpu_count', '?')} CPU cores, {rec.get('torch_threads', '?')} torch thread(s))"
+            )
+        lines.append("")
+    if doc.get("training"):
+        lines += [
+            "## Training records",
+            "",
+            "| agent | steps | wall time [s] | model | command (then resumes) |",
+            "|---|---|---|---|---|",
+        ]
+        for name, rec in doc["training"].items():
+            model = f"{rec.get('exported_model', 'final')} @ {rec.get('exported_timesteps', rec['timesteps'])}"
+            cmds = "<br>".join(
+                f"`{display_command(c)}`" for c in [rec["command"], *(r["command"] for r in rec.get("resumes", []))]
+            )
+            lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | {model} | {cmds} |")
+        lines.append("")
+    lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
+    bench = doc.get("benchmark")
+    if bench:
+        from amigo_gym.tools.training.benchmark import markdown_report as benchmark_markdown
+
+        table = benchmark_markdown(bench).splitlines()
+        lines += [
+            "#" + table[0],  # one level down
+            "",
+            f"`amigo-gym benchmark --quick` on the agents above ({len(bench['scenarios'])} scenarios, "
+            f"{bench['scenarios'][0]['episodes']} episodes each; {bench['wall_time_s']:.0f} s). A smoke-sized view: "
+            "the whole suite is `amigo-gym benchmark` (docs/benchmark.md).",
+        ]
+        new_names = [a for a in bench["aggregates"] if a not in {r["agent"] for r in doc["results"]}]
+        if new_names:
+            gain = proto["analytic_gain"]
+            lines += ["", "Agents (besides those above): " + "; ".join(agent_legend(new_names, gain)) + "."]
+        lines += [("#" + ln if ln.startswith("#") else ln) for ln in table[1:]]
+        if doc.get("benchmark_plots"):
+            lines += ["", "![benchmark scenarios](benchmark_scenarios.png)", ""]
+            lines += ["![benchmark profiles](benchmark_profiles.png)", ""]
+    return "\n".join(lines)
+
+
+def summary_text(doc: dict[str, Any], out: Path) -> str:
+    """What ``amigo-gym compare`` prints: the perturbed starts' table, the targets, the quick benchmark's H error,
+    every agent name explained, and where the files went (the full tables are in ``report.md``)."""
+    proto = doc["protocol"]
+    rows = [r for r in doc["results"] if r["scenario"] == "perturbed"]
+    n = len(proto["scenarios"]["perturbed"]["seeds"])
+    lines = [
+        f"AmigoBot-v0, {n} perturbed starts of {proto['duration_s']:.0f} s on the circle R = "
+        f"{proto['env_params']['radius']} m (H within 2 cm, heading within 0.1 rad):",
+        "",
+        "| agent | H RMS error [mm] | wheel-rate deviation from the analytic policy, RMS [rad/s] |",
+        "|---|---:|---:|",
+        *(f"| {r['agent']} | {r['h_rms_m'] * 1e3:.3f} | {r['wheel_rate_dev_rms']:.3f} |" for r in rows),
+        "",
+    ]
+    best = doc.get("best_learned")
+    if best:
+        ok_h = "met" if best["h_rms_m"] <= TARGETS["h_rms_m"] else "NOT met"
+        ok_w = "met" if best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"] else "NOT met"
+        lines.append(
+            f"Best learned agent: {best['agent']}, {best['h_rms_m'] * 1e3:.3f} mm (target <= "
+            f"{TARGETS['h_rms_m'] * 1e3:g} mm: {ok_h}), {best['wheel_rate_dev_rms']:.3f} rad/s (target <= "
+            f"{TARGETS['wheel_rate_dev_rms']:g} rad/s: {ok_w})."
+        )
+    names = [r["agent"] for r in rows]
+    bench = doc.get("benchmark")
+    if bench:
+        cells = []
+        for agent, a in bench["aggregates"].items():
+            g = a.get("all")
+            if g is not None:
+                runs_ = f" ({a['n_runs']} seeds)" if a["n_runs"] > 1 else ""
+                cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g}{runs_}")
+            names.append(agent)
+        lines.append(
+            f"Quick benchmark ({len(bench['scenarios'])} scenarios x {bench['scenarios'][0]['episodes']} short "
+            f"episodes on v0 and v1, a smoke test, not the benchmark's result), H RMS IQM [mm]: {', '.join(cells)}. "
+            f"{len(bench['unavailable'])} (agent, seed, scenario) runs could not run (a v0 model on a v1 "
+            "scenario or the reverse: other observations); report.md lists them."
+        )
+    lines += ["", "Agents:", *(f"  {x}" for x in agent_legend(names, proto["analytic_gain"])), ""]
+    plots = ", plots eval_*.png" + (", benchmark_*.png" if doc.get("benchmark_plots") else "")
+    has_plots = (out / "eval_trajectories.png").is_file()
+    lines.append(
+        f"Files in {out}/: report.md (every scenario, the training records, the benchmark's tables), results.json "
+        f"(all numbers), eval.md{plots if has_plots else ''}."
+    )
+    return "\n".join(lines)
+
+
+def quick_benchmark(
+    agents: Mapping[str, Any],
+    sources: Mapping[str, tuple[Path, str, int]],
+    generalists: Path | None = None,
+    *,
+    progress: bool = False,
+    reps: int = 10_000,
+    profile_reps: int = 2_000,
+) -> dict[str, Any]:
+    """The benchmark's ``--quick`` subset on compare's agents (module docstring, step 3): its JSON document.
+
+    Args:
+        agents: compare's agents by name; the classical ones (``analytic``, ``analytic_ff``) are rebuilt
+            per scenario by the benchmark, the others are used as loaded.
+        sources: ``{name: (model zip, algo, training seed)}`` of the loaded models (an agent without one
+            is left out).
+        generalists: a folder of AmigoBot-v1 generalists (``<models>/v1``), if any: its ``<folder>/*.zip`` for
+            every folder of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``.
+    """
+    from amigo_gym.tools.training.benchmark import (
+        CLASSICAL,
+        V1_AGENTS,
+        AgentSpec,
+        parse_agents,
+        quick_suite,
+        run_benchmark,
+    )
+
+    specs: list[AgentSpec] = []
+    for name, agent in agents.items():
+        if name in CLASSICAL:
+            specs.append(AgentSpec(name))
+        elif name in sources:
+            path, algo, seed = sources[name]
+            specs.append(AgentSpec(name, seed, str(path), algo, None, _model=agent))
+    if generalists is not None:
+        for folder in V1_AGENTS:
+            if any((generalists / folder).glob("*.zip")):
+                for spec in parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"]):
+                    digest = (spec.manifest or {}).get("sha256")
+                    if digest is not None and spec.path is not None:  # checked before the pickle is loaded
+                        manifest = Path(spec.path).with_suffix(".json")
+                        runs.verify_sha256(Path(spec.path), str(digest), str(manifest))
+                    specs.append(spec)
+    doc = run_benchmark(specs, quick_suite(), progress=progress, reps=reps, profile_reps=profile_reps, quick=True)
+    doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
+    return doc
+
+
+def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
+    """What the fresh PPO run must have been trained with to be reused (compared with its ``config.json``)."""
+    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, load_hyperparams, versions
+
+    return {
+        "algo": "ppo",
+        "timesteps": train_steps,
+        "seed": seed,
+        "env_kwargs": env_kwargs(),
+        "hyperparams": load_hyperparams(hyperparams or HYPERPARAMS_DIR / "ppo.yml"),
+        "versions": versions(),
+    }
+
+
+def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
+    """Why the run in ``run_dir`` cannot serve ``request`` (``None``: it can, to be resumed or reused as is).
+
+    The run's ``config.json`` must record the same algorithm, steps, seed, environment settings,
+    hyperparameters and package versions, and the run must have a checkpoint to continue from.
+    """
+    cfg_file = run_dir / "config.json"
+    if not cfg_file.is_file() or not (run_dir / "checkpoint.json").is_file():
+        return "no complete earlier run"
+    try:
+        cfg = json.loads(cfg_file.read_text())
+        recorded = {
+            "algo": cfg["settings"]["algo"],
+            "timesteps": cfg["settings"]["timesteps"],
+            "seed": cfg["settings"]["seed"],
+            "env_kwargs": cfg.get("env_kwargs"),
+            "hyperparams": cfg["hyperparams"],
+            "versions": cfg["versions"],
+        }
+    except (ValueError, KeyError, TypeError):
+        return f"unreadable {cfg_file}"
+    differ = [k for k in request if json.dumps(recorded[k], sort_keys=True) != json.dumps(request[k], sort_keys=True)]
+    short = ("algo", "timesteps", "seed")
+    reasons = [f"{k} {recorded[k]!r} != {request[k]!r}" if k in short else f"{k} differ" for k in differ]
+    return ", ".join(reasons) if reasons else None
+
+
+def publish(staging: Path, out: Path) -> dict[str, str]:
+    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring,
+    :func:`amigo_gym.tools.runs.publish`); the manifest's ``{file name: sha256}``."""
+    return runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
+
+
+def verify_outputs(out: Path) -> dict[str, str]:
+    """The manifest of a compare's output set, after checking every file against it
+    (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without ``manifest.json``,
+    ``CorruptFileError``)."""
+    return runs.verify_manifest(out, MANIFEST)
+
+
+def _say(message: str) -> None:
+    """A progress line on stderr (the report itself goes to stdout)."""
+    print(message, file=sys.stderr, flush=True)
+
+
+@dataclass(frozen=True)
+class CompareSettings:
+    """Settings of ``amigo-gym compare``, each the option of the same name (``plots``: ``--no-plots``,
+    ``benchmark``: ``--no-benchmark``, ``progress``: ``--no-progress``).
+
+    Attributes:
+        out: output directory [dir].
+        models: pretrained models, as for evaluate --models [path], '' for none. Model zips are pickles that run
+            code when loaded: pass only files you trust (the shipped ones are checked against their sha256).
+        train_steps: steps of a fresh PPO run [steps], 0: none (default 500000).
+        seeds: perturbed starts [episodes].
+        steps: steps per episode [steps].
+        seed: seed of the fresh training run [-].
+        hyperparams: YAML of the fresh PPO run [file] (default: agents/hyperparams/ppo.yml).
+        plots: draw the figures; --no-plots: skip the figures.
+        benchmark: run the quick benchmark subset (step 3); --no-benchmark: skip the quick benchmark table (step 3).
+        progress: show the progress bars (training, benchmark; phase lines go to stderr in any case);
+            --no-progress: no progress bar (default: shown on a terminal).
+    """
+
+    out: str = "results"
+    models: str = str(pretrained_dir())
+    train_steps: int = 500_000
+    seeds: int = 10
+    steps: int = 400
+    seed: int = 0
+    hyperparams: str | None = None
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    benchmark: bool = field(default=True, metadata=cli("--no-benchmark"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option and its allowed range on a bad setting."""
+        for name in ("train_steps", "seed"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(self, name)}")
+        if self.seeds < 1:
+            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+
+
+def run_compare(s: CompareSettings) -> dict[str, Any]:
+    """Run the main job (module docstring); return the JSON document."""
+    out = Path(s.out)
+    with runs.RunLock(out):
+        runs.clean_temporaries(out)
+        return _run_compare(s)
+
+
+def _run_compare(s: CompareSettings) -> dict[str, Any]:
+    out, models = Path(s.out), Path(s.models) if s.models else None
+    hyperparams = Path(s.hyperparams) if s.hyperparams else None
+    train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
+    from amigo_gym.model.params import EnvParams
+    from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
+    from amigo_gym.tools.training.evaluate import (
+        EvalProtocol,
+        default_agents,
+        evaluate_agents,
+        find_models,
+        load_model,
+        write_outputs,
+    )
+
+    proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
+    agents = default_agents(EnvParams(), proto.analytic_gain)
+    training: dict[str, Any] = {}
+    sources: dict[str, tuple[Path, str, int]] = {}  # name -> (zip, algo, training seed), for the benchmark
+    if models is not None:
+        _say(f"loading pretrained agents from {models}")
+        refs = find_models(models)
+        agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
+        training.update({v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None})
+        for r in refs:
+            rec_seed = training.get(v0_name(r.name), {}).get("seed")
+            sources[v0_name(r.name)] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
+    if train_steps > 0:
+        from stable_baselines3 import PPO
+
+        from amigo_gym.tools.training.train import Settings, train
+
+        run_dir = out / "train_ppo"
+        request = fresh_run_request(train_steps, seed, hyperparams)
+        stale = reuse_mismatch(run_dir, request)
+        if stale is not None and run_dir.exists():
+            _say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+            shutil.rmtree(run_dir)
+        argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
+        fresh = Settings(
+            algo="ppo",
+            seed=seed,
+            out=str(run_dir),
+            timesteps=train_steps,
+            hyperparams=None if hyperparams is None else str(hyperparams),
+            resume=stale is None,
+            eval_freq=0,
+            checkpoint_freq=max(train_steps // 4, 1),
+            progress=progress,
+            argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
+        )
+        if stale is None:
+            _say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+        else:
+            _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+        t0 = time.perf_counter()
+        training["ppo_fresh"] = train(fresh)
+        print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
+        # checked against the run's record before it is unpickled, like every model compare loads
+        runs.check_pickle(run_dir / "model.zip", training["ppo_fresh"]["sha256"], str(run_dir / "run.json"))
+        agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
+        sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
+    _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
+    results, trajs = evaluate_agents(agents, proto)
+    best = best_learned(results)
+    extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
+    bench: dict[str, Any] | None = None
+    if s.benchmark:
+        generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
+        _say(
+            "quick benchmark (amigo-gym benchmark --quick) on these agents"
+            + (f" and {generalists}" if generalists else "")
+        )
+        bench = quick_benchmark(agents, sources, generalists, progress=progress)
+        extra["benchmark"] = json_safe(bench)
+        extra["benchmark_plots"] = plots and bool(bench["results"])
+    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
+    try:
+        doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+        if bench is not None and extra["benchmark_plots"]:
+            from amigo_gym.tools.training.benchmark import plot_profiles, plot_scenarios
+
+            plot_scenarios(bench, staging / "benchmark_scenarios.png")
+            plot_profiles(bench, staging / "benchmark_profiles.png")
+        atomic_write(staging / "report.md", report_markdown(doc).encode())
+        publish(staging, out)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return doc
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym compare``."""
+    args = sys.argv[1:] if argv is None else argv
+    s = parse_settings(
+        CompareSettings, args, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
+    )
+
+    def run() -> int:
+        from amigo_gym.tools.training.evaluate import one_torch_thread
+
+        one_torch_thread()
+        doc = run_compare(replace(s, progress=s.progress and sys.stderr.isatty()))
+        print(summary_text(doc, Path(s.out)))
+        return 0
+
+    return run_guarded(run, "amigo-gym compare")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,294 @@
+r"""Failure rate binned by path curvature: ``amigo-gym benchmark --curvature``.
+
+Never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its scenario class
+and environment factory in. The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
+--curvature`".
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
+
+__all__ = [
+    "BIN_EDGES",
+    "CURVATURE_EPISODES",
+    "CURVATURE_SPEEDS",
+    "LEVELS",
+    "bin_table",
+    "cell_specs",
+    "markdown_curvature",
+    "run_curvature",
+    "wilson_interval",
+]
+
+#: speeds of the cells [m/s]: the ends of the training distribution's range
+CURVATURE_SPEEDS: tuple[float, ...] = (0.1, 0.4)
+#: curvature levels per speed (``max_curvature = K(v) j / LEVELS``)
+LEVELS = 4
+#: bin edges of ``path_max_kappa / K(v)`` [-] (the last bin closed)
+BIN_EDGES: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: episodes per cell (seeds 100, 101, ...)
+CURVATURE_EPISODES = 50
+#: episode length [s] and control period [s] of the cells
+DURATION_S = 60.0
+DT_S = 0.1
+#: path ids the cells draw from (ids [0, 2**20))
+POOL = 2**20
+#: the 95 % normal quantile
+Z95 = 1.959963984540054
+
+
+def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float]:
+    r"""Wilson score interval of a binomial proportion ``p = f / n``:
+
+    .. math:: \frac{p + z^2/(2n) \pm z \sqrt{p (1 - p) / n + z^2 / (4 n^2)}}{1 + z^2 / n}
+
+    ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval.
+    """
+    if n <= 0:
+        return math.nan, math.nan
+    if not 0 <= failures <= n:
+        raise ValueError(f"wilson_interval: failures must be in [0, n = {n}], got {failures}")
+    p = failures / n
+    zz = z * z
+    centre = p + zz / (2 * n)
+    half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
+    den = 1 + zz / n
+    return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
+
+
+def cell_specs(
+    speeds: Sequence[float] = CURVATURE_SPEEDS, levels: int = LEVELS, episodes: int = CURVATURE_EPISODES
+) -> list[dict[str, Any]]:
+    """The cells (module docstring) as keywords of :class:`amigo_gym.tools.training.benchmark.Scenario` (``name``,
+    ``env_id``, ``env_kwargs``: ``gym.make``'s, ``seeds``, ``max_steps``, ``held_out``, ``description``: naming
+    ``K(v)``, the level and the curvature); :func:`amigo_gym.tools.training.benchmark.curvature_scenarios` builds
+    them."""
+    from amigo_gym.task.v1 import feasible_random_curvature
+
+    if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
+        raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
+        raise ValueError(f"curvature cells: episodes must be an integer in [1, 10000], got {episodes!r}")
+    out = []
+    for v in speeds:
+        k_v = feasible_random_curvature(v)
+        for j in range(1, levels + 1):
+            k = k_v * j / levels
+            kw = {
+                "dt": DT_S,
+                "randomize": "none",
+                "path": "random",
+                "speed": float(v),
+                "random_pool": POOL,
+                "path_params": {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S},
+            }
+            desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{levels} of K = {k_v:.4g} 1/m), {v:g} m/s"
+            out.append({
+                "name": f"curv_v{v:g}_k{j}", "env_id": "AmigoBot-v1", "env_kwargs": kw,
+                "seeds": tuple(range(100, 100 + episodes)), "max_steps": round(DURATION_S / DT_S), "held_out": True,
+                "description": desc,
+            })  # fmt: skip
+    return out
+
+
+def _cell_limit(sc: Any) -> tuple[float, float]:
+    """``(v, K(v))`` of a cell [m/s, 1/m]."""
+    from amigo_gym.task.v1 import feasible_random_curvature
+
+    v = float(sc.env_kwargs["speed"])
+    return v, feasible_random_curvature(v)
+
+
+def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
+    """Run ``agent`` deterministically, one episode per seed of the cell ``sc`` (all side by side in the native vector
+    env, as :func:`amigo_gym.tools.training.benchmark.evaluate`); per episode the benchmark's metrics plus the tags
+    ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
+    import gymnasium as gym
+
+    venv: Any = gym.make_vec(sc.env_id, num_envs=len(sc.seeds), max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
+    try:
+        obs, _ = venv.reset(seed=list(sc.seeds))
+        u: Any = venv.unwrapped
+        adapter = InfoAdapter(u.params.robot, float(u.params.speed))
+        paths = list(u.paths.paths)
+        ids = [int(d["id"]) for d in u.path_infos]
+        recs = [EpisodeRecorder(DT_S) for _ in sc.seeds]
+        progress = np.zeros(len(sc.seeds))
+
+        def read_progress(i: int, info: dict[str, Any], _ended: bool) -> None:
+            progress[i] = float(info["progress"])
+
+        run_vector_episodes(agent, venv, obs, recs, adapter, read_progress)
+    finally:
+        venv.close()
+    out = []
+    for i, r in enumerate(recs):
+        m: dict[str, Any] = dict(r.metrics())
+        s_end = min(max(progress[i], 0.0), float(paths[i].length))
+        m |= {
+            "seed_env": int(sc.seeds[i]),
+            "path_id": ids[i],
+            "path_max_kappa": float(paths[i].max_abs_curvature),
+            "kappa_end": float(abs(np.asarray(paths[i].curvature(s_end)))),
+            "progress_end": float(progress[i]),
+        }
+        out.append(m)
+    return out
+
+
+def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BIN_EDGES) -> list[dict[str, Any]]:
+    """Failure rate per (agent, speed, bin) of tagged episodes (records with ``agent``, ``speed``, ``k_limit``,
+    ``path_max_kappa``, ``failure``): ``x = path_max_kappa / k_limit`` in ``[edges[b], edges[b+1])`` (the last bin
+    closed; an ``x`` outside ``[edges[0], edges[-1]]`` is an error: the cells' paths stay within ``K(v)``).
+
+    Returns:
+        rows ``agent``, ``speed`` [m/s], ``bin``, ``x_lo``, ``x_hi`` [-], ``kappa_lo``, ``kappa_hi`` [1/m], ``n``,
+        ``failures``, ``rate`` (None when ``n = 0``), ``ci95`` (Wilson), ``kappa_end_failed`` (median ``kappa_end`` of
+        the failed episodes [1/m], None without failures), ordered by agent (first seen), speed, bin.
+    """
+    e = np.asarray(edges, dtype=np.float64)
+    if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0) or not np.all(np.isfinite(e)):
+        raise ValueError(f"bin_table: edges must be 2 or more increasing finite numbers, got {list(edges)!r}")
+    groups: dict[tuple[str, float], list[Mapping[str, Any]]] = {}
+    limits: dict[float, float] = {}
+    for ep in episodes:
+        key = (str(ep["agent"]), float(ep["speed"]))
+        groups.setdefault(key, []).append(ep)
+        limits[float(ep["speed"])] = float(ep["k_limit"])
+    rows = []
+    for (agent, v), eps in groups.items():
+        k_v = limits[v]
+        x = np.array([float(ep["path_max_kappa"]) / k_v for ep in eps])
+        if np.any(x < e[0]) or np.any(x > e[-1] * (1 + 1e-12)):
+            raise ValueError(f"bin_table: path_max_kappa / K outside [{e[0]:g}, {e[-1]:g}] for {agent} at {v:g} m/s")
+        b = np.clip(np.searchsorted(e, x, side="right") - 1, 0, e.size - 2)
+        fail = np.array([bool(ep["failure"]) for ep in eps])
+        k_end = np.array([float(ep.get("kappa_end", math.nan)) for ep in eps])
+        for j in range(e.size - 1):
+            sel = b == j
+            n = int(sel.sum())
+            f = int(fail[sel].sum())
+            lo, hi = wilson_interval(f, n)
+            kf = k_end[sel & fail]
+            rows.append({
+                "agent": agent, "speed": v, "bin": j, "x_lo": float(e[j]), "x_hi": float(e[j + 1]),
+                "kappa_lo": float(e[j] * k_v), "kappa_hi": float(e[j + 1] * k_v), "n": n, "failures": f,
+                "rate": f / n if n else None, "ci95": [lo, hi] if n else None,
+                "kappa_end_failed": float(np.median(kf)) if kf.size else None,
+            })  # fmt: skip
+    return rows
+
+
+def run_curvature(
+    agents: Sequence[Any],
+    scenarios: Sequence[Any],
+    *,
+    make_env: Callable[[Any], Any],
+    unavailable_errors: tuple[type[BaseException], ...],
+    progress: bool = True,
+    on_cell: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Every agent seed on every cell; the JSON document: ``protocol``, ``scenarios``, ``agents``, ``episodes``
+    (tagged, one record per episode), ``table`` (:func:`bin_table`), ``unavailable``, ``wall_time_s``.
+
+    ``make_env(scenario)``: the single env the agents are built for; an agent that raises one of
+    ``unavailable_errors`` on a cell is listed in ``unavailable`` with the reason (the benchmark's
+    :func:`~amigo_gym.tools.training.benchmark.make_env` and ``Unavailable``, passed in by ``amigo-gym benchmark``).
+    """
+    from tqdm.auto import tqdm
+
+    t0 = time.perf_counter()
+    episodes: list[dict[str, Any]] = []
+    unavailable: list[dict[str, Any]] = []
+    total = len(agents) * sum(sc.episodes for sc in scenarios)
+    bar = tqdm(total=total, desc="curvature", unit="ep", disable=not progress)
+    try:
+        for spec in agents:
+            for sc in scenarios:
+                v, k_v = _cell_limit(sc)
+                env = make_env(sc)
+                try:
+                    agent = spec.instantiate(env)
+                    eps = evaluate_tagged(agent, sc)
+                except unavailable_errors as exc:
+                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
+                    continue
+                finally:
+                    env.close()
+                    bar.update(sc.episodes)
+                for ep in eps:
+                    episodes.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "speed": v,
+                                     "k_limit": k_v, **ep})  # fmt: skip
+                if on_cell is not None:
+                    on_cell(sc.name)
+    finally:
+        bar.close()
+    bins = [f"[{a:g}, {b:g})" for a, b in itertools.pairwise(BIN_EDGES)]
+    bins[-1] = bins[-1][:-1] + "]"
+    return {
+        "protocol": {
+            "speeds_m_s": sorted({float(sc.env_kwargs["speed"]) for sc in scenarios}),
+            "bins": "path_max_kappa / K(v) in " + ", ".join(bins),
+            "k_limit": "amigo_gym.task.v1.feasible_random_curvature(v) (max_curvature_rate = max_curvature x 1 m^-1)",
+            "failure": "terminated off the path, or |e| > 0.10 m at some t >= 5 s",
+            "interval": "Wilson score 95 %, episodes of every training seed pooled",
+        },
+        "scenarios": [sc.to_json() for sc in scenarios],
+        "agents": [a.describe() for a in agents],
+        "episodes": episodes,
+        "table": bin_table(episodes) if episodes else [],
+        "unavailable": unavailable,
+        "wall_time_s": round(time.perf_counter() - t0, 2),
+    }
+
+
+def markdown_curvature(doc: Mapping[str, Any]) -> str:
+    """The table: per speed, one row per bin, one column per agent: ``rate [lo, hi] (f/n)``."""
+    rows = doc["table"]
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+    lines = [
+        "# Failure rate per curvature bin (amigo-gym benchmark --curvature)",
+        "",
+        f"Bins of the path's max |kappa| / K(v) (K(v): the feasible limit at speed v); failure rate [95 % Wilson "
+        f"interval] (failures / episodes, training seeds pooled). {doc['protocol']['failure']}.",
+    ]
+    for v in sorted({r["speed"] for r in rows}):
+        lines += ["", f"## {v:g} m/s", "", "| max \\|kappa\\| [1/m] | " + " | ".join(agents) + " |"]
+        lines.append("|---|" + "---|" * len(agents))
+        sub = [r for r in rows if r["speed"] == v]
+        for j in sorted({r["bin"] for r in sub}):
+            cells = []
+            head = ""
+            for a in agents:
+                r = next((x for x in sub if x["agent"] == a and x["bin"] == j), None)
+                if r is None:
+                    cells.append("–")
+                    continue
+                head = f"[{r['kappa_lo']:.2f}, {r['kappa_hi']:.2f}{']' if j == len(BIN_EDGES) - 2 else ')'}"
+                if r["n"] == 0:
+                    cells.append("– (0)")
+                else:
+                    lo, hi = r["ci95"]
+                    cells.append(f"{r['rate']:.3f} [{lo:.3f}, {hi:.3f}] ({r['failures']}/{r['n']})")
+            lines.append(f"| {head} | " + " | ".join(cells) + " |")
+    if doc.get("unavailable"):
+        lines += ["", "## Unavailable", ""]
+        lines += [f"- {u['agent']} s{u['seed']} on {u['scenario']}: {u['reason']}" for u in doc["unavailable"]]
+    return "\n".join(lines) + "\n"
+
+
+def write_curvature(doc: Mapping[str, Any], json_path: Any, md_path: Any) -> list[str]:
+    """Write the document and its Markdown atomically; the paths written."""
+    atomic_write_json(json_path, doc)
+    atomic_write(md_path, markdown_curvature(doc))
+    return [str(json_path), str(md_path)]

@@ -1,0 +1,465 @@
+"""``amigo-gym curves``: learning curves over training seeds and the time to reach a tracking threshold.
+
+Usage, the run folders read, the aggregation over seeds, the threshold and the output files: docs/benchmark.md,
+"Reference: `amigo-gym curves`".
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+
+__all__ = [
+    "AXES",
+    "CURVE_METRICS",
+    "CurvesSettings",
+    "DEFAULT_THRESHOLD_M",
+    "THRESHOLD_METRIC",
+    "Run",
+    "curve",
+    "find_runs",
+    "learning_curves",
+    "main",
+    "markdown_report",
+    "plot_curves",
+    "threshold_time",
+    "threshold_summary",
+    "write_outputs",
+]
+
+#: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
+THRESHOLD_METRIC = "h_rms_settled_m"
+#: the tracking threshold [m], fixed in advance (module docstring)
+DEFAULT_THRESHOLD_M = 0.005
+#: the plotted metrics and their labels
+CURVE_METRICS: dict[str, str] = {"h_rms_m": "H cross-track RMS [m]", "mean_reward": "evaluation return"}
+#: the x axes and their labels
+AXES: dict[str, str] = {"timesteps": "environment steps", "wall_time_s": "wall time [s]"}
+_NAME = re.compile(r"^(?P<algo>[A-Za-z][A-Za-z0-9]*)_s(?P<seed>\d+)$")
+
+
+@dataclass(frozen=True)
+class Run:
+    """One training run: its group (algorithm), seed, folder and evaluations (sorted by steps, one per step).
+
+    Attributes:
+        algo: the algorithm (``config.json``'s ``settings.algo`` or the folder name).
+        seed: the training seed.
+        path: the run folder.
+        env_id: the environment it was trained on (``None``: not recorded).
+        evals: the evaluations of ``eval.json``, sorted by ``timesteps``, the last one kept per step.
+        group: the label it is aggregated under (the algorithm; with the env id if the runs differ in it).
+    """
+
+    algo: str
+    seed: int
+    path: Path
+    env_id: str | None
+    evals: tuple[dict[str, Any], ...]
+    group: str = ""
+
+
+def _say(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def _identify(run_dir: Path) -> tuple[str, int, str | None]:
+    """``(algo, seed, env_id)`` of a run folder from its ``config.json``, else its name; ``ValueError`` if neither."""
+    from amigo_gym.tools import runs
+
+    cfg_file = run_dir / "config.json"
+    if cfg_file.is_file():
+        cfg = runs.read_json(cfg_file)
+        settings = cfg.get("settings") if isinstance(cfg, dict) else None
+        if isinstance(settings, dict):
+            algo, seed = settings.get("algo"), settings.get("seed")
+            if isinstance(algo, str) and isinstance(seed, int) and not isinstance(seed, bool):
+                env = cfg.get("env_id", settings.get("env_id"))
+                return algo, seed, env if isinstance(env, str) else None
+    m = _NAME.match(run_dir.name)
+    if m is None:
+        raise ValueError("no config.json with settings.algo and settings.seed, and the name is not <algo>_s<seed>")
+    return m.group("algo").lower(), int(m.group("seed")), None
+
+
+def _finite(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(float(x))
+
+
+def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
+    from amigo_gym.tools import runs
+
+    data = runs.read_json(path)
+    if not isinstance(data, list) or not all(isinstance(e, dict) and _finite(e.get("timesteps")) for e in data):
+        raise ValueError("eval.json is not a list of evaluations with 'timesteps'")
+    by_step: dict[int, dict[str, Any]] = {}
+    for e in data:  # in file order: a repeated step (resumed run) keeps its later evaluation
+        by_step[int(e["timesteps"])] = e
+    return tuple(by_step[k] for k in sorted(by_step))
+
+
+def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, str]]]:
+    """The run folders in ``folders`` (module docstring): ``(runs, skipped)``, each skip with its reason.
+
+    Raises:
+        FileNotFoundError: a folder does not exist.
+        ValueError: the same (group, seed) twice.
+    """
+    found: list[Run] = []
+    skipped: list[dict[str, str]] = []
+    for folder in map(Path, folders):
+        if not folder.is_dir():
+            raise FileNotFoundError(f"--runs: no directory {folder}")
+        candidates = [folder] if (folder / "eval.json").is_file() else sorted(p for p in folder.iterdir() if p.is_dir())
+        for run_dir in candidates:
+            if not (run_dir / "eval.json").is_file():
+                skipped.append({"path": str(run_dir), "reason": "no eval.json"})
+                continue
+            try:
+                algo, seed, env_id = _identify(run_dir)
+                evals = _read_evals(run_dir / "eval.json")
+            except ValueError as exc:  # includes CorruptFileError
+                skipped.append({"path": str(run_dir), "reason": " ".join(str(exc).split())})
+                continue
+            if not evals:
+                skipped.append({"path": str(run_dir), "reason": "eval.json holds no evaluation yet"})
+                continue
+            found.append(Run(algo, seed, run_dir, env_id, evals))
+    several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1
+
+    def group(r: Run) -> str:
+        return f"{r.algo} {r.env_id}" if several_envs and r.env_id is not None else r.algo
+
+    runs_out = [Run(r.algo, r.seed, r.path, r.env_id, r.evals, group(r)) for r in found]
+    seen: dict[tuple[str, int], Path] = {}
+    for r in runs_out:
+        key = (r.group, r.seed)
+        if key in seen:
+            raise ValueError(f"--runs: {r.group} seed {r.seed} twice ({seen[key]} and {r.path})")
+        seen[key] = r.path
+    runs_out.sort(key=lambda r: (r.group, r.seed))
+    return runs_out, skipped
+
+
+def _series(run: Run, axis: str, metric: str) -> tuple[np.ndarray, np.ndarray]:
+    """The run's ``(x, y)`` of ``metric`` against ``axis``, finite points only, sorted by ``x``."""
+    pts = [(float(e[axis]), float(e[metric])) for e in run.evals if _finite(e.get(axis)) and _finite(e.get(metric))]
+    pts.sort(key=lambda p: p[0])
+    a = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    return a[:, 0], a[:, 1]
+
+
+def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, seed: int = 0) -> dict[str, Any] | None:
+    """Mean over ``runs`` (training seeds) of ``metric`` against ``axis``, with its 95 % bootstrap band.
+
+    Module docstring: step-function values, the range every seed covers, the union of the evaluation
+    points in it, the pointwise percentile bootstrap over seeds. ``None`` if the seeds share no range.
+    """
+    from amigo_gym.tools.training.intervals import stratified_bootstrap
+
+    series = {r.seed: _series(r, axis, metric) for r in runs}
+    series = {s: xy for s, xy in series.items() if xy[0].size}
+    if not series:
+        return None
+    lo = max(float(x[0]) for x, _ in series.values())
+    hi = min(float(x[-1]) for x, _ in series.values())
+    if lo > hi:
+        return None
+    grid = np.unique(np.concatenate([x[(x >= lo) & (x <= hi)] for x, _ in series.values()]))
+    values = np.stack([y[np.searchsorted(x, grid, side="right") - 1] for x, y in series.values()])
+    point, ci = stratified_bootstrap(values, lambda s: np.mean(s, axis=-2), reps=reps, seed=seed)
+    return {
+        "x": grid.tolist(),
+        "mean": point.tolist(),
+        "ci95_low": ci[0].tolist(),
+        "ci95_high": ci[1].tolist(),
+        "seeds": sorted(series),
+        "n_seeds": len(series),
+        "per_seed": {str(s): {"x": x.tolist(), "y": y.tolist()} for s, (x, y) in sorted(series.items())},
+    }
+
+
+def threshold_time(run: Run, metric: str = THRESHOLD_METRIC, threshold: float = DEFAULT_THRESHOLD_M) -> dict[str, Any]:
+    """The run's first evaluation with ``metric <= threshold``: ``reached``, its ``timesteps`` and ``wall_time_s``."""
+    for e in run.evals:
+        if _finite(e.get(metric)) and float(e[metric]) <= threshold:
+            wall: Any = e.get("wall_time_s")
+            return {
+                "seed": run.seed,
+                "reached": True,
+                "timesteps": int(e["timesteps"]),
+                "wall_time_s": float(wall) if _finite(wall) else None,
+            }
+    last = run.evals[-1]
+    return {
+        "seed": run.seed,
+        "reached": False,
+        "timesteps": None,
+        "wall_time_s": None,
+        "last_timesteps": int(last["timesteps"]),
+        "last_value": float(last[metric]) if _finite(last.get(metric)) else None,
+    }
+
+
+def _median_or_none(values: Sequence[float | None]) -> float | None:
+    """Median counting ``None`` (never reached) as later than everything; ``None`` if that median is not reached."""
+    if not values:
+        return None
+    med = float(np.median([math.inf if v is None else v for v in values]))
+    return None if math.isinf(med) else med
+
+
+def threshold_summary(
+    runs: Sequence[Run], metric: str = THRESHOLD_METRIC, threshold: float = DEFAULT_THRESHOLD_M
+) -> dict[str, Any]:
+    """Per-seed threshold times of a group, how many seeds reached it and the medians (module docstring)."""
+    per_seed = [threshold_time(r, metric, threshold) for r in runs]
+    return {
+        "n_seeds": len(per_seed),
+        "n_reached": sum(p["reached"] for p in per_seed),
+        "median_timesteps": _median_or_none([p["timesteps"] for p in per_seed]),
+        "median_wall_time_s": _median_or_none([p["wall_time_s"] if p["reached"] else None for p in per_seed]),
+        "per_seed": per_seed,
+    }
+
+
+def learning_curves(
+    folders: Sequence[str | Path],
+    *,
+    metric: str = THRESHOLD_METRIC,
+    threshold: float = DEFAULT_THRESHOLD_M,
+    reps: int = 10_000,
+    bootstrap_seed: int = 0,
+    progress: bool = False,
+) -> dict[str, Any]:
+    """Read the runs of ``folders``, compute every curve and the threshold table; the JSON document.
+
+    Raises:
+        ValueError: no usable run, bad ``threshold`` or ``reps``.
+    """
+    from tqdm.auto import tqdm
+
+    if not (math.isfinite(threshold) and threshold > 0):
+        raise ValueError(f"--threshold must be a finite number > 0 [m], got {threshold}")
+    if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
+        raise ValueError(f"--reps must be an integer >= 1, got {reps}")
+    t0 = time.perf_counter()
+    found, skipped = find_runs(folders)
+    for s in skipped:
+        _say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
+    if not found:
+        where = ", ".join(map(str, folders))
+        raise ValueError(f"--runs: no run folder with an eval.json in {where}")
+    groups: dict[str, list[Run]] = {}
+    for r in found:
+        groups.setdefault(r.group, []).append(r)
+    _say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
+    curves: dict[str, Any] = {}
+    jobs = [(g, axis, m) for g in groups for axis in AXES for m in CURVE_METRICS]
+    bar = tqdm(jobs, desc="curves", unit="curve", file=sys.stderr, disable=not progress)
+    for g, axis, m in bar:
+        curves.setdefault(g, {}).setdefault(axis, {})[m] = curve(groups[g], axis, m, reps=reps, seed=bootstrap_seed)
+    return {
+        "protocol": {
+            "curve": "mean over training seeds of each seed's latest evaluation at or before x; drawn where every "
+            "seed has evaluations",
+            "interval": "pointwise 95 % percentile bootstrap over training seeds (seeds resampled with replacement)",
+            "reps": reps,
+            "bootstrap_seed": bootstrap_seed,
+            "threshold_metric": metric,
+            "threshold_m": threshold,
+            "threshold_rule": "first evaluation with metric <= threshold; median over all seeds, a seed that never "
+            "reached it counting as later than any that did",
+        },
+        "runs": [
+            {
+                "group": r.group,
+                "algo": r.algo,
+                "seed": r.seed,
+                "env_id": r.env_id,
+                "path": str(r.path),
+                "evaluations": len(r.evals),
+                "last_timesteps": int(r.evals[-1]["timesteps"]),
+            }
+            for r in found
+        ],
+        "skipped": skipped,
+        "curves": curves,
+        "threshold": {g: threshold_summary(rs, metric, threshold) for g, rs in groups.items()},
+        "wall_time_s": round(time.perf_counter() - t0, 3),
+    }
+
+
+# --------------------------------------------------------------------------- reports
+def _fmt(x: float | None, scale: float = 1.0, fmt: str = ".3g") -> str:
+    return "–" if x is None else f"{scale * x:{fmt}}"
+
+
+def _final(c: Mapping[str, Any] | None, scale: float) -> str:
+    if c is None:
+        return "–"
+    return f"{scale * c['mean'][-1]:.3g} [{scale * c['ci95_low'][-1]:.3g}, {scale * c['ci95_high'][-1]:.3g}]"
+
+
+def markdown_report(doc: Mapping[str, Any]) -> str:
+    """Markdown: the time-to-threshold table, the final values with their intervals, the skipped folders."""
+    p = doc["protocol"]
+    thr_mm = 1e3 * p["threshold_m"]
+    lines = [
+        "# Learning curves",
+        "",
+        f"Mean over training seeds; intervals: {p['interval']} ({p['reps']} replications). "
+        f"Threshold: first evaluation with `{p['threshold_metric']}` <= {thr_mm:g} mm; "
+        "median over all seeds (a seed that never reached it counts as later than any that did; "
+        "'not reached': fewer than half did).",
+        "",
+        f"| algorithm | seeds reaching {thr_mm:g} mm | median steps | median wall time [s] | per seed: steps |",
+        "|---|---|---|---|---|",
+    ]
+    for g, t in doc["threshold"].items():
+        per = ", ".join(
+            f"s{q['seed']}: {q['timesteps']}" if q["reached"] else f"s{q['seed']}: not by {q['last_timesteps']}"
+            for q in t["per_seed"]
+        )
+        med_steps = "not reached" if t["median_timesteps"] is None else f"{t['median_timesteps']:.0f}"
+        med_wall = "not reached" if t["median_wall_time_s"] is None else f"{t['median_wall_time_s']:.0f}"
+        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {med_steps} | {med_wall} | {per} |")
+    lines += [
+        "",
+        "Final values (last step every seed reached; mean [95 % interval]):",
+        "",
+        "| algorithm | seeds | step | H RMS [mm] | return |",
+        "|---|---|---|---|---|",
+    ]
+    for g, axes in doc["curves"].items():
+        h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
+        n = h["n_seeds"] if h else (ret["n_seeds"] if ret else 0)
+        step = _fmt(h["x"][-1] if h else (ret["x"][-1] if ret else None), fmt=".0f")
+        lines.append(f"| {g} | {n} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
+    lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
+    if doc["skipped"]:
+        lines += ["Skipped folders:", ""] + [f"- {s['path']}: {s['reason']}" for s in doc["skipped"]] + [""]
+    return "\n".join(lines)
+
+
+def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
+    """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from amigo_gym.io import atomic_save
+
+    fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
+        for i, (g, axes) in enumerate(doc["curves"].items()):
+            c = axes[axis][metric]
+            color = f"C{i}"
+            if c is None:
+                continue
+            for s in c["per_seed"].values():
+                ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
+            marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
+            seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
+            ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
+            ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
+        if metric == "h_rms_m":
+            ax.set_yscale("log")
+        ax.set_xlabel(AXES[axis])
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    p = doc["protocol"]
+    fig.suptitle(f"Learning curves against {AXES[axis]}")
+    fig.text(
+        0.5,
+        0.01,
+        f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({p['reps']} "
+        "replications); thin: each seed (latest evaluation at or before x).",
+        ha="center",
+        fontsize=8,
+    )
+    fig.tight_layout(rect=(0, 0.04, 1, 0.96))
+    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
+    plt.close(fig)
+
+
+def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:
+    """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png``; the paths."""
+    from amigo_gym.io import atomic_write, atomic_write_json
+
+    written = [out / "curves.json", out / "curves.md"]
+    atomic_write_json(written[0], doc, parents=True)
+    atomic_write(written[1], markdown_report(doc), parents=True)
+    if plots:
+        for axis, name in (("timesteps", "curves_steps.png"), ("wall_time_s", "curves_wall.png")):
+            plot_curves(doc, axis, out / name)
+            written.append(out / name)
+    return written
+
+
+# --------------------------------------------------------------------------- command line
+@dataclass(frozen=True)
+class CurvesSettings:
+    """Options of ``amigo-gym curves`` (the option of the same name, or its ``cli(flag)``); checked by
+    :func:`learning_curves`.
+
+    Attributes:
+        runs: folders of run folders, or run folders (with eval.json) [dir] (required).
+        out: output folder [dir].
+        metric: metric of the threshold.
+        threshold: tracking threshold [m], > 0.
+        reps: bootstrap replications of the bands [reps], >= 1.
+        bootstrap_seed: seed of the bootstrap [-].
+        plots: draw the plots; --no-plots: skip the plots.
+        progress: show a progress bar on a terminal; --no-progress: no progress bar.
+    """
+
+    runs: list[str]
+    out: str = "results/curves"
+    metric: str = field(default=THRESHOLD_METRIC, metadata=cli(choices=("h_rms_settled_m", "h_rms_m")))
+    threshold: float = DEFAULT_THRESHOLD_M
+    reps: int = 10_000
+    bootstrap_seed: int = 0
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym curves``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    a = parse_settings(
+        CurvesSettings, args, "amigo-gym curves", "Learning curves over training seeds, time to threshold."
+    )
+
+    def run() -> int:
+        doc = learning_curves(
+            a.runs,
+            metric=a.metric,
+            threshold=a.threshold,
+            reps=a.reps,
+            bootstrap_seed=a.bootstrap_seed,
+            progress=a.progress and sys.stderr.isatty(),
+        )
+        doc["command"] = "amigo-gym curves " + " ".join(args)
+        written = write_outputs(doc, Path(a.out), plots=a.plots)
+        print(markdown_report(doc), end="")
+        print("wrote " + ", ".join(map(str, written)))
+        return 0
+
+    return run_guarded(run, "amigo-gym curves")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

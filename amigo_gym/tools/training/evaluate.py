@@ -1,0 +1,729 @@
+"""Evaluate the analytic policies and trained agents on one fixed protocol; JSON, Markdown table, plots.
+
+Usage, the protocol, the agents and models read, the metrics and the output files: docs/baselines.md,
+"Reference: `amigo-gym evaluate`".
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from amigo_gym.data import pretrained_dir
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
+from amigo_gym.model.params import EnvParams
+from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.runs import trust_unverified
+from amigo_gym.tools.training.task_metrics import _rms
+
+__all__ = [
+    "Agent",
+    "EvalProtocol",
+    "EvaluateSettings",
+    "Trajectory",
+    "default_agents",
+    "evaluate_agents",
+    "find_models",
+    "load_agents",
+    "load_model",
+    "training_records",
+    "main",
+    "markdown_table",
+    "plot_trajectories",
+    "plot_wheels",
+    "rollout",
+    "steady_start_pose",
+    "summarize",
+]
+
+Array = NDArray[np.float64]
+ENV_ID = "AmigoBot-v0"
+PRETRAINED_DIR = pretrained_dir()
+ALGOS = ("ppo", "sac", "td3")
+SCENARIOS = ("nominal", "paper_start", "perturbed")
+SETTLED_BAND_M = 1e-3
+
+
+class Agent(Protocol):
+    """Anything with SB3's ``predict`` (SB3 models, :class:`amigo_gym.policies.analytic.AnalyticPolicy`)."""
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]: ...
+
+
+@dataclass(frozen=True)
+class EvalProtocol:
+    """The fixed evaluation protocol (written to the JSON as ``protocol``).
+
+    Attributes:
+        steps: steps per episode (default 400: 40 s at dt = 0.1 s, more than one lap).
+        perturbed_seeds: reset seeds of the perturbed scenario.
+        settle_time_s: start of the "settled" window of the ``*_settled`` metrics [s].
+        analytic_gain: feedback gain of the reference analytic policy [1/s].
+        scenarios: which scenarios to run.
+    """
+
+    steps: int = 400
+    perturbed_seeds: tuple[int, ...] = tuple(range(100, 110))
+    settle_time_s: float = 5.0
+    analytic_gain: float = 3.0
+    scenarios: tuple[str, ...] = SCENARIOS
+
+    def __post_init__(self) -> None:
+        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 1:
+            raise ValueError(f"EvalProtocol.steps must be an integer >= 1, got {self.steps!r}")
+        if not self.perturbed_seeds or any(not isinstance(s, int) or s < 0 for s in self.perturbed_seeds):
+            raise ValueError(
+                f"EvalProtocol.perturbed_seeds must be non-negative integers, got {self.perturbed_seeds!r}"
+            )
+        bad = [s for s in self.scenarios if s not in SCENARIOS]
+        if bad or not self.scenarios:
+            raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
+        from amigo_gym.model.params import check_range
+
+        check_range("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
+        check_range("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
+
+
+@dataclass
+class Trajectory:
+    """One episode, sampled after every step ``t = dt .. T`` (``T`` steps; index 0 is after the first action).
+
+    Attributes:
+        time: ``(T,)`` [s]. e: cross-track error of H ``(T,)`` [m]. h: H ``(T, 2)`` [m].
+        rates: applied wheel rates ``(T, 2)`` [rad/s]. angles: wheel angles ``(T, 2)`` [rad].
+        ref_rates: analytic reference rates on the agent's observations ``(T, 2)`` [rad/s].
+        arc: arc length of H's closest point, unwrapped ``(T,)`` [m]. ret: return. terminated: left the path.
+        h0: H at the start ``(2,)`` [m].
+    """
+
+    time: Array
+    e: Array
+    h: Array
+    rates: Array
+    angles: Array
+    ref_rates: Array
+    arc: Array
+    ret: float
+    terminated: bool
+    h0: Array = field(default_factory=lambda: np.zeros(2))
+
+
+def steady_start_pose(params: EnvParams) -> Array:
+    """Pose ``(x_A, y_A, beta)`` with H at the circle's start point in the closed-form steady state.
+
+    ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.model.kinematics.circle_steady_state`), A ``l3``
+    behind H.
+    """
+    from amigo_gym.model.kinematics import a_from_h, circle_steady_state
+    from amigo_gym.paths import make_path
+
+    path = make_path(params)
+    if params.path != "circle":
+        raise ValueError(f"the nominal scenario needs path='circle', got {params.path!r}")
+    ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction)
+    beta = float(path.tangent_angle(0.0)) - float(ss.heading_lag)
+    h = path.point(0.0)
+    return np.array([*a_from_h(h[0], h[1], math.cos(beta), math.sin(beta), params.robot.l3), beta])
+
+
+def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
+    """Run ``agent`` deterministically for up to ``steps`` steps after ``env.reset(**reset_kwargs)``."""
+    from amigo_gym.policies.analytic import analytic_wheel_rates
+
+    params: EnvParams = env.unwrapped.params
+    path = env.unwrapped.path
+    wmax = params.robot.max_wheel_rate
+    obs, info = env.reset(**reset_kwargs)
+    h0 = np.asarray(info["h_position"], dtype=np.float64)
+    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref_rates", "arc")}
+    ret, terminated = 0.0, False
+    s_prev = float(path.project(h0).s)
+    s_unwrapped = 0.0
+    for _ in range(steps):
+        action, _ = agent.predict(obs, deterministic=True)
+        ref = np.clip(analytic_wheel_rates(obs, params, gain), -wmax, wmax)
+        obs, reward, terminated, truncated, info = env.step(action)
+        ret += float(reward)
+        s = float(path.project(info["h_position"]).s)
+        ds = s - s_prev
+        if path.length < math.inf:  # closed circle: arc lengths wrap at one lap
+            ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
+        s_unwrapped += ds
+        s_prev = s
+        row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
+        for col, value in zip(cols.values(), (*row, ref, s_unwrapped), strict=True):
+            col.append(value)
+        if terminated or truncated:
+            break
+    arrays = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
+    for k in ("h", "rates", "angles", "ref_rates"):
+        arrays[k] = arrays[k].reshape(-1, 2)
+    return Trajectory(**arrays, ret=ret, terminated=bool(terminated), h0=h0)
+
+
+def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
+    """First time after which ``|e| <= band`` for the rest of the episode (``None`` if never / terminated)."""
+    if tr.terminated or tr.e.size == 0:
+        return None
+    outside = np.flatnonzero(np.abs(tr.e) > band)
+    if outside.size == 0:
+        return 0.0
+    last = int(outside[-1])
+    return None if last == tr.e.size - 1 else float(tr.time[last + 1])
+
+
+def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
+    """Pooled metrics of one (agent, scenario) (keys documented in the module docstring)."""
+    from amigo_gym.model.kinematics import circle_steady_state
+
+    ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
+    e = np.concatenate([t.e for t in trajs])
+    settled = [t.time >= proto.settle_time_s - 1e-9 for t in trajs]
+    e_set = np.concatenate([t.e[m] for t, m in zip(trajs, settled, strict=True)])
+    dev = np.concatenate([t.rates - t.ref_rates for t in trajs])
+    dev_ss = np.concatenate([t.rates[m] - ss_rates for t, m in zip(trajs, settled, strict=True)])
+    rets = np.array([t.ret for t in trajs])
+    st = [_settling_time(t) for t in trajs]
+    return {
+        "episodes": len(trajs),
+        "h_rms_m": _rms(e),
+        "h_rms_settled_m": _rms(e_set),
+        "h_max_m": float(np.abs(e).max()),
+        "h_max_settled_m": float(np.abs(e_set).max()) if e_set.size else float("nan"),
+        "settling_time_s": None if any(x is None for x in st) else float(np.mean([x for x in st if x is not None])),
+        "wheel_rate_dev_rms": _rms(dev),
+        "wheel_rate_dev_steady_rms": _rms(dev_ss),
+        "mean_return": float(rets.mean()),
+        "std_return": float(rets.std()),
+        "mean_length": float(np.mean([t.e.size for t in trajs])),
+        "terminated": int(sum(t.terminated for t in trajs)),
+        "laps": float(np.mean([t.arc[-1] / (2 * math.pi * params.radius) for t in trajs])),
+    }
+
+
+def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
+    """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
+    from amigo_gym.policies.analytic import AnalyticPolicy
+
+    return {
+        "analytic": AnalyticPolicy(params, gain=gain),
+        "analytic_ff": AnalyticPolicy(params, feedforward_only=True),
+    }
+
+
+@dataclass(frozen=True)
+class ModelRef:
+    """A trained model found by :func:`find_models`.
+
+    Attributes:
+        name: the agent's name in the results: the algorithm for ``<algo>.zip`` files (pretrained
+            layout), the run folder's name for a run written by ``amigo-gym train``.
+        algo: ``ppo``, ``sac`` or ``td3``.
+        model: the SB3 ``.zip``.
+        record: the training record beside it (``<algo>.json`` or the run's ``run.json``), if any.
+        vecnormalize: the ``VecNormalize`` statistics saved beside it (``vecnormalize.pkl``), if any.
+    """
+
+    name: str
+    algo: str
+    model: Path
+    record: Path | None = None
+    vecnormalize: Path | None = None
+
+
+def _run_algo(run_dir: Path) -> str:
+    """The algorithm a run folder's ``config.json`` names."""
+    cfg = run_dir / "config.json"
+    try:
+        algo = json.loads(cfg.read_text())["settings"]["algo"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
+    if algo not in ALGOS:
+        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
+    return str(algo)
+
+
+def _beside(model: Path, name: str) -> Path | None:
+    f = model.parent / name
+    return f if f.is_file() else None
+
+
+def _run_ref(run_dir: Path, model: Path | None = None) -> ModelRef:
+    model = model or run_dir / "model.zip"
+    return ModelRef(
+        run_dir.name, _run_algo(run_dir), model, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    )
+
+
+def _is_run(d: Path) -> bool:
+    return (d / "model.zip").is_file() and (d / "config.json").is_file()
+
+
+def find_models(path: str | os.PathLike[str]) -> list[ModelRef]:
+    """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
+
+    ``path`` may be a run folder (``model.zip`` with the ``config.json`` naming its algorithm), a
+    folder of run folders, a model ``.zip`` (a run's ``model.zip`` / ``best_model.zip``, or an
+    ``<algo>.zip``), or a folder of ``<algo>.zip`` files (``agents/pretrained``, ``train --export``).
+
+    Raises:
+        FileNotFoundError: ``path`` does not exist.
+        ValueError: it holds no model, or a model whose algorithm cannot be told.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"--models: no file or directory {p}")
+    if p.is_file():
+        if p.suffix != ".zip":
+            raise ValueError(f"--models: {p} is not a model .zip")
+        if p.stem in ALGOS:
+            return [ModelRef(p.stem, p.stem, p, _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl"))]
+        if (p.parent / "config.json").is_file():
+            return [_run_ref(p.parent, p)]
+        raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
+    if _is_run(p):
+        return [_run_ref(p)]
+    refs = [
+        ModelRef(a, a, p / f"{a}.zip", _beside(p / f"{a}.zip", f"{a}.json"))
+        for a in ALGOS
+        if (p / f"{a}.zip").is_file()
+    ]
+    refs += [_run_ref(d) for d in sorted(p.iterdir()) if d.is_dir() and _is_run(d)]
+    if not refs:
+        raise ValueError(
+            f"--models: no models in {p} (expected a run folder with model.zip and config.json, "
+            "folders of such runs, or <algo>.zip files)"
+        )
+    names = [r.name for r in refs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"--models: two models in {p} share a name: {sorted(names)}")
+    return refs
+
+
+class NormalizedAgent:
+    """A model trained on ``VecNormalize``d observations: normalizes each observation with the saved statistics."""
+
+    def __init__(self, model: Any, vecnormalize: Any) -> None:
+        self.model = model
+        self.vecnormalize = vecnormalize
+
+    @property
+    def observation_space(self) -> Any:
+        """The model's observation space (the benchmark checks it against a scenario's)."""
+        return self.model.observation_space
+
+    def predict(
+        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
+    ) -> tuple[Any, Any]:
+        obs = self.vecnormalize.normalize_obs(np.asarray(observation, dtype=np.float32))
+        action, new_state = self.model.predict(
+            obs, state=state, episode_start=episode_start, deterministic=deterministic
+        )
+        return action, new_state
+
+
+def load_model(ref: ModelRef) -> Agent:
+    """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any).
+
+    Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code, so load only files you trust
+    (docs/reliability.md). Every file is checked before it is unpickled: the zip against the ``sha256`` of the
+    record beside it (``<algo>.json`` or ``run.json``), the statistics against the record's
+    ``files["vecnormalize.pkl"]``. A record that lists ``files`` but not the statistics, or any mismatch, is
+    refused; the shipped pretrained models (``agents/pretrained``) must have every hash. A file without a
+    recorded hash is loaded with a warning naming it, once (:func:`amigo_gym.tools.runs.check_pickle`; none with
+    ``--trust-unverified``).
+
+    Raises:
+        CorruptFileError: a sha256 mismatch, a file the record does not cover, or a file that is not a
+            loadable model (one line naming it).
+    """
+    import pickle
+
+    from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+
+    d = ref.model.parent
+    from stable_baselines3 import PPO, SAC, TD3
+
+    shipped = d.resolve() == PRETRAINED_DIR.resolve()
+    classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
+    record = read_json(ref.record) if ref.record is not None else None
+    if record is not None and not isinstance(record, dict):
+        raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
+    # a run's run.json records the sha256 of its final model.zip, and under "files" of every file beside it
+    files = record.get("files") if record is not None else None
+    digest = None
+    if isinstance(files, dict) and ref.record is not None and ref.record.name == "run.json":
+        digest = files.get(ref.model.name)
+    elif record is not None and (ref.record is None or ref.record.name != "run.json" or ref.model.name == "model.zip"):
+        digest = record.get("sha256")
+    if digest is None and shipped:
+        raise CorruptFileError(f"{d / (ref.algo + '.json')}: no sha256 for the shipped model {ref.model.name}")
+    stats_digest = None
+    if ref.vecnormalize is not None:  # checked now, before anything is unpickled
+        if isinstance(files, dict):
+            stats_digest = files.get(ref.vecnormalize.name)
+            if stats_digest is None:
+                raise CorruptFileError(
+                    f"{ref.vecnormalize}: not covered by the hashes of {ref.record} (its 'files' do not list it); "
+                    "refusing to unpickle it"
+                )
+        elif shipped:
+            raise CorruptFileError(f"{ref.vecnormalize}: no sha256 for the shipped statistics in {ref.record}")
+        check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record))
+    check_pickle(ref.model, None if digest is None else str(digest), str(ref.record))
+    with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
+        model = classes[ref.algo].load(ref.model, device="cpu")
+    if ref.vecnormalize is None:
+        agent: Agent = model
+        return agent
+    with corrupt_errors(ref.vecnormalize, "VecNormalize statistics"), open(ref.vecnormalize, "rb") as f:
+        stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
+    stats.training = False
+    return NormalizedAgent(model, stats)
+
+
+def load_agents(models: str | os.PathLike[str]) -> dict[str, Agent]:
+    """Load every model :func:`find_models` finds at ``models``, by name."""
+    return {ref.name: load_model(ref) for ref in find_models(models)}
+
+
+def training_records(models: str | os.PathLike[str]) -> dict[str, Any]:
+    """The training records beside the models :func:`find_models` finds, by agent name."""
+    return {r.name: json.loads(r.record.read_text()) for r in find_models(models) if r.record is not None}
+
+
+def evaluate_agents(
+    agents: dict[str, Agent], proto: EvalProtocol | None = None
+) -> tuple[list[dict[str, Any]], dict[str, dict[str, list[Trajectory]]]]:
+    """Roll every agent out on every scenario of ``proto``.
+
+    Returns:
+        ``(results, trajectories)``: one result dict per (agent, scenario) (``agent``, ``scenario`` and
+        the metrics of :func:`summarize`), and ``trajectories[agent][scenario]`` the episodes.
+    """
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
+
+    proto = proto or EvalProtocol()
+    env = gym.make(ENV_ID, max_episode_steps=proto.steps)
+    params: EnvParams = env.unwrapped.params  # type: ignore[attr-defined]
+    starts: dict[str, list[dict[str, Any]]] = {
+        "nominal": [{"options": {"pose": steady_start_pose(params)}}],
+        "paper_start": [{"options": {"pose": np.array([-params.robot.l3, 0.0, 0.0])}}],
+        "perturbed": [{"seed": s} for s in proto.perturbed_seeds],
+    }
+    results: list[dict[str, Any]] = []
+    trajs: dict[str, dict[str, list[Trajectory]]] = {}
+    for name, agent in agents.items():
+        trajs[name] = {}
+        for sc in proto.scenarios:
+            eps = [rollout(agent, env, kw, proto.steps, proto.analytic_gain) for kw in starts[sc]]
+            trajs[name][sc] = eps
+            results.append({"agent": name, "scenario": sc, **summarize(eps, params, proto)})
+    env.close()
+    return results, trajs
+
+
+def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
+    """The protocol as written to the JSON (with the env settings and the start poses)."""
+    return {
+        "env_id": ENV_ID,
+        "env_params": json_safe(asdict(params)),
+        "steps": proto.steps,
+        "duration_s": proto.steps * params.dt,
+        "lap_time_s": params.lap_time,
+        "scenarios": {
+            "nominal": {
+                "start_pose": steady_start_pose(params).tolist(),
+                "note": "H on the circle, steady heading lag",
+            },
+            "paper_start": {"start_pose": [-params.robot.l3, 0.0, 0.0], "note": "H at the origin, beta = 0"},
+            "perturbed": {"seeds": list(proto.perturbed_seeds), "note": "env's random start (reset(seed=s))"},
+        },
+        "run_scenarios": list(proto.scenarios),
+        "settle_time_s": proto.settle_time_s,
+        "settled_band_m": SETTLED_BAND_M,
+        "analytic_gain": proto.analytic_gain,
+        "wheel_rate_reference": (
+            f"the analytic policy (feedback gain k = {proto.analytic_gain:g}/s) on the agent's own observations"
+        ),
+        "deterministic": True,
+    }
+
+
+# --------------------------------------------------------------------------- table and plots
+COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
+    ("agent", "agent", str),
+    ("scenario", "scenario", str),
+    ("h_rms_m", "H RMS [mm]", lambda v: f"{v * 1e3:.3f}"),
+    ("h_rms_settled_m", "H RMS t≥5 s [mm]", lambda v: f"{v * 1e3:.3f}"),
+    ("h_max_m", "H max [mm]", lambda v: f"{v * 1e3:.2f}"),
+    ("settling_time_s", "settle ≤1 mm [s]", lambda v: "never" if v is None else f"{v:.1f}"),
+    ("wheel_rate_dev_rms", "rate dev RMS [rad/s]", lambda v: f"{v:.3f}"),
+    ("wheel_rate_dev_steady_rms", "rate dev steady [rad/s]", lambda v: f"{v:.3f}"),
+    ("mean_return", "return", lambda v: f"{v:.1f}"),
+    ("terminated", "left path", str),
+)
+
+
+def _missing(v: Any) -> bool:
+    """A metric that does not exist: ``None`` (as read back from JSON) or NaN."""
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+def markdown_table(results: Sequence[dict[str, Any]]) -> str:
+    """The results as a Markdown table (one row per agent and scenario)."""
+    lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
+    for r in results:
+        cells = ("n/a" if _missing(r[key]) and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _save_fig(fig: Any, path: Path) -> None:
+    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=110), path, parents=True)
+
+
+def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
+    """H's path (whole circle and a zoom on the start, first perturbed episode) and ``|e|`` over time.
+
+    Top: H's trajectory of every agent against the circle (eq. 6), left the whole lap, right the first
+    0.25 m where the perturbed start's transient happens. Bottom: ``|e(t)|`` (log scale) for the nominal
+    and the first perturbed start; the dotted line is the 1 mm band of ``settling_time_s``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from amigo_gym.paths import make_path
+
+    have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
+    top = "perturbed" if "perturbed" in have else sorted(have)[0]
+    fig, axes = plt.subplots(2, 2, figsize=(12.0, 10.0))
+    circle = make_path(params).point(np.linspace(0.0, 2 * math.pi * params.radius, 1441))
+    for j, zoom in enumerate((False, True)):
+        ax = axes[0, j]
+        ax.plot(circle[:, 0], circle[:, 1], color="0.6", lw=6 if zoom else 4, alpha=0.4, label="path (eq. 6)")
+        for name, per in trajs.items():
+            tr = per[top][0]
+            h = np.vstack([tr.h0, tr.h])
+            ax.plot(h[:, 0], h[:, 1], lw=1.2, marker="." if zoom else None, ms=3, label=name)
+        if zoom:
+            ax.set_xlim(-0.03, 0.25)
+            ax.set_ylim(-0.025, 0.04)
+            ax.set_title(f"H's trajectory near the start ({top} start)")
+        else:
+            ax.set_aspect("equal")
+            ax.set_title(f"H's trajectory, {top} start")
+        ax.set_xlabel("x0 [m]")
+        ax.set_ylabel("y0 [m]")
+        ax.legend(fontsize=8, loc="center" if not zoom else "upper left")
+    for j, sc in enumerate(s for s in ("nominal", "perturbed") if s in have):
+        ax = axes[1, j]
+        for name, per in trajs.items():
+            tr = per[sc][0]
+            ax.semilogy(tr.time, np.maximum(np.abs(tr.e), 1e-12), lw=1.0, label=name)
+        ax.axhline(SETTLED_BAND_M, color="k", ls=":", lw=0.8)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("|cross-track error of H| [m]")
+        ax.set_title(f"tracking error, {sc} start")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save_fig(fig, path)
+    plt.close(fig)
+
+
+def plot_wheels(
+    trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path, scenario: str = "perturbed"
+) -> None:
+    """Each agent's wheel angles and rates over time against the analytic policy's from the same start.
+
+    One row per agent other than ``analytic`` (paper's Figs. 2–5 with the agent in place of the rig):
+    left, ``alpha1, alpha2`` [rad] of the agent (thin) and of the analytic policy (wide, pale); middle,
+    ``alpha1dot, alpha2dot`` [rad/s] over the first 10 s with the closed-form steady rates dotted;
+    right, the agent's wheel angles minus the analytic policy's [rad] over the whole episode.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from amigo_gym.model.kinematics import circle_steady_state
+
+    if "analytic" not in trajs:
+        raise ValueError("plot_wheels needs the 'analytic' agent as the reference")
+    ref = trajs["analytic"][scenario][0]
+    others = [a for a in trajs if a != "analytic"] or ["analytic"]
+    ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
+    fig, axes = plt.subplots(len(others), 3, figsize=(16.0, 2.9 * len(others)), squeeze=False)
+    for i, name in enumerate(others):
+        tr = trajs[name][scenario][0]
+        n = min(tr.time.size, ref.time.size)
+        ax = axes[i, 0]
+        for k, c in ((0, "C0"), (1, "C3")):
+            ax.plot(ref.time, ref.angles[:, k], color=c, lw=3, alpha=0.35, label=f"alpha{k + 1} analytic")
+            ax.plot(tr.time, tr.angles[:, k], color=c, lw=1.0, label=f"alpha{k + 1} {name}")
+        ax.set_ylabel("wheel angle [rad]")
+        ax.set_title(f"{name}: wheel angles ({scenario} start)")
+        ax.legend(fontsize=7, ncol=2)
+        ax = axes[i, 1]
+        for k, c in ((0, "C0"), (1, "C3")):
+            ax.step(
+                ref.time, ref.rates[:, k], where="pre", color=c, lw=3, alpha=0.35, label=f"alpha{k + 1}dot analytic"
+            )
+            ax.step(tr.time, tr.rates[:, k], where="pre", color=c, lw=1.0, label=f"alpha{k + 1}dot {name}")
+            ax.axhline(ss[k], color=c, ls=":", lw=0.8)
+        ax.set_xlim(0.0, 10.0)
+        ax.set_ylabel("wheel rate [rad/s]")
+        ax.set_title(f"{name}: wheel rates, first 10 s (dotted: steady state)")
+        ax.legend(fontsize=7, ncol=2)
+        ax = axes[i, 2]
+        for k, c in ((0, "C0"), (1, "C3")):
+            ax.plot(tr.time[:n], tr.angles[:n, k] - ref.angles[:n, k], color=c, lw=1.0, label=f"alpha{k + 1}")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel("angle minus analytic [rad]")
+        ax.set_title(f"{name}: wheel angles minus the analytic policy's")
+        ax.legend(fontsize=7)
+    for ax in axes[-1]:
+        ax.set_xlabel("t [s]")
+    fig.tight_layout()
+    _save_fig(fig, path)
+    plt.close(fig)
+
+
+# --------------------------------------------------------------------------- files
+def write_outputs(
+    results: list[dict[str, Any]],
+    trajs: dict[str, dict[str, list[Trajectory]]],
+    proto: EvalProtocol,
+    out: Path,
+    json_path: Path,
+    extra: dict[str, Any] | None = None,
+    plots: bool = True,
+    markdown_path: Path | None = None,
+) -> dict[str, Any]:
+    """Write the JSON, the Markdown table (``markdown_path``, default ``out/eval.md``) and the figures.
+
+    Returns:
+        the JSON document.
+    """
+    params = EnvParams()
+    doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
+    atomic_write_json(json_path, doc, parents=True)
+    atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
+    if plots:
+        plot_trajectories(trajs, params, out / "eval_trajectories.png")
+        plot_wheels(trajs, params, out / "eval_wheels.png")
+    return doc
+
+
+def one_torch_thread() -> None:
+    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, whose forward pass is
+    fastest on one thread; more threads spin against the environment and other processes for the cores (on a
+    busy 2-core machine ``benchmark --quick`` took 265 s with torch's default threads, most of it in ``linear``).
+    The evaluating commands (evaluate, compare, benchmark) call it; ``train --threads`` does the same for
+    training."""
+    try:
+        import torch
+    except ImportError:
+        return
+    torch.set_num_threads(1)
+
+
+#: evaluate's own default output folder (``amigo-gym compare`` writes to ``results``)
+DEFAULT_OUT = "results/evaluate"
+
+
+@dataclass(frozen=True)
+class EvaluateSettings:
+    """Options of ``amigo-gym evaluate``, each the option of the same name unless its ``cli(flag)`` names one.
+
+    Attributes:
+        models: what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of <algo>.zip
+            [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs its code,
+            so pass only files you trust; the shipped ones are checked against their sha256.
+        out: directory for eval.md and the plots [dir]; a folder holding another command's output set
+            (manifest.json, e.g. compare's) is refused unless --force.
+        force: write into a folder that holds another command's files.
+        json: JSON file [file] (default: <out>/results.json).
+        markdown: Markdown table file [file] (default: <out>/eval.md).
+        steps: steps per episode [steps] (dt = 0.1 s).
+        seeds: number of perturbed starts, seeds 100.. [episodes], >= 1.
+        load_models: evaluate the trained models too; --no-models: only the analytic policies.
+        plots: draw the figures; --no-plots: skip the figures.
+        trust_unverified: load model zips and statistics without a recorded sha256 without the warning (they are
+            pickles: they run code).
+    """
+
+    models: str | None = None
+    out: str = DEFAULT_OUT
+    force: bool = False
+    json: str | None = None
+    markdown: str | None = None
+    steps: int = 400
+    seeds: int = 10
+    load_models: bool = field(default=True, metadata=cli("--no-models"))
+    plots: bool = field(default=True, metadata=cli("--no-plots"))
+    trust_unverified: bool = False
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value."""
+        if self.seeds < 1:
+            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym evaluate``."""
+    a = parse_settings(
+        EvaluateSettings,
+        argv,
+        "amigo-gym evaluate",
+        "Evaluate analytic and trained agents (fixed protocol).",
+    )
+    if a.trust_unverified:
+        trust_unverified()
+
+    def run() -> int:
+        one_torch_thread()
+        proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
+        agents = default_agents(EnvParams(), proto.analytic_gain)
+        training: dict[str, Any] = {}
+        if a.load_models:
+            models = a.models if a.models is not None else PRETRAINED_DIR
+            refs = find_models(models)
+            agents.update({ref.name: load_model(ref) for ref in refs})
+            training = {r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None}
+        results, trajs = evaluate_agents(agents, proto)
+        out = Path(a.out)
+        if (out / "manifest.json").is_file() and not a.force:
+            raise FileExistsError(
+                f"--out {out} holds another command's output set (manifest.json, e.g. amigo-gym compare's); "
+                f"evaluate would overwrite its results.json, eval.md and plots: choose another --out "
+                f"(default {DEFAULT_OUT}) or pass --force"
+            )
+        json_path = Path(a.json) if a.json else out / "results.json"
+        md_path = Path(a.markdown) if a.markdown else out / "eval.md"
+        extra = {"training": training} if training else None
+        write_outputs(results, trajs, proto, out, json_path, extra, plots=a.plots, markdown_path=md_path)
+        print(markdown_table(results), end="")
+        print(f"wrote {json_path}, {md_path}" + (f", {out}/eval_*.png" if a.plots else ""))
+        return 0
+
+    return run_guarded(run, "amigo-gym evaluate")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,332 @@
+"""rl-baselines3-zoo hyperparameter files for ``amigo-gym train``: read, check, turn into SB3 arguments.
+
+The files are rl-zoo's format (the mapping under the key ``AmigoBot-v0``), with the idioms users copy
+from rl-zoo: a string ``policy_kwargs: "dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` (parsed
+with :mod:`ast`, never evaluated: only literals, lists, tuples, dicts, ``dict(...)`` and the names of
+:data:`TORCH_NAMES` are allowed), ``normalize: true`` or a mapping / string of ``VecNormalize``
+keywords, ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``, and ``lin_<x>`` linear
+schedules for ``learning_rate`` and ``clip_range``. Every other key must be a keyword argument of
+the algorithm's SB3 class; unknown keys are refused in one line that lists them (``ValueError``), so
+that ``train`` can check a file before it writes anything.
+
+May import the standard library and numpy at module level; PyYAML, torch and stable-baselines3 are
+imported inside the functions that need them.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from amigo_gym.model.params import check_real
+
+__all__ = [
+    "ENV_ID",
+    "META_KEYS",
+    "TORCH_NAMES",
+    "Hyperparams",
+    "check_filter_alpha",
+    "load_hyperparams",
+    "parse_hyperparams",
+    "parse_python_literal",
+]
+
+ENV_ID = "AmigoBot-v0"
+
+#: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.tools.training.sb3_lowpass.POLICY_NAME`)
+LOWPASS_POLICY = "LowPassMlpPolicy"
+#: keys of the file that are not keyword arguments of the algorithm class
+META_KEYS = ("n_timesteps", "n_envs", "policy", "normalize", "noise_type", "noise_std", "normalize_kwargs")
+
+#: keyword arguments of the algorithm class that a file may not set (train sets them, or they need objects)
+RESERVED = (
+    "policy",
+    "env",
+    "seed",
+    "device",
+    "verbose",
+    "tensorboard_log",
+    "_init_setup_model",
+    "action_noise",
+    "replay_buffer_class",
+    "rollout_buffer_class",
+)
+
+#: the names a ``policy_kwargs`` string may use, as ``torch.<attribute path>``; written bare, or
+#: behind ``nn.``, ``th.nn.``, ``torch.nn.`` (activations) or ``optim.``, ``th.optim.``, ``torch.optim.``
+TORCH_NAMES: dict[str, str] = {
+    **{a: f"nn.{a}" for a in ("ReLU", "Tanh", "ELU", "LeakyReLU", "SiLU", "GELU", "Sigmoid", "Softplus", "Identity")},
+    **{o: f"optim.{o}" for o in ("Adam", "AdamW", "RMSprop", "SGD")},
+}
+
+_PREFIXES = ("", "nn.", "th.nn.", "torch.nn.", "optim.", "th.optim.", "torch.optim.")
+
+
+def _torch_object(name: str) -> Any:
+    """The torch class a ``policy_kwargs`` name stands for (``ValueError`` if it is not in :data:`TORCH_NAMES`)."""
+    for prefix in _PREFIXES:
+        if name.startswith(prefix) and name[len(prefix) :] in TORCH_NAMES:
+            target = TORCH_NAMES[name[len(prefix) :]]
+            if prefix and prefix.rstrip(".").split(".")[-1] != target.split(".")[0]:
+                continue  # nn.Adam or optim.ReLU
+            import torch
+
+            obj: Any = torch
+            for part in target.split("."):
+                obj = getattr(obj, part)
+            return obj
+    allowed = ", ".join(f"nn.{k}" if v.startswith("nn.") else f"optim.{k}" for k, v in TORCH_NAMES.items())
+    raise ValueError(f"policy_kwargs: unknown name {name!r}; allowed: {allowed}")
+
+
+def _dotted(node: ast.expr) -> str | None:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        base = _dotted(node.value)
+        return None if base is None else f"{base}.{node.attr}"
+    return None
+
+
+def parse_python_literal(text: str, what: str = "policy_kwargs") -> Any:
+    """Parse an rl-zoo style Python expression safely: literals, lists, tuples, dicts, ``dict(k=v)``, torch names.
+
+    Nothing is evaluated: the expression's syntax tree is walked and only the node types above are
+    accepted; a name such as ``nn.ReLU`` becomes the torch class it names (:data:`TORCH_NAMES`).
+
+    Raises:
+        ValueError: a syntax error or any other construct (a call of something other than ``dict``,
+            an unknown name, an operator other than a leading minus).
+    """
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        raise ValueError(f"{what}: cannot parse {text!r}: {exc.msg}") from None
+
+    def walk(node: ast.expr) -> Any:
+        if isinstance(node, ast.Constant) and isinstance(node.value, int | float | str | bool | type(None)):
+            return node.value
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+            v = walk(node.operand)
+            if isinstance(v, bool) or not isinstance(v, int | float):
+                raise ValueError(f"{what}: a sign applies to numbers only, in {text!r}")
+            return -v if isinstance(node.op, ast.USub) else v
+        if isinstance(node, ast.List):
+            return [walk(e) for e in node.elts]
+        if isinstance(node, ast.Tuple):
+            return tuple(walk(e) for e in node.elts)
+        if isinstance(node, ast.Dict):
+            if any(k is None for k in node.keys):
+                raise ValueError(f"{what}: ** is not allowed in {text!r}")
+            return {walk(k): walk(v) for k, v in zip(node.keys, node.values, strict=True) if k is not None}
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict":
+            if node.args or any(k.arg is None for k in node.keywords):
+                raise ValueError(f"{what}: write dict(key=value, ...) in {text!r}")
+            return {str(k.arg): walk(k.value) for k in node.keywords}
+        name = _dotted(node)
+        if name is not None:
+            if name in ("True", "False", "None"):
+                return {"True": True, "False": False, "None": None}[name]
+            return _torch_object(name)
+        raise ValueError(f"{what}: {ast.unparse(node)!r} is not allowed (only literals, lists, dicts, torch names)")
+
+    return walk(tree.body)
+
+
+def _schedule(key: str, value: Any) -> float | Callable[[float], float]:
+    """A number, or ``lin_<x>``: linear from ``x`` at the start to 0 at the end (``progress`` 1 -> 0)."""
+    if isinstance(value, bool):
+        raise ValueError(f"{key} must be a number or 'lin_<x>', got {value!r}")
+    if isinstance(value, int | float):
+        return float(value)
+    if isinstance(value, str):
+        text = value.strip()
+        try:
+            if text.startswith("lin_"):
+                start = float(text[4:])
+                return _Linear(start)
+            return float(text)
+        except ValueError:
+            pass
+    raise ValueError(f"{key} must be a number or 'lin_<x>', got {value!r}")
+
+
+@dataclass(frozen=True)
+class _Linear:
+    """rl-zoo's ``lin_<x>``: ``progress_remaining * x`` (picklable, so SB3 can save the model)."""
+
+    start: float
+
+    def __call__(self, progress_remaining: float) -> float:
+        return progress_remaining * self.start
+
+
+@dataclass
+class Hyperparams:
+    """A checked hyperparameter file.
+
+    Attributes:
+        raw: the ``AmigoBot-v0`` mapping as read (written to ``config.json``).
+        n_timesteps: the file's ``n_timesteps`` (``None`` if absent).
+        n_envs: the file's ``n_envs`` (``None`` if absent).
+        policy: the policy name: ``MlpPolicy`` (default), or ``LowPassMlpPolicy`` (TD3 with the low-pass action
+            parameterisation, :mod:`amigo_gym.tools.training.sb3_lowpass`; ``policy_kwargs.filter_alpha`` in (0, 1]).
+        normalize: ``VecNormalize`` keywords, or ``None`` for no normalisation.
+        kwargs: keyword arguments of the algorithm class (``policy_kwargs`` parsed, schedules made),
+            without the action noise (:meth:`action_noise` makes it for the action size).
+    """
+
+    raw: dict[str, Any]
+    n_timesteps: int | None = None
+    n_envs: int | None = None
+    policy: str = "MlpPolicy"
+    normalize: dict[str, Any] | None = None
+    noise_type: str | None = None
+    noise_std: float = 0.1
+    kwargs: dict[str, Any] = field(default_factory=dict)
+
+    def action_noise(self, n_actions: int) -> Any:
+        """The SB3 action noise of ``noise_type`` (``None`` without one)."""
+        if self.noise_type is None:
+            return None
+        from stable_baselines3.common.noise import NormalActionNoise, OrnsteinUhlenbeckActionNoise
+
+        mean, sigma = np.zeros(n_actions), self.noise_std * np.ones(n_actions)
+        if self.noise_type == "normal":
+            return NormalActionNoise(mean, sigma)
+        return OrnsteinUhlenbeckActionNoise(mean, sigma)
+
+
+def _algo_keywords(algo: str) -> set[str]:
+    from stable_baselines3 import PPO, SAC, TD3
+
+    cls: type = {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
+    return set(inspect.signature(cls).parameters) - {"self", *RESERVED}
+
+
+def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
+    if isinstance(value, str):
+        text = value.strip().lower()
+        value = text == "true" if text in ("true", "false") else parse_python_literal(value, "normalize")
+    if value is None or value is False:
+        return None
+    kw: dict[str, Any] = {}
+    if isinstance(value, Mapping):
+        allowed = {"norm_obs", "norm_reward", "clip_obs", "clip_reward", "gamma", "epsilon"}
+        bad = sorted(str(k) for k in value if k not in allowed)
+        if bad:
+            raise ValueError(f"normalize: unknown key(s) {', '.join(bad)}; allowed: {', '.join(sorted(allowed))}")
+        kw = dict(value)
+    elif value is not True:
+        raise ValueError(f"normalize must be true, false or a mapping of VecNormalize keywords, got {value!r}")
+    if gamma is not None:
+        kw.setdefault("gamma", float(gamma))  # as rl-zoo: the reward normalisation discounts like the agent
+    return kw
+
+
+def check_filter_alpha(value: object, owner: str = "policy_kwargs") -> float:
+    """The low-pass filter factor ``alpha`` of :data:`LOWPASS_POLICY` as a float, checked to be a finite real
+    number in (0, 1] (``a = p + alpha (u - p)``: 1 is no filter, 0 would freeze the command).
+
+    Raises:
+        ValueError: one line ``<owner>.filter_alpha must be a ... number in (0, 1], got <value>`` (also for
+            ``None``, ``bool``, strings, NaN and inf).
+    """
+    return check_real(owner, "filter_alpha", value, 0.0, 1.0, low_open=True)
+
+
+def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
+    """Check the ``AmigoBot-v0`` mapping of a file for ``algo`` and turn it into :class:`Hyperparams`.
+
+    Raises:
+        ValueError: one line: the unknown keys (all of them), or the first bad value.
+    """
+    allowed = _algo_keywords(algo) | set(META_KEYS)
+    unknown = sorted(str(k) for k in hp if k not in allowed)
+    if unknown:
+        raise ValueError(
+            f"{where}: unknown key(s) for {algo}: {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})"
+        )
+    out = Hyperparams(raw=dict(hp))
+    for name in ("n_timesteps", "n_envs"):
+        v = hp.get(name)
+        if v is not None:
+            if isinstance(v, float) and v.is_integer():
+                v = int(v)  # rl-zoo files often write 1e6
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ValueError(f"{where}: {name} must be an integer >= 1, got {v!r}")
+            setattr(out, name, v)
+    policy = hp.get("policy", "MlpPolicy")
+    if policy == LOWPASS_POLICY:
+        if algo != "td3":
+            raise ValueError(f"{where}: policy {LOWPASS_POLICY} is for td3, not {algo}")
+        pk0 = hp.get("policy_kwargs")
+        pk0 = parse_python_literal(pk0) if isinstance(pk0, str) else pk0
+        check_filter_alpha(pk0.get("filter_alpha") if isinstance(pk0, Mapping) else None, f"{where}: policy_kwargs")
+        if isinstance(pk0, Mapping) and "prev_index" in pk0:
+            raise ValueError(f"{where}: policy_kwargs.prev_index comes from the env's observation, not the file")
+        out.policy = LOWPASS_POLICY
+    elif policy != "MlpPolicy":
+        raise ValueError(
+            f"{where}: policy must be MlpPolicy (the observation is a vector) or {LOWPASS_POLICY} (td3), got {policy!r}"
+        )
+    normalize = hp.get("normalize", hp.get("normalize_kwargs"))
+    out.normalize = _normalize(normalize, hp.get("gamma"))
+    noise = hp.get("noise_type")
+    if noise is not None:
+        if algo == "ppo":
+            raise ValueError(f"{where}: noise_type applies to sac and td3, not ppo")
+        if noise not in ("normal", "ornstein-uhlenbeck"):
+            raise ValueError(f"{where}: noise_type must be 'normal' or 'ornstein-uhlenbeck', got {noise!r}")
+        out.noise_type = str(noise)
+        std = hp.get("noise_std", 0.1)
+        if isinstance(std, bool) or not isinstance(std, int | float) or not std >= 0:
+            raise ValueError(f"{where}: noise_std must be a number >= 0, got {std!r}")
+        out.noise_std = float(std)
+    elif "noise_std" in hp:
+        raise ValueError(f"{where}: noise_std without noise_type")
+    kw = {k: v for k, v in hp.items() if k not in META_KEYS}
+    for key in ("learning_rate", "clip_range", "clip_range_vf"):
+        if key in kw and kw[key] is not None:
+            kw[key] = _schedule(key, kw[key])
+    pk = kw.get("policy_kwargs")
+    if isinstance(pk, str):
+        pk = parse_python_literal(pk)
+    if pk is not None:
+        if not isinstance(pk, Mapping):
+            raise ValueError(f"{where}: policy_kwargs must be a mapping, got {pk!r}")
+        pk = dict(pk)
+        for key in ("activation_fn", "optimizer_class"):
+            if isinstance(pk.get(key), str):
+                pk[key] = _torch_object(pk[key])
+        kw["policy_kwargs"] = pk
+    if isinstance(kw.get("train_freq"), list):
+        kw["train_freq"] = tuple(kw["train_freq"])
+    out.kwargs = kw
+    return out
+
+
+def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict[str, Any]:
+    """The ``env_id`` mapping (``AmigoBot-v0`` by default) of an rl-zoo style YAML file (unchecked; see
+    :func:`parse_hyperparams`).
+
+    Raises:
+        ValueError: the file is not YAML or has no ``env_id`` mapping.
+        FileNotFoundError: no such file.
+    """
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as f:
+            doc = yaml.safe_load(f)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    if not isinstance(doc, dict) or env_id not in doc or not isinstance(doc[env_id], dict):
+        raise ValueError(f"{path}: expected a mapping with the key {env_id!r}")
+    return dict(doc[env_id])

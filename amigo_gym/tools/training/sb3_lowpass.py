@@ -1,0 +1,145 @@
+r"""TD3 with the low-pass action parameterisation inside its actor (``policy: LowPassMlpPolicy``).
+
+The fast PPO's smoothest parameterisation (:func:`amigo_gym.policies.learned.env_action`, docs/baselines.md,
+"Smoothness") for SB3's TD3: the actor's network gives a target ``u = tanh(mlp(o))`` in the normalised action
+units, and the action is
+
+.. math::  a = p + \alpha\,(u - p),
+
+``p`` ``(N, 2)`` the previous command read from the observation (``previous_command_1``, ``_2`` of
+AmigoBot-v1, normalised, in [-1, 1]) and ``alpha`` in (0, 1] the filter factor; the step-to-step change of the
+command is ``|a - p| = alpha |u - p|``, and ``a`` stays in [-1, 1] since ``p`` and ``u`` do. ``alpha = 1`` is
+SB3's actor. The filter is part of the actor's forward pass, so:
+
+* the critic learns ``Q(o, a)`` of the action the env receives, and the deterministic policy gradient flows
+  through the filter (``da/du = alpha``);
+* the saved SB3 zip *is* the filtered policy: ``TD3.load`` (and so :func:`amigo_gym.policies.load_pretrained`,
+  ``amigo-gym evaluate`` and ``amigo-gym benchmark``) runs it without knowing of the filter; the factor and the
+  observation indices are ``policy_kwargs`` saved in the zip.
+
+Exploration noise is added by SB3 after the actor (on ``a``), as for plain TD3; target policy smoothing adds its
+noise to the target actor's ``a`` likewise.
+
+Imports torch and stable-baselines3 (an edge module of the training layer, like :mod:`~.sb3_vec`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import torch as th
+from gymnasium import spaces
+from stable_baselines3.td3.policies import Actor, TD3Policy
+
+from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY as POLICY_NAME
+from amigo_gym.tools.training.hyperparams import check_filter_alpha
+
+__all__ = ["POLICY_NAME", "LowPassActor", "LowPassTD3Policy", "policy_for", "previous_command_index"]
+
+
+def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
+    """The checked ``(alpha, (i1, i2))``: ``alpha`` a finite number in (0, 1], two distinct indices in
+    [0, ``obs_dim``); ``ValueError`` naming the field and the value otherwise."""
+    a = check_filter_alpha(filter_alpha)
+    idx = tuple(prev_index) if isinstance(prev_index, Sequence) and not isinstance(prev_index, str) else None
+    if (
+        idx is None
+        or len(idx) != 2
+        or any(isinstance(i, bool) or not isinstance(i, int | np.integer) or not 0 <= int(i) < obs_dim for i in idx)
+        or idx[0] == idx[1]
+    ):
+        raise ValueError(
+            f"policy_kwargs.prev_index must be two distinct observation indices in [0, {obs_dim}), got {prev_index!r}"
+        )
+    return a, (int(idx[0]), int(idx[1]))
+
+
+def previous_command_index(fields: Sequence[str]) -> tuple[int, int]:
+    """Indices of ``previous_command_1`` and ``_2`` in an observation layout (``ValueError`` if absent: the
+    filter needs AmigoBot-v1's observation, ``amigo_gym.task.v1.obs_fields``)."""
+    names = list(fields)
+    try:
+        return names.index("previous_command_1"), names.index("previous_command_2")
+    except ValueError:
+        raise ValueError(
+            f"{POLICY_NAME}: the observation has no previous_command_1/_2 field (AmigoBot-v1's layout needed); "
+            f"fields: {', '.join(names)}"
+        ) from None
+
+
+class LowPassActor(Actor):
+    """SB3's TD3 actor followed by the low-pass filter (module docstring): ``forward(o) = p + alpha (mu(o) - p)``.
+
+    Args: those of :class:`stable_baselines3.td3.policies.Actor`, and ``filter_alpha`` (0, 1], ``prev_index``
+    the two observation indices of the previous command.
+    """
+
+    def __init__(self, *args: Any, filter_alpha: float, prev_index: Sequence[int], **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        obs_dim = int(np.prod(self.observation_space.shape or (0,)))
+        self.filter_alpha, self.prev_index = check_filter(filter_alpha, prev_index, obs_dim)
+        self.register_buffer("_prev_idx", th.as_tensor(self.prev_index, dtype=th.long), persistent=False)
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        data = super()._get_constructor_parameters()
+        data.update(filter_alpha=self.filter_alpha, prev_index=self.prev_index)
+        return data
+
+    def forward(self, obs: th.Tensor) -> th.Tensor:
+        """``(N, 2)`` action in [-1, 1] for observations ``(N, d)``: ``p + alpha (tanh(mlp(o)) - p)``."""
+        u = super().forward(obs)
+        prev = obs.reshape(obs.shape[0], -1).index_select(1, self.get_buffer("_prev_idx")).to(u.dtype).clamp(-1.0, 1.0)
+        out: th.Tensor = prev + self.filter_alpha * (u - prev)
+        return out
+
+
+class LowPassTD3Policy(TD3Policy):
+    """SB3's ``TD3Policy`` whose actors (online and target) are :class:`LowPassActor`.
+
+    Args: those of :class:`stable_baselines3.td3.policies.TD3Policy`, and the keywords ``filter_alpha`` and
+    ``prev_index`` (saved with the model as ``policy_kwargs``). The action space must be the normalised
+    ``Box(-1, 1, (2,))`` of AmigoBot-v1 (the filter mixes actions with the observed previous command).
+    """
+
+    def __init__(
+        self,
+        observation_space: spaces.Space[Any],
+        action_space: spaces.Box,
+        *args: Any,
+        filter_alpha: float = 1.0,
+        prev_index: Sequence[int] = (0, 1),
+        **kwargs: Any,
+    ) -> None:
+        if not (
+            isinstance(action_space, spaces.Box)
+            and np.all(action_space.low == -1.0)
+            and np.all(action_space.high == 1.0)
+        ):
+            raise ValueError(f"{POLICY_NAME}: the action space must be Box(-1, 1), got {action_space}")
+        obs_dim = int(np.prod(observation_space.shape or (0,)))
+        self.filter_alpha, self.prev_index = check_filter(filter_alpha, prev_index, obs_dim)
+        super().__init__(observation_space, action_space, *args, **kwargs)
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        data = super()._get_constructor_parameters()
+        data.update(filter_alpha=self.filter_alpha, prev_index=self.prev_index)
+        return data
+
+    def make_actor(self, features_extractor: Any = None) -> Actor:
+        kw = self._update_features_extractor(self.actor_kwargs, features_extractor)
+        return LowPassActor(**kw, filter_alpha=self.filter_alpha, prev_index=self.prev_index).to(self.device)
+
+
+def policy_for(venv: Any, policy_kwargs: dict[str, Any] | None) -> tuple[type[LowPassTD3Policy], dict[str, Any]]:
+    """The policy class and its ``policy_kwargs`` for a TD3 run on ``venv`` (an SB3 VecEnv of AmigoBot-v1):
+    ``prev_index`` from the env's observation layout (:func:`amigo_gym.task.v1.obs_fields`)."""
+    from amigo_gym.task.v1 import TrackingParams, obs_fields
+
+    params = venv.get_attr("params")[0]
+    if not isinstance(params, TrackingParams):
+        raise ValueError(f"{POLICY_NAME}: needs AmigoBot-v1 (TrackingParams), got {type(params).__name__}")
+    kw = dict(policy_kwargs or {})
+    kw["prev_index"] = previous_command_index(obs_fields(params))
+    return LowPassTD3Policy, kw

@@ -1,0 +1,1299 @@
+"""``amigo-gym sweep``: Optuna studies over :mod:`amigo_gym.tools.training.train`'s training, on one or many machines.
+
+Usage, environment, objective, storage, the fast PPO, winners (``--save-best``), secrets, modes, the global
+budget, stopped and killed workers, the summary and the exit status: docs/benchmark.md, "Reference: `amigo-gym
+sweep`".
+
+Imports optuna, SQLAlchemy (and PyYAML) only when run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import time
+import warnings
+import zlib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import FrameType
+from typing import Any, Literal, get_args
+from urllib.parse import quote, quote_plus
+
+import numpy as np
+
+from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
+from amigo_gym.tools.runs import handling
+from amigo_gym.tools.training.train import ENV_IDS, EnvId
+
+__all__ = [
+    "ABANDONED",
+    "VALIDATION_SEED_BASE",
+    "SWEEP_ALGOS",
+    "SweepConfig",
+    "budget_count",
+    "driver_url",
+    "main",
+    "make_storage",
+    "mark_abandoned",
+    "masked_url",
+    "open_study",
+    "run_worker",
+    "sample_fastppo",
+    "sample_hyperparams",
+    "scrub",
+    "study_status",
+    "summarize",
+    "validate_agent",
+    "validation_cells",
+    "write_best_yaml",
+    "write_summary",
+]
+
+Mode = Literal["hyperparams", "seeds"]
+MODES = get_args(Mode)
+#: the algorithms a sweep trains: SB3's (:mod:`amigo_gym.tools.training.train`) and the fast PPO
+#: (:mod:`amigo_gym.tools.training.fastppo`)
+SweepAlgo = Literal["ppo", "sac", "td3", "fastppo"]
+SWEEP_ALGOS = get_args(SweepAlgo)
+FASTPPO = "fastppo"
+#: a fast-PPO trial's rollout batch ``num_envs * rollout_steps`` is at most ``--timesteps / MIN_ITERATIONS``
+MIN_ITERATIONS = 8
+#: the marker written into the folder of a trial whose worker was stopped or killed
+ABANDONED = "ABANDONED.json"
+#: first evaluation seed of the validation cells; the benchmark's test seeds are 100..109
+VALIDATION_SEED_BASE = 1_000_000
+#: what the study optimises (stored as the study attribute ``objective``)
+OBJECTIVE = "validation_h_rms_iqm_m"
+SUMMARY = "summary.json"
+#: exit status of a worker stopped by SIGTERM / Ctrl-C
+INTERRUPTED = 130
+#: how long a worker joining a study waits for its creator to finish setting it up (attributes, grid) [s]
+READY_TIMEOUT_S = 120.0
+
+
+# --------------------------------------------------------------------------- secrets
+def masked_url(url: str) -> str:
+    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``);
+    a URL without a password is returned as typed."""
+    try:
+        from sqlalchemy.engine import make_url
+
+        u = make_url(url)
+        return url if u.password is None else str(u.render_as_string(hide_password=True))
+    except Exception:  # not a URL SQLAlchemy parses: mask anything between "user:" and "@"
+        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", url)
+
+
+def _password(url: str | None) -> str | None:
+    if not url:
+        return None
+    try:
+        from sqlalchemy.engine import make_url
+
+        pw = make_url(url).password
+    except Exception:
+        m = re.search(r"://[^/@:]*:([^@]*)@", url)
+        pw = m.group(1) if m else None
+    return str(pw) if pw else None
+
+
+def scrub(text: str, url: str | None) -> str:
+    """``text`` with every form of ``url``'s password (as typed, decoded, URL-quoted) replaced by ``***``."""
+    pw = _password(url)
+    if not pw:
+        return text
+    raw = re.search(r"://[^/@:]*:([^@]*)@", url or "")
+    forms = {pw, quote(pw, safe=""), quote_plus(pw)} | ({raw.group(1)} if raw else set())
+    for form in sorted((f for f in forms if f), key=len, reverse=True):
+        text = text.replace(form, "***")
+    return text
+
+
+def public_argv(argv: Sequence[str]) -> list[str]:
+    """The command line with every URL's password masked (``--storage URL`` and ``--storage=URL``)."""
+    out = []
+    for a in argv:
+        if "://" in a:
+            head, eq, tail = a.partition("=") if a.startswith("--") else ("", "", a)
+            a = head + eq + masked_url(tail)
+        out.append(a)
+    return out
+
+
+def _in_memory(url: str) -> bool:
+    """Whether ``url`` is an in-memory SQLite database (private to the process that opens it)."""
+    from sqlalchemy.engine import make_url
+
+    u = make_url(url)
+    if not u.drivername.startswith("sqlite"):
+        return False
+    db = u.database or ""
+    return db in ("", ":memory:") or db.startswith("file::memory:") or u.query.get("mode") == "memory"
+
+
+# --------------------------------------------------------------------------- settings
+@dataclass
+class SweepConfig:
+    """Settings of one ``amigo-gym sweep`` command (see the module docstring); each is the option of the same
+    name (``algos``: ``--algo``, ``env_id``: ``--env``).
+
+    Attributes:
+        algos: algorithm(s) (required).
+        mode: hyperparams (default) or seeds.
+        env_id: environment the trials train on.
+        env_kwargs: keywords of gym.make as JSON [json] (default: v1's training distribution; none for v0).
+        storage: SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); give a password through PGPASSWORD
+            or ~/.pgpass, not in the URL.
+        study_name: study name [name] (default: amigo-<algos>-<mode>).
+        n_trials: global trial budget over all workers [trials].
+        n_jobs: worker processes on this machine [processes].
+        seeds: training seeds (seeds mode) [seeds].
+        timesteps: training steps per trial [steps].
+        eval_freq: steps between evaluations (pruning points) [steps].
+        eval_episodes: episodes per evaluation [episodes].
+        val_episodes: episodes per validation cell (objective) [episodes].
+        val_max_steps: cut validation episodes to this length [steps] (0: the cell's).
+        train_seed: training seed of hyperparameter trials [-].
+        hyperparams: base YAML [file] (default: agents/hyperparams/<algo>.yml).
+        save_best: when the command ends, write the best COMPLETE trial's hyperparameters under the --env key
+            of this YAML file, other keys kept (hyperparams mode) [file] (default: none).
+        out: folder of the trials' runs (and the default SQLite file) [dir].
+        seed: base of the workers' sampler seeds [-].
+        sampler: Optuna sampler.
+        pruner: Optuna pruner.
+        n_startup_trials: trials before pruning and TPE start [trials].
+        heartbeat_interval: time between heartbeats [s].
+        grace_period: time without heartbeat before FAIL [s].
+        max_retry: retries of a trial whose worker died [retries].
+        threads: torch threads per worker [threads].
+        enqueue_base: run the base YAML's own values as the study's first trial (hyperparams mode, an SB3
+            algorithm), so the winner is compared with the file it starts from.
+        worker_index: index of a worker process started by ``--n-jobs`` (internal).
+        argv: the command line (not an option).
+    """
+
+    algos: list[SweepAlgo] = field(metadata=cli("--algo"))
+    mode: Mode = "hyperparams"
+    env_id: EnvId = field(default="AmigoBot-v0", metadata=cli("--env"))
+    env_kwargs: dict[str, Any] | None = field(default=None, metadata=cli(parse=json_object))
+    storage: str | None = None
+    study_name: str | None = None
+    n_trials: int = 20
+    n_jobs: int = 1
+    seeds: list[int] = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    timesteps: int = 100_000
+    eval_freq: int = 10_000
+    eval_episodes: int = 5
+    val_episodes: int = 5
+    val_max_steps: int = 0
+    train_seed: int = 0
+    hyperparams: str | None = None
+    save_best: str | None = None
+    out: str = "runs/sweep"
+    seed: int = 0
+    sampler: Literal["tpe", "random"] = "tpe"
+    pruner: Literal["median", "none"] = "median"
+    n_startup_trials: int = 5
+    heartbeat_interval: int = 60
+    grace_period: int = 120
+    max_retry: int = 1
+    threads: int = 1
+    enqueue_base: bool = False
+    worker_index: int = field(default=0, metadata=cli(hidden=True))
+    argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming a bad setting."""
+        if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
+            raise ValueError(f"--algo must be among {list(SWEEP_ALGOS)}, got {self.algos}")
+        if self.mode not in MODES:
+            raise ValueError(f"--mode must be one of {list(MODES)}, got {self.mode!r}")
+        if self.enqueue_base and (self.mode != "hyperparams" or FASTPPO in self.algos):
+            raise ValueError(
+                f"--enqueue-base is for --mode hyperparams of an SB3 algorithm, got {self.mode} {self.algos}"
+            )
+        if self.mode == "hyperparams" and len(self.algos) != 1:
+            raise ValueError(f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}")
+        if self.sampler not in ("tpe", "random"):
+            raise ValueError(f"--sampler must be 'tpe' or 'random', got {self.sampler!r}")
+        if self.pruner not in ("median", "none"):
+            raise ValueError(f"--pruner must be 'median' or 'none', got {self.pruner!r}")
+        if self.env_id not in ENV_IDS:
+            raise ValueError(f"--env must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        if self.env_kwargs is not None and not isinstance(self.env_kwargs, dict):
+            raise ValueError(f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}")
+        for name, low in (
+            ("n_trials", 1),
+            ("n_jobs", 1),
+            ("timesteps", 1),
+            ("eval_freq", 1),
+            ("eval_episodes", 1),
+            ("heartbeat_interval", 1),
+            ("grace_period", 1),
+            ("max_retry", 0),
+            ("threads", 1),
+            ("n_startup_trials", 0),
+            ("worker_index", 0),
+            ("train_seed", 0),
+            ("val_episodes", 1),
+            ("val_max_steps", 0),
+        ):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
+        if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
+            raise ValueError(f"--seeds must be distinct integers, got {self.seeds}")
+        if self.save_best is not None and self.mode != "hyperparams":
+            raise ValueError(f"--save-best applies to --mode hyperparams, not {self.mode}")
+        if FASTPPO in self.algos:
+            self._validate_fastppo()
+        n = self.study_name
+        if n is not None and (
+            not n
+            or n.startswith(".")
+            or ".." in n
+            or any(sep in n for sep in ("/", "\\", os.sep, os.altsep or "/"))
+            or any(ord(c) < 32 or c == "\x7f" for c in n)
+        ):
+            raise ValueError(
+                f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control "
+                f"characters), got {n!r}"
+            )
+        if self.storage is not None:
+            try:
+                memory = _in_memory(self.storage)
+            except ImportError:
+                raise
+            except Exception:
+                raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(self.storage)!r}") from None
+            if memory and self.n_jobs > 1:
+                raise ValueError(
+                    f"--storage {masked_url(self.storage)} is an in-memory database, private to each process: "
+                    f"with --n-jobs {self.n_jobs} the workers would not share one study; use a file "
+                    "(sqlite:///path/sweep.db, the default) or a server"
+                )
+
+    def _validate_fastppo(self) -> None:
+        """``--algo fastppo``: AmigoBot-v1 only, its own settings file, checked (with ``--env-kwargs``) up front."""
+        if self.env_id != "AmigoBot-v1":
+            raise ValueError(
+                f"--algo fastppo trains the native AmigoBot-v1 vector env: add --env AmigoBot-v1 "
+                f"(got --env {self.env_id})"
+            )
+        if self.hyperparams is not None and len(set(self.algos)) > 1:
+            raise ValueError(
+                f"--hyperparams {self.hyperparams}: one file cannot hold the settings of fastppo and of "
+                f"{', '.join(a for a in self.algos if a != FASTPPO)}; leave it out (agents/hyperparams/<algo>.yml each)"
+            )
+        from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
+        from amigo_gym.tools.training.train import HYPERPARAMS_DIR
+
+        base = load_settings_yaml(Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / "fastppo.yml")
+        try:
+            FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
+
+    @property
+    def storage_url(self) -> str:
+        """``--storage``, default ``sqlite:///<out>/sweep.db``."""
+        return self.storage or f"sqlite:///{Path(self.out).resolve() / 'sweep.db'}"
+
+    @property
+    def name(self) -> str:
+        """``--study-name``, default ``amigo-<algos>-<mode>``."""
+        return self.study_name or f"amigo-{'-'.join(self.algos)}-{self.mode}"
+
+    @property
+    def budget(self) -> int:
+        """Global number of trials: ``--n-trials``, or the grid's size in seeds mode."""
+        return len(self.algos) * len(self.seeds) if self.mode == "seeds" else self.n_trials
+
+    @property
+    def command(self) -> str:
+        """The command line, as typed, with the storage password masked (:func:`public_argv`)."""
+        return "amigo-gym sweep " + " ".join(public_argv(self.argv))
+
+    @property
+    def train_env_kwargs(self) -> dict[str, Any]:
+        """``--env-kwargs``, default: v1's training distribution (none for v0)."""
+        if self.env_kwargs is not None:
+            return dict(self.env_kwargs)
+        if self.env_id == "AmigoBot-v1":
+            from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+
+            return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
+        return {}
+
+
+# --------------------------------------------------------------------------- validation cells
+def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
+    """The validation cells of ``env_id``: the benchmark suite's held-in scenarios of that environment
+    (``held_out=False``), each with the seeds ``VALIDATION_SEED_BASE .. + episodes - 1`` instead of its
+    test seeds, and (``max_steps`` > 0) episodes cut to ``max_steps`` steps. Never a held-out scenario,
+    never a test seed."""
+    from amigo_gym.tools.training.benchmark import SUITE
+
+    seeds = tuple(range(VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + episodes))
+    cells = []
+    for sc in SUITE:
+        if sc.env_id != env_id or sc.held_out:
+            continue
+        if set(seeds) & set(sc.seeds):  # pragma: no cover - the suite's seeds are far below the base
+            raise ValueError(f"validation seeds overlap the test seeds of {sc.name}")
+        steps = min(sc.max_steps, max_steps) if max_steps > 0 else sc.max_steps
+        cells.append(replace(sc, seeds=seeds, max_steps=steps))
+    if not cells:
+        raise ValueError(f"the benchmark suite has no held-in scenario on {env_id}")
+    return tuple(cells)
+
+
+def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """The objective of a trained run: IQM over ``cells`` of the mean H cross-track RMS [m] of the run's
+    final model (``model.zip``, checked against ``run.json``'s sha256, with its ``vecnormalize.pkl``);
+    and the per-cell values (``None``: no finite value)."""
+    from amigo_gym.tools.training.evaluate import ModelRef, _run_algo, load_model
+
+    model = run_dir / "model.zip"
+    vecnorm = run_dir / "vecnormalize.pkl"
+    ref = ModelRef(
+        run_dir.name, _run_algo(run_dir), model, run_dir / "run.json", vecnorm if vecnorm.is_file() else None
+    )
+    return validate_agent(load_model(ref), cells)
+
+
+def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """:func:`validate_model` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
+    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy` (numpy; SB3's ``predict``)."""
+    from amigo_gym.policies.learned import FastPolicy
+    from amigo_gym.tools.runs import verify_sha256
+
+    model, record = run_dir / "model.zip", run_dir / "run.json"
+    verify_sha256(model, str(json.loads(record.read_text()).get("sha256")), str(record))
+    return validate_agent(FastPolicy.load(model), cells)
+
+
+def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` (SB3's ``predict``) run by the benchmark's
+    own loop (:func:`amigo_gym.tools.training.benchmark.evaluate`) on each cell's seeds; and the per-cell values
+    (``None``: no finite value; then the IQM is NaN)."""
+    from amigo_gym.tools.training import benchmark
+    from amigo_gym.tools.training.intervals import iqm
+
+    per_cell: dict[str, float | None] = {}
+    for sc in cells:
+        env = benchmark.make_env(sc)
+        try:
+            eps = benchmark.evaluate(agent, env, sc)
+        finally:
+            env.close()
+        vals = np.array([e["h_rms_m"] for e in eps], dtype=np.float64)
+        per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
+    finite = [v for v in per_cell.values() if v is not None]
+    if len(finite) != len(per_cell):
+        return math.nan, per_cell
+    return float(iqm(np.array([finite]))), per_cell
+
+
+# --------------------------------------------------------------------------- storage and study
+def make_storage(cfg: SweepConfig) -> Any:
+    """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
+    SQLite database, private to its one process, without them."""
+    import optuna.storages as st
+
+    url = driver_url(cfg.storage_url)
+    engine_kwargs: dict[str, Any] = {}
+    sqlite = url.startswith("sqlite")
+    if sqlite and not _in_memory(url):
+        Path(url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
+    if sqlite:
+        # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
+        engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
+    retry_cls = getattr(st, "RetryHeartbeatStaleTrialCallback", None)
+    kwargs: dict[str, Any] = {}
+    # an in-memory database lives and dies with its one process: no other worker's death to detect, and the
+    # heartbeat's thread would get a connection, hence a database, of its own (without the study's tables)
+    if not _in_memory(url):
+        kwargs = {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
+        if retry_cls is not None:
+            kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
+        else:  # Optuna < 4.9
+            kwargs["failed_trial_callback"] = st.RetryFailedTrialCallback(max_retry=cfg.max_retry)
+    last: Exception | None = None
+    for attempt in range(5):  # several processes creating the tables at once may collide once
+        try:
+            storage = st.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
+            break
+        except ImportError:
+            raise
+        except Exception as exc:  # sqlalchemy's errors vary by driver
+            last = exc
+            time.sleep(0.5 + attempt)
+    else:
+        detail = scrub(" ".join(f"{type(last).__name__}: {last}".split()), url)
+        raise RuntimeError(f"cannot open the storage {masked_url(url)}: {detail}") from None
+    if sqlite:
+        from sqlalchemy import event
+
+        @event.listens_for(storage.engine, "begin")
+        def _begin_immediate(conn: Any) -> None:
+            conn.exec_driver_sql("BEGIN IMMEDIATE")
+
+    return storage
+
+
+def driver_url(url: str) -> str:
+    """``postgresql://`` with the driver that is installed: SQLAlchemy 2.1 defaults to psycopg 3, the
+    ``bench`` extra installs ``psycopg2-binary``; an explicit ``postgresql+<driver>://`` is kept."""
+    if url.startswith(("postgresql://", "postgres://")):
+        import importlib.util
+
+        if importlib.util.find_spec("psycopg") is None and importlib.util.find_spec("psycopg2") is not None:
+            return "postgresql+psycopg2://" + url.split("://", 1)[1]
+    return url
+
+
+def _worker_seed(cfg: SweepConfig) -> int:
+    host = zlib.crc32(socket.gethostname().encode())
+    return int(np.random.SeedSequence([cfg.seed, cfg.worker_index, host, os.getpid()]).generate_state(1)[0])
+
+
+def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
+    """Create the study or join it (``load_if_exists``); its creator stores the command and enqueues a grid.
+
+    Raises:
+        ValueError: the existing study is of another mode, environment or objective.
+    """
+    import optuna
+
+    sampler: Any
+    if cfg.sampler == "tpe":
+        sampler = optuna.samplers.TPESampler(seed=sampler_seed, n_startup_trials=cfg.n_startup_trials)
+    else:
+        sampler = optuna.samplers.RandomSampler(seed=sampler_seed)
+    pruner: Any = optuna.pruners.NopPruner()
+    if cfg.pruner == "median" and cfg.mode == "hyperparams":
+        pruner = optuna.pruners.MedianPruner(n_startup_trials=cfg.n_startup_trials, n_warmup_steps=cfg.eval_freq)
+    kw: dict[str, Any] = {"storage": storage, "study_name": cfg.name, "sampler": sampler, "pruner": pruner}
+    try:  # exactly one process creates the study (unique name in the database) and enqueues the grid
+        study = optuna.create_study(direction="minimize", **kw)
+        created = True
+    except optuna.exceptions.DuplicatedStudyError:
+        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)  # logs "Using an existing study"
+        created = False
+    if created:
+        for key, value in (
+            ("command", cfg.command),
+            ("argv", public_argv(cfg.argv)),
+            ("mode", cfg.mode),
+            ("algos", cfg.algos),
+            ("budget", cfg.budget),
+            ("env_id", cfg.env_id),
+            ("env_kwargs", cfg.train_env_kwargs),
+            ("objective", OBJECTIVE),
+            ("created", time.strftime("%Y-%m-%dT%H:%M:%S%z")),
+            ("host", socket.gethostname()),
+        ):
+            study.set_user_attr(key, value)
+        if cfg.mode == "seeds":
+            for algo in cfg.algos:
+                for s in cfg.seeds:
+                    study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
+        elif cfg.enqueue_base:
+            from amigo_gym.tools.training.train import HYPERPARAMS_DIR, load_hyperparams
+
+            algo = cfg.algos[0]
+            base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+            study.enqueue_trial(
+                base_params(algo, load_hyperparams(base_file, cfg.env_id)), user_attrs={"baseline": True}
+            )
+        study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
+    else:
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while not study.user_attrs.get("ready"):
+            if time.monotonic() > deadline:
+                raise RuntimeError(
+                    f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
+                    "stopped while queuing the grid?); delete the study and start again"
+                )
+            time.sleep(0.5)
+        attrs = study.user_attrs
+        for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
+            theirs = attrs.get(key)
+            if theirs is not None and theirs != mine:
+                raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
+        if study.direction != optuna.study.StudyDirection.MINIMIZE:
+            raise ValueError(f"study {cfg.name!r} maximises another objective (made by an older amigo-gym)")
+    return study
+
+
+# --------------------------------------------------------------------------- budget and status
+def _counted(t: Any) -> bool:
+    from optuna.trial import TrialState
+
+    if t.state in (TrialState.COMPLETE, TrialState.PRUNED):
+        return True
+    return bool(t.state == TrialState.FAIL and "fail_reason" in t.user_attrs)
+
+
+def budget_count(study: Any, before: int | None = None) -> int:
+    """Trials that count against the budget: ended (COMPLETE, PRUNED, FAIL by an error), plus RUNNING trials
+    with a number below ``before`` (``None``: no RUNNING trial)."""
+    from optuna.trial import TrialState
+
+    n = 0
+    for t in study.get_trials(deepcopy=False):
+        if _counted(t) or (before is not None and t.state == TrialState.RUNNING and t.number < before):
+            n += 1
+    return n
+
+
+def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
+    """No queued trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials) and
+    no re-queued trial waits."""
+    from optuna.trial import TrialState
+
+    waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
+    if cfg.mode == "seeds":
+        return not waiting
+    return budget_count(study, before=sys.maxsize if running else None) >= cfg.budget and not waiting
+
+
+def study_status(study: Any, budget: int | None = None) -> str:
+    """``complete``, ``running`` or ``incomplete`` (module docstring), from the study alone."""
+    from optuna.trial import TrialState
+
+    trials = study.get_trials(deepcopy=False)
+    if any(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials):
+        return "running"
+    attrs = study.user_attrs
+    if attrs.get("mode") == "seeds":
+        cells = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.user_attrs.get("grid") is True}
+        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state == TrialState.COMPLETE}
+        return "complete" if cells and cells <= done else "incomplete"
+    want = int(attrs.get("budget", budget or 0))
+    return "complete" if budget_count(study) >= want else "incomplete"
+
+
+class _OverBudget(Exception):
+    """This trial lost the race for the last place in the budget (or is not from the grid)."""
+
+
+# --------------------------------------------------------------------------- abandoned trials
+def mark_abandoned(study: Any) -> list[int]:
+    """Write ``ABANDONED.json`` into the folder of every trial that ended FAIL because its worker was
+    stopped (``interrupted``) or stopped beating (killed), where the folder exists here; a marker written
+    before the retry was queued is brought up to date (``retried_as``).
+
+    Returns the numbers of the trials marked (or updated) now.
+    """
+    from optuna.trial import TrialState
+
+    trials = study.get_trials(deepcopy=False)
+    marked = []
+    for t in trials:
+        ua = t.user_attrs
+        if t.state != TrialState.FAIL or "fail_reason" in ua or "over_budget" in ua or "run_dir" not in ua:
+            continue
+        folder = Path(str(ua["run_dir"]))
+        if not folder.is_dir():
+            continue
+        origin = t.system_attrs.get("failed_trial")
+        if any(u.number == origin != t.number and u.user_attrs.get("run_dir") == ua["run_dir"] for u in trials):
+            continue  # a retry that died before it had a folder of its own: the folder is its original's
+        retries = [
+            u.number
+            for u in trials
+            if u.number != t.number
+            and (u.system_attrs.get("failed_trial") == t.number or u.user_attrs.get("retry_of") == t.number)
+        ]
+        try:  # marked before: rewritten only when a retry appeared since (Optuna queues it just after the FAIL)
+            old = json.loads((folder / ABANDONED).read_text())
+        except (OSError, ValueError):
+            old = None
+        if isinstance(old, dict) and old.get("retried_as") == retries:
+            continue
+        reason = ua.get("interrupted") or "its worker stopped sending heartbeats (killed, or its machine lost)"
+        doc = {
+            "study": study.study_name,
+            "trial": t.number,
+            "state": "FAIL",
+            "reason": reason,
+            "retried_as": retries,
+            "worker": ua.get("worker"),
+            "marked": old.get("marked") if isinstance(old, dict) else time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        atomic_write_json(folder / ABANDONED, doc)
+        marked.append(t.number)
+    return marked
+
+
+# --------------------------------------------------------------------------- the objective
+#: off-policy batch sizes sampled when the base YAML is a high-throughput configuration (``n_envs`` >= 64: many
+#: sub-envs, a few large gradient steps per vector step, docs/baselines.md "Off-policy per wall-second")
+HT_BATCH_SIZES = (512, 1024, 2048, 4096)
+HT_MIN_ENVS = 64
+#: rl-zoo's off-policy batch sizes, sampled over a base YAML of few sub-envs
+BATCH_SIZES = (64, 128, 256)
+
+
+def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
+    """The batch sizes SAC/TD3 sample over the base YAML ``base``: :data:`HT_BATCH_SIZES` when it has ``n_envs`` >=
+    :data:`HT_MIN_ENVS`, else :data:`BATCH_SIZES`."""
+    return HT_BATCH_SIZES if int((base or {}).get("n_envs", 1)) >= HT_MIN_ENVS else BATCH_SIZES
+
+
+def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; the other keys come from the base YAML ``base``).
+
+    SAC/TD3 sample ``batch_size`` from 64-256, or from :data:`HT_BATCH_SIZES` when ``base`` has ``n_envs`` >=
+    :data:`HT_MIN_ENVS`. The low-pass factor of ``policy: LowPassMlpPolicy`` is not sampled: the objective is H's
+    error alone, which would trade the smoothness the filter is there for (its value stays the base file's)."""
+    hp: dict[str, Any] = {
+        "learning_rate": trial.suggest_float("learning_rate", 1e-5, 3e-3, log=True),
+        "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-4, 0.1, log=True),
+    }
+    if algo == "ppo":
+        hp["gae_lambda"] = trial.suggest_float("gae_lambda", 0.8, 1.0)
+        hp["ent_coef"] = trial.suggest_float("ent_coef", 1e-8, 1e-2, log=True)
+        hp["clip_range"] = trial.suggest_categorical("clip_range", [0.1, 0.2, 0.3])
+        hp["n_epochs"] = trial.suggest_int("n_epochs", 1, 10)
+    else:
+        hp["tau"] = trial.suggest_float("tau", 1e-3, 5e-2, log=True)
+        hp["batch_size"] = trial.suggest_categorical("batch_size", list(batch_choices(base)))
+        if algo == "td3":
+            hp["noise_type"] = "normal"
+            hp["noise_std"] = trial.suggest_float("noise_std", 0.05, 0.5)
+    return hp
+
+
+def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
+    """The Optuna parameters of :func:`sample_hyperparams` that reproduce the base YAML ``base`` (for
+    ``--enqueue-base``: the study's first trial is the file it starts from).
+
+    Raises:
+        ValueError: a sampled key is missing from ``base`` or outside its sampled range.
+    """
+    names = ["learning_rate", "gamma"] + (
+        ["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo" else ["tau", "batch_size"]
+    )
+    if algo == "td3":
+        names.append("noise_std")
+    missing = [n for n in names if n not in base]
+    if missing:
+        raise ValueError(f"--enqueue-base: the base file has no {', '.join(missing)} for {algo}")
+    out = {n: base[n] for n in names if n != "gamma"}
+    out["one_minus_gamma"] = 1.0 - float(base["gamma"])
+    if algo != "ppo":
+        choices = batch_choices(base)
+        if base["batch_size"] not in choices:
+            raise ValueError(f"--enqueue-base: batch_size must be one of {list(choices)}, got {base['batch_size']!r}")
+    return out
+
+
+#: fast-PPO sampling choices (powers of two, so that every minibatch count divides the batch ``N T``)
+FAST_NUM_ENVS = (64, 128, 256, 512, 1024)
+FAST_ROLLOUT_STEPS = (8, 16, 32, 64, 128)
+FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
+
+
+def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
+    """Sampled :class:`~.fastppo.FastPPOSettings` of a fast-PPO trial of ``timesteps`` env-steps.
+
+    The space (rl-zoo's ``sample_ppo_params`` ranges, log-uniform where a parameter spans decades, narrowed where
+    this task and the large-batch regime say so; Optuna parameter name, then the setting it gives):
+
+    * ``learning_rate`` log-uniform [3e-5, 3e-3] (annealed linearly to 0 by the trainer): rl-zoo's 1e-5..1 cut to
+      what Adam with 1e3-1e5-sample batches tolerates; the shipped 3e-4 sits in the middle (log scale).
+    * ``epochs`` integer [1, 10] (rl-zoo: 1, 5, 10, 20): more passes reuse each sample more but cost CPU per
+      env-step, which is the budget here.
+    * ``num_envs`` ``N`` in {64, ..., 1024} and ``rollout_steps`` ``T`` in {8, ..., 128} (powers of two; rl-zoo's
+      ``n_steps`` 8..2048 for one env): the batch ``N T`` spans 512..131072. Only choices with ``N T_min`` and
+      ``N_min T`` at most ``timesteps / MIN_ITERATIONS`` are offered, and ``T`` is lowered to the largest choice
+      with ``N T <= timesteps / MIN_ITERATIONS`` (at least the smallest): a trial runs at least ``MIN_ITERATIONS``
+      updates (for 2M env-steps every pair qualifies; a tiny test budget keeps the smallest batch).
+    * ``n_minibatches`` in {1, 2, 4, 8, 16, 32} gives ``minibatch_size = N T / n_minibatches``: the minibatch
+      size is sampled as a divisor of the batch, so the constraint ``N T % minibatch_size == 0`` always holds.
+    * ``gamma = 1 - one_minus_gamma``, ``one_minus_gamma`` log-uniform [1e-3, 0.1]: horizons of 10 to 1000 steps
+      (1 s to an episode of 60 s at dt = 0.1 s); rl-zoo's 0.9..0.9999.
+    * ``gae_lambda`` uniform [0.8, 1.0] (rl-zoo's 0.8..1.0).
+    * ``clip_coef`` in {0.1, 0.2, 0.3, 0.4} (rl-zoo's clip_range).
+    * ``ent_coef`` log-uniform [1e-8, 1e-2] (rl-zoo: 1e-8..0.1, cut: the entropy here is that of a
+      state-independent ``log_std``, which a large bonus only inflates).
+    * ``log_std_init`` uniform [-3, 0] (rl-zoo: -4..1; the shipped -1): exploration noise 0.05..1 in normalised
+      action units.
+    * ``filter_alpha`` uniform [0.2, 1.0]: the low-pass action parameterisation (1: none; the shipped 0.5); below
+      0.2 the command lags by more than 0.5 s.
+    * ``caps_temporal`` log-uniform [1e-4, 1] (Mysore et al. 2021 use weights of order 0.01..1; 1e-4 is
+      practically off).
+
+    Everything else (``hidden``, ``vf_coef``, ``max_grad_norm``, ``norm_reward``, ``history``, ...) comes from the
+    base file (``--hyperparams``). Returns the settings (not the Optuna parameters).
+    """
+    cap = max(timesteps // MIN_ITERATIONS, 1)
+    t_min, n_min = min(FAST_ROLLOUT_STEPS), min(FAST_NUM_ENVS)
+    n_choices = [n for n in FAST_NUM_ENVS if n * t_min <= cap] or [n_min]
+    t_choices = [t for t in FAST_ROLLOUT_STEPS if n_min * t <= cap] or [t_min]
+    n = int(trial.suggest_categorical("num_envs", n_choices))
+    t_len = int(trial.suggest_categorical("rollout_steps", t_choices))
+    t_len = max([t for t in FAST_ROLLOUT_STEPS if t <= t_len and n * t <= cap] or [t_min])
+    n_mb = int(trial.suggest_categorical("n_minibatches", FAST_MINIBATCHES))
+    return {
+        "learning_rate": trial.suggest_float("learning_rate", 3e-5, 3e-3, log=True),
+        "epochs": trial.suggest_int("epochs", 1, 10),
+        "num_envs": n,
+        "rollout_steps": t_len,
+        "minibatch_size": n * t_len // n_mb,
+        "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-3, 0.1, log=True),
+        "gae_lambda": trial.suggest_float("gae_lambda", 0.8, 1.0),
+        "clip_coef": trial.suggest_categorical("clip_coef", [0.1, 0.2, 0.3, 0.4]),
+        "ent_coef": trial.suggest_float("ent_coef", 1e-8, 1e-2, log=True),
+        "log_std_init": trial.suggest_float("log_std_init", -3.0, 0.0),
+        "filter_alpha": trial.suggest_float("filter_alpha", 0.2, 1.0),
+        "caps_temporal": trial.suggest_float("caps_temporal", 1e-4, 1.0, log=True),
+    }
+
+
+def _requeue(study: Any, trial: Any, how: str) -> None:
+    """Mark an interrupted trial, queue its parameters again and mark its folder abandoned."""
+    trial.set_user_attr("interrupted", how)
+    frozen = study._storage.get_trial(trial._trial_id)
+    attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
+    study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
+
+
+#: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
+_TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
+
+
+def _validated_trial(
+    trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
+) -> float:
+    """The end shared by both kinds of trial (SB3's and the fast PPO's): ``fit_and_validate()`` trains and
+    validates, giving the objective and its per-cell values (:func:`validate_agent`); an error of
+    :data:`_TRIAL_ERRORS` is recorded as the trial's ``fail_reason`` and raised again; the cells go to the user
+    attribute ``validation``; a non-finite objective gets a ``fail_reason`` and is returned as it is (NaN: Optuna
+    marks the trial FAIL, never PRUNED)."""
+    try:
+        value, per_cell = fit_and_validate()
+    except _TRIAL_ERRORS as exc:
+        trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+        raise
+    trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
+    if not math.isfinite(value):
+        trial.set_user_attr("fail_reason", f"validation H RMS IQM {value} (cells: {per_cell})")
+    return value
+
+
+def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
+    import optuna
+    import yaml
+
+    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, load_hyperparams, train
+
+    cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
+    env_kwargs = cfg.train_env_kwargs
+
+    def objective(trial: Any) -> float:
+        mark_abandoned(study)  # trials Optuna just found stale (it checks before each new trial)
+        trial.set_user_attr("worker", f"{socket.gethostname()}:{os.getpid()}:{cfg.worker_index}")
+        trial.set_user_attr("sampler_seed", sampler_seed)
+        trial.set_user_attr("command", cfg.command)
+        if cfg.mode == "seeds":
+            if "fixed_params" not in study._storage.get_trial_system_attrs(trial._trial_id):
+                study.stop()
+                trial.set_user_attr("over_budget", True)
+                raise _OverBudget("the grid is exhausted")
+            algo: str = trial.suggest_categorical("algo", cfg.algos)
+            seed = int(trial.suggest_categorical("seed", cfg.seeds))
+        else:
+            if budget_count(study, before=trial.number) >= cfg.budget:
+                study.stop()
+                trial.set_user_attr("over_budget", True)
+                raise _OverBudget(f"the global budget of {cfg.budget} trials is reached")
+            algo, seed = cfg.algos[0], cfg.train_seed
+        run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
+        trial.set_user_attr("run_dir", str(run_dir))
+        try:
+            if algo == FASTPPO:
+                return _fastppo_trial(cfg, study, trial, seed, run_dir, cells)
+            return _train_and_validate(trial, algo, seed, run_dir)
+        except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
+            _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
+            raise
+        except optuna.TrialPruned:
+            raise
+        except Exception as exc:  # any other error is the trial's own (never "abandoned")
+            if "fail_reason" not in trial.user_attrs:
+                trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
+            raise
+
+    def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
+        base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+        hp = load_hyperparams(base_file, cfg.env_id)
+        if cfg.mode == "hyperparams":
+            hp |= sample_hyperparams(trial, algo, hp)
+        trial.set_user_attr("hyperparams", hp)
+        hp_file = run_dir / "hyperparams.yml"
+        atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
+        pruned = False
+
+        def after_eval(entry: dict[str, Any]) -> bool:
+            nonlocal pruned
+            value = float(entry.get("h_rms_m", math.nan))
+            if not math.isfinite(value):
+                raise FloatingPointError(f"evaluation at step {entry['timesteps']} gave h_rms_m {value}")
+            if cfg.mode == "hyperparams":
+                trial.report(value, step=int(entry["timesteps"]))
+                if trial.should_prune():
+                    pruned = True
+                    return False
+            return True
+
+        train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
+        s = Settings(
+            algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here (fastppo has its own trial)
+            seed=seed,
+            out=str(run_dir / "run"),
+            timesteps=cfg.timesteps,
+            eval_freq=cfg.eval_freq,
+            eval_episodes=cfg.eval_episodes,
+            checkpoint_freq=0,
+            threads=cfg.threads,
+            progress=False,
+            hyperparams=str(hp_file),
+            env_id=cfg.env_id,
+            env_kwargs=env_kwargs,
+            argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
+        )
+
+        def fit_and_validate() -> tuple[float, dict[str, float | None]]:
+            record = train(s, after_eval=after_eval)
+            last = record.get("last_eval") or {}
+            for key in ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward"):
+                if key in last:
+                    trial.set_user_attr(f"last_eval_{key}", last[key])
+            trial.set_user_attr("wall_time_s", record["wall_time_s"])
+            if pruned:
+                raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
+            return validate_model(run_dir / "run", cells)
+
+        return _validated_trial(trial, cells, fit_and_validate)
+
+    return objective
+
+
+def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir: Path, cells: Sequence[Any]) -> float:
+    """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
+    sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
+    import optuna
+    import yaml
+
+    from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
+    from amigo_gym.tools.training.fastppo import train as train_fast
+    from amigo_gym.tools.training.train import HYPERPARAMS_DIR
+
+    base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{FASTPPO}.yml"
+    hp = load_settings_yaml(base_file)
+    if cfg.mode == "hyperparams":
+        hp |= sample_fastppo(trial, cfg.timesteps)
+    trial.set_user_attr("hyperparams", hp)
+    hp_file = run_dir / "hyperparams.yml"
+    atomic_write(hp_file, yaml.safe_dump({YAML_ENV_ID: hp}, sort_keys=True), parents=True)
+    run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
+    run["threads"] = cfg.threads
+    env_kwargs = cfg.train_env_kwargs
+    s = FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
+    out = run_dir / "run"
+    resumed = _resume_fastppo(study, trial, s, out)
+    if resumed is not None:
+        trial.set_user_attr("resumed_from", resumed)
+    flags = [f"--{k.replace('_', '-')} {v}" for k, v in run.items()]
+    command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {' '.join(flags)} --env-kwargs " + repr(
+        json.dumps(env_kwargs)
+    )
+    train_command = command + (" --resume" if resumed else "")
+    config = {
+        "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
+        "fastppo_settings": s.to_json(),
+        "env_id": cfg.env_id,
+        "env_kwargs": env_kwargs,
+        "command": train_command,
+        "resumed_from": resumed,
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
+    pruned = False
+    reported: set[int] = set()
+
+    def after_eval(row: dict[str, float]) -> bool:
+        nonlocal pruned
+        value = float(row.get("eval_h_rms_m", math.nan))
+        if not math.isfinite(value):
+            raise FloatingPointError(f"evaluation at step {int(row['env_steps'])} gave h_rms_m {value}")
+        if cfg.mode == "hyperparams":
+            # the pruner compares trials at equal steps: report at the evaluation's scheduled step (a multiple of
+            # --eval-freq), which is the same in every trial whatever its batch size N T
+            step = int(row["env_steps"]) // cfg.eval_freq * cfg.eval_freq
+            if step not in reported:  # the last evaluation (at the budget) may share the step of the one before
+                reported.add(step)
+                trial.report(value, step=step)
+                if trial.should_prune():
+                    pruned = True
+                    return False
+        return True
+
+    def log(msg: str) -> None:
+        with open(out / "train.log", "a", encoding="utf-8") as f:
+            f.write(msg + "\n")
+
+    def fit_and_validate() -> tuple[float, dict[str, float | None]]:
+        record = train_fast(s, out, resume=resumed is not None, log=log, command=train_command, after_eval=after_eval)
+        last = record.get("last_eval") or {}
+        for key in ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure"):
+            if f"eval_{key}" in last:
+                trial.set_user_attr(f"last_eval_{key}", last[f"eval_{key}"])
+        trial.set_user_attr("last_eval_timesteps", record["timesteps"])
+        trial.set_user_attr("wall_time_s", record["wall_time_s"])
+        trial.set_user_attr("train_sps", record["train_sps"])
+        if pruned:
+            raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
+        return validate_fast_model(out, cells)
+
+    return _validated_trial(trial, cells, fit_and_validate)
+
+
+def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
+    """Continue an abandoned fast-PPO trial: the newest ``checkpoint.pt`` among this study's trials with the same
+    parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
+    ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
+    was); which trial it came from (``None``: none found, the run starts afresh)."""
+    import shutil
+
+    from optuna.trial import TrialState
+
+    best: tuple[float, Any, Path] | None = None
+    for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
+        ua = t.user_attrs
+        if t.number == trial.number or t.params != trial.params or "run_dir" not in ua:
+            continue
+        if "fail_reason" in ua or "over_budget" in ua:
+            continue
+        src = Path(str(ua["run_dir"])) / "run"
+        ckpt = src / "checkpoint.pt"
+        try:
+            same = json.loads((src / "settings.json").read_text()) == s.to_json()
+            mtime = ckpt.stat().st_mtime
+        except (OSError, ValueError):
+            continue
+        if same and (best is None or mtime > best[0]):
+            best = (mtime, t, src)
+    if best is None:
+        return None
+    _, t, src = best
+    out.mkdir(parents=True, exist_ok=True)
+    for f in src.iterdir():
+        if f.is_file() and f.name not in ("config.json", "run.lock", ABANDONED):
+            shutil.copy2(f, out / f.name)
+    return {"trial": t.number, "run_dir": str(src)}
+
+
+def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
+    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary.
+
+    ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
+    ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
+    """
+    import optuna
+    from optuna.study import MaxTrialsCallback
+    from optuna.trial import TrialState
+
+    cfg.validate()
+    sampler_seed = _worker_seed(cfg)
+    storage = make_storage(cfg)
+    study = open_study(cfg, storage, sampler_seed)
+    if opened is not None:
+        opened.append(study)
+    study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
+    with warnings.catch_warnings():  # experimental in Optuna; used as optimize() itself uses it
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        optuna.storages.fail_stale_trials(study)  # requeue trials of dead workers before checking the budget
+    mark_abandoned(study)
+
+    def stop_when_spent(st: Any, _t: Any) -> None:
+        if _exhausted(st, cfg, running=True):
+            st.stop()
+
+    with handling(_raise_interrupt, signal.SIGTERM):
+        if not _exhausted(study, cfg):
+            study.optimize(
+                _objective(cfg, study, sampler_seed),
+                n_trials=None,
+                catch=(ValueError, RuntimeError, FloatingPointError, FileNotFoundError, _OverBudget),
+                callbacks=[
+                    MaxTrialsCallback(cfg.budget, states=(TrialState.COMPLETE, TrialState.PRUNED)),
+                    stop_when_spent,
+                ],
+            )
+    return summarize(study, cfg.budget)
+
+
+def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
+    """The study as the summary states it (module docstring): from the study alone, the same for every worker."""
+    from optuna.trial import TrialState
+
+    trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
+    states = {s.name: sum(t.state == s for t in trials) for s in TrialState}
+    best = None
+    if any(t.state == TrialState.COMPLETE for t in trials):
+        b = study.best_trial
+        best = {"number": b.number, "value": b.value, "params": b.params}
+    attrs = dict(sorted(study.user_attrs.items()))
+    return {
+        "study": study.study_name,
+        "status": study_status(study, budget),
+        "budget": attrs.get("budget", budget),
+        "states": states,
+        "finished": sum(t.state not in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
+        "counted": budget_count(study),
+        "best": best,
+        "study_attrs": attrs,
+        "trials": [
+            {
+                "number": t.number,
+                "state": t.state.name,
+                "value": t.value,
+                "params": t.params,
+                "user_attrs": {k: v for k, v in sorted(t.user_attrs.items()) if k != "command"},
+                "failed_trial": t.system_attrs.get("failed_trial"),
+            }
+            for t in trials
+        ],
+    }
+
+
+def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
+    """Write ``summary.json`` into ``folder`` unless the one there saw more finished trials (module
+    docstring); under a lock on the folder's ``summary.lock``. Whether it was written."""
+    from amigo_gym.tools.runs import RunLock
+
+    path = folder / SUMMARY
+    with RunLock(folder, name="summary.lock", wait=60.0):
+        try:
+            old = json.loads(path.read_text())
+            newer = int(old.get("finished", -1)) > int(summary["finished"])
+        except (OSError, ValueError, TypeError, AttributeError):
+            newer = False
+        if newer:
+            return False
+        atomic_write_json(path, summary, parents=True)
+    return True
+
+
+# --------------------------------------------------------------------------- the winners into a YAML file
+_TOP_KEY = re.compile(r"^([^\s#:-][^:]*|'[^']*'|\"[^\"]*\"):")
+
+
+def _block_start(lines: list[str], i: int) -> int:
+    """First line of the comment lines right above line ``i`` (``i`` itself without any)."""
+    while i > 0 and lines[i - 1].startswith("#"):
+        i -= 1
+    return i
+
+
+def replace_yaml_block(text: str, key: str, block: str) -> str:
+    """``text`` (a YAML file of top-level mappings) with the top-level ``key`` and the comment lines right above it
+    replaced by ``block``; the other keys, their comments and the blank lines between them are kept as written.
+    A missing key is appended."""
+    lines = text.splitlines(keepends=True)
+    keys = [(i, m.group(1).strip("'\"")) for i, line in enumerate(lines) if (m := _TOP_KEY.match(line))]
+    at = [n for n, (_, k) in enumerate(keys) if k == key]
+    if not block.endswith("\n"):
+        block += "\n"
+    if not at:
+        head = "".join(lines)
+        return head + ("\n" if head and not head.endswith("\n\n") else "") + block
+    n = at[0]
+    start = _block_start(lines, keys[n][0])
+    end = _block_start(lines, keys[n + 1][0]) if n + 1 < len(keys) else len(lines)
+    while end > start and not lines[end - 1].strip():  # keep the blank lines before the next block
+        end -= 1
+    return "".join(lines[:start]) + block + "".join(lines[end:])
+
+
+def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
+    """Write the hyperparameters of ``study``'s best COMPLETE trial under ``env_id`` in the YAML file ``path``
+    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the
+    file's other keys stay as they were (:func:`replace_yaml_block`); written atomically and read back. The mapping
+    written (``None``: no COMPLETE trial, nothing written).
+
+    The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
+    trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
+    file's)."""
+    import yaml
+    from optuna.trial import TrialState
+
+    done = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE and t.value is not None]
+    if not done:
+        return None
+    best = study.best_trial
+    hp = best.user_attrs.get("hyperparams")
+    if not isinstance(hp, dict):  # a study from before the attribute: the trial's own file
+        hp = yaml.safe_load((Path(str(best.user_attrs["run_dir"])) / "hyperparams.yml").read_text())[env_id]
+    attrs = study.user_attrs
+    finished = sum(t.state in (TrialState.COMPLETE, TrialState.PRUNED) for t in study.get_trials(deepcopy=False))
+    seeds = (best.user_attrs.get("validation") or {}).get("seeds", [])
+    comment = [
+        f"# {env_id}: the best of {finished} finished trials (COMPLETE or PRUNED) of the study {study.study_name!r}",
+        f"# ({attrs.get('objective', OBJECTIVE)}, held-in validation cells, seeds {seeds[0] if seeds else '?'}.."
+        f"{seeds[-1] if seeds else '?'}): "
+        f"trial {best.number}, {1e3 * float(best.value):.4g} mm; written {time.strftime('%Y-%m-%d %H:%M %Z')}.",
+        f"# Found by: {attrs.get('command', '?')}",
+    ]
+    body = yaml.safe_dump({env_id: hp}, sort_keys=False, default_flow_style=None)
+    path = Path(path)
+    old = path.read_text(encoding="utf-8") if path.is_file() else ""
+    new = replace_yaml_block(old, env_id, "\n".join(comment) + "\n" + body)
+    before, after = (yaml.safe_load(old) or {}) if old else {}, yaml.safe_load(new)
+    if after.get(env_id) != hp or {k: v for k, v in after.items() if k != env_id} != {
+        k: v for k, v in before.items() if k != env_id
+    }:  # pragma: no cover - a file layout replace_yaml_block does not understand
+        raise ValueError(f"--save-best {path}: could not replace the {env_id} block of this file safely")
+    atomic_write(path, new, parents=True)
+    return dict(hp)
+
+
+# --------------------------------------------------------------------------- command line
+def parse_args(argv: Sequence[str]) -> SweepConfig:
+    """Settings from the command line (``amigo-gym sweep --help``)."""
+    return parse_settings(
+        SweepConfig, argv, "amigo-gym sweep", "Optuna studies over amigo-gym training runs.", argv=list(argv)
+    )
+
+
+def _spawn_workers(cfg: SweepConfig) -> list[int]:
+    """Open the study once (tables, grid), then run ``n_jobs`` worker processes of this command; their exit
+    statuses (negative: killed by that signal). A stop of this process (``SIGTERM``, ``Ctrl-C``) stops them
+    with ``SIGTERM`` and waits for them (each queues its trial again)."""
+    storage = make_storage(cfg)
+    open_study(cfg, storage, _worker_seed(cfg))
+    storage.engine.dispose()
+    base = [a for a in cfg.argv]
+    procs: list[subprocess.Popen[bytes]] = []
+    try:
+        for i in range(cfg.n_jobs):
+            args = [*base, "--n-jobs", "1", "--worker-index", str(i)]
+            procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args]))
+        return [p.wait() for p in procs]
+    except BaseException:
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        for p in procs:
+            p.wait()
+        raise
+
+
+def _describe(code: int) -> str:
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit status {code}"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym sweep`` (exit status: module docstring)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    cfg = parse_args(args)
+    url = cfg.storage_url
+
+    def run() -> int:
+        import optuna
+
+        interrupted = False
+        failed: list[str] = []
+        opened: list[Any] = []
+        with handling(_raise_interrupt, signal.SIGTERM):
+            if cfg.n_jobs > 1:
+                try:
+                    codes = _spawn_workers(cfg)
+                except KeyboardInterrupt:
+                    interrupted, codes = True, []
+                failed = [f"worker {i}: {_describe(c)}" for i, c in enumerate(codes) if c not in (0, INTERRUPTED)]
+                interrupted = interrupted or INTERRUPTED in codes
+            else:
+                try:
+                    run_worker(cfg, opened)
+                except KeyboardInterrupt:
+                    interrupted = True
+        # this process's own study object when it has one (an in-memory storage lives only in it)
+        study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
+        mark_abandoned(study)
+        summary = summarize(study, cfg.budget)
+        write_summary(Path(cfg.out) / cfg.name, summary)
+        status = summary["status"]
+        print(
+            f"study {summary['study']}: {status}; {summary['states']}; counted {summary['counted']} of budget "
+            f"{summary['budget']}"
+        )
+        if summary["best"] is not None:
+            print(f"best trial {summary['best']['number']}: {summary['best']['value']:.4g} {summary['best']['params']}")
+        if status == "running":
+            print("the study is still running (trials RUNNING or WAITING on other workers)")
+        if cfg.save_best is not None:
+            saved = write_best_yaml(cfg.save_best, study, cfg.env_id)
+            print(
+                f"wrote the best trial's hyperparameters under {cfg.env_id} in {cfg.save_best}"
+                if saved is not None
+                else f"no COMPLETE trial yet: {cfg.save_best} not written"
+            )
+        if failed:  # a worker that died counts before a stop
+            print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
+            return 1
+        if interrupted:
+            print("amigo-gym sweep: stopped; the interrupted trial is queued again: rerun to continue", file=sys.stderr)
+            return INTERRUPTED
+        if status == "incomplete":
+            print(
+                "amigo-gym sweep: error: the study is incomplete (trials failed or were lost); see summary.json",
+                file=sys.stderr,
+            )
+            return 1
+        return 0
+
+    def guarded() -> int:
+        try:
+            return run()
+        except ValueError as exc:  # status 2, one line, password masked
+            raise ValueError(scrub(str(exc), url)) from None
+        except (KeyboardInterrupt, FileNotFoundError, FileExistsError):
+            raise
+        except Exception as exc:
+            if os.environ.get("AMIGO_GYM_TRACEBACK"):
+                raise
+            print(
+                f"amigo-gym sweep: error: {scrub(' '.join(f'{type(exc).__name__}: {exc}'.split()), url)}",
+                file=sys.stderr,
+            )
+            return 1
+
+    return run_guarded(guarded, "amigo-gym sweep")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

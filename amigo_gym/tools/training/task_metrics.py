@@ -1,0 +1,224 @@
+"""Task metrics of path-tracking episodes, read from the environments' ``info`` (numpy only).
+
+Used by the benchmark and by the training's evaluation callback, so that a learning curve and a benchmark table
+report the same numbers. Imports only numpy and the standard library. The info read and the metrics of one episode:
+docs/benchmark.md, "Reference: task metrics".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "DEFAULT_FAILURE_TOLERANCE_M",
+    "DEFAULT_SETTLE_TIME_S",
+    "METRIC_NAMES",
+    "EpisodeRecorder",
+    "InfoAdapter",
+    "StepSample",
+    "episode_metrics",
+    "run_vector_episodes",
+]
+
+Array = NDArray[np.float64]
+
+#: start of the "settled" window [s] of the ``*_settled`` metrics and of the failure test
+DEFAULT_SETTLE_TIME_S = 5.0
+#: settled cross-track error beyond which an episode counts as a failure [m]
+DEFAULT_FAILURE_TOLERANCE_M = 0.10
+
+METRIC_NAMES: tuple[str, ...] = (
+    "h_rms_m",
+    "h_rms_settled_m",
+    "h_max_m",
+    "failure",
+    "speed_err_rms",
+    "speed_err_settled_rms",
+    "return",
+    "chatter_rms",
+    "chatter_settled_rms",
+    "effort_rms",
+    "steps",
+    "terminated",
+)
+
+
+@dataclass(frozen=True)
+class StepSample:
+    """What the metrics need from one step's ``info``."""
+
+    cross_track_error: float
+    speed_error: float
+    command: tuple[float, float]
+    wheel_rates: tuple[float, float]
+
+
+class InfoAdapter:
+    """Read a :class:`StepSample` from the ``info`` of ``AmigoBot-v0`` or ``-v1`` (module docstring).
+
+    Args:
+        robot: the simulated robot (``r1``, ``r2``) used when ``info`` has no ``speed_error`` (v0);
+            ``None``: the speed error is NaN for such infos.
+        reference_speed: reference speed of A [m/s] for the same computation.
+    """
+
+    def __init__(self, robot: Any = None, reference_speed: float | None = None) -> None:
+        self.robot = robot
+        self.reference_speed = reference_speed
+
+    @classmethod
+    def for_env(cls, env: Any) -> InfoAdapter:
+        """Adapter of a (wrapped) environment: takes ``env.unwrapped.params.robot`` / ``.speed`` if present."""
+        params = getattr(getattr(env, "unwrapped", env), "params", None)
+        robot = getattr(params, "robot", None)
+        speed = getattr(params, "speed", None)
+        ok = robot is not None and isinstance(speed, (int, float)) and not isinstance(speed, bool)
+        return cls(robot if ok else None, float(speed) if ok else None)  # type: ignore[arg-type]
+
+    def read(self, info: Mapping[str, Any]) -> StepSample:
+        """The step's sample; ``KeyError`` if ``cross_track_error`` or ``wheel_rates`` is missing."""
+        e = float(info["cross_track_error"])
+        w = np.asarray(info["wheel_rates"], dtype=np.float64).reshape(2)
+        cmd = np.asarray(info["command"], dtype=np.float64).reshape(2) if "command" in info else w
+        if "speed_error" in info:
+            ve = float(info["speed_error"])
+        elif self.robot is not None and self.reference_speed is not None:
+            ve = 0.5 * (self.robot.r1 * w[0] + self.robot.r2 * w[1]) - self.reference_speed
+        else:
+            ve = math.nan
+        return StepSample(e, ve, (float(cmd[0]), float(cmd[1])), (float(w[0]), float(w[1])))
+
+
+@dataclass
+class EpisodeRecorder:
+    """Collects the steps of one episode; :meth:`metrics` turns them into :func:`episode_metrics`."""
+
+    dt: float
+    settle_time_s: float = DEFAULT_SETTLE_TIME_S
+    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
+    e: list[float] = field(default_factory=list)
+    speed_error: list[float] = field(default_factory=list)
+    command: list[tuple[float, float]] = field(default_factory=list)
+    wheel_rates: list[tuple[float, float]] = field(default_factory=list)
+    rewards: list[float] = field(default_factory=list)
+    terminated: bool = False
+
+    def add(self, sample: StepSample, reward: float) -> None:
+        """Append one step (the state after the action)."""
+        self.e.append(sample.cross_track_error)
+        self.speed_error.append(sample.speed_error)
+        self.command.append(sample.command)
+        self.wheel_rates.append(sample.wheel_rates)
+        self.rewards.append(float(reward))
+
+    def metrics(self) -> dict[str, float]:
+        """The episode's metrics (module docstring)."""
+        return episode_metrics(
+            np.asarray(self.e, dtype=np.float64),
+            np.asarray(self.speed_error, dtype=np.float64),
+            np.asarray(self.command, dtype=np.float64).reshape(-1, 2),
+            np.asarray(self.wheel_rates, dtype=np.float64).reshape(-1, 2),
+            np.asarray(self.rewards, dtype=np.float64),
+            dt=self.dt,
+            terminated=self.terminated,
+            settle_time_s=self.settle_time_s,
+            failure_tolerance_m=self.failure_tolerance_m,
+        )
+
+
+def _rms(x: Array) -> float:
+    return float(np.sqrt(np.mean(np.square(x)))) if x.size else math.nan
+
+
+def episode_metrics(
+    e: Array,
+    speed_error: Array,
+    command: Array,
+    wheel_rates: Array,
+    rewards: Array,
+    *,
+    dt: float,
+    terminated: bool,
+    settle_time_s: float = DEFAULT_SETTLE_TIME_S,
+    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M,
+) -> dict[str, float]:
+    """Metrics of one episode of ``T`` steps, step ``k`` (0-based) at time ``t = (k + 1) dt`` (module docstring).
+
+    Args:
+        e: cross-track errors ``(T,)`` [m]. speed_error: ``(T,)`` [m/s]. command, wheel_rates: ``(T, 2)`` [rad/s].
+        rewards: ``(T,)``. dt: control period [s]. terminated: the episode ended by leaving the path.
+        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
+    """
+    t = dt * np.arange(1, e.size + 1)
+    settled = t >= settle_time_s - 1e-9
+    e_set = e[settled]
+    dcmd = np.diff(command, axis=0)
+    fail = bool(terminated) or bool(e_set.size and float(np.max(np.abs(e_set))) > failure_tolerance_m)
+    return {
+        "h_rms_m": _rms(e),
+        "h_rms_settled_m": _rms(e_set),
+        "h_max_m": float(np.max(np.abs(e))) if e.size else math.nan,
+        "failure": float(fail),
+        "speed_err_rms": _rms(speed_error),
+        "speed_err_settled_rms": _rms(speed_error[settled]),
+        "return": float(np.sum(rewards)),
+        "chatter_rms": _rms(dcmd),
+        "chatter_settled_rms": _rms(dcmd[settled[1:]]),
+        "effort_rms": _rms(wheel_rates),
+        "steps": float(e.size),
+        "terminated": float(bool(terminated)),
+    }
+
+
+def run_vector_episodes(
+    agent: Any,
+    venv: Any,
+    obs: Any,
+    recorders: Sequence[EpisodeRecorder],
+    adapter: InfoAdapter,
+    on_row: Callable[[int, dict[str, Any], bool], object] | None = None,
+) -> None:
+    """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
+    ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
+
+    The loop of :func:`amigo_gym.tools.training.benchmark.evaluate` and of
+    :func:`amigo_gym.tools.training.curvature.evaluate_tagged`: the agent predicts for the whole batch at every step
+    (a constant batch size, so that a network's outputs do not depend on how many episodes are still running;
+    ``episode_start`` marks the rows that ended, which the autoreset restarted). A row's episode is its steps up
+    to its first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
+    Reaching the end of an open path (AmigoBot-v1's ``info["end_of_path"]``) ends an episode as a success: its
+    recorder's ``terminated`` stays False.
+
+    Args:
+        agent: ``predict(obs, state=, episode_start=, deterministic=True) -> (actions, state)`` (SB3's form).
+        recorders: one :class:`EpisodeRecorder` per row (``N``).
+        adapter: reads a row's ``info`` (:class:`InfoAdapter`).
+        on_row: called as ``on_row(i, info, ended)`` after each recorded step of row ``i`` (``info``: that row's,
+            :func:`amigo_gym.envs.base.info_row`; ``ended``: it was the episode's last step).
+    """
+    from amigo_gym.envs.base import info_row
+
+    n = len(recorders)
+    live = np.ones(n, dtype=np.bool_)
+    state: Any = None
+    start = np.ones(n, dtype=np.bool_)
+    while live.any():
+        action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
+        start = np.zeros(n, dtype=np.bool_)
+        obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
+        for i in np.flatnonzero(live).tolist():
+            info = info_row(vinfo, i)
+            recorders[i].add(adapter.read(info), float(reward[i]))
+            ended = bool(terminated[i] or truncated[i])
+            if ended:
+                recorders[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
+                live[i] = False
+            if on_row is not None:
+                on_row(i, info, ended)
+        start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent

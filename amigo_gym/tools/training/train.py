@@ -1,0 +1,645 @@
+"""Train a PPO, SAC or TD3 baseline on ``AmigoBot-v0`` (one readable file, cleanrl style).
+
+Usage, hyperparameters, the run folder, checkpoints and resuming, seeds and threads: docs/baselines.md,
+"Reference: `amigo-gym train`".
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Literal, get_args
+
+import numpy as np
+
+from amigo_gym.data import hyperparams_dir, repository_root
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point
+from amigo_gym.tools import runs
+from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
+from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY, Hyperparams, load_hyperparams, parse_hyperparams
+from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter
+
+__all__ = [
+    "ALGOS",
+    "HYPERPARAMS_DIR",
+    "Settings",
+    "git_revision",
+    "load_hyperparams",
+    "main",
+    "train",
+]
+
+Algo = Literal["ppo", "sac", "td3"]
+#: the environments a run can train on
+EnvId = Literal["AmigoBot-v0", "AmigoBot-v1"]
+ALGOS = get_args(Algo)
+ENV_ID: EnvId = "AmigoBot-v0"
+ENV_IDS = get_args(EnvId)
+HYPERPARAMS_DIR = hyperparams_dir()
+OFF_POLICY = ("sac", "td3")
+EVAL_SEED_OFFSET = 10_000
+#: the VecNormalize statistics, beside the model (and in each checkpoint) when the file asks for normalize
+VECNORMALIZE = "vecnormalize.pkl"
+#: ``train(after_eval=...)``: receives each evaluation's record; ``False`` stops training
+AfterEvalHook = Callable[[dict[str, Any]], bool]
+
+
+# --------------------------------------------------------------------------- settings
+@dataclass
+class Settings:
+    """Everything a run depends on besides the hyperparameter file (saved in ``config.json``); each field is
+    the option of the same name of ``amigo-gym train`` (``env_id``: ``--env``, ``progress``: ``--no-progress``).
+
+    Attributes:
+        algo: algorithm (required).
+        seed: master seed [-].
+        timesteps: total env steps [steps], rounded up to whole rollouts (PPO: n_steps x n_envs; SAC/TD3:
+            train_freq x n_envs), and the command says so (default: the YAML's n_timesteps).
+        out: run directory [dir], must be empty unless --resume (required).
+        resume: continue from the latest good checkpoint in --out (its model and replay buffer are pickles:
+            resume only runs you trust).
+        n_envs: parallel envs [envs] (default: the YAML's n_envs or 1).
+        vec: vector env: ``native`` (:class:`amigo_gym.tools.training.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3
+            ``DummyVecEnv`` of ``gym.make``); ``auto``: native when ``n_envs > 1``.
+        hyperparams: rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml).
+        eval_freq: steps between evaluations [steps], 0: none.
+        eval_episodes: episodes per evaluation [episodes].
+        checkpoint_freq: steps between checkpoints [steps] (0: only at the end / on interrupt).
+        threads: torch threads [threads].
+        progress: show a progress bar (tqdm + rich); --no-progress: no progress bar.
+        export: copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none).
+        export_model: model to export: ``final`` (``model.zip``) or ``best`` (``best_model.zip``, the best
+            periodic evaluation; the record names its step).
+        env_id: environment id: ``AmigoBot-v0`` (the paper's task) or ``AmigoBot-v1`` (the real robot on many
+            paths).
+        env_kwargs: keywords of gym.make as JSON [json] (default {}), e.g. '{"path": "mixed", "speed": [0.1,
+            0.4]}': the training distribution.
+        argv: the command line (not an option).
+    """
+
+    algo: Algo
+    seed: int = 0
+    timesteps: int | None = None
+    out: str = field(default="runs/run", metadata=cli(required=True))
+    resume: bool = False
+    n_envs: int | None = None
+    vec: Literal["auto", "native", "dummy"] = "auto"
+    hyperparams: str | None = None
+    eval_freq: int = 10_000
+    eval_episodes: int = 5
+    checkpoint_freq: int = 20_000
+    threads: int = 1
+    progress: bool = field(default=True, metadata=cli("--no-progress"))
+    export: str | None = None
+    export_model: Literal["final", "best"] = "final"
+    env_id: EnvId = field(default=ENV_ID, metadata=cli("--env"))
+    env_kwargs: dict[str, Any] = field(default_factory=dict, metadata=cli(parse=json_object))
+    argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
+        if self.algo not in ALGOS:
+            raise ValueError(f"algo must be one of {list(ALGOS)}, got {self.algo!r}")
+        if self.export_model not in ("final", "best"):
+            raise ValueError(f"export_model must be 'final' or 'best', got {self.export_model!r}")
+        if self.env_id not in ENV_IDS:
+            raise ValueError(f"env_id must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        if not isinstance(self.env_kwargs, dict):
+            raise ValueError(f"env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
+        if self.vec not in ("auto", "native", "dummy"):
+            raise ValueError(f"vec must be 'auto', 'native' or 'dummy', got {self.vec!r}")
+        for name, low in (("seed", 0), ("eval_freq", 0), ("checkpoint_freq", 0), ("eval_episodes", 1), ("threads", 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+        for name in ("timesteps", "n_envs"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+
+
+# --------------------------------------------------------------------------- small utilities
+def git_revision() -> str:
+    """``git rev-parse HEAD`` of the repository holding this file, with ``-dirty`` if tracked files changed."""
+    root = repository_root()
+    if root is None:
+        return "not a git checkout"
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True, timeout=10).stdout
+
+    try:
+        rev, dirty = git("rev-parse", "HEAD").strip(), git("status", "--porcelain", "--untracked-files=no").strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return rev + ("-dirty" if dirty else "")
+
+
+def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torch")) -> dict[str, str]:
+    """Versions of Python, amigo_gym, numpy and ``libraries``: the libraries a run depends on."""
+    import importlib
+
+    from amigo_gym import __version__
+
+    found = {name: str(importlib.import_module(name).__version__) for name in libraries}
+    return {"python": platform.python_version(), "amigo_gym": __version__, "numpy": np.__version__} | found
+
+
+# --------------------------------------------------------------------------- environments
+def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The settings of the environment a run trains on, as JSON values.
+
+    ``AmigoBot-v0``: every field of its ``EnvParams`` (``gym.make``'s defaults updated by ``overrides``);
+    ``AmigoBot-v1``: the ``overrides`` as given (the defaults of ``TrackingParams`` apply to the rest).
+    """
+    from amigo_gym.model.params import EnvParams
+
+    if env_id != ENV_ID:
+        return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
+    from amigo_gym.envs.amigobot import make_env_params
+
+    params = make_env_params("train", None, **(overrides or {})) if overrides else EnvParams()
+    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(params)))
+    return kwargs
+
+
+def _make_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any]:
+    """JSON env kwargs as ``gym.make`` keywords (lists that stand for pairs become tuples)."""
+    out = dict(kwargs or {})
+    for key in ("speed", "preview"):
+        if isinstance(out.get(key), list):
+            out[key] = tuple(out[key])
+    return out
+
+
+def _native(vec: str, n_envs: int) -> bool:
+    """Whether the run uses the native vector env (``--vec native``, or ``auto`` with several envs)."""
+    return vec == "native" or (vec == "auto" and n_envs > 1)
+
+
+def make_train_env(
+    n_envs: int,
+    vec: str,
+    seed: int,
+    normalize: dict[str, Any] | None = None,
+    env_id: str = ENV_ID,
+    kwargs: dict[str, Any] | None = None,
+) -> Any:
+    """SB3 VecEnv of ``n_envs`` ``env_id`` envs with episode statistics (``VecMonitor``), seeded ``seed + i``.
+
+    ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``; ``kwargs``: of ``gym.make``.
+    """
+    import gymnasium as gym
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
+
+    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
+    from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
+
+    venv: Any
+    if _native(vec, n_envs):
+        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs, env_id=env_id, **_make_kwargs(kwargs)))
+    else:
+        venv = DummyVecEnv([lambda: Monitor(gym.make(env_id, **_make_kwargs(kwargs))) for _ in range(n_envs)])
+    venv.seed(seed)
+    venv.action_space.seed(seed)
+    if normalize is not None:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        venv = VecNormalize(venv, **normalize)
+    return venv
+
+
+# --------------------------------------------------------------------------- callbacks
+class _StopAtBoundary(Exception):
+    """Raised at a rollout boundary, after the checkpoint, when a stop was asked for."""
+
+
+def _callbacks(
+    s: Settings,
+    out: Path,
+    n_envs: int,
+    eval_seed: int,
+    done_steps: int,
+    wall: Callable[[], float],
+    stop: runs.StopRequest,
+    normalize: bool = False,
+    after_eval: AfterEvalHook | None = None,
+) -> list[Any]:
+    import gymnasium as gym
+    from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+
+    class Checkpoint(BaseCallback):
+        """At the start of a rollout (a consistent state: module docstring of :mod:`amigo_gym.tools.runs`): a
+        checkpoint every ``freq`` steps, and the stop asked for by ``SIGTERM``/``SIGINT``."""
+
+        def __init__(self, freq: int) -> None:
+            super().__init__()
+            self.freq = freq
+            self.last = done_steps
+
+        def _on_rollout_start(self) -> None:
+            due = self.freq and self.num_timesteps - self.last >= self.freq
+            if due or stop.requested:
+                self.last = self.num_timesteps
+                save_checkpoint(self.model, out, s.algo, wall())
+            if stop.requested:
+                raise _StopAtBoundary
+
+        def _on_step(self) -> bool:
+            return True
+
+    class AfterEval(BaseCallback):
+        """After each evaluation: append it and its task metrics to ``eval.json`` (atomically); call ``after_eval``."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            f = out / "eval.json"
+            self.history: list[dict[str, float]] = json.loads(f.read_text()) if f.is_file() else []
+
+        def _on_step(self) -> bool:
+            parent = self.parent
+            assert isinstance(parent, TaskEvalCallback)
+            entry = {
+                "timesteps": int(self.num_timesteps),
+                "mean_reward": float(parent.last_mean_reward),
+                "best_mean_reward": float(parent.best_mean_reward),
+                "wall_time_s": wall(),
+            } | parent.task_metrics
+            self.history.append(entry)
+            atomic_write_json(out / "eval.json", self.history, parents=True)
+            return True if after_eval is None else bool(after_eval(entry))
+
+    class SaveBest(BaseCallback):
+        """On a new best evaluation: ``best_model.zip`` (atomically)."""
+
+        def _on_step(self) -> bool:
+            atomic_save(self.model.save, out / "best_model.zip", parents=True)
+            return True
+
+    class TaskEvalCallback(EvalCallback):
+        """SB3's ``EvalCallback`` that also logs the task metrics of its evaluation episodes.
+
+        TensorBoard scalars next to ``eval/mean_reward``: ``eval/h_rms_m`` (mean over the episodes of H's
+        cross-track RMS), ``eval/h_rms_settled_m`` (over ``t >= 5 s``), ``eval/speed_err_rms`` [m/s] and
+        ``eval/failure_rate`` (:mod:`amigo_gym.tools.training.task_metrics`); also in ``eval.json``.
+        """
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            probe = gym.make(s.env_id, **_make_kwargs(s.env_kwargs))
+            self.adapter = InfoAdapter.for_env(probe)  # v1's infos carry their own speed error
+            self.dt = float(probe.unwrapped.params.dt)  # type: ignore[attr-defined]
+            probe.close()
+            self.recorders: dict[int, EpisodeRecorder] = {}
+            self.episodes: list[dict[str, float]] = []
+            self.task_metrics: dict[str, float] = {}
+            self.t_start = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
+                self.recorders, self.episodes = {}, []
+            return bool(super()._on_step())
+
+        def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+            super()._log_success_callback(locals_, globals_)
+            i, info = int(locals_["i"]), locals_["info"]
+            rec = self.recorders.setdefault(i, EpisodeRecorder(self.dt))
+            rec.add(self.adapter.read(info), float(locals_["reward"]))
+            if locals_["done"]:
+                ended = not info.get("TimeLimit.truncated", False)
+                rec.terminated = ended and not bool(info.get("end_of_path", False))  # v1: path end = success
+                self.episodes.append(rec.metrics())
+                del self.recorders[i]
+                for key in ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate"):
+                    vals = np.array([e["failure" if key == "failure_rate" else key] for e in self.episodes])
+                    vals = vals[np.isfinite(vals)]
+                    value = float(vals.mean()) if vals.size else float("nan")
+                    self.task_metrics[key] = value
+                    self.logger.record(f"eval/{key}", value)
+
+    cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
+    if s.eval_freq > 0:
+        # the same VecEnv type as training (SB3 warns otherwise); with normalize, EvalCallback copies the training
+        # statistics into its VecNormalize before each evaluation
+        vec = "native" if _native(s.vec, n_envs) else "dummy"
+        stats = {"training": False, "norm_reward": False} if normalize else None
+        eval_env = make_train_env(1, vec, eval_seed, stats, s.env_id, s.env_kwargs)
+        after = AfterEval()
+        ev = TaskEvalCallback(
+            eval_env,
+            n_eval_episodes=s.eval_episodes,
+            eval_freq=max(1, s.eval_freq // n_envs),
+            deterministic=True,
+            callback_on_new_best=SaveBest(),
+            callback_after_eval=after,
+            verbose=0,
+        )
+        ev.n_calls = done_steps // n_envs  # resumed: evaluate at the same steps as an uninterrupted run
+        if after.history:  # resumed: a new best must beat the evaluations before the interruption
+            ev.best_mean_reward = max(h["mean_reward"] for h in after.history)
+        cbs.append(ev)
+    return cbs
+
+
+def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) -> Path:
+    """A checkpoint of ``model`` (and its replay buffer for SAC/TD3): :func:`amigo_gym.tools.runs.save_checkpoint`."""
+
+    def write(folder: Path) -> list[str]:
+        model.save(folder / "model.zip")
+        fault_point("checkpoint:model")
+        if algo not in OFF_POLICY:
+            return ["model.zip"]
+        model.save_replay_buffer(folder / "replay_buffer.pkl")
+        fault_point("checkpoint:replay")
+        return ["model.zip", "replay_buffer.pkl"]
+
+    vecnormalize = model.get_vec_normalize_env()
+    if vecnormalize is not None:  # its statistics are part of the state: saved (and checked) with the model
+        inner = write
+
+        def write(folder: Path) -> list[str]:
+            names = inner(folder)
+            vecnormalize.save(folder / VECNORMALIZE)
+            return [*names, VECNORMALIZE]
+
+    return runs.save_checkpoint(out, algo, int(model.num_timesteps), write, wall_time_s)
+
+
+def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int, s: Settings) -> Any:
+    """Model (with its replay buffer) of a verified checkpoint, on a new training env seeded for its step."""
+    venv = make_train_env(n_envs, s.vec, s.seed + ck.step, None, s.env_id, s.env_kwargs)
+    if (ck.folder / VECNORMALIZE).is_file():
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        with runs.corrupt_errors(ck.folder / VECNORMALIZE, "VecNormalize statistics"):
+            venv = VecNormalize.load(str(ck.folder / VECNORMALIZE), venv)
+    path = ck.folder / "model.zip"
+    with runs.corrupt_errors(path, f"{algo.upper()} model"):
+        model = algo_cls.load(path, env=venv, device="cpu")
+    if int(model.num_timesteps) != ck.step:
+        raise runs.CorruptFileError(f"{path}: holds step {model.num_timesteps}, meta.json says {ck.step}")
+    if algo in OFF_POLICY:
+        rb_path = ck.folder / "replay_buffer.pkl"
+        with runs.corrupt_errors(rb_path, "replay buffer"):
+            model.load_replay_buffer(rb_path)
+        rb = model.replay_buffer
+        per_env = ck.step // n_envs
+        if rb.n_envs != n_envs or rb.pos != per_env % rb.buffer_size or rb.full != (per_env >= rb.buffer_size):
+            raise runs.CorruptFileError(
+                f"{rb_path}: holds {rb.buffer_size if rb.full else rb.pos} transitions per env, "
+                f"not the {per_env} of step {ck.step}"
+            )
+    return model
+
+
+# --------------------------------------------------------------------------- training
+def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any]:
+    """Run (or resume) one training run; return the run record (also written to ``run.json``).
+
+    ``after_eval`` is called after every periodic evaluation with its ``eval.json`` entry (``timesteps``,
+    ``mean_reward``, ``h_rms_m``, ...); returning ``False`` stops training (used by
+    :mod:`amigo_gym.tools.training.sweep` for pruning). The run then ends normally, with its model.
+
+    The run folder is locked for the whole call (:class:`amigo_gym.tools.runs.RunLock`).
+
+    Raises:
+        RunLockedError: another process uses the folder.
+        CorruptFileError: a damaged file that has no fallback (one line naming it).
+    """
+    s.validate()
+    hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
+    parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
+    stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
+    with runs.handling(stop), runs.RunLock(s.out):
+        result = _train(s, stop, after_eval)
+    if stop.requested and result is None:
+        raise KeyboardInterrupt
+    if result is None:  # pragma: no cover - _train returns None only on a stop
+        raise RuntimeError("training stopped")
+    return result
+
+
+def rollout_steps(model: Any) -> tuple[int, str] | None:
+    """The environment steps SB3 collects between two checks of the step budget, and how they come about.
+
+    PPO collects ``n_steps`` per env on ``n_envs`` envs; SAC and TD3 collect ``train_freq`` steps per env when
+    their ``train_freq`` counts steps (``None`` when it counts episodes: the rounding then depends on the episodes).
+    """
+    n_envs = int(model.n_envs)
+    if hasattr(model, "n_steps"):
+        return int(model.n_steps) * n_envs, f"n_steps {int(model.n_steps)} x {n_envs} envs"
+    freq = getattr(model, "train_freq", None)
+    unit = getattr(getattr(freq, "unit", None), "value", None)
+    if freq is None or unit != "step":
+        return None
+    return int(freq.frequency) * n_envs, f"train_freq {int(freq.frequency)} x {n_envs} envs"
+
+
+def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None) -> tuple[int, str]:
+    """The step count a run will end at when it has ``done`` steps and ``remaining`` to go: SB3 stops at the first
+    whole rollout (:func:`rollout_steps`) at or past the budget, ``done + ceil(remaining / rollout) * rollout``."""
+    if remaining <= 0 or rollout is None:
+        return done + max(remaining, 0), "" if rollout is None else rollout[1]
+    size, why = rollout
+    return done + -(-remaining // size) * size, why
+
+
+def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[str, Any]) -> dict[str, Any]:
+    """The ``config.json`` of a run started (or recovered) by this command."""
+    return {
+        "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
+        "hyperparams": hp,
+        "env_id": s.env_id,
+        "env_kwargs": env_kwargs(s.env_id, s.env_kwargs),
+        "git_revision": git_revision(),
+        "versions": versions(),
+        "command": "amigo-gym train " + " ".join(s.argv),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+
+
+def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
+    import torch
+    from stable_baselines3 import PPO, SAC, TD3
+    from stable_baselines3.common.utils import set_random_seed
+
+    algo_cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[s.algo]
+    out = Path(s.out)
+    hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
+    hp = load_hyperparams(hp_path, s.env_id)
+    parsed: Hyperparams = parse_hyperparams(s.algo, hp, str(hp_path))  # checked before anything is written
+    total = int(s.timesteps if s.timesteps is not None else (parsed.n_timesteps or 100_000))
+    n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
+
+    config_file = out / "config.json"
+    recovered = False
+    if s.resume and not config_file.is_file():
+        if not runs.candidates(out, report=False):
+            raise FileNotFoundError(f"--resume: no checkpoint in {out} (no run started there: missing config.json)")
+        # the checkpoints are intact: resume from them, recording this command's settings as the configuration
+        runs.warn(
+            f"--resume: {config_file} is missing; resuming from the checkpoints in {out / runs.CHECKPOINTS} "
+            "with the settings of this command (config.json written again, marked 'recovered')"
+        )
+        recovered = True
+    if s.resume and not recovered:
+        config = runs.read_json(config_file)
+        if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
+            raise runs.CorruptFileError(f"{config_file}: not a run configuration (no 'settings')")
+        if config["settings"].get("algo") != s.algo:
+            raise ValueError(f"--resume: {out} holds a {config['settings'].get('algo')} run, not {s.algo}")
+    elif not s.resume and runs.has_run_files(out):
+        raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
+    runs.clean_temporaries(out)  # left by a killed run; we hold the lock
+
+    torch.set_num_threads(s.threads)
+    set_random_seed(s.seed)
+
+    loaded = None
+    if s.resume:
+        loaded = runs.load_checkpoint(out, s.algo, lambda ck: _load_checkpoint(algo_cls, s.algo, ck, n_envs, s))
+        if loaded is None:
+            runs.warn(f"--resume: no checkpoint yet in {out}; starting from step 0")
+        runs.restore_snapshot(out, None if loaded is None else loaded[0])
+        if recovered:
+            config = _new_config(s, total, n_envs, hp_path, hp) | {"recovered": True}
+        resume_entry = {
+            "command": "amigo-gym train " + " ".join(s.argv),
+            "from_step": 0 if loaded is None else loaded[0].step,
+        }
+        config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
+        atomic_write_json(config_file, config, parents=True)
+    else:
+        config = _new_config(s, total, n_envs, hp_path, hp)
+        atomic_write_json(config_file, config, parents=True)
+
+    if loaded is not None:
+        ck, model = loaded
+        done_steps, previous_wall = ck.step, ck.wall_time_s
+        set_random_seed(s.seed + done_steps)
+    else:
+        venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize, s.env_id, s.env_kwargs)
+        kw = dict(parsed.kwargs)
+        noise = parsed.action_noise(int(venv.action_space.shape[0]))
+        if noise is not None:
+            kw["action_noise"] = noise
+        policy: Any = parsed.policy
+        if policy == LOWPASS_POLICY:  # TD3 with the low-pass actor: the previous command's place from the env
+            from amigo_gym.tools.training.sb3_lowpass import policy_for
+
+            policy, kw["policy_kwargs"] = policy_for(venv, kw.get("policy_kwargs"))
+        model = algo_cls(policy, venv, seed=s.seed, device="cpu", tensorboard_log=str(out / "tb"), verbose=0, **kw)
+        done_steps, previous_wall = 0, 0.0
+    venv = model.get_env()
+
+    remaining = total - int(model.num_timesteps)
+    planned = planned_timesteps(int(model.num_timesteps), remaining, rollout_steps(model))
+    if planned[0] != total:
+        print(
+            f"amigo-gym train: --timesteps {total} becomes {planned[0]} steps: "
+            f"SB3 trains whole rollouts ({planned[1]})",
+            file=sys.stderr,
+            flush=True,
+        )
+    t0 = time.perf_counter()
+
+    def wall() -> float:
+        return previous_wall + time.perf_counter() - t0
+
+    normalize = model.get_vec_normalize_env() is not None
+    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop, normalize, after_eval)
+    try:
+        if remaining > 0:
+            model.learn(
+                remaining,
+                callback=cbs,
+                reset_num_timesteps=loaded is None and not s.resume,
+                tb_log_name=s.algo,
+                progress_bar=s.progress,
+            )
+    except _StopAtBoundary:
+        venv.close()
+        return None
+    if int(model.num_timesteps) != done_steps or loaded is None:
+        save_checkpoint(model, out, s.algo, wall())
+    atomic_save(model.save, out / "model.zip", parents=True)
+    vecnormalize = model.get_vec_normalize_env()
+    if vecnormalize is not None:
+        atomic_save(vecnormalize.save, out / VECNORMALIZE, parents=True)
+
+    evals = runs.read_json(out / "eval.json") if (out / "eval.json").is_file() else []
+    record = {
+        "algo": s.algo,
+        "seed": s.seed,
+        "timesteps": int(model.num_timesteps),
+        "n_envs": n_envs,
+        "wall_time_s": round(wall(), 1),
+        "resumed_from": done_steps if s.resume else None,
+        "last_eval": evals[-1] if evals else None,
+        "command": config["command"],
+        "resumes": config.get("resumes", []),
+        "git_revision": config["git_revision"],
+        "versions": versions(),
+        "cpu_count": os.cpu_count(),
+        "torch_threads": s.threads,
+        "sha256": runs.sha256_file(out / "model.zip"),
+    }
+    # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
+    record["files"] = {
+        name: runs.sha256_file(out / name)
+        for name in ("model.zip", "best_model.zip", VECNORMALIZE)
+        if (out / name).is_file()
+    }
+    atomic_write_json(out / "run.json", record, parents=True)
+    if s.export:
+        exp = Path(s.export)
+        src = out / "model.zip"
+        exported = {"exported_model": "final", "exported_timesteps": record["timesteps"]}
+        if s.export_model == "best":
+            if not evals or not (out / "best_model.zip").is_file():
+                raise FileNotFoundError(f"--export-model best: no evaluation / best_model.zip in {out}")
+            src = out / "best_model.zip"
+            best = max(evals, key=lambda e: e["mean_reward"])
+            exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
+        exported["sha256"] = runs.sha256_file(src)
+        atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip", parents=True)
+        atomic_write_json(exp / f"{s.algo}.json", record | exported, parents=True)
+    venv.close()
+    return record
+
+
+# --------------------------------------------------------------------------- command line
+def parse_args(argv: Sequence[str]) -> Settings:
+    """Settings from the command line (``amigo-gym train --help``)."""
+    return parse_settings(
+        Settings, argv, "amigo-gym train", "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.", argv=list(argv)
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``amigo-gym train``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    s = parse_args(args)
+
+    def run() -> int:
+        record = train(s)
+        lines = [f"{k}: {record[k]}" for k in ("algo", "seed", "timesteps", "wall_time_s")]
+        if record["last_eval"]:
+            lines.append(f"last eval mean reward: {record['last_eval']['mean_reward']:.2f}")
+        print("\n".join(lines))
+        return 0
+
+    return run_guarded(run, "amigo-gym train")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
