@@ -36,7 +36,8 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
 
 
 def source_digest() -> str:
-    """A short hash (16 hex digits) of the bytes of every ``.py`` file of the package, in path order.
+    """A short hash (16 hex digits) of the bytes of every ``.py`` file of the environment core (the package but
+    :mod:`amigo_gym.tools`, which the kernels never import), in path order.
 
     numba keys its disk cache of a compiled function on the function's own file, but compiles into it the constants
     and functions it uses from other files: :func:`kernel_cache` puts the cache in a folder named by this digest, so
@@ -45,6 +46,8 @@ def source_digest() -> str:
     root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
     for f in sorted(root.rglob("*.py")):
+        if f.relative_to(root).parts[0] == "tools":
+            continue
         digest.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
     return digest.hexdigest()[:16]
 
