@@ -1,66 +1,39 @@
-r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL/PufferLib style, one module).
+r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL style, one module): ``amigo-gym train-fast``.
 
-    amigo-gym train-fast --out runs/fast_s0                              # the training distribution, 15M steps
-    amigo-gym train-fast --out runs/fast_s0 --resume                     # continue after an interruption
-    amigo-gym train-fast --out runs/fast_s1 --hyperparams agents/hyperparams/fastppo.yml --seed 1
-    amigo-gym train-fast --out runs/res_s0 --residual-bound 0.3 --history 4 \
-        --env-kwargs '{"path": "mixed", "speed": [0.1, 0.4], "randomize": {"delay": [0, 0.3]}}'
-    amigo-gym train-fast --out runs/res2_s0 --residual-bound 0.15 --residual-penalty 3 --nominal-fraction 0.3 \
-        --history 4 --env-kwargs '{"path": "mixed", "sigma_track": 0.005, "randomize": {"delay": [0, 0.3]}}'
+    amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo.yml      # 2-core laptop
+    amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo_gpu.yml  # 16 cores + GPU
+    amigo-gym train-fast --out runs/fast_s0 --resume                                          # after an interruption
 
-Why. SB3's PPO steps a handful of envs and runs small minibatches: on two cores it trains at ~600 env-steps/s
-on this task. Here one ``gym.make_vec("AmigoBot-v1", num_envs=N)`` (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`,
-the compiled batch step) steps all ``N`` robots at once, the policy runs on the ``(N, d)`` batch, and the update
-uses minibatches of thousands of samples: no Python loop over the sub-environments anywhere.
+One ``gym.make_vec("AmigoBot-v1", num_envs=N)`` steps all ``N`` robots on the CPU (``env_threads`` > 1: its
+``numba-parallel`` kernel on that many threads); the networks, the rollout buffers, GAE and the updates live on
+``device`` (``auto``: CUDA when torch sees a GPU, else the CPU). Per step the normalised features go to the device
+as one tensor and the sampled actions come back as one. Env and learner alternate (no overlap; docs/performance.md).
 
 Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robots)
 ----------------------------------------------------------------------------------
-* Features ``x`` of the raw observations (:class:`amigo_gym.policies.learned.FeatureBuilder`: observation, optional
-  history, optional analytic base action), normalised by a running mean/std updated with every batch
-  (:class:`~amigo_gym.policies.learned.RunningMeanStd`; saved with the model).
-* Gaussian policy ``u ~ N(mu(x), diag(exp(2 log_std)))`` with a state-independent ``log_std``; the environment
-  gets :func:`amigo_gym.policies.learned.env_action` of ``u`` (clip; residual; low-pass).
-* Reward normalisation (as SB3's ``VecNormalize``/CleanRL): ``R <- gamma R + r``, ``r' = clip(r / sqrt(Var[R] +
-  1e-8), -10, 10)`` with the running variance of ``R`` (reset at episode ends).
-* Time-limit truncation is bootstrapped: ``r'_t += gamma V(x_final)`` for rows truncated (not terminated).
-* GAE: ``delta_t = r'_t + gamma V(x_{t+1}) (1 - d_t) - V(x_t)``, ``A_t = delta_t + gamma lambda (1 - d_t) A_{t+1}``.
-* ``epochs`` passes over the ``N T`` samples in minibatches of ``minibatch_size``: clipped surrogate
-  ``-min(rho A, clip(rho, 1 - eps, 1 + eps) A)`` (advantages normalised per minibatch), ``vf_coef`` times
-  ``(V - (A + V_old))^2 / 2``, minus ``ent_coef`` times the entropy; gradient norm clipped at ``max_grad_norm``;
-  Adam, learning rate annealed linearly to 0 over the run.
-* Smoothness (CAPS, Mysore et al. 2021), on the mean output ``mu``: temporal ``caps_temporal * mean ||mu(x_t) -
-  mu(x_{t+1})||^2`` over steps within an episode, spatial ``caps_spatial * mean ||mu(x) - mu(x + sigma n)||^2`` with
-  ``n ~ N(0, I)`` in normalised feature units, ``sigma = caps_sigma``.
-* Nominal robots (``nominal_fraction = f > 0``): the last ``round(f N)`` of the ``N`` training robots are simulated
-  with ``env_kwargs`` without ``randomize`` and ``true_robot`` (the nominal robot: no mismatch, delay, slip or
-  noise), the others with ``env_kwargs``; the evaluations stay on ``env_kwargs``.
-* Residual penalty (residual policies only): ``residual_penalty * mean ||mu(x)||^2`` over the minibatch, ``mu`` in
-  units of the bound (the correction is ``residual_bound * clip(mu, -1, 1)``): pulls the correction to 0 where
-  the advantages do not ask for one, so that the policy keeps the analytic action where that is already at its floor.
+* Features ``x`` (:class:`amigo_gym.policies.learned.FeatureBuilder`: observation, optional history, optional
+  analytic base action), normalised by a running mean/std (saved with the model).
+* Gaussian policy ``u ~ N(mu(x), diag(exp(2 log_std)))``, state-independent ``log_std``; the env gets
+  :func:`amigo_gym.policies.learned.env_action` of ``u`` (clip; residual; low-pass).
+* Rewards scaled by the running std of the discounted return (clipped to +-10); time-limit truncation bootstrapped
+  with ``gamma V(x_final)``; GAE(``gamma``, ``gae_lambda``).
+* ``epochs`` passes in minibatches: clipped surrogate (advantages normalised per minibatch), ``vf_coef`` times the
+  value loss, minus ``ent_coef`` times the entropy; gradient norm clipped; Adam, learning rate annealed to 0.
+* Optional: CAPS smoothness on ``mu`` (temporal ``caps_temporal``, spatial ``caps_spatial`` at ``caps_sigma``);
+  the L2 ``residual_penalty`` on a residual policy's ``mu``; the last ``round(nominal_fraction N)`` robots simulated
+  as the nominal robot (``env_kwargs`` without ``randomize`` and ``true_robot``); a curvature curriculum.
 
-Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything needed to continue bit for bit: networks,
-optimiser, normalisers, the pickled vector env, the current observations and policy state, torch's RNG; written
-atomically every ``checkpoint_every`` env-steps and at the end); ``curve.csv`` / ``curve.json`` (env-steps,
-wall-clock, training throughput, evaluation metrics of :mod:`amigo_gym.tools.training.task_metrics` on ``eval_envs``
-episodes of the training distribution with the fixed validation seeds ``eval_seed + i``, never the benchmark's
-cells); ``model.zip`` (the final policy, :class:`amigo_gym.policies.learned.FastPolicy`, numpy only to run) and
-``best.zip`` (the evaluation with the lowest mean H cross-track RMS); ``run.json`` (steps, wall time, versions,
-sha256 of ``model.zip``).
+Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything needed to continue bit for bit, written
+atomically every ``checkpoint_every`` env-steps and at the end); ``curve.csv``/``curve.json`` (evaluations of
+:mod:`amigo_gym.tools.training.task_metrics` on ``eval_envs`` validation episodes, never the benchmark's cells);
+``model.zip`` (the final :class:`amigo_gym.policies.learned.FastPolicy`, numpy only), ``best.zip`` (lowest
+validation H RMS); ``run.json``, the manifest (steps, wall time, throughput, versions, git revision, CPU, thread
+counts, device, sha256 of ``model.zip``). Same command, same machine, same seed: the same weights (tested).
 
-Hyperparameter file (``--hyperparams``, :func:`load_settings_yaml`): the ``AmigoBot-v1`` mapping of an rl-zoo style
-YAML file whose keys are :class:`FastPPOSettings` fields (``agents/hyperparams/fastppo.yml``, written by
-``amigo-gym sweep --algo fastppo --save-best``); the run's own ``env_kwargs`` and ``seed`` are refused there (they
-are options of the run). The file's values replace the defaults; options given on the command line override the
-file.
-
-Interruption: the first ``SIGTERM`` or ``SIGINT`` (Ctrl-C) stops the run at the end of the current iteration, after a
-checkpoint (``KeyboardInterrupt``, status 130; ``--resume`` continues it bit for bit); a second one stops at once
-(the last periodic checkpoint stays). Signal handlers are installed only when training runs in the main thread.
-The run folder is locked for the whole run (:class:`amigo_gym.tools.runs.RunLock`, ``<out>/run.lock``): a second
-``train-fast`` or ``--resume`` on a folder in use stops at once with one line and touches nothing; a killed run
-leaves no lock behind (the operating system drops it).
-
-Imports torch (this module is an edge of the package; ``import amigo_gym`` never imports it).
+``--hyperparams``: the ``AmigoBot-v1`` mapping of an rl-zoo style YAML file of :class:`FastPPOSettings` fields
+(``env_kwargs`` and ``seed`` refused there); command-line options override it. The first ``SIGTERM``/``SIGINT`` stops
+at the end of the iteration after a checkpoint (status 130; ``--resume`` continues bit for bit), a second at once;
+the run folder is locked while training (:class:`amigo_gym.tools.runs.RunLock`).
 """
 
 from __future__ import annotations
@@ -80,7 +53,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import gymnasium as gym
 import numpy as np
@@ -91,32 +64,61 @@ from torch import nn
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
+from amigo_gym.tools.bench.machine import cpu_model
 from amigo_gym.tools.options import cli, json_object
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.task_metrics import episode_metrics
-from amigo_gym.tools.training.train import versions
+from amigo_gym.tools.training.train import git_revision, versions
 
 __all__ = [
+    "DEVICES",
     "YAML_ENV_ID",
     "YAML_RUN_KEYS",
+    "ActorCritic",
     "FastPPOSettings",
     "HyperparamsFile",
     "TrainFastRun",
-    "ActorCritic",
     "curriculum_path_params",
     "evaluate_policy",
     "load_settings_yaml",
+    "machine_record",
     "main",
+    "resolve_device",
     "train",
 ]
 
 Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
+#: values of ``--device``
+DEVICES = ("auto", "cpu", "cuda")
 
 
 def _default_env_kwargs() -> dict[str, Any]:
     return dict(TRAINING_DISTRIBUTION["env_kwargs"])
+
+
+def resolve_device(device: str) -> str:
+    """``"auto"``: ``"cuda"`` when torch sees a CUDA device, else ``"cpu"``; ``"cpu"``/``"cuda"`` as given.
+
+    Raises:
+        ValueError: one line, for another name or ``"cuda"`` on a machine without one.
+    """
+    if device not in DEVICES:
+        raise ValueError(f"FastPPOSettings.device must be one of {', '.join(DEVICES)}, got {device!r}")
+    cuda = torch.cuda.is_available()
+    if device == "cuda" and not cuda:
+        raise ValueError("FastPPOSettings.device = 'cuda' but torch sees no CUDA device here (allowed: auto, cpu)")
+    return ("cuda" if cuda else "cpu") if device == "auto" else device
+
+
+def _numba_threads_limit() -> int:
+    """The most threads numba may use here (``NUMBA_NUM_THREADS``); 1 without numba."""
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
+        return 1
+    return int(numba.config.NUMBA_NUM_THREADS)
 
 
 @dataclass(frozen=True)
@@ -156,7 +158,11 @@ class FastPPOSettings:
         eval_envs: evaluation episodes (validation seeds eval_seed + i), in [1, 4096].
         eval_seed: first validation seed [-], in [0, 2**31).
         checkpoint_every: env-steps between checkpoints [steps], in [1, 1e10].
-        threads: torch threads, in [1, 64].
+        threads: torch threads (the learner's CPU work) [threads], in [1, 64].
+        env_threads: threads of the vector env's step [threads], in [1, 256] and at most numba's NUMBA_NUM_THREADS;
+            above 1 the env runs its numba-parallel kernel (the same results bit for bit).
+        device: where the networks, rollout buffers, GAE and updates run: auto (cuda if torch sees one, else
+            cpu), cpu or cuda.
         max_episode_steps: episode time limit [steps], in [1, 100000].
         curriculum_max_curvature: final bound of ``|kappa|`` of the random paths [1/m] of a curvature curriculum
             (:func:`curriculum_path_params`), in [0, 100]; 0 (default): no curriculum. Needs ``path`` "random" or
@@ -199,6 +205,8 @@ class FastPPOSettings:
     eval_seed: int = 1_000_000
     checkpoint_every: int = 2_000_000
     threads: int = 1
+    env_threads: int = 1
+    device: Literal["auto", "cpu", "cuda"] = "auto"
     max_episode_steps: int = 600
     curriculum_max_curvature: float = 0.0
     curriculum_max_curvature_rate: float = 0.0
@@ -220,6 +228,7 @@ class FastPPOSettings:
             "eval_seed": (0, 2**31 - 1),
             "checkpoint_every": (1, 10**10),
             "threads": (1, 64),
+            "env_threads": (1, 256),
             "max_episode_steps": (1, 100000),
             "curriculum_stages": (1, 1000),
         }
@@ -251,6 +260,8 @@ class FastPPOSettings:
                 f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
                 f"got residual_bound = {self.residual_bound}"
             )
+        if self.device not in DEVICES:
+            raise ValueError(f"{o}.device must be one of {', '.join(DEVICES)}, got {self.device!r}")
         if not isinstance(self.norm_reward, bool):
             raise TypeError(f"{o}.norm_reward must be True or False, got {self.norm_reward!r}")
         hid = tuple(self.hidden)
@@ -420,7 +431,13 @@ class ActorCritic(nn.Module):
     def numpy_layers(self) -> list[tuple[Array, Array]]:
         """The actor as ``[(W (in, out), b (out,))]`` for :class:`FastPolicy` (``x W + b``)."""
         lins = [m for m in self.actor if isinstance(m, nn.Linear)]
-        return [(m.weight.detach().double().numpy().T.copy(), m.bias.detach().double().numpy().copy()) for m in lins]
+        return [(_np(m.weight).T.copy(), _np(m.bias)) for m in lins]
+
+
+def _np(t: torch.Tensor) -> Array:
+    """A float64 numpy copy of ``t`` (from any device)."""
+    out: Array = t.detach().to("cpu", torch.float64).numpy().copy()
+    return out
 
 
 def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
@@ -482,7 +499,7 @@ def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
     return out
 
 
-# --------------------------------------------------------------------------- training
+# --------------------------------------------------------------------------- training state
 @dataclass
 class _Run:
     """Everything a checkpoint holds besides the settings."""
@@ -507,46 +524,56 @@ class _Run:
     ep_ret: Array = field(default_factory=lambda: np.zeros(0))
 
 
-class _ConcatVectorEnv:
-    """Vector envs side by side as one of ``sum(n_i)`` robots (the rows of ``envs[0]`` first), for the trainer only.
+@dataclass
+class _Buffers:
+    """One rollout on the device, allocated once: features ``x`` and values ``v`` ``(T + 1, N, ...)`` (the last
+    row: after the rollout), actions, log-probabilities, rewards and episode ends ``(T, N, ...)``."""
 
-    ``step``'s info holds only ``final_obs`` (an object array of ``(obs_dim,)`` arrays, ``None`` where no episode
-    ended), the one info field the trainer reads.
-    """
+    x: torch.Tensor
+    u: torch.Tensor
+    logp: torch.Tensor
+    v: torch.Tensor
+    r: torch.Tensor
+    done: torch.Tensor
+
+    @classmethod
+    def allocate(cls, t_len: int, n: int, dim: int, device: str) -> _Buffers:
+        def z(*shape: int) -> torch.Tensor:
+            return torch.zeros(shape, device=device)
+
+        return cls(z(t_len + 1, n, dim), z(t_len, n, 2), z(t_len, n), z(t_len + 1, n), z(t_len, n), z(t_len, n))
+
+
+class _ConcatVectorEnv:
+    """Vector envs side by side as one of ``sum(n_i)`` robots (the rows of ``envs[0]`` first); ``step``'s info holds
+    only ``final_obs`` (an object array, ``None`` where no episode ended), the one info field the trainer reads."""
 
     def __init__(self, envs: Sequence[Any]) -> None:
         self.envs = list(envs)
-        self.sizes = [int(e.num_envs) for e in self.envs]
-        self.num_envs = sum(self.sizes)
+        self.edges = [0, *itertools.accumulate(int(e.num_envs) for e in self.envs)]
+        self.num_envs = self.edges[-1]
 
-    def _split(self, x: Sequence[Any] | Array) -> list[Any]:
-        edges = [0, *itertools.accumulate(self.sizes)]
-        return [x[a:b] for a, b in itertools.pairwise(edges)]
+    def _split(self, x: Any) -> list[Any]:
+        return [x[a:b] for a, b in itertools.pairwise(self.edges)]
 
     def reset(self, seed: list[int]) -> tuple[Array, dict[str, Any]]:
-        obs = [e.reset(seed=part)[0] for e, part in zip(self.envs, self._split(seed), strict=True)]
-        return np.concatenate(obs), {}
+        return np.concatenate([e.reset(seed=s)[0] for e, s in zip(self.envs, self._split(seed), strict=True)]), {}
 
     def step(self, action: Array) -> tuple[Array, Array, Array, Array, dict[str, Any]]:
         outs = [e.step(a) for e, a in zip(self.envs, self._split(action), strict=True)]
         final = np.full(self.num_envs, None, dtype=object)
-        k = 0
-        for (*_, info), n in zip(outs, self.sizes, strict=True):
-            if "final_obs" in info:
-                mask = np.asarray(info["_final_obs"], dtype=bool)
-                for i in np.flatnonzero(mask):
-                    final[k + i] = info["final_obs"][i]
-            k += n
-        cat = [np.concatenate([o[j] for o in outs]) for j in range(4)]
-        return cat[0], cat[1], cat[2], cat[3], {"final_obs": final}
+        for (*_, info), k in zip(outs, self.edges, strict=False):
+            for i in np.flatnonzero(info.get("_final_obs", ())):
+                final[k + i] = info["final_obs"][i]
+        o, r, te, tr = (np.concatenate([out[j] for out in outs]) for j in range(4))
+        return o, r, te, tr, {"final_obs": final}
 
     @property
     def params(self) -> Any:
-        """The first env's task settings (all envs share ``path_params``: :meth:`set_path_params` sets them all)."""
+        """The first env's task settings (all share ``path_params``: :meth:`set_path_params` sets them all)."""
         return self.envs[0].params
 
     def set_path_params(self, path_params: Mapping[str, Any]) -> None:
-        """The curriculum's stage, for every env (randomised and nominal robots alike)."""
         for e in self.envs:
             e.set_path_params(path_params)
 
@@ -557,28 +584,39 @@ class _ConcatVectorEnv:
 
 def _training_env(s: FastPPOSettings) -> Any:
     """The training robots: one native vector env of ``env_kwargs``, or that and one of nominal robots."""
+    kernel = {"kernel": "numba-parallel"} if s.env_threads > 1 else {}
 
     def make(n: int, kw: Mapping[str, Any]) -> Any:
-        return gym.make_vec(
-            "AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, autoreset_mode="SameStep", **kw
-        )
+        return gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps,
+                            autoreset_mode="SameStep", **kernel, **kw)  # fmt: skip
 
     k = round(s.nominal_fraction * s.num_envs)
-    if k == 0:
-        return make(s.num_envs, s.env_kwargs)
     nominal = {key: v for key, v in s.env_kwargs.items() if key not in ("randomize", "true_robot")}
-    if k == s.num_envs:
-        return make(k, nominal)
+    if k in (0, s.num_envs):
+        return make(s.num_envs, nominal if k else s.env_kwargs)
     return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
 
 
-def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
-    torch.manual_seed(s.seed)
-    net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
+def _set_threads(s: FastPPOSettings) -> None:
+    """torch's threads; numba's for the env (one line naming the limit when the machine has fewer)."""
+    torch.set_num_threads(s.threads)
+    if s.env_threads > 1:
+        limit = _numba_threads_limit()
+        if s.env_threads > limit:
+            raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
+                             f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
+        import numba
+
+        numba.set_num_threads(s.env_threads)
+
+
+def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
+    torch.manual_seed(s.seed)  # every device's generator
+    net = ActorCritic(builder.dim, s.hidden, s.log_std_init).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
     env = _training_env(s)
     seeds = np.random.SeedSequence(s.seed).generate_state(s.num_envs, dtype=np.uint32)
-    obs, _ = env.reset(seed=[int(x) for x in seeds])  # gymnasium accepts a list
+    obs, _ = env.reset(seed=[int(x) for x in seeds])
     n = s.num_envs
     return _Run(
         net, opt, env, RunningMeanStd.zeros(builder.dim), RunningMeanStd.zeros(1), np.zeros(n),
@@ -587,7 +625,13 @@ def _new_run(s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
     )  # fmt: skip
 
 
-def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
+_RUN_ARRAYS = ("ret_acc", "obs", "fstate", "starts", "ep_ret")
+_RUN_SCALARS = ("iteration", "global_step", "wall_s", "next_eval", "next_ckpt", "best_h", "curve", "episode_returns")
+
+
+def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
+    """Write everything needed to continue bit for bit (atomically): networks, optimiser, normalisers, the pickled
+    vector env, the current observations and policy state, torch's random states (CPU and CUDA)."""
     obj = {
         "settings": s.to_json(),
         "net": r.net.state_dict(),
@@ -596,38 +640,35 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "obs_rms": r.obs_rms.to_dict(),
         "ret_rms": r.ret_rms.to_dict(),
         "torch_rng": torch.get_rng_state(),
-        **{k: getattr(r, k) for k in ("ret_acc", "obs", "fstate", "starts", "ep_ret")},
-        **{k: getattr(r, k) for k in ("iteration", "global_step", "wall_s", "next_eval", "next_ckpt", "best_h")},
-        "curve": r.curve,
+        "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_initialized() else None,
+        **{k: getattr(r, k) for k in _RUN_ARRAYS + _RUN_SCALARS},
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
 
 
-def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
-    ck = torch.load(path, weights_only=False)
+def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
+    ck = torch.load(path, weights_only=False, map_location="cpu")
     # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
-    net = ActorCritic(builder.dim, s.hidden, s.log_std_init)
+    net = ActorCritic(builder.dim, s.hidden, s.log_std_init).to(device)
     net.load_state_dict(ck["net"])
     opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
-    opt.load_state_dict(ck["opt"])
+    opt.load_state_dict(ck["opt"])  # Adam moves its state to the parameters' device
     torch.set_rng_state(ck["torch_rng"])
-    r = _Run(
-        net, opt, pickle.loads(ck["env"]), RunningMeanStd.from_dict(ck["obs_rms"]),
-        RunningMeanStd.from_dict(ck["ret_rms"]), ck["ret_acc"], ck["obs"], ck["fstate"], ck["starts"],
-    )  # fmt: skip
-    for k in ("iteration", "global_step", "wall_s", "next_eval", "next_ckpt", "best_h", "curve", "episode_returns"):
+    if device == "cuda" and ck.get("cuda_rng") is not None:
+        torch.cuda.set_rng_state_all(ck["cuda_rng"])
+    r = _Run(net, opt, pickle.loads(ck["env"]), RunningMeanStd.from_dict(ck["obs_rms"]),
+             RunningMeanStd.from_dict(ck["ret_rms"]), *(ck[k] for k in _RUN_ARRAYS[:4]))  # fmt: skip
+    for k in ("ep_ret", *_RUN_SCALARS):
         setattr(r, k, ck[k])
-    r.ep_ret = ck["ep_ret"]
     return r
 
 
 def _policy(s: FastPPOSettings, r: _Run, info: Mapping[str, Any] | None = None) -> FastPolicy:
     obs_rms = RunningMeanStd(r.obs_rms.mean.copy(), r.obs_rms.var.copy(), r.obs_rms.count)
-    log_std = r.net.log_std.detach().double().numpy().copy()
-    return FastPolicy(s.spec(), r.net.numpy_layers(), log_std, obs_rms, info)
+    return FastPolicy(s.spec(), r.net.numpy_layers(), _np(r.net.log_std), obs_rms, info)
 
 
 def _write_curve(out: Path, curve: list[dict[str, float]]) -> None:
@@ -649,6 +690,141 @@ def _check_start(out: Path, resume: bool) -> None:
         raise FileNotFoundError(f"--resume: no checkpoint {ckpt}")
 
 
+def machine_record(device: str) -> dict[str, Any]:
+    """Where a run ran: git revision (``"unknown"`` outside a git checkout), CPU, thread counts, device."""
+    rev = git_revision()
+    try:
+        import numba
+
+        numba_threads: int | None = int(numba.get_num_threads())
+    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
+        numba_threads = None
+    return {
+        "git_revision": rev if rev and " " not in rev else "unknown",  # train.git_revision's sentence outside git
+        "cpu": cpu_model(),
+        "cpu_count": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "numba_threads": numba_threads,
+        "device": device,
+        "device_name": torch.cuda.get_device_name() if device == "cuda" else cpu_model(),
+    }
+
+
+# --------------------------------------------------------------------------- rollout, update
+def _sync(device: str) -> None:
+    """Wait for the device (timings of asynchronous CUDA work)."""
+    if device == "cuda":
+        torch.cuda.synchronize()
+
+
+def _features(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, device: str) -> tuple[torch.Tensor, Array, Array]:
+    """Normalised features of the current observations on the device (the normaliser updated with them first)."""
+    feats, base, s_next = builder(r.obs, r.fstate, r.starts)
+    r.obs_rms.update(feats)
+    x = torch.from_numpy(r.obs_rms.normalize(feats).astype(np.float32)).to(device)
+    return x, base, s_next
+
+
+def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str) -> float:
+    """Step the ``N`` robots ``T`` times with the current policy into ``buf``; the wall seconds spent in the env."""
+    net, gamma, t_len = r.net, s.gamma, s.rollout_steps
+    rew_buf = np.zeros((t_len, s.num_envs))
+    done_buf = np.zeros((t_len, s.num_envs))
+    finals: list[tuple[int, NDArray[np.intp], NDArray[np.float32]]] = []  # time-limit cuts: (t, rows, features)
+    env_s = 0.0
+    for t in range(t_len):
+        x, base, s_next = _features(s, r, builder, device)
+        with torch.no_grad():
+            mu = net.actor(x)
+            u = mu + net.log_std.exp() * torch.randn_like(mu)
+            buf.x[t], buf.u[t], buf.v[t], buf.logp[t] = x, u, net.value(x), _log_prob(mu, net.log_std, u)
+        a = env_action(_np(u), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
+        t0 = time.perf_counter()
+        obs, rew, term, trunc, info = r.env.step(a)
+        env_s += time.perf_counter() - t0
+        rew = np.asarray(rew, dtype=np.float64)
+        done = np.logical_or(term, trunc)
+        r.ep_ret += rew
+        if done.any():
+            r.episode_returns.extend(r.ep_ret[done].tolist())
+            r.ep_ret[done] = 0.0
+        if s.norm_reward:
+            r.ret_acc = r.ret_acc * gamma + rew
+            r.ret_rms.update(r.ret_acc)
+            rew = np.clip(rew / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0)
+            r.ret_acc[done] = 0.0
+        cut = np.flatnonzero(np.logical_and(trunc, np.logical_not(term)))
+        if cut.size:  # the time limit: bootstrapped below with V of the final observation
+            final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
+            f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
+            finals.append((t, cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
+        rew_buf[t], done_buf[t] = rew, done
+        r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
+    if finals:  # one forward pass for every truncated row of the rollout
+        with torch.no_grad():
+            v_fin = _np(net.value(torch.from_numpy(np.concatenate([f for *_, f in finals])).to(device)))
+        k = 0
+        for t, cut, _ in finals:
+            rew_buf[t, cut] += gamma * v_fin[k : k + cut.size]
+            k += cut.size
+    buf.x[t_len] = _features(s, r, builder, device)[0]
+    with torch.no_grad():
+        buf.v[t_len] = net.value(buf.x[t_len])
+    buf.r.copy_(torch.from_numpy(rew_buf.astype(np.float32)))
+    buf.done.copy_(torch.from_numpy(done_buf.astype(np.float32)))
+    r.global_step += s.num_envs * t_len
+    return env_s
+
+
+def gae(s: FastPPOSettings, buf: _Buffers) -> tuple[torch.Tensor, torch.Tensor]:
+    """Advantages and returns ``(T, N)`` (GAE; an episode end cuts the recursion)."""
+    adv = torch.zeros_like(buf.r)
+    last = torch.zeros_like(buf.r[0])
+    for t in reversed(range(s.rollout_steps)):
+        nonterm = 1.0 - buf.done[t]
+        delta = buf.r[t] + s.gamma * buf.v[t + 1] * nonterm - buf.v[t]
+        last = delta + s.gamma * s.gae_lambda * nonterm * last
+        adv[t] = last
+    return adv, adv + buf.v[:-1]
+
+
+def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
+    """``epochs`` passes of minibatch PPO over the rollout (module docstring), on the buffers' device."""
+    net, t_len = r.net, s.rollout_steps
+    batch, d = s.num_envs * t_len, buf.x.shape[-1]
+    adv, ret = gae(s, buf)
+    bx, bu, blogp = buf.x[:t_len].reshape(batch, d), buf.u.reshape(batch, 2), buf.logp.reshape(batch)
+    badv, bret = adv.reshape(batch), ret.reshape(batch)
+    bnext, bsame = buf.x[1:].reshape(batch, d), 1.0 - buf.done.reshape(batch)
+    for _ in range(s.epochs):
+        perm = torch.randperm(batch, device=bx.device)
+        for k in range(0, batch, s.minibatch_size):
+            idx = perm[k : k + s.minibatch_size]
+            xb = bx[idx]
+            mu = net.actor(xb)
+            ratio = (_log_prob(mu, net.log_std, bu[idx]) - blogp[idx]).exp()
+            ab = badv[idx]
+            ab = (ab - ab.mean()) / (ab.std() + 1e-8)
+            pg = torch.max(-ab * ratio, -ab * ratio.clamp(1.0 - s.clip_coef, 1.0 + s.clip_coef)).mean()
+            vloss = 0.5 * (net.value(xb) - bret[idx]).pow(2).mean()
+            entropy = (net.log_std + 0.5 * math.log(2.0 * math.pi * math.e)).sum()
+            loss = pg + s.vf_coef * vloss - s.ent_coef * entropy
+            if s.caps_temporal > 0:
+                same = bsame[idx]
+                dmu = (net.actor(bnext[idx]) - mu).pow(2).sum(-1)
+                loss = loss + s.caps_temporal * (dmu * same).sum() / same.sum().clamp(min=1.0)
+            if s.residual_penalty > 0:
+                loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
+            if s.caps_spatial > 0:
+                mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
+                loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()
+            r.opt.zero_grad()
+            loss.backward()  # type: ignore[no-untyped-call]
+            nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
+            r.opt.step()
+
+
+# --------------------------------------------------------------------------- the run
 def train(
     s: FastPPOSettings,
     out: str | Path,
@@ -675,15 +851,17 @@ def train(
 
     Raises:
         FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
+        ValueError: ``device`` cuda without one, ``env_threads`` above numba's limit here.
         runs.RunLockedError: another process trains in ``out`` (the folder is locked for the whole call).
         KeyboardInterrupt: stopped by ``SIGTERM``/``SIGINT`` (module docstring), after a checkpoint.
     """
     out = Path(out)
     _check_start(out, resume)
+    device = resolve_device(s.device)
     out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     with RunLock(out), handling(stop):  # one process per run folder: a second train-fast on it stops with one line
-        record = _train(s, out, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
+        record = _train(s, out, device, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
     if stop.requested and record.get("stopped_by") == "signal":
         raise KeyboardInterrupt
     return record
@@ -691,7 +869,8 @@ def train(
 
 def _train(
     s: FastPPOSettings,
-    out: str | Path,
+    out: Path,
+    device: str,
     resume: bool,
     until_steps: int | None,
     log: Callable[[str], None] | None,
@@ -700,36 +879,33 @@ def _train(
     after_eval: Callable[[dict[str, float]], bool] | None,
     stop_request: StopRequest,
 ) -> dict[str, Any]:
-    out = Path(out)
     ckpt = out / "checkpoint.pt"
     _check_start(out, resume)  # again, under the lock: another process may have written a checkpoint meanwhile
-    torch.set_num_threads(s.threads)
+    _set_threads(s)
+    say: Callable[[str], None] = log or (lambda _msg: None)
     builder = FeatureBuilder(s.spec())
-    r = _load_checkpoint(ckpt, s, builder) if resume else _new_run(s, builder)
+    r = _load_checkpoint(ckpt, s, builder, device) if resume else _new_run(s, builder, device)
     if not resume:
         atomic_write_json(out / "settings.json", s.to_json())
-    n, t_len = s.num_envs, s.rollout_steps
-    batch = n * t_len
+    batch = s.num_envs * s.rollout_steps
     n_iter = -(-s.total_steps // batch)
+    if n_iter * batch != s.total_steps:
+        say(f"total_steps {s.total_steps:,d} rounded up to {n_iter * batch:,d}: whole rollouts of num_envs x "
+            f"rollout_steps = {batch:,d} env-steps")  # fmt: skip
     stop = s.total_steps if until_steps is None else min(s.total_steps, until_steps)
-    d = builder.dim
-    gamma = s.gamma
-    net = r.net
-    t_start = time.perf_counter()
-    wall0 = r.wall_s
-
-    def say(msg: str) -> None:
-        if log is not None:
-            log(msg)
+    t_start, wall0 = time.perf_counter(), r.wall_s
 
     def evaluate() -> bool:
         t0 = time.perf_counter()
         pol = _policy(s, r)
         m = evaluate_policy(pol, s)
         wall = wall0 + time.perf_counter() - t_start
-        row = {"env_steps": float(r.global_step), "wall_s": round(wall, 2), "train_sps": 0.0}
         train_wall = max(wall - sum(c.get("eval_s", 0.0) for c in r.curve), 1e-9)
-        row["train_sps"] = round(r.global_step / train_wall, 1)
+        row = {
+            "env_steps": float(r.global_step),
+            "wall_s": round(wall, 2),
+            "train_sps": round(r.global_step / train_wall, 1),
+        }
         if s.curriculum_max_curvature > 0:  # the random paths' bound being trained on [1/m]
             row["curriculum_max_curvature"] = float(dict(r.env.params.path_params).get("max_curvature", 1.0))
         row |= {f"eval_{k}": v for k, v in m.items()}
@@ -752,120 +928,39 @@ def _train(
         if not evaluate():
             stopped_by = "after_eval"
         r.next_eval += s.eval_every
-
-    # CPU seconds of this call's rollouts and updates (process_time, all threads) and wall seconds of its iterations
-    cpu_split = {"rollout": 0.0, "update": 0.0, "loop_wall": 0.0}
-    buf_x = torch.zeros((t_len + 1, n, d))
-    buf_u = torch.zeros((t_len, n, 2))
-    buf_logp = torch.zeros((t_len, n))
-    buf_v = torch.zeros((t_len + 1, n))
-    buf_r = torch.zeros((t_len, n))
-    buf_done = torch.zeros((t_len, n))
+    # this call's seconds: CPU (process_time, all threads) of rollouts and updates, wall of the env steps, the
+    # rollouts (env + policy), the updates and the iterations
+    cpu = {"rollout": 0.0, "update": 0.0, "loop_wall": 0.0}
+    wall_split = {"env": 0.0, "rollout": 0.0, "update": 0.0, "loop": 0.0}
+    buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw
             r.env.set_path_params(stage)
             say(f"[curriculum] {r.global_step:>11,d} steps: random paths {stage}")
         r.iteration += 1
-        frac = 1.0 - (r.iteration - 1.0) / n_iter
         for g in r.opt.param_groups:
-            g["lr"] = frac * s.learning_rate
-        # ---------------------------------------------------------------- rollout
+            g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
         c0, w0 = time.process_time(), time.perf_counter()
-        for t in range(t_len):
-            feats, base, s_next = builder(r.obs, r.fstate, r.starts)
-            r.obs_rms.update(feats)
-            x = torch.as_tensor(r.obs_rms.normalize(feats), dtype=torch.float32)
-            with torch.no_grad():
-                mu = net.actor(x)
-                v = net.value(x)
-                u = mu + net.log_std.exp() * torch.randn_like(mu)
-                logp = _log_prob(mu, net.log_std, u)
-            a = env_action(u.double().numpy(), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
-            obs, rew, term, trunc, info = r.env.step(a)
-            rew = np.asarray(rew, dtype=np.float64)
-            done = np.logical_or(term, trunc)
-            r.ep_ret += rew
-            if done.any():
-                r.episode_returns.extend(r.ep_ret[done].tolist())
-                r.ep_ret[done] = 0.0
-            if s.norm_reward:
-                r.ret_acc = r.ret_acc * gamma + rew
-                r.ret_rms.update(r.ret_acc)
-                rew = np.clip(rew / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0)
-                r.ret_acc[done] = 0.0
-            cut = np.flatnonzero(np.logical_and(trunc, np.logical_not(term)))
-            if cut.size:  # bootstrap the time limit: V of the final observation
-                final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
-                f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
-                with torch.no_grad():
-                    xf = torch.as_tensor(r.obs_rms.normalize(f_fin), dtype=torch.float32)
-                    rew[cut] += gamma * net.value(xf).double().numpy()
-            buf_x[t], buf_u[t], buf_logp[t], buf_v[t] = x, u, logp, v
-            buf_r[t] = torch.as_tensor(rew, dtype=torch.float32)
-            buf_done[t] = torch.as_tensor(done, dtype=torch.float32)
-            r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
-        feats, _, _ = builder(r.obs, r.fstate, r.starts)
-        x_last = torch.as_tensor(r.obs_rms.normalize(feats), dtype=torch.float32)
-        buf_x[t_len] = x_last
-        with torch.no_grad():
-            buf_v[t_len] = net.value(x_last)
-        r.global_step += batch
-        c1 = time.process_time()
-        cpu_split["rollout"] += c1 - c0
-        # ---------------------------------------------------------------- GAE
-        adv = torch.zeros((t_len, n))
-        last = torch.zeros(n)
-        for t in reversed(range(t_len)):
-            nonterm = 1.0 - buf_done[t]
-            delta = buf_r[t] + gamma * buf_v[t + 1] * nonterm - buf_v[t]
-            last = delta + gamma * s.gae_lambda * nonterm * last
-            adv[t] = last
-        ret = adv + buf_v[:t_len]
-        # ---------------------------------------------------------------- update
-        bx, bu, blogp = buf_x[:t_len].reshape(batch, d), buf_u.reshape(batch, 2), buf_logp.reshape(batch)
-        badv, bret = adv.reshape(batch), ret.reshape(batch)
-        bnext = buf_x[1:].reshape(batch, d)
-        bsame = 1.0 - buf_done.reshape(batch)
-        for _ in range(s.epochs):
-            perm = torch.randperm(batch)
-            for k in range(0, batch, s.minibatch_size):
-                idx = perm[k : k + s.minibatch_size]
-                xb = bx[idx]
-                mu = net.actor(xb)
-                logp = _log_prob(mu, net.log_std, bu[idx])
-                ratio = (logp - blogp[idx]).exp()
-                ab = badv[idx]
-                ab = (ab - ab.mean()) / (ab.std() + 1e-8)
-                pg = torch.max(-ab * ratio, -ab * ratio.clamp(1.0 - s.clip_coef, 1.0 + s.clip_coef)).mean()
-                vloss = 0.5 * (net.value(xb) - bret[idx]).pow(2).mean()
-                entropy = (net.log_std + 0.5 * math.log(2.0 * math.pi * math.e)).sum()
-                loss = pg + s.vf_coef * vloss - s.ent_coef * entropy
-                if s.caps_temporal > 0:
-                    same = bsame[idx]
-                    dmu = (net.actor(bnext[idx]) - mu).pow(2).sum(-1)
-                    loss = loss + s.caps_temporal * (dmu * same).sum() / same.sum().clamp(min=1.0)
-                if s.residual_penalty > 0:
-                    loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
-                if s.caps_spatial > 0:
-                    mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
-                    loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()
-                r.opt.zero_grad()
-                loss.backward()  # type: ignore[no-untyped-call]
-                nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
-                r.opt.step()
-        cpu_split["update"] += time.process_time() - c1
-        cpu_split["loop_wall"] += time.perf_counter() - w0
-        wall = wall0 + time.perf_counter() - t_start
-        r.wall_s = wall
+        wall_split["env"] += rollout(s, r, builder, buf, device)
+        _sync(device)
+        c1, w1 = time.process_time(), time.perf_counter()
+        update(s, r, buf)
+        _sync(device)
+        c2, w2 = time.process_time(), time.perf_counter()
+        cpu["rollout"] += c1 - c0
+        cpu["update"] += c2 - c1
+        cpu["loop_wall"] += w2 - w0
+        wall_split["rollout"] += w1 - w0
+        wall_split["update"] += w2 - w1
+        wall_split["loop"] += w2 - w0
+        r.wall_s = wall = wall0 + time.perf_counter() - t_start
         if r.iteration % 20 == 0 or r.global_step >= stop:
             recent = r.episode_returns[-200:]
-            mean_ret = float(np.mean(recent)) if recent else math.nan
-            say(
-                f"{r.global_step:>11,d} / {s.total_steps:,d} steps  {wall:7.0f} s  "
-                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  episode return {mean_ret:7.1f}  "
-                f"std {float(net.log_std.detach().exp().mean()):.3f}"
-            )
+            ret = f"episode return {np.mean(recent):7.1f}" if recent else "no episode finished yet"
+            say(f"{r.global_step:>11,d} / {s.total_steps:,d} steps  {wall:7.0f} s  "
+                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  {ret}  "
+                f"std {float(r.net.log_std.detach().exp().mean()):.3f}")  # fmt: skip
         if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
             if not evaluate():
                 stopped_by = "after_eval"
@@ -876,7 +971,7 @@ def _train(
             stopped_by = "signal"
         if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
             r.wall_s = wall0 + time.perf_counter() - t_start
-            _save_checkpoint(ckpt, s, r)
+            checkpoint(ckpt, s, r)
             while r.next_ckpt <= r.global_step:
                 r.next_ckpt += s.checkpoint_every
     r.wall_s = wall0 + time.perf_counter() - t_start
@@ -894,9 +989,9 @@ def _train(
         "settings": s.to_json(),
         "command": command,
         "versions": versions(("gymnasium", "torch")),
-        "cpu_count": os.cpu_count(),
-        "torch_threads": torch.get_num_threads(),
-        "cpu_s_this_call": {k: round(v, 2) for k, v in cpu_split.items()},
+        **machine_record(device),
+        "cpu_s_this_call": {k: round(v, 2) for k, v in cpu.items()},
+        "wall_s_this_call": {k: round(v, 3) for k, v in wall_split.items()},
     }
     if record["finished"]:
         _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
