@@ -543,3 +543,89 @@ def test_offpolicy_models_have_64x64_networks() -> None:
             assert sum(m.out_features == 64 for m in linears) >= 2 * 3, algo  # actor and >= 2 critics, 2 layers each
     finally:
         venv.close()
+
+
+# --------------------------------------------------------------------------- device, threads, determinism, manifest
+def test_device_auto_resolves_to_cuda_only_where_torch_sees_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    from amigo_gym.tools.training.fastppo import resolve_device
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    assert resolve_device("auto") == "cuda" and resolve_device("cuda") == "cuda" and resolve_device("cpu") == "cpu"
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    assert resolve_device("auto") == "cpu" and resolve_device("cpu") == "cpu"
+    with pytest.raises(ValueError, match=r"device = 'cuda'.*allowed: auto, cpu"):
+        resolve_device("cuda")
+    with pytest.raises(ValueError, match=r"device must be one of auto, cpu, cuda, got 'gpu'"):
+        tiny(device="gpu")
+    assert tiny().device == "auto"
+
+
+def test_cuda_without_one_and_too_many_env_threads_are_one_line_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from amigo_gym.tools.training import fastppo
+
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    base = ["--total-steps", "128", "--num-envs", "16", "--rollout-steps", "8", "--minibatch-size", "64"]
+    for extra, match in (
+        (["--device", "cuda"], "device = 'cuda'"),
+        (["--env-threads", str(fastppo._numba_threads_limit() + 1)], "env_threads must be in [1, "),
+    ):
+        capsys.readouterr()
+        assert fastppo.main(["--out", str(tmp_path / "x"), "--quiet", *base, *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and match in err, err
+        assert not (tmp_path / "x").exists()  # refused before anything is written
+
+
+def test_same_command_twice_same_weights_and_the_manifest_names_the_machine(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The determinism users can check: one train-fast command line run twice (same machine, same seed) gives the
+    same weights bit for bit; run.json records the git revision, CPU, thread counts and device; a --total-steps
+    below one rollout is rounded up in one said line, and no 'nan' return is printed before an episode ends."""
+    from amigo_gym.tools.bench.machine import cpu_model
+    from amigo_gym.tools.training.fastppo import main
+
+    argv = ["--env-kwargs", json.dumps(KW), "--total-steps", "100", "--num-envs", "16", "--rollout-steps", "8",
+            "--epochs", "2", "--minibatch-size", "64", "--hidden", "8", "8", "--max-episode-steps", "20",
+            "--eval-envs", "2", "--eval-every", "1000", "--seed", "5", "--device", "cpu"]  # fmt: skip
+    outs = []
+    for name in ("a", "b"):
+        capsys.readouterr()
+        assert main(["--out", str(tmp_path / name), *argv]) == 0
+        outs.append(capsys.readouterr().out)
+    assert "total_steps 100 rounded up to 128: whole rollouts of num_envs x rollout_steps = 128" in outs[0]
+    progress = [line for line in outs[0].splitlines() if "128 / 128 steps" in line]
+    assert len(progress) == 1 and "no episode finished yet" in progress[0] and "nan" not in progress[0], outs[0]
+    wa, wb = weights(tmp_path / "a"), weights(tmp_path / "b")
+    assert wa.keys() == wb.keys()
+    for k in wa:
+        np.testing.assert_array_equal(wa[k], wb[k])
+    assert (tmp_path / "a" / "model.zip").read_bytes() == (tmp_path / "b" / "model.zip").read_bytes()
+    rec = json.loads((tmp_path / "a" / "run.json").read_text())
+    assert rec["timesteps"] == 128 and rec["device"] == "cpu" and rec["cpu"] == cpu_model()
+    assert rec["torch_threads"] == 1 and rec["numba_threads"] >= 1 and rec["settings"]["device"] == "cpu"
+    rev = rec["git_revision"]
+    assert rev == "unknown" or len(rev.removesuffix("-dirty")) == 40, rev
+    assert set(rec["wall_s_this_call"]) == {"env", "rollout", "update", "loop"}
+    assert 0 < rec["wall_s_this_call"]["env"] < rec["wall_s_this_call"]["rollout"] <= rec["wall_s_this_call"]["loop"]
+
+
+def test_manifest_says_unknown_outside_a_git_checkout(monkeypatch: pytest.MonkeyPatch) -> None:
+    from amigo_gym.tools.training import fastppo
+
+    monkeypatch.setattr(fastppo, "git_revision", lambda: "not a git checkout")
+    assert fastppo.machine_record("cpu")["git_revision"] == "unknown"
+    monkeypatch.setattr(fastppo, "git_revision", lambda: "a" * 40 + "-dirty")
+    assert fastppo.machine_record("cpu")["git_revision"] == "a" * 40 + "-dirty"
+
+
+def test_env_threads_run_the_parallel_kernel_with_the_same_weights(tmp_path: Path) -> None:
+    """env_threads 2 steps the robots on numba's threads (numba-parallel): the same weights as one thread."""
+    for name, n in (("one", 1), ("two", 2)):
+        rec = train(tiny(env_threads=n, device="cpu", total_steps=256), tmp_path / name, log=None, evaluate_runs=False)
+        assert rec["numba_threads"] == n and rec["torch_threads"] == 1  # numba's start did not change torch's
+    w1, w2 = weights(tmp_path / "one"), weights(tmp_path / "two")
+    for k in w1:
+        np.testing.assert_array_equal(w1[k], w2[k])

@@ -598,16 +598,19 @@ def _training_env(s: FastPPOSettings) -> Any:
 
 
 def _set_threads(s: FastPPOSettings) -> None:
-    """torch's threads; numba's for the env (one line naming the limit when the machine has fewer)."""
-    torch.set_num_threads(s.threads)
-    if s.env_threads > 1:
-        limit = _numba_threads_limit()
-        if s.env_threads > limit:
-            raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
-                             f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
+    """numba's threads for the env (one line naming the limit when the machine has fewer), then torch's: numba
+    starts its threading layer first, as that resets OpenMP's thread count (torch's, with the ``omp`` layer)."""
+    limit = _numba_threads_limit()
+    if s.env_threads > limit:
+        raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
+                         f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
+    try:
         import numba
 
         numba.set_num_threads(s.env_threads)
+    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
+        pass
+    torch.set_num_threads(s.threads)
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
@@ -858,6 +861,7 @@ def train(
     out = Path(out)
     _check_start(out, resume)
     device = resolve_device(s.device)
+    _set_threads(s)
     out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     with RunLock(out), handling(stop):  # one process per run folder: a second train-fast on it stops with one line
@@ -881,7 +885,6 @@ def _train(
 ) -> dict[str, Any]:
     ckpt = out / "checkpoint.pt"
     _check_start(out, resume)  # again, under the lock: another process may have written a checkpoint meanwhile
-    _set_threads(s)
     say: Callable[[str], None] = log or (lambda _msg: None)
     builder = FeatureBuilder(s.spec())
     r = _load_checkpoint(ckpt, s, builder, device) if resume else _new_run(s, builder, device)
@@ -958,7 +961,7 @@ def _train(
         if r.iteration % 20 == 0 or r.global_step >= stop:
             recent = r.episode_returns[-200:]
             ret = f"episode return {np.mean(recent):7.1f}" if recent else "no episode finished yet"
-            say(f"{r.global_step:>11,d} / {s.total_steps:,d} steps  {wall:7.0f} s  "
+            say(f"{r.global_step:>11,d} / {n_iter * batch:,d} steps  {wall:7.0f} s  "
                 f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  {ret}  "
                 f"std {float(r.net.log_std.detach().exp().mean()):.3f}")  # fmt: skip
         if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
