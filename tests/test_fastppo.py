@@ -475,8 +475,16 @@ def test_bench_train_writes_rates_and_ratios(tmp_path: Path) -> None:
     assert _rate_matches(fast["env_steps"], fast["wall_s"], fast["sps"])
     assert 0 < fast["loop_wall_s"] <= fast["wall_s"] and fast["sps_loop"] >= fast["sps"]  # iterations: part of the call
     assert fast["cpu_s_rollout"] > 0 and fast["cpu_s_update"] > 0
+    # the device named (auto: cpu without CUDA, the CPU's name), the env's share of the iterations
+    want = "cuda" if torch.cuda.is_available() else "cpu"
+    assert fast["device"] == want and sb3["device"] == "cpu" and sb3["device_name"] == cpu_model()
+    assert want == "cuda" or fast["device_name"] == cpu_model()
+    assert 0 < fast["env_share"] < 1 and fast["torch_threads"] == 1
     assert doc["ratios"]["fastppo/sb3_shipped"] == pytest.approx(fast["sps"] / sb3["sps"], abs=0.01)
     assert main(["--fast-steps", "10", "--json", str(out)]) == 2  # below one rollout: one-line error
+    with pytest.raises(SystemExit) as exc:  # argparse's one line: the choices
+        main(["--device", "gpu"])
+    assert exc.value.code == 2
 
 
 def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:

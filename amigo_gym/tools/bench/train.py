@@ -14,7 +14,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
@@ -34,31 +34,32 @@ def _load() -> list[float]:
         return []
 
 
-def bench_fastppo(steps: int, threads: int, seed: int = 0, **overrides: Any) -> dict[str, Any]:
-    """Train the fast PPO for ``steps`` env-steps (no evaluation) and time it: ``{"env_steps", "wall_s", "sps"}``."""
+def bench_fastppo(
+    steps: int, threads: int, seed: int = 0, device: str = "auto", env_threads: int = 1, **overrides: Any
+) -> dict[str, Any]:
+    """Train the fast PPO for ``steps`` env-steps (no evaluation) and time it: ``{"env_steps", "wall_s", "sps"}``,
+    the device, and the iterations' wall seconds split into the env's steps and the learner (the rest)."""
     from amigo_gym.tools.training.fastppo import FastPPOSettings, train
 
-    s = FastPPOSettings(
-        total_steps=steps,
-        threads=threads,
-        seed=seed,
-        eval_every=10**10,
-        checkpoint_every=10**10,
-        **overrides,
-    )
+    s = FastPPOSettings(**{"total_steps": steps, "threads": threads, "seed": seed, "device": device,
+                           "env_threads": env_threads, **overrides, "eval_every": 10**10,
+                           "checkpoint_every": 10**10})  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
         t0, c0 = time.perf_counter(), time.process_time()
         rec = train(s, Path(tmp) / "run", log=None, evaluate_runs=False)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     n = int(rec["timesteps"])
-    cfg = {k: getattr(s, k) for k in ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden")}
-    out = _result(n, wall, cpu, cfg)
+    keys = ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden", "env_threads", "device")
+    out = _result(n, wall, cpu, {k: getattr(s, k) for k in keys})
+    out |= {k: rec[k] for k in ("device", "device_name", "torch_threads", "numba_threads")}
     split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
     out["cpu_s_rollout"], out["cpu_s_update"] = split["rollout"], split["update"]
     out["loop_wall_s"] = split["loop_wall"]
     # steady state: the training iterations only, without building the env, the first resets and the final save
     out["sps_loop"] = round(n / max(split["loop_wall"], 1e-9), 1)
     out["sps_loop_cpu"] = round(n / max(split["rollout"] + split["update"], 1e-9), 1)
+    w = rec["wall_s_this_call"]
+    out["env_share"] = round(w["env"] / max(w["loop"], 1e-9), 3)  # the learner's: 1 - env_share
     return out
 
 
@@ -102,13 +103,14 @@ def bench_sb3(
     venv.close()
     n = int(model.num_timesteps)
     cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
-    return _result(n, wall, cpu, cfg)
+    return _result(n, wall, cpu, cfg) | {"device": "cpu", "device_name": cpu_model()}
 
 
 def _show(name: str, r: dict[str, Any]) -> None:
     line = f"{name:<15}{r['sps']:>10,.0f} env-steps/s of training ({r['sps_cpu']:,.0f} per CPU second)"
     if "sps_loop" in r:
         line += f"; training iterations only: {r['sps_loop']:,.0f} per s ({r['sps_loop_cpu']:,.0f} per CPU second)"
+        line += f", {100 * r['env_share']:.0f} % in the env; device {r['device']} ({r['device_name']})"
     print(line, flush=True)
 
 
@@ -134,6 +136,10 @@ class TrainSettings:
         fast_steps: env-steps of the fast PPO [steps].
         sb3_steps: env-steps of each SB3 run [steps].
         threads: torch threads of every run [threads].
+        device: the fast PPO's learner: auto (cuda if torch sees one, else cpu), cpu or cuda (SB3 runs on the cpu).
+        env_threads: the fast PPO's env threads (above 1: the numba-parallel kernel) [threads].
+        fast_hyperparams: the fast PPO's settings file, e.g. agents/hyperparams/fastppo.yml [file] (default: the
+            FastPPOSettings defaults, N = 512, T = 32).
         skip_sb3_fastconfig: skip SB3 with the fast configuration.
         json: write the results here [file] (default: print only).
         offpolicy: off-policy algorithms to time, comma-separated: sac,td3,crossq,tqc [names] (default: none).
@@ -144,6 +150,9 @@ class TrainSettings:
     fast_steps: int = 1_048_576
     sb3_steps: int = 32_768
     threads: int = 1
+    device: Literal["auto", "cpu", "cuda"] = "auto"
+    env_threads: int = 1
+    fast_hyperparams: str | None = None
     skip_sb3_fastconfig: bool = False
     json: str | None = None
     offpolicy: str = ""
@@ -154,6 +163,7 @@ class TrainSettings:
         check_range(PROG, "fast_steps", self.fast_steps, 16384, 10**9)
         check_range(PROG, "sb3_steps", self.sb3_steps, 1, 10**8)
         check_range(PROG, "threads", self.threads, 1, 64)
+        check_range(PROG, "env_threads", self.env_threads, 1, 256)
         bad = [a for a in self.offpolicy_algos if a not in ALGOS]
         if bad:
             raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
@@ -178,6 +188,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             "simd": simd_level(),
             "cpu_count": os.cpu_count(),
             "torch_threads": s.threads,
+            "env_threads": s.env_threads,
+            "fast_hyperparams": s.fast_hyperparams,
             "python": platform.python_version(),
             "numpy": np.__version__,
             "torch": torch.__version__,
@@ -187,7 +199,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"CPU: {head['cpu_model']}, SIMD {head['simd']} ({head['cpu_count']} CPUs visible), "
               f"torch threads {s.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
         runs: dict[str, Any] = {}
-        runs["fastppo"] = bench_fastppo(s.fast_steps, s.threads)
+        from amigo_gym.tools.training.fastppo import load_settings_yaml, resolve_device
+
+        hp = {} if s.fast_hyperparams is None else load_settings_yaml(s.fast_hyperparams)
+        hp = {k: tuple(v) if k == "hidden" else v for k, v in hp.items() if not k.endswith(("_every", "total_steps"))}
+        device = resolve_device(s.device)
+        print(f"fast PPO learner on {device} "
+              f"({torch.cuda.get_device_name() if device == 'cuda' else head['cpu_model']})", flush=True)  # fmt: skip
+        runs["fastppo"] = bench_fastppo(s.fast_steps, s.threads, 0, device, s.env_threads, **hp)
         _show("fastppo", runs["fastppo"])
         runs["sb3_shipped"] = bench_sb3(s.sb3_steps, s.threads, 16, 256, 1024, 10)
         _show("sb3_shipped", runs["sb3_shipped"])
