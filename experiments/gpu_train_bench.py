@@ -1,0 +1,208 @@
+"""Training at machine scale, measured in one run: throughput of ``amigo-gym train-fast`` at large N, then a
+generalist trained for a fixed wall budget, evaluated against the analytic controller on the ideal-robot cells.
+
+    python experiments/gpu_train_bench.py                                   # GPU node: N = 16,384, 180 s
+    python experiments/gpu_train_bench.py --budget-s 20 --n-envs 256        # any CPU machine, a smoke run
+
+Settings: ``agents/hyperparams/fastppo_gpu.yml`` with ``num_envs = --n-envs``, ``minibatch_size = N T / 8`` (the
+file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every thread numba may use) and
+``device = --device``. Steps, each printed and written to ``$OUT/gpu_train_bench.json`` (``--json`` otherwise):
+
+1. the machine: CPU name, CPUs, torch device (and GPU name), torch and numba thread counts, load average;
+2. env only: the vector env (the training distribution, numba-parallel) stepped with random actions;
+3. training throughput: ``--measure-iters`` iterations after one warm-up iteration (compilation, CUDA start), the
+   env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates);
+4. training for ``--budget-s`` seconds of iterations: ``total_steps`` = the measured rate times the budget (whole
+   rollouts; the learning rate anneals over it), then ``model.zip``;
+   (shrunk if the steps before it took so long that the run would pass ``--deadline-s``, default 7 minutes);
+5. the generalist and the analytic controller on the 11 ideal-robot cells of ``experiments/targets_v1.py``
+   (:data:`targets_v1.IDEAL`, the benchmark suite's scenarios and test seeds, ``amigo-gym benchmark``'s
+   evaluation): IQM of H RMS over (seed, cell) as ``targets_v1`` computes it, its ratio to the analytic's, the
+   median over the cells of the settled chatter (issue 35's targets: ratio <= 1.2, chatter <= 0.1 rad/s, in <= 3
+   minutes of training; >= 1M env-steps/s of training).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # targets_v1, beside this file
+
+from targets_v1 import IDEAL, _matrix
+
+from amigo_gym.io import atomic_write_json, sha256_file
+from amigo_gym.tools.bench.machine import cpu_model
+from amigo_gym.tools.training import benchmark as bm
+from amigo_gym.tools.training.fastppo import (
+    FastPPOSettings,
+    _numba_threads_limit,
+    load_settings_yaml,
+    resolve_device,
+    train,
+)
+from amigo_gym.tools.training.intervals import iqm
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIG = ROOT / "agents" / "hyperparams" / "fastppo_gpu.yml"
+
+
+def say(msg: str) -> None:
+    print(msg, flush=True)
+
+
+def settings(args: argparse.Namespace, total_steps: int, seed: int) -> FastPPOSettings:
+    hp: dict[str, Any] = load_settings_yaml(CONFIG)
+    hp["hidden"] = tuple(hp["hidden"])
+    batch = args.n_envs * hp["rollout_steps"]
+    hp |= {"num_envs": args.n_envs, "minibatch_size": max(1, batch // 8), "env_threads": args.env_threads}
+    hp |= {"device": args.device, "threads": args.threads, "total_steps": total_steps, "seed": seed}
+    hp |= {"eval_every": 10**10, "checkpoint_every": 10**10}
+    return FastPPOSettings(**hp)
+
+
+def env_only(s: FastPPOSettings, steps: int) -> float:
+    """Env-steps/s of the training env alone (random actions), after one warm-up step."""
+    from amigo_gym.tools.training.fastppo import _training_env
+
+    env = _training_env(s)
+    env.reset(seed=list(range(s.num_envs)))
+    rng = np.random.default_rng(0)
+    acts = rng.uniform(-1, 1, (steps + 1, s.num_envs, 2))
+    env.step(acts[0])
+    t0 = time.perf_counter()
+    for a in acts[1:]:
+        env.step(a)
+    wall = time.perf_counter() - t0
+    env.close()
+    return s.num_envs * steps / wall
+
+
+def timed_train(s: FastPPOSettings, out: Path) -> dict[str, Any]:
+    t0 = time.perf_counter()
+    rec = train(s, out, log=None, evaluate_runs=False)
+    rec["call_s"] = time.perf_counter() - t0
+    return rec
+
+
+def ideal_cells(model: Path) -> dict[str, Any]:
+    """The generalist against the analytic controller on the ideal cells (targets_v1's figures)."""
+    (model.with_suffix(".json")).write_text(json.dumps({"algo": "fastppo", "seed": 0, "sha256": sha256_file(model)}))
+    agents = [bm.AgentSpec("analytic"), bm.parse_agents([f"fastppo={model}"])[0]]
+    cells = [sc for sc in bm.SUITE if sc.name in IDEAL]
+    doc = bm.run_benchmark(agents, cells, progress=False, reps=100, profile_reps=10)
+    rows = [r for r in doc["results"] if r.get("h_rms_m") is not None]
+    out: dict[str, Any] = {"cells": list(IDEAL), "episodes_per_cell": cells[0].episodes}
+    for agent in ("analytic", "fastppo"):
+        h = _matrix(rows, agent, IDEAL, "h_rms_m") * 1e3
+        ch = _matrix(rows, agent, IDEAL, "chatter_settled_rms").mean(axis=0)
+        out[agent] = {"h_rms_iqm_mm": float(iqm(h)), "chatter_settled_median_rad_s": float(np.median(ch)),
+                      "chatter_settled_max_rad_s": float(ch.max())}  # fmt: skip
+    out["ratio"] = out["fastppo"]["h_rms_iqm_mm"] / out["analytic"]["h_rms_iqm_mm"]
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    import numba
+    import torch
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else "")
+    ap.add_argument("--budget-s", type=float, default=180.0, help="wall seconds of training iterations [s]")
+    ap.add_argument("--n-envs", type=int, default=16384, help="robots N")
+    ap.add_argument("--env-threads", type=int, default=_numba_threads_limit(), help="numba threads of the env")
+    ap.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1), help="torch threads")
+    ap.add_argument("--deadline-s", type=float, default=420.0, help="shrink the budget to end by then [s]")
+    ap.add_argument("--device", default="auto", choices=("auto", "cpu", "cuda"))
+    ap.add_argument("--measure-iters", type=int, default=6, help="iterations timed for the throughput")
+    ap.add_argument("--env-steps", type=int, default=50, help="steps of the env-only timing")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--json", type=Path, help="write the results here (default: $OUT/gpu_train_bench.json)")
+    args = ap.parse_args(argv)
+    t_all = time.perf_counter()
+    device = resolve_device(args.device)
+    doc: dict[str, Any] = {
+        "command": " ".join([sys.executable.rsplit("/", 1)[-1], *sys.argv]),
+        "cpu": cpu_model(),
+        "cpu_count": os.cpu_count(),
+        "device": device,
+        "device_name": torch.cuda.get_device_name() if device == "cuda" else cpu_model(),
+        "torch": torch.__version__,
+        "load_average_start": list(os.getloadavg()),
+        "config": str(CONFIG.relative_to(ROOT)),
+    }
+    say(f"CPU: {doc['cpu']} ({doc['cpu_count']} CPUs); torch {torch.__version__} on {device} ({doc['device_name']}); "
+        f"load {doc['load_average_start']}")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        s = settings(args, 1, args.seed)
+        batch = s.num_envs * s.rollout_steps
+        warm = timed_train(settings(args, batch, args.seed), Path(tmp) / "warm")  # compiles, starts CUDA
+        doc |= {k: warm[k] for k in ("torch_threads", "numba_threads", "git_revision")}
+        doc["warmup_call_s"] = round(warm["call_s"], 1)
+        say(f"threads: torch {warm['torch_threads']}, numba (env) {warm['numba_threads']}; N = {s.num_envs}, "
+            f"T = {s.rollout_steps}, minibatch {s.minibatch_size}, epochs {s.epochs}; "
+            f"warm-up {warm['call_s']:.1f} s")  # fmt: skip
+        doc["env_only_sps"] = round(env_only(s, args.env_steps))
+        say(f"env only: {doc['env_only_sps']:,} env-steps/s (numba threads {numba.get_num_threads()})")
+        m = timed_train(settings(args, batch * args.measure_iters, args.seed), Path(tmp) / "measure")
+        w = m["wall_s_this_call"]
+        sps = m["timesteps"] / w["loop"]
+        doc["throughput"] = {
+            "env_steps": m["timesteps"],
+            "loop_s": w["loop"],
+            "train_sps": round(sps),
+            "env_share": round(w["env"] / w["loop"], 3),
+            "learner_share": round(1 - w["env"] / w["loop"], 3),
+            "rollout_share": round(w["rollout"] / w["loop"], 3),
+            "update_share": round(w["update"] / w["loop"], 3),
+        }
+        t = doc["throughput"]
+        say(f"training: {sps:,.0f} env-steps/s over {args.measure_iters} iterations; env {100 * t['env_share']:.0f} "
+            f"%, learner {100 * t['learner_share']:.0f} % (rollout {100 * t['rollout_share']:.0f} % incl. env, "
+            f"update {100 * t['update_share']:.0f} %)")  # fmt: skip
+        budget = min(args.budget_s, args.deadline_s - (time.perf_counter() - t_all) - 60.0)  # 60 s: the evaluation
+        if budget < args.budget_s:
+            say(f"budget cut to {budget:.0f} s to end within --deadline-s {args.deadline_s:g} s")
+        doc["budget_s"] = budget = max(budget, 1.0)
+        total = max(1, round(sps * budget / batch)) * batch
+        say(f"training {total:,} env-steps (budget {budget:g} s at the measured rate) ...")
+        run = Path(tmp) / "run"
+        rec = timed_train(settings(args, total, args.seed), run)
+        w = rec["wall_s_this_call"]
+        doc["training"] = {
+            "total_steps": total,
+            "loop_s": w["loop"],
+            "call_s": round(rec["call_s"], 1),
+            "train_sps": round(total / w["loop"]),
+            "env_share": round(w["env"] / w["loop"], 3),
+            "sha256": rec.get("sha256"),
+        }
+        say(f"trained {total:,} env-steps in {w['loop']:.1f} s of iterations ({total / w['loop']:,.0f} env-steps/s; "
+            f"call {rec['call_s']:.1f} s); evaluating on the ideal cells ...")  # fmt: skip
+        t0 = time.perf_counter()
+        doc["ideal_cells"] = q = ideal_cells(run / "model.zip")
+        q["eval_s"] = round(time.perf_counter() - t0, 1)
+    a, f = q["analytic"], q["fastppo"]
+    say(f"ideal cells ({len(IDEAL)} x {q['episodes_per_cell']} episodes): H RMS IQM analytic {a['h_rms_iqm_mm']:.2f} "
+        f"mm, generalist {f['h_rms_iqm_mm']:.2f} mm, ratio {q['ratio']:.2f} (target <= 1.2); settled chatter median "
+        f"{f['chatter_settled_median_rad_s']:.3f} rad/s (max {f['chatter_settled_max_rad_s']:.3f}; "
+        "target <= 0.1)")  # fmt: skip
+    doc["load_average_end"] = list(os.getloadavg())
+    doc["total_s"] = round(time.perf_counter() - t_all, 1)
+    path = args.json or (Path(os.environ["OUT"]) / "gpu_train_bench.json" if os.environ.get("OUT") else None)
+    if path is not None:
+        atomic_write_json(path, doc, parents=True)
+        say(f"wrote {path}")
+    say(f"total {doc['total_s']:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
