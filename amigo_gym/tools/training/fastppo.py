@@ -68,7 +68,7 @@ from amigo_gym.tools.bench.machine import cpu_model
 from amigo_gym.tools.options import cli, json_object
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-from amigo_gym.tools.training.task_metrics import episode_metrics
+from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
 from amigo_gym.tools.training.train import git_revision, versions
 
 __all__ = [
@@ -450,48 +450,19 @@ def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch
 def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
     """Mean task metrics of ``eval_envs`` deterministic episodes of ``s.env_kwargs`` (validation seeds).
 
-    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)`` (its state passed through).
-
-    One vector env of ``eval_envs`` robots, ``reset(seed=[eval_seed + i])``, stepped until every robot's first
-    episode ended (``NextStep`` autoreset: later steps are ignored); per robot
-    :func:`amigo_gym.tools.training.task_metrics.episode_metrics`; the mean over robots (NaN-aware for settled values).
+    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)``. Robot ``i`` is reset with
+    seed ``eval_seed + i``; its first episode is recorded by the benchmark's loop
+    (:func:`amigo_gym.tools.training.task_metrics.run_vector_episodes`); the mean over robots (NaN-aware).
     """
     n = s.eval_envs
     env = gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, **s.env_kwargs)
     try:
         obs, _ = env.reset(seed=[s.eval_seed + i for i in range(n)])  # type: ignore[arg-type]
-        dt = float(env.params.dt)  # type: ignore[attr-defined]
-        steps = s.max_episode_steps
-        e = np.zeros((steps, n))
-        ve = np.zeros((steps, n))
-        cmd = np.zeros((steps, n, 2))
-        wr = np.zeros((steps, n, 2))
-        rew = np.zeros((steps, n))
-        length = np.full(n, steps)
-        term = np.zeros(n, dtype=bool)
-        alive = np.ones(n, dtype=bool)
-        state: Any = None  # any SB3-style predict: FastPolicy, AnalyticTrackingPolicy, an SB3 model
-        starts = np.ones(n, dtype=bool)
-        for k in range(steps):
-            act, state = policy.predict(obs, state=state, episode_start=starts)
-            starts = np.zeros(n, dtype=bool)
-            obs, r, te, tr, info = env.step(act)
-            e[k], ve[k], rew[k] = info["cross_track_error"], info["speed_error"], r
-            cmd[k], wr[k] = info["command"], info["wheel_rates"]
-            ended = alive & (te | tr)
-            length[ended] = k + 1
-            # reaching the end of an open path ends the episode as a success (as in the benchmark)
-            term[ended & te & ~np.asarray(info["end_of_path"], dtype=bool)] = True
-            alive &= ~ended
-            if not alive.any():
-                break
+        recs = [EpisodeRecorder(float(env.params.dt)) for _ in range(n)]  # type: ignore[attr-defined]
+        run_vector_episodes(policy, env, obs, recs, InfoAdapter())
     finally:
         env.close()
-    rows = [
-        episode_metrics(e[: length[i], i], ve[: length[i], i], cmd[: length[i], i], wr[: length[i], i],
-                        rew[: length[i], i], dt=dt, terminated=bool(term[i]))
-        for i in range(n)
-    ]  # fmt: skip
+    rows = [r.metrics() for r in recs]
     out: dict[str, float] = {}
     for key in rows[0]:
         vals = np.array([r[key] for r in rows], dtype=np.float64)
