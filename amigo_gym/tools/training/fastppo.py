@@ -568,13 +568,17 @@ def _training_env(s: FastPPOSettings) -> Any:
     return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
 
 
-def _set_threads(s: FastPPOSettings) -> None:
-    """numba's threads for the env (one line naming the limit when the machine has fewer), then torch's: numba
-    starts its threading layer first, as that resets OpenMP's thread count (torch's, with the ``omp`` layer)."""
+def _check_env_threads(s: FastPPOSettings) -> None:
+    """One line naming the limit when the machine has fewer threads for numba than ``env_threads``."""
     limit = _numba_threads_limit()
     if s.env_threads > limit:
         raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
                          f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
+
+
+def _set_threads(s: FastPPOSettings) -> None:
+    """numba's threads for the env, then torch's: numba starts its threading layer first, as that resets
+    OpenMP's thread count (torch's, with the ``omp`` layer)."""
     try:
         import numba
 
@@ -832,7 +836,7 @@ def train(
     out = Path(out)
     _check_start(out, resume)
     device = resolve_device(s.device)
-    _set_threads(s)
+    _check_env_threads(s)
     out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     with RunLock(out), handling(stop):  # one process per run folder: a second train-fast on it stops with one line
@@ -856,6 +860,7 @@ def _train(
 ) -> dict[str, Any]:
     ckpt = out / "checkpoint.pt"
     _check_start(out, resume)  # again, under the lock: another process may have written a checkpoint meanwhile
+    _set_threads(s)
     say: Callable[[str], None] = log or (lambda _msg: None)
     builder = FeatureBuilder(s.spec())
     r = _load_checkpoint(ckpt, s, builder, device) if resume else _new_run(s, builder, device)
