@@ -118,7 +118,7 @@ def _numba_threads_limit() -> int:
         import numba
     except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
         return 1
-    return int(numba.config.NUMBA_NUM_THREADS)
+    return int(getattr(numba.config, "NUMBA_NUM_THREADS"))  # noqa: B009  (set at run time: untyped)
 
 
 @dataclass(frozen=True)
@@ -555,7 +555,7 @@ class _ConcatVectorEnv:
 
 def _training_env(s: FastPPOSettings) -> Any:
     """The training robots: one native vector env of ``env_kwargs``, or that and one of nominal robots."""
-    kernel = {"kernel": "numba-parallel"} if s.env_threads > 1 else {}
+    kernel: dict[str, Any] = {"kernel": "numba-parallel"} if s.env_threads > 1 else {}
 
     def make(n: int, kw: Mapping[str, Any]) -> Any:
         return gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps,
@@ -618,7 +618,7 @@ def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "obs_rms": r.obs_rms.to_dict(),
         "ret_rms": r.ret_rms.to_dict(),
         "torch_rng": torch.get_rng_state(),
-        "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_initialized() else None,
+        "cuda_rng": torch.cuda.get_rng_state_all() if r.net.log_std.is_cuda else None,
         **{k: getattr(r, k) for k in _RUN_ARRAYS + _RUN_SCALARS},
         "episode_returns": r.episode_returns[-1000:],
     }
