@@ -11,7 +11,8 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
 1. the machine: CPU name, CPUs, torch device (and GPU name), torch and numba thread counts, load average;
 2. env only: the vector env (the training distribution, numba-parallel) stepped with random actions;
 3. training throughput: ``--measure-iters`` iterations after one warm-up iteration (compilation, CUDA start), the
-   env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates);
+   env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates); both runs
+   without the curriculum, whose raises would fall on every timed iteration;
 4. training for ``--budget-s`` seconds of iterations: ``total_steps`` = the measured rate times the budget (whole
    rollouts; the learning rate anneals over it), then ``model.zip``;
    (shrunk if the steps before it took so long that the run would pass ``--deadline-s``, default 7 minutes);
@@ -25,6 +26,7 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -59,8 +61,12 @@ def say(msg: str) -> None:
     print(msg, flush=True)
 
 
-def settings(args: argparse.Namespace, total_steps: int, seed: int) -> FastPPOSettings:
+def settings(args: argparse.Namespace, total_steps: int, seed: int, curriculum: bool = True) -> FastPPOSettings:
+    """The file's settings at ``--n-envs``; ``curriculum`` False: without the curvature curriculum (whose raises,
+    eight in a run, each rebuild the pool of random paths: one per iteration in the few iterations of a timing)."""
     hp: dict[str, Any] = load_settings_yaml(CONFIG)
+    if not curriculum:
+        hp["curriculum_max_curvature"] = 0.0
     hp["hidden"] = tuple(hp["hidden"])
     batch = args.n_envs * hp["rollout_steps"]
     hp |= {"num_envs": args.n_envs, "minibatch_size": max(1, batch // 8), "env_threads": args.env_threads}
@@ -93,11 +99,12 @@ def timed_train(s: FastPPOSettings, out: Path) -> dict[str, Any]:
     return rec
 
 
-def ideal_cells(model: Path) -> dict[str, Any]:
-    """The generalist against the analytic controller on the ideal cells (targets_v1's figures)."""
+def ideal_cells(model: Path, episodes: int) -> dict[str, Any]:
+    """The generalist against the analytic controller on the ideal cells (targets_v1's figures), the first
+    ``episodes`` test seeds of each."""
     (model.with_suffix(".json")).write_text(json.dumps({"algo": "fastppo", "seed": 0, "sha256": sha256_file(model)}))
     agents = [bm.AgentSpec("analytic"), bm.parse_agents([f"fastppo={model}"])[0]]
-    cells = [sc for sc in bm.SUITE if sc.name in IDEAL]
+    cells = [dataclasses.replace(sc, seeds=sc.seeds[:episodes]) for sc in bm.SUITE if sc.name in IDEAL]
     doc = bm.run_benchmark(agents, cells, progress=False, reps=100, profile_reps=10)
     rows = [r for r in doc["results"] if r.get("h_rms_m") is not None]
     out: dict[str, Any] = {"cells": list(IDEAL), "episodes_per_cell": cells[0].episodes}
@@ -124,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--measure-iters", type=int, default=6, help="iterations timed for the throughput")
     ap.add_argument("--env-steps", type=int, default=50, help="steps of the env-only timing")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--episodes", type=int, default=10, help="test seeds per ideal cell (the suite's: 10)")
     ap.add_argument("--json", type=Path, help="write the results here (default: $OUT/gpu_train_bench.json)")
     args = ap.parse_args(argv)
     t_all = time.perf_counter()
@@ -143,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         s = settings(args, 1, args.seed)
         batch = s.num_envs * s.rollout_steps
-        warm = timed_train(settings(args, batch, args.seed), Path(tmp) / "warm")  # compiles, starts CUDA
+        warm = timed_train(settings(args, batch, args.seed, False), Path(tmp) / "warm")  # compiles, starts CUDA
         doc |= {k: warm[k] for k in ("torch_threads", "numba_threads", "git_revision")}
         doc["warmup_call_s"] = round(warm["call_s"], 1)
         say(f"threads: torch {warm['torch_threads']}, numba (env) {warm['numba_threads']}; N = {s.num_envs}, "
@@ -151,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             f"warm-up {warm['call_s']:.1f} s")  # fmt: skip
         doc["env_only_sps"] = round(env_only(s, args.env_steps))
         say(f"env only: {doc['env_only_sps']:,} env-steps/s (numba threads {numba.get_num_threads()})")
-        m = timed_train(settings(args, batch * args.measure_iters, args.seed), Path(tmp) / "measure")
+        m = timed_train(settings(args, batch * args.measure_iters, args.seed, False), Path(tmp) / "measure")
         w = m["wall_s_this_call"]
         sps = m["timesteps"] / w["loop"]
         doc["throughput"] = {
@@ -187,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
         say(f"trained {total:,} env-steps in {w['loop']:.1f} s of iterations ({total / w['loop']:,.0f} env-steps/s; "
             f"call {rec['call_s']:.1f} s); evaluating on the ideal cells ...")  # fmt: skip
         t0 = time.perf_counter()
-        doc["ideal_cells"] = q = ideal_cells(run / "model.zip")
+        doc["ideal_cells"] = q = ideal_cells(run / "model.zip", args.episodes)
         q["eval_s"] = round(time.perf_counter() - t0, 1)
     a, f = q["analytic"], q["fastppo"]
     say(f"ideal cells ({len(IDEAL)} x {q['episodes_per_cell']} episodes): H RMS IQM analytic {a['h_rms_iqm_mm']:.2f} "

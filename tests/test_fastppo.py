@@ -637,3 +637,24 @@ def test_env_threads_run_the_parallel_kernel_with_the_same_weights(tmp_path: Pat
     w1, w2 = weights(tmp_path / "one"), weights(tmp_path / "two")
     for k in w1:
         np.testing.assert_array_equal(w1[k], w2[k])
+
+
+def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> None:
+    """experiments/gpu_train_bench.py (the GPU node's prepared measurement) runs here with tiny settings: the
+    machine, the throughput and its shares, the trained steps and the ideal-cell figures land in $OUT."""
+    root = Path(__file__).resolve().parent.parent
+    argv = ["--budget-s", "1", "--n-envs", "32", "--measure-iters", "1", "--env-steps", "2", "--episodes", "1"]
+    env = {**__import__("os").environ, "OUT": str(tmp_path), "PYTHONPATH": str(root)}
+    r = subprocess.run([sys.executable, str(root / "experiments" / "gpu_train_bench.py"), *argv], env=env,
+                       capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    doc = json.loads((tmp_path / "gpu_train_bench.json").read_text())
+    assert (
+        doc["device"] == ("cuda" if torch.cuda.is_available() else "cpu") and doc["cpu"] and doc["numba_threads"] >= 1
+    )
+    t = doc["throughput"]
+    assert t["train_sps"] > 0 and t["env_share"] + t["learner_share"] == pytest.approx(1.0, abs=1e-3)
+    assert doc["env_only_sps"] > 0 and doc["training"]["total_steps"] % (32 * 16) == 0
+    q = doc["ideal_cells"]
+    assert len(q["cells"]) == 11 and q["episodes_per_cell"] == 1 and q["analytic"]["h_rms_iqm_mm"] > 0
+    assert q["ratio"] == pytest.approx(q["fastppo"]["h_rms_iqm_mm"] / q["analytic"]["h_rms_iqm_mm"])
