@@ -37,7 +37,9 @@ from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # targets_v1, beside this file
+# this checkout's amigo_gym (whatever is installed) and targets_v1, beside this file
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from targets_v1 import IDEAL, _matrix
 
