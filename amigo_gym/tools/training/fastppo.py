@@ -121,6 +121,25 @@ def _numba_threads_limit() -> int:
     return int(getattr(numba.config, "NUMBA_NUM_THREADS"))  # noqa: B009  (set at run time: untyped)
 
 
+#: integer settings: [low, high]
+_INT_RANGES = {
+    "total_steps": (1, 10**10), "num_envs": (1, 65536), "rollout_steps": (1, 10000), "epochs": (1, 100),
+    "minibatch_size": (1, 10**8), "history": (0, 20), "seed": (0, 2**31 - 1), "eval_every": (1, 10**10),
+    "eval_envs": (1, 4096), "eval_seed": (0, 2**31 - 1), "checkpoint_every": (1, 10**10), "threads": (1, 64),
+    "env_threads": (1, 256), "max_episode_steps": (1, 100000), "curriculum_stages": (1, 1000),
+}  # fmt: skip
+#: float settings: (low, high, low end open, high end open)
+_FLOAT_RANGES = {
+    "learning_rate": (0.0, 1.0, True, False), "gamma": (0.0, 1.0, False, True), "gae_lambda": (0.0, 1.0, False, False),
+    "clip_coef": (0.0, 1.0, True, False), "ent_coef": (0.0, 1.0, False, False), "vf_coef": (0.0, 10.0, False, False),
+    "max_grad_norm": (0.0, 100.0, True, False), "log_std_init": (-5.0, 1.0, False, False),
+    "caps_temporal": (0.0, 100.0, False, False), "caps_spatial": (0.0, 100.0, False, False),
+    "caps_sigma": (0.0, 10.0, True, False), "residual_penalty": (0.0, 100.0, False, False),
+    "nominal_fraction": (0.0, 1.0, False, True), "curriculum_max_curvature": (0.0, 100.0, False, False),
+    "curriculum_max_curvature_rate": (0.0, 1000.0, False, False), "curriculum_fraction": (0.0, 1.0, True, False),
+}  # fmt: skip
+
+
 @dataclass(frozen=True)
 class FastPPOSettings:
     """Settings of a fast-PPO run (module docstring); every field is checked on construction.
@@ -164,15 +183,12 @@ class FastPPOSettings:
         device: where the networks, rollout buffers, GAE and updates run: auto (cuda if torch sees one, else
             cpu), cpu or cuda.
         max_episode_steps: episode time limit [steps], in [1, 100000].
-        curriculum_max_curvature: final bound of ``|kappa|`` of the random paths [1/m] of a curvature curriculum
-            (:func:`curriculum_path_params`), in [0, 100]; 0 (default): no curriculum. Needs ``path`` "random" or
-            "mixed" (whose random paths it changes), a value above the start (``env_kwargs``'s ``path_params``, else
-            the family's 1 1/m), and the final paths feasible at the highest speed (the env's check).
-        curriculum_max_curvature_rate: final bound of ``|dkappa/ds|`` [1/m^2], in [0, 1000]; 0: the start rate
-            times ``curriculum_max_curvature`` / the start curvature (the family's ratio kept).
-        curriculum_fraction: fraction of ``total_steps`` over which the bounds rise linearly from the start to the
-            final values [-], in (0, 1].
-        curriculum_stages: number of raises [-], in [1, 1000] (the pool of random paths is rebuilt at each).
+        curriculum_max_curvature: final bound of ``|kappa|`` of the random paths [1/m] (:func:`curriculum_path_params`),
+            in [0, 100]; 0: no curriculum. Needs path "random" or "mixed", a value above the start (``path_params``'s,
+            else 1 1/m) and final paths feasible at the highest speed.
+        curriculum_max_curvature_rate: final bound of ``|dkappa/ds|`` [1/m^2], in [0, 1000]; 0: the start's ratio kept.
+        curriculum_fraction: share of ``total_steps`` over which the bounds rise linearly [-], in (0, 1].
+        curriculum_stages: number of raises (each rebuilds the pool of random paths) [-], in [1, 1000].
     """
 
     env_kwargs: Mapping[str, Any] = field(default_factory=_default_env_kwargs, metadata=cli(parse=json_object))
@@ -215,46 +231,18 @@ class FastPPOSettings:
 
     def __post_init__(self) -> None:
         o = "FastPPOSettings"
-        ints = {
-            "total_steps": (1, 10**10),
-            "num_envs": (1, 65536),
-            "rollout_steps": (1, 10000),
-            "epochs": (1, 100),
-            "minibatch_size": (1, 10**8),
-            "history": (0, 20),
-            "seed": (0, 2**31 - 1),
-            "eval_every": (1, 10**10),
-            "eval_envs": (1, 4096),
-            "eval_seed": (0, 2**31 - 1),
-            "checkpoint_every": (1, 10**10),
-            "threads": (1, 64),
-            "env_threads": (1, 256),
-            "max_episode_steps": (1, 100000),
-            "curriculum_stages": (1, 1000),
-        }
-        for name, (lo, hi) in ints.items():
+        for name, (lo, hi) in _INT_RANGES.items():
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
                 raise TypeError(f"{o}.{name} must be an integer in [{lo}, {hi}], got {v!r}")
             check_range(o, name, v, lo, hi)
+        for name, (lo, hi, low_open, high_open) in _FLOAT_RANGES.items():
+            check_range(o, name, getattr(self, name), lo, hi, low_open=low_open, high_open=high_open)
         batch = self.num_envs * self.rollout_steps
         if self.minibatch_size > batch or batch % self.minibatch_size:
             raise ValueError(
                 f"{o}.minibatch_size must divide num_envs * rollout_steps = {batch}, got {self.minibatch_size}"
             )
-        check_range(o, "learning_rate", self.learning_rate, 0.0, 1.0, low_open=True)
-        check_range(o, "gamma", self.gamma, 0.0, 1.0, high_open=True)
-        check_range(o, "gae_lambda", self.gae_lambda, 0.0, 1.0)
-        check_range(o, "clip_coef", self.clip_coef, 0.0, 1.0, low_open=True)
-        check_range(o, "ent_coef", self.ent_coef, 0.0, 1.0)
-        check_range(o, "vf_coef", self.vf_coef, 0.0, 10.0)
-        check_range(o, "max_grad_norm", self.max_grad_norm, 0.0, 100.0, low_open=True)
-        check_range(o, "log_std_init", self.log_std_init, -5.0, 1.0)
-        check_range(o, "caps_temporal", self.caps_temporal, 0.0, 100.0)
-        check_range(o, "caps_spatial", self.caps_spatial, 0.0, 100.0)
-        check_range(o, "caps_sigma", self.caps_sigma, 0.0, 10.0, low_open=True)
-        check_range(o, "residual_penalty", self.residual_penalty, 0.0, 100.0)
-        check_range(o, "nominal_fraction", self.nominal_fraction, 0.0, 1.0, high_open=True)
         if self.residual_penalty > 0 and not self.residual_bound > 0:
             raise ValueError(
                 f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
@@ -274,9 +262,6 @@ class FastPPOSettings:
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
         object.__setattr__(self, "env_kwargs", json.loads(json.dumps(dict(self.env_kwargs))))
         self.spec()  # checks history, residual_bound, filter_alpha and the env keywords
-        check_range(o, "curriculum_max_curvature", self.curriculum_max_curvature, 0.0, 100.0)
-        check_range(o, "curriculum_max_curvature_rate", self.curriculum_max_curvature_rate, 0.0, 1000.0)
-        check_range(o, "curriculum_fraction", self.curriculum_fraction, 0.0, 1.0, low_open=True)
         if self.curriculum_max_curvature > 0:
             _check_curriculum(self)
 
@@ -695,10 +680,11 @@ def _sync(device: str) -> None:
         torch.cuda.synchronize()
 
 
-def _features(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, device: str) -> tuple[torch.Tensor, Array, Array]:
-    """Normalised features of the current observations on the device (the normaliser updated with them first)."""
+def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True) -> tuple[torch.Tensor, Array, Array]:
+    """Normalised features of the current observations on the device (``learn``: the normaliser updated first)."""
     feats, base, s_next = builder(r.obs, r.fstate, r.starts)
-    r.obs_rms.update(feats)
+    if learn:
+        r.obs_rms.update(feats)
     x = torch.from_numpy(r.obs_rms.normalize(feats).astype(np.float32)).to(device)
     return x, base, s_next
 
@@ -711,7 +697,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
     finals: list[tuple[int, NDArray[np.intp], NDArray[np.float32]]] = []  # time-limit cuts: (t, rows, features)
     env_s = 0.0
     for t in range(t_len):
-        x, base, s_next = _features(s, r, builder, device)
+        x, base, s_next = _features(r, builder, device)
         with torch.no_grad():
             mu = net.actor(x)
             u = mu + net.log_std.exp() * torch.randn_like(mu)
@@ -745,7 +731,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
         for t, cut, _ in finals:
             rew_buf[t, cut] += gamma * v_fin[k : k + cut.size]
             k += cut.size
-    buf.x[t_len] = _features(s, r, builder, device)[0]
+    buf.x[t_len] = _features(r, builder, device, learn=False)[0]  # the next rollout learns them
     with torch.no_grad():
         buf.v[t_len] = net.value(buf.x[t_len])
     buf.r.copy_(torch.from_numpy(rew_buf.astype(np.float32)))
