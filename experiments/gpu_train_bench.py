@@ -72,7 +72,7 @@ def settings(args: argparse.Namespace, total_steps: int, seed: int, curriculum: 
     hp["hidden"] = tuple(hp["hidden"])
     batch = args.n_envs * hp["rollout_steps"]
     hp |= {"num_envs": args.n_envs, "minibatch_size": max(1, batch // 8), "env_threads": args.env_threads}
-    hp |= {"device": args.device, "threads": args.threads, "total_steps": total_steps, "seed": seed}
+    hp |= {"device": args.device, "threads": args.threads or hp["threads"], "total_steps": total_steps, "seed": seed}
     hp |= {"eval_every": 10**10, "checkpoint_every": 10**10}
     return FastPPOSettings(**hp)
 
@@ -127,7 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget-s", type=float, default=180.0, help="wall seconds of training iterations [s]")
     ap.add_argument("--n-envs", type=int, default=16384, help="robots N")
     ap.add_argument("--env-threads", type=int, default=_numba_threads_limit(), help="numba threads of the env")
-    ap.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1), help="torch threads")
+    ap.add_argument("--threads", type=int, help="torch threads (default: the file's)")
     ap.add_argument("--deadline-s", type=float, default=420.0, help="shrink the budget to end by then [s]")
     ap.add_argument("--device", default="auto", choices=("auto", "cpu", "cuda"))
     ap.add_argument("--measure-iters", type=int, default=6, help="iterations timed for the throughput")
