@@ -7,7 +7,7 @@ r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL style, one modu
 One ``gym.make_vec("AmigoBot-v1", num_envs=N)`` steps all ``N`` robots on the CPU (``env_threads`` > 1: its
 ``numba-parallel`` kernel on that many threads); the networks, the rollout buffers, GAE and the updates live on
 ``device`` (``auto``: CUDA when torch sees a GPU, else the CPU). Per step the normalised features go to the device
-as one tensor and the sampled actions come back as one. Env and learner alternate (no overlap; docs/performance.md).
+as one tensor and the sampled actions come back as one. Env and learner alternate (no overlap: docs/baselines.md).
 
 Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robots)
 ----------------------------------------------------------------------------------
