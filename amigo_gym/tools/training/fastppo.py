@@ -88,7 +88,7 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.tools.options import cli, json_object
@@ -602,9 +602,11 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
+    vouch(sha256_file(path))  # written here: resuming it needs no trust flag (amigo_gym.io.require_trust)
 
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
+    require_trust(path)  # a pickle (the vector env): shipped, written here, or --trust-unverified
     ck = torch.load(path, weights_only=False)
     # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():

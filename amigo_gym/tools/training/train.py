@@ -599,6 +599,7 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         for name in ("model.zip", "best_model.zip", VECNORMALIZE)
         if (out / name).is_file()
     }
+    runs.vouch(*record["files"].values())  # written here: loading them again needs no trust flag
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
