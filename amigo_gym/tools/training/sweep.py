@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, get_args
-from urllib.parse import quote, quote_plus
+from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
 import numpy as np
 
@@ -81,41 +81,36 @@ READY_TIMEOUT_S = 120.0
 
 
 # --------------------------------------------------------------------------- secrets
-def masked_url(url: str) -> str:
-    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``);
-    a URL without a password is returned as typed."""
-    try:
-        from sqlalchemy.engine import make_url
-
-        u = make_url(url)
-        return url if u.password is None else str(u.render_as_string(hide_password=True))
-    except Exception:  # not a URL SQLAlchemy parses: mask anything between "user:" and "@"
-        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", url)
+#: a query parameter whose name has one of these holds a credential (``?password=``, ``sslpassword``, ``token``...)
+_SECRET_PARAM = re.compile(r"pass|pwd|secret|token|key|auth|cred", re.IGNORECASE)
 
 
-def _password(url: str | None) -> str | None:
-    if not url:
-        return None
-    try:
-        from sqlalchemy.engine import make_url
-
-        pw = make_url(url).password
-    except Exception:
-        m = re.search(r"://[^/@:]*:([^@]*)@", url)
-        pw = m.group(1) if m else None
-    return str(pw) if pw else None
+def _secrets(url: str | None) -> set[str]:
+    """Every form (as typed, decoded, URL-quoted) of every credential in ``url``: the password of ``user:pw@`` and
+    the value of each credential query parameter."""
+    found = set()
+    m = re.match(r"[^:/?#]*://([^/?#]*)@", url or "")  # the userinfo, up to the host's last "@"
+    if m and ":" in m.group(1):
+        found.add(m.group(1).partition(":")[2])
+    for part in re.split(r"[&;]", (url or "").partition("?")[2]):
+        name, eq, value = part.partition("=")
+        if eq and _SECRET_PARAM.search(unquote_plus(name)):
+            found.add(value.partition("#")[0])
+    forms = {g for f in found for v in (f, unquote(f), unquote_plus(f)) for g in (v, quote(v, safe=""), quote_plus(v))}
+    return {f for f in forms if f}
 
 
 def scrub(text: str, url: str | None) -> str:
-    """``text`` with every form of ``url``'s password (as typed, decoded, URL-quoted) replaced by ``***``."""
-    pw = _password(url)
-    if not pw:
-        return text
-    raw = re.search(r"://[^/@:]*:([^@]*)@", url or "")
-    forms = {pw, quote(pw, safe=""), quote_plus(pw)} | ({raw.group(1)} if raw else set())
-    for form in sorted((f for f in forms if f), key=len, reverse=True):
+    """``text`` with every credential of ``url`` in every form (:func:`_secrets`) replaced by ``***``: the one
+    masking of the storage URL, for what is written (summary, study and trial attributes) and said (error lines)."""
+    for form in sorted(_secrets(url), key=len, reverse=True):
         text = text.replace(form, "***")
     return text
+
+
+def masked_url(url: str) -> str:
+    """``url`` with its credentials masked (:func:`scrub`); a URL without any is returned as typed."""
+    return scrub(url, url)
 
 
 def public_argv(argv: Sequence[str]) -> list[str]:
