@@ -202,7 +202,7 @@ def test_postgresql_hyperparameter_budget_is_global(tmp_path: Path, postgres: st
 
 # --------------------------------------------------------------------------- a killed worker
 def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "--study-name", "kill")
+    base = _common(tmp_path, "--mode", "seeds", "--seeds", "1", "--study-name", "kill")
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
     long = list(base)
     long[long.index("--timesteps") + 1] = "10000000"  # a trial that would run for hours
@@ -618,3 +618,12 @@ def test_enqueue_base_refuses_seeds_mode_and_fastppo(kw: dict[str, Any], match: 
         base_params("td3", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256})
     with pytest.raises(ValueError, match=r"batch_size must be one of \[512, 1024, 2048, 4096\], got 256"):
         base_params("sac", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256, "n_envs": 128})
+
+
+def test_seeds_is_a_count_like_every_other_seeds_or_a_list() -> None:
+    from amigo_gym.tools.training.sweep import SweepConfig
+
+    assert SweepConfig(algos=["ppo"], mode="seeds", seeds=[3]).seeds == [0, 1, 2]
+    assert SweepConfig(algos=["ppo"], mode="seeds", seeds=[3, 7]).seeds == [3, 7]
+    with pytest.raises(ValueError, match=r"--seeds must be a count >= 1 or two or more distinct seeds, got \[\]"):
+        SweepConfig(algos=["ppo"], mode="seeds", seeds=[0]).validate()

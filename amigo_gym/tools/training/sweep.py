@@ -151,7 +151,8 @@ class SweepConfig:
         study_name: study name [name] (default: amigo-<algos>-<mode>).
         n_trials: global trial budget over all workers [trials].
         n_jobs: worker processes on this machine [processes].
-        seeds: training seeds (seeds mode) [seeds].
+        seeds: training seeds (seeds mode): a count N (seeds 0..N-1, as every other --seeds) or two or more seeds
+            [seeds].
         timesteps: training steps per trial [steps].
         eval_freq: steps between evaluations (pruning points) [steps].
         eval_episodes: episodes per evaluation [episodes].
@@ -206,6 +207,10 @@ class SweepConfig:
     worker_index: int = field(default=0, metadata=cli(hidden=True))
     argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
+    def __post_init__(self) -> None:
+        if len(self.seeds) == 1 and isinstance(self.seeds[0], int) and not isinstance(self.seeds[0], bool):
+            self.seeds = list(range(self.seeds[0]))  # a count
+
     def validate(self) -> None:
         """Raise ``ValueError`` naming a bad setting."""
         if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
@@ -246,7 +251,7 @@ class SweepConfig:
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
-            raise ValueError(f"--seeds must be distinct integers, got {self.seeds}")
+            raise ValueError(f"--seeds must be a count >= 1 or two or more distinct seeds, got {self.seeds}")
         if self.save_best is not None and self.mode != "hyperparams":
             raise ValueError(f"--save-best applies to --mode hyperparams, not {self.mode}")
         if FASTPPO in self.algos:
