@@ -446,7 +446,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
             _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(fresh)
-        print(f"ppo_fresh: {training['ppo_fresh']['timesteps']} steps, {time.perf_counter() - t0:.0f} s here")
+        rec = training["ppo_fresh"]
+        took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
+        print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
         # checked against the run's record before it is unpickled, like every model compare loads
         runs.check_pickle(run_dir / "model.zip", training["ppo_fresh"]["sha256"], str(run_dir / "run.json"))
         agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
