@@ -724,6 +724,9 @@ def _train(
         if log is not None:
             log(msg)
 
+    if s.total_steps % batch and not resume:
+        say(f"--total-steps {s.total_steps:,} becomes {n_iter * batch:,}: whole rollouts of {n} envs x {t_len} steps")
+
     def evaluate() -> bool:
         t0 = time.perf_counter()
         pol = _policy(s, r)
@@ -865,7 +868,8 @@ def _train(
             mean_ret = float(np.mean(recent)) if recent else math.nan
             say(
                 f"{r.global_step:>11,d} / {s.total_steps:,d} steps  {wall:7.0f} s  "
-                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  episode return {mean_ret:7.1f}  "
+                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  episode return "
+                f"{f'{mean_ret:7.1f}' if recent else 'n/a (none ended yet)'}  "
                 f"std {float(net.log_std.detach().exp().mean()):.3f}"
             )
         if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
