@@ -154,8 +154,9 @@ def _shipped_digests() -> set[str]:
     for manifest in pretrained_dir().rglob("*.json"):
         doc = json.loads(manifest.read_bytes())
         if isinstance(doc, dict):
-            files = doc.get("files") if isinstance(doc.get("files"), dict) else {}
-            out |= {str(d) for d in (doc.get("sha256"), *files.values()) if isinstance(d, str)}
+            files = doc.get("files")
+            digests = [doc.get("sha256"), *(files.values() if isinstance(files, dict) else ())]
+            out |= {d for d in digests if isinstance(d, str)}
     return out
 
 

@@ -489,13 +489,9 @@ def save_checkpoint(
         for name in names:
             _fsync_file(tmp / name)
         fault_point("checkpoint:files")
-        meta = {
-            "num_timesteps": int(step),
-            "algo": algo,
-            "wall_time_s": float(wall_time_s),
-            "files": {name: sha256_file(tmp / name) for name in names},
-        }
-        vouch(*meta["files"].values())
+        files = {name: sha256_file(tmp / name) for name in names}
+        vouch(*files.values())  # written here: resuming from it needs no trust flag
+        meta = {"num_timesteps": int(step), "algo": algo, "wall_time_s": float(wall_time_s), "files": files}
         (tmp / META).write_text(json.dumps(meta, indent=2) + "\n")
         _fsync_file(tmp / META)
         fsync_dir(tmp)
