@@ -59,11 +59,15 @@ class HelpFormatter(argparse.HelpFormatter):
 class OneLineParser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump).
 
-    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise.
+    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise; the description
+    and epilog are shown without reST markup (:func:`_plain`).
     """
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
+        for key in ("description", "epilog"):
+            if isinstance(kwargs.get(key), str):
+                kwargs[key] = _plain(str(kwargs[key]))
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:

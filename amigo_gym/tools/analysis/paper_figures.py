@@ -241,7 +241,7 @@ def _report(settings: Settings) -> int:
     """:func:`run`, then what it found on stdout."""
     sol, ph, files = run(settings)
     robot = RobotParams()
-    print(f"settings: {asdict(settings)}")
+    print("settings: " + ", ".join(f"{k} {v}" for k, v in asdict(settings).items()))
     print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
     print(
         f"peak wheel rates: alpha1_dot {float(np.max(np.abs(sol.alpha1_dot))):.4f}, "

@@ -64,6 +64,9 @@ class Command:
     unless: tuple[str, ...] = ()
 
 
+#: amigo_gym.io.TRUST_ENV (this module imports the standard library only)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
+
 _TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib", "filelock")
 
 COMMANDS: dict[str, Command] = {
@@ -196,7 +199,9 @@ def _load(target: str) -> Callable[[Sequence[str]], int | None]:
 
 
 def _usage() -> str:
-    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", "", "commands:"]
+    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", ""]
+    lines += ["Every command takes --trust-unverified: load model zips, statistics, replay buffers and checkpoints"]
+    lines += ["(pickles: loading one runs code) that are neither shipped nor written by a run here.", "", "commands:"]
     lines += [f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else "") for name, c in COMMANDS.items()]
     return "\n".join(lines)
 
@@ -222,6 +227,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         missing = missing_modules(cmd.modules)
         if missing:
             return _needs_extra(prog, cmd.extra, missing)
+    trust = "--trust-unverified" in rest  # every command: load pickles that are neither shipped nor written here
+    before = os.environ.get(TRUST_ENV)
+    if trust:
+        rest = [a for a in rest if a != "--trust-unverified"]
+        os.environ[TRUST_ENV] = "1"  # amigo_gym.io.require_trust; inherited by the command's own subprocesses
     try:
         rc = _load(cmd.target)(rest)
     except SystemExit:
@@ -243,6 +253,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         hint = "(AMIGO_GYM_TRACEBACK=1 shows the traceback)"
         print(f"{prog}: error: {type(exc).__name__}: {_one_line(exc)} {hint}", file=sys.stderr)
         return 1
+    finally:
+        if trust and before is None:
+            del os.environ[TRUST_ENV]
     return 0 if rc is None else int(rc)
 
 

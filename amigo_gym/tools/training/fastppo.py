@@ -88,7 +88,7 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.tools.options import cli, json_object
@@ -602,9 +602,11 @@ def _save_checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
+    vouch(sha256_file(path))  # written here: resuming it needs no trust flag (amigo_gym.io.require_trust)
 
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder) -> _Run:
+    require_trust(path)  # a pickle (the vector env): shipped, written here, or --trust-unverified
     ck = torch.load(path, weights_only=False)
     # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
@@ -721,6 +723,9 @@ def _train(
     def say(msg: str) -> None:
         if log is not None:
             log(msg)
+
+    if s.total_steps % batch and not resume:
+        say(f"--total-steps {s.total_steps:,} becomes {n_iter * batch:,}: whole rollouts of {n} envs x {t_len} steps")
 
     def evaluate() -> bool:
         t0 = time.perf_counter()
@@ -863,7 +868,8 @@ def _train(
             mean_ret = float(np.mean(recent)) if recent else math.nan
             say(
                 f"{r.global_step:>11,d} / {s.total_steps:,d} steps  {wall:7.0f} s  "
-                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  episode return {mean_ret:7.1f}  "
+                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  episode return "
+                f"{f'{mean_ret:7.1f}' if recent else 'n/a (none ended yet)'}  "
                 f"std {float(net.log_std.detach().exp().mean()):.3f}"
             )
         if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
