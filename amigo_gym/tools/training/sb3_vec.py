@@ -10,7 +10,7 @@ equal ``DummyVecEnv([lambda: gym.make(env_id)] * N)``'s (docs/baselines.md).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -78,7 +78,7 @@ class AmigoBotSB3VecEnv(VecEnv):
                 raise ValueError('options: only {"pose": (x_A, y_A, beta)} for every env is supported')
             options = {"pose": np.stack([np.asarray(o["pose"], dtype=np.float64) for o in self._options])}
         obs, infos = self.venv.reset(seed=None if all(s is None for s in seeds) else seeds, options=options)
-        self.reset_infos = self._split_infos(infos, range(self.num_envs))
+        self.reset_infos = [info_row(infos, i) for i in range(self.num_envs)]
         self._reset_seeds()
         self._reset_options()
         out: NDArray[Any] = obs
@@ -93,14 +93,10 @@ class AmigoBotSB3VecEnv(VecEnv):
         obs, rewards, terminated, truncated, vinfo = self.venv.step(self._actions)
         self._actions = None
         dones = terminated | truncated
-        infos = self._split_infos(vinfo, range(self.num_envs))
-        done_idx = np.flatnonzero(dones)
-        if done_idx.size:
-            final = self._split_infos(vinfo["final_info"], done_idx)
-            for j, fin in zip(done_idx.tolist(), final, strict=True):
-                self.reset_infos[j] = infos[j]
-                fin["terminal_observation"] = vinfo["final_obs"][j]
-                infos[j] = fin
+        infos = [info_row(vinfo, i) for i in range(self.num_envs)]
+        for j in np.flatnonzero(dones).tolist():  # reset in this step: the finished episode's info and observation
+            self.reset_infos[j] = infos[j]
+            infos[j] = info_row(vinfo["final_info"], j) | {"terminal_observation": vinfo["final_obs"][j]}
         for i in range(self.num_envs):
             infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return obs, rewards.astype(np.float32), dones, infos
@@ -131,8 +127,3 @@ class AmigoBotSB3VecEnv(VecEnv):
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         """The robots are not wrapped in Gymnasium wrappers (use ``VecMonitor`` for episode statistics)."""
         return [False for _ in self._get_indices(indices)]
-
-    @staticmethod
-    def _split_infos(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts (the single env's keys and types: :func:`amigo_gym.envs.base.info_row`)."""
-        return [info_row(vinfo, i) for i in idx]
