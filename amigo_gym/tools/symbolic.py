@@ -89,23 +89,9 @@ for _f, _p, _pd in _COORDS:
     _TO_PLAIN[_f] = _p
 
 #: every plain symbol an expression of :func:`derive` may contain, by name (the keyword names of :func:`lambdify`)
+_CONSTANTS = (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta, delta)
 PLAIN_SYMBOLS: dict[str, Any] = {
-    str(sym): sym
-    for sym in (
-        *(p for _, p, _ in _COORDS),
-        *(pd for _, _, pd in _COORDS),
-        l1,
-        l3,
-        l4,
-        l5,
-        r1,
-        r2,
-        r3,
-        R,
-        v_A,
-        theta,
-        delta,
-    )
+    str(sym): sym for sym in (*(p for _, p, _ in _COORDS), *(pd for _, _, pd in _COORDS), *_CONSTANTS)
 }
 
 
@@ -464,15 +450,7 @@ def derive() -> Derivation:
 
 def robot_values(robot: RobotParams) -> dict[str, float]:
     """The lengths of ``robot`` [m] by symbol name, for :func:`lambdify`'s keyword arguments."""
-    return {
-        "l_1": robot.l1,
-        "l_3": robot.l3,
-        "l_4": robot.l4,
-        "l_5": robot.l5,
-        "r_1": robot.r1,
-        "r_2": robot.r2,
-        "r_3": robot.r3,
-    }
+    return {f"{n[0]}_{n[1]}": float(getattr(robot, n)) for n in ("l1", "l3", "l4", "l5", "r1", "r2", "r3")}
 
 
 def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
