@@ -209,15 +209,11 @@ class ProfileSettings:
 
 def run(s: ProfileSettings) -> int:
     """The tables of the settings ``s`` on stdout (module docstring; ``--gap``, ``--single-parts``, ``--libm``)."""
-    if s.gap:
-        print(gap(s.sizes))
-        return 0
-    if s.single_parts:
-        print(single_parts())
-        return 0
-    if s.libm:
-        print(libm())
-        return 0
+    tables: dict[str, Callable[[], str]] = {"gap": lambda: gap(s.sizes), "single_parts": single_parts, "libm": libm}
+    for flag, table in tables.items():
+        if getattr(s, flag):
+            print(table())
+            return 0
     total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
     print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
     for n in s.sizes:

@@ -145,10 +145,7 @@ def _schedule(key: str, value: Any) -> float | Callable[[float], float]:
     if isinstance(value, str):
         text = value.strip()
         try:
-            if text.startswith("lin_"):
-                start = float(text[4:])
-                return _Linear(start)
-            return float(text)
+            return _Linear(float(text[4:])) if text.startswith("lin_") else float(text)
         except ValueError:
             pass
     raise ValueError(f"{key} must be a number or 'lin_<x>', got {value!r}")
