@@ -1,9 +1,5 @@
 """Command-line helpers shared by every ``amigo-gym`` sub-command: one-line errors, option help with defaults,
-options derived from a settings dataclass, and the extra-module probe.
-
-Sits at the bottom of the package (standard library only), so that the sub-commands in ``training``,
-``analysis``, ``bench`` and ``model`` import it downwards; the dispatcher :mod:`amigo_gym.tools.cli` imports it too
-and is imported by nothing.
+options derived from a settings dataclass, and the extra-module probe (standard library only).
 """
 
 from __future__ import annotations

@@ -1,14 +1,9 @@
-"""The ``amigo-gym`` command: a thin dispatcher; each sub-command lives in its own module.
+"""The ``amigo-gym`` command: a dispatcher to one module per sub-command, imported only when it runs.
 
-Every sub-command declares the optional extra it needs and the modules that extra provides; they are
-looked up (``importlib.util.find_spec``, nothing imported) *before* the sub-command's module is
-imported, so that a missing one gives one line naming the extra to install and exit status 2, never a
-traceback. Every other error path also ends in one line on stderr and a non-zero exit status
-(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs
-nothing but the standard library.
-
-May import the standard library only at module level; the sub-commands are imported by name when
-they run (arrows point from here down into the package, never back).
+A sub-command's extra is probed (``importlib.util.find_spec``) before its module is imported: a missing one is one
+line naming the extra to install, exit status 2. Every other error is one line on stderr and a non-zero status
+(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs only the
+standard library.
 """
 
 from __future__ import annotations
@@ -20,29 +15,9 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from amigo_gym.tools.options import (
-    HelpFormatter,
-    OneLineParser,
-    _one_line,
-    add_dataclass_options,
-    attribute_help,
-    install_hint,
-    missing_modules,
-    run_guarded,
-)
+from amigo_gym.tools.options import _one_line, install_hint, missing_modules
 
-__all__ = [
-    "COMMANDS",
-    "EXTRA_OF_MODULE",
-    "Command",
-    "add_dataclass_options",
-    "attribute_help",
-    "HelpFormatter",
-    "OneLineParser",
-    "main",
-    "missing_modules",
-    "run_guarded",
-]
+__all__ = ["COMMANDS", "EXTRA_OF_MODULE", "Command", "install_hint", "main"]
 
 
 @dataclass(frozen=True)
