@@ -22,12 +22,16 @@ import json
 import math
 import os
 import signal
+import sys
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 __all__ = [
+    "STATE_ENV",
+    "TRUST_ENV",
+    "UntrustedFileError",
     "atomic_save",
     "atomic_write",
     "atomic_write_json",
@@ -36,7 +40,9 @@ __all__ = [
     "finite_float",
     "fsync_dir",
     "json_safe",
+    "require_trust",
     "sha256_file",
+    "vouch",
 ]
 
 FAULT_ENV = "AMIGO_GYM_FAULT"
@@ -106,6 +112,73 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+#: environment variable that, set to ``1``, trusts every pickle (what ``amigo-gym ... --trust-unverified`` sets)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
+#: environment variable naming the folder of ``written.sha256`` (default ``$XDG_STATE_HOME/amigo_gym``, else
+#: ``~/.local/state/amigo_gym``)
+STATE_ENV = "AMIGO_GYM_STATE_DIR"
+
+
+class UntrustedFileError(ValueError):
+    """A pickle that neither a shipped manifest nor a run of this installation recorded (the message names it)."""
+
+
+def _written_list() -> Path:
+    state = os.environ.get("XDG_STATE_HOME") or os.path.join(os.path.expanduser("~"), ".local", "state")
+    return Path(os.environ.get(STATE_ENV) or os.path.join(state, "amigo_gym")) / "written.sha256"
+
+
+def vouch(*digests: str) -> None:
+    """Record the sha256 of pickles this installation wrote (models, statistics, replay buffers, checkpoints), so
+    that loading them later needs no trust flag: one line each, appended to ``written.sha256`` in the user's state
+    folder (``STATE_ENV``), which a downloaded folder cannot change. A failure to record is a one-line warning
+    (the file then needs ``--trust-unverified`` to load)."""
+    path = _written_list()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
+        try:
+            os.write(fd, "".join(f"{d}\n" for d in digests).encode())  # one append: whole lines, any process
+        finally:
+            os.close(fd)
+    except OSError as exc:
+        print(f"warning: cannot record the sha256 of what this run wrote in {path} ({exc})", file=sys.stderr)
+
+
+def _shipped_digests() -> set[str]:
+    from amigo_gym.data import pretrained_dir
+
+    out: set[str] = set()
+    for manifest in pretrained_dir().rglob("*.json"):
+        doc = json.loads(manifest.read_bytes())
+        if isinstance(doc, dict):
+            files = doc.get("files")
+            digests = [doc.get("sha256"), *(files.values() if isinstance(files, dict) else ())]
+            out |= {d for d in digests if isinstance(d, str)}
+    return out
+
+
+def require_trust(path: str | os.PathLike[str], digest: str | None = None, trust: bool = False) -> None:
+    """Refuse to unpickle ``path`` (whose sha256 is ``digest``, computed if ``None``) unless it is trusted: ``trust``
+    (the user's ``--trust-unverified`` / ``trust=True``, or ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or its sha256 is
+    one a shipped manifest (``agents/pretrained``) records or one this installation wrote (:func:`vouch`). A hash
+    beside a file proves only that the file is the one recorded, not who recorded it, so it is not enough.
+
+    Raises:
+        UntrustedFileError: one line naming the file and the flag.
+    """
+    if trust or os.environ.get(TRUST_ENV) == "1":
+        return
+    digest = digest or sha256_file(path)
+    written = _written_list()
+    if digest in _shipped_digests() or (written.is_file() and digest in written.read_text().split()):
+        return
+    raise UntrustedFileError(
+        f"{path}: refused: a pickle (loading it runs code) that no shipped manifest and no run of this installation "
+        "recorded; pass --trust-unverified (Python: trust=True) to load it if you trust where it came from"
+    )
 
 
 def file_mode(folder: bool = False) -> int:

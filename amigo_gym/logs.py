@@ -3,10 +3,11 @@ r"""Logs of a real robot: read them, replay them through the model, fit the mode
 The seed paper checks its simulation against a test rig (its Figs 2–5: wheel angles and rates, simulated
 and measured). This module does that for a user's own robot: a recorded run (the wheel-rate commands and
 the measured pose and/or wheel rates) drives the package's exact actuator step
-(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry) from the log's first pose,
-and the simulated and measured trajectories are compared (:func:`replay`); the true robot's wheel radii,
-half track, actuation delay (and ramp accelerations, where the log excites them) are fitted by bounded least
-squares on the replayed trajectory (:func:`identify`). ``docs/logs.md`` is the user's page.
+(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry),
+and the simulated and measured trajectories are compared (:func:`replay`, from the start pose that fits the
+log's first poses: the first measured pose alone would carry its noise into every later sample); the true robot's
+wheel radii, half track, actuation delay (and ramp accelerations, where the log excites them) are fitted by
+bounded least squares on the replayed trajectory (:func:`identify`). ``docs/logs.md`` is the user's page.
 
 Log format (CSV)
 ----------------
@@ -87,6 +88,8 @@ __all__ = [
     "robot_file_fields",
     "simulate",
     "summarize",
+    "fit_start",
+    "noise_level",
 ]
 
 Array = NDArray[np.float64]
@@ -559,15 +562,66 @@ def summarize(log: Log, rep: Replay) -> dict[str, Any]:
     return out
 
 
+def placed(pose: Array, start: Sequence[float] | Array) -> Array:
+    """Poses ``(m, 3)`` of a motion from the origin moved rigidly to start at ``start`` ``(x, y, theta)``."""
+    c, s = math.cos(start[2]), math.sin(start[2])
+    px, py = pose[:, 0], pose[:, 1]
+    return np.stack([start[0] + c * px - s * py, start[1] + s * px + c * py, start[2] + pose[:, 2]], axis=1)
+
+
+def start_window(log: Log) -> int:
+    """How many of the first measured poses fix the start pose in :func:`replay`: a fifth of the log, at least 10."""
+    return min(log.t_meas.size, max(10, math.ceil(log.t_meas.size / 5)))
+
+
+def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, float, float]:
+    r"""The start pose ``(x0, y0, theta0)`` [m, m, rad] placing the replay from the origin (``origin``) on the log's
+    first :func:`start_window` measured poses: least squares of the position errors and ``heading_weight`` [m/rad]
+    times the heading errors (the log's first pose alone carries its noise into every later sample)."""
+    from scipy.optimize import least_squares  # heavy: only here
+
+    if log.pose is None:
+        raise ValueError("fit_start: the log measures no pose")
+    k = start_window(log)
+    meas, sim = log.pose[:k], origin.pose[:k]
+
+    def residuals(z: Array) -> Array:
+        d = placed(sim, z) - meas
+        return np.concatenate([d[:, 0], d[:, 1], heading_weight * _wrap(d[:, 2])])
+
+    sol = least_squares(residuals, meas[0], x_scale=np.array([0.01, 0.01, 0.01]), xtol=1e-12, ftol=1e-12)
+    return float(sol.x[0]), float(sol.x[1]), float(sol.x[2])
+
+
+def noise_level(log: Log) -> float | None:
+    r"""The measured position's noise, estimated from the log [m]: ``1.4826 MAD / sqrt(20)`` of the third differences
+    of ``x`` and ``y`` (white noise of ``sigma`` per axis gives third differences of variance ``20 sigma^2``; the
+    motion's own third differences, jerk times the sample interval cubed, are small beside it except at a few
+    command switches, which the median ignores), as the RMS of the 2-D error it makes, ``sigma sqrt(2)``; ``None``
+    without a measured pose or with fewer than 8 samples."""
+    if log.pose is None or log.t_meas.size < 8:
+        return None
+    d3 = np.diff(log.pose[:, :2], n=3, axis=0).ravel()
+    sigma = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / math.sqrt(20.0)
+    return sigma * math.sqrt(2.0)
+
+
 def replay(
     log: Log,
     true_robot: RobotParams | None = None,
     actuators: ActuatorParams | None = None,
     nominal: RobotParams | None = None,
 ) -> tuple[Replay, dict[str, Any]]:
-    """:func:`simulate` from the log's first pose, and :func:`summarize` of its errors."""
-    rep = simulate(log, true_robot, actuators, nominal)
-    return rep, summarize(log, rep)
+    """:func:`simulate` from the start pose fitted to the log's first poses (:func:`fit_start`, heading weighted by
+    the nominal half track; without a measured pose from the origin), and :func:`summarize` of its errors with
+    ``start_pose`` and ``position_noise_m`` (:func:`noise_level`) added."""
+    nominal = RobotParams() if nominal is None else nominal
+    rep = simulate(log, true_robot, actuators, nominal, (0.0, 0.0, 0.0))
+    start = (0.0, 0.0, 0.0)
+    if log.pose is not None:
+        start = fit_start(log, rep, nominal.l1)
+        rep = Replay(rep.t, placed(rep.pose, start), rep.rates)
+    return rep, {**summarize(log, rep), "start_pose": list(start), "position_noise_m": noise_level(log)}
 
 
 # --------------------------------------------------------------------------------------------- robot files
@@ -649,8 +703,8 @@ class Fit:
             the start pose, a nuisance parameter).
         uncertainty: their standard errors from the Jacobian, same names and units (``None``: not determined).
         fitted: the names of the fitted robot parameters; ``fixed``: the others with their values.
-        before, after: :func:`summarize` of the replay (from the log's first pose) with the nominal and the
-            identified robot.
+        before, after: :func:`replay`'s summary (from the fitted start pose) with the nominal and the identified
+            robot.
         cost: ``0.5 * sum(residual^2)`` at the solution [m^2]; ``n_residuals``; ``nfev``: model evaluations.
         excited: seconds of ramping the log asks of each ramp channel, with the nominal ramps.
     """
@@ -809,10 +863,7 @@ def identify(
                 cache.pop(next(iter(cache)))
         parts = []
         if log.pose is not None and start is not None:
-            c, s = math.cos(start[2]), math.sin(start[2])
-            px, py = rep.pose[1:, 0], rep.pose[1:, 1]
-            d = np.stack([start[0] + c * px - s * py, start[1] + s * px + c * py, start[2] + rep.pose[1:, 2]], axis=1)
-            d -= log.pose[1:]
+            d = placed(rep.pose[1:], start) - log.pose[1:]
             parts += [d[:, 0], d[:, 1], lam * _wrap(d[:, 2])]
         if log.rates is not None:
             d = (rep.rates[1:] - log.rates[1:]) * rate_w

@@ -5,7 +5,9 @@ model under ``agents/pretrained/v1/<folder>/`` (the SB3 TD3 with a low-pass acto
 ``ppo_fast`` and its ``residual``, matched by the sha256 of the zip) that the run evaluated, stores its
 per-scenario figures (``h_rms_m``, ``h_rms_settled_m``, ``speed_err_rms``, ``failure_rate``, ``return``,
 ``chatter_settled_rms``) under ``"claimed"`` in its manifest, with the suite version and the benchmark command.
-``tests/test_agents_v1_pretrained.py`` re-runs some scenarios and asserts the same numbers exactly.
+``tests/test_agents_v1_pretrained.py`` re-runs some scenarios and asserts the same numbers: exactly on this machine
+(the claim records :func:`amigo_gym.tools.bench.machine.bits_key`), to 1 % relative on any other. Run it on the
+machine that ran the benchmark.
 
     python experiments/claim_v1.py --benchmark docs/benchmark/benchmark.json
 """
@@ -20,6 +22,7 @@ from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write_json
+from amigo_gym.tools.bench.machine import bits_key
 
 KEYS = ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "return", "chatter_settled_rms", "episodes")
 
@@ -48,6 +51,8 @@ def main() -> int:
             "command": doc.get("command"),
             # the run of docs/benchmark used torch's default, one thread per core (2 on the 2-core machines)
             "torch_threads": int(doc.get("torch_threads", 2)),
+            # the last bits are this machine's: compared exactly only where the key is the same
+            "machine": bits_key(),
             "scenarios": by_sha[sha],
         }
         atomic_write_json(manifest, m)  # json.dumps(indent=2) + newline, via a temporary file and os.replace

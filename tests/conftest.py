@@ -11,6 +11,7 @@ the other files follow in their collection order. Only the order changes: every 
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Callable
 
 import pytest
@@ -19,6 +20,8 @@ from cli_here import Ran, runner
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 os.environ.setdefault("MPLBACKEND", "Agg")
+# the sha256 of the pickles the tests' runs write (amigo_gym.io.vouch): not into the user's own record
+os.environ.setdefault("AMIGO_GYM_STATE_DIR", tempfile.mkdtemp(prefix="amigo_gym_state_"))
 
 # The files that take longest, longest first: the sum of each file's test times (setup + call + teardown) over
 # `python -m pytest -q -n 2 --dist loadfile --durations=0 --junitxml=t.xml` (2 cores, load average 3; summed per

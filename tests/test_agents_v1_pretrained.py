@@ -1,6 +1,6 @@
 """The shipped AmigoBot-v1 generalists: manifests complete, sha256 right, and the benchmark reproduces their
-claimed numbers on re-run scenarios, to 1e-5 relative (the last bits are the CPU's; experiments/claim_v1.py wrote
-them from a full benchmark run)."""
+claimed numbers on re-run scenarios (experiments/claim_v1.py wrote them from a full benchmark run): exactly on the
+machine that recorded them, to :data:`REL` on any other (the last bits are the CPU's and its BLAS's)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,20 @@ import numpy as np
 import pytest
 
 from amigo_gym.data import pretrained_dir
+from amigo_gym.tools.bench.machine import bits_key
 from amigo_gym.tools.training import benchmark as bm
 
 MANIFESTS = sorted((pretrained_dir() / "v1").glob("*/*.json"))
 #: the scenarios re-run here (the full benchmark holds the others)
 RERUN = ("lane_change",)  # short episodes (the path ends after about 5 m): a cheap re-run
 KEYS = ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "return")
+#: the relative tolerance of each claimed figure off its recording machine. torch's and numpy's float results are the
+#: CPU's (SIMD level, MKL's code path) and a chattering policy amplifies their last bits over an episode. Measured
+#: for the low-pass TD3 on an AVX-512 Xeon against the claims of the AVX2 EPYC that recorded them (5 seeds, lane
+#: change): H RMS up to 0.57 %, settled H RMS up to 2.6 % (the ~1 mm chatter of the last seconds), return 0.2 %,
+#: speed error 0.001 %; the numpy-only fast PPO and residual: exact. Each tolerance is 2-3x the largest seen; a change
+#: beyond it in any figure fails (the seeds of one agent differ by 3-7 % in H RMS); a failure rate must be the same.
+REL = {"h_rms_m": 0.02, "h_rms_settled_m": 0.06, "speed_err_rms": 0.01, "return": 0.01, "failure_rate": 0.0}
 
 
 def test_models_are_shipped() -> None:
@@ -109,13 +117,35 @@ def test_benchmark_reproduces_claimed_numbers(manifest: Path) -> None:
         doc = bm.run_benchmark([spec], scenarios, progress=False, reps=100, profile_reps=10)
     finally:
         torch.set_num_threads(threads)
+    exact = claimed.get("machine") == bits_key()  # the recording machine (and versions): the same bits
     for r in doc["results"]:
-        want = claimed["scenarios"][r["scenario"]]
-        for key in KEYS:
-            # the claims' machine's last bits are not this machine's (numpy's float64 arctan2 is vectorised on AVX-512
-            # and not on AVX2, torch's kernels differ between CPUs): 2e-16 relative seen between an AVX2 and an AVX-512
-            # AMD EPYC on 2026-11-26; 1e-5 is still 50 times tighter than the 3 significant figures published
-            assert r[key] == pytest.approx(want[key], rel=1e-5, abs=1e-12), (r["scenario"], key, r[key], want[key])
+        bad = off_claim(r, claimed["scenarios"][r["scenario"]], exact)
+        assert not bad, f"{manifest.name} {r['scenario']} ({'exact' if exact else 'tolerance REL'}): {bad}"
+
+
+def off_claim(result: dict[str, float], claim: dict[str, float], exact: bool) -> dict[str, tuple[float, float]]:
+    """The figures of ``result`` off their ``claim``: ``{key: (result, claim)}``."""
+    return {
+        k: (result[k], claim[k])
+        for k in KEYS
+        if result[k] != pytest.approx(claim[k], rel=0 if exact else REL[k], abs=0)
+    }
+
+
+def test_a_claim_off_by_more_than_the_tolerance_fails() -> None:
+    """What another CPU does (:data:`REL`'s measurements) passes; any figure off by more than its tolerance, a
+    changed failure rate, and any difference at all on the recording machine fail."""
+    claim = json.loads(CLAIMED[0].read_text())["claimed"]["scenarios"]["lane_change"]
+    seen = {"h_rms_m": 1.0057, "h_rms_settled_m": 1.026, "speed_err_rms": 0.99999, "return": 0.998}
+    other_cpu = {k: claim[k] * seen.get(k, 1.0) for k in KEYS}
+    assert not off_claim(other_cpu, claim, exact=False)
+    assert set(off_claim(other_cpu, claim, exact=True)) == set(seen)
+    for key in seen:
+        for sign in (1, -1):
+            assert set(off_claim(dict(claim, **{key: claim[key] * (1 + sign * 1.05 * REL[key])}), claim, False)) == {
+                key
+            }
+    assert set(off_claim(dict(claim, failure_rate=0.1), claim, exact=False)) == {"failure_rate"}
 
 
 TD3LP = sorted((pretrained_dir() / "v1" / "td3lp").glob("*.zip"))

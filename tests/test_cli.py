@@ -116,7 +116,9 @@ def test_every_option_help_gives_unit_and_default(name: str, capsys: pytest.Capt
     with pytest.raises(SystemExit) as exc:
         main([name, "--help"])
     assert exc.value.code == 0
-    blocks = _option_blocks(capsys.readouterr().out)
+    text = capsys.readouterr().out
+    assert "`" not in text, f"{name} --help shows reST markup"
+    blocks = _option_blocks(text)
     blocks.pop("--help")
     assert blocks, f"{name}: no options parsed"
     for flag, text in blocks.items():

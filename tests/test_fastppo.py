@@ -13,6 +13,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
+from amigo_gym.io import sha256_file, vouch  # noqa: E402
 from amigo_gym.policies import AnalyticTrackingPolicy, load_pretrained  # noqa: E402
 from amigo_gym.policies.learned import (  # noqa: E402
     HISTORY_FIELDS,
@@ -193,6 +194,7 @@ def test_checkpoint_written_before_a_new_field_resumes_with_its_default(tmp_path
     ck = torch.load(tmp_path / "cut" / "checkpoint.pt", weights_only=False)
     del ck["settings"]["residual_penalty"]
     torch.save(ck, tmp_path / "cut" / "checkpoint.pt")
+    vouch(sha256_file(tmp_path / "cut" / "checkpoint.pt"))  # as an older version of this installation wrote it
     train(s, tmp_path / "cut", log=None, resume=True)
     w1, w2 = weights(tmp_path / "whole"), weights(tmp_path / "cut")
     for k in w1:

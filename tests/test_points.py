@@ -155,3 +155,115 @@ def test_env_on_fitted_circle_matches_the_builtin_circle() -> None:
         assert not t1
     if e1.unwrapped._kernel is not None:  # type: ignore[attr-defined]
         assert e1.unwrapped._in_kernel  # type: ignore[attr-defined]  # a fitted path runs the compiled step
+
+
+# --------------------------------------------------------------------------- points as users bring them
+
+
+def _circle(n: int, r: float = 3.0) -> np.ndarray:
+    u = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    return np.c_[r * np.cos(u), r * np.sin(u)]
+
+
+@pytest.mark.parametrize(
+    ("points", "message"),
+    [
+        (1000.0 * _circle(190), r"spread over 8.48e\+03 m, outside \[0.33, 1000\] m; .*metres \(millimetres\?\)"),
+        (np.c_[np.linspace(0.0, 1e-6, 11), np.zeros(11)], r"span a path of 1e-06 m, outside \[0.33, 1000\] m"),
+        (_circle(190, 0.05), r"span a path of 0.314 m, outside \[0.33"),  # a circle smaller than the robot
+    ],
+)
+def test_points_not_in_metres_are_refused_in_one_line(points: np.ndarray, message: str) -> None:
+    """A 3 m circle in millimetres (a 19 km path; the fit used to exhaust memory), a 1 um line, a 5 cm circle."""
+    with pytest.raises(ValueError, match=r"^from_points\.points " + message) as err:
+        from_points(points, closed=points.shape[0] == 190)
+    assert "\n" not in str(err.value) and "metres" in str(err.value)
+
+
+def test_the_length_limits_are_what_is_refused() -> None:
+    """Just inside the limits passes: a 0.34 m line and a 999 m line."""
+    assert abs(from_points(np.c_[np.linspace(0.0, 0.34, 5), np.zeros(5)]).length - 0.34) < 1e-12
+    assert abs(from_points(np.c_[np.linspace(0.0, 999.0, 5), np.zeros(5)], step=10.0).length - 999.0) < 1e-9
+
+
+def test_shuffled_points_are_named_as_such() -> None:
+    """190 points of a 3 m circle in random order: refused as out of order (the fit with a large tolerance used to
+    give a 91 m path with curvature up to 1951 1/m); the same points in order fit."""
+    pts = _circle(190)
+    shuffled = pts[np.random.default_rng(0).permutation(len(pts))]
+    for tol in (1e-3, 1.0):
+        with pytest.raises(ValueError, match=r"^from_points\.points are not in path order: .*sort them") as err:
+            from_points(shuffled, closed=True, tolerance=tol)
+        assert "\n" not in str(err.value)
+    assert abs(from_points(pts, closed=True).length - 6.0 * math.pi) < 1e-4
+
+
+@pytest.fixture(scope="module")
+def gps_circle() -> np.ndarray:
+    """A GPS-like trace of a 3 m circle: 190 points (every 10 cm), 2 cm Gaussian noise per coordinate."""
+    return _circle(190) + np.random.default_rng(1).normal(size=(190, 2)) * 0.02
+
+
+def test_a_noisy_trace_is_smoothed_to_its_curvature(gps_circle: np.ndarray) -> None:
+    """With smoothing=0.02 the curvature is within 20 % of the circle's 1/3 1/m everywhere (interpolated, the noise
+    gives curvatures of tens of 1/m), and AmigoBot-v1 at 0.2 m/s accepts the path (its feasibility check refuses
+    the interpolated one)."""
+    fit = fit_points(gps_circle, closed=True, smoothing=0.02)
+    s = np.linspace(0.0, fit.path.length, 4000, endpoint=False)
+    assert np.max(np.abs(fit.path.curvature(s) * 3.0 - 1.0)) < 0.2
+    assert abs(fit.path.length / (6.0 * math.pi) - 1.0) < 0.02
+    # the stated bound: the smoothing moves the points by their 2-D noise, 2 cm * sqrt(2) RMS
+    assert fit.smoothed == pytest.approx(0.02 * math.sqrt(2.0), rel=1e-2) and fit.max_error <= 1e-3
+    env = gym.make("AmigoBot-v1", path=fit.path, speed=0.2)
+    assert env.reset(seed=0)[1]["feasibility"]["feasible"]
+    raw = from_points(gps_circle, closed=True)
+    assert np.max(np.abs(raw.curvature(s[s < raw.length]) * 3.0 - 1.0)) > 10.0
+    with pytest.raises(ValueError, match="feasib"):
+        gym.make("AmigoBot-v1", path=raw, speed=0.2)
+
+
+def test_dense_noisy_points_are_grouped_before_smoothing() -> None:
+    """An open 4 m straight-then-arc trace sampled every 2 mm with 2 cm noise (noise 10 times the spacing):
+    the curvature of the arc (radius 2 m) within 20 %, the straight within 0.1 1/m; at the open end the curvature
+    falls to 0 over the last 0.6 m (natural ends, module docstring)."""
+    ref = ClothoidPath((ClothoidSegment.line(2.0), ClothoidSegment.transition(0.5, 0.0, 0.5),
+                        ClothoidSegment.arc(2.0, 0.5)))  # fmt: skip
+    pts = ref.point(np.arange(0.0, ref.length, 0.002))
+    pts += np.random.default_rng(2).normal(size=pts.shape) * 0.02
+    path = from_points(pts, smoothing=0.02)
+    s = np.linspace(0.0, path.length, 2000)
+    k = path.curvature(s)
+    assert np.max(np.abs(k[s < 1.5])) < 0.1
+    assert np.max(np.abs(k[(s > 3.0) & (s < path.length - 0.6)] / 0.5 - 1.0)) < 0.2
+    assert abs(k[-1]) < 0.1
+
+
+def test_bad_smoothing_is_refused() -> None:
+    for bad, message in ((0.0, r"smoothing must be in \(0, 1\]"), (-1.0, "smoothing"), ("a", "smoothing")):
+        with pytest.raises(ValueError, match=message):
+            from_points(_circle(50), closed=True, smoothing=bad)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"smoothing=1 m needs groups of 4 points to get 3 sigma apart, leaving 2"):
+        from_points(np.c_[np.linspace(0.0, 1.0, 8), np.zeros(8)], smoothing=1.0)
+
+
+def test_the_points_file_cache_is_bounded_by_bytes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Three files whose paths take about the same memory, under a budget of 2.5 of them: the oldest is dropped;
+    the newest is kept even alone over the budget."""
+    from amigo_gym.paths import points
+
+    monkeypatch.setattr(points, "_FILE_CACHE", {})
+    files = []
+    for i in range(3):
+        f = tmp_path / f"c{i}.csv"
+        f.write_text("x,y\n" + "".join(f"{x!r},{y!r}\n" for x, y in _circle(400, 10.0 - 0.01 * i).tolist()))
+        files.append(f)
+        points.cached_file_path(f)
+        if i == 0:
+            ((_, size),) = points._FILE_CACHE.values()
+            assert size > 1e6  # 63 m of path: its samples every 2 cm, its segments
+            monkeypatch.setattr(points, "CACHE_BYTES", int(2.5 * size))
+    assert [k[0] for k in points._FILE_CACHE] == [str(f.resolve()) for f in files[1:]]
+    assert points.cached_file_path(files[2]) is points._FILE_CACHE[next(reversed(points._FILE_CACHE))][0]
+    monkeypatch.setattr(points, "CACHE_BYTES", 1)
+    points.cached_file_path(files[0])
+    assert [k[0] for k in points._FILE_CACHE] == [str(files[0].resolve())]

@@ -23,6 +23,7 @@ from typing import Any
 
 import pytest
 
+from amigo_gym.io import STATE_ENV, TRUST_ENV, UntrustedFileError
 from amigo_gym.tools import runs
 from amigo_gym.tools.training.compare import verify_outputs
 
@@ -450,7 +451,7 @@ def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded
     (out / "vecnormalize.pkl").write_bytes(pickle.dumps(_Crafted(ran)))
     (ref,) = find_models(out)
     assert ref.vecnormalize == out / "vecnormalize.pkl"
-    with pytest.raises(runs.CorruptFileError, match=r"not covered by the hashes of .*run\.json"):
+    with pytest.raises(UntrustedFileError, match=r"vecnormalize\.pkl: refused: .* --trust-unverified"):
         load_model(ref)
     assert not ran.exists()
     record["files"]["vecnormalize.pkl"] = "0" * 64  # listed, then replaced: the hash does not match
@@ -464,20 +465,19 @@ def test_a_crafted_pickle_beside_a_verified_model_is_refused_before_it_is_loaded
     with pytest.raises(runs.CorruptFileError, match=r"sac_s2\.zip: sha256 .* does not match"):
         spec.instantiate(None)
     assert not ran.exists()
-    # nothing recorded: loaded, with one warning naming the file (once per process), none when trusted
+    # nothing recorded beside it: a model a run here wrote still loads (its sha256 was recorded when written)
     (out / "vecnormalize.pkl").unlink()
     (out / "run.json").unlink()
     (ref,) = find_models(out)
     assert ref.record is None
-    capsys.readouterr()
     load_model(ref)
+    # one from elsewhere is refused, and loads with the user's flag
+    monkeypatch.setenv(STATE_ENV, str(tmp_path / "elsewhere"))
+    with pytest.raises(UntrustedFileError, match=r"model\.zip: refused"):
+        load_model(ref)
+    monkeypatch.setenv(TRUST_ENV, "1")
     load_model(ref)
-    err = capsys.readouterr().err
-    assert err.count("no recorded sha256") == 1 and f"{out / 'model.zip'}: no recorded sha256" in err, err
-    runs._warned.clear()
-    monkeypatch.setenv(runs.TRUST_ENV, "1")
-    load_model(ref)
-    assert "no recorded sha256" not in capsys.readouterr().err
+    assert not ran.exists()
 
 
 # --------------------------------------------------------------------------- result files

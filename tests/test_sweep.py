@@ -202,7 +202,7 @@ def test_postgresql_hyperparameter_budget_is_global(tmp_path: Path, postgres: st
 
 # --------------------------------------------------------------------------- a killed worker
 def test_killed_worker_leaves_its_trial_failed_and_retried(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    base = _common(tmp_path, "--mode", "seeds", "--seeds", "0", "--study-name", "kill")
+    base = _common(tmp_path, "--mode", "seeds", "--seeds", "1", "--study-name", "kill")
     base += ["--heartbeat-interval", "1", "--grace-period", "2"]
     long = list(base)
     long[long.index("--timesteps") + 1] = "10000000"  # a trial that would run for hours
@@ -380,6 +380,12 @@ def test_password_masking_helpers() -> None:
     assert "p@ss" not in cleaned and "p%40ss" not in cleaned and "w0rd" not in cleaned
     assert scrub("nothing secret", "sqlite:///x.db") == "nothing secret"
     assert masked_url("sqlite:///:memory:") == "sqlite:///:memory:"  # no password: as typed
+    # credentials in the query (issue 37): every form masked, the other parameters kept
+    q = "postgresql://db/amigo?sslmode=require&password=Qw%2Be%20rt&sslpassword=Zx-9&application_name=sweep"
+    assert masked_url(q) == "postgresql://db/amigo?sslmode=require&password=***&sslpassword=***&application_name=sweep"
+    said = scrub(f"cannot connect to {q}: password 'Qw+e rt' (Qw%2Be+rt), key Zx-9", q)
+    assert not [x for x in ("Qw", "Zx-9") if x in said], said
+    assert public_argv([f"--storage={q}"]) == [f"--storage={masked_url(q)}"]
 
 
 def test_validation_cells_are_held_in_scenarios_on_seeds_the_benchmark_never_tests() -> None:
@@ -407,6 +413,25 @@ def _leaks(secret: str, *roots: Path) -> list[str]:
     """Files under ``roots`` whose bytes hold ``secret`` (as typed or URL-quoted)."""
     forms = {secret.encode(), secret.replace("-", "%2D").encode()}
     return [str(f) for r in roots for f in r.rglob("*") if f.is_file() and any(x in f.read_bytes() for x in forms)]
+
+
+def test_no_credential_of_any_url_form_in_files_attributes_or_messages(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A storage URL with ``?password=`` (SQLite ignores it): the secret in no file under --out, no study or trial
+    attribute and no printed line, from a run, from a refused input and from an error."""
+    url = f"sqlite:///{tmp_path / 's.db'}?password={SECRET}&sslpassword={SECRET}x"
+    said = _sweep_here(capsys, _common(tmp_path, "--storage", url, "--study-name", "q", "--n-trials", "1"))
+    study = optuna.load_study(study_name="q", storage=f"sqlite:///{tmp_path / 's.db'}")
+    attrs = json.dumps([study.user_attrs] + [[t.user_attrs, t.system_attrs] for t in study.trials])
+    assert "password=***" in json.dumps(study.user_attrs)
+    from amigo_gym.tools.cli import main
+
+    for bad in (["--n-trials", "0"], ["--n-jobs", "2", "--storage", f"sqlite:///:memory:?password={SECRET}"]):
+        with pytest.raises(SystemExit):
+            main(["sweep", *_common(tmp_path, "--storage", url, "--study-name", "q", *bad)])
+    said += "".join(capsys.readouterr())
+    assert SECRET not in said + attrs and not _leaks(SECRET, tmp_path / "out"), said[-2000:]
 
 
 def test_postgresql_killed_and_stopped_workers_leave_every_cell_run_once(tmp_path: Path, postgres: str) -> None:
@@ -593,3 +618,12 @@ def test_enqueue_base_refuses_seeds_mode_and_fastppo(kw: dict[str, Any], match: 
         base_params("td3", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256})
     with pytest.raises(ValueError, match=r"batch_size must be one of \[512, 1024, 2048, 4096\], got 256"):
         base_params("sac", {"learning_rate": 1e-3, "gamma": 0.98, "tau": 0.005, "batch_size": 256, "n_envs": 128})
+
+
+def test_seeds_is_a_count_like_every_other_seeds_or_a_list() -> None:
+    from amigo_gym.tools.training.sweep import SweepConfig
+
+    assert SweepConfig(algos=["ppo"], mode="seeds", seeds=[3]).seeds == [0, 1, 2]
+    assert SweepConfig(algos=["ppo"], mode="seeds", seeds=[3, 7]).seeds == [3, 7]
+    with pytest.raises(ValueError, match=r"--seeds must be a count >= 1 or two or more distinct seeds, got \[\]"):
+        SweepConfig(algos=["ppo"], mode="seeds", seeds=[0]).validate()

@@ -193,3 +193,16 @@ def test_refuses_non_empty_out_and_missing_checkpoint(tmp_path: Path, train_here
     assert r.returncode == 2 and "not empty" in r.stderr
     r = train_here("--algo", "sac", "--out", str(tmp_path / "none"), "--timesteps", "10", "--resume")
     assert r.returncode == 2 and "no checkpoint" in r.stderr
+
+
+def test_a_refused_env_kwargs_writes_nothing_and_the_corrected_rerun_runs(
+    tmp_path: Path, train_here: Callable[..., Ran]
+) -> None:
+    out = tmp_path / "run"
+    args = ["--algo", "ppo", "--out", str(out), "--hyperparams", hp_file(tmp_path, "ppo"), "--eval-freq", "0"]
+    r = train_here(*args, "--timesteps", "128", "--env-kwargs", '{"speed": -1}')
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "speed" in r.stderr, r.stderr
+    assert not out.exists()
+    r = train_here(*args, "--timesteps", "128", "--env-kwargs", '{"speed": 0.2}')
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "run.json").read_text())["timesteps"] == 128

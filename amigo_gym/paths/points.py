@@ -5,42 +5,61 @@ closed), into a :class:`~amigo_gym.paths.ClothoidPath` with continuous curvature
 runs everywhere a built-in family runs: the compiled step of the single and the vector ``AmigoBot-v1``, the
 feasibility analysis, rendering, :class:`~amigo_gym.paths.PathBatch`.
 
+Checks (one line naming ``points``, the value and the allowed range): shape, NaN, repeated points, at most
+:data:`MAX_POINTS`; points **out of path order** (the median distance between consecutive points above a tenth
+of the points' extent and :data:`UNORDERED_RATIO` times the median distance to each point's nearest neighbour:
+shuffled points); a polyline through the points **shorter than** :data:`MIN_LENGTH` (the robot's body) or
+**longer than** :data:`MAX_LENGTH` (x, y not in metres: millimetres give a path 1000 times too long).
+
 Method (:func:`fit_points`):
 
 1. **Interpolating cubic spline** ``(x(t), y(t))`` in the chord-length parameter ``t`` (``t_0 = 0``,
-   ``t_{i+1} = t_i + |p_{i+1} - p_i|``): not-a-knot end conditions for an open path (a cubic through the
-   points is reproduced exactly; three points give a parabola, two a line), periodic for a closed one. It is
-   twice continuously differentiable, so its curvature
+   ``t_{i+1} = t_i + |p_{i+1} - p_i|``; :class:`scipy.interpolate.CubicSpline`): not-a-knot ends for an open
+   path (a cubic through the points is reproduced exactly; three points give a parabola, two a line), periodic
+   for a closed one. It is twice continuously differentiable, so its curvature
    ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` is continuous.
-2. **Clothoid spline.** Every spline interval is cut into equal parameter steps of chord at most ``step``
-   [m] (and a turn of at most 0.05 rad); each step becomes a :class:`~amigo_gym.paths.ClothoidSegment`
-   whose length is the spline's arc length over the step (Gauss–Legendre, 8 nodes) and whose curvature runs
-   linearly between the spline's curvatures at the step's ends. The path starts at ``p_0`` with the spline's
-   tangent there. Curvature is continuous along the path (and across the joint of a closed path).
+2. **Clothoid spline.** The parameter range is cut into steps of chord at most ``step`` [m] and turn at most
+   0.05 rad (from the curvature at the knots), independent of the points (10^6 dense points give as many
+   steps as their length needs); each step becomes a :class:`~amigo_gym.paths.ClothoidSegment` whose length
+   is the spline's arc length over the step (Gauss–Legendre, 8 nodes) and whose curvature runs linearly
+   between the spline's curvatures at the step's ends. The path starts at ``p_0`` with the spline's tangent
+   there. Curvature is continuous along the path (and across the joint of a closed path).
 3. **Closure** (closed paths): the curvature is corrected by
    ``c_0 + c_1 cos(w s) + c_2 sin(w s) + c_3 cos(2 w s) + c_4 sin(2 w s)``, ``w = 2 pi / L``, with the
    smallest ``c`` (least squares) from Gauss–Newton on the end pose, so that the path ends at its start pose
    to rounding (:class:`~amigo_gym.paths.ClothoidPath` requires 1e-9). The correction is of the order of the
-   discretisation error of step 2 (about 1e-5 relative to the curvature at the default ``step``); it keeps
-   the curvature continuous across the joint.
-4. **Error bound.** The distance of every input point ``p_i`` from the fitted path *at its own arc length*
-   ``s_i`` (the path's arc length at the spline's knot ``t_i``), ``|c(s_i) - p_i|``, is computed; if its
+   discretisation error of step 2; it keeps the curvature continuous across the joint.
+4. **Error bound.** The distance of every point ``p_i`` from the fitted path *at its own arc length*
+   ``s_i`` (the path's arc length at the spline's knot ``t_i``), ``|c(s_i) - p_i|`` [m], is computed; if its
    maximum exceeds ``tolerance`` (default 1 mm), ``step`` is halved and the fit repeated (at most
    :data:`MAX_REFINEMENTS` times), then a ``ValueError`` names the error reached. So a returned path passes
-   within ``tolerance`` of every point (the closest-point distance is smaller still), and
+   within ``tolerance`` of every point it was fitted to (the closest-point distance is smaller still), and
    :attr:`PointsFit.max_error` is the measured bound.
 
-Curvature between the points is the spline's: points sampled from a smooth curve give its curvature to the
-spline's accuracy (``O(h^2)`` for a sample spacing ``h``); noisy points give a noisy curvature (smooth them
-first). Points closer than 1e-9 m to their predecessor are refused, as are NaN, infinities, non-numbers and
-wrong shapes, with one line naming the point.
+**Smoothing** (``smoothing=sigma`` [m], the points' noise per coordinate, e.g. 0.02 for a GPS trace with
+2 cm noise). Interpolated, noisy points give a noisy curvature (2 cm noise on a 3 m circle sampled every 10 cm:
+curvatures from -59 to 79 1/m where the circle has 0.33). With ``smoothing``, first consecutive points are averaged in
+groups of ``g`` (the least power of 2 for which points ``g`` apart are a median ``3 sigma`` apart: the means are
+then several times their noise ``sigma / sqrt(g)`` apart, so noise does not rule their chord parameter; the ends
+of an open path move in by about half a group); then the means ``b_j`` are replaced by the points ``z_j`` minimising
+``sum_j |z_j - b_j|^2 + lambda sum_j w_j |z''_j|^2`` (second divided differences in the chord parameter, weighted
+by the spacing: a discrete cubic smoothing spline, Whittaker–Reinsch), with ``lambda`` chosen so that the RMS of
+``|z_j - b_j|`` is ``sigma sqrt(2 / g)`` [m], the RMS distance of a mean from the true path (the discrepancy
+principle; twice, the second time in the chord parameter of the first result), or the smoothest result where
+even that stays closer. Steps 1–4 then fit the path through the ``z_j`` (``max_error`` [m] against them;
+:attr:`PointsFit.smoothed` [m] is the RMS distance the smoothing moved the means). The smoothing removes
+detail shorter than about the distance over which ``sigma`` of noise and the path's own bending are alike: the
+3 m circle above comes out within 3 % of its curvature; a step of curvature is spread over about that distance
+(0.3 m for 2 cm noise on a 2 m radius), and at an open path's ends the curvature falls to 0 over about twice
+it (natural ends: the penalty's second difference vanishes there).
 
 Files (:func:`load_points`, :func:`from_file`): CSV with a header naming the columns ``x`` and ``y`` (metres;
 other columns ignored); JSON as ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of
 ``{"x": ..., "y": ...}`` objects.
 
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, :mod:`amigo_gym.io`,
-the sibling path modules and the standard library's ``csv``, ``json`` and ``pathlib``.
+This module may import numpy, scipy (inside the functions: ``interpolate``, ``sparse``, ``spatial``,
+``optimize``), :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, :mod:`amigo_gym.io`, the sibling
+path modules and the standard library's ``csv``, ``json`` and ``pathlib``.
 """
 
 from __future__ import annotations
@@ -70,6 +89,9 @@ __all__ = [
     "cached_file_path",
     "is_points_file",
     "MAX_REFINEMENTS",
+    "MAX_POINTS",
+    "MIN_LENGTH",
+    "MAX_LENGTH",
 ]
 
 Array = NDArray[np.float64]
@@ -80,8 +102,14 @@ MAX_REFINEMENTS = 4
 MAX_STEP_TURN = 0.05
 #: smallest distance between consecutive points [m]
 MIN_CHORD = 1e-9
-#: most points accepted (the fit's cost is linear in them)
+#: most points accepted (the fit's cost is linear in them: experiments/bench_points.py)
 MAX_POINTS = 1_000_000
+#: shortest path through the points [m] (the robot's body length, RobotParams.body_length)
+MIN_LENGTH = 0.33
+#: longest path through the points [m]
+MAX_LENGTH = 1000.0
+#: points are out of order when consecutive ones are this many times farther apart than nearest neighbours
+UNORDERED_RATIO = 10.0
 #: Gauss–Legendre nodes of the spline's arc length
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
@@ -98,6 +126,8 @@ class PointsFit:
         step: the largest chord of a clothoid step used [m].
         closure_correction: ``(c_0, ..., c_4)`` [1/m] of the closed path's curvature correction (module
             docstring; empty if open).
+        smoothed: RMS distance [m] the smoothing moved the (grouped) points; 0 without ``smoothing``. With it,
+            ``max_error`` and ``point_s`` are those of the smoothed points.
     """
 
     path: ClothoidPath
@@ -105,13 +135,15 @@ class PointsFit:
     point_s: Array
     step: float
     closure_correction: tuple[float, ...]
+    smoothed: float = 0.0
 
 
 # --------------------------------------------------------------------------- input checks
 
 
 def _check_points(points: Any, closed: bool, owner: str) -> Array:
-    """``points`` as a float64 ``(n, 2)`` array of distinct consecutive finite points (one-line errors)."""
+    """``points`` as a float64 ``(n, 2)`` array of distinct consecutive finite points in path order, spanning a
+    path of :data:`MIN_LENGTH` to :data:`MAX_LENGTH` metres (one-line errors)."""
     if isinstance(points, str | bytes | os.PathLike):
         raise ValueError(f"{owner}.points must be an (n, 2) array of x, y in metres; for a file use from_file")
     try:
@@ -141,114 +173,99 @@ def _check_points(points: Any, closed: bool, owner: str) -> Array:
     if dup.size:
         i = int(dup[0]) + 1
         raise ValueError(f"{owner}.points[{i}] repeats points[{i - 1}] ({p[i].tolist()}): points must be distinct")
+    # shuffled points: consecutive points far apart (against the extent) where each has a close neighbour
+    step, extent = float(np.median(chord)), float(np.hypot(*np.ptp(p, axis=0)))
+    if step > 0.1 * extent and len(p) > 4:
+        from scipy.spatial import cKDTree
+
+        near = float(np.median(cKDTree(p).query(p, k=2)[0][:, 1]))
+        if step > UNORDERED_RATIO * near:
+            raise ValueError(
+                f"{owner}.points are not in path order: consecutive points are {step:.3g} m apart (median), "
+                f"{step / near:.3g} times the {near:.3g} m to each one's nearest neighbour (allowed: at most "
+                f"{UNORDERED_RATIO:g} times); sort them along the path"
+            )
+    if extent > MAX_LENGTH:  # before any work: a path that long is longer still
+        _check_length(owner, extent, "spread over")
     return p
 
 
-# --------------------------------------------------------------------------- cubic splines
+def _check_length(owner: str, length: float, what: str = "span a path of") -> None:
+    if not MIN_LENGTH <= length <= MAX_LENGTH:
+        guess = "millimetres?" if length > MAX_LENGTH else "kilometres? the robot is 0.33 m long"
+        raise ValueError(
+            f"{owner}.points {what} {length:.3g} m, outside [{MIN_LENGTH:g}, {MAX_LENGTH:g}] m; x, y must be in "
+            f"metres ({guess})"
+        )
 
 
-def _tridiagonal(a: Array, b: Array, c: Array, r: Array) -> Array:
-    """Solve ``a_i z_{i-1} + b_i z_i + c_i z_{i+1} = r_i`` (Thomas' algorithm; ``a_0``, ``c_{-1}`` unused).
+# --------------------------------------------------------------------------- smoothing
 
-    ``r`` may have a trailing axis of right-hand sides. The systems here are diagonally dominant (spline
-    moments), so no pivoting is needed.
-    """
+
+def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, float]:
+    r"""The smoothed points (module docstring, *Smoothing*) and their RMS distance from the group means [m]."""
+    group = 1  # the fewest points whose ends are 3 sigma apart (doubling): their noise no longer rules the chord
+    while np.median(np.hypot(*(p[group:] - p[:-group]).T)) < 3.0 * sigma:
+        group *= 2
+        if len(p) // group < 4:
+            raise ValueError(
+                f"{owner}.smoothing={sigma:g} m needs groups of {group} points to get 3 sigma apart, leaving "
+                f"{len(p) // group} (at least 4); give the points' noise [m], a smaller value, or more points"
+            )
+    n = len(p) // group
+    b = p[: n * group].reshape(n, group, 2).mean(axis=1)
+    if len(p) > n * group:
+        b = np.vstack((b, p[n * group :].mean(axis=0, keepdims=True)))
     n = len(b)
-    cp = np.empty(n)
-    rp = np.empty_like(r)
-    cp[0] = c[0] / b[0]
-    rp[0] = r[0] / b[0]
-    for i in range(1, n):
-        den = b[i] - a[i] * cp[i - 1]
-        cp[i] = c[i] / den
-        rp[i] = (r[i] - a[i] * rp[i - 1]) / den
-    z = np.empty_like(r)
-    z[-1] = rp[-1]
-    for i in range(n - 2, -1, -1):
-        z[i] = rp[i] - cp[i] * z[i + 1]
-    return z
+    target = sigma * math.sqrt(2.0 / group)  # RMS distance of the true path from the group means
+    z = _whittaker(b, b, closed, target)
+    z = _whittaker(b, z, closed, target)  # again in the chord parameter of the first result
+    return z, float(np.sqrt(np.mean(np.sum((z - b) ** 2, axis=1))))
 
 
-def _cyclic_tridiagonal(a: Array, b: Array, c: Array, r: Array) -> Array:
-    """:func:`_tridiagonal` with the corner entries ``a_0`` (row 0, column n-1) and ``c_{n-1}`` (row n-1,
-    column 0): the Sherman–Morrison formula on two tridiagonal solves."""
+def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
+    """The points minimising ``|z - b|^2 + lambda |D z|^2`` (``D``: second divided differences in the chord
+    parameter of ``z``, weighted by the square root of the spacing, in units of the mean spacing) with the RMS of
+    ``|z - b|`` equal to ``target`` [m] (or the largest ``lambda`` tried, a straight line or a point, if smaller)."""
+    from scipy.optimize import brentq
+    from scipy.sparse import csc_matrix, identity
+    from scipy.sparse.linalg import splu
+
     n = len(b)
-    gamma = -b[0]
-    bb = b.copy()
-    bb[0] = b[0] - gamma
-    bb[-1] = b[-1] - a[0] * c[-1] / gamma
-    u = np.zeros(n)
-    u[0] = gamma
-    u[-1] = c[-1]
-    y = _tridiagonal(a, bb, c, r)
-    q = _tridiagonal(a, bb, c, u)
-    v0, v1 = 1.0, a[0] / gamma
-    fac = (v0 * y[0] + v1 * y[-1]) / (1.0 + v0 * q[0] + v1 * q[-1])
-    out: Array = y - np.multiply.outer(q, fac) if y.ndim > 1 else y - fac * q
-    return out
+    h = np.hypot(*np.diff(np.vstack((z, z[:1])) if closed else z, axis=0).T)
+    i = np.arange(n) if closed else np.arange(1, n - 1)
+    hm, hp = h[i - 1], h[i % len(h)]
+    w = np.sqrt(0.5 * (hm + hp)) * 2.0 / (hm + hp) * float(np.mean(h)) ** 1.5
+    vals = w[:, None] * np.c_[1.0 / hm, -(1.0 / hm + 1.0 / hp), 1.0 / hp]
+    cols = np.c_[(i - 1) % n, i, (i + 1) % n]
+    d = csc_matrix((vals.ravel(), (np.repeat(np.arange(len(i)), 3), cols.ravel())), shape=(len(i), n))
+    penalty, eye = (d.T @ d).tocsc(), identity(n, format="csc")
 
+    def solve(log_lam: float) -> Array:
+        out: Array = splu(eye + math.exp(log_lam) * penalty).solve(b)
+        return out
 
-def _moments(t: Array, v: Array, closed: bool) -> Array:
-    r"""Second derivatives ``M_i`` of the interpolating cubic spline of ``v`` ``(m, 2)`` at knots ``t`` ``(m,)``.
+    def gap(log_lam: float) -> float:
+        return float(np.sqrt(np.mean(np.sum((solve(log_lam) - b) ** 2, axis=1)))) - target
 
-    Interior rows: ``h_{i-1} M_{i-1} + 2 (h_{i-1} + h_i) M_i + h_i M_{i+1} = 6 (d_i - d_{i-1})`` with
-    ``h_i = t_{i+1} - t_i`` and ``d_i = (v_{i+1} - v_i) / h_i``. Closed: the same on every knot, cyclically
-    (``t``, ``v`` then include the first point again at the end). Open: not-a-knot (the third derivative is
-    continuous at ``t_1`` and ``t_{m-2}``), eliminated into the first and last interior rows.
-    """
-    h = np.diff(t)
-    d = np.diff(v, axis=0) / h[:, None]
-    if closed:
-        hm = np.roll(h, 1)  # h_{i-1}
-        rhs = 6.0 * (d - np.roll(d, 1, axis=0))
-        mom = _cyclic_tridiagonal(hm.copy(), 2.0 * (hm + h), h.copy(), rhs)
-        return np.vstack((mom, mom[:1]))
-    m = len(t)
-    if m == 2:
-        return np.zeros_like(v)
-    if m == 3:  # a parabola: one constant second derivative
-        mm = 6.0 * (d[1] - d[0]) / (3.0 * (h[0] + h[1]))
-        return np.tile(mm, (3, 1))
-    hm, hi = h[:-1], h[1:]
-    a = hm.copy()
-    b = 2.0 * (hm + hi)
-    c = hi.copy()
-    rhs = 6.0 * (d[1:] - d[:-1])
-    h0, h1 = h[0], h[1]
-    b[0] += h0 * (h0 + h1) / h1
-    c[0] -= h0 * h0 / h1
-    g0, g1 = h[-1], h[-2]  # last and second-to-last intervals
-    b[-1] += g0 * (g0 + g1) / g1
-    a[-1] -= g0 * g0 / g1
-    inner = _tridiagonal(a, b, c, rhs)
-    first = ((h0 + h1) * inner[0] - h0 * inner[1]) / h1
-    last = ((g0 + g1) * inner[-1] - g0 * inner[-2]) / g1
-    return np.vstack((first, inner, last))
-
-
-def _spline_derivatives(t: Array, v: Array, mom: Array, i: NDArray[np.integer[Any]], tau: Array) -> tuple[Array, Array]:
-    """First and second derivatives ``(k, 2)`` of the spline at ``t_i + tau`` (``0 <= tau <= h_i``)."""
-    h = (t[i + 1] - t[i])[:, None]
-    m0, m1 = mom[i], mom[i + 1]
-    tt = tau[:, None]
-    d1 = (v[i + 1] - v[i]) / h - h * (2.0 * m0 + m1) / 6.0 + m0 * tt + (m1 - m0) * tt * tt / (2.0 * h)
-    d2 = m0 + (m1 - m0) * tt / h
-    return d1, d2
+    # lambda from a fraction of a spacing to thousands of them (the fourth power of the smoothing length)
+    return solve(30.0 if gap(30.0) <= 0.0 else float(brentq(gap, -20.0, 30.0, xtol=1e-2)))
 
 
 # --------------------------------------------------------------------------- the fit
 
 
-def _end_pose(start: tuple[float, float, float], length: Array, k0: Array, rate: Array) -> tuple[float, float, float]:
-    """End pose of the chain of clothoid steps (vectorised: each step's displacement at heading 0, rotated)."""
+def _chain(start: tuple[float, float, float], length: Array, k0: Array, rate: Array) -> tuple[Array, Array, Array]:
+    """Poses ``(m + 1,)`` at the ends of a chain of clothoid steps from ``start`` (vectorised: each step's
+    displacement at heading 0, rotated, summed)."""
     x0, y0, th0 = start
-    turn = length * (k0 + 0.5 * rate * length)
-    head = th0 + np.concatenate(([0.0], np.cumsum(turn)[:-1]))
-    dx, dy, _ = advance(np.zeros_like(length), np.zeros_like(length), np.zeros_like(length), 1.0, 0.0, k0, rate, length)
-    ch, sh = np.cos(head), np.sin(head)
-    x = x0 + float(np.sum(ch * dx - sh * dy))
-    y = y0 + float(np.sum(sh * dx + ch * dy))
-    return x, y, th0 + float(np.sum(turn))
+    head = th0 + np.concatenate(([0.0], np.cumsum(length * (k0 + 0.5 * rate * length))))
+    zero = np.zeros_like(length)
+    dx, dy, _ = advance(zero, zero, zero, 1.0, 0.0, k0, rate, length)
+    ch, sh = np.cos(head[:-1]), np.sin(head[:-1])
+    x = x0 + np.concatenate(([0.0], np.cumsum(ch * dx - sh * dy)))
+    y = y0 + np.concatenate(([0.0], np.cumsum(sh * dx + ch * dy)))
+    return x, y, head
 
 
 def _segments(length: Array, kappa: Array) -> tuple[ClothoidSegment, ...]:
@@ -258,10 +275,30 @@ def _segments(length: Array, kappa: Array) -> tuple[ClothoidSegment, ...]:
     )
 
 
+def _arc(spline: Any, a: Array, b: Array) -> Array:
+    """Arc length of the spline from parameter ``a`` to ``b`` (Gauss–Legendre, 8 nodes)."""
+    w, mid = 0.5 * (b - a), 0.5 * (b + a)
+    out = np.zeros_like(a)
+    for xg, wg in zip(_GL_X.tolist(), _GL_W.tolist(), strict=True):
+        d1 = spline(mid + w * xg, 1)
+        out += wg * w * np.hypot(d1[:, 0], d1[:, 1])
+    return out
+
+
+def _curvature(spline: Any, u: Array) -> tuple[Array, Array, Array]:
+    """The spline's first derivative, speed and curvature at ``u``."""
+    d1, d2 = spline(u, 1), spline(u, 2)
+    sp = np.hypot(d1[:, 0], d1[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / sp**3
+    return d1, sp, kappa
+
+
 def fit_points(
     points: Any,
     closed: bool = False,
     *,
+    smoothing: float | None = None,
     tolerance: float = 1e-3,
     step: float = 0.02,
     sample_spacing: float = 0.02,
@@ -271,82 +308,77 @@ def fit_points(
     Args:
         points: ``(n, 2)`` x, y [m] in path order; a closed path may repeat its first point at the end.
         closed: the path is a loop from the last point back to the first (traversed in laps).
-        tolerance: largest distance of an input point from the path at its own arc length [m], in [1e-9, 1].
+        smoothing: None: the path passes through the points. A number ``sigma`` [m] in (0, 1]: the points'
+            noise (standard deviation per coordinate); the path is smoothed to an RMS distance of
+            ``sigma sqrt(2 / g)`` from the means of groups of ``g`` points (module docstring, *Smoothing*).
+        tolerance: largest distance of a point (a smoothed one with ``smoothing``) from the path at its own arc
+            length [m], in [1e-9, 1].
         step: largest chord of a clothoid step [m] to start with, in [1e-4, 10] (halved while the error
             exceeds ``tolerance``).
         sample_spacing: the path's coarse projection samples [m] (:class:`~amigo_gym.paths.ClothoidPath`).
 
     Raises:
-        ValueError: bad points or arguments (one line naming them), a curvature above 1e4 1/m (a cusp in
-            the data), or ``tolerance`` not reached after :data:`MAX_REFINEMENTS` halvings of ``step``.
+        ValueError: bad points or arguments (one line naming them; points out of order, or spanning a path
+            outside [0.33, 1000] m), a curvature above 1e4 1/m (a cusp in the data), or ``tolerance`` not
+            reached after :data:`MAX_REFINEMENTS` halvings of ``step``.
     """
+    from scipy.interpolate import CubicSpline
+
     owner = "from_points"
     if not isinstance(closed, bool | np.bool_):
         raise ValueError(f"{owner}.closed must be True or False, got {show_value(closed)}")
     closed = bool(closed)
     tol = check_real(owner, "tolerance", tolerance, 1e-9, 1.0)
     h_max = check_real(owner, "step", step, 1e-4, 10.0)
+    sigma = None if smoothing is None else check_real(owner, "smoothing", smoothing, 0.0, 1.0)
+    if sigma == 0.0:
+        raise ValueError(f"{owner}.smoothing must be in (0, 1] m or None, got 0")
     p = _check_points(points, closed, owner)
+    smoothed = 0.0
+    if sigma is not None:
+        p, smoothed = _smooth(p, closed, sigma, owner)
     knots = np.vstack((p, p[:1])) if closed else p
     chord = np.hypot(np.diff(knots[:, 0]), np.diff(knots[:, 1]))
     t = np.concatenate(([0.0], np.cumsum(chord)))
-    mom = _moments(t, knots, closed)
-    # the spline's turn per interval bounds the number of steps too (a step turns by at most MAX_STEP_TURN)
-    d1k, d2k = _spline_derivatives(t, knots, mom, np.arange(len(chord)), np.zeros(len(chord)))
-    speed_k = np.hypot(d1k[:, 0], d1k[:, 1])
-    kappa_k = np.abs(d1k[:, 0] * d2k[:, 1] - d1k[:, 1] * d2k[:, 0]) / speed_k**3
+    _check_length(owner, float(t[-1]))
+    spline = CubicSpline(t, knots, bc_type="periodic" if closed else "not-a-knot")
+    kk = np.abs(_curvature(spline, t)[2])
+    turn_density = 1.5 * np.nan_to_num(np.maximum(kk[:-1], kk[1:]), nan=0.0) / MAX_STEP_TURN  # steps per metre
     last_error = math.inf
     for _ in range(MAX_REFINEMENTS + 1):
-        want = np.ceil(np.maximum(chord / h_max, kappa_k * chord * 1.5 / MAX_STEP_TURN))
-        n_sub = np.minimum(np.maximum(2, want), 10_000).astype(np.int64)
-        # step k: interval idx[k], parameter offsets [tau0, tau1]
-        idx = np.repeat(np.arange(len(chord)), n_sub)
-        first = np.concatenate(([0], np.cumsum(n_sub)[:-1]))
-        j = np.arange(len(idx)) - np.repeat(first, n_sub)
-        hs = (chord / n_sub)[idx]
-        tau0 = j * hs
-        tau1 = np.where(j == n_sub[idx] - 1, chord[idx], (j + 1) * hs)
-        # arc length of each step: Gauss-Legendre of the spline's speed
-        w = 0.5 * (tau1 - tau0)
-        mid = 0.5 * (tau1 + tau0)
-        seg_len = np.zeros(len(idx))
-        for xg, wg in zip(_GL_X.tolist(), _GL_W.tolist(), strict=True):
-            d1, _ = _spline_derivatives(t, knots, mom, idx, mid + w * xg)
-            seg_len += wg * w * np.hypot(d1[:, 0], d1[:, 1])
-        # curvature at the step ends (the last end: the end of the last interval)
-        ends_i = np.concatenate((idx, idx[-1:]))
-        ends_tau = np.concatenate((tau0, tau1[-1:]))
-        d1, d2 = _spline_derivatives(t, knots, mom, ends_i, ends_tau)
-        sp = np.hypot(d1[:, 0], d1[:, 1])
+        # steps of at most h_max chord and MAX_STEP_TURN turn, laid along the parameter (not tied to the knots)
+        dens = np.concatenate(([0.0], np.cumsum(chord * np.maximum(1.0 / h_max, turn_density))))
+        u = np.interp(np.linspace(0.0, dens[-1], max(1, math.ceil(dens[-1])) + 1), dens, t)
+        u[0], u[-1] = t[0], t[-1]
+        seg_len = _arc(spline, u[:-1], u[1:])
+        d1, sp, kappa = _curvature(spline, u)
         if not (sp > 0.0).all():
             raise ValueError(f"{owner}: the spline through the points stops (a cusp); smooth or thin the points")
-        kappa = (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / sp**3
         if closed:
             kappa[-1] = kappa[0]  # periodic spline: equal to rounding; exactly equal for the joint
         kmax = float(np.max(np.abs(kappa)))
         if not kmax <= MAX_CURVATURE:
             raise ValueError(
                 f"{owner}: the spline through the points has curvature {kmax:.3g} 1/m, above {MAX_CURVATURE:g} "
-                "(a cusp or a kink in the data); smooth or thin the points"
+                "(a cusp or a kink in the data); smooth them (smoothing=) or thin them"
             )
         theta0 = math.atan2(float(d1[0, 1]), float(d1[0, 0]))
         start = (float(p[0, 0]), float(p[0, 1]), theta0)
-        s_knots = np.concatenate(([0.0], np.cumsum(seg_len)))
+        s_ends = np.concatenate(([0.0], np.cumsum(seg_len)))
         corr: tuple[float, ...] = ()
         if closed:
-            kappa, corr = _close(start, seg_len, kappa, s_knots)
-        path = ClothoidPath(
-            _segments(seg_len, kappa),
-            start=(start[0], start[1]),
-            start_angle=theta0,
-            closed=closed,
-            sample_spacing=sample_spacing,
-        )
-        point_s = s_knots[np.concatenate(([0], np.cumsum(n_sub)))][: len(p)]
-        pose = path.pose_columns(point_s)
-        err = float(np.max(np.hypot(np.asarray(pose.x) - p[:, 0], np.asarray(pose.y) - p[:, 1])))
+            kappa, corr = _close(start, seg_len, kappa, s_ends)
+        rate = np.diff(kappa) / seg_len
+        # each point at its own arc length on the chain of steps (numpy; the path's own pose agrees to rounding)
+        j = np.clip(np.searchsorted(u, t[: len(p)], side="right") - 1, 0, len(seg_len) - 1)
+        point_s = s_ends[j] + _arc(spline, u[j], t[: len(p)])
+        cx, cy, ch = _chain(start, seg_len, kappa[:-1], rate)
+        px, py, _ = advance(cx[j], cy[j], ch[j], 1.0, 0.0, kappa[j], rate[j], point_s - s_ends[j])
+        err = float(np.max(np.hypot(px - p[:, 0], py - p[:, 1])))
         if err <= tol:
-            return PointsFit(path, err, point_s, h_max, corr)
+            path = ClothoidPath(_segments(seg_len, kappa), start=(start[0], start[1]), start_angle=theta0,
+                                closed=closed, sample_spacing=sample_spacing)  # fmt: skip
+            return PointsFit(path, err, point_s, h_max, corr, smoothed)
         last_error = err
         h_max = 0.5 * h_max
     raise ValueError(
@@ -368,8 +400,8 @@ def _close(
 
     def gap(coef: Array) -> Array:
         k = kappa + coef @ modes
-        x, y, th = _end_pose(start, seg_len, k[:-1], np.diff(k) / seg_len)
-        return np.array((x - start[0], y - start[1], th - start[2] - target))
+        x, y, th = _chain(start, seg_len, k[:-1], np.diff(k) / seg_len)
+        return np.array((x[-1] - start[0], y[-1] - start[1], th[-1] - start[2] - target))
 
     nm = len(modes)
     coef = np.zeros(nm)
@@ -394,11 +426,13 @@ def from_points(
     points: Any,
     closed: bool = False,
     *,
+    smoothing: float | None = None,
     tolerance: float = 1e-3,
     step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> ClothoidPath:
-    """A path ``AmigoBot-v1`` accepts, fitted with continuous curvature to points ``(n, 2)`` [m] (:func:`fit_points`).
+    """A path ``AmigoBot-v1`` accepts, fitted with continuous curvature to points ``(n, 2)`` [m] (:func:`fit_points`;
+    ``smoothing=sigma`` [m] for noisy points, e.g. 0.02 for a GPS trace with 2 cm noise).
 
     ```python
     import numpy as np, gymnasium as gym, amigo_gym
@@ -409,7 +443,8 @@ def from_points(
     env = gym.make("AmigoBot-v1", path=path)
     ```
     """
-    return fit_points(points, closed, tolerance=tolerance, step=step, sample_spacing=sample_spacing).path
+    fit = fit_points(points, closed, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
+    return fit.path
 
 
 # --------------------------------------------------------------------------- files
@@ -491,6 +526,7 @@ def from_file(
     file: str | os.PathLike[str],
     closed: bool | None = None,
     *,
+    smoothing: float | None = None,
     tolerance: float = 1e-3,
     step: float = 0.02,
     sample_spacing: float = 0.02,
@@ -511,14 +547,16 @@ def from_file(
     else:
         use = closed
     try:
-        return from_points(pts, use, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
+        return from_points(pts, use, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     except ValueError as exc:
         raise ValueError(f"{file}: {exc}") from None
 
 
 #: the suffixes of a points file (``path="points.csv"`` in ``gym.make``)
 POINTS_SUFFIXES: tuple[str, ...] = (".csv", ".json")
-_FILE_CACHE: dict[tuple[str, int, int], ClothoidPath] = {}
+#: most bytes the fitted paths of points files keep in memory (besides the newest)
+CACHE_BYTES = 64 * 2**20
+_FILE_CACHE: dict[tuple[str, int, int], tuple[ClothoidPath, int]] = {}
 
 
 def is_points_file(name: str) -> bool:
@@ -529,17 +567,19 @@ def is_points_file(name: str) -> bool:
 def cached_file_path(file: str | os.PathLike[str]) -> ClothoidPath:
     """:func:`from_file` with the default settings, built once per process for each file version (resolved
     name, modification time and size): ``gym.make("AmigoBot-v1", path="points.csv")`` and every vector env
-    of a benchmark share one fitted path."""
+    of a benchmark share one fitted path. The cache holds at most :data:`CACHE_BYTES` of paths (their flat
+    vectors, the float lists built from them, 4 times as large, and their segments), oldest dropped first,
+    and always the newest."""
     f = Path(file)
     try:
         st = f.resolve().stat()
     except OSError:
         raise FileNotFoundError(f"{file}: no such points file") from None
     key = (str(f.resolve()), st.st_mtime_ns, st.st_size)
-    path = _FILE_CACHE.get(key)
-    if path is None:
-        path = from_file(f)
-        if len(_FILE_CACHE) >= 64:
-            _FILE_CACHE.clear()
-        _FILE_CACHE[key] = path
+    hit = _FILE_CACHE.pop(key, None)
+    path = from_file(f) if hit is None else hit[0]
+    size = 5 * path._t.flat.nbytes + 200 * len(path.segments)
+    while _FILE_CACHE and size + sum(b for _, b in _FILE_CACHE.values()) > CACHE_BYTES:
+        del _FILE_CACHE[next(iter(_FILE_CACHE))]
+    _FILE_CACHE[key] = (path, size)
     return path

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.io import atomic_save, sha256_file
+from amigo_gym.io import atomic_save, require_trust, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy
@@ -348,7 +348,7 @@ class FastPolicy(Policy):
 sha256_of = sha256_file
 
 
-def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any:
+def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
     """Load a shipped ``AmigoBot-v1`` agent after checking its manifest's SHA-256.
 
     Args:
@@ -356,6 +356,8 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any
             ``agents/pretrained/v1/td3lp/td3lp_s0.zip``).
         manifest: its manifest JSON (default: ``<zip stem>.json`` beside the zip), with ``sha256`` and, for
             SB3 zips, ``algo``.
+        trust: load an SB3 zip (a pickle: loading it runs code) that is neither shipped nor written by a run of
+            this installation (:func:`amigo_gym.io.require_trust`); a fast-PPO zip (numpy, JSON) needs none.
 
     Returns:
         An object with SB3's ``predict(obs, state=None, episode_start=None, deterministic=True)`` for a batch of
@@ -364,7 +366,8 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any
 
     Raises:
         FileNotFoundError: no zip or no manifest. ValueError: the manifest has no ``sha256``, the zip's digest
-        differs from it, or an SB3 manifest names an unknown algorithm.
+        differs from it, or an SB3 manifest names an unknown algorithm. UntrustedFileError (a ValueError): an SB3
+        zip not trusted (one line naming it and the flag).
     """
     p = Path(path)
     if not p.is_file():
@@ -389,4 +392,5 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None) -> Any
     classes: dict[str, Any] = {"ppo": sb3.PPO, "sac": sb3.SAC, "td3": sb3.TD3, "a2c": sb3.A2C, "ddpg": sb3.DDPG}
     if algo not in classes:
         raise ValueError(f"load_pretrained: manifest algo must be one of {sorted(classes)}, got {algo!r}")
+    require_trust(p, got, trust)
     return classes[algo].load(str(p), device="cpu")

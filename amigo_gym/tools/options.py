@@ -1,9 +1,5 @@
 """Command-line helpers shared by every ``amigo-gym`` sub-command: one-line errors, option help with defaults,
-options derived from a settings dataclass, and the extra-module probe.
-
-Sits at the bottom of the package (standard library only), so that the sub-commands in ``training``,
-``analysis``, ``bench`` and ``model`` import it downwards; the dispatcher :mod:`amigo_gym.tools.cli` imports it too
-and is imported by nothing.
+options derived from a settings dataclass, and the extra-module probe (standard library only).
 """
 
 from __future__ import annotations
@@ -59,11 +55,15 @@ class HelpFormatter(argparse.HelpFormatter):
 class OneLineParser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump).
 
-    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise.
+    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise; the description
+    and epilog are shown without reST markup (:func:`_plain`).
     """
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
+        for key in ("description", "epilog"):
+            if isinstance(kwargs.get(key), str):
+                kwargs[key] = _plain(str(kwargs[key]))
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:

@@ -23,14 +23,22 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from amigo_gym.io import atomic_save, atomic_write_json, fault_point, file_mode, fsync_dir, sha256_file
+from amigo_gym.io import (
+    atomic_save,
+    atomic_write_json,
+    fault_point,
+    file_mode,
+    fsync_dir,
+    require_trust,
+    sha256_file,
+    vouch,
+)
 
 __all__ = [
     "CHECKPOINTS",
     "LOCK_NAME",
     "POINTER",
     "Checkpoint",
-    "TRUST_ENV",
     "CorruptFileError",
     "RunLock",
     "RunLockedError",
@@ -46,9 +54,9 @@ __all__ = [
     "restore_snapshot",
     "save_checkpoint",
     "sha256_file",
-    "trust_unverified",
     "verify_manifest",
     "verify_sha256",
+    "vouch",
 ]
 
 LOCK_NAME = "run.lock"
@@ -270,39 +278,17 @@ def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
     return dict(doc["files"])
 
 
-#: environment variable that, set to ``1``, trusts files that have no recorded sha256 (no warning)
-TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
-_trust_unverified = False
-_warned: set[str] = set()
+def check_pickle(path: Path, expected: str | None, source: str | None, trust: bool = False) -> None:
+    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled: against the
+    sha256 ``expected`` of the manifest ``source`` if there is one (:func:`verify_sha256`: a damaged file), then
+    that it is trusted (:func:`amigo_gym.io.require_trust`: shipped, written here, or ``trust``).
 
-
-def trust_unverified(trust: bool = True) -> None:
-    """Load pickles without a recorded sha256 without the warning (the command lines' ``--trust-unverified``)."""
-    global _trust_unverified
-    _trust_unverified = bool(trust)
-
-
-def check_pickle(path: Path, expected: str | None, source: str | None) -> None:
-    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled.
-
-    With a recorded sha256 (``expected``, from the manifest ``source``): :func:`verify_sha256` (a mismatch or a
-    missing file raises :class:`CorruptFileError`). Without one: a warning naming the file, once per file and
-    process, that it is loaded unverified; none when the user trusts unverified files (:func:`trust_unverified`,
-    or the environment variable ``AMIGO_GYM_TRUST_UNVERIFIED=1``).
+    Raises:
+        CorruptFileError: missing or not the recorded file. UntrustedFileError: not trusted (one line).
     """
     if expected is not None:
         verify_sha256(path, expected, str(source))
-        return
-    if _trust_unverified or os.environ.get(TRUST_ENV) == "1":
-        return
-    key = str(Path(path).resolve())
-    if key in _warned:
-        return
-    _warned.add(key)
-    warn(
-        f"{path}: no recorded sha256 to check it against; it is a pickle, and loading it runs code: load only "
-        f"files you trust (--trust-unverified or {TRUST_ENV}=1 silences this)"
-    )
+    require_trust(path, expected, trust)
 
 
 def read_json(path: Path, what: str = "") -> Any:
@@ -441,6 +427,8 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
     for i, folder in enumerate(cands):
         try:
             ck = verify_checkpoint(folder, algo)
+            for name, digest in ck.meta["files"].items():  # meta.json is the run folder's: no proof of origin
+                require_trust(folder / name, str(digest))
             result = load(ck)
         except CorruptFileError as exc:
             tried.append(str(exc))
@@ -501,12 +489,9 @@ def save_checkpoint(
         for name in names:
             _fsync_file(tmp / name)
         fault_point("checkpoint:files")
-        meta = {
-            "num_timesteps": int(step),
-            "algo": algo,
-            "wall_time_s": float(wall_time_s),
-            "files": {name: sha256_file(tmp / name) for name in names},
-        }
+        files = {name: sha256_file(tmp / name) for name in names}
+        vouch(*files.values())  # written here: resuming from it needs no trust flag
+        meta = {"num_timesteps": int(step), "algo": algo, "wall_time_s": float(wall_time_s), "files": files}
         (tmp / META).write_text(json.dumps(meta, indent=2) + "\n")
         _fsync_file(tmp / META)
         fsync_dir(tmp)

@@ -1,85 +1,10 @@
 r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy), from the transforms to system (29).
 
-This module redoes, in SymPy, the Maple derivation of the paper (cited in docs/model.md) and checks it against the
-conventions of ``docs/model.md``. It is **not** on the environment's stepping path: ``import amigo_gym`` never
-imports it (nor SymPy); the numeric model lives in :mod:`amigo_gym.model.kinematics`. Everything is derived once and
-cached
-(:func:`derive`); ``amigo-gym derive [--latex] [--out FILE]`` prints the result.
-
-Walk-through
-------------
-Frames: 0 is the ground frame (z up), 4 the vehicle frame (heading ``beta`` about z, x4 forward), 1 and 2 the
-frames of the right and left drive wheels, turning with the wheel angles ``alpha1``, ``alpha2``. The coordinates
-``x_A, y_A, beta, alpha1, alpha2, alpha3, phi`` are functions of time ``t``; ``l1, l3, l4, l5, r1, r2, r3, R`` are
-positive lengths and ``v_A`` is the speed of A. A dot is a time derivative.
-
-1. **Point H** (eqs 1–4). ``r_H = T_{4,0,H} rho_H`` with the transform of eq. 2 (rotation ``beta`` about z,
-   translation ``(x_A + l3 cos b, y_A + l3 sin b, r1)``) and ``rho_H = (0, 0, -l4, 1)`` (eq. 3) gives
-   ``r_H = (x_A + l3 cos b, y_A + l3 sin b, r1 - l4, 1)`` (eq. 4).
-
-2. **Contact points** (eqs 13–16, 21–24). ``r_K = T_{4,0,K} T_{1,4} rho_K``: eq. 14 puts the centre of wheel 1 at
-   ``A + l1 (sin b, -cos b)`` at axle height ``r1``, eq. 15 turns frame 1 with the wheel (a proper rotation by
-   ``alpha1``), and eq. 16 writes the contact point in the wheel frame as ``rho_K = (-r1 cos a1, r1 sin a1, 0, 1)``,
-   which depends on ``alpha1`` exactly so that ``T_{1,4} rho_K = (0, 0, -r1, 1)``: the contact point is always the
-   bottom of the wheel, ``r_K = (x_A + l1 sin b, y_A - l1 cos b, 0, 1)``. Likewise ``r_L`` (wheel 2, radius ``r2``,
-   on the other side).
-
-3. **Velocity of the material point in contact** (what eqs 17 and 25 should say). Rolling without slipping asks
-   that the *material point of the wheel* now at K be at rest. That point is fixed in frame 1, so its velocity is
-   the time derivative of the chain applied to ``rho_K`` *frozen* at its current value, with the product rule:
-
-   .. math::
-       \bar v_K = \frac{d}{dt}\left(T_{4,0,K}\,T_{1,4}\right)\bar\rho_K
-               = \left(\dot T_{4,0,K}\,T_{1,4} + T_{4,0,K}\,\dot T_{1,4}\right)\bar\rho_K
-               = \begin{pmatrix}\dot x_A - r_1\dot\alpha_1\cos\beta + l_1\dot\beta\cos\beta\\
-                 \dot y_A - r_1\dot\alpha_1\sin\beta + l_1\dot\beta\sin\beta\\ 0\\ 0\end{pmatrix}
-
-   (eq. 18 with velocities). Differentiating ``rho_K`` as well gives instead the velocity of the *geometric*
-   contact point, ``(xdot_A + l1 betadot cos b, ydot_A + l1 betadot sin b, 0)``, which slides along the ground
-   with the robot and is not zero when the wheel rolls; the difference ``T_{4,0,K} T_{1,4} rhodot_K =
-   r1 alpha1dot (cos b, sin b, 0)`` is the rolling itself.
-
-4. **Rolling constraints** (eqs 19, 20, 27, 28): ``v_K = 0`` and ``v_L = 0``. With the motion of A (eqs 11, 12:
-   ``xdot_A = v_A cos b``, ``ydot_A = v_A sin b``, no side slip of A) the component of ``v_K`` across the
-   heading vanishes identically, and the component along it gives ``r1 alpha1dot = v_A + l1 betadot``; for wheel 2,
-   ``r2 alpha2dot = v_A - l1 betadot``. Conversely ``v_A = (r1 alpha1dot + r2 alpha2dot)/2`` and
-   ``betadot = (r1 alpha1dot - r2 alpha2dot)/(2 l1)``: the differential-drive relations of docs/model.md and
-   :func:`amigo_gym.model.kinematics.wheel_rates`.
-
-5. **Castor** (the seventh equation; no transform for it is printed in the paper). By analogy: the swivel S on the
-   body axis, ``l5`` behind A (``T_{4,0,S}``), a swivel rotation ``gamma`` about the vertical, and the castor wheel
-   turning with ``alpha3`` (``T_{3,S}``, ``rho_C`` as eqs 15–16 with ``r3``). Rolling without slipping of its
-   material contact point gives ``v_S = r3 alpha3dot (cos(b + gamma), sin(b + gamma))``: the castor aligns with the
-   velocity of its swivel, ``gamma = atan2(-l5 betadot, v_A)`` (trail neglected), and
-   ``r3 alpha3dot = sqrt(l5^2 betadot^2 + v_A^2)`` moving forward.
-
-6. **The path of H and the inverse problem** (eqs 6–10). H on the circle of eq. 6, ``x_H = R sin phi``,
-   ``y_H = R (1 - cos phi)``, gives eqs 7–8, and their time derivatives eqs 9–10:
-   ``xdot_A - l3 betadot sin b - R phidot cos phi = 0``, ``ydot_A + l3 betadot cos b - R phidot sin phi = 0``.
-   For any path with tangent angle ``theta(s)`` at arc length ``s`` (the circle: ``theta = phi``,
-   ``sdot = R phidot``) eqs 9–12 solve to the inverse-kinematics ODE
-
-   .. math:: \dot s = \frac{v_A}{\cos(\theta - \beta)}, \qquad \dot\beta = \frac{v_A \tan(\theta - \beta)}{l_3}.
-
-   On a circle the heading lag ``delta = theta - beta`` is steady where ``sdot / R = betadot``, i.e.
-   ``sin delta = l3 / R``, giving ``betadot = v_A / sqrt(R^2 - l3^2)``.
-
-7. **System (29), corrected**: the seven equations (9), (10), (11), (12), (19), (27) and the castor's, each ``= 0``.
-
-Where the paper's printing is wrong (cf. docs/model.md):
-
-* eqs 17 and 25 print the derivative of a product as the product of the derivatives,
-  ``Tdot_{4,0,K} Tdot_{1,4} rho_K``; that is ``r1 alpha1dot betadot (sin b, -cos b, 0, 0)``, not eq. 18;
-* eqs 18 and 26 print the positions ``x_A``, ``y_A`` where the velocities ``xdot_A``, ``ydot_A`` belong, and
-  eq. 28 prints ``y_A``;
-* eqs 19, 20, 27, 28 lack ``= 0``;
-* the text calls system 29 "six equations"; it has seven;
-* system 29 keeps only the x-components of ``v_K = 0`` and ``v_L = 0``; with eq. 11 these read
-  ``cos b (v_A + l1 betadot - r1 alpha1dot) = 0`` and say nothing about ``alpha1dot`` where ``cos b = 0``
-  (heading along y0). The solution here uses the component along the heading, which is regular everywhere.
-
-Numbers: :func:`lambdify` turns derived expressions into batched numpy functions of named arguments (the names of
-:data:`PLAIN_SYMBOLS`); :func:`robot_values` supplies a :class:`~amigo_gym.model.params.RobotParams`' lengths by name.
+The steps, the equations and the paper's misprints are in docs/derivation.md. Not on the stepping path:
+``import amigo_gym`` imports neither this module nor SymPy. :func:`derive` computes everything once (cached);
+:func:`lambdify` turns derived expressions into batched numpy functions of the names in :data:`PLAIN_SYMBOLS`;
+:func:`robot_values` gives a :class:`~amigo_gym.model.params.RobotParams`' lengths [m] by those names;
+``amigo-gym derive [--latex] [--out FILE]`` prints the derivation.
 """
 
 from __future__ import annotations
@@ -118,9 +43,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-# --------------------------------------------------------------------------------------------------------------------
-# Symbols
-# --------------------------------------------------------------------------------------------------------------------
+# --- Symbols
 
 #: time [s]
 t = sp.Symbol("t", real=True)
@@ -166,23 +89,9 @@ for _f, _p, _pd in _COORDS:
     _TO_PLAIN[_f] = _p
 
 #: every plain symbol an expression of :func:`derive` may contain, by name (the keyword names of :func:`lambdify`)
+_CONSTANTS = (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta, delta)
 PLAIN_SYMBOLS: dict[str, Any] = {
-    str(sym): sym
-    for sym in (
-        *(p for _, p, _ in _COORDS),
-        *(pd for _, _, pd in _COORDS),
-        l1,
-        l3,
-        l4,
-        l5,
-        r1,
-        r2,
-        r3,
-        R,
-        v_A,
-        theta,
-        delta,
-    )
+    str(sym): sym for sym in (*(p for _, p, _ in _COORDS), *(pd for _, _, pd in _COORDS), *_CONSTANTS)
 }
 
 
@@ -203,9 +112,7 @@ def _simp(expr: Any) -> Any:
     return sp.expand(sp.trigsimp(sp.expand(expr)))
 
 
-# --------------------------------------------------------------------------------------------------------------------
-# The transforms (eqs 2-3, 14-16, 22-24; the castor's by analogy)
-# --------------------------------------------------------------------------------------------------------------------
+# --- The transforms (eqs 2-3, 14-16, 22-24; the castor's by analogy)
 
 
 def _frame(angle: Any, x: Any, y: Any, z: Any) -> Any:
@@ -297,9 +204,7 @@ def material_velocity(chain: Sequence[Any], rho: Any) -> Any:
     return sp.ImmutableMatrix(total)
 
 
-# --------------------------------------------------------------------------------------------------------------------
-# The derivation
-# --------------------------------------------------------------------------------------------------------------------
+# --- The derivation
 
 #: labels of the seven equations of system (29): the paper's numbers, and the castor's
 SYSTEM_29_LABELS: tuple[str, ...] = ("9", "10", "11", "12", "19", "27", "castor")
@@ -540,22 +445,12 @@ def derive() -> Derivation:
     )
 
 
-# --------------------------------------------------------------------------------------------------------------------
-# Numbers
-# --------------------------------------------------------------------------------------------------------------------
+# --- Numbers
 
 
 def robot_values(robot: RobotParams) -> dict[str, float]:
     """The lengths of ``robot`` [m] by symbol name, for :func:`lambdify`'s keyword arguments."""
-    return {
-        "l_1": robot.l1,
-        "l_3": robot.l3,
-        "l_4": robot.l4,
-        "l_5": robot.l5,
-        "r_1": robot.r1,
-        "r_2": robot.r2,
-        "r_3": robot.r3,
-    }
+    return {f"{n[0]}_{n[1]}": float(getattr(robot, n)) for n in ("l1", "l3", "l4", "l5", "r1", "r2", "r3")}
 
 
 def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
@@ -595,9 +490,7 @@ def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
     return call
 
 
-# --------------------------------------------------------------------------------------------------------------------
-# Output
-# --------------------------------------------------------------------------------------------------------------------
+# --- Output
 
 
 def system_29_latex() -> list[str]:

@@ -19,7 +19,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
-from amigo_gym.tools.options import OneLineParser, add_dataclass_options, run_guarded
+from amigo_gym.tools.options import parse_settings, run_guarded
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
 
@@ -108,7 +108,6 @@ def halving_times(settings: Settings) -> list[GainFit]:
             win = (tr.time >= settings.t_from) & (tr.time <= settings.t_to) & (np.abs(tr.e) > 0)
             ts += tr.time[win].tolist()
             logs += np.log(np.abs(tr.e[win])).tolist()
-        # one slope, a separate intercept per episode would be finer; pooled is what the table states
         slope = float(np.polyfit(np.asarray(ts), np.asarray(logs), 1)[0])
         halving = math.log(2.0) / -slope if slope < 0 else math.inf
         out.append(GainFit(k, slope, halving, math.log(2.0) / k, curves))
@@ -140,9 +139,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
-    parser = OneLineParser(prog="amigo-gym convergence", description=__doc__.splitlines()[0])
-    add_dataclass_options(parser, Settings)
-    settings = Settings(**vars(parser.parse_args(argv)))
+    settings = parse_settings(Settings, argv, "amigo-gym convergence", __doc__.splitlines()[0])
 
     def run() -> int:
         rows = halving_times(settings)

@@ -4,24 +4,11 @@
 for H on the manoeuvre path and writes
 
 * ``DIR/paper_fig2_angles.png``: wheel angles alpha1 (blue) and alpha2 (red) against time, as Fig. 2;
-* ``DIR/paper_fig3_rates.png``: their rates alpha1_dot (blue) and alpha2_dot (red), as Fig. 3, with the
-  closed-form steady state on the circle as dotted lines;
+* ``DIR/paper_fig3_rates.png``: their rates, as Fig. 3, with the closed-form steady state on the circle dotted;
 * ``DIR/paper_manoeuvre.csv``: every column of the solution (SI units, radians).
 
-The phases are shaded and labelled in both plots.
-
-Choices (the paper gives v_A = 0.2 m/s and the construction data, not the timing nor the radius):
-
-* path: straight 1 m along x0 from the origin, then a left circle of R = 1 m tangent to it
-  (:class:`amigo_gym.paths.ManoeuvrePath`); H starts at the origin with beta = 0;
-* speed of A: trapezoid (:func:`amigo_gym.task.inverse.manoeuvre_profile`): standstill for 1 s, acceleration
-  0.1 m/s^2 (2 s to 0.2 m/s), cruise, deceleration 0.2 m/s^2 (1 s), then 1 s at rest. Both are well inside the
-  real robot's limits (0.3 m/s^2 and 0.75 m/s^2, ``RobotParams``), gentle enough to be visible in the
-  plots. Braking is timed so that A travels the straight plus one lap of its steady circle
-  (``2 pi sqrt(R^2 - l3^2)``), so the robot brakes on the circle near the end of the lap;
-* output step 0.01 s (the integration itself is adaptive, DOP853 with rtol = atol = 1e-12).
-
-Every setting is an option (``--help``).
+The phases are shaded and labelled in both plots. The default path and speed profile (the paper gives neither
+timing nor radius) and why: docs/core.md; every setting is an option (``--help``).
 """
 
 from __future__ import annotations
@@ -148,7 +135,7 @@ def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath)
     return out
 
 
-def _save_atomic(fig: Any, target: str, dpi: int) -> None:
+def _save(fig: Any, target: str, dpi: int) -> None:
     atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), target)
 
 
@@ -200,33 +187,26 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
         f"a = {settings.accel:g} m/s², braking {settings.decel:g} m/s²"
     )
 
-    fig, ax = plt.subplots(figsize=(8.0, 4.2), layout="constrained")
-    _shade(ax, ph)
-    ax.plot(sol.t, sol.alpha1, color="tab:blue", label="α1 (wheel 1, right)")
-    ax.plot(sol.t, sol.alpha2, color="tab:red", label="α2 (wheel 2, left)")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("wheel angle [rad]")
-    ax.set_xlim(sol.t[0], sol.t[-1])
-    ax.legend(loc="upper left")
-    fig.suptitle("Wheel angles (cf. paper Fig. 2): " + title, fontsize=9)
-    _save_atomic(fig, files["fig2"], settings.dpi)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(8.0, 4.2), layout="constrained")
-    _shade(ax, ph)
-    ax.plot(sol.t, sol.alpha1_dot, color="tab:blue", label="α̇1 (wheel 1, right)")
-    ax.plot(sol.t, sol.alpha2_dot, color="tab:red", label="α̇2 (wheel 2, left)")
-    for k, c in ((0, "tab:blue"), (1, "tab:red")):
-        ax.axhline(float(ss.wheel_rates[k]), color=c, lw=0.8, ls=":")
-    ax.plot([], [], color="0.3", lw=0.8, ls=":", label="steady state on the circle (closed form)")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("wheel rate [rad/s]")
-    ax.set_xlim(sol.t[0], sol.t[-1])
-    ax.set_ylim(-0.2, 1.25 * float(np.max(sol.wheel_rates)))
-    ax.legend(loc="lower center", fontsize=8)
-    fig.suptitle("Wheel rates (cf. paper Fig. 3): " + title, fontsize=9)
-    _save_atomic(fig, files["fig3"], settings.dpi)
-    plt.close(fig)
+    for key, y1, y2, symbol, what, fig_no in (
+        ("fig2", sol.alpha1, sol.alpha2, "α", "angle [rad]", 2),
+        ("fig3", sol.alpha1_dot, sol.alpha2_dot, "α̇", "rate [rad/s]", 3),
+    ):
+        fig, ax = plt.subplots(figsize=(8.0, 4.2), layout="constrained")
+        _shade(ax, ph)
+        ax.plot(sol.t, y1, color="tab:blue", label=f"{symbol}1 (wheel 1, right)")
+        ax.plot(sol.t, y2, color="tab:red", label=f"{symbol}2 (wheel 2, left)")
+        if key == "fig3":
+            for k, c in ((0, "tab:blue"), (1, "tab:red")):
+                ax.axhline(float(ss.wheel_rates[k]), color=c, lw=0.8, ls=":")
+            ax.plot([], [], color="0.3", lw=0.8, ls=":", label="steady state on the circle (closed form)")
+            ax.set_ylim(-0.2, 1.25 * float(np.max(sol.wheel_rates)))
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(f"wheel {what}")
+        ax.set_xlim(sol.t[0], sol.t[-1])
+        ax.legend(loc="upper left" if key == "fig2" else "lower center", fontsize=None if key == "fig2" else 8)
+        fig.suptitle(f"Wheel {what.split()[0]}s (cf. paper Fig. {fig_no}): " + title, fontsize=9)
+        _save(fig, files[key], settings.dpi)
+        plt.close(fig)
 
     sol.to_csv(files["csv"])
     return sol, ph, files
@@ -241,7 +221,7 @@ def _report(settings: Settings) -> int:
     """:func:`run`, then what it found on stdout."""
     sol, ph, files = run(settings)
     robot = RobotParams()
-    print(f"settings: {asdict(settings)}")
+    print("settings: " + ", ".join(f"{k} {v}" for k, v in asdict(settings).items()))
     print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
     print(
         f"peak wheel rates: alpha1_dot {float(np.max(np.abs(sol.alpha1_dot))):.4f}, "

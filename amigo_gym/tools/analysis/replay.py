@@ -1,14 +1,15 @@
 """``amigo-gym replay`` and ``amigo-gym identify``: a robot's log against the model (:mod:`amigo_gym.logs`).
 
-``amigo-gym replay LOG --out DIR [--robot robot.json]`` drives the model with the log's commands from its first
-pose and writes, into ``DIR``:
+``amigo-gym replay LOG --out DIR [--robot robot.json]`` drives the model with the log's commands from the start pose
+that fits the log's first poses (:func:`amigo_gym.logs.replay`) and writes, into ``DIR``:
 
 * ``trajectory.csv``: per measurement time ``t`` [s], the measured and simulated pose of A (``x_meas``,
   ``y_meas``, ``theta_meas``, ``x_sim``, ``y_sim``, ``theta_sim`` [m, rad]), the ``position_error`` [m] and
   ``heading_error`` [rad] (simulated minus measured, wrapped), and the wheel rates ``w1_sim``, ``w2_sim`` (and
   ``w1_meas``, ``w2_meas`` when measured) [rad/s];
 * ``replay.png``: the paths of A in the plane, the wheel rates over time (simulated against measured, as the
-  paper's Figs 3 and 5) and the size of the errors over time (log scale);
+  paper's Figs 3 and 5) and the size of the errors over time (log scale) against the measurement noise estimated
+  from the log (:func:`amigo_gym.logs.noise_level`);
 * ``summary.json``: :func:`amigo_gym.logs.summarize` (``rms_position_error_m`` among them), the robot used.
 
 ``amigo-gym identify LOG --out DIR`` fits the true robot (:func:`amigo_gym.logs.identify`) and writes
@@ -18,7 +19,8 @@ true_robot="robot.json")`` and ``replay --robot`` accept, their uncertainties, t
 and ``summary.json``.
 
 The folder is written whole or not at all: everything goes to a temporary folder beside it, which then takes its
-name (an existing ``DIR`` is refused unless ``--force``, which replaces it only once the new one is complete).
+name (an existing ``DIR`` is refused unless ``--force``, which replaces it only once the new one is complete); a
+killed run's temporary folder is removed by the next run into the same ``DIR``.
 A bad log gives one line naming the problem and exit status 2, before anything is written.
 """
 
@@ -37,7 +39,7 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.io import file_mode, fsync_dir, json_safe
-from amigo_gym.logs import Fit, Log, Replay, errors, identify, read_log, robot_from_file, simulate, summarize
+from amigo_gym.logs import Fit, Log, Replay, errors, identify, noise_level, read_log, replay, robot_from_file
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
@@ -131,6 +133,11 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
         else:
             ax_e.plot(t, np.abs(e["rate1"]), color="tab:blue", label=f"α̇1 [rad/s], {label}", **st)
             ax_e.plot(t, np.abs(e["rate2"]), color="tab:red", label=f"α̇2 [rad/s], {label}", **st)
+    noise = noise_level(log)
+    if noise is not None:
+        ax_e.axhline(
+            1e3 * noise, color="0.4", lw=0.8, ls=":", label=f"position noise, {1e3 * noise:.2g} mm (estimated)"
+        )
     ax_e.set_yscale("log")
     ax_e.set_xlabel("t [s]")
     ax_e.set_ylabel("|simulated − measured|")
@@ -157,12 +164,17 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
     """Write every file by its writer ``files[name](path)`` into a temporary folder beside ``out``, then move it
     to ``out`` (replacing an existing ``out`` only when ``force``, after the new folder is complete).
 
-    Interrupted or failing, the temporary folder is removed and ``out`` is untouched.
+    Interrupted or failing, the temporary folder is removed and ``out`` is untouched; killed, it stays, named
+    ``.<out>.<pid>-<random>.tmp``, until the next run for ``out`` removes it (and any whose process is gone).
     """
     check_out(out, force)
     parent = out.resolve().parent
     parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent))
+    for left in [*parent.glob(f".{out.name}.*.tmp"), *parent.glob(f".{out.name}.*.old")]:
+        pid = left.name[len(out.name) + 2 :].partition("-")[0]
+        if not (pid.isdigit() and _alive(int(pid))):  # a killed run's; a running one's stays
+            shutil.rmtree(left, ignore_errors=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}-", suffix=".tmp", dir=parent))
     old: Path | None = None
     try:
         for name, writer in files.items():
@@ -173,7 +185,7 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
         os.chmod(tmp, file_mode(folder=True))
         fsync_dir(tmp)
         if out.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".old", dir=parent))
+            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}-", suffix=".old", dir=parent))
             os.replace(out, old / "x")
         os.replace(tmp, out)
     except BaseException:
@@ -185,6 +197,17 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     fsync_dir(parent)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's
+        return True
+    return True
 
 
 def _text(data: str) -> Callable[[str], object]:
@@ -276,8 +299,8 @@ def main_replay(argv: Sequence[str] | None = None) -> int:
         else:
             robot, act = robot_from_file(args.robot, nominal, nominal_act)
             label = Path(args.robot).name
-        rep = simulate(log, robot, act, nominal)
-        summary = {**summarize(log, rep), "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
+        rep, summary = replay(log, robot, act, nominal)
+        summary = {**summary, "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
         files: dict[str, Callable[[str], object]] = {
             "trajectory.csv": _text(trajectory_csv(log, rep)),
             "replay.png": lambda path: plot(path, log, [(label, rep)], f"replay of {log.source}: {label}"),
@@ -309,8 +332,8 @@ def main_identify(argv: Sequence[str] | None = None) -> int:
         nominal, nominal_act = _nominal(args.nominal)
         log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
         fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
-        before = simulate(log, nominal, nominal_act, nominal)
-        after = simulate(log, fit.robot, fit.actuators, nominal)
+        before = replay(log, nominal, nominal_act, nominal)[0]
+        after = replay(log, fit.robot, fit.actuators, nominal)[0]
         files: dict[str, Callable[[str], object]] = {
             "robot.json": _json(fit.robot_json(log, nominal)),
             "trajectory.csv": _text(trajectory_csv(log, after)),

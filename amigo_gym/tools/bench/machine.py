@@ -10,7 +10,7 @@ import platform
 
 import numpy as np
 
-__all__ = ["cpu_model", "machine_line", "simd_level"]
+__all__ = ["bits_key", "cpu_model", "machine_line", "simd_level"]
 
 #: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, numpy >= 2.4 naming them
 #: ``X86_V4`` ... too, then ARM)
@@ -77,3 +77,15 @@ def machine_line() -> str:
         f"CPU: {cpu_model()}, SIMD {simd_level()}, {os.cpu_count()} CPUs visible; "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}"
     )
+
+
+def bits_key() -> str:
+    """What the last bits of a float result depend on: CPU model, numpy's SIMD level, numpy's and torch's versions
+    (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        torch = version("torch")
+    except PackageNotFoundError:
+        torch = "none"
+    return f"{cpu_model()}; SIMD {simd_level()}; numpy {np.__version__}; torch {torch}"

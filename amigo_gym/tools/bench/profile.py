@@ -1,12 +1,9 @@
 """Where the time of a step goes: cProfile of the single env and of the native vector env.
 
-``python -m amigo_gym.tools.bench.profile [--steps K] [--top T]`` profiles, with random actions and
-autoreset, ``K`` steps of ``gym.make("AmigoBot-v0")`` (wrappers included) and of
-``gym.make_vec("AmigoBot-v0", num_envs=N)`` at N = 1 and N = 4096 (``--sizes``), and prints for each
-the ``T`` functions with the largest own time (``tottime``), as a share of the total, in Markdown.
-cProfile adds a fixed cost to every Python call, so the shares overstate small Python functions
-against numpy's C loops; read them as "where", and the benchmarks (``amigo-gym bench-env``) as "how
-much".
+``python -m amigo_gym.tools.bench.profile [--steps K] [--top T]`` profiles ``K`` steps (random actions, autoreset)
+of ``gym.make("AmigoBot-v0")`` and of its vector env at each N of ``--sizes``, and prints per case the ``T``
+functions with the largest own time (``tottime``) as a share of the total, in Markdown. cProfile's per-call cost
+inflates small Python functions: read the shares as "where", ``amigo-gym bench-env`` as "how much".
 """
 
 from __future__ import annotations
@@ -212,15 +209,11 @@ class ProfileSettings:
 
 def run(s: ProfileSettings) -> int:
     """The tables of the settings ``s`` on stdout (module docstring; ``--gap``, ``--single-parts``, ``--libm``)."""
-    if s.gap:
-        print(gap(s.sizes))
-        return 0
-    if s.single_parts:
-        print(single_parts())
-        return 0
-    if s.libm:
-        print(libm())
-        return 0
+    tables: dict[str, Callable[[], str]] = {"gap": lambda: gap(s.sizes), "single_parts": single_parts, "libm": libm}
+    for flag, table in tables.items():
+        if getattr(s, flag):
+            print(table())
+            return 0
     total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
     print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
     for n in s.sizes:

@@ -1,18 +1,13 @@
 """``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
 
-The vector env keeps the rendered trail of H in one ``(trail_length, N, 2)`` ring written by two column copies per
-step (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`). This measures, at ``--n`` robots (default 1024) on ``--path``
-(default ``"mixed"``, hard randomisation, as training runs):
+At ``--n`` robots on ``--path`` (``"mixed"``: hard randomisation, as training runs), with and without rendering,
+the same seeds and actions:
 
-* **memory growth** over ``--steps`` steps (default 3000) from ``reset``: the resident memory of the process
-  (``/proc/self/statm``) with ``render_mode="rgb_array"`` and, in a process of its own, without (the same seeds
-  and actions); target <= 20 MiB with rendering. Each measurement runs in a fresh subprocess, so
-  that one does not reuse the other's freed memory;
-* **step time** with and without ``render_mode`` (the same seeds and actions; the repeats interleaved,
-  :func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
+* **memory growth** [MiB] of the resident memory (``/proc/self/statm``) over ``--steps`` steps from ``reset``,
+  each measurement in a fresh subprocess; target <= 20 MiB with rendering;
+* **step time**, interleaved repeats (:func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
 
-Prints one line per figure; ``--json FILE`` writes them (atomically). A measurement, not a test: the tests use tiny
-sizes (``tests/test_bad_inputs_v1.py``).
+Prints one line per figure; ``--json FILE`` writes them (atomically). The figures: docs/amigobot_v1.md.
 """
 
 from __future__ import annotations
@@ -57,9 +52,7 @@ def _rss() -> int:
 def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True, frames: int = 2) -> dict[str, float]:
     """Growth of the resident memory [MiB] from ``reset`` to after ``steps`` steps, with or without ``render_mode``.
 
-    With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them (the
-    renderers' pygame surfaces are not what is measured). The growth counts the trail's ring (allocated at reset,
-    its pages resident as they are first written) and whatever else the steps keep (the paths drawn at resets).
+    With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them.
     """
     env = _env(n, path, render=render)
     step = _vector_stepper(env, 0)  # reset, random actions (the same in both processes)

@@ -1,14 +1,9 @@
-"""The ``amigo-gym`` command: a thin dispatcher; each sub-command lives in its own module.
+"""The ``amigo-gym`` command: a dispatcher to one module per sub-command, imported only when it runs.
 
-Every sub-command declares the optional extra it needs and the modules that extra provides; they are
-looked up (``importlib.util.find_spec``, nothing imported) *before* the sub-command's module is
-imported, so that a missing one gives one line naming the extra to install and exit status 2, never a
-traceback. Every other error path also ends in one line on stderr and a non-zero exit status
-(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs
-nothing but the standard library.
-
-May import the standard library only at module level; the sub-commands are imported by name when
-they run (arrows point from here down into the package, never back).
+A sub-command's extra is probed (``importlib.util.find_spec``) before its module is imported: a missing one is one
+line naming the extra to install, exit status 2. Every other error is one line on stderr and a non-zero status
+(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs only the
+standard library.
 """
 
 from __future__ import annotations
@@ -20,29 +15,9 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from amigo_gym.tools.options import (
-    HelpFormatter,
-    OneLineParser,
-    _one_line,
-    add_dataclass_options,
-    attribute_help,
-    install_hint,
-    missing_modules,
-    run_guarded,
-)
+from amigo_gym.tools.options import _one_line, install_hint, missing_modules
 
-__all__ = [
-    "COMMANDS",
-    "EXTRA_OF_MODULE",
-    "Command",
-    "add_dataclass_options",
-    "attribute_help",
-    "HelpFormatter",
-    "OneLineParser",
-    "main",
-    "missing_modules",
-    "run_guarded",
-]
+__all__ = ["COMMANDS", "EXTRA_OF_MODULE", "Command", "install_hint", "main"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +38,9 @@ class Command:
     modules: tuple[str, ...] = ()
     unless: tuple[str, ...] = ()
 
+
+#: amigo_gym.io.TRUST_ENV (this module imports the standard library only)
+TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
 
 _TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib", "filelock")
 
@@ -196,7 +174,9 @@ def _load(target: str) -> Callable[[Sequence[str]], int | None]:
 
 
 def _usage() -> str:
-    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", "", "commands:"]
+    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", ""]
+    lines += ["Every command takes --trust-unverified: load model zips, statistics, replay buffers and checkpoints"]
+    lines += ["(pickles: loading one runs code) that are neither shipped nor written by a run here.", "", "commands:"]
     lines += [f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else "") for name, c in COMMANDS.items()]
     return "\n".join(lines)
 
@@ -222,6 +202,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         missing = missing_modules(cmd.modules)
         if missing:
             return _needs_extra(prog, cmd.extra, missing)
+    trust = "--trust-unverified" in rest  # every command: load pickles that are neither shipped nor written here
+    before = os.environ.get(TRUST_ENV)
+    if trust:
+        rest = [a for a in rest if a != "--trust-unverified"]
+        os.environ[TRUST_ENV] = "1"  # amigo_gym.io.require_trust; inherited by the command's own subprocesses
     try:
         rc = _load(cmd.target)(rest)
     except SystemExit:
@@ -243,6 +228,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         hint = "(AMIGO_GYM_TRACEBACK=1 shows the traceback)"
         print(f"{prog}: error: {type(exc).__name__}: {_one_line(exc)} {hint}", file=sys.stderr)
         return 1
+    finally:
+        if trust and before is None:
+            del os.environ[TRUST_ENV]
     return 0 if rc is None else int(rc)
 
 

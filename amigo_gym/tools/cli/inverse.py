@@ -1,18 +1,10 @@
 """``amigo-gym inverse``: the analytic inverse solution of H on a path, as CSV or a short summary.
 
-Examples::
-
-    amigo-gym inverse --path circle --radius 1 --speed 0.2 --duration 40 --dt 0.1 --csv circle.csv
-    amigo-gym inverse --path manoeuvre --straight-length 1 --radius 1 --accel 0.1 --decel 0.2 --csv m.csv
-
-``--path circle`` is the paper's case: H starts at the origin on eq. (6)'s circle with ``beta = 0`` and
-``v_A`` constant from t = 0 (unless ``--accel`` or braking is asked for). ``--path manoeuvre`` drives the
-straight segment, then the circle, with a trapezoidal speed profile: standstill until ``--t-start``,
-acceleration ``--accel``, cruise, braking ``--decel`` so that A stops after the straight plus ``--laps``
-laps of its steady circle (or from ``--brake-at`` seconds; ``--no-brake`` to keep going).
-
-CSV columns (SI units, radians): ``t, s, x_A, y_A, beta, v_A, betadot, alpha1, alpha2, alpha3,
-alpha1_dot, alpha2_dot, alpha3_dot, x_H, y_H``. Bad options give a one-line error and exit status 2.
+``--path circle``: H starts at the origin on eq. (6)'s circle with ``beta = 0``, ``v_A`` constant from t = 0 unless
+``--accel``, ``--t-start`` or ``--brake-at`` ask for a ramp. ``--path manoeuvre``: the straight, then the circle,
+with a trapezoidal speed profile that stops A after the straight plus ``--laps`` laps of its steady circle. CSV
+columns (SI units, radians): ``t, s, x_A, y_A, beta, v_A, betadot, alpha1, alpha2, alpha3, alpha1_dot, alpha2_dot,
+alpha3_dot, x_H, y_H``. Examples: docs/core.md.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ import numpy as np
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-from amigo_gym.tools.runs import remove_matching, trust_unverified
+from amigo_gym.tools.runs import remove_matching
 from amigo_gym.tools.training.task_metrics import (
     DEFAULT_FAILURE_TOLERANCE_M,
     DEFAULT_SETTLE_TIME_S,
@@ -361,17 +361,19 @@ class AgentSpec:
         if self.path is None:
             return CLASSICAL[self.name](env)
         if self._model is None:
-            from amigo_gym.tools.runs import check_pickle, corrupt_errors
+            from amigo_gym.tools.runs import check_pickle, corrupt_errors, verify_sha256
 
-            # checked before it is opened: the manifest's sha256, else a warning naming the file (once)
+            # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
             digest = (self.manifest or {}).get("sha256")
             path = Path(self.path)
-            check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
-            if str(self.algo).startswith(FAST_ALGO):
+            if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
                 from amigo_gym.policies.learned import FastPolicy
 
+                if digest is not None:
+                    verify_sha256(path, str(digest), str(path.with_suffix(".json")))
                 self._model = FastPolicy.load(self.path)
             else:
+                check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
                 from stable_baselines3 import PPO, SAC, TD3
 
                 cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
@@ -1070,8 +1072,6 @@ class BenchmarkSettings:
         curvature: run the curvature cells instead of the suite: failure rate per path-curvature bin
             (amigo_gym.tools.training.curvature; writes <out>/curvature.json and .md).
         curvature_episodes: episodes per curvature cell [episodes], >= 1.
-        trust_unverified: load model zips without a recorded sha256 without the warning (they are pickles: they
-            run code).
     """
 
     agents: list[str] | None = None
@@ -1095,7 +1095,6 @@ class BenchmarkSettings:
     duration: float = 60.0
     curvature: bool = False
     curvature_episodes: int = 50
-    trust_unverified: bool = False
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option, its allowed range and the value."""
@@ -1108,8 +1107,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym benchmark``."""
     args = list(sys.argv[1:] if argv is None else argv)
     a = parse_settings(BenchmarkSettings, args, "amigo-gym benchmark", "Run the AmigoBot benchmark suite.")
-    if a.trust_unverified:
-        trust_unverified()
     command = "amigo-gym benchmark " + " ".join(args)
 
     def run() -> int:

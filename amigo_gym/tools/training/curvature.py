@@ -101,14 +101,6 @@ def cell_specs(
     return out
 
 
-def _cell_limit(sc: Any) -> tuple[float, float]:
-    """``(v, K(v))`` of a cell [m/s, 1/m]."""
-    from amigo_gym.task.v1 import feasible_random_curvature
-
-    v = float(sc.env_kwargs["speed"])
-    return v, feasible_random_curvature(v)
-
-
 def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
     """Run ``agent`` deterministically, one episode per seed of the cell ``sc`` (all side by side in the native vector
     env, as :func:`amigo_gym.tools.training.benchmark.evaluate`); per episode the benchmark's metrics plus the tags
@@ -207,6 +199,8 @@ def run_curvature(
     """
     from tqdm.auto import tqdm
 
+    from amigo_gym.task.v1 import feasible_random_curvature
+
     t0 = time.perf_counter()
     episodes: list[dict[str, Any]] = []
     unavailable: list[dict[str, Any]] = []
@@ -215,7 +209,8 @@ def run_curvature(
     try:
         for spec in agents:
             for sc in scenarios:
-                v, k_v = _cell_limit(sc)
+                v = float(sc.env_kwargs["speed"])  # the cell's speed [m/s] and its curvature limit K(v) [1/m]
+                k_v = feasible_random_curvature(v)
                 env = make_env(sc)
                 try:
                     agent = spec.instantiate(env)

@@ -22,7 +22,6 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-from amigo_gym.tools.runs import trust_unverified
 from amigo_gym.tools.training.task_metrics import _rms
 
 __all__ = [
@@ -333,55 +332,38 @@ class NormalizedAgent:
         return action, new_state
 
 
-def load_model(ref: ModelRef) -> Agent:
+def load_model(ref: ModelRef, trust: bool = False) -> Agent:
     """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any).
 
-    Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code, so load only files you trust
-    (docs/reliability.md). Every file is checked before it is unpickled: the zip against the ``sha256`` of the
-    record beside it (``<algo>.json`` or ``run.json``), the statistics against the record's
-    ``files["vecnormalize.pkl"]``. A record that lists ``files`` but not the statistics, or any mismatch, is
-    refused; the shipped pretrained models (``agents/pretrained``) must have every hash. A file without a
-    recorded hash is loaded with a warning naming it, once (:func:`amigo_gym.tools.runs.check_pickle`; none with
-    ``--trust-unverified``).
+    Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code. Each is checked before it is
+    unpickled (:func:`amigo_gym.tools.runs.check_pickle`): against the sha256 of the record beside it
+    (``<algo>.json``'s ``sha256``, ``run.json``'s ``files``), then that it is trusted: shipped, written by a run
+    of this installation, or ``trust`` (``--trust-unverified``); else one line naming the file and the flag.
 
     Raises:
-        CorruptFileError: a sha256 mismatch, a file the record does not cover, or a file that is not a
-            loadable model (one line naming it).
+        CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+        UntrustedFileError: a file not trusted (one line naming it and the flag).
     """
     import pickle
 
-    from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
-
-    d = ref.model.parent
     from stable_baselines3 import PPO, SAC, TD3
 
-    shipped = d.resolve() == PRETRAINED_DIR.resolve()
+    from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+
     classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
     record = read_json(ref.record) if ref.record is not None else None
     if record is not None and not isinstance(record, dict):
         raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
     # a run's run.json records the sha256 of its final model.zip, and under "files" of every file beside it
     files = record.get("files") if record is not None else None
-    digest = None
-    if isinstance(files, dict) and ref.record is not None and ref.record.name == "run.json":
-        digest = files.get(ref.model.name)
-    elif record is not None and (ref.record is None or ref.record.name != "run.json" or ref.model.name == "model.zip"):
+    files = files if isinstance(files, dict) else {}
+    digest = files.get(ref.model.name)
+    if digest is None and record is not None and (ref.record is None or ref.record.name != "run.json"):
         digest = record.get("sha256")
-    if digest is None and shipped:
-        raise CorruptFileError(f"{d / (ref.algo + '.json')}: no sha256 for the shipped model {ref.model.name}")
-    stats_digest = None
-    if ref.vecnormalize is not None:  # checked now, before anything is unpickled
-        if isinstance(files, dict):
-            stats_digest = files.get(ref.vecnormalize.name)
-            if stats_digest is None:
-                raise CorruptFileError(
-                    f"{ref.vecnormalize}: not covered by the hashes of {ref.record} (its 'files' do not list it); "
-                    "refusing to unpickle it"
-                )
-        elif shipped:
-            raise CorruptFileError(f"{ref.vecnormalize}: no sha256 for the shipped statistics in {ref.record}")
-        check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record))
-    check_pickle(ref.model, None if digest is None else str(digest), str(ref.record))
+    if ref.vecnormalize is not None:  # checked first: it is unpickled after the model
+        stats_digest = files.get(ref.vecnormalize.name)
+        check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record), trust)
+    check_pickle(ref.model, None if digest is None else str(digest), str(ref.record), trust)
     with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
         model = classes[ref.algo].load(ref.model, device="cpu")
     if ref.vecnormalize is None:
@@ -393,9 +375,9 @@ def load_model(ref: ModelRef) -> Agent:
     return NormalizedAgent(model, stats)
 
 
-def load_agents(models: str | os.PathLike[str]) -> dict[str, Agent]:
-    """Load every model :func:`find_models` finds at ``models``, by name."""
-    return {ref.name: load_model(ref) for ref in find_models(models)}
+def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
+    """Load every model :func:`find_models` finds at ``models``, by name (``trust``: :func:`load_model`)."""
+    return {ref.name: load_model(ref, trust) for ref in find_models(models)}
 
 
 def training_records(models: str | os.PathLike[str]) -> dict[str, Any]:
@@ -654,7 +636,7 @@ class EvaluateSettings:
     Attributes:
         models: what train wrote: a run folder, a folder of run folders, a model .zip, or a folder of <algo>.zip
             [path] (default: the pretrained agents/pretrained). Model zips are pickles: loading one runs its code,
-            so pass only files you trust; the shipped ones are checked against their sha256.
+            so only shipped ones and those a run here wrote load without --trust-unverified.
         out: directory for eval.md and the plots [dir]; a folder holding another command's output set
             (manifest.json, e.g. compare's) is refused unless --force.
         force: write into a folder that holds another command's files.
@@ -664,8 +646,6 @@ class EvaluateSettings:
         seeds: number of perturbed starts, seeds 100.. [episodes], >= 1.
         load_models: evaluate the trained models too; --no-models: only the analytic policies.
         plots: draw the figures; --no-plots: skip the figures.
-        trust_unverified: load model zips and statistics without a recorded sha256 without the warning (they are
-            pickles: they run code).
     """
 
     models: str | None = None
@@ -677,7 +657,6 @@ class EvaluateSettings:
     seeds: int = 10
     load_models: bool = field(default=True, metadata=cli("--no-models"))
     plots: bool = field(default=True, metadata=cli("--no-plots"))
-    trust_unverified: bool = False
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option, its allowed range and the value."""
@@ -693,8 +672,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         "amigo-gym evaluate",
         "Evaluate analytic and trained agents (fixed protocol).",
     )
-    if a.trust_unverified:
-        trust_unverified()
 
     def run() -> int:
         one_torch_thread()

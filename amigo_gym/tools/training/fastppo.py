@@ -61,7 +61,7 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, sha256_file
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.tools.bench.machine import cpu_model
@@ -608,9 +608,11 @@ def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
+    vouch(sha256_file(path))  # written here: resuming it needs no trust flag (amigo_gym.io.require_trust)
 
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
+    require_trust(path)  # a pickle (the vector env): shipped, written here, or --trust-unverified
     ck = torch.load(path, weights_only=False, map_location="cpu")
     # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
@@ -854,7 +856,7 @@ def _train(
         atomic_write_json(out / "settings.json", s.to_json())
     batch = s.num_envs * s.rollout_steps
     n_iter = -(-s.total_steps // batch)
-    if n_iter * batch != s.total_steps:
+    if n_iter * batch != s.total_steps and not resume:
         say(f"total_steps {s.total_steps:,d} rounded up to {n_iter * batch:,d}: whole rollouts of num_envs x "
             f"rollout_steps = {batch:,d} env-steps")  # fmt: skip
     stop = s.total_steps if until_steps is None else min(s.total_steps, until_steps)

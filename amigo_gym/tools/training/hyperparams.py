@@ -7,10 +7,7 @@ with :mod:`ast`, never evaluated: only literals, lists, tuples, dicts, ``dict(..
 keywords, ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``, and ``lin_<x>`` linear
 schedules for ``learning_rate`` and ``clip_range``. Every other key must be a keyword argument of
 the algorithm's SB3 class; unknown keys are refused in one line that lists them (``ValueError``), so
-that ``train`` can check a file before it writes anything.
-
-May import the standard library and numpy at module level; PyYAML, torch and stable-baselines3 are
-imported inside the functions that need them.
+that ``train`` can check a file before it writes anything. PyYAML, torch and SB3 are imported lazily.
 """
 
 from __future__ import annotations
@@ -148,10 +145,7 @@ def _schedule(key: str, value: Any) -> float | Callable[[float], float]:
     if isinstance(value, str):
         text = value.strip()
         try:
-            if text.startswith("lin_"):
-                start = float(text[4:])
-                return _Linear(start)
-            return float(text)
+            return _Linear(float(text[4:])) if text.startswith("lin_") else float(text)
         except ValueError:
             pass
     raise ValueError(f"{key} must be a number or 'lin_<x>', got {value!r}")

@@ -1,27 +1,16 @@
-"""Aggregate scores with honest uncertainty: rliable's estimators, re-implemented in numpy.
+"""rliable's aggregate estimators (Agarwal et al., NeurIPS 2021; ``rliable`` v1.2.0), vectorised in numpy.
 
-Definitions follow ``rliable`` (Agarwal et al., "Deep RL at the Edge of the Statistical Precipice",
-NeurIPS 2021; ``google-research/rliable``, ``rliable/metrics.py`` and ``rliable/library.py``, v1.2.0).
-They are re-implemented here because rliable 1.2 requires ``arch<8``, whose 7.x releases fail to
-import with pandas 3 (``deprecate_kwarg() missing ... 'new_arg_name'``); the numbers are the same
-estimators, vectorised over bootstrap replications. Scores are matrices ``(num_runs, num_tasks)``:
-here runs are training seeds and tasks are benchmark scenarios.
+Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scenarios.
 
-* :func:`iqm`: interquartile mean, ``scipy.stats.trim_mean(scores, 0.25, axis=None)``: sort the
-  ``n = runs * tasks`` scores, drop ``floor(0.25 n)`` at each end, average the rest.
-* :func:`optimality_gap`: ``gamma - mean(min(scores, gamma))`` (higher scores are better). For a
-  lower-is-better metric ``x`` with target ``g`` it is applied to ``-x`` with ``gamma = -g``, which is
-  ``mean(max(x - g, 0))``: by how much, on average, the agent misses the target.
-* :func:`stratified_bootstrap`: rliable's ``StratifiedBootstrap`` (``task_bootstrap=False``): each
-  replication resamples the runs of every task independently, with replacement (the tasks are kept),
-  and the 95 % interval is the percentile interval (2.5 and 97.5 percentiles of the replications,
-  rliable's default ``method="percentile"``). It measures the uncertainty of repeating the experiment
-  with other training seeds on the same scenarios; with one run per task (a deterministic classical
-  policy) the interval has zero width.
-* :func:`performance_profile`: rliable's score distribution, the fraction of all ``(run, task)``
-  scores above ``tau`` (``run_score_deviation``), for a list of thresholds, with the same bootstrap.
+* :func:`iqm`: interquartile mean, ``scipy.stats.trim_mean(scores, 0.25, axis=None)``.
+* :func:`optimality_gap`: ``gamma - mean(min(scores, gamma))``; for a lower-is-better ``x`` with target ``g``,
+  applied to ``-x`` with ``gamma = -g``, it is ``mean(max(x - g, 0))``.
+* :func:`stratified_bootstrap`: rliable's ``StratifiedBootstrap`` (``task_bootstrap=False``): each replication
+  resamples the runs of every task with replacement; the interval is the percentile interval. With one run per
+  task it has zero width.
+* :func:`performance_profile`: the fraction of all scores above each ``tau``, with the same bootstrap.
 
-Imports only numpy.
+Why not rliable itself, and how the benchmark uses these: docs/benchmark.md.
 """
 
 from __future__ import annotations
@@ -44,8 +33,7 @@ __all__ = [
 Array = NDArray[np.float64]
 Stat = Callable[[Array], Array]
 
-#: bootstrap replications of the interval estimates (rliable's default is 50 000; 10 000 puts the
-#: Monte-Carlo error of a 95 % percentile bound well below the bound's own spread)
+#: bootstrap replications of the interval estimates
 DEFAULT_REPS = 10_000
 #: bootstrap replications of the performance profiles (rliable's default)
 DEFAULT_PROFILE_REPS = 2_000

@@ -1,26 +1,14 @@
 r"""TD3 with the low-pass action parameterisation inside its actor (``policy: LowPassMlpPolicy``).
 
-The fast PPO's smoothest parameterisation (:func:`amigo_gym.policies.learned.env_action`, docs/baselines.md,
-"Smoothness") for SB3's TD3: the actor's network gives a target ``u = tanh(mlp(o))`` in the normalised action
-units, and the action is
+The actor's network gives a target ``u = tanh(mlp(o))`` in normalised action units, and the action is
 
 .. math::  a = p + \alpha\,(u - p),
 
-``p`` ``(N, 2)`` the previous command read from the observation (``previous_command_1``, ``_2`` of
-AmigoBot-v1, normalised, in [-1, 1]) and ``alpha`` in (0, 1] the filter factor; the step-to-step change of the
-command is ``|a - p| = alpha |u - p|``, and ``a`` stays in [-1, 1] since ``p`` and ``u`` do. ``alpha = 1`` is
-SB3's actor. The filter is part of the actor's forward pass, so:
-
-* the critic learns ``Q(o, a)`` of the action the env receives, and the deterministic policy gradient flows
-  through the filter (``da/du = alpha``);
-* the saved SB3 zip *is* the filtered policy: ``TD3.load`` (and so :func:`amigo_gym.policies.load_pretrained`,
-  ``amigo-gym evaluate`` and ``amigo-gym benchmark``) runs it without knowing of the filter; the factor and the
-  observation indices are ``policy_kwargs`` saved in the zip.
-
-Exploration noise is added by SB3 after the actor (on ``a``), as for plain TD3; target policy smoothing adds its
-noise to the target actor's ``a`` likewise.
-
-Imports torch and stable-baselines3 (an edge module of the training layer, like :mod:`~.sb3_vec`).
+``p`` ``(N, 2)`` the previous command read from AmigoBot-v1's observation (``previous_command_1``, ``_2``, in
+[-1, 1]) and ``alpha`` in (0, 1] the filter factor (1: SB3's actor). The filter is part of the actor's forward pass:
+the critic learns ``Q(o, a)`` of the action the env receives, the policy gradient flows through the filter, and the
+saved SB3 zip is the filtered policy (``TD3.load`` runs it; ``alpha`` and the indices are its ``policy_kwargs``).
+SB3's exploration and target-smoothing noise are added to ``a``. Results: docs/baselines.md.
 """
 
 from __future__ import annotations

@@ -1,33 +1,16 @@
 """Adapter from the native Gymnasium vector env (:class:`amigo_gym.envs.AmigoBotVectorEnv`) to SB3's ``VecEnv``.
 
-Stable-Baselines3 expects its own vectorised API rather than Gymnasium's ``VectorEnv``:
-
-* ``reset()`` takes no arguments; seeds and options set by :meth:`VecEnv.seed` / :meth:`VecEnv.set_options`
-  are used once, by the next ``reset`` (sub-env ``i`` gets ``seed + i``, as in ``DummyVecEnv``);
-* ``step`` returns ``(obs, rewards, dones, infos)`` with ``dones = terminated | truncated`` and a *list*
-  of per-env info dicts;
-* a finished sub-env is reset in the same step: the returned observation is the new episode's first,
-  the last observation of the finished episode is ``infos[i]["terminal_observation"]``, and
-  ``infos[i]["TimeLimit.truncated"]`` is ``truncated and not terminated`` (set for every env and step);
-  the info of the reset is in ``reset_infos[i]``.
-
-The native env runs in Gymnasium's ``SAME_STEP`` autoreset mode, whose ``final_obs`` / ``final_info``
-carry exactly what SB3 needs, so no step is wasted and no Python loop runs over the environments
-except to build SB3's list of info dicts. Each per-env info has the single env's keys and types
-(``pose``, ``h_position``, ``cross_track_error`` (float), ``wheel_rates``, ``wheel_angles``,
-``castor_angle`` (float), ``reward_terms`` (dict of floats), ``time`` (float)), so that rollouts match
-``DummyVecEnv([lambda: gym.make("AmigoBot-v0")] * N)`` step for step (rewards as float32, like
-``DummyVecEnv``'s buffer).
-
-Example::
-
-    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=32))
-    PPO("MlpPolicy", venv).learn(100_000)
+SB3's API over Gymnasium's ``SAME_STEP`` autoreset: ``reset()`` uses the seeds / options of :meth:`VecEnv.seed` /
+:meth:`VecEnv.set_options` once (sub-env ``i`` gets ``seed + i``); ``step`` returns ``(obs, rewards, dones, infos)``
+with ``dones = terminated | truncated``, float32 rewards and one info dict per env with the single env's keys and
+types; a finished sub-env is reset in the same step, its last observation in ``infos[i]["terminal_observation"]``,
+``infos[i]["TimeLimit.truncated"] = truncated and not terminated``, the reset's info in ``reset_infos[i]``. Rollouts
+equal ``DummyVecEnv([lambda: gym.make(env_id)] * N)``'s (docs/baselines.md).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -86,7 +69,6 @@ class AmigoBotSB3VecEnv(VecEnv):
         self.params = self.venv.params
         self._actions: NDArray[Any] | None = None
 
-    # ------------------------------------------------------------------ core API
     def reset(self) -> VecEnvObs:
         """Reset every robot with the pending seeds/options (used once, as in ``DummyVecEnv``)."""
         seeds = list(self._seeds)
@@ -96,7 +78,7 @@ class AmigoBotSB3VecEnv(VecEnv):
                 raise ValueError('options: only {"pose": (x_A, y_A, beta)} for every env is supported')
             options = {"pose": np.stack([np.asarray(o["pose"], dtype=np.float64) for o in self._options])}
         obs, infos = self.venv.reset(seed=None if all(s is None for s in seeds) else seeds, options=options)
-        self.reset_infos = self._split_infos(infos, range(self.num_envs))
+        self.reset_infos = [info_row(infos, i) for i in range(self.num_envs)]
         self._reset_seeds()
         self._reset_options()
         out: NDArray[Any] = obs
@@ -111,14 +93,10 @@ class AmigoBotSB3VecEnv(VecEnv):
         obs, rewards, terminated, truncated, vinfo = self.venv.step(self._actions)
         self._actions = None
         dones = terminated | truncated
-        infos = self._split_infos(vinfo, range(self.num_envs))
-        done_idx = np.flatnonzero(dones)
-        if done_idx.size:
-            final = self._split_infos(vinfo["final_info"], done_idx)
-            for j, fin in zip(done_idx.tolist(), final, strict=True):
-                self.reset_infos[j] = infos[j]
-                fin["terminal_observation"] = vinfo["final_obs"][j]
-                infos[j] = fin
+        infos = [info_row(vinfo, i) for i in range(self.num_envs)]
+        for j in np.flatnonzero(dones).tolist():  # reset in this step: the finished episode's info and observation
+            self.reset_infos[j] = infos[j]
+            infos[j] = info_row(vinfo["final_info"], j) | {"terminal_observation": vinfo["final_obs"][j]}
         for i in range(self.num_envs):
             infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return obs, rewards.astype(np.float32), dones, infos
@@ -130,7 +108,6 @@ class AmigoBotSB3VecEnv(VecEnv):
         frames = self.venv.render()
         return [None] * self.num_envs if frames is None else list(frames)
 
-    # ------------------------------------------------------------------ attributes
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         """The native env's attribute (``params``, ``path``, ``render_mode``, ...), once per index."""
         value = getattr(self.venv, attr_name)
@@ -150,9 +127,3 @@ class AmigoBotSB3VecEnv(VecEnv):
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
         """The robots are not wrapped in Gymnasium wrappers (use ``VecMonitor`` for episode statistics)."""
         return [False for _ in self._get_indices(indices)]
-
-    # ------------------------------------------------------------------ helpers
-    @staticmethod
-    def _split_infos(vinfo: dict[str, Any], idx: Iterable[int]) -> list[dict[str, Any]]:
-        """Per-env info dicts (the single env's keys and types: :func:`amigo_gym.envs.base.info_row`)."""
-        return [info_row(vinfo, i) for i in idx]

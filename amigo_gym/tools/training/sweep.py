@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, get_args
-from urllib.parse import quote, quote_plus
+from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
 import numpy as np
 
@@ -81,41 +81,36 @@ READY_TIMEOUT_S = 120.0
 
 
 # --------------------------------------------------------------------------- secrets
-def masked_url(url: str) -> str:
-    """``url`` with its password replaced by ``***`` (SQLAlchemy's ``render_as_string(hide_password=True)``);
-    a URL without a password is returned as typed."""
-    try:
-        from sqlalchemy.engine import make_url
-
-        u = make_url(url)
-        return url if u.password is None else str(u.render_as_string(hide_password=True))
-    except Exception:  # not a URL SQLAlchemy parses: mask anything between "user:" and "@"
-        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", url)
+#: a query parameter whose name has one of these holds a credential (``?password=``, ``sslpassword``, ``token``...)
+_SECRET_PARAM = re.compile(r"pass|pwd|secret|token|key|auth|cred", re.IGNORECASE)
 
 
-def _password(url: str | None) -> str | None:
-    if not url:
-        return None
-    try:
-        from sqlalchemy.engine import make_url
-
-        pw = make_url(url).password
-    except Exception:
-        m = re.search(r"://[^/@:]*:([^@]*)@", url)
-        pw = m.group(1) if m else None
-    return str(pw) if pw else None
+def _secrets(url: str | None) -> set[str]:
+    """Every form (as typed, decoded, URL-quoted) of every credential in ``url``: the password of ``user:pw@`` and
+    the value of each credential query parameter."""
+    found = set()
+    m = re.match(r"[^:/?#]*://([^/?#]*)@", url or "")  # the userinfo, up to the host's last "@"
+    if m and ":" in m.group(1):
+        found.add(m.group(1).partition(":")[2])
+    for part in re.split(r"[&;]", (url or "").partition("?")[2]):
+        name, eq, value = part.partition("=")
+        if eq and _SECRET_PARAM.search(unquote_plus(name)):
+            found.add(value.partition("#")[0])
+    forms = {g for f in found for v in (f, unquote(f), unquote_plus(f)) for g in (v, quote(v, safe=""), quote_plus(v))}
+    return {f for f in forms if f}
 
 
 def scrub(text: str, url: str | None) -> str:
-    """``text`` with every form of ``url``'s password (as typed, decoded, URL-quoted) replaced by ``***``."""
-    pw = _password(url)
-    if not pw:
-        return text
-    raw = re.search(r"://[^/@:]*:([^@]*)@", url or "")
-    forms = {pw, quote(pw, safe=""), quote_plus(pw)} | ({raw.group(1)} if raw else set())
-    for form in sorted((f for f in forms if f), key=len, reverse=True):
+    """``text`` with every credential of ``url`` in every form (:func:`_secrets`) replaced by ``***``: the one
+    masking of the storage URL, for what is written (summary, study and trial attributes) and said (error lines)."""
+    for form in sorted(_secrets(url), key=len, reverse=True):
         text = text.replace(form, "***")
     return text
+
+
+def masked_url(url: str) -> str:
+    """``url`` with its credentials masked (:func:`scrub`); a URL without any is returned as typed."""
+    return scrub(url, url)
 
 
 def public_argv(argv: Sequence[str]) -> list[str]:
@@ -156,7 +151,8 @@ class SweepConfig:
         study_name: study name [name] (default: amigo-<algos>-<mode>).
         n_trials: global trial budget over all workers [trials].
         n_jobs: worker processes on this machine [processes].
-        seeds: training seeds (seeds mode) [seeds].
+        seeds: training seeds (seeds mode): a count N (seeds 0..N-1, as every other --seeds) or two or more seeds
+            [seeds].
         timesteps: training steps per trial [steps].
         eval_freq: steps between evaluations (pruning points) [steps].
         eval_episodes: episodes per evaluation [episodes].
@@ -211,6 +207,10 @@ class SweepConfig:
     worker_index: int = field(default=0, metadata=cli(hidden=True))
     argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
+    def __post_init__(self) -> None:
+        if len(self.seeds) == 1 and isinstance(self.seeds[0], int) and not isinstance(self.seeds[0], bool):
+            self.seeds = list(range(self.seeds[0]))  # a count
+
     def validate(self) -> None:
         """Raise ``ValueError`` naming a bad setting."""
         if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
@@ -251,7 +251,7 @@ class SweepConfig:
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
-            raise ValueError(f"--seeds must be distinct integers, got {self.seeds}")
+            raise ValueError(f"--seeds must be a count >= 1 or two or more distinct seeds, got {self.seeds}")
         if self.save_best is not None and self.mode != "hyperparams":
             raise ValueError(f"--save-best applies to --mode hyperparams, not {self.mode}")
         if FASTPPO in self.algos:

@@ -1,8 +1,7 @@
 """Task metrics of path-tracking episodes, read from the environments' ``info`` (numpy only).
 
 Used by the benchmark and by the training's evaluation callback, so that a learning curve and a benchmark table
-report the same numbers. Imports only numpy and the standard library. The info read and the metrics of one episode:
-docs/benchmark.md, "Reference: task metrics".
+report the same numbers. The info read and the metrics of one episode: docs/benchmark.md, "Reference: task metrics".
 """
 
 from __future__ import annotations

@@ -418,6 +418,10 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     s.validate()
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
+    import gymnasium as gym
+
+    # a refused --env-kwargs too: a refused run writes nothing, so its corrected rerun is a new run
+    gym.make(s.env_id, **_make_kwargs(s.env_kwargs)).close()
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
     with runs.handling(stop), runs.RunLock(s.out):
         result = _train(s, stop, after_eval)
@@ -599,6 +603,7 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         for name in ("model.zip", "best_model.zip", VECNORMALIZE)
         if (out / name).is_file()
     }
+    runs.vouch(*record["files"].values())  # written here: loading them again needs no trust flag
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
