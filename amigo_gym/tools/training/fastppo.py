@@ -236,8 +236,8 @@ class FastPPOSettings:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
                 raise TypeError(f"{o}.{name} must be an integer in [{lo}, {hi}], got {v!r}")
             check_range(o, name, v, lo, hi)
-        for name, (lo, hi, low_open, high_open) in _FLOAT_RANGES.items():
-            check_range(o, name, getattr(self, name), lo, hi, low_open=low_open, high_open=high_open)
+        for name, (low, high, low_open, high_open) in _FLOAT_RANGES.items():
+            check_range(o, name, getattr(self, name), low, high, low_open=low_open, high_open=high_open)
         batch = self.num_envs * self.rollout_steps
         if self.minibatch_size > batch or batch % self.minibatch_size:
             raise ValueError(
