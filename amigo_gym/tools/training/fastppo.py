@@ -823,12 +823,13 @@ def train(
     """
     out = Path(out)
     _check_start(out, resume)
-    device = resolve_device(s.device)
-    _check_env_threads(s)
-    out.mkdir(parents=True, exist_ok=True)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
-    with RunLock(out), handling(stop):  # one process per run folder: a second train-fast on it stops with one line
-        record = _train(s, out, device, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
+    with handling(stop):  # from here a signal stops training after its first iteration's checkpoint
+        device = resolve_device(s.device)  # both refuse before anything is written
+        _check_env_threads(s)
+        out.mkdir(parents=True, exist_ok=True)
+        with RunLock(out):  # one process per run folder: a second train-fast on it stops with one line
+            record = _train(s, out, device, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
     if stop.requested and record.get("stopped_by") == "signal":
         raise KeyboardInterrupt
     return record
