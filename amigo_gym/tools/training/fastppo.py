@@ -112,13 +112,19 @@ def resolve_device(device: str) -> str:
     return ("cuda" if cuda else "cpu") if device == "auto" else device
 
 
-def _numba_threads_limit() -> int:
-    """The most threads numba may use here (``NUMBA_NUM_THREADS``); 1 without numba."""
+def _numba() -> Any:
+    """The numba module, or None where it is not installed (a core dependency where it ships wheels)."""
     try:
         import numba
-    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
-        return 1
-    return int(getattr(numba.config, "NUMBA_NUM_THREADS"))  # noqa: B009  (set at run time: untyped)
+    except ImportError:  # pragma: no cover
+        return None
+    return numba
+
+
+def _numba_threads_limit() -> int:
+    """The most threads numba may use here (``NUMBA_NUM_THREADS``); 1 without numba."""
+    nb = _numba()
+    return 1 if nb is None else int(nb.config.NUMBA_NUM_THREADS)
 
 
 #: integer settings: [low, high]
@@ -564,12 +570,8 @@ def _check_env_threads(s: FastPPOSettings) -> None:
 def _set_threads(s: FastPPOSettings) -> None:
     """numba's threads for the env, then torch's: numba starts its threading layer first, as that resets
     OpenMP's thread count (torch's, with the ``omp`` layer)."""
-    try:
-        import numba
-
-        numba.set_num_threads(s.env_threads)
-    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
-        pass
+    if (nb := _numba()) is not None:
+        nb.set_num_threads(s.env_threads)
     torch.set_num_threads(s.threads)
 
 
@@ -657,19 +659,13 @@ def _check_start(out: Path, resume: bool) -> None:
 
 def machine_record(device: str) -> dict[str, Any]:
     """Where a run ran: git revision (``"unknown"`` outside a git checkout), CPU, thread counts, device."""
-    rev = git_revision()
-    try:
-        import numba
-
-        numba_threads: int | None = int(numba.get_num_threads())
-    except ImportError:  # pragma: no cover - numba is a core dependency where it ships wheels
-        numba_threads = None
+    rev, nb = git_revision(), _numba()
     return {
         "git_revision": rev if rev and " " not in rev else "unknown",  # train.git_revision's sentence outside git
         "cpu": cpu_model(),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
-        "numba_threads": numba_threads,
+        "numba_threads": None if nb is None else int(nb.get_num_threads()),
         "device": device,
         "device_name": torch.cuda.get_device_name() if device == "cuda" else cpu_model(),
     }
