@@ -13,7 +13,7 @@ import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -23,13 +23,7 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.runs import remove_matching
-from amigo_gym.tools.training.task_metrics import (
-    DEFAULT_FAILURE_TOLERANCE_M,
-    DEFAULT_SETTLE_TIME_S,
-    EpisodeRecorder,
-    InfoAdapter,
-    run_vector_episodes,
-)
+from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, make_env, run_scenario
 
 __all__ = [
     "CLASSICAL",
@@ -56,7 +50,6 @@ __all__ = [
     "write_outputs",
 ]
 
-SUITE_VERSION = "1.0"
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
@@ -106,53 +99,6 @@ TRAINING_DISTRIBUTION: dict[str, Any] = {
 
 
 # --------------------------------------------------------------------------- scenarios
-@dataclass(frozen=True)
-class Scenario:
-    """One benchmark scenario (data; never edited once released: bump :data:`SUITE_VERSION`).
-
-    Attributes:
-        name: unique name.
-        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
-        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
-        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
-        max_steps: episode length (``max_episode_steps``).
-        held_out: outside the generalists' training distribution (:data:`TRAINING_DISTRIBUTION`).
-        description: one line for the tables.
-        version: the suite version the scenario belongs to.
-        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
-    """
-
-    name: str
-    env_id: str
-    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    seeds: tuple[int, ...] = tuple(range(100, 110))
-    max_steps: int = 400
-    held_out: bool = False
-    description: str = ""
-    version: str = SUITE_VERSION
-    settle_time_s: float = DEFAULT_SETTLE_TIME_S
-    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
-
-    def __post_init__(self) -> None:
-        if not self.name or not isinstance(self.name, str):
-            raise ValueError(f"Scenario.name must be a non-empty string, got {self.name!r}")
-        if not self.seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in self.seeds):
-            raise ValueError(f"Scenario {self.name}: seeds must be non-negative integers, got {self.seeds!r}")
-        if len(set(self.seeds)) != len(self.seeds):
-            raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
-        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
-            raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
-
-    @property
-    def episodes(self) -> int:
-        """Number of evaluation episodes (one per seed)."""
-        return len(self.seeds)
-
-    def to_json(self) -> dict[str, Any]:
-        """The scenario as JSON data (its fields and ``episodes``; tuples as lists)."""
-        return json_safe({**asdict(self), "episodes": self.episodes})  # type: ignore[no-any-return]
-
-
 def user_scenarios(
     files: Sequence[str], speed: float, feasibility: str = "off", goal_tolerance: float = 0.0, duration: float = 60.0
 ) -> tuple[Scenario, ...]:
@@ -306,10 +252,6 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
 
 
 # --------------------------------------------------------------------------- agents
-class Unavailable(Exception):
-    """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
-
-
 def _classical(name: str) -> Callable[[Any], Any]:
     def make(env: Any) -> Any:
         base = env.unwrapped
@@ -510,67 +452,17 @@ def agent_label(name: str, algo: str | None = None) -> str:
 
 
 # --------------------------------------------------------------------------- evaluation
-def make_env(sc: Scenario) -> Any:
-    """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
-    if sc.env_id not in gym.registry:
-        raise Unavailable(f"environment {sc.env_id} is not registered")
-    try:
-        return gym.make(sc.env_id, max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
-    except (TypeError, ValueError) as exc:
-        raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
-
-
-def _dt(env: Any, sc: Scenario) -> float:
-    params = getattr(env.unwrapped, "params", None)
-    dt = getattr(params, "dt", None)
-    if isinstance(dt, (int, float)) and not isinstance(dt, bool):
-        return float(dt)
-    return float(sc.env_kwargs.get("dt", 0.1))
-
-
-def _vector_env(sc: Scenario) -> Any:
-    """The native vector env of ``sc`` (``SyncVectorEnv`` if it has none): one robot per evaluation seed."""
-    import gymnasium as gym
-
-    native = gym.spec(sc.env_id).vector_entry_point is not None  # else Gymnasium's SyncVectorEnv
-    return gym.make_vec(
-        sc.env_id,
-        num_envs=len(sc.seeds),
-        vectorization_mode="vector_entry_point" if native else "sync",
-        max_episode_steps=sc.max_steps,
-        **dict(sc.env_kwargs),
-    )
-
-
 def evaluate(
     agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
 ) -> list[dict[str, float]]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics.
+    """The metrics of one episode per seed of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`);
+    ``on_episode()`` as each episode ends. ``env``, the scenario's single env, is not stepped."""
 
-    The episodes run side by side in the environment's native vector env (robot ``i`` reset with seed
-    ``sc.seeds[i]``; the native vector env reproduces the single env bit for bit, tests/test_vector_v1.py),
-    by :func:`amigo_gym.tools.training.task_metrics.run_vector_episodes` (the whole batch predicted at every step; a
-    robot's episode is its steps up to its first end). ``on_episode()`` is called as each episode ends.
-    """
-    adapter = InfoAdapter.for_env(env)
-    dt = _dt(env, sc)
-    venv = _vector_env(sc)
-    try:
-        obs, _ = venv.reset(seed=list(sc.seeds))
-        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
+    def ended(_i: int, _info: dict[str, Any], end: bool, _obs: Any) -> None:
+        if end and on_episode is not None:
+            on_episode()
 
-        def episode_ended(_i: int, _info: dict[str, Any], ended: bool) -> None:
-            if ended and on_episode is not None:
-                on_episode()
-
-        run_vector_episodes(agent, venv, obs, recs, adapter, episode_ended)
-    finally:
-        venv.close()
-    return [r.metrics() for r in recs]
+    return [r.metrics() for r in run_scenario(agent, sc, on_row=ended)]
 
 
 def _nanmean(x: Sequence[float]) -> float | None:

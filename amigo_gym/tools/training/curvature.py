@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
+from amigo_gym.tools.training.task_metrics import run_scenario
 
 __all__ = [
     "BIN_EDGES",
@@ -102,27 +102,21 @@ def cell_specs(
 
 
 def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
-    """Run ``agent`` deterministically, one episode per seed of the cell ``sc`` (all side by side in the native vector
-    env, as :func:`amigo_gym.tools.training.benchmark.evaluate`); per episode the benchmark's metrics plus the tags
+    """Run ``agent`` deterministically, one episode per seed of the cell ``sc``
+    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); per episode the benchmark's metrics plus the tags
     ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
-    import gymnasium as gym
+    paths: list[Any] = []
+    ids: list[int] = []
+    progress = np.zeros(len(sc.seeds))
 
-    venv: Any = gym.make_vec(sc.env_id, num_envs=len(sc.seeds), max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
-    try:
-        obs, _ = venv.reset(seed=list(sc.seeds))
-        u: Any = venv.unwrapped
-        adapter = InfoAdapter(u.params.robot, float(u.params.speed))
-        paths = list(u.paths.paths)
-        ids = [int(d["id"]) for d in u.path_infos]
-        recs = [EpisodeRecorder(DT_S) for _ in sc.seeds]
-        progress = np.zeros(len(sc.seeds))
+    def read_paths(venv: Any, _infos: Any) -> None:
+        paths.extend(venv.unwrapped.paths.paths)
+        ids.extend(int(d["id"]) for d in venv.unwrapped.path_infos)
 
-        def read_progress(i: int, info: dict[str, Any], _ended: bool) -> None:
-            progress[i] = float(info["progress"])
+    def read_progress(i: int, info: dict[str, Any], _ended: bool, _obs: Any) -> None:
+        progress[i] = float(info["progress"])
 
-        run_vector_episodes(agent, venv, obs, recs, adapter, read_progress)
-    finally:
-        venv.close()
+    recs = run_scenario(agent, sc, on_reset=read_paths, on_row=read_progress)
     out = []
     for i, r in enumerate(recs):
         m: dict[str, Any] = dict(r.metrics())
