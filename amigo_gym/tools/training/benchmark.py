@@ -23,7 +23,14 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.runs import remove_matching
-from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, make_env, run_scenario
+from amigo_gym.tools.training.task_metrics import (
+    SUITE_VERSION,
+    Scenario,
+    Unavailable,
+    make_env,
+    run_grid,
+    run_scenario,
+)
 
 __all__ = [
     "CLASSICAL",
@@ -38,11 +45,13 @@ __all__ = [
     "AgentSpec",
     "BenchmarkSettings",
     "Scenario",
+    "Unavailable",
     "agent_label",
     "aggregate",
     "default_agents",
     "evaluate",
     "main",
+    "make_env",
     "markdown_report",
     "parse_agents",
     "quick_suite",
@@ -452,17 +461,10 @@ def agent_label(name: str, algo: str | None = None) -> str:
 
 
 # --------------------------------------------------------------------------- evaluation
-def evaluate(
-    agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
-) -> list[dict[str, float]]:
-    """The metrics of one episode per seed of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`);
-    ``on_episode()`` as each episode ends. ``env``, the scenario's single env, is not stepped."""
-
-    def ended(_i: int, _info: dict[str, Any], end: bool, _obs: Any) -> None:
-        if end and on_episode is not None:
-            on_episode()
-
-    return [r.metrics() for r in run_scenario(agent, sc, on_row=ended)]
+def evaluate(agent: Any, env: Any, sc: Scenario) -> list[dict[str, float]]:
+    """The metrics of one episode per seed of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`;
+    ``env``, the single env ``agent`` was built for, is not stepped)."""
+    return [r.metrics() for r in run_scenario(agent, sc)]
 
 
 def _nanmean(x: Sequence[float]) -> float | None:
@@ -499,51 +501,12 @@ def run_benchmark(
     quick: bool = False,
 ) -> dict[str, Any]:
     """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
-    from tqdm.auto import tqdm
-
     names = [sc.name for sc in scenarios]
     if len(set(names)) != len(names):
         raise ValueError(f"scenario names must be unique, got {names}")
     t0 = time.perf_counter()
-    envs: dict[str, Any] = {}
-    status: dict[str, str] = {}
-    feasibility: dict[str, Any] = {}  # AmigoBot-v1's report of a fixed path (where it exceeds the robot's limits)
-    for sc in scenarios:
-        try:
-            envs[sc.name] = make_env(sc)
-            status[sc.name] = "ok"
-            report = getattr(envs[sc.name].unwrapped, "feasibility", None)
-            if report is not None:
-                feasibility[sc.name] = report
-        except Unavailable as exc:
-            status[sc.name] = f"unavailable: {exc}"
-    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
-    results: list[dict[str, Any]] = []
-    unavailable: list[dict[str, Any]] = [
-        {"agent": None, "seed": None, "scenario": n, "reason": s.removeprefix("unavailable: ")}
-        for n, s in status.items()
-        if s != "ok"
-    ]
-    bar = tqdm(total=total, desc="benchmark", unit="ep", file=sys.stderr, disable=not progress)
-    try:
-        for spec in agents:
-            for sc in scenarios:
-                env = envs.get(sc.name)
-                if env is None:
-                    continue
-                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
-                try:
-                    agent = spec.instantiate(env)
-                    eps = evaluate(agent, env, sc, on_episode=lambda: bar.update(1))
-                except Unavailable as exc:
-                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
-                    bar.update(sc.episodes)
-                    continue
-                results.append(_record(spec, sc, eps))
-    finally:
-        bar.close()
-        for env in envs.values():
-            env.close()
+    grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
+    results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
     doc: dict[str, Any] = {
         "suite_version": SUITE_VERSION,
         "quick": quick,
@@ -559,11 +522,11 @@ def run_benchmark(
             "bootstrap_seed": bootstrap_seed,
             "training_distribution": TRAINING_DISTRIBUTION,
         },
-        "scenarios": [sc.to_json() | {"status": status[sc.name]} for sc in scenarios],
+        "scenarios": [sc.to_json() | {"status": grid.status[sc.name]} for sc in scenarios],
         "agents": [a.describe() for a in agents],
         "results": results,
-        "unavailable": unavailable,
-        "feasibility": feasibility,
+        "unavailable": grid.unavailable,
+        "feasibility": grid.feasibility,
     }
     held = {sc.name: sc.held_out for sc in scenarios}
     doc["aggregates"], doc["performance_profiles"] = aggregate(
@@ -1079,9 +1042,7 @@ def _run_curvature(a: BenchmarkSettings, command: str) -> int:
     agents = parse_agents(a.agents) if a.agents else default_agents()
     out = Path(a.out)
     with RunLock(out):
-        doc = curvature.run_curvature(
-            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=a.progress
-        )
+        doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
         doc["command"] = command
         written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
     print(curvature.markdown_curvature(doc), end="")

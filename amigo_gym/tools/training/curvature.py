@@ -1,7 +1,6 @@
 r"""Failure rate binned by path curvature: ``amigo-gym benchmark --curvature``.
 
-Never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its scenario class
-and environment factory in. The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
+The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
 --curvature`".
 """
 
@@ -10,13 +9,13 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.tools.training.task_metrics import run_scenario
+from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
 
 __all__ = [
     "BIN_EDGES",
@@ -175,53 +174,20 @@ def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BI
     return rows
 
 
-def run_curvature(
-    agents: Sequence[Any],
-    scenarios: Sequence[Any],
-    *,
-    make_env: Callable[[Any], Any],
-    unavailable_errors: tuple[type[BaseException], ...],
-    progress: bool = True,
-    on_cell: Callable[[str], None] | None = None,
-) -> dict[str, Any]:
-    """Every agent seed on every cell; the JSON document: ``protocol``, ``scenarios``, ``agents``, ``episodes``
-    (tagged, one record per episode), ``table`` (:func:`bin_table`), ``unavailable``, ``wall_time_s``.
-
-    ``make_env(scenario)``: the single env the agents are built for; an agent that raises one of
-    ``unavailable_errors`` on a cell is listed in ``unavailable`` with the reason (the benchmark's
-    :func:`~amigo_gym.tools.training.benchmark.make_env` and ``Unavailable``, passed in by ``amigo-gym benchmark``).
-    """
-    from tqdm.auto import tqdm
-
+def run_curvature(agents: Sequence[Any], scenarios: Sequence[Any], *, progress: bool = True) -> dict[str, Any]:
+    """Every agent seed on every cell (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
+    ``protocol``, ``scenarios``, ``agents``, ``episodes`` (tagged, one record per episode), ``table``
+    (:func:`bin_table`), ``unavailable``, ``wall_time_s``."""
     from amigo_gym.task.v1 import feasible_random_curvature
 
     t0 = time.perf_counter()
-    episodes: list[dict[str, Any]] = []
-    unavailable: list[dict[str, Any]] = []
-    total = len(agents) * sum(sc.episodes for sc in scenarios)
-    bar = tqdm(total=total, desc="curvature", unit="ep", disable=not progress)
-    try:
-        for spec in agents:
-            for sc in scenarios:
-                v = float(sc.env_kwargs["speed"])  # the cell's speed [m/s] and its curvature limit K(v) [1/m]
-                k_v = feasible_random_curvature(v)
-                env = make_env(sc)
-                try:
-                    agent = spec.instantiate(env)
-                    eps = evaluate_tagged(agent, sc)
-                except unavailable_errors as exc:
-                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
-                    continue
-                finally:
-                    env.close()
-                    bar.update(sc.episodes)
-                for ep in eps:
-                    episodes.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "speed": v,
-                                     "k_limit": k_v, **ep})  # fmt: skip
-                if on_cell is not None:
-                    on_cell(sc.name)
-    finally:
-        bar.close()
+    grid = run_grid(agents, scenarios, evaluate_tagged, desc="curvature", progress=progress)
+    episodes = [
+        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "speed": float(sc.env_kwargs["speed"])}
+        | {"k_limit": feasible_random_curvature(float(sc.env_kwargs["speed"])), **ep}
+        for spec, sc, eps in grid.runs
+        for ep in eps
+    ]
     bins = [f"[{a:g}, {b:g})" for a, b in itertools.pairwise(BIN_EDGES)]
     bins[-1] = bins[-1][:-1] + "]"
     return {
@@ -236,7 +202,7 @@ def run_curvature(
         "agents": [a.describe() for a in agents],
         "episodes": episodes,
         "table": bin_table(episodes) if episodes else [],
-        "unavailable": unavailable,
+        "unavailable": grid.unavailable,
         "wall_time_s": round(time.perf_counter() - t0, 2),
     }
 

@@ -28,8 +28,10 @@ __all__ = [
     "Scenario",
     "StepSample",
     "Unavailable",
+    "Grid",
     "episode_metrics",
     "make_env",
+    "run_grid",
     "run_scenario",
     "run_vector_episodes",
     "vector_env",
@@ -179,6 +181,67 @@ def run_scenario(
     finally:
         venv.close()
     return recs
+
+
+@dataclass
+class Grid:
+    """What :func:`run_grid` ran: ``runs`` ``(agent spec, scenario, result)``; ``status`` per scenario (``"ok"`` or
+    ``"unavailable: <why>"``); ``unavailable`` the runs that could not run (``agent``, ``seed``, ``scenario``,
+    ``reason``; ``agent`` None for a scenario no agent could run); ``feasibility`` AmigoBot-v1's report of each
+    fixed path."""
+
+    runs: list[tuple[Any, Scenario, Any]] = field(default_factory=list)
+    status: dict[str, str] = field(default_factory=dict)
+    unavailable: list[dict[str, Any]] = field(default_factory=list)
+    feasibility: dict[str, Any] = field(default_factory=dict)
+
+
+def run_grid(
+    agents: Sequence[Any],
+    scenarios: Sequence[Scenario],
+    run: Callable[[Any, Scenario], Any],
+    *,
+    desc: str = "benchmark",
+    progress: bool = True,
+) -> Grid:
+    """``run(agent, scenario)`` for every agent spec (``name``, ``seed``, ``instantiate(env)``, as
+    :class:`amigo_gym.tools.training.benchmark.AgentSpec`) on every scenario; an agent or a scenario that raises
+    :class:`Unavailable` is listed with the reason, never dropped. A progress bar in episodes on stderr."""
+    import sys
+
+    from tqdm.auto import tqdm
+
+    grid = Grid()
+    envs: dict[str, Any] = {}
+    for sc in scenarios:
+        try:
+            envs[sc.name] = env = make_env(sc)
+        except Unavailable as exc:
+            grid.status[sc.name] = f"unavailable: {exc}"
+            grid.unavailable.append({"agent": None, "seed": None, "scenario": sc.name, "reason": str(exc)})
+            continue
+        grid.status[sc.name] = "ok"
+        report = getattr(env.unwrapped, "feasibility", None)
+        if report is not None:
+            grid.feasibility[sc.name] = report
+    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
+    bar = tqdm(total=total, desc=desc, unit="ep", file=sys.stderr, disable=not progress)
+    try:
+        for spec in agents:
+            for sc in (sc for sc in scenarios if sc.name in envs):
+                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
+                try:
+                    grid.runs.append((spec, sc, run(spec.instantiate(envs[sc.name]), sc)))
+                except Unavailable as exc:
+                    grid.unavailable.append(
+                        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name} | {"reason": str(exc)}
+                    )
+                bar.update(sc.episodes)
+    finally:
+        bar.close()
+        for env in envs.values():
+            env.close()
+    return grid
 
 
 @dataclass(frozen=True)
