@@ -358,22 +358,16 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
 
 
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """The objective of a trained run: IQM over ``cells`` of the mean H cross-track RMS [m] of the run's
-    final model (``model.zip``, checked against ``run.json``'s sha256, with its ``vecnormalize.pkl``);
-    and the per-cell values (``None``: no finite value)."""
-    from amigo_gym.tools.training.evaluate import ModelRef, _run_algo, load_model
+    """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
+    ``vecnormalize.pkl``)."""
+    from amigo_gym.tools.training.evaluate import find_models, load_model
 
-    model = run_dir / "model.zip"
-    vecnorm = run_dir / "vecnormalize.pkl"
-    ref = ModelRef(
-        run_dir.name, _run_algo(run_dir), model, run_dir / "run.json", vecnorm if vecnorm.is_file() else None
-    )
-    return validate_agent(load_model(ref), cells)
+    return validate_agent(load_model(find_models(run_dir)[0]), cells)
 
 
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """:func:`validate_model` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
-    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy` (numpy; SB3's ``predict``)."""
+    """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
+    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
     from amigo_gym.policies.learned import FastPolicy
     from amigo_gym.tools.runs import verify_sha256
 
@@ -383,20 +377,15 @@ def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dic
 
 
 def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` (SB3's ``predict``) run by the benchmark's
-    own loop (:func:`amigo_gym.tools.training.benchmark.evaluate`) on each cell's seeds; and the per-cell values
-    (``None``: no finite value; then the IQM is NaN)."""
-    from amigo_gym.tools.training import benchmark
+    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
+    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
+    then the IQM is NaN)."""
     from amigo_gym.tools.training.intervals import iqm
+    from amigo_gym.tools.training.task_metrics import run_scenario
 
     per_cell: dict[str, float | None] = {}
     for sc in cells:
-        env = benchmark.make_env(sc)
-        try:
-            eps = benchmark.evaluate(agent, env, sc)
-        finally:
-            env.close()
-        vals = np.array([e["h_rms_m"] for e in eps], dtype=np.float64)
+        vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
         per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
     finite = [v for v in per_cell.values() if v is not None]
     if len(finite) != len(per_cell):
