@@ -34,7 +34,6 @@ __all__ = [
     "find_models",
     "load_agents",
     "load_model",
-    "training_records",
     "main",
     "markdown_table",
     "plot_trajectories",
@@ -421,11 +420,6 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
     """Load every model :func:`find_models` finds at ``models``, by name (``trust``: :func:`load_model`)."""
     return {ref.name: load_model(ref, trust) for ref in find_models(models)}
-
-
-def training_records(models: str | os.PathLike[str]) -> dict[str, Any]:
-    """The training records beside the models :func:`find_models` finds, by agent name."""
-    return {r.name: json.loads(r.record.read_text()) for r in find_models(models) if r.record is not None}
 
 
 def evaluate_agents(
