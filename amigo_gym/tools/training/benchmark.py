@@ -539,15 +539,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _score_matrix(
-    results: Sequence[dict[str, Any]], agent: str, scen: Sequence[str], key: str
-) -> tuple[np.ndarray, list[int]]:
-    seeds = sorted({r["seed"] for r in results if r["agent"] == agent})
-    table = {(r["seed"], r["scenario"]): r[key] for r in results if r["agent"] == agent}
-    m = np.array([[table[(s, c)] for c in scen] for s in seeds], dtype=np.float64)
-    return m, seeds
-
-
 def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
     return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
 
@@ -569,11 +560,8 @@ def aggregate(
     for agent in dict.fromkeys(r["agent"] for r in results):
         rs = [r for r in results if r["agent"] == agent and all(r[k] is not None for k in keys)]
         seeds = sorted({r["seed"] for r in rs})
-        common = [
-            c
-            for c in dict.fromkeys(r["scenario"] for r in rs)
-            if all((s, c) in {(x["seed"], x["scenario"]) for x in rs} for s in seeds)
-        ]
+        table = {(r["seed"], r["scenario"]): r for r in rs}
+        common = [c for c in dict.fromkeys(r["scenario"] for r in rs) if all((s, c) in table for s in seeds)]
         groups = {
             "all": common,
             "in_distribution": [c for c in common if not held_out.get(c, False)],
@@ -584,23 +572,19 @@ def aggregate(
             if not scen:
                 entry[g] = None
                 continue
-            h, _ = _score_matrix(rs, agent, scen, "h_rms_m")
-            v, _ = _score_matrix(rs, agent, scen, "speed_err_rms")
-            f, _ = _score_matrix(rs, agent, scen, "failure_rate")
-            ret, _ = _score_matrix(rs, agent, scen, "return_per_step")
+            m = {k: np.array([[table[(s, c)][k] for c in scen] for s in seeds]) for k in keys}
+            h, mean = m["h_rms_m"], lambda s: np.mean(s, axis=(-2, -1))
+            stats = {  # name: (scores, higher-is-better statistic)
+                "h_rms_m_iqm": (h, iqm),
+                "h_rms_m_optimality_gap": (-h, lambda s: optimality_gap(s, -H_TARGET_M)),
+                "speed_err_rms_iqm": (m["speed_err_rms"], iqm),
+                "failure_rate_mean": (m["failure_rate"], mean),
+                "return_per_step_iqm": (m["return_per_step"], iqm),
+                "return_per_step_optimality_gap": (m["return_per_step"], optimality_gap),
+            }
             gi = {"n_scenarios": len(scen), "scenarios": scen}
-            gi["h_rms_m_iqm"] = _interval(*stratified_bootstrap(h, iqm, reps=reps, seed=seed))
-            gi["h_rms_m_optimality_gap"] = _interval(
-                *stratified_bootstrap(-h, lambda s: optimality_gap(s, -H_TARGET_M), reps=reps, seed=seed)
-            )
-            gi["speed_err_rms_iqm"] = _interval(*stratified_bootstrap(v, iqm, reps=reps, seed=seed))
-            gi["failure_rate_mean"] = _interval(
-                *stratified_bootstrap(f, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
-            )
-            gi["return_per_step_iqm"] = _interval(*stratified_bootstrap(ret, iqm, reps=reps, seed=seed))
-            gi["return_per_step_optimality_gap"] = _interval(
-                *stratified_bootstrap(ret, optimality_gap, reps=reps, seed=seed)
-            )
+            for name, (x, stat) in stats.items():
+                gi[name] = _interval(*stratified_bootstrap(x, stat, reps=reps, seed=seed))
             entry[g] = gi
             if g == "all":
                 prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
