@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.tools.training.intervals import Z95, wilson_interval
 from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "CURVATURE_EPISODES",
     "CURVATURE_SPEEDS",
     "LEVELS",
+    "Z95",
     "bin_table",
     "cell_specs",
     "markdown_curvature",
@@ -42,27 +44,6 @@ DURATION_S = 60.0
 DT_S = 0.1
 #: path ids the cells draw from (ids [0, 2**20))
 POOL = 2**20
-#: the 95 % normal quantile
-Z95 = 1.959963984540054
-
-
-def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float]:
-    r"""Wilson score interval of a binomial proportion ``p = f / n``:
-
-    .. math:: \frac{p + z^2/(2n) \pm z \sqrt{p (1 - p) / n + z^2 / (4 n^2)}}{1 + z^2 / n}
-
-    ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval.
-    """
-    if n <= 0:
-        return math.nan, math.nan
-    if not 0 <= failures <= n:
-        raise ValueError(f"wilson_interval: failures must be in [0, n = {n}], got {failures}")
-    p = failures / n
-    zz = z * z
-    centre = p + zz / (2 * n)
-    half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
-    den = 1 + zz / n
-    return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
 
 
 def cell_specs(
