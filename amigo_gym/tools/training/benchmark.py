@@ -13,7 +13,7 @@ import re
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -24,11 +24,12 @@ from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.runs import remove_matching
 from amigo_gym.tools.training.task_metrics import (
-    DEFAULT_FAILURE_TOLERANCE_M,
-    DEFAULT_SETTLE_TIME_S,
-    EpisodeRecorder,
-    InfoAdapter,
-    run_vector_episodes,
+    SUITE_VERSION,
+    Scenario,
+    Unavailable,
+    make_env,
+    run_grid,
+    run_scenario,
 )
 
 __all__ = [
@@ -44,11 +45,13 @@ __all__ = [
     "AgentSpec",
     "BenchmarkSettings",
     "Scenario",
+    "Unavailable",
     "agent_label",
     "aggregate",
     "default_agents",
     "evaluate",
     "main",
+    "make_env",
     "markdown_report",
     "parse_agents",
     "quick_suite",
@@ -56,7 +59,6 @@ __all__ = [
     "write_outputs",
 ]
 
-SUITE_VERSION = "1.0"
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
@@ -106,53 +108,6 @@ TRAINING_DISTRIBUTION: dict[str, Any] = {
 
 
 # --------------------------------------------------------------------------- scenarios
-@dataclass(frozen=True)
-class Scenario:
-    """One benchmark scenario (data; never edited once released: bump :data:`SUITE_VERSION`).
-
-    Attributes:
-        name: unique name.
-        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
-        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
-        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
-        max_steps: episode length (``max_episode_steps``).
-        held_out: outside the generalists' training distribution (:data:`TRAINING_DISTRIBUTION`).
-        description: one line for the tables.
-        version: the suite version the scenario belongs to.
-        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
-    """
-
-    name: str
-    env_id: str
-    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
-    seeds: tuple[int, ...] = tuple(range(100, 110))
-    max_steps: int = 400
-    held_out: bool = False
-    description: str = ""
-    version: str = SUITE_VERSION
-    settle_time_s: float = DEFAULT_SETTLE_TIME_S
-    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
-
-    def __post_init__(self) -> None:
-        if not self.name or not isinstance(self.name, str):
-            raise ValueError(f"Scenario.name must be a non-empty string, got {self.name!r}")
-        if not self.seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in self.seeds):
-            raise ValueError(f"Scenario {self.name}: seeds must be non-negative integers, got {self.seeds!r}")
-        if len(set(self.seeds)) != len(self.seeds):
-            raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
-        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
-            raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
-
-    @property
-    def episodes(self) -> int:
-        """Number of evaluation episodes (one per seed)."""
-        return len(self.seeds)
-
-    def to_json(self) -> dict[str, Any]:
-        """The scenario as JSON data (its fields and ``episodes``; tuples as lists)."""
-        return json_safe({**asdict(self), "episodes": self.episodes})  # type: ignore[no-any-return]
-
-
 def user_scenarios(
     files: Sequence[str], speed: float, feasibility: str = "off", goal_tolerance: float = 0.0, duration: float = 60.0
 ) -> tuple[Scenario, ...]:
@@ -306,10 +261,6 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
 
 
 # --------------------------------------------------------------------------- agents
-class Unavailable(Exception):
-    """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
-
-
 def _classical(name: str) -> Callable[[Any], Any]:
     def make(env: Any) -> Any:
         base = env.unwrapped
@@ -510,67 +461,10 @@ def agent_label(name: str, algo: str | None = None) -> str:
 
 
 # --------------------------------------------------------------------------- evaluation
-def make_env(sc: Scenario) -> Any:
-    """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
-    if sc.env_id not in gym.registry:
-        raise Unavailable(f"environment {sc.env_id} is not registered")
-    try:
-        return gym.make(sc.env_id, max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
-    except (TypeError, ValueError) as exc:
-        raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
-
-
-def _dt(env: Any, sc: Scenario) -> float:
-    params = getattr(env.unwrapped, "params", None)
-    dt = getattr(params, "dt", None)
-    if isinstance(dt, (int, float)) and not isinstance(dt, bool):
-        return float(dt)
-    return float(sc.env_kwargs.get("dt", 0.1))
-
-
-def _vector_env(sc: Scenario) -> Any:
-    """The native vector env of ``sc`` (``SyncVectorEnv`` if it has none): one robot per evaluation seed."""
-    import gymnasium as gym
-
-    native = gym.spec(sc.env_id).vector_entry_point is not None  # else Gymnasium's SyncVectorEnv
-    return gym.make_vec(
-        sc.env_id,
-        num_envs=len(sc.seeds),
-        vectorization_mode="vector_entry_point" if native else "sync",
-        max_episode_steps=sc.max_steps,
-        **dict(sc.env_kwargs),
-    )
-
-
-def evaluate(
-    agent: Any, env: Any, sc: Scenario, on_episode: Callable[[], object] | None = None
-) -> list[dict[str, float]]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``; the episodes' metrics.
-
-    The episodes run side by side in the environment's native vector env (robot ``i`` reset with seed
-    ``sc.seeds[i]``; the native vector env reproduces the single env bit for bit, tests/test_vector_v1.py),
-    by :func:`amigo_gym.tools.training.task_metrics.run_vector_episodes` (the whole batch predicted at every step; a
-    robot's episode is its steps up to its first end). ``on_episode()`` is called as each episode ends.
-    """
-    adapter = InfoAdapter.for_env(env)
-    dt = _dt(env, sc)
-    venv = _vector_env(sc)
-    try:
-        obs, _ = venv.reset(seed=list(sc.seeds))
-        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
-
-        def episode_ended(_i: int, _info: dict[str, Any], ended: bool) -> None:
-            if ended and on_episode is not None:
-                on_episode()
-
-        run_vector_episodes(agent, venv, obs, recs, adapter, episode_ended)
-    finally:
-        venv.close()
-    return [r.metrics() for r in recs]
+def evaluate(agent: Any, env: Any, sc: Scenario) -> list[dict[str, float]]:
+    """The metrics of one episode per seed of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`;
+    ``env``, the single env ``agent`` was built for, is not stepped)."""
+    return [r.metrics() for r in run_scenario(agent, sc)]
 
 
 def _nanmean(x: Sequence[float]) -> float | None:
@@ -607,51 +501,12 @@ def run_benchmark(
     quick: bool = False,
 ) -> dict[str, Any]:
     """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
-    from tqdm.auto import tqdm
-
     names = [sc.name for sc in scenarios]
     if len(set(names)) != len(names):
         raise ValueError(f"scenario names must be unique, got {names}")
     t0 = time.perf_counter()
-    envs: dict[str, Any] = {}
-    status: dict[str, str] = {}
-    feasibility: dict[str, Any] = {}  # AmigoBot-v1's report of a fixed path (where it exceeds the robot's limits)
-    for sc in scenarios:
-        try:
-            envs[sc.name] = make_env(sc)
-            status[sc.name] = "ok"
-            report = getattr(envs[sc.name].unwrapped, "feasibility", None)
-            if report is not None:
-                feasibility[sc.name] = report
-        except Unavailable as exc:
-            status[sc.name] = f"unavailable: {exc}"
-    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
-    results: list[dict[str, Any]] = []
-    unavailable: list[dict[str, Any]] = [
-        {"agent": None, "seed": None, "scenario": n, "reason": s.removeprefix("unavailable: ")}
-        for n, s in status.items()
-        if s != "ok"
-    ]
-    bar = tqdm(total=total, desc="benchmark", unit="ep", file=sys.stderr, disable=not progress)
-    try:
-        for spec in agents:
-            for sc in scenarios:
-                env = envs.get(sc.name)
-                if env is None:
-                    continue
-                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
-                try:
-                    agent = spec.instantiate(env)
-                    eps = evaluate(agent, env, sc, on_episode=lambda: bar.update(1))
-                except Unavailable as exc:
-                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
-                    bar.update(sc.episodes)
-                    continue
-                results.append(_record(spec, sc, eps))
-    finally:
-        bar.close()
-        for env in envs.values():
-            env.close()
+    grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
+    results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
     doc: dict[str, Any] = {
         "suite_version": SUITE_VERSION,
         "quick": quick,
@@ -667,11 +522,11 @@ def run_benchmark(
             "bootstrap_seed": bootstrap_seed,
             "training_distribution": TRAINING_DISTRIBUTION,
         },
-        "scenarios": [sc.to_json() | {"status": status[sc.name]} for sc in scenarios],
+        "scenarios": [sc.to_json() | {"status": grid.status[sc.name]} for sc in scenarios],
         "agents": [a.describe() for a in agents],
         "results": results,
-        "unavailable": unavailable,
-        "feasibility": feasibility,
+        "unavailable": grid.unavailable,
+        "feasibility": grid.feasibility,
     }
     held = {sc.name: sc.held_out for sc in scenarios}
     doc["aggregates"], doc["performance_profiles"] = aggregate(
@@ -684,15 +539,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _score_matrix(
-    results: Sequence[dict[str, Any]], agent: str, scen: Sequence[str], key: str
-) -> tuple[np.ndarray, list[int]]:
-    seeds = sorted({r["seed"] for r in results if r["agent"] == agent})
-    table = {(r["seed"], r["scenario"]): r[key] for r in results if r["agent"] == agent}
-    m = np.array([[table[(s, c)] for c in scen] for s in seeds], dtype=np.float64)
-    return m, seeds
-
-
 def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
     return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
 
@@ -714,11 +560,8 @@ def aggregate(
     for agent in dict.fromkeys(r["agent"] for r in results):
         rs = [r for r in results if r["agent"] == agent and all(r[k] is not None for k in keys)]
         seeds = sorted({r["seed"] for r in rs})
-        common = [
-            c
-            for c in dict.fromkeys(r["scenario"] for r in rs)
-            if all((s, c) in {(x["seed"], x["scenario"]) for x in rs} for s in seeds)
-        ]
+        table = {(r["seed"], r["scenario"]): r for r in rs}
+        common = [c for c in dict.fromkeys(r["scenario"] for r in rs) if all((s, c) in table for s in seeds)]
         groups = {
             "all": common,
             "in_distribution": [c for c in common if not held_out.get(c, False)],
@@ -729,23 +572,19 @@ def aggregate(
             if not scen:
                 entry[g] = None
                 continue
-            h, _ = _score_matrix(rs, agent, scen, "h_rms_m")
-            v, _ = _score_matrix(rs, agent, scen, "speed_err_rms")
-            f, _ = _score_matrix(rs, agent, scen, "failure_rate")
-            ret, _ = _score_matrix(rs, agent, scen, "return_per_step")
+            m = {k: np.array([[table[(s, c)][k] for c in scen] for s in seeds]) for k in keys}
+            h, mean = m["h_rms_m"], lambda s: np.mean(s, axis=(-2, -1))
+            stats = {  # name: (scores, higher-is-better statistic)
+                "h_rms_m_iqm": (h, iqm),
+                "h_rms_m_optimality_gap": (-h, lambda s: optimality_gap(s, -H_TARGET_M)),
+                "speed_err_rms_iqm": (m["speed_err_rms"], iqm),
+                "failure_rate_mean": (m["failure_rate"], mean),
+                "return_per_step_iqm": (m["return_per_step"], iqm),
+                "return_per_step_optimality_gap": (m["return_per_step"], optimality_gap),
+            }
             gi = {"n_scenarios": len(scen), "scenarios": scen}
-            gi["h_rms_m_iqm"] = _interval(*stratified_bootstrap(h, iqm, reps=reps, seed=seed))
-            gi["h_rms_m_optimality_gap"] = _interval(
-                *stratified_bootstrap(-h, lambda s: optimality_gap(s, -H_TARGET_M), reps=reps, seed=seed)
-            )
-            gi["speed_err_rms_iqm"] = _interval(*stratified_bootstrap(v, iqm, reps=reps, seed=seed))
-            gi["failure_rate_mean"] = _interval(
-                *stratified_bootstrap(f, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
-            )
-            gi["return_per_step_iqm"] = _interval(*stratified_bootstrap(ret, iqm, reps=reps, seed=seed))
-            gi["return_per_step_optimality_gap"] = _interval(
-                *stratified_bootstrap(ret, optimality_gap, reps=reps, seed=seed)
-            )
+            for name, (x, stat) in stats.items():
+                gi[name] = _interval(*stratified_bootstrap(x, stat, reps=reps, seed=seed))
             entry[g] = gi
             if g == "all":
                 prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
@@ -1187,9 +1026,7 @@ def _run_curvature(a: BenchmarkSettings, command: str) -> int:
     agents = parse_agents(a.agents) if a.agents else default_agents()
     out = Path(a.out)
     with RunLock(out):
-        doc = curvature.run_curvature(
-            agents, scenarios, make_env=make_env, unavailable_errors=(Unavailable,), progress=a.progress
-        )
+        doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
         doc["command"] = command
         written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
     print(curvature.markdown_curvature(doc), end="")

@@ -417,8 +417,6 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
             rec_seed = training.get(v0_name(r.name), {}).get("seed")
             sources[v0_name(r.name)] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
     if train_steps > 0:
-        from stable_baselines3 import PPO
-
         from amigo_gym.tools.training.train import Settings, train
 
         run_dir = out / "train_ppo"
@@ -449,9 +447,7 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         rec = training["ppo_fresh"]
         took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
         print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
-        # checked against the run's record before it is unpickled, like every model compare loads
-        runs.check_pickle(run_dir / "model.zip", training["ppo_fresh"]["sha256"], str(run_dir / "run.json"))
-        agents["ppo_fresh"] = PPO.load(run_dir / "model.zip", device="cpu")
+        agents["ppo_fresh"] = load_model(find_models(run_dir)[0])  # checked against run.json, as every model
         sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
     _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)

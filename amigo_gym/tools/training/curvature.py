@@ -1,7 +1,6 @@
 r"""Failure rate binned by path curvature: ``amigo-gym benchmark --curvature``.
 
-Never imports :mod:`amigo_gym.tools.training.benchmark` (which calls it): the benchmark passes its scenario class
-and environment factory in. The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
+The cells, tags and bins: docs/baselines.md, "Reference: `amigo-gym benchmark
 --curvature`".
 """
 
@@ -10,19 +9,21 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
+from amigo_gym.tools.training.intervals import Z95, wilson_interval
+from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
 
 __all__ = [
     "BIN_EDGES",
     "CURVATURE_EPISODES",
     "CURVATURE_SPEEDS",
     "LEVELS",
+    "Z95",
     "bin_table",
     "cell_specs",
     "markdown_curvature",
@@ -43,27 +44,6 @@ DURATION_S = 60.0
 DT_S = 0.1
 #: path ids the cells draw from (ids [0, 2**20))
 POOL = 2**20
-#: the 95 % normal quantile
-Z95 = 1.959963984540054
-
-
-def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float]:
-    r"""Wilson score interval of a binomial proportion ``p = f / n``:
-
-    .. math:: \frac{p + z^2/(2n) \pm z \sqrt{p (1 - p) / n + z^2 / (4 n^2)}}{1 + z^2 / n}
-
-    ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval.
-    """
-    if n <= 0:
-        return math.nan, math.nan
-    if not 0 <= failures <= n:
-        raise ValueError(f"wilson_interval: failures must be in [0, n = {n}], got {failures}")
-    p = failures / n
-    zz = z * z
-    centre = p + zz / (2 * n)
-    half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
-    den = 1 + zz / n
-    return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
 
 
 def cell_specs(
@@ -102,27 +82,21 @@ def cell_specs(
 
 
 def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
-    """Run ``agent`` deterministically, one episode per seed of the cell ``sc`` (all side by side in the native vector
-    env, as :func:`amigo_gym.tools.training.benchmark.evaluate`); per episode the benchmark's metrics plus the tags
+    """Run ``agent`` deterministically, one episode per seed of the cell ``sc``
+    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); per episode the benchmark's metrics plus the tags
     ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
-    import gymnasium as gym
+    paths: list[Any] = []
+    ids: list[int] = []
+    progress = np.zeros(len(sc.seeds))
 
-    venv: Any = gym.make_vec(sc.env_id, num_envs=len(sc.seeds), max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
-    try:
-        obs, _ = venv.reset(seed=list(sc.seeds))
-        u: Any = venv.unwrapped
-        adapter = InfoAdapter(u.params.robot, float(u.params.speed))
-        paths = list(u.paths.paths)
-        ids = [int(d["id"]) for d in u.path_infos]
-        recs = [EpisodeRecorder(DT_S) for _ in sc.seeds]
-        progress = np.zeros(len(sc.seeds))
+    def read_paths(venv: Any, _infos: Any) -> None:
+        paths.extend(venv.unwrapped.paths.paths)
+        ids.extend(int(d["id"]) for d in venv.unwrapped.path_infos)
 
-        def read_progress(i: int, info: dict[str, Any], _ended: bool) -> None:
-            progress[i] = float(info["progress"])
+    def read_progress(i: int, info: dict[str, Any], _ended: bool, _obs: Any) -> None:
+        progress[i] = float(info["progress"])
 
-        run_vector_episodes(agent, venv, obs, recs, adapter, read_progress)
-    finally:
-        venv.close()
+    recs = run_scenario(agent, sc, on_reset=read_paths, on_row=read_progress)
     out = []
     for i, r in enumerate(recs):
         m: dict[str, Any] = dict(r.metrics())
@@ -181,53 +155,20 @@ def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BI
     return rows
 
 
-def run_curvature(
-    agents: Sequence[Any],
-    scenarios: Sequence[Any],
-    *,
-    make_env: Callable[[Any], Any],
-    unavailable_errors: tuple[type[BaseException], ...],
-    progress: bool = True,
-    on_cell: Callable[[str], None] | None = None,
-) -> dict[str, Any]:
-    """Every agent seed on every cell; the JSON document: ``protocol``, ``scenarios``, ``agents``, ``episodes``
-    (tagged, one record per episode), ``table`` (:func:`bin_table`), ``unavailable``, ``wall_time_s``.
-
-    ``make_env(scenario)``: the single env the agents are built for; an agent that raises one of
-    ``unavailable_errors`` on a cell is listed in ``unavailable`` with the reason (the benchmark's
-    :func:`~amigo_gym.tools.training.benchmark.make_env` and ``Unavailable``, passed in by ``amigo-gym benchmark``).
-    """
-    from tqdm.auto import tqdm
-
+def run_curvature(agents: Sequence[Any], scenarios: Sequence[Any], *, progress: bool = True) -> dict[str, Any]:
+    """Every agent seed on every cell (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
+    ``protocol``, ``scenarios``, ``agents``, ``episodes`` (tagged, one record per episode), ``table``
+    (:func:`bin_table`), ``unavailable``, ``wall_time_s``."""
     from amigo_gym.task.v1 import feasible_random_curvature
 
     t0 = time.perf_counter()
-    episodes: list[dict[str, Any]] = []
-    unavailable: list[dict[str, Any]] = []
-    total = len(agents) * sum(sc.episodes for sc in scenarios)
-    bar = tqdm(total=total, desc="curvature", unit="ep", disable=not progress)
-    try:
-        for spec in agents:
-            for sc in scenarios:
-                v = float(sc.env_kwargs["speed"])  # the cell's speed [m/s] and its curvature limit K(v) [1/m]
-                k_v = feasible_random_curvature(v)
-                env = make_env(sc)
-                try:
-                    agent = spec.instantiate(env)
-                    eps = evaluate_tagged(agent, sc)
-                except unavailable_errors as exc:
-                    unavailable.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)})
-                    continue
-                finally:
-                    env.close()
-                    bar.update(sc.episodes)
-                for ep in eps:
-                    episodes.append({"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "speed": v,
-                                     "k_limit": k_v, **ep})  # fmt: skip
-                if on_cell is not None:
-                    on_cell(sc.name)
-    finally:
-        bar.close()
+    grid = run_grid(agents, scenarios, evaluate_tagged, desc="curvature", progress=progress)
+    episodes = [
+        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "speed": float(sc.env_kwargs["speed"])}
+        | {"k_limit": feasible_random_curvature(float(sc.env_kwargs["speed"])), **ep}
+        for spec, sc, eps in grid.runs
+        for ep in eps
+    ]
     bins = [f"[{a:g}, {b:g})" for a, b in itertools.pairwise(BIN_EDGES)]
     bins[-1] = bins[-1][:-1] + "]"
     return {
@@ -242,7 +183,7 @@ def run_curvature(
         "agents": [a.describe() for a in agents],
         "episodes": episodes,
         "table": bin_table(episodes) if episodes else [],
-        "unavailable": unavailable,
+        "unavailable": grid.unavailable,
         "wall_time_s": round(time.perf_counter() - t0, 2),
     }
 

@@ -11,7 +11,7 @@ import math
 import os
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -22,7 +22,7 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-from amigo_gym.tools.training.task_metrics import _rms
+from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
 
 __all__ = [
     "Agent",
@@ -34,7 +34,6 @@ __all__ = [
     "find_models",
     "load_agents",
     "load_model",
-    "training_records",
     "main",
     "markdown_table",
     "plot_trajectories",
@@ -136,39 +135,82 @@ def steady_start_pose(params: EnvParams) -> Array:
     return np.array([*a_from_h(h[0], h[1], math.cos(beta), math.sin(beta), params.robot.l3), beta])
 
 
-def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
-    """Run ``agent`` deterministically for up to ``steps`` steps after ``env.reset(**reset_kwargs)``."""
+def protocol_scenarios(proto: EvalProtocol, params: EnvParams | None = None) -> tuple[Scenario, ...]:
+    """The protocol's scenarios for the engine (:mod:`amigo_gym.tools.training.task_metrics`): ``nominal`` and
+    ``paper_start`` one episode from a fixed pose, ``perturbed`` one per seed from the env's random start."""
+    params = params or EnvParams()
+    poses = {
+        "nominal": (tuple(steady_start_pose(params).tolist()), "H on the circle, steady heading lag"),
+        "paper_start": ((-params.robot.l3, 0.0, 0.0), "H at the origin, beta = 0"),
+        "perturbed": (None, "env's random start (reset(seed=s))"),
+    }
+    return tuple(
+        Scenario(
+            name,
+            ENV_ID,
+            seeds=proto.perturbed_seeds if poses[name][0] is None else (0,),
+            max_steps=proto.steps,
+            description=poses[name][1],
+            settle_time_s=proto.settle_time_s,
+            pose=poses[name][0],
+        )
+        for name in proto.scenarios
+    )
+
+
+def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
+    """The episodes of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`) as :class:`Trajectory`
+    rows, with the analytic policy's rates (gain ``gain`` [1/s]) on the agent's observations as the reference."""
+    from amigo_gym.envs.base import info_row
+    from amigo_gym.paths import make_path
     from amigo_gym.policies.analytic import analytic_wheel_rates
 
-    params: EnvParams = env.unwrapped.params
-    path = env.unwrapped.path
-    wmax = params.robot.max_wheel_rate
-    obs, info = env.reset(**reset_kwargs)
-    h0 = np.asarray(info["h_position"], dtype=np.float64)
-    cols: dict[str, list[Any]] = {k: [] for k in ("time", "e", "h", "rates", "angles", "ref_rates", "arc")}
-    ret, terminated = 0.0, False
-    s_prev = float(path.project(h0).s)
-    s_unwrapped = 0.0
-    for _ in range(steps):
-        action, _ = agent.predict(obs, deterministic=True)
+    keys = ("time", "e", "h", "rates", "angles", "ref_rates")
+    cols: list[dict[str, list[Any]]] = [{k: [] for k in keys} for _ in sc.seeds]
+    start: dict[str, Any] = {}
+
+    def on_reset(venv: Any, infos: dict[str, Any]) -> None:
+        start["params"] = venv.unwrapped.params
+        start["h0"] = [np.asarray(info_row(infos, i)["h_position"], dtype=np.float64) for i in range(len(sc.seeds))]
+
+    def on_row(i: int, info: dict[str, Any], _ended: bool, obs: Any) -> None:
+        params: EnvParams = start["params"]
+        wmax = params.robot.max_wheel_rate
         ref = np.clip(analytic_wheel_rates(obs, params, gain), -wmax, wmax)
-        obs, reward, terminated, truncated, info = env.step(action)
-        ret += float(reward)
-        s = float(path.project(info["h_position"]).s)
-        ds = s - s_prev
-        if path.length < math.inf:  # closed circle: arc lengths wrap at one lap
-            ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
-        s_unwrapped += ds
-        s_prev = s
         row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
-        for col, value in zip(cols.values(), (*row, ref, s_unwrapped), strict=True):
-            col.append(value)
-        if terminated or truncated:
-            break
-    arrays = {k: np.asarray(v, dtype=np.float64) for k, v in cols.items()}
-    for k in ("h", "rates", "angles", "ref_rates"):
-        arrays[k] = arrays[k].reshape(-1, 2)
-    return Trajectory(**arrays, ret=ret, terminated=bool(terminated), h0=h0)
+        for k, v in zip(keys, (*row, ref), strict=True):
+            cols[i][k].append(v)
+
+    recs = run_scenario(agent, sc, on_reset=on_reset, on_row=on_row)
+    path = make_path(start["params"])
+    out = []
+    for rec, col, h0 in zip(recs, cols, start["h0"], strict=True):
+        arrays = {k: np.asarray(v, dtype=np.float64) for k, v in col.items()}
+        for k in ("h", "rates", "angles", "ref_rates"):
+            arrays[k] = arrays[k].reshape(-1, 2)
+        # arc length of H's closest point, unwrapped at one lap on the closed circle
+        ds = np.diff([float(path.project(h).s) for h in (h0, *arrays["h"])])
+        if path.length < math.inf:
+            ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
+        out.append(Trajectory(**arrays, arc=np.cumsum(ds), ret=sum(rec.rewards), terminated=rec.terminated, h0=h0))
+    return out
+
+
+def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
+    """One episode of ``agent`` on ``env``'s id and settings after ``reset(**reset_kwargs)`` (``seed``, or
+    ``options={"pose": ...}``), at most ``steps`` steps (:func:`trajectories`)."""
+    spec = env.spec
+    limit = spec.max_episode_steps or steps
+    pose = (reset_kwargs.get("options") or {}).get("pose")
+    sc = Scenario(
+        "rollout",
+        spec.id,
+        dict(spec.kwargs),
+        seeds=(int(reset_kwargs.get("seed") or 0),),
+        max_steps=min(steps, limit),
+        pose=None if pose is None else tuple(np.asarray(pose, dtype=np.float64).tolist()),
+    )
+    return trajectories(agent, sc, gain)[0]
 
 
 def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
@@ -380,11 +422,6 @@ def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str
     return {ref.name: load_model(ref, trust) for ref in find_models(models)}
 
 
-def training_records(models: str | os.PathLike[str]) -> dict[str, Any]:
-    """The training records beside the models :func:`find_models` finds, by agent name."""
-    return {r.name: json.loads(r.record.read_text()) for r in find_models(models) if r.record is not None}
-
-
 def evaluate_agents(
     agents: dict[str, Agent], proto: EvalProtocol | None = None
 ) -> tuple[list[dict[str, Any]], dict[str, dict[str, list[Trajectory]]]]:
@@ -394,27 +431,16 @@ def evaluate_agents(
         ``(results, trajectories)``: one result dict per (agent, scenario) (``agent``, ``scenario`` and
         the metrics of :func:`summarize`), and ``trajectories[agent][scenario]`` the episodes.
     """
-    import gymnasium as gym
-
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-
     proto = proto or EvalProtocol()
-    env = gym.make(ENV_ID, max_episode_steps=proto.steps)
-    params: EnvParams = env.unwrapped.params  # type: ignore[attr-defined]
-    starts: dict[str, list[dict[str, Any]]] = {
-        "nominal": [{"options": {"pose": steady_start_pose(params)}}],
-        "paper_start": [{"options": {"pose": np.array([-params.robot.l3, 0.0, 0.0])}}],
-        "perturbed": [{"seed": s} for s in proto.perturbed_seeds],
-    }
+    params = EnvParams()
     results: list[dict[str, Any]] = []
     trajs: dict[str, dict[str, list[Trajectory]]] = {}
     for name, agent in agents.items():
         trajs[name] = {}
-        for sc in proto.scenarios:
-            eps = [rollout(agent, env, kw, proto.steps, proto.analytic_gain) for kw in starts[sc]]
-            trajs[name][sc] = eps
-            results.append({"agent": name, "scenario": sc, **summarize(eps, params, proto)})
-    env.close()
+        for sc in protocol_scenarios(proto, params):
+            eps = trajectories(agent, sc, proto.analytic_gain)
+            trajs[name][sc.name] = eps
+            results.append({"agent": name, "scenario": sc.name, **summarize(eps, params, proto)})
     return results, trajs
 
 
@@ -427,12 +453,9 @@ def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
         "duration_s": proto.steps * params.dt,
         "lap_time_s": params.lap_time,
         "scenarios": {
-            "nominal": {
-                "start_pose": steady_start_pose(params).tolist(),
-                "note": "H on the circle, steady heading lag",
-            },
-            "paper_start": {"start_pose": [-params.robot.l3, 0.0, 0.0], "note": "H at the origin, beta = 0"},
-            "perturbed": {"seeds": list(proto.perturbed_seeds), "note": "env's random start (reset(seed=s))"},
+            sc.name: ({"seeds": list(sc.seeds)} if sc.pose is None else {"start_pose": list(sc.pose)})
+            | {"note": sc.description}
+            for sc in protocol_scenarios(replace(proto, scenarios=SCENARIOS), params)
         },
         "run_scenarios": list(proto.scenarios),
         "settle_time_s": proto.settle_time_s,

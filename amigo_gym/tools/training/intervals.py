@@ -9,12 +9,14 @@ Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scena
   resamples the runs of every task with replacement; the interval is the percentile interval. With one run per
   task it has zero width.
 * :func:`performance_profile`: the fraction of all scores above each ``tau``, with the same bootstrap.
+* :func:`wilson_interval`: the Wilson score interval of a binomial proportion (the curvature cells' failure rates).
 
 Why not rliable itself, and how the benchmark uses these: docs/benchmark.md.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -28,6 +30,7 @@ __all__ = [
     "performance_profile",
     "score_distribution",
     "stratified_bootstrap",
+    "wilson_interval",
 ]
 
 Array = NDArray[np.float64]
@@ -131,3 +134,26 @@ def performance_profile(
     """
     t = np.asarray(taus, dtype=np.float64)
     return stratified_bootstrap(scores, lambda s: score_distribution(s, t), reps=reps, size=size, seed=seed)
+
+
+#: the 95 % normal quantile
+Z95 = 1.959963984540054
+
+
+def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float]:
+    r"""Wilson score interval of a binomial proportion ``p = f / n``:
+
+    .. math:: \frac{p + z^2/(2n) \pm z \sqrt{p (1 - p) / n + z^2 / (4 n^2)}}{1 + z^2 / n}
+
+    ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval.
+    """
+    if n <= 0:
+        return math.nan, math.nan
+    if not 0 <= failures <= n:
+        raise ValueError(f"wilson_interval: failures must be in [0, n = {n}], got {failures}")
+    p = failures / n
+    zz = z * z
+    centre = p + zz / (2 * n)
+    half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
+    den = 1 + zz / n
+    return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)

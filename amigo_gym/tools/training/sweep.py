@@ -358,22 +358,16 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
 
 
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """The objective of a trained run: IQM over ``cells`` of the mean H cross-track RMS [m] of the run's
-    final model (``model.zip``, checked against ``run.json``'s sha256, with its ``vecnormalize.pkl``);
-    and the per-cell values (``None``: no finite value)."""
-    from amigo_gym.tools.training.evaluate import ModelRef, _run_algo, load_model
+    """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
+    ``vecnormalize.pkl``)."""
+    from amigo_gym.tools.training.evaluate import find_models, load_model
 
-    model = run_dir / "model.zip"
-    vecnorm = run_dir / "vecnormalize.pkl"
-    ref = ModelRef(
-        run_dir.name, _run_algo(run_dir), model, run_dir / "run.json", vecnorm if vecnorm.is_file() else None
-    )
-    return validate_agent(load_model(ref), cells)
+    return validate_agent(load_model(find_models(run_dir)[0]), cells)
 
 
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """:func:`validate_model` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
-    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy` (numpy; SB3's ``predict``)."""
+    """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
+    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
     from amigo_gym.policies.learned import FastPolicy
     from amigo_gym.tools.runs import verify_sha256
 
@@ -383,20 +377,15 @@ def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dic
 
 
 def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` (SB3's ``predict``) run by the benchmark's
-    own loop (:func:`amigo_gym.tools.training.benchmark.evaluate`) on each cell's seeds; and the per-cell values
-    (``None``: no finite value; then the IQM is NaN)."""
-    from amigo_gym.tools.training import benchmark
+    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
+    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
+    then the IQM is NaN)."""
     from amigo_gym.tools.training.intervals import iqm
+    from amigo_gym.tools.training.task_metrics import run_scenario
 
     per_cell: dict[str, float | None] = {}
     for sc in cells:
-        env = benchmark.make_env(sc)
-        try:
-            eps = benchmark.evaluate(agent, env, sc)
-        finally:
-            env.close()
-        vals = np.array([e["h_rms_m"] for e in eps], dtype=np.float64)
+        vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
         per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
     finite = [v for v in per_cell.values() if v is not None]
     if len(finite) != len(per_cell):
@@ -707,38 +696,9 @@ FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
 
 
 def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
-    """Sampled :class:`~.fastppo.FastPPOSettings` of a fast-PPO trial of ``timesteps`` env-steps.
-
-    The space (rl-zoo's ``sample_ppo_params`` ranges, log-uniform where a parameter spans decades, narrowed where
-    this task and the large-batch regime say so; Optuna parameter name, then the setting it gives):
-
-    * ``learning_rate`` log-uniform [3e-5, 3e-3] (annealed linearly to 0 by the trainer): rl-zoo's 1e-5..1 cut to
-      what Adam with 1e3-1e5-sample batches tolerates; the shipped 3e-4 sits in the middle (log scale).
-    * ``epochs`` integer [1, 10] (rl-zoo: 1, 5, 10, 20): more passes reuse each sample more but cost CPU per
-      env-step, which is the budget here.
-    * ``num_envs`` ``N`` in {64, ..., 1024} and ``rollout_steps`` ``T`` in {8, ..., 128} (powers of two; rl-zoo's
-      ``n_steps`` 8..2048 for one env): the batch ``N T`` spans 512..131072. Only choices with ``N T_min`` and
-      ``N_min T`` at most ``timesteps / MIN_ITERATIONS`` are offered, and ``T`` is lowered to the largest choice
-      with ``N T <= timesteps / MIN_ITERATIONS`` (at least the smallest): a trial runs at least ``MIN_ITERATIONS``
-      updates (for 2M env-steps every pair qualifies; a tiny test budget keeps the smallest batch).
-    * ``n_minibatches`` in {1, 2, 4, 8, 16, 32} gives ``minibatch_size = N T / n_minibatches``: the minibatch
-      size is sampled as a divisor of the batch, so the constraint ``N T % minibatch_size == 0`` always holds.
-    * ``gamma = 1 - one_minus_gamma``, ``one_minus_gamma`` log-uniform [1e-3, 0.1]: horizons of 10 to 1000 steps
-      (1 s to an episode of 60 s at dt = 0.1 s); rl-zoo's 0.9..0.9999.
-    * ``gae_lambda`` uniform [0.8, 1.0] (rl-zoo's 0.8..1.0).
-    * ``clip_coef`` in {0.1, 0.2, 0.3, 0.4} (rl-zoo's clip_range).
-    * ``ent_coef`` log-uniform [1e-8, 1e-2] (rl-zoo: 1e-8..0.1, cut: the entropy here is that of a
-      state-independent ``log_std``, which a large bonus only inflates).
-    * ``log_std_init`` uniform [-3, 0] (rl-zoo: -4..1; the shipped -1): exploration noise 0.05..1 in normalised
-      action units.
-    * ``filter_alpha`` uniform [0.2, 1.0]: the low-pass action parameterisation (1: none; the shipped 0.5); below
-      0.2 the command lags by more than 0.5 s.
-    * ``caps_temporal`` log-uniform [1e-4, 1] (Mysore et al. 2021 use weights of order 0.01..1; 1e-4 is
-      practically off).
-
-    Everything else (``hidden``, ``vf_coef``, ``max_grad_norm``, ``norm_reward``, ``history``, ...) comes from the
-    base file (``--hyperparams``). Returns the settings (not the Optuna parameters).
-    """
+    """Sampled :class:`~.fastppo.FastPPOSettings` of a fast-PPO trial of ``timesteps`` env-steps (the settings, not
+    the Optuna parameters; the space and why: docs/benchmark.md, "Reference: `amigo-gym sweep`"): at least
+    :data:`MIN_ITERATIONS` updates, minibatches dividing the batch ``N T``; the rest from the base file."""
     cap = max(timesteps // MIN_ITERATIONS, 1)
     t_min, n_min = min(FAST_ROLLOUT_STEPS), min(FAST_NUM_ENVS)
     n_choices = [n for n in FAST_NUM_ENVS if n * t_min <= cap] or [n_min]

@@ -1,28 +1,40 @@
-"""Task metrics of path-tracking episodes, read from the environments' ``info`` (numpy only).
+"""The protocol engine: scenarios, the episode runner and the task metrics read from the environments' ``info``.
 
-Used by the benchmark and by the training's evaluation callback, so that a learning curve and a benchmark table
-report the same numbers. The info read and the metrics of one episode: docs/benchmark.md, "Reference: task metrics".
+One engine for ``amigo-gym evaluate`` (the paper's protocol as a scenario list), ``benchmark`` (the suite, the
+curvature cells) and ``compare`` (both), and for the training's evaluation callback, so that a learning curve
+and a benchmark table report the same numbers. The info read and the metrics of one episode: docs/benchmark.md,
+"Reference: task metrics".
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.io import json_safe
+
 __all__ = [
     "DEFAULT_FAILURE_TOLERANCE_M",
     "DEFAULT_SETTLE_TIME_S",
     "METRIC_NAMES",
+    "SUITE_VERSION",
     "EpisodeRecorder",
     "InfoAdapter",
+    "Scenario",
     "StepSample",
+    "Unavailable",
+    "Grid",
     "episode_metrics",
+    "make_env",
+    "run_grid",
+    "run_scenario",
     "run_vector_episodes",
+    "vector_env",
 ]
 
 Array = NDArray[np.float64]
@@ -31,6 +43,8 @@ Array = NDArray[np.float64]
 DEFAULT_SETTLE_TIME_S = 5.0
 #: settled cross-track error beyond which an episode counts as a failure [m]
 DEFAULT_FAILURE_TOLERANCE_M = 0.10
+#: version of the benchmark suite (:data:`amigo_gym.tools.training.benchmark.SUITES`)
+SUITE_VERSION = "1.0"
 
 METRIC_NAMES: tuple[str, ...] = (
     "h_rms_m",
@@ -46,6 +60,188 @@ METRIC_NAMES: tuple[str, ...] = (
     "steps",
     "terminated",
 )
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One scenario of the protocol: an environment, its start conditions and seeds (data; a released suite's
+    scenarios are never edited: bump :data:`SUITE_VERSION`).
+
+    Attributes:
+        name: unique name.
+        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
+        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
+        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
+        max_steps: episode length (``max_episode_steps``).
+        held_out: outside the generalists' training distribution.
+        description: one line for the tables.
+        version: the suite version the scenario belongs to.
+        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
+        pose: start pose ``(x_A [m], y_A [m], beta [rad])`` of every episode (``reset(options={"pose": ...})``);
+            ``None``: the environment's seeded start.
+    """
+
+    name: str
+    env_id: str
+    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    seeds: tuple[int, ...] = tuple(range(100, 110))
+    max_steps: int = 400
+    held_out: bool = False
+    description: str = ""
+    version: str = SUITE_VERSION
+    settle_time_s: float = DEFAULT_SETTLE_TIME_S
+    failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
+    pose: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError(f"Scenario.name must be a non-empty string, got {self.name!r}")
+        if not self.seeds or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be non-negative integers, got {self.seeds!r}")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
+            raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    @property
+    def episodes(self) -> int:
+        """Number of evaluation episodes (one per seed)."""
+        return len(self.seeds)
+
+    def to_json(self) -> dict[str, Any]:
+        """The scenario as JSON data (its fields and ``episodes``; tuples as lists; ``pose`` only when set)."""
+        d = {**asdict(self), "episodes": self.episodes}
+        if self.pose is None:
+            del d["pose"]
+        return json_safe(d)  # type: ignore[no-any-return]
+
+
+class Unavailable(Exception):
+    """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
+
+
+def make_env(sc: Scenario) -> Any:
+    """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
+
+    if sc.env_id not in gym.registry:
+        raise Unavailable(f"environment {sc.env_id} is not registered")
+    try:
+        return gym.make(sc.env_id, max_episode_steps=sc.max_steps, **dict(sc.env_kwargs))
+    except (TypeError, ValueError) as exc:
+        raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
+
+
+def vector_env(sc: Scenario) -> Any:
+    """The native vector env of ``sc`` (Gymnasium's ``SyncVectorEnv`` if it has none): one robot per seed."""
+    import gymnasium as gym
+
+    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
+
+    native = gym.spec(sc.env_id).vector_entry_point is not None
+    return gym.make_vec(
+        sc.env_id,
+        num_envs=len(sc.seeds),
+        vectorization_mode="vector_entry_point" if native else "sync",
+        max_episode_steps=sc.max_steps,
+        **dict(sc.env_kwargs),
+    )
+
+
+#: ``on_row(i, info, ended, obs)`` after each recorded step of row ``i``: its ``info``
+#: (:func:`amigo_gym.envs.base.info_row`), whether it ended the episode, the observation the agent acted on
+OnRow = Callable[[int, dict[str, Any], bool, Any], object]
+
+
+def run_scenario(
+    agent: Any,
+    sc: Scenario,
+    *,
+    on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
+    on_row: OnRow | None = None,
+) -> list[EpisodeRecorder]:
+    """Run ``agent`` deterministically for one episode per seed of ``sc``; one recorder per episode.
+
+    The episodes run side by side in the scenario's vector env (:func:`vector_env`; robot ``i`` reset with seed
+    ``sc.seeds[i]`` and ``sc.pose`` if set), by :func:`run_vector_episodes`. ``on_reset(venv, infos)`` is called
+    after the reset.
+    """
+    venv = vector_env(sc)
+    try:
+        options = None if sc.pose is None else {"pose": np.asarray(sc.pose, dtype=np.float64)}
+        obs, infos = venv.reset(seed=list(sc.seeds), options=options)
+        if on_reset is not None:
+            on_reset(venv, infos)
+        dt = getattr(getattr(venv.unwrapped, "params", None), "dt", None)
+        dt = float(dt) if isinstance(dt, (int, float)) else float(sc.env_kwargs.get("dt", 0.1))
+        recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
+        run_vector_episodes(agent, venv, obs, recs, InfoAdapter.for_env(venv), on_row)
+    finally:
+        venv.close()
+    return recs
+
+
+@dataclass
+class Grid:
+    """What :func:`run_grid` ran: ``runs`` ``(agent spec, scenario, result)``; ``status`` per scenario (``"ok"`` or
+    ``"unavailable: <why>"``); ``unavailable`` the runs that could not run (``agent``, ``seed``, ``scenario``,
+    ``reason``; ``agent`` None for a scenario no agent could run); ``feasibility`` AmigoBot-v1's report of each
+    fixed path."""
+
+    runs: list[tuple[Any, Scenario, Any]] = field(default_factory=list)
+    status: dict[str, str] = field(default_factory=dict)
+    unavailable: list[dict[str, Any]] = field(default_factory=list)
+    feasibility: dict[str, Any] = field(default_factory=dict)
+
+
+def run_grid(
+    agents: Sequence[Any],
+    scenarios: Sequence[Scenario],
+    run: Callable[[Any, Scenario], Any],
+    *,
+    desc: str = "benchmark",
+    progress: bool = True,
+) -> Grid:
+    """``run(agent, scenario)`` for every agent spec (``name``, ``seed``, ``instantiate(env)``, as
+    :class:`amigo_gym.tools.training.benchmark.AgentSpec`) on every scenario; an agent or a scenario that raises
+    :class:`Unavailable` is listed with the reason, never dropped. A progress bar in episodes on stderr."""
+    import sys
+
+    from tqdm.auto import tqdm
+
+    grid = Grid()
+    envs: dict[str, Any] = {}
+    for sc in scenarios:
+        try:
+            envs[sc.name] = env = make_env(sc)
+        except Unavailable as exc:
+            grid.status[sc.name] = f"unavailable: {exc}"
+            grid.unavailable.append({"agent": None, "seed": None, "scenario": sc.name, "reason": str(exc)})
+            continue
+        grid.status[sc.name] = "ok"
+        report = getattr(env.unwrapped, "feasibility", None)
+        if report is not None:
+            grid.feasibility[sc.name] = report
+    total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
+    bar = tqdm(total=total, desc=desc, unit="ep", file=sys.stderr, disable=not progress)
+    try:
+        for spec in agents:
+            for sc in (sc for sc in scenarios if sc.name in envs):
+                bar.set_postfix_str(f"{spec.name} s{spec.seed} {sc.name}", refresh=False)
+                try:
+                    grid.runs.append((spec, sc, run(spec.instantiate(envs[sc.name]), sc)))
+                except Unavailable as exc:
+                    grid.unavailable.append(
+                        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name} | {"reason": str(exc)}
+                    )
+                bar.update(sc.episodes)
+    finally:
+        bar.close()
+        for env in envs.values():
+            env.close()
+    return grid
 
 
 @dataclass(frozen=True)
@@ -181,13 +377,12 @@ def run_vector_episodes(
     obs: Any,
     recorders: Sequence[EpisodeRecorder],
     adapter: InfoAdapter,
-    on_row: Callable[[int, dict[str, Any], bool], object] | None = None,
+    on_row: OnRow | None = None,
 ) -> None:
     """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
     ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
 
-    The loop of :func:`amigo_gym.tools.training.benchmark.evaluate` and of
-    :func:`amigo_gym.tools.training.curvature.evaluate_tagged`: the agent predicts for the whole batch at every step
+    The loop of :func:`run_scenario`: the agent predicts for the whole batch at every step
     (a constant batch size, so that a network's outputs do not depend on how many episodes are still running;
     ``episode_start`` marks the rows that ended, which the autoreset restarted). A row's episode is its steps up
     to its first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
@@ -198,8 +393,7 @@ def run_vector_episodes(
         agent: ``predict(obs, state=, episode_start=, deterministic=True) -> (actions, state)`` (SB3's form).
         recorders: one :class:`EpisodeRecorder` per row (``N``).
         adapter: reads a row's ``info`` (:class:`InfoAdapter`).
-        on_row: called as ``on_row(i, info, ended)`` after each recorded step of row ``i`` (``info``: that row's,
-            :func:`amigo_gym.envs.base.info_row`; ``ended``: it was the episode's last step).
+        on_row: :data:`OnRow`, after each recorded step.
     """
     from amigo_gym.envs.base import info_row
 
@@ -210,6 +404,7 @@ def run_vector_episodes(
     while live.any():
         action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
         start = np.zeros(n, dtype=np.bool_)
+        seen = obs
         obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
         for i in np.flatnonzero(live).tolist():
             info = info_row(vinfo, i)
@@ -219,5 +414,5 @@ def run_vector_episodes(
                 recorders[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
                 live[i] = False
             if on_row is not None:
-                on_row(i, info, ended)
+                on_row(i, info, ended, seen[i])
         start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
