@@ -331,6 +331,11 @@ def foreign_pickle(p: Path) -> None:
 
 
 def rehash(p: Path) -> None:
+    """Record ``p``'s sha256 in its checkpoint's meta.json and as written by this installation (``io.vouch``): a file
+    the run itself wrote, with the wrong content (trust and integrity pass; loading must still fail cleanly)."""
+    from amigo_gym import io
+
+    io.vouch(runs.sha256_file(p))
     meta_file = p.parent / "meta.json"
     meta = json.loads(meta_file.read_text())
     meta["files"][p.name] = runs.sha256_file(p)
@@ -537,6 +542,7 @@ def test_shipped_models_match_their_manifests() -> None:
 
 def test_models_are_checked_before_loading(tmp_path: Path) -> None:
     from amigo_gym.data import pretrained_dir
+    from amigo_gym.io import UntrustedFileError
     from amigo_gym.tools.training.evaluate import load_agents
 
     shutil.copy(pretrained_dir() / "td3.zip", tmp_path / "td3.zip")
@@ -546,9 +552,12 @@ def test_models_are_checked_before_loading(tmp_path: Path) -> None:
     with pytest.raises(runs.CorruptFileError, match=r"td3\.zip: sha256 .* recorded in") as exc:
         load_agents(tmp_path)
     assert "\n" not in str(exc.value)
-    (tmp_path / "td3.json").unlink()  # without a record: one line, not a traceback from SB3
-    with pytest.raises(runs.CorruptFileError, match=r"td3\.zip: not a loadable TD3 model"):
+    (tmp_path / "td3.json").unlink()  # without a record: refused as untrusted, one line naming the flag
+    with pytest.raises(UntrustedFileError, match=r"td3\.zip: refused.*--trust-unverified") as refused:
         load_agents(tmp_path)
+    assert "\n" not in str(refused.value)
+    with pytest.raises(runs.CorruptFileError, match=r"td3\.zip: not a loadable TD3 model"):  # trusted: not a traceback
+        load_agents(tmp_path, trust=True)
 
 
 # --------------------------------------------------------------------------- the lock file goes with a clean exit
