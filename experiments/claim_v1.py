@@ -6,7 +6,7 @@ model under ``agents/pretrained/v1/<folder>/`` (the SB3 TD3 with a low-pass acto
 per-scenario figures (``h_rms_m``, ``h_rms_settled_m``, ``speed_err_rms``, ``failure_rate``, ``return``,
 ``chatter_settled_rms``) under ``"claimed"`` in its manifest, with the suite version and the benchmark command.
 ``tests/test_agents_v1_pretrained.py`` re-runs some scenarios and asserts the same numbers: exactly on this machine
-(the claim records :func:`amigo_gym.tools.bench.machine.bits_key`), to 1 % relative on any other. Run it on the
+(the claim records :func:`amigo_gym.tools.machine.bits_key`), to 1 % relative on any other. Run it on the
 machine that ran the benchmark.
 
     python experiments/claim_v1.py --benchmark docs/benchmark/benchmark.json
@@ -22,7 +22,7 @@ from pathlib import Path
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench.machine import bits_key
+from amigo_gym.tools.machine import bits_key
 
 KEYS = ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate", "return", "chatter_settled_rms", "episodes")
 

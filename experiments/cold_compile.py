@@ -15,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 
-from amigo_gym.tools.bench.machine import machine_line
+from amigo_gym.tools.machine import machine_line
 
 CASES = {
     "AmigoBot-v0": "e = gym.make('AmigoBot-v0'); e.reset(seed=0); e.step(np.zeros(2, np.float32))",

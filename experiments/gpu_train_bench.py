@@ -44,7 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from targets_v1 import IDEAL, _matrix
 
 from amigo_gym.io import atomic_write_json, sha256_file
-from amigo_gym.tools.bench.machine import cpu_model
+from amigo_gym.tools.machine import cpu_model
 from amigo_gym.tools.training import benchmark as bm
 from amigo_gym.tools.training.fastppo import (
     FastPPOSettings,

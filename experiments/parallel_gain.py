@@ -22,7 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 import amigo_gym  # noqa: F401  (registers the ids)
-from amigo_gym.tools.bench.machine import cpu_model, simd_level
+from amigo_gym.tools.machine import cpu_model, simd_level
 
 
 def _make(env_id: str, n: int, kernel: str) -> tuple[Any, np.ndarray]:

@@ -104,7 +104,7 @@ def measure() -> None:
     import mpmath
     import numba
 
-    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.machine import machine_line
 
     compiled = loops()
 
@@ -144,7 +144,7 @@ def agree(n: int) -> None:
     import cr_tan as tangent
     import mpmath
 
-    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.machine import machine_line
 
     mpmath.mp.prec = 160
     cr = loops()["tan_cr"]

@@ -89,7 +89,7 @@ def here(sizes: list[int], repeats: int, rounds: int) -> None:
     import amigo_gym  # noqa: F401  (registers the envs)
     from amigo_gym.sim import fast
     from amigo_gym.tools.bench.env import _vector_stepper, measure_many, numba_state
-    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.machine import machine_line
 
     print(f"{machine_line()}; {numba_state()}", flush=True)
     variants = _variants()

@@ -45,7 +45,7 @@ def main() -> int:
     a = p.parse_args()
 
     from amigo_gym.policies import AnalyticTrackingPolicy
-    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.machine import machine_line
     from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
     run = Path(a.run)

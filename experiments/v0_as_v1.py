@@ -173,7 +173,7 @@ def speed(steps: int = 3000, n: int = 4096) -> list[str]:
     import statistics
     import time
 
-    from amigo_gym.tools.bench.machine import machine_line
+    from amigo_gym.tools.machine import machine_line
 
     clock = time.perf_counter_ns
     acts = (0.27 + 0.1 * np.random.default_rng(0).uniform(-1.0, 1.0, (steps, 2))).astype(np.float32)

@@ -30,7 +30,7 @@ from amigo_gym.paths import make_path
 from amigo_gym.sim import fast
 from amigo_gym.task import v0 as task
 from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
-from amigo_gym.tools.bench.machine import cpu_model
+from amigo_gym.tools.machine import cpu_model
 
 N = 4096
 

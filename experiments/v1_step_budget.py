@@ -33,7 +33,7 @@ from amigo_gym.sim import layout_v1 as L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench.env import _single_stepper
-from amigo_gym.tools.bench.machine import machine_line
+from amigo_gym.tools.machine import machine_line
 
 
 def best(f: Callable[[], Any], number: int = 2000) -> float:

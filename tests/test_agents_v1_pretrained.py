@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.tools.bench.machine import bits_key
+from amigo_gym.tools.machine import bits_key
 from amigo_gym.tools.training import benchmark as bm
 
 MANIFESTS = sorted((pretrained_dir() / "v1").glob("*/*.json"))

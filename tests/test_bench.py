@@ -56,7 +56,7 @@ def test_bench_env_refuses_bad_arguments(capsys: pytest.CaptureFixture[str]) -> 
 def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``--kernels`` times each step implementation; the targets table names the CPU and judges each ratio."""
     pytest.importorskip("numba")
-    from amigo_gym.tools.bench.machine import cpu_model
+    from amigo_gym.tools.machine import cpu_model
 
     out = tmp_path / "bench.json"
     argv = ["--quick", "--sizes", "1", "8", "--skip-memory", "--skip-ppo", "--v1", "--kernels", "--threads", "1"]
@@ -177,7 +177,7 @@ def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
     """``simd_level`` (numpy's run-time detection) against the flags the kernel lists in /proc/cpuinfo."""
-    from amigo_gym.tools.bench.machine import cpu_model, machine_line, simd_level
+    from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
 
     level = simd_level()
     line = machine_line()

@@ -594,7 +594,7 @@ def test_same_command_twice_same_weights_and_the_manifest_names_the_machine(
     """The determinism users can check: one train-fast command line run twice (same machine, same seed) gives the
     same weights bit for bit; run.json records the git revision, CPU, thread counts and device; a --total-steps
     below one rollout is rounded up in one said line, and no 'nan' return is printed before an episode ends."""
-    from amigo_gym.tools.bench.machine import cpu_model
+    from amigo_gym.tools.machine import cpu_model
     from amigo_gym.tools.training.fastppo import main
 
     argv = ["--env-kwargs", json.dumps(KW), "--total-steps", "100", "--num-envs", "16", "--rollout-steps", "8",

@@ -27,7 +27,7 @@ from amigo_gym.paths import make_path
 from amigo_gym.sim.fast import numba_available
 from amigo_gym.task import v1 as tracking
 from amigo_gym.task.v0 import obs_dim, task_constants
-from amigo_gym.tools.bench.machine import machine_line
+from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.options import run_command
 
 __all__ = [

@@ -18,8 +18,8 @@ from typing import Any, Literal
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
-from amigo_gym.tools.bench.machine import cpu_model, simd_level
 from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
+from amigo_gym.tools.machine import cpu_model, simd_level
 from amigo_gym.tools.options import run_command
 
 __all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]

@@ -64,7 +64,7 @@ from torch import nn
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
-from amigo_gym.tools.bench.machine import cpu_model
+from amigo_gym.tools.machine import cpu_model
 from amigo_gym.tools.options import cli, json_object
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
