@@ -41,7 +41,7 @@ from amigo_gym.task import v0 as task_v0
 from amigo_gym.task import v1 as tracking
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from golden_compare import ulp_distance
+from golden_compare import relative_distance
 
 COMMON: dict[str, Any] = {"randomize": "none", "start_at_rest": False, "preview": (0.2, 0.4), "speed": 0.2}
 
@@ -114,7 +114,7 @@ def episode_pair(config: str, seed: int, pname: str, steps: int) -> dict[str, fl
             break
     w = {k: np.array(v) for k, v in want.items()}
     g = {k: np.array(v) for k, v in got.items()}
-    return ulp_distance(g, w)
+    return relative_distance(g, w)
 
 
 def formulas(n: int = 2000) -> list[str]:

@@ -40,7 +40,6 @@ LONGEST_FILES = (
     "test_newcomer.py",  # 72 s
     "test_benchmark.py",  # 61 s
     "test_notebook.py",  # 60 s
-    "test_kernels.py",  # 47 s
     "test_env_v1.py",  # 46 s
     "test_bad_inputs.py",  # 43 s
     "test_evaluate.py",  # 42 s

@@ -103,7 +103,7 @@ def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "kernel/step_columns" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     assert [r["n"] for r in doc["rows"]] == [1, 64]
-    from amigo_gym.sim.fast import numba_available
+    from amigo_gym.sim.fast_v1 import numba_available
 
     if numba_available():
         assert all(r["kernel"] > 0 and r["kernel_par"] > 0 for r in doc["rows"])
@@ -120,42 +120,6 @@ def test_bench_core_startup_rows_name_both_routes() -> None:
     assert '| python -c "import amigo_gym, numba" | 0.700 |' in table
     assert "| import + first v0 vector step, kernel=numpy (no numba) | 0.600 |" in table
     assert "| import + first AmigoBot-v1 step, kernel=numpy | 0.650 |" in table
-
-
-def test_bench_core_times_the_v0_step_of_the_kernel() -> None:
-    """What bench-core times as ``transition`` (and ``columns``; ``task.v1.V0Reference``) is AmigoBot-v0's step: the
-    compiled kernel's results on the same states (an independent code path; the kernel agrees with the reference to
-    1e-12, test_kernels.py)."""
-    pytest.importorskip("numba")
-    import numpy as np
-
-    from amigo_gym.model.params import EnvParams
-    from amigo_gym.paths import make_path
-    from amigo_gym.sim import fast
-    from amigo_gym.task import v0
-    from amigo_gym.task.v1 import V0Reference
-
-    params = EnvParams(path="manoeuvre", dt=0.3)
-    g = np.random.default_rng(5)
-    n = 200
-    pose = np.column_stack((g.uniform(-0.5, 2.5, (n, 2)), g.uniform(-4.0, 4.0, n)))
-    angles, rates, action = g.normal(size=(n, 3)), g.uniform(-15, 15, (n, 2)), g.uniform(-1.2, 1.2, (n, 2))
-    state = np.ascontiguousarray(np.column_stack((pose, angles, rates)))
-    ref = V0Reference(params, state)
-    rows, rec, out = ref.step(action)  # (it copies the state the kernel then advances in place)
-    got = dict(pose=rows[:, :3], wheel_angles=rows[:, 3:6], rates=rows[:, 6:], obs=ref.obs(out), h=rec[:, 3:5])
-    got |= {f"term_{j}": rec[:, 11 + j] for j in range(4)} | {"reward": rec[:, 15], "terminated": out.terminated}
-    obs = np.empty((n, v0.obs_dim(params)), np.float32)
-    reward, term, record = np.empty(n), np.empty(n, np.bool_), np.empty((n, 16))
-    ws = fast.workspace(v0.task_constants(params), make_path(params), n)
-    fast.step_rows(ws, state, np.ascontiguousarray(action), np.zeros(n, np.bool_), obs, reward, term, record)
-    np.testing.assert_allclose(np.column_stack((got["pose"], got["wheel_angles"], got["rates"])), state, atol=1e-12)
-    np.testing.assert_allclose(got["obs"].astype(np.float32), obs, atol=1e-6)
-    np.testing.assert_allclose(got["h"], record[:, 3:5], atol=1e-12)
-    terms = np.column_stack([got[f"term_{j}"] for j in range(4)])
-    np.testing.assert_allclose(np.column_stack((terms, got["reward"])), record[:, 11:], atol=1e-12)
-    np.testing.assert_array_equal(got["terminated"], term)
-    assert term.any() and not term.all()
 
 
 def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:

@@ -196,18 +196,6 @@ def test_v0_reference_step_scalars_equal_arrays_and_the_closed_forms(path_name: 
         np.testing.assert_array_equal(one.obs(one_start), ref.obs(start)[i])
 
 
-def test_task_constants_are_cached_and_derived() -> None:
-    p = EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)
-    k = task.task_constants(p)
-    with pytest.raises(TypeError):  # EnvParams is the only way to set dt (no second one)
-        task.TaskConstants(p, dt=0.5)  # type: ignore[call-arg]
-    assert k.dt == p.dt and k.l3 == p.robot.l3
-    assert task.task_constants(EnvParams(sigma_smooth=0.3, termination_distance=0.5, error_scale=0.1)) is k
-    assert k.e_max == task.obs_bounds(p)[1][0]
-    assert k.smooth_scale_sq == pytest.approx((p.robot.max_wheel_rate * 0.3) ** 2, rel=1e-15)
-    assert k.reference_obs == p.speed / p.robot.max_speed
-
-
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
 @pytest.mark.parametrize("n", [1, 5])
 def test_vector_env_equals_sync_on_the_manoeuvre_path(mode: AutoresetMode, n: int) -> None:
@@ -229,16 +217,19 @@ def test_vector_env_equals_sync_on_the_manoeuvre_path(mode: AutoresetMode, n: in
     )
     g = np.random.default_rng(3)
     rv, rs = vec.reset(seed=9), sync.reset(seed=9)
-    np.testing.assert_array_equal(rv[0], rs[0], strict=True)
+    close = {"rtol": 1e-9, "atol": 1e-9, "strict": True}  # the compiled step against the reference
+    np.testing.assert_allclose(rv[0], rs[0], rtol=2.5e-7, atol=2.5e-7, strict=True)
     ends = 0
     for _ in range(80):
         a = g.uniform(-0.2, 1.0, (n, 2))
         rv, rs = vec.step(a), sync.step(a)
-        for x, y in zip(rv[:4], rs[:4], strict=True):
+        np.testing.assert_allclose(rv[0], rs[0], rtol=2.5e-7, atol=2.5e-7, strict=True)
+        np.testing.assert_allclose(rv[1], rs[1], **close)
+        for x, y in zip(rv[2:4], rs[2:4], strict=True):
             np.testing.assert_array_equal(x, y, strict=True)
         for key in ("pose", "h_position", "cross_track_error", "wheel_angles", "castor_angle", "time"):
-            np.testing.assert_array_equal(rv[4][key], rs[4][key], err_msg=key)
+            np.testing.assert_allclose(rv[4][key], rs[4][key], err_msg=key, **close)
         for name in task.REWARD_TERMS:
-            np.testing.assert_array_equal(rv[4]["reward_terms"][name], rs[4]["reward_terms"][name], err_msg=name)
+            np.testing.assert_allclose(rv[4]["reward_terms"][name], rs[4]["reward_terms"][name], err_msg=name, **close)
         ends += int(np.sum(rv[2] | rv[3]))
     assert ends >= 3

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from amigo_gym.sim.fast import COMPILE_NOTICE
+from amigo_gym.sim.fast_v1 import COMPILE_NOTICE
 
 STEP = (
     "import gymnasium as gym, amigo_gym\n"
     "env = gym.make('AmigoBot-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
-    "print(type(env.unwrapped._v0).__name__ if getattr(env.unwrapped, '_v0', None) else 'numpy')\n"
+    "print(type(env.unwrapped._kernel).__name__ if env.unwrapped._kernel else 'numpy')\n"
 )
 
 
@@ -49,7 +49,7 @@ def _run(cache: Path, kernel: str) -> subprocess.CompletedProcess[str]:
 def test_notice_once_when_compiling_and_never_from_a_warm_cache(tmp_path: Path) -> None:
     cold = _run(tmp_path / "numba", "auto")  # an empty cache: numba compiles the step's kernels
     assert cold.returncode == 0, cold.stderr
-    assert cold.stdout.strip() == "SingleStep"  # the compiled step ran
+    assert cold.stdout.strip() == "StepKernel"  # the compiled step ran
     assert cold.stderr.splitlines().count(COMPILE_NOTICE) == 1, cold.stderr  # many kernels, one line
     assert "once" in COMPILE_NOTICE and "numba" in COMPILE_NOTICE
     warm = _run(tmp_path / "numba", "auto")  # the same cache: loaded, not compiled
@@ -66,5 +66,5 @@ def test_captured_stderr_stays_empty_without_a_terminal(tmp_path: Path) -> None:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "AMIGO_GYM_KERNEL": "auto"}
     env.pop("AMIGO_GYM_COMPILE_NOTICE", None)
     r = subprocess.run([sys.executable, "-c", STEP], capture_output=True, text=True, timeout=300, env=env)
-    assert r.returncode == 0 and r.stdout.strip() == "SingleStep", r.stderr
+    assert r.returncode == 0 and r.stdout.strip() == "StepKernel", r.stderr
     assert COMPILE_NOTICE not in r.stderr

@@ -94,7 +94,7 @@ def test_dev_includes_the_docs_site() -> None:
 def test_messages_give_the_command_for_a_clone_too() -> None:
     hint = install_hint("train")
     assert 'pip install "amigo-gym[train]"' in hint and 'pip install -e ".[train]"' in hint
-    for path in ("amigo_gym/envs/rendering.py", "amigo_gym/sim/fast.py"):
+    for path in ("amigo_gym/envs/rendering.py", "amigo_gym/sim/fast_v1.py"):
         text = (ROOT / path).read_text(encoding="utf-8")
         extra = "render" if "rendering" in path else "fast"
         assert f'pip install -e ".[{extra}]"' in text, path

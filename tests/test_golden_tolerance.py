@@ -1,13 +1,10 @@
-"""The golden tests' tolerance is portable and still catches changes of behaviour (issue 17).
+"""The golden tests' tolerance (tests/golden_compare.py: 1e-9 of each quantity's scale) is portable and still
+catches changes of behaviour.
 
 - With numpy's run-time SIMD dispatch restricted to its baseline (``NPY_DISABLE_CPU_FEATURES`` naming
   every dispatched feature this CPU has: another machine's ``exp``/``sin``/``cos``), the golden tests pass.
-- A one-ulp change of a physical constant of the robot (wheel radius, half track, offset of H) moves the
-  episode beyond the tolerance, and so does a relative change of 1e-12 of a reward constant.
-- A change below the machines' own spread, such as re-associating the product of the reward terms
-  (one ulp of the reward, like a change of CPU: ``python tests/golden_compare.py`` style figures are in
-  docs/development.md), passes the portable test; it is caught on the machine where it is made when one
-  code path has it and the other does not (the numpy reference against the compiled step, bit for bit).
+- A relative change of 1e-7 of a physical constant of the robot (wheel radius, half track, offset of H) or of a
+  reward constant moves the episodes beyond the tolerance.
 """
 
 from __future__ import annotations
@@ -22,8 +19,6 @@ import numpy as np
 import pytest
 import test_golden as tg
 from golden_compare import mismatches
-
-import amigo_gym.task.v1 as tracking
 
 ROOT = Path(__file__).resolve().parent.parent
 EPISODES = [(c, s, k) for c in tg.CONFIGS for s in tg.SEEDS for k in tg.KINDS]  # the whole golden file
@@ -54,10 +49,6 @@ def _problems(overrides: dict[str, Any]) -> list[list[str]]:
     return out
 
 
-def _next(x: float) -> float:
-    return float(np.nextafter(x, np.inf))
-
-
 def test_unchanged_code_is_within_tolerance() -> None:
     assert _problems({}) == [[] for _ in EPISODES]
 
@@ -67,30 +58,13 @@ def test_unchanged_code_is_within_tolerance() -> None:
     [("r1", 0.05), ("l1", 0.12), ("l3", 0.08)],
     ids=["wheel radius r1", "half track l1", "offset of H l3"],
 )
-def test_one_ulp_of_a_physical_constant_fails(field: str, nominal: float) -> None:
-    problems = _problems({"robot": {field: _next(nominal)}})
-    assert sum(map(bool, problems)) >= len(EPISODES) // 3, problems  # rewards move by 50-400 ulp of their scale
+def test_a_small_change_of_a_physical_constant_fails(field: str, nominal: float) -> None:
+    problems = _problems({"robot": {field: nominal * (1.0 + 1e-7)}})
+    assert sum(map(bool, problems)) >= len(EPISODES) // 3, problems
 
 
 def test_a_small_change_of_a_reward_constant_fails() -> None:
-    assert sum(map(bool, _problems({"sigma_track": 0.02 * (1 + 1e-12)}))) >= len(EPISODES) // 3
-
-
-def test_a_reordered_reward_product_is_caught_by_the_same_machine_comparison(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Re-associating the reward product in one code path: one ulp, seen bit for bit against the other path."""
-    import gymnasium as gym
-
-    golden = dict(np.load(tg.GOLDEN))
-    actions = golden["manoeuvre_right_fine/1/noisy/action"]
-    single, _ = tg.single_episode("manoeuvre_right_fine", 1, actions)  # the single env's step (unchanged)
-    # the numpy reference of AmigoBot-v0 (its configuration of task.v1) takes the product by this name
-    monkeypatch.setattr(tracking, "reward_product", lambda a, b, c, d: ((d * c) * b) * a)
-    envs = gym.make_vec("AmigoBot-v0", num_envs=1, kernel="numpy", **tg.CONFIGS["manoeuvre_right_fine"])
-    envs.reset(seed=1)
-    rewards = [envs.step(a[None, :])[1][0] for a in actions]
-    envs.close()
-    assert not np.array_equal(np.array(rewards), single["reward"])  # bit for bit: caught
-    np.testing.assert_allclose(rewards, single["reward"], rtol=4e-16, atol=0)  # though it is one ulp
+    assert sum(map(bool, _problems({"sigma_track": 0.02 * (1 + 1e-7)}))) >= len(EPISODES) // 3
 
 
 def test_golden_tests_pass_with_numpy_dispatch_restricted() -> None:

@@ -8,11 +8,9 @@ importing the tools.
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import layout
-import pytest
 
 
 def test_every_import_points_down_the_layers() -> None:
@@ -89,32 +87,3 @@ def test_the_checker_finds_a_core_module_that_imports_the_tools(tmp_path: Path) 
         ("amigo_gym.policies.c", "amigo_gym.tools.runs"),
     ]
     assert layout.imports_of_the_cli(graph) == [("amigo_gym.logs", "amigo_gym.tools.cli")]
-
-
-def test_old_task_names_are_found_with_a_warning() -> None:
-    from amigo_gym import task
-    from amigo_gym.task import v0
-
-    with warnings.catch_warnings(record=True) as w:
-        warnings.simplefilter("always")
-        assert task.reward_term_columns is v0.reward_term_columns
-    assert any("moved to amigo_gym.task.v0.reward_term_columns" in str(x.message) for x in w)
-    with pytest.raises(AttributeError):
-        task.no_such_name  # noqa: B018
-
-
-@pytest.mark.parametrize("name", ["step_columns", "transition", "State", "evaluate", "start_pose", "bound_heading"])
-def test_removed_task_names_name_their_replacement(name: str) -> None:
-    """AmigoBot-v0's second column step (removed in 0.2): a clear one-line error from both old homes, no warning."""
-    from amigo_gym import task
-    from amigo_gym.task import v0
-
-    assert name in v0.REMOVED and name not in v0.__all__
-    for home in (v0, task):
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            with pytest.raises(AttributeError, match=rf"task\.v0\.{name} was removed .* use amigo_gym\.task\.v[01]\."):
-                getattr(home, name)
-    with pytest.raises(ImportError):
-        exec(f"from amigo_gym.task.v0 import {name}")
-    assert not hasattr(v0, name)

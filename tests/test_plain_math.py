@@ -75,9 +75,9 @@ def test_compiled_gives_the_same_bits() -> None:
     pytest.importorskip("numba")
     import numba
 
-    from amigo_gym.sim import fast
+    from amigo_gym.sim import fast_v1
 
-    fast.kernels()  # registers the shared functions with numba
+    fast_v1.kernels()  # registers the shared functions with numba
 
     @numba.njit(error_model="numpy")
     def loop(e: np.ndarray) -> None:

@@ -1,4 +1,5 @@
-"""The native vector env against gymnasium's SyncVectorEnv of the single env, bit for bit."""
+"""The native vector env (the compiled step) against gymnasium's SyncVectorEnv of the single env (the numpy
+reference), within the golden tolerance (tests/golden_compare.py: 1e-9; float32 observations two roundings)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ HARD: dict[str, Any] = {"init_position_noise": 0.1, "termination_distance": 0.2,
 
 
 def assert_identical(a: Any, b: Any, where: str = "") -> None:
-    """Equal keys, dtypes, shapes and bits (object arrays element by element)."""
+    """Equal keys, dtypes and shapes, floats within the tolerance, the rest exactly (object arrays element by
+    element)."""
     if isinstance(a, dict):
         assert isinstance(b, dict) and a.keys() == b.keys(), (where, set(a) ^ set(b))
         for k in a:
@@ -36,6 +38,9 @@ def assert_identical(a: Any, b: Any, where: str = "") -> None:
             assert (x is None) == (y is None), where
             if x is not None:
                 assert_identical(x, y, where)
+    elif a.dtype.kind == "f":
+        tol = 2.5e-7 if a.dtype == np.float32 else 1e-9
+        np.testing.assert_allclose(a, b, rtol=tol, atol=tol, err_msg=where, strict=True)
     else:
         np.testing.assert_array_equal(a, b, err_msg=where, strict=True)
 
@@ -56,7 +61,7 @@ def make_pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.Vector
 
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
 @pytest.mark.parametrize("seed", [0, 7, 123])
-def test_vector_equals_sync_bit_for_bit(mode: AutoresetMode, seed: int) -> None:
+def test_vector_equals_sync(mode: AutoresetMode, seed: int) -> None:
     n = 6
     vec, sync = make_pair(n, mode, **HARD)
     assert vec.metadata["autoreset_mode"] == mode

@@ -121,13 +121,3 @@ def test_pickle_after_render() -> None:
     clone = pickle.loads(pickle.dumps(envs))
     a = np.full((2, 2), 0.3)
     _same(clone.step(a)[0], envs.step(a)[0], "clone steps like the original")
-
-
-def test_removed_rowwise_route_name_warns() -> None:
-    """``ROWWISE_MAX_N`` (the row-by-row route, removed in 0.2) still reads, as 0 robots, with a deprecation warning."""
-    import amigo_gym.envs.vector_v1 as vector_v1
-
-    with pytest.warns(DeprecationWarning, match="ROWWISE_MAX_N is deprecated"):
-        assert vector_v1.ROWWISE_MAX_N == 0
-    with pytest.raises(AttributeError, match="NO_SUCH_NAME"):
-        _ = vector_v1.NO_SUCH_NAME

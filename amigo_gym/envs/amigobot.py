@@ -6,11 +6,9 @@ AmigoBot-v0 is a configuration of the one robot and task (issue 19): :class:`Ami
 check them as :class:`amigo_gym.model.params.EnvParams` (its ranges and one-line errors), and pass
 :func:`amigo_gym.task.v1.v0_configuration` of it: ideal actuators, v0's observation layout and reward, no
 randomisation, the wheels rolling at the start, the circle or manoeuvre as a path object. With these settings the
-v1 classes run AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`; ``kernel="numpy"``: the reference,
-:mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is the ``EnvParams``; the
-AmigoBot-v1 settings it runs are ``env.tracking_params``.
-
-Old name: ``amigo_gym.envs.vector`` (this module, with a warning, until 0.3).
+v1 classes run AmigoBot-v1's compiled step with ideal actuators (:mod:`amigo_gym.sim.fast_v1`; ``kernel="numpy"``:
+the reference, :mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is the
+``EnvParams``; the AmigoBot-v1 settings it runs are ``env.tracking_params``.
 """
 
 from __future__ import annotations
@@ -36,7 +34,7 @@ from amigo_gym.envs.base import (
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.model.kinematics import h_position
 from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.sim import fast
+from amigo_gym.sim import fast_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
@@ -55,7 +53,7 @@ Array = NDArray[np.float64]
 ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
 
 #: the values of the single env's ``kernel`` keyword
-SINGLE_KERNELS: tuple[str, ...] = fast.KERNELS
+SINGLE_KERNELS: tuple[str, ...] = fast_v1.KERNELS
 
 
 def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
@@ -223,11 +221,11 @@ class AmigoBotEnv(AmigoBotV1Env):
     ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
     ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
-    (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results are the
-    same bits): ``"auto"`` (the default: the compiled step when numba is installed, a core
+    (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results agree to
+    1e-9, ``tests/test_kernel_v1.py``): ``"auto"`` (the default: the compiled step when numba is installed, a core
     dependency where it ships wheels, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats:
-    :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (AmigoBot-v0's compiled step,
-    :mod:`amigo_gym.sim.fast`). Unknown keywords raise ``TypeError``, bad values
+    :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (the compiled step,
+    :mod:`amigo_gym.sim.fast_v1`). Unknown keywords raise ``TypeError``, bad values
     ``ValueError`` naming the field and its range.
 
     ```python
@@ -302,10 +300,10 @@ class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
             (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
-        kernel: the step's implementation (:mod:`amigo_gym.sim.fast`): ``"auto"`` (default: the compiled
+        kernel: the step's implementation (:mod:`amigo_gym.sim.fast_v1`): ``"auto"`` (default: the compiled
             kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
             reference column functions of :mod:`amigo_gym.task.v1`, ideal actuators), ``"numba"`` (the compiled
-            kernel, the same results bit for bit; needs numba), or ``"numba-parallel"``
+            kernel, the same results to 1e-9; needs numba), or ``"numba-parallel"``
             (the kernel's loops on numba's threads).
         params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
 

@@ -17,13 +17,12 @@ from gymnasium import spaces
 from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces, one_robot
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
-from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast, fast_v1
+from amigo_gym.sim import fast_v1
 from amigo_gym.sim import layout_v1 as _L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values"]
+__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values", "v0_record_info"]
 
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = RESET_OPTIONS
@@ -80,7 +79,6 @@ def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor:
     return task.info_dict(pose, h, out.error, rates, angles, castor, out.terms, st.steps * dt)
 
 
-_np_array = np.array
 #: the compiled step's info record's arrays (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) as indices of its last axis,
 #: built once (one robot's record or ``(N, RECORD_WIDTH)`` records); the command's and the slip's
 _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
@@ -88,9 +86,18 @@ _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
 )
 _R_COMMAND, _R_SLIP = _L.R_COMMAND, _L.R_SLIP
 #: the record's scalars (from ``R_ERROR`` on: ``record[R_ERROR:]``, record_info's ``values``) by index
-_E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _TRACK, _SPEED, _SMOOTH, _REWARD = (i - _L.R_ERROR for i in (
-    _L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM, _L.R_TRACK, _L.R_SPEED,
-    _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
+_E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
+    i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
+                             _L.R_CASTOR, _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
+
+
+def v0_record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
+    """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of the compiled step's info records, as
+    :func:`record_info` builds AmigoBot-v1's (the same arguments: the arrays are views of ``record``)."""
+    terms = (values[_TRACK], values[_SPEED], values[_HEADING], values[_SMOOTH])
+    return task.info_dict(
+        record[_POSE], record[_H], values[_E], record[_RATES], record[_ANGLES], values[_CASTOR], terms, time
+    )
 
 
 def record_info(
@@ -253,9 +260,9 @@ class AmigoBotV1Env(AmigoBotBase):
         p = self.params
         self._init_base(render_mode, p.dt, make_spaces_v1(p))
         self._k = tracking.constants(p)
-        # the compiled step (amigo_gym.sim.fast_v1), for the episodes on a ClothoidPath; None: the reference code
+        # the compiled step (amigo_gym.sim.fast_v1), for the episodes on its paths; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
-        if fast_v1.use_kernel(owner, tracking.kernel_choice(owner, p, kernel)):
+        if fast_v1.use_kernel(owner, kernel):
             self._kernel = fast_v1.StepKernel(self._k)
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
@@ -264,10 +271,6 @@ class AmigoBotV1Env(AmigoBotBase):
         fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
-        # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings: the state lives in its buffer
-        self._v0: fast.SingleStep | None = None
-        if self.v0_params is not None and fast.use_fast_path(None if kernel == "auto" else kernel == "numba"):
-            self._v0 = fast.SingleStep(task.task_constants(self.v0_params), fixed)
         self._castor = 0.0  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._goal = (math.nan, math.nan)
         self.path: Any = fixed
@@ -303,25 +306,22 @@ class AmigoBotV1Env(AmigoBotBase):
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
         self._true_robot = {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)}  # info["true_robot"]'s values
         self._goal = tracking.goal_point(self._k.params, self.path)
-        self._in_kernel = kern is not None and type(self.path) is ClothoidPath
-        if self.v0_params is not None:  # AmigoBot-v0's settings: its start (the reference's) and its info
-            out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
-            self._castor = 0.0
-            if self._v0 is not None:
-                self._v0.set_state((st.x, st.y, st.beta, st.alpha1, st.alpha2, 0.0, st.w1, st.w2))
-            return np.array(out.obs, dtype=np.float32), self._v0_info(st, out)
+        self._in_kernel = kern is not None and fast_v1.compiled_path(self.path, k.params)
+        self._castor = 0.0
         if kern is not None and self._in_kernel:
             # tracking.reset_columns, compiled: the start state without noise, its own previous command
             kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
-            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, st.a1, st.a2, t)
+            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, t)
             kern.fill()
             info = self._kernel_info()
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
             info = self._info(out, tracking.NO_NOISE)
+        if self.v0_params is not None:  # AmigoBot-v0's info: no end condition, no feasibility
+            return obs, info
         info["end_condition"] = ""
         if self.feasibility is not None:
             info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
@@ -329,12 +329,6 @@ class AmigoBotV1Env(AmigoBotBase):
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
-        fs = self._v0
-        if fs is not None:
-            # AmigoBot-v0's settings by AmigoBot-v0's compiled step (fast.SingleStep.env_step): the reference's results
-            # (tracking.step_columns with ideal actuators) and v0's info
-            self._steps += 1
-            return fs.env_step(a1, a2, self._steps * self.params.dt)
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
@@ -348,7 +342,7 @@ class AmigoBotV1Env(AmigoBotBase):
             robot = self._k.nominal
             v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
             self._castor = advance_angle(self._castor, castor_rate_float(v, bdot, robot.l5, robot.r3), self.params.dt)
-            return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._v0_info(st, out)
+            return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._info(out, noise)
         info = self._info(out, noise)
         terminated = self._end(bool(out.terminated), info)
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
@@ -370,22 +364,13 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = steps = steps + 1
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array
         v = kern.scalars.tolist()
+        if self.v0_params is not None:
+            return kern.obs.copy(), v[_REWARD], v[_TERM] != 0.0, v0_record_info(rec, v, steps * self.params.dt)
         info = record_info(
             rec, v, steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
             self._path_info.copy(),
         )  # fmt: skip
         return kern.obs.copy(), v[_REWARD], self._end(v[_TERM] != 0.0, info), info
-
-    def _v0_info(self, st: tracking.State, out: tracking.Outcome) -> dict[str, Any]:
-        """AmigoBot-v0's info (:func:`v0_info_values`'s entries) from the reference's state and outcome, by the
-        builder of the compiled step's info (:func:`amigo_gym.task.v0.record_info`): the arrays are views of one
-        new array."""
-        rec = _np_array(
-            (st.x, st.y, st.beta, out.h_x, out.h_y, out.error, st.w1, st.w2, st.alpha1, st.alpha2, self._castor,
-             *out.terms),
-            dtype=np.float64,
-        )  # fmt: skip
-        return task.record_info(rec, rec.tolist(), float(st.steps * self.params.dt))
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`, of H at
@@ -412,6 +397,8 @@ class AmigoBotV1Env(AmigoBotBase):
         rec[_R_COMMAND] = self._ring[0]
         rec[_R_SLIP] = 0.0
         v = kern.scalars.tolist()
+        if self.v0_params is not None:
+            return v0_record_info(rec, v, self._steps * self.params.dt)
         return record_info(
             rec, v, self._steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
             self._path_info.copy(),
@@ -428,16 +415,15 @@ class AmigoBotV1Env(AmigoBotBase):
             raise gym.error.ResetNeeded("call reset() before _current_state() on AmigoBot-v1")
         if self._kernel is not None and self._in_kernel:
             return self._kernel.state(self._steps)
-        if self._v0 is not None:  # AmigoBot-v0's compiled step: its state (H's progress is not tracked)
-            x, y, beta, alpha1, alpha2, _, w1, w2 = self._v0.state()
-            w_max = self._k.w_max
-            return tracking.State(x, y, beta, w1, w2, alpha1, alpha2, math.nan, w1 / w_max, w2 / w_max, self._steps)
         return self._state
 
     # ------------------------------------------------------------------ info
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
         st, ep = self._state, self._episode
         assert st is not None and ep is not None
+        if self.v0_params is not None:
+            values = v0_info_values(self.params.dt, st, out, self._castor)
+            return {key: one_robot(v) for key, v in values.items()}
         values = info_values(self.params.dt, self._k.w_max, st, ep, out, noise, self._path_info)
         info = {key: v if key == "path" else one_robot(v) for key, v in values.items()}
         info["end_of_path"] = bool(out.end_of_path)

@@ -15,7 +15,7 @@ pose) -> (obs, infos)`` starts the robots ``idx``, ``_step(actions, mode)`` step
 path. Both infos keep the single env's keys (``info["h_position"]`` is what the trail records).
 
 This module may import numpy, gymnasium, :mod:`amigo_gym.envs.spec`, :mod:`amigo_gym.model.params`,
-:mod:`amigo_gym.task.v0` (the checks of actions and poses) and :mod:`amigo_gym.sim.fast` (the generators' table).
+:mod:`amigo_gym.task.v0` (the checks of actions and poses) and :mod:`amigo_gym.sim.fast_v1` (the kernel choices).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.params import HEADING_LIMIT, POSE_LIMIT, show_value
-from amigo_gym.sim import fast
+from amigo_gym.sim import fast_v1
 from amigo_gym.task import v0 as task
 
 __all__ = [
@@ -74,7 +74,7 @@ RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
 TRAIL_LENGTH = 1000
 
 #: the values of the vector envs' ``kernel`` keyword
-VECTOR_KERNELS: tuple[str, ...] = (*fast.KERNELS, "numba-parallel")
+VECTOR_KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
 
 
 # ---------------------------------------------------------------------------------------------------- checks
@@ -154,7 +154,7 @@ def box_spaces(bounds: tuple[Array, Array]) -> tuple[spaces.Box, spaces.Box]:
 def check_kernel(owner: str, kernel: Any, allowed: tuple[str, ...]) -> str:
     """``kernel`` if it is one of ``allowed``; else ``ValueError`` naming them."""
     if not isinstance(kernel, str) or kernel not in allowed:
-        raise ValueError(f"{owner}.kernel must be {fast.choices(allowed)}, got {kernel!r}")
+        raise ValueError(f"{owner}.kernel must be {fast_v1.choices(allowed)}, got {kernel!r}")
     return kernel
 
 
@@ -508,8 +508,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self.single_action_space, self.single_observation_space = single_spaces
         self.action_space = batch_space(self.single_action_space, n)
         self.observation_space = batch_space(self.single_observation_space, n)
-        # the generators, with the addresses of their C bit generators for the compiled draws
-        self._rngs = fast.GeneratorTable([None] * n)
+        self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         obs_dim = self.single_observation_space.shape[0]  # type: ignore[index]
@@ -739,11 +738,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._renderers = [None] * self.num_envs
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used.
-
-        The generators are copied with their table, which computes the copies' addresses anew
-        (:class:`amigo_gym.sim.fast.GeneratorTable`): a copy draws from its own generators only.
-        """
+        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
         state = self.__dict__.copy()
         state["_renderers"] = [None] * self.num_envs
         return state

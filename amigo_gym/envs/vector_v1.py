@@ -26,14 +26,13 @@ For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mod
 from __future__ import annotations
 
 import os
-import warnings
 from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, record_info, v0_info_values
+from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, record_info, v0_info_values, v0_record_info
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -47,9 +46,7 @@ from amigo_gym.envs.base import (
     check_vector_args,
 )
 from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
-from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast, fast_v1, fast_v1_batch, layout_v1
-from amigo_gym.task import v0 as task
+from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = ["AmigoBotV1VectorEnv"]
@@ -66,19 +63,6 @@ _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWA
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
-
-
-def __getattr__(name: str) -> Any:
-    """``ROWWISE_MAX_N`` (removed in 0.2 with the row-by-row step route; goes in 0.3): 0, with a warning."""
-    if name == "ROWWISE_MAX_N":
-        warnings.warn(
-            "amigo_gym.envs.vector_v1.ROWWISE_MAX_N is deprecated: since amigo_gym 0.2 no robots are stepped row by "
-            "row (one step route: the compiled step, or the column functions with kernel='numpy'); it goes in 0.3",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return 0
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 #: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
@@ -191,26 +175,15 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._ring = np.zeros((n, self._k.ring_length, 2))
         # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: fast_v1_batch.BatchKernel | None = None
-        compiled = fixed is None or type(fixed) is ClothoidPath  # drawn paths are built-in ones
-        choice = tracking.kernel_choice(owner, self._k.params, "numba" if kernel == "numba-parallel" else kernel)
-        if fast_v1.use_kernel(owner, choice) and compiled:
+        compiled = fixed is None or fast_v1.compiled_path(fixed, p)  # drawn paths are built-in ones
+        if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
-        elif fast.use_fast_path(None):  # the column route's projection and pose: the float functions, compiled
+        elif fast_v1.use_fast_path(None):  # the column route's projection and pose: the float functions, compiled
             fast_v1.path_loops()
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
-        # AmigoBot-v0's compiled step (amigo_gym.sim.fast) for v0's settings, on its rows (N, 8): x, y, beta, alpha1,
-        # alpha2, alpha3, w1, w2 (the state columns are views of them)
-        self._v0: fast.Workspace | None = None
-        self._parallel = kernel == "numba-parallel"
-        self._rows = np.zeros((n, 8))
-        self._castor = z.copy()  # the castor's rolling angle [rad] (v0's info)
-        if self.v0_params is not None and fast.use_fast_path(None if kernel == "auto" else kernel != "numpy"):
-            self._v0 = fast.workspace(task.task_constants(self.v0_params), fixed, n)
-            self._state = self._v0_views(self._state)
-        self._no_restart: BoolArray = np.zeros(n, dtype=np.bool_)  # the v0 kernel's restart mask when none restarts
-        self._no_rows: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
+        self._castor = z.copy()  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._ring_step = 0
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
@@ -318,46 +291,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._ring[i, :, 0] = st.a1 * w_max
         self._ring[i, :, 1] = st.a2 * w_max
 
-    def _v0_views(self, st: tracking.State) -> tracking.State:
-        """The state columns with the pose, wheel rates and wheel angles as views of AmigoBot-v0's rows (its
-        compiled step, v0's settings); the castor angle :attr:`_castor` too."""
-        r = self._rows
-        self._castor = r[:, 5]
-        return st._replace(x=r[:, 0], y=r[:, 1], beta=r[:, 2], alpha1=r[:, 3], alpha2=r[:, 4], w1=r[:, 6], w2=r[:, 7])
-
-    def _step_v0(self, ws: fast.Workspace, a: Array, mode: AutoresetMode) -> StepResult:
-        """:meth:`_step` with AmigoBot-v0's settings by AmigoBot-v0's compiled step (:func:`amigo_gym.sim.fast.
-        step_rows`): the reference's results, v0's infos.
-
-        Robots restarting (``NEXT_STEP``) get their start states inside the step, drawn from their generators' C bit
-        generators as :func:`amigo_gym.task.v1.begin_episode` draws them (``tests/test_v0_as_v1.py``) when every
-        generator is a ``PCG64``; otherwise after it, by :meth:`_reset_rows` (the reference).
-        """
-        restart, bitgens, idx = self._no_restart, None, None
-        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
-            if self._rngs.drawable:
-                restart, bitgens = self._autoreset, self._rngs.bitgens
-            else:
-                idx = np.flatnonzero(self._autoreset)
-        steps, limit = np.asarray(self._state.steps), self.max_episode_steps
-        r = fast.step_env_rows(ws, self._rows, a, restart, bitgens, self._parallel, steps, None, limit, self.params.dt)
-        obs, reward, terminated, truncated, infos, drawn = r
-        if drawn is None:
-            drawn = self._no_rows
-        else:  # the rows restarted in the step
-            idx = drawn
-        if self.render_mode is not None:
-            self._h_now[:] = infos["h_position"]
-            self._start_trails(drawn, infos["h_position"][drawn])
-        if bitgens is None and idx is not None:
-            obs[idx], info_r = self._reset_rows(idx)
-            assign_rows(infos, info_r, idx)
-        return self._finish_step(obs, reward, terminated, truncated, infos, idx)
-
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""
-        if self._v0 is not None:
-            return self._step_v0(self._v0, a, mode)
         a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
         if self._batch is not None:
@@ -463,6 +398,9 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if start:
             rec[:, _R_COMMAND] = self._batch.ws[rows, _W_A1 : _W_A2 + 1] * self._k.w_max
             rec[:, _R_SLIP] = 0.0
+        if self.v0_params is not None:
+            infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], np.asarray(self._state.steps)[rows] * dt)
+            return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
         infos = record_info(
             rec,
             rec.T[layout_v1.R_ERROR :],
@@ -524,10 +462,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self.__dict__.update(state)
         if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
             self._state = self._state_views(np.asarray(self._state.steps))
-        elif fast.use_fast_path(None):  # the column route's projection compiled in this process too
+        elif fast_v1.use_fast_path(None):  # the column route's projection compiled in this process too
             fast_v1.path_loops()
-        if self._v0 is not None:  # and of AmigoBot-v0's rows
-            self._state = self._v0_views(self._state)
 
 
 def _as_columns(v: Any, n: int) -> Any:

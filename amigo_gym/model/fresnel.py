@@ -165,9 +165,8 @@ def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
     ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer of floats, or of columns of one shape: then
     one 2-D array; numpy gives each element the bits it gives a scalar).
 
-    The compiled step does not compile this body: it overloads this function with the loop of the C library's
-    ``math.cos``/``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`; the same bits where
-    :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`, which the environment checks before using the kernel).
+    The compiled step does not compile this body: it overloads this function with the loop of ``math.cos`` and
+    ``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`).
     """
     lst = cast("list[Any]", buf)
     arr = _np_array(lst[b : b + n])

@@ -362,7 +362,7 @@ def circle_foot(
     With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho`` (at the centre ``u = r0``, the unit start radius,
     and ``n = r0``): returns ``(e, cos theta, sin theta, u_x, u_y)`` with the cross-track error
     ``e = d (r - rho)`` and the unit tangent ``d (-n_y, n_x)``. In numba's subset: the compiled step of
-    AmigoBot-v0 compiles this function (:data:`amigo_gym.sim._kernels.SHARED`).
+    the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
     """
     ux = x - cx
     uy = y - cy
@@ -383,7 +383,7 @@ def circle_foot(
 def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
     r"""The arc length ``s = r a`` [m] from the circle's start to the direction ``u`` from its centre (floats or
     columns; :func:`circle_foot`'s ``u``): ``a = atan2(d (r0 x u), r0 . u)`` plus ``2 pi`` where negative, in
-    ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
     cross = r0x * uy - r0y * ux
     a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
     return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
@@ -522,13 +522,9 @@ def manoeuvre_foot(
     tangent, the arc length ``s`` [m] on the whole path (``s_line``, or ``L + s_circ``), the circle's ``s_circ`` [m]
     and whether the line won (curvature 0; else the circle's ``d / r``).
 
-    In numba's subset: AmigoBot-v0's compiled step compiles this function (:data:`amigo_gym.sim._kernels.SHARED`).
-    ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: as Python, numpy's ufuncs, the column code's
-    functions; Python's ``math.hypot`` is its own algorithm, not the C library's), which numba compiles to the C
-    library's ``atan2`` and ``hypot``; numpy's float64 ``arctan2`` and ``hypot`` call those where they are not
-    vectorised. numpy vectorises ``arctan2`` on AVX-512 (its SVML): there the compiled ``s`` and ``s_circ`` may differ
-    from this function's by an ulp (``tests/test_kernels.py`` compares the compiled function with this one, ties,
-    centre and NaN included, and allows that difference only where the two ``atan2`` differ).
+    In numba's subset: the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
+    ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: the column code's functions), which numba
+    compiles to the C library's ``atan2`` and ``hypot``.
     ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
     ``0.0`` for ``+-0.0``, NaN for NaN).
     """
@@ -552,7 +548,7 @@ def manoeuvre_foot(
 def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
     """The manoeuvre path's curvature [1/m] at the arc length ``s`` [m], for floats: 0 where ``s <= big_l`` (the
     straight part, ``big_l`` [m] long), else the circle's ``curvature`` [1/m] (NaN ``s``: the circle's, as the
-    column code). In numba's subset (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    column code). In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
     return where_real(s <= big_l, 0.0, curvature)  # type: ignore[return-value]
 
 

@@ -839,8 +839,7 @@ _PATH_TABLE: list[float] = node_table(1)
 #
 # The loops of ClothoidPath._build, in numba's subset as the projection above: the float route runs them as Python on
 # lists, a compiled route (PathLoops, amigo_gym.sim.fast_v1.path_loops) compiles these very functions (SHARED of
-# amigo_gym.sim.layout_v1) with the C library's cosines and sines of the nodes (fresnel.cos_sin_nodes' overload,
-# numpy's bits where amigo_gym.sim.fast_v1.libm_matches_numpy: the route is offered only there).
+# amigo_gym.sim.layout_v1) with the C library's cosines and sines of the nodes (fresnel.cos_sin_nodes' overload).
 
 
 def chain_pieces(

@@ -1,53 +1,32 @@
-r"""Compiled step of ``AmigoBot-v1`` for one robot on a :class:`~amigo_gym.paths.ClothoidPath` (numba).
+r"""The compiled step of AmigoBot-v0 and AmigoBot-v1 for one robot, and its batch loops (numba).
 
-The fast path of :class:`amigo_gym.envs.AmigoBotV1Env` (numba, a core dependency where it ships wheels;
-loaded by :mod:`amigo_gym.sim.fast_v1`). One call of :func:`step` does what :func:`amigo_gym.task.v1.step_columns`
-does on Python floats, :func:`evaluate` what :func:`amigo_gym.task.v1.reset_columns` does, and :func:`progress`
-the projection of :func:`amigo_gym.task.v1.start_state`:
+Loaded by :mod:`amigo_gym.sim.fast_v1` (numba, a core dependency where it ships wheels). One call of :func:`step`
+does what :func:`amigo_gym.task.v1.step_columns` does on Python floats, :func:`evaluate` what
+:func:`amigo_gym.task.v1.reset_columns` does, and :func:`progress` the projection of
+:func:`amigo_gym.task.v1.start_state`:
 
-1. clip the action, write it into the command ring and read the setpoints in effect (delay):
-   :func:`amigo_gym.task.v1.action_commands`, :func:`amigo_gym.model.actuators.ring_slot` and
-   :func:`amigo_gym.model.actuators.ring_read_slots` (those of ``ring_write`` and ``ring_read``);
-2. the exact actuator step: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
+1. clip the action (:func:`amigo_gym.task.v1.action_commands`); with ``ideal_actuators`` the wheel rates are the
+   commands and the pose advances by the exact arc (:func:`_ideal_step`: :func:`amigo_gym.model.kinematics.
+   arc_from_tangents`, the castor's angle too); else the command goes into the delay ring
+   (:func:`amigo_gym.model.actuators.ring_slot`, :func:`amigo_gym.model.actuators.ring_read_slots`) and the exact
+   actuator step follows: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
    pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
-   :func:`amigo_gym.model.fresnel.advance_nodes`: the float path's own functions, compiled);
-3. H's projection on the path, and the measured H's when it differs
-   (:func:`amigo_gym.paths.clothoid.locate_flat` and :func:`amigo_gym.paths.clothoid.pose_flat`, compiled as they are);
-4. the preview (:meth:`amigo_gym.paths.ClothoidPath.pose_floats`), the observation, the heading reward term
-   and the arguments of the three exponential terms (:func:`amigo_gym.task.v0.reward_arguments`,
-   :func:`amigo_gym.task.v0.steady_heading`), the reference speed, termination and end of path: the pieces of
-   :func:`amigo_gym.task.v1.evaluate_columns` (``measurements``, ``end_flags``, ``preview_entry``,
-   ``task.v0.observe_head``, ``speed_observations``, ``trapezoid_speed``), compiled; :func:`_evaluate` and :func:`step`
-   only read and write ``ws`` and call them.
+   :func:`amigo_gym.model.fresnel.advance_nodes`);
+2. H's projection on the path (:func:`_locate`: a clothoid path's flat vector, :func:`amigo_gym.paths.clothoid.
+   locate_flat`; AmigoBot-v0's circle and manoeuvre in closed form, :func:`amigo_gym.paths.classic.circle_foot`,
+   :func:`amigo_gym.paths.classic.manoeuvre_foot`), and the measured H's when it differs;
+3. the observation (v1's: preview poses in the robot frame; v0's: the curvatures ahead, rates and speeds), the
+   heading reward term and the arguments of the three exponential terms, the reference speed, termination and end
+   of path: the pieces of :func:`amigo_gym.task.v1.evaluate_columns`, compiled.
 
-**The reference is the Python float path** (the functions named above). The scalar pieces both need (the
-ramps, the pieces' rates, body velocity and wheel rates, H from A, the heading error and the reward's heading
-term, the steady heading, the clips, the per-step draws (SplitMix64, the channels, the Box–Muller normals), the
-trapezoid speed, the evaluation's pieces, the ring's slots, the whole projection on the flat path vector (piece
-search, wrap, placement, coarse search, Newton loop, status), the quadrature's node sums and the actuator step:
-:data:`amigo_gym.sim.layout_v1.SHARED`) are the reference's own functions, compiled here as they are
-(docs/architecture.md, "The compiled step"). The evaluation's pieces run on floats and on columns in the reference:
-the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`'s ``clip_real``, ``min_real``, ``max0_real``,
-``abs_real``) are compiled as their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`, registered by
-:func:`amigo_gym.sim.layout.shared_compiler`), and ``randomization._uint64`` is overloaded below, so that every
-result is **bit-identical** (``tests/test_kernel_v1.py`` compares whole episodes bit for bit;
-``tests/test_golden_v1.py`` runs the golden episodes through it). What makes the bits equal:
-
-* arithmetic, comparisons, ``abs``, ``math.copysign``, ``math.sqrt`` and ``floor`` are exact (IEEE 754);
-  Python's ``min``/``max`` (first argument on ties), numpy's ``clip`` and ``argmin`` and ``bisect.bisect_right``
-  are reproduced with their tie and NaN rules (by the shared functions); numba does not contract ``a * b + c``
-  into an FMA (no fastmath);
-* ``math.cos``/``math.sin`` here are the C library's (the node sums' through the overload of
-  :func:`amigo_gym.model.fresnel.cos_sin_nodes` below), which numpy's float64 ``np.cos``/``np.sin`` (used by the
-  reference on arrays of node phases) equal bit for bit on the platforms checked; the environment checks it
-  once per process (:func:`amigo_gym.sim.fast_v1.libm_matches_numpy`) and runs the reference where it fails;
-* ``log``, whose numpy version differs from the C library's, is not evaluated here:
-  the per-step draws (:func:`amigo_gym.model.randomization.step_noise`) are split in three: the counter-based uniforms
-  (integer SplitMix64 on ``uint64``, exact: :func:`amigo_gym.model.randomization.step_uniforms`) by
-  :func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals (``sqrt``, the C
-  library's ``cos``; :func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the three reward
-  exponentials are the reference's :func:`amigo_gym.model.kinematics.col_exp` (plain arithmetic: the same bits
-  compiled, :func:`fill_record`).
+The scalar pieces are the reference's own functions (:data:`amigo_gym.sim.layout_v1.SHARED`), compiled as they are;
+the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`) as their float forms. The results agree with the
+reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit: ``sin``, ``cos``, ``tan`` and
+``log`` here are the C library's, the reference's numpy's. The per-step draws are split in three: the counter-based
+uniforms (integer SplitMix64 on ``uint64``: :func:`amigo_gym.model.randomization.step_uniforms`) by
+:func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals
+(:func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the reward's exponentials are
+:func:`amigo_gym.model.kinematics.col_exp` (plain arithmetic, :func:`fill_record`).
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
@@ -56,7 +35,8 @@ Layouts (float64 vectors, C-contiguous; defined, with their index constants, in 
   the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
   built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
 * ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``: the path's own flat vector, ``ClothoidPath._t.flat``, built with the path);
+  ``x, y``: the path's own flat vector, ``ClothoidPath._t.flat``, built with the path; empty for a circle or
+  manoeuvre, whose closed forms are in ``consts``);
 * ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
 * ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
   the outputs), then scratch space of ``WS_SCRATCH`` entries;
@@ -83,7 +63,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
 from amigo_gym.model.actuators import PIECES
-from amigo_gym.paths import clothoid, families
+from amigo_gym.paths import classic, clothoid, families
 from amigo_gym.sim import layout_v1 as L
 from amigo_gym.sim.layout import shared_compiler
 from amigo_gym.sim.layout import twin as _twin
@@ -96,7 +76,6 @@ __all__ = [
     "noise_uniforms",
     "progress",
     "pose",
-    "cos_sin",
     "build_chain",
     "build_samples",
     "rows_locate",
@@ -121,8 +100,8 @@ _shared = shared_compiler(
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
 def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
-    """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: the C library's ``math.cos``/``math.sin``
-    node by node (numpy's bits where :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`; no array temporaries)."""
+    """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: ``math.cos``/``math.sin`` node by node
+    (no array temporaries)."""
 
     def impl(buf: F64, b: int, n: int, m: int) -> None:
         for i in range(b, b + n):
@@ -164,15 +143,6 @@ _carray: Any = numpy_support.carray
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
-@_jit
-def cos_sin(x: F64, c: F64, s: F64) -> None:
-    """``c = cos(x)``, ``s = sin(x)`` elementwise by the functions the kernels use (for
-    :func:`amigo_gym.sim.fast_v1.libm_matches_numpy`)."""
-    for i in range(x.shape[0]):
-        c[i] = math.cos(x[i])
-        s[i] = math.sin(x[i])
-
-
 # ----------------------------------------------------------------------------------------- small rules
 
 
@@ -191,7 +161,7 @@ _steady_heading = _shared(task.steady_heading_float)
 _body_velocity = _shared(kinematics.body_velocity_of)
 _h_from_a = _shared(kinematics.h_from_a)
 #: the task's pieces (task.v1: floats or columns there), compiled
-_action_commands = _shared(tracking.action_commands)
+_action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
 _measured_differs = _shared(tracking.measured_differs)
 _measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
 _end_flags = _shared(tracking.end_flags)
@@ -199,6 +169,13 @@ _observe_head = _shared(task.observe_head)
 _preview_entry = _shared(tracking.preview_entry)
 _speed_observations = _shared(tracking.speed_observations)
 _ring_slot = _shared(actuators.ring_slot)
+_curvature_feature = _shared(task.curvature_feature)
+_observe_rates = _shared(task.observe_rates)
+_observe_reference = _shared(task.observe_reference)
+_arc_from_tangents = cast(Callable[..., tuple[float, float, float, float]], _shared(kinematics.arc_from_tangents))
+_advance_angle = _shared(kinematics.advance_angle)
+_castor_rate = _shared(kinematics.castor_rate_float)
+_bound_angle = _shared(task.bound_angle_float)
 _ring_read_slots = _shared(actuators.ring_read_slots)
 
 
@@ -275,13 +252,34 @@ def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float,
 pose = _pose
 
 
+_circle_foot = _shared(classic.circle_foot)
+_circle_arc = _shared(classic.circle_arc)
+_manoeuvre_foot = _shared(classic.manoeuvre_foot)
+_manoeuvre_curvature = _shared(classic.manoeuvre_curvature)
+_round_half_even = _shared(task.round_half_even)
+
+
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """clothoid._locate_float with the window ``c[L.C_WINDOW]`` ahead and behind: clothoid.locate_flat itself, its
-    node buffer on the stack.
+    """H's projection on the path of ``c[L.C_PATH_KIND]``: on a clothoid path ``path.locate`` with the window
+    ``c[L.C_WINDOW]`` ahead and behind (clothoid.locate_flat itself, its node buffer on the stack); on a circle
+    :meth:`amigo_gym.paths.CirclePath.locate` (``circle_foot``, ``circle_arc``; the lap nearest the hint ``sp``), on
+    the manoeuvre :meth:`amigo_gym.paths.ManoeuvrePath.locate` (``manoeuvre_foot``), status 0.
 
     Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
     """
+    kind = c[L.C_PATH_KIND]
+    if kind != L.PATH_CLOTHOID:
+        d = c[L.C_DIRECTION]
+        r = c[L.C_RADIUS]
+        cx, cy, r0x, r0y = c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
+        if kind == L.PATH_CIRCLE:
+            e, ct, st, ux, uy = _circle_foot(x, y, cx, cy, r0x, r0y, d, r)
+            s = _circle_arc(ux, uy, r0x, r0y, d, r)
+            lap = task.TWO_PI * r
+            return s + lap * _round_half_even((sp - s) / lap), d / r, e, ct, st, 0  # type: ignore[return-value]
+        e, ct, st, s, _s_circ, on_line = _manoeuvre_foot(x, y, cx, cy, r0x, r0y, d, r, c[L.C_STRAIGHT])
+        return s, 0.0 if on_line else d / r, e, ct, st, 0  # type: ignore[return-value]
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = clothoid.locate_flat(
@@ -323,8 +321,8 @@ def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
 
 @_jit
 def _normals(c: F64, ws: F64) -> None:
-    # randomization.step_normals itself, on the logarithms in ws and the cosines of the angles (the C library's
-    # math.cos, numpy's bits where fast_v1.libm_matches_numpy), written over the angles
+    # randomization.step_normals itself, on the logarithms in ws and the cosines of the angles, written over the
+    # angles
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
@@ -401,6 +399,20 @@ def build_lane(nodes: F64, ratio: float) -> tuple[float, float, float, float]:
 
 
 @_jit
+def _curvature_at(c: F64, pv: F64, s: float) -> float:
+    # the path's curvature [1/m] at the arc length s: the clothoid's pose, the circle's d / r, the manoeuvre's
+    kind = c[L.C_PATH_KIND]
+    if kind == L.PATH_CLOTHOID:
+        k: float = _pose(c, pv, s)[3]
+        return k
+    curvature: float = c[L.C_DIRECTION] / c[L.C_RADIUS]
+    if kind == L.PATH_CIRCLE:
+        return curvature
+    k_s: float = _manoeuvre_curvature(s, c[L.C_STRAIGHT], curvature)
+    return k_s
+
+
+@_jit
 def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
     """H's progress [m]: ``path.locate(x, y, s_prev, window, window).progress`` (``clothoid._locate_float``)."""
     s: float = _locate(c, pv, x, y, s_prev)[0]
@@ -423,8 +435,10 @@ def _evaluate(
     ws: F64,
     obs: NDArray[np.floating],
     v_true: float,
-    prev1: float,
-    prev2: float,
+    cb: float,
+    sb: float,
+    da1: float,
+    da2: float,
     t: float,
     nx: float,
     ny: float,
@@ -433,21 +447,19 @@ def _evaluate(
     nr2: float,
 ) -> None:
     # tracking.evaluate_columns of the state in ws (true H, its projection, measurements, observation, reward
-    # arguments, end), with the noise (nx, ny, nbeta, nr1, nr2): its pieces, compiled; the new progress into ws
+    # arguments, end) with the heading's cosine and sine (cb, sb), the command's change (da1, da2: of the normalised
+    # command, or of the wheel rates [rad/s] with reward="v0") and the noise (nx, ny, nbeta, nr1, nr2): its pieces,
+    # compiled; the new progress into ws
     l3 = c[L.C_L3]
     x = ws[L.W_X]
     y = ws[L.W_Y]
     beta = ws[L.W_BETA]
-    cb = math.cos(beta)
-    sb = math.sin(beta)
     hx, hy = _h_from_a(x, y, cb, sb, ws[L.W_L3])
     s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
     cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
     # task.steady_heading, task.reward_term_columns (the heading term; the exponentials' arguments only)
     cos_ss, sin_ss = _steady_heading(kappa, l3)
-    da1 = ws[L.W_A1] - prev1
-    da2 = ws[L.W_A2] - prev2
     arg_t, arg_v, arg_s = _reward_arguments(
         abs(e), abs(v_true - v_ref), da1 * da1 + da2 * da2, c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
     )
@@ -455,7 +467,8 @@ def _evaluate(
     ws[L.W_ARG_V] = arg_v
     ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     ws[L.W_ARG_S] = arg_s
-    terminated, at_end = _end_flags(e, c[L.C_TERM], pv[L.P_CLOSED], status)
+    closed = pv[L.P_CLOSED] if c[L.C_PATH_KIND] == L.PATH_CLOTHOID else 1.0  # (status 0 off clothoids)
+    terminated, at_end = _end_flags(e, c[L.C_TERM], closed, status)
     mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
     if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
         mcb = math.cos(mb)
@@ -473,6 +486,17 @@ def _evaluate(
     obs[2] = o2
     obs[3] = o3
     n_prev = int(c[L.C_N_PREVIEW])
+    v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
+    if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns: the curvature ahead, the rates, the speeds
+        for i in range(n_prev):
+            obs[4 + i] = _curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
+        q1, q2, q3 = _observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
+        obs[4 + n_prev] = q1
+        obs[5 + n_prev] = q2
+        obs[6 + n_prev] = q3
+        obs[7 + n_prev] = _observe_reference(v_ref, c[L.C_V_MAX])
+        _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
+        return
     scale = c[L.C_PREVIEW_SCALE]
     for i in range(n_prev):
         qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[L.C_TAIL + i])
@@ -480,7 +504,6 @@ def _evaluate(
         obs[4 + 3 * i] = px
         obs[5 + 3 * i] = py
         obs[6 + 3 * i] = pk
-    v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
     v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
     s0, s1, s2, s3, s4 = _speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
     k = 4 + 3 * n_prev
@@ -491,6 +514,15 @@ def _evaluate(
     obs[k + 4] = s4
     obs[k + 5] = ws[L.W_A1]
     obs[k + 6] = ws[L.W_A2]
+    _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
+
+
+@_jit
+def _store_outputs(
+    ws: F64, s_h: float, hx: float, hy: float, e: float, v_true: float, v_ref: float, mx: float, my: float,
+    mb: float, mw1: float, mw2: float, terminated: bool, at_end: bool,
+) -> None:  # fmt: skip
+    # the evaluation's outputs into ws
     ws[L.W_PROGRESS] = s_h
     ws[L.W_HX] = hx
     ws[L.W_HY] = hy
@@ -513,20 +545,20 @@ def evaluate(
     ws: F64,
     obs: NDArray[np.floating],
     v_true: float,
-    prev1: float,
-    prev2: float,
     t: float,
 ) -> None:
-    """:func:`amigo_gym.task.v1.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise.
+    """:func:`amigo_gym.task.v1.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise, no change
+    of the command (smoothness term 1).
 
     As there, the state keeps its progress (the start's hint): only the outputs of ``ws`` and ``obs`` are written.
 
     Args:
         c, pv, ws, obs: the layouts of the module docstring.
-        v_true: the true speed of A [m/s]; prev1, prev2: the previous normalised command [-]; t: time [s].
+        v_true: the true speed of A [m/s]; t: time [s].
     """
     progress = ws[L.W_PROGRESS]
-    _evaluate(c, pv, ws, obs, v_true, prev1, prev2, t, 0.0, 0.0, 0.0, 0.0, 0.0)
+    beta = ws[L.W_BETA]
+    _evaluate(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), 0.0, 0.0, t, 0.0, 0.0, 0.0, 0.0, 0.0)
     ws[L.W_PROGRESS] = progress
 
 
@@ -564,6 +596,9 @@ def step(
         ws[L.W_NR2] = 0.0
     # tracking.action_commands; actuators.ring_write, ring_read: their slots
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
+    if c[L.C_IDEAL] != 0.0:
+        _ideal_step(c, pv, ws, obs, c1, c2, cmd1, cmd2)
+        return
     length = ring.shape[0]
     slot = _ring_slot(ring_step, length)
     ring[slot, 0] = cmd1
@@ -571,29 +606,75 @@ def step(
     i_old, i_new = _ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
+    w1_old = ws[L.W_W1]
+    w2_old = ws[L.W_W2]
     v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[L.W_SLIP1], ws[L.W_SLIP2])
-    prev1 = ws[L.W_A1]
-    prev2 = ws[L.W_A2]
+    if c[L.C_REWARD_V0] != 0.0:
+        da1 = ws[L.W_W1] - w1_old
+        da2 = ws[L.W_W2] - w2_old
+    else:
+        da1 = c1 - ws[L.W_A1]
+        da2 = c2 - ws[L.W_A2]
     steps = ws[L.W_STEPS] + 1.0
     ws[L.W_A1] = c1
     ws[L.W_A2] = c2
     ws[L.W_STEPS] = steps
     ws[L.W_CMD1] = cmd1
     ws[L.W_CMD2] = cmd2
+    beta = ws[L.W_BETA]
     _evaluate(
         c,
         pv,
         ws,
         obs,
         v_true,
-        prev1,
-        prev2,
+        math.cos(beta),
+        math.sin(beta),
+        da1,
+        da2,
         steps * c[L.C_DT],
         ws[L.W_NX],
         ws[L.W_NY],
         ws[L.W_NB],
         ws[L.W_NR1],
         ws[L.W_NR2],
+    )
+
+
+@_jit
+def _ideal_step(
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float
+) -> None:
+    # tracking._ideal_step: the wheel rates are the commands (w1, w2) [rad/s], held over dt; the exact arc step
+    # (kinematics.arc_step: arc_from_tangents of the two tangents), the heading bounded (task.v0.bound_angle), the
+    # wheel and castor angles advanced; then the evaluation with the new heading's cosine and sine
+    dt = c[L.C_DT]
+    v, bdot = _body_velocity(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
+    beta = ws[L.W_BETA]
+    h = 0.5 * (bdot * dt)
+    x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, math.tan(0.5 * h), math.tan(0.5 * (beta + h)))
+    if c[L.C_REWARD_V0] != 0.0:
+        da1 = w1 - ws[L.W_W1]
+        da2 = w2 - ws[L.W_W2]
+    else:
+        da1 = c1 - ws[L.W_A1]
+        da2 = c2 - ws[L.W_A2]
+    steps = ws[L.W_STEPS] + 1.0
+    ws[L.W_X] = x1
+    ws[L.W_Y] = y1
+    ws[L.W_BETA] = _bound_angle(beta + bdot * dt)
+    ws[L.W_W1] = w1
+    ws[L.W_W2] = w2
+    ws[L.W_AL1] = _advance_angle(ws[L.W_AL1], w1, dt)
+    ws[L.W_AL2] = _advance_angle(ws[L.W_AL2], w2, dt)
+    ws[L.W_CASTOR] = _advance_angle(ws[L.W_CASTOR], _castor_rate(v, bdot, c[L.C_L5], c[L.C_R3]), dt)
+    ws[L.W_A1] = c1
+    ws[L.W_A2] = c2
+    ws[L.W_STEPS] = steps
+    ws[L.W_CMD1] = w1
+    ws[L.W_CMD2] = w2
+    _evaluate(
+        c, pv, ws, obs, v, cb, sb, da1, da2, steps * dt, ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
     )
 
 

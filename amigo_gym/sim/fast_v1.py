@@ -1,49 +1,57 @@
-"""The optional compiled step of the single ``AmigoBot-v1`` environment (numba), and when it runs.
+"""The compiled step of AmigoBot-v0 and AmigoBot-v1 (numba, a core dependency where it ships wheels), and when it runs.
 
-Two implementations of one robot's step exist:
+One step, two implementations of it:
 
 * the **reference**, :func:`amigo_gym.task.v1.step_columns` / :func:`amigo_gym.task.v1.evaluate_columns`
-  on Python floats (numpy, always available, any path object);
-* the **kernel**, :class:`StepKernel`: one compiled call per step (:mod:`amigo_gym.sim._kernels_v1`, numba, a
-  core dependency where it ships wheels) on a :class:`~amigo_gym.paths.ClothoidPath` (every built-in path family). The
-  logarithms of the per-step noise (between a small compiled call that draws the uniforms and the step) and
-  the three reward exponentials (after the step) are numpy's, as in the reference, since numpy's ``log`` and
-  ``exp`` are not the C library's. The results are the reference's bit for bit (``tests/test_kernel_v1.py``).
-  A path object of another class runs the reference.
+  on Python floats or numpy columns (always available, any path object: ``kernel="numpy"``);
+* the **kernel**, :class:`StepKernel` (one robot) and :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (``N``
+  robots): :mod:`amigo_gym.sim._kernels_v1`, the same scalar functions compiled, on a
+  :class:`~amigo_gym.paths.ClothoidPath` (every built-in family) and on AmigoBot-v0's
+  :class:`~amigo_gym.paths.CirclePath` and :class:`~amigo_gym.paths.ManoeuvrePath` with ``observation="v0"``.
+  Both agree to a stated tolerance, not bit for bit (``tests/test_kernel_v1.py``): numba calls the C library's
+  ``sin``, ``cos``, ``tan``, ``exp``, numpy its own loops. Another path object runs the reference.
 
-This module is numba-free: it holds the layouts of the kernel's vectors (the index constants below, used by
-the kernel and by :class:`amigo_gym.envs.AmigoBotV1Env`), builds the constants, hands out the paths' flat vectors
-and loads the kernel.
-
-:func:`use_kernel` decides from ``kernel="auto" | "numpy" | "numba"`` with the semantics of the v0 vector
-env's keyword (:func:`amigo_gym.sim.fast.use_fast_path`: ``"auto"`` follows ``AMIGO_GYM_KERNEL`` and uses numba when
-it can be imported). numba is imported only when a :class:`StepKernel` is first built (never by
-``import amigo_gym``); its compiled code is cached on disk, so a later process loads it instead of compiling.
+This module is numba-free: it builds the kernel's vectors (the layouts of :mod:`amigo_gym.sim.layout_v1`, whose
+names it re-exports), decides which implementation runs (:func:`use_kernel`, :func:`use_fast_path`) and loads the
+kernel (:func:`kernels`: numba is imported on the first call, never by ``import amigo_gym``; its compiled code is
+cached on disk, :func:`amigo_gym.sim.layout.kernel_cache`).
 """
 
 from __future__ import annotations
 
+import importlib.util
+import os
+import sys
+from collections.abc import Sequence
 from functools import lru_cache, partial
 from types import ModuleType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel, randomization
-from amigo_gym.paths import families
+from amigo_gym.paths import CirclePath, ManoeuvrePath, families
 from amigo_gym.paths.classic import PathPose
 from amigo_gym.paths.clothoid import ClothoidPath, PathLoops, use_compiled_rows
-from amigo_gym.sim import fast, layout_v1
+from amigo_gym.sim import layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = [
+    "KERNEL_ENV",
     "KERNELS",
+    "kernel_mode",
+    "numba_available",
+    "use_fast_path",
     "use_kernel",
-    "libm_matches_numpy",
+    "choices",
+    "COMPILE_NOTICE",
+    "announce_compilation",
+    "direct_call",
     "kernels",
     "kernel_constants",
     "flat_path",
+    "compiled_path",
     "path_loops",
     "StepKernel",
 ]
@@ -59,58 +67,156 @@ def __getattr__(name: str) -> Any:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
 
 
-# ---------------------------------------------------------------------------- selection and data
+#: environment variable that selects the step's implementation: ``auto`` (default), ``numba``, ``numpy``
+KERNEL_ENV = "AMIGO_GYM_KERNEL"
 
-#: values of the ``kernel=`` keyword of :class:`amigo_gym.envs.AmigoBotV1Env`
-KERNELS: tuple[str, ...] = fast.KERNELS
+KernelMode = Literal["auto", "numba", "numpy"]
 
 
-def use_kernel(owner: str, kernel: object) -> bool:
-    """Whether ``kernel=`` selects the compiled step (``"auto"``: when numba is importable and the platform's
-    ``cos``/``sin`` give numpy's bits, :func:`libm_matches_numpy`).
+#: the values of every env's ``kernel`` keyword (the vector envs also take ``"numba-parallel"``)
+KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
+
+
+def choices(values: Sequence[str]) -> str:
+    """``"'a', 'b' or 'c'"``: allowed values for a one-line error message."""
+    quoted = [repr(v) for v in values]
+    return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " or " + quoted[-1]
+
+
+def kernel_mode() -> KernelMode:
+    """The mode set by :data:`KERNEL_ENV` (``ValueError`` on another value)."""
+    mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
+    if mode == "auto":
+        return "auto"
+    if mode == "numba":
+        return "numba"
+    if mode == "numpy":
+        return "numpy"
+    raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
+
+
+@lru_cache(maxsize=1)
+def numba_available() -> bool:
+    """Whether numba can be imported (checked without importing it)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+def use_fast_path(requested: bool | None = None) -> bool:
+    """Whether to run the compiled kernel.
+
+    Args:
+        requested: ``True`` requires it, ``False`` refuses it, ``None`` follows :data:`KERNEL_ENV`.
 
     Raises:
-        ValueError: not one of :data:`KERNELS`.
-        ImportError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba`` with ``"auto"``) without numba installed.
-        RuntimeError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba``) where the compiled step cannot give the
-            reference's bits.
+        ImportError: the fast path is required (argument or ``AMIGO_GYM_KERNEL=numba``) but numba is missing.
     """
-    if not isinstance(kernel, str) or kernel not in KERNELS:
-        raise ValueError(f"{owner}.kernel must be {fast.choices(KERNELS)}, got {kernel!r}")
-    requested = None if kernel == "auto" else kernel == "numba"
-    if not fast.use_fast_path(requested):
+    if requested is None:
+        mode = kernel_mode()
+        if mode == "numpy":
+            return False
+        requested = True if mode == "numba" else None
+    if requested is False:
         return False
-    if libm_matches_numpy():
+    if numba_available():
         return True
-    if requested or fast.kernel_mode() == "numba":
-        raise RuntimeError(
-            f"{owner}: the compiled step cannot reproduce the reference's bits on this platform (numba's cos/sin, "
-            "the C library's, differ from numpy's); use kernel='numpy' (or 'auto')"
+    if requested:
+        raise ImportError(
+            "the fast path needs numba, which amigo-gym installs where numba ships wheels: "
+            'pip install "amigo-gym[fast]" (from a clone: pip install -e ".[fast]"; or set AMIGO_GYM_KERNEL=numpy)'
         )
     return False
 
 
-@lru_cache(maxsize=1)
-def libm_matches_numpy() -> bool:
-    """Whether the kernel's ``math.cos``/``math.sin`` (the C library's) give numpy's float64 ``np.cos``/``np.sin``
-    bits on a fixed sample of 4000 arguments (small ones, and headings of many laps): the premise of the
-    kernel's bit-identity (:mod:`amigo_gym.sim._kernels_v1`). Checked once per process (a millisecond)."""
-    g = np.random.default_rng(20240601)
-    x = np.concatenate((g.uniform(-10.0, 10.0, 2000), g.uniform(-2000.0, 2000.0, 1000), g.normal(0.0, 1e-3, 1000)))
-    return fast.same_bits_as_numpy(kernels().cos_sin, x, np.cos, np.sin)
+#: the one line printed (stderr) when numba starts compiling a kernel of this package in this process
+COMPILE_NOTICE = (
+    "amigo_gym: compiling the numba step (once per install, up to about 20 s; "
+    "later runs load it from numba's cache; AMIGO_GYM_KERNEL=numpy skips it)"
+)
+_notice_installed = False
+
+
+def announce_compilation() -> None:
+    """Print :data:`COMPILE_NOTICE` once to stderr when numba really compiles a kernel of ``amigo_gym``.
+
+    A listener of numba's ``numba:compile`` event, which numba fires only on a compilation, not when it loads the
+    compiled code from its disk cache: a process that finds the cache warm prints nothing. Only for a person: when
+    stderr is a terminal, or when the environment sets ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it); a
+    script's captured stderr stays as it was. Installed by the first call of :func:`kernels` (here and in
+    :mod:`amigo_gym.sim.fast_v1`); cheap afterwards.
+    """
+    global _notice_installed
+    if _notice_installed:
+        return
+    _notice_installed = True
+    wanted = os.environ.get("AMIGO_GYM_COMPILE_NOTICE")
+    if wanted == "0" or (wanted != "1" and not (sys.stderr is not None and sys.stderr.isatty())):
+        return
+    from numba.core import event
+
+    class _Notice(event.Listener):
+        done = False
+
+        def on_start(self, ev: Any) -> None:
+            dispatcher = ev.data.get("dispatcher") if isinstance(ev.data, dict) else None
+            module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+            if not self.done and module.startswith("amigo_gym"):
+                self.done = True
+                print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())  # type: ignore[no-untyped-call]
+
+
+def direct_call(dispatcher: Any, *args: Any) -> Any:
+    """The compiled code of the numba function ``dispatcher`` for the types of ``args``, called without numba's
+    dispatch.
+
+    A call of a numba function first finds the type of each argument and the compiled code for them (about 0.1 us per
+    argument: more than one robot's step); this returns that code, compiled or loaded from numba's disk cache now as
+    the first call would, so that a step pays for it once. The same machine code runs, so the results are the same
+    bits. Only for arguments of exactly these types at every call (the same dtypes, dimensions, C-contiguity and
+    writeability; numbers of the same kind): the callers pass their own buffers, allocated once, of the types
+    ``args`` have. Returns ``dispatcher`` itself where numba gives no such entry (another numba version).
+    """
+    import numba
+
+    sig = tuple(numba.typeof(a) for a in args)  # type: ignore[no-untyped-call]
+    dispatcher.compile(sig)
+    try:
+        return dispatcher.get_overload(sig)
+    except (AttributeError, KeyError):  # pragma: no cover  (numba's API moved)
+        return dispatcher
+
+
+def use_kernel(owner: str, kernel: object) -> bool:
+    """Whether ``kernel=`` (one of :data:`KERNELS`) selects the compiled step: ``"numba"`` requires it, ``"numpy"``
+    refuses it, ``"auto"`` follows :data:`KERNEL_ENV` and uses numba when it can be imported.
+
+    Raises:
+        ValueError: not one of :data:`KERNELS`.
+        ImportError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba`` with ``"auto"``) without numba installed.
+    """
+    if not isinstance(kernel, str) or kernel not in KERNELS:
+        raise ValueError(f"{owner}.kernel must be {choices(KERNELS)}, got {kernel!r}")
+    return use_fast_path(None if kernel == "auto" else kernel == "numba")
+
+
+def compiled_path(path: Any, p: tracking.TrackingParams) -> bool:
+    """Whether the compiled step runs on ``path``: a :class:`ClothoidPath`, or AmigoBot-v0's circle or manoeuvre
+    (closed forms) with ``observation="v0"`` (whose preview is the curvature alone)."""
+    return type(path) is ClothoidPath or (type(path) in (CirclePath, ManoeuvrePath) and p.observation == "v0")
 
 
 @lru_cache(maxsize=1)
-def path_loops() -> PathLoops | None:
+def path_loops() -> PathLoops:
     """The compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`: the float route's
     :func:`~amigo_gym.paths.clothoid.chain_pieces`, :func:`~amigo_gym.paths.clothoid.sample_points`,
     :func:`~amigo_gym.paths.families.run_segments` and :func:`~amigo_gym.paths.families.lane_change_shape`, compiled
     by :mod:`amigo_gym.sim._kernels_v1` with their node tables bound), which the environments with the compiled step
-    hand to the path constructors at resets; None where the C library's ``cos``/``sin`` do not give numpy's bits
-    (:func:`libm_matches_numpy`: then the float route builds the paths). The same paths either way
-    (``tests/test_path_loops.py``). Loads the kernels (numba) on the first call."""
-    if not libm_matches_numpy():
-        return None
+    hand to the path constructors at resets (the same paths to rounding, ``tests/test_path_loops.py``). Loads the
+    kernels (numba) on the first call."""
     kv = kernels()
     nodes = np.array(fresnel.node_table(1), dtype=np.float64)
     run_nodes = np.array(families.RUN_NODES, dtype=np.float64)
@@ -128,7 +234,7 @@ def path_loops() -> PathLoops | None:
 
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym.sim._kernels_v1` (imports numba on the first call)."""
-    fast.announce_compilation()
+    announce_compilation()
     from amigo_gym.sim.layout import kernel_cache
 
     with kernel_cache():
@@ -138,13 +244,19 @@ def kernels() -> ModuleType:
 
 
 def kernel_constants(k: tracking.Constants) -> Array:
-    """The ``consts`` vector of :mod:`amigo_gym.sim._kernels_v1` for the constants ``k``.
-
-    Every entry is computed as the reference computes it (``2.0 * l1``, the negated scales the reference
-    divides by), the quadrature nodes are :mod:`amigo_gym.model.fresnel`'s own lists, so the kernel's arithmetic is
-    the reference's.
+    """The ``consts`` vector of :mod:`amigo_gym.sim._kernels_v1` for the constants ``k``
+    (:data:`amigo_gym.sim.layout_v1.CONSTANT_FIELDS`, then the preview distances, their bounds and the quadratures'
+    nodes and weights), with the closed forms of ``k.params.path`` when it is a :class:`CirclePath` or a
+    :class:`ManoeuvrePath` (the circle's centre, unit start radius, direction, radius; the manoeuvre's straight part).
     """
     p = k.params
+    path = p.path
+    kind, circle, straight = layout_v1.PATH_CLOTHOID, CirclePath(), 0.0
+    if type(path) is CirclePath:
+        kind, circle = layout_v1.PATH_CIRCLE, path
+    elif type(path) is ManoeuvrePath:
+        kind, circle, straight = layout_v1.PATH_MANOEUVRE, path.circle, path.straight_length
+    cx, cy, r0x, r0y = circle._frame
     nominal = k.nominal
     act = p.actuators
     rz = p.randomize
@@ -179,16 +291,34 @@ def kernel_constants(k: tracking.Constants) -> Array:
         "position_noise": rz.position_noise,
         "heading_noise": rz.heading_noise,
         "wheel_rate_noise": rz.wheel_rate_noise,
+        "ideal": 1.0 if p.ideal_actuators else 0.0,
+        "obs_v0": 1.0 if p.observation == "v0" else 0.0,
+        "reward_v0": 1.0 if p.reward == "v0" else 0.0,
+        "l5": nominal.l5,
+        "r3": nominal.r3,
+        "path_kind": kind,
+        "cx": cx,
+        "cy": cy,
+        "r0x": r0x,
+        "r0y": r0y,
+        "direction": float(circle.direction),
+        "radius": circle.radius,
+        "straight_length": straight,
     }
     head = [values[name] for name in layout_v1.CONSTANT_FIELDS]
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
     return np.array(head + tail, dtype=np.float64)
 
 
-def flat_path(path: ClothoidPath) -> Array:
-    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1` for a :class:`ClothoidPath`: the path's own flat vector
+_NO_PATH: Array = np.zeros(0)
+
+
+def flat_path(path: Any) -> Array:
+    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1`: a :class:`ClothoidPath`'s own flat vector
     (``ClothoidPath._t.flat``, built with the path; the pieces' tables and the coarse samples the
-    reference searches). Read only by the kernels."""
+    reference searches), empty for a circle or manoeuvre (its closed forms are in the constants). Read only."""
+    if type(path) is not ClothoidPath:
+        return _NO_PATH
     flat: Array = path._t.flat
     return flat
 
@@ -232,13 +362,13 @@ class StepKernel:
         self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
         self.path_pose: Any = kv.pose
-        # the step and the draws for exactly these types (fast.direct_call: no dispatch per call): the ring (L, 2) and
+        # the step and the draws for exactly these types (direct_call: no dispatch per call): the ring (L, 2) and
         # the observation (D,) float32 of the single env, the step counters Python ints
-        self._uniforms: Any = fast.direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        self._uniforms: Any = direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
         self._args()
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
-        self.run_record: Any = fast.direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
-        self._fill: Any = fast.direct_call(kv.fill_record, self.ws, self.record, 0.0)
+        self.run_record: Any = direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
+        self._fill: Any = direct_call(kv.fill_record, self.ws, self.record, 0.0)
         #: the record's scalars (``record[R_ERROR:]``: a view, for their floats)
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
         self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
@@ -288,7 +418,7 @@ class StepKernel:
         got: PathPose = path.pose_columns(s)
         return got
 
-    def load(self, path: ClothoidPath, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
+    def load(self, path: Any, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
         self.path = flat_path(path)
         self._args()
@@ -296,6 +426,7 @@ class StepKernel:
         ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
             st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
         )  # fmt: skip
+        ws[layout_v1.W_CASTOR] = 0.0
         ws[layout_v1.W_R1 : layout_v1.W_L3D + 1] = (
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.paths.clothoid import ClothoidPath
-from amigo_gym.sim import fast, fast_v1, layout_v1
+from amigo_gym.sim import fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
 __all__ = ["PathArena", "BatchKernel"]
@@ -155,19 +155,19 @@ class BatchKernel:
         self._bind()
 
     def _bind(self) -> None:
-        """The compiled loops for exactly the types of :meth:`step`'s arguments (:func:`amigo_gym.sim.fast.direct_call`:
-        compiled, or loaded from numba's disk cache, now; no dispatch per call): C-contiguous float64 constants,
-        arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records, int64 starts and stops, uint64 keys,
-        int64 loop scratch, a float32 observation, Python ints and floats."""
+        """The compiled loops for exactly the types of :meth:`step`'s arguments
+        (:func:`amigo_gym.sim.fast_v1.direct_call`: compiled, or loaded from numba's disk cache, now; no dispatch per
+        call): C-contiguous float64 constants, arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records,
+        int64 starts and stops, uint64 keys, int64 loop scratch, a float32 observation, Python ints and floats."""
         kv = fast_v1.kernels()
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
         noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
         step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
-        self._noise_rows: Any = fast.direct_call(noise_rows, f1, f2, keys, f2)
+        self._noise_rows: Any = fast_v1.direct_call(noise_rows, f1, f2, keys, f2)
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, 0.0)
-        self._step_rows: Any = fast.direct_call(step_rows, *args)
+        self._step_rows: Any = fast_v1.direct_call(step_rows, *args)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -188,15 +188,15 @@ class BatchKernel:
         """Start the episodes of ``rows``: their paths, states (of floats) and episodes into the workspace.
 
         Raises:
-            TypeError: a path is not a :class:`ClothoidPath` (the compiled step's paths).
+            TypeError: a path is not one the compiled step runs (:func:`amigo_gym.sim.fast_v1.compiled_path`).
         """
         one = self._row
         ws = self.ws
         state = slice(fast_v1.W_X, fast_v1.W_L3D + 1)  # the state and the episode's constants
         draws = slice(fast_v1.W_SLIP_MAX, fast_v1.W_NOISE_ON + 1)  # the slip bound, whether the episode draws
         for i, path, st, ep in zip(rows, paths, states, episodes, strict=True):
-            if type(path) is not ClothoidPath:
-                raise TypeError(f"BatchKernel.load: row {i}'s path must be a ClothoidPath, got {type(path).__name__}")
+            if not fast_v1.compiled_path(path, self._k.params):
+                raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
             one.load(path, st, ep, tracking.ep_l3_differs(self._k, ep))
             ws[i, state] = one.ws[state]
             ws[i, draws] = one.ws[draws]
@@ -241,7 +241,7 @@ class BatchKernel:
         for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
             v_true, t = tracking.start_speed_time(st, ep)
             ws = self.ws[i]
-            one.evaluate(c, flat[starts[i] : stops[i]], ws, obs[j], v_true, st.a1, st.a2, t)
+            one.evaluate(c, flat[starts[i] : stops[i]], ws, obs[j], v_true, t)
             one._fill(ws, rec[j], sw)
         return rec
 

@@ -1,7 +1,7 @@
 """What the compiled steps' modules share: :func:`twin`, :func:`shared_compiler` and :func:`kernel_cache` (numba's
 disk cache in a folder keyed by the package's source bytes, so that a change of any file it compiles is seen).
 
-Imported by :mod:`amigo_gym.sim._kernels`, :mod:`amigo_gym.sim._kernels_v1` and their loaders; imports nothing of
+Imported by :mod:`amigo_gym.sim._kernels_v1` and its loader; imports nothing of
 the package; numba only inside :func:`kernel_cache` and :func:`shared_compiler`.
 """
 
@@ -27,7 +27,7 @@ _REGISTERED: set[Callable[..., Any]] = set()
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under
     its name, so the serial and the parallel compilation of one loop need two names (else they would share a cache
-    entry). Used by :mod:`amigo_gym.sim._kernels` and :mod:`amigo_gym.sim._kernels_v1`."""
+    entry). Used by :mod:`amigo_gym.sim._kernels_v1`."""
     assert isinstance(fn, types.FunctionType)
     copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
     copy.__qualname__ = name
@@ -130,7 +130,7 @@ def shared_compiler(
     compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
     runs its float form (an ``overload``), which must be in ``shared``.
     ``intrinsics`` maps Python functions to the typing functions of numba intrinsics that compiled code calls in their
-    place (:func:`amigo_gym.sim.numpy_loops.call_loop`, whose Python form uses ``ctypes``); the typing functions must be
+    place (:func:`amigo_gym.model.numeric.pow2_real`, whose Python form is numpy's); the typing functions must be
     in ``shared`` too.
     Only the kernel modules call this (they import numba anyway); this module stays numba-free.
     """

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
-from amigo_gym.paths import clothoid, families
+from amigo_gym.paths import classic, clothoid, families
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
@@ -48,6 +48,19 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
     "heading_noise",
     "wheel_rate_noise",
+    "ideal",  # 1.0 for ideal_actuators (the wheel rates are the commands, the exact arc step), else 0.0
+    "obs_v0",  # 1.0 for observation="v0" (AmigoBot-v0's layout), else 0.0
+    "reward_v0",  # 1.0 for reward="v0" (the smoothness of the wheel rates' change [rad/s]), else 0.0
+    "l5",  # nominal castor swivel distance [m] and castor radius [m] (the castor angle of ideal steps)
+    "r3",
+    "path_kind",  # PATH_CLOTHOID (the path vector), PATH_CIRCLE or PATH_MANOEUVRE (closed forms, the entries below)
+    "cx",  # the circle's centre [m], unit start radius, direction (+1 left, -1 right), radius [m]
+    "cy",
+    "r0x",
+    "r0y",
+    "direction",
+    "radius",
+    "straight_length",  # the manoeuvre's straight part [m]
 )
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
@@ -56,6 +69,11 @@ C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_SIG_T, C_SIG_V = (_C[n] for n in CO
 C_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
 C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[23:26])
 C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[26:29])
+C_IDEAL, C_OBS_V0, C_REWARD_V0, C_L5, C_R3, C_PATH_KIND = (_C[n] for n in CONSTANT_FIELDS[29:35])
+C_CX, C_CY, C_R0X, C_R0Y, C_DIRECTION, C_RADIUS, C_STRAIGHT = (_C[n] for n in CONSTANT_FIELDS[35:42])
+#: values of ``consts[C_PATH_KIND]``: a :class:`~amigo_gym.paths.ClothoidPath` (its flat vector), a
+#: :class:`~amigo_gym.paths.CirclePath` or a :class:`~amigo_gym.paths.ManoeuvrePath` (closed forms of the constants)
+PATH_CLOTHOID, PATH_CIRCLE, PATH_MANOEUVRE = 0.0, 1.0, 2.0
 #: where the variable-length parts of ``consts`` start
 C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
@@ -83,6 +101,7 @@ WS_FIELDS: tuple[str, ...] = (
     "a1",
     "a2",
     "steps",
+    "castor",  # the castor wheel's rolling angle [rad] (integrated by ideal steps: AmigoBot-v0's info)
     # episode, read only
     "r1",
     "r2",
@@ -126,18 +145,19 @@ WS_FIELDS: tuple[str, ...] = (
 )
 _W = {name: i for i, name in enumerate(WS_FIELDS)}
 W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
-W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[11:20])
-W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[20:30])
-W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[30:38])
-W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[38:42])
-W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[42:47])
+W_CASTOR = _W["castor"]
+W_R1, W_R2, W_L1, W_L3, W_LAG, W_TS, W_VC, W_TB, W_L3D = (_W[n] for n in WS_FIELDS[12:21])
+W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in WS_FIELDS[21:31])
+W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[31:39])
+W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[39:43])
+W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[43:48])
 #: the single env's info record (:func:`amigo_gym.sim._kernels_v1.fill_record`; the env hands out a new copy per step
 #: and the info's seven arrays are views of it): the workspace entries of those arrays in their order (pose, H, wheel
 #: rates, command, wheel angles, measured pose, slip), then those of the info's scalars, then the exponentials of the
 #: reward's track, speed and smoothness arguments, the smoothness term and the reward
 RECORD_ROWS = ("x", "y", "beta", "h_x", "h_y", "w1", "w2", "command1", "command2", "alpha1", "alpha2", "meas_x",
                "meas_y", "meas_beta", "slip1", "slip2")  # fmt: skip
-RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated")
+RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated", "castor")
 R_ERROR = len(RECORD_ROWS)
 R_HEADING = R_ERROR + RECORD_SCALARS.index("heading")
 R_TRACK = R_ERROR + len(RECORD_SCALARS)
@@ -150,8 +170,8 @@ R_POSE, R_H, R_RATES, R_COMMAND, R_ANGLES, R_MEASURED, R_SLIP = (
                  ("meas_x", "meas_beta"), ("slip1", "slip2"))
 )  # fmt: skip
 R_HX, R_HY = RECORD_ROWS.index("h_x"), RECORD_ROWS.index("h_y")
-R_PROGRESS, R_VT, R_VREF, R_END, R_TERM = (
-    R_ERROR + RECORD_SCALARS.index(n) for n in ("progress", "v_true", "v_ref", "end_of_path", "terminated")
+R_PROGRESS, R_VT, R_VREF, R_END, R_TERM, R_CASTOR = (
+    R_ERROR + RECORD_SCALARS.index(n) for n in ("progress", "v_true", "v_ref", "end_of_path", "terminated", "castor")
 )
 #: :data:`RECORD_ROWS` and :data:`RECORD_SCALARS` as workspace indices
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
@@ -207,6 +227,10 @@ SHARED: tuple[Callable[..., Any], ...] = (
     clothoid.pose_flat,
     clothoid.chain_pieces,
     clothoid.sample_points,
+    classic.circle_foot,
+    classic.circle_arc,
+    classic.manoeuvre_foot,
+    classic.manoeuvre_curvature,
     families.run_segments,
     families.s_curve_half,
     families.lane_change_shape,
@@ -220,6 +244,14 @@ SHARED: tuple[Callable[..., Any], ...] = (
     kinematics.body_velocity_of,
     kinematics.wheel_rates_of,
     kinematics.h_from_a,
+    kinematics.half_tan_cos_sin,
+    kinematics.arc_from_tangents,
+    kinematics.castor_rate_float,
+    kinematics.advance_angle,
+    task.bound_angle_float,
+    task.observe_rates,
+    task.observe_reference,
+    task.round_half_even,
     randomization.box_muller,
     randomization._counter_uniform_int,
     randomization.noise_level,

@@ -1,10 +1,8 @@
 r"""The tracking task as pure, batched functions: actions, observation, reward, start, end.
 
-AmigoBot-v0's compiled step (:mod:`amigo_gym.sim.fast`, which the environments run in AmigoBot-v0's
-configuration) compiles the scalar functions here; AmigoBot-v1's task (:mod:`amigo_gym.task.v1`, whose ideal step
-is the reference the compiled step is tested against, ``tests/test_kernels.py``) and the agents call them too;
-nothing here keeps state. Shapes: a leading batch axis is optional
-everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
+The compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles the scalar functions here; AmigoBot-v1's task
+(:mod:`amigo_gym.task.v1`, the reference) and the agents call them too; nothing here keeps state. Shapes: a leading
+batch axis is optional everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
 
 Observation (all dimensionless, ``psi = wrap(beta - theta)`` is the heading error against the path
 tangent ``theta`` at H's closest point, ``e`` H's signed cross-track error, positive left):
@@ -48,14 +46,11 @@ The step is written once: AmigoBot-v0's reference step is AmigoBot-v1's ideal st
 (:func:`amigo_gym.task.v1.step_columns` and ``reset_columns`` of :func:`amigo_gym.task.v1.v0_configuration`, what
 ``kernel="numpy"`` runs and what the compiled step is tested against), which calls the pieces here
 (:func:`observe_columns`, :func:`reward_term_columns`, :func:`steady_heading`, :func:`bound_angle`); they take plain
-scalars or ``(N,)`` arrays alike with the same bits (``tests/test_columns.py``, ``tests/test_float_paths.py``). The
-constants of the compiled step are derived once per :class:`EnvParams` (:func:`task_constants`, an internal cache:
-``EnvParams`` is the only way to set them). The names of the second column step removed in 0.2 (:data:`REMOVED`:
-``step_columns``, ``transition``, ``State``, ...) raise an ``AttributeError`` naming their replacement.
+scalars or ``(N,)`` arrays alike (``tests/test_columns.py``, ``tests/test_float_paths.py``).
 
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
 reader decodes the observation by these names) and the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
-:func:`record_info`, used by the single env and the vector env).
+used by the single env and the vector env).
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -64,16 +59,14 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
-from functools import lru_cache
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, col_exp, col_sqrt
 from amigo_gym.model.numeric import clip_float, clip_real
-from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams, show_value
+from amigo_gym.model.params import HEADING_LIMIT, EnvParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 __all__ = [
@@ -103,19 +96,15 @@ __all__ = [
     "clip_float",
     "heading_error",
     "initial_wheel_rates",
-    "TaskConstants",
-    "task_constants",
     "INFO_KEYS",
     "OBS_HEAD",
     "OBS_TAIL",
     "info_dict",
-    "record_info",
     "obs_index",
     "observe_columns",
 ]
 
 Array = NDArray[np.float64]
-AnyPath = CirclePath | ManoeuvrePath
 
 REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
 TWO_PI = 2.0 * math.pi
@@ -260,9 +249,22 @@ def bound_angle(b: Real) -> Real:
         nb = b.copy()
         nb[big] = b[big] - TWO_PI * np.round(b[big] / TWO_PI)
         return nb
+    return bound_angle_float(b)
+
+
+def round_half_even(x: float) -> float:
+    """``x`` rounded to the nearest integer, ties to even (Python's ``round`` and ``np.round``), as a float."""
+    r = float(math.floor(x + 0.5))
+    if r - x == 0.5 and r - 2.0 * math.floor(0.5 * r) != 0.0:
+        r -= 1.0
+    return r
+
+
+def bound_angle_float(b: float) -> float:
+    """:func:`bound_angle` of one float (a no-op within ``[-HEADING_LIMIT, HEADING_LIMIT]``; compiled)."""
     if -HEADING_LIMIT <= b <= HEADING_LIMIT:
         return b
-    return b - TWO_PI * round(b / TWO_PI)
+    return b - TWO_PI * round_half_even(b / TWO_PI)
 
 
 def initial_wheel_rates(params: EnvParams) -> Array:
@@ -270,90 +272,9 @@ def initial_wheel_rates(params: EnvParams) -> Array:
     return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
 
 
-@lru_cache(maxsize=64)
-def _path_start(path: AnyPath) -> tuple[float, float, float]:
-    """Start point ``(x, y)`` [m] and tangent angle [rad] of ``path`` (arc length 0)."""
-    x0, y0 = path.point(0.0).tolist()
-    return x0, y0, float(path.tangent_angle(0.0))
-
-
-@dataclass(frozen=True)
-class TaskConstants:
-    """The numbers a step needs, derived from :class:`EnvParams` (an internal cache, :func:`task_constants`).
-
-    ``params`` is the only argument: every other attribute is computed from it, so there is no second
-    way to set ``dt`` or any other setting.
-
-    Attributes:
-        params: the settings they derive from.
-        robot: ``params.robot``.
-        dt: ``params.dt`` [s].
-        w_max: ``robot.max_wheel_rate`` [rad/s].
-        l3: ``robot.l3`` [m].
-        speed: reference speed ``v_ref`` [m/s].
-        max_speed: ``robot.max_speed`` [m/s].
-        error_scale: ``params.error_scale`` [m].
-        e_max: bound of observation 0, ``2 termination_distance / error_scale`` [-].
-        termination_distance: [m].
-        sigma_track: [m].
-        sigma_speed: [m/s].
-        smooth_scale_sq: ``(w_max sigma_smooth) ** 2`` [rad^2/s^2].
-        smooth_weight: [-].
-        preview: preview distances [m].
-        reference_obs: observation ``reference_speed``, ``v_ref / v_max`` [-].
-    """
-
-    params: EnvParams
-    robot: RobotParams = field(init=False)
-    dt: float = field(init=False)
-    w_max: float = field(init=False)
-    l3: float = field(init=False)
-    speed: float = field(init=False)
-    max_speed: float = field(init=False)
-    error_scale: float = field(init=False)
-    e_max: float = field(init=False)
-    termination_distance: float = field(init=False)
-    sigma_track: float = field(init=False)
-    sigma_speed: float = field(init=False)
-    smooth_scale_sq: float = field(init=False)
-    smooth_weight: float = field(init=False)
-    preview: tuple[float, ...] = field(init=False)
-    reference_obs: float = field(init=False)
-
-    def __post_init__(self) -> None:
-        params = self.params
-        robot = params.robot
-        smooth_scale = robot.max_wheel_rate * params.sigma_smooth
-        derived = {
-            "robot": robot,
-            "dt": params.dt,
-            "w_max": robot.max_wheel_rate,
-            "l3": robot.l3,
-            "speed": params.speed,
-            "max_speed": robot.max_speed,
-            "error_scale": params.error_scale,
-            "e_max": error_bound(params.termination_distance, params.error_scale),  # obs_bounds(params)[1][0]
-            "termination_distance": params.termination_distance,
-            "sigma_track": params.sigma_track,
-            "sigma_speed": params.sigma_speed,
-            "smooth_scale_sq": smooth_scale * smooth_scale,
-            "smooth_weight": params.smooth_weight,
-            "preview": params.preview,
-            "reference_obs": params.speed / robot.max_speed,
-        }
-        for name, value in derived.items():
-            object.__setattr__(self, name, value)
-
-
-@lru_cache(maxsize=64)
-def task_constants(params: EnvParams) -> TaskConstants:
-    """The :class:`TaskConstants` of ``params`` (cached: equal settings give the same object)."""
-    return TaskConstants(params)
-
-
 # The scalar pieces of the step, written once in numba's subset (plain floats and ``math``; the arithmetic ones
-# take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels`,
-# :mod:`amigo_gym.sim._kernels_v1`) compiles these very functions (docs/architecture.md, "The compiled step").
+# take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels_v1`)
+# compiles these very functions (docs/architecture.md, "The compiled step").
 
 
 def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
@@ -380,7 +301,7 @@ def observe_head(
     """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
     clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
     curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns; compiled by the
-    compiled step (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
     return clip_real(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
@@ -400,7 +321,7 @@ def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
     [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
-    (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
     return (
         clip_real(w1 / w_max, -1.0, 1.0),
         clip_real(w2 / w_max, -1.0, 1.0),
@@ -495,14 +416,14 @@ def reward_arguments(
     -sigma_speed``, ``change_sq / -smooth_scale_sq`` (a division by the negated scale: the bits of the compiled
     steps, which compile this function). ``abs_error`` [m], ``abs_dv`` [m/s], ``change_sq`` in the units of
     ``smooth_scale_sq``; the scales ``sigma_track`` [m], ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive.
-    Floats or columns (numba's subset: :data:`amigo_gym.sim._kernels.SHARED`)."""
+    Floats or columns (numba's subset: :data:`amigo_gym.sim.layout_v1.SHARED`)."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
 def off_path(abs_error: Real, termination_distance: float) -> Any:
     """The termination of AmigoBot-v0's task: H farther than ``termination_distance`` [m] from the path, ``|e| >
     termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool for a float, a bool
-    column for a column; compiled by the compiled step (:data:`amigo_gym.sim._kernels.SHARED`)."""
+    column for a column; compiled by the compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
     return abs_error > termination_distance
 
 
@@ -526,8 +447,8 @@ def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
 def info_dict(
     pose: Any, h_position: Any, error: Any, rates: Any, angles: Any, castor: Any, terms: Any, time: Any
 ) -> dict[str, Any]:
-    """The info dict keyed as :data:`INFO_KEYS`, from its entries (AmigoBot-v1's ``v0_info_values`` calls it;
-    :func:`record_info` writes the same keys out, on the compiled step's hot path).
+    """The info dict keyed as :data:`INFO_KEYS`, from its entries (AmigoBot-v1's ``v0_info_values`` and
+    ``v0_record_info`` call it).
 
     ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m], ``error`` H's cross-track error [m], ``rates`` the
     wheel rates [rad/s], ``angles`` the wheel angles and ``castor`` the castor's [rad], ``terms`` the 4 reward
@@ -542,60 +463,3 @@ def info_dict(
         "reward_terms": dict(zip(REWARD_TERMS, terms, strict=True)),
         "time": time,
     }
-
-
-def record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
-    """The info dict (:data:`INFO_KEYS`) of a step record of the compiled step: the one builder of AmigoBot-v0's
-    info from a record (single and vector env, AmigoBot-v1 with v0's settings).
-
-    The record's 16 columns (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`): ``x, y, beta`` [m, m, rad], ``h_x, h_y``
-    [m], ``e`` [m], ``rate1, rate2`` [rad/s], ``alpha1, alpha2, alpha3`` [rad], the reward terms ``track, speed,
-    heading, smooth`` (:data:`REWARD_TERMS`) and the reward.
-
-    Args:
-        record: the record as an array, ``(16,)`` for one robot (or its first 10 columns) or ``(N, 16)``: the
-            ``"columns"`` entries are views of its last axis (hand over a new array at every step).
-        values: the record indexed by column for the ``"scalar"`` entries and the reward terms: its floats (one
-            robot; the first 15 columns suffice) or ``record.T`` (``(N,)`` views).
-        time: time since the episode's reset [s] (a float, or a column).
-    """
-    return {  # the keys of info_dict, written out: a step's hot path (a call and a zip cost ~1 us more)
-        "pose": record[_POSE],
-        "h_position": record[_H_POSITION],
-        "cross_track_error": values[5],
-        "wheel_rates": record[_WHEEL_RATES],
-        "wheel_angles": record[_WHEEL_ANGLES],
-        "castor_angle": values[10],
-        "reward_terms": {_TRACK: values[11], _SPEED: values[12], _HEADING: values[13], _SMOOTH: values[14]},
-        "time": time,
-    }
-
-
-_TRACK, _SPEED, _HEADING, _SMOOTH = REWARD_TERMS  # record_info's keys of the terms (a dict display: the fastest)
-#: record_info's indices of the record's last axis, built once (``record[..., 0:3]`` builds its slice and tuple at
-#: every call: 50 ns of a view's 160)
-_POSE, _H_POSITION, _WHEEL_RATES, _WHEEL_ANGLES = ((..., slice(a, b)) for a, b in ((0, 3), (3, 5), (6, 8), (8, 10)))
-
-
-#: the names removed in amigo_gym 0.2 (issue 19: AmigoBot-v0's step written once, as AmigoBot-v1's ideal step with
-#: v0's settings) and what replaces each; reading one raises an ``AttributeError`` that says so (:func:`__getattr__`)
-REMOVED: dict[str, str] = {
-    **dict.fromkeys(("State", "Outcome", "Motion", "move_columns", "outcome_columns", "step_columns", "step_float",
-                     "Transition", "transition"), "amigo_gym.task.v1.step_columns (State, Outcome)"),
-    **dict.fromkeys(("start_motion", "reset_columns", "Evaluation", "evaluate"), "amigo_gym.task.v1.reset_columns"),
-    "start_pose": "amigo_gym.task.v1.start_state",
-    "bound_heading": "amigo_gym.task.v0.bound_angle of the heading",
-}  # fmt: skip
-
-
-if not TYPE_CHECKING:  # hidden from mypy, for which a removed name stays an error
-
-    def __getattr__(name: str) -> NoReturn:
-        """A name of :data:`REMOVED` raises an ``AttributeError`` naming its replacement (one line)."""
-        if name in REMOVED:
-            raise AttributeError(
-                f"amigo_gym.task.v0.{name} was removed in amigo_gym 0.2: AmigoBot-v0's step is AmigoBot-v1's ideal "
-                f"step with v0's settings; use {REMOVED[name]} with amigo_gym.task.v1.constants(amigo_gym.task.v1."
-                "v0_configuration(params)), or gym.make('AmigoBot-v0', kernel='numpy')"
-            )
-        raise AttributeError(f"module 'amigo_gym.task.v0' has no attribute {name!r}")

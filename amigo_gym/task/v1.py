@@ -72,7 +72,6 @@ from amigo_gym.model.kinematics import (
     arc_step,
     body_velocity_columns,
     body_velocity_of,
-    castor_rate_columns,
     col_cos,
     col_sin,
     h_from_a,
@@ -115,7 +114,6 @@ __all__ = [
     "constants",
     "v0_settings",
     "v0_configuration",
-    "V0Reference",
     "command_ring_length",
     "Episode",
     "State",
@@ -228,9 +226,8 @@ class TrackingParams:
     With ``ideal_actuators=True, observation="v0", reward="v0"``, ``randomize="none"``, ``start_at_rest=False``,
     a constant ``speed``, v0's ``preview`` (0.2, 0.4) and the path ``amigo_gym.paths.CirclePath(radius, direction=...)``
     (a path object: its projection is v0's), ``AmigoBot-v1`` steps as ``AmigoBot-v0``
-    (``tests/test_v0_as_v1.py``). These settings (:func:`v0_settings`) run AmigoBot-v0's compiled step
-    (:mod:`amigo_gym.sim.fast`), or this module's reference step with ``kernel="numpy"``; AmigoBot-v1's compiled step
-    has only ``ideal_actuators=False, observation="v1", reward="v1"``.
+    (``tests/test_v0_as_v1.py``). The compiled step runs every setting on the built-in paths, and AmigoBot-v0's
+    circle and manoeuvre with ``observation="v0"`` (:func:`amigo_gym.sim.fast_v1.compiled_path`).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -350,11 +347,6 @@ class TrackingParams:
             if not isinstance(value, str) or value not in LAYOUTS:
                 raise ValueError(f"{o}.{name} must be one of {list(LAYOUTS)}, got {value!r}")
         _check_combined(o, self)
-
-    @property
-    def reference_only(self) -> bool:
-        """Whether these settings need the reference step (``ideal_actuators``, ``observation`` or ``reward`` v0)."""
-        return self.ideal_actuators or self.observation != "v1" or self.reward != "v1"
 
     @property
     def simulated_robot(self) -> RobotParams:
@@ -642,7 +634,7 @@ V0_SHARED_SETTINGS: tuple[str, ...] = (
 
 def v0_settings(p: TrackingParams) -> EnvParams | None:
     """The AmigoBot-v0 task that ``p`` describes, or ``None``: the settings whose steps AmigoBot-v0's compiled
-    step (:mod:`amigo_gym.sim.fast`) gives bit for bit, and whose info has AmigoBot-v0's keys.
+    step runs as AmigoBot-v0 (``gym.make("AmigoBot-v0")``), and whose info has AmigoBot-v0's keys.
 
     They are ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise (the ideal actuators
     already exclude delay, slip, a true robot and randomised geometry), ``start_at_rest=False``, a constant
@@ -696,93 +688,6 @@ def v0_configuration(e: EnvParams) -> TrackingParams:
         observation="v0",
         reward="v0",
     )
-
-
-class V0Reference:
-    """AmigoBot-v0's reference step, what ``gym.make("AmigoBot-v0", kernel="numpy")`` runs: :func:`step_columns` (and
-    :func:`reset_columns` for a start state) with :func:`v0_configuration`'s settings on the nominal robot's episode.
-
-    The state is AmigoBot-v0's 8 columns ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2`` [m, m, rad, rad, rad, rad,
-    rad/s, rad/s] (:data:`amigo_gym.sim._kernels.STATE_FIELDS`, the compiled step's rows): ``(N, 8)`` rows give
-    ``(N,)`` columns (``n = N``), one ``(8,)`` row Python floats (``n = 0``, the single env's float route). The castor
-    angle ``alpha3``, which :class:`State` (``st``) does not hold, is integrated as the vector env's reference route
-    does: ``alpha3 += castor_rate(v_A, betadot) dt`` [rad] with the new wheel rates (``castor``;
-    :func:`~amigo_gym.model.kinematics.castor_rate`). ``k``, ``path``, ``dt`` [s], ``ep``: v0's constants, path, step
-    and episode; ``ring``: the (unread) command ring.
-    """
-
-    def __init__(self, params: EnvParams, state: Any) -> None:
-        rows = np.asarray(state, dtype=np.float64)
-        self.k = k = constants(v0_configuration(params))
-        self.path, self.dt, self.n = k.params.path, k.params.dt, 0 if rows.ndim == 1 else len(rows)
-        ep = begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
-        self.ep = ep if self.n == 0 else Episode(*(np.full(self.n, v) for v in ep))
-        self.ring = np.zeros((*rows.shape[:-1], k.ring_length, 2))
-        c: list[Any] = rows.tolist() if self.n == 0 else [rows[:, j].copy() for j in range(8)]
-        z: Any = 0.0 if self.n == 0 else np.zeros(self.n)
-        steps: Any = 0 if self.n == 0 else np.zeros(self.n, dtype=np.int64)
-        self.st = State(c[0], c[1], c[2], c[6], c[7], c[3], c[4], z, z, z, steps)
-        self.castor: Any = c[5]
-
-    def step(self, actions: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], Outcome]:
-        """One step with the normalised ``actions`` ``(N, 2)`` (``(2,)`` for one robot), the state advanced:
-        ``(state rows, record rows, outcome)`` (:meth:`rows`, :meth:`record`)."""
-        a = np.asarray(actions, dtype=np.float64)
-        a1, a2 = (a[0].item(), a[1].item()) if self.n == 0 else (a[:, 0], a[:, 1])
-        st, out, _ = step_columns(self.k, self.path, self.st, self.ep, self.ring, 0, a1, a2)
-        self.st = st if self.n == 0 else State(*(np.asarray(col) for col in st))
-        v, bdot = body_velocity_columns(self.st.w1, self.st.w2, self.k.nominal)
-        self.castor = self.castor + castor_rate_columns(v, bdot, self.k.nominal) * self.dt
-        return self.rows(), self.record(out), out
-
-    def start(self) -> tuple[NDArray[np.float64], Outcome]:
-        """The evaluation of the state as a start state: ``(record rows, outcome)``."""
-        out = reset_columns(self.k, self.path, self.st, self.ep, NO_NOISE)
-        return self.record(out), out
-
-    def _stack(self, cols: list[Any]) -> NDArray[np.float64]:
-        if self.n == 0:
-            return np.array([float(c) for c in cols])
-        return np.column_stack([np.broadcast_to(np.asarray(c, dtype=np.float64), (self.n,)) for c in cols])
-
-    def rows(self) -> NDArray[np.float64]:
-        """The state as AmigoBot-v0's 8 columns: ``(N, 8)``, or ``(8,)`` for one robot."""
-        s = self.st
-        return self._stack([s.x, s.y, s.beta, s.alpha1, s.alpha2, self.castor, s.w1, s.w2])
-
-    def record(self, out: Outcome) -> NDArray[np.float64]:
-        """The 16 columns of the compiled step's record (:data:`amigo_gym.sim._kernels.RECORD_FIELDS`) of ``out``:
-        ``(N, 16)``, or ``(16,)`` for one robot."""
-        s = self.st
-        cols: list[Any] = [s.x, s.y, s.beta, out.h_x, out.h_y, out.error, s.w1, s.w2, s.alpha1, s.alpha2, self.castor]
-        return self._stack([*cols, *out.terms, out.reward])
-
-    def obs(self, out: Outcome) -> NDArray[np.float64]:
-        """The observation of ``out`` as float64 rows: ``(N, obs_dim)``, or ``(obs_dim,)`` for one robot."""
-        return self._stack(list(out.obs))
-
-
-def kernel_choice(owner: str, p: TrackingParams, kernel: Any) -> Any:
-    """The ``kernel=`` keyword of AmigoBot-v1's compiled step (:mod:`amigo_gym.sim.fast_v1`): ``"numpy"`` for
-    settings only the reference step has (:attr:`TrackingParams.reference_only`), else ``kernel`` itself.
-
-    (Settings that are AmigoBot-v0's, :func:`v0_settings`, accept ``kernel="numba"``: the envs then run AmigoBot-v0's
-    compiled step, :mod:`amigo_gym.sim.fast`.)
-
-    Raises:
-        ValueError: ``kernel="numba"`` with settings neither compiled step has (one line naming them).
-    """
-    if not p.reference_only:
-        return kernel
-    if kernel == "numba" and v0_settings(p) is not None:
-        return "numpy"
-    if kernel == "numba":
-        raise ValueError(
-            f"{owner}: kernel='numba' has only the default ideal_actuators=False, observation='v1', reward='v1'; got "
-            f"ideal_actuators={p.ideal_actuators!r}, observation={p.observation!r}, reward={p.reward!r}: use 'auto' or "
-            "'numpy'"
-        )
-    return "numpy" if kernel == "auto" else kernel
 
 
 def _smooth_scale_sq(p: TrackingParams, w_max: float) -> float:

@@ -21,12 +21,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.model.kinematics import body_velocity, step_pose
+from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, step_pose
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
-from amigo_gym.sim.fast import numba_available
+from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.task import v1 as tracking
-from amigo_gym.task.v0 import obs_dim, task_constants
 from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.options import run_command
 
@@ -35,6 +34,8 @@ __all__ = [
     "Row",
     "Startup",
     "euler_step",
+    "v0_columns",
+    "kernel_stepper",
     "loop_step",
     "measure",
     "measure_many",
@@ -139,16 +140,20 @@ def _bench_one(
     angles = np.zeros((n, 3))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
-    ref = tracking.V0Reference(params, np.column_stack((pose, angles, w)))
-    st, castor = ref.st, ref.castor
+    k, st, ep = v0_columns(params, pose, w)
+    ring = np.zeros((n, k.ring_length, 2))
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
 
-    def transition() -> object:
-        ref.st, ref.castor = st, castor  # every call steps the same states
-        return ref.step(action)
+    def columns() -> tracking.State:
+        return tracking.step_columns(k, path, st, ep, ring, 0, a1, a2)[0]
+
+    def transition() -> object:  # the step and the castor angle, as the env's reference route
+        new = columns()
+        v, bdot = body_velocity_columns(new.w1, new.w2, robot)
+        return new, angles[:, 2] + castor_rate_columns(v, bdot, robot) * params.dt
 
     t_tr = measure(transition, repeats, min_time)
-    t_co = measure(lambda: tracking.step_columns(ref.k, ref.path, st, ref.ep, ref.ring, 0, a1, a2), repeats, min_time)
+    t_co = measure(columns, repeats, min_time)
     t_sp = measure(lambda: step_pose(pose, w, params.dt, robot), repeats, min_time)
     t_eu = measure(lambda: euler_step(pose, w, params.dt, robot), repeats, min_time)
     loop = None
@@ -164,24 +169,43 @@ def _bench_one(
     return Row(n, n / t_tr, n / t_co, n / t_sp, n / t_eu, loop, kern, kern_par)
 
 
+def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
+    """AmigoBot-v0's constants (:func:`amigo_gym.task.v1.v0_configuration`) and the ``(N,)`` columns of a state at the
+    poses ``pose (N, 3)`` with the wheel rates ``w (N, 2)`` [rad/s] and of the nominal episode."""
+    k = tracking.constants(tracking.v0_configuration(params))
+    n = len(pose)
+    one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
+    ep = tracking.Episode(*(np.full(n, v) for v in one))
+    z = np.zeros(n)
+    a = w / k.w_max
+    cols = [np.array(c) for c in (pose[:, 0], pose[:, 1], pose[:, 2], w[:, 0], w[:, 1], z, z, z, a[:, 0], a[:, 1])]
+    st = tracking.State(*cols, np.zeros(n, dtype=np.int64))  # type: ignore[call-arg]
+    return k, st, ep
+
+
+def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, parallel: bool) -> Callable[[], object]:
+    """One compiled step of AmigoBot-v0's robots at ``pose`` with the wheel rates ``w`` [rad/s] and the actions
+    ``action (N, 2)`` (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; preallocated outputs, the state advances)."""
+    from amigo_gym.sim.fast_v1_batch import BatchKernel
+
+    k, st, ep = v0_columns(params, pose, w)
+    n = len(pose)
+    b = BatchKernel(k, n, parallel=parallel)
+    cols: list[Any] = [*st, *ep]
+    rows = [tracking.State(*(c[i].item() for c in cols[:11])) for i in range(n)]
+    eps = [tracking.Episode(*(c[i].item() for c in cols[11:])) for i in range(n)]
+    b.load(range(n), [k.params.path] * n, rows, eps)
+    rings = np.zeros((n, k.ring_length, 2))
+    a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
+    obs = np.empty((n, len(tracking.obs_fields(k.params))), dtype=np.float32)
+    return lambda: b.step(rings, 1, a1, a2, obs)
+
+
 def _kernel_steppers(
     params: EnvParams, path: Any, pose: Array, angles: Array, w: Array, action: Array
 ) -> tuple[Callable[[], object], Callable[[], object]]:
     """Serial and parallel kernel steps of the states (preallocated outputs; the state advances)."""
-    from amigo_gym.sim import fast
-
-    n = len(pose)
-    ws = fast.workspace(task_constants(params), path, n)
-    state = np.ascontiguousarray(np.column_stack((pose, angles, w)))
-    act = np.ascontiguousarray(action)
-    restart = np.zeros(n, dtype=np.bool_)
-    obs = np.empty((n, obs_dim(params)), dtype=np.float32)
-    reward = np.empty(n)
-    term = np.empty(n, dtype=np.bool_)
-    record = np.empty((n, 16))
-    args = (ws, state, act, restart, obs, reward, term, record)
-    step = fast.step_rows
-    return (lambda: step(*args)), (lambda: step(*args, parallel=True))
+    return kernel_stepper(params, pose, w, action, False), kernel_stepper(params, pose, w, action, True)
 
 
 def bench(

@@ -24,7 +24,7 @@ from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.io import atomic_save, atomic_write_json
 from amigo_gym.model.params import check_range
-from amigo_gym.sim.fast import numba_available
+from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.tools.bench.core import _fmt, measure_many
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
 from amigo_gym.tools.options import run_command

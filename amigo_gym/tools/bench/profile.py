@@ -67,28 +67,19 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
     from amigo_gym.envs.amigobot import AmigoBotVectorEnv
-    from amigo_gym.sim import fast
+    from amigo_gym.model.params import EnvParams
+    from amigo_gym.tools.bench.core import kernel_stepper
 
     quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
     bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
-    ws = quiet._v0  # AmigoBot-v0's compiled step (its configuration of AmigoBotV1VectorEnv)
-    assert ws is not None
-    rows = np.zeros((n, 8))
-    rows[:, 6:] = 4.0
+    pose = np.zeros((n, 3))
+    w = np.full((n, 2), 4.0)
     a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
-    no = np.zeros(n, dtype=np.bool_)
-    out = (np.empty((n, ws.obs_dim), np.float32), np.empty(n), np.empty(n, np.bool_), np.empty((n, 16)))
-
-    def kernel() -> None:
-        fast.step_rows(ws, rows, a, no, *out)
-
-    def fresh() -> None:
-        obs = np.empty((n, ws.obs_dim), np.float32)
-        fast.step_rows(ws, rows, a, no, obs, np.empty(n), no.copy(), np.empty((n, 16)))
+    kernel = kernel_stepper(EnvParams(), pose, w, a, False)
 
     fns = {
         "kernel": kernel,
-        "fresh": fresh,
+        "fresh": kernel,
         "quiet": _vector_stepper(quiet, 0),
         "bench": _vector_stepper(bench, 0),
         "cart": _vector_stepper(CartPoleVectorEnv(num_envs=n), 0),
@@ -110,13 +101,13 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     pend.reset(seed=0)
     a = np.array([0.27, 0.27], np.float32)
     ap = np.array([0.5], np.float32)
-    fs = raw._v0  # AmigoBot-v0's compiled step (None without numba: the steps then go on from the last state)
-    start = fs.state() if fs is not None else None
+    kern = raw._kernel  # the compiled step (None without numba: the steps then go on from the last state)
+    start = kern.ws.copy() if kern is not None else None
     k, ref_start, ep, ring = ref._k, ref._state, ref._episode, ref._ring  # the reference's start state (floats)
 
     def restart() -> None:
-        if fs is not None:
-            fs.set_state(start)
+        if kern is not None:
+            kern.ws[:] = start
 
     def reference() -> None:
         ref._state = ref_start
