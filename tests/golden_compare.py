@@ -5,7 +5,8 @@ are compared within a tolerance, not bit for bit: the same closed-form physics r
 floats and numpy columns, numba's compiled step) whose transcendental functions (``sin``, ``cos``, ``tan``,
 ``exp``) are not the same code (numpy's SIMD loops, chosen at run time per CPU, or the C library's), so results
 differ by ulps that the feedback of a closed-loop episode can grow. Bits are equal only for determinism: one
-install, one seed, one route (tests/test_determinism.py).
+install, one seed, one route (``tests/test_env.py::test_determinism_under_seed``,
+``tests/test_env_v1.py``, the serial and parallel loops and pickled copies of ``tests/test_vector_v1_kernel.py``).
 
 The rule, per recorded array ``want`` and its counterpart ``got``:
 

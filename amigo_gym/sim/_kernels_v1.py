@@ -704,7 +704,8 @@ def _ideal_step(
     )
 
 
-_RECORD_WS = L.RECORD_WS
+#: the workspace entries of the record (an array constant of the compiled code)
+_RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
 _N_RECORD_WS = len(L.RECORD_WS)
 _smooth_term = _shared(task.smooth_term)
 _reward_product = _shared(task.reward_product)
