@@ -17,10 +17,10 @@ the state then lives in the rows of its workspace (the ``(N,)`` state columns ar
 the reference. Their path projection and pose run a ClothoidPath's float functions row by row
 (:func:`amigo_gym.paths.clothoid.locate_rows`), compiled where numba is installed (unless ``AMIGO_GYM_KERNEL=numpy``).
 
-For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` bit for bit
-(observations, rewards, terminations, truncations and the numeric infos), randomisation included, in the
-``NEXT_STEP`` (default), ``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation
-(``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
+For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
+terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
+``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
+the reference, bit for bit on one route (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
 """
 
 from __future__ import annotations
@@ -112,12 +112,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             registration's 600 unless given.
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
-        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed and
-            gives the reference's bits, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
+        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed, unless
+            ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
             functions of :mod:`amigo_gym.task.v1`), ``"numba"`` (the compiled step, :mod:`amigo_gym.sim.fast_v1_batch`)
             or ``"numba-parallel"`` (its loops on numba's threads), as for :class:`amigo_gym.envs.AmigoBotV1Env`
             and :class:`amigo_gym.envs.AmigoBotVectorEnv`. The compiled step runs the built-in path families;
-            a path object of another class runs the reference. All give the same results bit for bit.
+            a path object of another class runs the reference. All agree to 1e-9.
         params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
 
     Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
