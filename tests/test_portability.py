@@ -27,7 +27,6 @@ FILES = (
     "tests/test_direct_call.py",
     "tests/test_plain_math.py",
     "tests/test_path_loops.py",
-    "tests/test_shared_pieces_v1.py",
 )
 
 

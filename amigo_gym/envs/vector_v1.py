@@ -17,10 +17,10 @@ the state then lives in the rows of its workspace (the ``(N,)`` state columns ar
 the reference. Their path projection and pose run a ClothoidPath's float functions row by row
 (:func:`amigo_gym.paths.clothoid.locate_rows`), compiled where numba is installed (unless ``AMIGO_GYM_KERNEL=numpy``).
 
-For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` bit for bit
-(observations, rewards, terminations, truncations and the numeric infos), randomisation included, in the
-``NEXT_STEP`` (default), ``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation
-(``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
+For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
+terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
+``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
+the reference, bit for bit on one route (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
 """
 
 from __future__ import annotations
@@ -112,12 +112,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             registration's 600 unless given.
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
-        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed and
-            gives the reference's bits, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
+        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed, unless
+            ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
             functions of :mod:`amigo_gym.task.v1`), ``"numba"`` (the compiled step, :mod:`amigo_gym.sim.fast_v1_batch`)
             or ``"numba-parallel"`` (its loops on numba's threads), as for :class:`amigo_gym.envs.AmigoBotV1Env`
             and :class:`amigo_gym.envs.AmigoBotVectorEnv`. The compiled step runs the built-in path families;
-            a path object of another class runs the reference. All give the same results bit for bit.
+            a path object of another class runs the reference. All agree to 1e-9.
         params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
 
     Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
@@ -255,29 +255,62 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     def _begin_rows_kernel(
         self, idx: NDArray[np.intp], pose_opt: Array | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
-        """:meth:`_begin_rows` with the compiled step, as the single env's reset: each row's episode drawn by
-        :func:`tracking.start_episode` (H's projections, a new path's building loops and its start pose compiled), its
-        start state evaluated by the compiled
-        :func:`amigo_gym.task.v1.reset_columns` (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`), the
-        infos built from the workspace rows as in a step. The same results as :func:`tracking.begin_episode`."""
+        """:meth:`_begin_rows` with the compiled step: each row draws its path and episode from its own generator
+        (:func:`tracking.draw_path`, a new path built by the compiled loops, and :func:`tracking.draw_episode`, as
+        :func:`tracking.start_episode` draws them); the start states of the rows that share a path are computed
+        together on columns (:func:`tracking.start_state`; :func:`tracking.placed_state` for the ``pose`` option) and
+        evaluated by the compiled step (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`); the infos are built
+        from their records as in a step."""
         b = self._batch
         assert b is not None
+        k = self._k
         rows = idx.tolist()
-        paths, states, episodes = [], [], []
-        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled (the same paths)
-        for i in rows:
-            pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
-            path, info, ep, st = tracking.start_episode(self._rng(i), self._k, pose, b.progress, loops, b.pose)
-            self._set_row(i, info, st, ep)
+        m = len(rows)
+        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled
+        paths: list[Any] = []
+        episodes: list[tracking.Episode] = []
+        draws: list[tuple[float, float, float]] = []
+        groups: dict[int, list[int]] = {}  # the rows (positions in idx) of each path object
+        for j, i in enumerate(rows):
+            rng = self._rng(i)
+            path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
+            ep, u = tracking.draw_episode(rng, k.params)
             paths.append(path)
-            states.append(st)
             episodes.append(ep)
+            draws.append(u)
+            groups.setdefault(id(path), []).append(j)
+        ep_all = tracking.episode_columns(episodes)
+        u_all = np.array(draws, dtype=np.float64).reshape(m, 3)
+        cols: list[Any] = [np.zeros(m) for _ in _STATE_FIELDS[:-1]] + [np.zeros(m, dtype=np.int64)]
+        for js in groups.values():
+            sel = np.array(js, dtype=np.intp)
+            path = paths[js[0]]
+            ep = tracking.Episode(*(np.asarray(c)[sel] for c in ep_all))
+            st = tracking.start_state(k, path, ep, (u_all[sel, 0], u_all[sel, 1], u_all[sel, 2]))
+            if pose_opt is not None:
+                st = tracking.placed_state(k, path, ep, st, tuple(pose_opt[idx[sel]].T))
+            for col, value in zip(cols, st, strict=True):
+                col[sel] = value
+        st_all = tracking.State(*cols)
+        self._set_rows(idx, st_all, ep_all)
         self.paths.replace(idx, paths)
-        self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
-        obs = np.empty((len(rows), self._obs.shape[1]), dtype=np.float32)
-        infos = self._kernel_infos(idx, b.start(rows, paths, states, episodes, obs), True)[0]
+        self._goal[idx] = [tracking.goal_point(k.params, path) for path in paths]
+        obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
+        infos = self._kernel_infos(idx, b.start(rows, paths, st_all, ep_all, obs), True)[0]
         self._start_trails(idx, infos["h_position"])
         return obs, infos
+
+    def _set_rows(self, idx: NDArray[np.intp], st: tracking.State, ep: tracking.Episode) -> None:
+        """The robots ``idx`` start the episodes ``ep`` at ``st`` (``(m,)`` columns): their columns and command
+        rings."""
+        for name, col in zip(_STATE_FIELDS, st, strict=True):
+            np.asarray(getattr(self._state, name))[idx] = col
+        for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
+            np.asarray(getattr(self._episode, name))[idx] = col
+        # the command the robot was executing before the first step: its wheels' state (0 at rest)
+        w_max = self._k.w_max
+        self._ring[idx, :, 0] = (np.asarray(st.a1) * w_max)[:, None]
+        self._ring[idx, :, 1] = (np.asarray(st.a2) * w_max)[:, None]
 
     def _set_row(self, i: int, path_info: dict[str, Any], st: tracking.State, ep: tracking.Episode) -> None:
         """Robot ``i`` starts the episode ``ep`` at ``st``: its columns, command ring and path description."""

@@ -476,8 +476,8 @@ class ManoeuvrePath:
 
         The line's distance is ``hypot(x - s_line, y)`` with ``s_line = min(x, L)``, its cross-track error ``y``
         (``sign(y)`` times that distance beyond the segment's end). One point of Python floats runs
-        :func:`manoeuvre_foot` (the function AmigoBot-v0's compiled step compiles); columns run the same
-        operations on arrays (``tests/test_float_paths.py`` compares the two bit for bit).
+        :func:`manoeuvre_foot` (the function the compiled step compiles); columns run the same operations on
+        arrays.
         ``minimal=True``: the point and the tangent angle are not computed (NaN).
         """
         circle = self.circle

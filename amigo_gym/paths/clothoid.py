@@ -459,8 +459,7 @@ class ClothoidPath:
 # --------------------------------------------------------------------------- the float path of one point
 #
 # The pose and the projection on Python floats (one robot's step evaluates about 15 poses), and on arrays entry by
-# entry (locate_rows, pose_rows): the bits of the former vectorised column code, which tests/clothoid_columns.py
-# keeps as a reference (tests/test_float_paths.py compares them, ties and NaN included).
+# entry (locate_rows, pose_rows).
 #
 # The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
 # subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,

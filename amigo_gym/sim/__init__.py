@@ -1,7 +1,7 @@
-"""The compiled step: numba kernels that run the task's step for one robot or a batch, bit for bit as the
-Python float reference in :mod:`amigo_gym.task` (``kernel="numpy"``).
+"""The compiled step of AmigoBot-v0 and AmigoBot-v1: numba kernels that run :mod:`amigo_gym.task.v1`'s step for one
+robot (:mod:`amigo_gym.sim.fast_v1`) or a batch (:mod:`amigo_gym.sim.fast_v1_batch`), the scalar functions of the
+reference compiled (:mod:`amigo_gym.sim._kernels_v1`), agreeing with the reference (``kernel="numpy"``) to 1e-9.
 
-``fast`` / ``_kernels`` are AmigoBot-v0's; ``fast_v1`` / ``_kernels_v1`` / ``fast_v1_batch`` AmigoBot-v1's.
 numba is a core dependency where it ships wheels (the ``fast`` extra elsewhere): without it every env runs the
 reference.
 """

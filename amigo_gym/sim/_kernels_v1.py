@@ -87,6 +87,7 @@ __all__ = [
 F64 = NDArray[np.float64]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 
 _shared = shared_compiler(
     "amigo_gym.sim._kernels_v1",
@@ -137,6 +138,31 @@ def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
 _alloca_once: Any = cgutils.alloca_once
 _cpointer: Any = numba.types.CPointer
 _carray: Any = numpy_support.carray
+
+
+def _data_ptr_typing(typingctx: Any, arr: Any) -> Any:
+    """Typing and code of :data:`_data_ptr` (``numba.extending.intrinsic``)."""
+    if not isinstance(arr, numba.types.Array):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        return context.make_array(signature.args[0])(context, builder, args[0]).data
+
+    return _cpointer(arr.dtype)(arr), codegen
+
+
+#: ``_data_ptr(a)``: the pointer to the data of the array ``a``; ``_carray(_data_ptr(a), n)`` is a view of its first
+#: ``n`` elements without a reference count (the callee's calls then count no references: no atomic operations per
+#: call; used while ``a`` lives)
+_data_ptr: Any = intrinsic(_data_ptr_typing)
+
+
+@_jit_inline
+def _bare(a: Any) -> Any:
+    # the 1-D C-contiguous array a as a view without a reference count (_data_ptr)
+    return _carray(_data_ptr(a), a.shape[0])
+
+
 #: ``_stack_ptr(n)``: a pointer to ``n`` float64 (a compile-time constant) on the stack of the compiled function that
 #: calls it; ``_carray(_stack_ptr(n), n)`` is a node buffer without an allocation per pose or step (used within that
 #: call only)
@@ -678,7 +704,8 @@ def _ideal_step(
     )
 
 
-_RECORD_WS = L.RECORD_WS
+#: the workspace entries of the record (an array constant of the compiled code)
+_RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
 _N_RECORD_WS = len(L.RECORD_WS)
 _smooth_term = _shared(task.smooth_term)
 _reward_product = _shared(task.reward_product)
@@ -722,7 +749,9 @@ def step_record(
 ) -> None:
     """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
     (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
-    step(c, pv, ring, ws, obs, ring_step, a1, a2)
+    ring2 = _carray(_data_ptr(ring), ring.shape)
+    c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
+    step(c, pv, ring2, ws, obs, ring_step, a1, a2)
     fill_record(ws, rec, smooth_weight)
 
 
@@ -769,12 +798,42 @@ def _step_rows(
 
     The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
     """
+    c = _bare(c)
     for i in numba.prange(ws.shape[0]):
-        row = ws[i]
+        row = _bare(ws[i])
         for j in range(logs.shape[1]):
             row[L.S_LOG + j] = logs[i, j]
-        step(c, flat[starts[i] : stops[i]], rings[i], row, obs[i], ring_step, a1[i], a2[i])
-        fill_record(row, rec[i], smooth_weight)
+        ring = _carray(_data_ptr(rings[i]), rings.shape[1:])
+        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
+        rec_i = _bare(rec[i])
+        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i])
+        fill_record(row, rec_i, smooth_weight)
+
+
+@_jit
+def start_rows(
+    c: F64,
+    flat: F64,
+    starts: NDArray[np.int64],
+    stops: NDArray[np.int64],
+    ws: F64,
+    obs: NDArray[np.floating],
+    rec: F64,
+    rows: NDArray[np.int64],
+    v_true: F64,
+    t: F64,
+    smooth_weight: float,
+) -> None:
+    """:func:`evaluate` and :func:`fill_record` of the start states in the rows ``rows (m,)`` of ``ws`` (their paths
+    ``flat[starts[i]:stops[i]]``): the observations into ``obs (m, D)``, the info records into ``rec (m,
+    RECORD_WIDTH)``; ``v_true``, ``t`` ``(m,)`` the start speeds [m/s] and times [s]."""
+    c = _bare(c)
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        row = _bare(ws[i])
+        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
+        evaluate(c, pv, row, _bare(obs[j]), v_true[j], t[j])
+        fill_record(row, _bare(rec[j]), smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

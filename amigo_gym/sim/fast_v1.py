@@ -232,6 +232,7 @@ def path_loops() -> PathLoops:
     return loops
 
 
+@lru_cache(maxsize=1)
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym.sim._kernels_v1` (imports numba on the first call)."""
     announce_compilation()

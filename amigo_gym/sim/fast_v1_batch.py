@@ -178,30 +178,33 @@ class BatchKernel:
         self.__dict__.update(state)
         self._bind()
 
-    def load(
-        self,
-        rows: Sequence[int],
-        paths: Sequence[ClothoidPath],
-        states: Sequence[tracking.State],
-        episodes: Sequence[tracking.Episode],
-    ) -> None:
-        """Start the episodes of ``rows``: their paths, states (of floats) and episodes into the workspace.
+    def load(self, rows: Sequence[int], paths: Sequence[Any], st: tracking.State, ep: tracking.Episode) -> None:
+        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns,
+        :func:`amigo_gym.task.v1.episode_columns`) into the workspace, as
+        :meth:`amigo_gym.sim.fast_v1.StepKernel.load` loads one robot's.
 
         Raises:
             TypeError: a path is not one the compiled step runs (:func:`amigo_gym.sim.fast_v1.compiled_path`).
         """
-        one = self._row
-        ws = self.ws
-        state = slice(fast_v1.W_X, fast_v1.W_L3D + 1)  # the state and the episode's constants
-        draws = slice(fast_v1.W_SLIP_MAX, fast_v1.W_NOISE_ON + 1)  # the slip bound, whether the episode draws
-        for i, path, st, ep in zip(rows, paths, states, episodes, strict=True):
+        for i, path in zip(rows, paths, strict=True):
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
-            one.load(path, st, ep, tracking.ep_l3_differs(self._k, ep))
-            ws[i, state] = one.ws[state]
-            ws[i, draws] = one.ws[draws]
-            self.keys[i] = one.key
-            self.noise_on[i] = one.noise_on
+        r = np.asarray(rows, dtype=np.intp)
+        ws = self.ws
+        ws[r, fast_v1.W_X : fast_v1.W_STEPS + 1] = np.column_stack(
+            [np.asarray(c, dtype=np.float64) for c in st]
+        )  # the state's fields in WS_FIELDS' order
+        ws[r, fast_v1.W_CASTOR] = 0.0
+        l3_differs = np.asarray(ep.l3) != self._k.l3
+        ws[r, fast_v1.W_R1 : fast_v1.W_L3D + 1] = np.column_stack(
+            (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
+        )
+        # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
+        noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
+        ws[r, fast_v1.W_SLIP_MAX] = ep.slip_max
+        ws[r, fast_v1.W_NOISE_ON] = noise_on
+        self.keys[r] = ep.key
+        self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
@@ -217,32 +220,32 @@ class BatchKernel:
     def start(
         self,
         rows: Sequence[int],
-        paths: Sequence[ClothoidPath],
-        states: Sequence[tracking.State],
-        episodes: Sequence[tracking.Episode],
+        paths: Sequence[Any],
+        st: tracking.State,
+        ep: tracking.Episode,
         obs: NDArray[np.floating[Any]],
     ) -> Array:
         """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.task.v1.reset_columns`,
-        compiled: :func:`amigo_gym.sim._kernels_v1.evaluate`, as the single env's reset).
+        compiled: :func:`amigo_gym.sim._kernels_v1.start_rows`, as the single env's reset).
 
         Args:
-            obs: ``(len(rows), D)``, written: the rows' observations.
+            obs: ``(len(rows), D)`` C-contiguous, written: the rows' observations.
 
         Returns:
             ``(len(rows), RECORD_WIDTH)``, new: the rows' info records (:func:`amigo_gym.sim._kernels_v1.fill_record`,
             as the single env's :meth:`amigo_gym.sim.fast_v1.StepKernel.fill`; the command and slip entries are the
             workspace's, which the caller replaces by a start's).
         """
-        self.load(rows, paths, states, episodes)
-        c = self.consts
-        flat, starts, stops = self.arena.flat, self.arena.starts, self.arena.stops
-        rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
-        one, sw = self._row, self._row.smooth_weight
-        for j, (i, st, ep) in enumerate(zip(rows, states, episodes, strict=True)):
-            v_true, t = tracking.start_speed_time(st, ep)
-            ws = self.ws[i]
-            one.evaluate(c, flat[starts[i] : stops[i]], ws, obs[j], v_true, t)
-            one._fill(ws, rec[j], sw)
+        self.load(rows, paths, st, ep)
+        v_true, t = tracking.start_speed_time(st, ep)
+        m = len(rows)
+        rec = np.empty((m, layout_v1.RECORD_WIDTH))
+        a = self.arena
+        fast_v1.kernels().start_rows(
+            self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, np.asarray(rows, dtype=np.int64),
+            np.broadcast_to(np.asarray(v_true, dtype=np.float64), (m,)).copy(),
+            np.broadcast_to(np.asarray(t, dtype=np.float64), (m,)).copy(), self._row.smooth_weight,
+        )  # fmt: skip
         return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:

@@ -46,7 +46,7 @@ The step is written once: AmigoBot-v0's reference step is AmigoBot-v1's ideal st
 (:func:`amigo_gym.task.v1.step_columns` and ``reset_columns`` of :func:`amigo_gym.task.v1.v0_configuration`, what
 ``kernel="numpy"`` runs and what the compiled step is tested against), which calls the pieces here
 (:func:`observe_columns`, :func:`reward_term_columns`, :func:`steady_heading`, :func:`bound_angle`); they take plain
-scalars or ``(N,)`` arrays alike (``tests/test_columns.py``, ``tests/test_float_paths.py``).
+scalars or ``(N,)`` arrays alike (``tests/test_columns.py``).
 
 One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
 reader decodes the observation by these names) and the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,

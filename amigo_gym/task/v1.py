@@ -1617,9 +1617,26 @@ def start_episode(
     ep, u = draw_episode(rng, k.params)
     st = start_state(k, path, ep, u, progress, path_pose)
     if pose is not None:
-        x, y, b = (float(c) for c in pose)
-        hx = x + ep.l3 * col_cos(b)
-        hy = y + ep.l3 * col_sin(b)
-        s_h = _progress(k, path, hx, hy, 0.0, progress)
-        st = st._replace(x=x, y=y, beta=b, progress=float(s_h))
+        st = placed_state(k, path, ep, st, tuple(float(c) for c in pose), progress)
+        st = st._replace(progress=float(st.progress))
     return path, info, ep, st
+
+
+def placed_state(
+    k: Constants, path: Any, ep: Episode, st: State, pose: tuple[Real, ...], progress: ProgressFn | None = None
+) -> State:
+    """The start state ``st`` with A at ``pose = (x_A, y_A, beta)`` [m, m, rad] instead (floats or columns), H
+    ``l3`` (true) ahead of it and H's progress there (from the hint 0)."""
+    x, y, b = pose
+    hx = x + ep.l3 * col_cos(b)
+    hy = y + ep.l3 * col_sin(b)
+    return st._replace(x=x, y=y, beta=b, progress=_progress(k, path, hx, hy, 0.0, progress))
+
+
+def episode_columns(episodes: list[Episode]) -> Episode:
+    """Episodes of several robots as one :class:`Episode` of ``(m,)`` columns (``lag`` int64, ``key`` uint64)."""
+    cols = list(zip(*episodes, strict=True))
+    types: dict[str, Any] = {"lag": np.int64, "key": np.uint64}
+    fields = zip(Episode._fields, cols, strict=True)
+    arrays: list[Any] = [np.array(c, dtype=types.get(f, np.float64)) for f, c in fields]
+    return Episode(*arrays)

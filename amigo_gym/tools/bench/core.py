@@ -191,10 +191,7 @@ def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, para
     k, st, ep = v0_columns(params, pose, w)
     n = len(pose)
     b = BatchKernel(k, n, parallel=parallel)
-    cols: list[Any] = [*st, *ep]
-    rows = [tracking.State(*(c[i].item() for c in cols[:11])) for i in range(n)]
-    eps = [tracking.Episode(*(c[i].item() for c in cols[11:])) for i in range(n)]
-    b.load(range(n), [k.params.path] * n, rows, eps)
+    b.load(range(n), [k.params.path] * n, st, ep)
     rings = np.zeros((n, k.ring_length, 2))
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
     obs = np.empty((n, len(tracking.obs_fields(k.params))), dtype=np.float32)
