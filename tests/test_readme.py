@@ -110,3 +110,12 @@ def test_every_python_block_of_the_readme_runs_when_pasted_alone() -> None:
             env={**os.environ, "AMIGO_GYM_KERNEL": "numpy"},
         )
         assert r.returncode == 0, f"README block fails:\n{block}\n{r.stderr[-2000:]}"
+
+
+def test_architecture_page_is_short_with_its_picture_and_table() -> None:
+    """docs/architecture.md is read by a newcomer in minutes: at most 300 lines, with the layer picture, the "which
+    file to edit" table and the tolerance decision; history lives in git and CHANGELOG.md."""
+    page = (ROOT / "docs" / "architecture.md").read_text()
+    assert len(page.splitlines()) <= 300
+    assert "figures/layers.png" in page and "## Which file to edit" in page and "1e-9" in page
+    assert (ROOT / "CHANGELOG.md").is_file()

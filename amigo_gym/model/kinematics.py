@@ -122,8 +122,8 @@ def cos_sin(x: Real) -> tuple[Real, Real]:
 
 # Pure arithmetic, written once: these functions take floats or arrays alike (no numpy call, no branch on a
 # value), so the reference runs them as Python on floats and on ``(N,)`` arrays, and the compiled steps
-# (:mod:`amigo_gym.sim`) compile the very same functions with ``numba.njit`` (docs/architecture.md, "The compiled
-# step"). Keep them so: arithmetic, comparisons and the ``math`` functions numba compiles to the same IEEE
+# (:mod:`amigo_gym.sim`) compile the very same functions with ``numba.njit`` (docs/architecture.md, "One robot,
+# one step"). Keep them so: arithmetic, comparisons and the ``math`` functions numba compiles to the same IEEE
 # operations; a change of any source file gives the kernels a fresh disk cache (`sim.layout.kernel_cache`).
 
 

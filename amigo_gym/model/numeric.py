@@ -3,7 +3,7 @@ r"""Elementwise helpers written once for Python floats, numpy columns and the co
 The reference's pieces of physics and of the task are *polymorphic*: one function computes one robot on Python
 floats (the single env) and ``N`` robots on ``(N,)`` columns (the vector env), and the compiled steps
 (:mod:`amigo_gym.sim._kernels_v1`) compile the very same function
-(docs/architecture.md, "The compiled step"). What differs between floats and columns is confined to the helpers
+(docs/architecture.md, "One robot, one step"). What differs between floats and columns is confined to the helpers
 below: each ``*_real`` function dispatches on the type (numpy's ufunc on an array, its ``*_float`` form on a
 float), and each ``*_float`` form is plain float code in numba's subset with **numpy's rules** (NaN, ties, signed
 zeros), so that a float and a column give the same bits.

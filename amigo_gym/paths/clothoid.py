@@ -464,7 +464,7 @@ class ClothoidPath:
 # The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
 # subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
 # no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
-# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "The compiled step"), so the projection is written once: the
+# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "One robot, one step"), so the projection is written once: the
 # piece search, wrap and placement of a pose, the coarse search, the Newton loop, the foot terms, the status and the
 # pose (pose_flat, whose quadrature is fresnel's node functions: numpy's cosines and sines of the nodes here, the C
 # library's in compiled code, fresnel.cos_sin_nodes' overload, checked equal per process).

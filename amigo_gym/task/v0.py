@@ -274,7 +274,7 @@ def initial_wheel_rates(params: EnvParams) -> Array:
 
 # The scalar pieces of the step, written once in numba's subset (plain floats and ``math``; the arithmetic ones
 # take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels_v1`)
-# compiles these very functions (docs/architecture.md, "The compiled step").
+# compiles these very functions (docs/architecture.md, "One robot, one step").
 
 
 def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
