@@ -151,6 +151,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         check_memory(owner, int(num_envs), p, render_mode)
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
         fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
+        self._template = None if fixed is None else tracking.episode_template(p)
         n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
@@ -266,8 +268,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         k = self._k
         rows = idx.tolist()
         m = len(rows)
-        fixed = tracking.fixed_path(k.params)
-        template = None if fixed is None else tracking.episode_template(k.params)
+        template = self._template
+        fixed = None if template is None else tracking.fixed_path(k.params)
         if template is not None:  # one path, episodes that differ in their start offsets alone: one draw per row
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]  # (a fixed path: no draw)

@@ -204,7 +204,7 @@ class BatchKernel:
         Raises:
             TypeError: a path is not one the compiled step runs (:func:`amigo_gym.sim.fast_v1.compiled_path`).
         """
-        for i, path in zip(rows, paths, strict=True):
+        for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
