@@ -841,22 +841,23 @@ def _step_rows(
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arguments of the arc step's two
-    tangents (:func:`_ideal_motion`) of every row into ``tans (N, 2)``, whose ``np.tan`` the caller takes."""
+    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arc step's two tangents (the C
+    library's ``tan`` of :func:`_ideal_motion`'s arguments, as :func:`_ideal_step`) of every row into ``tans (N, 2)``,
+    in a loop of their own (the rows' calls overlap)."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
         arg_h, arg_m = _ideal_motion(c, _bare(ws[i]), w1, w2)[3:]
-        tans[i, 0] = arg_h
-        tans[i, 1] = arg_m
+        tans[i, 0] = math.tan(arg_h)
+        tans[i, 1] = math.tan(arg_m)
 
 
 def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`step` of every row (ideal actuators, no per-step draws: :func:`_ideal_move`) with the tangents
-    ``tans (N, 2)`` (numpy's of pass 1's arguments), the record's workspace entries into ``rec`` and the reward's
+    """Pass 2: :func:`step` of every row (ideal actuators, no per-step draws: :func:`_ideal_move`) with pass 1's
+    tangents ``tans (N, 2)``, the record's workspace entries into ``rec`` and the reward's
     three exponential arguments into ``exps (N, 3)`` (for :func:`_record_rows`); rows as in :func:`_step_rows`."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):

@@ -12,9 +12,9 @@ is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fa
    exponentials (:func:`amigo_gym.model.kinematics.col_exp`), its terms and the reward.
 
 With ideal actuators and no per-step draws (AmigoBot-v0's settings) a step is three loops instead
-(:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``, ``record_rows``), numpy's vectorised
-``np.tan`` of the arc step's tangents between the first two and the reward's exponentials in a loop of their own: the
-same functions per row, the tangents numpy's (to 1e-9 of the single env's, whose are the C library's).
+(:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``, ``record_rows``): the arc step's tangents and
+the reward's exponentials each in a loop of their own (the rows' independent calls overlap; the exponentials' loop
+is vectorised), the same functions per row in the same order: the single env's bits.
 
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
 compiled :func:`amigo_gym.sim._kernels_v1.evaluate` and :func:`amigo_gym.sim._kernels_v1.fill_record`, as the
@@ -286,7 +286,6 @@ class BatchKernel:
         sw = self._row.smooth_weight
         if self.ideal and not self.noise_on.any():  # (rows that draw slips take the general step)
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
-            np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
             self._record_rows(self._exps, rec, sw)
             return rec
