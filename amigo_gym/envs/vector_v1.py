@@ -151,6 +151,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         check_memory(owner, int(num_envs), p, render_mode)
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
         fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
+        self._template = None if fixed is None else tracking.episode_template(p)
         n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
@@ -266,21 +268,18 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         k = self._k
         rows = idx.tolist()
         m = len(rows)
-        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled
-        paths: list[Any] = []
-        episodes: list[tracking.Episode] = []
-        draws: list[tuple[float, float, float]] = []
-        groups: dict[int, list[int]] = {}  # the rows (positions in idx) of each path object
-        for j, i in enumerate(rows):
-            rng = self._rng(i)
-            path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
-            ep, u = tracking.draw_episode(rng, k.params)
-            paths.append(path)
-            episodes.append(ep)
-            draws.append(u)
-            groups.setdefault(id(path), []).append(j)
-        ep_all = tracking.episode_columns(episodes)
-        u_all = np.array(draws, dtype=np.float64).reshape(m, 3)
+        template = self._template
+        fixed = None if template is None else tracking.fixed_path(k.params)
+        if template is not None:  # one path, episodes that differ in their start offsets alone: one draw per row
+            paths: list[Any] = [fixed] * m
+            info = tracking.draw_path(self._rng(rows[0]), k.params)[1]  # (a fixed path: no draw)
+            for i in rows:
+                self.path_infos[i] = dict(info)
+            ep_all = tracking.Episode(*(np.repeat(c, m) for c in tracking.episode_columns([template])))
+            u_all = np.array([self._rng(i).uniform(-1.0, 1.0, size=3) for i in rows]).reshape(m, 3)
+            groups = {id(fixed): list(range(m))}
+        else:
+            paths, ep_all, u_all, groups = self._draw_rows(rows)
         cols: list[Any] = [np.zeros(m) for _ in _STATE_FIELDS[:-1]] + [np.zeros(m, dtype=np.int64)]
         for js in groups.values():
             sel = np.array(js, dtype=np.intp)
@@ -291,14 +290,35 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
                 st = tracking.placed_state(k, path, ep, st, tuple(pose_opt[idx[sel]].T))
             for col, value in zip(cols, st, strict=True):
                 col[sel] = value
+            self._goal[idx[sel]] = tracking.goal_point(k.params, path)
         st_all = tracking.State(*cols)
         self._set_rows(idx, st_all, ep_all)
-        self.paths.replace(idx, paths)
-        self._goal[idx] = [tracking.goal_point(k.params, path) for path in paths]
+        if template is None or any(self.paths[i] is not fixed for i in rows):  # (a fixed path: mostly there)
+            self.paths.replace(idx, paths)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
         infos = self._kernel_infos(idx, b.start(rows, paths, st_all, ep_all, obs), True)[0]
         self._start_trails(idx, infos["h_position"])
         return obs, infos
+
+    def _draw_rows(self, rows: list[int]) -> tuple[list[Any], tracking.Episode, Array, dict[int, list[int]]]:
+        """Each of ``rows`` draws its path and episode from its own generator (:func:`tracking.draw_path`, a new path
+        built by the compiled loops, and :func:`tracking.draw_episode`): the paths, the episodes as columns, the start
+        offsets ``(m, 3)`` and the positions in ``rows`` of each path object."""
+        k = self._k
+        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled
+        paths: list[Any] = []
+        episodes: list[tracking.Episode] = []
+        draws: list[tuple[float, float, float]] = []
+        groups: dict[int, list[int]] = {}
+        for j, i in enumerate(rows):
+            rng = self._rng(i)
+            path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
+            ep, u = tracking.draw_episode(rng, k.params)
+            paths.append(path)
+            episodes.append(ep)
+            draws.append(u)
+            groups.setdefault(id(path), []).append(j)
+        return paths, tracking.episode_columns(episodes), np.array(draws, dtype=np.float64).reshape(-1, 3), groups
 
     def _set_rows(self, idx: NDArray[np.intp], st: tracking.State, ep: tracking.Episode) -> None:
         """The robots ``idx`` start the episodes ``ep`` at ``st`` (``(m,)`` columns): their columns and command

@@ -613,13 +613,7 @@ def step(
     if ws[L.W_NOISE_ON] != 0.0:
         _normals(c, ws)
     else:
-        ws[L.W_SLIP1] = 0.0
-        ws[L.W_SLIP2] = 0.0
-        ws[L.W_NX] = 0.0
-        ws[L.W_NY] = 0.0
-        ws[L.W_NB] = 0.0
-        ws[L.W_NR1] = 0.0
-        ws[L.W_NR2] = 0.0
+        _no_draws(ws)
     # tracking.action_commands; actuators.ring_write, ring_read: their slots
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     if c[L.C_IDEAL] != 0.0:
@@ -668,17 +662,47 @@ def step(
 
 
 @_jit
+def _no_draws(ws: F64) -> None:
+    # a step without per-step draws: zero slips and noise in ws
+    ws[L.W_SLIP1] = 0.0
+    ws[L.W_SLIP2] = 0.0
+    ws[L.W_NX] = 0.0
+    ws[L.W_NY] = 0.0
+    ws[L.W_NB] = 0.0
+    ws[L.W_NR1] = 0.0
+    ws[L.W_NR2] = 0.0
+
+
+@_jit
+def _ideal_motion(c: F64, ws: F64, w1: float, w2: float) -> tuple[float, float, float, float, float]:
+    # tracking._ideal_step's motion at the wheel rates (w1, w2) [rad/s] up to its two tangents: (v_A [m/s], betadot
+    # [rad/s], h = betadot dt / 2 [rad], and the tangents' arguments h / 2 and (beta + h) / 2 [rad])
+    v, bdot = _body_velocity(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
+    h = 0.5 * (bdot * c[L.C_DT])
+    return v, bdot, h, 0.5 * h, 0.5 * (ws[L.W_BETA] + h)
+
+
+@_jit
 def _ideal_step(
     c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float
 ) -> None:
-    # tracking._ideal_step: the wheel rates are the commands (w1, w2) [rad/s], held over dt; the exact arc step
-    # (kinematics.arc_step: arc_from_tangents of the two tangents), the heading bounded (task.v0.bound_angle), the
-    # wheel and castor angles advanced; then the evaluation with the new heading's cosine and sine
+    # tracking._ideal_step: _ideal_move with the C library's tangents
+    v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, w1, w2)
+    _ideal_move(c, pv, ws, obs, c1, c2, w1, w2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
+
+
+@_jit
+def _ideal_move(
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float, v: float,
+    bdot: float, h: float, t_h: float, t_m: float,
+) -> None:  # fmt: skip
+    # tracking._ideal_step from _ideal_motion's (v, bdot, h) and the tangents t_h = tan(h / 2), t_m = tan((beta + h)
+    # / 2): the wheel rates are the commands (w1, w2) [rad/s], held over dt; the exact arc step (kinematics.arc_step:
+    # arc_from_tangents), the heading bounded (task.v0.bound_angle), the wheel and castor angles advanced; then the
+    # evaluation with the new heading's cosine and sine
     dt = c[L.C_DT]
-    v, bdot = _body_velocity(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
     beta = ws[L.W_BETA]
-    h = 0.5 * (bdot * dt)
-    x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, math.tan(0.5 * h), math.tan(0.5 * (beta + h)))
+    x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, t_h, t_m)
     if c[L.C_REWARD_V0] != 0.0:
         da1 = w1 - ws[L.W_W1]
         da2 = w2 - ws[L.W_W2]
@@ -717,12 +741,18 @@ def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
     :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments
     (:func:`amigo_gym.model.kinematics.col_exp`, the reference's), the smoothness term and the reward
     (:func:`record_terms`)."""
-    for j in range(_N_RECORD_WS):
-        rec[j] = ws[_RECORD_WS[j]]
+    _record_entries(ws, rec)
     rec[L.R_TRACK] = kinematics.col_exp(ws[L.W_ARG_T])
     rec[L.R_SPEED] = kinematics.col_exp(ws[L.W_ARG_V])
     rec[L.R_SMOOTH_EXP] = kinematics.col_exp(ws[L.W_ARG_S])
     record_terms(rec, smooth_weight)
+
+
+@_jit
+def _record_entries(ws: F64, rec: F64) -> None:
+    # the record's workspace entries (layout_v1.RECORD_WS)
+    for j in range(_N_RECORD_WS):
+        rec[j] = ws[_RECORD_WS[j]]
 
 
 @_jit
@@ -810,6 +840,53 @@ def _step_rows(
         fill_record(row, rec_i, smooth_weight)
 
 
+def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
+    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arc step's two tangents (the C
+    library's ``tan`` of :func:`_ideal_motion`'s arguments, as :func:`_ideal_step`) of every row into ``tans (N, 2)``,
+    in a loop of their own (the rows' calls overlap)."""
+    c = _bare(c)
+    for i in numba.prange(ws.shape[0]):
+        w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
+        arg_h, arg_m = _ideal_motion(c, _bare(ws[i]), w1, w2)[3:]
+        tans[i, 0] = math.tan(arg_h)
+        tans[i, 1] = math.tan(arg_m)
+
+
+def _ideal_rows(
+    c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
+    a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
+) -> None:  # fmt: skip
+    """Pass 2: :func:`step` of every row (ideal actuators, no per-step draws: :func:`_ideal_move`) with pass 1's
+    tangents ``tans (N, 2)``, the record's workspace entries into ``rec`` and the reward's
+    three exponential arguments into ``exps (N, 3)`` (for :func:`_record_rows`); rows as in :func:`_step_rows`."""
+    c = _bare(c)
+    for i in numba.prange(ws.shape[0]):
+        row = _bare(ws[i])
+        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
+        _no_draws(row)
+        c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
+        v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
+        _ideal_move(c, pv, row, _bare(obs[i]), c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
+        _record_entries(row, _bare(rec[i]))
+        exps[i, 0] = row[L.W_ARG_T]
+        exps[i, 1] = row[L.W_ARG_V]
+        exps[i, 2] = row[L.W_ARG_S]
+
+
+def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
+    """Pass 3: :func:`fill_record`'s exponentials of ``exps (N, 3)`` (:func:`amigo_gym.model.kinematics.col_exp`, in
+    place, in a loop of their own over a flat view: LLVM vectorises it), then the records' terms and rewards."""
+    flat = exps.reshape(exps.size)
+    for j in numba.prange(flat.shape[0]):
+        flat[j] = kinematics.col_exp(flat[j])
+    for i in numba.prange(rec.shape[0]):
+        r = _bare(rec[i])
+        r[L.R_TRACK] = exps[i, 0]
+        r[L.R_SPEED] = exps[i, 1]
+        r[L.R_SMOOTH_EXP] = exps[i, 2]
+        record_terms(r, smooth_weight)
+
+
 @_jit
 def start_rows(
     c: F64,
@@ -841,3 +918,9 @@ noise_rows = _jit(_twin(_noise_rows, "noise_rows"))
 noise_rows_parallel = _jit_parallel(_twin(_noise_rows, "noise_rows_parallel"))
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
+ideal_tangent_rows = _jit(_twin(_ideal_tangent_rows, "ideal_tangent_rows"))
+ideal_tangent_rows_parallel = _jit_parallel(_twin(_ideal_tangent_rows, "ideal_tangent_rows_parallel"))
+ideal_rows = _jit(_twin(_ideal_rows, "ideal_rows"))
+ideal_rows_parallel = _jit_parallel(_twin(_ideal_rows, "ideal_rows_parallel"))
+record_rows = _jit(_twin(_record_rows, "record_rows"))
+record_rows_parallel = _jit_parallel(_twin(_record_rows, "record_rows_parallel"))

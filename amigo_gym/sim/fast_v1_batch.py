@@ -11,6 +11,11 @@ is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fa
    ring and workspace row, and writes its info record: the single environment's record, with the reward's
    exponentials (:func:`amigo_gym.model.kinematics.col_exp`), its terms and the reward.
 
+With ideal actuators and no per-step draws (AmigoBot-v0's settings) a step is three loops instead
+(:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``, ``record_rows``): the arc step's tangents and
+the reward's exponentials each in a loop of their own (the rows' independent calls overlap; the exponentials' loop
+is vectorised), the same functions per row in the same order: the single env's bits.
+
 Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
 compiled :func:`amigo_gym.sim._kernels_v1.evaluate` and :func:`amigo_gym.sim._kernels_v1.fill_record`, as the
 single environment's reset.
@@ -152,6 +157,10 @@ class BatchKernel:
         self.noise_on = np.zeros(n, dtype=np.bool_)
         self._u1: Array = np.ones((n, m))
         self._logs: Array = np.zeros((n, m))
+        #: the three-loop step of ideal actuators without per-step draws (module docstring), and its scratch
+        self.ideal = k.params.ideal_actuators and m == 0
+        self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
+        self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
         self._bind()
 
     def _bind(self) -> None:
@@ -168,10 +177,19 @@ class BatchKernel:
         self._noise_rows: Any = fast_v1.direct_call(noise_rows, f1, f2, keys, f2)
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, 0.0)
         self._step_rows: Any = fast_v1.direct_call(step_rows, *args)
+        if self.ideal:
+            par = "_parallel" if self.parallel else ""
+            self._ideal_tangent_rows: Any = fast_v1.direct_call(
+                getattr(kv, "ideal_tangent_rows" + par), f1, f2, f1, f1, f2
+            )
+            ideal = (f1, f1, i1, i1, f2, obs, f1, f1, f2, f2, f2)
+            self._ideal_rows: Any = fast_v1.direct_call(getattr(kv, "ideal_rows" + par), *ideal)
+            self._record_rows: Any = fast_v1.direct_call(getattr(kv, "record_rows" + par), f2, f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        del state["_noise_rows"], state["_step_rows"]
+        for name in ("_noise_rows", "_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
+            state.pop(name, None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -186,7 +204,7 @@ class BatchKernel:
         Raises:
             TypeError: a path is not one the compiled step runs (:func:`amigo_gym.sim.fast_v1.compiled_path`).
         """
-        for i, path in zip(rows, paths, strict=True):
+        for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
@@ -263,13 +281,18 @@ class BatchKernel:
         """
         c = self.consts
         ws = self.ws
+        a = self.arena
+        rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
+        sw = self._row.smooth_weight
+        if self.ideal and not self.noise_on.any():  # (rows that draw slips take the general step)
+            self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
+            self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
+            self._record_rows(self._exps, rec, sw)
+            return rec
         if self._u1.shape[1]:  # normal draws: their uniforms, numpy's logarithms of the whole block
             self._noise_rows(c, ws, self.keys, self._u1)
             np.log(self._u1, out=self._logs)
         elif self.noise_on.any():  # slips only
             self._noise_rows(c, ws, self.keys, self._u1)
-        a = self.arena
-        rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
-        sw = self._row.smooth_weight
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, rec, sw)
         return rec

@@ -1296,6 +1296,25 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     return ep, (u0, u1, u2)
 
 
+def episode_template(p: TrackingParams) -> Episode | None:
+    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u``, else ``None``.
+
+    That is a fixed speed, no randomised range (:func:`amigo_gym.model.randomization.sample` draws nothing) and no key
+    (ideal actuators without noise): AmigoBot-v0's settings. Each episode's draws are then
+    ``rng.uniform(-1.0, 1.0, size=3)`` alone, as in :func:`draw_episode`.
+    """
+    lo, hi = p.speed_range
+    r = p.randomize
+    if (
+        lo != hi
+        or not p.ideal_actuators
+        or r.has_noise
+        or any(a != b for a, b in (r.wheel_radius, r.track, r.slip, r.delay))
+    ):
+        return None
+    return draw_episode(np.random.default_rng(0), p)[0]  # (the generator's draws are u alone, not in the episode)
+
+
 #: ``(path, x, y, hint) -> progress``: H's progress [m] at ``(x, y)`` from the hint, as
 #: ``path.locate(x, y, hint, k.window, k.window).progress`` (the single env passes its compiled twin)
 ProgressFn = Callable[[Any, Any, Any, Any], Real]
