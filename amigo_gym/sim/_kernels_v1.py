@@ -179,7 +179,7 @@ _place = _shared(clothoid.place)
 _pose_flat = _shared(clothoid.pose_flat)
 
 
-#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "The compiled step")
+#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "One robot, one step")
 _heading_error = _shared(task.heading_error)
 _heading_term = _shared(task.heading_term)
 _reward_arguments = _shared(task.reward_arguments)
