@@ -429,3 +429,16 @@ def test_spec_json_round_trip_rebuilds_v1() -> None:
     a, _ = env.reset(seed=4)
     b, _ = again.reset(seed=4)
     np.testing.assert_array_equal(a, b)
+
+
+def test_a_missing_robot_file_names_the_keyword(tmp_path: Any) -> None:
+    """``true_robot`` given as a path to a robot file that does not exist (or is not one): one line that names the
+    keyword and the file."""
+    with pytest.raises(FileNotFoundError, match=r"^AmigoBotV1Env: true_robot: robot file 'abc' does not exist") as e:
+        gym.make("AmigoBot-v1", true_robot="abc")
+    assert "\n" not in str(e.value)
+    bad = tmp_path / "robot.json"
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match=r"true_robot: .*robot\.json") as e2:
+        gym.make("AmigoBot-v1", true_robot=str(bad))
+    assert "\n" not in str(e2.value)

@@ -495,7 +495,10 @@ def make_tracking_params(
         # a robot file (robot.json of `amigo-gym identify`): r1, r2, l1 [m] and the actuators' delay [s], ramps
         from amigo_gym.logs import load_robot_file
 
-        tr, act_file = load_robot_file(tr)
+        try:
+            tr, act_file = load_robot_file(tr)
+        except (FileNotFoundError, ValueError) as exc:
+            raise type(exc)(f"{owner}: true_robot: {exc}") from None
     if isinstance(tr, Mapping):
         settings["true_robot"] = _robot_from_mapping(owner, "true_robot", robot, tr)
     act = settings.get("actuators")
