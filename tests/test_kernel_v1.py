@@ -24,6 +24,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
+from test_v0_as_v1 import V0_CONFIG
 
 from amigo_gym.envs import AmigoBotV1Env
 from amigo_gym.paths import CirclePath, ManoeuvrePath
@@ -34,15 +35,7 @@ from amigo_gym.task import v1 as tracking
 pytest.importorskip("numba", reason="the compiled v1 step needs numba (the extra amigo_gym[fast])")
 
 #: AmigoBot-v0's settings of AmigoBot-v1 (tests/test_v0_as_v1.py), without the path
-V0: dict[str, Any] = {
-    "ideal_actuators": True,
-    "observation": "v0",
-    "reward": "v0",
-    "randomize": "none",
-    "start_at_rest": False,
-    "preview": (0.2, 0.4),
-    "speed": 0.2,
-}
+V0: dict[str, Any] = {k: v for k, v in V0_CONFIG.items() if k != "path"}
 #: the tolerance relative to ``1 + |value|`` (float64); float32 values: :data:`RTOL32`
 RTOL = 1e-9
 RTOL32 = 2.5e-7

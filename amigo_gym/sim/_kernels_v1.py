@@ -181,6 +181,7 @@ _pose_flat = _shared(clothoid.pose_flat)
 
 #: the reference's scalar pieces of the step, compiled (docs/architecture.md, "One robot, one step")
 _heading_error = _shared(task.heading_error)
+_command_change = cast(Callable[..., tuple[float, float]], _shared(tracking.command_change))
 _heading_term = _shared(task.heading_term)
 _reward_arguments = _shared(task.reward_arguments)
 _steady_heading = _shared(task.steady_heading_float)
@@ -629,12 +630,9 @@ def step(
     w1_old = ws[L.W_W1]
     w2_old = ws[L.W_W2]
     v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[L.W_SLIP1], ws[L.W_SLIP2])
-    if c[L.C_REWARD_V0] != 0.0:
-        da1 = ws[L.W_W1] - w1_old
-        da2 = ws[L.W_W2] - w2_old
-    else:
-        da1 = c1 - ws[L.W_A1]
-        da2 = c2 - ws[L.W_A2]
+    da1, da2 = _command_change(
+        c[L.C_REWARD_V0] != 0.0, ws[L.W_W1], ws[L.W_W2], w1_old, w2_old, c1, c2, ws[L.W_A1], ws[L.W_A2]
+    )
     steps = ws[L.W_STEPS] + 1.0
     ws[L.W_A1] = c1
     ws[L.W_A2] = c2
@@ -703,12 +701,7 @@ def _ideal_move(
     dt = c[L.C_DT]
     beta = ws[L.W_BETA]
     x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, t_h, t_m)
-    if c[L.C_REWARD_V0] != 0.0:
-        da1 = w1 - ws[L.W_W1]
-        da2 = w2 - ws[L.W_W2]
-    else:
-        da1 = c1 - ws[L.W_A1]
-        da2 = c2 - ws[L.W_A2]
+    da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, ws[L.W_W1], ws[L.W_W2], c1, c2, ws[L.W_A1], ws[L.W_A2])
     steps = ws[L.W_STEPS] + 1.0
     ws[L.W_X] = x1
     ws[L.W_Y] = y1

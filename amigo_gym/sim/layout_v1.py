@@ -194,6 +194,7 @@ S_U2 = S_LOG + 5
 #: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
 #: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
 SHARED: tuple[Callable[..., Any], ...] = (
+    tracking.command_change,
     *numeric.SCALAR_FORMS.values(),
     actuators.ramp,
     actuators.clip_setpoint,

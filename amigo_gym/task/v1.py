@@ -1506,13 +1506,8 @@ def evaluate_columns(
     cos_psi, sin_psi = heading_error(cb, sb, loc.cos_theta, loc.sin_theta)
     v_ref = reference_speed(p, ep, t)
     cos_ss, sin_ss = steady_heading(loc.curvature, l3)
-    if p.reward == "v0":  # AmigoBot-v0's: the change of the wheel rates [rad/s]
-        pw1, pw2 = (st.w1, st.w2) if prev_rates is None else prev_rates
-        da1 = st.w1 - pw1
-        da2 = st.w2 - pw2
-    else:
-        da1 = st.a1 - prev1
-        da2 = st.a2 - prev2
+    pw1, pw2 = (st.w1, st.w2) if prev_rates is None else prev_rates
+    da1, da2 = command_change(p.reward == "v0", st.w1, st.w2, pw1, pw2, st.a1, st.a2, prev1, prev2)
     terms = reward_term_columns(  # the reward of AmigoBot-v0, from the true state
         _abs(e),
         _abs(v_true - v_ref),
@@ -1568,6 +1563,17 @@ def evaluate_columns(
     obs += [st.a1, st.a2]
     out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
+
+
+def command_change(
+    wheel_rates: bool, w1: Real, w2: Real, pw1: Real, pw2: Real, a1: Real, a2: Real, pa1: Real, pa2: Real
+) -> tuple[Real, Real]:
+    """The change the smoothness term penalises: with ``wheel_rates`` (AmigoBot-v0's reward) the wheel rates' change
+    ``(w1 - pw1, w2 - pw2)`` [rad/s], else the normalised command's ``(a1 - pa1, a2 - pa2)`` [-]. Floats or
+    columns; the compiled step calls it too."""
+    if wheel_rates:
+        return w1 - pw1, w2 - pw2
+    return a1 - pa1, a2 - pa2
 
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
