@@ -80,12 +80,19 @@ def machine_line() -> str:
 
 
 def bits_key() -> str:
-    """What the last bits of a float result depend on: CPU model, numpy's SIMD level, numpy's and torch's versions
-    (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
+    """What the last bits of a float result depend on: CPU model, numpy's SIMD level, the kernels torch dispatches to
+    (``ATEN_CPU_CAPABILITY``), MKL's code path (``MKL_ENABLE_INSTRUCTIONS``, ``MKL_CBWR``), numpy's and torch's
+    versions (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
+    import os
     from importlib.metadata import PackageNotFoundError, version
 
     try:
         torch = version("torch")
     except PackageNotFoundError:
         torch = "none"
-    return f"{cpu_model()}; SIMD {simd_level()}; numpy {np.__version__}; torch {torch}"
+    else:
+        import torch as _torch
+
+        torch += f" ({_torch.backends.cpu.get_cpu_capability()})"
+    mkl = ",".join(f"{k}={os.environ[k]}" for k in ("MKL_ENABLE_INSTRUCTIONS", "MKL_CBWR") if os.environ.get(k))
+    return f"{cpu_model()}; SIMD {simd_level()}; numpy {np.__version__}; torch {torch}" + (f"; MKL {mkl}" if mkl else "")
