@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -181,3 +182,21 @@ def test_low_pass_td3_loads_checked_and_bounds_its_command_change(model: Path) -
         assert np.all(np.abs(a - obs[:, idx]) <= 2 * alpha + 1e-5)
         obs, *_ = env.step(a)
     env.close()
+
+
+def test_bits_key_changes_with_torchs_kernels_and_mkls_path() -> None:
+    """Torch's generic kernels (``ATEN_CPU_CAPABILITY``, as in the portability recipe of docs/development.md) and
+    another MKL code path give another key, so a claim recorded with the machine's own is not compared bit for bit."""
+    import subprocess
+    import sys
+
+    def key(**env: str) -> str:
+        code = "from amigo_gym.tools.machine import bits_key; print(bits_key())"
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**os.environ, **env})
+        assert run.returncode == 0, run.stderr
+        return run.stdout.strip()
+
+    own, generic = key(), key(ATEN_CPU_CAPABILITY="default")
+    assert "(DEFAULT)" in generic
+    assert generic != own or "(DEFAULT)" in own  # a CPU without vector kernels has only the one
+    assert key(MKL_ENABLE_INSTRUCTIONS="AVX2") != own

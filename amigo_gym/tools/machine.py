@@ -95,4 +95,5 @@ def bits_key() -> str:
 
         torch += f" ({_torch.backends.cpu.get_cpu_capability()})"
     mkl = ",".join(f"{k}={os.environ[k]}" for k in ("MKL_ENABLE_INSTRUCTIONS", "MKL_CBWR") if os.environ.get(k))
-    return f"{cpu_model()}; SIMD {simd_level()}; numpy {np.__version__}; torch {torch}" + (f"; MKL {mkl}" if mkl else "")
+    key = f"{cpu_model()}; SIMD {simd_level()}; numpy {np.__version__}; torch {torch}"
+    return f"{key}; MKL {mkl}" if mkl else key
