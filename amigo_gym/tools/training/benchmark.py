@@ -509,8 +509,9 @@ def run_benchmark(
     t0 = time.perf_counter()
     grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
     results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
+    versions = sorted({sc.version for sc in scenarios})
     doc: dict[str, Any] = {
-        "suite_version": SUITE_VERSION,
+        "suite_version": versions[0] if len(versions) == 1 else "mixed",
         "quick": quick,
         "protocol": {
             "deterministic": True,
@@ -611,7 +612,8 @@ def aggregate(
 def failed_episodes(doc: Mapping[str, Any], agent: str) -> tuple[int, int]:
     """``(failed, episodes)`` of ``agent`` over its (training seed, scenario) runs on the scenarios of its aggregate
     (``doc["aggregates"][agent]["all"]["scenarios"]``, those its statistics cover); an episode fails when its settled
-    H error exceeds the scenario's ``failure_tolerance_m`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`)."""
+    H error exceeds the scenario's ``failure_tolerance_m`` (``task_metrics.run_scenario``).
+    """
     scenarios = set(doc["aggregates"][agent]["all"]["scenarios"])
     flags = [
         f
