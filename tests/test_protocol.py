@@ -77,3 +77,11 @@ def test_every_cell_makes_resets_and_steps() -> None:
         env.reset(seed=sc.seeds[0])
         env.step(env.action_space.sample() * 0)
         env.close()
+
+
+def test_the_suite_2_results_in_the_docs_are_generated_from_the_committed_run() -> None:
+    doc = json.loads((ROOT / "docs/benchmark/suite_2.0/benchmark.json").read_text())
+    assert doc["suite_version"] == "2.0" and [s["name"] for s in doc["scenarios"]] == [sc.name for sc in TEST]
+    text = (ROOT / "docs/benchmark.md").read_text(encoding="utf-8")
+    assert benchmark.readme_table(doc) in text
+    assert "amigo-gym benchmark --table-from docs/benchmark/suite_2.0/benchmark.json" in text
