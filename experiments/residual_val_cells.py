@@ -1,11 +1,11 @@
-"""Validation versions of benchmark cells: same env keywords, other seeds (never the benchmark's 100-109).
+"""The protocol's validation cells for choosing between agents (never a test cell or seed).
 
     python experiments/residual_val_cells.py --models res=experiments/candidates/residual_s0.zip \
-        [--cells delay_0.1 delay_0.25 ...] [--seeds 20] [--first-seed 2000000] [--json out.json]
+        [--cells val_delay_0.1 val_delay_0.25 ...] [--seeds 20] [--json out.json]
 
-For each cell of :data:`amigo_gym.tools.training.benchmark.SUITE` named in ``--cells`` (default: the ideal-robot, the
-delay and the wheel-mismatch cells), the scenario with ``seeds = first_seed .. first_seed + seeds - 1`` (one episode
-each, :func:`amigo_gym.tools.training.benchmark.evaluate`, deterministic) for the analytic controller
+For each AmigoBot-v1 cell of :func:`amigo_gym.tools.training.protocol.validation_cells` named in ``--cells``
+(default: all), on the first ``--seeds`` validation seeds (one episode each,
+:func:`amigo_gym.tools.training.benchmark.evaluate`, deterministic), the analytic controller
 (:class:`amigo_gym.policies.AnalyticTrackingPolicy`, nominal robot) and every ``NAME=ZIP`` fast-PPO model.
 Prints one Markdown row per cell: the mean H cross-track RMS over the episodes [mm] with a 95 % bootstrap interval
 over episodes (2 000 resamples, seed 0), and the ratio of each model's mean to the analytic's.
@@ -16,16 +16,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import replace
 
 import numpy as np
 
-from amigo_gym.tools.training.benchmark import SUITE, AgentSpec, evaluate, make_env
-
-IDEAL = ("circle_r1_ccw", "circle_r0.5_ccw", "circle_r0.5_cw", "circle_r2_cw", "circle_v0.1", "circle_v0.4",
-         "circle_v_random", "figure8", "random_paths", "lane_change", "mixed")  # fmt: skip
-DELAY = ("delay_0.1", "delay_0.25")
-MISMATCH = ("wheels_plus5", "wheels_minus5", "wheels_unequal")
+from amigo_gym.tools.training.benchmark import AgentSpec, evaluate, make_env
+from amigo_gym.tools.training.protocol import validation_cells
 
 
 def ci(x: np.ndarray, reps: int = 2000) -> tuple[float, float]:
@@ -38,24 +33,24 @@ def ci(x: np.ndarray, reps: int = 2000) -> tuple[float, float]:
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="*", default=[], help="NAME=ZIP fast-PPO models")
-    p.add_argument("--cells", nargs="*", default=list(DELAY + MISMATCH + IDEAL))
+    p.add_argument("--cells", nargs="*", default=None, help="validation cell names (default: every v1 cell)")
     p.add_argument("--seeds", type=int, default=20)
-    p.add_argument("--first-seed", type=int, default=2_000_000)
     p.add_argument("--json", default=None)
     a = p.parse_args()
-    if a.first_seed < 1000:
-        p.error("--first-seed must be >= 1000 (the benchmark's test seeds are 100-109)")
+    by = {sc.name: sc for sc in validation_cells("AmigoBot-v1", a.seeds)}
+    unknown = sorted(set(a.cells or ()) - set(by))
+    if unknown:
+        p.error(f"--cells must be validation cells {sorted(by)}, got {unknown}")
     specs = [AgentSpec("analytic")]
     for m in a.models:
         name, path = m.split("=", 1)
         specs.append(AgentSpec(name, 0, path, "fastppo_residual"))
-    by = {sc.name: sc for sc in SUITE}
     out: dict[str, dict[str, list[float]]] = {}
     print("| cell | " + " | ".join(f"{s.name} H RMS [mm]" for s in specs) + " | " +
           " | ".join(f"{s.name}/analytic" for s in specs[1:]) + " |")  # fmt: skip
     print("|---" * (2 * len(specs)) + "|")
-    for cell in a.cells:
-        sc = replace(by[cell], seeds=tuple(range(a.first_seed, a.first_seed + a.seeds)))
+    for cell in a.cells or list(by):
+        sc = by[cell]
         env = make_env(sc)
         row = {}
         for s in specs:

@@ -1,9 +1,9 @@
-"""The sweep's objective for any models: IQM of H RMS over the held-in v1 validation cells (5 episodes each).
+"""The sweep's objective for any models: IQM of H RMS over the protocol's v1 validation cells (5 episodes each).
 
 The number ``amigo-gym sweep --env AmigoBot-v1`` minimises (:func:`amigo_gym.tools.training.sweep.validation_cells`,
-:func:`~amigo_gym.tools.training.sweep.validate_agent`: the benchmark's held-in cells on validation seeds, never a test
-seed or a held-out cell), computed for models trained outside the sweep, e.g. the shipped seeds against the sweep's
-trials, which ran a shorter budget:
+:func:`~amigo_gym.tools.training.sweep.validate_agent`: :mod:`amigo_gym.tools.training.protocol`'s validation cells
+on validation seeds, never a test cell or seed), computed for models trained outside the sweep, e.g. the shipped
+seeds against the sweep's trials, which ran a shorter budget:
 
     python experiments/sweep_objective.py 'agents/pretrained/v1/ppo_fast/*.zip'
 
@@ -25,8 +25,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("models", nargs="*", help="model zips or glob patterns (quoted)")
     ap.add_argument("--episodes", type=int, default=5, help="validation episodes per cell (default 5, the sweep's)")
     a = ap.parse_args(argv)
-    if not 1 <= a.episodes <= 1000:
-        print(f"sweep_objective: error: --episodes {a.episodes}: must be in [1, 1000]", file=sys.stderr)
+    if not 1 <= a.episodes <= 100:
+        print(f"sweep_objective: error: --episodes {a.episodes}: must be in [1, 100]", file=sys.stderr)
         return 2
     paths = [p for pattern in a.models for p in (sorted(glob.glob(pattern)) or [pattern])]
     cells = validation_cells("AmigoBot-v1", a.episodes, 0)

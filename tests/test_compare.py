@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -102,7 +103,7 @@ def test_quick_benchmark_table_in_the_published_set(tmp_path: Path, cli: Any) ->
     assert r.returncode == 0, r.stderr
     report = (out / "report.md").read_text()
     assert "## AmigoBot benchmark, suite 1.0 (quick subset)" in report
-    assert "| analytic | 1 | 3 |" in report and "### H cross-track RMS per scenario" in report
+    assert "| analytic | 1 | 3 | 0 of 6 |" in report and "### H cross-track RMS per scenario" in report
     doc = json.loads((out / "results.json").read_text())
     assert [s["name"] for s in doc["benchmark"]["scenarios"]] == list(QUICK_SCENARIOS)
     assert doc["benchmark"]["aggregates"]["analytic"]["n_runs"] == 1
@@ -146,3 +147,4 @@ def test_compare_runs_the_fast_ppo_generalist_beside_sb3s_and_labels_them(tmp_pa
     assert "`td3lp_v1`: SB3 TD3 low-pass generalist" in report
     assert "`ppo_fast_v1`: fast PPO generalist" in report  # the benchmark table's own legend
     assert "ppo_fast_v1 " in r.stdout and "fast PPO" in r.stdout
+    assert re.search(r"ppo_fast_v1 [\d.]+ \(\d+ of \d+ failed\)", r.stdout), r.stdout  # failures beside the error

@@ -28,7 +28,7 @@ import pytest
 optuna = pytest.importorskip("optuna")
 from optuna.trial import TrialState  # noqa: E402
 
-from amigo_gym.tools.training.sweep import driver_url  # noqa: E402
+from amigo_gym.tools.training.sweep import SweepConfig, driver_url  # noqa: E402
 
 TINY = "AmigoBot-v0:\n  n_steps: 32\n  batch_size: 32\n  n_epochs: 1\n  policy_kwargs:\n    net_arch: [16]\n"
 PG_ROOT = Path("/usr/lib/postgresql")  # Debian's layout: <version>/bin/initdb (15 here; any version works)
@@ -388,22 +388,14 @@ def test_password_masking_helpers() -> None:
     assert public_argv([f"--storage={q}"]) == [f"--storage={masked_url(q)}"]
 
 
-def test_validation_cells_are_held_in_scenarios_on_seeds_the_benchmark_never_tests() -> None:
-    from amigo_gym.tools.training.benchmark import SUITE
-    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE, validation_cells
+def test_the_sweep_scores_the_protocols_validation_cells() -> None:
+    from amigo_gym.tools.training import protocol
+    from amigo_gym.tools.training.sweep import validation_cells
 
-    test_seeds = {s for sc in SUITE for s in sc.seeds}
     for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
-        cells = validation_cells(env_id, episodes=3, max_steps=50)
-        by_name = {sc.name: sc for sc in SUITE}
-        held_in = [sc.name for sc in SUITE if sc.env_id == env_id and not sc.held_out]
-        assert [c.name for c in cells] == held_in and held_in
-        for c in cells:
-            assert not by_name[c.name].held_out
-            assert c.seeds == (VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + 1, VALIDATION_SEED_BASE + 2)
-            assert not set(c.seeds) & test_seeds
-            assert c.max_steps == min(50, by_name[c.name].max_steps)
-            assert dict(c.env_kwargs) == dict(by_name[c.name].env_kwargs)
+        assert validation_cells(env_id, 3, 50) == protocol.validation_cells(env_id, 3, 50)
+    with pytest.raises(ValueError, match="--val-episodes must be at most 100, got 101"):
+        SweepConfig(algos=["ppo"], val_episodes=101).validate()
 
 
 SECRET = "Pw-7f3b9cQ"
@@ -494,8 +486,8 @@ def test_a_failed_connection_prints_no_password(tmp_path: Path, capsys: pytest.C
 def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_cells(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.tools.training.benchmark import SUITE, TRAINING_DISTRIBUTION
-    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.protocol import VALIDATION_SEEDS, validation_cells
 
     hp = tmp_path / "tiny_v1.yml"
     hp.write_text(TINY.replace("AmigoBot-v0", "AmigoBot-v1"))
@@ -515,8 +507,8 @@ def test_v1_trials_train_on_the_training_distribution_and_score_on_validation_ce
     config = json.loads((run_dir / "run" / "config.json").read_text())
     assert config["env_id"] == "AmigoBot-v1" and config["env_kwargs"] == TRAINING_DISTRIBUTION["env_kwargs"]
     val = trial.user_attrs["validation"]
-    held_in = [sc.name for sc in SUITE if sc.env_id == "AmigoBot-v1" and not sc.held_out]
-    assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEED_BASE]
+    held_in = [sc.name for sc in validation_cells("AmigoBot-v1")]
+    assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEEDS[0]]
     assert all(v is not None and v > 0 for v in val["cells"].values())
     # the value is the IQM (25 % trimmed mean) of the per-cell values
     cells = np.sort(np.array(list(val["cells"].values())))

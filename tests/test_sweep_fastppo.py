@@ -49,9 +49,9 @@ def _weights(model: Path) -> list[np.ndarray]:
 def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from amigo_gym.tools.training.benchmark import SUITE, TRAINING_DISTRIBUTION
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
     from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
-    from amigo_gym.tools.training.sweep import VALIDATION_SEED_BASE
+    from amigo_gym.tools.training.protocol import VALIDATION_SEEDS, validation_cells
 
     target = tmp_path / "hp.yml"  # a file with another block, whose comment and values must survive
     other = "# kept as written\nAmigoBot-v0:\n  n_steps: 32  # a comment\n\n"
@@ -65,7 +65,7 @@ def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
     study = optuna.load_study(study_name="fp", storage=f"sqlite:///{tmp_path / 'out' / 'sweep.db'}")
     trials = study.get_trials()
     assert [t.state for t in trials] == [TrialState.COMPLETE] * 2, [(t.state, t.user_attrs) for t in trials]
-    held_in = [sc.name for sc in SUITE if sc.env_id == "AmigoBot-v1" and not sc.held_out]
+    held_in = [sc.name for sc in validation_cells("AmigoBot-v1")]
     for t in trials:
         # every evaluation (steps 0, 1024, ..., 4096) reached the pruner
         assert sorted(t.intermediate_values) == [0, 1024, 2048, 3072, 4096]
@@ -79,9 +79,9 @@ def test_fastppo_study_completes_reports_each_evaluation_and_saves_the_best(
         assert s["num_envs"] * s["rollout_steps"] % s["minibatch_size"] == 0
         assert 3e-5 <= s["learning_rate"] <= 3e-3 and 0.9 <= s["gamma"] <= 0.999 and 0.2 <= s["filter_alpha"] <= 1
         assert s["gamma"] == pytest.approx(1 - t.params["one_minus_gamma"], abs=1e-15)
-        # the objective: IQM over the held-in v1 cells of the validation episodes (never a test seed)
+        # the objective: IQM over the protocol's v1 validation cells (never a test cell or seed)
         val = t.user_attrs["validation"]
-        assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEED_BASE]
+        assert list(val["cells"]) == held_in and val["seeds"] == [VALIDATION_SEEDS[0]]
         cells = np.sort(np.array(list(val["cells"].values())))
         k = int(0.25 * cells.size)
         assert t.value == pytest.approx(float(cells[k : cells.size - k].mean()), rel=1e-12)

@@ -23,6 +23,7 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.runs import remove_matching
+from amigo_gym.tools.training import protocol
 from amigo_gym.tools.training.task_metrics import (
     SUITE_VERSION,
     Scenario,
@@ -50,6 +51,7 @@ __all__ = [
     "aggregate",
     "default_agents",
     "evaluate",
+    "failed_episodes",
     "main",
     "make_env",
     "markdown_report",
@@ -245,7 +247,7 @@ SUITE_1_0: tuple[Scenario, ...] = (
 )
 
 #: released suites by version (never edited)
-SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0}
+SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0, protocol.VERSION: protocol.TEST}
 SUITE: tuple[Scenario, ...] = SUITES[SUITE_VERSION]
 #: the scenarios of ``--quick`` (run with 2 episodes of at most 120 steps)
 QUICK_SCENARIOS: tuple[str, ...] = ("v0_paper_circle", "v0_speed_0.4", "circle_r1_ccw")
@@ -507,8 +509,9 @@ def run_benchmark(
     t0 = time.perf_counter()
     grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
     results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
+    versions = sorted({sc.version for sc in scenarios})
     doc: dict[str, Any] = {
-        "suite_version": SUITE_VERSION,
+        "suite_version": versions[0] if len(versions) == 1 else "mixed",
         "quick": quick,
         "protocol": {
             "deterministic": True,
@@ -606,6 +609,22 @@ def aggregate(
 
 
 # --------------------------------------------------------------------------- reports
+def failed_episodes(doc: Mapping[str, Any], agent: str) -> tuple[int, int]:
+    """``(failed, episodes)`` of ``agent`` over its (training seed, scenario) runs on the scenarios of its aggregate
+    (``doc["aggregates"][agent]["all"]["scenarios"]``, those its statistics cover); an episode fails when its settled
+    H error exceeds the scenario's ``failure_tolerance_m`` (``task_metrics.run_scenario``).
+    """
+    scenarios = set(doc["aggregates"][agent]["all"]["scenarios"])
+    flags = [
+        f
+        for r in doc["results"]
+        if r["agent"] == agent and r["scenario"] in scenarios
+        for f in r["per_episode"]["failure"]
+        if f is not None and math.isfinite(f)
+    ]
+    return int(sum(flags)), len(flags)
+
+
 def _mm(x: float | None) -> str:
     return "–" if x is None else f"{1e3 * x:.3g}"
 
@@ -618,9 +637,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         f"IQM and optimality gap over (training seed, scenario) runs; [95 % stratified-bootstrap interval, "
         f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
         "",
-        "| agent | seeds | scenarios | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] | failure rate "
-        "| return/step IQM | held-out H RMS IQM [mm] |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| agent | seeds | scenarios | failed episodes | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] "
+        "| failure rate | return/step IQM | held-out H RMS IQM [mm] |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
@@ -634,8 +653,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         if g is None:
             continue
         h = a.get("held_out")
+        failed, episodes = failed_episodes(doc, agent)
         lines.append(
-            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {iv(g['h_rms_m_iqm'])} | "
+            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {failed} of {episodes} | {iv(g['h_rms_m_iqm'])} | "
             f"{iv(g['h_rms_m_optimality_gap'])} | {iv(g['speed_err_rms_iqm'])} | "
             f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
             f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
@@ -687,32 +707,35 @@ README_ROWS = (
 
 
 def readme_table(doc: Mapping[str, Any]) -> str:
-    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): H RMS IQM
-    [mm] with its 95 % interval, the same on the held-out scenarios, the speed error IQM [mm/s]; the best of each
-    column in bold. Generalists are found as ``<algo>_v1`` or, in runs before the names were unified, ``<algo>``.
+    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): the failed
+    episodes (:func:`failed_episodes`), H RMS IQM [mm] with its 95 % interval, the same on the held-out scenarios,
+    the speed error IQM [mm/s]; the best of each column in bold. Generalists are found as ``<algo>_v1`` or, in runs
+    before the names were unified, ``<algo>``.
 
     Raises:
         ValueError: the document lacks the classical rows or every generalist.
     """
     aggs = doc["aggregates"]
-    rows: list[tuple[str, Mapping[str, Any], int]] = []
+    rows: list[tuple[str, Mapping[str, Any], int, str]] = []
     for name, label in README_ROWS:
-        agg = aggs.get(name) or (aggs.get(name.removesuffix("_v1")) if name.endswith("_v1") else None)
+        key = name if name in aggs else name.removesuffix("_v1")
+        agg = aggs.get(key)
         if agg is None or agg.get("all") is None:
             continue
         n = int(agg["n_runs"])
-        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n))
+        failed, episodes = failed_episodes(doc, key)
+        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n, f"{failed} of {episodes}"))
     if len(rows) < 3:
         raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
     cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
     best = [
-        min(1e3 * agg[g][k]["value"] for _, agg, _ in rows if agg.get(g)) for g, k, _ in cols
+        min(1e3 * agg[g][k]["value"] for _, agg, _, _ in rows if agg.get(g)) for g, k, _ in cols
     ]  # the smallest of each column
     lines = [
-        "| agent | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
-        "|---|---:|---:|---:|",
+        "| agent | failed episodes | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
+        "|---|---:|---:|---:|---:|",
     ]
-    for label, agg, n in rows:
+    for label, agg, n, failed in rows:
         cells = []
         for (g, k, fmt), low in zip(cols, best, strict=True):
             d = agg.get(g)
@@ -725,7 +748,7 @@ def readme_table(doc: Mapping[str, Any]) -> str:
                 lo, hi = (1e3 * x for x in d[k]["ci95"])
                 text += f" [{lo:{fmt}}, {hi:{fmt}}]"
             cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label} | {failed} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

@@ -218,12 +218,16 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
         for agent, a in bench["aggregates"].items():
             g = a.get("all")
             if g is not None:
-                runs_ = f" ({a['n_runs']} seeds)" if a["n_runs"] > 1 else ""
-                cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g}{runs_}")
+                from amigo_gym.tools.training.benchmark import failed_episodes
+
+                runs_ = f", {a['n_runs']} seeds" if a["n_runs"] > 1 else ""
+                failed, episodes = failed_episodes(bench, agent)
+                cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g} ({failed} of {episodes} failed{runs_})")
             names.append(agent)
         lines.append(
             f"Quick benchmark ({len(bench['scenarios'])} scenarios x {bench['scenarios'][0]['episodes']} short "
-            f"episodes on v0 and v1, a smoke test, not the benchmark's result), H RMS IQM [mm]: {', '.join(cells)}. "
+            f"episodes on v0 and v1, a smoke test, not the benchmark's result), H RMS IQM [mm] (failed episodes): "
+            f"{', '.join(cells)}. "
             f"{len(bench['unavailable'])} (agent, seed, scenario) runs could not run (a v0 model on a v1 "
             "scenario or the reverse: other observations); report.md lists them."
         )

@@ -21,7 +21,7 @@ import time
 import warnings
 import zlib
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, get_args
@@ -36,7 +36,6 @@ from amigo_gym.tools.training.train import ENV_IDS, EnvId
 
 __all__ = [
     "ABANDONED",
-    "VALIDATION_SEED_BASE",
     "SWEEP_ALGOS",
     "SweepConfig",
     "budget_count",
@@ -69,8 +68,6 @@ FASTPPO = "fastppo"
 MIN_ITERATIONS = 8
 #: the marker written into the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
-#: first evaluation seed of the validation cells; the benchmark's test seeds are 100..109
-VALIDATION_SEED_BASE = 1_000_000
 #: what the study optimises (stored as the study attribute ``objective``)
 OBJECTIVE = "validation_h_rms_iqm_m"
 SUMMARY = "summary.json"
@@ -250,6 +247,10 @@ class SweepConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
+        from amigo_gym.tools.training.protocol import VALIDATION_SEEDS
+
+        if self.val_episodes > len(VALIDATION_SEEDS):
+            raise ValueError(f"--val-episodes must be at most {len(VALIDATION_SEEDS)}, got {self.val_episodes}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
             raise ValueError(f"--seeds must be a count >= 1 or two or more distinct seeds, got {self.seeds}")
         if self.save_best is not None and self.mode != "hyperparams":
@@ -337,24 +338,11 @@ class SweepConfig:
 
 # --------------------------------------------------------------------------- validation cells
 def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
-    """The validation cells of ``env_id``: the benchmark suite's held-in scenarios of that environment
-    (``held_out=False``), each with the seeds ``VALIDATION_SEED_BASE .. + episodes - 1`` instead of its
-    test seeds, and (``max_steps`` > 0) episodes cut to ``max_steps`` steps. Never a held-out scenario,
-    never a test seed."""
-    from amigo_gym.tools.training.benchmark import SUITE
+    """The cells the sweep's objective evaluates: :func:`amigo_gym.tools.training.protocol.validation_cells`
+    (the protocol's validation cells of ``env_id`` on its validation seeds; never a test cell or a test seed)."""
+    from amigo_gym.tools.training.protocol import validation_cells as cells
 
-    seeds = tuple(range(VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + episodes))
-    cells = []
-    for sc in SUITE:
-        if sc.env_id != env_id or sc.held_out:
-            continue
-        if set(seeds) & set(sc.seeds):  # pragma: no cover - the suite's seeds are far below the base
-            raise ValueError(f"validation seeds overlap the test seeds of {sc.name}")
-        steps = min(sc.max_steps, max_steps) if max_steps > 0 else sc.max_steps
-        cells.append(replace(sc, seeds=seeds, max_steps=steps))
-    if not cells:
-        raise ValueError(f"the benchmark suite has no held-in scenario on {env_id}")
-    return tuple(cells)
+    return cells(env_id, episodes, max_steps)
 
 
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
