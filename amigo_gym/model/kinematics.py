@@ -19,7 +19,7 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.numeric import arctan2_real, pow2_real, sqrt_real, where_real
+from amigo_gym.model.numeric import pow2_real, sqrt_real, where_real
 
 __all__ = [
     "body_velocity",
@@ -31,7 +31,6 @@ __all__ = [
     "contact_points",
     "castor_position",
     "step_pose",
-    "step_wheel_angles",
     "advance_angle",
     "sinc",
     "Real",
@@ -46,7 +45,6 @@ __all__ = [
     "cos_sin",
     "col_sqrt",
     "col_exp",
-    "col_arctan2",
     "SteadyCircle",
     "circle_steady_state",
     "Geometry",
@@ -220,10 +218,6 @@ def col_exp(x: Real) -> Real:
     y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
     k1 = (0.5 * k + _ROUND) - _ROUND
     return where_real(x != x, x, y * pow2_real(k - k1) * pow2_real(k1))
-
-
-#: ``np.arctan2(y, x)``; a Python float for scalar ``y`` and ``x``
-col_arctan2 = arctan2_real
 
 
 def _sinc(x: Real, sin_x: Real) -> Real:
@@ -435,18 +429,6 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> 
     v, bdot = body_velocity_columns(w[..., 0], w[..., 1], robot)
     new = arc_step(p[..., 0], p[..., 1], p[..., 2], v, bdot, np.asarray(dt, dtype=np.float64), with_heading=False)
     return pack(new.x, new.y, new.beta)
-
-
-def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
-    """Wheel angles ``(..., 3)`` [rad] after ``dt`` [s] with drive-wheel rates ``w`` ``(..., 2)`` [rad/s]
-    held: ``alpha1, alpha2`` advance by ``w dt``, the castor's ``alpha3`` by :func:`castor_rate` ``dt``.
-    """
-    a = np.asarray(alpha, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    dt_ = np.asarray(dt, dtype=np.float64)
-    v, bdot = body_velocity_columns(w[..., 0], w[..., 1], robot)
-    a3 = castor_rate_columns(v, bdot, robot)
-    return pack(a[..., 0] + w[..., 0] * dt_, a[..., 1] + w[..., 1] * dt_, a[..., 2] + a3 * dt_)
 
 
 class SteadyCircle(NamedTuple):
