@@ -288,8 +288,9 @@ def feasibility(
         v_A = v_H \cos\psi,\quad \dot\beta = \frac{v_H \sin\psi}{l_3},\quad
         \dot\alpha_{1,2} = \frac{v_A \pm l_1 \dot\beta}{r_{1,2}};
 
-    constant ``v_H``: ``dv_A/dt = -v_H sin(psi) psi_t``, ``betaddot = v_H cos(psi) psi_t / l3``; constant ``v_A``:
-    ``dv_A/dt = 0``, ``betaddot = v_A psi_t / (l3 cos^2 psi)``; ``alphaddot_{1,2} = (dv_A/dt +- l1 betaddot) / r_{1,2}``.
+    constant ``v_H``: ``dv_A/dt = -v_H sin(psi) psi_t``, ``betaddot = v_H cos(psi) psi_t / l3``; constant
+    ``v_A``: ``dv_A/dt = 0``, ``betaddot = v_A psi_t / (l3 cos^2 psi)``; then
+    ``alphaddot_{1,2} = (dv_A/dt +- l1 betaddot) / r_{1,2}``.
     Peaks are over the samples (both sides of every breakpoint): a smooth maximum between samples ``h`` apart is
     underestimated by at most ``h^2/8 max|f''|``.
 
