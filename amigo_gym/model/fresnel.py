@@ -138,8 +138,7 @@ class Buffer(Protocol):
 
 def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
     """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``, by numpy
-    (``buf`` a list of floats or of equal-shape columns). Compiled code overloads it with ``math.cos``/``math.sin``.
-    """
+    (``buf`` a list of floats or of equal-shape columns). Compiled code overloads it with ``math.cos``/``math.sin``."""
     lst = cast("list[Any]", buf)
     arr = _np_array(lst[b : b + n])
     cos = _np_cos(arr)
@@ -251,8 +250,7 @@ def unit_speed_nodes(
     buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
     """``advance(x, y, theta, 1, 0, w0, alpha, t)`` with the cosine and sine of the new heading,
-    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``.
-    """
+    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``."""
     m = nn + 1
     unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
     cos_sin_nodes(buf, 0, m, m)
@@ -275,8 +273,7 @@ def unit_speed_poses(
     starts: list[tuple[float, float, float, float, float, float]],
 ) -> list[tuple[float, float, float, float, float]]:
     """:func:`unit_speed_nodes` of several ``(x, y, theta, w0, alpha, t)`` (floats), one ``np.cos`` and
-    ``np.sin`` call for all.
-    """
+    ``np.sin`` call for all."""
     nn = NODES + 1
     m = len(starts) * nn
     buf = [0.0] * (3 * m)

@@ -206,8 +206,7 @@ _P = (1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.613756321437934
 def col_exp(x: Real) -> Real:
     """``exp(x)`` in plain float64 arithmetic (fdlibm's ``exp`` without branches), for floats, columns and
     compiled code: within 1 ulp, subnormals included; 0 below ``-745.14`` and for ``-inf``, ``inf`` above
-    ``709.79``, NaN for NaN. ``x = k ln 2 + r``, a rational form of ``e^r``, then ``2^k`` as two exact factors.
-    """
+    ``709.79``, NaN for NaN. ``x = k ln 2 + r``, a rational form of ``e^r``, then ``2^k`` as two exact factors."""
     xc = where_real(x > -746.0, where_real(x < 1000.0, x, 1000.0), -746.0)  # NaN to -746, restored below
     k = (xc * _INV_LN2 + _ROUND) - _ROUND
     hi = xc - k * _LN2_HI
@@ -239,8 +238,7 @@ def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Re
 
 def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
     """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s]
-    (the sign of ``-0.0`` is negative).
-    """
+    (the sign of ``-0.0`` is negative)."""
     if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
         return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
     lb = robot.l5 * betadot
@@ -359,8 +357,7 @@ def h_from_a(x_a: float, y_a: float, cos_beta: float, sin_beta: float, l3: float
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]: ...
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
     """Point H, ``l3`` [m] ahead of A along the heading (paper eq. 4):
-    ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns. Inverse of :func:`a_from_h`.
-    """
+    ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns. Inverse of :func:`a_from_h`."""
     return x_a + l3 * cos_beta, y_a + l3 * sin_beta
 
 

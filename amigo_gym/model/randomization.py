@@ -182,8 +182,7 @@ def _uniform(rng: np.random.Generator, interval: tuple[float, float]) -> float:
 
 def sample(rng: np.random.Generator, r: Randomization) -> EpisodeDraw:
     """Draw one episode's values from ``rng`` in a fixed order (right wheel, left wheel, track, slip, delay);
-    a fixed range uses no random number.
-    """
+    a fixed range uses no random number."""
     return EpisodeDraw(
         r1_scale=_uniform(rng, r.wheel_radius),
         r2_scale=_uniform(rng, r.wheel_radius),
@@ -278,8 +277,7 @@ def _uint64(n: int) -> int:
 
 def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
     """:func:`counter_uniform`'s formula for a Python ``int`` key and step (``uint64`` when compiled) or
-    ``uint64`` columns, every product and sum mod ``2**64``. Returns a float or a float64 column.
-    """
+    ``uint64`` columns, every product and sum mod ``2**64``. Returns a float or a float64 column."""
     z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64
@@ -289,8 +287,7 @@ def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
 
 def noise_level(channel: int, position: float, heading: float, rate: float) -> float:
     """Standard deviation of noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) [m, m, rad, rad/s,
-    rad/s].
-    """
+    rad/s]."""
     return position if channel < 2 else (heading if channel == 2 else rate)
 
 
@@ -331,8 +328,7 @@ def step_normals(
     out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
 ) -> None:
     """The normal draws of :func:`step_noise` into ``out[out_at : out_at + 5]`` (0.0 for a channel off):
-    :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]`` and ``coss[cos_at + j]``.
-    """
+    :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]`` and ``coss[cos_at + j]``."""
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
@@ -345,8 +341,7 @@ def step_normals(
 
 def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
     r"""One normal draw of standard deviation ``level``: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, given
-    ``log(u1)`` and ``cos(2 pi u2)``; floats or columns.
-    """
+    ``log(u1)`` and ``cos(2 pi u2)``; floats or columns."""
     return level * (sqrt_real(-2.0 * log_u1) * cos_angle)
 
 

@@ -53,8 +53,7 @@ def _is_path(obj: object) -> bool:
 @dataclass
 class _Padded:
     """The rows' flat path vectors: row ``i``'s in ``flat[i]`` (``W`` entries, the longest vector's), at
-    ``start[i] = i W`` in ``flat.reshape(-1)``.
-    """
+    ``start[i] = i W`` in ``flat.reshape(-1)``."""
 
     flat: Array
     start: IntArray

@@ -187,8 +187,7 @@ class Path(Protocol):
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         """Column form of :meth:`project`; ``minimal=True`` leaves NaN in the fields the observation and
-        reward do not need (arc length where the curvature is constant, point, tangent angle).
-        """
+        reward do not need (arc length where the curvature is constant, point, tangent angle)."""
         ...
 
     def curvature_columns(self, s: Real) -> Real:
@@ -268,8 +267,7 @@ class CirclePath:
 
     def pose_columns(self, s: Real) -> PathPose:
         """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at arc lengths ``s`` [m]: floats for a
-        float ``s``, else arrays of its shape.
-        """
+        float ``s``, else arrays of its shape."""
         th = self.tangent_angle(s)
         cx, cy = self.center
         dr = self.direction * self.radius
@@ -280,8 +278,7 @@ class CirclePath:
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
         """:class:`PathPoint` of ``(x, y)`` [m] by :meth:`project_xy`; ``progress`` is ``s`` plus the whole laps
-        nearest to ``s_prev`` (``s`` without a hint); the window is not used (the projection is unique); status 0.
-        """
+        nearest to ``s_prev`` (``s`` without a hint); the window is not used (the projection is unique); status 0."""
         cp = self.project_xy(x, y)
         s = cp.s
         progress = s
@@ -335,8 +332,7 @@ def circle_foot(
 ) -> tuple[Real, Real, Real, Real, Real]:
     """Foot of ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m], direction ``d`` (+1
     left, -1 right): ``(e, cos theta, sin theta, u_x, u_y)`` with ``u = (x, y) - c`` (``r0`` at the centre),
-    ``e = d (r - |u|)`` and the tangent ``d (-n_y, n_x)``, ``n = u / |u|``.
-    """
+    ``e = d (r - |u|)`` and the tangent ``d (-n_y, n_x)``, ``n = u / |u|``."""
     ux = x - cx
     uy = y - cy
     rho = sqrt_real(ux * ux + uy * uy)
@@ -355,8 +351,7 @@ def circle_foot(
 
 def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
     """Arc length ``s = r a`` [m] from the circle's start to the direction ``u``:
-    ``a = atan2(d (r0 x u), r0 . u)``, plus ``2 pi`` where negative.
-    """
+    ``a = atan2(d (r0 x u), r0 . u)``, plus ``2 pi`` where negative."""
     cross = r0x * uy - r0y * ux
     a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
     return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
@@ -427,8 +422,7 @@ class ManoeuvrePath:
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
         """:class:`PathPoint` of ``(x, y)`` [m] by :meth:`project_xy`; ``progress = s``; status 0 (the path does
-        not end).
-        """
+        not end)."""
         cp = self.project_xy(x, y)
         if not isinstance(cp.cross_track_error, np.ndarray) or np.ndim(cp.cross_track_error) == 0:
             cp = ClosestPoint(*(float(v) for v in cp))
@@ -440,8 +434,7 @@ class ManoeuvrePath:
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         """Closest point to ``(x, y)`` [m] (:func:`manoeuvre_foot`); ``minimal=True``: point and tangent
-        angle are NaN.
-        """
+        angle are NaN."""
         circle = self.circle
         cx, cy, r0x, r0y = circle._frame
         d, r = self.direction, self.radius

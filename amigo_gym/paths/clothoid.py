@@ -139,8 +139,7 @@ class ClothoidSegment:
 
 class PathSpec(Protocol):
     """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it). A path of your own
-    needs only ``length``, ``closed`` and ``pose_columns``; :mod:`amigo_gym.paths.user` completes the rest.
-    """
+    needs only ``length``, ``closed`` and ``pose_columns``; :mod:`amigo_gym.paths.user` completes the rest."""
 
     @property
     def length(self) -> float:
@@ -174,8 +173,7 @@ def check_hint(sp: Real) -> None:
 @dataclass(frozen=True)
 class _Tables:
     """A built :class:`ClothoidPath`: its flat path vector and largest ``|curvature|`` [1/m], the header read
-    once, the pieces' and samples' columns as views (``*_a``) or lists.
-    """
+    once, the pieces' and samples' columns as views (``*_a``) or lists."""
 
     flat: Array
     max_abs_curvature: float
@@ -273,8 +271,7 @@ class ClothoidPath:
 
     def _build(self, loops: PathLoops | None = None) -> _Tables:
         """Split the segments into pieces, chain their start poses (:func:`chain_pieces`) and sample the path
-        for the coarse search; ``loops``: compiled forms of the loops, or None.
-        """
+        for the coarse search; ``loops``: compiled forms of the loops, or None."""
         segs: list[float] = []
         n = 0
         kmax = 0.0
@@ -451,8 +448,7 @@ def py_max(a: float, b: float) -> float:
 
 def wrap_arc(s: float, length: float, closed: bool) -> tuple[float, float, float]:
     """``s`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the lap number (closed) and the length
-    past an open path's ends (``s = u + extra``).
-    """
+    past an open path's ends (``s = u + extra``)."""
     if closed:
         lap = _floor_float(s / length)
         return s - lap * length, lap, 0.0
@@ -474,8 +470,7 @@ def placed_pose(
     extra: float,
 ) -> tuple[float, float, float, float, float, float, float]:
     """The pose on the whole path from the pose at ``u`` in its piece: laps add ``lap * turn`` [rad] to the
-    heading; past an open path's ends it goes straight (curvature 0).
-    """
+    heading; past an open path's ends it goes straight (curvature 0)."""
     if closed:
         return x, y, th + lap * turn, kappa, c, cos_t, sin_t
     if extra != 0.0:
@@ -516,8 +511,7 @@ def newton_step(
 ) -> tuple[float, bool]:
     """One Newton iteration of the projection from ``s`` [m] with the pose there:
     ``s' = clip(s + clip(g / max(1 - kappa e, MIN_NEWTON_DENOMINATOR), -h, h), lo, hi)``, and whether ``s'``
-    equals ``s`` (a fixed point).
-    """
+    equals ``s`` (a fixed point)."""
     _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
     den = 1.0 - kappa * e
     if den < MIN_NEWTON_DENOMINATOR:
@@ -528,8 +522,7 @@ def newton_step(
 
 def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
     """The status (:data:`STATUS_INTERIOR`, ...) of a projection ``s`` [m] with residual ``g``
-    in ``[lo, hi]``.
-    """
+    in ``[lo, hi]``."""
     status = STATUS_INTERIOR
     if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
         status = STATUS_WINDOW
@@ -580,8 +573,7 @@ def piece_index(pv: FlatPath, u: float) -> int:
 
 def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
     """``(j, du, lap, extra)``: the piece holding ``s`` [m], the distance into it, the lap and the length past
-    an open path's ends.
-    """
+    an open path's ends."""
     u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     j = piece_index(pv, u)
     return j, u - pv[P_TAIL + j], lap, extra
@@ -591,8 +583,7 @@ def place(
     pv: FlatPath, j: int, du: float, lap: float, extra: float, x: float, y: float, th: float, ct: float, st: float
 ) -> FloatPose:
     """The pose at ``du`` [m] into piece ``j`` (its unit-speed pose ``x, y, th, ct, st``) on the whole path:
-    curvature ``k0 + c du``, then :func:`placed_pose`.
-    """
+    curvature ``k0 + c du``, then :func:`placed_pose`."""
     n = int(pv[P_N])
     c = pv[P_TAIL + 5 * n + j]
     kappa = pv[P_TAIL + 4 * n + j] + c * du
@@ -603,8 +594,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
     """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample nearest to ``(x, y)``
     among ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead + behind) / h) + 2`` (a closed path reads sample
     ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum of the squared distance wins (the first NaN
-    if any, as ``np.argmin``).
-    """
+    if any, as ``np.argmin``)."""
     h = pv[P_SPACING]
     n = int(pv[P_N])
     m = int(pv[P_M])
@@ -649,8 +639,7 @@ def locate_flat(
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with hint ``sp`` [m] and window ``ahead``,
     ``behind`` [m] (> 0) on the flat path ``pv``: :func:`locate_window`, :func:`coarse_start`, :func:`project_flat`
     (``pose``, ``buf``, ``nodes``, ``nb``: the pose function and its arguments, as :func:`pose_flat`). Returns
-    :data:`FlatPoint`.
-    """
+    :data:`FlatPoint`."""
     lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
     return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
@@ -658,8 +647,7 @@ def locate_flat(
 
 def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
     """:func:`locate_flat` without a hint: from :func:`coarse_global`, in ``[0, length]`` (open) or
-    unbounded (closed).
-    """
+    unbounded (closed)."""
     if pv[P_CLOSED] != 0.0:
         lo, hi = -math.inf, math.inf
     else:
@@ -669,8 +657,7 @@ def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPat
 
 def coarse_global(pv: FlatPath, x: float, y: float) -> float:
     """``s = j h`` [m] of the sample nearest to ``(x, y)`` over the whole path (first minimum, as
-    ``np.argmin``).
-    """
+    ``np.argmin``)."""
     n = int(pv[P_N])
     m = int(pv[P_M])
     sx = P_TAIL + 6 * n
@@ -690,8 +677,7 @@ def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
     """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: Newton
-    (:func:`newton_step`, at most :data:`NEWTON_ITERATIONS`, stopped at a fixed point), foot terms and status.
-    """
+    (:func:`newton_step`, at most :data:`NEWTON_ITERATIONS`, stopped at a fixed point), foot terms and status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
@@ -737,8 +723,7 @@ def locate_rows(
 ) -> None:
     """:func:`locate_flat` (hinted) or :func:`locate_global` of the points ``(x[i], y[i])`` [m] on the flat
     paths at ``flat[start[i]:]``; column ``i`` of ``out`` ``(12, N)`` gets the fields of :class:`PathPoint`
-    (status as a float).
-    """
+    (status as a float)."""
     for i in range(len(x)):
         pv = flat[start[i] :]
         if hinted:
@@ -761,8 +746,7 @@ def locate_rows(
 
 def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: list[int] | IntArray, s: FlatPath) -> None:
     """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into the columns of
-    ``out`` ``(7, N)`` (the fields of :class:`PathPose`).
-    """
+    ``out`` ``(7, N)`` (the fields of :class:`PathPose`)."""
     for i in range(len(s)):
         x, y, th, kappa, c, ct, st = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
         out[0, i] = x
@@ -843,8 +827,7 @@ def chain_pieces(
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
     """Write the coarse samples ``s_j = j spacing`` [m], ``j < count``, into ``pv``: ``x`` at ``pv[o + j]``,
-    ``y`` at ``pv[o + count + j]`` (header and pieces written before).
-    """
+    ``y`` at ``pv[o + count + j]`` (header and pieces written before)."""
     for j in range(count):
         x, y, _th, _k, _c, _ct, _st = pose_flat(buf, nodes, 0, pv, j * spacing)
         pv[o + j] = x
@@ -919,8 +902,7 @@ def locate_columns(
     pose: PoseOf | None = None,
 ) -> PathPoint:
     """:func:`locate_rows` on ``(N,)`` float64 columns (compiled where registered, else Python; always
-    Python for a custom ``pose``); a :class:`PathPoint` of columns.
-    """
+    Python for a custom ``pose``); a :class:`PathPoint` of columns."""
     out = np.empty((12, x.shape[0]))
     hints = x if sp is None else sp
     if _COMPILED and pose is None:
@@ -938,8 +920,7 @@ def locate_points(
     pose: PoseOf | None = None,
 ) -> PathPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of points of any shape (window and hints checked, arguments
-    broadcast); arrays of the broadcast shape.
-    """
+    broadcast); arrays of the broadcast shape."""
     ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
     if s_prev is not None:
         check_hint(s_prev)

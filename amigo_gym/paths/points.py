@@ -196,8 +196,7 @@ def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, fl
 def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
     """The points minimising ``|z - b|^2 + lambda |D z|^2`` (``D``: weighted second divided differences in
     the chord parameter of ``z``) with the RMS of ``|z - b|`` equal to ``target`` [m] (or the largest ``lambda``
-    tried, if still closer).
-    """
+    tried, if still closer)."""
     from scipy.optimize import brentq
     from scipy.sparse import csc_matrix, identity
     from scipy.sparse.linalg import splu
@@ -529,8 +528,7 @@ def is_points_file(name: str) -> bool:
 
 def cached_file_path(file: str | os.PathLike[str]) -> ClothoidPath:
     """:func:`from_file` with default settings, built once per process per file version (resolved name,
-    modification time, size); at most :data:`CACHE_BYTES` of paths kept (oldest dropped, the newest always).
-    """
+    modification time, size); at most :data:`CACHE_BYTES` of paths kept (oldest dropped, the newest always)."""
     f = Path(file)
     try:
         st = f.resolve().stat()

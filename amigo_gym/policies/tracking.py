@@ -128,8 +128,7 @@ def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tu
 def closed_loop_impulse_response(gain: float, integral_gain: float, dt: float, steps: int = 20000) -> Array:
     """Response ``h_n`` [m per m] of the sampled error loop to one disturbance ``delta_0 = 1`` m:
     ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, ``e_{k+1} = e_k + dt c_k + delta_k``; ``h_0 = 0``,
-    ``h_1 = 1``. Returns ``(steps,)``.
-    """
+    ``h_1 = 1``. Returns ``(steps,)``."""
     h = np.zeros(steps)
     e, z = 0.0, 0.0
     for n in range(1, steps):
