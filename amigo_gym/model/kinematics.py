@@ -301,18 +301,12 @@ def pack(*columns: Real) -> Array:
 
 
 def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
-    r"""Speed of A and turn rate from the wheel rates (inverse of :func:`wheel_rates`).
+    r"""Speed of A and turn rate ``(v_A [m/s], betadot [rad/s])``, each ``(...)``, from wheel rates ``w``
+    ``(..., 2)`` [rad/s] (right, left); the inverse of :func:`wheel_rates`:
 
     .. math::
         v_A = \frac{r_1 \dot\alpha_1 + r_2 \dot\alpha_2}{2}, \qquad
         \dot\beta = \frac{r_1 \dot\alpha_1 - r_2 \dot\alpha_2}{2 l_1}
-
-    Args:
-        w: wheel rates ``(..., 2)`` [rad/s], ``[wheel 1 (right), wheel 2 (left)]``.
-        robot: geometry.
-
-    Returns:
-        ``(v_A, betadot)``, each of shape ``(...)``, in [m/s] and [rad/s].
     """
     w = np.asarray(w, dtype=np.float64)
     v, b = body_velocity_columns(w[..., 0], w[..., 1], robot)
@@ -320,18 +314,11 @@ def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
 
 
 def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
+    r"""Wheel rates ``(..., 2)`` [rad/s] rolling without slip for ``v_A`` [m/s] and ``betadot`` [rad/s] of shape
+    ``(...)`` (docs/model.md, system 29):
 
     .. math::
         r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
-
-    Args:
-        v_a: speed of A along the heading, shape ``(...)`` [m/s].
-        betadot: turn rate, shape ``(...)`` [rad/s].
-        robot: geometry.
-
-    Returns:
-        wheel rates ``(..., 2)`` [rad/s], ``[alpha1dot, alpha2dot]``.
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
@@ -339,12 +326,9 @@ def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
 
 
 def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Rolling rate of the self-aligned castor (seventh equation of system 29), signed like ``v_A``:
+    r"""Rolling rate ``alpha3dot`` ``(...)`` [rad/s] of the self-aligned castor (system 29), signed like ``v_A``:
 
     .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
-
-    Returns:
-        ``alpha3dot`` of shape ``(...)`` [rad/s].
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
@@ -367,15 +351,8 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) ->
 
 
 def h_position(pose: ArrayLike, robot: Geometry) -> Array:
-    """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
-
-    ``r_H = (x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
-
-    Args:
-        pose: ``(..., 3)`` as ``(x_A [m], y_A [m], beta [rad])``.
-
-    Returns:
-        ``(..., 2)`` [m].
+    """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4):
+    ``(x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
     """
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
@@ -383,12 +360,8 @@ def h_position(pose: ArrayLike, robot: Geometry) -> Array:
 
 
 def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
-    """Contact points K (wheel 1, right) and L (wheel 2, left) on the ground (paper eqs 14, 22).
-
+    """Contact points ``(K, L)``, each ``(..., 2)`` [m], of wheel 1 (right) and 2 (left) (paper eqs 14, 22):
     ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
-
-    Returns:
-        ``(K, L)``, each ``(..., 2)`` [m].
     """
     p = np.asarray(pose, dtype=np.float64)
     side = pack(np.sin(p[..., 2]), -np.cos(p[..., 2])) * robot.l1
@@ -429,14 +402,13 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> 
 
 
 class SteadyCircle(NamedTuple):
-    """Closed-form steady state of H on a circle (docs/model.md, "The path of H and the inverse problem").
+    """Steady state of H on a circle (:func:`circle_steady_state`; docs/model.md).
 
     Attributes:
-        radius_a: radius of A's concentric circle ``R_A = sqrt(R^2 - l3^2)`` [m].
+        radius_a: radius of A's circle ``R_A = sqrt(R^2 - l3^2)`` [m].
         betadot: turn rate ``d v_A / R_A`` [rad/s].
-        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad], the path tangent minus the heading.
-        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], shape ``(..., 2)``.
-        castor_rate: ``alpha3dot`` [rad/s].
+        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad].
+        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], ``(..., 2)``; castor_rate: ``alpha3dot`` [rad/s].
         speed_h: speed of H, ``v_A R / R_A`` [m/s].
     """
 
