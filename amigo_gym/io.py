@@ -128,8 +128,7 @@ def _written_list() -> Path:
 
 def vouch(*digests: str) -> None:
     """Record the sha256 of pickles this installation wrote, one line each appended to ``written.sha256`` in the
-    user's state folder (:data:`STATE_ENV`), so that loading them needs no trust flag; a failure is a warning.
-    """
+    user's state folder (:data:`STATE_ENV`), so that loading them needs no trust flag; a failure is a warning."""
     path = _written_list()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -352,8 +352,7 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) ->
 
 def h_position(pose: ArrayLike, robot: Geometry) -> Array:
     """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4):
-    ``(x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
-    """
+    ``(x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
@@ -361,8 +360,7 @@ def h_position(pose: ArrayLike, robot: Geometry) -> Array:
 
 def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     """Contact points ``(K, L)``, each ``(..., 2)`` [m], of wheel 1 (right) and 2 (left) (paper eqs 14, 22):
-    ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
-    """
+    ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``."""
     p = np.asarray(pose, dtype=np.float64)
     side = pack(np.sin(p[..., 2]), -np.cos(p[..., 2])) * robot.l1
     return p[..., :2] + side, p[..., :2] - side

@@ -240,7 +240,7 @@ class ClothoidPath:
         sample_spacing: largest spacing [m] of the samples of the coarse projection search, in
             [1e-4, 1]; the samples are also at most ``0.1 / max|kappa|`` apart. Default 0.02.
         loops: (an argument of the constructor only, not stored) the compiled path-building loops
-            (:class:`PathLoops`), or None (default): the float route; the same path either way.
+            (:class:`PathLoops`), or None (default): Python; the same path either way.
     """
 
     segments: tuple[ClothoidSegment, ...]
@@ -313,7 +313,7 @@ class ClothoidPath:
         flat[P_TAIL:o] = out
         if loops is not None:
             loops.samples(flat, o, m, spacing)
-        elif _COMPILED:  # compiled pose_flat at each sample (the same bits)
+        elif _COMPILED:  # compiled pose_flat at each sample
             q = pose_columns_of(flat, np.zeros(m, dtype=np.int64), np.arange(m, dtype=np.float64) * spacing)
             flat[o : o + m], flat[o + m :] = q.x, q.y
         else:
@@ -323,7 +323,7 @@ class ClothoidPath:
 
     @cached_property
     def _flat_list(self) -> list[float]:
-        """The flat path vector as a list of Python floats (what the float route reads), built on first use."""
+        """The flat path vector as a list of Python floats (faster to index than the array), built on first use."""
         out: list[float] = self._t.flat.tolist()
         return out
 
@@ -433,7 +433,7 @@ class ClothoidPath:
         return locate_points(self._t.flat, x, y, s_prev, max_advance, max_retreat)
 
 
-# --------------------------------------------------------------------------- the float route (numba subset)
+# --------------------------------------------------------------------------- one point (numba's subset)
 
 
 def py_min(a: float, b: float) -> float:
@@ -548,7 +548,7 @@ PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spac
 P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
 #: where the pieces' arrays start
 P_TAIL = len(PATH_HEADER)
-#: a flat path vector: a float64 array (compiled code) or a list of Python floats (the float path)
+#: a flat path vector: a float64 array or a list of Python floats
 FlatPath = list[float] | NDArray[np.float64]
 
 
@@ -774,7 +774,7 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
     return place(pv, j, du, lap, extra, x, y, th, ct, st)
 
 
-#: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes`` on the float path)
+#: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes``)
 _PATH_TABLE: list[float] = node_table(1)
 
 
