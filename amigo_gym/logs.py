@@ -4,33 +4,11 @@ A recorded run (wheel-rate commands and the measured pose and/or wheel rates) dr
 (:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry); :func:`replay` compares
 the simulated and measured trajectories from a start pose fitted to the log's first poses, and :func:`identify`
 fits the true wheel radii, half track, delay (and ramp rates the log excites) by bounded least squares.
-``docs/logs.md`` is the user's page.
 
-Log format (CSV)
-----------------
-One header row, then one row per sample; lines starting with ``#`` are skipped; other columns are ignored.
-
-==========  =====  ===========================================================================
-column      unit   meaning
-==========  =====  ===========================================================================
-``t``       s      time of the sample, strictly increasing (any origin)
-``cmd_w1``  rad/s  wheel-rate setpoint of wheel 1 (right) issued at ``t`` (held until the next row)
-``cmd_w2``  rad/s  wheel-rate setpoint of wheel 2 (left)
-``x, y``    m      measured position of A (the drive axle's midpoint) at ``t``, ground frame
-``theta``   rad    measured heading at ``t`` (wrapped or not: it is unwrapped on reading)
-``w1, w2``  rad/s  measured wheel rates at ``t`` (positive forward)
-==========  =====  ===========================================================================
-
-``t``, ``cmd_w1``, ``cmd_w2`` are required, with all of ``x, y, theta`` or both of ``w1, w2`` (or all five).
-
-ROS 2 bags (:func:`read_bag`, extra ``amigo_gym[logs]``): a Twist command topic (default ``/cmd_vel``)
-converted to wheel rates with the nominal robot, and a pose topic (Odometry or PoseStamped, default ``/odom``)
-giving A's pose, at the bag's record times. The pose should be measured independently of the wheels.
-
-Checks (:class:`LogError`, one line): missing columns or topics, an empty log, text or NaN/inf, time not
-strictly increasing, and units wrong by orders of magnitude: median sample interval outside [1e-4, 5] s,
-wheel rates above 3 times the robot's limit, A faster than 3 times the top speed, measured travel, turn or
-wheel rates more than 10 times (or under a tenth of) what the commands give.
+Logs are CSV files (:data:`CSV_COLUMNS`: ``t`` [s], ``cmd_w1``, ``cmd_w2`` [rad/s] required, with ``x, y`` [m],
+``theta`` [rad] of A and/or ``w1, w2`` [rad/s]) or ROS 2 bags (:func:`read_bag`). :func:`check_log` refuses
+them in one line (:class:`LogError`) for missing columns, NaN, time not increasing or units wrong by orders of
+magnitude. The format, the bag topics and every message: ``docs/logs.md``.
 """
 
 from __future__ import annotations
@@ -82,7 +60,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: the columns of the CSV log format, with their units (module docstring)
+#: the columns of the CSV log format, with their units (docs/logs.md)
 CSV_COLUMNS: dict[str, str] = {
     "t": "s",
     "cmd_w1": "rad/s",
@@ -159,7 +137,7 @@ def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: boo
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
-    """A CSV log (module docstring for the format), checked (:func:`check_log`).
+    """A CSV log (format: docs/logs.md), checked (:func:`check_log`).
 
     Raises:
         LogError: one line naming the file's problem (missing column, text, NaN, time not increasing, units).
@@ -334,7 +312,7 @@ def read_log(
     """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked.
 
     Raises:
-        LogError: one line naming the problem (module docstring); also for an unknown kind of file.
+        LogError: one line naming the problem (docs/logs.md); also for an unknown kind of file.
         FileNotFoundError: no such path.
     """
     p = Path(path)
@@ -369,7 +347,9 @@ def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
 
 
 def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
-    """Refuse a log whose units look wrong by orders of magnitude (module docstring, *Checks*).
+    """Refuse a log whose units look wrong by orders of magnitude: median sample interval outside [1e-4, 5] s,
+    wheel rates above 3 times the robot's limit, A faster than 3 times its top speed, measured travel, turn or
+    wheel rates more than 10 times (or under a tenth of) what the commands give.
 
     ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to the names the user knows (columns or topics).
 

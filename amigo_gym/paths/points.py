@@ -1,37 +1,25 @@
 """Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` fitted to points, from arrays, CSV or JSON.
 
-:func:`from_points` turns an ``(n, 2)`` array of points ``(x, y)`` [m], ordered along the path (optionally
-closed), into a :class:`~amigo_gym.paths.ClothoidPath` with continuous curvature, usable wherever a family is.
+:func:`from_points` turns an ``(n, 2)`` array of points ``(x, y)`` [m] in path order (optionally closed) into a
+:class:`~amigo_gym.paths.ClothoidPath` with continuous curvature (:func:`fit_points`; docs/amigobot_v1.md,
+"Paths of your own"):
 
-Checks (one-line errors naming ``points``): shape, NaN, repeated points, at most :data:`MAX_POINTS`; points out
-of path order (median consecutive distance above a tenth of the extent and :data:`UNORDERED_RATIO` times the
-median nearest-neighbour distance); a polyline shorter than :data:`MIN_LENGTH` or longer than
-:data:`MAX_LENGTH` (not metres).
+1. an interpolating cubic spline in the chord-length parameter (not-a-knot ends if open, periodic if closed);
+2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a
+   :class:`~amigo_gym.paths.ClothoidSegment` of the spline's arc length, its curvature linear between the
+   spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at the step's ends;
+3. a closed path's curvature corrected by the smallest ``c_0 + sum_q (c cos + c sin)(q w s)``, ``q = 1, 2``,
+   ``w = 2 pi / L``, closing it to rounding (Gauss–Newton);
+4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved
+   up to :data:`MAX_REFINEMENTS` times), else ``ValueError``.
 
-Method (:func:`fit_points`):
+With ``smoothing=sigma`` [m] (the points' noise) points are first averaged in groups of ``g`` (a power of 2,
+points ``g`` apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline
+(Whittaker–Reinsch, least ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the
+means; at an open path's ends the curvature falls to 0 (natural ends).
 
-1. Interpolating cubic spline ``(x(t), y(t))`` in the chord-length parameter (not-a-knot ends if open,
-   periodic if closed); its curvature ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` is continuous.
-2. Clothoid spline: steps of chord at most ``step`` [m] and turn at most :data:`MAX_STEP_TURN`, each a
-   :class:`~amigo_gym.paths.ClothoidSegment` of the spline's arc length (Gauss–Legendre, 8 nodes) with the
-   curvature linear between the spline's at its ends, from ``p_0`` with the spline's tangent.
-3. Closure (closed paths): the curvature is corrected by
-   ``c_0 + c_1 cos(w s) + c_2 sin(w s) + c_3 cos(2 w s) + c_4 sin(2 w s)``, ``w = 2 pi / L``, the smallest ``c``
-   from Gauss–Newton on the end pose, so the path ends at its start pose to rounding.
-4. Error bound: ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length; above ``tolerance`` ``step`` is
-   halved (at most :data:`MAX_REFINEMENTS` times), then ``ValueError``. :attr:`PointsFit.max_error` is the bound.
-
-Smoothing (``smoothing=sigma`` [m], the points' noise per coordinate): points are averaged in groups of ``g``
-(the least power of 2 with points ``g`` apart a median ``3 sigma`` apart), then the means ``b_j`` replaced by
-the ``z_j`` minimising ``sum_j |z_j - b_j|^2 + lambda sum_j w_j |z''_j|^2`` (second divided differences in the
-chord parameter: a discrete cubic smoothing spline, Whittaker–Reinsch), ``lambda`` chosen so that the RMS of
-``|z_j - b_j|`` is ``sigma sqrt(2 / g)`` (discrepancy principle, applied twice). Steps 1–4 then fit the
-``z_j``. Detail shorter than the distance where noise and bending are alike is removed; at an open path's ends
-the curvature falls to 0 (natural ends).
-
-Files (:func:`load_points`, :func:`from_file`): CSV with a header naming ``x`` and ``y`` [m] (other columns
-ignored); JSON as ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of ``{"x", "y"}``
-objects.
+Files (:func:`load_points`): CSV with a header naming ``x`` and ``y`` [m]; JSON ``{"x": [...], "y": [...]}``
+(optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects.
 """
 
 from __future__ import annotations
@@ -173,7 +161,7 @@ def _check_length(owner: str, length: float, what: str = "span a path of") -> No
 
 
 def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, float]:
-    r"""The smoothed points (module docstring, *Smoothing*) and their RMS distance from the group means [m]."""
+    r"""The smoothed points (module docstring) and their RMS distance from the group means [m]."""
     group = 1  # the fewest points whose ends are 3 sigma apart (doubling): their noise no longer rules the chord
     while np.median(np.hypot(*(p[group:] - p[:-group]).T)) < 3.0 * sigma:
         group *= 2
