@@ -1,8 +1,7 @@
 """amigo_gym: a Gymnasium environment for the AmigoBot differential-drive robot.
 
-``import amigo_gym`` registers ``AmigoBot-v0`` and ``AmigoBot-v1`` and needs only numpy and gymnasium; the symbolic
-derivation (sympy), rendering (pygame), plots (matplotlib) and agents (torch, stable-baselines3)
-are imported only where they are used.
+``import amigo_gym`` registers ``AmigoBot-v0`` and ``AmigoBot-v1`` and needs only numpy and gymnasium; sympy,
+pygame, matplotlib, torch and stable-baselines3 are imported only where used.
 """
 
 from __future__ import annotations
@@ -17,8 +16,7 @@ from amigo_gym.model.params import EnvParams, RobotParams
 __version__ = "0.1.0"
 __all__ = ["EnvParams", "RobotParams", "SeparateEnvSpec", "__version__"]
 
-#: steps of one episode at the default dt = 0.1 s: 40 s, more than one lap (31.3 s) of the
-#: default circle. Pass ``max_episode_steps`` to ``gym.make`` with other settings.
+#: steps of one AmigoBot-v0 episode at the default dt = 0.1 s: 40 s, more than one lap of the default circle
 MAX_EPISODE_STEPS = 400
 
 #: steps of one AmigoBot-v1 episode at the default dt = 0.1 s: 60 s
@@ -28,15 +26,9 @@ MAX_EPISODE_STEPS_V1 = 600
 class SeparateEnvSpec(EnvSpec):
     """The registered spec of ``AmigoBot-v1``: an environment of its own name, not a newer version of ``AmigoBot-v0``.
 
-    Gymnasium warns "The environment AmigoBot-v0 is out of date" (a ``DeprecationWarning``) whenever ``gym.make``
-    makes ``AmigoBot-v0`` while a spec of the same ``name`` with a higher ``version`` is registered
-    (``gymnasium.envs.registration.find_highest_version``). v0 is not deprecated: it stays the ideal robot of the
-    paper comparison, and v1 is a different task (docs/amigobot_v1.md). This spec reports ``name = id``
-    (``"AmigoBot-v1"``) and ``version = None``, as an unversioned environment of that name, so that the lookup of
-    v0's versions does not see it; ``gym.make("AmigoBot-v1")`` finds it by its id as before (the unversioned
-    ``gym.make("AmigoBot")``, which Gymnasium resolves to the highest version with a warning, now gives v0: name the
-    version). It compares equal to the plain :class:`EnvSpec` of the same fields (what ``EnvSpec.from_json`` gives
-    back), pickles and copies as one.
+    It reports ``name = id`` and ``version = None``, so that ``gym.make("AmigoBot-v0")`` does not warn that v0 is
+    out of date (v1 is a different task, docs/amigobot_v1.md); ``gym.make("AmigoBot-v1")`` finds it by id. It compares
+    equal to the plain :class:`EnvSpec` of the same fields, and pickles and copies as one.
     """
 
     def __post_init__(self) -> None:
@@ -66,7 +58,7 @@ if "AmigoBot-v0" not in registry:
     )
 
 if "AmigoBot-v1" not in registry:
-    # gymnasium.register builds a plain EnvSpec; the registry is the dict it writes to (SeparateEnvSpec's docstring)
+    # gymnasium.register builds a plain EnvSpec: write the registry's entry directly
     registry["AmigoBot-v1"] = SeparateEnvSpec(
         id="AmigoBot-v1",
         entry_point="amigo_gym.envs:AmigoBotV1Env",

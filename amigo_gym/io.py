@@ -1,18 +1,14 @@
-"""Atomic file writing: what a user saves is never left half-written by an interrupted run; file digests.
+"""Atomic file writing (a saved file is never left half-written) and file digests.
 
-Every writer puts the data in a temporary file in the target's own folder (same file system), flushes
-and fsyncs it, gives it the mode a plain new file would get (``0o666 & ~umask``; ``mkstemp`` makes
-``0o600``) and then moves it over the target with ``os.replace``, which is atomic on POSIX and Windows.
-On any error, ``KeyboardInterrupt`` included, the temporary file is removed and the target is untouched.
-After the move the folder itself is fsynced, so that the new name survives a power loss.
+Every writer puts the data in a temporary file in the target's folder, fsyncs it, gives it the mode of a plain
+new file (``0o666 & ~umask``) and moves it over the target with ``os.replace`` (atomic on POSIX and Windows),
+then fsyncs the folder. On any error, ``KeyboardInterrupt`` included, the temporary file is removed and the
+target untouched. JSON is strict (NaN and infinities become ``null``); :func:`finite_float` is the one check of a
+number in a text cell.
 
-JSON is written strictly (``allow_nan=False``): NaN and infinities become ``null``. Text files are read
-back through :func:`finite_float`, the one check of a number in a cell (CSV logs, point files).
-
-Fault injection (tests only): with the environment variable ``AMIGO_GYM_FAULT=<stage>[@<n>]`` the process
-kills itself (``SIGKILL``) the ``n``-th time (default 1) it reaches ``<stage>``:
-``write:<file name>`` (temporary file complete, not yet moved) and ``rename:<file name>`` (moved, folder
-not yet fsynced) here, and the stages of :mod:`amigo_gym.tools.runs`. Unset, :func:`fault_point` does nothing.
+Fault injection (tests only): ``AMIGO_GYM_FAULT=<stage>[@<n>]`` makes the process kill itself (``SIGKILL``) the
+``n``-th time (default 1) it reaches ``<stage>``: ``write:<file name>`` (temporary file complete, not moved),
+``rename:<file name>`` (moved, folder not fsynced), and the stages of :mod:`amigo_gym.tools.runs`.
 """
 
 from __future__ import annotations
@@ -116,7 +112,7 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
 
 #: environment variable that, set to ``1``, trusts every pickle (what ``amigo-gym ... --trust-unverified`` sets)
 TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
-#: environment variable naming the folder of ``written.sha256`` (default ``$XDG_STATE_HOME/amigo_gym``, else
+#: environment variable naming the folder of ``written.sha256`` (default ``$XDG_STATE_HOME/amigo_gym`` or
 #: ``~/.local/state/amigo_gym``)
 STATE_ENV = "AMIGO_GYM_STATE_DIR"
 
@@ -131,10 +127,8 @@ def _written_list() -> Path:
 
 
 def vouch(*digests: str) -> None:
-    """Record the sha256 of pickles this installation wrote (models, statistics, replay buffers, checkpoints), so
-    that loading them later needs no trust flag: one line each, appended to ``written.sha256`` in the user's state
-    folder (``STATE_ENV``), which a downloaded folder cannot change. A failure to record is a one-line warning
-    (the file then needs ``--trust-unverified`` to load)."""
+    """Record the sha256 of pickles this installation wrote, one line each appended to ``written.sha256`` in the
+    user's state folder (:data:`STATE_ENV`), so that loading them needs no trust flag; a failure is a warning."""
     path = _written_list()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -161,10 +155,9 @@ def _shipped_digests() -> set[str]:
 
 
 def require_trust(path: str | os.PathLike[str], digest: str | None = None, trust: bool = False) -> None:
-    """Refuse to unpickle ``path`` (whose sha256 is ``digest``, computed if ``None``) unless it is trusted: ``trust``
-    (the user's ``--trust-unverified`` / ``trust=True``, or ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or its sha256 is
-    one a shipped manifest (``agents/pretrained``) records or one this installation wrote (:func:`vouch`). A hash
-    beside a file proves only that the file is the one recorded, not who recorded it, so it is not enough.
+    """Refuse to unpickle ``path`` (sha256 ``digest``, computed if ``None``) unless ``trust`` (or
+    ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or its sha256 is recorded by a shipped manifest (``agents/pretrained``) or by
+    :func:`vouch`. A hash beside the file is not enough (it proves no origin).
 
     Raises:
         UntrustedFileError: one line naming the file and the flag.

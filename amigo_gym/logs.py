@@ -1,48 +1,14 @@
-r"""Logs of a real robot: read them, replay them through the model, fit the model's parameters to them.
+"""Logs of a real robot: read them, replay them through the model, fit the model's parameters to them.
 
-The seed paper checks its simulation against a test rig (its Figs 2–5: wheel angles and rates, simulated
-and measured). This module does that for a user's own robot: a recorded run (the wheel-rate commands and
-the measured pose and/or wheel rates) drives the package's exact actuator step
-(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry),
-and the simulated and measured trajectories are compared (:func:`replay`, from the start pose that fits the
-log's first poses: the first measured pose alone would carry its noise into every later sample); the true robot's
-wheel radii, half track, actuation delay (and ramp accelerations, where the log excites them) are fitted by
-bounded least squares on the replayed trajectory (:func:`identify`). ``docs/logs.md`` is the user's page.
+A recorded run (wheel-rate commands and the measured pose and/or wheel rates) drives the exact actuator step
+(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry); :func:`replay` compares
+the simulated and measured trajectories from a start pose fitted to the log's first poses, and :func:`identify`
+fits the true wheel radii, half track, delay (and ramp rates the log excites) by bounded least squares.
 
-Log format (CSV)
-----------------
-One header row, then one row per sample; lines starting with ``#`` are skipped; other columns are ignored.
-
-==========  =====  ===========================================================================
-column      unit   meaning
-==========  =====  ===========================================================================
-``t``       s      time of the sample, strictly increasing (any origin)
-``cmd_w1``  rad/s  wheel-rate setpoint of wheel 1 (right) issued at ``t`` (held until the next row)
-``cmd_w2``  rad/s  wheel-rate setpoint of wheel 2 (left)
-``x, y``    m      measured position of A (the drive axle's midpoint) at ``t``, ground frame
-``theta``   rad    measured heading at ``t`` (wrapped or not: it is unwrapped on reading)
-``w1, w2``  rad/s  measured wheel rates at ``t`` (positive forward)
-==========  =====  ===========================================================================
-
-``t``, ``cmd_w1``, ``cmd_w2`` are required, with all of ``x, y, theta`` or both of ``w1, w2`` (or all five).
-
-ROS 2 bags (:func:`read_bag`, needs the ``rosbags`` package, extra ``amigo_gym[logs]``): a velocity-command
-topic (``geometry_msgs/msg/Twist`` or ``TwistStamped``; default ``/cmd_vel``) converted to wheel rates with
-the nominal robot, ``w1 = (v + l1 w) / r1``, ``w2 = (v - l1 w) / r2``, and a pose topic
-(``nav_msgs/msg/Odometry``, ``geometry_msgs/msg/PoseStamped`` or ``PoseWithCovarianceStamped``; default
-``/odom``) whose pose is that of A. Times are the bag's record times. The pose should be measured
-independently of the wheels (motion capture, localisation): wheel odometry computed with the nominal radii
-cannot reveal the true ones.
-
-Checks (:class:`LogError`, one line naming the problem): missing columns or topics, an empty log, text or
-NaN/inf in a number column, time not strictly increasing, and units wrong by orders of magnitude: the
-median sample interval outside [1e-4, 5] s (milliseconds or nanoseconds as seconds), wheel rates above
-3 times the robot's limit (deg/s or rpm), the measured A faster than 3 times the robot's top speed, and
-the measured travel, turn or wheel rates more than 10 times (or less than a tenth of) what the commands
-give (millimetres, degrees).
-
-This module may import numpy, the standard library and the core modules (params, kinematics, actuators, io); scipy
-(:func:`identify`) and rosbags (:func:`read_bag`) are imported inside the functions that need them.
+Logs are CSV files (:data:`CSV_COLUMNS`: ``t`` [s], ``cmd_w1``, ``cmd_w2`` [rad/s] required, with ``x, y`` [m],
+``theta`` [rad] of A and/or ``w1, w2`` [rad/s]) or ROS 2 bags (:func:`read_bag`). :func:`check_log` refuses
+them in one line (:class:`LogError`) for missing columns, NaN, time not increasing or units wrong by orders of
+magnitude. The format, the bag topics and every message: ``docs/logs.md``.
 """
 
 from __future__ import annotations
@@ -94,7 +60,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-#: the columns of the CSV log format, with their units (module docstring)
+#: the columns of the CSV log format, with their units (docs/logs.md)
 CSV_COLUMNS: dict[str, str] = {
     "t": "s",
     "cmd_w1": "rad/s",
@@ -171,7 +137,7 @@ def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: boo
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
-    """A CSV log (module docstring for the format), checked (:func:`check_log`).
+    """A CSV log (format: docs/logs.md), checked (:func:`check_log`).
 
     Raises:
         LogError: one line naming the file's problem (missing column, text, NaN, time not increasing, units).
@@ -346,7 +312,7 @@ def read_log(
     """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked.
 
     Raises:
-        LogError: one line naming the problem (module docstring); also for an unknown kind of file.
+        LogError: one line naming the problem (docs/logs.md); also for an unknown kind of file.
         FileNotFoundError: no such path.
     """
     p = Path(path)
@@ -381,7 +347,9 @@ def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
 
 
 def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
-    """Refuse a log whose units look wrong by orders of magnitude (module docstring, *Checks*).
+    """Refuse a log whose units look wrong by orders of magnitude: median sample interval outside [1e-4, 5] s,
+    wheel rates above 3 times the robot's limit, A faster than 3 times its top speed, measured travel, turn or
+    wheel rates more than 10 times (or under a tenth of) what the commands give.
 
     ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to the names the user knows (columns or topics).
 
@@ -450,24 +418,21 @@ def simulate(
     nominal: RobotParams | None = None,
     start: Sequence[float] | None = None,
 ) -> Replay:
-    r"""Drive the model with the log's commands and sample it at the log's measurement times.
+    """Drive the model with the log's commands and sample it at the log's measurement times.
 
-    The command issued at ``t_cmd[j]`` is in effect from ``t_cmd[j] + delay`` on (``actuators.delay``), so the
-    setpoint at time ``t`` is :math:`c(t) = cmd_j`, ``j`` the last with ``t_cmd[j] + delay <= t``; before the first
-    one the robot executes its start wheel rates. Between consecutive measurement times the step is
-    :func:`amigo_gym.model.actuators.actuator_step` (the environment's exact step: firmware ramps of the nominal
-    robot, true radii and half track, no slip), once per interval with the setpoint switching inside it, and
-    again from each further switch in the same interval (irregular logs); for a log sampled every ``dt`` with
-    commands at the same times this is exactly the environment's step with ``dt`` and the same delay.
+    The command issued at ``t_cmd[j]`` takes effect at ``t_cmd[j] + delay``; before the first the robot keeps its
+    start wheel rates. Between measurement times the step is
+    :func:`amigo_gym.model.actuators.actuator_step` (nominal firmware ramps, true radii and half track, no slip),
+    split at every command switch: for a log sampled every ``dt`` with commands at the same times it is the
+    environment's step.
 
     Args:
         log: the log (:func:`read_log`).
-        true_robot: the robot that moves (its ``r1``, ``r2``, ``l1`` [m]); default the nominal robot.
-        actuators: ramps and delay [s] (:class:`ActuatorParams`); default the manufacturer's, no delay.
+        true_robot: the robot that moves (``r1``, ``r2``, ``l1`` [m]); default the nominal robot.
+        actuators: ramps and delay [s]; default the manufacturer's, no delay.
         nominal: the robot the firmware believes in (default :class:`RobotParams`).
         start: pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas[0]``; default the log's first measured pose
-            (``(0, 0, 0)`` without a measured pose). The wheel rates start at the log's first measured ones
-            (0, at rest, without them).
+            (else the origin). Wheel rates start at the first measured ones (else 0).
 
     Returns:
         :class:`Replay` at ``log.t_meas``.
@@ -575,9 +540,9 @@ def start_window(log: Log) -> int:
 
 
 def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, float, float]:
-    r"""The start pose ``(x0, y0, theta0)`` [m, m, rad] placing the replay from the origin (``origin``) on the log's
-    first :func:`start_window` measured poses: least squares of the position errors and ``heading_weight`` [m/rad]
-    times the heading errors (the log's first pose alone carries its noise into every later sample)."""
+    """The start pose ``(x0, y0, theta0)`` [m, m, rad] placing ``origin`` (a replay from the origin) on the
+    log's first :func:`start_window` poses: least squares of the position errors and ``heading_weight`` [m/rad]
+    times the heading errors."""
     from scipy.optimize import least_squares  # heavy: only here
 
     if log.pose is None:
@@ -594,11 +559,9 @@ def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, f
 
 
 def noise_level(log: Log) -> float | None:
-    r"""The measured position's noise, estimated from the log [m]: ``1.4826 MAD / sqrt(20)`` of the third differences
-    of ``x`` and ``y`` (white noise of ``sigma`` per axis gives third differences of variance ``20 sigma^2``; the
-    motion's own third differences, jerk times the sample interval cubed, are small beside it except at a few
-    command switches, which the median ignores), as the RMS of the 2-D error it makes, ``sigma sqrt(2)``; ``None``
-    without a measured pose or with fewer than 8 samples."""
+    """The measured position's noise [m]: ``sigma sqrt(2)`` with ``sigma = 1.4826 MAD / sqrt(20)`` of the third
+    differences of ``x`` and ``y`` (white noise gives them variance ``20 sigma^2``); ``None`` without a measured
+    pose or with fewer than 8 samples."""
     if log.pose is None or log.t_meas.size < 8:
         return None
     d3 = np.diff(log.pose[:, :2], n=3, axis=0).ravel()
@@ -746,12 +709,9 @@ class Fit:
 
 
 def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | None = None) -> dict[str, float]:
-    r"""Seconds the nominal ramps spend speeding up over the log: ``sum max(|c_k| - |c_{k-1}|, 0) / A``.
-
-    ``c_k`` the commanded translational speed [m/s] (``acceleration``) or turn rate [rad/s] (``rot_acceleration``)
-    of the k-th command (the nominal robot), ``A`` the nominal rate. A ramp that runs for under three log samples
-    in all is not identifiable from the pose; :func:`identify` fits only the ones above that.
-    """
+    """Seconds the nominal ramps spend speeding up over the log: ``sum max(|c_k| - |c_{k-1}|, 0) / A``, ``c_k``
+    the k-th command's speed [m/s] (``acceleration``) or turn rate [rad/s] (``rot_acceleration``), ``A`` the nominal
+    rate."""
     act = ActuatorParams() if actuators is None else actuators
     v, w = body_velocity(log.cmd, nominal)
     out = {}
@@ -770,32 +730,25 @@ def identify(
 ) -> Fit:
     r"""Fit the true robot to a log: bounded least squares on the replayed trajectory.
 
-    Parameters: ``r1``, ``r2``, ``l1`` [m] (when the log measures the pose), ``delay`` [s], and with
-    ``ramps="auto"`` each ramp rate (``acceleration`` [m/s^2], ``rot_acceleration`` [rad/s^2]) that the log
-    keeps busy for at least three samples (:func:`ramp_excitation`; ``"fit"``: both, ``"fixed"``: neither);
-    nuisance: the start pose ``x0``, ``y0``, ``theta0`` (the log's first pose is itself measured with noise).
-    Residuals, per measurement sample ``k >= 1``:
+    Parameters: ``r1``, ``r2``, ``l1`` [m] (when the pose is measured), ``delay`` [s], and with ``ramps="auto"``
+    each ramp rate (``acceleration`` [m/s^2], ``rot_acceleration`` [rad/s^2]) the log keeps busy for at least three
+    samples (:func:`ramp_excitation`; ``"fit"``: both, ``"fixed"``: neither); nuisance: the start pose. Residuals
+    per measurement sample ``k >= 1`` (measured components only):
 
     .. math:: (x_k^{sim} - x_k,\; y_k^{sim} - y_k,\; \lambda\, \mathrm{wrap}(\theta_k^{sim} - \theta_k),\;
               r_1 \Delta t\, (w_{1,k}^{sim} - w_{1,k}),\; r_2 \Delta t\, (w_{2,k}^{sim} - w_{2,k}))
 
-    (the measured components only; ``lambda`` = ``heading_weight`` [m/rad], default the nominal half track;
-    wheel rates as rim travel per median sample interval ``Delta t``) minimised by
-    :func:`scipy.optimize.least_squares` (``trf``, finite-difference Jacobian) within ``r, l1`` in nominal
-    ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramp rates in nominal ``* [0.1, 10]``. Start: the nominal
-    robot, the log's first pose, and the best delay of a grid of steps of ``MAX_DELAY / 10`` (the cost is not
-    convex in the delay far from its minimum). Uncertainties: ``sqrt(diag(s^2 (J^T J)^{-1}))``,
-    ``s^2 = 2 cost / (N - p)``; they assume independent residuals and so understate the error when the model
-    misses something systematic.
+    with ``Delta t`` the median sample interval, minimised by :func:`scipy.optimize.least_squares` (``trf``) within
+    ``r, l1`` in nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramp rates in nominal ``* [0.1, 10]``,
+    from the nominal robot and the best delay of a grid of ``MAX_DELAY / 10``. Uncertainties:
+    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)`` (independent residuals assumed).
 
     Args:
         log: the log (:func:`read_log`, read with the same ``nominal``).
-        nominal: the robot the firmware believes in (default :class:`RobotParams`): the start and the centre
-            of the bounds of ``r1``, ``r2``, ``l1``.
-        ramps: ``"auto"``, ``"fit"`` or ``"fixed"`` (above).
+        nominal: the robot the firmware believes in (default :class:`RobotParams`), the start and bounds' centre.
+        ramps: ``"auto"``, ``"fit"`` or ``"fixed"``.
         heading_weight: ``lambda`` [m/rad], > 0; default ``nominal.l1``.
-        actuators: the firmware's nominal ramps (start of the fitted ramp rates, values of the others); its
-            delay is not used (fitted). Default the manufacturer's (:class:`ActuatorParams`).
+        actuators: the nominal ramps (its delay is not used). Default :class:`ActuatorParams`.
 
     Raises:
         ValueError: a bad ``ramps``.

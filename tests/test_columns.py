@@ -19,7 +19,6 @@ from amigo_gym.model.kinematics import (
     body_velocity_columns,
     castor_rate,
     castor_rate_columns,
-    col_arctan2,
     col_cos,
     col_exp,
     col_sin,
@@ -57,8 +56,6 @@ def test_column_math_is_numpy_and_gives_floats_for_scalars() -> None:
     y = np.abs(x)
     np.testing.assert_array_equal(col_sqrt(y), np.sqrt(y))
     assert type(col_sqrt(2.0)) is float and col_sqrt(2.0) == float(np.sqrt(2.0))
-    np.testing.assert_array_equal(col_arctan2(x, x[::-1]), np.arctan2(x, x[::-1]))
-    assert col_arctan2(float(x[0]), float(x[1])) == np.arctan2(x[0], x[1])
 
 
 def test_cos_sin_from_the_half_angle_tangent() -> None:

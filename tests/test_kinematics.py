@@ -17,7 +17,6 @@ from amigo_gym.model.kinematics import (
     h_position,
     sinc,
     step_pose,
-    step_wheel_angles,
     wheel_rates,
 )
 from amigo_gym.model.params import RobotParams
@@ -205,14 +204,6 @@ def test_points_on_the_body() -> None:
     np.testing.assert_allclose(castor_position(pose, ROBOT), a - L5 * u, atol=1e-15)
 
 
-def test_wheel_angles_advance() -> None:
-    alpha = np.array([0.1, -0.2, 0.3])
-    w = np.array([4.0, 3.0])
-    out = step_wheel_angles(alpha, w, 0.25, ROBOT)
-    v, bd = (R1 * 4.0 + R2 * 3.0) / 2, (R1 * 4.0 - R2 * 3.0) / (2 * L1)
-    np.testing.assert_allclose(out, [0.1 + 1.0, -0.2 + 0.75, 0.3 + math.hypot(v, L5 * bd) / R3 * 0.25], atol=1e-15)
-
-
 # ---------------------------------------------------------------------------------------------- batching
 
 
@@ -221,13 +212,12 @@ def test_batch_equals_loop() -> None:
     n = 7
     pose = np.column_stack((g.normal(size=(n, 2)), g.uniform(-4, 4, n)))
     w = g.uniform(-15, 15, (n, 2))
-    alpha = g.normal(size=(n, 3))
+    g.normal(size=(n, 3))  # (the draws that follow stay as they were)
     dt = g.uniform(0.01, 1.0, n)
     v, bd = body_velocity(w, ROBOT)
     k, l_ = contact_points(pose, ROBOT)
     batched = {
         "step_pose": step_pose(pose, w, dt, ROBOT),
-        "step_wheel_angles": step_wheel_angles(alpha, w, dt, ROBOT),
         "h": h_position(pose, ROBOT),
         "castor": castor_position(pose, ROBOT),
         "wr": wheel_rates(v, bd, ROBOT),
@@ -237,7 +227,6 @@ def test_batch_equals_loop() -> None:
     for i in range(n):
         single = {
             "step_pose": step_pose(pose[i], w[i], dt[i], ROBOT),
-            "step_wheel_angles": step_wheel_angles(alpha[i], w[i], dt[i], ROBOT),
             "h": h_position(pose[i], ROBOT),
             "castor": castor_position(pose[i], ROBOT),
             "wr": wheel_rates(v[i], bd[i], ROBOT),

@@ -12,7 +12,6 @@ from scipy import stats
 from amigo_gym.model.randomization import (
     PRESETS,
     Randomization,
-    counter_normal,
     counter_uniform,
     draw_key,
     make_randomization,
@@ -95,11 +94,6 @@ def test_counter_uniform_is_uniform_and_independent() -> None:
         assert stats.kstest(u, "uniform").pvalue > 1e-3
     assert abs(np.corrcoef(u0, u1)[0, 1]) < 0.02
     assert abs(np.corrcoef(u0, u2)[0, 1]) < 0.02
-
-
-def test_counter_normal_is_standard_normal() -> None:
-    z = counter_normal(np.uint64(2024), np.arange(50_000), 3)
-    assert stats.kstest(z, "norm").pvalue > 1e-3
 
 
 def test_step_noise_scalar_equals_batch_rows_and_is_zero_when_off() -> None:

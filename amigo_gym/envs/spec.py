@@ -1,12 +1,8 @@
-"""The environments' ``spec`` in JSON form, so that Gymnasium's ``EnvSpec`` JSON round trip gives back an equal spec.
+"""The environments' ``spec`` with its keywords in JSON form: ``EnvSpec.from_json(spec.to_json())`` equals it.
 
-``gym.make("AmigoBot-v0", params=EnvParams(...))`` records the keywords in ``env.spec.kwargs`` as they were given;
-``EnvSpec.to_json`` turns the dataclasses into mappings and tuples into lists, so ``EnvSpec.from_json`` gave back a
-spec that was not equal to the original (Gymnasium's own ``test_env_spec_to_from_json`` failed), although it rebuilt
-the same environment. :class:`JsonSpecMixin` stores the spec with its keywords already in that form (the envs take
-mappings and lists for every setting); keywords that JSON cannot hold (a path object of your own) stay as given.
-
-This module may import only the standard library and gymnasium.
+``EnvSpec.to_json`` turns dataclasses into mappings and tuples into lists; :class:`JsonSpecMixin` stores the
+keywords in that form already (the envs accept mappings and lists for every setting). Keywords JSON cannot hold
+(a path object of your own) stay as given.
 """
 
 from __future__ import annotations
@@ -42,8 +38,7 @@ def json_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
 
 
 class JsonSpecMixin:
-    """``spec`` stored with its keywords in JSON form (:func:`json_kwargs`): ``EnvSpec.from_json(spec.to_json())``
-    equals it. Gymnasium's ``make``/``make_vec`` set it; reading it is as for any environment."""
+    """``spec`` stored with its keywords in JSON form (:func:`json_kwargs`); set by ``make``/``make_vec``."""
 
     _json_spec: EnvSpec | None = None
 

@@ -9,8 +9,4 @@ module              holds
 ``actuators``       the firmware's wheel-rate ramps, delays and the exact pose over them
 ``randomization``   the true robot drawn around the nominal one, slip and measurement noise
 ==================  ==========================================================================================
-
-Imports numpy, these modules and the package's bottom layer (:mod:`amigo_gym.io`); the symbolic D–H derivation
-(sympy) is a tool, :mod:`amigo_gym.tools.symbolic`. The analytic inverse solution needs the paths, so it sits above
-them, in :mod:`amigo_gym.task.inverse`.
 """

@@ -1,33 +1,26 @@
-r"""The one integral behind every curve of AmigoBot-v1: motion with speed and turn rate linear in time.
+r"""Motion with speed and turn rate linear in time: the integral behind every curve of AmigoBot-v1.
 
-A body moving with speed ``v(t) = v0 + a t`` along its heading and turn rate ``w(t) = w0 + alpha t``
-has the heading ``theta(t) = theta0 + w0 t + alpha t^2 / 2`` (exact, a quadratic) and the position
+A body with speed ``v(t) = v0 + a t`` along its heading and turn rate ``w(t) = w0 + alpha t`` has the heading
+``theta(t) = theta0 + w0 t + alpha t^2 / 2`` and the position
 
 .. math::
     \mathbf{p}(T) = \mathbf{p}_0 + \int_0^T (v_0 + a t)
         \begin{pmatrix}\cos\theta(t)\\ \sin\theta(t)\end{pmatrix} dt,
 
-a generalised Fresnel integral. Two things in this package are such motions:
+a generalised Fresnel integral. It gives point A within a control step while the firmware ramps its speeds
+(:mod:`amigo_gym.model.actuators`, one call per linear piece) and a clothoid path piece (:mod:`amigo_gym.paths`:
+arc length as time, ``v = 1``, ``a = 0``, curvature as turn rate).
 
-* the robot's point A within a control step when the firmware ramps its speeds (:mod:`amigo_gym.model.actuators`):
-  ``v``, ``w`` are piecewise linear in time, and each linear piece is one call;
-* a clothoid path segment (:mod:`amigo_gym.paths`): arc length plays the time, ``v = 1``, ``a = 0``,
-  and the curvature ``kappa0 + c s`` the turn rate.
+Evaluation: Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals. Where
+the phase varies by at most :data:`MAX_PHASE_PER_SUB` rad on a sub-interval the error bound
+``|E| <= h^{2n+1} (n!)^4 / ((2n+1) ((2n)!)^3) max|f^{(2n)}|`` is below 1e-20 relative to ``|v| h``: exact to
+rounding (checked against mpmath in ``tests/test_fresnel.py``), lines, arcs and clothoids alike. Callers
+choose ``n_sub`` with :func:`subintervals`.
 
-Evaluation: Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal
-sub-intervals. The integrand is entire; on a sub-interval over which the phase ``theta`` varies by
-at most :data:`MAX_PHASE_PER_SUB` radians the quadrature error bound,
-``|E| <= h^{2n+1} (n!)^4 / ((2n+1) ((2n)!)^3) max|f^{(2n)}|``, is below 1e-20 relative to ``|v| h``,
-so the result is exact to rounding (about 1e-16 relative; measured against mpmath at 50 digits in
-``tests/test_fresnel.py``). The closed forms via Fresnel integrals lose digits when the curvature
-rate is small (the difference of two nearly equal Fresnel values); the quadrature has no such
-branch: lines (``w0 = alpha = 0``), arcs (``alpha = 0``) and clothoids are the same code.
-Callers choose ``n_sub`` with :func:`subintervals` from a bound of the phase change they can meet.
-
-Every function takes columns (floats, or float64 arrays that broadcast together) and returns the
-same kind, so one robot and a batch run the same code; the node functions (:func:`advance_nodes`,
-:func:`unit_speed_nodes` and their parts) are the float path's loops on buffers, which AmigoBot-v1's compiled
-step compiles as they are.
+:func:`advance` takes floats or broadcasting float64 arrays. The node functions (:func:`advance_nodes`,
+:func:`unit_speed_nodes` and their parts) work on a buffer ``buf`` of stride ``m`` from ``buf[b]``: phases in
+``buf[b : b + m]``, cosines in ``buf[b + m : b + 2m]``, sines in ``buf[b + 2m : b + 3m]``; they are in numba's
+subset and compiled by :mod:`amigo_gym.sim._kernels_v1`.
 """
 
 from __future__ import annotations
@@ -46,8 +39,6 @@ __all__ = [
     "subintervals",
     "subinterval_count",
     "advance",
-    "advance_chain_float",
-    "unit_speed_pose",
     "unit_speed_poses",
     "Buffer",
     "cos_sin_nodes",
@@ -94,8 +85,7 @@ def subintervals(max_phase_change: float) -> int:
 
 
 def subinterval_count(max_phase_change: float) -> int:
-    """:func:`subintervals` of a finite ``max_phase_change >= 0`` [rad], unchecked (in numba's subset: the compiled
-    path builders call it, :func:`amigo_gym.paths.families.run_segments`)."""
+    """:func:`subintervals` of a finite ``max_phase_change >= 0`` [rad], unchecked (numba's subset)."""
     return max(1, math.ceil(max_phase_change / MAX_PHASE_PER_SUB))
 
 
@@ -108,20 +98,15 @@ def advance(
         \theta' = \theta + w_0 t + \tfrac12 \alpha t^2, \qquad
         (x', y') = (x, y) + \int_0^t (v_0 + a\tau)\,(\cos, \sin)(\theta + w_0\tau + \tfrac12\alpha\tau^2)\,d\tau
 
-    evaluated by Gauss–Legendre quadrature (module docstring); ``t = 0`` returns the pose unchanged.
-
     Args:
         x, y, theta: start pose [m, m, rad].
         v0, a: speed at the start [m/s] and its rate of change [m/s^2].
         w0, alpha: turn rate at the start [rad/s] and its rate of change [rad/s^2].
-        t: duration [s], >= 0 (not checked: callers pass piece lengths they computed).
+        t: duration [s], >= 0 (unchecked).
         n_sub: number of equal sub-intervals (:func:`subintervals`).
 
     Returns:
-        ``(x', y', theta')``, columns of the broadcast shape of the inputs.
-
-    One source for floats, columns and the compiled step: :func:`advance_nodes` of one piece on a node buffer (a list
-    whose entries are floats, or columns of the broadcast shape).
+        ``(x', y', theta')`` of the broadcast shape.
     """
     table = node_table(n_sub)
     m = NODES * n_sub
@@ -143,17 +128,8 @@ def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
     return got
 
 
-# -- the node sums of the float path and the compiled step, written once ------------------------------------
-#
-# Plain Python on buffers (``list`` of floats in the float path, where indexing is cheapest; float64 arrays in the
-# compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim.layout_v1.SHARED). Their
-# expressions and order of operations are :func:`advance`'s. A node buffer ``buf`` of stride ``m`` from ``buf[b]``
-# holds the phases in ``buf[b : b + m]``, their cosines in ``buf[b + m : b + 2m]`` and sines in
-# ``buf[b + 2m : b + 3m]``.
-
-
 class Buffer(Protocol):
-    """What the node functions index: a ``list`` of floats (float path) or a float64 array (compiled step)."""
+    """What the node functions index: a ``list`` of floats or a float64 array."""
 
     def __getitem__(self, i: int, /) -> float: ...
     def __setitem__(self, i: int, v: float, /) -> None: ...
@@ -161,13 +137,8 @@ class Buffer(Protocol):
 
 
 def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
-    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``: numpy's
-    ``np.cos``/``np.sin`` of the phases as one array (a ``list`` buffer of floats, or of columns of one shape: then
-    one 2-D array; numpy gives each element the bits it gives a scalar).
-
-    The compiled step does not compile this body: it overloads this function with the loop of ``math.cos`` and
-    ``math.sin`` (:mod:`amigo_gym.sim._kernels_v1`).
-    """
+    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``, by numpy
+    (``buf`` a list of floats or of equal-shape columns). Compiled code overloads it with ``math.cos``/``math.sin``."""
     lst = cast("list[Any]", buf)
     arr = _np_array(lst[b : b + n])
     cos = _np_cos(arr)
@@ -204,12 +175,11 @@ def node_phases(
 def node_sums(
     buf: Buffer, k: int, m: int, v0: float, a: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float]:
-    r"""The weighted sums of one piece's node cosines and sines (``buf[m + k + i]``, ``buf[2 m + k + i]``), in order.
+    r"""Weighted sums of one piece's node cosines and sines:
 
     .. math:: (d_x, d_y) = \sum_i (v_0 + a \tau_i) w_i (\cos, \sin)\phi_i, \quad \tau_i = u_i t
 
-    so that the position advances by ``(dx t, dy t)``. ``v0 = 1``, ``a = 0`` (a path piece) weights by ``w_i``
-    exactly. ``nodes, j, nn`` as :func:`node_phases`.
+    so that the position advances by ``(dx t, dy t)``; ``nodes, j, nn`` as :func:`node_phases`.
     """
     dx = 0.0
     dy = 0.0
@@ -234,13 +204,12 @@ def advance_nodes(
     j: int,
     nn: int,
 ) -> tuple[float, float, float]:
-    """:func:`advance` applied piece after piece: the phases of all pieces' nodes first (the heading at each piece's
-    start is closed form), one :func:`cos_sin_nodes`, then the sums in order.
+    """:func:`advance` of several pieces in turn: all phases, one :func:`cos_sin_nodes`, then the sums.
 
     Args:
-        buf, b, m: node buffer of stride ``m >= n_pieces * nn`` from ``buf[b]`` (``3 m`` entries).
+        buf, b, m: node buffer of stride ``m >= n_pieces * nn`` from ``buf[b]``.
         x, y, theta: start pose [m, m, rad].
-        pieces: ``(v0, a, w0, alpha, t)`` of each piece (as :func:`advance`'s arguments) at ``pieces[p + 5 q]``.
+        pieces: ``(v0, a, w0, alpha, t)`` of piece ``q`` at ``pieces[p + 5 q]``.
         n_pieces: number of pieces (0: the start pose).
         nodes, j, nn: the nodes and weights (:func:`node_phases`).
 
@@ -264,8 +233,7 @@ def advance_nodes(
 def unit_speed_phases(
     buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> None:
-    """:func:`node_phases` of a path piece (arc length as time) into ``buf[k : k + nn]``, its end heading at
-    ``buf[k + nn]`` (so that one :func:`cos_sin_nodes` gives its cosine and sine too)."""
+    """:func:`node_phases` of a path piece into ``buf[k : k + nn]``, its end heading at ``buf[k + nn]``."""
     buf[k + nn] = node_phases(buf, k, theta, w0, alpha, t, nodes, j, nn)
 
 
@@ -281,7 +249,8 @@ def unit_speed_sums(
 def unit_speed_nodes(
     buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
-    """:func:`unit_speed_pose` on a node buffer of stride ``nn + 1`` (length ``3 (nn + 1)``)."""
+    """``advance(x, y, theta, 1, 0, w0, alpha, t)`` with the cosine and sine of the new heading,
+    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``."""
     m = nn + 1
     unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
     cos_sin_nodes(buf, 0, m, m)
@@ -300,45 +269,11 @@ def node_table(n_sub: int) -> list[float]:
     return got
 
 
-# -- the float path's entry points: thin wrappers on lists --------------------------------------------------
-
-
-def unit_speed_pose(
-    x: float, y: float, theta: float, w0: float, alpha: float, t: float
-) -> tuple[float, float, float, float, float]:
-    """``advance(x, y, theta, 1.0, 0.0, w0, alpha, t, 1)`` for Python floats (a path piece: arc length as time),
-    with ``cos`` and ``sin`` of the new heading: ``(x', y', theta', cos theta', sin theta')``, the same bits as
-    :func:`advance` and ``np.cos``/``np.sin`` of ``theta'`` (:func:`unit_speed_nodes`).
-
-    With unit speed the weights ``(1 + 0 tau) w_i`` are exactly ``w_i``.
-    """
-    return unit_speed_nodes([0.0] * (3 * NODES + 3), x, y, theta, w0, alpha, t, _TABLE_1, 0, NODES)
-
-
-def advance_chain_float(
-    x: float, y: float, theta: float, pieces: list[tuple[float, float, float, float, float]], n_sub: int = 1
-) -> tuple[float, float, float]:
-    """:func:`advance` applied piece after piece, for Python floats: the same bits (:func:`advance_nodes`).
-
-    Args:
-        x, y, theta: start pose [m, m, rad].
-        pieces: ``(v0, a, w0, alpha, t)`` of each piece, in order (as :func:`advance`'s arguments).
-        n_sub: sub-intervals per piece.
-
-    Returns:
-        the pose after the last piece (the start pose for no pieces).
-    """
-    nn = NODES * n_sub
-    m = len(pieces) * nn
-    flat = [v for piece in pieces for v in piece]
-    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, flat, 0, len(pieces), node_table(n_sub), 0, nn)
-
-
 def unit_speed_poses(
     starts: list[tuple[float, float, float, float, float, float]],
 ) -> list[tuple[float, float, float, float, float]]:
-    """:func:`unit_speed_pose` of several independent ``(x, y, theta, w0, alpha, t)``, with one ``np.cos`` and one
-    ``np.sin`` call for all (the same bits as one call each)."""
+    """:func:`unit_speed_nodes` of several ``(x, y, theta, w0, alpha, t)`` (floats), one ``np.cos`` and
+    ``np.sin`` call for all."""
     nn = NODES + 1
     m = len(starts) * nn
     buf = [0.0] * (3 * m)

@@ -1,20 +1,14 @@
-r"""Direct kinematics of the AmigoBot: pure, batched numpy functions.
+"""Direct kinematics of the AmigoBot: closed-form, batched functions.
 
-Conventions (``docs/model.md``): ground frame 0 with z up; the pose of the robot is
-``pose = (x_A, y_A, beta)``, the position of the axle midpoint A [m] and the heading beta [rad]
-about z. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the left (contact
-L = A - l1 (sin b, -cos b)); wheel angles ``alpha1..3`` are positive when the robot moves forward.
-Wheel rates are stacked as ``w = (alpha1dot, alpha2dot)`` [rad/s].
+Conventions (``docs/model.md``): ground frame 0 with z up; ``pose = (x_A, y_A, beta)``, the axle midpoint A
+[m] and the heading beta [rad]. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the
+left; wheel angles ``alpha1..3`` [rad] grow moving forward; wheel rates ``w = (alpha1dot, alpha2dot)`` [rad/s].
 
-Every function accepts a single item or a batch with leading axes: a pose of shape ``(3,)`` or
-``(N, 3)`` (any ``(..., 3)``), wheel rates ``(2,)`` or ``(N, 2)``, speeds ``()`` or ``(N,)``. Outputs
-carry the same leading axes. Nothing here integrates numerically: :func:`step_pose` is the exact
-solution for rates held constant over a step (zero-order hold), valid for any ``dt``.
-
-The column functions :func:`body_velocity_columns` and :func:`arc_step` take each coordinate as a
-separate column (a float or an array of any shape): the array functions above are thin wrappers
-over them, and the environments call them directly (the single environment with plain scalars, the
-vector environment with ``(N,)`` arrays), so that one piece of code computes every step.
+Array functions take one item or a batch with leading axes (pose ``(..., 3)``, rates ``(..., 2)``, speeds
+``(...)``) and return the same leading axes. Column functions (``*_columns``, ``*_of``, :func:`arc_step`) take
+each coordinate as a float or an array of any shape; the pure-arithmetic ones are also compiled by
+:mod:`amigo_gym.sim` with numba. Nothing integrates numerically: :func:`step_pose` is exact for rates held
+over a step of any ``dt``.
 """
 
 from __future__ import annotations
@@ -25,7 +19,7 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.numeric import arctan2_real, pow2_real, sqrt_real, where_real
+from amigo_gym.model.numeric import pow2_real, sqrt_real, where_real
 
 __all__ = [
     "body_velocity",
@@ -37,7 +31,6 @@ __all__ = [
     "contact_points",
     "castor_position",
     "step_pose",
-    "step_wheel_angles",
     "advance_angle",
     "sinc",
     "Real",
@@ -52,7 +45,6 @@ __all__ = [
     "cos_sin",
     "col_sqrt",
     "col_exp",
-    "col_arctan2",
     "SteadyCircle",
     "circle_steady_state",
     "Geometry",
@@ -67,8 +59,7 @@ Array = NDArray[np.float64]
 
 
 class Geometry(Protocol):
-    """The robot's geometry as this module reads it [m]: :class:`amigo_gym.model.params.RobotParams` (which imports
-    this module to check its settings, so this module names only the attributes it needs)."""
+    """The robot's geometry [m] as read here (:class:`amigo_gym.model.params.RobotParams` provides it)."""
 
     @property
     def l1(self) -> float: ...
@@ -88,9 +79,7 @@ class Geometry(Protocol):
 Real: TypeAlias = float | NDArray[np.float64]
 
 
-# Column math: numpy's functions, giving a Python float for a scalar argument. The value is numpy's in
-# both cases (the same function, hence the same bits for one robot and for a batch); arithmetic on
-# Python floats is IEEE double arithmetic as numpy's, and several times faster than on numpy scalars.
+# Column math: numpy's functions, a Python float for a scalar argument.
 
 
 def col_sin(x: Real) -> Real:
@@ -109,22 +98,16 @@ def col_tan(x: Real) -> Real:
 
 
 def cos_sin(x: Real) -> tuple[Real, Real]:
-    r"""``(cos x, sin x)`` from one tangent of the half angle (Weierstrass substitution).
+    r"""``(cos x, sin x)`` from one tangent of the half angle:
 
     .. math:: t = \tan\frac{x}{2}, \qquad \cos x = \frac{1 - t^2}{1 + t^2}, \qquad \sin x = \frac{2t}{1 + t^2}
 
-    One transcendental function instead of two; the values agree with ``np.cos``, ``np.sin`` to a
-    few units in the last place (absolute error about 2e-16), for any finite ``x`` (``x/2`` is never an
-    odd multiple of ``pi/2`` in floating point, so ``t`` is finite).
+    Within about 2e-16 of ``np.cos``, ``np.sin`` for any finite ``x``.
     """
     return half_tan_cos_sin(col_tan(0.5 * x))
 
 
-# Pure arithmetic, written once: these functions take floats or arrays alike (no numpy call, no branch on a
-# value), so the reference runs them as Python on floats and on ``(N,)`` arrays, and the compiled steps
-# (:mod:`amigo_gym.sim`) compile the very same functions with ``numba.njit`` (docs/architecture.md, "One robot,
-# one step"). Keep them so: arithmetic, comparisons and the ``math`` functions numba compiles to the same IEEE
-# operations; a change of any source file gives the kernels a fresh disk cache (`sim.layout.kernel_cache`).
+# Pure arithmetic on floats or arrays alike, in numba's subset (compiled by amigo_gym.sim).
 
 
 def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:
@@ -145,11 +128,11 @@ def arc_from_tangents(
 def arc_from_tangents(
     x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
 ) -> tuple[Real, Real, Real, Real]:
-    r"""The exact arc step of :func:`arc_step` from the two tangents it needs: ``t_h = tan(h / 2)`` of half the turn
-    ``h = betadot dt / 2`` and ``t_m = tan(m / 2)`` of the mid-step heading ``m = beta + h``.
+    r"""The arc step of :func:`arc_step` from ``t_h = tan(h / 2)`` (``h = betadot dt / 2``) and
+    ``t_m = tan(m / 2)`` (``m = beta + h``).
 
-    .. math:: x' = x + c \cos m,\quad y' = y + c \sin m,\quad c = v_A\,dt\,rac{\sin h}{h},\quad
-        \coseta' = \cos m\cos h - \sin m\sin h,\quad \sineta' = \sin m\cos h + \cos m\sin h
+    .. math:: x' = x + c \cos m,\quad y' = y + c \sin m,\quad c = v_A\,dt\,\frac{\sin h}{h},\quad
+        \cos\beta' = \cos m\cos h - \sin m\sin h,\quad \sin\beta' = \sin m\cos h + \cos m\sin h
 
     Returns:
         ``(x', y', cos beta', sin beta')`` [m, m, -, -].
@@ -203,9 +186,7 @@ def advance_angle(alpha: NDArray[np.float64], rate: Real, dt: float) -> NDArray[
 @overload
 def advance_angle(alpha: Real, rate: Real, dt: float) -> Real: ...
 def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
-    r"""A wheel's angle [rad] after ``dt`` [s] at the rate ``rate`` [rad/s] held over the step (exact):
-    :math:`\alpha + \dot\alpha\, dt`. Floats or columns; both compiled steps compile it (the drive wheels' and the
-    castor's angles of AmigoBot-v0's step)."""
+    r"""A wheel's angle [rad] after ``dt`` [s] at ``rate`` [rad/s]: :math:`\alpha + \dot\alpha\, dt`."""
     return alpha + rate * dt
 
 
@@ -223,12 +204,9 @@ _P = (1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.613756321437934
 
 
 def col_exp(x: Real) -> Real:
-    r"""``exp(x)`` in plain float64 arithmetic and an exact scaling by powers of two (:func:`pow2_real`): the same bits
-    on every CPU, for a float (a Python float), a column and in the compiled steps (which compile this function),
-    within 1 ulp of the true exponential, subnormal results included, 0 below ``-745.14`` and for ``-inf``, ``inf``
-    above ``709.79``, NaN for NaN (``tests/test_plain_math.py``). fdlibm's ``exp`` without its branches: ``x = k ln 2
-    + r`` (``k`` rounded to the nearest integer, ``ln 2`` in two parts), its rational form of ``e^r``, then ``2^k``
-    in two exact factors ``2^(k - k // 2)`` and ``2^(k // 2)`` (one rounding where the result is subnormal)."""
+    """``exp(x)`` in plain float64 arithmetic (fdlibm's ``exp`` without branches), for floats, columns and
+    compiled code: within 1 ulp, subnormals included; 0 below ``-745.14`` and for ``-inf``, ``inf`` above
+    ``709.79``, NaN for NaN. ``x = k ln 2 + r``, a rational form of ``e^r``, then ``2^k`` as two exact factors."""
     xc = where_real(x > -746.0, where_real(x < 1000.0, x, 1000.0), -746.0)  # NaN to -746, restored below
     k = (xc * _INV_LN2 + _ROUND) - _ROUND
     hi = xc - k * _LN2_HI
@@ -239,10 +217,6 @@ def col_exp(x: Real) -> Real:
     y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
     k1 = (0.5 * k + _ROUND) - _ROUND
     return where_real(x != x, x, y * pow2_real(k - k1) * pow2_real(k1))
-
-
-#: ``np.arctan2(y, x)``; a Python float for scalar ``y`` and ``x``
-col_arctan2 = arctan2_real
 
 
 def _sinc(x: Real, sin_x: Real) -> Real:
@@ -263,11 +237,8 @@ def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Re
 
 
 def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
-    """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s].
-
-    The sign is that of ``v_A`` as a float: negative for ``-0.0`` (where the environments have
-    ``betadot = 0`` too, so a zero rate either way).
-    """
+    """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s]
+    (the sign of ``-0.0`` is negative)."""
     if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
         return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
     lb = robot.l5 * betadot
@@ -295,26 +266,23 @@ class ArcStep(NamedTuple):
 def arc_step(x: Real, y: Real, beta: Real, v_a: Real, betadot: Real, dt: Real, with_heading: bool = True) -> ArcStep:
     r"""Column form of :func:`step_pose`, with the cosine and sine of the new heading.
 
-    With ``h = betadot dt / 2`` (half the turn of the step) and the mid-step heading ``m = beta + h``,
+    With ``h = betadot dt / 2`` and the mid-step heading ``m = beta + h``:
 
     .. math::
         x' = x + c \cos m, \quad y' = y + c \sin m, \quad \beta' = \beta + 2h,
         \qquad c = v_A\,dt\,\frac{\sin h}{h}
 
-    and, by the angle-addition formulas, ``cos(beta') = cos(m) cos(h) - sin(m) sin(h)`` and
-    ``sin(beta') = sin(m) cos(h) + cos(m) sin(h)`` (``beta' = m + h``). Two transcendental functions in
-    all: ``tan(m/2)`` gives ``cos m`` and ``sin m``, ``tan(h/2)`` gives ``cos h`` and ``sin h``
-    (:func:`cos_sin`); ``sin(h)/h`` is 1 at ``h = 0``.
+    ``cos``/``sin`` of ``m`` and ``h`` each come from one half-angle tangent (:func:`cos_sin`); ``sin(h)/h`` is 1
+    at ``h = 0``.
 
     Args:
         x, y, beta: the pose [m, m, rad].
         v_a, betadot: speed of A [m/s] and turn rate [rad/s], held over the step.
         dt: step [s].
-        with_heading: compute ``cos(beta')``, ``sin(beta')`` (else they are NaN).
+        with_heading: compute ``cos(beta')``, ``sin(beta')`` (else NaN).
 
     Returns:
-        ``(x', y', beta', cos(beta'), sin(beta'))``; ``beta'`` is ``beta + betadot dt`` (not wrapped), its
-        cosine and sine equal ``cos(beta')``, ``sin(beta')`` to rounding.
+        :class:`ArcStep` ``(x', y', beta', cos beta', sin beta')``; ``beta'`` is not wrapped.
     """
     db = betadot * dt
     h = 0.5 * db
@@ -333,18 +301,12 @@ def pack(*columns: Real) -> Array:
 
 
 def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
-    r"""Speed of A and turn rate from the wheel rates (inverse of :func:`wheel_rates`).
+    r"""Speed of A and turn rate ``(v_A [m/s], betadot [rad/s])``, each ``(...)``, from wheel rates ``w``
+    ``(..., 2)`` [rad/s] (right, left); the inverse of :func:`wheel_rates`:
 
     .. math::
         v_A = \frac{r_1 \dot\alpha_1 + r_2 \dot\alpha_2}{2}, \qquad
         \dot\beta = \frac{r_1 \dot\alpha_1 - r_2 \dot\alpha_2}{2 l_1}
-
-    Args:
-        w: wheel rates ``(..., 2)`` [rad/s], ``[wheel 1 (right), wheel 2 (left)]``.
-        robot: geometry.
-
-    Returns:
-        ``(v_A, betadot)``, each of shape ``(...)``, in [m/s] and [rad/s].
     """
     w = np.asarray(w, dtype=np.float64)
     v, b = body_velocity_columns(w[..., 0], w[..., 1], robot)
@@ -352,18 +314,11 @@ def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
 
 
 def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Wheel rates that roll without slipping for a given motion (docs/model.md, system 29).
+    r"""Wheel rates ``(..., 2)`` [rad/s] rolling without slip for ``v_A`` [m/s] and ``betadot`` [rad/s] of shape
+    ``(...)`` (docs/model.md, system 29):
 
     .. math::
         r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
-
-    Args:
-        v_a: speed of A along the heading, shape ``(...)`` [m/s].
-        betadot: turn rate, shape ``(...)`` [rad/s].
-        robot: geometry.
-
-    Returns:
-        wheel rates ``(..., 2)`` [rad/s], ``[alpha1dot, alpha2dot]``.
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
@@ -371,15 +326,9 @@ def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
 
 
 def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Rolling rate of the self-aligned castor (seventh equation of system 29).
+    r"""Rolling rate ``alpha3dot`` ``(...)`` [rad/s] of the self-aligned castor (system 29), signed like ``v_A``:
 
     .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
-
-    The castor is taken as aligned with the velocity of its swivel (no swivel transient); the rate
-    is the swivel's speed over ``r3``, signed like ``v_A`` so that it is positive moving forward.
-
-    Returns:
-        ``alpha3dot`` of shape ``(...)`` [rad/s].
     """
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
@@ -391,11 +340,8 @@ def h_from_a(x_a: float, y_a: float, cos_beta: float, sin_beta: float, l3: float
 @overload
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]: ...
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
-    """Point H from point A in column form: H lies ``l3`` ahead of A along the heading (paper eq. 4).
-
-    ``(x_H, y_H) = (x_A + l3 cos beta, y_A + l3 sin beta)``; the inverse of :func:`a_from_h`. The one
-    home of this relation: the task, the policies' start poses, the inverse solution and rendering call it.
-    """
+    """Point H, ``l3`` [m] ahead of A along the heading (paper eq. 4):
+    ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns. Inverse of :func:`a_from_h`."""
     return x_a + l3 * cos_beta, y_a + l3 * sin_beta
 
 
@@ -405,65 +351,42 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) ->
 
 
 def h_position(pose: ArrayLike, robot: Geometry) -> Array:
-    """Ground projection of point H, ``l3`` ahead of A along the heading (paper eq. 4).
-
-    ``r_H = (x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant.
-
-    Args:
-        pose: ``(..., 3)`` as ``(x_A [m], y_A [m], beta [rad])``.
-
-    Returns:
-        ``(..., 2)`` [m].
-    """
+    """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4):
+    ``(x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
 def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
-    """Contact points K (wheel 1, right) and L (wheel 2, left) on the ground (paper eqs 14, 22).
-
-    ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``.
-
-    Returns:
-        ``(K, L)``, each ``(..., 2)`` [m].
-    """
+    """Contact points ``(K, L)``, each ``(..., 2)`` [m], of wheel 1 (right) and 2 (left) (paper eqs 14, 22):
+    ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``."""
     p = np.asarray(pose, dtype=np.float64)
     side = pack(np.sin(p[..., 2]), -np.cos(p[..., 2])) * robot.l1
     return p[..., :2] + side, p[..., :2] - side
 
 
 def castor_position(pose: ArrayLike, robot: Geometry) -> Array:
-    """Ground position of the castor swivel, ``l5`` behind A on the body axis ``(..., 2)`` [m].
-
-    The paper places the castor on the body axis at distance ``l5`` from A; as on the real robot it
-    trails the drive axle.
-    """
+    """Ground position of the castor swivel, ``l5`` behind A on the body axis: ``(..., 2)`` [m]."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(p[..., 0] - robot.l5 * np.cos(b), p[..., 1] - robot.l5 * np.sin(b))
 
 
 def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
-    r"""Exact pose after ``dt`` with wheel rates ``w`` held constant (closed-form arc).
-
-    With ``(v_A, betadot)`` from :func:`body_velocity` and ``db = betadot dt``, A moves on a circular
-    arc (a straight line when ``db = 0``); the chord form
+    r"""Exact pose after ``dt`` with wheel rates ``w`` held (A moves on a circular arc or a line):
 
     .. math::
         \Delta\beta = \dot\beta\,dt, \qquad
         \Delta \mathbf{r}_A = v_A\,dt\,\operatorname{sinc}\!\left(\tfrac{\Delta\beta}{2}\right)
         \begin{pmatrix}\cos(\beta + \Delta\beta/2)\\ \sin(\beta + \Delta\beta/2)\end{pmatrix}
 
-    is exact for every ``dt`` and has no division by a small ``betadot``. It is evaluated by
-    :func:`arc_step`, with ``sinc(h) = sin(h) / h`` for ``h = db / 2`` and the cosine and sine of
-    ``beta + h`` and of ``h`` each from one tangent of the half angle (:func:`cos_sin`). The heading is not
-    wrapped, so that it stays continuous along a trajectory.
+    with ``(v_A, betadot)`` from :func:`body_velocity`; evaluated by :func:`arc_step`. The heading is not wrapped.
 
     Args:
         pose: ``(..., 3)`` as ``(x_A, y_A, beta)`` [m, m, rad].
-        w: wheel rates ``(..., 2)`` [rad/s] (broadcast against ``pose``'s leading axes).
-        dt: step length [s], scalar or ``(...)``.
+        w: wheel rates ``(..., 2)`` [rad/s] (broadcast against ``pose``).
+        dt: step [s], scalar or ``(...)``.
         robot: geometry.
 
     Returns:
@@ -476,37 +399,14 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> 
     return pack(new.x, new.y, new.beta)
 
 
-def step_wheel_angles(alpha: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
-    """Wheel angles after ``dt`` with drive-wheel rates ``w`` held (exact).
-
-    ``alpha1, alpha2`` advance by ``w dt``; the castor ``alpha3`` by ``castor_rate dt``, which is
-    constant while the rates are held.
-
-    Args:
-        alpha: ``(..., 3)`` wheel angles ``(alpha1, alpha2, alpha3)`` [rad].
-        w: ``(..., 2)`` drive-wheel rates [rad/s].
-        dt: step [s].
-
-    Returns:
-        ``(..., 3)`` [rad].
-    """
-    a = np.asarray(alpha, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    dt_ = np.asarray(dt, dtype=np.float64)
-    v, bdot = body_velocity_columns(w[..., 0], w[..., 1], robot)
-    a3 = castor_rate_columns(v, bdot, robot)
-    return pack(a[..., 0] + w[..., 0] * dt_, a[..., 1] + w[..., 1] * dt_, a[..., 2] + a3 * dt_)
-
-
 class SteadyCircle(NamedTuple):
-    """Closed-form steady state of H on a circle (docs/model.md, "The path of H and the inverse problem").
+    """Steady state of H on a circle (:func:`circle_steady_state`; docs/model.md).
 
     Attributes:
-        radius_a: radius of A's concentric circle ``R_A = sqrt(R^2 - l3^2)`` [m].
+        radius_a: radius of A's circle ``R_A = sqrt(R^2 - l3^2)`` [m].
         betadot: turn rate ``d v_A / R_A`` [rad/s].
-        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad], the path tangent minus the heading.
-        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], shape ``(..., 2)``.
-        castor_rate: ``alpha3dot`` [rad/s].
+        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad].
+        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], ``(..., 2)``; castor_rate: ``alpha3dot`` [rad/s].
         speed_h: speed of H, ``v_A R / R_A`` [m/s].
     """
 
@@ -519,19 +419,16 @@ class SteadyCircle(NamedTuple):
 
 
 def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
-    r"""Steady state of H on a circle of radius ``R`` with A at constant speed ``v_A``.
+    r"""Steady state of H on a circle of radius ``R`` [m] with A at constant speed ``v_A`` [m/s]:
 
     .. math::
         R_A = \sqrt{R^2 - l_3^2},\quad \dot\beta = d\,\frac{v_A}{R_A},\quad
         \theta - \beta = d \arctan\frac{l_3}{R_A}
 
-    and the wheel rates from :func:`wheel_rates`. Requires ``R > l3``.
+    with the wheel rates of :func:`wheel_rates`; ``direction`` ``d`` is +1 (left turn) or -1 (right).
 
-    Args:
-        radius: R [m], shape ``(...)``.
-        v_a: speed of A [m/s], shape ``(...)``.
-        robot: geometry.
-        direction: +1 for a left turn, -1 for a right turn.
+    Raises:
+        ValueError: unless ``R > l3``.
     """
     r = np.asarray(radius, dtype=np.float64)
     if np.any(~(r > robot.l3)):

@@ -1,39 +1,24 @@
-r"""Domain randomisation of AmigoBot-v1 as data: ranges in frozen dataclasses, drawn from the env's generator.
+"""Domain randomisation of AmigoBot-v1 as data: ranges in frozen dataclasses, drawn from the env's generator.
 
-The robot that is simulated is not the robot the policy knows. :class:`Randomization` holds the
-ranges (each a closed interval ``(low, high)``, with ``low == high`` meaning "fixed"); :func:`sample`
-draws one episode's values (:class:`EpisodeDraw`) from the environment's ``np_random`` in a fixed order,
-so that ``reset(seed=...)`` reproduces every draw. Per-step randomness (slip and measurement noise)
-is a pure function of a per-episode key (drawn at reset from the env's generator) and the step index
-(:func:`step_noise`), so that one robot and a batch of robots get the same draws without a per-robot
-generator call in the step.
+:class:`Randomization` holds closed ranges ``(low, high)`` (``low == high``: fixed); :func:`sample` draws one
+episode's values (:class:`EpisodeDraw`) from the env's ``np_random`` in a fixed order, so ``reset(seed=...)``
+reproduces them. Per-step draws (slip, measurement noise) are a pure function of a per-episode key and the step
+index (:func:`step_noise`, a counter-based SplitMix64 generator), identical for one robot and a batch.
 
-What each range means (scales multiply the nominal value; they never add):
+Ranges (scales multiply the nominal value):
 
-* ``wheel_radius``: scale of each true drive-wheel radius, drawn independently for the right and the
-  left wheel [-]. Worn or under-inflated tyres and manufacturing tolerance change the effective rolling
-  radius by a few per cent; odometry calibration (UMBmark, Borenstein & Feng 1996) measures wheel-radius
-  ratios off by 0.1–1 % on calibrated robots and several per cent on uncalibrated ones.
-* ``track``: scale of the true half track ``l1`` [-] (the effective contact width of rubber tyres).
-* ``slip``: per-episode bound ``s_max`` [-] of the per-step loss of ground speed: at every step each wheel's
-  ground contact speed is ``(1 - s_i) r_i alphadot_i`` with ``s_i ~ U(0, s_max)`` drawn per step.
-* ``delay``: actuation delay [s]: a command takes effect this long after it is issued (applied exactly,
-  mid-step). The robot's controller runs a 100 ms cycle (ARCOS/AROS server information packets every
-  100 ms), so a command waits 0–100 ms for the next cycle, plus the serial link.
-* ``position_noise``, ``heading_noise``, ``wheel_rate_noise``: standard deviations of zero-mean Gaussian
-  noise on the measured pose of A [m], heading [rad] and wheel rates [rad/s] (what the observation is
-  computed from). Fresh noise every step; the true state is never perturbed.
+* ``wheel_radius``: scale of each true drive-wheel radius, right and left drawn independently [-] (worn tyres,
+  tolerance: odometry calibration finds 0.1–1 % on calibrated robots, several per cent otherwise);
+* ``track``: scale of the true half track ``l1`` [-];
+* ``slip``: per-episode bound ``s_max`` [-]; each step each wheel's ground speed is ``(1 - s_i) r_i alphadot_i``
+  with ``s_i ~ U(0, s_max)``;
+* ``delay``: actuation delay [s], applied exactly within the step (the robot's 100 ms cycle plus the link);
+* ``position_noise``, ``heading_noise``, ``wheel_rate_noise``: standard deviations of zero-mean Gaussian noise on
+  the measured pose of A [m], heading [rad] and wheel rates [rad/s], fresh each step; the true state is never
+  perturbed.
 
-The presets (:data:`PRESETS`) are choices of this project, not measurements: ``"mild"`` covers a
-calibrated robot on a clean floor, ``"hard"`` an uncalibrated one with worn tyres, a slippery floor and
-a slow link. Held-out conditions for the benchmark lie outside ``"hard"``.
-
-The per-step draws are written once (issue 19): :func:`step_uniforms`, :func:`step_normals`, :func:`box_muller` and
-the counter generator run on Python floats (one robot), on columns (the vector env's numpy route) and compiled
-(AmigoBot-v1's kernel).
-
-Imports only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` (column type) and
-:mod:`amigo_gym.model.numeric` (the polymorphic helpers).
+The :data:`PRESETS` are this project's choices, not measurements: ``"mild"`` a calibrated robot on a clean floor,
+``"hard"`` an uncalibrated one with worn tyres, a slippery floor and a slow link.
 """
 
 from __future__ import annotations
@@ -41,7 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, NamedTuple, cast
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,7 +41,6 @@ __all__ = [
     "EpisodeDraw",
     "Randomization",
     "StepNoise",
-    "counter_normal",
     "counter_uniform",
     "draw_key",
     "make_randomization",
@@ -197,11 +181,8 @@ def _uniform(rng: np.random.Generator, interval: tuple[float, float]) -> float:
 
 
 def sample(rng: np.random.Generator, r: Randomization) -> EpisodeDraw:
-    """Draw one episode's values from ``rng`` in a fixed order (right wheel, left wheel, track, slip, delay).
-
-    A fixed range uses no random number, so that turning randomisation off changes no other draw's stream
-    only through the ranges that are fixed; with everything off the generator is not touched at all.
-    """
+    """Draw one episode's values from ``rng`` in a fixed order (right wheel, left wheel, track, slip, delay);
+    a fixed range uses no random number."""
     return EpisodeDraw(
         r1_scale=_uniform(rng, r.wheel_radius),
         r2_scale=_uniform(rng, r.wheel_radius),
@@ -227,15 +208,12 @@ _M64 = 0xFFFFFFFFFFFFFFFF
 
 
 def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
-    r"""Uniform numbers in ``(0, 1)`` from a counter-based generator: a pure function of ``(key, step, channel)``.
+    r"""Uniform numbers in ``(0, 1)``, a pure function of ``(key, step, channel)``:
 
     .. math:: u = (\lfloor h / 2^{11} \rfloor + 1/2) / 2^{53}, \qquad
         h = \mathrm{splitmix64}(\mathrm{key} + \gamma\,(2^{8} \mathrm{step} + \mathrm{channel} + 1))
 
-    with the golden-ratio increment ``gamma = 0x9E3779B97F4A7C15`` (SplitMix64's sequence). Being a pure function
-    of its arguments, the same draw comes out for one robot and for row ``i`` of a batch with no per-robot
-    generator call in the step; the episode's ``key`` is drawn at reset from the env's ``np_random``.
-    :func:`_counter_uniform_int` on ``uint64`` columns (the one source of the formula).
+    with ``gamma = 0x9E3779B97F4A7C15``.
 
     Args:
         key: per-episode 64-bit keys, shape ``(...)`` (uint64).
@@ -249,38 +227,26 @@ def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np
     return u
 
 
-def counter_normal(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
-    r"""Standard normal numbers by Box–Muller from uniform channels ``2 channel`` and ``2 channel + 1``.
-
-    .. math:: z = \sqrt{-2 \ln u_1}\,\cos(2\pi u_2)
-
-    (:func:`box_muller` of level 1 on columns).
-    """
-    u1 = counter_uniform(key, step, 2 * channel)
-    u2 = counter_uniform(key, step, 2 * channel + 1)
-    return cast("NDArray[np.float64]", box_muller(1.0, np.log(u1), np.cos(_TWO_PI * u2)))
-
-
 def draw_key(rng: np.random.Generator) -> int:
     """A fresh 64-bit episode key for :func:`step_noise`, from the env's generator."""
     return int(rng.integers(0, 2**63, dtype=np.int64)) * 2 + int(rng.integers(0, 2, dtype=np.int64))
 
 
 def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real) -> StepNoise:
-    """The draws of step ``step`` of the episodes with keys ``key``: slip ``U(0, slip_max)`` per wheel, Gaussian noise.
+    """Step ``step``'s draws for the episodes with keys ``key``: slip ``U(0, slip_max)`` per wheel and
+    Gaussian measurement noise; quantities that are off are exact zeros.
 
-    Quantities that are off are exact zeros. Channels: 0, 1 slip of wheels 1, 2; normal channels 1–5 for
-    ``x, y, beta, rate1, rate2`` (uniform channels 2–11).
+    Channels: uniform 0, 1 for the slips; uniform ``2 (ch + 1)``, ``2 (ch + 1) + 1`` for noise channel ``ch`` (0-4:
+    ``x, y, beta, rate1, rate2``).
 
     Args:
         key: per-episode keys (:func:`draw_key`), shape ``(...)``.
-        step: index of the step within the episode (0 for the first), shape ``(...)``.
+        step: index of the step in the episode (0 first), shape ``(...)``.
         r: the ranges (noise levels).
         slip_max: per-episode slip bounds, shape ``(...)`` or a float.
     """
     if type(key) is int and type(step) is int and type(slip_max) is float:
         return _step_noise_float(key, step, r, slip_max)
-    # columns: the float path's functions on uint64 and float64 columns (a list of rows as the buffer)
     levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
     buf: list[Any] = [0.0] * 10
     with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
@@ -295,7 +261,7 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
     return StepNoise(s1, s2, *out)
 
 
-# -- the float path of one robot: the same bits with Python integers (wrapping as uint64 does) -------------
+# -- SplitMix64 on Python ints (wrapping as uint64) ----------------------------------------------------------
 
 _GAMMA = 0x9E3779B97F4A7C15
 _MIX1 = 0xBF58476D1CE4E5B9
@@ -305,17 +271,13 @@ _TWO_PI = 2.0 * math.pi
 
 
 def _uint64(n: int) -> int:
-    """``n`` as an unsigned 64-bit integer: ``n mod 2**64`` as a Python ``int``. The compiled step overloads it with
-    numba's ``np.uint64(n)`` (:mod:`amigo_gym.sim._kernels_v1`), so that :func:`_counter_uniform_int` runs its
-    integer arithmetic on ``uint64`` there (wrapping, logical shifts) and on exact Python ints here: the same bits."""
+    """``n mod 2**64``; compiled code overloads it with ``np.uint64(n)``."""
     return n & _M64
 
 
 def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
-    """:func:`counter_uniform`'s formula, written once: for one key and step (Python ``int`` with ``0 <= key < 2**64``
-    and ``step >= 0``; ``uint64`` in the compiled step, which compiles this function) or for ``uint64`` columns
-    (:func:`counter_uniform`, the column route of :func:`step_noise`): SplitMix64, every product and sum taken mod
-    ``2**64`` (``& _M64``; numpy's ``uint64`` wraps). Returns a float, or a float64 column."""
+    """:func:`counter_uniform`'s formula for a Python ``int`` key and step (``uint64`` when compiled) or
+    ``uint64`` columns, every product and sum mod ``2**64``. Returns a float or a float64 column."""
     z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64
@@ -324,8 +286,8 @@ def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
 
 
 def noise_level(channel: int, position: float, heading: float, rate: float) -> float:
-    """The standard deviation of measurement-noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) from the
-    three levels of :class:`Randomization` [m, m, rad, rad/s, rad/s]."""
+    """Standard deviation of noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) [m, m, rad, rad/s,
+    rad/s]."""
     return position if channel < 2 else (heading if channel == 2 else rate)
 
 
@@ -341,15 +303,12 @@ def channels_on(position: float, heading: float, rate: float) -> int:
 def step_uniforms(
     buf: Any, u1_at: int, u2_at: int, key: Any, step: Any, slip_max: Real, position: float, heading: float, rate: float
 ) -> tuple[Real, Real, int]:
-    """The uniform draws of :func:`step_noise` for one robot (``key`` a Python ``int``, or ``uint64`` in the compiled
-    step) or for columns (``key``, ``step`` ``uint64`` columns, ``slip_max`` a float or a column, ``buf`` a list whose
-    entries become columns): the slips ``slip_max u`` (0.0 when ``slip_max`` is 0; on columns, ``slip_max u`` of
-    every row when any row's ``slip_max`` is above 0, which is 0.0 where it is 0)
-    and, for each measurement-noise channel on (in channel order, :func:`noise_level`), ``u1`` into
-    ``buf[u1_at + j]`` and the angle ``2 pi u2`` into ``buf[u2_at + j]`` (``j`` counting the channels on).
+    """The uniform draws of :func:`step_noise` (one robot, or columns with ``buf`` a list): the slips
+    ``slip_max u`` (0.0 when no ``slip_max`` is above 0) and, for the ``j``-th noise channel on, ``u1`` into
+    ``buf[u1_at + j]`` and ``2 pi u2`` into ``buf[u2_at + j]``.
 
     Returns:
-        ``(slip1, slip2, on)``, ``on`` the number of channels on.
+        ``(slip1, slip2, on)``, ``on`` the number of noise channels on.
     """
     s1 = 0.0
     s2 = 0.0
@@ -368,10 +327,8 @@ def step_uniforms(
 def step_normals(
     out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
 ) -> None:
-    """The normal draws of :func:`step_noise` for one robot (or columns: ``logs``, ``coss`` rows of columns), into
-    ``out[out_at : out_at + 5]`` (``x, y, beta, rate1, rate2``; 0.0 for a channel off): :func:`box_muller` of the
-    ``j``-th channel on from ``logs[log_at + j]`` (``log u1``) and ``coss[cos_at + j]`` (``cos 2 pi u2``), given
-    (:func:`step_uniforms`' draws)."""
+    """The normal draws of :func:`step_noise` into ``out[out_at : out_at + 5]`` (0.0 for a channel off):
+    :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]`` and ``coss[cos_at + j]``."""
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
@@ -383,16 +340,13 @@ def step_normals(
 
 
 def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
-    r"""One normal draw of standard deviation ``level`` by Box–Muller from ``log(u1)`` and ``cos(2 pi u2)`` of two
-    uniforms: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`. The logarithm and the cosine are given (numpy's, in
-    the reference); pure arithmetic on floats or columns (:func:`amigo_gym.model.numeric.sqrt_real`), written once:
-    the compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
+    r"""One normal draw of standard deviation ``level``: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, given
+    ``log(u1)`` and ``cos(2 pi u2)``; floats or columns."""
     return level * (sqrt_real(-2.0 * log_u1) * cos_angle)
 
 
 def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:
-    """:func:`step_noise` for one robot (the same bits): :func:`step_uniforms`, the normals' ``log`` and ``cos`` in one
-    numpy call each, :func:`step_normals` (the functions the compiled step compiles)."""
+    """:func:`step_noise` for one robot (Python ints and floats)."""
     levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
     buf = [0.0] * 10
     s1, s2, on = step_uniforms(buf, 0, 5, key, step, slip_max, *levels)

@@ -1,23 +1,13 @@
 """Paths for point H: the AmigoBot-v0 paths and the clothoid path families of AmigoBot-v1.
 
-* :mod:`amigo_gym.paths.classic`: :class:`CirclePath` and :class:`ManoeuvrePath` of AmigoBot-v0, unchanged
-  (the env's behaviour is bit for bit that of the former module ``amigo_gym/paths.py``).
-* :mod:`amigo_gym.paths.clothoid`: :class:`ClothoidPath`, exact clothoid geometry and a projection that keeps
-  progress (:meth:`ClothoidPath.locate`); :class:`PathSpec`, what AmigoBot-v1 needs of a path.
-* :mod:`amigo_gym.paths.families`: the path families (circle, manoeuvre, figure-8, lane change, random) and
-  their registry :data:`FAMILIES`.
-* :mod:`amigo_gym.paths.batch`: :class:`PathBatch`, ``N`` paths (one per sub-environment) behind the column
-  interface of one path on ``(N,)`` columns, row ``i`` bit-identical to path ``i``.
-* :mod:`amigo_gym.paths.points`: :func:`from_points` and :func:`from_file`, a :class:`ClothoidPath` with
-  continuous curvature fitted to points of your own (an array, a CSV or a JSON file).
-* :mod:`amigo_gym.paths.user`: the duck-typed protocol of a path object of your own (``length``, ``closed``,
-  ``pose_columns``), :func:`check_path` and :class:`UserPath`, which checks it at ``gym.make`` and every result.
-* :mod:`amigo_gym.paths.analysis`: :func:`preview` (path ahead in the robot frame) and :func:`feasibility`
-  (wheel rates and accelerations the exact inverse solution needs).
-
-This package may import numpy (and, in :mod:`amigo_gym.paths.points`, the standard library's csv and json),
-:mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
-:mod:`amigo_gym.model.fresnel` only.
+* :mod:`amigo_gym.paths.classic`: :class:`CirclePath` and :class:`ManoeuvrePath` of AmigoBot-v0.
+* :mod:`amigo_gym.paths.clothoid`: :class:`ClothoidPath` (exact geometry, :meth:`ClothoidPath.locate` keeping
+  progress) and :class:`PathSpec`, what AmigoBot-v1 needs of a path.
+* :mod:`amigo_gym.paths.families`: the families (circle, manoeuvre, figure-8, lane change, random), :data:`FAMILIES`.
+* :mod:`amigo_gym.paths.batch`: :class:`PathBatch`, ``N`` paths behind one path's interface on ``(N,)`` columns.
+* :mod:`amigo_gym.paths.points`: :func:`from_points`, :func:`from_file`: a :class:`ClothoidPath` fitted to points.
+* :mod:`amigo_gym.paths.user`: the protocol of a path object of your own, :func:`check_path`, :class:`UserPath`.
+* :mod:`amigo_gym.paths.analysis`: :func:`preview` (the path ahead in the robot frame) and :func:`feasibility`.
 """
 
 from __future__ import annotations

@@ -1,11 +1,6 @@
-r"""What a path asks of the robot: the path ahead in the robot's frame (:func:`preview`) and the wheel rates and
-accelerations the exact inverse solution needs (:func:`feasibility`).
-
-Both take any :class:`~amigo_gym.paths.clothoid.PathSpec` (a :class:`~amigo_gym.paths.clothoid.ClothoidPath` or a
-user's own path).
-
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
-:mod:`amigo_gym.model.fresnel`.
+"""What a path asks of the robot: the path ahead in the robot's frame (:func:`preview`) and the wheel rates and
+accelerations the exact inverse solution needs (:func:`feasibility`), for any
+:class:`~amigo_gym.paths.clothoid.PathSpec`.
 """
 
 from __future__ import annotations
@@ -74,8 +69,7 @@ def preview(path: PathSpec, x: Real, y: Real, heading: Real, s: Real, distances:
 
 #: largest arc-length step of the heading-lag integration, as a fraction of ``l3``
 STEP_FRACTION = 1.0 / 64.0
-#: arc length of the warm-up of a closed path (whole laps), in units of ``l3``: the lag forgets its start
-#: as ``exp(-s cos(psi) / l3)``
+#: arc length of the warm-up of a closed path [l3] (the lag forgets its start as ``exp(-s cos(psi) / l3)``)
 WARMUP_L3 = 60.0
 
 
@@ -123,24 +117,21 @@ def heading_lag_profile(
 ) -> LagProfile:
     r"""The heading lag ``psi = theta - beta`` of the exact inverse solution along a path (H on the path).
 
-    H, ``l3`` ahead of A on the heading, moves along the path with speed ``v_H``; in the robot's frame its
-    velocity ``v_A (cos, sin)(beta) + l3 betadot (-sin, cos)(beta) = v_H (cos, sin)(theta)`` gives
-    ``v_A = v_H cos psi`` and ``l3 betadot = v_H sin psi``; with ``dtheta/dt = kappa v_H`` the lag obeys, per
-    unit arc length of H (for any speed profile),
+    From ``v_A (cos, sin)(beta) + l3 betadot (-sin, cos)(beta) = v_H (cos, sin)(theta)``: ``v_A = v_H cos psi``,
+    ``l3 betadot = v_H sin psi`` and, per unit arc length of H (any speed profile),
 
     .. math:: \frac{d\psi}{ds} = \kappa(s) - \frac{\sin\psi}{l_3},
 
-    stable about the quasi-steady lag ``sin psi = kappa l3`` (a circle: ``tan psi = l3 / R_A``). It is integrated
-    by the classical Runge–Kutta method with steps of at most ``step_fraction l3``, aligned with the path's
-    breakpoints (``path.breakpoints()`` if it has them) so that the curvature is smooth within each step (the
-    curvature at a step's end is evaluated just before a breakpoint: its left limit).
+    stable about ``sin psi = kappa l3``. Integrated by classical Runge–Kutta with steps of at most
+    ``step_fraction l3`` aligned with ``path.breakpoints()`` if present (the curvature at a step's end is the left
+    limit).
 
     Args:
-        path: the path; an open path from its start to its end, a closed one over one lap after a warm-up of
-            whole laps of at least :data:`WARMUP_L3` ``l3`` (the periodic solution to about ``exp(-60)``).
+        path: open: from its start to its end; closed: one lap after a warm-up of whole laps of at least
+            :data:`WARMUP_L3` ``l3`` (the periodic solution).
         robot: geometry (``l3``).
-        initial_lag: ``psi`` at the start of an open path [rad]; None: the quasi-steady lag ``asin(kappa(0) l3)``
-            (clipped to ``[-1, 1]``); 0: the paper's start, heading along the tangent.
+        initial_lag: ``psi`` at the start of an open path [rad]; None: ``asin(kappa(0) l3)`` (clipped);
+            0: heading along the tangent.
         step_fraction: largest step over ``l3``, in [1e-3, 0.5].
     """
     l3 = robot.l3
@@ -290,35 +281,27 @@ def feasibility(
 ) -> Feasibility:
     r"""Peak wheel rate, accelerations and turn rates the exact inverse solution needs to track ``path`` at ``speed``.
 
-    Method: the heading lag ``psi(s)`` of the exact inverse solution (:func:`heading_lag_profile`, RK4 with steps
-    of at most ``l3/64``), then, at every sample (each step's ends, both sides of every breakpoint), with the
-    speed of H ``v_H`` (``= speed`` for ``speed_of="H"``, ``speed / cos psi`` for ``"A"``) and
-    ``psi_t = v_H dpsi/ds``:
+    From the heading lag ``psi(s)`` (:func:`heading_lag_profile`), at every sample, with ``v_H = speed``
+    (``speed_of="H"``) or ``speed / cos psi`` (``"A"``) and ``psi_t = v_H dpsi/ds``:
 
     .. math::
         v_A = v_H \cos\psi,\quad \dot\beta = \frac{v_H \sin\psi}{l_3},\quad
-        \dot\alpha_{1,2} = \frac{v_A \pm l_1 \dot\beta}{r_{1,2}},
+        \dot\alpha_{1,2} = \frac{v_A \pm l_1 \dot\beta}{r_{1,2}};
 
-    and the time derivatives: for constant ``v_H``, ``dv_A/dt = -v_H sin(psi) psi_t``,
-    ``betaddot = v_H cos(psi) psi_t / l3``; for constant ``v_A``, ``dv_A/dt = 0``,
-    ``betaddot = v_A psi_t / (l3 cos^2 psi)``; ``alphaddot_{1,2} = (dv_A/dt +- l1 betaddot) / r_{1,2}``.
-    On a circle of radius ``R`` this is the steady state ``R_A = sqrt(R^2 - l3^2)``, ``betadot = v_A / R_A``,
-    wheel rates ``(v_A +- l1 v_A / R_A) / r``, e.g. 16.58 rad/s for 0.74 m/s on 1 m, 20.71 rad/s for 0.2 m/s
-    on 0.085 m (``l1 = 0.12``, ``l3 = 0.08``, ``r = 0.05``).
-
-    Accuracy: ``psi`` to about 1e-9 rad (RK4, step ``l3/64``; the lag converges to the path's within
-    ``exp(-s/l3)``); the peaks are taken over the samples, so a smooth maximum between two samples ``h`` apart
-    is underestimated by at most ``h^2/8 max|f''|`` (relative 1e-5 or less on the families' paths); peaks at
-    curvature jumps (steps of the accelerations) are sampled on both sides exactly.
+    constant ``v_H``: ``dv_A/dt = -v_H sin(psi) psi_t``, ``betaddot = v_H cos(psi) psi_t / l3``; constant
+    ``v_A``: ``dv_A/dt = 0``, ``betaddot = v_A psi_t / (l3 cos^2 psi)``; then
+    ``alphaddot_{1,2} = (dv_A/dt +- l1 betaddot) / r_{1,2}``.
+    Peaks are over the samples (both sides of every breakpoint): a smooth maximum between samples ``h`` apart is
+    underestimated by at most ``h^2/8 max|f''|``.
 
     Args:
         path: the path (open: from its start, with ``initial_lag``; closed: the periodic solution).
         speed: the reference speed [m/s], in (0, 10].
         robot: geometry and the wheel-rate limit (default :class:`RobotParams`).
-        speed_of: whose speed is held constant: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
-        max_wheel_rate: [rad/s], default ``robot.max_wheel_rate`` (15).
+        speed_of: whose speed is constant: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
+        max_wheel_rate: [rad/s], default ``robot.max_wheel_rate``.
         max_wheel_acceleration, max_acceleration, max_rotation_rate, max_rotational_acceleration: further
-            limits [rad/s^2, m/s^2, rad/s, rad/s^2] to check; None: not checked (the peaks are still reported).
+            limits [rad/s^2, m/s^2, rad/s, rad/s^2]; None: not checked (the peaks are still reported).
         initial_lag: see :func:`heading_lag_profile`.
     """
     robot = RobotParams() if robot is None else robot

@@ -1,31 +1,17 @@
-r"""A batch of paths, one per sub-environment: the column interface of a path on ``(N,)`` columns.
+"""A batch of paths, one per sub-environment: the column interface of a path on ``(N,)`` columns.
 
-:class:`PathBatch` holds ``N`` paths (any mix: circles of different radii, figure-8s, lane changes, random
-paths, ...) and offers what AmigoBot-v1 needs of a path (:class:`~amigo_gym.paths.clothoid.PathSpec`:
-``length``, ``closed``, ``pose_columns``, ``locate``) on ``(N,)`` columns, row ``i`` using path ``i``.
+:class:`PathBatch` holds ``N`` paths (any mix of families and user paths) and offers
+:class:`~amigo_gym.paths.clothoid.PathSpec` (``length``, ``closed``, ``pose_columns``, ``locate``) on ``(N,)``
+columns, row ``i`` using path ``i``: row ``i`` of :meth:`PathBatch.locate` and :meth:`PathBatch.pose_columns`
+equals ``paths[i]``'s own result for row ``i``'s floats.
 
-Exactness: row ``i`` of :meth:`PathBatch.locate` and :meth:`PathBatch.pose_columns` is *bit-identical* to
-``paths[i].locate(float(x[i]), float(y[i]), float(s_prev[i]), ...)`` and ``paths[i].pose_columns(float(s[i]))``.
-The flat path vectors of the :class:`~amigo_gym.paths.clothoid.ClothoidPath` s (their pieces and coarse samples,
-after :data:`~amigo_gym.paths.clothoid.PATH_HEADER`) are stacked into a padded ``(N, W)`` array, and every evaluation
-runs a ClothoidPath's own float functions on each row's vector, row by row
-(:func:`~amigo_gym.paths.clothoid.locate_rows`, :func:`~amigo_gym.paths.clothoid.pose_rows`: compiled where a
-compiled route registered them, else a Python loop).
+The :class:`~amigo_gym.paths.clothoid.ClothoidPath` s' flat path vectors are stacked into a padded ``(N, W)``
+array evaluated row by row (:func:`~amigo_gym.paths.clothoid.locate_rows`,
+:func:`~amigo_gym.paths.clothoid.pose_rows`). When every row holds the same object (:meth:`PathBatch.from_path`)
+that object is called with the columns directly (no table). A path of your own may sit in any rows: the rows
+are grouped by object, each called once with its rows' ``(k,)`` columns.
 
-Special cases:
-
-* every row the same object (:meth:`PathBatch.from_path`, or ``PathBatch([path] * n)``): the batch calls that
-  object with the ``(N,)`` columns directly (no padded tables are built, no padding cost; with ``N = 1``, with
-  floats); a ClothoidPath gives the same bits for an array and for its floats.
-* a path of your own (an object with ``length``, ``closed``, ``pose_columns`` and ``locate`` that is not a
-  :class:`ClothoidPath`) may sit in any rows: the batch groups the rows by distinct object (a loop over the
-  distinct objects, not the rows), calls each object once with the columns of its rows (``(k,)`` arrays)
-  and scatters the results. Its rows get whatever that object returns for arrays.
-
-Units: arc lengths [m], points [m], angles [rad], curvature [1/m], curvature rate [1/m^2].
-
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
-:mod:`amigo_gym.model.fresnel`.
+Units: arc lengths and points [m], angles [rad], curvature [1/m], curvature rate [1/m^2].
 """
 
 from __future__ import annotations
@@ -66,8 +52,8 @@ def _is_path(obj: object) -> bool:
 
 @dataclass
 class _Padded:
-    """The rows' flat path vectors (``ClothoidPath._t.flat``): row ``i``'s in ``flat[i]`` (``N`` rows of ``W``
-    entries, the longest vector's), starting at ``start[i] = i W`` in ``flat.reshape(-1)``."""
+    """The rows' flat path vectors: row ``i``'s in ``flat[i]`` (``W`` entries, the longest vector's), at
+    ``start[i] = i W`` in ``flat.reshape(-1)``."""
 
     flat: Array
     start: IntArray
@@ -77,8 +63,7 @@ class _Padded:
         return cls(np.zeros((n, w)), np.arange(n, dtype=np.int64) * w)
 
     def write(self, rows: IntArray, path: ClothoidPath) -> None:
-        """Rows ``rows`` take the flat vector of ``path`` (O(len(rows) W); the rows widen, O(N W), when it is longer
-        than any before)."""
+        """Rows ``rows`` take ``path``'s flat vector (the table widens when it is longer than any before)."""
         f = path._t.flat  # same package: the batch stacks the path's own vector
         n, w = self.flat.shape
         if f.size > w:
@@ -93,13 +78,11 @@ class _Padded:
 
 
 class PathBatch:
-    r"""``N`` paths, one per row, with the column interface of a path on ``(N,)`` columns (module docstring).
-
-    Row ``i`` of every column result is bit-identical to path ``i``'s own result for row ``i``'s floats.
+    """``N`` paths, one per row, with the column interface of a path (module docstring).
 
     Args:
         paths: the ``N >= 1`` paths: :class:`~amigo_gym.paths.clothoid.ClothoidPath` s or objects implementing
-            :class:`~amigo_gym.paths.clothoid.PathSpec` (grouped by object, see the module docstring).
+            :class:`~amigo_gym.paths.clothoid.PathSpec`.
     """
 
     def __init__(self, paths: Sequence[PathSpec]) -> None:
@@ -184,11 +167,7 @@ class PathBatch:
         return self._tables
 
     def replace(self, rows: ArrayLike, paths: Sequence[PathSpec]) -> None:
-        """Rows ``rows`` (distinct row numbers, ``(k,)``) take ``paths`` (``k`` paths), in place (autoreset).
-
-        Cost O(k W) (``W``: the longest flat path vector); the padded array grows (O(N W)) only when a new path's
-        vector is longer than any before, and is first built when the rows stop all using one object.
-        """
+        """Rows ``rows`` (distinct, ``(k,)``) take ``paths`` (``k`` paths), in place (autoreset); cost O(k W)."""
         ra = np.asarray(rows)
         if ra.ndim != 1 or not (ra.size == 0 or np.issubdtype(ra.dtype, np.integer)):
             raise ValueError(f"PathBatch.replace.rows must be a 1-D array of row numbers, got {rows!r}")
@@ -292,11 +271,7 @@ class PathBatch:
         max_advance: float = 0.5,
         max_retreat: float | None = None,
     ) -> PathPoint:
-        r"""Closest point of each row's path to ``(x, y)``, keeping progress (:meth:`ClothoidPath.locate`).
-
-        With hints ``s_prev`` the coarse search covers each row's samples in
-        ``[s_prev - max_retreat, s_prev + max_advance]`` (the main use, every step); without, all its samples
-        (a global search, at reset). Then Newton's method, as :meth:`ClothoidPath.locate`.
+        """Closest point of each row's path to ``(x, y)``, keeping progress (:meth:`ClothoidPath.locate`).
 
         Args:
             x, y: ``(N,)`` query points [m] (or floats for all rows).
@@ -314,7 +289,7 @@ class PathBatch:
         sp = None if s_prev is None else self._column("s_prev", s_prev)
         only = self._uniform()
         if only is not None:
-            if xa.size == 1:  # one row: the path's float code (the same bits, a fifth of the time)
+            if xa.size == 1:  # one row: the path's float code (faster)
                 sp1 = None if sp is None else float(sp[0])
                 return self._point(only.locate(float(xa[0]), float(ya[0]), sp1, max_advance, max_retreat))
             return self._point(only.locate(xa, ya, sp, max_advance, max_retreat))
@@ -336,7 +311,7 @@ class PathBatch:
         return PathPoint(*f)
 
     def _locate_padded(self, x: Array, y: Array, sp: Array | None, ahead: float, behind: float) -> PathPoint:
-        """:meth:`ClothoidPath.locate` on every row with its own flat path (its functions, row by row)."""
+        """:meth:`ClothoidPath.locate` on every row with its own flat path."""
         if sp is not None and not np.isfinite(sp).all():  # refused on a ClothoidPath's row, ignored on another's
             check_hint(sp[~np.isin(self._ids, list(self._foreign_objects))])
             sp = np.where(np.isfinite(sp), sp, 0.0)

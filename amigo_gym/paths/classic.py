@@ -1,15 +1,12 @@
-r"""AmigoBot-v0 paths for point H: the paper's circle (eq. 6) and its manoeuvre path (straight, then circle).
+"""AmigoBot-v0 paths for point H: the paper's circle (eq. 6) and its manoeuvre path (straight, then circle).
 
-Paths are frozen dataclasses whose methods are pure and batched: arc lengths ``s`` have shape
-``(...)`` and points ``(..., 2)``; results keep the leading axes. A path is parametrised by arc
-length ``s`` [m] from its start point; its tangent angle ``theta(s)`` [rad] and signed curvature
-``kappa(s) = dtheta/ds`` [1/m] (positive turning left) follow.
-
-The signed cross-track error of a point is positive when the point lies to the **left** of the
-path direction, i.e. ``e = (p - closest) . n`` with ``n = (-sin theta, cos theta)``.
-
-``project`` takes points ``(..., 2)``; ``project_xy`` is its column form (``x`` and ``y`` as separate
-floats or arrays, the form the environments call), and ``project`` is a thin wrapper over it.
+Paths are frozen dataclasses with pure, batched methods: arc lengths ``s`` [m] of shape ``(...)`` from the start
+point, points ``(..., 2)`` [m]; the tangent angle ``theta(s)`` [rad] is continuous and the signed curvature
+``kappa(s) = dtheta/ds`` [1/m] is positive turning left. The cross-track error ``e = (p - closest) . n`` [m],
+``n = (-sin theta, cos theta)``, is positive left of the path. ``project`` takes points ``(..., 2)``,
+``project_xy`` is its column form (floats or arrays). The foot functions (:func:`circle_foot`,
+:func:`circle_arc`, :func:`manoeuvre_foot`, :func:`manoeuvre_curvature`) are in numba's subset and compiled by
+:mod:`amigo_gym.sim`.
 """
 
 from __future__ import annotations
@@ -93,13 +90,13 @@ class ClosestPoint(NamedTuple):
 
 
 class PathPose(NamedTuple):
-    """The path at arc lengths ``s``: columns of the shape of ``s`` (``pose_columns`` of every path family).
+    """The path at arc lengths ``s``: columns of the shape of ``s`` (``pose_columns`` of every path).
 
     Attributes:
         x, y: the point [m].
         theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
         curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2] (0 on a circle, and on the manoeuvre path but at its joint).
+        curvature_rate: ``dkappa/ds`` [1/m^2].
         cos_theta, sin_theta: the unit tangent [-].
     """
 
@@ -112,10 +109,6 @@ class PathPose(NamedTuple):
     sin_theta: Real
 
 
-#: the name of :meth:`CirclePath.pose_columns`' and :meth:`ManoeuvrePath.pose_columns`' result, :class:`PathPose`
-CirclePose = PathPose
-
-
 def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> PathPose:
     """A :class:`PathPose` of arrays, or of floats for a float ``s``."""
     c, sn = np.cos(th), np.sin(th)
@@ -125,24 +118,20 @@ def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> PathPose:
 
 
 class PathPoint(NamedTuple):
-    """Result of :meth:`amigo_gym.paths.clothoid.ClothoidPath.locate` (and :meth:`CirclePath.locate`,
-    :meth:`ManoeuvrePath.locate`): the closest path point to query points, as columns.
+    """The closest path point to query points (``locate`` of every path), as columns.
 
     Attributes:
-        s: arc length of the closest point within one traversal [m]: in ``[0, length)`` on a closed path
-            (``[0, length]`` on an open one).
-        progress: the unwrapped arc length [m]: ``s`` plus whole laps on a closed path (continuing from the
-            hint ``s_prev``); equal to ``s`` on an open path.
+        s: arc length within one traversal [m]: ``[0, length)`` closed, ``[0, length]`` open.
+        progress: the unwrapped arc length [m] (``s`` plus whole laps, continuing from the hint ``s_prev``).
         x, y: the closest point [m].
-        tangent_angle: path tangent angle there [rad], ``theta(progress)`` (continuous, unwrapped).
-        curvature: signed curvature there [1/m].
-        curvature_rate: ``dkappa/ds`` there [1/m^2].
-        cross_track_error: ``(p - c) . n``, positive left of the path direction [m] (at a clamped end, the
-            lateral part of the offset only; ``distance`` is the full distance).
-        cos_theta, sin_theta: the unit tangent there [-].
+        tangent_angle: ``theta(progress)`` [rad], unwrapped.
+        curvature: signed curvature [1/m].
+        curvature_rate: ``dkappa/ds`` [1/m^2].
+        cross_track_error: ``(p - c) . n`` [m], positive left (at a clamped end, the lateral part only).
+        cos_theta, sin_theta: the unit tangent [-].
         distance: ``|p - c|`` [m].
         status: :data:`~amigo_gym.paths.clothoid.STATUS_INTERIOR` (0), ``STATUS_START``, ``STATUS_END`` or
-            ``STATUS_WINDOW`` (:mod:`amigo_gym.paths.clothoid`).
+            ``STATUS_WINDOW``.
     """
 
     s: Real
@@ -172,10 +161,6 @@ class PathPoint(NamedTuple):
         )
 
 
-#: the name :meth:`CirclePath.locate` and :meth:`ManoeuvrePath.locate` used for :class:`PathPoint`
-Located = PathPoint
-
-
 class Path(Protocol):
     """What the environment, the inverse solution and the agents need of a path."""
 
@@ -201,12 +186,8 @@ class Path(Protocol):
         ...
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Column form of :meth:`project` for the points ``(x, y)``.
-
-        ``minimal=True`` computes only what the observation and the reward need (cross-track error,
-        curvature, unit tangent, and the arc length where the curvature varies) and leaves the other
-        fields NaN.
-        """
+        """Column form of :meth:`project`; ``minimal=True`` leaves NaN in the fields the observation and
+        reward do not need (arc length where the curvature is constant, point, tangent angle)."""
         ...
 
     def curvature_columns(self, s: Real) -> Real:
@@ -281,12 +262,12 @@ class CirclePath:
     def curvature_columns(self, s: Real) -> Real:
         return self.direction / self.radius
 
-    #: a circle repeats with period :attr:`length` (the path protocol of ``AmigoBot-v1``, :mod:`amigo_gym.paths.user`)
+    #: a circle repeats with period :attr:`length`
     closed = True
 
     def pose_columns(self, s: Real) -> PathPose:
-        """The circle at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
-        ``theta`` [rad] and ``curvature`` [1/m] as floats for a float ``s``, else arrays of the shape of ``s``."""
+        """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at arc lengths ``s`` [m]: floats for a
+        float ``s``, else arrays of its shape."""
         th = self.tangent_angle(s)
         cx, cy = self.center
         dr = self.direction * self.radius
@@ -296,12 +277,8 @@ class CirclePath:
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
-        r"""The closest point of the circle to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (the fields of
-        :class:`amigo_gym.paths.PathPoint`), by :meth:`project_xy` itself: the cross-track error, unit tangent
-        and curvature are AmigoBot-v0's bits. ``progress`` is ``s`` plus the whole laps ``2 pi R k`` that bring it
-        nearest to ``s_prev`` (``s`` without a hint); the window (``max_advance``, ``max_retreat``) is not
-        needed, the projection being unique (the start point at the centre); ``status`` 0 (interior).
-        """
+        """:class:`PathPoint` of ``(x, y)`` [m] by :meth:`project_xy`; ``progress`` is ``s`` plus the whole laps
+        nearest to ``s_prev`` (``s`` without a hint); the window is not used (the projection is unique); status 0."""
         cp = self.project_xy(x, y)
         s = cp.s
         progress = s
@@ -323,14 +300,11 @@ class CirclePath:
         return self.project_xy(p[..., 0], p[..., 1]).projection()
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        r"""Closest point of the circle to ``(x, y)``, by vector algebra about the centre ``c``.
+        """Closest point of the circle to ``(x, y)`` [m].
 
-        With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho``: the closest point is ``c + R n``,
-        the unit tangent there ``d (-n_y, n_x)``, the cross-track error ``d (R - rho)``, and the arc
-        length ``s = R a`` with ``a`` in ``[0, 2 pi)`` the angle from the start radius ``r0`` to ``u``
-        in the direction of travel, ``a = atan2(d (r0 x u), r0 . u)`` (plus ``2 pi`` where negative).
-        At the centre itself (every point of the circle equally close) it is the start point.
-        ``minimal=True``: ``s``, the point and the tangent angle are not computed (NaN).
+        With ``u = (x, y) - c``, ``rho = |u|``, ``n = u / rho``: the point ``c + R n``, the tangent ``d (-n_y, n_x)``,
+        ``e = d (R - rho)``, ``s = R a`` with ``a = atan2(d (r0 x u), r0 . u)`` in ``[0, 2 pi)`` from the start
+        radius ``r0``. At the centre: the start point. ``minimal=True``: ``s``, point and tangent angle are NaN.
         """
         cx, cy, r0x, r0y = self._frame
         d, r = self.direction, self.radius
@@ -356,14 +330,9 @@ class CirclePath:
 def circle_foot(
     x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float
 ) -> tuple[Real, Real, Real, Real, Real]:
-    r"""The foot of the point ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m] and direction
-    ``d`` (+1 left, -1 right), for floats (:meth:`CirclePath.project_xy`'s expressions, ``minimal``).
-
-    With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho`` (at the centre ``u = r0``, the unit start radius,
-    and ``n = r0``): returns ``(e, cos theta, sin theta, u_x, u_y)`` with the cross-track error
-    ``e = d (r - rho)`` and the unit tangent ``d (-n_y, n_x)``. In numba's subset: the compiled step of
-    the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
-    """
+    """Foot of ``(x, y)`` [m] on the circle of centre ``(cx, cy)``, radius ``r`` [m], direction ``d`` (+1
+    left, -1 right): ``(e, cos theta, sin theta, u_x, u_y)`` with ``u = (x, y) - c`` (``r0`` at the centre),
+    ``e = d (r - |u|)`` and the tangent ``d (-n_y, n_x)``, ``n = u / |u|``."""
     ux = x - cx
     uy = y - cy
     rho = sqrt_real(ux * ux + uy * uy)
@@ -381,9 +350,8 @@ def circle_foot(
 
 
 def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
-    r"""The arc length ``s = r a`` [m] from the circle's start to the direction ``u`` from its centre (floats or
-    columns; :func:`circle_foot`'s ``u``): ``a = atan2(d (r0 x u), r0 . u)`` plus ``2 pi`` where negative, in
-    ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    """Arc length ``s = r a`` [m] from the circle's start to the direction ``u``:
+    ``a = atan2(d (r0 x u), r0 . u)``, plus ``2 pi`` where negative."""
     cross = r0x * uy - r0y * ux
     a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
     return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
@@ -393,11 +361,9 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
 class ManoeuvrePath:
     """The paper's manoeuvre path: a straight segment along x0 from the origin, then a circle.
 
-    For ``0 <= s <= straight_length`` the path is ``(s, 0)`` with tangent 0; beyond, it is the circle
-    of ``radius`` tangent to the segment's end, turning by ``direction`` (laps repeat). The straight
-    part extends backwards for ``s < 0`` so that points behind the start project onto it.
-
-    Projection takes the closer of the straight half-line and the circle (ties to the straight).
+    ``(s, 0)`` with tangent 0 for ``s <= straight_length`` (extending backwards for ``s < 0``), then the circle of
+    ``radius`` tangent to the segment's end, turning by ``direction`` (laps repeat). Projection takes the closer
+    of the half-line and the circle (ties to the line).
 
     Attributes:
         radius: circle radius [m], > 0.
@@ -440,17 +406,14 @@ class ManoeuvrePath:
         return np.where((s <= self.straight_length)[..., None], straight, arc)
 
     def curvature_columns(self, s: Real) -> Real:
-        """The curvature [1/m] at arc lengths ``s`` [m]: 0 on the straight part (``s <= straight_length``), the
-        circle's ``direction / radius`` beyond (:func:`manoeuvre_curvature` for a float ``s``)."""
+        """Curvature [1/m] at ``s`` [m]: 0 for ``s <= straight_length``, else ``direction / radius``."""
         return manoeuvre_curvature(s, self.straight_length, self.direction / self.radius)  # type: ignore[arg-type]
 
-    #: the manoeuvre is an open path for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): its projection never
-    #: reports the end (the circle's laps repeat), as in AmigoBot-v0
+    #: open, but its projection never reports the end (the circle's laps repeat)
     closed = False
 
     def pose_columns(self, s: Real) -> PathPose:
-        """The path at arc lengths ``s`` [m] for ``AmigoBot-v1`` (:mod:`amigo_gym.paths.user`): ``x``, ``y`` [m],
-        ``theta`` [rad] and ``curvature`` [1/m] (:meth:`curvature_columns`), floats for a float ``s``."""
+        """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at ``s`` [m], floats for a float ``s``."""
         xy = self.point(s)
         k = np.where(np.asarray(s) <= self.straight_length, 0.0, self.direction / self.radius)
         return _pose(xy[..., 0], xy[..., 1], self.tangent_angle(s), k, s)
@@ -458,9 +421,8 @@ class ManoeuvrePath:
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
-        """The closest point to ``(x, y)`` [m] as ``AmigoBot-v1`` reads it (:class:`amigo_gym.paths.PathPoint`'s
-        fields) by :meth:`project_xy` itself (AmigoBot-v0's bits); ``progress`` is ``s`` (the hint and the window
-        are not needed), ``status`` 0: the path does not end."""
+        """:class:`PathPoint` of ``(x, y)`` [m] by :meth:`project_xy`; ``progress = s``; status 0 (the path does
+        not end)."""
         cp = self.project_xy(x, y)
         if not isinstance(cp.cross_track_error, np.ndarray) or np.ndim(cp.cross_track_error) == 0:
             cp = ClosestPoint(*(float(v) for v in cp))
@@ -471,15 +433,8 @@ class ManoeuvrePath:
         return self.project_xy(p[..., 0], p[..., 1]).projection()
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Closest point of the path to ``(x, y)`` [m]: the closer of the straight half-line (``y = 0``, ``x <=
-        straight_length``) and the circle (:meth:`CirclePath.project_xy`), ties to the line.
-
-        The line's distance is ``hypot(x - s_line, y)`` with ``s_line = min(x, L)``, its cross-track error ``y``
-        (``sign(y)`` times that distance beyond the segment's end). One point of Python floats runs
-        :func:`manoeuvre_foot` (the function the compiled step compiles); columns run the same operations on
-        arrays.
-        ``minimal=True``: the point and the tangent angle are not computed (NaN).
-        """
+        """Closest point to ``(x, y)`` [m] (:func:`manoeuvre_foot`); ``minimal=True``: point and tangent
+        angle are NaN."""
         circle = self.circle
         cx, cy, r0x, r0y = circle._frame
         d, r = self.direction, self.radius
@@ -489,8 +444,7 @@ class ManoeuvrePath:
         curvature = where_real(on_line, 0.0, d / r)
         if minimal:
             return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
-        # the circle's foot point c + r n, with n from its unit tangent d (-n_y, n_x) (a negation is exact); the
-        # line's (s, 0) where it won
+        # the circle's foot c + r n (n from the tangent d (-n_y, n_x)), or the line's (s, 0)
         nx = sin_theta if d > 0 else -sin_theta
         ny = -cos_theta if d > 0 else cos_theta
         theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
@@ -509,24 +463,15 @@ class ManoeuvrePath:
 def manoeuvre_foot(
     x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
 ) -> tuple[Real, Real, Real, Real, Real, bool | NDArray[np.bool_]]:
-    r"""The foot of the point ``(x, y)`` [m] on the manoeuvre path, for floats (:meth:`ManoeuvrePath.project_xy`).
+    """Foot of ``(x, y)`` [m] on the manoeuvre path: the half-line ``y = 0, x <= L`` (``L = big_l``), then
+    the circle of :func:`circle_foot` starting at ``(L, 0)``.
 
-    The path: the half-line ``y = 0, x <= L`` (``L = big_l`` [m], the straight part, tangent angle 0), then the circle
-    of centre ``(cx, cy)``, radius ``r`` [m] and direction ``d`` (+1 left, -1 right) that starts at ``(L, 0)``, its
-    unit start radius ``(r0x, r0y)`` (:func:`circle_foot`). On the circle, the arc length from its start is
-    ``s_circ = r a`` with ``a = atan2(d (r0 x u), r0 . u)`` in ``[0, 2 pi)`` (``u`` from the centre to the point);
-    on the line, the foot is ``s_line = min(x, L)`` at the distance ``d_line = hypot(x - s_line, y)``, the
-    cross-track error ``y`` (``sign(y) d_line`` past the end). The line wins where ``d_line <= |e_circle|``.
+    On the line ``s_line = min(x, L)``, ``d_line = hypot(x - s_line, y)``, ``e = y`` (``sign(y) d_line`` past the
+    end); on the circle ``s_circ`` by :func:`circle_arc`. The line wins where ``d_line <= |e_circle|``. ``min`` and
+    ``sign`` follow numpy's NaN and signed-zero rules.
 
-    Returns ``(e, cos theta, sin theta, s, s_circ, on_line)``: the cross-track error [m] (positive left), the unit
-    tangent, the arc length ``s`` [m] on the whole path (``s_line``, or ``L + s_circ``), the circle's ``s_circ`` [m]
-    and whether the line won (curvature 0; else the circle's ``d / r``).
-
-    In numba's subset: the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
-    ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: the column code's functions), which numba
-    compiles to the C library's ``atan2`` and ``hypot``.
-    ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
-    ``0.0`` for ``+-0.0``, NaN for NaN).
+    Returns:
+        ``(e, cos theta, sin theta, s, s_circ, on_line)``: ``s`` is ``s_line`` or ``L + s_circ``.
     """
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
     s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
@@ -546,15 +491,12 @@ def manoeuvre_foot(
 
 
 def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
-    """The manoeuvre path's curvature [1/m] at the arc length ``s`` [m], for floats: 0 where ``s <= big_l`` (the
-    straight part, ``big_l`` [m] long), else the circle's ``curvature`` [1/m] (NaN ``s``: the circle's, as the
-    column code). In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    """Curvature [1/m] at ``s`` [m]: 0 where ``s <= big_l``, else ``curvature`` (also for NaN)."""
     return where_real(s <= big_l, 0.0, curvature)  # type: ignore[return-value]
 
 
 def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
-    """The :class:`PathPoint` of a projection ``cp`` with its ``progress`` [m]: curvature rate 0, ``distance = |e|``,
-    status 0 (interior)."""
+    """The :class:`PathPoint` of ``cp`` with ``progress`` [m]: curvature rate 0, ``distance = |e|``, status 0."""
     e = cp.cross_track_error
     zero = 0.0 * e
     if isinstance(e, np.ndarray):

@@ -1,30 +1,26 @@
-r"""Clothoid paths for point H (AmigoBot-v1): exact geometry, and a projection that keeps progress.
+r"""Clothoid paths for point H (AmigoBot-v1): exact geometry and a projection that keeps progress.
 
-A :class:`ClothoidPath` is a chain of :class:`ClothoidSegment` s, each with curvature linear in arc length
-(lines and circular arcs are the special cases of a zero curvature rate), from a start pose, optionally
-closed (it is then traversed in laps). Along one piece of curvature ``kappa(u) = k0 + c u`` starting at
-``(x0, y0, theta0)``:
+A :class:`ClothoidPath` chains :class:`ClothoidSegment` s of curvature linear in arc length (lines and arcs
+included) from a start pose, optionally closed (traversed in laps). On a piece of curvature
+``kappa(u) = k0 + c u`` from ``(x0, y0, theta0)``:
 
 .. math::
     \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
     \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
 
-evaluated by :func:`amigo_gym.model.fresnel.advance` (speed 1, turn rate ``k0 + c u``), exact to rounding as long as
-``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``. Segments are therefore split into equal *pieces* that satisfy
-this bound, and the start pose of every piece is computed once, at construction, by chaining the pieces.
-A point then costs one quadrature from its piece's start (no accumulation along the path).
+by :func:`amigo_gym.model.fresnel.advance` (speed 1), exact to rounding while
+``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``; segments are split into equal pieces meeting this bound, whose
+start poses are chained once at construction, so a pose costs one quadrature from its piece's start.
 
-Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m] from the start point, tangent angle
-``theta(s)`` [rad] continuous (never wrapped, laps add the total turn), signed curvature ``kappa = dtheta/ds``
-[1/m] positive turning left, signed cross-track error ``e = (p - c(s)) . n`` [m] with the left normal
-``n = (-sin theta, cos theta)``. An open path continues beyond its ends as the straight lines along its end
-tangents (curvature 0 there); a closed path repeats (``s`` modulo the lap length). Column arguments are
-floats or float64 arrays of any shape; one code serves both, with bit-identical results: the float functions below
-(``pose_flat``, ``locate_flat``), on an array entry by entry (``locate_rows``, ``pose_rows``: Python, or compiled by
-the v1 kernels once a compiled route registered them, ``use_compiled_rows``).
+Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m], tangent angle ``theta(s)`` [rad]
+continuous (laps add the total turn), curvature ``kappa = dtheta/ds`` [1/m] positive turning left, cross-track
+error ``e = (p - c(s)) . n`` [m] with ``n = (-sin theta, cos theta)``. An open path continues beyond its ends
+along its end tangents (curvature 0); a closed one repeats with period :attr:`ClothoidPath.length`.
 
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
-:mod:`amigo_gym.model.fresnel`.
+One path is stored as a flat float vector (:data:`PATH_HEADER`, then the pieces' ``s0, x0, y0, th0, k0, c``,
+then the coarse samples' ``x``, ``y``); the functions on it (:func:`pose_flat`, :func:`locate_flat` and those
+they call) are in numba's subset and are compiled by :mod:`amigo_gym.sim._kernels_v1`; Python runs them on
+lists of floats.
 """
 
 from __future__ import annotations
@@ -78,7 +74,7 @@ STATUS_END = 2
 #: the projection is clamped at an edge of the search window around the hint ``s_prev``
 STATUS_WINDOW = 3
 
-#: Newton iterations of the projection (a fixed count, so that one point and a batch give the same bits)
+#: Newton iterations of the projection (at most; it stops at a fixed point)
 NEWTON_ITERATIONS = 5
 #: the Newton denominator ``1 - kappa e`` is bounded below by this (points near a centre of curvature)
 MIN_NEWTON_DENOMINATOR = 0.05
@@ -142,13 +138,8 @@ class ClothoidSegment:
 
 
 class PathSpec(Protocol):
-    """The full interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it).
-
-    A path is parametrised by arc length ``s`` [m] of point H, with a tangent angle continuous in ``s`` and
-    a signed curvature (positive turning left). A path object of your own needs only ``length``, ``closed``
-    and a ``pose_columns`` returning ``x``, ``y``, ``theta`` and ``curvature``: :mod:`amigo_gym.paths.user`
-    checks it and completes the rest (``locate`` is optional).
-    """
+    """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it). A path of your own
+    needs only ``length``, ``closed`` and ``pose_columns``; :mod:`amigo_gym.paths.user` completes the rest."""
 
     @property
     def length(self) -> float:
@@ -172,8 +163,7 @@ class PathSpec(Protocol):
 
 
 def check_hint(sp: Real) -> None:
-    """Refuse a NaN or infinite hint ``s_prev`` [m] of :meth:`ClothoidPath.locate` (a float or a column, both
-    routes): the one-line error of :func:`check_real` naming the first such value."""
+    """Raise :func:`check_real`'s error for the first NaN or infinite hint ``s_prev`` (float or array)."""
     a = np.asarray(sp, dtype=np.float64)
     bad = a[~np.isfinite(a)]
     if bad.size:
@@ -182,9 +172,8 @@ def check_hint(sp: Real) -> None:
 
 @dataclass(frozen=True)
 class _Tables:
-    """A built :class:`ClothoidPath`: its flat path vector (:data:`PATH_HEADER`, the pieces, the coarse samples) and
-    its largest ``|curvature|`` [1/m]; the header's values are read from the vector once, the pieces' and the samples'
-    columns are views of it (arrays) or its entries as Python floats (lists)."""
+    """A built :class:`ClothoidPath`: its flat path vector and largest ``|curvature|`` [1/m], the header read
+    once, the pieces' and samples' columns as views (``*_a``) or lists."""
 
     flat: Array
     max_abs_curvature: float
@@ -219,19 +208,15 @@ class _Tables:
 
 
 class PathLoops(NamedTuple):
-    """The compiled forms of the path-building loops, which a compiled route hands to the path constructors
-    (``loops=``; :func:`amigo_gym.sim.fast_v1.path_loops`). Without them the constructors run the same functions as
-    Python (the reference); both give the same bits (``tests/test_path_loops.py``).
+    """Compiled forms of the path-building loops (:func:`amigo_gym.sim.fast_v1.path_loops`), passed as
+    ``loops=`` to the path constructors; without them Python runs the same functions.
 
     Attributes:
-        chain: :func:`chain_pieces` ``(out, n, segs, n_segs, x, y, theta) -> (x, y, theta, length)`` (its scratch and
-            nodes supplied).
-        samples: :func:`sample_points` ``(pv, o, count, spacing)``: the coarse samples written into the flat path
-            vector ``pv`` itself (the float route takes them from :func:`_poses_flat`, the same poses).
-        run: :func:`amigo_gym.paths.families.run_segments` ``(segs, n_segs, x, y, theta) -> (x, y, theta)``.
-        lane: :func:`amigo_gym.paths.families.lane_change_shape` ``(ratio) -> (x1, y1, theta_m, x_m)``.
-        locate, pose: :func:`locate_rows` and :func:`pose_rows` (their scratch and nodes supplied), the column
-            projection and pose of every path once registered (:func:`use_compiled_rows`).
+        chain: :func:`chain_pieces` (scratch and nodes supplied).
+        samples: :func:`sample_points` ``(pv, o, count, spacing)``.
+        run: :func:`amigo_gym.paths.families.run_segments`.
+        lane: :func:`amigo_gym.paths.families.lane_change_shape`.
+        locate, pose: :func:`locate_rows` and :func:`pose_rows` (:func:`use_compiled_rows`).
     """
 
     chain: Callable[..., tuple[float, float, float, float]]
@@ -255,7 +240,7 @@ class ClothoidPath:
         sample_spacing: largest spacing [m] of the samples of the coarse projection search, in
             [1e-4, 1]; the samples are also at most ``0.1 / max|kappa|`` apart. Default 0.02.
         loops: (an argument of the constructor only, not stored) the compiled path-building loops
-            (:class:`PathLoops`), or None (default): the float route; the same path either way.
+            (:class:`PathLoops`), or None (default): Python; the same path either way.
     """
 
     segments: tuple[ClothoidSegment, ...]
@@ -285,8 +270,8 @@ class ClothoidPath:
         object.__setattr__(self, "_t", self._build(loops))
 
     def _build(self, loops: PathLoops | None = None) -> _Tables:
-        """Split the segments into pieces of phase change <= MAX_PHASE_PER_SUB and chain their start poses
-        (:func:`chain_pieces`), then sample the path for the coarse search; ``loops``: their compiled forms."""
+        """Split the segments into pieces, chain their start poses (:func:`chain_pieces`) and sample the path
+        for the coarse search; ``loops``: compiled forms of the loops, or None."""
         segs: list[float] = []
         n = 0
         kmax = 0.0
@@ -320,8 +305,7 @@ class ClothoidPath:
         spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
         n_samples = max(8, math.ceil(total / spacing))
         spacing = total / n_samples
-        # the flat path vector: the header, the pieces, then the coarse samples at s_j = j * spacing, j = 0..n_samples
-        # (open) or 0..n_samples - 1 (closed, periodic), the path's own pose at each (pose_flat reads no sample)
+        # samples at s_j = j * spacing, j = 0..n_samples (open) or 0..n_samples - 1 (closed)
         m = n_samples + (0 if self.closed else 1)
         o = P_TAIL + 6 * n
         flat = np.zeros(o + 2 * m)
@@ -329,7 +313,7 @@ class ClothoidPath:
         flat[P_TAIL:o] = out
         if loops is not None:
             loops.samples(flat, o, m, spacing)
-        elif _COMPILED:  # compiled pose_flat at each sample (the same bits)
+        elif _COMPILED:  # compiled pose_flat at each sample
             q = pose_columns_of(flat, np.zeros(m, dtype=np.int64), np.arange(m, dtype=np.float64) * spacing)
             flat[o : o + m], flat[o + m :] = q.x, q.y
         else:
@@ -339,8 +323,7 @@ class ClothoidPath:
 
     @cached_property
     def _flat_list(self) -> list[float]:
-        """The flat path vector as a list of Python floats, what the float path reads (indexing a list is faster
-        than an array and gives floats); built at its first use (4 times the array's memory)."""
+        """The flat path vector as a list of Python floats (faster to index than the array), built on first use."""
         out: list[float] = self._t.flat.tolist()
         return out
 
@@ -369,7 +352,7 @@ class ClothoidPath:
         return tuple(out)
 
     def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s`` (:func:`pose_flat`: of a float, or of each entry of an array, :func:`pose_columns_of`)."""
+        """Pose at ``s``: of a float, or of each entry of an array (:func:`pose_columns_of`)."""
         if not isinstance(s, np.ndarray):
             return PathPose(*_pose_float(self._flat_list, s if type(s) is float else float(s)))
         a = np.ascontiguousarray(s, dtype=np.float64).reshape(-1)
@@ -381,7 +364,7 @@ class ClothoidPath:
         return self._pose(self._t, s)
 
     def pose_floats(self, ss: list[float]) -> list[PathPose]:
-        """:meth:`pose_columns` of each float in ``ss`` (the same bits), computed together (one robot's preview)."""
+        """:meth:`pose_columns` of each float in ``ss``, computed together."""
         return [PathPose(*q) for q in _poses_flat(self._flat_list, ss)]
 
     def _array_pose(self, s: ArrayLike) -> PathPose:
@@ -418,37 +401,31 @@ class ClothoidPath:
         return self.project_xy(q[..., 0], q[..., 1]).projection()
 
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Column form of :meth:`project` (global search), the :class:`~amigo_gym.paths.classic.Path` protocol.
-
-        ``minimal`` is accepted for the protocol; every field is computed.
-        """
+        """Column form of :meth:`project` (global search; ``minimal`` is ignored)."""
         return self.locate(x, y).closest_point()
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
-        r"""Closest path point to the points ``(x, y)`` [m], keeping progress along the path.
+        """Closest path point to the points ``(x, y)`` [m], keeping progress along the path.
 
-        1. Coarse search over the precomputed samples ``s_j = j h`` (``h`` = the sample spacing): without a
-           hint over the whole path (one lap), with a hint ``s_prev`` [m] (unwrapped progress) over the
-           samples in the window ``[s_prev - max_retreat, s_prev + max_advance]`` only (unwrapped too). The
-           window keeps the projection on its branch where the path passes near itself (a figure-8's
-           crossing): choose it smaller than half the arc length between such branches and larger than the
-           distance the point can advance between calls.
-        2. Newton's method on ``g(s) = (p - c(s)) . t(s)`` (zero at a foot point), with
-           ``g'(s) = -(1 - kappa e)``, ``e = (p - c) . n``: ``s <- s + g / max(1 - kappa e, 0.05)``, the step
-           limited to ``h`` and ``s`` kept in the window and, on an open path, in ``[0, L]``;
-           :data:`NEWTON_ITERATIONS` iterations, to machine precision from a start within ``h / 2``.
+        1. Coarse search over the samples ``s_j = j h``: over one lap without a hint, else over the window
+           ``[s_prev - max_retreat, s_prev + max_advance]`` (unwrapped). Choose the window smaller than half the arc
+           length between branches that pass near each other (a figure-8's crossing) and larger than the advance
+           between calls.
+        2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
+           ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
+           ``[0, L]`` on an open path); :data:`NEWTON_ITERATIONS` iterations.
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
         Args:
-            x, y: query points, columns [m].
-            s_prev: the previous progress [m] (column broadcasting with ``x``), or None for a global search.
+            x, y: query points [m], float or arrays.
+            s_prev: previous progress [m] (broadcast with ``x``), or None for a global search.
             max_advance, max_retreat: the window ahead of and behind ``s_prev`` [m], > 0 (``max_retreat``
                 defaults to ``max_advance``).
 
         Returns:
-            :class:`PathPoint` columns of the broadcast shape of ``x``, ``y`` (and ``s_prev``).
+            :class:`PathPoint` of the broadcast shape.
         """
         if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray)):
             sp = None if s_prev is None else float(s_prev)
@@ -456,18 +433,7 @@ class ClothoidPath:
         return locate_points(self._t.flat, x, y, s_prev, max_advance, max_retreat)
 
 
-# --------------------------------------------------------------------------- the float path of one point
-#
-# The pose and the projection on Python floats (one robot's step evaluates about 15 poses), and on arrays entry by
-# entry (locate_rows, pose_rows).
-#
-# The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
-# subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
-# no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
-# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "One robot, one step"), so the projection is written once: the
-# piece search, wrap and placement of a pose, the coarse search, the Newton loop, the foot terms, the status and the
-# pose (pose_flat, whose quadrature is fresnel's node functions: numpy's cosines and sines of the nodes here, the C
-# library's in compiled code, fresnel.cos_sin_nodes' overload, checked equal per process).
+# --------------------------------------------------------------------------- one point (numba's subset)
 
 
 def py_min(a: float, b: float) -> float:
@@ -481,8 +447,8 @@ def py_max(a: float, b: float) -> float:
 
 
 def wrap_arc(s: float, length: float, closed: bool) -> tuple[float, float, float]:
-    """Arc length ``s`` [m] on a path of lap ``length`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the
-    lap number (closed: ``u = s - lap length``) and the length past an open path's ends (``s = u + extra``)."""
+    """``s`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the lap number (closed) and the length
+    past an open path's ends (``s = u + extra``)."""
     if closed:
         lap = _floor_float(s / length)
         return s - lap * length, lap, 0.0
@@ -503,9 +469,8 @@ def placed_pose(
     turn: float,
     extra: float,
 ) -> tuple[float, float, float, float, float, float, float]:
-    """The pose ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` on the whole path from the pose at ``u``
-    in its piece (:func:`wrap_arc`): laps of a closed path add whole turns ``turn`` [rad] to the heading, an open
-    path goes straight on past its ends (curvature 0 there)."""
+    """The pose on the whole path from the pose at ``u`` in its piece: laps add ``lap * turn`` [rad] to the
+    heading; past an open path's ends it goes straight (curvature 0)."""
     if closed:
         return x, y, th + lap * turn, kappa, c, cos_t, sin_t
     if extra != 0.0:
@@ -514,8 +479,7 @@ def placed_pose(
 
 
 def locate_window(sp: float, ahead: float, behind: float, length: float, closed: bool) -> tuple[float, float]:
-    """The search window ``[lo, hi]`` [m] around the hint ``sp``, kept in
-    ``[0, length]`` on an open path."""
+    """The window ``[sp - behind, sp + ahead]`` [m], clipped to ``[0, length]`` on an open path."""
     lo = sp - behind
     hi = sp + ahead
     if not closed:
@@ -545,9 +509,9 @@ def newton_step(
     lo: float,
     hi: float,
 ) -> tuple[float, bool]:
-    """One iteration of the projection's Newton method (:func:`_newton`) from ``s`` [m] with the pose there:
-    ``s' = clip(s + clip(g / max(1 - kappa e, MIN_NEWTON_DENOMINATOR), -h, h), lo, hi)``, and whether ``s'`` is
-    ``s`` bit for bit (a fixed point: the remaining iterations would repeat it)."""
+    """One Newton iteration of the projection from ``s`` [m] with the pose there:
+    ``s' = clip(s + clip(g / max(1 - kappa e, MIN_NEWTON_DENOMINATOR), -h, h), lo, hi)``, and whether ``s'``
+    equals ``s`` (a fixed point)."""
     _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
     den = 1.0 - kappa * e
     if den < MIN_NEWTON_DENOMINATOR:
@@ -557,8 +521,8 @@ def newton_step(
 
 
 def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
-    """The status (:data:`STATUS_INTERIOR`, ...) of one projection ``s`` [m] with residual ``g = (p - c) . t`` in the
-    range ``[lo, hi]``: clamped at a window edge, or at an end of an open path."""
+    """The status (:data:`STATUS_INTERIOR`, ...) of a projection ``s`` [m] with residual ``g``
+    in ``[lo, hi]``."""
     status = STATUS_INTERIOR
     if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
         status = STATUS_WINDOW
@@ -578,23 +542,18 @@ PoseOf = Callable[[Buffer, Buffer, int, Any, float], FloatPose]
 FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
 
 # --------------------------------------------------------------------------- the flat path vector
-#
-# One path as one vector of floats: the header below, then the n pieces' s0, x0, y0, th0, k0, c (n each), then the
-# m coarse samples' x, y (m each). The compiled step reads it as a float64 array (amigo_gym.sim.fast_v1.flat_path),
-# the float path as a list of the same Python floats (ClothoidPath._flat_list); the functions below read either.
 
 #: the head of a flat path vector (then the arrays)
 PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
 P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
 #: where the pieces' arrays start
 P_TAIL = len(PATH_HEADER)
-#: a flat path vector: a float64 array (compiled code) or a list of Python floats (the float path)
+#: a flat path vector: a float64 array or a list of Python floats
 FlatPath = list[float] | NDArray[np.float64]
 
 
 def piece_index(pv: FlatPath, u: float) -> int:
-    """The piece of the flat path ``pv`` holding ``u`` [m]: ``bisect.bisect_right(s0, u) - 1`` clamped to
-    ``[0, n - 1]`` (the last piece whose start ``s0`` is ``<= u``; NaN gives the last piece, as bisect)."""
+    """Index of the last piece of ``pv`` with ``s0 <= u``, clamped to ``[0, n - 1]`` (NaN: the last)."""
     n = int(pv[P_N])
     lo = 0
     hi = n
@@ -613,9 +572,8 @@ def piece_index(pv: FlatPath, u: float) -> int:
 
 
 def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
-    """The piece ``j`` holding the arc length ``s`` [m] on the flat path ``pv``, the distance ``du`` [m] into it, the
-    lap number and the length ``extra`` [m] past an open path's ends (the wrap, clamp and
-    search: :func:`wrap_arc`, :func:`piece_index`)."""
+    """``(j, du, lap, extra)``: the piece holding ``s`` [m], the distance into it, the lap and the length past
+    an open path's ends."""
     u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     j = piece_index(pv, u)
     return j, u - pv[P_TAIL + j], lap, extra
@@ -624,9 +582,8 @@ def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
 def place(
     pv: FlatPath, j: int, du: float, lap: float, extra: float, x: float, y: float, th: float, ct: float, st: float
 ) -> FloatPose:
-    """The pose at ``du`` [m] into piece ``j`` of the flat path ``pv`` (``x, y, th, ct, st``: its unit-speed pose from
-    the piece's start, :func:`amigo_gym.model.fresnel.unit_speed_pose`) on the whole path (:func:`placed_pose`):
-    curvature ``k0 + c du``, laps of a closed path add whole turns, an open path goes straight on past its ends."""
+    """The pose at ``du`` [m] into piece ``j`` (its unit-speed pose ``x, y, th, ct, st``) on the whole path:
+    curvature ``k0 + c du``, then :func:`placed_pose`."""
     n = int(pv[P_N])
     c = pv[P_TAIL + 5 * n + j]
     kappa = pv[P_TAIL + 4 * n + j] + c * du
@@ -634,13 +591,10 @@ def place(
 
 
 def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> float:
-    """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample
-    nearest to ``(x, y)`` among the samples ``s_j = j h``, ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead +
-    behind) / h) + 2`` (unwrapped: a closed path reads sample ``j mod m``, an open one sample ``clip(j, 0, m - 1)``).
-
-    The rules of the column code: the squared distance ``dx^2 + dy^2``, the first minimum (``np.argmin``; the first
-    NaN if any), ``np.mod`` (the float modulo of a whole number, exact) and ``np.clip`` of the sample numbers.
-    """
+    """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample nearest to ``(x, y)``
+    among ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead + behind) / h) + 2`` (a closed path reads sample
+    ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum of the squared distance wins (the first NaN
+    if any, as ``np.argmin``)."""
     h = pv[P_SPACING]
     n = int(pv[P_N])
     m = int(pv[P_M])
@@ -651,8 +605,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
     j0 = float(np.floor((sp - behind) / h))
     m_f = float(m)
     top = m_f - 1.0
-    # the sample numbers j0 + k are whole numbers computed exactly below 2^53: then j mod m steps by one (a float
-    # modulo per sample otherwise)
+    # below 2^53 the sample numbers are exact whole numbers: j mod m steps by one
     stepping = abs(j0) + float(count) < 9007199254740992.0
     idx = int(j0 % m_f) if closed else 0
     best = 0.0
@@ -683,20 +636,18 @@ def locate_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float,
     behind: float,
 ) -> FlatPoint:  # fmt: skip
-    """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with the hint ``sp`` [m] and the window ``ahead``,
-    ``behind`` [m] (> 0, finite) on the flat path ``pv``: the window (:func:`locate_window`), the coarse search
-    (:func:`coarse_start`) clipped to it, then :func:`project_flat` (``pose``, ``buf``, ``nodes``, ``nb``: the pose
-    function and what it is passed, :func:`pose_flat`'s). Returns :data:`FlatPoint` (the fields of
-    :class:`PathPoint` but the lap's ``s``).
-    """
+    """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with hint ``sp`` [m] and window ``ahead``,
+    ``behind`` [m] (> 0) on the flat path ``pv``: :func:`locate_window`, :func:`coarse_start`, :func:`project_flat`
+    (``pose``, ``buf``, ``nodes``, ``nb``: the pose function and its arguments, as :func:`pose_flat`). Returns
+    :data:`FlatPoint`."""
     lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
     s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
     return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
 
 
 def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
-    """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] without a hint: from the nearest of all samples
-    (:func:`coarse_global`), :func:`project_flat` in ``[0, length]`` (open) or unbounded (closed)."""
+    """:func:`locate_flat` without a hint: from :func:`coarse_global`, in ``[0, length]`` (open) or
+    unbounded (closed)."""
     if pv[P_CLOSED] != 0.0:
         lo, hi = -math.inf, math.inf
     else:
@@ -705,8 +656,8 @@ def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPat
 
 
 def coarse_global(pv: FlatPath, x: float, y: float) -> float:
-    """Step 1 of :meth:`ClothoidPath.locate` without a hint: ``s = j h`` [m] of the sample ``j`` nearest to ``(x, y)``
-    among all of the flat path ``pv`` (squared distances, the first minimum or the first NaN, as ``np.argmin``)."""
+    """``s = j h`` [m] of the sample nearest to ``(x, y)`` over the whole path (first minimum, as
+    ``np.argmin``)."""
     n = int(pv[P_N])
     m = int(pv[P_M])
     sx = P_TAIL + 6 * n
@@ -725,10 +676,8 @@ def coarse_global(pv: FlatPath, x: float, y: float) -> float:
 def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
-    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from the coarse estimate ``s`` [m] in the range ``[lo, hi]``:
-    Newton's method (:func:`newton_step`, :data:`NEWTON_ITERATIONS` iterations, stopped at a fixed point: the
-    remaining ones would repeat it), the foot terms and the status; the poses by ``pose(buf, nodes, nb, pv, s)``
-    (:func:`pose_flat`; a :class:`~amigo_gym.paths.user.UserPath`'s on floats)."""
+    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: Newton
+    (:func:`newton_step`, at most :data:`NEWTON_ITERATIONS`, stopped at a fixed point), foot terms and status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
@@ -744,8 +693,7 @@ def project_flat(
 
 
 def lap_arc(s: float, length: float, closed: bool) -> float:
-    """The arc length ``s`` [m] within one lap, in ``[0, length)``, on a closed path (``s`` itself on an open one):
-    :attr:`PathPoint.s` of the progress ``s``."""
+    """``s`` [m] reduced to ``[0, length)`` on a closed path, unchanged on an open one."""
     if not closed:
         return s
     s_lap = s - _floor_float(s / length) * length
@@ -773,11 +721,9 @@ def locate_rows(
     behind: float,
     hinted: bool,
 ) -> None:
-    """:meth:`ClothoidPath.locate` of the points ``(x[i], y[i])`` [m] on the flat paths starting at ``flat[start[i]]``,
-    row by row: :func:`locate_flat` with the hints ``sp[i]`` (``hinted``) else :func:`locate_global` (``pose``: as
-    theirs); row ``i`` of
-    ``out`` ``(12, N)``: the fields of :class:`PathPoint` (the status as a float). The column form of the projection:
-    Python runs it on lists (a memoryview for ``flat``), compiled code on arrays (:class:`PathLoops`)."""
+    """:func:`locate_flat` (hinted) or :func:`locate_global` of the points ``(x[i], y[i])`` [m] on the flat
+    paths at ``flat[start[i]:]``; column ``i`` of ``out`` ``(12, N)`` gets the fields of :class:`PathPoint`
+    (status as a float)."""
     for i in range(len(x)):
         pv = flat[start[i] :]
         if hinted:
@@ -799,8 +745,8 @@ def locate_rows(
 
 
 def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: list[int] | IntArray, s: FlatPath) -> None:
-    """:func:`pose_flat` at the arc lengths ``s[i]`` [m] on the flat paths starting at ``flat[start[i]]``, row by row,
-    into the rows of ``out`` ``(7, N)`` (the fields of :class:`PathPose`), as :func:`locate_rows`."""
+    """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into the columns of
+    ``out`` ``(7, N)`` (the fields of :class:`PathPose`)."""
     for i in range(len(s)):
         x, y, th, kappa, c, ct, st = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
         out[0, i] = x
@@ -813,13 +759,11 @@ def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: lis
 
 
 def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
-    """The pose at the arc length ``s`` [m] on the flat path ``pv``:
-    ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -] by :func:`piece_at`, the
-    quadrature from the piece's start (:func:`amigo_gym.model.fresnel.unit_speed_nodes`) and :func:`place`.
+    """Pose at arc length ``s`` [m] on the flat path ``pv``:
+    ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -].
 
-    ``buf``: a node buffer of ``3 (NODES + 1)`` floats (scratch); ``nodes[nb:]``: the path quadrature's ``NODES``
-    nodes then weights on [0, 1] (:func:`amigo_gym.model.fresnel.node_table` of 1). The float path passes lists
-    (:func:`_pose_float`), the compiled step a buffer on its stack and its constants (:mod:`amigo_gym.sim._kernels_v1`).
+    ``buf``: scratch of ``3 (NODES + 1)`` floats; ``nodes[nb:]``: the quadrature's nodes then weights on [0, 1]
+    (:func:`amigo_gym.model.fresnel.node_table` of 1).
     """
     j, du, lap, extra = piece_at(pv, s)
     n = int(pv[P_N])
@@ -830,15 +774,11 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
     return place(pv, j, du, lap, extra, x, y, th, ct, st)
 
 
-#: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes`` on the float path)
+#: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes``)
 _PATH_TABLE: list[float] = node_table(1)
 
 
 # --------------------------------------------------------------------------- building a path
-#
-# The loops of ClothoidPath._build, in numba's subset as the projection above: the float route runs them as Python on
-# lists, a compiled route (PathLoops, amigo_gym.sim.fast_v1.path_loops) compiles these very functions (SHARED of
-# amigo_gym.sim.layout_v1) with the C library's cosines and sines of the nodes (fresnel.cos_sin_nodes' overload).
 
 
 def chain_pieces(
@@ -852,16 +792,15 @@ def chain_pieces(
     buf: Buffer,
     nodes: Buffer,
 ) -> tuple[float, float, float, float]:
-    """The pieces of a path and their start poses, chained (:meth:`ClothoidPath._build`).
+    """Split the segments into pieces and chain their start poses.
 
-    Segment ``g`` (``segs[4 g : 4 g + 4]``: length [m], curvature [1/m], curvature rate [1/m^2] and its number of
-    pieces, as a float) is split into equal pieces; piece ``q``'s ``s0, x0, y0, th0, k0, c`` are written at ``out[q],
-    out[n + q], ..., out[5 n + q]`` (``n`` pieces in all), its start pose the previous piece's end, one quadrature
-    from ``(x, y, th)`` (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: :func:`amigo_gym.model.fresnel.advance`'s
-    bits; ``buf``: ``3 (NODES + 1)`` scratch, ``nodes``: :func:`amigo_gym.model.fresnel.node_table` of 1).
+    Segment ``g`` is ``segs[4 g : 4 g + 4]``: length [m], curvature [1/m], curvature rate [1/m^2], piece count.
+    Piece ``q``'s ``s0, x0, y0, th0, k0, c`` go to ``out[q], out[n + q], ..., out[5 n + q]``; each start pose is
+    the previous piece's end (:func:`amigo_gym.model.fresnel.unit_speed_nodes`; ``buf``, ``nodes`` as
+    :func:`pose_flat`).
 
     Returns:
-        the end pose and the length, ``(x, y, theta, length)``.
+        ``(x, y, theta, length)`` at the path's end.
     """
     q = 0
     s_seg = 0.0
@@ -887,13 +826,8 @@ def chain_pieces(
 
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
-    """The coarse samples of the flat path ``pv`` written into it: the points at ``s_j = j spacing`` [m],
-    ``j < count``, by :func:`pose_flat` (the float path's pose), their
-    ``x`` at ``pv[o + j]``, ``y`` at ``pv[o + count + j]`` (``pv``'s header and pieces written before).
-
-    The compiled route's samples (:class:`PathLoops`); the float route takes them from the column pose of all at
-    once (:meth:`ClothoidPath._build`), faster in numpy than this loop in Python.
-    """
+    """Write the coarse samples ``s_j = j spacing`` [m], ``j < count``, into ``pv``: ``x`` at ``pv[o + j]``,
+    ``y`` at ``pv[o + count + j]`` (header and pieces written before)."""
     for j in range(count):
         x, y, _th, _k, _c, _ct, _st = pose_flat(buf, nodes, 0, pv, j * spacing)
         pv[o + j] = x
@@ -901,13 +835,12 @@ def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, 
 
 
 def _pose_float(pv: FlatPath, s: float) -> FloatPose:
-    """:func:`pose_flat` on the float path: a new scratch list, the path quadrature's nodes."""
+    """:func:`pose_flat` with a fresh scratch list and the path quadrature's nodes."""
     return pose_flat([0.0] * (3 * NODES + 3), _PATH_TABLE, 0, pv, s)
 
 
 def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
-    """:func:`_pose_float` of several floats, the cosines and sines of all in one numpy call each
-    (:func:`amigo_gym.model.fresnel.unit_speed_poses`)."""
+    """:func:`_pose_float` of several floats, the cosines and sines in one numpy call."""
     n = int(pv[P_N])
     where = [piece_at(pv, s) for s in ss]
     starts = []
@@ -921,7 +854,7 @@ def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
 
 
 def _window(max_advance: float, max_retreat: float | None) -> tuple[float, float]:
-    """The search window ``ahead``, ``behind`` [m] of :meth:`ClothoidPath.locate`, checked (> 0, finite)."""
+    """The window ``ahead``, ``behind`` [m] of :meth:`ClothoidPath.locate`, checked (> 0, finite)."""
     if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
         ahead = max_advance  # what check_real returns for a finite positive float
     else:
@@ -936,8 +869,7 @@ def _window(max_advance: float, max_retreat: float | None) -> tuple[float, float
 def _locate_float(
     pv: FlatPath, x: float, y: float, sp: float | None, max_advance: float, max_retreat: float | None
 ) -> PathPoint:
-    """:meth:`ClothoidPath.locate` for float ``x``, ``y``, ``s_prev`` (or None) on the flat path ``pv``: the window
-    checked, :func:`locate_flat` (:func:`locate_global` without a hint), the lap's ``s`` added."""
+    """:meth:`ClothoidPath.locate` for floats (``sp`` may be None) on the flat path ``pv``."""
     buf = [0.0] * (3 * NODES + 3)
     if sp is None:
         r = locate_global(pose_flat, buf, _PATH_TABLE, 0, pv, x, y)
@@ -949,15 +881,12 @@ def _locate_float(
     return PathPoint(lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0), *r)
 
 
-#: the compiled :func:`locate_rows` and :func:`pose_rows` (:class:`PathLoops`) once a compiled route registered them
-#: (:func:`use_compiled_rows`); else Python runs them
+#: the compiled rows registered by :func:`use_compiled_rows`
 _COMPILED: list[PathLoops] = []
 
 
 def use_compiled_rows(loops: PathLoops) -> None:
-    """From now on, run the column projection and pose (:func:`locate_columns`, :func:`pose_columns_of`) by the
-    compiled :func:`locate_rows` and :func:`pose_rows` of ``loops`` (the same bits:
-    :func:`amigo_gym.sim.fast_v1.path_loops` offers them only where the C library's ``cos``/``sin`` are numpy's)."""
+    """Run :func:`locate_columns` and :func:`pose_columns_of` by the compiled rows of ``loops`` from now on."""
     if not _COMPILED:
         _COMPILED.append(loops)
 
@@ -972,9 +901,8 @@ def locate_columns(
     behind: float,
     pose: PoseOf | None = None,
 ) -> PathPoint:
-    """:func:`locate_rows` on ``(N,)`` float64 columns, the flat path of row ``i`` at ``flat[start[i]:]``: compiled
-    where registered (:func:`use_compiled_rows`), else in Python (always for a ``pose`` other than
-    :func:`pose_flat`); a :class:`PathPoint` of ``(N,)`` columns."""
+    """:func:`locate_rows` on ``(N,)`` float64 columns (compiled where registered, else Python; always
+    Python for a custom ``pose``); a :class:`PathPoint` of columns."""
     out = np.empty((12, x.shape[0]))
     hints = x if sp is None else sp
     if _COMPILED and pose is None:
@@ -991,8 +919,8 @@ def locate_points(
     flat: Array, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None,
     pose: PoseOf | None = None,
 ) -> PathPoint:  # fmt: skip
-    """:meth:`ClothoidPath.locate` of points of any shape on the flat path ``flat`` (the window and the hints checked,
-    the arguments broadcast): :func:`locate_columns`; ``pose``: as there. Arrays of the broadcast shape."""
+    """:meth:`ClothoidPath.locate` of points of any shape (window and hints checked, arguments
+    broadcast); arrays of the broadcast shape."""
     ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
     if s_prev is not None:
         check_hint(s_prev)
@@ -1004,7 +932,7 @@ def locate_points(
 
 
 def pose_columns_of(flat: Array, start: IntArray, s: Array) -> PathPose:
-    """:func:`pose_rows` on a ``(N,)`` float64 column, as :func:`locate_columns`; a :class:`PathPose` of columns."""
+    """:func:`pose_rows` on a ``(N,)`` float64 column, as :func:`locate_columns`; a :class:`PathPose`."""
     out = np.empty((7, s.shape[0]))
     if _COMPILED:
         _COMPILED[0].pose(out, flat, start, s)

@@ -1,19 +1,18 @@
-r"""Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry.
+"""Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry.
 
-Each family is a pure function of its parameters (and of a :class:`numpy.random.Generator` where random):
-the same arguments give the same path. :data:`FAMILIES` names them with their documented parameter ranges,
-and :func:`make_family_path` builds one by name, validating every parameter (a one-line ``ValueError``
-naming the field, the value and the allowed range; NaN, infinities, bools and strings are refused).
+Each family is a pure function of its parameters (and of a :class:`numpy.random.Generator` where random).
+:data:`FAMILIES` names them with their parameter ranges; :func:`make_family_path` builds one by name, checking
+every parameter (a one-line ``ValueError`` naming the field, the value and the range).
 
-* ``"circle"``: :func:`circle`, the paper's eq. (6) (the geometry of :class:`~amigo_gym.paths.CirclePath`).
-* ``"manoeuvre"``: :func:`manoeuvre`, the paper's manoeuvre: a straight segment along x0, then the circle.
-* ``"figure8"``: :func:`figure8`, two lobes joined by straight lines crossing at the origin, with clothoid
-  transitions (continuous curvature).
-* ``"lane_change"``: :func:`lane_change`, a sideways shift made of four clothoids (continuous curvature).
-* ``"random"``: :func:`random_path`, seeded random smooth paths of bounded curvature and curvature rate.
+* ``"circle"``: :func:`circle`, the paper's eq. (6).
+* ``"manoeuvre"``: :func:`manoeuvre`, a straight segment along x0, then the circle.
+* ``"figure8"``: :func:`figure8`, two lobes joined by lines crossing at the origin, clothoid transitions.
+* ``"lane_change"``: :func:`lane_change`, a sideways shift made of four clothoids.
+* ``"random"``: :func:`random_path`, random smooth paths of bounded curvature and curvature rate.
 
-This module may import numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.kinematics` and
-:mod:`amigo_gym.model.fresnel`.
+Every constructor takes ``loops``: the compiled path-building loops
+(:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (Python); the path is the same either way. The loops
+(:func:`run_segments`, :func:`lane_change_shape`) are in numba's subset.
 """
 
 from __future__ import annotations
@@ -112,16 +111,13 @@ def circle(
     *,
     loops: PathLoops | None = None,
 ) -> ClothoidPath:
-    r"""A closed circle of ``radius`` [m] entered at ``start`` [m] with heading ``start_angle`` [rad].
-
-    One arc segment of length ``2 pi R`` and curvature ``d / R``; with the defaults it is the paper's eq. (6),
-    ``x = R sin(s/R)``, ``y = R (1 - cos(s/R))`` (the geometry of :class:`~amigo_gym.paths.CirclePath`).
+    """A closed circle of ``radius`` [m] entered at ``start`` [m] with heading ``start_angle`` [rad]: one arc of
+    length ``2 pi R`` and curvature ``d / R``; the defaults give the paper's eq. (6).
 
     Args:
         radius: R [m], in (0, 1000].
         direction: +1 turns left (counter-clockwise), -1 right.
-        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
-            path either way.
+        loops: compiled path-building loops or None (module docstring).
     """
     r = CIRCLE_RANGES["radius"].check("circle", "radius", radius)
     d = _direction("circle", direction)
@@ -136,17 +132,15 @@ def manoeuvre(
     *,
     loops: PathLoops | None = None,
 ) -> ClothoidPath:
-    """The paper's manoeuvre path: ``straight_length`` [m] along x0 from the origin, then ``laps`` laps of the circle.
-
-    The geometry of :class:`~amigo_gym.paths.ManoeuvrePath` (an open path: it ends after ``laps`` laps).
+    """The paper's manoeuvre path: ``straight_length`` [m] along x0 from the origin, then ``laps`` laps of
+    the circle (open: it ends after the laps).
 
     Args:
         radius: circle radius [m], in (0, 1000].
         straight_length: [m], in [0, 1000] (0: the circle alone).
         direction: +1 (left) or -1 (right).
         laps: laps of the circle, in (0, 100].
-        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
-            path either way.
+        loops: compiled path-building loops or None (module docstring).
     """
     r = MANOEUVRE_RANGES["radius"].check("manoeuvre", "radius", radius)
     sl = MANOEUVRE_RANGES["straight_length"].check("manoeuvre", "straight_length", straight_length)
@@ -157,18 +151,13 @@ def manoeuvre(
     return ClothoidPath(segs, loops=loops)
 
 
-# -- the families' construction loops, written once ----------------------------------------------------------
-#
-# In numba's subset (floats, ints, buffers, a constant exception): the float route runs them as Python on lists, a
-# compiled route (clothoid.PathLoops) compiles these very functions (amigo_gym.sim.layout_v1.SHARED), with the C
-# library's cosines and sines of the nodes where they give numpy's bits (fresnel.cos_sin_nodes).
+# -- construction loops (numba's subset) ---------------------------------------------------------------------
 
 #: largest heading reached in a lane change [rad]
 LANE_CHANGE_MAX_HEADING = 1.2
 #: most sub-intervals of one segment of :func:`run_segments` (a turn of up to 8 rad; the families' take 1 or 2)
 RUN_MAX_SUB = 4
-#: the node tables of 1 to :data:`RUN_MAX_SUB` sub-intervals one after another (:func:`amigo_gym.model.fresnel.
-#: node_table`; that of ``n`` from ``NODES n (n - 1)``): :func:`run_segments`' ``nodes`` on the float route
+#: the node tables of 1 to :data:`RUN_MAX_SUB` sub-intervals in turn (that of ``n`` from ``NODES n (n - 1)``)
 RUN_NODES: list[float] = [v for n in range(1, RUN_MAX_SUB + 1) for v in node_table(n)]
 #: entries of :func:`run_segments`' scratch ``buf`` (a node buffer of the most sub-intervals) and of its segments
 RUN_SCRATCH = 3 * (NODES * RUN_MAX_SUB + 1)
@@ -177,9 +166,8 @@ RUN_SCRATCH = 3 * (NODES * RUN_MAX_SUB + 1)
 def run_segments(
     buf: Buffer, nodes: Buffer, segs: Buffer, n_segs: int, x: float, y: float, th: float
 ) -> tuple[float, float, float]:
-    """End pose after the segments ``segs[3 g : 3 g + 3] = (length, curvature, rate)`` from ``(x, y, th)``: each one
-    quadrature of as many sub-intervals as its phase change needs (:func:`amigo_gym.model.fresnel.subintervals`; the
-    bits of :func:`amigo_gym.model.fresnel.advance`, by :func:`amigo_gym.model.fresnel.unit_speed_nodes`).
+    """End pose after the segments ``segs[3 g : 3 g + 3] = (length, curvature, rate)`` from ``(x, y, th)``,
+    each by one quadrature of as many sub-intervals as its phase change needs.
 
     ``buf``: :data:`RUN_SCRATCH` scratch; ``nodes``: :data:`RUN_NODES`.
 
@@ -213,12 +201,11 @@ def s_curve_half(buf: Buffer, nodes: Buffer, segs: Buffer, theta_max: float) -> 
 
 
 def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) -> tuple[float, float, float, float]:
-    """The shape of a lane change of ``|offset| / length = ratio`` (:func:`lane_change`): ``(x1, y1, theta_m, xm)``.
+    """The shape of a lane change of ``|offset| / length = ratio``: ``(x1, y1, theta_m, xm)``.
 
-    ``(x1, y1)``: the end of the half S-curve at the largest heading :data:`LANE_CHANGE_MAX_HEADING` (the steepest
-    lane change has ``ratio = y1 / x1``); then, when ``ratio <= y1 / x1`` (else ``theta_m = xm = NaN``), the heading
-    ``theta_m`` whose half S-curve has ``y / x = ratio``, by bisection to rounding, and that half's ``x``,
-    ``xm``. ``buf``, ``nodes``: :func:`run_segments`'; ``segs``: 6 entries of scratch.
+    ``(x1, y1)``: the end of the half S-curve at :data:`LANE_CHANGE_MAX_HEADING` (the steepest lane change has
+    ``ratio = y1 / x1``); if ``ratio <= y1 / x1`` (else NaN) the heading ``theta_m`` whose half S-curve has
+    ``y / x = ratio`` (bisection to rounding) and that half's ``x``, ``xm``. ``segs``: 6 entries of scratch.
     """
     x1, y1 = s_curve_half(buf, nodes, segs, LANE_CHANGE_MAX_HEADING)
     if ratio > y1 / x1:
@@ -242,8 +229,7 @@ def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) ->
 def _run(
     segs: list[tuple[float, float, float]], pose: tuple[float, float, float], loops: PathLoops | None = None
 ) -> tuple[float, float, float]:
-    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (exact quadrature, split by phase):
-    :func:`run_segments`, compiled when ``loops``."""
+    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (:func:`run_segments`)."""
     flat = [v for seg in segs for v in seg]
     if loops is not None:
         return loops.run(np.array(flat), len(segs), *pose)
@@ -253,25 +239,19 @@ def _run(
 def figure8(
     size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
-    r"""A closed figure-8 crossing itself at the origin, with continuous curvature.
+    """A closed figure-8 crossing itself at the origin, with continuous curvature.
 
-    Construction (lobe radius ``R`` first taken as 1, then everything scaled so that the width is ``size``):
-    the right lobe leaves the origin with heading ``phi = crossing_angle / 2`` along a line of length ``a``,
-    turns right through a clothoid (curvature 0 to ``-1/R`` over ``b = transition R``), an arc, the mirror
-    clothoid, and returns to the origin with heading ``pi - phi`` along a line of length ``a``. Its curvature
-    profile is a palindrome, so the lobe is symmetric about the normal at its middle, where the heading is
-    ``-pi/2``; it returns to the origin when that middle lies on the x axis, which fixes
-    ``a = -y_m / sin(phi)`` (``y_m``: height gained from the line's end to the middle, computed exactly). The
-    left lobe is the mirror image in the y axis (curvatures negated). The path starts at the right lobe's
-    rightmost point heading down (``-pi/2``), away from the crossing, so that a projection without a hint
-    is unambiguous at the start; it crosses the origin at ``s = L/4`` and ``s = 3L/4``.
+    With the lobe radius 1, the right lobe leaves the origin at heading ``phi = crossing_angle / 2`` along a line of
+    length ``a``, turns right through a clothoid (curvature 0 to -1 over ``b = transition``), an arc and the mirror
+    clothoid, and returns along a line of length ``a``; ``a = -y_m / sin(phi)`` puts the lobe's middle (heading
+    ``-pi/2``) on the x axis. The left lobe is the mirror image; the whole is scaled to the width ``size``. The path
+    starts at the right lobe's rightmost point heading ``-pi/2`` and crosses the origin at ``s = L/4`` and ``3L/4``.
 
     Args:
         size: overall width along x0 [m], in (0, 1000].
         crossing_angle: angle between the crossing lines [rad], in [0.3, 2.0].
         transition: clothoid length over lobe radius [-], in [0, 1.5].
-        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (the float
-            route); the same path either way.
+        loops: compiled path-building loops or None (module docstring).
     """
     size = FIGURE8_RANGES["size"].check("figure8", "size", size)
     phi = 0.5 * FIGURE8_RANGES["crossing_angle"].check("figure8", "crossing_angle", crossing_angle)
@@ -316,22 +296,18 @@ def figure8(
 def lane_change(
     offset: float = 0.5, length: float = 3.0, lead: float = 1.0, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
-    r"""A lane change: straight along x0, a sideways shift by ``offset`` over ``length``, straight again.
+    """A lane change: straight along x0, a sideways shift by ``offset`` over ``length``, straight again.
 
-    The shift is four clothoids of equal length ``q``: curvature ``0 -> k -> 0 -> -k -> 0`` (for a left shift),
-    so the curvature is continuous and piecewise linear, and the heading rises to ``theta_m = k q`` and back
-    to 0. The second half is the first turned by ``pi`` about the shift's midpoint, so the shift is twice the
-    first half's. Unit half (``q = 1``, ``k = theta_m``) ends at ``(X1, Y1)(theta_m)``; a scale ``q`` multiplies
-    both. ``Y1/X1`` increases with ``theta_m``, so ``theta_m`` solves ``Y1/X1 = |offset| / length`` (bisection to
-    rounding), then ``q = length / (2 X1)``. Requires ``theta_m <= 1.2 rad``, i.e. ``|offset|`` up to about
-    ``0.68 length``.
+    The shift is four clothoids of length ``q``, curvature ``0 -> k -> 0 -> -k -> 0`` (left shift), the heading
+    rising to ``theta_m = k q``; ``theta_m`` solves ``Y1/X1 = |offset| / length`` for the unit half S-curve
+    (:func:`lane_change_shape`), then ``q = length / (2 X1)``. Requires ``theta_m <= 1.2 rad``
+    (``|offset| <~ 0.68 length``).
 
     Args:
-        offset: sideways shift [m], positive to the left, in [-100, 100] (0 gives a straight line).
+        offset: sideways shift [m], positive to the left, in [-100, 100] (0: a straight line).
         length: extent of the shift along x0 [m], in (0, 1000].
         lead: straight run before and after [m], in [0, 1000].
-        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (the float
-            route: :func:`lane_change_shape` as Python); the same path either way.
+        loops: compiled path-building loops or None (module docstring).
     """
     off = LANE_CHANGE_RANGES["offset"].check("lane_change", "offset", offset)
     ln = LANE_CHANGE_RANGES["length"].check("lane_change", "length", length)
@@ -368,16 +344,12 @@ def random_path(
     *,
     loops: PathLoops | None = None,
 ) -> ClothoidPath:
-    r"""A random smooth open path from the origin along x0: continuous curvature, ``|kappa| <= max_curvature``,
+    """A random smooth open path from the origin along x0, ``|kappa| <= max_curvature``,
     ``|dkappa/ds| <= max_curvature_rate``.
 
-    The curvature starts at 0 and alternates between *ramps* and *holds*: a ramp goes linearly to a target
-    drawn uniformly in ``[-max_curvature, max_curvature]`` over a length drawn uniformly in
-    ``[min_piece, max_piece]`` and stretched if needed to ``|delta kappa| / max_curvature_rate``, so that the
-    rate bound holds; a hold keeps the curvature (an arc) over a length drawn uniformly in
-    ``[0, max_piece]``. The last piece is cut at ``length`` (a cut ramp keeps its rate). The curvature is
-    piecewise linear and continuous, so both bounds hold everywhere. The same generator state gives the same
-    path.
+    From 0 the curvature alternates ramps (linear to a target ``U(-max_curvature, max_curvature)`` over a length
+    ``U(min_piece, max_piece)``, stretched to ``|delta kappa| / max_curvature_rate`` if needed) and holds (an arc of
+    length ``U(0, max_piece)``); the last piece is cut at ``length``.
 
     Args:
         rng: the random generator (consumed).
@@ -385,8 +357,7 @@ def random_path(
         max_curvature: [1/m], in (0, 100].
         max_curvature_rate: [1/m^2], in (0, 1000].
         min_piece, max_piece: ramp lengths [m], in [0.01, 100], ``min_piece <= max_piece``.
-        loops: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None; the same
-            path either way.
+        loops: compiled path-building loops or None (module docstring).
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
@@ -449,10 +420,7 @@ FAMILIES: dict[str, Family] = {
 def make_family_path(
     name: str, rng: np.random.Generator | None = None, *, loops: PathLoops | None = None, **params: Any
 ) -> ClothoidPath:
-    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at their defaults).
-
-    ``loops``: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`), or None (the float
-    route); the same path either way.
+    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at defaults).
 
     Raises:
         ValueError: unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``.

@@ -1,65 +1,25 @@
-r"""Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` fitted to points, from arrays, CSV or JSON.
+"""Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` fitted to points, from arrays, CSV or JSON.
 
-:func:`from_points` turns an ``(n, 2)`` array of points ``(x, y)`` [m], ordered along the path (optionally
-closed), into a :class:`~amigo_gym.paths.ClothoidPath` with continuous curvature. Being a ``ClothoidPath`` it
-runs everywhere a built-in family runs: the compiled step of the single and the vector ``AmigoBot-v1``, the
-feasibility analysis, rendering, :class:`~amigo_gym.paths.PathBatch`.
+:func:`from_points` turns an ``(n, 2)`` array of points ``(x, y)`` [m] in path order (optionally closed) into a
+:class:`~amigo_gym.paths.ClothoidPath` with continuous curvature (:func:`fit_points`; docs/amigobot_v1.md,
+"Paths of your own"):
 
-Checks (one line naming ``points``, the value and the allowed range): shape, NaN, repeated points, at most
-:data:`MAX_POINTS`; points **out of path order** (the median distance between consecutive points above a tenth
-of the points' extent and :data:`UNORDERED_RATIO` times the median distance to each point's nearest neighbour:
-shuffled points); a polyline through the points **shorter than** :data:`MIN_LENGTH` (the robot's body) or
-**longer than** :data:`MAX_LENGTH` (x, y not in metres: millimetres give a path 1000 times too long).
+1. an interpolating cubic spline in the chord-length parameter (not-a-knot ends if open, periodic if closed);
+2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a
+   :class:`~amigo_gym.paths.ClothoidSegment` of the spline's arc length, its curvature linear between the
+   spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at the step's ends;
+3. a closed path's curvature corrected by the smallest ``c_0 + sum_q (c cos + c sin)(q w s)``, ``q = 1, 2``,
+   ``w = 2 pi / L``, closing it to rounding (Gauss–Newton);
+4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved
+   up to :data:`MAX_REFINEMENTS` times), else ``ValueError``.
 
-Method (:func:`fit_points`):
+With ``smoothing=sigma`` [m] (the points' noise) points are first averaged in groups of ``g`` (a power of 2,
+points ``g`` apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline
+(Whittaker–Reinsch, least ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the
+means; at an open path's ends the curvature falls to 0 (natural ends).
 
-1. **Interpolating cubic spline** ``(x(t), y(t))`` in the chord-length parameter ``t`` (``t_0 = 0``,
-   ``t_{i+1} = t_i + |p_{i+1} - p_i|``; :class:`scipy.interpolate.CubicSpline`): not-a-knot ends for an open
-   path (a cubic through the points is reproduced exactly; three points give a parabola, two a line), periodic
-   for a closed one. It is twice continuously differentiable, so its curvature
-   ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` is continuous.
-2. **Clothoid spline.** The parameter range is cut into steps of chord at most ``step`` [m] and turn at most
-   0.05 rad (from the curvature at the knots), independent of the points (10^6 dense points give as many
-   steps as their length needs); each step becomes a :class:`~amigo_gym.paths.ClothoidSegment` whose length
-   is the spline's arc length over the step (Gauss–Legendre, 8 nodes) and whose curvature runs linearly
-   between the spline's curvatures at the step's ends. The path starts at ``p_0`` with the spline's tangent
-   there. Curvature is continuous along the path (and across the joint of a closed path).
-3. **Closure** (closed paths): the curvature is corrected by
-   ``c_0 + c_1 cos(w s) + c_2 sin(w s) + c_3 cos(2 w s) + c_4 sin(2 w s)``, ``w = 2 pi / L``, with the
-   smallest ``c`` (least squares) from Gauss–Newton on the end pose, so that the path ends at its start pose
-   to rounding (:class:`~amigo_gym.paths.ClothoidPath` requires 1e-9). The correction is of the order of the
-   discretisation error of step 2; it keeps the curvature continuous across the joint.
-4. **Error bound.** The distance of every point ``p_i`` from the fitted path *at its own arc length*
-   ``s_i`` (the path's arc length at the spline's knot ``t_i``), ``|c(s_i) - p_i|`` [m], is computed; if its
-   maximum exceeds ``tolerance`` (default 1 mm), ``step`` is halved and the fit repeated (at most
-   :data:`MAX_REFINEMENTS` times), then a ``ValueError`` names the error reached. So a returned path passes
-   within ``tolerance`` of every point it was fitted to (the closest-point distance is smaller still), and
-   :attr:`PointsFit.max_error` is the measured bound.
-
-**Smoothing** (``smoothing=sigma`` [m], the points' noise per coordinate, e.g. 0.02 for a GPS trace with
-2 cm noise). Interpolated, noisy points give a noisy curvature (2 cm noise on a 3 m circle sampled every 10 cm:
-curvatures from -59 to 79 1/m where the circle has 0.33). With ``smoothing``, first consecutive points are averaged in
-groups of ``g`` (the least power of 2 for which points ``g`` apart are a median ``3 sigma`` apart: the means are
-then several times their noise ``sigma / sqrt(g)`` apart, so noise does not rule their chord parameter; the ends
-of an open path move in by about half a group); then the means ``b_j`` are replaced by the points ``z_j`` minimising
-``sum_j |z_j - b_j|^2 + lambda sum_j w_j |z''_j|^2`` (second divided differences in the chord parameter, weighted
-by the spacing: a discrete cubic smoothing spline, Whittaker–Reinsch), with ``lambda`` chosen so that the RMS of
-``|z_j - b_j|`` is ``sigma sqrt(2 / g)`` [m], the RMS distance of a mean from the true path (the discrepancy
-principle; twice, the second time in the chord parameter of the first result), or the smoothest result where
-even that stays closer. Steps 1–4 then fit the path through the ``z_j`` (``max_error`` [m] against them;
-:attr:`PointsFit.smoothed` [m] is the RMS distance the smoothing moved the means). The smoothing removes
-detail shorter than about the distance over which ``sigma`` of noise and the path's own bending are alike: the
-3 m circle above comes out within 3 % of its curvature; a step of curvature is spread over about that distance
-(0.3 m for 2 cm noise on a 2 m radius), and at an open path's ends the curvature falls to 0 over about twice
-it (natural ends: the penalty's second difference vanishes there).
-
-Files (:func:`load_points`, :func:`from_file`): CSV with a header naming the columns ``x`` and ``y`` (metres;
-other columns ignored); JSON as ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of
-``{"x": ..., "y": ...}`` objects.
-
-This module may import numpy, scipy (inside the functions: ``interpolate``, ``sparse``, ``spatial``,
-``optimize``), :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.fresnel`, :mod:`amigo_gym.io`, the sibling
-path modules and the standard library's ``csv``, ``json`` and ``pathlib``.
+Files (:func:`load_points`): CSV with a header naming ``x`` and ``y`` [m]; JSON ``{"x": [...], "y": [...]}``
+(optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects.
 """
 
 from __future__ import annotations
@@ -120,14 +80,12 @@ class PointsFit:
 
     Attributes:
         path: the fitted :class:`~amigo_gym.paths.ClothoidPath`.
-        max_error: ``max_i |c(s_i) - p_i|`` [m]: the largest distance of an input point from the path at its
-            own arc length (the bound the fit guarantees, ``<= tolerance``).
-        point_s: ``(n,)`` arc length ``s_i`` of each input point along the path [m].
+        max_error: ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length (``<= tolerance``).
+        point_s: ``(n,)`` arc length of each input point along the path [m].
         step: the largest chord of a clothoid step used [m].
-        closure_correction: ``(c_0, ..., c_4)`` [1/m] of the closed path's curvature correction (module
-            docstring; empty if open).
-        smoothed: RMS distance [m] the smoothing moved the (grouped) points; 0 without ``smoothing``. With it,
-            ``max_error`` and ``point_s`` are those of the smoothed points.
+        closure_correction: ``(c_0, ..., c_4)`` [1/m] of a closed path's curvature correction (empty if open).
+        smoothed: RMS distance [m] the smoothing moved the grouped points (0 without ``smoothing``; with it,
+            ``max_error`` and ``point_s`` refer to the smoothed points).
     """
 
     path: ClothoidPath
@@ -203,7 +161,7 @@ def _check_length(owner: str, length: float, what: str = "span a path of") -> No
 
 
 def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, float]:
-    r"""The smoothed points (module docstring, *Smoothing*) and their RMS distance from the group means [m]."""
+    r"""The smoothed points (module docstring) and their RMS distance from the group means [m]."""
     group = 1  # the fewest points whose ends are 3 sigma apart (doubling): their noise no longer rules the chord
     while np.median(np.hypot(*(p[group:] - p[:-group]).T)) < 3.0 * sigma:
         group *= 2
@@ -224,9 +182,9 @@ def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, fl
 
 
 def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
-    """The points minimising ``|z - b|^2 + lambda |D z|^2`` (``D``: second divided differences in the chord
-    parameter of ``z``, weighted by the square root of the spacing, in units of the mean spacing) with the RMS of
-    ``|z - b|`` equal to ``target`` [m] (or the largest ``lambda`` tried, a straight line or a point, if smaller)."""
+    """The points minimising ``|z - b|^2 + lambda |D z|^2`` (``D``: weighted second divided differences in
+    the chord parameter of ``z``) with the RMS of ``|z - b|`` equal to ``target`` [m] (or the largest ``lambda``
+    tried, if still closer)."""
     from scipy.optimize import brentq
     from scipy.sparse import csc_matrix, identity
     from scipy.sparse.linalg import splu
@@ -303,24 +261,19 @@ def fit_points(
     step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> PointsFit:
-    """Fit a continuous-curvature :class:`~amigo_gym.paths.ClothoidPath` to points (method: module docstring).
+    """Fit a continuous-curvature :class:`~amigo_gym.paths.ClothoidPath` to points (module docstring).
 
     Args:
         points: ``(n, 2)`` x, y [m] in path order; a closed path may repeat its first point at the end.
-        closed: the path is a loop from the last point back to the first (traversed in laps).
-        smoothing: None: the path passes through the points. A number ``sigma`` [m] in (0, 1]: the points'
-            noise (standard deviation per coordinate); the path is smoothed to an RMS distance of
-            ``sigma sqrt(2 / g)`` from the means of groups of ``g`` points (module docstring, *Smoothing*).
-        tolerance: largest distance of a point (a smoothed one with ``smoothing``) from the path at its own arc
-            length [m], in [1e-9, 1].
-        step: largest chord of a clothoid step [m] to start with, in [1e-4, 10] (halved while the error
-            exceeds ``tolerance``).
-        sample_spacing: the path's coarse projection samples [m] (:class:`~amigo_gym.paths.ClothoidPath`).
+        closed: the path loops from the last point back to the first.
+        smoothing: None: through the points; ``sigma`` [m] in (0, 1]: the points' noise (module docstring).
+        tolerance: largest distance of a (smoothed) point from the path at its own arc length [m], in [1e-9, 1].
+        step: first largest chord of a clothoid step [m], in [1e-4, 10].
+        sample_spacing: the path's coarse projection samples [m].
 
     Raises:
-        ValueError: bad points or arguments (one line naming them; points out of order, or spanning a path
-            outside [0.33, 1000] m), a curvature above 1e4 1/m (a cusp in the data), or ``tolerance`` not
-            reached after :data:`MAX_REFINEMENTS` halvings of ``step``.
+        ValueError: bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached
+            after :data:`MAX_REFINEMENTS` halvings of ``step``.
     """
     from scipy.interpolate import CubicSpline
 
@@ -390,8 +343,7 @@ def fit_points(
 def _close(
     start: tuple[float, float, float], seg_len: Array, kappa: Array, s_knots: Array
 ) -> tuple[Array, tuple[float, ...]]:
-    """The curvature ``kappa + sum_q c_q mode_q(s)`` closing the path (module docstring: Gauss–Newton with the
-    smallest step on the end pose's gap, finite-difference Jacobian), and ``c``."""
+    """The curvature ``kappa + sum_q c_q mode_q(s)`` closing the path (Gauss–Newton, smallest step) and ``c``."""
     length = float(s_knots[-1])
     om = TWO_PI * s_knots / length
     modes = np.stack((np.ones_like(om), np.cos(om), np.sin(om), np.cos(2.0 * om), np.sin(2.0 * om)))
@@ -431,8 +383,7 @@ def from_points(
     step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> ClothoidPath:
-    """A path ``AmigoBot-v1`` accepts, fitted with continuous curvature to points ``(n, 2)`` [m] (:func:`fit_points`;
-    ``smoothing=sigma`` [m] for noisy points, e.g. 0.02 for a GPS trace with 2 cm noise).
+    """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`).
 
     ```python
     import numpy as np, gymnasium as gym, amigo_gym
@@ -456,14 +407,13 @@ def _number(text: str, file: str, row: int, col: str) -> float:
 
 
 def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
-    """The points ``(n, 2)`` [m] of a CSV or JSON file (module docstring), and the JSON's ``"closed"`` if given.
-
-    CSV (any other suffix than ``.json``): a header row naming ``x`` and ``y`` (case-insensitive, other columns
-    ignored), then one point per row; blank lines and lines starting with ``#`` are skipped.
+    """The points ``(n, 2)`` [m] of a CSV or JSON file, and the JSON's ``"closed"`` if given. CSV (any
+    suffix but ``.json``): a header naming ``x`` and ``y`` (case-insensitive), one point per row; blank and ``#``
+    lines skipped.
 
     Raises:
         FileNotFoundError: no such file.
-        ValueError: one line naming the file and the row or key that is wrong.
+        ValueError: one line naming the file and the row or key.
     """
     f = Path(file)
     name = str(f)
@@ -565,11 +515,8 @@ def is_points_file(name: str) -> bool:
 
 
 def cached_file_path(file: str | os.PathLike[str]) -> ClothoidPath:
-    """:func:`from_file` with the default settings, built once per process for each file version (resolved
-    name, modification time and size): ``gym.make("AmigoBot-v1", path="points.csv")`` and every vector env
-    of a benchmark share one fitted path. The cache holds at most :data:`CACHE_BYTES` of paths (their flat
-    vectors, the float lists built from them, 4 times as large, and their segments), oldest dropped first,
-    and always the newest."""
+    """:func:`from_file` with default settings, built once per process per file version (resolved name,
+    modification time, size); at most :data:`CACHE_BYTES` of paths kept (oldest dropped, the newest always)."""
     f = Path(file)
     try:
         st = f.resolve().stat()

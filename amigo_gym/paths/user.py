@@ -1,34 +1,22 @@
-r"""Path objects of your own: the duck-typed protocol ``AmigoBot-v1`` checks, and the wrapper that runs them.
+"""Path objects of your own: the duck-typed protocol ``AmigoBot-v1`` checks, and the wrapper that runs them.
 
-The protocol (the fewest members; :func:`check_path` checks them at ``gym.make``):
+The protocol (:func:`check_path` checks it at ``gym.make``):
 
-* ``length``: arc length of one traversal [m], a finite real number > 0 (an attribute or a property);
-* ``closed``: ``True`` if the path repeats with period ``length`` (laps), else ``False``;
-* ``pose_columns(s)``: for arc lengths ``s`` [m] (a float, or a float64 array of any shape), an object with
-  attributes ``x``, ``y`` [m], ``theta`` (tangent angle [rad], continuous in ``s``) and ``curvature`` [1/m,
-  positive turning left], each of the shape of ``s`` (floats for a float). Beyond the ends of an open path it
-  is called with ``s < 0`` or ``s > length`` too (the preview looks ahead): continue along the end tangent.
+* ``length``: arc length of one traversal [m], a finite real number > 0;
+* ``closed``: ``True`` if the path repeats with period ``length``, else ``False``;
+* ``pose_columns(s)``: for arc lengths ``s`` [m] (a float or a float64 array), an object with ``x``, ``y`` [m],
+  ``theta`` (tangent angle [rad], continuous) and ``curvature`` [1/m, positive left], each of the shape of
+  ``s``; an open path is also asked for ``s < 0`` or ``s > length`` (continue along the end tangent).
 
-Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning an
-:class:`~amigo_gym.paths.PathPoint` (the closest point, keeping progress; see
-:meth:`~amigo_gym.paths.ClothoidPath.locate`). Without it, :class:`UserPath` finds the closest point itself from
-``pose_columns``: samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then the same Newton
-iteration as :meth:`~amigo_gym.paths.ClothoidPath.locate` (:func:`~amigo_gym.paths.clothoid.locate_points`, row by
-row, with this path's ``pose_columns`` on floats). The
-renderer and the feasibility analysis use ``length``, ``closed`` and ``pose_columns`` only.
+Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a :class:`~amigo_gym.paths.PathPoint`.
+Without it :class:`UserPath` searches samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then
+runs the Newton iteration of :meth:`~amigo_gym.paths.ClothoidPath.locate` on ``pose_columns``.
 
-:func:`check_path` refuses, in one line naming the path and the member, a missing member, a ``length`` of
-0, -5, NaN or ``"10"``, a ``closed`` that is not a bool, a ``pose_columns`` (or ``locate``) whose fields are
-missing, of the wrong shape or not finite on a probe of the path. :class:`UserPath` then checks every result
-while the env runs: NaN or infinity from the path raises ``ValueError`` at the step that produced it, naming the
-path, the member, the field and the arc length or point.
+Errors name the path, the member and the value: a missing member, a bad ``length`` or ``closed``, or fields
+missing, misshapen or not finite, at ``gym.make`` (on a probe) and at any later step.
 
-A :class:`~amigo_gym.paths.ClothoidPath` (every built-in family, :func:`~amigo_gym.paths.from_points`) is
-trusted as it is and runs the compiled step; AmigoBot-v0's :class:`~amigo_gym.paths.CirclePath` and
-:class:`~amigo_gym.paths.ManoeuvrePath` are trusted as they are and run the reference step (their ``locate`` is
-AmigoBot-v0's projection); a :class:`UserPath` runs the reference step.
-
-This module may import numpy, :mod:`amigo_gym.model.params` and the sibling path modules.
+:class:`~amigo_gym.paths.ClothoidPath`, :class:`~amigo_gym.paths.CirclePath` and
+:class:`~amigo_gym.paths.ManoeuvrePath` are trusted as they are; anything else is wrapped in a :class:`UserPath`.
 """
 
 from __future__ import annotations
@@ -89,9 +77,9 @@ def _finite_column(value: Any, shape: tuple[int, ...], where: str) -> Array:
 class UserPath:
     """A checked path object of your own (module docstring), with the full interface ``AmigoBot-v1`` uses.
 
-    ``pose_columns`` completes the user's ``x, y, theta, curvature`` to a :class:`~amigo_gym.paths.PathPose`
-    (``cos_theta``, ``sin_theta`` from ``theta``; ``curvature_rate`` from the user's result if it has one, else 0)
-    and ``locate`` is the user's or the sampled search; every result is checked for NaN and infinities.
+    ``pose_columns`` completes ``x, y, theta, curvature`` to a :class:`~amigo_gym.paths.PathPose` (``curvature_rate``
+    the user's or 0); ``locate`` is the user's or the sampled search; every result is checked for NaN and
+    infinities.
 
     Attributes:
         path: the user's object. name: :func:`path_name` of it. length [m], closed: its values, checked.
@@ -137,7 +125,7 @@ class UserPath:
         js = np.arange(n + (0 if self.closed else 1), dtype=np.float64)
         samples = self.pose_columns(js * self._spacing)
         sx, sy = (np.asarray(v, dtype=np.float64) for v in (samples.x, samples.y))
-        # a flat path vector (amigo_gym.paths.clothoid.PATH_HEADER) of no pieces: the samples the projection searches
+        # a flat path vector of no pieces: the samples the projection searches
         head = [0.0, float(sx.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0]
         self._flat = np.concatenate((head, sx, sy))
         loc = self.locate(np.asarray(pose.x), np.asarray(pose.y), probe, 0.5, 0.5)
@@ -174,8 +162,7 @@ class UserPath:
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
-        """The closest path point to ``(x, y)`` [m] (the user's ``locate`` if it has one, else the sampled search),
-        checked (module docstring)."""
+        """The closest path point to ``(x, y)`` [m] (the user's ``locate`` or the sampled search), checked."""
         if self._user_locate is not None:
             got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
             return self._checked_point(got, x, y)
@@ -201,16 +188,13 @@ class UserPath:
     def _locate(
         self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
     ) -> PathPoint:
-        """:meth:`~amigo_gym.paths.ClothoidPath.locate`'s projection on the samples and ``pose_columns`` of this path
-        (:func:`~amigo_gym.paths.clothoid.locate_points`: its float functions row by row, the poses this path's;
-        floats back for float arguments)."""
+        """The sampled search (:func:`~amigo_gym.paths.clothoid.locate_points` with this path's poses)."""
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
         got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
         return _point(list(got), scalar)
 
     def _pose_of(self, _buf: Any, _nodes: Any, _nb: int, _pv: Any, s: float) -> FloatPose:
-        """:meth:`pose_columns` of a float as the projection's pose function
-        (:func:`~amigo_gym.paths.clothoid.project_flat`)."""
+        """:meth:`pose_columns` of a float as the projection's pose function."""
         x, y, th, kappa, rate, ct, st = self.pose_columns(s)  # floats for a float
         return float(x), float(y), float(th), float(kappa), float(rate), float(ct), float(st)
 
@@ -223,8 +207,7 @@ def _point(vals: list[Any], scalar: bool) -> PathPoint:
 
 
 def check_path(path: Any, owner: str = "AmigoBot-v1") -> Any:
-    """A path object checked against the protocol (module docstring): a :class:`~amigo_gym.paths.ClothoidPath`
-    or a :class:`UserPath` as it is, anything else wrapped in a :class:`UserPath` (which checks it).
+    """``path`` as it is if trusted (module docstring), else wrapped in a :class:`UserPath` (which checks it).
 
     Raises:
         ValueError: one line naming the path, the member and the value.

@@ -1,17 +1,12 @@
-"""Classical controllers with stable-baselines3's ``predict`` interface, each written once for both envs.
+"""Classical and learned controllers with stable-baselines3's ``predict`` interface.
 
-* :mod:`amigo_gym.policies.base`: the observation adapter :class:`~amigo_gym.policies.base.Fields` (v0's or v1's
-  layout, read by field name) and the ``predict`` every policy shares.
-* :mod:`amigo_gym.policies.analytic`: the analytic inverse solution (``analytic_tracking_command``, the one law)
-  and :class:`AnalyticPolicy` (``AmigoBot-v0``'s baseline: proportional feedback, no state).
-* :mod:`amigo_gym.policies.tracking`: ``AmigoBot-v1``'s baselines: :class:`AnalyticTrackingPolicy` (the same law on
-  any path with integral action and mid-step feedforward; reads v0's observation too) and :class:`PurePursuitPolicy`
-  (needs v1's preview points).
-* :mod:`amigo_gym.policies.learned`: learned ``AmigoBot-v1`` policies in numpy (the fast PPO's models, the residual
-  policy on the analytic controller) and :func:`load_pretrained` (a shipped zip, its manifest's sha256 checked).
-
-May import the core (params, kinematics, paths, task, tracking, inverse) and numpy; never envs' internals,
-training, analysis or the CLI.
+* :mod:`amigo_gym.policies.base`: the observation adapter :class:`~amigo_gym.policies.base.Fields` (either env's
+  layout, read by field name) and the shared ``predict``.
+* :mod:`amigo_gym.policies.analytic`: the analytic law (``analytic_tracking_command``) and :class:`AnalyticPolicy`
+  (``AmigoBot-v0``'s baseline).
+* :mod:`amigo_gym.policies.tracking`: :class:`AnalyticTrackingPolicy` (PI and feedforward, any path) and
+  :class:`PurePursuitPolicy` (``AmigoBot-v1``'s preview points).
+* :mod:`amigo_gym.policies.learned`: learned ``AmigoBot-v1`` policies in numpy and :func:`load_pretrained`.
 """
 
 from __future__ import annotations

@@ -1,23 +1,18 @@
 r"""The analytic inverse solution as a state-feedback policy: the law of both envs, and ``AmigoBot-v0``'s policy.
 
-:func:`analytic_tracking_command` is the one implementation of the law (turn rate from H's commanded normal
-speed); :class:`AnalyticPolicy` (here) and :class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy` (PI
-feedback and mid-step feedforward, module docstring of :mod:`amigo_gym.policies.tracking`) call it. Both read
-either env's observation through the adapter :class:`amigo_gym.policies.base.Fields`.
+:func:`analytic_tracking_command` is the one implementation of the law; :class:`AnalyticPolicy` and
+:class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy` call it. Both read either env's observation by field
+name (:class:`amigo_gym.policies.base.Fields`) and the constant task settings; they take
 
-The policy reads only the observation, by field name (``AmigoBot-v0``'s :func:`amigo_gym.task.v0.obs_names` or
-``AmigoBot-v1``'s :func:`amigo_gym.task.v1.obs_fields`; never by raw positions), and the constant task settings
-(:class:`~amigo_gym.model.params.EnvParams` or :class:`~amigo_gym.task.v1.TrackingParams`). It takes
-
-* ``e = cross_track_error * error_scale``: signed cross-track error of H [m], positive left of the path;
+* ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
 * ``psi = atan2(sin_heading_error, cos_heading_error)``: heading error ``beta - theta`` [rad];
-* ``kappa = curvature / l3``: signed path curvature at H's closest point [1/m];
+* ``kappa = curvature / l3``: path curvature at H's closest point [1/m];
 * ``v_ref = reference_speed * max_speed``: reference speed of A [m/s].
 
 Velocity of H in the path frame
 -------------------------------
-With ``t = (cos theta, sin theta)`` the path tangent and ``n = (-sin theta, cos theta)`` the left
-normal at H's closest point, H = A + l3 (cos beta, sin beta) moves with
+With the path tangent ``t = (cos theta, sin theta)`` and left normal ``n`` at H's closest point,
+H = A + l3 (cos beta, sin beta) moves with
 
 .. math::
     \begin{pmatrix} \dot H \cdot t \\ \dot H \cdot n \end{pmatrix}
@@ -25,57 +20,32 @@ normal at H's closest point, H = A + l3 (cos beta, sin beta) moves with
       \begin{pmatrix} v_A \\ \dot\beta \end{pmatrix},
     \qquad \det = l_3 \ne 0,
 
-and the cross-track error obeys ``edot = Hdot . n`` (for the circle exactly; for any smooth path at
-the closest point). The map is invertible everywhere, which is why the look-ahead point H (rather
-than A) can be steered directly.
+and ``edot = Hdot . n``: H can be steered directly.
 
 Control law (``speed_reference="A"``, the default)
 --------------------------------------------------
-The paper's inverse problem prescribes the speed of A, ``v_A = v_ref`` (eqs 11-12), and asks H to
-stay on the path. Asking instead for ``Hdot . n = -k e`` (first-order decay of the error) and
-solving the second row of the map for the turn rate gives
+``v_A = v_ref`` (the paper's eqs 11-12) and ``Hdot . n = -k e``:
 
 .. math::
     v_A = v_{ref}, \qquad
     \dot\beta = \frac{-k\,e - v_{ref}\sin\psi}{l_3\cos\psi}.
 
-With ``k = 0`` (``feedforward_only=True``) this is exactly the paper's inverse ODE (docs/model.md)
-``betadot = v_A tan(theta - beta) / l3`` evaluated on the measured heading error, i.e. the open-loop
-inverse solution run in closed loop: it keeps ``Hdot . n = 0``, so H keeps whatever offset it
-starts with, while the heading converges to the steady lag (rate ``v_A / l3``). The feedback term
-adds the exponential decay ``e(t) = e0 exp(-k t)`` in continuous time.
+With ``k = 0`` (``feedforward_only=True``) this is the paper's inverse ODE
+``betadot = v_A tan(theta - beta) / l3`` in closed loop (H keeps its start offset); ``k > 0`` adds the decay
+``e(t) = e0 exp(-k t)`` in continuous time.
 
-Alternative (``speed_reference="H"``): the look-ahead law with a constant tangential speed of H,
-the steady value ``v_ref R / R_A = v_ref / cos(delta_ss)`` with ``sin(delta_ss) = kappa l3``:
+``speed_reference="H"``: a constant tangential speed of H, ``v_ref / cos(delta_ss)`` with
+``sin(delta_ss) = kappa l3``:
 
 .. math::
     \begin{pmatrix} v_A \\ \dot\beta \end{pmatrix}
     = \begin{pmatrix} \cos\psi & \sin\psi \\ -\sin\psi / l_3 & \cos\psi / l_3 \end{pmatrix}
       \begin{pmatrix} v_{ref}/\cos\delta_{ss} \\ -k\,e \end{pmatrix}.
 
-Both laws have the same steady state on a circle of radius ``R``: ``e = 0``, ``psi = -delta_ss``,
-``v_A = v_ref``, ``betadot = v_ref / R_A`` (:func:`amigo_gym.model.kinematics.circle_steady_state`); they
-differ only in transients (the "A" law never changes the speed of A, which the reward's speed term
-asks for, and needs no curvature: the path enters through ``psi``).
-
-Wheel rates follow from the rolling relations (:func:`amigo_gym.model.kinematics.wheel_rates`)
-``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, and the action is
-``clip(w / max_wheel_rate, -1, 1)``.
-
-Discrete time and the gain
---------------------------
-The environment holds the command over ``dt`` (0.1 s). Started on the steady state, the held
-command is the exact steady arc, so H stays on the circle to rounding. Away from it, the error
-decays roughly like ``(1 - k dt)^n`` while ``k dt`` is small; the zero-order hold adds an error of
-order ``dt`` (the closed loop tends to ``e0 exp(-k t)`` as ``dt -> 0``, tested). The heading mode
-(rate ``v_A / l3`` = 2.5 1/s) bounds the achievable rate: measured halving times of the error on
-the env's perturbed starts over t in [1, 4] s are 0.71, 0.41, 0.33, 0.30 s for k = 1, 2, 3, 5 1/s
-(``docs/baselines.md``). The default ``k = 3 1/s`` gets most of the speed without overshoot and
-keeps the commands of the env's perturbed starts far from the wheel-rate limit.
-
-Singularity: the law divides by ``cos psi``, like the paper's ODE (singular at ``|psi| = pi/2``). The
-denominator is floored at ``cos_min`` (0.2) so that commands stay finite when the robot faces
-across the path; the clipped action then turns the robot at the largest rate the wheels allow.
+Both have the steady state of :func:`amigo_gym.model.kinematics.circle_steady_state` on a circle. The wheel rates
+follow from ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``; the action is
+``clip(w / max_wheel_rate, -1, 1)``. The default gain ``k = 3 1/s`` (``docs/baselines.md``); ``cos psi`` is
+floored at :data:`COS_MIN` (the law is singular at ``|psi| = pi/2``).
 """
 
 from __future__ import annotations
@@ -126,14 +96,11 @@ def analytic_tracking_command(
         \omega = \omega_0 - \frac{\dot s}{l_3\cos\psi}\Bigl(\omega_0 - \frac{\kappa\dot s}{1 - \kappa e}\Bigr)
         \frac{dt}{2}\ \text{(feedforward)},
 
-    with ``cos psi`` floored at :data:`COS_MIN` and ``kappa e`` at 0.5. ``v = v_ref``. ``c = -k e`` without
-    feedforward is :class:`AnalyticPolicy`'s law (module docstring); the PI form and the feedforward are
-    :class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy`'s (:mod:`amigo_gym.policies.tracking`).
+    with ``v = v_ref``, ``cos psi`` floored at :data:`COS_MIN` and ``1 - kappa e`` at 0.5.
 
     Args:
         e: H's cross-track error [m]; sin_psi, cos_psi: of the heading error [-]; kappa: curvature at H's closest
-            point [1/m]; v_ref: speed of A to command [m/s]; c: the commanded normal speed of H [m/s]. Columns of
-            one shape ``(N,)``.
+            point [1/m]; v_ref: speed of A [m/s]; c: commanded normal speed of H [m/s]. Columns ``(N,)``.
         l3: distance A to H [m]; dt: control period [s]; feedforward: add the mid-step term.
 
     Returns:
@@ -211,14 +178,13 @@ def analytic_wheel_rates(
 
 
 class AnalyticPolicy(Policy):
-    """The analytic inverse solution with look-ahead feedback, with an SB3-like ``predict`` (stateless: the state
-    returned is None).
+    """The analytic inverse solution with look-ahead feedback (module docstring); ``predict`` is stateless.
 
     Args:
-        params: task settings (geometry, ``error_scale``, the observation layout): ``AmigoBot-v0``'s
-            :class:`~amigo_gym.model.params.EnvParams` or ``AmigoBot-v1``'s :class:`~amigo_gym.task.v1.TrackingParams`.
-        gain: feedback gain ``k`` on H's cross-track error [1/s], in [0, 1/dt]; default 3.
-        feedforward_only: use ``k = 0``: the paper's inverse ODE in closed loop (no error feedback).
+        params: :class:`~amigo_gym.model.params.EnvParams` (``AmigoBot-v0``) or
+            :class:`~amigo_gym.task.v1.TrackingParams` (``AmigoBot-v1``).
+        gain: feedback gain ``k`` [1/s], in [0, 1/dt]; default 3.
+        feedforward_only: ``k = 0``: the paper's inverse ODE in closed loop.
         speed_reference: ``"A"`` (``v_A = v_ref``, default) or ``"H"`` (constant tangential speed of H).
     """
 

@@ -1,15 +1,11 @@
 """What every policy of :mod:`amigo_gym.policies` shares: the observation adapter and SB3's ``predict``.
 
-* :class:`Fields`: the adapter between a controller and an environment. It names the observation's fields
-  for the task settings (``AmigoBot-v0``'s :class:`~amigo_gym.model.params.EnvParams`, layout
-  :func:`amigo_gym.task.v0.obs_names`, or ``AmigoBot-v1``'s :class:`~amigo_gym.task.v1.TrackingParams`, layout
-  :func:`amigo_gym.task.v1.obs_fields`), checks observations and reads columns by name, so one controller
-  reads either env's observation.
-* :class:`Policy`: stable-baselines3's ``predict`` for one observation ``(d,)`` or a batch ``(N, d)``, the
-  per-row recurrent state (SB3 style) and its reset at ``episode_start``; a policy implements ``_act`` on
-  ``(N, d)``.
-
-May import numpy, :mod:`amigo_gym.model.params` and the task modules' observation layouts.
+* :class:`Fields` names the observation's fields for the task settings (``AmigoBot-v0``'s
+  :class:`~amigo_gym.model.params.EnvParams`, :func:`amigo_gym.task.v0.obs_names`; ``AmigoBot-v1``'s
+  :class:`~amigo_gym.task.v1.TrackingParams`, :func:`amigo_gym.task.v1.obs_fields`), checks observations and
+  reads columns by name.
+* :class:`Policy`: ``predict`` for ``(d,)`` or ``(N, d)``, the per-row recurrent state and its reset at
+  ``episode_start``; a policy implements ``_act`` on ``(N, d)``.
 """
 
 from __future__ import annotations

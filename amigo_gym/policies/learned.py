@@ -1,36 +1,20 @@
-r"""Learned ``AmigoBot-v1`` policies in numpy: the fast PPO's models, the residual policy, and :func:`load_pretrained`.
+"""Learned ``AmigoBot-v1`` policies in numpy: the fast PPO's models, the residual policy, and :func:`load_pretrained`.
 
-A model trained by :mod:`amigo_gym.tools.training.fastppo` is a zip of two files, ``model.json`` (format, settings,
-observation layout) and ``weights.npz`` (the actor's layers and the observation normalisation). Running it
-needs numpy only: :class:`FastPolicy` evaluates the 64x64 tanh network itself, so loading a fast-PPO model
-imports no torch. :func:`load_pretrained` also opens the project's SB3 zips (then stable-baselines3 is
-imported, inside the function).
+A fast-PPO model (:mod:`amigo_gym.tools.training.fastppo`) is a zip of ``model.json`` (format, settings,
+observation layout) and ``weights.npz`` (the actor's layers, the observation normalisation); :class:`FastPolicy`
+evaluates its 64x64 tanh network in numpy (no torch). :func:`load_pretrained` also opens SB3 zips (importing
+stable-baselines3 then).
 
-Features (what the network observes), for a batch of raw observations ``o`` ``(N, d)``:
+Features for raw observations ``o`` ``(N, d)``: ``o`` itself (:func:`amigo_gym.task.v1.obs_fields`); with
+``history = H > 0`` the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (filled with the first
+observation at an episode's start); with a residual (``residual_bound = b > 0``) the analytic controller's
+action ``a0`` ``(N, 2)``. All are normalised, ``f = clip((x - mean) / sqrt(var + 1e-8), -10, 10)``.
 
-* the raw observation ``o`` (``d = 20`` fields, :func:`amigo_gym.task.v1.obs_fields`);
-* with ``history = H > 0``: the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (``7 H``
-  values; at an episode's start the history is filled with the first observation). The observation already
-  holds the previous command and the measured wheel rates; the history adds the commands and measurements of
-  the steps before, which is what an actuation delay of up to ``H dt`` needs to be observable;
-* with a residual (``residual_bound = b > 0``): the analytic controller's action ``a0`` ``(N, 2)``.
-
-All features are normalised by the running mean and standard deviation saved with the model,
-``f = clip((x - mean) / sqrt(var + 1e-8), -10, 10)``.
-
-Actions (:func:`env_action`), from the network's output ``u`` ``(N, 2)`` (its mean when ``deterministic``):
-
-* plain policy: ``a = clip(u, -1, 1)``;
-* residual policy: ``a = clip(a0 + b clip(u, -1, 1), -1, 1)`` with ``a0`` the
-  :class:`~amigo_gym.policies.AnalyticTrackingPolicy` (nominal robot, default gains, its integral state kept
-  per row): the correction ``|a - a0| <= b`` per wheel, in the normalised action units (1 = ``max_wheel_rate``);
-* low-pass parameterisation (``filter_alpha = alpha < 1``): the target above is then approached by
-  ``a = p + alpha (a_target - p)``, ``p`` the previous command read from the observation
-  (``previous_command_1``, ``_2``); the step-to-step command change is at most ``alpha`` times the target's
-  distance. ``alpha = 1`` (default) is no filter.
-
-May import numpy, the standard library and the core (params, tracking, io) and the sibling policies; never
-torch, SB3 (only inside :func:`load_pretrained`), training or the CLI.
+Actions (:func:`env_action`) from the network's output ``u`` ``(N, 2)`` (its mean when ``deterministic``):
+plain ``a = clip(u, -1, 1)``; residual ``a = clip(a0 + b clip(u, -1, 1), -1, 1)`` with ``a0`` the
+:class:`~amigo_gym.policies.AnalyticTrackingPolicy` (nominal robot, default gains, integral kept per row), so
+``|a - a0| <= b`` per wheel; with ``filter_alpha = alpha < 1`` the target is approached as
+``a = p + alpha (a_target - p)`` from the previous command ``p`` of the observation.
 """
 
 from __future__ import annotations
@@ -240,11 +224,11 @@ def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
 class FastPolicy(Policy):
     """A fast-PPO model in numpy with SB3's ``predict`` (module docstring).
 
-    ``predict`` keeps, per batch row, the analytic controller's integral and the history, SB3-recurrent style:
-    ``state`` ``(N, state_dim)`` in and out; ``state=None`` uses an internal state (reset where
-    ``episode_start`` is True and whenever the batch size changes). ``episode_start=None`` with ``state=None``
-    treats the first call (and a new batch size) as the start of the episodes, and with a given all-zero state
-    every row. ``deterministic=False`` adds the Gaussian exploration noise ``exp(log_std)`` to the mean action.
+    ``predict`` keeps per batch row the analytic controller's integral and the history, SB3-recurrent style:
+    ``state`` ``(N, state_dim)`` in and out; ``state=None`` uses an internal state (reset where ``episode_start``
+    is True and when the batch size changes). ``episode_start=None`` treats the first call (or a new batch size,
+    or an all-zero given state) as the episodes' start. ``deterministic=False`` adds Gaussian noise
+    ``exp(log_std)`` to the mean action.
     """
 
     def __init__(
@@ -352,22 +336,18 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
     """Load a shipped ``AmigoBot-v1`` agent after checking its manifest's SHA-256.
 
     Args:
-        path: the model zip (a fast-PPO model, residual included, or an SB3 PPO/SAC/TD3 zip such as the shipped
-            ``agents/pretrained/v1/td3lp/td3lp_s0.zip``).
-        manifest: its manifest JSON (default: ``<zip stem>.json`` beside the zip), with ``sha256`` and, for
-            SB3 zips, ``algo``.
-        trust: load an SB3 zip (a pickle: loading it runs code) that is neither shipped nor written by a run of
-            this installation (:func:`amigo_gym.io.require_trust`); a fast-PPO zip (numpy, JSON) needs none.
+        path: the model zip (a fast-PPO model or an SB3 PPO/SAC/TD3/A2C/DDPG zip).
+        manifest: its manifest JSON (default ``<zip stem>.json`` beside it), with ``sha256`` and, for SB3, ``algo``.
+        trust: load an SB3 zip (a pickle) neither shipped nor written here (:func:`amigo_gym.io.require_trust`);
+            a fast-PPO zip needs none.
 
     Returns:
-        An object with SB3's ``predict(obs, state=None, episode_start=None, deterministic=True)`` for a batch of
-        raw ``AmigoBot-v1`` observations: a :class:`FastPolicy`, or the SB3 model (stable-baselines3 is imported
-        only then).
+        An object with SB3's ``predict``: a :class:`FastPolicy`, or the SB3 model.
 
     Raises:
-        FileNotFoundError: no zip or no manifest. ValueError: the manifest has no ``sha256``, the zip's digest
-        differs from it, or an SB3 manifest names an unknown algorithm. UntrustedFileError (a ValueError): an SB3
-        zip not trusted (one line naming it and the flag).
+        FileNotFoundError: no zip or no manifest.
+        ValueError: no ``sha256`` in the manifest, a different digest, or an unknown SB3 algorithm.
+        UntrustedFileError: an SB3 zip not trusted.
     """
     p = Path(path)
     if not p.is_file():

@@ -1,133 +1,53 @@
 r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
 
-Both read only the observation, by field name (:class:`amigo_gym.policies.base.Fields`), and the constant settings
+Both read the observation by field name (:class:`amigo_gym.policies.base.Fields`) and the nominal robot of
 :class:`~amigo_gym.task.v1.TrackingParams` (:class:`AnalyticTrackingPolicy` also ``AmigoBot-v0``'s
-:class:`~amigo_gym.model.params.EnvParams`), use the **nominal** robot (``params.robot``), and have
-stable-baselines3's ``predict`` interface for one observation ``(d,)`` or a batch ``(N, d)``.
-
-Fields used: ``e``, ``psi`` (here from ``sin_heading_error``, ``cos_heading_error`` as they are), ``kappa`` and
-``v_ref`` as in :mod:`amigo_gym.policies.analytic`, whose docstring also derives the velocity of H in the path
-frame: ``edot = Hdot . n = v sin psi + l3 omega cos psi`` for a speed ``v`` of A and turn rate ``omega`` on any
-smooth path, a map ``(v, omega) -> Hdot`` of determinant ``l3 != 0`` (H is steered directly, and the error
-dynamics do not depend on the path's curvature). Besides (module table of :mod:`amigo_gym.task.v1`,
-``v_max = robot.max_speed``):
-
-* ``v_ahead = reference_speed_ahead * v_max``: the reference speed 1 s later [m/s];
-* ``(x_d, y_d) = preview_{x,y}_<d> * preview_scale``: the path point ``d`` [m] of arc length ahead of H's
-  closest point, in the robot frame (origin A, x along the heading) [m].
+:class:`~amigo_gym.model.params.EnvParams`), with stable-baselines3's ``predict`` for ``(d,)`` or ``(N, d)``.
+Fields: ``e``, ``psi``, ``kappa``, ``v_ref`` as in :mod:`amigo_gym.policies.analytic` (which derives
+``edot = v sin psi + l3 omega cos psi``), ``v_ahead = reference_speed_ahead * v_max`` (the reference speed 1 s
+later) and the preview points ``(x_d, y_d)`` [m] in the robot frame (origin A, x along the heading).
 
 Analytic law (:func:`analytic_tracking_command`)
 ------------------------------------------------
-Ask for ``Hdot = sdot t + c n`` with ``c = -k e - k_i z``, ``z = int e dt``, and keep ``v = v_ref``:
+``Hdot = sdot t + c n`` with ``c = -k e - k_i z``, ``z = int e dt``, and ``v = v_ref``:
 
 .. math::
     v = v_{ref}, \qquad \dot s = \frac{v_{ref} - c\sin\psi}{\cos\psi}, \qquad
-    \omega = \frac{-\dot s\sin\psi + c\cos\psi}{l_3} = \frac{c - v_{ref}\sin\psi}{l_3\cos\psi}.
+    \omega = \frac{c - v_{ref}\sin\psi}{l_3\cos\psi},
 
-Then ``edot = -k e - k_i z`` exactly in continuous time, on every path and speed profile. On the path
-(``e = z = 0``) this *is* the paper's exact inverse solution: with the lag ``theta - beta = -psi``,
-``sdot = v_A / cos(theta - beta)`` and ``betadot = v_A tan(theta - beta) / l3``. ``cos psi`` is floored at
-:data:`COS_MIN` (the law is singular when the robot faces across the path, like the paper's ODE).
+so ``e'' + k e' + k_i e = 0`` on every path and speed profile; on the path it is the paper's exact inverse
+solution. ``cos psi`` is floored at :data:`COS_MIN`. Defaults ``k = 1 1/s``, ``k_i = k^2/4`` (critically damped);
+a larger ``k`` settles faster on the ideal robot but, with the firmware's turn-rate ramp (``a_w = 0.87
+rad/s^2``, linear for ``|e| <= a_w l3 / k^2``) and the ``"hard"`` preset's delays, may enter a limit cycle.
+Anti-windup: ``k_i |z| <= integral_limit``. The wheel-rate setpoints are scaled into ``+-w_max`` keeping
+``omega / v`` (:func:`limit_wheel_rates`).
 
-Gains (the default ``k = 1 1/s``, ``k_i = k^2/4 = 0.25 1/s^2``). The error obeys ``e'' + k e' + k_i e = 0``:
-
-* critically damped, ``k_i = k^2 / 4``: the fastest decay without overshoot, double pole at ``-k/2``;
-* sampling: the command is held over ``dt``; the discrete loop (:func:`closed_loop_impulse_response`) has
-  both poles at about ``exp(-k dt / 2) = 0.905`` for ``k dt = 0.2``, far inside its stability limit (the
-  discrete loop becomes unstable near ``k dt = 2``); its behaviour is within a few per cent of the continuous one;
-* actuator ramps: correcting an error ``e`` at rate ``~k`` needs turn-rate changes of ``~k^2 e / l3`` per
-  second; the firmware ramps the turn rate at ``a_w = 0.87 rad/s^2``, so the loop stays linear for
-  ``|e| <= a_w l3 / k^2 = 1.7 cm`` at ``k = 2``, the size of the env's start offsets (2 cm). Larger gains
-  shrink that range as ``1/k^2`` (the ramp then rate-limits the turn); smaller gains slow the settling
-  (``|e| < 1e-6 m`` after about 13 s at ``k = 2`` from a 2 cm start, 25 s at ``k = 1``);
-* delay: a command acts ``tau`` late (up to 0.15 s in the ``"hard"`` preset) and is held over ``dt``, a phase
-  lag of about ``k (tau + dt/2)`` at the loop's bandwidth; together with the rate-limited turn this pushed
-  the loop into a limit cycle at ``k = 2`` (figure-8 at 0.3 m/s, ``randomize="hard"``, seed 0: H 0.25 m off
-  the path, saturated bang-bang wheel commands), while ``k = 1`` kept H within 11 mm on seeds 0–5 (and the
-  linear range above grows to 7 cm). The default is therefore ``k = 1``: robustness to the robot as it is
-  over settling speed on the ideal one. This was found by rendering the ``"hard"`` figure-8 with ``amigo-gym
-  gallery``; it is a design choice of the controller, not a fit to a benchmark score.
-
-Anti-windup: ``k_i |z|`` is clamped at ``integral_limit`` (default 0.1 m/s, the correction speed a 25 %
-mismatch of wheel radii or track needs at 0.4 m/s). A constant mismatch (true wheel radii or track off)
-leaves a constant ``c`` in steady state; the integral supplies it, so ``e -> 0``.
-
-Limits: the wheel-rate setpoints ``r1 w1 = v + l1 omega``, ``r2 w2 = v - l1 omega`` are divided by
-``max(1, |w1| / w_max, |w2| / w_max)``: within ``+-w_max`` with the ratio ``omega / v`` (the path's
-curvature of A) kept.
-
-Feedforward (``feedforward=True``, default). The command is held over a step while the exact solution's turn
-rate changes; ``Hdot . n = v sin psi + l3 omega cos psi`` then drifts by ``sdot psidot t``. Evaluating the law at
-the predicted heading error of mid-step, ``psi + psidot dt / 2``, i.e. adding
+Feedforward (``feedforward=True``): the law is evaluated at the mid-step heading error ``psi + psidot dt / 2``,
 
 .. math::
-    \Delta\omega = \frac{\partial \omega}{\partial \psi}\,\dot\psi\,\frac{dt}{2}
-    = -\frac{\dot s}{l_3\cos\psi}\Bigl(\omega - \frac{\kappa\,\dot s}{1 - \kappa e}\Bigr)\frac{dt}{2},
+    \Delta\omega = -\frac{\dot s}{l_3\cos\psi}\Bigl(\omega - \frac{\kappa\,\dot s}{1 - \kappa e}\Bigr)\frac{dt}{2},
 
-removes the first-order hold error (``psidot = omega - kappa sdot / (1 - kappa e)`` uses the curvature at H,
-observed). On a circle in steady state ``psidot = 0``: the term vanishes. The reference speed is fed forward
-too: ``v`` is the reference predicted for the end of the step (:meth:`AnalyticTrackingPolicy.next_reference_speed`,
-from the 1 s preview), so that a trapezoid's ramp is met at each step's end rather than one step late.
+and ``v`` is the reference predicted for the step's end (:meth:`AnalyticTrackingPolicy.next_reference_speed`).
 
-Tracking error on paths whose curvature changes (:func:`zoh_error_bound`)
---------------------------------------------------------------------------
-On the path the exact solution's turn rate is ``omega*(t)``. For H on the path and ``v_A = v`` constant, the
-heading lag ``psi = theta - beta`` obeys ``dpsi/ds = u``, ``u = kappa - sin(psi) / l3``
-(:func:`amigo_gym.paths.heading_lag_profile`), and ``omega* = v tan(psi) / l3``, so
-``omegadot* = v^2 u / (l3 cos^3 psi)``. Two first-order low passes in arc length bound it:
-``d(sin psi)/ds = (cos psi / l3) (l3 kappa - sin psi)`` keeps ``|sin psi| <= l3 kappa_max``, and
-``du/ds = (cos psi / l3) (l3 kappa' / cos psi - u)`` keeps ``|u| <= l3 K / cos psi`` (``K = max |dkappa/ds|``;
-``u`` is continuous where ``kappa'`` jumps), hence, with ``cos^2 psi >= 1 - (l3 kappa_max)^2``,
-
-.. math:: |\dot\omega^*| \le \dot W = \frac{v^2 K}{(1 - (l_3\kappa_{max})^2)^2}
-
-(the tests check ``Wdot`` against the exact peak of :func:`amigo_gym.paths.feasibility`). Two effects make the
-held command miss ``omega*`` within a step:
-
-1. zero-order hold: ``omega_cmd = omega*(t_k)`` while ``omega*(t_k + t) = omega*(t_k) + omegadot* t``: ``Hdot . n``
-   is off by ``l3 cos(psi) omegadot* t``; over a step, ``e`` loses up to ``l3 Wdot dt^2 / 2``;
-2. the firmware's ramp: successive commands differ by ``Delta omega = omegadot* dt``, reached after
-   ``|Delta omega| / a_w`` (``a_w = rot_acceleration`` 0.87 rad/s^2, the slower of the two rates); the turn rate
-   lags by the triangle ``Delta omega^2 / (2 a_w)``: ``e`` loses up to another ``l3 Wdot^2 dt^2 / (2 a_w)``.
-
-So each step adds at most ``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))`` to the error dynamics
-``e_{k+1} = e_k + dt c_k + delta_k`` (with ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, as implemented).
-A sequence of disturbances bounded by ``delta`` gives ``|e| <= ||h||_1 delta``, with ``h`` the impulse response of
-this loop (:func:`closed_loop_impulse_response`; ``||h||_1 = 7.50`` for ``k = 2``, ``k_i = 1``, ``dt = 0.1``, close
-to the continuous loop's ``4 / (e k dt) = 7.36``: its response to a unit velocity impulse, ``(1 - k t / 2)
-exp(-k t / 2)``, has L1 norm ``4 / (e k)``).
-The bound is ``O(dt)``: ``|e| <= ||h||_1 delta ~ (4 / (e k)) l3 Wdot dt (1/2 + Wdot / (2 a_w))``. With the
-feedforward the first term is cancelled to first order; the same bound then holds with room to spare.
-
-Measured (``dt = 0.1``, randomisation off, no start offsets, max ``|e|`` after 5 s; ``tests/test_policies_v1.py``)::
-
-    path          v [m/s]  K [1/m^2]  bound [mm]  plain [mm]  feedforward [mm]  pure pursuit [mm]
-    figure8       0.1      2.95       0.093       0.034       0.0040            42
-    figure8       0.4      2.95       2.24        0.94        0.49              41
-    lane_change   0.1      0.563      0.017       0.013       0.0004            17
-    lane_change   0.4      0.563      0.30        0.23        0.015             16
-    random (id)   0.4      1.0        0.58        0.22        0.045             27
-
-On circles (radii 0.5-2 m, both directions, 0.1-0.4 m/s, from the env's 2 cm / 0.1 rad start offsets) H is within
-3e-8 m of the path at 20-25 s and still converging; with true wheel radii and track 5 % larger, within 3e-8 m too.
+Error bound with a held command (:func:`zoh_error_bound`)
+---------------------------------------------------------
+With ``K = max |dkappa/ds|``, the exact turn rate changes at most at
+``Wdot = v^2 K / (1 - (l3 kappa_max)^2)^2``. Holding the command over ``dt`` and the firmware's ramp add at most
+``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))`` per step to ``e_{k+1} = e_k + dt c_k + delta_k``, so
+``|e| <= ||h||_1 delta`` with ``h`` the loop's impulse response (:func:`closed_loop_impulse_response`;
+``||h||_1 ~ 4 / (e k dt)``). ``tests/test_policies_v1.py`` checks the bound on the path families.
 
 Pure pursuit (:class:`PurePursuitPolicy`)
 -----------------------------------------
-Coulter (1992), "Implementation of the Pure Pursuit Path Tracking Algorithm", CMU-RI-TR-92-01: the reference
-point A drives on the circular arc through the goal point ``(x_L, y_L)`` (robot frame) tangent to its heading,
+Coulter (1992), CMU-RI-TR-92-01: A drives on the arc through the goal point ``(x_L, y_L)`` (robot frame)
+tangent to its heading,
 
-.. math:: \kappa = \frac{2 y_L}{L^2}, \qquad L^2 = x_L^2 + y_L^2, \qquad v = v_{ref}, \qquad \omega = v\kappa.
+.. math:: \kappa = \frac{2 y_L}{L^2}, \qquad L^2 = x_L^2 + y_L^2, \qquad v = v_{ref}, \qquad \omega = v\kappa,
 
-The goal point is the observation's preview point at the chosen arc-length distance ``d`` ahead of H's closest
-point (no interpolation: a chord between preview points would put the goal off the path); its distance from A
-is ``L ~ l3 + d`` on a straight. On a circle of radius ``R`` the steady state has A on a circle of radius
-``R_A`` concentric with the path and the goal on the path: ``y_L = (R_A^2 + L^2 - R^2) / (2 R_A)``, and
-``1 / R_A = 2 y_L / L^2`` gives ``R_A = R`` for every ``L``. A tracks the circle exactly and H, ``l3`` ahead on
-the tangent, runs outside it at ``sqrt(R^2 + l3^2)``: the steady cross-track error of H is
+the goal being the preview point at arc length ``d`` ahead of H's closest point. On a circle of radius ``R``
+A tracks the circle and H runs outside it, for every look-ahead:
 
-.. math:: e_{ss} = -\mathrm{direction}\,\bigl(\sqrt{R^2 + l_3^2} - R\bigr) \approx -\mathrm{direction}\,\frac{l_3^2}{2R}
-
-(3.2 mm on R = 1 m, 6.4 mm on 0.5 m), whatever the lookahead: the offset is the price of tracking A, not H.
+.. math:: e_{ss} = -d\,\bigl(\sqrt{R^2 + l_3^2} - R\bigr) \approx -d\,\frac{l_3^2}{2R}, \qquad d = \mathrm{direction}.
 """
 
 from __future__ import annotations
@@ -206,11 +126,9 @@ def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tu
 
 
 def closed_loop_impulse_response(gain: float, integral_gain: float, dt: float, steps: int = 20000) -> Array:
-    r"""Response ``h_n`` [m per m] of the sampled error loop to one disturbance ``delta_0 = 1`` m.
-
-    ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, ``e_{k+1} = e_k + dt c_k + delta_k`` (the analytic
-    policy's update, module docstring); ``h_0 = 0``, ``h_1 = 1``. Returns ``(steps,)``.
-    """
+    """Response ``h_n`` [m per m] of the sampled error loop to one disturbance ``delta_0 = 1`` m:
+    ``z_k = z_{k-1} + dt e_k``, ``c_k = -k e_k - k_i z_k``, ``e_{k+1} = e_k + dt c_k + delta_k``; ``h_0 = 0``,
+    ``h_1 = 1``. Returns ``(steps,)``."""
     h = np.zeros(steps)
     e, z = 0.0, 0.0
     for n in range(1, steps):
@@ -256,25 +174,20 @@ def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> 
 
 
 class AnalyticTrackingPolicy(Policy):
-    """The exact inverse solution along any path and speed profile, with PI feedback on H (module docstring).
+    """The exact inverse solution with PI feedback on H (module docstring).
 
-    ``predict`` keeps the integral ``z`` [m s] of H's cross-track error per batch row, SB3-recurrent style:
-
-    * ``state`` given: an ``(N, 1)`` array (``(1, 1)`` for a single observation) of ``z``; rows where
-      ``episode_start`` is True are reset to 0 before the update; the new ``(N, 1)`` state is returned (the input
-      is not modified).
-    * ``state=None``: the policy's own internal state (one row per batch row) is used and updated, reset where
-      ``episode_start`` is True, and reset to zeros whenever the batch size changes; call :meth:`reset` at the
-      start of new episodes if ``episode_start`` is not passed. The returned state is a copy of it.
+    ``predict`` keeps the integral ``z`` [m s] of H's cross-track error per batch row, SB3-recurrent style: a given
+    ``state`` ``(N, 1)`` is reset where ``episode_start`` is True and the new state returned (the input is not
+    modified); with ``state=None`` the policy's own state is used (reset where ``episode_start`` is True or when the
+    batch size changes; :meth:`reset` otherwise) and a copy returned.
 
     Args:
-        params: the task's settings (nominal robot, ``dt``, observation layout): ``AmigoBot-v1``'s
-            :class:`~amigo_gym.task.v1.TrackingParams`, or ``AmigoBot-v0``'s :class:`~amigo_gym.model.params.EnvParams`
-            (its observation has no speed preview: the reference speed is constant, and is fed forward as it is).
+        params: :class:`~amigo_gym.task.v1.TrackingParams`, or ``AmigoBot-v0``'s
+            :class:`~amigo_gym.model.params.EnvParams` (no speed preview: the reference speed is fed forward as is).
         gain: ``k`` [1/s], in (0, 1/dt]; default 1.
-        integral_gain: ``k_i`` [1/s^2] >= 0; default ``k^2/4`` (critically damped); 0 disables the integral.
-        integral_limit: clamp of ``k_i |z|`` [m/s] (anti-windup), > 0; default 0.1.
-        feedforward: mid-step feedforward of the turn rate and the reference speed (module docstring); default True.
+        integral_gain: ``k_i`` [1/s^2] >= 0; default ``k^2/4``; 0 disables the integral.
+        integral_limit: clamp of ``k_i |z|`` [m/s], > 0; default 0.1.
+        feedforward: mid-step feedforward of the turn rate and the reference speed; default True.
     """
 
     def __init__(
@@ -356,24 +269,18 @@ class AnalyticTrackingPolicy(Policy):
 
 
 class PurePursuitPolicy(Policy):
-    """Pure pursuit (Coulter 1992) towards a preview point of the observation, in the textbook's variants.
+    """Pure pursuit (Coulter 1992) towards a preview point of the observation.
 
     Args:
         params: the task's settings.
-        lookahead: arc length ahead of H's closest point of the goal point [m]; must be one of ``params.preview``
-            (the goal is that preview point, module docstring). Default 0.5 (or the preview distance nearest it).
-        origin: the point that pursues the goal: ``"axle"`` (default; the axle midpoint A, Coulter's rear-axle
-            form: the arc from A tangent to the heading through the goal) or ``"H"`` (the arc from H, ``l3``
-            ahead of A on the heading: the goal in H's frame, ``x_L - l3``, ``y_L``; the turn rate
-            ``omega = v kappa_H`` with ``kappa_H = 2 y_L / ((x_L - l3)^2 + y_L^2)``).
-        max_turn_rate: the turn rate is clipped to ``[-max_turn_rate, max_turn_rate]`` [rad/s] (> 0), as a
-            published controller's rate limit; None (default): no limit but the wheels' (:func:`limit_wheel_rates`).
-        lookahead_time: speed-scaled look-ahead [s] (> 0): per robot the goal is the preview point nearest to
-            ``lookahead_time * v_ref`` ahead (the preview distances are the only goal points the observation
-            holds); None (default): the fixed ``lookahead``.
+        lookahead: arc length [m] of the goal point ahead of H's closest point, one of ``params.preview``.
+            Default 0.5 (or the preview distance nearest it).
+        origin: the pursuing point: ``"axle"`` (default, A) or ``"H"`` (goal in H's frame, ``(x_L - l3, y_L)``).
+        max_turn_rate: clip of the turn rate [rad/s] (> 0); None (default): only the wheels' limit.
+        lookahead_time: speed-scaled look-ahead [s] (> 0): the preview point nearest to
+            ``lookahead_time * v_ref`` ahead; None (default): the fixed ``lookahead``.
 
-    ``predict`` is stateless: it returns ``state`` unchanged. The benchmark's ``pure_pursuit`` is the default form
-    (``origin="axle"``, fixed look-ahead 0.5 m, no turn-rate limit; docs/benchmark.md).
+    ``predict`` is stateless. The benchmark's ``pure_pursuit`` is the default form (docs/benchmark.md).
     """
 
     def __init__(
