@@ -145,8 +145,11 @@ def env_kwargs(st: Settings, condition: str, point_at_axle: bool) -> dict:
 
 
 def pure_pursuit_preset(params, st: Settings) -> PurePursuitPolicy:
-    """(c) The textbook preset 'cao2024': Coulter's arc from A to the point d = 0.2 m along the path ahead of the
-    closest point, omega = 2 v sin(alpha) / L_d, |omega| <= 1 rad/s; on a nominal robot with l3 = 1 mm."""
+    """(c) The textbook preset (:meth:`PurePursuitPolicy.textbook`: Coulter's arc from A to the point d = 0.2 m along
+    the path ahead of the closest point, omega = 2 v sin(alpha) / L_d, |omega| <= 1 rad/s), or the variant that other
+    ``--lookahead`` / ``--max-turn-rate`` give; on a nominal robot with l3 = 1 mm."""
+    if (st.lookahead, st.max_turn_rate) == (0.2, 1.0):
+        return PurePursuitPolicy.textbook(params)
     return PurePursuitPolicy(params, lookahead=st.lookahead, origin="axle", max_turn_rate=st.max_turn_rate)
 
 

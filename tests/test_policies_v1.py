@@ -240,3 +240,14 @@ def test_bad_inputs_refused() -> None:
         pol.predict(np.full(len(tracking.obs_fields(p)), np.nan))
     with pytest.raises(ValueError, match="gain"):
         AnalyticTrackingPolicy(p, gain=0.0)
+
+
+def test_the_textbook_pure_pursuit_preset() -> None:
+    """Cao et al. (2024)'s values (experiments/random_paths.py reproduces their failure rate with it)."""
+    import gymnasium as gym
+
+    env = gym.make("AmigoBot-v1", preview=(0.2, 0.5, 1.0))
+    pp = PurePursuitPolicy.textbook(env.unwrapped.params)
+    assert (pp.lookahead, pp.origin, pp.max_turn_rate, pp.lookahead_time) == (0.2, "axle", 1.0, None)
+    with pytest.raises(ValueError, match=r"lookahead must be one of the preview distances"):
+        PurePursuitPolicy.textbook(gym.make("AmigoBot-v1", preview=(0.5, 1.0)).unwrapped.params)
