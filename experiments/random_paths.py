@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import itertools
 import json
 import math
 import time
@@ -193,6 +194,7 @@ def main() -> None:
     if a.replot:
         doc = json.loads(Path(a.replot).read_text())
         st = Settings(**{k: tuple(v) if isinstance(v, list) else v for k, v in doc["settings"].items()})
+        by_curvature(st, doc["episodes"])
         return plot(st, doc["summary"], Path(a.replot).with_suffix(".png"))
     st = Settings(paths=a.paths, generator=a.generator, seed=a.seed, out=a.out)
     print(machine_line(), flush=True)
@@ -241,6 +243,7 @@ def main() -> None:
                 flush=True,
             )
     summary = summarise(st, rows)
+    by_curvature(st, rows)
     out = Path(st.out)
     out.mkdir(parents=True, exist_ok=True)
     tag = f"{st.generator}{st.seed}_{st.paths}"
@@ -301,6 +304,25 @@ def summarise(st: Settings, rows: list[dict]) -> list[dict]:
                     f"   ({len(ok)} feasible: {rec['rate_feasible']:.1%} [{flo:.1%}, {fhi:.1%}])"
                 )
     return res
+
+
+#: bins of a path's peak curvature [1/m] for :func:`by_curvature`
+CURVATURE_BINS = (0.0, 2.0, 5.0, 10.0, 20.0, 60.0)
+
+
+def by_curvature(st: Settings, rows: list[dict]) -> None:
+    """Print the failure rate at the first tolerance per bin of the path's peak curvature (:data:`CURVATURE_BINS`)."""
+    bins = list(itertools.pairwise(CURVATURE_BINS))
+    print(f"\nfailure rate at {st.tolerances[0]} m per peak-curvature bin [1/m] (paths in the bin):")
+    print(f"{'agent':22} {'condition':9} " + " ".join(f"{f'[{lo:g}, {hi:g})':>15}" for lo, hi in bins))
+    for name in AGENTS:
+        for cond in st.conditions:
+            sel = [r for r in rows if r["agent"] == name and r["condition"] == cond]
+            cells = []
+            for lo, hi in bins:
+                b = [r["peak"] >= st.tolerances[0] for r in sel if lo <= r["max_curvature"] < hi]
+                cells.append(f"{np.mean(b):6.1%} ({len(b):>4})" if b else f"{'-':>15}")
+            print(f"{name:22} {cond:9} " + " ".join(f"{c:>15}" for c in cells))
 
 
 def plot(st: Settings, summary: list[dict], file: Path) -> None:
