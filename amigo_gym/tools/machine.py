@@ -6,7 +6,10 @@ prints these beside its figures. Standard library and numpy only.
 
 from __future__ import annotations
 
+import importlib
+import os
 import platform
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
@@ -49,8 +52,6 @@ def simd_level() -> str:
     for (``__cpu_dispatch__``, ``__cpu_baseline__``), which also honours ``NPY_DISABLE_CPU_FEATURES`` (numpy's AVX2
     code on an AVX-512 machine says ``"AVX2"``); ``"unknown"`` if this numpy does not expose it.
     """
-    import importlib
-
     module = None
     for name in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):  # numpy 2, numpy 1
         try:
@@ -71,8 +72,6 @@ def simd_level() -> str:
 
 def machine_line() -> str:
     """One line for a benchmark's header: CPU, SIMD level, CPUs visible, Python and numpy versions."""
-    import os
-
     return (
         f"CPU: {cpu_model()}, SIMD {simd_level()}, {os.cpu_count()} CPUs visible; "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}"
@@ -82,8 +81,6 @@ def machine_line() -> str:
 def bits_key() -> str:
     """What the last bits of a float result depend on: CPU model, numpy's SIMD level, numpy's and torch's versions
     (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         torch = version("torch")
     except PackageNotFoundError:

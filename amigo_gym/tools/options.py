@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 import re
 import sys
 import types
@@ -141,8 +142,6 @@ def cli(
 
 def json_object(text: str) -> dict[str, Any]:
     """``text`` as a JSON object (``ValueError`` ``must be a JSON object, got '<text>'`` otherwise)."""
-    import json
-
     try:
         value = json.loads(text)
     except ValueError:

@@ -15,10 +15,12 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import gymnasium as gym
 import numpy as np
 
 from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
+from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.tools.options import parse_settings, run_guarded
 
 __all__ = ["GainFit", "Settings", "halving_times", "main"]
@@ -82,10 +84,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
     Raises:
         ValueError: on a bad window, or if an episode leaves the path.
     """
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-    from amigo_gym.policies.analytic import AnalyticPolicy
     from amigo_gym.tools.training.evaluate import rollout
 
     check_range("Settings", "t_from", settings.t_from, 0.0)

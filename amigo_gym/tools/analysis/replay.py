@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import shutil
 import tempfile
@@ -215,8 +216,6 @@ def _text(data: str) -> Callable[[str], object]:
 
 
 def _json(obj: Any) -> Callable[[str], object]:
-    import json
-
     return _text(json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
 
 

@@ -28,10 +28,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import gymnasium as gym
 import numpy as np
 
 from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
 from amigo_gym.model.params import RobotParams
+from amigo_gym.paths import CirclePath
+from amigo_gym.task.inverse import paper_circle
 from amigo_gym.tools.options import parse_settings, run_guarded
 
 __all__ = ["Check", "VerifySettings", "main", "round_trip_error", "rows"]
@@ -67,8 +70,6 @@ def _laps_error(dt: float, euler: bool) -> float:
 
 
 def _env_laps_error() -> float:
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401
 
     pose, w = _steady_pose()
@@ -84,9 +85,6 @@ def _env_laps_error() -> float:
 
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
-    from amigo_gym.paths import CirclePath
-    from amigo_gym.task.inverse import paper_circle
-
     path = CirclePath(radius=R)
     sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)
     w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt

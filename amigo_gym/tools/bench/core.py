@@ -25,6 +25,7 @@ from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, cas
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
 from amigo_gym.sim.fast_v1 import numba_available
+from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.options import run_command
@@ -186,8 +187,6 @@ def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Const
 def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, parallel: bool) -> Callable[[], object]:
     """One compiled step of AmigoBot-v0's robots at ``pose`` with the wheel rates ``w`` [rad/s] and the actions
     ``action (N, 2)`` (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; preallocated outputs, the state advances)."""
-    from amigo_gym.sim.fast_v1_batch import BatchKernel
-
     k, st, ep = v0_columns(params, pose, w)
     n = len(pose)
     b = BatchKernel(k, n, parallel=parallel)

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from amigo_gym.envs import AmigoBotV1VectorEnv
 from amigo_gym.io import atomic_write_json
 from amigo_gym.tools.bench.core import measure_many
 from amigo_gym.tools.bench.env import _vector_stepper
@@ -34,8 +35,6 @@ MiB = 2**20
 
 
 def _env(n: int, path: str, render: bool) -> Any:
-    from amigo_gym.envs import AmigoBotV1VectorEnv
-
     kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
     return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
 

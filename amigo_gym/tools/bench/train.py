@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
+
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
@@ -180,7 +182,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
 
     def run(s: TrainSettings) -> int:
-        import numpy as np
         import torch
 
         head = {

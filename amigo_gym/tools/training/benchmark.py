@@ -10,8 +10,11 @@ import glob
 import json
 import math
 import re
+import shutil
 import sys
+import tempfile
 import time
+import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -21,6 +24,10 @@ import numpy as np
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
+from amigo_gym.model.params import EnvParams
+from amigo_gym.paths.points import cached_file_path, is_points_file
+from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.runs import remove_matching
 from amigo_gym.tools.training.task_metrics import (
@@ -117,8 +124,6 @@ def user_scenarios(
     Raises:
         FileNotFoundError, ValueError: a missing file, a bad value (one line).
     """
-    from amigo_gym.paths.points import cached_file_path, is_points_file
-
     out = []
     for f in files:
         if not is_points_file(str(f)):
@@ -267,12 +272,7 @@ def _classical(name: str) -> Callable[[Any], Any]:
         hook = getattr(base, "classical_policy", None)
         if callable(hook):
             return hook(name)
-        from amigo_gym.model.params import EnvParams
-        from amigo_gym.policies.analytic import AnalyticPolicy
-
         params = getattr(base, "params", None)
-        from amigo_gym.task.v1 import TrackingParams
-
         if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
@@ -356,8 +356,6 @@ class AgentSpec:
 
 def _is_fast_model(path: Path) -> bool:
     """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
-    import zipfile
-
     try:
         with zipfile.ZipFile(path) as z:
             return "model.json" in z.namelist()
@@ -850,9 +848,6 @@ def write_outputs(
     last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
     ``publish:<file name>`` after each move.
     """
-    import shutil
-    import tempfile
-
     from amigo_gym.tools.runs import publish
 
     out.mkdir(parents=True, exist_ok=True)

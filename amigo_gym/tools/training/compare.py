@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import glob
 import json
+import shlex
 import shutil
 import sys
 import tempfile
@@ -19,6 +20,8 @@ from typing import Any
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
+from amigo_gym.model.params import EnvParams
+from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
@@ -90,8 +93,6 @@ def display_command(command: str, root: Path | None = None) -> str:
     """``command`` with its absolute paths made short: relative to the repository (``root``, default the current
     folder) when inside it, else their last two parts (a training record's ``--out /tmp/retrain/runs/ppo`` reads
     ``--out runs/ppo``), so that no printed command shows a machine's temporary folders."""
-    import shlex
-
     base = (root or Path.cwd()).resolve()
     words = []
     for word in shlex.split(command):
@@ -393,8 +394,6 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     out, models = Path(s.out), Path(s.models) if s.models else None
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
     train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
-    from amigo_gym.model.params import EnvParams
-    from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
     from amigo_gym.tools.training.evaluate import (
         EvalProtocol,
         default_agents,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
 __all__ = [
@@ -359,8 +360,6 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from amigo_gym.io import atomic_save
-
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
         for i, (g, axes) in enumerate(doc["curves"].items()):
@@ -397,8 +396,6 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
 
 def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:
     """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png``; the paths."""
-    from amigo_gym.io import atomic_write, atomic_write_json
-
     written = [out / "curves.json", out / "curves.md"]
     atomic_write_json(written[0], doc, parents=True)
     atomic_write(written[1], markdown_report(doc), parents=True)

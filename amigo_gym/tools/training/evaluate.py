@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import pickle
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
@@ -19,8 +20,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
+from amigo_gym.envs.base import info_row
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
-from amigo_gym.model.params import EnvParams
+from amigo_gym.model.kinematics import a_from_h, circle_steady_state
+from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.paths import make_path
+from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
 
@@ -87,8 +92,6 @@ class EvalProtocol:
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
-        from amigo_gym.model.params import check_range
-
         check_range("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
         check_range("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
 
@@ -123,9 +126,6 @@ def steady_start_pose(params: EnvParams) -> Array:
     ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.model.kinematics.circle_steady_state`), A ``l3``
     behind H.
     """
-    from amigo_gym.model.kinematics import a_from_h, circle_steady_state
-    from amigo_gym.paths import make_path
-
     path = make_path(params)
     if params.path != "circle":
         raise ValueError(f"the nominal scenario needs path='circle', got {params.path!r}")
@@ -161,10 +161,6 @@ def protocol_scenarios(proto: EvalProtocol, params: EnvParams | None = None) -> 
 def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
     """The episodes of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`) as :class:`Trajectory`
     rows, with the analytic policy's rates (gain ``gain`` [1/s]) on the agent's observations as the reference."""
-    from amigo_gym.envs.base import info_row
-    from amigo_gym.paths import make_path
-    from amigo_gym.policies.analytic import analytic_wheel_rates
-
     keys = ("time", "e", "h", "rates", "angles", "ref_rates")
     cols: list[dict[str, list[Any]]] = [{k: [] for k in keys} for _ in sc.seeds]
     start: dict[str, Any] = {}
@@ -226,8 +222,6 @@ def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None
 
 def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
     """Pooled metrics of one (agent, scenario) (keys documented in the module docstring)."""
-    from amigo_gym.model.kinematics import circle_steady_state
-
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
     e = np.concatenate([t.e for t in trajs])
     settled = [t.time >= proto.settle_time_s - 1e-9 for t in trajs]
@@ -255,8 +249,6 @@ def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtoco
 
 def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
-    from amigo_gym.policies.analytic import AnalyticPolicy
-
     return {
         "analytic": AnalyticPolicy(params, gain=gain),
         "analytic_ff": AnalyticPolicy(params, feedforward_only=True),
@@ -386,8 +378,6 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
         UntrustedFileError: a file not trusted (one line naming it and the flag).
     """
-    import pickle
-
     from stable_baselines3 import PPO, SAC, TD3
 
     from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
@@ -513,8 +503,6 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from amigo_gym.paths import make_path
-
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
     top = "perturbed" if "perturbed" in have else sorted(have)[0]
     fig, axes = plt.subplots(2, 2, figsize=(12.0, 10.0))
@@ -565,8 +553,6 @@ def plot_wheels(
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from amigo_gym.model.kinematics import circle_steady_state
 
     if "analytic" not in trajs:
         raise ValueError("plot_wheels needs the 'analytic' agent as the reference")

@@ -63,7 +63,9 @@ from torch import nn
 
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
+from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
+from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import cpu_model
 from amigo_gym.tools.options import cli, json_object
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
@@ -276,8 +278,6 @@ class FastPPOSettings:
         ``max_curvature_rate`` [1/m^2] and the ``env_kwargs``' other ``path_params``), or None without one."""
         if self.curriculum_max_curvature <= 0:
             return None
-        from amigo_gym.paths.families import RANDOM_RANGES
-
         given = {str(k): float(v) for k, v in dict(self.env_kwargs.get("path_params") or {}).items()}
         start = {k: r.default for k, r in RANDOM_RANGES.items() if k in ("max_curvature", "max_curvature_rate")}
         start |= given
@@ -307,8 +307,6 @@ class FastPPOSettings:
 def _check_curriculum(s: FastPPOSettings) -> None:
     """One-line errors for a curriculum the env cannot run: a fixed path, a final curvature not above the start, a
     final stage the env's feasibility check refuses (at the highest reference speed)."""
-    from amigo_gym.task import v1 as tracking
-
     o = "FastPPOSettings"
     path = s.env_kwargs.get("path", tracking.TrackingParams.path)
     if path not in ("random", "mixed"):

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import yaml
 
 from amigo_gym.model.params import check_real
 
@@ -314,8 +315,6 @@ def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict
         ValueError: the file is not YAML or has no ``env_id`` mapping.
         FileNotFoundError: no such file.
     """
-    import yaml
-
     try:
         with open(path, encoding="utf-8") as f:
             doc = yaml.safe_load(f)

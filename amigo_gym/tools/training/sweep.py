@@ -13,6 +13,7 @@ import json
 import math
 import os
 import re
+import shutil
 import signal
 import socket
 import subprocess
@@ -28,8 +29,14 @@ from typing import Any, Literal, get_args
 from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
 import numpy as np
+import optuna
+import yaml
+from optuna.study import MaxTrialsCallback
+from optuna.trial import TrialState
+from sqlalchemy.engine import make_url
 
 from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.policies.learned import FastPolicy
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.tools.runs import handling
 from amigo_gym.tools.training.train import ENV_IDS, EnvId
@@ -126,8 +133,6 @@ def public_argv(argv: Sequence[str]) -> list[str]:
 
 def _in_memory(url: str) -> bool:
     """Whether ``url`` is an in-memory SQLite database (private to the process that opens it)."""
-    from sqlalchemy.engine import make_url
-
     u = make_url(url)
     if not u.drivername.startswith("sqlite"):
         return False
@@ -223,30 +228,17 @@ class SweepConfig:
             )
         if self.mode == "hyperparams" and len(self.algos) != 1:
             raise ValueError(f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}")
-        if self.sampler not in ("tpe", "random"):
-            raise ValueError(f"--sampler must be 'tpe' or 'random', got {self.sampler!r}")
-        if self.pruner not in ("median", "none"):
-            raise ValueError(f"--pruner must be 'median' or 'none', got {self.pruner!r}")
-        if self.env_id not in ENV_IDS:
-            raise ValueError(f"--env must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        choices = (("sampler", self.sampler, ("tpe", "random")), ("pruner", self.pruner, ("median", "none")),
+                   ("env", self.env_id, ENV_IDS))  # fmt: skip
+        for flag, value, allowed in choices:
+            if value not in allowed:
+                raise ValueError(f"--{flag} must be one of {list(allowed)}, got {value!r}")
         if self.env_kwargs is not None and not isinstance(self.env_kwargs, dict):
             raise ValueError(f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}")
-        for name, low in (
-            ("n_trials", 1),
-            ("n_jobs", 1),
-            ("timesteps", 1),
-            ("eval_freq", 1),
-            ("eval_episodes", 1),
-            ("heartbeat_interval", 1),
-            ("grace_period", 1),
-            ("max_retry", 0),
-            ("threads", 1),
-            ("n_startup_trials", 0),
-            ("worker_index", 0),
-            ("train_seed", 0),
-            ("val_episodes", 1),
-            ("val_max_steps", 0),
-        ):
+        lows = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
+                "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0,
+                "train_seed": 0, "val_episodes": 1, "val_max_steps": 0}  # fmt: skip
+        for name, low in lows.items():
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
@@ -368,7 +360,6 @@ def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
     ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
-    from amigo_gym.policies.learned import FastPolicy
     from amigo_gym.tools.runs import verify_sha256
 
     model, record = run_dir / "model.zip", run_dir / "run.json"
@@ -397,8 +388,6 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
 def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
     SQLite database, private to its one process, without them."""
-    import optuna.storages as st
-
     url = driver_url(cfg.storage_url)
     engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
@@ -407,7 +396,7 @@ def make_storage(cfg: SweepConfig) -> Any:
     if sqlite:
         # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
         engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
-    retry_cls = getattr(st, "RetryHeartbeatStaleTrialCallback", None)
+    retry_cls = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)
     kwargs: dict[str, Any] = {}
     # an in-memory database lives and dies with its one process: no other worker's death to detect, and the
     # heartbeat's thread would get a connection, hence a database, of its own (without the study's tables)
@@ -416,11 +405,11 @@ def make_storage(cfg: SweepConfig) -> Any:
         if retry_cls is not None:
             kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
         else:  # Optuna < 4.9
-            kwargs["failed_trial_callback"] = st.RetryFailedTrialCallback(max_retry=cfg.max_retry)
+            kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
     last: Exception | None = None
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
-            storage = st.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
+            storage = optuna.storages.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
             break
         except ImportError:
             raise
@@ -462,8 +451,6 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     Raises:
         ValueError: the existing study is of another mode, environment or objective.
     """
-    import optuna
-
     sampler: Any
     if cfg.sampler == "tpe":
         sampler = optuna.samplers.TPESampler(seed=sampler_seed, n_startup_trials=cfg.n_startup_trials)
@@ -527,8 +514,6 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
 
 # --------------------------------------------------------------------------- budget and status
 def _counted(t: Any) -> bool:
-    from optuna.trial import TrialState
-
     if t.state in (TrialState.COMPLETE, TrialState.PRUNED):
         return True
     return bool(t.state == TrialState.FAIL and "fail_reason" in t.user_attrs)
@@ -537,8 +522,6 @@ def _counted(t: Any) -> bool:
 def budget_count(study: Any, before: int | None = None) -> int:
     """Trials that count against the budget: ended (COMPLETE, PRUNED, FAIL by an error), plus RUNNING trials
     with a number below ``before`` (``None``: no RUNNING trial)."""
-    from optuna.trial import TrialState
-
     n = 0
     for t in study.get_trials(deepcopy=False):
         if _counted(t) or (before is not None and t.state == TrialState.RUNNING and t.number < before):
@@ -549,8 +532,6 @@ def budget_count(study: Any, before: int | None = None) -> int:
 def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
     """No queued trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials) and
     no re-queued trial waits."""
-    from optuna.trial import TrialState
-
     waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
     if cfg.mode == "seeds":
         return not waiting
@@ -559,8 +540,6 @@ def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
 
 def study_status(study: Any, budget: int | None = None) -> str:
     """``complete``, ``running`` or ``incomplete`` (module docstring), from the study alone."""
-    from optuna.trial import TrialState
-
     trials = study.get_trials(deepcopy=False)
     if any(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials):
         return "running"
@@ -585,8 +564,6 @@ def mark_abandoned(study: Any) -> list[int]:
 
     Returns the numbers of the trials marked (or updated) now.
     """
-    from optuna.trial import TrialState
-
     trials = study.get_trials(deepcopy=False)
     marked = []
     for t in trials:
@@ -731,6 +708,34 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
+def _write_trial_hp(trial: Any, run_dir: Path, key: str, hp: dict[str, Any]) -> Path:
+    """The trial's hyperparameters as its user attribute and as ``run_dir/hyperparams.yml`` (under ``key``)."""
+    trial.set_user_attr("hyperparams", hp)
+    hp_file = run_dir / "hyperparams.yml"
+    atomic_write(hp_file, yaml.safe_dump({key: hp}, sort_keys=True), parents=True)
+    return hp_file
+
+
+def _reporter(cfg: SweepConfig, trial: Any) -> tuple[Callable[[float, int, int], bool], dict[str, bool]]:
+    """``report(value, at, step)`` for a trial's evaluations (at env-step ``at``): a non-finite value raises
+    ``FloatingPointError``; in hyperparams mode the value goes to the pruner once per ``step``; ``False`` (and the
+    flag ``pruned`` set) when the pruner stops the trial."""
+    state, reported = {"pruned": False}, set()
+
+    def report(value: float, at: int, step: int) -> bool:
+        if not math.isfinite(value):
+            raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
+        if cfg.mode == "hyperparams" and step not in reported:
+            reported.add(step)
+            trial.report(value, step=step)
+            if trial.should_prune():
+                state["pruned"] = True
+                return False
+        return True
+
+    return report, state
+
+
 #: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
 _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
 
@@ -755,9 +760,6 @@ def _validated_trial(
 
 
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
-    import optuna
-    import yaml
-
     from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, load_hyperparams, train
 
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
@@ -802,22 +804,12 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
             hp |= sample_hyperparams(trial, algo, hp)
-        trial.set_user_attr("hyperparams", hp)
-        hp_file = run_dir / "hyperparams.yml"
-        atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
-        pruned = False
+        hp_file = _write_trial_hp(trial, run_dir, cfg.env_id, hp)
+        report, pruned = _reporter(cfg, trial)
 
         def after_eval(entry: dict[str, Any]) -> bool:
-            nonlocal pruned
-            value = float(entry.get("h_rms_m", math.nan))
-            if not math.isfinite(value):
-                raise FloatingPointError(f"evaluation at step {entry['timesteps']} gave h_rms_m {value}")
-            if cfg.mode == "hyperparams":
-                trial.report(value, step=int(entry["timesteps"]))
-                if trial.should_prune():
-                    pruned = True
-                    return False
-            return True
+            step = int(entry["timesteps"])
+            return report(float(entry.get("h_rms_m", math.nan)), step, step)
 
         train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
         s = Settings(
@@ -843,7 +835,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 if key in last:
                     trial.set_user_attr(f"last_eval_{key}", last[key])
             trial.set_user_attr("wall_time_s", record["wall_time_s"])
-            if pruned:
+            if pruned["pruned"]:
                 raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
             return validate_model(run_dir / "run", cells)
 
@@ -855,9 +847,6 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
 def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir: Path, cells: Sequence[Any]) -> float:
     """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
     sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
-    import optuna
-    import yaml
-
     from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
     from amigo_gym.tools.training.fastppo import train as train_fast
     from amigo_gym.tools.training.train import HYPERPARAMS_DIR
@@ -866,9 +855,7 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
     hp = load_settings_yaml(base_file)
     if cfg.mode == "hyperparams":
         hp |= sample_fastppo(trial, cfg.timesteps)
-    trial.set_user_attr("hyperparams", hp)
-    hp_file = run_dir / "hyperparams.yml"
-    atomic_write(hp_file, yaml.safe_dump({YAML_ENV_ID: hp}, sort_keys=True), parents=True)
+    hp_file = _write_trial_hp(trial, run_dir, YAML_ENV_ID, hp)
     run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
     run["threads"] = cfg.threads
     env_kwargs = cfg.train_env_kwargs
@@ -892,25 +879,13 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
     atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
-    pruned = False
-    reported: set[int] = set()
+    report, pruned = _reporter(cfg, trial)
 
     def after_eval(row: dict[str, float]) -> bool:
-        nonlocal pruned
-        value = float(row.get("eval_h_rms_m", math.nan))
-        if not math.isfinite(value):
-            raise FloatingPointError(f"evaluation at step {int(row['env_steps'])} gave h_rms_m {value}")
-        if cfg.mode == "hyperparams":
-            # the pruner compares trials at equal steps: report at the evaluation's scheduled step (a multiple of
-            # --eval-freq), which is the same in every trial whatever its batch size N T
-            step = int(row["env_steps"]) // cfg.eval_freq * cfg.eval_freq
-            if step not in reported:  # the last evaluation (at the budget) may share the step of the one before
-                reported.add(step)
-                trial.report(value, step=step)
-                if trial.should_prune():
-                    pruned = True
-                    return False
-        return True
+        # the pruner compares trials at equal steps: the evaluation's scheduled step (a multiple of --eval-freq), the
+        # same in every trial whatever its batch size N T
+        at = int(row["env_steps"])
+        return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
 
     def log(msg: str) -> None:
         with open(out / "train.log", "a", encoding="utf-8") as f:
@@ -925,7 +900,7 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         trial.set_user_attr("last_eval_timesteps", record["timesteps"])
         trial.set_user_attr("wall_time_s", record["wall_time_s"])
         trial.set_user_attr("train_sps", record["train_sps"])
-        if pruned:
+        if pruned["pruned"]:
             raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
         return validate_fast_model(out, cells)
 
@@ -937,10 +912,6 @@ def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any]
     parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
     ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
     was); which trial it came from (``None``: none found, the run starts afresh)."""
-    import shutil
-
-    from optuna.trial import TrialState
-
     best: tuple[float, Any, Path] | None = None
     for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
         ua = t.user_attrs
@@ -977,10 +948,6 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
     ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
     ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
     """
-    import optuna
-    from optuna.study import MaxTrialsCallback
-    from optuna.trial import TrialState
-
     cfg.validate()
     sampler_seed = _worker_seed(cfg)
     storage = make_storage(cfg)
@@ -1013,8 +980,6 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     """The study as the summary states it (module docstring): from the study alone, the same for every worker."""
-    from optuna.trial import TrialState
-
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
     states = {s.name: sum(t.state == s for t in trials) for s in TrialState}
     best = None
@@ -1103,9 +1068,6 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
     The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
     trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
     file's)."""
-    import yaml
-    from optuna.trial import TrialState
-
     done = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE and t.value is not None]
     if not done:
         return None
@@ -1183,8 +1145,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     url = cfg.storage_url
 
     def run() -> int:
-        import optuna
-
         interrupted = False
         failed: list[str] = []
         opened: list[Any] = []
