@@ -13,8 +13,6 @@ from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
-__all__ = ["bits_key", "cpu_model", "machine_line", "simd_level"]
-
 #: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, numpy >= 2.4 naming them
 #: ``X86_V4`` ... too, then ARM)
 _LEVELS = (

@@ -16,22 +16,6 @@ from typing import Any, Literal, NoReturn, TypeVar, Union, get_args, get_origin,
 
 T = TypeVar("T")
 
-__all__ = [
-    "HelpFormatter",
-    "OneLineParser",
-    "add_dataclass_options",
-    "attribute_help",
-    "cli",
-    "install_hint",
-    "json_object",
-    "missing_modules",
-    "parse_bool",
-    "parse_settings",
-    "run_command",
-    "run_guarded",
-    "settings_from_args",
-]
-
 
 class HelpFormatter(argparse.HelpFormatter):
     """Appends ``(default: X)`` to an option's help unless the help already names its default.

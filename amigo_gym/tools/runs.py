@@ -34,31 +34,6 @@ from amigo_gym.io import (
     vouch,
 )
 
-__all__ = [
-    "CHECKPOINTS",
-    "LOCK_NAME",
-    "POINTER",
-    "Checkpoint",
-    "CorruptFileError",
-    "RunLock",
-    "RunLockedError",
-    "check_pickle",
-    "clean_temporaries",
-    "remove_matching",
-    "handling",
-    "has_run_files",
-    "is_current_lock",
-    "load_checkpoint",
-    "publish",
-    "read_json",
-    "restore_snapshot",
-    "save_checkpoint",
-    "sha256_file",
-    "verify_manifest",
-    "verify_sha256",
-    "vouch",
-]
-
 LOCK_NAME = "run.lock"
 POINTER = "checkpoint.json"
 CHECKPOINTS = "checkpoints"

@@ -23,8 +23,6 @@ from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.tools.options import parse_settings, run_guarded
 
-__all__ = ["GainFit", "Settings", "halving_times", "main"]
-
 
 @dataclass(frozen=True)
 class GainFit:

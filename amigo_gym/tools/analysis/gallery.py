@@ -22,8 +22,6 @@ from amigo_gym.envs.rendering import headless
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = ["GALLERY", "GallerySettings", "render_family", "main"]
-
 PROG = "amigo-gym gallery"
 
 #: name -> (keyword arguments of gym.make("AmigoBot-v1"), steps)

@@ -39,8 +39,6 @@ from amigo_gym.task.inverse import (
 )
 from amigo_gym.tools.options import run_command
 
-__all__ = ["FIG2", "FIG3", "CSV", "Settings", "Phase", "phases", "run", "main"]
-
 PROG = "amigo-gym paper"
 FIG2 = "paper_fig2_angles.png"
 FIG3 = "paper_fig3_rates.png"

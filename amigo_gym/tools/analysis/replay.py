@@ -45,17 +45,6 @@ from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = [
-    "IdentifySettings",
-    "LogSettings",
-    "ReplaySettings",
-    "main_identify",
-    "main_replay",
-    "plot",
-    "trajectory_csv",
-    "write_folder",
-]
-
 
 def trajectory_csv(log: Log, rep: Replay) -> str:
     """The side-by-side table of ``trajectory.csv`` (module docstring) as CSV text."""

@@ -37,8 +37,6 @@ from amigo_gym.paths import CirclePath
 from amigo_gym.task.inverse import paper_circle
 from amigo_gym.tools.options import parse_settings, run_guarded
 
-__all__ = ["Check", "VerifySettings", "main", "round_trip_error", "rows"]
-
 #: the steady state of the default circle (R = 1 m, v_A = 0.2 m/s), to 6 decimals as docs/model.md tabulates it
 STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
 ROBOT = RobotParams()

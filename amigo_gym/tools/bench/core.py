@@ -30,23 +30,6 @@ from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.options import run_command
 
-__all__ = [
-    "CoreSettings",
-    "Row",
-    "Startup",
-    "euler_step",
-    "v0_columns",
-    "kernel_stepper",
-    "loop_step",
-    "measure",
-    "measure_many",
-    "bench",
-    "bench_startup",
-    "format_table",
-    "main",
-    "run",
-]
-
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
 DEFAULT_SIZES = (1, 64, 1024, 4096, 16384, 65536)

@@ -29,33 +29,6 @@ from amigo_gym.tools.bench.core import _fmt, measure_many
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
 from amigo_gym.tools.options import run_command
 
-__all__ = [
-    "EnvSettings",
-    "SingleResult",
-    "VectorRow",
-    "MemoryResult",
-    "PPORow",
-    "V1Result",
-    "KernelRow",
-    "Target",
-    "Report",
-    "bench_single",
-    "bench_vector",
-    "bench_memory",
-    "bench_ppo",
-    "bench_v1",
-    "bench_kernels",
-    "targets",
-    "format_report",
-    "format_kernels",
-    "format_targets",
-    "numba_state",
-    "load_average",
-    "plot_vector",
-    "main",
-    "run",
-]
-
 PROG = "amigo-gym bench-env"
 DEFAULT_SIZES = (1, 64, 1024, 4096, 65536)
 QUICK_SIZES = (1, 64, 1024)

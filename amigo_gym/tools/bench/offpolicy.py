@@ -15,8 +15,6 @@ import numpy as np
 
 from amigo_gym.data import hyperparams_dir
 
-__all__ = ["ALGOS", "CONFIGS", "DeterministicPolicy", "algo_class", "bench_offpolicy", "make_model", "offpolicy_config"]
-
 #: the off-policy algorithms measured: name -> (module, class)
 ALGOS: dict[str, tuple[str, str]] = {
     "sac": ("stable_baselines3", "SAC"),

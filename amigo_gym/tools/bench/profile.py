@@ -28,8 +28,6 @@ from amigo_gym.tools.bench.core import measure_many
 from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
 from amigo_gym.tools.options import run_command
 
-__all__ = ["ProfileSettings", "gap", "profile_steps", "single_parts", "main", "run"]
-
 PROG = "python -m amigo_gym.tools.bench.profile"
 
 

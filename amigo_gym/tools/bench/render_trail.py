@@ -27,8 +27,6 @@ from amigo_gym.tools.bench.core import measure_many
 from amigo_gym.tools.bench.env import _vector_stepper
 from amigo_gym.tools.options import cli, run_command
 
-__all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
-
 PROG = "python -m amigo_gym.tools.bench.render_trail"
 
 MiB = 2**20

@@ -24,8 +24,6 @@ from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.tools.machine import cpu_model, simd_level
 from amigo_gym.tools.options import run_command
 
-__all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
-
 PROG = "amigo-gym bench-train"
 
 

@@ -36,8 +36,6 @@ from amigo_gym.task.inverse import (
 )
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = ["InverseSettings", "main"]
-
 PROG = "amigo-gym inverse"
 
 #: default duration of a circle run without braking [s]: more than one lap of the default circle (31.3 s)

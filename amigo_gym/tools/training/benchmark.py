@@ -34,37 +34,9 @@ from amigo_gym.tools.training.task_metrics import (
     SUITE_VERSION,
     Scenario,
     Unavailable,
-    make_env,
     run_grid,
     run_scenario,
 )
-
-__all__ = [
-    "CLASSICAL",
-    "H_TARGET_M",
-    "QUICK_SCENARIOS",
-    "SUITE",
-    "SUITES",
-    "SUITE_VERSION",
-    "TRAINING_DISTRIBUTION",
-    "RETIRED_V1_AGENTS",
-    "V1_AGENTS",
-    "AgentSpec",
-    "BenchmarkSettings",
-    "Scenario",
-    "Unavailable",
-    "agent_label",
-    "aggregate",
-    "default_agents",
-    "evaluate",
-    "main",
-    "make_env",
-    "markdown_report",
-    "parse_agents",
-    "quick_suite",
-    "run_benchmark",
-    "write_outputs",
-]
 
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy

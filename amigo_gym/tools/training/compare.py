@@ -25,22 +25,6 @@ from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail earl
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = [
-    "MANIFEST",
-    "TARGETS",
-    "agent_legend",
-    "display_command",
-    "main",
-    "publish",
-    "quick_benchmark",
-    "report_markdown",
-    "CompareSettings",
-    "run_compare",
-    "summary_text",
-    "v0_name",
-    "verify_outputs",
-]
-
 MANIFEST = "manifest.json"
 
 #: targets for the best learned agent on the perturbed scenario
@@ -285,7 +269,8 @@ def quick_benchmark(
 
 def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
     """What the fresh PPO run must have been trained with to be reused (compared with its ``config.json``)."""
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, load_hyperparams, versions
+    from amigo_gym.tools.training.hyperparams import load_hyperparams
+    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
 
     return {
         "algo": "ppo",

@@ -16,21 +16,8 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.task.v1 import feasible_random_curvature
-from amigo_gym.tools.training.intervals import Z95, wilson_interval
+from amigo_gym.tools.training.intervals import wilson_interval
 from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
-
-__all__ = [
-    "BIN_EDGES",
-    "CURVATURE_EPISODES",
-    "CURVATURE_SPEEDS",
-    "LEVELS",
-    "Z95",
-    "bin_table",
-    "cell_specs",
-    "markdown_curvature",
-    "run_curvature",
-    "wilson_interval",
-]
 
 #: speeds of the cells [m/s]: the ends of the training distribution's range
 CURVATURE_SPEEDS: tuple[float, ...] = (0.1, 0.4)

@@ -20,24 +20,6 @@ import numpy as np
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = [
-    "AXES",
-    "CURVE_METRICS",
-    "CurvesSettings",
-    "DEFAULT_THRESHOLD_M",
-    "THRESHOLD_METRIC",
-    "Run",
-    "curve",
-    "find_runs",
-    "learning_curves",
-    "main",
-    "markdown_report",
-    "plot_curves",
-    "threshold_time",
-    "threshold_summary",
-    "write_outputs",
-]
-
 #: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
 THRESHOLD_METRIC = "h_rms_settled_m"
 #: the tracking threshold [m], fixed in advance (module docstring)

@@ -29,25 +29,6 @@ from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
 
-__all__ = [
-    "Agent",
-    "EvalProtocol",
-    "EvaluateSettings",
-    "Trajectory",
-    "default_agents",
-    "evaluate_agents",
-    "find_models",
-    "load_agents",
-    "load_model",
-    "main",
-    "markdown_table",
-    "plot_trajectories",
-    "plot_wheels",
-    "rollout",
-    "steady_start_pose",
-    "summarize",
-]
-
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
 PRETRAINED_DIR = pretrained_dir()

@@ -73,23 +73,6 @@ from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
 from amigo_gym.tools.training.train import git_revision, versions
 
-__all__ = [
-    "DEVICES",
-    "YAML_ENV_ID",
-    "YAML_RUN_KEYS",
-    "ActorCritic",
-    "FastPPOSettings",
-    "HyperparamsFile",
-    "TrainFastRun",
-    "curriculum_path_params",
-    "evaluate_policy",
-    "load_settings_yaml",
-    "machine_record",
-    "main",
-    "resolve_device",
-    "train",
-]
-
 Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
 #: values of ``--device``

@@ -24,17 +24,6 @@ import yaml
 
 from amigo_gym.model.params import check_real
 
-__all__ = [
-    "ENV_ID",
-    "META_KEYS",
-    "TORCH_NAMES",
-    "Hyperparams",
-    "check_filter_alpha",
-    "load_hyperparams",
-    "parse_hyperparams",
-    "parse_python_literal",
-]
-
 ENV_ID = "AmigoBot-v0"
 
 #: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.tools.training.sb3_lowpass.POLICY_NAME`)

@@ -22,17 +22,6 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "DEFAULT_PROFILE_REPS",
-    "DEFAULT_REPS",
-    "iqm",
-    "optimality_gap",
-    "performance_profile",
-    "score_distribution",
-    "stratified_bootstrap",
-    "wilson_interval",
-]
-
 Array = NDArray[np.float64]
 Stat = Callable[[Array], Array]
 

@@ -25,8 +25,6 @@ from amigo_gym.task.v1 import TrackingParams, obs_fields
 from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY as POLICY_NAME
 from amigo_gym.tools.training.hyperparams import check_filter_alpha
 
-__all__ = ["POLICY_NAME", "LowPassActor", "LowPassTD3Policy", "policy_for", "previous_command_index"]
-
 
 def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
     """The checked ``(alpha, (i1, i2))``: ``alpha`` a finite number in (0, 1], two distinct indices in

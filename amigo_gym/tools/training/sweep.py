@@ -41,30 +41,6 @@ from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarde
 from amigo_gym.tools.runs import handling
 from amigo_gym.tools.training.train import ENV_IDS, EnvId
 
-__all__ = [
-    "ABANDONED",
-    "VALIDATION_SEED_BASE",
-    "SWEEP_ALGOS",
-    "SweepConfig",
-    "budget_count",
-    "driver_url",
-    "main",
-    "make_storage",
-    "mark_abandoned",
-    "masked_url",
-    "open_study",
-    "run_worker",
-    "sample_fastppo",
-    "sample_hyperparams",
-    "scrub",
-    "study_status",
-    "summarize",
-    "validate_agent",
-    "validation_cells",
-    "write_best_yaml",
-    "write_summary",
-]
-
 Mode = Literal["hyperparams", "seeds"]
 MODES = get_args(Mode)
 #: the algorithms a sweep trains: SB3's (:mod:`amigo_gym.tools.training.train`) and the fast PPO
@@ -485,7 +461,8 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
         elif cfg.enqueue_base:
-            from amigo_gym.tools.training.train import HYPERPARAMS_DIR, load_hyperparams
+            from amigo_gym.tools.training.hyperparams import load_hyperparams
+            from amigo_gym.tools.training.train import HYPERPARAMS_DIR
 
             algo = cfg.algos[0]
             base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
@@ -760,7 +737,8 @@ def _validated_trial(
 
 
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, load_hyperparams, train
+    from amigo_gym.tools.training.hyperparams import load_hyperparams
+    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, train
 
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
     env_kwargs = cfg.train_env_kwargs

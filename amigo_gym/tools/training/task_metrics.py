@@ -21,25 +21,6 @@ from numpy.typing import NDArray
 from amigo_gym.envs.base import info_row
 from amigo_gym.io import json_safe
 
-__all__ = [
-    "DEFAULT_FAILURE_TOLERANCE_M",
-    "DEFAULT_SETTLE_TIME_S",
-    "METRIC_NAMES",
-    "SUITE_VERSION",
-    "EpisodeRecorder",
-    "InfoAdapter",
-    "Scenario",
-    "StepSample",
-    "Unavailable",
-    "Grid",
-    "episode_metrics",
-    "make_env",
-    "run_grid",
-    "run_scenario",
-    "run_vector_episodes",
-    "vector_env",
-]
-
 Array = NDArray[np.float64]
 
 #: start of the "settled" window [s] of the ``*_settled`` metrics and of the failure test

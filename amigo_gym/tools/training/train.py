@@ -25,22 +25,12 @@ import numpy as np
 from amigo_gym import __version__
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.envs.amigobot import make_env_params
-from amigo_gym.io import atomic_save, atomic_write_json, fault_point
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_file, vouch
 from amigo_gym.model.params import EnvParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY, Hyperparams, load_hyperparams, parse_hyperparams
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter
-
-__all__ = [
-    "ALGOS",
-    "HYPERPARAMS_DIR",
-    "Settings",
-    "git_revision",
-    "load_hyperparams",
-    "main",
-    "train",
-]
 
 Algo = Literal["ppo", "sac", "td3"]
 #: the environments a run can train on
@@ -588,15 +578,15 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         "versions": versions(),
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
-        "sha256": runs.sha256_file(out / "model.zip"),
+        "sha256": sha256_file(out / "model.zip"),
     }
     # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
     record["files"] = {
-        name: runs.sha256_file(out / name)
+        name: sha256_file(out / name)
         for name in ("model.zip", "best_model.zip", VECNORMALIZE)
         if (out / name).is_file()
     }
-    runs.vouch(*record["files"].values())  # written here: loading them again needs no trust flag
+    vouch(*record["files"].values())  # written here: loading them again needs no trust flag
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
@@ -608,7 +598,7 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
             src = out / "best_model.zip"
             best = max(evals, key=lambda e: e["mean_reward"])
             exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
-        exported["sha256"] = runs.sha256_file(src)
+        exported["sha256"] = sha256_file(src)
         atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip", parents=True)
         atomic_write_json(exp / f"{s.algo}.json", record | exported, parents=True)
     venv.close()
