@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.tools.options import parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
 
 
 @dataclass(frozen=True)
@@ -113,10 +113,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
 
 
 def _plot(rows: list[GainFit], path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7.0, 3.8), layout="constrained")
     for i, row in enumerate(rows):
@@ -130,8 +127,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
     ax.set_ylim(1e-12, 0.05)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

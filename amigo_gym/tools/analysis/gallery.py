@@ -21,6 +21,7 @@ import numpy as np
 from amigo_gym.envs.rendering import headless
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot
 
 PROG = "amigo-gym gallery"
 
@@ -83,10 +84,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
 
     def run() -> int:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = pyplot()
 
         headless()
         out = Path(args.out)

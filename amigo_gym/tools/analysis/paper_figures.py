@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.io import atomic_save
 from amigo_gym.model.params import RobotParams, check_range
 from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
@@ -38,6 +37,7 @@ from amigo_gym.task.inverse import (
     time_grid,
 )
 from amigo_gym.tools.options import run_command
+from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym paper"
 FIG2 = "paper_fig2_angles.png"
@@ -133,10 +133,6 @@ def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath)
     return out
 
 
-def _save(fig: Any, target: str, dpi: int) -> None:
-    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), target)
-
-
 def _shade(ax: Any, ph: list[Phase]) -> None:
     colours = ("#f2f2f2", "#ffffff")
     for i, p in enumerate(ph):
@@ -157,10 +153,7 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
 
 def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str]]:
     """Solve the manoeuvre, write the two figures and the CSV; return the solution, phases and paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     robot = RobotParams()
     os.makedirs(settings.out, exist_ok=True)
@@ -203,8 +196,7 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
         ax.set_xlim(sol.t[0], sol.t[-1])
         ax.legend(loc="upper left" if key == "fig2" else "lower center", fontsize=None if key == "fig2" else 8)
         fig.suptitle(f"Wheel {what.split()[0]}s (cf. paper Fig. {fig_no}): " + title, fontsize=9)
-        _save(fig, files[key], settings.dpi)
-        plt.close(fig)
+        save_figure(fig, files[key], settings.dpi)
 
     sol.to_csv(files["csv"])
     return sol, ph, files

@@ -44,6 +44,7 @@ from amigo_gym.logs import Fit, Log, Replay, errors, identify, noise_level, read
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
 
 
 def trajectory_csv(log: Log, rep: Replay) -> str:
@@ -76,10 +77,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
 
     ``reps``: ``(label, replay)`` pairs; the last one is drawn in full colour, the others thin.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig = plt.figure(figsize=(10.0, 7.0), layout="constrained")
     grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.4))
@@ -134,8 +132,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
     ax_e.legend(fontsize=7, loc="best")
     ax_e.set_title("error over time", fontsize=9)
     fig.suptitle(title, fontsize=9)
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def check_out(out: Path, force: bool) -> None:

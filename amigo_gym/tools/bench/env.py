@@ -22,12 +22,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.io import atomic_save, atomic_write_json
+from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.tools.bench.core import _fmt, measure_many
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
 from amigo_gym.tools.options import run_command
+from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym bench-env"
 DEFAULT_SIZES = (1, 64, 1024, 4096, 65536)
@@ -741,10 +742,7 @@ def format_report(report: Report) -> str:
 def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None) -> None:
     """Env-steps/s against N (log-log): the native env (per step implementation), CartPole, Sync, and with
     ``v1`` the native AmigoBot-v1 vector env (its default task and the hard one, :data:`V1_HARD`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     ns = [r.n for r in rows]
@@ -771,8 +769,7 @@ def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=120, format="png"), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 # ---------------------------------------------------------------------------------------------- tables

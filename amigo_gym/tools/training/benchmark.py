@@ -23,12 +23,13 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths.points import cached_file_path, is_points_file
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import remove_matching
 from amigo_gym.tools.training.task_metrics import (
     SUITE_VERSION,
@@ -723,20 +724,13 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
     """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
     (:func:`scenarios_figure`), saved as PNG."""
-    import matplotlib.pyplot as plt
-
-    fig = scenarios_figure(doc, reps, seed)
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(scenarios_figure(doc, reps, seed), path)
 
 
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
     """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
     the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     from amigo_gym.tools.training.intervals import stratified_bootstrap
 
@@ -775,10 +769,7 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
 
 def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     """Performance profiles: fraction of (seed, scenario) runs with H RMS below tau, with bootstrap bands."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     prof = doc["performance_profiles"]
     taus = np.asarray(prof["taus_m"])
@@ -793,8 +784,7 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     ax.set_title("Performance profiles (rliable score distributions)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 #: the manifest naming a published set of benchmark outputs (in ``--out``)

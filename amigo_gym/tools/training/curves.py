@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json
+from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
 
 #: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
 THRESHOLD_METRIC = "h_rms_settled_m"
@@ -337,10 +338,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 
 def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
     """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
@@ -372,8 +370,7 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
         fontsize=8,
     )
     fig.tight_layout(rect=(0, 0.04, 1, 0.96))
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:

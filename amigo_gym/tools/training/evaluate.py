@@ -21,12 +21,13 @@ from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.envs.base import info_row
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.model.kinematics import a_from_h, circle_steady_state
 from amigo_gym.model.params import EnvParams, check_range
 from amigo_gym.paths import make_path
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
 
 Array = NDArray[np.float64]
@@ -468,10 +469,6 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _save_fig(fig: Any, path: Path) -> None:
-    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=110), path, parents=True)
-
-
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
     """H's path (whole circle and a zoom on the start, first perturbed episode) and ``|e|`` over time.
 
@@ -479,10 +476,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
     0.25 m where the perturbed start's transient happens. Bottom: ``|e(t)|`` (log scale) for the nominal
     and the first perturbed start; the dotted line is the 1 mm band of ``settling_time_s``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
     top = "perturbed" if "perturbed" in have else sorted(have)[0]
@@ -516,8 +510,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
         ax.set_title(f"tracking error, {sc} start")
         ax.legend(fontsize=8)
     fig.tight_layout()
-    _save_fig(fig, path)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_wheels(
@@ -530,10 +523,7 @@ def plot_wheels(
     ``alpha1dot, alpha2dot`` [rad/s] over the first 10 s with the closed-form steady rates dotted;
     right, the agent's wheel angles minus the analytic policy's [rad] over the whole episode.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     if "analytic" not in trajs:
         raise ValueError("plot_wheels needs the 'analytic' agent as the reference")
@@ -572,8 +562,7 @@ def plot_wheels(
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.tight_layout()
-    _save_fig(fig, path)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 # --------------------------------------------------------------------------- files
