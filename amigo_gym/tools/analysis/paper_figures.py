@@ -1,15 +1,9 @@
 """The paper's manoeuvre, "starting, driving straight, driving on circular curve, braking" (its Figs 2, 3).
 
-``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`)
-for H on the manoeuvre path and writes
-
-* ``DIR/paper_fig2_angles.png``: wheel angles alpha1 (blue) and alpha2 (red) against time, as Fig. 2;
-* ``DIR/paper_fig3_rates.png``: their rates, as Fig. 3, with the closed-form steady state on the circle dotted;
-* ``DIR/paper_manoeuvre.csv``: every column of the solution (SI units, radians).
-
-The phases are shaded and labelled in both plots. The default path and speed profile (the paper gives neither
-timing nor radius) and why: docs/core.md; every setting is an option (``--help``).
-"""
+``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`) for H on
+the manoeuvre path and writes ``DIR/paper_fig2_angles.png`` (wheel angles, as Fig. 2), ``DIR/paper_fig3_rates.png``
+(their rates, as Fig. 3, the closed-form steady state dotted) and ``DIR/paper_manoeuvre.csv`` (every column, SI units,
+radians), the phases shaded. The default path and speed profile and why: docs/core.md."""
 
 from __future__ import annotations
 

@@ -1,14 +1,9 @@
 """``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
 
-At ``--n`` robots on ``--path`` (``"mixed"``: hard randomisation, as training runs), with and without rendering,
-the same seeds and actions:
-
-* **memory growth** [MiB] of the resident memory (``/proc/self/statm``) over ``--steps`` steps from ``reset``,
-  each measurement in a fresh subprocess; target <= 20 MiB with rendering;
-* **step time**, interleaved repeats (:func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
-
-Prints one line per figure; ``--json FILE`` writes them (atomically). The figures: docs/amigobot_v1.md.
-"""
+At ``--n`` robots on ``--path``, with and without rendering (same seeds and actions): the growth of the resident memory
+[MiB] over ``--steps`` steps (each in a fresh subprocess; target <= 20 MiB) and the step-time ratio
+(:func:`amigo_gym.tools.bench.core.measure_many`; target <= 1.1). ``--json FILE`` writes them. The figures:
+docs/amigobot_v1.md."""
 
 from __future__ import annotations
 

@@ -284,25 +284,20 @@ class AgentSpec:
         """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
         if self.path is None:
             return CLASSICAL[self.name](env)
-        if self._model is None:
-            from amigo_gym.tools.runs import check_pickle, corrupt_errors, verify_sha256
-
-            # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
-            digest = (self.manifest or {}).get("sha256")
-            path = Path(self.path)
+        if self._model is None:  # checked before it is opened against the manifest's sha256 (and trusted if SB3's)
+            path, record = Path(self.path), Path(self.path).with_suffix(".json")
             if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
                 from amigo_gym.policies.learned import FastPolicy
+                from amigo_gym.tools.runs import verify_sha256
 
-                if digest is not None:
-                    verify_sha256(path, str(digest), str(path.with_suffix(".json")))
+                if (digest := (self.manifest or {}).get("sha256")) is not None:
+                    verify_sha256(path, str(digest), str(record))
                 self._model = FastPolicy.load(self.path)
             else:
-                check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
-                from stable_baselines3 import PPO, SAC, TD3
+                from amigo_gym.tools.training.evaluate import ModelRef, load_model
 
-                cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
-                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
-                    self._model = cls.load(self.path, device="cpu")
+                ref = ModelRef(self.name, str(self.algo), path, record if record.is_file() else None)
+                self._model = load_model(ref)
         if str(self.algo).startswith(FAST_ALGO):
             dim = self._model.builder.obs_dim
             if getattr(env.observation_space, "shape", None) != (dim,):

@@ -360,11 +360,9 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
         UntrustedFileError: a file not trusted (one line naming it and the flag).
     """
-    from stable_baselines3 import PPO, SAC, TD3
-
     from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+    from amigo_gym.tools.training.hyperparams import sb3_class
 
-    classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
     record = read_json(ref.record) if ref.record is not None else None
     if record is not None and not isinstance(record, dict):
         raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
@@ -379,7 +377,7 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record), trust)
     check_pickle(ref.model, None if digest is None else str(digest), str(ref.record), trust)
     with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
-        model = classes[ref.algo].load(ref.model, device="cpu")
+        model = sb3_class(ref.algo).load(ref.model, device="cpu")
     if ref.vecnormalize is None:
         agent: Agent = model
         return agent

@@ -7,7 +7,7 @@ with :mod:`ast`, never evaluated: only literals, lists, tuples, dicts, ``dict(..
 keywords, ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``, and ``lin_<x>`` linear
 schedules for ``learning_rate`` and ``clip_range``. Every other key must be a keyword argument of
 the algorithm's SB3 class; unknown keys are refused in one line that lists them (``ValueError``), so
-that ``train`` can check a file before it writes anything. PyYAML, torch and SB3 are imported lazily.
+that ``train`` can check a file before it writes anything. torch and SB3 are imported lazily.
 """
 
 from __future__ import annotations
@@ -187,11 +187,15 @@ class Hyperparams:
         return OrnsteinUhlenbeckActionNoise(mean, sigma)
 
 
-def _algo_keywords(algo: str) -> set[str]:
-    from stable_baselines3 import PPO, SAC, TD3
+def sb3_class(algo: str) -> Any:
+    """SB3's class of ``algo`` (``ppo``, ``sac``, ``td3``: ``PPO``, ``SAC``, ``TD3``)."""
+    import stable_baselines3
 
-    cls: type = {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
-    return set(inspect.signature(cls).parameters) - {"self", *RESERVED}
+    return getattr(stable_baselines3, algo.upper())
+
+
+def _algo_keywords(algo: str) -> set[str]:
+    return set(inspect.signature(sb3_class(algo)).parameters) - {"self", *RESERVED}
 
 
 def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:

@@ -29,7 +29,13 @@ from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_fil
 from amigo_gym.model.params import EnvParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY, Hyperparams, load_hyperparams, parse_hyperparams
+from amigo_gym.tools.training.hyperparams import (
+    LOWPASS_POLICY,
+    Hyperparams,
+    load_hyperparams,
+    parse_hyperparams,
+    sb3_class,
+)
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter
 
 Algo = Literal["ppo", "sac", "td3"]
@@ -456,10 +462,9 @@ def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[st
 
 def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
-    from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
 
-    algo_cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[s.algo]
+    algo_cls = sb3_class(s.algo)
     out = Path(s.out)
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     hp = load_hyperparams(hp_path, s.env_id)
