@@ -22,6 +22,7 @@ from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.tools.options import parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.training.evaluate import rollout
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,6 @@ def halving_times(settings: Settings) -> list[GainFit]:
         ValueError: on a bad window, or if an episode leaves the path.
     """
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-    from amigo_gym.tools.training.evaluate import rollout
 
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)

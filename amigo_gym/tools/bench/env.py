@@ -21,6 +21,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+from llvmlite import binding
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
@@ -567,7 +568,6 @@ def numba_state() -> str:
     if not numba_available():
         return "numba not installed"
     import numba
-    from llvmlite import binding
 
     target = getattr(numba.config, "CPU_NAME", None) or binding.get_host_cpu_name()
     svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.data import hyperparams_dir
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.hyperparams import load_hyperparams
 
 #: the off-policy algorithms measured: name -> (module, class)
 ALGOS: dict[str, tuple[str, str]] = {
@@ -51,8 +53,6 @@ def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
     SAC and TD3 read ``agents/hyperparams/<algo>.yml``; CrossQ and TQC read ``sac.yml`` (CrossQ without ``tau``).
     The result has ``n_envs``, ``noise_type``/``noise_std`` (TD3) and the keyword arguments of the class.
     """
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-
     if config not in CONFIGS:
         raise ValueError(f"offpolicy: configuration must be one of {', '.join(CONFIGS)}, got {config!r}")
     algo_class(algo)  # checks the name
@@ -85,7 +85,6 @@ def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> An
 def _venv(n_envs: int, seed: int) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
     kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])

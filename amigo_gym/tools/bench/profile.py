@@ -24,7 +24,7 @@ from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 from amigo_gym.model.params import EnvParams, check_range
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
-from amigo_gym.tools.bench.core import measure_many
+from amigo_gym.tools.bench.core import kernel_stepper, measure_many
 from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
 from amigo_gym.tools.options import run_command
 
@@ -66,8 +66,6 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
-    from amigo_gym.tools.bench.core import kernel_stepper
-
     quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
     bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
     pose = np.zeros((n, 3))

@@ -30,7 +30,11 @@ from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
-from amigo_gym.tools.runs import remove_matching
+from amigo_gym.tools.runs import RunLock, publish, remove_matching, verify_manifest
+from amigo_gym.tools.training import curvature
+from amigo_gym.tools.training.curvature import cell_specs
+from amigo_gym.tools.training.evaluate import one_torch_thread
+from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import (
     SUITE_VERSION,
     Scenario,
@@ -518,8 +522,6 @@ def aggregate(
     seed: int = 0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Per-agent aggregates and H-error performance profiles (module docstring)."""
-    from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-
     aggregates: dict[str, Any] = {}
     profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
     keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
@@ -727,8 +729,6 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
     the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
     plt = pyplot()
 
-    from amigo_gym.tools.training.intervals import stratified_bootstrap
-
     scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
     agents = list(doc["aggregates"])
     size = (min(18.0, max(6.0, 0.45 * len(scen) + 2.0)) + 1.6, 4.8)  # at most 19.6 in wide: fits a page
@@ -805,8 +805,6 @@ def write_outputs(
     last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
     ``publish:<file name>`` after each move.
     """
-    from amigo_gym.tools.runs import publish
-
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
     try:
@@ -827,8 +825,6 @@ def write_outputs(
 def verify_outputs(out: Path) -> dict[str, str]:
     """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
     (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
-    from amigo_gym.tools.runs import verify_manifest
-
     return verify_manifest(out, MANIFEST)
 
 
@@ -901,8 +897,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = "amigo-gym benchmark " + " ".join(args)
 
     def run() -> int:
-        from amigo_gym.tools.training.evaluate import one_torch_thread
-
         one_torch_thread()
         suite = SUITES[a.suite]
         if a.table_from is not None:
@@ -934,8 +928,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "benchmark.json"
         md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
-        from amigo_gym.tools.runs import RunLock
-
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
             clean_temporaries(out)
             doc = run_benchmark(
@@ -960,16 +952,11 @@ def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
     """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`: random paths up to the
     feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
     suite."""
-    from amigo_gym.tools.training.curvature import cell_specs
-
     return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
 
 
 def _run_curvature(a: BenchmarkSettings, command: str) -> int:
     """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.tools.training.curvature`)."""
-    from amigo_gym.tools.runs import RunLock
-    from amigo_gym.tools.training import curvature
-
     if a.path or a.scenarios:
         raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
     scenarios = curvature_scenarios(a.curvature_episodes)

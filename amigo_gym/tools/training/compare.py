@@ -24,6 +24,28 @@ from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.training.benchmark import (
+    ALGOS,
+    CLASSICAL,
+    RETIRED_V1_AGENTS,
+    V1_AGENTS,
+    AgentSpec,
+    parse_agents,
+    quick_suite,
+    run_benchmark,
+)
+from amigo_gym.tools.training.evaluate import (
+    EvalProtocol,
+    default_agents,
+    evaluate_agents,
+    find_models,
+    load_model,
+    markdown_table,
+    one_torch_thread,
+    write_outputs,
+)
+from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
 
 MANIFEST = "manifest.json"
 
@@ -35,8 +57,6 @@ ANALYTIC = ("analytic", "analytic_ff")
 def v0_name(name: str) -> str:
     """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
     ``amigo-gym benchmark`` names them; its v1 generalists are ``<algo>_v1``), a run's own name otherwise."""
-    from amigo_gym.tools.training.benchmark import ALGOS
-
     return f"{name}_v0" if name in ALGOS else name
 
 
@@ -44,8 +64,6 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
     """One line per agent name of a report: what it is (every name a report prints is explained; the v1
     generalists by the label of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS` or, retired,
     :data:`~amigo_gym.tools.training.benchmark.RETIRED_V1_AGENTS`: "SB3 TD3 low-pass", "fast PPO", "SB3 PPO")."""
-    from amigo_gym.tools.training.benchmark import RETIRED_V1_AGENTS, V1_AGENTS
-
     fixed = {
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
         "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
@@ -98,8 +116,6 @@ def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed")
 
 def report_markdown(doc: dict[str, Any]) -> str:
     """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
-    from amigo_gym.tools.training.evaluate import markdown_table
-
     proto = doc["protocol"]
     lines = [
         "# AmigoBot-v0: learned agents against the analytic inverse solution",
@@ -241,15 +257,6 @@ def quick_benchmark(
         generalists: a folder of AmigoBot-v1 generalists (``<models>/v1``), if any: its ``<folder>/*.zip`` for
             every folder of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``.
     """
-    from amigo_gym.tools.training.benchmark import (
-        CLASSICAL,
-        V1_AGENTS,
-        AgentSpec,
-        parse_agents,
-        quick_suite,
-        run_benchmark,
-    )
-
     specs: list[AgentSpec] = []
     for name, agent in agents.items():
         if name in CLASSICAL:
@@ -269,9 +276,6 @@ def quick_benchmark(
 
 def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
     """What the fresh PPO run must have been trained with to be reused (compared with its ``config.json``)."""
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
-
     return {
         "algo": "ppo",
         "timesteps": train_steps,
@@ -379,15 +383,6 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     out, models = Path(s.out), Path(s.models) if s.models else None
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
     train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
-    from amigo_gym.tools.training.evaluate import (
-        EvalProtocol,
-        default_agents,
-        evaluate_agents,
-        find_models,
-        load_model,
-        write_outputs,
-    )
-
     proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
     agents = default_agents(EnvParams(), proto.analytic_gain)
     training: dict[str, Any] = {}
@@ -470,8 +465,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
 
     def run() -> int:
-        from amigo_gym.tools.training.evaluate import one_torch_thread
-
         one_torch_thread()
         doc = run_compare(replace(s, progress=s.progress and sys.stderr.isatty()))
         print(summary_text(doc, Path(s.out)))

@@ -18,8 +18,10 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.training.intervals import stratified_bootstrap
 
 #: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
 THRESHOLD_METRIC = "h_rms_settled_m"
@@ -59,8 +61,6 @@ def _say(message: str) -> None:
 
 def _identify(run_dir: Path) -> tuple[str, int, str | None]:
     """``(algo, seed, env_id)`` of a run folder from its ``config.json``, else its name; ``ValueError`` if neither."""
-    from amigo_gym.tools import runs
-
     cfg_file = run_dir / "config.json"
     if cfg_file.is_file():
         cfg = runs.read_json(cfg_file)
@@ -81,8 +81,6 @@ def _finite(x: Any) -> bool:
 
 
 def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
-    from amigo_gym.tools import runs
-
     data = runs.read_json(path)
     if not isinstance(data, list) or not all(isinstance(e, dict) and _finite(e.get("timesteps")) for e in data):
         raise ValueError("eval.json is not a list of evaluations with 'timesteps'")
@@ -149,8 +147,6 @@ def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, se
     Module docstring: step-function values, the range every seed covers, the union of the evaluation
     points in it, the pointwise percentile bootstrap over seeds. ``None`` if the seeds share no range.
     """
-    from amigo_gym.tools.training.intervals import stratified_bootstrap
-
     series = {r.seed: _series(r, axis, metric) for r in runs}
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:

@@ -28,6 +28,8 @@ from amigo_gym.paths import make_path
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+from amigo_gym.tools.training.hyperparams import sb3_class
 from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
 
 Array = NDArray[np.float64]
@@ -360,9 +362,6 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
         UntrustedFileError: a file not trusted (one line naming it and the flag).
     """
-    from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
-    from amigo_gym.tools.training.hyperparams import sb3_class
-
     record = read_json(ref.record) if ref.record is not None else None
     if record is not None and not isinstance(record, dict):
         raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")

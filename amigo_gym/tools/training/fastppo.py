@@ -67,9 +67,17 @@ from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import cpu_model
-from amigo_gym.tools.options import cli, json_object
+from amigo_gym.tools.options import (
+    OneLineParser,
+    add_dataclass_options,
+    cli,
+    json_object,
+    run_guarded,
+    settings_from_args,
+)
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.hyperparams import load_hyperparams
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
 from amigo_gym.tools.training.train import git_revision, versions
 
@@ -364,8 +372,6 @@ def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
     Raises:
         FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, or a bad key or value.
     """
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-
     return check_settings_mapping(load_hyperparams(path, YAML_ENV_ID), str(path))
 
 
@@ -976,8 +982,6 @@ class TrainFastRun(HyperparamsFile):
 def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> argparse.ArgumentParser:
     """The options of ``cls`` (and the :class:`FastPPOSettings`' unless ``cls`` is :class:`HyperparamsFile`);
     ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
-    from amigo_gym.tools.options import OneLineParser, add_dataclass_options
-
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "", **kw)
     add_dataclass_options(p, cls)
     if cls is not HyperparamsFile:
@@ -988,8 +992,6 @@ def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
-    from amigo_gym.tools.options import run_guarded, settings_from_args
-
     args_in = list(sys.argv[1:] if argv is None else argv)
     known, _ = _parser(HyperparamsFile, add_help=False).parse_known_args(args_in)
     defaults: dict[str, Any] = {}

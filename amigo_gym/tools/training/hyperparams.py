@@ -7,7 +7,7 @@ with :mod:`ast`, never evaluated: only literals, lists, tuples, dicts, ``dict(..
 keywords, ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``, and ``lin_<x>`` linear
 schedules for ``learning_rate`` and ``clip_range``. Every other key must be a keyword argument of
 the algorithm's SB3 class; unknown keys are refused in one line that lists them (``ValueError``), so
-that ``train`` can check a file before it writes anything. torch and SB3 are imported lazily.
+that ``train`` can check a file before it writes anything. PyYAML, torch and SB3 are imported lazily.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import yaml
 
 from amigo_gym.model.params import check_real
 
@@ -308,6 +307,8 @@ def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict
         ValueError: the file is not YAML or has no ``env_id`` mapping.
         FileNotFoundError: no such file.
     """
+    import yaml
+
     try:
         with open(path, encoding="utf-8") as f:
             doc = yaml.safe_load(f)

@@ -38,8 +38,13 @@ from sqlalchemy.engine import make_url
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.policies.learned import FastPolicy
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.tools.runs import handling
-from amigo_gym.tools.training.train import ENV_IDS, EnvId
+from amigo_gym.tools.runs import RunLock, handling, verify_sha256
+from amigo_gym.tools.training.benchmark import SUITE
+from amigo_gym.tools.training.evaluate import find_models, load_model
+from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.intervals import iqm
+from amigo_gym.tools.training.task_metrics import run_scenario
+from amigo_gym.tools.training.train import ENV_IDS, HYPERPARAMS_DIR, EnvId, Settings, train
 
 Mode = Literal["hyperparams", "seeds"]
 MODES = get_args(Mode)
@@ -263,7 +268,6 @@ class SweepConfig:
                 f"{', '.join(a for a in self.algos if a != FASTPPO)}; leave it out (agents/hyperparams/<algo>.yml each)"
             )
         from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
-        from amigo_gym.tools.training.train import HYPERPARAMS_DIR
 
         base = load_settings_yaml(Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / "fastppo.yml")
         try:
@@ -309,8 +313,6 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
     (``held_out=False``), each with the seeds ``VALIDATION_SEED_BASE .. + episodes - 1`` instead of its
     test seeds, and (``max_steps`` > 0) episodes cut to ``max_steps`` steps. Never a held-out scenario,
     never a test seed."""
-    from amigo_gym.tools.training.benchmark import SUITE
-
     seeds = tuple(range(VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + episodes))
     cells = []
     for sc in SUITE:
@@ -328,16 +330,12 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
     ``vecnormalize.pkl``)."""
-    from amigo_gym.tools.training.evaluate import find_models, load_model
-
     return validate_agent(load_model(find_models(run_dir)[0]), cells)
 
 
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
     ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
-    from amigo_gym.tools.runs import verify_sha256
-
     model, record = run_dir / "model.zip", run_dir / "run.json"
     verify_sha256(model, str(json.loads(record.read_text()).get("sha256")), str(record))
     return validate_agent(FastPolicy.load(model), cells)
@@ -347,9 +345,6 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
     """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
     (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
     then the IQM is NaN)."""
-    from amigo_gym.tools.training.intervals import iqm
-    from amigo_gym.tools.training.task_metrics import run_scenario
-
     per_cell: dict[str, float | None] = {}
     for sc in cells:
         vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
@@ -737,9 +732,6 @@ def _validated_trial(
 
 
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, train
-
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
     env_kwargs = cfg.train_env_kwargs
 
@@ -827,7 +819,6 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
     sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
     from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
     from amigo_gym.tools.training.fastppo import train as train_fast
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR
 
     base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{FASTPPO}.yml"
     hp = load_settings_yaml(base_file)
@@ -991,8 +982,6 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
 def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
     """Write ``summary.json`` into ``folder`` unless the one there saw more finished trials (module
     docstring); under a lock on the folder's ``summary.lock``. Whether it was written."""
-    from amigo_gym.tools.runs import RunLock
-
     path = folder / SUMMARY
     with RunLock(folder, name="summary.lock", wait=60.0):
         try:
