@@ -42,6 +42,7 @@ from amigo_gym.tools.training.task_metrics import (
     run_grid,
     run_scenario,
 )
+from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
 
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy

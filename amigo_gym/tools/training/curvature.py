@@ -16,6 +16,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.task.v1 import feasible_random_curvature
+from amigo_gym.tools.training.intervals import Z95 as Z95  # re-exported: the cells' interval
 from amigo_gym.tools.training.intervals import wilson_interval
 from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
 
