@@ -315,6 +315,11 @@ def run_guarded(fn: Callable[[], int | None], prog: str) -> int:
     return 0 if rc is None else int(rc)
 
 
+def say(message: str) -> None:
+    """A progress line on stderr (a command's results go to stdout)."""
+    print(message, file=sys.stderr, flush=True)
+
+
 def missing_modules(modules: Sequence[str]) -> list[str]:
     """The modules of ``modules`` that cannot be found (``importlib.util.find_spec``; nothing is imported)."""
     out = []

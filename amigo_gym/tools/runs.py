@@ -422,13 +422,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
     return None
 
 
-def save_checkpoint(
-    out: Path,
-    algo: str,
-    step: int,
-    write: Callable[[Path], list[str]],
-    wall_time_s: float,
-) -> Path:
+def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], list[str]], wall_time_s: float) -> Path:
     """Write a complete checkpoint, switch ``checkpoint.json`` to it, then delete all but the last two.
 
     Args:

@@ -191,10 +191,7 @@ def _run(args: InverseSettings) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym inverse`` (returns the exit status)."""
     args = parse_settings(
-        InverseSettings,
-        argv,
-        PROG,
-        "Analytic inverse solution of point H on a path (CSV or summary).",
+        InverseSettings, argv, PROG, "Analytic inverse solution of point H on a path (CSV or summary)."
     )
     return run_guarded(lambda: _run(args), PROG)
 

@@ -35,33 +35,19 @@ from amigo_gym.tools.training import curvature
 from amigo_gym.tools.training.curvature import cell_specs
 from amigo_gym.tools.training.evaluate import one_torch_thread
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-from amigo_gym.tools.training.task_metrics import (
-    SUITE_VERSION,
-    Scenario,
-    Unavailable,
-    run_grid,
-    run_scenario,
-)
+from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, run_grid, run_scenario
 from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
 
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
-V1_AGENTS: dict[str, str] = {
-    "td3lp": "SB3 TD3 low-pass",
-    "ppo_fast": "fast PPO",
-    "residual": "fast PPO residual",
-}
+V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
 #: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
 #: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
 #: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
 #: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
-RETIRED_V1_AGENTS: dict[str, str] = {
-    "ppo": "SB3 PPO",
-    "sac": "SB3 SAC",
-    "td3": "SB3 TD3",
-}
+RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]

@@ -23,7 +23,7 @@ from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training.benchmark import (
     ALGOS,
     CLASSICAL,
@@ -326,11 +326,6 @@ def verify_outputs(out: Path) -> dict[str, str]:
     return runs.verify_manifest(out, MANIFEST)
 
 
-def _say(message: str) -> None:
-    """A progress line on stderr (the report itself goes to stdout)."""
-    print(message, file=sys.stderr, flush=True)
-
-
 @dataclass(frozen=True)
 class CompareSettings:
     """Settings of ``amigo-gym compare``, each the option of the same name (``plots``: ``--no-plots``,
@@ -388,7 +383,7 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     training: dict[str, Any] = {}
     sources: dict[str, tuple[Path, str, int]] = {}  # name -> (zip, algo, training seed), for the benchmark
     if models is not None:
-        _say(f"loading pretrained agents from {models}")
+        say(f"loading pretrained agents from {models}")
         refs = find_models(models)
         agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
         training.update({v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None})
@@ -402,7 +397,7 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         request = fresh_run_request(train_steps, seed, hyperparams)
         stale = reuse_mismatch(run_dir, request)
         if stale is not None and run_dir.exists():
-            _say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+            say(f"retraining: the run in {run_dir} does not match the request ({stale})")
             shutil.rmtree(run_dir)
         argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
         fresh = Settings(
@@ -418,9 +413,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
             argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
         )
         if stale is None:
-            _say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+            say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
         else:
-            _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+            say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(fresh)
         rec = training["ppo_fresh"]
@@ -428,14 +423,14 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
         agents["ppo_fresh"] = load_model(find_models(run_dir)[0])  # checked against run.json, as every model
         sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
-    _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
+    say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
     extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
     bench: dict[str, Any] | None = None
     if s.benchmark:
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
-        _say(
+        say(
             "quick benchmark (amigo-gym benchmark --quick) on these agents"
             + (f" and {generalists}" if generalists else "")
         )

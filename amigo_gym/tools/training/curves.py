@@ -19,7 +19,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.training.intervals import stratified_bootstrap
 
@@ -53,10 +53,6 @@ class Run:
     env_id: str | None
     evals: tuple[dict[str, Any], ...]
     group: str = ""
-
-
-def _say(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
 
 
 def _identify(run_dir: Path) -> tuple[str, int, str | None]:
@@ -236,14 +232,14 @@ def learning_curves(
     t0 = time.perf_counter()
     found, skipped = find_runs(folders)
     for s in skipped:
-        _say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
+        say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
     if not found:
         where = ", ".join(map(str, folders))
         raise ValueError(f"--runs: no run folder with an eval.json in {where}")
     groups: dict[str, list[Run]] = {}
     for r in found:
         groups.setdefault(r.group, []).append(r)
-    _say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
+    say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
     curves: dict[str, Any] = {}
     jobs = [(g, axis, m) for g in groups for axis in AXES for m in CURVE_METRICS]
     bar = tqdm(jobs, desc="curves", unit="curve", file=sys.stderr, disable=not progress)

@@ -233,10 +233,7 @@ def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtoco
 
 def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
-    return {
-        "analytic": AnalyticPolicy(params, gain=gain),
-        "analytic_ff": AnalyticPolicy(params, feedforward_only=True),
-    }
+    return {"analytic": AnalyticPolicy(params, gain=gain), "analytic_ff": AnalyticPolicy(params, feedforward_only=True)}
 
 
 @dataclass(frozen=True)
@@ -643,10 +640,7 @@ class EvaluateSettings:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     a = parse_settings(
-        EvaluateSettings,
-        argv,
-        "amigo-gym evaluate",
-        "Evaluate analytic and trained agents (fixed protocol).",
+        EvaluateSettings, argv, "amigo-gym evaluate", "Evaluate analytic and trained agents (fixed protocol)."
     )
 
     def run() -> int:

@@ -66,12 +66,7 @@ def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
 
 
 def stratified_bootstrap(
-    scores: ArrayLike,
-    stat: Stat,
-    *,
-    reps: int = DEFAULT_REPS,
-    size: float = 0.95,
-    seed: int | np.random.Generator = 0,
+    scores: ArrayLike, stat: Stat, *, reps: int = DEFAULT_REPS, size: float = 0.95, seed: int | np.random.Generator = 0
 ) -> tuple[Array, Array]:
     """Point estimate and percentile interval of ``stat`` under rliable's stratified bootstrap.
 
