@@ -27,17 +27,12 @@ from typing import Any, Literal, get_args
 from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
 import numpy as np
-import optuna
-import yaml
-from optuna.study import MaxTrialsCallback
-from optuna.trial import TrialState
-from sqlalchemy.engine import make_url
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.policies.learned import FastPolicy
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
 from amigo_gym.tools.runs import RunLock, handling, verify_sha256
-from amigo_gym.tools.training.benchmark import SUITE
+from amigo_gym.tools.training.benchmark import SUITE, TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.evaluate import find_models, load_model
 from amigo_gym.tools.training.hyperparams import load_hyperparams
 from amigo_gym.tools.training.intervals import iqm
@@ -112,6 +107,8 @@ def public_argv(argv: Sequence[str]) -> list[str]:
 
 def _in_memory(url: str) -> bool:
     """Whether ``url`` is an in-memory SQLite database (private to the process that opens it)."""
+    from sqlalchemy.engine import make_url
+
     u = make_url(url)
     if not u.drivername.startswith("sqlite"):
         return False
@@ -299,8 +296,6 @@ class SweepConfig:
         if self.env_kwargs is not None:
             return dict(self.env_kwargs)
         if self.env_id == "AmigoBot-v1":
-            from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-
             return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
         return {}
 
@@ -357,6 +352,8 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
 def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
     SQLite database, private to its one process, without them."""
+    import optuna.storages
+
     url = driver_url(cfg.storage_url)
     engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
@@ -420,6 +417,8 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     Raises:
         ValueError: the existing study is of another mode, environment or objective.
     """
+    import optuna
+
     sampler: Any
     if cfg.sampler == "tpe":
         sampler = optuna.samplers.TPESampler(seed=sampler_seed, n_startup_trials=cfg.n_startup_trials)
@@ -454,9 +453,6 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
         elif cfg.enqueue_base:
-            from amigo_gym.tools.training.hyperparams import load_hyperparams
-            from amigo_gym.tools.training.train import HYPERPARAMS_DIR
-
             algo = cfg.algos[0]
             base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
             study.enqueue_trial(
@@ -484,6 +480,8 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
 
 # --------------------------------------------------------------------------- budget and status
 def _counted(t: Any) -> bool:
+    from optuna.trial import TrialState
+
     if t.state in (TrialState.COMPLETE, TrialState.PRUNED):
         return True
     return bool(t.state == TrialState.FAIL and "fail_reason" in t.user_attrs)
@@ -492,6 +490,8 @@ def _counted(t: Any) -> bool:
 def budget_count(study: Any, before: int | None = None) -> int:
     """Trials that count against the budget: ended (COMPLETE, PRUNED, FAIL by an error), plus RUNNING trials
     with a number below ``before`` (``None``: no RUNNING trial)."""
+    from optuna.trial import TrialState
+
     n = 0
     for t in study.get_trials(deepcopy=False):
         if _counted(t) or (before is not None and t.state == TrialState.RUNNING and t.number < before):
@@ -502,6 +502,8 @@ def budget_count(study: Any, before: int | None = None) -> int:
 def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
     """No queued trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials) and
     no re-queued trial waits."""
+    from optuna.trial import TrialState
+
     waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
     if cfg.mode == "seeds":
         return not waiting
@@ -510,6 +512,8 @@ def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
 
 def study_status(study: Any, budget: int | None = None) -> str:
     """``complete``, ``running`` or ``incomplete`` (module docstring), from the study alone."""
+    from optuna.trial import TrialState
+
     trials = study.get_trials(deepcopy=False)
     if any(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials):
         return "running"
@@ -534,6 +538,8 @@ def mark_abandoned(study: Any) -> list[int]:
 
     Returns the numbers of the trials marked (or updated) now.
     """
+    from optuna.trial import TrialState
+
     trials = study.get_trials(deepcopy=False)
     marked = []
     for t in trials:
@@ -680,6 +686,8 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
 
 def _write_trial_hp(trial: Any, run_dir: Path, key: str, hp: dict[str, Any]) -> Path:
     """The trial's hyperparameters as its user attribute and as ``run_dir/hyperparams.yml`` (under ``key``)."""
+    import yaml
+
     trial.set_user_attr("hyperparams", hp)
     hp_file = run_dir / "hyperparams.yml"
     atomic_write(hp_file, yaml.safe_dump({key: hp}, sort_keys=True), parents=True)
@@ -730,6 +738,8 @@ def _validated_trial(
 
 
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
+    import optuna
+
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
     env_kwargs = cfg.train_env_kwargs
 
@@ -815,6 +825,8 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
 def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir: Path, cells: Sequence[Any]) -> float:
     """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
     sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
+    import optuna
+
     from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
     from amigo_gym.tools.training.fastppo import train as train_fast
 
@@ -879,6 +891,8 @@ def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any]
     parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
     ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
     was); which trial it came from (``None``: none found, the run starts afresh)."""
+    from optuna.trial import TrialState
+
     best: tuple[float, Any, Path] | None = None
     for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
         ua = t.user_attrs
@@ -915,6 +929,10 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
     ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
     ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
     """
+    import optuna
+    from optuna.study import MaxTrialsCallback
+    from optuna.trial import TrialState
+
     cfg.validate()
     sampler_seed = _worker_seed(cfg)
     storage = make_storage(cfg)
@@ -947,6 +965,8 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     """The study as the summary states it (module docstring): from the study alone, the same for every worker."""
+    from optuna.trial import TrialState
+
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
     states = {s.name: sum(t.state == s for t in trials) for s in TrialState}
     best = None
@@ -1033,6 +1053,9 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
     The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
     trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
     file's)."""
+    import yaml
+    from optuna.trial import TrialState
+
     done = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE and t.value is not None]
     if not done:
         return None
@@ -1110,6 +1133,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     url = cfg.storage_url
 
     def run() -> int:
+        import optuna
+
         interrupted = False
         failed: list[str] = []
         opened: list[Any] = []
