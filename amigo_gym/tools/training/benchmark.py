@@ -27,13 +27,23 @@ from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.model.params import EnvParams
 from amigo_gym.paths.points import cached_file_path, is_points_file
 from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.policies.learned import FastPolicy
 from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
-from amigo_gym.tools.runs import RunLock, publish, remove_matching, verify_manifest
+from amigo_gym.tools.runs import (
+    RunLock,
+    check_pickle,
+    corrupt_errors,
+    publish,
+    remove_matching,
+    verify_manifest,
+    verify_sha256,
+)
 from amigo_gym.tools.training import curvature
 from amigo_gym.tools.training.curvature import cell_specs
 from amigo_gym.tools.training.evaluate import one_torch_thread
+from amigo_gym.tools.training.hyperparams import sb3_class
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, run_grid, run_scenario
 from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
@@ -275,20 +285,18 @@ class AgentSpec:
         """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
         if self.path is None:
             return CLASSICAL[self.name](env)
-        if self._model is None:  # checked before it is opened against the manifest's sha256 (and trusted if SB3's)
-            path, record = Path(self.path), Path(self.path).with_suffix(".json")
+        if self._model is None:
+            # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
+            digest = (self.manifest or {}).get("sha256")
+            path, source = Path(self.path), str(Path(self.path).with_suffix(".json"))
             if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
-                from amigo_gym.policies.learned import FastPolicy
-                from amigo_gym.tools.runs import verify_sha256
-
-                if (digest := (self.manifest or {}).get("sha256")) is not None:
-                    verify_sha256(path, str(digest), str(record))
+                if digest is not None:
+                    verify_sha256(path, str(digest), source)
                 self._model = FastPolicy.load(self.path)
             else:
-                from amigo_gym.tools.training.evaluate import ModelRef, load_model
-
-                ref = ModelRef(self.name, str(self.algo), path, record if record.is_file() else None)
-                self._model = load_model(ref)
+                check_pickle(path, None if digest is None else str(digest), source)
+                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
+                    self._model = sb3_class(str(self.algo)).load(self.path, device="cpu")
         if str(self.algo).startswith(FAST_ALGO):
             dim = self._model.builder.obs_dim
             if getattr(env.observation_space, "shape", None) != (dim,):
