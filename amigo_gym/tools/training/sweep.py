@@ -302,10 +302,9 @@ class SweepConfig:
 
 # --------------------------------------------------------------------------- validation cells
 def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
-    """The validation cells of ``env_id``: the benchmark suite's held-in scenarios of that environment
-    (``held_out=False``), each with the seeds ``VALIDATION_SEED_BASE .. + episodes - 1`` instead of its
-    test seeds, and (``max_steps`` > 0) episodes cut to ``max_steps`` steps. Never a held-out scenario,
-    never a test seed."""
+    """The benchmark suite's held-in scenarios of ``env_id``, with the validation seeds ``VALIDATION_SEED_BASE .. +
+    episodes - 1`` in place of their test seeds and (``max_steps`` > 0) episodes cut to ``max_steps``: never a held-out
+    scenario, never a test seed."""
     seeds = tuple(range(VALIDATION_SEED_BASE, VALIDATION_SEED_BASE + episodes))
     cells = []
     for sc in SUITE:
@@ -721,10 +720,9 @@ _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """The end shared by both kinds of trial (SB3's and the fast PPO's): ``fit_and_validate()`` trains and
-    validates, giving the objective and its per-cell values (:func:`validate_agent`); an error of
-    :data:`_TRIAL_ERRORS` is recorded as the trial's ``fail_reason`` and raised again; the cells go to the user
-    attribute ``validation``; a non-finite objective gets a ``fail_reason`` and is returned as it is (NaN: Optuna
+    """The end of both kinds of trial: ``fit_and_validate()`` gives the objective and its per-cell values
+    (:func:`validate_agent`), stored as the user attribute ``validation``; an error of :data:`_TRIAL_ERRORS` becomes the
+    trial's ``fail_reason`` and is raised again; a non-finite objective gets a ``fail_reason`` and is returned (Optuna
     marks the trial FAIL, never PRUNED)."""
     try:
         value, per_cell = fit_and_validate()
@@ -887,10 +885,9 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
-    """Continue an abandoned fast-PPO trial: the newest ``checkpoint.pt`` among this study's trials with the same
-    parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
-    ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
-    was); which trial it came from (``None``: none found, the run starts afresh)."""
+    """Continue an abandoned fast-PPO trial: copy into ``out`` the run files of the newest ``checkpoint.pt`` among this
+    study's FAIL trials with the same parameters whose worker was stopped or killed (no error of their own) and whose
+    ``settings.json`` equals ``s``; the trial it came from (``None``: none, the run starts afresh)."""
     from optuna.trial import TrialState
 
     best: tuple[float, Any, Path] | None = None
@@ -1045,14 +1042,11 @@ def replace_yaml_block(text: str, key: str, block: str) -> str:
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
-    """Write the hyperparameters of ``study``'s best COMPLETE trial under ``env_id`` in the YAML file ``path``
-    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the
-    file's other keys stay as they were (:func:`replace_yaml_block`); written atomically and read back. The mapping
-    written (``None``: no COMPLETE trial, nothing written).
-
-    The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
-    trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
-    file's)."""
+    """Write the best COMPLETE trial's hyperparameters (its user attribute ``hyperparams``: the base file's values with
+    the sampled ones; ``n_timesteps`` / ``total_steps`` stay the base file's) under ``env_id`` in the YAML file ``path``
+    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the file's
+    other keys kept (:func:`replace_yaml_block`), written atomically and read back. The mapping written (``None``: no
+    COMPLETE trial, nothing written)."""
     import yaml
     from optuna.trial import TrialState
 
