@@ -2,7 +2,7 @@
 
 Usage, environment, objective, storage, the fast PPO, winners (``--save-best``), secrets, modes, the global
 budget, stopped and killed workers, the summary and the exit status: docs/benchmark.md, "Reference: `amigo-gym
-sweep`".
+sweep`". Imports optuna, SQLAlchemy (and PyYAML) only when run.
 """
 
 from __future__ import annotations
