@@ -6,11 +6,12 @@ prints these beside its figures. Standard library and numpy only.
 
 from __future__ import annotations
 
+import importlib
+import os
 import platform
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
-
-__all__ = ["bits_key", "cpu_model", "machine_line", "simd_level"]
 
 #: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, numpy >= 2.4 naming them
 #: ``X86_V4`` ... too, then ARM)
@@ -49,8 +50,6 @@ def simd_level() -> str:
     for (``__cpu_dispatch__``, ``__cpu_baseline__``), which also honours ``NPY_DISABLE_CPU_FEATURES`` (numpy's AVX2
     code on an AVX-512 machine says ``"AVX2"``); ``"unknown"`` if this numpy does not expose it.
     """
-    import importlib
-
     module = None
     for name in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):  # numpy 2, numpy 1
         try:
@@ -71,8 +70,6 @@ def simd_level() -> str:
 
 def machine_line() -> str:
     """One line for a benchmark's header: CPU, SIMD level, CPUs visible, Python and numpy versions."""
-    import os
-
     return (
         f"CPU: {cpu_model()}, SIMD {simd_level()}, {os.cpu_count()} CPUs visible; "
         f"{platform.python_implementation()} {platform.python_version()}, numpy {np.__version__}"
@@ -83,9 +80,6 @@ def bits_key() -> str:
     """What the last bits of a float result depend on: CPU model, numpy's SIMD level, the kernels torch dispatches to
     (``ATEN_CPU_CAPABILITY``), MKL's code path (``MKL_ENABLE_INSTRUCTIONS``, ``MKL_CBWR``), numpy's and torch's
     versions (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
-    import os
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         torch = version("torch")
     except PackageNotFoundError:

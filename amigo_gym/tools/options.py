@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import json
 import re
 import sys
 import types
@@ -14,22 +15,6 @@ from dataclasses import MISSING, Field, fields
 from typing import Any, Literal, NoReturn, TypeVar, Union, get_args, get_origin, get_type_hints
 
 T = TypeVar("T")
-
-__all__ = [
-    "HelpFormatter",
-    "OneLineParser",
-    "add_dataclass_options",
-    "attribute_help",
-    "cli",
-    "install_hint",
-    "json_object",
-    "missing_modules",
-    "parse_bool",
-    "parse_settings",
-    "run_command",
-    "run_guarded",
-    "settings_from_args",
-]
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -141,8 +126,6 @@ def cli(
 
 def json_object(text: str) -> dict[str, Any]:
     """``text`` as a JSON object (``ValueError`` ``must be a JSON object, got '<text>'`` otherwise)."""
-    import json
-
     try:
         value = json.loads(text)
     except ValueError:
@@ -330,6 +313,11 @@ def run_guarded(fn: Callable[[], int | None], prog: str) -> int:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     return 0 if rc is None else int(rc)
+
+
+def say(message: str) -> None:
+    """A progress line on stderr (a command's results go to stdout)."""
+    print(message, file=sys.stderr, flush=True)
 
 
 def missing_modules(modules: Sequence[str]) -> list[str]:

@@ -34,31 +34,6 @@ from amigo_gym.io import (
     vouch,
 )
 
-__all__ = [
-    "CHECKPOINTS",
-    "LOCK_NAME",
-    "POINTER",
-    "Checkpoint",
-    "CorruptFileError",
-    "RunLock",
-    "RunLockedError",
-    "check_pickle",
-    "clean_temporaries",
-    "remove_matching",
-    "handling",
-    "has_run_files",
-    "is_current_lock",
-    "load_checkpoint",
-    "publish",
-    "read_json",
-    "restore_snapshot",
-    "save_checkpoint",
-    "sha256_file",
-    "verify_manifest",
-    "verify_sha256",
-    "vouch",
-]
-
 LOCK_NAME = "run.lock"
 POINTER = "checkpoint.json"
 CHECKPOINTS = "checkpoints"
@@ -447,13 +422,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
     return None
 
 
-def save_checkpoint(
-    out: Path,
-    algo: str,
-    step: int,
-    write: Callable[[Path], list[str]],
-    wall_time_s: float,
-) -> Path:
+def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], list[str]], wall_time_s: float) -> Path:
     """Write a complete checkpoint, switch ``checkpoint.json`` to it, then delete all but the last two.
 
     Args:

@@ -530,10 +530,7 @@ def _sections(latex: bool) -> list[tuple[str, list[_Row]]]:
         (
             "Velocities of the wheels' material points in contact (eqs 18, 26 corrected): "
             "d/dt(T40 T14) rho with rho frozen",
-            [
-                ("18", name("v_K", r"\bar v_K"), f(d.v_K)),
-                ("26", name("v_L", r"\bar v_L"), f(d.v_L)),
-            ],
+            [("18", name("v_K", r"\bar v_K"), f(d.v_K)), ("26", name("v_L", r"\bar v_L"), f(d.v_L))],
         ),
         (
             "System (29), corrected: seven equations",

@@ -15,13 +15,14 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import gymnasium as gym
 import numpy as np
 
-from amigo_gym.io import atomic_save
 from amigo_gym.model.params import check_range
+from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.tools.options import parse_settings, run_guarded
-
-__all__ = ["GainFit", "Settings", "halving_times", "main"]
+from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.training.evaluate import rollout
 
 
 @dataclass(frozen=True)
@@ -82,11 +83,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
     Raises:
         ValueError: on a bad window, or if an episode leaves the path.
     """
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-    from amigo_gym.policies.analytic import AnalyticPolicy
-    from amigo_gym.tools.training.evaluate import rollout
 
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
@@ -116,10 +113,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
 
 
 def _plot(rows: list[GainFit], path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7.0, 3.8), layout="constrained")
     for i, row in enumerate(rows):
@@ -133,8 +127,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
     ax.set_ylim(1e-12, 0.05)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -15,11 +15,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
+from amigo_gym.envs.rendering import headless
+from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-
-__all__ = ["GALLERY", "GallerySettings", "render_family", "main"]
+from amigo_gym.tools.plots import pyplot
 
 PROG = "amigo-gym gallery"
 
@@ -36,10 +38,7 @@ GALLERY: dict[str, tuple[dict[str, Any], int]] = {
 
 def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray, float]:
     """Run one episode with the analytic policy and return the last frame and H's largest settled error [m]."""
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401
-    from amigo_gym.policies import AnalyticTrackingPolicy
 
     env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
     policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
@@ -85,12 +84,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
 
     def run() -> int:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        from amigo_gym.envs.rendering import headless
+        plt = pyplot()
 
         headless()
         out = Path(args.out)

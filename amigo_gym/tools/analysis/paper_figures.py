@@ -1,15 +1,9 @@
 """The paper's manoeuvre, "starting, driving straight, driving on circular curve, braking" (its Figs 2, 3).
 
-``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`)
-for H on the manoeuvre path and writes
-
-* ``DIR/paper_fig2_angles.png``: wheel angles alpha1 (blue) and alpha2 (red) against time, as Fig. 2;
-* ``DIR/paper_fig3_rates.png``: their rates, as Fig. 3, with the closed-form steady state on the circle dotted;
-* ``DIR/paper_manoeuvre.csv``: every column of the solution (SI units, radians).
-
-The phases are shaded and labelled in both plots. The default path and speed profile (the paper gives neither
-timing nor radius) and why: docs/core.md; every setting is an option (``--help``).
-"""
+``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`) for H on
+the manoeuvre path and writes ``DIR/paper_fig2_angles.png`` (wheel angles, as Fig. 2), ``DIR/paper_fig3_rates.png``
+(their rates, as Fig. 3, the closed-form steady state dotted) and ``DIR/paper_manoeuvre.csv`` (every column, SI units,
+radians), the phases shaded. The default path and speed profile and why: docs/core.md."""
 
 from __future__ import annotations
 
@@ -22,7 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.io import atomic_save
 from amigo_gym.model.params import RobotParams, check_range
 from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
@@ -38,8 +31,7 @@ from amigo_gym.task.inverse import (
     time_grid,
 )
 from amigo_gym.tools.options import run_command
-
-__all__ = ["FIG2", "FIG3", "CSV", "Settings", "Phase", "phases", "run", "main"]
+from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym paper"
 FIG2 = "paper_fig2_angles.png"
@@ -135,10 +127,6 @@ def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath)
     return out
 
 
-def _save(fig: Any, target: str, dpi: int) -> None:
-    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=dpi), target)
-
-
 def _shade(ax: Any, ph: list[Phase]) -> None:
     colours = ("#f2f2f2", "#ffffff")
     for i, p in enumerate(ph):
@@ -159,10 +147,7 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
 
 def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str]]:
     """Solve the manoeuvre, write the two figures and the CSV; return the solution, phases and paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     robot = RobotParams()
     os.makedirs(settings.out, exist_ok=True)
@@ -205,8 +190,7 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
         ax.set_xlim(sol.t[0], sol.t[-1])
         ax.legend(loc="upper left" if key == "fig2" else "lower center", fontsize=None if key == "fig2" else 8)
         fig.suptitle(f"Wheel {what.split()[0]}s (cf. paper Fig. {fig_no}): " + title, fontsize=9)
-        _save(fig, files[key], settings.dpi)
-        plt.close(fig)
+        save_figure(fig, files[key], settings.dpi)
 
     sol.to_csv(files["csv"])
     return sol, ph, files

@@ -1,33 +1,16 @@
 """``amigo-gym replay`` and ``amigo-gym identify``: a robot's log against the model (:mod:`amigo_gym.logs`).
 
-``amigo-gym replay LOG --out DIR [--robot robot.json]`` drives the model with the log's commands from the start pose
-that fits the log's first poses (:func:`amigo_gym.logs.replay`) and writes, into ``DIR``:
-
-* ``trajectory.csv``: per measurement time ``t`` [s], the measured and simulated pose of A (``x_meas``,
-  ``y_meas``, ``theta_meas``, ``x_sim``, ``y_sim``, ``theta_sim`` [m, rad]), the ``position_error`` [m] and
-  ``heading_error`` [rad] (simulated minus measured, wrapped), and the wheel rates ``w1_sim``, ``w2_sim`` (and
-  ``w1_meas``, ``w2_meas`` when measured) [rad/s];
-* ``replay.png``: the paths of A in the plane, the wheel rates over time (simulated against measured, as the
-  paper's Figs 3 and 5) and the size of the errors over time (log scale) against the measurement noise estimated
-  from the log (:func:`amigo_gym.logs.noise_level`);
-* ``summary.json``: :func:`amigo_gym.logs.summarize` (``rms_position_error_m`` among them), the robot used.
-
-``amigo-gym identify LOG --out DIR`` fits the true robot (:func:`amigo_gym.logs.identify`) and writes
-``robot.json`` (``r1``, ``r2``, ``l1`` [m], ``delay`` [s] under the names ``gym.make("AmigoBot-v1",
-true_robot="robot.json")`` and ``replay --robot`` accept, their uncertainties, the replay errors before and after),
-``trajectory.csv`` and ``identify.png`` of the replay with the identified robot (the nominal one's errors beside),
-and ``summary.json``.
-
-The folder is written whole or not at all: everything goes to a temporary folder beside it, which then takes its
-name (an existing ``DIR`` is refused unless ``--force``, which replaces it only once the new one is complete); a
-killed run's temporary folder is removed by the next run into the same ``DIR``.
-A bad log gives one line naming the problem and exit status 2, before anything is written.
+``replay LOG --out DIR [--robot robot.json]`` writes ``trajectory.csv``, ``replay.png`` and ``summary.json``; ``identify
+LOG --out DIR`` fits the true robot and writes ``robot.json`` (the names ``gym.make("AmigoBot-v1", true_robot=...)``
+accepts), ``trajectory.csv``, ``identify.png`` and ``summary.json``. Columns, figures and fits: docs/logs.md. ``DIR`` is
+written whole or not at all (:func:`write_folder`); a bad log is one line and exit status 2, before anything is written.
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import shutil
 import tempfile
@@ -43,17 +26,7 @@ from amigo_gym.logs import Fit, Log, Replay, errors, identify, noise_level, read
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-
-__all__ = [
-    "IdentifySettings",
-    "LogSettings",
-    "ReplaySettings",
-    "main_identify",
-    "main_replay",
-    "plot",
-    "trajectory_csv",
-    "write_folder",
-]
+from amigo_gym.tools.plots import pyplot, save_figure
 
 
 def trajectory_csv(log: Log, rep: Replay) -> str:
@@ -86,10 +59,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
 
     ``reps``: ``(label, replay)`` pairs; the last one is drawn in full colour, the others thin.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig = plt.figure(figsize=(10.0, 7.0), layout="constrained")
     grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.4))
@@ -144,8 +114,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
     ax_e.legend(fontsize=7, loc="best")
     ax_e.set_title("error over time", fontsize=9)
     fig.suptitle(title, fontsize=9)
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def check_out(out: Path, force: bool) -> None:
@@ -215,8 +184,6 @@ def _text(data: str) -> Callable[[str], object]:
 
 
 def _json(obj: Any) -> Callable[[str], object]:
-    import json
-
     return _text(json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
 
 

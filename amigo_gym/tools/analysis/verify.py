@@ -1,24 +1,10 @@
 """``amigo-gym verify``: the project's exactness checks, measured against references, PASS/FAIL per row.
 
-Each row is a residual against an independent reference (nothing is compared with itself) and the
-bound it must meet; the command prints PASS or FAIL per row and exits with status 1 when a row fails:
-
-1. the closed-form steady state on the circle against the values tabulated in ``docs/model.md``;
-2. exactness of the step: from the steady pose on the circle (R = 1 m, v_A = 0.2 m/s), the closed-form
-   steady wheel rates held through :func:`amigo_gym.model.kinematics.step_pose` keep H on the circle over 10
-   laps (largest ``| |H - c| - R |``), for dt = 0.01, 0.1, 0.5 s; an explicit Euler step of the same
-   unicycle as the counter-example;
-3. the same through ``gym.make("AmigoBot-v0")`` with float64 actions, dt = 0.1 s;
-4. the inverse solution (SciPy DOP853) of the paper's case: largest cross-track error of H along 60 s;
-5. the transient round trip: the inverse solution's wheel-angle increments per step, held through the
-   exact step, keep H near the circle over a lap (dt = 0.1 and 0.05 s; their ratio ~4: second order);
-6. the symbolic derivation (SymPy): the rolling constraints of system 29 (both components of v_K and
-   v_L, eqs 11-12 and the castor) evaluated on 1000 random states of the numeric kinematics.
-
-The tests assert bounds on the same quantities (``tests/test_kinematics.py``, ``test_env.py``,
-``test_inverse.py``, ``test_symbolic.py``); this command prints the measured values and the verdicts.
-May import the core, the envs (through ``gym.make``) and, for the slow checks, scipy and sympy.
-"""
+Each row is a residual against an independent reference (nothing is compared with itself) and the bound it must meet:
+the closed-form steady state against docs/model.md's table; the exact step (and an Euler counter-example) keeping H on
+the circle over 10 laps, directly and through ``gym.make("AmigoBot-v0")``; the SciPy inverse solution of the paper's
+case; the transient round trip (second order in dt); the symbolic rolling constraints (SymPy) on random states. Exit
+status 1 when a row fails; the rows and values: docs/model.md, "Exactness, measured"."""
 
 from __future__ import annotations
 
@@ -28,13 +14,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import gymnasium as gym
 import numpy as np
 
 from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, circle_steady_state, h_position, step_pose
 from amigo_gym.model.params import RobotParams
+from amigo_gym.paths import CirclePath
+from amigo_gym.task.inverse import paper_circle
 from amigo_gym.tools.options import parse_settings, run_guarded
-
-__all__ = ["Check", "VerifySettings", "main", "round_trip_error", "rows"]
 
 #: the steady state of the default circle (R = 1 m, v_A = 0.2 m/s), to 6 decimals as docs/model.md tabulates it
 STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
@@ -67,8 +54,6 @@ def _laps_error(dt: float, euler: bool) -> float:
 
 
 def _env_laps_error() -> float:
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401
 
     pose, w = _steady_pose()
@@ -84,9 +69,6 @@ def _env_laps_error() -> float:
 
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
-    from amigo_gym.paths import CirclePath
-    from amigo_gym.task.inverse import paper_circle
-
     path = CirclePath(radius=R)
     sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)
     w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt

@@ -25,26 +25,10 @@ from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, cas
 from amigo_gym.model.params import EnvParams, RobotParams, check_range
 from amigo_gym.paths import make_path
 from amigo_gym.sim.fast_v1 import numba_available
+from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.options import run_command
-
-__all__ = [
-    "CoreSettings",
-    "Row",
-    "Startup",
-    "euler_step",
-    "v0_columns",
-    "kernel_stepper",
-    "loop_step",
-    "measure",
-    "measure_many",
-    "bench",
-    "bench_startup",
-    "format_table",
-    "main",
-    "run",
-]
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
@@ -186,8 +170,6 @@ def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Const
 def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, parallel: bool) -> Callable[[], object]:
     """One compiled step of AmigoBot-v0's robots at ``pose`` with the wheel rates ``w`` [rad/s] and the actions
     ``action (N, 2)`` (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; preallocated outputs, the state advances)."""
-    from amigo_gym.sim.fast_v1_batch import BatchKernel
-
     k, st, ep = v0_columns(params, pose, w)
     n = len(pose)
     b = BatchKernel(k, n, parallel=parallel)

@@ -21,40 +21,15 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+from llvmlite import binding
 
-from amigo_gym.io import atomic_save, atomic_write_json
+from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.tools.bench.core import _fmt, measure_many
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
-from amigo_gym.tools.options import run_command
-
-__all__ = [
-    "EnvSettings",
-    "SingleResult",
-    "VectorRow",
-    "MemoryResult",
-    "PPORow",
-    "V1Result",
-    "KernelRow",
-    "Target",
-    "Report",
-    "bench_single",
-    "bench_vector",
-    "bench_memory",
-    "bench_ppo",
-    "bench_v1",
-    "bench_kernels",
-    "targets",
-    "format_report",
-    "format_kernels",
-    "format_targets",
-    "numba_state",
-    "load_average",
-    "plot_vector",
-    "main",
-    "run",
-]
+from amigo_gym.tools.options import run_command, say
+from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym bench-env"
 DEFAULT_SIZES = (1, 64, 1024, 4096, 65536)
@@ -63,10 +38,6 @@ SYNC_MAX = 1024
 POOL = 16
 
 Log = Callable[[str], None]
-
-
-def _log(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
 
 
 def _quiet(msg: str) -> None:
@@ -183,12 +154,7 @@ class VectorRow:
 
 
 def bench_vector(
-    sizes: Sequence[int],
-    repeats: int,
-    min_time: float,
-    sync_max: int,
-    seed: int = 0,
-    log: Log | None = None,
+    sizes: Sequence[int], repeats: int, min_time: float, sync_max: int, seed: int = 0, log: Log | None = None
 ) -> list[VectorRow]:
     """Env-steps per second of the native vector env, CartPole's native one, and Sync of AmigoBot."""
     say = log or _quiet
@@ -593,7 +559,6 @@ def numba_state() -> str:
     if not numba_available():
         return "numba not installed"
     import numba
-    from llvmlite import binding
 
     target = getattr(numba.config, "CPU_NAME", None) or binding.get_host_cpu_name()
     svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"
@@ -768,10 +733,7 @@ def format_report(report: Report) -> str:
 def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None) -> None:
     """Env-steps/s against N (log-log): the native env (per step implementation), CartPole, Sync, and with
     ``v1`` the native AmigoBot-v1 vector env (its default task and the hard one, :data:`V1_HARD`)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     ns = [r.n for r in rows]
@@ -798,8 +760,7 @@ def plot_vector(rows: Sequence[VectorRow], path: str, v1: V1Result | None = None
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=120, format="png"), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 # ---------------------------------------------------------------------------------------------- tables
@@ -942,13 +903,13 @@ def run(s: EnvSettings) -> int:
     print(f"{machine_line()}; {numba_state()}; load average {rep.load[0]}", flush=True)
     print(f"median of {repeats} repeats of >= {min_time:g} s", flush=True)
     if not s.skip_single:
-        _log("single env: AmigoBot-v0 vs Pendulum-v1")
+        say("single env: AmigoBot-v0 vs Pendulum-v1")
         rep.single = bench_single(repeats, min_time)
     if not s.skip_vector:
-        _log(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
-        rep.vector = bench_vector(sizes, repeats, min_time, sync_max, log=_log)
+        say(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
+        rep.vector = bench_vector(sizes, repeats, min_time, sync_max, log=say)
     if not s.skip_memory:
-        _log(f"memory per sub-env (N = {memory_n} vs 1)")
+        say(f"memory per sub-env (N = {memory_n} vs 1)")
         rep.memory = bench_memory(memory_n)
     if not s.skip_ppo:
         try:
@@ -957,17 +918,17 @@ def run(s: EnvSettings) -> int:
         except ImportError:
             rep.notes.append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
         else:
-            _log(f"SB3 PPO learn, {ppo_steps} steps per run")
+            say(f"SB3 PPO learn, {ppo_steps} steps per run")
             rollout, rounds = (64, 1) if s.quick else (2048, s.ppo_repeats)
-            rep.ppo = bench_ppo(ppo_steps, s.ppo_envs, log=_log, rollout=rollout, repeats=rounds, v1=s.v1)
+            rep.ppo = bench_ppo(ppo_steps, s.ppo_envs, log=say, rollout=rollout, repeats=rounds, v1=s.v1)
     if s.v1:
-        _log("AmigoBot-v1 vs v0")
+        say("AmigoBot-v1 vs v0")
         rep.v1 = bench_v1(sizes, repeats, min_time)
         if rep.v1 is None:
             rep.notes.append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
     if s.kernels:
         n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
-        _log(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
+        say(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
         rep.kernels = bench_kernels(n_k, repeats, min_time)
         if not rep.kernels:
             rep.notes.append("--kernels: numba is not installed; only the numpy step exists")
@@ -975,7 +936,7 @@ def run(s: EnvSettings) -> int:
     print(format_report(rep))
     if s.plot is not None and rep.vector:
         plot_vector(rep.vector, s.plot, rep.v1)
-        _log(f"wrote {s.plot}")
+        say(f"wrote {s.plot}")
     if s.json is not None:
         atomic_write_json(s.json, rep.to_json())
     return 0

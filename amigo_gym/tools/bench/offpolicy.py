@@ -6,11 +6,16 @@ The algorithms, the two configurations and the rates: docs/performance.md, "Refe
 
 from __future__ import annotations
 
+import importlib
 import time
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["ALGOS", "CONFIGS", "DeterministicPolicy", "algo_class", "bench_offpolicy", "make_model", "offpolicy_config"]
+import numpy as np
+
+from amigo_gym.data import hyperparams_dir
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.hyperparams import load_hyperparams
 
 #: the off-policy algorithms measured: name -> (module, class)
 ALGOS: dict[str, tuple[str, str]] = {
@@ -36,8 +41,6 @@ CONFIGS: dict[str, dict[str, Any]] = {
 
 def algo_class(algo: str) -> Any:
     """The SB3 / sb3-contrib class of ``algo`` (:data:`ALGOS`); ``ValueError`` for another name."""
-    import importlib
-
     if algo not in ALGOS:
         raise ValueError(f"offpolicy: algorithm must be one of {', '.join(ALGOS)}, got {algo!r}")
     module, name = ALGOS[algo]
@@ -50,9 +53,6 @@ def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
     SAC and TD3 read ``agents/hyperparams/<algo>.yml``; CrossQ and TQC read ``sac.yml`` (CrossQ without ``tau``).
     The result has ``n_envs``, ``noise_type``/``noise_std`` (TD3) and the keyword arguments of the class.
     """
-    from amigo_gym.data import hyperparams_dir
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-
     if config not in CONFIGS:
         raise ValueError(f"offpolicy: configuration must be one of {', '.join(CONFIGS)}, got {config!r}")
     algo_class(algo)  # checks the name
@@ -68,7 +68,6 @@ def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
 
 def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> Any:
     """The ``algo`` model of the mapping ``hp`` (:func:`offpolicy_config`) on ``venv``, CPU, ``MlpPolicy``."""
-    import numpy as np
     from stable_baselines3.common.noise import NormalActionNoise
 
     kw = {k: v for k, v in hp.items() if k not in ("n_envs", "noise_type", "noise_std")}
@@ -86,7 +85,6 @@ def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> An
 def _venv(n_envs: int, seed: int) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
     kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])

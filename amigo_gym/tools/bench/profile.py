@@ -9,6 +9,7 @@ inflates small Python functions: read the shares as "where", ``amigo-gym bench-e
 from __future__ import annotations
 
 import cProfile
+import math
 import pstats
 import sys
 from collections.abc import Callable, Sequence
@@ -19,14 +20,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
-from amigo_gym.model.params import check_range
+from amigo_gym.envs.amigobot import AmigoBotVectorEnv
+from amigo_gym.model.params import EnvParams, check_range
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
-from amigo_gym.tools.bench.core import measure_many
+from amigo_gym.tools.bench.core import kernel_stepper, measure_many
 from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
 from amigo_gym.tools.options import run_command
-
-__all__ = ["ProfileSettings", "gap", "profile_steps", "single_parts", "main", "run"]
 
 PROG = "python -m amigo_gym.tools.bench.profile"
 
@@ -66,10 +66,6 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
 
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
-    from amigo_gym.envs.amigobot import AmigoBotVectorEnv
-    from amigo_gym.model.params import EnvParams
-    from amigo_gym.tools.bench.core import kernel_stepper
-
     quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
     bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
     pose = np.zeros((n, 3))
@@ -156,8 +152,6 @@ def libm(n: int = 100_000, seed: int = 0) -> str:
     """Markdown table: how many of ``n`` float64 arguments (uniform in [-10, 10]; ``log``: in (0, 20]) get other bits
     from numpy's ``sin``, ``cos``, ``tan``, ``exp``, ``log`` than from the C library's (Python's ``math``, which the
     compiled kernels call). Why the kernels compute ``sin``/``cos`` themselves and leave the others to numpy."""
-    import math
-
     g = np.random.default_rng(seed)
     x = g.uniform(-10.0, 10.0, n)
     pos = g.uniform(0.0, 20.0, n) + 1e-300

@@ -1,14 +1,9 @@
 """``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
 
-At ``--n`` robots on ``--path`` (``"mixed"``: hard randomisation, as training runs), with and without rendering,
-the same seeds and actions:
-
-* **memory growth** [MiB] of the resident memory (``/proc/self/statm``) over ``--steps`` steps from ``reset``,
-  each measurement in a fresh subprocess; target <= 20 MiB with rendering;
-* **step time**, interleaved repeats (:func:`amigo_gym.tools.bench.core.measure_many`): the ratio, target <= 1.1.
-
-Prints one line per figure; ``--json FILE`` writes them (atomically). The figures: docs/amigobot_v1.md.
-"""
+At ``--n`` robots on ``--path``, with and without rendering (same seeds and actions): the growth of the resident memory
+[MiB] over ``--steps`` steps (each in a fresh subprocess; target <= 20 MiB) and the step-time ratio
+(:func:`amigo_gym.tools.bench.core.measure_many`; target <= 1.1). ``--json FILE`` writes them. The figures:
+docs/amigobot_v1.md."""
 
 from __future__ import annotations
 
@@ -21,12 +16,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from amigo_gym.envs import AmigoBotV1VectorEnv
 from amigo_gym.io import atomic_write_json
 from amigo_gym.tools.bench.core import measure_many
 from amigo_gym.tools.bench.env import _vector_stepper
 from amigo_gym.tools.options import cli, run_command
-
-__all__ = ["RenderTrailSettings", "main", "measure_memory", "measure_time", "run"]
 
 PROG = "python -m amigo_gym.tools.bench.render_trail"
 
@@ -34,8 +28,6 @@ MiB = 2**20
 
 
 def _env(n: int, path: str, render: bool) -> Any:
-    from amigo_gym.envs import AmigoBotV1VectorEnv
-
     kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
     return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
 

@@ -16,13 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
+
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
 from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.tools.machine import cpu_model, simd_level
 from amigo_gym.tools.options import run_command
-
-__all__ = ["TrainSettings", "bench_fastppo", "bench_sb3", "cpu_model", "main"]
 
 PROG = "amigo-gym bench-train"
 
@@ -180,7 +180,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym bench-train``."""
 
     def run(s: TrainSettings) -> int:
-        import numpy as np
         import torch
 
         head = {

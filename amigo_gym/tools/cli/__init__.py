@@ -17,8 +17,6 @@ from dataclasses import dataclass
 
 from amigo_gym.tools.options import _one_line, install_hint, missing_modules
 
-__all__ = ["COMMANDS", "EXTRA_OF_MODULE", "Command", "install_hint", "main"]
-
 
 @dataclass(frozen=True)
 class Command:

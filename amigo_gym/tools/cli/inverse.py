@@ -36,8 +36,6 @@ from amigo_gym.task.inverse import (
 )
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 
-__all__ = ["InverseSettings", "main"]
-
 PROG = "amigo-gym inverse"
 
 #: default duration of a circle run without braking [s]: more than one lap of the default circle (31.3 s)
@@ -193,10 +191,7 @@ def _run(args: InverseSettings) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym inverse`` (returns the exit status)."""
     args = parse_settings(
-        InverseSettings,
-        argv,
-        PROG,
-        "Analytic inverse solution of point H on a path (CSV or summary).",
+        InverseSettings, argv, PROG, "Analytic inverse solution of point H on a path (CSV or summary)."
     )
     return run_guarded(lambda: _run(args), PROG)
 

@@ -10,8 +10,11 @@ import glob
 import json
 import math
 import re
+import shutil
 import sys
+import tempfile
 import time
+import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -20,65 +23,41 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe, sha256_file
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
+from amigo_gym.model.params import EnvParams
+from amigo_gym.paths.points import cached_file_path, is_points_file
+from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.policies.learned import FastPolicy
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
-from amigo_gym.tools.runs import remove_matching
-from amigo_gym.tools.training import protocol
-from amigo_gym.tools.training.task_metrics import (
-    SUITE_VERSION,
-    Scenario,
-    Unavailable,
-    make_env,
-    run_grid,
-    run_scenario,
+from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.runs import (
+    RunLock,
+    check_pickle,
+    corrupt_errors,
+    publish,
+    remove_matching,
+    verify_manifest,
+    verify_sha256,
 )
-
-__all__ = [
-    "CLASSICAL",
-    "H_TARGET_M",
-    "QUICK_SCENARIOS",
-    "SUITE",
-    "SUITES",
-    "SUITE_VERSION",
-    "TRAINING_DISTRIBUTION",
-    "RETIRED_V1_AGENTS",
-    "V1_AGENTS",
-    "AgentSpec",
-    "BenchmarkSettings",
-    "Scenario",
-    "Unavailable",
-    "agent_label",
-    "aggregate",
-    "default_agents",
-    "evaluate",
-    "failed_episodes",
-    "main",
-    "make_env",
-    "markdown_report",
-    "parse_agents",
-    "quick_suite",
-    "run_benchmark",
-    "write_outputs",
-]
+from amigo_gym.tools.training import curvature, protocol
+from amigo_gym.tools.training.curvature import cell_specs
+from amigo_gym.tools.training.evaluate import one_torch_thread
+from amigo_gym.tools.training.hyperparams import sb3_class
+from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
+from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
 
 ALGOS = ("ppo", "sac", "td3")
 #: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
 FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
-V1_AGENTS: dict[str, str] = {
-    "td3lp": "SB3 TD3 low-pass",
-    "ppo_fast": "fast PPO",
-    "residual": "fast PPO residual",
-}
+V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
 #: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
 #: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
 #: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
 #: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
-RETIRED_V1_AGENTS: dict[str, str] = {
-    "ppo": "SB3 PPO",
-    "sac": "SB3 SAC",
-    "td3": "SB3 TD3",
-}
+RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
 #: thresholds of the H-error performance profile [m]
@@ -119,8 +98,6 @@ def user_scenarios(
     Raises:
         FileNotFoundError, ValueError: a missing file, a bad value (one line).
     """
-    from amigo_gym.paths.points import cached_file_path, is_points_file
-
     out = []
     for f in files:
         if not is_points_file(str(f)):
@@ -269,12 +246,7 @@ def _classical(name: str) -> Callable[[Any], Any]:
         hook = getattr(base, "classical_policy", None)
         if callable(hook):
             return hook(name)
-        from amigo_gym.model.params import EnvParams
-        from amigo_gym.policies.analytic import AnalyticPolicy
-
         params = getattr(base, "params", None)
-        from amigo_gym.task.v1 import TrackingParams
-
         if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
@@ -314,24 +286,17 @@ class AgentSpec:
         if self.path is None:
             return CLASSICAL[self.name](env)
         if self._model is None:
-            from amigo_gym.tools.runs import check_pickle, corrupt_errors, verify_sha256
-
             # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
             digest = (self.manifest or {}).get("sha256")
-            path = Path(self.path)
+            path, source = Path(self.path), str(Path(self.path).with_suffix(".json"))
             if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
-                from amigo_gym.policies.learned import FastPolicy
-
                 if digest is not None:
-                    verify_sha256(path, str(digest), str(path.with_suffix(".json")))
+                    verify_sha256(path, str(digest), source)
                 self._model = FastPolicy.load(self.path)
             else:
-                check_pickle(path, None if digest is None else str(digest), str(path.with_suffix(".json")))
-                from stable_baselines3 import PPO, SAC, TD3
-
-                cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[str(self.algo)]
+                check_pickle(path, None if digest is None else str(digest), source)
                 with corrupt_errors(path, f"{str(self.algo).upper()} model"):
-                    self._model = cls.load(self.path, device="cpu")
+                    self._model = sb3_class(str(self.algo)).load(self.path, device="cpu")
         if str(self.algo).startswith(FAST_ALGO):
             dim = self._model.builder.obs_dim
             if getattr(env.observation_space, "shape", None) != (dim,):
@@ -358,8 +323,6 @@ class AgentSpec:
 
 def _is_fast_model(path: Path) -> bool:
     """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
-    import zipfile
-
     try:
         with zipfile.ZipFile(path) as z:
             return "model.json" in z.namelist()
@@ -555,8 +518,6 @@ def aggregate(
     seed: int = 0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Per-agent aggregates and H-error performance profiles (module docstring)."""
-    from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-
     aggregates: dict[str, Any] = {}
     profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
     keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
@@ -776,22 +737,13 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
     """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
     (:func:`scenarios_figure`), saved as PNG."""
-    import matplotlib.pyplot as plt
-
-    fig = scenarios_figure(doc, reps, seed)
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(scenarios_figure(doc, reps, seed), path)
 
 
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
     """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
     the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from amigo_gym.tools.training.intervals import stratified_bootstrap
+    plt = pyplot()
 
     scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
     agents = list(doc["aggregates"])
@@ -828,10 +780,7 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
 
 def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     """Performance profiles: fraction of (seed, scenario) runs with H RMS below tau, with bootstrap bands."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     prof = doc["performance_profiles"]
     taus = np.asarray(prof["taus_m"])
@@ -846,8 +795,7 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     ax.set_title("Performance profiles (rliable score distributions)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 #: the manifest naming a published set of benchmark outputs (in ``--out``)
@@ -873,11 +821,6 @@ def write_outputs(
     last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
     ``publish:<file name>`` after each move.
     """
-    import shutil
-    import tempfile
-
-    from amigo_gym.tools.runs import publish
-
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
     try:
@@ -898,8 +841,6 @@ def write_outputs(
 def verify_outputs(out: Path) -> dict[str, str]:
     """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
     (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
-    from amigo_gym.tools.runs import verify_manifest
-
     return verify_manifest(out, MANIFEST)
 
 
@@ -972,8 +913,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = "amigo-gym benchmark " + " ".join(args)
 
     def run() -> int:
-        from amigo_gym.tools.training.evaluate import one_torch_thread
-
         one_torch_thread()
         suite = SUITES[a.suite]
         if a.table_from is not None:
@@ -1005,8 +944,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = Path(a.out)
         json_path = Path(a.json) if a.json else out / "benchmark.json"
         md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
-        from amigo_gym.tools.runs import RunLock
-
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
             clean_temporaries(out)
             doc = run_benchmark(
@@ -1031,16 +968,11 @@ def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
     """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`: random paths up to the
     feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
     suite."""
-    from amigo_gym.tools.training.curvature import cell_specs
-
     return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
 
 
 def _run_curvature(a: BenchmarkSettings, command: str) -> int:
     """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.tools.training.curvature`)."""
-    from amigo_gym.tools.runs import RunLock
-    from amigo_gym.tools.training import curvature
-
     if a.path or a.scenarios:
         raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
     scenarios = curvature_scenarios(a.curvature_episodes)

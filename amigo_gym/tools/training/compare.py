@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import glob
 import json
+import shlex
 import shutil
 import sys
 import tempfile
@@ -19,24 +20,32 @@ from typing import Any
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
+from amigo_gym.model.params import EnvParams
+from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
-
-__all__ = [
-    "MANIFEST",
-    "TARGETS",
-    "agent_legend",
-    "display_command",
-    "main",
-    "publish",
-    "quick_benchmark",
-    "report_markdown",
-    "CompareSettings",
-    "run_compare",
-    "summary_text",
-    "v0_name",
-    "verify_outputs",
-]
+from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
+from amigo_gym.tools.training.benchmark import (
+    ALGOS,
+    CLASSICAL,
+    RETIRED_V1_AGENTS,
+    V1_AGENTS,
+    AgentSpec,
+    parse_agents,
+    quick_suite,
+    run_benchmark,
+)
+from amigo_gym.tools.training.evaluate import (
+    EvalProtocol,
+    default_agents,
+    evaluate_agents,
+    find_models,
+    load_model,
+    markdown_table,
+    one_torch_thread,
+    write_outputs,
+)
+from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
 
 MANIFEST = "manifest.json"
 
@@ -48,8 +57,6 @@ ANALYTIC = ("analytic", "analytic_ff")
 def v0_name(name: str) -> str:
     """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
     ``amigo-gym benchmark`` names them; its v1 generalists are ``<algo>_v1``), a run's own name otherwise."""
-    from amigo_gym.tools.training.benchmark import ALGOS
-
     return f"{name}_v0" if name in ALGOS else name
 
 
@@ -57,8 +64,6 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
     """One line per agent name of a report: what it is (every name a report prints is explained; the v1
     generalists by the label of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS` or, retired,
     :data:`~amigo_gym.tools.training.benchmark.RETIRED_V1_AGENTS`: "SB3 TD3 low-pass", "fast PPO", "SB3 PPO")."""
-    from amigo_gym.tools.training.benchmark import RETIRED_V1_AGENTS, V1_AGENTS
-
     fixed = {
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
         "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
@@ -90,8 +95,6 @@ def display_command(command: str, root: Path | None = None) -> str:
     """``command`` with its absolute paths made short: relative to the repository (``root``, default the current
     folder) when inside it, else their last two parts (a training record's ``--out /tmp/retrain/runs/ppo`` reads
     ``--out runs/ppo``), so that no printed command shows a machine's temporary folders."""
-    import shlex
-
     base = (root or Path.cwd()).resolve()
     words = []
     for word in shlex.split(command):
@@ -113,8 +116,6 @@ def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed")
 
 def report_markdown(doc: dict[str, Any]) -> str:
     """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
-    from amigo_gym.tools.training.evaluate import markdown_table
-
     proto = doc["protocol"]
     lines = [
         "# AmigoBot-v0: learned agents against the analytic inverse solution",
@@ -260,15 +261,6 @@ def quick_benchmark(
         generalists: a folder of AmigoBot-v1 generalists (``<models>/v1``), if any: its ``<folder>/*.zip`` for
             every folder of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``.
     """
-    from amigo_gym.tools.training.benchmark import (
-        CLASSICAL,
-        V1_AGENTS,
-        AgentSpec,
-        parse_agents,
-        quick_suite,
-        run_benchmark,
-    )
-
     specs: list[AgentSpec] = []
     for name, agent in agents.items():
         if name in CLASSICAL:
@@ -288,8 +280,6 @@ def quick_benchmark(
 
 def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
     """What the fresh PPO run must have been trained with to be reused (compared with its ``config.json``)."""
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, load_hyperparams, versions
-
     return {
         "algo": "ppo",
         "timesteps": train_steps,
@@ -338,11 +328,6 @@ def verify_outputs(out: Path) -> dict[str, str]:
     (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without ``manifest.json``,
     ``CorruptFileError``)."""
     return runs.verify_manifest(out, MANIFEST)
-
-
-def _say(message: str) -> None:
-    """A progress line on stderr (the report itself goes to stdout)."""
-    print(message, file=sys.stderr, flush=True)
 
 
 @dataclass(frozen=True)
@@ -397,23 +382,12 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     out, models = Path(s.out), Path(s.models) if s.models else None
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
     train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
-    from amigo_gym.model.params import EnvParams
-    from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
-    from amigo_gym.tools.training.evaluate import (
-        EvalProtocol,
-        default_agents,
-        evaluate_agents,
-        find_models,
-        load_model,
-        write_outputs,
-    )
-
     proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
     agents = default_agents(EnvParams(), proto.analytic_gain)
     training: dict[str, Any] = {}
     sources: dict[str, tuple[Path, str, int]] = {}  # name -> (zip, algo, training seed), for the benchmark
     if models is not None:
-        _say(f"loading pretrained agents from {models}")
+        say(f"loading pretrained agents from {models}")
         refs = find_models(models)
         agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
         training.update({v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None})
@@ -427,7 +401,7 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         request = fresh_run_request(train_steps, seed, hyperparams)
         stale = reuse_mismatch(run_dir, request)
         if stale is not None and run_dir.exists():
-            _say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+            say(f"retraining: the run in {run_dir} does not match the request ({stale})")
             shutil.rmtree(run_dir)
         argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
         fresh = Settings(
@@ -443,9 +417,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
             argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
         )
         if stale is None:
-            _say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+            say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
         else:
-            _say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+            say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
         t0 = time.perf_counter()
         training["ppo_fresh"] = train(fresh)
         rec = training["ppo_fresh"]
@@ -453,14 +427,14 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
         agents["ppo_fresh"] = load_model(find_models(run_dir)[0])  # checked against run.json, as every model
         sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
-    _say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
+    say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
     extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
     bench: dict[str, Any] | None = None
     if s.benchmark:
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
-        _say(
+        say(
             "quick benchmark (amigo-gym benchmark --quick) on these agents"
             + (f" and {generalists}" if generalists else "")
         )
@@ -490,8 +464,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
 
     def run() -> int:
-        from amigo_gym.tools.training.evaluate import one_torch_thread
-
         one_torch_thread()
         doc = run_compare(replace(s, progress=s.progress and sys.stderr.isatty()))
         print(summary_text(doc, Path(s.out)))

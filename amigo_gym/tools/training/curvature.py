@@ -15,21 +15,10 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
-from amigo_gym.tools.training.intervals import Z95, wilson_interval
+from amigo_gym.task.v1 import feasible_random_curvature
+from amigo_gym.tools.training.intervals import Z95 as Z95  # re-exported: the cells' interval
+from amigo_gym.tools.training.intervals import wilson_interval
 from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
-
-__all__ = [
-    "BIN_EDGES",
-    "CURVATURE_EPISODES",
-    "CURVATURE_SPEEDS",
-    "LEVELS",
-    "Z95",
-    "bin_table",
-    "cell_specs",
-    "markdown_curvature",
-    "run_curvature",
-    "wilson_interval",
-]
 
 #: speeds of the cells [m/s]: the ends of the training distribution's range
 CURVATURE_SPEEDS: tuple[float, ...] = (0.1, 0.4)
@@ -53,8 +42,6 @@ def cell_specs(
     ``env_id``, ``env_kwargs``: ``gym.make``'s, ``seeds``, ``max_steps``, ``held_out``, ``description``: naming
     ``K(v)``, the level and the curvature); :func:`amigo_gym.tools.training.benchmark.curvature_scenarios` builds
     them."""
-    from amigo_gym.task.v1 import feasible_random_curvature
-
     if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
         raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
@@ -159,8 +146,6 @@ def run_curvature(agents: Sequence[Any], scenarios: Sequence[Any], *, progress: 
     """Every agent seed on every cell (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
     ``protocol``, ``scenarios``, ``agents``, ``episodes`` (tagged, one record per episode), ``table``
     (:func:`bin_table`), ``unavailable``, ``wall_time_s``."""
-    from amigo_gym.task.v1 import feasible_random_curvature
-
     t0 = time.perf_counter()
     grid = run_grid(agents, scenarios, evaluate_tagged, desc="curvature", progress=progress)
     episodes = [

@@ -17,25 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
-
-__all__ = [
-    "AXES",
-    "CURVE_METRICS",
-    "CurvesSettings",
-    "DEFAULT_THRESHOLD_M",
-    "THRESHOLD_METRIC",
-    "Run",
-    "curve",
-    "find_runs",
-    "learning_curves",
-    "main",
-    "markdown_report",
-    "plot_curves",
-    "threshold_time",
-    "threshold_summary",
-    "write_outputs",
-]
+from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.tools import runs
+from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
+from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.training.intervals import stratified_bootstrap
 
 #: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
 THRESHOLD_METRIC = "h_rms_settled_m"
@@ -69,14 +55,8 @@ class Run:
     group: str = ""
 
 
-def _say(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
-
-
 def _identify(run_dir: Path) -> tuple[str, int, str | None]:
     """``(algo, seed, env_id)`` of a run folder from its ``config.json``, else its name; ``ValueError`` if neither."""
-    from amigo_gym.tools import runs
-
     cfg_file = run_dir / "config.json"
     if cfg_file.is_file():
         cfg = runs.read_json(cfg_file)
@@ -97,8 +77,6 @@ def _finite(x: Any) -> bool:
 
 
 def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
-    from amigo_gym.tools import runs
-
     data = runs.read_json(path)
     if not isinstance(data, list) or not all(isinstance(e, dict) and _finite(e.get("timesteps")) for e in data):
         raise ValueError("eval.json is not a list of evaluations with 'timesteps'")
@@ -165,8 +143,6 @@ def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, se
     Module docstring: step-function values, the range every seed covers, the union of the evaluation
     points in it, the pointwise percentile bootstrap over seeds. ``None`` if the seeds share no range.
     """
-    from amigo_gym.tools.training.intervals import stratified_bootstrap
-
     series = {r.seed: _series(r, axis, metric) for r in runs}
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:
@@ -256,14 +232,14 @@ def learning_curves(
     t0 = time.perf_counter()
     found, skipped = find_runs(folders)
     for s in skipped:
-        _say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
+        say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
     if not found:
         where = ", ".join(map(str, folders))
         raise ValueError(f"--runs: no run folder with an eval.json in {where}")
     groups: dict[str, list[Run]] = {}
     for r in found:
         groups.setdefault(r.group, []).append(r)
-    _say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
+    say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
     curves: dict[str, Any] = {}
     jobs = [(g, axis, m) for g in groups for axis in AXES for m in CURVE_METRICS]
     bar = tqdm(jobs, desc="curves", unit="curve", file=sys.stderr, disable=not progress)
@@ -354,12 +330,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 
 def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
     """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from amigo_gym.io import atomic_save
+    plt = pyplot()
 
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
@@ -391,14 +362,11 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
         fontsize=8,
     )
     fig.tight_layout(rect=(0, 0.04, 1, 0.96))
-    atomic_save(lambda tmp: fig.savefig(tmp, dpi=110), path, parents=True)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:
     """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png``; the paths."""
-    from amigo_gym.io import atomic_write, atomic_write_json
-
     written = [out / "curves.json", out / "curves.md"]
     atomic_write_json(written[0], doc, parents=True)
     atomic_write(written[1], markdown_report(doc), parents=True)

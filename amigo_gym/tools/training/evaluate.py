@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import pickle
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
@@ -19,29 +20,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, json_safe
-from amigo_gym.model.params import EnvParams
+from amigo_gym.envs.base import info_row
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe
+from amigo_gym.model.kinematics import a_from_h, circle_steady_state
+from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.paths import make_path
+from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.plots import pyplot, save_figure
+from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+from amigo_gym.tools.training.hyperparams import sb3_class
 from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
-
-__all__ = [
-    "Agent",
-    "EvalProtocol",
-    "EvaluateSettings",
-    "Trajectory",
-    "default_agents",
-    "evaluate_agents",
-    "find_models",
-    "load_agents",
-    "load_model",
-    "main",
-    "markdown_table",
-    "plot_trajectories",
-    "plot_wheels",
-    "rollout",
-    "steady_start_pose",
-    "summarize",
-]
 
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
@@ -87,8 +76,6 @@ class EvalProtocol:
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
-        from amigo_gym.model.params import check_range
-
         check_range("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
         check_range("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
 
@@ -123,9 +110,6 @@ def steady_start_pose(params: EnvParams) -> Array:
     ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.model.kinematics.circle_steady_state`), A ``l3``
     behind H.
     """
-    from amigo_gym.model.kinematics import a_from_h, circle_steady_state
-    from amigo_gym.paths import make_path
-
     path = make_path(params)
     if params.path != "circle":
         raise ValueError(f"the nominal scenario needs path='circle', got {params.path!r}")
@@ -161,10 +145,6 @@ def protocol_scenarios(proto: EvalProtocol, params: EnvParams | None = None) -> 
 def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
     """The episodes of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`) as :class:`Trajectory`
     rows, with the analytic policy's rates (gain ``gain`` [1/s]) on the agent's observations as the reference."""
-    from amigo_gym.envs.base import info_row
-    from amigo_gym.paths import make_path
-    from amigo_gym.policies.analytic import analytic_wheel_rates
-
     keys = ("time", "e", "h", "rates", "angles", "ref_rates")
     cols: list[dict[str, list[Any]]] = [{k: [] for k in keys} for _ in sc.seeds]
     start: dict[str, Any] = {}
@@ -226,8 +206,6 @@ def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None
 
 def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
     """Pooled metrics of one (agent, scenario) (keys documented in the module docstring)."""
-    from amigo_gym.model.kinematics import circle_steady_state
-
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
     e = np.concatenate([t.e for t in trajs])
     settled = [t.time >= proto.settle_time_s - 1e-9 for t in trajs]
@@ -255,12 +233,7 @@ def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtoco
 
 def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
-    from amigo_gym.policies.analytic import AnalyticPolicy
-
-    return {
-        "analytic": AnalyticPolicy(params, gain=gain),
-        "analytic_ff": AnalyticPolicy(params, feedforward_only=True),
-    }
+    return {"analytic": AnalyticPolicy(params, gain=gain), "analytic_ff": AnalyticPolicy(params, feedforward_only=True)}
 
 
 @dataclass(frozen=True)
@@ -386,13 +359,6 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
         UntrustedFileError: a file not trusted (one line naming it and the flag).
     """
-    import pickle
-
-    from stable_baselines3 import PPO, SAC, TD3
-
-    from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
-
-    classes: dict[str, Any] = {"ppo": PPO, "sac": SAC, "td3": TD3}
     record = read_json(ref.record) if ref.record is not None else None
     if record is not None and not isinstance(record, dict):
         raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
@@ -407,7 +373,7 @@ def load_model(ref: ModelRef, trust: bool = False) -> Agent:
         check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record), trust)
     check_pickle(ref.model, None if digest is None else str(digest), str(ref.record), trust)
     with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
-        model = classes[ref.algo].load(ref.model, device="cpu")
+        model = sb3_class(ref.algo).load(ref.model, device="cpu")
     if ref.vecnormalize is None:
         agent: Agent = model
         return agent
@@ -497,10 +463,6 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _save_fig(fig: Any, path: Path) -> None:
-    atomic_save(lambda tmp: fig.savefig(tmp, format="png", dpi=110), path, parents=True)
-
-
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
     """H's path (whole circle and a zoom on the start, first perturbed episode) and ``|e|`` over time.
 
@@ -508,12 +470,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
     0.25 m where the perturbed start's transient happens. Bottom: ``|e(t)|`` (log scale) for the nominal
     and the first perturbed start; the dotted line is the 1 mm band of ``settling_time_s``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from amigo_gym.paths import make_path
+    plt = pyplot()
 
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
     top = "perturbed" if "perturbed" in have else sorted(have)[0]
@@ -547,8 +504,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
         ax.set_title(f"tracking error, {sc} start")
         ax.legend(fontsize=8)
     fig.tight_layout()
-    _save_fig(fig, path)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_wheels(
@@ -561,12 +517,7 @@ def plot_wheels(
     ``alpha1dot, alpha2dot`` [rad/s] over the first 10 s with the closed-form steady rates dotted;
     right, the agent's wheel angles minus the analytic policy's [rad] over the whole episode.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from amigo_gym.model.kinematics import circle_steady_state
+    plt = pyplot()
 
     if "analytic" not in trajs:
         raise ValueError("plot_wheels needs the 'analytic' agent as the reference")
@@ -605,8 +556,7 @@ def plot_wheels(
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.tight_layout()
-    _save_fig(fig, path)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 # --------------------------------------------------------------------------- files
@@ -690,10 +640,7 @@ class EvaluateSettings:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym evaluate``."""
     a = parse_settings(
-        EvaluateSettings,
-        argv,
-        "amigo-gym evaluate",
-        "Evaluate analytic and trained agents (fixed protocol).",
+        EvaluateSettings, argv, "amigo-gym evaluate", "Evaluate analytic and trained agents (fixed protocol)."
     )
 
     def run() -> int:

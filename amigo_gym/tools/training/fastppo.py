@@ -63,30 +63,23 @@ from torch import nn
 
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
 from amigo_gym.model.params import check_range
+from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
+from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import cpu_model
-from amigo_gym.tools.options import cli, json_object
+from amigo_gym.tools.options import (
+    OneLineParser,
+    add_dataclass_options,
+    cli,
+    json_object,
+    run_guarded,
+    settings_from_args,
+)
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.hyperparams import load_hyperparams
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
 from amigo_gym.tools.training.train import git_revision, versions
-
-__all__ = [
-    "DEVICES",
-    "YAML_ENV_ID",
-    "YAML_RUN_KEYS",
-    "ActorCritic",
-    "FastPPOSettings",
-    "HyperparamsFile",
-    "TrainFastRun",
-    "curriculum_path_params",
-    "evaluate_policy",
-    "load_settings_yaml",
-    "machine_record",
-    "main",
-    "resolve_device",
-    "train",
-]
 
 Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
@@ -276,8 +269,6 @@ class FastPPOSettings:
         ``max_curvature_rate`` [1/m^2] and the ``env_kwargs``' other ``path_params``), or None without one."""
         if self.curriculum_max_curvature <= 0:
             return None
-        from amigo_gym.paths.families import RANDOM_RANGES
-
         given = {str(k): float(v) for k, v in dict(self.env_kwargs.get("path_params") or {}).items()}
         start = {k: r.default for k, r in RANDOM_RANGES.items() if k in ("max_curvature", "max_curvature_rate")}
         start |= given
@@ -307,8 +298,6 @@ class FastPPOSettings:
 def _check_curriculum(s: FastPPOSettings) -> None:
     """One-line errors for a curriculum the env cannot run: a fixed path, a final curvature not above the start, a
     final stage the env's feasibility check refuses (at the highest reference speed)."""
-    from amigo_gym.task import v1 as tracking
-
     o = "FastPPOSettings"
     path = s.env_kwargs.get("path", tracking.TrackingParams.path)
     if path not in ("random", "mixed"):
@@ -383,8 +372,6 @@ def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
     Raises:
         FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, or a bad key or value.
     """
-    from amigo_gym.tools.training.hyperparams import load_hyperparams
-
     return check_settings_mapping(load_hyperparams(path, YAML_ENV_ID), str(path))
 
 
@@ -995,8 +982,6 @@ class TrainFastRun(HyperparamsFile):
 def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> argparse.ArgumentParser:
     """The options of ``cls`` (and the :class:`FastPPOSettings`' unless ``cls`` is :class:`HyperparamsFile`);
     ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
-    from amigo_gym.tools.options import OneLineParser, add_dataclass_options
-
     p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "", **kw)
     add_dataclass_options(p, cls)
     if cls is not HyperparamsFile:
@@ -1007,8 +992,6 @@ def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
-    from amigo_gym.tools.options import run_guarded, settings_from_args
-
     args_in = list(sys.argv[1:] if argv is None else argv)
     known, _ = _parser(HyperparamsFile, add_help=False).parse_known_args(args_in)
     defaults: dict[str, Any] = {}

@@ -23,17 +23,6 @@ import numpy as np
 
 from amigo_gym.model.params import check_real
 
-__all__ = [
-    "ENV_ID",
-    "META_KEYS",
-    "TORCH_NAMES",
-    "Hyperparams",
-    "check_filter_alpha",
-    "load_hyperparams",
-    "parse_hyperparams",
-    "parse_python_literal",
-]
-
 ENV_ID = "AmigoBot-v0"
 
 #: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.tools.training.sb3_lowpass.POLICY_NAME`)
@@ -197,11 +186,15 @@ class Hyperparams:
         return OrnsteinUhlenbeckActionNoise(mean, sigma)
 
 
-def _algo_keywords(algo: str) -> set[str]:
-    from stable_baselines3 import PPO, SAC, TD3
+def sb3_class(algo: str) -> Any:
+    """SB3's class of ``algo`` (``ppo``, ``sac``, ``td3``: ``PPO``, ``SAC``, ``TD3``)."""
+    import stable_baselines3
 
-    cls: type = {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
-    return set(inspect.signature(cls).parameters) - {"self", *RESERVED}
+    return getattr(stable_baselines3, algo.upper())
+
+
+def _algo_keywords(algo: str) -> set[str]:
+    return set(inspect.signature(sb3_class(algo)).parameters) - {"self", *RESERVED}
 
 
 def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:

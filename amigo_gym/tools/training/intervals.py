@@ -22,17 +22,6 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "DEFAULT_PROFILE_REPS",
-    "DEFAULT_REPS",
-    "iqm",
-    "optimality_gap",
-    "performance_profile",
-    "score_distribution",
-    "stratified_bootstrap",
-    "wilson_interval",
-]
-
 Array = NDArray[np.float64]
 Stat = Callable[[Array], Array]
 
@@ -77,12 +66,7 @@ def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
 
 
 def stratified_bootstrap(
-    scores: ArrayLike,
-    stat: Stat,
-    *,
-    reps: int = DEFAULT_REPS,
-    size: float = 0.95,
-    seed: int | np.random.Generator = 0,
+    scores: ArrayLike, stat: Stat, *, reps: int = DEFAULT_REPS, size: float = 0.95, seed: int | np.random.Generator = 0
 ) -> tuple[Array, Array]:
     """Point estimate and percentile interval of ``stat`` under rliable's stratified bootstrap.
 

@@ -21,10 +21,9 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3.td3.policies import Actor, TD3Policy
 
+from amigo_gym.task.v1 import TrackingParams, obs_fields
 from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY as POLICY_NAME
 from amigo_gym.tools.training.hyperparams import check_filter_alpha
-
-__all__ = ["POLICY_NAME", "LowPassActor", "LowPassTD3Policy", "policy_for", "previous_command_index"]
 
 
 def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
@@ -123,8 +122,6 @@ class LowPassTD3Policy(TD3Policy):
 def policy_for(venv: Any, policy_kwargs: dict[str, Any] | None) -> tuple[type[LowPassTD3Policy], dict[str, Any]]:
     """The policy class and its ``policy_kwargs`` for a TD3 run on ``venv`` (an SB3 VecEnv of AmigoBot-v1):
     ``prev_index`` from the env's observation layout (:func:`amigo_gym.task.v1.obs_fields`)."""
-    from amigo_gym.task.v1 import TrackingParams, obs_fields
-
     params = venv.get_attr("params")[0]
     if not isinstance(params, TrackingParams):
         raise ValueError(f"{POLICY_NAME}: needs AmigoBot-v1 (TrackingParams), got {type(params).__name__}")

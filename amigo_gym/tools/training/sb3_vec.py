@@ -24,9 +24,6 @@ from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 from amigo_gym.envs.base import info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 
-__all__ = ["AmigoBotSB3VecEnv"]
-
-
 #: the native vector env of each id (the registrations' ``vector_entry_point``)
 VECTOR_ENVS: dict[str, Any] = {"AmigoBot-v0": AmigoBotVectorEnv, "AmigoBot-v1": AmigoBotV1VectorEnv}
 

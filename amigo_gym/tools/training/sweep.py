@@ -2,9 +2,7 @@
 
 Usage, environment, objective, storage, the fast PPO, winners (``--save-best``), secrets, modes, the global
 budget, stopped and killed workers, the summary and the exit status: docs/benchmark.md, "Reference: `amigo-gym
-sweep`".
-
-Imports optuna, SQLAlchemy (and PyYAML) only when run.
+sweep`". Imports optuna, SQLAlchemy (and PyYAML) only when run.
 """
 
 from __future__ import annotations
@@ -13,6 +11,7 @@ import json
 import math
 import os
 import re
+import shutil
 import signal
 import socket
 import subprocess
@@ -30,32 +29,15 @@ from urllib.parse import quote, quote_plus, unquote, unquote_plus
 import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.policies.learned import FastPolicy
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.tools.runs import handling
-from amigo_gym.tools.training.train import ENV_IDS, EnvId
-
-__all__ = [
-    "ABANDONED",
-    "SWEEP_ALGOS",
-    "SweepConfig",
-    "budget_count",
-    "driver_url",
-    "main",
-    "make_storage",
-    "mark_abandoned",
-    "masked_url",
-    "open_study",
-    "run_worker",
-    "sample_fastppo",
-    "sample_hyperparams",
-    "scrub",
-    "study_status",
-    "summarize",
-    "validate_agent",
-    "validation_cells",
-    "write_best_yaml",
-    "write_summary",
-]
+from amigo_gym.tools.runs import RunLock, handling, verify_sha256
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+from amigo_gym.tools.training.evaluate import find_models, load_model
+from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.intervals import iqm
+from amigo_gym.tools.training.task_metrics import run_scenario
+from amigo_gym.tools.training.train import ENV_IDS, HYPERPARAMS_DIR, EnvId, Settings, train
 
 Mode = Literal["hyperparams", "seeds"]
 MODES = get_args(Mode)
@@ -220,30 +202,17 @@ class SweepConfig:
             )
         if self.mode == "hyperparams" and len(self.algos) != 1:
             raise ValueError(f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}")
-        if self.sampler not in ("tpe", "random"):
-            raise ValueError(f"--sampler must be 'tpe' or 'random', got {self.sampler!r}")
-        if self.pruner not in ("median", "none"):
-            raise ValueError(f"--pruner must be 'median' or 'none', got {self.pruner!r}")
-        if self.env_id not in ENV_IDS:
-            raise ValueError(f"--env must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        choices = (("sampler", self.sampler, ("tpe", "random")), ("pruner", self.pruner, ("median", "none")),
+                   ("env", self.env_id, ENV_IDS))  # fmt: skip
+        for flag, value, allowed in choices:
+            if value not in allowed:
+                raise ValueError(f"--{flag} must be one of {list(allowed)}, got {value!r}")
         if self.env_kwargs is not None and not isinstance(self.env_kwargs, dict):
             raise ValueError(f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}")
-        for name, low in (
-            ("n_trials", 1),
-            ("n_jobs", 1),
-            ("timesteps", 1),
-            ("eval_freq", 1),
-            ("eval_episodes", 1),
-            ("heartbeat_interval", 1),
-            ("grace_period", 1),
-            ("max_retry", 0),
-            ("threads", 1),
-            ("n_startup_trials", 0),
-            ("worker_index", 0),
-            ("train_seed", 0),
-            ("val_episodes", 1),
-            ("val_max_steps", 0),
-        ):
+        lows = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
+                "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0,
+                "train_seed": 0, "val_episodes": 1, "val_max_steps": 0}  # fmt: skip
+        for name, low in lows.items():
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
@@ -296,7 +265,6 @@ class SweepConfig:
                 f"{', '.join(a for a in self.algos if a != FASTPPO)}; leave it out (agents/hyperparams/<algo>.yml each)"
             )
         from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
-        from amigo_gym.tools.training.train import HYPERPARAMS_DIR
 
         base = load_settings_yaml(Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / "fastppo.yml")
         try:
@@ -330,8 +298,6 @@ class SweepConfig:
         if self.env_kwargs is not None:
             return dict(self.env_kwargs)
         if self.env_id == "AmigoBot-v1":
-            from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-
             return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
         return {}
 
@@ -348,17 +314,12 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
     ``vecnormalize.pkl``)."""
-    from amigo_gym.tools.training.evaluate import find_models, load_model
-
     return validate_agent(load_model(find_models(run_dir)[0]), cells)
 
 
 def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
     ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
-    from amigo_gym.policies.learned import FastPolicy
-    from amigo_gym.tools.runs import verify_sha256
-
     model, record = run_dir / "model.zip", run_dir / "run.json"
     verify_sha256(model, str(json.loads(record.read_text()).get("sha256")), str(record))
     return validate_agent(FastPolicy.load(model), cells)
@@ -368,9 +329,6 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
     """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
     (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
     then the IQM is NaN)."""
-    from amigo_gym.tools.training.intervals import iqm
-    from amigo_gym.tools.training.task_metrics import run_scenario
-
     per_cell: dict[str, float | None] = {}
     for sc in cells:
         vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
@@ -385,7 +343,7 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
 def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
     SQLite database, private to its one process, without them."""
-    import optuna.storages as st
+    import optuna.storages
 
     url = driver_url(cfg.storage_url)
     engine_kwargs: dict[str, Any] = {}
@@ -395,7 +353,7 @@ def make_storage(cfg: SweepConfig) -> Any:
     if sqlite:
         # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
         engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
-    retry_cls = getattr(st, "RetryHeartbeatStaleTrialCallback", None)
+    retry_cls = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)
     kwargs: dict[str, Any] = {}
     # an in-memory database lives and dies with its one process: no other worker's death to detect, and the
     # heartbeat's thread would get a connection, hence a database, of its own (without the study's tables)
@@ -404,11 +362,11 @@ def make_storage(cfg: SweepConfig) -> Any:
         if retry_cls is not None:
             kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
         else:  # Optuna < 4.9
-            kwargs["failed_trial_callback"] = st.RetryFailedTrialCallback(max_retry=cfg.max_retry)
+            kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
     last: Exception | None = None
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
-            storage = st.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
+            storage = optuna.storages.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
             break
         except ImportError:
             raise
@@ -486,8 +444,6 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
         elif cfg.enqueue_base:
-            from amigo_gym.tools.training.train import HYPERPARAMS_DIR, load_hyperparams
-
             algo = cfg.algos[0]
             base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
             study.enqueue_trial(
@@ -719,6 +675,36 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
+def _write_trial_hp(trial: Any, run_dir: Path, key: str, hp: dict[str, Any]) -> Path:
+    """The trial's hyperparameters as its user attribute and as ``run_dir/hyperparams.yml`` (under ``key``)."""
+    import yaml
+
+    trial.set_user_attr("hyperparams", hp)
+    hp_file = run_dir / "hyperparams.yml"
+    atomic_write(hp_file, yaml.safe_dump({key: hp}, sort_keys=True), parents=True)
+    return hp_file
+
+
+def _reporter(cfg: SweepConfig, trial: Any) -> tuple[Callable[[float, int, int], bool], dict[str, bool]]:
+    """``report(value, at, step)`` for a trial's evaluations (at env-step ``at``): a non-finite value raises
+    ``FloatingPointError``; in hyperparams mode the value goes to the pruner once per ``step``; ``False`` (and the
+    flag ``pruned`` set) when the pruner stops the trial."""
+    state, reported = {"pruned": False}, set()
+
+    def report(value: float, at: int, step: int) -> bool:
+        if not math.isfinite(value):
+            raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
+        if cfg.mode == "hyperparams" and step not in reported:
+            reported.add(step)
+            trial.report(value, step=step)
+            if trial.should_prune():
+                state["pruned"] = True
+                return False
+        return True
+
+    return report, state
+
+
 #: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
 _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
 
@@ -726,10 +712,9 @@ _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """The end shared by both kinds of trial (SB3's and the fast PPO's): ``fit_and_validate()`` trains and
-    validates, giving the objective and its per-cell values (:func:`validate_agent`); an error of
-    :data:`_TRIAL_ERRORS` is recorded as the trial's ``fail_reason`` and raised again; the cells go to the user
-    attribute ``validation``; a non-finite objective gets a ``fail_reason`` and is returned as it is (NaN: Optuna
+    """The end of both kinds of trial: ``fit_and_validate()`` gives the objective and its per-cell values
+    (:func:`validate_agent`), stored as the user attribute ``validation``; an error of :data:`_TRIAL_ERRORS` becomes the
+    trial's ``fail_reason`` and is raised again; a non-finite objective gets a ``fail_reason`` and is returned (Optuna
     marks the trial FAIL, never PRUNED)."""
     try:
         value, per_cell = fit_and_validate()
@@ -744,9 +729,6 @@ def _validated_trial(
 
 def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
     import optuna
-    import yaml
-
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR, Settings, load_hyperparams, train
 
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
     env_kwargs = cfg.train_env_kwargs
@@ -790,22 +772,12 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         hp = load_hyperparams(base_file, cfg.env_id)
         if cfg.mode == "hyperparams":
             hp |= sample_hyperparams(trial, algo, hp)
-        trial.set_user_attr("hyperparams", hp)
-        hp_file = run_dir / "hyperparams.yml"
-        atomic_write(hp_file, yaml.safe_dump({cfg.env_id: hp}, sort_keys=True), parents=True)
-        pruned = False
+        hp_file = _write_trial_hp(trial, run_dir, cfg.env_id, hp)
+        report, pruned = _reporter(cfg, trial)
 
         def after_eval(entry: dict[str, Any]) -> bool:
-            nonlocal pruned
-            value = float(entry.get("h_rms_m", math.nan))
-            if not math.isfinite(value):
-                raise FloatingPointError(f"evaluation at step {entry['timesteps']} gave h_rms_m {value}")
-            if cfg.mode == "hyperparams":
-                trial.report(value, step=int(entry["timesteps"]))
-                if trial.should_prune():
-                    pruned = True
-                    return False
-            return True
+            step = int(entry["timesteps"])
+            return report(float(entry.get("h_rms_m", math.nan)), step, step)
 
         train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
         s = Settings(
@@ -831,7 +803,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 if key in last:
                     trial.set_user_attr(f"last_eval_{key}", last[key])
             trial.set_user_attr("wall_time_s", record["wall_time_s"])
-            if pruned:
+            if pruned["pruned"]:
                 raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
             return validate_model(run_dir / "run", cells)
 
@@ -844,19 +816,15 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
     """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
     sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
     import optuna
-    import yaml
 
     from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
     from amigo_gym.tools.training.fastppo import train as train_fast
-    from amigo_gym.tools.training.train import HYPERPARAMS_DIR
 
     base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{FASTPPO}.yml"
     hp = load_settings_yaml(base_file)
     if cfg.mode == "hyperparams":
         hp |= sample_fastppo(trial, cfg.timesteps)
-    trial.set_user_attr("hyperparams", hp)
-    hp_file = run_dir / "hyperparams.yml"
-    atomic_write(hp_file, yaml.safe_dump({YAML_ENV_ID: hp}, sort_keys=True), parents=True)
+    hp_file = _write_trial_hp(trial, run_dir, YAML_ENV_ID, hp)
     run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
     run["threads"] = cfg.threads
     env_kwargs = cfg.train_env_kwargs
@@ -880,25 +848,13 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
     atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
-    pruned = False
-    reported: set[int] = set()
+    report, pruned = _reporter(cfg, trial)
 
     def after_eval(row: dict[str, float]) -> bool:
-        nonlocal pruned
-        value = float(row.get("eval_h_rms_m", math.nan))
-        if not math.isfinite(value):
-            raise FloatingPointError(f"evaluation at step {int(row['env_steps'])} gave h_rms_m {value}")
-        if cfg.mode == "hyperparams":
-            # the pruner compares trials at equal steps: report at the evaluation's scheduled step (a multiple of
-            # --eval-freq), which is the same in every trial whatever its batch size N T
-            step = int(row["env_steps"]) // cfg.eval_freq * cfg.eval_freq
-            if step not in reported:  # the last evaluation (at the budget) may share the step of the one before
-                reported.add(step)
-                trial.report(value, step=step)
-                if trial.should_prune():
-                    pruned = True
-                    return False
-        return True
+        # the pruner compares trials at equal steps: the evaluation's scheduled step (a multiple of --eval-freq), the
+        # same in every trial whatever its batch size N T
+        at = int(row["env_steps"])
+        return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
 
     def log(msg: str) -> None:
         with open(out / "train.log", "a", encoding="utf-8") as f:
@@ -913,7 +869,7 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
         trial.set_user_attr("last_eval_timesteps", record["timesteps"])
         trial.set_user_attr("wall_time_s", record["wall_time_s"])
         trial.set_user_attr("train_sps", record["train_sps"])
-        if pruned:
+        if pruned["pruned"]:
             raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
         return validate_fast_model(out, cells)
 
@@ -921,12 +877,9 @@ def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir:
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
-    """Continue an abandoned fast-PPO trial: the newest ``checkpoint.pt`` among this study's trials with the same
-    parameters that ended FAIL because their worker was stopped or killed (not by an error of their own), whose
-    ``settings.json`` equals ``s``, is copied with its run files into ``out`` (the abandoned folder is left as it
-    was); which trial it came from (``None``: none found, the run starts afresh)."""
-    import shutil
-
+    """Continue an abandoned fast-PPO trial: copy into ``out`` the run files of the newest ``checkpoint.pt`` among this
+    study's FAIL trials with the same parameters whose worker was stopped or killed (no error of their own) and whose
+    ``settings.json`` equals ``s``; the trial it came from (``None``: none, the run starts afresh)."""
     from optuna.trial import TrialState
 
     best: tuple[float, Any, Path] | None = None
@@ -1036,8 +989,6 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
 def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
     """Write ``summary.json`` into ``folder`` unless the one there saw more finished trials (module
     docstring); under a lock on the folder's ``summary.lock``. Whether it was written."""
-    from amigo_gym.tools.runs import RunLock
-
     path = folder / SUMMARY
     with RunLock(folder, name="summary.lock", wait=60.0):
         try:
@@ -1083,14 +1034,11 @@ def replace_yaml_block(text: str, key: str, block: str) -> str:
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
-    """Write the hyperparameters of ``study``'s best COMPLETE trial under ``env_id`` in the YAML file ``path``
-    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the
-    file's other keys stay as they were (:func:`replace_yaml_block`); written atomically and read back. The mapping
-    written (``None``: no COMPLETE trial, nothing written).
-
-    The mapping is the trial's user attribute ``hyperparams``: the base file's values with the sampled ones, as the
-    trial trained them (its ``--timesteps`` budget is not in it: ``n_timesteps`` / ``total_steps`` stay the base
-    file's)."""
+    """Write the best COMPLETE trial's hyperparameters (its user attribute ``hyperparams``: the base file's values with
+    the sampled ones; ``n_timesteps`` / ``total_steps`` stay the base file's) under ``env_id`` in the YAML file ``path``
+    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the file's
+    other keys kept (:func:`replace_yaml_block`), written atomically and read back. The mapping written (``None``: no
+    COMPLETE trial, nothing written)."""
     import yaml
     from optuna.trial import TrialState
 

@@ -9,33 +9,17 @@ and a benchmark table report the same numbers. The info read and the metrics of 
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from amigo_gym.envs.base import info_row
 from amigo_gym.io import json_safe
-
-__all__ = [
-    "DEFAULT_FAILURE_TOLERANCE_M",
-    "DEFAULT_SETTLE_TIME_S",
-    "METRIC_NAMES",
-    "SUITE_VERSION",
-    "EpisodeRecorder",
-    "InfoAdapter",
-    "Scenario",
-    "StepSample",
-    "Unavailable",
-    "Grid",
-    "episode_metrics",
-    "make_env",
-    "run_grid",
-    "run_scenario",
-    "run_vector_episodes",
-    "vector_env",
-]
 
 Array = NDArray[np.float64]
 
@@ -122,8 +106,6 @@ class Unavailable(Exception):
 
 def make_env(sc: Scenario) -> Any:
     """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
 
     if sc.env_id not in gym.registry:
@@ -136,8 +118,6 @@ def make_env(sc: Scenario) -> Any:
 
 def vector_env(sc: Scenario) -> Any:
     """The native vector env of ``sc`` (Gymnasium's ``SyncVectorEnv`` if it has none): one robot per seed."""
-    import gymnasium as gym
-
     import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
 
     native = gym.spec(sc.env_id).vector_entry_point is not None
@@ -207,8 +187,6 @@ def run_grid(
     """``run(agent, scenario)`` for every agent spec (``name``, ``seed``, ``instantiate(env)``, as
     :class:`amigo_gym.tools.training.benchmark.AgentSpec`) on every scenario; an agent or a scenario that raises
     :class:`Unavailable` is listed with the reason, never dropped. A progress bar in episodes on stderr."""
-    import sys
-
     from tqdm.auto import tqdm
 
     grid = Grid()
@@ -395,8 +373,6 @@ def run_vector_episodes(
         adapter: reads a row's ``info`` (:class:`InfoAdapter`).
         on_row: :data:`OnRow`, after each recorded step.
     """
-    from amigo_gym.envs.base import info_row
-
     n = len(recorders)
     live = np.ones(n, dtype=np.bool_)
     state: Any = None

@@ -6,6 +6,7 @@ Usage, hyperparameters, the run folder, checkpoints and resuming, seeds and thre
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import platform
@@ -18,24 +19,24 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal, get_args
 
+import gymnasium as gym
 import numpy as np
 
+from amigo_gym import __version__
 from amigo_gym.data import hyperparams_dir, repository_root
-from amigo_gym.io import atomic_save, atomic_write_json, fault_point
+from amigo_gym.envs.amigobot import make_env_params
+from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_file, vouch
+from amigo_gym.model.params import EnvParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
-from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY, Hyperparams, load_hyperparams, parse_hyperparams
+from amigo_gym.tools.training.hyperparams import (
+    LOWPASS_POLICY,
+    Hyperparams,
+    load_hyperparams,
+    parse_hyperparams,
+    sb3_class,
+)
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter
-
-__all__ = [
-    "ALGOS",
-    "HYPERPARAMS_DIR",
-    "Settings",
-    "git_revision",
-    "load_hyperparams",
-    "main",
-    "train",
-]
 
 Algo = Literal["ppo", "sac", "td3"]
 #: the environments a run can train on
@@ -145,10 +146,6 @@ def git_revision() -> str:
 
 def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torch")) -> dict[str, str]:
     """Versions of Python, amigo_gym, numpy and ``libraries``: the libraries a run depends on."""
-    import importlib
-
-    from amigo_gym import __version__
-
     found = {name: str(importlib.import_module(name).__version__) for name in libraries}
     return {"python": platform.python_version(), "amigo_gym": __version__, "numpy": np.__version__} | found
 
@@ -160,12 +157,8 @@ def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) ->
     ``AmigoBot-v0``: every field of its ``EnvParams`` (``gym.make``'s defaults updated by ``overrides``);
     ``AmigoBot-v1``: the ``overrides`` as given (the defaults of ``TrackingParams`` apply to the rest).
     """
-    from amigo_gym.model.params import EnvParams
-
     if env_id != ENV_ID:
         return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
-    from amigo_gym.envs.amigobot import make_env_params
-
     params = make_env_params("train", None, **(overrides or {})) if overrides else EnvParams()
     kwargs: dict[str, Any] = json.loads(json.dumps(asdict(params)))
     return kwargs
@@ -197,7 +190,6 @@ def make_train_env(
 
     ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``; ``kwargs``: of ``gym.make``.
     """
-    import gymnasium as gym
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
@@ -234,7 +226,6 @@ def _callbacks(
     normalize: bool = False,
     after_eval: AfterEvalHook | None = None,
 ) -> list[Any]:
-    import gymnasium as gym
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
     class Checkpoint(BaseCallback):
@@ -418,8 +409,6 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     s.validate()
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
-    import gymnasium as gym
-
     # a refused --env-kwargs too: a refused run writes nothing, so its corrected rerun is a new run
     gym.make(s.env_id, **_make_kwargs(s.env_kwargs)).close()
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
@@ -473,10 +462,9 @@ def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[st
 
 def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
     import torch
-    from stable_baselines3 import PPO, SAC, TD3
     from stable_baselines3.common.utils import set_random_seed
 
-    algo_cls: Any = {"ppo": PPO, "sac": SAC, "td3": TD3}[s.algo]
+    algo_cls = sb3_class(s.algo)
     out = Path(s.out)
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     hp = load_hyperparams(hp_path, s.env_id)
@@ -595,15 +583,15 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         "versions": versions(),
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
-        "sha256": runs.sha256_file(out / "model.zip"),
+        "sha256": sha256_file(out / "model.zip"),
     }
     # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
     record["files"] = {
-        name: runs.sha256_file(out / name)
+        name: sha256_file(out / name)
         for name in ("model.zip", "best_model.zip", VECNORMALIZE)
         if (out / name).is_file()
     }
-    runs.vouch(*record["files"].values())  # written here: loading them again needs no trust flag
+    vouch(*record["files"].values())  # written here: loading them again needs no trust flag
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
@@ -615,7 +603,7 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
             src = out / "best_model.zip"
             best = max(evals, key=lambda e: e["mean_reward"])
             exported = {"exported_model": "best", "exported_timesteps": best["timesteps"], "best_eval": best}
-        exported["sha256"] = runs.sha256_file(src)
+        exported["sha256"] = sha256_file(src)
         atomic_save(lambda tmp: shutil.copyfile(src, tmp), exp / f"{s.algo}.zip", parents=True)
         atomic_write_json(exp / f"{s.algo}.json", record | exported, parents=True)
     venv.close()
