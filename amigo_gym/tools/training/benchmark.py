@@ -684,8 +684,8 @@ def readme_table(doc: Mapping[str, Any]) -> str:
         if agg is None or agg.get("all") is None:
             continue
         n = int(agg["n_runs"])
-        failed, episodes = failed_episodes(doc, key)
-        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n, f"{failed} of {episodes}"))
+        bad, episodes = failed_episodes(doc, key)
+        rows.append((label if n == 1 else f"{label}, {n} seeds", agg, n, f"{bad} of {episodes}"))
     if len(rows) < 3:
         raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
     cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
