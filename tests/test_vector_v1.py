@@ -1,4 +1,6 @@
-"""The native AmigoBot-v1 vector env equals Gymnasium's SyncVectorEnv of single envs bit for bit (heterogeneous)."""
+"""The native AmigoBot-v1 vector env (compiled) equals Gymnasium's SyncVectorEnv of single envs (the reference,
+``kernel="numpy"``) within the golden tolerance (1e-9 of each quantity's scale; 2.5e-7 for float32 observations),
+on heterogeneous batches; a pickled copy continues with the same bits."""
 
 from __future__ import annotations
 
@@ -34,7 +36,15 @@ def _pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.VectorEnv,
 
 
 def _same(a: Any, b: Any, what: str) -> None:
-    assert np.array_equal(np.asarray(a), np.asarray(b)), what
+    """Equal shapes and dtypes; floats within the tolerance of their scale, the rest equal."""
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape and a.dtype == b.dtype, what
+    if a.dtype.kind != "f":
+        assert np.array_equal(a, b), what
+        return
+    rtol = 2.5e-7 if a.dtype == np.float32 else 1e-9
+    scale = max(1.0, float(np.max(np.abs(b), initial=0.0)))
+    np.testing.assert_allclose(a, b, rtol=0.0, atol=rtol * scale, err_msg=what)
 
 
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
@@ -53,7 +63,7 @@ def _same(a: Any, b: Any, what: str) -> None:
     ],
 )
 @pytest.mark.parametrize("n", [5, 2])
-def test_native_equals_sync_bit_for_bit(mode: AutoresetMode, kwargs: dict[str, Any], n: int) -> None:
+def test_native_equals_sync(mode: AutoresetMode, kwargs: dict[str, Any], n: int) -> None:
     native, sync = _pair(n, mode, **dict(kwargs))
     o1, i1 = native.reset(seed=11)
     o2, i2 = sync.reset(seed=11)
@@ -120,4 +130,4 @@ def test_pickle_after_render() -> None:
     assert frames is not None and frames[0].shape[2] == 3
     clone = pickle.loads(pickle.dumps(envs))
     a = np.full((2, 2), 0.3)
-    _same(clone.step(a)[0], envs.step(a)[0], "clone steps like the original")
+    assert np.array_equal(clone.step(a)[0], envs.step(a)[0]), "clone steps like the original"

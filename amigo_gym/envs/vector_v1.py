@@ -55,8 +55,8 @@ _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 #: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
 KERNELS: tuple[str, ...] = VECTOR_KERNELS
-# entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS): the normalised command
-_W_A1, _W_A2 = fast_v1.W_A1, fast_v1.W_A2
+# entries of the compiled step's workspace rows (amigo_gym.sim.layout_v1.WS_FIELDS): the normalised command
+_W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
 # the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
@@ -469,7 +469,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         kept beside them)."""
         assert self._batch is not None
         ws = self._batch.ws
-        cols: list[Any] = [ws[:, fast_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
+        cols: list[Any] = [ws[:, layout_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
         return tracking.State._make([*cols, steps])
 
     # ------------------------------------------------------------------ infos

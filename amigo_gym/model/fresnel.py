@@ -146,7 +146,7 @@ def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
 # -- the node sums of the float path and the compiled step, written once ------------------------------------
 #
 # Plain Python on buffers (``list`` of floats in the float path, where indexing is cheapest; float64 arrays in the
-# compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim.layout_v1.SHARED). Their
+# compiled step of AmigoBot-v1, which compiles these functions as they are: amigo_gym.sim._kernels_v1). Their
 # expressions and order of operations are :func:`advance`'s. A node buffer ``buf`` of stride ``m`` from ``buf[b]``
 # holds the phases in ``buf[b : b + m]``, their cosines in ``buf[b + m : b + 2m]`` and sines in
 # ``buf[b + 2m : b + 3m]``.

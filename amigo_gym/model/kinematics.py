@@ -25,8 +25,6 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.numeric import arctan2_real, pow2_real, sqrt_real, where_real
-
 __all__ = [
     "body_velocity",
     "wheel_rates",
@@ -51,7 +49,6 @@ __all__ = [
     "col_tan",
     "cos_sin",
     "col_sqrt",
-    "col_exp",
     "col_arctan2",
     "SteadyCircle",
     "circle_steady_state",
@@ -210,39 +207,11 @@ def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
 
 
 #: ``np.sqrt(x)``; ``math.sqrt(x)`` for a scalar ``x`` (the same value: IEEE 754 rounds sqrt exactly)
-col_sqrt = sqrt_real
-
-
-#: ``1.5 * 2**52``: ``(t + _ROUND) - _ROUND`` rounds a float below ``2**51`` in magnitude to an integer
-_ROUND = 6755399441055744.0
-#: ``1 / ln 2``, and ``ln 2`` in two parts (fdlibm's ``ln2HI``, of 32 bits, and ``ln2LO``)
-_INV_LN2, _LN2_HI, _LN2_LO = 1.44269504088896338700e00, 6.93147180369123816490e-01, 1.90821492927058770002e-10
-#: fdlibm's ``exp`` coefficients: ``r (e^r + 1) / (e^r - 1) = 2 + r^2 / 6 + P2 r^4 + ...`` on ``|r| <= ln 2 / 2``
-_P = (1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.61375632143793436117e-05,
-      -1.65339022054652515390e-06, 4.13813679705723846039e-08)  # fmt: skip
-
-
-def col_exp(x: Real) -> Real:
-    r"""``exp(x)`` in plain float64 arithmetic and an exact scaling by powers of two (:func:`pow2_real`): the same bits
-    on every CPU, for a float (a Python float), a column and in the compiled steps (which compile this function),
-    within 1 ulp of the true exponential, subnormal results included, 0 below ``-745.14`` and for ``-inf``, ``inf``
-    above ``709.79``, NaN for NaN (``tests/test_plain_math.py``). fdlibm's ``exp`` without its branches: ``x = k ln 2
-    + r`` (``k`` rounded to the nearest integer, ``ln 2`` in two parts), its rational form of ``e^r``, then ``2^k``
-    in two exact factors ``2^(k - k // 2)`` and ``2^(k // 2)`` (one rounding where the result is subnormal)."""
-    xc = where_real(x > -746.0, where_real(x < 1000.0, x, 1000.0), -746.0)  # NaN to -746, restored below
-    k = (xc * _INV_LN2 + _ROUND) - _ROUND
-    hi = xc - k * _LN2_HI
-    lo = k * _LN2_LO
-    r = hi - lo
-    t = r * r
-    c = r - t * (_P[0] + t * (_P[1] + t * (_P[2] + t * (_P[3] + t * _P[4]))))
-    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
-    k1 = (0.5 * k + _ROUND) - _ROUND
-    return where_real(x != x, x, y * pow2_real(k - k1) * pow2_real(k1))
+col_sqrt = np.sqrt
 
 
 #: ``np.arctan2(y, x)``; a Python float for scalar ``y`` and ``x``
-col_arctan2 = arctan2_real
+col_arctan2 = np.arctan2
 
 
 def _sinc(x: Real, sin_x: Real) -> Real:

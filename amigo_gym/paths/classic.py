@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, pack
-from amigo_gym.model.numeric import abs_real, any_real, arctan2_real, hypot_real, sqrt_real, where_real
+from amigo_gym.model.numeric import where
 from amigo_gym.model.params import EnvParams, check_range
 
 __all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
@@ -362,17 +362,17 @@ def circle_foot(
     With ``u = (x, y) - c``, ``rho = |u|`` and ``n = u / rho`` (at the centre ``u = r0``, the unit start radius,
     and ``n = r0``): returns ``(e, cos theta, sin theta, u_x, u_y)`` with the cross-track error
     ``e = d (r - rho)`` and the unit tangent ``d (-n_y, n_x)``. In numba's subset: the compiled step of
-    the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
+    the compiled step compiles this function (``amigo_gym.sim._kernels_v1``).
     """
     ux = x - cx
     uy = y - cy
-    rho = sqrt_real(ux * ux + uy * uy)
+    rho = np.sqrt(ux * ux + uy * uy)
     norm = rho
     at_centre = rho == 0.0
-    if any_real(at_centre):  # at the centre: the start point
-        ux = where_real(at_centre, r0x, ux)
-        uy = where_real(at_centre, r0y, uy)
-        norm = where_real(at_centre, 1.0, rho)
+    if np.any(at_centre):  # at the centre: the start point
+        ux = where(at_centre, r0x, ux)
+        uy = where(at_centre, r0y, uy)
+        norm = where(at_centre, 1.0, rho)
     nx = ux / norm
     ny = uy / norm
     if d > 0.0:
@@ -383,10 +383,11 @@ def circle_foot(
 def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -> Real:
     r"""The arc length ``s = r a`` [m] from the circle's start to the direction ``u`` from its centre (floats or
     columns; :func:`circle_foot`'s ``u``): ``a = atan2(d (r0 x u), r0 . u)`` plus ``2 pi`` where negative, in
-    ``[0, 2 pi]``. In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    ``[0, 2 pi]``. In numba's subset (``amigo_gym.sim._kernels_v1``)."""
     cross = r0x * uy - r0y * ux
-    a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
-    return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
+    a = np.arctan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
+    s: Real = r * (a + where(a < 0.0, TWO_PI, 0.0))
+    return s
 
 
 @dataclass(frozen=True)
@@ -486,7 +487,7 @@ class ManoeuvrePath:
         e, cos_theta, sin_theta, s, s_circ, on_line = manoeuvre_foot(
             x, y, cx, cy, r0x, r0y, float(d), r, self.straight_length
         )
-        curvature = where_real(on_line, 0.0, d / r)
+        curvature = where(on_line, 0.0, d / r)
         if minimal:
             return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
         # the circle's foot point c + r n, with n from its unit tangent d (-n_y, n_x) (a negation is exact); the
@@ -496,9 +497,9 @@ class ManoeuvrePath:
         theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
         return ClosestPoint(
             s,
-            where_real(on_line, s, cx + r * nx),
-            where_real(on_line, 0.0, cy + r * ny),
-            where_real(on_line, 0.0, theta),
+            where(on_line, s, cx + r * nx),
+            where(on_line, 0.0, cy + r * ny),
+            where(on_line, 0.0, theta),
             curvature,
             e,
             cos_theta,
@@ -522,7 +523,7 @@ def manoeuvre_foot(
     tangent, the arc length ``s`` [m] on the whole path (``s_line``, or ``L + s_circ``), the circle's ``s_circ`` [m]
     and whether the line won (curvature 0; else the circle's ``d / r``).
 
-    In numba's subset: the compiled step compiles this function (:data:`amigo_gym.sim.layout_v1.SHARED`).
+    In numba's subset: the compiled step compiles this function (``amigo_gym.sim._kernels_v1``).
     ``atan2`` and ``hypot`` are numpy's (``np.arctan2``, ``np.hypot``: the column code's functions), which numba
     compiles to the C library's ``atan2`` and ``hypot``.
     ``min`` and ``sign`` follow numpy's rules (``np.minimum``: NaN propagates, the second on ties; ``np.sign``:
@@ -530,16 +531,16 @@ def manoeuvre_foot(
     """
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
     s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
-    s_line = where_real((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)
-    d_line = hypot_real(x - s_line, y)
-    on_line = d_line <= abs_real(e)  # the line (ties to it)
-    sign_y = where_real(y > 0.0, 1.0, where_real(y < 0.0, -1.0, where_real(y == 0.0, 0.0, y)))  # np.sign(y)
-    e_line = where_real(x <= big_l, y, sign_y * d_line)
+    s_line = where((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)
+    d_line = np.hypot(x - s_line, y)
+    on_line = d_line <= np.abs(e)  # the line (ties to it)
+    sign_y = where(y > 0.0, 1.0, where(y < 0.0, -1.0, where(y == 0.0, 0.0, y)))  # np.sign(y)
+    e_line = where(x <= big_l, y, sign_y * d_line)
     return (
-        where_real(on_line, e_line, e),
-        where_real(on_line, 1.0, cos_theta),
-        where_real(on_line, 0.0, sin_theta),
-        where_real(on_line, s_line, big_l + s_circ),
+        where(on_line, e_line, e),
+        where(on_line, 1.0, cos_theta),
+        where(on_line, 0.0, sin_theta),
+        where(on_line, s_line, big_l + s_circ),
         s_circ,
         on_line,
     )
@@ -548,8 +549,9 @@ def manoeuvre_foot(
 def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
     """The manoeuvre path's curvature [1/m] at the arc length ``s`` [m], for floats: 0 where ``s <= big_l`` (the
     straight part, ``big_l`` [m] long), else the circle's ``curvature`` [1/m] (NaN ``s``: the circle's, as the
-    column code). In numba's subset (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
-    return where_real(s <= big_l, 0.0, curvature)  # type: ignore[return-value]
+    column code). In numba's subset (``amigo_gym.sim._kernels_v1``)."""
+    k: float = where(s <= big_l, 0.0, curvature)
+    return k
 
 
 def _located(cp: ClosestPoint, progress: Real) -> PathPoint:

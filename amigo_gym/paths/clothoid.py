@@ -47,7 +47,6 @@ from amigo_gym.model.fresnel import (
     unit_speed_poses,
 )
 from amigo_gym.model.kinematics import Real, pack
-from amigo_gym.model.numeric import clip_float
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, Projection
 
@@ -221,7 +220,7 @@ class _Tables:
 class PathLoops(NamedTuple):
     """The compiled forms of the path-building loops, which a compiled route hands to the path constructors
     (``loops=``; :func:`amigo_gym.sim.fast_v1.path_loops`). Without them the constructors run the same functions as
-    Python (the reference); both give the same bits (``tests/test_path_loops.py``).
+    Python (the reference); both give the same paths to the tolerance (``tests/test_kernel_v1.py``).
 
     Attributes:
         chain: :func:`chain_pieces` ``(out, n, segs, n_segs, x, y, theta) -> (x, y, theta, length)`` (its scratch and
@@ -461,10 +460,10 @@ class ClothoidPath:
 # The pose and the projection on Python floats (one robot's step evaluates about 15 poses), and on arrays entry by
 # entry (locate_rows, pose_rows).
 #
-# The functions below from py_min to pose_rows (and numeric.clip_float, numpy's clip of a float) are in numba's
+# The functions below from py_min to pose_rows are in numba's
 # subset (floats, ints, comparisons, math.floor/copysign/sqrt, np.floor of a float, indexing of the flat path vector,
 # no object, no exception): the compiled step of AmigoBot-v1 compiles these very functions
-# (amigo_gym.sim.layout_v1.SHARED; docs/architecture.md, "One robot, one step"), so the projection is written once: the
+# (amigo_gym.sim._kernels_v1; docs/architecture.md, "One robot, one step"), so the projection is written once: the
 # piece search, wrap and placement of a pose, the coarse search, the Newton loop, the foot terms, the status and the
 # pose (pose_flat, whose quadrature is fresnel's node functions: numpy's cosines and sines of the nodes here, the C
 # library's in compiled code, fresnel.cos_sin_nodes' overload, checked equal per process).
@@ -519,8 +518,8 @@ def locate_window(sp: float, ahead: float, behind: float, length: float, closed:
     lo = sp - behind
     hi = sp + ahead
     if not closed:
-        lo = clip_float(lo, 0.0, length)
-        hi = clip_float(hi, 0.0, length)
+        lo = min(max(lo, 0.0), length)
+        hi = min(max(hi, 0.0), length)
     return lo, hi
 
 
@@ -668,7 +667,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
                 else:
                     idx = int(jj % m_f)
         else:
-            jj = clip_float(jj, 0.0, top)
+            jj = min(max(jj, 0.0), top)
             idx = int(jj)
         ddx = pv[sx + idx] - x
         ddy = pv[sy + idx] - y
@@ -690,7 +689,7 @@ def locate_flat(
     :class:`PathPoint` but the lap's ``s``).
     """
     lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-    s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
+    s = min(max(coarse_start(pv, x, y, sp, ahead, behind), lo), hi)
     return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
 
 

@@ -160,7 +160,7 @@ def manoeuvre(
 # -- the families' construction loops, written once ----------------------------------------------------------
 #
 # In numba's subset (floats, ints, buffers, a constant exception): the float route runs them as Python on lists, a
-# compiled route (clothoid.PathLoops) compiles these very functions (amigo_gym.sim.layout_v1.SHARED), with the C
+# compiled route (clothoid.PathLoops) compiles these very functions (amigo_gym.sim._kernels_v1), with the C
 # library's cosines and sines of the nodes where they give numpy's bits (fresnel.cos_sin_nodes).
 
 #: largest heading reached in a lane change [rad]

@@ -19,7 +19,7 @@ does what :func:`amigo_gym.task.v1.step_columns` does on Python floats, :func:`e
    heading reward term and the arguments of the three exponential terms, the reference speed, termination and end
    of path: the pieces of :func:`amigo_gym.task.v1.evaluate_columns`, compiled.
 
-The scalar pieces are the reference's own functions (:data:`amigo_gym.sim.layout_v1.SHARED`), compiled as they are;
+The scalar pieces are the reference's own functions (``amigo_gym.sim._kernels_v1``), compiled as they are;
 the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`) as their float forms. The results agree with the
 reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit: ``sin``, ``cos``, ``tan`` and
 ``log`` here are the C library's, the reference's numpy's. The per-step draws are split in three: the counter-based
@@ -49,7 +49,9 @@ folder keyed by the package's source bytes (:func:`amigo_gym.sim.layout.kernel_c
 
 from __future__ import annotations
 
+import inspect
 import math
+import types
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -57,7 +59,7 @@ import numba
 import numpy as np
 from llvmlite import ir as llvm_ir
 from numba.core import cgutils
-from numba.extending import intrinsic, overload
+from numba.extending import intrinsic, overload, register_jitable
 from numba.np import numpy_support
 from numpy.typing import NDArray
 
@@ -65,7 +67,6 @@ from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomizati
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import classic, clothoid, families
 from amigo_gym.sim import layout_v1 as L
-from amigo_gym.sim.layout import shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -89,14 +90,33 @@ F64 = NDArray[np.float64]
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 _jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 
-_shared = shared_compiler(
-    "amigo_gym.sim._kernels_v1",
-    L.SHARED,
-    _jit,
-    inline=L.SHARED_INLINE,
-    scalar_forms={**numeric.SCALAR_FORMS, **actuators.SCALAR_FORMS},
-    intrinsics={numeric.pow2_real: numeric.pow2_typing},
-)
+#: the modules whose functions the kernel compiles as they are: each registered with numba (``register_jitable``:
+#: compiled code may call it), the node loops inlined (small loops LLVM would leave as calls)
+_SHARED_MODULES = (actuators, fresnel, kinematics, randomization, classic, clothoid, families, task, tracking)
+_INLINE = (fresnel.advance_nodes, fresnel.node_phases, fresnel.node_sums, fresnel.unit_speed_phases,
+           fresnel.unit_speed_sums, fresnel.unit_speed_nodes)  # fmt: skip
+#: functions that dispatch on floats or columns, and the float form compiled in their place
+_FLOAT_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
+    numeric.where: numeric.where_float,
+    actuators.sort_knots: actuators.sort_knots_float,
+    actuators.advance_pieces: fresnel.advance_nodes,
+}
+_OVERLOADED: set[Any] = {*_FLOAT_FORMS, fresnel.cos_sin_nodes, randomization._uint64}
+
+
+def _register() -> None:
+    for module in (*_SHARED_MODULES, numeric):
+        for fn in vars(module).values():
+            if isinstance(fn, types.FunctionType) and fn.__module__ == module.__name__ and fn not in _OVERLOADED:
+                register_jitable(inline="always" if fn in _INLINE else "never")(fn)
+    for poly, scalar in _FLOAT_FORMS.items():
+        typer = lambda *args, _s=scalar: _s  # noqa: E731
+        typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
+        overload(poly, jit_options={"error_model": "numpy"})(typer)
+
+
+_register()
+_shared = _jit
 
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
@@ -735,9 +755,9 @@ def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
     (:func:`amigo_gym.model.kinematics.col_exp`, the reference's), the smoothness term and the reward
     (:func:`record_terms`)."""
     _record_entries(ws, rec)
-    rec[L.R_TRACK] = kinematics.col_exp(ws[L.W_ARG_T])
-    rec[L.R_SPEED] = kinematics.col_exp(ws[L.W_ARG_V])
-    rec[L.R_SMOOTH_EXP] = kinematics.col_exp(ws[L.W_ARG_S])
+    rec[L.R_TRACK] = math.exp(ws[L.W_ARG_T])
+    rec[L.R_SPEED] = math.exp(ws[L.W_ARG_V])
+    rec[L.R_SMOOTH_EXP] = math.exp(ws[L.W_ARG_S])
     record_terms(rec, smooth_weight)
 
 
@@ -871,7 +891,7 @@ def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
     place, in a loop of their own over a flat view: LLVM vectorises it), then the records' terms and rewards."""
     flat = exps.reshape(exps.size)
     for j in numba.prange(flat.shape[0]):
-        flat[j] = kinematics.col_exp(flat[j])
+        flat[j] = math.exp(flat[j])
     for i in numba.prange(rec.shape[0]):
         r = _bare(rec[i])
         r[L.R_TRACK] = exps[i, 0]

@@ -59,14 +59,6 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
-def __getattr__(name: str) -> Any:
-    """The layouts' names (:mod:`amigo_gym.sim.layout_v1`), also read here: ``fast_v1.W_X``."""
-    try:
-        return getattr(layout_v1, name)
-    except AttributeError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-
-
 #: environment variable that selects the step's implementation: ``auto`` (default), ``numba``, ``numpy``
 KERNEL_ENV = "AMIGO_GYM_KERNEL"
 
@@ -215,7 +207,7 @@ def path_loops() -> PathLoops:
     :func:`~amigo_gym.paths.clothoid.chain_pieces`, :func:`~amigo_gym.paths.clothoid.sample_points`,
     :func:`~amigo_gym.paths.families.run_segments` and :func:`~amigo_gym.paths.families.lane_change_shape`, compiled
     by :mod:`amigo_gym.sim._kernels_v1` with their node tables bound), which the environments with the compiled step
-    hand to the path constructors at resets (the same paths to rounding, ``tests/test_path_loops.py``). Loads the
+    hand to the path constructors at resets (the same paths to the tolerance, ``tests/test_kernel_v1.py``). Loads the
     kernels (numba) on the first call."""
     kv = kernels()
     nodes = np.array(fresnel.node_table(1), dtype=np.float64)

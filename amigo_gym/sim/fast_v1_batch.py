@@ -133,7 +133,7 @@ class PathArena:
 class BatchKernel:
     """The compiled step of ``n`` robots (module docstring): constants, path arena, workspace rows.
 
-    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.fast_v1.WS_FIELDS`, loaded by
+    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.layout_v1.WS_FIELDS`, loaded by
     :meth:`load` with :meth:`amigo_gym.sim.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
     every row. The compiled loops are :func:`amigo_gym.sim._kernels_v1.noise_rows` and
     :func:`amigo_gym.sim._kernels_v1.step_rows` (``parallel``: their ``prange`` twins on numba's threads; the
@@ -151,7 +151,7 @@ class BatchKernel:
         self.consts: Array = self._row.consts
         self.parallel = parallel
         self.arena = PathArena(n)
-        self.ws: Array = np.zeros((n, len(fast_v1.WS_FIELDS) + fast_v1.WS_SCRATCH))
+        self.ws: Array = np.zeros((n, len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         m = self._row.n_normal
         self.noise_on = np.zeros(n, dtype=np.bool_)
@@ -209,18 +209,18 @@ class BatchKernel:
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
         ws = self.ws
-        ws[r, fast_v1.W_X : fast_v1.W_STEPS + 1] = np.column_stack(
+        ws[r, layout_v1.W_X : layout_v1.W_STEPS + 1] = np.column_stack(
             [np.asarray(c, dtype=np.float64) for c in st]
         )  # the state's fields in WS_FIELDS' order
-        ws[r, fast_v1.W_CASTOR] = 0.0
+        ws[r, layout_v1.W_CASTOR] = 0.0
         l3_differs = np.asarray(ep.l3) != self._k.l3
-        ws[r, fast_v1.W_R1 : fast_v1.W_L3D + 1] = np.column_stack(
+        ws[r, layout_v1.W_R1 : layout_v1.W_L3D + 1] = np.column_stack(
             (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
         )
         # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
         noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
-        ws[r, fast_v1.W_SLIP_MAX] = ep.slip_max
-        ws[r, fast_v1.W_NOISE_ON] = noise_on
+        ws[r, layout_v1.W_SLIP_MAX] = ep.slip_max
+        ws[r, layout_v1.W_NOISE_ON] = noise_on
         self.keys[r] = ep.key
         self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)

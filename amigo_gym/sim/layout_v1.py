@@ -9,13 +9,8 @@ May import numpy and the model, paths and task modules; never numba.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
-from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
-from amigo_gym.paths import classic, clothoid, families
-from amigo_gym.task import v0 as task
-from amigo_gym.task import v1 as tracking
+from amigo_gym.model import actuators
+from amigo_gym.paths import clothoid
 
 #: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
@@ -189,105 +184,3 @@ S_PIECES = S_ACT + actuators.SCRATCH_PIECES
 S_U1 = S_ACT + actuators.SCRATCH
 S_LOG = S_U1 + 5
 S_U2 = S_LOG + 5
-
-
-#: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
-#: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
-SHARED: tuple[Callable[..., Any], ...] = (
-    tracking.command_change,
-    *numeric.SCALAR_FORMS.values(),
-    actuators.ramp,
-    actuators.clip_setpoint,
-    actuators.sort_knots_float,
-    actuators.piece_rates,
-    actuators._channel_ws,
-    actuators._evaluate_ws,
-    actuators.actuator_step_ws,
-    actuators.ring_slot,
-    actuators.ring_read_slots,
-    clothoid.py_min,
-    clothoid.py_max,
-    clothoid.wrap_arc,
-    clothoid.placed_pose,
-    clothoid.locate_window,
-    clothoid.foot_terms,
-    clothoid.newton_step,
-    clothoid.locate_status_float,
-    clothoid.piece_index,
-    clothoid.piece_at,
-    clothoid.place,
-    clothoid.coarse_start,
-    clothoid.locate_flat,
-    clothoid.locate_global,
-    clothoid.coarse_global,
-    clothoid.project_flat,
-    clothoid.lap_arc,
-    clothoid._floor_float,
-    clothoid.locate_rows,
-    clothoid.pose_rows,
-    clothoid.pose_flat,
-    clothoid.chain_pieces,
-    clothoid.sample_points,
-    classic.circle_foot,
-    classic.circle_arc,
-    classic.manoeuvre_foot,
-    classic.manoeuvre_curvature,
-    families.run_segments,
-    families.s_curve_half,
-    families.lane_change_shape,
-    fresnel.subinterval_count,
-    fresnel.node_phases,
-    fresnel.node_sums,
-    fresnel.advance_nodes,
-    fresnel.unit_speed_phases,
-    fresnel.unit_speed_sums,
-    fresnel.unit_speed_nodes,
-    kinematics.body_velocity_of,
-    kinematics.wheel_rates_of,
-    kinematics.h_from_a,
-    kinematics.half_tan_cos_sin,
-    kinematics.arc_from_tangents,
-    kinematics.castor_rate_float,
-    kinematics.advance_angle,
-    task.bound_angle_float,
-    task.observe_rates,
-    task.observe_reference,
-    task.round_half_even,
-    randomization.box_muller,
-    randomization._counter_uniform_int,
-    randomization.noise_level,
-    randomization.channels_on,
-    randomization.step_uniforms,
-    randomization.step_normals,
-    task.heading_error,
-    task.heading_term,
-    task.reward_arguments,
-    task.off_path,
-    task.steady_heading_float,
-    tracking.trapezoid_speed,
-    tracking.reference_speed_of,
-    tracking.action_commands,
-    tracking.measurements,
-    tracking.measured_differs,
-    tracking.end_flags,
-    task.observe_head,
-    task.curvature_feature,
-    tracking.preview_entry,
-    tracking.speed_observations,
-    task.smooth_term,
-    task.reward_product,
-    kinematics.col_exp,
-    numeric.pow2_typing,
-)
-
-
-#: the functions of :data:`SHARED` that numba inlines into their callers (the node loops, called per path pose)
-SHARED_INLINE: tuple[Callable[..., Any], ...] = (
-    kinematics.col_exp,
-    fresnel.advance_nodes,
-    fresnel.node_phases,
-    fresnel.node_sums,
-    fresnel.unit_speed_phases,
-    fresnel.unit_speed_sums,
-    fresnel.unit_speed_nodes,
-)
