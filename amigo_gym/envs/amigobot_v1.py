@@ -351,16 +351,12 @@ class AmigoBotV1Env(AmigoBotBase):
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
-        The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
-        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates them
-        (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`); the info by
+        The per-step draws and the reward inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`); the info by
         :func:`record_info` from a copy of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
         """
         kern = self._kernel
         assert kern is not None
         steps = self._steps
-        if kern.noise_on:
-            kern.draw(steps)
         kern.run_record(self._ring_step, a1, a2, *kern.args)
         self._steps = steps = steps + 1
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array

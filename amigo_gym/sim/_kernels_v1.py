@@ -19,14 +19,10 @@ does what :func:`amigo_gym.task.v1.step_columns` does on Python floats, :func:`e
    heading reward term and the arguments of the three exponential terms, the reference speed, termination and end
    of path: the pieces of :func:`amigo_gym.task.v1.evaluate_columns`, compiled.
 
-The scalar pieces are the reference's own functions (``amigo_gym.sim._kernels_v1``), compiled as they are;
-the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`) as their float forms. The results agree with the
-reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit: ``sin``, ``cos``, ``tan`` and
-``log`` here are the C library's, the reference's numpy's. The per-step draws are split in three: the counter-based
-uniforms (integer SplitMix64 on ``uint64``: :func:`amigo_gym.model.randomization.step_uniforms`) by
-:func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals
-(:func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the reward's exponentials are
-:func:`amigo_gym.model.kinematics.col_exp` (plain arithmetic, :func:`fill_record`).
+The scalar pieces are the reference's own functions (every function of the modules in :data:`_SHARED_MODULES`),
+compiled as they are; the helpers that dispatch on floats or columns as their float forms (:data:`_FLOAT_FORMS`).
+The results agree with the reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit:
+``sin``, ``cos``, ``tan``, ``exp`` and ``log`` here are the C library's, the reference's numpy's.
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
@@ -74,7 +70,6 @@ from amigo_gym.task import v1 as tracking
 __all__ = [
     "step",
     "evaluate",
-    "noise_uniforms",
     "progress",
     "pose",
     "build_chain",
@@ -344,38 +339,19 @@ _channels_on = _shared(randomization.channels_on)
 
 
 @_jit
-def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
-    """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` for step ``step``:
-    :func:`amigo_gym.model.randomization.step_uniforms` itself (SplitMix64 on ``uint64``).
-
-    Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
-    that is on (in channel order), ``u1`` at ``ws[L.S_U1:]`` and ``2 pi u2`` at ``ws[L.S_U2:]``. The caller then
-    writes ``np.log`` of the ``u1`` at ``ws[L.S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
-
-    Args:
-        key: the episode's key (:func:`amigo_gym.model.randomization.draw_key`), step: the state's step counter.
-
-    Returns:
-        the number of channels on (the length of the ``u1`` written).
-    """
-    s1, s2, on = _step_uniforms(
-        ws, L.S_U1, L.S_U2, key, step, ws[L.W_SLIP_MAX], c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], c[L.C_RATE_NOISE]
-    )
-    ws[L.W_SLIP1] = s1
-    ws[L.W_SLIP2] = s2
-    return on
-
-
-@_jit
-def _normals(c: F64, ws: F64) -> None:
-    # randomization.step_normals itself, on the logarithms in ws and the cosines of the angles, written over the
-    # angles
+def _draws(c: F64, ws: F64, key: np.uint64) -> None:
+    # this step's draws into ws (randomization.step_noise of the state's step counter): the slips, then the normals
+    # by Box-Muller from the uniforms (step_uniforms, step_normals; log and cos of the C library)
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
-    for j in range(_channels_on(position, heading, rate)):
+    s1, s2, on = _step_uniforms(ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate)
+    ws[L.W_SLIP1] = s1
+    ws[L.W_SLIP2] = s2
+    for j in range(on):
+        ws[L.S_U1 + j] = math.log(ws[L.S_U1 + j])
         ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
-    _step_normals(ws, L.W_NX, ws, L.S_LOG, ws, L.S_U2, position, heading, rate)
+    _step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
 
 
 # ----------------------------------------------------------------------------------------- building paths
@@ -619,12 +595,12 @@ def step(
     ring_step: int,
     a1: float,
     a2: float,
+    key: np.uint64,
 ) -> None:
     """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws`` (updated in place) on Python floats.
 
-    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the state's step counter) come from
-    :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[L.W_NOISE_ON]`` is set, else they are zeros;
-    they are written to ``ws`` (``slip1`` ... ``noise_rate2``).
+    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the episode's ``key`` and the state's step
+    counter) when ``ws[L.W_NOISE_ON]`` is set, else zeros, are written to ``ws`` (``slip1`` ... ``noise_rate2``).
 
     Args:
         c, pv, ring, ws, obs: the layouts of the module docstring.
@@ -632,7 +608,7 @@ def step(
         a1, a2: the validated action (finite) [-], clipped here.
     """
     if ws[L.W_NOISE_ON] != 0.0:
-        _normals(c, ws)
+        _draws(c, ws, key)
     else:
         _no_draws(ws)
     # tracking.action_commands; actuators.ring_write, ring_read: their slots
@@ -789,35 +765,20 @@ def step_record(
     obs: NDArray[np.floating],
     rec: F64,
     smooth_weight: float,
+    key: np.uint64,
 ) -> None:
     """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
     (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
     ring2 = _carray(_data_ptr(ring), ring.shape)
     c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
-    step(c, pv, ring2, ws, obs, ring_step, a1, a2)
+    step(c, pv, ring2, ws, obs, ring_step, a1, a2, key)
     fill_record(ws, rec, smooth_weight)
 
 
 # ----------------------------------------------------------------------------------------- N robots
 # The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
-# :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``
-# between the two loops (as for one robot). They live in this file so
-# that numba's disk cache, keyed on this file, is invalidated with the row functions they call. Each loop is
-# written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under another name).
-
-
-def _noise_rows(c: F64, ws: F64, keys: NDArray[np.uint64], u1: F64) -> None:
-    """:func:`noise_uniforms` of every row of ``ws (N, W)`` that draws per step, at its own step counter.
-
-    Copies each such row's uniforms ``u1`` into ``u1 (N, n_normal)`` (C-contiguous: the caller takes
-    ``np.log`` of the whole block, then passes it to :func:`_step_rows`). Rows that draw nothing are left alone.
-    """
-    for i in numba.prange(ws.shape[0]):
-        row = ws[i]
-        if row[L.W_NOISE_ON] != 0.0:
-            on = noise_uniforms(c, row, keys[i], int(row[L.W_STEPS]))
-            for j in range(on):
-                u1[i, j] = row[L.S_U1 + j]
+# :func:`step` called row by row in one compiled loop. Each loop is written once with ``prange`` and compiled twice
+# (serial, and ``parallel=True`` under another name).
 
 
 def _step_rows(
@@ -831,25 +792,21 @@ def _step_rows(
     ring_step: int,
     a1: F64,
     a2: F64,
-    logs: F64,
+    keys: NDArray[np.uint64],
     rec: F64,
     smooth_weight: float,
 ) -> None:
     """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
     2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
-    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms).
-
-    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
-    """
+    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms), its episode's
+    key ``keys[i]``."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         row = _bare(ws[i])
-        for j in range(logs.shape[1]):
-            row[L.S_LOG + j] = logs[i, j]
         ring = _carray(_data_ptr(rings[i]), rings.shape[1:])
         pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
         rec_i = _bare(rec[i])
-        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i])
+        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i], keys[i])
         fill_record(row, rec_i, smooth_weight)
 
 
@@ -927,8 +884,6 @@ def start_rows(
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
-noise_rows = _jit(_twin(_noise_rows, "noise_rows"))
-noise_rows_parallel = _jit_parallel(_twin(_noise_rows, "noise_rows_parallel"))
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
 ideal_tangent_rows = _jit(_twin(_ideal_tangent_rows, "ideal_tangent_rows"))

@@ -172,9 +172,9 @@ R_PROGRESS, R_VT, R_VREF, R_END, R_TERM, R_CASTOR = (
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
 
 #: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
-#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1``, their logarithms
-#: and the angles ``2 pi u2`` (5 each; the step replaces the angles by their cosines)
-WS_SCRATCH = actuators.SCRATCH + 3 * 5
+#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1`` and angles
+#: ``2 pi u2`` (5 each; the step replaces them by their logarithms and cosines)
+WS_SCRATCH = actuators.SCRATCH + 2 * 5
 #: where :func:`amigo_gym.model.actuators.actuator_step_ws`'s scratch starts, and its parts
 S_ACT = len(WS_FIELDS)
 S_KV = S_ACT + actuators.SCRATCH_V
@@ -182,5 +182,4 @@ S_KW = S_ACT + actuators.SCRATCH_W
 S_TIMES = S_ACT + actuators.SCRATCH_TIMES
 S_PIECES = S_ACT + actuators.SCRATCH_PIECES
 S_U1 = S_ACT + actuators.SCRATCH
-S_LOG = S_U1 + 5
-S_U2 = S_LOG + 5
+S_U2 = S_U1 + 5
