@@ -811,15 +811,15 @@ def _step_rows(
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arc step's two tangents (the C
-    library's ``tan`` of :func:`_ideal_motion`'s arguments, as :func:`_ideal_step`) of every row into ``tans (N, 2)``,
-    in a loop of their own (the rows' calls overlap)."""
+    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arguments of the arc step's two tangents
+    (:func:`_ideal_motion`) of every row into ``tans (N, 2)``; the caller takes ``np.tan`` of the block (numpy's
+    vectorised loop) before pass 2."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
         arg_h, arg_m = _ideal_motion(c, _bare(ws[i]), w1, w2)[3:]
-        tans[i, 0] = math.tan(arg_h)
-        tans[i, 1] = math.tan(arg_m)
+        tans[i, 0] = arg_h
+        tans[i, 1] = arg_m
 
 
 def _ideal_rows(
@@ -844,11 +844,8 @@ def _ideal_rows(
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: :func:`fill_record`'s exponentials of ``exps (N, 3)`` (:func:`amigo_gym.model.kinematics.col_exp`, in
-    place, in a loop of their own over a flat view: LLVM vectorises it), then the records' terms and rewards."""
-    flat = exps.reshape(exps.size)
-    for j in numba.prange(flat.shape[0]):
-        flat[j] = math.exp(flat[j])
+    """Pass 3: the records' exponentials from ``exps (N, 3)`` (``np.exp`` of pass 2's arguments, taken by the caller
+    on the whole block), then their terms and rewards."""
     for i in numba.prange(rec.shape[0]):
         r = _bare(rec[i])
         r[L.R_TRACK] = exps[i, 0]

@@ -5,8 +5,7 @@
 :mod:`amigo_gym.sim.fast_v1`) over the rows of an ``(N, W)`` workspace in one compiled loop, each row on its own
 path, ring and workspace row, writing its info record. With ideal actuators and no per-step draws (AmigoBot-v0's
 settings) a step is three loops (:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``,
-``record_rows``): the arc step's tangents and the reward's exponentials each in a loop of their own, which overlap
-and vectorise. Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row
+``record_rows``) with numpy's vectorised ``tan`` and ``exp`` of whole blocks between them. Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row
 (:func:`amigo_gym.sim._kernels_v1.start_rows`). Each row agrees with :class:`amigo_gym.envs.AmigoBotV1Env` to the
 tolerance (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
 (:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
@@ -265,7 +264,9 @@ class BatchKernel:
         sw = self._row.smooth_weight
         if self.ideal and not self.noise_on.any():  # (rows that draw slips take the general step)
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
+            np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
+            np.exp(self._exps, out=self._exps)
             self._record_rows(self._exps, rec, sw)
             return rec
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self.keys, rec, sw)
