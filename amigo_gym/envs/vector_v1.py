@@ -20,7 +20,8 @@ the reference. Their path projection and pose run a ClothoidPath's float functio
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
 terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
 ``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
-the reference, bit for bit on one route (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
+the reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the
+same bits.
 """
 
 from __future__ import annotations

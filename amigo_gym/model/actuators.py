@@ -2,7 +2,7 @@ r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuat
 
 Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
 float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
-as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code and get the same bits.
+as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code.
 This module may import only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.numeric`,
 :mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.model.fresnel` and the standard library (``tests/test_actuators.py``
 checks it).
@@ -449,7 +449,7 @@ def actuator_step(
        wheel angles by ``L (w_i(t_j) + \dot w_i L / 2)`` and the distance by ``L (v_true(t_j) + \dot v_true L / 2)``.
     4. The new wheel rates are the nominal inverse of ``(v(dt), w(dt))``.
 
-    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays: the same bits).
+    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays).
 
     Args:
         x, y, beta: pose of A at the start [m, m, rad].

@@ -235,10 +235,9 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
 # ----------------------------------------------------------------------------------------- actuators
 
 
-# The actuator step and the path pose are the float path's own functions (actuators.actuator_step_ws,
+# The actuator step and the path pose are the reference's own functions (actuators.actuator_step_ws,
 # fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
-# by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
-# no call.
+# by name (registered by _register, the node loops inlined: _INLINE).
 _reference_speed_of = cast(Callable[..., float], _shared(tracking.reference_speed_of))
 
 
@@ -727,8 +726,8 @@ _reward_product = _shared(task.reward_product)
 @_jit
 def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
     """The single env's info record ``rec (RECORD_WIDTH,)`` from the workspace (:data:`layout_v1.RECORD_ROWS`,
-    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments
-    (:func:`amigo_gym.model.kinematics.col_exp`, the reference's), the smoothness term and the reward
+    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments,
+    the smoothness term and the reward
     (:func:`record_terms`)."""
     _record_entries(ws, rec)
     rec[L.R_TRACK] = math.exp(ws[L.W_ARG_T])

@@ -5,11 +5,11 @@
 :mod:`amigo_gym.sim.fast_v1`) over the rows of an ``(N, W)`` workspace in one compiled loop, each row on its own
 path, ring and workspace row, writing its info record. With ideal actuators and no per-step draws (AmigoBot-v0's
 settings) a step is three loops (:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``,
-``record_rows``) with numpy's vectorised ``tan`` and ``exp`` of whole blocks between them. Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row
-(:func:`amigo_gym.sim._kernels_v1.start_rows`). Each row agrees with :class:`amigo_gym.envs.AmigoBotV1Env` to the
-tolerance (``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
-(:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
-``arena.flat[starts[i]:stops[i]]``.
+``record_rows``) with numpy's vectorised ``tan`` and ``exp`` of whole blocks between them. Starts of episodes
+(:meth:`BatchKernel.start`) evaluate the start states row by row (:func:`amigo_gym.sim._kernels_v1.start_rows`).
+Each row agrees with :class:`amigo_gym.envs.AmigoBotV1Env` to the tolerance (``tests/test_vector_v1_kernel.py``).
+The paths of the batch are flattened once each (:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena
+(:class:`PathArena`); row ``i`` reads ``arena.flat[starts[i]:stops[i]]``.
 
 numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.sim.fast_v1.kernels`).
 """

@@ -1,8 +1,8 @@
 """The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free).
 
 The index constants below are read by the kernel (:mod:`amigo_gym.sim._kernels_v1`, which numba compiles them into
-as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors and re-exports every name here) and by the
-environments; :data:`SHARED` lists the reference's float functions the kernel compiles.
+as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors) and by the
+environments.
 
 May import numpy and the model, paths and task modules; never numba.
 """
