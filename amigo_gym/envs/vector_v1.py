@@ -154,6 +154,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
         self._template = None if fixed is None else tracking.episode_template(p)
+        #: the template as columns of one row (tracking.episode_columns), repeated for the rows that restart
+        self._template_row = None if self._template is None else tracking.episode_columns([self._template])
         n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
@@ -272,11 +274,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         template = self._template
         fixed = None if template is None else tracking.fixed_path(k.params)
         if template is not None:  # one path, episodes that differ in their start offsets alone: one draw per row
+            assert self._template_row is not None
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]  # (a fixed path: no draw)
             for i in rows:
                 self.path_infos[i] = dict(info)
-            ep_all = tracking.Episode(*(np.repeat(c, m) for c in tracking.episode_columns([template])))
+            ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
             u_all = np.array([self._rng(i).uniform(-1.0, 1.0, size=3) for i in rows]).reshape(m, 3)
             groups = {id(fixed): list(range(m))}
         else:
@@ -294,7 +297,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._goal[idx[sel]] = tracking.goal_point(k.params, path)
         st_all = tracking.State(*cols)
         self._set_rows(idx, st_all, ep_all)
-        if template is None or any(self.paths[i] is not fixed for i in rows):  # (a fixed path: mostly there)
+        if template is None:  # (with a template, every row keeps the fixed path it was built with)
             self.paths.replace(idx, paths)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
         infos = self._kernel_infos(idx, b.start(rows, paths, st_all, ep_all, obs), True)[0]
