@@ -83,7 +83,8 @@ STEPS = 120
 def _same(a: Any, b: Any, where: str) -> None:
     """``a`` and ``b`` of the same types (dicts, arrays, floats, bools, ints, strings), floats within the tolerance
     (:data:`RTOL`, :data:`RTOL32`), the rest equal."""
-    assert type(a) is type(b), f"{where}: {type(a).__name__} != {type(b).__name__}"
+    both_floats = isinstance(a, float) and isinstance(b, float)  # float or np.float64
+    assert both_floats or type(a) is type(b), f"{where}: {type(a).__name__} != {type(b).__name__}"
     if isinstance(a, dict):
         assert list(a) == list(b), where
         for k in a:
@@ -342,3 +343,19 @@ def test_kernel_cache_is_keyed_by_the_source_bytes(tmp_path: Path) -> None:
     ).stdout.split()
     assert Path(path).is_relative_to(cache / "amigo_gym" / digest), path
     assert restored == str(cache)  # the user's setting, restored for their own functions
+
+
+@pytest.mark.parametrize("family", ["circle", "manoeuvre", "figure8", "lane_change", "random"])
+def test_compiled_path_loops_build_the_same_paths(family: str) -> None:
+    """The compiled path-building loops (``fast_v1.path_loops``, handed to the constructors at resets) build the
+    float route's paths to the tolerance: every piece, sample and length within 1e-12 of its scale."""
+    from amigo_gym.paths import families
+
+    loops = fast_v1.path_loops()
+    for seed in range(5):
+        a = families.make_family_path(family, np.random.default_rng(seed))
+        b = families.make_family_path(family, np.random.default_rng(seed), loops=loops)
+        for name in ("flat", "sample_x", "sample_y"):
+            x, y = np.asarray(getattr(a._t, name)), np.asarray(getattr(b._t, name))
+            assert x.shape == y.shape and np.allclose(x, y, rtol=0, atol=1e-12 * max(1.0, np.abs(x).max())), name
+        assert a._t.length == pytest.approx(b._t.length, rel=1e-12)

@@ -6,7 +6,7 @@ tests that compare the compiled step with the reference (within the stated toler
 new process where numpy's run-time dispatch is restricted to its baseline (``NPY_DISABLE_CPU_FEATURES`` naming every
 dispatched feature this CPU has) and numba compiles for a generic CPU of this architecture (``NUMBA_CPU_NAME=generic``
 with ``NUMBA_CPU_FEATURES=""``: no AVX, no FMA; the name alone keeps the host's features), into a numba cache of its
-own; the plain ``exp`` (``model/kinematics.py``) keeps its bits there too (``tests/test_plain_math.py``).
+own.
 """
 
 from __future__ import annotations
@@ -25,8 +25,6 @@ FILES = (
     "tests/test_v0_as_v1.py",
     "tests/test_golden.py",
     "tests/test_direct_call.py",
-    "tests/test_plain_math.py",
-    "tests/test_path_loops.py",
 )
 
 

@@ -1,4 +1,6 @@
-"""The native AmigoBot-v1 vector env equals Gymnasium's SyncVectorEnv of single envs bit for bit (heterogeneous)."""
+"""The native AmigoBot-v1 vector env: partial resets as Gymnasium's SyncVectorEnv of single envs (the reference,
+``kernel="numpy"``, within the golden tolerance; tests/test_vector_v1_kernel.py compares whole runs), heterogeneous
+batches, bad actions, pickling."""
 
 from __future__ import annotations
 
@@ -34,47 +36,15 @@ def _pair(n: int, mode: AutoresetMode, **kw: Any) -> tuple[gym.vector.VectorEnv,
 
 
 def _same(a: Any, b: Any, what: str) -> None:
-    assert np.array_equal(np.asarray(a), np.asarray(b)), what
-
-
-@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
-@pytest.mark.parametrize(
-    "kwargs",
-    [
-        {"max_episode_steps": 40},
-        {"path": "mixed", "randomize": "hard", "speed": (0.1, 0.4), "max_episode_steps": 30},
-        {
-            "path": "random",
-            "randomize": "mild",
-            "speed_profile": "trapezoid",
-            "profile_duration": 3.0,
-            "max_episode_steps": 45,
-        },
-    ],
-)
-@pytest.mark.parametrize("n", [5, 2])
-def test_native_equals_sync_bit_for_bit(mode: AutoresetMode, kwargs: dict[str, Any], n: int) -> None:
-    native, sync = _pair(n, mode, **dict(kwargs))
-    o1, i1 = native.reset(seed=11)
-    o2, i2 = sync.reset(seed=11)
-    _same(o1, o2, "reset obs")
-    for key in INFO_KEYS:
-        _same(i1[key], i2[key], f"reset info {key}")
-    rng = np.random.default_rng(1)
-    for t in range(100):
-        a = rng.uniform(-1.0, 1.0, (n, 2))
-        a[:, 1] = 0.6 * a[:, 1] + 0.4 * a[:, 0]
-        r1 = native.step(a)
-        r2 = sync.step(a)
-        for j, name in enumerate(("obs", "reward", "terminated", "truncated")):
-            _same(r1[j], r2[j], f"{name} at step {t}")
-        for key in INFO_KEYS:
-            _same(r1[4][key], r2[4][key], f"info {key} at step {t}")
-        for term in ("track", "speed", "heading", "smooth"):
-            _same(r1[4]["reward_terms"][term], r2[4]["reward_terms"][term], f"reward term {term}")
-        if mode == AutoresetMode.SAME_STEP and "final_obs" in r2[4]:
-            for i in np.flatnonzero(r2[4]["_final_obs"]):
-                _same(r1[4]["final_obs"][i], r2[4]["final_obs"][i], "final_obs")
+    """Equal shapes and dtypes; floats within the tolerance of their scale, the rest equal."""
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape and a.dtype == b.dtype, what
+    if a.dtype.kind != "f":
+        assert np.array_equal(a, b), what
+        return
+    rtol = 2.5e-7 if a.dtype == np.float32 else 1e-9
+    scale = max(1.0, float(np.max(np.abs(b), initial=0.0)))
+    np.testing.assert_allclose(a, b, rtol=0.0, atol=rtol * scale, err_msg=what)
 
 
 def test_disabled_mode_and_reset_mask_equal_sync() -> None:
@@ -120,4 +90,4 @@ def test_pickle_after_render() -> None:
     assert frames is not None and frames[0].shape[2] == 3
     clone = pickle.loads(pickle.dumps(envs))
     a = np.full((2, 2), 0.3)
-    _same(clone.step(a)[0], envs.step(a)[0], "clone steps like the original")
+    assert np.array_equal(clone.step(a)[0], envs.step(a)[0]), "clone steps like the original"

@@ -14,7 +14,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces, one_robot
+from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.sim import fast_v1
@@ -22,7 +22,7 @@ from amigo_gym.sim import layout_v1 as _L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "v0_info_values", "v0_record_info"]
+__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "record_info", "reference_record", "v0_record_info"]
 
 #: keys accepted in ``reset(options=...)``
 V1_RESET_OPTIONS: tuple[str, ...] = RESET_OPTIONS
@@ -33,50 +33,18 @@ def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
     return box_spaces(tracking.obs_bounds(p))
 
 
-def info_values(
-    dt: float,
-    w_max: float,
-    st: tracking.State,
-    ep: tracking.Episode,
-    out: tracking.Outcome,
-    noise: StepNoise,
-    path_info: dict[str, Any] | None = None,
-) -> dict[str, Any]:
-    """The info of a step (or a start, ``noise = NO_NOISE``) from the reference's state, episode and outcome, as
-    floats and tuples of floats (one robot) or ``(N,)`` columns (:class:`amigo_gym.envs.AmigoBotV1VectorEnv`);
-    ``path`` (a copy of ``path_info``) only when given. ``dt`` [s], ``w_max`` [rad/s] the nominal wheel-rate limit
-    that scales the command."""
-    info: dict[str, Any] = {
-        "pose": (st.x, st.y, st.beta),
-        "h_position": (out.h_x, out.h_y),
-        "cross_track_error": out.error,
-        "progress": st.progress,
-        "speed": out.v_true,
-        "reference_speed": out.v_ref,
-        "speed_error": out.v_true - out.v_ref,
-        "wheel_rates": (st.w1, st.w2),
-        "command": (st.a1 * w_max, st.a2 * w_max),
-        "wheel_angles": (st.alpha1, st.alpha2),
-        "measured_pose": (out.meas_x, out.meas_y, out.meas_beta),
-        "reward_terms": dict(zip(tracking.REWARD_TERMS, out.terms, strict=True)),
-        "time": st.steps * dt,
-    }
-    if path_info is not None:
-        info["path"] = dict(path_info)
-    info["true_robot"] = {"r1": ep.r1, "r2": ep.r2, "l1": ep.l1}
-    info["delay"] = ep.lag * dt + ep.t_switch
-    info["slip"] = (noise.slip1, noise.slip2)
-    info["end_of_path"] = out.end_of_path
-    return info
-
-
-def v0_info_values(dt: float, st: tracking.State, out: tracking.Outcome, castor: Any) -> dict[str, Any]:
-    """AmigoBot-v0's info (:data:`amigo_gym.task.v0.INFO_KEYS`) of a step or start of the reference with v0's
-    settings (:func:`amigo_gym.task.v1.v0_settings`), as :func:`info_values` gives AmigoBot-v1's: floats and tuples
-    (one robot) or ``(N,)`` columns. ``dt`` [s]; ``castor`` the castor wheel's rolling angle [rad] (the reference
-    of AmigoBot-v1 does not integrate it: the envs do, as AmigoBot-v0's step)."""
-    pose, h, rates, angles = (st.x, st.y, st.beta), (out.h_x, out.h_y), (st.w1, st.w2), (st.alpha1, st.alpha2)
-    return task.info_dict(pose, h, out.error, rates, angles, castor, out.terms, st.steps * dt)
+def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
+    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, its scalars, the reward's
+    exponentials and terms, the reward) of the reference's state, outcome and draws: ``(RECORD_WIDTH,)`` for one
+    robot's floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales the command; ``castor`` [rad] the
+    castor's angle (AmigoBot-v0's info). :func:`record_info` and :func:`v0_record_info` build the infos from it."""
+    track, speed, heading, smooth = out.terms
+    cols = (
+        st.x, st.y, st.beta, out.h_x, out.h_y, st.w1, st.w2, st.a1 * w_max, st.a2 * w_max, st.alpha1, st.alpha2,
+        out.meas_x, out.meas_y, out.meas_beta, noise.slip1, noise.slip2, out.error, st.progress, out.v_true,
+        out.v_ref, heading, out.end_of_path, out.terminated, castor, track, speed, np.nan, smooth, out.reward,
+    )  # fmt: skip
+    return np.stack(np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols)), axis=-1)
 
 
 #: the compiled step's info record's arrays (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) as indices of its last axis,
@@ -109,10 +77,10 @@ def record_info(
     end_of_path: Any,
     path: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The info of the compiled step's info records (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`,
-    :func:`amigo_gym.sim._kernels_v1.fill_record`): the one builder of AmigoBot-v1's info from a record, for the
-    single env (one robot) and the vector env (its compact infos), as :func:`info_values` builds it from the
-    reference's state and outcome (the same entries; :func:`amigo_gym.task.v0.record_info` is AmigoBot-v0's).
+    """AmigoBot-v1's info of info records (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the compiled step's,
+    :func:`amigo_gym.sim._kernels_v1.fill_record`, or the reference's, :func:`reference_record`): the one builder of
+    AmigoBot-v1's info, for the single env (one robot) and the vector env (its compact infos); :func:`v0_record_info`
+    is AmigoBot-v0's.
 
     Args:
         record: ``(RECORD_WIDTH,)`` (one robot) or ``(N, RECORD_WIDTH)``, a new array: the info's seven arrays are
@@ -351,16 +319,12 @@ class AmigoBotV1Env(AmigoBotBase):
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
 
-        The per-step draws' logarithms by numpy (:meth:`amigo_gym.sim.fast_v1.StepKernel.draw`) and the reward's
-        exponentials inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`), as the reference evaluates them
-        (:func:`amigo_gym.task.v1.step_columns`, :func:`amigo_gym.model.kinematics.col_exp`); the info by
+        The per-step draws and the reward inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`); the info by
         :func:`record_info` from a copy of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
         """
         kern = self._kernel
         assert kern is not None
         steps = self._steps
-        if kern.noise_on:
-            kern.draw(steps)
         kern.run_record(self._ring_step, a1, a2, *kern.args)
         self._steps = steps = steps + 1
         rec = kern.record.copy()  # the info's seven arrays are views of this one new array
@@ -420,15 +384,16 @@ class AmigoBotV1Env(AmigoBotBase):
 
     # ------------------------------------------------------------------ info
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
-        st, ep = self._state, self._episode
-        assert st is not None and ep is not None
+        """The info of the reference's state and outcome (:func:`reference_record`, then as :meth:`_step_kernel`)."""
+        st = self._state
+        assert st is not None
+        rec = reference_record(self._k.w_max, st, out, noise, self._castor)
+        v = rec[_L.R_ERROR :].tolist()
+        time = int(st.steps) * self.params.dt
         if self.v0_params is not None:
-            values = v0_info_values(self.params.dt, st, out, self._castor)
-            return {key: one_robot(v) for key, v in values.items()}
-        values = info_values(self.params.dt, self._k.w_max, st, ep, out, noise, self._path_info)
-        info = {key: v if key == "path" else one_robot(v) for key, v in values.items()}
-        info["end_of_path"] = bool(out.end_of_path)
-        return info
+            return v0_record_info(rec, v, time)
+        path = self._path_info.copy()
+        return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, path)
 
     def _render_state(self) -> dict[str, Any]:
         st = self._current_state()

@@ -52,7 +52,6 @@ __all__ = [
     "check_reset_options",
     "check_vector_args",
     "info_row",
-    "one_robot",
     "parse_pose_option",
     "parse_seeds",
     "scatter_infos",
@@ -305,16 +304,6 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
             else:
                 out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
     return out
-
-
-def one_robot(value: Any) -> Any:
-    """A numeric info entry of one robot (AmigoBot-v1's ``info_values`` and ``v0_info_values``) in
-    the single envs' types: tuples as float64 arrays, dicts of floats, floats."""
-    if isinstance(value, tuple):
-        return np.array(value, dtype=np.float64)
-    if isinstance(value, dict):
-        return {k: float(v) for k, v in value.items()}
-    return float(value)
 
 
 def take_rows(infos: dict[str, Any], idx: NDArray[np.intp]) -> dict[str, Any]:

@@ -20,7 +20,8 @@ the reference. Their path projection and pose run a ClothoidPath's float functio
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
 terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
 ``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
-the reference, bit for bit on one route (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``).
+the reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the
+same bits.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import info_values, make_spaces_v1, record_info, v0_info_values, v0_record_info
+from amigo_gym.envs.amigobot_v1 import make_spaces_v1, record_info, reference_record, v0_record_info
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -55,8 +56,8 @@ _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
 #: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
 KERNELS: tuple[str, ...] = VECTOR_KERNELS
-# entries of the compiled step's workspace rows (amigo_gym.sim.fast_v1.WS_FIELDS): the normalised command
-_W_A1, _W_A2 = fast_v1.W_A1, fast_v1.W_A2
+# entries of the compiled step's workspace rows (amigo_gym.sim.layout_v1.WS_FIELDS): the normalised command
+_W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
 # the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
@@ -153,6 +154,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
         #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
         self._template = None if fixed is None else tracking.episode_template(p)
+        #: the template as columns of one row (tracking.episode_columns), repeated for the rows that restart
+        self._template_row = None if self._template is None else tracking.episode_columns([self._template])
         n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
@@ -223,8 +226,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: their observations and compact infos (:meth:`_begin_rows`)."""
-        obs, cols = self._begin_rows(idx, pose_opt)
-        return obs, self._infos(cols, idx)
+        return self._begin_rows(idx, pose_opt)
 
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
@@ -237,7 +239,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         k = self._k
         m = len(idx)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
-        cols: dict[str, list[Any]] = {}
+        recs = []
         paths = []
         for j, i in enumerate(idx.tolist()):
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
@@ -245,12 +247,11 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             paths.append(b.path)
             self._set_row(i, b.path_info, b.state, b.episode)
             obs[j] = b.outcome.obs
-            for key, value in self._row_info(b.state, b.episode, b.outcome, tracking.NO_NOISE).items():
-                cols.setdefault(key, []).append(value)
+            recs.append(reference_record(k.w_max, b.state, b.outcome, tracking.NO_NOISE, 0.0))
         self.paths.replace(idx, paths)
         self._castor[idx] = 0.0
-        infos = {key: _stack(v) for key, v in cols.items()}
-        self._start_trails(idx, _array(infos["h_position"]))
+        infos = self._record_infos(idx, np.stack(recs))[0]
+        self._start_trails(idx, infos["h_position"])
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         return obs, infos
 
@@ -271,11 +272,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         template = self._template
         fixed = None if template is None else tracking.fixed_path(k.params)
         if template is not None:  # one path, episodes that differ in their start offsets alone: one draw per row
+            assert self._template_row is not None
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]  # (a fixed path: no draw)
             for i in rows:
                 self.path_infos[i] = dict(info)
-            ep_all = tracking.Episode(*(np.repeat(c, m) for c in tracking.episode_columns([template])))
+            ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
             u_all = np.array([self._rng(i).uniform(-1.0, 1.0, size=3) for i in rows]).reshape(m, 3)
             groups = {id(fixed): list(range(m))}
         else:
@@ -293,10 +295,13 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._goal[idx[sel]] = tracking.goal_point(k.params, path)
         st_all = tracking.State(*cols)
         self._set_rows(idx, st_all, ep_all)
-        if template is None or any(self.paths[i] is not fixed for i in rows):  # (a fixed path: mostly there)
+        if template is None:  # (with a template, every row keeps the fixed path it was built with)
             self.paths.replace(idx, paths)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
-        infos = self._kernel_infos(idx, b.start(rows, paths, st_all, ep_all, obs), True)[0]
+        rec = b.start(rows, paths, st_all, ep_all, obs)
+        rec[:, _R_COMMAND] = b.ws[idx, _W_A1 : _W_A2 + 1] * k.w_max  # a start: the command being executed, no slip
+        rec[:, _R_SLIP] = 0.0
+        infos = self._record_infos(idx, rec)[0]
         self._start_trails(idx, infos["h_position"])
         return obs, infos
 
@@ -414,43 +419,29 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
             obs[:, j] = c
-        reward = np.asarray(out.reward, dtype=np.float64).copy()
-        terminated: BoolArray = np.asarray(out.terminated, dtype=np.bool_).copy()
-        infos = self._infos(self._batch_info(out, noise), None)
-        return obs, reward, terminated, infos, np.asarray(out.h_x), np.asarray(out.h_y)
+        rec = reference_record(self._k.w_max, self._state, out, noise, self._castor).reshape(n, -1)
+        infos, reward, terminated = self._record_infos(slice(None), rec)
+        return obs, reward, terminated, infos, rec[:, _R_HX], rec[:, _R_HY]
 
     def _step_kernel(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
         """:meth:`_step_columns` by the compiled step (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`): the same
-        results, the infos built from the workspace rows (the same keys, dtypes and values as
-        :meth:`_batch_info`)."""
+        results, the infos built from the records (:meth:`_record_infos`)."""
         b = self._batch
         assert b is not None
         obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
         rec = b.step(self._ring, self._ring_step, a1, a2, obs)
         steps = self._state.steps
         np.add(steps, 1, out=steps)
-        infos, reward, terminated = self._kernel_infos(slice(None), rec, False)
+        infos, reward, terminated = self._record_infos(slice(None), rec)
         return obs, reward, terminated, infos, rec[:, _R_HX], rec[:, _R_HY]
 
-    def _kernel_infos(
-        self, rows: NDArray[np.intp] | slice, rec: Array, start: bool
-    ) -> tuple[dict[str, Any], Array, BoolArray]:
-        """The compact infos of ``rows`` from their info records (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.step`,
-        :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the single env's record, :meth:`AmigoBotV1Env._kernel_info`),
-        :meth:`_row_info`'s entries with the same dtypes and values as the reference forms them
-        (:func:`amigo_gym.envs.amigobot_v1.record_info`, the single env's builder: the arrays views of ``rec``, a new
-        array); with the rewards and ``terminated``.
-
-        Args:
-            rows: the robots (``slice(None)``: all). rec: ``(m, RECORD_WIDTH)``, new. start: the records of start
-                states (no slip; the command the robot was executing, from its state), else of a step.
-        """
-        assert self._batch is not None
+    def _record_infos(self, rows: NDArray[np.intp] | slice, rec: Array) -> tuple[dict[str, Any], Array, BoolArray]:
+        """The compact infos of ``rows`` from their info records ``rec (m, RECORD_WIDTH)``, a new array
+        (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the compiled step's or :func:`reference_record`'s), by the single
+        env's builders (:func:`amigo_gym.envs.amigobot_v1.record_info`: the arrays are views of ``rec``); with the
+        rewards and ``terminated``."""
         ep = self._episode
         dt = self.params.dt
-        if start:
-            rec[:, _R_COMMAND] = self._batch.ws[rows, _W_A1 : _W_A2 + 1] * self._k.w_max
-            rec[:, _R_SLIP] = 0.0
         if self.v0_params is not None:
             infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], np.asarray(self._state.steps)[rows] * dt)
             return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
@@ -469,31 +460,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         kept beside them)."""
         assert self._batch is not None
         ws = self._batch.ws
-        cols: list[Any] = [ws[:, fast_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
+        cols: list[Any] = [ws[:, layout_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
         return tracking.State._make([*cols, steps])
-
-    # ------------------------------------------------------------------ infos
-    def _row_info(
-        self, st: tracking.State, ep: tracking.Episode, out: tracking.Outcome, noise: Any, castor: Any = 0.0
-    ) -> dict[str, Any]:
-        """One robot's numeric info values, or every robot's as columns (:func:`info_values`, without ``path``;
-        AmigoBot-v0's, :func:`v0_info_values`, with its settings)."""
-        if self.v0_params is not None:
-            return v0_info_values(self.params.dt, st, out, castor)
-        return info_values(self.params.dt, self._k.w_max, st, ep, out, noise)
-
-    def _batch_info(self, out: tracking.Outcome, noise: Any) -> dict[str, Any]:
-        return {
-            k: _as_columns(v, self.num_envs)
-            for k, v in self._row_info(self._state, self._episode, out, noise, self._castor).items()
-        }
-
-    def _infos(self, cols: dict[str, Any], idx: NDArray[np.intp] | None) -> dict[str, Any]:
-        """Compact infos (rows of the robots concerned) as arrays."""
-        out: dict[str, Any] = {}
-        for key, v in cols.items():
-            out[key] = self._infos(v, idx) if isinstance(v, dict) else _array(v)
-        return out
 
     # ------------------------------------------------------------------ rendering
     def _start_trails(self, idx: NDArray[np.intp], h: Array) -> None:
@@ -517,35 +485,3 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._state = self._state_views(np.asarray(self._state.steps))
         elif fast_v1.use_fast_path(None):  # the column route's projection compiled in this process too
             fast_v1.path_loops()
-
-
-def _as_columns(v: Any, n: int) -> Any:
-    if isinstance(v, dict):
-        return {k: _as_columns(x, n) for k, x in v.items()}
-    if isinstance(v, tuple):
-        return tuple(_full(c, n) for c in v)
-    return _full(v, n)
-
-
-def _full(c: Any, n: int) -> Array:
-    a = np.asarray(c)
-    if a.shape == (n,):
-        return a.astype(np.float64, copy=False)
-    return np.full(n, float(a))
-
-
-def _stack(values: list[Any]) -> Any:
-    """Rows of one info key (floats, tuples of floats or dicts) as columns."""
-    first = values[0]
-    if isinstance(first, dict):
-        return {k: _stack([v[k] for v in values]) for k in first}
-    if isinstance(first, tuple):
-        return tuple(np.array([v[j] for v in values], dtype=np.float64) for j in range(len(first)))
-    return np.array(values, dtype=np.float64)
-
-
-def _array(v: Any) -> Array:
-    """An info value as an array: a tuple of columns becomes ``(m, k)``."""
-    if isinstance(v, tuple):
-        return np.stack([np.asarray(c, dtype=np.float64) for c in v], axis=-1)
-    return np.asarray(v, dtype=np.float64)

@@ -2,7 +2,7 @@ r"""The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuat
 
 Pure, batched functions (no state, no environment code). Every function takes *columns* (floats, or
 float64 arrays that broadcast together, e.g. ``(N,)`` for ``N`` robots) and returns the same kind,
-as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code and get the same bits.
+as in :mod:`amigo_gym.model.kinematics`; one robot and a batch run the same code.
 This module may import only numpy, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.model.numeric`,
 :mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.model.fresnel` and the standard library (``tests/test_actuators.py``
 checks it).
@@ -74,7 +74,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.model import fresnel
 from amigo_gym.model.kinematics import Real, body_velocity_of, wheel_rates_of
-from amigo_gym.model.numeric import abs_real, any_array, any_real, copysign_real, max_real, min_real, where_real
+from amigo_gym.model.numeric import any_array, where
 from amigo_gym.model.params import RobotParams, check_range
 
 __all__ = [
@@ -144,11 +144,11 @@ class ActuatorParams:
 
 
 # Column helpers (the same values for floats and arrays): amigo_gym.model.numeric.
-_where = where_real
-_abs = abs_real
-_min = min_real
-_max = max_real
-_copysign = copysign_real
+_where = where
+_abs = np.abs
+_min = np.minimum
+_max = np.maximum
+_copysign = np.copysign
 _any_array = any_array
 
 
@@ -449,7 +449,7 @@ def actuator_step(
        wheel angles by ``L (w_i(t_j) + \dot w_i L / 2)`` and the distance by ``L (v_true(t_j) + \dot v_true L / 2)``.
     4. The new wheel rates are the nominal inverse of ``(v(dt), w(dt))``.
 
-    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays: the same bits).
+    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays).
 
     Args:
         x, y, beta: pose of A at the start [m, m, rad].
@@ -535,10 +535,10 @@ def piece_rates(
 
 # The step written once on a scratch buffer ``ws``: a list of floats (one robot) or of columns (a batch: the vector
 # env's numpy route), or the workspace array of AmigoBot-v1's compiled step, which compiles these functions as they
-# are (amigo_gym.sim.layout_v1.SHARED). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
+# are (amigo_gym.sim._kernels_v1). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
 # 6 values and 6 slopes, the 11 piece boundaries, then ``(vt, at, wt, alt, length)`` of each live piece (on columns:
 # of each piece live in some row). Two steps differ between floats and columns, each a helper with a float form
-# that the kernel compiles in its place (:data:`SCALAR_FORMS`): the sort of the piece boundaries
+# that the kernel compiles in its place (``amigo_gym.sim._kernels_v1``): the sort of the piece boundaries
 # (:func:`sort_knots`) and the pose over the pieces (:func:`advance_pieces`).
 
 #: scratch entries of one speed channel: 7 knots, 6 values, 6 slopes
@@ -606,11 +606,6 @@ def advance_pieces(
         nx, ny, nb = fresnel.advance_nodes([0.0] * (3 * nn), 0, nn, x, y, theta, piece, 0, 1, nodes, j, nn)
         x, y, theta = np.where(live, nx, x), np.where(live, ny, y), np.where(live, nb, theta)
     return x, y, theta
-
-
-#: the helpers of the step that differ between floats and columns, each with the float form that the compiled step
-#: runs in its place (:func:`amigo_gym.sim.layout.shared_compiler`)
-SCALAR_FORMS: dict[Any, Any] = {sort_knots: sort_knots_float, advance_pieces: fresnel.advance_nodes}
 
 
 def _channel_ws(
@@ -748,7 +743,7 @@ def actuator_step_ws(
         t1 = ws[tm + j + 1]
         length = t1 - t0
         live = length > 0.0
-        if not any_real(live):
+        if not np.any(live):
             continue
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate_ws(ws, kv, t0, mid)

@@ -19,8 +19,6 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.numeric import pow2_real, sqrt_real, where_real
-
 __all__ = [
     "body_velocity",
     "wheel_rates",
@@ -44,7 +42,6 @@ __all__ = [
     "col_tan",
     "cos_sin",
     "col_sqrt",
-    "col_exp",
     "SteadyCircle",
     "circle_steady_state",
     "Geometry",
@@ -191,32 +188,7 @@ def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
 
 
 #: ``np.sqrt(x)``; ``math.sqrt(x)`` for a scalar ``x`` (the same value: IEEE 754 rounds sqrt exactly)
-col_sqrt = sqrt_real
-
-
-#: ``1.5 * 2**52``: ``(t + _ROUND) - _ROUND`` rounds a float below ``2**51`` in magnitude to an integer
-_ROUND = 6755399441055744.0
-#: ``1 / ln 2``, and ``ln 2`` in two parts (fdlibm's ``ln2HI``, of 32 bits, and ``ln2LO``)
-_INV_LN2, _LN2_HI, _LN2_LO = 1.44269504088896338700e00, 6.93147180369123816490e-01, 1.90821492927058770002e-10
-#: fdlibm's ``exp`` coefficients: ``r (e^r + 1) / (e^r - 1) = 2 + r^2 / 6 + P2 r^4 + ...`` on ``|r| <= ln 2 / 2``
-_P = (1.66666666666666019037e-01, -2.77777777770155933842e-03, 6.61375632143793436117e-05,
-      -1.65339022054652515390e-06, 4.13813679705723846039e-08)  # fmt: skip
-
-
-def col_exp(x: Real) -> Real:
-    """``exp(x)`` in plain float64 arithmetic (fdlibm's ``exp`` without branches), for floats, columns and
-    compiled code: within 1 ulp, subnormals included; 0 below ``-745.14`` and for ``-inf``, ``inf`` above
-    ``709.79``, NaN for NaN. ``x = k ln 2 + r``, a rational form of ``e^r``, then ``2^k`` as two exact factors."""
-    xc = where_real(x > -746.0, where_real(x < 1000.0, x, 1000.0), -746.0)  # NaN to -746, restored below
-    k = (xc * _INV_LN2 + _ROUND) - _ROUND
-    hi = xc - k * _LN2_HI
-    lo = k * _LN2_LO
-    r = hi - lo
-    t = r * r
-    c = r - t * (_P[0] + t * (_P[1] + t * (_P[2] + t * (_P[3] + t * _P[4]))))
-    y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi)
-    k1 = (0.5 * k + _ROUND) - _ROUND
-    return where_real(x != x, x, y * pow2_real(k - k1) * pow2_real(k1))
+col_sqrt = np.sqrt
 
 
 def _sinc(x: Real, sin_x: Real) -> Real:

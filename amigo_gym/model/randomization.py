@@ -32,7 +32,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real
-from amigo_gym.model.numeric import any_real, sqrt_real
 from amigo_gym.model.params import check_range
 
 __all__ = [
@@ -312,7 +311,7 @@ def step_uniforms(
     """
     s1 = 0.0
     s2 = 0.0
-    if any_real(slip_max > 0.0):
+    if np.any(slip_max > 0.0):
         s1 = slip_max * _counter_uniform_int(key, step, 0)
         s2 = slip_max * _counter_uniform_int(key, step, 1)
     on = 0
@@ -342,7 +341,7 @@ def step_normals(
 def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
     r"""One normal draw of standard deviation ``level``: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, given
     ``log(u1)`` and ``cos(2 pi u2)``; floats or columns."""
-    return level * (sqrt_real(-2.0 * log_u1) * cos_angle)
+    return level * (np.sqrt(-2.0 * log_u1) * cos_angle)
 
 
 def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:

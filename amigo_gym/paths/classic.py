@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, pack
-from amigo_gym.model.numeric import abs_real, any_real, arctan2_real, hypot_real, sqrt_real, where_real
+from amigo_gym.model.numeric import where
 from amigo_gym.model.params import EnvParams, check_range
 
 __all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
@@ -335,13 +335,13 @@ def circle_foot(
     ``e = d (r - |u|)`` and the tangent ``d (-n_y, n_x)``, ``n = u / |u|``."""
     ux = x - cx
     uy = y - cy
-    rho = sqrt_real(ux * ux + uy * uy)
+    rho = np.sqrt(ux * ux + uy * uy)
     norm = rho
     at_centre = rho == 0.0
-    if any_real(at_centre):  # at the centre: the start point
-        ux = where_real(at_centre, r0x, ux)
-        uy = where_real(at_centre, r0y, uy)
-        norm = where_real(at_centre, 1.0, rho)
+    if np.any(at_centre):  # at the centre: the start point
+        ux = where(at_centre, r0x, ux)
+        uy = where(at_centre, r0y, uy)
+        norm = where(at_centre, 1.0, rho)
     nx = ux / norm
     ny = uy / norm
     if d > 0.0:
@@ -353,8 +353,9 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
     """Arc length ``s = r a`` [m] from the circle's start to the direction ``u``:
     ``a = atan2(d (r0 x u), r0 . u)``, plus ``2 pi`` where negative."""
     cross = r0x * uy - r0y * ux
-    a = arctan2_real(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
-    return r * (a + where_real(a < 0.0, TWO_PI, 0.0))
+    a = np.arctan2(cross if d > 0.0 else -cross, r0x * ux + r0y * uy)
+    s: Real = r * (a + where(a < 0.0, TWO_PI, 0.0))
+    return s
 
 
 @dataclass(frozen=True)
@@ -441,7 +442,7 @@ class ManoeuvrePath:
         e, cos_theta, sin_theta, s, s_circ, on_line = manoeuvre_foot(
             x, y, cx, cy, r0x, r0y, float(d), r, self.straight_length
         )
-        curvature = where_real(on_line, 0.0, d / r)
+        curvature = where(on_line, 0.0, d / r)
         if minimal:
             return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
         # the circle's foot c + r n (n from the tangent d (-n_y, n_x)), or the line's (s, 0)
@@ -450,9 +451,9 @@ class ManoeuvrePath:
         theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
         return ClosestPoint(
             s,
-            where_real(on_line, s, cx + r * nx),
-            where_real(on_line, 0.0, cy + r * ny),
-            where_real(on_line, 0.0, theta),
+            where(on_line, s, cx + r * nx),
+            where(on_line, 0.0, cy + r * ny),
+            where(on_line, 0.0, theta),
             curvature,
             e,
             cos_theta,
@@ -475,16 +476,16 @@ def manoeuvre_foot(
     """
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
     s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
-    s_line = where_real((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)
-    d_line = hypot_real(x - s_line, y)
-    on_line = d_line <= abs_real(e)  # the line (ties to it)
-    sign_y = where_real(y > 0.0, 1.0, where_real(y < 0.0, -1.0, where_real(y == 0.0, 0.0, y)))  # np.sign(y)
-    e_line = where_real(x <= big_l, y, sign_y * d_line)
+    s_line = where((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)
+    d_line = np.hypot(x - s_line, y)
+    on_line = d_line <= np.abs(e)  # the line (ties to it)
+    sign_y = where(y > 0.0, 1.0, where(y < 0.0, -1.0, where(y == 0.0, 0.0, y)))  # np.sign(y)
+    e_line = where(x <= big_l, y, sign_y * d_line)
     return (
-        where_real(on_line, e_line, e),
-        where_real(on_line, 1.0, cos_theta),
-        where_real(on_line, 0.0, sin_theta),
-        where_real(on_line, s_line, big_l + s_circ),
+        where(on_line, e_line, e),
+        where(on_line, 1.0, cos_theta),
+        where(on_line, 0.0, sin_theta),
+        where(on_line, s_line, big_l + s_circ),
         s_circ,
         on_line,
     )
@@ -492,7 +493,8 @@ def manoeuvre_foot(
 
 def manoeuvre_curvature(s: float, big_l: float, curvature: float) -> float:
     """Curvature [1/m] at ``s`` [m]: 0 where ``s <= big_l``, else ``curvature`` (also for NaN)."""
-    return where_real(s <= big_l, 0.0, curvature)  # type: ignore[return-value]
+    k: float = where(s <= big_l, 0.0, curvature)
+    return k
 
 
 def _located(cp: ClosestPoint, progress: Real) -> PathPoint:

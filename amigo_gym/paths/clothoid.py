@@ -43,7 +43,6 @@ from amigo_gym.model.fresnel import (
     unit_speed_poses,
 )
 from amigo_gym.model.kinematics import Real, pack
-from amigo_gym.model.numeric import clip_float
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, Projection
 
@@ -483,8 +482,8 @@ def locate_window(sp: float, ahead: float, behind: float, length: float, closed:
     lo = sp - behind
     hi = sp + ahead
     if not closed:
-        lo = clip_float(lo, 0.0, length)
-        hi = clip_float(hi, 0.0, length)
+        lo = min(max(lo, 0.0), length)
+        hi = min(max(hi, 0.0), length)
     return lo, hi
 
 
@@ -621,7 +620,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
                 else:
                     idx = int(jj % m_f)
         else:
-            jj = clip_float(jj, 0.0, top)
+            jj = min(max(jj, 0.0), top)
             idx = int(jj)
         ddx = pv[sx + idx] - x
         ddy = pv[sy + idx] - y
@@ -641,7 +640,7 @@ def locate_flat(
     (``pose``, ``buf``, ``nodes``, ``nb``: the pose function and its arguments, as :func:`pose_flat`). Returns
     :data:`FlatPoint`."""
     lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-    s = clip_float(coarse_start(pv, x, y, sp, ahead, behind), lo, hi)
+    s = min(max(coarse_start(pv, x, y, sp, ahead, behind), lo), hi)
     return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
 
 

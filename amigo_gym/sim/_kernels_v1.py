@@ -19,14 +19,10 @@ does what :func:`amigo_gym.task.v1.step_columns` does on Python floats, :func:`e
    heading reward term and the arguments of the three exponential terms, the reference speed, termination and end
    of path: the pieces of :func:`amigo_gym.task.v1.evaluate_columns`, compiled.
 
-The scalar pieces are the reference's own functions (:data:`amigo_gym.sim.layout_v1.SHARED`), compiled as they are;
-the polymorphic helpers they call (:mod:`amigo_gym.model.numeric`) as their float forms. The results agree with the
-reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit: ``sin``, ``cos``, ``tan`` and
-``log`` here are the C library's, the reference's numpy's. The per-step draws are split in three: the counter-based
-uniforms (integer SplitMix64 on ``uint64``: :func:`amigo_gym.model.randomization.step_uniforms`) by
-:func:`noise_uniforms`, their logarithms by ``np.log`` between the calls, the Box–Muller normals
-(:func:`amigo_gym.model.randomization.step_normals`) in :func:`step`; the reward's exponentials are
-:func:`amigo_gym.model.kinematics.col_exp` (plain arithmetic, :func:`fill_record`).
+The scalar pieces are the reference's own functions (every function of the modules in :data:`_SHARED_MODULES`),
+compiled as they are; the helpers that dispatch on floats or columns as their float forms (:data:`_FLOAT_FORMS`).
+The results agree with the reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit:
+``sin``, ``cos``, ``tan``, ``exp`` and ``log`` here are the C library's, the reference's numpy's.
 
 Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
 (``L`` here), which numba never loads):
@@ -49,7 +45,9 @@ folder keyed by the package's source bytes (:func:`amigo_gym.sim.layout.kernel_c
 
 from __future__ import annotations
 
+import inspect
 import math
+import types
 from collections.abc import Callable
 from typing import Any, cast
 
@@ -57,7 +55,7 @@ import numba
 import numpy as np
 from llvmlite import ir as llvm_ir
 from numba.core import cgutils
-from numba.extending import intrinsic, overload
+from numba.extending import intrinsic, overload, register_jitable
 from numba.np import numpy_support
 from numpy.typing import NDArray
 
@@ -65,7 +63,6 @@ from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomizati
 from amigo_gym.model.actuators import PIECES
 from amigo_gym.paths import classic, clothoid, families
 from amigo_gym.sim import layout_v1 as L
-from amigo_gym.sim.layout import shared_compiler
 from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -73,7 +70,6 @@ from amigo_gym.task import v1 as tracking
 __all__ = [
     "step",
     "evaluate",
-    "noise_uniforms",
     "progress",
     "pose",
     "build_chain",
@@ -89,14 +85,33 @@ F64 = NDArray[np.float64]
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
 _jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, inline="always")
 
-_shared = shared_compiler(
-    "amigo_gym.sim._kernels_v1",
-    L.SHARED,
-    _jit,
-    inline=L.SHARED_INLINE,
-    scalar_forms={**numeric.SCALAR_FORMS, **actuators.SCALAR_FORMS},
-    intrinsics={numeric.pow2_real: numeric.pow2_typing},
-)
+#: the modules whose functions the kernel compiles as they are: each registered with numba (``register_jitable``:
+#: compiled code may call it), the node loops inlined (small loops LLVM would leave as calls)
+_SHARED_MODULES = (actuators, fresnel, kinematics, randomization, classic, clothoid, families, task, tracking)
+_INLINE = (fresnel.advance_nodes, fresnel.node_phases, fresnel.node_sums, fresnel.unit_speed_phases,
+           fresnel.unit_speed_sums, fresnel.unit_speed_nodes)  # fmt: skip
+#: functions that dispatch on floats or columns, and the float form compiled in their place
+_FLOAT_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
+    numeric.where: numeric.where_float,
+    actuators.sort_knots: actuators.sort_knots_float,
+    actuators.advance_pieces: fresnel.advance_nodes,
+}
+_OVERLOADED: set[Any] = {*_FLOAT_FORMS, fresnel.cos_sin_nodes, randomization._uint64}
+
+
+def _register() -> None:
+    for module in (*_SHARED_MODULES, numeric):
+        for fn in vars(module).values():
+            if isinstance(fn, types.FunctionType) and fn.__module__ == module.__name__ and fn not in _OVERLOADED:
+                register_jitable(inline="always" if fn in _INLINE else "never")(fn)
+    for poly, scalar in _FLOAT_FORMS.items():
+        typer = lambda *args, _s=scalar: _s  # noqa: E731
+        typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
+        overload(poly, jit_options={"error_model": "numpy"})(typer)
+
+
+_register()
+_shared = _jit
 
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
@@ -220,10 +235,9 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
 # ----------------------------------------------------------------------------------------- actuators
 
 
-# The actuator step and the path pose are the float path's own functions (actuators.actuator_step_ws,
+# The actuator step and the path pose are the reference's own functions (actuators.actuator_step_ws,
 # fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
-# by name: registered by _shared (SHARED), the node loops inlined by numba (SHARED_INLINE) so that a path pose costs
-# no call.
+# by name (registered by _register, the node loops inlined: _INLINE).
 _reference_speed_of = cast(Callable[..., float], _shared(tracking.reference_speed_of))
 
 
@@ -324,38 +338,19 @@ _channels_on = _shared(randomization.channels_on)
 
 
 @_jit
-def noise_uniforms(c: F64, ws: F64, key: np.uint64, step: int) -> int:
-    """The uniform numbers of :func:`amigo_gym.model.randomization.step_noise` for step ``step``:
-    :func:`amigo_gym.model.randomization.step_uniforms` itself (SplitMix64 on ``uint64``).
-
-    Writes the slips (``slip_max u``, or 0.0 when ``slip_max`` is 0) and, for each measurement-noise channel
-    that is on (in channel order), ``u1`` at ``ws[L.S_U1:]`` and ``2 pi u2`` at ``ws[L.S_U2:]``. The caller then
-    writes ``np.log`` of the ``u1`` at ``ws[L.S_LOG:]`` (numpy's logarithm, as the reference) before :func:`step`.
-
-    Args:
-        key: the episode's key (:func:`amigo_gym.model.randomization.draw_key`), step: the state's step counter.
-
-    Returns:
-        the number of channels on (the length of the ``u1`` written).
-    """
-    s1, s2, on = _step_uniforms(
-        ws, L.S_U1, L.S_U2, key, step, ws[L.W_SLIP_MAX], c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], c[L.C_RATE_NOISE]
-    )
-    ws[L.W_SLIP1] = s1
-    ws[L.W_SLIP2] = s2
-    return on
-
-
-@_jit
-def _normals(c: F64, ws: F64) -> None:
-    # randomization.step_normals itself, on the logarithms in ws and the cosines of the angles, written over the
-    # angles
+def _draws(c: F64, ws: F64, key: np.uint64) -> None:
+    # this step's draws into ws (randomization.step_noise of the state's step counter): the slips, then the normals
+    # by Box-Muller from the uniforms (step_uniforms, step_normals; log and cos of the C library)
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
-    for j in range(_channels_on(position, heading, rate)):
+    s1, s2, on = _step_uniforms(ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate)
+    ws[L.W_SLIP1] = s1
+    ws[L.W_SLIP2] = s2
+    for j in range(on):
+        ws[L.S_U1 + j] = math.log(ws[L.S_U1 + j])
         ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
-    _step_normals(ws, L.W_NX, ws, L.S_LOG, ws, L.S_U2, position, heading, rate)
+    _step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
 
 
 # ----------------------------------------------------------------------------------------- building paths
@@ -599,12 +594,12 @@ def step(
     ring_step: int,
     a1: float,
     a2: float,
+    key: np.uint64,
 ) -> None:
     """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws`` (updated in place) on Python floats.
 
-    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the state's step counter) come from
-    :func:`noise_uniforms` and numpy's logarithms in ``ws`` when ``ws[L.W_NOISE_ON]`` is set, else they are zeros;
-    they are written to ``ws`` (``slip1`` ... ``noise_rate2``).
+    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the episode's ``key`` and the state's step
+    counter) when ``ws[L.W_NOISE_ON]`` is set, else zeros, are written to ``ws`` (``slip1`` ... ``noise_rate2``).
 
     Args:
         c, pv, ring, ws, obs: the layouts of the module docstring.
@@ -612,7 +607,7 @@ def step(
         a1, a2: the validated action (finite) [-], clipped here.
     """
     if ws[L.W_NOISE_ON] != 0.0:
-        _normals(c, ws)
+        _draws(c, ws, key)
     else:
         _no_draws(ws)
     # tracking.action_commands; actuators.ring_write, ring_read: their slots
@@ -731,13 +726,13 @@ _reward_product = _shared(task.reward_product)
 @_jit
 def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
     """The single env's info record ``rec (RECORD_WIDTH,)`` from the workspace (:data:`layout_v1.RECORD_ROWS`,
-    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments
-    (:func:`amigo_gym.model.kinematics.col_exp`, the reference's), the smoothness term and the reward
+    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments,
+    the smoothness term and the reward
     (:func:`record_terms`)."""
     _record_entries(ws, rec)
-    rec[L.R_TRACK] = kinematics.col_exp(ws[L.W_ARG_T])
-    rec[L.R_SPEED] = kinematics.col_exp(ws[L.W_ARG_V])
-    rec[L.R_SMOOTH_EXP] = kinematics.col_exp(ws[L.W_ARG_S])
+    rec[L.R_TRACK] = math.exp(ws[L.W_ARG_T])
+    rec[L.R_SPEED] = math.exp(ws[L.W_ARG_V])
+    rec[L.R_SMOOTH_EXP] = math.exp(ws[L.W_ARG_S])
     record_terms(rec, smooth_weight)
 
 
@@ -769,35 +764,20 @@ def step_record(
     obs: NDArray[np.floating],
     rec: F64,
     smooth_weight: float,
+    key: np.uint64,
 ) -> None:
     """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
     (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
     ring2 = _carray(_data_ptr(ring), ring.shape)
     c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
-    step(c, pv, ring2, ws, obs, ring_step, a1, a2)
+    step(c, pv, ring2, ws, obs, ring_step, a1, a2, key)
     fill_record(ws, rec, smooth_weight)
 
 
 # ----------------------------------------------------------------------------------------- N robots
 # The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
-# :func:`noise_uniforms` and :func:`step` called row by row in one compiled loop each, with numpy's ``log``
-# between the two loops (as for one robot). They live in this file so
-# that numba's disk cache, keyed on this file, is invalidated with the row functions they call. Each loop is
-# written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under another name).
-
-
-def _noise_rows(c: F64, ws: F64, keys: NDArray[np.uint64], u1: F64) -> None:
-    """:func:`noise_uniforms` of every row of ``ws (N, W)`` that draws per step, at its own step counter.
-
-    Copies each such row's uniforms ``u1`` into ``u1 (N, n_normal)`` (C-contiguous: the caller takes
-    ``np.log`` of the whole block, then passes it to :func:`_step_rows`). Rows that draw nothing are left alone.
-    """
-    for i in numba.prange(ws.shape[0]):
-        row = ws[i]
-        if row[L.W_NOISE_ON] != 0.0:
-            on = noise_uniforms(c, row, keys[i], int(row[L.W_STEPS]))
-            for j in range(on):
-                u1[i, j] = row[L.S_U1 + j]
+# :func:`step` called row by row in one compiled loop. Each loop is written once with ``prange`` and compiled twice
+# (serial, and ``parallel=True`` under another name).
 
 
 def _step_rows(
@@ -811,38 +791,34 @@ def _step_rows(
     ring_step: int,
     a1: F64,
     a2: F64,
-    logs: F64,
+    keys: NDArray[np.uint64],
     rec: F64,
     smooth_weight: float,
 ) -> None:
     """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
     2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
-    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms).
-
-    The logarithms ``logs (N, n_normal)`` (``np.log`` of :func:`_noise_rows`'s uniforms) are put in place first.
-    """
+    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms), its episode's
+    key ``keys[i]``."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         row = _bare(ws[i])
-        for j in range(logs.shape[1]):
-            row[L.S_LOG + j] = logs[i, j]
         ring = _carray(_data_ptr(rings[i]), rings.shape[1:])
         pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
         rec_i = _bare(rec[i])
-        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i])
+        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i], keys[i])
         fill_record(row, rec_i, smooth_weight)
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arc step's two tangents (the C
-    library's ``tan`` of :func:`_ideal_motion`'s arguments, as :func:`_ideal_step`) of every row into ``tans (N, 2)``,
-    in a loop of their own (the rows' calls overlap)."""
+    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arguments of the arc step's two tangents
+    (:func:`_ideal_motion`) of every row into ``tans (N, 2)``; the caller takes ``np.tan`` of the block (numpy's
+    vectorised loop) before pass 2."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
         arg_h, arg_m = _ideal_motion(c, _bare(ws[i]), w1, w2)[3:]
-        tans[i, 0] = math.tan(arg_h)
-        tans[i, 1] = math.tan(arg_m)
+        tans[i, 0] = arg_h
+        tans[i, 1] = arg_m
 
 
 def _ideal_rows(
@@ -867,11 +843,8 @@ def _ideal_rows(
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: :func:`fill_record`'s exponentials of ``exps (N, 3)`` (:func:`amigo_gym.model.kinematics.col_exp`, in
-    place, in a loop of their own over a flat view: LLVM vectorises it), then the records' terms and rewards."""
-    flat = exps.reshape(exps.size)
-    for j in numba.prange(flat.shape[0]):
-        flat[j] = kinematics.col_exp(flat[j])
+    """Pass 3: the records' exponentials from ``exps (N, 3)`` (``np.exp`` of pass 2's arguments, taken by the caller
+    on the whole block), then their terms and rewards."""
     for i in numba.prange(rec.shape[0]):
         r = _bare(rec[i])
         r[L.R_TRACK] = exps[i, 0]
@@ -907,8 +880,6 @@ def start_rows(
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
-noise_rows = _jit(_twin(_noise_rows, "noise_rows"))
-noise_rows_parallel = _jit_parallel(_twin(_noise_rows, "noise_rows_parallel"))
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
 ideal_tangent_rows = _jit(_twin(_ideal_tangent_rows, "ideal_tangent_rows"))

@@ -59,14 +59,6 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
-def __getattr__(name: str) -> Any:
-    """The layouts' names (:mod:`amigo_gym.sim.layout_v1`), also read here: ``fast_v1.W_X``."""
-    try:
-        return getattr(layout_v1, name)
-    except AttributeError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-
-
 #: environment variable that selects the step's implementation: ``auto`` (default), ``numba``, ``numpy``
 KERNEL_ENV = "AMIGO_GYM_KERNEL"
 
@@ -215,7 +207,7 @@ def path_loops() -> PathLoops:
     :func:`~amigo_gym.paths.clothoid.chain_pieces`, :func:`~amigo_gym.paths.clothoid.sample_points`,
     :func:`~amigo_gym.paths.families.run_segments` and :func:`~amigo_gym.paths.families.lane_change_shape`, compiled
     by :mod:`amigo_gym.sim._kernels_v1` with their node tables bound), which the environments with the compiled step
-    hand to the path constructors at resets (the same paths to rounding, ``tests/test_path_loops.py``). Loads the
+    hand to the path constructors at resets (the same paths to the tolerance, ``tests/test_kernel_v1.py``). Loads the
     kernels (numba) on the first call."""
     kv = kernels()
     nodes = np.array(fresnel.node_table(1), dtype=np.float64)
@@ -354,39 +346,30 @@ class StepKernel:
         # normal draws per step
         self.n_normal = randomization.channels_on(rz.position_noise, rz.heading_noise, rz.wheel_rate_noise)
         self.window = k.window
-        self.noise_on = False  # this episode draws per step (:meth:`draw` before :attr:`step`)
         self._bind()
 
     def _bind(self) -> None:
         kv = kernels()
         self.evaluate: Any = kv.evaluate
-        self.noise_uniforms: Any = kv.noise_uniforms
         self.locate_progress: Any = kv.progress
         self.path_pose: Any = kv.pose
-        # the step and the draws for exactly these types (direct_call: no dispatch per call): the ring (L, 2) and
-        # the observation (D,) float32 of the single env, the step counters Python ints
-        self._uniforms: Any = direct_call(kv.noise_uniforms, self.consts, self.ws, self.key, 0)
+        # the step for exactly these types (direct_call: no dispatch per call): the ring (L, 2) and the observation
+        # (D,) float32 of the single env, the step counter a Python int, the key uint64
         self._args()
         #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
         self.run_record: Any = direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
         self._fill: Any = direct_call(kv.fill_record, self.ws, self.record, 0.0)
         #: the record's scalars (``record[R_ERROR:]``: a view, for their floats)
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
-        self.u1: Array = self.ws[layout_v1.S_U1 : layout_v1.S_U1 + self.n_normal]
-        self.logs: Array = self.ws[layout_v1.S_LOG : layout_v1.S_LOG + self.n_normal]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for name in (
             "evaluate",
-            "noise_uniforms",
             "locate_progress",
             "path_pose",
             "scalars",
-            "u1",
-            "logs",
             "args",
-            "_uniforms",
             "run_record",
             "_fill",
         ):
@@ -399,7 +382,7 @@ class StepKernel:
 
     def _args(self) -> None:
         #: :attr:`run_record`'s arguments after the step's own (the episode's path: set again by :meth:`load`)
-        self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, self.smooth_weight)
+        self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, self.smooth_weight, self.key)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
         """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`): compiled on a
@@ -422,7 +405,6 @@ class StepKernel:
     def load(self, path: Any, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
         """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
         self.path = flat_path(path)
-        self._args()
         ws = self.ws
         ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
             st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
@@ -433,21 +415,13 @@ class StepKernel:
         )  # fmt: skip
         ws[layout_v1.W_SLIP_MAX] = ep.slip_max
         # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
-        self.noise_on = float(ep.slip_max) > 0.0 or self.n_normal > 0
-        ws[layout_v1.W_NOISE_ON] = 1.0 if self.noise_on else 0.0
+        ws[layout_v1.W_NOISE_ON] = 1.0 if float(ep.slip_max) > 0.0 or self.n_normal > 0 else 0.0
         self.key = np.uint64(ep.key)
+        self._args()
 
     def fill(self) -> None:
         """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
         self._fill(self.ws, self.record, self.smooth_weight)
-
-    def draw(self, steps: int) -> None:
-        """This step's draws into the workspace (:func:`amigo_gym.model.randomization.step_noise` of the step counter
-        ``steps``): the uniforms by :func:`amigo_gym.sim._kernels_v1.noise_uniforms`, their logarithms by ``np.log``
-        (as the reference); :func:`amigo_gym.sim._kernels_v1.step` completes the normals. Only when anything is drawn.
-        """
-        if self._uniforms(self.consts, self.ws, self.key, steps):
-            np.log(self.u1, out=self.logs)
 
     def state(self, steps: int) -> tracking.State:
         """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""

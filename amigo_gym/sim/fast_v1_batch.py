@@ -1,32 +1,15 @@
 """The compiled step of ``N`` ``AmigoBot-v1`` robots at once (numba): the native vector env's fast path.
 
-:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym.sim._kernels_v1.step`, whose reference
-is the Python float code of :mod:`amigo_gym.task.v1`: see :mod:`amigo_gym.sim.fast_v1`) over the rows of an
-``(N, W)`` workspace in one compiled loop, with the single robot's split kept exactly:
-
-1. one compiled loop draws every row's uniforms (:func:`amigo_gym.sim._kernels_v1.noise_uniforms`, only when the
-   task draws per step);
-2. ``np.log`` of the whole ``(N, n_normal)`` block of uniforms (numpy's logarithm, as the reference);
-3. one compiled loop steps every row (:func:`amigo_gym.sim._kernels_v1.step_record`'s parts), each on its own path,
-   ring and workspace row, and writes its info record: the single environment's record, with the reward's
-   exponentials (:func:`amigo_gym.model.kinematics.col_exp`), its terms and the reward.
-
-With ideal actuators and no per-step draws (AmigoBot-v0's settings) a step is three loops instead
-(:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``, ``record_rows``): the arc step's tangents and
-the reward's exponentials each in a loop of their own (the rows' independent calls overlap; the exponentials' loop
-is vectorised), the same functions per row in the same order: the single env's bits.
-
-Starts of episodes (:meth:`BatchKernel.start`) evaluate the start states row by row with the single robot's
-compiled :func:`amigo_gym.sim._kernels_v1.evaluate` and :func:`amigo_gym.sim._kernels_v1.fill_record`, as the
-single environment's reset.
-
-The records are the single environment's: the same compiled :func:`amigo_gym.sim._kernels_v1.fill_record` on each
-row, as in one robot's step; ``np.log`` takes and writes
-a C-contiguous block, like the reference's arrays (numpy may pick its loop by memory layout). So every row gets the
-bits of :class:`amigo_gym.envs.AmigoBotV1Env`, hence of ``SyncVectorEnv`` of single envs
-(``tests/test_vector_v1_kernel.py``). The paths of the batch are flattened once each
-(:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena (:class:`PathArena`); row ``i`` reads
-``arena.flat[starts[i]:stops[i]]``.
+:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym.sim._kernels_v1.step` and
+:func:`amigo_gym.sim._kernels_v1.fill_record`, whose reference is :mod:`amigo_gym.task.v1`: see
+:mod:`amigo_gym.sim.fast_v1`) over the rows of an ``(N, W)`` workspace in one compiled loop, each row on its own
+path, ring and workspace row, writing its info record. With ideal actuators and no per-step draws (AmigoBot-v0's
+settings) a step is three loops (:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``,
+``record_rows``) with numpy's vectorised ``tan`` and ``exp`` of whole blocks between them. Starts of episodes
+(:meth:`BatchKernel.start`) evaluate the start states row by row (:func:`amigo_gym.sim._kernels_v1.start_rows`).
+Each row agrees with :class:`amigo_gym.envs.AmigoBotV1Env` to the tolerance (``tests/test_vector_v1_kernel.py``).
+The paths of the batch are flattened once each (:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena
+(:class:`PathArena`); row ``i`` reads ``arena.flat[starts[i]:stops[i]]``.
 
 numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.sim.fast_v1.kernels`).
 """
@@ -133,11 +116,10 @@ class PathArena:
 class BatchKernel:
     """The compiled step of ``n`` robots (module docstring): constants, path arena, workspace rows.
 
-    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.fast_v1.WS_FIELDS`, loaded by
+    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.layout_v1.WS_FIELDS`, loaded by
     :meth:`load` with :meth:`amigo_gym.sim.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
-    every row. The compiled loops are :func:`amigo_gym.sim._kernels_v1.noise_rows` and
-    :func:`amigo_gym.sim._kernels_v1.step_rows` (``parallel``: their ``prange`` twins on numba's threads; the
-    rows are independent, so the results are the same).
+    every row. The compiled loop is :func:`amigo_gym.sim._kernels_v1.step_rows` (``parallel``: its ``prange`` twin
+    on numba's threads; the rows are independent, so the results are the same).
 
     Attributes:
         consts: :func:`amigo_gym.sim.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
@@ -151,12 +133,10 @@ class BatchKernel:
         self.consts: Array = self._row.consts
         self.parallel = parallel
         self.arena = PathArena(n)
-        self.ws: Array = np.zeros((n, len(fast_v1.WS_FIELDS) + fast_v1.WS_SCRATCH))
+        self.ws: Array = np.zeros((n, len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         m = self._row.n_normal
         self.noise_on = np.zeros(n, dtype=np.bool_)
-        self._u1: Array = np.ones((n, m))
-        self._logs: Array = np.zeros((n, m))
         #: the three-loop step of ideal actuators without per-step draws (module docstring), and its scratch
         self.ideal = k.params.ideal_actuators and m == 0
         self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
@@ -172,10 +152,8 @@ class BatchKernel:
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
-        noise_rows = kv.noise_rows_parallel if self.parallel else kv.noise_rows
         step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
-        self._noise_rows: Any = fast_v1.direct_call(noise_rows, f1, f2, keys, f2)
-        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, f2, f2, 0.0)
+        args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
         self._step_rows: Any = fast_v1.direct_call(step_rows, *args)
         if self.ideal:
             par = "_parallel" if self.parallel else ""
@@ -188,7 +166,7 @@ class BatchKernel:
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("_noise_rows", "_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
+        for name in ("_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
             state.pop(name, None)
         return state
 
@@ -209,18 +187,18 @@ class BatchKernel:
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
         ws = self.ws
-        ws[r, fast_v1.W_X : fast_v1.W_STEPS + 1] = np.column_stack(
+        ws[r, layout_v1.W_X : layout_v1.W_STEPS + 1] = np.column_stack(
             [np.asarray(c, dtype=np.float64) for c in st]
         )  # the state's fields in WS_FIELDS' order
-        ws[r, fast_v1.W_CASTOR] = 0.0
+        ws[r, layout_v1.W_CASTOR] = 0.0
         l3_differs = np.asarray(ep.l3) != self._k.l3
-        ws[r, fast_v1.W_R1 : fast_v1.W_L3D + 1] = np.column_stack(
+        ws[r, layout_v1.W_R1 : layout_v1.W_L3D + 1] = np.column_stack(
             (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
         )
         # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
         noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
-        ws[r, fast_v1.W_SLIP_MAX] = ep.slip_max
-        ws[r, fast_v1.W_NOISE_ON] = noise_on
+        ws[r, layout_v1.W_SLIP_MAX] = ep.slip_max
+        ws[r, layout_v1.W_NOISE_ON] = noise_on
         self.keys[r] = ep.key
         self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)
@@ -286,13 +264,10 @@ class BatchKernel:
         sw = self._row.smooth_weight
         if self.ideal and not self.noise_on.any():  # (rows that draw slips take the general step)
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
+            np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
+            np.exp(self._exps, out=self._exps)
             self._record_rows(self._exps, rec, sw)
             return rec
-        if self._u1.shape[1]:  # normal draws: their uniforms, numpy's logarithms of the whole block
-            self._noise_rows(c, ws, self.keys, self._u1)
-            np.log(self._u1, out=self._logs)
-        elif self.noise_on.any():  # slips only
-            self._noise_rows(c, ws, self.keys, self._u1)
-        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self._logs, rec, sw)
+        self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self.keys, rec, sw)
         return rec

@@ -1,27 +1,21 @@
-"""What the compiled steps' modules share: :func:`twin`, :func:`shared_compiler` and :func:`kernel_cache` (numba's
-disk cache in a folder keyed by the package's source bytes, so that a change of any file it compiles is seen).
+"""What the compiled step's modules share: :func:`twin` and :func:`kernel_cache` (numba's disk cache in a folder
+keyed by the package's source bytes, so that a change of any file it compiles is seen).
 
-Imported by :mod:`amigo_gym.sim._kernels_v1` and its loader; imports nothing of
-the package; numba only inside :func:`kernel_cache` and :func:`shared_compiler`.
+Imports nothing of the package; numba only inside :func:`kernel_cache`.
 """
 
 from __future__ import annotations
 
 import hashlib
-import inspect
 import os
 import shutil
 import types
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, TypeVar, cast
+from typing import Any, cast
 
-__all__ = ["twin", "source_digest", "cache_root", "kernel_cache", "shared_compiler"]
-
-_F = TypeVar("_F", bound=Callable[..., Any])
-#: the functions already registered with numba by :func:`shared_compiler`
-_REGISTERED: set[Callable[..., Any]] = set()
+__all__ = ["twin", "source_digest", "cache_root", "kernel_cache"]
 
 
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
@@ -89,78 +83,3 @@ def kernel_cache() -> Iterator[Path]:
         yield folder
     finally:
         config.CACHE_DIR = previous
-
-
-def _calls(fn: Callable[..., Any]) -> Callable[..., Any]:
-    """A function of any arguments that calls ``fn`` with them (an ``overload``'s implementation of an intrinsic)."""
-
-    def call(*args: Any) -> Any:
-        return fn(*args)
-
-    return call
-
-
-def _returns(scalar: Callable[..., Any]) -> Callable[..., Any]:
-    """The typing function of an ``overload`` whose implementation is ``scalar`` for any argument types (numba
-    requires the typing function's signature to be the implementation's)."""
-
-    def typer(*args: Any) -> Callable[..., Any]:
-        return scalar
-
-    typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
-    return typer
-
-
-def shared_compiler(
-    owner: str,
-    shared: tuple[Callable[..., Any], ...],
-    jit: Callable[..., Any],
-    inline: tuple[Callable[..., Any], ...] = (),
-    scalar_forms: Mapping[Callable[..., Any], Callable[..., Any]] | None = None,
-    intrinsics: Mapping[Callable[..., Any], Callable[..., Any]] | None = None,
-) -> Callable[[_F], _F]:
-    """The decorator with which the kernel module ``owner`` compiles the reference's functions of ``shared``.
-
-    Registers every function of ``shared`` with numba (``register_jitable``: compiled code may call it, as the
-    shared functions call each other) and returns ``compiled(fn)``: ``jit(fn)`` for a function of ``shared``,
-    an ``ImportError`` for another (so that what a kernel compiles is listed in one place).
-    The functions of ``inline`` (a part of ``shared``) are inlined into their callers by numba itself
-    (``inline="always"``: small loops that LLVM would otherwise leave as calls).
-    ``scalar_forms`` maps polymorphic helpers (floats or columns, dispatching on ``isinstance``, which numba cannot
-    compile) to their float forms (:data:`amigo_gym.model.numeric.SCALAR_FORMS`): compiled code calling a helper
-    runs its float form (an ``overload``), which must be in ``shared``.
-    ``intrinsics`` maps Python functions to the typing functions of numba intrinsics that compiled code calls in their
-    place (:func:`amigo_gym.model.numeric.pow2_real`, whose Python form is numpy's); the typing functions must be
-    in ``shared`` too.
-    Only the kernel modules call this (they import numba anyway); this module stays numba-free.
-    """
-    from numba.extending import intrinsic, overload, register_jitable
-
-    for fn in shared:
-        if fn not in _REGISTERED:  # once per process (both kernels share some functions)
-            if fn in inline:
-                register_jitable(inline="always")(fn)
-            else:
-                register_jitable(fn)
-            _REGISTERED.add(fn)
-    for poly, scalar in (scalar_forms or {}).items():
-        if scalar not in shared:
-            raise ImportError(
-                f"{owner} compiles {scalar.__qualname__} for {poly.__qualname__} but does not list it in SHARED"
-            )
-        if poly not in _REGISTERED:
-            overload(poly, jit_options={"error_model": "numpy"})(_returns(scalar))
-            _REGISTERED.add(poly)
-    for python_form, typing in (intrinsics or {}).items():
-        if typing not in shared:
-            raise ImportError(f"{owner} compiles {typing.__qualname__} but does not list it in SHARED")
-        if python_form not in _REGISTERED:
-            overload(python_form)(_returns(_calls(intrinsic(typing))))
-            _REGISTERED.add(python_form)
-
-    def compiled(fn: _F) -> _F:
-        if fn not in shared:
-            raise ImportError(f"{owner} compiles {fn.__qualname__} but does not list it in SHARED")
-        return cast(_F, jit(fn))
-
-    return compiled

@@ -1,21 +1,16 @@
 """The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free).
 
 The index constants below are read by the kernel (:mod:`amigo_gym.sim._kernels_v1`, which numba compiles them into
-as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors and re-exports every name here) and by the
-environments; :data:`SHARED` lists the reference's float functions the kernel compiles.
+as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors) and by the
+environments.
 
 May import numpy and the model, paths and task modules; never numba.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
-from amigo_gym.model import actuators, fresnel, kinematics, numeric, randomization
-from amigo_gym.paths import classic, clothoid, families
-from amigo_gym.task import v0 as task
-from amigo_gym.task import v1 as tracking
+from amigo_gym.model import actuators
+from amigo_gym.paths import clothoid
 
 #: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
@@ -177,9 +172,9 @@ R_PROGRESS, R_VT, R_VREF, R_END, R_TERM, R_CASTOR = (
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
 
 #: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
-#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1``, their logarithms
-#: and the angles ``2 pi u2`` (5 each; the step replaces the angles by their cosines)
-WS_SCRATCH = actuators.SCRATCH + 3 * 5
+#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1`` and angles
+#: ``2 pi u2`` (5 each; the step replaces them by their logarithms and cosines)
+WS_SCRATCH = actuators.SCRATCH + 2 * 5
 #: where :func:`amigo_gym.model.actuators.actuator_step_ws`'s scratch starts, and its parts
 S_ACT = len(WS_FIELDS)
 S_KV = S_ACT + actuators.SCRATCH_V
@@ -187,107 +182,4 @@ S_KW = S_ACT + actuators.SCRATCH_W
 S_TIMES = S_ACT + actuators.SCRATCH_TIMES
 S_PIECES = S_ACT + actuators.SCRATCH_PIECES
 S_U1 = S_ACT + actuators.SCRATCH
-S_LOG = S_U1 + 5
-S_U2 = S_LOG + 5
-
-
-#: the reference's float functions that the kernel compiles as they are (numba.njit of the function itself): the
-#: one source of each; :func:`amigo_gym.sim._kernels_v1` refuses to compile one not listed here
-SHARED: tuple[Callable[..., Any], ...] = (
-    tracking.command_change,
-    *numeric.SCALAR_FORMS.values(),
-    actuators.ramp,
-    actuators.clip_setpoint,
-    actuators.sort_knots_float,
-    actuators.piece_rates,
-    actuators._channel_ws,
-    actuators._evaluate_ws,
-    actuators.actuator_step_ws,
-    actuators.ring_slot,
-    actuators.ring_read_slots,
-    clothoid.py_min,
-    clothoid.py_max,
-    clothoid.wrap_arc,
-    clothoid.placed_pose,
-    clothoid.locate_window,
-    clothoid.foot_terms,
-    clothoid.newton_step,
-    clothoid.locate_status_float,
-    clothoid.piece_index,
-    clothoid.piece_at,
-    clothoid.place,
-    clothoid.coarse_start,
-    clothoid.locate_flat,
-    clothoid.locate_global,
-    clothoid.coarse_global,
-    clothoid.project_flat,
-    clothoid.lap_arc,
-    clothoid._floor_float,
-    clothoid.locate_rows,
-    clothoid.pose_rows,
-    clothoid.pose_flat,
-    clothoid.chain_pieces,
-    clothoid.sample_points,
-    classic.circle_foot,
-    classic.circle_arc,
-    classic.manoeuvre_foot,
-    classic.manoeuvre_curvature,
-    families.run_segments,
-    families.s_curve_half,
-    families.lane_change_shape,
-    fresnel.subinterval_count,
-    fresnel.node_phases,
-    fresnel.node_sums,
-    fresnel.advance_nodes,
-    fresnel.unit_speed_phases,
-    fresnel.unit_speed_sums,
-    fresnel.unit_speed_nodes,
-    kinematics.body_velocity_of,
-    kinematics.wheel_rates_of,
-    kinematics.h_from_a,
-    kinematics.half_tan_cos_sin,
-    kinematics.arc_from_tangents,
-    kinematics.castor_rate_float,
-    kinematics.advance_angle,
-    task.bound_angle_float,
-    task.observe_rates,
-    task.observe_reference,
-    task.round_half_even,
-    randomization.box_muller,
-    randomization._counter_uniform_int,
-    randomization.noise_level,
-    randomization.channels_on,
-    randomization.step_uniforms,
-    randomization.step_normals,
-    task.heading_error,
-    task.heading_term,
-    task.reward_arguments,
-    task.off_path,
-    task.steady_heading_float,
-    tracking.trapezoid_speed,
-    tracking.reference_speed_of,
-    tracking.action_commands,
-    tracking.measurements,
-    tracking.measured_differs,
-    tracking.end_flags,
-    task.observe_head,
-    task.curvature_feature,
-    tracking.preview_entry,
-    tracking.speed_observations,
-    task.smooth_term,
-    task.reward_product,
-    kinematics.col_exp,
-    numeric.pow2_typing,
-)
-
-
-#: the functions of :data:`SHARED` that numba inlines into their callers (the node loops, called per path pose)
-SHARED_INLINE: tuple[Callable[..., Any], ...] = (
-    kinematics.col_exp,
-    fresnel.advance_nodes,
-    fresnel.node_phases,
-    fresnel.node_sums,
-    fresnel.unit_speed_phases,
-    fresnel.unit_speed_sums,
-    fresnel.unit_speed_nodes,
-)
+S_U2 = S_U1 + 5

@@ -64,8 +64,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.kinematics import Real, col_exp, col_sqrt
-from amigo_gym.model.numeric import clip_float, clip_real
+from amigo_gym.model.kinematics import Real, col_sqrt
+from amigo_gym.model.numeric import clip
 from amigo_gym.model.params import HEADING_LIMIT, EnvParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
@@ -88,12 +88,10 @@ __all__ = [
     "observe_rates",
     "observe_reference",
     "curvature_feature",
-    "clip_real",
     "smooth_term",
     "heading_term",
     "steady_heading",
     "steady_heading_float",
-    "clip_float",
     "heading_error",
     "initial_wheel_rates",
     "INFO_KEYS",
@@ -291,7 +289,7 @@ def heading_term(cos_psi: Real, sin_psi: Real, cos_ss: Real, sin_ss: Real) -> Re
 def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
     """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` for floats
     (``kappa l3`` clipped to [-1, 1]; :func:`steady_heading`)."""
-    sin_ss = -clip_float(curvature * l3, -1.0, 1.0)
+    sin_ss = -min(max(curvature * l3, -1.0), 1.0)
     return math.sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 
@@ -301,14 +299,14 @@ def observe_head(
     """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
     clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
     curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns; compiled by the
-    compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
-    return clip_real(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
+    compiled step (``amigo_gym.sim._kernels_v1``)."""
+    return clip(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
 def curvature_feature(curvature: Real, l3: float) -> Real:
     """A curvature field of the observation (at H, and at each preview point): ``clip(kappa l3, -1, 1)`` [-] of the
     curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns; compiled by the compiled step."""
-    return clip_real(curvature * l3, -1.0, 1.0)
+    return clip(curvature * l3, -1.0, 1.0)
 
 
 def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real, Real]:
@@ -321,11 +319,11 @@ def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
     [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
-    (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    (``amigo_gym.sim._kernels_v1``)."""
     return (
-        clip_real(w1 / w_max, -1.0, 1.0),
-        clip_real(w2 / w_max, -1.0, 1.0),
-        clip_real((v - v_ref) / v_max, -2.0, 2.0),
+        clip(w1 / w_max, -1.0, 1.0),
+        clip(w2 / w_max, -1.0, 1.0),
+        clip((v - v_ref) / v_max, -2.0, 2.0),
     )
 
 
@@ -401,10 +399,10 @@ def reward_term_columns(
         abs_error, abs_dv, change_sq, sigma_track, sigma_speed, smooth_scale_sq
     )
     return (
-        col_exp(arg_track),
-        col_exp(arg_speed),
+        np.exp(arg_track),
+        np.exp(arg_speed),
         heading_term(cos_psi, sin_psi, cos_ss, sin_ss),
-        smooth_term(col_exp(arg_smooth), smooth_weight),
+        smooth_term(np.exp(arg_smooth), smooth_weight),
     )
 
 
@@ -416,14 +414,14 @@ def reward_arguments(
     -sigma_speed``, ``change_sq / -smooth_scale_sq`` (a division by the negated scale: the bits of the compiled
     steps, which compile this function). ``abs_error`` [m], ``abs_dv`` [m/s], ``change_sq`` in the units of
     ``smooth_scale_sq``; the scales ``sigma_track`` [m], ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive.
-    Floats or columns (numba's subset: :data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    Floats or columns (numba's subset: ``amigo_gym.sim._kernels_v1``)."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
 def off_path(abs_error: Real, termination_distance: float) -> Any:
     """The termination of AmigoBot-v0's task: H farther than ``termination_distance`` [m] from the path, ``|e| >
     termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool for a float, a bool
-    column for a column; compiled by the compiled step (:data:`amigo_gym.sim.layout_v1.SHARED`)."""
+    column for a column; compiled by the compiled step (``amigo_gym.sim._kernels_v1``)."""
     return abs_error > termination_distance
 
 
@@ -440,7 +438,7 @@ def reward_product(track: Real, speed: Real, heading: Real, smooth: Real) -> Rea
 def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
     """``(cos psi_ss, sin psi_ss)`` of the steady heading error ``psi_ss = -asin(kappa l3)`` (``kappa l3`` clipped to
     [-1, 1]): ``cos psi_ss = sqrt(1 - (kappa l3)^2)``, ``sin psi_ss = -kappa l3``; floats or columns."""
-    sin_ss = -clip_real(curvature * l3, -1.0, 1.0)
+    sin_ss = -clip(curvature * l3, -1.0, 1.0)
     return col_sqrt(1.0 - sin_ss * sin_ss), sin_ss
 
 

@@ -76,7 +76,7 @@ from amigo_gym.model.kinematics import (
     col_sin,
     h_from_a,
 )
-from amigo_gym.model.numeric import abs_real, clip_real, max0_real, min_real
+from amigo_gym.model.numeric import clip
 from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath, make_path
@@ -788,10 +788,13 @@ class Outcome(NamedTuple):
 
 # The polymorphic helpers of the shared pieces below (numpy's elementwise form on columns, the float form on floats;
 # the compiled step runs the float form): amigo_gym.model.numeric, one home for both tasks and the model.
-_clip = clip_real
-_min = min_real
-_abs = abs_real
-_max0 = max0_real
+_clip = clip
+_min = np.minimum
+_abs = np.abs
+
+
+def _max0(x: Any) -> Any:
+    return np.maximum(x, 0.0)
 
 
 def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
@@ -818,7 +821,8 @@ def trapezoid_speed(v: Real, accel: float, decel: float, t_brake: Real, t: Real)
 
     (``T = profile_duration``), the minima left to right. Floats or columns (``_min``, ``_max0``); written once: the
     compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
-    return _max0(_min(_min(accel * t, v), v - decel * (t - t_brake)))
+    out: Real = _max0(_min(_min(accel * t, v), v - decel * (t - t_brake)))
+    return out
 
 
 # The pieces of :func:`evaluate_columns` (floats or columns; the compiled step compiles them: one source).
