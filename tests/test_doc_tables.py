@@ -38,6 +38,9 @@ def test_readme_performance_table_is_generated_from_the_committed_json() -> None
     assert _readme_table() == generated
     command = "amigo-gym bench-env --table-from docs/figures/bench_env.json --core-json docs/figures/bench_core.json"
     assert command in (ROOT / "README.md").read_text(encoding="utf-8")
+    # docs/performance.md shows the same generated table, with its command
+    performance = (ROOT / "docs/performance.md").read_text(encoding="utf-8")
+    assert generated in performance and command in performance
 
 
 def test_the_table_command_prints_it() -> None:
