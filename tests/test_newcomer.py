@@ -109,7 +109,7 @@ def test_seeds_counts_the_starts_in_convergence_as_in_evaluate_and_compare() -> 
 # --------------------------------------------------------------------------- one naming of the agents
 def test_benchmark_and_compare_name_the_pretrained_agents_alike() -> None:
     from amigo_gym.tools.training.benchmark import ALGOS, RETIRED_V1_AGENTS, V1_AGENTS, default_agents
-    from amigo_gym.tools.training.compare import v0_name
+    from amigo_gym.tools.training.evaluate import v0_name
 
     names = {a.name for a in default_agents()}
     assert {"analytic", "analytic_ff"} <= names

@@ -25,7 +25,6 @@ from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail earl
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training.benchmark import (
-    ALGOS,
     CLASSICAL,
     RETIRED_V1_AGENTS,
     V1_AGENTS,
@@ -42,6 +41,7 @@ from amigo_gym.tools.training.evaluate import (
     load_model,
     markdown_table,
     one_torch_thread,
+    v0_name,
     write_outputs,
 )
 from amigo_gym.tools.training.hyperparams import load_hyperparams
@@ -52,12 +52,6 @@ MANIFEST = "manifest.json"
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
 ANALYTIC = ("analytic", "analytic_ff")
-
-
-def v0_name(name: str) -> str:
-    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
-    ``amigo-gym benchmark`` names them; its v1 generalists are ``<algo>_v1``), a run's own name otherwise."""
-    return f"{name}_v0" if name in ALGOS else name
 
 
 def agent_legend(names: Sequence[str], gain: float) -> list[str]:

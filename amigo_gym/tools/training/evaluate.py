@@ -284,6 +284,13 @@ def _is_run(d: Path) -> bool:
     return (d / "model.zip").is_file() and (d / "config.json").is_file()
 
 
+def v0_name(name: str) -> str:
+    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
+    ``amigo-gym benchmark`` and ``compare`` name them; the v1 generalists are ``<folder>_v1``), a run's own name
+    otherwise."""
+    return f"{name}_v0" if name in ALGOS else name
+
+
 def find_models(path: str | os.PathLike[str]) -> list[ModelRef]:
     """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
 
@@ -651,8 +658,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if a.load_models:
             models = a.models if a.models is not None else PRETRAINED_DIR
             refs = find_models(models)
-            agents.update({ref.name: load_model(ref) for ref in refs})
-            training = {r.name: json.loads(r.record.read_text()) for r in refs if r.record is not None}
+            agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
+            training = {v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None}
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
         if (out / "manifest.json").is_file() and not a.force:
