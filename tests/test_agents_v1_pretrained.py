@@ -190,9 +190,12 @@ def test_bits_key_changes_with_torchs_kernels_and_mkls_path() -> None:
     import subprocess
     import sys
 
+    set_by_the_recipe = ("ATEN_CPU_CAPABILITY", "MKL_ENABLE_INSTRUCTIONS", "MKL_CBWR")
+    base = {k: v for k, v in os.environ.items() if k not in set_by_the_recipe}
+
     def key(**env: str) -> str:
         code = "from amigo_gym.tools.machine import bits_key; print(bits_key())"
-        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**os.environ, **env})
+        run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**base, **env})
         assert run.returncode == 0, run.stderr
         return run.stdout.strip()
 
