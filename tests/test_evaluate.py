@@ -145,10 +145,8 @@ def test_cli_writes_json_table_and_plots(tmp_path: Path) -> None:
     assert r.returncode == 2 and "no file or directory" in r.stderr
 
 
-def test_evaluate_names_the_pretrained_agents_as_compare_and_benchmark_do(tmp_path: Path) -> None:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    cmd = [sys.executable, "-m", "amigo_gym.tools.cli", "evaluate", "--steps", "20", "--seeds", "1", "--no-plots"]
-    r = subprocess.run([*cmd, "--out", str(tmp_path)], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+def test_evaluate_names_the_pretrained_agents_as_compare_and_benchmark_do(tmp_path: Path, in_process: Any) -> None:
+    r = in_process("evaluate", "--steps", "20", "--seeds", "1", "--no-plots", "--out", str(tmp_path))
     assert r.returncode == 0, r.stderr
     doc = json.loads((tmp_path / "results.json").read_text())
     assert {d["agent"] for d in doc["results"]} == {"analytic", "analytic_ff", "ppo_v0", "sac_v0", "td3_v0"}

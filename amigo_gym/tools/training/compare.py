@@ -29,6 +29,7 @@ from amigo_gym.tools.training.benchmark import (
     RETIRED_V1_AGENTS,
     V1_AGENTS,
     AgentSpec,
+    failed_episodes,
     parse_agents,
     quick_suite,
     run_benchmark,
@@ -213,8 +214,6 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
         for agent, a in bench["aggregates"].items():
             g = a.get("all")
             if g is not None:
-                from amigo_gym.tools.training.benchmark import failed_episodes
-
                 runs_ = f", {a['n_runs']} seeds" if a["n_runs"] > 1 else ""
                 failed, episodes = failed_episodes(bench, agent)
                 cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g} ({failed} of {episodes} failed{runs_})")

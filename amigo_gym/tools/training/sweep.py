@@ -36,6 +36,8 @@ from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.evaluate import find_models, load_model
 from amigo_gym.tools.training.hyperparams import load_hyperparams
 from amigo_gym.tools.training.intervals import iqm
+from amigo_gym.tools.training.protocol import VALIDATION_SEEDS
+from amigo_gym.tools.training.protocol import validation_cells as validation_cells  # the objective's cells
 from amigo_gym.tools.training.task_metrics import run_scenario
 from amigo_gym.tools.training.train import ENV_IDS, HYPERPARAMS_DIR, EnvId, Settings, train
 
@@ -216,8 +218,6 @@ class SweepConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
-        from amigo_gym.tools.training.protocol import VALIDATION_SEEDS
-
         if self.val_episodes > len(VALIDATION_SEEDS):
             raise ValueError(f"--val-episodes must be at most {len(VALIDATION_SEEDS)}, got {self.val_episodes}")
         if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
@@ -303,14 +303,6 @@ class SweepConfig:
 
 
 # --------------------------------------------------------------------------- validation cells
-def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Any, ...]:
-    """The cells the sweep's objective evaluates: :func:`amigo_gym.tools.training.protocol.validation_cells`
-    (the protocol's validation cells of ``env_id`` on its validation seeds; never a test cell or a test seed)."""
-    from amigo_gym.tools.training.protocol import validation_cells as cells
-
-    return cells(env_id, episodes, max_steps)
-
-
 def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
     ``vecnormalize.pkl``)."""
