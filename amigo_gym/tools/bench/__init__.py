@@ -88,6 +88,16 @@ def md_table(head: str, rows: Iterable[str], first: str = "---", last: str = "--
     return [f"| {head} |", f"|{first}|" + "---:|" * (head.count(" | ") - 1) + f"{last}|", *(f"| {r} |" for r in rows)]
 
 
+def rates(name: str, count: int, wall: float, cpu: float) -> dict[str, float]:
+    """``count`` per wall second (``name``) and per CPU second of this process, all threads (``name_cpu``)."""
+    return {name: round(count / max(wall, 1e-9), 1), f"{name}_cpu": round(count / max(cpu, 1e-9), 1)}
+
+
+def clock() -> tuple[float, float]:
+    """Wall and CPU clocks of this process [s] (:func:`time.perf_counter`, :func:`time.process_time`)."""
+    return time.perf_counter(), time.process_time()
+
+
 def load_average() -> str:
     """The machine's load average over 1, 5 and 15 minutes (``"-"`` where the OS has none)."""
     try:
