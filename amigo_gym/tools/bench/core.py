@@ -29,7 +29,7 @@ from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench import fmt, md_table, measure_many
 from amigo_gym.tools.machine import machine_line
-from amigo_gym.tools.options import run_command
+from amigo_gym.tools.options import run_command, say
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
@@ -130,12 +130,7 @@ def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, para
 
 
 def bench(
-    sizes: Sequence[int],
-    repeats: int = 7,
-    min_time: float = 0.05,
-    loop_max: int = 4096,
-    seed: int = 0,
-    kernels: bool = True,
+    sizes: Sequence[int], repeats: int, min_time: float, loop_max: int, kernels: bool, seed: int = 0
 ) -> list[Row]:
     """One :func:`_bench_one` row per size (the same random states for every method); ``kernels=False`` (or numba
     missing) leaves the kernel columns ``None``."""
@@ -292,11 +287,11 @@ def run(s: CoreSettings) -> int:
             numba.set_num_threads(s.threads)
         threads = int(numba.get_num_threads())
     print(f"{machine_line()}; median of {repeats} repeats", flush=True)
-    print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
-    rows = bench(sizes, repeats, min_time, s.loop_max, kernels=not s.skip_kernel)
+    say(f"{PROG}: sizes {sizes}")
+    rows = bench(sizes, repeats, min_time, s.loop_max, not s.skip_kernel)
     startup = None
     if not s.skip_startup:
-        print(f"{PROG}: start-up of fresh processes", file=sys.stderr, flush=True)
+        say(f"{PROG}: start-up of fresh processes")
         startup = bench_startup(1 if s.quick else 3)
     print(format_table(rows, startup, threads))
     if s.json is not None:
