@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import csv
 import functools
+import importlib.util
 import io
 import itertools
 import json
@@ -75,10 +76,8 @@ PROG = "amigo-gym train-fast"
 DEVICES = ("auto", "cpu", "cuda")
 _CURVATURE_KEYS = ("max_curvature", "max_curvature_rate")
 
-try:
-    import numba
-except ImportError:  # pragma: no cover - numba ships wheels for the common platforms only
-    numba = None
+#: numba (None where it is not installed: it ships wheels for the common platforms only)
+numba: Any = importlib.import_module("numba") if importlib.util.find_spec("numba") else None
 
 
 def resolve_device(device: str) -> str:
@@ -262,7 +261,8 @@ class FastPPOSettings:
         bad = sorted(set(d) - {f.name for f in fields(cls)})
         if bad:
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
-        return cls(**{k: (tuple(v) if k == "hidden" else v) for k, v in d.items()})
+        kw: dict[str, Any] = {k: (tuple(v) if k == "hidden" else v) for k, v in d.items()}
+        return cls(**kw)
 
 
 def _check_curriculum(s: FastPPOSettings) -> None:
@@ -803,7 +803,11 @@ def _train(
     cpu = dict.fromkeys(("rollout", "update", "loop_wall"), 0.0)
     wall_split = dict.fromkeys(("env", "rollout", "update", "loop"), 0.0)
     buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
-    sync = torch.cuda.synchronize if device == "cuda" else lambda: None  # timings of asynchronous CUDA work
+
+    def sync() -> None:  # timings of asynchronous CUDA work
+        if device == "cuda":
+            torch.cuda.synchronize()
+
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw

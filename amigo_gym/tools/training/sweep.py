@@ -501,12 +501,8 @@ class _OverBudget(Exception):
 
 # --------------------------------------------------------------------------- abandoned trials
 def mark_abandoned(study: Any) -> list[int]:
-    """Write ``ABANDONED.json`` into the folder of every trial that ended FAIL because its worker was
-    stopped (``interrupted``) or stopped beating (killed), where the folder exists here; a marker written
-    before the retry was queued is brought up to date (``retried_as``).
-
-    Returns the numbers of the trials marked (or updated) now.
-    """
+    """Write ``ABANDONED.json`` into the folder (where it exists here) of every trial that ended FAIL because its
+    worker was stopped or killed, or bring its ``retried_as`` up to date; the numbers of the trials marked now."""
     from optuna.trial import TrialState
 
     trials = study.get_trials(deepcopy=False)
@@ -564,11 +560,8 @@ def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
 
 
 def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; the other keys come from the base YAML ``base``).
-
-    SAC/TD3 sample ``batch_size`` from 64-256, or from :data:`HT_BATCH_SIZES` when ``base`` has ``n_envs`` >=
-    :data:`HT_MIN_ENVS`. The low-pass factor of ``policy: LowPassMlpPolicy`` is not sampled: the objective is H's
-    error alone, which would trade the smoothness the filter is there for (its value stays the base file's)."""
+    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; SAC/TD3 batch sizes from :func:`batch_choices` of the
+    base YAML ``base``). The low-pass factor is not sampled (the objective, H's error alone, would trade smoothness)."""
     hp: dict[str, Any] = {
         "learning_rate": trial.suggest_float("learning_rate", 1e-5, 3e-3, log=True),
         "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-4, 0.1, log=True),
@@ -862,11 +855,8 @@ def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
 
 
 def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
-    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary.
-
-    ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
-    ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
-    """
+    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary. ``SIGTERM``
+    is ``Ctrl-C``; ``opened`` receives the study as soon as it is open."""
     import optuna
     from optuna.study import MaxTrialsCallback
     from optuna.trial import TrialState
@@ -983,11 +973,9 @@ def replace_yaml_block(text: str, key: str, block: str) -> str:
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
-    """Write the best COMPLETE trial's hyperparameters (its user attribute ``hyperparams``: the base file's values with
-    the sampled ones; ``n_timesteps`` / ``total_steps`` stay the base file's) under ``env_id`` in the YAML file ``path``
-    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the file's
-    other keys kept (:func:`replace_yaml_block`), written atomically and read back. The mapping written (``None``: no
-    COMPLETE trial, nothing written)."""
+    """``--save-best``: the best COMPLETE trial's hyperparameters (user attribute ``hyperparams``) under ``env_id`` in
+    the YAML file ``path``, with comment lines naming the study's command, the trial and its value, the other keys
+    kept (:func:`replace_yaml_block`); the mapping written (``None``: no COMPLETE trial, nothing written)."""
     import yaml
     from optuna.trial import TrialState
 
@@ -1036,11 +1024,10 @@ def _spawn_workers(cfg: SweepConfig) -> list[int]:
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()
-    base = [a for a in cfg.argv]
     procs: list[subprocess.Popen[bytes]] = []
     try:
         for i in range(cfg.n_jobs):
-            args = [*base, "--n-jobs", "1", "--worker-index", str(i)]
+            args = [*cfg.argv, "--n-jobs", "1", "--worker-index", str(i)]
             procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args]))
         return [p.wait() for p in procs]
     except BaseException:
