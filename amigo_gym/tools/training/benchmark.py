@@ -15,7 +15,7 @@ import sys
 import tempfile
 import time
 import zipfile
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -23,34 +23,24 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
-from amigo_gym.model.params import EnvParams
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.paths.points import cached_file_path, is_points_file
-from amigo_gym.policies.analytic import AnalyticPolicy
-from amigo_gym.policies.learned import FastPolicy
-from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import (
     RunLock,
-    check_pickle,
-    corrupt_errors,
     publish,
     remove_matching,
     verify_manifest,
-    verify_sha256,
 )
 from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training.curvature import cell_specs
-from amigo_gym.tools.training.evaluate import one_torch_thread
-from amigo_gym.tools.training.hyperparams import sb3_class
+from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable  # re-exported: an agent that cannot run
 from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
 
-ALGOS = ("ppo", "sac", "td3")
-#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
-FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
 V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
 #: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
@@ -240,87 +230,6 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
 
 
 # --------------------------------------------------------------------------- agents
-def _classical(name: str) -> Callable[[Any], Any]:
-    def make(env: Any) -> Any:
-        base = env.unwrapped
-        hook = getattr(base, "classical_policy", None)
-        if callable(hook):
-            return hook(name)
-        params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
-            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
-
-            if name == "analytic":
-                return AnalyticTrackingPolicy(params)
-            if name == "pure_pursuit":
-                return PurePursuitPolicy(params)
-            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
-        if not isinstance(params, EnvParams):
-            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
-        if name == "analytic":
-            return AnalyticPolicy(params)
-        if name == "analytic_ff":
-            return AnalyticPolicy(params, feedforward_only=True)
-        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
-
-    return make
-
-
-#: classical policies by name: built per scenario from the environment
-CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
-
-
-@dataclass
-class AgentSpec:
-    """One training seed of one agent: a classical policy (``path is None``) or an SB3 model zip."""
-
-    name: str
-    seed: int = 0
-    path: str | None = None
-    algo: str | None = None
-    manifest: dict[str, Any] | None = None
-    _model: Any = field(default=None, repr=False)
-
-    def instantiate(self, env: Any) -> Any:
-        """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
-        if self.path is None:
-            return CLASSICAL[self.name](env)
-        if self._model is None:
-            # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
-            digest = (self.manifest or {}).get("sha256")
-            path, source = Path(self.path), str(Path(self.path).with_suffix(".json"))
-            if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
-                if digest is not None:
-                    verify_sha256(path, str(digest), source)
-                self._model = FastPolicy.load(self.path)
-            else:
-                check_pickle(path, None if digest is None else str(digest), source)
-                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
-                    self._model = sb3_class(str(self.algo)).load(self.path, device="cpu")
-        if str(self.algo).startswith(FAST_ALGO):
-            dim = self._model.builder.obs_dim
-            if getattr(env.observation_space, "shape", None) != (dim,):
-                raise Unavailable(f"observation shape {env.observation_space.shape} differs from the model's ({dim},)")
-            return self._model
-        want = getattr(self._model.observation_space, "shape", None)
-        got = getattr(env.observation_space, "shape", None)
-        if want != got:
-            raise Unavailable(f"observation shape {got} of the scenario differs from the model's {want}")
-        return self._model
-
-    def describe(self) -> dict[str, Any]:
-        """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
-        d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
-        if self.path is None:
-            d["kind"] = "classical"
-        else:
-            kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
-            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
-            if self.manifest is not None:
-                d["manifest"] = self.manifest
-        return d
-
-
 def _is_fast_model(path: Path) -> bool:
     """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
     try:
