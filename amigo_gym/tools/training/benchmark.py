@@ -109,25 +109,27 @@ def user_scenarios(
     return tuple(out)
 
 
-def _v0(name: str, desc: str, held_out: bool = False, max_steps: int = 400, **kw: Any) -> Scenario:
-    return Scenario(name, "AmigoBot-v0", kw, max_steps=max_steps, held_out=held_out, description=desc)
+def _v1(name: str, desc: str, held_out: bool = False, env_id: str = "AmigoBot-v1", **kw: Any) -> Scenario:
+    return protocol.cell(name, desc, env_id, held_out, seeds=tuple(range(100, 110)), version="1.0", **kw)
 
 
-def _v1(name: str, desc: str, held_out: bool = False, dt: float = 0.1, duration: float = 40.0, **kw: Any) -> Scenario:
-    kwargs = {"dt": dt, "randomize": "none", **kw}
-    return Scenario(name, "AmigoBot-v1", kwargs, max_steps=round(duration / dt), held_out=held_out, description=desc)
+def _v0(name: str, desc: str, held_out: bool = False, **kw: Any) -> Scenario:
+    return _v1(name, desc, held_out, "AmigoBot-v0", **kw)
 
 
 _WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
 _WHEELS_MINUS5 = {"r1": 0.0475, "r2": 0.0475, "l1": 0.114}
 _WHEELS_UNEQUAL = {"r1": 0.0525, "r2": 0.0475}
+_CIRCLE = {"path": "circle", "speed": 0.2}
+_MIXED = {"path": "mixed", "speed": (0.1, 0.4)}
 
+# fmt: off
 SUITE_1_0: tuple[Scenario, ...] = (
     # the paper's task on the exact v0 environment (the v0 specialists were trained on it)
     _v0("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s"),
-    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", held_out=True, speed=0.1),
-    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", held_out=True, speed=0.4),
-    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", held_out=True, dt=0.2, max_steps=200),
+    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", True, speed=0.1),
+    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", True, speed=0.4),
+    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", True, dt=0.2, max_steps=200),
     # circles: radii and both directions
     _v1("circle_r1_ccw", "paper circle on v1 (actuator limits)", path="circle", radius=1.0, direction=1, speed=0.2),
     _v1("circle_r0.5_ccw", "circle R 0.5 m, left", path="circle", radius=0.5, direction=1, speed=0.2),
@@ -137,81 +139,33 @@ SUITE_1_0: tuple[Scenario, ...] = (
     _v1("circle_v0.1", "circle R 1 m at 0.1 m/s", path="circle", radius=1.0, speed=0.1),
     _v1("circle_v0.4", "circle R 1 m at 0.4 m/s", path="circle", radius=1.0, speed=0.4),
     _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
-    _v1(
-        "manoeuvre_trapezoid",
-        "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)",
-        True,
-        path="manoeuvre",
-        speed=0.2,
-        speed_profile="trapezoid",
-    ),
+    _v1("manoeuvre_trapezoid", "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)", True, path="manoeuvre",
+        speed=0.2, speed_profile="trapezoid"),
     # path families
     _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s (held out)", True, path="manoeuvre", speed=0.2),
     _v1("figure8", "figure-8, 0.2 m/s", path="figure8", speed=0.2),
     _v1("random_paths", "seeded random smooth paths, 0.2 m/s", path="random", speed=0.2),
-    _v1(
-        "random_paths_sharp",
-        "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
-        True,
-        path="random",
-        speed=0.2,
-        path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5},
-    ),
+    _v1("random_paths_sharp", "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
+        True, path="random", speed=0.2, path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5}),
     _v1("lane_change", "lane change, 0.3 m/s", path="lane_change", speed=0.3),
-    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", path="mixed", speed=(0.1, 0.4)),
+    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", **_MIXED),
     # control period
     _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s (held out)", True, dt=0.05, path="circle", radius=1.0, speed=0.2),
     _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s (held out)", True, dt=0.2, path="circle", radius=1.0, speed=0.2),
     # the robot is not the model
-    _v1(
-        "wheels_plus5",
-        "true wheel radii and track +5 % (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        true_robot=_WHEELS_PLUS5,
-    ),
-    _v1(
-        "wheels_minus5",
-        "true wheel radii and track -5 % (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        true_robot=_WHEELS_MINUS5,
-    ),
-    _v1(
-        "wheels_unequal",
-        "right wheel +5 %, left -5 % (held out)",
-        True,
-        path="figure8",
-        speed=0.2,
-        true_robot=_WHEELS_UNEQUAL,
-    ),
-    _v1(
-        "slip",
-        "wheel slip up to 5 % per step (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        randomize={"slip": (0.0, 0.05)},
-    ),
-    _v1(
-        "delay_0.1", "actuation delay 0.1 s (held out)", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}
-    ),
+    _v1("wheels_plus5", "true wheel radii and track +5 % (held out)", True, **_CIRCLE, true_robot=_WHEELS_PLUS5),
+    _v1("wheels_minus5", "true wheel radii and track -5 % (held out)", True, **_CIRCLE, true_robot=_WHEELS_MINUS5),
+    _v1("wheels_unequal", "right wheel +5 %, left -5 % (held out)", True, path="figure8", speed=0.2,
+        true_robot=_WHEELS_UNEQUAL),
+    _v1("slip", "wheel slip up to 5 % per step (held out)", True, **_CIRCLE, randomize={"slip": (0.0, 0.05)}),
+    _v1("delay_0.1", "actuation delay 0.1 s (held out)", True, **_CIRCLE, randomize={"delay": (0.1, 0.1)}),
     _v1("delay_0.25", "actuation delay 0.25 s (held out)", True, path="figure8", randomize={"delay": (0.25, 0.25)}),
-    _v1(
-        "noise",
-        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2},
-    ),
-    _v1("mild", "'mild' randomisation on mixed paths", path="mixed", speed=(0.1, 0.4), randomize="mild"),
-    _v1(
-        "hard", "'hard' randomisation on mixed paths (held out)", True, path="mixed", speed=(0.1, 0.4), randomize="hard"
-    ),
+    _v1("noise", "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)", True, **_CIRCLE,
+        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2}),
+    _v1("mild", "'mild' randomisation on mixed paths", **_MIXED, randomize="mild"),
+    _v1("hard", "'hard' randomisation on mixed paths (held out)", True, **_MIXED, randomize="hard"),
 )
+# fmt: on
 
 #: released suites by version (never edited)
 SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0, protocol.VERSION: protocol.TEST}
