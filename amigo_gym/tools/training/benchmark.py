@@ -16,7 +16,7 @@ import tempfile
 import time
 import zipfile
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
@@ -176,11 +176,7 @@ QUICK_SCENARIOS: tuple[str, ...] = ("v0_paper_circle", "v0_speed_0.4", "circle_r
 
 def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps: int = 120) -> tuple[Scenario, ...]:
     """The ``--quick`` subset: :data:`QUICK_SCENARIOS` with at most ``episodes`` seeds and ``max_steps`` steps."""
-    return tuple(
-        replace(sc, seeds=sc.seeds[:episodes], max_steps=min(sc.max_steps, max_steps))
-        for sc in suite
-        if sc.name in QUICK_SCENARIOS
-    )
+    return tuple(sc.cut(episodes, max_steps) for sc in suite if sc.name in QUICK_SCENARIOS)
 
 
 # --------------------------------------------------------------------------- agents
@@ -787,15 +783,20 @@ def main(argv: Sequence[str] | None = None) -> int:
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
-        if a.curvature:
-            return _run_curvature(a, command)
-        scenarios = quick_suite(suite) if a.quick else suite
-        if a.path:
-            if a.scenarios:
-                raise ValueError("--path and --scenarios exclude each other")
-            scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
-            if a.quick:  # every path, shorter
-                scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+        if a.curvature and (a.path or a.scenarios):
+            raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+        if a.path and a.scenarios:
+            raise ValueError("--path and --scenarios exclude each other")
+        if a.curvature or a.path:
+            scenarios = (
+                curvature_scenarios(a.curvature_episodes)
+                if a.curvature
+                else user_scenarios(a.path or [], a.speed, a.feasibility, a.goal_tolerance, a.duration)
+            )
+            if a.quick:  # every cell, shorter
+                scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
+        else:
+            scenarios = quick_suite(suite) if a.quick else suite
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
             bad = [n for n in a.scenarios if n not in known]
@@ -805,23 +806,30 @@ def main(argv: Sequence[str] | None = None) -> int:
             scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
-        json_path = Path(a.json) if a.json else out / "benchmark.json"
-        md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
-            clean_temporaries(out)
-            doc = run_benchmark(
-                agents,
-                scenarios,
-                progress=a.progress,
-                reps=a.reps,
-                profile_reps=a.profile_reps,
-                bootstrap_seed=a.bootstrap_seed,
-                quick=a.quick,
-            )
-            doc["command"] = command
-            written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
-        print(markdown_report(doc), end="")
-        print("wrote " + ", ".join(map(str, written)))
+            if a.curvature:
+                doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
+                doc["command"] = command
+                written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
+                report = curvature.markdown_curvature(doc)
+            else:
+                clean_temporaries(out)
+                doc = run_benchmark(
+                    agents,
+                    scenarios,
+                    progress=a.progress,
+                    reps=a.reps,
+                    profile_reps=a.profile_reps,
+                    bootstrap_seed=a.bootstrap_seed,
+                    quick=a.quick,
+                )
+                doc["command"] = command
+                json_path = Path(a.json) if a.json else out / "benchmark.json"
+                md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
+                written = [str(p) for p in write_outputs(doc, out, json_path, md_path, plots=a.plots)]
+                report = markdown_report(doc)
+        print(report, end="")
+        print("wrote " + ", ".join(written))
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
@@ -832,24 +840,6 @@ def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
     feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
     suite."""
     return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
-
-
-def _run_curvature(a: BenchmarkSettings, command: str) -> int:
-    """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.tools.training.curvature`)."""
-    if a.path or a.scenarios:
-        raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
-    scenarios = curvature_scenarios(a.curvature_episodes)
-    if a.quick:
-        scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
-    agents = parse_agents(a.agents) if a.agents else default_agents()
-    out = Path(a.out)
-    with RunLock(out):
-        doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
-        doc["command"] = command
-        written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
-    print(curvature.markdown_curvature(doc), end="")
-    print("wrote " + ", ".join(written))
-    return 0
 
 
 if __name__ == "__main__":

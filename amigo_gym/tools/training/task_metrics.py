@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import gymnasium as gym
@@ -86,6 +86,10 @@ class Scenario:
             raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
             raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    def cut(self, episodes: int, max_steps: int) -> Scenario:
+        """The scenario on its first ``episodes`` seeds, episodes of at most ``max_steps`` steps."""
+        return replace(self, seeds=self.seeds[:episodes], max_steps=min(self.max_steps, max_steps))
 
     @property
     def episodes(self) -> int:
