@@ -836,10 +836,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
-    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`: random paths up to the
-    feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
-    suite."""
-    return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
+    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`), ``episodes`` each; opt-in,
+    not part of the suite."""
+    return cell_specs(episodes=episodes)
 
 
 if __name__ == "__main__":

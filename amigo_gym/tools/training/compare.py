@@ -13,7 +13,7 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -107,6 +107,11 @@ def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed")
     return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
 
 
+def _met(best: Mapping[str, Any]) -> tuple[str, ...]:
+    """Whether ``best`` meets each of :data:`TARGETS` (H error, wheel-rate deviation): ``"met"`` or ``"NOT met"``."""
+    return tuple("met" if best[k] <= TARGETS[k] else "NOT met" for k in ("h_rms_m", "wheel_rate_dev_rms"))
+
+
 def report_markdown(doc: dict[str, Any]) -> str:
     """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
     proto = doc["protocol"]
@@ -125,16 +130,14 @@ def report_markdown(doc: dict[str, Any]) -> str:
     ]
     best = doc.get("best_learned")
     if best:
-        ok_h = best["h_rms_m"] <= TARGETS["h_rms_m"]
-        ok_w = best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"]
+        ok_h, ok_w = _met(best)
         lines += [
             "## Targets (best learned agent, perturbed starts)",
             "",
             f"- agent: **{best['agent']}**",
-            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): "
-            + ("met" if ok_h else "NOT met"),
+            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): {ok_h}",
             f"- RMS wheel-rate deviation: {best['wheel_rate_dev_rms']:.4f} rad/s (target <= "
-            f"{TARGETS['wheel_rate_dev_rms']} rad/s): " + ("met" if ok_w else "NOT met"),
+            f"{TARGETS['wheel_rate_dev_rms']} rad/s): {ok_w}",
         ]
         rec = doc.get("training", {}).get(best["agent"])
         if rec:
@@ -198,8 +201,7 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
     ]
     best = doc.get("best_learned")
     if best:
-        ok_h = "met" if best["h_rms_m"] <= TARGETS["h_rms_m"] else "NOT met"
-        ok_w = "met" if best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"] else "NOT met"
+        ok_h, ok_w = _met(best)
         lines.append(
             f"Best learned agent: {best['agent']}, {best['h_rms_m'] * 1e3:.3f} mm (target <= "
             f"{TARGETS['h_rms_m'] * 1e3:g} mm: {ok_h}), {best['wheel_rate_dev_rms']:.3f} rad/s (target <= "
