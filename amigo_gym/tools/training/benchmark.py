@@ -43,10 +43,8 @@ from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exp
 
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
 V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
-#: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
-#: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
-#: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
-#: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
+#: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents still read "SB3 PPO generalist";
+#: docs/baselines.md, "Retired references")
 RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
@@ -674,11 +672,9 @@ def write_outputs(
 ) -> list[Path]:
     """Publish the JSON, the Markdown and (``plots``) the two figures as one set; the paths written.
 
-    Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
-    ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
-    new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
-    last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
-    ``publish:<file name>`` after each move.
+    Each file is written into a staging folder ``<out>/.staging-benchmark-*``, then moved into place with the
+    manifest ``<out>/benchmark_manifest.json`` written last (:func:`amigo_gym.tools.runs.publish`;
+    :func:`verify_outputs` checks the set).
     """
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))

@@ -575,11 +575,8 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
-    """H's path (whole circle and a zoom on the start, first perturbed episode) and ``|e|`` over time.
-
-    Top: H's trajectory of every agent against the circle (eq. 6), left the whole lap, right the first
-    0.25 m where the perturbed start's transient happens. Bottom: ``|e(t)|`` (log scale) for the nominal
-    and the first perturbed start; the dotted line is the 1 mm band of ``settling_time_s``.
+    """Top: H's trajectory of every agent against the circle (eq. 6), the whole lap and a zoom on the first 0.25 m
+    (first perturbed episode). Bottom: ``|e(t)|`` (log scale), nominal and first perturbed start, 1 mm band dotted.
     """
     plt = pyplot()
 
@@ -621,13 +618,9 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
 def plot_wheels(
     trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path, scenario: str = "perturbed"
 ) -> None:
-    """Each agent's wheel angles and rates over time against the analytic policy's from the same start.
-
-    One row per agent other than ``analytic`` (paper's Figs. 2–5 with the agent in place of the rig):
-    left, ``alpha1, alpha2`` [rad] of the agent (thin) and of the analytic policy (wide, pale); middle,
-    ``alpha1dot, alpha2dot`` [rad/s] over the first 10 s with the closed-form steady rates dotted;
-    right, the agent's wheel angles minus the analytic policy's [rad] over the whole episode.
-    """
+    """One row per agent other than ``analytic`` (the paper's Figs. 2–5): its wheel angles [rad] against the
+    analytic policy's (wide, pale), its wheel rates [rad/s] over the first 10 s (steady rates dotted), and its wheel
+    angles minus the analytic policy's [rad]."""
     plt = pyplot()
 
     if "analytic" not in trajs:
@@ -697,11 +690,8 @@ def write_outputs(
 
 
 def one_torch_thread() -> None:
-    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, whose forward pass is
-    fastest on one thread; more threads spin against the environment and other processes for the cores (on a
-    busy 2-core machine ``benchmark --quick`` took 265 s with torch's default threads, most of it in ``linear``).
-    The evaluating commands (evaluate, compare, benchmark) call it; ``train --threads`` does the same for
-    training."""
+    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, fastest on one thread
+    (more threads spin against the environment for the cores). The evaluating commands call it."""
     try:
         import torch
     except ImportError:

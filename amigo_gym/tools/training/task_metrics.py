@@ -364,11 +364,9 @@ def run_vector_episodes(
     """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
     ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
 
-    The loop of :func:`run_scenario`: the agent predicts for the whole batch at every step
-    (a constant batch size, so that a network's outputs do not depend on how many episodes are still running;
-    ``episode_start`` marks the rows that ended, which the autoreset restarted). A row's episode is its steps up
-    to its first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
-    Reaching the end of an open path (AmigoBot-v1's ``info["end_of_path"]``) ends an episode as a success: its
+    The agent predicts for the whole batch at every step (a constant batch size: a network's outputs do not depend
+    on how many episodes still run; ``episode_start`` marks the rows the autoreset restarted). A row's episode is
+    its steps up to its first end. Reaching the end of an open path (``info["end_of_path"]``) is a success: the
     recorder's ``terminated`` stays False.
 
     Args:
