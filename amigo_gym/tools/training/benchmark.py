@@ -655,6 +655,14 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     save_figure(fig, path)
 
 
+def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
+    """Draw ``benchmark_scenarios.png`` (:func:`plot_scenarios`, the document's bootstrap seed) and
+    ``benchmark_profiles.png`` (:func:`plot_profiles`) into ``folder``; their names."""
+    plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+    plot_profiles(doc, folder / "benchmark_profiles.png")
+    return ["benchmark_scenarios.png", "benchmark_profiles.png"]
+
+
 #: the manifest naming a published set of benchmark outputs (in ``--out``)
 MANIFEST = "benchmark_manifest.json"
 #: names of the temporary files and folders a benchmark writes in ``--out`` (removed by the next run)
@@ -683,10 +691,7 @@ def write_outputs(
         atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
-            targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"
-            targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
-            plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
-            plot_profiles(doc, staging / "benchmark_profiles.png")
+            targets |= {out / name: staging / name for name in plot_all(doc, staging)}
         publish(targets, out, MANIFEST, command=doc.get("command"))
     finally:
         shutil.rmtree(staging, ignore_errors=True)

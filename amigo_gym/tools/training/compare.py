@@ -29,6 +29,7 @@ from amigo_gym.tools.training.benchmark import (
     V1_AGENTS,
     failed_episodes,
     parse_agents,
+    plot_all,
     quick_suite,
     run_benchmark,
 )
@@ -291,12 +292,6 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
     return ", ".join(reasons) if reasons else None
 
 
-def publish(staging: Path, out: Path) -> dict[str, str]:
-    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring,
-    :func:`amigo_gym.tools.runs.publish`); the manifest's ``{file name: sha256}``."""
-    return runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
-
-
 def verify_outputs(out: Path) -> dict[str, str]:
     """The manifest of a compare's output set, after checking every file against it
     (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without ``manifest.json``,
@@ -417,12 +412,10 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     try:
         doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
         if bench is not None and extra["benchmark_plots"]:
-            from amigo_gym.tools.training.benchmark import plot_profiles, plot_scenarios
-
-            plot_scenarios(bench, staging / "benchmark_scenarios.png")
-            plot_profiles(bench, staging / "benchmark_profiles.png")
+            plot_all(bench, staging)
         atomic_write(staging / "report.md", report_markdown(doc).encode())
-        publish(staging, out)
+        # every file of staging moved into out as one set, the manifest last
+        runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return doc

@@ -412,15 +412,10 @@ def _beside(model: Path, name: str) -> Path | None:
     return f if f.is_file() else None
 
 
-def _model_ref(name: str, algo: str, model: Path, record: Path | None, vecnormalize: Path | None) -> AgentSpec:
-    return AgentSpec(name, 0, str(model), algo, None, record, vecnormalize)
-
-
 def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
     model = model or run_dir / "model.zip"
-    return _model_ref(
-        run_dir.name, _run_algo(run_dir), model, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
-    )
+    record, stats = _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    return AgentSpec(run_dir.name, 0, str(model), _run_algo(run_dir), None, record, stats)
 
 
 def _is_run(d: Path) -> bool:
@@ -452,14 +447,15 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
         if p.suffix != ".zip":
             raise ValueError(f"--models: {p} is not a model .zip")
         if p.stem in ALGOS:
-            return [_model_ref(p.stem, p.stem, p, _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl"))]
+            record, stats = _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl")
+            return [AgentSpec(p.stem, 0, str(p), p.stem, None, record, stats)]
         if (p.parent / "config.json").is_file():
             return [_run_ref(p.parent, p)]
         raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
     if _is_run(p):
         return [_run_ref(p)]
     refs = [
-        _model_ref(a, a, p / f"{a}.zip", _beside(p / f"{a}.zip", f"{a}.json"), None)
+        AgentSpec(a, 0, str(p / f"{a}.zip"), a, None, _beside(p / f"{a}.zip", f"{a}.json"))
         for a in ALGOS
         if (p / f"{a}.zip").is_file()
     ]
