@@ -118,8 +118,8 @@ def _v0(name: str, desc: str, held_out: bool = False, **kw: Any) -> Scenario:
 _WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
 _WHEELS_MINUS5 = {"r1": 0.0475, "r2": 0.0475, "l1": 0.114}
 _WHEELS_UNEQUAL = {"r1": 0.0525, "r2": 0.0475}
-_CIRCLE = {"path": "circle", "speed": 0.2}
-_MIXED = {"path": "mixed", "speed": (0.1, 0.4)}
+_CIRCLE: dict[str, Any] = {"path": "circle", "speed": 0.2}
+_MIXED: dict[str, Any] = {"path": "mixed", "speed": (0.1, 0.4)}
 
 # fmt: off
 SUITE_1_0: tuple[Scenario, ...] = (

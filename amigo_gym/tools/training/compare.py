@@ -391,9 +391,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         rec = training["ppo_fresh"]
         took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
         print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
-        fresh = find_models(run_dir)[0]
-        agents["ppo_fresh"] = fresh.load()  # checked against run.json, as every model
-        specs.append(replace(fresh, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
+        trained = find_models(run_dir)[0]
+        agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
+        specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
     say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)

@@ -338,7 +338,7 @@ class AgentSpec:
         """
         if self._model is not None:
             return self._model  # type: ignore[no-any-return]
-        record = self.manifest
+        record: Any = self.manifest
         if record is None and self.record is not None:
             record = read_json(self.record)
             if not isinstance(record, dict):
