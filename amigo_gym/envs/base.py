@@ -37,28 +37,6 @@ from amigo_gym.model.params import HEADING_LIMIT, POSE_LIMIT, show_value
 from amigo_gym.sim import fast_v1
 from amigo_gym.task import v0 as task
 
-__all__ = [
-    "RENDER_MODES",
-    "RESET_OPTIONS",
-    "TRAIL_LENGTH",
-    "VECTOR_KERNELS",
-    "AmigoBotBase",
-    "AmigoBotVectorBase",
-    "assign_rows",
-    "box_spaces",
-    "check_kernel",
-    "check_render_mode",
-    "check_reset_mask",
-    "check_reset_options",
-    "check_vector_args",
-    "info_row",
-    "parse_pose_option",
-    "parse_seeds",
-    "scatter_infos",
-    "take_rows",
-    "trail_of",
-]
-
 Array = NDArray[np.float64]
 ObsArray = NDArray[np.float32]
 BoolArray = NDArray[np.bool_]
@@ -320,17 +298,6 @@ def assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.int
             infos[k][idx] = v
 
 
-def trail_of(trail: Any, start: Any, count: int, i: int) -> list[tuple[float, float]]:
-    """Robot ``i``'s rendered trail from a ring ``trail`` of shape ``(T, N, 2)`` [m] holding the last ``T`` of
-    ``count`` positions written, ``start[i]`` being the count at which its episode began; oldest first."""
-    if trail is None:
-        return []
-    length = trail.shape[0]
-    first = max(int(start[i]), count - length)
-    rows = np.arange(first, count) % length
-    return [(float(x), float(y)) for x, y in trail[rows, i].tolist()]
-
-
 # ---------------------------------------------------------------------------------------------------- single env
 class AmigoBotBase(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     """One robot: the Gymnasium machinery of every task version (module docstring); a version sets
@@ -590,7 +557,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._obs[idx] = obs
         if self.render_mode is not None:
             self._append_trail()
-        return self._obs.copy(), self._scatter(infos, mask)
+        return self._obs.copy(), scatter_infos(infos, mask, self.num_envs)
 
     def step(self, actions: NDArray[np.floating[Any]]) -> StepResult:
         """Step every robot; autoreset finished ones according to ``autoreset_mode``.
@@ -642,7 +609,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
                 final_obs = np.full(n, None, dtype=object)
                 for i in idx.tolist():
                     final_obs[i] = obs[i].copy()
-                final_info = self._scatter(take_rows(infos, idx), done)
+                final_info = scatter_infos(take_rows(infos, idx), done, n)
                 self._mark_final(final_info, done)
                 obs_r, info_r = self._reset_rows(idx)
                 obs[idx] = obs_r
@@ -659,7 +626,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._obs = obs  # returned as is: reset() copies it before changing rows
         if self.render_mode is not None:
             self._append_trail()
-        return obs, reward, terminated, truncated, self._scatter(infos, None)
+        return obs, reward, terminated, truncated, scatter_infos(infos, None, n)
 
     def _truncated(self, steps: NDArray[np.int64]) -> BoolArray:
         """``steps >= max_episode_steps`` (all False without a limit)."""
@@ -667,10 +634,6 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
             return np.zeros(self.num_envs, dtype=np.bool_)
         out: BoolArray = steps >= self.max_episode_steps
         return out
-
-    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos (:func:`scatter_infos`)."""
-        return scatter_infos(infos, mask, self.num_envs)
 
     # ------------------------------------------------------------------ rendering
     def _append_trail(self) -> None:
@@ -685,7 +648,11 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
 
     def _trail_of(self, i: int) -> list[tuple[float, float]]:
         """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        return trail_of(self._trail, self._trail_start, self._trail_count, i)
+        if self._trail is None:
+            return []
+        length = self._trail.shape[0]
+        rows = np.arange(max(int(self._trail_start[i]), self._trail_count - length), self._trail_count) % length
+        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
         """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
