@@ -23,10 +23,9 @@ from amigo_gym.task import v1 as tracking
 
 
 def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
-    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, its scalars, the reward's
-    exponentials and terms, the reward) of the reference's state, outcome and draws: ``(RECORD_WIDTH,)`` for one
-    robot's floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales the command; ``castor`` [rad] the
-    castor's angle (AmigoBot-v0's info). :func:`record_info` and :func:`v0_record_info` build the infos from it."""
+    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state,
+    outcome and draws: ``(RECORD_WIDTH,)`` for floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales
+    the command; ``castor`` [rad] is the castor's angle (AmigoBot-v0's info)."""
     track, speed, heading, smooth = out.terms
     cols = (
         st.x, st.y, st.beta, out.h_x, out.h_y, st.w1, st.w2, st.a1 * w_max, st.a2 * w_max, st.alpha1, st.alpha2,
@@ -65,22 +64,18 @@ def record_info(
     end_of_path: Any,
     path: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """AmigoBot-v1's info of info records (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the compiled step's,
-    :func:`amigo_gym.sim._kernels_v1.fill_record`, or the reference's, :func:`reference_record`): the one builder of
-    AmigoBot-v1's info, for the single env (one robot) and the vector env (its compact infos); :func:`v0_record_info`
-    is AmigoBot-v0's.
+    """AmigoBot-v1's info (one robot's, or the vector env's compact infos) of info records
+    (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, the compiled step's or :func:`reference_record`'s).
 
     Args:
-        record: ``(RECORD_WIDTH,)`` (one robot) or ``(N, RECORD_WIDTH)``, a new array: the info's seven arrays are
-            views of its last axis.
-        values: the record's scalars (``record[..., R_ERROR:]``) indexed by entry: their floats (one robot) or
-            ``record.T[R_ERROR:]`` (``(N,)`` views).
-        time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: as the
-            env gives them (floats or columns). path: the path's description (the single env's only), or None.
+        record: ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``, a new array: the info's arrays are views of it.
+        values: the record's scalars (``record[..., R_ERROR:]``): floats (one robot) or ``(N,)`` views.
+        time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: floats
+            or columns. path: the path's description (the single env's only), or None.
     """
     v_true = values[_VT]
     v_ref = values[_VREF]
-    info = {
+    return {
         "pose": record[_POSE],
         "h_position": record[_H],
         "cross_track_error": values[_E],
@@ -99,14 +94,12 @@ def record_info(
             "smooth": values[_SMOOTH],
         },
         "time": time,
+        **({} if path is None else {"path": path}),
+        "true_robot": true_robot,
+        "delay": delay,
+        "slip": record[_SLIP],
+        "end_of_path": end_of_path,
     }
-    if path is not None:
-        info["path"] = path
-    info["true_robot"] = true_robot
-    info["delay"] = delay
-    info["slip"] = record[_SLIP]
-    info["end_of_path"] = end_of_path
-    return info
 
 
 class AmigoBotV1Env(AmigoBotBase):

@@ -135,15 +135,6 @@ def check_kernel(owner: str, kernel: Any, allowed: tuple[str, ...]) -> str:
     return kernel
 
 
-def parse_autoreset_mode(mode: str | AutoresetMode) -> AutoresetMode:
-    """``autoreset_mode`` as an :class:`AutoresetMode` (``ValueError`` naming the allowed values)."""
-    try:
-        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
-    except ValueError:
-        allowed = [m.value for m in AutoresetMode]
-        raise ValueError(f"autoreset_mode must be one of {allowed}, got {mode!r}") from None
-
-
 def check_reset_mask(mask: Any, n: int) -> BoolArray:
     """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
     if not isinstance(mask, np.ndarray):
@@ -459,7 +450,11 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         self.render_mode = render_mode
-        self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
+        try:
+            self.autoreset_mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            allowed = [m.value for m in AutoresetMode]
+            raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / dt, "autoreset_mode": self.autoreset_mode}
         self.single_action_space, self.single_observation_space = single_spaces
         self.action_space = batch_space(self.single_action_space, n)
@@ -477,29 +472,29 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._was_reset = False
         return n
 
+    # the hooks (module docstring): new episodes for the robots idx (observations (m, D), compact infos); a step;
+    # steps taken (N,); each robot's H (N, 2) [m]; robot i's path; amend the compact infos of the robots idx that
+    # restarted within a step; amend the final_info of a SAME_STEP autoreset
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """Start new episodes for the robots ``idx``: their observations ``(m, D)`` and compact infos."""
         raise NotImplementedError
 
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         raise NotImplementedError
 
     def _step_counts(self) -> NDArray[np.int64]:
-        """Steps taken in each robot's episode ``(N,)``."""
         raise NotImplementedError
 
     def _h_positions(self) -> Array:
-        """Each robot's H ``(N, 2)`` [m], for the trail."""
         raise NotImplementedError
 
     def _path_of(self, i: int) -> Any:
         raise NotImplementedError
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
-        """Amend the compact infos of the robots ``idx`` that started a new episode within this step."""
+        raise NotImplementedError
 
     def _mark_final(self, final_info: dict[str, Any], done: BoolArray) -> None:
-        """Amend the vector-format ``final_info`` of a ``SAME_STEP`` autoreset."""
+        raise NotImplementedError
 
     # ------------------------------------------------------------------ seeding
     @property

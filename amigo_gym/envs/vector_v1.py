@@ -1,27 +1,15 @@
 """Native numpy-batched vector environment of ``AmigoBot-v1``, for heterogeneous batches.
 
-``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with
-its own path (of its own family when ``path="mixed"``), reference speed, true robot, slip, delay and noise,
-stepped together by the column functions of :mod:`amigo_gym.task.v1` that the single environment calls,
-with no Python loop over the robots in the step: the paths are one :class:`amigo_gym.paths.PathBatch`, the
-per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` ring. Loops run only over
-the robots being reset, which draw their episodes from their own generators with the single environment's
-function (:func:`amigo_gym.task.v1.begin_episode`).
-
-With numba (``kernel="auto"`` or ``"numba"``; a core dependency where it ships wheels) and the built-in path families
-(:class:`amigo_gym.paths.ClothoidPath`), the step is instead the single environment's compiled step
-(:mod:`amigo_gym.sim.fast_v1`) run over the robots in one compiled loop
-(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`);
-the state then lives in the rows of its workspace (the ``(N,)`` state columns are views of them). Otherwise
-(``kernel="numpy"``, no numba, a path object of another class) the column functions step the batch; they are
-the reference. Their path projection and pose run a ClothoidPath's float functions row by row
-(:func:`amigo_gym.paths.clothoid.locate_rows`), compiled where numba is installed (unless ``AMIGO_GYM_KERNEL=numpy``).
+``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with its own
+path, reference speed, true robot, slip, delay and noise. With numba and the built-in path families the step is the
+single environment's compiled step run over the robots in one compiled loop
+(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; the state columns are views of its workspace rows); otherwise the
+column functions of :mod:`amigo_gym.task.v1` (the reference) step the batch, with no Python loop over the robots.
+Robots being reset draw their episodes from their own generators with the single environment's functions.
 
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
-terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
-``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
-the reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the
-same bits.
+terminations, truncations, numeric infos) in the three autoreset modes, to 1e-9 between the compiled step and the
+reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the same bits.
 """
 
 from __future__ import annotations

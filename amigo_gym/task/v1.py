@@ -389,13 +389,8 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
 
 
 def _check_combined(owner: str, p: TrackingParams) -> None:
-    """Refuse settings that are each in range but conflict together (they are never clipped silently).
-
-    * the fixed delay plus the highest randomised delay above :data:`amigo_gym.model.actuators.MAX_DELAY` (0.5 s);
-    * a trapezoid that cannot reach its cruise speed: ``v / profile_accel + v / profile_decel >
-      profile_duration`` at the highest reference speed ``v``;
-    * ``ideal_actuators`` with a delay, slip, a true robot or randomised geometry (ideal actuators have none).
-    """
+    """Refuse settings that are each in range but conflict together (never clipped silently): a total delay above
+    ``MAX_DELAY``, a trapezoid too short to reach its speed, ``ideal_actuators`` with delay, slip or mismatch."""
     fixed = p.actuators.delay
     high = p.randomize.delay[1]
     if p.ideal_actuators:
@@ -511,16 +506,8 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
-    out += [
-        "reference_speed",
-        "reference_speed_ahead",
-        "speed_error",
-        "wheel_rate_1",
-        "wheel_rate_2",
-        "previous_command_1",
-        "previous_command_2",
-    ]
-    return tuple(out)
+    speeds = ("reference_speed", "reference_speed_ahead", "speed_error", "wheel_rate_1", "wheel_rate_2")
+    return (*out, *speeds, "previous_command_1", "previous_command_2")
 
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -1140,10 +1127,8 @@ def path_nbytes(path: Any) -> int:
 def _cached_family(
     name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None, loops: PathLoops | None = None
 ) -> Any:
-    """A family path, built once per process for each parameter set (and seed of a random one), kept while the
-    paths built fit in :data:`PATH_CACHE_BYTES` (least recently used dropped first; a path is rebuilt the same).
-    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`) or None; the same path
-    either way."""
+    """A family path, built once per process for each parameter set (and seed of a random one) and kept within
+    :data:`PATH_CACHE_BYTES` (least recently used dropped first). ``loops``: as :func:`draw_path`."""
     from amigo_gym.paths import make_family_path
 
     global _cache_bytes
@@ -1173,15 +1158,9 @@ def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = 
 def draw_path(
     rng: np.random.Generator, p: TrackingParams, loops: PathLoops | None = None
 ) -> tuple[Any, dict[str, Any]]:
-    """The episode's path, drawn from ``rng`` for ``"random"`` and ``"mixed"`` (else the fixed path, no draw).
-
-    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`,
-    :func:`amigo_gym.sim.fast_v1.path_loops`) that build a new path, or None (the float route); the same path either
-    way.
-
-    Returns:
-        the path and a description for ``info`` (family and parameters).
-    """
+    """The episode's path and its description for ``info`` (family and parameters), drawn from ``rng`` for
+    ``"random"`` and ``"mixed"`` (else the fixed path, no draw). ``loops``: the compiled path-building loops
+    (:func:`amigo_gym.sim.fast_v1.path_loops`) or None; the same path either way."""
     from amigo_gym.paths import make_family_path
 
     if not isinstance(p.path, str) or p.path not in ("random", "mixed"):
@@ -1204,22 +1183,15 @@ def draw_path(
 
 
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
-    """Draw one episode's constants and the start offsets from ``rng``, in a fixed order.
-
-    Order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), start offsets
-    ``u ~ U[-1, 1]^3``, the key of the per-step draws (not with ``ideal_actuators`` and no noise: key 0). (The path
-    is drawn before, by :func:`draw_path`.)
-
-    Returns:
-        the :class:`Episode` (floats) and ``u``.
-    """
+    """Draw one episode's constants (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from
+    ``rng``, in this order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), ``u``,
+    the key of the per-step draws (key 0, not drawn, with ``ideal_actuators`` and no noise)."""
     from amigo_gym.model.randomization import draw_key, sample
 
     lo, hi = p.speed_range
     v = lo if lo == hi else float(rng.uniform(lo, hi))
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    # the per-step draws' key; with ideal actuators and no noise there are no per-step draws and no key is drawn
     # (AmigoBot-v0's stream: three uniforms per episode)
     key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
     true = p.simulated_robot
@@ -1243,12 +1215,8 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
 
 
 def episode_template(p: TrackingParams) -> Episode | None:
-    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u``, else ``None``.
-
-    That is a fixed speed, no randomised range (:func:`amigo_gym.model.randomization.sample` draws nothing) and no key
-    (ideal actuators without noise): AmigoBot-v0's settings. Each episode's draws are then
-    ``rng.uniform(-1.0, 1.0, size=3)`` alone, as in :func:`draw_episode`.
-    """
+    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u`` (a fixed speed, no
+    randomised range, ideal actuators without noise: AmigoBot-v0's settings), else ``None``."""
     lo, hi = p.speed_range
     r = p.randomize
     if (
@@ -1312,19 +1280,10 @@ def start_state(
 def step_columns(
     k: Constants, path: Any, state: State, ep: Episode, ring: NDArray[np.float64], ring_step: int, a1: Real, a2: Real
 ) -> tuple[State, Outcome, Any]:
-    """One step of AmigoBot-v1 in column form.
-
-    1. Clip the normalised action to [-1, 1]; setpoints ``a w_max`` [rad/s] into the command ring; read the
-       setpoints in effect (delay, :func:`amigo_gym.model.actuators.ring_read`).
-    2. Per-step draws (slip, noise: :func:`amigo_gym.model.randomization.step_noise`).
-    3. The exact actuator step (:func:`amigo_gym.model.actuators.actuator_step`).
-    4. Observation, reward and end of the new state (:func:`evaluate_columns`).
-
-    Args:
-        k: constants; path: the path (or a batch of paths); state: the state before the step; ep: the episode.
-        ring: the command ring (``(L, 2)`` for one robot, ``(N, L, 2)`` for a batch), written in place.
-        ring_step: the ring's counter (any counter that increases by one per step).
-        a1, a2: the validated action (finite numbers).
+    """One step of AmigoBot-v1 in column form: clip the action, write its setpoints ``a w_max`` [rad/s] into the
+    command ``ring`` (``(L, 2)`` or ``(N, L, 2)``, in place, at the counter ``ring_step``) and read those in effect
+    (the delay), draw the step's slip and noise, take the exact actuator step
+    (:func:`amigo_gym.model.actuators.actuator_step`) and evaluate the new state (:func:`evaluate_columns`).
 
     Returns:
         the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.model.randomization.StepNoise`).
@@ -1496,11 +1455,8 @@ class Begin(NamedTuple):
 
 
 def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None) -> Begin:
-    """Draw and start one robot's episode from its generator (the single env's reset and the vector env's rows).
-
-    Draws, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`), then builds the
-    start state (:func:`start_state`; ``pose`` replaces the drawn pose of A) and evaluates it.
-    """
+    """Draw, start and evaluate one robot's episode from its generator (:func:`start_episode`, then
+    :func:`reset_columns`)."""
     path, info, ep, st = start_episode(rng, k, pose)
     return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))
 
@@ -1513,13 +1469,10 @@ def start_episode(
     loops: PathLoops | None = None,
     path_pose: PoseFn | None = None,
 ) -> tuple[Any, dict[str, Any], Episode, State]:
-    """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
-
-    ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``), ``loops`` builds a
-    drawn path (:func:`draw_path`), ``path_pose`` gives the path's start pose (:data:`PoseFn`; default
-    ``path.pose_columns``). (The single env's compiled step projects and evaluates the start state itself,
-    :mod:`amigo_gym.sim.fast_v1`.)
-    """
+    """Draw, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`) from ``rng``, and build
+    the start state (:func:`start_state`; ``pose`` replaces the drawn pose of A): ``(path, path_info, episode,
+    state)``. ``progress``, ``loops``, ``path_pose``: the compiled twins of :func:`start_state` and :func:`draw_path`
+    (default the float route)."""
     path, info = draw_path(rng, k.params, loops)
     ep, u = draw_episode(rng, k.params)
     st = start_state(k, path, ep, u, progress, path_pose)
