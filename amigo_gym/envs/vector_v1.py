@@ -144,7 +144,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
-        self._state = tracking.State(*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64))
+        self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
         self._episode = tracking.episode_columns([tracking.Episode(*(0 for _ in _EPISODE_FIELDS))] * n)
         self._ring = np.zeros((n, self._k.ring_length, 2))
         # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
