@@ -86,16 +86,12 @@ class Randomization:
     wheel_rate_noise: float = 0.0
 
     def __post_init__(self) -> None:
-        o = "Randomization"
-        object.__setattr__(self, "wheel_radius", _interval(o, "wheel_radius", self.wheel_radius, 0.5, 1.5))
-        object.__setattr__(self, "track", _interval(o, "track", self.track, 0.5, 1.5))
-        object.__setattr__(self, "slip", _interval(o, "slip", self.slip, 0.0, 0.5))
-        object.__setattr__(self, "delay", _interval(o, "delay", self.delay, 0.0, MAX_DELAY))
-        object.__setattr__(self, "position_noise", check_range(o, "position_noise", self.position_noise, 0.0, 0.1))
-        object.__setattr__(self, "heading_noise", check_range(o, "heading_noise", self.heading_noise, 0.0, 0.2))
-        object.__setattr__(
-            self, "wheel_rate_noise", check_range(o, "wheel_rate_noise", self.wheel_rate_noise, 0.0, 2.0)
-        )
+        ranges = {"wheel_radius": (0.5, 1.5), "track": (0.5, 1.5), "slip": (0.0, 0.5), "delay": (0.0, MAX_DELAY),
+                  "position_noise": (0.0, 0.1), "heading_noise": (0.0, 0.2),
+                  "wheel_rate_noise": (0.0, 2.0)}  # fmt: skip
+        for i, (name, (low, high)) in enumerate(ranges.items()):
+            check = _interval if i < 4 else check_range  # the four ranges, then the noise levels
+            object.__setattr__(self, name, check("Randomization", name, getattr(self, name), low, high))
 
     @property
     def is_off(self) -> bool:

@@ -726,14 +726,9 @@ def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: lis
     """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into the columns of
     ``out`` ``(7, N)`` (the fields of :class:`PathPose`)."""
     for i in range(len(s)):
-        x, y, th, kappa, c, ct, st = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
-        out[0, i] = x
-        out[1, i] = y
-        out[2, i] = th
-        out[3, i] = kappa
-        out[4, i] = c
-        out[5, i] = ct
-        out[6, i] = st
+        r = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
+        for k in range(7):
+            out[k, i] = r[k]
 
 
 def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
