@@ -187,7 +187,8 @@ class _Projecting:
     def project(self, p: ArrayLike) -> Projection:
         """Closest point to ``p`` ``(..., 2)`` [m] (:meth:`project_xy` of its columns)."""
         q = np.asarray(p, dtype=np.float64)
-        return self.project_xy(q[..., 0], q[..., 1]).projection()  # type: ignore[attr-defined]
+        cp: ClosestPoint = self.project_xy(q[..., 0], q[..., 1])  # type: ignore[attr-defined]
+        return cp.projection()
 
 
 @dataclass(frozen=True)
