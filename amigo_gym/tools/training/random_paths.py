@@ -58,11 +58,8 @@ def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.nda
         if np.all(np.abs((fy(u, 2) * dx - fx(u, 2) * dy) / (dx**2 + dy**2) ** 1.5) <= 50.0):
             break
     g, w = np.polynomial.legendre.leggauss(8)
-    a, b = u[:-1, None], u[1:, None]
-    seg = ((b - a)[:, 0] / 2) * (
-        np.hypot(fx((a + b) / 2 + (b - a) / 2 * g, 1), fy((a + b) / 2 + (b - a) / 2 * g, 1)) @ w
-    )
-    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    h, m = np.diff(u) / 2, (u[:-1] + u[1:])[:, None] / 2
+    arc = np.concatenate([[0.0], np.cumsum(h * (np.hypot(fx(m + h[:, None] * g, 1), fy(m + h[:, None] * g, 1)) @ w))])
     X, Y = _natural(arc, fx(u)), _natural(arc, fy(u))
     t = np.linspace(0.0, arc[-1], math.ceil(arc[-1] / spacing) + 1)
     k = (Y(t, 2) * X(t, 1) - X(t, 2) * Y(t, 1)) / (X(t, 1) ** 2 + Y(t, 1) ** 2) ** 1.5
@@ -203,58 +200,45 @@ def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = Tru
     }
 
 
-def _cell(r: Mapping[str, Any]) -> str:
-    if not r["n"]:
-        return "– (0)"
-    lo, hi = r["ci95"]
-    return f"{100 * r['rate']:.1f} [{100 * lo:.1f}, {100 * hi:.1f}] ({r['failures']}/{r['n']})"
-
-
 def markdown_random_paths(doc: Mapping[str, Any]) -> str:
-    """The tables: failure rate [%] [95 % interval] (failures/paths) per agent and tolerance (the published row
+    """The tables: failure rate [%] [95 % interval] (failures/episodes) per agent and tolerance (the published row
     under the paper's condition at 0.2 m/s), per curvature bin at the smallest tolerance, per training seed."""
     p, rows = doc["protocol"], doc["table"]
     tols = p["tolerances"]
     agents = list(dict.fromkeys(r["agent"] for r in rows))
 
-    def pick(agent: str, group: str, tol: float, **key: Any) -> Mapping[str, Any]:
-        return next(r for r in rows if r["agent"] == agent and r["group"] == group and r["tolerance"] == tol
-                    and all(r.get(k) == v for k, v in key.items()))  # fmt: skip
+    def row(*cells: Any) -> str:
+        return "| " + " | ".join(map(str, cells)) + " |"
 
-    n_paths = p["paths"] - len(doc["skipped"])
+    def cell(agent: str, group: str, tol: float, **key: Any) -> str:
+        r = next(r for r in rows if (r["agent"], r["group"], r["tolerance"]) == (agent, group, tol)
+                 and all(r.get(k) == v for k, v in key.items()))  # fmt: skip
+        lo, hi = r["ci95"] or (0.0, 0.0)
+        return f"{100 * r['rate']:.1f} [{100 * lo:.1f}, {100 * hi:.1f}] ({r['failures']}/{r['n']})" if r["n"] else "–"
+
+    bins = [list(b) for b in itertools.pairwise(CURVATURE_BINS)]
     lines = [
-        f"# Random paths (Cao et al. 2024): {n_paths} paths of RandomState({p['seed']}), condition {p['condition']}",
+        f"# Random paths (Cao et al. 2024): {p['paths'] - len(doc['skipped'])} paths of RandomState({p['seed']}), "
+        f"condition {p['condition']}",
         "",
         f"{p['speed']:g} m/s, {p['duration_s']:g} s; a path fails when {p['failure']}. Failure rate [%] [95 % Wilson "
         f"interval] (failures/episodes, training seeds pooled); AmigoBot-v1 accepts {doc['accepted']} of the paths.",
         "",
-        "| agent | " + " | ".join(f"{t:g} m" for t in tols) + f" | accepted paths, {tols[0]:g} m |",
-        "|---|" + "---|" * (len(tols) + 1),
+        row("agent", *(f"{t:g} m" for t in tols), f"accepted paths, {tols[0]:g} m"),
+        row(*["---"] * (len(tols) + 2)),
     ]
     if p["condition"] == "paper" and p["speed"] == 0.2:
-        lines.append(
-            "| published (Cao et al.) | " + " | ".join(f"{100 * PUBLISHED.get(t, math.nan):.1f}" for t in tols) + " | |"
-        )
-    for a in agents:
-        lines.append(
-            f"| {a} | "
-            + " | ".join(_cell(pick(a, "all", t)) for t in tols)
-            + f" | {_cell(pick(a, 'accepted', tols[0]))} |"
-        )
-    bins = list(itertools.pairwise(CURVATURE_BINS))
+        lines.append(row("published (Cao et al.)", *(f"{100 * PUBLISHED.get(t, math.nan):.1f}" for t in tols), ""))
+    lines += [row(a, *(cell(a, "all", t) for t in tols), cell(a, "accepted", tols[0])) for a in agents]
     lines += ["", f"Per bin of the path's peak |kappa| [1/m], {tols[0]:g} m:", ""]
-    lines += ["| agent | " + " | ".join(f"[{lo:g}, {hi:g})" for lo, hi in bins) + " |", "|---|" + "---|" * len(bins)]
-    lines += [
-        f"| {a} | " + " | ".join(_cell(pick(a, "curvature", tols[0], kappa=list(b))) for b in bins) + " |"
-        for a in agents
-    ]
-    seeds = [r for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]
+    lines += [row("agent", *(f"[{lo:g}, {hi:g})" for lo, hi in bins)), row(*["---"] * (len(bins) + 1))]
+    lines += [row(a, *(cell(a, "curvature", tols[0], kappa=b) for b in bins)) for a in agents]
+    seeds = [(r["agent"], r["seed"]) for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]
     if seeds:
-        lines += ["", "Per training seed:", "", "| agent | seed | " + " | ".join(f"{t:g} m" for t in tols) + " |"]
-        lines.append("|---|---|" + "---|" * len(tols))
-        for r in seeds:
-            cells = " | ".join(_cell(pick(r["agent"], "seed", t, seed=r["seed"])) for t in tols)
-            lines.append(f"| {r['agent']} | {r['seed']} | {cells} |")
+        lines += ["", "Per training seed:", "", row("agent", "seed", *(f"{t:g} m" for t in tols))]
+        lines += [row(*["---"] * (len(tols) + 2))] + [
+            row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
+        ]
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
     return "\n".join(lines) + "\n"
