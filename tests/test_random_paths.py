@@ -102,3 +102,10 @@ def test_bad_input_is_one_line(args: list[str], says: str, tmp_path: Path, capsy
         rc = exc.code
     err = capsys.readouterr().err.strip()
     assert rc == 2 and says in err and len(err.splitlines()) == 1
+
+
+def test_the_committed_run_s_table_is_generated_from_its_json() -> None:
+    run = REFERENCE.parent / "firmware_200"
+    doc = json.loads((run / "random_paths.json").read_text())
+    assert rp.markdown_random_paths(doc) == (run / "random_paths.md").read_text()
+    assert doc["command"].startswith("amigo-gym benchmark --random-paths 200 --condition firmware")
