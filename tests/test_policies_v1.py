@@ -243,7 +243,7 @@ def test_bad_inputs_refused() -> None:
 
 
 def test_the_textbook_pure_pursuit_preset() -> None:
-    """Cao et al. (2024)'s values (experiments/random_paths.py reproduces their failure rate with it)."""
+    """Cao et al. (2024)'s values (``benchmark --random-paths`` reproduces their failure rate with it)."""
     import gymnasium as gym
 
     env = gym.make("AmigoBot-v1", preview=(0.2, 0.5, 1.0))

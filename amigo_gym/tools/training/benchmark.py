@@ -16,7 +16,7 @@ import tempfile
 import time
 import zipfile
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -34,6 +34,7 @@ from amigo_gym.tools.runs import (
     verify_manifest,
 )
 from amigo_gym.tools.training import curvature, protocol
+from amigo_gym.tools.training import random_paths as rp
 from amigo_gym.tools.training.curvature import cell_specs
 from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
@@ -735,6 +736,13 @@ class BenchmarkSettings:
         curvature: run the curvature cells instead of the suite: failure rate per path-curvature bin
             (amigo_gym.tools.training.curvature; writes <out>/curvature.json and .md).
         curvature_episodes: episodes per curvature cell [episodes], >= 1.
+        random_paths: run this many paths of the published random-path protocol instead of the suite (Cao et al.
+            2024; amigo_gym.tools.training.random_paths; writes <out>/random_paths.json and .md) [paths] (default 0:
+            off).
+        random_paths_seed: seed of the paths' RandomState (100: the paper's 1000 paths) [-].
+        condition: --random-paths: "paper" (ideal actuators, rolling start, dt 0.05 s, H on the axle) or
+            "firmware" (AmigoBot-v1's defaults).
+        tolerance: --random-paths: a path fails when the peak |cross-track error| reaches this [m].
     """
 
     agents: list[str] | None = None
@@ -758,6 +766,10 @@ class BenchmarkSettings:
     duration: float = 60.0
     curvature: bool = False
     curvature_episodes: int = 50
+    random_paths: int = field(default=0, metadata=cli(metavar="N"))
+    random_paths_seed: int = rp.SEED
+    condition: Literal["paper", "firmware"] = "paper"
+    tolerance: tuple[float, ...] = rp.TOLERANCES
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option, its allowed range and the value."""
@@ -784,16 +796,18 @@ def main(argv: Sequence[str] | None = None) -> int:
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
-        if a.curvature and (a.path or a.scenarios):
-            raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+        if sum(map(bool, (a.curvature, a.random_paths, a.path or a.scenarios))) > 1:
+            raise ValueError("--curvature, --random-paths and --path/--scenarios exclude each other")
         if a.path and a.scenarios:
             raise ValueError("--path and --scenarios exclude each other")
-        if a.curvature or a.path:
-            scenarios = (
-                curvature_scenarios(a.curvature_episodes)
-                if a.curvature
-                else user_scenarios(a.path or [], a.speed, a.feasibility, a.goal_tolerance, a.duration)
-            )
+        paths = rp.path_set(a.random_paths, a.condition, a.random_paths_seed, a.speed, a.tolerance)
+        if a.curvature or a.path or a.random_paths:
+            if a.curvature:
+                scenarios = curvature_scenarios(a.curvature_episodes)
+            elif a.random_paths:
+                scenarios = paths.scenarios
+            else:
+                scenarios = user_scenarios(a.path or [], a.speed, a.feasibility, a.goal_tolerance, a.duration)
             if a.quick:  # every cell, shorter
                 scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
         else:
@@ -813,6 +827,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                 doc["command"] = command
                 written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
                 report = curvature.markdown_curvature(doc)
+            elif a.random_paths:
+                doc = rp.run_random_paths(agents, replace(paths, scenarios=scenarios), progress=a.progress)
+                doc["command"] = command
+                written = rp.write_random_paths(doc, out / "random_paths.json", out / "random_paths.md")
+                report = rp.markdown_random_paths(doc)
             else:
                 clean_temporaries(out)
                 doc = run_benchmark(

@@ -255,6 +255,8 @@ def _classical(name: str) -> Callable[[Any], Any]:
                 return AnalyticTrackingPolicy(params)
             if name == "pure_pursuit":
                 return PurePursuitPolicy(params)
+            if name == "pure_pursuit_textbook":  # Cao et al. (2024)'s preset: from A, 0.2 m ahead, |omega| <= 1 rad/s
+                return PurePursuitPolicy.textbook(params)
             raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
         if not isinstance(params, EnvParams):
             raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
@@ -268,7 +270,9 @@ def _classical(name: str) -> Callable[[Any], Any]:
 
 
 #: classical policies by name: built per scenario from the environment
-CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
+CLASSICAL: dict[str, Callable[[Any], Any]] = {
+    n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
+}
 
 
 class NormalizedAgent:

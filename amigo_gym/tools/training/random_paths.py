@@ -1,0 +1,251 @@
+"""The random-path protocol of Cao et al. (Sensors 24(2) 561, 2024) as scenarios (``benchmark --random-paths``).
+
+The protocol, its sources, the two conditions and the outputs: docs/benchmark.md, "Random paths: the published
+protocol (Cao et al., Sensors 2024)".
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from amigo_gym.io import atomic_write, atomic_write_json
+from amigo_gym.paths import from_points
+from amigo_gym.tools.training.intervals import wilson_interval
+from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
+
+#: the authors' failure_rate.npy at 0.2 m/s: tolerance [m] -> failure rate
+PUBLISHED = {0.1: 0.276, 0.2: 0.053, 0.3: 0.002}
+TOLERANCES: tuple[float, ...] = (0.1, 0.2, 0.3)
+CONDITIONS: tuple[str, ...] = ("paper", "firmware")
+#: bins of a path's peak |curvature| [1/m]
+CURVATURE_BINS: tuple[float, ...] = (0.0, 2.0, 5.0, 10.0, 20.0, 60.0)
+#: episode length [s], success when H is this close to the end [m], the paper's stream seed
+DURATION_S, GOAL_M, SEED = 20.0, 0.02, 100
+
+
+def _natural(s: Any, v: Any) -> CubicSpline:
+    return CubicSpline(s, v, bc_type=((2, 0.0), (2, 0.0)))
+
+
+def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray, float]:
+    """One path of the protocol from the authors' ``RandomState`` calls: points ``(n, 2)`` [m] every ``spacing``
+    [m] along the arc-length spline, and its peak |curvature| [1/m].
+
+    Five waypoints from (0, 0), legs of length U(0.5, 2) m in direction U[0, 2 pi); a natural cubic spline in a
+    parameter spaced evenly over the polyline's length, redrawn while |kappa| > 50 1/m at 200 samples; re-splined
+    (natural) in arc length through 200 samples (arc length by 8-point Gauss per interval).
+    """
+    while True:
+        legs = rng.randint(4, 5)  # always 4: the authors' draw, kept for their stream
+        x, y = [0.0], [0.0]
+        for _ in range(legs):
+            d, th = rng.uniform(0.5, 2.0), 2 * np.pi * rng.rand()
+            x.append(x[-1] + d * np.cos(th))
+            y.append(y[-1] + d * np.sin(th))
+        s = np.linspace(0.0, np.hypot(np.diff(x), np.diff(y)).sum(), len(x))
+        fx, fy = _natural(s, x), _natural(s, y)
+        u = np.linspace(0.0, s[-1], 200)
+        dx, dy = fx(u, 1), fy(u, 1)
+        if np.all(np.abs((fy(u, 2) * dx - fx(u, 2) * dy) / (dx**2 + dy**2) ** 1.5) <= 50.0):
+            break
+    g, w = np.polynomial.legendre.leggauss(8)
+    h, m = np.diff(u) / 2, (u[:-1] + u[1:])[:, None] / 2
+    arc = np.concatenate([[0.0], np.cumsum(h * (np.hypot(fx(m + h[:, None] * g, 1), fy(m + h[:, None] * g, 1)) @ w))])
+    X, Y = _natural(arc, fx(u)), _natural(arc, fy(u))
+    t = np.linspace(0.0, arc[-1], math.ceil(arc[-1] / spacing) + 1)
+    k = (Y(t, 2) * X(t, 1) - X(t, 2) * Y(t, 1)) / (X(t, 1) ** 2 + Y(t, 1) ** 2) ** 1.5
+    return np.column_stack([X(t), Y(t)]), float(np.abs(k).max())
+
+
+def start_offset(seed: int = SEED) -> tuple[float, float, float]:
+    """The start of every path relative to its first pose: ``(dx [m], dy [m], dbeta [rad])`` of A, the authors'
+    ``Unicycle.reset(flag="random")`` seeded with ``seed`` (heading U(-5 deg, 0.1 deg): their code's bounds)."""
+    r = np.random.RandomState(seed)
+    x, y = r.uniform(-0.1, 0.1), r.uniform(-0.1, 0.1)
+    return float(x), float(y), float(r.uniform(-np.deg2rad(5.0), np.deg2rad(0.1)))
+
+
+@dataclass(frozen=True)
+class PathSet:
+    """The scenarios of :func:`path_set`; ``tags`` per scenario: ``path`` (its index), ``length`` [m],
+    ``max_curvature`` [1/m] (the spline's), ``fit_step`` [m]; ``skipped`` the paths ``from_points`` refused."""
+
+    scenarios: tuple[Scenario, ...]
+    tags: Mapping[str, Mapping[str, float]]
+    skipped: tuple[int, ...]
+    settings: Mapping[str, Any]
+
+
+def path_set(
+    paths: int, condition: str = "paper", seed: int = SEED, speed: float = 0.2, tolerances: Sequence[float] = TOLERANCES
+) -> PathSet:
+    """One AmigoBot-v1 scenario per path of the stream ``RandomState(seed)`` at ``speed`` [m/s], one episode from
+    the start pose of :func:`start_offset`, for :data:`DURATION_S`; ended past the largest tolerance [m].
+
+    ``condition`` ``"paper"``: the paper's unicycle (H on A: ``l3`` = 1 mm), ideal actuators, rolling start, dt
+    0.05 s; ``"firmware"``: AmigoBot-v1's defaults (dt 0.1 s).
+
+    Raises:
+        ValueError: ``paths`` < 0, an unknown ``condition``, a tolerance <= 0 (one line naming the flag).
+    """
+    if isinstance(paths, bool) or not isinstance(paths, int) or paths < 0:
+        raise ValueError(f"--random-paths must be an integer >= 0, got {paths!r}")
+    if condition not in CONDITIONS:
+        raise ValueError(f"--condition must be one of {list(CONDITIONS)}, got {condition!r}")
+    if not tolerances or any(not (0.0 < t <= 10.0) for t in tolerances):
+        raise ValueError(f"--tolerance must be in (0, 10] m each, got {list(tolerances)}")
+    dt = 0.05 if condition == "paper" else 0.1
+    kw: dict[str, Any] = {"speed": speed, "dt": dt, "feasibility": "off", "goal_tolerance": GOAL_M}
+    kw["termination_distance"] = max(tolerances) + 0.01  # past the largest tolerance nothing more is learnt
+    if condition == "paper":
+        kw |= {"ideal_actuators": True, "start_at_rest": False, "robot": {"l3": 1e-3}}
+    rng, (dx, dy, db) = np.random.RandomState(seed), start_offset()
+    out, tags, skipped = [], {}, []
+    for i in range(paths):
+        pts, kmax = draw_path(rng)
+        try:  # the sharpest corners (|kappa| ~ 50 1/m) need finer clothoid steps to stay within 1 mm
+            path, step = from_points(pts), 0.02
+        except ValueError:
+            try:
+                path, step = from_points(pts, step=0.005), 0.005
+            except ValueError:  # a cusp between the 200 samples the protocol checks: not a path to drive
+                skipped.append(i)
+                continue
+        heading = float(path.pose_columns(0.0).theta)
+        name, desc = f"rp{seed}_{i:04d}", f"random path {i} of RandomState({seed}), peak |kappa| {kmax:.3g} 1/m"
+        pose = (dx, dy, heading + db)
+        out.append(
+            Scenario(name, "AmigoBot-v1", kw | {"path": path}, (0,), round(DURATION_S / dt), True, desc, pose=pose)
+        )
+        tags[name] = {
+            "path": i,
+            "length": round(float(path.length), 5),
+            "max_curvature": round(kmax, 5),
+            "fit_step": step,
+        }
+    settings = {"paths": paths, "condition": condition, "seed": seed, "speed": speed, "tolerances": list(tolerances)}
+    return PathSet(tuple(out), tags, tuple(skipped), settings | {"duration_s": DURATION_S, "goal_m": GOAL_M})
+
+
+def _rate(eps: Sequence[Mapping[str, Any]], tol: float) -> dict[str, Any]:
+    f, n = sum(e["peak_m"] >= tol for e in eps), len(eps)
+    lo, hi = wilson_interval(f, n)
+    return {"n": n, "failures": f, "rate": f / n if n else None, "ci95": [lo, hi] if n else None}
+
+
+def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[float]) -> list[dict[str, Any]]:
+    """Failure rates (peak |e| >= tolerance) with Wilson 95 % intervals, per agent and tolerance, in groups: ``all``
+    (training seeds pooled), ``accepted`` (paths the env's feasibility report accepts), ``seed`` (each training seed,
+    agents with several) and ``curvature`` (``kappa``: the bin of :data:`CURVATURE_BINS`)."""
+    rows = []
+    for agent in dict.fromkeys(e["agent"] for e in episodes):
+        mine = [e for e in episodes if e["agent"] == agent]
+        seeds = list(dict.fromkeys(e["seed"] for e in mine))
+        groups: list[tuple[dict[str, Any], list[Mapping[str, Any]]]] = [
+            ({"group": "all"}, mine),
+            ({"group": "accepted"}, [e for e in mine if e["feasible"]]),
+        ]
+        groups += [({"group": "seed", "seed": s}, [e for e in mine if e["seed"] == s]) for s in seeds if len(seeds) > 1]
+        for lo, hi in itertools.pairwise(CURVATURE_BINS):
+            groups.append(
+                ({"group": "curvature", "kappa": [lo, hi]}, [e for e in mine if lo <= e["max_curvature"] < hi])
+            )
+        rows += [{"agent": agent, "tolerance": t, **key, **_rate(eps, t)} for key, eps in groups for t in tolerances]
+    return rows
+
+
+def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = True) -> dict[str, Any]:
+    """Every agent seed on every path (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
+    ``protocol``, ``agents``, ``accepted`` (paths the env's feasibility report accepts), ``skipped``, ``table``
+    (:func:`failure_table`), ``episodes`` (one record per agent seed and path: ``peak_m``, the peak |e| of H),
+    ``unavailable``, ``wall_time_s``."""
+    t0 = time.perf_counter()
+
+    def run(agent: Any, sc: Scenario) -> list[dict[str, float]]:
+        return [r.metrics() for r in run_scenario(agent, sc)]
+
+    grid = run_grid(agents, ps.scenarios, run, desc="random paths", progress=progress)
+    ok = {name: bool(r["feasible"]) for name, r in grid.feasibility.items()}
+    episodes = [
+        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, **ps.tags[sc.name], "feasible": ok[sc.name]}
+        | {"peak_m": round(ep["h_max_m"], 5), "steps": int(ep["steps"]), "terminated": bool(ep["terminated"])}
+        for spec, sc, eps in grid.runs
+        for ep in eps
+    ]
+    tolerances = ps.settings["tolerances"]
+    return {
+        "protocol": {
+            **ps.settings,
+            "start_offset": start_offset(),
+            "failure": "peak |cross-track error| of H over the episode >= tolerance",
+            "interval": "Wilson score 95 %, episodes of every training seed pooled",
+            "published": {str(t): r for t, r in PUBLISHED.items()},
+        },
+        "agents": [a.describe() for a in agents],
+        "accepted": sum(ok.values()),
+        "skipped": list(ps.skipped),
+        "table": failure_table(episodes, tolerances),
+        "episodes": episodes,
+        "unavailable": grid.unavailable,
+        "wall_time_s": round(time.perf_counter() - t0, 2),
+    }
+
+
+def markdown_random_paths(doc: Mapping[str, Any]) -> str:
+    """The tables: failure rate [%] [95 % interval] (failures/episodes) per agent and tolerance (the published row
+    under the paper's condition at 0.2 m/s), per curvature bin at the smallest tolerance, per training seed."""
+    p, rows = doc["protocol"], doc["table"]
+    tols = p["tolerances"]
+    agents = list(dict.fromkeys(r["agent"] for r in rows))
+
+    def row(*cells: Any) -> str:
+        return "| " + " | ".join(map(str, cells)) + " |"
+
+    def cell(agent: str, group: str, tol: float, **key: Any) -> str:
+        r = next(r for r in rows if (r["agent"], r["group"], r["tolerance"]) == (agent, group, tol)
+                 and all(r.get(k) == v for k, v in key.items()))  # fmt: skip
+        lo, hi = r["ci95"] or (0.0, 0.0)
+        return f"{100 * r['rate']:.1f} [{100 * lo:.1f}, {100 * hi:.1f}] ({r['failures']}/{r['n']})" if r["n"] else "–"
+
+    bins = [list(b) for b in itertools.pairwise(CURVATURE_BINS)]
+    lines = [
+        f"# Random paths (Cao et al. 2024): {p['paths'] - len(doc['skipped'])} paths of RandomState({p['seed']}), "
+        f"condition {p['condition']}",
+        "",
+        f"{p['speed']:g} m/s, {p['duration_s']:g} s; a path fails when {p['failure']}. Failure rate [%] [95 % Wilson "
+        f"interval] (failures/episodes, training seeds pooled); AmigoBot-v1 accepts {doc['accepted']} of the paths.",
+        "",
+        row("agent", *(f"{t:g} m" for t in tols), f"accepted paths, {tols[0]:g} m"),
+        row(*["---"] * (len(tols) + 2)),
+    ]
+    if p["condition"] == "paper" and p["speed"] == 0.2:
+        lines.append(row("published (Cao et al.)", *(f"{100 * PUBLISHED.get(t, math.nan):.1f}" for t in tols), ""))
+    lines += [row(a, *(cell(a, "all", t) for t in tols), cell(a, "accepted", tols[0])) for a in agents]
+    lines += ["", f"Per bin of the path's peak |kappa| [1/m], {tols[0]:g} m:", ""]
+    lines += [row("agent", *(f"[{lo:g}, {hi:g})" for lo, hi in bins)), row(*["---"] * (len(bins) + 1))]
+    lines += [row(a, *(cell(a, "curvature", tols[0], kappa=b) for b in bins)) for a in agents]
+    seeds = [(r["agent"], r["seed"]) for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]
+    if seeds:
+        lines += ["", "Per training seed:", "", row("agent", "seed", *(f"{t:g} m" for t in tols))]
+        lines += [row(*["---"] * (len(tols) + 2))] + [
+            row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
+        ]
+    runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
+    lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
+    return "\n".join(lines) + "\n"
+
+
+def write_random_paths(doc: Mapping[str, Any], json_path: Any, md_path: Any) -> list[str]:
+    """Write the document and its Markdown atomically; the paths written."""
+    atomic_write_json(json_path, doc)
+    atomic_write(md_path, markdown_random_paths(doc))
+    return [str(json_path), str(md_path)]
