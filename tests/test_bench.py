@@ -81,12 +81,12 @@ def test_bench_env_kernels_and_targets(tmp_path: Path, capsys: pytest.CaptureFix
 def test_targets_judge_each_ratio_against_its_bound() -> None:
     """:func:`env.targets` on hand-made results: the ratios, the bounds of the speed targets, met or not."""
     rows = [
-        env.VectorRow(1, native=1e5, cartpole=2e4, sync=None),  # call: 10 us against 50 us -> 0.2, met
-        env.VectorRow(4096, native=3e6, cartpole=6e6, sync=None, kernels={"numba-parallel": 9e6}),
+        env.vector_row(1, native=1e5, cartpole=2e4),  # call: 10 us against 50 us -> 0.2, met
+        env.vector_row(4096, native=3e6, cartpole=6e6, kernels={"numba-parallel": 9e6}),
     ]
-    v1 = env.V1Result(v1_us=30.0, v0_us=10.0, vector={4096: (1e6, 2e6)})
-    rep = env.Report(single=env.SingleResult(4.0, 10.0), vector=rows, v1=v1)
-    got = {t.name: (round(t.ratio, 6), t.met) for t in env.targets(rep)}
+    v1 = {"ratio": 3.0, "vector": {"4096": {"v1": 1e6, "v0": 2e6}}}
+    doc = {"single": {"ratio": 0.4}, "vector": rows, "v1": v1}
+    got = {t["name"]: (round(t["ratio"], 6), t["met"]) for t in env.targets(doc)}
     assert got == {
         "single": (0.4, True),
         "vector_4096": (0.5, False),
@@ -115,7 +115,9 @@ def test_bench_core_startup_rows_name_both_routes() -> None:
     for code in (core._FIRST_STEP, core._FIRST_STEP_V1):
         ref = core._numpy_route(code)
         assert "kernel='numpy'" in ref and "numba" not in ref and ref.replace("numpy'", "numba'") == code
-    st = core.Startup(0.5, 0.02, 3.0, 0.8, 4.0, 0.9, numba_import_s=0.7, numpy_first_s=0.6, v1_numpy_first_s=0.65)
+    keys = ("import_s", "python_s", "kernel_cold_s", "kernel_warm_s", "v1_cold_s", "v1_warm_s", "numba_import_s")
+    st = {**dict(zip(keys, (0.5, 0.02, 3.0, 0.8, 4.0, 0.9, 0.7), strict=True)), "numpy_first_s": 0.6}
+    st["v1_numpy_first_s"] = 0.65
     table = core.format_table([], st)
     assert '| python -c "import amigo_gym, numba" | 0.700 |' in table
     assert "| import + first v0 vector step, kernel=numpy (no numba) | 0.600 |" in table

@@ -108,18 +108,11 @@ def cli(
     """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``.
 
     Args:
-        flag: the option's name when it is not ``--field-name`` (e.g. ``--env`` for ``env_id``); a ``--no-x``
-            flag of a ``bool`` field that defaults to ``True`` stores ``False``.
-        required: the option must be given even though the field has a default.
-        hidden: left out of ``--help`` (internal options).
-        parse: turns the option's text into the field's value after parsing (e.g. :func:`json_object`); a
-            ``ValueError`` becomes ``<flag> <message>``; not given: the field's default.
-        skip: no option for this field (set by the command itself).
-        positional: a positional argument named as the field (``nargs`` as for an option).
-        metavar: the value's name in ``--help`` (default: argparse's, the field's name in capitals).
-        choices: the values allowed (a ``Literal`` type gives them otherwise).
-        nargs: argparse's ``nargs`` in place of the type's (e.g. ``"*"`` for a list that may be empty).
-        group: the name of a mutually exclusive group: at most one option of the group may be given.
+        flag: the option's name when not ``--field-name``; a ``--no-x`` flag of a ``bool`` field stores ``False``.
+        required: the option must be given although the field has a default. hidden: left out of ``--help``.
+        parse: turns the option's text into the value (e.g. :func:`json_object`; a ``ValueError`` becomes ``<flag>
+            <message>``). skip: no option (the command sets the field). positional: a positional argument.
+        metavar, choices, nargs: argparse's, in place of the type's. group: a mutually exclusive group's name.
     """
     return {"cli": dict(locals())}  # the arguments above, by name
 
@@ -179,18 +172,13 @@ def _scalar(tp: Any) -> dict[str, Any]:
 
 
 def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
-    """One option per field of the dataclass ``cls``, typed and defaulted as the field (one source for both).
+    """One option ``--field-name`` (or :func:`cli`'s) per field of the dataclass ``cls``, typed and defaulted as the
+    field; its help is the field's ``Attributes:`` entry (unit in brackets; ``[file]``: metavar ``FILE``).
 
-    The option is ``--field-name`` unless :func:`cli` names another flag. Its help is the field's entry in the
-    class docstring's ``Attributes:`` section (which names the unit in brackets); :class:`HelpFormatter` appends
-    the default. Types: ``int``, ``float``, ``str``, ``Path`` and other one-argument classes; ``X | None``
-    (default ``None``); ``Literal[...]`` (the choices, in that order); ``list[X]`` and ``tuple[X, ...]``
-    (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag that sets ``True`` when the default is
-    ``False``, a ``--no-x`` flag that sets ``False`` (its help: the field's after ``--no-x: ``), else an option
-    taking ``true``/``false``; anything else needs ``cli(parse=...)`` and takes a string. A field without a
-    default is a required option; ``cli(skip=True)`` fields and ``init=False`` fields get none. :func:`cli` may
-    make it positional, name its metavar, choices or nargs, or put it in a mutually exclusive group; an option whose
-    unit is ``[file]`` shows ``FILE`` as its argument (a positional its name) unless :func:`cli` names another metavar.
+    Types: ``int``, ``float``, ``str`` and other one-argument classes; ``X | None``; ``Literal[...]`` (choices);
+    ``list[X]``, ``tuple[X, ...]`` (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag setting ``True``
+    (default ``False``), a ``--no-x`` flag (its help: the text after ``--no-x: ``), else ``true``/``false``; others
+    need ``cli(parse=...)``. No default: a required option; ``cli(skip=True)`` and ``init=False`` fields get none.
     """
     helps = attribute_help(cls)
     hints = get_type_hints(cls)
@@ -270,13 +258,17 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     return cls(**kw)
 
 
-def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
-    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``): a
-    :class:`OneLineParser` with :func:`add_dataclass_options`, then :func:`settings_from_args` (``extra``: further
-    fields) and ``validate()`` when ``cls`` has one; a bad value is the parser's one-line error (exit status 2)."""
-    parser = OneLineParser(prog=prog, description=description)
+def _parse(cls: type, argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, argparse.Namespace]:
+    parser = OneLineParser(prog=prog, description=doc)
     add_dataclass_options(parser, cls)
-    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    return parser, parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+
+
+def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
+    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``;
+    ``extra``: further fields), ``validate()``d when ``cls`` has it; a bad value is the parser's one-line error
+    (exit status 2)."""
+    parser, namespace = _parse(cls, argv, prog, description)
     try:
         settings = settings_from_args(cls, namespace, **extra)
         validate = getattr(settings, "validate", None)
@@ -292,9 +284,7 @@ def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str
     a malformed option exits with the parser's one-line error (status 2), a value ``cls`` refuses (or a bad input met
     by ``run``) is one line and the returned status 2 (:func:`run_guarded`), unlike :func:`parse_settings`, which
     exits."""
-    parser = OneLineParser(prog=prog, description=doc)
-    add_dataclass_options(parser, cls)
-    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    namespace = _parse(cls, argv, prog, doc)[1]
     return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
 
 

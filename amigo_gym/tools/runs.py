@@ -1,13 +1,13 @@
-"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named.
+"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named, output sets.
 
-Used by ``amigo-gym train`` and ``amigo-gym compare``; imports only the standard library, :mod:`amigo_gym.io` and,
-when a lock is taken, ``filelock``. The lock, checkpoints, corrupt files, temporaries and output sets:
-docs/reliability.md, "Reference: run folders".
+Standard library, :mod:`amigo_gym.io` and (for the lock) ``filelock`` only. Reference: docs/reliability.md,
+"Reference: run folders".
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import json
 import os
@@ -43,9 +43,8 @@ SNAPSHOT = ("eval.json", "best_model.zip")
 
 
 class StopRequest:
-    """A signal handler for ``SIGTERM``/``SIGINT`` while a run holds its folder: the first signal sets
-    :attr:`requested` (the run stops at its next safe point, after a checkpoint) and prints ``message`` to
-    stderr; a second one stops at once (``KeyboardInterrupt``)."""
+    """A ``SIGTERM``/``SIGINT`` handler: the first signal sets :attr:`requested` (the run stops at its next safe
+    point) and prints ``message`` to stderr; a second raises ``KeyboardInterrupt``."""
 
     def __init__(self, message: str) -> None:
         self.message = message
@@ -86,12 +85,8 @@ def warn(message: str) -> None:
 
 # --------------------------------------------------------------------------- lock
 class RunLock:
-    """Exclusive lock on a run folder for the life of the process's use of it (module docstring).
-
-    Use as a context manager; the folder is created if missing. ``name``: the lock file's name in
-    ``folder`` (default ``run.lock``); ``wait``: seconds to wait for another holder to let go (default 0:
-    fail at once). The lock is ``filelock.FileLock`` (``flock`` on POSIX, ``msvcrt`` on Windows), imported
-    when the lock is taken.
+    """Exclusive lock (``filelock.FileLock``) on ``folder/name`` while the context is entered; the folder is created
+    if missing; ``wait``: seconds to wait for another holder (0: fail at once).
 
     Raises:
         RunLockedError: another process holds it (one line with its pid).
@@ -130,8 +125,7 @@ class RunLock:
         return self
 
     def release(self) -> None:
-        """Remove the lock file (still locked, so no one holds a lock on it that the removal could break) and
-        unlock it."""
+        """Remove the lock file (while still locked) and unlock it."""
         if self._lock is not None:
             if sys.platform != "win32":  # Windows cannot remove an open file; its lock file stays
                 with contextlib.suppress(OSError):
@@ -158,22 +152,20 @@ def is_current_lock(fd: int, path: Path) -> bool:
     return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
 
 
-#: names of the temporaries this package makes: ``.tmp-*``, ``.staging-*`` folders, ``.trash-*`` checkpoints being
-#: deleted, and :func:`amigo_gym.io.atomic_save`'s ``.<stem>.<8 random characters><suffix>`` files
+#: the package's temporaries: ``.tmp-*``, ``.staging-*``, ``.trash-*`` and :func:`amigo_gym.io.atomic_save`'s
+#: ``.<stem>.<8 random characters><suffix>``
 TEMPORARY_NAME = re.compile(r"^\.(?:tmp|staging|trash)-.+$|^\..+\.[A-Za-z0-9_]{8}(?:\.[A-Za-z0-9]+)?$")
 
 
 def clean_temporaries(folder: Path) -> None:
-    """Remove what killed processes left: the package's own temporary files and folders (:data:`TEMPORARY_NAME`)
-    in ``folder`` and in its ``checkpoints/``; any other dot-named entry (``.git``, ``.env``) is left alone. Call
-    only while holding the folder's :class:`RunLock`."""
+    """Remove the package's temporaries (:data:`TEMPORARY_NAME`) from ``folder`` and its ``checkpoints/``; other
+    dot-named entries stay. Call only while holding the folder's :class:`RunLock`."""
     for d in (folder, folder / CHECKPOINTS):
         remove_matching(d, TEMPORARY_NAME)
 
 
 def remove_matching(folder: Path, pattern: re.Pattern[str]) -> list[str]:
-    """Remove the entries of ``folder`` (if it is one) whose names ``pattern`` matches: folders with their contents,
-    files and links (never what a link points to). The names removed."""
+    """Remove the entries of ``folder`` whose names ``pattern`` matches (links, never their targets); their names."""
     removed = []
     if folder.is_dir():
         for p in folder.iterdir():
@@ -215,10 +207,9 @@ def _key(path: Path, out: Path) -> str:
 def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
     """Move the staged files ``{target: staged file}`` to their targets as one set; the manifest's ``{file: sha256}``.
 
-    The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``, a file named relative
-    to ``out`` when inside it) is removed first and written atomically last: the set is complete and consistent
-    exactly when the manifest exists and every file matches it (:func:`verify_manifest`), so a reader that checks
-    it never mixes files of two runs. Fault stages (tests): ``publish:<file name>`` after each move.
+    The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``) is removed first and
+    written last: the set is complete exactly when it exists and every file matches it (:func:`verify_manifest`).
+    Fault stages (tests): ``publish:<file name>`` after each move.
     """
     files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
     (out / manifest).unlink(missing_ok=True)
@@ -254,8 +245,7 @@ def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
 
 
 def check_pickle(path: Path, expected: str | None, source: str | None, trust: bool = False) -> None:
-    """Check a pickle (model zip, ``vecnormalize.pkl``, replay buffer) **before** it is unpickled: against the
-    sha256 ``expected`` of the manifest ``source`` if there is one (:func:`verify_sha256`: a damaged file), then
+    """Check a pickle before it is unpickled: against the sha256 ``expected`` of the manifest ``source`` if any, then
     that it is trusted (:func:`amigo_gym.io.require_trust`: shipped, written here, or ``trust``).
 
     Raises:
@@ -283,19 +273,13 @@ def _fsync_file(path: Path) -> None:
 
 
 # --------------------------------------------------------------------------- checkpoints
+@dataclasses.dataclass
 class Checkpoint:
-    """A checkpoint folder whose ``meta.json`` and sha256 sums have been verified.
+    """A verified checkpoint folder ``<run>/checkpoints/step_<n>[.<k>]``, its ``num_timesteps`` and ``meta.json``."""
 
-    Attributes:
-        folder: ``<run>/checkpoints/step_<n>[.<k>]``.
-        step: its ``num_timesteps``.
-        meta: the parsed ``meta.json``.
-    """
-
-    def __init__(self, folder: Path, step: int, meta: dict[str, Any]) -> None:
-        self.folder = folder
-        self.step = step
-        self.meta = meta
+    folder: Path
+    step: int
+    meta: dict[str, Any]
 
     @property
     def wall_time_s(self) -> float:
@@ -361,10 +345,8 @@ def _step_of(folder: Path) -> tuple[int, int]:
 
 
 def candidates(out: Path, report: bool = True) -> list[Path]:
-    """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first.
-
-    A damaged pointer is reported with a warning (the folders are still found by name).
-    """
+    """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first (a
+    damaged pointer is reported with a warning)."""
     found: list[Path] = []
     try:
         ptr = _read_pointer(out)
@@ -385,14 +367,10 @@ def candidates(out: Path, report: bool = True) -> list[Path]:
 
 
 def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> tuple[Checkpoint, Any] | None:
-    """Load the newest good checkpoint of the run in ``out`` with ``load`` (which unpickles the model etc.).
+    """``(checkpoint, load(checkpoint))`` of the newest good checkpoint in ``out`` (``None``: no checkpoint folder).
 
-    Each candidate (:func:`candidates`) is verified (:func:`verify_checkpoint`) and then passed to
-    ``load``; a :class:`CorruptFileError` (from either) prints a warning and falls back to the next.
-    A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
-
-    Returns:
-        ``(checkpoint, load's result)``, or ``None`` if the run has no checkpoint folder at all.
+    Each candidate (:func:`candidates`) is verified, then loaded; a :class:`CorruptFileError` warns and falls back to
+    the next. A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
 
     Raises:
         CorruptFileError: checkpoints exist but none is usable (one line listing why).
@@ -423,23 +401,12 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
 
 
 def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], list[str]], wall_time_s: float) -> Path:
-    """Write a complete checkpoint, switch ``checkpoint.json`` to it, then delete all but the last two.
+    """Write a complete checkpoint of ``step`` (``write(folder)`` writes the model files, returns their names) into
+    the run folder ``out`` (its :class:`RunLock` held), switch ``checkpoint.json`` to it, delete all but the last two;
+    the new folder. ``meta.json`` records ``algo``, the step and ``wall_time_s`` [s].
 
-    Args:
-        out: the run folder (its :class:`RunLock` held).
-        algo: algorithm name, recorded in ``meta.json``.
-        step: the model's ``num_timesteps``.
-        write: writes the model files into the folder it is given; returns their names.
-        wall_time_s: training wall time so far [s], recorded in ``meta.json``.
-
-    Fault stages (``AMIGO_GYM_FAULT``, see :mod:`amigo_gym.io`): those of ``write`` (train.py:
-    ``checkpoint:model``, ``checkpoint:replay``), ``checkpoint:files`` (every file written and fsynced),
-    ``checkpoint:meta`` (``meta.json`` written), ``checkpoint:rename`` (folder renamed, pointer
-    not switched), ``write:checkpoint.json`` / ``rename:checkpoint.json`` (the pointer's atomic write),
-    ``checkpoint:trash`` (an old checkpoint renamed for deletion, not yet deleted).
-
-    Returns:
-        the new checkpoint folder.
+    Fault stages (``AMIGO_GYM_FAULT``): ``write``'s, ``checkpoint:files``, ``checkpoint:meta``, ``checkpoint:rename``,
+    ``write:checkpoint.json`` / ``rename:checkpoint.json``, ``checkpoint:trash``.
     """
     root = out / CHECKPOINTS
     root.mkdir(parents=True, exist_ok=True)
@@ -499,8 +466,7 @@ def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, 
 
 
 def _previous_good(out: Path, algo: str, new: Path) -> str | None:
-    """The checkpoint to keep beside ``new``: the first of the pointer's, its previous one and the
-    others (newest first) that verifies (a damaged one a resume fell back from is not kept)."""
+    """The checkpoint to keep beside ``new``: the first other candidate that verifies."""
     for folder in (p for p in candidates(out, report=False) if p != new):
         try:
             verify_checkpoint(folder, algo)
@@ -511,11 +477,8 @@ def _previous_good(out: Path, algo: str, new: Path) -> str | None:
 
 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
-    """Put the run's evaluation record (``eval.json``, ``best_model.zip``) back to the checkpoint's.
-
-    Evaluations made after the checkpoint by a run that was then killed are dropped (the resumed run
-    makes them again at the same steps), so the history holds no duplicate. ``ck=None``: no record.
-    """
+    """Put the run's evaluation record (``eval.json``, ``best_model.zip``) back to the checkpoint's (``None``: none);
+    evaluations after it are made again by the resumed run."""
     for name in SNAPSHOT:
         src = None if ck is None else ck.folder / name
         dst = out / name
@@ -531,8 +494,7 @@ def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
 
 @contextlib.contextmanager
 def corrupt_errors(path: Path, what: str) -> Iterator[None]:
-    """Turn any exception while loading ``path`` (unpickling, unzipping, SB3's checks) into one
-    :class:`CorruptFileError` line naming the file."""
+    """Any exception while loading ``path`` becomes one :class:`CorruptFileError` line naming the file."""
     try:
         yield
     except CorruptFileError:

@@ -73,19 +73,21 @@ class Settings:
 
     def __post_init__(self) -> None:
         robot = RobotParams()
-        o = "Settings"
-        check_range(o, "speed", self.speed, 0.0, robot.max_speed, low_open=True)
-        check_range(o, "radius", self.radius, robot.l3, 1e3, low_open=True)
-        check_range(o, "straight_length", self.straight_length, 0.0, 1e3)
         if self.direction not in (1, -1):
-            raise ValueError(f"{o}.direction must be +1 or -1, got {self.direction!r}")
-        check_range(o, "accel", self.accel, 0.0, robot.max_acceleration, low_open=True)
-        check_range(o, "decel", self.decel, 0.0, robot.max_deceleration, low_open=True)
-        check_range(o, "t_start", self.t_start, 0.0, 1e3)
-        check_range(o, "laps", self.laps, 0.0, 100.0)
-        check_range(o, "tail", self.tail, 0.0, 1e3)
-        check_range(o, "dt", self.dt, 0.0, 1.0, low_open=True)
-        check_range(o, "dpi", self.dpi, 20, 600)
+            raise ValueError(f"Settings.direction must be +1 or -1, got {self.direction!r}")
+        for name, low, high, low_open in (
+            ("speed", 0.0, robot.max_speed, True),
+            ("radius", robot.l3, 1e3, True),
+            ("straight_length", 0.0, 1e3, False),
+            ("accel", 0.0, robot.max_acceleration, True),
+            ("decel", 0.0, robot.max_deceleration, True),
+            ("t_start", 0.0, 1e3, False),
+            ("laps", 0.0, 100.0, False),
+            ("tail", 0.0, 1e3, False),
+            ("dt", 0.0, 1.0, True),
+            ("dpi", 20, 600, False),
+        ):
+            check_range("Settings", name, getattr(self, name), low, high, low_open=low_open)
 
 
 @dataclass(frozen=True)
@@ -133,15 +135,10 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
         ax.axvspan(p.t0, p.t1, color=colours[i % 2], zorder=0)
         if i:
             ax.axvline(p.t0, color="0.6", lw=0.6, ls="--", zorder=1)
+        rotation = 0 if p.t1 - p.t0 > 4.0 else 60
+        at = (0.5 * (p.t0 + p.t1), 1.01)
         ax.text(
-            0.5 * (p.t0 + p.t1),
-            1.01,
-            p.name,
-            transform=ax.get_xaxis_transform(),
-            ha="center",
-            va="bottom",
-            fontsize=7,
-            rotation=0 if p.t1 - p.t0 > 4.0 else 60,
+            *at, p.name, transform=ax.get_xaxis_transform(), ha="center", va="bottom", fontsize=7, rotation=rotation
         )
 
 
@@ -154,15 +151,8 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
     if not os.access(settings.out, os.W_OK):
         raise ValueError(f"--out folder {settings.out!r} is not writable")
     path = ManoeuvrePath(settings.radius, settings.straight_length, settings.direction)
-    profile = manoeuvre_profile(
-        path,
-        settings.speed,
-        robot,
-        accel=settings.accel,
-        decel=settings.decel,
-        t_start=settings.t_start,
-        laps=settings.laps,
-    )
+    kw = {k: getattr(settings, k) for k in ("accel", "decel", "t_start", "laps")}
+    profile = manoeuvre_profile(path, settings.speed, robot, **kw)
     sol = solve_inverse(path, profile, time_grid(profile.t_stop + settings.tail, settings.dt), robot)
     ph = phases(sol, profile, path)
     ss = circle_steady_state(settings.radius, settings.speed, robot, settings.direction)

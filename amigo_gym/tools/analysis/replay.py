@@ -32,17 +32,13 @@ from amigo_gym.tools.plots import pyplot, save_figure
 def trajectory_csv(log: Log, rep: Replay) -> str:
     """The side-by-side table of ``trajectory.csv`` (module docstring) as CSV text."""
     e = errors(log, rep)
+    xyt = ("x", "y", "theta")
     cols: dict[str, Any] = {"t": rep.t}
     if log.pose is not None:
-        for i, n in enumerate(("x", "y", "theta")):
-            cols[f"{n}_meas"] = log.pose[:, i]
-        for i, n in enumerate(("x", "y", "theta")):
-            cols[f"{n}_sim"] = rep.pose[:, i]
-        cols["position_error"] = e["position"]
-        cols["heading_error"] = e["heading"]
-    else:
-        for i, n in enumerate(("x", "y", "theta")):
-            cols[f"{n}_sim"] = rep.pose[:, i]
+        cols |= {f"{n}_meas": log.pose[:, i] for i, n in enumerate(xyt)}
+    cols |= {f"{n}_sim": rep.pose[:, i] for i, n in enumerate(xyt)}
+    if log.pose is not None:
+        cols |= {"position_error": e["position"], "heading_error": e["heading"]}
     if log.rates is not None:
         cols["w1_meas"], cols["w2_meas"] = log.rates[:, 0], log.rates[:, 1]
     cols["w1_sim"], cols["w2_sim"] = rep.rates[:, 0], rep.rates[:, 1]

@@ -27,6 +27,8 @@ from amigo_gym.tools.options import parse_settings, run_guarded
 STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
 ROBOT = RobotParams()
 R, V = 1.0, 0.2
+#: one lap of A's steady circle [s]
+LAP = 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V
 
 
 def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
@@ -40,9 +42,8 @@ def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
 def _laps_error(dt: float, euler: bool) -> float:
     pose, w = _steady_pose()
     v, bd = body_velocity(w, ROBOT)
-    n = math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / dt)
     err = 0.0
-    for _ in range(n):
+    for _ in range(math.ceil(10 * LAP / dt)):
         if euler:
             b = pose[2]
             pose = pose + dt * np.array([v * math.cos(b), v * math.sin(b), bd])
@@ -61,7 +62,7 @@ def _env_laps_error() -> float:
     env.reset(options={"pose": pose})
     action = w / ROBOT.max_wheel_rate
     err = 0.0
-    for _ in range(math.ceil(10 * 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V / 0.1)):
+    for _ in range(math.ceil(10 * LAP / 0.1)):
         _, _, _, _, info = env.step(action)
         err = max(err, abs(info["cross_track_error"]))
     return err
@@ -70,7 +71,7 @@ def _env_laps_error() -> float:
 def round_trip_error(dt: float) -> float:
     """Largest ``|e|`` of H [m] over one lap when the inverse solution's wheel-angle increments / dt are held."""
     path = CirclePath(radius=R)
-    sol = paper_circle(radius=R, speed=V, duration=2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V, dt=dt)
+    sol = paper_circle(radius=R, speed=V, duration=LAP, dt=dt)
     w = np.diff(sol.wheel_angles[:, :2], axis=0) / dt
     pose = sol.pose[0]
     err = 0.0
@@ -122,20 +123,15 @@ def _check(what: str, value: float, bound: str, ok: Callable[[float], bool]) -> 
 def rows(quick: bool = False) -> list[Check]:
     """Every check with its verdict (``quick``: skip the slow ones)."""
     ss = circle_steady_state(R, V, ROBOT)
-    got = {
-        "betadot": float(ss.betadot),
-        "alpha1_dot": float(ss.wheel_rates[0]),
-        "alpha2_dot": float(ss.wheel_rates[1]),
-        "alpha3_dot": float(ss.castor_rate),
-    }
+    got = dict(zip(STEADY_REFERENCE, (ss.betadot, *ss.wheel_rates, ss.castor_rate), strict=True))
     out = [
         _check(
-            f"steady {k} [rad/s] - docs/model.md's {STEADY_REFERENCE[k]}",
-            got[k] - STEADY_REFERENCE[k],
+            f"steady {k} [rad/s] - docs/model.md's {ref}",
+            float(got[k]) - ref,
             "abs < 5e-7 (6 decimals)",
             lambda v: abs(v) < 5e-7,
         )
-        for k in STEADY_REFERENCE
+        for k, ref in STEADY_REFERENCE.items()
     ]
     for dt in (0.01, 0.1, 0.5):
         what = f"exact step, 10 laps, dt = {dt} s: max H off circle [m]"
@@ -145,8 +141,6 @@ def rows(quick: bool = False) -> list[Check]:
     what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
     out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
     if not quick:
-        from amigo_gym.task.inverse import paper_circle
-
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R
         what = "inverse solution, 60 s: max abs(e) of H [m]"

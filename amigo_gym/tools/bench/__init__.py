@@ -1,1 +1,106 @@
-"""Benchmarks of the exact step and of the environments against peers measured in the same run."""
+"""Speed benchmarks against peers measured in the same run, and their one timing harness.
+
+Every figure is timed beside its peer in interleaved repeats (:func:`measure_many`), the envs stepped with random
+actions drawn in advance (:func:`stepper`), and printed as Markdown (:func:`md_table`) under the machine's line
+(:func:`amigo_gym.tools.machine.machine_line`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import time
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+#: random actions drawn in advance per env, cycled
+POOL = 16
+
+
+def measure_many(fns: Mapping[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
+    """Median time of one call [s] of each function, the repeats interleaved (round robin).
+
+    Each repeat times every function in turn (each for at least ``min_time``), so a change of the
+    machine's load during the run affects the competitors alike and their ratios stay meaningful.
+    """
+    inner = {}
+    for name, fn in fns.items():
+        fn()  # warm-up
+        t0 = time.perf_counter()
+        fn()
+        inner[name] = max(1, math.ceil(min_time / max(time.perf_counter() - t0, 1e-7)))
+    samples: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            m = inner[name]
+            t0 = time.perf_counter()
+            for _ in range(m):
+                fn()
+            samples[name].append((time.perf_counter() - t0) / m)
+    return {name: statistics.median(v) for name, v in samples.items()}
+
+
+def stepper(env: Any, seed: int = 0) -> Callable[[], object]:
+    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`; a vector env autoresets,
+    a single env is reset on termination or truncation."""
+    space = env.action_space
+    if isinstance(space, gym.spaces.Box):
+        rng = np.random.default_rng(seed)
+        pool = list(rng.uniform(space.low, space.high, (POOL, *space.shape)).astype(space.dtype))
+    else:  # CartPole: discrete actions
+        space.seed(seed)
+        pool = [space.sample() for _ in range(POOL)]
+    env.reset(seed=seed)
+    single = not isinstance(env, gym.vector.VectorEnv)
+    k = [0]
+
+    def step() -> object:
+        i = k[0] = (k[0] + 1) % POOL
+        out = env.step(pool[i])
+        if single and (out[2] or out[3]):
+            env.reset()
+        return None
+
+    return step
+
+
+def time_envs(envs: Mapping[str, Any], repeats: int, min_time: float, seed: int = 0) -> dict[str, float]:
+    """Median time of one ``step`` [s] of each env (:func:`stepper`, :func:`measure_many`); closes the envs."""
+    try:
+        return measure_many({k: stepper(e, seed) for k, e in envs.items()}, repeats, min_time)
+    finally:
+        for e in envs.values():
+            e.close()
+
+
+def fmt(x: float | None, spec: str = ".3g") -> str:
+    """``x`` formatted, ``"-"`` for ``None``."""
+    return "-" if x is None else format(x, spec)
+
+
+def md_table(head: str, rows: Iterable[str], first: str = "---", last: str = "---:") -> list[str]:
+    """A Markdown table's lines from its header and rows, their cells joined by ``" | "``: the rule aligns the first
+    and the last column by ``first`` and ``last``, the others right."""
+    return [f"| {head} |", f"|{first}|" + "---:|" * (head.count(" | ") - 1) + f"{last}|", *(f"| {r} |" for r in rows)]
+
+
+def rates(name: str, count: int, wall: float, cpu: float) -> dict[str, float]:
+    """``count`` per wall second (``name``) and per CPU second of this process, all threads (``name_cpu``)."""
+    return {name: round(count / max(wall, 1e-9), 1), f"{name}_cpu": round(count / max(cpu, 1e-9), 1)}
+
+
+def clock() -> tuple[float, float]:
+    """Wall and CPU clocks of this process [s] (:func:`time.perf_counter`, :func:`time.process_time`)."""
+    return time.perf_counter(), time.process_time()
+
+
+def load_average() -> str:
+    """The machine's load average over 1, 5 and 15 minutes (``"-"`` where the OS has none)."""
+    try:
+        return " ".join(f"{x:.2f}" for x in os.getloadavg())
+    except OSError:
+        return "-"

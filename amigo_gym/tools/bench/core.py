@@ -14,7 +14,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,11 +27,15 @@ from amigo_gym.paths import make_path
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
+from amigo_gym.tools.bench import fmt, md_table, measure_many
 from amigo_gym.tools.machine import machine_line
-from amigo_gym.tools.options import run_command
+from amigo_gym.tools.options import run_command, say
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
+#: the methods timed per batch size (docs/performance.md), keys of a row with ``n`` and ``ratio_kernel``
+METHODS = ("transition", "columns", "step_pose", "euler", "loop", "kernel", "kernel_par")
+Row = dict[str, Any]
 DEFAULT_SIZES = (1, 64, 1024, 4096, 16384, 65536)
 
 
@@ -57,66 +61,9 @@ def loop_step(
     return out
 
 
-def measure(fn: Callable[[], object], repeats: int, min_time: float) -> float:
-    """Median time of one call [s]: each repeat runs ``fn`` enough times to last ``min_time`` (:func:`measure_many`)."""
-    return measure_many({"fn": fn}, repeats, min_time)["fn"]
-
-
-def measure_many(fns: dict[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
-    """Median time of one call [s] of each function, the repeats interleaved (round robin).
-
-    Each repeat times every function in turn (each for at least ``min_time``), so a change of the
-    machine's load during the run affects the competitors alike and their ratios stay meaningful.
-    """
-    inner = {}
-    for name, fn in fns.items():
-        fn()  # warm-up
-        t0 = time.perf_counter()
-        fn()
-        inner[name] = max(1, math.ceil(min_time / max(time.perf_counter() - t0, 1e-7)))
-    samples: dict[str, list[float]] = {name: [] for name in fns}
-    for _ in range(repeats):
-        for name, fn in fns.items():
-            m = inner[name]
-            t0 = time.perf_counter()
-            for _ in range(m):
-                fn()
-            samples[name].append((time.perf_counter() - t0) / m)
-    return {name: statistics.median(v) for name, v in samples.items()}
-
-
-@dataclass(frozen=True)
-class Row:
-    """Env-steps per second at batch size ``n`` (``None`` where not measured)."""
-
-    n: int
-    transition: float
-    columns: float
-    step_pose: float
-    euler: float
-    loop: float | None
-    kernel: float | None = None
-    kernel_par: float | None = None
-
-    @property
-    def ratio_euler(self) -> float:
-        """``step_pose / euler`` throughput (1 = as fast as the Euler peer)."""
-        return self.step_pose / self.euler
-
-    @property
-    def ratio_loop(self) -> float | None:
-        """``step_pose / loop`` throughput (speed-up of batching over a Python loop)."""
-        return None if self.loop is None else self.step_pose / self.loop
-
-    @property
-    def ratio_kernel(self) -> float | None:
-        """``kernel / columns`` throughput (speed-up of the compiled step over the numpy reference)."""
-        return None if self.kernel is None else self.kernel / self.columns
-
-
-def _bench_one(
-    n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool = False
-) -> Row:
+def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool) -> Row:
+    """Env-steps per second of each method at batch size ``n`` (``None`` where not measured), in interleaved repeats,
+    and ``kernel / columns``, the speed-up of the compiled step over the numpy reference."""
     params = EnvParams()
     robot = params.robot
     path = make_path(params)
@@ -136,21 +83,23 @@ def _bench_one(
         v, bdot = body_velocity_columns(new.w1, new.w2, robot)
         return new, angles[:, 2] + castor_rate_columns(v, bdot, robot) * params.dt
 
-    t_tr = measure(transition, repeats, min_time)
-    t_co = measure(columns, repeats, min_time)
-    t_sp = measure(lambda: step_pose(pose, w, params.dt, robot), repeats, min_time)
-    t_eu = measure(lambda: euler_step(pose, w, params.dt, robot), repeats, min_time)
-    loop = None
+    fns: dict[str, Callable[[], object]] = {
+        "transition": transition,
+        "columns": columns,
+        "step_pose": lambda: step_pose(pose, w, params.dt, robot),
+        "euler": lambda: euler_step(pose, w, params.dt, robot),
+    }
     if n <= loop_max:
         pl = [(float(a), float(b), float(c)) for a, b, c in pose]
         wl = [(float(a), float(b)) for a, b in w]
-        loop = n / measure(lambda: loop_step(pl, wl, params.dt, robot), repeats, min_time)
-    kern = kern_par = None
+        fns["loop"] = lambda: loop_step(pl, wl, params.dt, robot)
     if kernels:
-        steppers = _kernel_steppers(params, path, pose, angles, w, action)
-        kern = n / measure(steppers[0], repeats, min_time)
-        kern_par = n / measure(steppers[1], repeats, min_time)
-    return Row(n, n / t_tr, n / t_co, n / t_sp, n / t_eu, loop, kern, kern_par)
+        fns["kernel"] = kernel_stepper(params, pose, w, action, False)
+        fns["kernel_par"] = kernel_stepper(params, pose, w, action, True)
+    t = measure_many(fns, repeats, min_time)
+    row: Row = {"n": n} | {m: n / t[m] if m in t else None for m in METHODS}
+    row["ratio_kernel"] = None if row["kernel"] is None else row["kernel"] / row["columns"]
+    return row
 
 
 def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
@@ -180,58 +129,13 @@ def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, para
     return lambda: b.step(rings, 1, a1, a2, obs)
 
 
-def _kernel_steppers(
-    params: EnvParams, path: Any, pose: Array, angles: Array, w: Array, action: Array
-) -> tuple[Callable[[], object], Callable[[], object]]:
-    """Serial and parallel kernel steps of the states (preallocated outputs; the state advances)."""
-    return kernel_stepper(params, pose, w, action, False), kernel_stepper(params, pose, w, action, True)
-
-
 def bench(
-    sizes: Sequence[int],
-    repeats: int = 7,
-    min_time: float = 0.05,
-    loop_max: int = 4096,
-    seed: int = 0,
-    kernels: bool = True,
+    sizes: Sequence[int], repeats: int, min_time: float, loop_max: int, kernels: bool, seed: int = 0
 ) -> list[Row]:
-    """Measure every size (same random states for every method); returns one :class:`Row` each.
-
-    ``kernels=False`` (or numba missing) leaves the kernel columns ``None``.
-    """
+    """One :func:`_bench_one` row per size (the same random states for every method); ``kernels=False`` (or numba
+    missing) leaves the kernel columns ``None``."""
     rng = np.random.default_rng(seed)
-    use = kernels and numba_available()
-    return [_bench_one(n, repeats, min_time, loop_max, rng, use) for n in sizes]
-
-
-@dataclass(frozen=True)
-class Startup:
-    """Wall times of fresh processes [s] (median of ``repeats``).
-
-    Attributes:
-        import_s: ``python -c "import amigo_gym"``.
-        python_s: ``python -c "pass"`` (the interpreter alone), for reference.
-        kernel_cold_s: import, ``gym.make_vec("AmigoBot-v0", num_envs=4)`` (the compiled v0 kernel), reset and
-            the first step, with an empty numba cache (compiles).
-        kernel_warm_s: the same with the cache the cold run wrote (a second process).
-        v1_cold_s: import, ``gym.make("AmigoBot-v1")`` (the compiled v1 step), reset and the first step, with an
-            empty numba cache.
-        v1_warm_s: the same, second process.
-        numba_import_s: ``python -c "import amigo_gym, numba"`` (what loading numba adds to the import).
-        numpy_first_s: import, ``gym.make_vec("AmigoBot-v0", num_envs=4, kernel="numpy")`` (the reference, what
-            runs without numba), reset and the first step.
-        v1_numpy_first_s: import, ``gym.make("AmigoBot-v1", kernel="numpy")``, reset and the first step.
-    """
-
-    import_s: float
-    python_s: float
-    kernel_cold_s: float | None
-    kernel_warm_s: float | None
-    v1_cold_s: float | None = None
-    v1_warm_s: float | None = None
-    numba_import_s: float | None = None
-    numpy_first_s: float | None = None
-    v1_numpy_first_s: float | None = None
+    return [_bench_one(n, repeats, min_time, loop_max, rng, kernels and numba_available()) for n in sizes]
 
 
 _FIRST_STEP = (
@@ -276,54 +180,62 @@ def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
     return statistics.median(colds), statistics.median(warms)
 
 
-def bench_startup(repeats: int = 3) -> Startup:
-    """Time fresh processes: the import, and the first compiled steps (v0 vector, v1 single) from an empty then a
-    filled numba cache."""
-    py = statistics.median(_wall("pass") for _ in range(repeats))
-    imp = statistics.median(_wall("import amigo_gym") for _ in range(repeats))
-    first = statistics.median(_wall(_numpy_route(_FIRST_STEP)) for _ in range(repeats))
-    first1 = statistics.median(_wall(_numpy_route(_FIRST_STEP_V1)) for _ in range(repeats))
-    if not numba_available():
-        return Startup(imp, py, None, None, numpy_first_s=first, v1_numpy_first_s=first1)
-    with_numba = statistics.median(_wall("import amigo_gym, numba") for _ in range(repeats))
-    cold, warm = _cold_warm(_FIRST_STEP, repeats)
-    cold1, warm1 = _cold_warm(_FIRST_STEP_V1, repeats)
-    return Startup(imp, py, cold, warm, cold1, warm1, with_numba, first, first1)
+#: the start-up rows: key of :func:`bench_startup`'s result, label
+STARTUP_ROWS = (
+    ("python_s", 'python -c "pass"'),
+    ("import_s", 'python -c "import amigo_gym"'),
+    ("numba_import_s", 'python -c "import amigo_gym, numba"'),
+    ("numpy_first_s", "import + first v0 vector step, kernel=numpy (no numba)"),
+    ("kernel_cold_s", "import + first v0 vector step (kernel), empty numba cache"),
+    ("kernel_warm_s", "the same, second process (cached; target < 1)"),
+    ("v1_cold_s", "import + first AmigoBot-v1 step (compiled), empty numba cache"),
+    ("v1_warm_s", "the same, second process (cached; target < 1)"),
+    ("v1_numpy_first_s", "import + first AmigoBot-v1 step, kernel=numpy"),
+)
 
 
-def _fmt(x: float | None, spec: str = ".3g") -> str:
-    return "-" if x is None else format(x, spec)
+def bench_startup(repeats: int = 3) -> dict[str, float | None]:
+    """Wall times of fresh processes [s] (median of ``repeats``), by the keys of :data:`STARTUP_ROWS`: the interpreter
+    alone, ``import amigo_gym`` (and with numba), and import plus the first step (``gym.make_vec("AmigoBot-v0",
+    num_envs=4)``, ``gym.make("AmigoBot-v1")``) of the reference (``kernel="numpy"``) and of the compiled kernel with
+    an empty numba cache (``_cold_s``: compiles) and with the cache that run wrote (``_warm_s``); ``None`` without
+    numba."""
+
+    def median(code: str) -> float:
+        return statistics.median(_wall(code) for _ in range(repeats))
+
+    out: dict[str, float | None] = {
+        "import_s": median("import amigo_gym"),
+        "python_s": median("pass"),
+        "numpy_first_s": median(_numpy_route(_FIRST_STEP)),
+        "v1_numpy_first_s": median(_numpy_route(_FIRST_STEP_V1)),
+    }
+    out |= dict.fromkeys(("kernel_cold_s", "kernel_warm_s", "v1_cold_s", "v1_warm_s", "numba_import_s"))
+    if numba_available():
+        out["kernel_cold_s"], out["kernel_warm_s"] = _cold_warm(_FIRST_STEP, repeats)
+        out["v1_cold_s"], out["v1_warm_s"] = _cold_warm(_FIRST_STEP_V1, repeats)
+        out["numba_import_s"] = median("import amigo_gym, numba")
+    return out
 
 
-def format_table(rows: Sequence[Row], startup: Startup | None = None, threads: int | None = None) -> str:
+def format_table(
+    rows: Sequence[Row], startup: dict[str, float | None] | None = None, threads: int | None = None
+) -> str:
     """Markdown table of env-steps per second and ratios (and of the start-up times, if measured)."""
     head = (
-        "| N | transition [steps/s] | step_columns [steps/s] | step_pose [steps/s] | Euler peer [steps/s] "
+        "N | transition [steps/s] | step_columns [steps/s] | step_pose [steps/s] | Euler peer [steps/s] "
         f"| Python loop [steps/s] | kernel [steps/s] | kernel, {threads or '-'} threads [steps/s] "
-        "| step_pose/Euler | step_pose/loop | kernel/step_columns |"
+        "| step_pose/Euler | step_pose/loop | kernel/step_columns"
     )
-    lines = [head, "|" + "---:|" * 11]
-    for r in rows:
-        lines.append(
-            f"| {r.n} | {r.transition:.3g} | {r.columns:.3g} | {r.step_pose:.3g} | {r.euler:.3g} | {_fmt(r.loop)} | "
-            f"{_fmt(r.kernel)} | {_fmt(r.kernel_par)} | "
-            f"{r.ratio_euler:.2f} | {_fmt(r.ratio_loop, '.3g')} | {_fmt(r.ratio_kernel, '.1f')} |"
-        )
+    cells = [
+        f"{r['n']} | " + " | ".join(fmt(r[m]) for m in METHODS) + f" | {r['step_pose'] / r['euler']:.2f} | "
+        + fmt(None if r["loop"] is None else r["step_pose"] / r["loop"]) + f" | {fmt(r['ratio_kernel'], '.1f')}"
+        for r in rows
+    ]  # fmt: skip
+    lines = md_table(head, cells, first="---:")
     if startup is not None:
-        lines += [
-            "",
-            "| fresh process | wall time [s] |",
-            "|---|---:|",
-            f'| python -c "pass" | {startup.python_s:.3f} |',
-            f'| python -c "import amigo_gym" | {startup.import_s:.3f} |',
-            f'| python -c "import amigo_gym, numba" | {_fmt(startup.numba_import_s, ".3f")} |',
-            f"| import + first v0 vector step, kernel=numpy (no numba) | {_fmt(startup.numpy_first_s, '.3f')} |",
-            f"| import + first v0 vector step (kernel), empty numba cache | {_fmt(startup.kernel_cold_s, '.3f')} |",
-            f"| the same, second process (cached; target < 1) | {_fmt(startup.kernel_warm_s, '.3f')} |",
-            f"| import + first AmigoBot-v1 step (compiled), empty numba cache | {_fmt(startup.v1_cold_s, '.3f')} |",
-            f"| the same, second process (cached; target < 1) | {_fmt(startup.v1_warm_s, '.3f')} |",
-            f"| import + first AmigoBot-v1 step, kernel=numpy | {_fmt(startup.v1_numpy_first_s, '.3f')} |",
-        ]
+        cells = [f"{label} | {fmt(startup[key], '.3f')}" for key, label in STARTUP_ROWS]
+        lines += ["", *md_table("fresh process | wall time [s]", cells)]
     return "\n".join(lines)
 
 
@@ -375,20 +287,15 @@ def run(s: CoreSettings) -> int:
             numba.set_num_threads(s.threads)
         threads = int(numba.get_num_threads())
     print(f"{machine_line()}; median of {repeats} repeats", flush=True)
-    print(f"{PROG}: sizes {sizes}", file=sys.stderr, flush=True)
-    rows = bench(sizes, repeats, min_time, s.loop_max, kernels=not s.skip_kernel)
+    say(f"{PROG}: sizes {sizes}")
+    rows = bench(sizes, repeats, min_time, s.loop_max, not s.skip_kernel)
     startup = None
     if not s.skip_startup:
-        print(f"{PROG}: start-up of fresh processes", file=sys.stderr, flush=True)
+        say(f"{PROG}: start-up of fresh processes")
         startup = bench_startup(1 if s.quick else 3)
     print(format_table(rows, startup, threads))
     if s.json is not None:
-        doc = {
-            "rows": [{**asdict(r), "ratio_kernel": r.ratio_kernel} for r in rows],
-            "threads": threads,
-            "startup": None if startup is None else asdict(startup),
-        }
-        atomic_write_json(s.json, doc)
+        atomic_write_json(s.json, {"rows": rows, "threads": threads, "startup": startup})
     return 0
 
 

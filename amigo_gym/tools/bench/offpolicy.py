@@ -7,13 +7,13 @@ The algorithms, the two configurations and the rates: docs/performance.md, "Refe
 from __future__ import annotations
 
 import importlib
-import time
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from amigo_gym.data import hyperparams_dir
+from amigo_gym.tools.bench import clock, rates
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.hyperparams import load_hyperparams
 
@@ -111,43 +111,32 @@ def bench_offpolicy(
     hp = offpolicy_config(algo, config)
     torch.set_num_threads(threads)
     n_envs = int(hp.get("n_envs", 1))
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0 = clock()
     venv = _venv(n_envs, seed)
     model = make_model(algo, hp, venv, seed)
     model.learn(total_timesteps=int(hp["learning_starts"]))  # warm-up: random actions, no update
     if pre_steps > 0:
         model.learn(total_timesteps=pre_steps, reset_num_timesteps=False)
-    t1, c1 = time.perf_counter(), time.process_time()
-    n1, g1 = int(model.num_timesteps), int(model._n_updates)
+    (t1, c1), n1, g1 = clock(), int(model.num_timesteps), int(model._n_updates)
     model.learn(total_timesteps=steps, reset_num_timesteps=False)
-    t2, c2 = time.perf_counter(), time.process_time()
+    (t2, c2), n, g = clock(), int(model.num_timesteps), int(model._n_updates)
     venv.close()
-    n, g = int(model.num_timesteps), int(model._n_updates)
-    lw, lc = t2 - t1, c2 - c1
     train_freq = hp["train_freq"][0] if isinstance(hp["train_freq"], list | tuple) else hp["train_freq"]
     cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in hp.items()} | {
         "net_arch": [64, 64],
         "gradient_steps_per_env_step": round(float(hp["gradient_steps"]) / (float(train_freq) * n_envs), 4),
     }
-    return {
-        "algo": algo,
-        "env_steps": n,
-        "grad_steps": g,
-        "wall_s": round(t2 - t0, 2),
-        "cpu_s": round(c2 - c0, 2),
-        "sps": round(n / (t2 - t0), 1),
-        "sps_cpu": round(n / max(c2 - c0, 1e-9), 1),
-        "warmup_wall_s": round(t1 - t0, 2),
-        "loop_env_steps": n - n1,
-        "loop_grad_steps": g - g1,
-        "loop_wall_s": round(lw, 2),
-        "loop_cpu_s": round(lc, 2),
-        "sps_loop": round((n - n1) / max(lw, 1e-9), 1),
-        "sps_loop_cpu": round((n - n1) / max(lc, 1e-9), 1),
-        "gsps_loop": round((g - g1) / max(lw, 1e-9), 1),
-        "gsps_loop_cpu": round((g - g1) / max(lc, 1e-9), 1),
-        "config": cfg,
-    }
+    whole = {"algo": algo, "env_steps": n, "grad_steps": g, "wall_s": round(t2 - t0, 2), "cpu_s": round(c2 - c0, 2)}
+    loop = {"loop_env_steps": n - n1, "loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2)}
+    loop["loop_cpu_s"] = round(c2 - c1, 2)
+    return (
+        whole
+        | rates("sps", n, t2 - t0, c2 - c0)
+        | {"warmup_wall_s": round(t1 - t0, 2), **loop}
+        | rates("sps_loop", n - n1, t2 - t1, c2 - c1)
+        | rates("gsps_loop", g - g1, t2 - t1, c2 - c1)
+        | {"config": cfg}
+    )
 
 
 class DeterministicPolicy:

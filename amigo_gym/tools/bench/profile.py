@@ -24,8 +24,8 @@ from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 from amigo_gym.model.params import EnvParams, check_range
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
-from amigo_gym.tools.bench.core import kernel_stepper, measure_many
-from amigo_gym.tools.bench.env import _single_stepper, _vector_stepper
+from amigo_gym.tools.bench import md_table, measure_many, stepper
+from amigo_gym.tools.bench.core import kernel_stepper
 from amigo_gym.tools.options import run_command
 
 PROG = "python -m amigo_gym.tools.bench.profile"
@@ -59,10 +59,9 @@ def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[flo
 
 
 def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float, int]]) -> str:
+    cells = [f"`{name}` | {100 * share:.1f} % | {calls / steps:.3g}" for name, share, calls in rows]
     out = [f"### {title}: {steps} steps, {1e6 * total / steps:.1f} us per step under cProfile", ""]
-    out += ["| function | own time | calls per step |", "|---|---:|---:|"]
-    out += [f"| `{name}` | {100 * share:.1f} % | {calls / steps:.3g} |" for name, share, calls in rows]
-    return "\n".join(out)
+    return "\n".join(out + md_table("function | own time | calls per step", cells))
 
 
 def _gap_row(n: int, repeats: int, min_time: float) -> str:
@@ -76,14 +75,14 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
     fns = {
         "kernel": kernel,
         "fresh": kernel,
-        "quiet": _vector_stepper(quiet, 0),
-        "bench": _vector_stepper(bench, 0),
-        "cart": _vector_stepper(CartPoleVectorEnv(num_envs=n), 0),
+        "quiet": stepper(quiet, 0),
+        "bench": stepper(bench, 0),
+        "cart": stepper(CartPoleVectorEnv(num_envs=n), 0),
     }
     t = measure_many(fns, repeats, min_time)
     c = t["cart"]
     cells = " | ".join(f"{1e6 * t[k]:.0f} ({c / t[k]:.2f})" for k in ("kernel", "fresh", "quiet", "bench"))
-    return f"| {n} | {cells} | {1e6 * c:.0f} |"
+    return f"{n} | {cells} | {1e6 * c:.0f}"
 
 
 def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
@@ -130,9 +129,9 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     }
     t = measure_many(fns, repeats, min_time)
     ref = t["Pendulum `gym.make` step"]
-    lines = ["| part | [us] | / Pendulum step |", "|---|---:|---:|"]
-    lines += [f"| {k} | {1e6 * v:.1f} | {v / ref:.2f} |" for k, v in t.items()]
-    return "\n".join(lines)
+    return "\n".join(
+        md_table("part | [us] | / Pendulum step", [f"{k} | {1e6 * v:.1f} | {v / ref:.2f}" for k, v in t.items()])
+    )
 
 
 def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
@@ -142,10 +141,10 @@ def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
     "No episode ends": ``termination_distance=10``, ``max_episode_steps=None``. Needs numba.
     """
     head = (
-        "| N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
-        "| env.step, random actions (benchmark) | CartPoleVectorEnv |"
+        "N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
+        "| env.step, random actions (benchmark) | CartPoleVectorEnv"
     )
-    return "\n".join([head, "|---:|---:|---:|---:|---:|---:|", *(_gap_row(n, repeats, min_time) for n in sizes)])
+    return "\n".join(md_table(head, (_gap_row(n, repeats, min_time) for n in sizes), first="---:"))
 
 
 def libm(n: int = 100_000, seed: int = 0) -> str:
@@ -155,12 +154,12 @@ def libm(n: int = 100_000, seed: int = 0) -> str:
     g = np.random.default_rng(seed)
     x = g.uniform(-10.0, 10.0, n)
     pos = g.uniform(0.0, 20.0, n) + 1e-300
-    rows = ["| function | arguments | numpy != C library |", "|---|---:|---:|"]
+    rows = []
     for name, args in (("sin", x), ("cos", x), ("tan", x), ("exp", x), ("log", pos)):
         ours = np.array([getattr(math, name)(v) for v in args.tolist()])
         theirs = getattr(np, name)(args)
-        rows.append(f"| `{name}` | {n} | {int(np.count_nonzero(ours.view(np.int64) != theirs.view(np.int64)))} |")
-    return "\n".join(rows)
+        rows.append(f"`{name}` | {n} | {int(np.count_nonzero(ours.view(np.int64) != theirs.view(np.int64)))}")
+    return "\n".join(md_table("function | arguments | numpy != C library", rows))
 
 
 @dataclass(frozen=True)
@@ -199,13 +198,13 @@ def run(s: ProfileSettings) -> int:
         if getattr(s, flag):
             print(table())
             return 0
-    total, rows = profile_steps(_single_stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
+    total, rows = profile_steps(stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
     print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
     for n in s.sizes:
         steps = max(20, s.steps // max(1, n // 64))
         kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
         envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
-        total, rows = profile_steps(_vector_stepper(envs, 0), steps, s.top)
+        total, rows = profile_steps(stepper(envs, 0), steps, s.top)
         name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if s.kernel is None else f", kernel={s.kernel}")
         print(_table(name, steps, total, rows), end="\n\n")
     return 0

@@ -2,7 +2,7 @@
 
 At ``--n`` robots on ``--path``, with and without rendering (same seeds and actions): the growth of the resident memory
 [MiB] over ``--steps`` steps (each in a fresh subprocess; target <= 20 MiB) and the step-time ratio
-(:func:`amigo_gym.tools.bench.core.measure_many`; target <= 1.1). ``--json FILE`` writes them. The figures:
+(:func:`amigo_gym.tools.bench.measure_many`; target <= 1.1). ``--json FILE`` writes them. The figures:
 docs/amigobot_v1.md."""
 
 from __future__ import annotations
@@ -18,8 +18,7 @@ from typing import Any, Literal
 
 from amigo_gym.envs import AmigoBotV1VectorEnv
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench.core import measure_many
-from amigo_gym.tools.bench.env import _vector_stepper
+from amigo_gym.tools.bench import stepper, time_envs
 from amigo_gym.tools.options import cli, run_command
 
 PROG = "python -m amigo_gym.tools.bench.render_trail"
@@ -47,7 +46,7 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
     With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them.
     """
     env = _env(n, path, render=render)
-    step = _vector_stepper(env, 0)  # reset, random actions (the same in both processes)
+    step = stepper(env, 0)  # reset, random actions (the same in both processes)
     gc.collect()
     first = _rss()
     for _ in range(steps):
@@ -64,10 +63,7 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
 
 def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float = 0.5) -> dict[str, float]:
     """Median time of one ``step`` [s] with and without ``render_mode`` (interleaved repeats), and their ratio."""
-    envs = {"plain": _env(n, path, render=False), "rgb_array": _env(n, path, render=True)}
-    t = measure_many({name: _vector_stepper(env, 0) for name, env in envs.items()}, repeats, min_time)
-    for env in envs.values():
-        env.close()
+    t = time_envs({"plain": _env(n, path, render=False), "rgb_array": _env(n, path, render=True)}, repeats, min_time)
     return {"step_s": t["plain"], "step_render_s": t["rgb_array"], "ratio": t["rgb_array"] / t["plain"]}
 
 

@@ -10,7 +10,6 @@ import os
 import platform
 import sys
 import tempfile
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +19,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.params import check_range
+from amigo_gym.tools.bench import clock, rates
 from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.tools.machine import cpu_model, simd_level
 from amigo_gym.tools.options import run_command
@@ -45,19 +45,16 @@ def bench_fastppo(
                            "env_threads": env_threads, **overrides, "eval_every": 10**10,
                            "checkpoint_every": 10**10})  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
-        t0, c0 = time.perf_counter(), time.process_time()
+        t0, c0 = clock()
         rec = train(s, Path(tmp) / "run", log=None, evaluate_runs=False)
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    n = int(rec["timesteps"])
+        (t1, c1), n = clock(), int(rec["timesteps"])
     keys = ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden", "env_threads", "device")
-    out = _result(n, wall, cpu, {k: getattr(s, k) for k in keys})
+    out = _result(n, t1 - t0, c1 - c0, {k: getattr(s, k) for k in keys})
     out |= {k: rec[k] for k in ("device", "device_name", "torch_threads", "numba_threads")}
     split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
-    out["cpu_s_rollout"], out["cpu_s_update"] = split["rollout"], split["update"]
-    out["loop_wall_s"] = split["loop_wall"]
+    out |= {"cpu_s_rollout": split["rollout"], "cpu_s_update": split["update"], "loop_wall_s": split["loop_wall"]}
     # steady state: the training iterations only, without building the env, the first resets and the final save
-    out["sps_loop"] = round(n / max(split["loop_wall"], 1e-9), 1)
-    out["sps_loop_cpu"] = round(n / max(split["rollout"] + split["update"], 1e-9), 1)
+    out |= rates("sps_loop", n, split["loop_wall"], split["rollout"] + split["update"])
     w = rec["wall_s_this_call"]
     out["env_share"] = round(w["env"] / max(w["loop"], 1e-9), 3)  # the learner's: 1 - env_share
     return out
@@ -69,8 +66,7 @@ def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, A
         "env_steps": n,
         "wall_s": round(wall, 2),
         "cpu_s": round(cpu, 2),
-        "sps": round(n / wall, 1),
-        "sps_cpu": round(n / cpu, 1),
+        **rates("sps", n, wall, cpu),
         "config": cfg,
     }
 
@@ -83,7 +79,7 @@ def bench_sb3(
     from stable_baselines3 import PPO
 
     torch.set_num_threads(threads)
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0 = clock()
     venv = _venv(n_envs, seed)
     model = PPO(
         "MlpPolicy",
@@ -99,11 +95,10 @@ def bench_sb3(
         verbose=0,
     )
     model.learn(total_timesteps=steps)
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    t1, c1 = clock()
     venv.close()
-    n = int(model.num_timesteps)
     cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
-    return _result(n, wall, cpu, cfg) | {"device": "cpu", "device_name": cpu_model()}
+    return _result(int(model.num_timesteps), t1 - t0, c1 - c0, cfg) | {"device": "cpu", "device_name": cpu_model()}
 
 
 def _show(name: str, r: dict[str, Any]) -> None:

@@ -40,121 +40,64 @@ class Command:
 #: amigo_gym.io.TRUST_ENV (this module imports the standard library only)
 TRUST_ENV = "AMIGO_GYM_TRUST_UNVERIFIED"
 
-_TRAIN = ("torch", "stable_baselines3", "yaml", "matplotlib", "filelock")
+_TRAIN = "train: torch stable_baselines3 yaml matplotlib filelock"
 
-COMMANDS: dict[str, Command] = {
-    "inverse": Command("amigo_gym.tools.cli.inverse:main", "analytic inverse solution of H on a path, as CSV"),
-    "paper": Command(
-        "amigo_gym.tools.analysis.paper_figures:main",
-        "the paper's manoeuvre: Fig. 2/3-style plots and CSV",
-        extra="plot",
-        modules=("matplotlib",),
-    ),
-    "derive": Command(
-        "amigo_gym.tools.symbolic:main",
-        "symbolic D-H derivation; print the equations (LaTeX)",
-        extra="symbolic",
-        modules=("sympy",),
-    ),
-    "train": Command(
-        "amigo_gym.tools.training.train:main",
-        "train a PPO/SAC/TD3 baseline on AmigoBot-v0",
-        extra="train",
-        modules=("torch", "stable_baselines3", "yaml", "tqdm", "rich"),
-    ),
-    "evaluate": Command(
-        "amigo_gym.tools.training.evaluate:main",
-        "evaluate analytic and trained agents on the fixed protocol",
-        extra="train",
-        modules=_TRAIN,
-    ),
-    "verify": Command(
-        "amigo_gym.tools.analysis.verify:main",
-        "exactness checks against references, PASS/FAIL (exit 1 on a FAIL)",
-        extra="symbolic",
-        modules=("sympy",),
-        unless=("--quick",),
-    ),
-    "convergence": Command(
-        "amigo_gym.tools.analysis.convergence:main", "convergence rate of the analytic policy vs its gain"
-    ),
-    "compare": Command(
-        "amigo_gym.tools.training.compare:main",
-        "main job: pretrained agents vs analytic solution, report + plots",
-        extra="train",
-        modules=_TRAIN,
-    ),
-    "benchmark": Command(
-        "amigo_gym.tools.training.benchmark:main",
-        "scenario suite x agents x seeds: IQM, bootstrap CIs, plots",
-        extra="train",
-        modules=_TRAIN,
-    ),
-    "curves": Command(
-        "amigo_gym.tools.training.curves:main",
-        "learning curves over training seeds (eval.json), time to a tracking threshold",
-        extra="train",
-        modules=("tqdm", "matplotlib"),
-    ),
-    "sweep": Command(
-        "amigo_gym.tools.training.sweep:main",
-        "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL",
-        extra="bench",
-        modules=("optuna", "torch", "stable_baselines3", "yaml"),
-    ),
-    "replay": Command(
-        "amigo_gym.tools.analysis.replay:main_replay",
-        "replay a robot's log (CSV or ROS 2 bag) through the model: errors, plot",
-        extra="logs",
-        modules=("matplotlib",),
-    ),
-    "identify": Command(
-        "amigo_gym.tools.analysis.replay:main_identify",
-        "fit wheel radii, half track, delay to a robot's log: robot.json",
-        extra="logs",
-        modules=("matplotlib",),
-    ),
-    "train-fast": Command(
-        "amigo_gym.tools.training.fastppo:main",
-        "fast PPO (or residual on the analytic controller) over the native AmigoBot-v1 vector env",
-        extra="train",
-        modules=("torch",),
-    ),
-    "bench-train": Command(
-        "amigo_gym.tools.bench.train:main",
-        "training throughput: the fast PPO against SB3 PPO, same run",
-        extra="train",
-        modules=("torch", "stable_baselines3"),
-    ),
-    "bench-core": Command("amigo_gym.tools.bench.core:main", "benchmark the batched exact step"),
-    "bench-env": Command("amigo_gym.tools.bench.env:main", "benchmark the environment against peers"),
-    "gallery": Command(
-        "amigo_gym.tools.analysis.gallery:main",
-        "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)",
-        extra="render",
-        modules=("pygame", "matplotlib"),
-    ),
-}
+#: name, module under amigo_gym.tools (``:function``, default ``main``), "extra: the modules of it that the command
+#: imports" ("": none; "unless FLAG": the flag lifts the need), summary
+_TABLE = (
+    ("inverse", "cli.inverse", "", "analytic inverse solution of H on a path, as CSV"),
+    ("paper", "analysis.paper_figures", "plot: matplotlib", "the paper's manoeuvre: Fig. 2/3-style plots and CSV"),
+    ("derive", "symbolic", "symbolic: sympy", "symbolic D-H derivation; print the equations (LaTeX)"),
+    ("train", "training.train", "train: torch stable_baselines3 yaml tqdm rich",
+     "train a PPO/SAC/TD3 baseline on AmigoBot-v0"),
+    ("evaluate", "training.evaluate", _TRAIN, "evaluate analytic and trained agents on the fixed protocol"),
+    ("verify", "analysis.verify", "symbolic: sympy unless --quick",
+     "exactness checks against references, PASS/FAIL (exit 1 on a FAIL)"),
+    ("convergence", "analysis.convergence", "", "convergence rate of the analytic policy vs its gain"),
+    ("compare", "training.compare", _TRAIN, "main job: pretrained agents vs analytic solution, report + plots"),
+    ("benchmark", "training.benchmark", _TRAIN, "scenario suite x agents x seeds: IQM, bootstrap CIs, plots"),
+    ("curves", "training.curves", "train: tqdm matplotlib",
+     "learning curves over training seeds (eval.json), time to a tracking threshold"),
+    ("sweep", "training.sweep", "bench: optuna torch stable_baselines3 yaml",
+     "Optuna studies (hyperparameters, seed grids); SQLite or PostgreSQL"),
+    ("replay", "analysis.replay:main_replay", "logs: matplotlib",
+     "replay a robot's log (CSV or ROS 2 bag) through the model: errors, plot"),
+    ("identify", "analysis.replay:main_identify", "logs: matplotlib",
+     "fit wheel radii, half track, delay to a robot's log: robot.json"),
+    ("train-fast", "training.fastppo", "train: torch",
+     "fast PPO (or residual on the analytic controller) over the native AmigoBot-v1 vector env"),
+    ("bench-train", "bench.train", "train: torch stable_baselines3",
+     "training throughput: the fast PPO against SB3 PPO, same run"),
+    ("bench-core", "bench.core", "", "benchmark the batched exact step"),
+    ("bench-env", "bench.env", "", "benchmark the environment against peers"),
+    ("gallery", "analysis.gallery", "render: pygame matplotlib",
+     "pictures of every AmigoBot-v1 path family (docs/figures/v1_*.png)"),
+)  # fmt: skip
+
+
+def _command(target: str, needs: str, summary: str) -> Command:
+    extra, _, rest = needs.partition(":")
+    modules, _, unless = rest.partition(" unless ")
+    target = f"amigo_gym.tools.{target}" + ("" if ":" in target else ":main")
+    return Command(target, summary, extra or None, tuple(modules.split()), tuple(unless.split()))
+
+
+COMMANDS: dict[str, Command] = {name: _command(target, needs, summary) for name, target, needs, summary in _TABLE}
 
 #: optional top-level module -> the extra that installs it (for a module missing at run time)
 EXTRA_OF_MODULE: dict[str, str] = {
-    "torch": "train",
-    "stable_baselines3": "train",
-    "sb3_contrib": "train",
-    "filelock": "train",
-    "yaml": "train",
-    "tqdm": "train",
-    "rich": "train",
-    "tensorboard": "train",
-    "sympy": "symbolic",
-    "matplotlib": "plot",
-    "pygame": "render",
-    "moviepy": "video",
-    "nbclient": "notebook",
-    "nbformat": "notebook",
-    "optuna": "bench",
-    "psycopg2": "bench",
-    "rosbags": "logs",
+    module: extra
+    for extra, modules in (
+        ("train", "torch stable_baselines3 sb3_contrib filelock yaml tqdm rich tensorboard"),
+        ("symbolic", "sympy"),
+        ("plot", "matplotlib"),
+        ("render", "pygame"),
+        ("video", "moviepy"),
+        ("notebook", "nbclient nbformat"),
+        ("bench", "optuna psycopg2"),
+        ("logs", "rosbags"),
+    )
+    for module in modules.split()
 }
 
 

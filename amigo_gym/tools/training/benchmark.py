@@ -15,48 +15,36 @@ import sys
 import tempfile
 import time
 import zipfile
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
 from amigo_gym.data import pretrained_dir
-from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
-from amigo_gym.model.params import EnvParams
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.paths.points import cached_file_path, is_points_file
-from amigo_gym.policies.analytic import AnalyticPolicy
-from amigo_gym.policies.learned import FastPolicy
-from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import (
     RunLock,
-    check_pickle,
-    corrupt_errors,
     publish,
     remove_matching,
     verify_manifest,
-    verify_sha256,
 )
 from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training.curvature import cell_specs
-from amigo_gym.tools.training.evaluate import one_torch_thread
-from amigo_gym.tools.training.hyperparams import sb3_class
+from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, Unavailable, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable  # re-exported: an agent that cannot run
 from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
 
-ALGOS = ("ppo", "sac", "td3")
-#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
-FAST_ALGO = "fastppo"
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
 V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
-#: retired v1 generalists (no longer shipped, not benchmarked by default; labels only, so ``--agents ppo_v1=...``
-#: and older benchmark documents still read "SB3 PPO generalist"): the untuned SB3 references trained with v0's
-#: settings, superseded by :data:`V1_AGENTS` (docs/baselines.md, "Retired references"). Their zips are in git
-#: history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo agents/pretrained/v1/sac agents/pretrained/v1/td3``.
+#: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents still read "SB3 PPO generalist";
+#: docs/baselines.md, "Retired references")
 RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
@@ -119,25 +107,27 @@ def user_scenarios(
     return tuple(out)
 
 
-def _v0(name: str, desc: str, held_out: bool = False, max_steps: int = 400, **kw: Any) -> Scenario:
-    return Scenario(name, "AmigoBot-v0", kw, max_steps=max_steps, held_out=held_out, description=desc)
+def _v1(name: str, desc: str, held_out: bool = False, env_id: str = "AmigoBot-v1", **kw: Any) -> Scenario:
+    return protocol.cell(name, desc, env_id, held_out, seeds=tuple(range(100, 110)), version="1.0", **kw)
 
 
-def _v1(name: str, desc: str, held_out: bool = False, dt: float = 0.1, duration: float = 40.0, **kw: Any) -> Scenario:
-    kwargs = {"dt": dt, "randomize": "none", **kw}
-    return Scenario(name, "AmigoBot-v1", kwargs, max_steps=round(duration / dt), held_out=held_out, description=desc)
+def _v0(name: str, desc: str, held_out: bool = False, **kw: Any) -> Scenario:
+    return _v1(name, desc, held_out, "AmigoBot-v0", **kw)
 
 
 _WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
 _WHEELS_MINUS5 = {"r1": 0.0475, "r2": 0.0475, "l1": 0.114}
 _WHEELS_UNEQUAL = {"r1": 0.0525, "r2": 0.0475}
+_CIRCLE: dict[str, Any] = {"path": "circle", "speed": 0.2}
+_MIXED: dict[str, Any] = {"path": "mixed", "speed": (0.1, 0.4)}
 
+# fmt: off
 SUITE_1_0: tuple[Scenario, ...] = (
     # the paper's task on the exact v0 environment (the v0 specialists were trained on it)
     _v0("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s"),
-    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", held_out=True, speed=0.1),
-    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", held_out=True, speed=0.4),
-    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", held_out=True, dt=0.2, max_steps=200),
+    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", True, speed=0.1),
+    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", True, speed=0.4),
+    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", True, dt=0.2, max_steps=200),
     # circles: radii and both directions
     _v1("circle_r1_ccw", "paper circle on v1 (actuator limits)", path="circle", radius=1.0, direction=1, speed=0.2),
     _v1("circle_r0.5_ccw", "circle R 0.5 m, left", path="circle", radius=0.5, direction=1, speed=0.2),
@@ -147,81 +137,33 @@ SUITE_1_0: tuple[Scenario, ...] = (
     _v1("circle_v0.1", "circle R 1 m at 0.1 m/s", path="circle", radius=1.0, speed=0.1),
     _v1("circle_v0.4", "circle R 1 m at 0.4 m/s", path="circle", radius=1.0, speed=0.4),
     _v1("circle_v_random", "circle R 1 m, speed drawn in [0.1, 0.4]", path="circle", radius=1.0, speed=(0.1, 0.4)),
-    _v1(
-        "manoeuvre_trapezoid",
-        "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)",
-        True,
-        path="manoeuvre",
-        speed=0.2,
-        speed_profile="trapezoid",
-    ),
+    _v1("manoeuvre_trapezoid", "paper manoeuvre, start-cruise-brake at 0.2 m/s (held out)", True, path="manoeuvre",
+        speed=0.2, speed_profile="trapezoid"),
     # path families
     _v1("manoeuvre", "paper manoeuvre (straight, circle), 0.2 m/s (held out)", True, path="manoeuvre", speed=0.2),
     _v1("figure8", "figure-8, 0.2 m/s", path="figure8", speed=0.2),
     _v1("random_paths", "seeded random smooth paths, 0.2 m/s", path="random", speed=0.2),
-    _v1(
-        "random_paths_sharp",
-        "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
-        True,
-        path="random",
-        speed=0.2,
-        path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5},
-    ),
+    _v1("random_paths_sharp", "random paths of higher curvature (1.5 1/m, rate 1.5 1/m^2), 0.2 m/s (held out)",
+        True, path="random", speed=0.2, path_params={"max_curvature": 1.5, "max_curvature_rate": 1.5}),
     _v1("lane_change", "lane change, 0.3 m/s", path="lane_change", speed=0.3),
-    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", path="mixed", speed=(0.1, 0.4)),
+    _v1("mixed", "path family drawn per episode, speed in [0.1, 0.4]", **_MIXED),
     # control period
     _v1("circle_dt_0.05", "circle R 1 m, dt 0.05 s (held out)", True, dt=0.05, path="circle", radius=1.0, speed=0.2),
     _v1("circle_dt_0.2", "circle R 1 m, dt 0.2 s (held out)", True, dt=0.2, path="circle", radius=1.0, speed=0.2),
     # the robot is not the model
-    _v1(
-        "wheels_plus5",
-        "true wheel radii and track +5 % (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        true_robot=_WHEELS_PLUS5,
-    ),
-    _v1(
-        "wheels_minus5",
-        "true wheel radii and track -5 % (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        true_robot=_WHEELS_MINUS5,
-    ),
-    _v1(
-        "wheels_unequal",
-        "right wheel +5 %, left -5 % (held out)",
-        True,
-        path="figure8",
-        speed=0.2,
-        true_robot=_WHEELS_UNEQUAL,
-    ),
-    _v1(
-        "slip",
-        "wheel slip up to 5 % per step (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        randomize={"slip": (0.0, 0.05)},
-    ),
-    _v1(
-        "delay_0.1", "actuation delay 0.1 s (held out)", True, path="circle", speed=0.2, randomize={"delay": (0.1, 0.1)}
-    ),
+    _v1("wheels_plus5", "true wheel radii and track +5 % (held out)", True, **_CIRCLE, true_robot=_WHEELS_PLUS5),
+    _v1("wheels_minus5", "true wheel radii and track -5 % (held out)", True, **_CIRCLE, true_robot=_WHEELS_MINUS5),
+    _v1("wheels_unequal", "right wheel +5 %, left -5 % (held out)", True, path="figure8", speed=0.2,
+        true_robot=_WHEELS_UNEQUAL),
+    _v1("slip", "wheel slip up to 5 % per step (held out)", True, **_CIRCLE, randomize={"slip": (0.0, 0.05)}),
+    _v1("delay_0.1", "actuation delay 0.1 s (held out)", True, **_CIRCLE, randomize={"delay": (0.1, 0.1)}),
     _v1("delay_0.25", "actuation delay 0.25 s (held out)", True, path="figure8", randomize={"delay": (0.25, 0.25)}),
-    _v1(
-        "noise",
-        "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)",
-        True,
-        path="circle",
-        speed=0.2,
-        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2},
-    ),
-    _v1("mild", "'mild' randomisation on mixed paths", path="mixed", speed=(0.1, 0.4), randomize="mild"),
-    _v1(
-        "hard", "'hard' randomisation on mixed paths (held out)", True, path="mixed", speed=(0.1, 0.4), randomize="hard"
-    ),
+    _v1("noise", "measurement noise: 5 mm, 0.01 rad, 0.2 rad/s (held out)", True, **_CIRCLE,
+        randomize={"position_noise": 0.005, "heading_noise": 0.01, "wheel_rate_noise": 0.2}),
+    _v1("mild", "'mild' randomisation on mixed paths", **_MIXED, randomize="mild"),
+    _v1("hard", "'hard' randomisation on mixed paths (held out)", True, **_MIXED, randomize="hard"),
 )
+# fmt: on
 
 #: released suites by version (never edited)
 SUITES: dict[str, tuple[Scenario, ...]] = {"1.0": SUITE_1_0, protocol.VERSION: protocol.TEST}
@@ -232,95 +174,10 @@ QUICK_SCENARIOS: tuple[str, ...] = ("v0_paper_circle", "v0_speed_0.4", "circle_r
 
 def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps: int = 120) -> tuple[Scenario, ...]:
     """The ``--quick`` subset: :data:`QUICK_SCENARIOS` with at most ``episodes`` seeds and ``max_steps`` steps."""
-    return tuple(
-        replace(sc, seeds=sc.seeds[:episodes], max_steps=min(sc.max_steps, max_steps))
-        for sc in suite
-        if sc.name in QUICK_SCENARIOS
-    )
+    return tuple(sc.cut(episodes, max_steps) for sc in suite if sc.name in QUICK_SCENARIOS)
 
 
 # --------------------------------------------------------------------------- agents
-def _classical(name: str) -> Callable[[Any], Any]:
-    def make(env: Any) -> Any:
-        base = env.unwrapped
-        hook = getattr(base, "classical_policy", None)
-        if callable(hook):
-            return hook(name)
-        params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
-            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
-
-            if name == "analytic":
-                return AnalyticTrackingPolicy(params)
-            if name == "pure_pursuit":
-                return PurePursuitPolicy(params)
-            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
-        if not isinstance(params, EnvParams):
-            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
-        if name == "analytic":
-            return AnalyticPolicy(params)
-        if name == "analytic_ff":
-            return AnalyticPolicy(params, feedforward_only=True)
-        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
-
-    return make
-
-
-#: classical policies by name: built per scenario from the environment
-CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
-
-
-@dataclass
-class AgentSpec:
-    """One training seed of one agent: a classical policy (``path is None``) or an SB3 model zip."""
-
-    name: str
-    seed: int = 0
-    path: str | None = None
-    algo: str | None = None
-    manifest: dict[str, Any] | None = None
-    _model: Any = field(default=None, repr=False)
-
-    def instantiate(self, env: Any) -> Any:
-        """The agent for ``env`` (classical: built for it; SB3: loaded once, its observation space checked)."""
-        if self.path is None:
-            return CLASSICAL[self.name](env)
-        if self._model is None:
-            # checked before it is opened: the manifest's sha256; an SB3 zip (a pickle) must also be trusted
-            digest = (self.manifest or {}).get("sha256")
-            path, source = Path(self.path), str(Path(self.path).with_suffix(".json"))
-            if str(self.algo).startswith(FAST_ALGO):  # numpy weights and JSON: no code runs
-                if digest is not None:
-                    verify_sha256(path, str(digest), source)
-                self._model = FastPolicy.load(self.path)
-            else:
-                check_pickle(path, None if digest is None else str(digest), source)
-                with corrupt_errors(path, f"{str(self.algo).upper()} model"):
-                    self._model = sb3_class(str(self.algo)).load(self.path, device="cpu")
-        if str(self.algo).startswith(FAST_ALGO):
-            dim = self._model.builder.obs_dim
-            if getattr(env.observation_space, "shape", None) != (dim,):
-                raise Unavailable(f"observation shape {env.observation_space.shape} differs from the model's ({dim},)")
-            return self._model
-        want = getattr(self._model.observation_space, "shape", None)
-        got = getattr(env.observation_space, "shape", None)
-        if want != got:
-            raise Unavailable(f"observation shape {got} of the scenario differs from the model's {want}")
-        return self._model
-
-    def describe(self) -> dict[str, Any]:
-        """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
-        d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
-        if self.path is None:
-            d["kind"] = "classical"
-        else:
-            kind = "fastppo" if str(self.algo).startswith(FAST_ALGO) else "sb3"
-            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
-            if self.manifest is not None:
-                d["manifest"] = self.manifest
-        return d
-
-
 def _is_fast_model(path: Path) -> bool:
     """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
     try:
@@ -798,6 +655,14 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     save_figure(fig, path)
 
 
+def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
+    """Draw ``benchmark_scenarios.png`` (:func:`plot_scenarios`, the document's bootstrap seed) and
+    ``benchmark_profiles.png`` (:func:`plot_profiles`) into ``folder``; their names."""
+    plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+    plot_profiles(doc, folder / "benchmark_profiles.png")
+    return ["benchmark_scenarios.png", "benchmark_profiles.png"]
+
+
 #: the manifest naming a published set of benchmark outputs (in ``--out``)
 MANIFEST = "benchmark_manifest.json"
 #: names of the temporary files and folders a benchmark writes in ``--out`` (removed by the next run)
@@ -815,11 +680,9 @@ def write_outputs(
 ) -> list[Path]:
     """Publish the JSON, the Markdown and (``plots``) the two figures as one set; the paths written.
 
-    Every file is first written into a staging folder ``<out>/.staging-benchmark-*``; then the manifest
-    ``<out>/benchmark_manifest.json`` is removed, the files are moved to their places (``os.replace``) and a
-    new manifest naming each file (relative to ``out`` when inside it) with its sha256 is written atomically,
-    last (:func:`amigo_gym.tools.runs.publish`; :func:`verify_outputs` checks the set). Fault stages (tests):
-    ``publish:<file name>`` after each move.
+    Each file is written into a staging folder ``<out>/.staging-benchmark-*``, then moved into place with the
+    manifest ``<out>/benchmark_manifest.json`` written last (:func:`amigo_gym.tools.runs.publish`;
+    :func:`verify_outputs` checks the set).
     """
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
@@ -828,10 +691,7 @@ def write_outputs(
         atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
-            targets[out / "benchmark_scenarios.png"] = staging / "benchmark_scenarios.png"
-            targets[out / "benchmark_profiles.png"] = staging / "benchmark_profiles.png"
-            plot_scenarios(doc, staging / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
-            plot_profiles(doc, staging / "benchmark_profiles.png")
+            targets |= {out / name: staging / name for name in plot_all(doc, staging)}
         publish(targets, out, MANIFEST, command=doc.get("command"))
     finally:
         shutil.rmtree(staging, ignore_errors=True)
@@ -924,15 +784,20 @@ def main(argv: Sequence[str] | None = None) -> int:
                 size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
-        if a.curvature:
-            return _run_curvature(a, command)
-        scenarios = quick_suite(suite) if a.quick else suite
-        if a.path:
-            if a.scenarios:
-                raise ValueError("--path and --scenarios exclude each other")
-            scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
-            if a.quick:  # every path, shorter
-                scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
+        if a.curvature and (a.path or a.scenarios):
+            raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
+        if a.path and a.scenarios:
+            raise ValueError("--path and --scenarios exclude each other")
+        if a.curvature or a.path:
+            scenarios = (
+                curvature_scenarios(a.curvature_episodes)
+                if a.curvature
+                else user_scenarios(a.path or [], a.speed, a.feasibility, a.goal_tolerance, a.duration)
+            )
+            if a.quick:  # every cell, shorter
+                scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
+        else:
+            scenarios = quick_suite(suite) if a.quick else suite
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
             bad = [n for n in a.scenarios if n not in known]
@@ -942,51 +807,39 @@ def main(argv: Sequence[str] | None = None) -> int:
             scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
-        json_path = Path(a.json) if a.json else out / "benchmark.json"
-        md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
-            clean_temporaries(out)
-            doc = run_benchmark(
-                agents,
-                scenarios,
-                progress=a.progress,
-                reps=a.reps,
-                profile_reps=a.profile_reps,
-                bootstrap_seed=a.bootstrap_seed,
-                quick=a.quick,
-            )
-            doc["command"] = command
-            written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
-        print(markdown_report(doc), end="")
-        print("wrote " + ", ".join(map(str, written)))
+            if a.curvature:
+                doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
+                doc["command"] = command
+                written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
+                report = curvature.markdown_curvature(doc)
+            else:
+                clean_temporaries(out)
+                doc = run_benchmark(
+                    agents,
+                    scenarios,
+                    progress=a.progress,
+                    reps=a.reps,
+                    profile_reps=a.profile_reps,
+                    bootstrap_seed=a.bootstrap_seed,
+                    quick=a.quick,
+                )
+                doc["command"] = command
+                json_path = Path(a.json) if a.json else out / "benchmark.json"
+                md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
+                written = [str(p) for p in write_outputs(doc, out, json_path, md_path, plots=a.plots)]
+                report = markdown_report(doc)
+        print(report, end="")
+        print("wrote " + ", ".join(written))
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
 
 
 def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
-    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`: random paths up to the
-    feasible curvature at 0.1 and 0.4 m/s, ``episodes`` seeds each from 100), as scenarios; opt-in, not part of the
-    suite."""
-    return tuple(Scenario(**c) for c in cell_specs(episodes=episodes))
-
-
-def _run_curvature(a: BenchmarkSettings, command: str) -> int:
-    """``amigo-gym benchmark --curvature`` (:mod:`amigo_gym.tools.training.curvature`)."""
-    if a.path or a.scenarios:
-        raise ValueError("--curvature runs its own cells: it excludes --path and --scenarios")
-    scenarios = curvature_scenarios(a.curvature_episodes)
-    if a.quick:
-        scenarios = tuple(replace(sc, seeds=sc.seeds[:2], max_steps=min(sc.max_steps, 120)) for sc in scenarios)
-    agents = parse_agents(a.agents) if a.agents else default_agents()
-    out = Path(a.out)
-    with RunLock(out):
-        doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
-        doc["command"] = command
-        written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
-    print(curvature.markdown_curvature(doc), end="")
-    print("wrote " + ", ".join(written))
-    return 0
+    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`), ``episodes`` each; opt-in,
+    not part of the suite."""
+    return cell_specs(episodes=episodes)
 
 
 if __name__ == "__main__":

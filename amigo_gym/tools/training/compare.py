@@ -25,24 +25,23 @@ from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail earl
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training.benchmark import (
-    CLASSICAL,
     RETIRED_V1_AGENTS,
     V1_AGENTS,
-    AgentSpec,
     failed_episodes,
     parse_agents,
+    plot_all,
     quick_suite,
     run_benchmark,
 )
 from amigo_gym.tools.training.evaluate import (
+    AgentSpec,
     EvalProtocol,
     default_agents,
     evaluate_agents,
     find_models,
-    load_model,
     markdown_table,
     one_torch_thread,
-    v0_name,
+    trained_agents,
     write_outputs,
 )
 from amigo_gym.tools.training.hyperparams import load_hyperparams
@@ -109,6 +108,11 @@ def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed")
     return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
 
 
+def _met(best: Mapping[str, Any]) -> tuple[str, ...]:
+    """Whether ``best`` meets each of :data:`TARGETS` (H error, wheel-rate deviation): ``"met"`` or ``"NOT met"``."""
+    return tuple("met" if best[k] <= TARGETS[k] else "NOT met" for k in ("h_rms_m", "wheel_rate_dev_rms"))
+
+
 def report_markdown(doc: dict[str, Any]) -> str:
     """The Markdown report of a compare run (``doc`` as written to ``results.json``)."""
     proto = doc["protocol"]
@@ -127,16 +131,14 @@ def report_markdown(doc: dict[str, Any]) -> str:
     ]
     best = doc.get("best_learned")
     if best:
-        ok_h = best["h_rms_m"] <= TARGETS["h_rms_m"]
-        ok_w = best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"]
+        ok_h, ok_w = _met(best)
         lines += [
             "## Targets (best learned agent, perturbed starts)",
             "",
             f"- agent: **{best['agent']}**",
-            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): "
-            + ("met" if ok_h else "NOT met"),
+            f"- H RMS error: {best['h_rms_m'] * 1e3:.3f} mm (target <= {TARGETS['h_rms_m'] * 1e3:g} mm): {ok_h}",
             f"- RMS wheel-rate deviation: {best['wheel_rate_dev_rms']:.4f} rad/s (target <= "
-            f"{TARGETS['wheel_rate_dev_rms']} rad/s): " + ("met" if ok_w else "NOT met"),
+            f"{TARGETS['wheel_rate_dev_rms']} rad/s): {ok_w}",
         ]
         rec = doc.get("training", {}).get(best["agent"])
         if rec:
@@ -200,8 +202,7 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
     ]
     best = doc.get("best_learned")
     if best:
-        ok_h = "met" if best["h_rms_m"] <= TARGETS["h_rms_m"] else "NOT met"
-        ok_w = "met" if best["wheel_rate_dev_rms"] <= TARGETS["wheel_rate_dev_rms"] else "NOT met"
+        ok_h, ok_w = _met(best)
         lines.append(
             f"Best learned agent: {best['agent']}, {best['h_rms_m'] * 1e3:.3f} mm (target <= "
             f"{TARGETS['h_rms_m'] * 1e3:g} mm: {ok_h}), {best['wheel_rate_dev_rms']:.3f} rad/s (target <= "
@@ -236,37 +237,18 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
 
 
 def quick_benchmark(
-    agents: Mapping[str, Any],
-    sources: Mapping[str, tuple[Path, str, int]],
-    generalists: Path | None = None,
-    *,
-    progress: bool = False,
-    reps: int = 10_000,
-    profile_reps: int = 2_000,
+    specs: Sequence[AgentSpec], generalists: Path | None = None, *, progress: bool = False
 ) -> dict[str, Any]:
-    """The benchmark's ``--quick`` subset on compare's agents (module docstring, step 3): its JSON document.
-
-    Args:
-        agents: compare's agents by name; the classical ones (``analytic``, ``analytic_ff``) are rebuilt
-            per scenario by the benchmark, the others are used as loaded.
-        sources: ``{name: (model zip, algo, training seed)}`` of the loaded models (an agent without one
-            is left out).
-        generalists: a folder of AmigoBot-v1 generalists (``<models>/v1``), if any: its ``<folder>/*.zip`` for
-            every folder of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``.
-    """
-    specs: list[AgentSpec] = []
-    for name, agent in agents.items():
-        if name in CLASSICAL:
-            specs.append(AgentSpec(name))
-        elif name in sources:
-            path, algo, seed = sources[name]
-            specs.append(AgentSpec(name, seed, str(path), algo, None, _model=agent))
+    """The benchmark's ``--quick`` subset on compare's agents ``specs`` (the models as loaded) and, from a folder of
+    AmigoBot-v1 generalists (``<models>/v1``), its ``<folder>/*.zip`` for every folder of
+    :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``: its JSON document."""
+    specs = list(specs)
     if generalists is not None:
         for folder in V1_AGENTS:
             if any((generalists / folder).glob("*.zip")):
                 # each checked (and an SB3 zip trusted) before it is loaded: AgentSpec.instantiate
                 specs += parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
-    doc = run_benchmark(specs, quick_suite(), progress=progress, reps=reps, profile_reps=profile_reps, quick=True)
+    doc = run_benchmark(specs, quick_suite(), progress=progress, quick=True)
     doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
     return doc
 
@@ -308,12 +290,6 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
     short = ("algo", "timesteps", "seed")
     reasons = [f"{k} {recorded[k]!r} != {request[k]!r}" if k in short else f"{k} differ" for k in differ]
     return ", ".join(reasons) if reasons else None
-
-
-def publish(staging: Path, out: Path) -> dict[str, str]:
-    """Move every file of ``staging`` into ``out`` as one set, manifest last (module docstring,
-    :func:`amigo_gym.tools.runs.publish`); the manifest's ``{file name: sha256}``."""
-    return runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
@@ -377,16 +353,13 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
     proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
     agents = default_agents(EnvParams(), proto.analytic_gain)
+    specs = [AgentSpec(name) for name in agents]  # the benchmark builds the classical ones per scenario
     training: dict[str, Any] = {}
-    sources: dict[str, tuple[Path, str, int]] = {}  # name -> (zip, algo, training seed), for the benchmark
     if models is not None:
         say(f"loading pretrained agents from {models}")
-        refs = find_models(models)
-        agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
-        training.update({v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None})
-        for r in refs:
-            rec_seed = training.get(v0_name(r.name), {}).get("seed")
-            sources[v0_name(r.name)] = (r.model, r.algo, rec_seed if isinstance(rec_seed, int) else 0)
+        found, training = trained_agents(models)
+        specs += found
+        agents.update({spec.name: spec.load() for spec in found})
     if train_steps > 0:
         from amigo_gym.tools.training.train import Settings, train
 
@@ -418,8 +391,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         rec = training["ppo_fresh"]
         took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
         print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
-        agents["ppo_fresh"] = load_model(find_models(run_dir)[0])  # checked against run.json, as every model
-        sources["ppo_fresh"] = (run_dir / "model.zip", "ppo", seed)
+        trained = find_models(run_dir)[0]
+        agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
+        specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
     say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
     results, trajs = evaluate_agents(agents, proto)
     best = best_learned(results)
@@ -431,19 +405,17 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
             "quick benchmark (amigo-gym benchmark --quick) on these agents"
             + (f" and {generalists}" if generalists else "")
         )
-        bench = quick_benchmark(agents, sources, generalists, progress=progress)
+        bench = quick_benchmark(specs, generalists, progress=progress)
         extra["benchmark"] = json_safe(bench)
         extra["benchmark_plots"] = plots and bool(bench["results"])
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
     try:
         doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
         if bench is not None and extra["benchmark_plots"]:
-            from amigo_gym.tools.training.benchmark import plot_profiles, plot_scenarios
-
-            plot_scenarios(bench, staging / "benchmark_scenarios.png")
-            plot_profiles(bench, staging / "benchmark_profiles.png")
+            plot_all(bench, staging)
         atomic_write(staging / "report.md", report_markdown(doc).encode())
-        publish(staging, out)
+        # every file of staging moved into out as one set, the manifest last
+        runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return doc

@@ -18,7 +18,7 @@ from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.task.v1 import feasible_random_curvature
 from amigo_gym.tools.training.intervals import Z95 as Z95  # re-exported: the cells' interval
 from amigo_gym.tools.training.intervals import wilson_interval
-from amigo_gym.tools.training.task_metrics import run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
 
 #: speeds of the cells [m/s]: the ends of the training distribution's range
 CURVATURE_SPEEDS: tuple[float, ...] = (0.1, 0.4)
@@ -37,11 +37,9 @@ POOL = 2**20
 
 def cell_specs(
     speeds: Sequence[float] = CURVATURE_SPEEDS, levels: int = LEVELS, episodes: int = CURVATURE_EPISODES
-) -> list[dict[str, Any]]:
-    """The cells (module docstring) as keywords of :class:`amigo_gym.tools.training.benchmark.Scenario` (``name``,
-    ``env_id``, ``env_kwargs``: ``gym.make``'s, ``seeds``, ``max_steps``, ``held_out``, ``description``: naming
-    ``K(v)``, the level and the curvature); :func:`amigo_gym.tools.training.benchmark.curvature_scenarios` builds
-    them."""
+) -> tuple[Scenario, ...]:
+    """The cells (module docstring): AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``,
+    ``episodes`` seeds from 100, held out; each description names ``K(v)``, the level and the curvature."""
     if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
         raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
@@ -51,21 +49,12 @@ def cell_specs(
         k_v = feasible_random_curvature(v)
         for j in range(1, levels + 1):
             k = k_v * j / levels
-            kw = {
-                "dt": DT_S,
-                "randomize": "none",
-                "path": "random",
-                "speed": float(v),
-                "random_pool": POOL,
-                "path_params": {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S},
-            }
+            kw = {"dt": DT_S, "randomize": "none", "path": "random", "speed": float(v), "random_pool": POOL}
+            kw["path_params"] = {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S}
             desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{levels} of K = {k_v:.4g} 1/m), {v:g} m/s"
-            out.append({
-                "name": f"curv_v{v:g}_k{j}", "env_id": "AmigoBot-v1", "env_kwargs": kw,
-                "seeds": tuple(range(100, 100 + episodes)), "max_steps": round(DURATION_S / DT_S), "held_out": True,
-                "description": desc,
-            })  # fmt: skip
-    return out
+            seeds = tuple(range(100, 100 + episodes))
+            out.append(Scenario(f"curv_v{v:g}_k{j}", "AmigoBot-v1", kw, seeds, round(DURATION_S / DT_S), True, desc))
+    return tuple(out)
 
 
 def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:

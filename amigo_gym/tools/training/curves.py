@@ -36,16 +36,9 @@ _NAME = re.compile(r"^(?P<algo>[A-Za-z][A-Za-z0-9]*)_s(?P<seed>\d+)$")
 
 @dataclass(frozen=True)
 class Run:
-    """One training run: its group (algorithm), seed, folder and evaluations (sorted by steps, one per step).
-
-    Attributes:
-        algo: the algorithm (``config.json``'s ``settings.algo`` or the folder name).
-        seed: the training seed.
-        path: the run folder.
-        env_id: the environment it was trained on (``None``: not recorded).
-        evals: the evaluations of ``eval.json``, sorted by ``timesteps``, the last one kept per step.
-        group: the label it is aggregated under (the algorithm; with the env id if the runs differ in it).
-    """
+    """One training run: algorithm (``config.json``'s or the folder name's), seed, folder, environment (``None``: not
+    recorded), the evaluations of ``eval.json`` (sorted by ``timesteps``, the last kept per step) and the group it is
+    aggregated under (the algorithm; with the env id if the runs differ in it)."""
 
     algo: str
     seed: int
@@ -138,11 +131,9 @@ def _series(run: Run, axis: str, metric: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, seed: int = 0) -> dict[str, Any] | None:
-    """Mean over ``runs`` (training seeds) of ``metric`` against ``axis``, with its 95 % bootstrap band.
-
-    Module docstring: step-function values, the range every seed covers, the union of the evaluation
-    points in it, the pointwise percentile bootstrap over seeds. ``None`` if the seeds share no range.
-    """
+    """Mean over ``runs`` (training seeds) of ``metric`` against ``axis`` (step functions, on the union of the
+    evaluation points in the range every seed covers) with its pointwise 95 % percentile bootstrap band over seeds;
+    ``None`` if the seeds share no range."""
     series = {r.seed: _series(r, axis, metric) for r in runs}
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:
@@ -353,14 +344,9 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
         ax.legend(fontsize=8)
     p = doc["protocol"]
     fig.suptitle(f"Learning curves against {AXES[axis]}")
-    fig.text(
-        0.5,
-        0.01,
-        f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({p['reps']} "
-        "replications); thin: each seed (latest evaluation at or before x).",
-        ha="center",
-        fontsize=8,
-    )
+    note = (f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({p['reps']} "
+            "replications); thin: each seed (latest evaluation at or before x).")  # fmt: skip
+    fig.text(0.5, 0.01, note, ha="center", fontsize=8)
     fig.tight_layout(rect=(0, 0.04, 1, 0.96))
     save_figure(fig, path)
 

@@ -21,21 +21,25 @@ from numpy.typing import NDArray
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.envs.base import info_row
-from amigo_gym.io import atomic_write, atomic_write_json, json_safe
+from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.model.kinematics import a_from_h, circle_steady_state
 from amigo_gym.model.params import EnvParams, check_range
 from amigo_gym.paths import make_path
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
+from amigo_gym.policies.learned import FastPolicy
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
-from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json
+from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json, verify_sha256
 from amigo_gym.tools.training.hyperparams import sb3_class
-from amigo_gym.tools.training.task_metrics import Scenario, _rms, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, Unavailable, _rms, run_scenario
 
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
 PRETRAINED_DIR = pretrained_dir()
 ALGOS = ("ppo", "sac", "td3")
+#: algorithm name (prefix) of the fast PPO's models (:mod:`amigo_gym.tools.training.fastppo`), run in numpy
+FAST_ALGO = "fastppo"
 SCENARIOS = ("nominal", "paper_start", "perturbed")
 SETTLED_BAND_M = 1e-3
 
@@ -236,100 +240,35 @@ def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
     return {"analytic": AnalyticPolicy(params, gain=gain), "analytic_ff": AnalyticPolicy(params, feedforward_only=True)}
 
 
-@dataclass(frozen=True)
-class ModelRef:
-    """A trained model found by :func:`find_models`.
+# --------------------------------------------------------------------------- agents
+def _classical(name: str) -> Callable[[Any], Any]:
+    def make(env: Any) -> Any:
+        base = env.unwrapped
+        hook = getattr(base, "classical_policy", None)
+        if callable(hook):
+            return hook(name)
+        params = getattr(base, "params", None)
+        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
+            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
-    Attributes:
-        name: the agent's name in the results: the algorithm for ``<algo>.zip`` files (pretrained
-            layout), the run folder's name for a run written by ``amigo-gym train``.
-        algo: ``ppo``, ``sac`` or ``td3``.
-        model: the SB3 ``.zip``.
-        record: the training record beside it (``<algo>.json`` or the run's ``run.json``), if any.
-        vecnormalize: the ``VecNormalize`` statistics saved beside it (``vecnormalize.pkl``), if any.
-    """
+            if name == "analytic":
+                return AnalyticTrackingPolicy(params)
+            if name == "pure_pursuit":
+                return PurePursuitPolicy(params)
+            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
+        if not isinstance(params, EnvParams):
+            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
+        if name == "analytic":
+            return AnalyticPolicy(params)
+        if name == "analytic_ff":
+            return AnalyticPolicy(params, feedforward_only=True)
+        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
 
-    name: str
-    algo: str
-    model: Path
-    record: Path | None = None
-    vecnormalize: Path | None = None
-
-
-def _run_algo(run_dir: Path) -> str:
-    """The algorithm a run folder's ``config.json`` names."""
-    cfg = run_dir / "config.json"
-    try:
-        algo = json.loads(cfg.read_text())["settings"]["algo"]
-    except (OSError, ValueError, KeyError, TypeError):
-        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
-    if algo not in ALGOS:
-        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
-    return str(algo)
+    return make
 
 
-def _beside(model: Path, name: str) -> Path | None:
-    f = model.parent / name
-    return f if f.is_file() else None
-
-
-def _run_ref(run_dir: Path, model: Path | None = None) -> ModelRef:
-    model = model or run_dir / "model.zip"
-    return ModelRef(
-        run_dir.name, _run_algo(run_dir), model, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
-    )
-
-
-def _is_run(d: Path) -> bool:
-    return (d / "model.zip").is_file() and (d / "config.json").is_file()
-
-
-def v0_name(name: str) -> str:
-    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
-    ``amigo-gym benchmark`` and ``compare`` name them; the v1 generalists are ``<folder>_v1``), a run's own name
-    otherwise."""
-    return f"{name}_v0" if name in ALGOS else name
-
-
-def find_models(path: str | os.PathLike[str]) -> list[ModelRef]:
-    """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
-
-    ``path`` may be a run folder (``model.zip`` with the ``config.json`` naming its algorithm), a
-    folder of run folders, a model ``.zip`` (a run's ``model.zip`` / ``best_model.zip``, or an
-    ``<algo>.zip``), or a folder of ``<algo>.zip`` files (``agents/pretrained``, ``train --export``).
-
-    Raises:
-        FileNotFoundError: ``path`` does not exist.
-        ValueError: it holds no model, or a model whose algorithm cannot be told.
-    """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"--models: no file or directory {p}")
-    if p.is_file():
-        if p.suffix != ".zip":
-            raise ValueError(f"--models: {p} is not a model .zip")
-        if p.stem in ALGOS:
-            return [ModelRef(p.stem, p.stem, p, _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl"))]
-        if (p.parent / "config.json").is_file():
-            return [_run_ref(p.parent, p)]
-        raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
-    if _is_run(p):
-        return [_run_ref(p)]
-    refs = [
-        ModelRef(a, a, p / f"{a}.zip", _beside(p / f"{a}.zip", f"{a}.json"))
-        for a in ALGOS
-        if (p / f"{a}.zip").is_file()
-    ]
-    refs += [_run_ref(d) for d in sorted(p.iterdir()) if d.is_dir() and _is_run(d)]
-    if not refs:
-        raise ValueError(
-            f"--models: no models in {p} (expected a run folder with model.zip and config.json, "
-            "folders of such runs, or <algo>.zip files)"
-        )
-    names = [r.name for r in refs]
-    if len(set(names)) != len(names):
-        raise ValueError(f"--models: two models in {p} share a name: {sorted(names)}")
-    return refs
+#: classical policies by name: built per scenario from the environment
+CLASSICAL: dict[str, Callable[[Any], Any]] = {n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit")}
 
 
 class NormalizedAgent:
@@ -354,45 +293,206 @@ class NormalizedAgent:
         return action, new_state
 
 
-def load_model(ref: ModelRef, trust: bool = False) -> Agent:
-    """Load one :class:`ModelRef` with its SB3 class, on the CPU (with its ``VecNormalize`` statistics, if any).
+@dataclass
+class AgentSpec:
+    """One training seed of one agent: a classical policy (``path is None``, built per environment) or a model zip.
 
-    Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code. Each is checked before it is
-    unpickled (:func:`amigo_gym.tools.runs.check_pickle`): against the sha256 of the record beside it
-    (``<algo>.json``'s ``sha256``, ``run.json``'s ``files``), then that it is trusted: shipped, written by a run
-    of this installation, or ``trust`` (``--trust-unverified``); else one line naming the file and the flag.
+    Attributes:
+        name: the agent's name in the results. seed: its training seed.
+        path: the model zip (SB3, or the fast PPO's numpy weights). algo: ``ppo``, ``sac``, ``td3`` or ``fastppo*``.
+        manifest: the JSON beside the zip (``<zip>.json``: ``algo``, ``seed``, ``sha256``), as read.
+        record: the training record beside it (``<algo>.json`` or a run's ``run.json``), read when it is loaded.
+        vecnormalize: the ``VecNormalize`` statistics saved beside it (``vecnormalize.pkl``), if any.
+    """
+
+    name: str
+    seed: int = 0
+    path: str | None = None
+    algo: str | None = None
+    manifest: dict[str, Any] | None = None
+    record: Path | None = None
+    vecnormalize: Path | None = None
+    _model: Any = field(default=None, repr=False)
+
+    @property
+    def model(self) -> Path:
+        """The model zip."""
+        return Path(str(self.path))
+
+    @property
+    def fast(self) -> bool:
+        """A fast PPO model (:class:`amigo_gym.policies.learned.FastPolicy`: numpy weights and JSON, no pickle)."""
+        return str(self.algo).startswith(FAST_ALGO)
+
+    def load(self, trust: bool = False) -> Agent:
+        """The model, as given (``_model``) or loaded on the CPU (with its ``VecNormalize`` statistics, if any).
+
+        Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code. Each is checked before it is
+        unpickled (:func:`amigo_gym.tools.runs.check_pickle`): against the sha256 of the manifest or record beside it
+        (``sha256``; ``run.json``'s ``files``), then that it is trusted: shipped, written by a run of this
+        installation, or ``trust`` (``--trust-unverified``); else one line naming the file and the flag.
+
+        Raises:
+            CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+            UntrustedFileError: a file not trusted (one line naming it and the flag).
+        """
+        if self._model is not None:
+            return self._model  # type: ignore[no-any-return]
+        record: Any = self.manifest
+        if record is None and self.record is not None:
+            record = read_json(self.record)
+            if not isinstance(record, dict):
+                raise CorruptFileError(f"{self.record}: not a training record (a JSON object)")
+        record = record or {}
+        # a run's run.json records the sha256 of its final model.zip, and under "files" of every file beside it
+        files = record.get("files") if isinstance(record.get("files"), dict) else {}
+        digest = files.get(self.model.name)
+        if digest is None and (self.record is None or self.record.name != "run.json"):
+            digest = record.get("sha256")
+        source = str(self.record or self.model.with_suffix(".json"))
+        if self.fast:
+            if digest is not None:
+                verify_sha256(self.model, str(digest), source)
+            return FastPolicy.load(self.model)
+        if self.vecnormalize is not None:  # checked first: it is unpickled after the model
+            stats_digest = files.get(self.vecnormalize.name)
+            check_pickle(self.vecnormalize, None if stats_digest is None else str(stats_digest), source, trust)
+        check_pickle(self.model, None if digest is None else str(digest), source, trust)
+        with corrupt_errors(self.model, f"{str(self.algo).upper()} model"):
+            model = sb3_class(str(self.algo)).load(self.model, device="cpu")
+        if self.vecnormalize is None:
+            return model  # type: ignore[no-any-return]
+        with corrupt_errors(self.vecnormalize, "VecNormalize statistics"), open(self.vecnormalize, "rb") as f:
+            stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
+        stats.training = False
+        return NormalizedAgent(model, stats)
+
+    def instantiate(self, env: Any) -> Any:
+        """The agent for ``env``: a classical policy built for it, or the model (:meth:`load`) if its observation
+        space matches the scenario's (:class:`Unavailable` otherwise)."""
+        if self.path is None:
+            return CLASSICAL[self.name](env)
+        model: Any = self.load()
+        self._model = model
+        want = (model.builder.obs_dim,) if self.fast else getattr(model.observation_space, "shape", None)
+        got = getattr(env.observation_space, "shape", None)
+        if want != got:
+            raise Unavailable(
+                f"observation shape {got}{'' if self.fast else ' of the scenario'} differs from the model's {want}"
+            )
+        return model
+
+    def describe(self) -> dict[str, Any]:
+        """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
+        d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
+        if self.path is None:
+            d["kind"] = "classical"
+        else:
+            kind = "fastppo" if self.fast else "sb3"
+            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
+            if self.manifest is not None:
+                d["manifest"] = self.manifest
+        return d
+
+
+def _run_algo(run_dir: Path) -> str:
+    """The algorithm a run folder's ``config.json`` names."""
+    cfg = run_dir / "config.json"
+    try:
+        algo = json.loads(cfg.read_text())["settings"]["algo"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
+    if algo not in ALGOS:
+        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
+    return str(algo)
+
+
+def _beside(model: Path, name: str) -> Path | None:
+    f = model.parent / name
+    return f if f.is_file() else None
+
+
+def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
+    model = model or run_dir / "model.zip"
+    record, stats = _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    return AgentSpec(run_dir.name, 0, str(model), _run_algo(run_dir), None, record, stats)
+
+
+def _is_run(d: Path) -> bool:
+    return (d / "model.zip").is_file() and (d / "config.json").is_file()
+
+
+def v0_name(name: str) -> str:
+    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
+    ``amigo-gym benchmark`` and ``compare`` name them; the v1 generalists are ``<folder>_v1``), a run's own name
+    otherwise."""
+    return f"{name}_v0" if name in ALGOS else name
+
+
+def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
+    """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
+
+    ``path`` may be a run folder (``model.zip`` with the ``config.json`` naming its algorithm), a
+    folder of run folders, a model ``.zip`` (a run's ``model.zip`` / ``best_model.zip``, or an
+    ``<algo>.zip``), or a folder of ``<algo>.zip`` files (``agents/pretrained``, ``train --export``).
 
     Raises:
-        CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
-        UntrustedFileError: a file not trusted (one line naming it and the flag).
+        FileNotFoundError: ``path`` does not exist.
+        ValueError: it holds no model, or a model whose algorithm cannot be told.
     """
-    record = read_json(ref.record) if ref.record is not None else None
-    if record is not None and not isinstance(record, dict):
-        raise CorruptFileError(f"{ref.record}: not a training record (a JSON object)")
-    # a run's run.json records the sha256 of its final model.zip, and under "files" of every file beside it
-    files = record.get("files") if record is not None else None
-    files = files if isinstance(files, dict) else {}
-    digest = files.get(ref.model.name)
-    if digest is None and record is not None and (ref.record is None or ref.record.name != "run.json"):
-        digest = record.get("sha256")
-    if ref.vecnormalize is not None:  # checked first: it is unpickled after the model
-        stats_digest = files.get(ref.vecnormalize.name)
-        check_pickle(ref.vecnormalize, None if stats_digest is None else str(stats_digest), str(ref.record), trust)
-    check_pickle(ref.model, None if digest is None else str(digest), str(ref.record), trust)
-    with corrupt_errors(ref.model, f"{ref.algo.upper()} model"):
-        model = sb3_class(ref.algo).load(ref.model, device="cpu")
-    if ref.vecnormalize is None:
-        agent: Agent = model
-        return agent
-    with corrupt_errors(ref.vecnormalize, "VecNormalize statistics"), open(ref.vecnormalize, "rb") as f:
-        stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
-    stats.training = False
-    return NormalizedAgent(model, stats)
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"--models: no file or directory {p}")
+    if p.is_file():
+        if p.suffix != ".zip":
+            raise ValueError(f"--models: {p} is not a model .zip")
+        if p.stem in ALGOS:
+            record, stats = _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl")
+            return [AgentSpec(p.stem, 0, str(p), p.stem, None, record, stats)]
+        if (p.parent / "config.json").is_file():
+            return [_run_ref(p.parent, p)]
+        raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
+    if _is_run(p):
+        return [_run_ref(p)]
+    refs = [
+        AgentSpec(a, 0, str(p / f"{a}.zip"), a, None, _beside(p / f"{a}.zip", f"{a}.json"))
+        for a in ALGOS
+        if (p / f"{a}.zip").is_file()
+    ]
+    refs += [_run_ref(d) for d in sorted(p.iterdir()) if d.is_dir() and _is_run(d)]
+    if not refs:
+        raise ValueError(
+            f"--models: no models in {p} (expected a run folder with model.zip and config.json, "
+            "folders of such runs, or <algo>.zip files)"
+        )
+    names = [r.name for r in refs]
+    if len(set(names)) != len(names):
+        raise ValueError(f"--models: two models in {p} share a name: {sorted(names)}")
+    return refs
+
+
+def load_model(ref: AgentSpec, trust: bool = False) -> Agent:
+    """Load a model :func:`find_models` found (:meth:`AgentSpec.load`)."""
+    return ref.load(trust)
 
 
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
     """Load every model :func:`find_models` finds at ``models``, by name (``trust``: :func:`load_model`)."""
     return {ref.name: load_model(ref, trust) for ref in find_models(models)}
+
+
+def trained_agents(models: str | os.PathLike[str]) -> tuple[list[AgentSpec], dict[str, Any]]:
+    """The models at ``models`` (:func:`find_models`), loaded, named by :func:`v0_name`, each with the training seed
+    its record names (0 without one); and the training records by name."""
+    specs, training = [], {}
+    for ref in find_models(models):
+        model = ref.load()
+        name = v0_name(ref.name)
+        if ref.record is not None:
+            training[name] = json.loads(ref.record.read_text())
+        seed = training.get(name, {}).get("seed")
+        specs.append(replace(ref, name=name, seed=seed if isinstance(seed, int) else 0, _model=model))
+    return specs, training
 
 
 def evaluate_agents(
@@ -471,11 +571,8 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
-    """H's path (whole circle and a zoom on the start, first perturbed episode) and ``|e|`` over time.
-
-    Top: H's trajectory of every agent against the circle (eq. 6), left the whole lap, right the first
-    0.25 m where the perturbed start's transient happens. Bottom: ``|e(t)|`` (log scale) for the nominal
-    and the first perturbed start; the dotted line is the 1 mm band of ``settling_time_s``.
+    """Top: H's trajectory of every agent against the circle (eq. 6), the whole lap and a zoom on the first 0.25 m
+    (first perturbed episode). Bottom: ``|e(t)|`` (log scale), nominal and first perturbed start, 1 mm band dotted.
     """
     plt = pyplot()
 
@@ -517,13 +614,9 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
 def plot_wheels(
     trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path, scenario: str = "perturbed"
 ) -> None:
-    """Each agent's wheel angles and rates over time against the analytic policy's from the same start.
-
-    One row per agent other than ``analytic`` (paper's Figs. 2–5 with the agent in place of the rig):
-    left, ``alpha1, alpha2`` [rad] of the agent (thin) and of the analytic policy (wide, pale); middle,
-    ``alpha1dot, alpha2dot`` [rad/s] over the first 10 s with the closed-form steady rates dotted;
-    right, the agent's wheel angles minus the analytic policy's [rad] over the whole episode.
-    """
+    """One row per agent other than ``analytic`` (the paper's Figs. 2–5): its wheel angles [rad] against the
+    analytic policy's (wide, pale), its wheel rates [rad/s] over the first 10 s (steady rates dotted), and its wheel
+    angles minus the analytic policy's [rad]."""
     plt = pyplot()
 
     if "analytic" not in trajs:
@@ -593,11 +686,8 @@ def write_outputs(
 
 
 def one_torch_thread() -> None:
-    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, whose forward pass is
-    fastest on one thread; more threads spin against the environment and other processes for the cores (on a
-    busy 2-core machine ``benchmark --quick`` took 265 s with torch's default threads, most of it in ``linear``).
-    The evaluating commands (evaluate, compare, benchmark) call it; ``train --threads`` does the same for
-    training."""
+    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, fastest on one thread
+    (more threads spin against the environment for the cores). The evaluating commands call it."""
     try:
         import torch
     except ImportError:
@@ -657,9 +747,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         training: dict[str, Any] = {}
         if a.load_models:
             models = a.models if a.models is not None else PRETRAINED_DIR
-            refs = find_models(models)
-            agents.update({v0_name(ref.name): load_model(ref) for ref in refs})
-            training = {v0_name(r.name): json.loads(r.record.read_text()) for r in refs if r.record is not None}
+            specs, training = trained_agents(models)
+            agents.update({spec.name: spec.load() for spec in specs})
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
         if (out / "manifest.json").is_file() and not a.force:

@@ -4,36 +4,24 @@ r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL style, one modu
     amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo_gpu.yml  # 16 cores + GPU
     amigo-gym train-fast --out runs/fast_s0 --resume                                          # after an interruption
 
-One ``gym.make_vec("AmigoBot-v1", num_envs=N)`` steps all ``N`` robots on the CPU (``env_threads`` > 1: its
-``numba-parallel`` kernel on that many threads); the networks, the rollout buffers, GAE and the updates live on
-``device`` (``auto``: CUDA when torch sees a GPU, else the CPU). Per step the normalised features go to the device
-as one tensor and the sampled actions come back as one. Env and learner alternate (no overlap: docs/baselines.md).
+The ``N = num_envs`` robots step on the CPU (``env_threads`` > 1: the ``numba-parallel`` kernel); networks, rollout
+buffers, GAE and updates live on ``device`` (``auto``: CUDA when torch sees a GPU). Per iteration of ``T =
+rollout_steps`` steps: features ``x`` (:class:`amigo_gym.policies.learned.FeatureBuilder`) normalised by a running
+mean/std; Gaussian policy ``u ~ N(mu(x), diag(exp(2 log_std)))`` whose :func:`~amigo_gym.policies.learned.env_action`
+the env gets; rewards scaled by the running std of the discounted return (clipped to +-10), time-limit truncation
+bootstrapped with ``gamma V(x_final)``, GAE(``gamma``, ``gae_lambda``); ``epochs`` passes of minibatch clipped PPO
+(advantages normalised per minibatch, ``+ vf_coef`` value loss, ``- ent_coef`` entropy, optional CAPS smoothness and
+residual L2 penalty on ``mu``), gradient norm clipped, Adam with the learning rate annealed to 0. The last
+``round(nominal_fraction N)`` robots are the nominal robot (``env_kwargs`` without ``randomize``, ``true_robot``).
 
-Algorithm (per iteration of ``T = rollout_steps`` steps of ``N = num_envs`` robots)
-----------------------------------------------------------------------------------
-* Features ``x`` (:class:`amigo_gym.policies.learned.FeatureBuilder`: observation, optional history, optional
-  analytic base action), normalised by a running mean/std (saved with the model).
-* Gaussian policy ``u ~ N(mu(x), diag(exp(2 log_std)))``, state-independent ``log_std``; the env gets
-  :func:`amigo_gym.policies.learned.env_action` of ``u`` (clip; residual; low-pass).
-* Rewards scaled by the running std of the discounted return (clipped to +-10); time-limit truncation bootstrapped
-  with ``gamma V(x_final)``; GAE(``gamma``, ``gae_lambda``).
-* ``epochs`` passes in minibatches: clipped surrogate (advantages normalised per minibatch), ``vf_coef`` times the
-  value loss, minus ``ent_coef`` times the entropy; gradient norm clipped; Adam, learning rate annealed to 0.
-* Optional: CAPS smoothness on ``mu`` (temporal ``caps_temporal``, spatial ``caps_spatial`` at ``caps_sigma``);
-  the L2 ``residual_penalty`` on a residual policy's ``mu``; the last ``round(nominal_fraction N)`` robots simulated
-  as the nominal robot (``env_kwargs`` without ``randomize`` and ``true_robot``); a curvature curriculum.
-
-Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything needed to continue bit for bit, written
-atomically every ``checkpoint_every`` env-steps and at the end); ``curve.csv``/``curve.json`` (evaluations of
-:mod:`amigo_gym.tools.training.task_metrics` on ``eval_envs`` validation episodes, never the benchmark's cells);
-``model.zip`` (the final :class:`amigo_gym.policies.learned.FastPolicy`, numpy only), ``best.zip`` (lowest
-validation H RMS); ``run.json``, the manifest (steps, wall time, throughput, versions, git revision, CPU, thread
-counts, device, sha256 of ``model.zip``). Same command, same machine, same seed: the same weights (tested).
-
-``--hyperparams``: the ``AmigoBot-v1`` mapping of an rl-zoo style YAML file of :class:`FastPPOSettings` fields
-(``env_kwargs`` and ``seed`` refused there); command-line options override it. The first ``SIGTERM``/``SIGINT`` stops
-at the end of the iteration after a checkpoint (status 130; ``--resume`` continues bit for bit), a second at once;
-the run folder is locked while training (:class:`amigo_gym.tools.runs.RunLock`).
+Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything to continue bit for bit, written atomically
+every ``checkpoint_every`` env-steps and at the end); ``curve.csv``/``curve.json`` (validation episodes of
+:mod:`~amigo_gym.tools.training.task_metrics`); ``model.zip`` (:class:`~amigo_gym.policies.learned.FastPolicy`),
+``best.zip`` (lowest validation H RMS); ``run.json`` (steps, wall time, throughput, versions, git revision, CPU,
+threads, device, sha256 of ``model.zip``). Same command, machine and seed: the same weights. ``--hyperparams``: the
+``AmigoBot-v1`` mapping of an rl-zoo style YAML file of settings (no ``env_kwargs``, ``seed``); options override it.
+The first ``SIGTERM``/``SIGINT`` stops after the iteration's checkpoint (status 130; ``--resume`` continues), a
+second at once; the folder is locked while training (:class:`amigo_gym.tools.runs.RunLock`).
 """
 
 from __future__ import annotations
@@ -41,7 +29,8 @@ from __future__ import annotations
 import argparse
 import csv
 import functools
-import io as _io
+import importlib.util
+import io
 import itertools
 import json
 import math
@@ -85,57 +74,40 @@ Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
 #: values of ``--device``
 DEVICES = ("auto", "cpu", "cuda")
+_CURVATURE_KEYS = ("max_curvature", "max_curvature_rate")
 
-
-def _default_env_kwargs() -> dict[str, Any]:
-    return dict(TRAINING_DISTRIBUTION["env_kwargs"])
+#: numba (None where it is not installed: it ships wheels for the common platforms only)
+numba: Any = importlib.import_module("numba") if importlib.util.find_spec("numba") else None
 
 
 def resolve_device(device: str) -> str:
     """``"auto"``: ``"cuda"`` when torch sees a CUDA device, else ``"cpu"``; ``"cpu"``/``"cuda"`` as given.
 
     Raises:
-        ValueError: one line, for another name or ``"cuda"`` on a machine without one.
+        ValueError: one line, for ``"cuda"`` on a machine without one.
     """
-    if device not in DEVICES:
-        raise ValueError(f"FastPPOSettings.device must be one of {', '.join(DEVICES)}, got {device!r}")
     cuda = torch.cuda.is_available()
     if device == "cuda" and not cuda:
         raise ValueError("FastPPOSettings.device = 'cuda' but torch sees no CUDA device here (allowed: auto, cpu)")
     return ("cuda" if cuda else "cpu") if device == "auto" else device
 
 
-def _numba() -> Any:
-    """The numba module, or None where it is not installed (a core dependency where it ships wheels)."""
-    try:
-        import numba
-    except ImportError:  # pragma: no cover
-        return None
-    return numba
-
-
 def _numba_threads_limit() -> int:
     """The most threads numba may use here (``NUMBA_NUM_THREADS``); 1 without numba."""
-    nb = _numba()
-    return 1 if nb is None else int(nb.config.NUMBA_NUM_THREADS)
+    return 1 if numba is None else int(numba.config.NUMBA_NUM_THREADS)
 
 
-#: integer settings: [low, high]
-_INT_RANGES = {
-    "total_steps": (1, 10**10), "num_envs": (1, 65536), "rollout_steps": (1, 10000), "epochs": (1, 100),
-    "minibatch_size": (1, 10**8), "history": (0, 20), "seed": (0, 2**31 - 1), "eval_every": (1, 10**10),
-    "eval_envs": (1, 4096), "eval_seed": (0, 2**31 - 1), "checkpoint_every": (1, 10**10), "threads": (1, 64),
-    "env_threads": (1, 256), "max_episode_steps": (1, 100000), "curriculum_stages": (1, 1000),
-}  # fmt: skip
-#: float settings: (low, high, low end open, high end open)
-_FLOAT_RANGES = {
-    "learning_rate": (0.0, 1.0, True, False), "gamma": (0.0, 1.0, False, True), "gae_lambda": (0.0, 1.0, False, False),
-    "clip_coef": (0.0, 1.0, True, False), "ent_coef": (0.0, 1.0, False, False), "vf_coef": (0.0, 10.0, False, False),
-    "max_grad_norm": (0.0, 100.0, True, False), "log_std_init": (-5.0, 1.0, False, False),
-    "caps_temporal": (0.0, 100.0, False, False), "caps_spatial": (0.0, 100.0, False, False),
-    "caps_sigma": (0.0, 10.0, True, False), "residual_penalty": (0.0, 100.0, False, False),
-    "nominal_fraction": (0.0, 1.0, False, True), "curriculum_max_curvature": (0.0, 100.0, False, False),
-    "curriculum_max_curvature_rate": (0.0, 1000.0, False, False), "curriculum_fraction": (0.0, 1.0, True, False),
+#: the allowed interval of each numeric setting ("(" / ")": that end open); integers where the field is an int
+_RANGES = {
+    "total_steps": "[1, 1e10]", "num_envs": "[1, 65536]", "rollout_steps": "[1, 10000]", "epochs": "[1, 100]",
+    "minibatch_size": "[1, 1e8]", "history": "[0, 20]", "seed": "[0, 2147483647]", "eval_every": "[1, 1e10]",
+    "eval_envs": "[1, 4096]", "eval_seed": "[0, 2147483647]", "checkpoint_every": "[1, 1e10]", "threads": "[1, 64]",
+    "env_threads": "[1, 256]", "max_episode_steps": "[1, 100000]", "curriculum_stages": "[1, 1000]",
+    "learning_rate": "(0, 1]", "gamma": "[0, 1)", "gae_lambda": "[0, 1]", "clip_coef": "(0, 1]", "ent_coef": "[0, 1]",
+    "vf_coef": "[0, 10]", "max_grad_norm": "(0, 100]", "log_std_init": "[-5, 1]", "caps_temporal": "[0, 100]",
+    "caps_spatial": "[0, 100]", "caps_sigma": "(0, 10]", "residual_penalty": "[0, 100]", "nominal_fraction": "[0, 1)",
+    "curriculum_max_curvature": "[0, 100]", "curriculum_max_curvature_rate": "[0, 1000]",
+    "curriculum_fraction": "(0, 1]",
 }  # fmt: skip
 
 
@@ -190,7 +162,9 @@ class FastPPOSettings:
         curriculum_stages: number of raises (each rebuilds the pool of random paths) [-], in [1, 1000].
     """
 
-    env_kwargs: Mapping[str, Any] = field(default_factory=_default_env_kwargs, metadata=cli(parse=json_object))
+    env_kwargs: Mapping[str, Any] = field(
+        default_factory=lambda: dict(TRAINING_DISTRIBUTION["env_kwargs"]), metadata=cli(parse=json_object)
+    )
     total_steps: int = 15_000_000
     num_envs: int = 512
     rollout_steps: int = 32
@@ -230,13 +204,15 @@ class FastPPOSettings:
 
     def __post_init__(self) -> None:
         o = "FastPPOSettings"
-        for name, (lo, hi) in _INT_RANGES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-                raise TypeError(f"{o}.{name} must be an integer in [{lo}, {hi}], got {v!r}")
-            check_range(o, name, v, lo, hi)
-        for name, (low, high, low_open, high_open) in _FLOAT_RANGES.items():
-            check_range(o, name, getattr(self, name), low, high, low_open=low_open, high_open=high_open)
+        for f in fields(self):
+            v, rng = getattr(self, f.name), _RANGES.get(f.name)
+            if f.type == "int" and (isinstance(v, bool) or not isinstance(v, (int, np.integer))):
+                raise TypeError(f"{o}.{f.name} must be an integer in {rng}, got {v!r}")
+            if f.type == "bool" and not isinstance(v, bool):
+                raise TypeError(f"{o}.{f.name} must be True or False, got {v!r}")
+            if rng is not None:
+                lo, hi = (float(x) for x in rng[1:-1].split(","))
+                check_range(o, f.name, v, lo, hi, low_open=rng[0] == "(", high_open=rng[-1] == ")")
         batch = self.num_envs * self.rollout_steps
         if self.minibatch_size > batch or batch % self.minibatch_size:
             raise ValueError(
@@ -249,8 +225,6 @@ class FastPPOSettings:
             )
         if self.device not in DEVICES:
             raise ValueError(f"{o}.device must be one of {', '.join(DEVICES)}, got {self.device!r}")
-        if not isinstance(self.norm_reward, bool):
-            raise TypeError(f"{o}.norm_reward must be True or False, got {self.norm_reward!r}")
         hid = tuple(self.hidden)
         if not hid or any(
             isinstance(h, bool) or not isinstance(h, (int, np.integer)) or not 1 <= h <= 4096 for h in hid
@@ -269,14 +243,11 @@ class FastPPOSettings:
         ``max_curvature_rate`` [1/m^2] and the ``env_kwargs``' other ``path_params``), or None without one."""
         if self.curriculum_max_curvature <= 0:
             return None
-        given = {str(k): float(v) for k, v in dict(self.env_kwargs.get("path_params") or {}).items()}
-        start = {k: r.default for k, r in RANDOM_RANGES.items() if k in ("max_curvature", "max_curvature_rate")}
-        start |= given
+        start = {k: r.default for k, r in RANDOM_RANGES.items() if k in _CURVATURE_KEYS}
+        start |= {str(k): float(v) for k, v in dict(self.env_kwargs.get("path_params") or {}).items()}
         k_end = float(self.curriculum_max_curvature)
-        c_end = (
-            float(self.curriculum_max_curvature_rate) or start["max_curvature_rate"] * k_end / start["max_curvature"]
-        )
-        return start, {**start, "max_curvature": k_end, "max_curvature_rate": c_end}
+        c_end = self.curriculum_max_curvature_rate or start["max_curvature_rate"] * k_end / start["max_curvature"]
+        return start, {**start, "max_curvature": k_end, "max_curvature_rate": float(c_end)}
 
     def spec(self) -> FeatureSpec:
         """The policy's :class:`~amigo_gym.policies.learned.FeatureSpec`."""
@@ -287,8 +258,7 @@ class FastPPOSettings:
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> FastPPOSettings:
-        names = {f.name for f in fields(cls)}
-        bad = sorted(set(d) - names)
+        bad = sorted(set(d) - {f.name for f in fields(cls)})
         if bad:
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
         kw: dict[str, Any] = {k: (tuple(v) if k == "hidden" else v) for k, v in d.items()}
@@ -304,9 +274,7 @@ def _check_curriculum(s: FastPPOSettings) -> None:
         raise ValueError(
             f"{o}.curriculum_max_curvature needs env_kwargs path 'random' or 'mixed' (drawn paths), got path={path!r}"
         )
-    ends = s.curriculum()
-    assert ends is not None
-    start, final = ends
+    start, final = s.curriculum() or ({}, {})
     if final["max_curvature"] <= start["max_curvature"]:
         raise ValueError(
             f"{o}.curriculum_max_curvature must exceed the start max_curvature {start['max_curvature']:g} 1/m, "
@@ -323,19 +291,16 @@ def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, floa
     r"""The random paths' parameters of the curvature curriculum after ``env_steps`` env-steps (None without one).
 
     Stage ``j = min(S, floor(S g / (f T)))`` of ``S = curriculum_stages`` after ``g`` env-steps of ``T =
-    total_steps`` (``f = curriculum_fraction``), and each bound ``b_j = b_0 + (b_S - b_0) j / S`` between the
-    start ``b_0`` and the final ``b_S`` (:meth:`FastPPOSettings.curriculum`): ``max_curvature`` [1/m] and
-    ``max_curvature_rate`` [1/m^2]. ``j`` depends on ``g`` alone: a resumed run raises at the same steps.
+    total_steps`` (``f = curriculum_fraction``); each bound ``b_j = b_0 + (b_S - b_0) j / S`` between the start and
+    final of :meth:`FastPPOSettings.curriculum`. ``j`` depends on ``g`` alone: a resumed run raises at the same steps.
     """
     ends = s.curriculum()
     if ends is None:
         return None
     start, final = ends
-    n = s.curriculum_stages
-    span = s.curriculum_fraction * s.total_steps
+    n, span = s.curriculum_stages, s.curriculum_fraction * s.total_steps
     j = n if env_steps >= span else min(n, int(n * env_steps // span))
-    return {k: start[k] + (final[k] - start[k]) * j / n if k in ("max_curvature", "max_curvature_rate") else v
-            for k, v in start.items()}  # fmt: skip
+    return {k: start[k] + (final[k] - start[k]) * j / n if k in _CURVATURE_KEYS else v for k, v in start.items()}
 
 
 #: the key of a fast-PPO hyperparameter file's mapping (rl-zoo layout: one mapping per environment id)
@@ -344,52 +309,39 @@ YAML_ENV_ID = "AmigoBot-v1"
 YAML_RUN_KEYS = ("env_kwargs", "seed")
 
 
-def check_settings_mapping(hp: Mapping[str, Any], where: str = "hyperparams") -> dict[str, Any]:
-    """``hp`` (a hyperparameter file's mapping) checked as :class:`FastPPOSettings` values; a plain copy.
+def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The :data:`YAML_ENV_ID` mapping of a fast-PPO hyperparameter file, checked as :class:`FastPPOSettings` values.
 
     Raises:
-        ValueError / TypeError: one line naming the file, the unknown keys (all of them) or the first bad value.
+        FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, a run key
+            (:data:`YAML_RUN_KEYS`), unknown keys (all of them) or the first bad value; one line naming the file.
     """
+    hp = load_hyperparams(path, YAML_ENV_ID)
     names = [f.name for f in fields(FastPPOSettings)]
     run_keys = sorted(str(k) for k in hp if k in YAML_RUN_KEYS)
     if run_keys:
-        raise ValueError(f"{where}: {', '.join(run_keys)} belong to a run's command line, not a hyperparameter file")
+        raise ValueError(f"{path}: {', '.join(run_keys)} belong to a run's command line, not a hyperparameter file")
     unknown = sorted(str(k) for k in hp if k not in names)
     if unknown:
         allowed = ", ".join(n for n in names if n not in YAML_RUN_KEYS)
-        raise ValueError(f"{where}: unknown key(s) for fastppo: {', '.join(unknown)} (allowed: {allowed})")
+        raise ValueError(f"{path}: unknown key(s) for fastppo: {', '.join(unknown)} (allowed: {allowed})")
     out = {str(k): (list(v) if isinstance(v, (list, tuple)) else v) for k, v in hp.items()}
     try:
         FastPPOSettings.from_json(out)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: {' '.join(str(exc).split())}") from None
+        raise ValueError(f"{path}: {' '.join(str(exc).split())}") from None
     return out
 
 
-def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The checked :data:`YAML_ENV_ID` mapping of a fast-PPO hyperparameter file (module docstring).
-
-    Raises:
-        FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, or a bad key or value.
-    """
-    return check_settings_mapping(load_hyperparams(path, YAML_ENV_ID), str(path))
-
-
 # --------------------------------------------------------------------------- networks
-def _layer(n_in: int, n_out: int, gain: float) -> nn.Linear:
-    lin = nn.Linear(n_in, n_out)
-    nn.init.orthogonal_(lin.weight, gain)
-    nn.init.zeros_(lin.bias)
-    return lin
-
-
 def _mlp(n_in: int, hidden: Sequence[int], n_out: int, out_gain: float) -> nn.Sequential:
-    mods: list[nn.Module] = []
-    d = n_in
-    for h in hidden:
-        mods += [_layer(d, h, math.sqrt(2.0)), nn.Tanh()]
-        d = h
-    mods.append(_layer(d, n_out, out_gain))
+    """Tanh MLP, orthogonal weights (gain sqrt 2, ``out_gain`` for the last layer) and zero biases."""
+    sizes, mods = [n_in, *hidden, n_out], list[nn.Module]()
+    for k, (a, b) in enumerate(itertools.pairwise(sizes)):
+        lin = nn.Linear(a, b)
+        nn.init.orthogonal_(lin.weight, out_gain if k == len(hidden) else math.sqrt(2.0))
+        nn.init.zeros_(lin.bias)
+        mods += [lin] if k == len(hidden) else [lin, nn.Tanh()]
     return nn.Sequential(*mods)
 
 
@@ -408,8 +360,7 @@ class ActorCritic(nn.Module):
 
     def numpy_layers(self) -> list[tuple[Array, Array]]:
         """The actor as ``[(W (in, out), b (out,))]`` for :class:`FastPolicy` (``x W + b``)."""
-        lins = [m for m in self.actor if isinstance(m, nn.Linear)]
-        return [(_np(m.weight).T.copy(), _np(m.bias)) for m in lins]
+        return [(_np(m.weight).T.copy(), _np(m.bias)) for m in self.actor if isinstance(m, nn.Linear)]
 
 
 def _np(t: torch.Tensor) -> Array:
@@ -424,14 +375,10 @@ def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch
     return (-0.5 * z * z - log_std - 0.5 * math.log(2.0 * math.pi)).sum(-1)
 
 
-# --------------------------------------------------------------------------- evaluation
 def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
-    """Mean task metrics of ``eval_envs`` deterministic episodes of ``s.env_kwargs`` (validation seeds).
-
-    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)``. Robot ``i`` is reset with
-    seed ``eval_seed + i``; its first episode is recorded by the benchmark's loop
-    (:func:`amigo_gym.tools.training.task_metrics.run_vector_episodes`); the mean over robots (NaN-aware).
-    """
+    """Mean task metrics (NaN-aware) of ``eval_envs`` deterministic episodes of ``s.env_kwargs``: robot ``i`` reset
+    with seed ``eval_seed + i``, its first episode recorded (:func:`~.task_metrics.run_vector_episodes`).
+    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)``."""
     n = s.eval_envs
     env = gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, **s.env_kwargs)
     try:
@@ -441,11 +388,8 @@ def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
     finally:
         env.close()
     rows = [r.metrics() for r in recs]
-    out: dict[str, float] = {}
-    for key in rows[0]:
-        vals = np.array([r[key] for r in rows], dtype=np.float64)
-        out[key] = float(np.nanmean(vals)) if np.isfinite(vals).any() else math.nan
-    return out
+    vals = {k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]}
+    return {k: float(np.nanmean(v)) if np.isfinite(v).any() else math.nan for k, v in vals.items()}
 
 
 # --------------------------------------------------------------------------- training state
@@ -462,6 +406,7 @@ class _Run:
     obs: Array
     fstate: Array
     starts: NDArray[np.bool_]
+    ep_ret: Array
     iteration: int = 0
     global_step: int = 0
     wall_s: float = 0.0
@@ -470,13 +415,17 @@ class _Run:
     best_h: float = math.inf
     curve: list[dict[str, float]] = field(default_factory=list)
     episode_returns: list[float] = field(default_factory=list)
-    ep_ret: Array = field(default_factory=lambda: np.zeros(0))
+
+
+#: the :class:`_Run` fields a checkpoint stores under their own names
+_RUN_STATE = ("ret_acc", "obs", "fstate", "starts", "ep_ret", "iteration", "global_step", "wall_s", "next_eval",
+              "next_ckpt", "best_h", "curve", "episode_returns")  # fmt: skip
 
 
 @dataclass
 class _Buffers:
-    """One rollout on the device, allocated once: features ``x`` and values ``v`` ``(T + 1, N, ...)`` (the last
-    row: after the rollout), actions, log-probabilities, rewards and episode ends ``(T, N, ...)``."""
+    """One rollout on the device: features ``x`` and values ``v`` ``(T + 1, N, ...)`` (the last row: after the
+    rollout), actions, log-probabilities, rewards and episode ends ``(T, N, ...)``."""
 
     x: torch.Tensor
     u: torch.Tensor
@@ -486,11 +435,9 @@ class _Buffers:
     done: torch.Tensor
 
     @classmethod
-    def allocate(cls, t_len: int, n: int, dim: int, device: str) -> _Buffers:
-        def z(*shape: int) -> torch.Tensor:
-            return torch.zeros(shape, device=device)
-
-        return cls(z(t_len + 1, n, dim), z(t_len, n, 2), z(t_len, n), z(t_len + 1, n), z(t_len, n), z(t_len, n))
+    def allocate(cls, t: int, n: int, dim: int, device: str) -> _Buffers:
+        shapes = ((t + 1, n, dim), (t, n, 2), (t, n), (t + 1, n), (t, n), (t, n))
+        return cls(*(torch.zeros(shape, device=device) for shape in shapes))
 
 
 class _ConcatVectorEnv:
@@ -546,39 +493,23 @@ def _training_env(s: FastPPOSettings) -> Any:
     return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
 
 
-def _check_env_threads(s: FastPPOSettings) -> None:
-    """One line naming the limit when the machine has fewer threads for numba than ``env_threads``."""
-    limit = _numba_threads_limit()
-    if s.env_threads > limit:
-        raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
-                         f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
-
-
-def _set_threads(s: FastPPOSettings) -> None:
-    """numba's threads for the env, then torch's: numba starts its threading layer first, as that resets
-    OpenMP's thread count (torch's, with the ``omp`` layer)."""
-    if (nb := _numba()) is not None:
-        nb.set_num_threads(s.env_threads)
-    torch.set_num_threads(s.threads)
+def _networks(s: FastPPOSettings, dim: int, device: str) -> tuple[ActorCritic, torch.optim.Adam]:
+    net = ActorCritic(dim, s.hidden, s.log_std_init).to(device)
+    return net, torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
     torch.manual_seed(s.seed)  # every device's generator
-    net = ActorCritic(builder.dim, s.hidden, s.log_std_init).to(device)
-    opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
+    net, opt = _networks(s, builder.dim, device)
     env = _training_env(s)
     seeds = np.random.SeedSequence(s.seed).generate_state(s.num_envs, dtype=np.uint32)
     obs, _ = env.reset(seed=[int(x) for x in seeds])
     n = s.num_envs
     return _Run(
         net, opt, env, RunningMeanStd.zeros(builder.dim), RunningMeanStd.zeros(1), np.zeros(n),
-        np.asarray(obs, dtype=np.float64), builder.initial_state(n), np.ones(n, dtype=bool),
-        next_eval=0, next_ckpt=s.checkpoint_every, ep_ret=np.zeros(n),
+        np.asarray(obs, dtype=np.float64), builder.initial_state(n), np.ones(n, dtype=bool), np.zeros(n),
+        next_ckpt=s.checkpoint_every,
     )  # fmt: skip
-
-
-_RUN_ARRAYS = ("ret_acc", "obs", "fstate", "starts", "ep_ret")
-_RUN_SCALARS = ("iteration", "global_step", "wall_s", "next_eval", "next_ckpt", "best_h", "curve", "episode_returns")
 
 
 def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
@@ -593,7 +524,7 @@ def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "ret_rms": r.ret_rms.to_dict(),
         "torch_rng": torch.get_rng_state(),
         "cuda_rng": torch.cuda.get_rng_state_all() if r.net.log_std.is_cuda else None,
-        **{k: getattr(r, k) for k in _RUN_ARRAYS + _RUN_SCALARS},
+        **{k: getattr(r, k) for k in _RUN_STATE},
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
@@ -606,18 +537,16 @@ def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder, de
     # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
-    net = ActorCritic(builder.dim, s.hidden, s.log_std_init).to(device)
+    net, opt = _networks(s, builder.dim, device)
     net.load_state_dict(ck["net"])
-    opt = torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
     opt.load_state_dict(ck["opt"])  # Adam moves its state to the parameters' device
     torch.set_rng_state(ck["torch_rng"])
     if device == "cuda" and ck.get("cuda_rng") is not None:
         torch.cuda.set_rng_state_all(ck["cuda_rng"])
-    r = _Run(net, opt, pickle.loads(ck["env"]), RunningMeanStd.from_dict(ck["obs_rms"]),
-             RunningMeanStd.from_dict(ck["ret_rms"]), *(ck[k] for k in _RUN_ARRAYS[:4]))  # fmt: skip
-    for k in ("ep_ret", *_RUN_SCALARS):
-        setattr(r, k, ck[k])
-    return r
+    rms = RunningMeanStd.from_dict
+    return _Run(
+        net, opt, pickle.loads(ck["env"]), rms(ck["obs_rms"]), rms(ck["ret_rms"]), **{k: ck[k] for k in _RUN_STATE}
+    )
 
 
 def _policy(s: FastPPOSettings, r: _Run, info: Mapping[str, Any] | None = None) -> FastPolicy:
@@ -625,46 +554,21 @@ def _policy(s: FastPPOSettings, r: _Run, info: Mapping[str, Any] | None = None) 
     return FastPolicy(s.spec(), r.net.numpy_layers(), _np(r.net.log_std), obs_rms, info)
 
 
-def _write_curve(out: Path, curve: list[dict[str, float]]) -> None:
-    atomic_write_json(out / "curve.json", curve)
-    if curve:
-        buf = _io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=list(curve[0]))
-        w.writeheader()
-        w.writerows(curve)
-        atomic_write(out / "curve.csv", buf.getvalue())
-
-
-def _check_start(out: Path, resume: bool) -> None:
-    """Refuse to overwrite a run (a checkpoint without ``resume``) or to resume nothing."""
-    ckpt = out / "checkpoint.pt"
-    if ckpt.exists() and not resume:
-        raise FileExistsError(f"{ckpt} exists: pass --resume to continue it or choose another --out")
-    if resume and not ckpt.exists():
-        raise FileNotFoundError(f"--resume: no checkpoint {ckpt}")
-
-
 def machine_record(device: str) -> dict[str, Any]:
     """Where a run ran: git revision (``"unknown"`` outside a git checkout), CPU, thread counts, device."""
-    rev, nb = git_revision(), _numba()
+    rev = git_revision()
     return {
         "git_revision": rev if rev and " " not in rev else "unknown",  # train.git_revision's sentence outside git
         "cpu": cpu_model(),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
-        "numba_threads": None if nb is None else int(nb.get_num_threads()),
+        "numba_threads": None if numba is None else int(numba.get_num_threads()),
         "device": device,
         "device_name": torch.cuda.get_device_name() if device == "cuda" else cpu_model(),
     }
 
 
 # --------------------------------------------------------------------------- rollout, update
-def _sync(device: str) -> None:
-    """Wait for the device (timings of asynchronous CUDA work)."""
-    if device == "cuda":
-        torch.cuda.synchronize()
-
-
 def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True) -> tuple[torch.Tensor, Array, Array]:
     """Normalised features of the current observations on the device (``learn``: the normaliser updated first)."""
     feats, base, s_next = builder(r.obs, r.fstate, r.starts)
@@ -774,6 +678,15 @@ def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
 
 
 # --------------------------------------------------------------------------- the run
+def _check_start(out: Path, resume: bool) -> None:
+    """Refuse to overwrite a run (a checkpoint without ``resume``) or to resume nothing."""
+    ckpt = out / "checkpoint.pt"
+    if ckpt.exists() and not resume:
+        raise FileExistsError(f"{ckpt} exists: pass --resume to continue it or choose another --out")
+    if resume and not ckpt.exists():
+        raise FileNotFoundError(f"--resume: no checkpoint {ckpt}")
+
+
 def train(
     s: FastPPOSettings,
     out: str | Path,
@@ -790,13 +703,11 @@ def train(
     Args:
         s: the settings. out: the run folder (created). resume: continue from ``out/checkpoint.pt`` (the settings
             must be the same); without it an existing checkpoint is an error (nothing is overwritten).
-        until_steps: stop (after a checkpoint) once this many env-steps are done, as an interruption would;
-            ``None``: train to ``total_steps``.
+        until_steps: stop (after a checkpoint) once this many env-steps are done, as an interruption would.
         log: progress lines (``None``: quiet). command: the command line recorded in ``run.json``.
         evaluate_runs: run the evaluations (False: none, no curve, no ``best.zip``; for throughput benchmarks).
-        after_eval: called with each evaluation's ``curve.csv`` row (``env_steps``, ``eval_h_rms_m``, ...); ``False``
-            stops training at once (no checkpoint, no ``model.zip``: the record says ``finished`` False and
-            ``stopped_by`` ``after_eval``); used by ``amigo-gym sweep`` for pruning.
+        after_eval: called with each evaluation's ``curve.csv`` row; ``False`` stops training at once (no checkpoint,
+            no ``model.zip``; the record's ``stopped_by`` is ``after_eval``); ``amigo-gym sweep``'s pruning.
 
     Raises:
         FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
@@ -808,11 +719,15 @@ def train(
     _check_start(out, resume)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     with handling(stop):  # from here a signal stops training after its first iteration's checkpoint
-        device = resolve_device(s.device)  # both refuse before anything is written
-        _check_env_threads(s)
+        device = resolve_device(s.device)  # refused before anything is written
+        if s.env_threads > (limit := _numba_threads_limit()):
+            raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
+                             f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
         out.mkdir(parents=True, exist_ok=True)
         with RunLock(out):  # one process per run folder: a second train-fast on it stops with one line
-            record = _train(s, out, device, resume, until_steps, log, command, evaluate_runs, after_eval, stop)
+            _check_start(out, resume)  # again, under the lock
+            record = _train(s, out, device, resume, until_steps, log or (lambda _msg: None), command,
+                            evaluate_runs, after_eval, stop)  # fmt: skip
     if stop.requested and record.get("stopped_by") == "signal":
         raise KeyboardInterrupt
     return record
@@ -824,18 +739,17 @@ def _train(
     device: str,
     resume: bool,
     until_steps: int | None,
-    log: Callable[[str], None] | None,
+    say: Callable[[str], None],
     command: str | None,
     evaluate_runs: bool,
     after_eval: Callable[[dict[str, float]], bool] | None,
     stop_request: StopRequest,
 ) -> dict[str, Any]:
-    ckpt = out / "checkpoint.pt"
-    _check_start(out, resume)  # again, under the lock: another process may have written a checkpoint meanwhile
-    _set_threads(s)
-    say: Callable[[str], None] = log or (lambda _msg: None)
+    if numba is not None:  # numba's threading layer first: starting it resets OpenMP's (torch's) thread count
+        numba.set_num_threads(s.env_threads)
+    torch.set_num_threads(s.threads)
     builder = FeatureBuilder(s.spec())
-    r = _load_checkpoint(ckpt, s, builder, device) if resume else _new_run(s, builder, device)
+    r = _load_checkpoint(out / "checkpoint.pt", s, builder, device) if resume else _new_run(s, builder, device)
     if not resume:
         atomic_write_json(out / "settings.json", s.to_json())
     batch = s.num_envs * s.rollout_steps
@@ -847,6 +761,7 @@ def _train(
     t_start, wall0 = time.perf_counter(), r.wall_s
 
     def evaluate() -> bool:
+        """Evaluate, append to the curve (and ``best.zip``); ``after_eval``'s verdict."""
         t0 = time.perf_counter()
         pol = _policy(s, r)
         m = evaluate_policy(pol, s)
@@ -862,7 +777,12 @@ def _train(
         row |= {f"eval_{k}": v for k, v in m.items()}
         row["eval_s"] = round(time.perf_counter() - t0, 2)
         r.curve.append(row)
-        _write_curve(out, r.curve)
+        atomic_write_json(out / "curve.json", r.curve)
+        text = io.StringIO()
+        w = csv.DictWriter(text, fieldnames=list(r.curve[0]))
+        w.writeheader()
+        w.writerows(r.curve)
+        atomic_write(out / "curve.csv", text.getvalue())
         if m["h_rms_m"] < r.best_h:
             r.best_h = m["h_rms_m"]
             pol.info.update({"env_steps": r.global_step, "selected_by": "lowest eval_h_rms_m (validation seeds)"})
@@ -879,11 +799,15 @@ def _train(
         if not evaluate():
             stopped_by = "after_eval"
         r.next_eval += s.eval_every
-    # this call's seconds: CPU (process_time, all threads) of rollouts and updates, wall of the env steps, the
-    # rollouts (env + policy), the updates and the iterations
-    cpu = {"rollout": 0.0, "update": 0.0, "loop_wall": 0.0}
-    wall_split = {"env": 0.0, "rollout": 0.0, "update": 0.0, "loop": 0.0}
+    # this call's seconds: CPU (process_time, all threads) and wall of the env steps, rollouts, updates, iterations
+    cpu = dict.fromkeys(("rollout", "update", "loop_wall"), 0.0)
+    wall_split = dict.fromkeys(("env", "rollout", "update", "loop"), 0.0)
     buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
+
+    def sync() -> None:  # timings of asynchronous CUDA work
+        if device == "cuda":
+            torch.cuda.synchronize()
+
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw
@@ -894,10 +818,10 @@ def _train(
             g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
         c0, w0 = time.process_time(), time.perf_counter()
         wall_split["env"] += rollout(s, r, builder, buf, device)
-        _sync(device)
+        sync()
         c1, w1 = time.process_time(), time.perf_counter()
         update(s, r, buf)
-        _sync(device)
+        sync()
         c2, w2 = time.process_time(), time.perf_counter()
         cpu["rollout"] += c1 - c0
         cpu["update"] += c2 - c1
@@ -922,7 +846,7 @@ def _train(
             stopped_by = "signal"
         if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
             r.wall_s = wall0 + time.perf_counter() - t_start
-            checkpoint(ckpt, s, r)
+            checkpoint(out / "checkpoint.pt", s, r)
             while r.next_ckpt <= r.global_step:
                 r.next_ckpt += s.checkpoint_every
     r.wall_s = wall0 + time.perf_counter() - t_start
@@ -979,32 +903,25 @@ class TrainFastRun(HyperparamsFile):
     quiet: bool = False
 
 
-def _parser(cls: type, defaults: Mapping[str, Any] | None = None, **kw: Any) -> argparse.ArgumentParser:
-    """The options of ``cls`` (and the :class:`FastPPOSettings`' unless ``cls`` is :class:`HyperparamsFile`);
-    ``defaults``: a hyperparameter file's values, which replace the fields' defaults."""
-    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "", **kw)
-    add_dataclass_options(p, cls)
-    if cls is not HyperparamsFile:
-        add_dataclass_options(p, FastPPOSettings)
-    p.set_defaults(**(defaults or {}))
-    return p
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
     args_in = list(sys.argv[1:] if argv is None else argv)
-    known, _ = _parser(HyperparamsFile, add_help=False).parse_known_args(args_in)
+    first = argparse.ArgumentParser(add_help=False)
+    add_dataclass_options(first, HyperparamsFile)
     defaults: dict[str, Any] = {}
-    if known.hyperparams is not None:
-        rc = run_guarded(lambda: defaults.update(load_settings_yaml(known.hyperparams)), PROG)
-        if rc:
-            return rc
-    args = _parser(TrainFastRun, defaults).parse_args(args_in)
+    hp_file = first.parse_known_args(args_in)[0].hyperparams
+    if hp_file is not None and (rc := run_guarded(lambda: defaults.update(load_settings_yaml(hp_file)), PROG)):
+        return rc
+    p = OneLineParser(prog=PROG, description=__doc__.splitlines()[0] if __doc__ else "")
+    for cls in (TrainFastRun, FastPPOSettings):
+        add_dataclass_options(p, cls)
+    p.set_defaults(**defaults)
+    args = p.parse_args(args_in)
     run_opts = settings_from_args(TrainFastRun, args)
 
     def run() -> int:
         s = settings_from_args(FastPPOSettings, args)
-        cmd = "amigo-gym train-fast " + " ".join(shlex.quote(a) for a in args_in)
+        cmd = f"{PROG} " + " ".join(shlex.quote(a) for a in args_in)
         log = None if run_opts.quiet else functools.partial(print, flush=True)
         rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))

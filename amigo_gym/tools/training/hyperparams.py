@@ -1,13 +1,9 @@
 """rl-baselines3-zoo hyperparameter files for ``amigo-gym train``: read, check, turn into SB3 arguments.
 
-The files are rl-zoo's format (the mapping under the key ``AmigoBot-v0``), with the idioms users copy
-from rl-zoo: a string ``policy_kwargs: "dict(net_arch=[64, 64], activation_fn=nn.ReLU)"`` (parsed
-with :mod:`ast`, never evaluated: only literals, lists, tuples, dicts, ``dict(...)`` and the names of
-:data:`TORCH_NAMES` are allowed), ``normalize: true`` or a mapping / string of ``VecNormalize``
-keywords, ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``, and ``lin_<x>`` linear
-schedules for ``learning_rate`` and ``clip_range``. Every other key must be a keyword argument of
-the algorithm's SB3 class; unknown keys are refused in one line that lists them (``ValueError``), so
-that ``train`` can check a file before it writes anything. PyYAML, torch and SB3 are imported lazily.
+rl-zoo's format (one mapping per env id) and idioms: a string ``policy_kwargs`` (:func:`parse_python_literal`),
+``normalize`` (true or ``VecNormalize`` keywords), ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``,
+``lin_<x>`` schedules. Every other key must be a keyword of the algorithm's SB3 class; unknown keys are refused in
+one line listing them. PyYAML, torch and SB3 are imported lazily.
 """
 
 from __future__ import annotations
@@ -81,14 +77,11 @@ def _dotted(node: ast.expr) -> str | None:
 
 
 def parse_python_literal(text: str, what: str = "policy_kwargs") -> Any:
-    """Parse an rl-zoo style Python expression safely: literals, lists, tuples, dicts, ``dict(k=v)``, torch names.
-
-    Nothing is evaluated: the expression's syntax tree is walked and only the node types above are
-    accepted; a name such as ``nn.ReLU`` becomes the torch class it names (:data:`TORCH_NAMES`).
+    """Parse an rl-zoo style Python expression without evaluating it: literals, lists, tuples, dicts, ``dict(k=v)``,
+    a leading sign, and the torch names of :data:`TORCH_NAMES` (``nn.ReLU`` becomes the class).
 
     Raises:
-        ValueError: a syntax error or any other construct (a call of something other than ``dict``,
-            an unknown name, an operator other than a leading minus).
+        ValueError: a syntax error or any other construct.
     """
     try:
         tree = ast.parse(text.strip(), mode="eval")
@@ -152,18 +145,10 @@ class _Linear:
 
 @dataclass
 class Hyperparams:
-    """A checked hyperparameter file.
-
-    Attributes:
-        raw: the ``AmigoBot-v0`` mapping as read (written to ``config.json``).
-        n_timesteps: the file's ``n_timesteps`` (``None`` if absent).
-        n_envs: the file's ``n_envs`` (``None`` if absent).
-        policy: the policy name: ``MlpPolicy`` (default), or ``LowPassMlpPolicy`` (TD3 with the low-pass action
-            parameterisation, :mod:`amigo_gym.tools.training.sb3_lowpass`; ``policy_kwargs.filter_alpha`` in (0, 1]).
-        normalize: ``VecNormalize`` keywords, or ``None`` for no normalisation.
-        kwargs: keyword arguments of the algorithm class (``policy_kwargs`` parsed, schedules made),
-            without the action noise (:meth:`action_noise` makes it for the action size).
-    """
+    """A checked hyperparameter file: the mapping as read (``raw``), its ``n_timesteps`` / ``n_envs`` (``None``:
+    absent), ``policy`` (``MlpPolicy`` or :data:`LOWPASS_POLICY`), ``VecNormalize`` keywords (``None``: none), the
+    action noise's type and std, and the algorithm class's keyword arguments (``policy_kwargs`` parsed, schedules
+    made; the noise by :meth:`action_noise`)."""
 
     raw: dict[str, Any]
     n_timesteps: int | None = None
@@ -218,13 +203,8 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
 
 
 def check_filter_alpha(value: object, owner: str = "policy_kwargs") -> float:
-    """The low-pass filter factor ``alpha`` of :data:`LOWPASS_POLICY` as a float, checked to be a finite real
-    number in (0, 1] (``a = p + alpha (u - p)``: 1 is no filter, 0 would freeze the command).
-
-    Raises:
-        ValueError: one line ``<owner>.filter_alpha must be a ... number in (0, 1], got <value>`` (also for
-            ``None``, ``bool``, strings, NaN and inf).
-    """
+    """The low-pass filter factor ``alpha`` of :data:`LOWPASS_POLICY` (``a = p + alpha (u - p)``) as a float in
+    (0, 1]; else one ``ValueError`` line naming ``<owner>.filter_alpha``."""
     return check_real(owner, "filter_alpha", value, 0.0, 1.0, low_open=True)
 
 
@@ -300,12 +280,10 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
 
 
 def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict[str, Any]:
-    """The ``env_id`` mapping (``AmigoBot-v0`` by default) of an rl-zoo style YAML file (unchecked; see
-    :func:`parse_hyperparams`).
+    """The ``env_id`` mapping of an rl-zoo style YAML file, unchecked (:func:`parse_hyperparams`).
 
     Raises:
-        ValueError: the file is not YAML or has no ``env_id`` mapping.
-        FileNotFoundError: no such file.
+        ValueError: not YAML, or no ``env_id`` mapping. FileNotFoundError: no such file.
     """
     import yaml
 

@@ -57,16 +57,12 @@ def previous_command_index(fields: Sequence[str]) -> tuple[int, int]:
 
 
 class LowPassActor(Actor):
-    """SB3's TD3 actor followed by the low-pass filter (module docstring): ``forward(o) = p + alpha (mu(o) - p)``.
-
-    Args: those of :class:`stable_baselines3.td3.policies.Actor`, and ``filter_alpha`` (0, 1], ``prev_index``
-    the two observation indices of the previous command.
-    """
+    """SB3's TD3 actor followed by the low-pass filter: ``forward(o) = p + alpha (mu(o) - p)`` (``prev_index``: the
+    observation indices of ``p``)."""
 
     def __init__(self, *args: Any, filter_alpha: float, prev_index: Sequence[int], **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        obs_dim = int(np.prod(self.observation_space.shape or (0,)))
-        self.filter_alpha, self.prev_index = check_filter(filter_alpha, prev_index, obs_dim)
+        self.filter_alpha, self.prev_index = filter_alpha, tuple(prev_index)  # checked by LowPassTD3Policy
         self.register_buffer("_prev_idx", th.as_tensor(self.prev_index, dtype=th.long), persistent=False)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:

@@ -303,20 +303,6 @@ class SweepConfig:
 
 
 # --------------------------------------------------------------------------- validation cells
-def validate_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """:func:`validate_agent` of a run's final model (``model.zip``, checked against ``run.json``'s sha256, with its
-    ``vecnormalize.pkl``)."""
-    return validate_agent(load_model(find_models(run_dir)[0]), cells)
-
-
-def validate_fast_model(run_dir: Path, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """:func:`validate_agent` of a fast-PPO run (``amigo-gym train-fast``'s folder): its ``model.zip``, checked against
-    ``run.json``'s sha256, run as :class:`amigo_gym.policies.learned.FastPolicy`."""
-    model, record = run_dir / "model.zip", run_dir / "run.json"
-    verify_sha256(model, str(json.loads(record.read_text()).get("sha256")), str(record))
-    return validate_agent(FastPolicy.load(model), cells)
-
-
 def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
     """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
     (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
@@ -515,12 +501,8 @@ class _OverBudget(Exception):
 
 # --------------------------------------------------------------------------- abandoned trials
 def mark_abandoned(study: Any) -> list[int]:
-    """Write ``ABANDONED.json`` into the folder of every trial that ended FAIL because its worker was
-    stopped (``interrupted``) or stopped beating (killed), where the folder exists here; a marker written
-    before the retry was queued is brought up to date (``retried_as``).
-
-    Returns the numbers of the trials marked (or updated) now.
-    """
+    """Write ``ABANDONED.json`` into the folder (where it exists here) of every trial that ended FAIL because its
+    worker was stopped or killed, or bring its ``retried_as`` up to date; the numbers of the trials marked now."""
     from optuna.trial import TrialState
 
     trials = study.get_trials(deepcopy=False)
@@ -578,11 +560,8 @@ def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
 
 
 def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; the other keys come from the base YAML ``base``).
-
-    SAC/TD3 sample ``batch_size`` from 64-256, or from :data:`HT_BATCH_SIZES` when ``base`` has ``n_envs`` >=
-    :data:`HT_MIN_ENVS`. The low-pass factor of ``policy: LowPassMlpPolicy`` is not sampled: the objective is H's
-    error alone, which would trade the smoothness the filter is there for (its value stays the base file's)."""
+    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; SAC/TD3 batch sizes from :func:`batch_choices` of the
+    base YAML ``base``). The low-pass factor is not sampled (the objective, H's error alone, would trade smoothness)."""
     hp: dict[str, Any] = {
         "learning_rate": trial.suggest_float("learning_rate", 1e-5, 3e-3, log=True),
         "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-4, 0.1, log=True),
@@ -667,36 +646,6 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
-def _write_trial_hp(trial: Any, run_dir: Path, key: str, hp: dict[str, Any]) -> Path:
-    """The trial's hyperparameters as its user attribute and as ``run_dir/hyperparams.yml`` (under ``key``)."""
-    import yaml
-
-    trial.set_user_attr("hyperparams", hp)
-    hp_file = run_dir / "hyperparams.yml"
-    atomic_write(hp_file, yaml.safe_dump({key: hp}, sort_keys=True), parents=True)
-    return hp_file
-
-
-def _reporter(cfg: SweepConfig, trial: Any) -> tuple[Callable[[float, int, int], bool], dict[str, bool]]:
-    """``report(value, at, step)`` for a trial's evaluations (at env-step ``at``): a non-finite value raises
-    ``FloatingPointError``; in hyperparams mode the value goes to the pruner once per ``step``; ``False`` (and the
-    flag ``pruned`` set) when the pruner stops the trial."""
-    state, reported = {"pruned": False}, set()
-
-    def report(value: float, at: int, step: int) -> bool:
-        if not math.isfinite(value):
-            raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
-        if cfg.mode == "hyperparams" and step not in reported:
-            reported.add(step)
-            trial.report(value, step=step)
-            if trial.should_prune():
-                state["pruned"] = True
-                return False
-        return True
-
-    return report, state
-
-
 #: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
 _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
 
@@ -704,10 +653,9 @@ _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """The end of both kinds of trial: ``fit_and_validate()`` gives the objective and its per-cell values
-    (:func:`validate_agent`), stored as the user attribute ``validation``; an error of :data:`_TRIAL_ERRORS` becomes the
-    trial's ``fail_reason`` and is raised again; a non-finite objective gets a ``fail_reason`` and is returned (Optuna
-    marks the trial FAIL, never PRUNED)."""
+    """The end of every trial: ``fit_and_validate()`` gives the objective and its per-cell values (user attribute
+    ``validation``); an error of :data:`_TRIAL_ERRORS` becomes the trial's ``fail_reason`` and is raised again; a
+    non-finite objective gets a ``fail_reason`` and is returned (Optuna marks the trial FAIL, never PRUNED)."""
     try:
         value, per_cell = fit_and_validate()
     except _TRIAL_ERRORS as exc:
@@ -723,7 +671,6 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
     import optuna
 
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
-    env_kwargs = cfg.train_env_kwargs
 
     def objective(trial: Any) -> float:
         mark_abandoned(study)  # trials Optuna just found stale (it checks before each new trial)
@@ -746,9 +693,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
         trial.set_user_attr("run_dir", str(run_dir))
         try:
-            if algo == FASTPPO:
-                return _fastppo_trial(cfg, study, trial, seed, run_dir, cells)
-            return _train_and_validate(trial, algo, seed, run_dir)
+            return _trial(cfg, study, trial, algo, seed, run_dir, cells)
         except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
             _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
             raise
@@ -759,111 +704,116 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
                 trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
             raise
 
-    def _train_and_validate(trial: Any, algo: str, seed: int, run_dir: Path) -> float:
-        base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
-        hp = load_hyperparams(base_file, cfg.env_id)
-        if cfg.mode == "hyperparams":
-            hp |= sample_hyperparams(trial, algo, hp)
-        hp_file = _write_trial_hp(trial, run_dir, cfg.env_id, hp)
-        report, pruned = _reporter(cfg, trial)
+    return objective
+
+
+def _trial(
+    cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
+) -> float:
+    """One trial, in this process: the settings from the base file (and the sampler in hyperparams mode) as the user
+    attribute ``hyperparams`` and ``run_dir/hyperparams.yml``; training in ``run_dir/run`` with its evaluations
+    reported to the pruner (hyperparams mode); then the objective on ``cells`` (:func:`_validated_trial`)."""
+    import optuna
+    import yaml
+
+    from amigo_gym.tools.training import fastppo
+
+    fast = algo == FASTPPO
+    base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+    hp = fastppo.load_settings_yaml(base_file) if fast else load_hyperparams(base_file, cfg.env_id)
+    if cfg.mode == "hyperparams":
+        hp |= sample_fastppo(trial, cfg.timesteps) if fast else sample_hyperparams(trial, algo, hp)
+    trial.set_user_attr("hyperparams", hp)
+    hp_file = run_dir / "hyperparams.yml"
+    hp_key = fastppo.YAML_ENV_ID if fast else cfg.env_id
+    atomic_write(hp_file, yaml.safe_dump({hp_key: hp}, sort_keys=True), parents=True)
+    out, env_kwargs, reported, pruned = run_dir / "run", cfg.train_env_kwargs, set(), []
+
+    def report(value: float, at: int, step: int) -> bool:
+        """A non-finite value raises; in hyperparams mode the value goes to the pruner once per ``step``."""
+        if not math.isfinite(value):
+            raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
+        if cfg.mode == "hyperparams" and step not in reported:
+            reported.add(step)
+            trial.report(value, step=step)
+            if trial.should_prune():
+                pruned.append(at)
+                return False
+        return True
+
+    def fit_sb3() -> tuple[dict[str, Any], dict[str, Any], Any]:
+        train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
+        s = Settings(
+            algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here
+            seed=seed, out=str(out), timesteps=cfg.timesteps, eval_freq=cfg.eval_freq,
+            eval_episodes=cfg.eval_episodes, checkpoint_freq=0, threads=cfg.threads, progress=False,
+            hyperparams=str(hp_file), env_id=cfg.env_id, env_kwargs=env_kwargs,
+            argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
+        )  # fmt: skip
 
         def after_eval(entry: dict[str, Any]) -> bool:
             step = int(entry["timesteps"])
             return report(float(entry.get("h_rms_m", math.nan)), step, step)
 
-        train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
-        s = Settings(
-            algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here (fastppo has its own trial)
-            seed=seed,
-            out=str(run_dir / "run"),
-            timesteps=cfg.timesteps,
-            eval_freq=cfg.eval_freq,
-            eval_episodes=cfg.eval_episodes,
-            checkpoint_freq=0,
-            threads=cfg.threads,
-            progress=False,
-            hyperparams=str(hp_file),
-            env_id=cfg.env_id,
-            env_kwargs=env_kwargs,
-            argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
+        record = train(s, after_eval=after_eval)
+        last = record.get("last_eval") or {}
+        keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
+        attrs = {f"last_eval_{k}": last[k] for k in keys if k in last}
+        return record, attrs, lambda: load_model(find_models(out)[0])
+
+    def fit_fast() -> tuple[dict[str, Any], dict[str, Any], Any]:
+        run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
+        run["threads"] = cfg.threads
+        s = fastppo.FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
+        resumed = _resume_fastppo(study, trial, s, out)
+        if resumed is not None:
+            trial.set_user_attr("resumed_from", resumed)
+        flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
+        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs " + repr(
+            json.dumps(env_kwargs)
         )
+        command += " --resume" if resumed else ""
+        config = {
+            "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
+            "fastppo_settings": s.to_json(),
+            "env_id": cfg.env_id,
+            "env_kwargs": env_kwargs,
+            "command": command,
+            "resumed_from": resumed,
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
 
-        def fit_and_validate() -> tuple[float, dict[str, float | None]]:
-            record = train(s, after_eval=after_eval)
-            last = record.get("last_eval") or {}
-            for key in ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward"):
-                if key in last:
-                    trial.set_user_attr(f"last_eval_{key}", last[key])
-            trial.set_user_attr("wall_time_s", record["wall_time_s"])
-            if pruned["pruned"]:
-                raise optuna.TrialPruned(f"pruned at step {last.get('timesteps')}")
-            return validate_model(run_dir / "run", cells)
+        def after_eval(row: dict[str, float]) -> bool:
+            # the pruner compares trials at the evaluation's scheduled step (a multiple of --eval-freq), the same in
+            # every trial whatever its batch size N T
+            at = int(row["env_steps"])
+            return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
 
-        return _validated_trial(trial, cells, fit_and_validate)
+        def log(msg: str) -> None:
+            with open(out / "train.log", "a", encoding="utf-8") as f:
+                f.write(msg + "\n")
 
-    return objective
+        record = fastppo.train(s, out, resume=resumed is not None, log=log, command=command, after_eval=after_eval)
+        last = record.get("last_eval") or {}
+        keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
+        attrs = {f"last_eval_{k}": last[f"eval_{k}"] for k in keys if f"eval_{k}" in last}
+        attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]}
 
+        def load() -> FastPolicy:
+            model, manifest = out / "model.zip", out / "run.json"
+            verify_sha256(model, str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
+            return FastPolicy.load(model)
 
-def _fastppo_trial(cfg: SweepConfig, study: Any, trial: Any, seed: int, run_dir: Path, cells: Sequence[Any]) -> float:
-    """One fast-PPO trial, in this process (module docstring, "Fast PPO"): settings from the base file (and the
-    sampler), training with the evaluations reported to the pruner, then the objective on ``cells``."""
-    import optuna
-
-    from amigo_gym.tools.training.fastppo import YAML_ENV_ID, FastPPOSettings, load_settings_yaml
-    from amigo_gym.tools.training.fastppo import train as train_fast
-
-    base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{FASTPPO}.yml"
-    hp = load_settings_yaml(base_file)
-    if cfg.mode == "hyperparams":
-        hp |= sample_fastppo(trial, cfg.timesteps)
-    hp_file = _write_trial_hp(trial, run_dir, YAML_ENV_ID, hp)
-    run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
-    run["threads"] = cfg.threads
-    env_kwargs = cfg.train_env_kwargs
-    s = FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
-    out = run_dir / "run"
-    resumed = _resume_fastppo(study, trial, s, out)
-    if resumed is not None:
-        trial.set_user_attr("resumed_from", resumed)
-    flags = [f"--{k.replace('_', '-')} {v}" for k, v in run.items()]
-    command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {' '.join(flags)} --env-kwargs " + repr(
-        json.dumps(env_kwargs)
-    )
-    train_command = command + (" --resume" if resumed else "")
-    config = {
-        "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
-        "fastppo_settings": s.to_json(),
-        "env_id": cfg.env_id,
-        "env_kwargs": env_kwargs,
-        "command": train_command,
-        "resumed_from": resumed,
-        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-    }
-    atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
-    report, pruned = _reporter(cfg, trial)
-
-    def after_eval(row: dict[str, float]) -> bool:
-        # the pruner compares trials at equal steps: the evaluation's scheduled step (a multiple of --eval-freq), the
-        # same in every trial whatever its batch size N T
-        at = int(row["env_steps"])
-        return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
-
-    def log(msg: str) -> None:
-        with open(out / "train.log", "a", encoding="utf-8") as f:
-            f.write(msg + "\n")
+        return record, attrs, load
 
     def fit_and_validate() -> tuple[float, dict[str, float | None]]:
-        record = train_fast(s, out, resume=resumed is not None, log=log, command=train_command, after_eval=after_eval)
-        last = record.get("last_eval") or {}
-        for key in ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure"):
-            if f"eval_{key}" in last:
-                trial.set_user_attr(f"last_eval_{key}", last[f"eval_{key}"])
-        trial.set_user_attr("last_eval_timesteps", record["timesteps"])
-        trial.set_user_attr("wall_time_s", record["wall_time_s"])
-        trial.set_user_attr("train_sps", record["train_sps"])
-        if pruned["pruned"]:
-            raise optuna.TrialPruned(f"pruned at step {record['timesteps']}")
-        return validate_fast_model(out, cells)
+        record, attrs, load = fit_fast() if fast else fit_sb3()
+        for key, value in (attrs | {"wall_time_s": record["wall_time_s"]}).items():
+            trial.set_user_attr(key, value)
+        if pruned:
+            raise optuna.TrialPruned(f"pruned at step {pruned[0]}")
+        return validate_agent(load(), cells)
 
     return _validated_trial(trial, cells, fit_and_validate)
 
@@ -905,11 +855,8 @@ def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
 
 
 def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
-    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary.
-
-    ``SIGTERM`` is handled as ``Ctrl-C`` (``KeyboardInterrupt``, after the trial was queued again).
-    ``opened``: receives the study as soon as it is open (its caller still has it after an interrupt).
-    """
+    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary. ``SIGTERM``
+    is ``Ctrl-C``; ``opened`` receives the study as soon as it is open."""
     import optuna
     from optuna.study import MaxTrialsCallback
     from optuna.trial import TrialState
@@ -1026,11 +973,9 @@ def replace_yaml_block(text: str, key: str, block: str) -> str:
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
-    """Write the best COMPLETE trial's hyperparameters (its user attribute ``hyperparams``: the base file's values with
-    the sampled ones; ``n_timesteps`` / ``total_steps`` stay the base file's) under ``env_id`` in the YAML file ``path``
-    (``--save-best``), with comment lines naming the study's command, the trial and its validation value; the file's
-    other keys kept (:func:`replace_yaml_block`), written atomically and read back. The mapping written (``None``: no
-    COMPLETE trial, nothing written)."""
+    """``--save-best``: the best COMPLETE trial's hyperparameters (user attribute ``hyperparams``) under ``env_id`` in
+    the YAML file ``path``, with comment lines naming the study's command, the trial and its value, the other keys
+    kept (:func:`replace_yaml_block`); the mapping written (``None``: no COMPLETE trial, nothing written)."""
     import yaml
     from optuna.trial import TrialState
 
@@ -1079,11 +1024,10 @@ def _spawn_workers(cfg: SweepConfig) -> list[int]:
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()
-    base = [a for a in cfg.argv]
     procs: list[subprocess.Popen[bytes]] = []
     try:
         for i in range(cfg.n_jobs):
-            args = [*base, "--n-jobs", "1", "--worker-index", str(i)]
+            args = [*cfg.argv, "--n-jobs", "1", "--worker-index", str(i)]
             procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args]))
         return [p.wait() for p in procs]
     except BaseException:

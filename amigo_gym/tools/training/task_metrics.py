@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import gymnasium as gym
@@ -86,6 +86,10 @@ class Scenario:
             raise ValueError(f"Scenario {self.name}: seeds must be distinct, got {self.seeds!r}")
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
             raise ValueError(f"Scenario {self.name}: max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    def cut(self, episodes: int, max_steps: int) -> Scenario:
+        """The scenario on its first ``episodes`` seeds, episodes of at most ``max_steps`` steps."""
+        return replace(self, seeds=self.seeds[:episodes], max_steps=min(self.max_steps, max_steps))
 
     @property
     def episodes(self) -> int:
@@ -360,11 +364,9 @@ def run_vector_episodes(
     """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
     ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
 
-    The loop of :func:`run_scenario`: the agent predicts for the whole batch at every step
-    (a constant batch size, so that a network's outputs do not depend on how many episodes are still running;
-    ``episode_start`` marks the rows that ended, which the autoreset restarted). A row's episode is its steps up
-    to its first end; the rows that have ended keep being stepped (and ignored) until every episode has ended.
-    Reaching the end of an open path (AmigoBot-v1's ``info["end_of_path"]``) ends an episode as a success: its
+    The agent predicts for the whole batch at every step (a constant batch size: a network's outputs do not depend
+    on how many episodes still run; ``episode_start`` marks the rows the autoreset restarted). A row's episode is
+    its steps up to its first end. Reaching the end of an open path (``info["end_of_path"]``) is a success: the
     recorder's ``terminated`` stays False.
 
     Args:

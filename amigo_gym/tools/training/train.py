@@ -107,24 +107,19 @@ class Settings:
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
-        if self.algo not in ALGOS:
-            raise ValueError(f"algo must be one of {list(ALGOS)}, got {self.algo!r}")
-        if self.export_model not in ("final", "best"):
-            raise ValueError(f"export_model must be 'final' or 'best', got {self.export_model!r}")
-        if self.env_id not in ENV_IDS:
-            raise ValueError(f"env_id must be one of {list(ENV_IDS)}, got {self.env_id!r}")
+        for name, allowed in (("algo", ALGOS), ("export_model", ("final", "best")), ("env_id", ENV_IDS),
+                              ("vec", ("auto", "native", "dummy"))):  # fmt: skip
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {list(allowed)}, got {getattr(self, name)!r}")
         if not isinstance(self.env_kwargs, dict):
             raise ValueError(f"env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
-        if self.vec not in ("auto", "native", "dummy"):
-            raise ValueError(f"vec must be 'auto', 'native' or 'dummy', got {self.vec!r}")
-        for name, low in (("seed", 0), ("eval_freq", 0), ("checkpoint_freq", 0), ("eval_episodes", 1), ("threads", 1)):
+        lows = {"seed": 0, "eval_freq": 0, "checkpoint_freq": 0, "eval_episodes": 1, "threads": 1, "timesteps": 1}
+        for name, low in (lows | {"n_envs": 1}).items():
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+            if (v is not None or name not in ("timesteps", "n_envs")) and (
+                isinstance(v, bool) or not isinstance(v, int) or v < low
+            ):
                 raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
-        for name in ("timesteps", "n_envs"):
-            v = getattr(self, name)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
-                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
 
 
 # --------------------------------------------------------------------------- small utilities
@@ -342,25 +337,21 @@ def _callbacks(
 
 
 def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) -> Path:
-    """A checkpoint of ``model`` (and its replay buffer for SAC/TD3): :func:`amigo_gym.tools.runs.save_checkpoint`."""
+    """A checkpoint of ``model`` (with its replay buffer for SAC/TD3 and its VecNormalize statistics, part of the
+    state): :func:`amigo_gym.tools.runs.save_checkpoint`."""
 
     def write(folder: Path) -> list[str]:
         model.save(folder / "model.zip")
         fault_point("checkpoint:model")
-        if algo not in OFF_POLICY:
-            return ["model.zip"]
-        model.save_replay_buffer(folder / "replay_buffer.pkl")
-        fault_point("checkpoint:replay")
-        return ["model.zip", "replay_buffer.pkl"]
-
-    vecnormalize = model.get_vec_normalize_env()
-    if vecnormalize is not None:  # its statistics are part of the state: saved (and checked) with the model
-        inner = write
-
-        def write(folder: Path) -> list[str]:
-            names = inner(folder)
+        names = ["model.zip"]
+        if algo in OFF_POLICY:
+            model.save_replay_buffer(folder / "replay_buffer.pkl")
+            fault_point("checkpoint:replay")
+            names.append("replay_buffer.pkl")
+        if (vecnormalize := model.get_vec_normalize_env()) is not None:
             vecnormalize.save(folder / VECNORMALIZE)
-            return [*names, VECNORMALIZE]
+            names.append(VECNORMALIZE)
+        return names
 
     return runs.save_checkpoint(out, algo, int(model.num_timesteps), write, wall_time_s)
 
@@ -394,13 +385,8 @@ def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int,
 
 # --------------------------------------------------------------------------- training
 def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any]:
-    """Run (or resume) one training run; return the run record (also written to ``run.json``).
-
-    ``after_eval`` is called after every periodic evaluation with its ``eval.json`` entry (``timesteps``,
-    ``mean_reward``, ``h_rms_m``, ...); returning ``False`` stops training (used by
-    :mod:`amigo_gym.tools.training.sweep` for pruning). The run then ends normally, with its model.
-
-    The run folder is locked for the whole call (:class:`amigo_gym.tools.runs.RunLock`).
+    """Run (or resume) one training run, its folder locked; the run record (also ``run.json``). ``after_eval(entry)``
+    after each evaluation (its ``eval.json`` entry): ``False`` stops training (the run ends normally, with its model).
 
     Raises:
         RunLockedError: another process uses the folder.
@@ -504,15 +490,11 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         runs.restore_snapshot(out, None if loaded is None else loaded[0])
         if recovered:
             config = _new_config(s, total, n_envs, hp_path, hp) | {"recovered": True}
-        resume_entry = {
-            "command": "amigo-gym train " + " ".join(s.argv),
-            "from_step": 0 if loaded is None else loaded[0].step,
-        }
-        config["resumes"] = [*config.get("resumes", []), resume_entry | {"git_revision": git_revision()}]
-        atomic_write_json(config_file, config, parents=True)
+        entry = {"command": "amigo-gym train " + " ".join(s.argv), "from_step": 0 if loaded is None else loaded[0].step}
+        config["resumes"] = [*config.get("resumes", []), entry | {"git_revision": git_revision()}]
     else:
         config = _new_config(s, total, n_envs, hp_path, hp)
-        atomic_write_json(config_file, config, parents=True)
+    atomic_write_json(config_file, config, parents=True)
 
     if loaded is not None:
         ck, model = loaded
