@@ -76,6 +76,7 @@ CSV_COLUMNS: dict[str, str] = {
 FIT_BOUNDS = MAX_TRUE_DEVIATION
 #: search box of the ramp rates in :func:`identify`, as factors of the nominal ones
 RAMP_FACTORS = (0.1, 10.0)
+RAMP_NAMES = ("acceleration", "rot_acceleration")
 XTOL = 1e-10
 _ROBOT_FIELDS = frozenset(f.name for f in fields(RobotParams))
 _ACTUATOR_FIELDS = frozenset(f.name for f in fields(ActuatorParams))
@@ -156,14 +157,10 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise LogError(f"{p.name}: column(s) {dup} appear more than once in the header (line {header_line})")
-    need = ["t", "cmd_w1", "cmd_w2"]
-    missing = [c for c in need if c not in names]
-    has_pose = [c in names for c in ("x", "y", "theta")]
-    has_rates = [c in names for c in ("w1", "w2")]
-    if any(has_pose) and not all(has_pose):
-        missing += [c for c, h in zip(("x", "y", "theta"), has_pose, strict=True) if not h]
-    if any(has_rates) and not all(has_rates):
-        missing += [c for c, h in zip(("w1", "w2"), has_rates, strict=True) if not h]
+    has_pose, has_rates = ([c in names for c in g] for g in (("x", "y", "theta"), ("w1", "w2")))
+    missing = [c for c in ("t", "cmd_w1", "cmd_w2") if c not in names]
+    for group, has in ((("x", "y", "theta"), has_pose), (("w1", "w2"), has_rates)):
+        missing += [c for c, h in zip(group, has, strict=True) if any(has) and not h]
     if missing:
         raise LogError(f"{p.name}: missing column(s) {missing}; the header has {names} (a log needs t, cmd_w1, "
                        "cmd_w2 and x, y, theta and/or w1, w2)")  # fmt: skip
@@ -459,25 +456,16 @@ def simulate(
         ta, tb = ts[k], ts[k + 1]
         lo, hi = lo_all[k], lo_all[k + 1]
         cur = c0 if lo == 0 else cmds[lo - 1]
-        if hi == lo:
-            s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], cur[0], cur[1], 0.0, tb - ta, nominal, act,
-                              r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
-        else:
-            # the first switch inside the first call; each further switch starts a call of its own
-            edges = [*switch[lo + 1 : hi].tolist(), tb]
-            new = cmds[lo]
-            seg_end = edges[0]
-            s = actuator_step(x, y, beta, w1, w2, cur[0], cur[1], new[0], new[1], float(switch[lo]) - ta,
-                              seg_end - ta, nominal, act, r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-            x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
-            for i in range(1, len(edges)):
-                c = cmds[lo + i]
-                length = edges[i] - edges[i - 1]
-                if length > 0.0:
-                    s = actuator_step(x, y, beta, w1, w2, c[0], c[1], c[0], c[1], 0.0, length, nominal, act,
-                                      r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
-                    x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
+        # calls (held, new, switch time, length): the first switch inside the first call, each further switch
+        # starting a call of its own (skipped when of length 0)
+        edges = [*switch[lo + 1 : hi].tolist(), tb]
+        calls = [(cur, cur, 0.0, tb - ta)] if hi == lo else [(cur, cmds[lo], float(switch[lo]) - ta, edges[0] - ta)]
+        calls += [(cmds[lo + i], cmds[lo + i], 0.0, edges[i] - edges[i - 1]) for i in range(1, len(edges))]
+        for i, (a, b, t_switch, length) in enumerate(calls):
+            if i == 0 or length > 0.0:
+                s = actuator_step(x, y, beta, w1, w2, a[0], a[1], b[0], b[1], t_switch, length, nominal, act,
+                                  r1t, r2t, l1t, n_sub=n_sub)  # fmt: skip
+                x, y, beta, w1, w2 = float(s.x), float(s.y), float(s.beta), float(s.w1), float(s.w2)
         out[k + 1] = (x, y, beta, w1, w2)
     return Replay(t.copy(), out[:, :3].copy(), out[:, 3:].copy())
 
@@ -509,22 +497,27 @@ def summarize(log: Log, rep: Replay) -> dict[str, Any]:
     ``rms_wheel_rate_error_rad_s`` (over both wheels), ``max_wheel_rate_error_rad_s``.
     """
     e = errors(log, rep)
-    out: dict[str, Any] = {"n_samples": int(log.t_meas.size), "duration_s": float(log.t_meas[-1] - log.t_meas[0])}
-    for key in ("rms_position_error_m", "max_position_error_m", "final_position_error_m", "rms_heading_error_rad",
-                "max_heading_error_rad", "rms_wheel_rate_error_rad_s", "max_wheel_rate_error_rad_s"):  # fmt: skip
-        out[key] = None
-    if "position" in e:
-        p, h = e["position"], e["heading"]
-        out["rms_position_error_m"] = float(np.sqrt(np.mean(p**2)))
-        out["max_position_error_m"] = float(np.max(p))
-        out["final_position_error_m"] = float(p[-1])
-        out["rms_heading_error_rad"] = float(np.sqrt(np.mean(h**2)))
-        out["max_heading_error_rad"] = float(np.max(np.abs(h)))
-    if "rate1" in e:
-        r = np.concatenate([e["rate1"], e["rate2"]])
-        out["rms_wheel_rate_error_rad_s"] = float(np.sqrt(np.mean(r**2)))
-        out["max_wheel_rate_error_rad_s"] = float(np.max(np.abs(r)))
-    return out
+    p, h = e.get("position"), e.get("heading")
+    r = np.concatenate([e["rate1"], e["rate2"]]) if "rate1" in e else None
+
+    def stat(f: Any, a: Array | None) -> float | None:
+        return None if a is None else float(f(a))
+
+    return {
+        "n_samples": int(log.t_meas.size),
+        "duration_s": float(log.t_meas[-1] - log.t_meas[0]),
+        "rms_position_error_m": stat(_rms, p),
+        "max_position_error_m": stat(np.max, p),
+        "final_position_error_m": stat(lambda a: a[-1], p),
+        "rms_heading_error_rad": stat(_rms, h),
+        "max_heading_error_rad": stat(lambda a: np.max(np.abs(a)), h),
+        "rms_wheel_rate_error_rad_s": stat(_rms, r),
+        "max_wheel_rate_error_rad_s": stat(lambda a: np.max(np.abs(a)), r),
+    }
+
+
+def _rms(a: Array) -> float:
+    return float(np.sqrt(np.mean(a**2)))
 
 
 def placed(pose: Array, start: Sequence[float] | Array) -> Array:
@@ -688,24 +681,20 @@ class Fit:
     def robot_json(self, log: Log, nominal: RobotParams) -> dict[str, Any]:
         """The content of ``robot.json``: the estimates under ``gym.make``'s names (``r1``, ``r2``, ``l1`` [m],
         ``delay`` [s], the four ramp rates, fitted or nominal: the robot as replayed), then the report."""
-        out: dict[str, Any] = {"format": ROBOT_FORMAT}
-        out["r1"], out["r2"], out["l1"] = self.robot.r1, self.robot.r2, self.robot.l1
-        out["delay"] = self.actuators.delay
-        for k in ("acceleration", "deceleration", "rot_acceleration", "rot_deceleration"):
-            out[k] = getattr(self.actuators, k)  # fitted or the nominal ramps: the robot as replayed
-        out["uncertainty"] = {k: self.uncertainty.get(k) for k in (*self.fitted, "x0", "y0", "theta0")
-                              if k in self.uncertainty}  # fmt: skip
-        out["fitted"] = list(self.fitted)
-        out["fixed"] = dict(self.fixed)
-        if "x0" in self.values:
-            out["start_pose"] = [self.values["x0"], self.values["y0"], self.values["theta0"]]
-        out["replay_before"] = self.before
-        out["replay_after"] = self.after
+        act, v = self.actuators, self.values
+        out: dict[str, Any] = {"format": ROBOT_FORMAT, "r1": self.robot.r1, "r2": self.robot.r2, "l1": self.robot.l1}
+        out |= {k: getattr(act, k) for k in ("delay", "acceleration", "deceleration", "rot_acceleration",
+                                              "rot_deceleration")}  # fmt: skip
+        out["uncertainty"] = {
+            k: self.uncertainty[k] for k in (*self.fitted, "x0", "y0", "theta0") if k in self.uncertainty
+        }
+        out |= {"fitted": list(self.fitted), "fixed": dict(self.fixed)}
+        if "x0" in v:
+            out["start_pose"] = [v["x0"], v["y0"], v["theta0"]]
+        out |= {"replay_before": self.before, "replay_after": self.after}
         out["fit"] = {"cost": self.cost, "n_residuals": self.n_residuals, "model_evaluations": self.nfev,
                       "ramping_s": self.excited}  # fmt: skip
-        out["nominal"] = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1}
-        out["log"] = log.source
-        return out
+        return out | {"nominal": {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1}, "log": log.source}
 
 
 def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | None = None) -> dict[str, float]:
@@ -766,32 +755,16 @@ def identify(
     if log.pose is not None:
         names += ["r1", "r2", "l1"]
     names.append("delay")
-    for k in ("acceleration", "rot_acceleration"):
-        if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step):
-            names.append(k)
+    names += [k for k in RAMP_NAMES if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step)]
     n_fit = len(names)
     if log.pose is not None:
         names += ["x0", "y0", "theta0"]
     nom = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1, "delay": base_act.delay,
            "acceleration": base_act.acceleration, "rot_acceleration": base_act.rot_acceleration}  # fmt: skip
-    lo, hi, x_scale = [], [], []
-    for n in names:
-        if n in ("r1", "r2", "l1"):
-            lo.append(nom[n] * (1 - FIT_BOUNDS))
-            hi.append(nom[n] * (1 + FIT_BOUNDS))
-            x_scale.append(nom[n] * 0.01)
-        elif n == "delay":
-            lo.append(0.0)
-            hi.append(MAX_DELAY)
-            x_scale.append(0.01)
-        elif n in ("acceleration", "rot_acceleration"):
-            lo.append(nom[n] * RAMP_FACTORS[0])
-            hi.append(nom[n] * RAMP_FACTORS[1])
-            x_scale.append(nom[n] * 0.1)
-        else:
-            lo.append(-np.inf)
-            hi.append(np.inf)
-            x_scale.append(0.01)
+    box = {"delay": (0.0, MAX_DELAY, 0.01)}  # (low, high, scale) of each parameter; the start pose: unbounded
+    box |= {n: (nom[n] * (1 - FIT_BOUNDS), nom[n] * (1 + FIT_BOUNDS), nom[n] * 0.01) for n in ("r1", "r2", "l1")}
+    box |= {n: (nom[n] * RAMP_FACTORS[0], nom[n] * RAMP_FACTORS[1], nom[n] * 0.1) for n in RAMP_NAMES}
+    lo, hi, x_scale = zip(*(box.get(n, (-np.inf, np.inf, 0.01)) for n in names), strict=True)
     pose0 = None if log.pose is None else log.pose[0]
     rate_w = np.array([nominal.r1, nominal.r2]) * step
 
@@ -840,16 +813,13 @@ def identify(
     )  # fmt: skip
     jac = np.asarray(sol.jac, dtype=np.float64)
     n_res = int(sol.fun.size)
-    dof = max(n_res - len(names), 1)
-    s2 = 2.0 * float(sol.cost) / dof
-    jtj = jac.T @ jac
-    unc: dict[str, float | None]
+    s2 = 2.0 * float(sol.cost) / max(n_res - len(names), 1)
+    unc: dict[str, float | None] = dict.fromkeys(names)
     try:
-        cov = np.linalg.inv(jtj) * s2
-        diag = np.diag(cov)
+        diag = np.diag(np.linalg.inv(jac.T @ jac) * s2)
         unc = {n: (float(np.sqrt(v)) if v >= 0 and np.isfinite(v) else None) for n, v in zip(names, diag, strict=True)}
     except np.linalg.LinAlgError:
-        unc = dict.fromkeys(names)
+        pass
     values = {n: float(v) for n, v in zip(names, sol.x, strict=True)}
     robot, act, _ = unpack(sol.x)
     fitted = tuple(names[:n_fit])

@@ -22,68 +22,35 @@ from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
-from amigo_gym.envs.base import (
-    RESET_OPTIONS,
-    TRAIL_LENGTH,
-    VECTOR_KERNELS,
-    check_kernel,
-    check_vector_args,
-    info_row,
-    parse_pose_option,
-)
+from amigo_gym.envs.base import TRAIL_LENGTH, VECTOR_KERNELS, check_kernel, check_vector_args
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.model.kinematics import h_position
 from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.sim import fast_v1
 from amigo_gym.task import v1 as tracking
 
-__all__ = [
-    "ENV_SETTINGS",
-    "RESET_OPTIONS",
-    "AmigoBotEnv",
-    "AmigoBotVectorEnv",
-    "info_row",
-    "make_env_params",
-    "parse_pose_option",
-]
-
 Array = NDArray[np.float64]
 
 #: names of the task settings accepted as keywords by the environments (every ``EnvParams`` field)
 ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
 
-#: the values of the single env's ``kernel`` keyword
-SINGLE_KERNELS: tuple[str, ...] = fast_v1.KERNELS
 
-
-def _robot_params(owner: str, robot: RobotParams | Mapping[str, Any]) -> RobotParams:
-    """A :class:`RobotParams`, or one made from a mapping of its field names (``TypeError`` on others)."""
-    if isinstance(robot, RobotParams):
-        return robot
-    if not isinstance(robot, Mapping):
-        raise TypeError(f"{owner}: robot must be a RobotParams or a mapping of its fields, got {type(robot).__name__}")
-    names = {f.name for f in fields(RobotParams)}
-    bad = sorted(str(k) for k in robot if k not in names)
+def _from_mapping(owner: str, what: str, cls: type[Any], value: Any) -> Any:
+    """``value`` if a ``cls``, or a ``cls`` made from a mapping of its field names (``TypeError`` on anything else,
+    or on an unknown field, naming the allowed ones)."""
+    if isinstance(value, cls):
+        return value
+    name = ("an " if cls is EnvParams else "a ") + cls.__name__
+    if not isinstance(value, Mapping):
+        raise TypeError(f"{owner}: {what} must be {name} or a mapping of its fields, got {type(value).__name__}")
+    names = [f.name for f in fields(cls)]
+    bad = sorted(str(k) for k in value if k not in names)
     if bad:
-        raise TypeError(f"{owner}: unknown robot field(s) {bad}; allowed: {', '.join(sorted(names))}")
-    return RobotParams(**robot)
-
-
-def _env_params(owner: str, params: EnvParams | Mapping[str, Any] | None) -> EnvParams:
-    """An :class:`EnvParams`, or one made from a mapping of its field names (``robot`` may be a mapping too)."""
-    if params is None:
-        return EnvParams()
-    if isinstance(params, EnvParams):
-        return params
-    if not isinstance(params, Mapping):
-        raise TypeError(f"{owner}: params must be an EnvParams or a mapping of its fields, got {type(params).__name__}")
-    bad = sorted(str(k) for k in params if k not in ENV_SETTINGS)
-    if bad:
-        raise TypeError(f"{owner}: unknown params field(s) {bad}; allowed: {', '.join(ENV_SETTINGS)}")
-    kw = dict(params)
-    if "robot" in kw:
-        kw["robot"] = _robot_params(owner, kw["robot"])
-    return EnvParams(**kw)
+        raise TypeError(f"{owner}: unknown {what} field(s) {bad}; allowed: {', '.join(names)}")
+    kw = dict(value)
+    if "robot" in kw and cls is EnvParams:
+        kw["robot"] = _from_mapping(owner, "robot", RobotParams, kw["robot"])
+    return cls(**kw)
 
 
 def make_env_params(
@@ -114,11 +81,11 @@ def make_env_params(
         allowed = ", ".join(("params", *ENV_SETTINGS))
         names = ", ".join(map(repr, unknown))
         raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")
-    base = _env_params(owner, params)
-    if robot is not None:
-        settings["robot"] = _robot_params(owner, robot)
-    elif "robot" in settings:
-        settings["robot"] = _robot_params(owner, settings["robot"])
+    base = EnvParams() if params is None else _from_mapping(owner, "params", EnvParams, params)
+    if robot is not None or "robot" in settings:
+        settings["robot"] = _from_mapping(
+            owner, "robot", RobotParams, settings.get("robot") if robot is None else robot
+        )
     return replace(base, **settings) if settings else base
 
 
@@ -242,6 +209,7 @@ class AmigoBotEnv(AmigoBotV1Env):
 
     #: points of H kept for the rendered trail (the most recent ones)
     trail_length: int = TRAIL_LENGTH
+    _v0 = True
 
     def __init__(
         self,
@@ -253,17 +221,12 @@ class AmigoBotEnv(AmigoBotV1Env):
         **settings: Any,
     ) -> None:
         owner = type(self).__name__
-        check_kernel(owner, kernel, SINGLE_KERNELS)
+        check_kernel(owner, kernel, fast_v1.KERNELS)
         e = make_env_params(owner, params, robot, **settings)
         super().__init__(render_mode, params=tracking.v0_configuration(e), kernel=kernel)
         #: the AmigoBot-v1 settings this env runs (:func:`amigo_gym.task.v1.v0_configuration` of :attr:`params`)
         self.tracking_params: tracking.TrackingParams = self._k.params
         self.params = e  # type: ignore[assignment]
-
-    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
-        """The path, and no feasibility report: :class:`~amigo_gym.model.params.EnvParams` checked that the task is
-        drivable (AmigoBot-v0's check, its messages)."""
-        return p.path, None
 
     @property
     def pose(self) -> Array:
@@ -320,6 +283,8 @@ class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
     ``render()``: the renderers are dropped and recreated when next used).
     """
 
+    _v0 = True
+
     def __init__(
         self,
         num_envs: int = 1,
@@ -343,8 +308,3 @@ class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
         #: the path every robot follows (:func:`amigo_gym.paths.make_path` of :attr:`params`)
         self.path: Any = p.path
         self.params = e  # type: ignore[assignment]
-
-    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
-        """The path, and no feasibility report: :class:`~amigo_gym.model.params.EnvParams` checked that the task is
-        drivable (AmigoBot-v0's check, its messages)."""
-        return p.path, None

@@ -12,9 +12,8 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
-from amigo_gym.envs.base import RESET_OPTIONS, AmigoBotBase, Array, ObsArray, box_spaces
+from amigo_gym.envs.base import AmigoBotBase, Array, ObsArray, box_spaces
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.sim import fast_v1
@@ -22,22 +21,11 @@ from amigo_gym.sim import layout_v1 as _L
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1Env", "make_spaces_v1", "V1_RESET_OPTIONS", "record_info", "reference_record", "v0_record_info"]
-
-#: keys accepted in ``reset(options=...)``
-V1_RESET_OPTIONS: tuple[str, ...] = RESET_OPTIONS
-
-
-def make_spaces_v1(p: tracking.TrackingParams) -> tuple[spaces.Box, spaces.Box]:
-    """The action space ``Box(-1, 1, (2,), float32)`` and the observation space (:func:`tracking.obs_bounds`)."""
-    return box_spaces(tracking.obs_bounds(p))
-
 
 def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
-    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, its scalars, the reward's
-    exponentials and terms, the reward) of the reference's state, outcome and draws: ``(RECORD_WIDTH,)`` for one
-    robot's floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales the command; ``castor`` [rad] the
-    castor's angle (AmigoBot-v0's info). :func:`record_info` and :func:`v0_record_info` build the infos from it."""
+    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state,
+    outcome and draws: ``(RECORD_WIDTH,)`` for floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales
+    the command; ``castor`` [rad] is the castor's angle (AmigoBot-v0's info)."""
     track, speed, heading, smooth = out.terms
     cols = (
         st.x, st.y, st.beta, out.h_x, out.h_y, st.w1, st.w2, st.a1 * w_max, st.a2 * w_max, st.alpha1, st.alpha2,
@@ -52,7 +40,6 @@ def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, no
 _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
     (..., r) for r in (_L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP)
 )
-_R_COMMAND, _R_SLIP = _L.R_COMMAND, _L.R_SLIP
 #: the record's scalars (from ``R_ERROR`` on: ``record[R_ERROR:]``, record_info's ``values``) by index
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
     i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
@@ -77,22 +64,18 @@ def record_info(
     end_of_path: Any,
     path: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """AmigoBot-v1's info of info records (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the compiled step's,
-    :func:`amigo_gym.sim._kernels_v1.fill_record`, or the reference's, :func:`reference_record`): the one builder of
-    AmigoBot-v1's info, for the single env (one robot) and the vector env (its compact infos); :func:`v0_record_info`
-    is AmigoBot-v0's.
+    """AmigoBot-v1's info (one robot's, or the vector env's compact infos) of info records
+    (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, the compiled step's or :func:`reference_record`'s).
 
     Args:
-        record: ``(RECORD_WIDTH,)`` (one robot) or ``(N, RECORD_WIDTH)``, a new array: the info's seven arrays are
-            views of its last axis.
-        values: the record's scalars (``record[..., R_ERROR:]``) indexed by entry: their floats (one robot) or
-            ``record.T[R_ERROR:]`` (``(N,)`` views).
-        time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: as the
-            env gives them (floats or columns). path: the path's description (the single env's only), or None.
+        record: ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``, a new array: the info's arrays are views of it.
+        values: the record's scalars (``record[..., R_ERROR:]``): floats (one robot) or ``(N,)`` views.
+        time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: floats
+            or columns. path: the path's description (the single env's only), or None.
     """
     v_true = values[_VT]
     v_ref = values[_VREF]
-    info = {
+    return {
         "pose": record[_POSE],
         "h_position": record[_H],
         "cross_track_error": values[_E],
@@ -111,14 +94,12 @@ def record_info(
             "smooth": values[_SMOOTH],
         },
         "time": time,
+        **({} if path is None else {"path": path}),
+        "true_robot": true_robot,
+        "delay": delay,
+        "slip": record[_SLIP],
+        "end_of_path": end_of_path,
     }
-    if path is not None:
-        info["path"] = path
-    info["true_robot"] = true_robot
-    info["delay"] = delay
-    info["slip"] = record[_SLIP]
-    info["end_of_path"] = end_of_path
-    return info
 
 
 class AmigoBotV1Env(AmigoBotBase):
@@ -144,7 +125,7 @@ class AmigoBotV1Env(AmigoBotBase):
     * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
       acceleration than the robot has is refused at construction (``feasibility="error"``, the default), and so
       is a ``"random"`` or ``"mixed"`` task that can draw such a path (a bound over the family,
-      :func:`amigo_gym.task.v1.check_drawn_feasible`); ``"warn"`` and ``"off"`` run it. The report (where the
+      :func:`amigo_gym.task.v1.drawn_feasibility_problem`); ``"warn"`` and ``"off"`` run it. The report (where the
       limits are exceeded) is ``env.feasibility`` and ``info["feasibility"]`` at reset.
 
     ## Action Space
@@ -220,6 +201,8 @@ class AmigoBotV1Env(AmigoBotBase):
 
     #: points of H kept for the rendered trail (the most recent ones)
     trail_length: int = 4096
+    #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
+    _v0 = False
 
     def __init__(
         self, render_mode: str | None = None, *, params: Any = None, kernel: str = "auto", **settings: Any
@@ -227,7 +210,7 @@ class AmigoBotV1Env(AmigoBotBase):
         owner = type(self).__name__
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
-        self._init_base(render_mode, p.dt, make_spaces_v1(p))
+        self._init_base(render_mode, p.dt, box_spaces(tracking.obs_bounds(p)))
         self._k = tracking.constants(p)
         # the compiled step (amigo_gym.sim.fast_v1), for the episodes on its paths; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
@@ -237,7 +220,7 @@ class AmigoBotV1Env(AmigoBotBase):
         self._steps = 0
         self._delay = 0.0
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)  # (feasibility=)
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
         self._castor = 0.0  # the castor's rolling angle [rad] (v0's info) on the reference route
@@ -249,11 +232,6 @@ class AmigoBotV1Env(AmigoBotBase):
         self._episode: tracking.Episode | None = None
         self._path_info: dict[str, Any] = {}
         self._true_robot: dict[str, float] = {}
-
-    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
-        """The fixed path (``None``: drawn) and its feasibility report: :func:`amigo_gym.task.v1.check_task`, which
-        refuses an infeasible task as ``p.feasibility`` says."""
-        return tracking.check_task(p)
 
     # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
     def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
@@ -284,7 +262,10 @@ class AmigoBotV1Env(AmigoBotBase):
             obs = np.empty(self._obs_shape, dtype=np.float32)
             kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, t)
             kern.fill()
-            info = self._kernel_info()
+            rec = kern.record.copy()
+            rec[_L.R_COMMAND] = self._ring[0]  # a start: the command the robot was executing, no slip
+            rec[_L.R_SLIP] = 0.0
+            info = self._record_info(rec, kern.scalars.tolist())
         else:
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
@@ -324,18 +305,14 @@ class AmigoBotV1Env(AmigoBotBase):
         """
         kern = self._kernel
         assert kern is not None
-        steps = self._steps
         kern.run_record(self._ring_step, a1, a2, *kern.args)
-        self._steps = steps = steps + 1
-        rec = kern.record.copy()  # the info's seven arrays are views of this one new array
+        self._steps += 1
         v = kern.scalars.tolist()
-        if self.v0_params is not None:
-            return kern.obs.copy(), v[_REWARD], v[_TERM] != 0.0, v0_record_info(rec, v, steps * self.params.dt)
-        info = record_info(
-            rec, v, steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
-            self._path_info.copy(),
-        )  # fmt: skip
-        return kern.obs.copy(), v[_REWARD], self._end(v[_TERM] != 0.0, info), info
+        info = self._record_info(kern.record.copy(), v)  # the info's seven arrays are views of this one new array
+        terminated = v[_TERM] != 0.0
+        if self.v0_params is None:
+            terminated = self._end(terminated, info)
+        return kern.obs.copy(), v[_REWARD], terminated, info
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
         """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`, of H at
@@ -352,22 +329,15 @@ class AmigoBotV1Env(AmigoBotBase):
         info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
         return terminated
 
-    def _kernel_info(self) -> dict[str, Any]:
-        """:meth:`_info` of a start state from the compiled step's info record (:attr:`amigo_gym.sim.fast_v1.StepKernel.
-        record` after :meth:`amigo_gym.sim.fast_v1.StepKernel.fill`, :data:`amigo_gym.sim.layout_v1.RECORD_ROWS`): no
-        slip, the command the robot was executing (the delay ring's); :meth:`_step_kernel` builds a step's."""
-        kern = self._kernel
-        assert kern is not None
-        rec = kern.record.copy()  # the info's seven arrays are views of this one new array
-        rec[_R_COMMAND] = self._ring[0]
-        rec[_R_SLIP] = 0.0
-        v = kern.scalars.tolist()
+    def _record_info(self, rec: Array, v: list[float]) -> dict[str, Any]:
+        """The info of an info record ``rec`` (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, a new array: the info's
+        arrays are views of it) and its scalars ``v`` (:func:`record_info`, or :func:`v0_record_info` with
+        AmigoBot-v0's settings)."""
+        time = self._steps * self.params.dt
         if self.v0_params is not None:
-            return v0_record_info(rec, v, self._steps * self.params.dt)
-        return record_info(
-            rec, v, self._steps * self.params.dt, self._true_robot.copy(), self._delay, v[_END] != 0.0,
-            self._path_info.copy(),
-        )  # fmt: skip
+            return v0_record_info(rec, v, time)
+        path = self._path_info.copy()
+        return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, path)
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace
@@ -385,15 +355,9 @@ class AmigoBotV1Env(AmigoBotBase):
     # ------------------------------------------------------------------ info
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
         """The info of the reference's state and outcome (:func:`reference_record`, then as :meth:`_step_kernel`)."""
-        st = self._state
-        assert st is not None
-        rec = reference_record(self._k.w_max, st, out, noise, self._castor)
-        v = rec[_L.R_ERROR :].tolist()
-        time = int(st.steps) * self.params.dt
-        if self.v0_params is not None:
-            return v0_record_info(rec, v, time)
-        path = self._path_info.copy()
-        return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, path)
+        assert self._state is not None
+        rec = reference_record(self._k.w_max, self._state, out, noise, self._castor)
+        return self._record_info(rec, rec[_L.R_ERROR :].tolist())
 
     def _render_state(self) -> dict[str, Any]:
         st = self._current_state()

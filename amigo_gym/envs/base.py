@@ -37,28 +37,6 @@ from amigo_gym.model.params import HEADING_LIMIT, POSE_LIMIT, show_value
 from amigo_gym.sim import fast_v1
 from amigo_gym.task import v0 as task
 
-__all__ = [
-    "RENDER_MODES",
-    "RESET_OPTIONS",
-    "TRAIL_LENGTH",
-    "VECTOR_KERNELS",
-    "AmigoBotBase",
-    "AmigoBotVectorBase",
-    "assign_rows",
-    "box_spaces",
-    "check_kernel",
-    "check_render_mode",
-    "check_reset_mask",
-    "check_reset_options",
-    "check_vector_args",
-    "info_row",
-    "parse_pose_option",
-    "parse_seeds",
-    "scatter_infos",
-    "take_rows",
-    "trail_of",
-]
-
 Array = NDArray[np.float64]
 ObsArray = NDArray[np.float32]
 BoolArray = NDArray[np.bool_]
@@ -155,15 +133,6 @@ def check_kernel(owner: str, kernel: Any, allowed: tuple[str, ...]) -> str:
     if not isinstance(kernel, str) or kernel not in allowed:
         raise ValueError(f"{owner}.kernel must be {fast_v1.choices(allowed)}, got {kernel!r}")
     return kernel
-
-
-def parse_autoreset_mode(mode: str | AutoresetMode) -> AutoresetMode:
-    """``autoreset_mode`` as an :class:`AutoresetMode` (``ValueError`` naming the allowed values)."""
-    try:
-        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
-    except ValueError:
-        allowed = [m.value for m in AutoresetMode]
-        raise ValueError(f"autoreset_mode must be one of {allowed}, got {mode!r}") from None
 
 
 def check_reset_mask(mask: Any, n: int) -> BoolArray:
@@ -318,17 +287,6 @@ def assign_rows(infos: dict[str, Any], rows: dict[str, Any], idx: NDArray[np.int
             assign_rows(infos[k], v, idx)
         else:
             infos[k][idx] = v
-
-
-def trail_of(trail: Any, start: Any, count: int, i: int) -> list[tuple[float, float]]:
-    """Robot ``i``'s rendered trail from a ring ``trail`` of shape ``(T, N, 2)`` [m] holding the last ``T`` of
-    ``count`` positions written, ``start[i]`` being the count at which its episode began; oldest first."""
-    if trail is None:
-        return []
-    length = trail.shape[0]
-    first = max(int(start[i]), count - length)
-    rows = np.arange(first, count) % length
-    return [(float(x), float(y)) for x, y in trail[rows, i].tolist()]
 
 
 # ---------------------------------------------------------------------------------------------------- single env
@@ -492,7 +450,11 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         self.render_mode = render_mode
-        self.autoreset_mode = parse_autoreset_mode(autoreset_mode)
+        try:
+            self.autoreset_mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            allowed = [m.value for m in AutoresetMode]
+            raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / dt, "autoreset_mode": self.autoreset_mode}
         self.single_action_space, self.single_observation_space = single_spaces
         self.action_space = batch_space(self.single_action_space, n)
@@ -510,29 +472,29 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._was_reset = False
         return n
 
+    # the hooks (module docstring): new episodes for the robots idx (observations (m, D), compact infos); a step;
+    # steps taken (N,); each robot's H (N, 2) [m]; robot i's path; amend the compact infos of the robots idx that
+    # restarted within a step; amend the final_info of a SAME_STEP autoreset
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """Start new episodes for the robots ``idx``: their observations ``(m, D)`` and compact infos."""
         raise NotImplementedError
 
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         raise NotImplementedError
 
     def _step_counts(self) -> NDArray[np.int64]:
-        """Steps taken in each robot's episode ``(N,)``."""
         raise NotImplementedError
 
     def _h_positions(self) -> Array:
-        """Each robot's H ``(N, 2)`` [m], for the trail."""
         raise NotImplementedError
 
     def _path_of(self, i: int) -> Any:
         raise NotImplementedError
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
-        """Amend the compact infos of the robots ``idx`` that started a new episode within this step."""
+        raise NotImplementedError
 
     def _mark_final(self, final_info: dict[str, Any], done: BoolArray) -> None:
-        """Amend the vector-format ``final_info`` of a ``SAME_STEP`` autoreset."""
+        raise NotImplementedError
 
     # ------------------------------------------------------------------ seeding
     @property
@@ -590,7 +552,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._obs[idx] = obs
         if self.render_mode is not None:
             self._append_trail()
-        return self._obs.copy(), self._scatter(infos, mask)
+        return self._obs.copy(), scatter_infos(infos, mask, self.num_envs)
 
     def step(self, actions: NDArray[np.floating[Any]]) -> StepResult:
         """Step every robot; autoreset finished ones according to ``autoreset_mode``.
@@ -642,7 +604,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
                 final_obs = np.full(n, None, dtype=object)
                 for i in idx.tolist():
                     final_obs[i] = obs[i].copy()
-                final_info = self._scatter(take_rows(infos, idx), done)
+                final_info = scatter_infos(take_rows(infos, idx), done, n)
                 self._mark_final(final_info, done)
                 obs_r, info_r = self._reset_rows(idx)
                 obs[idx] = obs_r
@@ -659,7 +621,7 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
         self._obs = obs  # returned as is: reset() copies it before changing rows
         if self.render_mode is not None:
             self._append_trail()
-        return obs, reward, terminated, truncated, self._scatter(infos, None)
+        return obs, reward, terminated, truncated, scatter_infos(infos, None, n)
 
     def _truncated(self, steps: NDArray[np.int64]) -> BoolArray:
         """``steps >= max_episode_steps`` (all False without a limit)."""
@@ -667,10 +629,6 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
             return np.zeros(self.num_envs, dtype=np.bool_)
         out: BoolArray = steps >= self.max_episode_steps
         return out
-
-    def _scatter(self, infos: dict[str, Any], mask: BoolArray | None) -> dict[str, Any]:
-        """Vector-format infos (:func:`scatter_infos`)."""
-        return scatter_infos(infos, mask, self.num_envs)
 
     # ------------------------------------------------------------------ rendering
     def _append_trail(self) -> None:
@@ -685,7 +643,11 @@ class AmigoBotVectorBase(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[
 
     def _trail_of(self, i: int) -> list[tuple[float, float]]:
         """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
-        return trail_of(self._trail, self._trail_start, self._trail_count, i)
+        if self._trail is None:
+            return []
+        length = self._trail.shape[0]
+        rows = np.arange(max(int(self._trail_start[i]), self._trail_count - length), self._trail_count) % length
+        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
         """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.

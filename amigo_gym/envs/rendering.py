@@ -214,12 +214,9 @@ class Renderer:
         pg.draw.line(surf, BODY_EDGE, self._px((x, y)), self._px(front), 2)
         pg.draw.circle(surf, POINT_A, self._px((x, y)), 3)
         pg.draw.circle(surf, POINT_H, self._px(h_position(pose, robot)), 4)
-        if self._font is not None and (time is not None or cross_track_error is not None):
-            parts = []
-            if time is not None:
-                parts.append(f"t = {time:6.2f} s")
-            if cross_track_error is not None:
-                parts.append(f"e = {1000 * cross_track_error:+7.1f} mm")
+        parts = [] if time is None else [f"t = {time:6.2f} s"]
+        parts += [] if cross_track_error is None else [f"e = {1000 * cross_track_error:+7.1f} mm"]
+        if self._font is not None and parts:
             surf.blit(self._font.render("   ".join(parts), True, TEXT), (8, 8))
         if self.mode == "human":
             assert self._window is not None

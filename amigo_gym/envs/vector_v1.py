@@ -1,27 +1,15 @@
 """Native numpy-batched vector environment of ``AmigoBot-v1``, for heterogeneous batches.
 
-``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with
-its own path (of its own family when ``path="mixed"``), reference speed, true robot, slip, delay and noise,
-stepped together by the column functions of :mod:`amigo_gym.task.v1` that the single environment calls,
-with no Python loop over the robots in the step: the paths are one :class:`amigo_gym.paths.PathBatch`, the
-per-episode constants ``(N,)`` columns, the delayed commands one ``(N, L, 2)`` ring. Loops run only over
-the robots being reset, which draw their episodes from their own generators with the single environment's
-function (:func:`amigo_gym.task.v1.begin_episode`).
-
-With numba (``kernel="auto"`` or ``"numba"``; a core dependency where it ships wheels) and the built-in path families
-(:class:`amigo_gym.paths.ClothoidPath`), the step is instead the single environment's compiled step
-(:mod:`amigo_gym.sim.fast_v1`) run over the robots in one compiled loop
-(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`);
-the state then lives in the rows of its workspace (the ``(N,)`` state columns are views of them). Otherwise
-(``kernel="numpy"``, no numba, a path object of another class) the column functions step the batch; they are
-the reference. Their path projection and pose run a ClothoidPath's float functions row by row
-(:func:`amigo_gym.paths.clothoid.locate_rows`), compiled where numba is installed (unless ``AMIGO_GYM_KERNEL=numpy``).
+``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with its own
+path, reference speed, true robot, slip, delay and noise. With numba and the built-in path families the step is the
+single environment's compiled step run over the robots in one compiled loop
+(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; the state columns are views of its workspace rows); otherwise the
+column functions of :mod:`amigo_gym.task.v1` (the reference) step the batch, with no Python loop over the robots.
+Robots being reset draw their episodes from their own generators with the single environment's functions.
 
 For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
-terminations, truncations and the numeric infos), randomisation included, in the ``NEXT_STEP`` (default),
-``SAME_STEP`` and ``DISABLED`` autoreset modes, with either implementation: to 1e-9 between the compiled step and
-the reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the
-same bits.
+terminations, truncations, numeric infos) in the three autoreset modes, to 1e-9 between the compiled step and the
+reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the same bits.
 """
 
 from __future__ import annotations
@@ -33,7 +21,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
-from amigo_gym.envs.amigobot_v1 import make_spaces_v1, record_info, reference_record, v0_record_info
+from amigo_gym.envs.amigobot_v1 import record_info, reference_record, v0_record_info
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
@@ -43,6 +31,7 @@ from amigo_gym.envs.base import (
     ObsArray,
     StepResult,
     assign_rows,
+    box_spaces,
     check_kernel,
     check_vector_args,
 )
@@ -50,12 +39,8 @@ from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, cas
 from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["AmigoBotV1VectorEnv"]
-
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-#: values of the ``kernel=`` keyword (:func:`amigo_gym.sim.fast_v1.use_kernel`'s, and v0's ``"numba-parallel"``)
-KERNELS: tuple[str, ...] = VECTOR_KERNELS
 # entries of the compiled step's workspace rows (amigo_gym.sim.layout_v1.WS_FIELDS): the normalised command
 _W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
 # the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
@@ -84,18 +69,13 @@ def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = 
     return n * per
 
 
-def machine_memory() -> int | None:
-    """This machine's physical memory [bytes] (``os.sysconf``), or None where it is not known."""
-    try:
-        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):
-        return None
-
-
 def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> None:
     """Refuse a ``num_envs`` whose robots need more memory than the machine has (:func:`memory_needed`), before
     anything is allocated; one line naming ``num_envs`` and the bytes."""
-    total = machine_memory()
+    try:
+        total: int | None = int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):  # not known here
+        total = None
     need = memory_needed(n, p, render_mode)
     if total is not None and need > total:
         raise ValueError(
@@ -130,6 +110,9 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     (:func:`memory_needed`: about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
     """
 
+    #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
+    _v0 = False
+
     def __init__(
         self,
         num_envs: int = 1,
@@ -145,38 +128,24 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
 
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        check_kernel(owner, kernel, KERNELS)
+        check_kernel(owner, kernel, VECTOR_KERNELS)
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
         check_memory(owner, int(num_envs), p, render_mode)
         #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = self._check_task(p)  # refuses infeasible tasks, fixed or drawn (feasibility=)
+        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)  # (feasibility=)
         #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
         self._template = None if fixed is None else tracking.episode_template(p)
         #: the template as columns of one row (tracking.episode_columns), repeated for the rows that restart
         self._template_row = None if self._template is None else tracking.episode_columns([self._template])
-        n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, make_spaces_v1(p))
+        spaces = box_spaces(tracking.obs_bounds(p))
+        n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, spaces)
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
-        z = np.zeros(n)
-        self._state = tracking.State(
-            z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(), z.copy(),
-            np.zeros(n, dtype=np.int64),
-        )  # fmt: skip
-        self._episode = tracking.Episode(
-            r1=z.copy(),
-            r2=z.copy(),
-            l1=z.copy(),
-            l3=z.copy(),
-            slip_max=z.copy(),
-            lag=np.zeros(n, dtype=np.int64),
-            t_switch=z.copy(),
-            key=np.zeros(n, dtype=np.uint64),
-            v_cruise=z.copy(),
-            t_brake=z.copy(),
-        )
+        self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
+        self._episode = tracking.episode_columns([tracking.Episode(*(0 for _ in _EPISODE_FIELDS))] * n)
         self._ring = np.zeros((n, self._k.ring_length, 2))
         # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: fast_v1_batch.BatchKernel | None = None
@@ -188,16 +157,11 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             fast_v1.path_loops()
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
         self.v0_params = tracking.v0_settings(p)
-        self._castor = z.copy()  # the castor's rolling angle [rad] (v0's info) on the reference route
+        self._castor = np.zeros(n)  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._ring_step = 0
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
-
-    def _check_task(self, p: tracking.TrackingParams) -> tuple[Any, dict[str, Any] | None]:
-        """The fixed path (``None``: drawn) and its feasibility report: :func:`amigo_gym.task.v1.check_task`, which
-        refuses an infeasible task as ``p.feasibility`` says."""
-        return tracking.check_task(p)
 
     def set_path_params(self, path_params: Any) -> None:
         """Draw the next episodes' paths with the family parameters ``path_params`` (a curriculum between rollouts).
@@ -225,10 +189,6 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
 
     # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """New episodes for the robots ``idx``: their observations and compact infos (:meth:`_begin_rows`)."""
-        return self._begin_rows(idx, pose_opt)
-
-    def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
 
         Returns:
@@ -239,15 +199,18 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         k = self._k
         m = len(idx)
         obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
-        recs = []
-        paths = []
+        recs, paths, states, episodes = [], [], [], []
         for j, i in enumerate(idx.tolist()):
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
             b = tracking.begin_episode(self._rng(i), k, pose)
             paths.append(b.path)
-            self._set_row(i, b.path_info, b.state, b.episode)
+            self.path_infos[i] = b.path_info
+            states.append(b.state)
+            episodes.append(b.episode)
             obs[j] = b.outcome.obs
             recs.append(reference_record(k.w_max, b.state, b.outcome, tracking.NO_NOISE, 0.0))
+        st = tracking.State(*(np.array(c) for c in zip(*states, strict=True)))
+        self._set_rows(idx, st, tracking.episode_columns(episodes))
         self.paths.replace(idx, paths)
         self._castor[idx] = 0.0
         infos = self._record_infos(idx, np.stack(recs))[0]
@@ -258,7 +221,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     def _begin_rows_kernel(
         self, idx: NDArray[np.intp], pose_opt: Array | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
-        """:meth:`_begin_rows` with the compiled step: each row draws its path and episode from its own generator
+        """:meth:`_reset_rows` with the compiled step: each row draws its path and episode from its own generator
         (:func:`tracking.draw_path`, a new path built by the compiled loops, and :func:`tracking.draw_episode`, as
         :func:`tracking.start_episode` draws them); the start states of the rows that share a path are computed
         together on columns (:func:`tracking.start_state`; :func:`tracking.placed_state` for the ``pose`` option) and
@@ -336,18 +299,6 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         w_max = self._k.w_max
         self._ring[idx, :, 0] = (np.asarray(st.a1) * w_max)[:, None]
         self._ring[idx, :, 1] = (np.asarray(st.a2) * w_max)[:, None]
-
-    def _set_row(self, i: int, path_info: dict[str, Any], st: tracking.State, ep: tracking.Episode) -> None:
-        """Robot ``i`` starts the episode ``ep`` at ``st``: its columns, command ring and path description."""
-        w_max = self._k.w_max
-        self.path_infos[i] = path_info
-        for name in _STATE_FIELDS:
-            np.asarray(getattr(self._state, name))[i] = getattr(st, name)
-        for name in _EPISODE_FIELDS:
-            np.asarray(getattr(self._episode, name))[i] = getattr(ep, name)
-        # the command the robot was executing before the first step: its wheels' state (0 at rest)
-        self._ring[i, :, 0] = st.a1 * w_max
-        self._ring[i, :, 1] = st.a2 * w_max
 
     def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
         """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""

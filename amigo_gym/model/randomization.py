@@ -86,16 +86,12 @@ class Randomization:
     wheel_rate_noise: float = 0.0
 
     def __post_init__(self) -> None:
-        o = "Randomization"
-        object.__setattr__(self, "wheel_radius", _interval(o, "wheel_radius", self.wheel_radius, 0.5, 1.5))
-        object.__setattr__(self, "track", _interval(o, "track", self.track, 0.5, 1.5))
-        object.__setattr__(self, "slip", _interval(o, "slip", self.slip, 0.0, 0.5))
-        object.__setattr__(self, "delay", _interval(o, "delay", self.delay, 0.0, MAX_DELAY))
-        object.__setattr__(self, "position_noise", check_range(o, "position_noise", self.position_noise, 0.0, 0.1))
-        object.__setattr__(self, "heading_noise", check_range(o, "heading_noise", self.heading_noise, 0.0, 0.2))
-        object.__setattr__(
-            self, "wheel_rate_noise", check_range(o, "wheel_rate_noise", self.wheel_rate_noise, 0.0, 2.0)
-        )
+        ranges = {"wheel_radius": (0.5, 1.5), "track": (0.5, 1.5), "slip": (0.0, 0.5), "delay": (0.0, MAX_DELAY),
+                  "position_noise": (0.0, 0.1), "heading_noise": (0.0, 0.2),
+                  "wheel_rate_noise": (0.0, 2.0)}  # fmt: skip
+        for i, (name, (low, high)) in enumerate(ranges.items()):
+            check = _interval if i < 4 else check_range  # the four ranges, then the noise levels
+            object.__setattr__(self, name, check("Randomization", name, getattr(self, name), low, high))
 
     @property
     def is_off(self) -> bool:
@@ -244,18 +240,16 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
         r: the ranges (noise levels).
         slip_max: per-episode slip bounds, shape ``(...)`` or a float.
     """
-    if type(key) is int and type(step) is int and type(slip_max) is float:
-        return _step_noise_float(key, step, r, slip_max)
+    one = type(key) is int and type(step) is int and type(slip_max) is float  # one robot: on Python ints
     levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
     buf: list[Any] = [0.0] * 10
     with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
-        s1, s2, on = step_uniforms(
-            buf, 0, 5, np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64), slip_max, *levels
-        )
+        k, n = (key, step) if one else (np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64))
+        s1, s2, on = step_uniforms(buf, 0, 5, k, n, slip_max, *levels)
     out: list[Any] = [0.0, 0.0, 0.0, 0.0, 0.0]
     if on:
         step_normals(out, 0, np.log(buf[:on]), 0, np.cos(buf[5 : 5 + on]), 0, *levels)
-    if np.ndim(key) == 0 and np.ndim(step) == 0 and np.ndim(slip_max) == 0:  # one robot: plain floats
+    if one or (np.ndim(key) == 0 and np.ndim(step) == 0 and np.ndim(slip_max) == 0):  # one robot: plain floats
         return StepNoise(*(float(c) for c in (s1, s2, *out)))
     return StepNoise(s1, s2, *out)
 
@@ -342,16 +336,3 @@ def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
     r"""One normal draw of standard deviation ``level``: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, given
     ``log(u1)`` and ``cos(2 pi u2)``; floats or columns."""
     return level * (np.sqrt(-2.0 * log_u1) * cos_angle)
-
-
-def _step_noise_float(key: int, step: int, r: Randomization, slip_max: float) -> StepNoise:
-    """:func:`step_noise` for one robot (Python ints and floats)."""
-    levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
-    buf = [0.0] * 10
-    s1, s2, on = step_uniforms(buf, 0, 5, key, step, slip_max, *levels)
-    out = [0.0, 0.0, 0.0, 0.0, 0.0]
-    if on:
-        logs = np.log(buf[:on]).tolist()
-        coss = np.cos(buf[5 : 5 + on]).tolist()
-        step_normals(out, 0, logs, 0, coss, 0, *levels)
-    return StepNoise(s1, s2, out[0], out[1], out[2], out[3], out[4])

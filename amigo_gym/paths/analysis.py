@@ -141,12 +141,12 @@ def heading_lag_profile(
     warm = 0.0
     if path.closed:
         warm = length * math.ceil(WARMUP_L3 * l3 / length)
-    a, b = _grid(path, -warm, length, h_max) if path.closed else _grid(path, 0.0, length, h_max)
+    a, b = _grid(path, 0.0 - warm, length, h_max)  # (+0.0 when open)
     mid = 0.5 * (a + b)
     b_left = np.nextafter(b, a)
-    k_a = np.asarray(path.pose_columns(a).curvature, dtype=np.float64) * np.ones_like(a)
-    k_m = np.asarray(path.pose_columns(mid).curvature, dtype=np.float64) * np.ones_like(a)
-    k_b = np.asarray(path.pose_columns(b_left).curvature, dtype=np.float64) * np.ones_like(a)
+    k_a, k_m, k_b = (
+        np.asarray(path.pose_columns(u).curvature, dtype=np.float64) * np.ones_like(a) for u in (a, mid, b_left)
+    )
     if initial_lag is None:
         psi = math.asin(min(max(float(k_a[0]) * l3, -1.0), 1.0))
     else:
@@ -229,14 +229,9 @@ class Feasibility:
     def report(self) -> dict[str, Any]:
         """A JSON-able summary: ``feasible``, ``message`` (:meth:`message`), ``speed`` [m/s], ``speed_of``,
         ``binding``, ``peaks``, ``peak_s`` [m], ``limits`` and ``exceeded`` (intervals as ``[s_from, s_to]`` lists)."""
-        return {
-            "feasible": self.feasible,
-            "message": self.message(),
-            "speed": self.speed,
-            "speed_of": self.speed_of,
-            "binding": self.binding,
-            "peaks": dict(self.peaks),
-            "peak_s": dict(self.peak_s),
+        out = {"feasible": self.feasible, "message": self.message(), "speed": self.speed, "speed_of": self.speed_of}
+        out |= {"binding": self.binding, "peaks": dict(self.peaks), "peak_s": dict(self.peak_s)}
+        return out | {
             "limits": dict(self.limits),
             "exceeded": {k: [list(iv) for iv in v] for k, v in self.exceeded.items()},
         }
@@ -348,15 +343,10 @@ def feasibility(
         "rotation_rate": np.abs(bd),
         "rotational_acceleration": np.abs(bdd),
     }
-    peaks: dict[str, float] = {}
-    peak_s: dict[str, float] = {}
+    arg = {name: int(np.argmax(np.where(np.isfinite(f), f, np.inf))) for name, f in series.items()}
+    peaks = {name: float(f[arg[name]]) for name, f in series.items()}
+    peak_s = {name: float(prof.s[i]) for name, i in arg.items()}
     peak_wheel: dict[str, str] = {}
-    arg: dict[str, int] = {}
-    for name, f in series.items():
-        i = int(np.argmax(np.where(np.isfinite(f), f, np.inf)))
-        arg[name] = i
-        peaks[name] = float(f[i])
-        peak_s[name] = float(prof.s[i])
     for name, (a1, a2) in (("wheel_rate", (w1, w2)), ("wheel_acceleration", (wd1, wd2))):
         i = arg[name]
         # wheel 1 (right) is outer on a left turn (betadot > 0)
@@ -369,27 +359,15 @@ def feasibility(
     exceeded = {q: _intervals(prof.s, ~(series[q] <= lim)) for q, lim in limits.items()}
     if singular:
         exceeded["heading lag"] = _intervals(prof.s, ~(np.abs(psi) < math.pi / 2 - 1e-9))
-    if singular:
         i = int(np.argmax(np.abs(psi)))
         binding, needed, limit, k = "heading lag", max_lag, math.pi / 2, float(kappa[i])
     else:
         binding = max(limits, key=lambda q: peaks[q] / limits[q])
         needed, limit, k = peaks[binding], limits[binding], float(kappa[arg[binding]])
-    return Feasibility(
-        speed=v,
-        speed_of=speed_of,
-        peaks=peaks,
-        peak_s=peak_s,
-        peak_wheel=peak_wheel,
-        limits=limits,
-        binding=binding,
-        needed=needed,
-        limit=limit,
-        radius=math.inf if k == 0.0 else 1.0 / abs(k),
-        feasible=not singular and all(peaks[q] <= limits[q] for q in limits),
-        max_heading_lag=max_lag,
-        exceeded=exceeded,
-    )
+    radius = math.inf if k == 0.0 else 1.0 / abs(k)
+    feasible = not singular and all(peaks[q] <= limits[q] for q in limits)
+    return Feasibility(v, speed_of, peaks, peak_s, peak_wheel, limits, binding, needed, limit, radius, feasible,
+                       max_lag, exceeded)  # fmt: skip
 
 
 #: most intervals listed per quantity in :attr:`Feasibility.exceeded`

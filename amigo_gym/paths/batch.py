@@ -31,7 +31,7 @@ from amigo_gym.paths.clothoid import (
     PathPose,
     PathSpec,
     check_hint,
-    check_real,
+    check_window,
     locate_columns,
     pose_columns_of,
 )
@@ -46,8 +46,15 @@ BoolArray = NDArray[np.bool_]
 _PLACEHOLDER = ClothoidPath((ClothoidSegment.line(1.0),))
 
 
-def _is_path(obj: object) -> bool:
-    return all(hasattr(obj, a) for a in ("length", "closed", "pose_columns", "locate"))
+def _check_paths(paths: Sequence[PathSpec], where: str) -> list[PathSpec]:
+    """``paths`` as a list, each with ``length``, ``closed``, ``pose_columns`` and ``locate`` (one-line error)."""
+    for i, p in enumerate(paths):
+        if not all(hasattr(p, a) for a in ("length", "closed", "pose_columns", "locate")):
+            raise ValueError(
+                f"{where}[{i}] must have length, closed, pose_columns and locate (amigo_gym.paths.PathSpec), "
+                f"got {type(p).__name__}"
+            )
+    return list(paths)
 
 
 @dataclass
@@ -86,15 +93,9 @@ class PathBatch:
     """
 
     def __init__(self, paths: Sequence[PathSpec]) -> None:
-        seq = list(paths)
+        seq = _check_paths(list(paths), "PathBatch.paths")
         if not seq:
             raise ValueError("PathBatch.paths must hold at least one path, got none")
-        for i, p in enumerate(seq):
-            if not _is_path(p):
-                raise ValueError(
-                    f"PathBatch.paths[{i}] must have length, closed, pose_columns and locate "
-                    f"(amigo_gym.paths.PathSpec), got {type(p).__name__}"
-                )
         n = len(seq)
         self._paths: list[PathSpec] = seq
         self._ids = np.zeros(n, dtype=np.int64)
@@ -116,12 +117,6 @@ class PathBatch:
 
     # --- rows -------------------------------------------------------------------------------------------
 
-    def _groups(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> dict[int, tuple[PathSpec, list[int]]]:
-        out: dict[int, tuple[PathSpec, list[int]]] = {}
-        for r, p in zip(rows.tolist(), paths, strict=True):
-            out.setdefault(id(p), (p, []))[1].append(r)
-        return out
-
     def _set(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> None:
         """Rows ``rows`` take ``paths``: bookkeeping O(len(rows)), tables O(len(rows) W) when they exist."""
         for r in rows.tolist():
@@ -133,7 +128,9 @@ class PathBatch:
                     self._foreign_objects.pop(oid, None)
                 else:
                     self._counts[oid] = old - 1
-        groups = self._groups(rows, paths)
+        groups: dict[int, tuple[PathSpec, list[int]]] = {}
+        for r, p in zip(rows.tolist(), paths, strict=True):
+            groups.setdefault(id(p), (p, []))[1].append(r)
         for oid, (p, rs) in groups.items():
             ra = np.asarray(rs, dtype=np.intp)
             self._ids[ra] = oid
@@ -171,7 +168,7 @@ class PathBatch:
         ra = np.asarray(rows)
         if ra.ndim != 1 or not (ra.size == 0 or np.issubdtype(ra.dtype, np.integer)):
             raise ValueError(f"PathBatch.replace.rows must be a 1-D array of row numbers, got {rows!r}")
-        ps = list(paths)
+        ps = _check_paths(list(paths), "PathBatch.replace.paths")
         if len(ps) != ra.size:
             raise ValueError(f"PathBatch.replace: {ra.size} rows but {len(ps)} paths")
         n = len(self._paths)
@@ -180,12 +177,6 @@ class PathBatch:
             raise ValueError(f"PathBatch.replace.rows must lie in [0, {n}), got {rows!r}")
         if np.unique(ra).size != ra.size:
             raise ValueError(f"PathBatch.replace.rows must be distinct, got {rows!r}")
-        for i, p in enumerate(ps):
-            if not _is_path(p):
-                raise ValueError(
-                    f"PathBatch.replace.paths[{i}] must have length, closed, pose_columns and locate "
-                    f"(amigo_gym.paths.PathSpec), got {type(p).__name__}"
-                )
         self._set(ra, ps)
 
     @property
@@ -284,8 +275,7 @@ class PathBatch:
         """
         xa = self._column("x", x)
         ya = self._column("y", y)
-        ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-        behind = ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+        ahead, behind = check_window(max_advance, max_retreat)
         sp = None if s_prev is None else self._column("s_prev", s_prev)
         only = self._uniform()
         if only is not None:

@@ -78,15 +78,9 @@ class ClosestPoint(NamedTuple):
     def projection(self) -> Projection:
         """The :class:`Projection` of these columns (point stacked ``(..., 2)``, curvature broadcast)."""
         s = np.asarray(self.s)
-        return Projection(
-            s=s,
-            point=pack(self.x, self.y),
-            tangent_angle=np.asarray(self.tangent_angle),
-            curvature=np.asarray(np.broadcast_to(self.curvature, s.shape)).copy(),
-            cross_track_error=np.asarray(self.cross_track_error),
-            cos_theta=np.asarray(self.cos_theta),
-            sin_theta=np.asarray(self.sin_theta),
-        )
+        k = np.asarray(np.broadcast_to(self.curvature, s.shape)).copy()
+        rest = (np.asarray(v) for v in (self.cross_track_error, self.cos_theta, self.sin_theta))
+        return Projection(s, pack(self.x, self.y), np.asarray(self.tangent_angle), k, *rest)
 
 
 class PathPose(NamedTuple):
@@ -149,16 +143,8 @@ class PathPoint(NamedTuple):
 
     def closest_point(self) -> ClosestPoint:
         """The :class:`ClosestPoint` of these columns (``s`` within one lap)."""
-        return ClosestPoint(
-            self.s,
-            self.x,
-            self.y,
-            self.tangent_angle,
-            self.curvature,
-            self.cross_track_error,
-            self.cos_theta,
-            self.sin_theta,
-        )
+        e, c, sn = self.cross_track_error, self.cos_theta, self.sin_theta
+        return ClosestPoint(self.s, self.x, self.y, self.tangent_angle, self.curvature, e, c, sn)
 
 
 class Path(Protocol):
@@ -195,8 +181,18 @@ class Path(Protocol):
         ...
 
 
+class _Projecting:
+    """``project`` of a path with ``project_xy``."""
+
+    def project(self, p: ArrayLike) -> Projection:
+        """Closest point to ``p`` ``(..., 2)`` [m] (:meth:`project_xy` of its columns)."""
+        q = np.asarray(p, dtype=np.float64)
+        cp: ClosestPoint = self.project_xy(q[..., 0], q[..., 1])  # type: ignore[attr-defined]
+        return cp.projection()
+
+
 @dataclass(frozen=True)
-class CirclePath:
+class CirclePath(_Projecting):
     r"""Circle of radius ``radius`` entered at ``start`` with heading ``start_angle``.
 
     ``direction = +1`` turns left (counter-clockwise), ``-1`` right. With the defaults this is the
@@ -295,10 +291,6 @@ class CirclePath:
         d, t0 = self.direction, self.start_angle
         return (*self.center, d * math.sin(t0), -d * math.cos(t0))
 
-    def project(self, p: ArrayLike) -> Projection:
-        p = np.asarray(p, dtype=np.float64)
-        return self.project_xy(p[..., 0], p[..., 1]).projection()
-
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         """Closest point of the circle to ``(x, y)`` [m].
 
@@ -315,16 +307,8 @@ class CirclePath:
         # the foot point c + r n, with n from the unit tangent d (-n_y, n_x) (a negation is exact)
         nx = sin_theta if d > 0 else -sin_theta
         ny = -cos_theta if d > 0 else cos_theta
-        return ClosestPoint(
-            s=s,
-            x=cx + r * nx,
-            y=cy + r * ny,
-            tangent_angle=self.start_angle + (s if d > 0 else -s) / r,
-            curvature=d / r,
-            cross_track_error=e,
-            cos_theta=cos_theta,
-            sin_theta=sin_theta,
-        )
+        theta = self.start_angle + (s if d > 0 else -s) / r
+        return ClosestPoint(s, cx + r * nx, cy + r * ny, theta, d / r, e, cos_theta, sin_theta)
 
 
 def circle_foot(
@@ -359,7 +343,7 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
 
 
 @dataclass(frozen=True)
-class ManoeuvrePath:
+class ManoeuvrePath(_Projecting):
     """The paper's manoeuvre path: a straight segment along x0 from the origin, then a circle.
 
     ``(s, 0)`` with tangent 0 for ``s <= straight_length`` (extending backwards for ``s < 0``), then the circle of
@@ -429,10 +413,6 @@ class ManoeuvrePath:
             cp = ClosestPoint(*(float(v) for v in cp))
         return _located(cp, cp.s)
 
-    def project(self, p: ArrayLike) -> Projection:
-        p = np.asarray(p, dtype=np.float64)
-        return self.project_xy(p[..., 0], p[..., 1]).projection()
-
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
         """Closest point to ``(x, y)`` [m] (:func:`manoeuvre_foot`); ``minimal=True``: point and tangent
         angle are NaN."""
@@ -501,15 +481,9 @@ def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
     """The :class:`PathPoint` of ``cp`` with ``progress`` [m]: curvature rate 0, ``distance = |e|``, status 0."""
     e = cp.cross_track_error
     zero = 0.0 * e
-    if isinstance(e, np.ndarray):
-        return PathPoint(
-            cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
-            cp.cos_theta, cp.sin_theta, np.abs(e), np.zeros(e.shape, np.int64),
-        )  # fmt: skip
-    return PathPoint(
-        cp.s, progress, cp.x, cp.y, cp.tangent_angle, cp.curvature + zero, zero, e,
-        cp.cos_theta, cp.sin_theta, abs(e), 0,
-    )  # fmt: skip
+    dist, status = (np.abs(e), np.zeros(e.shape, np.int64)) if isinstance(e, np.ndarray) else (abs(e), 0)
+    k = cp.curvature + zero
+    return PathPoint(cp.s, progress, cp.x, cp.y, cp.tangent_angle, k, zero, e, cp.cos_theta, cp.sin_theta, dist, status)
 
 
 def make_path(params: EnvParams) -> CirclePath | ManoeuvrePath:

@@ -44,7 +44,7 @@ from amigo_gym.model.fresnel import (
 )
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.params import check_range, check_real
-from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, Projection
+from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, _Projecting
 
 __all__ = [
     "STATUS_INTERIOR",
@@ -172,17 +172,16 @@ def check_hint(sp: Real) -> None:
 @dataclass(frozen=True)
 class _Tables:
     """A built :class:`ClothoidPath`: its flat path vector and largest ``|curvature|`` [1/m], the header read
-    once, the pieces' and samples' columns as views (``*_a``) or lists."""
+    once, the pieces' start arc lengths (a list) and the samples' columns (views)."""
 
     flat: Array
     max_abs_curvature: float
     length: float
     turn: float
-    spacing: float
 
     @classmethod
     def of(cls, flat: Array, max_abs_curvature: float) -> _Tables:
-        return cls(flat, max_abs_curvature, *(float(flat[i]) for i in (P_LENGTH, P_TURN, P_SPACING)))
+        return cls(flat, max_abs_curvature, float(flat[P_LENGTH]), float(flat[P_TURN]))
 
     def column(self, k: int) -> Array:
         """Column ``k`` (view): ``0 ... 5`` the pieces' ``s0, x0, y0, th0, k0, c``, ``6``, ``7`` the samples' x, y."""
@@ -190,20 +189,9 @@ class _Tables:
         a = P_TAIL + k * n if k < 6 else P_TAIL + 6 * n + (k - 6) * m
         return self.flat[a : a + (n if k < 6 else m)]
 
-    s0_a = property(lambda self: self.column(0))
-    x0_a = property(lambda self: self.column(1))
-    y0_a = property(lambda self: self.column(2))
-    th0_a = property(lambda self: self.column(3))
-    k0_a = property(lambda self: self.column(4))
-    c_a = property(lambda self: self.column(5))
+    s0 = property(lambda self: self.column(0).tolist())
     sample_x = property(lambda self: self.column(6))
     sample_y = property(lambda self: self.column(7))
-    s0 = property(lambda self: self.column(0).tolist())
-    x0 = property(lambda self: self.column(1).tolist())
-    y0 = property(lambda self: self.column(2).tolist())
-    th0 = property(lambda self: self.column(3).tolist())
-    k0 = property(lambda self: self.column(4).tolist())
-    c = property(lambda self: self.column(5).tolist())
 
 
 class PathLoops(NamedTuple):
@@ -227,7 +215,7 @@ class PathLoops(NamedTuple):
 
 
 @dataclass(frozen=True)
-class ClothoidPath:
+class ClothoidPath(_Projecting):
     r"""A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
 
     Attributes:
@@ -350,17 +338,13 @@ class ClothoidPath:
             out.append(out[-1] + float(g.length))
         return tuple(out)
 
-    def _pose(self, t: _Tables, s: Real) -> PathPose:
-        """Pose at ``s``: of a float, or of each entry of an array (:func:`pose_columns_of`)."""
+    def pose_columns(self, s: Real) -> PathPose:
+        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
         if not isinstance(s, np.ndarray):
             return PathPose(*_pose_float(self._flat_list, s if type(s) is float else float(s)))
         a = np.ascontiguousarray(s, dtype=np.float64).reshape(-1)
-        p = pose_columns_of(t.flat, np.zeros(a.size, dtype=np.int64), a)
+        p = pose_columns_of(self._t.flat, np.zeros(a.size, dtype=np.int64), a)
         return PathPose(*(np.reshape(v, np.shape(s)) for v in p))
-
-    def pose_columns(self, s: Real) -> PathPose:
-        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
-        return self._pose(self._t, s)
 
     def pose_floats(self, ss: list[float]) -> list[PathPose]:
         """:meth:`pose_columns` of each float in ``ss``, computed together."""
@@ -368,7 +352,7 @@ class ClothoidPath:
 
     def _array_pose(self, s: ArrayLike) -> PathPose:
         a = np.asarray(s, dtype=np.float64)
-        p = self._pose(self._t, a.reshape(-1))
+        p = self.pose_columns(a.reshape(-1))
         return PathPose(*(np.broadcast_to(v, (a.size,)).reshape(a.shape) for v in p))
 
     def point(self, s: ArrayLike) -> Array:
@@ -390,17 +374,12 @@ class ClothoidPath:
 
     def curvature_columns(self, s: Real) -> Real:
         """:meth:`curvature` as a column."""
-        return self._pose(self._t, s).curvature
+        return self.pose_columns(s).curvature
 
     # --- projection -------------------------------------------------------------------------------------
 
-    def project(self, p: ArrayLike) -> Projection:
-        """Closest point to ``p`` ``(..., 2)`` [m] (global search; :meth:`locate` for the column form with a hint)."""
-        q = np.asarray(p, dtype=np.float64)
-        return self.project_xy(q[..., 0], q[..., 1]).projection()
-
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Column form of :meth:`project` (global search; ``minimal`` is ignored)."""
+        """Closest point (global search; :meth:`locate` for the column form with a hint; ``minimal`` is ignored)."""
         return self.locate(x, y).closest_point()
 
     def locate(
@@ -747,14 +726,9 @@ def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: lis
     """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into the columns of
     ``out`` ``(7, N)`` (the fields of :class:`PathPose`)."""
     for i in range(len(s)):
-        x, y, th, kappa, c, ct, st = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
-        out[0, i] = x
-        out[1, i] = y
-        out[2, i] = th
-        out[3, i] = kappa
-        out[4, i] = c
-        out[5, i] = ct
-        out[6, i] = st
+        r = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
+        for k in range(7):
+            out[k, i] = r[k]
 
 
 def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> FloatPose:
@@ -852,17 +826,10 @@ def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
     ]
 
 
-def _window(max_advance: float, max_retreat: float | None) -> tuple[float, float]:
+def check_window(max_advance: float, max_retreat: float | None) -> tuple[float, float]:
     """The window ``ahead``, ``behind`` [m] of :meth:`ClothoidPath.locate`, checked (> 0, finite)."""
-    if type(max_advance) is float and max_advance > 0.0 and max_advance < math.inf:
-        ahead = max_advance  # what check_real returns for a finite positive float
-    else:
-        ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
-    if max_retreat is None:
-        return ahead, ahead
-    if type(max_retreat) is float and max_retreat > 0.0 and max_retreat < math.inf:
-        return ahead, max_retreat
-    return ahead, check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
+    ahead = check_real("locate", "max_advance", max_advance, 0.0, low_open=True)
+    return ahead, ahead if max_retreat is None else check_real("locate", "max_retreat", max_retreat, 0.0, low_open=True)
 
 
 def _locate_float(
@@ -873,7 +840,7 @@ def _locate_float(
     if sp is None:
         r = locate_global(pose_flat, buf, _PATH_TABLE, 0, pv, x, y)
     else:
-        ahead, behind = _window(max_advance, max_retreat)
+        ahead, behind = check_window(max_advance, max_retreat)
         if sp - sp != 0.0:
             check_hint(sp)
         r = locate_flat(pose_flat, buf, _PATH_TABLE, 0, pv, x, y, sp, ahead, behind)
@@ -920,7 +887,7 @@ def locate_points(
 ) -> PathPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of points of any shape (window and hints checked, arguments
     broadcast); arrays of the broadcast shape."""
-    ahead, behind = (0.0, 0.0) if s_prev is None else _window(max_advance, max_retreat)
+    ahead, behind = (0.0, 0.0) if s_prev is None else check_window(max_advance, max_retreat)
     if s_prev is not None:
         check_hint(s_prev)
     cols = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (x, y, 0.0 if s_prev is None else s_prev)))

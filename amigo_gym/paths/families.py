@@ -70,6 +70,11 @@ class ParamRange:
         return check_real(owner, name, value, self.low, self.high, low_open=self.low_open, high_open=self.high_open)
 
 
+def _checked(owner: str, ranges: dict[str, ParamRange], values: tuple[object, ...]) -> list[float]:
+    """``values`` of the parameters of ``ranges`` (in its order), each checked (:meth:`ParamRange.check`)."""
+    return [rng.check(owner, name, v) for (name, rng), v in zip(ranges.items(), values, strict=True)]
+
+
 def _direction(owner: str, value: object) -> int:
     if isinstance(value, bool | np.bool_) or value not in (1, -1):
         raise ValueError(f"{owner}.direction must be +1 (left) or -1 (right), got {value!r}")
@@ -142,9 +147,7 @@ def manoeuvre(
         laps: laps of the circle, in (0, 100].
         loops: compiled path-building loops or None (module docstring).
     """
-    r = MANOEUVRE_RANGES["radius"].check("manoeuvre", "radius", radius)
-    sl = MANOEUVRE_RANGES["straight_length"].check("manoeuvre", "straight_length", straight_length)
-    n = MANOEUVRE_RANGES["laps"].check("manoeuvre", "laps", laps)
+    r, sl, n = _checked("manoeuvre", MANOEUVRE_RANGES, (radius, straight_length, laps))
     d = _direction("manoeuvre", direction)
     arc = ClothoidSegment.arc(2.0 * math.pi * r * n, d / r)
     segs = (ClothoidSegment.line(sl), arc) if sl > 0.0 else (arc,)
@@ -253,9 +256,8 @@ def figure8(
         transition: clothoid length over lobe radius [-], in [0, 1.5].
         loops: compiled path-building loops or None (module docstring).
     """
-    size = FIGURE8_RANGES["size"].check("figure8", "size", size)
-    phi = 0.5 * FIGURE8_RANGES["crossing_angle"].check("figure8", "crossing_angle", crossing_angle)
-    b = FIGURE8_RANGES["transition"].check("figure8", "transition", transition)
+    size, phi, b = _checked("figure8", FIGURE8_RANGES, (size, crossing_angle, transition))
+    phi = 0.5 * phi
     # unit lobe radius; the right half-lobe from the line's end to the middle (heading phi -> -pi/2)
     half_turn = math.pi / 2 + phi  # total right turn from the line to the middle
     arc_half = half_turn - 0.5 * b  # turn of half the arc (the clothoid turns b/2)
@@ -275,21 +277,12 @@ def figure8(
     la, lb, lc = a * scale, b * scale, arc_half * scale
     k = 1.0 / scale
     seg = ClothoidSegment
-    right_in = [seg.transition(lb, 0.0, -k)] if b > 0.0 else []
-    right_out = [seg.transition(lb, -k, 0.0)] if b > 0.0 else []
-    left_in = [seg.transition(lb, 0.0, k)] if b > 0.0 else []
-    left_out = [seg.transition(lb, k, 0.0)] if b > 0.0 else []
-    segs = (
-        seg.arc(lc, -k),
-        *right_out,
-        seg.line(2.0 * la),
-        *left_in,
-        seg.arc(2.0 * lc, k),
-        *left_out,
-        seg.line(2.0 * la),
-        *right_in,
-        seg.arc(lc, -k),
-    )
+
+    def clothoid(k0: float, k1: float) -> list[ClothoidSegment]:
+        return [seg.transition(lb, k0, k1)] if b > 0.0 else []
+
+    segs = (seg.arc(lc, -k), *clothoid(-k, 0.0), seg.line(2.0 * la), *clothoid(0.0, k), seg.arc(2.0 * lc, k),
+            *clothoid(k, 0.0), seg.line(2.0 * la), *clothoid(0.0, -k), seg.arc(lc, -k))  # fmt: skip
     return ClothoidPath(segs, (size / 2.0, 0.0), -math.pi / 2, closed=True, loops=loops)
 
 
@@ -309,9 +302,7 @@ def lane_change(
         lead: straight run before and after [m], in [0, 1000].
         loops: compiled path-building loops or None (module docstring).
     """
-    off = LANE_CHANGE_RANGES["offset"].check("lane_change", "offset", offset)
-    ln = LANE_CHANGE_RANGES["length"].check("lane_change", "length", length)
-    lead = LANE_CHANGE_RANGES["lead"].check("lane_change", "lead", lead)
+    off, ln, lead = _checked("lane_change", LANE_CHANGE_RANGES, (offset, length, lead))
     ratio = abs(off) / ln
     if loops is not None:
         x1, y1, theta_m, xm = loops.lane(ratio)
@@ -324,12 +315,7 @@ def lane_change(
     q = ln / (2.0 * xm)
     k = math.copysign(theta_m / q, off) if off != 0.0 else 0.0
     seg = ClothoidSegment
-    shift = (
-        seg.transition(q, 0.0, k),
-        seg.transition(q, k, 0.0),
-        seg.transition(q, 0.0, -k),
-        seg.transition(q, -k, 0.0),
-    )
+    shift = tuple(seg.transition(q, k0, k1) for k0, k1 in ((0.0, k), (k, 0.0), (0.0, -k), (-k, 0.0)))
     lines = (seg.line(lead),) if lead > 0.0 else ()
     return ClothoidPath((*lines, *shift, *lines), loops=loops)
 
@@ -361,11 +347,8 @@ def random_path(
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
-    total = RANDOM_RANGES["length"].check("random_path", "length", length)
-    kmax = RANDOM_RANGES["max_curvature"].check("random_path", "max_curvature", max_curvature)
-    cmax = RANDOM_RANGES["max_curvature_rate"].check("random_path", "max_curvature_rate", max_curvature_rate)
-    pmin = RANDOM_RANGES["min_piece"].check("random_path", "min_piece", min_piece)
-    pmax = RANDOM_RANGES["max_piece"].check("random_path", "max_piece", max_piece)
+    given = (length, max_curvature, max_curvature_rate, min_piece, max_piece)
+    total, kmax, cmax, pmin, pmax = _checked("random_path", RANDOM_RANGES, given)
     if pmin > pmax:
         raise ValueError(f"random_path.min_piece must be <= max_piece = {pmax:g} m, got {min_piece!r}")
     segs: list[ClothoidSegment] = []

@@ -424,7 +424,7 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
             doc = json.loads(f.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise ValueError(f"{name}: not valid JSON ({exc})") from None
-        closed: bool | None = None
+        closed = doc.get("closed") if isinstance(doc, dict) else None
         if isinstance(doc, dict):
             missing = [k for k in ("x", "y") if k not in doc]
             if missing:
@@ -432,17 +432,14 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
             xs, ys = doc["x"], doc["y"]
             if not isinstance(xs, list) or not isinstance(ys, list) or len(xs) != len(ys):
                 raise ValueError(f"{name}: 'x' and 'y' must be lists of equal length")
-            if "closed" in doc:
-                if not isinstance(doc["closed"], bool):
-                    raise ValueError(f"{name}: 'closed' must be true or false, got {doc['closed']!r}")
-                closed = doc["closed"]
+            if "closed" in doc and not isinstance(closed, bool):
+                raise ValueError(f"{name}: 'closed' must be true or false, got {closed!r}")
             rows = list(zip(xs, ys, strict=True))
         elif isinstance(doc, list):
-            rows = []
             for i, item in enumerate(doc):
                 if not isinstance(item, dict) or "x" not in item or "y" not in item:
                     raise ValueError(f"{name}: item {i} must be an object with 'x' and 'y', got {show_value(item)}")
-                rows.append((item["x"], item["y"]))
+            rows = [(item["x"], item["y"]) for item in doc]
         else:
             raise ValueError(f"{name}: expected {{'x': [...], 'y': [...]}} or a list of {{'x', 'y'}} objects")
         for i, (x, y) in enumerate(rows):
@@ -457,8 +454,7 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
     lines = [(i + 1, ln) for i, ln in enumerate(text.splitlines()) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise ValueError(f"{name}: empty; expected a header with columns x, y and one point per row")
-    reader = csv.reader([ln for _, ln in lines])
-    table = list(reader)
+    table = list(csv.reader([ln for _, ln in lines]))
     header = [h.strip().lower() for h in table[0]]
     missing = [k for k in ("x", "y") if k not in header]
     if missing:
@@ -490,12 +486,11 @@ def from_file(
     Raises:
         ValueError: the file's or the fit's problem, one line naming the file.
     """
-    pts, file_closed = load_points(file)
-    if closed is None:
-        repeats = len(pts) > 2 and bool(np.hypot(*(pts[-1] - pts[0])) < MIN_CHORD)
-        use = repeats if file_closed is None else file_closed
-    else:
+    pts, use = load_points(file)
+    if closed is not None:
         use = closed
+    elif use is None:
+        use = len(pts) > 2 and bool(np.hypot(*(pts[-1] - pts[0])) < MIN_CHORD)
     try:
         return from_points(pts, use, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     except ValueError as exc:

@@ -140,21 +140,11 @@ class UserPath:
         shape = () if scalar else np.shape(s)
         got = self.path.pose_columns(s)
         where = f"{self._owner}: path {self.name}: pose_columns(s)"
-        cols: dict[str, Any] = {}
-        for f in POSE_FIELDS:
-            if not hasattr(got, f):
-                raise ValueError(f"{where} must return an object with {', '.join(POSE_FIELDS)}; it has no {f!r}")
-            try:
-                cols[f] = _finite_column(getattr(got, f), shape, f"{where}.{f}")
-            except ValueError as exc:
-                if scalar:
-                    raise ValueError(f"{exc} (at s = {float(s)!r} m)") from None
-                raise
+        at = f"s = {float(s)!r} m" if scalar else None
+        x, y, th, k = _fields(got, POSE_FIELDS, shape, where, f"an object with {', '.join(POSE_FIELDS)}", at)
         rate = getattr(got, "curvature_rate", None)
         cr = np.zeros(shape) if rate is None else _finite_column(rate, shape, f"{where}.curvature_rate")
-        th = cols["theta"]
-        c, sn = np.cos(th), np.sin(th)
-        out = PathPose(cols["x"], cols["y"], th, cols["curvature"], cr, c, sn)
+        out = PathPose(x, y, th, k, cr, np.cos(th), np.sin(th))
         if scalar:
             return PathPose(*(float(v) for v in out))
         return out
@@ -172,18 +162,8 @@ class UserPath:
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray))
         shape = () if scalar else np.broadcast_shapes(np.shape(x), np.shape(y))
         where = f"{self._owner}: path {self.name}: locate(x, y, ...)"
-        vals: list[Any] = []
-        for f in PathPoint._fields:
-            if not hasattr(got, f):
-                raise ValueError(f"{where} must return an amigo_gym.paths.PathPoint; it has no {f!r}")
-            try:
-                v = _finite_column(getattr(got, f), shape, f"{where}.{f}")
-            except ValueError as exc:
-                if scalar:
-                    raise ValueError(f"{exc} (at x = {float(x)!r}, y = {float(y)!r} m)") from None
-                raise
-            vals.append(v)
-        return _point(vals, scalar)
+        at = f"x = {float(x)!r}, y = {float(y)!r} m" if scalar else None
+        return _point(_fields(got, PathPoint._fields, shape, where, "an amigo_gym.paths.PathPoint", at), scalar)
 
     def _locate(
         self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
@@ -197,6 +177,22 @@ class UserPath:
         """:meth:`pose_columns` of a float as the projection's pose function."""
         x, y, th, kappa, rate, ct, st = self.pose_columns(s)  # floats for a float
         return float(x), float(y), float(th), float(kappa), float(rate), float(ct), float(st)
+
+
+def _fields(
+    got: Any, names: tuple[str, ...], shape: tuple[int, ...], where: str, kind: str, at: str | None
+) -> list[Array]:
+    """The fields ``names`` of a user's result, each :func:`_finite_column` (one-line errors; ``at``: the point
+    of a float query, added to them)."""
+    out = []
+    for f in names:
+        if not hasattr(got, f):
+            raise ValueError(f"{where} must return {kind}; it has no {f!r}")
+        try:
+            out.append(_finite_column(getattr(got, f), shape, f"{where}.{f}"))
+        except ValueError as exc:
+            raise ValueError(f"{exc} (at {at})" if at else str(exc)) from None
+    return out
 
 
 def _point(vals: list[Any], scalar: bool) -> PathPoint:

@@ -7,27 +7,14 @@ Fields: ``e``, ``psi``, ``kappa``, ``v_ref`` as in :mod:`amigo_gym.policies.anal
 ``edot = v sin psi + l3 omega cos psi``), ``v_ahead = reference_speed_ahead * v_max`` (the reference speed 1 s
 later) and the preview points ``(x_d, y_d)`` [m] in the robot frame (origin A, x along the heading).
 
-Analytic law (:func:`analytic_tracking_command`)
-------------------------------------------------
-``Hdot = sdot t + c n`` with ``c = -k e - k_i z``, ``z = int e dt``, and ``v = v_ref``:
-
-.. math::
-    v = v_{ref}, \qquad \dot s = \frac{v_{ref} - c\sin\psi}{\cos\psi}, \qquad
-    \omega = \frac{c - v_{ref}\sin\psi}{l_3\cos\psi},
-
-so ``e'' + k e' + k_i e = 0`` on every path and speed profile; on the path it is the paper's exact inverse
-solution. ``cos psi`` is floored at :data:`COS_MIN`. Defaults ``k = 1 1/s``, ``k_i = k^2/4`` (critically damped);
-a larger ``k`` settles faster on the ideal robot but, with the firmware's turn-rate ramp (``a_w = 0.87
-rad/s^2``, linear for ``|e| <= a_w l3 / k^2``) and the ``"hard"`` preset's delays, may enter a limit cycle.
+Analytic law (:func:`analytic_tracking_command`, derived in :mod:`amigo_gym.policies.analytic`)
+------------------------------------------------------------------------------------------------
+H's normal speed ``c = -k e - k_i z``, ``z = int e dt``, and ``v = v_ref``: ``e'' + k e' + k_i e = 0`` on every
+path and speed profile. Defaults ``k = 1 1/s``, ``k_i = k^2/4`` (critically damped); a larger ``k`` may enter a
+limit cycle with the firmware's turn-rate ramp (``a_w = 0.87 rad/s^2``) and the ``"hard"`` preset's delays.
 Anti-windup: ``k_i |z| <= integral_limit``. The wheel-rate setpoints are scaled into ``+-w_max`` keeping
-``omega / v`` (:func:`limit_wheel_rates`).
-
-Feedforward (``feedforward=True``): the law is evaluated at the mid-step heading error ``psi + psidot dt / 2``,
-
-.. math::
-    \Delta\omega = -\frac{\dot s}{l_3\cos\psi}\Bigl(\omega - \frac{\kappa\,\dot s}{1 - \kappa e}\Bigr)\frac{dt}{2},
-
-and ``v`` is the reference predicted for the step's end (:meth:`AnalyticTrackingPolicy.next_reference_speed`).
+``omega / v`` (:func:`limit_wheel_rates`). Feedforward (``feedforward=True``): the law at the mid-step heading
+error, and ``v`` the reference predicted for the step's end (:meth:`AnalyticTrackingPolicy.next_reference_speed`).
 
 Error bound with a held command (:func:`zoh_error_bound`)
 ---------------------------------------------------------
@@ -106,17 +93,8 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: Params) -> Array:
 
 
 def pure_pursuit_command(x_l: ArrayLike, y_l: ArrayLike, v_ref: ArrayLike) -> tuple[Array, Array]:
-    r"""Pure pursuit (Coulter 1992) towards the goal point ``(x_L, y_L)`` in the frame of A.
-
-    .. math:: \kappa = \frac{2 y_L}{L^2}, \quad L^2 = x_L^2 + y_L^2, \quad v = v_{ref}, \quad \omega = v\kappa.
-
-    Args:
-        x_l, y_l: the goal point in the frame of A (x along the heading) [m], ``(N,)``; ``L`` is floored at 1 mm.
-        v_ref: speed of A [m/s], ``(N,)``.
-
-    Returns:
-        ``(v [m/s], omega [rad/s])``, each ``(N,)``.
-    """
+    """Pure pursuit (module docstring) towards the goal point ``(x_L, y_L)`` [m] in the frame of A (``L`` floored
+    at 1 mm) at the speed ``v_ref`` [m/s] of A: ``(v [m/s], omega [rad/s])``, columns ``(N,)``."""
     x = np.asarray(x_l, dtype=np.float64)
     y = np.asarray(y_l, dtype=np.float64)
     v = np.asarray(v_ref, dtype=np.float64)
@@ -283,6 +261,9 @@ class PurePursuitPolicy(Policy):
     ``predict`` is stateless. The benchmark's ``pure_pursuit`` is the default form (docs/benchmark.md).
     """
 
+    max_turn_rate: float | None
+    lookahead_time: float | None
+
     def __init__(
         self,
         params: TrackingParams,
@@ -304,14 +285,9 @@ class PurePursuitPolicy(Policy):
         if origin not in ("axle", "H"):
             raise ValueError(f"{o}.origin must be 'axle' or 'H', got {origin!r}")
         self.origin = origin
-        self.max_turn_rate = (
-            None if max_turn_rate is None else check_range(o, "max_turn_rate", max_turn_rate, 0.0, 1e3, low_open=True)
-        )
-        self.lookahead_time = (
-            None
-            if lookahead_time is None
-            else check_range(o, "lookahead_time", lookahead_time, 0.0, 60.0, low_open=True)
-        )
+        opt = {"max_turn_rate": (max_turn_rate, 1e3), "lookahead_time": (lookahead_time, 60.0)}
+        for k, (v, top) in opt.items():
+            setattr(self, k, None if v is None else check_range(o, k, v, 0.0, top, low_open=True))
         self.lookahead = la
         self._prev = np.asarray(prev, dtype=np.float64)
         self._fixed = list(prev).index(la)

@@ -53,7 +53,6 @@ __all__ = [
     "circle_steady_state",
     "manoeuvre_profile",
     "paper_circle",
-    "path_breakpoints",
     "solve_inverse",
     "time_grid",
 ]
@@ -224,42 +223,8 @@ class TrapezoidProfile:
 
 
 #: names of the columns of an :class:`InverseSolution`, in CSV order
-COLUMNS: tuple[str, ...] = (
-    "t",
-    "s",
-    "x_A",
-    "y_A",
-    "beta",
-    "v_A",
-    "betadot",
-    "alpha1",
-    "alpha2",
-    "alpha3",
-    "alpha1_dot",
-    "alpha2_dot",
-    "alpha3_dot",
-    "x_H",
-    "y_H",
-)
-
-#: units of the columns, for the CSV header comment and plots
-UNITS: dict[str, str] = {
-    "t": "s",
-    "s": "m",
-    "x_A": "m",
-    "y_A": "m",
-    "beta": "rad",
-    "v_A": "m/s",
-    "betadot": "rad/s",
-    "alpha1": "rad",
-    "alpha2": "rad",
-    "alpha3": "rad",
-    "alpha1_dot": "rad/s",
-    "alpha2_dot": "rad/s",
-    "alpha3_dot": "rad/s",
-    "x_H": "m",
-    "y_H": "m",
-}
+COLUMNS: tuple[str, ...] = ("t", "s", "x_A", "y_A", "beta", "v_A", "betadot", "alpha1", "alpha2", "alpha3",
+                            "alpha1_dot", "alpha2_dot", "alpha3_dot", "x_H", "y_H")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -357,17 +322,6 @@ def time_grid(duration: float, dt: float, t0: float = 0.0) -> Array:
     return t0 + dt * np.arange(n + 1, dtype=np.float64)
 
 
-def path_breakpoints(path: AnyPath) -> tuple[float, ...]:
-    """Arc lengths [m] where the path's curvature jumps (the manoeuvre's straight→circle junction)."""
-    if isinstance(path, ManoeuvrePath) and path.straight_length > 0.0:
-        return (float(path.straight_length),)
-    return ()
-
-
-def _path_radius(path: AnyPath) -> float:
-    return float(path.radius)
-
-
 def solve_inverse(
     path: AnyPath,
     profile: SpeedProfile,
@@ -420,7 +374,7 @@ def solve_inverse(
     o = "solve_inverse"
     if not isinstance(path, (CirclePath, ManoeuvrePath)):
         raise ValueError(f"{o}.path must be a CirclePath or ManoeuvrePath, got {type(path).__name__}")
-    check_range(o, "path.radius", _path_radius(path), robot.l3, low_open=True)
+    check_range(o, "path.radius", float(path.radius), robot.l3, low_open=True)
     check_range(o, "profile.peak_speed", profile.peak_speed, 0.0, robot.max_speed, low_open=True)
     tg = np.asarray(t, dtype=np.float64)
     if tg.ndim != 1 or tg.size < 1:
@@ -479,7 +433,8 @@ def solve_inverse(
     max_step = 2.0 * l3 / profile.peak_speed
     t_first, t_last = float(tg[0]), float(tg[-1])
     edges = [t_first, *(b for b in profile.breakpoints() if t_first < b < t_last), t_last]
-    s_breaks = [sb for sb in path_breakpoints(path) if sb > s0]
+    # the arc length where the path's curvature jumps: the manoeuvre's straight->circle junction
+    s_breaks = [float(path.straight_length)] if isinstance(path, ManoeuvrePath) and path.straight_length > s0 else []
     out = np.empty((y.size, tg.size))
     out[:, 0] = y
     for ta, tb in itertools.pairwise(edges):

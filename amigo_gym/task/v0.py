@@ -30,9 +30,7 @@ Reward: the product of four named terms, each in [0, 1], so the reward lies in [
         \cdot \underbrace{\left(1 - w_s\left(1 - e^{-(\|\Delta a\|/\sigma_a)^2}\right)\right)}_{\text{smooth}}
 
 with ``psi_ss = -asin(kappa l3)`` the steady heading error of the exact inverse solution on the
-local curvature and ``Delta a`` the change of the normalised wheel-rate command. A product (rather
-than a sum) makes every term necessary: standing still or spinning in place loses the speed term,
-driving the path the wrong way loses the heading term, leaving the path loses the tracking term.
+local curvature and ``Delta a`` the change of the normalised wheel-rate command.
 
 Evaluation without angles: the cosine and sine of the heading error come from the unit vectors of
 the heading, ``u = (cos beta, sin beta)``, and of the path tangent, ``t = (cos theta, sin theta)``
@@ -42,15 +40,9 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
 ``Delta w`` of the wheel rates.
 
-The step is written once: AmigoBot-v0's reference step is AmigoBot-v1's ideal step with v0's settings
-(:func:`amigo_gym.task.v1.step_columns` and ``reset_columns`` of :func:`amigo_gym.task.v1.v0_configuration`, what
-``kernel="numpy"`` runs and what the compiled step is tested against), which calls the pieces here
-(:func:`observe_columns`, :func:`reward_term_columns`, :func:`steady_heading`, :func:`bound_angle`); they take plain
-scalars or ``(N,)`` arrays alike (``tests/test_columns.py``).
-
-One home per contract: the observation's named fields (:func:`obs_names`, :func:`obs_index`; every
-reader decodes the observation by these names) and the info dict's schema (:data:`INFO_KEYS`, :func:`info_dict`,
-used by the single env and the vector env).
+AmigoBot-v0's step is AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns` of
+:func:`amigo_gym.task.v1.v0_configuration`), which calls the pieces here on floats or ``(N,)`` columns alike. The
+observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts readers use.
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -68,39 +60,6 @@ from amigo_gym.model.kinematics import Real, col_sqrt
 from amigo_gym.model.numeric import clip
 from amigo_gym.model.params import HEADING_LIMIT, EnvParams, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
-
-__all__ = [
-    "REWARD_TERMS",
-    "obs_dim",
-    "obs_bounds",
-    "obs_bounds_of",
-    "error_bound",
-    "obs_names",
-    "validate_action",
-    "action_pair",
-    "real_array",
-    "reward_term_columns",
-    "reward_product",
-    "reward_arguments",
-    "off_path",
-    "observe_head",
-    "observe_tail",
-    "observe_rates",
-    "observe_reference",
-    "curvature_feature",
-    "smooth_term",
-    "heading_term",
-    "steady_heading",
-    "steady_heading_float",
-    "heading_error",
-    "initial_wheel_rates",
-    "INFO_KEYS",
-    "OBS_HEAD",
-    "OBS_TAIL",
-    "info_dict",
-    "obs_index",
-    "observe_columns",
-]
 
 Array = NDArray[np.float64]
 
@@ -270,9 +229,7 @@ def initial_wheel_rates(params: EnvParams) -> Array:
     return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
 
 
-# The scalar pieces of the step, written once in numba's subset (plain floats and ``math``; the arithmetic ones
-# take arrays too): the reference calls them as Python, the compiled step (:mod:`amigo_gym.sim._kernels_v1`)
-# compiles these very functions (docs/architecture.md, "One robot, one step").
+# The scalar pieces of the step in numba's subset: the compiled step (amigo_gym.sim._kernels_v1) compiles them.
 
 
 def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
@@ -320,11 +277,7 @@ def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max:
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
     [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
     (``amigo_gym.sim._kernels_v1``)."""
-    return (
-        clip(w1 / w_max, -1.0, 1.0),
-        clip(w2 / w_max, -1.0, 1.0),
-        clip((v - v_ref) / v_max, -2.0, 2.0),
-    )
+    return (clip(w1 / w_max, -1.0, 1.0), clip(w2 / w_max, -1.0, 1.0), clip((v - v_ref) / v_max, -2.0, 2.0))
 
 
 def observe_reference(v_ref: Real, v_max: float) -> Real:

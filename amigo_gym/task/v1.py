@@ -103,26 +103,6 @@ if TYPE_CHECKING:
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
 
-__all__ = [
-    "REWARD_TERMS",
-    "PATH_FAMILIES",
-    "TrackingParams",
-    "make_tracking_params",
-    "obs_fields",
-    "obs_bounds",
-    "Constants",
-    "constants",
-    "v0_settings",
-    "v0_configuration",
-    "command_ring_length",
-    "Episode",
-    "State",
-    "Outcome",
-    "reference_speed",
-    "step_columns",
-    "reset_columns",
-]
-
 REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
 #: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
 PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
@@ -139,6 +119,27 @@ SpeedProfile = Literal["constant", "trapezoid"]
 LAYOUTS: tuple[str, ...] = ("v1", "v0")
 #: values of ``feasibility=``: refuse an infeasible fixed path, warn and run it, or run it silently
 FEASIBILITY_MODES: tuple[str, ...] = ("error", "warn", "off")
+
+
+#: the settings that must be instances of a class: name, class, and the class as the error message names it
+_TYPES: tuple[tuple[str, type, str], ...] = (
+    ("robot", RobotParams, "a RobotParams"),
+    ("true_robot", RobotParams, "a RobotParams or None"),
+    ("actuators", ActuatorParams, "an ActuatorParams"),
+    ("randomize", Randomization, "a Randomization"),
+)
+#: the settings that take one of a few values
+_CHOICES: tuple[tuple[str, tuple[Any, ...]], ...] = (
+    ("ideal_actuators", (True, False)),
+    ("observation", LAYOUTS),
+    ("reward", LAYOUTS),
+    ("speed_profile", ("constant", "trapezoid")),
+    ("start_at_rest", (True, False)),
+    ("feasibility", FEASIBILITY_MODES),
+)
+#: the range checks whose low (high) end is open
+_LOW_OPEN = frozenset({"radius", "profile_accel", "profile_decel", "profile_duration", "termination_distance"})
+_HIGH_OPEN = frozenset({"smooth_weight"})
 
 
 def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
@@ -168,26 +169,21 @@ class TrackingParams:
         actuators: the firmware's ramps (0.3 / 0.75 m/s^2, 0.87 / 2.5 rad/s^2) and a fixed delay [s].
         randomize: ranges drawn per episode (wheel radii, track, slip, delay) and measurement noise;
             a preset name (``"none"``, ``"mild"``, ``"hard"``) or a mapping in ``gym.make``.
-        dt: control period [s], in [MIN_DT = 0.001, 1]. Default 0.1 (the robot's 100 ms cycle). The bound keeps the
-            delay ring small: ``ring_length(dt)``, about ``0.5 / dt + 2`` commands per robot, at most 501 (8 KB).
-            AmigoBot-v0's configuration (``ideal_actuators=True, observation="v0", reward="v0"``: no delay ring)
-            keeps AmigoBot-v0's ranges (:class:`amigo_gym.model.params.EnvParams`): ``dt`` in [1e-6, 2] s,
-            ``error_scale`` in [1e-6, 10] m, each ``preview`` in [0, 10] m, the sigmas in [1e-6, 1e6].
+        dt: control period [s], in [MIN_DT = 0.001, 1] (the delay ring keeps at most 501 commands). Default 0.1.
+            AmigoBot-v0's configuration (``ideal_actuators=True, observation="v0", reward="v0"``) keeps
+            AmigoBot-v0's ranges: ``dt`` in [1e-6, 2] s, ``error_scale`` in [1e-6, 10] m, each ``preview`` in
+            [0, 10] m, the sigmas in [1e-6, 1e6].
         path: a family name of :data:`PATH_FAMILIES`, a points file (``.csv`` or ``.json`` with columns ``x``,
             ``y`` [m]: :func:`amigo_gym.paths.from_file`), or a path object (:mod:`amigo_gym.paths.user`).
         radius: radius of ``"circle"`` and of the circular part of ``"manoeuvre"`` [m]; with
             ``path="mixed"`` circles draw their radius in [0.5, 3] m instead. Default 1.0.
         direction: +1 (left turn) or -1 (right) for circles and the manoeuvre. Default +1.
-        path_params: further parameters of the family (e.g. ``{"size": 4.0}`` for ``"figure8"``), as
-            sorted ``(name, value)`` pairs; ``gym.make`` takes a mapping (or the pairs, as JSON gives them back).
-            Checked at construction against the family's ranges (:data:`amigo_gym.paths.FAMILIES`): an unknown
-            or out-of-range parameter is refused, and so is any parameter that would go unused (with
-            ``path="mixed"``, whose circle, figure-8 and lane-change ranges are :data:`MIXED_RANGES` and whose
-            random paths alone take the ``"random"`` family's parameters, or a path object), and ``radius`` or
-            ``direction`` for ``"circle"``/``"manoeuvre"`` (the keywords of those names set them).
-        random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each
-            built once per process and kept while the process's built paths fit in :data:`PATH_CACHE_BYTES`
-            (64 MiB; the default pool takes about 25 MB). Default 1024.
+        path_params: further parameters of the family (e.g. ``{"size": 4.0}`` for ``"figure8"``), as sorted
+            ``(name, value)`` pairs (``gym.make`` takes a mapping), checked against the family's ranges
+            (:data:`amigo_gym.paths.FAMILIES`); unknown, out-of-range and unused parameters are refused (with
+            ``path="mixed"`` only its random paths take them; ``radius``/``direction`` are keywords).
+        random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each built once
+            per process and cached within :data:`PATH_CACHE_BYTES`. Default 1024.
         speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)``
             drawn per episode. Default 0.2.
         speed_profile: ``"constant"``, or ``"trapezoid"`` (start at 0, accelerate at ``profile_accel``,
@@ -212,22 +208,14 @@ class TrackingParams:
             the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
             passes the end (``"end_of_path"``).
         ideal_actuators: ``True``: the wheels take the commanded rates ``a w_max`` at once and hold them over the
-            step (AmigoBot-v0's actuators): the pose advances by the exact arc
-            (:func:`amigo_gym.model.kinematics.arc_step`), the heading's cosine and sine by angle addition, the
-            ramps of ``actuators`` are not used. Requires no delay (``actuators.delay`` 0, ``randomize.delay``
-            (0, 0)), no slip, no ``true_robot`` and no randomised geometry. Default False (the firmware's ramps).
+            step (AmigoBot-v0's actuators; the pose advances by the exact arc). Requires no delay, no slip, no
+            ``true_robot`` and no randomised geometry. Default False (the firmware's ramps).
         observation: the observation layout: ``"v1"`` (default, module table) or ``"v0"``, AmigoBot-v0's
-            (:func:`amigo_gym.task.v0.obs_names`: error, heading error, curvature, the curvature at each
-            ``preview`` distance, the two wheel rates, speed error, reference speed), from the measured state.
+            (:func:`amigo_gym.task.v0.obs_names`), from the measured state.
         reward: ``"v1"`` (default): the smoothness term's change is that of the normalised command over
-            ``2 sigma_smooth``; ``"v0"``: AmigoBot-v0's, the change of the wheel rates over ``w_max sigma_smooth``
-            (4 times the loss of a given change).
+            ``2 sigma_smooth``; ``"v0"``: AmigoBot-v0's, the change of the wheel rates over ``w_max sigma_smooth``.
 
-    With ``ideal_actuators=True, observation="v0", reward="v0"``, ``randomize="none"``, ``start_at_rest=False``,
-    a constant ``speed``, v0's ``preview`` (0.2, 0.4) and the path ``amigo_gym.paths.CirclePath(radius, direction=...)``
-    (a path object: its projection is v0's), ``AmigoBot-v1`` steps as ``AmigoBot-v0``
-    (``tests/test_v0_as_v1.py``). The compiled step runs every setting on the built-in paths, and AmigoBot-v0's
-    circle and manoeuvre with ``observation="v0"`` (:func:`amigo_gym.sim.fast_v1.compiled_path`).
+    AmigoBot-v0 is the configuration :func:`v0_configuration` (``tests/test_v0_as_v1.py``).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -265,18 +253,15 @@ class TrackingParams:
     def __post_init__(self) -> None:
         o = "TrackingParams"
         s = object.__setattr__
-        if not isinstance(self.robot, RobotParams):
-            raise ValueError(f"{o}.robot must be a RobotParams, got {type(self.robot).__name__}")
-        if self.true_robot is not None and not isinstance(self.true_robot, RobotParams):
-            raise ValueError(f"{o}.true_robot must be a RobotParams or None, got {type(self.true_robot).__name__}")
-        if not isinstance(self.actuators, ActuatorParams):
-            raise ValueError(f"{o}.actuators must be an ActuatorParams, got {type(self.actuators).__name__}")
-        if not isinstance(self.randomize, Randomization):
-            raise ValueError(f"{o}.randomize must be a Randomization, got {type(self.randomize).__name__}")
-        # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
-        # (EnvParams's, which AmigoBot-v0's envs check first): its steps need no delay ring, so dt in [1e-6, 2] s
-        v0 = self.ideal_actuators is True and self.observation == "v0" and self.reward == "v0"
-        s(self, "dt", check_range(o, "dt", self.dt, *((1e-6, 2.0) if v0 else (MIN_DT, 1.0))))
+        for name, cls, what in _TYPES:
+            value = getattr(self, name)
+            if not isinstance(value, cls) and not (name == "true_robot" and value is None):
+                raise ValueError(f"{o}.{name} must be {what}, got {type(value).__name__}")
+        for name, allowed in _CHOICES:
+            value = getattr(self, name)
+            if not isinstance(value, type(allowed[0])) or value not in allowed:
+                what = "True or False" if allowed[0] is True else f"one of {list(allowed)}"
+                raise ValueError(f"{o}.{name} must be {what}, got {value!r}")
         if isinstance(self.path, str) and self.path not in PATH_FAMILIES:
             from amigo_gym.paths.points import cached_file_path, is_points_file
 
@@ -290,62 +275,47 @@ class TrackingParams:
             from amigo_gym.paths.user import check_path
 
             s(self, "path", check_path(self.path, "AmigoBot-v1"))
-        s(self, "radius", check_range(o, "radius", self.radius, self.robot.l3, 1e3, low_open=True))
+        # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
+        # (EnvParams's): its steps need no delay ring, so dt in [1e-6, 2] s
+        v0 = self.ideal_actuators and self.observation == "v0" and self.reward == "v0"
+        r = self.robot
+        sigma_high = 1e6 if v0 else 10.0
+        ranges = (
+            ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0))),
+            ("radius", r.l3, 1e3),
+            ("profile_accel", 0.0, r.max_acceleration),
+            ("profile_decel", 0.0, r.max_deceleration),
+            ("profile_duration", 0.0, 1e5),
+            ("termination_distance", 0.0, 10.0),
+            ("init_heading_noise", 0.0, math.pi / 4),
+            ("error_scale", 1e-6 if v0 else 1e-4, 10.0),
+            ("preview_scale", 1e-2, 10.0),
+            ("sigma_track", 1e-6, sigma_high),
+            ("sigma_speed", 1e-6, sigma_high),
+            ("sigma_smooth", 1e-6, sigma_high),
+            ("smooth_weight", 0.0, 1.0),
+            ("goal_tolerance", 0.0, 10.0),
+        )
+        for name, low, high in ranges:
+            value = getattr(self, name)
+            s(
+                self,
+                name,
+                check_range(o, name, value, low, high, low_open=name in _LOW_OPEN, high_open=name in _HIGH_OPEN),
+            )
+        high = self.termination_distance / 2
+        s(self, "init_position_noise", check_range(o, "init_position_noise", self.init_position_noise, 0.0, high))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
         if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
             raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
-        s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, self.robot.max_speed))
-        if self.speed_profile not in ("constant", "trapezoid"):
-            raise ValueError(f"{o}.speed_profile must be 'constant' or 'trapezoid', got {self.speed_profile!r}")
-        s(
-            self,
-            "profile_accel",
-            check_range(o, "profile_accel", self.profile_accel, 0.0, self.robot.max_acceleration, low_open=True),
-        )
-        s(
-            self,
-            "profile_decel",
-            check_range(o, "profile_decel", self.profile_decel, 0.0, self.robot.max_deceleration, low_open=True),
-        )
-        s(self, "profile_duration", check_range(o, "profile_duration", self.profile_duration, 0.0, 1e5, low_open=True))
-        if not isinstance(self.start_at_rest, bool):
-            raise ValueError(f"{o}.start_at_rest must be True or False, got {self.start_at_rest!r}")
-        s(
-            self,
-            "termination_distance",
-            check_range(o, "termination_distance", self.termination_distance, 0.0, 10.0, low_open=True),
-        )
-        s(
-            self,
-            "init_position_noise",
-            check_range(o, "init_position_noise", self.init_position_noise, 0.0, self.termination_distance / 2),
-        )
-        s(self, "init_heading_noise", check_range(o, "init_heading_noise", self.init_heading_noise, 0.0, math.pi / 4))
-        s(self, "error_scale", check_range(o, "error_scale", self.error_scale, 1e-6 if v0 else 1e-4, 10.0))
+        s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, r.max_speed))
         if isinstance(self.preview, (str, bytes)) or not hasattr(self.preview, "__iter__"):
             raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
         far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
-        prev = tuple(
-            check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview)
-        )
-        s(self, "preview", prev)
-        s(self, "preview_scale", check_range(o, "preview_scale", self.preview_scale, 1e-2, 10.0))
-        sigma_high = 1e6 if v0 else 10.0  # v0's sigmas: [1e-6, 1e6]
-        s(self, "sigma_track", check_range(o, "sigma_track", self.sigma_track, 1e-6, sigma_high))
-        s(self, "sigma_speed", check_range(o, "sigma_speed", self.sigma_speed, 1e-6, sigma_high))
-        s(self, "sigma_smooth", check_range(o, "sigma_smooth", self.sigma_smooth, 1e-6, sigma_high))
-        s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
-        if not isinstance(self.feasibility, str) or self.feasibility not in FEASIBILITY_MODES:
-            raise ValueError(f"{o}.feasibility must be one of {list(FEASIBILITY_MODES)}, got {self.feasibility!r}")
-        s(self, "goal_tolerance", check_range(o, "goal_tolerance", self.goal_tolerance, 0.0, 10.0))
+        prev = (check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
+        s(self, "preview", tuple(prev))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
-        if not isinstance(self.ideal_actuators, bool):
-            raise ValueError(f"{o}.ideal_actuators must be True or False, got {self.ideal_actuators!r}")
-        for name in ("observation", "reward"):
-            value = getattr(self, name)
-            if not isinstance(value, str) or value not in LAYOUTS:
-                raise ValueError(f"{o}.{name} must be one of {list(LAYOUTS)}, got {value!r}")
         _check_combined(o, self)
 
     @property
@@ -419,13 +389,8 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
 
 
 def _check_combined(owner: str, p: TrackingParams) -> None:
-    """Refuse settings that are each in range but conflict together (they are never clipped silently).
-
-    * the fixed delay plus the highest randomised delay above :data:`amigo_gym.model.actuators.MAX_DELAY` (0.5 s);
-    * a trapezoid that cannot reach its cruise speed: ``v / profile_accel + v / profile_decel >
-      profile_duration`` at the highest reference speed ``v``;
-    * ``ideal_actuators`` with a delay, slip, a true robot or randomised geometry (ideal actuators have none).
-    """
+    """Refuse settings that are each in range but conflict together (never clipped silently): a total delay above
+    ``MAX_DELAY``, a trapezoid too short to reach its speed, ``ideal_actuators`` with delay, slip or mismatch."""
     fixed = p.actuators.delay
     high = p.randomize.delay[1]
     if p.ideal_actuators:
@@ -541,16 +506,8 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
-    out += [
-        "reference_speed",
-        "reference_speed_ahead",
-        "speed_error",
-        "wheel_rate_1",
-        "wheel_rate_2",
-        "previous_command_1",
-        "previous_command_2",
-    ]
-    return tuple(out)
+    speeds = ("reference_speed", "reference_speed_ahead", "speed_error", "wheel_rate_1", "wheel_rate_2")
+    return (*out, *speeds, "previous_command_1", "previous_command_2")
 
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -602,6 +559,7 @@ def constants(p: TrackingParams) -> Constants:
     # the projection window: farther than H can move in one step (speed of H <= v + l3 |w|)
     h_speed = actuators.turn_rate_bound(robot) * robot.l3 + 1.25 * robot.max_speed
     window = max(0.25, 1.5 * h_speed * p.dt + 0.1)
+    smooth = w_max * p.sigma_smooth
     return Constants(
         params=p,
         nominal=robot,
@@ -613,7 +571,9 @@ def constants(p: TrackingParams) -> Constants:
         ring_length=command_ring_length(p),
         window=window,
         preview_bounds=tuple((d + robot.l3 + 2.0 * p.termination_distance) / p.preview_scale for d in p.preview),
-        smooth_scale_sq=_smooth_scale_sq(p, w_max),
+        # the smoothness term's squared scale: (2 sigma_smooth)^2 of the command's change (reward="v1"), or
+        # (w_max sigma_smooth)^2 [rad^2/s^2] of the wheel rates' change (reward="v0", AmigoBot-v0's)
+        smooth_scale_sq=smooth * smooth if p.reward == "v0" else 4.0 * p.sigma_smooth * p.sigma_smooth,
     )
 
 
@@ -691,15 +651,6 @@ def v0_configuration(e: EnvParams) -> TrackingParams:
         observation="v0",
         reward="v0",
     )
-
-
-def _smooth_scale_sq(p: TrackingParams, w_max: float) -> float:
-    """The smoothness term's squared scale: ``(2 sigma_smooth)^2`` of the command's change (``reward="v1"``), or
-    ``(w_max sigma_smooth)^2`` [rad^2/s^2] of the wheel rates' change (``reward="v0"``, AmigoBot-v0's)."""
-    if p.reward == "v0":
-        scale = w_max * p.sigma_smooth
-        return scale * scale
-    return 4.0 * p.sigma_smooth * p.sigma_smooth
 
 
 class Episode(NamedTuple):
@@ -800,7 +751,7 @@ def _max0(x: Any) -> Any:
 def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
     r"""Reference speed of A at episode time ``t`` [s], in [m/s].
 
-    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake): :func:`trapezoid_speed` with ``a_up =
+    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake): :func:`reference_speed_of` with ``a_up =
     profile_accel``, ``a_down = profile_decel``, ``t_b`` = :attr:`Episode.t_brake`. Floats or columns.
     """
     trapezoid = p.speed_profile == "trapezoid"
@@ -808,20 +759,14 @@ def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
 
 
 def reference_speed_of(trapezoid: bool, v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
-    """:func:`reference_speed` from numbers: the cruise speed ``v`` [m/s], or :func:`trapezoid_speed` when
-    ``trapezoid``. Floats or columns; compiled by the compiled step."""
-    return trapezoid_speed(v, accel, decel, t_brake, t) if trapezoid else v
-
-
-def trapezoid_speed(v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
-    r"""The trapezoid reference speed [m/s] (start, cruise, brake):
+    r""":func:`reference_speed` from numbers [m/s]: the cruise speed ``v``, or when ``trapezoid`` (start, cruise,
+    brake)
 
     .. math:: v_{ref}(t) = \max\bigl(0, \min(a_{up} t,\; v,\; v - a_{down} (t - t_b))\bigr),
         \qquad t_b = T - v / a_{down}
 
-    (``T = profile_duration``), the minima left to right. Floats or columns (``_min``, ``_max0``); written once: the
-    compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles this function."""
-    out: Real = _max0(_min(_min(accel * t, v), v - decel * (t - t_brake)))
+    (``T = profile_duration``), the minima left to right. Floats or columns; compiled by the compiled step."""
+    out: Real = _max0(_min(_min(accel * t, v), v - decel * (t - t_brake))) if trapezoid else v
     return out
 
 
@@ -906,29 +851,28 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
         the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
         ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
     """
-    f = _feasibility(path, p.speed_range[1], p.robot, None if p.ideal_actuators else p.actuators.rot_acceleration)
-    if not f.feasible:
-        if p.feasibility == "error":
-            raise ValueError(f"{f.message()} (feasibility='warn' or 'off' runs it anyway)")
-        if p.feasibility == "warn":
-            warnings.warn(f"AmigoBot-v1: {f.message()}; running it (feasibility='warn')", UserWarning, stacklevel=3)
+    # remembered per process for a ClothoidPath (frozen: its value is its key; every env of a vector of single envs
+    # checks the same task, an RK4 lag profile of tens of ms); another path object (a user's) analysed each time
+    analyse = _feasibility if type(path) is ClothoidPath else _feasibility.__wrapped__
+    f = analyse(path, p.speed_range[1], p.robot, None if p.ideal_actuators else p.actuators.rot_acceleration)
+    _apply_feasibility(p, None if f.feasible else f.message(), stacklevel=4)
     return f.report()
 
 
+def _apply_feasibility(p: TrackingParams, problem: str | None, stacklevel: int) -> None:
+    """Apply ``p.feasibility`` to a problem: ``"error"`` raises a one-line ``ValueError``, ``"warn"`` warns and
+    runs, ``"off"`` runs."""
+    if problem is None or p.feasibility == "off":
+        return
+    if p.feasibility == "error":
+        raise ValueError(f"{problem} (feasibility='warn' or 'off' runs it anyway)")
+    warnings.warn(f"AmigoBot-v1: {problem}; running it (feasibility='warn')", UserWarning, stacklevel=stacklevel)
+
+
 @lru_cache(maxsize=256)
-def _cached_feasibility(path: ClothoidPath, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
-    from amigo_gym.paths import feasibility
-
-    return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
-
-
 def _feasibility(path: Any, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
     """:func:`amigo_gym.paths.feasibility` of ``path`` at the speed ``v`` [m/s] of A, with the ramp limit ``rot``
-    [rad/s^2] (``None``: unbounded), remembered per process for a :class:`~amigo_gym.paths.ClothoidPath` (frozen: its
-    value is its key), since every env of a vector of single envs checks the same task (an RK4 lag profile each,
-    tens of ms); another path object (a user's, which may change) is analysed each time."""
-    if type(path) is ClothoidPath:
-        return _cached_feasibility(path, v, robot, rot)
+    [rad/s^2] (``None``: unbounded)."""
     from amigo_gym.paths import feasibility
 
     return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
@@ -1135,30 +1079,19 @@ def drawn_feasibility_problem(p: TrackingParams) -> str | None:
     return None
 
 
-def check_drawn_feasible(p: TrackingParams) -> None:
-    """Apply ``p.feasibility`` to :func:`drawn_feasibility_problem`: ``"error"`` raises a one-line ``ValueError``,
-    ``"warn"`` warns once and runs, ``"off"`` runs."""
-    problem = drawn_feasibility_problem(p)
-    if problem is None or p.feasibility == "off":
-        return
-    if p.feasibility == "error":
-        raise ValueError(f"{problem} (feasibility='warn' or 'off' runs it anyway)")
-    warnings.warn(f"AmigoBot-v1: {problem}; running it (feasibility='warn')", UserWarning, stacklevel=3)
-
-
 def check_task(p: TrackingParams) -> tuple[Any, dict[str, Any] | None]:
     """The fixed path of ``p`` (:func:`fixed_path`, ``None`` when drawn) and its feasibility report (``None`` for
     drawn paths), after applying ``p.feasibility``: :func:`check_feasible` on a fixed path,
-    :func:`check_drawn_feasible` on drawn ones."""
+    :func:`drawn_feasibility_problem` on drawn ones."""
     fixed = fixed_path(p)
     if fixed is not None:
         return fixed, check_feasible(p, fixed)
-    check_drawn_feasible(p)
+    _apply_feasibility(p, drawn_feasibility_problem(p), stacklevel=3)
     return None, None
 
 
 #: ranges of the family parameters drawn per episode by ``path="mixed"`` (the environments check at construction
-#: that every path they can draw is feasible at the highest reference speed: :func:`check_drawn_feasible`)
+#: that every path they can draw is feasible at the highest reference speed: :func:`drawn_feasibility_problem`)
 MIXED_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "circle": {"radius": (0.5, 3.0)},
     "figure8": {"size": (3.0, 6.0)},
@@ -1170,14 +1103,10 @@ def fixed_path(p: TrackingParams) -> Any:
     """The path of a task whose path is not drawn per episode, else ``None`` (``"random"`` and ``"mixed"``)."""
     if not isinstance(p.path, str):
         return p.path
-    extra = dict(p.path_params)
-    if p.path == "circle":
-        return _cached_family("circle", (("direction", p.direction), ("radius", p.radius), *sorted(extra.items())))
-    if p.path == "manoeuvre":
-        return _cached_family("manoeuvre", (("direction", p.direction), ("radius", p.radius), *sorted(extra.items())))
-    if p.path in ("figure8", "lane_change"):
-        return _cached_family(p.path, tuple(sorted(extra.items())))
-    return None
+    extra = tuple(sorted(dict(p.path_params).items()))
+    if p.path in ("circle", "manoeuvre"):
+        return _cached_family(p.path, (("direction", p.direction), ("radius", p.radius), *extra))
+    return _cached_family(p.path, extra) if p.path in ("figure8", "lane_change") else None
 
 
 #: bytes of family paths a process keeps built (:func:`_cached_family`): 64 MiB, e.g. the whole default random pool
@@ -1198,10 +1127,8 @@ def path_nbytes(path: Any) -> int:
 def _cached_family(
     name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None, loops: PathLoops | None = None
 ) -> Any:
-    """A family path, built once per process for each parameter set (and seed of a random one), kept while the
-    paths built fit in :data:`PATH_CACHE_BYTES` (least recently used dropped first; a path is rebuilt the same).
-    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`) or None; the same path
-    either way."""
+    """A family path, built once per process for each parameter set (and seed of a random one) and kept within
+    :data:`PATH_CACHE_BYTES` (least recently used dropped first). ``loops``: as :func:`draw_path`."""
     from amigo_gym.paths import make_family_path
 
     global _cache_bytes
@@ -1231,24 +1158,15 @@ def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = 
 def draw_path(
     rng: np.random.Generator, p: TrackingParams, loops: PathLoops | None = None
 ) -> tuple[Any, dict[str, Any]]:
-    """The episode's path, drawn from ``rng`` for ``"random"`` and ``"mixed"`` (else the fixed path, no draw).
-
-    ``loops``: the compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`,
-    :func:`amigo_gym.sim.fast_v1.path_loops`) that build a new path, or None (the float route); the same path either
-    way.
-
-    Returns:
-        the path and a description for ``info`` (family and parameters).
-    """
+    """The episode's path and its description for ``info`` (family and parameters), drawn from ``rng`` for
+    ``"random"`` and ``"mixed"`` (else the fixed path, no draw). ``loops``: the compiled path-building loops
+    (:func:`amigo_gym.sim.fast_v1.path_loops`) or None; the same path either way."""
     from amigo_gym.paths import make_family_path
 
-    if p.path == "random":
-        pid = int(rng.integers(p.random_pool))
-        return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
-    if p.path != "mixed":
+    if not isinstance(p.path, str) or p.path not in ("random", "mixed"):
         fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
-    fam = MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
+    fam = "random" if p.path == "random" else MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
     if fam == "random":
         pid = int(rng.integers(p.random_pool))
         return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
@@ -1265,22 +1183,15 @@ def draw_path(
 
 
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
-    """Draw one episode's constants and the start offsets from ``rng``, in a fixed order.
-
-    Order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), start offsets
-    ``u ~ U[-1, 1]^3``, the key of the per-step draws (not with ``ideal_actuators`` and no noise: key 0). (The path
-    is drawn before, by :func:`draw_path`.)
-
-    Returns:
-        the :class:`Episode` (floats) and ``u``.
-    """
+    """Draw one episode's constants (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from
+    ``rng``, in this order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), ``u``,
+    the key of the per-step draws (key 0, not drawn, with ``ideal_actuators`` and no noise)."""
     from amigo_gym.model.randomization import draw_key, sample
 
     lo, hi = p.speed_range
     v = lo if lo == hi else float(rng.uniform(lo, hi))
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    # the per-step draws' key; with ideal actuators and no noise there are no per-step draws and no key is drawn
     # (AmigoBot-v0's stream: three uniforms per episode)
     key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
     true = p.simulated_robot
@@ -1304,12 +1215,8 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
 
 
 def episode_template(p: TrackingParams) -> Episode | None:
-    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u``, else ``None``.
-
-    That is a fixed speed, no randomised range (:func:`amigo_gym.model.randomization.sample` draws nothing) and no key
-    (ideal actuators without noise): AmigoBot-v0's settings. Each episode's draws are then
-    ``rng.uniform(-1.0, 1.0, size=3)`` alone, as in :func:`draw_episode`.
-    """
+    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u`` (a fixed speed, no
+    randomised range, ideal actuators without noise: AmigoBot-v0's settings), else ``None``."""
     lo, hi = p.speed_range
     r = p.randomize
     if (
@@ -1373,19 +1280,10 @@ def start_state(
 def step_columns(
     k: Constants, path: Any, state: State, ep: Episode, ring: NDArray[np.float64], ring_step: int, a1: Real, a2: Real
 ) -> tuple[State, Outcome, Any]:
-    """One step of AmigoBot-v1 in column form.
-
-    1. Clip the normalised action to [-1, 1]; setpoints ``a w_max`` [rad/s] into the command ring; read the
-       setpoints in effect (delay, :func:`amigo_gym.model.actuators.ring_read`).
-    2. Per-step draws (slip, noise: :func:`amigo_gym.model.randomization.step_noise`).
-    3. The exact actuator step (:func:`amigo_gym.model.actuators.actuator_step`).
-    4. Observation, reward and end of the new state (:func:`evaluate_columns`).
-
-    Args:
-        k: constants; path: the path (or a batch of paths); state: the state before the step; ep: the episode.
-        ring: the command ring (``(L, 2)`` for one robot, ``(N, L, 2)`` for a batch), written in place.
-        ring_step: the ring's counter (any counter that increases by one per step).
-        a1, a2: the validated action (finite numbers).
+    """One step of AmigoBot-v1 in column form: clip the action, write its setpoints ``a w_max`` [rad/s] into the
+    command ``ring`` (``(L, 2)`` or ``(N, L, 2)``, in place, at the counter ``ring_step``) and read those in effect
+    (the delay), draw the step's slip and noise, take the exact actuator step
+    (:func:`amigo_gym.model.actuators.actuator_step`) and evaluate the new state (:func:`evaluate_columns`).
 
     Returns:
         the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.model.randomization.StepNoise`).
@@ -1399,41 +1297,14 @@ def step_columns(
     actuators.ring_write(ring, ring_step, cmd1, cmd2)
     o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
     noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
+    x, y, beta, w1, w2 = state.x, state.y, state.beta, state.w1, state.w2
+    slips = (noise.slip1, noise.slip2, k.n_sub)
     act = actuators.actuator_step(
-        state.x,
-        state.y,
-        state.beta,
-        state.w1,
-        state.w2,
-        o1,
-        o2,
-        n1,
-        n2,
-        ep.t_switch,
-        p.dt,
-        k.nominal,
-        p.actuators,
-        ep.r1,
-        ep.r2,
-        ep.l1,
-        noise.slip1,
-        noise.slip2,
-        k.n_sub,
+        x, y, beta, w1, w2, o1, o2, n1, n2, ep.t_switch, p.dt, k.nominal, p.actuators, ep.r1, ep.r2, ep.l1, *slips
     )
     steps = state.steps + 1
-    new = State(
-        act.x,
-        act.y,
-        act.beta,
-        act.w1,
-        act.w2,
-        state.alpha1 + act.dalpha1,
-        state.alpha2 + act.dalpha2,
-        state.progress,
-        c1,
-        c2,
-        steps,
-    )
+    alpha1, alpha2 = state.alpha1 + act.dalpha1, state.alpha2 + act.dalpha2
+    new = State(act.x, act.y, act.beta, act.w1, act.w2, alpha1, alpha2, state.progress, c1, c2, steps)
     out, progress = evaluate_columns(
         k, path, new, ep, noise, act.v_true, state.a1, state.a2, steps * p.dt, prev_rates=(state.w1, state.w2)
     )
@@ -1462,19 +1333,8 @@ def _ideal_step(
     alpha1 = advance_angle(state.alpha1, w1, dt)
     alpha2 = advance_angle(state.alpha2, w2, dt)
     new = State(arc.x, arc.y, bound_angle(arc.beta), w1, w2, alpha1, alpha2, state.progress, c1, c2, steps)
-    out, progress = evaluate_columns(
-        k,
-        path,
-        new,
-        ep,
-        noise,
-        v,
-        state.a1,
-        state.a2,
-        steps * dt,
-        prev_rates=(state.w1, state.w2),
-        heading=(arc.cos_beta, arc.sin_beta),
-    )
+    rates, heading = (state.w1, state.w2), (arc.cos_beta, arc.sin_beta)
+    out, progress = evaluate_columns(k, path, new, ep, noise, v, state.a1, state.a2, steps * dt, rates, heading)
     return new._replace(progress=progress), out, noise
 
 
@@ -1512,19 +1372,9 @@ def evaluate_columns(
     cos_ss, sin_ss = steady_heading(loc.curvature, l3)
     pw1, pw2 = (st.w1, st.w2) if prev_rates is None else prev_rates
     da1, da2 = command_change(p.reward == "v0", st.w1, st.w2, pw1, pw2, st.a1, st.a2, prev1, prev2)
-    terms = reward_term_columns(  # the reward of AmigoBot-v0, from the true state
-        _abs(e),
-        _abs(v_true - v_ref),
-        cos_psi,
-        sin_psi,
-        cos_ss,
-        sin_ss,
-        da1 * da1 + da2 * da2,
-        p.sigma_track,
-        p.sigma_speed,
-        p.smooth_weight,
-        k.smooth_scale_sq,
-    )
+    change_sq, scales = da1 * da1 + da2 * da2, (p.sigma_track, p.sigma_speed, p.smooth_weight, k.smooth_scale_sq)
+    # the reward of AmigoBot-v0, from the true state
+    terms = reward_term_columns(_abs(e), _abs(v_true - v_ref), cos_psi, sin_psi, cos_ss, sin_ss, change_sq, *scales)
     reward = reward_product(*terms)
     # on a batch, per-row paths: the open ones end when H passes their end
     terminated, at_end = end_flags(e, p.termination_distance, path.closed, loc.status)
@@ -1534,37 +1384,26 @@ def evaluate_columns(
     if measured_differs(p.randomize.position_noise, p.randomize.heading_noise, ep_l3_differs(k, ep)):
         mcb, msb = col_cos(mb), col_sin(mb)
         mloc = path.locate(*h_from_a(mx, my, mcb, msb, l3), loc.progress, k.window, k.window)
-        m_e, m_ct, m_st, m_k, m_s = (
-            mloc.cross_track_error,
-            mloc.cos_theta,
-            mloc.sin_theta,
-            mloc.curvature,
-            mloc.progress,
-        )
     else:
-        mcb, msb = cb, sb
-        m_e, m_ct, m_st, m_k, m_s = e, loc.cos_theta, loc.sin_theta, loc.curvature, loc.progress
-    m_cos_psi, m_sin_psi = heading_error(mcb, msb, m_ct, m_st)
+        mcb, msb, mloc = cb, sb, loc
+    m_e, m_k, m_s = mloc.cross_track_error, mloc.curvature, mloc.progress
+    m_cos_psi, m_sin_psi = heading_error(mcb, msb, mloc.cos_theta, mloc.sin_theta)
     v_meas, _ = body_velocity_of(mw1, mw2, k.nominal.r1, k.nominal.r2, 2.0 * k.nominal.l1)
     if p.observation == "v0":
-        out0 = Outcome(
-            observe_columns(
-                path, p.preview, l3, p.error_scale, k.e_max, k.w_max, k.v_max, m_e, m_sin_psi, m_cos_psi, m_k, m_s,
-                mw1, mw2, v_meas, v_ref,
-            ),
-            terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end,
+        obs: Any = observe_columns(
+            path, p.preview, l3, p.error_scale, k.e_max, k.w_max, k.v_max, m_e, m_sin_psi, m_cos_psi, m_k, m_s,
+            mw1, mw2, v_meas, v_ref,
         )  # fmt: skip
-        return out0, loc.progress
-    obs: list[Real] = [*observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
-    if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
-        ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
     else:
-        ahead = [path.pose_columns(m_s + d) for d in p.preview]
-    for q, bound in zip(ahead, k.preview_bounds, strict=True):
-        obs += preview_entry(mcb, msb, mx, my, q.x, q.y, q.curvature, l3, p.preview_scale, bound)
-    v_ahead = reference_speed(p, ep, t + SPEED_LOOKAHEAD)
-    obs += speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, k.v_max, k.w_max)
-    obs += [st.a1, st.a2]
+        obs = [*observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
+        if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
+            ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
+        else:
+            ahead = [path.pose_columns(m_s + d) for d in p.preview]
+        for q, bound in zip(ahead, k.preview_bounds, strict=True):
+            obs += preview_entry(mcb, msb, mx, my, q.x, q.y, q.curvature, l3, p.preview_scale, bound)
+        v_ahead = reference_speed(p, ep, t + SPEED_LOOKAHEAD)
+        obs += [*speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, k.v_max, k.w_max), st.a1, st.a2]
     out = Outcome(tuple(obs), terms, reward, terminated, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, at_end)
     return out, loc.progress
 
@@ -1598,13 +1437,8 @@ def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -
 def start_speed_time(st: State, ep: Episode) -> tuple[Real, Real]:
     """The true speed of A [m/s] (no slip) and the time [s] at which :func:`reset_columns` evaluates a start state."""
     zero = 0.0 * st.x
-    v, _ = _body(st.w1, st.w2, ep)
+    v, _ = body_velocity_of(st.w1, st.w2, ep.r1, ep.r2, 2.0 * ep.l1)
     return v + zero, zero
-
-
-def _body(w1: Real, w2: Real, ep: Episode) -> tuple[Real, Real]:
-    """True speed of A and turn rate for wheel rates ``w1``, ``w2`` (no slip) [m/s, rad/s]."""
-    return body_velocity_of(w1, w2, ep.r1, ep.r2, 2.0 * ep.l1)
 
 
 NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -1621,11 +1455,8 @@ class Begin(NamedTuple):
 
 
 def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None) -> Begin:
-    """Draw and start one robot's episode from its generator (the single env's reset and the vector env's rows).
-
-    Draws, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`), then builds the
-    start state (:func:`start_state`; ``pose`` replaces the drawn pose of A) and evaluates it.
-    """
+    """Draw, start and evaluate one robot's episode from its generator (:func:`start_episode`, then
+    :func:`reset_columns`)."""
     path, info, ep, st = start_episode(rng, k, pose)
     return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))
 
@@ -1638,13 +1469,10 @@ def start_episode(
     loops: PathLoops | None = None,
     path_pose: PoseFn | None = None,
 ) -> tuple[Any, dict[str, Any], Episode, State]:
-    """:func:`begin_episode` without the evaluation of the start state: ``(path, path_info, episode, state)``.
-
-    ``progress`` replaces the projections of H (:data:`ProgressFn`; default ``path.locate``), ``loops`` builds a
-    drawn path (:func:`draw_path`), ``path_pose`` gives the path's start pose (:data:`PoseFn`; default
-    ``path.pose_columns``). (The single env's compiled step projects and evaluates the start state itself,
-    :mod:`amigo_gym.sim.fast_v1`.)
-    """
+    """Draw, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`) from ``rng``, and build
+    the start state (:func:`start_state`; ``pose`` replaces the drawn pose of A): ``(path, path_info, episode,
+    state)``. ``progress``, ``loops``, ``path_pose``: the compiled twins of :func:`start_state` and :func:`draw_path`
+    (default the float route)."""
     path, info = draw_path(rng, k.params, loops)
     ep, u = draw_episode(rng, k.params)
     st = start_state(k, path, ep, u, progress, path_pose)
