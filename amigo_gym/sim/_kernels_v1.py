@@ -351,7 +351,7 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
 
 # ----------------------------------------------------------------------------------------- per-step draws
 
-#: the per-step draws (randomization._step_noise_float's pieces), compiled
+#: the per-step draws (randomization.step_noise's pieces), compiled
 _step_uniforms = _shared(randomization.step_uniforms)
 _step_normals = _shared(randomization.step_normals)
 _channels_on = _shared(randomization.channels_on)
