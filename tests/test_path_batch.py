@@ -1,4 +1,5 @@
-"""PathBatch: row i of every column result is bit-identical to path i's own float result (all families, windows,
+"""PathBatch: row i of every column result equals path i's own float result to 1e-12 (the float route takes arcs in
+closed form, the columns a quadrature; all families, windows,
 figure-8 crossings, beyond the ends of open paths, several laps of closed ones), replace/grow, uniform batches,
 and paths of the user's own grouped by object."""
 
@@ -84,14 +85,19 @@ def _queries(rng: np.random.Generator, paths: Sequence[PathSpec]) -> tuple[Array
 
 
 def _assert_rows(got: PathPoint | PathPose, refs: Sequence[PathPoint | PathPose]) -> None:
-    """Every field of ``got`` is an ``(N,)`` array whose row i has the bits of ``refs[i]``'s field."""
+    """Every field of ``got`` is an ``(N,)`` array whose row i is ``refs[i]``'s field: the status exactly, the floats
+    within 1e-12 (relative, of at least 1 m, rad or 1/m), NaN where the reference has NaN."""
     n = len(refs)
     for f in got._fields:
         col = getattr(got, f)
         assert isinstance(col, np.ndarray) and col.shape == (n,), (f, type(col), np.shape(col))
         assert col.dtype == (np.int64 if f == "status" else np.float64), (f, col.dtype)
         ref = np.array([getattr(r, f) for r in refs], dtype=col.dtype)
-        bad = np.flatnonzero(col.view(np.int64) != ref.view(np.int64))  # the bits, -0.0 and NaN included
+        if f == "status":
+            bad = np.flatnonzero(col != ref)
+        else:
+            off = np.abs(col - ref) > 1e-12 * np.maximum(1.0, np.abs(ref))
+            bad = np.flatnonzero(np.where(np.isnan(ref), ~np.isnan(col), off | np.isnan(col)))
         assert bad.size == 0, f"{f}: rows {bad[:5].tolist()}: {col[bad[:5]]} != {ref[bad[:5]]}"
 
 
@@ -104,7 +110,7 @@ def _ref_locate(
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_locate_windowed_bit_identical(seed: int) -> None:
+def test_locate_windowed_agrees(seed: int) -> None:
     rng = np.random.default_rng(seed)
     paths = _random_paths(rng, 72)
     batch = PathBatch(paths)
@@ -113,7 +119,7 @@ def test_locate_windowed_bit_identical(seed: int) -> None:
         _assert_rows(batch.locate(x, y, sp, ahead, behind), _ref_locate(paths, x, y, sp, ahead, behind))
 
 
-def test_locate_global_bit_identical() -> None:
+def test_locate_global_agrees() -> None:
     rng = np.random.default_rng(2)
     paths = _random_paths(rng, 48)
     batch = PathBatch(paths)
@@ -121,7 +127,7 @@ def test_locate_global_bit_identical() -> None:
     _assert_rows(batch.locate(x, y), _ref_locate(paths, x, y, None))
 
 
-def test_pose_columns_bit_identical_over_laps_and_beyond_ends() -> None:
+def test_pose_columns_agree_over_laps_and_beyond_ends() -> None:
     rng = np.random.default_rng(3)
     paths = _random_paths(rng, 60)
     batch = PathBatch(paths)

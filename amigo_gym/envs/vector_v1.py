@@ -241,7 +241,8 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             for i in rows:
                 self.path_infos[i] = dict(info)
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
-            u_all = np.array([self._rng(i).uniform(-1.0, 1.0, size=3) for i in rows]).reshape(m, 3)
+            # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
+            u_all = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in rows]).reshape(m, 3)
             groups = {id(fixed): list(range(m))}
         else:
             paths, ep_all, u_all, groups = self._draw_rows(rows)

@@ -250,7 +250,15 @@ def unit_speed_nodes(
     buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
     """``advance(x, y, theta, 1, 0, w0, alpha, t)`` with the cosine and sine of the new heading,
-    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``."""
+    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``. A piece of constant
+    curvature (``alpha == 0``: a line or an arc) in closed form: the chord ``t sin(h)/h`` along ``theta + h``,
+    ``h = w0 t / 2``."""
+    if alpha == 0.0:
+        h = 0.5 * w0 * t
+        chord = t if h == 0.0 else t * (math.sin(h) / h)
+        mid = theta + h
+        end = theta + w0 * t
+        return x + chord * math.cos(mid), y + chord * math.sin(mid), end, math.cos(end), math.sin(end)
     m = nn + 1
     unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
     cos_sin_nodes(buf, 0, m, m)

@@ -480,6 +480,7 @@ def newton_step(
     px: float,
     py: float,
     kappa: float,
+    c: float,
     ct: float,
     st: float,
     s: float,
@@ -487,14 +488,16 @@ def newton_step(
     lo: float,
     hi: float,
 ) -> tuple[float, bool]:
-    """One Newton iteration of the projection from ``s`` [m] with the pose there:
-    ``s' = clip(s + clip(g / max(1 - kappa e, MIN_NEWTON_DENOMINATOR), -h, h), lo, hi)``, and whether ``s'``
-    equals ``s`` (a fixed point)."""
+    """One step of the projection from ``s`` [m] with the pose there (curvature ``kappa``, its rate ``c``):
+    ``s' = clip(s + clip(d, -h, h), lo, hi)`` with Newton's ``d = g / q``, ``q = max(1 - kappa e,
+    MIN_NEWTON_DENOMINATOR)``; on a piece of constant curvature (``c == 0``, ``kappa != 0``) the foot on the arc
+    itself, ``d = atan2(kappa g, q) / kappa`` (exact in one step); and whether ``s'`` equals ``s`` (a fixed point)."""
     _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
     den = 1.0 - kappa * e
     if den < MIN_NEWTON_DENOMINATOR:
         den = MIN_NEWTON_DENOMINATOR
-    s_new = py_min(py_max(s + py_min(py_max(g / den, -h), h), lo), hi)
+    d = math.atan2(kappa * g, den) / kappa if c == 0.0 and kappa != 0.0 else g / den
+    s_new = py_min(py_max(s + py_min(py_max(d, -h), h), lo), hi)
     return s_new, s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s)
 
 
@@ -659,7 +662,7 @@ def project_flat(
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
-        s_new, settled = newton_step(x, y, px, py, kappa, ct, st, s, h, lo, hi)
+        s_new, settled = newton_step(x, y, px, py, kappa, c, ct, st, s, h, lo, hi)
         if settled:
             break
         s = s_new

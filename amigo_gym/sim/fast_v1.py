@@ -414,7 +414,7 @@ class StepKernel:
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
         ws[layout_v1.W_SLIP_MAX] = ep.slip_max
-        # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
+        # anything drawn per step (randomization.step_noise: slip when slip_max > 0, noise when a level is)
         ws[layout_v1.W_NOISE_ON] = 1.0 if float(ep.slip_max) > 0.0 or self.n_normal > 0 else 0.0
         self.key = np.uint64(ep.key)
         self._args()

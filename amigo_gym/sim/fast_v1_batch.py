@@ -195,7 +195,7 @@ class BatchKernel:
         ws[r, layout_v1.W_R1 : layout_v1.W_L3D + 1] = np.column_stack(
             (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
         )
-        # anything drawn per step (randomization._step_noise_float: slip when slip_max > 0, noise when a level is)
+        # anything drawn per step (randomization.step_noise: slip when slip_max > 0, noise when a level is)
         noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
         ws[r, layout_v1.W_SLIP_MAX] = ep.slip_max
         ws[r, layout_v1.W_NOISE_ON] = noise_on
