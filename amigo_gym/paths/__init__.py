@@ -18,7 +18,6 @@ from amigo_gym.paths.classic import (
     CirclePath,
     ClosestPoint,
     ManoeuvrePath,
-    Path,
     Projection,
     make_path,
     wrap_angle,
@@ -51,7 +50,6 @@ from amigo_gym.paths.user import UserPath, check_path
 __all__ = [
     "Projection",
     "ClosestPoint",
-    "Path",
     "CirclePath",
     "ManoeuvrePath",
     "make_path",
