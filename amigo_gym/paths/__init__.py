@@ -18,6 +18,8 @@ from amigo_gym.paths.classic import (
     CirclePath,
     ClosestPoint,
     ManoeuvrePath,
+    PathPoint,
+    PathPose,
     Projection,
     make_path,
     wrap_angle,
@@ -29,8 +31,6 @@ from amigo_gym.paths.clothoid import (
     STATUS_WINDOW,
     ClothoidPath,
     ClothoidSegment,
-    PathPoint,
-    PathPose,
     PathSpec,
 )
 from amigo_gym.paths.families import (

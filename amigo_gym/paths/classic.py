@@ -23,8 +23,6 @@ from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.numeric import where
 from amigo_gym.model.params import EnvParams, check_range
 
-__all__ = ["Projection", "ClosestPoint", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
-
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
 #: an int status (one point) or an int64 column
