@@ -10,8 +10,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["agents_dir", "hyperparams_dir", "pretrained_dir", "repository_root"]
-
 _PACKAGE = Path(__file__).resolve().parent
 
 

@@ -24,23 +24,6 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = [
-    "STATE_ENV",
-    "TRUST_ENV",
-    "UntrustedFileError",
-    "atomic_save",
-    "atomic_write",
-    "atomic_write_json",
-    "fault_point",
-    "file_mode",
-    "finite_float",
-    "fsync_dir",
-    "json_safe",
-    "require_trust",
-    "sha256_file",
-    "vouch",
-]
-
 FAULT_ENV = "AMIGO_GYM_FAULT"
 _fault_counts: dict[str, int] = {}
 

@@ -38,26 +38,6 @@ from amigo_gym.model.actuators import (
 from amigo_gym.model.kinematics import body_velocity
 from amigo_gym.model.params import RobotParams, show_value
 
-__all__ = [
-    "CSV_COLUMNS",
-    "FIT_BOUNDS",
-    "Fit",
-    "Log",
-    "LogError",
-    "Replay",
-    "identify",
-    "load_robot_file",
-    "read_bag",
-    "read_csv",
-    "read_log",
-    "replay",
-    "robot_file_fields",
-    "simulate",
-    "summarize",
-    "fit_start",
-    "noise_level",
-]
-
 Array = NDArray[np.float64]
 
 #: the columns of the CSV log format, with their units (docs/logs.md)

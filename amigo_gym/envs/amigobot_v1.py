@@ -8,12 +8,23 @@ from __future__ import annotations
 
 import copy
 import math
-from typing import Any
+from collections import deque
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
+from numpy.typing import NDArray
 
-from amigo_gym.envs.base import AmigoBotBase, Array, ObsArray, box_spaces
+from amigo_gym.envs.base import (
+    RENDER_MODES,
+    Array,
+    ObsArray,
+    box_spaces,
+    check_render_mode,
+    check_reset_options,
+    parse_pose_option,
+)
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
 from amigo_gym.sim import fast_v1
@@ -102,7 +113,7 @@ def record_info(
     }
 
 
-class AmigoBotV1Env(AmigoBotBase):
+class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
     ## Description
@@ -199,6 +210,8 @@ class AmigoBotV1Env(AmigoBotBase):
     * v0: the ideal robot on the paper's circle (unchanged, ``AmigoBot-v0``).
     """
 
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}  # noqa: RUF012
+
     #: points of H kept for the rendered trail (the most recent ones)
     trail_length: int = 4096
     #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
@@ -210,7 +223,15 @@ class AmigoBotV1Env(AmigoBotBase):
         owner = type(self).__name__
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
-        self._init_base(render_mode, p.dt, box_spaces(tracking.obs_bounds(p)))
+        self.render_mode = check_render_mode(render_mode)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
+        self.action_space, self.observation_space = box_spaces(tracking.obs_bounds(p))  # type: ignore[assignment]
+        self._trail: deque[tuple[float, float]] = deque(maxlen=self.trail_length)
+        self._renderer: Any = None
+        # order of calls (Gymnasium's classic-control convention): no step before reset; a warning
+        # when a terminated episode is stepped
+        self._needs_reset = True
+        self._ended: bool | None = False  # None: terminated and warned
         self._k = tracking.constants(p)
         # the compiled step (amigo_gym.sim.fast_v1), for the episodes on its paths; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
@@ -233,11 +254,23 @@ class AmigoBotV1Env(AmigoBotBase):
         self._path_info: dict[str, Any] = {}
         self._true_robot: dict[str, float] = {}
 
-    # ------------------------------------------------------------------ the task's hooks (AmigoBotBase)
-    def _begin(self, pose_opt: Array | None) -> tuple[ObsArray, dict[str, Any]]:
-        """A new episode (its path, true robot and noise drawn), its start observation and info."""
+    # ------------------------------------------------------------------ gym API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Start an episode (its path, true robot and noise drawn; see the class docstring, *Starting State*).
+
+        Args:
+            seed: seeds ``self.np_random`` (as every Gymnasium env).
+            options: ``None`` or ``{"pose": (x_A, y_A, beta)}`` for an exact start pose.
+
+        Raises:
+            ValueError: unknown option key or a bad pose.
+        """
+        check_reset_options(options)  # refuse bad options before touching the state or the generator
+        pose = tuple(parse_pose_option(options["pose"]).tolist()) if options is not None and "pose" in options else None
+        super().reset(seed=seed)
         k = self._k
-        pose = None if pose_opt is None else tuple(pose_opt.tolist())
         kern = self._kernel
         # with the compiled step, H's projections, a drawn path's building loops and its start pose compiled (the
         # same results)
@@ -270,12 +303,51 @@ class AmigoBotV1Env(AmigoBotBase):
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
             info = self._info(out, tracking.NO_NOISE)
-        if self.v0_params is not None:  # AmigoBot-v0's info: no end condition, no feasibility
-            return obs, info
-        info["end_condition"] = ""
-        if self.feasibility is not None:
-            info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
+        if self.v0_params is None:  # (AmigoBot-v0's info: no end condition, no feasibility)
+            info["end_condition"] = ""
+            if self.feasibility is not None:
+                info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
+        self._needs_reset = False
+        self._ended = False
+        self._trail.clear()
+        hx, hy = info["h_position"].tolist()
+        self._trail.append((hx, hy))
+        if self.render_mode == "human":
+            self.render()
         return obs, info
+
+    def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Hold the wheel-rate commands ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
+
+        Raises:
+            gymnasium.error.ResetNeeded: before the first ``reset()``.
+            TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
+            ValueError: action of a wrong shape or with NaN/inf entries.
+
+        Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
+        environments do, and goes on integrating. (Truncation belongs to the ``TimeLimit`` wrapper of
+        ``gym.make``, outside this environment; the vector environment truncates itself and autoresets,
+        or refuses to step a finished robot in ``Disabled`` mode.)
+        """
+        if self._needs_reset:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
+        a1, a2 = task.action_pair(action)
+        if self._ended:
+            gym.logger.warn(
+                f"{type(self).__name__}: step() called after the episode was terminated (the environment has already "
+                "returned terminated = True); call reset() to start a new one (the steps go on integrating, outside "
+                "the task)"
+            )
+            self._ended = None  # warned: once per episode
+        obs, reward, terminated, info = self._advance(a1, a2)
+        if self.render_mode is not None:
+            hx, hy = info["h_position"].tolist()
+            self._trail.append((hx, hy))
+            if self.render_mode == "human":
+                self.render()
+        if terminated and self._ended is False:
+            self._ended = True
+        return obs, reward, terminated, False, info
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
@@ -366,3 +438,38 @@ class AmigoBotV1Env(AmigoBotBase):
             "wheel_angles": np.array((st.alpha1, st.alpha2)),
             "time": float(int(st.steps) * self.params.dt),
         }
+
+    # ------------------------------------------------------------------ rendering
+    def render(self) -> NDArray[np.uint8] | None:
+        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.envs.rendering`).
+
+        Returns:
+            ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"``; ``None`` otherwise.
+        """
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make"
+            )
+            return None
+        if self._needs_reset:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before render()")
+        from amigo_gym.envs.rendering import Renderer
+
+        if self._renderer is None or self._renderer.path is not self.path:  # a new episode may have a new path
+            if self._renderer is not None:
+                self._renderer.close()
+            self._renderer = Renderer(self.params, self.path, self.render_mode)
+        frame: NDArray[np.uint8] | None = self._renderer.draw(trail=self._trail, **self._render_state())
+        return frame
+
+    def close(self) -> None:
+        """Close the render window, if any."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle and deep-copy without the renderer (pygame surfaces); it is recreated when next used."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state

@@ -49,8 +49,6 @@ class DrawablePath(Protocol):
     def point(self, s: ArrayLike) -> NDArray[np.float64]: ...
 
 
-__all__ = ["DrawablePath", "RenderSettings", "Renderer", "path_polyline", "view_box"]
-
 BACKGROUND = (255, 255, 255)
 GRID = (228, 228, 228)
 PATH = (40, 90, 200)

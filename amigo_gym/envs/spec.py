@@ -13,8 +13,6 @@ from typing import Any
 
 from gymnasium.envs.registration import EnvSpec
 
-__all__ = ["JsonSpecMixin", "json_kwargs"]
-
 
 def _plain(value: Any) -> Any:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):

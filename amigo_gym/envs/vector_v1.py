@@ -15,17 +15,20 @@ reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
-from gymnasium.vector import AutoresetMode
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from amigo_gym.envs.amigobot_v1 import record_info, reference_record, v0_record_info
 from amigo_gym.envs.base import (
     TRAIL_LENGTH,
     VECTOR_KERNELS,
-    AmigoBotVectorBase,
     Array,
     BoolArray,
     ObsArray,
@@ -33,10 +36,18 @@ from amigo_gym.envs.base import (
     assign_rows,
     box_spaces,
     check_kernel,
+    check_reset_mask,
+    check_reset_options,
     check_vector_args,
+    parse_pose_option,
+    parse_seeds,
+    scatter_infos,
+    take_rows,
 )
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
 from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
+from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
@@ -84,7 +95,20 @@ def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: st
         )
 
 
-class AmigoBotV1VectorEnv(AmigoBotVectorBase):
+def _is_scalar(x: Any) -> bool:
+    """Whether ``x`` is not a sequence of per-robot actions (strings count as scalars)."""
+    if isinstance(x, str | bytes):
+        return True
+    if isinstance(x, np.ndarray):
+        return x.ndim == 0
+    try:
+        iter(x)
+    except TypeError:
+        return True
+    return False
+
+
+class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):
     """``N`` AmigoBot-v1 tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotV1Env`).
 
     Args:
@@ -109,6 +133,15 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
     rendered. ``num_envs`` is refused when its robots would need more than the machine's memory
     (:func:`memory_needed`: about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
     """
+
+    #: positions of H kept per robot for the rendered trail (a fixed-size ring buffer)
+    trail_length: int = TRAIL_LENGTH
+
+    metadata: dict[str, Any] = {  # noqa: RUF012  (gymnasium declares metadata as a plain attribute)
+        "render_modes": ["rgb_array"],
+        "render_fps": 10.0,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
 
     #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
     _v0 = False
@@ -139,8 +172,29 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._template = None if fixed is None else tracking.episode_template(p)
         #: the template as columns of one row (tracking.episode_columns), repeated for the rows that restart
         self._template_row = None if self._template is None else tracking.episode_columns([self._template])
-        spaces = box_spaces(tracking.obs_bounds(p))
-        n = self._init_base(num_envs, max_episode_steps, render_mode, autoreset_mode, p.dt, spaces)
+        n = self.num_envs = int(num_envs)
+        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
+        self.render_mode = render_mode
+        try:
+            self.autoreset_mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            allowed = [m.value for m in AutoresetMode]
+            raise ValueError(f"autoreset_mode must be one of {allowed}, got {autoreset_mode!r}") from None
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt, "autoreset_mode": self.autoreset_mode}
+        self.single_action_space, obs_space = box_spaces(tracking.obs_bounds(p))
+        self.single_observation_space = obs_space
+        self.action_space = batch_space(self.single_action_space, n)
+        self.observation_space = batch_space(obs_space, n)
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._seeds: list[int | None] = [None] * n
+        self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
+        self._obs: ObsArray = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
+        # the rendered trail of H: a ring (trail_length, N, 2), allocated when first written (render_mode set)
+        self._trail: Array | None = None
+        self._trail_count = 0  # positions written so far
+        self._trail_start = np.zeros(n, dtype=np.int64)  # the count at which each robot's episode started
+        self._renderers: list[Any] = [None] * n
+        self._was_reset = False
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
@@ -162,6 +216,129 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
         # each robot's H to write next into the rendered trail (render_mode set)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
+
+    # ------------------------------------------------------------------ seeding
+    @property
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``).
+
+        Before the first reset, as ``Env.np_random_seed``: each generator is made from a random seed
+        on first use, and that seed is reported (and used by a ``reset()`` without a seed).
+        """
+        for i in range(self.num_envs):
+            self._rng(i)
+        return tuple(int(s) for s in self._seeds if s is not None)
+
+    @property
+    def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
+        """The sub-environments' generators (``None`` before the first reset)."""
+        return tuple(self._rngs)
+
+    def _rng(self, i: int) -> np.random.Generator:
+        g = self._rngs[i]
+        if g is None:  # as Env.np_random: a random seed on first use
+            g, self._seeds[i] = seeding.np_random()
+            self._rngs[i] = g
+        return g
+
+    # ------------------------------------------------------------------ reset and step
+    def reset(
+        self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[ObsArray, dict[str, Any]]:
+        """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
+
+        Raises:
+            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
+            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
+        """
+        n = self.num_envs
+        check_reset_options(options, extra=("reset_mask",))
+        seeds = parse_seeds(seed, n)
+        mask: BoolArray = np.ones(n, dtype=np.bool_)
+        if options is not None and "reset_mask" in options:
+            mask = check_reset_mask(options["reset_mask"], n)
+        pose_opt = None
+        if options is not None and "pose" in options:
+            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        if not mask.all() and not self._was_reset:
+            raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
+        self._was_reset = True
+        idx = np.flatnonzero(mask)
+        for i in idx.tolist():
+            if seeds[i] is not None:
+                self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
+        self._autoreset[idx] = False
+        obs, infos = self._reset_rows(idx, pose_opt)
+        self._obs = self._obs.copy()  # the last step returned it
+        self._obs[idx] = obs
+        if self.render_mode is not None:
+            self._append_trail()
+        return self._obs.copy(), scatter_infos(infos, mask, self.num_envs)
+
+    def step(self, actions: NDArray[np.floating[Any]]) -> StepResult:
+        """Step every robot; autoreset finished ones according to ``autoreset_mode``.
+
+        Raises:
+            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``; actions that are not real numbers.
+            ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
+            RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
+        """
+        n = self.num_envs
+        if not self._was_reset:
+            raise gym.error.ResetNeeded(f"call reset() before step() on {type(self).__name__}")
+        if _is_scalar(actions):  # TypeError as SyncVectorEnv, which iterates over the actions
+            kind = "a string" if isinstance(actions, str | bytes) else f"a scalar {type(actions).__name__} object"
+            raise TypeError(
+                f"Unable to iterate over the following elements: {actions} "
+                f"(actions must be an array of shape ({n}, 2), got {kind})"
+            )
+        a = task.validate_action(actions, (n,))
+        mode = self.autoreset_mode
+        if mode == AutoresetMode.DISABLED and np.count_nonzero(self._autoreset):
+            raise RuntimeError(
+                f"robots {np.flatnonzero(self._autoreset).tolist()} finished their episodes; "
+                "reset them (options={'reset_mask': ...}) before stepping in Disabled autoreset mode"
+            )
+        a1, a2 = a[:, 0].copy(), a[:, 1].copy()
+        self._ring_step += 1
+        if self._batch is not None:
+            obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
+        else:
+            obs, reward, terminated, infos, hx, hy = self._step_columns(a1, a2)
+        if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
+            self._h_now[:, 0] = hx
+            self._h_now[:, 1] = hy
+        if self.v0_params is None:  # (AmigoBot-v0's settings: no goal, no end condition in the infos)
+            terminated = self._end(terminated, infos, hx, hy)
+        truncated: BoolArray = np.zeros(n, dtype=np.bool_)
+        if self.max_episode_steps is not None:
+            truncated = np.asarray(self._state.steps) >= self.max_episode_steps
+        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
+            idx = np.flatnonzero(self._autoreset)  # they start a new episode at this step instead of stepping
+            obs[idx], info_r = self._reset_rows(idx)
+            assign_rows(infos, info_r, idx)
+            reward[idx] = 0.0
+            terminated[idx] = False
+            truncated[idx] = False
+            self._mark_restarted(infos, idx)
+        elif mode == AutoresetMode.SAME_STEP and _np_count_nonzero(done := terminated | truncated):
+            idx = np.flatnonzero(done)
+            final_obs = np.full(n, None, dtype=object)
+            for i in idx.tolist():
+                final_obs[i] = obs[i].copy()
+            final_info = scatter_infos(take_rows(infos, idx), done, n)
+            if self.v0_params is None:  # None outside done, as SyncVectorEnv gathers the single env's str
+                final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
+            obs[idx], info_r = self._reset_rows(idx)
+            assign_rows(infos, info_r, idx)
+            self._mark_restarted(infos, idx)
+            final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": final_info}
+            infos = {**final, "_final_info": done.copy(), **infos}
+        self._autoreset = terminated | truncated
+        self._obs = obs  # returned as is: reset() copies it before changing rows
+        if self.render_mode is not None:
+            self._append_trail()
+        return obs, reward, terminated, truncated, scatter_infos(infos, None, n)
 
     def set_path_params(self, path_params: Any) -> None:
         """Draw the next episodes' paths with the family parameters ``path_params`` (a curriculum between rollouts).
@@ -187,7 +364,7 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         if self._batch is not None:
             self._batch._k = self._k
 
-    # ------------------------------------------------------------------ the task's hooks (AmigoBotVectorBase)
+    # ------------------------------------------------------------------ episodes and steps
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
 
@@ -301,40 +478,12 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
         self._ring[idx, :, 0] = (np.asarray(st.a1) * w_max)[:, None]
         self._ring[idx, :, 1] = (np.asarray(st.a2) * w_max)[:, None]
 
-    def _step(self, a: Array, mode: AutoresetMode) -> StepResult:
-        """Step every robot (actions ``a`` validated, ``(N, 2)``); restart those that ended at the last step."""
-        a1, a2 = a[:, 0].copy(), a[:, 1].copy()
-        self._ring_step += 1
-        if self._batch is not None:
-            obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
-        else:
-            obs, reward, terminated, infos, hx, hy = self._step_columns(a1, a2)
-        if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
-            self._h_now[:, 0] = hx
-            self._h_now[:, 1] = hy
-        if self.v0_params is None:  # (AmigoBot-v0's settings: no goal, no end condition in the infos)
-            terminated = self._end(terminated, infos, hx, hy)
-        truncated = self._truncated(np.asarray(self._state.steps))
-        restart = None
-        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
-            restart = np.flatnonzero(self._autoreset)
-            obs_r, info_r = self._reset_rows(restart)
-            obs[restart] = obs_r
-            assign_rows(infos, info_r, restart)
-        return self._finish_step(obs, reward, terminated, truncated, infos, restart)
-
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
         """The robots ``idx`` started a new episode: no end condition."""
         if self.v0_params is not None:
             return
         infos["end_condition"] = infos["end_condition"].copy()
         infos["end_condition"][idx] = ""
-
-    def _mark_final(self, final_info: dict[str, Any], done: BoolArray) -> None:
-        """``final_info["end_condition"]`` is ``None`` outside ``done``, as ``SyncVectorEnv`` gathers it."""
-        if self.v0_params is not None:
-            return
-        final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
 
     def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
         """``terminated`` with the goals of open paths (``goal_tolerance``, :func:`tracking.goal_reached`) and
@@ -422,14 +571,68 @@ class AmigoBotV1VectorEnv(AmigoBotVectorBase):
             self._trail_start[idx] = self._trail_count
             self._h_now[idx] = h
 
-    def _h_positions(self) -> Array:
-        return self._h_now
+    def _append_trail(self) -> None:
+        """Write the robots' H into the trail's ring buffer."""
+        length = max(1, int(self.trail_length))
+        if self._trail is None or self._trail.shape[0] != length:
+            self._trail = np.zeros((length, self.num_envs, 2))
+            self._trail_count = 0
+            self._trail_start[:] = 0
+        self._trail[self._trail_count % length] = self._h_now
+        self._trail_count += 1
 
-    def _step_counts(self) -> NDArray[np.int64]:
-        return np.asarray(self._state.steps)
+    def _trail_of(self, i: int) -> list[tuple[float, float]]:
+        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
+        if self._trail is None:
+            return []
+        length = self._trail.shape[0]
+        rows = np.arange(max(int(self._trail_start[i]), self._trail_count - length), self._trail_count) % length
+        return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
-    def _path_of(self, i: int) -> Any:
-        return self.paths[i]
+    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
+
+        Raises:
+            gymnasium.error.ResetNeeded: before the first ``reset()``.
+        """
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
+            return None
+        if not self._was_reset:
+            raise gym.error.ResetNeeded(f"call reset() before render() on {type(self).__name__}")
+        from amigo_gym.envs.rendering import Renderer
+
+        st = self._state
+        x, y, beta, alpha1, alpha2 = (np.asarray(c) for c in (st.x, st.y, st.beta, st.alpha1, st.alpha2))
+        steps = np.asarray(st.steps)
+        frames = []
+        for i in range(self.num_envs):
+            path: Any = self.paths[i]
+            r = self._renderers[i]
+            if r is None or r.path is not path:
+                r = self._renderers[i] = Renderer(self.params, path, "rgb_array")
+            frames.append(
+                r.draw(
+                    np.array((x[i], y[i], beta[i])),
+                    self._trail_of(i),
+                    wheel_angles=np.array((alpha1[i], alpha2[i])),
+                    time=float(steps[i] * self.params.dt),
+                )
+            )
+        return tuple(frames)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the renderers."""
+        for r in self._renderers:
+            if r is not None:
+                r.close()
+        self._renderers = [None] * self.num_envs
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
+        state = self.__dict__.copy()
+        state["_renderers"] = [None] * self.num_envs
+        return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)

@@ -77,28 +77,6 @@ from amigo_gym.model.kinematics import Real, body_velocity_of, wheel_rates_of
 from amigo_gym.model.numeric import any_array, where
 from amigo_gym.model.params import RobotParams, check_range
 
-__all__ = [
-    "MAX_DELAY",
-    "MAX_TRUE_DEVIATION",
-    "PIECES",
-    "ActuatorParams",
-    "Ramp",
-    "ActuatorStep",
-    "clip_setpoints",
-    "wheel_rates_columns",
-    "ramp",
-    "turn_rate_bound",
-    "step_subintervals",
-    "delay_split",
-    "ring_length",
-    "make_ring",
-    "ring_write",
-    "ring_read",
-    "ring_slot",
-    "ring_read_slots",
-    "actuator_step",
-]
-
 #: largest actuation delay supported [s] (the project's choice: a few 0.1 s control cycles)
 MAX_DELAY = 0.5
 #: relative deviation of the true wheel radii and half track from nominal assumed by :func:`turn_rate_bound`

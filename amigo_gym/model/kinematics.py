@@ -19,39 +19,6 @@ from typing import NamedTuple, Protocol, TypeAlias, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "body_velocity",
-    "wheel_rates",
-    "castor_rate",
-    "h_position",
-    "h_from_a",
-    "a_from_h",
-    "contact_points",
-    "castor_position",
-    "step_pose",
-    "advance_angle",
-    "sinc",
-    "Real",
-    "ArcStep",
-    "arc_step",
-    "body_velocity_columns",
-    "castor_rate_columns",
-    "pack",
-    "col_sin",
-    "col_cos",
-    "col_tan",
-    "cos_sin",
-    "col_sqrt",
-    "SteadyCircle",
-    "circle_steady_state",
-    "Geometry",
-    "half_tan_cos_sin",
-    "arc_from_tangents",
-    "body_velocity_of",
-    "wheel_rates_of",
-    "castor_rate_float",
-]
-
 Array = NDArray[np.float64]
 
 

@@ -16,8 +16,6 @@ from typing import Any, TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Real", "any_array", "clip", "where", "where_float"]
-
 #: a float or a column of floats
 Real: TypeAlias = float | NDArray[np.float64]
 

@@ -25,16 +25,6 @@ from typing import Any, Literal
 
 from amigo_gym.model.kinematics import circle_steady_state
 
-__all__ = [
-    "HEADING_LIMIT",
-    "POSE_LIMIT",
-    "RobotParams",
-    "EnvParams",
-    "check_range",
-    "check_real",
-    "show_value",
-]
-
 #: largest ``|x_A|``, ``|y_A|`` of a start pose [m]: float64 still resolves 2.3e-10 m there (ulp(1e6)),
 #: far below any tracking error the task measures
 POSE_LIMIT = 1e6

@@ -34,19 +34,6 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import check_range
 
-__all__ = [
-    "MAX_DELAY",
-    "PRESETS",
-    "EpisodeDraw",
-    "Randomization",
-    "StepNoise",
-    "counter_uniform",
-    "draw_key",
-    "make_randomization",
-    "sample",
-    "step_noise",
-]
-
 #: largest actuation delay the environments support [s]
 MAX_DELAY = 0.5
 

@@ -18,7 +18,8 @@ from amigo_gym.paths.classic import (
     CirclePath,
     ClosestPoint,
     ManoeuvrePath,
-    Path,
+    PathPoint,
+    PathPose,
     Projection,
     make_path,
     wrap_angle,
@@ -30,8 +31,6 @@ from amigo_gym.paths.clothoid import (
     STATUS_WINDOW,
     ClothoidPath,
     ClothoidSegment,
-    PathPoint,
-    PathPose,
     PathSpec,
 )
 from amigo_gym.paths.families import (
@@ -51,7 +50,6 @@ from amigo_gym.paths.user import UserPath, check_path
 __all__ = [
     "Projection",
     "ClosestPoint",
-    "Path",
     "CirclePath",
     "ManoeuvrePath",
     "make_path",

@@ -15,10 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.model.kinematics import Real
-from amigo_gym.model.params import RobotParams
-from amigo_gym.paths.clothoid import PathSpec, check_real
-
-__all__ = ["Preview", "preview", "LagProfile", "Feasibility", "feasibility", "heading_lag_profile"]
+from amigo_gym.model.params import RobotParams, check_real
+from amigo_gym.paths.clothoid import PathSpec
 
 Array = NDArray[np.float64]
 

@@ -24,19 +24,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real
+from amigo_gym.paths.classic import PathPoint, PathPose
 from amigo_gym.paths.clothoid import (
     ClothoidPath,
     ClothoidSegment,
-    PathPoint,
-    PathPose,
     PathSpec,
     check_hint,
     check_window,
     locate_columns,
     pose_columns_of,
 )
-
-__all__ = ["PathBatch"]
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -238,7 +235,7 @@ class PathBatch:
             s: ``(N,)`` arc lengths [m] (or a float for all rows).
 
         Returns:
-            :class:`~amigo_gym.paths.clothoid.PathPose` of ``(N,)`` columns.
+            :class:`~amigo_gym.paths.classic.PathPose` of ``(N,)`` columns.
         """
         sa = self._column("s", s)
         only = self._uniform()
@@ -271,7 +268,7 @@ class PathBatch:
                 defaults to ``max_advance``).
 
         Returns:
-            :class:`~amigo_gym.paths.clothoid.PathPoint` of ``(N,)`` columns (``status`` int64).
+            :class:`~amigo_gym.paths.classic.PathPoint` of ``(N,)`` columns (``status`` int64).
         """
         xa = self._column("x", x)
         ya = self._column("y", y)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, NamedTuple, Protocol
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,8 +22,6 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.numeric import where
 from amigo_gym.model.params import EnvParams, check_range
-
-__all__ = ["Projection", "ClosestPoint", "Path", "CirclePath", "ManoeuvrePath", "make_path", "wrap_angle"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
@@ -145,40 +143,6 @@ class PathPoint(NamedTuple):
         """The :class:`ClosestPoint` of these columns (``s`` within one lap)."""
         e, c, sn = self.cross_track_error, self.cos_theta, self.sin_theta
         return ClosestPoint(self.s, self.x, self.y, self.tangent_angle, self.curvature, e, c, sn)
-
-
-class Path(Protocol):
-    """What the environment, the inverse solution and the agents need of a path."""
-
-    @property
-    def length(self) -> float:
-        """Arc length of one traversal [m] (one lap for a closed path, ``inf`` if open)."""
-        ...
-
-    def point(self, s: ArrayLike) -> Array:
-        """Point at arc length ``s``: ``(..., 2)`` [m]."""
-        ...
-
-    def tangent_angle(self, s: ArrayLike) -> Array:
-        """Tangent angle ``theta(s)`` [rad], continuous in ``s`` (not wrapped)."""
-        ...
-
-    def curvature(self, s: ArrayLike) -> Array:
-        """Signed curvature ``kappa(s)`` [1/m]."""
-        ...
-
-    def project(self, p: ArrayLike) -> Projection:
-        """Closest point to ``p`` ``(..., 2)``, with tangent, curvature and signed cross-track error."""
-        ...
-
-    def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Column form of :meth:`project`; ``minimal=True`` leaves NaN in the fields the observation and
-        reward do not need (arc length where the curvature is constant, point, tangent angle)."""
-        ...
-
-    def curvature_columns(self, s: Real) -> Real:
-        """:meth:`curvature` as a column: a plain float where it does not depend on ``s``."""
-        ...
 
 
 class _Projecting:

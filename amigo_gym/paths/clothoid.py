@@ -46,20 +46,6 @@ from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, _Projecting
 
-__all__ = [
-    "STATUS_INTERIOR",
-    "STATUS_START",
-    "STATUS_END",
-    "STATUS_WINDOW",
-    "ClothoidSegment",
-    "ClothoidPath",
-    "PathPose",
-    "PathPoint",
-    "PathSpec",
-    "PathLoops",
-    "check_real",
-]
-
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 TWO_PI = 2.0 * math.pi

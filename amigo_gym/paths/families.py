@@ -25,25 +25,8 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.model.fresnel import NODES, Buffer, node_table, subinterval_count, unit_speed_nodes
-from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, PathLoops, check_real, py_max
-
-__all__ = [
-    "ParamRange",
-    "Family",
-    "FAMILIES",
-    "circle",
-    "manoeuvre",
-    "figure8",
-    "lane_change",
-    "random_path",
-    "make_family_path",
-    "run_segments",
-    "s_curve_half",
-    "lane_change_shape",
-    "RUN_MAX_SUB",
-    "RUN_NODES",
-    "RUN_SCRATCH",
-]
+from amigo_gym.model.params import check_real
+from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, PathLoops, py_max
 
 
 @dataclass(frozen=True)

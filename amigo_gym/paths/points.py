@@ -37,22 +37,8 @@ from numpy.typing import NDArray
 
 from amigo_gym.io import finite_float
 from amigo_gym.model.fresnel import advance
-from amigo_gym.model.params import show_value
-from amigo_gym.paths.clothoid import MAX_CURVATURE, TWO_PI, ClothoidPath, ClothoidSegment, check_real
-
-__all__ = [
-    "PointsFit",
-    "fit_points",
-    "from_points",
-    "load_points",
-    "from_file",
-    "cached_file_path",
-    "is_points_file",
-    "MAX_REFINEMENTS",
-    "MAX_POINTS",
-    "MIN_LENGTH",
-    "MAX_LENGTH",
-]
+from amigo_gym.model.params import check_real, show_value
+from amigo_gym.paths.clothoid import MAX_CURVATURE, TWO_PI, ClothoidPath, ClothoidSegment
 
 Array = NDArray[np.float64]
 

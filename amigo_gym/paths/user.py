@@ -29,10 +29,8 @@ from numpy.typing import NDArray
 
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import show_value
-from amigo_gym.paths.classic import CirclePath, ManoeuvrePath
-from amigo_gym.paths.clothoid import ClothoidPath, FloatPose, PathPoint, PathPose, locate_points
-
-__all__ = ["REQUIRED_MEMBERS", "POSE_FIELDS", "UserPath", "check_path", "path_name"]
+from amigo_gym.paths.classic import CirclePath, ManoeuvrePath, PathPoint, PathPose
+from amigo_gym.paths.clothoid import ClothoidPath, FloatPose, locate_points
 
 Array = NDArray[np.float64]
 

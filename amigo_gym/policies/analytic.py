@@ -59,15 +59,6 @@ from amigo_gym.model.kinematics import wheel_rates
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.base import Fields, Params, Policy
 
-__all__ = [
-    "COS_MIN",
-    "DEFAULT_GAIN",
-    "AnalyticPolicy",
-    "analytic_body_velocity",
-    "analytic_tracking_command",
-    "analytic_wheel_rates",
-]
-
 Array = NDArray[np.float64]
 
 #: default feedback gain k [1/s] on H's cross-track error

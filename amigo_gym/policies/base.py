@@ -19,8 +19,6 @@ from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.task.v0 import obs_names
 from amigo_gym.task.v1 import TrackingParams, obs_fields
 
-__all__ = ["Fields", "Params", "Policy"]
-
 Array = NDArray[np.float64]
 #: the task settings of either environment
 Params = EnvParams | TrackingParams

@@ -36,17 +36,6 @@ from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy
 from amigo_gym.task.v1 import TrackingParams, make_tracking_params
 
-__all__ = [
-    "FORMAT",
-    "HISTORY_FIELDS",
-    "FastPolicy",
-    "FeatureSpec",
-    "RunningMeanStd",
-    "env_action",
-    "load_pretrained",
-    "sha256_of",
-]
-
 Array = NDArray[np.float64]
 #: the ``format`` entry of a fast-PPO model's ``model.json``
 FORMAT = "amigo_gym.fastppo/1"

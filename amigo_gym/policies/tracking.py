@@ -47,23 +47,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.actuators import wheel_rates_columns
 from amigo_gym.model.params import check_range
-from amigo_gym.policies.analytic import COS_MIN, analytic_tracking_command
+from amigo_gym.policies.analytic import analytic_tracking_command
 from amigo_gym.policies.base import Fields, Params, Policy
 from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams
-
-__all__ = [
-    "COS_MIN",
-    "DEFAULT_TRACKING_GAIN",
-    "DEFAULT_INTEGRAL_LIMIT",
-    "AnalyticTrackingPolicy",
-    "PurePursuitPolicy",
-    "analytic_tracking_command",
-    "pure_pursuit_command",
-    "limit_wheel_rates",
-    "closed_loop_impulse_response",
-    "zoh_error_bound",
-    "pure_pursuit_circle_offset",
-]
 
 Array = NDArray[np.float64]
 

@@ -37,25 +37,6 @@ from amigo_gym.paths.clothoid import ClothoidPath, PathLoops, use_compiled_rows
 from amigo_gym.sim import layout_v1
 from amigo_gym.task import v1 as tracking
 
-__all__ = [
-    "KERNEL_ENV",
-    "KERNELS",
-    "kernel_mode",
-    "numba_available",
-    "use_fast_path",
-    "use_kernel",
-    "choices",
-    "COMPILE_NOTICE",
-    "announce_compilation",
-    "direct_call",
-    "kernels",
-    "kernel_constants",
-    "flat_path",
-    "compiled_path",
-    "path_loops",
-    "StepKernel",
-]
-
 Array = NDArray[np.float64]
 
 

@@ -26,8 +26,6 @@ from amigo_gym.paths.clothoid import ClothoidPath
 from amigo_gym.sim import fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
-__all__ = ["PathArena", "BatchKernel"]
-
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 

@@ -15,8 +15,6 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, cast
 
-__all__ = ["twin", "source_digest", "cache_root", "kernel_cache"]
-
 
 def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     """A copy of the function ``fn`` named ``name``, for the compiled kernels: numba caches a compiled function under

@@ -40,22 +40,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_save
-from amigo_gym.model.kinematics import SteadyCircle, a_from_h, castor_rate, circle_steady_state, h_position, wheel_rates
+from amigo_gym.model.kinematics import a_from_h, castor_rate, h_position, wheel_rates
+from amigo_gym.model.kinematics import circle_steady_state as circle_steady_state
 from amigo_gym.model.params import RobotParams, check_range
 from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
-
-__all__ = [
-    "ConstantSpeed",
-    "InverseSolution",
-    "SpeedProfile",
-    "SteadyCircle",
-    "TrapezoidProfile",
-    "circle_steady_state",
-    "manoeuvre_profile",
-    "paper_circle",
-    "solve_inverse",
-    "time_grid",
-]
 
 Array = NDArray[np.float64]
 AnyPath = CirclePath | ManoeuvrePath

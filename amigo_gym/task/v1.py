@@ -515,8 +515,7 @@ def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float
     if p.observation == "v0":
         return obs_bounds_of(p.termination_distance, p.error_scale, len(p.preview))
     high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
-    for d in p.preview:
-        b = (d + p.robot.l3 + 2.0 * p.termination_distance) / p.preview_scale
+    for b in constants(p).preview_bounds:
         high += [b, b, 1.0]
     high += [1.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0]
     hi = np.array(high)
@@ -542,7 +541,7 @@ class Constants:
     n_sub: int
     ring_length: int
     window: float
-    preview_bounds: tuple[float, ...]
+    preview_bounds: tuple[float, ...]  # the b_i of the module table
     smooth_scale_sq: float
 
 
