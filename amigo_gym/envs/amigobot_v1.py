@@ -6,7 +6,6 @@ A thin stateful shell over the column functions of :mod:`amigo_gym.task.v1`; the
 
 from __future__ import annotations
 
-import copy
 import math
 from collections import deque
 from typing import Any, SupportsFloat
@@ -111,6 +110,15 @@ def record_info(
         "slip": record[_SLIP],
         "end_of_path": end_of_path,
     }
+
+
+def _fresh(x: Any) -> Any:
+    """A copy of a report of dicts and lists: new containers, the immutable leaves shared (faster than deepcopy)."""
+    if isinstance(x, dict):
+        return {k: _fresh(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_fresh(v) for v in x]
+    return x
 
 
 class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
@@ -306,7 +314,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         if self.v0_params is None:  # (AmigoBot-v0's info: no end condition, no feasibility)
             info["end_condition"] = ""
             if self.feasibility is not None:
-                info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset (Gymnasium's rule)
+                info["feasibility"] = _fresh(self.feasibility)  # new objects at every reset (Gymnasium's rule)
         self._needs_reset = False
         self._ended = False
         self._trail.clear()

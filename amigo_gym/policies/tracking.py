@@ -284,7 +284,7 @@ class PurePursuitPolicy(Policy):
         """The textbook preset of Cao et al., Sensors 24(2) 561 (2024), Sec. 3.1 and the authors' code: the goal 0.2 m
         of arc length ahead of the closest point, pursued from the axle midpoint A, the turn rate clipped to 1 rad/s.
         Needs 0.2 among ``params.preview``. On their 1000 random paths at 0.2 m/s it fails 26.8 % [24.1, 29.6] at
-        0.1 m (published: 27.6 %; ``experiments/random_paths.py``, docs/benchmark.md)."""
+        0.1 m (published: 27.6 %; ``amigo-gym benchmark --random-paths 1000``, docs/benchmark.md)."""
         return cls(params, 0.2, origin="axle", max_turn_rate=1.0)
 
     @property
