@@ -52,22 +52,17 @@ The model (one control step of length ``dt``, step time ``0 <= t <= dt``)
 
 Sources
 -------
-The limits are those of the manufacturer's (Adept MobileRobots, formerly ActivMedia) AmigoBot
-robot parameter file and MobileSim simulator model of the AmigoBot-SH, as collected in
-``docs/model.md`` (public data on the real robot): maximum speed 0.75 m/s (15 rad/s of wheel
-rate with r = 0.05 m), acceleration 0.3 m/s^2 (0.87 rad/s^2), deceleration 0.75 m/s^2 (2.5 rad/s^2).
-The ramp rule (speeding up at the acceleration, slowing down at the deceleration, through zero by
-stopping first) is the project's model of the ARCOS firmware's velocity profile that these
-parameters configure; it has not been checked here against an ARCOS manual or the robot. The delay
-bound ``MAX_DELAY`` is the project's choice (a few control cycles of 0.1 s); the delay is in seconds
-and applied exactly (a delay in seconds, not in steps; ``docs/amigobot_v1.md``).
+The limits (speed, accelerations, decelerations) are those of the manufacturer's (Adept MobileRobots, formerly
+ActivMedia) AmigoBot parameter file and MobileSim model of the AmigoBot-SH (``docs/model.md``). The ramp rule is
+the project's model of the ARCOS firmware's velocity profile, not checked against an ARCOS manual or the robot.
+``MAX_DELAY`` is the project's choice; the delay is in seconds, applied exactly (``docs/amigobot_v1.md``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, NamedTuple, overload
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -121,48 +116,21 @@ class ActuatorParams:
             object.__setattr__(self, f.name, v)
 
 
-# Column helpers (the same values for floats and arrays): amigo_gym.model.numeric.
-_where = where
-_abs = np.abs
-_min = np.minimum
-_max = np.maximum
-_copysign = np.copysign
-_any_array = any_array
-
-
 def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Real]:
-    """Wheel-rate setpoints clipped to ``[-w_max, w_max]``, ``w_max = nominal.max_wheel_rate`` [rad/s].
-
-    Args:
-        w1c, w2c: setpoints of wheel 1 (right) and wheel 2 (left) [rad/s], columns.
-        nominal: the robot the firmware believes in (15 rad/s by default).
-
-    Returns:
-        the clipped setpoints [rad/s], columns of the broadcast shape.
-    """
-    w_max = nominal.max_wheel_rate
-    return clip_setpoint(w1c, w_max), clip_setpoint(w2c, w_max)
+    """Setpoints of wheel 1 (right) and 2 (left) [rad/s], columns, clipped to ``[-w_max, w_max]`` with ``w_max =
+    nominal.max_wheel_rate`` (the robot the firmware believes in: 15 rad/s by default)."""
+    return clip_setpoint(w1c, nominal.max_wheel_rate), clip_setpoint(w2c, nominal.max_wheel_rate)
 
 
 def clip_setpoint(w: Real, w_max: float) -> Real:
-    """One setpoint (float or column) clipped to ``[-w_max, w_max]`` [rad/s]: ``min(max(w, -w_max), w_max)`` by the
-    helpers of :mod:`amigo_gym.model.numeric` (a NaN float gives ``-w_max``, a NaN element NaN). Written once: the
-    column step, the float step and the compiled step (:func:`actuator_step_ws`)."""
-    return _min(_max(w, -w_max), w_max)
+    """One setpoint (float or column) clipped: ``min(max(w, -w_max), w_max)`` [rad/s] (a NaN float gives ``-w_max``,
+    a NaN element NaN)."""
+    return np.minimum(np.maximum(w, -w_max), w_max)
 
 
 def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Real]:
-    r"""Wheel rates rolling without slip for speeds ``(v, w)`` (inverse of ``body_velocity_columns``).
-
-    .. math:: \dot\alpha_1 = (v + l_1 w) / r_1, \qquad \dot\alpha_2 = (v - l_1 w) / r_2
-
-    Args:
-        v: translational speed of A [m/s]; w: rotational speed [rad/s] (columns).
-        robot: geometry (the nominal robot for the firmware's actuator state).
-
-    Returns:
-        ``(alpha1dot, alpha2dot)`` [rad/s], columns.
-    """
+    """Wheel rates ``(alpha1dot, alpha2dot)`` [rad/s] rolling without slip for the speeds ``v`` [m/s], ``w`` [rad/s]
+    (columns): ``((v + l1 w) / r1, (v - l1 w) / r2)`` of ``robot``, the inverse of ``body_velocity_columns``."""
     return wheel_rates_of(v, w, robot.l1, robot.r1, robot.r2)
 
 
@@ -207,18 +175,18 @@ def ramp(u0: Real, target: Real, accel: float, decel: float, duration: Real) -> 
         :class:`Ramp` with ``t_a = min(t_z, T)``, ``t_b = min(t_r, T)``, the values at these times and the slopes.
     """
     reverse = u0 * target < 0.0
-    u_z = _where(reverse, 0.0, u0)
-    t_z = _where(reverse, _abs(u0) / decel, 0.0)
-    s_a = _where(reverse, _copysign(decel, -u0), 0.0)
+    u_z = where(reverse, 0.0, u0)
+    t_z = where(reverse, np.abs(u0) / decel, 0.0)
+    s_a = where(reverse, np.copysign(decel, -u0), 0.0)
     d = target - u_z
-    rate = _where(_abs(target) > _abs(u_z), accel, decel)
-    t_r = t_z + _abs(d) / rate
-    s_b = _copysign(rate, d)
+    rate = where(np.abs(target) > np.abs(u_z), accel, decel)
+    t_r = t_z + np.abs(d) / rate
+    s_b = np.copysign(rate, d)
     z_in = t_z <= duration
     r_in = t_r <= duration
-    u_a = _where(z_in, u_z, u0 + s_a * duration)
-    u_b = _where(r_in, target, _where(z_in, u_z + s_b * (duration - t_z), u_a))
-    return Ramp(_min(t_z, duration), _min(t_r, duration), u_a, u_b, s_a, s_b)
+    u_a = where(z_in, u_z, u0 + s_a * duration)
+    u_b = where(r_in, target, where(z_in, u_z + s_b * (duration - t_z), u_a))
+    return Ramp(np.minimum(t_z, duration), np.minimum(t_r, duration), u_a, u_b, s_a, s_b)
 
 
 def turn_rate_bound(nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION) -> float:
@@ -252,18 +220,9 @@ def step_subintervals(dt: float, nominal: RobotParams, deviation: float = MAX_TR
 
 
 def delay_split(delay: Real, dt: float) -> tuple[int | NDArray[np.int64], Real]:
-    """Split a delay into whole steps and a switch time: ``delay = m dt + f``, ``0 <= f < dt``.
-
-    During step ``k`` the command of step ``k - m - 1`` is in effect for step time ``t < f`` and that of
-    step ``k - m`` for ``t >= f`` (module docstring, item 4). ``f = fmod(delay, dt)`` is exact.
-
-    Args:
-        delay: the delay [s], in ``[0, MAX_DELAY]`` (a column: it may differ per robot).
-        dt: the control step [s], > 0.
-
-    Returns:
-        ``(m, f)``: an int (an int64 array for an array ``delay``) and the switch time [s] (column).
-    """
+    """``(m, f)`` with ``delay = m dt + f``, ``0 <= f < dt`` (``f = fmod(delay, dt)``, exact; module docstring, item 4)
+    for a delay [s] in ``[0, MAX_DELAY]`` (a column) and the step ``dt > 0`` [s]: ``m`` an int (int64 array for an
+    array ``delay``), the switch time ``f`` [s] a column."""
     if isinstance(delay, np.ndarray):
         f_arr = np.fmod(delay, dt)
         return np.rint((delay - f_arr) / dt).astype(np.int64), f_arr
@@ -285,16 +244,9 @@ def ring_length(dt: float, max_delay: float = MAX_DELAY) -> int:
 
 
 def make_ring(length: int, w1c: Real, w2c: Real) -> NDArray[np.float64]:
-    """A command ring filled with one command (what the robot was doing before the first step).
-
-    Args:
-        length: :func:`ring_length`.
-        w1c, w2c: the command [rad/s], columns of shape ``()`` or ``(N,)``.
-
-    Returns:
-        float64 array ``(length, 2)`` for float commands, ``(N, length, 2)`` for ``(N,)`` commands: slot
-        ``j % length`` holds ``(w1c, w2c)`` issued at step ``j``.
-    """
+    """A ring of ``length`` (:func:`ring_length`) commands, each ``(w1c, w2c)`` [rad/s] (what the robot did before the
+    first step; columns ``()`` or ``(N,)``): float64 ``(length, 2)`` or ``(N, length, 2)``; slot ``j % length`` holds
+    the command of step ``j``."""
     shape = np.broadcast_shapes(np.shape(w1c), np.shape(w2c))
     ring = np.empty((*shape, length, 2))
     ring[..., 0] = np.asarray(w1c)[..., None]
@@ -303,28 +255,21 @@ def make_ring(length: int, w1c: Real, w2c: Real) -> NDArray[np.float64]:
 
 
 def ring_write(ring: NDArray[np.float64], step: int, w1c: Real, w2c: Real) -> None:
-    """Store the command issued at ``step`` in its slot, ``step % length`` (in place: the ring is the caller's state).
-
-    Args:
-        ring: from :func:`make_ring`, ``(length, 2)`` or ``(N, length, 2)``.
-        step: the step counter ``k`` (>= 0).
-        w1c, w2c: the command [rad/s] (columns matching the ring's leading shape).
-    """
+    """Store the command ``(w1c, w2c)`` [rad/s] (columns matching the ring's leading shape) issued at ``step >= 0`` in
+    its slot of ``ring`` (:func:`make_ring`), in place."""
     slot = ring_slot(step, ring.shape[-2])
     ring[..., slot, 0] = w1c
     ring[..., slot, 1] = w2c
 
 
 def ring_slot(step: Any, length: int) -> Any:
-    """The slot of the command issued at ``step`` in a ring of ``length`` commands: ``step % length`` (Python's
-    modulo: never negative). Written once: :func:`ring_write`, and the compiled step compiles it."""
+    """The slot of the command issued at ``step`` in a ring of ``length`` commands: ``step % length`` (never < 0)."""
     return step % length
 
 
 def ring_read_slots(step: Any, lag: Any, length: int) -> tuple[Any, Any]:
-    """The slots of the setpoints in effect during step ``step`` with a lag of ``lag`` whole steps: those of steps
-    ``step - lag - 1`` (old) and ``step - lag`` (new), ``(old, new)``. Ints or int columns (Python's and numpy's
-    modulo: never negative); written once: :func:`ring_read`, and the compiled step compiles it."""
+    """The slots ``(old, new)`` of the setpoints in effect during step ``step`` with a lag of ``lag`` whole steps: those
+    of steps ``step - lag - 1`` and ``step - lag`` (ints or int columns)."""
     return ring_slot(step - lag - 1, length), ring_slot(step - lag, length)
 
 
@@ -345,22 +290,16 @@ def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]
         ValueError: if the ring is too short for ``lag``.
     """
     length = ring.shape[-2]
-    if ring.ndim == 2 and type(lag) is int:  # one robot: no array arithmetic
-        if lag + 2 > length or lag < 0:
-            raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
-        j_old, j_new = ring_read_slots(step, lag, length)
-        w1_new, w2_new = ring[j_new].tolist()
-        w1_old, w2_old = ring[j_old].tolist()
-        return w1_old, w2_old, w1_new, w2_new
-    if np.any(np.asarray(lag) + 2 > length) or np.any(np.asarray(lag) < 0):
+    lags = lag if type(lag) is int else np.asarray(lag)  # one robot: no array arithmetic
+    if np.any(lags + 2 > length) or np.any(lags < 0):
         raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
-    i_old, i_new = ring_read_slots(step, np.asarray(lag), length)
+    i_old, i_new = ring_read_slots(step, lags, length)
     if ring.ndim == 2:
-        new, old = ring[int(i_new)], ring[int(i_old)]
-        return float(old[0]), float(old[1]), float(new[0]), float(new[1])
+        (w1_old, w2_old), (w1_new, w2_new) = ring[int(i_old)].tolist(), ring[int(i_new)].tolist()
+        return w1_old, w2_old, w1_new, w2_new
     rows = np.arange(ring.shape[0])
-    new_a, old_a = ring[rows, i_new], ring[rows, i_old]
-    return old_a[:, 0].copy(), old_a[:, 1].copy(), new_a[:, 0].copy(), new_a[:, 1].copy()
+    old, new = ring[rows, i_old], ring[rows, i_new]
+    return old[:, 0].copy(), old[:, 1].copy(), new[:, 0].copy(), new[:, 1].copy()
 
 
 # -- the step ------------------------------------------------------------------------------------------
@@ -411,23 +350,13 @@ def actuator_step(
     slip2: Real = 0.0,
     n_sub: int | None = None,
 ) -> ActuatorStep:
-    r"""One control step of the robot with its actuators, exact (module docstring for the model).
+    r"""One control step of the robot with its actuators, exact (the model: module docstring).
 
-    1. Setpoints clipped (:func:`clip_setpoints`) and converted with the nominal robot to commands
-       ``(v_c, w_c)``, the old ones in effect on ``[0, t_s)``, the new ones on ``[t_s, dt]``.
-    2. ``(v, w)`` from the wheel rates ``(w1, w2)`` (nominal ``body_velocity_columns``), ramped per channel
-       (:func:`ramp`, twice: towards the old then the new command): each channel has 5 inner
-       breakpoints ``t_a, t_b`` of each ramp and ``t_s``; their union (9 times, sorted per robot)
-       splits the step into :data:`PIECES` pieces (some of zero length) on which ``v`` and ``w`` are linear.
-    3. On each piece ``[t_j, t_{j+1}]`` of length ``L``: nominal wheel rates
-       ``w_i(t) = w_i(t_j) + \dot w_i (t - t_j)`` (:func:`wheel_rates_columns`); true ground speed and
-       turn rate ``v_true = (g1 w1 + g2 w2) / 2``, ``w_true = (g1 w1 - g2 w2) / (2 l1t)`` with
-       ``g_i = (1 - s_i) r_it``, both linear; the pose advances by
-       ``fresnel.advance(x, y, beta, v_true(t_j), dv_true/dt, w_true(t_j), dw_true/dt, L, n_sub)``, the
-       wheel angles by ``L (w_i(t_j) + \dot w_i L / 2)`` and the distance by ``L (v_true(t_j) + \dot v_true L / 2)``.
-    4. The new wheel rates are the nominal inverse of ``(v(dt), w(dt))``.
-
-    Pieces of zero length leave everything unchanged (skipped for floats, masked for arrays).
+    Each speed channel is ramped twice (:func:`ramp`: towards the old, then the new command); the union of their
+    breakpoints and ``t_s`` (9 times, sorted per robot) splits the step into :data:`PIECES` pieces (some of zero
+    length, which change nothing) on which ``v`` and ``w`` are linear. On a piece of length ``L`` the pose advances by
+    :func:`amigo_gym.model.fresnel.advance_nodes` of the true speeds (module docstring, item 5), the wheel angles by
+    ``L (w_i + \dot w_i L / 2)`` and the distance by ``L (v_true + \dot v_true L / 2)``.
 
     Args:
         x, y, beta: pose of A at the start [m, m, rad].
@@ -452,7 +381,7 @@ def actuator_step(
     cols: tuple[Real, ...] = (
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
     )  # fmt: skip
-    if _any_array(*cols):  # columns: every input and output an array of the broadcast shape
+    if any_array(*cols):  # columns: every input and output an array of the broadcast shape
         arrays = np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols))
         cols = tuple(np.array(a, dtype=np.float64) for a in arrays)
     else:
@@ -470,47 +399,6 @@ def actuator_step(
 
 
 # -- the step written once: floats, columns and the compiled step ----------------------------------------
-
-
-@overload
-def piece_rates(
-    v: float, a: float, om: float, al: float, l1n: float, r1n: float, r2n: float, g1: float, g2: float, inv_2l1t: float
-) -> tuple[float, float, float, float, float, float, float, float]: ...
-@overload
-def piece_rates(
-    v: Real, a: Real, om: Real, al: Real, l1n: float, r1n: float, r2n: float, g1: Real, g2: Real, inv_2l1t: Real
-) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real]: ...
-def piece_rates(
-    v: Real, a: Real, om: Real, al: Real, l1n: float, r1n: float, r2n: float, g1: Real, g2: Real, inv_2l1t: Real
-) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real]:
-    r"""The rates of one linear piece of the ramps: the wheels' commanded rate and its slope, and the true body's.
-
-    From the nominal body velocity ``v + a tau`` [m/s] and turn rate ``om + al tau`` [rad/s] of the piece, the wheel
-    rates ``p_i + q_i tau`` [rad/s] (:func:`~amigo_gym.model.kinematics.wheel_rates_of` of the nominal robot) and the
-    true body's ``vt + at tau``, ``wt + alt tau`` with the true radii times ``1 - slip`` (``g1``, ``g2`` [m]) and
-    ``inv_2l1t = 1 / (2 l_1)`` of the true half track:
-
-    .. math:: v_t = \tfrac12 (g_1 p_1 + g_2 p_2),\quad \omega_t = \frac{g_1 p_1 - g_2 p_2}{2 l_1}
-
-    Pure arithmetic on floats or arrays, written once: the column step, the float step and the compiled step
-    (:mod:`amigo_gym.sim._kernels_v1`) call it. Returns ``(p1, q1, p2, q2, vt, at, wt, alt)``.
-    """
-    p1 = (v + l1n * om) / r1n
-    q1 = (a + l1n * al) / r1n
-    p2 = (v - l1n * om) / r2n
-    q2 = (a - l1n * al) / r2n
-    return (
-        p1,
-        q1,
-        p2,
-        q2,
-        0.5 * (g1 * p1 + g2 * p2),
-        0.5 * (g1 * q1 + g2 * q2),
-        (g1 * p1 - g2 * p2) * inv_2l1t,
-        (g1 * q1 - g2 * q2) * inv_2l1t,
-    )
-
-
 # The step written once on a scratch buffer ``ws``: a list of floats (one robot) or of columns (a batch: the vector
 # env's numpy route), or the workspace array of AmigoBot-v1's compiled step, which compiles these functions as they
 # are (amigo_gym.sim._kernels_v1). Offsets from the scratch's start ``k``: per channel (v, then w) 7 knots,
@@ -545,7 +433,7 @@ def sort_knots_float(ws: fresnel.Buffer, i0: int, n: int) -> None:
 def sort_knots(ws: Any, i0: int, n: int) -> None:
     """Sort ``ws[i0 : i0 + n]`` in place, ascending: row by row for a list of columns (``np.sort``; the same values as
     :func:`sort_knots_float`, which sorts floats and which the compiled step runs in its place)."""
-    if not _any_array(*ws[i0 : i0 + n]):
+    if not any_array(*ws[i0 : i0 + n]):
         sort_knots_float(ws, i0, n)
         return
     ws[i0 : i0 + n] = list(np.sort(np.stack(np.broadcast_arrays(*ws[i0 : i0 + n])), axis=0))
@@ -569,7 +457,7 @@ def advance_pieces(
     a piece of length ``t <= 0`` (or NaN) leaving a row unchanged: on floats (every piece is live: its float form,
     which the compiled step runs) all pieces at once; on columns piece by piece, each advancing the rows where it is
     live (on those rows alone when they are fewer than half), the same bits per row."""
-    if not _any_array(x):  # floats (actuator_step makes every input a column when one is)
+    if not any_array(x):  # floats (actuator_step makes every input a column when one is)
         return fresnel.advance_nodes(buf, b, m, x, y, theta, pieces, p, n_pieces, nodes, j, nn)
     for q in range(n_pieces):
         piece = pieces[p + 5 * q : p + 5 * q + 5]
@@ -595,27 +483,12 @@ def _channel_ws(
     ``ws[k + 13 : k + 19]``; returns the value at ``dt``."""
     ta1, tb1, ua1, ub1, sa1, sb1 = ramp(u0, c_old, accel, decel, t_s)
     ta2, tb2, ua2, ub2, sa2, sb2 = ramp(ub1, c_new, accel, decel, dt - t_s)
-    ws[k] = 0.0
-    ws[k + 1] = ta1
-    ws[k + 2] = tb1
-    ws[k + 3] = t_s
-    ws[k + 4] = _min(t_s + ta2, dt)
-    ws[k + 5] = _min(t_s + tb2, dt)
-    ws[k + 6] = dt
-    v = k + 7
-    ws[v] = u0
-    ws[v + 1] = ua1
-    ws[v + 2] = ub1
-    ws[v + 3] = ub1
-    ws[v + 4] = ua2
-    ws[v + 5] = ub2
-    s = k + 13
-    ws[s] = sa1
-    ws[s + 1] = sb1
-    ws[s + 2] = 0.0
-    ws[s + 3] = sa2
-    ws[s + 4] = sb2
-    ws[s + 5] = 0.0
+    for i, knot in enumerate((0.0, ta1, tb1, t_s, np.minimum(t_s + ta2, dt), np.minimum(t_s + tb2, dt), dt)):
+        ws[k + i] = knot
+    for i, value in enumerate((u0, ua1, ub1, ub1, ua2, ub2)):
+        ws[k + 7 + i] = value
+    for i, slope in enumerate((sa1, sb1, 0.0, sa2, sb2, 0.0)):
+        ws[k + 13 + i] = slope
     return ub2
 
 
@@ -628,8 +501,8 @@ def _evaluate_ws(ws: Any, k: int, t: Real, mid: Real) -> tuple[Real, Real]:
     slope = ws[s]
     for i in range(1, 6):
         inside = mid >= ws[k + i]
-        val = _where(inside, ws[v + i] + ws[s + i] * (t - ws[k + i]), val)
-        slope = _where(inside, ws[s + i], slope)
+        val = where(inside, ws[v + i] + ws[s + i] * (t - ws[k + i]), val)
+        slope = where(inside, ws[s + i], slope)
     return val, slope
 
 
@@ -696,15 +569,8 @@ def actuator_step_ws(
     # times = [0, *sorted(9 inner breakpoints), dt]
     tm = k + SCRATCH_TIMES
     ws[tm] = 0.0
-    ws[tm + 1] = ws[kv + 1]
-    ws[tm + 2] = ws[kv + 2]
-    ws[tm + 3] = ws[kv + 3]
-    ws[tm + 4] = ws[kv + 4]
-    ws[tm + 5] = ws[kv + 5]
-    ws[tm + 6] = ws[kw + 1]
-    ws[tm + 7] = ws[kw + 2]
-    ws[tm + 8] = ws[kw + 4]
-    ws[tm + 9] = ws[kw + 5]
+    for i, src in enumerate((kv + 1, kv + 2, kv + 3, kv + 4, kv + 5, kw + 1, kw + 2, kw + 4, kw + 5)):
+        ws[tm + 1 + i] = ws[src]
     ws[tm + 10] = dt
     sort_knots(ws, tm + 1, 9)
     # 3. pieces: their rates, the wheel angles and the distance; then the pose over all (fresnel.advance_nodes)
@@ -726,18 +592,23 @@ def actuator_step_ws(
         mid = 0.5 * (t0 + t1)
         v, a = _evaluate_ws(ws, kv, t0, mid)
         om, al = _evaluate_ws(ws, kw, t0, mid)
-        p1, q1, p2, q2, vt, at, wt, alt = piece_rates(v, a, om, al, l1n, r1n, r2n, g1, g2, inv_2l1t)
-        pc = pcs + 5 * n_pieces
-        ws[pc] = vt
-        ws[pc + 1] = at
-        ws[pc + 2] = wt
-        ws[pc + 3] = alt
-        ws[pc + 4] = length
+        # the nominal wheel rates p_i + q_i tau (wheel_rates_of) and the true body's vt + at tau, wt + alt tau:
+        # vt = (g1 p1 + g2 p2) / 2, wt = (g1 p1 - g2 p2) / (2 l1t)
+        p1 = (v + l1n * om) / r1n
+        q1 = (a + l1n * al) / r1n
+        p2 = (v - l1n * om) / r2n
+        q2 = (a - l1n * al) / r2n
+        vt = 0.5 * (g1 * p1 + g2 * p2)
+        at = 0.5 * (g1 * q1 + g2 * q2)
+        wt = (g1 * p1 - g2 * p2) * inv_2l1t
+        alt = (g1 * q1 - g2 * q2) * inv_2l1t
+        for i, rate in enumerate((vt, at, wt, alt, length)):
+            ws[pcs + 5 * n_pieces + i] = rate
         n_pieces += 1
         half = 0.5 * length
-        da1 = _where(live, da1 + length * (p1 + q1 * half), da1)
-        da2 = _where(live, da2 + length * (p2 + q2 * half), da2)
-        dist = _where(live, dist + length * (vt + at * half), dist)
+        da1 = where(live, da1 + length * (p1 + q1 * half), da1)
+        da2 = where(live, da2 + length * (p2 + q2 * half), da2)
+        dist = where(live, dist + length * (vt + at * half), dist)
     x, y, beta = advance_pieces(buf, b, PIECES * nn, x, y, beta, ws, pcs, n_pieces, nodes, node_at, nn)
     # 4. the new actuator state (wheel_rates_columns) and the true speeds at the end
     w1n, w2n = wheel_rates_of(v_end, w_end, l1n, r1n, r2n)

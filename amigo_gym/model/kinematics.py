@@ -158,16 +158,11 @@ def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
 col_sqrt = np.sqrt
 
 
-def _sinc(x: Real, sin_x: Real) -> Real:
-    """``sin(x) / x`` given ``sin(x)``, 1 at 0 (``x == 0`` adds 1 to both sides; exact elsewhere)."""
-    zero = x == 0.0
-    return (sin_x + zero) / (x + zero)
-
-
 def sinc(x: ArrayLike) -> Array:
-    """Unnormalised sinc, ``sin(x) / x`` with value 1 at 0, elementwise [-]."""
+    """Unnormalised sinc, ``sin(x) / x`` with value 1 at 0, elementwise [-] (``x == 0`` adds 1 to both sides)."""
     x = np.asarray(x, dtype=np.float64)
-    return np.asarray(_sinc(x, np.sin(x)))
+    zero = x == 0.0
+    return np.asarray((np.sin(x) + zero) / (x + zero))
 
 
 def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Real]:
@@ -181,15 +176,8 @@ def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
     if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
         return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
     lb = robot.l5 * betadot
-    return _copysign(col_sqrt(lb * lb + v_a * v_a), v_a) / robot.r3
-
-
-def _copysign(x: Real, y: Real) -> Real:
-    """``|x|`` with the sign of ``y`` (exact; ``math.copysign`` for scalars, which is faster)."""
-    if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
-        out: Real = np.copysign(x, y)
-        return out
-    return math.copysign(x, y)
+    out: Real = np.copysign(col_sqrt(lb * lb + v_a * v_a), v_a) / robot.r3
+    return out
 
 
 class ArcStep(NamedTuple):
@@ -227,7 +215,7 @@ def arc_step(x: Real, y: Real, beta: Real, v_a: Real, betadot: Real, dt: Real, w
     h = 0.5 * db
     x1, y1, cos_b, sin_b = arc_from_tangents(x, y, v_a, dt, h, col_tan(0.5 * h), col_tan(0.5 * (beta + h)))
     if not with_heading:
-        return ArcStep(x1, y1, beta + db, math.nan, math.nan)
+        cos_b = sin_b = math.nan
     return ArcStep(x1, y1, beta + db, cos_b, sin_b)
 
 
