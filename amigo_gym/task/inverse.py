@@ -9,14 +9,10 @@ two-state ODE (``docs/model.md``, "The path of H and the inverse problem"):
     \dot\beta = \frac{v_A \tan(\theta(s) - \beta)}{l_3}.
 
 The wheel rates follow from the rolling constraints (system 29, :func:`~amigo_gym.model.kinematics.wheel_rates`
-and :func:`~amigo_gym.model.kinematics.castor_rate`), the wheel angles by integration. This module integrates
-``(s, psi = theta(s) - beta, x_A, y_A, alpha1, alpha2, alpha3)`` together with SciPy's DOP853 at ``rtol = atol = 1e-12``
-(``x_A, y_A`` from ``xdot_A = v_A cos beta``, ``ydot_A = v_A sin beta``, so that ``r_H`` computed from the
-integrated pose is an independent check that H stays on the path). The integration is split at every
-kink of the speed profile (its :meth:`breakpoints`) and at every curvature jump of the path (the
-manoeuvre's straight→circle junction, located as an ODE event in ``s``), so that each piece has a smooth
-right-hand side and the solver keeps its order. The dense output of each piece is evaluated on the
-requested time grid.
+and :func:`~amigo_gym.model.kinematics.castor_rate`), the wheel angles by integration: :func:`solve_inverse`
+integrates ``(s, psi = theta(s) - beta, x_A, y_A, alpha1, alpha2, alpha3)`` with SciPy's DOP853 (``r_H`` of the
+integrated pose checks independently that H stays on the path), split at every kink of the speed profile and every
+curvature jump of the path (an ODE event in ``s``) so that each piece has a smooth right-hand side.
 
 The ODE is singular where ``|theta - beta| = pi/2``; for forward motion the heading error decays, so a
 start with ``|theta(s0) - beta0| < pi/2`` is well defined (the paper's start is ``beta0 = theta(0)``).
@@ -277,10 +273,7 @@ class InverseSolution:
         return np.stack((self.alpha1, self.alpha2, self.alpha3), axis=-1)
 
     def to_csv(self, path: str | os.PathLike[str], columns: Sequence[str] = COLUMNS) -> None:
-        """Write the chosen columns as CSV with a header line (SI units, radians), atomically.
-
-        The data go to a temporary file in the target's folder, which then replaces the target
-        (``os.replace``), so an interrupted write never leaves a half-written file.
+        """Write the chosen columns as CSV with a header line (SI units, radians), atomically (never half-written).
 
         Raises:
             ValueError: on an unknown column name.
@@ -400,18 +393,9 @@ def solve_inverse(
             sdot = v / math.cos(psi)
             bdot = v * math.tan(psi) / l3
             beta = float(path.tangent_angle(yy[0])) - psi
-            w = wheel_rates(v, bdot, robot)
-            return np.array(
-                [
-                    sdot,
-                    float(path.curvature(yy[0])) * sdot - bdot,
-                    v * math.cos(beta),
-                    v * math.sin(beta),
-                    w[0],
-                    w[1],
-                    float(castor_rate(v, bdot, robot)),
-                ]
-            )
+            w1, w2 = wheel_rates(v, bdot, robot)
+            dpsi = float(path.curvature(yy[0])) * sdot - bdot
+            return np.array((sdot, dpsi, v * math.cos(beta), v * math.sin(beta), w1, w2, castor_rate(v, bdot, robot)))
 
         return rhs
 
@@ -438,17 +422,8 @@ def solve_inverse(
                 reach.terminal = True  # type: ignore[attr-defined]
                 reach.direction = 1.0  # type: ignore[attr-defined]
                 events.append(reach)
-            sol = solve_ivp(
-                make_rhs(ta, tb),
-                (tc, tb),
-                y,
-                method="DOP853",
-                rtol=rtol,
-                atol=atol,
-                dense_output=True,
-                events=events or None,
-                max_step=max_step,
-            )
+            sol = solve_ivp(make_rhs(ta, tb), (tc, tb), y, "DOP853", dense_output=True, events=events or None,
+                            max_step=max_step, rtol=rtol, atol=atol)  # fmt: skip
             if not sol.success:
                 raise RuntimeError(f"{o}: integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
             t_end = float(sol.t[-1])
@@ -468,23 +443,8 @@ def solve_inverse(
     bdot = v * np.tan(psi) / l3
     w = wheel_rates(v, bdot, robot)
     h = h_position(np.stack((xa, ya, beta), axis=-1), robot)
-    return InverseSolution(
-        t=tg,
-        s=s,
-        x_A=xa,
-        y_A=ya,
-        beta=beta,
-        v_A=v,
-        betadot=bdot,
-        alpha1=a1,
-        alpha2=a2,
-        alpha3=a3,
-        alpha1_dot=w[:, 0],
-        alpha2_dot=w[:, 1],
-        alpha3_dot=castor_rate(v, bdot, robot),
-        x_H=h[:, 0],
-        y_H=h[:, 1],
-    )
+    a3dot = castor_rate(v, bdot, robot)
+    return InverseSolution(tg, s, xa, ya, beta, v, bdot, a1, a2, a3, w[:, 0], w[:, 1], a3dot, h[:, 0], h[:, 1])
 
 
 def manoeuvre_profile(
