@@ -41,16 +41,8 @@ from amigo_gym.model.params import RobotParams, show_value
 Array = NDArray[np.float64]
 
 #: the columns of the CSV log format, with their units (docs/logs.md)
-CSV_COLUMNS: dict[str, str] = {
-    "t": "s",
-    "cmd_w1": "rad/s",
-    "cmd_w2": "rad/s",
-    "x": "m",
-    "y": "m",
-    "theta": "rad",
-    "w1": "rad/s",
-    "w2": "rad/s",
-}
+CSV_COLUMNS: dict[str, str] = {"t": "s", "cmd_w1": "rad/s", "cmd_w2": "rad/s", "x": "m", "y": "m", "theta": "rad",
+                                "w1": "rad/s", "w2": "rad/s"}  # fmt: skip
 
 #: relative half-width of the search box of r1, r2 and l1 around the nominal values in :func:`identify`
 FIT_BOUNDS = MAX_TRUE_DEVIATION
@@ -183,11 +175,7 @@ def _yaw(qx: float, qy: float, qz: float, qw: float) -> float:
 
 
 _TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
-_POSE_TYPES = (
-    "nav_msgs/msg/Odometry",
-    "geometry_msgs/msg/PoseStamped",
-    "geometry_msgs/msg/PoseWithCovarianceStamped",
-)
+_POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/PoseWithCovarianceStamped")
 
 
 def read_bag(
@@ -507,20 +495,15 @@ def placed(pose: Array, start: Sequence[float] | Array) -> Array:
     return np.stack([start[0] + c * px - s * py, start[1] + s * px + c * py, start[2] + pose[:, 2]], axis=1)
 
 
-def start_window(log: Log) -> int:
-    """How many of the first measured poses fix the start pose in :func:`replay`: a fifth of the log, at least 10."""
-    return min(log.t_meas.size, max(10, math.ceil(log.t_meas.size / 5)))
-
-
 def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, float, float]:
     """The start pose ``(x0, y0, theta0)`` [m, m, rad] placing ``origin`` (a replay from the origin) on the
-    log's first :func:`start_window` poses: least squares of the position errors and ``heading_weight`` [m/rad]
-    times the heading errors."""
+    log's first poses (a fifth of the log, at least 10): least squares of the position errors and ``heading_weight``
+    [m/rad] times the heading errors."""
     from scipy.optimize import least_squares  # heavy: only here
 
     if log.pose is None:
         raise ValueError("fit_start: the log measures no pose")
-    k = start_window(log)
+    k = min(log.t_meas.size, max(10, math.ceil(log.t_meas.size / 5)))
     meas, sim = log.pose[:k], origin.pose[:k]
 
     def residuals(z: Array) -> Array:
@@ -563,16 +546,25 @@ def replay(
 # --------------------------------------------------------------------------------------------- robot files
 
 
-def robot_file_fields(data: Any, where: str) -> tuple[dict[str, float], dict[str, float]]:
-    """The robot and actuator fields of a robot file's content (a JSON object, e.g. from :func:`identify`).
+def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dict[str, float]]:
+    """The robot and actuator fields of a robot file (a JSON object: ``robot.json`` of ``amigo-gym identify``).
 
     Keys: fields of :class:`RobotParams` (``r1``, ``r2``, ``l1`` [m], ...) and of :class:`ActuatorParams`
     (``delay`` [s], ``acceleration`` [m/s^2], ...); the report keys :func:`identify` writes (``uncertainty``,
     ``replay_before``, ...) are ignored. Values are checked by the dataclasses where they are used.
 
     Raises:
-        ValueError: not an object, an unknown key, a value that is not a number.
+        FileNotFoundError: no such file. ValueError: not JSON, not an object, an unknown key, a value that is not a
+        number (one line).
     """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"robot file {str(p)!r} does not exist or is not a file")
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{p.name}: not a JSON file ({exc})") from None
+    where = p.name
     if not isinstance(data, Mapping):
         raise ValueError(f"{where}: a robot file must hold a JSON object, got {show_value(data)}")
     unknown = sorted(str(k) for k in data if k not in _ROBOT_FIELDS | _ACTUATOR_FIELDS | _META_FIELDS)
@@ -590,22 +582,6 @@ def robot_file_fields(data: Any, where: str) -> tuple[dict[str, float], dict[str
             raise ValueError(f"{where}: {k} must be a number, got {show_value(v)}")
         (robot if k in _ROBOT_FIELDS else act)[str(k)] = float(v)
     return robot, act
-
-
-def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dict[str, float]]:
-    """:func:`robot_file_fields` of a JSON file (``robot.json`` of ``amigo-gym identify``).
-
-    Raises:
-        FileNotFoundError: no such file. ValueError: not JSON, or bad content (one line).
-    """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"robot file {str(p)!r} does not exist or is not a file")
-    try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{p.name}: not a JSON file ({exc})") from None
-    return robot_file_fields(data, p.name)
 
 
 def robot_from_file(

@@ -40,15 +40,8 @@ Array = NDArray[np.float64]
 #: the ``format`` entry of a fast-PPO model's ``model.json``
 FORMAT = "amigo_gym.fastppo/1"
 #: fields of the observation kept for ``history`` previous steps (commands and measurements)
-HISTORY_FIELDS: tuple[str, ...] = (
-    "cross_track_error",
-    "sin_heading_error",
-    "speed_error",
-    "wheel_rate_1",
-    "wheel_rate_2",
-    "previous_command_1",
-    "previous_command_2",
-)
+HISTORY_FIELDS: tuple[str, ...] = ("cross_track_error", "sin_heading_error", "speed_error", "wheel_rate_1",
+                                   "wheel_rate_2", "previous_command_1", "previous_command_2")  # fmt: skip
 #: normalised features are clipped to +-this
 OBS_CLIP = 10.0
 _EPS = 1e-8
@@ -195,9 +188,7 @@ def env_action(u: Array, base: Array, prev: Array, residual_bound: float, filter
     """
     c = np.clip(u, -1.0, 1.0)
     target = np.clip(base + residual_bound * c, -1.0, 1.0) if residual_bound > 0 else c
-    if filter_alpha < 1.0:
-        target = prev + filter_alpha * (target - prev)
-    out: Array = target
+    out: Array = prev + filter_alpha * (target - prev) if filter_alpha < 1.0 else target
     return out
 
 
