@@ -561,14 +561,11 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
             h = np.vstack([tr.h0, tr.h])
             ax.plot(h[:, 0], h[:, 1], lw=1.2, marker="." if zoom else None, ms=3, label=name)
         if zoom:
-            ax.set_xlim(-0.03, 0.25)
-            ax.set_ylim(-0.025, 0.04)
-            ax.set_title(f"H's trajectory near the start ({top} start)")
+            ax.set(xlim=(-0.03, 0.25), ylim=(-0.025, 0.04), title=f"H's trajectory near the start ({top} start)")
         else:
             ax.set_aspect("equal")
             ax.set_title(f"H's trajectory, {top} start")
-        ax.set_xlabel("x0 [m]")
-        ax.set_ylabel("y0 [m]")
+        ax.set(xlabel="x0 [m]", ylabel="y0 [m]")
         ax.legend(fontsize=8, loc="center" if not zoom else "upper left")
     for j, sc in enumerate(s for s in ("nominal", "perturbed") if s in have):
         ax = axes[1, j]
@@ -576,9 +573,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
             tr = per[sc][0]
             ax.semilogy(tr.time, np.maximum(np.abs(tr.e), 1e-12), lw=1.0, label=name)
         ax.axhline(SETTLED_BAND_M, color="k", ls=":", lw=0.8)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("|cross-track error of H| [m]")
-        ax.set_title(f"tracking error, {sc} start")
+        ax.set(xlabel="t [s]", ylabel="|cross-track error of H| [m]", title=f"tracking error, {sc} start")
         ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
@@ -617,8 +612,7 @@ def plot_wheels(
             (ax_rate, "wheel rate [rad/s]", "wheel rates, first 10 s (dotted: steady state)", 2),
             (ax_diff, "angle minus analytic [rad]", "wheel angles minus the analytic policy's", 1),
         ):
-            ax.set_ylabel(ylabel)
-            ax.set_title(f"{name}: {title}")
+            ax.set(ylabel=ylabel, title=f"{name}: {title}")
             ax.legend(fontsize=7, ncol=ncol)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
