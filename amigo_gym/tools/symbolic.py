@@ -53,40 +53,20 @@ def _q(name: str) -> Any:
     return sp.Function(name, real=True)(t)
 
 
-# generalised coordinates as functions of time (the paper's Maple variables)
-xA_t, yA_t, beta_t = _q("x_A"), _q("y_A"), _q("beta")
-alpha1_t, alpha2_t, alpha3_t = _q("alpha_1"), _q("alpha_2"), _q("alpha_3")
-phi_t, s_t, gamma_t = _q("phi"), _q("s"), _q("gamma")
+# each coordinate q: its time function q(t) (the paper's Maple variables) and plain symbols q, qdot at one instant
+_NAMES = ("x_A", "y_A", "beta", "alpha_1", "alpha_2", "alpha_3", "phi", "s", "gamma")
+_COORDS: tuple[tuple[Any, Any, Any], ...] = tuple(
+    (_q(n), sp.Symbol(n, real=True), sp.Symbol(n.replace("_", "dot_") if "_" in n else n + "dot", real=True))
+    for n in _NAMES
+)
+xA_t, yA_t, beta_t, alpha1_t, alpha2_t, alpha3_t, phi_t, s_t, gamma_t = (c[0] for c in _COORDS)
+x_A, y_A, beta, alpha_1, alpha_2, alpha_3, phi, s, gamma = (c[1] for c in _COORDS)
+xdot_A, ydot_A, betadot, alphadot_1, alphadot_2, alphadot_3, phidot, sdot, gammadot = (c[2] for c in _COORDS)
+_TO_PLAIN: dict[Any, Any] = {k: v for f, p, pd in _COORDS for k, v in ((sp.Derivative(f, t), pd), (f, p))}
 
-# constants: lengths [m] and the speed of A [m/s]
+# constants: lengths [m] and the speed of A [m/s]; the path tangent angle at H [rad], the heading lag theta - beta
 l1, l3, l4, l5, r1, r2, r3, R = sp.symbols("l_1 l_3 l_4 l_5 r_1 r_2 r_3 R", positive=True)
-v_A = sp.Symbol("v_A", real=True)
-
-# plain symbols standing for the coordinates and their rates at one instant (for printing and numbers)
-x_A, y_A, beta, alpha_1, alpha_2, alpha_3, phi, s, gamma = sp.symbols(
-    "x_A y_A beta alpha_1 alpha_2 alpha_3 phi s gamma", real=True
-)
-xdot_A, ydot_A, betadot, alphadot_1, alphadot_2, alphadot_3, phidot, sdot, gammadot = sp.symbols(
-    "xdot_A ydot_A betadot alphadot_1 alphadot_2 alphadot_3 phidot sdot gammadot", real=True
-)
-#: path tangent angle at H [rad] and heading lag ``theta - beta`` [rad]
-theta, delta = sp.symbols("theta delta", real=True)
-
-_COORDS = (
-    (xA_t, x_A, xdot_A),
-    (yA_t, y_A, ydot_A),
-    (beta_t, beta, betadot),
-    (alpha1_t, alpha_1, alphadot_1),
-    (alpha2_t, alpha_2, alphadot_2),
-    (alpha3_t, alpha_3, alphadot_3),
-    (phi_t, phi, phidot),
-    (s_t, s, sdot),
-    (gamma_t, gamma, gammadot),
-)
-_TO_PLAIN: dict[Any, Any] = {}
-for _f, _p, _pd in _COORDS:
-    _TO_PLAIN[sp.Derivative(_f, t)] = _pd
-    _TO_PLAIN[_f] = _p
+v_A, theta, delta = sp.symbols("v_A theta delta", real=True)
 
 #: every plain symbol an expression of :func:`derive` may contain, by name (the keyword names of :func:`lambdify`)
 _CONSTANTS = (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta, delta)
@@ -366,8 +346,8 @@ def derive() -> Derivation:
 
     # steady state on a circle (curvature 1/R): d(theta - beta)/dt = sdot / R - betadot = 0
     in_lag = {theta: beta + delta}
-    lag_rate = sp.simplify((inverse_ode[sdot] / R - inverse_ode[betadot]).subs(in_lag))
-    roots = [d for d in sp.solve(sp.simplify(lag_rate * sp.cos(delta)), delta) if not d.has(sp.pi)]
+    heading_lag_rate = sp.simplify((inverse_ode[sdot] / R - inverse_ode[betadot]).subs(in_lag))
+    roots = [d for d in sp.solve(sp.simplify(heading_lag_rate * sp.cos(delta)), delta) if not d.has(sp.pi)]
     if len(roots) != 1:  # pragma: no cover
         raise RuntimeError(f"expected one steady heading lag in (-pi/2, pi/2), got {roots}")
     steady_lag = roots[0]
@@ -386,63 +366,21 @@ def derive() -> Derivation:
     }
 
     eq19, eq20, eq27, eq28 = v_K[0], v_K[1], v_L[0], v_L[1]
+    system_29 = (eq9, eq10, eq11, eq12, eq19, eq27, eq_castor)
 
-    # the paper's printed (wrong) forms
-    def dot_product_chain(chain: Sequence[Any], rho: Any) -> Any:
-        prod = sp.eye(4)
-        for m in chain:
-            prod = prod * sp.diff(m, t)
-        return _simp(to_plain(prod * rho))
+    def printed(r: Any, alphadot: Any, sign: int) -> list[Any]:  # eqs 18, 26 as printed: positions for velocities
+        return [x_A - r * alphadot * cb + sign * l1 * betadot * cb, y_A - r * alphadot * sb + sign * l1 * betadot * sb]
 
     misprints = Misprints(
-        eq17=dot_product_chain([T.T40K, T.T14], T.rho_K),
-        eq25=dot_product_chain([T.T40L, T.T24], T.rho_L),
-        eq18=sp.ImmutableMatrix(
-            [x_A - r1 * alphadot_1 * cb + l1 * betadot * cb, y_A - r1 * alphadot_1 * sb + l1 * betadot * sb, 0, 0]
-        ),
-        eq26=sp.ImmutableMatrix(
-            [x_A - r2 * alphadot_2 * cb - l1 * betadot * cb, y_A - r2 * alphadot_2 * sb - l1 * betadot * sb, 0, 0]
-        ),
-        eq28=y_A - r2 * alphadot_2 * sb - l1 * betadot * sb,
+        eq17=_simp(to_plain(sp.diff(T.T40K, t) * sp.diff(T.T14, t) * T.rho_K)),
+        eq25=_simp(to_plain(sp.diff(T.T40L, t) * sp.diff(T.T24, t) * T.rho_L)),
+        eq18=sp.ImmutableMatrix([*printed(r1, alphadot_1, 1), 0, 0]),
+        eq26=sp.ImmutableMatrix([*printed(r2, alphadot_2, -1), 0, 0]),
+        eq28=printed(r2, alphadot_2, -1)[1],
         contact_point_velocity_K=_simp(to_plain(sp.diff(T.T40K * T.T14 * T.rho_K, t))),
     )
-
-    return Derivation(
-        r_H=r_H,
-        r_K=r_K,
-        r_L=r_L,
-        v_K=v_K,
-        v_L=v_L,
-        v_S=v_S,
-        v_C=v_C,
-        eq7=eq7,
-        eq8=eq8,
-        eq9=eq9,
-        eq10=eq10,
-        eq11=eq11,
-        eq12=eq12,
-        eq19=eq19,
-        eq20=eq20,
-        eq27=eq27,
-        eq28=eq28,
-        eq_castor=eq_castor,
-        system_29=(eq9, eq10, eq11, eq12, eq19, eq27, eq_castor),
-        slip_K=slip_K,
-        slip_L=slip_L,
-        roll_K=roll_K,
-        roll_L=roll_L,
-        wheel_rates=wheel_rates,
-        body_velocity=body_velocity,
-        castor_swivel=castor_swivel,
-        castor_rate=castor_rate,
-        eq9_path=eq9_path,
-        eq10_path=eq10_path,
-        inverse_ode=inverse_ode,
-        heading_lag_rate=lag_rate,
-        steady_lag=steady_lag,
-        steady=steady,
-        misprints=misprints,
-    )
+    # every field of Derivation is a local variable of the same name
+    return Derivation(**{k: v for k, v in locals().items() if k in Derivation.__dataclass_fields__})
 
 
 # --- Numbers
@@ -576,23 +514,14 @@ def render(latex: bool = False) -> str:
         latex: a LaTeX fragment (amsmath ``align`` environments; the paper's equation numbers as tags) instead
             of plain text.
     """
-    out: list[str] = []
-    if latex:
-        out.append("% Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive --latex); needs amsmath")
-        for title, rows in _sections(latex=True):
-            out.append(f"% {title}")
-            out.append(r"\begin{align}")
+    head = "Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive"
+    out = [f"% {head} --latex); needs amsmath" if latex else f"{head})"]
+    for title, rows in _sections(latex):
+        if latex:
             lines = [f"{lhs} &= {rhs} " + (f"\\tag{{{lab}}}" if lab else r"\notag") for lab, lhs, rhs in rows]
-            out.append(" \\\\\n".join(lines))
-            out.append(r"\end{align}")
-        return "\n".join(out) + "\n"
-    out.append("Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive)")
-    for title, rows in _sections(latex=False):
-        out.append("")
-        out.append(title + ":")
-        for lab, lhs, rhs in rows:
-            tag = f"({lab})" if lab else ""
-            out.append(f"  {tag:<9}{lhs} = {rhs}")
+            out += [f"% {title}", r"\begin{align}", " \\\\\n".join(lines), r"\end{align}"]
+        else:
+            out += ["", title + ":", *(f"  {f'({lab})' if lab else '':<9}{lhs} = {rhs}" for lab, lhs, rhs in rows)]
     return "\n".join(out) + "\n"
 
 

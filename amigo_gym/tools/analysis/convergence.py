@@ -121,10 +121,8 @@ def _plot(rows: list[GainFit], path: str) -> None:
         for j, (t, e) in enumerate(row.curves):
             label = f"k = {row.gain:g} 1/s (halves every {row.halving_s:.2f} s)" if j == 0 else None
             ax.semilogy(t, np.maximum(e, 1e-12), color=color, lw=0.8, alpha=0.7, label=label)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("|cross-track error of H| [m]")
+    ax.set(xlabel="t [s]", ylabel="|cross-track error of H| [m]", ylim=(1e-12, 0.05))
     ax.set_title("Analytic policy from perturbed starts (seeds 100-109), dt = 0.1 s")
-    ax.set_ylim(1e-12, 0.05)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     save_figure(fig, path)

@@ -71,8 +71,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
         ax_xy.plot(rep.pose[:, 0], rep.pose[:, 1], color="tab:green" if st["ls"] == "-" else "tab:orange",
                    label=f"simulated, {label}", lw=st["lw"], ls=st["ls"])  # fmt: skip
     ax_xy.set_aspect("equal", adjustable="datalim")
-    ax_xy.set_xlabel("x of A [m]")
-    ax_xy.set_ylabel("y of A [m]")
+    ax_xy.set(xlabel="x of A [m]", ylabel="y of A [m]")
     ax_xy.legend(fontsize=8, loc="best")
     ax_xy.set_title("path of A", fontsize=9)
 
@@ -86,10 +85,9 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
     tc = log.t_cmd - rep.t[0]
     ax_w.step(tc, log.cmd[:, 0], where="post", color="tab:blue", lw=0.6, alpha=0.5, label="α̇1 command")
     ax_w.step(tc, log.cmd[:, 1], where="post", color="tab:red", lw=0.6, alpha=0.5, label="α̇2 command")
-    ax_w.set_ylabel("wheel rate [rad/s]")
+    ax_w.set(ylabel="wheel rate [rad/s]", xlim=(t[0], t[-1]))
     ax_w.legend(fontsize=7, ncol=2, loc="best")
     ax_w.set_title("wheel rates (cf. the paper's Figs 3 and 5)", fontsize=9)
-    ax_w.set_xlim(t[0], t[-1])
 
     for (label, rep), st in zip(reps, styles, strict=True):
         e = errors(log, rep)
@@ -105,8 +103,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
             1e3 * noise, color="0.4", lw=0.8, ls=":", label=f"position noise, {1e3 * noise:.2g} mm (estimated)"
         )
     ax_e.set_yscale("log")
-    ax_e.set_xlabel("t [s]")
-    ax_e.set_ylabel("|simulated − measured|")
+    ax_e.set(xlabel="t [s]", ylabel="|simulated − measured|")
     ax_e.legend(fontsize=7, loc="best")
     ax_e.set_title("error over time", fontsize=9)
     fig.suptitle(title, fontsize=9)
@@ -234,12 +231,15 @@ class IdentifySettings(LogSettings):
             raise ValueError(f"--heading-weight must be in (0, 1000) m/rad, got {self.heading_weight!r}")
 
 
-def _nominal(path: str | None) -> tuple[RobotParams, ActuatorParams]:
-    """``--nominal``: the nominal robot and ramps of a JSON file (its delay is ignored), or the defaults."""
-    if path is None:
-        return RobotParams(), ActuatorParams()
-    robot, act = robot_from_file(path)
-    return robot, replace(act, delay=0.0)
+def _read(args: LogSettings) -> tuple[Path, RobotParams, ActuatorParams, Log]:
+    """``--out`` checked (nothing written yet), the nominal robot and ramps (``--nominal``: a JSON file, its delay
+    ignored; default the AmigoBot's) and the log."""
+    check_out(Path(args.out), args.force)
+    nominal, act = RobotParams(), ActuatorParams()
+    if args.nominal is not None:
+        nominal, act = robot_from_file(args.nominal)
+        act = replace(act, delay=0.0)
+    return Path(args.out), nominal, act, read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
 
 
 def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
@@ -252,10 +252,7 @@ def main_replay(argv: Sequence[str] | None = None) -> int:
     args = parse_settings(ReplaySettings, argv, "amigo-gym replay", "Replay a robot's log through the model; compare.")
 
     def go() -> int:
-        out = Path(args.out)
-        check_out(out, args.force)
-        nominal, nominal_act = _nominal(args.nominal)
-        log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
+        out, nominal, nominal_act, log = _read(args)
         if args.robot is None:
             robot, act = nominal, nominal_act
             label = "nominal robot"
@@ -290,10 +287,7 @@ def main_identify(argv: Sequence[str] | None = None) -> int:
     args = parse_settings(IdentifySettings, argv, "amigo-gym identify", "Fit the robot's radii, track, delay to a log.")
 
     def go() -> int:
-        out = Path(args.out)
-        check_out(out, args.force)
-        nominal, nominal_act = _nominal(args.nominal)
-        log = read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
+        out, nominal, nominal_act, log = _read(args)
         fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
         before = replay(log, nominal, nominal_act, nominal)[0]
         after = replay(log, fit.robot, fit.actuators, nominal)[0]

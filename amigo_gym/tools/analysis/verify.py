@@ -12,7 +12,7 @@ import math
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -89,18 +89,8 @@ def _symbolic_residual(n: int = 1000, seed: int = 0) -> float:
     x, y, b = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-math.pi, math.pi, n)
     w = rng.uniform(-15, 15, (n, 2))
     v, bd = body_velocity(w, ROBOT)
-    values = {
-        "x_A": x,
-        "y_A": y,
-        "beta": b,
-        "xdot_A": v * np.cos(b),
-        "ydot_A": v * np.sin(b),
-        "betadot": bd,
-        "alphadot_1": w[:, 0],
-        "alphadot_2": w[:, 1],
-        "v_A": v,
-        **S.robot_values(ROBOT),
-    }
+    values: dict[str, Any] = {"x_A": x, "y_A": y, "beta": b, "betadot": bd, "v_A": v, **S.robot_values(ROBOT)}
+    values |= {"xdot_A": v * np.cos(b), "ydot_A": v * np.sin(b), "alphadot_1": w[:, 0], "alphadot_2": w[:, 1]}
     rolling = S.lambdify([d.eq11, d.eq12, d.eq19, d.eq20, d.eq27, d.eq28])(**values)
     # the castor's equation is written for forward motion: speed |v_A| and rolling rate |alpha3dot|
     castor = S.lambdify([d.eq_castor])(**{**values, "v_A": np.abs(v), "alphadot_3": np.abs(castor_rate(v, bd, ROBOT))})
@@ -124,20 +114,14 @@ def rows(quick: bool = False) -> list[Check]:
     """Every check with its verdict (``quick``: skip the slow ones)."""
     ss = circle_steady_state(R, V, ROBOT)
     got = dict(zip(STEADY_REFERENCE, (ss.betadot, *ss.wheel_rates, ss.castor_rate), strict=True))
-    out = [
-        _check(
-            f"steady {k} [rad/s] - docs/model.md's {ref}",
-            float(got[k]) - ref,
-            "abs < 5e-7 (6 decimals)",
-            lambda v: abs(v) < 5e-7,
-        )
-        for k, ref in STEADY_REFERENCE.items()
-    ]
+    out = []
+    for k, ref in STEADY_REFERENCE.items():
+        what = f"steady {k} [rad/s] - docs/model.md's {ref}"
+        out.append(_check(what, float(got[k]) - ref, "abs < 5e-7 (6 decimals)", lambda v: abs(v) < 5e-7))
     for dt in (0.01, 0.1, 0.5):
-        what = f"exact step, 10 laps, dt = {dt} s: max H off circle [m]"
-        out.append(_check(what, _laps_error(dt, False), "<= 1e-9", lambda v: v <= 1e-9))
-        what = f"Euler step, 10 laps, dt = {dt} s: max H off circle [m]"
-        out.append(_check(what, _laps_error(dt, True), "> 1e-4: not exact", lambda v: v > 1e-4))
+        what = f"step, 10 laps, dt = {dt} s: max H off circle [m]"
+        out.append(_check(f"exact {what}", _laps_error(dt, False), "<= 1e-9", lambda v: v <= 1e-9))
+        out.append(_check(f"Euler {what}", _laps_error(dt, True), "> 1e-4: not exact", lambda v: v > 1e-4))
     what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
     out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
     if not quick:
@@ -148,9 +132,8 @@ def rows(quick: bool = False) -> list[Check]:
         e1, e2 = round_trip_error(0.1), round_trip_error(0.05)
         out.append(_check("round trip, 1 lap, dt = 0.1 s: max abs(e) [m]", e1, "<= 1e-4", lambda v: v <= 1e-4))
         out.append(_check("round trip, 1 lap, dt = 0.05 s: max abs(e) [m]", e2, "<= 1e-4", lambda v: v <= 1e-4))
-        out.append(
-            _check("round trip ratio dt 0.1 / 0.05 (second order)", e1 / e2, "in [3.5, 4.5]", lambda v: 3.5 <= v <= 4.5)
-        )
+        what = "round trip ratio dt 0.1 / 0.05 (second order)"
+        out.append(_check(what, e1 / e2, "in [3.5, 4.5]", lambda v: 3.5 <= v <= 4.5))
         what = "symbolic system 29 on 1000 random states: max residual"
         out.append(_check(what, _symbolic_residual(), "<= 1e-12", lambda v: v <= 1e-12))
     return out

@@ -177,19 +177,14 @@ def markdown_curvature(doc: Mapping[str, Any]) -> str:
         lines.append("|---|" + "---|" * len(agents))
         sub = [r for r in rows if r["speed"] == v]
         for j in sorted({r["bin"] for r in sub}):
-            cells = []
-            head = ""
-            for a in agents:
-                r = next((x for x in sub if x["agent"] == a and x["bin"] == j), None)
-                if r is None:
-                    cells.append("–")
-                    continue
-                head = f"[{r['kappa_lo']:.2f}, {r['kappa_hi']:.2f}{']' if j == len(BIN_EDGES) - 2 else ')'}"
-                if r["n"] == 0:
-                    cells.append("– (0)")
-                else:
-                    lo, hi = r["ci95"]
-                    cells.append(f"{r['rate']:.3f} [{lo:.3f}, {hi:.3f}] ({r['failures']}/{r['n']})")
+            by = {r["agent"]: r for r in sub if r["bin"] == j}
+            r = next(iter(by.values()))
+            head = f"[{r['kappa_lo']:.2f}, {r['kappa_hi']:.2f}{']' if j == len(BIN_EDGES) - 2 else ')'}"
+            cells = [
+                "–" if (c := by.get(a)) is None else "– (0)" if c["n"] == 0
+                else f"{c['rate']:.3f} [{c['ci95'][0]:.3f}, {c['ci95'][1]:.3f}] ({c['failures']}/{c['n']})"
+                for a in agents
+            ]  # fmt: skip
             lines.append(f"| {head} | " + " | ".join(cells) + " |")
     if doc.get("unavailable"):
         lines += ["", "## Unavailable", ""]

@@ -275,12 +275,12 @@ CLASSICAL: dict[str, Callable[[Any], Any]] = {
 }
 
 
+@dataclass
 class NormalizedAgent:
     """A model trained on ``VecNormalize``d observations: normalizes each observation with the saved statistics."""
 
-    def __init__(self, model: Any, vecnormalize: Any) -> None:
-        self.model = model
-        self.vecnormalize = vecnormalize
+    model: Any
+    vecnormalize: Any
 
     @property
     def observation_space(self) -> Any:
@@ -291,10 +291,7 @@ class NormalizedAgent:
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
     ) -> tuple[Any, Any]:
         obs = self.vecnormalize.normalize_obs(np.asarray(observation, dtype=np.float32))
-        action, new_state = self.model.predict(
-            obs, state=state, episode_start=episode_start, deterministic=deterministic
-        )
-        return action, new_state
+        return tuple(self.model.predict(obs, state=state, episode_start=episode_start, deterministic=deterministic))
 
 
 @dataclass
@@ -521,30 +518,6 @@ def evaluate_agents(
     return results, trajs
 
 
-def protocol_dict(proto: EvalProtocol, params: EnvParams) -> dict[str, Any]:
-    """The protocol as written to the JSON (with the env settings and the start poses)."""
-    return {
-        "env_id": ENV_ID,
-        "env_params": json_safe(asdict(params)),
-        "steps": proto.steps,
-        "duration_s": proto.steps * params.dt,
-        "lap_time_s": params.lap_time,
-        "scenarios": {
-            sc.name: ({"seeds": list(sc.seeds)} if sc.pose is None else {"start_pose": list(sc.pose)})
-            | {"note": sc.description}
-            for sc in protocol_scenarios(replace(proto, scenarios=SCENARIOS), params)
-        },
-        "run_scenarios": list(proto.scenarios),
-        "settle_time_s": proto.settle_time_s,
-        "settled_band_m": SETTLED_BAND_M,
-        "analytic_gain": proto.analytic_gain,
-        "wheel_rate_reference": (
-            f"the analytic policy (feedback gain k = {proto.analytic_gain:g}/s) on the agent's own observations"
-        ),
-        "deterministic": True,
-    }
-
-
 # --------------------------------------------------------------------------- table and plots
 COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
     ("agent", "agent", str),
@@ -560,16 +533,12 @@ COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 )
 
 
-def _missing(v: Any) -> bool:
-    """A metric that does not exist: ``None`` (as read back from JSON) or NaN."""
-    return v is None or (isinstance(v, float) and math.isnan(v))
-
-
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     """The results as a Markdown table (one row per agent and scenario)."""
     lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
-    for r in results:
-        cells = ("n/a" if _missing(r[key]) and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
+    for r in results:  # a metric that does not exist: None (as read back from JSON) or NaN
+        missing = {k for k, v in r.items() if v is None or (isinstance(v, float) and math.isnan(v))}
+        cells = ("n/a" if key in missing and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -592,14 +561,11 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
             h = np.vstack([tr.h0, tr.h])
             ax.plot(h[:, 0], h[:, 1], lw=1.2, marker="." if zoom else None, ms=3, label=name)
         if zoom:
-            ax.set_xlim(-0.03, 0.25)
-            ax.set_ylim(-0.025, 0.04)
-            ax.set_title(f"H's trajectory near the start ({top} start)")
+            ax.set(xlim=(-0.03, 0.25), ylim=(-0.025, 0.04), title=f"H's trajectory near the start ({top} start)")
         else:
             ax.set_aspect("equal")
             ax.set_title(f"H's trajectory, {top} start")
-        ax.set_xlabel("x0 [m]")
-        ax.set_ylabel("y0 [m]")
+        ax.set(xlabel="x0 [m]", ylabel="y0 [m]")
         ax.legend(fontsize=8, loc="center" if not zoom else "upper left")
     for j, sc in enumerate(s for s in ("nominal", "perturbed") if s in have):
         ax = axes[1, j]
@@ -607,9 +573,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
             tr = per[sc][0]
             ax.semilogy(tr.time, np.maximum(np.abs(tr.e), 1e-12), lw=1.0, label=name)
         ax.axhline(SETTLED_BAND_M, color="k", ls=":", lw=0.8)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("|cross-track error of H| [m]")
-        ax.set_title(f"tracking error, {sc} start")
+        ax.set(xlabel="t [s]", ylabel="|cross-track error of H| [m]", title=f"tracking error, {sc} start")
         ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
@@ -632,31 +596,24 @@ def plot_wheels(
     for i, name in enumerate(others):
         tr = trajs[name][scenario][0]
         n = min(tr.time.size, ref.time.size)
-        ax = axes[i, 0]
+        ax_angle, ax_rate, ax_diff = axes[i]
         for k, c in ((0, "C0"), (1, "C3")):
-            ax.plot(ref.time, ref.angles[:, k], color=c, lw=3, alpha=0.35, label=f"alpha{k + 1} analytic")
-            ax.plot(tr.time, tr.angles[:, k], color=c, lw=1.0, label=f"alpha{k + 1} {name}")
-        ax.set_ylabel("wheel angle [rad]")
-        ax.set_title(f"{name}: wheel angles ({scenario} start)")
-        ax.legend(fontsize=7, ncol=2)
-        ax = axes[i, 1]
-        for k, c in ((0, "C0"), (1, "C3")):
-            ax.step(
-                ref.time, ref.rates[:, k], where="pre", color=c, lw=3, alpha=0.35, label=f"alpha{k + 1}dot analytic"
-            )
-            ax.step(tr.time, tr.rates[:, k], where="pre", color=c, lw=1.0, label=f"alpha{k + 1}dot {name}")
-            ax.axhline(ss[k], color=c, ls=":", lw=0.8)
-        ax.set_xlim(0.0, 10.0)
-        ax.set_ylabel("wheel rate [rad/s]")
-        ax.set_title(f"{name}: wheel rates, first 10 s (dotted: steady state)")
-        ax.legend(fontsize=7, ncol=2)
-        ax = axes[i, 2]
-        for k, c in ((0, "C0"), (1, "C3")):
-            ax.plot(tr.time[:n], tr.angles[:n, k] - ref.angles[:n, k], color=c, lw=1.0, label=f"alpha{k + 1}")
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel("angle minus analytic [rad]")
-        ax.set_title(f"{name}: wheel angles minus the analytic policy's")
-        ax.legend(fontsize=7)
+            a = f"alpha{k + 1}"
+            ax_angle.plot(ref.time, ref.angles[:, k], color=c, lw=3, alpha=0.35, label=f"{a} analytic")
+            ax_angle.plot(tr.time, tr.angles[:, k], color=c, lw=1.0, label=f"{a} {name}")
+            ax_rate.step(ref.time, ref.rates[:, k], where="pre", color=c, lw=3, alpha=0.35, label=f"{a}dot analytic")
+            ax_rate.step(tr.time, tr.rates[:, k], where="pre", color=c, lw=1.0, label=f"{a}dot {name}")
+            ax_rate.axhline(ss[k], color=c, ls=":", lw=0.8)
+            ax_diff.plot(tr.time[:n], tr.angles[:n, k] - ref.angles[:n, k], color=c, lw=1.0, label=a)
+        ax_rate.set_xlim(0.0, 10.0)
+        ax_diff.axhline(0.0, color="k", lw=0.5)
+        for ax, ylabel, title, ncol in (
+            (ax_angle, "wheel angle [rad]", f"wheel angles ({scenario} start)", 2),
+            (ax_rate, "wheel rate [rad/s]", "wheel rates, first 10 s (dotted: steady state)", 2),
+            (ax_diff, "angle minus analytic [rad]", "wheel angles minus the analytic policy's", 1),
+        ):
+            ax.set(ylabel=ylabel, title=f"{name}: {title}")
+            ax.legend(fontsize=7, ncol=ncol)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     fig.tight_layout()
@@ -674,13 +631,30 @@ def write_outputs(
     plots: bool = True,
     markdown_path: Path | None = None,
 ) -> dict[str, Any]:
-    """Write the JSON, the Markdown table (``markdown_path``, default ``out/eval.md``) and the figures.
-
-    Returns:
-        the JSON document.
-    """
+    """Write the JSON (``protocol`` with the env settings and start poses, ``results``, ``extra``), the Markdown
+    table (``markdown_path``, default ``out/eval.md``) and the figures; return the JSON document."""
     params = EnvParams()
-    doc = {"protocol": protocol_dict(proto, params), "results": results, **(extra or {})}
+    protocol = {
+        "env_id": ENV_ID,
+        "env_params": json_safe(asdict(params)),
+        "steps": proto.steps,
+        "duration_s": proto.steps * params.dt,
+        "lap_time_s": params.lap_time,
+        "scenarios": {
+            sc.name: ({"seeds": list(sc.seeds)} if sc.pose is None else {"start_pose": list(sc.pose)})
+            | {"note": sc.description}
+            for sc in protocol_scenarios(replace(proto, scenarios=SCENARIOS), params)
+        },
+        "run_scenarios": list(proto.scenarios),
+        "settle_time_s": proto.settle_time_s,
+        "settled_band_m": SETTLED_BAND_M,
+        "analytic_gain": proto.analytic_gain,
+        "wheel_rate_reference": (
+            f"the analytic policy (feedback gain k = {proto.analytic_gain:g}/s) on the agent's own observations"
+        ),
+        "deterministic": True,
+    }
+    doc = {"protocol": protocol, "results": results, **(extra or {})}
     atomic_write_json(json_path, doc, parents=True)
     atomic_write(markdown_path or out / "eval.md", markdown_table(results).encode(), parents=True)
     if plots:

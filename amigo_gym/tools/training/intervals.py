@@ -91,12 +91,9 @@ def stratified_bootstrap(
     chunk = max(1, _CHUNK // (n * m))
     cols = np.arange(m)
     out: list[Array] = []
-    done = 0
-    while done < reps:
-        k = min(chunk, reps - done)
-        idx = rng.integers(0, n, size=(k, n, m))
+    for done in range(0, reps, chunk):
+        idx = rng.integers(0, n, size=(min(chunk, reps - done), n, m))
         out.append(np.asarray(stat(x[idx, cols]), dtype=np.float64))
-        done += k
     values = np.concatenate(out, axis=0)
     tail = 100.0 * (1.0 - size) / 2.0
     interval = np.percentile(values, [tail, 100.0 - tail], axis=0)
