@@ -221,8 +221,9 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
         f"# Random paths (Cao et al. 2024): {p['paths'] - len(doc['skipped'])} paths of RandomState({p['seed']}), "
         f"condition {p['condition']}",
         "",
-        f"{p['speed']:g} m/s, {p['duration_s']:g} s; a path fails when {p['failure']}. Failure rate in % with its 95 % "
-        f"Wilson interval (failures/episodes, training seeds pooled); AmigoBot-v1 accepts {doc['accepted']} of the paths.",
+        f"{p['speed']:g} m/s, {p['duration_s']:g} s; a path fails when {p['failure']}. Failure rate in % with its "
+        f"95 % Wilson interval (failures/episodes, training seeds pooled); AmigoBot-v1 accepts {doc['accepted']} of "
+        "the paths.",
         "",
         row("agent", *(f"{t:g} m" for t in tols), f"accepted paths, {tols[0]:g} m"),
         row(*["---"] * (len(tols) + 2)),
