@@ -822,16 +822,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
-            if a.curvature:
-                doc = curvature.run_curvature(agents, scenarios, progress=a.progress)
+            if a.curvature or a.random_paths:
+                if a.curvature:
+                    name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
+                else:
+                    name, doc = (
+                        "random_paths",
+                        rp.run_random_paths(agents, replace(paths, scenarios=scenarios), progress=a.progress),
+                    )
                 doc["command"] = command
-                written = curvature.write_curvature(doc, out / "curvature.json", out / "curvature.md")
-                report = curvature.markdown_curvature(doc)
-            elif a.random_paths:
-                doc = rp.run_random_paths(agents, replace(paths, scenarios=scenarios), progress=a.progress)
-                doc["command"] = command
-                written = rp.write_random_paths(doc, out / "random_paths.json", out / "random_paths.md")
-                report = rp.markdown_random_paths(doc)
+                report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
+                atomic_write_json(out / f"{name}.json", doc)
+                atomic_write(out / f"{name}.md", report)
+                written = [str(out / f"{name}.json"), str(out / f"{name}.md")]
             else:
                 clean_temporaries(out)
                 doc = run_benchmark(

@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.task.v1 import feasible_random_curvature
 from amigo_gym.tools.training.intervals import Z95 as Z95  # re-exported: the cells' interval
 from amigo_gym.tools.training.intervals import wilson_interval
@@ -190,10 +189,3 @@ def markdown_curvature(doc: Mapping[str, Any]) -> str:
         lines += ["", "## Unavailable", ""]
         lines += [f"- {u['agent']} s{u['seed']} on {u['scenario']}: {u['reason']}" for u in doc["unavailable"]]
     return "\n".join(lines) + "\n"
-
-
-def write_curvature(doc: Mapping[str, Any], json_path: Any, md_path: Any) -> list[str]:
-    """Write the document and its Markdown atomically; the paths written."""
-    atomic_write_json(json_path, doc)
-    atomic_write(md_path, markdown_curvature(doc))
-    return [str(json_path), str(md_path)]

@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.paths import from_points
 from amigo_gym.tools.training.intervals import wilson_interval
 from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
@@ -243,10 +242,3 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
     return "\n".join(lines) + "\n"
-
-
-def write_random_paths(doc: Mapping[str, Any], json_path: Any, md_path: Any) -> list[str]:
-    """Write the document and its Markdown atomically; the paths written."""
-    atomic_write_json(json_path, doc)
-    atomic_write(md_path, markdown_random_paths(doc))
-    return [str(json_path), str(md_path)]
