@@ -58,16 +58,10 @@ class LogError(ValueError):
 
 @dataclass(frozen=True)
 class Log:
-    """A recorded run: commands and measurements on their own time bases.
-
-    Attributes:
-        t_cmd: command times [s], ``(n,)``, strictly increasing.
-        cmd: wheel-rate setpoints ``(w1c, w2c)`` [rad/s], ``(n, 2)``, each held until the next.
-        t_meas: measurement times [s], ``(m,)``, strictly increasing, ``m >= 3``.
-        pose: measured pose of A ``(x, y, theta)`` [m, m, rad], ``(m, 3)``, theta unwrapped; ``None``: not measured.
-        rates: measured wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``; ``None``: not measured.
-        source: file name and topics, for reports.
-    """
+    """A recorded run: setpoints ``cmd`` ``(w1c, w2c)`` [rad/s], ``(n, 2)``, each held from its time ``t_cmd`` [s]
+    until the next; at the times ``t_meas`` [s], ``(m >= 3,)``, the measured pose of A ``(x, y, theta)`` [m, m, rad],
+    ``(m, 3)``, theta unwrapped, and wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``, each ``None`` if not measured.
+    Times strictly increasing; ``source``: file name and topics."""
 
     t_cmd: Array
     cmd: Array
@@ -94,12 +88,8 @@ def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: boo
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
-    """A CSV log (docs/logs.md), checked (:func:`check_log`).
-
-    Raises:
-        LogError: one line naming the problem (missing column, text, NaN, time not increasing, units).
-        FileNotFoundError: no such file.
-    """
+    """A CSV log (docs/logs.md), checked (:func:`check_log`). Raises ``FileNotFoundError`` or a one-line
+    :class:`LogError` (missing column, text, NaN, time not increasing, units)."""
     nominal = RobotParams() if nominal is None else nominal
     p = Path(path)
     if not p.is_file():
@@ -158,20 +148,15 @@ _POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped", "geomet
 
 
 def read_bag(
-    path: str | os.PathLike[str],
-    nominal: RobotParams | None = None,
-    cmd_topic: str = "/cmd_vel",
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, cmd_topic: str = "/cmd_vel",
     pose_topic: str = "/odom",
-) -> Log:
+) -> Log:  # fmt: skip
     r"""A ROS 2 bag (a rosbag2 folder, or its ``.db3``/``.mcap`` file) as a :class:`Log`, checked.
 
     A Twist ``(v, w)`` [m/s, rad/s] gives the nominal setpoints ``((v + l1 w) / r1, (v - l1 w) / r2)``; a pose message
     A's ``x``, ``y`` and heading ``atan2(2(qw qz + qx qy), 1 - 2(qy^2 + qz^2))``. Times: record times [s] from the
-    first message of either topic; of messages at one time on one topic, the last counts.
-
-    Raises:
-        LogError: not a bag, an empty bag, a topic missing or of another type, NaN, units (:func:`check_log`).
-        FileNotFoundError: no such path.
+    first message of either topic; of messages at one time on one topic, the last counts. Raises
+    ``FileNotFoundError`` or :class:`LogError` (not a bag, empty, a topic missing or of another type, NaN, units).
     """
     nominal = RobotParams() if nominal is None else nominal
     p = Path(path)
@@ -247,17 +232,11 @@ def _last_of_equal(t: NDArray[np.int64], values: Array) -> tuple[NDArray[np.int6
 
 
 def read_log(
-    path: str | os.PathLike[str],
-    nominal: RobotParams | None = None,
-    cmd_topic: str = "/cmd_vel",
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, cmd_topic: str = "/cmd_vel",
     pose_topic: str = "/odom",
-) -> Log:
-    """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked.
-
-    Raises:
-        LogError: one line naming the problem (docs/logs.md); also for an unknown kind of file.
-        FileNotFoundError: no such path.
-    """
+) -> Log:  # fmt: skip
+    """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked. Raises
+    ``FileNotFoundError`` or a one-line :class:`LogError` (docs/logs.md; also for an unknown kind of file)."""
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"log {str(p)!r} does not exist")
@@ -266,27 +245,6 @@ def read_log(
     if p.suffix.lower() in (".csv", ".txt"):
         return read_csv(p, nominal)
     raise LogError(f"{p.name}: unknown kind of log (a .csv file or a ROS 2 bag folder / .db3 / .mcap file)")
-
-
-def _windows(t: Array, span: float = 1.0) -> NDArray[np.intp]:
-    """Indices of ``t`` splitting it into consecutive windows of about ``span`` seconds (at least 2 indices)."""
-    edges = np.arange(t[0], t[-1] + span, span)
-    idx = np.unique(np.clip(np.searchsorted(t, edges), 0, t.size - 1))
-    return idx if idx.size >= 2 else np.array([0, t.size - 1])
-
-
-def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
-    """Integrals of the commanded speed and turn rate (nominal robot, no ramps, no delay) at the times ``t``."""
-    v, w = body_velocity(log.cmd, nominal)
-    grid = np.union1d(log.t_cmd, t)
-    j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
-    dt = np.diff(grid)
-    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
-    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
-    sv = np.concatenate([[0.0], np.cumsum(vj * dt)])
-    sw = np.concatenate([[0.0], np.cumsum(wj * dt)])
-    k = np.searchsorted(grid, t)
-    return sv[k], sw[k]
 
 
 def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
@@ -316,8 +274,17 @@ def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: s
                 f"{where}: {names[key]}: |wheel rate| up to {top:.4g} rad/s, over 3 times the robot's limit "
                 f"{w_max:g} rad/s; wheel rates must be in rad/s (deg/s or rpm?)"
             )
-    win = _windows(t)
-    s_v, s_w = _commanded(log, nominal, t[win])
+    # windows of about 1 s, and the integrals of the commanded speed and turn rate (nominal robot) at their ends
+    win = np.unique(np.clip(np.searchsorted(t, np.arange(t[0], t[-1] + 1.0, 1.0)), 0, t.size - 1))
+    win = win if win.size >= 2 else np.array([0, t.size - 1])
+    v, w = body_velocity(log.cmd, nominal)
+    grid = np.union1d(log.t_cmd, t[win])
+    j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
+    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
+    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
+    k = np.searchsorted(grid, t[win])
+    s_v = np.concatenate([[0.0], np.cumsum(vj * np.diff(grid))])[k]
+    s_w = np.concatenate([[0.0], np.cumsum(wj * np.diff(grid))])[k]
     cmd_travel = float(np.sum(np.abs(np.diff(s_v))))
     cmd_turn = float(np.sum(np.abs(np.diff(s_w))))
     if log.pose is not None:
@@ -351,23 +318,17 @@ def _ratio(where: str, name: str, measured: float, commanded: float, floor: floa
 
 
 def simulate(
-    log: Log,
-    true_robot: RobotParams | None = None,
-    actuators: ActuatorParams | None = None,
-    nominal: RobotParams | None = None,
-    start: Sequence[float] | None = None,
-) -> Replay:
+    log: Log, true_robot: RobotParams | None = None, actuators: ActuatorParams | None = None,
+    nominal: RobotParams | None = None, start: Sequence[float] | None = None,
+) -> Replay:  # fmt: skip
     """Drive the model with the log's commands; a :class:`Replay` at ``log.t_meas``.
 
     The command of ``t_cmd[j]`` takes effect at ``t_cmd[j] + delay`` (before the first: the start wheel rates held);
     between measurements :func:`amigo_gym.model.actuators.actuator_step` (no slip), split at every switch.
 
-    Args:
-        true_robot: the robot that moves (``r1``, ``r2``, ``l1`` [m]); default ``nominal``.
-        actuators: ramps and delay [s]; default :class:`ActuatorParams`.
-        nominal: the robot the firmware believes in (default :class:`RobotParams`).
-        start: pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas[0]``; default the first measured pose, else the
-            origin. The wheel rates start at the first measured ones, else 0.
+    ``true_robot`` moves (default ``nominal``, itself default :class:`RobotParams`) with ``actuators`` (default
+    :class:`ActuatorParams`) from ``start``, the pose of A [m, m, rad] at ``t_meas[0]`` (default the first measured
+    pose, else the origin), and the first measured wheel rates (else 0).
     """
     nominal = RobotParams() if nominal is None else nominal
     robot = nominal if true_robot is None else true_robot
@@ -485,11 +446,9 @@ def noise_level(log: Log) -> float | None:
 
 
 def replay(
-    log: Log,
-    true_robot: RobotParams | None = None,
-    actuators: ActuatorParams | None = None,
+    log: Log, true_robot: RobotParams | None = None, actuators: ActuatorParams | None = None,
     nominal: RobotParams | None = None,
-) -> tuple[Replay, dict[str, Any]]:
+) -> tuple[Replay, dict[str, Any]]:  # fmt: skip
     """:func:`simulate` from the start pose of :func:`fit_start` (weight ``nominal.l1``; the origin without a measured
     pose), and :func:`summarize` of it with ``start_pose`` and ``position_noise_m`` (:func:`noise_level`)."""
     nominal = RobotParams() if nominal is None else nominal
@@ -538,11 +497,8 @@ def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dic
 def robot_from_file(
     path: str | os.PathLike[str], nominal: RobotParams | None = None, actuators: ActuatorParams | None = None
 ) -> tuple[RobotParams, ActuatorParams]:
-    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``.
-
-    Raises:
-        FileNotFoundError, ValueError: as :func:`load_robot_file`, and a value out of its range.
-    """
+    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``. Raises as
+    :func:`load_robot_file`, and ``ValueError`` for a value out of its range."""
     nominal = RobotParams() if nominal is None else nominal
     actuators = ActuatorParams() if actuators is None else actuators
     robot, act = load_robot_file(path)
@@ -551,17 +507,10 @@ def robot_from_file(
 
 @dataclass(frozen=True)
 class Fit:
-    """Result of :func:`identify`.
-
-    Attributes:
-        robot, actuators: the identified true robot and actuators.
-        values: the fitted parameters by name [m, s, m/s^2, rad/s^2], with the start pose ``x0``, ``y0``, ``theta0``.
-        uncertainty: their standard errors, same names and units (``None``: not determined).
-        fitted: the names of the fitted robot parameters; ``fixed``: the others with their values.
-        before, after: :func:`replay`'s summary with the nominal and the identified robot.
-        cost: ``0.5 * sum(residual^2)`` [m^2]; ``n_residuals``; ``nfev``: model evaluations.
-        excited: :func:`ramp_excitation` [s].
-    """
+    """Result of :func:`identify`: the identified ``robot`` and ``actuators``; the fitted ``values`` [m, s, m/s^2,
+    rad/s^2] (with the start pose ``x0``, ``y0``, ``theta0``) and their standard errors ``uncertainty`` (``None``: not
+    determined); the names ``fitted`` and the ``fixed`` values; :func:`replay`'s summaries ``before`` and ``after``;
+    ``cost = 0.5 sum(residual^2)`` [m^2], ``n_residuals``, ``nfev``; ``excited`` (:func:`ramp_excitation`) [s]."""
 
     robot: RobotParams
     actuators: ActuatorParams
@@ -607,22 +556,16 @@ def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | 
 
 
 def identify(
-    log: Log,
-    nominal: RobotParams | None = None,
-    ramps: str = "auto",
-    heading_weight: float | None = None,
+    log: Log, nominal: RobotParams | None = None, ramps: str = "auto", heading_weight: float | None = None,
     actuators: ActuatorParams | None = None,
-) -> Fit:
-    r"""Fit the true robot to a log: bounded least squares on the replayed trajectory.
+) -> Fit:  # fmt: skip
+    """Fit the true robot to a log: bounded least squares on the replayed trajectory.
 
     Parameters: ``r1``, ``r2``, ``l1`` [m] (pose measured), ``delay`` [s], the ramp rates ``acceleration`` [m/s^2]
     and ``rot_acceleration`` [rad/s^2] (``"auto"``: those ramping for 3 samples or more, :func:`ramp_excitation`;
     ``"fit"``: both; ``"fixed"``: neither), and the start pose. Residuals per sample ``k >= 1``, measured only:
-
-    .. math:: (x_k^{sim} - x_k,\; y_k^{sim} - y_k,\; \lambda\, \mathrm{wrap}(\theta_k^{sim} - \theta_k),\;
-              r_1 \Delta t\, (w_{1,k}^{sim} - w_{1,k}),\; r_2 \Delta t\, (w_{2,k}^{sim} - w_{2,k}))
-
-    ``Delta t`` the median sample interval, by :func:`scipy.optimize.least_squares` (``trf``) within ``r, l1`` in
+    simulated minus measured ``x``, ``y``, ``lambda wrap(theta)``, ``r1 Delta t w1``, ``r2 Delta t w2``, with
+    ``Delta t`` the median sample interval; by :func:`scipy.optimize.least_squares` (``trf``) within ``r, l1`` in
     nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramps in nominal ``* [0.1, 10]``, from the nominal robot
     (``nominal``, :class:`RobotParams` by default; ramps of ``actuators``) and the best delay of a grid of
     ``MAX_DELAY / 10``. ``lambda = heading_weight`` [m/rad], default ``nominal.l1``. Uncertainties:
