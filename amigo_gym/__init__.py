@@ -7,7 +7,6 @@ pygame, matplotlib, torch and stable-baselines3 are imported only where used.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 from gymnasium.envs.registration import EnvSpec, register, registry
 
@@ -24,12 +23,9 @@ MAX_EPISODE_STEPS_V1 = 600
 
 
 class SeparateEnvSpec(EnvSpec):
-    """The registered spec of ``AmigoBot-v1``: an environment of its own name, not a newer version of ``AmigoBot-v0``.
-
-    It reports ``name = id`` and ``version = None``, so that ``gym.make("AmigoBot-v0")`` does not warn that v0 is
-    out of date (v1 is a different task, docs/amigobot_v1.md); ``gym.make("AmigoBot-v1")`` finds it by id. It compares
-    equal to the plain :class:`EnvSpec` of the same fields, and pickles and copies as one.
-    """
+    """The spec of ``AmigoBot-v1``, a task of its own name (``name = id``, ``version = None``), so that
+    ``gym.make("AmigoBot-v0")`` does not warn that v0 is out of date; equal to the plain :class:`EnvSpec` of the same
+    fields."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -39,14 +35,10 @@ class SeparateEnvSpec(EnvSpec):
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, EnvSpec):
             return NotImplemented
-        return _init_fields(self) == _init_fields(other)
+        names = [f.name for f in dataclasses.fields(EnvSpec) if f.init]
+        return [getattr(self, n) for n in names] == [getattr(other, n) for n in names]
 
-    # unhashable, as EnvSpec (a mutable dataclass)
-    __hash__ = None  # type: ignore[assignment]
-
-
-def _init_fields(spec: EnvSpec) -> tuple[Any, ...]:
-    return tuple(getattr(spec, f.name) for f in dataclasses.fields(EnvSpec) if f.init)
+    __hash__ = None  # type: ignore[assignment]  # unhashable, as EnvSpec
 
 
 if "AmigoBot-v0" not in registry:
@@ -58,7 +50,7 @@ if "AmigoBot-v0" not in registry:
     )
 
 if "AmigoBot-v1" not in registry:
-    # gymnasium.register builds a plain EnvSpec: write the registry's entry directly
+    # register() builds a plain EnvSpec
     registry["AmigoBot-v1"] = SeparateEnvSpec(
         id="AmigoBot-v1",
         entry_point="amigo_gym.envs:AmigoBotV1Env",

@@ -1,10 +1,5 @@
-"""Where the shipped artefacts live: the pretrained models and the hyperparameter files.
-
-In the repository they are the top-level folder ``agents/`` (data, not code: rl-zoo hyperparameter
-YAML, pretrained models with their manifests). A wheel ships the same folder as package data,
-installed as ``amigo_gym/agents/``. :func:`agents_dir` finds it in either layout. Imports only the
-standard library.
-"""
+"""Where the shipped ``agents/`` data live (pretrained models, hyperparameter files): the top-level folder of a
+checkout, or ``amigo_gym/agents/`` in a wheel. Imports only the standard library."""
 
 from __future__ import annotations
 
@@ -23,7 +18,7 @@ def agents_dir() -> Path:
     """The ``agents/`` data folder: ``amigo_gym/agents`` in a wheel, ``<repository>/agents`` in a checkout.
 
     Raises:
-        FileNotFoundError: neither exists (a broken installation).
+        FileNotFoundError: neither exists.
     """
     installed = _PACKAGE / "agents"
     if installed.is_dir():

@@ -1,14 +1,7 @@
-"""Atomic file writing (a saved file is never left half-written) and file digests.
-
-Every writer puts the data in a temporary file in the target's folder, fsyncs it, gives it the mode of a plain
-new file (``0o666 & ~umask``) and moves it over the target with ``os.replace`` (atomic on POSIX and Windows),
-then fsyncs the folder. On any error, ``KeyboardInterrupt`` included, the temporary file is removed and the
-target untouched. JSON is strict (NaN and infinities become ``null``); :func:`finite_float` is the one check of a
-number in a text cell.
-
-Fault injection (tests only): ``AMIGO_GYM_FAULT=<stage>[@<n>]`` makes the process kill itself (``SIGKILL``) the
-``n``-th time (default 1) it reaches ``<stage>``: ``write:<file name>`` (temporary file complete, not moved),
-``rename:<file name>`` (moved, folder not fsynced), and the stages of :mod:`amigo_gym.tools.runs`.
+"""Atomic file writing (temporary file, fsync, ``os.replace``, fsync of the folder; on any error the target is
+untouched), strict JSON, file digests and the trust check of pickles. Fault injection (tests only):
+``AMIGO_GYM_FAULT=<stage>[@<n>]`` kills the process the ``n``-th time it reaches ``<stage>``: ``write:<file name>``
+(written, not moved), ``rename:<file name>`` (moved, folder not fsynced), and the stages of ``amigo_gym.tools.runs``.
 """
 
 from __future__ import annotations
@@ -58,8 +51,8 @@ def fsync_dir(folder: str | os.PathLike[str]) -> None:
 
 
 def json_safe(obj: Any) -> Any:
-    """``obj`` for strict JSON: every non-finite float (NaN, inf) replaced by ``None``, numpy scalars and arrays as
-    Python numbers and lists, mappings as dicts with ``str`` keys, tuples as lists."""
+    """``obj`` for strict JSON: non-finite floats as ``None``, numpy values as Python ones, mappings as dicts with
+    ``str`` keys, tuples as lists."""
     if isinstance(obj, Mapping):
         return {str(k): json_safe(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -72,9 +65,7 @@ def json_safe(obj: Any) -> Any:
 
 
 def finite_float(text: str, message: Callable[[bool], str], error: type[ValueError] = ValueError) -> float:
-    """``float(text)`` of a text cell if it is a finite number; otherwise raises ``error(message(is_number))``, with
-    ``is_number`` False for text that is no number and True for NaN and infinities (the caller's one-line message
-    names the file, the place and the value)."""
+    """``float(text)`` if finite; else raises ``error(message(is_number))``, ``is_number`` True for NaN and inf."""
     try:
         value = float(text)
     except ValueError:
@@ -110,8 +101,8 @@ def _written_list() -> Path:
 
 
 def vouch(*digests: str) -> None:
-    """Record the sha256 of pickles this installation wrote, one line each appended to ``written.sha256`` in the
-    user's state folder (:data:`STATE_ENV`), so that loading them needs no trust flag; a failure is a warning."""
+    """Append the sha256 of pickles this installation wrote to ``written.sha256`` in the state folder
+    (:data:`STATE_ENV`), so that loading them needs no trust flag; a failure is a warning."""
     path = _written_list()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -139,8 +130,7 @@ def _shipped_digests() -> set[str]:
 
 def require_trust(path: str | os.PathLike[str], digest: str | None = None, trust: bool = False) -> None:
     """Refuse to unpickle ``path`` (sha256 ``digest``, computed if ``None``) unless ``trust`` (or
-    ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or its sha256 is recorded by a shipped manifest (``agents/pretrained``) or by
-    :func:`vouch`. A hash beside the file is not enough (it proves no origin).
+    ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or a shipped manifest (``agents/pretrained``) or :func:`vouch` recorded it.
 
     Raises:
         UntrustedFileError: one line naming the file and the flag.
@@ -158,34 +148,20 @@ def require_trust(path: str | os.PathLike[str], digest: str | None = None, trust
 
 
 def file_mode(folder: bool = False) -> int:
-    """The mode of a new plain file (``folder``: a new folder) under the current umask, ``0o666 & ~umask``
-    (``0o777 & ~umask``)."""
+    """The mode of a new file under the current umask, ``0o666 & ~umask`` (``folder``: ``0o777 & ~umask``)."""
     umask = os.umask(0)
     os.umask(umask)
     return (0o777 if folder else 0o666) & ~umask
 
 
-def _target(path: str | os.PathLike[str], parents: bool) -> Path:
-    target = Path(path)
-    folder = target.parent
-    if parents:
-        folder.mkdir(parents=True, exist_ok=True)
-    elif not folder.is_dir():
-        raise FileNotFoundError(f"folder {str(folder)!r} of {str(target)!r} does not exist")
-    return target
-
-
 def atomic_save(save: Callable[[str], object], path: str | os.PathLike[str], *, parents: bool = False) -> None:
-    """Let ``save(tmp)`` write a temporary file (e.g. ``fig.savefig``, ``model.save``), then move it to ``path``.
-
-    The temporary name keeps ``path``'s suffix, for writers that choose the format by it.
-
-    Args:
-        save: called once with the temporary file's path (a ``str``); must write the whole file.
-        path: the target.
-        parents: create missing parent folders (otherwise a missing folder raises ``FileNotFoundError``).
-    """
-    target = _target(path, parents)
+    """Let ``save(tmp)`` write the whole file at ``tmp`` (a ``str`` with ``path``'s suffix), then move it to ``path``.
+    ``parents``: create missing folders (else a missing folder raises ``FileNotFoundError``)."""
+    target = Path(path)
+    if parents:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    elif not target.parent.is_dir():
+        raise FileNotFoundError(f"folder {str(target.parent)!r} of {str(target)!r} does not exist")
     fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.stem}.", suffix=target.suffix or ".tmp")
     os.close(fd)
     try:

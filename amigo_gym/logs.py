@@ -1,14 +1,9 @@
 """Logs of a real robot: read them, replay them through the model, fit the model's parameters to them.
 
-A recorded run (wheel-rate commands and the measured pose and/or wheel rates) drives the exact actuator step
-(:func:`amigo_gym.model.actuators.actuator_step`: firmware ramps, delay, true geometry); :func:`replay` compares
-the simulated and measured trajectories from a start pose fitted to the log's first poses, and :func:`identify`
-fits the true wheel radii, half track, delay (and ramp rates the log excites) by bounded least squares.
-
-Logs are CSV files (:data:`CSV_COLUMNS`: ``t`` [s], ``cmd_w1``, ``cmd_w2`` [rad/s] required, with ``x, y`` [m],
-``theta`` [rad] of A and/or ``w1, w2`` [rad/s]) or ROS 2 bags (:func:`read_bag`). :func:`check_log` refuses
-them in one line (:class:`LogError`) for missing columns, NaN, time not increasing or units wrong by orders of
-magnitude. The format, the bag topics and every message: ``docs/logs.md``.
+Logs are CSV files (:data:`CSV_COLUMNS`: ``t``, ``cmd_w1``, ``cmd_w2`` required, with ``x, y, theta`` of A
+and/or ``w1, w2``) or ROS 2 bags (:func:`read_bag`), refused in one line (:class:`LogError`) by :func:`check_log`.
+:func:`replay` drives :func:`amigo_gym.model.actuators.actuator_step` with the commands; :func:`identify` fits the
+true radii, half track, delay and ramps by bounded least squares. Format, topics, messages: ``docs/logs.md``.
 """
 
 from __future__ import annotations
@@ -44,9 +39,8 @@ Array = NDArray[np.float64]
 CSV_COLUMNS: dict[str, str] = {"t": "s", "cmd_w1": "rad/s", "cmd_w2": "rad/s", "x": "m", "y": "m", "theta": "rad",
                                 "w1": "rad/s", "w2": "rad/s"}  # fmt: skip
 
-#: relative half-width of the search box of r1, r2 and l1 around the nominal values in :func:`identify`
+#: search boxes of :func:`identify`: r1, r2, l1 within nominal * (1 +- FIT_BOUNDS), ramps within nominal * RAMP_FACTORS
 FIT_BOUNDS = MAX_TRUE_DEVIATION
-#: search box of the ramp rates in :func:`identify`, as factors of the nominal ones
 RAMP_FACTORS = (0.1, 10.0)
 RAMP_NAMES = ("acceleration", "rot_acceleration")
 XTOL = 1e-10
@@ -64,17 +58,10 @@ class LogError(ValueError):
 
 @dataclass(frozen=True)
 class Log:
-    """A recorded run: commands and measurements on their own time bases.
-
-    Attributes:
-        t_cmd: times at which the commands were issued [s], ``(n,)``, strictly increasing.
-        cmd: wheel-rate setpoints ``(w1c, w2c)`` [rad/s], ``(n, 2)``, each held until the next.
-        t_meas: times of the measurements [s], ``(m,)``, strictly increasing, ``m >= 3``.
-        pose: measured pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas``, ``(m, 3)``, theta unwrapped;
-            ``None`` if not measured.
-        rates: measured wheel rates ``(w1, w2)`` [rad/s] at ``t_meas``, ``(m, 2)``; ``None`` if not measured.
-        source: where the log came from (a file name and topics), for reports.
-    """
+    """A recorded run: setpoints ``cmd`` ``(w1c, w2c)`` [rad/s], ``(n, 2)``, each held from its time ``t_cmd`` [s]
+    until the next; at the times ``t_meas`` [s], ``(m >= 3,)``, the measured pose of A ``(x, y, theta)`` [m, m, rad],
+    ``(m, 3)``, theta unwrapped, and wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``, each ``None`` if not measured.
+    Times strictly increasing; ``source``: file name and topics."""
 
     t_cmd: Array
     cmd: Array
@@ -86,36 +73,23 @@ class Log:
 
 @dataclass(frozen=True)
 class Replay:
-    """The model driven by a log's commands (:func:`simulate`), sampled at the log's measurement times.
-
-    Attributes:
-        t: the log's measurement times [s], ``(m,)``.
-        pose: simulated pose of A ``(x, y, theta)`` [m, m, rad], ``(m, 3)``, theta continuous.
-        rates: simulated wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``.
-    """
+    """The model driven by a log's commands (:func:`simulate`) at the measurement times ``t`` [s], ``(m,)``: pose of
+    A ``(x, y, theta)`` [m, m, rad], ``(m, 3)``, theta continuous, and wheel rates ``(w1, w2)`` [rad/s], ``(m, 2)``."""
 
     t: Array
     pose: Array
     rates: Array
 
 
-# --------------------------------------------------------------------------------------------- reading
-
-
 def _cell_problem(where: str, column: str, cell: str, line: int, not_finite: bool) -> str:
-    """One line on a cell that is not a finite number (docs/logs.md's table of messages)."""
     if not_finite:
         return f"{where}: column {column!r}: {cell} at line {line}; every value must be finite"
     return f"{where}: column {column!r}: {cell!r} at line {line} is not a number"
 
 
 def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -> Log:
-    """A CSV log (format: docs/logs.md), checked (:func:`check_log`).
-
-    Raises:
-        LogError: one line naming the file's problem (missing column, text, NaN, time not increasing, units).
-        FileNotFoundError: no such file.
-    """
+    """A CSV log (docs/logs.md), checked (:func:`check_log`). Raises ``FileNotFoundError`` or a one-line
+    :class:`LogError` (missing column, text, NaN, time not increasing, units)."""
     nominal = RobotParams() if nominal is None else nominal
     p = Path(path)
     if not p.is_file():
@@ -169,32 +143,20 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
     return log
 
 
-def _yaw(qx: float, qy: float, qz: float, qw: float) -> float:
-    """Heading about z [rad] of the unit quaternion ``(qx, qy, qz, qw)``: ``atan2(2(w z + x y), 1 - 2(y^2 + z^2))``."""
-    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
-
-
 _TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 _POSE_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/PoseWithCovarianceStamped")
 
 
 def read_bag(
-    path: str | os.PathLike[str],
-    nominal: RobotParams | None = None,
-    cmd_topic: str = "/cmd_vel",
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, cmd_topic: str = "/cmd_vel",
     pose_topic: str = "/odom",
-) -> Log:
+) -> Log:  # fmt: skip
     r"""A ROS 2 bag (a rosbag2 folder, or its ``.db3``/``.mcap`` file) as a :class:`Log`, checked.
 
-    Commands: each Twist (``linear.x`` = v [m/s], ``angular.z`` = w [rad/s]) becomes wheel-rate setpoints with
-    the nominal robot, :math:`w_1 = (v + l_1 w)/r_1`, :math:`w_2 = (v - l_1 w)/r_2`. Measurements: the pose of
-    A from each pose message (``x``, ``y``; heading ``atan2(2(q_w q_z + q_x q_y), 1 - 2(q_y^2 + q_z^2))``).
-    Times: the bag's record times [s] from the first message of either topic. Messages recorded at the same
-    time on one topic: the last one counts.
-
-    Raises:
-        LogError: not a bag, an empty bag, a topic missing or of another type, NaN, units (:func:`check_log`).
-        FileNotFoundError: no such path.
+    A Twist ``(v, w)`` [m/s, rad/s] gives the nominal setpoints ``((v + l1 w) / r1, (v - l1 w) / r2)``; a pose message
+    A's ``x``, ``y`` and heading ``atan2(2(qw qz + qx qy), 1 - 2(qy^2 + qz^2))``. Times: record times [s] from the
+    first message of either topic; of messages at one time on one topic, the last counts. Raises
+    ``FileNotFoundError`` or :class:`LogError` (not a bag, empty, a topic missing or of another type, NaN, units).
     """
     nominal = RobotParams() if nominal is None else nominal
     p = Path(path)
@@ -235,7 +197,8 @@ def read_bag(
                 ps = msg.pose if conn.msgtype.endswith("PoseStamped") else msg.pose.pose
                 q = ps.orientation
                 t_p.append(stamp)
-                pose.append((float(ps.position.x), float(ps.position.y), _yaw(q.x, q.y, q.z, q.w)))
+                yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+                pose.append((float(ps.position.x), float(ps.position.y), yaw))
     finally:
         reader.close()
     for topic, ts, vals in ((cmd_topic, t_c, cmd), (pose_topic, t_p, pose)):
@@ -261,7 +224,7 @@ def read_bag(
 
 
 def _last_of_equal(t: NDArray[np.int64], values: Array) -> tuple[NDArray[np.int64], Array]:
-    """Samples in time order with, of equal times, the last one (stable sort keeps the bag's order)."""
+    """Samples in time order; of equal times the last (the stable sort keeps the bag's order)."""
     order = np.argsort(t, kind="stable")
     t, values = t[order], values[order]
     keep = np.append(t[1:] != t[:-1], True)
@@ -269,17 +232,11 @@ def _last_of_equal(t: NDArray[np.int64], values: Array) -> tuple[NDArray[np.int6
 
 
 def read_log(
-    path: str | os.PathLike[str],
-    nominal: RobotParams | None = None,
-    cmd_topic: str = "/cmd_vel",
+    path: str | os.PathLike[str], nominal: RobotParams | None = None, cmd_topic: str = "/cmd_vel",
     pose_topic: str = "/odom",
-) -> Log:
-    """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked.
-
-    Raises:
-        LogError: one line naming the problem (docs/logs.md); also for an unknown kind of file.
-        FileNotFoundError: no such path.
-    """
+) -> Log:  # fmt: skip
+    """A log from a CSV file (``.csv``) or a ROS 2 bag (a folder, ``.db3`` or ``.mcap``), checked. Raises
+    ``FileNotFoundError`` or a one-line :class:`LogError` (docs/logs.md; also for an unknown kind of file)."""
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"log {str(p)!r} does not exist")
@@ -290,33 +247,11 @@ def read_log(
     raise LogError(f"{p.name}: unknown kind of log (a .csv file or a ROS 2 bag folder / .db3 / .mcap file)")
 
 
-def _windows(t: Array, span: float = 1.0) -> NDArray[np.intp]:
-    """Indices of ``t`` splitting it into consecutive windows of about ``span`` seconds (at least 2 indices)."""
-    edges = np.arange(t[0], t[-1] + span, span)
-    idx = np.unique(np.clip(np.searchsorted(t, edges), 0, t.size - 1))
-    return idx if idx.size >= 2 else np.array([0, t.size - 1])
-
-
-def _commanded(log: Log, nominal: RobotParams, t: Array) -> tuple[Array, Array]:
-    """Integrals of the commanded speed and turn rate (nominal robot, no ramps, no delay) at the times ``t``."""
-    v, w = body_velocity(log.cmd, nominal)
-    grid = np.union1d(log.t_cmd, t)
-    j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
-    dt = np.diff(grid)
-    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
-    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
-    sv = np.concatenate([[0.0], np.cumsum(vj * dt)])
-    sw = np.concatenate([[0.0], np.cumsum(wj * dt)])
-    k = np.searchsorted(grid, t)
-    return sv[k], sw[k]
-
-
 def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
     """Refuse a log whose units look wrong by orders of magnitude: median sample interval outside [1e-4, 5] s,
-    wheel rates above 3 times the robot's limit, A faster than 3 times its top speed, measured travel, turn or
-    wheel rates more than 10 times (or under a tenth of) what the commands give.
-
-    ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to the names the user knows (columns or topics).
+    wheel rates over 3 times the limit, A over 3 times its top speed, measured travel, turn or wheel rates off by
+    more than 10 times from what the commands give. ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to
+    the user's column or topic names.
 
     Raises:
         LogError: one line naming the quantity, what was found and the likely unit mistake.
@@ -339,8 +274,17 @@ def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: s
                 f"{where}: {names[key]}: |wheel rate| up to {top:.4g} rad/s, over 3 times the robot's limit "
                 f"{w_max:g} rad/s; wheel rates must be in rad/s (deg/s or rpm?)"
             )
-    win = _windows(t)
-    s_v, s_w = _commanded(log, nominal, t[win])
+    # windows of about 1 s, and the integrals of the commanded speed and turn rate (nominal robot) at their ends
+    win = np.unique(np.clip(np.searchsorted(t, np.arange(t[0], t[-1] + 1.0, 1.0)), 0, t.size - 1))
+    win = win if win.size >= 2 else np.array([0, t.size - 1])
+    v, w = body_velocity(log.cmd, nominal)
+    grid = np.union1d(log.t_cmd, t[win])
+    j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
+    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
+    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
+    k = np.searchsorted(grid, t[win])
+    s_v = np.concatenate([[0.0], np.cumsum(vj * np.diff(grid))])[k]
+    s_w = np.concatenate([[0.0], np.cumsum(wj * np.diff(grid))])[k]
     cmd_travel = float(np.sum(np.abs(np.diff(s_v))))
     cmd_turn = float(np.sum(np.abs(np.diff(s_w))))
     if log.pose is not None:
@@ -373,34 +317,18 @@ def _ratio(where: str, name: str, measured: float, commanded: float, floor: floa
         )
 
 
-# --------------------------------------------------------------------------------------------- replay
-
-
 def simulate(
-    log: Log,
-    true_robot: RobotParams | None = None,
-    actuators: ActuatorParams | None = None,
-    nominal: RobotParams | None = None,
-    start: Sequence[float] | None = None,
-) -> Replay:
-    """Drive the model with the log's commands and sample it at the log's measurement times.
+    log: Log, true_robot: RobotParams | None = None, actuators: ActuatorParams | None = None,
+    nominal: RobotParams | None = None, start: Sequence[float] | None = None,
+) -> Replay:  # fmt: skip
+    """Drive the model with the log's commands; a :class:`Replay` at ``log.t_meas``.
 
-    The command issued at ``t_cmd[j]`` takes effect at ``t_cmd[j] + delay``; before the first the robot keeps its
-    start wheel rates. Between measurement times the step is
-    :func:`amigo_gym.model.actuators.actuator_step` (nominal firmware ramps, true radii and half track, no slip),
-    split at every command switch: for a log sampled every ``dt`` with commands at the same times it is the
-    environment's step.
+    The command of ``t_cmd[j]`` takes effect at ``t_cmd[j] + delay`` (before the first: the start wheel rates held);
+    between measurements :func:`amigo_gym.model.actuators.actuator_step` (no slip), split at every switch.
 
-    Args:
-        log: the log (:func:`read_log`).
-        true_robot: the robot that moves (``r1``, ``r2``, ``l1`` [m]); default the nominal robot.
-        actuators: ramps and delay [s]; default the manufacturer's, no delay.
-        nominal: the robot the firmware believes in (default :class:`RobotParams`).
-        start: pose of A ``(x, y, theta)`` [m, m, rad] at ``t_meas[0]``; default the log's first measured pose
-            (else the origin). Wheel rates start at the first measured ones (else 0).
-
-    Returns:
-        :class:`Replay` at ``log.t_meas``.
+    ``true_robot`` moves (default ``nominal``, itself default :class:`RobotParams`) with ``actuators`` (default
+    :class:`ActuatorParams`) from ``start``, the pose of A [m, m, rad] at ``t_meas[0]`` (default the first measured
+    pose, else the origin), and the first measured wheel rates (else 0).
     """
     nominal = RobotParams() if nominal is None else nominal
     robot = nominal if true_robot is None else true_robot
@@ -424,8 +352,7 @@ def simulate(
         ta, tb = ts[k], ts[k + 1]
         lo, hi = lo_all[k], lo_all[k + 1]
         cur = c0 if lo == 0 else cmds[lo - 1]
-        # calls (held, new, switch time, length): the first switch inside the first call, each further switch
-        # starting a call of its own (skipped when of length 0)
+        # calls (held, new, switch time, length): the first switch inside the first call, one call per further switch
         edges = [*switch[lo + 1 : hi].tolist(), tb]
         calls = [(cur, cur, 0.0, tb - ta)] if hi == lo else [(cur, cmds[lo], float(switch[lo]) - ta, edges[0] - ta)]
         calls += [(cmds[lo + i], cmds[lo + i], 0.0, edges[i] - edges[i - 1]) for i in range(1, len(edges))]
@@ -444,8 +371,8 @@ def _wrap(a: Array) -> Array:
 
 
 def errors(log: Log, rep: Replay) -> dict[str, Array]:
-    """Simulated minus measured, per sample: ``position`` (distance of A [m]), ``heading`` (wrapped [rad]),
-    ``rate1``, ``rate2`` [rad/s]; only what the log measures."""
+    """Simulated minus measured per sample, of what the log measures: ``position`` (distance of A [m]), ``heading``
+    (wrapped [rad]), ``rate1``, ``rate2`` [rad/s]."""
     out: dict[str, Array] = {}
     if log.pose is not None:
         d = rep.pose - log.pose
@@ -458,12 +385,7 @@ def errors(log: Log, rep: Replay) -> dict[str, Array]:
 
 
 def summarize(log: Log, rep: Replay) -> dict[str, Any]:
-    """RMS and maximum errors of a replay (``null`` for what the log does not measure).
-
-    Keys: ``n_samples``, ``duration_s``, ``rms_position_error_m``, ``max_position_error_m``,
-    ``final_position_error_m``, ``rms_heading_error_rad``, ``max_heading_error_rad``,
-    ``rms_wheel_rate_error_rad_s`` (over both wheels), ``max_wheel_rate_error_rad_s``.
-    """
+    """RMS and maximum errors of a replay (``None`` for what the log does not measure), keyed as returned."""
     e = errors(log, rep)
     p, h = e.get("position"), e.get("heading")
     r = np.concatenate([e["rate1"], e["rate2"]]) if "rate1" in e else None
@@ -496,9 +418,8 @@ def placed(pose: Array, start: Sequence[float] | Array) -> Array:
 
 
 def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, float, float]:
-    """The start pose ``(x0, y0, theta0)`` [m, m, rad] placing ``origin`` (a replay from the origin) on the
-    log's first poses (a fifth of the log, at least 10): least squares of the position errors and ``heading_weight``
-    [m/rad] times the heading errors."""
+    """The start pose ``(x0, y0, theta0)`` [m, m, rad] placing ``origin`` (a replay from the origin) on the log's first
+    poses (a fifth, at least 10): least squares of the position errors and ``heading_weight`` [m/rad] x heading."""
     from scipy.optimize import least_squares  # heavy: only here
 
     if log.pose is None:
@@ -515,9 +436,8 @@ def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, f
 
 
 def noise_level(log: Log) -> float | None:
-    """The measured position's noise [m]: ``sigma sqrt(2)`` with ``sigma = 1.4826 MAD / sqrt(20)`` of the third
-    differences of ``x`` and ``y`` (white noise gives them variance ``20 sigma^2``); ``None`` without a measured
-    pose or with fewer than 8 samples."""
+    """The measured position's noise [m]: ``sigma sqrt(2)``, ``sigma = 1.4826 MAD / sqrt(20)`` of the third differences
+    of ``x`` and ``y``; ``None`` without a measured pose or with fewer than 8 samples."""
     if log.pose is None or log.t_meas.size < 8:
         return None
     d3 = np.diff(log.pose[:, :2], n=3, axis=0).ravel()
@@ -526,14 +446,11 @@ def noise_level(log: Log) -> float | None:
 
 
 def replay(
-    log: Log,
-    true_robot: RobotParams | None = None,
-    actuators: ActuatorParams | None = None,
+    log: Log, true_robot: RobotParams | None = None, actuators: ActuatorParams | None = None,
     nominal: RobotParams | None = None,
-) -> tuple[Replay, dict[str, Any]]:
-    """:func:`simulate` from the start pose fitted to the log's first poses (:func:`fit_start`, heading weighted by
-    the nominal half track; without a measured pose from the origin), and :func:`summarize` of its errors with
-    ``start_pose`` and ``position_noise_m`` (:func:`noise_level`) added."""
+) -> tuple[Replay, dict[str, Any]]:  # fmt: skip
+    """:func:`simulate` from the start pose of :func:`fit_start` (weight ``nominal.l1``; the origin without a measured
+    pose), and :func:`summarize` of it with ``start_pose`` and ``position_noise_m`` (:func:`noise_level`)."""
     nominal = RobotParams() if nominal is None else nominal
     rep = simulate(log, true_robot, actuators, nominal, (0.0, 0.0, 0.0))
     start = (0.0, 0.0, 0.0)
@@ -543,19 +460,12 @@ def replay(
     return rep, {**summarize(log, rep), "start_pose": list(start), "position_noise_m": noise_level(log)}
 
 
-# --------------------------------------------------------------------------------------------- robot files
-
-
 def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dict[str, float]]:
-    """The robot and actuator fields of a robot file (a JSON object: ``robot.json`` of ``amigo-gym identify``).
-
-    Keys: fields of :class:`RobotParams` (``r1``, ``r2``, ``l1`` [m], ...) and of :class:`ActuatorParams`
-    (``delay`` [s], ``acceleration`` [m/s^2], ...); the report keys :func:`identify` writes (``uncertainty``,
-    ``replay_before``, ...) are ignored. Values are checked by the dataclasses where they are used.
+    """The :class:`RobotParams` and :class:`ActuatorParams` fields of a robot file (a JSON object, e.g. the
+    ``robot.json`` of ``amigo-gym identify``, whose report keys are ignored), unchecked.
 
     Raises:
-        FileNotFoundError: no such file. ValueError: not JSON, not an object, an unknown key, a value that is not a
-        number (one line).
+        FileNotFoundError: no such file. ValueError: not a JSON object, an unknown key, a value not a number.
     """
     p = Path(path)
     if not p.is_file():
@@ -587,39 +497,20 @@ def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dic
 def robot_from_file(
     path: str | os.PathLike[str], nominal: RobotParams | None = None, actuators: ActuatorParams | None = None
 ) -> tuple[RobotParams, ActuatorParams]:
-    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``.
-
-    Used for ``--robot`` (the true robot, on the nominal one) and ``--nominal`` (the nominal robot and the
-    firmware's ramps, on :class:`RobotParams` and :class:`ActuatorParams` defaults).
-
-    Raises:
-        FileNotFoundError, ValueError: as :func:`load_robot_file`, and a value out of its range (one line).
-    """
+    """The robot and actuators of a robot file: its values on top of ``nominal`` and ``actuators``. Raises as
+    :func:`load_robot_file`, and ``ValueError`` for a value out of its range."""
     nominal = RobotParams() if nominal is None else nominal
     actuators = ActuatorParams() if actuators is None else actuators
     robot, act = load_robot_file(path)
     return replace(nominal, **robot), replace(actuators, **act)
 
 
-# --------------------------------------------------------------------------------------------- identify
-
-
 @dataclass(frozen=True)
 class Fit:
-    """Result of :func:`identify`.
-
-    Attributes:
-        robot: the identified true robot (``r1``, ``r2``, ``l1`` fitted when the log measures the pose).
-        actuators: the identified actuators (``delay``; ``acceleration``, ``rot_acceleration`` when fitted).
-        values: the fitted parameters by name [m, s, m/s^2, rad/s^2] (and ``x0``, ``y0`` [m], ``theta0`` [rad],
-            the start pose, a nuisance parameter).
-        uncertainty: their standard errors from the Jacobian, same names and units (``None``: not determined).
-        fitted: the names of the fitted robot parameters; ``fixed``: the others with their values.
-        before, after: :func:`replay`'s summary (from the fitted start pose) with the nominal and the identified
-            robot.
-        cost: ``0.5 * sum(residual^2)`` at the solution [m^2]; ``n_residuals``; ``nfev``: model evaluations.
-        excited: seconds of ramping the log asks of each ramp channel, with the nominal ramps.
-    """
+    """Result of :func:`identify`: the identified ``robot`` and ``actuators``; the fitted ``values`` [m, s, m/s^2,
+    rad/s^2] (with the start pose ``x0``, ``y0``, ``theta0``) and their standard errors ``uncertainty`` (``None``: not
+    determined); the names ``fitted`` and the ``fixed`` values; :func:`replay`'s summaries ``before`` and ``after``;
+    ``cost = 0.5 sum(residual^2)`` [m^2], ``n_residuals``, ``nfev``; ``excited`` (:func:`ramp_excitation`) [s]."""
 
     robot: RobotParams
     actuators: ActuatorParams
@@ -635,8 +526,7 @@ class Fit:
     excited: dict[str, float]
 
     def robot_json(self, log: Log, nominal: RobotParams) -> dict[str, Any]:
-        """The content of ``robot.json``: the estimates under ``gym.make``'s names (``r1``, ``r2``, ``l1`` [m],
-        ``delay`` [s], the four ramp rates, fitted or nominal: the robot as replayed), then the report."""
+        """The content of ``robot.json``: the robot as replayed under ``gym.make``'s names, then the report."""
         act, v = self.actuators, self.values
         out: dict[str, Any] = {"format": ROBOT_FORMAT, "r1": self.robot.r1, "r2": self.robot.r2, "l1": self.robot.l1}
         out |= {k: getattr(act, k) for k in ("delay", "acceleration", "deceleration", "rot_acceleration",
@@ -654,9 +544,8 @@ class Fit:
 
 
 def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | None = None) -> dict[str, float]:
-    """Seconds the nominal ramps spend speeding up over the log: ``sum max(|c_k| - |c_{k-1}|, 0) / A``, ``c_k``
-    the k-th command's speed [m/s] (``acceleration``) or turn rate [rad/s] (``rot_acceleration``), ``A`` the nominal
-    rate."""
+    """Seconds the nominal ramps speed up over the log: ``sum max(|c_k| - |c_{k-1}|, 0) / A`` of the commanded speed
+    (``acceleration``) and turn rate (``rot_acceleration``), ``A`` the nominal rate."""
     act = ActuatorParams() if actuators is None else actuators
     v, w = body_velocity(log.cmd, nominal)
     out = {}
@@ -667,33 +556,20 @@ def ramp_excitation(log: Log, nominal: RobotParams, actuators: ActuatorParams | 
 
 
 def identify(
-    log: Log,
-    nominal: RobotParams | None = None,
-    ramps: str = "auto",
-    heading_weight: float | None = None,
+    log: Log, nominal: RobotParams | None = None, ramps: str = "auto", heading_weight: float | None = None,
     actuators: ActuatorParams | None = None,
-) -> Fit:
-    r"""Fit the true robot to a log: bounded least squares on the replayed trajectory.
+) -> Fit:  # fmt: skip
+    """Fit the true robot to a log: bounded least squares on the replayed trajectory.
 
-    Parameters: ``r1``, ``r2``, ``l1`` [m] (when the pose is measured), ``delay`` [s], and with ``ramps="auto"``
-    each ramp rate (``acceleration`` [m/s^2], ``rot_acceleration`` [rad/s^2]) the log keeps busy for at least three
-    samples (:func:`ramp_excitation`; ``"fit"``: both, ``"fixed"``: neither); nuisance: the start pose. Residuals
-    per measurement sample ``k >= 1`` (measured components only):
-
-    .. math:: (x_k^{sim} - x_k,\; y_k^{sim} - y_k,\; \lambda\, \mathrm{wrap}(\theta_k^{sim} - \theta_k),\;
-              r_1 \Delta t\, (w_{1,k}^{sim} - w_{1,k}),\; r_2 \Delta t\, (w_{2,k}^{sim} - w_{2,k}))
-
-    with ``Delta t`` the median sample interval, minimised by :func:`scipy.optimize.least_squares` (``trf``) within
-    ``r, l1`` in nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramp rates in nominal ``* [0.1, 10]``,
-    from the nominal robot and the best delay of a grid of ``MAX_DELAY / 10``. Uncertainties:
-    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)`` (independent residuals assumed).
-
-    Args:
-        log: the log (:func:`read_log`, read with the same ``nominal``).
-        nominal: the robot the firmware believes in (default :class:`RobotParams`), the start and bounds' centre.
-        ramps: ``"auto"``, ``"fit"`` or ``"fixed"``.
-        heading_weight: ``lambda`` [m/rad], > 0; default ``nominal.l1``.
-        actuators: the nominal ramps (its delay is not used). Default :class:`ActuatorParams`.
+    Parameters: ``r1``, ``r2``, ``l1`` [m] (pose measured), ``delay`` [s], the ramp rates ``acceleration`` [m/s^2]
+    and ``rot_acceleration`` [rad/s^2] (``"auto"``: those ramping for 3 samples or more, :func:`ramp_excitation`;
+    ``"fit"``: both; ``"fixed"``: neither), and the start pose. Residuals per sample ``k >= 1``, measured only:
+    simulated minus measured ``x``, ``y``, ``lambda wrap(theta)``, ``r1 Delta t w1``, ``r2 Delta t w2``, with
+    ``Delta t`` the median sample interval; by :func:`scipy.optimize.least_squares` (``trf``) within ``r, l1`` in
+    nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramps in nominal ``* [0.1, 10]``, from the nominal robot
+    (``nominal``, :class:`RobotParams` by default; ramps of ``actuators``) and the best delay of a grid of
+    ``MAX_DELAY / 10``. ``lambda = heading_weight`` [m/rad], default ``nominal.l1``. Uncertainties:
+    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)``.
 
     Raises:
         ValueError: a bad ``ramps``.
@@ -735,8 +611,7 @@ def identify(
 
     def residuals(z: Sequence[float]) -> Array:
         robot, act, start = unpack(z)
-        # the motion from another start pose is the motion from the origin moved rigidly: one simulation per
-        # robot, whatever the start (the finite differences in x0, y0, theta0 reuse it)
+        # one simulation per robot, from the origin, placed at each start pose
         key = tuple(float(a) for a in z[:n_fit])
         rep = cache.get(key)
         if rep is None:

@@ -1,26 +1,13 @@
-r"""Motion with speed and turn rate linear in time: the integral behind every curve of AmigoBot-v1.
+"""Motion with speed and turn rate linear in time: the integral behind every curve of AmigoBot-v1.
 
-A body with speed ``v(t) = v0 + a t`` along its heading and turn rate ``w(t) = w0 + alpha t`` has the heading
-``theta(t) = theta0 + w0 t + alpha t^2 / 2`` and the position
+Speed ``v0 + a t`` and turn rate ``w0 + alpha t`` give the heading ``theta(t) = theta0 + w0 t + alpha t^2 / 2`` and
+the position ``p(T) = p0 + int_0^T (v0 + a t) (cos, sin)(theta(t)) dt``, a generalised Fresnel integral: point A over
+a linear piece of the firmware's ramps, and a clothoid path piece (arc length as time, ``v = 1``, ``a = 0``).
 
-.. math::
-    \mathbf{p}(T) = \mathbf{p}_0 + \int_0^T (v_0 + a t)
-        \begin{pmatrix}\cos\theta(t)\\ \sin\theta(t)\end{pmatrix} dt,
-
-a generalised Fresnel integral. It gives point A within a control step while the firmware ramps its speeds
-(:mod:`amigo_gym.model.actuators`, one call per linear piece) and a clothoid path piece (:mod:`amigo_gym.paths`:
-arc length as time, ``v = 1``, ``a = 0``, curvature as turn rate).
-
-Evaluation: Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals. Where
-the phase varies by at most :data:`MAX_PHASE_PER_SUB` rad on a sub-interval the error bound
-``|E| <= h^{2n+1} (n!)^4 / ((2n+1) ((2n)!)^3) max|f^{(2n)}|`` is below 1e-20 relative to ``|v| h``: exact to
-rounding (checked against mpmath in ``tests/test_fresnel.py``), lines, arcs and clothoids alike. Callers
-choose ``n_sub`` with :func:`subintervals`.
-
-:func:`advance` takes floats or broadcasting float64 arrays. The node functions (:func:`advance_nodes`,
-:func:`unit_speed_nodes` and their parts) work on a buffer ``buf`` of stride ``m`` from ``buf[b]``: phases in
-``buf[b : b + m]``, cosines in ``buf[b + m : b + 2m]``, sines in ``buf[b + 2m : b + 3m]``; they are in numba's
-subset and compiled by :mod:`amigo_gym.sim._kernels_v1`.
+Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals (:func:`subintervals`):
+with a phase change of at most :data:`MAX_PHASE_PER_SUB` rad per sub-interval the error bound is below 1e-20
+relative to ``|v| h``, exact to rounding. The node functions work on a buffer ``buf`` of stride ``m`` from
+``buf[b]``: phases, then cosines at ``+ m``, sines at ``+ 2m``; numba compiles them as they are.
 """
 
 from __future__ import annotations
@@ -29,27 +16,8 @@ import math
 from typing import Any, Protocol, cast
 
 import numpy as np
-from numpy.typing import NDArray
 
 from amigo_gym.model.kinematics import Real
-
-__all__ = [
-    "NODES",
-    "MAX_PHASE_PER_SUB",
-    "subintervals",
-    "subinterval_count",
-    "advance",
-    "unit_speed_poses",
-    "Buffer",
-    "cos_sin_nodes",
-    "node_phases",
-    "node_sums",
-    "advance_nodes",
-    "unit_speed_phases",
-    "unit_speed_sums",
-    "unit_speed_nodes",
-    "node_table",
-]
 
 #: Gauss–Legendre nodes per sub-interval
 NODES = 10
@@ -58,12 +26,8 @@ MAX_PHASE_PER_SUB = 2.0
 
 _X, _W = np.polynomial.legendre.leggauss(NODES)
 #: nodes on [0, 1] and their weights (summing to 1)
-_U: NDArray[np.float64] = 0.5 * (_X + 1.0)
-_UW: NDArray[np.float64] = 0.5 * _W
-_U_LIST: list[float] = _U.tolist()
-_UW_LIST: list[float] = _UW.tolist()
-#: nodes and weights on [0, 1] for ``n_sub`` sub-intervals (lists, built once per ``n_sub``)
-_NODE_CACHE: dict[int, tuple[list[float], list[float]]] = {1: (_U_LIST, _UW_LIST)}
+_U_LIST: list[float] = (0.5 * (_X + 1.0)).tolist()
+_UW_LIST: list[float] = (0.5 * _W).tolist()
 #: :func:`node_table` for one sub-interval (a path piece's quadrature), and the cache of the others
 _TABLE_1: list[float] = _U_LIST + _UW_LIST
 _TABLE_CACHE: dict[int, list[float]] = {1: _TABLE_1}
@@ -74,11 +38,8 @@ _np_sin = np.sin
 
 
 def subintervals(max_phase_change: float) -> int:
-    """Number of sub-intervals so that the phase varies by at most :data:`MAX_PHASE_PER_SUB` on each.
-
-    Args:
-        max_phase_change: a bound of ``|w0| T + |alpha| T^2 / 2`` over the calls to come [rad].
-    """
+    """Sub-intervals so that the phase varies by at most :data:`MAX_PHASE_PER_SUB` on each, given a bound
+    ``max_phase_change`` [rad] of ``|w0| T + |alpha| T^2 / 2``."""
     if not math.isfinite(max_phase_change) or max_phase_change < 0:
         raise ValueError(f"max_phase_change must be a finite number >= 0, got {max_phase_change!r}")
     return subinterval_count(max_phase_change)
@@ -92,22 +53,9 @@ def subinterval_count(max_phase_change: float) -> int:
 def advance(
     x: Real, y: Real, theta: Real, v0: Real, a: Real, w0: Real, alpha: Real, t: Real, n_sub: int = 1
 ) -> tuple[Real, Real, Real]:
-    r"""Pose after time ``t`` with speed ``v0 + a tau`` and turn rate ``w0 + alpha tau`` (``0 <= tau <= t``).
-
-    .. math::
-        \theta' = \theta + w_0 t + \tfrac12 \alpha t^2, \qquad
-        (x', y') = (x, y) + \int_0^t (v_0 + a\tau)\,(\cos, \sin)(\theta + w_0\tau + \tfrac12\alpha\tau^2)\,d\tau
-
-    Args:
-        x, y, theta: start pose [m, m, rad].
-        v0, a: speed at the start [m/s] and its rate of change [m/s^2].
-        w0, alpha: turn rate at the start [rad/s] and its rate of change [rad/s^2].
-        t: duration [s], >= 0 (unchecked).
-        n_sub: number of equal sub-intervals (:func:`subintervals`).
-
-    Returns:
-        ``(x', y', theta')`` of the broadcast shape.
-    """
+    """Pose ``(x', y', theta')`` [m, m, rad] after ``t >= 0`` [s] from ``(x, y, theta)`` with speed ``v0 + a tau``
+    [m/s] and turn rate ``w0 + alpha tau`` [rad/s] (module docstring); floats or broadcasting arrays, ``n_sub`` of
+    :func:`subintervals`."""
     table = node_table(n_sub)
     m = NODES * n_sub
     buf: list[Any] = [0.0] * (3 * m)
@@ -117,15 +65,9 @@ def advance(
 
 
 def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
-    """Nodes and weights on [0, 1] for ``n_sub`` equal sub-intervals (cached lists)."""
-    got = _NODE_CACHE.get(n_sub)
-    if got is None:
-        u = [(k + ui) / n_sub for k in range(n_sub) for ui in _U_LIST]
-        uw = [wi / n_sub for _ in range(n_sub) for wi in _UW_LIST]
-        got = (u, uw)
-        if len(_NODE_CACHE) < 64:
-            _NODE_CACHE[n_sub] = got
-    return got
+    """Nodes and weights on [0, 1] for ``n_sub`` equal sub-intervals."""
+    table = node_table(n_sub)
+    return table[: NODES * n_sub], table[NODES * n_sub :]
 
 
 class Buffer(Protocol):
@@ -137,8 +79,7 @@ class Buffer(Protocol):
 
 
 def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
-    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``, by numpy
-    (``buf`` a list of floats or of equal-shape columns). Compiled code overloads it with ``math.cos``/``math.sin``."""
+    """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``; floats or columns."""
     lst = cast("list[Any]", buf)
     arr = _np_array(lst[b : b + n])
     cos = _np_cos(arr)
@@ -154,17 +95,8 @@ def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
 def node_phases(
     buf: Buffer, k: int, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> float:
-    r"""The phases at the nodes of one piece into ``buf[k : k + nn]``; returns the heading at its end.
-
-    .. math:: \phi_i = \theta + \tau_i (w_0 + \tfrac12\alpha\tau_i),\quad \tau_i = u_i t, \qquad
-        \theta' = \theta + t (w_0 + \tfrac12\alpha t)
-
-    Args:
-        buf: node buffer; k: where this piece's phases start.
-        theta, w0, alpha, t: start heading [rad], turn rate [rad/s] and its rate [rad/s^2], duration [s].
-        nodes, j, nn: the ``nn`` nodes ``u_i`` on [0, 1] at ``nodes[j + i]``, their weights at ``nodes[j + nn + i]``
-            (:func:`node_table`).
-    """
+    """The phases ``theta + tau_i (w0 + alpha tau_i / 2)``, ``tau_i = u_i t``, into ``buf[k : k + nn]``; returns the
+    heading at ``t`` [rad]. ``nodes[j + i]``: the ``nn`` nodes ``u_i`` on [0, 1], then their weights."""
     half_alpha = 0.5 * alpha
     for i in range(nn):
         tau = nodes[j + i] * t
@@ -175,12 +107,7 @@ def node_phases(
 def node_sums(
     buf: Buffer, k: int, m: int, v0: float, a: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float]:
-    r"""Weighted sums of one piece's node cosines and sines:
-
-    .. math:: (d_x, d_y) = \sum_i (v_0 + a \tau_i) w_i (\cos, \sin)\phi_i, \quad \tau_i = u_i t
-
-    so that the position advances by ``(dx t, dy t)``; ``nodes, j, nn`` as :func:`node_phases`.
-    """
+    """``(dx, dy) = sum_i (v0 + a tau_i) w_i (cos, sin)(phi_i)``: the position advances by ``(dx t, dy t)``."""
     dx = 0.0
     dy = 0.0
     for i in range(nn):
@@ -191,31 +118,11 @@ def node_sums(
 
 
 def advance_nodes(
-    buf: Buffer,
-    b: int,
-    m: int,
-    x: float,
-    y: float,
-    theta: float,
-    pieces: Buffer,
-    p: int,
-    n_pieces: int,
-    nodes: Buffer,
-    j: int,
-    nn: int,
-) -> tuple[float, float, float]:
-    """:func:`advance` of several pieces in turn: all phases, one :func:`cos_sin_nodes`, then the sums.
-
-    Args:
-        buf, b, m: node buffer of stride ``m >= n_pieces * nn`` from ``buf[b]``.
-        x, y, theta: start pose [m, m, rad].
-        pieces: ``(v0, a, w0, alpha, t)`` of piece ``q`` at ``pieces[p + 5 q]``.
-        n_pieces: number of pieces (0: the start pose).
-        nodes, j, nn: the nodes and weights (:func:`node_phases`).
-
-    Returns:
-        the pose after the last piece.
-    """
+    buf: Buffer, b: int, m: int, x: float, y: float, theta: float, pieces: Buffer, p: int, n_pieces: int,
+    nodes: Buffer, j: int, nn: int,
+) -> tuple[float, float, float]:  # fmt: skip
+    """:func:`advance` of ``n_pieces`` pieces ``(v0, a, w0, alpha, t)`` at ``pieces[p + 5 q]`` in turn, on a node buffer
+    of stride ``m >= n_pieces * nn``; the pose after the last."""
     th = theta
     for q in range(n_pieces):
         o = p + 5 * q
@@ -249,10 +156,8 @@ def unit_speed_sums(
 def unit_speed_nodes(
     buf: Buffer, x: float, y: float, theta: float, w0: float, alpha: float, t: float, nodes: Buffer, j: int, nn: int
 ) -> tuple[float, float, float, float, float]:
-    """``advance(x, y, theta, 1, 0, w0, alpha, t)`` with the cosine and sine of the new heading,
-    ``(x', y', theta', cos theta', sin theta')``, on a node buffer of length ``3 (nn + 1)``. A piece of constant
-    curvature (``alpha == 0``: a line or an arc) in closed form: the chord ``t sin(h)/h`` along ``theta + h``,
-    ``h = w0 t / 2``."""
+    """``(x', y', theta', cos theta', sin theta')`` of ``advance(x, y, theta, 1, 0, w0, alpha, t)`` on a node buffer of
+    ``3 (nn + 1)``; for ``alpha == 0`` in closed form: the chord ``t sin(h)/h`` along ``theta + h``, ``h = w0 t/2``."""
     if alpha == 0.0:
         h = 0.5 * w0 * t
         chord = t if h == 0.0 else t * (math.sin(h) / h)
@@ -266,12 +171,11 @@ def unit_speed_nodes(
 
 
 def node_table(n_sub: int) -> list[float]:
-    """The nodes on [0, 1] for ``n_sub`` equal sub-intervals, then their weights (``2 NODES n_sub`` floats, cached):
-    the ``nodes`` of :func:`node_phases` with ``j = 0``, ``nn = NODES n_sub``."""
+    """The ``NODES n_sub`` nodes on [0, 1] of ``n_sub`` equal sub-intervals, then their weights (cached)."""
     got = _TABLE_CACHE.get(n_sub)
     if got is None:
-        u, uw = _nodes(n_sub)
-        got = u + uw
+        got = [(k + ui) / n_sub for k in range(n_sub) for ui in _U_LIST]
+        got += [wi / n_sub for _ in range(n_sub) for wi in _UW_LIST]
         if len(_TABLE_CACHE) < 64:
             _TABLE_CACHE[n_sub] = got
     return got
@@ -280,8 +184,7 @@ def node_table(n_sub: int) -> list[float]:
 def unit_speed_poses(
     starts: list[tuple[float, float, float, float, float, float]],
 ) -> list[tuple[float, float, float, float, float]]:
-    """:func:`unit_speed_nodes` of several ``(x, y, theta, w0, alpha, t)`` (floats), one ``np.cos`` and
-    ``np.sin`` call for all."""
+    """:func:`unit_speed_nodes` of several ``(x, y, theta, w0, alpha, t)``, one ``np.cos`` and ``np.sin`` for all."""
     nn = NODES + 1
     m = len(starts) * nn
     buf = [0.0] * (3 * m)

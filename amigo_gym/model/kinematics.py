@@ -1,14 +1,9 @@
-"""Direct kinematics of the AmigoBot: closed-form, batched functions.
+"""Direct kinematics of the AmigoBot: closed-form, batched functions (``docs/model.md``).
 
-Conventions (``docs/model.md``): ground frame 0 with z up; ``pose = (x_A, y_A, beta)``, the axle midpoint A
-[m] and the heading beta [rad]. Wheel 1 is the right wheel (contact K = A + l1 (sin b, -cos b)), wheel 2 the
-left; wheel angles ``alpha1..3`` [rad] grow moving forward; wheel rates ``w = (alpha1dot, alpha2dot)`` [rad/s].
-
-Array functions take one item or a batch with leading axes (pose ``(..., 3)``, rates ``(..., 2)``, speeds
-``(...)``) and return the same leading axes. Column functions (``*_columns``, ``*_of``, :func:`arc_step`) take
-each coordinate as a float or an array of any shape; the pure-arithmetic ones are also compiled by
-:mod:`amigo_gym.sim` with numba. Nothing integrates numerically: :func:`step_pose` is exact for rates held
-over a step of any ``dt``.
+``pose = (x_A, y_A, beta)``: the axle midpoint A [m] and the heading [rad], ground frame z up. Wheel 1 is the
+right wheel, 2 the left; wheel rates ``w = (alpha1dot, alpha2dot)`` [rad/s], positive forward. Array functions take
+leading batch axes (pose ``(..., 3)``, rates ``(..., 2)``); column functions (``*_columns``, ``*_of``,
+:func:`arc_step`) take floats or arrays of any shape, and the pure-arithmetic ones are also compiled (numba).
 """
 
 from __future__ import annotations
@@ -43,9 +38,6 @@ class Geometry(Protocol):
 Real: TypeAlias = float | NDArray[np.float64]
 
 
-# Column math: numpy's functions, a Python float for a scalar argument.
-
-
 def col_sin(x: Real) -> Real:
     """``np.sin(x)``; a Python float for a scalar ``x``."""
     return np.sin(x) if isinstance(x, np.ndarray) else float(np.sin(x))
@@ -62,20 +54,12 @@ def col_tan(x: Real) -> Real:
 
 
 def cos_sin(x: Real) -> tuple[Real, Real]:
-    r"""``(cos x, sin x)`` from one tangent of the half angle:
-
-    .. math:: t = \tan\frac{x}{2}, \qquad \cos x = \frac{1 - t^2}{1 + t^2}, \qquad \sin x = \frac{2t}{1 + t^2}
-
-    Within about 2e-16 of ``np.cos``, ``np.sin`` for any finite ``x``.
-    """
+    """``(cos x, sin x)`` from ``t = tan(x / 2)`` (:func:`half_tan_cos_sin`), within about 2e-16 of numpy's."""
     return half_tan_cos_sin(col_tan(0.5 * x))
 
 
-# Pure arithmetic on floats or arrays alike, in numba's subset (compiled by amigo_gym.sim).
-
-
 def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:
-    r"""``(cos x, sin x)`` from ``t = tan(x / 2)``: ``((1 - t^2) / (1 + t^2), 2 t / (1 + t^2))`` (:func:`cos_sin`)."""
+    """``(cos x, sin x)`` from ``t = tan(x / 2)``: ``((1 - t^2) / (1 + t^2), 2 t / (1 + t^2))``."""
     t2 = t * t
     r = 1.0 / (1.0 + t2)
     return (1.0 - t2) * r, (t + t) * r
@@ -92,18 +76,10 @@ def arc_from_tangents(
 def arc_from_tangents(
     x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
 ) -> tuple[Real, Real, Real, Real]:
-    r"""The arc step of :func:`arc_step` from ``t_h = tan(h / 2)`` (``h = betadot dt / 2``) and
-    ``t_m = tan(m / 2)`` (``m = beta + h``).
-
-    .. math:: x' = x + c \cos m,\quad y' = y + c \sin m,\quad c = v_A\,dt\,\frac{\sin h}{h},\quad
-        \cos\beta' = \cos m\cos h - \sin m\sin h,\quad \sin\beta' = \sin m\cos h + \cos m\sin h
-
-    Returns:
-        ``(x', y', cos beta', sin beta')`` [m, m, -, -].
-    """
+    """:func:`arc_step`'s ``(x', y', cos beta', sin beta')`` from ``t_h = tan(h / 2)`` and ``t_m = tan(m / 2)``."""
     cos_h, sin_h = half_tan_cos_sin(t_h)
     cos_mid, sin_mid = half_tan_cos_sin(t_m)
-    zero = h == 0.0  # sin(h) / h, 1 at h = 0 (adds 1 to both sides there; exact elsewhere)
+    zero = h == 0.0  # sin(h) / h, 1 at h = 0
     chord = v_a * dt * ((sin_h + zero) / (h + zero))
     return (
         x + chord * cos_mid,
@@ -118,8 +94,7 @@ def body_velocity_of(w1: float, w2: float, r1: float, r2: float, two_l1: float) 
 @overload
 def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]: ...
 def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]:
-    r"""``(v_A, betadot)`` [m/s, rad/s] from the wheel rates [rad/s]: ``v_A = (r_1 w_1 + r_2 w_2) / 2``,
-    ``betadot = (r_1 w_1 - r_2 w_2) / (2 l_1)`` (``two_l1`` is ``2 l_1`` [m])."""
+    """``(v_A, betadot)`` [m/s, rad/s] of wheel rates [rad/s]: ``((r1 w1 + r2 w2) / 2, (r1 w1 - r2 w2) / two_l1)``."""
     u1 = r1 * w1
     u2 = r2 * w2
     return 0.5 * (u1 + u2), (u1 - u2) / two_l1
@@ -130,15 +105,13 @@ def wheel_rates_of(v_a: float, betadot: float, l1: float, r1: float, r2: float) 
 @overload
 def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]: ...
 def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]:
-    r"""The wheel rates [rad/s] of a body velocity: ``w_1 = (v_A + l_1 betadot) / r_1``,
-    ``w_2 = (v_A - l_1 betadot) / r_2`` (the inverse of :func:`body_velocity_of`)."""
+    """The wheel rates [rad/s] ``((v_A + l1 betadot) / r1, (v_A - l1 betadot) / r2)``."""
     lw = l1 * betadot
     return (v_a + lw) / r1, (v_a - lw) / r2
 
 
 def castor_rate_float(v_a: float, betadot: float, l5: float, r3: float) -> float:
-    r"""The castor wheel's rate [rad/s] for floats: ``sign(v_A) sqrt(l_5^2 betadot^2 + v_A^2) / r_3``
-    (:func:`castor_rate_columns`)."""
+    """The castor's rate [rad/s] for floats: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3``."""
     lb = l5 * betadot
     return math.copysign(math.sqrt(lb * lb + v_a * v_a), v_a) / r3
 
@@ -150,7 +123,7 @@ def advance_angle(alpha: NDArray[np.float64], rate: Real, dt: float) -> NDArray[
 @overload
 def advance_angle(alpha: Real, rate: Real, dt: float) -> Real: ...
 def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
-    r"""A wheel's angle [rad] after ``dt`` [s] at ``rate`` [rad/s]: :math:`\alpha + \dot\alpha\, dt`."""
+    """A wheel's angle [rad] after ``dt`` [s] at ``rate`` [rad/s]: ``alpha + rate dt``."""
     return alpha + rate * dt
 
 
@@ -159,7 +132,7 @@ col_sqrt = np.sqrt
 
 
 def sinc(x: ArrayLike) -> Array:
-    """Unnormalised sinc, ``sin(x) / x`` with value 1 at 0, elementwise [-] (``x == 0`` adds 1 to both sides)."""
+    """Unnormalised sinc, ``sin(x) / x`` with value 1 at 0, elementwise."""
     x = np.asarray(x, dtype=np.float64)
     zero = x == 0.0
     return np.asarray((np.sin(x) + zero) / (x + zero))
@@ -171,8 +144,7 @@ def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Re
 
 
 def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
-    """Column form of :func:`castor_rate`: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3`` [rad/s]
-    (the sign of ``-0.0`` is negative)."""
+    """Column form of :func:`castor_rate` (the sign of ``-0.0`` is negative)."""
     if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
         return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
     lb = robot.l5 * betadot
@@ -181,7 +153,7 @@ def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
 
 
 class ArcStep(NamedTuple):
-    """Result of :func:`arc_step`: the new pose as columns, with the cosine and sine of its heading."""
+    """Result of :func:`arc_step`: the new pose, with the cosine and sine of its heading."""
 
     x: Real
     y: Real
@@ -191,26 +163,9 @@ class ArcStep(NamedTuple):
 
 
 def arc_step(x: Real, y: Real, beta: Real, v_a: Real, betadot: Real, dt: Real, with_heading: bool = True) -> ArcStep:
-    r"""Column form of :func:`step_pose`, with the cosine and sine of the new heading.
-
-    With ``h = betadot dt / 2`` and the mid-step heading ``m = beta + h``:
-
-    .. math::
-        x' = x + c \cos m, \quad y' = y + c \sin m, \quad \beta' = \beta + 2h,
-        \qquad c = v_A\,dt\,\frac{\sin h}{h}
-
-    ``cos``/``sin`` of ``m`` and ``h`` each come from one half-angle tangent (:func:`cos_sin`); ``sin(h)/h`` is 1
-    at ``h = 0``.
-
-    Args:
-        x, y, beta: the pose [m, m, rad].
-        v_a, betadot: speed of A [m/s] and turn rate [rad/s], held over the step.
-        dt: step [s].
-        with_heading: compute ``cos(beta')``, ``sin(beta')`` (else NaN).
-
-    Returns:
-        :class:`ArcStep` ``(x', y', beta', cos beta', sin beta')``; ``beta'`` is not wrapped.
-    """
+    """Column form of :func:`step_pose` from ``v_a`` [m/s], ``betadot`` [rad/s] held over ``dt`` [s]: an
+    :class:`ArcStep`, ``cos beta'``, ``sin beta'`` NaN unless ``with_heading``. With ``h = betadot dt / 2``,
+    ``m = beta + h``: ``(x', y') = (x, y) + v_A dt (sin h / h) (cos m, sin m)``, ``beta' = beta + 2h``."""
     db = betadot * dt
     h = 0.5 * db
     x1, y1, cos_b, sin_b = arc_from_tangents(x, y, v_a, dt, h, col_tan(0.5 * h), col_tan(0.5 * (beta + h)))
@@ -228,35 +183,23 @@ def pack(*columns: Real) -> Array:
 
 
 def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
-    r"""Speed of A and turn rate ``(v_A [m/s], betadot [rad/s])``, each ``(...)``, from wheel rates ``w``
-    ``(..., 2)`` [rad/s] (right, left); the inverse of :func:`wheel_rates`:
-
-    .. math::
-        v_A = \frac{r_1 \dot\alpha_1 + r_2 \dot\alpha_2}{2}, \qquad
-        \dot\beta = \frac{r_1 \dot\alpha_1 - r_2 \dot\alpha_2}{2 l_1}
-    """
+    """Speed of A and turn rate ``(v_A [m/s], betadot [rad/s])``, each ``(...)``, of wheel rates ``w`` ``(..., 2)``
+    [rad/s]: ``v_A = (r1 w1 + r2 w2) / 2``, ``betadot = (r1 w1 - r2 w2) / (2 l1)``."""
     w = np.asarray(w, dtype=np.float64)
     v, b = body_velocity_columns(w[..., 0], w[..., 1], robot)
     return np.asarray(v), np.asarray(b)
 
 
 def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Wheel rates ``(..., 2)`` [rad/s] rolling without slip for ``v_A`` [m/s] and ``betadot`` [rad/s] of shape
-    ``(...)`` (docs/model.md, system 29):
-
-    .. math::
-        r_1 \dot\alpha_1 = v_A + l_1 \dot\beta, \qquad r_2 \dot\alpha_2 = v_A - l_1 \dot\beta
-    """
+    """Wheel rates ``(..., 2)`` [rad/s] rolling without slip at ``v_A`` [m/s] and ``betadot`` [rad/s], ``(...)``:
+    ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``."""
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
     return pack(*wheel_rates_of(v, b, robot.l1, robot.r1, robot.r2))
 
 
 def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
-    r"""Rolling rate ``alpha3dot`` ``(...)`` [rad/s] of the self-aligned castor (system 29), signed like ``v_A``:
-
-    .. math:: r_3 \dot\alpha_3 = \sqrt{l_5^2 \dot\beta^2 + v_A^2}
-    """
+    """Rolling rate ``(...)`` [rad/s] of the self-aligned castor: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3``."""
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
     return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
@@ -267,19 +210,17 @@ def h_from_a(x_a: float, y_a: float, cos_beta: float, sin_beta: float, l3: float
 @overload
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]: ...
 def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
-    """Point H, ``l3`` [m] ahead of A along the heading (paper eq. 4):
-    ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns. Inverse of :func:`a_from_h`."""
+    """Point H, ``l3`` [m] ahead of A (paper eq. 4): ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns."""
     return x_a + l3 * cos_beta, y_a + l3 * sin_beta
 
 
 def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
-    """Point A from point H in column form: A lies ``l3`` behind H, ``(x_H - l3 cos beta, y_H - l3 sin beta)``."""
+    """Point A, ``l3`` behind H: ``(x_H - l3 cos beta, y_H - l3 sin beta)``; columns."""
     return x_h - l3 * cos_beta, y_h - l3 * sin_beta
 
 
 def h_position(pose: ArrayLike, robot: Geometry) -> Array:
-    """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4):
-    ``(x_A + l3 cos b, y_A + l3 sin b)``; its height ``r1 - l4`` is constant."""
+    """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4)."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
@@ -301,24 +242,9 @@ def castor_position(pose: ArrayLike, robot: Geometry) -> Array:
 
 
 def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
-    r"""Exact pose after ``dt`` with wheel rates ``w`` held (A moves on a circular arc or a line):
-
-    .. math::
-        \Delta\beta = \dot\beta\,dt, \qquad
-        \Delta \mathbf{r}_A = v_A\,dt\,\operatorname{sinc}\!\left(\tfrac{\Delta\beta}{2}\right)
-        \begin{pmatrix}\cos(\beta + \Delta\beta/2)\\ \sin(\beta + \Delta\beta/2)\end{pmatrix}
-
-    with ``(v_A, betadot)`` from :func:`body_velocity`; evaluated by :func:`arc_step`. The heading is not wrapped.
-
-    Args:
-        pose: ``(..., 3)`` as ``(x_A, y_A, beta)`` [m, m, rad].
-        w: wheel rates ``(..., 2)`` [rad/s] (broadcast against ``pose``).
-        dt: step [s], scalar or ``(...)``.
-        robot: geometry.
-
-    Returns:
-        new pose ``(..., 3)``.
-    """
+    """Exact pose ``(..., 3)`` after ``dt`` [s] of ``pose`` ``(..., 3)`` with wheel rates ``w`` ``(..., 2)`` [rad/s]
+    held (heading not wrapped): ``d beta = betadot dt``, ``d A = v_A dt sinc(d beta / 2) (cos, sin)(beta + d beta / 2)``
+    (:func:`arc_step`)."""
     p = np.asarray(pose, dtype=np.float64)
     w = np.asarray(w, dtype=np.float64)
     v, bdot = body_velocity_columns(w[..., 0], w[..., 1], robot)
@@ -327,15 +253,8 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> 
 
 
 class SteadyCircle(NamedTuple):
-    """Steady state of H on a circle (:func:`circle_steady_state`; docs/model.md).
-
-    Attributes:
-        radius_a: radius of A's circle ``R_A = sqrt(R^2 - l3^2)`` [m].
-        betadot: turn rate ``d v_A / R_A`` [rad/s].
-        heading_lag: ``theta - beta = d atan(l3 / R_A)`` [rad].
-        wheel_rates: ``(alpha1dot, alpha2dot)`` [rad/s], ``(..., 2)``; castor_rate: ``alpha3dot`` [rad/s].
-        speed_h: speed of H, ``v_A R / R_A`` [m/s].
-    """
+    """Steady state of H on a circle (:func:`circle_steady_state`): ``radius_a`` [m], ``betadot`` [rad/s],
+    ``heading_lag`` [rad], ``wheel_rates`` ``(..., 2)`` and ``castor_rate`` [rad/s], ``speed_h = v_A R / R_A`` [m/s]."""
 
     radius_a: Array
     betadot: Array
@@ -346,13 +265,8 @@ class SteadyCircle(NamedTuple):
 
 
 def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
-    r"""Steady state of H on a circle of radius ``R`` [m] with A at constant speed ``v_A`` [m/s]:
-
-    .. math::
-        R_A = \sqrt{R^2 - l_3^2},\quad \dot\beta = d\,\frac{v_A}{R_A},\quad
-        \theta - \beta = d \arctan\frac{l_3}{R_A}
-
-    with the wheel rates of :func:`wheel_rates`; ``direction`` ``d`` is +1 (left turn) or -1 (right).
+    """Steady state of H on a circle of radius ``R`` [m] with A at constant speed ``v_A`` [m/s], ``direction`` ``d``
+    +1 (left turn) or -1: ``R_A = sqrt(R^2 - l3^2)``, ``betadot = d v_A / R_A``, ``theta - beta = d atan(l3 / R_A)``.
 
     Raises:
         ValueError: unless ``R > l3``.

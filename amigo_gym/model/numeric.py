@@ -1,12 +1,6 @@
-"""Elementwise helpers for function bodies written once for numpy columns (the reference) and floats (compiled).
-
-numpy's ufuncs (``np.minimum``, ``np.abs``, ``np.sqrt``, ``np.arctan2``, ``np.any``, ...) take both and numba
-compiles them on floats, so the shared functions call them directly. Two operations need a helper: clipping
-(``np.clip`` of a float does not compile) and selection (``np.where`` of floats gives a 0-d array): :func:`where`
-dispatches on the type, and the compiled step compiles :func:`where_float` in its place
-(``amigo_gym.sim._kernels_v1``).
-
-May import numpy and the standard library only.
+"""Elementwise helpers for bodies written once for floats (compiled by numba) and numpy columns: clipping
+(``np.clip`` of a float does not compile) and selection (``np.where`` of floats gives a 0-d array; compiled code
+runs :func:`where_float` in its place). May import numpy and the standard library only.
 """
 
 from __future__ import annotations
@@ -26,13 +20,13 @@ def any_array(*cols: object) -> bool:
 
 
 def clip(x: Real, low: float, high: float) -> Real:
-    """``x`` clipped to ``[low, high]`` (``low <= high``), elementwise: ``np.minimum(np.maximum(x, low), high)``."""
+    """``x`` clipped to ``[low, high]`` (``low <= high``), elementwise."""
     out: Real = np.minimum(np.maximum(x, low), high)
     return out
 
 
 def where_float(cond: bool, a: float, b: float) -> float:
-    """``a`` if ``cond`` else ``b``: :func:`where` of floats."""
+    """``a`` if ``cond`` else ``b``."""
     return a if cond else b
 
 

@@ -1,24 +1,11 @@
-"""Domain randomisation of AmigoBot-v1 as data: ranges in frozen dataclasses, drawn from the env's generator.
+"""Domain randomisation of AmigoBot-v1: ranges in frozen dataclasses, drawn from the env's generator.
 
-:class:`Randomization` holds closed ranges ``(low, high)`` (``low == high``: fixed); :func:`sample` draws one
-episode's values (:class:`EpisodeDraw`) from the env's ``np_random`` in a fixed order, so ``reset(seed=...)``
-reproduces them. Per-step draws (slip, measurement noise) are a pure function of a per-episode key and the step
-index (:func:`step_noise`, a counter-based SplitMix64 generator), identical for one robot and a batch.
-
-Ranges (scales multiply the nominal value):
-
-* ``wheel_radius``: scale of each true drive-wheel radius, right and left drawn independently [-] (worn tyres,
-  tolerance: odometry calibration finds 0.1–1 % on calibrated robots, several per cent otherwise);
-* ``track``: scale of the true half track ``l1`` [-];
-* ``slip``: per-episode bound ``s_max`` [-]; each step each wheel's ground speed is ``(1 - s_i) r_i alphadot_i``
-  with ``s_i ~ U(0, s_max)``;
-* ``delay``: actuation delay [s], applied exactly within the step (the robot's 100 ms cycle plus the link);
-* ``position_noise``, ``heading_noise``, ``wheel_rate_noise``: standard deviations of zero-mean Gaussian noise on
-  the measured pose of A [m], heading [rad] and wheel rates [rad/s], fresh each step; the true state is never
-  perturbed.
-
-The :data:`PRESETS` are this project's choices, not measurements: ``"mild"`` a calibrated robot on a clean floor,
-``"hard"`` an uncalibrated one with worn tyres, a slippery floor and a slow link.
+:func:`sample` draws one episode's values from the env's ``np_random`` in a fixed order (``reset(seed=...)``
+reproduces them); per-step draws (slip, measurement noise) are a pure function of a per-episode key and the step
+(:func:`step_noise`, a counter-based SplitMix64), identical for one robot and a batch. The ranges: scales of each
+true wheel radius and of the half track [-], the slip bound ``s_max`` (each step ``s_i ~ U(0, s_max)``), the delay
+[s], and the standard deviations of Gaussian noise on the measured position [m], heading [rad] and wheel rates
+[rad/s] (the true state is never perturbed). :data:`PRESETS` are the project's choices, not measurements.
 """
 
 from __future__ import annotations
@@ -31,15 +18,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from amigo_gym.model.actuators import MAX_DELAY
 from amigo_gym.model.kinematics import Real
 from amigo_gym.model.params import check_range
 
-#: largest actuation delay the environments support [s]
-MAX_DELAY = 0.5
-
 
 def _interval(owner: str, name: str, value: Any, low: float, high: float) -> tuple[float, float]:
-    """Check a ``(low, high)`` pair inside ``[low, high]`` with ``low <= high``; return it as floats."""
+    """The pair ``value`` as floats, checked within ``[low, high]`` and ordered."""
     if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
         raise ValueError(f"{owner}.{name} must be a pair (low, high) within [{low:g}, {high:g}], got {value!r}")
     lo = check_range(owner, f"{name}[0]", value[0], low, high)
@@ -51,18 +36,10 @@ def _interval(owner: str, name: str, value: Any, low: float, high: float) -> tup
 
 @dataclass(frozen=True)
 class Randomization:
-    """Ranges of the randomised quantities (module docstring); ``(x, x)`` fixes a value.
-
-    Attributes:
-        wheel_radius: scale of each true wheel radius [-], within [0.5, 1.5]. Default (1, 1).
-        track: scale of the true half track ``l1`` [-], within [0.5, 1.5]. Default (1, 1).
-        slip: bound ``s_max`` of the per-step loss of each wheel's ground speed [-], within [0, 0.5].
-            Default (0, 0).
-        delay: actuation delay [s], within [0, MAX_DELAY = 0.5]. Default (0, 0).
-        position_noise: std of the measured position of A [m], within [0, 0.1]. Default 0.
-        heading_noise: std of the measured heading [rad], within [0, 0.2]. Default 0.
-        wheel_rate_noise: std of the measured wheel rates [rad/s], within [0, 2]. Default 0.
-    """
+    """Ranges ``(low, high)`` of the randomised quantities (``(x, x)`` fixes one; default: nothing randomised):
+    ``wheel_radius`` and ``track`` scales [-] within [0.5, 1.5], ``slip`` [-] within [0, 0.5], ``delay`` [s] within
+    [0, MAX_DELAY]; noise standard deviations ``position_noise`` [m] within [0, 0.1], ``heading_noise`` [rad] within
+    [0, 0.2], ``wheel_rate_noise`` [rad/s] within [0, 2]."""
 
     wheel_radius: tuple[float, float] = (1.0, 1.0)
     track: tuple[float, float] = (1.0, 1.0)
@@ -91,32 +68,19 @@ class Randomization:
         return self.position_noise > 0 or self.heading_noise > 0 or self.wheel_rate_noise > 0
 
 
-#: named presets of ``randomize=`` (module docstring)
+#: named presets of ``randomize=``: ``mild`` a calibrated robot on a clean floor, ``hard`` an uncalibrated one with
+#: worn tyres, a slippery floor and a slow link
 PRESETS: dict[str, Randomization] = {
     "none": Randomization(),
-    "mild": Randomization(
-        wheel_radius=(0.98, 1.02),
-        track=(0.98, 1.02),
-        slip=(0.0, 0.02),
-        delay=(0.0, 0.05),
-        position_noise=0.002,
-        heading_noise=0.005,
-        wheel_rate_noise=0.05,
-    ),
-    "hard": Randomization(
-        wheel_radius=(0.95, 1.05),
-        track=(0.95, 1.05),
-        slip=(0.0, 0.1),
-        delay=(0.0, 0.15),
-        position_noise=0.005,
-        heading_noise=0.01,
-        wheel_rate_noise=0.2,
-    ),
-}
+    "mild": Randomization(wheel_radius=(0.98, 1.02), track=(0.98, 1.02), slip=(0.0, 0.02), delay=(0.0, 0.05),
+                          position_noise=0.002, heading_noise=0.005, wheel_rate_noise=0.05),
+    "hard": Randomization(wheel_radius=(0.95, 1.05), track=(0.95, 1.05), slip=(0.0, 0.1), delay=(0.0, 0.15),
+                          position_noise=0.005, heading_noise=0.01, wheel_rate_noise=0.2),
+}  # fmt: skip
 
 
 def make_randomization(value: str | Randomization | Mapping[str, Any] | None) -> Randomization:
-    """``randomize=`` of the environments: a preset name, a :class:`Randomization`, or a mapping of its fields.
+    """``randomize=``: a preset name, a :class:`Randomization`, or a mapping of its fields.
 
     Raises:
         ValueError: an unknown preset or field, or a bad range (naming the field, value and allowed range).
@@ -140,14 +104,7 @@ def make_randomization(value: str | Randomization | Mapping[str, Any] | None) ->
 
 
 class EpisodeDraw(NamedTuple):
-    """One episode's randomised values (module docstring).
-
-    Attributes:
-        r1_scale, r2_scale: scales of the true right and left wheel radii [-].
-        track_scale: scale of the true half track [-].
-        slip_max: bound of the per-step slip of this episode [-].
-        delay: actuation delay [s].
-    """
+    """One episode's scales of the true right and left wheel radii and half track [-], slip bound [-], delay [s]."""
 
     r1_scale: float
     r2_scale: float
@@ -157,14 +114,13 @@ class EpisodeDraw(NamedTuple):
 
 
 def _uniform(rng: np.random.Generator, interval: tuple[float, float]) -> float:
-    """A draw from ``U(low, high)``; the low end itself, without using the generator, when fixed."""
+    """A draw from ``U(low, high)``; ``low`` without using the generator when fixed."""
     lo, hi = interval
     return lo if lo == hi else float(rng.uniform(lo, hi))
 
 
 def sample(rng: np.random.Generator, r: Randomization) -> EpisodeDraw:
-    """Draw one episode's values from ``rng`` in a fixed order (right wheel, left wheel, track, slip, delay);
-    a fixed range uses no random number."""
+    """Draw one episode's values from ``rng`` in the order of :class:`EpisodeDraw` (a fixed range draws nothing)."""
     return EpisodeDraw(
         r1_scale=_uniform(rng, r.wheel_radius),
         r2_scale=_uniform(rng, r.wheel_radius),
@@ -190,18 +146,9 @@ _M64 = 0xFFFFFFFFFFFFFFFF
 
 
 def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
-    r"""Uniform numbers in ``(0, 1)``, a pure function of ``(key, step, channel)``:
-
-    .. math:: u = (\lfloor h / 2^{11} \rfloor + 1/2) / 2^{53}, \qquad
-        h = \mathrm{splitmix64}(\mathrm{key} + \gamma\,(2^{8} \mathrm{step} + \mathrm{channel} + 1))
-
-    with ``gamma = 0x9E3779B97F4A7C15``.
-
-    Args:
-        key: per-episode 64-bit keys, shape ``(...)`` (uint64).
-        step: step counters, shape ``(...)``.
-        channel: which quantity, in ``[0, 256)``.
-    """
+    """Uniform numbers in ``(0, 1)`` of uint64 ``key`` and ``step`` ``(...)`` and ``channel`` in ``[0, 256)``:
+    ``u = (floor(h / 2^11) + 1/2) / 2^53``, ``h = splitmix64(key + gamma (256 step + channel + 1))``,
+    ``gamma = 0x9E3779B97F4A7C15``."""
     with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
         u: NDArray[np.float64] = _counter_uniform_int(
             np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64), channel
@@ -215,18 +162,9 @@ def draw_key(rng: np.random.Generator) -> int:
 
 
 def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real) -> StepNoise:
-    """Step ``step``'s draws for the episodes with keys ``key``: slip ``U(0, slip_max)`` per wheel and
-    Gaussian measurement noise; quantities that are off are exact zeros.
-
-    Channels: uniform 0, 1 for the slips; uniform ``2 (ch + 1)``, ``2 (ch + 1) + 1`` for noise channel ``ch`` (0-4:
-    ``x, y, beta, rate1, rate2``).
-
-    Args:
-        key: per-episode keys (:func:`draw_key`), shape ``(...)``.
-        step: index of the step in the episode (0 first), shape ``(...)``.
-        r: the ranges (noise levels).
-        slip_max: per-episode slip bounds, shape ``(...)`` or a float.
-    """
+    """Step ``step``'s (0 first) draws for the episodes of keys ``key`` (:func:`draw_key`), ``(...)``: slips
+    ``U(0, slip_max)`` and Gaussian noise of ``r``'s levels, exact zeros where off. Uniform channels: 0, 1 the slips,
+    ``2 (ch + 1)`` and ``2 (ch + 1) + 1`` noise channel ``ch`` (0-4: ``x, y, beta, rate1, rate2``)."""
     one = type(key) is int and type(step) is int and type(slip_max) is float  # one robot: on Python ints
     levels = (r.position_noise, r.heading_noise, r.wheel_rate_noise)
     buf: list[Any] = [0.0] * 10
@@ -241,8 +179,6 @@ def step_noise(key: ArrayLike, step: ArrayLike, r: Randomization, slip_max: Real
     return StepNoise(s1, s2, *out)
 
 
-# -- SplitMix64 on Python ints (wrapping as uint64) ----------------------------------------------------------
-
 _GAMMA = 0x9E3779B97F4A7C15
 _MIX1 = 0xBF58476D1CE4E5B9
 _MIX2 = 0x94D049BB133111EB
@@ -256,8 +192,7 @@ def _uint64(n: int) -> int:
 
 
 def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
-    """:func:`counter_uniform`'s formula for a Python ``int`` key and step (``uint64`` when compiled) or
-    ``uint64`` columns, every product and sum mod ``2**64``. Returns a float or a float64 column."""
+    """:func:`counter_uniform` of Python ints (``uint64`` when compiled) or ``uint64`` columns, mod ``2**64``."""
     z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64
@@ -266,30 +201,20 @@ def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
 
 
 def noise_level(channel: int, position: float, heading: float, rate: float) -> float:
-    """Standard deviation of noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) [m, m, rad, rad/s,
-    rad/s]."""
+    """Standard deviation of noise channel ``channel`` (0-4: ``x, y, beta, rate1, rate2``) [m, m, rad, rad/s]."""
     return position if channel < 2 else (heading if channel == 2 else rate)
 
 
 def channels_on(position: float, heading: float, rate: float) -> int:
-    """How many of the five measurement-noise channels are on (a level above 0): the normal draws per step."""
-    on = 0
-    for ch in range(5):
-        if noise_level(ch, position, heading, rate) > 0.0:
-            on += 1
-    return on
+    """How many of the five noise channels are on (a level above 0)."""
+    return 2 * (position > 0.0) + (heading > 0.0) + 2 * (rate > 0.0)
 
 
 def step_uniforms(
     buf: Any, u1_at: int, u2_at: int, key: Any, step: Any, slip_max: Real, position: float, heading: float, rate: float
 ) -> tuple[Real, Real, int]:
-    """The uniform draws of :func:`step_noise` (one robot, or columns with ``buf`` a list): the slips
-    ``slip_max u`` (0.0 when no ``slip_max`` is above 0) and, for the ``j``-th noise channel on, ``u1`` into
-    ``buf[u1_at + j]`` and ``2 pi u2`` into ``buf[u2_at + j]``.
-
-    Returns:
-        ``(slip1, slip2, on)``, ``on`` the number of noise channels on.
-    """
+    """The uniforms of :func:`step_noise`: ``(slip1, slip2, on)`` (slips 0.0 when no ``slip_max`` is above 0, ``on``
+    noise channels); ``u1`` of the ``j``-th channel on at ``buf[u1_at + j]``, ``2 pi u2`` at ``buf[u2_at + j]``."""
     s1 = 0.0
     s2 = 0.0
     if np.any(slip_max > 0.0):
@@ -307,19 +232,13 @@ def step_uniforms(
 def step_normals(
     out: Any, out_at: int, logs: Any, log_at: int, coss: Any, cos_at: int, position: float, heading: float, rate: float
 ) -> None:
-    """The normal draws of :func:`step_noise` into ``out[out_at : out_at + 5]`` (0.0 for a channel off):
-    :func:`box_muller` of the ``j``-th channel on from ``logs[log_at + j]`` and ``coss[cos_at + j]``."""
+    r"""The normals of :func:`step_noise` into ``out[out_at : out_at + 5]`` (0.0 for a channel off): Box–Muller,
+    :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, of ``log u1 = logs[log_at + j]``, ``cos = coss[cos_at + j]``."""
     on = 0
     for ch in range(5):
         level = noise_level(ch, position, heading, rate)
         value: Real = 0.0
         if level > 0.0:
-            value = box_muller(level, logs[log_at + on], coss[cos_at + on])
+            value = level * (np.sqrt(-2.0 * logs[log_at + on]) * coss[cos_at + on])
             on += 1
         out[out_at + ch] = value
-
-
-def box_muller(level: float, log_u1: Real, cos_angle: Real) -> Real:
-    r"""One normal draw of standard deviation ``level``: :math:`\sigma \sqrt{-2 \ln u_1} \cos(2\pi u_2)`, given
-    ``log(u1)`` and ``cos(2 pi u2)``; floats or columns."""
-    return level * (np.sqrt(-2.0 * log_u1) * cos_angle)
