@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,10 +26,6 @@ from numpy.typing import ArrayLike, NDArray
 Array = NDArray[np.float64]
 Stat = Callable[[Array], Array]
 
-#: bootstrap replications of the interval estimates
-DEFAULT_REPS = 10_000
-#: bootstrap replications of the performance profiles (rliable's default)
-DEFAULT_PROFILE_REPS = 2_000
 #: largest number of resampled scores held in memory at once
 _CHUNK = 4_000_000
 
@@ -66,20 +63,11 @@ def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
 
 
 def stratified_bootstrap(
-    scores: ArrayLike, stat: Stat, *, reps: int = DEFAULT_REPS, size: float = 0.95, seed: int | np.random.Generator = 0
+    scores: ArrayLike, stat: Stat, *, reps: int = 10_000, size: float = 0.95, seed: int | np.random.Generator = 0
 ) -> tuple[Array, Array]:
-    """Point estimate and percentile interval of ``stat`` under rliable's stratified bootstrap.
-
-    Args:
-        scores: ``(num_runs, num_tasks)``.
-        stat: vectorised statistic: maps ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``.
-        reps: bootstrap replications.
-        size: coverage of the interval (0.95: the 2.5 and 97.5 percentiles).
-        seed: seed or generator of the resampling (the same seed gives the same interval).
-
-    Returns:
-        ``(point, interval)``: ``stat(scores)`` and an array ``(2, ...)`` of the lower and upper bounds.
-    """
+    """``(stat(scores), interval (2, ...))`` under rliable's stratified bootstrap: ``scores`` ``(num_runs,
+    num_tasks)``, ``stat`` vectorised from ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``, ``reps``
+    replications, percentile interval of coverage ``size``, resampling seeded by ``seed``."""
     x = _matrix(scores)
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ValueError(f"reps must be an integer >= 1, got {reps!r}")
@@ -104,15 +92,11 @@ def performance_profile(
     scores: ArrayLike,
     taus: Sequence[float] | Array,
     *,
-    reps: int = DEFAULT_PROFILE_REPS,
+    reps: int = 2_000,
     size: float = 0.95,
     seed: int | np.random.Generator = 0,
 ) -> tuple[Array, Array]:
-    """rliable's performance profile (score distribution) with its stratified-bootstrap interval.
-
-    Returns:
-        ``(profile, interval)``: ``(len(taus),)`` fractions of scores above each ``tau`` and ``(2, len(taus))``.
-    """
+    """rliable's performance profile: fractions of scores above each ``tau`` and their interval ``(2, len(taus))``."""
     t = np.asarray(taus, dtype=np.float64)
     return stratified_bootstrap(scores, lambda s: score_distribution(s, t), reps=reps, size=size, seed=seed)
 
@@ -138,3 +122,9 @@ def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float
     half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
     den = 1 + zz / n
     return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
+
+
+def failure_rate(failures: int, n: int) -> dict[str, Any]:
+    """``n``, ``failures``, ``rate`` and its Wilson ``ci95`` (both ``None`` for ``n = 0``)."""
+    lo, hi = wilson_interval(failures, n)
+    return {"n": n, "failures": failures, "rate": failures / n if n else None, "ci95": [lo, hi] if n else None}

@@ -55,8 +55,8 @@ def cell(
     duration: float = 40.0,
     **kw: Any,
 ) -> Scenario:
-    """A suite's scenario: AmigoBot-v0 with ``gym.make``'s keywords ``kw`` for 400 steps, or AmigoBot-v1 with ``dt``
-    (0.1 s), ``randomize="none"`` and ``kw`` for ``duration`` [s]; ``max_steps`` in ``kw`` sets the length."""
+    """A suite's scenario: AmigoBot-v0 with ``kw`` for 400 steps, or AmigoBot-v1 with ``dt`` (0.1 s),
+    ``randomize="none"`` and ``kw`` for ``duration`` [s]; ``max_steps`` in ``kw`` sets the length."""
     dt = kw.get("dt", 0.1)
     steps = kw.pop("max_steps", 400 if env_id == "AmigoBot-v0" else round(duration / dt))
     kwargs = kw if env_id == "AmigoBot-v0" else {"dt": dt, "randomize": "none", **kw}
@@ -119,17 +119,13 @@ TEST: tuple[Scenario, ...] = (
 
 
 def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Scenario, ...]:
-    """The validation cells of ``env_id`` on the first ``episodes`` of :data:`VALIDATION_SEEDS`, episodes cut to
-    ``max_steps`` steps when ``max_steps > 0``: what every tuning decision evaluates. Never a test cell or seed.
-
-    Raises:
-        ValueError: ``episodes`` outside ``[1, len(VALIDATION_SEEDS)]``, or no validation cell on ``env_id``.
-    """
+    """The validation cells of ``env_id`` on the first ``episodes`` of :data:`VALIDATION_SEEDS`, cut to ``max_steps``
+    steps when ``max_steps > 0``. Raises ``ValueError``: ``episodes`` out of range, no cell on ``env_id``."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= len(VALIDATION_SEEDS):
         raise ValueError(f"episodes must be an integer in [1, {len(VALIDATION_SEEDS)}], got {episodes!r}")
     seeds = VALIDATION_SEEDS[:episodes]
     cells = tuple(
-        replace(sc, seeds=seeds, max_steps=min(sc.max_steps, max_steps) if max_steps > 0 else sc.max_steps)
+        replace(sc, seeds=seeds).cut(episodes, max_steps if max_steps > 0 else sc.max_steps)
         for sc in VALIDATION
         if sc.env_id == env_id
     )
