@@ -178,12 +178,8 @@ def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
         fast = False
     if fast:
         algo = algo if isinstance(algo, str) and algo.startswith(FAST_ALGO) else FAST_ALGO
-    elif algo not in ALGOS:
-        for cand in (path.stem, path.parent.name, name or ""):
-            hit = next((a for a in ALGOS if a in cand.lower()), None)
-            if hit:
-                algo = hit
-                break
+    elif algo not in ALGOS:  # the first algorithm named by the file, its folder or the agent
+        algo = next((a for c in (path.stem, path.parent.name, name or "") for a in ALGOS if a in c.lower()), algo)
     if algo not in ALGOS and not str(algo).startswith(FAST_ALGO):
         raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
     seed = (manifest or {}).get("seed")
@@ -208,17 +204,14 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
             zips = sorted(p.glob("*.zip")) + sorted(p.glob("*/*.zip"))
             if not zips:
                 raise FileNotFoundError(f"--agents {spec}: no .zip in {p}")
-            for i, z in enumerate(zips):
-                label = name or (z.parent.name if z.parent != p else z.stem)
-                out.append(_model_spec(label, z, i))
+            out += [_model_spec(name or (z.parent.name if z.parent != p else z.stem), z, i) for i, z in enumerate(zips)]
             continue
         files = sorted(glob.glob(pattern))
         if not files:
             if not sep and not pattern.endswith(".zip"):
                 raise ValueError(f"--agents: unknown classical policy {spec!r} (choose from {', '.join(CLASSICAL)})")
             raise FileNotFoundError(f"--agents {spec}: no file matches {pattern!r}")
-        for i, f in enumerate(files):
-            out.append(_model_spec(name or None, Path(f), i))
+        out += [_model_spec(name or None, Path(f), i) for i, f in enumerate(files)]
     names_seeds = [(a.name, a.seed) for a in out]
     dup = sorted({x for x in names_seeds if names_seeds.count(x) > 1})
     if dup:
@@ -230,12 +223,9 @@ def default_agents() -> list[AgentSpec]:
     """The classical policies, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<folder>_v1``)."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
-    for algo in ALGOS:
-        if (d / f"{algo}.zip").is_file():
-            out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
+    out += [_model_spec(f"{a}_v0", d / f"{a}.zip", 0) for a in ALGOS if (d / f"{a}.zip").is_file()]
     for folder in V1_AGENTS:
-        for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip"))):
-            out.append(_model_spec(f"{folder}_v1", z, i))
+        out += [_model_spec(f"{folder}_v1", z, i) for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip")))]
     return out
 
 
@@ -297,7 +287,7 @@ def run_benchmark(
     bootstrap_seed: int = 0,
     quick: bool = False,
 ) -> dict[str, Any]:
-    """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
+    """Evaluate every agent seed on every scenario and aggregate; the JSON document (docs/benchmark.md)."""
     names = [sc.name for sc in scenarios]
     if len(set(names)) != len(names):
         raise ValueError(f"scenario names must be unique, got {names}")
@@ -337,10 +327,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
-    return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
-
-
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -349,7 +335,7 @@ def aggregate(
     profile_reps: int = 2_000,
     seed: int = 0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Per-agent aggregates and H-error performance profiles (module docstring)."""
+    """Per-agent aggregates (IQM, optimality gap, mean with 95 % bootstrap intervals) and H-error profiles."""
     aggregates: dict[str, Any] = {}
     profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
     keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
@@ -380,23 +366,16 @@ def aggregate(
             }
             gi = {"n_scenarios": len(scen), "scenarios": scen}
             for name, (x, stat) in stats.items():
-                gi[name] = _interval(*stratified_bootstrap(x, stat, reps=reps, seed=seed))
+                pt, ci = stratified_bootstrap(x, stat, reps=reps, seed=seed)
+                gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
                 prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
-                profiles["agents"][agent] = {
-                    "fraction_below": prof.tolist(),
-                    "ci95_low": band[0].tolist(),
-                    "ci95_high": band[1].tolist(),
-                }
-        top = entry["all"]
-        if top is not None:
-            entry = {
-                "metric": "h_rms_m",
-                "iqm": top["h_rms_m_iqm"]["value"],
-                "ci95": top["h_rms_m_iqm"]["ci95"],
-                **entry,
-            }
+                keys_ = ("fraction_below", "ci95_low", "ci95_high")
+                profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
+        if entry["all"] is not None:
+            top = entry["all"]["h_rms_m_iqm"]
+            entry = {"metric": "h_rms_m", "iqm": top["value"], "ci95": top["ci95"], **entry}
         aggregates[str(agent)] = entry
     return aggregates, profiles
 

@@ -224,15 +224,8 @@ def learning_curves(
             "reached it counting as later than any that did",
         },
         "runs": [
-            {
-                "group": r.group,
-                "algo": r.algo,
-                "seed": r.seed,
-                "env_id": r.env_id,
-                "path": str(r.path),
-                "evaluations": len(r.evals),
-                "last_timesteps": int(r.evals[-1]["timesteps"]),
-            }
+            {"group": r.group, "algo": r.algo, "seed": r.seed, "env_id": r.env_id, "path": str(r.path)}
+            | {"evaluations": len(r.evals), "last_timesteps": int(r.evals[-1]["timesteps"])}
             for r in found
         ],
         "skipped": skipped,
@@ -243,10 +236,6 @@ def learning_curves(
 
 
 # --------------------------------------------------------------------------- reports
-def _fmt(x: float | None, scale: float = 1.0, fmt: str = ".3g") -> str:
-    return "–" if x is None else f"{scale * x:{fmt}}"
-
-
 def _final(c: Mapping[str, Any] | None, scale: float) -> str:
     if c is None:
         return "–"
@@ -273,9 +262,8 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             f"s{q['seed']}: {q['timesteps']}" if q["reached"] else f"s{q['seed']}: not by {q['last_timesteps']}"
             for q in t["per_seed"]
         )
-        med_steps = "not reached" if t["median_timesteps"] is None else f"{t['median_timesteps']:.0f}"
-        med_wall = "not reached" if t["median_wall_time_s"] is None else f"{t['median_wall_time_s']:.0f}"
-        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {med_steps} | {med_wall} | {per} |")
+        med = ("not reached" if t[k] is None else f"{t[k]:.0f}" for k in ("median_timesteps", "median_wall_time_s"))
+        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {' | '.join(med)} | {per} |")
     lines += [
         "",
         "Final values (last step every seed reached; mean [95 % interval]):",
@@ -285,9 +273,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     ]
     for g, axes in doc["curves"].items():
         h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
-        n = h["n_seeds"] if h else (ret["n_seeds"] if ret else 0)
-        step = _fmt(h["x"][-1] if h else (ret["x"][-1] if ret else None), fmt=".0f")
-        lines.append(f"| {g} | {n} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
+        c = h or ret
+        step = f"{c['x'][-1]:.0f}" if c else "–"
+        lines.append(f"| {g} | {c['n_seeds'] if c else 0} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
     lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
     if doc["skipped"]:
         lines += ["Skipped folders:", ""] + [f"- {s['path']}: {s['reason']}" for s in doc["skipped"]] + [""]
