@@ -292,7 +292,7 @@ def run_benchmark(
     if len(set(names)) != len(names):
         raise ValueError(f"scenario names must be unique, got {names}")
     t0 = time.perf_counter()
-    grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
+    grid = run_grid(agents, scenarios, progress=progress)
     results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
     versions = sorted({sc.version for sc in scenarios})
     doc: dict[str, Any] = {

@@ -60,10 +60,8 @@ class EvalProtocol:
     def __post_init__(self) -> None:
         if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 1:
             raise ValueError(f"EvalProtocol.steps must be an integer >= 1, got {self.steps!r}")
-        if not self.perturbed_seeds or any(not isinstance(s, int) or s < 0 for s in self.perturbed_seeds):
-            raise ValueError(
-                f"EvalProtocol.perturbed_seeds must be non-negative integers, got {self.perturbed_seeds!r}"
-            )
+        if not (seeds := self.perturbed_seeds) or any(not isinstance(s, int) or s < 0 for s in seeds):
+            raise ValueError(f"EvalProtocol.perturbed_seeds must be non-negative integers, got {seeds!r}")
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")

@@ -19,7 +19,7 @@ from scipy.interpolate import CubicSpline
 
 from amigo_gym.paths import from_points
 from amigo_gym.tools.training.intervals import failure_rate
-from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, run_grid
 
 #: the authors' failure_rate.npy at 0.2 m/s: tolerance [m] -> failure rate
 PUBLISHED = {0.1: 0.276, 0.2: 0.053, 0.3: 0.002}
@@ -152,11 +152,7 @@ def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[fl
 def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = True) -> dict[str, Any]:
     """Every agent seed on every path; the JSON document (``table``: :func:`failure_table`)."""
     t0 = time.perf_counter()
-
-    def run(agent: Any, sc: Scenario) -> list[dict[str, float]]:
-        return [r.metrics() for r in run_scenario(agent, sc)]
-
-    grid = run_grid(agents, ps.scenarios, run, desc="random paths", progress=progress)
+    grid = run_grid(agents, ps.scenarios, desc="random paths", progress=progress)
     ok = {name: bool(r["feasible"]) for name, r in grid.feasibility.items()}
     episodes = [
         {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, **ps.tags[sc.name], "feasible": ok[sc.name]}

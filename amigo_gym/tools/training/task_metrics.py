@@ -147,15 +147,16 @@ class Grid:
 def run_grid(
     agents: Sequence[Any],
     scenarios: Sequence[Scenario],
-    run: Callable[[Any, Scenario], Any],
+    run: Callable[[Any, Scenario], Any] | None = None,
     *,
     desc: str = "benchmark",
     progress: bool = True,
 ) -> Grid:
-    """``run(agent, scenario)`` for every agent spec (``name``, ``seed``, ``instantiate(env)``) on every scenario;
-    what raises :class:`Unavailable` is listed with the reason, never dropped."""
+    """``run(agent, scenario)`` (default: the metrics of each episode) for every agent spec (``name``, ``seed``,
+    ``instantiate(env)``) on every scenario; what raises :class:`Unavailable` is listed with the reason."""
     from tqdm.auto import tqdm
 
+    run = run or (lambda agent, sc: [r.metrics() for r in run_scenario(agent, sc)])
     grid = Grid()
     envs: dict[str, Any] = {}
     for sc in scenarios:
