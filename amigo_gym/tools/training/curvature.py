@@ -72,18 +72,11 @@ def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
         progress[i] = float(info["progress"])
 
     recs = run_scenario(agent, sc, on_reset=read_paths, on_row=read_progress)
-    out = []
-    for i, r in enumerate(recs):
-        m: dict[str, Any] = dict(r.metrics())
-        s_end = min(max(progress[i], 0.0), float(paths[i].length))
-        m |= {
-            "seed_env": int(sc.seeds[i]),
-            "path_id": ids[i],
-            "path_max_kappa": float(paths[i].max_abs_curvature),
-            "kappa_end": float(abs(np.asarray(paths[i].curvature(s_end)))),
-            "progress_end": float(progress[i]),
-        }
-        out.append(m)
+    out: list[dict[str, Any]] = []
+    for i, (r, path) in enumerate(zip(recs, paths, strict=True)):
+        k_end = float(abs(np.asarray(path.curvature(min(max(progress[i], 0.0), float(path.length))))))
+        tags = {"seed_env": int(sc.seeds[i]), "path_id": ids[i], "path_max_kappa": float(path.max_abs_curvature)}
+        out.append(r.metrics() | tags | {"kappa_end": k_end, "progress_end": float(progress[i])})
     return out
 
 

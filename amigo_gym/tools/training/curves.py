@@ -87,17 +87,14 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
             raise FileNotFoundError(f"--runs: no directory {folder}")
         candidates = [folder] if (folder / "eval.json").is_file() else sorted(p for p in folder.iterdir() if p.is_dir())
         for run_dir in candidates:
-            if not (run_dir / "eval.json").is_file():
-                skipped.append({"path": str(run_dir), "reason": "no eval.json"})
-                continue
             try:
+                if not (run_dir / "eval.json").is_file():
+                    raise ValueError("no eval.json")
                 algo, seed, env_id = _identify(run_dir)
-                evals = _read_evals(run_dir / "eval.json")
+                if not (evals := _read_evals(run_dir / "eval.json")):
+                    raise ValueError("eval.json holds no evaluation yet")
             except ValueError as exc:  # includes CorruptFileError
                 skipped.append({"path": str(run_dir), "reason": " ".join(str(exc).split())})
-                continue
-            if not evals:
-                skipped.append({"path": str(run_dir), "reason": "eval.json holds no evaluation yet"})
                 continue
             found.append(Run(algo, seed, run_dir, env_id, evals))
     several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1

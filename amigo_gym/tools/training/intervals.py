@@ -1,17 +1,9 @@
-"""rliable's aggregate estimators (Agarwal et al., NeurIPS 2021; ``rliable`` v1.2.0), vectorised in numpy.
+"""rliable's aggregate estimators (Agarwal et al., NeurIPS 2021; ``rliable`` v1.2.0), vectorised in numpy, and the
+Wilson interval of a failure rate.
 
-Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scenarios.
-
-* :func:`iqm`: interquartile mean, ``scipy.stats.trim_mean(scores, 0.25, axis=None)``.
-* :func:`optimality_gap`: ``gamma - mean(min(scores, gamma))``; for a lower-is-better ``x`` with target ``g``,
-  applied to ``-x`` with ``gamma = -g``, it is ``mean(max(x - g, 0))``.
-* :func:`stratified_bootstrap`: rliable's ``StratifiedBootstrap`` (``task_bootstrap=False``): each replication
-  resamples the runs of every task with replacement; the interval is the percentile interval. With one run per
-  task it has zero width.
-* :func:`performance_profile`: the fraction of all scores above each ``tau``, with the same bootstrap.
-* :func:`wilson_interval`: the Wilson score interval of a binomial proportion (the curvature cells' failure rates).
-
-Why not rliable itself, and how the benchmark uses these: docs/benchmark.md.
+Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scenarios. The bootstrap is rliable's
+``StratifiedBootstrap`` (``task_bootstrap=False``): each replication resamples the runs of every task with
+replacement; with one run per task the interval has zero width. Why not rliable itself: docs/benchmark.md.
 """
 
 from __future__ import annotations
@@ -49,7 +41,8 @@ def iqm(scores: ArrayLike) -> Array:
 
 
 def optimality_gap(scores: ArrayLike, gamma: float = 1.0) -> Array:
-    """rliable's optimality gap over the last two axes: ``gamma - mean(min(scores, gamma))``."""
+    """rliable's optimality gap over the last two axes: ``gamma - mean(min(scores, gamma))`` (for a lower-is-better
+    ``x`` with target ``g``, applied to ``-x`` with ``gamma = -g``: ``mean(max(x - g, 0))``)."""
     x = np.asarray(scores, dtype=np.float64)
     return np.asarray(gamma - np.mean(np.minimum(x, gamma), axis=(-2, -1)), dtype=np.float64)
 

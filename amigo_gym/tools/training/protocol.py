@@ -1,29 +1,10 @@
 """The benchmark protocol 2.0: validation cells for every decision, test cells that no decision sees.
 
 Every decision taken while building an agent (the sweep's objective, the curriculum, the choice between agents,
-early stopping) evaluates :func:`validation_cells` only. The benchmark reports suite ``"2.0"``
-(:data:`TEST`: ``amigo-gym benchmark --suite 2.0``) on :data:`TEST_SEEDS`, 30 episodes per cell, seeds no
-decision used. The split is in the cells themselves, not only in the seeds:
-
-=====================  =====================================  =========================================
-condition              validation                             test
-=====================  =====================================  =========================================
-ideal robot            circles R 1 m left, 0.5 m right;       circles R 0.75 m right at 0.25 m/s, 2 m
-                       figure-8 (size 4 m); lane change       left at 0.3 m/s; figure-8 size 5 m at
-                       0.3 m/s; random paths (pool, 20 m);    0.3 m/s; lane change 0.8 m over 4 m at
-                       mixed families                         0.2 m/s; random paths of 12 m,
-                                                              kappa <= 0.8 1/m; the paper's manoeuvre
-actuation delay        0.1 s (circle), 0.25 s (figure-8)      0.15 s (circle), 0.3 s (random paths)
-wrong wheels           radii and track +5 % (circle);         radii only +7 % (circle), track only
-                       right +5 %, left -5 % (figure-8)       -7 % (figure-8), right +7 %, left -7 %
-                                                              (lane change)
-noise                  5 mm, 0.01 rad, 0.2 rad/s              10 mm, 0.02 rad, 0.4 rad/s (random paths)
-AmigoBot-v0            the paper's circle at 0.2 m/s          the circle at 0.1 and 0.4 m/s, dt 0.2 s
-=====================  =====================================  =========================================
-
-No test cell has a validation cell's ``(env_id, env_kwargs)``, and the seed ranges are disjoint
-(``tests/test_protocol.py``, which also runs the sweep's objective and checks that it loads no test cell).
-A released suite is never edited: a change is a new version beside it.
+early stopping) evaluates :func:`validation_cells` only; the benchmark reports suite ``"2.0"`` (:data:`TEST`,
+``amigo-gym benchmark --suite 2.0``) on :data:`TEST_SEEDS`. No test cell has a validation cell's ``(env_id,
+env_kwargs)`` and the seed ranges are disjoint (docs/benchmark.md, "Protocol 2.0"). A released suite is never edited:
+a change is a new version beside it.
 """
 
 from __future__ import annotations

@@ -109,18 +109,11 @@ def path_set(
             except ValueError:  # a cusp between the 200 samples the protocol checks: not a path to drive
                 skipped.append(i)
                 continue
-        heading = float(path.pose_columns(0.0).theta)
         name, desc = f"rp{seed}_{i:04d}", f"random path {i} of RandomState({seed}), peak |kappa| {kmax:.3g} 1/m"
-        pose = (dx, dy, heading + db)
-        out.append(
-            Scenario(name, "AmigoBot-v1", kw | {"path": path}, (0,), round(DURATION_S / dt), True, desc, pose=pose)
-        )
-        tags[name] = {
-            "path": i,
-            "length": round(float(path.length), 5),
-            "max_curvature": round(kmax, 5),
-            "fit_step": step,
-        }
+        pose = (dx, dy, float(path.pose_columns(0.0).theta) + db)
+        steps, length = round(DURATION_S / dt), round(float(path.length), 5)
+        out.append(Scenario(name, "AmigoBot-v1", kw | {"path": path}, (0,), steps, True, desc, pose=pose))
+        tags[name] = {"path": i, "length": length, "max_curvature": round(kmax, 5), "fit_step": step}
     settings = {"paths": paths, "condition": condition, "seed": seed, "speed": speed, "tolerances": list(tolerances)}
     return PathSet(tuple(out), tags, tuple(skipped), settings | {"duration_s": DURATION_S, "goal_m": GOAL_M})
 
