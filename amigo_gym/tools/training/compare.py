@@ -51,7 +51,6 @@ MANIFEST = "manifest.json"
 
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
-ANALYTIC = ("analytic", "analytic_ff")
 
 
 def agent_legend(names: Sequence[str], gain: float) -> list[str]:
@@ -101,7 +100,7 @@ def display_command(command: str, root: Path | None = None) -> str:
 
 def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed") -> dict[str, Any] | None:
     """The learned agent with the smallest H RMS error on ``scenario`` (``None`` if there is none)."""
-    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ANALYTIC]
+    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ("analytic", "analytic_ff")]
     return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
 
 
@@ -320,11 +319,9 @@ class CompareSettings:
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option and its allowed range on a bad setting."""
-        for name in ("train_steps", "seed"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(self, name)}")
-        if self.seeds < 1:
-            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+        for name, low in (("train_steps", 0), ("seed", 0), ("seeds", 1)):
+            if getattr(self, name) < low:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {getattr(self, name)}")
 
 
 def run_compare(s: CompareSettings) -> dict[str, Any]:

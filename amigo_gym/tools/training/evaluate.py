@@ -142,8 +142,7 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
     out = []
     for rec, col, h0 in zip(recs, cols, start["h0"], strict=True):
         arrays = {k: np.asarray(v, dtype=np.float64) for k, v in col.items()}
-        for k in ("h", "rates", "angles", "ref_rates"):
-            arrays[k] = arrays[k].reshape(-1, 2)
+        arrays |= {k: arrays[k].reshape(-1, 2) for k in keys[2:]}  # h, rates, angles, ref_rates
         # arc length of H's closest point, unwrapped at one lap on the closed circle
         ds = np.diff([float(path.project(h).s) for h in (h0, *arrays["h"])])
         if path.length < math.inf:
