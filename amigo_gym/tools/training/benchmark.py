@@ -91,7 +91,8 @@ def user_scenarios(
     names = [Path(f).stem for f in files]
     for f, stem in zip(files, names, strict=True):
         name = f"path:{stem}" if names.count(stem) == 1 else f"path:{f}"
-        kw = {"path": str(f), "speed": speed, "feasibility": feasibility, "goal_tolerance": goal_tolerance}
+        kw: dict[str, Any] = {"path": str(f), "speed": speed, "feasibility": feasibility}
+        kw["goal_tolerance"] = goal_tolerance
         out.append(_v1(name, f"points of {f} at {speed:g} m/s", True, duration=duration, **kw))
     return tuple(out)
 
@@ -550,9 +551,8 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
     for j, agent in enumerate(agents):
         xs, ys, lo, hi = [], [], [], []
         for i, name in enumerate(scen):
-            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == name]
-            vals = [v for v in vals if v is not None]
-            if not vals:
+            vals = [r["h_rms_m"] for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, name)]
+            if not (vals := [v for v in vals if v is not None]):
                 continue
             m = np.asarray(vals, dtype=np.float64).reshape(-1, 1)
             pt, ci = stratified_bootstrap(m, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)

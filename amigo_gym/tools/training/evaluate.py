@@ -283,7 +283,7 @@ class AgentSpec:
             UntrustedFileError: a file not trusted (one line naming it and the flag).
         """
         if self._model is not None:
-            return self._model  # type: ignore[no-any-return]
+            return self._model
         record: Any = self.manifest
         if record is None and self.record is not None:
             record = read_json(self.record)
@@ -307,7 +307,7 @@ class AgentSpec:
         with corrupt_errors(self.model, f"{str(self.algo).upper()} model"):
             model = sb3_class(str(self.algo)).load(self.model, device="cpu")
         if self.vecnormalize is None:
-            return model  # type: ignore[no-any-return]
+            return model
         with corrupt_errors(self.vecnormalize, "VecNormalize statistics"), open(self.vecnormalize, "rb") as f:
             stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
         stats.training = False
