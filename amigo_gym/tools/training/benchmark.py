@@ -27,25 +27,18 @@ from amigo_gym.io import atomic_write, atomic_write_json, json_safe
 from amigo_gym.paths.points import cached_file_path, is_points_file
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
-from amigo_gym.tools.runs import (
-    RunLock,
-    publish,
-    remove_matching,
-    verify_manifest,
-)
+from amigo_gym.tools.runs import RunLock, publish, remove_matching, verify_manifest
 from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training import random_paths as rp
-from amigo_gym.tools.training.curvature import cell_specs
 from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
 from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
-from amigo_gym.tools.training.task_metrics import SUITE_VERSION, Scenario, run_grid, run_scenario
-from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable  # re-exported: an agent that cannot run
-from amigo_gym.tools.training.task_metrics import make_env as make_env  # re-exported: a scenario's env
+from amigo_gym.tools.training.task_metrics import METRIC_NAMES, SUITE_VERSION, Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable
+from amigo_gym.tools.training.task_metrics import make_env as make_env
 
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
 V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
-#: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents still read "SB3 PPO generalist";
-#: docs/baselines.md, "Retired references")
+#: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents)
 RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
 H_TARGET_M = 0.01
@@ -81,12 +74,8 @@ TRAINING_DISTRIBUTION: dict[str, Any] = {
 def user_scenarios(
     files: Sequence[str], speed: float, feasibility: str = "off", goal_tolerance: float = 0.0, duration: float = 60.0
 ) -> tuple[Scenario, ...]:
-    """One ``AmigoBot-v1`` scenario per points file (``path=file``: :func:`amigo_gym.paths.from_file`), named after
-    the file, at ``speed`` [m/s], ``feasibility`` and ``goal_tolerance`` [m] (``gym.make``'s), ``duration`` [s].
-
-    Raises:
-        FileNotFoundError, ValueError: a missing file, a bad value (one line).
-    """
+    """One ``AmigoBot-v1`` scenario per points file, named after the file, at ``speed`` [m/s], ``feasibility``,
+    ``goal_tolerance`` [m] and ``duration`` [s]. Raises ``FileNotFoundError`` / ``ValueError`` (one line)."""
     out = []
     for f in files:
         if not is_points_file(str(f)):
@@ -179,27 +168,19 @@ def quick_suite(suite: Sequence[Scenario] = SUITE, episodes: int = 2, max_steps:
 
 
 # --------------------------------------------------------------------------- agents
-def _is_fast_model(path: Path) -> bool:
-    """A zip written by :class:`amigo_gym.policies.learned.FastPolicy` (it holds ``model.json``)."""
-    try:
-        with zipfile.ZipFile(path) as z:
-            return "model.json" in z.namelist()
-    except (OSError, zipfile.BadZipFile):
-        return False
-
-
 def _model_spec(name: str | None, path: Path, index: int) -> AgentSpec:
     manifest_file = path.with_suffix(".json")
     manifest = json.loads(manifest_file.read_text()) if manifest_file.is_file() else None
     algo = (manifest or {}).get("algo")
-    if _is_fast_model(path):  # amigo_gym.tools.training.fastppo's models (numpy; plain or residual)
+    try:  # a FastPolicy zip holds model.json
+        with zipfile.ZipFile(path) as z:
+            fast = "model.json" in z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        fast = False
+    if fast:
         algo = algo if isinstance(algo, str) and algo.startswith(FAST_ALGO) else FAST_ALGO
-    elif algo not in ALGOS:
-        for cand in (path.stem, path.parent.name, name or ""):
-            hit = next((a for a in ALGOS if a in cand.lower()), None)
-            if hit:
-                algo = hit
-                break
+    elif algo not in ALGOS:  # the first algorithm named by the file, its folder or the agent
+        algo = next((a for c in (path.stem, path.parent.name, name or "") for a in ALGOS if a in c.lower()), algo)
     if algo not in ALGOS and not str(algo).startswith(FAST_ALGO):
         raise ValueError(f"{path}: cannot tell its algorithm (no manifest 'algo', no ppo/sac/td3 in the names)")
     seed = (manifest or {}).get("seed")
@@ -224,17 +205,14 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
             zips = sorted(p.glob("*.zip")) + sorted(p.glob("*/*.zip"))
             if not zips:
                 raise FileNotFoundError(f"--agents {spec}: no .zip in {p}")
-            for i, z in enumerate(zips):
-                label = name or (z.parent.name if z.parent != p else z.stem)
-                out.append(_model_spec(label, z, i))
+            out += [_model_spec(name or (z.parent.name if z.parent != p else z.stem), z, i) for i, z in enumerate(zips)]
             continue
         files = sorted(glob.glob(pattern))
         if not files:
             if not sep and not pattern.endswith(".zip"):
                 raise ValueError(f"--agents: unknown classical policy {spec!r} (choose from {', '.join(CLASSICAL)})")
             raise FileNotFoundError(f"--agents {spec}: no file matches {pattern!r}")
-        for i, f in enumerate(files):
-            out.append(_model_spec(name or None, Path(f), i))
+        out += [_model_spec(name or None, Path(f), i) for i, f in enumerate(files)]
     names_seeds = [(a.name, a.seed) for a in out]
     dup = sorted({x for x in names_seeds if names_seeds.count(x) > 1})
     if dup:
@@ -243,26 +221,18 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
 
 
 def default_agents() -> list[AgentSpec]:
-    """The classical policies (``analytic``, ``analytic_ff``, ``pure_pursuit``), the shipped v0 specialists
-    (``<algo>_v0``) and v1 generalists (``<folder>_v1`` for every folder of :data:`V1_AGENTS`: ``td3lp_v1``,
-    ``ppo_fast_v1``, ``residual_v1``), named as ``amigo-gym compare`` names them."""
+    """The classical policies, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<folder>_v1``)."""
     out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
-    for algo in ALGOS:
-        if (d / f"{algo}.zip").is_file():
-            out.append(_model_spec(f"{algo}_v0", d / f"{algo}.zip", 0))
+    out += [_model_spec(f"{a}_v0", d / f"{a}.zip", 0) for a in ALGOS if (d / f"{a}.zip").is_file()]
     for folder in V1_AGENTS:
-        for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip"))):
-            out.append(_model_spec(f"{folder}_v1", z, i))
+        out += [_model_spec(f"{folder}_v1", z, i) for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip")))]
     return out
 
 
 def agent_label(name: str, algo: str | None = None) -> str:
-    """What an agent is, in words: ``ppo_v1`` -> "SB3 PPO generalist", ``ppo_fast_v1`` -> "fast PPO generalist"
-    (:data:`V1_AGENTS`, :data:`RETIRED_V1_AGENTS`), ``sac_v0`` -> "SB3 SAC v0 specialist", a classical policy ->
-    "classical", another name -> "model". The algorithm ``algo`` (the manifest's, when known) decides over the
-    name: ``fastppo*`` -> "fast PPO" (``fastppo_residual``: "fast PPO residual"), ``ppo``/``sac``/``td3`` -> "SB3
-    PPO"/..., so a fast-PPO zip passed as ``--agents ppo_v1=...`` still reads "fast PPO"."""
+    """What an agent is, in words (``ppo_fast_v1`` -> "fast PPO generalist", ``sac_v0`` -> "SB3 SAC v0 specialist",
+    "classical", "model"); the algorithm ``algo``, when known, decides over the name."""
     if name in CLASSICAL:
         return "classical"
     labels = {**RETIRED_V1_AGENTS, **V1_AGENTS}
@@ -272,7 +242,7 @@ def agent_label(name: str, algo: str | None = None) -> str:
         kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
     elif algo in ALGOS:
         kind = f"SB3 {str(algo).upper()}"
-        if v1 and labels[name[:-3]].startswith(kind):  # a variant of the algorithm, e.g. "SB3 TD3 low-pass"
+        if v1 and labels[name[:-3]].startswith(kind):  # a variant, e.g. "SB3 TD3 low-pass"
             kind = labels[name[:-3]]
     elif v1:
         kind = labels[name[:-3]]
@@ -285,8 +255,7 @@ def agent_label(name: str, algo: str | None = None) -> str:
 
 # --------------------------------------------------------------------------- evaluation
 def evaluate(agent: Any, env: Any, sc: Scenario) -> list[dict[str, float]]:
-    """The metrics of one episode per seed of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`;
-    ``env``, the single env ``agent`` was built for, is not stepped)."""
+    """The metrics of one episode per seed of ``sc`` (``env``, the env ``agent`` was built for, is not stepped)."""
     return [r.metrics() for r in run_scenario(agent, sc)]
 
 
@@ -300,14 +269,10 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
     col = {k: [e[k] for e in eps] for k in eps[0]}
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
-    for k in ("h_rms_m", "h_rms_settled_m", "h_max_m", "speed_err_rms", "speed_err_settled_rms"):
-        rec[k] = _nanmean(col[k])
-    rec["failure_rate"] = _nanmean(col["failure"])
-    rec["return"] = _nanmean(col["return"])
-    rec["return_per_step"] = None if rec["return"] is None else rec["return"] / sc.max_steps
-    for k in ("chatter_rms", "chatter_settled_rms", "effort_rms"):
-        rec[k] = _nanmean(col[k])
-    rec["mean_steps"] = _nanmean(col["steps"])
+    for k in METRIC_NAMES[:-1]:
+        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = _nanmean(col[k])
+        if k == "return":
+            rec["return_per_step"] = None if v is None else v / sc.max_steps
     rec["terminated"] = int(sum(col["terminated"]))
     rec["per_episode"] = {k: json_safe(v) for k, v in col.items()}
     return rec
@@ -323,12 +288,12 @@ def run_benchmark(
     bootstrap_seed: int = 0,
     quick: bool = False,
 ) -> dict[str, Any]:
-    """Evaluate every agent seed on every scenario, aggregate; the JSON document (module docstring)."""
+    """Evaluate every agent seed on every scenario and aggregate; the JSON document (docs/benchmark.md)."""
     names = [sc.name for sc in scenarios]
     if len(set(names)) != len(names):
         raise ValueError(f"scenario names must be unique, got {names}")
     t0 = time.perf_counter()
-    grid = run_grid(agents, scenarios, lambda agent, sc: evaluate(agent, None, sc), progress=progress)
+    grid = run_grid(agents, scenarios, progress=progress)
     results = [_record(spec, sc, eps) for spec, sc, eps in grid.runs]
     versions = sorted({sc.version for sc in scenarios})
     doc: dict[str, Any] = {
@@ -363,10 +328,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _interval(point: np.ndarray, ci: np.ndarray) -> dict[str, Any]:
-    return {"value": float(point), "ci95": [float(ci[0]), float(ci[1])]}
-
-
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -375,7 +336,7 @@ def aggregate(
     profile_reps: int = 2_000,
     seed: int = 0,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Per-agent aggregates and H-error performance profiles (module docstring)."""
+    """Per-agent aggregates (IQM, optimality gap, mean with 95 % bootstrap intervals) and H-error profiles."""
     aggregates: dict[str, Any] = {}
     profiles: dict[str, Any] = {"taus_m": list(PROFILE_TAUS), "agents": {}}
     keys = ("h_rms_m", "speed_err_rms", "failure_rate", "return_per_step")
@@ -406,33 +367,23 @@ def aggregate(
             }
             gi = {"n_scenarios": len(scen), "scenarios": scen}
             for name, (x, stat) in stats.items():
-                gi[name] = _interval(*stratified_bootstrap(x, stat, reps=reps, seed=seed))
+                pt, ci = stratified_bootstrap(x, stat, reps=reps, seed=seed)
+                gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
                 prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
-                profiles["agents"][agent] = {
-                    "fraction_below": prof.tolist(),
-                    "ci95_low": band[0].tolist(),
-                    "ci95_high": band[1].tolist(),
-                }
-        top = entry["all"]
-        if top is not None:
-            entry = {
-                "metric": "h_rms_m",
-                "iqm": top["h_rms_m_iqm"]["value"],
-                "ci95": top["h_rms_m_iqm"]["ci95"],
-                **entry,
-            }
+                keys_ = ("fraction_below", "ci95_low", "ci95_high")
+                profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
+        if entry["all"] is not None:
+            top = entry["all"]["h_rms_m_iqm"]
+            entry = {"metric": "h_rms_m", "iqm": top["value"], "ci95": top["ci95"], **entry}
         aggregates[str(agent)] = entry
     return aggregates, profiles
 
 
 # --------------------------------------------------------------------------- reports
 def failed_episodes(doc: Mapping[str, Any], agent: str) -> tuple[int, int]:
-    """``(failed, episodes)`` of ``agent`` over its (training seed, scenario) runs on the scenarios of its aggregate
-    (``doc["aggregates"][agent]["all"]["scenarios"]``, those its statistics cover); an episode fails when its settled
-    H error exceeds the scenario's ``failure_tolerance_m`` (``task_metrics.run_scenario``).
-    """
+    """``(failed, episodes)`` of ``agent`` on the scenarios its aggregate covers."""
     scenarios = set(doc["aggregates"][agent]["all"]["scenarios"])
     flags = [
         f
@@ -526,14 +477,8 @@ README_ROWS = (
 
 
 def readme_table(doc: Mapping[str, Any]) -> str:
-    """The README's AmigoBot-v1 table from a full run's JSON (``amigo-gym benchmark --table-from FILE``): the failed
-    episodes (:func:`failed_episodes`), H RMS IQM [mm] with its 95 % interval, the same on the held-out scenarios,
-    the speed error IQM [mm/s]; the best of each column in bold. Generalists are found as ``<algo>_v1`` or, in runs
-    before the names were unified, ``<algo>``.
-
-    Raises:
-        ValueError: the document lacks the classical rows or every generalist.
-    """
+    """The README's AmigoBot-v1 table from a benchmark JSON (``--table-from``), the best of each column in bold.
+    Raises ``ValueError`` if the document lacks the classical rows or every generalist."""
     aggs = doc["aggregates"]
     rows: list[tuple[str, Mapping[str, Any], int, str]] = []
     for name, label in README_ROWS:
@@ -547,9 +492,7 @@ def readme_table(doc: Mapping[str, Any]) -> str:
     if len(rows) < 3:
         raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
     cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
-    best = [
-        min(1e3 * agg[g][k]["value"] for _, agg, _, _ in rows if agg.get(g)) for g, k, _ in cols
-    ]  # the smallest of each column
+    best = [min(1e3 * agg[g][k]["value"] for _, agg, _, _ in rows if agg.get(g)) for g, k, _ in cols]
     lines = [
         "| agent | failed episodes | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
         "|---|---:|---:|---:|---:|",
@@ -572,8 +515,7 @@ def readme_table(doc: Mapping[str, Any]) -> str:
 
 
 def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The unavailable (agent, scenario) runs, one line per agent and reason: its seeds and scenarios listed once
-    (an AmigoBot-v0 model on the v1 scenarios is one line, not one per seed and scenario)."""
+    """The unavailable runs, one line per agent and reason, its seeds and scenarios listed once."""
     groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
     for u in unavailable:
         seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
@@ -593,16 +535,13 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
-    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale
-    (:func:`scenarios_figure`), saved as PNG."""
+    """:func:`scenarios_figure` saved as PNG."""
     save_figure(scenarios_figure(doc, reps, seed), path)
 
 
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
-    """The figure of :func:`plot_scenarios`: the title in two short lines and the legend outside the axes, at
-    the right (matplotlib's constrained layout keeps both inside the figure, whatever the number of bars)."""
+    """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
     plt = pyplot()
-
     scen = [s["name"] for s in doc["scenarios"] if s["status"] == "ok"]
     agents = list(doc["aggregates"])
     size = (min(18.0, max(6.0, 0.45 * len(scen) + 2.0)) + 1.6, 4.8)  # at most 19.6 in wide: fits a page
@@ -612,9 +551,8 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
     for j, agent in enumerate(agents):
         xs, ys, lo, hi = [], [], [], []
         for i, name in enumerate(scen):
-            vals = [r["h_rms_m"] for r in doc["results"] if r["agent"] == agent and r["scenario"] == name]
-            vals = [v for v in vals if v is not None]
-            if not vals:
+            vals = [r["h_rms_m"] for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, name)]
+            if not (vals := [v for v in vals if v is not None]):
                 continue
             m = np.asarray(vals, dtype=np.float64).reshape(-1, 1)
             pt, ci = stratified_bootstrap(m, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
@@ -639,7 +577,6 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
 def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     """Performance profiles: fraction of (seed, scenario) runs with H RMS below tau, with bootstrap bands."""
     plt = pyplot()
-
     prof = doc["performance_profiles"]
     taus = np.asarray(prof["taus_m"])
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -657,8 +594,7 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
 
 
 def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
-    """Draw ``benchmark_scenarios.png`` (:func:`plot_scenarios`, the document's bootstrap seed) and
-    ``benchmark_profiles.png`` (:func:`plot_profiles`) into ``folder``; their names."""
+    """Draw ``benchmark_scenarios.png`` and ``benchmark_profiles.png`` into ``folder``; their names."""
     plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
     plot_profiles(doc, folder / "benchmark_profiles.png")
     return ["benchmark_scenarios.png", "benchmark_profiles.png"]
@@ -671,20 +607,15 @@ _TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_man
 
 
 def clean_temporaries(out: Path) -> list[str]:
-    """Remove what killed benchmarks left in ``out``: their staging folders and temporary files (only names a
-    benchmark writes; other dot files are left alone). Call while holding ``out``'s lock. The names removed."""
+    """Remove what killed benchmarks left in ``out`` (hold ``out``'s lock); the names removed."""
     return remove_matching(out, _TEMPORARY)
 
 
 def write_outputs(
     doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
 ) -> list[Path]:
-    """Publish the JSON, the Markdown and (``plots``) the two figures as one set; the paths written.
-
-    Each file is written into a staging folder ``<out>/.staging-benchmark-*``, then moved into place with the
-    manifest ``<out>/benchmark_manifest.json`` written last (:func:`amigo_gym.tools.runs.publish`;
-    :func:`verify_outputs` checks the set).
-    """
+    """Publish the JSON, the Markdown and (``plots``) the two figures as one set with :data:`MANIFEST` written last
+    (:func:`amigo_gym.tools.runs.publish`); the paths written."""
     out.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
     try:
@@ -700,8 +631,7 @@ def write_outputs(
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
-    """The manifest's ``{file: sha256}`` of the benchmark outputs in ``out``, after checking every file
-    (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without a manifest, ``CorruptFileError``)."""
+    """The manifest's ``{file: sha256}`` after checking every file (:func:`amigo_gym.tools.runs.verify_manifest`)."""
     return verify_manifest(out, MANIFEST)
 
 
@@ -792,8 +722,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
         if a.list_suite:
             for sc in suite:
-                flag = "held out" if sc.held_out else ""
-                size = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps"
+                size, flag = f"{sc.episodes:>3} ep {sc.max_steps:>4} steps", "held out" if sc.held_out else ""
                 print(f"{sc.name:<22} {sc.env_id:<12} {size} {flag:<9}{sc.description}")
             return 0
         if sum(map(bool, (a.curvature, a.random_paths, a.path or a.scenarios))) > 1:
@@ -801,17 +730,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         if a.path and a.scenarios:
             raise ValueError("--path and --scenarios exclude each other")
         paths = rp.path_set(a.random_paths, a.condition, a.random_paths_seed, a.speed, a.tolerance)
-        if a.curvature or a.path or a.random_paths:
-            if a.curvature:
-                scenarios = curvature_scenarios(a.curvature_episodes)
-            elif a.random_paths:
-                scenarios = paths.scenarios
-            else:
-                scenarios = user_scenarios(a.path or [], a.speed, a.feasibility, a.goal_tolerance, a.duration)
-            if a.quick:  # every cell, shorter
-                scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
+        if a.curvature:
+            scenarios = curvature_scenarios(a.curvature_episodes)
+        elif a.random_paths:
+            scenarios = paths.scenarios
+        elif a.path:
+            scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
         else:
             scenarios = quick_suite(suite) if a.quick else suite
+        if a.quick and (a.curvature or a.random_paths or a.path):  # every cell, shorter
+            scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
             bad = [n for n in a.scenarios if n not in known]
@@ -826,15 +754,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if a.curvature:
                     name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
                 else:
-                    name, doc = (
-                        "random_paths",
-                        rp.run_random_paths(agents, replace(paths, scenarios=scenarios), progress=a.progress),
-                    )
+                    ps = replace(paths, scenarios=scenarios)
+                    name, doc = "random_paths", rp.run_random_paths(agents, ps, progress=a.progress)
                 doc["command"] = command
                 report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
-                atomic_write_json(out / f"{name}.json", doc)
-                atomic_write(out / f"{name}.md", report)
-                written = [str(out / f"{name}.json"), str(out / f"{name}.md")]
+                written = [out / f"{name}.json", out / f"{name}.md"]
+                atomic_write_json(written[0], doc)
+                atomic_write(written[1], report)
             else:
                 clean_temporaries(out)
                 doc = run_benchmark(
@@ -849,19 +775,18 @@ def main(argv: Sequence[str] | None = None) -> int:
                 doc["command"] = command
                 json_path = Path(a.json) if a.json else out / "benchmark.json"
                 md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
-                written = [str(p) for p in write_outputs(doc, out, json_path, md_path, plots=a.plots)]
+                written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
                 report = markdown_report(doc)
         print(report, end="")
-        print("wrote " + ", ".join(written))
+        print("wrote " + ", ".join(map(str, written)))
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
 
 
 def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
-    """The cells of ``--curvature`` (:func:`amigo_gym.tools.training.curvature.cell_specs`), ``episodes`` each; opt-in,
-    not part of the suite."""
-    return cell_specs(episodes=episodes)
+    """The cells of ``--curvature``, ``episodes`` each (not part of the suite)."""
+    return curvature.cell_specs(episodes=episodes)
 
 
 if __name__ == "__main__":

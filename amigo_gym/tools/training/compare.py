@@ -51,13 +51,10 @@ MANIFEST = "manifest.json"
 
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
-ANALYTIC = ("analytic", "analytic_ff")
 
 
 def agent_legend(names: Sequence[str], gain: float) -> list[str]:
-    """One line per agent name of a report: what it is (every name a report prints is explained; the v1
-    generalists by the label of :data:`amigo_gym.tools.training.benchmark.V1_AGENTS` or, retired,
-    :data:`~amigo_gym.tools.training.benchmark.RETIRED_V1_AGENTS`: "SB3 TD3 low-pass", "fast PPO", "SB3 PPO")."""
+    """One line per agent name of a report: what it is."""
     fixed = {
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
         "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
@@ -86,9 +83,8 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
 
 
 def display_command(command: str, root: Path | None = None) -> str:
-    """``command`` with its absolute paths made short: relative to the repository (``root``, default the current
-    folder) when inside it, else their last two parts (a training record's ``--out /tmp/retrain/runs/ppo`` reads
-    ``--out runs/ppo``), so that no printed command shows a machine's temporary folders."""
+    """``command`` with its absolute paths relative to ``root`` (default the current folder) when inside it, else
+    their last two parts, so that no printed command shows a machine's temporary folders."""
     base = (root or Path.cwd()).resolve()
     words = []
     for word in shlex.split(command):
@@ -104,12 +100,11 @@ def display_command(command: str, root: Path | None = None) -> str:
 
 def best_learned(results: Sequence[dict[str, Any]], scenario: str = "perturbed") -> dict[str, Any] | None:
     """The learned agent with the smallest H RMS error on ``scenario`` (``None`` if there is none)."""
-    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ANALYTIC]
+    rows = [r for r in results if r["scenario"] == scenario and r["agent"] not in ("analytic", "analytic_ff")]
     return min(rows, key=lambda r: r["h_rms_m"]) if rows else None
 
 
 def _met(best: Mapping[str, Any]) -> tuple[str, ...]:
-    """Whether ``best`` meets each of :data:`TARGETS` (H error, wheel-rate deviation): ``"met"`` or ``"NOT met"``."""
     return tuple("met" if best[k] <= TARGETS[k] else "NOT met" for k in ("h_rms_m", "wheel_rate_dev_rms"))
 
 
@@ -186,8 +181,8 @@ def report_markdown(doc: dict[str, Any]) -> str:
 
 
 def summary_text(doc: dict[str, Any], out: Path) -> str:
-    """What ``amigo-gym compare`` prints: the perturbed starts' table, the targets, the quick benchmark's H error,
-    every agent name explained, and where the files went (the full tables are in ``report.md``)."""
+    """What ``amigo-gym compare`` prints: the perturbed starts' table, the targets, the quick benchmark, the agents
+    and where the files went."""
     proto = doc["protocol"]
     rows = [r for r in doc["results"] if r["scenario"] == "perturbed"]
     n = len(proto["scenarios"]["perturbed"]["seeds"])
@@ -239,14 +234,11 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
 def quick_benchmark(
     specs: Sequence[AgentSpec], generalists: Path | None = None, *, progress: bool = False
 ) -> dict[str, Any]:
-    """The benchmark's ``--quick`` subset on compare's agents ``specs`` (the models as loaded) and, from a folder of
-    AmigoBot-v1 generalists (``<models>/v1``), its ``<folder>/*.zip`` for every folder of
-    :data:`amigo_gym.tools.training.benchmark.V1_AGENTS`, named ``<folder>_v1``: its JSON document."""
+    """The benchmark's ``--quick`` subset on ``specs`` and the v1 generalists in ``generalists`` (``<folder>_v1``)."""
     specs = list(specs)
     if generalists is not None:
         for folder in V1_AGENTS:
             if any((generalists / folder).glob("*.zip")):
-                # each checked (and an SB3 zip trusted) before it is loaded: AgentSpec.instantiate
                 specs += parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
     doc = run_benchmark(specs, quick_suite(), progress=progress, quick=True)
     doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
@@ -266,11 +258,8 @@ def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = No
 
 
 def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
-    """Why the run in ``run_dir`` cannot serve ``request`` (``None``: it can, to be resumed or reused as is).
-
-    The run's ``config.json`` must record the same algorithm, steps, seed, environment settings,
-    hyperparameters and package versions, and the run must have a checkpoint to continue from.
-    """
+    """Why the run in ``run_dir`` cannot serve ``request`` (``None``: it can): its ``config.json`` must record the
+    same settings, hyperparameters and versions, and it must have a checkpoint."""
     cfg_file = run_dir / "config.json"
     if not cfg_file.is_file() or not (run_dir / "checkpoint.json").is_file():
         return "no complete earlier run"
@@ -293,9 +282,7 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
 
 
 def verify_outputs(out: Path) -> dict[str, str]:
-    """The manifest of a compare's output set, after checking every file against it
-    (:func:`amigo_gym.tools.runs.verify_manifest`: ``FileNotFoundError`` without ``manifest.json``,
-    ``CorruptFileError``)."""
+    """The manifest of the output set, after checking every file (:func:`amigo_gym.tools.runs.verify_manifest`)."""
     return runs.verify_manifest(out, MANIFEST)
 
 
@@ -332,15 +319,13 @@ class CompareSettings:
 
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option and its allowed range on a bad setting."""
-        for name in ("train_steps", "seed"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= 0, got {getattr(self, name)}")
-        if self.seeds < 1:
-            raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
+        for name, low in (("train_steps", 0), ("seed", 0), ("seeds", 1)):
+            if getattr(self, name) < low:
+                raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {getattr(self, name)}")
 
 
 def run_compare(s: CompareSettings) -> dict[str, Any]:
-    """Run the main job (module docstring); return the JSON document."""
+    """Run the main job; the JSON document."""
     out = Path(s.out)
     with runs.RunLock(out):
         runs.clean_temporaries(out)
@@ -350,8 +335,8 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
 def _run_compare(s: CompareSettings) -> dict[str, Any]:
     out, models = Path(s.out), Path(s.models) if s.models else None
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
-    train_steps, seeds, steps, seed, plots, progress = s.train_steps, s.seeds, s.steps, s.seed, s.plots, s.progress
-    proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
+    train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
+    proto = EvalProtocol(steps=s.steps, perturbed_seeds=tuple(range(100, 100 + s.seeds)))
     agents = default_agents(EnvParams(), proto.analytic_gain)
     specs = [AgentSpec(name) for name in agents]  # the benchmark builds the classical ones per scenario
     training: dict[str, Any] = {}
@@ -401,10 +386,8 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     bench: dict[str, Any] | None = None
     if s.benchmark:
         generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
-        say(
-            "quick benchmark (amigo-gym benchmark --quick) on these agents"
-            + (f" and {generalists}" if generalists else "")
-        )
+        also = f" and {generalists}" if generalists else ""
+        say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
         bench = quick_benchmark(specs, generalists, progress=progress)
         extra["benchmark"] = json_safe(bench)
         extra["benchmark_plots"] = plots and bool(bench["results"])

@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.task.v1 import feasible_random_curvature
-from amigo_gym.tools.training.intervals import Z95 as Z95  # re-exported: the cells' interval
-from amigo_gym.tools.training.intervals import wilson_interval
+from amigo_gym.tools.training.intervals import Z95 as Z95
+from amigo_gym.tools.training.intervals import failure_rate
+from amigo_gym.tools.training.intervals import wilson_interval as wilson_interval
 from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
 
 #: speeds of the cells [m/s]: the ends of the training distribution's range
@@ -37,8 +38,8 @@ POOL = 2**20
 def cell_specs(
     speeds: Sequence[float] = CURVATURE_SPEEDS, levels: int = LEVELS, episodes: int = CURVATURE_EPISODES
 ) -> tuple[Scenario, ...]:
-    """The cells (module docstring): AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``,
-    ``episodes`` seeds from 100, held out; each description names ``K(v)``, the level and the curvature."""
+    """The held-out cells: AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``, ``episodes``
+    seeds from 100."""
     if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
         raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
@@ -57,9 +58,8 @@ def cell_specs(
 
 
 def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
-    """Run ``agent`` deterministically, one episode per seed of the cell ``sc``
-    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); per episode the benchmark's metrics plus the tags
-    ``path_id``, ``path_max_kappa`` [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m] (module docstring)."""
+    """Per episode of the cell ``sc`` the benchmark's metrics plus ``seed_env``, ``path_id``, ``path_max_kappa``
+    [1/m], ``kappa_end`` [1/m] and ``progress_end`` [m]."""
     paths: list[Any] = []
     ids: list[int] = []
     progress = np.zeros(len(sc.seeds))
@@ -72,31 +72,19 @@ def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
         progress[i] = float(info["progress"])
 
     recs = run_scenario(agent, sc, on_reset=read_paths, on_row=read_progress)
-    out = []
-    for i, r in enumerate(recs):
-        m: dict[str, Any] = dict(r.metrics())
-        s_end = min(max(progress[i], 0.0), float(paths[i].length))
-        m |= {
-            "seed_env": int(sc.seeds[i]),
-            "path_id": ids[i],
-            "path_max_kappa": float(paths[i].max_abs_curvature),
-            "kappa_end": float(abs(np.asarray(paths[i].curvature(s_end)))),
-            "progress_end": float(progress[i]),
-        }
-        out.append(m)
+    out: list[dict[str, Any]] = []
+    for i, (r, path) in enumerate(zip(recs, paths, strict=True)):
+        k_end = float(abs(np.asarray(path.curvature(min(max(progress[i], 0.0), float(path.length))))))
+        tags = {"seed_env": int(sc.seeds[i]), "path_id": ids[i], "path_max_kappa": float(path.max_abs_curvature)}
+        out.append(r.metrics() | tags | {"kappa_end": k_end, "progress_end": float(progress[i])})
     return out
 
 
 def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BIN_EDGES) -> list[dict[str, Any]]:
-    """Failure rate per (agent, speed, bin) of tagged episodes (records with ``agent``, ``speed``, ``k_limit``,
-    ``path_max_kappa``, ``failure``): ``x = path_max_kappa / k_limit`` in ``[edges[b], edges[b+1])`` (the last bin
-    closed; an ``x`` outside ``[edges[0], edges[-1]]`` is an error: the cells' paths stay within ``K(v)``).
-
-    Returns:
-        rows ``agent``, ``speed`` [m/s], ``bin``, ``x_lo``, ``x_hi`` [-], ``kappa_lo``, ``kappa_hi`` [1/m], ``n``,
-        ``failures``, ``rate`` (None when ``n = 0``), ``ci95`` (Wilson), ``kappa_end_failed`` (median ``kappa_end`` of
-        the failed episodes [1/m], None without failures), ordered by agent (first seen), speed, bin.
-    """
+    """Failure rate per (agent, speed, bin) of tagged episodes, binned by ``x = path_max_kappa / k_limit`` in
+    ``[edges[b], edges[b+1])`` (the last bin closed; an ``x`` outside the edges is an error): rows with ``x_lo``,
+    ``x_hi``, ``kappa_lo``, ``kappa_hi`` [1/m], :func:`~amigo_gym.tools.training.intervals.failure_rate`'s keys and
+    ``kappa_end_failed`` (median ``kappa_end`` of the failures [1/m])."""
     e = np.asarray(edges, dtype=np.float64)
     if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0) or not np.all(np.isfinite(e)):
         raise ValueError(f"bin_table: edges must be 2 or more increasing finite numbers, got {list(edges)!r}")
@@ -117,23 +105,18 @@ def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BI
         k_end = np.array([float(ep.get("kappa_end", math.nan)) for ep in eps])
         for j in range(e.size - 1):
             sel = b == j
-            n = int(sel.sum())
-            f = int(fail[sel].sum())
-            lo, hi = wilson_interval(f, n)
             kf = k_end[sel & fail]
             rows.append({
                 "agent": agent, "speed": v, "bin": j, "x_lo": float(e[j]), "x_hi": float(e[j + 1]),
-                "kappa_lo": float(e[j] * k_v), "kappa_hi": float(e[j + 1] * k_v), "n": n, "failures": f,
-                "rate": f / n if n else None, "ci95": [lo, hi] if n else None,
+                "kappa_lo": float(e[j] * k_v), "kappa_hi": float(e[j + 1] * k_v),
+                **failure_rate(int(fail[sel].sum()), int(sel.sum())),
                 "kappa_end_failed": float(np.median(kf)) if kf.size else None,
             })  # fmt: skip
     return rows
 
 
 def run_curvature(agents: Sequence[Any], scenarios: Sequence[Any], *, progress: bool = True) -> dict[str, Any]:
-    """Every agent seed on every cell (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
-    ``protocol``, ``scenarios``, ``agents``, ``episodes`` (tagged, one record per episode), ``table``
-    (:func:`bin_table`), ``unavailable``, ``wall_time_s``."""
+    """Every agent seed on every cell; the JSON document (``episodes`` tagged, ``table``: :func:`bin_table`)."""
     t0 = time.perf_counter()
     grid = run_grid(agents, scenarios, evaluate_tagged, desc="curvature", progress=progress)
     episodes = [

@@ -36,9 +36,8 @@ _NAME = re.compile(r"^(?P<algo>[A-Za-z][A-Za-z0-9]*)_s(?P<seed>\d+)$")
 
 @dataclass(frozen=True)
 class Run:
-    """One training run: algorithm (``config.json``'s or the folder name's), seed, folder, environment (``None``: not
-    recorded), the evaluations of ``eval.json`` (sorted by ``timesteps``, the last kept per step) and the group it is
-    aggregated under (the algorithm; with the env id if the runs differ in it)."""
+    """One training run: its ``eval.json`` evaluations (sorted by ``timesteps``, the last kept per step) and the
+    ``group`` it is aggregated under (the algorithm, with the env id if the runs differ in it)."""
 
     algo: str
     seed: int
@@ -49,7 +48,6 @@ class Run:
 
 
 def _identify(run_dir: Path) -> tuple[str, int, str | None]:
-    """``(algo, seed, env_id)`` of a run folder from its ``config.json``, else its name; ``ValueError`` if neither."""
     cfg_file = run_dir / "config.json"
     if cfg_file.is_file():
         cfg = runs.read_json(cfg_file)
@@ -80,12 +78,8 @@ def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
 
 
 def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, str]]]:
-    """The run folders in ``folders`` (module docstring): ``(runs, skipped)``, each skip with its reason.
-
-    Raises:
-        FileNotFoundError: a folder does not exist.
-        ValueError: the same (group, seed) twice.
-    """
+    """The run folders in ``folders``: ``(runs, skipped)``, each skip with its reason. Raises
+    ``FileNotFoundError`` for a missing folder, ``ValueError`` for the same (group, seed) twice."""
     found: list[Run] = []
     skipped: list[dict[str, str]] = []
     for folder in map(Path, folders):
@@ -93,25 +87,21 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
             raise FileNotFoundError(f"--runs: no directory {folder}")
         candidates = [folder] if (folder / "eval.json").is_file() else sorted(p for p in folder.iterdir() if p.is_dir())
         for run_dir in candidates:
-            if not (run_dir / "eval.json").is_file():
-                skipped.append({"path": str(run_dir), "reason": "no eval.json"})
-                continue
             try:
+                if not (run_dir / "eval.json").is_file():
+                    raise ValueError("no eval.json")
                 algo, seed, env_id = _identify(run_dir)
-                evals = _read_evals(run_dir / "eval.json")
+                if not (evals := _read_evals(run_dir / "eval.json")):
+                    raise ValueError("eval.json holds no evaluation yet")
             except ValueError as exc:  # includes CorruptFileError
                 skipped.append({"path": str(run_dir), "reason": " ".join(str(exc).split())})
                 continue
-            if not evals:
-                skipped.append({"path": str(run_dir), "reason": "eval.json holds no evaluation yet"})
-                continue
             found.append(Run(algo, seed, run_dir, env_id, evals))
     several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1
-
-    def group(r: Run) -> str:
-        return f"{r.algo} {r.env_id}" if several_envs and r.env_id is not None else r.algo
-
-    runs_out = [Run(r.algo, r.seed, r.path, r.env_id, r.evals, group(r)) for r in found]
+    runs_out = [
+        Run(r.algo, r.seed, r.path, r.env_id, r.evals, f"{r.algo} {r.env_id}" if several_envs and r.env_id else r.algo)
+        for r in found
+    ]
     seen: dict[tuple[str, int], Path] = {}
     for r in runs_out:
         key = (r.group, r.seed)
@@ -123,7 +113,6 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
 
 
 def _series(run: Run, axis: str, metric: str) -> tuple[np.ndarray, np.ndarray]:
-    """The run's ``(x, y)`` of ``metric`` against ``axis``, finite points only, sorted by ``x``."""
     pts = [(float(e[axis]), float(e[metric])) for e in run.evals if _finite(e.get(axis)) and _finite(e.get(metric))]
     pts.sort(key=lambda p: p[0])
     a = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
@@ -131,9 +120,8 @@ def _series(run: Run, axis: str, metric: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, seed: int = 0) -> dict[str, Any] | None:
-    """Mean over ``runs`` (training seeds) of ``metric`` against ``axis`` (step functions, on the union of the
-    evaluation points in the range every seed covers) with its pointwise 95 % percentile bootstrap band over seeds;
-    ``None`` if the seeds share no range."""
+    """Mean over ``runs`` of ``metric`` against ``axis`` (step functions on the range every seed covers) with its
+    pointwise 95 % bootstrap band over seeds; ``None`` if the seeds share no range."""
     series = {r.seed: _series(r, axis, metric) for r in runs}
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:
@@ -156,46 +144,33 @@ def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, se
     }
 
 
-def threshold_time(run: Run, metric: str = THRESHOLD_METRIC, threshold: float = DEFAULT_THRESHOLD_M) -> dict[str, Any]:
-    """The run's first evaluation with ``metric <= threshold``: ``reached``, its ``timesteps`` and ``wall_time_s``."""
-    for e in run.evals:
-        if _finite(e.get(metric)) and float(e[metric]) <= threshold:
-            wall: Any = e.get("wall_time_s")
-            return {
-                "seed": run.seed,
-                "reached": True,
-                "timesteps": int(e["timesteps"]),
-                "wall_time_s": float(wall) if _finite(wall) else None,
-            }
-    last = run.evals[-1]
-    return {
-        "seed": run.seed,
-        "reached": False,
-        "timesteps": None,
-        "wall_time_s": None,
-        "last_timesteps": int(last["timesteps"]),
-        "last_value": float(last[metric]) if _finite(last.get(metric)) else None,
-    }
-
-
-def _median_or_none(values: Sequence[float | None]) -> float | None:
-    """Median counting ``None`` (never reached) as later than everything; ``None`` if that median is not reached."""
-    if not values:
-        return None
-    med = float(np.median([math.inf if v is None else v for v in values]))
-    return None if math.isinf(med) else med
-
-
 def threshold_summary(
     runs: Sequence[Run], metric: str = THRESHOLD_METRIC, threshold: float = DEFAULT_THRESHOLD_M
 ) -> dict[str, Any]:
-    """Per-seed threshold times of a group, how many seeds reached it and the medians (module docstring)."""
-    per_seed = [threshold_time(r, metric, threshold) for r in runs]
+    """Per seed the first evaluation with ``metric <= threshold``, how many seeds reached it and the medians (a seed
+    that never did counting as later than any that did; ``None``: the median is not reached)."""
+    per_seed = []
+    for run in runs:
+        hit = next((e for e in run.evals if _finite(e.get(metric)) and float(e[metric]) <= threshold), None)
+        p: dict[str, Any] = {"seed": run.seed, "reached": hit is not None, "timesteps": None, "wall_time_s": None}
+        if hit is not None:
+            wall = float(hit["wall_time_s"]) if _finite(hit.get("wall_time_s")) else None
+            p |= {"timesteps": int(hit["timesteps"]), "wall_time_s": wall}
+        else:
+            last = run.evals[-1]
+            value = float(last[metric]) if _finite(last.get(metric)) else None
+            p |= {"last_timesteps": int(last["timesteps"]), "last_value": value}
+        per_seed.append(p)
+
+    def median(key: str) -> float | None:
+        med = float(np.median([math.inf if p[key] is None else p[key] for p in per_seed] or [math.inf]))
+        return None if math.isinf(med) else med
+
     return {
         "n_seeds": len(per_seed),
         "n_reached": sum(p["reached"] for p in per_seed),
-        "median_timesteps": _median_or_none([p["timesteps"] for p in per_seed]),
-        "median_wall_time_s": _median_or_none([p["wall_time_s"] if p["reached"] else None for p in per_seed]),
+        "median_timesteps": median("timesteps"),
+        "median_wall_time_s": median("wall_time_s"),
         "per_seed": per_seed,
     }
 
@@ -209,11 +184,8 @@ def learning_curves(
     bootstrap_seed: int = 0,
     progress: bool = False,
 ) -> dict[str, Any]:
-    """Read the runs of ``folders``, compute every curve and the threshold table; the JSON document.
-
-    Raises:
-        ValueError: no usable run, bad ``threshold`` or ``reps``.
-    """
+    """Every curve and the threshold table of the runs in ``folders``; the JSON document. Raises ``ValueError``: no
+    usable run, bad ``threshold`` or ``reps``."""
     from tqdm.auto import tqdm
 
     if not (math.isfinite(threshold) and threshold > 0):
@@ -249,15 +221,8 @@ def learning_curves(
             "reached it counting as later than any that did",
         },
         "runs": [
-            {
-                "group": r.group,
-                "algo": r.algo,
-                "seed": r.seed,
-                "env_id": r.env_id,
-                "path": str(r.path),
-                "evaluations": len(r.evals),
-                "last_timesteps": int(r.evals[-1]["timesteps"]),
-            }
+            {"group": r.group, "algo": r.algo, "seed": r.seed, "env_id": r.env_id, "path": str(r.path)}
+            | {"evaluations": len(r.evals), "last_timesteps": int(r.evals[-1]["timesteps"])}
             for r in found
         ],
         "skipped": skipped,
@@ -268,10 +233,6 @@ def learning_curves(
 
 
 # --------------------------------------------------------------------------- reports
-def _fmt(x: float | None, scale: float = 1.0, fmt: str = ".3g") -> str:
-    return "–" if x is None else f"{scale * x:{fmt}}"
-
-
 def _final(c: Mapping[str, Any] | None, scale: float) -> str:
     if c is None:
         return "–"
@@ -298,9 +259,8 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             f"s{q['seed']}: {q['timesteps']}" if q["reached"] else f"s{q['seed']}: not by {q['last_timesteps']}"
             for q in t["per_seed"]
         )
-        med_steps = "not reached" if t["median_timesteps"] is None else f"{t['median_timesteps']:.0f}"
-        med_wall = "not reached" if t["median_wall_time_s"] is None else f"{t['median_wall_time_s']:.0f}"
-        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {med_steps} | {med_wall} | {per} |")
+        med = ("not reached" if t[k] is None else f"{t[k]:.0f}" for k in ("median_timesteps", "median_wall_time_s"))
+        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {' | '.join(med)} | {per} |")
     lines += [
         "",
         "Final values (last step every seed reached; mean [95 % interval]):",
@@ -310,9 +270,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     ]
     for g, axes in doc["curves"].items():
         h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
-        n = h["n_seeds"] if h else (ret["n_seeds"] if ret else 0)
-        step = _fmt(h["x"][-1] if h else (ret["x"][-1] if ret else None), fmt=".0f")
-        lines.append(f"| {g} | {n} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
+        c = h or ret
+        step = f"{c['x'][-1]:.0f}" if c else "–"
+        lines.append(f"| {g} | {c['n_seeds'] if c else 0} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
     lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
     if doc["skipped"]:
         lines += ["Skipped folders:", ""] + [f"- {s['path']}: {s['reason']}" for s in doc["skipped"]] + [""]
@@ -322,7 +282,6 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
     """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
     plt = pyplot()
-
     fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
         for i, (g, axes) in enumerate(doc["curves"].items()):
@@ -366,8 +325,7 @@ def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> l
 # --------------------------------------------------------------------------- command line
 @dataclass(frozen=True)
 class CurvesSettings:
-    """Options of ``amigo-gym curves`` (the option of the same name, or its ``cli(flag)``); checked by
-    :func:`learning_curves`.
+    """Options of ``amigo-gym curves``; checked by :func:`learning_curves`.
 
     Attributes:
         runs: folders of run folders, or run folders (with eval.json) [dir] (required).

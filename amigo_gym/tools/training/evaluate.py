@@ -14,7 +14,7 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,27 +42,14 @@ ALGOS = ("ppo", "sac", "td3")
 FAST_ALGO = "fastppo"
 SCENARIOS = ("nominal", "paper_start", "perturbed")
 SETTLED_BAND_M = 1e-3
-
-
-class Agent(Protocol):
-    """Anything with SB3's ``predict`` (SB3 models, :class:`amigo_gym.policies.analytic.AnalyticPolicy`)."""
-
-    def predict(
-        self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
-    ) -> tuple[Any, Any]: ...
+#: anything with SB3's ``predict(obs, state=, episode_start=, deterministic=) -> (action, state)``
+Agent = Any
 
 
 @dataclass(frozen=True)
 class EvalProtocol:
-    """The fixed evaluation protocol (written to the JSON as ``protocol``).
-
-    Attributes:
-        steps: steps per episode (default 400: 40 s at dt = 0.1 s, more than one lap).
-        perturbed_seeds: reset seeds of the perturbed scenario.
-        settle_time_s: start of the "settled" window of the ``*_settled`` metrics [s].
-        analytic_gain: feedback gain of the reference analytic policy [1/s].
-        scenarios: which scenarios to run.
-    """
+    """The fixed evaluation protocol: ``steps`` per episode (400: 40 s), the ``perturbed_seeds``, the start of the
+    settled window ``settle_time_s`` [s], the reference policy's ``analytic_gain`` [1/s], the ``scenarios`` run."""
 
     steps: int = 400
     perturbed_seeds: tuple[int, ...] = tuple(range(100, 110))
@@ -73,10 +60,8 @@ class EvalProtocol:
     def __post_init__(self) -> None:
         if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 1:
             raise ValueError(f"EvalProtocol.steps must be an integer >= 1, got {self.steps!r}")
-        if not self.perturbed_seeds or any(not isinstance(s, int) or s < 0 for s in self.perturbed_seeds):
-            raise ValueError(
-                f"EvalProtocol.perturbed_seeds must be non-negative integers, got {self.perturbed_seeds!r}"
-            )
+        if not (seeds := self.perturbed_seeds) or any(not isinstance(s, int) or s < 0 for s in seeds):
+            raise ValueError(f"EvalProtocol.perturbed_seeds must be non-negative integers, got {seeds!r}")
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
@@ -86,15 +71,9 @@ class EvalProtocol:
 
 @dataclass
 class Trajectory:
-    """One episode, sampled after every step ``t = dt .. T`` (``T`` steps; index 0 is after the first action).
-
-    Attributes:
-        time: ``(T,)`` [s]. e: cross-track error of H ``(T,)`` [m]. h: H ``(T, 2)`` [m].
-        rates: applied wheel rates ``(T, 2)`` [rad/s]. angles: wheel angles ``(T, 2)`` [rad].
-        ref_rates: analytic reference rates on the agent's observations ``(T, 2)`` [rad/s].
-        arc: arc length of H's closest point, unwrapped ``(T,)`` [m]. ret: return. terminated: left the path.
-        h0: H at the start ``(2,)`` [m].
-    """
+    """One episode of ``T`` steps, sampled after each step: ``time`` [s], cross-track error ``e`` [m], ``h`` (T, 2)
+    [m], wheel ``rates`` [rad/s] and ``angles`` [rad], the analytic ``ref_rates`` [rad/s], ``arc`` (H's unwrapped
+    arc length [m]), the return ``ret``, ``terminated`` (left the path), ``h0`` (H at the start [m])."""
 
     time: Array
     e: Array
@@ -109,11 +88,8 @@ class Trajectory:
 
 
 def steady_start_pose(params: EnvParams) -> Array:
-    """Pose ``(x_A, y_A, beta)`` with H at the circle's start point in the closed-form steady state.
-
-    ``beta = theta(0) - d atan(l3 / R_A)`` (:func:`amigo_gym.model.kinematics.circle_steady_state`), A ``l3``
-    behind H.
-    """
+    """Pose ``(x_A, y_A, beta)`` with H at the circle's start in the closed-form steady state
+    (``beta = theta(0) - d atan(l3 / R_A)``)."""
     path = make_path(params)
     if params.path != "circle":
         raise ValueError(f"the nominal scenario needs path='circle', got {params.path!r}")
@@ -124,31 +100,27 @@ def steady_start_pose(params: EnvParams) -> Array:
 
 
 def protocol_scenarios(proto: EvalProtocol, params: EnvParams | None = None) -> tuple[Scenario, ...]:
-    """The protocol's scenarios for the engine (:mod:`amigo_gym.tools.training.task_metrics`): ``nominal`` and
-    ``paper_start`` one episode from a fixed pose, ``perturbed`` one per seed from the env's random start."""
+    """The protocol's scenarios: ``nominal`` and ``paper_start`` one episode from a fixed pose, ``perturbed`` one per
+    seed from the env's random start."""
     params = params or EnvParams()
     poses = {
         "nominal": (tuple(steady_start_pose(params).tolist()), "H on the circle, steady heading lag"),
         "paper_start": ((-params.robot.l3, 0.0, 0.0), "H at the origin, beta = 0"),
         "perturbed": (None, "env's random start (reset(seed=s))"),
     }
-    return tuple(
-        Scenario(
-            name,
-            ENV_ID,
-            seeds=proto.perturbed_seeds if poses[name][0] is None else (0,),
-            max_steps=proto.steps,
-            description=poses[name][1],
-            settle_time_s=proto.settle_time_s,
-            pose=poses[name][0],
+    out = []
+    for name in proto.scenarios:
+        pose, desc = poses[name]
+        seeds = proto.perturbed_seeds if pose is None else (0,)
+        out.append(
+            Scenario(name, ENV_ID, {}, seeds, proto.steps, False, desc, settle_time_s=proto.settle_time_s, pose=pose)
         )
-        for name in proto.scenarios
-    )
+    return tuple(out)
 
 
 def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
-    """The episodes of ``sc`` (:func:`amigo_gym.tools.training.task_metrics.run_scenario`) as :class:`Trajectory`
-    rows, with the analytic policy's rates (gain ``gain`` [1/s]) on the agent's observations as the reference."""
+    """The episodes of ``sc`` as :class:`Trajectory` rows, the analytic policy's rates (gain ``gain`` [1/s]) on the
+    agent's observations as the reference."""
     keys = ("time", "e", "h", "rates", "angles", "ref_rates")
     cols: list[dict[str, list[Any]]] = [{k: [] for k in keys} for _ in sc.seeds]
     start: dict[str, Any] = {}
@@ -170,8 +142,7 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
     out = []
     for rec, col, h0 in zip(recs, cols, start["h0"], strict=True):
         arrays = {k: np.asarray(v, dtype=np.float64) for k, v in col.items()}
-        for k in ("h", "rates", "angles", "ref_rates"):
-            arrays[k] = arrays[k].reshape(-1, 2)
+        arrays |= {k: arrays[k].reshape(-1, 2) for k in keys[2:]}  # h, rates, angles, ref_rates
         # arc length of H's closest point, unwrapped at one lap on the closed circle
         ds = np.diff([float(path.project(h).s) for h in (h0, *arrays["h"])])
         if path.length < math.inf:
@@ -181,24 +152,14 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
 
 
 def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
-    """One episode of ``agent`` on ``env``'s id and settings after ``reset(**reset_kwargs)`` (``seed``, or
-    ``options={"pose": ...}``), at most ``steps`` steps (:func:`trajectories`)."""
-    spec = env.spec
-    limit = spec.max_episode_steps or steps
-    pose = (reset_kwargs.get("options") or {}).get("pose")
-    sc = Scenario(
-        "rollout",
-        spec.id,
-        dict(spec.kwargs),
-        seeds=(int(reset_kwargs.get("seed") or 0),),
-        max_steps=min(steps, limit),
-        pose=None if pose is None else tuple(np.asarray(pose, dtype=np.float64).tolist()),
-    )
-    return trajectories(agent, sc, gain)[0]
+    """One episode of ``agent`` on ``env``'s id and settings after ``reset(**reset_kwargs)``, at most ``steps``."""
+    spec, pose = env.spec, (reset_kwargs.get("options") or {}).get("pose")
+    seeds, limit = (int(reset_kwargs.get("seed") or 0),), min(steps, spec.max_episode_steps or steps)
+    pose = None if pose is None else tuple(np.asarray(pose, dtype=np.float64).tolist())
+    return trajectories(agent, Scenario("rollout", spec.id, dict(spec.kwargs), seeds, limit, pose=pose), gain)[0]
 
 
 def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
-    """First time after which ``|e| <= band`` for the rest of the episode (``None`` if never / terminated)."""
     if tr.terminated or tr.e.size == 0:
         return None
     outside = np.flatnonzero(np.abs(tr.e) > band)
@@ -209,7 +170,7 @@ def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None
 
 
 def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
-    """Pooled metrics of one (agent, scenario) (keys documented in the module docstring)."""
+    """Pooled metrics of one (agent, scenario)."""
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
     e = np.concatenate([t.e for t in trajs])
     settled = [t.time >= proto.settle_time_s - 1e-9 for t in trajs]
@@ -251,19 +212,15 @@ def _classical(name: str) -> Callable[[Any], Any]:
         if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
-            if name == "analytic":
-                return AnalyticTrackingPolicy(params)
-            if name == "pure_pursuit":
-                return PurePursuitPolicy(params)
-            if name == "pure_pursuit_textbook":  # Cao et al. (2024)'s preset: from A, 0.2 m ahead, |omega| <= 1 rad/s
-                return PurePursuitPolicy.textbook(params)
+            v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
+            v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
+            if name in v1:
+                return v1[name](params)
             raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
         if not isinstance(params, EnvParams):
             raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
-        if name == "analytic":
-            return AnalyticPolicy(params)
-        if name == "analytic_ff":
-            return AnalyticPolicy(params, feedforward_only=True)
+        if name in ("analytic", "analytic_ff"):
+            return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
         raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
 
     return make
@@ -277,14 +234,13 @@ CLASSICAL: dict[str, Callable[[Any], Any]] = {
 
 @dataclass
 class NormalizedAgent:
-    """A model trained on ``VecNormalize``d observations: normalizes each observation with the saved statistics."""
+    """A model trained on ``VecNormalize``d observations, normalizing each observation with the saved statistics."""
 
     model: Any
     vecnormalize: Any
 
     @property
     def observation_space(self) -> Any:
-        """The model's observation space (the benchmark checks it against a scenario's)."""
         return self.model.observation_space
 
     def predict(
@@ -296,15 +252,9 @@ class NormalizedAgent:
 
 @dataclass
 class AgentSpec:
-    """One training seed of one agent: a classical policy (``path is None``, built per environment) or a model zip.
-
-    Attributes:
-        name: the agent's name in the results. seed: its training seed.
-        path: the model zip (SB3, or the fast PPO's numpy weights). algo: ``ppo``, ``sac``, ``td3`` or ``fastppo*``.
-        manifest: the JSON beside the zip (``<zip>.json``: ``algo``, ``seed``, ``sha256``), as read.
-        record: the training record beside it (``<algo>.json`` or a run's ``run.json``), read when it is loaded.
-        vecnormalize: the ``VecNormalize`` statistics saved beside it (``vecnormalize.pkl``), if any.
-    """
+    """One training seed of one agent: a classical policy (``path is None``) or a model zip (``algo``: ``ppo``,
+    ``sac``, ``td3`` or ``fastppo*``) with the ``manifest`` read beside it (``<zip>.json``), its training ``record``
+    (``<algo>.json`` or ``run.json``) and ``vecnormalize`` statistics, if any."""
 
     name: str
     seed: int = 0
@@ -317,28 +267,23 @@ class AgentSpec:
 
     @property
     def model(self) -> Path:
-        """The model zip."""
         return Path(str(self.path))
 
     @property
     def fast(self) -> bool:
-        """A fast PPO model (:class:`amigo_gym.policies.learned.FastPolicy`: numpy weights and JSON, no pickle)."""
+        """A :class:`amigo_gym.policies.learned.FastPolicy` model (numpy weights and JSON, no pickle)."""
         return str(self.algo).startswith(FAST_ALGO)
 
     def load(self, trust: bool = False) -> Agent:
-        """The model, as given (``_model``) or loaded on the CPU (with its ``VecNormalize`` statistics, if any).
-
-        Model zips and ``vecnormalize.pkl`` are pickles: loading one runs code. Each is checked before it is
-        unpickled (:func:`amigo_gym.tools.runs.check_pickle`): against the sha256 of the manifest or record beside it
-        (``sha256``; ``run.json``'s ``files``), then that it is trusted: shipped, written by a run of this
-        installation, or ``trust`` (``--trust-unverified``); else one line naming the file and the flag.
+        """The model, loaded on the CPU (with its ``VecNormalize`` statistics). Each pickle is checked first against
+        the sha256 its manifest or record gives, then that it is shipped, written here, or ``trust``ed.
 
         Raises:
-            CorruptFileError: a sha256 mismatch, or a file that is not a loadable model (one line naming it).
+            CorruptFileError: a sha256 mismatch or a file that is no loadable model (one line naming it).
             UntrustedFileError: a file not trusted (one line naming it and the flag).
         """
         if self._model is not None:
-            return self._model  # type: ignore[no-any-return]
+            return self._model
         record: Any = self.manifest
         if record is None and self.record is not None:
             record = read_json(self.record)
@@ -362,15 +307,15 @@ class AgentSpec:
         with corrupt_errors(self.model, f"{str(self.algo).upper()} model"):
             model = sb3_class(str(self.algo)).load(self.model, device="cpu")
         if self.vecnormalize is None:
-            return model  # type: ignore[no-any-return]
+            return model
         with corrupt_errors(self.vecnormalize, "VecNormalize statistics"), open(self.vecnormalize, "rb") as f:
             stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
         stats.training = False
         return NormalizedAgent(model, stats)
 
     def instantiate(self, env: Any) -> Any:
-        """The agent for ``env``: a classical policy built for it, or the model (:meth:`load`) if its observation
-        space matches the scenario's (:class:`Unavailable` otherwise)."""
+        """A classical policy built for ``env``, or the model if its observation space matches (else
+        :class:`Unavailable`)."""
         if self.path is None:
             return CLASSICAL[self.name](env)
         model: Any = self.load()
@@ -397,7 +342,6 @@ class AgentSpec:
 
 
 def _run_algo(run_dir: Path) -> str:
-    """The algorithm a run folder's ``config.json`` names."""
     cfg = run_dir / "config.json"
     try:
         algo = json.loads(cfg.read_text())["settings"]["algo"]
@@ -424,18 +368,12 @@ def _is_run(d: Path) -> bool:
 
 
 def v0_name(name: str) -> str:
-    """The name of a loaded AmigoBot-v0 model: ``<algo>_v0`` for the pretrained layout's ``<algo>.zip`` (as
-    ``amigo-gym benchmark`` and ``compare`` name them; the v1 generalists are ``<folder>_v1``), a run's own name
-    otherwise."""
+    """``<algo>_v0`` for the pretrained layout's ``<algo>.zip``, a run's own name otherwise."""
     return f"{name}_v0" if name in ALGOS else name
 
 
 def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
-    """The trained models at ``path``: whatever ``amigo-gym train`` writes, or the pretrained layout.
-
-    ``path`` may be a run folder (``model.zip`` with the ``config.json`` naming its algorithm), a
-    folder of run folders, a model ``.zip`` (a run's ``model.zip`` / ``best_model.zip``, or an
-    ``<algo>.zip``), or a folder of ``<algo>.zip`` files (``agents/pretrained``, ``train --export``).
+    """The trained models at ``path``: a run folder, a folder of them, a model ``.zip`` or a folder of ``<algo>.zip``.
 
     Raises:
         FileNotFoundError: ``path`` does not exist.
@@ -473,18 +411,18 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
 
 
 def load_model(ref: AgentSpec, trust: bool = False) -> Agent:
-    """Load a model :func:`find_models` found (:meth:`AgentSpec.load`)."""
+    """:meth:`AgentSpec.load`."""
     return ref.load(trust)
 
 
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
-    """Load every model :func:`find_models` finds at ``models``, by name (``trust``: :func:`load_model`)."""
+    """Every model :func:`find_models` finds at ``models``, loaded, by name."""
     return {ref.name: load_model(ref, trust) for ref in find_models(models)}
 
 
 def trained_agents(models: str | os.PathLike[str]) -> tuple[list[AgentSpec], dict[str, Any]]:
-    """The models at ``models`` (:func:`find_models`), loaded, named by :func:`v0_name`, each with the training seed
-    its record names (0 without one); and the training records by name."""
+    """The models at ``models``, loaded, named by :func:`v0_name`, with their records' training seeds (0 without);
+    and the training records by name."""
     specs, training = [], {}
     for ref in find_models(models):
         model = ref.load()
@@ -499,12 +437,8 @@ def trained_agents(models: str | os.PathLike[str]) -> tuple[list[AgentSpec], dic
 def evaluate_agents(
     agents: dict[str, Agent], proto: EvalProtocol | None = None
 ) -> tuple[list[dict[str, Any]], dict[str, dict[str, list[Trajectory]]]]:
-    """Roll every agent out on every scenario of ``proto``.
-
-    Returns:
-        ``(results, trajectories)``: one result dict per (agent, scenario) (``agent``, ``scenario`` and
-        the metrics of :func:`summarize`), and ``trajectories[agent][scenario]`` the episodes.
-    """
+    """Every agent on every scenario of ``proto``: ``(results, trajectories)``, one result per (agent, scenario)
+    (:func:`summarize`) and ``trajectories[agent][scenario]`` the episodes."""
     proto = proto or EvalProtocol()
     params = EnvParams()
     results: list[dict[str, Any]] = []
@@ -544,11 +478,8 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
-    """Top: H's trajectory of every agent against the circle (eq. 6), the whole lap and a zoom on the first 0.25 m
-    (first perturbed episode). Bottom: ``|e(t)|`` (log scale), nominal and first perturbed start, 1 mm band dotted.
-    """
+    """Top: H's trajectory of every agent against the circle, whole and near the start. Bottom: ``|e(t)|``."""
     plt = pyplot()
-
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
     top = "perturbed" if "perturbed" in have else sorted(have)[0]
     fig, axes = plt.subplots(2, 2, figsize=(12.0, 10.0))
@@ -582,11 +513,8 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
 def plot_wheels(
     trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path, scenario: str = "perturbed"
 ) -> None:
-    """One row per agent other than ``analytic`` (the paper's Figs. 2–5): its wheel angles [rad] against the
-    analytic policy's (wide, pale), its wheel rates [rad/s] over the first 10 s (steady rates dotted), and its wheel
-    angles minus the analytic policy's [rad]."""
+    """Per agent (the paper's Figs. 2–5): wheel angles, wheel rates over 10 s, angles minus the analytic policy's."""
     plt = pyplot()
-
     if "analytic" not in trajs:
         raise ValueError("plot_wheels needs the 'analytic' agent as the reference")
     ref = trajs["analytic"][scenario][0]
@@ -631,8 +559,8 @@ def write_outputs(
     plots: bool = True,
     markdown_path: Path | None = None,
 ) -> dict[str, Any]:
-    """Write the JSON (``protocol`` with the env settings and start poses, ``results``, ``extra``), the Markdown
-    table (``markdown_path``, default ``out/eval.md``) and the figures; return the JSON document."""
+    """Write the JSON (``protocol``, ``results``, ``extra``), the Markdown table (default ``out/eval.md``) and the
+    figures; the JSON document."""
     params = EnvParams()
     protocol = {
         "env_id": ENV_ID,
@@ -664,8 +592,7 @@ def write_outputs(
 
 
 def one_torch_thread() -> None:
-    """``torch.set_num_threads(1)`` when torch is installed: the policies are small MLPs, fastest on one thread
-    (more threads spin against the environment for the cores). The evaluating commands call it."""
+    """``torch.set_num_threads(1)`` when torch is installed: small MLPs run fastest on one thread."""
     try:
         import torch
     except ImportError:

@@ -1,23 +1,16 @@
-"""rliable's aggregate estimators (Agarwal et al., NeurIPS 2021; ``rliable`` v1.2.0), vectorised in numpy.
+"""rliable's aggregate estimators (Agarwal et al., NeurIPS 2021; ``rliable`` v1.2.0), vectorised in numpy, and the
+Wilson interval of a failure rate.
 
-Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scenarios.
-
-* :func:`iqm`: interquartile mean, ``scipy.stats.trim_mean(scores, 0.25, axis=None)``.
-* :func:`optimality_gap`: ``gamma - mean(min(scores, gamma))``; for a lower-is-better ``x`` with target ``g``,
-  applied to ``-x`` with ``gamma = -g``, it is ``mean(max(x - g, 0))``.
-* :func:`stratified_bootstrap`: rliable's ``StratifiedBootstrap`` (``task_bootstrap=False``): each replication
-  resamples the runs of every task with replacement; the interval is the percentile interval. With one run per
-  task it has zero width.
-* :func:`performance_profile`: the fraction of all scores above each ``tau``, with the same bootstrap.
-* :func:`wilson_interval`: the Wilson score interval of a binomial proportion (the curvature cells' failure rates).
-
-Why not rliable itself, and how the benchmark uses these: docs/benchmark.md.
+Scores are matrices ``(num_runs, num_tasks)``: training seeds by benchmark scenarios. The bootstrap is rliable's
+``StratifiedBootstrap`` (``task_bootstrap=False``): each replication resamples the runs of every task with
+replacement; with one run per task the interval has zero width. Why not rliable itself: docs/benchmark.md.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,10 +18,6 @@ from numpy.typing import ArrayLike, NDArray
 Array = NDArray[np.float64]
 Stat = Callable[[Array], Array]
 
-#: bootstrap replications of the interval estimates
-DEFAULT_REPS = 10_000
-#: bootstrap replications of the performance profiles (rliable's default)
-DEFAULT_PROFILE_REPS = 2_000
 #: largest number of resampled scores held in memory at once
 _CHUNK = 4_000_000
 
@@ -52,7 +41,8 @@ def iqm(scores: ArrayLike) -> Array:
 
 
 def optimality_gap(scores: ArrayLike, gamma: float = 1.0) -> Array:
-    """rliable's optimality gap over the last two axes: ``gamma - mean(min(scores, gamma))``."""
+    """rliable's optimality gap over the last two axes: ``gamma - mean(min(scores, gamma))`` (for a lower-is-better
+    ``x`` with target ``g``, applied to ``-x`` with ``gamma = -g``: ``mean(max(x - g, 0))``)."""
     x = np.asarray(scores, dtype=np.float64)
     return np.asarray(gamma - np.mean(np.minimum(x, gamma), axis=(-2, -1)), dtype=np.float64)
 
@@ -66,20 +56,11 @@ def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
 
 
 def stratified_bootstrap(
-    scores: ArrayLike, stat: Stat, *, reps: int = DEFAULT_REPS, size: float = 0.95, seed: int | np.random.Generator = 0
+    scores: ArrayLike, stat: Stat, *, reps: int = 10_000, size: float = 0.95, seed: int | np.random.Generator = 0
 ) -> tuple[Array, Array]:
-    """Point estimate and percentile interval of ``stat`` under rliable's stratified bootstrap.
-
-    Args:
-        scores: ``(num_runs, num_tasks)``.
-        stat: vectorised statistic: maps ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``.
-        reps: bootstrap replications.
-        size: coverage of the interval (0.95: the 2.5 and 97.5 percentiles).
-        seed: seed or generator of the resampling (the same seed gives the same interval).
-
-    Returns:
-        ``(point, interval)``: ``stat(scores)`` and an array ``(2, ...)`` of the lower and upper bounds.
-    """
+    """``(stat(scores), interval (2, ...))`` under rliable's stratified bootstrap: ``scores`` ``(num_runs,
+    num_tasks)``, ``stat`` vectorised from ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``, ``reps``
+    replications, percentile interval of coverage ``size``, resampling seeded by ``seed``."""
     x = _matrix(scores)
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ValueError(f"reps must be an integer >= 1, got {reps!r}")
@@ -104,15 +85,11 @@ def performance_profile(
     scores: ArrayLike,
     taus: Sequence[float] | Array,
     *,
-    reps: int = DEFAULT_PROFILE_REPS,
+    reps: int = 2_000,
     size: float = 0.95,
     seed: int | np.random.Generator = 0,
 ) -> tuple[Array, Array]:
-    """rliable's performance profile (score distribution) with its stratified-bootstrap interval.
-
-    Returns:
-        ``(profile, interval)``: ``(len(taus),)`` fractions of scores above each ``tau`` and ``(2, len(taus))``.
-    """
+    """rliable's performance profile: fractions of scores above each ``tau`` and their interval ``(2, len(taus))``."""
     t = np.asarray(taus, dtype=np.float64)
     return stratified_bootstrap(scores, lambda s: score_distribution(s, t), reps=reps, size=size, seed=seed)
 
@@ -138,3 +115,9 @@ def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float
     half = z * math.sqrt(p * (1 - p) / n + zz / (4 * n * n))
     den = 1 + zz / n
     return max(0.0, (centre - half) / den), min(1.0, (centre + half) / den)
+
+
+def failure_rate(failures: int, n: int) -> dict[str, Any]:
+    """``n``, ``failures``, ``rate`` and its Wilson ``ci95`` (both ``None`` for ``n = 0``)."""
+    lo, hi = wilson_interval(failures, n)
+    return {"n": n, "failures": failures, "rate": failures / n if n else None, "ci95": [lo, hi] if n else None}

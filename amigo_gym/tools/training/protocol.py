@@ -1,29 +1,10 @@
 """The benchmark protocol 2.0: validation cells for every decision, test cells that no decision sees.
 
 Every decision taken while building an agent (the sweep's objective, the curriculum, the choice between agents,
-early stopping) evaluates :func:`validation_cells` only. The benchmark reports suite ``"2.0"``
-(:data:`TEST`: ``amigo-gym benchmark --suite 2.0``) on :data:`TEST_SEEDS`, 30 episodes per cell, seeds no
-decision used. The split is in the cells themselves, not only in the seeds:
-
-=====================  =====================================  =========================================
-condition              validation                             test
-=====================  =====================================  =========================================
-ideal robot            circles R 1 m left, 0.5 m right;       circles R 0.75 m right at 0.25 m/s, 2 m
-                       figure-8 (size 4 m); lane change       left at 0.3 m/s; figure-8 size 5 m at
-                       0.3 m/s; random paths (pool, 20 m);    0.3 m/s; lane change 0.8 m over 4 m at
-                       mixed families                         0.2 m/s; random paths of 12 m,
-                                                              kappa <= 0.8 1/m; the paper's manoeuvre
-actuation delay        0.1 s (circle), 0.25 s (figure-8)      0.15 s (circle), 0.3 s (random paths)
-wrong wheels           radii and track +5 % (circle);         radii only +7 % (circle), track only
-                       right +5 %, left -5 % (figure-8)       -7 % (figure-8), right +7 %, left -7 %
-                                                              (lane change)
-noise                  5 mm, 0.01 rad, 0.2 rad/s              10 mm, 0.02 rad, 0.4 rad/s (random paths)
-AmigoBot-v0            the paper's circle at 0.2 m/s          the circle at 0.1 and 0.4 m/s, dt 0.2 s
-=====================  =====================================  =========================================
-
-No test cell has a validation cell's ``(env_id, env_kwargs)``, and the seed ranges are disjoint
-(``tests/test_protocol.py``, which also runs the sweep's objective and checks that it loads no test cell).
-A released suite is never edited: a change is a new version beside it.
+early stopping) evaluates :func:`validation_cells` only; the benchmark reports suite ``"2.0"`` (:data:`TEST`,
+``amigo-gym benchmark --suite 2.0``) on :data:`TEST_SEEDS`. No test cell has a validation cell's ``(env_id,
+env_kwargs)`` and the seed ranges are disjoint (docs/benchmark.md, "Protocol 2.0"). A released suite is never edited:
+a change is a new version beside it.
 """
 
 from __future__ import annotations
@@ -55,8 +36,8 @@ def cell(
     duration: float = 40.0,
     **kw: Any,
 ) -> Scenario:
-    """A suite's scenario: AmigoBot-v0 with ``gym.make``'s keywords ``kw`` for 400 steps, or AmigoBot-v1 with ``dt``
-    (0.1 s), ``randomize="none"`` and ``kw`` for ``duration`` [s]; ``max_steps`` in ``kw`` sets the length."""
+    """A suite's scenario: AmigoBot-v0 with ``kw`` for 400 steps, or AmigoBot-v1 with ``dt`` (0.1 s),
+    ``randomize="none"`` and ``kw`` for ``duration`` [s]; ``max_steps`` in ``kw`` sets the length."""
     dt = kw.get("dt", 0.1)
     steps = kw.pop("max_steps", 400 if env_id == "AmigoBot-v0" else round(duration / dt))
     kwargs = kw if env_id == "AmigoBot-v0" else {"dt": dt, "randomize": "none", **kw}
@@ -119,17 +100,13 @@ TEST: tuple[Scenario, ...] = (
 
 
 def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tuple[Scenario, ...]:
-    """The validation cells of ``env_id`` on the first ``episodes`` of :data:`VALIDATION_SEEDS`, episodes cut to
-    ``max_steps`` steps when ``max_steps > 0``: what every tuning decision evaluates. Never a test cell or seed.
-
-    Raises:
-        ValueError: ``episodes`` outside ``[1, len(VALIDATION_SEEDS)]``, or no validation cell on ``env_id``.
-    """
+    """The validation cells of ``env_id`` on the first ``episodes`` of :data:`VALIDATION_SEEDS`, cut to ``max_steps``
+    steps when ``max_steps > 0``. Raises ``ValueError``: ``episodes`` out of range, no cell on ``env_id``."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= len(VALIDATION_SEEDS):
         raise ValueError(f"episodes must be an integer in [1, {len(VALIDATION_SEEDS)}], got {episodes!r}")
     seeds = VALIDATION_SEEDS[:episodes]
     cells = tuple(
-        replace(sc, seeds=seeds, max_steps=min(sc.max_steps, max_steps) if max_steps > 0 else sc.max_steps)
+        replace(sc, seeds=seeds).cut(episodes, max_steps if max_steps > 0 else sc.max_steps)
         for sc in VALIDATION
         if sc.env_id == env_id
     )

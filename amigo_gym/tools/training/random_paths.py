@@ -18,8 +18,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from amigo_gym.paths import from_points
-from amigo_gym.tools.training.intervals import wilson_interval
-from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.intervals import failure_rate
+from amigo_gym.tools.training.task_metrics import Scenario, run_grid
 
 #: the authors' failure_rate.npy at 0.2 m/s: tolerance [m] -> failure rate
 PUBLISHED = {0.1: 0.276, 0.2: 0.053, 0.3: 0.002}
@@ -36,13 +36,9 @@ def _natural(s: Any, v: Any) -> CubicSpline:
 
 
 def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray, float]:
-    """One path of the protocol from the authors' ``RandomState`` calls: points ``(n, 2)`` [m] every ``spacing``
-    [m] along the arc-length spline, and its peak |curvature| [1/m].
-
-    Five waypoints from (0, 0), legs of length U(0.5, 2) m in direction U[0, 2 pi); a natural cubic spline in a
-    parameter spaced evenly over the polyline's length, redrawn while |kappa| > 50 1/m at 200 samples; re-splined
-    (natural) in arc length through 200 samples (arc length by 8-point Gauss per interval).
-    """
+    """One path from the authors' ``RandomState`` calls: points ``(n, 2)`` [m] every ``spacing`` [m] and its peak
+    |curvature| [1/m]. Five waypoints, legs U(0.5, 2) m in direction U[0, 2 pi), a natural cubic spline redrawn
+    while |kappa| > 50 1/m, re-splined in arc length (8-point Gauss)."""
     while True:
         legs = rng.randint(4, 5)  # always 4: the authors' draw, kept for their stream
         x, y = [0.0], [0.0]
@@ -66,8 +62,8 @@ def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.nda
 
 
 def start_offset(seed: int = SEED) -> tuple[float, float, float]:
-    """The start of every path relative to its first pose: ``(dx [m], dy [m], dbeta [rad])`` of A, the authors'
-    ``Unicycle.reset(flag="random")`` seeded with ``seed`` (heading U(-5 deg, 0.1 deg): their code's bounds)."""
+    """The start of every path relative to its first pose: ``(dx [m], dy [m], dbeta [rad])`` of A, as the authors'
+    ``Unicycle.reset(flag="random")`` seeded with ``seed``."""
     r = np.random.RandomState(seed)
     x, y = r.uniform(-0.1, 0.1), r.uniform(-0.1, 0.1)
     return float(x), float(y), float(r.uniform(-np.deg2rad(5.0), np.deg2rad(0.1)))
@@ -87,15 +83,9 @@ class PathSet:
 def path_set(
     paths: int, condition: str = "paper", seed: int = SEED, speed: float = 0.2, tolerances: Sequence[float] = TOLERANCES
 ) -> PathSet:
-    """One AmigoBot-v1 scenario per path of the stream ``RandomState(seed)`` at ``speed`` [m/s], one episode from
-    the start pose of :func:`start_offset`, for :data:`DURATION_S`; ended past the largest tolerance [m].
-
-    ``condition`` ``"paper"``: the paper's unicycle (H on A: ``l3`` = 1 mm), ideal actuators, rolling start, dt
-    0.05 s; ``"firmware"``: AmigoBot-v1's defaults (dt 0.1 s).
-
-    Raises:
-        ValueError: ``paths`` < 0, an unknown ``condition``, a tolerance <= 0 (one line naming the flag).
-    """
+    """One AmigoBot-v1 scenario per path of ``RandomState(seed)`` at ``speed`` [m/s], one episode from
+    :func:`start_offset`, ended past the largest tolerance [m]. ``condition`` ``"paper"``: H on A, ideal actuators,
+    rolling start, dt 0.05 s; ``"firmware"``: AmigoBot-v1's defaults. Raises ``ValueError`` naming the flag."""
     if isinstance(paths, bool) or not isinstance(paths, int) or paths < 0:
         raise ValueError(f"--random-paths must be an integer >= 0, got {paths!r}")
     if condition not in CONDITIONS:
@@ -119,32 +109,18 @@ def path_set(
             except ValueError:  # a cusp between the 200 samples the protocol checks: not a path to drive
                 skipped.append(i)
                 continue
-        heading = float(path.pose_columns(0.0).theta)
         name, desc = f"rp{seed}_{i:04d}", f"random path {i} of RandomState({seed}), peak |kappa| {kmax:.3g} 1/m"
-        pose = (dx, dy, heading + db)
-        out.append(
-            Scenario(name, "AmigoBot-v1", kw | {"path": path}, (0,), round(DURATION_S / dt), True, desc, pose=pose)
-        )
-        tags[name] = {
-            "path": i,
-            "length": round(float(path.length), 5),
-            "max_curvature": round(kmax, 5),
-            "fit_step": step,
-        }
+        pose = (dx, dy, float(path.pose_columns(0.0).theta) + db)
+        steps, length = round(DURATION_S / dt), round(float(path.length), 5)
+        out.append(Scenario(name, "AmigoBot-v1", kw | {"path": path}, (0,), steps, True, desc, pose=pose))
+        tags[name] = {"path": i, "length": length, "max_curvature": round(kmax, 5), "fit_step": step}
     settings = {"paths": paths, "condition": condition, "seed": seed, "speed": speed, "tolerances": list(tolerances)}
     return PathSet(tuple(out), tags, tuple(skipped), settings | {"duration_s": DURATION_S, "goal_m": GOAL_M})
 
 
-def _rate(eps: Sequence[Mapping[str, Any]], tol: float) -> dict[str, Any]:
-    f, n = sum(e["peak_m"] >= tol for e in eps), len(eps)
-    lo, hi = wilson_interval(f, n)
-    return {"n": n, "failures": f, "rate": f / n if n else None, "ci95": [lo, hi] if n else None}
-
-
 def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[float]) -> list[dict[str, Any]]:
-    """Failure rates (peak |e| >= tolerance) with Wilson 95 % intervals, per agent and tolerance, in groups: ``all``
-    (training seeds pooled), ``accepted`` (paths the env's feasibility report accepts), ``seed`` (each training seed,
-    agents with several) and ``curvature`` (``kappa``: the bin of :data:`CURVATURE_BINS`)."""
+    """Failure rates (peak |e| >= tolerance) with Wilson 95 % intervals per agent and tolerance, in groups ``all``,
+    ``accepted`` (feasible paths), ``seed`` (agents with several) and ``curvature`` (bin ``kappa``)."""
     rows = []
     for agent in dict.fromkeys(e["agent"] for e in episodes):
         mine = [e for e in episodes if e["agent"] == agent]
@@ -158,21 +134,18 @@ def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[fl
             groups.append(
                 ({"group": "curvature", "kappa": [lo, hi]}, [e for e in mine if lo <= e["max_curvature"] < hi])
             )
-        rows += [{"agent": agent, "tolerance": t, **key, **_rate(eps, t)} for key, eps in groups for t in tolerances]
+        rows += [
+            {"agent": agent, "tolerance": t, **key, **failure_rate(sum(e["peak_m"] >= t for e in eps), len(eps))}
+            for key, eps in groups
+            for t in tolerances
+        ]
     return rows
 
 
 def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = True) -> dict[str, Any]:
-    """Every agent seed on every path (:func:`amigo_gym.tools.training.task_metrics.run_grid`); the JSON document:
-    ``protocol``, ``agents``, ``accepted`` (paths the env's feasibility report accepts), ``skipped``, ``table``
-    (:func:`failure_table`), ``episodes`` (one record per agent seed and path: ``peak_m``, the peak |e| of H),
-    ``unavailable``, ``wall_time_s``."""
+    """Every agent seed on every path; the JSON document (``table``: :func:`failure_table`)."""
     t0 = time.perf_counter()
-
-    def run(agent: Any, sc: Scenario) -> list[dict[str, float]]:
-        return [r.metrics() for r in run_scenario(agent, sc)]
-
-    grid = run_grid(agents, ps.scenarios, run, desc="random paths", progress=progress)
+    grid = run_grid(agents, ps.scenarios, desc="random paths", progress=progress)
     ok = {name: bool(r["feasible"]) for name, r in grid.feasibility.items()}
     episodes = [
         {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, **ps.tags[sc.name], "feasible": ok[sc.name]}
@@ -200,8 +173,7 @@ def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = Tru
 
 
 def markdown_random_paths(doc: Mapping[str, Any]) -> str:
-    """The tables: failure rate [%] [95 % interval] (failures/episodes) per agent and tolerance (the published row
-    under the paper's condition at 0.2 m/s), per curvature bin at the smallest tolerance, per training seed."""
+    """The tables: failure rate [%] per agent and tolerance, per curvature bin and per training seed."""
     p, rows = doc["protocol"], doc["table"]
     tols = p["tolerances"]
     agents = list(dict.fromkeys(r["agent"] for r in rows))

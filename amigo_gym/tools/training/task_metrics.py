@@ -1,9 +1,7 @@
 """The protocol engine: scenarios, the episode runner and the task metrics read from the environments' ``info``.
 
-One engine for ``amigo-gym evaluate`` (the paper's protocol as a scenario list), ``benchmark`` (the suite, the
-curvature cells) and ``compare`` (both), and for the training's evaluation callback, so that a learning curve
-and a benchmark table report the same numbers. The info read and the metrics of one episode: docs/benchmark.md,
-"Reference: task metrics".
+One engine for ``evaluate``, ``benchmark``, ``compare`` and the training's evaluation callback; the metrics:
+docs/benchmark.md, "Reference: task metrics".
 """
 
 from __future__ import annotations
@@ -30,40 +28,19 @@ DEFAULT_FAILURE_TOLERANCE_M = 0.10
 #: version of the benchmark suite (:data:`amigo_gym.tools.training.benchmark.SUITES`)
 SUITE_VERSION = "1.0"
 
+#: the keys of :func:`episode_metrics`
 METRIC_NAMES: tuple[str, ...] = (
-    "h_rms_m",
-    "h_rms_settled_m",
-    "h_max_m",
-    "failure",
-    "speed_err_rms",
-    "speed_err_settled_rms",
-    "return",
-    "chatter_rms",
-    "chatter_settled_rms",
-    "effort_rms",
-    "steps",
-    "terminated",
+    *("h_rms_m", "h_rms_settled_m", "h_max_m", "failure", "speed_err_rms", "speed_err_settled_rms", "return"),
+    *("chatter_rms", "chatter_settled_rms", "effort_rms", "steps", "terminated"),
 )
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """One scenario of the protocol: an environment, its start conditions and seeds (data; a released suite's
-    scenarios are never edited: bump :data:`SUITE_VERSION`).
-
-    Attributes:
-        name: unique name.
-        env_id: Gymnasium id, e.g. ``AmigoBot-v1``.
-        env_kwargs: keywords of ``gym.make`` (besides ``max_episode_steps``).
-        seeds: evaluation seeds, one episode each (``reset(seed=s)``).
-        max_steps: episode length (``max_episode_steps``).
-        held_out: outside the generalists' training distribution.
-        description: one line for the tables.
-        version: the suite version the scenario belongs to.
-        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
-        pose: start pose ``(x_A [m], y_A [m], beta [rad])`` of every episode (``reset(options={"pose": ...})``);
-            ``None``: the environment's seeded start.
-    """
+    """One scenario: ``gym.make(env_id, max_episode_steps=max_steps, **env_kwargs)``, one episode per seed
+    (``reset(seed=s)``, from ``pose`` ``(x_A [m], y_A [m], beta [rad])`` if set); ``held_out``: outside the
+    generalists' training distribution; ``settle_time_s`` [s] and ``failure_tolerance_m`` [m] of the settled metrics.
+    A released suite's scenarios are never edited."""
 
     name: str
     env_id: str
@@ -93,11 +70,10 @@ class Scenario:
 
     @property
     def episodes(self) -> int:
-        """Number of evaluation episodes (one per seed)."""
         return len(self.seeds)
 
     def to_json(self) -> dict[str, Any]:
-        """The scenario as JSON data (its fields and ``episodes``; tuples as lists; ``pose`` only when set)."""
+        """The fields and ``episodes`` as JSON data (``pose`` only when set)."""
         d = {**asdict(self), "episodes": self.episodes}
         if self.pose is None:
             del d["pose"]
@@ -121,21 +97,15 @@ def make_env(sc: Scenario) -> Any:
 
 
 def vector_env(sc: Scenario) -> Any:
-    """The native vector env of ``sc`` (Gymnasium's ``SyncVectorEnv`` if it has none): one robot per seed."""
+    """The native vector env of ``sc`` (else Gymnasium's ``SyncVectorEnv``): one robot per seed."""
     import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
 
-    native = gym.spec(sc.env_id).vector_entry_point is not None
-    return gym.make_vec(
-        sc.env_id,
-        num_envs=len(sc.seeds),
-        vectorization_mode="vector_entry_point" if native else "sync",
-        max_episode_steps=sc.max_steps,
-        **dict(sc.env_kwargs),
-    )
+    mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
+    kw = dict(sc.env_kwargs)
+    return gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
 
 
-#: ``on_row(i, info, ended, obs)`` after each recorded step of row ``i``: its ``info``
-#: (:func:`amigo_gym.envs.base.info_row`), whether it ended the episode, the observation the agent acted on
+#: ``on_row(i, info, ended, obs)`` after each recorded step of row ``i``, ``obs`` what the agent acted on
 OnRow = Callable[[int, dict[str, Any], bool, Any], object]
 
 
@@ -146,12 +116,8 @@ def run_scenario(
     on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
     on_row: OnRow | None = None,
 ) -> list[EpisodeRecorder]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``; one recorder per episode.
-
-    The episodes run side by side in the scenario's vector env (:func:`vector_env`; robot ``i`` reset with seed
-    ``sc.seeds[i]`` and ``sc.pose`` if set), by :func:`run_vector_episodes`. ``on_reset(venv, infos)`` is called
-    after the reset.
-    """
+    """Run ``agent`` deterministically for one episode per seed of ``sc``, side by side in its vector env; one
+    recorder per episode. ``on_reset(venv, infos)`` is called after the reset."""
     venv = vector_env(sc)
     try:
         options = None if sc.pose is None else {"pose": np.asarray(sc.pose, dtype=np.float64)}
@@ -169,10 +135,8 @@ def run_scenario(
 
 @dataclass
 class Grid:
-    """What :func:`run_grid` ran: ``runs`` ``(agent spec, scenario, result)``; ``status`` per scenario (``"ok"`` or
-    ``"unavailable: <why>"``); ``unavailable`` the runs that could not run (``agent``, ``seed``, ``scenario``,
-    ``reason``; ``agent`` None for a scenario no agent could run); ``feasibility`` AmigoBot-v1's report of each
-    fixed path."""
+    """What :func:`run_grid` ran: ``runs`` ``(agent spec, scenario, result)``, ``status`` per scenario, the
+    ``unavailable`` runs with their reasons, AmigoBot-v1's ``feasibility`` report of each fixed path."""
 
     runs: list[tuple[Any, Scenario, Any]] = field(default_factory=list)
     status: dict[str, str] = field(default_factory=dict)
@@ -183,16 +147,16 @@ class Grid:
 def run_grid(
     agents: Sequence[Any],
     scenarios: Sequence[Scenario],
-    run: Callable[[Any, Scenario], Any],
+    run: Callable[[Any, Scenario], Any] | None = None,
     *,
     desc: str = "benchmark",
     progress: bool = True,
 ) -> Grid:
-    """``run(agent, scenario)`` for every agent spec (``name``, ``seed``, ``instantiate(env)``, as
-    :class:`amigo_gym.tools.training.benchmark.AgentSpec`) on every scenario; an agent or a scenario that raises
-    :class:`Unavailable` is listed with the reason, never dropped. A progress bar in episodes on stderr."""
+    """``run(agent, scenario)`` (default: the metrics of each episode) for every agent spec (``name``, ``seed``,
+    ``instantiate(env)``) on every scenario; what raises :class:`Unavailable` is listed with the reason."""
     from tqdm.auto import tqdm
 
+    run = run or (lambda agent, sc: [r.metrics() for r in run_scenario(agent, sc)])
     grid = Grid()
     envs: dict[str, Any] = {}
     for sc in scenarios:
@@ -237,13 +201,8 @@ class StepSample:
 
 
 class InfoAdapter:
-    """Read a :class:`StepSample` from the ``info`` of ``AmigoBot-v0`` or ``-v1`` (module docstring).
-
-    Args:
-        robot: the simulated robot (``r1``, ``r2``) used when ``info`` has no ``speed_error`` (v0);
-            ``None``: the speed error is NaN for such infos.
-        reference_speed: reference speed of A [m/s] for the same computation.
-    """
+    """Read a :class:`StepSample` from an ``info``; without ``speed_error`` (v0) it is computed from ``robot``'s
+    wheel radii and the ``reference_speed`` [m/s] (NaN without them)."""
 
     def __init__(self, robot: Any = None, reference_speed: float | None = None) -> None:
         self.robot = robot
@@ -251,7 +210,7 @@ class InfoAdapter:
 
     @classmethod
     def for_env(cls, env: Any) -> InfoAdapter:
-        """Adapter of a (wrapped) environment: takes ``env.unwrapped.params.robot`` / ``.speed`` if present."""
+        """Adapter of ``env.unwrapped.params``' ``robot`` and ``speed``, if present."""
         params = getattr(getattr(env, "unwrapped", env), "params", None)
         robot = getattr(params, "robot", None)
         speed = getattr(params, "speed", None)
@@ -274,7 +233,7 @@ class InfoAdapter:
 
 @dataclass
 class EpisodeRecorder:
-    """Collects the steps of one episode; :meth:`metrics` turns them into :func:`episode_metrics`."""
+    """Collects the steps of one episode for :func:`episode_metrics`."""
 
     dt: float
     settle_time_s: float = DEFAULT_SETTLE_TIME_S
@@ -287,7 +246,6 @@ class EpisodeRecorder:
     terminated: bool = False
 
     def add(self, sample: StepSample, reward: float) -> None:
-        """Append one step (the state after the action)."""
         self.e.append(sample.cross_track_error)
         self.speed_error.append(sample.speed_error)
         self.command.append(sample.command)
@@ -295,7 +253,6 @@ class EpisodeRecorder:
         self.rewards.append(float(reward))
 
     def metrics(self) -> dict[str, float]:
-        """The episode's metrics (module docstring)."""
         return episode_metrics(
             np.asarray(self.e, dtype=np.float64),
             np.asarray(self.speed_error, dtype=np.float64),
@@ -325,13 +282,9 @@ def episode_metrics(
     settle_time_s: float = DEFAULT_SETTLE_TIME_S,
     failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M,
 ) -> dict[str, float]:
-    """Metrics of one episode of ``T`` steps, step ``k`` (0-based) at time ``t = (k + 1) dt`` (module docstring).
-
-    Args:
-        e: cross-track errors ``(T,)`` [m]. speed_error: ``(T,)`` [m/s]. command, wheel_rates: ``(T, 2)`` [rad/s].
-        rewards: ``(T,)``. dt: control period [s]. terminated: the episode ended by leaving the path.
-        settle_time_s: start of the settled window [s]. failure_tolerance_m: settled error of a failure [m].
-    """
+    """Metrics (:data:`METRIC_NAMES`) of one episode of ``T`` steps, step ``k`` at ``t = (k + 1) dt`` [s]: ``e`` [m],
+    ``speed_error`` [m/s] ``(T,)``, ``command`` and ``wheel_rates`` ``(T, 2)`` [rad/s], ``rewards`` ``(T,)``; a failure
+    is ``terminated`` or ``|e| > failure_tolerance_m`` [m] at some ``t >= settle_time_s`` [s]."""
     t = dt * np.arange(1, e.size + 1)
     settled = t >= settle_time_s - 1e-9
     e_set = e[settled]
@@ -361,20 +314,9 @@ def run_vector_episodes(
     adapter: InfoAdapter,
     on_row: OnRow | None = None,
 ) -> None:
-    """Run ``agent`` deterministically on the vector env ``venv``, just reset (``obs`` its observation
-    ``(N, ...)``), until robot ``i``'s first episode has ended for every ``i``; its steps go to ``recorders[i]``.
-
-    The agent predicts for the whole batch at every step (a constant batch size: a network's outputs do not depend
-    on how many episodes still run; ``episode_start`` marks the rows the autoreset restarted). A row's episode is
-    its steps up to its first end. Reaching the end of an open path (``info["end_of_path"]``) is a success: the
-    recorder's ``terminated`` stays False.
-
-    Args:
-        agent: ``predict(obs, state=, episode_start=, deterministic=True) -> (actions, state)`` (SB3's form).
-        recorders: one :class:`EpisodeRecorder` per row (``N``).
-        adapter: reads a row's ``info`` (:class:`InfoAdapter`).
-        on_row: :data:`OnRow`, after each recorded step.
-    """
+    """Run ``agent`` (SB3's ``predict``) deterministically on ``venv``, just reset to ``obs``, until every row's first
+    episode has ended; row ``i``'s steps go to ``recorders[i]``. The whole batch is predicted at every step (a
+    network's outputs do not depend on how many rows still run). Reaching the end of an open path is a success."""
     n = len(recorders)
     live = np.ones(n, dtype=np.bool_)
     state: Any = None
