@@ -1,12 +1,6 @@
-"""Classical and learned controllers with stable-baselines3's ``predict`` interface.
-
-* :mod:`amigo_gym.policies.base`: the observation adapter :class:`~amigo_gym.policies.base.Fields` (either env's
-  layout, read by field name) and the shared ``predict``.
-* :mod:`amigo_gym.policies.analytic`: the analytic law (``analytic_tracking_command``) and :class:`AnalyticPolicy`
-  (``AmigoBot-v0``'s baseline).
-* :mod:`amigo_gym.policies.tracking`: :class:`AnalyticTrackingPolicy` (PI and feedforward, any path) and
-  :class:`PurePursuitPolicy` (``AmigoBot-v1``'s preview points).
-* :mod:`amigo_gym.policies.learned`: learned ``AmigoBot-v1`` policies in numpy and :func:`load_pretrained`.
+"""Classical and learned controllers with stable-baselines3's ``predict`` interface: :class:`AnalyticPolicy`
+(``AmigoBot-v0``'s baseline), :class:`AnalyticTrackingPolicy` (PI and feedforward, any path),
+:class:`PurePursuitPolicy`, and learned ``AmigoBot-v1`` policies (:class:`FastPolicy`, :func:`load_pretrained`).
 """
 
 from __future__ import annotations

@@ -1,51 +1,25 @@
 r"""The analytic inverse solution as a state-feedback policy: the law of both envs, and ``AmigoBot-v0``'s policy.
 
-:func:`analytic_tracking_command` is the one implementation of the law; :class:`AnalyticPolicy` and
-:class:`~amigo_gym.policies.tracking.AnalyticTrackingPolicy` call it. Both read either env's observation by field
-name (:class:`amigo_gym.policies.base.Fields`) and the constant task settings; they take
-
-* ``e = cross_track_error * error_scale``: H's signed cross-track error [m], positive left of the path;
-* ``psi = atan2(sin_heading_error, cos_heading_error)``: heading error ``beta - theta`` [rad];
-* ``kappa = curvature / l3``: path curvature at H's closest point [1/m];
-* ``v_ref = reference_speed * max_speed``: reference speed of A [m/s].
-
-Velocity of H in the path frame
--------------------------------
-With the path tangent ``t = (cos theta, sin theta)`` and left normal ``n`` at H's closest point,
-H = A + l3 (cos beta, sin beta) moves with
+It reads either env's observation by field name: ``e = cross_track_error * error_scale`` [m] (positive left),
+``psi = atan2(sin_heading_error, cos_heading_error)`` [rad], ``kappa = curvature / l3`` [1/m] and
+``v_ref = reference_speed * max_speed`` [m/s]. H = A + l3 (cos beta, sin beta) moves along the path tangent and
+normal as
 
 .. math::
     \begin{pmatrix} \dot H \cdot t \\ \dot H \cdot n \end{pmatrix}
     = \begin{pmatrix} \cos\psi & -l_3 \sin\psi \\ \sin\psi & l_3\cos\psi \end{pmatrix}
       \begin{pmatrix} v_A \\ \dot\beta \end{pmatrix},
-    \qquad \det = l_3 \ne 0,
 
-and ``edot = Hdot . n``: H can be steered directly.
-
-Control law (``speed_reference="A"``, the default)
---------------------------------------------------
-``v_A = v_ref`` (the paper's eqs 11-12) and ``Hdot . n = -k e``:
+so H can be steered directly. ``speed_reference="A"`` (default, the paper's eqs 11-12) imposes ``v_A = v_ref`` and
+``edot = -k e``:
 
 .. math::
-    v_A = v_{ref}, \qquad
-    \dot\beta = \frac{-k\,e - v_{ref}\sin\psi}{l_3\cos\psi}.
+    \dot\beta = \frac{-k\,e - v_{ref}\sin\psi}{l_3\cos\psi}
 
-With ``k = 0`` (``feedforward_only=True``) this is the paper's inverse ODE
-``betadot = v_A tan(theta - beta) / l3`` in closed loop (H keeps its start offset); ``k > 0`` adds the decay
-``e(t) = e0 exp(-k t)`` in continuous time.
-
-``speed_reference="H"``: a constant tangential speed of H, ``v_ref / cos(delta_ss)`` with
-``sin(delta_ss) = kappa l3``:
-
-.. math::
-    \begin{pmatrix} v_A \\ \dot\beta \end{pmatrix}
-    = \begin{pmatrix} \cos\psi & \sin\psi \\ -\sin\psi / l_3 & \cos\psi / l_3 \end{pmatrix}
-      \begin{pmatrix} v_{ref}/\cos\delta_{ss} \\ -k\,e \end{pmatrix}.
-
-Both have the steady state of :func:`amigo_gym.model.kinematics.circle_steady_state` on a circle. The wheel rates
-follow from ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``; the action is
-``clip(w / max_wheel_rate, -1, 1)``. The default gain ``k = 3 1/s`` (``docs/baselines.md``); ``cos psi`` is
-floored at :data:`COS_MIN` (the law is singular at ``|psi| = pi/2``).
+(``k = 0``, ``feedforward_only=True``: the paper's inverse ODE in closed loop). ``speed_reference="H"`` imposes a
+constant tangential speed of H, ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)`` with
+``sin delta_ss = kappa l3``. The wheel rates are ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, the
+action ``clip(w / max_wheel_rate, -1, 1)``; ``cos psi`` is floored at :data:`COS_MIN`.
 """
 
 from __future__ import annotations
@@ -80,7 +54,7 @@ def analytic_tracking_command(
     dt: float,
     feedforward: bool = True,
 ) -> tuple[Array, Array]:
-    r"""Speed of A ``v`` [m/s] and turn rate ``omega`` [rad/s] of the analytic law for H's normal speed ``c``.
+    r"""``(v [m/s], omega [rad/s])``, columns ``(N,)``, of the analytic law for H's normal speed ``c`` [m/s]:
 
     .. math::
         \dot s = \frac{v - c\sin\psi}{\cos\psi}, \quad \omega_0 = \frac{c - v\sin\psi}{l_3\cos\psi}, \quad
@@ -88,14 +62,6 @@ def analytic_tracking_command(
         \frac{dt}{2}\ \text{(feedforward)},
 
     with ``v = v_ref``, ``cos psi`` floored at :data:`COS_MIN` and ``1 - kappa e`` at 0.5.
-
-    Args:
-        e: H's cross-track error [m]; sin_psi, cos_psi: of the heading error [-]; kappa: curvature at H's closest
-            point [1/m]; v_ref: speed of A [m/s]; c: commanded normal speed of H [m/s]. Columns ``(N,)``.
-        l3: distance A to H [m]; dt: control period [s]; feedforward: add the mid-step term.
-
-    Returns:
-        ``(v, omega)``, each ``(N,)``.
     """
     e_a = np.asarray(e, dtype=np.float64)
     sp = np.asarray(sin_psi, dtype=np.float64)
@@ -112,7 +78,6 @@ def analytic_tracking_command(
 
 
 def _body_velocity(f: Fields, o: Array, gain: float, speed_reference: str) -> tuple[Array, Array]:
-    """:func:`analytic_body_velocity` for checked observations ``(N, d)``."""
     p = f.params
     l3 = f.robot.l3
     e = f(o, "cross_track_error") * p.error_scale
@@ -130,27 +95,10 @@ def _body_velocity(f: Fields, o: Array, gain: float, speed_reference: str) -> tu
 
 
 def analytic_body_velocity(
-    obs: ArrayLike,
-    params: Params,
-    gain: float = DEFAULT_GAIN,
-    speed_reference: SpeedReference = "A",
+    obs: ArrayLike, params: Params, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
 ) -> tuple[Array, Array]:
-    r"""Commanded ``(v_A [m/s], betadot [rad/s])`` of the analytic law (module docstring) from observations.
-
-    ``speed_reference="A"``: ``v_A = v_ref``, ``betadot = (-k e - v_ref sin psi) / (l3 cos psi)``
-    (:func:`analytic_tracking_command` with ``c = -k e``, no feedforward).
-    ``speed_reference="H"``: ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)`` with
-    ``sin delta_ss = kappa l3``. ``cos psi`` is floored at ``COS_MIN``.
-
-    Args:
-        obs: observations ``(obs_dim,)`` or ``(N, obs_dim)`` (the layout of ``params``' env).
-        params: the task settings the observations were made with (v0's or v1's).
-        gain: feedback gain ``k`` >= 0 [1/s]; 0 gives the paper's inverse ODE.
-        speed_reference: ``"A"`` or ``"H"`` (module docstring).
-
-    Returns:
-        ``(v_A, betadot)``, each of shape ``()`` or ``(N,)``.
-    """
+    """Commanded ``(v_A [m/s], betadot [rad/s])``, each ``()`` or ``(N,)``, of the law (module docstring) with gain
+    ``k`` [1/s] >= 0 for observations ``(d,)`` or ``(N, d)`` made with ``params`` (v0's or v1's)."""
     f = Fields("analytic_body_velocity", params)
     o, single = f.check(obs)
     v, bd = _body_velocity(f, o, gain, speed_reference)
@@ -158,10 +106,7 @@ def analytic_body_velocity(
 
 
 def analytic_wheel_rates(
-    obs: ArrayLike,
-    params: Params,
-    gain: float = DEFAULT_GAIN,
-    speed_reference: SpeedReference = "A",
+    obs: ArrayLike, params: Params, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
 ) -> Array:
     """Wheel rates ``(..., 2)`` [rad/s] of the analytic law, unclipped (``r1 w1 = v_A + l1 betadot``, ...)."""
     v, bd = analytic_body_velocity(obs, params, gain, speed_reference)
@@ -169,15 +114,8 @@ def analytic_wheel_rates(
 
 
 class AnalyticPolicy(Policy):
-    """The analytic inverse solution with look-ahead feedback (module docstring); ``predict`` is stateless.
-
-    Args:
-        params: :class:`~amigo_gym.model.params.EnvParams` (``AmigoBot-v0``) or
-            :class:`~amigo_gym.task.v1.TrackingParams` (``AmigoBot-v1``).
-        gain: feedback gain ``k`` [1/s], in [0, 1/dt]; default 3.
-        feedforward_only: ``k = 0``: the paper's inverse ODE in closed loop.
-        speed_reference: ``"A"`` (``v_A = v_ref``, default) or ``"H"`` (constant tangential speed of H).
-    """
+    """The analytic law (module docstring) for ``EnvParams`` or ``TrackingParams``, gain ``k`` [1/s] in [0, 1/dt]
+    (``feedforward_only``: ``k = 0``); ``predict`` is stateless."""
 
     def __init__(
         self,

@@ -1,12 +1,4 @@
-"""What every policy of :mod:`amigo_gym.policies` shares: the observation adapter and SB3's ``predict``.
-
-* :class:`Fields` names the observation's fields for the task settings (``AmigoBot-v0``'s
-  :class:`~amigo_gym.model.params.EnvParams`, :func:`amigo_gym.task.v0.obs_names`; ``AmigoBot-v1``'s
-  :class:`~amigo_gym.task.v1.TrackingParams`, :func:`amigo_gym.task.v1.obs_fields`), checks observations and
-  reads columns by name.
-* :class:`Policy`: ``predict`` for ``(d,)`` or ``(N, d)``, the per-row recurrent state and its reset at
-  ``episode_start``; a policy implements ``_act`` on ``(N, d)``.
-"""
+"""What every policy shares: the observation adapter :class:`Fields` and SB3's ``predict`` (:class:`Policy`)."""
 
 from __future__ import annotations
 
@@ -25,14 +17,8 @@ Params = EnvParams | TrackingParams
 
 
 class Fields:
-    """The observation layout of ``params`` (v0 or v1, module docstring) and the constants a controller reads.
-
-    Args:
-        owner: the policy's name, first in every error message.
-        params: the task settings the observations are made with.
-        accept: the settings types this policy can read (a controller that needs v1's preview takes only
-            :class:`~amigo_gym.task.v1.TrackingParams`).
-    """
+    """The observation layout of ``params`` (``EnvParams`` or ``TrackingParams``, of the types in ``accept``), read
+    by field name; ``owner`` (the policy's name) starts every error message."""
 
     def __init__(self, owner: str, params: Any, accept: tuple[type, ...] = (EnvParams, TrackingParams)) -> None:
         if not (isinstance(params, (EnvParams, TrackingParams)) and issubclass(type(params), accept)):
@@ -63,7 +49,7 @@ class Fields:
 
 
 class Policy:
-    """SB3's ``predict`` over :meth:`_act` (module docstring); ``self._fields`` is set by the subclass."""
+    """SB3's ``predict`` over :meth:`_act`, with a per-row recurrent state; ``self._fields`` is set by the subclass."""
 
     _fields: Fields
     _state: Array | None = None
@@ -73,8 +59,8 @@ class Policy:
         self._state = None
 
     def _rows(self, n: int, state: Any, width: int) -> tuple[Array, bool]:
-        """The state ``(n, width)`` of ``n`` rows: a copy of ``state``, or (``state=None``) the internal state,
-        zeros when new or when the batch size changed; and whether it was made new."""
+        """The state ``(n, width)``: a copy of ``state``, or the internal state (zeros when new or resized), and
+        whether it was made new."""
         if state is None:
             fresh = self._state is None or self._state.shape[0] != n
             if fresh:
@@ -98,20 +84,11 @@ class Policy:
         raise NotImplementedError
 
     def predict(
-        self,
-        observation: ArrayLike,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
+        self, observation: ArrayLike, state: Any = None, episode_start: Any = None, deterministic: bool = True
     ) -> tuple[NDArray[np.float32], Any]:
-        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1].
-
-        Args:
-            observation: ``(d,)`` or ``(N, d)`` (the layout of the policy's task settings).
-            state: the policy's recurrent state ``(N, k)`` or None (the internal state; the class docstring).
-            episode_start: ``(N,)`` booleans (or a scalar for a single observation): rows to reset; None: none.
-            deterministic: the mean action (the classical controllers are deterministic and ignore it).
-        """
+        """SB3-style ``(actions, state)``: actions ``(2,)`` or ``(N, 2)`` float32 in [-1, 1] for observations ``(d,)``
+        or ``(N, d)``; ``state`` ``(N, k)`` or None (the internal state); ``episode_start``: rows to reset;
+        ``deterministic``: the mean action (the classical controllers ignore it)."""
         o, single = self._fields.check(observation)
         act, new_state = self._act(o, state, episode_start, deterministic)
         a32 = np.asarray(act).astype(np.float32)

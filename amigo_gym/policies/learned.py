@@ -1,20 +1,12 @@
-"""Learned ``AmigoBot-v1`` policies in numpy: the fast PPO's models, the residual policy, and :func:`load_pretrained`.
+"""Learned ``AmigoBot-v1`` policies in numpy (fast-PPO models, the residual policy) and :func:`load_pretrained`.
 
-A fast-PPO model (:mod:`amigo_gym.tools.training.fastppo`) is a zip of ``model.json`` (format, settings,
-observation layout) and ``weights.npz`` (the actor's layers, the observation normalisation); :class:`FastPolicy`
-evaluates its 64x64 tanh network in numpy (no torch). :func:`load_pretrained` also opens SB3 zips (importing
-stable-baselines3 then).
-
-Features for raw observations ``o`` ``(N, d)``: ``o`` itself (:func:`amigo_gym.task.v1.obs_fields`); with
-``history = H > 0`` the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (filled with the first
-observation at an episode's start); with a residual (``residual_bound = b > 0``) the analytic controller's
-action ``a0`` ``(N, 2)``. All are normalised, ``f = clip((x - mean) / sqrt(var + 1e-8), -10, 10)``.
-
-Actions (:func:`env_action`) from the network's output ``u`` ``(N, 2)`` (its mean when ``deterministic``):
-plain ``a = clip(u, -1, 1)``; residual ``a = clip(a0 + b clip(u, -1, 1), -1, 1)`` with ``a0`` the
-:class:`~amigo_gym.policies.AnalyticTrackingPolicy` (nominal robot, default gains, integral kept per row), so
-``|a - a0| <= b`` per wheel; with ``filter_alpha = alpha < 1`` the target is approached as
-``a = p + alpha (a_target - p)`` from the previous command ``p`` of the observation.
+A fast-PPO model is a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor's
+layers, the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``; with ``history = H > 0``
+the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (the first observation at an episode's start);
+with ``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``. All are
+normalised, ``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action from the network's output ``u``:
+``a = clip(u, -1, 1)``, or ``clip(a0 + b clip(u, -1, 1), -1, 1)``; with ``filter_alpha = alpha < 1``,
+``a = p + alpha (a - p)`` from the previous command ``p``.
 """
 
 from __future__ import annotations
@@ -42,18 +34,11 @@ FORMAT = "amigo_gym.fastppo/1"
 #: fields of the observation kept for ``history`` previous steps (commands and measurements)
 HISTORY_FIELDS: tuple[str, ...] = ("cross_track_error", "sin_heading_error", "speed_error", "wheel_rate_1",
                                    "wheel_rate_2", "previous_command_1", "previous_command_2")  # fmt: skip
-#: normalised features are clipped to +-this
-OBS_CLIP = 10.0
-_EPS = 1e-8
 
 
 @dataclass
 class RunningMeanStd:
-    """Running mean and variance of ``(B, D)`` batches (Chan et al.'s parallel update, as SB3's ``VecNormalize``).
-
-    Merging a batch of mean ``m_b``, variance ``v_b`` and count ``n_b``: ``d = m_b - m``, ``n' = n + n_b``,
-    ``m' = m + d n_b / n'``, ``v' = (v n + v_b n_b + d^2 n n_b / n') / n'``.
-    """
+    """Running mean and variance of ``(B, D)`` batches (Chan et al.'s parallel update, as SB3's ``VecNormalize``)."""
 
     mean: Array
     var: Array
@@ -79,7 +64,7 @@ class RunningMeanStd:
 
     def normalize(self, x: Array) -> Array:
         """``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``."""
-        out: Array = np.clip((x - self.mean) / np.sqrt(self.var + _EPS), -OBS_CLIP, OBS_CLIP)
+        out: Array = np.clip((x - self.mean) / np.sqrt(self.var + 1e-8), -10.0, 10.0)
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -92,16 +77,9 @@ class RunningMeanStd:
 
 @dataclass(frozen=True)
 class FeatureSpec:
-    """What the network observes and how its output becomes an action (module docstring).
-
-    Attributes:
-        env_kwargs: ``gym.make("AmigoBot-v1", ...)`` keywords of the training task (the observation layout,
-            the nominal robot and ``dt`` of the residual's analytic controller come from them).
-        history: previous steps of :data:`HISTORY_FIELDS` in the features, in [0, 20].
-        residual_bound: bound ``b`` of the learned correction in normalised action units, in [0, 2]; 0: no
-            residual (the network's output is the action).
-        filter_alpha: low-pass factor in (0, 1]; 1: no filter.
-    """
+    """What the network observes and how its output becomes an action (module docstring): the training task's
+    ``gym.make`` keywords ``env_kwargs``, ``history`` in [0, 20], ``residual_bound`` in [0, 2] (0: no residual) and
+    ``filter_alpha`` in (0, 1] (1: no filter)."""
 
     env_kwargs: Mapping[str, Any]
     history: int = 0
@@ -117,7 +95,7 @@ class FeatureSpec:
         check_range(o, "filter_alpha", self.filter_alpha, 0.0, 1.0, low_open=True)
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
-        self.params()  # the environment's own checks of the keywords
+        self.params()
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
@@ -126,11 +104,8 @@ class FeatureSpec:
 
 
 class FeatureBuilder:
-    """The features of a batch of raw observations and the analytic base action (module docstring).
-
-    State per row: ``z`` ``(N,)`` (the analytic controller's integral [m s]) and ``hist`` ``(N, H, 7)``.
-    :meth:`__call__` is pure: it returns the new state instead of keeping it.
-    """
+    """The features of raw observations and the analytic base action; the state per row is ``[z, hist.ravel()]``
+    (the analytic controller's integral [m s], the history ``(H, 7)``)."""
 
     def __init__(self, spec: FeatureSpec) -> None:
         self.spec = spec
@@ -146,14 +121,12 @@ class FeatureBuilder:
         self.state_dim = 1 + h * len(HISTORY_FIELDS)
 
     def initial_state(self, n: int) -> Array:
-        """``(N, state_dim)`` zeros: ``[z, hist.ravel()]`` (rows are reset at ``episode_start`` anyway)."""
+        """``(N, state_dim)`` zeros."""
         return np.zeros((n, self.state_dim))
 
     def __call__(self, obs: Array, state: Array, starts: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
-        """``(features (N, dim) raw, base action (N, 2) or zeros, new state)`` for obs ``(N, d)``.
-
-        Rows with ``starts`` begin an episode: ``z = 0`` and the history filled with this observation.
-        """
+        """``(raw features (N, dim), base action (N, 2) or zeros, new state)``; rows with ``starts`` begin an
+        episode."""
         n = obs.shape[0]
         h, f = self.spec.history, len(HISTORY_FIELDS)
         z = np.where(starts, 0.0, state[:, 0])
@@ -181,11 +154,7 @@ class FeatureBuilder:
 
 
 def env_action(u: Array, base: Array, prev: Array, residual_bound: float, filter_alpha: float) -> Array:
-    """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring, Actions).
-
-    ``a_t = clip(u, -1, 1)`` (plain) or ``clip(a0 + b clip(u, -1, 1), -1, 1)`` (residual, ``b > 0``), then
-    ``a = p + alpha (a_t - p)``.
-    """
+    """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring)."""
     c = np.clip(u, -1.0, 1.0)
     target = np.clip(base + residual_bound * c, -1.0, 1.0) if residual_bound > 0 else c
     out: Array = prev + filter_alpha * (target - prev) if filter_alpha < 1.0 else target
@@ -202,14 +171,8 @@ def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
 
 
 class FastPolicy(Policy):
-    """A fast-PPO model in numpy with SB3's ``predict`` (module docstring).
-
-    ``predict`` keeps per batch row the analytic controller's integral and the history, SB3-recurrent style:
-    ``state`` ``(N, state_dim)`` in and out; ``state=None`` uses an internal state (reset where ``episode_start``
-    is True and when the batch size changes). ``episode_start=None`` treats the first call (or a new batch size,
-    or an all-zero given state) as the episodes' start. ``deterministic=False`` adds Gaussian noise
-    ``exp(log_std)`` to the mean action.
-    """
+    """A fast-PPO model in numpy with SB3's ``predict``; its state ``(N, state_dim)`` per row. ``episode_start=None``
+    starts the episodes at a new or all-zero state; ``deterministic=False`` adds noise ``exp(log_std)`` to the mean."""
 
     def __init__(
         self,
@@ -256,7 +219,6 @@ class FastPolicy(Policy):
             u, base, b.previous_command(obs), self.spec.residual_bound, self.spec.filter_alpha
         ), s_new.copy()
 
-    # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
         """Write the model zip atomically (``model.json`` + ``weights.npz``)."""
         meta = {
@@ -285,11 +247,7 @@ class FastPolicy(Policy):
 
     @classmethod
     def load(cls, path: str | Path) -> FastPolicy:
-        """Read a model zip written by :meth:`save`.
-
-        Raises:
-            ValueError: not a fast-PPO model zip.
-        """
+        """Read a model zip written by :meth:`save` (``ValueError`` if it is not one)."""
         with zipfile.ZipFile(path) as z:
             names = set(z.namelist())
             if "model.json" not in names or "weights.npz" not in names:
@@ -313,16 +271,9 @@ sha256_of = sha256_file
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
-    """Load a shipped ``AmigoBot-v1`` agent after checking its manifest's SHA-256.
-
-    Args:
-        path: the model zip (a fast-PPO model or an SB3 PPO/SAC/TD3/A2C/DDPG zip).
-        manifest: its manifest JSON (default ``<zip stem>.json`` beside it), with ``sha256`` and, for SB3, ``algo``.
-        trust: load an SB3 zip (a pickle) neither shipped nor written here (:func:`amigo_gym.io.require_trust`);
-            a fast-PPO zip needs none.
-
-    Returns:
-        An object with SB3's ``predict``: a :class:`FastPolicy`, or the SB3 model.
+    """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
+    zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
+    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here.
 
     Raises:
         FileNotFoundError: no zip or no manifest.
@@ -347,7 +298,7 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
     if fast:
         return FastPolicy.load(p)
     algo = str(meta.get("algo", "")).lower()
-    import stable_baselines3 as sb3  # edge import: only for SB3 zips
+    import stable_baselines3 as sb3
 
     classes: dict[str, Any] = {"ppo": sb3.PPO, "sac": sb3.SAC, "td3": sb3.TD3, "a2c": sb3.A2C, "ddpg": sb3.DDPG}
     if algo not in classes:

@@ -1,26 +1,14 @@
 r"""The analytic inverse solution: wheel angles and rates that make H follow a path exactly.
 
-Given a path of H with tangent angle ``theta(s)`` at arc length ``s`` (:mod:`amigo_gym.paths`) and a
-prescribed speed profile ``v_A(t)`` of the axle midpoint A, the paper's eqs (7)–(10) reduce to a
-two-state ODE (``docs/model.md``, "The path of H and the inverse problem"):
+For a path of H with tangent angle ``theta(s)`` at arc length ``s`` and a speed profile ``v_A(t)`` of A, the paper's
+eqs (7)-(10) reduce to (``docs/model.md``)
 
 .. math::
     \dot s = \frac{v_A}{\cos(\theta(s) - \beta)}, \qquad
-    \dot\beta = \frac{v_A \tan(\theta(s) - \beta)}{l_3}.
+    \dot\beta = \frac{v_A \tan(\theta(s) - \beta)}{l_3},
 
-The wheel rates follow from the rolling constraints (system 29, :func:`~amigo_gym.model.kinematics.wheel_rates`
-and :func:`~amigo_gym.model.kinematics.castor_rate`), the wheel angles by integration: :func:`solve_inverse`
-integrates ``(s, psi = theta(s) - beta, x_A, y_A, alpha1, alpha2, alpha3)`` with SciPy's DOP853 (``r_H`` of the
-integrated pose checks independently that H stays on the path), split at every kink of the speed profile and every
-curvature jump of the path (an ODE event in ``s``) so that each piece has a smooth right-hand side.
-
-The ODE is singular where ``|theta - beta| = pi/2``; for forward motion the heading error decays, so a
-start with ``|theta(s0) - beta0| < pi/2`` is well defined (the paper's start is ``beta0 = theta(0)``).
-
-The closed-form steady state on a circle is :func:`amigo_gym.model.kinematics.circle_steady_state`,
-re-exported here.
-
-Units: metres, radians, seconds throughout; arrays of an :class:`InverseSolution` have shape ``(T,)``.
+singular at ``|theta - beta| = pi/2``; the wheel rates follow from the rolling constraints (system 29). Units: m,
+rad, s; arrays of an :class:`InverseSolution` have shape ``(T,)``.
 """
 
 from __future__ import annotations
@@ -47,8 +35,7 @@ AnyPath = CirclePath | ManoeuvrePath
 #: largest number of time-grid points accepted (about 120 MB of output columns)
 MAX_GRID_POINTS = 1_000_000
 
-#: the project's choice for the paper's manoeuvre (the paper gives no timing): gentle start and stop,
-#: well inside the real robot's limits (0.3 m/s^2 and 0.75 m/s^2), so that the phases are visible
+#: the paper's manoeuvre's timing (the paper gives none): acceleration and deceleration [m/s^2], start [s], laps
 MANOEUVRE_ACCEL = 0.1
 MANOEUVRE_DECEL = 0.2
 MANOEUVRE_T_START = 1.0
@@ -56,29 +43,20 @@ MANOEUVRE_LAPS = 1.0
 
 
 class SpeedProfile(Protocol):
-    """A prescribed speed of A, ``v_A(t) >= 0`` [m/s], piecewise smooth in time ``t`` [s]."""
+    """A prescribed speed of A, ``v_A(t) >= 0`` [m/s] (right-continuous), piecewise smooth in time ``t`` [s]:
+    ``peak_speed`` its largest value, ``breakpoints()`` the increasing times where it or its derivative jumps."""
 
     @property
-    def peak_speed(self) -> float:
-        """Largest value of ``v_A`` [m/s]."""
-        ...
+    def peak_speed(self) -> float: ...
 
-    def __call__(self, t: ArrayLike) -> Array:
-        """``v_A(t)`` [m/s], same shape as ``t``; right-continuous at a jump."""
-        ...
+    def __call__(self, t: ArrayLike) -> Array: ...
 
-    def breakpoints(self) -> tuple[float, ...]:
-        """Times [s] where ``v_A`` or its derivative is discontinuous, increasing."""
-        ...
+    def breakpoints(self) -> tuple[float, ...]: ...
 
 
 @dataclass(frozen=True)
 class ConstantSpeed:
-    """``v_A(t) = speed`` for all ``t`` (the paper's case: "constant velocity of the point A").
-
-    Attributes:
-        speed: v_A [m/s], > 0.
-    """
+    """``v_A(t) = speed`` [m/s], > 0 (the paper's case)."""
 
     speed: float = 0.2
 
@@ -95,10 +73,6 @@ class ConstantSpeed:
     def breakpoints(self) -> tuple[float, ...]:
         return ()
 
-    def distance(self, t: ArrayLike, t0: float = 0.0) -> Array:
-        """Distance travelled by A from ``t0`` to ``t`` [m]: ``speed (t - t0)``."""
-        return float(self.speed) * (np.asarray(t, dtype=np.float64) - t0)
-
 
 @dataclass(frozen=True)
 class TrapezoidProfile:
@@ -111,15 +85,8 @@ class TrapezoidProfile:
             \max(v - d (t - t_b), 0) & t \ge t_b
         \end{cases}
 
-    with ``a = accel``, ``d = decel``, ``v = speed``, ``t_s = t_start``, ``t_b = t_brake``. With
-    ``accel=None`` the speed jumps to ``v`` at ``t_start``; with ``t_brake=None`` it never brakes.
-
-    Attributes:
-        speed: cruise speed v [m/s], > 0.
-        accel: acceleration a [m/s^2], > 0, or ``None`` for a step. The real robot: 0.3.
-        decel: deceleration d [m/s^2], > 0. The real robot: 0.75.
-        t_start: start of the motion [s], >= 0.
-        t_brake: start of braking [s], ``>= t_start + speed/accel`` (cruise speed reached), or ``None``.
+    with ``v = speed`` [m/s] > 0, ``a = accel`` [m/s^2] > 0 (``None``: a step at ``t_start``), ``d = decel``
+    [m/s^2] > 0, ``t_s = t_start`` [s] >= 0 and ``t_b = t_brake`` [s] >= :attr:`t_cruise` (``None``: no braking).
     """
 
     speed: float = 0.2
@@ -142,11 +109,8 @@ class TrapezoidProfile:
     def from_distance(
         cls, speed: float, distance: float, accel: float | None = 0.3, decel: float = 0.75, t_start: float = 0.0
     ) -> TrapezoidProfile:
-        """The profile whose A travels ``distance`` [m] in all, braking at the right time.
-
-        ``distance = v^2/(2a) + v (t_b - t_s - v/a) + v^2/(2d)``, solved for ``t_b``; ``distance``
-        must be at least the start and stop distances ``v^2/(2a) + v^2/(2d)``.
-        """
+        """The profile whose A travels ``distance = v^2/(2a) + v (t_b - t_s - v/a) + v^2/(2d)`` [m] in all (solved for
+        ``t_b``; at least ``v^2/(2a) + v^2/(2d)``)."""
         o = "TrapezoidProfile"
         v = check_range(o, "speed", speed, 0.0, low_open=True)
         d_acc = 0.0 if accel is None else v * v / (2.0 * check_range(o, "accel", accel, 0.0, low_open=True))
@@ -188,7 +152,7 @@ class TrapezoidProfile:
         return tuple(sorted(set(out)))
 
     def distance(self, t: ArrayLike, t0: float = 0.0) -> Array:
-        """Distance travelled by A from ``t0`` to ``t`` [m], the integral of ``v_A`` (closed form)."""
+        """Distance travelled by A from ``t0`` to ``t`` [m] (closed form)."""
         return self._cumulative(np.asarray(t, dtype=np.float64)) - self._cumulative(np.asarray(t0, dtype=np.float64))
 
     def _cumulative(self, t: Array) -> Array:
@@ -213,19 +177,9 @@ COLUMNS: tuple[str, ...] = ("t", "s", "x_A", "y_A", "beta", "v_A", "betadot", "a
 
 @dataclass(frozen=True)
 class InverseSolution:
-    """The inverse solution sampled on a time grid; every array has shape ``(T,)`` (read-only).
-
-    Attributes:
-        t: time [s].
-        s: arc length of H along the path [m].
-        x_A, y_A: position of the axle midpoint A in frame 0 [m].
-        beta: heading [rad], continuous (not wrapped).
-        v_A: speed of A [m/s] (the prescribed profile).
-        betadot: turn rate ``v_A tan(theta(s) - beta) / l3`` [rad/s].
-        alpha1, alpha2, alpha3: wheel angles (right, left, castor) [rad], from 0 at ``t[0]`` by default.
-        alpha1_dot, alpha2_dot, alpha3_dot: wheel rates [rad/s] (system 29).
-        x_H, y_H: point H computed from the integrated pose of A (paper eq. 4) [m].
-    """
+    """The inverse solution on a time grid, read-only ``(T,)`` arrays: time ``t`` [s], H's arc length ``s`` [m], A's
+    position [m], the unwrapped heading ``beta`` [rad], ``v_A`` [m/s], ``betadot`` [rad/s], the wheel angles (right,
+    left, castor) [rad] and rates [rad/s], and H from the integrated pose of A (paper eq. 4) [m]."""
 
     t: Array
     s: Array
@@ -273,12 +227,8 @@ class InverseSolution:
         return np.stack((self.alpha1, self.alpha2, self.alpha3), axis=-1)
 
     def to_csv(self, path: str | os.PathLike[str], columns: Sequence[str] = COLUMNS) -> None:
-        """Write the chosen columns as CSV with a header line (SI units, radians), atomically (never half-written).
-
-        Raises:
-            ValueError: on an unknown column name.
-            OSError: when the folder does not exist or is not writable.
-        """
+        """Write the chosen columns as CSV with a header line, atomically. Raises ``ValueError`` on an unknown column,
+        ``OSError`` when the folder does not exist or is not writable."""
         unknown = [c for c in columns if c not in COLUMNS]
         if unknown:
             raise ValueError(f"unknown column(s) {unknown}; choose from {', '.join(COLUMNS)}")
@@ -288,12 +238,8 @@ class InverseSolution:
 
 
 def time_grid(duration: float, dt: float, t0: float = 0.0) -> Array:
-    """Uniform grid ``t0, t0 + dt, ..., t0 + n dt`` with ``n = floor(duration/dt)`` (plus rounding slack) [s].
-
-    Raises:
-        ValueError: unless ``0 < dt <= duration`` are finite and the grid has at most
-            :data:`MAX_GRID_POINTS` points.
-    """
+    """Uniform grid ``t0, t0 + dt, ..., t0 + n dt`` [s], ``n = floor(duration/dt)``; ``ValueError`` unless
+    ``0 < dt <= duration`` are finite and the grid has at most :data:`MAX_GRID_POINTS` points."""
     check_range("time_grid", "duration", duration, 0.0, low_open=True)
     check_range("time_grid", "dt", dt, 0.0, duration, low_open=True)
     check_range("time_grid", "t0", t0)
@@ -315,11 +261,10 @@ def solve_inverse(
     rtol: float = 1e-12,
     atol: float = 1e-12,
 ) -> InverseSolution:
-    r"""Integrate the inverse kinematics of H on ``path`` with speed ``profile`` and sample it at ``t``.
+    r"""Integrate the inverse kinematics of H on ``path`` with speed ``profile`` (DOP853) and sample it at ``t``.
 
-    The ODE of docs/model.md is integrated in the variables ``(s, psi)`` with the heading error
-    ``psi = theta(s) - beta`` (so ``beta = theta(s) - psi``; ``psidot = kappa(s) sdot - betadot``), together
-    with the pose of A and the wheel angles; state ``y = (s, psi, x_A, y_A, alpha1, alpha2, alpha3)``:
+    State ``(s, psi, x_A, y_A, alpha1, alpha2, alpha3)`` with ``psi = theta(s) - beta``, split at the profile's
+    breakpoints and the path's curvature jumps:
 
     .. math::
         \dot s = \frac{v_A}{\cos\psi},\quad
@@ -329,25 +274,10 @@ def solve_inverse(
         \dot\alpha_{1,2} = \frac{v_A \pm l_1\dot\beta}{r_{1,2}},\quad
         \dot\alpha_3 = \frac{\sqrt{l_5^2\dot\beta^2 + v_A^2}}{r_3}
 
-    ``psi`` tends to the constant lag ``atan(l3 / R_A)`` on a circle; integrating it rather than ``beta``
-    (which grows without bound) puts the solver's error control on the quantity the rates depend on.
-
-    At ``t[0]`` H is at ``path.point(s0)`` with heading ``beta0`` (default ``theta(s0)``, the paper's
-    start) and A is ``l3`` behind H.
-
-    Args:
-        path: :class:`~amigo_gym.paths.CirclePath` or :class:`~amigo_gym.paths.ManoeuvrePath`; its radius
-            must exceed ``robot.l3`` (the steady state needs ``R_A = sqrt(R^2 - l3^2)``).
-        profile: speed of A, ``v_A(t) >= 0``, peak at most ``robot.max_speed``.
-        t: increasing time grid ``(T,)`` [s], the integration starts at ``t[0]``.
-        robot: geometry (default :class:`RobotParams()`).
-        s0: start arc length of H [m], >= 0.
-        beta0: start heading [rad]; ``|wrap(theta(s0) - beta0)| < pi/2`` (the ODE is singular there).
-        alpha0: start wheel angles [rad].
-        rtol, atol: tolerances of DOP853.
-
-    Raises:
-        ValueError: on a bad grid, radius, speed, start (naming the field and its range).
+    At ``t[0]`` (the increasing grid's first time) H is at ``path.point(s0)`` [m] with heading ``beta0`` [rad]
+    (default ``theta(s0)``; ``|theta(s0) - beta0| < pi/2``), A ``l3`` behind, the wheel angles ``alpha0`` [rad].
+    ``path``: a ``CirclePath`` or ``ManoeuvrePath`` of radius above ``l3``; ``profile``: peak at most
+    ``robot.max_speed``. Raises ``ValueError`` naming a bad field and its range.
     """
     from scipy.integrate import solve_ivp
 
@@ -379,15 +309,12 @@ def solve_inverse(
 
     l3 = robot.l3
     h0 = path.point(s0)
-    # the heading error psi = theta(s) - beta is integrated instead of beta: it tends to a constant on a
-    # circle, so that the error control acts on the small, well-scaled quantity the rates depend on
     y = np.array([s0, theta0 - b0, *a_from_h(h0[0], h0[1], math.cos(b0), math.sin(b0), l3), *alpha0], dtype=np.float64)
 
     def make_rhs(ta: float, tb: float) -> Callable[[float, Array], Array]:
         lo, hi = np.nextafter(ta, math.inf), np.nextafter(tb, -math.inf)
 
         def rhs(tt: float, yy: Array) -> Array:
-            # the profile is smooth inside (ta, tb); evaluate it there (one-sided at the ends)
             v = float(profile(min(max(tt, lo), hi)))
             psi = yy[1]
             sdot = v / math.cos(psi)
@@ -399,13 +326,10 @@ def solve_inverse(
 
         return rhs
 
-    # The heading error relaxes at the rate v_A / l3 (exactly, on any circle, at the steady state): steps
-    # longer than a few l3 / v_A put DOP853 at the edge of its stability region, where the error
-    # estimate no longer bounds the dense output's error; 2 l3 / v_A keeps every sample near 1e-12.
+    # psi relaxes at the rate v_A / l3: longer steps than 2 l3 / v_A leave DOP853's stability region
     max_step = 2.0 * l3 / profile.peak_speed
     t_first, t_last = float(tg[0]), float(tg[-1])
     edges = [t_first, *(b for b in profile.breakpoints() if t_first < b < t_last), t_last]
-    # the arc length where the path's curvature jumps: the manoeuvre's straight->circle junction
     s_breaks = [float(path.straight_length)] if isinstance(path, ManoeuvrePath) and path.straight_length > s0 else []
     out = np.empty((y.size, tg.size))
     out[:, 0] = y
@@ -457,14 +381,8 @@ def manoeuvre_profile(
     t_start: float = MANOEUVRE_T_START,
     laps: float = MANOEUVRE_LAPS,
 ) -> TrapezoidProfile:
-    """Speed profile of the manoeuvre "starting, driving straight, circular curve, braking".
-
-    A stands still until ``t_start``, accelerates at ``accel`` to ``speed``, cruises and brakes at
-    ``decel`` so that it comes to rest after travelling ``straight_length + laps * 2 pi R_A`` [m], the
-    straight plus ``laps`` laps of its steady circle ``R_A = sqrt(R^2 - l3^2)`` (H stops close to,
-    not exactly at, the end of the lap, because A's path differs from the steady circle during the
-    transient at the start of the curve).
-    """
+    """Speed profile of the manoeuvre "starting, driving straight, circular curve, braking": A rests until
+    ``t_start`` [s] and comes to rest after ``straight_length + laps 2 pi R_A`` [m], ``R_A = sqrt(R^2 - l3^2)``."""
     robot = RobotParams() if robot is None else robot
     check_range("manoeuvre_profile", "laps", laps, 0.0, 1e3)
     ra = math.sqrt(check_range("manoeuvre_profile", "radius", path.radius, robot.l3, low_open=True) ** 2 - robot.l3**2)
@@ -481,15 +399,7 @@ def paper_circle(
     robot: RobotParams | None = None,
     direction: int = 1,
 ) -> InverseSolution:
-    """The paper's case: H from the origin on eq. (6)'s circle, ``beta0 = 0``, ``v_A`` constant from t = 0.
-
-    Args:
-        radius: R [m], > l3.
-        speed: v_A [m/s].
-        duration: simulated time [s]; the grid is ``time_grid(duration, dt)``.
-        dt: output step [s] (the integration itself is adaptive and accurate to ~1e-12).
-        robot: geometry.
-        direction: +1 left (eq. 6), -1 right.
-    """
+    """The paper's case: H from the origin on eq. (6)'s circle of radius [m] > l3 (``direction`` +1 left, -1 right),
+    ``beta0 = 0``, constant ``speed`` [m/s], sampled every ``dt`` [s] over ``duration`` [s]."""
     path = CirclePath(radius=radius, direction=direction)
     return solve_inverse(path, ConstantSpeed(speed), time_grid(duration, dt), robot)

@@ -1,17 +1,10 @@
-r"""The AmigoBot-v1 task as pure, batched functions: settings, start, step, observation, reward, end.
+r"""The AmigoBot-v1 task as pure functions of floats (one robot) or ``(N,)`` columns (a batch): settings, start,
+step, observation, reward, end.
 
-``AmigoBot-v1`` is the real robot on many paths: actions are wheel-rate *setpoints* that the firmware
-ramps (:mod:`amigo_gym.model.actuators`), the simulated robot may differ from the nominal one (``true_robot``,
-:mod:`amigo_gym.model.randomization`), commands may arrive late, wheels may slip, and measurements may be
-noisy; point H follows a path of any family (:mod:`amigo_gym.paths`). Both
-:class:`amigo_gym.envs.AmigoBotV1Env` and :class:`amigo_gym.envs.AmigoBotV1VectorEnv` call the column
-functions here (floats for one robot, ``(N,)`` arrays for a batch), so that they run the same code.
-
-Observation (float32, every field named in :data:`OBS_FIELDS` order; "measured" means computed from
-the noisy pose and wheel rates, with the nominal robot). ``e`` is H's signed cross-track error
-(positive left), ``psi`` the heading minus the path tangent at H's closest point, ``kappa`` the path
-curvature, ``(x_i, y_i)`` the path point ``d_i`` ahead of H's closest point in the robot frame (origin A,
-x along the heading), ``v_ref`` the reference speed of A:
+Observation (float32, :func:`obs_fields` order; "measured": from the noisy pose and wheel rates, nominal robot).
+``e`` is H's signed cross-track error (positive left), ``psi`` the heading minus the path tangent at H's closest
+point, ``kappa`` the path curvature, ``(x_i, y_i)`` the path point ``d_i`` ahead of H's closest point in the robot
+frame (origin A, x along the heading), ``v_ref`` the reference speed of A:
 
 ==============================  =====================================  ===========================
 field                           value                                  bounds
@@ -32,22 +25,17 @@ field                           value                                  bounds
 
 with ``b_i = (d_i + l3 + 2 d_term) / preview_scale``.
 
-Reward: the product of four named terms in [0, 1] (as AmigoBot-v0's, from the *true* state):
+Reward (true state): the product of the terms ``track``, ``speed``, ``heading``, ``smooth``, each in [0, 1],
 
 .. math::
     r = e^{-|e|/\sigma_e} \cdot e^{-|v_A - v_{ref}|/\sigma_v} \cdot \tfrac12(1 + \cos(\psi - \psi_{ss}))
         \cdot \left(1 - w_s (1 - e^{-(\|\Delta a\|/\sigma_a)^2})\right)
 
-``track``, ``speed``, ``heading``, ``smooth``; ``psi_ss = -asin(kappa l3)`` is the heading error of the
-exact steady state, ``v_A`` the true speed of A at the end of the step and ``Delta a`` the change of the
-normalised command. Ignoring the reference speed costs the speed term.
+with ``psi_ss = -asin(kappa l3)``, ``v_A`` the true speed of A at the step's end and ``Delta a`` the change of the
+normalised command.
 
-End: terminated when ``|e| > termination_distance`` (true H) or when H reaches the end of an open path;
-truncated by the registration's time limit.
-
-This module may import numpy and the core modules (params, kinematics, fresnel, actuators, paths,
-randomization; :mod:`amigo_gym.logs` inside :func:`make_tracking_params`, for a robot file); never the
-environments, policies, training or the CLI.
+End: terminated when ``|e| > termination_distance`` (true H) or H reaches an open path's end; truncated by the
+registration's time limit.
 """
 
 from __future__ import annotations
@@ -110,8 +98,7 @@ PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change
 MIXED_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change", "random")
 #: how far ahead the reference speed is also observed [s]
 SPEED_LOOKAHEAD = 1.0
-#: smallest control period [s]: the delay ring then keeps ``ring_length(0.001) = 501`` commands per robot (8 KB;
-#: :func:`amigo_gym.model.actuators.ring_length`: the whole steps of MAX_DELAY = 0.5 s, 499 in binary, plus 2)
+#: smallest control period [s]: the delay ring then keeps 501 commands per robot
 MIN_DT = 1e-3
 
 SpeedProfile = Literal["constant", "trapezoid"]
@@ -331,15 +318,8 @@ class TrackingParams:
 
 
 def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], ...]:
-    """``path_params`` as sorted ``(name, float)`` pairs, checked against the family of ``path`` (one-line errors).
-
-    Accepts a mapping or a sequence of ``(name, value)`` pairs (what a JSON round trip of the pairs gives).
-
-    Raises:
-        ValueError: not a mapping or pairs; a name the family does not have; a value outside its range
-            (:class:`amigo_gym.paths.ParamRange`); a parameter that would go unused (``path="mixed"``, a path
-            object); ``radius``/``direction`` for circle and manoeuvre (set by the keywords of those names).
-    """
+    """``path_params`` (a mapping or ``(name, value)`` pairs) as sorted ``(name, float)`` pairs, checked against the
+    family of ``path``: one-line ``ValueError`` for an unknown, out-of-range or unused parameter."""
     from amigo_gym.paths.families import FAMILIES, RANDOM_RANGES
 
     name = f"{owner}.path_params"
@@ -365,7 +345,7 @@ def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], 
             f"{name} is unused with a path object ({type(path).__name__}): give the path its parameters instead, "
             f"got {given!r}"
         )
-    if path == "mixed":  # only its random family takes parameters (e.g. a curvature curriculum)
+    if path == "mixed":
         unused = sorted(k for k in keys if k not in RANDOM_RANGES)
         if unused:
             raise ValueError(
@@ -426,13 +406,10 @@ def make_tracking_params(
 ) -> TrackingParams:
     """Settings from the keywords of ``gym.make("AmigoBot-v1", ...)``: every field, mappings accepted.
 
-    ``robot`` a :class:`RobotParams` or a mapping of its fields; ``true_robot`` a mapping of the fields
-    that differ from the nominal robot (or a whole ``RobotParams``, or the path of a robot file such as the
-    ``robot.json`` of ``amigo-gym identify``: its ``r1``, ``r2``, ``l1`` [m] on the nominal robot, its ``delay``
-    [s] and ramp rates on ``actuators``, where an ``actuators`` mapping's own fields win; :mod:`amigo_gym.logs`);
-    ``actuators`` a mapping of
-    :class:`ActuatorParams` fields; ``randomize`` a preset name or a mapping of :class:`Randomization` fields;
-    ``path_params`` a mapping; ``params`` a whole :class:`TrackingParams` or a mapping of its fields.
+    ``robot``, ``actuators``: an instance or a mapping of its fields; ``true_robot``: a mapping of the fields that
+    differ from the nominal robot, a ``RobotParams``, or a robot file (``robot.json`` of ``amigo-gym identify``: its
+    ``r1``, ``r2``, ``l1`` [m], and its ``delay`` [s] and ramps on ``actuators``, whose own fields win);
+    ``randomize``: a preset name or a mapping; ``params``: a :class:`TrackingParams` or a mapping of its fields.
 
     Raises:
         TypeError: an unknown keyword (listing the allowed ones).
@@ -452,12 +429,11 @@ def make_tracking_params(
         raise TypeError(f"{owner}: params must be a TrackingParams or a mapping, got {type(base).__name__}")
     robot = settings.get("robot", base.robot)
     if isinstance(robot, Mapping):
-        robot = _robot_from_mapping(owner, "robot", RobotParams(), robot)
+        robot = _from_mapping(owner, "robot", RobotParams(), robot)
         settings["robot"] = robot
     tr = settings.get("true_robot")
     act_file: dict[str, float] = {}
     if isinstance(tr, str | os.PathLike):
-        # a robot file (robot.json of `amigo-gym identify`): r1, r2, l1 [m] and the actuators' delay [s], ramps
         from amigo_gym.logs import load_robot_file
 
         try:
@@ -465,45 +441,37 @@ def make_tracking_params(
         except (FileNotFoundError, ValueError) as exc:
             raise type(exc)(f"{owner}: true_robot: {exc}") from None
     if isinstance(tr, Mapping):
-        settings["true_robot"] = _robot_from_mapping(owner, "true_robot", robot, tr)
+        settings["true_robot"] = _from_mapping(owner, "true_robot", robot, tr)
     act = settings.get("actuators")
     if act_file:
         if isinstance(act, Mapping):
-            act = {**act_file, **act}  # the fields the actuators keyword names win
+            act = {**act_file, **act}
         else:
             act = replace(base.actuators if act is None else act, **act_file)
         settings["actuators"] = act
     if isinstance(act, Mapping):
-        allowed = {f.name for f in fields(ActuatorParams)}
-        bad = sorted(str(k) for k in act if k not in allowed)
-        if bad:
-            raise ValueError(f"{owner}: unknown actuators field(s) {bad}; allowed: {sorted(allowed)}")
-        settings["actuators"] = ActuatorParams(**act)
+        settings["actuators"] = _from_mapping(owner, "actuators", ActuatorParams(), act)
     if "randomize" in settings:
         settings["randomize"] = make_randomization(settings["randomize"])
-    if isinstance(settings.get("preview"), list):
-        settings["preview"] = tuple(settings["preview"])
-    if isinstance(settings.get("speed"), list):
-        settings["speed"] = tuple(settings["speed"])
+    for name in ("preview", "speed"):
+        if isinstance(settings.get(name), list):
+            settings[name] = tuple(settings[name])
     return replace(base, **settings) if settings else base
 
 
-def _robot_from_mapping(owner: str, name: str, base: RobotParams, values: Mapping[str, Any]) -> RobotParams:
-    allowed = {f.name for f in fields(RobotParams)}
+def _from_mapping(owner: str, name: str, base: Any, values: Mapping[str, Any]) -> Any:
+    allowed = {f.name for f in fields(base)}
     bad = sorted(str(k) for k in values if k not in allowed)
     if bad:
         raise ValueError(f"{owner}: unknown {name} field(s) {bad}; allowed: {sorted(allowed)}")
     return replace(base, **{str(k): v for k, v in values.items()})
 
 
-# --------------------------------------------------------------------------- observation layout
-
-
 def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     """Names of the observation's components, in order (module table; ``observation="v0"``: AmigoBot-v0's)."""
     if p.observation == "v0":
         return (*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(p.preview))), *OBS_TAIL)
-    out = list(OBS_HEAD)  # AmigoBot-v0's head: error, heading error, curvature
+    out = list(OBS_HEAD)
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
     speeds = ("reference_speed", "reference_speed_ahead", "speed_error", "wheel_rate_1", "wheel_rate_2")
@@ -520,17 +488,13 @@ def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float
     high += [1.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0]
     hi = np.array(high)
     lo = -hi
-    lo[len(high) - 7] = 0.0  # reference speed
-    lo[len(high) - 6] = 0.0  # reference speed ahead
+    lo[-7:-5] = 0.0  # the reference speeds
     return lo, hi
-
-
-# --------------------------------------------------------------------------- constants and state
 
 
 @dataclass(frozen=True)
 class Constants:
-    """Numbers a step needs, derived once from :class:`TrackingParams` (:func:`constants`); internal."""
+    """Numbers a step needs, derived once from :class:`TrackingParams` (:func:`constants`)."""
 
     params: TrackingParams
     nominal: RobotParams
@@ -546,8 +510,7 @@ class Constants:
 
 
 def command_ring_length(p: TrackingParams) -> int:
-    """Commands kept per robot in the delay ring: ``ring_length(dt)`` (delays up to ``MAX_DELAY``), or 2 with
-    ``ideal_actuators`` (no delay: the ring is never read, and ``dt`` may be as small as AmigoBot-v0's 1e-6 s)."""
+    """Commands kept per robot in the delay ring: for delays up to ``MAX_DELAY``, or 2 with ``ideal_actuators``."""
     return actuators.ring_length(p.dt, 0.0 if p.ideal_actuators else actuators.MAX_DELAY)
 
 
@@ -555,7 +518,7 @@ def constants(p: TrackingParams) -> Constants:
     """The :class:`Constants` of ``p``."""
     robot = p.robot
     w_max = robot.max_wheel_rate
-    # the projection window: farther than H can move in one step (speed of H <= v + l3 |w|)
+    # the projection window exceeds H's step (speed of H <= v + l3 |w|)
     h_speed = actuators.turn_rate_bound(robot) * robot.l3 + 1.25 * robot.max_speed
     window = max(0.25, 1.5 * h_speed * p.dt + 0.1)
     smooth = w_max * p.sigma_smooth
@@ -570,14 +533,12 @@ def constants(p: TrackingParams) -> Constants:
         ring_length=command_ring_length(p),
         window=window,
         preview_bounds=tuple((d + robot.l3 + 2.0 * p.termination_distance) / p.preview_scale for d in p.preview),
-        # the smoothness term's squared scale: (2 sigma_smooth)^2 of the command's change (reward="v1"), or
-        # (w_max sigma_smooth)^2 [rad^2/s^2] of the wheel rates' change (reward="v0", AmigoBot-v0's)
+        # (w_max sigma_smooth)^2 [rad^2/s^2] of the wheel rates' change (reward="v0"), else (2 sigma_smooth)^2
         smooth_scale_sq=smooth * smooth if p.reward == "v0" else 4.0 * p.sigma_smooth * p.sigma_smooth,
     )
 
 
-#: the settings AmigoBot-v0's ``EnvParams`` and AmigoBot-v1's ``TrackingParams`` share, under the same name and meaning
-#: (:func:`v0_settings`, :func:`v0_configuration`)
+#: the settings AmigoBot-v0's ``EnvParams`` and ``TrackingParams`` share, under the same name and meaning
 V0_SHARED_SETTINGS: tuple[str, ...] = (
     "robot",
     "dt",
@@ -595,15 +556,12 @@ V0_SHARED_SETTINGS: tuple[str, ...] = (
 
 
 def v0_settings(p: TrackingParams) -> EnvParams | None:
-    """The AmigoBot-v0 task that ``p`` describes, or ``None``: the settings whose steps AmigoBot-v0's compiled
-    step runs as AmigoBot-v0 (``gym.make("AmigoBot-v0")``), and whose info has AmigoBot-v0's keys.
+    """The AmigoBot-v0 task that ``p`` describes (run by AmigoBot-v0's step, with its info keys), or ``None``.
 
-    They are ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise (the ideal actuators
-    already exclude delay, slip, a true robot and randomised geometry), ``start_at_rest=False``, a constant
-    ``speed`` with the constant profile, ``goal_tolerance=0`` and a path object equal to the path of the returned
-    :class:`amigo_gym.model.params.EnvParams` (``CirclePath(radius, direction=...)`` or
-    ``ManoeuvrePath(radius, straight_length, direction)``, from the origin along x0); settings that
-    :class:`~amigo_gym.model.params.EnvParams` refuses (e.g. a speed the circle cannot be driven at) are not v0's.
+    v0's settings: ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise,
+    ``start_at_rest=False``, a constant ``speed`` and profile, ``goal_tolerance=0`` and the path of the returned
+    :class:`~amigo_gym.model.params.EnvParams` (a ``CirclePath`` or ``ManoeuvrePath`` from the origin along x0),
+    which must accept them.
     """
     path = p.path
     kind: Literal["circle", "manoeuvre"] = "circle" if type(path) is CirclePath else "manoeuvre"
@@ -653,16 +611,9 @@ def v0_configuration(e: EnvParams) -> TrackingParams:
 
 
 class Episode(NamedTuple):
-    """What is drawn once per episode (columns).
-
-    Attributes:
-        r1, r2, l1, l3: the true geometry [m].
-        slip_max: bound of the per-step slip [-].
-        lag, t_switch: the delay as whole steps and the switch time within a step [s] (``delay = lag dt + t_switch``).
-        key: the key of the per-step draws (uint64).
-        v_cruise: the reference cruise speed [m/s].
-        t_brake: time at which the trapezoid starts braking [s] (``inf`` for a constant speed).
-    """
+    """What is drawn once per episode: the true geometry ``r1, r2, l1, l3`` [m], the slip bound ``slip_max`` [-], the
+    delay ``lag dt + t_switch`` (whole steps, [s]), the ``key`` of the per-step draws (uint64), the cruise speed
+    ``v_cruise`` [m/s] and the trapezoid's braking time ``t_brake`` [s] (``inf`` for a constant speed)."""
 
     r1: Real
     r2: Real
@@ -677,16 +628,9 @@ class Episode(NamedTuple):
 
 
 class State(NamedTuple):
-    """The state of one robot or a batch (columns).
-
-    Attributes:
-        x, y, beta: true pose of A [m, m, rad].
-        w1, w2: actual wheel rates [rad/s] (the actuator state).
-        alpha1, alpha2: wheel angles [rad].
-        progress: H's arc length along the path, unwrapped over laps [m] (the projection's hint).
-        a1, a2: the previous action (normalised command) [-].
-        steps: steps taken in the episode (int).
-    """
+    """The state: true pose of A ``x, y, beta`` [m, m, rad], wheel rates ``w1, w2`` [rad/s] and angles ``alpha1,
+    alpha2`` [rad], H's arc length ``progress`` unwrapped over laps [m], the previous action ``a1, a2`` [-] and the
+    ``steps`` taken (int)."""
 
     x: Real
     y: Real
@@ -702,19 +646,10 @@ class State(NamedTuple):
 
 
 class Outcome(NamedTuple):
-    """What the environments report about a state (columns).
-
-    Attributes:
-        obs: the observation's columns, in :func:`obs_fields` order (float64; the envs cast to float32).
-        terms: the reward terms in :data:`REWARD_TERMS` order.
-        reward: their product.
-        terminated: H left the path or reached an open path's end (bool columns).
-        h_x, h_y: true H [m].
-        error: H's true signed cross-track error [m].
-        v_true: true speed of A [m/s]; v_ref: the reference speed [m/s].
-        meas_x, meas_y, meas_beta: the measured pose [m, m, rad]; meas_w1, meas_w2: measured wheel rates [rad/s].
-        end_of_path: H reached the end of an open path (a terminal state that is a success, not a failure).
-    """
+    """What the environments report about a state: the observation (:func:`obs_fields` order, float64), the reward
+    ``terms`` (:data:`REWARD_TERMS` order) and their product, ``terminated``, true H ``h_x, h_y`` [m], its
+    cross-track ``error`` [m], the true and reference speeds of A [m/s], the measured pose [m, m, rad] and wheel
+    rates [rad/s], and ``end_of_path`` (H reached an open path's end: a success)."""
 
     obs: tuple[Real, ...]
     terms: tuple[Real, Real, Real, Real]
@@ -733,88 +668,64 @@ class Outcome(NamedTuple):
     end_of_path: Any = False
 
 
-# --------------------------------------------------------------------------- column helpers
-
-
-# The polymorphic helpers of the shared pieces below (numpy's elementwise form on columns, the float form on floats;
-# the compiled step runs the float form): amigo_gym.model.numeric, one home for both tasks and the model.
-_clip = clip
-_min = np.minimum
-_abs = np.abs
-
-
-def _max0(x: Any) -> Any:
-    return np.maximum(x, 0.0)
+# The pieces below take floats or columns; the compiled step compiles them.
 
 
 def reference_speed(p: TrackingParams, ep: Episode, t: Real) -> Real:
-    r"""Reference speed of A at episode time ``t`` [s], in [m/s].
-
-    Constant: ``v_ref = v``. Trapezoid (start, cruise, brake): :func:`reference_speed_of` with ``a_up =
-    profile_accel``, ``a_down = profile_decel``, ``t_b`` = :attr:`Episode.t_brake`. Floats or columns.
-    """
+    """Reference speed of A [m/s] at episode time ``t`` [s] (:func:`reference_speed_of`)."""
     trapezoid = p.speed_profile == "trapezoid"
     return reference_speed_of(trapezoid, ep.v_cruise, p.profile_accel, p.profile_decel, ep.t_brake, t)
 
 
 def reference_speed_of(trapezoid: bool, v: Real, accel: float, decel: float, t_brake: Real, t: Real) -> Real:
-    r""":func:`reference_speed` from numbers [m/s]: the cruise speed ``v``, or when ``trapezoid`` (start, cruise,
-    brake)
+    r"""Reference speed [m/s]: the cruise speed ``v``, or when ``trapezoid``
 
     .. math:: v_{ref}(t) = \max\bigl(0, \min(a_{up} t,\; v,\; v - a_{down} (t - t_b))\bigr),
         \qquad t_b = T - v / a_{down}
 
-    (``T = profile_duration``), the minima left to right. Floats or columns; compiled by the compiled step."""
-    out: Real = _max0(_min(_min(accel * t, v), v - decel * (t - t_brake))) if trapezoid else v
+    (``T = profile_duration``), the minima left to right."""
+    out: Real = np.maximum(np.minimum(np.minimum(accel * t, v), v - decel * (t - t_brake)), 0.0) if trapezoid else v
     return out
 
 
-# The pieces of :func:`evaluate_columns` (floats or columns; the compiled step compiles them: one source).
-
-
 def action_commands(a1: Real, a2: Real, w_max: float) -> tuple[Real, Real, Real, Real]:
-    """The action clipped to [-1, 1] and the setpoints it asks for: ``(c1, c2, c1 w_max, c2 w_max)`` [-, -, rad/s,
-    rad/s]. Floats or columns; compiled by the compiled step."""
-    c1 = _clip(a1, -1.0, 1.0)
-    c2 = _clip(a2, -1.0, 1.0)
+    """The action clipped to [-1, 1] and its setpoints: ``(c1, c2, c1 w_max, c2 w_max)`` [-, -, rad/s, rad/s]."""
+    c1 = clip(a1, -1.0, 1.0)
+    c2 = clip(a2, -1.0, 1.0)
     return c1, c2, c1 * w_max, c2 * w_max
 
 
 def measurements(
     x: Real, y: Real, beta: Real, w1: Real, w2: Real, nx: Real, ny: Real, nbeta: Real, nr1: Real, nr2: Real
 ) -> tuple[Real, Real, Real, Real, Real]:
-    """The measured pose of A and wheel rates: the true ones plus the step's noise [m, m, rad, rad/s, rad/s]. Floats
-    or columns; compiled by the compiled step."""
+    """The measured pose of A and wheel rates: the true ones plus the step's noise [m, m, rad, rad/s, rad/s]."""
     return x + nx, y + ny, beta + nbeta, w1 + nr1, w2 + nr2
 
 
 def measured_differs(position_noise: float, heading_noise: float, l3_differs: bool) -> bool:
-    """Whether the measured H differs from the true one, so that it is projected on its own: noise on the position
-    [m] or heading [rad], or a true ``l3`` other than the nominal (:func:`ep_l3_differs`). Compiled by the compiled
-    step."""
+    """Whether the measured H is projected on its own: noise on the position [m] or heading [rad], or a true ``l3``
+    other than the nominal."""
     return position_noise > 0.0 or heading_noise > 0.0 or l3_differs
 
 
 def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) -> tuple[Any, Any]:
-    """``(terminated, at_end)``: H is farther than ``termination_distance`` [m] from the path (``|e|``, true H) or has
-    reached the end of an open path (``status`` is :data:`STATUS_END`, ``closed`` false or 0). Floats (bools) or
-    columns (bool arrays); compiled by the compiled step."""
+    """``(terminated, at_end)``: ``|e| > termination_distance`` [m], or H reached an open path's end (``status`` is
+    :data:`STATUS_END`, ``closed`` 0)."""
     at_end = (status == STATUS_END) & (closed == 0)
-    terminated = off_path(_abs(e), termination_distance) | at_end
+    terminated = off_path(np.abs(e), termination_distance) | at_end
     return terminated, at_end
 
 
 def preview_entry(
     mcb: Real, msb: Real, mx: Real, my: Real, qx: Real, qy: Real, q_k: Real, l3: float, scale: float, bound: float
 ) -> tuple[Real, Real, Real]:
-    """One preview point's three fields: the path point ``(qx, qy)`` [m] in the measured robot frame (origin A
-    ``(mx, my)``, heading cosine and sine ``mcb``, ``msb``) over ``preview_scale``, clipped to ``+-bound``, and its
-    curvature field (:func:`amigo_gym.task.v0.curvature_feature`). Floats or columns; compiled by the compiled step."""
+    """One preview point's fields: the path point ``(qx, qy)`` [m] in the measured frame of A (origin ``(mx, my)``,
+    heading cosine and sine ``mcb``, ``msb``) over ``scale``, clipped to ``+-bound``, and its curvature field."""
     dx = qx - mx
     dy = qy - my
     return (
-        _clip((mcb * dx + msb * dy) / scale, -bound, bound),
-        _clip((mcb * dy - msb * dx) / scale, -bound, bound),
+        clip((mcb * dx + msb * dy) / scale, -bound, bound),
+        clip((mcb * dy - msb * dx) / scale, -bound, bound),
         curvature_feature(q_k, l3),
     )
 
@@ -822,36 +733,26 @@ def preview_entry(
 def speed_observations(
     v_ref: Real, v_ahead: Real, v_meas: Real, mw1: Real, mw2: Real, v_max: float, w_max: float
 ) -> tuple[Real, Real, Real, Real, Real]:
-    """The observation's speed fields: ``v_ref / v_max``, ``v_ref(t + lookahead) / v_max``, ``clip((v_meas -
-    v_ref) / v_max, +-2)``, ``clip(w_i / w_max, +-2)`` of the measured wheel rates. Floats or columns; compiled by
-    the compiled step."""
+    """The speed fields: ``v_ref / v_max``, ``v_ahead / v_max``, ``clip((v_meas - v_ref) / v_max, +-2)`` and
+    ``clip(w_i / w_max, +-2)`` of the measured wheel rates."""
     return (
         v_ref / v_max,
         v_ahead / v_max,
-        _clip((v_meas - v_ref) / v_max, -2.0, 2.0),
-        _clip(mw1 / w_max, -2.0, 2.0),
-        _clip(mw2 / w_max, -2.0, 2.0),
+        clip((v_meas - v_ref) / v_max, -2.0, 2.0),
+        clip(mw1 / w_max, -2.0, 2.0),
+        clip(mw2 / w_max, -2.0, 2.0),
     )
 
 
-# --------------------------------------------------------------------------- paths
-
-
 def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
-    """Check a task against what the nominal robot has; refuse it (one-line ``ValueError``), warn or say nothing
-    as ``p.feasibility`` says (``"error"``, ``"warn"``, ``"off"``).
-
-    Checks the wheel rate (``robot.max_wheel_rate``) and the rotational speed ramp
-    (``actuators.rot_acceleration``; none with ``ideal_actuators``, whose accelerations are unbounded) at the
-    highest reference speed, with the exact heading lag of H (:func:`amigo_gym.paths.feasibility`), and the
-    trapezoid's rates against the robot's ramps.
+    """Check a fixed path against the nominal robot's wheel rate and rotational ramp (none with ``ideal_actuators``)
+    at the highest reference speed (:func:`amigo_gym.paths.feasibility`); apply ``p.feasibility`` to a problem.
 
     Returns:
         the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
         ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
     """
-    # remembered per process for a ClothoidPath (frozen: its value is its key; every env of a vector of single envs
-    # checks the same task, an RK4 lag profile of tens of ms); another path object (a user's) analysed each time
+    # cached for a ClothoidPath (frozen: its value is its key); a user's path object is analysed each time
     analyse = _feasibility if type(path) is ClothoidPath else _feasibility.__wrapped__
     f = analyse(path, p.speed_range[1], p.robot, None if p.ideal_actuators else p.actuators.rot_acceleration)
     _apply_feasibility(p, None if f.feasible else f.message(), stacklevel=4)
@@ -859,8 +760,7 @@ def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
 
 
 def _apply_feasibility(p: TrackingParams, problem: str | None, stacklevel: int) -> None:
-    """Apply ``p.feasibility`` to a problem: ``"error"`` raises a one-line ``ValueError``, ``"warn"`` warns and
-    runs, ``"off"`` runs."""
+    """``p.feasibility`` on a problem: ``"error"`` raises one line, ``"warn"`` warns, ``"off"`` runs."""
     if problem is None or p.feasibility == "off":
         return
     if p.feasibility == "error":
@@ -870,22 +770,19 @@ def _apply_feasibility(p: TrackingParams, problem: str | None, stacklevel: int) 
 
 @lru_cache(maxsize=256)
 def _feasibility(path: Any, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
-    """:func:`amigo_gym.paths.feasibility` of ``path`` at the speed ``v`` [m/s] of A, with the ramp limit ``rot``
-    [rad/s^2] (``None``: unbounded)."""
+    """:func:`amigo_gym.paths.feasibility` at the speed ``v`` [m/s] of A, ramp limit ``rot`` [rad/s^2] or None."""
     from amigo_gym.paths import feasibility
 
     return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
 
 
-#: values of ``info["end_condition"]``: ``""`` the episode goes on (or ended by truncation), ``"goal"`` H came within
-#: ``goal_tolerance`` of an open path's end point, ``"end_of_path"`` H passed that end, ``"off_path"`` H was farther
-#: than ``termination_distance`` from the path (the first that applies, in this order)
+#: values of ``info["end_condition"]``: none (going on or truncated), H within ``goal_tolerance`` of an open path's end
+#: point, H past that end, H farther than ``termination_distance`` from the path (the first that applies)
 END_CONDITIONS: tuple[str, ...] = ("", "goal", "end_of_path", "off_path")
 
 
 def goal_point(p: TrackingParams, path: Any) -> tuple[float, float]:
-    """The end point ``(x, y)`` [m] of an open ``path`` when ``p.goal_tolerance > 0``; else ``(nan, nan)``, which
-    no H reaches (:func:`goal_reached`)."""
+    """The end point ``(x, y)`` [m] of an open ``path`` when ``p.goal_tolerance > 0``, else ``(nan, nan)``."""
     if p.goal_tolerance <= 0.0 or bool(path.closed):
         return math.nan, math.nan
     q = path.pose_columns(float(path.length))
@@ -893,8 +790,7 @@ def goal_point(p: TrackingParams, path: Any) -> tuple[float, float]:
 
 
 def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> Any:
-    """Whether H ``(hx, hy)`` is within ``p.goal_tolerance`` of the goal ``(gx, gy)`` [m] (:func:`goal_point`):
-    ``(hx - gx)^2 + (hy - gy)^2 <= goal_tolerance^2`` (False for a NaN goal). Floats or columns."""
+    """``(hx - gx)^2 + (hy - gy)^2 <= goal_tolerance^2`` [m^2] (False for a NaN goal)."""
     dx = hx - gx
     dy = hy - gy
     return dx * dx + dy * dy <= p.goal_tolerance * p.goal_tolerance
@@ -910,14 +806,7 @@ def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
 
 
 class Envelope(NamedTuple):
-    """Bounds of the paths a drawn task can give (:func:`drawn_envelopes`).
-
-    Attributes:
-        family: the family's name.
-        max_curvature: bound of ``|kappa|`` over its paths [1/m].
-        max_curvature_rate: bound of ``|dkappa/ds|`` [1/m^2].
-        what: the parameters, for messages.
-    """
+    """A family's bounds of ``|kappa|`` [1/m] and ``|dkappa/ds|`` [1/m^2] over its paths; ``what``: its parameters."""
 
     family: str
     max_curvature: float
@@ -926,29 +815,23 @@ class Envelope(NamedTuple):
 
 
 def _segment_bounds(path: Any) -> tuple[float, float]:
-    """``max |kappa|`` and ``max |dkappa/ds|`` over the segments of a :class:`amigo_gym.paths.ClothoidPath`."""
     k = max(max(abs(g.curvature), abs(g.curvature + g.curvature_rate * g.length)) for g in path.segments)
     c = max(abs(g.curvature_rate) for g in path.segments)
     return float(k), float(c)
 
 
 def drawn_envelopes(p: TrackingParams) -> list[Envelope]:
-    """Curvature and curvature-rate bounds of every path ``path="random"`` or ``"mixed"`` can draw (else ``[]``).
+    """The :class:`Envelope` of every family ``path="random"`` or ``"mixed"`` draws (else ``[]``).
 
-    * random paths (:func:`amigo_gym.paths.random_path`): ``|kappa| <= max_curvature`` and ``|dkappa/ds| <=
-      min(max_curvature_rate, 2 max_curvature / min_piece)`` (a ramp changes the curvature by at most
-      ``2 max_curvature`` over at least ``min_piece``);
-    * mixed: circles of radius >= 0.5 m; figure-8s and lane changes at the corner of :data:`MIXED_RANGES` where
-      they are sharpest (the smallest figure-8, the largest offset over the shortest length: shrinking a path
-      by a factor scales its curvature up by that factor and its rate by the square), read from the segments
-      of those paths; and its random paths (the defaults, or ``path_params``, which apply to them only).
+    Random paths: ``|kappa| <= max_curvature``, ``|dkappa/ds| <= min(max_curvature_rate, 2 max_curvature /
+    min_piece)``. Mixed adds circles of radius >= 0.5 m and the sharpest figure-8 and lane change of
+    :data:`MIXED_RANGES` (read from their segments).
     """
     from amigo_gym.paths.families import RANDOM_RANGES
 
-    if p.path in ("random", "mixed"):
-        vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(p.path_params)
-    else:
+    if p.path not in ("random", "mixed"):
         return []
+    vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(p.path_params)
     kmax = vals["max_curvature"]
     rate = min(vals["max_curvature_rate"], 2.0 * kmax / vals["min_piece"])
     what = f"max_curvature {kmax:g} 1/m, max_curvature_rate {vals['max_curvature_rate']:g} 1/m^2"
@@ -967,24 +850,14 @@ def drawn_envelopes(p: TrackingParams) -> list[Envelope]:
 
 
 def envelope_needs(e: Envelope, speed: float, robot: RobotParams) -> tuple[float, float]:
-    r"""Upper bounds of the wheel rate [rad/s] and rotational acceleration [rad/s^2] that the exact inverse solution
-    needs on any path within the envelope ``e`` at the constant speed ``speed`` of A (as
-    :func:`amigo_gym.paths.feasibility` computes them on one path); ``inf`` when H may fall 90 degrees behind.
+    r"""Upper bounds of the wheel rate [rad/s] and rotational acceleration [rad/s^2] the exact inverse solution needs
+    on any path within ``e`` at the constant speed ``speed`` [m/s] of A; ``inf`` when H may fall 90 degrees behind.
 
-    With the heading lag ``psi`` of :func:`amigo_gym.paths.heading_lag_profile`,
-    ``dpsi/ds = u = kappa - sin(psi) / l3``, starting from the quasi-steady lag (``u = 0``) on a path of continuous
-    curvature: ``sin psi`` can only move towards ``kappa l3``, so ``|sin psi| <= sigma = kappa_max l3`` (needs
-    ``sigma < 1``), and ``du/ds = kappa' - (cos(psi) / l3) u`` keeps ``|u| <= c_max l3 / c`` with
-    ``c = sqrt(1 - sigma^2) <= cos psi``. Then, with ``v_H = v / cos psi``,
-    ``betadot = v tan(psi) / l3`` and ``betaddot = v^2 u / (l3 cos^3 psi)``:
+    With ``sigma = kappa_max l3 < 1`` bounding ``|sin psi|`` of the heading lag and ``c = sqrt(1 - sigma^2)``:
 
     .. math::
         |\dot\alpha_i| \le \frac{v + l_1 v \sigma / (l_3 c)}{\min(r_1, r_2)}, \qquad
         |\ddot\beta| \le \frac{v^2 c_{max}}{c^4}.
-
-    Both are reached on a long enough arc of curvature ``kappa_max`` and a long enough ramp at rate ``c_max``
-    (e.g. 16.8 rad/s and 0.57 rad/s^2 for the default random paths at 0.75 m/s, where the peaks of 100 pool paths
-    reach 16.80 and 0.568).
     """
     sigma = e.max_curvature * robot.l3
     if sigma >= 1.0:
@@ -1002,27 +875,11 @@ def feasible_random_curvature(
     rate_per_curvature: float = 1.0,
     min_piece: float = 0.5,
 ) -> float:
-    r"""The largest ``max_curvature`` [1/m] of ``path="random"`` paths with ``max_curvature_rate = rate_per_curvature
-    max_curvature`` that the environments accept at the constant speed ``speed`` [m/s] of A
-    (:func:`drawn_feasibility_problem`: :func:`envelope_needs` within ``robot.max_wheel_rate`` and
-    ``rot_acceleration``).
-
-    With ``sigma = kappa l3``, ``c = sqrt(1 - sigma^2)`` and the envelope's rate ``c_max = min(rho, 2 / min_piece)
-    kappa`` (``rho = rate_per_curvature`` [1/m]), both needs grow with ``kappa``:
-
-    .. math::
-        \frac{v (1 + l_1 \sigma / (l_3 c))}{\min(r_1, r_2)} \le \dot\alpha_{max}, \qquad
-        \frac{v^2 c_{max}}{c^4} \le \ddot\beta_{max},
-
-    so the limit is found by bisection on ``kappa`` in ``(0, 1/l3)`` (to a relative 1e-12). The default ratio
-    ``rho = 1`` 1/m is the random family's (``max_curvature`` 1 1/m, ``max_curvature_rate`` 1 1/m^2). E.g. 10.1 1/m at
-    0.1 m/s and 4.26 1/m at 0.4 m/s on the nominal AmigoBot (the rotational ramp binds at both).
-
-    Args:
-        speed: A's reference speed [m/s], in (0, robot.max_speed]. robot: the nominal robot (default
-            :class:`RobotParams`). rot_acceleration: the ramp of the rotational speed [rad/s^2] (default
-            :class:`ActuatorParams`'s 0.87). rate_per_curvature: ``rho`` [1/m], in (0, 1e3]. min_piece: the random
-            family's ``min_piece`` [m], in [0.01, 100].
+    r"""The largest ``max_curvature`` [1/m] of ``path="random"`` with ``max_curvature_rate = rho max_curvature``
+    (``rho = rate_per_curvature`` [1/m], in (0, 1e3]) whose :func:`envelope_needs` at the speed ``speed`` [m/s] of A
+    stay within ``robot.max_wheel_rate`` and ``rot_acceleration`` [rad/s^2] (default 0.87), by bisection on
+    ``kappa`` in ``(0, 1/l3)`` to a relative 1e-12; ``min_piece`` [m] in [0.01, 100] bounds the rate by
+    ``2 kappa / min_piece``.
     """
     robot = RobotParams() if robot is None else robot
     acc = ActuatorParams().rot_acceleration if rot_acceleration is None else rot_acceleration
@@ -1047,13 +904,8 @@ def feasible_random_curvature(
 
 
 def drawn_feasibility_problem(p: TrackingParams) -> str | None:
-    """Why a path drawn under ``path="random"``/``"mixed"`` settings can need more than the robot has, or ``None``.
-
-    The same limits as :func:`check_feasible` (``robot.max_wheel_rate``, ``actuators.rot_acceleration``) at the
-    highest reference speed, with the bounds of :func:`envelope_needs` over :func:`drawn_envelopes`: a task without a
-    problem draws only paths that :func:`check_feasible` would accept. One line naming the family, its parameters,
-    the need and the limit.
-    """
+    """Why a path drawn under ``path="random"``/``"mixed"`` can need more than the robot has (:func:`envelope_needs`
+    over :func:`drawn_envelopes` at the highest reference speed), as one line, or ``None``."""
     v = p.speed_range[1]
     robot = p.robot
     for e in drawn_envelopes(p):
@@ -1079,9 +931,8 @@ def drawn_feasibility_problem(p: TrackingParams) -> str | None:
 
 
 def check_task(p: TrackingParams) -> tuple[Any, dict[str, Any] | None]:
-    """The fixed path of ``p`` (:func:`fixed_path`, ``None`` when drawn) and its feasibility report (``None`` for
-    drawn paths), after applying ``p.feasibility``: :func:`check_feasible` on a fixed path,
-    :func:`drawn_feasibility_problem` on drawn ones."""
+    """The fixed path of ``p`` and its feasibility report (``None``, ``None`` for drawn paths), after applying
+    ``p.feasibility`` (:func:`check_feasible`, :func:`drawn_feasibility_problem`)."""
     fixed = fixed_path(p)
     if fixed is not None:
         return fixed, check_feasible(p, fixed)
@@ -1089,8 +940,7 @@ def check_task(p: TrackingParams) -> tuple[Any, dict[str, Any] | None]:
     return None, None
 
 
-#: ranges of the family parameters drawn per episode by ``path="mixed"`` (the environments check at construction
-#: that every path they can draw is feasible at the highest reference speed: :func:`drawn_feasibility_problem`)
+#: ranges of the family parameters drawn per episode by ``path="mixed"``
 MIXED_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     "circle": {"radius": (0.5, 3.0)},
     "figure8": {"size": (3.0, 6.0)},
@@ -1108,26 +958,21 @@ def fixed_path(p: TrackingParams) -> Any:
     return _cached_family(p.path, extra) if p.path in ("figure8", "lane_change") else None
 
 
-#: bytes of family paths a process keeps built (:func:`_cached_family`): 64 MiB, e.g. the whole default random pool
-#: (1024 paths of about 25 KB) with room to spare; the least recently used paths are dropped beyond it
+#: bytes of family paths a process keeps built (the least recently used dropped beyond it)
 PATH_CACHE_BYTES = 64 * 2**20
 _FAMILY_CACHE: OrderedDict[tuple[Any, ...], tuple[Any, int]] = OrderedDict()
 _cache_bytes = 0
 
 
 def path_nbytes(path: Any) -> int:
-    """An estimate of the memory of a built :class:`amigo_gym.paths.ClothoidPath` [bytes]: its tables' arrays, about
-    400 bytes per segment and 2 KiB for the objects (within a factor 2 of ``tracemalloc``'s count,
-    ``tests/test_bad_inputs_v1.py``)."""
-    # the tables are one flat vector (their arrays are views of it)
+    """An estimate of the memory of a built :class:`amigo_gym.paths.ClothoidPath` [bytes]."""
     return int(path._t.flat.nbytes) + 400 * len(path.segments) + 2048
 
 
 def _cached_family(
     name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None, loops: PathLoops | None = None
 ) -> Any:
-    """A family path, built once per process for each parameter set (and seed of a random one) and kept within
-    :data:`PATH_CACHE_BYTES` (least recently used dropped first). ``loops``: as :func:`draw_path`."""
+    """A family path, built once per process for each parameter set (and seed), within :data:`PATH_CACHE_BYTES`."""
     from amigo_gym.paths import make_family_path
 
     global _cache_bytes
@@ -1148,8 +993,7 @@ def _cached_family(
 
 
 def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = None) -> Any:
-    """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached
-    (``loops``: as :func:`draw_path`)."""
+    """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
     extra = tuple(sorted(dict(p.path_params).items())) if p.path in ("random", "mixed") else ()
     return _cached_family("random", extra, rng_seed=path_id, loops=loops)
 
@@ -1157,9 +1001,8 @@ def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = 
 def draw_path(
     rng: np.random.Generator, p: TrackingParams, loops: PathLoops | None = None
 ) -> tuple[Any, dict[str, Any]]:
-    """The episode's path and its description for ``info`` (family and parameters), drawn from ``rng`` for
-    ``"random"`` and ``"mixed"`` (else the fixed path, no draw). ``loops``: the compiled path-building loops
-    (:func:`amigo_gym.sim.fast_v1.path_loops`) or None; the same path either way."""
+    """The episode's path and its ``info`` description (family, parameters), drawn from ``rng`` for ``"random"`` and
+    ``"mixed"``. ``loops``: the compiled path-building loops or None (the same path either way)."""
     from amigo_gym.paths import make_family_path
 
     if not isinstance(p.path, str) or p.path not in ("random", "mixed"):
@@ -1169,33 +1012,26 @@ def draw_path(
     if fam == "random":
         pid = int(rng.integers(p.random_pool))
         return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
-    values: dict[str, Any] = {}
-    for name, (lo, hi) in MIXED_RANGES[fam].items():
-        values[name] = float(rng.uniform(lo, hi))
+    values: dict[str, Any] = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in MIXED_RANGES[fam].items()}
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
-    # parameters drawn from continuous ranges do not repeat: built, not cached
+    # continuous parameters do not repeat: built, not cached
     return make_family_path(fam, None, loops=loops, **values), {"family": fam, **values}
 
 
-# --------------------------------------------------------------------------- episodes and steps
-
-
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
-    """Draw one episode's constants (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from
-    ``rng``, in this order: speed (when a range), randomisation (:func:`amigo_gym.model.randomization.sample`), ``u``,
-    the key of the per-step draws (key 0, not drawn, with ``ideal_actuators`` and no noise)."""
+    """Draw one episode (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from ``rng``, in this
+    order: speed (when a range), randomisation, ``u``, the key of the per-step draws (0, not drawn, with
+    ``ideal_actuators`` and no noise)."""
     from amigo_gym.model.randomization import draw_key, sample
 
     lo, hi = p.speed_range
     v = lo if lo == hi else float(rng.uniform(lo, hi))
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    # (AmigoBot-v0's stream: three uniforms per episode)
     key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
     true = p.simulated_robot
-    delay = p.actuators.delay + d.delay
-    delay = min(delay, actuators.MAX_DELAY)
+    delay = min(p.actuators.delay + d.delay, actuators.MAX_DELAY)
     lag, t_switch = actuators.delay_split(delay, p.dt)
     t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
     ep = Episode(
@@ -1214,30 +1050,20 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
 
 
 def episode_template(p: TrackingParams) -> Episode | None:
-    """The one episode :func:`draw_episode` gives when its only draws are the start offsets ``u`` (a fixed speed, no
-    randomised range, ideal actuators without noise: AmigoBot-v0's settings), else ``None``."""
+    """The one episode :func:`draw_episode` gives when it draws only ``u`` (AmigoBot-v0's settings), else ``None``."""
     lo, hi = p.speed_range
-    r = p.randomize
-    if (
-        lo != hi
-        or not p.ideal_actuators
-        or r.has_noise
-        or any(a != b for a, b in (r.wheel_radius, r.track, r.slip, r.delay))
-    ):
+    if lo != hi or not p.ideal_actuators or p.randomize.has_noise:  # (ideal actuators: no randomised range)
         return None
-    return draw_episode(np.random.default_rng(0), p)[0]  # (the generator's draws are u alone, not in the episode)
+    return draw_episode(np.random.default_rng(0), p)[0]
 
 
-#: ``(path, x, y, hint) -> progress``: H's progress [m] at ``(x, y)`` from the hint, as
-#: ``path.locate(x, y, hint, k.window, k.window).progress`` (the single env passes its compiled twin)
+#: ``(path, x, y, hint) -> progress``: H's progress [m] at ``(x, y)``, as ``path.locate`` gives it
 ProgressFn = Callable[[Any, Any, Any, Any], Real]
-#: ``(path, s) -> PathPose``: the path's pose at the arc length ``s``, as ``path.pose_columns(s)`` (the compiled step's
-#: environments pass its compiled twin)
+#: ``(path, s) -> PathPose``: the path's pose at the arc length ``s`` [m], as ``path.pose_columns(s)``
 PoseFn = Callable[[Any, Any], Any]
 
 
 def _progress(k: Constants, path: Any, x: Real, y: Real, hint: Real, progress: ProgressFn | None) -> Real:
-    """H's progress at ``(x, y)`` from ``hint``: ``progress`` when given, else by ``path.locate``."""
     if progress is not None:
         return progress(path, x, y, hint)
     s_h: Real = path.locate(x, y, hint, k.window, k.window).progress
@@ -1252,13 +1078,10 @@ def start_state(
     progress: ProgressFn | None = None,
     path_pose: PoseFn | None = None,
 ) -> State:
-    """The start state: H at the path's start plus ``u[:2] * init_position_noise``, heading along the tangent
-    plus ``u[2] * init_heading_noise``, A ``l3`` (true) behind H; wheels at rest (or rolling at the reference
-    speed), wheel angles 0; the previous command is the wheels' state (0 at rest).
-
-    ``progress`` replaces the projection of H (:data:`ProgressFn`; default ``path.locate``), ``path_pose`` the path's
-    start pose (:data:`PoseFn`; default ``path.pose_columns``).
-    """
+    """The start state: H at the path's start plus ``u[:2] init_position_noise`` [m], heading along the tangent plus
+    ``u[2] init_heading_noise`` [rad], A ``l3`` (true) behind H; wheels at rest (or rolling at the reference speed),
+    angles 0, the previous command the wheels' state. ``progress``, ``path_pose``: compiled twins (default the path's
+    methods)."""
     p = k.params
     start = path.pose_columns(0.0 * u[0]) if path_pose is None else path_pose(path, 0.0 * u[0])
     beta = start.theta + u[2] * p.init_heading_noise
@@ -1279,10 +1102,10 @@ def start_state(
 def step_columns(
     k: Constants, path: Any, state: State, ep: Episode, ring: NDArray[np.float64], ring_step: int, a1: Real, a2: Real
 ) -> tuple[State, Outcome, Any]:
-    """One step of AmigoBot-v1 in column form: clip the action, write its setpoints ``a w_max`` [rad/s] into the
-    command ``ring`` (``(L, 2)`` or ``(N, L, 2)``, in place, at the counter ``ring_step``) and read those in effect
-    (the delay), draw the step's slip and noise, take the exact actuator step
-    (:func:`amigo_gym.model.actuators.actuator_step`) and evaluate the new state (:func:`evaluate_columns`).
+    """One step: clip the action; with ``ideal_actuators`` hold the setpoints ``w_i = a_i w_max`` [rad/s] over
+    ``dt`` (the pose advances by the exact arc, the heading bounded as AmigoBot-v0's), else write them into the
+    command ``ring`` (``(L, 2)`` or ``(N, L, 2)``, in place, at ``ring_step``), read those in effect after the delay
+    and take the exact actuator step with the step's slip; then evaluate the new state (:func:`evaluate_columns`).
 
     Returns:
         the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.model.randomization.StepNoise`).
@@ -1290,49 +1113,27 @@ def step_columns(
     from amigo_gym.model.randomization import step_noise
 
     p = k.params
-    c1, c2, cmd1, cmd2 = action_commands(a1, a2, k.w_max)
-    if p.ideal_actuators:
-        return _ideal_step(k, path, state, ep, c1, c2, cmd1, cmd2)
-    actuators.ring_write(ring, ring_step, cmd1, cmd2)
-    o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
-    noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
-    x, y, beta, w1, w2 = state.x, state.y, state.beta, state.w1, state.w2
-    slips = (noise.slip1, noise.slip2, k.n_sub)
-    act = actuators.actuator_step(
-        x, y, beta, w1, w2, o1, o2, n1, n2, ep.t_switch, p.dt, k.nominal, p.actuators, ep.r1, ep.r2, ep.l1, *slips
-    )
-    steps = state.steps + 1
-    alpha1, alpha2 = state.alpha1 + act.dalpha1, state.alpha2 + act.dalpha2
-    new = State(act.x, act.y, act.beta, act.w1, act.w2, alpha1, alpha2, state.progress, c1, c2, steps)
-    out, progress = evaluate_columns(
-        k, path, new, ep, noise, act.v_true, state.a1, state.a2, steps * p.dt, prev_rates=(state.w1, state.w2)
-    )
-    return new._replace(progress=progress), out, noise
-
-
-def _ideal_step(
-    k: Constants, path: Any, state: State, ep: Episode, c1: Real, c2: Real, w1: Real, w2: Real
-) -> tuple[State, Outcome, Any]:
-    r""":func:`step_columns` with ``ideal_actuators``: AmigoBot-v0's motion (its one home: AmigoBot-v0's reference).
-
-    The wheel rates ``w_i = c_i w_max`` [rad/s] (:func:`action_commands`) are held over ``dt``; with
-    ``(v, \dot\beta)`` their body velocity (nominal robot), the pose advances by the exact arc
-    (:func:`amigo_gym.model.kinematics.arc_step`), whose heading cosine and sine (angle addition) the evaluation uses;
-    wheel angles advance by ``w_i dt``. A heading past ``HEADING_LIMIT`` (1e6 rad) is reduced by whole turns
-    (:func:`amigo_gym.task.v0.bound_angle`), as AmigoBot-v0's.
-    """
-    from amigo_gym.model.randomization import step_noise
-
-    p = k.params
     dt = p.dt
+    c1, c2, cmd1, cmd2 = action_commands(a1, a2, k.w_max)
     noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
-    v, bdot = body_velocity_columns(w1, w2, k.nominal)
-    arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
+    heading: tuple[Real, Real] | None = None
+    if p.ideal_actuators:
+        v, bdot = body_velocity_columns(cmd1, cmd2, k.nominal)
+        arc = arc_step(state.x, state.y, state.beta, v, bdot, dt)
+        x, y, beta, w1, w2, heading = arc.x, arc.y, bound_angle(arc.beta), cmd1, cmd2, (arc.cos_beta, arc.sin_beta)
+        alpha1, alpha2 = advance_angle(state.alpha1, cmd1, dt), advance_angle(state.alpha2, cmd2, dt)
+    else:
+        actuators.ring_write(ring, ring_step, cmd1, cmd2)
+        o1, o2, n1, n2 = actuators.ring_read(ring, ring_step, ep.lag)
+        act = actuators.actuator_step(
+            state.x, state.y, state.beta, state.w1, state.w2, o1, o2, n1, n2, ep.t_switch, dt, k.nominal,
+            p.actuators, ep.r1, ep.r2, ep.l1, noise.slip1, noise.slip2, k.n_sub,
+        )  # fmt: skip
+        x, y, beta, w1, w2, v = act.x, act.y, act.beta, act.w1, act.w2, act.v_true
+        alpha1, alpha2 = state.alpha1 + act.dalpha1, state.alpha2 + act.dalpha2
     steps = state.steps + 1
-    alpha1 = advance_angle(state.alpha1, w1, dt)
-    alpha2 = advance_angle(state.alpha2, w2, dt)
-    new = State(arc.x, arc.y, bound_angle(arc.beta), w1, w2, alpha1, alpha2, state.progress, c1, c2, steps)
-    rates, heading = (state.w1, state.w2), (arc.cos_beta, arc.sin_beta)
+    new = State(x, y, beta, w1, w2, alpha1, alpha2, state.progress, c1, c2, steps)
+    rates = (state.w1, state.w2)
     out, progress = evaluate_columns(k, path, new, ep, noise, v, state.a1, state.a2, steps * dt, rates, heading)
     return new._replace(progress=progress), out, noise
 
@@ -1350,15 +1151,10 @@ def evaluate_columns(
     prev_rates: tuple[Real, Real] | None = None,
     heading: tuple[Real, Real] | None = None,
 ) -> tuple[Outcome, Real]:
-    """Observation, reward and end of the state ``st`` at time ``t`` (module docstring).
+    """Observation, reward and end of the state ``st`` at time ``t`` [s] (module docstring), and H's new progress [m].
 
-    The true H is projected with the hint ``st.progress``; the measured pose (true pose plus ``noise``) is
-    projected again only when it differs (noise on, or a true ``l3`` other than the nominal).
-    ``prev_rates``: the wheel rates before the step [rad/s] (``reward="v0"``; default the state's own: no change);
-    ``heading``: ``(cos beta, sin beta)`` of the state when known (the ideal step's; default ``cos``, ``sin`` of it).
-
-    Returns:
-        the :class:`Outcome` and H's new progress [m].
+    ``prev1``, ``prev2``: the previous command; ``prev_rates``: the wheel rates before the step [rad/s] (default the
+    state's own); ``heading``: ``(cos beta, sin beta)`` of the state when known.
     """
     p = k.params
     l3 = k.l3
@@ -1372,10 +1168,8 @@ def evaluate_columns(
     pw1, pw2 = (st.w1, st.w2) if prev_rates is None else prev_rates
     da1, da2 = command_change(p.reward == "v0", st.w1, st.w2, pw1, pw2, st.a1, st.a2, prev1, prev2)
     change_sq, scales = da1 * da1 + da2 * da2, (p.sigma_track, p.sigma_speed, p.smooth_weight, k.smooth_scale_sq)
-    # the reward of AmigoBot-v0, from the true state
-    terms = reward_term_columns(_abs(e), _abs(v_true - v_ref), cos_psi, sin_psi, cos_ss, sin_ss, change_sq, *scales)
+    terms = reward_term_columns(np.abs(e), np.abs(v_true - v_ref), cos_psi, sin_psi, cos_ss, sin_ss, change_sq, *scales)
     reward = reward_product(*terms)
-    # on a batch, per-row paths: the open ones end when H passes their end
     terminated, at_end = end_flags(e, p.termination_distance, path.closed, loc.status)
     mx, my, mb, mw1, mw2 = measurements(
         st.x, st.y, st.beta, st.w1, st.w2, noise.x, noise.y, noise.beta, noise.rate1, noise.rate2
@@ -1395,7 +1189,7 @@ def evaluate_columns(
         )  # fmt: skip
     else:
         obs = [*observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, p.error_scale, k.e_max)]
-        if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath: the preview together
+        if type(m_s) is float and hasattr(path, "pose_floats"):  # one robot on a ClothoidPath
             ahead: list[Any] = path.pose_floats([m_s + d for d in p.preview])
         else:
             ahead = [path.pose_columns(m_s + d) for d in p.preview]
@@ -1410,16 +1204,15 @@ def evaluate_columns(
 def command_change(
     wheel_rates: bool, w1: Real, w2: Real, pw1: Real, pw2: Real, a1: Real, a2: Real, pa1: Real, pa2: Real
 ) -> tuple[Real, Real]:
-    """The change the smoothness term penalises: with ``wheel_rates`` (AmigoBot-v0's reward) the wheel rates' change
-    ``(w1 - pw1, w2 - pw2)`` [rad/s], else the normalised command's ``(a1 - pa1, a2 - pa2)`` [-]. Floats or
-    columns; the compiled step calls it too."""
+    """The change the smoothness term penalises: with ``wheel_rates`` (``reward="v0"``) ``(w1 - pw1, w2 - pw2)``
+    [rad/s], else ``(a1 - pa1, a2 - pa2)`` [-]."""
     if wheel_rates:
         return w1 - pw1, w2 - pw2
     return a1 - pa1, a2 - pa2
 
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
-    """Whether the true ``l3`` differs from the nominal (then the measured H is projected separately)."""
+    """Whether the true ``l3`` differs from the nominal."""
     l3 = ep.l3
     if type(l3) is float:
         return l3 != k.l3
@@ -1434,7 +1227,7 @@ def reset_columns(k: Constants, path: Any, st: State, ep: Episode, noise: Any) -
 
 
 def start_speed_time(st: State, ep: Episode) -> tuple[Real, Real]:
-    """The true speed of A [m/s] (no slip) and the time [s] at which :func:`reset_columns` evaluates a start state."""
+    """The true speed of A [m/s] (no slip) and the time 0 [s] of a start state."""
     zero = 0.0 * st.x
     v, _ = body_velocity_of(st.w1, st.w2, ep.r1, ep.r2, 2.0 * ep.l1)
     return v + zero, zero
@@ -1444,7 +1237,7 @@ NO_NOISE = StepNoise(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 class Begin(NamedTuple):
-    """A new episode of one robot (:func:`begin_episode`): floats."""
+    """A new episode of one robot (:func:`begin_episode`)."""
 
     path: Any
     path_info: dict[str, Any]
@@ -1454,8 +1247,7 @@ class Begin(NamedTuple):
 
 
 def begin_episode(rng: np.random.Generator, k: Constants, pose: tuple[float, float, float] | None = None) -> Begin:
-    """Draw, start and evaluate one robot's episode from its generator (:func:`start_episode`, then
-    :func:`reset_columns`)."""
+    """Draw, start and evaluate one robot's episode (:func:`start_episode`, :func:`reset_columns`)."""
     path, info, ep, st = start_episode(rng, k, pose)
     return Begin(path, info, ep, st, reset_columns(k, path, st, ep, NO_NOISE))
 
@@ -1468,10 +1260,8 @@ def start_episode(
     loops: PathLoops | None = None,
     path_pose: PoseFn | None = None,
 ) -> tuple[Any, dict[str, Any], Episode, State]:
-    """Draw, in order, the path (:func:`draw_path`) and the episode (:func:`draw_episode`) from ``rng``, and build
-    the start state (:func:`start_state`; ``pose`` replaces the drawn pose of A): ``(path, path_info, episode,
-    state)``. ``progress``, ``loops``, ``path_pose``: the compiled twins of :func:`start_state` and :func:`draw_path`
-    (default the float route)."""
+    """``(path, path_info, episode, state)``: draw the path, then the episode, from ``rng`` and build the start state
+    (``pose`` replaces the drawn pose of A). ``progress``, ``loops``, ``path_pose``: compiled twins or None."""
     path, info = draw_path(rng, k.params, loops)
     ep, u = draw_episode(rng, k.params)
     st = start_state(k, path, ep, u, progress, path_pose)
@@ -1484,8 +1274,7 @@ def start_episode(
 def placed_state(
     k: Constants, path: Any, ep: Episode, st: State, pose: tuple[Real, ...], progress: ProgressFn | None = None
 ) -> State:
-    """The start state ``st`` with A at ``pose = (x_A, y_A, beta)`` [m, m, rad] instead (floats or columns), H
-    ``l3`` (true) ahead of it and H's progress there (from the hint 0)."""
+    """The start state ``st`` with A at ``pose = (x_A, y_A, beta)`` [m, m, rad] and H's progress there."""
     x, y, b = pose
     hx = x + ep.l3 * col_cos(b)
     hy = y + ep.l3 * col_sin(b)
