@@ -188,11 +188,9 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
         if meta["metavar"] is None and "[file]" in help_text and not meta["positional"] and "action" not in kw:
             kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
         kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
-        target: Any = parser
-        if meta["group"] is not None:
-            if meta["group"] not in groups:
-                groups[meta["group"]] = parser.add_mutually_exclusive_group()
-            target = groups[meta["group"]]
+        if meta["group"] is not None and meta["group"] not in groups:
+            groups[meta["group"]] = parser.add_mutually_exclusive_group()
+        target = groups.get(meta["group"], parser)
         if meta["positional"]:
             del kw["dest"]
             kw.pop("required", None)

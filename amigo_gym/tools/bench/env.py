@@ -143,30 +143,25 @@ def bench_memory(n: int, seed: int = 0) -> Doc:
 def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> tuple[float, float]:
     """PPO ``learn`` throughput [env-steps/s] and the share of its wall time in ``venv``'s ``reset``/``step_wait``."""
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecEnvWrapper
 
-    class Timed(VecEnvWrapper):
-        env_time = 0.0
+    env_time = [0.0]
 
-        def reset(self) -> Any:
-            return self._timed(self.venv.reset)
-
-        def step_wait(self) -> Any:
-            return self._timed(self.venv.step_wait)
-
-        def _timed(self, fn: Callable[[], Any]) -> Any:
+    def timed(fn: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any) -> Any:
             t0 = time.perf_counter()
-            out = fn()
-            self.env_time += time.perf_counter() - t0
+            out = fn(*args)
+            env_time[0] += time.perf_counter() - t0
             return out
 
-    timed = Timed(venv)
-    model = PPO("MlpPolicy", timed, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
+        return call
+
+    venv.reset, venv.step_wait = timed(venv.reset), timed(venv.step_wait)
+    model = PPO("MlpPolicy", venv, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
     t0 = time.perf_counter()
     model.learn(total_timesteps=timesteps)
     wall = time.perf_counter() - t0
-    timed.close()
-    return float(model.num_timesteps / wall), float(timed.env_time / wall)
+    venv.close()
+    return float(model.num_timesteps / wall), float(env_time[0] / wall)
 
 
 def bench_ppo(
@@ -485,12 +480,9 @@ def run(s: EnvSettings) -> int:
         return 0
     sizes = list(s.sizes or (QUICK_SIZES if s.quick else DEFAULT_SIZES))
     if s.quick:
-        small = {
-            "sync_max": min(s.sync_max, SYNC_MAX),
-            "memory_n": min(s.memory_n, 256),
-            "ppo_steps": min(s.ppo_steps, 128),
-        }
-        s = replace(s, repeats=1, min_time=0.02, ppo_repeats=1, **small)
+        small: dict[str, Any] = {"sync_max": min(s.sync_max, SYNC_MAX), "memory_n": min(s.memory_n, 256)}
+        small["ppo_steps"] = min(s.ppo_steps, 128)
+        s = replace(s, min_time=0.02, **small, repeats=1, ppo_repeats=1)
     if s.threads is not None and numba_available():
         import numba
 

@@ -72,9 +72,9 @@ def bench_sb3(
     torch.set_num_threads(threads)
     t0, c0 = clock()
     venv = _venv(n_envs, seed)
-    cfg = {"n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs}
-    kw = {"learning_rate": 3e-4, "gamma": 0.98, "policy_kwargs": {"net_arch": [64, 64]}, "seed": seed, "verbose": 0}
-    model = PPO("MlpPolicy", venv, **cfg, **kw, device="cpu")
+    cfg: dict[str, Any] = {"n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs}
+    kw: dict[str, Any] = {"learning_rate": 3e-4, "gamma": 0.98, "policy_kwargs": {"net_arch": [64, 64]}}
+    model = PPO("MlpPolicy", venv, **cfg, **kw, seed=seed, verbose=0, device="cpu")
     model.learn(total_timesteps=steps)
     t1, c1 = clock()
     venv.close()
@@ -153,7 +153,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     def run(s: TrainSettings) -> int:
         import torch
 
-        head = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count(), "torch_threads": s.threads}
+        head: dict[str, Any] = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
+        head["torch_threads"] = s.threads
         head |= {"env_threads": s.env_threads, "fast_hyperparams": s.fast_hyperparams}
         head |= {"python": platform.python_version(), "numpy": np.__version__, "torch": torch.__version__}
         command = "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:])
