@@ -209,12 +209,9 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
         if meta["skip"] or not f.init or not hasattr(namespace, f.name):
             continue
         value = getattr(namespace, f.name)
-        if meta["parse"] is not None:
-            if value is None:
-                continue
-            if not isinstance(value, str):  # a default set on the parser (``set_defaults``): already parsed
-                kw[f.name] = value
-                continue
+        if meta["parse"] is not None and value is None:
+            continue
+        if meta["parse"] is not None and isinstance(value, str):  # else a parsed default set on the parser
             try:
                 value = meta["parse"](value)
             except ValueError as exc:
@@ -238,9 +235,7 @@ def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, descr
     parser, namespace = _parse(cls, argv, prog, description)
     try:
         settings = settings_from_args(cls, namespace, **extra)
-        validate = getattr(settings, "validate", None)
-        if validate is not None:
-            validate()
+        getattr(settings, "validate", lambda: None)()
     except ValueError as exc:
         parser.error(str(exc))
     return settings

@@ -129,10 +129,7 @@ def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, in
 def bench_memory(n: int, seed: int = 0) -> Doc:
     """Bytes per sub-env, retained (state and buffers) and the transient peak of one ``step``, of the native vector
     env and of ``CartPoleVectorEnv`` (differences ``n`` vs 1)."""
-    makers: dict[str, Callable[[int], Any]] = {
-        "amigobot": partial(_vec, "AmigoBot-v0"),
-        "cartpole": lambda m: CartPoleVectorEnv(num_envs=m),
-    }
+    makers: dict[str, Callable[[int], Any]] = {"amigobot": partial(_vec, "AmigoBot-v0"), "cartpole": CartPoleVectorEnv}
     out: Doc = {"n": n}
     for name, make in makers.items():
         (r1, p1), (rn, pn) = (_traced(partial(make, m), seed) for m in (1, n))
