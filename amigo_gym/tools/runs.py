@@ -78,7 +78,6 @@ def warn(message: str) -> None:
     print(f"amigo-gym: warning: {message}", file=sys.stderr, flush=True)
 
 
-# --------------------------------------------------------------------------- lock
 class RunLock:
     """Exclusive lock on ``folder/name`` (created) while the context is entered; ``wait``: seconds to wait for another
     holder, else :class:`RunLockedError` (one line with its pid)."""
@@ -172,7 +171,6 @@ def has_run_files(folder: Path) -> bool:
     return folder.is_dir() and any(p.name != LOCK_NAME and not p.name.startswith(".") for p in folder.iterdir())
 
 
-# --------------------------------------------------------------------------- files
 def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():
@@ -250,7 +248,6 @@ def _fsync_file(path: Path) -> None:
         os.fsync(fh.fileno())
 
 
-# --------------------------------------------------------------------------- checkpoints
 @dataclasses.dataclass
 class Checkpoint:
     """A verified checkpoint folder ``<run>/checkpoints/step_<n>[.<k>]``, its ``num_timesteps`` and ``meta.json``."""

@@ -23,8 +23,6 @@ from amigo_gym.tools.options import cli, run_command
 
 Array = NDArray[np.float64]
 
-# --- Symbols
-
 #: time [s]
 t = sp.Symbol("t", real=True)
 
@@ -68,9 +66,6 @@ def _simp(expr: Any) -> Any:
     if isinstance(expr, sp.MatrixBase):
         return sp.ImmutableMatrix(expr.applyfunc(_simp))
     return sp.expand(sp.trigsimp(sp.expand(expr)))
-
-
-# --- The transforms (eqs 2-3, 14-16, 22-24; the castor's by analogy)
 
 
 def _frame(angle: Any, x: Any, y: Any, z: Any) -> Any:
@@ -161,8 +156,6 @@ def material_velocity(chain: Sequence[Any], rho: Any) -> Any:
         total += prod * rho
     return sp.ImmutableMatrix(total)
 
-
-# --- The derivation
 
 #: labels of the seven equations of system (29): the paper's numbers, and the castor's
 SYSTEM_29_LABELS: tuple[str, ...] = ("9", "10", "11", "12", "19", "27", "castor")
@@ -361,9 +354,6 @@ def derive() -> Derivation:
     return Derivation(**{k: v for k, v in locals().items() if k in Derivation.__dataclass_fields__})
 
 
-# --- Numbers
-
-
 def robot_values(robot: RobotParams) -> dict[str, float]:
     """The lengths of ``robot`` [m] by symbol name, for :func:`lambdify`'s keyword arguments."""
     return {f"{n[0]}_{n[1]}": float(getattr(robot, n)) for n in ("l1", "l3", "l4", "l5", "r1", "r2", "r3")}
@@ -394,9 +384,6 @@ def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
         return np.stack(np.broadcast_arrays(*out, *args), axis=-1)[..., : len(out)]
 
     return call
-
-
-# --- Output
 
 
 def system_29_latex() -> list[str]:
