@@ -1,8 +1,5 @@
-"""``amigo-gym bench-core``: throughput of the batched exact step, with peers measured in the same run.
-
-What it times per batch size, the ratios and the start-up times: docs/performance.md, "Reference: `amigo-gym
-bench-core`".
-"""
+"""``amigo-gym bench-core``: throughput of the batched exact step, with peers measured in the same run
+(docs/performance.md, "Reference: `amigo-gym bench-core`")."""
 
 from __future__ import annotations
 
