@@ -158,7 +158,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         if trust and before is None:
             del os.environ[TRUST_ENV]
     return 0 if rc is None else int(rc)
-
-
-if __name__ == "__main__":
-    sys.exit(main())
