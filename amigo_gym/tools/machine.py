@@ -1,8 +1,4 @@
-"""The machine a speed figure was measured on: CPU model and the SIMD level numpy dispatches to.
-
-Speed ratios move with the CPU (numpy picks its SIMD ``exp``/``sin``/``cos`` at run time), so every benchmark
-prints these beside its figures. Standard library and numpy only.
-"""
+"""The machine a speed figure was measured on: CPU model and the SIMD level numpy dispatches to."""
 
 from __future__ import annotations
 
@@ -44,19 +40,12 @@ def cpu_model() -> str:
 
 
 def simd_level() -> str:
-    """The widest SIMD level that numpy found on this CPU and may dispatch to, e.g. ``"AVX2"``.
-
-    Read from numpy's own run-time detection (``__cpu_features__``) among the levels numpy dispatches to or was built
-    for (``__cpu_dispatch__``, ``__cpu_baseline__``), which also honours ``NPY_DISABLE_CPU_FEATURES`` (numpy's AVX2
-    code on an AVX-512 machine says ``"AVX2"``); ``"unknown"`` if this numpy does not expose it.
-    """
-    module = None
-    for name in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):  # numpy 2, numpy 1
-        try:
-            module = importlib.import_module(name)
-        except ImportError:
-            continue
-        break
+    """The widest SIMD level that numpy detected on this CPU and may dispatch to (honouring
+    ``NPY_DISABLE_CPU_FEATURES``), e.g. ``"AVX2"``; ``"unknown"`` if this numpy does not expose it."""
+    try:
+        module = importlib.import_module("numpy._core._multiarray_umath")
+    except ImportError:  # numpy 1
+        module = importlib.import_module("numpy.core._multiarray_umath")
     features: dict[str, bool] | None = getattr(module, "__cpu_features__", None)
     if features is None:
         return "unknown"
@@ -77,9 +66,8 @@ def machine_line() -> str:
 
 
 def bits_key() -> str:
-    """What the last bits of a float result depend on: CPU model, numpy's SIMD level, the kernels torch dispatches to
-    (``ATEN_CPU_CAPABILITY``), MKL's code path (``MKL_ENABLE_INSTRUCTIONS``, ``MKL_CBWR``), numpy's and torch's
-    versions (a claim recorded with the same key is compared exactly; tests/test_agents_v1_pretrained.py)."""
+    """What the last bits of a float result depend on: CPU model, numpy's SIMD level, torch's CPU capability, MKL's
+    code path (``MKL_ENABLE_INSTRUCTIONS``, ``MKL_CBWR``), numpy's and torch's versions."""
     try:
         torch = version("torch")
     except PackageNotFoundError:

@@ -1,11 +1,11 @@
-"""Command-line helpers shared by every ``amigo-gym`` sub-command: one-line errors, option help with defaults,
-options derived from a settings dataclass, and the extra-module probe (standard library only).
-"""
+"""Command-line helpers of every ``amigo-gym`` sub-command: options derived from a settings dataclass, one-line
+errors, range checks, the extra-module probe."""
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
+import itertools
 import json
 import re
 import sys
@@ -18,11 +18,7 @@ T = TypeVar("T")
 
 
 class HelpFormatter(argparse.HelpFormatter):
-    """Appends ``(default: X)`` to an option's help unless the help already names its default.
-
-    Flags (``store_true``) say ``(default: off)``. Units stay the help text's job: every option taking a
-    value names its unit in brackets, e.g. ``[m]``, ``[s]``, ``[steps]``, ``[file]``.
-    """
+    """Appends ``(default: X)`` (a flag: ``(default: off)``) to an option's help unless it names its default."""
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
@@ -38,11 +34,8 @@ class HelpFormatter(argparse.HelpFormatter):
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line on stderr and exit status 2 (no usage dump).
-
-    Uses :class:`HelpFormatter` (every option's help ends with its default) unless told otherwise; the description
-    and epilog are shown without reST markup (:func:`_plain`).
-    """
+    """ArgumentParser whose errors are one line on stderr and exit status 2; :class:`HelpFormatter` by default,
+    description and epilog without reST markup."""
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
@@ -65,30 +58,19 @@ def attribute_help(cls: type) -> dict[str, str]:
 
 
 def _attributes(doc: str) -> dict[str, str]:
-    """``{field: text}`` of the ``Attributes:`` section of ``doc`` (an entry starts at the first entry's indent)."""
     out: dict[str, str] = {}
-    inside, current, indent = False, "", -1
-    for line in doc.splitlines():
-        stripped = line.strip()
-        if stripped == "Attributes:":
-            inside = True
-            continue
-        if not inside:
-            continue
-        if not stripped:
-            break
-        name, colon, text = stripped.partition(": ")
-        at = len(line) - len(line.lstrip())
-        if colon and name.isidentifier() and indent in (-1, at):
-            current, indent = name, at
-            out[name] = text
+    lines = doc.partition("Attributes:\n")[2].splitlines()
+    indent, current = len(lines[0]) - len(lines[0].lstrip()) if lines else 0, ""
+    for line in itertools.takewhile(str.strip, lines):  # an entry starts at the first entry's indent
+        name, colon, text = line.strip().partition(": ")
+        if colon and name.isidentifier() and len(line) - len(line.lstrip()) == indent:
+            current, out[name] = name, text
         elif current:
-            out[current] += " " + stripped
+            out[current] += " " + line.strip()
     return out
 
 
 def _plain(text: str) -> str:
-    """``text`` without reST markup: ``:class:`x``` and ````x```` become ``x``."""
     return re.sub(r":\w+:`~?([^`]*)`", r"\1", text).replace("``", "")
 
 
@@ -118,7 +100,7 @@ def cli(
 
 
 def json_object(text: str) -> dict[str, Any]:
-    """``text`` as a JSON object (``ValueError`` ``must be a JSON object, got '<text>'`` otherwise)."""
+    """``text`` as a JSON object; ``ValueError`` otherwise."""
     try:
         value = json.loads(text)
     except ValueError:
@@ -146,14 +128,6 @@ def _flag(f: Field[Any]) -> str:
     return str(_meta(f)["flag"] or "--" + f.name.replace("_", "-"))
 
 
-def _default(f: Field[Any]) -> Any:
-    if f.default is not MISSING:
-        return f.default
-    if f.default_factory is not MISSING:
-        return f.default_factory()
-    return MISSING
-
-
 def _strip_optional(tp: Any) -> Any:
     if get_origin(tp) in (Union, types.UnionType):
         args = [a for a in get_args(tp) if a is not type(None)]
@@ -162,7 +136,6 @@ def _strip_optional(tp: Any) -> Any:
 
 
 def _scalar(tp: Any) -> dict[str, Any]:
-    """``type``/``choices`` keywords of ``add_argument`` for a scalar type (``Literal`` gives the choices)."""
     if get_origin(tp) is Literal:
         choices = get_args(tp)
         return {"type": type(choices[0]), "choices": choices}
@@ -173,12 +146,11 @@ def _scalar(tp: Any) -> dict[str, Any]:
 
 def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     """One option ``--field-name`` (or :func:`cli`'s) per field of the dataclass ``cls``, typed and defaulted as the
-    field; its help is the field's ``Attributes:`` entry (unit in brackets; ``[file]``: metavar ``FILE``).
+    field, its help the field's ``Attributes:`` entry (unit in brackets; ``[file]``: metavar ``FILE``).
 
-    Types: ``int``, ``float``, ``str`` and other one-argument classes; ``X | None``; ``Literal[...]`` (choices);
-    ``list[X]``, ``tuple[X, ...]`` (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag setting ``True``
-    (default ``False``), a ``--no-x`` flag (its help: the text after ``--no-x: ``), else ``true``/``false``; others
-    need ``cli(parse=...)``. No default: a required option; ``cli(skip=True)`` and ``init=False`` fields get none.
+    Types: one-argument classes, ``X | None``, ``Literal`` (choices), ``list[X]``/``tuple[X, ...]`` (``nargs="+"``),
+    ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag (default ``False``), a ``--no-x`` flag, else ``true``/``false``.
+    No default: a required option.
     """
     helps = attribute_help(cls)
     hints = get_type_hints(cls)
@@ -187,7 +159,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
         meta = _meta(f)
         if meta["skip"] or not f.init:
             continue
-        flag, default = _flag(f), _default(f)
+        flag = _flag(f)
+        default = f.default_factory() if f.default_factory is not MISSING else f.default
         help_text = argparse.SUPPRESS if meta["hidden"] else helps.get(f.name, "")
         kw: dict[str, Any] = {"dest": f.name, "help": help_text}
         if default is MISSING or meta["required"]:
@@ -215,11 +188,9 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
         if meta["metavar"] is None and "[file]" in help_text and not meta["positional"] and "action" not in kw:
             kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
         kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
-        target: Any = parser
-        if meta["group"] is not None:
-            if meta["group"] not in groups:
-                groups[meta["group"]] = parser.add_mutually_exclusive_group()
-            target = groups[meta["group"]]
+        if meta["group"] is not None and meta["group"] not in groups:
+            groups[meta["group"]] = parser.add_mutually_exclusive_group()
+        target = groups.get(meta["group"], parser)
         if meta["positional"]:
             del kw["dest"]
             kw.pop("required", None)
@@ -229,11 +200,8 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
 
 
 def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
-    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields).
-
-    Lists become tuples where the field is a tuple; options with ``cli(parse=...)`` are parsed here (a
-    ``ValueError`` becomes ``<flag> <message>``). Raises what ``cls`` raises on a bad value.
-    """
+    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields);
+    ``cli(parse=...)`` options are parsed here (a ``ValueError`` becomes ``<flag> <message>``)."""
     hints = get_type_hints(cls)
     kw: dict[str, Any] = {}
     for f in fields(cls):  # type: ignore[arg-type]
@@ -241,12 +209,9 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
         if meta["skip"] or not f.init or not hasattr(namespace, f.name):
             continue
         value = getattr(namespace, f.name)
-        if meta["parse"] is not None:
-            if value is None:
-                continue
-            if not isinstance(value, str):  # a default set on the parser (``set_defaults``): already parsed
-                kw[f.name] = value
-                continue
+        if meta["parse"] is not None and value is None:
+            continue
+        if meta["parse"] is not None and isinstance(value, str):  # else a parsed default set on the parser
             try:
                 value = meta["parse"](value)
             except ValueError as exc:
@@ -265,27 +230,28 @@ def _parse(cls: type, argv: Sequence[str] | None, prog: str, doc: str) -> tuple[
 
 
 def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
-    """The settings ``cls`` of the command ``prog`` from its command line ``argv`` (``None``: ``sys.argv[1:]``;
-    ``extra``: further fields), ``validate()``d when ``cls`` has it; a bad value is the parser's one-line error
-    (exit status 2)."""
+    """The settings ``cls`` of the command ``prog`` from ``argv`` (``None``: ``sys.argv[1:]``), ``validate()``d when
+    ``cls`` has it; a bad value exits with the parser's one-line error (status 2)."""
     parser, namespace = _parse(cls, argv, prog, description)
     try:
         settings = settings_from_args(cls, namespace, **extra)
-        validate = getattr(settings, "validate", None)
-        if validate is not None:
-            validate()
+        getattr(settings, "validate", lambda: None)()
     except ValueError as exc:
         parser.error(str(exc))
     return settings
 
 
 def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str] | None, prog: str, doc: str) -> int:
-    """``run(settings)`` with the settings dataclass ``cls`` from the command line ``argv`` (default ``sys.argv[1:]``):
-    a malformed option exits with the parser's one-line error (status 2), a value ``cls`` refuses (or a bad input met
-    by ``run``) is one line and the returned status 2 (:func:`run_guarded`), unlike :func:`parse_settings`, which
-    exits."""
+    """``run(settings)`` with the settings ``cls`` from ``argv``, ``validate()``d when ``cls`` has it: a malformed
+    option exits (status 2); a value ``cls`` or ``run`` refuses is one line and the returned status 2."""
     namespace = _parse(cls, argv, prog, doc)[1]
-    return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
+
+    def go() -> int | None:
+        settings = settings_from_args(cls, namespace)
+        getattr(settings, "validate", lambda: None)()
+        return run(settings)
+
+    return run_guarded(go, prog)
 
 
 def _one_line(text: object) -> str:
@@ -293,7 +259,7 @@ def _one_line(text: object) -> str:
 
 
 def run_guarded(fn: Callable[[], int | None], prog: str) -> int:
-    """Run ``fn``; a bad input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``) gives one line, status 2."""
+    """Run ``fn``; a ``ValueError``, ``FileNotFoundError`` or ``FileExistsError`` gives one line, status 2."""
     try:
         rc = fn()
     except (ValueError, FileNotFoundError, FileExistsError) as exc:
@@ -311,7 +277,7 @@ def say(message: str) -> None:
 
 
 def missing_modules(modules: Sequence[str]) -> list[str]:
-    """The modules of ``modules`` that cannot be found (``importlib.util.find_spec``; nothing is imported)."""
+    """The modules of ``modules`` that ``importlib.util.find_spec`` cannot find (nothing is imported)."""
     out = []
     for m in modules:
         try:
@@ -324,5 +290,17 @@ def missing_modules(modules: Sequence[str]) -> list[str]:
 
 
 def install_hint(extra: str) -> str:
-    """The two commands that install ``extra``: from an index, and from a clone of the repository."""
+    """The commands that install ``extra``: from an index, and from a clone."""
     return f'pip install "amigo-gym[{extra}]" (from a clone: pip install -e ".[{extra}]")'
+
+
+def check_fields(owner: str, obj: object, **ranges: tuple[float, ...]) -> None:
+    """``check_range(owner, name, ...)`` of each named field of ``obj`` in ``(low, high[, low_open])``: ``None``
+    passes, a tuple is checked item by item (``name[i]``)."""
+    from amigo_gym.model.params import check_range
+
+    for name, (low, high, *opened) in ranges.items():
+        value = getattr(obj, name)
+        items = enumerate(value) if isinstance(value, tuple) else [] if value is None else [(None, value)]
+        for i, v in items:
+            check_range(owner, name if i is None else f"{name}[{i}]", v, low, high, low_open=any(opened))

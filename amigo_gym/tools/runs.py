@@ -1,8 +1,5 @@
-"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named, output sets.
-
-Standard library, :mod:`amigo_gym.io` and (for the lock) ``filelock`` only. Reference: docs/reliability.md,
-"Reference: run folders".
-"""
+"""Run folders: one process at a time, checkpoints that survive any kill, corrupt files named, output sets
+(docs/reliability.md, "Reference: run folders")."""
 
 from __future__ import annotations
 
@@ -20,7 +17,6 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
 from amigo_gym.io import (
@@ -59,8 +55,7 @@ class StopRequest:
 
 @contextlib.contextmanager
 def handling(handler: Callable[[int, Any], None], *signals: signal.Signals) -> Iterator[None]:
-    """``handler`` on ``signals`` (default ``SIGTERM`` and ``SIGINT``) inside the block, the previous handlers
-    restored after it; nothing outside the main thread (signals are handled only there)."""
+    """``handler`` on ``signals`` (default ``SIGTERM`` and ``SIGINT``) inside the block (main thread only)."""
     main = threading.current_thread() is threading.main_thread()
     old = {sig: signal.signal(sig, handler) for sig in signals or (signal.SIGTERM, signal.SIGINT)} if main else {}
     try:
@@ -83,14 +78,9 @@ def warn(message: str) -> None:
     print(f"amigo-gym: warning: {message}", file=sys.stderr, flush=True)
 
 
-# --------------------------------------------------------------------------- lock
 class RunLock:
-    """Exclusive lock (``filelock.FileLock``) on ``folder/name`` while the context is entered; the folder is created
-    if missing; ``wait``: seconds to wait for another holder (0: fail at once).
-
-    Raises:
-        RunLockedError: another process holds it (one line with its pid).
-    """
+    """Exclusive lock on ``folder/name`` (created) while the context is entered; ``wait``: seconds to wait for another
+    holder, else :class:`RunLockedError` (one line with its pid)."""
 
     def __init__(self, folder: str | os.PathLike[str], name: str = LOCK_NAME, wait: float = 0.0) -> None:
         self.folder = Path(folder)
@@ -136,14 +126,12 @@ class RunLock:
     def __enter__(self) -> RunLock:
         return self.acquire()
 
-    def __exit__(
-        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.release()
 
 
 def is_current_lock(fd: int, path: Path) -> bool:
-    """Whether ``path`` still names the file open as ``fd`` (same device and inode; ``False`` if it is gone)."""
+    """Whether ``path`` still names the file open as ``fd`` (same device and inode)."""
     try:
         named = os.stat(path)
     except FileNotFoundError:
@@ -158,8 +146,8 @@ TEMPORARY_NAME = re.compile(r"^\.(?:tmp|staging|trash)-.+$|^\..+\.[A-Za-z0-9_]{8
 
 
 def clean_temporaries(folder: Path) -> None:
-    """Remove the package's temporaries (:data:`TEMPORARY_NAME`) from ``folder`` and its ``checkpoints/``; other
-    dot-named entries stay. Call only while holding the folder's :class:`RunLock`."""
+    """Remove the package's temporaries (:data:`TEMPORARY_NAME`) from ``folder`` and its ``checkpoints/`` (call only
+    while holding the folder's :class:`RunLock`)."""
     for d in (folder, folder / CHECKPOINTS):
         remove_matching(d, TEMPORARY_NAME)
 
@@ -183,7 +171,6 @@ def has_run_files(folder: Path) -> bool:
     return folder.is_dir() and any(p.name != LOCK_NAME and not p.name.startswith(".") for p in folder.iterdir())
 
 
-# --------------------------------------------------------------------------- files
 def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():
@@ -208,8 +195,7 @@ def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any
     """Move the staged files ``{target: staged file}`` to their targets as one set; the manifest's ``{file: sha256}``.
 
     The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``) is removed first and
-    written last: the set is complete exactly when it exists and every file matches it (:func:`verify_manifest`).
-    Fault stages (tests): ``publish:<file name>`` after each move.
+    written last. Fault stages: ``publish:<file name>`` after each move.
     """
     files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
     (out / manifest).unlink(missing_ok=True)
@@ -227,12 +213,8 @@ def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any
 
 
 def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
-    """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file.
-
-    Raises:
-        FileNotFoundError: no manifest (no complete set: the command was interrupted while publishing).
-        CorruptFileError: a file missing or not the one the manifest lists.
-    """
+    """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file;
+    ``FileNotFoundError`` without a manifest, :class:`CorruptFileError` for a file missing or changed."""
     path = out / manifest
     if not path.is_file():
         raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
@@ -245,12 +227,8 @@ def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
 
 
 def check_pickle(path: Path, expected: str | None, source: str | None, trust: bool = False) -> None:
-    """Check a pickle before it is unpickled: against the sha256 ``expected`` of the manifest ``source`` if any, then
-    that it is trusted (:func:`amigo_gym.io.require_trust`: shipped, written here, or ``trust``).
-
-    Raises:
-        CorruptFileError: missing or not the recorded file. UntrustedFileError: not trusted (one line).
-    """
+    """Check a pickle before it is unpickled: against the sha256 ``expected`` of the manifest ``source`` if any
+    (:class:`CorruptFileError`), then that it is trusted (:func:`amigo_gym.io.require_trust`)."""
     if expected is not None:
         verify_sha256(path, expected, str(source))
     require_trust(path, expected, trust)
@@ -260,8 +238,6 @@ def read_json(path: Path, what: str = "") -> Any:
     """Parse a JSON file; :class:`CorruptFileError` naming the file on a decoding error."""
     try:
         return json.loads(path.read_bytes())
-    except FileNotFoundError:
-        raise
     except (ValueError, UnicodeDecodeError) as exc:
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise CorruptFileError(f"{path}: not valid JSON{' ' + what if what else ''} ({detail})") from None
@@ -272,7 +248,6 @@ def _fsync_file(path: Path) -> None:
         os.fsync(fh.fileno())
 
 
-# --------------------------------------------------------------------------- checkpoints
 @dataclasses.dataclass
 class Checkpoint:
     """A verified checkpoint folder ``<run>/checkpoints/step_<n>[.<k>]``, its ``num_timesteps`` and ``meta.json``."""
@@ -287,19 +262,14 @@ class Checkpoint:
 
 
 def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
-    """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling).
-
-    Raises:
-        CorruptFileError: missing or damaged ``meta.json``, another algorithm, a file missing or changed.
-    """
+    """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling);
+    :class:`CorruptFileError` for a missing or damaged ``meta.json``, another algorithm, a file missing or changed."""
     meta_path = folder / META
     if not meta_path.is_file():
         raise CorruptFileError(f"{meta_path}: missing (the checkpoint is incomplete)")
     meta = read_json(meta_path)
-    if (
-        not isinstance(meta, dict)
-        or not isinstance(meta.get("num_timesteps"), int)
-        or not isinstance(meta.get("files"), dict)
+    if not (
+        isinstance(meta, dict) and isinstance(meta.get("num_timesteps"), int) and isinstance(meta.get("files"), dict)
     ):
         raise CorruptFileError(f"{meta_path}: not a checkpoint record (needs num_timesteps and files)")
     if meta.get("algo") != algo:
@@ -313,25 +283,24 @@ def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
     return Checkpoint(folder, int(meta["num_timesteps"]), meta)
 
 
-def _read_pointer(out: Path) -> dict[str, Any] | None:
-    """The parsed ``checkpoint.json`` (``None`` if absent); :class:`CorruptFileError` if damaged."""
+def _read_pointer(out: Path, report: bool = False) -> dict[str, Any] | None:
+    """The parsed ``checkpoint.json``; ``None`` if absent or damaged (``report``: with a warning)."""
     path = out / POINTER
-    if not path.is_file():
+    try:
+        doc = read_json(path) if path.is_file() else None
+        if doc is not None and not (isinstance(doc, dict) and isinstance(doc.get("path"), str)):
+            raise CorruptFileError(f"{path}: not a checkpoint pointer (needs a 'path')")
+    except CorruptFileError as exc:
+        if report:
+            warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
         return None
-    doc = read_json(path)
-    if not isinstance(doc, dict) or not isinstance(doc.get("path"), str):
-        raise CorruptFileError(f"{path}: not a checkpoint pointer (needs a 'path')")
     return doc
 
 
 def _inside(out: Path, rel: Any) -> Path | None:
     """``out / rel`` if ``rel`` names a checkpoint folder inside ``out/checkpoints`` (else ``None``)."""
-    if not isinstance(rel, str):
-        return None
-    p = Path(rel)
-    if len(p.parts) != 2 or p.parts[0] != CHECKPOINTS or p.name.startswith("."):
-        return None
-    return out / p
+    parts = Path(rel).parts if isinstance(rel, str) else ()
+    return out / rel if len(parts) == 2 and parts[0] == CHECKPOINTS and not parts[1].startswith(".") else None
 
 
 def _step_of(folder: Path) -> tuple[int, int]:
@@ -348,13 +317,7 @@ def candidates(out: Path, report: bool = True) -> list[Path]:
     """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first (a
     damaged pointer is reported with a warning)."""
     found: list[Path] = []
-    try:
-        ptr = _read_pointer(out)
-    except CorruptFileError as exc:
-        if report:
-            warn(f"{exc}; looking for checkpoints in {out / CHECKPOINTS}")
-        ptr = None
-    if ptr is not None:
+    if (ptr := _read_pointer(out, report)) is not None:
         for key in ("path", "previous"):
             p = _inside(out, ptr.get(key))
             if p is not None and p.is_dir() and p not in found:
@@ -369,11 +332,8 @@ def candidates(out: Path, report: bool = True) -> list[Path]:
 def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> tuple[Checkpoint, Any] | None:
     """``(checkpoint, load(checkpoint))`` of the newest good checkpoint in ``out`` (``None``: no checkpoint folder).
 
-    Each candidate (:func:`candidates`) is verified, then loaded; a :class:`CorruptFileError` warns and falls back to
-    the next. A missing, damaged or stale ``checkpoint.json`` is rewritten to name the checkpoint loaded.
-
-    Raises:
-        CorruptFileError: checkpoints exist but none is usable (one line listing why).
+    A candidate that fails with :class:`CorruptFileError` warns and falls back to the next; ``checkpoint.json`` is
+    rewritten to name the checkpoint loaded. :class:`CorruptFileError` (one line) if none is usable.
     """
     tried: list[str] = []
     cands = candidates(out)
@@ -388,10 +348,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
             nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
             warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
             continue
-        try:
-            ptr = _read_pointer(out)
-        except CorruptFileError:
-            ptr = None
+        ptr = _read_pointer(out)
         if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
             _write_pointer(out, algo, folder, ck.step)
         return ck, result
@@ -477,8 +434,7 @@ def _previous_good(out: Path, algo: str, new: Path) -> str | None:
 
 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
-    """Put the run's evaluation record (``eval.json``, ``best_model.zip``) back to the checkpoint's (``None``: none);
-    evaluations after it are made again by the resumed run."""
+    """Put the run's evaluation record (:data:`SNAPSHOT`) back to the checkpoint's (``None``: none)."""
     for name in SNAPSHOT:
         src = None if ck is None else ck.folder / name
         dst = out / name

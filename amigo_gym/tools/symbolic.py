@@ -1,10 +1,8 @@
 r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy), from the transforms to system (29).
 
-The steps, the equations and the paper's misprints are in docs/derivation.md. Not on the stepping path:
-``import amigo_gym`` imports neither this module nor SymPy. :func:`derive` computes everything once (cached);
-:func:`lambdify` turns derived expressions into batched numpy functions of the names in :data:`PLAIN_SYMBOLS`;
-:func:`robot_values` gives a :class:`~amigo_gym.model.params.RobotParams`' lengths [m] by those names;
-``amigo-gym derive [--latex] [--out FILE]`` prints the derivation.
+The steps, the equations and the paper's misprints: docs/derivation.md. :func:`derive` computes everything once
+(cached); :func:`lambdify` turns derived expressions into batched numpy functions of the names in
+:data:`PLAIN_SYMBOLS`; ``amigo-gym derive [--latex] [--out FILE]`` prints the derivation.
 """
 
 from __future__ import annotations
@@ -21,29 +19,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_write
 from amigo_gym.model.params import RobotParams
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
-
-__all__ = [
-    "PLAIN_SYMBOLS",
-    "SYSTEM_29_LABELS",
-    "DeriveSettings",
-    "Derivation",
-    "Misprints",
-    "Transforms",
-    "derive",
-    "lambdify",
-    "main",
-    "material_velocity",
-    "render",
-    "robot_values",
-    "system_29_latex",
-    "to_plain",
-    "transforms",
-]
+from amigo_gym.tools.options import cli, run_command
 
 Array = NDArray[np.float64]
-
-# --- Symbols
 
 #: time [s]
 t = sp.Symbol("t", real=True)
@@ -76,10 +54,8 @@ PLAIN_SYMBOLS: dict[str, Any] = {
 
 
 def to_plain(expr: Any) -> Any:
-    """Replace the time functions ``q(t)`` and their derivatives ``dq/dt`` by the plain symbols ``q``, ``qdot``.
-
-    Works on expressions and matrices (returns an immutable matrix for a matrix).
-    """
+    """Replace the time functions ``q(t)`` and their derivatives ``dq/dt`` by the plain symbols ``q``, ``qdot`` (in
+    an expression or a matrix: an immutable matrix)."""
     if isinstance(expr, sp.MatrixBase):
         return sp.ImmutableMatrix(expr.applyfunc(lambda e: e.xreplace(_TO_PLAIN)))
     return sp.sympify(expr).xreplace(_TO_PLAIN)
@@ -90,9 +66,6 @@ def _simp(expr: Any) -> Any:
     if isinstance(expr, sp.MatrixBase):
         return sp.ImmutableMatrix(expr.applyfunc(_simp))
     return sp.expand(sp.trigsimp(sp.expand(expr)))
-
-
-# --- The transforms (eqs 2-3, 14-16, 22-24; the castor's by analogy)
 
 
 def _frame(angle: Any, x: Any, y: Any, z: Any) -> Any:
@@ -183,8 +156,6 @@ def material_velocity(chain: Sequence[Any], rho: Any) -> Any:
         total += prod * rho
     return sp.ImmutableMatrix(total)
 
-
-# --- The derivation
 
 #: labels of the seven equations of system (29): the paper's numbers, and the castor's
 SYSTEM_29_LABELS: tuple[str, ...] = ("9", "10", "11", "12", "19", "27", "castor")
@@ -383,28 +354,15 @@ def derive() -> Derivation:
     return Derivation(**{k: v for k, v in locals().items() if k in Derivation.__dataclass_fields__})
 
 
-# --- Numbers
-
-
 def robot_values(robot: RobotParams) -> dict[str, float]:
     """The lengths of ``robot`` [m] by symbol name, for :func:`lambdify`'s keyword arguments."""
     return {f"{n[0]}_{n[1]}": float(getattr(robot, n)) for n in ("l1", "l3", "l4", "l5", "r1", "r2", "r3")}
 
 
 def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
-    """Batched numpy function of derived expressions.
-
-    Args:
-        exprs: ``n`` SymPy expressions in plain symbols (see :data:`PLAIN_SYMBOLS`).
-
-    Returns:
-        ``f(**values)``: keyword arguments named after the symbols the expressions contain (e.g. ``x_A``,
-        ``betadot``, ``l_1``; extra names are ignored), each a finite scalar or array; the values broadcast and the
-        result has shape ``(..., n)``.
-
-    Raises:
-        ValueError: (when called) a needed value is missing or not finite.
-    """
+    """Batched numpy function ``f(**values)`` of ``n`` expressions in plain symbols (:data:`PLAIN_SYMBOLS`): keyword
+    arguments named after their symbols (e.g. ``x_A``, ``l_1``; extra names ignored), finite scalars or arrays that
+    broadcast; the result has shape ``(..., n)``. ``f`` raises ``ValueError`` for a missing or non-finite value."""
     exprs = [sp.sympify(e) for e in exprs]
     syms = sorted(set().union(*(e.free_symbols for e in exprs)), key=str)
     unknown = [str(x) for x in syms if str(x) not in PLAIN_SYMBOLS]
@@ -428,9 +386,6 @@ def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
     return call
 
 
-# --- Output
-
-
 def system_29_latex() -> list[str]:
     """The seven equations of system (29) as LaTeX, one string ``"<lhs> = 0"`` each (order of
     :data:`SYSTEM_29_LABELS`)."""
@@ -440,83 +395,59 @@ def system_29_latex() -> list[str]:
 _Row = tuple[str | None, str, str]  # (equation label or None, left-hand side, right-hand side)
 
 
-def _sections(latex: bool) -> list[tuple[str, list[_Row]]]:
-    d = derive()
-    mp = d.misprints
+def _sections(latex: bool) -> dict[str, list[_Row]]:
+    d, mp, lag = derive(), derive().misprints, {theta: beta + delta}
 
     def f(e: Any) -> str:
         if isinstance(e, sp.MatrixBase):
             return str(sp.latex(e)) if latex else "(" + ", ".join(sp.sstr(x) for x in e) + ")"
         return str(sp.latex(e)) if latex else str(sp.sstr(e))
 
-    def name(text: str, tex: str) -> str:
-        return tex if latex else text
+    def eq(label: str | None, lhs: Any, rhs: Any, tex: str | None = None) -> _Row:  # tex: the LaTeX of a named lhs
+        return (label, f(lhs) if tex is None else tex if latex else lhs, f(rhs))
 
-    def eq(label: str | None, lhs: Any, rhs: Any) -> _Row:
-        return (label, f(lhs), f(rhs))
-
-    lag = {theta: beta + delta}
-    return [
-        (
-            "Positions (eqs 4, 13, 21): H, and the contact points K (wheel 1, right) and L (wheel 2, left)",
-            [
-                ("4", name("r_H", r"\bar r_H"), f(d.r_H)),
-                ("13", name("r_K", r"\bar r_K"), f(d.r_K)),
-                ("21", name("r_L", r"\bar r_L"), f(d.r_L)),
-            ],
-        ),
-        (
-            "Velocities of the wheels' material points in contact (eqs 18, 26 corrected): "
-            "d/dt(T40 T14) rho with rho frozen",
-            [("18", name("v_K", r"\bar v_K"), f(d.v_K)), ("26", name("v_L", r"\bar v_L"), f(d.v_L))],
-        ),
-        (
-            "System (29), corrected: seven equations",
-            [eq(lab, e, 0) for lab, e in zip(SYSTEM_29_LABELS, d.system_29, strict=True)],
-        ),
-        (
-            "Solution of v_K = v_L = 0 with eqs 11-12: no side slip, and the differential-drive relations",
-            [
-                (None, name("v_K across the heading", r"\bar v_K \cdot \bar e_\perp"), f(d.slip_K)),
-                (None, name("v_L across the heading", r"\bar v_L \cdot \bar e_\perp"), f(d.slip_L)),
-                *[eq(None, k, v) for k, v in d.wheel_rates.items()],
-                *[eq(None, k, v) for k, v in d.body_velocity.items()],
-            ],
-        ),
-        (
-            "Castor: rolling of its material contact point (swivel gamma relative to the body, trail neglected)",
-            [eq(None, gamma, d.castor_swivel), eq(None, alphadot_3, d.castor_rate)],
-        ),
-        (
-            "Inverse kinematics from eqs 9-12: H on a path with tangent angle theta(s), delta = theta - beta",
-            [eq(None, k, sp.simplify(v.subs(lag))) for k, v in sorted(d.inverse_ode.items(), key=str, reverse=True)],
-        ),
-        (
-            "Steady state of H on a circle of radius R",
-            [eq(None, delta, d.steady_lag), *[eq(None, PLAIN_SYMBOLS[k], v) for k, v in d.steady.items()]],
-        ),
-        (
-            "The paper's misprinted forms (not identities)",
-            [
-                ("17", name("Tdot40K Tdot14 rho_K", r"\dot T_{4,0,K}\,\dot T_{1,4}\,\bar\rho_K"), f(mp.eq17)),
-                ("18", name("printed v_K", r"\text{printed } \bar v_K"), f(mp.eq18)),
-                ("26", name("printed v_L", r"\text{printed } \bar v_L"), f(mp.eq26)),
-                eq("28", mp.eq28, 0),
-            ],
-        ),
-    ]
+    return {
+        "Positions (eqs 4, 13, 21): H, and the contact points K (wheel 1, right) and L (wheel 2, left)": [
+            eq("4", "r_H", d.r_H, r"\bar r_H"),
+            eq("13", "r_K", d.r_K, r"\bar r_K"),
+            eq("21", "r_L", d.r_L, r"\bar r_L"),
+        ],
+        "Velocities of the wheels' material points in contact (eqs 18, 26 corrected): d/dt(T40 T14) rho with rho "
+        "frozen": [eq("18", "v_K", d.v_K, r"\bar v_K"), eq("26", "v_L", d.v_L, r"\bar v_L")],
+        "System (29), corrected: seven equations": [
+            eq(lab, e, 0) for lab, e in zip(SYSTEM_29_LABELS, d.system_29, strict=True)
+        ],
+        "Solution of v_K = v_L = 0 with eqs 11-12: no side slip, and the differential-drive relations": [
+            eq(None, "v_K across the heading", d.slip_K, r"\bar v_K \cdot \bar e_\perp"),
+            eq(None, "v_L across the heading", d.slip_L, r"\bar v_L \cdot \bar e_\perp"),
+            *[eq(None, k, v) for k, v in (d.wheel_rates | d.body_velocity).items()],
+        ],
+        "Castor: rolling of its material contact point (swivel gamma relative to the body, trail neglected)": [
+            eq(None, gamma, d.castor_swivel),
+            eq(None, alphadot_3, d.castor_rate),
+        ],
+        "Inverse kinematics from eqs 9-12: H on a path with tangent angle theta(s), delta = theta - beta": [
+            eq(None, k, sp.simplify(v.subs(lag))) for k, v in sorted(d.inverse_ode.items(), key=str, reverse=True)
+        ],
+        "Steady state of H on a circle of radius R": [
+            eq(None, delta, d.steady_lag),
+            *[eq(None, PLAIN_SYMBOLS[k], v) for k, v in d.steady.items()],
+        ],
+        "The paper's misprinted forms (not identities)": [
+            eq("17", "Tdot40K Tdot14 rho_K", mp.eq17, r"\dot T_{4,0,K}\,\dot T_{1,4}\,\bar\rho_K"),
+            eq("18", "printed v_K", mp.eq18, r"\text{printed } \bar v_K"),
+            eq("26", "printed v_L", mp.eq26, r"\text{printed } \bar v_L"),
+            eq("28", mp.eq28, 0),
+        ],
+    }
 
 
 def render(latex: bool = False) -> str:
-    """The derivation as text: positions, contact velocities, system (29), its solution and the paper's misprints.
-
-    Args:
-        latex: a LaTeX fragment (amsmath ``align`` environments; the paper's equation numbers as tags) instead
-            of plain text.
-    """
+    """The derivation as text (``latex``: a LaTeX fragment of amsmath ``align`` environments, the paper's equation
+    numbers as tags): positions, contact velocities, system (29), its solution and the paper's misprints."""
     head = "Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive"
     out = [f"% {head} --latex); needs amsmath" if latex else f"{head})"]
-    for title, rows in _sections(latex):
+    for title, rows in _sections(latex).items():
         if latex:
             lines = [f"{lhs} &= {rhs} " + (f"\\tag{{{lab}}}" if lab else r"\notag") for lab, lhs, rhs in rows]
             out += [f"% {title}", r"\begin{align}", " \\\\\n".join(lines), r"\end{align}"]
@@ -538,27 +469,20 @@ class DeriveSettings:
     out: str | None = field(default=None, metadata=cli(metavar="FILE"))
 
 
+def _derive(args: DeriveSettings) -> None:
+    text = render(latex=args.latex)
+    if args.out is None or args.out == "-":
+        sys.stdout.write(text)
+    else:
+        atomic_write(args.out, text)
+        print(f"wrote {args.out}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
-    prog = "amigo-gym derive"
-    args = parse_settings(
-        DeriveSettings,
-        argv,
-        prog,
-        "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point "
-        "velocities, the corrected system (29) with seven equations, its solution, and the paper's misprints.",
-    )
-
-    def run() -> int:
-        text = render(latex=args.latex)
-        if args.out is None or args.out == "-":
-            sys.stdout.write(text)
-        else:
-            atomic_write(args.out, text)
-            print(f"wrote {args.out}", file=sys.stderr)
-        return 0
-
-    return run_guarded(run, prog)
+    doc = "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point velocities, the "
+    doc += "corrected system (29) with seven equations, its solution, and the paper's misprints."
+    return run_command(DeriveSettings, _derive, argv, "amigo-gym derive", doc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,11 +1,9 @@
 """Convergence of the analytic policy from perturbed starts, for several feedback gains.
 
-``amigo-gym convergence`` rolls out :class:`amigo_gym.policies.analytic.AnalyticPolicy` with each gain ``k`` on the
-evaluation protocol's perturbed starts (``reset(seed=s)``, s = 100..109: H within +-2 cm per axis,
-heading +-0.1 rad) and fits, by least squares over all episodes, the slope of ``log|e(t)|`` over a time
-window (default [1, 4] s, after the heading transient and before rounding noise). The halving time
-of H's error is ``ln 2 / -slope``; the continuous-time law alone would give ``ln 2 / k``. Prints a
-Markdown table and, with ``--plot FILE``, draws ``|e(t)|`` on a log scale for every gain.
+``amigo-gym convergence`` rolls out :class:`amigo_gym.policies.analytic.AnalyticPolicy` with each gain ``k`` from the
+evaluation protocol's perturbed starts and fits, over all episodes, the slope of ``log|e(t)|`` over a time window: H's
+error halves every ``ln 2 / -slope`` (the continuous-time law: ``ln 2 / k``). Prints a Markdown table; ``--plot FILE``
+draws ``|e(t)|`` for every gain.
 """
 
 from __future__ import annotations
@@ -20,7 +18,7 @@ import numpy as np
 
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import AnalyticPolicy
-from amigo_gym.tools.options import parse_settings, run_guarded
+from amigo_gym.tools.options import run_command
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.training.evaluate import rollout
 
@@ -78,11 +76,7 @@ class Settings:
 
 
 def halving_times(settings: Settings) -> list[GainFit]:
-    """Fit the error's decay for every gain.
-
-    Raises:
-        ValueError: on a bad window, or if an episode leaves the path.
-    """
+    """Fit the error's decay for every gain; ``ValueError`` on a bad window, or if an episode leaves the path."""
     import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
 
     check_range("Settings", "t_from", settings.t_from, 0.0)
@@ -113,9 +107,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
 
 
 def _plot(rows: list[GainFit], path: str) -> None:
-    plt = pyplot()
-
-    fig, ax = plt.subplots(figsize=(7.0, 3.8), layout="constrained")
+    fig, ax = pyplot().subplots(figsize=(7.0, 3.8), layout="constrained")
     for i, row in enumerate(rows):
         color = f"C{i}"
         for j, (t, e) in enumerate(row.curves):
@@ -128,23 +120,21 @@ def _plot(rows: list[GainFit], path: str) -> None:
     save_figure(fig, path)
 
 
+def _report(settings: Settings) -> None:
+    rows = halving_times(settings)
+    print(f"fit of log|e| over t in [{settings.t_from:g}, {settings.t_to:g}] s, {settings.seeds} seeds")
+    print("| gain k [1/s] | " + " | ".join(f"{r.gain:g}" for r in rows) + " |")
+    print("|---|" + "---|" * len(rows))
+    print("| error halves every [s] | " + " | ".join(f"{r.halving_s:.2f}" for r in rows) + " |")
+    print("| continuous-time ln2/k [s] | " + " | ".join(f"{r.continuous_halving_s:.2f}" for r in rows) + " |")
+    if settings.plot:
+        _plot(rows, settings.plot)
+        print(f"plot: {settings.plot}")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
-    settings = parse_settings(Settings, argv, "amigo-gym convergence", __doc__.splitlines()[0])
-
-    def run() -> int:
-        rows = halving_times(settings)
-        print(f"fit of log|e| over t in [{settings.t_from:g}, {settings.t_to:g}] s, {settings.seeds} seeds")
-        print("| gain k [1/s] | " + " | ".join(f"{r.gain:g}" for r in rows) + " |")
-        print("|---|" + "---|" * len(rows))
-        print("| error halves every [s] | " + " | ".join(f"{r.halving_s:.2f}" for r in rows) + " |")
-        print("| continuous-time ln2/k [s] | " + " | ".join(f"{r.continuous_halving_s:.2f}" for r in rows) + " |")
-        if settings.plot:
-            _plot(rows, settings.plot)
-            print(f"plot: {settings.plot}")
-        return 0
-
-    return run_guarded(run, "amigo-gym convergence")
+    return run_command(Settings, _report, argv, "amigo-gym convergence", __doc__.splitlines()[0])
 
 
 if __name__ == "__main__":

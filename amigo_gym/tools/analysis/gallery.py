@@ -1,10 +1,7 @@
 """``amigo-gym gallery``: a picture of every AmigoBot-v1 path family, driven by the analytic policy.
 
-For each family (circle, manoeuvre, figure-8, lane change, random, and a "hard" randomised robot on a
-figure-8), one episode of ``AmigoBot-v1`` with :class:`amigo_gym.policies.AnalyticTrackingPolicy`,
-rendered with ``render_mode="rgb_array"`` (the reference path, H and its trail, A, the robot outline) at
-the end of the episode, written as ``<out>/v1_<family>.png``. Needs the ``render`` extra (pygame) and
-matplotlib only to write PNG files (``plot`` extra).
+For each family of :data:`GALLERY`, the last frame (``render_mode="rgb_array"``) of one episode of ``AmigoBot-v1``
+with :class:`amigo_gym.policies.AnalyticTrackingPolicy`, written as ``<out>/v1_<family>.png``.
 """
 
 from __future__ import annotations
@@ -20,7 +17,7 @@ import numpy as np
 
 from amigo_gym.envs.rendering import headless
 from amigo_gym.policies import AnalyticTrackingPolicy
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, run_command
 from amigo_gym.tools.plots import pyplot
 
 PROG = "amigo-gym gallery"
@@ -37,7 +34,7 @@ GALLERY: dict[str, tuple[dict[str, Any], int]] = {
 
 
 def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray, float]:
-    """Run one episode with the analytic policy and return the last frame and H's largest settled error [m]."""
+    """The last frame of one episode with the analytic policy and H's largest error after 5 s [m]."""
     import amigo_gym  # noqa: F401
 
     env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
@@ -79,24 +76,19 @@ class GallerySettings:
                 raise ValueError(f"--only: unknown family {name!r}; choose from {', '.join(GALLERY)}")
 
 
+def _draw(args: GallerySettings) -> None:
+    headless()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for name in args.only or GALLERY:
+        frame, worst = render_family(*GALLERY[name])
+        target = out / f"v1_{name}.png"
+        tmp = target.with_suffix(".tmp.png")
+        pyplot().imsave(tmp, frame)
+        tmp.replace(target)
+        print(f"{target}: max |e| of H after 5 s = {worst:.3g} m", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym gallery [--out DIR] [--only NAME ...]`` (module docstring)."""
-    args = parse_settings(GallerySettings, argv, PROG, __doc__.splitlines()[0])
-
-    def run() -> int:
-        plt = pyplot()
-
-        headless()
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        for name in args.only or GALLERY:
-            kwargs, steps = GALLERY[name]
-            frame, worst = render_family(kwargs, steps)
-            target = out / f"v1_{name}.png"
-            tmp = target.with_suffix(".tmp.png")
-            plt.imsave(tmp, frame)
-            tmp.replace(target)
-            print(f"{target}: max |e| of H after 5 s = {worst:.3g} m", file=sys.stderr)
-        return 0
-
-    return run_guarded(run, PROG)
+    return run_command(GallerySettings, _draw, argv, PROG, __doc__.splitlines()[0])

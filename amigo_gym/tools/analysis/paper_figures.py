@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import ManoeuvrePath
 from amigo_gym.task.inverse import (
     MANOEUVRE_ACCEL,
@@ -30,7 +30,7 @@ from amigo_gym.task.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.tools.options import run_command
+from amigo_gym.tools.options import check_fields, run_command
 from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym paper"
@@ -75,19 +75,10 @@ class Settings:
         robot = RobotParams()
         if self.direction not in (1, -1):
             raise ValueError(f"Settings.direction must be +1 or -1, got {self.direction!r}")
-        for name, low, high, low_open in (
-            ("speed", 0.0, robot.max_speed, True),
-            ("radius", robot.l3, 1e3, True),
-            ("straight_length", 0.0, 1e3, False),
-            ("accel", 0.0, robot.max_acceleration, True),
-            ("decel", 0.0, robot.max_deceleration, True),
-            ("t_start", 0.0, 1e3, False),
-            ("laps", 0.0, 100.0, False),
-            ("tail", 0.0, 1e3, False),
-            ("dt", 0.0, 1.0, True),
-            ("dpi", 20, 600, False),
-        ):
-            check_range("Settings", name, getattr(self, name), low, high, low_open=low_open)
+        limits = {"speed": (0, robot.max_speed, True), "radius": (robot.l3, 1e3, True), "straight_length": (0, 1e3)}
+        limits |= {"accel": (0, robot.max_acceleration, True), "decel": (0, robot.max_deceleration, True)}
+        limits |= {"t_start": (0, 1e3), "laps": (0, 100), "tail": (0, 1e3), "dt": (0, 1, True), "dpi": (20, 600)}
+        check_fields("Settings", self, **limits)
 
 
 @dataclass(frozen=True)
@@ -100,11 +91,8 @@ class Phase:
 
 
 def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath) -> list[Phase]:
-    """The phases standstill, starting, straight, circle, braking, rest (empty ones dropped).
-
-    "starting" is the acceleration of A; "straight" lasts until H reaches the end of the straight
-    segment (``s = straight_length``, interpolated on the grid); "braking" starts at ``t_brake``.
-    """
+    """The phases standstill, starting (A accelerates), straight (until H's ``s = straight_length``), circle,
+    braking, rest (empty ones dropped)."""
     t_end = float(sol.t[-1])
     moving = sol.s > sol.s[0]
     if path.straight_length > 0.0 and np.any(sol.s >= path.straight_length) and np.any(moving):
@@ -121,12 +109,8 @@ def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath)
         ("braking", t_brake, profile.t_stop),
         ("rest", profile.t_stop, t_end),
     ]
-    out = []
-    for name, a, b in cuts:
-        a, b = max(float(sol.t[0]), a), min(t_end, b)
-        if b > a:
-            out.append(Phase(name, a, b))
-    return out
+    out = [Phase(name, max(float(sol.t[0]), a), min(t_end, b)) for name, a, b in cuts]
+    return [p for p in out if p.t1 > p.t0]
 
 
 def _shade(ax: Any, ph: list[Phase]) -> None:
@@ -135,17 +119,12 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
         ax.axvspan(p.t0, p.t1, color=colours[i % 2], zorder=0)
         if i:
             ax.axvline(p.t0, color="0.6", lw=0.6, ls="--", zorder=1)
-        rotation = 0 if p.t1 - p.t0 > 4.0 else 60
-        at = (0.5 * (p.t0 + p.t1), 1.01)
-        ax.text(
-            *at, p.name, transform=ax.get_xaxis_transform(), ha="center", va="bottom", fontsize=7, rotation=rotation
-        )
+        kw = {"ha": "center", "va": "bottom", "fontsize": 7, "rotation": 0 if p.t1 - p.t0 > 4.0 else 60}
+        ax.text(0.5 * (p.t0 + p.t1), 1.01, p.name, transform=ax.get_xaxis_transform(), **kw)
 
 
 def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str]]:
     """Solve the manoeuvre, write the two figures and the CSV; return the solution, phases and paths."""
-    plt = pyplot()
-
     robot = RobotParams()
     os.makedirs(settings.out, exist_ok=True)
     if not os.access(settings.out, os.W_OK):
@@ -166,7 +145,7 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
         ("fig2", sol.alpha1, sol.alpha2, "α", "angle [rad]", 2),
         ("fig3", sol.alpha1_dot, sol.alpha2_dot, "α̇", "rate [rad/s]", 3),
     ):
-        fig, ax = plt.subplots(figsize=(8.0, 4.2), layout="constrained")
+        fig, ax = pyplot().subplots(figsize=(8.0, 4.2), layout="constrained")
         _shade(ax, ph)
         ax.plot(sol.t, y1, color="tab:blue", label=f"{symbol}1 (wheel 1, right)")
         ax.plot(sol.t, y2, color="tab:red", label=f"{symbol}2 (wheel 2, left)")

@@ -1,9 +1,8 @@
 """``amigo-gym replay`` and ``amigo-gym identify``: a robot's log against the model (:mod:`amigo_gym.logs`).
 
-``replay LOG --out DIR [--robot robot.json]`` writes ``trajectory.csv``, ``replay.png`` and ``summary.json``; ``identify
-LOG --out DIR`` fits the true robot and writes ``robot.json`` (the names ``gym.make("AmigoBot-v1", true_robot=...)``
-accepts), ``trajectory.csv``, ``identify.png`` and ``summary.json``. Columns, figures and fits: docs/logs.md. ``DIR`` is
-written whole or not at all (:func:`write_folder`); a bad log is one line and exit status 2, before anything is written.
+``replay LOG --out DIR`` writes ``trajectory.csv``, ``replay.png``, ``summary.json``; ``identify LOG --out DIR`` fits
+the true robot and writes ``robot.json`` (for ``gym.make("AmigoBot-v1", true_robot=...)``), ``trajectory.csv``,
+``identify.png``, ``summary.json`` (docs/logs.md). ``DIR`` is written whole or not at all (:func:`write_folder`).
 """
 
 from __future__ import annotations
@@ -25,7 +24,7 @@ from amigo_gym.io import file_mode, fsync_dir, json_safe
 from amigo_gym.logs import Fit, Log, Replay, errors, identify, noise_level, read_log, replay, robot_from_file
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, run_command
 from amigo_gym.tools.plots import pyplot, save_figure
 
 
@@ -51,20 +50,15 @@ def trajectory_csv(log: Log, rep: Replay) -> str:
 
 
 def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) -> None:
-    """The comparison figure: A's path in the plane, wheel rates over time, errors over time (module docstring).
-
-    ``reps``: ``(label, replay)`` pairs; the last one is drawn in full colour, the others thin.
-    """
-    plt = pyplot()
-
-    fig = plt.figure(figsize=(10.0, 7.0), layout="constrained")
+    """The comparison figure: A's path in the plane, wheel rates and errors over time, of the ``(label, replay)``
+    pairs ``reps`` (the last one in full colour, the others thin)."""
+    fig = pyplot().figure(figsize=(10.0, 7.0), layout="constrained")
     grid = fig.add_gridspec(2, 2, width_ratios=(1.0, 1.4))
     ax_xy = fig.add_subplot(grid[:, 0])
     ax_w = fig.add_subplot(grid[0, 1])
     ax_e = fig.add_subplot(grid[1, 1], sharex=ax_w)
-    styles: list[dict[str, Any]] = [{"lw": 0.9, "ls": "--", "alpha": 0.8}] * (len(reps) - 1) + [
-        {"lw": 1.4, "ls": "-", "alpha": 1.0}
-    ]
+    styles: list[dict[str, Any]] = [{"lw": 0.9, "ls": "--", "alpha": 0.8}] * (len(reps) - 1)
+    styles.append({"lw": 1.4, "ls": "-", "alpha": 1.0})
     if log.pose is not None:
         ax_xy.plot(log.pose[:, 0], log.pose[:, 1], ".", color="k", ms=2.5, label="measured")
     for (label, rep), st in zip(reps, styles, strict=True):
@@ -77,14 +71,13 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
 
     label, rep = reps[-1]
     t = rep.t - rep.t[0]
-    ax_w.plot(t, rep.rates[:, 0], color="tab:blue", lw=1.2, label=f"α̇1 simulated ({label})")
-    ax_w.plot(t, rep.rates[:, 1], color="tab:red", lw=1.2, label=f"α̇2 simulated ({label})")
-    if log.rates is not None:
-        ax_w.plot(t, log.rates[:, 0], ".", color="tab:blue", ms=2.5, label="α̇1 measured")
-        ax_w.plot(t, log.rates[:, 1], ".", color="tab:red", ms=2.5, label="α̇2 measured")
-    tc = log.t_cmd - rep.t[0]
-    ax_w.step(tc, log.cmd[:, 0], where="post", color="tab:blue", lw=0.6, alpha=0.5, label="α̇1 command")
-    ax_w.step(tc, log.cmd[:, 1], where="post", color="tab:red", lw=0.6, alpha=0.5, label="α̇2 command")
+    for i, c in enumerate(("tab:blue", "tab:red")):
+        ax_w.plot(t, rep.rates[:, i], color=c, lw=1.2, label=f"α̇{i + 1} simulated ({label})")
+        if log.rates is not None:
+            ax_w.plot(t, log.rates[:, i], ".", color=c, ms=2.5, label=f"α̇{i + 1} measured")
+        ax_w.step(
+            log.t_cmd - rep.t[0], log.cmd[:, i], where="post", color=c, lw=0.6, alpha=0.5, label=f"α̇{i + 1} command"
+        )
     ax_w.set(ylabel="wheel rate [rad/s]", xlim=(t[0], t[-1]))
     ax_w.legend(fontsize=7, ncol=2, loc="best")
     ax_w.set_title("wheel rates (cf. the paper's Figs 3 and 5)", fontsize=9)
@@ -95,15 +88,12 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
             ax_e.plot(t, 1e3 * e["position"], color="k", label=f"position [mm], {label}", **st)
             ax_e.plot(t, 1e3 * np.abs(e["heading"]), color="tab:purple", label=f"heading [mrad], {label}", **st)
         else:
-            ax_e.plot(t, np.abs(e["rate1"]), color="tab:blue", label=f"α̇1 [rad/s], {label}", **st)
-            ax_e.plot(t, np.abs(e["rate2"]), color="tab:red", label=f"α̇2 [rad/s], {label}", **st)
-    noise = noise_level(log)
-    if noise is not None:
-        ax_e.axhline(
-            1e3 * noise, color="0.4", lw=0.8, ls=":", label=f"position noise, {1e3 * noise:.2g} mm (estimated)"
-        )
-    ax_e.set_yscale("log")
-    ax_e.set(xlabel="t [s]", ylabel="|simulated − measured|")
+            for i, c in enumerate(("tab:blue", "tab:red")):
+                ax_e.plot(t, np.abs(e[f"rate{i + 1}"]), color=c, label=f"α̇{i + 1} [rad/s], {label}", **st)
+    if (noise := noise_level(log)) is not None:
+        label = f"position noise, {1e3 * noise:.2g} mm (estimated)"
+        ax_e.axhline(1e3 * noise, color="0.4", lw=0.8, ls=":", label=label)
+    ax_e.set(yscale="log", xlabel="t [s]", ylabel="|simulated − measured|")
     ax_e.legend(fontsize=7, loc="best")
     ax_e.set_title("error over time", fontsize=9)
     fig.suptitle(title, fontsize=9)
@@ -111,11 +101,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
 
 
 def check_out(out: Path, force: bool) -> None:
-    """Refuse ``--out`` if it is a file, or a folder that is not empty without ``force`` (nothing written).
-
-    Raises:
-        FileExistsError: one line naming the folder and ``--force``.
-    """
+    """``FileExistsError`` if ``--out`` is a file, or a folder that is not empty without ``force``."""
     if out.exists() and not out.is_dir():
         raise FileExistsError(f"--out {str(out)!r} is a file, not a folder")
     if out.is_dir() and any(out.iterdir()) and not force:
@@ -123,12 +109,9 @@ def check_out(out: Path, force: bool) -> None:
 
 
 def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bool) -> None:
-    """Write every file by its writer ``files[name](path)`` into a temporary folder beside ``out``, then move it
-    to ``out`` (replacing an existing ``out`` only when ``force``, after the new folder is complete).
-
-    Interrupted or failing, the temporary folder is removed and ``out`` is untouched; killed, it stays, named
-    ``.<out>.<pid>-<random>.tmp``, until the next run for ``out`` removes it (and any whose process is gone).
-    """
+    """Write every file by its writer ``files[name](path)`` into a temporary folder beside ``out``, then move it to
+    ``out`` (replacing an existing ``out`` only when ``force``); a killed run's temporary folder is removed by the
+    next run for ``out``."""
     check_out(out, force)
     parent = out.resolve().parent
     parent.mkdir(parents=True, exist_ok=True)
@@ -162,7 +145,6 @@ def write_folder(out: Path, files: dict[str, Callable[[str], object]], force: bo
 
 
 def _alive(pid: int) -> bool:
-    """Whether process ``pid`` runs (on this machine)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -232,8 +214,7 @@ class IdentifySettings(LogSettings):
 
 
 def _read(args: LogSettings) -> tuple[Path, RobotParams, ActuatorParams, Log]:
-    """``--out`` checked (nothing written yet), the nominal robot and ramps (``--nominal``: a JSON file, its delay
-    ignored; default the AmigoBot's) and the log."""
+    """``--out`` checked, the nominal robot and ramps (``--nominal``, its delay ignored) and the log."""
     check_out(Path(args.out), args.force)
     nominal, act = RobotParams(), ActuatorParams()
     if args.nominal is not None:
@@ -247,33 +228,30 @@ def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
             "rot_acceleration": act.rot_acceleration}  # fmt: skip
 
 
+def _replay(args: ReplaySettings) -> None:
+    out, nominal, nominal_act, log = _read(args)
+    robot, act, label = nominal, nominal_act, "nominal robot"
+    if args.robot is not None:
+        (robot, act), label = robot_from_file(args.robot, nominal, nominal_act), Path(args.robot).name
+    rep, summary = replay(log, robot, act, nominal)
+    summary = {**summary, "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
+    files: dict[str, Callable[[str], object]] = {
+        "trajectory.csv": _text(trajectory_csv(log, rep)),
+        "replay.png": lambda path: plot(path, log, [(label, rep)], f"replay of {log.source}: {label}"),
+        "summary.json": _json(summary),
+    }
+    write_folder(out, files, args.force)
+    rms = summary["rms_position_error_m"]
+    shown = f"rms position error {rms:.4g} m" if rms is not None else (
+        f"rms wheel-rate error {summary['rms_wheel_rate_error_rad_s']:.4g} rad/s")  # fmt: skip
+    print(f"replay: {log.t_meas.size} samples, {shown}; wrote {out}/trajectory.csv, replay.png, summary.json")
+
+
 def main_replay(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym replay`` (module docstring)."""
-    args = parse_settings(ReplaySettings, argv, "amigo-gym replay", "Replay a robot's log through the model; compare.")
-
-    def go() -> int:
-        out, nominal, nominal_act, log = _read(args)
-        if args.robot is None:
-            robot, act = nominal, nominal_act
-            label = "nominal robot"
-        else:
-            robot, act = robot_from_file(args.robot, nominal, nominal_act)
-            label = Path(args.robot).name
-        rep, summary = replay(log, robot, act, nominal)
-        summary = {**summary, "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
-        files: dict[str, Callable[[str], object]] = {
-            "trajectory.csv": _text(trajectory_csv(log, rep)),
-            "replay.png": lambda path: plot(path, log, [(label, rep)], f"replay of {log.source}: {label}"),
-            "summary.json": _json(summary),
-        }
-        write_folder(out, files, args.force)
-        rms = summary["rms_position_error_m"]
-        shown = f"rms position error {rms:.4g} m" if rms is not None else (
-            f"rms wheel-rate error {summary['rms_wheel_rate_error_rad_s']:.4g} rad/s")  # fmt: skip
-        print(f"replay: {log.t_meas.size} samples, {shown}; wrote {out}/trajectory.csv, replay.png, summary.json")
-        return 0
-
-    return run_guarded(go, "amigo-gym replay")
+    return run_command(
+        ReplaySettings, _replay, argv, "amigo-gym replay", "Replay a robot's log through the model; compare."
+    )
 
 
 def _fit_summary(fit: Fit) -> dict[str, Any]:
@@ -282,29 +260,28 @@ def _fit_summary(fit: Fit) -> dict[str, Any]:
             "n_residuals": fit.n_residuals, "model_evaluations": fit.nfev, "ramping_s": fit.excited}  # fmt: skip
 
 
+def _identify(args: IdentifySettings) -> None:
+    out, nominal, nominal_act, log = _read(args)
+    fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
+    before = replay(log, nominal, nominal_act, nominal)[0]
+    after = replay(log, fit.robot, fit.actuators, nominal)[0]
+    files: dict[str, Callable[[str], object]] = {
+        "robot.json": _json(fit.robot_json(log, nominal)),
+        "trajectory.csv": _text(trajectory_csv(log, after)),
+        "identify.png": lambda path: plot(
+            path, log, [("nominal", before), ("identified", after)], f"identification from {log.source}"
+        ),
+        "summary.json": _json({**_fit_summary(fit), "log": log.source}),
+    }
+    write_folder(out, files, args.force)
+    parts = [f"{k} = {fit.values[k]:.5g} ± {u:.2g}" if (u := fit.uncertainty.get(k)) is not None
+             else f"{k} = {fit.values[k]:.5g}" for k in fit.fitted]  # fmt: skip
+    b, a = fit.before["rms_position_error_m"], fit.after["rms_position_error_m"]
+    err = f"; rms position error {b:.4g} m -> {a:.4g} m" if a is not None else ""
+    print(f"identify: {', '.join(parts)}{err}; wrote {out}/robot.json, trajectory.csv, identify.png, summary.json")
+
+
 def main_identify(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym identify`` (module docstring)."""
-    args = parse_settings(IdentifySettings, argv, "amigo-gym identify", "Fit the robot's radii, track, delay to a log.")
-
-    def go() -> int:
-        out, nominal, nominal_act, log = _read(args)
-        fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
-        before = replay(log, nominal, nominal_act, nominal)[0]
-        after = replay(log, fit.robot, fit.actuators, nominal)[0]
-        files: dict[str, Callable[[str], object]] = {
-            "robot.json": _json(fit.robot_json(log, nominal)),
-            "trajectory.csv": _text(trajectory_csv(log, after)),
-            "identify.png": lambda path: plot(
-                path, log, [("nominal", before), ("identified", after)], f"identification from {log.source}"
-            ),
-            "summary.json": _json({**_fit_summary(fit), "log": log.source}),
-        }
-        write_folder(out, files, args.force)
-        parts = [f"{k} = {fit.values[k]:.5g} ± {u:.2g}" if (u := fit.uncertainty.get(k)) is not None
-                 else f"{k} = {fit.values[k]:.5g}" for k in fit.fitted]  # fmt: skip
-        b, a = fit.before["rms_position_error_m"], fit.after["rms_position_error_m"]
-        err = f"; rms position error {b:.4g} m -> {a:.4g} m" if a is not None else ""
-        print(f"identify: {', '.join(parts)}{err}; wrote {out}/robot.json, trajectory.csv, identify.png, summary.json")
-        return 0
-
-    return run_guarded(go, "amigo-gym identify")
+    doc = "Fit the robot's radii, track, delay to a log."
+    return run_command(IdentifySettings, _identify, argv, "amigo-gym identify", doc)

@@ -1,10 +1,7 @@
 """``amigo-gym verify``: the project's exactness checks, measured against references, PASS/FAIL per row.
 
-Each row is a residual against an independent reference (nothing is compared with itself) and the bound it must meet:
-the closed-form steady state against docs/model.md's table; the exact step (and an Euler counter-example) keeping H on
-the circle over 10 laps, directly and through ``gym.make("AmigoBot-v0")``; the SciPy inverse solution of the paper's
-case; the transient round trip (second order in dt); the symbolic rolling constraints (SymPy) on random states. Exit
-status 1 when a row fails; the rows and values: docs/model.md, "Exactness, measured"."""
+Each row is a residual against an independent reference and the bound it must meet; exit status 1 when a row fails.
+The rows and values: docs/model.md, "Exactness, measured"."""
 
 from __future__ import annotations
 
@@ -21,7 +18,7 @@ from amigo_gym.model.kinematics import a_from_h, body_velocity, castor_rate, cir
 from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import CirclePath
 from amigo_gym.task.inverse import paper_circle
-from amigo_gym.tools.options import parse_settings, run_guarded
+from amigo_gym.tools.options import run_command
 
 #: the steady state of the default circle (R = 1 m, v_A = 0.2 m/s), to 6 decimals as docs/model.md tabulates it
 STEADY_REFERENCE = {"betadot": 0.200643, "alpha1_dot": 4.481543, "alpha2_dot": 3.518457, "alpha3_dot": 6.714802}
@@ -150,20 +147,19 @@ class VerifySettings:
     quick: bool = False
 
 
+def _report(args: VerifySettings) -> int:
+    checks = rows(args.quick)
+    print("| check | measured | bound | verdict |\n|---|---:|---|---|")
+    for c in checks:
+        print(f"| {c.what} | {c.value:.3g} | {c.bound} | {'PASS' if c.passed else 'FAIL'} |")
+    failed = [c for c in checks if not c.passed]
+    print(f"{len(checks) - len(failed)} of {len(checks)} checks passed" + (": FAIL" if failed else ""))
+    return 1 if failed else 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym verify [--quick]``: print the table of residuals with PASS/FAIL; status 1 if one fails."""
-    args = parse_settings(VerifySettings, argv, "amigo-gym verify", __doc__.splitlines()[0])
-
-    def run() -> int:
-        checks = rows(args.quick)
-        print("| check | measured | bound | verdict |\n|---|---:|---|---|")
-        for c in checks:
-            print(f"| {c.what} | {c.value:.3g} | {c.bound} | {'PASS' if c.passed else 'FAIL'} |")
-        failed = [c for c in checks if not c.passed]
-        print(f"{len(checks) - len(failed)} of {len(checks)} checks passed" + (": FAIL" if failed else ""))
-        return 1 if failed else 0
-
-    return run_guarded(run, "amigo-gym verify")
+    return run_command(VerifySettings, _report, argv, "amigo-gym verify", __doc__.splitlines()[0])
 
 
 if __name__ == "__main__":

@@ -1,9 +1,4 @@
-"""Speed benchmarks against peers measured in the same run, and their one timing harness.
-
-Every figure is timed beside its peer in interleaved repeats (:func:`measure_many`), the envs stepped with random
-actions drawn in advance (:func:`stepper`), and printed as Markdown (:func:`md_table`) under the machine's line
-(:func:`amigo_gym.tools.machine.machine_line`).
-"""
+"""Speed benchmarks against peers timed in the same run (interleaved repeats), and their timing harness."""
 
 from __future__ import annotations
 
@@ -22,11 +17,8 @@ POOL = 16
 
 
 def measure_many(fns: Mapping[str, Callable[[], object]], repeats: int, min_time: float) -> dict[str, float]:
-    """Median time of one call [s] of each function, the repeats interleaved (round robin).
-
-    Each repeat times every function in turn (each for at least ``min_time``), so a change of the
-    machine's load during the run affects the competitors alike and their ratios stay meaningful.
-    """
+    """Median time of one call [s] of each function over ``repeats`` round-robin repeats of >= ``min_time`` [s] each
+    (a change of the machine's load affects the competitors alike)."""
     inner = {}
     for name, fn in fns.items():
         fn()  # warm-up
@@ -45,8 +37,8 @@ def measure_many(fns: Mapping[str, Callable[[], object]], repeats: int, min_time
 
 
 def stepper(env: Any, seed: int = 0) -> Callable[[], object]:
-    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`; a vector env autoresets,
-    a single env is reset on termination or truncation."""
+    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`; a single env is reset
+    when its episode ends."""
     space = env.action_space
     if isinstance(space, gym.spaces.Box):
         rng = np.random.default_rng(seed)
@@ -83,8 +75,8 @@ def fmt(x: float | None, spec: str = ".3g") -> str:
 
 
 def md_table(head: str, rows: Iterable[str], first: str = "---", last: str = "---:") -> list[str]:
-    """A Markdown table's lines from its header and rows, their cells joined by ``" | "``: the rule aligns the first
-    and the last column by ``first`` and ``last``, the others right."""
+    """A Markdown table's lines from its header and rows (cells joined by ``" | "``); the rule aligns the first and
+    last column by ``first`` and ``last``, the others right."""
     return [f"| {head} |", f"|{first}|" + "---:|" * (head.count(" | ") - 1) + f"{last}|", *(f"| {r} |" for r in rows)]
 
 
@@ -94,7 +86,7 @@ def rates(name: str, count: int, wall: float, cpu: float) -> dict[str, float]:
 
 
 def clock() -> tuple[float, float]:
-    """Wall and CPU clocks of this process [s] (:func:`time.perf_counter`, :func:`time.process_time`)."""
+    """Wall and CPU clocks of this process [s]."""
     return time.perf_counter(), time.process_time()
 
 

@@ -1,8 +1,5 @@
-"""``amigo-gym bench-core``: throughput of the batched exact step, with peers measured in the same run.
-
-What it times per batch size, the ratios and the start-up times: docs/performance.md, "Reference: `amigo-gym
-bench-core`".
-"""
+"""``amigo-gym bench-core``: throughput of the batched exact step, with peers measured in the same run
+(docs/performance.md, "Reference: `amigo-gym bench-core`")."""
 
 from __future__ import annotations
 
@@ -22,14 +19,14 @@ from numpy.typing import NDArray
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, step_pose
-from amigo_gym.model.params import EnvParams, RobotParams, check_range
+from amigo_gym.model.params import EnvParams, RobotParams
 from amigo_gym.paths import make_path
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench import fmt, md_table, measure_many
 from amigo_gym.tools.machine import machine_line
-from amigo_gym.tools.options import run_command, say
+from amigo_gym.tools.options import check_fields, run_command, say
 
 PROG = "amigo-gym bench-core"
 Array = NDArray[np.float64]
@@ -62,8 +59,7 @@ def loop_step(
 
 
 def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool) -> Row:
-    """Env-steps per second of each method at batch size ``n`` (``None`` where not measured), in interleaved repeats,
-    and ``kernel / columns``, the speed-up of the compiled step over the numpy reference."""
+    """Env-steps per second of each method at batch size ``n`` (``None``: not measured) and ``ratio_kernel``."""
     params = EnvParams()
     robot = params.robot
     path = make_path(params)
@@ -103,8 +99,8 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
 
 
 def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
-    """AmigoBot-v0's constants (:func:`amigo_gym.task.v1.v0_configuration`) and the ``(N,)`` columns of a state at the
-    poses ``pose (N, 3)`` with the wheel rates ``w (N, 2)`` [rad/s] and of the nominal episode."""
+    """AmigoBot-v0's constants and the ``(N,)`` columns of the state at ``pose (N, 3)`` with wheel rates ``w (N, 2)``
+    [rad/s] and of the nominal episode."""
     k = tracking.constants(tracking.v0_configuration(params))
     n = len(pose)
     one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
@@ -117,8 +113,8 @@ def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Const
 
 
 def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, parallel: bool) -> Callable[[], object]:
-    """One compiled step of AmigoBot-v0's robots at ``pose`` with the wheel rates ``w`` [rad/s] and the actions
-    ``action (N, 2)`` (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; preallocated outputs, the state advances)."""
+    """One compiled step (preallocated outputs) of AmigoBot-v0's robots at ``pose`` with wheel rates ``w`` [rad/s] and
+    actions ``action (N, 2)``."""
     k, st, ep = v0_columns(params, pose, w)
     n = len(pose)
     b = BatchKernel(k, n, parallel=parallel)
@@ -132,8 +128,7 @@ def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, para
 def bench(
     sizes: Sequence[int], repeats: int, min_time: float, loop_max: int, kernels: bool, seed: int = 0
 ) -> list[Row]:
-    """One :func:`_bench_one` row per size (the same random states for every method); ``kernels=False`` (or numba
-    missing) leaves the kernel columns ``None``."""
+    """One :func:`_bench_one` row per size; ``kernels=False`` (or no numba) leaves the kernel columns ``None``."""
     rng = np.random.default_rng(seed)
     return [_bench_one(n, repeats, min_time, loop_max, rng, kernels and numba_available()) for n in sizes]
 
@@ -156,21 +151,15 @@ def _numpy_route(code: str) -> str:
 
 
 def _wall(code: str, env: dict[str, str] | None = None) -> float:
-    """Wall time [s] from starting a fresh ``python -c code`` to the end of ``code`` (the child reports the
-    clock when it is done: the interpreter's teardown, about 0.3 s with numba loaded, is not start-up)."""
+    """Wall time [s] from starting ``python -c code`` to the end of ``code`` (the interpreter's teardown excluded)."""
     t0 = time.time()
-    out = subprocess.run(
-        [sys.executable, "-c", code + "\nimport time as _t\nprint(repr(_t.time()))"],
-        check=True,
-        env=env,
-        capture_output=True,
-        text=True,
-    )
+    code += "\nimport time as _t\nprint(repr(_t.time()))"
+    out = subprocess.run([sys.executable, "-c", code], check=True, env=env, capture_output=True, text=True)
     return float(out.stdout.split()[-1]) - t0
 
 
 def _cold_warm(code: str, repeats: int) -> tuple[float, float]:
-    """Median wall times of ``code`` in a fresh process with an empty numba cache, then with the one it wrote."""
+    """Median wall times of ``code`` with an empty numba cache, then with the one it wrote."""
     colds, warms = [], []
     for _ in range(repeats):
         with tempfile.TemporaryDirectory() as cache:
@@ -195,11 +184,8 @@ STARTUP_ROWS = (
 
 
 def bench_startup(repeats: int = 3) -> dict[str, float | None]:
-    """Wall times of fresh processes [s] (median of ``repeats``), by the keys of :data:`STARTUP_ROWS`: the interpreter
-    alone, ``import amigo_gym`` (and with numba), and import plus the first step (``gym.make_vec("AmigoBot-v0",
-    num_envs=4)``, ``gym.make("AmigoBot-v1")``) of the reference (``kernel="numpy"``) and of the compiled kernel with
-    an empty numba cache (``_cold_s``: compiles) and with the cache that run wrote (``_warm_s``); ``None`` without
-    numba."""
+    """Wall times of fresh processes [s] (median of ``repeats``) by the keys of :data:`STARTUP_ROWS`; the compiled
+    ones ``None`` without numba."""
 
     def median(code: str) -> float:
         return statistics.median(_wall(code) for _ in range(repeats))
@@ -266,13 +252,8 @@ class CoreSettings:
     json: str | None = None
 
     def __post_init__(self) -> None:
-        for i, n in enumerate(self.sizes or ()):
-            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
-        check_range(PROG, "repeats", self.repeats, 1, 1000)
-        check_range(PROG, "min_time", self.min_time, 0.0, 60.0, low_open=True)
-        check_range(PROG, "loop_max", self.loop_max, 0, 10_000_000)
-        if self.threads is not None:
-            check_range(PROG, "threads", self.threads, 1, 4096)
+        ranges = {"sizes": (1, 1e7), "repeats": (1, 1000), "min_time": (0, 60, True), "loop_max": (0, 1e7)}
+        check_fields(PROG, self, **ranges, threads=(1, 4096))
 
 
 def run(s: CoreSettings) -> int:

@@ -1,9 +1,5 @@
-"""``amigo-gym bench-env``: speed of ``AmigoBot-v0`` against peers measured in the same run.
-
-What it times, against which peers, the speed targets, the header and the options: docs/performance.md,
-"Reference: `amigo-gym bench-env`". Every measurement returns its section of the ``--json`` document (plain
-dicts, ratios included); the report, the targets and the plot are read from that document.
-"""
+"""``amigo-gym bench-env``: speed of ``AmigoBot-v0`` against peers measured in the same run (docs/performance.md,
+"Reference: `amigo-gym bench-env`"); the report, the targets and the plot are read from the ``--json`` document."""
 
 from __future__ import annotations
 
@@ -14,7 +10,7 @@ import sys
 import time
 import tracemalloc
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -24,11 +20,10 @@ from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 from llvmlite import binding
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.model.params import check_range
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.tools.bench import fmt, load_average, md_table, stepper, time_envs
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
-from amigo_gym.tools.options import run_command, say
+from amigo_gym.tools.options import check_fields, missing_modules, run_command, say
 from amigo_gym.tools.plots import pyplot, save_figure
 
 PROG = "amigo-gym bench-env"
@@ -42,12 +37,8 @@ V1_MAX_N = 4096
 #: the step implementations ``--kernels`` compares (the vector envs also run ``"numba-parallel"``)
 KERNEL_CHOICES = ("numpy", "numba")
 #: the speed targets for one core: name -> (comparison, bound)
-TARGETS: dict[str, tuple[str, float]] = {
-    "single": ("<=", 0.4),
-    "vector_4096": (">=", 1.0),
-    "call_n1": ("<=", 0.5),
-    "v1_v0": ("<=", 1.5),
-}
+TARGETS: dict[str, tuple[str, float]] = {"single": ("<=", 0.4), "vector_4096": (">=", 1.0), "call_n1": ("<=", 0.5)}
+TARGETS["v1_v0"] = ("<=", 1.5)
 Doc = dict[str, Any]
 
 
@@ -56,8 +47,7 @@ def _vec(env_id: str, n: int, **kw: Any) -> Any:
 
 
 def _vector_kernels(parallel: bool = False) -> list[str]:
-    """The native vector env's ``kernel`` choices (``parallel``: with ``"numba-parallel"``); numpy alone without
-    numba."""
+    """The native vector env's ``kernel`` choices (``parallel``: with ``"numba-parallel"``)."""
     if not numba_available():
         return ["numpy"]
     return [*KERNEL_CHOICES, "numba-parallel"] if parallel else list(KERNEL_CHOICES)
@@ -72,17 +62,9 @@ def bench_single(repeats: int, min_time: float, seed: int = 0) -> Doc:
 def vector_row(n: int, native: float, cartpole: float, sync: float | None = None, kernels: Doc | None = None) -> Doc:
     """Env-steps/s at ``N`` robots of the native env (and per ``kernel``), CartPole's and Sync's, with the ratios
     (native / CartPole: target >= 0.8 at N = 4096; native / Sync: >= 20) and the time of one call [us]."""
-    return {
-        "n": n,
-        "native": native,
-        "cartpole": cartpole,
-        "sync": sync,
-        "kernels": kernels or {},
-        "ratio_cartpole": native / cartpole,
-        "ratio_sync": None if sync is None else native / sync,
-        "call_us": 1e6 * n / native,
-        "cartpole_call_us": 1e6 * n / cartpole,
-    }
+    ratios = {"ratio_cartpole": native / cartpole, "ratio_sync": None if sync is None else native / sync}
+    calls = {"call_us": 1e6 * n / native, "cartpole_call_us": 1e6 * n / cartpole}
+    return {"n": n, "native": native, "cartpole": cartpole, "sync": sync, "kernels": kernels or {}} | ratios | calls
 
 
 def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: int, seed: int = 0) -> list[Doc]:
@@ -90,11 +72,8 @@ def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: 
     choices = _vector_kernels(parallel=True)
     rows = []
     for n in sizes:
-        envs: dict[str, Any] = {
-            "native": _vec("AmigoBot-v0", n),
-            **{k: _vec("AmigoBot-v0", n, kernel=k) for k in choices},
-        }
-        envs["cartpole"] = CartPoleVectorEnv(num_envs=n)
+        envs: dict[str, Any] = {"native": _vec("AmigoBot-v0", n), "cartpole": CartPoleVectorEnv(num_envs=n)}
+        envs |= {k: _vec("AmigoBot-v0", n, kernel=k) for k in choices}
         if n <= sync_max:
             envs["sync"] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
         t = time_envs(envs, repeats, min_time, seed)
@@ -111,12 +90,9 @@ def fixed_cost(rows: Sequence[Doc]) -> Doc | None:
     r = next((r for r in rows if r["n"] == 1), None)
     if r is None:
         return None
-    out = {
-        "amigobot_us": r["call_us"],
-        "cartpole_us": r["cartpole_call_us"],
-        "ratio": r["call_us"] / r["cartpole_call_us"],
-    }
-    return out | {f"amigobot_{k}_us": 1e6 / v for k, v in r["kernels"].items()}
+    a, c = r["call_us"], r["cartpole_call_us"]
+    kernels = {f"amigobot_{k}_us": 1e6 / v for k, v in r["kernels"].items()}
+    return {"amigobot_us": a, "cartpole_us": c, "ratio": a / c} | kernels
 
 
 def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, int]:
@@ -145,10 +121,7 @@ def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, in
 def bench_memory(n: int, seed: int = 0) -> Doc:
     """Bytes per sub-env, retained (state and buffers) and the transient peak of one ``step``, of the native vector
     env and of ``CartPoleVectorEnv`` (differences ``n`` vs 1)."""
-    makers: dict[str, Callable[[int], Any]] = {
-        "amigobot": partial(_vec, "AmigoBot-v0"),
-        "cartpole": lambda m: CartPoleVectorEnv(num_envs=m),
-    }
+    makers: dict[str, Callable[[int], Any]] = {"amigobot": partial(_vec, "AmigoBot-v0"), "cartpole": CartPoleVectorEnv}
     out: Doc = {"n": n}
     for name, make in makers.items():
         (r1, p1), (rn, pn) = (_traced(partial(make, m), seed) for m in (1, n))
@@ -159,42 +132,33 @@ def bench_memory(n: int, seed: int = 0) -> Doc:
 def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> tuple[float, float]:
     """PPO ``learn`` throughput [env-steps/s] and the share of its wall time in ``venv``'s ``reset``/``step_wait``."""
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecEnvWrapper
 
-    class Timed(VecEnvWrapper):
-        env_time = 0.0
+    env_time = [0.0]
 
-        def reset(self) -> Any:
-            return self._timed(self.venv.reset)
-
-        def step_wait(self) -> Any:
-            return self._timed(self.venv.step_wait)
-
-        def _timed(self, fn: Callable[[], Any]) -> Any:
+    def timed(fn: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any) -> Any:
             t0 = time.perf_counter()
-            out = fn()
-            self.env_time += time.perf_counter() - t0
+            out = fn(*args)
+            env_time[0] += time.perf_counter() - t0
             return out
 
-    timed = Timed(venv)
-    model = PPO("MlpPolicy", timed, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
+        return call
+
+    venv.reset, venv.step_wait = timed(venv.reset), timed(venv.step_wait)
+    model = PPO("MlpPolicy", venv, n_steps=n_steps, batch_size=64, n_epochs=2, seed=seed, device="cpu", verbose=0)
     t0 = time.perf_counter()
     model.learn(total_timesteps=timesteps)
     wall = time.perf_counter() - t0
-    timed.close()
-    return float(model.num_timesteps / wall), float(timed.env_time / wall)
+    venv.close()
+    return float(model.num_timesteps / wall), float(env_time[0] / wall)
 
 
 def bench_ppo(
     timesteps: int, n_envs: int, seed: int = 0, rollout: int = 2048, repeats: int = 3, v1: bool = False
 ) -> list[Doc]:
-    """SB3 PPO ``learn`` throughput [env-steps/s] on AmigoBot-v0 and Pendulum-v1 with the same settings, with 1 env
-    (``DummyVecEnv``) and ``n_envs`` (the native adapter, per kernel), and the env's share of the wall time.
-
-    PPO: ``MlpPolicy``, ``n_steps = rollout // n_envs`` (at least 32; ``timesteps`` rounded up to whole
-    rollouts), ``batch_size=64``, ``n_epochs=2``, CPU, one torch thread. The AmigoBot and Pendulum runs alternate
-    ``repeats`` times; the medians are reported. ``v1=True`` adds ``AmigoBot-v1`` with the task of :data:`V1_HARD`.
-    """
+    """SB3 PPO ``learn`` throughput [env-steps/s] and the env's share of the wall time, AmigoBot-v0 against
+    Pendulum-v1, with 1 env and ``n_envs`` (per kernel; ``v1``: also AmigoBot-v1 with :data:`V1_HARD`); the medians
+    of ``repeats`` alternating runs, ``n_steps = max(32, rollout // n_envs)``, one torch thread."""
     import torch
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import VecMonitor
@@ -222,53 +186,36 @@ def bench_ppo(
             pend = partial(make_vec_env, lambda: gym.make("Pendulum-v1"), n_envs=m, seed=seed)
             runs = [[_ppo_rate(f(), budget, n_steps, seed) for f in (make, pend)] for _ in range(repeats)]
             (a, sa), (p, sp) = [[statistics.median(r[i][j] for r in runs) for j in (0, 1)] for i in (0, 1)]
-            rows.append(
-                {
-                    "n_envs": m,
-                    "amigobot_vec": kind,
-                    "amigobot": a,
-                    "pendulum": p,
-                    "amigobot_env_share": sa,
-                    "pendulum_env_share": sp,
-                    "ratio": a / p,
-                }
-            )
+            row = {"n_envs": m, "amigobot_vec": kind, "amigobot": a, "pendulum": p}
+            rows.append(row | {"amigobot_env_share": sa, "pendulum_env_share": sp, "ratio": a / p})
             say(f"  PPO, {m} env(s): AmigoBot ({kind}) {a:.0f} steps/s (env {sa:.0%}), Pendulum {p:.0f} (env {sp:.0%})")
     finally:
         torch.set_num_threads(threads)
     return rows
 
 
-def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> Doc | None:
+def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> Doc:
     """v1 (its default task and :data:`V1_HARD`) against v0: single step [us] and the ratios, and the vector envs'
-    env-steps/s at ``sizes`` up to :data:`V1_MAX_N`; ``None`` when ``AmigoBot-v1`` is not registered."""
-    if "AmigoBot-v1" not in gym.registry:
-        return None
+    env-steps/s at ``sizes`` up to :data:`V1_MAX_N`."""
     tasks = {"v1": ("AmigoBot-v1", {}), "v1_hard": ("AmigoBot-v1", V1_HARD), "v0": ("AmigoBot-v0", {})}
     ts = time_envs({k: gym.make(e, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
     vector = {}
-    if gym.registry["AmigoBot-v1"].vector_entry_point is not None:
-        for n in (n for n in sizes if n <= V1_MAX_N):
-            tv = time_envs({k: _vec(e, n, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
-            vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard")}
-    return {
-        "v1_us": ts["v1"] * 1e6,
-        "v0_us": ts["v0"] * 1e6,
-        "ratio": ts["v1"] / ts["v0"],
-        "v1_hard_us": ts["v1_hard"] * 1e6,
-        "ratio_hard": ts["v1_hard"] / ts["v0"],
-        "hard_task": {k: list(v) if isinstance(v, tuple) else v for k, v in V1_HARD.items()},
-        "vector": vector,
-    }
+    for n in (n for n in sizes if n <= V1_MAX_N):
+        tv = time_envs({k: _vec(e, n, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
+        vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard")}
+    us = {f"{k}_us": t * 1e6 for k, t in ts.items()}
+    ratios = {"ratio": ts["v1"] / ts["v0"], "ratio_hard": ts["v1_hard"] / ts["v0"]}
+    hard = {k: list(v) if isinstance(v, tuple) else v for k, v in V1_HARD.items()}
+    return us | ratios | {"hard_task": hard, "vector": vector}
 
 
 def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[Doc]:
-    """Time of one env-step [us] of AmigoBot-v0 and v1 (default task) per step implementation (``us``), with the
-    speed-up numpy / numba: the single env (``n = 0``) and the vector env at ``n`` robots; ``[]`` without numba."""
+    """Time of one env-step [us] of AmigoBot-v0 and v1 per step implementation (``us``) and the speed-up numpy /
+    numba, single env (``n = 0``) and vector env at ``n`` robots; ``[]`` without numba."""
     if not numba_available():
         return []
     rows = []
-    for env_id in (e for e in ("AmigoBot-v0", "AmigoBot-v1") if e in gym.registry):
+    for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
         single = time_envs({k: gym.make(env_id, kernel=k) for k in KERNEL_CHOICES}, repeats, min_time, seed)
         vector = time_envs({k: _vec(env_id, n, kernel=k) for k in _vector_kernels(True)}, repeats, min_time, seed)
         for m, t in ((0, single), (n, vector)):
@@ -279,9 +226,7 @@ def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[
 
 def targets(doc: Doc, n_vector: int = 4096) -> list[Doc]:
     """The speed targets' figures that ``doc`` holds, each with its ratio, bound (:data:`TARGETS`; ``None``:
-    reported only) and whether it is met: the single step against Pendulum-v1, the vector env at ``n_vector``
-    against ``CartPoleVectorEnv`` (and with numba's threads), the fixed cost per call at N = 1, and AmigoBot-v1
-    against AmigoBot-v0 (single step; vector env)."""
+    reported only) and whether it is met."""
     found = []
     if doc.get("single"):
         found.append(("single", "single step, AmigoBot-v0 / Pendulum-v1 (time)", doc["single"]["ratio"]))
@@ -309,10 +254,8 @@ def targets(doc: Doc, n_vector: int = 4096) -> list[Doc]:
 
 
 def numba_state() -> str:
-    """numba's version, the CPU it compiles for (``NUMBA_CPU_NAME``, else the host's: e.g. ``znver4``) and with which
-    features (``NUMBA_CPU_FEATURES``, else the host's: ``haswell`` with ``NUMBA_CPU_FEATURES=""`` makes AVX2 code on an
-    AVX-512 machine, the name alone keeps AVX-512), its threads (``NUMBA_NUM_THREADS``, ``--threads``) and whether it
-    uses Intel SVML."""
+    """numba's version, the CPU and features it compiles for (``NUMBA_CPU_NAME``, ``NUMBA_CPU_FEATURES``, else the
+    host's), its threads and whether it uses Intel SVML."""
     if not numba_available():
         return "numba not installed"
     import numba
@@ -372,12 +315,11 @@ def format_report(doc: Doc) -> str:
             f"single step [us] (target <= 1.5) | {v['v1_us']:.1f} | {fmt(v['v1_hard_us'], '.1f')} | {v['v0_us']:.1f} "
             f"| {v['ratio']:.2f} | {fmt(v['ratio_hard'], '.2f')}"
         ]
-        for n, r in v["vector"].items():
-            h = r.get("v1_hard")
-            cells.append(
-                f"vector, N = {n} [steps/s] | {r['v1']:.3g} | {fmt(h)} | {r['v0']:.3g} | {r['v0'] / r['v1']:.2f} "
-                f"(time) | {fmt(None if h is None else r['v0'] / h, '.2f')} (time)"
-            )
+        cells += [
+            f"vector, N = {n} [steps/s] | {r['v1']:.3g} | {r['v1_hard']:.3g} | {r['v0']:.3g} | {r['v0'] / r['v1']:.2f} "
+            f"(time) | {r['v0'] / r['v1_hard']:.2f} (time)"
+            for n, r in v["vector"].items()
+        ]
         out += [*md_table(head, cells), ""]
     if doc["kernels"]:
         names = list(dict.fromkeys(k for r in doc["kernels"] for k in r["us"]))
@@ -418,14 +360,9 @@ def plot_vector(rows: Sequence[Doc], path: str, v1: Doc | None = None) -> None:
         ax.plot(*zip(*sync, strict=True), "x:", label="SyncVectorEnv(AmigoBot-v0)")
     if v1 is not None and v1["vector"]:
         n1 = [int(n) for n in v1["vector"]]
-        ax.plot(n1, [r["v1"] for r in v1["vector"].values()], "D-", label="AmigoBotV1VectorEnv (default task)")
-        ax.plot(
-            n1, [r["v1_hard"] for r in v1["vector"].values()], "d--", label="AmigoBotV1VectorEnv (mixed paths, hard)"
-        )
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("number of sub-envs N")
-    ax.set_ylabel("env-steps per second")
+        for key, style, task in (("v1", "D-", "default task"), ("v1_hard", "d--", "mixed paths, hard")):
+            ax.plot(n1, [r[key] for r in v1["vector"].values()], style, label=f"AmigoBotV1VectorEnv ({task})")
+    ax.set(xscale="log", yscale="log", xlabel="number of sub-envs N", ylabel="env-steps per second")
     ax.set_title("Vector env throughput (one run, same machine)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
@@ -434,13 +371,8 @@ def plot_vector(rows: Sequence[Doc], path: str, v1: Doc | None = None) -> None:
 
 
 def headline_table(env_doc: dict[str, Any], core_doc: dict[str, Any] | None = None) -> str:
-    """The README's performance table (figure, measured, target), generated from the JSON of a
-    ``bench-env --v1 --json`` run (``env_doc``) and of a ``bench-core --json`` run (``core_doc``, for the
-    start-up row), so that no copy of a figure is typed by hand: ``amigo-gym bench-env --table-from FILE``.
-
-    Raises:
-        KeyError: a document without the figures of a full ``--v1`` run.
-    """
+    """The README's performance table (figure, measured, target) from the JSON of a ``bench-env --v1 --json`` run
+    and of a ``bench-core --json`` run (``core_doc``: the start-up row); ``KeyError`` without a full ``--v1`` run."""
     vec = {int(v["n"]): v for v in env_doc["vector"]}
     ppo1 = next(p for p in env_doc["ppo"] if p["n_envs"] == 1)
     ppo8 = next(p for p in env_doc["ppo"] if p["n_envs"] > 1 and "numba" in str(p["amigobot_vec"]))
@@ -460,16 +392,9 @@ def headline_table(env_doc: dict[str, Any], core_doc: dict[str, Any] | None = No
     ]  # fmt: skip
     if core_doc is not None and core_doc.get("startup"):
         st = core_doc["startup"]
-        rows.append(
-            (
-                "second process, import to first compiled step (`amigo-gym bench-core`)",
-                f"{st['kernel_warm_s']:.2f} s (v1: {st['v1_warm_s']:.2f} s)",
-                "< 1 s",
-            )
-        )
-    lines = ["| figure | measured | target |", "|---|---:|---:|"]
-    lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
-    return "\n".join(lines) + "\n"
+        what = "second process, import to first compiled step (`amigo-gym bench-core`)"
+        rows.append((what, f"{st['kernel_warm_s']:.2f} s (v1: {st['v1_warm_s']:.2f} s)", "< 1 s"))
+    return "\n".join(md_table("figure | measured | target", (" | ".join(r) for r in rows), last="---:")) + "\n"
 
 
 @dataclass(frozen=True)
@@ -523,25 +448,14 @@ class EnvSettings:
     core_json: str | None = None
 
     def __post_init__(self) -> None:
-        for i, n in enumerate(self.sizes or ()):
-            check_range(PROG, f"sizes[{i}]", n, 1, 1_000_000)
-        check_range(PROG, "min_time", self.min_time, 0.0, 60.0, low_open=True)
-        for name, low, high in (
-            ("repeats", 1, 1000),
-            ("sync_max", 0, 1_000_000),
-            ("memory_n", 2, 10_000_000),
-            ("ppo_steps", 1, 10_000_000),
-            ("ppo_envs", 1, 4096),
-            ("ppo_repeats", 1, 100),
-        ):
-            check_range(PROG, name, getattr(self, name), low, high)
-        if self.threads is not None:
-            check_range(PROG, "threads", self.threads, 1, os.cpu_count() or 1)
+        check_fields(PROG, self, sizes=(1, 1e6), min_time=(0, 60, True), repeats=(1, 1000), sync_max=(0, 1e6))
+        check_fields(PROG, self, memory_n=(2, 1e7), ppo_steps=(1, 1e7), ppo_envs=(1, 4096), ppo_repeats=(1, 100))
+        check_fields(PROG, self, threads=(1, os.cpu_count() or 1))
 
 
 def run(s: EnvSettings) -> int:
-    """``amigo-gym bench-env`` with the settings ``s``: the report on stdout (progress on stderr), ``--plot``,
-    ``--json``; with ``--table-from``, only :func:`headline_table` of the JSON files."""
+    """``amigo-gym bench-env``: the report on stdout (progress on stderr), ``--plot``, ``--json``; with
+    ``--table-from``, only :func:`headline_table`."""
     if s.table_from is not None:
         import json
 
@@ -552,64 +466,49 @@ def run(s: EnvSettings) -> int:
         except (KeyError, StopIteration) as exc:
             raise ValueError(f"--table-from {s.table_from}: not the JSON of a full --v1 run ({exc})") from None
         return 0
+    sizes = list(s.sizes or (QUICK_SIZES if s.quick else DEFAULT_SIZES))
     if s.quick:
-        sizes = list(s.sizes or QUICK_SIZES)
-        repeats, min_time, sync_max = 1, 0.02, min(s.sync_max, SYNC_MAX)
-        memory_n, ppo_steps = min(s.memory_n, 256), min(s.ppo_steps, 128)
-    else:
-        sizes = list(s.sizes or DEFAULT_SIZES)
-        repeats, min_time, sync_max = s.repeats, s.min_time, s.sync_max
-        memory_n, ppo_steps = s.memory_n, s.ppo_steps
+        small: dict[str, Any] = {"sync_max": min(s.sync_max, SYNC_MAX), "memory_n": min(s.memory_n, 256)}
+        small["ppo_steps"] = min(s.ppo_steps, 128)
+        s = replace(s, min_time=0.02, **small, repeats=1, ppo_repeats=1)
     if s.threads is not None and numba_available():
         import numba
 
-        # numba's pool has NUMBA_NUM_THREADS threads (default: the CPUs)
-        check_range(PROG, "threads", s.threads, 1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1)))
+        check_fields(PROG, s, threads=(1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))))  # numba's pool
         numba.set_num_threads(s.threads)
     doc: Doc = dict.fromkeys(("machine", "single", "vector", "fixed_cost_n1", "memory", "ppo", "v1", "kernels"))
     doc |= {"vector": [], "ppo": [], "kernels": [], "targets": [], "notes": []}
     start = load_average()
     print(f"{machine_line()}; {numba_state()}; load average {start}", flush=True)
-    print(f"median of {repeats} repeats of >= {min_time:g} s", flush=True)
+    print(f"median of {s.repeats} repeats of >= {s.min_time:g} s", flush=True)
     if not s.skip_single:
         say("single env: AmigoBot-v0 vs Pendulum-v1")
-        doc["single"] = bench_single(repeats, min_time)
+        doc["single"] = bench_single(s.repeats, s.min_time)
     if not s.skip_vector:
-        say(f"vector env at N = {sizes} (Sync up to N = {sync_max})")
-        doc["vector"] = bench_vector(sizes, repeats, min_time, sync_max)
+        say(f"vector env at N = {sizes} (Sync up to N = {s.sync_max})")
+        doc["vector"] = bench_vector(sizes, s.repeats, s.min_time, s.sync_max)
         doc["fixed_cost_n1"] = fixed_cost(doc["vector"])
     if not s.skip_memory:
-        say(f"memory per sub-env (N = {memory_n} vs 1)")
-        doc["memory"] = bench_memory(memory_n)
-    if not s.skip_ppo:
-        try:
-            import stable_baselines3  # noqa: F401
-            import torch  # noqa: F401
-        except ImportError:
-            doc["notes"].append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
-        else:
-            say(f"SB3 PPO learn, {ppo_steps} steps per run")
-            rollout, rounds = (64, 1) if s.quick else (2048, s.ppo_repeats)
-            doc["ppo"] = bench_ppo(ppo_steps, s.ppo_envs, rollout=rollout, repeats=rounds, v1=s.v1)
+        say(f"memory per sub-env (N = {s.memory_n} vs 1)")
+        doc["memory"] = bench_memory(s.memory_n)
+    if not s.skip_ppo and missing_modules(["stable_baselines3", "torch"]):
+        doc["notes"].append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
+    elif not s.skip_ppo:
+        say(f"SB3 PPO learn, {s.ppo_steps} steps per run")
+        rollout = 64 if s.quick else 2048
+        doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=rollout, repeats=s.ppo_repeats, v1=s.v1)
     if s.v1:
         say("AmigoBot-v1 vs v0")
-        doc["v1"] = bench_v1(sizes, repeats, min_time)
-        if doc["v1"] is None:
-            doc["notes"].append("--v1: AmigoBot-v1 is not in gymnasium's registry; v1 vs v0 skipped")
+        doc["v1"] = bench_v1(sizes, s.repeats, s.min_time)
     if s.kernels:
         n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
         say(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
-        doc["kernels"] = bench_kernels(n_k, repeats, min_time)
+        doc["kernels"] = bench_kernels(n_k, s.repeats, s.min_time)
         if not doc["kernels"]:
             doc["notes"].append("--kernels: numba is not installed; only the numpy step exists")
     doc["targets"] = targets(doc)
-    doc["machine"] = {
-        "cpu_model": cpu_model(),
-        "simd": simd_level(),
-        "cpu_count": os.cpu_count(),
-        "numba": numba_state(),
-        "load_average": {"start": start, "end": load_average()},
-    }
+    cpu = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
+    doc["machine"] = cpu | {"numba": numba_state(), "load_average": {"start": start, "end": load_average()}}
     print(format_report(doc))
     if s.plot is not None and doc["vector"]:
         plot_vector(doc["vector"], s.plot, doc["v1"])

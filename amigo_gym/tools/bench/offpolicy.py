@@ -1,8 +1,5 @@
-"""Off-policy entries of ``amigo-gym bench-train``: SB3's SAC and TD3, sb3-contrib's CrossQ and TQC, timed.
-
-The algorithms, the two configurations and the rates: docs/performance.md, "Reference: `amigo-gym bench-train
---offpolicy`". Imports torch, stable-baselines3 and sb3-contrib inside the functions (the ``train`` extra).
-"""
+"""Off-policy entries of ``amigo-gym bench-train``: SB3's SAC and TD3, sb3-contrib's CrossQ and TQC, timed
+(docs/performance.md, "Reference: `amigo-gym bench-train --offpolicy`")."""
 
 from __future__ import annotations
 
@@ -26,17 +23,8 @@ ALGOS: dict[str, tuple[str, str]] = {
 }
 
 #: the two configurations: ``shipped`` reads the v1 YAML; ``ht`` overrides these keys of it
-CONFIGS: dict[str, dict[str, Any]] = {
-    "shipped": {},
-    "ht": {
-        "n_envs": 128,
-        "train_freq": 1,
-        "gradient_steps": 8,
-        "batch_size": 2048,
-        "learning_starts": 10_240,
-        "buffer_size": 500_000,
-    },
-}
+HT = {"n_envs": 128, "train_freq": 1, "gradient_steps": 8, "batch_size": 2048, "learning_starts": 10_240}
+CONFIGS: dict[str, dict[str, Any]] = {"shipped": {}, "ht": HT | {"buffer_size": 500_000}}
 
 
 def algo_class(algo: str) -> Any:
@@ -48,22 +36,16 @@ def algo_class(algo: str) -> Any:
 
 
 def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
-    """The rl-zoo style mapping of ``algo`` in ``config`` (:data:`CONFIGS`): the v1 YAML, then the overrides.
-
-    SAC and TD3 read ``agents/hyperparams/<algo>.yml``; CrossQ and TQC read ``sac.yml`` (CrossQ without ``tau``).
-    The result has ``n_envs``, ``noise_type``/``noise_std`` (TD3) and the keyword arguments of the class.
-    """
+    """The rl-zoo style mapping of ``algo`` in ``config`` (:data:`CONFIGS`): ``agents/hyperparams/<algo>.yml``
+    (CrossQ, TQC: ``sac.yml``, CrossQ without ``tau``) for AmigoBot-v1, then the overrides."""
     if config not in CONFIGS:
         raise ValueError(f"offpolicy: configuration must be one of {', '.join(CONFIGS)}, got {config!r}")
     algo_class(algo)  # checks the name
     source = algo if algo in ("sac", "td3") else "sac"
     hp = dict(load_hyperparams(hyperparams_dir() / f"{source}.yml", "AmigoBot-v1"))
-    hp.pop("n_timesteps", None)
-    hp.pop("policy", None)
-    if algo == "crossq":
-        hp.pop("tau", None)
-    hp.update(CONFIGS[config])
-    return hp
+    for key in ("n_timesteps", "policy", "tau" if algo == "crossq" else ""):
+        hp.pop(key, None)
+    return hp | CONFIGS[config]
 
 
 def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> Any:
@@ -96,16 +78,9 @@ def _venv(n_envs: int, seed: int) -> Any:
 def bench_offpolicy(
     algo: str, config: str, steps: int, threads: int, seed: int = 0, pre_steps: int = 0
 ) -> dict[str, Any]:
-    """Train ``algo`` in ``config`` for its warm-up and then ``steps`` env-steps of training; time both (module doc).
-
-    ``pre_steps``: env-steps of training after the warm-up that are counted in the whole call but not in the loop
-    (for JIT-compiled implementations such as sbx, whose first update compiles; 0 for SB3 and sb3-contrib).
-
-    Returns ``env_steps`` (all, warm-up included), ``grad_steps`` (gradient steps: critic updates), ``wall_s``,
-    ``cpu_s``, ``sps``, ``sps_cpu`` (whole call), ``loop_env_steps``, ``loop_wall_s``, ``loop_cpu_s``, ``sps_loop``,
-    ``sps_loop_cpu``, ``gsps_loop``, ``gsps_loop_cpu`` (the loop after the warm-up) and ``config`` (the mapping,
-    the network, ``gradient_steps_per_env_step``).
-    """
+    """Train ``algo`` in ``config`` for its warm-up, ``pre_steps`` (timed in the whole call only: a JIT's first
+    update) and ``steps`` env-steps; the counts, times and rates of the whole call and of the loop after the warm-up
+    (``loop_*``, ``*_loop``; ``gsps``: gradient steps/s) and ``config``."""
     import torch
 
     hp = offpolicy_config(algo, config)
@@ -122,26 +97,17 @@ def bench_offpolicy(
     (t2, c2), n, g = clock(), int(model.num_timesteps), int(model._n_updates)
     venv.close()
     train_freq = hp["train_freq"][0] if isinstance(hp["train_freq"], list | tuple) else hp["train_freq"]
-    cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in hp.items()} | {
-        "net_arch": [64, 64],
-        "gradient_steps_per_env_step": round(float(hp["gradient_steps"]) / (float(train_freq) * n_envs), 4),
-    }
-    whole = {"algo": algo, "env_steps": n, "grad_steps": g, "wall_s": round(t2 - t0, 2), "cpu_s": round(c2 - c0, 2)}
-    loop = {"loop_env_steps": n - n1, "loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2)}
-    loop["loop_cpu_s"] = round(c2 - c1, 2)
-    return (
-        whole
-        | rates("sps", n, t2 - t0, c2 - c0)
-        | {"warmup_wall_s": round(t1 - t0, 2), **loop}
-        | rates("sps_loop", n - n1, t2 - t1, c2 - c1)
-        | rates("gsps_loop", g - g1, t2 - t1, c2 - c1)
-        | {"config": cfg}
-    )
+    cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in hp.items()} | {"net_arch": [64, 64]}
+    cfg["gradient_steps_per_env_step"] = round(float(hp["gradient_steps"]) / (float(train_freq) * n_envs), 4)
+    out = {"algo": algo, "env_steps": n, "grad_steps": g, "wall_s": round(t2 - t0, 2), "cpu_s": round(c2 - c0, 2)}
+    out |= rates("sps", n, t2 - t0, c2 - c0) | {"warmup_wall_s": round(t1 - t0, 2), "loop_env_steps": n - n1}
+    out |= {"loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2), "loop_cpu_s": round(c2 - c1, 2)}
+    out |= rates("sps_loop", n - n1, t2 - t1, c2 - c1) | rates("gsps_loop", g - g1, t2 - t1, c2 - c1)
+    return out | {"config": cfg}
 
 
 class DeterministicPolicy:
-    """An SB3 model's deterministic ``predict`` with the signature
-    :func:`amigo_gym.tools.training.fastppo.evaluate_policy` calls (SB3's own default is stochastic)."""
+    """An SB3 model's ``predict``, deterministic by default (as ``fastppo.evaluate_policy`` calls it)."""
 
     def __init__(self, model: Any) -> None:
         self.model = model

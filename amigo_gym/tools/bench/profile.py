@@ -1,9 +1,7 @@
 """Where the time of a step goes: cProfile of the single env and of the native vector env.
 
-``python -m amigo_gym.tools.bench.profile [--steps K] [--top T]`` profiles ``K`` steps (random actions, autoreset)
-of ``gym.make("AmigoBot-v0")`` and of its vector env at each N of ``--sizes``, and prints per case the ``T``
-functions with the largest own time (``tottime``) as a share of the total, in Markdown. cProfile's per-call cost
-inflates small Python functions: read the shares as "where", ``amigo-gym bench-env`` as "how much".
+``python -m amigo_gym.tools.bench.profile [--steps K] [--top T]``: per case (``gym.make("AmigoBot-v0")``, its vector
+env at each N of ``--sizes``) the ``T`` functions with the largest own time as a share of the total, in Markdown.
 """
 
 from __future__ import annotations
@@ -21,12 +19,12 @@ import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.envs.amigobot import AmigoBotVectorEnv
-from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.model.params import EnvParams
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench import md_table, measure_many, stepper
 from amigo_gym.tools.bench.core import kernel_stepper
-from amigo_gym.tools.options import run_command
+from amigo_gym.tools.options import check_fields, run_command
 
 PROG = "python -m amigo_gym.tools.bench.profile"
 
@@ -100,26 +98,20 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     start = kern.ws.copy() if kern is not None else None
     k, ref_start, ep, ring = ref._k, ref._state, ref._episode, ref._ring  # the reference's start state (floats)
 
-    def restart() -> None:
-        if kern is not None:
-            kern.ws[:] = start
+    def restarted(e: Any) -> Callable[[], None]:
+        def step() -> None:
+            if e is ref:
+                ref._state = ref_start
+            elif kern is not None:
+                kern.ws[:] = start
+            e.step(a)
 
-    def reference() -> None:
-        ref._state = ref_start
-        ref.step(a)
-
-    def wrapped() -> None:
-        restart()
-        env.step(a)
-
-    def unwrapped() -> None:
-        restart()
-        raw.step(a)
+        return step
 
     fns = {
-        "AmigoBot `gym.make` step": wrapped,
-        "AmigoBot unwrapped `env.step`": unwrapped,
-        "AmigoBot unwrapped `env.step`, kernel=numpy (v0's reference)": reference,
+        "AmigoBot `gym.make` step": restarted(env),
+        "AmigoBot unwrapped `env.step`": restarted(raw),
+        "AmigoBot unwrapped `env.step`, kernel=numpy (v0's reference)": restarted(ref),
         "`task.v1.step_columns` on Python floats (v0's reference step)": lambda: tracking.step_columns(
             k, ref.path, ref_start, ep, ring, 0, 0.27, 0.27
         ),
@@ -135,11 +127,8 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
 
 
 def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
-    """Markdown table: the kernel alone, the kernel env without and with episode restarts, against CartPole.
-
-    Times per ``step`` call [us] in interleaved repeats, with CartPole's time over each in brackets.
-    "No episode ends": ``termination_distance=10``, ``max_episode_steps=None``. Needs numba.
-    """
+    """Markdown table: time per ``step`` call [us] of the kernel alone, the kernel env without and with episode
+    restarts, and CartPole's (CartPole's time over each in brackets). Needs numba."""
     head = (
         "N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
         "| env.step, random actions (benchmark) | CartPoleVectorEnv"
@@ -148,9 +137,8 @@ def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
 
 
 def libm(n: int = 100_000, seed: int = 0) -> str:
-    """Markdown table: how many of ``n`` float64 arguments (uniform in [-10, 10]; ``log``: in (0, 20]) get other bits
-    from numpy's ``sin``, ``cos``, ``tan``, ``exp``, ``log`` than from the C library's (Python's ``math``, which the
-    compiled kernels call). Why the kernels compute ``sin``/``cos`` themselves and leave the others to numpy."""
+    """Markdown table: how many of ``n`` float64 arguments (uniform in [-10, 10]; ``log``: (0, 20]) get other bits from
+    numpy's ``sin``, ``cos``, ``tan``, ``exp``, ``log`` than from the C library's (Python's ``math``)."""
     g = np.random.default_rng(seed)
     x = g.uniform(-10.0, 10.0, n)
     pos = g.uniform(0.0, 20.0, n) + 1e-300
@@ -185,14 +173,11 @@ class ProfileSettings:
     libm: bool = False
 
     def __post_init__(self) -> None:
-        check_range(PROG, "steps", self.steps, 1, 10**9)
-        check_range(PROG, "top", self.top, 1, 10**6)
-        for i, n in enumerate(self.sizes):
-            check_range(PROG, f"sizes[{i}]", n, 1, 10_000_000)
+        check_fields(PROG, self, steps=(1, 1e9), top=(1, 1e6), sizes=(1, 1e7))
 
 
 def run(s: ProfileSettings) -> int:
-    """The tables of the settings ``s`` on stdout (module docstring; ``--gap``, ``--single-parts``, ``--libm``)."""
+    """The tables of the settings ``s`` on stdout."""
     tables: dict[str, Callable[[], str]] = {"gap": lambda: gap(s.sizes), "single_parts": single_parts, "libm": libm}
     for flag, table in tables.items():
         if getattr(s, flag):

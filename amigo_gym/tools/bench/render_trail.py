@@ -41,10 +41,8 @@ def _rss() -> int:
 
 
 def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True, frames: int = 2) -> dict[str, float]:
-    """Growth of the resident memory [MiB] from ``reset`` to after ``steps`` steps, with or without ``render_mode``.
-
-    With ``render``, the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them.
-    """
+    """Growth of the resident memory [MiB] from ``reset`` to after ``steps`` steps, with or without ``render_mode``
+    (then the trails of the first ``frames`` robots are read at the end, as ``render()`` reads them)."""
     env = _env(n, path, render=render)
     step = stepper(env, 0)  # reset, random actions (the same in both processes)
     gc.collect()
@@ -52,8 +50,7 @@ def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True,
     for _ in range(steps):
         step()
     if render:
-        trails = [env._trail_of(i) for i in range(frames)]
-        del trails
+        _ = [env._trail_of(i) for i in range(frames)]
     gc.collect()
     second = _rss()
     ring = getattr(env, "_trail", None)
@@ -72,12 +69,12 @@ class RenderTrailSettings:
     """Settings of ``python -m amigo_gym.tools.bench.render_trail``, each the option of the same name.
 
     Attributes:
-        n: robots [envs] (default 1024).
-        steps: rendered steps of the memory measurement (default 3000).
+        n: robots [envs].
+        steps: rendered steps of the memory measurement [steps].
         memory_only: the subprocess of one memory measurement, ``render`` or ``plain`` (internal).
-        path: path= of the envs (default mixed, with hard randomisation).
-        repeats: interleaved repeats of the timing (median) (default 5).
-        min_time: least duration of one timing repeat [s] (default 0.5).
+        path: path= of the envs (mixed: with hard randomisation) [name].
+        repeats: interleaved repeats of the timing (median) [repeats].
+        min_time: least duration of one timing repeat [s].
         skip_memory: time only.
         skip_time: measure the memory only.
         json: write the figures as JSON [file].
@@ -100,7 +97,7 @@ class RenderTrailSettings:
 
 
 def run(s: RenderTrailSettings) -> int:
-    """The measurements of the settings ``s``, one line per figure on stdout (module docstring), ``--json``."""
+    """The measurements of the settings ``s``, one line per figure on stdout, ``--json``."""
     out: dict[str, Any] = {"n": s.n, "steps": s.steps, "path": s.path}
     if s.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
         print(json.dumps(measure_memory(s.n, s.steps, s.path, render=s.memory_only == "render")))

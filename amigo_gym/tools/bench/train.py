@@ -1,8 +1,5 @@
-"""``amigo-gym bench-train``: env-steps of *training* per second, the fast PPO against SB3's PPO, same run.
-
-The three trainings, the rates and the off-policy entries: docs/performance.md, "Reference: `amigo-gym
-bench-train`".
-"""
+"""``amigo-gym bench-train``: env-steps of *training* per second, the fast PPO against SB3's PPO, same run
+(docs/performance.md, "Reference: `amigo-gym bench-train`")."""
 
 from __future__ import annotations
 
@@ -18,11 +15,10 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.model.params import check_range
 from amigo_gym.tools.bench import clock, rates
 from amigo_gym.tools.bench.offpolicy import ALGOS, _venv, bench_offpolicy
 from amigo_gym.tools.machine import cpu_model, simd_level
-from amigo_gym.tools.options import run_command
+from amigo_gym.tools.options import check_fields, run_command
 
 PROG = "amigo-gym bench-train"
 
@@ -62,13 +58,8 @@ def bench_fastppo(
 
 def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
     """Env-steps per wall second (``sps``) and per CPU second of this process, all threads (``sps_cpu``)."""
-    return {
-        "env_steps": n,
-        "wall_s": round(wall, 2),
-        "cpu_s": round(cpu, 2),
-        **rates("sps", n, wall, cpu),
-        "config": cfg,
-    }
+    out = {"env_steps": n, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2)}
+    return out | rates("sps", n, wall, cpu) | {"config": cfg}
 
 
 def bench_sb3(
@@ -81,23 +72,13 @@ def bench_sb3(
     torch.set_num_threads(threads)
     t0, c0 = clock()
     venv = _venv(n_envs, seed)
-    model = PPO(
-        "MlpPolicy",
-        venv,
-        n_steps=n_steps,
-        batch_size=batch_size,
-        n_epochs=n_epochs,
-        learning_rate=3e-4,
-        gamma=0.98,
-        policy_kwargs={"net_arch": [64, 64]},
-        seed=seed,
-        device="cpu",
-        verbose=0,
-    )
+    cfg: dict[str, Any] = {"n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs}
+    kw: dict[str, Any] = {"learning_rate": 3e-4, "gamma": 0.98, "policy_kwargs": {"net_arch": [64, 64]}}
+    model = PPO("MlpPolicy", venv, **cfg, **kw, seed=seed, verbose=0, device="cpu")
     model.learn(total_timesteps=steps)
     t1, c1 = clock()
     venv.close()
-    cfg = {"n_envs": n_envs, "n_steps": n_steps, "batch_size": batch_size, "n_epochs": n_epochs, "net_arch": [64, 64]}
+    cfg = {"n_envs": n_envs, **cfg, "net_arch": [64, 64]}
     return _result(int(model.num_timesteps), t1 - t0, c1 - c0, cfg) | {"device": "cpu", "device_name": cpu_model()}
 
 
@@ -155,19 +136,14 @@ class TrainSettings:
     offpolicy_ht_steps: int = 16384
 
     def __post_init__(self) -> None:
-        check_range(PROG, "fast_steps", self.fast_steps, 16384, 10**9)
-        check_range(PROG, "sb3_steps", self.sb3_steps, 1, 10**8)
-        check_range(PROG, "threads", self.threads, 1, 64)
-        check_range(PROG, "env_threads", self.env_threads, 1, 256)
-        bad = [a for a in self.offpolicy_algos if a not in ALGOS]
-        if bad:
+        check_fields(PROG, self, fast_steps=(16384, 1e9), sb3_steps=(1, 1e8), threads=(1, 64), env_threads=(1, 256))
+        if bad := [a for a in self.offpolicy_algos if a not in ALGOS]:
             raise ValueError(f"offpolicy: unknown algorithm(s) {', '.join(bad)}; allowed: {', '.join(ALGOS)}")
-        check_range(PROG, "offpolicy_steps", self.offpolicy_steps, 8, 10**8)
-        check_range(PROG, "offpolicy_ht_steps", self.offpolicy_ht_steps, 128, 10**9)
+        check_fields(PROG, self, offpolicy_steps=(8, 1e8), offpolicy_ht_steps=(128, 1e9))
 
     @property
     def offpolicy_algos(self) -> list[str]:
-        """The names of ``--offpolicy`` (:mod:`amigo_gym.tools.bench.offpolicy`'s ``ALGOS``; none run without it)."""
+        """The names of ``--offpolicy``."""
         return [a.strip() for a in self.offpolicy.split(",") if a.strip()]
 
 
@@ -177,19 +153,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     def run(s: TrainSettings) -> int:
         import torch
 
-        head = {
-            "cpu_model": cpu_model(),
-            "simd": simd_level(),
-            "cpu_count": os.cpu_count(),
-            "torch_threads": s.threads,
-            "env_threads": s.env_threads,
-            "fast_hyperparams": s.fast_hyperparams,
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "torch": torch.__version__,
-            "load_average_start": _load(),
-            "command": "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:]),
-        }
+        head: dict[str, Any] = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
+        head["torch_threads"] = s.threads
+        head |= {"env_threads": s.env_threads, "fast_hyperparams": s.fast_hyperparams}
+        head |= {"python": platform.python_version(), "numpy": np.__version__, "torch": torch.__version__}
+        command = "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:])
+        head |= {"load_average_start": _load(), "command": command}
         print(f"CPU: {head['cpu_model']}, SIMD {head['simd']} ({head['cpu_count']} CPUs visible), "
               f"torch threads {s.threads}, load average {head['load_average_start']}", flush=True)  # fmt: skip
         runs: dict[str, Any] = {}
@@ -208,9 +177,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             runs["sb3_fastconfig"] = bench_sb3(max(s.sb3_steps, 512 * 32), s.threads, 512, 32, 4096, 4)
             _show("sb3_fastconfig", runs["sb3_fastconfig"])
         runs |= _run_offpolicy(s)
-        ratios = {
-            f"fastppo/{k}": round(runs["fastppo"]["sps"] / v["sps"], 2) for k, v in runs.items() if k != "fastppo"
-        }
+        fast = runs["fastppo"]["sps"]
+        ratios = {f"fastppo/{k}": round(fast / v["sps"], 2) for k, v in runs.items() if k != "fastppo"}
         for k, v in ratios.items():
             print(f"ratio {k}: {v:.1f}x", flush=True)
         doc = head | {"runs": runs, "ratios": ratios, "load_average_end": _load()}

@@ -1,9 +1,7 @@
 """The ``amigo-gym`` command: a dispatcher to one module per sub-command, imported only when it runs.
 
-A sub-command's extra is probed (``importlib.util.find_spec``) before its module is imported: a missing one is one
-line naming the extra to install, exit status 2. Every other error is one line on stderr and a non-zero status
-(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error). ``amigo-gym --help`` needs only the
-standard library.
+A missing extra is one line naming it (exit status 2); every other error is one line on stderr and a non-zero status
+(``AMIGO_GYM_TRACEBACK=1`` shows the traceback of an unexpected error).
 """
 
 from __future__ import annotations
@@ -12,7 +10,7 @@ import importlib
 import importlib.util
 import os
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from amigo_gym.tools.options import _one_line, install_hint, missing_modules
@@ -103,15 +101,8 @@ EXTRA_OF_MODULE: dict[str, str] = {
 
 def _needs_extra(prog: str, extra: str, missing: Sequence[str]) -> int:
     names = ", ".join(missing)
-    line = f"{prog}: error: needs the {extra!r} extra: {install_hint(extra)} (missing: {names})"
-    print(line, file=sys.stderr)
+    print(f"{prog}: error: needs the {extra!r} extra: {install_hint(extra)} (missing: {names})", file=sys.stderr)
     return 2
-
-
-def _load(target: str) -> Callable[[Sequence[str]], int | None]:
-    mod, _, fn = target.partition(":")
-    func: Callable[[Sequence[str]], int | None] = getattr(importlib.import_module(mod), fn)
-    return func
 
 
 def _usage() -> str:
@@ -149,31 +140,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         rest = [a for a in rest if a != "--trust-unverified"]
         os.environ[TRUST_ENV] = "1"  # amigo_gym.io.require_trust; inherited by the command's own subprocesses
     try:
-        rc = _load(cmd.target)(rest)
-    except SystemExit:
-        raise
+        module, _, function = cmd.target.partition(":")
+        rc = getattr(importlib.import_module(module), function)(rest)
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
-    except ModuleNotFoundError as exc:
-        top = (exc.name or "").partition(".")[0]
+    except Exception as exc:  # an unexpected error: still one line unless asked for the traceback
+        top = (exc.name or "").partition(".")[0] if isinstance(exc, ModuleNotFoundError) else None
         if top in EXTRA_OF_MODULE:
             return _needs_extra(prog, EXTRA_OF_MODULE[top], [top])
         if os.environ.get("AMIGO_GYM_TRACEBACK"):
             raise
-        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
-        return 1
-    except Exception as exc:  # an unexpected error: still one line unless asked for the traceback
-        if os.environ.get("AMIGO_GYM_TRACEBACK"):
-            raise
-        hint = "(AMIGO_GYM_TRACEBACK=1 shows the traceback)"
-        print(f"{prog}: error: {type(exc).__name__}: {_one_line(exc)} {hint}", file=sys.stderr)
+        line = f"{type(exc).__name__}: {_one_line(exc)} (AMIGO_GYM_TRACEBACK=1 shows the traceback)"
+        print(f"{prog}: error: {_one_line(exc) if top is not None else line}", file=sys.stderr)
         return 1
     finally:
         if trust and before is None:
             del os.environ[TRUST_ENV]
     return 0 if rc is None else int(rc)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -34,7 +34,7 @@ from amigo_gym.task.inverse import (
     solve_inverse,
     time_grid,
 )
-from amigo_gym.tools.options import cli, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, run_command
 
 PROG = "amigo-gym inverse"
 
@@ -85,25 +85,22 @@ class InverseSettings:
         _check("--radius", self.radius, robot.l3, 1e3, low_open=True)
         _check("--speed", self.speed, 0.0, robot.max_speed, low_open=True)
         _check("--dt", self.dt, 0.0, 10.0, low_open=True)
-        if self.duration is not None:
-            _check("--duration", self.duration, 0.0, 1e5, low_open=True)
+        _check("--duration", self.duration, 0.0, 1e5, low_open=True)
         if self.csv is not None:
             _check_csv_target(self.csv)
         if self.path == "manoeuvre":
             _check("--straight-length", self.straight_length, 0.0, 1e3)
-        for flag, value in (("--accel", self.accel), ("--decel", self.decel)):
-            if value is not None:
-                _check(flag, value, 0.0, low_open=True)
-        if self.t_start is not None:
-            _check("--t-start", self.t_start, 0.0)
-        if self.laps is not None:
-            _check("--laps", self.laps, 0.0, 1e3)
+        _check("--accel", self.accel, 0.0, low_open=True)
+        _check("--decel", self.decel, 0.0, low_open=True)
+        _check("--t-start", self.t_start, 0.0)
+        _check("--laps", self.laps, 0.0, 1e3)
 
 
-def _check(flag: str, value: float, low: float, high: float = math.inf, **kw: bool) -> float:
-    """``check_range`` with the option's name in the message."""
+def _check(flag: str, value: float | None, low: float, high: float = math.inf, **kw: bool) -> None:
+    """``check_range`` with the option's name in the message; ``None`` passes."""
     try:
-        return check_range("_", "_", value, low, high, **kw)
+        if value is not None:
+            check_range("_", "_", value, low, high, **kw)
     except ValueError as exc:
         raise ValueError(str(exc).replace("_._", flag, 1)) from None
 
@@ -140,8 +137,8 @@ def _profile(args: InverseSettings, path: CirclePath | ManoeuvrePath, robot: Rob
 
 def _summary(sol: InverseSolution, path: CirclePath | ManoeuvrePath, robot: RobotParams, speed: float) -> str:
     e = path.project(np.stack((sol.x_H, sol.y_H), axis=-1)).cross_track_error
-    w_max = robot.max_wheel_rate
     peak = float(np.max(np.abs(sol.wheel_rates)))
+    ss = circle_steady_state(path.radius, speed, robot, path.direction)
     lines = [
         f"path: {type(path).__name__}, R = {path.radius:g} m, direction {path.direction:+d}; "
         f"{sol.t.size} samples, t = {sol.t[0]:g}..{sol.t[-1]:g} s",
@@ -150,19 +147,16 @@ def _summary(sol: InverseSolution, path: CirclePath | ManoeuvrePath, robot: Robo
         f"alpha2_dot = {sol.alpha2_dot[-1]:.6f}, alpha3_dot = {sol.alpha3_dot[-1]:.6f}",
         f"end angles [rad]: alpha1 = {sol.alpha1[-1]:.6f}, alpha2 = {sol.alpha2[-1]:.6f}, "
         f"alpha3 = {sol.alpha3[-1]:.6f}",
-        f"peak |drive wheel rate| = {peak:.4f} rad/s (limit {w_max:g}); max |cross-track error of H| = "
+        f"peak |drive wheel rate| = {peak:.4f} rad/s (limit {robot.max_wheel_rate:g}); max |cross-track error of H| = "
         f"{float(np.max(np.abs(e))):.2e} m",
-    ]
-    ss = circle_steady_state(path.radius, speed, robot, path.direction)
-    lines.append(
         f"steady state on the circle (closed form): betadot = {float(ss.betadot):.6f}, "
         f"alpha1_dot = {float(ss.wheel_rates[0]):.6f}, alpha2_dot = {float(ss.wheel_rates[1]):.6f}, "
-        f"alpha3_dot = {float(ss.castor_rate):.6f}"
-    )
+        f"alpha3_dot = {float(ss.castor_rate):.6f}",
+    ]
     return "\n".join(lines)
 
 
-def _run(args: InverseSettings) -> int:
+def _run(args: InverseSettings) -> None:
     robot = RobotParams()
     path: CirclePath | ManoeuvrePath
     if args.path == "circle":
@@ -179,21 +173,19 @@ def _run(args: InverseSettings) -> int:
     sol = solve_inverse(path, profile, time_grid(duration, args.dt), robot)
     if args.csv is None:
         print(_summary(sol, path, robot, args.speed))
-        return 0
+        return
     try:
         sol.to_csv(args.csv)
     except OSError as exc:
         raise ValueError(f"--csv: cannot write {args.csv!r}: {exc.strerror or exc}") from None
     print(f"wrote {sol.t.size} rows x {len(sol.columns())} columns to {args.csv}")
-    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym inverse`` (returns the exit status)."""
-    args = parse_settings(
-        InverseSettings, argv, PROG, "Analytic inverse solution of point H on a path (CSV or summary)."
+    return run_command(
+        InverseSettings, _run, argv, PROG, "Analytic inverse solution of point H on a path (CSV or summary)."
     )
-    return run_guarded(lambda: _run(args), PROG)
 
 
 if __name__ == "__main__":
