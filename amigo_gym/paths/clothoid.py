@@ -152,7 +152,7 @@ class _Tables:
     turn: float
 
     def column(self, k: int) -> Array:
-        """Column ``k`` (view): ``0 ... 5`` the pieces' ``s0, x0, y0, th0, k0, c``, ``6``, ``7`` the samples' x, y."""
+        # column k (a view): 0 ... 5 the pieces' s0, x0, y0, th0, k0, c; 6, 7 the samples' x, y
         n, m = int(self.flat[P_N]), int(self.flat[P_M])
         a = P_TAIL + k * n if k < 6 else P_TAIL + 6 * n + (k - 6) * m
         return self.flat[a : a + (n if k < 6 else m)]
@@ -349,23 +349,16 @@ class ClothoidPath(_Projecting):
     ) -> PathPoint:
         """Closest path point to the points ``(x, y)`` [m], keeping progress along the path.
 
-        1. Coarse search over the samples ``s_j = j h``: over one lap without a hint, else over the window
-           ``[s_prev - max_retreat, s_prev + max_advance]`` (unwrapped). Choose the window smaller than half the arc
-           length between branches that pass near each other (a figure-8's crossing) and larger than the advance
-           between calls.
+        1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
+           window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
+           ``max_advance``), smaller than half the arc length between branches that pass near each other (a
+           figure-8's crossing) and larger than the advance between calls.
         2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
            ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
            ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations.
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
-        Args:
-            x, y: query points [m], floats or arrays.
-            s_prev: previous progress [m] (broadcast with ``x``), or None for a global search.
-            max_advance, max_retreat: the window ahead of and behind ``s_prev`` [m], > 0 (``max_retreat``
-                defaults to ``max_advance``).
-
-        Returns:
-            :class:`PathPoint` of the broadcast shape.
+        ``x``, ``y``, ``s_prev``: floats or arrays, broadcast; a :class:`PathPoint` of their shape.
         """
         if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray)):
             sp = None if s_prev is None else float(s_prev)

@@ -48,9 +48,7 @@ def _direction(owner: str, value: object) -> int:
     return 1 if value == 1 else -1
 
 
-CIRCLE_RANGES = {
-    "radius": ParamRange(0.0, 1e3, 1.0, "m", "circle radius R", low_open=True),
-}
+CIRCLE_RANGES = {"radius": ParamRange(0.0, 1e3, 1.0, "m", "circle radius R", low_open=True)}
 MANOEUVRE_RANGES = {
     "radius": ParamRange(0.0, 1e3, 1.0, "m", "radius R of the circular part", low_open=True),
     "straight_length": ParamRange(0.0, 1e3, 1.0, "m", "length of the straight part along x0"),
@@ -76,13 +74,9 @@ RANDOM_RANGES = {
 
 
 def circle(
-    radius: float = 1.0,
-    direction: int = 1,
-    start: tuple[float, float] = (0.0, 0.0),
-    start_angle: float = 0.0,
-    *,
+    radius: float = 1.0, direction: int = 1, start: tuple[float, float] = (0.0, 0.0), start_angle: float = 0.0, *,
     loops: PathLoops | None = None,
-) -> ClothoidPath:
+) -> ClothoidPath:  # fmt: skip
     """A closed circle of ``radius`` [m] in (0, 1000] entered at ``start`` [m] with heading ``start_angle`` [rad],
     turning left (``direction = +1``) or right (-1): one arc of length ``2 pi R``, curvature ``d / R``; the defaults
     give the paper's eq. (6)."""
@@ -92,13 +86,9 @@ def circle(
 
 
 def manoeuvre(
-    radius: float = 1.0,
-    straight_length: float = 1.0,
-    direction: int = 1,
-    laps: float = 1.0,
-    *,
+    radius: float = 1.0, straight_length: float = 1.0, direction: int = 1, laps: float = 1.0, *,
     loops: PathLoops | None = None,
-) -> ClothoidPath:
+) -> ClothoidPath:  # fmt: skip
     """The paper's manoeuvre path: ``straight_length`` [m] in [0, 1000] along x0 from the origin, then ``laps``
     in (0, 100] laps of the circle of ``radius`` [m] in (0, 1000], turning by ``direction`` (+1 left, -1 right);
     open: it ends after the laps."""
@@ -174,15 +164,6 @@ def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) ->
     return x1, y1, theta_m, xm
 
 
-def _run(
-    segs: list[tuple[float, float, float]], pose: tuple[float, float, float], loops: PathLoops | None = None
-) -> tuple[float, float, float]:
-    flat = [v for seg in segs for v in seg]
-    if loops is not None:
-        return loops.run(np.array(flat), len(segs), *pose)
-    return run_segments([0.0] * RUN_SCRATCH, RUN_NODES, flat, len(segs), *pose)
-
-
 def figure8(
     size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
@@ -201,9 +182,11 @@ def figure8(
     arc_half = math.pi / 2 + phi - 0.5 * b
     if arc_half <= 0.0:
         raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
-    pieces = [(b, 0.0, -1.0 / b)] if b > 0.0 else []
-    pieces.append((arc_half, -1.0, 0.0))
-    xm, ym, _ = _run(pieces, (0.0, 0.0, phi), loops)
+    pieces = [b, 0.0, -1.0 / b, arc_half, -1.0, 0.0] if b > 0.0 else [arc_half, -1.0, 0.0]
+    if loops is not None:
+        xm, ym, _ = loops.run(np.array(pieces), len(pieces) // 3, 0.0, 0.0, phi)
+    else:
+        xm, ym, _ = run_segments([0.0] * RUN_SCRATCH, RUN_NODES, pieces, len(pieces) // 3, 0.0, 0.0, phi)
     a = -ym / math.sin(phi)
     if a < 0.0:
         raise ValueError(
@@ -252,15 +235,9 @@ def lane_change(
 
 
 def random_path(
-    rng: np.random.Generator,
-    length: float = 20.0,
-    max_curvature: float = 1.0,
-    max_curvature_rate: float = 1.0,
-    min_piece: float = 0.5,
-    max_piece: float = 3.0,
-    *,
-    loops: PathLoops | None = None,
-) -> ClothoidPath:
+    rng: np.random.Generator, length: float = 20.0, max_curvature: float = 1.0, max_curvature_rate: float = 1.0,
+    min_piece: float = 0.5, max_piece: float = 3.0, *, loops: PathLoops | None = None,
+) -> ClothoidPath:  # fmt: skip
     """A random smooth open path of ``length`` [m] in (0, 10000] from the origin along x0, ``|kappa| <=
     max_curvature`` [1/m] in (0, 100], ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] in (0, 1000].
 

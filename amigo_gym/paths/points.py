@@ -147,7 +147,6 @@ def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, fl
     b = p[: n * group].reshape(n, group, 2).mean(axis=1)
     if len(p) > n * group:
         b = np.vstack((b, p[n * group :].mean(axis=0, keepdims=True)))
-    n = len(b)
     target = sigma * math.sqrt(2.0 / group)  # RMS distance of the true path from the group means
     z = _whittaker(b, b, closed, target)
     z = _whittaker(b, z, closed, target)  # again in the chord parameter of the first result
@@ -191,13 +190,6 @@ def _chain(start: tuple[float, float, float], length: Array, k0: Array, rate: Ar
     x = x0 + np.concatenate(([0.0], np.cumsum(ch * dx - sh * dy)))
     y = y0 + np.concatenate(([0.0], np.cumsum(sh * dx + ch * dy)))
     return x, y, head
-
-
-def _segments(length: Array, kappa: Array) -> tuple[ClothoidSegment, ...]:
-    rate = np.diff(kappa) / length
-    return tuple(
-        ClothoidSegment(ln, k, r) for ln, k, r in zip(length.tolist(), kappa[:-1].tolist(), rate.tolist(), strict=True)
-    )
 
 
 def _arc(spline: Any, a: Array, b: Array) -> Array:
@@ -291,8 +283,9 @@ def fit_points(
         px, py, _ = advance(cx[j], cy[j], ch[j], 1.0, 0.0, kappa[j], rate[j], point_s - s_ends[j])
         err = float(np.max(np.hypot(px - p[:, 0], py - p[:, 1])))
         if err <= tol:
-            path = ClothoidPath(_segments(seg_len, kappa), start=(start[0], start[1]), start_angle=theta0,
-                                closed=closed, sample_spacing=sample_spacing)  # fmt: skip
+            segs = zip(seg_len.tolist(), kappa[:-1].tolist(), rate.tolist(), strict=True)
+            path = ClothoidPath(tuple(ClothoidSegment(*g) for g in segs), start=(start[0], start[1]),
+                                start_angle=theta0, closed=closed, sample_spacing=sample_spacing)  # fmt: skip
             return PointsFit(path, err, point_s, h_max, corr, smoothed)
         last_error = err
         h_max = 0.5 * h_max

@@ -139,24 +139,16 @@ class UserPath:
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
         """The closest path point to ``(x, y)`` [m] (the user's ``locate`` or the sampled search), checked."""
-        if self._user_locate is not None:
-            got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
-            return self._checked_point(got, x, y)
-        return self._locate(x, y, s_prev, max_advance, max_retreat)
-
-    def _checked_point(self, got: Any, x: Real, y: Real) -> PathPoint:
+        if self._user_locate is None:  # the sampled search
+            scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
+            got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
+            return _point(list(got), scalar)
+        got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray))
         shape = () if scalar else np.broadcast_shapes(np.shape(x), np.shape(y))
         where = f"{self._owner}: path {self.name}: locate(x, y, ...)"
         at = f"x = {float(x)!r}, y = {float(y)!r} m" if scalar else None
         return _point(_fields(got, PathPoint._fields, shape, where, "an amigo_gym.paths.PathPoint", at), scalar)
-
-    def _locate(
-        self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
-    ) -> PathPoint:
-        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
-        return _point(list(got), scalar)
 
     def _pose_of(self, _buf: Any, _nodes: Any, _nb: int, _pv: Any, s: float) -> FloatPose:
         x, y, th, kappa, rate, ct, st = self.pose_columns(s)  # floats for a float
