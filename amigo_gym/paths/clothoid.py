@@ -110,28 +110,23 @@ class ClothoidSegment:
 
 
 class PathSpec(Protocol):
-    """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it). A path of your own needs
-    only ``length``, ``closed`` and ``pose_columns``; :mod:`amigo_gym.paths.user` completes the rest."""
+    """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it): ``length`` of one traversal
+    [m] (one lap), ``closed`` (repeats with period ``length``), ``pose_columns(s)`` (a :class:`PathPose` of columns
+    at arc lengths ``s`` [m]) and ``locate`` (the closest :class:`PathPoint` to ``(x, y)`` [m], within
+    ``[s_prev - max_retreat, s_prev + max_advance]`` given a hint). A path of your own needs only the first three;
+    :mod:`amigo_gym.paths.user` completes the rest."""
 
     @property
-    def length(self) -> float:
-        """Arc length of one traversal [m] (one lap of a closed path)."""
-        ...
+    def length(self) -> float: ...
 
     @property
-    def closed(self) -> bool:
-        """Whether the path repeats with period :attr:`length` (laps)."""
-        ...
+    def closed(self) -> bool: ...
 
-    def pose_columns(self, s: Real) -> PathPose:
-        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` (columns)."""
-        ...
+    def pose_columns(self, s: Real) -> PathPose: ...
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
-    ) -> PathPoint:
-        """Closest path point to ``(x, y)``; within ``[s_prev - max_retreat, s_prev + max_advance]`` given a hint."""
-        ...
+    ) -> PathPoint: ...
 
 
 def check_hint(sp: Real) -> None:
