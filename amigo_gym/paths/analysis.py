@@ -22,14 +22,8 @@ Array = NDArray[np.float64]
 
 
 class Preview(NamedTuple):
-    """The path at fixed distances ahead, in the robot's frame; arrays ``(..., K)`` for ``K`` distances.
-
-    Attributes:
-        forward: coordinate along the robot's heading [m].
-        left: coordinate to the robot's left [m].
-        curvature: signed path curvature there [1/m].
-        s: the arc lengths ``s + d_i`` [m].
-    """
+    """The path at ``K`` distances ahead in the robot's frame, arrays ``(..., K)``: coordinates ``forward`` along
+    the robot's heading and ``left`` of it [m], the signed ``curvature`` there [1/m], the arc lengths ``s`` [m]."""
 
     forward: Array
     left: Array
@@ -70,14 +64,9 @@ WARMUP_L3 = 60.0
 
 
 class LagProfile(NamedTuple):
-    """The heading lag along a path (:func:`heading_lag_profile`); arrays ``(M,)``.
-
-    Attributes:
-        s: arc lengths of the samples [m], increasing (a sample at each side of every breakpoint).
-        psi: heading lag ``theta - beta`` [rad].
-        dpsi_ds: ``kappa - sin(psi) / l3`` [rad/m].
-        curvature: path curvature [1/m].
-    """
+    """The heading lag along a path (:func:`heading_lag_profile`), arrays ``(M,)``: arc lengths ``s`` [m],
+    increasing (a sample at each side of every breakpoint), the lag ``psi = theta - beta`` [rad],
+    ``dpsi_ds = kappa - sin(psi) / l3`` [rad/m] and the path ``curvature`` [1/m]."""
 
     s: Array
     psi: Array

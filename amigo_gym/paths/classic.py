@@ -32,16 +32,9 @@ def wrap_angle(x: ArrayLike) -> Array:
 
 
 class Projection(NamedTuple):
-    """Closest point of a path to query points; every field has the query's leading axes.
-
-    Attributes:
-        s: arc length of the closest point [m].
-        point: the closest point ``(..., 2)`` [m].
-        tangent_angle: path tangent angle there [rad].
-        curvature: signed path curvature there [1/m].
-        cross_track_error: signed distance, positive left of the path direction [m].
-        cos_theta, sin_theta: the unit tangent there [-].
-    """
+    """Closest point of a path to query points, fields with the query's leading axes: its arc length ``s`` [m],
+    the ``point`` ``(..., 2)`` [m], the path's ``tangent_angle`` [rad] and signed ``curvature`` [1/m] there, the
+    ``cross_track_error`` [m] (positive left of the path direction) and the unit tangent ``cos_theta, sin_theta``."""
 
     s: Array
     point: Array
@@ -74,15 +67,9 @@ class ClosestPoint(NamedTuple):
 
 
 class PathPose(NamedTuple):
-    """The path at arc lengths ``s``: columns of the shape of ``s`` (``pose_columns`` of every path).
-
-    Attributes:
-        x, y: the point [m].
-        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
-        curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2].
-        cos_theta, sin_theta: the unit tangent [-].
-    """
+    """The path at arc lengths ``s`` (``pose_columns`` of every path), columns of the shape of ``s``: the point
+    ``x, y`` [m], the tangent angle ``theta`` [rad] (continuous: laps of a closed path add its total turn), the
+    signed ``curvature`` [1/m], ``curvature_rate = dkappa/ds`` [1/m^2], the unit tangent ``cos_theta, sin_theta``."""
 
     x: Real
     y: Real
@@ -298,16 +285,9 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
 
 @dataclass(frozen=True)
 class ManoeuvrePath(_Projecting):
-    """The paper's manoeuvre path: a straight segment along x0 from the origin, then a circle.
-
-    ``(s, 0)`` with tangent 0 for ``s <= straight_length`` (extending backwards for ``s < 0``), then the circle of
-    ``radius`` tangent to the segment's end, turning by ``direction`` (laps repeat). Projection takes the closer
-    of the half-line and the circle (ties to the line).
-
-    Attributes:
-        radius: circle radius [m], > 0.
-        straight_length: straight segment length [m], >= 0.
-        direction: +1 (left) or -1 (right).
+    """The paper's manoeuvre path: ``(s, 0)`` with tangent 0 for ``s <= straight_length`` [m] (>= 0; also for
+    ``s < 0``), then the circle of ``radius`` [m] (> 0) tangent to the segment's end, turning by ``direction`` (+1
+    left, -1 right; laps repeat). Projection takes the closer of the half-line and the circle (ties to the line).
     """
 
     radius: float = 1.0
@@ -387,16 +367,11 @@ class ManoeuvrePath(_Projecting):
 def manoeuvre_foot(
     x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
 ) -> tuple[Real, Real, Real, Real, Real, bool | NDArray[np.bool_]]:
-    """Foot of ``(x, y)`` [m] on the manoeuvre path: the half-line ``y = 0, x <= L`` (``L = big_l``), then
-    the circle of :func:`circle_foot` starting at ``(L, 0)``.
-
-    On the line ``s_line = min(x, L)``, ``d_line = hypot(x - s_line, y)``, ``e = y`` (``sign(y) d_line`` past the
-    end); on the circle ``s_circ`` by :func:`circle_arc`. The line wins where ``d_line <= |e_circle|``. ``min`` and
-    ``sign`` follow numpy's NaN and signed-zero rules.
-
-    Returns:
-        ``(e, cos theta, sin theta, s, s_circ, on_line)``: ``s`` is ``s_line`` or ``L + s_circ``.
-    """
+    """``(e, cos theta, sin theta, s, s_circ, on_line)``: the foot of ``(x, y)`` [m] on the manoeuvre path, the
+    half-line ``y = 0, x <= L = big_l`` then the circle of :func:`circle_foot` from ``(L, 0)``. On the line
+    ``s = min(x, L)``, ``d_line = hypot(x - s, y)``, ``e = y`` (``sign(y) d_line`` past the end); on the circle
+    ``s = L + s_circ`` (:func:`circle_arc`). The line wins where ``d_line <= |e_circle|`` (numpy's NaN and
+    signed-zero rules)."""
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
     s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
     s_line = where((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)

@@ -159,15 +159,10 @@ class _Tables:
 
 class PathLoops(NamedTuple):
     """Compiled path-building loops (:func:`amigo_gym.sim.fast_v1.path_loops`), the ``loops=`` of the path
-    constructors; without them Python runs the same functions.
-
-    Attributes:
-        chain: :func:`chain_pieces` (scratch and nodes supplied).
-        samples: :func:`sample_points` ``(pv, o, count, spacing)``.
-        run: :func:`amigo_gym.paths.families.run_segments`.
-        lane: :func:`amigo_gym.paths.families.lane_change_shape`.
-        locate, pose: :func:`locate_rows` and :func:`pose_rows` (:func:`use_compiled_rows`).
-    """
+    constructors (without them Python runs the same functions): ``chain`` :func:`chain_pieces`, ``samples``
+    :func:`sample_points`, ``run`` :func:`amigo_gym.paths.families.run_segments`, ``lane``
+    :func:`amigo_gym.paths.families.lane_change_shape`, ``locate`` :func:`locate_rows`, ``pose`` :func:`pose_rows`;
+    their scratch and nodes supplied."""
 
     chain: Callable[..., tuple[float, float, float, float]]
     samples: Callable[..., None]
