@@ -120,7 +120,6 @@ class PathBatch:
                 self._tables.write(np.asarray(rs, dtype=np.intp), p)
 
     def _padded(self) -> _Padded:
-        # the padded tables, built on first need (then kept up to date by replace)
         if self._tables is None:
             clothoids = [p for p in self._objects.values() if isinstance(p, ClothoidPath)] + [_PLACEHOLDER]
             n, w = len(self._paths), max(p._t.flat.size for p in clothoids)

@@ -215,7 +215,6 @@ class ClothoidPath(_Projecting):
         object.__setattr__(self, "_t", self._build(loops))
 
     def _build(self, loops: PathLoops | None = None) -> _Tables:
-        # the pieces (chain_pieces), the closure check and the coarse samples
         segs: list[float] = []
         n = 0
         kmax = 0.0

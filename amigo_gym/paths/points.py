@@ -203,7 +203,6 @@ def _arc(spline: Any, a: Array, b: Array) -> Array:
 
 
 def _curvature(spline: Any, u: Array) -> tuple[Array, Array, Array]:
-    # the spline's first derivative, speed and curvature at u
     d1, d2 = spline(u, 1), spline(u, 2)
     sp = np.hypot(d1[:, 0], d1[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
