@@ -1,13 +1,5 @@
-"""Paths for point H: the AmigoBot-v0 paths and the clothoid path families of AmigoBot-v1.
-
-* :mod:`amigo_gym.paths.classic`: :class:`CirclePath` and :class:`ManoeuvrePath` of AmigoBot-v0.
-* :mod:`amigo_gym.paths.clothoid`: :class:`ClothoidPath` (exact geometry, :meth:`ClothoidPath.locate` keeping
-  progress) and :class:`PathSpec`, what AmigoBot-v1 needs of a path.
-* :mod:`amigo_gym.paths.families`: the families (circle, manoeuvre, figure-8, lane change, random), :data:`FAMILIES`.
-* :mod:`amigo_gym.paths.batch`: :class:`PathBatch`, ``N`` paths behind one path's interface on ``(N,)`` columns.
-* :mod:`amigo_gym.paths.points`: :func:`from_points`, :func:`from_file`: a :class:`ClothoidPath` fitted to points.
-* :mod:`amigo_gym.paths.user`: the protocol of a path object of your own, :func:`check_path`, :class:`UserPath`.
-* :mod:`amigo_gym.paths.analysis`: :func:`preview` (the path ahead in the robot frame) and :func:`feasibility`.
+"""Paths for point H: the AmigoBot-v0 paths (:mod:`~amigo_gym.paths.classic`), the clothoid paths of AmigoBot-v1
+(:mod:`~amigo_gym.paths.clothoid`), their families, batches, fits to points, paths of your own and their analysis.
 """
 
 from __future__ import annotations

@@ -22,14 +22,8 @@ Array = NDArray[np.float64]
 
 
 class Preview(NamedTuple):
-    """The path at fixed distances ahead, in the robot's frame; arrays ``(..., K)`` for ``K`` distances.
-
-    Attributes:
-        forward: coordinate along the robot's heading [m].
-        left: coordinate to the robot's left [m].
-        curvature: signed path curvature there [1/m].
-        s: the arc lengths ``s + d_i`` [m].
-    """
+    """The path at ``K`` distances ahead in the robot's frame, arrays ``(..., K)``: coordinates ``forward`` along
+    the robot's heading and ``left`` of it [m], the signed ``curvature`` there [1/m], the arc lengths ``s`` [m]."""
 
     forward: Array
     left: Array
@@ -38,18 +32,16 @@ class Preview(NamedTuple):
 
 
 def preview(path: PathSpec, x: Real, y: Real, heading: Real, s: Real, distances: Sequence[float]) -> Preview:
-    r"""Path points at arc lengths ``s + d_i`` in the frame of the robot pose ``(x, y, heading)``, with the curvature.
+    r"""Path points at arc lengths ``s + d_i`` in the frame of the pose ``(x, y, heading)``, with the curvature.
 
-    With the path point ``c_i = c(s + d_i)`` and ``(dx, dy) = c_i - (x, y)``:
+    With ``(dx, dy) = c(s + d_i) - (x, y)``:
 
     .. math:: f_i = \cos\beta\,dx + \sin\beta\,dy, \qquad l_i = -\sin\beta\,dx + \cos\beta\,dy.
 
     Args:
-        path: the path.
-        x, y, heading: the frame's origin [m] and heading ``beta`` [rad] (e.g. point H or A and the robot's
-            heading), columns of one shape ``(...)`` (floats or arrays).
-        s: arc length (progress) of the reference point on the path [m], a column of the same shape.
-        distances: ``d_i`` [m], ``K`` finite numbers (may be negative: behind).
+        x, y, heading: the frame's origin [m] and heading ``beta`` [rad], columns of one shape ``(...)``.
+        s: progress of the reference point on the path [m], a column of the same shape.
+        distances: ``d_i`` [m], ``K`` finite numbers (negative: behind).
 
     Returns:
         :class:`Preview` with arrays of shape ``(..., K)``.
@@ -72,14 +64,9 @@ WARMUP_L3 = 60.0
 
 
 class LagProfile(NamedTuple):
-    """The heading lag along a path (:func:`heading_lag_profile`); arrays ``(M,)``.
-
-    Attributes:
-        s: arc lengths of the samples [m], increasing (a sample at each side of every breakpoint).
-        psi: heading lag ``theta - beta`` [rad].
-        dpsi_ds: ``kappa - sin(psi) / l3`` [rad/m].
-        curvature: path curvature [1/m].
-    """
+    """The heading lag along a path (:func:`heading_lag_profile`), arrays ``(M,)``: arc lengths ``s`` [m],
+    increasing (a sample at each side of every breakpoint), the lag ``psi = theta - beta`` [rad],
+    ``dpsi_ds = kappa - sin(psi) / l3`` [rad/m] and the path ``curvature`` [1/m]."""
 
     s: Array
     psi: Array
@@ -88,7 +75,7 @@ class LagProfile(NamedTuple):
 
 
 def _grid(path: PathSpec, start: float, stop: float, h_max: float) -> tuple[Array, Array]:
-    """Step ends ``(s_i, s_{i+1})`` covering ``[start, stop]``, aligned with the path's breakpoints if it has any."""
+    # step ends (s_i, s_i+1) of at most h_max covering [start, stop], aligned with the path's breakpoints if any
     brk = getattr(path, "breakpoints", None)
     pts = [start, stop]
     if callable(brk):
@@ -116,21 +103,14 @@ def heading_lag_profile(
     r"""The heading lag ``psi = theta - beta`` of the exact inverse solution along a path (H on the path).
 
     From ``v_A (cos, sin)(beta) + l3 betadot (-sin, cos)(beta) = v_H (cos, sin)(theta)``: ``v_A = v_H cos psi``,
-    ``l3 betadot = v_H sin psi`` and, per unit arc length of H (any speed profile),
+    ``l3 betadot = v_H sin psi`` and, per unit arc length of H,
 
     .. math:: \frac{d\psi}{ds} = \kappa(s) - \frac{\sin\psi}{l_3},
 
-    stable about ``sin psi = kappa l3``. Integrated by classical Runge–Kutta with steps of at most
-    ``step_fraction l3`` aligned with ``path.breakpoints()`` if present (the curvature at a step's end is the left
-    limit).
-
-    Args:
-        path: open: from its start to its end; closed: one lap after a warm-up of whole laps of at least
-            :data:`WARMUP_L3` ``l3`` (the periodic solution).
-        robot: geometry (``l3``).
-        initial_lag: ``psi`` at the start of an open path [rad]; None: ``asin(kappa(0) l3)`` (clipped);
-            0: heading along the tangent.
-        step_fraction: largest step over ``l3``, in [1e-3, 0.5].
+    by classical Runge–Kutta with steps of at most ``step_fraction l3`` (in [1e-3, 0.5]) aligned with
+    ``path.breakpoints()`` if present. An open path from its start to its end, from ``initial_lag`` [rad] (None:
+    ``asin(kappa(0) l3)``, clipped); a closed one over one lap after a warm-up of whole laps of at least
+    :data:`WARMUP_L3` ``l3`` (the periodic solution).
     """
     l3 = robot.l3
     frac = check_real("heading_lag_profile", "step_fraction", step_fraction, 1e-3, 0.5)
@@ -176,6 +156,7 @@ def heading_lag_profile(
     return LagProfile(s, ps, kk - np.sin(ps) * inv, kk)
 
 
+#: the quantities of :func:`feasibility`: unit and keyword of the limit
 QUANTITIES = {
     "wheel_rate": ("rad/s", "max_wheel_rate"),
     "wheel_acceleration": ("rad/s^2", "max_wheel_acceleration"),
@@ -190,23 +171,20 @@ class Feasibility:
     """What tracking a path at a reference speed needs, and the binding limit.
 
     Attributes:
-        speed: the reference speed [m/s].
-        speed_of: ``"A"`` (the axle midpoint, AmigoBot-v0's ``speed``) or ``"H"``.
+        speed: the reference speed [m/s] of ``speed_of``: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
         peaks: largest magnitude of each quantity over the path: ``wheel_rate`` [rad/s], ``wheel_acceleration``
             [rad/s^2], ``acceleration`` (of A along its heading, [m/s^2]), ``rotation_rate`` [rad/s],
             ``rotational_acceleration`` [rad/s^2].
         peak_s: arc length of each peak [m].
-        peak_wheel: for the wheel quantities, which wheel: ``"outer"``, ``"inner"`` (of the turn there) or ``"each"``.
+        peak_wheel: for the wheel quantities, ``"outer"``, ``"inner"`` (of the turn there) or ``"each"``.
         limits: the limits checked (name as in ``peaks``, value).
         binding: the quantity with the largest ratio of need to limit (``"heading lag"`` if the lag reaches
-            90 degrees: H cannot follow the path forward).
-        needed, limit: its peak and its limit.
+            90 degrees: H cannot follow the path forward); ``needed``, ``limit``: its peak and limit.
         radius: path radius ``1/|kappa|`` at the binding peak [m] (``inf`` on a straight).
         feasible: every peak within its limit and the lag below 90 degrees.
         max_heading_lag: largest ``|theta - beta|`` [rad].
-        exceeded: where the path needs more than the robot has: for each checked quantity (name as in
-            ``limits``) the arc-length intervals ``(s_from, s_to)`` [m] over whose samples the need exceeds the
-            limit (empty if it never does; at most :data:`MAX_INTERVALS`, the rest merged into the last), and
+        exceeded: for each checked quantity the arc-length intervals ``(s_from, s_to)`` [m] over whose samples the
+            need exceeds the limit (at most :data:`MAX_INTERVALS`, the rest merged into the last), and
             ``"heading lag"`` where the lag reaches 90 degrees.
     """
 
@@ -229,49 +207,33 @@ class Feasibility:
         ``binding``, ``peaks``, ``peak_s`` [m], ``limits`` and ``exceeded`` (intervals as ``[s_from, s_to]`` lists)."""
         out = {"feasible": self.feasible, "message": self.message(), "speed": self.speed, "speed_of": self.speed_of}
         out |= {"binding": self.binding, "peaks": dict(self.peaks), "peak_s": dict(self.peak_s)}
-        return out | {
-            "limits": dict(self.limits),
-            "exceeded": {k: [list(iv) for iv in v] for k, v in self.exceeded.items()},
-        }
+        exceeded = {k: [list(iv) for iv in v] for k, v in self.exceeded.items()}
+        return out | {"limits": dict(self.limits), "exceeded": exceeded}
 
     def message(self) -> str:
         """One line, e.g. ``path: speed 0.74 m/s on radius 1 m needs 16.6 rad/s on the outer wheel, above the
         robot's limit of 15 rad/s``."""
         where = "on a straight line" if math.isinf(self.radius) else f"on radius {self.radius:.3g} m"
-        head = f"path: speed {self.speed:.3g} m/s of {self.speed_of} {where}"
-        if self.speed_of == "A":
-            head = f"path: speed {self.speed:.3g} m/s {where}"
+        of = "" if self.speed_of == "A" else f" of {self.speed_of}"
+        head = f"path: speed {self.speed:.3g} m/s{of} {where}"
         if self.binding == "heading lag":
             return f"{head} turns the heading 90 degrees away from the path: H cannot follow it"
         unit = QUANTITIES[self.binding][0]
-        what = self.binding.replace("_", " ")
+        need = f"{self.needed:.3g} {unit}" + ("" if self.binding == "wheel_rate" else f" of {self.binding}")
         if self.binding.startswith("wheel"):
             wheel = self.peak_wheel[self.binding]
-            side = "on each wheel" if wheel == "each" else f"on the {wheel} wheel"
-            need = (
-                f"{self.needed:.3g} {unit} {side}"
-                if self.binding == "wheel_rate"
-                else f"{self.needed:.3g} {unit} of {what} {side}"
-            )
-        else:
-            need = f"{self.needed:.3g} {unit} of {what}"
+            need += " on each wheel" if wheel == "each" else f" on the {wheel} wheel"
+        need = need.replace("_", " ")
         verdict = "above" if self.needed > self.limit else "within"
         return f"{head} needs {need}, {verdict} the robot's limit of {self.limit:.3g} {unit}"
 
 
 def feasibility(
-    path: PathSpec,
-    speed: float,
-    robot: RobotParams | None = None,
-    speed_of: Literal["A", "H"] = "A",
-    *,
-    max_wheel_rate: float | None = None,
-    max_wheel_acceleration: float | None = None,
-    max_acceleration: float | None = None,
-    max_rotation_rate: float | None = None,
-    max_rotational_acceleration: float | None = None,
-    initial_lag: float | None = None,
-) -> Feasibility:
+    path: PathSpec, speed: float, robot: RobotParams | None = None, speed_of: Literal["A", "H"] = "A", *,
+    max_wheel_rate: float | None = None, max_wheel_acceleration: float | None = None,
+    max_acceleration: float | None = None, max_rotation_rate: float | None = None,
+    max_rotational_acceleration: float | None = None, initial_lag: float | None = None,
+) -> Feasibility:  # fmt: skip
     r"""Peak wheel rate, accelerations and turn rates the exact inverse solution needs to track ``path`` at ``speed``.
 
     From the heading lag ``psi(s)`` (:func:`heading_lag_profile`), at every sample, with ``v_H = speed``
@@ -288,14 +250,12 @@ def feasibility(
     underestimated by at most ``h^2/8 max|f''|``.
 
     Args:
-        path: the path (open: from its start, with ``initial_lag``; closed: the periodic solution).
-        speed: the reference speed [m/s], in (0, 10].
+        speed: the reference speed [m/s], in (0, 10], of ``speed_of``: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
         robot: geometry and the wheel-rate limit (default :class:`RobotParams`).
-        speed_of: whose speed is constant: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
         max_wheel_rate: [rad/s], default ``robot.max_wheel_rate``.
         max_wheel_acceleration, max_acceleration, max_rotation_rate, max_rotational_acceleration: further
             limits [rad/s^2, m/s^2, rad/s, rad/s^2]; None: not checked (the peaks are still reported).
-        initial_lag: see :func:`heading_lag_profile`.
+        initial_lag: as :func:`heading_lag_profile`.
     """
     robot = RobotParams() if robot is None else robot
     v = check_real("feasibility", "speed", speed, 0.0, 10.0, low_open=True)
@@ -317,18 +277,12 @@ def feasibility(
     l1, l3 = robot.l1, robot.l3
     max_lag = float(np.max(np.abs(psi)))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        if speed_of == "H":
-            v_h = np.full_like(psi, v)
-            v_a = v * cos_p
-            psi_t = v_h * prof.dpsi_ds
-            acc = -v * sin_p * psi_t
-            bdd = v * cos_p * psi_t / l3
-        else:
-            v_h = v / cos_p
-            v_a = np.full_like(psi, v)
-            psi_t = v_h * prof.dpsi_ds
-            acc = np.zeros_like(psi)
-            bdd = v * psi_t / (l3 * cos_p * cos_p)
+        on_h = speed_of == "H"
+        v_h = np.full_like(psi, v) if on_h else v / cos_p
+        v_a = v * cos_p if on_h else np.full_like(psi, v)
+        psi_t = v_h * prof.dpsi_ds
+        acc = -v * sin_p * psi_t if on_h else np.zeros_like(psi)
+        bdd = v * cos_p * psi_t / l3 if on_h else v * psi_t / (l3 * cos_p * cos_p)
         bd = v_h * sin_p / l3
         w1 = (v_a + l1 * bd) / robot.r1
         w2 = (v_a - l1 * bd) / robot.r2
@@ -348,11 +302,8 @@ def feasibility(
     for name, (a1, a2) in (("wheel_rate", (w1, w2)), ("wheel_acceleration", (wd1, wd2))):
         i = arg[name]
         # wheel 1 (right) is outer on a left turn (betadot > 0)
-        one = abs(a1[i]) > abs(a2[i])
-        if abs(a1[i]) == abs(a2[i]) or bd[i] == 0.0:
-            peak_wheel[name] = "each"
-        else:
-            peak_wheel[name] = "outer" if one == (bd[i] > 0.0) else "inner"
+        outer = (abs(a1[i]) > abs(a2[i])) == (bd[i] > 0.0)
+        peak_wheel[name] = "each" if abs(a1[i]) == abs(a2[i]) or bd[i] == 0.0 else "outer" if outer else "inner"
     singular = not max_lag < math.pi / 2 - 1e-9
     exceeded = {q: _intervals(prof.s, ~(series[q] <= lim)) for q, lim in limits.items()}
     if singular:

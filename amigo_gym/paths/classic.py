@@ -1,12 +1,9 @@
 """AmigoBot-v0 paths for point H: the paper's circle (eq. 6) and its manoeuvre path (straight, then circle).
 
-Paths are frozen dataclasses with pure, batched methods: arc lengths ``s`` [m] of shape ``(...)`` from the start
-point, points ``(..., 2)`` [m]; the tangent angle ``theta(s)`` [rad] is continuous and the signed curvature
-``kappa(s) = dtheta/ds`` [1/m] is positive turning left. The cross-track error ``e = (p - closest) . n`` [m],
-``n = (-sin theta, cos theta)``, is positive left of the path. ``project`` takes points ``(..., 2)``,
-``project_xy`` is its column form (floats or arrays). The foot functions (:func:`circle_foot`,
-:func:`circle_arc`, :func:`manoeuvre_foot`, :func:`manoeuvre_curvature`) are in numba's subset and compiled by
-:mod:`amigo_gym.sim`.
+Arc lengths ``s`` [m] from the start point, points ``(..., 2)`` [m], tangent angle ``theta(s)`` [rad] continuous,
+signed curvature ``kappa(s) = dtheta/ds`` [1/m] positive turning left, cross-track error ``e = (p - closest) . n``
+[m] with ``n = (-sin theta, cos theta)`` (positive left). ``project`` takes points ``(..., 2)``, ``project_xy``
+columns (floats or arrays). The foot functions are in numba's subset (compiled by :mod:`amigo_gym.sim`).
 """
 
 from __future__ import annotations
@@ -35,17 +32,9 @@ def wrap_angle(x: ArrayLike) -> Array:
 
 
 class Projection(NamedTuple):
-    """Closest point of a path to query points; every field has the query's leading axes.
-
-    Attributes:
-        s: arc length of the closest point [m].
-        point: the closest point ``(..., 2)`` [m].
-        tangent_angle: path tangent angle there [rad].
-        curvature: signed path curvature there [1/m].
-        cross_track_error: signed distance, positive left of the path direction [m].
-        cos_theta: ``cos(tangent_angle)``, the x component of the unit tangent there [-].
-        sin_theta: ``sin(tangent_angle)``, its y component [-].
-    """
+    """Closest point of a path to query points, fields with the query's leading axes: its arc length ``s`` [m],
+    the ``point`` ``(..., 2)`` [m], the path's ``tangent_angle`` [rad] and signed ``curvature`` [1/m] there, the
+    ``cross_track_error`` [m] (positive left of the path direction) and the unit tangent ``cos_theta, sin_theta``."""
 
     s: Array
     point: Array
@@ -57,12 +46,8 @@ class Projection(NamedTuple):
 
 
 class ClosestPoint(NamedTuple):
-    """Column form of :class:`Projection` (from ``project_xy``): the point as ``x``, ``y`` columns.
-
-    ``curvature`` is a plain float where it is the same for every query (on a circle); every other
-    field has the query's shape, except the fields a ``minimal`` projection does not compute, which
-    are NaN.
-    """
+    """Column form of :class:`Projection` (from ``project_xy``): the point as ``x``, ``y`` columns of the query's
+    shape; ``curvature`` a float on a circle; the fields a ``minimal`` projection skips are NaN."""
 
     s: Real
     x: Real
@@ -82,15 +67,9 @@ class ClosestPoint(NamedTuple):
 
 
 class PathPose(NamedTuple):
-    """The path at arc lengths ``s``: columns of the shape of ``s`` (``pose_columns`` of every path).
-
-    Attributes:
-        x, y: the point [m].
-        theta: tangent angle [rad], continuous (laps of a closed path add its total turn).
-        curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2].
-        cos_theta, sin_theta: the unit tangent [-].
-    """
+    """The path at arc lengths ``s`` (``pose_columns`` of every path), columns of the shape of ``s``: the point
+    ``x, y`` [m], the tangent angle ``theta`` [rad] (continuous: laps of a closed path add its total turn), the
+    signed ``curvature`` [1/m], ``curvature_rate = dkappa/ds`` [1/m^2], the unit tangent ``cos_theta, sin_theta``."""
 
     x: Real
     y: Real
@@ -102,7 +81,7 @@ class PathPose(NamedTuple):
 
 
 def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> PathPose:
-    """A :class:`PathPose` of arrays, or of floats for a float ``s``."""
+    # a PathPose of arrays, or of floats for a float s
     c, sn = np.cos(th), np.sin(th)
     if not isinstance(s, np.ndarray):
         return PathPose(float(x), float(y), float(th), float(k), 0.0, float(c), float(sn))
@@ -146,8 +125,6 @@ class PathPoint(NamedTuple):
 
 
 class _Projecting:
-    """``project`` of a path with ``project_xy``."""
-
     def project(self, p: ArrayLike) -> Projection:
         """Closest point to ``p`` ``(..., 2)`` [m] (:meth:`project_xy` of its columns)."""
         q = np.asarray(p, dtype=np.float64)
@@ -157,16 +134,14 @@ class _Projecting:
 
 @dataclass(frozen=True)
 class CirclePath(_Projecting):
-    r"""Circle of radius ``radius`` entered at ``start`` with heading ``start_angle``.
-
-    ``direction = +1`` turns left (counter-clockwise), ``-1`` right. With the defaults this is the
-    paper's eq. (6): through the origin, tangent to x0 there, centre ``(0, R)``:
+    r"""Circle of radius ``radius`` entered at ``start`` with heading ``start_angle``, turning left
+    (``direction = +1``) or right (``-1``). The defaults give the paper's eq. (6):
 
     .. math:: x_H = R \sin\phi, \quad y_H = R(1 - \cos\phi), \quad \phi = s / R.
 
-    In general ``theta(s) = theta0 + d s / R`` and ``p(s) = c + d R (sin theta, -cos theta)`` with
-    centre ``c = p0 + d R (-sin theta0, cos theta0)``. Arc lengths of projections lie in
-    ``[0, 2 pi R)``; :meth:`point` and friends accept any ``s`` (laps repeat).
+    In general ``theta(s) = theta0 + d s / R``, ``p(s) = c + d R (sin theta, -cos theta)``, centre
+    ``c = p0 + d R (-sin theta0, cos theta0)``. Projections' arc lengths lie in ``[0, 2 pi R)``; any ``s`` is
+    accepted (laps repeat).
 
     Attributes:
         radius: R [m], > 0.
@@ -226,8 +201,7 @@ class CirclePath(_Projecting):
     closed = True
 
     def pose_columns(self, s: Real) -> PathPose:
-        """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at arc lengths ``s`` [m]: floats for a
-        float ``s``, else arrays of its shape."""
+        """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at arc lengths ``s`` [m] (floats for a float)."""
         th = self.tangent_angle(s)
         cx, cy = self.center
         dr = self.direction * self.radius
@@ -251,7 +225,7 @@ class CirclePath(_Projecting):
 
     @cached_property
     def _frame(self) -> tuple[float, float, float, float]:
-        """Centre ``(cx, cy)`` and the unit vector ``(r0x, r0y)`` from the centre to the start point."""
+        # the centre and the unit vector from it to the start point
         d, t0 = self.direction, self.start_angle
         return (*self.center, d * math.sin(t0), -d * math.cos(t0))
 
@@ -268,11 +242,14 @@ class CirclePath(_Projecting):
         if minimal:
             return ClosestPoint(math.nan, math.nan, math.nan, math.nan, d / r, e, cos_theta, sin_theta)
         s = circle_arc(ux, uy, r0x, r0y, float(d), r)
-        # the foot point c + r n, with n from the unit tangent d (-n_y, n_x) (a negation is exact)
-        nx = sin_theta if d > 0 else -sin_theta
-        ny = -cos_theta if d > 0 else cos_theta
-        theta = self.start_angle + (s if d > 0 else -s) / r
-        return ClosestPoint(s, cx + r * nx, cy + r * ny, theta, d / r, e, cos_theta, sin_theta)
+        return ClosestPoint(s, *self._on_arc(s, cos_theta, sin_theta), d / r, e, cos_theta, sin_theta)
+
+    def _on_arc(self, s: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real, Real]:
+        # the foot c + r n (n from the unit tangent d (-n_y, n_x): a negation is exact) and theta at arc length s
+        cx, cy, _, _ = self._frame
+        d, r = self.direction, self.radius
+        nx, ny = (sin_theta, -cos_theta) if d > 0 else (-sin_theta, cos_theta)
+        return cx + r * nx, cy + r * ny, self.start_angle + (s if d > 0 else -s) / r
 
 
 def circle_foot(
@@ -308,16 +285,9 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
 
 @dataclass(frozen=True)
 class ManoeuvrePath(_Projecting):
-    """The paper's manoeuvre path: a straight segment along x0 from the origin, then a circle.
-
-    ``(s, 0)`` with tangent 0 for ``s <= straight_length`` (extending backwards for ``s < 0``), then the circle of
-    ``radius`` tangent to the segment's end, turning by ``direction`` (laps repeat). Projection takes the closer
-    of the half-line and the circle (ties to the line).
-
-    Attributes:
-        radius: circle radius [m], > 0.
-        straight_length: straight segment length [m], >= 0.
-        direction: +1 (left) or -1 (right).
+    """The paper's manoeuvre path: ``(s, 0)`` with tangent 0 for ``s <= straight_length`` [m] (>= 0; also for
+    ``s < 0``), then the circle of ``radius`` [m] (> 0) tangent to the segment's end, turning by ``direction`` (+1
+    left, -1 right; laps repeat). Projection takes the closer of the half-line and the circle (ties to the line).
     """
 
     radius: float = 1.0
@@ -389,35 +359,19 @@ class ManoeuvrePath(_Projecting):
         curvature = where(on_line, 0.0, d / r)
         if minimal:
             return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
-        # the circle's foot c + r n (n from the tangent d (-n_y, n_x)), or the line's (s, 0)
-        nx = sin_theta if d > 0 else -sin_theta
-        ny = -cos_theta if d > 0 else cos_theta
-        theta = circle.start_angle + (s_circ if d > 0 else -s_circ) / r
-        return ClosestPoint(
-            s,
-            where(on_line, s, cx + r * nx),
-            where(on_line, 0.0, cy + r * ny),
-            where(on_line, 0.0, theta),
-            curvature,
-            e,
-            cos_theta,
-            sin_theta,
-        )
+        arc = circle._on_arc(s_circ, cos_theta, sin_theta)
+        px, py, theta = (where(on_line, a, b) for a, b in zip((s, 0.0, 0.0), arc, strict=True))
+        return ClosestPoint(s, px, py, theta, curvature, e, cos_theta, sin_theta)
 
 
 def manoeuvre_foot(
     x: Real, y: Real, cx: float, cy: float, r0x: float, r0y: float, d: float, r: float, big_l: float
 ) -> tuple[Real, Real, Real, Real, Real, bool | NDArray[np.bool_]]:
-    """Foot of ``(x, y)`` [m] on the manoeuvre path: the half-line ``y = 0, x <= L`` (``L = big_l``), then
-    the circle of :func:`circle_foot` starting at ``(L, 0)``.
-
-    On the line ``s_line = min(x, L)``, ``d_line = hypot(x - s_line, y)``, ``e = y`` (``sign(y) d_line`` past the
-    end); on the circle ``s_circ`` by :func:`circle_arc`. The line wins where ``d_line <= |e_circle|``. ``min`` and
-    ``sign`` follow numpy's NaN and signed-zero rules.
-
-    Returns:
-        ``(e, cos theta, sin theta, s, s_circ, on_line)``: ``s`` is ``s_line`` or ``L + s_circ``.
-    """
+    """``(e, cos theta, sin theta, s, s_circ, on_line)``: the foot of ``(x, y)`` [m] on the manoeuvre path, the
+    half-line ``y = 0, x <= L = big_l`` then the circle of :func:`circle_foot` from ``(L, 0)``. On the line
+    ``s = min(x, L)``, ``d_line = hypot(x - s, y)``, ``e = y`` (``sign(y) d_line`` past the end); on the circle
+    ``s = L + s_circ`` (:func:`circle_arc`). The line wins where ``d_line <= |e_circle|`` (numpy's NaN and
+    signed-zero rules)."""
     e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, d, r)
     s_circ = circle_arc(ux, uy, r0x, r0y, d, r)
     s_line = where((x < big_l) | (x != x), x, big_l)  # np.minimum(x, big_l)

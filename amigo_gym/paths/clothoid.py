@@ -1,26 +1,22 @@
 r"""Clothoid paths for point H (AmigoBot-v1): exact geometry and a projection that keeps progress.
 
-A :class:`ClothoidPath` chains :class:`ClothoidSegment` s of curvature linear in arc length (lines and arcs
-included) from a start pose, optionally closed (traversed in laps). On a piece of curvature
-``kappa(u) = k0 + c u`` from ``(x0, y0, theta0)``:
+A :class:`ClothoidPath` chains :class:`ClothoidSegment` s (curvature linear in arc length) from a start pose,
+optionally closed (laps). On a piece of curvature ``kappa(u) = k0 + c u`` from ``(x0, y0, theta0)``:
 
 .. math::
     \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
     \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
 
-by :func:`amigo_gym.model.fresnel.advance` (speed 1), exact to rounding while
-``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``; segments are split into equal pieces meeting this bound, whose
-start poses are chained once at construction, so a pose costs one quadrature from its piece's start.
+by :func:`amigo_gym.model.fresnel.advance`, exact to rounding while ``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``
+(segments are split into such pieces, their start poses chained at construction).
 
-Conventions (as :mod:`amigo_gym.paths.classic`): arc length ``s`` [m], tangent angle ``theta(s)`` [rad]
-continuous (laps add the total turn), curvature ``kappa = dtheta/ds`` [1/m] positive turning left, cross-track
-error ``e = (p - c(s)) . n`` [m] with ``n = (-sin theta, cos theta)``. An open path continues beyond its ends
-along its end tangents (curvature 0); a closed one repeats with period :attr:`ClothoidPath.length`.
+Conventions: arc length ``s`` [m], tangent angle ``theta(s)`` [rad] continuous (laps add the total turn),
+curvature ``kappa = dtheta/ds`` [1/m] positive turning left, cross-track error ``e = (p - c(s)) . n`` [m],
+``n = (-sin theta, cos theta)``. An open path continues straight beyond its ends; a closed one repeats with period
+:attr:`ClothoidPath.length`.
 
-One path is stored as a flat float vector (:data:`PATH_HEADER`, then the pieces' ``s0, x0, y0, th0, k0, c``,
-then the coarse samples' ``x``, ``y``); the functions on it (:func:`pose_flat`, :func:`locate_flat` and those
-they call) are in numba's subset and are compiled by :mod:`amigo_gym.sim._kernels_v1`; Python runs them on
-lists of floats.
+A path is stored as a flat float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse
+samples' ``x``, ``y``); the functions on it are in numba's subset (compiled by :mod:`amigo_gym.sim._kernels_v1`).
 """
 
 from __future__ import annotations
@@ -34,14 +30,7 @@ from typing import Any, NamedTuple, Protocol, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.fresnel import (
-    NODES,
-    Buffer,
-    node_table,
-    subintervals,
-    unit_speed_nodes,
-    unit_speed_poses,
-)
+from amigo_gym.model.fresnel import NODES, Buffer, node_table, subintervals, unit_speed_nodes, unit_speed_poses
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, _Projecting
@@ -72,13 +61,12 @@ CLOSURE_TOLERANCE = 1e-9
 
 @dataclass(frozen=True)
 class ClothoidSegment:
-    r"""One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` for ``0 <= u <= length``.
-
-    A line has ``curvature = curvature_rate = 0``, a circular arc ``curvature_rate = 0``.
+    """One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` for ``0 <= u <= length``
+    (a line: both 0; an arc: ``curvature_rate = 0``).
 
     Attributes:
         length: arc length [m], in (0, 1e5].
-        curvature: signed curvature at the segment's start [1/m], in [-1e4, 1e4] (positive turns left).
+        curvature: signed curvature at the start [1/m], in [-1e4, 1e4] (positive turns left).
         curvature_rate: ``dkappa/ds`` [1/m^2], finite; the end curvature must lie in [-1e4, 1e4] too.
     """
 
@@ -87,7 +75,6 @@ class ClothoidSegment:
     curvature_rate: float = 0.0
 
     def __post_init__(self) -> None:
-        # stored as Python floats (check_real also accepts Fractions and 0-d arrays)
         o = "ClothoidSegment"
         object.__setattr__(self, "length", check_real(o, "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True))
         object.__setattr__(self, "curvature", check_real(o, "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE))
@@ -112,39 +99,34 @@ class ClothoidSegment:
 
     @property
     def curvature_end(self) -> float:
-        """Curvature at the segment's end, ``curvature + curvature_rate length`` [1/m]."""
+        """Curvature at the end, ``curvature + curvature_rate length`` [1/m]."""
         return float(self.curvature) + float(self.curvature_rate) * float(self.length)
 
     @property
     def turn(self) -> float:
-        """Change of tangent angle over the segment, ``k0 L + c L^2 / 2`` [rad]."""
+        """Change of tangent angle, ``k0 L + c L^2 / 2`` [rad]."""
         length = float(self.length)
         return length * (float(self.curvature) + 0.5 * float(self.curvature_rate) * length)
 
 
 class PathSpec(Protocol):
-    """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it). A path of your own
-    needs only ``length``, ``closed`` and ``pose_columns``; :mod:`amigo_gym.paths.user` completes the rest."""
+    """The interface AmigoBot-v1 uses of a path (:class:`ClothoidPath` implements it): ``length`` of one traversal
+    [m] (one lap), ``closed`` (repeats with period ``length``), ``pose_columns(s)`` (a :class:`PathPose` of columns
+    at arc lengths ``s`` [m]) and ``locate`` (the closest :class:`PathPoint` to ``(x, y)`` [m], within
+    ``[s_prev - max_retreat, s_prev + max_advance]`` given a hint). A path of your own needs only the first three;
+    :mod:`amigo_gym.paths.user` completes the rest."""
 
     @property
-    def length(self) -> float:
-        """Arc length of one traversal [m] (one lap of a closed path)."""
-        ...
+    def length(self) -> float: ...
 
     @property
-    def closed(self) -> bool:
-        """Whether the path repeats with period :attr:`length` (laps)."""
-        ...
+    def closed(self) -> bool: ...
 
-    def pose_columns(self, s: Real) -> PathPose:
-        """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` (columns)."""
-        ...
+    def pose_columns(self, s: Real) -> PathPose: ...
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
-    ) -> PathPoint:
-        """Closest path point to ``(x, y)``; within ``[s_prev - max_retreat, s_prev + max_advance]`` given a hint."""
-        ...
+    ) -> PathPoint: ...
 
 
 def check_hint(sp: Real) -> None:
@@ -157,20 +139,15 @@ def check_hint(sp: Real) -> None:
 
 @dataclass(frozen=True)
 class _Tables:
-    """A built :class:`ClothoidPath`: its flat path vector and largest ``|curvature|`` [1/m], the header read
-    once, the pieces' start arc lengths (a list) and the samples' columns (views)."""
+    """A built path: its flat vector, largest ``|curvature|`` [1/m], length [m] and total turn [rad]."""
 
     flat: Array
     max_abs_curvature: float
     length: float
     turn: float
 
-    @classmethod
-    def of(cls, flat: Array, max_abs_curvature: float) -> _Tables:
-        return cls(flat, max_abs_curvature, float(flat[P_LENGTH]), float(flat[P_TURN]))
-
     def column(self, k: int) -> Array:
-        """Column ``k`` (view): ``0 ... 5`` the pieces' ``s0, x0, y0, th0, k0, c``, ``6``, ``7`` the samples' x, y."""
+        # column k (a view): 0 ... 5 the pieces' s0, x0, y0, th0, k0, c; 6, 7 the samples' x, y
         n, m = int(self.flat[P_N]), int(self.flat[P_M])
         a = P_TAIL + k * n if k < 6 else P_TAIL + 6 * n + (k - 6) * m
         return self.flat[a : a + (n if k < 6 else m)]
@@ -181,16 +158,11 @@ class _Tables:
 
 
 class PathLoops(NamedTuple):
-    """Compiled forms of the path-building loops (:func:`amigo_gym.sim.fast_v1.path_loops`), passed as
-    ``loops=`` to the path constructors; without them Python runs the same functions.
-
-    Attributes:
-        chain: :func:`chain_pieces` (scratch and nodes supplied).
-        samples: :func:`sample_points` ``(pv, o, count, spacing)``.
-        run: :func:`amigo_gym.paths.families.run_segments`.
-        lane: :func:`amigo_gym.paths.families.lane_change_shape`.
-        locate, pose: :func:`locate_rows` and :func:`pose_rows` (:func:`use_compiled_rows`).
-    """
+    """Compiled path-building loops (:func:`amigo_gym.sim.fast_v1.path_loops`), the ``loops=`` of the path
+    constructors (without them Python runs the same functions): ``chain`` :func:`chain_pieces`, ``samples``
+    :func:`sample_points`, ``run`` :func:`amigo_gym.paths.families.run_segments`, ``lane``
+    :func:`amigo_gym.paths.families.lane_change_shape`, ``locate`` :func:`locate_rows`, ``pose`` :func:`pose_rows`;
+    their scratch and nodes supplied."""
 
     chain: Callable[..., tuple[float, float, float, float]]
     samples: Callable[..., None]
@@ -202,7 +174,7 @@ class PathLoops(NamedTuple):
 
 @dataclass(frozen=True)
 class ClothoidPath(_Projecting):
-    r"""A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
+    """A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
 
     Attributes:
         segments: the segments in order (a non-empty tuple of :class:`ClothoidSegment`).
@@ -210,10 +182,10 @@ class ClothoidPath(_Projecting):
         start_angle: tangent angle at the start [rad].
         closed: the path repeats; its end pose must then equal its start pose (to 1e-9 relative to
             ``max(1 m, length)`` in position and 1e-9 rad in angle modulo ``2 pi``).
-        sample_spacing: largest spacing [m] of the samples of the coarse projection search, in
-            [1e-4, 1]; the samples are also at most ``0.1 / max|kappa|`` apart. Default 0.02.
-        loops: (an argument of the constructor only, not stored) the compiled path-building loops
-            (:class:`PathLoops`), or None (default): Python; the same path either way.
+        sample_spacing: largest spacing [m] of the coarse projection samples, in [1e-4, 1]; they are also at most
+            ``0.1 / max|kappa|`` apart. Default 0.02.
+        loops: (constructor only, not stored) the compiled path-building loops (:class:`PathLoops`), or None:
+            Python; the same path either way.
     """
 
     segments: tuple[ClothoidSegment, ...]
@@ -243,8 +215,6 @@ class ClothoidPath(_Projecting):
         object.__setattr__(self, "_t", self._build(loops))
 
     def _build(self, loops: PathLoops | None = None) -> _Tables:
-        """Split the segments into pieces, chain their start poses (:func:`chain_pieces`) and sample the path
-        for the coarse search; ``loops``: compiled forms of the loops, or None."""
         segs: list[float] = []
         n = 0
         kmax = 0.0
@@ -260,15 +230,14 @@ class ClothoidPath(_Projecting):
         x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
         if loops is None:
             out: Any = [0.0] * (6 * n)
-            x, y, th, total = chain_pieces(out, n, segs, n_segs, x, y, th, [0.0] * (3 * NODES + 3), _PATH_TABLE)
+            x, y, th, total = chain_pieces(out, n, segs, n_segs, x, y, th, [0.0] * _SCRATCH, _PATH_TABLE)
         else:
             out = np.empty(6 * n)
             x, y, th, total = loops.chain(out, n, np.array(segs), n_segs, x, y, th)
         raw_turn = th - float(self.start_angle)
         turn = raw_turn
         if self.closed:
-            laps = round(raw_turn / TWO_PI)
-            turn = TWO_PI * laps
+            turn = TWO_PI * round(raw_turn / TWO_PI)
             gap = math.hypot(x - self.start[0], y - self.start[1])
             if gap > CLOSURE_TOLERANCE * max(1.0, total) or abs(raw_turn - turn) > CLOSURE_TOLERANCE:
                 raise ValueError(
@@ -278,29 +247,26 @@ class ClothoidPath(_Projecting):
         spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
         n_samples = max(8, math.ceil(total / spacing))
         spacing = total / n_samples
-        # samples at s_j = j * spacing, j = 0..n_samples (open) or 0..n_samples - 1 (closed)
-        m = n_samples + (0 if self.closed else 1)
+        m = n_samples + (0 if self.closed else 1)  # s_j = j spacing up to the end (open) or before it (closed)
         o = P_TAIL + 6 * n
         flat = np.zeros(o + 2 * m)
         flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0)
         flat[P_TAIL:o] = out
         if loops is not None:
             loops.samples(flat, o, m, spacing)
-        elif _COMPILED:  # compiled pose_flat at each sample
+        elif _COMPILED:
             q = pose_columns_of(flat, np.zeros(m, dtype=np.int64), np.arange(m, dtype=np.float64) * spacing)
             flat[o : o + m], flat[o + m :] = q.x, q.y
         else:
             poses = _poses_flat(flat.tolist(), (np.arange(m, dtype=np.float64) * spacing).tolist())
             flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]
-        return _Tables.of(flat, kmax)
+        return _Tables(flat, kmax, float(flat[P_LENGTH]), float(flat[P_TURN]))
 
     @cached_property
     def _flat_list(self) -> list[float]:
-        """The flat path vector as a list of Python floats (faster to index than the array), built on first use."""
+        # the flat vector as Python floats (faster to index than the array)
         out: list[float] = self._t.flat.tolist()
         return out
-
-    # --- evaluation -------------------------------------------------------------------------------------
 
     @property
     def length(self) -> float:
@@ -327,7 +293,8 @@ class ClothoidPath(_Projecting):
     def pose_columns(self, s: Real) -> PathPose:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""
         if not isinstance(s, np.ndarray):
-            return PathPose(*_pose_float(self._flat_list, s if type(s) is float else float(s)))
+            sf = s if type(s) is float else float(s)
+            return PathPose(*pose_flat([0.0] * _SCRATCH, _PATH_TABLE, 0, self._flat_list, sf))
         a = np.ascontiguousarray(s, dtype=np.float64).reshape(-1)
         p = pose_columns_of(self._t.flat, np.zeros(a.size, dtype=np.int64), a)
         return PathPose(*(np.reshape(v, np.shape(s)) for v in p))
@@ -362,10 +329,8 @@ class ClothoidPath(_Projecting):
         """:meth:`curvature` as a column."""
         return self.pose_columns(s).curvature
 
-    # --- projection -------------------------------------------------------------------------------------
-
     def project_xy(self, x: Real, y: Real, minimal: bool = False) -> ClosestPoint:
-        """Closest point (global search; :meth:`locate` for the column form with a hint; ``minimal`` is ignored)."""
+        """Closest point (global search; ``minimal`` is ignored)."""
         return self.locate(x, y).closest_point()
 
     def locate(
@@ -373,23 +338,16 @@ class ClothoidPath(_Projecting):
     ) -> PathPoint:
         """Closest path point to the points ``(x, y)`` [m], keeping progress along the path.
 
-        1. Coarse search over the samples ``s_j = j h``: over one lap without a hint, else over the window
-           ``[s_prev - max_retreat, s_prev + max_advance]`` (unwrapped). Choose the window smaller than half the arc
-           length between branches that pass near each other (a figure-8's crossing) and larger than the advance
-           between calls.
+        1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
+           window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
+           ``max_advance``), smaller than half the arc length between branches that pass near each other (a
+           figure-8's crossing) and larger than the advance between calls.
         2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
            ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
-           ``[0, L]`` on an open path); :data:`NEWTON_ITERATIONS` iterations.
+           ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations.
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
-        Args:
-            x, y: query points [m], float or arrays.
-            s_prev: previous progress [m] (broadcast with ``x``), or None for a global search.
-            max_advance, max_retreat: the window ahead of and behind ``s_prev`` [m], > 0 (``max_retreat``
-                defaults to ``max_advance``).
-
-        Returns:
-            :class:`PathPoint` of the broadcast shape.
+        ``x``, ``y``, ``s_prev``: floats or arrays, broadcast; a :class:`PathPoint` of their shape.
         """
         if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray)):
             sp = None if s_prev is None else float(s_prev)
@@ -401,111 +359,20 @@ class ClothoidPath(_Projecting):
 
 
 def py_min(a: float, b: float) -> float:
-    """Python's ``min(a, b)`` of two floats: ``a`` unless ``b < a`` (the first on ties and NaN), for compiled code."""
+    """Python's ``min(a, b)`` of two floats (``a`` on ties and NaN), for compiled code."""
     return b if b < a else a
 
 
 def py_max(a: float, b: float) -> float:
-    """Python's ``max(a, b)`` of two floats: ``a`` unless ``b > a`` (the first on ties and NaN), for compiled code."""
+    """Python's ``max(a, b)`` of two floats (``a`` on ties and NaN), for compiled code."""
     return b if b > a else a
-
-
-def wrap_arc(s: float, length: float, closed: bool) -> tuple[float, float, float]:
-    """``s`` [m] as ``(u, lap, extra)``: ``u`` in ``[0, length]``, the lap number (closed) and the length
-    past an open path's ends (``s = u + extra``)."""
-    if closed:
-        lap = _floor_float(s / length)
-        return s - lap * length, lap, 0.0
-    u = py_min(py_max(s, 0.0), length)
-    return u, 0.0, s - u
-
-
-def placed_pose(
-    x: float,
-    y: float,
-    th: float,
-    cos_t: float,
-    sin_t: float,
-    kappa: float,
-    c: float,
-    closed: bool,
-    lap: float,
-    turn: float,
-    extra: float,
-) -> tuple[float, float, float, float, float, float, float]:
-    """The pose on the whole path from the pose at ``u`` in its piece: laps add ``lap * turn`` [rad] to the
-    heading; past an open path's ends it goes straight (curvature 0)."""
-    if closed:
-        return x, y, th + lap * turn, kappa, c, cos_t, sin_t
-    if extra != 0.0:
-        return x + extra * cos_t, y + extra * sin_t, th, 0.0, 0.0, cos_t, sin_t
-    return x + extra * cos_t, y + extra * sin_t, th, kappa, c, cos_t, sin_t
-
-
-def locate_window(sp: float, ahead: float, behind: float, length: float, closed: bool) -> tuple[float, float]:
-    """The window ``[sp - behind, sp + ahead]`` [m], clipped to ``[0, length]`` on an open path."""
-    lo = sp - behind
-    hi = sp + ahead
-    if not closed:
-        lo = min(max(lo, 0.0), length)
-        hi = min(max(hi, 0.0), length)
-    return lo, hi
-
-
-def foot_terms(x: float, y: float, px: float, py: float, ct: float, st: float) -> tuple[float, float, float, float]:
-    """``(dx, dy, g, e)`` of the point ``(x, y)`` against the path point ``(px, py)`` of tangent ``(ct, st)``:
-    ``d = p - c``, ``g = d . t`` (zero at a foot point), ``e = d . n`` (the cross-track error)."""
-    dx = x - px
-    dy = y - py
-    return dx, dy, dx * ct + dy * st, dy * ct - dx * st
-
-
-def newton_step(
-    x: float,
-    y: float,
-    px: float,
-    py: float,
-    kappa: float,
-    c: float,
-    ct: float,
-    st: float,
-    s: float,
-    h: float,
-    lo: float,
-    hi: float,
-) -> tuple[float, bool]:
-    """One step of the projection from ``s`` [m] with the pose there (curvature ``kappa``, its rate ``c``):
-    ``s' = clip(s + clip(d, -h, h), lo, hi)`` with Newton's ``d = g / q``, ``q = max(1 - kappa e,
-    MIN_NEWTON_DENOMINATOR)``; on a piece of constant curvature (``c == 0``, ``kappa != 0``) the foot on the arc
-    itself, ``d = atan2(kappa g, q) / kappa`` (exact in one step); and whether ``s'`` equals ``s`` (a fixed point)."""
-    _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
-    den = 1.0 - kappa * e
-    if den < MIN_NEWTON_DENOMINATOR:
-        den = MIN_NEWTON_DENOMINATOR
-    d = math.atan2(kappa * g, den) / kappa if c == 0.0 and kappa != 0.0 else g / den
-    s_new = py_min(py_max(s + py_min(py_max(d, -h), h), lo), hi)
-    return s_new, s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s)
-
-
-def locate_status_float(s: float, g: float, lo: float, hi: float, length: float, closed: bool) -> int:
-    """The status (:data:`STATUS_INTERIOR`, ...) of a projection ``s`` [m] with residual ``g``
-    in ``[lo, hi]``."""
-    status = STATUS_INTERIOR
-    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
-        status = STATUS_WINDOW
-    if not closed:
-        if s <= 0.0 and g < 0.0:
-            status = STATUS_START
-        if s >= length and g > 0.0:
-            status = STATUS_END
-    return status
 
 
 FloatPose = tuple[float, float, float, float, float, float, float]
 #: a path's pose on floats, ``(buf, nodes, nb, pv, s) -> FloatPose`` (:func:`pose_flat`'s arguments)
 PoseOf = Callable[[Buffer, Buffer, int, Any, float], FloatPose]
-#: the fields of :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta,
-#: distance, status)``
+#: :func:`locate_flat`'s result: ``(progress, x, y, theta, kappa, dkappa/ds, e, cos theta, sin theta, distance,
+#: status)``
 FlatPoint = tuple[float, float, float, float, float, float, float, float, float, float, int]
 
 # --------------------------------------------------------------------------- the flat path vector
@@ -519,8 +386,19 @@ P_TAIL = len(PATH_HEADER)
 FlatPath = list[float] | NDArray[np.float64]
 
 
-def piece_index(pv: FlatPath, u: float) -> int:
-    """Index of the last piece of ``pv`` with ``s0 <= u``, clamped to ``[0, n - 1]`` (NaN: the last)."""
+def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
+    """``(j, du, lap, extra)``: the last piece ``j`` with ``s0 <= u`` (clamped to the pieces; NaN: the last) for
+    ``s`` [m] wrapped to ``u`` in ``[0, length]``, the distance ``du = u - s0`` into it [m], the lap (closed) and
+    the length ``extra = s - u`` past an open path's ends [m]."""
+    length = pv[P_LENGTH]
+    if pv[P_CLOSED] != 0.0:
+        lap = _floor_float(s / length)
+        u = s - lap * length
+        extra = 0.0
+    else:
+        u = py_min(py_max(s, 0.0), length)
+        lap = 0.0
+        extra = s - u
     n = int(pv[P_N])
     lo = 0
     hi = n
@@ -530,46 +408,36 @@ def piece_index(pv: FlatPath, u: float) -> int:
             hi = mid
         else:
             lo = mid + 1
-    j = lo - 1
-    if j < 0:
-        j = 0
-    if j > n - 1:
-        j = n - 1
-    return j
-
-
-def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
-    """``(j, du, lap, extra)``: the piece holding ``s`` [m], the distance into it, the lap and the length past
-    an open path's ends."""
-    u, lap, extra = wrap_arc(s, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-    j = piece_index(pv, u)
+    j = min(max(lo - 1, 0), n - 1)
     return j, u - pv[P_TAIL + j], lap, extra
 
 
 def place(
     pv: FlatPath, j: int, du: float, lap: float, extra: float, x: float, y: float, th: float, ct: float, st: float
 ) -> FloatPose:
-    """The pose at ``du`` [m] into piece ``j`` (its unit-speed pose ``x, y, th, ct, st``) on the whole path:
-    curvature ``k0 + c du``, then :func:`placed_pose`."""
+    """The pose on the whole path from the unit-speed pose ``x, y, th, ct, st`` at ``du`` [m] into piece ``j``:
+    curvature ``k0 + c du``; laps add ``lap * turn`` [rad] to the heading; past an open path's ends it goes
+    straight (curvature 0)."""
     n = int(pv[P_N])
     c = pv[P_TAIL + 5 * n + j]
     kappa = pv[P_TAIL + 4 * n + j] + c * du
-    return placed_pose(x, y, th, ct, st, kappa, c, pv[P_CLOSED] != 0.0, lap, pv[P_TURN], extra)
+    if pv[P_CLOSED] != 0.0:
+        return x, y, th + lap * pv[P_TURN], kappa, c, ct, st
+    if extra != 0.0:
+        return x + extra * ct, y + extra * st, th, 0.0, 0.0, ct, st
+    return x + extra * ct, y + extra * st, th, kappa, c, ct, st
 
 
-def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behind: float) -> float:
-    """Step 1 of :meth:`ClothoidPath.locate` with a hint: ``s`` [m] of the sample nearest to ``(x, y)``
-    among ``j = floor((sp - behind) / h) + k``, ``k < ceil((ahead + behind) / h) + 2`` (a closed path reads sample
-    ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum of the squared distance wins (the first NaN
-    if any, as ``np.argmin``)."""
+def nearest_sample(pv: FlatPath, x: float, y: float, j0: float, count: int) -> float:
+    """``s = j h`` [m] of the coarse sample nearest to ``(x, y)`` among ``j = j0 + k``, ``k < count`` (a closed path
+    reads sample ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum wins (the first NaN if any, as
+    ``np.argmin``)."""
     h = pv[P_SPACING]
     n = int(pv[P_N])
     m = int(pv[P_M])
     sx = P_TAIL + 6 * n
     sy = sx + m
     closed = pv[P_CLOSED] != 0.0
-    count = math.ceil((ahead + behind) / h) + 2
-    j0 = float(np.floor((sp - behind) / h))
     m_f = float(m)
     top = m_f - 1.0
     # below 2^53 the sample numbers are exact whole numbers: j mod m steps by one
@@ -593,7 +461,7 @@ def coarse_start(pv: FlatPath, x: float, y: float, sp: float, ahead: float, behi
         ddx = pv[sx + idx] - x
         ddy = pv[sy + idx] - y
         d2 = ddx * ddx + ddy * ddy
-        if k == 0 or d2 < best or (d2 != d2 and best == best):  # np.argmin: the first minimum (or NaN)
+        if k == 0 or d2 < best or (d2 != d2 and best == best):
             best = d2
             best_j = jj
     return best_j * h
@@ -604,59 +472,61 @@ def locate_flat(
     behind: float,
 ) -> FlatPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with hint ``sp`` [m] and window ``ahead``,
-    ``behind`` [m] (> 0) on the flat path ``pv``: :func:`locate_window`, :func:`coarse_start`, :func:`project_flat`
-    (``pose``, ``buf``, ``nodes``, ``nb``: the pose function and its arguments, as :func:`pose_flat`). Returns
-    :data:`FlatPoint`."""
-    lo, hi = locate_window(sp, ahead, behind, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-    s = min(max(coarse_start(pv, x, y, sp, ahead, behind), lo), hi)
-    return project_flat(pose, buf, nodes, nb, pv, x, y, s, lo, hi)
+    ``behind`` [m] (> 0) on the flat path ``pv``; ``pose(buf, nodes, nb, pv, s)``: :func:`pose_flat` or alike."""
+    lo = sp - behind
+    hi = sp + ahead
+    if pv[P_CLOSED] == 0.0:
+        lo = min(max(lo, 0.0), pv[P_LENGTH])
+        hi = min(max(hi, 0.0), pv[P_LENGTH])
+    h = pv[P_SPACING]
+    s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(s, lo), hi), lo, hi)
 
 
 def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:
-    """:func:`locate_flat` without a hint: from :func:`coarse_global`, in ``[0, length]`` (open) or
+    """:func:`locate_flat` without a hint: from the nearest of all samples, in ``[0, length]`` (open) or
     unbounded (closed)."""
+    s = nearest_sample(pv, x, y, 0.0, int(pv[P_M]))
     if pv[P_CLOSED] != 0.0:
-        lo, hi = -math.inf, math.inf
-    else:
-        lo, hi = 0.0, pv[P_LENGTH]
-    return project_flat(pose, buf, nodes, nb, pv, x, y, coarse_global(pv, x, y), lo, hi)
+        return project_flat(pose, buf, nodes, nb, pv, x, y, s, -math.inf, math.inf)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, s, 0.0, pv[P_LENGTH])
 
 
-def coarse_global(pv: FlatPath, x: float, y: float) -> float:
-    """``s = j h`` [m] of the sample nearest to ``(x, y)`` over the whole path (first minimum, as
-    ``np.argmin``)."""
-    n = int(pv[P_N])
-    m = int(pv[P_M])
-    sx = P_TAIL + 6 * n
-    best = 0.0
-    best_j = 0
-    for j in range(m):
-        ddx = pv[sx + j] - x
-        ddy = pv[sx + m + j] - y
-        d2 = ddx * ddx + ddy * ddy
-        if j == 0 or d2 < best or (d2 != d2 and best == best):
-            best = d2
-            best_j = j
-    return float(best_j) * pv[P_SPACING]
+def foot_terms(x: float, y: float, px: float, py: float, ct: float, st: float) -> tuple[float, float, float, float]:
+    """``(dx, dy, g, e)``: ``d = (x, y) - (px, py)``, ``g = d . t``, ``e = d . n`` for the tangent ``t = (ct, st)``."""
+    dx = x - px
+    dy = y - py
+    return dx, dy, dx * ct + dy * st, dy * ct - dx * st
 
 
 def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
-    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: Newton
-    (:func:`newton_step`, at most :data:`NEWTON_ITERATIONS`, stopped at a fixed point), foot terms and status."""
+    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most
+    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` until a fixed point, with
+    ``d = g / q``, ``q = max(1 - kappa e, MIN_NEWTON_DENOMINATOR)``, or on an arc (``c = 0``, ``kappa != 0``) the
+    exact ``d = atan2(kappa g, q) / kappa``; then the foot terms and the status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
-        s_new, settled = newton_step(x, y, px, py, kappa, c, ct, st, s, h, lo, hi)
-        if settled:
+        _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
+        den = py_max(1.0 - kappa * e, MIN_NEWTON_DENOMINATOR)
+        d = math.atan2(kappa * g, den) / kappa if c == 0.0 and kappa != 0.0 else g / den
+        s_new = py_min(py_max(s + py_min(py_max(d, -h), h), lo), hi)
+        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
             break
         s = s_new
         px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
-    dist = math.sqrt(dx * dx + dy * dy)
-    status = locate_status_float(s, g, lo, hi, pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-    return s, px, py, th, kappa, c, e, ct, st, dist, status
+    status = STATUS_INTERIOR
+    if (s <= lo and g < 0.0) or (s >= hi and g > 0.0):
+        status = STATUS_WINDOW
+    if pv[P_CLOSED] == 0.0:
+        if s <= 0.0 and g < 0.0:
+            status = STATUS_START
+        if s >= pv[P_LENGTH] and g > 0.0:
+            status = STATUS_END
+    return s, px, py, th, kappa, c, e, ct, st, math.sqrt(dx * dx + dy * dy), status
 
 
 def lap_arc(s: float, length: float, closed: bool) -> float:
@@ -670,27 +540,16 @@ def lap_arc(s: float, length: float, closed: bool) -> float:
 
 
 def _floor_float(q: float) -> float:
-    """``np.floor`` of a float: ``math.floor`` where finite, NaN and infinities as they are."""
+    # np.floor of a float: math.floor where finite, NaN and infinities as they are
     return float(math.floor(q)) if q - q == 0.0 else q
 
 
 def locate_rows(
-    pose: PoseOf,
-    out: Array,
-    buf: Buffer,
-    nodes: Buffer,
-    flat: FlatPath,
-    start: list[int] | IntArray,
-    x: FlatPath,
-    y: FlatPath,
-    sp: FlatPath,
-    ahead: float,
-    behind: float,
-    hinted: bool,
-) -> None:
-    """:func:`locate_flat` (hinted) or :func:`locate_global` of the points ``(x[i], y[i])`` [m] on the flat
-    paths at ``flat[start[i]:]``; column ``i`` of ``out`` ``(12, N)`` gets the fields of :class:`PathPoint`
-    (status as a float)."""
+    pose: PoseOf, out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: list[int] | IntArray, x: FlatPath,
+    y: FlatPath, sp: FlatPath, ahead: float, behind: float, hinted: bool,
+) -> None:  # fmt: skip
+    """:func:`locate_flat` (``hinted``) or :func:`locate_global` of the points ``(x[i], y[i])`` [m] on the flat
+    paths at ``flat[start[i]:]``, into column ``i`` of ``out`` ``(12, N)`` (the fields of :class:`PathPoint`)."""
     for i in range(len(x)):
         pv = flat[start[i] :]
         if hinted:
@@ -712,8 +571,8 @@ def locate_rows(
 
 
 def pose_rows(out: Array, buf: Buffer, nodes: Buffer, flat: FlatPath, start: list[int] | IntArray, s: FlatPath) -> None:
-    """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into the columns of
-    ``out`` ``(7, N)`` (the fields of :class:`PathPose`)."""
+    """:func:`pose_flat` at ``s[i]`` [m] on the flat paths at ``flat[start[i]:]``, into column ``i`` of ``out``
+    ``(7, N)``."""
     for i in range(len(s)):
         r = pose_flat(buf, nodes, 0, flat[start[i] :], s[i])
         for k in range(7):
@@ -724,8 +583,7 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
     """Pose at arc length ``s`` [m] on the flat path ``pv``:
     ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -].
 
-    ``buf``: scratch of ``3 (NODES + 1)`` floats; ``nodes[nb:]``: the quadrature's nodes then weights on [0, 1]
-    (:func:`amigo_gym.model.fresnel.node_table` of 1).
+    ``buf``: scratch of ``3 (NODES + 1)`` floats; ``nodes[nb:]``: :func:`amigo_gym.model.fresnel.node_table` of 1.
     """
     j, du, lap, extra = piece_at(pv, s)
     n = int(pv[P_N])
@@ -738,28 +596,16 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
 
 #: the path quadrature's nodes and weights (:func:`pose_flat`'s ``nodes``)
 _PATH_TABLE: list[float] = node_table(1)
-
-
-# --------------------------------------------------------------------------- building a path
+#: the size of :func:`pose_flat`'s scratch ``buf``
+_SCRATCH = 3 * NODES + 3
 
 
 def chain_pieces(
-    out: Buffer,
-    n: int,
-    segs: Buffer,
-    n_segs: int,
-    x: float,
-    y: float,
-    th: float,
-    buf: Buffer,
-    nodes: Buffer,
+    out: Buffer, n: int, segs: Buffer, n_segs: int, x: float, y: float, th: float, buf: Buffer, nodes: Buffer
 ) -> tuple[float, float, float, float]:
-    """Split the segments into pieces and chain their start poses.
-
-    Segment ``g`` is ``segs[4 g : 4 g + 4]``: length [m], curvature [1/m], curvature rate [1/m^2], piece count.
-    Piece ``q``'s ``s0, x0, y0, th0, k0, c`` go to ``out[q], out[n + q], ..., out[5 n + q]``; each start pose is
-    the previous piece's end (:func:`amigo_gym.model.fresnel.unit_speed_nodes`; ``buf``, ``nodes`` as
-    :func:`pose_flat`).
+    """Split the segments ``segs[4 g : 4 g + 4]`` (length [m], curvature [1/m], rate [1/m^2], piece count) into
+    pieces and chain their start poses from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into
+    ``out[q], out[n + q], ..., out[5 n + q]`` (``buf``, ``nodes`` as :func:`pose_flat`).
 
     Returns:
         ``(x, y, theta, length)`` at the path's end.
@@ -788,21 +634,16 @@ def chain_pieces(
 
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:
-    """Write the coarse samples ``s_j = j spacing`` [m], ``j < count``, into ``pv``: ``x`` at ``pv[o + j]``,
-    ``y`` at ``pv[o + count + j]`` (header and pieces written before)."""
+    """Write the coarse samples at ``s_j = j spacing`` [m], ``j < count``, into ``pv``: ``x`` at ``pv[o + j]``,
+    ``y`` at ``pv[o + count + j]``."""
     for j in range(count):
         x, y, _th, _k, _c, _ct, _st = pose_flat(buf, nodes, 0, pv, j * spacing)
         pv[o + j] = x
         pv[o + count + j] = y
 
 
-def _pose_float(pv: FlatPath, s: float) -> FloatPose:
-    """:func:`pose_flat` with a fresh scratch list and the path quadrature's nodes."""
-    return pose_flat([0.0] * (3 * NODES + 3), _PATH_TABLE, 0, pv, s)
-
-
 def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
-    """:func:`_pose_float` of several floats, the cosines and sines in one numpy call."""
+    """:func:`pose_flat` of several floats ``ss`` [m], the cosines and sines in one numpy call."""
     n = int(pv[P_N])
     where = [piece_at(pv, s) for s in ss]
     starts = []
@@ -824,8 +665,7 @@ def check_window(max_advance: float, max_retreat: float | None) -> tuple[float, 
 def _locate_float(
     pv: FlatPath, x: float, y: float, sp: float | None, max_advance: float, max_retreat: float | None
 ) -> PathPoint:
-    """:meth:`ClothoidPath.locate` for floats (``sp`` may be None) on the flat path ``pv``."""
-    buf = [0.0] * (3 * NODES + 3)
+    buf = [0.0] * _SCRATCH
     if sp is None:
         r = locate_global(pose_flat, buf, _PATH_TABLE, 0, pv, x, y)
     else:
@@ -847,17 +687,11 @@ def use_compiled_rows(loops: PathLoops) -> None:
 
 
 def locate_columns(
-    flat: Array,
-    start: IntArray,
-    x: Array,
-    y: Array,
-    sp: Array | None,
-    ahead: float,
-    behind: float,
+    flat: Array, start: IntArray, x: Array, y: Array, sp: Array | None, ahead: float, behind: float,
     pose: PoseOf | None = None,
-) -> PathPoint:
-    """:func:`locate_rows` on ``(N,)`` float64 columns (compiled where registered, else Python; always
-    Python for a custom ``pose``); a :class:`PathPoint` of columns."""
+) -> PathPoint:  # fmt: skip
+    """:func:`locate_rows` on ``(N,)`` float64 columns (compiled where registered and ``pose`` is None, else
+    Python); a :class:`PathPoint` of columns."""
     out = np.empty((12, x.shape[0]))
     hints = x if sp is None else sp
     if _COMPILED and pose is None:
@@ -866,7 +700,7 @@ def locate_columns(
         rows = (start.tolist(), x.tolist(), y.tolist(), hints.tolist())
         pv = cast(FlatPath, flat.data)  # a memoryview: its slices are views, its entries Python floats
         of = pose_flat if pose is None else pose
-        locate_rows(of, out, [0.0] * (3 * NODES + 3), _PATH_TABLE, pv, *rows, ahead, behind, sp is not None)
+        locate_rows(of, out, [0.0] * _SCRATCH, _PATH_TABLE, pv, *rows, ahead, behind, sp is not None)
     return PathPoint._make([*out[:11], out[11].astype(np.int64)])
 
 
@@ -874,8 +708,7 @@ def locate_points(
     flat: Array, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None,
     pose: PoseOf | None = None,
 ) -> PathPoint:  # fmt: skip
-    """:meth:`ClothoidPath.locate` of points of any shape (window and hints checked, arguments
-    broadcast); arrays of the broadcast shape."""
+    """:meth:`ClothoidPath.locate` of points of any shape (window and hints checked, arguments broadcast)."""
     ahead, behind = (0.0, 0.0) if s_prev is None else check_window(max_advance, max_retreat)
     if s_prev is not None:
         check_hint(s_prev)
@@ -887,10 +720,10 @@ def locate_points(
 
 
 def pose_columns_of(flat: Array, start: IntArray, s: Array) -> PathPose:
-    """:func:`pose_rows` on a ``(N,)`` float64 column, as :func:`locate_columns`; a :class:`PathPose`."""
+    """:func:`pose_rows` on a ``(N,)`` float64 column, compiled as :func:`locate_columns`."""
     out = np.empty((7, s.shape[0]))
     if _COMPILED:
         _COMPILED[0].pose(out, flat, start, s)
     else:
-        pose_rows(out, [0.0] * (3 * NODES + 3), _PATH_TABLE, cast(FlatPath, flat.data), start.tolist(), s.tolist())
+        pose_rows(out, [0.0] * _SCRATCH, _PATH_TABLE, cast(FlatPath, flat.data), start.tolist(), s.tolist())
     return PathPose(*out)

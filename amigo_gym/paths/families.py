@@ -1,18 +1,9 @@
 """Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry.
 
-Each family is a pure function of its parameters (and of a :class:`numpy.random.Generator` where random).
 :data:`FAMILIES` names them with their parameter ranges; :func:`make_family_path` builds one by name, checking
-every parameter (a one-line ``ValueError`` naming the field, the value and the range).
-
-* ``"circle"``: :func:`circle`, the paper's eq. (6).
-* ``"manoeuvre"``: :func:`manoeuvre`, a straight segment along x0, then the circle.
-* ``"figure8"``: :func:`figure8`, two lobes joined by lines crossing at the origin, clothoid transitions.
-* ``"lane_change"``: :func:`lane_change`, a sideways shift made of four clothoids.
-* ``"random"``: :func:`random_path`, random smooth paths of bounded curvature and curvature rate.
-
-Every constructor takes ``loops``: the compiled path-building loops
-(:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (Python); the path is the same either way. The loops
-(:func:`run_segments`, :func:`lane_change_shape`) are in numba's subset.
+every parameter (a one-line ``ValueError`` naming the field, the value and the range). Every constructor takes
+``loops``: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (Python); the
+path is the same either way. :func:`run_segments` and :func:`lane_change_shape` are in numba's subset.
 """
 
 from __future__ import annotations
@@ -31,14 +22,8 @@ from amigo_gym.paths.clothoid import ClothoidPath, ClothoidSegment, PathLoops, p
 
 @dataclass(frozen=True)
 class ParamRange:
-    """Allowed range of one family parameter.
-
-    Attributes:
-        low, high: bounds (inclusive unless ``low_open``/``high_open``).
-        default: the value used when the parameter is not given.
-        unit: its unit, e.g. ``"m"``.
-        doc: one line saying what it is.
-    """
+    """Allowed range ``[low, high]`` of one family parameter (open ends by ``low_open``, ``high_open``), its
+    ``default``, ``unit`` (e.g. ``"m"``) and a one-line ``doc``."""
 
     low: float
     high: float
@@ -54,7 +39,6 @@ class ParamRange:
 
 
 def _checked(owner: str, ranges: dict[str, ParamRange], values: tuple[object, ...]) -> list[float]:
-    """``values`` of the parameters of ``ranges`` (in its order), each checked (:meth:`ParamRange.check`)."""
     return [rng.check(owner, name, v) for (name, rng), v in zip(ranges.items(), values, strict=True)]
 
 
@@ -64,9 +48,7 @@ def _direction(owner: str, value: object) -> int:
     return 1 if value == 1 else -1
 
 
-CIRCLE_RANGES = {
-    "radius": ParamRange(0.0, 1e3, 1.0, "m", "circle radius R", low_open=True),
-}
+CIRCLE_RANGES = {"radius": ParamRange(0.0, 1e3, 1.0, "m", "circle radius R", low_open=True)}
 MANOEUVRE_RANGES = {
     "radius": ParamRange(0.0, 1e3, 1.0, "m", "radius R of the circular part", low_open=True),
     "straight_length": ParamRange(0.0, 1e3, 1.0, "m", "length of the straight part along x0"),
@@ -92,52 +74,30 @@ RANDOM_RANGES = {
 
 
 def circle(
-    radius: float = 1.0,
-    direction: int = 1,
-    start: tuple[float, float] = (0.0, 0.0),
-    start_angle: float = 0.0,
-    *,
+    radius: float = 1.0, direction: int = 1, start: tuple[float, float] = (0.0, 0.0), start_angle: float = 0.0, *,
     loops: PathLoops | None = None,
-) -> ClothoidPath:
-    """A closed circle of ``radius`` [m] entered at ``start`` [m] with heading ``start_angle`` [rad]: one arc of
-    length ``2 pi R`` and curvature ``d / R``; the defaults give the paper's eq. (6).
-
-    Args:
-        radius: R [m], in (0, 1000].
-        direction: +1 turns left (counter-clockwise), -1 right.
-        loops: compiled path-building loops or None (module docstring).
-    """
+) -> ClothoidPath:  # fmt: skip
+    """A closed circle of ``radius`` [m] in (0, 1000] entered at ``start`` [m] with heading ``start_angle`` [rad],
+    turning left (``direction = +1``) or right (-1): one arc of length ``2 pi R``, curvature ``d / R``; the defaults
+    give the paper's eq. (6)."""
     r = CIRCLE_RANGES["radius"].check("circle", "radius", radius)
     d = _direction("circle", direction)
     return ClothoidPath((ClothoidSegment.arc(2.0 * math.pi * r, d / r),), start, start_angle, closed=True, loops=loops)
 
 
 def manoeuvre(
-    radius: float = 1.0,
-    straight_length: float = 1.0,
-    direction: int = 1,
-    laps: float = 1.0,
-    *,
+    radius: float = 1.0, straight_length: float = 1.0, direction: int = 1, laps: float = 1.0, *,
     loops: PathLoops | None = None,
-) -> ClothoidPath:
-    """The paper's manoeuvre path: ``straight_length`` [m] along x0 from the origin, then ``laps`` laps of
-    the circle (open: it ends after the laps).
-
-    Args:
-        radius: circle radius [m], in (0, 1000].
-        straight_length: [m], in [0, 1000] (0: the circle alone).
-        direction: +1 (left) or -1 (right).
-        laps: laps of the circle, in (0, 100].
-        loops: compiled path-building loops or None (module docstring).
-    """
+) -> ClothoidPath:  # fmt: skip
+    """The paper's manoeuvre path: ``straight_length`` [m] in [0, 1000] along x0 from the origin, then ``laps``
+    in (0, 100] laps of the circle of ``radius`` [m] in (0, 1000], turning by ``direction`` (+1 left, -1 right);
+    open: it ends after the laps."""
     r, sl, n = _checked("manoeuvre", MANOEUVRE_RANGES, (radius, straight_length, laps))
     d = _direction("manoeuvre", direction)
     arc = ClothoidSegment.arc(2.0 * math.pi * r * n, d / r)
     segs = (ClothoidSegment.line(sl), arc) if sl > 0.0 else (arc,)
     return ClothoidPath(segs, loops=loops)
 
-
-# -- construction loops (numba's subset) ---------------------------------------------------------------------
 
 #: largest heading reached in a lane change [rad]
 LANE_CHANGE_MAX_HEADING = 1.2
@@ -152,14 +112,9 @@ RUN_SCRATCH = 3 * (NODES * RUN_MAX_SUB + 1)
 def run_segments(
     buf: Buffer, nodes: Buffer, segs: Buffer, n_segs: int, x: float, y: float, th: float
 ) -> tuple[float, float, float]:
-    """End pose after the segments ``segs[3 g : 3 g + 3] = (length, curvature, rate)`` from ``(x, y, th)``,
-    each by one quadrature of as many sub-intervals as its phase change needs.
-
-    ``buf``: :data:`RUN_SCRATCH` scratch; ``nodes``: :data:`RUN_NODES`.
-
-    Raises:
-        ValueError: a segment turns by more than ``2 RUN_MAX_SUB`` rad (or by NaN).
-    """
+    """End pose after the segments ``segs[3 g : 3 g + 3] = (length, curvature, rate)`` from ``(x, y, th)``, each
+    one quadrature of as many sub-intervals as it needs (``buf``: :data:`RUN_SCRATCH` floats; ``nodes``:
+    :data:`RUN_NODES`); ``ValueError`` if a segment turns by more than ``2 RUN_MAX_SUB`` rad (or by NaN)."""
     for g in range(n_segs):
         length = segs[3 * g]
         k = segs[3 * g + 1]
@@ -174,8 +129,8 @@ def run_segments(
 
 
 def s_curve_half(buf: Buffer, nodes: Buffer, segs: Buffer, theta_max: float) -> tuple[float, float]:
-    """End point of the first half of the unit S-curve: clothoids 0 -> theta_max -> 0 curvature over length 1 each
-    (:func:`run_segments` from the origin along x0; ``segs``: 6 entries of scratch)."""
+    """End point of the first half of the unit S-curve from the origin along x0: clothoids of curvature
+    ``0 -> theta_max -> 0`` over length 1 each (``segs``: 6 floats of scratch)."""
     segs[0] = 1.0
     segs[1] = 0.0
     segs[2] = theta_max
@@ -187,12 +142,9 @@ def s_curve_half(buf: Buffer, nodes: Buffer, segs: Buffer, theta_max: float) -> 
 
 
 def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) -> tuple[float, float, float, float]:
-    """The shape of a lane change of ``|offset| / length = ratio``: ``(x1, y1, theta_m, xm)``.
-
-    ``(x1, y1)``: the end of the half S-curve at :data:`LANE_CHANGE_MAX_HEADING` (the steepest lane change has
-    ``ratio = y1 / x1``); if ``ratio <= y1 / x1`` (else NaN) the heading ``theta_m`` whose half S-curve has
-    ``y / x = ratio`` (bisection to rounding) and that half's ``x``, ``xm``. ``segs``: 6 entries of scratch.
-    """
+    """``(x1, y1, theta_m, xm)`` of a lane change of ``|offset| / length = ratio``: ``(x1, y1)`` the end of the
+    half S-curve at :data:`LANE_CHANGE_MAX_HEADING` (the steepest); if ``ratio <= y1 / x1`` (else NaN) the heading
+    ``theta_m`` whose half S-curve has ``y / x = ratio`` (bisection) and its ``x``, ``xm``."""
     x1, y1 = s_curve_half(buf, nodes, segs, LANE_CHANGE_MAX_HEADING)
     if ratio > y1 / x1:
         return x1, y1, math.nan, math.nan
@@ -212,51 +164,36 @@ def lane_change_shape(buf: Buffer, nodes: Buffer, segs: Buffer, ratio: float) ->
     return x1, y1, theta_m, xm
 
 
-def _run(
-    segs: list[tuple[float, float, float]], pose: tuple[float, float, float], loops: PathLoops | None = None
-) -> tuple[float, float, float]:
-    """End pose after segments ``(length, curvature, rate)`` from ``pose`` (:func:`run_segments`)."""
-    flat = [v for seg in segs for v in seg]
-    if loops is not None:
-        return loops.run(np.array(flat), len(segs), *pose)
-    return run_segments([0.0] * RUN_SCRATCH, RUN_NODES, flat, len(segs), *pose)
-
-
 def figure8(
     size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
-    """A closed figure-8 crossing itself at the origin, with continuous curvature.
+    """A closed figure-8 of width ``size`` [m] in (0, 1000] crossing itself at the origin at ``crossing_angle``
+    [rad] in [0.3, 2.0], with continuous curvature.
 
-    With the lobe radius 1, the right lobe leaves the origin at heading ``phi = crossing_angle / 2`` along a line of
-    length ``a``, turns right through a clothoid (curvature 0 to -1 over ``b = transition``), an arc and the mirror
-    clothoid, and returns along a line of length ``a``; ``a = -y_m / sin(phi)`` puts the lobe's middle (heading
-    ``-pi/2``) on the x axis. The left lobe is the mirror image; the whole is scaled to the width ``size``. The path
-    starts at the right lobe's rightmost point heading ``-pi/2`` and crosses the origin at ``s = L/4`` and ``3L/4``.
-
-    Args:
-        size: overall width along x0 [m], in (0, 1000].
-        crossing_angle: angle between the crossing lines [rad], in [0.3, 2.0].
-        transition: clothoid length over lobe radius [-], in [0, 1.5].
-        loops: compiled path-building loops or None (module docstring).
+    With lobe radius 1, the right lobe leaves the origin at heading ``phi = crossing_angle / 2`` along a line of
+    length ``a``, turns right through a clothoid (curvature 0 to -1 over ``b = transition`` in [0, 1.5]), an arc and
+    the mirror clothoid, and returns along a line of length ``a = -y_m / sin(phi)`` (the lobe's middle on the x
+    axis). The left lobe is the mirror image; the whole is scaled to ``size``. The path starts at the right lobe's
+    rightmost point heading ``-pi/2`` and crosses the origin at ``s = L/4`` and ``3L/4``.
     """
     size, phi, b = _checked("figure8", FIGURE8_RANGES, (size, crossing_angle, transition))
     phi = 0.5 * phi
-    # unit lobe radius; the right half-lobe from the line's end to the middle (heading phi -> -pi/2)
-    half_turn = math.pi / 2 + phi  # total right turn from the line to the middle
-    arc_half = half_turn - 0.5 * b  # turn of half the arc (the clothoid turns b/2)
+    # the right half-lobe from the line's end to the middle (heading phi -> -pi/2); the clothoid turns b/2
+    arc_half = math.pi / 2 + phi - 0.5 * b
     if arc_half <= 0.0:
         raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
-    pieces = [(b, 0.0, -1.0 / b)] if b > 0.0 else []
-    pieces.append((arc_half, -1.0, 0.0))
-    xm, ym, _ = _run(pieces, (0.0, 0.0, phi), loops)
+    pieces = [b, 0.0, -1.0 / b, arc_half, -1.0, 0.0] if b > 0.0 else [arc_half, -1.0, 0.0]
+    if loops is not None:
+        xm, ym, _ = loops.run(np.array(pieces), len(pieces) // 3, 0.0, 0.0, phi)
+    else:
+        xm, ym, _ = run_segments([0.0] * RUN_SCRATCH, RUN_NODES, pieces, len(pieces) // 3, 0.0, 0.0, phi)
     a = -ym / math.sin(phi)
     if a < 0.0:
         raise ValueError(
             f"figure8: crossing_angle {crossing_angle!r} with transition {transition!r} leaves no room for the "
             "crossing lines; use a smaller angle or transition"
         )
-    x_right = a * math.cos(phi) + xm  # rightmost point (the middle of the right lobe)
-    scale = size / (2.0 * x_right)
+    scale = size / (2.0 * (a * math.cos(phi) + xm))
     la, lb, lc = a * scale, b * scale, arc_half * scale
     k = 1.0 / scale
     seg = ClothoidSegment
@@ -272,18 +209,12 @@ def figure8(
 def lane_change(
     offset: float = 0.5, length: float = 3.0, lead: float = 1.0, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
-    """A lane change: straight along x0, a sideways shift by ``offset`` over ``length``, straight again.
+    """A lane change: ``lead`` [m] in [0, 1000] along x0, a sideways shift by ``offset`` [m] in [-100, 100]
+    (positive left) over ``length`` [m] in (0, 1000], ``lead`` again.
 
     The shift is four clothoids of length ``q``, curvature ``0 -> k -> 0 -> -k -> 0`` (left shift), the heading
     rising to ``theta_m = k q``; ``theta_m`` solves ``Y1/X1 = |offset| / length`` for the unit half S-curve
-    (:func:`lane_change_shape`), then ``q = length / (2 X1)``. Requires ``theta_m <= 1.2 rad``
-    (``|offset| <~ 0.68 length``).
-
-    Args:
-        offset: sideways shift [m], positive to the left, in [-100, 100] (0: a straight line).
-        length: extent of the shift along x0 [m], in (0, 1000].
-        lead: straight run before and after [m], in [0, 1000].
-        loops: compiled path-building loops or None (module docstring).
+    (:func:`lane_change_shape`), ``q = length / (2 X1)``; ``theta_m <= 1.2 rad`` (``|offset| <~ 0.68 length``).
     """
     off, ln, lead = _checked("lane_change", LANE_CHANGE_RANGES, (offset, length, lead))
     ratio = abs(off) / ln
@@ -304,29 +235,15 @@ def lane_change(
 
 
 def random_path(
-    rng: np.random.Generator,
-    length: float = 20.0,
-    max_curvature: float = 1.0,
-    max_curvature_rate: float = 1.0,
-    min_piece: float = 0.5,
-    max_piece: float = 3.0,
-    *,
-    loops: PathLoops | None = None,
-) -> ClothoidPath:
-    """A random smooth open path from the origin along x0, ``|kappa| <= max_curvature``,
-    ``|dkappa/ds| <= max_curvature_rate``.
+    rng: np.random.Generator, length: float = 20.0, max_curvature: float = 1.0, max_curvature_rate: float = 1.0,
+    min_piece: float = 0.5, max_piece: float = 3.0, *, loops: PathLoops | None = None,
+) -> ClothoidPath:  # fmt: skip
+    """A random smooth open path of ``length`` [m] in (0, 10000] from the origin along x0, ``|kappa| <=
+    max_curvature`` [1/m] in (0, 100], ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] in (0, 1000].
 
     From 0 the curvature alternates ramps (linear to a target ``U(-max_curvature, max_curvature)`` over a length
-    ``U(min_piece, max_piece)``, stretched to ``|delta kappa| / max_curvature_rate`` if needed) and holds (an arc of
-    length ``U(0, max_piece)``); the last piece is cut at ``length``.
-
-    Args:
-        rng: the random generator (consumed).
-        length: arc length [m], in (0, 10000].
-        max_curvature: [1/m], in (0, 100].
-        max_curvature_rate: [1/m^2], in (0, 1000].
-        min_piece, max_piece: ramp lengths [m], in [0.01, 100], ``min_piece <= max_piece``.
-        loops: compiled path-building loops or None (module docstring).
+    ``U(min_piece, max_piece)`` [m] in [0.01, 100], stretched to ``|delta kappa| / max_curvature_rate`` if needed)
+    and holds (an arc of length ``U(0, max_piece)``); the last piece is cut at ``length``. ``rng`` is consumed.
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
@@ -355,15 +272,8 @@ def random_path(
 
 @dataclass(frozen=True)
 class Family:
-    """A path family of the registry.
-
-    Attributes:
-        name: its registry name.
-        build: the constructor (:func:`circle`, ...); ``random`` takes the generator as its first argument.
-        params: the numeric parameters with their ranges and defaults.
-        random: whether it needs a generator.
-        doc: one line.
-    """
+    """A family of the registry: ``name``, the constructor ``build`` (its first argument the generator if
+    ``random``), its numeric ``params`` and a one-line ``doc``."""
 
     name: str
     build: Callable[..., ClothoidPath]

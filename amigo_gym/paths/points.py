@@ -1,8 +1,5 @@
-"""Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` fitted to points, from arrays, CSV or JSON.
-
-:func:`from_points` turns an ``(n, 2)`` array of points ``(x, y)`` [m] in path order (optionally closed) into a
-:class:`~amigo_gym.paths.ClothoidPath` with continuous curvature (:func:`fit_points`; docs/amigobot_v1.md,
-"Paths of your own"):
+"""Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` of continuous curvature fitted to points ``(n, 2)``
+``(x, y)`` [m] in path order (:func:`fit_points`; docs/amigobot_v1.md, "Paths of your own"):
 
 1. an interpolating cubic spline in the chord-length parameter (not-a-knot ends if open, periodic if closed);
 2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a
@@ -10,16 +7,13 @@
    spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at the step's ends;
 3. a closed path's curvature corrected by the smallest ``c_0 + sum_q (c cos + c sin)(q w s)``, ``q = 1, 2``,
    ``w = 2 pi / L``, closing it to rounding (Gauss–Newton);
-4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved
-   up to :data:`MAX_REFINEMENTS` times), else ``ValueError``.
+4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved up to
+   :data:`MAX_REFINEMENTS` times), else ``ValueError``.
 
 With ``smoothing=sigma`` [m] (the points' noise) points are first averaged in groups of ``g`` (a power of 2,
 points ``g`` apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline
 (Whittaker–Reinsch, least ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the
-means; at an open path's ends the curvature falls to 0 (natural ends).
-
-Files (:func:`load_points`): CSV with a header naming ``x`` and ``y`` [m]; JSON ``{"x": [...], "y": [...]}``
-(optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects.
+means; at an open path's ends the curvature falls to 0.
 """
 
 from __future__ import annotations
@@ -48,9 +42,9 @@ MAX_REFINEMENTS = 4
 MAX_STEP_TURN = 0.05
 #: smallest distance between consecutive points [m]
 MIN_CHORD = 1e-9
-#: most points accepted (the fit's cost is linear in them: experiments/bench_points.py)
+#: most points accepted
 MAX_POINTS = 1_000_000
-#: shortest path through the points [m] (the robot's body length, RobotParams.body_length)
+#: shortest path through the points [m] (the robot's body length)
 MIN_LENGTH = 0.33
 #: longest path through the points [m]
 MAX_LENGTH = 1000.0
@@ -82,12 +76,8 @@ class PointsFit:
     smoothed: float = 0.0
 
 
-# --------------------------------------------------------------------------- input checks
-
-
 def _check_points(points: Any, closed: bool, owner: str) -> Array:
-    """``points`` as a float64 ``(n, 2)`` array of distinct consecutive finite points in path order, spanning a
-    path of :data:`MIN_LENGTH` to :data:`MAX_LENGTH` metres (one-line errors)."""
+    # points as a float64 (n, 2) array of distinct consecutive finite points in path order, in metres
     if isinstance(points, str | bytes | os.PathLike):
         raise ValueError(f"{owner}.points must be an (n, 2) array of x, y in metres; for a file use from_file")
     try:
@@ -117,7 +107,7 @@ def _check_points(points: Any, closed: bool, owner: str) -> Array:
     if dup.size:
         i = int(dup[0]) + 1
         raise ValueError(f"{owner}.points[{i}] repeats points[{i - 1}] ({p[i].tolist()}): points must be distinct")
-    # shuffled points: consecutive points far apart (against the extent) where each has a close neighbour
+    # shuffled: consecutive points far apart where each has a close neighbour
     step, extent = float(np.median(chord)), float(np.hypot(*np.ptp(p, axis=0)))
     if step > 0.1 * extent and len(p) > 4:
         from scipy.spatial import cKDTree
@@ -143,12 +133,9 @@ def _check_length(owner: str, length: float, what: str = "span a path of") -> No
         )
 
 
-# --------------------------------------------------------------------------- smoothing
-
-
 def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, float]:
-    r"""The smoothed points (module docstring) and their RMS distance from the group means [m]."""
-    group = 1  # the fewest points whose ends are 3 sigma apart (doubling): their noise no longer rules the chord
+    # the smoothed points (module docstring) and their RMS distance from the group means [m]
+    group = 1
     while np.median(np.hypot(*(p[group:] - p[:-group]).T)) < 3.0 * sigma:
         group *= 2
         if len(p) // group < 4:
@@ -160,7 +147,6 @@ def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, fl
     b = p[: n * group].reshape(n, group, 2).mean(axis=1)
     if len(p) > n * group:
         b = np.vstack((b, p[n * group :].mean(axis=0, keepdims=True)))
-    n = len(b)
     target = sigma * math.sqrt(2.0 / group)  # RMS distance of the true path from the group means
     z = _whittaker(b, b, closed, target)
     z = _whittaker(b, z, closed, target)  # again in the chord parameter of the first result
@@ -168,9 +154,8 @@ def _smooth(p: Array, closed: bool, sigma: float, owner: str) -> tuple[Array, fl
 
 
 def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
-    """The points minimising ``|z - b|^2 + lambda |D z|^2`` (``D``: weighted second divided differences in
-    the chord parameter of ``z``) with the RMS of ``|z - b|`` equal to ``target`` [m] (or the largest ``lambda``
-    tried, if still closer)."""
+    # the points minimising |z - b|^2 + lambda |D z|^2 (D: weighted second divided differences in the chord
+    # parameter of z) at an RMS distance target [m] from b (or the largest lambda tried, if still closer)
     from scipy.optimize import brentq
     from scipy.sparse import csc_matrix, identity
     from scipy.sparse.linalg import splu
@@ -192,16 +177,11 @@ def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
     def gap(log_lam: float) -> float:
         return float(np.sqrt(np.mean(np.sum((solve(log_lam) - b) ** 2, axis=1)))) - target
 
-    # lambda from a fraction of a spacing to thousands of them (the fourth power of the smoothing length)
     return solve(30.0 if gap(30.0) <= 0.0 else float(brentq(gap, -20.0, 30.0, xtol=1e-2)))
 
 
-# --------------------------------------------------------------------------- the fit
-
-
 def _chain(start: tuple[float, float, float], length: Array, k0: Array, rate: Array) -> tuple[Array, Array, Array]:
-    """Poses ``(m + 1,)`` at the ends of a chain of clothoid steps from ``start`` (vectorised: each step's
-    displacement at heading 0, rotated, summed)."""
+    # poses (m + 1,) at the ends of a chain of clothoid steps from start: each step at heading 0, rotated, summed
     x0, y0, th0 = start
     head = th0 + np.concatenate(([0.0], np.cumsum(length * (k0 + 0.5 * rate * length))))
     zero = np.zeros_like(length)
@@ -212,15 +192,8 @@ def _chain(start: tuple[float, float, float], length: Array, k0: Array, rate: Ar
     return x, y, head
 
 
-def _segments(length: Array, kappa: Array) -> tuple[ClothoidSegment, ...]:
-    rate = np.diff(kappa) / length
-    return tuple(
-        ClothoidSegment(ln, k, r) for ln, k, r in zip(length.tolist(), kappa[:-1].tolist(), rate.tolist(), strict=True)
-    )
-
-
 def _arc(spline: Any, a: Array, b: Array) -> Array:
-    """Arc length of the spline from parameter ``a`` to ``b`` (Gauss–Legendre, 8 nodes)."""
+    # arc length of the spline from parameter a to b (Gauss–Legendre, 8 nodes)
     w, mid = 0.5 * (b - a), 0.5 * (b + a)
     out = np.zeros_like(a)
     for xg, wg in zip(_GL_X.tolist(), _GL_W.tolist(), strict=True):
@@ -230,7 +203,6 @@ def _arc(spline: Any, a: Array, b: Array) -> Array:
 
 
 def _curvature(spline: Any, u: Array) -> tuple[Array, Array, Array]:
-    """The spline's first derivative, speed and curvature at ``u``."""
     d1, d2 = spline(u, 1), spline(u, 2)
     sp = np.hypot(d1[:, 0], d1[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -239,14 +211,9 @@ def _curvature(spline: Any, u: Array) -> tuple[Array, Array, Array]:
 
 
 def fit_points(
-    points: Any,
-    closed: bool = False,
-    *,
-    smoothing: float | None = None,
-    tolerance: float = 1e-3,
-    step: float = 0.02,
+    points: Any, closed: bool = False, *, smoothing: float | None = None, tolerance: float = 1e-3, step: float = 0.02,
     sample_spacing: float = 0.02,
-) -> PointsFit:
+) -> PointsFit:  # fmt: skip
     """Fit a continuous-curvature :class:`~amigo_gym.paths.ClothoidPath` to points (module docstring).
 
     Args:
@@ -285,7 +252,7 @@ def fit_points(
     turn_density = 1.5 * np.nan_to_num(np.maximum(kk[:-1], kk[1:]), nan=0.0) / MAX_STEP_TURN  # steps per metre
     last_error = math.inf
     for _ in range(MAX_REFINEMENTS + 1):
-        # steps of at most h_max chord and MAX_STEP_TURN turn, laid along the parameter (not tied to the knots)
+        # steps of at most h_max chord and MAX_STEP_TURN turn, laid along the parameter
         dens = np.concatenate(([0.0], np.cumsum(chord * np.maximum(1.0 / h_max, turn_density))))
         u = np.interp(np.linspace(0.0, dens[-1], max(1, math.ceil(dens[-1])) + 1), dens, t)
         u[0], u[-1] = t[0], t[-1]
@@ -315,8 +282,9 @@ def fit_points(
         px, py, _ = advance(cx[j], cy[j], ch[j], 1.0, 0.0, kappa[j], rate[j], point_s - s_ends[j])
         err = float(np.max(np.hypot(px - p[:, 0], py - p[:, 1])))
         if err <= tol:
-            path = ClothoidPath(_segments(seg_len, kappa), start=(start[0], start[1]), start_angle=theta0,
-                                closed=closed, sample_spacing=sample_spacing)  # fmt: skip
+            segs = zip(seg_len.tolist(), kappa[:-1].tolist(), rate.tolist(), strict=True)
+            path = ClothoidPath(tuple(ClothoidSegment(*g) for g in segs), start=(start[0], start[1]),
+                                start_angle=theta0, closed=closed, sample_spacing=sample_spacing)  # fmt: skip
             return PointsFit(path, err, point_s, h_max, corr, smoothed)
         last_error = err
         h_max = 0.5 * h_max
@@ -329,7 +297,7 @@ def fit_points(
 def _close(
     start: tuple[float, float, float], seg_len: Array, kappa: Array, s_knots: Array
 ) -> tuple[Array, tuple[float, ...]]:
-    """The curvature ``kappa + sum_q c_q mode_q(s)`` closing the path (Gauss–Newton, smallest step) and ``c``."""
+    # the curvature kappa + sum_q c_q mode_q(s) closing the path (Gauss–Newton, smallest step) and c
     length = float(s_knots[-1])
     om = TWO_PI * s_knots / length
     modes = np.stack((np.ones_like(om), np.cos(om), np.sin(om), np.cos(2.0 * om), np.sin(2.0 * om)))
@@ -361,14 +329,9 @@ def _close(
 
 
 def from_points(
-    points: Any,
-    closed: bool = False,
-    *,
-    smoothing: float | None = None,
-    tolerance: float = 1e-3,
-    step: float = 0.02,
+    points: Any, closed: bool = False, *, smoothing: float | None = None, tolerance: float = 1e-3, step: float = 0.02,
     sample_spacing: float = 0.02,
-) -> ClothoidPath:
+) -> ClothoidPath:  # fmt: skip
     """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`).
 
     ```python
@@ -384,18 +347,16 @@ def from_points(
     return fit.path
 
 
-# --------------------------------------------------------------------------- files
-
-
 def _number(text: str, file: str, row: int, col: str) -> float:
     what = f"{file}: row {row}, column {col!r} must be"
     return finite_float(text, lambda inf: f"{what} {'finite' if inf else 'a number [m]'}, got {text!r}")
 
 
 def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
-    """The points ``(n, 2)`` [m] of a CSV or JSON file, and the JSON's ``"closed"`` if given. CSV (any
-    suffix but ``.json``): a header naming ``x`` and ``y`` (case-insensitive), one point per row; blank and ``#``
-    lines skipped.
+    """The points ``(n, 2)`` [m] of a file, and the JSON's ``"closed"`` if given. JSON (``.json``):
+    ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects; CSV (any
+    other suffix): a header naming ``x`` and ``y`` (case-insensitive), one point per row, blank and ``#`` lines
+    skipped.
 
     Raises:
         FileNotFoundError: no such file.
@@ -455,14 +416,9 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
 
 
 def from_file(
-    file: str | os.PathLike[str],
-    closed: bool | None = None,
-    *,
-    smoothing: float | None = None,
-    tolerance: float = 1e-3,
-    step: float = 0.02,
-    sample_spacing: float = 0.02,
-) -> ClothoidPath:
+    file: str | os.PathLike[str], closed: bool | None = None, *, smoothing: float | None = None,
+    tolerance: float = 1e-3, step: float = 0.02, sample_spacing: float = 0.02,
+) -> ClothoidPath:  # fmt: skip
     """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`).
 
     Args:

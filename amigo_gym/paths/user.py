@@ -8,15 +8,11 @@ The protocol (:func:`check_path` checks it at ``gym.make``):
   ``theta`` (tangent angle [rad], continuous) and ``curvature`` [1/m, positive left], each of the shape of
   ``s``; an open path is also asked for ``s < 0`` or ``s > length`` (continue along the end tangent).
 
-Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a :class:`~amigo_gym.paths.PathPoint`.
-Without it :class:`UserPath` searches samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`), then
-runs the Newton iteration of :meth:`~amigo_gym.paths.ClothoidPath.locate` on ``pose_columns``.
+Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a :class:`~amigo_gym.paths.PathPoint`;
+without it samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`) are searched, then the Newton
+iteration of :meth:`~amigo_gym.paths.ClothoidPath.locate` runs on ``pose_columns``.
 
-Errors name the path, the member and the value: a missing member, a bad ``length`` or ``closed``, or fields
-missing, misshapen or not finite, at ``gym.make`` (on a probe) and at any later step.
-
-:class:`~amigo_gym.paths.ClothoidPath`, :class:`~amigo_gym.paths.CirclePath` and
-:class:`~amigo_gym.paths.ManoeuvrePath` are trusted as they are; anything else is wrapped in a :class:`UserPath`.
+Errors (at ``gym.make``, on a probe, and at any later step) name the path, the member and the value.
 """
 
 from __future__ import annotations
@@ -53,7 +49,7 @@ def path_name(obj: object) -> str:
 
 
 def _finite_column(value: Any, shape: tuple[int, ...], where: str) -> Array:
-    """``value`` as a float64 array of ``shape`` (a scalar broadcasts), all finite; else one-line ValueError."""
+    # value as a float64 array of shape (a scalar broadcasts), all finite; else a one-line ValueError
     if isinstance(value, str | bytes | bool | np.bool_):
         raise ValueError(f"{where} must be real numbers, got {show_value(value)}")
     try:
@@ -73,15 +69,8 @@ def _finite_column(value: Any, shape: tuple[int, ...], where: str) -> Array:
 
 
 class UserPath:
-    """A checked path object of your own (module docstring), with the full interface ``AmigoBot-v1`` uses.
-
-    ``pose_columns`` completes ``x, y, theta, curvature`` to a :class:`~amigo_gym.paths.PathPose` (``curvature_rate``
-    the user's or 0); ``locate`` is the user's or the sampled search; every result is checked for NaN and
-    infinities.
-
-    Attributes:
-        path: the user's object. name: :func:`path_name` of it. length [m], closed: its values, checked.
-    """
+    """A checked path object of your own ``path`` (module docstring), with the full interface ``AmigoBot-v1``
+    uses; ``name`` (:func:`path_name`), ``length`` [m] and ``closed`` are its values, checked."""
 
     def __init__(self, path: Any, owner: str = "AmigoBot-v1") -> None:
         self.path = path
@@ -114,7 +103,7 @@ class UserPath:
         self._user_locate = getattr(path, "locate", None)
         if self._user_locate is not None and not callable(self._user_locate):
             raise ValueError(f"{who}: locate must be a method (or absent), got {show_value(self._user_locate)}")
-        # probes: pose_columns on a column and on a float, then the closest-point search on points of the path
+        # probes: pose_columns on a column and a float, then locate on points of the path
         probe = np.linspace(0.0, self.length, 7)
         pose = self.pose_columns(probe)
         self.pose_columns(0.0)
@@ -130,10 +119,9 @@ class UserPath:
         _finite_column(loc.progress, probe.shape, f"{who}: locate(...).progress")
         self.locate(float(np.asarray(pose.x)[0]), float(np.asarray(pose.y)[0]), 0.0, 0.5, 0.5)
 
-    # --- checked evaluation ----------------------------------------------------------------------------
-
     def pose_columns(self, s: Real) -> PathPose:
-        """The user's ``pose_columns(s)``, checked and completed to a :class:`~amigo_gym.paths.PathPose`."""
+        """The user's ``pose_columns(s)``, checked and completed to a :class:`~amigo_gym.paths.PathPose`
+        (``curvature_rate`` the user's or 0)."""
         scalar = not isinstance(s, np.ndarray)
         shape = () if scalar else np.shape(s)
         got = self.path.pose_columns(s)
@@ -151,28 +139,18 @@ class UserPath:
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
     ) -> PathPoint:
         """The closest path point to ``(x, y)`` [m] (the user's ``locate`` or the sampled search), checked."""
-        if self._user_locate is not None:
-            got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
-            return self._checked_point(got, x, y)
-        return self._locate(x, y, s_prev, max_advance, max_retreat)
-
-    def _checked_point(self, got: Any, x: Real, y: Real) -> PathPoint:
+        if self._user_locate is None:  # the sampled search
+            scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
+            got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
+            return _point(list(got), scalar)
+        got = self._user_locate(x, y, s_prev, max_advance, max_retreat)
         scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray))
         shape = () if scalar else np.broadcast_shapes(np.shape(x), np.shape(y))
         where = f"{self._owner}: path {self.name}: locate(x, y, ...)"
         at = f"x = {float(x)!r}, y = {float(y)!r} m" if scalar else None
         return _point(_fields(got, PathPoint._fields, shape, where, "an amigo_gym.paths.PathPoint", at), scalar)
 
-    def _locate(
-        self, x: Real, y: Real, s_prev: Real | None, max_advance: float, max_retreat: float | None
-    ) -> PathPoint:
-        """The sampled search (:func:`~amigo_gym.paths.clothoid.locate_points` with this path's poses)."""
-        scalar = not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or isinstance(s_prev, np.ndarray))
-        got = locate_points(self._flat, x, y, s_prev, max_advance, max_retreat, self._pose_of)
-        return _point(list(got), scalar)
-
     def _pose_of(self, _buf: Any, _nodes: Any, _nb: int, _pv: Any, s: float) -> FloatPose:
-        """:meth:`pose_columns` of a float as the projection's pose function."""
         x, y, th, kappa, rate, ct, st = self.pose_columns(s)  # floats for a float
         return float(x), float(y), float(th), float(kappa), float(rate), float(ct), float(st)
 
@@ -180,8 +158,7 @@ class UserPath:
 def _fields(
     got: Any, names: tuple[str, ...], shape: tuple[int, ...], where: str, kind: str, at: str | None
 ) -> list[Array]:
-    """The fields ``names`` of a user's result, each :func:`_finite_column` (one-line errors; ``at``: the point
-    of a float query, added to them)."""
+    # the fields names of a user's result, each _finite_column (at: the point of a float query, for the errors)
     out = []
     for f in names:
         if not hasattr(got, f):
@@ -194,14 +171,14 @@ def _fields(
 
 
 def _point(vals: list[Any], scalar: bool) -> PathPoint:
-    """A :class:`~amigo_gym.paths.PathPoint` of the columns ``vals`` (floats and an int status for a point)."""
     if scalar:
         return PathPoint._make([*(float(v) for v in vals[:-1]), int(vals[-1])])
     return PathPoint._make([*vals[:-1], np.asarray(vals[-1]).astype(np.int64)])
 
 
 def check_path(path: Any, owner: str = "AmigoBot-v1") -> Any:
-    """``path`` as it is if trusted (module docstring), else wrapped in a :class:`UserPath` (which checks it).
+    """``path`` as it is if a :class:`~amigo_gym.paths.ClothoidPath`, :class:`~amigo_gym.paths.CirclePath`,
+    :class:`~amigo_gym.paths.ManoeuvrePath` or :class:`UserPath`, else wrapped in a :class:`UserPath` (checked).
 
     Raises:
         ValueError: one line naming the path, the member and the value.
