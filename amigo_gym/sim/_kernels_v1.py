@@ -1,22 +1,16 @@
-r"""The compiled step of AmigoBot-v0 and AmigoBot-v1 for one robot, and its batch loops (numba).
+r"""The compiled step for one robot and its batch loops (numba): :func:`step` is
+:func:`amigo_gym.task.v1.step_columns` on floats, :func:`evaluate` :func:`amigo_gym.task.v1.reset_columns`, the
+reference's scalar functions compiled as they are (float forms for those that take columns). They agree with the
+reference to 1e-9, not bit for bit (``sin``, ``cos``, ``tan``, ``exp`` and ``log`` are the C library's here).
 
-:func:`step` is :func:`amigo_gym.task.v1.step_columns` on floats, :func:`evaluate` is
-:func:`amigo_gym.task.v1.reset_columns`: the reference's scalar functions (every function of the modules in
-:data:`_SHARED_MODULES`) compiled as they are, the float forms in place of those that dispatch on floats or columns
-(:data:`_FLOAT_FORMS`). They agree with the reference to 1e-9 (``tests/test_kernel_v1.py``), not bit for bit: ``sin``,
-``cos``, ``tan``, ``exp`` and ``log`` here are the C library's.
-
-Layouts (float64 vectors, C-contiguous; index constants in :mod:`amigo_gym.sim.layout_v1`, ``L`` here):
+Layouts (float64, C-contiguous; index constants in :mod:`amigo_gym.sim.layout_v1`, ``L`` here):
 
 * ``consts``: ``CONSTANT_FIELDS``, the ``n_preview`` preview distances [m], their observation bounds, the actuator
   quadrature's nodes and weights on [0, 1] (``10 n_sub`` each), the path quadrature's (10 each);
-* ``path``: a clothoid path's flat vector (``ClothoidPath._t.flat``); empty for a circle or manoeuvre, whose
-  closed forms are in ``consts``;
+* ``path``: a clothoid path's flat vector; empty for a circle or manoeuvre (closed forms in ``consts``);
 * ``ring (L, 2)``: the command ring [rad/s], updated in place;
 * ``ws``: ``WS_FIELDS`` (state, episode, draws, outputs), then ``WS_SCRATCH`` entries of scratch;
 * ``obs``: the observation (float32 or float64), written.
-
-Compiled code is cached on disk (:func:`amigo_gym.sim.layout.kernel_cache`).
 """
 
 from __future__ import annotations
@@ -66,7 +60,7 @@ def _register() -> None:
     for module in (*_SHARED_MODULES, numeric):
         for fn in vars(module).values():
             if isinstance(fn, types.FunctionType) and fn.__module__ == module.__name__ and fn not in _OVERLOADED:
-                register_jitable(inline="always" if fn in _INLINE else "never")(fn)
+                register_jitable(inline="always" if fn in _INLINE else "never", error_model="numpy")(fn)
     for poly, scalar in _FLOAT_FORMS.items():
         typer = lambda *args, _s=scalar: _s  # noqa: E731
         typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
@@ -158,33 +152,12 @@ def _bare(a: Any) -> Any:
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
-# ----------------------------------------------------------------------------------------- small rules
-
-#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "One robot, one step")
-_pose_flat = _jit(clothoid.pose_flat)
-_heading_error = _jit(task.heading_error)
-_command_change = cast(Callable[..., tuple[float, float]], _jit(tracking.command_change))
-_heading_term = _jit(task.heading_term)
-_reward_arguments = _jit(task.reward_arguments)
-_steady_heading = _jit(task.steady_heading_float)
-_body_velocity = _jit(kinematics.body_velocity_of)
-_h_from_a = _jit(kinematics.h_from_a)
-_action_commands = cast(Callable[..., tuple[float, float, float, float]], _jit(tracking.action_commands))
-_measured_differs = _jit(tracking.measured_differs)
-_measurements = cast(Callable[..., tuple[float, float, float, float, float]], _jit(tracking.measurements))
-_end_flags = _jit(tracking.end_flags)
-_observe_head = _jit(task.observe_head)
-_preview_entry = _jit(tracking.preview_entry)
-_speed_observations = _jit(tracking.speed_observations)
-_ring_slot = _jit(actuators.ring_slot)
-_curvature_feature = _jit(task.curvature_feature)
-_observe_rates = _jit(task.observe_rates)
-_observe_reference = _jit(task.observe_reference)
-_arc_from_tangents = cast(Callable[..., tuple[float, float, float, float]], _jit(kinematics.arc_from_tangents))
-_advance_angle = _jit(kinematics.advance_angle)
-_castor_rate = _jit(kinematics.castor_rate_float)
-_bound_angle = _jit(task.bound_angle_float)
-_ring_read_slots = _jit(actuators.ring_read_slots)
+#: the functions of floats or columns that the kernel calls, typed as their float forms
+_command_change = cast(Callable[..., tuple[float, float]], tracking.command_change)
+_action_commands = cast(Callable[..., tuple[float, float, float, float]], tracking.action_commands)
+_measurements = cast(Callable[..., tuple[float, float, float, float, float]], tracking.measurements)
+_arc_from_tangents = cast(Callable[..., tuple[float, float, float, float]], kinematics.arc_from_tangents)
+_reference_speed_of = cast(Callable[..., float], tracking.reference_speed_of)
 
 
 @overload(randomization._uint64, jit_options={"error_model": "numpy"})
@@ -195,11 +168,6 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
         return np.uint64(n)
 
     return impl
-
-
-# ----------------------------------------------------------------------------------------- actuators
-
-_reference_speed_of = cast(Callable[..., float], _jit(tracking.reference_speed_of))
 
 
 @_jit
@@ -228,9 +196,6 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     return v_true  # type: ignore[return-value]  # a float here
 
 
-# ----------------------------------------------------------------------------------------- the path
-
-
 @_jit
 def _path_nodes(c: F64) -> int:
     nodes: int = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
@@ -242,14 +207,7 @@ def pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, 
     """:func:`amigo_gym.paths.clothoid.pose_flat`: ``(x, y, theta, kappa, curvature_rate, cos theta, sin theta)`` at
     the arc length ``s`` [m]."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    return _pose_flat(buf, c, _path_nodes(c), pv, s)
-
-
-_circle_foot = _jit(classic.circle_foot)
-_circle_arc = _jit(classic.circle_arc)
-_manoeuvre_foot = _jit(classic.manoeuvre_foot)
-_manoeuvre_curvature = _jit(classic.manoeuvre_curvature)
-_round_half_even = _jit(task.round_half_even)
+    return clothoid.pose_flat(buf, c, _path_nodes(c), pv, s)
 
 
 @_jit
@@ -263,11 +221,11 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
         r = c[L.C_RADIUS]
         cx, cy, r0x, r0y = c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
         if kind == L.PATH_CIRCLE:
-            e, ct, st, ux, uy = _circle_foot(x, y, cx, cy, r0x, r0y, d, r)
-            s = _circle_arc(ux, uy, r0x, r0y, d, r)
+            e, ct, st, ux, uy = classic.circle_foot(x, y, cx, cy, r0x, r0y, d, r)
+            s = classic.circle_arc(ux, uy, r0x, r0y, d, r)
             lap = task.TWO_PI * r
-            return s + lap * _round_half_even((sp - s) / lap), d / r, e, ct, st, 0  # type: ignore[return-value]
-        e, ct, st, s, _s_circ, on_line = _manoeuvre_foot(x, y, cx, cy, r0x, r0y, d, r, c[L.C_STRAIGHT])
+            return s + lap * task.round_half_even((sp - s) / lap), d / r, e, ct, st, 0  # type: ignore[return-value]
+        e, ct, st, s, _s_circ, on_line = classic.manoeuvre_foot(x, y, cx, cy, r0x, r0y, d, r, c[L.C_STRAIGHT])
         return s, 0.0 if on_line else d / r, e, ct, st, 0  # type: ignore[return-value]
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
@@ -277,28 +235,22 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     return s, kappa, e, ct, st, status
 
 
-# ----------------------------------------------------------------------------------------- per-step draws
-
-_step_uniforms = _jit(randomization.step_uniforms)
-_step_normals = _jit(randomization.step_normals)
-
-
 @_jit
 def _draws(c: F64, ws: F64, key: np.uint64) -> None:
     # randomization.step_noise of the state's step counter into ws: the slips, the normals by Box-Muller
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
-    s1, s2, on = _step_uniforms(ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate)
+    s1, s2, on = randomization.step_uniforms(
+        ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate
+    )
     ws[L.W_SLIP1] = s1
     ws[L.W_SLIP2] = s2
     for j in range(on):
         ws[L.S_U1 + j] = math.log(ws[L.S_U1 + j])
         ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
-    _step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
+    randomization.step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
 
-
-# ----------------------------------------------------------------------------------------- building paths
 
 # The path-building loops (clothoid.PathLoops), their scratch on the stack; ``nodes``: the quadrature's node table.
 _RUN_NODES = families.RUN_SCRATCH
@@ -315,17 +267,9 @@ def build_chain(
 
 @_jit
 def rows_locate(
-    nodes: F64,
-    out: F64,
-    flat: F64,
-    start: NDArray[np.int64],
-    x: F64,
-    y: F64,
-    sp: F64,
-    ahead: float,
-    behind: float,
+    nodes: F64, out: F64, flat: F64, start: NDArray[np.int64], x: F64, y: F64, sp: F64, ahead: float, behind: float,
     on: bool,
-) -> None:
+) -> None:  # fmt: skip
     """:func:`amigo_gym.paths.clothoid.locate_rows`: the column projection, row by row, into ``out``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     clothoid.locate_rows(clothoid.pose_flat, out, buf, nodes, flat, start, x, y, sp, ahead, behind, on)
@@ -370,7 +314,7 @@ def _curvature_at(c: F64, pv: F64, s: float) -> float:
     curvature: float = c[L.C_DIRECTION] / c[L.C_RADIUS]
     if kind == L.PATH_CIRCLE:
         return curvature
-    k_s: float = _manoeuvre_curvature(s, c[L.C_STRAIGHT], curvature)
+    k_s: float = classic.manoeuvre_curvature(s, c[L.C_STRAIGHT], curvature)
     return k_s
 
 
@@ -379,9 +323,6 @@ def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
     """H's progress [m]: ``path.locate(x, y, s_prev, window, window).progress``."""
     s: float = _locate(c, pv, x, y, s_prev)[0]
     return s
-
-
-# ----------------------------------------------------------------------------------------- the task
 
 
 @_jit
@@ -400,73 +341,64 @@ def _evaluate(
     x = ws[L.W_X]
     y = ws[L.W_Y]
     beta = ws[L.W_BETA]
-    hx, hy = _h_from_a(x, y, cb, sb, ws[L.W_L3])
+    hx, hy = kinematics.h_from_a(x, y, cb, sb, ws[L.W_L3])
     s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
-    cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
+    cos_psi, sin_psi = task.heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
-    cos_ss, sin_ss = _steady_heading(kappa, l3)
-    arg_t, arg_v, arg_s = _reward_arguments(
+    cos_ss, sin_ss = task.steady_heading_float(kappa, l3)
+    arg_t, arg_v, arg_s = task.reward_arguments(
         abs(e), abs(v_true - v_ref), da1 * da1 + da2 * da2, c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
     )
     ws[L.W_ARG_T] = arg_t
     ws[L.W_ARG_V] = arg_v
-    ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
+    ws[L.W_HEADING] = task.heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     ws[L.W_ARG_S] = arg_s
     closed = pv[clothoid.P_CLOSED] if c[L.C_PATH_KIND] == L.PATH_CLOTHOID else 1.0
-    terminated, at_end = _end_flags(e, c[L.C_TERM], closed, status)
+    terminated, at_end = tracking.end_flags(e, c[L.C_TERM], closed, status)
     mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
-    if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
+    if tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
         mcb = math.cos(mb)
         msb = math.sin(mb)
-        mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)
+        mhx, mhy = kinematics.h_from_a(mx, my, mcb, msb, l3)
         m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h)
     else:
         mcb = cb
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
-    m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
-    o0, o1, o2, o3 = _observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
+    m_cos_psi, m_sin_psi = task.heading_error(mcb, msb, m_ct, m_st)
+    o0, o1, o2, o3 = task.observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
     obs[0] = o0
     obs[1] = o1
     obs[2] = o2
     obs[3] = o3
     n_prev = int(c[L.C_N_PREVIEW])
-    v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
+    v_meas = kinematics.body_velocity_of(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
     if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns
         for i in range(n_prev):
-            obs[4 + i] = _curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
-        q1, q2, q3 = _observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
+            obs[4 + i] = task.curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
+        q1, q2, q3 = task.observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
         obs[4 + n_prev] = q1
         obs[5 + n_prev] = q2
         obs[6 + n_prev] = q3
-        obs[7 + n_prev] = _observe_reference(v_ref, c[L.C_V_MAX])
-        _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
-        return
-    scale = c[L.C_PREVIEW_SCALE]
-    for i in range(n_prev):
-        qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + i])
-        px, py, pk = _preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
-        obs[4 + 3 * i] = px
-        obs[5 + 3 * i] = py
-        obs[6 + 3 * i] = pk
-    v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
-    s0, s1, s2, s3, s4 = _speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
-    k = 4 + 3 * n_prev
-    obs[k] = s0
-    obs[k + 1] = s1
-    obs[k + 2] = s2
-    obs[k + 3] = s3
-    obs[k + 4] = s4
-    obs[k + 5] = ws[L.W_A1]
-    obs[k + 6] = ws[L.W_A2]
-    _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
-
-
-@_jit
-def _store_outputs(
-    ws: F64, s_h: float, hx: float, hy: float, e: float, v_true: float, v_ref: float, mx: float, my: float,
-    mb: float, mw1: float, mw2: float, terminated: bool, at_end: bool,
-) -> None:  # fmt: skip
+        obs[7 + n_prev] = task.observe_reference(v_ref, c[L.C_V_MAX])
+    else:
+        scale = c[L.C_PREVIEW_SCALE]
+        for i in range(n_prev):
+            qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + i])
+            px, py, pk = tracking.preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
+            obs[4 + 3 * i] = px
+            obs[5 + 3 * i] = py
+            obs[6 + 3 * i] = pk
+        v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
+        s0, s1, s2, s3, s4 = tracking.speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
+        k = 4 + 3 * n_prev
+        obs[k] = s0
+        obs[k + 1] = s1
+        obs[k + 2] = s2
+        obs[k + 3] = s3
+        obs[k + 4] = s4
+        obs[k + 5] = ws[L.W_A1]
+        obs[k + 6] = ws[L.W_A2]
     ws[L.W_PROGRESS] = s_h
     ws[L.W_HX] = hx
     ws[L.W_HY] = hy
@@ -505,13 +437,14 @@ def step(
         _no_draws(ws)
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     if c[L.C_IDEAL] != 0.0:
-        _ideal_step(c, pv, ws, obs, c1, c2, cmd1, cmd2)
+        v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, cmd1, cmd2)
+        _ideal_move(c, pv, ws, obs, c1, c2, cmd1, cmd2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
         return
     length = ring.shape[0]
-    slot = _ring_slot(ring_step, length)
+    slot = actuators.ring_slot(ring_step, length)
     ring[slot, 0] = cmd1
     ring[slot, 1] = cmd2
-    i_old, i_new = _ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
+    i_old, i_new = actuators.ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
     w1_old = ws[L.W_W1]
@@ -520,15 +453,23 @@ def step(
     da1, da2 = _command_change(
         c[L.C_REWARD_V0] != 0.0, ws[L.W_W1], ws[L.W_W2], w1_old, w2_old, c1, c2, ws[L.W_A1], ws[L.W_A2]
     )
+    beta = ws[L.W_BETA]
+    _finish(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), da1, da2, c1, c2, cmd1, cmd2)
+
+
+@_jit
+def _finish(
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, cb: float, sb: float, da1: float, da2: float,
+    c1: float, c2: float, cmd1: float, cmd2: float,
+) -> None:  # fmt: skip
+    # the step's command and counter into ws, then the evaluation of the new state
     steps = ws[L.W_STEPS] + 1.0
     ws[L.W_A1] = c1
     ws[L.W_A2] = c2
     ws[L.W_STEPS] = steps
     ws[L.W_CMD1] = cmd1
     ws[L.W_CMD2] = cmd2
-    beta = ws[L.W_BETA]
     t = steps * c[L.C_DT]
-    cb, sb = math.cos(beta), math.sin(beta)
     nx, ny, nb, nr1, nr2 = ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
     _evaluate(c, pv, ws, obs, v_true, cb, sb, da1, da2, t, nx, ny, nb, nr1, nr2)
 
@@ -542,17 +483,9 @@ def _no_draws(ws: F64) -> None:
 @_jit
 def _ideal_motion(c: F64, ws: F64, w1: float, w2: float) -> tuple[float, float, float, float, float]:
     # (v_A [m/s], betadot [rad/s], h = betadot dt / 2, the tangents' arguments h / 2, (beta + h) / 2 [rad])
-    v, bdot = _body_velocity(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
+    v, bdot = kinematics.body_velocity_of(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
     h = 0.5 * (bdot * c[L.C_DT])
     return v, bdot, h, 0.5 * h, 0.5 * (ws[L.W_BETA] + h)
-
-
-@_jit
-def _ideal_step(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float
-) -> None:
-    v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, w1, w2)
-    _ideal_move(c, pv, ws, obs, c1, c2, w1, w2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
 
 
 @_jit
@@ -566,29 +499,21 @@ def _ideal_move(
     beta = ws[L.W_BETA]
     x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, t_h, t_m)
     da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, ws[L.W_W1], ws[L.W_W2], c1, c2, ws[L.W_A1], ws[L.W_A2])
-    steps = ws[L.W_STEPS] + 1.0
     ws[L.W_X] = x1
     ws[L.W_Y] = y1
-    ws[L.W_BETA] = _bound_angle(beta + bdot * dt)
+    ws[L.W_BETA] = task.bound_angle_float(beta + bdot * dt)
     ws[L.W_W1] = w1
     ws[L.W_W2] = w2
-    ws[L.W_AL1] = _advance_angle(ws[L.W_AL1], w1, dt)
-    ws[L.W_AL2] = _advance_angle(ws[L.W_AL2], w2, dt)
-    ws[L.W_CASTOR] = _advance_angle(ws[L.W_CASTOR], _castor_rate(v, bdot, c[L.C_L5], c[L.C_R3]), dt)
-    ws[L.W_A1] = c1
-    ws[L.W_A2] = c2
-    ws[L.W_STEPS] = steps
-    ws[L.W_CMD1] = w1
-    ws[L.W_CMD2] = w2
-    _evaluate(
-        c, pv, ws, obs, v, cb, sb, da1, da2, steps * dt, ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
+    ws[L.W_AL1] = kinematics.advance_angle(ws[L.W_AL1], w1, dt)
+    ws[L.W_AL2] = kinematics.advance_angle(ws[L.W_AL2], w2, dt)
+    ws[L.W_CASTOR] = kinematics.advance_angle(
+        ws[L.W_CASTOR], kinematics.castor_rate_float(v, bdot, c[L.C_L5], c[L.C_R3]), dt
     )
+    _finish(c, pv, ws, obs, v, cb, sb, da1, da2, c1, c2, w1, w2)
 
 
 _RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
 _N_RECORD_WS = len(L.RECORD_WS)
-_smooth_term = _jit(task.smooth_term)
-_reward_product = _jit(task.reward_product)
 
 
 @_jit
@@ -610,9 +535,9 @@ def _record_entries(ws: F64, rec: F64) -> None:
 @_jit
 def record_terms(rec: F64, smooth_weight: float) -> None:
     """The smoothness term and the reward of ``rec`` from its exponentials and heading term."""
-    smooth = _smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
+    smooth = task.smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
     rec[L.R_SMOOTH] = smooth
-    rec[L.R_REWARD] = _reward_product(rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING], smooth)
+    rec[L.R_REWARD] = task.reward_product(rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING], smooth)
 
 
 @_jit
@@ -627,8 +552,8 @@ def step_record(
     fill_record(ws, rec, smooth_weight)
 
 
-# ----------------------------------------------------------------------------------------- N robots
-# Each row loop is written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under another name).
+# The batch: each row loop is written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under
+# another name).
 
 
 def _step_rows(

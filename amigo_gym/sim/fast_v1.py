@@ -1,11 +1,5 @@
-"""When the compiled step runs, and its vectors (numba-free: :func:`kernels` imports numba on its first call).
-
-The reference step is :func:`amigo_gym.task.v1.step_columns` (any path, ``kernel="numpy"``); the kernel,
-:class:`StepKernel` (one robot) and :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (``N`` robots), compiles the same
-scalar functions (:mod:`amigo_gym.sim._kernels_v1`) and runs on a :class:`~amigo_gym.paths.ClothoidPath`, and on
-AmigoBot-v0's :class:`~amigo_gym.paths.CirclePath` and :class:`~amigo_gym.paths.ManoeuvrePath` with
-``observation="v0"``. Both agree to 1e-9 (``tests/test_kernel_v1.py``), not bit for bit.
-"""
+"""When the compiled step runs (:func:`use_kernel`, :func:`compiled_path`) and its vectors; numba-free until
+:func:`kernels`. The kernel compiles the reference's scalar functions and agrees with it to 1e-9, not bit for bit."""
 
 from __future__ import annotations
 
@@ -43,14 +37,6 @@ def choices(values: Sequence[str]) -> str:
     return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " or " + quoted[-1]
 
 
-def kernel_mode() -> str:
-    """The mode set by :data:`KERNEL_ENV`: ``"auto"``, ``"numba"`` or ``"numpy"`` (``ValueError`` on another value)."""
-    mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
-    if mode in KERNELS:
-        return mode
-    raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
-
-
 @lru_cache(maxsize=1)
 def numba_available() -> bool:
     """Whether numba can be imported (checked without importing it)."""
@@ -58,16 +44,17 @@ def numba_available() -> bool:
 
 
 def use_fast_path(requested: bool | None = None) -> bool:
-    """Whether to run the compiled kernel.
-
-    Args:
-        requested: ``True`` requires it, ``False`` refuses it, ``None`` follows :data:`KERNEL_ENV`.
+    """Whether to run the compiled kernel: ``requested`` ``True`` requires it, ``False`` refuses it, ``None`` follows
+    :data:`KERNEL_ENV`.
 
     Raises:
+        ValueError: :data:`KERNEL_ENV` is not ``auto``, ``numba`` or ``numpy``.
         ImportError: the fast path is required (argument or ``AMIGO_GYM_KERNEL=numba``) but numba is missing.
     """
     if requested is None:
-        mode = kernel_mode()
+        mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
+        if mode not in KERNELS:
+            raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
         if mode == "numpy":
             return False
         requested = True if mode == "numba" else None
@@ -135,7 +122,7 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
 
 def use_kernel(owner: str, kernel: object) -> bool:
     """Whether ``kernel=`` selects the compiled step: ``"numba"`` requires it, ``"numpy"`` refuses it, ``"auto"``
-    follows :data:`KERNEL_ENV` and uses numba when it can be imported.
+    follows :data:`KERNEL_ENV`.
 
     Raises:
         ValueError: not one of :data:`KERNELS`.
@@ -194,55 +181,23 @@ def kernel_constants(k: tracking.Constants) -> Array:
     elif type(path) is ManoeuvrePath:
         kind, circle, straight = layout_v1.PATH_MANOEUVRE, path.circle, path.straight_length
     cx, cy, r0x, r0y = circle._frame
-    nominal = k.nominal
+    n = k.nominal
     act = p.actuators
     rz = p.randomize
     u, uw = fresnel._nodes(k.n_sub)
-    values: dict[str, float] = {
-        "dt": p.dt,
-        "w_max": k.w_max,
-        "r1": nominal.r1,
-        "r2": nominal.r2,
-        "l1": nominal.l1,
-        "two_l1": 2.0 * nominal.l1,
-        "accel": act.acceleration,
-        "decel": act.deceleration,
-        "rot_accel": act.rot_acceleration,
-        "rot_decel": act.rot_deceleration,
-        "l3": k.l3,
-        "error_scale": p.error_scale,
-        "e_max": k.e_max,
-        "termination_distance": p.termination_distance,
-        "preview_scale": p.preview_scale,
-        "v_max": k.v_max,
-        "sigma_track": p.sigma_track,
-        "sigma_speed": p.sigma_speed,
-        "smooth_scale_sq": k.smooth_scale_sq,
-        "trapezoid": 1.0 if p.speed_profile == "trapezoid" else 0.0,
-        "profile_accel": p.profile_accel,
-        "profile_decel": p.profile_decel,
-        "window": k.window,
-        "speed_lookahead": tracking.SPEED_LOOKAHEAD,
-        "n_preview": float(len(p.preview)),
-        "n_nodes": float(len(u)),
-        "position_noise": rz.position_noise,
-        "heading_noise": rz.heading_noise,
-        "wheel_rate_noise": rz.wheel_rate_noise,
-        "ideal": 1.0 if p.ideal_actuators else 0.0,
-        "obs_v0": 1.0 if p.observation == "v0" else 0.0,
-        "reward_v0": 1.0 if p.reward == "v0" else 0.0,
-        "l5": nominal.l5,
-        "r3": nominal.r3,
-        "path_kind": kind,
-        "cx": cx,
-        "cy": cy,
-        "r0x": r0x,
-        "r0y": r0y,
-        "direction": float(circle.direction),
-        "radius": circle.radius,
-        "straight_length": straight,
-    }
-    head = [values[name] for name in layout_v1.CONSTANT_FIELDS]
+    head = [  # in the order of layout_v1.CONSTANT_FIELDS, line by line
+        p.dt, k.w_max, n.r1, n.r2, n.l1, 2.0 * n.l1,
+        act.acceleration, act.deceleration, act.rot_acceleration, act.rot_deceleration,
+        k.l3, p.error_scale, k.e_max, p.termination_distance, p.preview_scale, k.v_max,
+        p.sigma_track, p.sigma_speed, k.smooth_scale_sq,
+        1.0 if p.speed_profile == "trapezoid" else 0.0, p.profile_accel, p.profile_decel,
+        k.window, tracking.SPEED_LOOKAHEAD, float(len(p.preview)), float(len(u)),
+        rz.position_noise, rz.heading_noise, rz.wheel_rate_noise,
+        1.0 if p.ideal_actuators else 0.0, 1.0 if p.observation == "v0" else 0.0, 1.0 if p.reward == "v0" else 0.0,
+        n.l5, n.r3,
+        kind,
+        cx, cy, r0x, r0y, float(circle.direction), circle.radius, straight,
+    ]  # fmt: skip
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
     return np.array(head + tail, dtype=np.float64)
 

@@ -1,10 +1,5 @@
-"""The compiled step of ``N`` robots at once (numba): the native vector env's fast path.
-
-:class:`BatchKernel` runs the single robot's compiled step over the rows of an ``(N, W)`` workspace in one compiled
-loop, each row on its own path, ring and workspace row. With ideal actuators and no per-step draws a step is three
-loops with numpy's ``tan`` and ``exp`` of whole blocks between them. The paths are flattened into one float64 arena
-(:class:`PathArena`).
-"""
+"""The compiled step of ``N`` robots (numba): the single robot's step over the rows of an ``(N, W)`` workspace in one
+compiled loop; with ideal actuators and no per-step draws, three loops with numpy's ``tan`` and ``exp`` between."""
 
 from __future__ import annotations
 
@@ -117,11 +112,10 @@ class BatchKernel:
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
-        step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
+        par = "_parallel" if self.parallel else ""
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
-        self._step_rows: Any = fast_v1.direct_call(step_rows, *args)
+        self._step_rows: Any = fast_v1.direct_call(getattr(kv, "step_rows" + par), *args)
         if self.ideal:
-            par = "_parallel" if self.parallel else ""
             self._ideal_tangent_rows: Any = fast_v1.direct_call(
                 getattr(kv, "ideal_tangent_rows" + par), f1, f2, f1, f1, f2
             )
@@ -162,14 +156,6 @@ class BatchKernel:
         self.keys[r] = ep.key
         self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)
-
-    def progress(self, path: Any, x: float, y: float, hint: float) -> float:
-        """H's progress [m] (:data:`amigo_gym.task.v1.ProgressFn`)."""
-        return self._row.progress(path, x, y, hint)
-
-    def pose(self, path: Any, s: float) -> Any:
-        """The path's pose at ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`)."""
-        return self._row.pose(path, s)
 
     def start(
         self,

@@ -18,7 +18,6 @@ def twin(fn: Callable[..., Any], name: str) -> Callable[..., Any]:
     assert isinstance(fn, types.FunctionType)
     copy = types.FunctionType(fn.__code__, fn.__globals__, name, fn.__defaults__, fn.__closure__)
     copy.__qualname__ = name
-    copy.__doc__ = fn.__doc__
     return copy
 
 
@@ -34,27 +33,24 @@ def source_digest() -> str:
     return digest.hexdigest()[:16]
 
 
-def cache_root() -> Path:
-    """``$NUMBA_CACHE_DIR/amigo_gym`` when set, else ``$XDG_CACHE_HOME/amigo_gym/numba`` (``~/.cache/...``)."""
-    user = os.environ.get("NUMBA_CACHE_DIR")
-    if user:
-        return Path(user) / "amigo_gym"
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "amigo_gym" / "numba"
-
-
 #: how many source digests' caches :func:`kernel_cache` keeps (the most recently used; one per install or edit)
 KEEP_CACHES = 8
 
 
 @contextmanager
 def kernel_cache() -> Iterator[Path]:
-    """Within this block numba's disk cache is ``cache_root() / source_digest()`` (yielded); the least recently used
-    caches of other digests beyond :data:`KEEP_CACHES` are removed."""
+    """Within this block numba's disk cache is ``root / source_digest()`` (yielded), ``root`` being
+    ``$NUMBA_CACHE_DIR/amigo_gym`` when set, else ``$XDG_CACHE_HOME/amigo_gym/numba`` (``~/.cache/...``); the least
+    recently used caches of other digests beyond :data:`KEEP_CACHES` are removed."""
     from numba.core import config as numba_config
 
     config = cast(Any, numba_config)  # its settings are set at run time
 
-    root = cache_root()
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        root = Path(user) / "amigo_gym"
+    else:
+        root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "amigo_gym" / "numba"
     folder = root / source_digest()
     folder.mkdir(parents=True, exist_ok=True)
     folder.touch()

@@ -9,49 +9,19 @@ from amigo_gym.model import actuators
 
 #: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
-    "dt",  # control period [s]
-    "w_max",  # nominal max wheel rate [rad/s]
-    "r1",  # nominal wheel radii [m] and half track [m]
-    "r2",
-    "l1",
-    "two_l1",  # 2 l1 [m]
-    "accel",  # firmware ramps [m/s^2], [rad/s^2]
-    "decel",
-    "rot_accel",
-    "rot_decel",
-    "l3",  # nominal l3 [m]
-    "error_scale",  # [m]
-    "e_max",  # observation bound of the cross-track error [-]
-    "termination_distance",  # [m]
-    "preview_scale",  # [m]
-    "v_max",  # nominal max speed [m/s]
-    "sigma_track",  # the reward's scales: [m]
-    "sigma_speed",  # [m/s]
-    "smooth_scale_sq",  # [-]
-    "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
-    "profile_accel",  # [m/s^2]
-    "profile_decel",  # [m/s^2]
-    "window",  # projection window ahead and behind [m]
-    "speed_lookahead",  # [s]
-    "n_preview",  # number of preview distances
-    "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
-    "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
-    "heading_noise",
-    "wheel_rate_noise",
-    "ideal",  # 1.0 for ideal_actuators (the wheel rates are the commands, the exact arc step), else 0.0
-    "obs_v0",  # 1.0 for observation="v0" (AmigoBot-v0's layout), else 0.0
-    "reward_v0",  # 1.0 for reward="v0" (the smoothness of the wheel rates' change [rad/s]), else 0.0
-    "l5",  # nominal castor swivel distance [m] and castor radius [m] (the castor angle of ideal steps)
-    "r3",
-    "path_kind",  # PATH_CLOTHOID (the path vector), PATH_CIRCLE or PATH_MANOEUVRE (closed forms, the entries below)
-    "cx",  # the circle's centre [m], unit start radius, direction (+1 left, -1 right), radius [m]
-    "cy",
-    "r0x",
-    "r0y",
-    "direction",
-    "radius",
-    "straight_length",  # the manoeuvre's straight part [m]
-)
+    "dt", "w_max", "r1", "r2", "l1", "two_l1",  # [s], [rad/s], the nominal wheel radii, half track, 2 l1 [m]
+    "accel", "decel", "rot_accel", "rot_decel",  # firmware ramps [m/s^2], [rad/s^2]
+    "l3", "error_scale", "e_max", "termination_distance", "preview_scale", "v_max",  # [m], [m], [-], [m], [m], [m/s]
+    "sigma_track", "sigma_speed", "smooth_scale_sq",  # the reward's scales [m], [m/s], [-]
+    "trapezoid", "profile_accel", "profile_decel",  # 1.0 for speed_profile="trapezoid" else 0.0; [m/s^2]
+    "window", "speed_lookahead", "n_preview", "n_nodes",  # [m], [s], counts (actuator nodes per piece: 10 n_sub)
+    "position_noise", "heading_noise", "wheel_rate_noise",  # noise standard deviations [m], [rad], [rad/s]
+    "ideal", "obs_v0", "reward_v0",  # 1.0 for ideal_actuators, observation="v0", reward="v0", else 0.0
+    "l5", "r3",  # nominal castor swivel distance and castor radius [m]
+    "path_kind",  # PATH_CLOTHOID (the path vector), PATH_CIRCLE or PATH_MANOEUVRE (closed forms below)
+    # the circle's centre [m], unit start radius, direction (+1 left), radius [m]; the manoeuvre's straight part [m]
+    "cx", "cy", "r0x", "r0y", "direction", "radius", "straight_length",
+)  # fmt: skip
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
 C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
