@@ -1,11 +1,9 @@
-r"""``AmigoBot-v1``: the real robot on many paths: actuator ramps, mismatch, slip, delay and noise, exactly integrated.
-
-A thin stateful shell over the column functions of :mod:`amigo_gym.task.v1`; the native vector environment
-:class:`amigo_gym.envs.AmigoBotV1VectorEnv` calls the same functions on ``(N,)`` columns.
-"""
+r"""``AmigoBot-v1``: the real robot on many paths (actuator ramps, mismatch, slip, delay and noise, exactly
+integrated), a stateful shell over the functions of :mod:`amigo_gym.task.v1`."""
 
 from __future__ import annotations
 
+import copy
 import math
 from collections import deque
 from typing import Any, SupportsFloat
@@ -14,15 +12,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.envs.base import (
-    RENDER_MODES,
-    Array,
-    ObsArray,
-    box_spaces,
-    check_render_mode,
-    check_reset_options,
-    parse_pose_option,
-)
+from amigo_gym.envs.base import RENDER_MODES, Array, ObsArray, box_spaces, check_reset_options, parse_pose_option
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
@@ -33,9 +23,8 @@ from amigo_gym.task import v1 as tracking
 
 
 def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
-    """The compiled step's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state,
-    outcome and draws: ``(RECORD_WIDTH,)`` for floats, ``(N, RECORD_WIDTH)`` for columns. ``w_max`` [rad/s] scales
-    the command; ``castor`` [rad] is the castor's angle (AmigoBot-v0's info)."""
+    """The info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state, outcome and draws:
+    ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``; ``w_max`` [rad/s] scales the command, ``castor`` [rad]."""
     track, speed, heading, smooth = out.terms
     cols = (
         st.x, st.y, st.beta, out.h_x, out.h_y, st.w1, st.w2, st.a1 * w_max, st.a2 * w_max, st.alpha1, st.alpha2,
@@ -45,20 +34,17 @@ def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, no
     return np.stack(np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols)), axis=-1)
 
 
-#: the compiled step's info record's arrays (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) as indices of its last axis,
-#: built once (one robot's record or ``(N, RECORD_WIDTH)`` records); the command's and the slip's
+#: the info record's arrays as indices of its last axis; its scalars (``record[..., R_ERROR:]``) by index
 _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
     (..., r) for r in (_L.R_POSE, _L.R_H, _L.R_RATES, _L.R_COMMAND, _L.R_ANGLES, _L.R_MEASURED, _L.R_SLIP)
 )
-#: the record's scalars (from ``R_ERROR`` on: ``record[R_ERROR:]``, record_info's ``values``) by index
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
     i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
                              _L.R_CASTOR, _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
 
 
 def v0_record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
-    """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of the compiled step's info records, as
-    :func:`record_info` builds AmigoBot-v1's (the same arguments: the arrays are views of ``record``)."""
+    """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of info records, arguments as :func:`record_info`."""
     terms = (values[_TRACK], values[_SPEED], values[_HEADING], values[_SMOOTH])
     return task.info_dict(
         record[_POSE], record[_H], values[_E], record[_RATES], record[_ANGLES], values[_CASTOR], terms, time
@@ -74,12 +60,11 @@ def record_info(
     end_of_path: Any,
     path: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """AmigoBot-v1's info (one robot's, or the vector env's compact infos) of info records
-    (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, the compiled step's or :func:`reference_record`'s).
+    """AmigoBot-v1's info (one robot's, or the vector env's compact infos) of info records.
 
     Args:
         record: ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``, a new array: the info's arrays are views of it.
-        values: the record's scalars (``record[..., R_ERROR:]``): floats (one robot) or ``(N,)`` views.
+        values: the record's scalars (``record[..., R_ERROR:]``): floats or ``(N,)`` views.
         time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: floats
             or columns. path: the path's description (the single env's only), or None.
     """
@@ -112,40 +97,29 @@ def record_info(
     }
 
 
-def _fresh(x: Any) -> Any:
-    """A copy of a report of dicts and lists: new containers, the immutable leaves shared (faster than deepcopy)."""
-    if isinstance(x, dict):
-        return {k: _fresh(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_fresh(v) for v in x]
-    return x
-
-
 class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
     r"""AmigoBot path tracking on the real robot: point H follows a path of any family, steered by wheel-rate setpoints.
 
     ## Description
 
-    The AmigoBot's kinematics as in ``AmigoBot-v0`` (the D–H model of the paper: pose ``(x_A, y_A, beta)``,
-    point H ``l3 = 0.08 m`` ahead of the axle midpoint A), with the robot as it is:
+    The kinematics of ``AmigoBot-v0`` (pose ``(x_A, y_A, beta)``, point H ``l3 = 0.08 m`` ahead of the axle
+    midpoint A), with the robot as it is:
 
-    * **Actuators.** Actions are wheel-rate *setpoints*; the firmware ramps its translational speed at
-      0.3 m/s^2 (speeding up) / 0.75 m/s^2 (slowing down) and its rotational speed at 0.87 / 2.5 rad/s^2
-      towards them, and the wheel rates are limited to 15 rad/s (:mod:`amigo_gym.model.actuators`). The actual
-      wheel rates are part of the state; episodes start with the wheels at rest.
-    * **Exact integration.** Within a step the speeds are piecewise linear in time; the pose advances by
-      the exact generalised Fresnel integral on each piece (:mod:`amigo_gym.model.fresnel`), no Euler or RK step.
-    * **The robot is not the model.** ``robot`` is the nominal robot (the action scale, the observation,
-      every policy); ``true_robot`` is the simulated one; ``randomize`` draws wheel radii, track, slip,
-      actuation delay and measurement noise per episode (:mod:`amigo_gym.model.randomization`).
-    * **Many paths.** ``path``: ``"circle"``, ``"manoeuvre"``, ``"figure8"``, ``"lane_change"``,
-      ``"random"``, ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`);
-      ``speed`` a constant or a range, ``speed_profile="trapezoid"`` for start–cruise–brake.
-    * **Feasibility.** A fixed task whose exact inverse solution needs more wheel rate or rotational
-      acceleration than the robot has is refused at construction (``feasibility="error"``, the default), and so
-      is a ``"random"`` or ``"mixed"`` task that can draw such a path (a bound over the family,
-      :func:`amigo_gym.task.v1.drawn_feasibility_problem`); ``"warn"`` and ``"off"`` run it. The report (where the
-      limits are exceeded) is ``env.feasibility`` and ``info["feasibility"]`` at reset.
+    * **Actuators.** Actions are wheel-rate *setpoints*; the firmware ramps the translational speed at 0.3 / 0.75
+      m/s^2 (up / down) and the rotational speed at 0.87 / 2.5 rad/s^2 towards them, wheel rates limited to 15 rad/s
+      (:mod:`amigo_gym.model.actuators`). The wheel rates are state; episodes start at rest.
+    * **Exact integration.** The speeds are piecewise linear in time; the pose advances by the exact generalised
+      Fresnel integral on each piece (:mod:`amigo_gym.model.fresnel`).
+    * **The robot is not the model.** ``robot`` is the nominal robot (action scale, observation, policies);
+      ``true_robot`` the simulated one; ``randomize`` draws wheel radii, track, slip, delay and measurement noise
+      per episode (:mod:`amigo_gym.model.randomization`).
+    * **Many paths.** ``path``: ``"circle"``, ``"manoeuvre"``, ``"figure8"``, ``"lane_change"``, ``"random"``,
+      ``"mixed"`` or a path object of your own (:class:`amigo_gym.paths.PathSpec`); ``speed`` a constant or a
+      range, ``speed_profile="trapezoid"`` for start–cruise–brake.
+    * **Feasibility.** A task whose exact inverse solution (for a drawn family, a bound:
+      :func:`amigo_gym.task.v1.drawn_feasibility_problem`) needs more wheel rate or rotational acceleration than
+      the robot has is refused at construction (``feasibility="error"``, the default); ``"warn"`` and ``"off"`` run
+      it. The report is ``env.feasibility`` and ``info["feasibility"]`` at reset.
 
     ## Action Space
 
@@ -157,8 +131,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     ``Box(low, high, (18 + 3 (len(preview) - 3),), float32)``: the fields of :func:`amigo_gym.task.v1.obs_fields`
     (errors of H, path preview in the robot frame, reference speed now and 1 s ahead, speed error, measured
-    wheel rates, previous command); the table is in :mod:`amigo_gym.task.v1`. The true robot, slip and
-    delay are never observed.
+    wheel rates, previous command). The true robot, slip and delay are never observed.
 
     ## Rewards
 
@@ -189,20 +162,17 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     ## Arguments
 
-    Every field of :class:`amigo_gym.task.v1.TrackingParams` as a keyword, mappings accepted for ``robot``,
-    ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``; ``render_mode``; and
-    ``kernel``, the step's implementation (:mod:`amigo_gym.sim.fast_v1`): ``"auto"`` (default: the compiled step
-    when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference float code of
-    :mod:`amigo_gym.task.v1`) or ``"numba"`` (the compiled step; needs numba). The
-    compiled step runs on the built-in path families (:class:`amigo_gym.paths.ClothoidPath`) and on AmigoBot-v0's
-    circle and manoeuvre with ``observation="v0"``; a path object of your own runs the reference code. Both agree
-    to 1e-9 (``tests/test_kernel_v1.py``); one seed on one route gives the same bits.
+    Every field of :class:`amigo_gym.task.v1.TrackingParams` as a keyword (mappings accepted for ``robot``,
+    ``true_robot``, ``actuators``, ``randomize``, ``path_params`` and ``params``), ``render_mode``, and ``kernel``:
+    ``"auto"`` (default: the compiled step when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"``
+    (the reference code of :mod:`amigo_gym.task.v1`) or ``"numba"``. The compiled step runs on the built-in path
+    families and on AmigoBot-v0's circle and manoeuvre with ``observation="v0"``; a path object of your own runs the
+    reference. Both agree to 1e-9; one seed on one route gives the same bits.
 
-    Every argument is checked at construction, in one line naming the field, the value and the allowed range:
-    ``dt`` in [0.001, 1] s (the delay ring then keeps at most 501 commands), ``path_params`` against the family's
-    parameters and ranges (unknown, out-of-range and unused ones refused), and settings that conflict are refused,
-    not clipped (a fixed ``actuators.delay`` plus the highest ``randomize.delay`` above 0.5 s; a trapezoid too short
-    to reach its speed).
+    Every argument is checked at construction, in one line naming the field, the value and the allowed range
+    (``dt`` in [0.001, 1] s; unknown, out-of-range and unused ``path_params`` refused); conflicting settings are
+    refused, not clipped (``actuators.delay`` plus the highest ``randomize.delay`` above 0.5 s; a trapezoid too
+    short to reach its speed).
 
     ```python
     import gymnasium as gym
@@ -213,9 +183,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     ## Version History
 
-    * v1: the real robot (actuator ramps and limits, true robot, slip, delay, noise), path families and
-      speed profiles, a generalising observation (preview, reference speed, previous command).
-    * v0: the ideal robot on the paper's circle (unchanged, ``AmigoBot-v0``).
+    * v1: the real robot, path families and speed profiles, a generalising observation.
+    * v0: the ideal robot on the paper's circle (``AmigoBot-v0``).
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 10.0}  # noqa: RUF012
@@ -231,26 +200,25 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         owner = type(self).__name__
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
-        self.render_mode = check_render_mode(render_mode)
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode must be one of {list(RENDER_MODES)} or None, got {render_mode!r}")
+        self.render_mode = render_mode
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
         self.action_space, self.observation_space = box_spaces(tracking.obs_bounds(p))  # type: ignore[assignment]
         self._trail: deque[tuple[float, float]] = deque(maxlen=self.trail_length)
         self._renderer: Any = None
-        # order of calls (Gymnasium's classic-control convention): no step before reset; a warning
-        # when a terminated episode is stepped
         self._needs_reset = True
         self._ended: bool | None = False  # None: terminated and warned
         self._k = tracking.constants(p)
-        # the compiled step (amigo_gym.sim.fast_v1), for the episodes on its paths; None: the reference code
         self._kernel: fast_v1.StepKernel | None = None
         if fast_v1.use_kernel(owner, kernel):
             self._kernel = fast_v1.StepKernel(self._k)
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
         self._delay = 0.0
-        #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)  # (feasibility=)
-        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
+        #: the fixed path's feasibility report (None for drawn paths)
+        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
+        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`), or None
         self.v0_params = tracking.v0_settings(p)
         self._castor = 0.0  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._goal = (math.nan, math.nan)
@@ -266,22 +234,13 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
-        """Start an episode (its path, true robot and noise drawn; see the class docstring, *Starting State*).
-
-        Args:
-            seed: seeds ``self.np_random`` (as every Gymnasium env).
-            options: ``None`` or ``{"pose": (x_A, y_A, beta)}`` for an exact start pose.
-
-        Raises:
-            ValueError: unknown option key or a bad pose.
-        """
-        check_reset_options(options)  # refuse bad options before touching the state or the generator
+        """Start an episode (class docstring, *Starting State*); ``options={"pose": (x_A, y_A, beta)}`` sets the start
+        pose [m, m, rad]. ``ValueError`` on an unknown option key or a bad pose."""
+        check_reset_options(options)
         pose = tuple(parse_pose_option(options["pose"]).tolist()) if options is not None and "pose" in options else None
         super().reset(seed=seed)
         k = self._k
         kern = self._kernel
-        # with the compiled step, H's projections, a drawn path's building loops and its start pose compiled (the
-        # same results)
         progress, loops, at = (None, None, None) if kern is None else (kern.progress, fast_v1.path_loops(), kern.pose)
         self.path, self._path_info, ep, st = tracking.start_episode(self.np_random, k, pose, progress, loops, at)
         self._episode = ep
@@ -292,12 +251,11 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._ring_step = 0
         self._steps = int(st.steps)
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
-        self._true_robot = {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)}  # info["true_robot"]'s values
+        self._true_robot = {"r1": float(ep.r1), "r2": float(ep.r2), "l1": float(ep.l1)}
         self._goal = tracking.goal_point(self._k.params, self.path)
         self._in_kernel = kern is not None and fast_v1.compiled_path(self.path, k.params)
         self._castor = 0.0
         if kern is not None and self._in_kernel:
-            # tracking.reset_columns, compiled: the start state without noise, its own previous command
             kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
@@ -311,10 +269,10 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             out = tracking.reset_columns(k, self.path, st, ep, tracking.NO_NOISE)
             obs = np.array(out.obs, dtype=np.float32)
             info = self._info(out, tracking.NO_NOISE)
-        if self.v0_params is None:  # (AmigoBot-v0's info: no end condition, no feasibility)
+        if self.v0_params is None:
             info["end_condition"] = ""
             if self.feasibility is not None:
-                info["feasibility"] = _fresh(self.feasibility)  # new objects at every reset (Gymnasium's rule)
+                info["feasibility"] = copy.deepcopy(self.feasibility)  # new objects at every reset
         self._needs_reset = False
         self._ended = False
         self._trail.clear()
@@ -332,10 +290,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
             ValueError: action of a wrong shape or with NaN/inf entries.
 
-        Stepping a terminated episode warns once per episode, as Gymnasium's classic-control
-        environments do, and goes on integrating. (Truncation belongs to the ``TimeLimit`` wrapper of
-        ``gym.make``, outside this environment; the vector environment truncates itself and autoresets,
-        or refuses to step a finished robot in ``Disabled`` mode.)
+        Stepping a terminated episode warns once per episode and goes on integrating. Truncation belongs to the
+        ``TimeLimit`` wrapper of ``gym.make``.
         """
         if self._needs_reset:
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
@@ -358,7 +314,6 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return obs, reward, terminated, False, info
 
     def _advance(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
-        """One control period with the setpoints ``(a1, a2) * w_max`` (class docstring)."""
         self._ring_step += 1
         if self._in_kernel:
             return self._step_kernel(a1, a2)
@@ -368,7 +323,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         )
         self._state = st
         self._steps = int(st.steps)
-        if self.v0_params is not None:  # AmigoBot-v0's settings on the reference route: v0's info
+        if self.v0_params is not None:
             robot = self._k.nominal
             v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
             self._castor = advance_angle(self._castor, castor_rate_float(v, bdot, robot.l5, robot.r3), self.params.dt)
@@ -378,26 +333,19 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
 
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
-        """:meth:`_advance` by the compiled kernel (:mod:`amigo_gym.sim.fast_v1`): the same results as the reference.
-
-        The per-step draws and the reward inside the call (:func:`amigo_gym.sim._kernels_v1.step_record`); the info by
-        :func:`record_info` from a copy of the call's info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`).
-        """
         kern = self._kernel
         assert kern is not None
         kern.run_record(self._ring_step, a1, a2, *kern.args)
         self._steps += 1
         v = kern.scalars.tolist()
-        info = self._record_info(kern.record.copy(), v)  # the info's seven arrays are views of this one new array
+        info = self._record_info(kern.record.copy(), v)
         terminated = v[_TERM] != 0.0
         if self.v0_params is None:
             terminated = self._end(terminated, info)
         return kern.obs.copy(), v[_REWARD], terminated, info
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
-        """``terminated`` with the goal of an open path (``goal_tolerance``, :func:`tracking.goal_reached`, of H at
-        ``info["h_position"]``, read only where the path has a goal) and ``info["end_condition"]``
-        (:data:`tracking.END_CONDITIONS`); a goal sets ``info["end_of_path"]`` too."""
+        # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"]
         gx, gy = self._goal
         goal = False
         if gx == gx:
@@ -410,9 +358,6 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return terminated
 
     def _record_info(self, rec: Array, v: list[float]) -> dict[str, Any]:
-        """The info of an info record ``rec`` (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`, a new array: the info's
-        arrays are views of it) and its scalars ``v`` (:func:`record_info`, or :func:`v0_record_info` with
-        AmigoBot-v0's settings)."""
         time = self._steps * self.params.dt
         if self.v0_params is not None:
             return v0_record_info(rec, v, time)
@@ -420,21 +365,14 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, path)
 
     def _current_state(self) -> tracking.State:
-        """The state of the episode (:class:`amigo_gym.task.v1.State` of floats; from the compiled step's workspace
-        when it runs the episode).
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-        """
+        """The state of the episode (:class:`amigo_gym.task.v1.State` of floats); ``ResetNeeded`` before a reset."""
         if self._state is None:
             raise gym.error.ResetNeeded("call reset() before _current_state() on AmigoBot-v1")
         if self._kernel is not None and self._in_kernel:
             return self._kernel.state(self._steps)
         return self._state
 
-    # ------------------------------------------------------------------ info
     def _info(self, out: tracking.Outcome, noise: StepNoise) -> dict[str, Any]:
-        """The info of the reference's state and outcome (:func:`reference_record`, then as :meth:`_step_kernel`)."""
         assert self._state is not None
         rec = reference_record(self._k.w_max, self._state, out, noise, self._castor)
         return self._record_info(rec, rec[_L.R_ERROR :].tolist())
@@ -447,13 +385,9 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             "time": float(int(st.steps) * self.params.dt),
         }
 
-    # ------------------------------------------------------------------ rendering
     def render(self) -> NDArray[np.uint8] | None:
-        """Draw the robot to scale, the path and H's trail (see :mod:`amigo_gym.envs.rendering`).
-
-        Returns:
-            ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"``; ``None`` otherwise.
-        """
+        """The ``(H, W, 3)`` uint8 frame for ``render_mode="rgb_array"`` (:mod:`amigo_gym.envs.rendering`); ``None``
+        otherwise."""
         if self.render_mode is None:
             gym.logger.warn(
                 "render() called without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make"
@@ -463,7 +397,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before render()")
         from amigo_gym.envs.rendering import Renderer
 
-        if self._renderer is None or self._renderer.path is not self.path:  # a new episode may have a new path
+        if self._renderer is None or self._renderer.path is not self.path:
             if self._renderer is not None:
                 self._renderer.close()
             self._renderer = Renderer(self.params, self.path, self.render_mode)
@@ -477,7 +411,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             self._renderer = None
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderer (pygame surfaces); it is recreated when next used."""
+        """Pickle and deep-copy without the renderer (recreated when next used)."""
         state = self.__dict__.copy()
         state["_renderer"] = None
         return state

@@ -1,13 +1,5 @@
 """What the AmigoBot environments share: the checks of their arguments, reset options and seeds, their spaces,
-and the vector format of infos (:func:`scatter_infos`, :func:`info_row`).
-
-The classes are :class:`amigo_gym.envs.AmigoBotV1Env` (one robot, :mod:`amigo_gym.envs.amigobot_v1`) and
-:class:`amigo_gym.envs.AmigoBotV1VectorEnv` (``N`` robots, :mod:`amigo_gym.envs.vector_v1`); ``AmigoBot-v0`` is
-their configuration (:mod:`amigo_gym.envs.amigobot`).
-
-This module may import numpy, gymnasium, :mod:`amigo_gym.model.params`, :mod:`amigo_gym.task.v0` (the checks of
-actions and poses) and :mod:`amigo_gym.sim.fast_v1` (the kernel choices).
-"""
+and the vector format of infos (:func:`scatter_infos`, :func:`info_row`)."""
 
 from __future__ import annotations
 
@@ -27,36 +19,25 @@ ObsArray = NDArray[np.float32]
 BoolArray = NDArray[np.bool_]
 StepResult = tuple[ObsArray, NDArray[Any], NDArray[Any], NDArray[Any], dict[str, Any]]
 
-#: keys accepted in ``reset(options=...)`` (the vector envs also take ``"reset_mask"``)
-RESET_OPTIONS: tuple[str, ...] = ("pose",)
-
 RENDER_MODES: tuple[str, ...] = ("human", "rgb_array")
 
-#: points of H's trail kept for rendering (the most recent ones; memory stays flat however long the run)
+#: points of H's trail kept for rendering (the most recent ones)
 TRAIL_LENGTH = 1000
 
 #: the values of the vector envs' ``kernel`` keyword
 VECTOR_KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
 
 
-# ---------------------------------------------------------------------------------------------------- checks
 def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
-    """Validate ``options["pose"]``: ``(x_A [m], y_A [m], beta [rad])`` as finite numbers.
-
-    The coordinates must lie within ``POSE_LIMIT`` (1e6 m) and the heading within ``HEADING_LIMIT``
-    (1e6 rad) of zero, where float64 still resolves a step (:mod:`amigo_gym.model.params`).
-
-    Args:
-        value: the option's value; shape ``(3,)``, or ``batch_shape + (3,)`` when ``batch_shape`` is given.
-        batch_shape: leading axes a vector environment also accepts.
+    """``options["pose"]``, ``(x_A [m], y_A [m], beta [rad])`` of shape ``(3,)`` or ``batch_shape + (3,)``, checked:
+    finite, ``|x_A|, |y_A| <= POSE_LIMIT`` (1e6 m), ``|beta| <= HEADING_LIMIT`` (1e6 rad).
 
     Raises:
-        ValueError: not real numbers (strings, bools, complex numbers, objects), a ragged sequence, a
-            wrong shape, NaN/inf, or a value out of range.
+        ValueError: not real numbers, a wrong shape, NaN/inf, or a value out of range.
     """
     try:
         pose = task.real_array(value, 'options["pose"]').copy()
-    except TypeError as exc:  # reset options are refused with ValueError, whatever is wrong
+    except TypeError as exc:  # reset options are refused with ValueError
         raise ValueError(str(exc)) from None
     if pose.shape != (3,) and pose.shape != (*batch_shape, 3):
         want = "(3,)" if not batch_shape else f"(3,) or {(*batch_shape, 3)}"
@@ -72,22 +53,15 @@ def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
 
 
 def check_reset_options(options: Mapping[str, Any] | None, extra: tuple[str, ...] = ()) -> None:
-    """Refuse unknown ``reset`` option keys (``ValueError`` naming the allowed ones)."""
+    """Refuse ``reset`` option keys other than ``"pose"`` and ``extra`` (``ValueError`` naming the allowed ones)."""
     if options is None:
         return
     if not isinstance(options, Mapping):
         raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
-    allowed = (*RESET_OPTIONS, *extra)
+    allowed = ("pose", *extra)
     unknown = sorted(str(k) for k in options if k not in allowed)
     if unknown:
         raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(allowed)}")
-
-
-def check_render_mode(render_mode: str | None) -> str | None:
-    """Refuse a render mode other than ``None``, ``"human"`` and ``"rgb_array"`` (``ValueError``)."""
-    if render_mode is not None and render_mode not in RENDER_MODES:
-        raise ValueError(f"render_mode must be one of {list(RENDER_MODES)} or None, got {render_mode!r}")
-    return render_mode
 
 
 def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_mode: Any) -> None:
@@ -121,7 +95,7 @@ def check_kernel(owner: str, kernel: Any, allowed: tuple[str, ...]) -> str:
 
 
 def check_reset_mask(mask: Any, n: int) -> BoolArray:
-    """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exception types and messages)."""
+    """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exceptions and messages)."""
     if not isinstance(mask, np.ndarray):
         raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
     if mask.shape != (n,):
@@ -138,11 +112,10 @@ def check_reset_mask(mask: Any, n: int) -> BoolArray:
 
 def parse_seeds(seed: Any, n: int) -> list[int | None]:
     """``reset(seed=...)`` of a vector env: ``None``, an int ``s >= 0`` (seeds ``s + i``) or a list/tuple of ``n``
-    ints ``>= 0``/None, as ``SyncVectorEnv`` takes them (numpy integers accepted too; bools refused).
+    ints ``>= 0``/None, as ``SyncVectorEnv`` takes them.
 
     Raises:
-        TypeError: a seed of another type (a float, a string, ...), naming it and the accepted types.
-        ValueError: a negative seed, or a list of the wrong length.
+        TypeError: a seed of another type. ValueError: a negative seed, or a list of the wrong length.
     """
     accepted = f"None, an int >= 0, or a list of num_envs={n} ints >= 0 / None"
     if seed is None:
@@ -166,19 +139,12 @@ def parse_seeds(seed: Any, n: int) -> list[int | None]:
 
 
 def _is_int(x: Any) -> bool:
-    """A Python or numpy integer, not a bool."""
     return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_)
 
 
-# ---------------------------------------------------------------------------------------------------- vector infos
 def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict[str, Any]:
-    """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``) and ``_key`` masks.
-
-    ``mask=None`` means that ``infos`` already holds full ``(n, ...)`` rows for every robot. Shared by the
-    native vector envs of AmigoBot-v0 and -v1. Every ``_key`` mask is an array of its own, as in
-    ``SyncVectorEnv``'s infos (the rows of one ``(keys, n)`` array, filled at once, after one walk over ``infos``
-    that leaves a place for each).
-    """
+    """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``; ``mask=None``: ``infos``
+    holds full rows already) and a ``_key`` mask array of its own per key, as in ``SyncVectorEnv``."""
     slots: list[tuple[dict[str, Any], str]] = []
     out = _scatter_into(infos, mask, n, slots)
     masks = np.empty((len(slots), n), dtype=np.bool_)
@@ -188,28 +154,21 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
     return out
 
 
-#: the ``_key`` mask's name of each info key (``""``: a key passed on without a mask), memoised (a step's hot path)
+#: the ``_key`` mask's name of each info key (``""``: no mask), memoised
 _MASK_NAMES: dict[str, str] = {}
-
-
-def _mask_name(k: str) -> str:
-    """``"_" + k``, or ``""`` for a key that gets no mask (a mask itself, ``final_obs``, ``final_info``)."""
-    name = _MASK_NAMES.get(k)
-    if name is None:
-        name = "" if k.startswith("_") or k in ("final_obs", "final_info") else f"_{k}"
-        if len(_MASK_NAMES) < 4096:  # the envs' few keys; a bound for other callers' ones
-            _MASK_NAMES[k] = name
-    return name
 
 
 def _scatter_into(
     infos: dict[str, Any], mask: BoolArray | None, n: int, slots: list[tuple[dict[str, Any], str]]
 ) -> dict[str, Any]:
-    """:func:`scatter_infos` without the masks: each ``_key`` entry is a place (``None``) recorded in ``slots``, in
-    the order of the masks' rows."""
+    # scatter_infos without the masks: each _key entry is a place recorded in slots
     out: dict[str, Any] = {}
     for k, v in infos.items():
-        name = _MASK_NAMES.get(k) or _mask_name(k)
+        name = _MASK_NAMES.get(k)
+        if name is None:
+            name = "" if k.startswith("_") or k in ("final_obs", "final_info") else f"_{k}"
+            if len(_MASK_NAMES) < 4096:
+                _MASK_NAMES[k] = name
         if not name:
             out[k] = v
             continue
@@ -221,17 +180,14 @@ def _scatter_into(
             full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
             full[mask] = v
             out[k] = full
-        out[name] = None  # a mask of its own per key, set by scatter_infos
+        out[name] = None
         slots.append((out, name))
     return out
 
 
 def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
     """Robot ``i``'s info from vector-format infos: ``(N,)`` columns as floats (object columns as they are),
-    ``(N, k)`` rows as arrays.
-
-    The ``_key`` masks and ``final_obs``/``final_info`` are left out; nested dicts recurse.
-    """
+    ``(N, k)`` rows as arrays; without the ``_key`` masks and ``final_obs``/``final_info``."""
     out: dict[str, Any] = {}
     for k, v in vinfo.items():
         if k.startswith("_") or k in ("final_obs", "final_info"):
@@ -240,7 +196,7 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
             out[k] = info_row(v, i)
         else:
             a = np.asarray(v)
-            if a.dtype == object:  # e.g. AmigoBot-v1's end_condition (str)
+            if a.dtype == object:
                 out[k] = a[i]
             else:
                 out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()

@@ -1,18 +1,10 @@
 """Top-down drawing of the AmigoBot on its path, to scale (pygame, imported only when used).
 
-The world frame 0 (x right, y up, metres) is mapped to the screen with a fixed scale chosen so
-that the whole path plus a margin of ``termination_distance + 0.25 m`` fits. Drawn to scale:
-
-* the body, a 0.330 m x 0.279 m rectangle (``RobotParams.body_length`` x ``body_width``) centred
-  on the axle midpoint A and aligned with the heading;
-* both drive wheels, ``2 r1`` long, at the contact points K (wheel 1, right) and L (wheel 2, left),
-  ``l1`` either side of A, with a spoke that turns with the wheel angle;
-* the castor, a disc of radius ``r3`` at its swivel ``l5`` behind A;
-* point H (red), ``l3`` ahead of A, and the trail of H (green); the path (blue); a 0.5 m grid.
-
-``render_mode="rgb_array"`` draws on an off-screen surface and returns ``(H, W, 3)`` uint8;
-``"human"`` shows the same picture in a window at ``1/dt`` frames per second. Both work headless
-with ``SDL_VIDEODRIVER=dummy``.
+The whole path plus a margin of ``termination_distance + 0.25 m`` fits the square frame (x right, y up). Drawn: the
+body (``body_length`` x ``body_width``, centred on A), the wheels (``2 r1`` long at K and L, with a spoke that turns
+with the wheel angle), the castor (radius ``r3``, ``l5`` behind A), H (red) and its trail (green), the path (blue)
+and a 0.5 m grid. ``"rgb_array"`` returns ``(H, W, 3)`` uint8; ``"human"`` shows a window at ``1/dt`` frames per
+second. Both work headless with ``SDL_VIDEODRIVER=dummy``.
 """
 
 from __future__ import annotations
@@ -41,8 +33,8 @@ class RenderSettings(Protocol):
 
 
 class DrawablePath(Protocol):
-    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m] (``point``; an
-    AmigoBot-v1 path's ``pose_columns`` is used instead when it has one)."""
+    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m] (or
+    ``pose_columns``)."""
 
     @property
     def length(self) -> float: ...
@@ -66,23 +58,11 @@ TEXT = (20, 20, 20)
 def path_polyline(path: DrawablePath, n: int = 400) -> NDArray[np.float64]:
     """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
     s = np.linspace(0.0, path.length, n + 1)
-    if hasattr(path, "pose_columns"):  # an AmigoBot-v1 path: its documented members only (amigo_gym.paths.user)
+    if hasattr(path, "pose_columns"):
         q = path.pose_columns(s)
         return np.stack((np.broadcast_to(q.x, s.shape), np.broadcast_to(q.y, s.shape)), axis=-1).astype(np.float64)
     pts: NDArray[np.float64] = np.asarray(path.point(s), dtype=np.float64)
     return pts
-
-
-def view_box(params: RenderSettings, path: DrawablePath) -> tuple[float, float, float, float]:
-    """Square world window ``(x_min, y_min, x_max, y_max)`` [m] containing the path and a margin."""
-    pts = path_polyline(path)
-    lo = pts.min(axis=0)
-    hi = pts.max(axis=0)
-    margin = params.termination_distance + 0.25
-    centre = 0.5 * (lo + hi)
-    half = 0.5 * float(np.max(hi - lo)) + margin
-    cx, cy = float(centre[0]), float(centre[1])
-    return (cx - half, cy - half, cx + half, cy + half)
 
 
 def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: float) -> NDArray[np.float64]:
@@ -95,21 +75,15 @@ def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: fl
 
 
 class Renderer:
-    """Draws frames of one robot; one instance per environment (holds the window in human mode).
-
-    Args:
-        params: task settings (geometry of the robot, termination distance for the view).
-        path: the path of H.
-        mode: ``"rgb_array"`` or ``"human"``.
-        size: frame width and height [px].
-    """
+    """Draws frames of one robot on ``path`` (one per environment; holds the window in ``"human"`` mode), ``size``
+    pixels square."""
 
     def __init__(self, params: RenderSettings, path: DrawablePath, mode: str = "rgb_array", size: int = 600) -> None:
         if mode not in ("rgb_array", "human"):
             raise ValueError(f"render mode must be 'rgb_array' or 'human', got {mode!r}")
         try:
             import pygame
-        except ImportError as exc:  # pragma: no cover - pygame is an optional dependency
+        except ImportError as exc:  # pragma: no cover
             from gymnasium.error import DependencyNotInstalled
 
             raise DependencyNotInstalled(
@@ -120,10 +94,13 @@ class Renderer:
         self.path = path
         self.mode = mode
         self.size = int(size)
-        x0, y0, x1, _ = view_box(params, path)
-        self._origin = (x0, y0)
-        self.scale = self.size / (x1 - x0)  # px per metre
-        self._path_px = [self._px(p) for p in path_polyline(path)]
+        pts = path_polyline(path)  # the view: a square around the path with a margin
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        half = 0.5 * float(np.max(hi - lo)) + (params.termination_distance + 0.25)
+        cx, cy = (float(c) for c in 0.5 * (lo + hi))
+        self._origin = (cx - half, cy - half)
+        self.scale = self.size / ((cx + half) - (cx - half))  # px per metre
+        self._path_px = [self._px(p) for p in pts]
         self._window: Any = None
         self._clock: Any = None
         self._font: Any = None
@@ -135,12 +112,11 @@ class Renderer:
         try:
             pygame.font.init()
             self._font = pygame.font.Font(None, 20)
-        except Exception:  # fonts are optional decoration
+        except Exception:  # fonts are optional
             self._font = None
         self._background = self._draw_background()
 
     def _px(self, p: ArrayLike) -> tuple[float, float]:
-        """Screen pixel of a world point [m] (y up in the world, down on the screen)."""
         q = np.asarray(p, dtype=np.float64)
         return ((q[0] - self._origin[0]) * self.scale, self.size - (q[1] - self._origin[1]) * self.scale)
 
@@ -177,14 +153,8 @@ class Renderer:
         time: float | None = None,
         cross_track_error: float | None = None,
     ) -> NDArray[np.uint8] | None:
-        """Draw the robot at ``pose`` ``(x_A, y_A, beta)`` with H's ``trail`` (list of ``(x, y)`` [m]).
-
-        Args:
-            pose: ``(3,)`` pose [m, m, rad].
-            trail: past positions of H [m], oldest first.
-            wheel_angles: ``(alpha1, alpha2)`` [rad] for the wheel spokes (optional).
-            time: time [s] to print (optional).
-            cross_track_error: H's cross-track error [m] to print (optional).
+        """Draw the robot at ``pose`` ``(x_A [m], y_A [m], beta [rad])`` with H's ``trail`` (``(x, y)`` [m], oldest
+        first), the ``wheel_angles`` [rad], and the ``time`` [s] and ``cross_track_error`` [m] printed when given.
 
         Returns:
             the frame ``(size, size, 3)`` uint8 in ``rgb_array`` mode; ``None`` in ``human`` mode.
@@ -205,8 +175,7 @@ class Renderer:
             # spoke: the wheel's visible rotation, projected on the ground (length r cos(alpha))
             tip = np.asarray(c) + r * math.cos(alpha) * np.array([math.cos(b), math.sin(b)])
             pg.draw.line(surf, SPOKE, self._px(c), self._px(tip), 2)
-        cp = castor_position(pose, robot)
-        cpx = self._px(cp)
+        cpx = self._px(castor_position(pose, robot))
         pg.draw.circle(surf, CASTOR, cpx, max(2.0, robot.r3 * self.scale))
         front = (x + 0.5 * robot.body_length * math.cos(b), y + 0.5 * robot.body_length * math.sin(b))
         pg.draw.line(surf, BODY_EDGE, self._px((x, y)), self._px(front), 2)

@@ -1,16 +1,6 @@
-"""Native numpy-batched vector environment of ``AmigoBot-v1``, for heterogeneous batches.
-
-``gym.make_vec("AmigoBot-v1", num_envs=N)`` builds :class:`AmigoBotV1VectorEnv`: ``N`` robots, each with its own
-path, reference speed, true robot, slip, delay and noise. With numba and the built-in path families the step is the
-single environment's compiled step run over the robots in one compiled loop
-(:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`; the state columns are views of its workspace rows); otherwise the
-column functions of :mod:`amigo_gym.task.v1` (the reference) step the batch, with no Python loop over the robots.
-Robots being reset draw their episodes from their own generators with the single environment's functions.
-
-For the same seeds it reproduces ``gym.make_vec("AmigoBot-v1", vectorization_mode="sync")`` (observations, rewards,
-terminations, truncations, numeric infos) in the three autoreset modes, to 1e-9 between the compiled step and the
-reference (``tests/test_vector_v1.py``, ``tests/test_vector_v1_kernel.py``); one seed on one route gives the same bits.
-"""
+"""Native vector environment of ``AmigoBot-v1`` (``gym.make_vec("AmigoBot-v1", num_envs=N)``): ``N`` robots, each
+with its own path, speed, true robot, slip, delay and noise. For the same seeds it reproduces
+``vectorization_mode="sync"`` in the three autoreset modes (to 1e-9 between the compiled step and the reference)."""
 
 from __future__ import annotations
 
@@ -52,26 +42,20 @@ from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-# entries of the compiled step's workspace rows (amigo_gym.sim.layout_v1.WS_FIELDS): the normalised command
 _W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
-# the info record's entries (the single env's record: amigo_gym.sim.layout_v1.RECORD_ROWS, RECORD_SCALARS)
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
 
-
-#: bytes per robot besides the command ring, the trail and the paths: state, episode and workspace columns, the
-#: generator, the path description (``tests/test_bad_inputs_v1.py::test_memory_estimate_matches_tracemalloc`` holds
-#: :func:`memory_needed` within [0.5, 3] times ``tracemalloc``'s count per robot, N = 96 minus N = 32)
+#: bytes per robot besides the command ring, the trail and the paths
 ROW_BYTES = 3200
 
 
 def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> int:
-    """An estimate of the memory of ``n`` robots [bytes] (:data:`ROW_BYTES` each, plus the command ring of
-    ``command_ring_length(p)`` commands, the render trail's ``TRAIL_LENGTH`` positions, and, for paths drawn per
-    episode, twice the memory of a drawn path: the path and its copy in the compiled step's arena)."""
+    """An estimate of the memory of ``n`` robots [bytes]: :data:`ROW_BYTES` each, the command ring, the render trail
+    and, for drawn paths, twice a drawn path (the path and its copy in the compiled step's arena)."""
     per = ROW_BYTES + 16 * tracking.command_ring_length(p)
     if render_mode is not None:
         per += 16 * TRAIL_LENGTH
@@ -81,11 +65,10 @@ def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = 
 
 
 def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> None:
-    """Refuse a ``num_envs`` whose robots need more memory than the machine has (:func:`memory_needed`), before
-    anything is allocated; one line naming ``num_envs`` and the bytes."""
+    """``ValueError`` when ``n`` robots need more memory than the machine has (:func:`memory_needed`)."""
     try:
         total: int | None = int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):  # not known here
+    except (AttributeError, ValueError, OSError):
         total = None
     need = memory_needed(n, p, render_mode)
     if total is not None and need > total:
@@ -96,12 +79,9 @@ def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: st
 
 
 def _is_scalar(x: Any) -> bool:
-    """Whether ``x`` is not a sequence of per-robot actions (strings count as scalars)."""
     if isinstance(x, str | bytes):
         return True
-    if isinstance(x, np.ndarray):
-        return x.ndim == 0
-    try:
+    try:  # (a 0-d array is not iterable)
         iter(x)
     except TypeError:
         return True
@@ -117,27 +97,19 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             registration's 600 unless given.
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
-        kernel: the step's implementation: ``"auto"`` (default: the compiled step when numba is installed, unless
-            ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference column
-            functions of :mod:`amigo_gym.task.v1`), ``"numba"`` (the compiled step, :mod:`amigo_gym.sim.fast_v1_batch`)
-            or ``"numba-parallel"`` (its loops on numba's threads), as for :class:`amigo_gym.envs.AmigoBotV1Env`
-            and :class:`amigo_gym.envs.AmigoBotVectorEnv`. The compiled step runs the built-in path families;
-            a path object of another class runs the reference. All agree to 1e-9.
+        kernel: ``"auto"``, ``"numpy"`` or ``"numba"`` as for :class:`amigo_gym.envs.AmigoBotV1Env`, or
+            ``"numba-parallel"`` (the compiled loops on numba's threads).
         params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
 
-    Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; the path description
-    of each robot is :attr:`path_infos` (strings are not batched).
-
-    Rendering keeps the last ``trail_length`` (1000) positions of H per robot in one ``(1000, N, 2)`` ring
-    (16 KB per robot, written by two column copies per step), so memory stays flat however many steps are
-    rendered. ``num_envs`` is refused when its robots would need more than the machine's memory
-    (:func:`memory_needed`: about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
+    Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; each robot's path description
+    is in :attr:`path_infos`. Rendering keeps the last ``trail_length`` (1000) positions of H per robot.
+    ``num_envs`` is refused when its robots would need more than the machine's memory (:func:`memory_needed`:
+    about 3.3 KB per robot at dt = 0.1 s on a fixed path, 53 KB on drawn paths).
     """
 
-    #: positions of H kept per robot for the rendered trail (a fixed-size ring buffer)
     trail_length: int = TRAIL_LENGTH
 
-    metadata: dict[str, Any] = {  # noqa: RUF012  (gymnasium declares metadata as a plain attribute)
+    metadata: dict[str, Any] = {  # noqa: RUF012
         "render_modes": ["rgb_array"],
         "render_fps": 10.0,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
@@ -166,11 +138,10 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         p = self.params
         self._k = tracking.constants(p)
         check_memory(owner, int(num_envs), p, render_mode)
-        #: the fixed path's feasibility report (amigo_gym.paths.Feasibility.report; None for drawn paths)
-        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)  # (feasibility=)
-        #: on a fixed path, the episode that every start draws but its offsets (tracking.episode_template), or None
+        #: the fixed path's feasibility report (None for drawn paths)
+        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
+        # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
-        #: the template as columns of one row (tracking.episode_columns), repeated for the rows that restart
         self._template_row = None if self._template is None else tracking.episode_columns([self._template])
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
@@ -189,9 +160,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._seeds: list[int | None] = [None] * n
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
-        # the rendered trail of H: a ring (trail_length, N, 2), allocated when first written (render_mode set)
-        self._trail: Array | None = None
-        self._trail_count = 0  # positions written so far
+        self._trail: Array | None = None  # H's trail: a ring (trail_length, N, 2), allocated when first written
+        self._trail_count = 0
         self._trail_start = np.zeros(n, dtype=np.int64)  # the count at which each robot's episode started
         self._renderers: list[Any] = [None] * n
         self._was_reset = False
@@ -201,30 +171,24 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
         self._episode = tracking.episode_columns([tracking.Episode(*(0 for _ in _EPISODE_FIELDS))] * n)
         self._ring = np.zeros((n, self._k.ring_length, 2))
-        # the compiled step (amigo_gym.sim.fast_v1_batch) for built-in paths; None: the reference column functions
         self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or fast_v1.compiled_path(fixed, p)  # drawn paths are built-in ones
         if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
             self._state = self._state_views(self._state.steps)
-        elif fast_v1.use_fast_path(None):  # the column route's projection and pose: the float functions, compiled
+        elif fast_v1.use_fast_path(None):
             fast_v1.path_loops()
-        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`; its info keys), or None
+        #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`), or None
         self.v0_params = tracking.v0_settings(p)
         self._castor = np.zeros(n)  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._ring_step = 0
-        self._goal = np.full((n, 2), np.nan)  # each row's goal (tracking.goal_point), set at its reset
-        # each robot's H to write next into the rendered trail (render_mode set)
+        self._goal = np.full((n, 2), np.nan)
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
 
-    # ------------------------------------------------------------------ seeding
     @property
     def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
-        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``).
-
-        Before the first reset, as ``Env.np_random_seed``: each generator is made from a random seed
-        on first use, and that seed is reported (and used by a ``reset()`` without a seed).
-        """
+        """Seeds of the sub-environments' generators (as ``SyncVectorEnv.np_random_seed``; before the first reset,
+        each generator is made from a random seed, which is reported)."""
         for i in range(self.num_envs):
             self._rng(i)
         return tuple(int(s) for s in self._seeds if s is not None)
@@ -236,12 +200,11 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def _rng(self, i: int) -> np.random.Generator:
         g = self._rngs[i]
-        if g is None:  # as Env.np_random: a random seed on first use
+        if g is None:
             g, self._seeds[i] = seeding.np_random()
             self._rngs[i] = g
         return g
 
-    # ------------------------------------------------------------------ reset and step
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
@@ -269,7 +232,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
         self._autoreset[idx] = False
         obs, infos = self._reset_rows(idx, pose_opt)
-        self._obs = self._obs.copy()  # the last step returned it
+        self._obs = self._obs.copy()
         self._obs[idx] = obs
         if self.render_mode is not None:
             self._append_trail()
@@ -301,20 +264,19 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             )
         a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
-        if self._batch is not None:
-            obs, reward, terminated, infos, hx, hy = self._step_kernel(a1, a2)
-        else:
-            obs, reward, terminated, infos, hx, hy = self._step_columns(a1, a2)
-        if self.render_mode is not None:  # H to draw; the rows restarted below write their start instead
+        obs, rec = self._step_kernel(a1, a2) if self._batch is not None else self._step_columns(a1, a2)
+        infos, reward, terminated = self._record_infos(slice(None), rec)
+        hx, hy = rec[:, _R_HX], rec[:, _R_HY]
+        if self.render_mode is not None:
             self._h_now[:, 0] = hx
             self._h_now[:, 1] = hy
-        if self.v0_params is None:  # (AmigoBot-v0's settings: no goal, no end condition in the infos)
+        if self.v0_params is None:
             terminated = self._end(terminated, infos, hx, hy)
         truncated: BoolArray = np.zeros(n, dtype=np.bool_)
         if self.max_episode_steps is not None:
             truncated = np.asarray(self._state.steps) >= self.max_episode_steps
         if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
-            idx = np.flatnonzero(self._autoreset)  # they start a new episode at this step instead of stepping
+            idx = np.flatnonzero(self._autoreset)
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)
             reward[idx] = 0.0
@@ -327,7 +289,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             for i in idx.tolist():
                 final_obs[i] = obs[i].copy()
             final_info = scatter_infos(take_rows(infos, idx), done, n)
-            if self.v0_params is None:  # None outside done, as SyncVectorEnv gathers the single env's str
+            if self.v0_params is None:
                 final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)
@@ -335,21 +297,17 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             final = {"final_obs": final_obs, "_final_obs": done.copy(), "final_info": final_info}
             infos = {**final, "_final_info": done.copy(), **infos}
         self._autoreset = terminated | truncated
-        self._obs = obs  # returned as is: reset() copies it before changing rows
+        self._obs = obs
         if self.render_mode is not None:
             self._append_trail()
         return obs, reward, terminated, truncated, scatter_infos(infos, None, n)
 
     def set_path_params(self, path_params: Any) -> None:
-        """Draw the next episodes' paths with the family parameters ``path_params`` (a curriculum between rollouts).
+        """Draw the next episodes' paths with the family parameters ``path_params``, e.g.
+        ``{"max_curvature": 3.0, "max_curvature_rate": 3.0}`` [1/m, 1/m^2] (``path="random"`` or ``"mixed"`` only).
 
-        Only for drawn paths (``path="random"`` or ``"mixed"``, whose random paths alone take them, e.g.
-        ``{"max_curvature": 3.0, "max_curvature_rate": 3.0}`` [1/m, 1/m^2]). The new settings are checked as at
-        construction (ranges, one-line errors; the drawn paths' feasibility at the highest speed, as
-        ``feasibility=`` says) before anything changes. Episodes under way keep their paths; robots draw from the
-        new pool (:func:`amigo_gym.task.v1.random_pool_path`: the same ids, built with these parameters) at their
-        next reset. No random number is drawn: a run that sets the same parameters at the same steps gives the
-        same bits.
+        Checked as at construction before anything changes; episodes under way keep their paths, robots draw from
+        the new pool at their next reset. No random number is drawn.
         """
         from dataclasses import replace
 
@@ -357,25 +315,28 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         if not isinstance(self.params.path, str) or self.params.path not in ("random", "mixed"):
             raise ValueError(f"{owner}: only drawn paths (path='random' or 'mixed') take new parameters, got "
                              f"path={self.params.path!r}")  # fmt: skip
-        p = replace(self.params, path_params=path_params)  # checked by TrackingParams (one-line ValueError)
+        p = replace(self.params, path_params=path_params)
         tracking.check_task(p)
         self.params = p
         self._k = tracking.constants(p)
         if self._batch is not None:
             self._batch._k = self._k
 
-    # ------------------------------------------------------------------ episodes and steps
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
-        """New episodes for the robots ``idx``: draw, start and evaluate each (a loop over these rows only).
-
-        Returns:
-            the rows' observations ``(m, D)`` and their compact infos (``(m, ...)`` arrays).
-        """
+        """New episodes for the robots ``idx``: their observations ``(m, D)`` and compact infos."""
+        obs = np.empty((len(idx), self._obs.shape[1]), dtype=np.float32)
         if self._batch is not None:
-            return self._begin_rows_kernel(idx, pose_opt)
+            rec = self._begin_rows_kernel(idx, pose_opt, obs)
+        else:
+            rec = self._begin_rows_columns(idx, pose_opt, obs)
+        infos = self._record_infos(idx, rec)[0]
+        if self.render_mode is not None:  # the robots' trails start at the next position
+            self._trail_start[idx] = self._trail_count
+            self._h_now[idx] = infos["h_position"]
+        return obs, infos
+
+    def _begin_rows_columns(self, idx: NDArray[np.intp], pose_opt: Array | None, obs: ObsArray) -> Array:
         k = self._k
-        m = len(idx)
-        obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
         recs, paths, states, episodes = [], [], [], []
         for j, i in enumerate(idx.tolist()):
             pose = None if pose_opt is None else tuple(pose_opt[i].tolist())
@@ -390,20 +351,11 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._set_rows(idx, st, tracking.episode_columns(episodes))
         self.paths.replace(idx, paths)
         self._castor[idx] = 0.0
-        infos = self._record_infos(idx, np.stack(recs))[0]
-        self._start_trails(idx, infos["h_position"])
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
-        return obs, infos
+        return np.stack(recs)
 
-    def _begin_rows_kernel(
-        self, idx: NDArray[np.intp], pose_opt: Array | None = None
-    ) -> tuple[ObsArray, dict[str, Any]]:
-        """:meth:`_reset_rows` with the compiled step: each row draws its path and episode from its own generator
-        (:func:`tracking.draw_path`, a new path built by the compiled loops, and :func:`tracking.draw_episode`, as
-        :func:`tracking.start_episode` draws them); the start states of the rows that share a path are computed
-        together on columns (:func:`tracking.start_state`; :func:`tracking.placed_state` for the ``pose`` option) and
-        evaluated by the compiled step (:meth:`amigo_gym.sim.fast_v1_batch.BatchKernel.start`); the infos are built
-        from their records as in a step."""
+    def _begin_rows_kernel(self, idx: NDArray[np.intp], pose_opt: Array | None, obs: ObsArray) -> Array:
+        # each row draws from its own generator; the rows that share a path start together on columns
         b = self._batch
         assert b is not None
         k = self._k
@@ -411,18 +363,31 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         m = len(rows)
         template = self._template
         fixed = None if template is None else tracking.fixed_path(k.params)
-        if template is not None:  # one path, episodes that differ in their start offsets alone: one draw per row
+        if template is not None:  # one path: the episodes differ in their start offsets alone
             assert self._template_row is not None
             paths: list[Any] = [fixed] * m
-            info = tracking.draw_path(self._rng(rows[0]), k.params)[1]  # (a fixed path: no draw)
+            info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
             for i in rows:
                 self.path_infos[i] = dict(info)
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
             # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
             u_all = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in rows]).reshape(m, 3)
             groups = {id(fixed): list(range(m))}
-        else:
-            paths, ep_all, u_all, groups = self._draw_rows(rows)
+        else:  # each row draws its path (built by the compiled loops) and episode
+            loops = fast_v1.path_loops()
+            paths, groups = [], {}
+            episodes: list[tracking.Episode] = []
+            draws: list[tuple[float, float, float]] = []
+            for j, i in enumerate(rows):
+                rng = self._rng(i)
+                path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
+                ep, u = tracking.draw_episode(rng, k.params)
+                paths.append(path)
+                episodes.append(ep)
+                draws.append(u)
+                groups.setdefault(id(path), []).append(j)
+            ep_all = tracking.episode_columns(episodes)
+            u_all = np.array(draws, dtype=np.float64).reshape(-1, 3)
         cols: list[Any] = [np.zeros(m) for _ in _STATE_FIELDS[:-1]] + [np.zeros(m, dtype=np.int64)]
         for js in groups.values():
             sel = np.array(js, dtype=np.intp)
@@ -436,39 +401,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             self._goal[idx[sel]] = tracking.goal_point(k.params, path)
         st_all = tracking.State(*cols)
         self._set_rows(idx, st_all, ep_all)
-        if template is None:  # (with a template, every row keeps the fixed path it was built with)
+        if template is None:
             self.paths.replace(idx, paths)
-        obs = np.empty((m, self._obs.shape[1]), dtype=np.float32)
         rec = b.start(rows, paths, st_all, ep_all, obs)
         rec[:, _R_COMMAND] = b.ws[idx, _W_A1 : _W_A2 + 1] * k.w_max  # a start: the command being executed, no slip
         rec[:, _R_SLIP] = 0.0
-        infos = self._record_infos(idx, rec)[0]
-        self._start_trails(idx, infos["h_position"])
-        return obs, infos
-
-    def _draw_rows(self, rows: list[int]) -> tuple[list[Any], tracking.Episode, Array, dict[int, list[int]]]:
-        """Each of ``rows`` draws its path and episode from its own generator (:func:`tracking.draw_path`, a new path
-        built by the compiled loops, and :func:`tracking.draw_episode`): the paths, the episodes as columns, the start
-        offsets ``(m, 3)`` and the positions in ``rows`` of each path object."""
-        k = self._k
-        loops = fast_v1.path_loops()  # a drawn path's building loops, compiled
-        paths: list[Any] = []
-        episodes: list[tracking.Episode] = []
-        draws: list[tuple[float, float, float]] = []
-        groups: dict[int, list[int]] = {}
-        for j, i in enumerate(rows):
-            rng = self._rng(i)
-            path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
-            ep, u = tracking.draw_episode(rng, k.params)
-            paths.append(path)
-            episodes.append(ep)
-            draws.append(u)
-            groups.setdefault(id(path), []).append(j)
-        return paths, tracking.episode_columns(episodes), np.array(draws, dtype=np.float64).reshape(-1, 3), groups
+        return rec
 
     def _set_rows(self, idx: NDArray[np.intp], st: tracking.State, ep: tracking.Episode) -> None:
-        """The robots ``idx`` start the episodes ``ep`` at ``st`` (``(m,)`` columns): their columns and command
-        rings."""
         for name, col in zip(_STATE_FIELDS, st, strict=True):
             np.asarray(getattr(self._state, name))[idx] = col
         for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
@@ -479,17 +419,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._ring[idx, :, 1] = (np.asarray(st.a2) * w_max)[:, None]
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
-        """The robots ``idx`` started a new episode: no end condition."""
         if self.v0_params is not None:
             return
         infos["end_condition"] = infos["end_condition"].copy()
         infos["end_condition"][idx] = ""
 
     def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
-        """``terminated`` with the goals of open paths (``goal_tolerance``, :func:`tracking.goal_reached`) and
-        ``infos["end_condition"]`` (:data:`tracking.END_CONDITIONS`, an object array of str); a goal sets
-        ``end_of_path``."""
-        cond = np.full(self.num_envs, "", dtype=object)  # as SyncVectorEnv gathers the single env's str
+        # with the goals of open paths (goal_tolerance), which set end_of_path; and infos["end_condition"]
+        cond = np.full(self.num_envs, "", dtype=object)
         if self._k.params.goal_tolerance > 0.0:
             goal = tracking.goal_reached(self._k.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
             if _np_count_nonzero(goal):
@@ -505,42 +442,33 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         infos["end_condition"] = cond
         return terminated
 
-    def _step_columns(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
-        """The step of every robot by the reference column functions (:func:`tracking.step_columns` on ``(N,)``
-        columns, the single env's reference): ``(obs, reward, terminated, infos, h_x, h_y)``, infos compact."""
+    def _step_columns(self, a1: Array, a2: Array) -> tuple[ObsArray, Array]:
+        """Every robot's step: the observations and info records."""
         n = self.num_envs
         st, out, noise = tracking.step_columns(
             self._k, self.paths, self._state, self._episode, self._ring, self._ring_step, a1, a2
         )
         self._state = tracking.State(*(np.asarray(c) for c in st))
-        if self.v0_params is not None:  # the castor angle of v0's info, as AmigoBot-v0's step integrates it
+        if self.v0_params is not None:  # the castor angle of v0's info
             robot = self._k.nominal
             v, bdot = body_velocity_columns(self._state.w1, self._state.w2, robot)
             self._castor = advance_angle(self._castor, castor_rate_columns(v, bdot, robot), self.params.dt)
         obs = np.empty((n, self._obs.shape[1]), dtype=np.float32)
         for j, c in enumerate(out.obs):
             obs[:, j] = c
-        rec = reference_record(self._k.w_max, self._state, out, noise, self._castor).reshape(n, -1)
-        infos, reward, terminated = self._record_infos(slice(None), rec)
-        return obs, reward, terminated, infos, rec[:, _R_HX], rec[:, _R_HY]
+        return obs, reference_record(self._k.w_max, self._state, out, noise, self._castor).reshape(n, -1)
 
-    def _step_kernel(self, a1: Array, a2: Array) -> tuple[ObsArray, Array, BoolArray, dict[str, Any], Array, Array]:
-        """:meth:`_step_columns` by the compiled step (:class:`amigo_gym.sim.fast_v1_batch.BatchKernel`): the same
-        results, the infos built from the records (:meth:`_record_infos`)."""
+    def _step_kernel(self, a1: Array, a2: Array) -> tuple[ObsArray, Array]:
         b = self._batch
         assert b is not None
         obs = np.empty((self.num_envs, self._obs.shape[1]), dtype=np.float32)
         rec = b.step(self._ring, self._ring_step, a1, a2, obs)
         steps = self._state.steps
         np.add(steps, 1, out=steps)
-        infos, reward, terminated = self._record_infos(slice(None), rec)
-        return obs, reward, terminated, infos, rec[:, _R_HX], rec[:, _R_HY]
+        return obs, rec
 
     def _record_infos(self, rows: NDArray[np.intp] | slice, rec: Array) -> tuple[dict[str, Any], Array, BoolArray]:
-        """The compact infos of ``rows`` from their info records ``rec (m, RECORD_WIDTH)``, a new array
-        (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`: the compiled step's or :func:`reference_record`'s), by the single
-        env's builders (:func:`amigo_gym.envs.amigobot_v1.record_info`: the arrays are views of ``rec``); with the
-        rewards and ``terminated``."""
+        """The compact infos, rewards and ``terminated`` of ``rows`` from their info records ``rec``, a new array."""
         ep = self._episode
         dt = self.params.dt
         if self.v0_params is not None:
@@ -557,22 +485,12 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
-        """The state columns as views of the compiled step's workspace rows (``steps``: the int64 counter,
-        kept beside them)."""
         assert self._batch is not None
         ws = self._batch.ws
         cols: list[Any] = [ws[:, layout_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
         return tracking.State._make([*cols, steps])
 
-    # ------------------------------------------------------------------ rendering
-    def _start_trails(self, idx: NDArray[np.intp], h: Array) -> None:
-        """The robots ``idx`` start episodes at H = ``h`` ``(m, 2)``: their trails start at the next position."""
-        if self.render_mode is not None:
-            self._trail_start[idx] = self._trail_count
-            self._h_now[idx] = h
-
     def _append_trail(self) -> None:
-        """Write the robots' H into the trail's ring buffer."""
         length = max(1, int(self.trail_length))
         if self._trail is None or self._trail.shape[0] != length:
             self._trail = np.zeros((length, self.num_envs, 2))
@@ -582,7 +500,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._trail_count += 1
 
     def _trail_of(self, i: int) -> list[tuple[float, float]]:
-        """H's positions of robot ``i`` since its episode started (at most ``trail_length``), oldest first."""
         if self._trail is None:
             return []
         length = self._trail.shape[0]
@@ -629,14 +546,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._renderers = [None] * self.num_envs
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle and deep-copy without the renderers (pygame surfaces); they are recreated when next used."""
+        """Pickle and deep-copy without the renderers (recreated when next used)."""
         state = self.__dict__.copy()
         state["_renderers"] = [None] * self.num_envs
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        if self._batch is not None:  # the state columns are views of the workspace again (pickled as copies)
+        if self._batch is not None:  # the state columns are views of the workspace again
             self._state = self._state_views(np.asarray(self._state.steps))
-        elif fast_v1.use_fast_path(None):  # the column route's projection compiled in this process too
+        elif fast_v1.use_fast_path(None):
             fast_v1.path_loops()

@@ -1,46 +1,16 @@
-r"""The compiled step of AmigoBot-v0 and AmigoBot-v1 for one robot, and its batch loops (numba).
+r"""The compiled step for one robot and its batch loops (numba): :func:`step` is
+:func:`amigo_gym.task.v1.step_columns` on floats, :func:`evaluate` :func:`amigo_gym.task.v1.reset_columns`, the
+reference's scalar functions compiled as they are (float forms for those that take columns). They agree with the
+reference to 1e-9, not bit for bit (``sin``, ``cos``, ``tan``, ``exp`` and ``log`` are the C library's here).
 
-Loaded by :mod:`amigo_gym.sim.fast_v1` (numba, a core dependency where it ships wheels). One call of :func:`step`
-does what :func:`amigo_gym.task.v1.step_columns` does on Python floats, :func:`evaluate` what
-:func:`amigo_gym.task.v1.reset_columns` does, and :func:`progress` the projection of
-:func:`amigo_gym.task.v1.start_state`:
+Layouts (float64, C-contiguous; index constants in :mod:`amigo_gym.sim.layout_v1`, ``L`` here):
 
-1. clip the action (:func:`amigo_gym.task.v1.action_commands`); with ``ideal_actuators`` the wheel rates are the
-   commands and the pose advances by the exact arc (:func:`_ideal_step`: :func:`amigo_gym.model.kinematics.
-   arc_from_tangents`, the castor's angle too); else the command goes into the delay ring
-   (:func:`amigo_gym.model.actuators.ring_slot`, :func:`amigo_gym.model.actuators.ring_read_slots`) and the exact
-   actuator step follows: the firmware's ramps, up to :data:`amigo_gym.model.actuators.PIECES` linear pieces, the
-   pose advanced over each by Gauss–Legendre quadrature (:func:`amigo_gym.model.actuators.actuator_step_ws`,
-   :func:`amigo_gym.model.fresnel.advance_nodes`);
-2. H's projection on the path (:func:`_locate`: a clothoid path's flat vector, :func:`amigo_gym.paths.clothoid.
-   locate_flat`; AmigoBot-v0's circle and manoeuvre in closed form, :func:`amigo_gym.paths.classic.circle_foot`,
-   :func:`amigo_gym.paths.classic.manoeuvre_foot`), and the measured H's when it differs;
-3. the observation (v1's: preview poses in the robot frame; v0's: the curvatures ahead, rates and speeds), the
-   heading reward term and the arguments of the three exponential terms, the reference speed, termination and end
-   of path: the pieces of :func:`amigo_gym.task.v1.evaluate_columns`, compiled.
-
-The scalar pieces are the reference's own functions (every function of the modules in :data:`_SHARED_MODULES`),
-compiled as they are; the helpers that dispatch on floats or columns as their float forms (:data:`_FLOAT_FORMS`).
-The results agree with the reference to the tolerance of ``tests/test_kernel_v1.py`` (1e-9), not bit for bit:
-``sin``, ``cos``, ``tan``, ``exp`` and ``log`` here are the C library's, the reference's numpy's.
-
-Layouts (float64 vectors, C-contiguous; defined, with their index constants, in :mod:`amigo_gym.sim.layout_v1`
-(``L`` here), which numba never loads):
-
-* ``consts`` (``CONSTANT_FIELDS``, then the ``n_preview`` preview distances [m], their observation bounds,
-  the actuator quadrature's nodes and weights on [0, 1] (``10 n_sub`` each) and the path quadrature's (10 each);
-  built by :func:`amigo_gym.sim.fast_v1.kernel_constants`);
-* ``path`` (``PATH_HEADER``, then the ``n`` pieces' ``s0, x0, y0, th0, k0, c`` and the ``m`` coarse samples'
-  ``x, y``: the path's own flat vector, ``ClothoidPath._t.flat``, built with the path; empty for a circle or
-  manoeuvre, whose closed forms are in ``consts``);
-* ``ring (L, 2)``: the command ring of :func:`amigo_gym.model.actuators.make_ring`, updated in place;
-* ``ws``: ``WS_FIELDS`` (the state, read and updated in place; the episode's constants; the per-step draws;
-  the outputs), then scratch space of ``WS_SCRATCH`` entries;
+* ``consts``: ``CONSTANT_FIELDS``, the ``n_preview`` preview distances [m], their observation bounds, the actuator
+  quadrature's nodes and weights on [0, 1] (``10 n_sub`` each), the path quadrature's (10 each);
+* ``path``: a clothoid path's flat vector; empty for a circle or manoeuvre (closed forms in ``consts``);
+* ``ring (L, 2)``: the command ring [rad/s], updated in place;
+* ``ws``: ``WS_FIELDS`` (state, episode, draws, outputs), then ``WS_SCRATCH`` entries of scratch;
 * ``obs``: the observation (float32 or float64), written.
-
-This module imports numba at import time; :mod:`amigo_gym.sim.fast_v1` imports it only when the kernel is first
-used, so ``import amigo_gym`` never loads numba. Compiled code is cached on disk (``cache=True``) in a
-folder keyed by the package's source bytes (:func:`amigo_gym.sim.layout.kernel_cache`).
 """
 
 from __future__ import annotations
@@ -67,19 +37,6 @@ from amigo_gym.sim.layout import twin as _twin
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
-__all__ = [
-    "step",
-    "evaluate",
-    "progress",
-    "pose",
-    "build_chain",
-    "build_samples",
-    "rows_locate",
-    "rows_pose",
-    "build_run",
-    "build_lane",
-]
-
 F64 = NDArray[np.float64]
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False)
@@ -103,7 +60,7 @@ def _register() -> None:
     for module in (*_SHARED_MODULES, numeric):
         for fn in vars(module).values():
             if isinstance(fn, types.FunctionType) and fn.__module__ == module.__name__ and fn not in _OVERLOADED:
-                register_jitable(inline="always" if fn in _INLINE else "never")(fn)
+                register_jitable(inline="always" if fn in _INLINE else "never", error_model="numpy")(fn)
     for poly, scalar in _FLOAT_FORMS.items():
         typer = lambda *args, _s=scalar: _s  # noqa: E731
         typer.__signature__ = inspect.signature(scalar)  # type: ignore[attr-defined]
@@ -111,15 +68,13 @@ def _register() -> None:
 
 
 _register()
-_shared = _jit
 
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
 def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
-    """The compiled form of :func:`amigo_gym.model.fresnel.cos_sin_nodes`: one ``sincos`` of the first phase
-    ``p0``, then each node's by the angle sum with ``d = p - p0``, ``cos d`` and ``sin d`` by their Taylor
-    polynomials when every ``|d| <= 0.5`` (the first terms left out are below 1e-16 of the value: ``0.5^15/15!`` and
-    ``0.5^16/16!``), else ``math.cos``/``math.sin`` of each."""
+    """:func:`amigo_gym.model.fresnel.cos_sin_nodes`: ``cos``/``sin`` of the first phase ``p0``, each node's by the
+    angle sum with ``d = p - p0`` and Taylor polynomials of ``cos d``, ``sin d`` when every ``|d| <= 0.5`` (terms left
+    out < 1e-16), else ``math.cos``/``math.sin`` of each."""
 
     def impl(buf: F64, b: int, n: int, m: int) -> None:
         if n == 0:
@@ -130,7 +85,7 @@ def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int,
             near = near & (abs(buf[i] - p0) <= 0.5)
         if not near:
             for i in range(b, b + n):
-                phase = buf[i]  # one load: the cosine and sine of one value (LLVM fuses them into one sincos call)
+                phase = buf[i]  # one load: LLVM fuses the cosine and sine into one sincos call
                 buf[m + i] = math.cos(phase)
                 buf[2 * m + i] = math.sin(phase)
             return
@@ -150,15 +105,13 @@ def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int,
 _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / math.factorial(k) for k in range(2, 15))
 
 
-#: entries of the path pose's node buffer (:func:`amigo_gym.model.fresnel.unit_speed_nodes`: stride ``NODES + 1``)
+#: entries of the path pose's node buffer (stride ``NODES + 1``) and of the actuator step's (one sub-interval per
+#: piece; more sub-intervals allocate theirs), on the stack
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
-#: entries of the actuator step's node buffer on the stack (:func:`amigo_gym.model.fresnel.advance_nodes`, one
-#: sub-interval per piece; more sub-intervals allocate theirs)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
 
 
 def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
-    """Typing and code of :data:`_stack_ptr` (``numba.extending.intrinsic``)."""
     if not isinstance(n, numba.types.IntegerLiteral):
         return None
     size = n.literal_value
@@ -176,7 +129,6 @@ _carray: Any = numpy_support.carray
 
 
 def _data_ptr_typing(typingctx: Any, arr: Any) -> Any:
-    """Typing and code of :data:`_data_ptr` (``numba.extending.intrinsic``)."""
     if not isinstance(arr, numba.types.Array):
         return None
 
@@ -186,65 +138,31 @@ def _data_ptr_typing(typingctx: Any, arr: Any) -> Any:
     return _cpointer(arr.dtype)(arr), codegen
 
 
-#: ``_data_ptr(a)``: the pointer to the data of the array ``a``; ``_carray(_data_ptr(a), n)`` is a view of its first
-#: ``n`` elements without a reference count (the callee's calls then count no references: no atomic operations per
-#: call; used while ``a`` lives)
+#: ``_data_ptr(a)``: the data pointer of ``a``; ``_carray(_data_ptr(a), n)`` is a view of its first ``n`` elements
+#: without a reference count (no atomic operations per call; used while ``a`` lives)
 _data_ptr: Any = intrinsic(_data_ptr_typing)
 
 
 @_jit_inline
 def _bare(a: Any) -> Any:
-    # the 1-D C-contiguous array a as a view without a reference count (_data_ptr)
     return _carray(_data_ptr(a), a.shape[0])
 
 
-#: ``_stack_ptr(n)``: a pointer to ``n`` float64 (a compile-time constant) on the stack of the compiled function that
-#: calls it; ``_carray(_stack_ptr(n), n)`` is a node buffer without an allocation per pose or step (used within that
-#: call only)
+#: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
 
-# ----------------------------------------------------------------------------------------- small rules
-
-
-#: the projection (clothoid's float path: the piece search, wrap and placement of a pose, the coarse search, the Newton
-#: loop and the status, calling clothoid's other shared functions), compiled
-_piece_at = _shared(clothoid.piece_at)
-_place = _shared(clothoid.place)
-_pose_flat = _shared(clothoid.pose_flat)
-
-
-#: the reference's scalar pieces of the step, compiled (docs/architecture.md, "One robot, one step")
-_heading_error = _shared(task.heading_error)
-_command_change = cast(Callable[..., tuple[float, float]], _shared(tracking.command_change))
-_heading_term = _shared(task.heading_term)
-_reward_arguments = _shared(task.reward_arguments)
-_steady_heading = _shared(task.steady_heading_float)
-_body_velocity = _shared(kinematics.body_velocity_of)
-_h_from_a = _shared(kinematics.h_from_a)
-#: the task's pieces (task.v1: floats or columns there), compiled
-_action_commands = cast(Callable[..., tuple[float, float, float, float]], _shared(tracking.action_commands))
-_measured_differs = _shared(tracking.measured_differs)
-_measurements = cast(Callable[..., tuple[float, float, float, float, float]], _shared(tracking.measurements))
-_end_flags = _shared(tracking.end_flags)
-_observe_head = _shared(task.observe_head)
-_preview_entry = _shared(tracking.preview_entry)
-_speed_observations = _shared(tracking.speed_observations)
-_ring_slot = _shared(actuators.ring_slot)
-_curvature_feature = _shared(task.curvature_feature)
-_observe_rates = _shared(task.observe_rates)
-_observe_reference = _shared(task.observe_reference)
-_arc_from_tangents = cast(Callable[..., tuple[float, float, float, float]], _shared(kinematics.arc_from_tangents))
-_advance_angle = _shared(kinematics.advance_angle)
-_castor_rate = _shared(kinematics.castor_rate_float)
-_bound_angle = _shared(task.bound_angle_float)
-_ring_read_slots = _shared(actuators.ring_read_slots)
+#: the functions of floats or columns that the kernel calls, typed as their float forms
+_command_change = cast(Callable[..., tuple[float, float]], tracking.command_change)
+_action_commands = cast(Callable[..., tuple[float, float, float, float]], tracking.action_commands)
+_measurements = cast(Callable[..., tuple[float, float, float, float, float]], tracking.measurements)
+_arc_from_tangents = cast(Callable[..., tuple[float, float, float, float]], kinematics.arc_from_tangents)
+_reference_speed_of = cast(Callable[..., float], tracking.reference_speed_of)
 
 
 @overload(randomization._uint64, jit_options={"error_model": "numpy"})
 def _uint64_of(n: int) -> Callable[[int], np.uint64]:
-    """The compiled form of :func:`amigo_gym.model.randomization._uint64`: ``np.uint64(n)`` (the counter generator's
-    arithmetic on ``uint64``: wrapping products and sums, logical shifts)."""
+    """``np.uint64(n)``: the counter generator's wrapping ``uint64`` arithmetic."""
 
     def impl(n: int) -> np.uint64:
         return np.uint64(n)
@@ -252,26 +170,14 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
     return impl
 
 
-# ----------------------------------------------------------------------------------------- actuators
-
-
-# The actuator step and the path pose are the reference's own functions (actuators.actuator_step_ws,
-# fresnel.unit_speed_nodes; their node sums' cosines and sines by the overload of fresnel.cos_sin_nodes above), called
-# by name (registered by _register, the node loops inlined: _INLINE).
-_reference_speed_of = cast(Callable[..., float], _shared(tracking.reference_speed_of))
-
-
 @_jit
 def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
-    """:func:`amigo_gym.model.actuators.actuator_step_ws` (the float path's own source) from the state in ``ws``: the
-    new pose, wheel rates and angles into ``ws``.
-
-    Returns the true speed of A at the end of the step [m/s].
-    """
+    """:func:`amigo_gym.model.actuators.actuator_step_ws` of the state in ``ws``, updated in place; returns the true
+    speed of A at the end of the step [m/s]."""
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
     size = 3 * PIECES * nn
-    # on the stack for n_sub = 1 (the default dt = 0.1 s: fresnel.subintervals of 19.5 rad/s x dt), else allocated
+    # on the stack for n_sub = 1 (dt = 0.1 s), else allocated
     nodes = _carray(_stack_ptr(_STEP_NODES), _STEP_NODES) if size <= _STEP_NODES else np.empty(size)
     x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = actuators.actuator_step_ws(
         ws, L.S_ACT, nodes, 0, c, base, nn,
@@ -290,56 +196,36 @@ def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, 
     return v_true  # type: ignore[return-value]  # a float here
 
 
-# ----------------------------------------------------------------------------------------- the path
-
-
 @_jit
 def _path_nodes(c: F64) -> int:
-    # where the path quadrature's nodes and weights start in the constants
     nodes: int = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
     return nodes
 
 
 @_jit
-def _pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
-    # clothoid.pose_flat itself: (x, y, theta, kappa, curvature_rate, cos theta, sin theta) at arc length s, its node
-    # buffer on the stack
+def pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
+    """:func:`amigo_gym.paths.clothoid.pose_flat`: ``(x, y, theta, kappa, curvature_rate, cos theta, sin theta)`` at
+    the arc length ``s`` [m]."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    return _pose_flat(buf, c, _path_nodes(c), pv, s)
-
-
-#: the path's pose at an arc length (:func:`amigo_gym.paths.clothoid.pose_flat`, as the float path's ``pose_columns``
-#: of a float): the environments' start pose (:meth:`amigo_gym.sim.fast_v1.StepKernel.pose`)
-pose = _pose
-
-
-_circle_foot = _shared(classic.circle_foot)
-_circle_arc = _shared(classic.circle_arc)
-_manoeuvre_foot = _shared(classic.manoeuvre_foot)
-_manoeuvre_curvature = _shared(classic.manoeuvre_curvature)
-_round_half_even = _shared(task.round_half_even)
+    return clothoid.pose_flat(buf, c, _path_nodes(c), pv, s)
 
 
 @_jit
 def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
-    """H's projection on the path of ``c[L.C_PATH_KIND]``: on a clothoid path ``path.locate`` with the window
-    ``c[L.C_WINDOW]`` ahead and behind (clothoid.locate_flat itself, its node buffer on the stack); on a circle
-    :meth:`amigo_gym.paths.CirclePath.locate` (``circle_foot``, ``circle_arc``; the lap nearest the hint ``sp``), on
-    the manoeuvre :meth:`amigo_gym.paths.ManoeuvrePath.locate` (``manoeuvre_foot``), status 0.
-
-    Returns ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)``.
-    """
+    """H's projection ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)`` from the hint ``sp``:
+    ``path.locate`` with the window ``c[L.C_WINDOW]`` ahead and behind; a circle's or manoeuvre's closed form
+    (the circle's lap nearest ``sp``), status 0."""
     kind = c[L.C_PATH_KIND]
     if kind != L.PATH_CLOTHOID:
         d = c[L.C_DIRECTION]
         r = c[L.C_RADIUS]
         cx, cy, r0x, r0y = c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
         if kind == L.PATH_CIRCLE:
-            e, ct, st, ux, uy = _circle_foot(x, y, cx, cy, r0x, r0y, d, r)
-            s = _circle_arc(ux, uy, r0x, r0y, d, r)
+            e, ct, st, ux, uy = classic.circle_foot(x, y, cx, cy, r0x, r0y, d, r)
+            s = classic.circle_arc(ux, uy, r0x, r0y, d, r)
             lap = task.TWO_PI * r
-            return s + lap * _round_half_even((sp - s) / lap), d / r, e, ct, st, 0  # type: ignore[return-value]
-        e, ct, st, s, _s_circ, on_line = _manoeuvre_foot(x, y, cx, cy, r0x, r0y, d, r, c[L.C_STRAIGHT])
+            return s + lap * task.round_half_even((sp - s) / lap), d / r, e, ct, st, 0  # type: ignore[return-value]
+        e, ct, st, s, _s_circ, on_line = classic.manoeuvre_foot(x, y, cx, cy, r0x, r0y, d, r, c[L.C_STRAIGHT])
         return s, 0.0 if on_line else d / r, e, ct, st, 0  # type: ignore[return-value]
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
@@ -349,92 +235,70 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     return s, kappa, e, ct, st, status
 
 
-# ----------------------------------------------------------------------------------------- per-step draws
-
-#: the per-step draws (randomization.step_noise's pieces), compiled
-_step_uniforms = _shared(randomization.step_uniforms)
-_step_normals = _shared(randomization.step_normals)
-_channels_on = _shared(randomization.channels_on)
-
-
 @_jit
 def _draws(c: F64, ws: F64, key: np.uint64) -> None:
-    # this step's draws into ws (randomization.step_noise of the state's step counter): the slips, then the normals
-    # by Box-Muller from the uniforms (step_uniforms, step_normals; log and cos of the C library)
+    # randomization.step_noise of the state's step counter into ws: the slips, the normals by Box-Muller
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
-    s1, s2, on = _step_uniforms(ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate)
+    s1, s2, on = randomization.step_uniforms(
+        ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate
+    )
     ws[L.W_SLIP1] = s1
     ws[L.W_SLIP2] = s2
     for j in range(on):
         ws[L.S_U1 + j] = math.log(ws[L.S_U1 + j])
         ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
-    _step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
+    randomization.step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
 
 
-# ----------------------------------------------------------------------------------------- building paths
-
-#: entries of the families' quadrature scratch (:data:`amigo_gym.paths.families.RUN_SCRATCH`) on the stack
+# The path-building loops (clothoid.PathLoops), their scratch on the stack; ``nodes``: the quadrature's node table.
 _RUN_NODES = families.RUN_SCRATCH
-
-
-# The path-building loops of the float route (clothoid.PathLoops: clothoid.chain_pieces and sample_points,
-# families.run_segments and lane_change_shape), compiled as they are, their scratch on the stack; ``nodes``: the
-# quadrature's node tables (fresnel.node_table of 1; families.RUN_NODES). amigo_gym.sim.fast_v1.path_loops binds them.
 
 
 @_jit
 def build_chain(
     nodes: F64, out: F64, n: int, segs: F64, n_segs: int, x: float, y: float, th: float
 ) -> tuple[float, float, float, float]:
-    """:func:`amigo_gym.paths.clothoid.chain_pieces` itself: the pieces into ``out``; ``(x, y, theta, length)``."""
+    """:func:`amigo_gym.paths.clothoid.chain_pieces`: the pieces into ``out``; ``(x, y, theta, length)``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     return clothoid.chain_pieces(out, n, segs, n_segs, x, y, th, buf, nodes)
 
 
 @_jit
 def rows_locate(
-    nodes: F64,
-    out: F64,
-    flat: F64,
-    start: NDArray[np.int64],
-    x: F64,
-    y: F64,
-    sp: F64,
-    ahead: float,
-    behind: float,
+    nodes: F64, out: F64, flat: F64, start: NDArray[np.int64], x: F64, y: F64, sp: F64, ahead: float, behind: float,
     on: bool,
-) -> None:
-    """:func:`amigo_gym.paths.clothoid.locate_rows` itself: the column projection, row by row, into ``out``."""
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.paths.clothoid.locate_rows`: the column projection, row by row, into ``out``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     clothoid.locate_rows(clothoid.pose_flat, out, buf, nodes, flat, start, x, y, sp, ahead, behind, on)
 
 
 @_jit
 def rows_pose(nodes: F64, out: F64, flat: F64, start: NDArray[np.int64], s: F64) -> None:
-    """:func:`amigo_gym.paths.clothoid.pose_rows` itself: the column pose, row by row, into ``out``."""
+    """:func:`amigo_gym.paths.clothoid.pose_rows`: the column pose, row by row, into ``out``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     clothoid.pose_rows(out, buf, nodes, flat, start, s)
 
 
 @_jit
 def build_samples(nodes: F64, pv: F64, o: int, count: int, spacing: float) -> None:
-    """:func:`amigo_gym.paths.clothoid.sample_points` itself: the coarse samples written into ``pv``."""
+    """:func:`amigo_gym.paths.clothoid.sample_points`: the coarse samples written into ``pv``."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     clothoid.sample_points(buf, nodes, pv, o, count, spacing)
 
 
 @_jit
 def build_run(nodes: F64, segs: F64, n_segs: int, x: float, y: float, th: float) -> tuple[float, float, float]:
-    """:func:`amigo_gym.paths.families.run_segments` itself: the end pose after the segments."""
+    """:func:`amigo_gym.paths.families.run_segments`: the end pose after the segments."""
     buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
     return families.run_segments(buf, nodes, segs, n_segs, x, y, th)
 
 
 @_jit
 def build_lane(nodes: F64, ratio: float) -> tuple[float, float, float, float]:
-    """:func:`amigo_gym.paths.families.lane_change_shape` itself: ``(x1, y1, theta_m, xm)``."""
+    """:func:`amigo_gym.paths.families.lane_change_shape`: ``(x1, y1, theta_m, xm)``."""
     buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
     segs = _carray(_stack_ptr(6), 6)
     return families.lane_change_shape(buf, nodes, segs, ratio)
@@ -442,129 +306,99 @@ def build_lane(nodes: F64, ratio: float) -> tuple[float, float, float, float]:
 
 @_jit
 def _curvature_at(c: F64, pv: F64, s: float) -> float:
-    # the path's curvature [1/m] at the arc length s: the clothoid's pose, the circle's d / r, the manoeuvre's
+    # the path's curvature [1/m] at the arc length s [m]
     kind = c[L.C_PATH_KIND]
     if kind == L.PATH_CLOTHOID:
-        k: float = _pose(c, pv, s)[3]
+        k: float = pose(c, pv, s)[3]
         return k
     curvature: float = c[L.C_DIRECTION] / c[L.C_RADIUS]
     if kind == L.PATH_CIRCLE:
         return curvature
-    k_s: float = _manoeuvre_curvature(s, c[L.C_STRAIGHT], curvature)
+    k_s: float = classic.manoeuvre_curvature(s, c[L.C_STRAIGHT], curvature)
     return k_s
 
 
 @_jit
 def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
-    """H's progress [m]: ``path.locate(x, y, s_prev, window, window).progress`` (``clothoid._locate_float``)."""
+    """H's progress [m]: ``path.locate(x, y, s_prev, window, window).progress``."""
     s: float = _locate(c, pv, x, y, s_prev)[0]
     return s
 
 
-# ----------------------------------------------------------------------------------------- the task
-
-
 @_jit
 def _reference_speed(c: F64, ws: F64, t: float) -> float:
-    # tracking.reference_speed: tracking.reference_speed_of itself
     return _reference_speed_of(c[L.C_TRAPEZOID] != 0.0, ws[L.W_VC], c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
 
 
 @_jit
 def _evaluate(
-    c: F64,
-    pv: F64,
-    ws: F64,
-    obs: NDArray[np.floating],
-    v_true: float,
-    cb: float,
-    sb: float,
-    da1: float,
-    da2: float,
-    t: float,
-    nx: float,
-    ny: float,
-    nbeta: float,
-    nr1: float,
-    nr2: float,
-) -> None:
-    # tracking.evaluate_columns of the state in ws (true H, its projection, measurements, observation, reward
-    # arguments, end) with the heading's cosine and sine (cb, sb), the command's change (da1, da2: of the normalised
-    # command, or of the wheel rates [rad/s] with reward="v0") and the noise (nx, ny, nbeta, nr1, nr2): its pieces,
-    # compiled; the new progress into ws
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, cb: float, sb: float, da1: float, da2: float,
+    t: float, nx: float, ny: float, nbeta: float, nr1: float, nr2: float,
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.task.v1.evaluate_columns` of the state in ``ws`` with the heading's ``cos``, ``sin`` (``cb``,
+    ``sb``), the command's change ``(da1, da2)`` and the noise ``(nx, ny, nbeta, nr1, nr2)``; outputs into ``ws``."""
     l3 = c[L.C_L3]
     x = ws[L.W_X]
     y = ws[L.W_Y]
     beta = ws[L.W_BETA]
-    hx, hy = _h_from_a(x, y, cb, sb, ws[L.W_L3])
+    hx, hy = kinematics.h_from_a(x, y, cb, sb, ws[L.W_L3])
     s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
-    cos_psi, sin_psi = _heading_error(cb, sb, ct, st)
+    cos_psi, sin_psi = task.heading_error(cb, sb, ct, st)
     v_ref = _reference_speed(c, ws, t)
-    # task.steady_heading, task.reward_term_columns (the heading term; the exponentials' arguments only)
-    cos_ss, sin_ss = _steady_heading(kappa, l3)
-    arg_t, arg_v, arg_s = _reward_arguments(
+    cos_ss, sin_ss = task.steady_heading_float(kappa, l3)
+    arg_t, arg_v, arg_s = task.reward_arguments(
         abs(e), abs(v_true - v_ref), da1 * da1 + da2 * da2, c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
     )
     ws[L.W_ARG_T] = arg_t
     ws[L.W_ARG_V] = arg_v
-    ws[L.W_HEADING] = _heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
+    ws[L.W_HEADING] = task.heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     ws[L.W_ARG_S] = arg_s
-    closed = pv[L.P_CLOSED] if c[L.C_PATH_KIND] == L.PATH_CLOTHOID else 1.0  # (status 0 off clothoids)
-    terminated, at_end = _end_flags(e, c[L.C_TERM], closed, status)
+    closed = pv[clothoid.P_CLOSED] if c[L.C_PATH_KIND] == L.PATH_CLOTHOID else 1.0
+    terminated, at_end = tracking.end_flags(e, c[L.C_TERM], closed, status)
     mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
-    if _measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
+    if tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
         mcb = math.cos(mb)
         msb = math.sin(mb)
-        mhx, mhy = _h_from_a(mx, my, mcb, msb, l3)
+        mhx, mhy = kinematics.h_from_a(mx, my, mcb, msb, l3)
         m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h)
     else:
         mcb = cb
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
-    m_cos_psi, m_sin_psi = _heading_error(mcb, msb, m_ct, m_st)
-    o0, o1, o2, o3 = _observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
+    m_cos_psi, m_sin_psi = task.heading_error(mcb, msb, m_ct, m_st)
+    o0, o1, o2, o3 = task.observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
     obs[0] = o0
     obs[1] = o1
     obs[2] = o2
     obs[3] = o3
     n_prev = int(c[L.C_N_PREVIEW])
-    v_meas = _body_velocity(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
-    if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns: the curvature ahead, the rates, the speeds
+    v_meas = kinematics.body_velocity_of(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
+    if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns
         for i in range(n_prev):
-            obs[4 + i] = _curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
-        q1, q2, q3 = _observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
+            obs[4 + i] = task.curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
+        q1, q2, q3 = task.observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
         obs[4 + n_prev] = q1
         obs[5 + n_prev] = q2
         obs[6 + n_prev] = q3
-        obs[7 + n_prev] = _observe_reference(v_ref, c[L.C_V_MAX])
-        _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
-        return
-    scale = c[L.C_PREVIEW_SCALE]
-    for i in range(n_prev):
-        qx, qy, _th, qk, _cr, _ct, _st = _pose(c, pv, m_s + c[L.C_TAIL + i])
-        px, py, pk = _preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
-        obs[4 + 3 * i] = px
-        obs[5 + 3 * i] = py
-        obs[6 + 3 * i] = pk
-    v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
-    s0, s1, s2, s3, s4 = _speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
-    k = 4 + 3 * n_prev
-    obs[k] = s0
-    obs[k + 1] = s1
-    obs[k + 2] = s2
-    obs[k + 3] = s3
-    obs[k + 4] = s4
-    obs[k + 5] = ws[L.W_A1]
-    obs[k + 6] = ws[L.W_A2]
-    _store_outputs(ws, s_h, hx, hy, e, v_true, v_ref, mx, my, mb, mw1, mw2, terminated, at_end)
-
-
-@_jit
-def _store_outputs(
-    ws: F64, s_h: float, hx: float, hy: float, e: float, v_true: float, v_ref: float, mx: float, my: float,
-    mb: float, mw1: float, mw2: float, terminated: bool, at_end: bool,
-) -> None:  # fmt: skip
-    # the evaluation's outputs into ws
+        obs[7 + n_prev] = task.observe_reference(v_ref, c[L.C_V_MAX])
+    else:
+        scale = c[L.C_PREVIEW_SCALE]
+        for i in range(n_prev):
+            qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + i])
+            px, py, pk = tracking.preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
+            obs[4 + 3 * i] = px
+            obs[5 + 3 * i] = py
+            obs[6 + 3 * i] = pk
+        v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
+        s0, s1, s2, s3, s4 = tracking.speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
+        k = 4 + 3 * n_prev
+        obs[k] = s0
+        obs[k + 1] = s1
+        obs[k + 2] = s2
+        obs[k + 3] = s3
+        obs[k + 4] = s4
+        obs[k + 5] = ws[L.W_A1]
+        obs[k + 6] = ws[L.W_A2]
     ws[L.W_PROGRESS] = s_h
     ws[L.W_HX] = hx
     ws[L.W_HY] = hy
@@ -581,23 +415,9 @@ def _store_outputs(
 
 
 @_jit
-def evaluate(
-    c: F64,
-    pv: F64,
-    ws: F64,
-    obs: NDArray[np.floating],
-    v_true: float,
-    t: float,
-) -> None:
-    """:func:`amigo_gym.task.v1.reset_columns`: ``evaluate_columns`` of the state in ``ws`` without noise, no change
-    of the command (smoothness term 1).
-
-    As there, the state keeps its progress (the start's hint): only the outputs of ``ws`` and ``obs`` are written.
-
-    Args:
-        c, pv, ws, obs: the layouts of the module docstring.
-        v_true: the true speed of A [m/s]; t: time [s].
-    """
+def evaluate(c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, t: float) -> None:
+    """:func:`amigo_gym.task.v1.reset_columns` of the state in ``ws`` (no noise, no command change) at the true speed
+    ``v_true`` [m/s] and time ``t`` [s]: writes the outputs of ``ws`` and ``obs``; the progress is kept."""
     progress = ws[L.W_PROGRESS]
     beta = ws[L.W_BETA]
     _evaluate(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), 0.0, 0.0, t, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -606,40 +426,25 @@ def evaluate(
 
 @_jit
 def step(
-    c: F64,
-    pv: F64,
-    ring: F64,
-    ws: F64,
-    obs: NDArray[np.floating],
-    ring_step: int,
-    a1: float,
-    a2: float,
-    key: np.uint64,
+    c: F64, pv: F64, ring: F64, ws: F64, obs: NDArray[np.floating], ring_step: int, a1: float, a2: float, key: np.uint64
 ) -> None:
-    """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws`` (updated in place) on Python floats.
-
-    This step's draws (:func:`amigo_gym.model.randomization.step_noise` of the episode's ``key`` and the state's step
-    counter) when ``ws[L.W_NOISE_ON]`` is set, else zeros, are written to ``ws`` (``slip1`` ... ``noise_rate2``).
-
-    Args:
-        c, pv, ring, ws, obs: the layouts of the module docstring.
-        ring_step: the ring's counter (one more than at the previous step).
-        a1, a2: the validated action (finite) [-], clipped here.
-    """
+    """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws``, updated in place, for the finite action
+    ``(a1, a2)`` [-] (clipped here); ``ring_step`` is the ring's counter. This step's draws (the episode's ``key``)
+    when ``ws[L.W_NOISE_ON]`` is set, else zeros, go into ``ws``."""
     if ws[L.W_NOISE_ON] != 0.0:
         _draws(c, ws, key)
     else:
         _no_draws(ws)
-    # tracking.action_commands; actuators.ring_write, ring_read: their slots
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     if c[L.C_IDEAL] != 0.0:
-        _ideal_step(c, pv, ws, obs, c1, c2, cmd1, cmd2)
+        v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, cmd1, cmd2)
+        _ideal_move(c, pv, ws, obs, c1, c2, cmd1, cmd2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
         return
     length = ring.shape[0]
-    slot = _ring_slot(ring_step, length)
+    slot = actuators.ring_slot(ring_step, length)
     ring[slot, 0] = cmd1
     ring[slot, 1] = cmd2
-    i_old, i_new = _ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
+    i_old, i_new = actuators.ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
     w1_old = ws[L.W_W1]
@@ -648,60 +453,39 @@ def step(
     da1, da2 = _command_change(
         c[L.C_REWARD_V0] != 0.0, ws[L.W_W1], ws[L.W_W2], w1_old, w2_old, c1, c2, ws[L.W_A1], ws[L.W_A2]
     )
+    beta = ws[L.W_BETA]
+    _finish(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), da1, da2, c1, c2, cmd1, cmd2)
+
+
+@_jit
+def _finish(
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, cb: float, sb: float, da1: float, da2: float,
+    c1: float, c2: float, cmd1: float, cmd2: float,
+) -> None:  # fmt: skip
+    # the step's command and counter into ws, then the evaluation of the new state
     steps = ws[L.W_STEPS] + 1.0
     ws[L.W_A1] = c1
     ws[L.W_A2] = c2
     ws[L.W_STEPS] = steps
     ws[L.W_CMD1] = cmd1
     ws[L.W_CMD2] = cmd2
-    beta = ws[L.W_BETA]
-    _evaluate(
-        c,
-        pv,
-        ws,
-        obs,
-        v_true,
-        math.cos(beta),
-        math.sin(beta),
-        da1,
-        da2,
-        steps * c[L.C_DT],
-        ws[L.W_NX],
-        ws[L.W_NY],
-        ws[L.W_NB],
-        ws[L.W_NR1],
-        ws[L.W_NR2],
-    )
+    t = steps * c[L.C_DT]
+    nx, ny, nb, nr1, nr2 = ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
+    _evaluate(c, pv, ws, obs, v_true, cb, sb, da1, da2, t, nx, ny, nb, nr1, nr2)
 
 
 @_jit
 def _no_draws(ws: F64) -> None:
-    # a step without per-step draws: zero slips and noise in ws
-    ws[L.W_SLIP1] = 0.0
-    ws[L.W_SLIP2] = 0.0
-    ws[L.W_NX] = 0.0
-    ws[L.W_NY] = 0.0
-    ws[L.W_NB] = 0.0
-    ws[L.W_NR1] = 0.0
-    ws[L.W_NR2] = 0.0
+    for j in (L.W_SLIP1, L.W_SLIP2, L.W_NX, L.W_NY, L.W_NB, L.W_NR1, L.W_NR2):
+        ws[j] = 0.0
 
 
 @_jit
 def _ideal_motion(c: F64, ws: F64, w1: float, w2: float) -> tuple[float, float, float, float, float]:
-    # tracking._ideal_step's motion at the wheel rates (w1, w2) [rad/s] up to its two tangents: (v_A [m/s], betadot
-    # [rad/s], h = betadot dt / 2 [rad], and the tangents' arguments h / 2 and (beta + h) / 2 [rad])
-    v, bdot = _body_velocity(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
+    # (v_A [m/s], betadot [rad/s], h = betadot dt / 2, the tangents' arguments h / 2, (beta + h) / 2 [rad])
+    v, bdot = kinematics.body_velocity_of(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
     h = 0.5 * (bdot * c[L.C_DT])
     return v, bdot, h, 0.5 * h, 0.5 * (ws[L.W_BETA] + h)
-
-
-@_jit
-def _ideal_step(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float
-) -> None:
-    # tracking._ideal_step: _ideal_move with the C library's tangents
-    v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, w1, w2)
-    _ideal_move(c, pv, ws, obs, c1, c2, w1, w2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
 
 
 @_jit
@@ -709,46 +493,32 @@ def _ideal_move(
     c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float, v: float,
     bdot: float, h: float, t_h: float, t_m: float,
 ) -> None:  # fmt: skip
-    # tracking._ideal_step from _ideal_motion's (v, bdot, h) and the tangents t_h = tan(h / 2), t_m = tan((beta + h)
-    # / 2): the wheel rates are the commands (w1, w2) [rad/s], held over dt; the exact arc step (kinematics.arc_step:
-    # arc_from_tangents), the heading bounded (task.v0.bound_angle), the wheel and castor angles advanced; then the
-    # evaluation with the new heading's cosine and sine
+    """``tracking._ideal_step``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact arc step
+    with ``t_h = tan(h / 2)``, ``t_m = tan((beta + h) / 2)``, then the evaluation."""
     dt = c[L.C_DT]
     beta = ws[L.W_BETA]
     x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, t_h, t_m)
     da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, ws[L.W_W1], ws[L.W_W2], c1, c2, ws[L.W_A1], ws[L.W_A2])
-    steps = ws[L.W_STEPS] + 1.0
     ws[L.W_X] = x1
     ws[L.W_Y] = y1
-    ws[L.W_BETA] = _bound_angle(beta + bdot * dt)
+    ws[L.W_BETA] = task.bound_angle_float(beta + bdot * dt)
     ws[L.W_W1] = w1
     ws[L.W_W2] = w2
-    ws[L.W_AL1] = _advance_angle(ws[L.W_AL1], w1, dt)
-    ws[L.W_AL2] = _advance_angle(ws[L.W_AL2], w2, dt)
-    ws[L.W_CASTOR] = _advance_angle(ws[L.W_CASTOR], _castor_rate(v, bdot, c[L.C_L5], c[L.C_R3]), dt)
-    ws[L.W_A1] = c1
-    ws[L.W_A2] = c2
-    ws[L.W_STEPS] = steps
-    ws[L.W_CMD1] = w1
-    ws[L.W_CMD2] = w2
-    _evaluate(
-        c, pv, ws, obs, v, cb, sb, da1, da2, steps * dt, ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
+    ws[L.W_AL1] = kinematics.advance_angle(ws[L.W_AL1], w1, dt)
+    ws[L.W_AL2] = kinematics.advance_angle(ws[L.W_AL2], w2, dt)
+    ws[L.W_CASTOR] = kinematics.advance_angle(
+        ws[L.W_CASTOR], kinematics.castor_rate_float(v, bdot, c[L.C_L5], c[L.C_R3]), dt
     )
+    _finish(c, pv, ws, obs, v, cb, sb, da1, da2, c1, c2, w1, w2)
 
 
-#: the workspace entries of the record (an array constant of the compiled code)
 _RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
 _N_RECORD_WS = len(L.RECORD_WS)
-_smooth_term = _shared(task.smooth_term)
-_reward_product = _shared(task.reward_product)
 
 
 @_jit
 def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
-    """The single env's info record ``rec (RECORD_WIDTH,)`` from the workspace (:data:`layout_v1.RECORD_ROWS`,
-    :data:`layout_v1.RECORD_SCALARS`), then the exponentials of the reward's three arguments,
-    the smoothness term and the reward
-    (:func:`record_terms`)."""
+    """The info record ``rec (RECORD_WIDTH,)`` of the workspace: its entries, the exponentials, terms and reward."""
     _record_entries(ws, rec)
     rec[L.R_TRACK] = math.exp(ws[L.W_ARG_T])
     rec[L.R_SPEED] = math.exp(ws[L.W_ARG_V])
@@ -758,67 +528,41 @@ def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
 
 @_jit
 def _record_entries(ws: F64, rec: F64) -> None:
-    # the record's workspace entries (layout_v1.RECORD_WS)
     for j in range(_N_RECORD_WS):
         rec[j] = ws[_RECORD_WS[j]]
 
 
 @_jit
 def record_terms(rec: F64, smooth_weight: float) -> None:
-    """The smoothness term and the reward of the info record ``rec`` from its exponentials and its heading term
-    (:func:`amigo_gym.task.v0.smooth_term`, :func:`amigo_gym.task.v0.reward_product`)."""
-    smooth = _smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
+    """The smoothness term and the reward of ``rec`` from its exponentials and heading term."""
+    smooth = task.smooth_term(rec[L.R_SMOOTH_EXP], smooth_weight)
     rec[L.R_SMOOTH] = smooth
-    rec[L.R_REWARD] = _reward_product(rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING], smooth)
+    rec[L.R_REWARD] = task.reward_product(rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING], smooth)
 
 
 @_jit
 def step_record(
-    ring_step: int,
-    a1: float,
-    a2: float,
-    c: F64,
-    pv: F64,
-    ring: F64,
-    ws: F64,
-    obs: NDArray[np.floating],
-    rec: F64,
-    smooth_weight: float,
-    key: np.uint64,
-) -> None:
-    """:func:`step`, then :func:`fill_record`: the single env's step, its reward and its info's entries in one call
-    (the step's arguments first: the single env passes the others as one tuple, :attr:`fast_v1.StepKernel.args`)."""
+    ring_step: int, a1: float, a2: float, c: F64, pv: F64, ring: F64, ws: F64, obs: NDArray[np.floating], rec: F64,
+    smooth_weight: float, key: np.uint64,
+) -> None:  # fmt: skip
+    """:func:`step`, then :func:`fill_record` (the arguments after ``a2``: :attr:`fast_v1.StepKernel.args`)."""
     ring2 = _carray(_data_ptr(ring), ring.shape)
     c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
     step(c, pv, ring2, ws, obs, ring_step, a1, a2, key)
     fill_record(ws, rec, smooth_weight)
 
 
-# ----------------------------------------------------------------------------------------- N robots
-# The batch of :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (the native vector env): the single robot's
-# :func:`step` called row by row in one compiled loop. Each loop is written once with ``prange`` and compiled twice
-# (serial, and ``parallel=True`` under another name).
+# The batch: each row loop is written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under
+# another name).
 
 
 def _step_rows(
-    c: F64,
-    flat: F64,
-    starts: NDArray[np.int64],
-    stops: NDArray[np.int64],
-    rings: F64,
-    ws: F64,
-    obs: NDArray[np.floating],
-    ring_step: int,
-    a1: F64,
-    a2: F64,
-    keys: NDArray[np.uint64],
-    rec: F64,
+    c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], rings: F64, ws: F64,
+    obs: NDArray[np.floating], ring_step: int, a1: F64, a2: F64, keys: NDArray[np.uint64], rec: F64,
     smooth_weight: float,
-) -> None:
-    """:func:`step_record` of every row: row ``i`` on the path ``flat[starts[i]:stops[i]]``, its ring ``rings[i] (L,
-    2)``, its workspace ``ws[i]``, its observation ``obs[i]``, the action ``(a1[i], a2[i])``, its info record
-    ``rec[i]`` (:func:`fill_record`: the single env's record, the reward's exponentials and terms), its episode's
-    key ``keys[i]``."""
+) -> None:  # fmt: skip
+    """:func:`step_record` of every row ``i``: its path ``flat[starts[i]:stops[i]]``, ring ``rings[i]``, workspace
+    ``ws[i]``, observation ``obs[i]``, action ``(a1[i], a2[i])``, record ``rec[i]`` and key ``keys[i]``."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         row = _bare(ws[i])
@@ -830,9 +574,8 @@ def _step_rows(
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of :func:`_ideal_rows` (ideal actuators, no per-step draws): the arguments of the arc step's two tangents
-    (:func:`_ideal_motion`) of every row into ``tans (N, 2)``; the caller takes ``np.tan`` of the block (numpy's
-    vectorised loop) before pass 2."""
+    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (N, 2)``, whose
+    ``np.tan`` the caller takes."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
@@ -845,9 +588,8 @@ def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`step` of every row (ideal actuators, no per-step draws: :func:`_ideal_move`) with pass 1's
-    tangents ``tans (N, 2)``, the record's workspace entries into ``rec`` and the reward's
-    three exponential arguments into ``exps (N, 3)`` (for :func:`_record_rows`); rows as in :func:`_step_rows`."""
+    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (N, 2)``; the record's entries into ``rec``,
+    the reward's exponential arguments into ``exps (N, 3)``."""
     c = _bare(c)
     for i in numba.prange(ws.shape[0]):
         row = _bare(ws[i])
@@ -863,8 +605,7 @@ def _ideal_rows(
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the records' exponentials from ``exps (N, 3)`` (``np.exp`` of pass 2's arguments, taken by the caller
-    on the whole block), then their terms and rewards."""
+    """Pass 3: the records' exponentials ``exps (N, 3)`` (``np.exp`` taken by the caller), terms and rewards."""
     for i in numba.prange(rec.shape[0]):
         r = _bare(rec[i])
         r[L.R_TRACK] = exps[i, 0]
@@ -875,21 +616,11 @@ def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
 
 @_jit
 def start_rows(
-    c: F64,
-    flat: F64,
-    starts: NDArray[np.int64],
-    stops: NDArray[np.int64],
-    ws: F64,
-    obs: NDArray[np.floating],
-    rec: F64,
-    rows: NDArray[np.int64],
-    v_true: F64,
-    t: F64,
-    smooth_weight: float,
-) -> None:
-    """:func:`evaluate` and :func:`fill_record` of the start states in the rows ``rows (m,)`` of ``ws`` (their paths
-    ``flat[starts[i]:stops[i]]``): the observations into ``obs (m, D)``, the info records into ``rec (m,
-    RECORD_WIDTH)``; ``v_true``, ``t`` ``(m,)`` the start speeds [m/s] and times [s]."""
+    c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
+    rec: F64, rows: NDArray[np.int64], v_true: F64, t: F64, smooth_weight: float,
+) -> None:  # fmt: skip
+    """:func:`evaluate` and :func:`fill_record` of the rows ``rows (m,)`` of ``ws``, at the start speeds ``v_true``
+    [m/s] and times ``t`` [s]: observations into ``obs (m, D)``, records into ``rec (m, RECORD_WIDTH)``."""
     c = _bare(c)
     for j in range(rows.shape[0]):
         i = rows[j]

@@ -1,21 +1,5 @@
-"""The compiled step of AmigoBot-v0 and AmigoBot-v1 (numba, a core dependency where it ships wheels), and when it runs.
-
-One step, two implementations of it:
-
-* the **reference**, :func:`amigo_gym.task.v1.step_columns` / :func:`amigo_gym.task.v1.evaluate_columns`
-  on Python floats or numpy columns (always available, any path object: ``kernel="numpy"``);
-* the **kernel**, :class:`StepKernel` (one robot) and :class:`amigo_gym.sim.fast_v1_batch.BatchKernel` (``N``
-  robots): :mod:`amigo_gym.sim._kernels_v1`, the same scalar functions compiled, on a
-  :class:`~amigo_gym.paths.ClothoidPath` (every built-in family) and on AmigoBot-v0's
-  :class:`~amigo_gym.paths.CirclePath` and :class:`~amigo_gym.paths.ManoeuvrePath` with ``observation="v0"``.
-  Both agree to a stated tolerance, not bit for bit (``tests/test_kernel_v1.py``): numba calls the C library's
-  ``sin``, ``cos``, ``tan``, ``exp``, numpy its own loops. Another path object runs the reference.
-
-This module is numba-free: it builds the kernel's vectors (the layouts of :mod:`amigo_gym.sim.layout_v1`, whose
-names it re-exports), decides which implementation runs (:func:`use_kernel`, :func:`use_fast_path`) and loads the
-kernel (:func:`kernels`: numba is imported on the first call, never by ``import amigo_gym``; its compiled code is
-cached on disk, :func:`amigo_gym.sim.layout.kernel_cache`).
-"""
+"""When the compiled step runs (:func:`use_kernel`, :func:`compiled_path`) and its vectors; numba-free until
+:func:`kernels`. The kernel compiles the reference's scalar functions and agrees with it to 1e-9, not bit for bit."""
 
 from __future__ import annotations
 
@@ -25,7 +9,7 @@ import sys
 from collections.abc import Sequence
 from functools import lru_cache, partial
 from types import ModuleType
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,9 +27,6 @@ Array = NDArray[np.float64]
 #: environment variable that selects the step's implementation: ``auto`` (default), ``numba``, ``numpy``
 KERNEL_ENV = "AMIGO_GYM_KERNEL"
 
-KernelMode = Literal["auto", "numba", "numpy"]
-
-
 #: the values of every env's ``kernel`` keyword (the vector envs also take ``"numba-parallel"``)
 KERNELS: tuple[str, ...] = ("auto", "numpy", "numba")
 
@@ -56,18 +37,6 @@ def choices(values: Sequence[str]) -> str:
     return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " or " + quoted[-1]
 
 
-def kernel_mode() -> KernelMode:
-    """The mode set by :data:`KERNEL_ENV` (``ValueError`` on another value)."""
-    mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
-    if mode == "auto":
-        return "auto"
-    if mode == "numba":
-        return "numba"
-    if mode == "numpy":
-        return "numpy"
-    raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
-
-
 @lru_cache(maxsize=1)
 def numba_available() -> bool:
     """Whether numba can be imported (checked without importing it)."""
@@ -75,16 +44,17 @@ def numba_available() -> bool:
 
 
 def use_fast_path(requested: bool | None = None) -> bool:
-    """Whether to run the compiled kernel.
-
-    Args:
-        requested: ``True`` requires it, ``False`` refuses it, ``None`` follows :data:`KERNEL_ENV`.
+    """Whether to run the compiled kernel: ``requested`` ``True`` requires it, ``False`` refuses it, ``None`` follows
+    :data:`KERNEL_ENV`.
 
     Raises:
+        ValueError: :data:`KERNEL_ENV` is not ``auto``, ``numba`` or ``numpy``.
         ImportError: the fast path is required (argument or ``AMIGO_GYM_KERNEL=numba``) but numba is missing.
     """
     if requested is None:
-        mode = kernel_mode()
+        mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
+        if mode not in KERNELS:
+            raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
         if mode == "numpy":
             return False
         requested = True if mode == "numba" else None
@@ -109,14 +79,8 @@ _notice_installed = False
 
 
 def announce_compilation() -> None:
-    """Print :data:`COMPILE_NOTICE` once to stderr when numba really compiles a kernel of ``amigo_gym``.
-
-    A listener of numba's ``numba:compile`` event, which numba fires only on a compilation, not when it loads the
-    compiled code from its disk cache: a process that finds the cache warm prints nothing. Only for a person: when
-    stderr is a terminal, or when the environment sets ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it); a
-    script's captured stderr stays as it was. Installed by the first call of :func:`kernels` (here and in
-    :mod:`amigo_gym.sim.fast_v1`); cheap afterwards.
-    """
+    """Print :data:`COMPILE_NOTICE` once to stderr when numba compiles (not loads from its cache) a kernel of
+    ``amigo_gym``: when stderr is a terminal, or ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it)."""
     global _notice_installed
     if _notice_installed:
         return
@@ -143,16 +107,9 @@ def announce_compilation() -> None:
 
 
 def direct_call(dispatcher: Any, *args: Any) -> Any:
-    """The compiled code of the numba function ``dispatcher`` for the types of ``args``, called without numba's
-    dispatch.
-
-    A call of a numba function first finds the type of each argument and the compiled code for them (about 0.1 us per
-    argument: more than one robot's step); this returns that code, compiled or loaded from numba's disk cache now as
-    the first call would, so that a step pays for it once. The same machine code runs, so the results are the same
-    bits. Only for arguments of exactly these types at every call (the same dtypes, dimensions, C-contiguity and
-    writeability; numbers of the same kind): the callers pass their own buffers, allocated once, of the types
-    ``args`` have. Returns ``dispatcher`` itself where numba gives no such entry (another numba version).
-    """
+    """The compiled entry of the numba function ``dispatcher`` for the types of ``args`` (compiled or loaded now),
+    callable without numba's dispatch (about 0.1 us per argument): only for arguments of exactly these types at every
+    call. Returns ``dispatcher`` itself where numba gives no such entry."""
     import numba
 
     sig = tuple(numba.typeof(a) for a in args)  # type: ignore[no-untyped-call]
@@ -164,8 +121,8 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
 
 
 def use_kernel(owner: str, kernel: object) -> bool:
-    """Whether ``kernel=`` (one of :data:`KERNELS`) selects the compiled step: ``"numba"`` requires it, ``"numpy"``
-    refuses it, ``"auto"`` follows :data:`KERNEL_ENV` and uses numba when it can be imported.
+    """Whether ``kernel=`` selects the compiled step: ``"numba"`` requires it, ``"numpy"`` refuses it, ``"auto"``
+    follows :data:`KERNEL_ENV`.
 
     Raises:
         ValueError: not one of :data:`KERNELS`.
@@ -184,12 +141,8 @@ def compiled_path(path: Any, p: tracking.TrackingParams) -> bool:
 
 @lru_cache(maxsize=1)
 def path_loops() -> PathLoops:
-    """The compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`: the float route's
-    :func:`~amigo_gym.paths.clothoid.chain_pieces`, :func:`~amigo_gym.paths.clothoid.sample_points`,
-    :func:`~amigo_gym.paths.families.run_segments` and :func:`~amigo_gym.paths.families.lane_change_shape`, compiled
-    by :mod:`amigo_gym.sim._kernels_v1` with their node tables bound), which the environments with the compiled step
-    hand to the path constructors at resets (the same paths to the tolerance, ``tests/test_kernel_v1.py``). Loads the
-    kernels (numba) on the first call."""
+    """The compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`), their node tables bound; also
+    installed for the column projection and pose (:func:`amigo_gym.paths.clothoid.use_compiled_rows`)."""
     kv = kernels()
     nodes = np.array(fresnel.node_table(1), dtype=np.float64)
     run_nodes = np.array(families.RUN_NODES, dtype=np.float64)
@@ -218,11 +171,8 @@ def kernels() -> ModuleType:
 
 
 def kernel_constants(k: tracking.Constants) -> Array:
-    """The ``consts`` vector of :mod:`amigo_gym.sim._kernels_v1` for the constants ``k``
-    (:data:`amigo_gym.sim.layout_v1.CONSTANT_FIELDS`, then the preview distances, their bounds and the quadratures'
-    nodes and weights), with the closed forms of ``k.params.path`` when it is a :class:`CirclePath` or a
-    :class:`ManoeuvrePath` (the circle's centre, unit start radius, direction, radius; the manoeuvre's straight part).
-    """
+    """The ``consts`` vector of :mod:`amigo_gym.sim._kernels_v1` for the constants ``k``, with the closed forms of a
+    :class:`CirclePath` or :class:`ManoeuvrePath` ``k.params.path``."""
     p = k.params
     path = p.path
     kind, circle, straight = layout_v1.PATH_CLOTHOID, CirclePath(), 0.0
@@ -231,55 +181,23 @@ def kernel_constants(k: tracking.Constants) -> Array:
     elif type(path) is ManoeuvrePath:
         kind, circle, straight = layout_v1.PATH_MANOEUVRE, path.circle, path.straight_length
     cx, cy, r0x, r0y = circle._frame
-    nominal = k.nominal
+    n = k.nominal
     act = p.actuators
     rz = p.randomize
     u, uw = fresnel._nodes(k.n_sub)
-    values: dict[str, float] = {
-        "dt": p.dt,
-        "w_max": k.w_max,
-        "r1": nominal.r1,
-        "r2": nominal.r2,
-        "l1": nominal.l1,
-        "two_l1": 2.0 * nominal.l1,
-        "accel": act.acceleration,
-        "decel": act.deceleration,
-        "rot_accel": act.rot_acceleration,
-        "rot_decel": act.rot_deceleration,
-        "l3": k.l3,
-        "error_scale": p.error_scale,
-        "e_max": k.e_max,
-        "termination_distance": p.termination_distance,
-        "preview_scale": p.preview_scale,
-        "v_max": k.v_max,
-        "sigma_track": p.sigma_track,
-        "sigma_speed": p.sigma_speed,
-        "smooth_scale_sq": k.smooth_scale_sq,
-        "trapezoid": 1.0 if p.speed_profile == "trapezoid" else 0.0,
-        "profile_accel": p.profile_accel,
-        "profile_decel": p.profile_decel,
-        "window": k.window,
-        "speed_lookahead": tracking.SPEED_LOOKAHEAD,
-        "n_preview": float(len(p.preview)),
-        "n_nodes": float(len(u)),
-        "position_noise": rz.position_noise,
-        "heading_noise": rz.heading_noise,
-        "wheel_rate_noise": rz.wheel_rate_noise,
-        "ideal": 1.0 if p.ideal_actuators else 0.0,
-        "obs_v0": 1.0 if p.observation == "v0" else 0.0,
-        "reward_v0": 1.0 if p.reward == "v0" else 0.0,
-        "l5": nominal.l5,
-        "r3": nominal.r3,
-        "path_kind": kind,
-        "cx": cx,
-        "cy": cy,
-        "r0x": r0x,
-        "r0y": r0y,
-        "direction": float(circle.direction),
-        "radius": circle.radius,
-        "straight_length": straight,
-    }
-    head = [values[name] for name in layout_v1.CONSTANT_FIELDS]
+    head = [  # in the order of layout_v1.CONSTANT_FIELDS, line by line
+        p.dt, k.w_max, n.r1, n.r2, n.l1, 2.0 * n.l1,
+        act.acceleration, act.deceleration, act.rot_acceleration, act.rot_deceleration,
+        k.l3, p.error_scale, k.e_max, p.termination_distance, p.preview_scale, k.v_max,
+        p.sigma_track, p.sigma_speed, k.smooth_scale_sq,
+        1.0 if p.speed_profile == "trapezoid" else 0.0, p.profile_accel, p.profile_decel,
+        k.window, tracking.SPEED_LOOKAHEAD, float(len(p.preview)), float(len(u)),
+        rz.position_noise, rz.heading_noise, rz.wheel_rate_noise,
+        1.0 if p.ideal_actuators else 0.0, 1.0 if p.observation == "v0" else 0.0, 1.0 if p.reward == "v0" else 0.0,
+        n.l5, n.r3,
+        kind,
+        cx, cy, r0x, r0y, float(circle.direction), circle.radius, straight,
+    ]  # fmt: skip
     tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
     return np.array(head + tail, dtype=np.float64)
 
@@ -288,9 +206,8 @@ _NO_PATH: Array = np.zeros(0)
 
 
 def flat_path(path: Any) -> Array:
-    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1`: a :class:`ClothoidPath`'s own flat vector
-    (``ClothoidPath._t.flat``, built with the path; the pieces' tables and the coarse samples the
-    reference searches), empty for a circle or manoeuvre (its closed forms are in the constants). Read only."""
+    """The ``path`` vector of :mod:`amigo_gym.sim._kernels_v1`: a :class:`ClothoidPath`'s own flat vector (read
+    only), else empty."""
     if type(path) is not ClothoidPath:
         return _NO_PATH
     flat: Array = path._t.flat
@@ -298,33 +215,20 @@ def flat_path(path: Any) -> Array:
 
 
 class StepKernel:
-    """The compiled step of one robot (:mod:`amigo_gym.sim._kernels_v1`): constants, flattened path, workspace.
-
-    The state of an episode lives in :attr:`ws` between steps (:meth:`load` puts a :class:`tracking.State` and a
-    :class:`tracking.Episode` there, :meth:`state` reads it back). :attr:`run_record` (a step: ``run_record(ring_step,
-    a1, a2, *args)``) and :attr:`evaluate` are the compiled :func:`amigo_gym.sim._kernels_v1.step_record` and
-    :func:`amigo_gym.sim._kernels_v1.evaluate` (dropped when pickled, loaded again when unpickled).
-
-    Attributes:
-        consts: :func:`kernel_constants`. path: :func:`flat_path` of the episode's path.
-        ws: the workspace, ``len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH`` float64.
-    """
+    """The compiled step of one robot: constants :attr:`consts`, the path's vector :attr:`path`, the workspace
+    :attr:`ws` (the episode's state between steps), the observation :attr:`obs`, the info record :attr:`record` and
+    the command ring :attr:`ring`. A step: ``run_record(ring_step, a1, a2, *args)``."""
 
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
         self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
-        #: the single env's observation, written by each step (:attr:`run`; the env hands out a copy)
         self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
-        #: the single env's info record (:data:`layout_v1.RECORD_WIDTH`, :func:`amigo_gym.sim._kernels_v1.fill_record`),
-        #: written by :attr:`run_record` and :meth:`fill`
         self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
-        #: the single env's delay ring of commands (:func:`amigo_gym.model.actuators.ring_write`), ``(L, 2)``
         self.ring: Array = np.zeros((k.ring_length, 2))
         self.smooth_weight = float(k.params.smooth_weight)
         self.path: Array = np.zeros(0)
         self.key = np.uint64(0)
         rz = k.params.randomize
-        # normal draws per step
         self.n_normal = randomization.channels_on(rz.position_noise, rz.heading_noise, rz.wheel_rate_noise)
         self.window = k.window
         self._bind()
@@ -334,26 +238,14 @@ class StepKernel:
         self.evaluate: Any = kv.evaluate
         self.locate_progress: Any = kv.progress
         self.path_pose: Any = kv.pose
-        # the step for exactly these types (direct_call: no dispatch per call): the ring (L, 2) and the observation
-        # (D,) float32 of the single env, the step counter a Python int, the key uint64
         self._args()
-        #: the step and its info record in one call (:func:`amigo_gym.sim._kernels_v1.step_record`)
         self.run_record: Any = direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
         self._fill: Any = direct_call(kv.fill_record, self.ws, self.record, 0.0)
-        #: the record's scalars (``record[R_ERROR:]``: a view, for their floats)
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in (
-            "evaluate",
-            "locate_progress",
-            "path_pose",
-            "scalars",
-            "args",
-            "run_record",
-            "_fill",
-        ):
+        for name in ("evaluate", "locate_progress", "path_pose", "scalars", "args", "run_record", "_fill"):
             del state[name]
         return state
 
@@ -362,12 +254,10 @@ class StepKernel:
         self._bind()
 
     def _args(self) -> None:
-        #: :attr:`run_record`'s arguments after the step's own (the episode's path: set again by :meth:`load`)
         self.args = (self.consts, self.path, self.ring, self.ws, self.obs, self.record, self.smooth_weight, self.key)
 
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
-        """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`): compiled on a
-        :class:`ClothoidPath`, ``path.locate`` on any other path."""
+        """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`)."""
         if type(path) is ClothoidPath:
             s: float = self.locate_progress(self.consts, flat_path(path), x, y, hint)
             return s
@@ -375,9 +265,7 @@ class StepKernel:
         return got
 
     def pose(self, path: Any, s: float) -> PathPose:
-        """The path's pose at the arc length ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`): compiled on a
-        :class:`ClothoidPath` (:func:`amigo_gym.paths.clothoid.pose_flat`, as its float path), ``path.pose_columns``
-        on any other path."""
+        """The path's pose at the arc length ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`)."""
         if type(path) is ClothoidPath:
             return PathPose(*self.path_pose(self.consts, flat_path(path), s))
         got: PathPose = path.pose_columns(s)
@@ -395,21 +283,15 @@ class StepKernel:
             ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
         )  # fmt: skip
         ws[layout_v1.W_SLIP_MAX] = ep.slip_max
-        # anything drawn per step (randomization.step_noise: slip when slip_max > 0, noise when a level is)
         ws[layout_v1.W_NOISE_ON] = 1.0 if float(ep.slip_max) > 0.0 or self.n_normal > 0 else 0.0
         self.key = np.uint64(ep.key)
         self._args()
 
     def fill(self) -> None:
-        """The info record from the workspace as it is (a start state: after :attr:`evaluate`)."""
+        """The info record of the workspace as it is (after :attr:`evaluate`)."""
         self._fill(self.ws, self.record, self.smooth_weight)
 
     def state(self, steps: int) -> tracking.State:
-        """The state in the workspace as a :class:`tracking.State` of floats (``steps``, an int, given)."""
+        """The state in the workspace as a :class:`tracking.State` of floats, ``steps`` given."""
         x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[layout_v1.W_X : layout_v1.W_A2 + 1].tolist()
         return tracking.State(x, y, beta, w1, w2, al1, al2, prog, a1, a2, steps)
-
-    def outputs(self) -> list[float]:
-        """The entries :data:`layout_v1.WS_FIELDS` of the workspace as Python floats."""
-        out: list[float] = self.ws[: len(layout_v1.WS_FIELDS)].tolist()
-        return out

@@ -1,18 +1,5 @@
-"""The compiled step of ``N`` ``AmigoBot-v1`` robots at once (numba): the native vector env's fast path.
-
-:class:`BatchKernel` runs the single robot's compiled step (:func:`amigo_gym.sim._kernels_v1.step` and
-:func:`amigo_gym.sim._kernels_v1.fill_record`, whose reference is :mod:`amigo_gym.task.v1`: see
-:mod:`amigo_gym.sim.fast_v1`) over the rows of an ``(N, W)`` workspace in one compiled loop, each row on its own
-path, ring and workspace row, writing its info record. With ideal actuators and no per-step draws (AmigoBot-v0's
-settings) a step is three loops (:func:`amigo_gym.sim._kernels_v1.ideal_tangent_rows`, ``ideal_rows``,
-``record_rows``) with numpy's vectorised ``tan`` and ``exp`` of whole blocks between them. Starts of episodes
-(:meth:`BatchKernel.start`) evaluate the start states row by row (:func:`amigo_gym.sim._kernels_v1.start_rows`).
-Each row agrees with :class:`amigo_gym.envs.AmigoBotV1Env` to the tolerance (``tests/test_vector_v1_kernel.py``).
-The paths of the batch are flattened once each (:func:`amigo_gym.sim.fast_v1.flat_path`) into one float64 arena
-(:class:`PathArena`); row ``i`` reads ``arena.flat[starts[i]:stops[i]]``.
-
-numba is imported only when a :class:`BatchKernel` is built (:func:`amigo_gym.sim.fast_v1.kernels`).
-"""
+"""The compiled step of ``N`` robots (numba): the single robot's step over the rows of an ``(N, W)`` workspace in one
+compiled loop; with ideal actuators and no per-step draws, three loops with numpy's ``tan`` and ``exp`` between."""
 
 from __future__ import annotations
 
@@ -31,18 +18,10 @@ IntArray = NDArray[np.int64]
 
 
 class PathArena:
-    """The flattened paths of ``n`` rows in one float64 array: row ``i``'s is ``flat[starts[i]:stops[i]]``.
+    """The flattened paths of ``n`` rows in one float64 array :attr:`flat`: row ``i``'s is
+    ``flat[starts[i]:stops[i]]``. Each distinct path object is stored once while a row uses it; the arena grows by
+    doubling and is compacted when over half of it (and over :attr:`COMPACT_MIN` entries) is dead."""
 
-    Each distinct path (by object) is stored once, while a row uses it; a new path is appended (the arena grows
-    by doubling), and the arena is compacted when more than half of it (and over :attr:`COMPACT_MIN` entries)
-    belongs to paths no row uses any more. Built at resets, never in a step.
-
-    Attributes:
-        flat: the arena (its length is the capacity; entries past :attr:`used` are free).
-        starts, stops: ``(n,)`` int64, each row's slice (``0, 0`` until a path is assigned).
-    """
-
-    #: the arena is compacted only once this many entries are dead (and more than the live ones)
     COMPACT_MIN = 4096
 
     def __init__(self, n: int) -> None:
@@ -51,22 +30,20 @@ class PathArena:
         self.starts: IntArray = np.zeros(n, dtype=np.int64)
         self.stops: IntArray = np.zeros(n, dtype=np.int64)
         self._row_ids: list[int] = [0] * n  # id of each row's path (0: none)
-        # id -> [path, start, stop, rows using it]
         self._live: dict[int, list[Any]] = {}
-        self._dead = 0  # entries of the arena that no live path owns
+        self._dead = 0
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        # the paths are new objects: key them by their new ids
         self.__dict__.update(state)
         new = {oid: id(entry[0]) for oid, entry in self._live.items()}
         self._live = {new[oid]: entry for oid, entry in self._live.items()}
         self._row_ids = [new[oid] if oid else 0 for oid in self._row_ids]
 
     def assign(self, rows: Sequence[int], paths: Sequence[ClothoidPath]) -> None:
-        """Rows ``rows`` take ``paths`` (one each, built-in :class:`ClothoidPath` objects)."""
+        """Rows ``rows`` take ``paths`` (:class:`ClothoidPath` objects, one each)."""
         for i, path in zip(rows, paths, strict=True):
             old = self._row_ids[i]
-            if old == id(path) and old in self._live:  # the same path again (a fixed path): nothing to do
+            if old == id(path) and old in self._live:
                 continue
             if old:
                 entry = self._live[old]
@@ -97,7 +74,6 @@ class PathArena:
         return start, stop
 
     def _compact(self) -> None:
-        """Keep the live paths only, in their order, and move the rows' slices with them."""
         old = self.flat
         self.flat = np.zeros(max(1024, 2 * (self.used - self._dead)))
         self.used = 0
@@ -112,22 +88,12 @@ class PathArena:
 
 
 class BatchKernel:
-    """The compiled step of ``n`` robots (module docstring): constants, path arena, workspace rows.
-
-    Each row's episode lives in its row of :attr:`ws` (:data:`amigo_gym.sim.layout_v1.WS_FIELDS`, loaded by
-    :meth:`load` with :meth:`amigo_gym.sim.fast_v1.StepKernel.load`, the single robot's rules); :meth:`step` steps
-    every row. The compiled loop is :func:`amigo_gym.sim._kernels_v1.step_rows` (``parallel``: its ``prange`` twin
-    on numba's threads; the rows are independent, so the results are the same).
-
-    Attributes:
-        consts: :func:`amigo_gym.sim.fast_v1.kernel_constants`. arena: the rows' paths (:class:`PathArena`).
-        ws: ``(n, len(WS_FIELDS) + WS_SCRATCH)`` float64, the rows' workspaces.
-        keys: ``(n,)`` uint64, the episodes' keys of the per-step draws.
-    """
+    """The compiled step of ``n`` robots: constants :attr:`consts`, paths :attr:`arena`, workspace rows :attr:`ws`
+    and the episodes' keys :attr:`keys`; ``parallel`` runs the loops on numba's threads (the same results)."""
 
     def __init__(self, k: tracking.Constants, n: int, parallel: bool = False) -> None:
         self._k = k
-        self._row = fast_v1.StepKernel(k)  # the single robot's loader (its workspace: one row's staging)
+        self._row = fast_v1.StepKernel(k)
         self.consts: Array = self._row.consts
         self.parallel = parallel
         self.arena = PathArena(n)
@@ -135,26 +101,21 @@ class BatchKernel:
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         m = self._row.n_normal
         self.noise_on = np.zeros(n, dtype=np.bool_)
-        #: the three-loop step of ideal actuators without per-step draws (module docstring), and its scratch
         self.ideal = k.params.ideal_actuators and m == 0
         self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
         self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
         self._bind()
 
     def _bind(self) -> None:
-        """The compiled loops for exactly the types of :meth:`step`'s arguments
-        (:func:`amigo_gym.sim.fast_v1.direct_call`: compiled, or loaded from numba's disk cache, now; no dispatch per
-        call): C-contiguous float64 constants, arena, rings ``(n, L, 2)``, workspace, actions, logarithms and records,
-        int64 starts and stops, uint64 keys, int64 loop scratch, a float32 observation, Python ints and floats."""
+        # the loops for exactly the types of step's arguments (fast_v1.direct_call)
         kv = fast_v1.kernels()
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
-        step_rows = kv.step_rows_parallel if self.parallel else kv.step_rows
+        par = "_parallel" if self.parallel else ""
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
-        self._step_rows: Any = fast_v1.direct_call(step_rows, *args)
+        self._step_rows: Any = fast_v1.direct_call(getattr(kv, "step_rows" + par), *args)
         if self.ideal:
-            par = "_parallel" if self.parallel else ""
             self._ideal_tangent_rows: Any = fast_v1.direct_call(
                 getattr(kv, "ideal_tangent_rows" + par), f1, f2, f1, f1, f2
             )
@@ -173,43 +134,28 @@ class BatchKernel:
         self._bind()
 
     def load(self, rows: Sequence[int], paths: Sequence[Any], st: tracking.State, ep: tracking.Episode) -> None:
-        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns,
-        :func:`amigo_gym.task.v1.episode_columns`) into the workspace, as
-        :meth:`amigo_gym.sim.fast_v1.StepKernel.load` loads one robot's.
+        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the workspace.
 
         Raises:
-            TypeError: a path is not one the compiled step runs (:func:`amigo_gym.sim.fast_v1.compiled_path`).
+            TypeError: a path the compiled step does not run (:func:`amigo_gym.sim.fast_v1.compiled_path`).
         """
         for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
         ws = self.ws
-        ws[r, layout_v1.W_X : layout_v1.W_STEPS + 1] = np.column_stack(
-            [np.asarray(c, dtype=np.float64) for c in st]
-        )  # the state's fields in WS_FIELDS' order
+        ws[r, layout_v1.W_X : layout_v1.W_STEPS + 1] = np.column_stack([np.asarray(c, dtype=np.float64) for c in st])
         ws[r, layout_v1.W_CASTOR] = 0.0
         l3_differs = np.asarray(ep.l3) != self._k.l3
         ws[r, layout_v1.W_R1 : layout_v1.W_L3D + 1] = np.column_stack(
             (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
         )
-        # anything drawn per step (randomization.step_noise: slip when slip_max > 0, noise when a level is)
         noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
         ws[r, layout_v1.W_SLIP_MAX] = ep.slip_max
         ws[r, layout_v1.W_NOISE_ON] = noise_on
         self.keys[r] = ep.key
         self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)
-
-    def progress(self, path: Any, x: float, y: float, hint: float) -> float:
-        """H's progress [m] (:data:`amigo_gym.task.v1.ProgressFn`):
-        :meth:`amigo_gym.sim.fast_v1.StepKernel.progress`."""
-        return self._row.progress(path, x, y, hint)
-
-    def pose(self, path: Any, s: float) -> Any:
-        """The path's pose at ``s`` [m] (:data:`amigo_gym.task.v1.PoseFn`):
-        :meth:`amigo_gym.sim.fast_v1.StepKernel.pose`."""
-        return self._row.pose(path, s)
 
     def start(
         self,
@@ -219,17 +165,8 @@ class BatchKernel:
         ep: tracking.Episode,
         obs: NDArray[np.floating[Any]],
     ) -> Array:
-        """:meth:`load` the rows, then evaluate their start states (:func:`amigo_gym.task.v1.reset_columns`,
-        compiled: :func:`amigo_gym.sim._kernels_v1.start_rows`, as the single env's reset).
-
-        Args:
-            obs: ``(len(rows), D)`` C-contiguous, written: the rows' observations.
-
-        Returns:
-            ``(len(rows), RECORD_WIDTH)``, new: the rows' info records (:func:`amigo_gym.sim._kernels_v1.fill_record`,
-            as the single env's :meth:`amigo_gym.sim.fast_v1.StepKernel.fill`; the command and slip entries are the
-            workspace's, which the caller replaces by a start's).
-        """
+        """:meth:`load` the rows and evaluate their start states (:func:`amigo_gym.task.v1.reset_columns`) into
+        ``obs (len(rows), D)``; returns their info records ``(len(rows), RECORD_WIDTH)``, new."""
         self.load(rows, paths, st, ep)
         v_true, t = tracking.start_speed_time(st, ep)
         m = len(rows)
@@ -243,24 +180,15 @@ class BatchKernel:
         return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
-        """Step every row (:func:`amigo_gym.task.v1.step_columns` of each, the single robot's compiled step).
-
-        Args:
-            rings: ``(n, L, 2)`` the command rings [rad/s], updated in place. ring_step: their counter.
-            a1, a2: ``(n,)`` float64, the validated actions [-] (clipped in the step).
-            obs: ``(n, D)`` C-contiguous, written (float32 for the env).
-
-        Returns:
-            ``(n, RECORD_WIDTH)``, new: every row's info record (:func:`amigo_gym.sim._kernels_v1.fill_record`, the
-            single env's record: its entries, the reward's exponentials and terms, the reward). The rows of
-            :attr:`ws` hold the new states.
-        """
+        """Step every row (:func:`amigo_gym.task.v1.step_columns`) with the actions ``a1, a2 (n,)`` [-], the command
+        rings ``rings (n, L, 2)`` [rad/s] (updated) and their counter ``ring_step``; the observations into
+        ``obs (n, D)``. Returns every row's info record ``(n, RECORD_WIDTH)``, new."""
         c = self.consts
         ws = self.ws
         a = self.arena
         rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
         sw = self._row.smooth_weight
-        if self.ideal and not self.noise_on.any():  # (rows that draw slips take the general step)
+        if self.ideal and not self.noise_on.any():
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
             np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)

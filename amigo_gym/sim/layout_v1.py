@@ -1,62 +1,27 @@
-"""The layouts of the vectors of ``AmigoBot-v1``'s compiled step (numba-free).
+"""The layouts of the vectors of the compiled step (:mod:`amigo_gym.sim._kernels_v1`) and their index constants.
 
-The index constants below are read by the kernel (:mod:`amigo_gym.sim._kernels_v1`, which numba compiles them into
-as constants), by :mod:`amigo_gym.sim.fast_v1` (which builds the vectors) and by the
-environments.
-
-May import numpy and the model, paths and task modules; never numba.
+Never imports numba.
 """
 
 from __future__ import annotations
 
 from amigo_gym.model import actuators
-from amigo_gym.paths import clothoid
 
 #: scalar entries at the head of ``consts`` (the variable-length parts follow: :mod:`amigo_gym.sim._kernels_v1`)
 CONSTANT_FIELDS: tuple[str, ...] = (
-    "dt",  # control period [s]
-    "w_max",  # nominal max wheel rate [rad/s]
-    "r1",  # nominal wheel radii [m] and half track [m]
-    "r2",
-    "l1",
-    "two_l1",  # 2 l1 [m]
-    "accel",  # firmware ramps [m/s^2], [rad/s^2]
-    "decel",
-    "rot_accel",
-    "rot_decel",
-    "l3",  # nominal l3 [m]
-    "error_scale",  # [m]
-    "e_max",  # observation bound of the cross-track error [-]
-    "termination_distance",  # [m]
-    "preview_scale",  # [m]
-    "v_max",  # nominal max speed [m/s]
-    "sigma_track",  # the reward's scales: [m]
-    "sigma_speed",  # [m/s]
-    "smooth_scale_sq",  # [-]
-    "trapezoid",  # 1.0 for speed_profile="trapezoid", else 0.0
-    "profile_accel",  # [m/s^2]
-    "profile_decel",  # [m/s^2]
-    "window",  # projection window ahead and behind [m]
-    "speed_lookahead",  # [s]
-    "n_preview",  # number of preview distances
-    "n_nodes",  # actuator quadrature nodes per piece (10 n_sub)
-    "position_noise",  # the measurement noise's standard deviations [m], [rad], [rad/s]
-    "heading_noise",
-    "wheel_rate_noise",
-    "ideal",  # 1.0 for ideal_actuators (the wheel rates are the commands, the exact arc step), else 0.0
-    "obs_v0",  # 1.0 for observation="v0" (AmigoBot-v0's layout), else 0.0
-    "reward_v0",  # 1.0 for reward="v0" (the smoothness of the wheel rates' change [rad/s]), else 0.0
-    "l5",  # nominal castor swivel distance [m] and castor radius [m] (the castor angle of ideal steps)
-    "r3",
-    "path_kind",  # PATH_CLOTHOID (the path vector), PATH_CIRCLE or PATH_MANOEUVRE (closed forms, the entries below)
-    "cx",  # the circle's centre [m], unit start radius, direction (+1 left, -1 right), radius [m]
-    "cy",
-    "r0x",
-    "r0y",
-    "direction",
-    "radius",
-    "straight_length",  # the manoeuvre's straight part [m]
-)
+    "dt", "w_max", "r1", "r2", "l1", "two_l1",  # [s], [rad/s], the nominal wheel radii, half track, 2 l1 [m]
+    "accel", "decel", "rot_accel", "rot_decel",  # firmware ramps [m/s^2], [rad/s^2]
+    "l3", "error_scale", "e_max", "termination_distance", "preview_scale", "v_max",  # [m], [m], [-], [m], [m], [m/s]
+    "sigma_track", "sigma_speed", "smooth_scale_sq",  # the reward's scales [m], [m/s], [-]
+    "trapezoid", "profile_accel", "profile_decel",  # 1.0 for speed_profile="trapezoid" else 0.0; [m/s^2]
+    "window", "speed_lookahead", "n_preview", "n_nodes",  # [m], [s], counts (actuator nodes per piece: 10 n_sub)
+    "position_noise", "heading_noise", "wheel_rate_noise",  # noise standard deviations [m], [rad], [rad/s]
+    "ideal", "obs_v0", "reward_v0",  # 1.0 for ideal_actuators, observation="v0", reward="v0", else 0.0
+    "l5", "r3",  # nominal castor swivel distance and castor radius [m]
+    "path_kind",  # PATH_CLOTHOID (the path vector), PATH_CIRCLE or PATH_MANOEUVRE (closed forms below)
+    # the circle's centre [m], unit start radius, direction (+1 left), radius [m]; the manoeuvre's straight part [m]
+    "cx", "cy", "r0x", "r0y", "direction", "radius", "straight_length",
+)  # fmt: skip
 _C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
 C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
 C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
@@ -74,70 +39,20 @@ C_TAIL = len(CONSTANT_FIELDS)
 #: Gauss–Legendre nodes of the path quadrature (:data:`amigo_gym.model.fresnel.NODES`)
 PATH_NODES = 10
 
-#: the head of a flattened path (then the arrays), defined with the path: :data:`amigo_gym.paths.clothoid.PATH_HEADER`
-PATH_HEADER: tuple[str, ...] = clothoid.PATH_HEADER
-P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = (
-    clothoid.P_N, clothoid.P_M, clothoid.P_LENGTH, clothoid.P_TURN, clothoid.P_SPACING, clothoid.P_CLOSED,
-)  # fmt: skip
-P_TAIL = clothoid.P_TAIL
-
 #: entries of ``ws``: the state (:class:`amigo_gym.task.v1.State`), the episode (:class:`amigo_gym.task.v1.Episode`;
 #: ``l3_differs`` 1.0 when the true l3 is not the nominal one), the outputs of a step or an evaluation
 WS_FIELDS: tuple[str, ...] = (
-    # state, updated by step
-    "x",
-    "y",
-    "beta",
-    "w1",
-    "w2",
-    "alpha1",
-    "alpha2",
-    "progress",
-    "a1",
-    "a2",
-    "steps",
-    "castor",  # the castor wheel's rolling angle [rad] (integrated by ideal steps: AmigoBot-v0's info)
+    # state, updated by step; "castor": the castor wheel's rolling angle [rad] (ideal steps: AmigoBot-v0's info)
+    "x", "y", "beta", "w1", "w2", "alpha1", "alpha2", "progress", "a1", "a2", "steps", "castor",
     # episode, read only
-    "r1",
-    "r2",
-    "l1",
-    "l3",
-    "lag",
-    "t_switch",
-    "v_cruise",
-    "t_brake",
-    "l3_differs",
-    # outputs
-    "h_x",
-    "h_y",
-    "error",
-    "v_true",
-    "v_ref",
-    "meas_x",
-    "meas_y",
-    "meas_beta",
-    "meas_w1",
-    "meas_w2",
-    "heading",  # the heading reward term
-    "arg_track",  # arguments of the exponentials of the track, speed and smoothness terms
-    "arg_speed",
-    "arg_smooth",
-    "terminated",  # 1.0 / 0.0
-    "end_of_path",  # 1.0 / 0.0
-    "command1",  # the setpoints written into the ring this step [rad/s]
-    "command2",
-    # the per-step draws (randomization.step_noise): the episode's slip bound and whether anything is drawn (1.0 /
-    # 0.0), then this step's draws
-    "slip_max",
-    "noise_on",
-    "slip1",
-    "slip2",
-    "noise_x",
-    "noise_y",
-    "noise_beta",
-    "noise_rate1",
-    "noise_rate2",
-)
+    "r1", "r2", "l1", "l3", "lag", "t_switch", "v_cruise", "t_brake", "l3_differs",
+    # outputs: "heading" the heading reward term, "arg_*" the arguments of the track, speed and smoothness
+    # exponentials, "terminated" and "end_of_path" 1.0 / 0.0, "command*" the setpoints written this step [rad/s]
+    "h_x", "h_y", "error", "v_true", "v_ref", "meas_x", "meas_y", "meas_beta", "meas_w1", "meas_w2",
+    "heading", "arg_track", "arg_speed", "arg_smooth", "terminated", "end_of_path", "command1", "command2",
+    # the per-step draws: the episode's slip bound, whether anything is drawn (1.0 / 0.0), this step's draws
+    "slip_max", "noise_on", "slip1", "slip2", "noise_x", "noise_y", "noise_beta", "noise_rate1", "noise_rate2",
+)  # fmt: skip
 _W = {name: i for i, name in enumerate(WS_FIELDS)}
 W_X, W_Y, W_BETA, W_W1, W_W2, W_AL1, W_AL2, W_PROGRESS, W_A1, W_A2, W_STEPS = (_W[n] for n in WS_FIELDS[0:11])
 W_CASTOR = _W["castor"]
@@ -146,10 +61,9 @@ W_HX, W_HY, W_E, W_VT, W_VREF, W_MX, W_MY, W_MB, W_MW1, W_MW2 = (_W[n] for n in 
 W_HEADING, W_ARG_T, W_ARG_V, W_ARG_S, W_TERM, W_END, W_CMD1, W_CMD2 = (_W[n] for n in WS_FIELDS[31:39])
 W_SLIP_MAX, W_NOISE_ON, W_SLIP1, W_SLIP2 = (_W[n] for n in WS_FIELDS[39:43])
 W_NX, W_NY, W_NB, W_NR1, W_NR2 = (_W[n] for n in WS_FIELDS[43:48])
-#: the single env's info record (:func:`amigo_gym.sim._kernels_v1.fill_record`; the env hands out a new copy per step
-#: and the info's seven arrays are views of it): the workspace entries of those arrays in their order (pose, H, wheel
-#: rates, command, wheel angles, measured pose, slip), then those of the info's scalars, then the exponentials of the
-#: reward's track, speed and smoothness arguments, the smoothness term and the reward
+#: the info record (:func:`amigo_gym.sim._kernels_v1.fill_record`): the workspace entries of the info's seven arrays,
+#: then of its scalars, then the exponentials of the track, speed and smoothness arguments, the smoothness term and
+#: the reward
 RECORD_ROWS = ("x", "y", "beta", "h_x", "h_y", "w1", "w2", "command1", "command2", "alpha1", "alpha2", "meas_x",
                "meas_y", "meas_beta", "slip1", "slip2")  # fmt: skip
 RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated", "castor")
@@ -171,15 +85,9 @@ R_PROGRESS, R_VT, R_VREF, R_END, R_TERM, R_CASTOR = (
 #: :data:`RECORD_ROWS` and :data:`RECORD_SCALARS` as workspace indices
 RECORD_WS = tuple(WS_FIELDS.index(name) for name in (*RECORD_ROWS, *RECORD_SCALARS))
 
-#: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`: 2 channels
-#: x (7 knots, 6 values, 6 slopes), 11 times, 10 pieces x 5), then the normal draws' uniforms ``u1`` and angles
-#: ``2 pi u2`` (5 each; the step replaces them by their logarithms and cosines)
+#: scratch entries after :data:`WS_FIELDS`: the actuator step's (:data:`amigo_gym.model.actuators.SCRATCH`, from
+#: ``S_ACT``), then the normal draws' uniforms ``u1`` and angles ``2 pi u2`` (5 each)
 WS_SCRATCH = actuators.SCRATCH + 2 * 5
-#: where :func:`amigo_gym.model.actuators.actuator_step_ws`'s scratch starts, and its parts
 S_ACT = len(WS_FIELDS)
-S_KV = S_ACT + actuators.SCRATCH_V
-S_KW = S_ACT + actuators.SCRATCH_W
-S_TIMES = S_ACT + actuators.SCRATCH_TIMES
-S_PIECES = S_ACT + actuators.SCRATCH_PIECES
 S_U1 = S_ACT + actuators.SCRATCH
 S_U2 = S_U1 + 5
