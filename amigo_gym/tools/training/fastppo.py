@@ -682,17 +682,10 @@ def train(
 
 
 def _train(
-    s: FastPPOSettings,
-    out: Path,
-    device: str,
-    resume: bool,
-    until_steps: int | None,
-    say: Callable[[str], None],
-    command: str | None,
-    evaluate_runs: bool,
-    after_eval: Callable[[dict[str, float]], bool] | None,
+    s: FastPPOSettings, out: Path, device: str, resume: bool, until_steps: int | None, say: Callable[[str], None],
+    command: str | None, evaluate_runs: bool, after_eval: Callable[[dict[str, float]], bool] | None,
     stop_request: StopRequest,
-) -> dict[str, Any]:
+) -> dict[str, Any]:  # fmt: skip
     if numba is not None:  # first: starting numba's threads resets torch's count
         numba.set_num_threads(s.env_threads)
     torch.set_num_threads(s.threads)
@@ -820,7 +813,7 @@ def _train(
 # --------------------------------------------------------------------------- CLI
 @dataclass(frozen=True)
 class HyperparamsFile:
-    """The option read first.
+    """The option read first (its file's values become the other options' defaults).
 
     Attributes:
         hyperparams: settings file [YAML]: its AmigoBot-v1 mapping replaces the defaults; options override it
