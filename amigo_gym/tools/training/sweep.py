@@ -20,7 +20,6 @@ import zlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import FrameType
 from typing import Any, Literal, get_args
 from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
@@ -802,13 +801,9 @@ def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any]
     return {"trial": t.number, "run_dir": str(src)}
 
 
-def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
-
-
-def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
-    """One worker: join the study, run trials until the budget (or the grid) is spent; a summary. ``opened``
-    receives the study as soon as it is open."""
+def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
+    """One worker: join the study, run trials until the budget (or the grid) is spent; ``opened`` receives the
+    study as soon as it is open."""
     import optuna
     from optuna.study import MaxTrialsCallback
     from optuna.trial import TrialState
@@ -829,7 +824,7 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
         if _exhausted(st, cfg, running=True):
             st.stop()
 
-    with handling(_raise_interrupt, signal.SIGTERM):
+    with handling(signal.default_int_handler, signal.SIGTERM):
         if not _exhausted(study, cfg):
             study.optimize(
                 _objective(cfg, study, sampler_seed),
@@ -840,7 +835,6 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
                     stop_when_spent,
                 ],
             )
-    return summarize(study, cfg.budget)
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
@@ -995,7 +989,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         interrupted = False
         failed: list[str] = []
         opened: list[Any] = []
-        with handling(_raise_interrupt, signal.SIGTERM):
+        with handling(signal.default_int_handler, signal.SIGTERM):
             if cfg.n_jobs > 1:
                 try:
                     codes = _spawn_workers(cfg)
