@@ -5,6 +5,7 @@ Reference (objective, storage, modes, budget, stopped workers, summary, exit sta
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -725,10 +726,8 @@ def _trial(
         if resumed is not None:
             trial.set_user_attr("resumed_from", resumed)
         flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
-        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs " + repr(
-            json.dumps(env_kwargs)
-        )
-        command += " --resume" if resumed else ""
+        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
+        command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
         config = {
             "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
             "fastppo_settings": s.to_json(),
@@ -875,13 +874,9 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
     """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials; whether it did."""
     path = folder / SUMMARY
     with RunLock(folder, name="summary.lock", wait=60.0):
-        try:
-            old = json.loads(path.read_text())
-            newer = int(old.get("finished", -1)) > int(summary["finished"])
-        except (OSError, ValueError, TypeError, AttributeError):
-            newer = False
-        if newer:
-            return False
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
+            if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
+                return False
         atomic_write_json(path, summary, parents=True)
     return True
 
