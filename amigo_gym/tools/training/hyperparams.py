@@ -110,10 +110,9 @@ class _Linear:
 
 @dataclass
 class Hyperparams:
-    """A checked hyperparameter file: the mapping as read (``raw``), its meta keys (``None``: absent) and the
-    algorithm class's keyword arguments (``policy_kwargs`` parsed, schedules made)."""
+    """A checked hyperparameter file: its meta keys (``None``: absent) and the algorithm class's keyword arguments
+    (``policy_kwargs`` parsed, schedules made)."""
 
-    raw: dict[str, Any]
     n_timesteps: int | None = None
     n_envs: int | None = None
     policy: str = "MlpPolicy"
@@ -177,7 +176,7 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
         raise ValueError(
             f"{where}: unknown key(s) for {algo}: {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})"
         )
-    out = Hyperparams(raw=dict(hp))
+    out = Hyperparams()
     for name in ("n_timesteps", "n_envs"):
         v = hp.get(name)
         if v is not None:
