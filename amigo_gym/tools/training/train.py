@@ -394,22 +394,21 @@ def _train(
     n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
 
     config_file = out / "config.json"
-    recovered = False
-    if s.resume and not config_file.is_file():
+    recovered = s.resume and not config_file.is_file()
+    if recovered:
         if not runs.candidates(out, report=False):
             raise FileNotFoundError(f"--resume: no checkpoint in {out} (no run started there: missing config.json)")
         runs.warn(
             f"--resume: {config_file} is missing; resuming from the checkpoints in {out / runs.CHECKPOINTS} "
             "with the settings of this command (config.json written again, marked 'recovered')"
         )
-        recovered = True
-    if s.resume and not recovered:
+    elif s.resume:
         config = runs.read_json(config_file)
         if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
             raise runs.CorruptFileError(f"{config_file}: not a run configuration (no 'settings')")
         if config["settings"].get("algo") != s.algo:
             raise ValueError(f"--resume: {out} holds a {config['settings'].get('algo')} run, not {s.algo}")
-    elif not s.resume and runs.has_run_files(out):
+    elif runs.has_run_files(out):
         raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
     runs.clean_temporaries(out)  # we hold the lock
 
