@@ -302,12 +302,11 @@ def make_storage(cfg: SweepConfig) -> Any:
     import optuna.storages
 
     url = driver_url(cfg.storage_url)
-    engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
     if sqlite and not _in_memory(url):
         Path(url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
-    if sqlite:  # pysqlite's BEGIN is deferred: take the write lock at BEGIN (below)
-        engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
+    # pysqlite's BEGIN is deferred: take the write lock at BEGIN (below)
+    engine_kwargs = {"connect_args": {"timeout": 120, "isolation_level": None}} if sqlite else {}
     retry_cls = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)
     kwargs: dict[str, Any] = {}
     if not _in_memory(url):  # in memory: no other worker, and the heartbeat's thread would get its own database
@@ -359,11 +358,9 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     another mode, environment or objective."""
     import optuna
 
-    sampler: Any
+    sampler: Any = optuna.samplers.RandomSampler(seed=sampler_seed)
     if cfg.sampler == "tpe":
         sampler = optuna.samplers.TPESampler(seed=sampler_seed, n_startup_trials=cfg.n_startup_trials)
-    else:
-        sampler = optuna.samplers.RandomSampler(seed=sampler_seed)
     pruner: Any = optuna.pruners.NopPruner()
     if cfg.pruner == "median" and cfg.mode == "hyperparams":
         pruner = optuna.pruners.MedianPruner(n_startup_trials=cfg.n_startup_trials, n_warmup_steps=cfg.eval_freq)
