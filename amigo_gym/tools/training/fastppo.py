@@ -1,27 +1,16 @@
-r"""Fast PPO over the native ``AmigoBot-v1`` vector env (CleanRL style, one module): ``amigo-gym train-fast``.
+r"""``amigo-gym train-fast``: PPO over the native ``AmigoBot-v1`` vector env (CleanRL style, one module).
 
-    amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo.yml      # 2-core laptop
-    amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo_gpu.yml  # 16 cores + GPU
-    amigo-gym train-fast --out runs/fast_s0 --resume                                          # after an interruption
+    amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo.yml  # --resume: continue
 
-The ``N = num_envs`` robots step on the CPU (``env_threads`` > 1: the ``numba-parallel`` kernel); networks, rollout
-buffers, GAE and updates live on ``device`` (``auto``: CUDA when torch sees a GPU). Per iteration of ``T =
-rollout_steps`` steps: features ``x`` (:class:`amigo_gym.policies.learned.FeatureBuilder`) normalised by a running
-mean/std; Gaussian policy ``u ~ N(mu(x), diag(exp(2 log_std)))`` whose :func:`~amigo_gym.policies.learned.env_action`
-the env gets; rewards scaled by the running std of the discounted return (clipped to +-10), time-limit truncation
-bootstrapped with ``gamma V(x_final)``, GAE(``gamma``, ``gae_lambda``); ``epochs`` passes of minibatch clipped PPO
-(advantages normalised per minibatch, ``+ vf_coef`` value loss, ``- ent_coef`` entropy, optional CAPS smoothness and
-residual L2 penalty on ``mu``), gradient norm clipped, Adam with the learning rate annealed to 0. The last
-``round(nominal_fraction N)`` robots are the nominal robot (``env_kwargs`` without ``randomize``, ``true_robot``).
+``N = num_envs`` robots step on the CPU; networks, buffers, GAE and updates run on ``device``. Per iteration of ``T =
+rollout_steps`` steps: features normalised by a running mean/std, Gaussian policy ``u ~ N(mu(x), exp(2 log_std))``,
+rewards scaled by the running std of the discounted return (clipped to +-10), time-limit truncation bootstrapped with
+``gamma V(x_final)``, GAE; ``epochs`` passes of minibatch clipped PPO (value loss, entropy, optional CAPS and residual
+penalties), Adam with the learning rate annealed to 0. The last ``round(nominal_fraction N)`` robots are nominal.
 
-Outputs in ``--out``: ``settings.json``; ``checkpoint.pt`` (everything to continue bit for bit, written atomically
-every ``checkpoint_every`` env-steps and at the end); ``curve.csv``/``curve.json`` (validation episodes of
-:mod:`~amigo_gym.tools.training.task_metrics`); ``model.zip`` (:class:`~amigo_gym.policies.learned.FastPolicy`),
-``best.zip`` (lowest validation H RMS); ``run.json`` (steps, wall time, throughput, versions, git revision, CPU,
-threads, device, sha256 of ``model.zip``). Same command, machine and seed: the same weights. ``--hyperparams``: the
-``AmigoBot-v1`` mapping of an rl-zoo style YAML file of settings (no ``env_kwargs``, ``seed``); options override it.
-The first ``SIGTERM``/``SIGINT`` stops after the iteration's checkpoint (status 130; ``--resume`` continues), a
-second at once; the folder is locked while training (:class:`amigo_gym.tools.runs.RunLock`).
+Outputs in ``--out``: ``settings.json``, ``checkpoint.pt`` (to continue bit for bit), ``curve.csv``/``curve.json``,
+``model.zip``, ``best.zip`` (lowest validation H RMS), ``run.json`` (steps, timings, versions, machine, sha256). The
+first ``SIGTERM``/``SIGINT`` stops after the iteration's checkpoint (status 130), a second at once.
 """
 
 from __future__ import annotations
@@ -72,20 +61,15 @@ from amigo_gym.tools.training.train import git_revision, versions
 
 Array = NDArray[np.float64]
 PROG = "amigo-gym train-fast"
-#: values of ``--device``
 DEVICES = ("auto", "cpu", "cuda")
 _CURVATURE_KEYS = ("max_curvature", "max_curvature_rate")
 
-#: numba (None where it is not installed: it ships wheels for the common platforms only)
+#: numba (None where it is not installed)
 numba: Any = importlib.import_module("numba") if importlib.util.find_spec("numba") else None
 
 
 def resolve_device(device: str) -> str:
-    """``"auto"``: ``"cuda"`` when torch sees a CUDA device, else ``"cpu"``; ``"cpu"``/``"cuda"`` as given.
-
-    Raises:
-        ValueError: one line, for ``"cuda"`` on a machine without one.
-    """
+    """``"auto"``: ``"cuda"`` when torch sees one, else ``"cpu"``; ``ValueError`` for ``"cuda"`` without one."""
     cuda = torch.cuda.is_available()
     if device == "cuda" and not cuda:
         raise ValueError("FastPPOSettings.device = 'cuda' but torch sees no CUDA device here (allowed: auto, cpu)")
@@ -93,11 +77,10 @@ def resolve_device(device: str) -> str:
 
 
 def _numba_threads_limit() -> int:
-    """The most threads numba may use here (``NUMBA_NUM_THREADS``); 1 without numba."""
     return 1 if numba is None else int(numba.config.NUMBA_NUM_THREADS)
 
 
-#: the allowed interval of each numeric setting ("(" / ")": that end open); integers where the field is an int
+#: the allowed interval of each numeric setting ("(" / ")": that end open)
 _RANGES = {
     "total_steps": "[1, 1e10]", "num_envs": "[1, 65536]", "rollout_steps": "[1, 10000]", "epochs": "[1, 100]",
     "minibatch_size": "[1, 1e8]", "history": "[0, 20]", "seed": "[0, 2147483647]", "eval_every": "[1, 1e10]",
@@ -113,53 +96,46 @@ _RANGES = {
 
 @dataclass(frozen=True)
 class FastPPOSettings:
-    """Settings of a fast-PPO run (module docstring); every field is checked on construction.
+    """Settings of a fast-PPO run, checked on construction (ranges: ``_RANGES``).
 
     Attributes:
         env_kwargs: keywords of gym.make_vec("AmigoBot-v1", ...) [JSON mapping]; default: the training distribution.
-        total_steps: env-steps of training [steps], in [1, 1e10].
-        num_envs: robots stepped together N, in [1, 65536].
-        rollout_steps: steps per robot per iteration T, in [1, 10000].
-        epochs: passes over each rollout, in [1, 100].
-        minibatch_size: samples per gradient step, in [1, N T]; N T must be a multiple of it.
-        learning_rate: Adam's initial step size [-], in (0, 1]; annealed linearly to 0.
-        gamma: discount per step [-], in [0, 1).
-        gae_lambda: GAE lambda [-], in [0, 1].
-        clip_coef: PPO ratio clip eps [-], in (0, 1].
-        ent_coef: entropy bonus [-], in [0, 1].
-        vf_coef: value-loss weight [-], in [0, 10].
-        max_grad_norm: gradient-norm clip [-], in (0, 100].
-        hidden: hidden layer widths of both networks (tanh) [units], each in [1, 4096].
-        log_std_init: initial log standard deviation of the policy [log of normalised action units], in [-5, 1].
+        total_steps: env-steps of training [steps].
+        num_envs: robots stepped together N [robots].
+        rollout_steps: steps per robot per iteration T [steps].
+        epochs: passes over each rollout [-].
+        minibatch_size: samples per gradient step [samples]; N T must be a multiple of it.
+        learning_rate: Adam's initial step size [-], annealed linearly to 0.
+        gamma: discount per step [-].
+        gae_lambda: GAE lambda [-].
+        clip_coef: PPO ratio clip eps [-].
+        ent_coef: entropy bonus [-].
+        vf_coef: value-loss weight [-].
+        max_grad_norm: gradient-norm clip [-].
+        hidden: hidden layer widths of both networks (tanh) [units].
+        log_std_init: initial log standard deviation of the policy [log normalised action units].
         norm_reward: scale rewards by the running std of the discounted return.
-        history: previous steps of commands and measurements in the features [steps], in [0, 20].
-        residual_bound: bound of the learned correction to the analytic action [normalised action units], in
-            [0, 2]; 0: plain policy.
-        residual_penalty: weight of the L2 penalty on the residual policy's mean correction [-, per (bound units)^2],
-            in [0, 100]; needs residual_bound > 0 when > 0 (module docstring).
-        nominal_fraction: share of the N training robots simulated as the nominal robot [-], in [0, 1)
-            (module docstring); 0: all robots from env_kwargs.
-        filter_alpha: low-pass factor of the action parameterisation [-], in (0, 1]; 1: none.
-        caps_temporal: CAPS temporal smoothness weight [-], in [0, 100].
-        caps_spatial: CAPS spatial smoothness weight [-], in [0, 100].
-        caps_sigma: CAPS spatial perturbation std [normalised feature units], in (0, 10].
-        seed: seed of the networks, the sampling and the training envs [-], in [0, 2**31).
-        eval_every: env-steps between evaluations [steps], in [1, 1e10].
-        eval_envs: evaluation episodes (validation seeds eval_seed + i), in [1, 4096].
-        eval_seed: first validation seed [-], in [0, 2**31).
-        checkpoint_every: env-steps between checkpoints [steps], in [1, 1e10].
-        threads: torch threads (the learner's CPU work) [threads], in [1, 64].
-        env_threads: threads of the vector env's step [threads], in [1, 256] and at most numba's NUMBA_NUM_THREADS;
-            above 1 the env runs its numba-parallel kernel (the same results bit for bit).
-        device: where the networks, rollout buffers, GAE and updates run: auto (cuda if torch sees one, else
-            cpu), cpu or cuda.
-        max_episode_steps: episode time limit [steps], in [1, 100000].
-        curriculum_max_curvature: final bound of ``|kappa|`` of the random paths [1/m] (:func:`curriculum_path_params`),
-            in [0, 100]; 0: no curriculum. Needs path "random" or "mixed", a value above the start (``path_params``'s,
-            else 1 1/m) and final paths feasible at the highest speed.
-        curriculum_max_curvature_rate: final bound of ``|dkappa/ds|`` [1/m^2], in [0, 1000]; 0: the start's ratio kept.
-        curriculum_fraction: share of ``total_steps`` over which the bounds rise linearly [-], in (0, 1].
-        curriculum_stages: number of raises (each rebuilds the pool of random paths) [-], in [1, 1000].
+        history: previous steps of commands and measurements in the features [steps].
+        residual_bound: bound of the learned correction to the analytic action [normalised action units]; 0: none.
+        residual_penalty: weight of the L2 penalty on the residual's mean correction [-]; needs residual_bound > 0.
+        nominal_fraction: share of the N robots simulated as the nominal robot [-].
+        filter_alpha: low-pass factor of the action parameterisation [-]; 1: none.
+        caps_temporal: CAPS temporal smoothness weight [-].
+        caps_spatial: CAPS spatial smoothness weight [-].
+        caps_sigma: CAPS spatial perturbation std [normalised feature units].
+        seed: seed of the networks, the sampling and the training envs [-].
+        eval_every: env-steps between evaluations [steps].
+        eval_envs: evaluation episodes (validation seeds eval_seed + i) [episodes].
+        eval_seed: first validation seed [-].
+        checkpoint_every: env-steps between checkpoints [steps].
+        threads: torch threads [threads].
+        env_threads: threads of the vector env's step [threads], at most NUMBA_NUM_THREADS (same results).
+        device: where the networks and updates run: auto (cuda if torch sees one), cpu or cuda.
+        max_episode_steps: episode time limit [steps].
+        curriculum_max_curvature: final bound of the random paths' curvature [1/m]; 0: no curriculum.
+        curriculum_max_curvature_rate: final bound of its rate [1/m^2]; 0: the start's ratio kept.
+        curriculum_fraction: share of total_steps over which the bounds rise linearly [-].
+        curriculum_stages: number of raises [-].
     """
 
     env_kwargs: Mapping[str, Any] = field(
@@ -239,8 +215,7 @@ class FastPPOSettings:
             _check_curriculum(self)
 
     def curriculum(self) -> tuple[dict[str, float], dict[str, float]] | None:
-        """``(start, final)`` random-path parameters of the curvature curriculum (``max_curvature`` [1/m],
-        ``max_curvature_rate`` [1/m^2] and the ``env_kwargs``' other ``path_params``), or None without one."""
+        """``(start, final)`` random-path parameters of the curvature curriculum (None without one)."""
         if self.curriculum_max_curvature <= 0:
             return None
         start = {k: r.default for k, r in RANDOM_RANGES.items() if k in _CURVATURE_KEYS}
@@ -250,7 +225,6 @@ class FastPPOSettings:
         return start, {**start, "max_curvature": k_end, "max_curvature_rate": float(c_end)}
 
     def spec(self) -> FeatureSpec:
-        """The policy's :class:`~amigo_gym.policies.learned.FeatureSpec`."""
         return FeatureSpec(self.env_kwargs, self.history, self.residual_bound, self.filter_alpha)
 
     def to_json(self) -> dict[str, Any]:
@@ -266,8 +240,7 @@ class FastPPOSettings:
 
 
 def _check_curriculum(s: FastPPOSettings) -> None:
-    """One-line errors for a curriculum the env cannot run: a fixed path, a final curvature not above the start, a
-    final stage the env's feasibility check refuses (at the highest reference speed)."""
+    """Refuse a curriculum the env cannot run: a fixed path, a final curvature not above the start, infeasible."""
     o = "FastPPOSettings"
     path = s.env_kwargs.get("path", tracking.TrackingParams.path)
     if path not in ("random", "mixed"):
@@ -288,12 +261,9 @@ def _check_curriculum(s: FastPPOSettings) -> None:
 
 
 def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, float] | None:
-    r"""The random paths' parameters of the curvature curriculum after ``env_steps`` env-steps (None without one).
-
-    Stage ``j = min(S, floor(S g / (f T)))`` of ``S = curriculum_stages`` after ``g`` env-steps of ``T =
-    total_steps`` (``f = curriculum_fraction``); each bound ``b_j = b_0 + (b_S - b_0) j / S`` between the start and
-    final of :meth:`FastPPOSettings.curriculum`. ``j`` depends on ``g`` alone: a resumed run raises at the same steps.
-    """
+    """The random paths' parameters after ``g = env_steps`` (None without a curriculum): stage ``j = min(S, floor(S g
+    / (f T)))`` of ``S = curriculum_stages`` (``f = curriculum_fraction``, ``T = total_steps``), each bound ``b_0 +
+    (b_S - b_0) j / S``."""
     ends = s.curriculum()
     if ends is None:
         return None
@@ -303,19 +273,14 @@ def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, floa
     return {k: start[k] + (final[k] - start[k]) * j / n if k in _CURVATURE_KEYS else v for k, v in start.items()}
 
 
-#: the key of a fast-PPO hyperparameter file's mapping (rl-zoo layout: one mapping per environment id)
+#: the key of a fast-PPO hyperparameter file's mapping, and the settings it may not hold (a run's)
 YAML_ENV_ID = "AmigoBot-v1"
-#: settings a hyperparameter file may not hold: they belong to a run (its command line), not to tuned settings
 YAML_RUN_KEYS = ("env_kwargs", "seed")
 
 
 def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The :data:`YAML_ENV_ID` mapping of a fast-PPO hyperparameter file, checked as :class:`FastPPOSettings` values.
-
-    Raises:
-        FileNotFoundError: no such file. ValueError: not YAML, no ``AmigoBot-v1`` mapping, a run key
-            (:data:`YAML_RUN_KEYS`), unknown keys (all of them) or the first bad value; one line naming the file.
-    """
+    """The checked :data:`YAML_ENV_ID` mapping of a fast-PPO hyperparameter file; one ``ValueError`` line naming the
+    file for a run key, unknown keys (all) or the first bad value."""
     hp = load_hyperparams(path, YAML_ENV_ID)
     names = [f.name for f in fields(FastPPOSettings)]
     run_keys = sorted(str(k) for k in hp if k in YAML_RUN_KEYS)
@@ -376,9 +341,8 @@ def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch
 
 
 def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
-    """Mean task metrics (NaN-aware) of ``eval_envs`` deterministic episodes of ``s.env_kwargs``: robot ``i`` reset
-    with seed ``eval_seed + i``, its first episode recorded (:func:`~.task_metrics.run_vector_episodes`).
-    ``policy``: anything with SB3's ``predict(obs, state, episode_start, deterministic)``."""
+    """Mean task metrics (NaN-aware) of the first deterministic episodes of ``eval_envs`` robots of ``s.env_kwargs``
+    seeded ``eval_seed + i``; ``policy``: anything with SB3's ``predict``."""
     n = s.eval_envs
     env = gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, **s.env_kwargs)
     try:
@@ -424,8 +388,7 @@ _RUN_STATE = ("ret_acc", "obs", "fstate", "starts", "ep_ret", "iteration", "glob
 
 @dataclass
 class _Buffers:
-    """One rollout on the device: features ``x`` and values ``v`` ``(T + 1, N, ...)`` (the last row: after the
-    rollout), actions, log-probabilities, rewards and episode ends ``(T, N, ...)``."""
+    """One rollout on the device: features ``x``, values ``v`` ``(T + 1, N, ...)``; the rest ``(T, N, ...)``."""
 
     x: torch.Tensor
     u: torch.Tensor
@@ -441,8 +404,7 @@ class _Buffers:
 
 
 class _ConcatVectorEnv:
-    """Vector envs side by side as one of ``sum(n_i)`` robots (the rows of ``envs[0]`` first); ``step``'s info holds
-    only ``final_obs`` (an object array, ``None`` where no episode ended), the one info field the trainer reads."""
+    """Vector envs side by side as one; ``step``'s info holds only ``final_obs`` (``None`` where no episode ended)."""
 
     def __init__(self, envs: Sequence[Any]) -> None:
         self.envs = list(envs)
@@ -466,7 +428,6 @@ class _ConcatVectorEnv:
 
     @property
     def params(self) -> Any:
-        """The first env's task settings (all share ``path_params``: :meth:`set_path_params` sets them all)."""
         return self.envs[0].params
 
     def set_path_params(self, path_params: Mapping[str, Any]) -> None:
@@ -513,8 +474,7 @@ def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
 
 
 def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
-    """Write everything needed to continue bit for bit (atomically): networks, optimiser, normalisers, the pickled
-    vector env, the current observations and policy state, torch's random states (CPU and CUDA)."""
+    """Write (atomically) everything needed to continue bit for bit, the vector env pickled."""
     obj = {
         "settings": s.to_json(),
         "net": r.net.state_dict(),
@@ -528,13 +488,12 @@ def checkpoint(path: Path, s: FastPPOSettings, r: _Run) -> None:
         "episode_returns": r.episode_returns[-1000:],
     }
     atomic_save(lambda tmp: torch.save(obj, tmp), path)
-    vouch(sha256_file(path))  # written here: resuming it needs no trust flag (amigo_gym.io.require_trust)
+    vouch(sha256_file(path))
 
 
 def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
-    require_trust(path)  # a pickle (the vector env): shipped, written here, or --trust-unverified
+    require_trust(path)
     ck = torch.load(path, weights_only=False, map_location="cpu")
-    # a checkpoint written before a field existed holds its default (FastPPOSettings.from_json fills it in)
     if FastPPOSettings.from_json(ck["settings"]).to_json() != s.to_json():
         raise ValueError(f"{path}: the checkpoint's settings differ from these (resume with the same settings)")
     net, opt = _networks(s, builder.dim, device)
@@ -555,10 +514,10 @@ def _policy(s: FastPPOSettings, r: _Run, info: Mapping[str, Any] | None = None) 
 
 
 def machine_record(device: str) -> dict[str, Any]:
-    """Where a run ran: git revision (``"unknown"`` outside a git checkout), CPU, thread counts, device."""
+    """Where a run ran: git revision (``"unknown"`` outside a checkout), CPU, thread counts, device."""
     rev = git_revision()
     return {
-        "git_revision": rev if rev and " " not in rev else "unknown",  # train.git_revision's sentence outside git
+        "git_revision": rev if rev and " " not in rev else "unknown",
         "cpu": cpu_model(),
         "cpu_count": os.cpu_count(),
         "torch_threads": torch.get_num_threads(),
@@ -570,7 +529,7 @@ def machine_record(device: str) -> dict[str, Any]:
 
 # --------------------------------------------------------------------------- rollout, update
 def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True) -> tuple[torch.Tensor, Array, Array]:
-    """Normalised features of the current observations on the device (``learn``: the normaliser updated first)."""
+    """Normalised features of the current observations on the device (``learn``: update the normaliser first)."""
     feats, base, s_next = builder(r.obs, r.fstate, r.starts)
     if learn:
         r.obs_rms.update(feats)
@@ -579,7 +538,7 @@ def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True)
 
 
 def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str) -> float:
-    """Step the ``N`` robots ``T`` times with the current policy into ``buf``; the wall seconds spent in the env."""
+    """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env."""
     net, gamma, t_len = r.net, s.gamma, s.rollout_steps
     rew_buf = np.zeros((t_len, s.num_envs))
     done_buf = np.zeros((t_len, s.num_envs))
@@ -642,7 +601,7 @@ def gae(s: FastPPOSettings, buf: _Buffers) -> tuple[torch.Tensor, torch.Tensor]:
 
 
 def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
-    """``epochs`` passes of minibatch PPO over the rollout (module docstring), on the buffers' device."""
+    """``epochs`` passes of minibatch PPO over the rollout, on the buffers' device."""
     net, t_len = r.net, s.rollout_steps
     batch, d = s.num_envs * t_len, buf.x.shape[-1]
     adv, ret = gae(s, buf)
@@ -679,7 +638,6 @@ def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
 
 # --------------------------------------------------------------------------- the run
 def _check_start(out: Path, resume: bool) -> None:
-    """Refuse to overwrite a run (a checkpoint without ``resume``) or to resume nothing."""
     ckpt = out / "checkpoint.pt"
     if ckpt.exists() and not resume:
         raise FileExistsError(f"{ckpt} exists: pass --resume to continue it or choose another --out")
@@ -698,33 +656,23 @@ def train(
     evaluate_runs: bool = True,
     after_eval: Callable[[dict[str, float]], bool] | None = None,
 ) -> dict[str, Any]:
-    """Train (or continue) a fast-PPO run in ``out`` (module docstring); returns the run record (``run.json``).
+    """Train (or ``resume`` with the same settings) a run in ``out``, locked; the record (``run.json``).
 
-    Args:
-        s: the settings. out: the run folder (created). resume: continue from ``out/checkpoint.pt`` (the settings
-            must be the same); without it an existing checkpoint is an error (nothing is overwritten).
-        until_steps: stop (after a checkpoint) once this many env-steps are done, as an interruption would.
-        log: progress lines (``None``: quiet). command: the command line recorded in ``run.json``.
-        evaluate_runs: run the evaluations (False: none, no curve, no ``best.zip``; for throughput benchmarks).
-        after_eval: called with each evaluation's ``curve.csv`` row; ``False`` stops training at once (no checkpoint,
-            no ``model.zip``; the record's ``stopped_by`` is ``after_eval``); ``amigo-gym sweep``'s pruning.
-
-    Raises:
-        FileExistsError: a checkpoint exists and ``resume`` is False. FileNotFoundError: ``resume`` without one.
-        ValueError: ``device`` cuda without one, ``env_threads`` above numba's limit here.
-        runs.RunLockedError: another process trains in ``out`` (the folder is locked for the whole call).
-        KeyboardInterrupt: stopped by ``SIGTERM``/``SIGINT`` (module docstring), after a checkpoint.
+    ``until_steps``: stop after a checkpoint at this many env-steps; ``log``: progress lines (``None``: quiet);
+    ``command``: recorded; ``evaluate_runs`` False: no evaluations; ``after_eval(row)`` False: stop at once (no
+    checkpoint, no ``model.zip``, ``stopped_by`` ``after_eval``). Raises ``FileExistsError`` (a checkpoint without
+    ``resume``), ``FileNotFoundError``, ``ValueError``, ``RunLockedError``, ``KeyboardInterrupt`` (a signal).
     """
     out = Path(out)
     _check_start(out, resume)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
-    with handling(stop):  # from here a signal stops training after its first iteration's checkpoint
-        device = resolve_device(s.device)  # refused before anything is written
+    with handling(stop):
+        device = resolve_device(s.device)
         if s.env_threads > (limit := _numba_threads_limit()):
             raise ValueError(f"FastPPOSettings.env_threads must be in [1, {limit}] on this machine (numba's "
                              f"NUMBA_NUM_THREADS), got {s.env_threads}")  # fmt: skip
         out.mkdir(parents=True, exist_ok=True)
-        with RunLock(out):  # one process per run folder: a second train-fast on it stops with one line
+        with RunLock(out):
             _check_start(out, resume)  # again, under the lock
             record = _train(s, out, device, resume, until_steps, log or (lambda _msg: None), command,
                             evaluate_runs, after_eval, stop)  # fmt: skip
@@ -734,18 +682,11 @@ def train(
 
 
 def _train(
-    s: FastPPOSettings,
-    out: Path,
-    device: str,
-    resume: bool,
-    until_steps: int | None,
-    say: Callable[[str], None],
-    command: str | None,
-    evaluate_runs: bool,
-    after_eval: Callable[[dict[str, float]], bool] | None,
+    s: FastPPOSettings, out: Path, device: str, resume: bool, until_steps: int | None, say: Callable[[str], None],
+    command: str | None, evaluate_runs: bool, after_eval: Callable[[dict[str, float]], bool] | None,
     stop_request: StopRequest,
-) -> dict[str, Any]:
-    if numba is not None:  # numba's threading layer first: starting it resets OpenMP's (torch's) thread count
+) -> dict[str, Any]:  # fmt: skip
+    if numba is not None:  # first: starting numba's threads resets torch's count
         numba.set_num_threads(s.env_threads)
     torch.set_num_threads(s.threads)
     builder = FeatureBuilder(s.spec())
@@ -761,7 +702,6 @@ def _train(
     t_start, wall0 = time.perf_counter(), r.wall_s
 
     def evaluate() -> bool:
-        """Evaluate, append to the curve (and ``best.zip``); ``after_eval``'s verdict."""
         t0 = time.perf_counter()
         pol = _policy(s, r)
         m = evaluate_policy(pol, s)
@@ -772,7 +712,7 @@ def _train(
             "wall_s": round(wall, 2),
             "train_sps": round(r.global_step / train_wall, 1),
         }
-        if s.curriculum_max_curvature > 0:  # the random paths' bound being trained on [1/m]
+        if s.curriculum_max_curvature > 0:
             row["curriculum_max_curvature"] = float(dict(r.env.params.path_params).get("max_curvature", 1.0))
         row |= {f"eval_{k}": v for k, v in m.items()}
         row["eval_s"] = round(time.perf_counter() - t0, 2)
@@ -799,36 +739,29 @@ def _train(
         if not evaluate():
             stopped_by = "after_eval"
         r.next_eval += s.eval_every
-    # this call's seconds: CPU (process_time, all threads) and wall of the env steps, rollouts, updates, iterations
-    cpu = dict.fromkeys(("rollout", "update", "loop_wall"), 0.0)
-    wall_split = dict.fromkeys(("env", "rollout", "update", "loop"), 0.0)
+    env_s, spent = 0.0, np.zeros(4)  # this call's seconds: CPU of rollouts, updates; wall of rollouts, updates
     buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
 
-    def sync() -> None:  # timings of asynchronous CUDA work
+    def sync() -> None:
         if device == "cuda":
             torch.cuda.synchronize()
 
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
-        if stage is not None and dict(r.env.params.path_params) != stage:  # between rollouts; no random draw
+        if stage is not None and dict(r.env.params.path_params) != stage:
             r.env.set_path_params(stage)
             say(f"[curriculum] {r.global_step:>11,d} steps: random paths {stage}")
         r.iteration += 1
         for g in r.opt.param_groups:
             g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
         c0, w0 = time.process_time(), time.perf_counter()
-        wall_split["env"] += rollout(s, r, builder, buf, device)
+        env_s += rollout(s, r, builder, buf, device)
         sync()
         c1, w1 = time.process_time(), time.perf_counter()
         update(s, r, buf)
         sync()
         c2, w2 = time.process_time(), time.perf_counter()
-        cpu["rollout"] += c1 - c0
-        cpu["update"] += c2 - c1
-        cpu["loop_wall"] += w2 - w0
-        wall_split["rollout"] += w1 - w0
-        wall_split["update"] += w2 - w1
-        wall_split["loop"] += w2 - w0
+        spent += (c1 - c0, c2 - c1, w1 - w0, w2 - w1)
         r.wall_s = wall = wall0 + time.perf_counter() - t_start
         if r.iteration % 20 == 0 or r.global_step >= stop:
             recent = r.episode_returns[-200:]
@@ -851,6 +784,8 @@ def _train(
                 r.next_ckpt += s.checkpoint_every
     r.wall_s = wall0 + time.perf_counter() - t_start
     r.env.close()
+    cpu_s = dict(zip(("rollout", "update", "loop_wall"), (*spent[:2], spent[2:].sum()), strict=True))
+    wall_s = dict(zip(("env", "rollout", "update", "loop"), (env_s, *spent[2:], spent[2:].sum()), strict=True))
     record: dict[str, Any] = {
         "algo": "fastppo_residual" if s.residual_bound > 0 else "fastppo",
         "seed": s.seed,
@@ -865,8 +800,8 @@ def _train(
         "command": command,
         "versions": versions(("gymnasium", "torch")),
         **machine_record(device),
-        "cpu_s_this_call": {k: round(v, 2) for k, v in cpu.items()},
-        "wall_s_this_call": {k: round(v, 3) for k, v in wall_split.items()},
+        "cpu_s_this_call": {k: round(float(v), 2) for k, v in cpu_s.items()},
+        "wall_s_this_call": {k: round(float(v), 3) for k, v in wall_s.items()},
     }
     if record["finished"]:
         _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
@@ -878,11 +813,11 @@ def _train(
 # --------------------------------------------------------------------------- CLI
 @dataclass(frozen=True)
 class HyperparamsFile:
-    """The option of ``amigo-gym train-fast`` read first: the file whose values become the defaults of the others.
+    """The option read first (its file's values become the other options' defaults).
 
     Attributes:
-        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping of settings replaces the defaults below; options
-            given here override it (e.g. agents/hyperparams/fastppo.yml) (default: none).
+        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping replaces the defaults; options override it
+            (default: none).
     """
 
     hyperparams: str | None = None
@@ -890,7 +825,7 @@ class HyperparamsFile:
 
 @dataclass(frozen=True)
 class TrainFastRun(HyperparamsFile):
-    """Options of ``amigo-gym train-fast`` besides the :class:`FastPPOSettings` (the run, not the training).
+    """The run's options besides the :class:`FastPPOSettings`.
 
     Attributes:
         out: run folder [folder] (required).
@@ -904,7 +839,7 @@ class TrainFastRun(HyperparamsFile):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``amigo-gym train-fast``: ``--hyperparams`` is read first; its file's values become the other defaults."""
+    """Entry point of ``amigo-gym train-fast``."""
     args_in = list(sys.argv[1:] if argv is None else argv)
     first = argparse.ArgumentParser(add_help=False)
     add_dataclass_options(first, HyperparamsFile)

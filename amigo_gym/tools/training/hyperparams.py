@@ -1,9 +1,7 @@
-"""rl-baselines3-zoo hyperparameter files for ``amigo-gym train``: read, check, turn into SB3 arguments.
+"""rl-zoo hyperparameter files (one mapping per env id) for ``amigo-gym train``: read, check, make SB3 arguments.
 
-rl-zoo's format (one mapping per env id) and idioms: a string ``policy_kwargs`` (:func:`parse_python_literal`),
-``normalize`` (true or ``VecNormalize`` keywords), ``noise_type: normal | ornstein-uhlenbeck`` with ``noise_std``,
-``lin_<x>`` schedules. Every other key must be a keyword of the algorithm's SB3 class; unknown keys are refused in
-one line listing them. PyYAML, torch and SB3 are imported lazily.
+rl-zoo's idioms: a string ``policy_kwargs``, ``normalize``, ``noise_type``/``noise_std``, ``lin_<x>`` schedules; every
+other key must be a keyword of the algorithm's SB3 class.
 """
 
 from __future__ import annotations
@@ -21,68 +19,40 @@ from amigo_gym.model.params import check_real
 
 ENV_ID = "AmigoBot-v0"
 
-#: the ``policy`` of TD3 with the low-pass actor (:data:`amigo_gym.tools.training.sb3_lowpass.POLICY_NAME`)
+#: the ``policy`` of TD3 with the low-pass actor (:mod:`amigo_gym.tools.training.sb3_lowpass`)
 LOWPASS_POLICY = "LowPassMlpPolicy"
 #: keys of the file that are not keyword arguments of the algorithm class
 META_KEYS = ("n_timesteps", "n_envs", "policy", "normalize", "noise_type", "noise_std", "normalize_kwargs")
 
 #: keyword arguments of the algorithm class that a file may not set (train sets them, or they need objects)
-RESERVED = (
-    "policy",
-    "env",
-    "seed",
-    "device",
-    "verbose",
-    "tensorboard_log",
-    "_init_setup_model",
-    "action_noise",
-    "replay_buffer_class",
-    "rollout_buffer_class",
-)
+RESERVED = (  # noqa: SIM905
+    "policy env seed device verbose tensorboard_log _init_setup_model action_noise replay_buffer_class "
+    "rollout_buffer_class"
+).split()
 
-#: the names a ``policy_kwargs`` string may use, as ``torch.<attribute path>``; written bare, or
-#: behind ``nn.``, ``th.nn.``, ``torch.nn.`` (activations) or ``optim.``, ``th.optim.``, ``torch.optim.``
+#: the torch names a ``policy_kwargs`` string may use (``{name: module}``), bare or behind ``nn.``/``optim.``,
+#: ``th.`` or ``torch.`` and that module
 TORCH_NAMES: dict[str, str] = {
-    **{a: f"nn.{a}" for a in ("ReLU", "Tanh", "ELU", "LeakyReLU", "SiLU", "GELU", "Sigmoid", "Softplus", "Identity")},
-    **{o: f"optim.{o}" for o in ("Adam", "AdamW", "RMSprop", "SGD")},
+    **dict.fromkeys(("ReLU", "Tanh", "ELU", "LeakyReLU", "SiLU", "GELU", "Sigmoid", "Softplus", "Identity"), "nn"),
+    **dict.fromkeys(("Adam", "AdamW", "RMSprop", "SGD"), "optim"),
 }
-
-_PREFIXES = ("", "nn.", "th.nn.", "torch.nn.", "optim.", "th.optim.", "torch.optim.")
 
 
 def _torch_object(name: str) -> Any:
     """The torch class a ``policy_kwargs`` name stands for (``ValueError`` if it is not in :data:`TORCH_NAMES`)."""
-    for prefix in _PREFIXES:
-        if name.startswith(prefix) and name[len(prefix) :] in TORCH_NAMES:
-            target = TORCH_NAMES[name[len(prefix) :]]
-            if prefix and prefix.rstrip(".").split(".")[-1] != target.split(".")[0]:
-                continue  # nn.Adam or optim.ReLU
-            import torch
+    head, _, attr = name.rpartition(".")
+    module = TORCH_NAMES.get(attr)
+    if module is not None and head in ("", module, f"th.{module}", f"torch.{module}"):
+        import torch
 
-            obj: Any = torch
-            for part in target.split("."):
-                obj = getattr(obj, part)
-            return obj
-    allowed = ", ".join(f"nn.{k}" if v.startswith("nn.") else f"optim.{k}" for k, v in TORCH_NAMES.items())
+        return getattr(getattr(torch, module), attr)
+    allowed = ", ".join(f"{v}.{k}" for k, v in TORCH_NAMES.items())
     raise ValueError(f"policy_kwargs: unknown name {name!r}; allowed: {allowed}")
 
 
-def _dotted(node: ast.expr) -> str | None:
-    if isinstance(node, ast.Name):
-        return node.id
-    if isinstance(node, ast.Attribute):
-        base = _dotted(node.value)
-        return None if base is None else f"{base}.{node.attr}"
-    return None
-
-
 def parse_python_literal(text: str, what: str = "policy_kwargs") -> Any:
-    """Parse an rl-zoo style Python expression without evaluating it: literals, lists, tuples, dicts, ``dict(k=v)``,
-    a leading sign, and the torch names of :data:`TORCH_NAMES` (``nn.ReLU`` becomes the class).
-
-    Raises:
-        ValueError: a syntax error or any other construct.
-    """
+    """An rl-zoo Python expression, parsed, not evaluated: literals, lists, tuples, dicts, ``dict(k=v)``, a sign, and
+    the torch names of :data:`TORCH_NAMES` (the classes). ``ValueError``: any other construct."""
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
@@ -108,21 +78,16 @@ def parse_python_literal(text: str, what: str = "policy_kwargs") -> Any:
             if node.args or any(k.arg is None for k in node.keywords):
                 raise ValueError(f"{what}: write dict(key=value, ...) in {text!r}")
             return {str(k.arg): walk(k.value) for k in node.keywords}
-        name = _dotted(node)
-        if name is not None:
-            if name in ("True", "False", "None"):
-                return {"True": True, "False": False, "None": None}[name]
-            return _torch_object(name)
+        if isinstance(node, ast.Name | ast.Attribute):
+            return _torch_object(ast.unparse(node))
         raise ValueError(f"{what}: {ast.unparse(node)!r} is not allowed (only literals, lists, dicts, torch names)")
 
     return walk(tree.body)
 
 
 def _schedule(key: str, value: Any) -> float | Callable[[float], float]:
-    """A number, or ``lin_<x>``: linear from ``x`` at the start to 0 at the end (``progress`` 1 -> 0)."""
-    if isinstance(value, bool):
-        raise ValueError(f"{key} must be a number or 'lin_<x>', got {value!r}")
-    if isinstance(value, int | float):
+    """A number, or ``lin_<x>``: linear from ``x`` at the start to 0 at the end."""
+    if isinstance(value, int | float) and not isinstance(value, bool):
         return float(value)
     if isinstance(value, str):
         text = value.strip()
@@ -145,12 +110,9 @@ class _Linear:
 
 @dataclass
 class Hyperparams:
-    """A checked hyperparameter file: the mapping as read (``raw``), its ``n_timesteps`` / ``n_envs`` (``None``:
-    absent), ``policy`` (``MlpPolicy`` or :data:`LOWPASS_POLICY`), ``VecNormalize`` keywords (``None``: none), the
-    action noise's type and std, and the algorithm class's keyword arguments (``policy_kwargs`` parsed, schedules
-    made; the noise by :meth:`action_noise`)."""
+    """A checked hyperparameter file: its meta keys (``None``: absent) and the algorithm class's keyword arguments
+    (``policy_kwargs`` parsed, schedules made)."""
 
-    raw: dict[str, Any]
     n_timesteps: int | None = None
     n_envs: int | None = None
     policy: str = "MlpPolicy"
@@ -160,7 +122,6 @@ class Hyperparams:
     kwargs: dict[str, Any] = field(default_factory=dict)
 
     def action_noise(self, n_actions: int) -> Any:
-        """The SB3 action noise of ``noise_type`` (``None`` without one)."""
         if self.noise_type is None:
             return None
         from stable_baselines3.common.noise import NormalActionNoise, OrnsteinUhlenbeckActionNoise
@@ -172,7 +133,7 @@ class Hyperparams:
 
 
 def sb3_class(algo: str) -> Any:
-    """SB3's class of ``algo`` (``ppo``, ``sac``, ``td3``: ``PPO``, ``SAC``, ``TD3``)."""
+    """SB3's class of ``algo`` (``ppo``: ``PPO``...)."""
     import stable_baselines3
 
     return getattr(stable_baselines3, algo.upper())
@@ -198,29 +159,24 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
     elif value is not True:
         raise ValueError(f"normalize must be true, false or a mapping of VecNormalize keywords, got {value!r}")
     if gamma is not None:
-        kw.setdefault("gamma", float(gamma))  # as rl-zoo: the reward normalisation discounts like the agent
+        kw.setdefault("gamma", float(gamma))
     return kw
 
 
 def check_filter_alpha(value: object, owner: str = "policy_kwargs") -> float:
-    """The low-pass filter factor ``alpha`` of :data:`LOWPASS_POLICY` (``a = p + alpha (u - p)``) as a float in
-    (0, 1]; else one ``ValueError`` line naming ``<owner>.filter_alpha``."""
+    """The low-pass filter factor ``alpha`` in (0, 1] (``ValueError`` naming ``<owner>.filter_alpha``)."""
     return check_real(owner, "filter_alpha", value, 0.0, 1.0, low_open=True)
 
 
 def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
-    """Check the ``AmigoBot-v0`` mapping of a file for ``algo`` and turn it into :class:`Hyperparams`.
-
-    Raises:
-        ValueError: one line: the unknown keys (all of them), or the first bad value.
-    """
+    """The checked mapping ``hp`` of a file for ``algo``; ``ValueError``: unknown keys (all) or the first bad value."""
     allowed = _algo_keywords(algo) | set(META_KEYS)
     unknown = sorted(str(k) for k in hp if k not in allowed)
     if unknown:
         raise ValueError(
             f"{where}: unknown key(s) for {algo}: {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})"
         )
-    out = Hyperparams(raw=dict(hp))
+    out = Hyperparams()
     for name in ("n_timesteps", "n_envs"):
         v = hp.get(name)
         if v is not None:
@@ -229,14 +185,14 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{where}: {name} must be an integer >= 1, got {v!r}")
             setattr(out, name, v)
+    pk = hp.get("policy_kwargs")
+    pk = parse_python_literal(pk) if isinstance(pk, str) else pk
     policy = hp.get("policy", "MlpPolicy")
     if policy == LOWPASS_POLICY:
         if algo != "td3":
             raise ValueError(f"{where}: policy {LOWPASS_POLICY} is for td3, not {algo}")
-        pk0 = hp.get("policy_kwargs")
-        pk0 = parse_python_literal(pk0) if isinstance(pk0, str) else pk0
-        check_filter_alpha(pk0.get("filter_alpha") if isinstance(pk0, Mapping) else None, f"{where}: policy_kwargs")
-        if isinstance(pk0, Mapping) and "prev_index" in pk0:
+        check_filter_alpha(pk.get("filter_alpha") if isinstance(pk, Mapping) else None, f"{where}: policy_kwargs")
+        if isinstance(pk, Mapping) and "prev_index" in pk:
             raise ValueError(f"{where}: policy_kwargs.prev_index comes from the env's observation, not the file")
         out.policy = LOWPASS_POLICY
     elif policy != "MlpPolicy":
@@ -262,9 +218,6 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
     for key in ("learning_rate", "clip_range", "clip_range_vf"):
         if key in kw and kw[key] is not None:
             kw[key] = _schedule(key, kw[key])
-    pk = kw.get("policy_kwargs")
-    if isinstance(pk, str):
-        pk = parse_python_literal(pk)
     if pk is not None:
         if not isinstance(pk, Mapping):
             raise ValueError(f"{where}: policy_kwargs must be a mapping, got {pk!r}")
@@ -280,11 +233,7 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
 
 
 def load_hyperparams(path: str | os.PathLike[str], env_id: str = ENV_ID) -> dict[str, Any]:
-    """The ``env_id`` mapping of an rl-zoo style YAML file, unchecked (:func:`parse_hyperparams`).
-
-    Raises:
-        ValueError: not YAML, or no ``env_id`` mapping. FileNotFoundError: no such file.
-    """
+    """The ``env_id`` mapping of a YAML file, unchecked; ``ValueError``: not YAML or no such mapping."""
     import yaml
 
     try:

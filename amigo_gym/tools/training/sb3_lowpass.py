@@ -1,14 +1,8 @@
-r"""TD3 with the low-pass action parameterisation inside its actor (``policy: LowPassMlpPolicy``).
+r"""TD3 with the low-pass filter inside its actor (``policy: LowPassMlpPolicy``): ``a = p + alpha (u - p)``.
 
-The actor's network gives a target ``u = tanh(mlp(o))`` in normalised action units, and the action is
-
-.. math::  a = p + \alpha\,(u - p),
-
-``p`` ``(N, 2)`` the previous command read from AmigoBot-v1's observation (``previous_command_1``, ``_2``, in
-[-1, 1]) and ``alpha`` in (0, 1] the filter factor (1: SB3's actor). The filter is part of the actor's forward pass:
-the critic learns ``Q(o, a)`` of the action the env receives, the policy gradient flows through the filter, and the
-saved SB3 zip is the filtered policy (``TD3.load`` runs it; ``alpha`` and the indices are its ``policy_kwargs``).
-SB3's exploration and target-smoothing noise are added to ``a``. Results: docs/baselines.md.
+``u = tanh(mlp(o))`` [normalised action units], ``p`` ``(N, 2)`` the previous command read from AmigoBot-v1's
+observation (``previous_command_1``, ``_2``), ``alpha`` in (0, 1] (1: SB3's actor). The critic learns ``Q(o, a)`` of
+the filtered action; the saved zip is the filtered policy (``alpha`` and the indices are its ``policy_kwargs``).
 """
 
 from __future__ import annotations
@@ -27,8 +21,7 @@ from amigo_gym.tools.training.hyperparams import check_filter_alpha
 
 
 def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
-    """The checked ``(alpha, (i1, i2))``: ``alpha`` a finite number in (0, 1], two distinct indices in
-    [0, ``obs_dim``); ``ValueError`` naming the field and the value otherwise."""
+    """The checked ``(alpha, (i1, i2))``: ``alpha`` in (0, 1], two distinct indices in [0, ``obs_dim``)."""
     a = check_filter_alpha(filter_alpha)
     idx = tuple(prev_index) if isinstance(prev_index, Sequence) and not isinstance(prev_index, str) else None
     if (
@@ -43,22 +36,8 @@ def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tupl
     return a, (int(idx[0]), int(idx[1]))
 
 
-def previous_command_index(fields: Sequence[str]) -> tuple[int, int]:
-    """Indices of ``previous_command_1`` and ``_2`` in an observation layout (``ValueError`` if absent: the
-    filter needs AmigoBot-v1's observation, ``amigo_gym.task.v1.obs_fields``)."""
-    names = list(fields)
-    try:
-        return names.index("previous_command_1"), names.index("previous_command_2")
-    except ValueError:
-        raise ValueError(
-            f"{POLICY_NAME}: the observation has no previous_command_1/_2 field (AmigoBot-v1's layout needed); "
-            f"fields: {', '.join(names)}"
-        ) from None
-
-
 class LowPassActor(Actor):
-    """SB3's TD3 actor followed by the low-pass filter: ``forward(o) = p + alpha (mu(o) - p)`` (``prev_index``: the
-    observation indices of ``p``)."""
+    """SB3's TD3 actor followed by the low-pass filter (``prev_index``: the observation indices of ``p``)."""
 
     def __init__(self, *args: Any, filter_alpha: float, prev_index: Sequence[int], **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -71,7 +50,6 @@ class LowPassActor(Actor):
         return data
 
     def forward(self, obs: th.Tensor) -> th.Tensor:
-        """``(N, 2)`` action in [-1, 1] for observations ``(N, d)``: ``p + alpha (tanh(mlp(o)) - p)``."""
         u = super().forward(obs)
         prev = obs.reshape(obs.shape[0], -1).index_select(1, self.get_buffer("_prev_idx")).to(u.dtype).clamp(-1.0, 1.0)
         out: th.Tensor = prev + self.filter_alpha * (u - prev)
@@ -79,12 +57,8 @@ class LowPassActor(Actor):
 
 
 class LowPassTD3Policy(TD3Policy):
-    """SB3's ``TD3Policy`` whose actors (online and target) are :class:`LowPassActor`.
-
-    Args: those of :class:`stable_baselines3.td3.policies.TD3Policy`, and the keywords ``filter_alpha`` and
-    ``prev_index`` (saved with the model as ``policy_kwargs``). The action space must be the normalised
-    ``Box(-1, 1, (2,))`` of AmigoBot-v1 (the filter mixes actions with the observed previous command).
-    """
+    """SB3's ``TD3Policy`` with :class:`LowPassActor` actors; ``filter_alpha``, ``prev_index``: saved as
+    ``policy_kwargs``. The action space must be ``Box(-1, 1)``."""
 
     def __init__(
         self,
@@ -116,11 +90,15 @@ class LowPassTD3Policy(TD3Policy):
 
 
 def policy_for(venv: Any, policy_kwargs: dict[str, Any] | None) -> tuple[type[LowPassTD3Policy], dict[str, Any]]:
-    """The policy class and its ``policy_kwargs`` for a TD3 run on ``venv`` (an SB3 VecEnv of AmigoBot-v1):
-    ``prev_index`` from the env's observation layout (:func:`amigo_gym.task.v1.obs_fields`)."""
+    """The policy class and its ``policy_kwargs`` for a TD3 run on ``venv`` (an SB3 VecEnv of AmigoBot-v1)."""
     params = venv.get_attr("params")[0]
     if not isinstance(params, TrackingParams):
         raise ValueError(f"{POLICY_NAME}: needs AmigoBot-v1 (TrackingParams), got {type(params).__name__}")
-    kw = dict(policy_kwargs or {})
-    kw["prev_index"] = previous_command_index(obs_fields(params))
-    return LowPassTD3Policy, kw
+    names = list(obs_fields(params))
+    if "previous_command_1" not in names or "previous_command_2" not in names:
+        raise ValueError(
+            f"{POLICY_NAME}: the observation has no previous_command_1/_2 field (AmigoBot-v1's layout needed); "
+            f"fields: {', '.join(names)}"
+        )
+    prev = (names.index("previous_command_1"), names.index("previous_command_2"))
+    return LowPassTD3Policy, {**(policy_kwargs or {}), "prev_index": prev}

@@ -1,11 +1,8 @@
-"""Adapter from the native Gymnasium vector env (:class:`amigo_gym.envs.AmigoBotVectorEnv`) to SB3's ``VecEnv``.
+"""SB3 ``VecEnv`` over the native vector env (``SAME_STEP`` autoreset): the rollouts of ``DummyVecEnv``.
 
-SB3's API over Gymnasium's ``SAME_STEP`` autoreset: ``reset()`` uses the seeds / options of :meth:`VecEnv.seed` /
-:meth:`VecEnv.set_options` once (sub-env ``i`` gets ``seed + i``); ``step`` returns ``(obs, rewards, dones, infos)``
-with ``dones = terminated | truncated``, float32 rewards and one info dict per env with the single env's keys and
-types; a finished sub-env is reset in the same step, its last observation in ``infos[i]["terminal_observation"]``,
-``infos[i]["TimeLimit.truncated"] = truncated and not terminated``, the reset's info in ``reset_infos[i]``. Rollouts
-equal ``DummyVecEnv([lambda: gym.make(env_id)] * N)``'s (docs/baselines.md).
+``reset()`` uses the pending seeds (sub-env ``i``: ``seed + i``) and options once; ``step`` gives ``dones =
+terminated | truncated``, float32 rewards, one info dict per env with ``terminal_observation`` and
+``TimeLimit.truncated`` on a reset in the same step (the reset's info in ``reset_infos[i]``).
 """
 
 from __future__ import annotations
@@ -24,22 +21,12 @@ from amigo_gym.envs.amigobot import AmigoBotVectorEnv
 from amigo_gym.envs.base import info_row
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 
-#: the native vector env of each id (the registrations' ``vector_entry_point``)
 VECTOR_ENVS: dict[str, Any] = {"AmigoBot-v0": AmigoBotVectorEnv, "AmigoBot-v1": AmigoBotV1VectorEnv}
 
 
 class AmigoBotSB3VecEnv(VecEnv):
-    """SB3 ``VecEnv`` over one native :class:`AmigoBotVectorEnv` of ``num_envs`` robots.
-
-    Args:
-        num_envs: number of robots (>= 1).
-        max_episode_steps: truncation after this many steps (default 400, the registration's).
-        render_mode: ``None`` or ``"rgb_array"``.
-        env_id: ``"AmigoBot-v0"`` (default) or ``"AmigoBot-v1"`` (then ``max_episode_steps`` defaults to 600).
-        **settings: task settings, as keywords of ``gym.make(env_id, ...)`` (``dt``, ``radius``,
-            ``kernel`` (both ids): ``"auto"`` by default, the compiled step when numba is installed,
-            ``params``, ``robot``, ...).
-    """
+    """``num_envs`` robots of ``env_id`` (AmigoBot-v0 or -v1: then ``max_episode_steps`` defaults to 600);
+    ``settings``: keywords of ``gym.make(env_id, ...)``."""
 
     def __init__(
         self,
@@ -67,7 +54,6 @@ class AmigoBotSB3VecEnv(VecEnv):
         self._actions: NDArray[Any] | None = None
 
     def reset(self) -> VecEnvObs:
-        """Reset every robot with the pending seeds/options (used once, as in ``DummyVecEnv``)."""
         seeds = list(self._seeds)
         options: dict[str, Any] | None = None
         if any(self._options):
@@ -91,7 +77,7 @@ class AmigoBotSB3VecEnv(VecEnv):
         self._actions = None
         dones = terminated | truncated
         infos = [info_row(vinfo, i) for i in range(self.num_envs)]
-        for j in np.flatnonzero(dones).tolist():  # reset in this step: the finished episode's info and observation
+        for j in np.flatnonzero(dones).tolist():
             self.reset_infos[j] = infos[j]
             infos[j] = info_row(vinfo["final_info"], j) | {"terminal_observation": vinfo["final_obs"][j]}
         for i in range(self.num_envs):
@@ -106,21 +92,17 @@ class AmigoBotSB3VecEnv(VecEnv):
         return [None] * self.num_envs if frames is None else list(frames)
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        """The native env's attribute (``params``, ``path``, ``render_mode``, ...), once per index."""
         value = getattr(self.venv, attr_name)
         return [value for _ in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        """Set an attribute of the native env (shared by every robot: all indices must be selected)."""
         if sorted(self._get_indices(indices)) != list(range(self.num_envs)):
             raise ValueError("set_attr: the robots share one native env; set attributes for all indices")
         setattr(self.venv, attr_name, value)
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None, **kw: Any) -> list[Any]:
-        """Call a method of the native env once and return its result for each index."""
         result = getattr(self.venv, method_name)(*method_args, **kw)
         return [result for _ in self._get_indices(indices)]
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
-        """The robots are not wrapped in Gymnasium wrappers (use ``VecMonitor`` for episode statistics)."""
         return [False for _ in self._get_indices(indices)]

@@ -1,12 +1,11 @@
-"""``amigo-gym sweep``: Optuna studies over :mod:`amigo_gym.tools.training.train`'s training, on one or many machines.
+"""``amigo-gym sweep``: Optuna studies over SB3 or fast-PPO training, on one or many machines.
 
-Usage, environment, objective, storage, the fast PPO, winners (``--save-best``), secrets, modes, the global
-budget, stopped and killed workers, the summary and the exit status: docs/benchmark.md, "Reference: `amigo-gym
-sweep`". Imports optuna, SQLAlchemy (and PyYAML) only when run.
+Reference (objective, storage, modes, budget, stopped workers, summary, exit status): docs/benchmark.md.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -22,7 +21,6 @@ import zlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import FrameType
 from typing import Any, Literal, get_args
 from urllib.parse import quote, quote_plus, unquote, unquote_plus
 
@@ -43,32 +41,28 @@ from amigo_gym.tools.training.train import ENV_IDS, HYPERPARAMS_DIR, EnvId, Sett
 
 Mode = Literal["hyperparams", "seeds"]
 MODES = get_args(Mode)
-#: the algorithms a sweep trains: SB3's (:mod:`amigo_gym.tools.training.train`) and the fast PPO
-#: (:mod:`amigo_gym.tools.training.fastppo`)
 SweepAlgo = Literal["ppo", "sac", "td3", "fastppo"]
 SWEEP_ALGOS = get_args(SweepAlgo)
 FASTPPO = "fastppo"
 #: a fast-PPO trial's rollout batch ``num_envs * rollout_steps`` is at most ``--timesteps / MIN_ITERATIONS``
 MIN_ITERATIONS = 8
-#: the marker written into the folder of a trial whose worker was stopped or killed
+#: the marker in the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
-#: what the study optimises (stored as the study attribute ``objective``)
 OBJECTIVE = "validation_h_rms_iqm_m"
 SUMMARY = "summary.json"
 #: exit status of a worker stopped by SIGTERM / Ctrl-C
 INTERRUPTED = 130
-#: how long a worker joining a study waits for its creator to finish setting it up (attributes, grid) [s]
+#: how long a worker joining a study waits for its creator to set it up [s]
 READY_TIMEOUT_S = 120.0
 
 
 # --------------------------------------------------------------------------- secrets
-#: a query parameter whose name has one of these holds a credential (``?password=``, ``sslpassword``, ``token``...)
+#: a query parameter whose name has one of these holds a credential
 _SECRET_PARAM = re.compile(r"pass|pwd|secret|token|key|auth|cred", re.IGNORECASE)
 
 
 def _secrets(url: str | None) -> set[str]:
-    """Every form (as typed, decoded, URL-quoted) of every credential in ``url``: the password of ``user:pw@`` and
-    the value of each credential query parameter."""
+    """Every form (as typed, decoded, quoted) of each credential in ``url`` (``user:pw@``, credential parameters)."""
     found = set()
     m = re.match(r"[^:/?#]*://([^/?#]*)@", url or "")  # the userinfo, up to the host's last "@"
     if m and ":" in m.group(1):
@@ -82,20 +76,19 @@ def _secrets(url: str | None) -> set[str]:
 
 
 def scrub(text: str, url: str | None) -> str:
-    """``text`` with every credential of ``url`` in every form (:func:`_secrets`) replaced by ``***``: the one
-    masking of the storage URL, for what is written (summary, study and trial attributes) and said (error lines)."""
+    """``text`` with every form of every credential of ``url`` replaced by ``***``."""
     for form in sorted(_secrets(url), key=len, reverse=True):
         text = text.replace(form, "***")
     return text
 
 
 def masked_url(url: str) -> str:
-    """``url`` with its credentials masked (:func:`scrub`); a URL without any is returned as typed."""
+    """``url`` with its credentials masked."""
     return scrub(url, url)
 
 
 def public_argv(argv: Sequence[str]) -> list[str]:
-    """The command line with every URL's password masked (``--storage URL`` and ``--storage=URL``)."""
+    """The command line with every URL's credentials masked."""
     out = []
     for a in argv:
         if "://" in a:
@@ -106,7 +99,7 @@ def public_argv(argv: Sequence[str]) -> list[str]:
 
 
 def _in_memory(url: str) -> bool:
-    """Whether ``url`` is an in-memory SQLite database (private to the process that opens it)."""
+    """Whether ``url`` is an in-memory SQLite database (private to its process)."""
     from sqlalchemy.engine import make_url
 
     u = make_url(url)
@@ -119,21 +112,18 @@ def _in_memory(url: str) -> bool:
 # --------------------------------------------------------------------------- settings
 @dataclass
 class SweepConfig:
-    """Settings of one ``amigo-gym sweep`` command (see the module docstring); each is the option of the same
-    name (``algos``: ``--algo``, ``env_id``: ``--env``).
+    """Settings of one ``amigo-gym sweep`` command; each field is its option.
 
     Attributes:
         algos: algorithm(s) (required).
         mode: hyperparams (default) or seeds.
         env_id: environment the trials train on.
         env_kwargs: keywords of gym.make as JSON [json] (default: v1's training distribution; none for v0).
-        storage: SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); give a password through PGPASSWORD
-            or ~/.pgpass, not in the URL.
+        storage: SQLAlchemy URL [url] (default: sqlite:///<out>/sweep.db); a password goes in PGPASSWORD or ~/.pgpass.
         study_name: study name [name] (default: amigo-<algos>-<mode>).
         n_trials: global trial budget over all workers [trials].
         n_jobs: worker processes on this machine [processes].
-        seeds: training seeds (seeds mode): a count N (seeds 0..N-1, as every other --seeds) or two or more seeds
-            [seeds].
+        seeds: training seeds (seeds mode): a count N (seeds 0..N-1) or two or more seeds [seeds].
         timesteps: training steps per trial [steps].
         eval_freq: steps between evaluations (pruning points) [steps].
         eval_episodes: episodes per evaluation [episodes].
@@ -141,8 +131,8 @@ class SweepConfig:
         val_max_steps: cut validation episodes to this length [steps] (0: the cell's).
         train_seed: training seed of hyperparameter trials [-].
         hyperparams: base YAML [file] (default: agents/hyperparams/<algo>.yml).
-        save_best: when the command ends, write the best COMPLETE trial's hyperparameters under the --env key
-            of this YAML file, other keys kept (hyperparams mode) [file] (default: none).
+        save_best: at the end, write the best COMPLETE trial's hyperparameters under the --env key of this YAML
+            file, other keys kept [file] (default: none).
         out: folder of the trials' runs (and the default SQLite file) [dir].
         seed: base of the workers' sampler seeds [-].
         sampler: Optuna sampler.
@@ -152,9 +142,8 @@ class SweepConfig:
         grace_period: time without heartbeat before FAIL [s].
         max_retry: retries of a trial whose worker died [retries].
         threads: torch threads per worker [threads].
-        enqueue_base: run the base YAML's own values as the study's first trial (hyperparams mode, an SB3
-            algorithm), so the winner is compared with the file it starts from.
-        worker_index: index of a worker process started by ``--n-jobs`` (internal).
+        enqueue_base: run the base YAML's own values as the first trial (hyperparams mode, an SB3 algorithm).
+        worker_index: index of a worker process started by --n-jobs (internal).
         argv: the command line (not an option).
     """
 
@@ -193,7 +182,6 @@ class SweepConfig:
             self.seeds = list(range(self.seeds[0]))  # a count
 
     def validate(self) -> None:
-        """Raise ``ValueError`` naming a bad setting."""
         if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
             raise ValueError(f"--algo must be among {list(SWEEP_ALGOS)}, got {self.algos}")
         if self.mode not in MODES:
@@ -227,13 +215,7 @@ class SweepConfig:
         if FASTPPO in self.algos:
             self._validate_fastppo()
         n = self.study_name
-        if n is not None and (
-            not n
-            or n.startswith(".")
-            or ".." in n
-            or any(sep in n for sep in ("/", "\\", os.sep, os.altsep or "/"))
-            or any(ord(c) < 32 or c == "\x7f" for c in n)
-        ):
+        if n is not None and (not n or n.startswith(".") or ".." in n or re.search(r"[/\\\x00-\x1f\x7f]", n)):
             raise ValueError(
                 f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control "
                 f"characters), got {n!r}"
@@ -243,7 +225,7 @@ class SweepConfig:
                 memory = _in_memory(self.storage)
             except ImportError:
                 raise
-            except Exception:
+            except Exception:  # SQLAlchemy's error for a malformed URL
                 raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(self.storage)!r}") from None
             if memory and self.n_jobs > 1:
                 raise ValueError(
@@ -253,7 +235,7 @@ class SweepConfig:
                 )
 
     def _validate_fastppo(self) -> None:
-        """``--algo fastppo``: AmigoBot-v1 only, its own settings file, checked (with ``--env-kwargs``) up front."""
+        """``--algo fastppo``: AmigoBot-v1 only; its settings file checked with ``--env-kwargs`` up front."""
         if self.env_id != "AmigoBot-v1":
             raise ValueError(
                 f"--algo fastppo trains the native AmigoBot-v1 vector env: add --env AmigoBot-v1 "
@@ -266,35 +248,34 @@ class SweepConfig:
             )
         from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
 
-        base = load_settings_yaml(Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / "fastppo.yml")
+        base = load_settings_yaml(self.base_file(FASTPPO))
         try:
             FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
         except (TypeError, ValueError) as exc:
             raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
 
+    def base_file(self, algo: str) -> Path:
+        return Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+
     @property
     def storage_url(self) -> str:
-        """``--storage``, default ``sqlite:///<out>/sweep.db``."""
         return self.storage or f"sqlite:///{Path(self.out).resolve() / 'sweep.db'}"
 
     @property
     def name(self) -> str:
-        """``--study-name``, default ``amigo-<algos>-<mode>``."""
         return self.study_name or f"amigo-{'-'.join(self.algos)}-{self.mode}"
 
     @property
     def budget(self) -> int:
-        """Global number of trials: ``--n-trials``, or the grid's size in seeds mode."""
+        """Global number of trials: ``--n-trials``, or the grid's size (seeds mode)."""
         return len(self.algos) * len(self.seeds) if self.mode == "seeds" else self.n_trials
 
     @property
     def command(self) -> str:
-        """The command line, as typed, with the storage password masked (:func:`public_argv`)."""
         return "amigo-gym sweep " + " ".join(public_argv(self.argv))
 
     @property
     def train_env_kwargs(self) -> dict[str, Any]:
-        """``--env-kwargs``, default: v1's training distribution (none for v0)."""
         if self.env_kwargs is not None:
             return dict(self.env_kwargs)
         if self.env_id == "AmigoBot-v1":
@@ -302,11 +283,9 @@ class SweepConfig:
         return {}
 
 
-# --------------------------------------------------------------------------- validation cells
 def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
-    """IQM over ``cells`` of the mean H cross-track RMS [m] of ``agent`` on each cell's seeds
-    (:func:`amigo_gym.tools.training.task_metrics.run_scenario`); and the per-cell values (``None``: no finite value;
-    then the IQM is NaN)."""
+    """IQM over ``cells`` of ``agent``'s mean H cross-track RMS [m] on each cell's seeds, and the per-cell values
+    (``None``: not finite; then the IQM is NaN)."""
     per_cell: dict[str, float | None] = {}
     for sc in cells:
         vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
@@ -319,23 +298,18 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
 
 # --------------------------------------------------------------------------- storage and study
 def make_storage(cfg: SweepConfig) -> Any:
-    """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (module docstring); an in-memory
-    SQLite database, private to its one process, without them."""
+    """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (in memory: without them)."""
     import optuna.storages
 
     url = driver_url(cfg.storage_url)
-    engine_kwargs: dict[str, Any] = {}
     sqlite = url.startswith("sqlite")
     if sqlite and not _in_memory(url):
         Path(url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
-    if sqlite:
-        # pysqlite's own BEGIN is deferred (reads outside the write lock); take the lock at BEGIN
-        engine_kwargs["connect_args"] = {"timeout": 120, "isolation_level": None}
+    # pysqlite's BEGIN is deferred: take the write lock at BEGIN (below)
+    engine_kwargs = {"connect_args": {"timeout": 120, "isolation_level": None}} if sqlite else {}
     retry_cls = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)
     kwargs: dict[str, Any] = {}
-    # an in-memory database lives and dies with its one process: no other worker's death to detect, and the
-    # heartbeat's thread would get a connection, hence a database, of its own (without the study's tables)
-    if not _in_memory(url):
+    if not _in_memory(url):  # in memory: no other worker, and the heartbeat's thread would get its own database
         kwargs = {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
         if retry_cls is not None:
             kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
@@ -365,8 +339,7 @@ def make_storage(cfg: SweepConfig) -> Any:
 
 
 def driver_url(url: str) -> str:
-    """``postgresql://`` with the driver that is installed: SQLAlchemy 2.1 defaults to psycopg 3, the
-    ``bench`` extra installs ``psycopg2-binary``; an explicit ``postgresql+<driver>://`` is kept."""
+    """``postgresql://`` with the installed driver (psycopg 3, else psycopg2); ``postgresql+<driver>://`` kept."""
     if url.startswith(("postgresql://", "postgres://")):
         import importlib.util
 
@@ -381,27 +354,22 @@ def _worker_seed(cfg: SweepConfig) -> int:
 
 
 def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
-    """Create the study or join it (``load_if_exists``); its creator stores the command and enqueues a grid.
-
-    Raises:
-        ValueError: the existing study is of another mode, environment or objective.
-    """
+    """Create the study (store the command, enqueue a grid) or join it; ``ValueError``: the existing study is of
+    another mode, environment or objective."""
     import optuna
 
-    sampler: Any
+    sampler: Any = optuna.samplers.RandomSampler(seed=sampler_seed)
     if cfg.sampler == "tpe":
         sampler = optuna.samplers.TPESampler(seed=sampler_seed, n_startup_trials=cfg.n_startup_trials)
-    else:
-        sampler = optuna.samplers.RandomSampler(seed=sampler_seed)
     pruner: Any = optuna.pruners.NopPruner()
     if cfg.pruner == "median" and cfg.mode == "hyperparams":
         pruner = optuna.pruners.MedianPruner(n_startup_trials=cfg.n_startup_trials, n_warmup_steps=cfg.eval_freq)
     kw: dict[str, Any] = {"storage": storage, "study_name": cfg.name, "sampler": sampler, "pruner": pruner}
-    try:  # exactly one process creates the study (unique name in the database) and enqueues the grid
+    try:  # exactly one process creates the study (unique name) and enqueues the grid
         study = optuna.create_study(direction="minimize", **kw)
         created = True
     except optuna.exceptions.DuplicatedStudyError:
-        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)  # logs "Using an existing study"
+        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)
         created = False
     if created:
         for key, value in (
@@ -422,12 +390,9 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
                 for s in cfg.seeds:
                     study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
         elif cfg.enqueue_base:
-            algo = cfg.algos[0]
-            base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
-            study.enqueue_trial(
-                base_params(algo, load_hyperparams(base_file, cfg.env_id)), user_attrs={"baseline": True}
-            )
-        study.set_user_attr("ready", True)  # joiners wait for this: the grid is queued in full
+            base = load_hyperparams(cfg.base_file(cfg.algos[0]), cfg.env_id)
+            study.enqueue_trial(base_params(cfg.algos[0], base), user_attrs={"baseline": True})
+        study.set_user_attr("ready", True)  # joiners wait for the whole grid
     else:
         deadline = time.monotonic() + READY_TIMEOUT_S
         while not study.user_attrs.get("ready"):
@@ -457,8 +422,7 @@ def _counted(t: Any) -> bool:
 
 
 def budget_count(study: Any, before: int | None = None) -> int:
-    """Trials that count against the budget: ended (COMPLETE, PRUNED, FAIL by an error), plus RUNNING trials
-    with a number below ``before`` (``None``: no RUNNING trial)."""
+    """Trials that count against the budget: COMPLETE, PRUNED, FAIL by an error, and RUNNING below ``before``."""
     from optuna.trial import TrialState
 
     n = 0
@@ -469,8 +433,7 @@ def budget_count(study: Any, before: int | None = None) -> int:
 
 
 def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
-    """No queued trial left (seeds mode), or the budget is spent (``running``: counting RUNNING trials) and
-    no re-queued trial waits."""
+    """No queued trial left (seeds mode), or the budget spent (``running``: with RUNNING trials) and none queued."""
     from optuna.trial import TrialState
 
     waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
@@ -480,7 +443,7 @@ def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
 
 
 def study_status(study: Any, budget: int | None = None) -> str:
-    """``complete``, ``running`` or ``incomplete`` (module docstring), from the study alone."""
+    """``complete``, ``running`` or ``incomplete``, from the study alone."""
     from optuna.trial import TrialState
 
     trials = study.get_trials(deepcopy=False)
@@ -495,21 +458,27 @@ def study_status(study: Any, budget: int | None = None) -> str:
     return "complete" if budget_count(study) >= want else "incomplete"
 
 
+def _abandoned(t: Any) -> bool:
+    """Whether trial ``t`` ended FAIL because its worker was stopped or killed (no error of its own)."""
+    from optuna.trial import TrialState
+
+    ua = t.user_attrs
+    return bool(t.state == TrialState.FAIL and "run_dir" in ua and not {"fail_reason", "over_budget"} & set(ua))
+
+
 class _OverBudget(Exception):
-    """This trial lost the race for the last place in the budget (or is not from the grid)."""
+    """This trial is over the budget (or not from the grid)."""
 
 
 # --------------------------------------------------------------------------- abandoned trials
 def mark_abandoned(study: Any) -> list[int]:
-    """Write ``ABANDONED.json`` into the folder (where it exists here) of every trial that ended FAIL because its
-    worker was stopped or killed, or bring its ``retried_as`` up to date; the numbers of the trials marked now."""
-    from optuna.trial import TrialState
-
+    """Write (or update the ``retried_as`` of) ``ABANDONED.json`` in the folder of every trial that ended FAIL
+    because its worker was stopped or killed; the numbers of the trials marked now."""
     trials = study.get_trials(deepcopy=False)
     marked = []
     for t in trials:
         ua = t.user_attrs
-        if t.state != TrialState.FAIL or "fail_reason" in ua or "over_budget" in ua or "run_dir" not in ua:
+        if not _abandoned(t):
             continue
         folder = Path(str(ua["run_dir"]))
         if not folder.is_dir():
@@ -523,7 +492,7 @@ def mark_abandoned(study: Any) -> list[int]:
             if u.number != t.number
             and (u.system_attrs.get("failed_trial") == t.number or u.user_attrs.get("retry_of") == t.number)
         ]
-        try:  # marked before: rewritten only when a retry appeared since (Optuna queues it just after the FAIL)
+        try:  # marked before: rewritten only when a retry appeared since
             old = json.loads((folder / ABANDONED).read_text())
         except (OSError, ValueError):
             old = None
@@ -545,23 +514,19 @@ def mark_abandoned(study: Any) -> list[int]:
 
 
 # --------------------------------------------------------------------------- the objective
-#: off-policy batch sizes sampled when the base YAML is a high-throughput configuration (``n_envs`` >= 64: many
-#: sub-envs, a few large gradient steps per vector step, docs/baselines.md "Off-policy per wall-second")
+#: off-policy batch sizes sampled over a base YAML of many sub-envs (>= HT_MIN_ENVS), else rl-zoo's
 HT_BATCH_SIZES = (512, 1024, 2048, 4096)
 HT_MIN_ENVS = 64
-#: rl-zoo's off-policy batch sizes, sampled over a base YAML of few sub-envs
 BATCH_SIZES = (64, 128, 256)
 
 
 def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
-    """The batch sizes SAC/TD3 sample over the base YAML ``base``: :data:`HT_BATCH_SIZES` when it has ``n_envs`` >=
-    :data:`HT_MIN_ENVS`, else :data:`BATCH_SIZES`."""
     return HT_BATCH_SIZES if int((base or {}).get("n_envs", 1)) >= HT_MIN_ENVS else BATCH_SIZES
 
 
 def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Sampled hyperparameters of ``algo`` (rl-zoo style ranges; SAC/TD3 batch sizes from :func:`batch_choices` of the
-    base YAML ``base``). The low-pass factor is not sampled (the objective, H's error alone, would trade smoothness)."""
+    """Sampled hyperparameters of ``algo`` (rl-zoo ranges; batch sizes by the base YAML ``base``). The low-pass
+    factor is not sampled (the objective, H's error alone, would trade smoothness)."""
     hp: dict[str, Any] = {
         "learning_rate": trial.suggest_float("learning_rate", 1e-5, 3e-3, log=True),
         "gamma": 1.0 - trial.suggest_float("one_minus_gamma", 1e-4, 0.1, log=True),
@@ -581,12 +546,8 @@ def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = N
 
 
 def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
-    """The Optuna parameters of :func:`sample_hyperparams` that reproduce the base YAML ``base`` (for
-    ``--enqueue-base``: the study's first trial is the file it starts from).
-
-    Raises:
-        ValueError: a sampled key is missing from ``base`` or outside its sampled range.
-    """
+    """The Optuna parameters of :func:`sample_hyperparams` that reproduce the base YAML ``base`` (``--enqueue-base``);
+    ``ValueError``: a sampled key is missing or outside its range."""
     names = ["learning_rate", "gamma"] + (
         ["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo" else ["tau", "batch_size"]
     )
@@ -604,16 +565,14 @@ def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-#: fast-PPO sampling choices (powers of two, so that every minibatch count divides the batch ``N T``)
+#: fast-PPO sampling choices (powers of two: every minibatch count divides the batch ``N T``)
 FAST_NUM_ENVS = (64, 128, 256, 512, 1024)
 FAST_ROLLOUT_STEPS = (8, 16, 32, 64, 128)
 FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
 
 
 def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
-    """Sampled :class:`~.fastppo.FastPPOSettings` of a fast-PPO trial of ``timesteps`` env-steps (the settings, not
-    the Optuna parameters; the space and why: docs/benchmark.md, "Reference: `amigo-gym sweep`"): at least
-    :data:`MIN_ITERATIONS` updates, minibatches dividing the batch ``N T``; the rest from the base file."""
+    """Sampled fast-PPO settings of a trial of ``timesteps`` env-steps: at least :data:`MIN_ITERATIONS` updates."""
     cap = max(timesteps // MIN_ITERATIONS, 1)
     t_min, n_min = min(FAST_ROLLOUT_STEPS), min(FAST_NUM_ENVS)
     n_choices = [n for n in FAST_NUM_ENVS if n * t_min <= cap] or [n_min]
@@ -639,23 +598,21 @@ def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
 
 
 def _requeue(study: Any, trial: Any, how: str) -> None:
-    """Mark an interrupted trial, queue its parameters again and mark its folder abandoned."""
     trial.set_user_attr("interrupted", how)
     frozen = study._storage.get_trial(trial._trial_id)
     attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
-#: errors of a trial's own training or validation: recorded as its ``fail_reason`` (then raised: Optuna marks it FAIL)
+#: errors of a trial's own: recorded as its ``fail_reason``, then raised (Optuna marks it FAIL)
 _TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
 
 
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """The end of every trial: ``fit_and_validate()`` gives the objective and its per-cell values (user attribute
-    ``validation``); an error of :data:`_TRIAL_ERRORS` becomes the trial's ``fail_reason`` and is raised again; a
-    non-finite objective gets a ``fail_reason`` and is returned (Optuna marks the trial FAIL, never PRUNED)."""
+    """``fit_and_validate()``'s objective, its per-cell values stored (``validation``); an error or a non-finite value
+    is the trial's ``fail_reason`` (raised again / returned: Optuna marks it FAIL)."""
     try:
         value, per_cell = fit_and_validate()
     except _TRIAL_ERRORS as exc:
@@ -673,28 +630,27 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
 
     def objective(trial: Any) -> float:
-        mark_abandoned(study)  # trials Optuna just found stale (it checks before each new trial)
+        mark_abandoned(study)  # trials Optuna just found stale
         trial.set_user_attr("worker", f"{socket.gethostname()}:{os.getpid()}:{cfg.worker_index}")
         trial.set_user_attr("sampler_seed", sampler_seed)
         trial.set_user_attr("command", cfg.command)
         if cfg.mode == "seeds":
-            if "fixed_params" not in study._storage.get_trial_system_attrs(trial._trial_id):
-                study.stop()
-                trial.set_user_attr("over_budget", True)
-                raise _OverBudget("the grid is exhausted")
-            algo: str = trial.suggest_categorical("algo", cfg.algos)
-            seed = int(trial.suggest_categorical("seed", cfg.seeds))
+            over = "fixed_params" not in study._storage.get_trial_system_attrs(trial._trial_id)
+            why = "the grid is exhausted"
         else:
-            if budget_count(study, before=trial.number) >= cfg.budget:
-                study.stop()
-                trial.set_user_attr("over_budget", True)
-                raise _OverBudget(f"the global budget of {cfg.budget} trials is reached")
-            algo, seed = cfg.algos[0], cfg.train_seed
+            over = budget_count(study, before=trial.number) >= cfg.budget
+            why = f"the global budget of {cfg.budget} trials is reached"
+        if over:
+            study.stop()
+            trial.set_user_attr("over_budget", True)
+            raise _OverBudget(why)
+        algo: str = trial.suggest_categorical("algo", cfg.algos) if cfg.mode == "seeds" else cfg.algos[0]
+        seed = int(trial.suggest_categorical("seed", cfg.seeds)) if cfg.mode == "seeds" else cfg.train_seed
         run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
         trial.set_user_attr("run_dir", str(run_dir))
         try:
             return _trial(cfg, study, trial, algo, seed, run_dir, cells)
-        except KeyboardInterrupt:  # SIGTERM / Ctrl-C: queue the cell again before the worker stops
+        except KeyboardInterrupt:  # queue the trial again before the worker stops
             _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
             raise
         except optuna.TrialPruned:
@@ -710,16 +666,15 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
 def _trial(
     cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
 ) -> float:
-    """One trial, in this process: the settings from the base file (and the sampler in hyperparams mode) as the user
-    attribute ``hyperparams`` and ``run_dir/hyperparams.yml``; training in ``run_dir/run`` with its evaluations
-    reported to the pruner (hyperparams mode); then the objective on ``cells`` (:func:`_validated_trial`)."""
+    """One trial: the settings (base file, sampled in hyperparams mode) in ``run_dir/hyperparams.yml``, training in
+    ``run_dir/run`` with evaluations reported to the pruner (hyperparams mode), then the objective on ``cells``."""
     import optuna
     import yaml
 
     from amigo_gym.tools.training import fastppo
 
     fast = algo == FASTPPO
-    base_file = Path(cfg.hyperparams) if cfg.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
+    base_file = cfg.base_file(algo)
     hp = fastppo.load_settings_yaml(base_file) if fast else load_hyperparams(base_file, cfg.env_id)
     if cfg.mode == "hyperparams":
         hp |= sample_fastppo(trial, cfg.timesteps) if fast else sample_hyperparams(trial, algo, hp)
@@ -730,7 +685,6 @@ def _trial(
     out, env_kwargs, reported, pruned = run_dir / "run", cfg.train_env_kwargs, set(), []
 
     def report(value: float, at: int, step: int) -> bool:
-        """A non-finite value raises; in hyperparams mode the value goes to the pruner once per ``step``."""
         if not math.isfinite(value):
             raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
         if cfg.mode == "hyperparams" and step not in reported:
@@ -769,10 +723,8 @@ def _trial(
         if resumed is not None:
             trial.set_user_attr("resumed_from", resumed)
         flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
-        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs " + repr(
-            json.dumps(env_kwargs)
-        )
-        command += " --resume" if resumed else ""
+        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
+        command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
         config = {
             "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
             "fastppo_settings": s.to_json(),
@@ -785,8 +737,7 @@ def _trial(
         atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
 
         def after_eval(row: dict[str, float]) -> bool:
-            # the pruner compares trials at the evaluation's scheduled step (a multiple of --eval-freq), the same in
-            # every trial whatever its batch size N T
+            # the pruner compares trials at the scheduled step (a multiple of --eval-freq), whatever their N T
             at = int(row["env_steps"])
             return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
 
@@ -819,19 +770,15 @@ def _trial(
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
-    """Continue an abandoned fast-PPO trial: copy into ``out`` the run files of the newest ``checkpoint.pt`` among this
-    study's FAIL trials with the same parameters whose worker was stopped or killed (no error of their own) and whose
-    ``settings.json`` equals ``s``; the trial it came from (``None``: none, the run starts afresh)."""
+    """Copy into ``out`` the run files of the newest checkpoint of an abandoned FAIL trial with the same parameters and
+    settings ``s``; the trial it came from (``None``: none)."""
     from optuna.trial import TrialState
 
     best: tuple[float, Any, Path] | None = None
     for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
-        ua = t.user_attrs
-        if t.number == trial.number or t.params != trial.params or "run_dir" not in ua:
+        if t.number == trial.number or t.params != trial.params or not _abandoned(t):
             continue
-        if "fail_reason" in ua or "over_budget" in ua:
-            continue
-        src = Path(str(ua["run_dir"])) / "run"
+        src = Path(str(t.user_attrs["run_dir"])) / "run"
         ckpt = src / "checkpoint.pt"
         try:
             same = json.loads((src / "settings.json").read_text()) == s.to_json()
@@ -850,13 +797,9 @@ def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any]
     return {"trial": t.number, "run_dir": str(src)}
 
 
-def _raise_interrupt(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
-
-
-def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, Any]:
-    """One worker: join the study and run trials until the budget (or the grid) is used up; a summary. ``SIGTERM``
-    is ``Ctrl-C``; ``opened`` receives the study as soon as it is open."""
+def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
+    """One worker: join the study, run trials until the budget (or the grid) is spent; ``opened`` receives the
+    study as soon as it is open."""
     import optuna
     from optuna.study import MaxTrialsCallback
     from optuna.trial import TrialState
@@ -868,7 +811,7 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
     if opened is not None:
         opened.append(study)
     study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
-    with warnings.catch_warnings():  # experimental in Optuna; used as optimize() itself uses it
+    with warnings.catch_warnings():  # experimental in Optuna
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         optuna.storages.fail_stale_trials(study)  # requeue trials of dead workers before checking the budget
     mark_abandoned(study)
@@ -877,7 +820,7 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
         if _exhausted(st, cfg, running=True):
             st.stop()
 
-    with handling(_raise_interrupt, signal.SIGTERM):
+    with handling(signal.default_int_handler, signal.SIGTERM):
         if not _exhausted(study, cfg):
             study.optimize(
                 _objective(cfg, study, sampler_seed),
@@ -888,11 +831,10 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> dict[str, A
                     stop_when_spent,
                 ],
             )
-    return summarize(study, cfg.budget)
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
-    """The study as the summary states it (module docstring): from the study alone, the same for every worker."""
+    """The study's summary, from the study alone (the same for every worker)."""
     from optuna.trial import TrialState
 
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
@@ -926,17 +868,12 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
 
 
 def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
-    """Write ``summary.json`` into ``folder`` unless the one there saw more finished trials (module
-    docstring); under a lock on the folder's ``summary.lock``. Whether it was written."""
+    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials; whether it did."""
     path = folder / SUMMARY
     with RunLock(folder, name="summary.lock", wait=60.0):
-        try:
-            old = json.loads(path.read_text())
-            newer = int(old.get("finished", -1)) > int(summary["finished"])
-        except (OSError, ValueError, TypeError, AttributeError):
-            newer = False
-        if newer:
-            return False
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
+            if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
+                return False
         atomic_write_json(path, summary, parents=True)
     return True
 
@@ -946,16 +883,14 @@ _TOP_KEY = re.compile(r"^([^\s#:-][^:]*|'[^']*'|\"[^\"]*\"):")
 
 
 def _block_start(lines: list[str], i: int) -> int:
-    """First line of the comment lines right above line ``i`` (``i`` itself without any)."""
     while i > 0 and lines[i - 1].startswith("#"):
         i -= 1
     return i
 
 
 def replace_yaml_block(text: str, key: str, block: str) -> str:
-    """``text`` (a YAML file of top-level mappings) with the top-level ``key`` and the comment lines right above it
-    replaced by ``block``; the other keys, their comments and the blank lines between them are kept as written.
-    A missing key is appended."""
+    """``text`` (YAML of top-level mappings) with ``key`` and its comment lines replaced by ``block`` (appended
+    when missing); the rest kept as written."""
     lines = text.splitlines(keepends=True)
     keys = [(i, m.group(1).strip("'\"")) for i, line in enumerate(lines) if (m := _TOP_KEY.match(line))]
     at = [n for n, (_, k) in enumerate(keys) if k == key]
@@ -973,9 +908,8 @@ def replace_yaml_block(text: str, key: str, block: str) -> str:
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
-    """``--save-best``: the best COMPLETE trial's hyperparameters (user attribute ``hyperparams``) under ``env_id`` in
-    the YAML file ``path``, with comment lines naming the study's command, the trial and its value, the other keys
-    kept (:func:`replace_yaml_block`); the mapping written (``None``: no COMPLETE trial, nothing written)."""
+    """``--save-best``: the best COMPLETE trial's hyperparameters under ``env_id`` in the YAML file ``path``, with
+    comments naming the command, trial and value; the mapping written (``None``: no COMPLETE trial)."""
     import yaml
     from optuna.trial import TrialState
 
@@ -983,9 +917,7 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
     if not done:
         return None
     best = study.best_trial
-    hp = best.user_attrs.get("hyperparams")
-    if not isinstance(hp, dict):  # a study from before the attribute: the trial's own file
-        hp = yaml.safe_load((Path(str(best.user_attrs["run_dir"])) / "hyperparams.yml").read_text())[env_id]
+    hp = best.user_attrs["hyperparams"]
     attrs = study.user_attrs
     finished = sum(t.state in (TrialState.COMPLETE, TrialState.PRUNED) for t in study.get_trials(deepcopy=False))
     seeds = (best.user_attrs.get("validation") or {}).get("seeds", [])
@@ -1010,17 +942,9 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
 
 
 # --------------------------------------------------------------------------- command line
-def parse_args(argv: Sequence[str]) -> SweepConfig:
-    """Settings from the command line (``amigo-gym sweep --help``)."""
-    return parse_settings(
-        SweepConfig, argv, "amigo-gym sweep", "Optuna studies over amigo-gym training runs.", argv=list(argv)
-    )
-
-
 def _spawn_workers(cfg: SweepConfig) -> list[int]:
-    """Open the study once (tables, grid), then run ``n_jobs`` worker processes of this command; their exit
-    statuses (negative: killed by that signal). A stop of this process (``SIGTERM``, ``Ctrl-C``) stops them
-    with ``SIGTERM`` and waits for them (each queues its trial again)."""
+    """Open the study once, then run ``n_jobs`` workers of this command; their exit statuses. A stop of this process
+    stops them with ``SIGTERM`` and waits for them."""
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()
@@ -1040,18 +964,15 @@ def _spawn_workers(cfg: SweepConfig) -> list[int]:
 
 
 def _describe(code: int) -> str:
-    if code < 0:
-        try:
-            return f"killed by {signal.Signals(-code).name}"
-        except ValueError:
-            return f"killed by signal {-code}"
-    return f"exit status {code}"
+    if code >= 0:
+        return f"exit status {code}"
+    return f"killed by {signal.Signals(-code).name if -code in signal.valid_signals() else f'signal {-code}'}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``amigo-gym sweep`` (exit status: module docstring)."""
+    """Entry point of ``amigo-gym sweep``."""
     args = list(sys.argv[1:] if argv is None else argv)
-    cfg = parse_args(args)
+    cfg = parse_settings(SweepConfig, args, "amigo-gym sweep", "Optuna studies over amigo-gym training.", argv=args)
     url = cfg.storage_url
 
     def run() -> int:
@@ -1060,7 +981,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         interrupted = False
         failed: list[str] = []
         opened: list[Any] = []
-        with handling(_raise_interrupt, signal.SIGTERM):
+        with handling(signal.default_int_handler, signal.SIGTERM):
             if cfg.n_jobs > 1:
                 try:
                     codes = _spawn_workers(cfg)
@@ -1073,7 +994,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     run_worker(cfg, opened)
                 except KeyboardInterrupt:
                     interrupted = True
-        # this process's own study object when it has one (an in-memory storage lives only in it)
+        # this process's own study when it has one (an in-memory storage lives only in it)
         study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
         mark_abandoned(study)
         summary = summarize(study, cfg.budget)

@@ -1,8 +1,4 @@
-"""Train a PPO, SAC or TD3 baseline on ``AmigoBot-v0`` (one readable file, cleanrl style).
-
-Usage, hyperparameters, the run folder, checkpoints and resuming, seeds and threads: docs/baselines.md,
-"Reference: `amigo-gym train`".
-"""
+"""``amigo-gym train``: a PPO, SAC or TD3 baseline with SB3 (docs/baselines.md, "Reference: `amigo-gym train`")."""
 
 from __future__ import annotations
 
@@ -28,7 +24,7 @@ from amigo_gym.envs.amigobot import make_env_params
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_file, vouch
 from amigo_gym.model.params import EnvParams
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded
+from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded, say
 from amigo_gym.tools.training.hyperparams import (
     LOWPASS_POLICY,
     Hyperparams,
@@ -39,7 +35,6 @@ from amigo_gym.tools.training.hyperparams import (
 from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter
 
 Algo = Literal["ppo", "sac", "td3"]
-#: the environments a run can train on
 EnvId = Literal["AmigoBot-v0", "AmigoBot-v1"]
 ALGOS = get_args(Algo)
 ENV_ID: EnvId = "AmigoBot-v0"
@@ -47,7 +42,6 @@ ENV_IDS = get_args(EnvId)
 HYPERPARAMS_DIR = hyperparams_dir()
 OFF_POLICY = ("sac", "td3")
 EVAL_SEED_OFFSET = 10_000
-#: the VecNormalize statistics, beside the model (and in each checkpoint) when the file asks for normalize
 VECNORMALIZE = "vecnormalize.pkl"
 #: ``train(after_eval=...)``: receives each evaluation's record; ``False`` stops training
 AfterEvalHook = Callable[[dict[str, Any]], bool]
@@ -56,33 +50,26 @@ AfterEvalHook = Callable[[dict[str, Any]], bool]
 # --------------------------------------------------------------------------- settings
 @dataclass
 class Settings:
-    """Everything a run depends on besides the hyperparameter file (saved in ``config.json``); each field is
-    the option of the same name of ``amigo-gym train`` (``env_id``: ``--env``, ``progress``: ``--no-progress``).
+    """A run's settings besides the hyperparameter file (saved in ``config.json``); each field is its option.
 
     Attributes:
         algo: algorithm (required).
         seed: master seed [-].
-        timesteps: total env steps [steps], rounded up to whole rollouts (PPO: n_steps x n_envs; SAC/TD3:
-            train_freq x n_envs), and the command says so (default: the YAML's n_timesteps).
+        timesteps: total env steps [steps], rounded up to whole rollouts (default: the YAML's n_timesteps).
         out: run directory [dir], must be empty unless --resume (required).
-        resume: continue from the latest good checkpoint in --out (its model and replay buffer are pickles:
-            resume only runs you trust).
+        resume: continue from the latest good checkpoint in --out (pickles: resume only runs you trust).
         n_envs: parallel envs [envs] (default: the YAML's n_envs or 1).
-        vec: vector env: ``native`` (:class:`amigo_gym.tools.training.sb3_vec.AmigoBotSB3VecEnv`) or ``dummy`` (SB3
-            ``DummyVecEnv`` of ``gym.make``); ``auto``: native when ``n_envs > 1``.
+        vec: vector env: native (AmigoBotSB3VecEnv), dummy (DummyVecEnv) or auto (native when n_envs > 1).
         hyperparams: rl-zoo YAML [file] (default: agents/hyperparams/<algo>.yml).
         eval_freq: steps between evaluations [steps], 0: none.
         eval_episodes: episodes per evaluation [episodes].
         checkpoint_freq: steps between checkpoints [steps] (0: only at the end / on interrupt).
         threads: torch threads [threads].
-        progress: show a progress bar (tqdm + rich); --no-progress: no progress bar.
+        progress: --no-progress: no progress bar.
         export: copy model and record to DIR/<algo>.zip, DIR/<algo>.json [dir] (default: none).
-        export_model: model to export: ``final`` (``model.zip``) or ``best`` (``best_model.zip``, the best
-            periodic evaluation; the record names its step).
-        env_id: environment id: ``AmigoBot-v0`` (the paper's task) or ``AmigoBot-v1`` (the real robot on many
-            paths).
-        env_kwargs: keywords of gym.make as JSON [json] (default {}), e.g. '{"path": "mixed", "speed": [0.1,
-            0.4]}': the training distribution.
+        export_model: model to export: final (model.zip) or best (best_model.zip, the best evaluation).
+        env_id: environment id: AmigoBot-v0 (the paper's task) or AmigoBot-v1 (the real robot on many paths).
+        env_kwargs: keywords of gym.make as JSON [json] (default {}), e.g. '{"path": "mixed"}'.
         argv: the command line (not an option).
     """
 
@@ -106,7 +93,6 @@ class Settings:
     argv: list[str] = field(default_factory=list, metadata=cli(skip=True))
 
     def validate(self) -> None:
-        """Raise ``ValueError`` naming the field and the allowed range on a bad setting."""
         for name, allowed in (("algo", ALGOS), ("export_model", ("final", "best")), ("env_id", ENV_IDS),
                               ("vec", ("auto", "native", "dummy"))):  # fmt: skip
             if getattr(self, name) not in allowed:
@@ -122,7 +108,6 @@ class Settings:
                 raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
 
 
-# --------------------------------------------------------------------------- small utilities
 def git_revision() -> str:
     """``git rev-parse HEAD`` of the repository holding this file, with ``-dirty`` if tracked files changed."""
     root = repository_root()
@@ -140,18 +125,13 @@ def git_revision() -> str:
 
 
 def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torch")) -> dict[str, str]:
-    """Versions of Python, amigo_gym, numpy and ``libraries``: the libraries a run depends on."""
+    """Versions of Python, amigo_gym, numpy and ``libraries``."""
     found = {name: str(importlib.import_module(name).__version__) for name in libraries}
     return {"python": platform.python_version(), "amigo_gym": __version__, "numpy": np.__version__} | found
 
 
-# --------------------------------------------------------------------------- environments
 def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The settings of the environment a run trains on, as JSON values.
-
-    ``AmigoBot-v0``: every field of its ``EnvParams`` (``gym.make``'s defaults updated by ``overrides``);
-    ``AmigoBot-v1``: the ``overrides`` as given (the defaults of ``TrackingParams`` apply to the rest).
-    """
+    """The trained env's settings as JSON: v0 every ``EnvParams`` field, v1 the ``overrides`` as given."""
     if env_id != ENV_ID:
         return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
     params = make_env_params("train", None, **(overrides or {})) if overrides else EnvParams()
@@ -160,7 +140,7 @@ def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) ->
 
 
 def _make_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any]:
-    """JSON env kwargs as ``gym.make`` keywords (lists that stand for pairs become tuples)."""
+    """JSON env kwargs as ``gym.make`` keywords (pairs as tuples)."""
     out = dict(kwargs or {})
     for key in ("speed", "preview"):
         if isinstance(out.get(key), list):
@@ -169,7 +149,6 @@ def _make_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any]:
 
 
 def _native(vec: str, n_envs: int) -> bool:
-    """Whether the run uses the native vector env (``--vec native``, or ``auto`` with several envs)."""
     return vec == "native" or (vec == "auto" and n_envs > 1)
 
 
@@ -181,14 +160,12 @@ def make_train_env(
     env_id: str = ENV_ID,
     kwargs: dict[str, Any] | None = None,
 ) -> Any:
-    """SB3 VecEnv of ``n_envs`` ``env_id`` envs with episode statistics (``VecMonitor``), seeded ``seed + i``.
-
-    ``normalize``: ``VecNormalize`` keywords (outermost wrapper), or ``None``; ``kwargs``: of ``gym.make``.
-    """
+    """SB3 VecEnv of ``n_envs`` monitored ``env_id`` envs seeded ``seed + i``; ``normalize``: ``VecNormalize``
+    keywords (``None``: none); ``kwargs``: of ``gym.make``."""
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
+    import amigo_gym  # noqa: F401  (registers the envs)
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
     venv: Any
@@ -205,9 +182,8 @@ def make_train_env(
     return venv
 
 
-# --------------------------------------------------------------------------- callbacks
 class _StopAtBoundary(Exception):
-    """Raised at a rollout boundary, after the checkpoint, when a stop was asked for."""
+    """A stop asked for, raised at a rollout boundary after the checkpoint."""
 
 
 def _callbacks(
@@ -224,8 +200,7 @@ def _callbacks(
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
     class Checkpoint(BaseCallback):
-        """At the start of a rollout (a consistent state: module docstring of :mod:`amigo_gym.tools.runs`): a
-        checkpoint every ``freq`` steps, and the stop asked for by ``SIGTERM``/``SIGINT``."""
+        """At a rollout's start: a checkpoint every ``freq`` steps, and the stop asked for by a signal."""
 
         def __init__(self, freq: int) -> None:
             super().__init__()
@@ -243,57 +218,42 @@ def _callbacks(
         def _on_step(self) -> bool:
             return True
 
-    class AfterEval(BaseCallback):
-        """After each evaluation: append it and its task metrics to ``eval.json`` (atomically); call ``after_eval``."""
-
-        def __init__(self) -> None:
-            super().__init__()
-            f = out / "eval.json"
-            self.history: list[dict[str, float]] = json.loads(f.read_text()) if f.is_file() else []
-
-        def _on_step(self) -> bool:
-            parent = self.parent
-            assert isinstance(parent, TaskEvalCallback)
-            entry = {
-                "timesteps": int(self.num_timesteps),
-                "mean_reward": float(parent.last_mean_reward),
-                "best_mean_reward": float(parent.best_mean_reward),
-                "wall_time_s": wall(),
-            } | parent.task_metrics
-            self.history.append(entry)
-            atomic_write_json(out / "eval.json", self.history, parents=True)
-            return True if after_eval is None else bool(after_eval(entry))
-
-    class SaveBest(BaseCallback):
-        """On a new best evaluation: ``best_model.zip`` (atomically)."""
-
-        def _on_step(self) -> bool:
-            atomic_save(self.model.save, out / "best_model.zip", parents=True)
-            return True
-
     class TaskEvalCallback(EvalCallback):
-        """SB3's ``EvalCallback`` that also logs the task metrics of its evaluation episodes.
-
-        TensorBoard scalars next to ``eval/mean_reward``: ``eval/h_rms_m`` (mean over the episodes of H's
-        cross-track RMS), ``eval/h_rms_settled_m`` (over ``t >= 5 s``), ``eval/speed_err_rms`` [m/s] and
-        ``eval/failure_rate`` (:mod:`amigo_gym.tools.training.task_metrics`); also in ``eval.json``.
-        """
+        """SB3's ``EvalCallback`` that also logs ``eval/h_rms_m``, ``eval/h_rms_settled_m`` [m],
+        ``eval/speed_err_rms`` [m/s] and ``eval/failure_rate`` of its episodes (means); after each evaluation: a new
+        best saved as ``best_model.zip``, the evaluation appended to ``eval.json``, ``after_eval``'s verdict."""
 
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
             probe = gym.make(s.env_id, **_make_kwargs(s.env_kwargs))
-            self.adapter = InfoAdapter.for_env(probe)  # v1's infos carry their own speed error
+            self.adapter = InfoAdapter.for_env(probe)
             self.dt = float(probe.unwrapped.params.dt)  # type: ignore[attr-defined]
             probe.close()
             self.recorders: dict[int, EpisodeRecorder] = {}
             self.episodes: list[dict[str, float]] = []
             self.task_metrics: dict[str, float] = {}
-            self.t_start = time.perf_counter()
+            f = out / "eval.json"
+            self.history: list[dict[str, float]] = json.loads(f.read_text()) if f.is_file() else []
+            if self.history:  # resumed: a new best must beat the evaluations before the interruption
+                self.best_mean_reward = max(h["mean_reward"] for h in self.history)
 
         def _on_step(self) -> bool:
-            if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
-                self.recorders, self.episodes = {}, []
-            return bool(super()._on_step())
+            if not (self.eval_freq > 0 and self.n_calls % self.eval_freq == 0):
+                return True
+            self.recorders, self.episodes = {}, []
+            best = self.best_mean_reward
+            go = bool(super()._on_step())
+            if self.best_mean_reward > best:
+                atomic_save(self.model.save, out / "best_model.zip", parents=True)
+            entry = {
+                "timesteps": int(self.num_timesteps),
+                "mean_reward": float(self.last_mean_reward),
+                "best_mean_reward": float(self.best_mean_reward),
+                "wall_time_s": wall(),
+            } | self.task_metrics
+            self.history.append(entry)
+            atomic_write_json(out / "eval.json", self.history, parents=True)
+            return go and (after_eval is None or bool(after_eval(entry)))
 
         def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
             super()._log_success_callback(locals_, globals_)
@@ -314,31 +274,19 @@ def _callbacks(
 
     cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
     if s.eval_freq > 0:
-        # the same VecEnv type as training (SB3 warns otherwise); with normalize, EvalCallback copies the training
-        # statistics into its VecNormalize before each evaluation
+        # the training's VecEnv type (SB3 warns otherwise); EvalCallback copies the VecNormalize statistics
         vec = "native" if _native(s.vec, n_envs) else "dummy"
         stats = {"training": False, "norm_reward": False} if normalize else None
         eval_env = make_train_env(1, vec, eval_seed, stats, s.env_id, s.env_kwargs)
-        after = AfterEval()
-        ev = TaskEvalCallback(
-            eval_env,
-            n_eval_episodes=s.eval_episodes,
-            eval_freq=max(1, s.eval_freq // n_envs),
-            deterministic=True,
-            callback_on_new_best=SaveBest(),
-            callback_after_eval=after,
-            verbose=0,
-        )
+        every = max(1, s.eval_freq // n_envs)
+        ev = TaskEvalCallback(eval_env, n_eval_episodes=s.eval_episodes, eval_freq=every, deterministic=True, verbose=0)
         ev.n_calls = done_steps // n_envs  # resumed: evaluate at the same steps as an uninterrupted run
-        if after.history:  # resumed: a new best must beat the evaluations before the interruption
-            ev.best_mean_reward = max(h["mean_reward"] for h in after.history)
         cbs.append(ev)
     return cbs
 
 
 def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) -> Path:
-    """A checkpoint of ``model`` (with its replay buffer for SAC/TD3 and its VecNormalize statistics, part of the
-    state): :func:`amigo_gym.tools.runs.save_checkpoint`."""
+    """A checkpoint of ``model`` with its replay buffer (SAC/TD3) and VecNormalize statistics."""
 
     def write(folder: Path) -> list[str]:
         model.save(folder / "model.zip")
@@ -357,7 +305,7 @@ def save_checkpoint(model: Any, out: Path, algo: str, wall_time_s: float = 0.0) 
 
 
 def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int, s: Settings) -> Any:
-    """Model (with its replay buffer) of a verified checkpoint, on a new training env seeded for its step."""
+    """The model (and replay buffer) of a verified checkpoint, on a new training env seeded for its step."""
     venv = make_train_env(n_envs, s.vec, s.seed + ck.step, None, s.env_id, s.env_kwargs)
     if (ck.folder / VECNORMALIZE).is_file():
         from stable_baselines3.common.vec_env import VecNormalize
@@ -383,36 +331,25 @@ def _load_checkpoint(algo_cls: Any, algo: str, ck: runs.Checkpoint, n_envs: int,
     return model
 
 
-# --------------------------------------------------------------------------- training
 def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any]:
-    """Run (or resume) one training run, its folder locked; the run record (also ``run.json``). ``after_eval(entry)``
-    after each evaluation (its ``eval.json`` entry): ``False`` stops training (the run ends normally, with its model).
-
-    Raises:
-        RunLockedError: another process uses the folder.
-        CorruptFileError: a damaged file that has no fallback (one line naming it).
-    """
+    """Run (or resume) one run, its folder locked; the record (``run.json``). ``after_eval(entry)`` after each
+    evaluation: ``False`` stops training (the run ends normally). Raises ``RunLockedError``, ``CorruptFileError``."""
     s.validate()
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
-    parse_hyperparams(s.algo, load_hyperparams(hp_path, s.env_id), str(hp_path))  # before the folder is touched
-    # a refused --env-kwargs too: a refused run writes nothing, so its corrected rerun is a new run
+    hp = load_hyperparams(hp_path, s.env_id)
+    parsed = parse_hyperparams(s.algo, hp, str(hp_path))  # a refused run writes nothing
     gym.make(s.env_id, **_make_kwargs(s.env_kwargs)).close()
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
     with runs.handling(stop), runs.RunLock(s.out):
-        result = _train(s, stop, after_eval)
+        result = _train(s, hp_path, hp, parsed, stop, after_eval)
     if stop.requested and result is None:
         raise KeyboardInterrupt
-    if result is None:  # pragma: no cover - _train returns None only on a stop
-        raise RuntimeError("training stopped")
+    assert result is not None
     return result
 
 
 def rollout_steps(model: Any) -> tuple[int, str] | None:
-    """The environment steps SB3 collects between two checks of the step budget, and how they come about.
-
-    PPO collects ``n_steps`` per env on ``n_envs`` envs; SAC and TD3 collect ``train_freq`` steps per env when
-    their ``train_freq`` counts steps (``None`` when it counts episodes: the rounding then depends on the episodes).
-    """
+    """The env steps SB3 collects between two checks of the step budget and why (``None``: episodes)."""
     n_envs = int(model.n_envs)
     if hasattr(model, "n_steps"):
         return int(model.n_steps) * n_envs, f"n_steps {int(model.n_steps)} x {n_envs} envs"
@@ -424,8 +361,7 @@ def rollout_steps(model: Any) -> tuple[int, str] | None:
 
 
 def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None) -> tuple[int, str]:
-    """The step count a run will end at when it has ``done`` steps and ``remaining`` to go: SB3 stops at the first
-    whole rollout (:func:`rollout_steps`) at or past the budget, ``done + ceil(remaining / rollout) * rollout``."""
+    """The step a run ends at with ``done`` steps and ``remaining`` to go: the first whole rollout past the budget."""
     if remaining <= 0 or rollout is None:
         return done + max(remaining, 0), "" if rollout is None else rollout[1]
     size, why = rollout
@@ -433,7 +369,6 @@ def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None
 
 
 def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[str, Any]) -> dict[str, Any]:
-    """The ``config.json`` of a run started (or recovered) by this command."""
     return {
         "settings": asdict(s) | {"timesteps": total, "n_envs": n_envs, "hyperparams": str(hp_path)},
         "hyperparams": hp,
@@ -446,38 +381,36 @@ def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[st
     }
 
 
-def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None = None) -> dict[str, Any] | None:
+def _train(
+    s: Settings, hp_path: Path, hp: dict[str, Any], parsed: Hyperparams, stop: runs.StopRequest,
+    after_eval: AfterEvalHook | None,
+) -> dict[str, Any] | None:  # fmt: skip
     import torch
     from stable_baselines3.common.utils import set_random_seed
 
     algo_cls = sb3_class(s.algo)
     out = Path(s.out)
-    hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
-    hp = load_hyperparams(hp_path, s.env_id)
-    parsed: Hyperparams = parse_hyperparams(s.algo, hp, str(hp_path))  # checked before anything is written
     total = int(s.timesteps if s.timesteps is not None else (parsed.n_timesteps or 100_000))
     n_envs = int(s.n_envs if s.n_envs is not None else (parsed.n_envs or 1))
 
     config_file = out / "config.json"
-    recovered = False
-    if s.resume and not config_file.is_file():
+    recovered = s.resume and not config_file.is_file()
+    if recovered:
         if not runs.candidates(out, report=False):
             raise FileNotFoundError(f"--resume: no checkpoint in {out} (no run started there: missing config.json)")
-        # the checkpoints are intact: resume from them, recording this command's settings as the configuration
         runs.warn(
             f"--resume: {config_file} is missing; resuming from the checkpoints in {out / runs.CHECKPOINTS} "
             "with the settings of this command (config.json written again, marked 'recovered')"
         )
-        recovered = True
-    if s.resume and not recovered:
+    elif s.resume:
         config = runs.read_json(config_file)
         if not isinstance(config, dict) or not isinstance(config.get("settings"), dict):
             raise runs.CorruptFileError(f"{config_file}: not a run configuration (no 'settings')")
         if config["settings"].get("algo") != s.algo:
             raise ValueError(f"--resume: {out} holds a {config['settings'].get('algo')} run, not {s.algo}")
-    elif not s.resume and runs.has_run_files(out):
+    elif runs.has_run_files(out):
         raise FileExistsError(f"{out} is not empty; pass --resume to continue it or choose another --out")
-    runs.clean_temporaries(out)  # left by a killed run; we hold the lock
+    runs.clean_temporaries(out)  # we hold the lock
 
     torch.set_num_threads(s.threads)
     set_random_seed(s.seed)
@@ -507,7 +440,7 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         if noise is not None:
             kw["action_noise"] = noise
         policy: Any = parsed.policy
-        if policy == LOWPASS_POLICY:  # TD3 with the low-pass actor: the previous command's place from the env
+        if policy == LOWPASS_POLICY:
             from amigo_gym.tools.training.sb3_lowpass import policy_for
 
             policy, kw["policy_kwargs"] = policy_for(venv, kw.get("policy_kwargs"))
@@ -518,12 +451,8 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
     remaining = total - int(model.num_timesteps)
     planned = planned_timesteps(int(model.num_timesteps), remaining, rollout_steps(model))
     if planned[0] != total:
-        print(
-            f"amigo-gym train: --timesteps {total} becomes {planned[0]} steps: "
-            f"SB3 trains whole rollouts ({planned[1]})",
-            file=sys.stderr,
-            flush=True,
-        )
+        say(f"amigo-gym train: --timesteps {total} becomes {planned[0]} steps: SB3 trains whole rollouts "
+            f"({planned[1]})")  # fmt: skip
     t0 = time.perf_counter()
 
     def wall() -> float:
@@ -567,13 +496,13 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
         "torch_threads": s.threads,
         "sha256": sha256_file(out / "model.zip"),
     }
-    # every pickle a loader reads beside the model, with its sha256 (checked before unpickling)
+    # every pickle a loader reads, with its sha256 (checked before unpickling); written here: trusted
     record["files"] = {
         name: sha256_file(out / name)
         for name in ("model.zip", "best_model.zip", VECNORMALIZE)
         if (out / name).is_file()
     }
-    vouch(*record["files"].values())  # written here: loading them again needs no trust flag
+    vouch(*record["files"].values())
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
         exp = Path(s.export)
@@ -592,18 +521,11 @@ def _train(s: Settings, stop: runs.StopRequest, after_eval: AfterEvalHook | None
     return record
 
 
-# --------------------------------------------------------------------------- command line
-def parse_args(argv: Sequence[str]) -> Settings:
-    """Settings from the command line (``amigo-gym train --help``)."""
-    return parse_settings(
-        Settings, argv, "amigo-gym train", "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1.", argv=list(argv)
-    )
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym train``."""
     args = list(sys.argv[1:] if argv is None else argv)
-    s = parse_args(args)
+    doc = "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1."
+    s = parse_settings(Settings, args, "amigo-gym train", doc, argv=args)
 
     def run() -> int:
         record = train(s)
