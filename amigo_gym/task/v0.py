@@ -41,7 +41,7 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``Delta w`` of the wheel rates.
 
 AmigoBot-v0's step is AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns` of
-:func:`amigo_gym.task.v1.v0_configuration`), which calls the pieces here on floats or ``(N,)`` columns alike. The
+:meth:`amigo_gym.task.v1.TrackingParams.v0`), which calls the pieces here on floats or ``(N,)`` columns alike. The
 observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts readers use.
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
@@ -50,16 +50,21 @@ May import numpy and the core (params, kinematics, paths); never envs, policies,
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.kinematics import Real, col_sqrt
+from amigo_gym.model.kinematics import Real, circle_steady_state, col_sqrt
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import HEADING_LIMIT, EnvParams, show_value
+from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, SIGMA_RANGE, RobotParams, check_real, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
+
+if TYPE_CHECKING:
+    from amigo_gym.task.v1 import TrackingParams
 
 Array = NDArray[np.float64]
 
@@ -85,19 +90,116 @@ INFO_KEYS: dict[str, str] = {
 }
 
 
-def obs_names(params: EnvParams) -> list[str]:
+#: AmigoBot-v0's settings: every keyword of ``gym.make("AmigoBot-v0", ...)`` and its default (:func:`check_v0`)
+V0_DEFAULTS: dict[str, Any] = {
+    "robot": RobotParams(),
+    "dt": 0.1,
+    "radius": 1.0,
+    "speed": 0.2,
+    "direction": 1,
+    "path": "circle",
+    "straight_length": 1.0,
+    "termination_distance": 0.25,
+    "init_position_noise": 0.02,
+    "init_heading_noise": 0.1,
+    "error_scale": 0.05,
+    "preview": (0.2, 0.4),
+    "sigma_track": 0.02,
+    "sigma_speed": 0.05,
+    "sigma_smooth": 0.1,
+    "smooth_weight": 0.2,
+}
+
+
+def check_v0(**settings: Any) -> dict[str, Any]:
+    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, checked: numbers as Python floats, ``direction``
+    an int, ``preview`` a tuple (``dt=np.float32(0.1)`` is stored as ``0.10000000149011612``).
+
+    ``robot`` a :class:`~amigo_gym.model.params.RobotParams`; ``dt`` in [1e-6, 2] s; ``radius`` of the circle H
+    follows in (robot.l3, 1e3] m; ``speed`` of A in [1e-6, robot.max_speed] m/s; ``direction`` +1 (left, eq. 6) or
+    -1; ``path`` ``"circle"`` (through the origin, tangent to x0) or ``"manoeuvre"`` (``straight_length`` in
+    [0, 1e3] m along x0, then the circle); ``termination_distance`` in [1e-3, 10] m; ``init_position_noise`` in
+    [0, termination_distance / 2] m per axis; ``init_heading_noise`` in [0, pi/4] rad; ``error_scale`` in
+    [1e-6, 10] m; each ``preview`` distance in [0, 10] m; ``sigma_track`` [m], ``sigma_speed`` [m/s],
+    ``sigma_smooth`` in [1e-6, 1e6]; ``smooth_weight`` in [0, 1). The task must be drivable: the straight roll at
+    ``speed`` (``speed / r`` on each wheel) and the exact steady state on the circle
+    (:func:`~amigo_gym.model.kinematics.circle_steady_state`) within ``robot.max_wheel_rate``.
+
+    Raises:
+        TypeError: an unknown setting.
+        ValueError: one line naming ``EnvParams.<setting>`` (AmigoBot-v0's settings), the range and the value, or
+            the wheel rate a task needs and the limit.
+    """
+    o = "EnvParams"
+    unknown = sorted(set(settings) - set(V0_DEFAULTS))
+    if unknown:
+        raise TypeError(f"{o} got unexpected keyword argument(s) {unknown}; allowed: {', '.join(V0_DEFAULTS)}")
+    s = {**V0_DEFAULTS, **settings}
+    robot = s["robot"]
+    if not isinstance(robot, RobotParams):
+        raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(robot)}")
+
+    def real(name: str, low: float, high: float, **kw: bool) -> None:
+        s[name] = check_real(o, name, s[name], low, high, **kw)
+
+    real("dt", 1e-6, 2.0)
+    real("radius", robot.l3, 1e3, low_open=True)
+    real("speed", MIN_SPEED, robot.max_speed)
+    d = s["direction"]
+    if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
+        raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
+    s["direction"] = int(d)
+    if not isinstance(s["path"], str) or s["path"] not in ("circle", "manoeuvre"):
+        raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(s['path'])}")
+    s["path"] = str(s["path"])
+    real("straight_length", 0.0, 1e3)
+    real("termination_distance", 1e-3, 10.0)
+    real("init_position_noise", 0.0, s["termination_distance"] / 2)
+    real("init_heading_noise", 0.0, math.pi / 4)
+    real("error_scale", 1e-6, 10.0)
+    pv = s["preview"]
+    if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
+        raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
+    s["preview"] = tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv))
+    for name in ("sigma_track", "sigma_speed", "sigma_smooth"):
+        real(name, *SIGMA_RANGE)
+    real("smooth_weight", 0.0, 1.0, high_open=True)
+    _check_drivable(s)
+    return s
+
+
+def _check_drivable(s: dict[str, Any]) -> None:
+    """Refuse a task whose steady wheel rates exceed ``robot.max_wheel_rate``; the rates are linear in the speed, so
+    the largest speed that fits is ``speed * w_max / needed``."""
+    robot, v, radius = s["robot"], s["speed"], s["radius"]
+    w_max = robot.max_wheel_rate
+    limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
+    r_min = min(robot.r1, robot.r2)
+    need = v / r_min
+    if need > w_max:
+        raise ValueError(
+            f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+            f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
+        )
+    if not (radius - robot.l3) * (radius + robot.l3) > 0.0:
+        raise ValueError(f"EnvParams.radius {radius!r} is too close to robot.l3 = {robot.l3:g} m")
+    rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
+    need = max(abs(rates[0]), abs(rates[1]))
+    if not need <= w_max:
+        raise ValueError(
+            f"EnvParams: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
+            f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
+        )
+
+
+def obs_names(params: TrackingParams) -> list[str]:
     """Names of the observation components, in order (the module table): the contract every reader uses."""
     return [*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(params.preview))), *OBS_TAIL]
 
 
-def obs_index(params: EnvParams) -> dict[str, int]:
+def obs_index(params: TrackingParams) -> dict[str, int]:
     """``{name: index}`` of the observation components (:func:`obs_names`)."""
     return {name: i for i, name in enumerate(obs_names(params))}
-
-
-def obs_dim(params: EnvParams) -> int:
-    """Length of the observation vector: ``len(obs_names(params))``, ``8 + len(params.preview)``."""
-    return len(OBS_HEAD) + len(params.preview) + len(OBS_TAIL)
 
 
 def error_bound(termination_distance: float, error_scale: float) -> float:
@@ -106,14 +208,9 @@ def error_bound(termination_distance: float, error_scale: float) -> float:
     return 2.0 * termination_distance / error_scale
 
 
-def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
-    """Finite ``(low, high)`` bounds of the observation (see the module table)."""
-    return obs_bounds_of(params.termination_distance, params.error_scale, len(params.preview))
-
-
 def obs_bounds_of(termination_distance: float, error_scale: float, n_preview: int) -> tuple[Array, Array]:
-    """:func:`obs_bounds` from the three settings it depends on (also AmigoBot-v1's ``observation="v0"``):
-    ``termination_distance``, ``error_scale`` [m] and the number of preview distances."""
+    """The observation's finite ``(low, high)`` bounds (the module table) from ``termination_distance``, ``error_scale``
+    [m] and the number of preview distances."""
     e_max = error_bound(termination_distance, error_scale)
     high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + n_preview) + [1.0, 1.0, 2.0, 1.0])
     low = -high
@@ -222,11 +319,6 @@ def bound_angle_float(b: float) -> float:
     if -HEADING_LIMIT <= b <= HEADING_LIMIT:
         return b
     return b - TWO_PI * round_half_even(b / TWO_PI)
-
-
-def initial_wheel_rates(params: EnvParams) -> Array:
-    """Wheel rates at the start: rolling straight at the reference speed, ``(v/r1, v/r2)`` [rad/s]."""
-    return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
 
 
 # The scalar pieces of the step in numba's subset: the compiled step (amigo_gym.sim._kernels_v1) compiles them.
