@@ -36,8 +36,10 @@ Array = NDArray[np.float64]
 def _fields(owner: str, what: str, value: Any, names: Collection[str]) -> dict[str, Any]:
     """The mapping ``value`` as a dict (``TypeError`` on another type or a name not in ``names``)."""
     if not isinstance(value, Mapping):
-        kind = "a RobotParams" if what == "robot" else "AmigoBot-v0's TrackingParams (EnvParams)"
-        raise TypeError(f"{owner}: {what} must be {kind} or a mapping of its fields, got {type(value).__name__}")
+        kind = "a RobotParams or a mapping of its fields"
+        if what == "params":
+            kind = "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its settings (EnvParams fields)"
+        raise TypeError(f"{owner}: {what} must be {kind}, got {type(value).__name__}")
     bad = sorted(str(k) for k in value if k not in names)
     if bad:
         raise TypeError(f"{owner}: unknown {what} field(s) {bad}; allowed: {', '.join(names)}")

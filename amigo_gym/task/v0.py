@@ -53,7 +53,7 @@ import math
 import numbers
 import warnings
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -62,9 +62,6 @@ from amigo_gym.model.kinematics import Real, circle_steady_state, col_sqrt
 from amigo_gym.model.numeric import clip
 from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, SIGMA_RANGE, RobotParams, check_real, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
-
-if TYPE_CHECKING:
-    from amigo_gym.task.v1 import TrackingParams
 
 Array = NDArray[np.float64]
 
@@ -192,12 +189,13 @@ def _check_drivable(s: dict[str, Any]) -> None:
         )
 
 
-def obs_names(params: TrackingParams) -> list[str]:
-    """Names of the observation components, in order (the module table): the contract every reader uses."""
+def obs_names(params: Any) -> list[str]:
+    """Names of the observation components of AmigoBot-v0's settings ``params`` (a ``TrackingParams``), in order (the
+    module table): the contract every reader uses."""
     return [*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(params.preview))), *OBS_TAIL]
 
 
-def obs_index(params: TrackingParams) -> dict[str, int]:
+def obs_index(params: Any) -> dict[str, int]:
     """``{name: index}`` of the observation components (:func:`obs_names`)."""
     return {name: i for i, name in enumerate(obs_names(params))}
 
