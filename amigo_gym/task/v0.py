@@ -161,14 +161,9 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     for name in ("sigma_track", "sigma_speed", "sigma_smooth"):
         real(name, *SIGMA_RANGE)
     real("smooth_weight", 0.0, 1.0, high_open=True)
-    _check_drivable(s)
-    return s
-
-
-def _check_drivable(s: dict[str, Any]) -> None:
-    """Refuse a task whose steady wheel rates exceed ``robot.max_wheel_rate``; the rates are linear in the speed, so
-    the largest speed that fits is ``speed * w_max / needed``."""
-    robot, v, radius = s["robot"], s["speed"], s["radius"]
+    # drivable: the straight roll at the start, the exact steady state on the circle; the rates are linear in the
+    # speed, so at most speed * w_max / need fits
+    v, radius = s["speed"], s["radius"]
     w_max = robot.max_wheel_rate
     limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
     r_min = min(robot.r1, robot.r2)
@@ -178,8 +173,6 @@ def _check_drivable(s: dict[str, Any]) -> None:
             f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
             f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
         )
-    if not (radius - robot.l3) * (radius + robot.l3) > 0.0:
-        raise ValueError(f"EnvParams.radius {radius!r} is too close to robot.l3 = {robot.l3:g} m")
     rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
     need = max(abs(rates[0]), abs(rates[1]))
     if not need <= w_max:
@@ -187,6 +180,7 @@ def _check_drivable(s: dict[str, Any]) -> None:
             f"EnvParams: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
+    return s
 
 
 def obs_names(params: Any) -> list[str]:
