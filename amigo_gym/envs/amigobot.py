@@ -21,12 +21,11 @@ from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
-from amigo_gym.envs.base import TRAIL_LENGTH, VECTOR_KERNELS, check_kernel, check_vector_args
+from amigo_gym.envs.base import TRAIL_LENGTH
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.model.kinematics import h_position
 from amigo_gym.model.params import RobotParams
-from amigo_gym.sim import fast_v1
 from amigo_gym.task.v0 import V0_DEFAULTS
 from amigo_gym.task.v1 import TrackingParams, v0_settings
 
@@ -229,9 +228,8 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
         kernel: str = "auto",
         **settings: Any,
     ) -> None:
-        owner = type(self).__name__
-        check_kernel(owner, kernel, fast_v1.KERNELS)
-        super().__init__(render_mode, params=make_env_params(owner, params, robot, **settings), kernel=kernel)
+        p = make_env_params(type(self).__name__, params, robot, **settings)
+        super().__init__(render_mode, params=p, kernel=kernel)
 
     @property
     def pose(self) -> Array:
@@ -302,10 +300,7 @@ class AmigoBotVectorEnv(_V0Spec, AmigoBotV1VectorEnv):
         robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
-        owner = type(self).__name__
-        check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        check_kernel(owner, kernel, VECTOR_KERNELS)
-        p = make_env_params(owner, params, robot, **settings)
+        p = make_env_params(type(self).__name__, params, robot, **settings)
         super().__init__(num_envs, max_episode_steps, render_mode, autoreset_mode, kernel, params=p)
         #: the path every robot follows (``params.path``)
         self.path: Any = p.path
