@@ -339,14 +339,13 @@ def observe_head(
 ) -> tuple[Real, Real, Real, Real]:
     """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
     clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
-    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns; compiled by the
-    compiled step (``amigo_gym.sim._kernels_v1``)."""
+    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns."""
     return clip(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
 def curvature_feature(curvature: Real, l3: float) -> Real:
     """A curvature field of the observation (at H, and at each preview point): ``clip(kappa l3, -1, 1)`` [-] of the
-    curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns; compiled by the compiled step."""
+    curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns."""
     return clip(curvature * l3, -1.0, 1.0)
 
 
@@ -359,14 +358,12 @@ def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: 
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
-    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
-    (``amigo_gym.sim._kernels_v1``)."""
+    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns."""
     return (clip(w1 / w_max, -1.0, 1.0), clip(w2 / w_max, -1.0, 1.0), clip((v - v_ref) / v_max, -2.0, 2.0))
 
 
 def observe_reference(v_ref: Real, v_max: float) -> Real:
-    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]); the compiled step, where
-    ``v_ref`` is a constant, computes it once per call. Floats or columns."""
+    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]). Floats or columns."""
     return v_ref / v_max
 
 
@@ -447,18 +444,15 @@ def reward_arguments(
     abs_error: Real, abs_dv: Real, change_sq: Real, sigma_track: float, sigma_speed: float, smooth_scale_sq: float
 ) -> tuple[Real, Real, Real]:
     r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`):
-    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, computed as ``abs_error / -sigma_track``, ``abs_dv /
-    -sigma_speed``, ``change_sq / -smooth_scale_sq`` (a division by the negated scale: the bits of the compiled
-    steps, which compile this function). ``abs_error`` [m], ``abs_dv`` [m/s], ``change_sq`` in the units of
-    ``smooth_scale_sq``; the scales ``sigma_track`` [m], ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive.
-    Floats or columns (numba's subset: ``amigo_gym.sim._kernels_v1``)."""
+    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale. ``abs_error``
+    [m], ``abs_dv`` [m/s], ``change_sq`` in the units of ``smooth_scale_sq``; the scales ``sigma_track`` [m],
+    ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive. Floats or columns."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
 def off_path(abs_error: Real, termination_distance: float) -> Any:
     """The termination of AmigoBot-v0's task: H farther than ``termination_distance`` [m] from the path, ``|e| >
-    termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool for a float, a bool
-    column for a column; compiled by the compiled step (``amigo_gym.sim._kernels_v1``)."""
+    termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool, or a bool column."""
     return abs_error > termination_distance
 
 
@@ -482,12 +476,10 @@ def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
 def info_dict(
     pose: Any, h_position: Any, error: Any, rates: Any, angles: Any, castor: Any, terms: Any, time: Any
 ) -> dict[str, Any]:
-    """The info dict keyed as :data:`INFO_KEYS`, from its entries (AmigoBot-v1's ``v0_info_values`` and
-    ``v0_record_info`` call it).
-
-    ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m], ``error`` H's cross-track error [m], ``rates`` the
-    wheel rates [rad/s], ``angles`` the wheel angles and ``castor`` the castor's [rad], ``terms`` the 4 reward
-    terms (:data:`REWARD_TERMS` order), ``time`` [s]: any types, handed out as they are."""
+    """The info dict keyed as :data:`INFO_KEYS`: ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m],
+    ``error`` H's cross-track error [m], ``rates`` the wheel rates [rad/s], ``angles`` the wheel angles and
+    ``castor`` the castor's [rad], ``terms`` the 4 reward terms (:data:`REWARD_TERMS` order), ``time`` [s]: any
+    types, handed out as they are."""
     return {
         "pose": pose,
         "h_position": h_position,
