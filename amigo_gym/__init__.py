@@ -10,10 +10,10 @@ import dataclasses
 
 from gymnasium.envs.registration import EnvSpec, register, registry
 
-from amigo_gym.model.params import EnvParams, RobotParams
+from amigo_gym.model.params import RobotParams
 
 __version__ = "0.1.0"
-__all__ = ["EnvParams", "RobotParams", "SeparateEnvSpec", "__version__"]
+__all__ = ["RobotParams", "SeparateEnvSpec", "__version__"]
 
 #: steps of one AmigoBot-v0 episode at the default dt = 0.1 s: 40 s, more than one lap of the default circle
 MAX_EPISODE_STEPS = 400

@@ -16,20 +16,25 @@ from scipy.integrate import solve_ivp
 from v0_reference import Reference, start_pose
 
 from amigo_gym.model.kinematics import body_velocity, circle_steady_state
-from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.paths import make_path
+from amigo_gym.model.params import RobotParams
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_body_velocity
 from amigo_gym.task import v0 as task
+from amigo_gym.task.v1 import TrackingParams
 
 
-def steady_pose(p: EnvParams) -> np.ndarray:
+def lap_time(p: TrackingParams) -> float:
+    """Time of one steady lap of the circle [s]: ``2 pi R_A / v_A``."""
+    return 2 * math.pi * math.sqrt(p.radius**2 - p.robot.l3**2) / float(p.speed)
+
+
+def steady_pose(p: TrackingParams) -> np.ndarray:
     """Pose with H at the circle's start point and the steady heading lag (closed form)."""
     ss = circle_steady_state(p.radius, p.speed, p.robot, p.direction)
     beta = -float(ss.heading_lag)  # theta(0) = 0, beta = theta - lag
     return np.array([-p.robot.l3 * math.cos(beta), -p.robot.l3 * math.sin(beta), beta])
 
 
-def observe(p: EnvParams, pose: np.ndarray, rates: np.ndarray) -> np.ndarray:
+def observe(p: TrackingParams, pose: np.ndarray, rates: np.ndarray) -> np.ndarray:
     """The observation of start states ``pose (..., 3)`` with wheel rates ``rates (..., 2)`` (float64), by AmigoBot-v0's
     reference evaluation (tests/v0_reference.py)."""
     pose = np.atleast_2d(pose)
@@ -39,12 +44,12 @@ def observe(p: EnvParams, pose: np.ndarray, rates: np.ndarray) -> np.ndarray:
 
 
 def rollout(
-    policy: AnalyticPolicy, p: EnvParams, pose: np.ndarray, n: int, rates: np.ndarray | None = None
+    policy: AnalyticPolicy, p: TrackingParams, pose: np.ndarray, n: int, rates: np.ndarray | None = None
 ) -> dict[str, np.ndarray]:
     """Closed loop with AmigoBot-v0's exact reference step (tests/v0_reference.py, what
     ``gym.make("AmigoBot-v0", kernel="numpy")`` runs) from ``pose`` and ``rates``; observations cast to float32 like
     the env."""
-    rates = task.initial_wheel_rates(p) if rates is None else rates
+    rates = np.array([p.speed / p.robot.r1, p.speed / p.robot.r2]) if rates is None else rates
     ref = Reference(p, np.concatenate((pose, np.zeros(3), rates)))
     _, out = ref.start()
     obs = ref.obs(out).astype(np.float32)
@@ -60,35 +65,35 @@ def rollout(
 
 
 CASES = [
-    EnvParams(),
-    EnvParams(radius=0.5, speed=0.3, direction=-1),
-    EnvParams(radius=2.0, speed=0.1, dt=0.05, robot=RobotParams(l3=0.1, r1=0.06)),
+    TrackingParams.v0(),
+    TrackingParams.v0(radius=0.5, speed=0.3, direction=-1),
+    TrackingParams.v0(radius=2.0, speed=0.1, dt=0.05, robot=RobotParams(l3=0.1, r1=0.06)),
 ]
 
 
 @pytest.mark.parametrize("p", CASES)
 @pytest.mark.parametrize("speed_reference", ["A", "H"])
-def test_steady_state_rates_match_closed_form(p: EnvParams, speed_reference: str) -> None:
+def test_steady_state_rates_match_closed_form(p: TrackingParams, speed_reference: str) -> None:
     ss = circle_steady_state(p.radius, p.speed, p.robot, p.direction)
     obs = observe(p, steady_pose(p), ss.wheel_rates)[0].astype(np.float32)
     for feedforward_only in (False, True):
-        pol = AnalyticPolicy(p, feedforward_only=feedforward_only, speed_reference=speed_reference)  # type: ignore[arg-type]
+        pol = AnalyticPolicy(p, feedforward_only=feedforward_only, speed_reference=speed_reference)
         np.testing.assert_allclose(pol.wheel_rates(obs), ss.wheel_rates, atol=1e-5)
         np.testing.assert_allclose(pol.predict(obs)[0], ss.wheel_rates / p.robot.max_wheel_rate, atol=1e-6)
 
 
 def test_modelmd_example_rates() -> None:
     # docs/model.md: v_A = 0.2 m/s, R = 1 m: alpha1dot = 4.481543, alpha2dot = 3.518457 rad/s
-    p = EnvParams()
+    p = TrackingParams.v0()
     obs = observe(p, steady_pose(p), np.array([4.481543, 3.518457]))[0]
     np.testing.assert_allclose(AnalyticPolicy(p).wheel_rates(obs), [4.481543, 3.518457], atol=1e-5)
 
 
 @pytest.mark.parametrize("p", CASES)
 @pytest.mark.parametrize("feedforward_only", [False, True])
-def test_nominal_lap_stays_on_circle(p: EnvParams, feedforward_only: bool) -> None:
+def test_nominal_lap_stays_on_circle(p: TrackingParams, feedforward_only: bool) -> None:
     ss = circle_steady_state(p.radius, p.speed, p.robot, p.direction)
-    n = math.ceil(p.lap_time / p.dt) + 1
+    n = math.ceil(lap_time(p) / p.dt) + 1
     out = rollout(AnalyticPolicy(p, feedforward_only=feedforward_only), p, steady_pose(p), n, ss.wheel_rates)
     assert np.abs(out["e"]).max() <= 1e-6
     # and H went once around: heading advanced by 2 pi (beyond a lap by the extra step)
@@ -101,10 +106,10 @@ def test_error_follows_continuous_decay(speed_reference: str) -> None:
     k = 3.0
     devs = []
     for dt in (0.01, 0.005):
-        p = EnvParams(dt=dt)
+        p = TrackingParams.v0(dt=dt)
         pose = start_pose(p, [0.5, 1.0, -1.0])
         n = round(2.0 / dt)
-        e = rollout(AnalyticPolicy(p, gain=k, speed_reference=speed_reference), p, pose, n)["e"]  # type: ignore[arg-type]
+        e = rollout(AnalyticPolicy(p, gain=k, speed_reference=speed_reference), p, pose, n)["e"]
         t = np.arange(n + 1) * dt
         devs.append(np.abs(e - e[0] * np.exp(-k * t)).max() / abs(e[0]))
     assert devs[1] < 0.01
@@ -112,7 +117,7 @@ def test_error_follows_continuous_decay(speed_reference: str) -> None:
 
 
 def test_perturbed_start_converges_at_default_dt() -> None:
-    p = EnvParams()
+    p = TrackingParams.v0()
     rng = np.random.default_rng(0)
     for u in rng.uniform(-1, 1, size=(5, 3)):
         e = rollout(AnalyticPolicy(p), p, start_pose(p, u), 60)["e"]
@@ -123,8 +128,8 @@ def test_perturbed_start_converges_at_default_dt() -> None:
 
 def test_feedforward_only_keeps_offset_and_aligns_heading() -> None:
     """k = 0 keeps Hdot . n = 0: H keeps its offset while psi -> psi_ss at rate v/l3 (small dt)."""
-    p = EnvParams(dt=0.005)
-    path = make_path(p)
+    p = TrackingParams.v0(dt=0.005)
+    path = p.path
     pose = start_pose(p, [0.0, 1.0, 1.0])
     out = rollout(AnalyticPolicy(p, feedforward_only=True), p, pose, round(3.0 / p.dt))
     e = out["e"]
@@ -143,7 +148,7 @@ def test_feedforward_only_is_the_papers_inverse_ode() -> None:
     sdot = v / cos(theta - beta), betadot = v tan(theta - beta) / l3, theta = s / R,
     integrated here independently with SciPy; the discrete loop differs by O(dt).
     """
-    p = EnvParams(dt=0.005, init_position_noise=0.0, init_heading_noise=0.0)
+    p = TrackingParams.v0(dt=0.005, init_position_noise=0.0, init_heading_noise=0.0)
     l3, v, radius = p.robot.l3, p.speed, p.radius
     n = round(5.0 / p.dt)
     t = np.arange(n + 1) * p.dt
@@ -164,7 +169,7 @@ def test_feedforward_only_is_the_papers_inverse_ode() -> None:
 
 
 def test_batch_equals_loop() -> None:
-    p = EnvParams()
+    p = TrackingParams.v0()
     rng = np.random.default_rng(1)
     poses = start_pose(p, rng.uniform(-1, 1, size=(7, 3)))
     rates = rng.uniform(0, 8, size=(7, 2))
@@ -178,13 +183,13 @@ def test_batch_equals_loop() -> None:
 
 def test_law_solves_the_velocity_map() -> None:
     """The commanded (v_A, betadot) give H the requested path-frame velocity (tangential, -k e)."""
-    p = EnvParams()
+    p = TrackingParams.v0()
     rng = np.random.default_rng(2)
     n = 50
     psi = rng.uniform(-1.2, 1.2, n)
     e = rng.uniform(-0.1, 0.1, n)
     kl3 = rng.uniform(-0.5, 0.5, n)
-    obs = np.zeros((n, task.obs_dim(p)))
+    obs = np.zeros((n, len(task.obs_names(p))))
     obs[:, 0], obs[:, 1], obs[:, 2], obs[:, 3] = e / p.error_scale, np.sin(psi), np.cos(psi), kl3
     obs[:, -1] = p.speed / p.robot.max_speed
     l3, k = p.robot.l3, 2.5
@@ -208,7 +213,7 @@ def test_law_from_plain_geometry(direction: int) -> None:
     the path), and the rates from ``r w = v_A +- l1 betadot`` with ``betadot = (-k e - v sin psi) /
     (l3 cos psi)``.
     """
-    p = EnvParams(direction=direction)
+    p = TrackingParams.v0(direction=direction)
     robot, k = p.robot, 3.0
     rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, size=(6, 3))
@@ -230,23 +235,23 @@ def test_law_from_plain_geometry(direction: int) -> None:
 
 
 def test_bad_input() -> None:
-    p = EnvParams()
+    p = TrackingParams.v0()
     pol = AnalyticPolicy(p)
     with pytest.raises(ValueError, match="shape"):
         pol.predict(np.zeros(5))
     with pytest.raises(ValueError, match="finite"):
-        pol.predict(np.full(task.obs_dim(p), np.nan))
+        pol.predict(np.full(len(task.obs_names(p)), np.nan))
     with pytest.raises(ValueError, match=r"AnalyticPolicy\.gain"):
         AnalyticPolicy(p, gain=-1.0)
     with pytest.raises(ValueError, match=r"AnalyticPolicy\.gain"):
         AnalyticPolicy(p, gain=math.inf)
     with pytest.raises(ValueError, match="speed_reference"):
-        AnalyticPolicy(p, speed_reference="B")  # type: ignore[arg-type]
+        AnalyticPolicy(p, speed_reference="B")
 
 
 def test_action_is_clipped() -> None:
-    p = EnvParams()
-    obs = np.zeros(task.obs_dim(p))
+    p = TrackingParams.v0()
+    obs = np.zeros(len(task.obs_names(p)))
     obs[0], obs[1], obs[2], obs[-1] = 4.0, math.sin(1.5), math.cos(1.5), 1.0  # far off, facing across
     a, _ = AnalyticPolicy(p).predict(obs)
     assert np.all(np.abs(a) <= 1.0) and np.isclose(np.abs(a).max(), 1.0)
@@ -258,12 +263,12 @@ def test_env_lap_from_steady_pose_via_reset_options() -> None:
 
     import amigo_gym  # noqa: F401
 
-    p = EnvParams()
+    p = TrackingParams.v0()
     env = gym.make("AmigoBot-v0", max_episode_steps=None)
     pol = AnalyticPolicy(p)
     obs, info = env.reset(options={"pose": steady_pose(p)})
     assert abs(info["cross_track_error"]) < 1e-15
-    n = math.ceil(p.lap_time / p.dt)
+    n = math.ceil(lap_time(p) / p.dt)
     es, rates = [], []
     for _ in range(n):
         obs, _, terminated, _, info = env.step(pol.predict(obs)[0])

@@ -1,6 +1,6 @@
 """Every bad input gets a clear one-line error naming the field, the value and the range (issue 11).
 
-Table-driven: every ``RobotParams`` and ``EnvParams`` field against wrong types and extremes, every form
+Table-driven: every ``RobotParams`` field and AmigoBot-v0 setting against wrong types and extremes, every form
 of action, every order of calls. None may give a traceback from inside numpy, NaN or inf, or be accepted
 silently; valid inputs of other numeric types are converted to Python floats.
 """
@@ -23,8 +23,9 @@ import pytest
 
 import amigo_gym
 from amigo_gym.envs import AmigoBotEnv, AmigoBotVectorEnv
-from amigo_gym.model.params import HEADING_LIMIT, EnvParams, RobotParams
-from amigo_gym.task.v0 import obs_bounds, validate_action
+from amigo_gym.model.params import HEADING_LIMIT, RobotParams
+from amigo_gym.task.v0 import V0_DEFAULTS, validate_action
+from amigo_gym.task.v1 import TrackingParams, obs_bounds
 
 PACKAGE = Path(amigo_gym.__file__).resolve().parent
 
@@ -83,7 +84,7 @@ def robot_cases() -> list[tuple[str, Any]]:
 
 def env_cases() -> list[tuple[str, Any]]:
     numeric = list(ENV_EXTREMES)
-    assert sorted([*numeric, "robot", "direction", "path", "preview"]) == sorted(f.name for f in fields(EnvParams))
+    assert sorted([*numeric, "robot", "direction", "path", "preview"]) == sorted(V0_DEFAULTS)
     return [(n, v) for n in numeric for v in [*WRONG_TYPES, *NON_FINITE, *ENV_EXTREMES[n]]]
 
 
@@ -110,7 +111,7 @@ def test_robot_field_refused(name: str, value: Any) -> None:
 @pytest.mark.parametrize(("name", "value"), env_cases())
 def test_env_field_refused(name: str, value: Any) -> None:
     with pytest.raises(ValueError) as exc:
-        EnvParams(**{name: value})
+        TrackingParams.v0(**{name: value})
     msg = check_clean(exc)
     assert f"EnvParams.{name}" in msg or ("EnvParams: speed" in msg and name in ("speed", "radius")), msg
 
@@ -145,7 +146,7 @@ def test_env_field_refused(name: str, value: Any) -> None:
 )
 def test_env_structured_field_refused(name: str, value: Any, needle: str) -> None:
     with pytest.raises(ValueError) as exc:
-        EnvParams(**{name: value})
+        TrackingParams.v0(**{name: value})
     check_clean(exc, needle)
 
 
@@ -162,7 +163,7 @@ def test_env_structured_field_refused(name: str, value: Any, needle: str) -> Non
 def test_infeasible_task_refused(settings: dict[str, Any], needles: list[str]) -> None:
     """A task the robot cannot drive: the exact steady state's wheel rate is over the limit."""
     with pytest.raises(ValueError) as exc:
-        EnvParams(**settings)
+        TrackingParams.v0(**settings)
     check_clean(exc, *needles)
     with pytest.raises(ValueError, match="needs"):
         gym.make("AmigoBot-v0", **settings)
@@ -203,17 +204,17 @@ def test_issue_cases_through_gym_make(kwargs: dict[str, Any], needle: str) -> No
     ],
 )
 def test_numbers_are_stored_as_python_floats(value: Any, stored: float) -> None:
-    p = EnvParams(dt=value)
+    p = TrackingParams.v0(dt=value)
     assert type(p.dt) is float and p.dt == stored
     r = RobotParams(l1=value * 0.12 if not isinstance(value, np.ndarray) else float(value) * 0.12)
     assert type(r.l1) is float
-    assert type(EnvParams(direction=np.int64(-1)).direction) is int
-    assert all(type(d) is float for d in EnvParams(preview=np.array([0.2, 0.4], dtype=np.float32)).preview)
+    assert type(TrackingParams.v0(direction=np.int64(-1)).direction) is int
+    assert all(type(d) is float for d in TrackingParams.v0(preview=np.array([0.2, 0.4], dtype=np.float32)).preview)
 
 
 def test_float32_setting_keeps_the_state_float64_and_cache_keys_apart() -> None:
-    p32, p64 = EnvParams(dt=np.float32(0.1)), EnvParams(dt=0.1)
-    assert p32 != p64 and hash(EnvParams(dt=0.1)) == hash(p64)
+    p32, p64 = TrackingParams.v0(dt=np.float32(0.1)), TrackingParams.v0(dt=0.1)
+    assert p32 != p64 and hash(TrackingParams.v0(dt=0.1)) == hash(p64)
     env = AmigoBotEnv(dt=np.float32(0.1))
     ref = AmigoBotEnv(dt=float(np.float32(0.1)))
     for e in (env, ref):

@@ -20,7 +20,6 @@ import pytest
 from gymnasium.envs.registration import EnvSpec
 
 import amigo_gym
-from amigo_gym import EnvParams
 from amigo_gym.envs import AmigoBotV1Env, AmigoBotV1VectorEnv, vector_v1
 from amigo_gym.model import actuators
 from amigo_gym.paths import feasibility, make_family_path
@@ -400,14 +399,14 @@ def _specs() -> list[EnvSpec]:
     return [
         gym.spec("AmigoBot-v0"),
         gym.spec("AmigoBot-v1"),
-        gym.make("AmigoBot-v0", params=EnvParams(dt=0.05, radius=1.5)).spec,
-        gym.make("AmigoBot-v0", params=EnvParams(dt=0.05)).unwrapped.spec,
+        gym.make("AmigoBot-v0", params=tracking.TrackingParams.v0(dt=0.05, radius=1.5)).spec,
+        gym.make("AmigoBot-v0", params=tracking.TrackingParams.v0(dt=0.05)).unwrapped.spec,
         gym.make(
             "AmigoBot-v1", params=tracking.TrackingParams(dt=0.05, path="figure8", path_params={"size": 5.0})
         ).spec,
         gym.make("AmigoBot-v1", speed=(0.1, 0.3), randomize="mild", true_robot={"r1": 0.051}).spec,
         gym.make_vec("AmigoBot-v1", num_envs=2, params=tracking.TrackingParams(path="mixed")).spec,
-        gym.make_vec("AmigoBot-v0", num_envs=2, params=EnvParams(speed=0.3)).spec,
+        gym.make_vec("AmigoBot-v0", num_envs=2, params=tracking.TrackingParams.v0(speed=0.3)).spec,
     ]
 
 

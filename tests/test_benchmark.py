@@ -187,10 +187,10 @@ class _CountingAgent:
     """A stateful policy: counts steps since the episode start (integral action would keep its integral)."""
 
     def __init__(self) -> None:
-        from amigo_gym.model.params import EnvParams
         from amigo_gym.policies.analytic import AnalyticPolicy
+        from amigo_gym.task.v1 import TrackingParams
 
-        self.inner = AnalyticPolicy(EnvParams())
+        self.inner = AnalyticPolicy(TrackingParams.v0())
         self.starts = 0
 
     def predict(

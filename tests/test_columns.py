@@ -23,9 +23,10 @@ from amigo_gym.model.kinematics import (
     pack,
     step_pose,
 )
-from amigo_gym.model.params import EnvParams, RobotParams
+from amigo_gym.model.params import RobotParams
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import v0 as task
+from amigo_gym.task.v1 import TrackingParams
 
 ROBOT = RobotParams()
 PATHS = [
@@ -120,7 +121,7 @@ def test_v0_reference_step_is_the_closed_forms(path_name: str) -> None:
     the motion is the exact arc step of the clipped, scaled action (:func:`step_pose`), the wheel angles advance by
     ``w dt``; the reward is the product of its four terms, each in [0, 1]; a start state's H is
     ``A + l3 (cos b, sin b)``."""
-    p = EnvParams(path=path_name, dt=0.2)
+    p = TrackingParams.v0(path=path_name, dt=0.2)
     g = rng()
     n = 64
     pose = start_pose(p, g.uniform(-1, 1, (n, 3)))

@@ -10,7 +10,8 @@ import pytest
 from gymnasium.envs.registration import EnvSpec
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym import EnvParams, RobotParams
+from amigo_gym import RobotParams
+from amigo_gym.task.v1 import TrackingParams
 
 
 def _rollout(env: gym.Env[Any, Any]) -> list[float]:
@@ -41,7 +42,7 @@ def test_spec_json_round_trip(kwargs: dict[str, Any]) -> None:
 
 def test_mapping_equals_dataclass() -> None:
     """A mapping means the same as the dataclass built from it, for the single and the vector env."""
-    want = EnvParams(radius=1.5, dt=0.05, robot=RobotParams(l3=0.1), preview=(0.3,))
+    want = TrackingParams.v0(radius=1.5, dt=0.05, robot=RobotParams(l3=0.1), preview=(0.3,))
     as_map = {"radius": 1.5, "dt": 0.05, "robot": {"l3": 0.1}, "preview": [0.3]}
     assert gym.make("AmigoBot-v0", params=as_map).unwrapped.params == want  # type: ignore[attr-defined]
     vec = gym.make_vec("AmigoBot-v0", num_envs=2, params=as_map)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym import EnvParams
 from amigo_gym.model.kinematics import a_from_h, h_from_a, h_position
 from amigo_gym.task import v0 as task
+from amigo_gym.task.v1 import TrackingParams
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -22,19 +22,19 @@ def test_env_card_table_lists_the_observation_names_in_order() -> None:
     card = (ROOT / "docs" / "env_card.md").read_text(encoding="utf-8")
     rows = re.findall(r"^\| (\d+)\s+\| `(\w+)`\s+\|", card, flags=re.M)
     assert [int(i) for i, _ in rows] == list(range(len(rows)))
-    assert [name for _, name in rows] == task.obs_names(EnvParams())
+    assert [name for _, name in rows] == task.obs_names(TrackingParams.v0())
     assert len(rows) == gym.make("AmigoBot-v0").observation_space.shape[0]  # type: ignore[index]
 
 
 def test_observation_fields_mean_what_their_names_say() -> None:
     """Decode a known state by names: H 1 cm left of the circle, heading along the tangent, rolling straight."""
-    p = EnvParams(preview=(0.5,))
+    p = TrackingParams.v0(preview=(0.5,))
     env = gym.make("AmigoBot-v0", params=p)
     beta = 0.0
     xa, ya = a_from_h(0.0, 0.01, math.cos(beta), math.sin(beta), p.robot.l3)
     obs, _ = env.reset(options={"pose": (xa, ya, beta)})
     i = task.obs_index(p)
-    assert list(i) == task.obs_names(p) and len(i) == task.obs_dim(p) == obs.shape[0]
+    assert list(i) == task.obs_names(p) and len(i) == obs.shape[0]
     assert obs[i["cross_track_error"]] == pytest.approx(0.01 / p.error_scale, rel=1e-4)
     assert obs[i["sin_heading_error"]] == pytest.approx(0.0, abs=1e-6)
     assert obs[i["cos_heading_error"]] == pytest.approx(1.0)

@@ -18,8 +18,9 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym import MAX_EPISODE_STEPS, EnvParams, RobotParams
+from amigo_gym import MAX_EPISODE_STEPS, RobotParams
 from amigo_gym.envs import AmigoBotEnv
+from amigo_gym.task.v1 import TrackingParams
 
 L1, L3, R_WHEEL = 0.12, 0.08, 0.05
 W_MAX = 15.0  # 0.75 m/s over r = 0.05 m
@@ -323,7 +324,7 @@ def test_bad_render_mode() -> None:
 
 
 def test_settings_keywords_params_and_robot() -> None:
-    base = EnvParams(radius=2.0, speed=0.3)
+    base = TrackingParams.v0(radius=2.0, speed=0.3)
     env = AmigoBotEnv(params=base, dt=0.2, robot={"l3": 0.1})
     p = env.params
     assert (p.radius, p.speed, p.dt, p.robot.l3, p.robot.l1) == (2.0, 0.3, 0.2, 0.1, 0.12)

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.training.evaluate import (
     EvalProtocol,
     default_agents,
@@ -30,7 +30,7 @@ Eval = tuple[list[dict[str, Any]], dict[str, dict[str, list[Any]]]]
 
 
 def test_steady_start_pose_is_the_closed_form_steady_state() -> None:
-    p = EnvParams()
+    p = TrackingParams.v0()
     pose = steady_start_pose(p)
     l3, radius = p.robot.l3, p.radius
     h = pose[:2] + l3 * np.array([math.cos(pose[2]), math.sin(pose[2])])
@@ -43,7 +43,7 @@ def test_steady_start_pose_is_the_closed_form_steady_state() -> None:
 @pytest.fixture(scope="module")
 def analytic_eval() -> Eval:
     proto = EvalProtocol(steps=320, perturbed_seeds=(100, 101))
-    results, trajs = evaluate_agents(default_agents(EnvParams()), proto)
+    results, trajs = evaluate_agents(default_agents(TrackingParams.v0()), proto)
     return results, trajs
 
 
@@ -54,7 +54,7 @@ def row(results: list[dict[str, Any]], agent: str, scenario: str) -> dict[str, A
 
 def test_analytic_nominal_is_exact(analytic_eval: Eval) -> None:
     results, _ = analytic_eval
-    p = EnvParams()
+    p = TrackingParams.v0()
     for agent in ("analytic", "analytic_ff"):
         r = row(results, agent, "nominal")
         assert float(r["h_max_m"]) <= 1e-6
@@ -71,7 +71,7 @@ def test_metrics_match_an_independent_rollout(analytic_eval: Eval) -> None:
     """Recompute the perturbed metrics of analytic_ff with a plain env loop."""
     results, _ = analytic_eval
     env = gym.make("AmigoBot-v0", max_episode_steps=320)
-    p = EnvParams()
+    p = TrackingParams.v0()
     ff, ref = AnalyticPolicy(p, feedforward_only=True), AnalyticPolicy(p, gain=3.0)
     es, devs, rets = [], [], []
     for seed in (100, 101):

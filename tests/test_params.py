@@ -9,7 +9,9 @@ from typing import Any
 
 import pytest
 
-from amigo_gym.model.params import EnvParams, RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.paths import CirclePath
+from amigo_gym.task.v1 import TrackingParams
 
 # docs/model.md, "Construction data" and "Public data on the real robot"
 TABLE_1 = {"l1": 0.12, "l3": 0.08, "l4": 0.03, "l5": 0.12, "r1": 0.05, "r2": 0.05, "r3": 0.03}
@@ -33,23 +35,20 @@ def test_robot_defaults_are_table_1_and_robot_data() -> None:
 
 
 def test_env_defaults() -> None:
-    p = EnvParams()
+    p = TrackingParams.v0()
     assert p.speed == 0.2  # the paper's v_A
     assert p.dt == 0.1
     assert p.radius == 1.0
     assert p.direction == 1
-    assert p.path == "circle"
+    assert p.path == CirclePath(radius=1.0, direction=1)
     assert p.robot == RobotParams()
-    ra = math.sqrt(1.0 - 0.08**2)
-    assert p.lap_time == pytest.approx(2.0 * math.pi * ra / 0.2, rel=1e-14)
-    assert p.speed_h == pytest.approx(0.2 / ra, rel=1e-14)
 
 
 def test_frozen() -> None:
     with pytest.raises(dataclasses.FrozenInstanceError):
         RobotParams().l1 = 0.2  # type: ignore[misc]
     with pytest.raises(dataclasses.FrozenInstanceError):
-        EnvParams().speed = 0.3  # type: ignore[misc]
+        TrackingParams.v0().speed = 0.3  # type: ignore[misc]
 
 
 BAD_ROBOT: list[tuple[str, Any]] = [
@@ -98,38 +97,38 @@ BAD_ENV: list[tuple[str, Any]] = [
 @pytest.mark.parametrize(("field", "value"), BAD_ENV)
 def test_env_rejects(field: str, value: Any) -> None:
     with pytest.raises(ValueError, match=re.escape(f"EnvParams.{field}")) as exc:
-        EnvParams(**{field: value})
+        TrackingParams.v0(**{field: value})
     assert RANGE.search(str(exc.value)), str(exc.value)
 
 
 @pytest.mark.parametrize("value", [0, 2, -2, True])
 def test_env_rejects_direction(value: Any) -> None:
     with pytest.raises(ValueError, match=r"EnvParams\.direction.*\+1.*-1"):
-        EnvParams(direction=value)
+        TrackingParams.v0(direction=value)
 
 
 @pytest.mark.parametrize("value", ["square", "", "Circle"])
 def test_env_rejects_path(value: Any) -> None:
     with pytest.raises(ValueError, match=r"EnvParams\.path.*'circle'.*'manoeuvre'"):
-        EnvParams(path=value)
+        TrackingParams.v0(path=value)
 
 
 def test_env_rejects_preview_and_robot() -> None:
     with pytest.raises(ValueError, match=r"EnvParams\.preview\[1\]"):
-        EnvParams(preview=(0.2, -0.1))
+        TrackingParams.v0(preview=(0.2, -0.1))
     with pytest.raises(ValueError, match=r"EnvParams\.preview\[0\]"):
-        EnvParams(preview=(math.nan,))
+        TrackingParams.v0(preview=(math.nan,))
     with pytest.raises(ValueError, match=r"EnvParams\.robot"):
-        EnvParams(robot="amigobot")  # type: ignore[arg-type]
+        TrackingParams.v0(robot="amigobot")  # type: ignore[arg-type]
 
 
 def test_limits_follow_the_robot() -> None:
     """The radius bound is the robot's l3 and the speed bound its max_speed, not fixed numbers."""
     big = RobotParams(l3=0.2, max_speed=1.0)
     with pytest.raises(ValueError, match=r"EnvParams\.radius"):
-        EnvParams(robot=big, radius=0.15)
-    assert EnvParams(robot=big, radius=2.0, speed=0.9).speed == 0.9
-    assert EnvParams(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]
+        TrackingParams.v0(robot=big, radius=0.15)
+    assert TrackingParams.v0(robot=big, radius=2.0, speed=0.9).speed == 0.9
+    assert TrackingParams.v0(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]
 
 
 def test_check_range() -> None:

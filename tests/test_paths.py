@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from amigo_gym.model.params import EnvParams
-from amigo_gym.paths import CirclePath, ManoeuvrePath, make_path, wrap_angle
+from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
+from amigo_gym.task.v1 import TrackingParams
 
 Array = NDArray[np.float64]
 
@@ -164,10 +164,10 @@ def test_wrap_angle() -> None:
 
 
 def test_make_path_and_validation() -> None:
-    c = make_path(EnvParams(radius=2.0, direction=-1))
+    c = TrackingParams.v0(radius=2.0, direction=-1).path
     assert isinstance(c, CirclePath)
     assert (c.radius, c.direction, c.start, c.start_angle) == (2.0, -1, (0.0, 0.0), 0.0)
-    m = make_path(EnvParams(path="manoeuvre", straight_length=0.5))
+    m = TrackingParams.v0(path="manoeuvre", straight_length=0.5).path
     assert isinstance(m, ManoeuvrePath)
     assert (m.radius, m.straight_length, m.direction) == (1.0, 0.5, 1)
     with pytest.raises(ValueError, match=r"CirclePath\.radius"):

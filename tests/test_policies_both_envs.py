@@ -18,7 +18,6 @@ import pytest
 
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
-from amigo_gym.model.params import EnvParams
 from amigo_gym.policies import AnalyticPolicy, AnalyticTrackingPolicy, PurePursuitPolicy, analytic_body_velocity
 from amigo_gym.task import v1
 
@@ -67,7 +66,7 @@ def test_v0_law_reads_v1_fields_by_name() -> None:
     vals |= {"curvature": 0.2, "reference_speed": 0.5}
     for k, x in vals.items():
         o1[names.index(k)] = x
-    p0 = EnvParams(robot=p1.robot, dt=p1.dt, error_scale=p1.error_scale)
+    p0 = v1.TrackingParams.v0(robot=p1.robot, dt=p1.dt, error_scale=p1.error_scale)
     from amigo_gym.task.v0 import obs_names
 
     n0 = obs_names(p0)
@@ -83,10 +82,13 @@ def test_v0_law_reads_v1_fields_by_name() -> None:
 
 
 def test_bad_settings_and_layouts() -> None:
-    p0, p1 = EnvParams(), v1.make_tracking_params("test", None)
-    with pytest.raises(ValueError, match=r"PurePursuitPolicy\.params must be TrackingParams, got EnvParams"):
+    p0, p1 = v1.TrackingParams.v0(), v1.make_tracking_params("test", None)
+    with pytest.raises(
+        ValueError,
+        match=r"PurePursuitPolicy\.params must be TrackingParams with observation='v1', got observation='v0'",
+    ):
         PurePursuitPolicy(p0)
-    with pytest.raises(ValueError, match=r"AnalyticPolicy\.params must be EnvParams or TrackingParams, got dict"):
+    with pytest.raises(ValueError, match=r"AnalyticPolicy\.params must be TrackingParams, got dict"):
         AnalyticPolicy({})  # type: ignore[arg-type]
     obs1 = np.zeros(len(v1.obs_fields(p1)))
     with pytest.raises(ValueError, match=r"AnalyticTrackingPolicy: observation must have shape \(\d+,\)"):

@@ -9,8 +9,10 @@ import pytest
 from gymnasium.wrappers import TimeLimit
 
 import amigo_gym
-from amigo_gym import EnvParams, RobotParams
+from amigo_gym import RobotParams
 from amigo_gym.envs import AmigoBotEnv, AmigoBotVectorEnv
+from amigo_gym.task.v0 import V0_DEFAULTS
+from amigo_gym.task.v1 import TrackingParams
 
 
 def test_spec() -> None:
@@ -26,7 +28,7 @@ def test_make_wraps_time_limit_and_passes_settings() -> None:
     u = env.unwrapped
     assert isinstance(u, AmigoBotEnv)
     p = u.params
-    assert (p.dt, p.radius, p.speed, p.direction, p.path) == (0.05, 1.5, 0.3, -1, "manoeuvre")
+    assert (p.dt, p.radius, p.speed, p.direction, type(p.path).__name__) == (0.05, 1.5, 0.3, -1, "ManoeuvrePath")
     assert env.metadata["render_fps"] == pytest.approx(20.0)
     assert gym.make("AmigoBot-v0", max_episode_steps=30)._max_episode_steps == 30  # type: ignore[attr-defined]
 
@@ -50,14 +52,14 @@ def test_every_env_params_field_is_a_keyword() -> None:
         "sigma_smooth": 0.2,
         "smooth_weight": 0.1,
     }
-    assert set(values) == set(EnvParams.__dataclass_fields__)
+    assert set(values) == set(V0_DEFAULTS)
     u = gym.make("AmigoBot-v0", **values).unwrapped
     assert isinstance(u, AmigoBotEnv)
-    assert u.params == EnvParams(**values)
+    assert u.params == TrackingParams.v0(**values)
 
 
 def test_params_object_and_overrides() -> None:
-    base = EnvParams(radius=3.0, speed=0.4)
+    base = TrackingParams.v0(radius=3.0, speed=0.4)
     u = gym.make("AmigoBot-v0", params=base).unwrapped
     assert isinstance(u, AmigoBotEnv) and u.params == base
     u2 = gym.make("AmigoBot-v0", params=base, speed=0.1).unwrapped

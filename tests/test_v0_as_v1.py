@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 from golden_compare import mismatches
 
-import amigo_gym  # registers the envs
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.policies import AnalyticPolicy
 from amigo_gym.sim.fast_v1 import numba_available
@@ -135,11 +134,11 @@ def test_observation_names_and_bounds_are_v0s() -> None:
 
 def test_v0_keywords_are_these_settings() -> None:
     """``gym.make("AmigoBot-v0")`` (single and vector) runs AmigoBot-v1's classes with exactly :data:`V0_CONFIG`'s
-    settings (:func:`amigo_gym.task.v1.v0_configuration`): the same task, hence the same steps on every route."""
+    settings (:meth:`amigo_gym.task.v1.TrackingParams.v0`): the same task, hence the same steps on every route."""
     want = tracking.make_tracking_params("test", **{**V0_CONFIG, "feasibility": "off"})
-    assert gym.make("AmigoBot-v0").unwrapped.tracking_params == want
+    assert gym.make("AmigoBot-v0").unwrapped.params == want
     envs = gym.make_vec("AmigoBot-v0", num_envs=2, vectorization_mode="vector_entry_point")
-    assert envs.unwrapped.tracking_params == want
+    assert envs.unwrapped.params == want
 
 
 @pytest.mark.parametrize("kernel", ROUTES)
@@ -170,7 +169,7 @@ def test_v0_settings_are_checked() -> None:
     with pytest.raises(ValueError, match=r"ideal_actuators needs .* actuators.delay 0.1"):
         tracking.make_tracking_params("t", ideal_actuators=True, actuators={"delay": 0.1})
     v0p = tracking.make_tracking_params("t", **V0_CONFIG)
-    assert tracking.v0_settings(v0p) == amigo_gym.EnvParams()
+    assert tracking.v0_settings(v0p) == task_v0.V0_DEFAULTS
     for off in ({"start_at_rest": True}, {"path": CirclePath(radius=1.0, start_angle=0.1)}, {"goal_tolerance": 0.1}):
         assert tracking.v0_settings(tracking.make_tracking_params("t", **{**V0_CONFIG, **off})) is None
 
@@ -187,19 +186,18 @@ def test_v0_settings_are_checked() -> None:
     ],
 )
 def test_v0_configuration_keeps_v0s_ranges_and_v1s_messages(edge: dict[str, Any]) -> None:
-    """AmigoBot-v0's settings at the edges of EnvParams' ranges are its configuration of AmigoBot-v1
-    (v0_configuration and v0_settings are inverse), and gym.make("AmigoBot-v0") runs them; the same values without
+    """AmigoBot-v0's settings at the edges of their ranges are its configuration of AmigoBot-v1
+    (TrackingParams.v0 and v0_settings are inverse), and gym.make("AmigoBot-v0") runs them; the same values without
     v0's configuration keep AmigoBot-v1's ranges and messages."""
-    e = amigo_gym.EnvParams(**edge)
-    p = tracking.v0_configuration(e)
-    assert tracking.v0_settings(p) == e
+    p = tracking.TrackingParams.v0(**edge)
+    assert tracking.TrackingParams.v0(**tracking.v0_settings(p) or {}) == p
     assert tracking.constants(p).ring_length == 2  # ideal actuators: no delay to keep, whatever dt
     env = gym.make("AmigoBot-v0", max_episode_steps=3, **edge)
     env.reset(seed=0)
     for _ in range(3):
         obs, reward, *_ = env.step(np.array([0.3, 0.3]))
         assert np.all(np.isfinite(obs)) and np.isfinite(reward)
-    assert env.unwrapped.params == e  # type: ignore[attr-defined]
+    assert env.unwrapped.params == p  # type: ignore[attr-defined]
     v1_only = {k: v for k, v in edge.items() if k in ("dt", "error_scale", "preview", "sigma_track")}
     messages = {
         "dt": r"^TrackingParams.dt must be a finite number in \[0.001, 1\], got ",

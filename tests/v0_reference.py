@@ -2,7 +2,7 @@
 
 The reference is the route ``gym.make("AmigoBot-v0", kernel="numpy")`` runs: AmigoBot-v1's column step with ideal
 actuators (:func:`amigo_gym.task.v1.step_columns`) and its start evaluation (:func:`amigo_gym.task.v1.reset_columns`)
-with v0's settings (:func:`amigo_gym.task.v1.v0_configuration`), on the nominal robot's episode:
+with v0's settings (:meth:`amigo_gym.task.v1.TrackingParams.v0`), on the nominal robot's episode:
 :class:`Reference`, which holds the state as AmigoBot-v0's 8 columns
 ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2``.
 """
@@ -15,18 +15,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import body_velocity_columns, castor_rate_columns
-from amigo_gym.model.params import EnvParams
 from amigo_gym.task import v1 as tracking
 from amigo_gym.task.v1 import (
     NO_NOISE,
     Episode,
     Outcome,
     State,
+    TrackingParams,
     begin_episode,
     constants,
     reset_columns,
     step_columns,
-    v0_configuration,
 )
 
 __all__ = ["Reference", "start_pose"]
@@ -36,7 +35,7 @@ Array = NDArray[np.float64]
 
 class Reference:
     """AmigoBot-v0's reference step, what ``gym.make("AmigoBot-v0", kernel="numpy")`` runs: :func:`step_columns` (and
-    :func:`reset_columns` for a start state) with :func:`v0_configuration`'s settings on the nominal robot's episode.
+    :func:`reset_columns` for a start state) with AmigoBot-v0's settings ``params`` on the nominal robot's episode.
 
     The state is AmigoBot-v0's 8 columns ``x, y, beta, alpha1, alpha2, alpha3, rate1, rate2`` [m, m, rad, rad, rad, rad,
     rad/s, rad/s] : ``(N, 8)`` rows give
@@ -47,9 +46,9 @@ class Reference:
     and episode; ``ring``: the (unread) command ring.
     """
 
-    def __init__(self, params: EnvParams, state: Any) -> None:
+    def __init__(self, params: TrackingParams, state: Any) -> None:
         rows = np.asarray(state, dtype=np.float64)
-        self.k = k = constants(v0_configuration(params))
+        self.k = k = constants(params)
         self.path, self.dt, self.n = k.params.path, k.params.dt, 0 if rows.ndim == 1 else len(rows)
         ep = begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
         self.ep = ep if self.n == 0 else Episode(*(np.full(self.n, v) for v in ep))
@@ -98,7 +97,7 @@ class Reference:
         return self._stack(list(out.obs))
 
 
-def start_pose(params: EnvParams, u: ArrayLike) -> Array:
+def start_pose(params: TrackingParams, u: ArrayLike) -> Array:
     """The start pose ``(..., 3)`` ``(x_A, y_A, beta)`` of uniform draws ``u (..., 3)`` in [-1, 1]
     (:func:`amigo_gym.task.v1.start_state`: H at the path's start plus ``u[:2] * init_position_noise``, heading
     ``theta(0) + u[2] * init_heading_noise``, A ``l3`` behind H)."""

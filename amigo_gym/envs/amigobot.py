@@ -1,95 +1,103 @@
 r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
 
-AmigoBot-v0 is a configuration of the one robot and task (issue 19): :class:`AmigoBotEnv` and
-:class:`AmigoBotVectorEnv` are the AmigoBot-v1 classes (:class:`amigo_gym.envs.AmigoBotV1Env`,
-:class:`amigo_gym.envs.AmigoBotV1VectorEnv`) built with AmigoBot-v0's settings. They take AmigoBot-v0's keywords,
-check them as :class:`amigo_gym.model.params.EnvParams` (its ranges and one-line errors), and pass
-:func:`amigo_gym.task.v1.v0_configuration` of it: ideal actuators, v0's observation layout and reward, no
-randomisation, the wheels rolling at the start, the circle or manoeuvre as a path object. With these settings the
-v1 classes run AmigoBot-v1's compiled step with ideal actuators (:mod:`amigo_gym.sim.fast_v1`; ``kernel="numpy"``:
-the reference, :mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is the
-``EnvParams``; the AmigoBot-v1 settings it runs are ``env.tracking_params``.
+AmigoBot-v0 is a configuration of the one robot and task: :class:`AmigoBotEnv` and :class:`AmigoBotVectorEnv` are
+the AmigoBot-v1 classes (:class:`amigo_gym.envs.AmigoBotV1Env`, :class:`amigo_gym.envs.AmigoBotV1VectorEnv`) built
+with :meth:`amigo_gym.task.v1.TrackingParams.v0` of AmigoBot-v0's keywords: ideal actuators, v0's observation
+layout and reward, no randomisation, the wheels rolling at the start, the circle or manoeuvre as a path object. They
+run AmigoBot-v1's compiled step with ideal actuators (:mod:`amigo_gym.sim.fast_v1`; ``kernel="numpy"``: the
+reference, :mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is that
+``TrackingParams``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
-from amigo_gym.envs.base import TRAIL_LENGTH, VECTOR_KERNELS, check_kernel, check_vector_args
+from amigo_gym.envs.base import TRAIL_LENGTH
+from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.envs.vector_v1 import AmigoBotV1VectorEnv
 from amigo_gym.model.kinematics import h_position
-from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.sim import fast_v1
-from amigo_gym.task import v1 as tracking
+from amigo_gym.model.params import RobotParams
+from amigo_gym.task.v0 import V0_DEFAULTS
+from amigo_gym.task.v1 import TrackingParams, v0_settings
 
 Array = NDArray[np.float64]
 
-#: names of the task settings accepted as keywords by the environments (every ``EnvParams`` field)
-ENV_SETTINGS: tuple[str, ...] = tuple(f.name for f in fields(EnvParams))
 
-
-def _from_mapping(owner: str, what: str, cls: type[Any], value: Any) -> Any:
-    """``value`` if a ``cls``, or a ``cls`` made from a mapping of its field names (``TypeError`` on anything else,
-    or on an unknown field, naming the allowed ones)."""
-    if isinstance(value, cls):
-        return value
-    name = ("an " if cls is EnvParams else "a ") + cls.__name__
+def _fields(owner: str, what: str, value: Any, names: Collection[str]) -> dict[str, Any]:
+    """The mapping ``value`` as a dict (``TypeError`` on another type or a name not in ``names``)."""
     if not isinstance(value, Mapping):
-        raise TypeError(f"{owner}: {what} must be {name} or a mapping of its fields, got {type(value).__name__}")
-    names = [f.name for f in fields(cls)]
+        kind = "a RobotParams or a mapping of its fields"
+        if what == "params":
+            kind = "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its settings (EnvParams fields)"
+        raise TypeError(f"{owner}: {what} must be {kind}, got {type(value).__name__}")
     bad = sorted(str(k) for k in value if k not in names)
     if bad:
         raise TypeError(f"{owner}: unknown {what} field(s) {bad}; allowed: {', '.join(names)}")
-    kw = dict(value)
-    if "robot" in kw and cls is EnvParams:
-        kw["robot"] = _from_mapping(owner, "robot", RobotParams, kw["robot"])
-    return cls(**kw)
+    return dict(value)
 
 
 def make_env_params(
     owner: str,
-    params: EnvParams | Mapping[str, Any] | None = None,
+    params: TrackingParams | Mapping[str, Any] | None = None,
     robot: RobotParams | Mapping[str, Any] | None = None,
     **settings: Any,
-) -> EnvParams:
-    """Task settings from the keywords of ``gym.make`` / ``gym.make_vec``.
-
-    Every configuration keyword accepts a plain mapping as well as its dataclass, so that the settings
-    survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's ``--env-kwargs``.
+) -> TrackingParams:
+    """AmigoBot-v0's task (:meth:`amigo_gym.task.v1.TrackingParams.v0`) from the keywords of ``gym.make`` /
+    ``gym.make_vec``. Every keyword accepts a plain mapping as well as its dataclass, so that the settings survive
+    ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's ``--env-kwargs``.
 
     Args:
         owner: name of the caller, for error messages.
-        params: a complete :class:`EnvParams`, or a mapping of its field names to values (``robot``
-            inside it may be a mapping too); defaults if ``None``.
+        params: AmigoBot-v0's ``TrackingParams`` (an env's ``params``), or a mapping of AmigoBot-v0's settings
+            (``robot`` inside it may be a mapping too); defaults if ``None``.
         robot: a :class:`RobotParams`, or a mapping of its field names to values (e.g. from a YAML file).
-        **settings: any other :class:`EnvParams` field (``dt``, ``radius``, ``speed``, ...); they
-            override the fields of ``params``.
+        **settings: any other of AmigoBot-v0's settings (``dt``, ``radius``, ``speed``, ...); they override
+            those of ``params``.
 
     Raises:
         TypeError: on an unknown keyword or field, or a ``params`` / ``robot`` of another type.
-        ValueError: on a bad value (from :class:`EnvParams` / :class:`RobotParams`, naming the field and range).
+        ValueError: on a bad value, naming the field and range (:func:`amigo_gym.task.v0.check_v0`).
     """
-    unknown = sorted(k for k in settings if k not in ENV_SETTINGS)
+    unknown = sorted(k for k in settings if k not in V0_DEFAULTS)
     if unknown:
-        allowed = ", ".join(("params", *ENV_SETTINGS))
+        allowed = ", ".join(("params", *V0_DEFAULTS))
         names = ", ".join(map(repr, unknown))
         raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")
-    base = EnvParams() if params is None else _from_mapping(owner, "params", EnvParams, params)
-    if robot is not None or "robot" in settings:
-        settings["robot"] = _from_mapping(
-            owner, "robot", RobotParams, settings.get("robot") if robot is None else robot
-        )
-    return replace(base, **settings) if settings else base
+    given = (v0_settings(params) or params) if isinstance(params, TrackingParams) else params
+    kw = ({} if given is None else _fields(owner, "params", given, V0_DEFAULTS)) | settings
+    if robot is not None:
+        kw["robot"] = robot
+    if not isinstance(kw.get("robot", V0_DEFAULTS["robot"]), RobotParams):
+        kw["robot"] = RobotParams(**_fields(owner, "robot", kw["robot"], [f.name for f in fields(RobotParams)]))
+    return TrackingParams.v0(**kw)
 
 
-class AmigoBotEnv(AmigoBotV1Env):
+class _V0Spec(JsonSpecMixin):
+    """``spec`` whose ``params``, if a ``TrackingParams``, is kept as AmigoBot-v0's settings (a JSON mapping)."""
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The environment's :class:`gymnasium.envs.registration.EnvSpec`, keywords in JSON form (None before set)."""
+        return self._json_spec
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        given = None if value is None else value.kwargs.get("params")
+        if value is not None and isinstance(given, TrackingParams):
+            value = replace(value, kwargs={**value.kwargs, "params": v0_settings(given)})
+        JsonSpecMixin.spec.fset(self, value)  # type: ignore[attr-defined]
+
+
+class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
     r"""AmigoBot path tracking: drive point H of a differential-drive robot along a circle.
 
     ## Description
@@ -120,7 +128,7 @@ class AmigoBotEnv(AmigoBotV1Env):
 
     ## Observation Space
 
-    ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.v0.obs_bounds`).
+    ``Box(low, high, (8 + len(preview),), float32)`` (bounds from :func:`amigo_gym.task.v0.obs_bounds_of`).
     ``e`` is H's signed cross-track error (positive left of the path), ``psi = wrap(beta - theta)``
     the heading minus the path tangent at H's closest point, ``kappa`` the signed path curvature.
     Every reader decodes it by the names of :func:`amigo_gym.task.v0.obs_names` (index by
@@ -182,18 +190,18 @@ class AmigoBotEnv(AmigoBotV1Env):
 
     ## Arguments
 
-    Every setting is a keyword of ``gym.make("AmigoBot-v0", ...)``: any field of
-    :class:`amigo_gym.EnvParams` (``dt``, ``radius``, ``speed``, ``direction``, ``path``,
+    Every setting is a keyword of ``gym.make("AmigoBot-v0", ...)``: any of AmigoBot-v0's settings
+    (:func:`amigo_gym.task.v0.check_v0`: ``dt``, ``radius``, ``speed``, ``direction``, ``path``,
     ``straight_length``, ``termination_distance``, ``init_position_noise``, ``init_heading_noise``,
     ``error_scale``, ``preview``, ``sigma_track``, ``sigma_speed``, ``sigma_smooth``,
     ``smooth_weight``), ``robot`` (a :class:`amigo_gym.RobotParams` or a dict of its fields),
-    ``params`` (a whole ``EnvParams`` or a dict of its fields; other keywords override its fields) and ``render_mode``
-    (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the results agree to
-    1e-9, ``tests/test_kernel_v1.py``): ``"auto"`` (the default: the compiled step when numba is installed, a core
-    dependency where it ships wheels, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the reference, Python floats:
-    :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (the compiled step,
-    :mod:`amigo_gym.sim.fast_v1`). Unknown keywords raise ``TypeError``, bad values
-    ``ValueError`` naming the field and its range.
+    ``params`` (an AmigoBot-v0 env's ``params`` or a dict of its settings; other keywords override them),
+    ``render_mode`` (``"human"`` or ``"rgb_array"``), and ``kernel``, how the step is computed (never what: the
+    results agree to 1e-9, ``tests/test_kernel_v1.py``): ``"auto"`` (the default: the compiled step when numba is
+    installed, a core dependency where it ships wheels, unless ``AMIGO_GYM_KERNEL=numpy``), ``"numpy"`` (the
+    reference, Python floats: :mod:`amigo_gym.task.v1`'s step with ideal actuators) or ``"numba"`` (the compiled
+    step, :mod:`amigo_gym.sim.fast_v1`). Unknown keywords raise ``TypeError``, bad values ``ValueError`` naming the
+    field and its range.
 
     ```python
     import gymnasium as gym
@@ -215,18 +223,13 @@ class AmigoBotEnv(AmigoBotV1Env):
         self,
         render_mode: str | None = None,
         *,
-        params: EnvParams | Mapping[str, Any] | None = None,
+        params: TrackingParams | Mapping[str, Any] | None = None,
         robot: RobotParams | Mapping[str, Any] | None = None,
         kernel: str = "auto",
         **settings: Any,
     ) -> None:
-        owner = type(self).__name__
-        check_kernel(owner, kernel, fast_v1.KERNELS)
-        e = make_env_params(owner, params, robot, **settings)
-        super().__init__(render_mode, params=tracking.v0_configuration(e), kernel=kernel)
-        #: the AmigoBot-v1 settings this env runs (:func:`amigo_gym.task.v1.v0_configuration` of :attr:`params`)
-        self.tracking_params: tracking.TrackingParams = self._k.params
-        self.params = e  # type: ignore[assignment]
+        p = make_env_params(type(self).__name__, params, robot, **settings)
+        super().__init__(render_mode, params=p, kernel=kernel)
 
     @property
     def pose(self) -> Array:
@@ -253,7 +256,7 @@ class AmigoBotEnv(AmigoBotV1Env):
         return out
 
 
-class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
+class AmigoBotVectorEnv(_V0Spec, AmigoBotV1VectorEnv):
     """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
 
     Args:
@@ -293,18 +296,11 @@ class AmigoBotVectorEnv(AmigoBotV1VectorEnv):
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         kernel: str = "auto",
         *,
-        params: EnvParams | Mapping[str, Any] | None = None,
+        params: TrackingParams | Mapping[str, Any] | None = None,
         robot: RobotParams | Mapping[str, Any] | None = None,
         **settings: Any,
     ) -> None:
-        owner = type(self).__name__
-        check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        check_kernel(owner, kernel, VECTOR_KERNELS)
-        e = make_env_params(owner, params, robot, **settings)
-        p = tracking.v0_configuration(e)
+        p = make_env_params(type(self).__name__, params, robot, **settings)
         super().__init__(num_envs, max_episode_steps, render_mode, autoreset_mode, kernel, params=p)
-        #: the AmigoBot-v1 settings this env runs (:func:`amigo_gym.task.v1.v0_configuration` of :attr:`params`)
-        self.tracking_params: tracking.TrackingParams = p
-        #: the path every robot follows (:func:`amigo_gym.paths.make_path` of :attr:`params`)
+        #: the path every robot follows (``params.path``)
         self.path: Any = p.path
-        self.params = e  # type: ignore[assignment]

@@ -191,7 +191,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     #: points of H kept for the rendered trail (the most recent ones)
     trail_length: int = 4096
-    #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
+    #: AmigoBot-v0's classes: the path without a feasibility report (check_v0 checked that it is drivable)
     _v0 = False
 
     def __init__(

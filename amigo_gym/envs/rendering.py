@@ -22,7 +22,7 @@ from amigo_gym.model.params import RobotParams
 
 
 class RenderSettings(Protocol):
-    """What the renderer needs of the task settings (``EnvParams`` of v0, ``TrackingParams`` of v1)."""
+    """What the renderer needs of the task settings (a ``TrackingParams``)."""
 
     @property
     def robot(self) -> RobotParams: ...

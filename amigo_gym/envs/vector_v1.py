@@ -115,7 +115,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
 
-    #: AmigoBot-v0's classes: the path without a feasibility report (EnvParams checked that it is drivable)
+    #: AmigoBot-v0's classes: the path without a feasibility report (check_v0 checked that it is drivable)
     _v0 = False
 
     def __init__(

@@ -1,8 +1,8 @@
-"""Robot and task parameters as frozen, validated dataclasses.
+"""The robot's parameters as a frozen, validated dataclass, and the checks every setting uses.
 
 Every length is in metres, every angle in radians, every time in seconds. Parameters are passed
 explicitly to the pure functions of :mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.paths` and
-:mod:`amigo_gym.task.v0`; there are no module-level settings.
+:mod:`amigo_gym.task.v1` (whose ``TrackingParams`` holds the task's settings); there are no module-level settings.
 
 Sources
 -------
@@ -19,11 +19,8 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, Literal
-
-from amigo_gym.model.kinematics import circle_steady_state
+from typing import Any
 
 #: largest ``|x_A|``, ``|y_A|`` of a start pose [m]: float64 still resolves 2.3e-10 m there (ulp(1e6)),
 #: far below any tracking error the task measures
@@ -176,133 +173,3 @@ class RobotParams:
         Both wheels share this limit so that neither rim exceeds ``max_speed``.
         """
         return self.max_speed / max(self.r1, self.r2)
-
-
-PathName = Literal["circle", "manoeuvre"]
-
-
-@dataclass(frozen=True)
-class EnvParams:
-    """Settings of the ``AmigoBot`` tracking task (all keyword arguments of ``gym.make``).
-
-    Attributes:
-        robot: robot geometry and limits (a :class:`RobotParams`).
-        dt: control period; wheel rates are held over it [s]. Default 0.1 (the robot's 100 ms cycle).
-            Range [1e-6, 2].
-        radius: radius ``R`` of the circle that H must follow [m]; must exceed ``robot.l3`` so that
-            the steady state exists (``R_A = sqrt(R^2 - l3^2)``). Default 1.0.
-        speed: reference speed of point A, ``v_A`` [m/s], in [1e-6, robot.max_speed]. Default 0.2.
-        direction: +1 for a left (counter-clockwise) circle as in the paper's eq. (6), -1 for right (an integer).
-        path: ``"circle"`` (eq. 6: through the origin, tangent to x0 there) or ``"manoeuvre"``
-            (a straight segment of ``straight_length`` along x0 from the origin, then the circle).
-        straight_length: length of the straight part of the manoeuvre path [m], >= 0. Default 1.0.
-        termination_distance: the episode terminates when |cross-track error of H| exceeds it [m].
-            In [1e-3, 10]. Default 0.25.
-        init_position_noise: half-width of the uniform perturbation of H's start position, per
-            axis [m], in [0, termination_distance/2]. Default 0.02.
-        init_heading_noise: half-width of the uniform perturbation of the start heading [rad], in
-            [0, pi/4]. Default 0.1.
-        error_scale: the observation reports the cross-track error divided by this [m], in [1e-6, 10].
-            Default 0.05.
-        preview: distances ahead of H's closest path point at which the path curvature is also
-            observed [m], each in [0, 10] (any sequence; stored as a tuple). Default (0.2, 0.4).
-        sigma_track: scale of the tracking reward term ``exp(-|e|/sigma_track)`` [m]. Default 0.02.
-        sigma_speed: scale of the speed term ``exp(-|v_A - v_ref|/sigma_speed)`` [m/s]. Default 0.05.
-        sigma_smooth: scale of the change of normalised action in the smoothness term [-]. Default 0.1.
-        smooth_weight: largest loss the smoothness term can cause, in [0, 1). Default 0.2.
-
-    The sigmas lie in [1e-6, 1e6]. Numbers are stored as Python floats (``direction`` as an int), so
-    ``dt=np.float32(0.1)`` becomes ``0.10000000149011612`` and never makes the state float32. The task
-    must be drivable: the straight roll at ``speed`` and the exact steady state on the circle
-    (:func:`amigo_gym.model.kinematics.circle_steady_state`) must keep both wheel rates within
-    ``robot.max_wheel_rate``; otherwise a one-line ``ValueError`` names the rate needed and the limit
-    (``speed 0.74 m/s on a 1 m circle needs 16.6 rad/s on the outer wheel, over the limit 15 rad/s``).
-    """
-
-    robot: RobotParams = RobotParams()
-    dt: float = 0.1
-    radius: float = 1.0
-    speed: float = 0.2
-    direction: int = 1
-    path: PathName = "circle"
-    straight_length: float = 1.0
-    termination_distance: float = 0.25
-    init_position_noise: float = 0.02
-    init_heading_noise: float = 0.1
-    error_scale: float = 0.05
-    preview: tuple[float, ...] = (0.2, 0.4)
-    sigma_track: float = 0.02
-    sigma_speed: float = 0.05
-    sigma_smooth: float = 0.1
-    smooth_weight: float = 0.2
-
-    def __post_init__(self) -> None:
-        o = "EnvParams"
-        if not isinstance(self.robot, RobotParams):
-            raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(self.robot)}")
-        robot = self.robot
-
-        def real(name: str, low: float, high: float, **kw: bool) -> None:
-            _set(self, name, check_real(o, name, getattr(self, name), low, high, **kw))
-
-        real("dt", 1e-6, 2.0)
-        real("radius", robot.l3, 1e3, low_open=True)
-        real("speed", MIN_SPEED, robot.max_speed)
-        d = self.direction
-        if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
-            raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
-        _set(self, "direction", int(d))
-        if not isinstance(self.path, str) or self.path not in ("circle", "manoeuvre"):
-            raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(self.path)}")
-        _set(self, "path", str(self.path))
-        real("straight_length", 0.0, 1e3)
-        real("termination_distance", 1e-3, 10.0)
-        real("init_position_noise", 0.0, self.termination_distance / 2)
-        real("init_heading_noise", 0.0, math.pi / 4)
-        real("error_scale", 1e-6, 10.0)
-        pv = self.preview
-        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
-            raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
-        _set(self, "preview", tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv)))
-        real("sigma_track", *SIGMA_RANGE)
-        real("sigma_speed", *SIGMA_RANGE)
-        real("sigma_smooth", *SIGMA_RANGE)
-        real("smooth_weight", 0.0, 1.0, high_open=True)
-        self._check_feasible()
-
-    def _check_feasible(self) -> None:
-        """Refuse a task the robot cannot drive: a steady wheel rate above ``robot.max_wheel_rate``.
-
-        The start (and the manoeuvre's straight) rolls straight at ``speed``: ``speed / r`` on each wheel.
-        The circle needs the exact steady state's rates (:func:`amigo_gym.model.kinematics.circle_steady_state`);
-        they are linear in the speed, so the largest speed that fits is ``speed * w_max / needed``.
-        """
-        robot, v, w_max = self.robot, self.speed, self.robot.max_wheel_rate
-        limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
-        r_min = min(robot.r1, robot.r2)
-        need = v / r_min
-        if need > w_max:
-            raise ValueError(
-                f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
-                f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
-            )
-        ra = math.sqrt((self.radius - robot.l3) * (self.radius + robot.l3))
-        if not ra > 0.0:
-            raise ValueError(f"EnvParams.radius {self.radius!r} is too close to robot.l3 = {robot.l3:g} m")
-        rates = circle_steady_state(self.radius, v, robot, self.direction).wheel_rates.tolist()
-        need = max(abs(rates[0]), abs(rates[1]))
-        if not need <= w_max:
-            raise ValueError(
-                f"EnvParams: speed {v:g} m/s on a {self.radius:g} m circle needs {need:.3g} rad/s on the outer "
-                f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
-            )
-
-    @property
-    def speed_h(self) -> float:
-        """Steady speed of H on the circle [m/s]: ``v_A R / R_A`` (H runs on the outer circle)."""
-        return self.speed * self.radius / math.sqrt(self.radius**2 - self.robot.l3**2)
-
-    @property
-    def lap_time(self) -> float:
-        """Time of one steady lap of the circle [s]: ``2 pi R_A / v_A``."""
-        return 2 * math.pi * math.sqrt(self.radius**2 - self.robot.l3**2) / self.speed

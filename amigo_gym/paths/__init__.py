@@ -13,7 +13,6 @@ from amigo_gym.paths.classic import (
     PathPoint,
     PathPose,
     Projection,
-    make_path,
     wrap_angle,
 )
 from amigo_gym.paths.clothoid import (
@@ -44,7 +43,6 @@ __all__ = [
     "ClosestPoint",
     "CirclePath",
     "ManoeuvrePath",
-    "make_path",
     "wrap_angle",
     "STATUS_END",
     "STATUS_INTERIOR",

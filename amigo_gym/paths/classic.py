@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.numeric import where
-from amigo_gym.model.params import EnvParams, check_range
+from amigo_gym.model.params import check_range
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
@@ -402,10 +402,3 @@ def _located(cp: ClosestPoint, progress: Real) -> PathPoint:
     dist, status = (np.abs(e), np.zeros(e.shape, np.int64)) if isinstance(e, np.ndarray) else (abs(e), 0)
     k = cp.curvature + zero
     return PathPoint(cp.s, progress, cp.x, cp.y, cp.tangent_angle, k, zero, e, cp.cos_theta, cp.sin_theta, dist, status)
-
-
-def make_path(params: EnvParams) -> CirclePath | ManoeuvrePath:
-    """The path that ``params`` describe (``params.path``, ``radius``, ``direction``, ...)."""
-    if params.path == "circle":
-        return CirclePath(radius=params.radius, direction=params.direction)
-    return ManoeuvrePath(radius=params.radius, straight_length=params.straight_length, direction=params.direction)

@@ -114,7 +114,7 @@ def analytic_wheel_rates(
 
 
 class AnalyticPolicy(Policy):
-    """The analytic law (module docstring) for ``EnvParams`` or ``TrackingParams``, gain ``k`` [1/s] in [0, 1/dt]
+    """The analytic law (module docstring) for AmigoBot-v0's or v1's ``TrackingParams``, gain ``k`` [1/s] in [0, 1/dt]
     (``feedforward_only``: ``k = 0``); ``predict`` is stateless."""
 
     def __init__(

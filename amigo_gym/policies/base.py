@@ -7,27 +7,27 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.task.v0 import obs_names
+from amigo_gym.model.params import RobotParams
 from amigo_gym.task.v1 import TrackingParams, obs_fields
 
 Array = NDArray[np.float64]
 #: the task settings of either environment
-Params = EnvParams | TrackingParams
+Params = TrackingParams
 
 
 class Fields:
-    """The observation layout of ``params`` (``EnvParams`` or ``TrackingParams``, of the types in ``accept``), read
-    by field name; ``owner`` (the policy's name) starts every error message."""
+    """The observation layout of ``params`` (a ``TrackingParams``: AmigoBot-v0's layout or v1's; ``v1_only``: v1's),
+    read by field name; ``owner`` (the policy's name) starts every error message."""
 
-    def __init__(self, owner: str, params: Any, accept: tuple[type, ...] = (EnvParams, TrackingParams)) -> None:
-        if not (isinstance(params, (EnvParams, TrackingParams)) and issubclass(type(params), accept)):
-            kinds = " or ".join(t.__name__ for t in accept)
-            raise ValueError(f"{owner}.params must be {kinds}, got {type(params).__name__}")
+    def __init__(self, owner: str, params: Any, v1_only: bool = False) -> None:
+        if not isinstance(params, TrackingParams) or (v1_only and params.observation != "v1"):
+            want = "TrackingParams with observation='v1'" if v1_only else "TrackingParams"
+            got = f"observation={params.observation!r}" if isinstance(params, TrackingParams) else type(params).__name__
+            raise ValueError(f"{owner}.params must be {want}, got {got}")
         self.owner = owner
         self.params: Params = params
         self.robot: RobotParams = params.robot
-        self.names = obs_names(params) if isinstance(params, EnvParams) else obs_fields(params)
+        self.names = obs_fields(params)
         self.dim = len(self.names)
         self.index = {n: i for i, n in enumerate(self.names)}
 

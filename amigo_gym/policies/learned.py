@@ -110,7 +110,7 @@ class FeatureBuilder:
     def __init__(self, spec: FeatureSpec) -> None:
         self.spec = spec
         p = spec.params()
-        self.fields = Fields("FastPolicy", p, (TrackingParams,))
+        self.fields = Fields("FastPolicy", p, v1_only=True)
         names = self.fields.names
         self.obs_dim = len(names)
         self._hist_idx = np.array([names.index(f) for f in HISTORY_FIELDS])

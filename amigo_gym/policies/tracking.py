@@ -95,8 +95,8 @@ def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> 
 
 
 class AnalyticTrackingPolicy(Policy):
-    """The exact inverse solution with PI feedback on H (module docstring), for ``TrackingParams`` or
-    ``EnvParams``: ``gain`` ``k`` [1/s] in (0, 1/dt], ``integral_gain`` ``k_i`` [1/s^2] >= 0 (default ``k^2/4``),
+    """The exact inverse solution with PI feedback on H (module docstring), for AmigoBot-v0's or v1's
+    ``TrackingParams``: ``gain`` ``k`` [1/s] in (0, 1/dt], ``integral_gain`` ``k_i`` [1/s^2] >= 0 (default ``k^2/4``),
     ``integral_limit`` [m/s] > 0, ``feedforward``: of the mid-step turn rate and the reference speed.
 
     ``predict`` keeps the integral ``z`` [m s] per batch row as its state ``(N, 1)``, reset where ``episode_start``.
@@ -182,7 +182,7 @@ class PurePursuitPolicy(Policy):
         lookahead_time: float | None = None,
     ) -> None:
         o = "PurePursuitPolicy"
-        self._fields = Fields(o, params, (TrackingParams,))
+        self._fields = Fields(o, params, v1_only=True)
         self.params = params
         prev = params.preview
         if lookahead is None:

@@ -41,7 +41,7 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``Delta w`` of the wheel rates.
 
 AmigoBot-v0's step is AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns` of
-:func:`amigo_gym.task.v1.v0_configuration`), which calls the pieces here on floats or ``(N,)`` columns alike. The
+:meth:`amigo_gym.task.v1.TrackingParams.v0`), which calls the pieces here on floats or ``(N,)`` columns alike. The
 observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts readers use.
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
@@ -50,15 +50,17 @@ May import numpy and the core (params, kinematics, paths); never envs, policies,
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.kinematics import Real, col_sqrt
+from amigo_gym.model.kinematics import Real, circle_steady_state, col_sqrt
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import HEADING_LIMIT, EnvParams, show_value
+from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, SIGMA_RANGE, RobotParams, check_real, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 Array = NDArray[np.float64]
@@ -85,19 +87,111 @@ INFO_KEYS: dict[str, str] = {
 }
 
 
-def obs_names(params: EnvParams) -> list[str]:
-    """Names of the observation components, in order (the module table): the contract every reader uses."""
+#: AmigoBot-v0's settings: every keyword of ``gym.make("AmigoBot-v0", ...)`` and its default (:func:`check_v0`)
+V0_DEFAULTS: dict[str, Any] = {
+    "robot": RobotParams(),
+    "dt": 0.1,
+    "radius": 1.0,
+    "speed": 0.2,
+    "direction": 1,
+    "path": "circle",
+    "straight_length": 1.0,
+    "termination_distance": 0.25,
+    "init_position_noise": 0.02,
+    "init_heading_noise": 0.1,
+    "error_scale": 0.05,
+    "preview": (0.2, 0.4),
+    "sigma_track": 0.02,
+    "sigma_speed": 0.05,
+    "sigma_smooth": 0.1,
+    "smooth_weight": 0.2,
+}
+
+
+def check_v0(**settings: Any) -> dict[str, Any]:
+    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, checked: numbers as Python floats, ``direction``
+    an int, ``preview`` a tuple (``dt=np.float32(0.1)`` is stored as ``0.10000000149011612``).
+
+    ``robot`` a :class:`~amigo_gym.model.params.RobotParams`; ``dt`` in [1e-6, 2] s; ``radius`` of the circle H
+    follows in (robot.l3, 1e3] m; ``speed`` of A in [1e-6, robot.max_speed] m/s; ``direction`` +1 (left, eq. 6) or
+    -1; ``path`` ``"circle"`` (through the origin, tangent to x0) or ``"manoeuvre"`` (``straight_length`` in
+    [0, 1e3] m along x0, then the circle); ``termination_distance`` in [1e-3, 10] m; ``init_position_noise`` in
+    [0, termination_distance / 2] m per axis; ``init_heading_noise`` in [0, pi/4] rad; ``error_scale`` in
+    [1e-6, 10] m; each ``preview`` distance in [0, 10] m; ``sigma_track`` [m], ``sigma_speed`` [m/s],
+    ``sigma_smooth`` in [1e-6, 1e6]; ``smooth_weight`` in [0, 1). The task must be drivable: the straight roll at
+    ``speed`` (``speed / r`` on each wheel) and the exact steady state on the circle
+    (:func:`~amigo_gym.model.kinematics.circle_steady_state`) within ``robot.max_wheel_rate``.
+
+    Raises:
+        TypeError: an unknown setting.
+        ValueError: one line naming ``EnvParams.<setting>`` (AmigoBot-v0's settings), the range and the value, or
+            the wheel rate a task needs and the limit.
+    """
+    o = "EnvParams"
+    unknown = sorted(set(settings) - set(V0_DEFAULTS))
+    if unknown:
+        raise TypeError(f"{o} got unexpected keyword argument(s) {unknown}; allowed: {', '.join(V0_DEFAULTS)}")
+    s = {**V0_DEFAULTS, **settings}
+    robot = s["robot"]
+    if not isinstance(robot, RobotParams):
+        raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(robot)}")
+
+    def real(name: str, low: float, high: float, **kw: bool) -> None:
+        s[name] = check_real(o, name, s[name], low, high, **kw)
+
+    real("dt", 1e-6, 2.0)
+    real("radius", robot.l3, 1e3, low_open=True)
+    real("speed", MIN_SPEED, robot.max_speed)
+    d = s["direction"]
+    if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
+        raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
+    s["direction"] = int(d)
+    if not isinstance(s["path"], str) or s["path"] not in ("circle", "manoeuvre"):
+        raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(s['path'])}")
+    s["path"] = str(s["path"])
+    real("straight_length", 0.0, 1e3)
+    real("termination_distance", 1e-3, 10.0)
+    real("init_position_noise", 0.0, s["termination_distance"] / 2)
+    real("init_heading_noise", 0.0, math.pi / 4)
+    real("error_scale", 1e-6, 10.0)
+    pv = s["preview"]
+    if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
+        raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
+    s["preview"] = tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv))
+    for name in ("sigma_track", "sigma_speed", "sigma_smooth"):
+        real(name, *SIGMA_RANGE)
+    real("smooth_weight", 0.0, 1.0, high_open=True)
+    # drivable: the straight roll at the start, the exact steady state on the circle; the rates are linear in the
+    # speed, so at most speed * w_max / need fits
+    v, radius = s["speed"], s["radius"]
+    w_max = robot.max_wheel_rate
+    limit = f"the limit {w_max:.3g} rad/s (robot.max_speed / max(r1, r2))"
+    r_min = min(robot.r1, robot.r2)
+    need = v / r_min
+    if need > w_max:
+        raise ValueError(
+            f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+            f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
+        )
+    rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
+    need = max(abs(rates[0]), abs(rates[1]))
+    if not need <= w_max:
+        raise ValueError(
+            f"EnvParams: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
+            f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
+        )
+    return s
+
+
+def obs_names(params: Any) -> list[str]:
+    """Names of the observation components of AmigoBot-v0's settings ``params`` (a ``TrackingParams``), in order (the
+    module table): the contract every reader uses."""
     return [*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(params.preview))), *OBS_TAIL]
 
 
-def obs_index(params: EnvParams) -> dict[str, int]:
+def obs_index(params: Any) -> dict[str, int]:
     """``{name: index}`` of the observation components (:func:`obs_names`)."""
     return {name: i for i, name in enumerate(obs_names(params))}
-
-
-def obs_dim(params: EnvParams) -> int:
-    """Length of the observation vector: ``len(obs_names(params))``, ``8 + len(params.preview)``."""
-    return len(OBS_HEAD) + len(params.preview) + len(OBS_TAIL)
 
 
 def error_bound(termination_distance: float, error_scale: float) -> float:
@@ -106,14 +200,9 @@ def error_bound(termination_distance: float, error_scale: float) -> float:
     return 2.0 * termination_distance / error_scale
 
 
-def obs_bounds(params: EnvParams) -> tuple[Array, Array]:
-    """Finite ``(low, high)`` bounds of the observation (see the module table)."""
-    return obs_bounds_of(params.termination_distance, params.error_scale, len(params.preview))
-
-
 def obs_bounds_of(termination_distance: float, error_scale: float, n_preview: int) -> tuple[Array, Array]:
-    """:func:`obs_bounds` from the three settings it depends on (also AmigoBot-v1's ``observation="v0"``):
-    ``termination_distance``, ``error_scale`` [m] and the number of preview distances."""
+    """The observation's finite ``(low, high)`` bounds (the module table) from ``termination_distance``, ``error_scale``
+    [m] and the number of preview distances."""
     e_max = error_bound(termination_distance, error_scale)
     high = np.array([e_max, 1.0, 1.0] + [1.0] * (1 + n_preview) + [1.0, 1.0, 2.0, 1.0])
     low = -high
@@ -224,11 +313,6 @@ def bound_angle_float(b: float) -> float:
     return b - TWO_PI * round_half_even(b / TWO_PI)
 
 
-def initial_wheel_rates(params: EnvParams) -> Array:
-    """Wheel rates at the start: rolling straight at the reference speed, ``(v/r1, v/r2)`` [rad/s]."""
-    return np.array([params.speed / params.robot.r1, params.speed / params.robot.r2])
-
-
 # The scalar pieces of the step in numba's subset: the compiled step (amigo_gym.sim._kernels_v1) compiles them.
 
 
@@ -255,14 +339,13 @@ def observe_head(
 ) -> tuple[Real, Real, Real, Real]:
     """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
     clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
-    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns; compiled by the
-    compiled step (``amigo_gym.sim._kernels_v1``)."""
+    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns."""
     return clip(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
 def curvature_feature(curvature: Real, l3: float) -> Real:
     """A curvature field of the observation (at H, and at each preview point): ``clip(kappa l3, -1, 1)`` [-] of the
-    curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns; compiled by the compiled step."""
+    curvature ``kappa`` [1/m] and ``l3`` [m]. Floats or columns."""
     return clip(curvature * l3, -1.0, 1.0)
 
 
@@ -275,14 +358,12 @@ def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: 
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
-    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns; compiled by the compiled step
-    (``amigo_gym.sim._kernels_v1``)."""
+    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns."""
     return (clip(w1 / w_max, -1.0, 1.0), clip(w2 / w_max, -1.0, 1.0), clip((v - v_ref) / v_max, -2.0, 2.0))
 
 
 def observe_reference(v_ref: Real, v_max: float) -> Real:
-    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]); the compiled step, where
-    ``v_ref`` is a constant, computes it once per call. Floats or columns."""
+    """The observed reference speed ``v_ref / v_max`` [-] (``v_ref``, ``v_max`` [m/s]). Floats or columns."""
     return v_ref / v_max
 
 
@@ -363,18 +444,15 @@ def reward_arguments(
     abs_error: Real, abs_dv: Real, change_sq: Real, sigma_track: float, sigma_speed: float, smooth_scale_sq: float
 ) -> tuple[Real, Real, Real]:
     r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`):
-    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, computed as ``abs_error / -sigma_track``, ``abs_dv /
-    -sigma_speed``, ``change_sq / -smooth_scale_sq`` (a division by the negated scale: the bits of the compiled
-    steps, which compile this function). ``abs_error`` [m], ``abs_dv`` [m/s], ``change_sq`` in the units of
-    ``smooth_scale_sq``; the scales ``sigma_track`` [m], ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive.
-    Floats or columns (numba's subset: ``amigo_gym.sim._kernels_v1``)."""
+    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale. ``abs_error``
+    [m], ``abs_dv`` [m/s], ``change_sq`` in the units of ``smooth_scale_sq``; the scales ``sigma_track`` [m],
+    ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive. Floats or columns."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
 def off_path(abs_error: Real, termination_distance: float) -> Any:
     """The termination of AmigoBot-v0's task: H farther than ``termination_distance`` [m] from the path, ``|e| >
-    termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool for a float, a bool
-    column for a column; compiled by the compiled step (``amigo_gym.sim._kernels_v1``)."""
+    termination_distance`` with ``abs_error = |e|`` [m] (NaN is not off the path). A bool, or a bool column."""
     return abs_error > termination_distance
 
 
@@ -398,12 +476,10 @@ def steady_heading(curvature: Real, l3: float) -> tuple[Real, Real]:
 def info_dict(
     pose: Any, h_position: Any, error: Any, rates: Any, angles: Any, castor: Any, terms: Any, time: Any
 ) -> dict[str, Any]:
-    """The info dict keyed as :data:`INFO_KEYS`, from its entries (AmigoBot-v1's ``v0_info_values`` and
-    ``v0_record_info`` call it).
-
-    ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m], ``error`` H's cross-track error [m], ``rates`` the
-    wheel rates [rad/s], ``angles`` the wheel angles and ``castor`` the castor's [rad], ``terms`` the 4 reward
-    terms (:data:`REWARD_TERMS` order), ``time`` [s]: any types, handed out as they are."""
+    """The info dict keyed as :data:`INFO_KEYS`: ``pose`` ``(x, y, beta)`` [m, m, rad], ``h_position`` [m],
+    ``error`` H's cross-track error [m], ``rates`` the wheel rates [rad/s], ``angles`` the wheel angles and
+    ``castor`` the castor's [rad], ``terms`` the 4 reward terms (:data:`REWARD_TERMS` order), ``time`` [s]: any
+    types, handed out as they are."""
     return {
         "pose": pose,
         "h_position": h_position,

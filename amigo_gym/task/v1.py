@@ -65,14 +65,16 @@ from amigo_gym.model.kinematics import (
     h_from_a,
 )
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import EnvParams, RobotParams, check_range, show_value
+from amigo_gym.model.params import RobotParams, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath, make_path
+from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
 from amigo_gym.paths.clothoid import PathLoops
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     OBS_TAIL,
+    V0_DEFAULTS,
     bound_angle,
+    check_v0,
     curvature_feature,
     error_bound,
     heading_error,
@@ -202,7 +204,7 @@ class TrackingParams:
         reward: ``"v1"`` (default): the smoothness term's change is that of the normalised command over
             ``2 sigma_smooth``; ``"v0"``: AmigoBot-v0's, the change of the wheel rates over ``w_max sigma_smooth``.
 
-    AmigoBot-v0 is the configuration :func:`v0_configuration` (``tests/test_v0_as_v1.py``).
+    AmigoBot-v0 is the configuration :meth:`v0` (``tests/test_v0_as_v1.py``).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -263,7 +265,7 @@ class TrackingParams:
 
             s(self, "path", check_path(self.path, "AmigoBot-v1"))
         # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
-        # (EnvParams's): its steps need no delay ring, so dt in [1e-6, 2] s
+        # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s
         v0 = self.ideal_actuators and self.observation == "v0" and self.reward == "v0"
         r = self.robot
         sigma_high = 1e6 if v0 else 10.0
@@ -304,6 +306,21 @@ class TrackingParams:
         s(self, "preview", tuple(prev))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
         _check_combined(o, self)
+
+    @classmethod
+    def v0(cls, **settings: Any) -> TrackingParams:
+        """AmigoBot-v0's task: its settings (every keyword of ``gym.make("AmigoBot-v0", ...)``, checked by
+        :func:`amigo_gym.task.v0.check_v0`) with ideal actuators, v0's observation and reward, no randomisation, the
+        wheels rolling at the start, the circle or manoeuvre as a path object and ``feasibility="off"`` (``check_v0``
+        checked that the robot can drive it)."""
+        s = check_v0(**settings)
+        radius, d, straight = s.pop("radius"), s.pop("direction"), s.pop("straight_length")
+        if s.pop("path") == "circle":
+            path: CirclePath | ManoeuvrePath = CirclePath(radius=radius, direction=d)
+        else:
+            path = ManoeuvrePath(radius=radius, straight_length=straight, direction=d)
+        v0: dict[str, Any] = {"ideal_actuators": True, "observation": "v0", "reward": "v0", "start_at_rest": False}
+        return cls(**s, **v0, path=path, radius=radius, direction=d, feasibility="off")
 
     @property
     def simulated_robot(self) -> RobotParams:
@@ -538,33 +555,15 @@ def constants(p: TrackingParams) -> Constants:
     )
 
 
-#: the settings AmigoBot-v0's ``EnvParams`` and ``TrackingParams`` share, under the same name and meaning
-V0_SHARED_SETTINGS: tuple[str, ...] = (
-    "robot",
-    "dt",
-    "speed",
-    "termination_distance",
-    "init_position_noise",
-    "init_heading_noise",
-    "error_scale",
-    "preview",
-    "sigma_track",
-    "sigma_speed",
-    "sigma_smooth",
-    "smooth_weight",
-)
-
-
-def v0_settings(p: TrackingParams) -> EnvParams | None:
-    """The AmigoBot-v0 task that ``p`` describes (run by AmigoBot-v0's step, with its info keys), or ``None``.
+def v0_settings(p: TrackingParams) -> dict[str, Any] | None:
+    """AmigoBot-v0's settings that make ``p`` (``TrackingParams.v0(**v0_settings(p))`` is ``p`` with
+    ``feasibility="off"``), or ``None``: the settings AmigoBot-v0's compiled step runs, whose info has v0's keys.
 
     v0's settings: ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise,
-    ``start_at_rest=False``, a constant ``speed`` and profile, ``goal_tolerance=0`` and the path of the returned
-    :class:`~amigo_gym.model.params.EnvParams` (a ``CirclePath`` or ``ManoeuvrePath`` from the origin along x0),
-    which must accept them.
+    ``start_at_rest=False``, a constant ``speed`` and profile, ``goal_tolerance=0`` and the path of a drivable v0 task
+    (``CirclePath(radius, direction=...)`` or ``ManoeuvrePath(radius, straight_length, direction)``).
     """
     path = p.path
-    kind: Literal["circle", "manoeuvre"] = "circle" if type(path) is CirclePath else "manoeuvre"
     if (
         type(path) not in (CirclePath, ManoeuvrePath)
         or not (p.ideal_actuators and p.observation == "v0" and p.reward == "v0")
@@ -575,39 +574,14 @@ def v0_settings(p: TrackingParams) -> EnvParams | None:
         or p.goal_tolerance != 0.0
     ):
         return None
+    kind = "circle" if type(path) is CirclePath else "manoeuvre"
+    of_path = {"radius": path.radius, "direction": path.direction, "path": kind}
+    of_path["straight_length"] = getattr(path, "straight_length", 1.0)
+    s = {k: of_path[k] if k in of_path else getattr(p, k) for k in V0_DEFAULTS}
     try:
-        e = EnvParams(
-            **{name: getattr(p, name) for name in V0_SHARED_SETTINGS},
-            radius=path.radius,
-            direction=path.direction,
-            path=kind,
-            straight_length=getattr(path, "straight_length", 1.0),
-        )
+        return s if TrackingParams.v0(**s).path == path else None
     except ValueError:
         return None
-    return e if make_path(e) == path else None
-
-
-def v0_configuration(e: EnvParams) -> TrackingParams:
-    """AmigoBot-v0's task ``e`` as AmigoBot-v1's settings: the inverse of :func:`v0_settings`
-    (``v0_settings(v0_configuration(e)) == e``), what ``gym.make("AmigoBot-v0", ...)`` runs.
-
-    Ideal actuators, v0's observation and reward, no randomisation, wheels rolling at the start, the path of ``e``
-    as a path object (:func:`amigo_gym.paths.make_path`), ``feasibility="off"`` (``e`` is drivable:
-    :class:`~amigo_gym.model.params.EnvParams` checked it) and every other setting of ``e``.
-    """
-    return TrackingParams(
-        **{name: getattr(e, name) for name in V0_SHARED_SETTINGS},
-        randomize=make_randomization("none"),
-        path=make_path(e),
-        radius=e.radius,
-        direction=e.direction,
-        start_at_rest=False,
-        feasibility="off",
-        ideal_actuators=True,
-        observation="v0",
-        reward="v0",
-    )
 
 
 class Episode(NamedTuple):

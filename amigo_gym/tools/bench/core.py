@@ -19,8 +19,7 @@ from numpy.typing import NDArray
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, step_pose
-from amigo_gym.model.params import EnvParams, RobotParams
-from amigo_gym.paths import make_path
+from amigo_gym.model.params import RobotParams
 from amigo_gym.sim.fast_v1 import numba_available
 from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
@@ -60,9 +59,9 @@ def loop_step(
 
 def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool) -> Row:
     """Env-steps per second of each method at batch size ``n`` (``None``: not measured) and ``ratio_kernel``."""
-    params = EnvParams()
+    params = tracking.TrackingParams.v0()
     robot = params.robot
-    path = make_path(params)
+    path = params.path
     pose = np.column_stack((rng.normal(0.0, 0.05, (n, 2)), rng.normal(0.0, 0.1, n)))
     angles = np.zeros((n, 3))
     action = rng.uniform(0.2, 0.35, (n, 2))
@@ -98,10 +97,12 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     return row
 
 
-def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
-    """AmigoBot-v0's constants and the ``(N,)`` columns of the state at ``pose (N, 3)`` with wheel rates ``w (N, 2)``
-    [rad/s] and of the nominal episode."""
-    k = tracking.constants(tracking.v0_configuration(params))
+def v0_columns(
+    params: tracking.TrackingParams, pose: Array, w: Array
+) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
+    """AmigoBot-v0's constants (``params`` from ``TrackingParams.v0``) and the ``(N,)`` columns of the state at
+    ``pose (N, 3)`` with wheel rates ``w (N, 2)`` [rad/s] and of the nominal episode."""
+    k = tracking.constants(params)
     n = len(pose)
     one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
     ep = tracking.Episode(*(np.full(n, v) for v in one))
@@ -112,7 +113,9 @@ def v0_columns(params: EnvParams, pose: Array, w: Array) -> tuple[tracking.Const
     return k, st, ep
 
 
-def kernel_stepper(params: EnvParams, pose: Array, w: Array, action: Array, parallel: bool) -> Callable[[], object]:
+def kernel_stepper(
+    params: tracking.TrackingParams, pose: Array, w: Array, action: Array, parallel: bool
+) -> Callable[[], object]:
     """One compiled step (preallocated outputs) of AmigoBot-v0's robots at ``pose`` with wheel rates ``w`` [rad/s] and
     actions ``action (N, 2)``."""
     k, st, ep = v0_columns(params, pose, w)

@@ -19,7 +19,6 @@ import numpy as np
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.envs.amigobot import AmigoBotVectorEnv
-from amigo_gym.model.params import EnvParams
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench import md_table, measure_many, stepper
@@ -68,7 +67,7 @@ def _gap_row(n: int, repeats: int, min_time: float) -> str:
     pose = np.zeros((n, 3))
     w = np.full((n, 2), 4.0)
     a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
-    kernel = kernel_stepper(EnvParams(), pose, w, a, False)
+    kernel = kernel_stepper(tracking.TrackingParams.v0(), pose, w, a, False)
 
     fns = {
         "kernel": kernel,

@@ -20,8 +20,8 @@ from typing import Any
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
-from amigo_gym.model.params import EnvParams
 from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training.benchmark import (
@@ -337,7 +337,7 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
     train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
     proto = EvalProtocol(steps=s.steps, perturbed_seeds=tuple(range(100, 100 + s.seeds)))
-    agents = default_agents(EnvParams(), proto.analytic_gain)
+    agents = default_agents(TrackingParams.v0(), proto.analytic_gain)
     specs = [AgentSpec(name) for name in agents]  # the benchmark builds the classical ones per scenario
     training: dict[str, Any] = {}
     if models is not None:

@@ -23,11 +23,11 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.envs.base import info_row
 from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.model.kinematics import a_from_h, circle_steady_state
-from amigo_gym.model.params import EnvParams, check_range
-from amigo_gym.paths import make_path
+from amigo_gym.model.params import check_range
+from amigo_gym.paths import CirclePath
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.policies.learned import FastPolicy
-from amigo_gym.task.v1 import TrackingParams
+from amigo_gym.task.v1 import TrackingParams, v0_settings
 from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json, verify_sha256
@@ -87,22 +87,22 @@ class Trajectory:
     h0: Array = field(default_factory=lambda: np.zeros(2))
 
 
-def steady_start_pose(params: EnvParams) -> Array:
+def steady_start_pose(params: TrackingParams) -> Array:
     """Pose ``(x_A, y_A, beta)`` with H at the circle's start in the closed-form steady state
     (``beta = theta(0) - d atan(l3 / R_A)``)."""
-    path = make_path(params)
-    if params.path != "circle":
-        raise ValueError(f"the nominal scenario needs path='circle', got {params.path!r}")
+    path = params.path
+    if not isinstance(path, CirclePath):
+        raise ValueError(f"the nominal scenario needs path='circle', got {type(path).__name__}")
     ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction)
     beta = float(path.tangent_angle(0.0)) - float(ss.heading_lag)
     h = path.point(0.0)
     return np.array([*a_from_h(h[0], h[1], math.cos(beta), math.sin(beta), params.robot.l3), beta])
 
 
-def protocol_scenarios(proto: EvalProtocol, params: EnvParams | None = None) -> tuple[Scenario, ...]:
+def protocol_scenarios(proto: EvalProtocol, params: TrackingParams | None = None) -> tuple[Scenario, ...]:
     """The protocol's scenarios: ``nominal`` and ``paper_start`` one episode from a fixed pose, ``perturbed`` one per
     seed from the env's random start."""
-    params = params or EnvParams()
+    params = params or TrackingParams.v0()
     poses = {
         "nominal": (tuple(steady_start_pose(params).tolist()), "H on the circle, steady heading lag"),
         "paper_start": ((-params.robot.l3, 0.0, 0.0), "H at the origin, beta = 0"),
@@ -130,7 +130,7 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
         start["h0"] = [np.asarray(info_row(infos, i)["h_position"], dtype=np.float64) for i in range(len(sc.seeds))]
 
     def on_row(i: int, info: dict[str, Any], _ended: bool, obs: Any) -> None:
-        params: EnvParams = start["params"]
+        params: TrackingParams = start["params"]
         wmax = params.robot.max_wheel_rate
         ref = np.clip(analytic_wheel_rates(obs, params, gain), -wmax, wmax)
         row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
@@ -138,7 +138,7 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
             cols[i][k].append(v)
 
     recs = run_scenario(agent, sc, on_reset=on_reset, on_row=on_row)
-    path = make_path(start["params"])
+    path = start["params"].path
     out = []
     for rec, col, h0 in zip(recs, cols, start["h0"], strict=True):
         arrays = {k: np.asarray(v, dtype=np.float64) for k, v in col.items()}
@@ -169,7 +169,7 @@ def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None
     return None if last == tr.e.size - 1 else float(tr.time[last + 1])
 
 
-def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtocol) -> dict[str, Any]:
+def summarize(trajs: Sequence[Trajectory], params: TrackingParams, proto: EvalProtocol) -> dict[str, Any]:
     """Pooled metrics of one (agent, scenario)."""
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
     e = np.concatenate([t.e for t in trajs])
@@ -196,7 +196,7 @@ def summarize(trajs: Sequence[Trajectory], params: EnvParams, proto: EvalProtoco
     }
 
 
-def default_agents(params: EnvParams, gain: float = 3.0) -> dict[str, Agent]:
+def default_agents(params: TrackingParams, gain: float = 3.0) -> dict[str, Agent]:
     """The two analytic policies: ``analytic`` (feedback gain ``gain``) and ``analytic_ff`` (gain 0)."""
     return {"analytic": AnalyticPolicy(params, gain=gain), "analytic_ff": AnalyticPolicy(params, feedforward_only=True)}
 
@@ -209,7 +209,7 @@ def _classical(name: str) -> Callable[[Any], Any]:
         if callable(hook):
             return hook(name)
         params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams):  # v1: the nominal robot's policies on any path
+        if isinstance(params, TrackingParams) and not getattr(base, "_v0", False):  # v1: the nominal robot's policies
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
             v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
@@ -217,7 +217,7 @@ def _classical(name: str) -> Callable[[Any], Any]:
             if name in v1:
                 return v1[name](params)
             raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
-        if not isinstance(params, EnvParams):
+        if not isinstance(params, TrackingParams):
             raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
         if name in ("analytic", "analytic_ff"):
             return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
@@ -440,7 +440,7 @@ def evaluate_agents(
     """Every agent on every scenario of ``proto``: ``(results, trajectories)``, one result per (agent, scenario)
     (:func:`summarize`) and ``trajectories[agent][scenario]`` the episodes."""
     proto = proto or EvalProtocol()
-    params = EnvParams()
+    params = TrackingParams.v0()
     results: list[dict[str, Any]] = []
     trajs: dict[str, dict[str, list[Trajectory]]] = {}
     for name, agent in agents.items():
@@ -477,13 +477,13 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path) -> None:
+def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path) -> None:
     """Top: H's trajectory of every agent against the circle, whole and near the start. Bottom: ``|e(t)|``."""
     plt = pyplot()
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
     top = "perturbed" if "perturbed" in have else sorted(have)[0]
     fig, axes = plt.subplots(2, 2, figsize=(12.0, 10.0))
-    circle = make_path(params).point(np.linspace(0.0, 2 * math.pi * params.radius, 1441))
+    circle = params.path.point(np.linspace(0.0, 2 * math.pi * params.radius, 1441))
     for j, zoom in enumerate((False, True)):
         ax = axes[0, j]
         ax.plot(circle[:, 0], circle[:, 1], color="0.6", lw=6 if zoom else 4, alpha=0.4, label="path (eq. 6)")
@@ -511,7 +511,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Env
 
 
 def plot_wheels(
-    trajs: dict[str, dict[str, list[Trajectory]]], params: EnvParams, path: Path, scenario: str = "perturbed"
+    trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path, scenario: str = "perturbed"
 ) -> None:
     """Per agent (the paper's Figs. 2–5): wheel angles, wheel rates over 10 s, angles minus the analytic policy's."""
     plt = pyplot()
@@ -561,13 +561,14 @@ def write_outputs(
 ) -> dict[str, Any]:
     """Write the JSON (``protocol``, ``results``, ``extra``), the Markdown table (default ``out/eval.md``) and the
     figures; the JSON document."""
-    params = EnvParams()
+    params = TrackingParams.v0()
+    v0 = v0_settings(params) or {}
     protocol = {
         "env_id": ENV_ID,
-        "env_params": json_safe(asdict(params)),
+        "env_params": json_safe({**v0, "robot": asdict(params.robot)}),
         "steps": proto.steps,
         "duration_s": proto.steps * params.dt,
-        "lap_time_s": params.lap_time,
+        "lap_time_s": 2 * math.pi * math.sqrt(params.radius**2 - params.robot.l3**2) / v0["speed"],
         "scenarios": {
             sc.name: ({"seeds": list(sc.seeds)} if sc.pose is None else {"start_pose": list(sc.pose)})
             | {"note": sc.description}
@@ -648,7 +649,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     def run() -> int:
         one_torch_thread()
         proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
-        agents = default_agents(EnvParams(), proto.analytic_gain)
+        agents = default_agents(TrackingParams.v0(), proto.analytic_gain)
         training: dict[str, Any] = {}
         if a.load_models:
             models = a.models if a.models is not None else PRETRAINED_DIR

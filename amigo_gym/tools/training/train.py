@@ -22,7 +22,7 @@ from amigo_gym import __version__
 from amigo_gym.data import hyperparams_dir, repository_root
 from amigo_gym.envs.amigobot import make_env_params
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_file, vouch
-from amigo_gym.model.params import EnvParams
+from amigo_gym.task.v1 import v0_settings
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded, say
 from amigo_gym.tools.training.hyperparams import (
@@ -131,11 +131,12 @@ def versions(libraries: Sequence[str] = ("gymnasium", "stable_baselines3", "torc
 
 
 def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """The trained env's settings as JSON: v0 every ``EnvParams`` field, v1 the ``overrides`` as given."""
+    """The trained env's settings as JSON: v0 every one of its settings, v1 the ``overrides`` as given."""
     if env_id != ENV_ID:
         return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
-    params = make_env_params("train", None, **(overrides or {})) if overrides else EnvParams()
-    kwargs: dict[str, Any] = json.loads(json.dumps(asdict(params)))
+    params = make_env_params("train", None, **(overrides or {}))
+    v0 = v0_settings(params) or {}
+    kwargs: dict[str, Any] = json.loads(json.dumps({**v0, "robot": asdict(params.robot)}))
     return kwargs
 
 
