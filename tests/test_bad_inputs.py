@@ -113,35 +113,36 @@ def test_env_field_refused(name: str, value: Any) -> None:
     with pytest.raises(ValueError) as exc:
         TrackingParams.v0(**{name: value})
     msg = check_clean(exc)
-    assert f"EnvParams.{name}" in msg or ("EnvParams: speed" in msg and name in ("speed", "radius")), msg
+    drivability = "TrackingParams.v0: speed" in msg and name in ("speed", "radius")
+    assert f"TrackingParams.v0.{name}" in msg or drivability, msg
 
 
 @pytest.mark.parametrize(
     ("name", "value", "needle"),
     [
-        ("direction", 0, "EnvParams.direction"),
-        ("direction", 2, "EnvParams.direction"),
-        ("direction", True, "EnvParams.direction"),
-        ("direction", 1.0, "EnvParams.direction"),
-        ("direction", "1", "EnvParams.direction"),
-        ("direction", None, "EnvParams.direction"),
-        ("path", "square", "EnvParams.path"),
-        ("path", None, "EnvParams.path"),
-        ("path", ["circle"], "EnvParams.path"),
-        ("path", 1, "EnvParams.path"),
-        ("preview", None, "EnvParams.preview"),
-        ("preview", "0.2", "EnvParams.preview"),
-        ("preview", 0.2, "EnvParams.preview"),
-        ("preview", {"a": 0.2}, "EnvParams.preview"),
-        ("preview", np.array(0.2), "EnvParams.preview"),
-        ("preview", (0.2, "x"), "EnvParams.preview[1]"),
-        ("preview", (0.2, True), "EnvParams.preview[1]"),
-        ("preview", (math.nan,), "EnvParams.preview[0]"),
-        ("preview", ((0.1, 0.2),), "EnvParams.preview[0]"),
-        ("preview", (11.0,), "EnvParams.preview[0]"),
-        ("robot", "amigobot", "EnvParams.robot"),
-        ("robot", None, "EnvParams.robot"),
-        ("robot", {"l1": 0.12}, "EnvParams.robot"),
+        ("direction", 0, "TrackingParams.v0.direction"),
+        ("direction", 2, "TrackingParams.v0.direction"),
+        ("direction", True, "TrackingParams.v0.direction"),
+        ("direction", 1.0, "TrackingParams.v0.direction"),
+        ("direction", "1", "TrackingParams.v0.direction"),
+        ("direction", None, "TrackingParams.v0.direction"),
+        ("path", "square", "TrackingParams.v0.path"),
+        ("path", None, "TrackingParams.v0.path"),
+        ("path", ["circle"], "TrackingParams.v0.path"),
+        ("path", 1, "TrackingParams.v0.path"),
+        ("preview", None, "TrackingParams.v0.preview"),
+        ("preview", "0.2", "TrackingParams.v0.preview"),
+        ("preview", 0.2, "TrackingParams.v0.preview"),
+        ("preview", {"a": 0.2}, "TrackingParams.v0.preview"),
+        ("preview", np.array(0.2), "TrackingParams.v0.preview"),
+        ("preview", (0.2, "x"), "TrackingParams.v0.preview[1]"),
+        ("preview", (0.2, True), "TrackingParams.v0.preview[1]"),
+        ("preview", (math.nan,), "TrackingParams.v0.preview[0]"),
+        ("preview", ((0.1, 0.2),), "TrackingParams.v0.preview[0]"),
+        ("preview", (11.0,), "TrackingParams.v0.preview[0]"),
+        ("robot", "amigobot", "TrackingParams.v0.robot"),
+        ("robot", None, "TrackingParams.v0.robot"),
+        ("robot", {"l1": 0.12}, "TrackingParams.v0.robot"),
     ],
 )
 def test_env_structured_field_refused(name: str, value: Any, needle: str) -> None:
@@ -176,12 +177,12 @@ def test_infeasible_task_refused(settings: dict[str, Any], needles: list[str]) -
         ({"robot": {"max_speed": 1e308}}, "RobotParams.max_speed"),
         ({"robot": {"l1": 1e-310}}, "RobotParams.l1"),
         ({"robot": {"r1": 1e-300, "r2": 1e-300}}, "RobotParams.r1"),
-        ({"dt": True}, "EnvParams.dt"),
-        ({"dt": "0.1"}, "EnvParams.dt"),
-        ({"radius": "1"}, "EnvParams.radius"),
-        ({"dt": np.array([0.1])}, "EnvParams.dt"),
-        ({"preview": None}, "EnvParams.preview"),
-        ({"error_scale": 1e-40}, "EnvParams.error_scale"),
+        ({"dt": True}, "TrackingParams.v0.dt"),
+        ({"dt": "0.1"}, "TrackingParams.v0.dt"),
+        ({"radius": "1"}, "TrackingParams.v0.radius"),
+        ({"dt": np.array([0.1])}, "TrackingParams.v0.dt"),
+        ({"preview": None}, "TrackingParams.v0.preview"),
+        ({"error_scale": 1e-40}, "TrackingParams.v0.error_scale"),
     ],
 )
 def test_issue_cases_through_gym_make(kwargs: dict[str, Any], needle: str) -> None:

@@ -299,7 +299,7 @@ def test_bad_behaviours_earn_at_most_20_percent(name: str) -> None:
     ("kwargs", "exc", "match"),
     [
         ({"foo": 1}, TypeError, "foo"),
-        ({"params": "x"}, TypeError, "EnvParams"),
+        ({"params": "x"}, TypeError, "TrackingParams.v0"),
         ({"robot": {"wheel": 1}}, TypeError, "wheel"),
         ({"dt": 0.0}, ValueError, "dt"),
         ({"dt": float("nan")}, ValueError, "dt"),

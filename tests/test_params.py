@@ -96,36 +96,36 @@ BAD_ENV: list[tuple[str, Any]] = [
 
 @pytest.mark.parametrize(("field", "value"), BAD_ENV)
 def test_env_rejects(field: str, value: Any) -> None:
-    with pytest.raises(ValueError, match=re.escape(f"EnvParams.{field}")) as exc:
+    with pytest.raises(ValueError, match=re.escape(f"TrackingParams.v0.{field}")) as exc:
         TrackingParams.v0(**{field: value})
     assert RANGE.search(str(exc.value)), str(exc.value)
 
 
 @pytest.mark.parametrize("value", [0, 2, -2, True])
 def test_env_rejects_direction(value: Any) -> None:
-    with pytest.raises(ValueError, match=r"EnvParams\.direction.*\+1.*-1"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.direction.*\+1.*-1"):
         TrackingParams.v0(direction=value)
 
 
 @pytest.mark.parametrize("value", ["square", "", "Circle"])
 def test_env_rejects_path(value: Any) -> None:
-    with pytest.raises(ValueError, match=r"EnvParams\.path.*'circle'.*'manoeuvre'"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.path.*'circle'.*'manoeuvre'"):
         TrackingParams.v0(path=value)
 
 
 def test_env_rejects_preview_and_robot() -> None:
-    with pytest.raises(ValueError, match=r"EnvParams\.preview\[1\]"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.preview\[1\]"):
         TrackingParams.v0(preview=(0.2, -0.1))
-    with pytest.raises(ValueError, match=r"EnvParams\.preview\[0\]"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.preview\[0\]"):
         TrackingParams.v0(preview=(math.nan,))
-    with pytest.raises(ValueError, match=r"EnvParams\.robot"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.robot"):
         TrackingParams.v0(robot="amigobot")  # type: ignore[arg-type]
 
 
 def test_limits_follow_the_robot() -> None:
     """The radius bound is the robot's l3 and the speed bound its max_speed, not fixed numbers."""
     big = RobotParams(l3=0.2, max_speed=1.0)
-    with pytest.raises(ValueError, match=r"EnvParams\.radius"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.radius"):
         TrackingParams.v0(robot=big, radius=0.15)
     assert TrackingParams.v0(robot=big, radius=2.0, speed=0.9).speed == 0.9
     assert TrackingParams.v0(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]

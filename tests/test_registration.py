@@ -69,7 +69,7 @@ def test_params_object_and_overrides() -> None:
 def test_unknown_keyword_and_bad_value() -> None:
     with pytest.raises(TypeError, match="radious"):
         gym.make("AmigoBot-v0", radious=1.0)
-    with pytest.raises(ValueError, match=r"EnvParams\.radius"):
+    with pytest.raises(ValueError, match=r"TrackingParams\.v0\.radius"):
         gym.make("AmigoBot-v0", radius=0.0)
     with pytest.raises(TypeError, match="radious"):
         gym.make_vec("AmigoBot-v0", num_envs=2, radious=1.0)

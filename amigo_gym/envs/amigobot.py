@@ -37,7 +37,7 @@ def _fields(owner: str, what: str, value: Any, names: Collection[str]) -> dict[s
     if not isinstance(value, Mapping):
         kind = "a RobotParams or a mapping of its fields"
         if what == "params":
-            kind = "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its settings (EnvParams fields)"
+            kind = "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its keywords"
         raise TypeError(f"{owner}: {what} must be {kind}, got {type(value).__name__}")
     bad = sorted(str(k) for k in value if k not in names)
     if bad:

@@ -124,10 +124,10 @@ def check_v0(**settings: Any) -> dict[str, Any]:
 
     Raises:
         TypeError: an unknown setting.
-        ValueError: one line naming ``EnvParams.<setting>`` (AmigoBot-v0's settings), the range and the value, or
+        ValueError: one line naming ``TrackingParams.v0.<setting>``, the range and the value, or
             the wheel rate a task needs and the limit.
     """
-    o = "EnvParams"
+    o = "TrackingParams.v0"
     unknown = sorted(set(settings) - set(V0_DEFAULTS))
     if unknown:
         raise TypeError(f"{o} got unexpected keyword argument(s) {unknown}; allowed: {', '.join(V0_DEFAULTS)}")
@@ -170,14 +170,14 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     need = v / r_min
     if need > w_max:
         raise ValueError(
-            f"EnvParams: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+            f"TrackingParams.v0: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
             f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
         )
     rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
     need = max(abs(rates[0]), abs(rates[1]))
     if not need <= w_max:
         raise ValueError(
-            f"EnvParams: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
+            f"TrackingParams.v0: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
     return s
