@@ -50,6 +50,9 @@ STATUS_WINDOW = 3
 
 #: Newton iterations of the projection (at most; it stops at a fixed point)
 NEWTON_ITERATIONS = 5
+#: a Newton step ``u`` [m] with ``|u| (1 + |kappa| + |c u|)`` below this is the last one (the next would be below
+#: rounding), its pose the first-order one from the last pose (its error ``kappa u^2 / 2`` below rounding too)
+NEWTON_TAYLOR_STEP = 1e-8
 #: the Newton denominator ``1 - kappa e`` is bounded below by this (points near a centre of curvature)
 MIN_NEWTON_DENOMINATOR = 0.05
 #: largest length [m] and curvature [1/m] of a segment
@@ -344,7 +347,8 @@ class ClothoidPath(_Projecting):
            figure-8's crossing) and larger than the advance between calls.
         2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
            ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
-           ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations.
+           ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations, the last below
+           :data:`NEWTON_TAYLOR_STEP`.
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
         ``x``, ``y``, ``s_prev``: floats or arrays, broadcast; a :class:`PathPoint` of their shape.
@@ -503,7 +507,8 @@ def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
     """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most
-    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` until a fixed point, with
+    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)``, the last one below
+    :data:`NEWTON_TAYLOR_STEP` (its pose to first order), with
     ``d = g / q``, ``q = max(1 - kappa e, MIN_NEWTON_DENOMINATOR)``, or on an arc (``c = 0``, ``kappa != 0``) the
     exact ``d = atan2(kappa g, q) / kappa``; then the foot terms and the status."""
     h = pv[P_SPACING]
@@ -513,9 +518,12 @@ def project_flat(
         den = py_max(1.0 - kappa * e, MIN_NEWTON_DENOMINATOR)
         d = math.atan2(kappa * g, den) / kappa if c == 0.0 and kappa != 0.0 else g / den
         s_new = py_min(py_max(s + py_min(py_max(d, -h), h), lo), hi)
-        if s_new == s and math.copysign(1.0, s_new) == math.copysign(1.0, s):
-            break
+        u = s_new - s
         s = s_new
+        if abs(u) * (1.0 + abs(kappa) + abs(c * u)) <= NEWTON_TAYLOR_STEP:
+            px, py, th, ct, st = px + u * ct, py + u * st, th + kappa * u, ct - kappa * u * st, st + kappa * u * ct
+            kappa += c * u
+            break
         px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     dx, dy, g, e = foot_terms(x, y, px, py, ct, st)
     status = STATUS_INTERIOR
