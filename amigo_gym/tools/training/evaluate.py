@@ -209,7 +209,7 @@ def _classical(name: str) -> Callable[[Any], Any]:
         if callable(hook):
             return hook(name)
         params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams) and not getattr(base, "_v0", False):  # v1: the nominal robot's policies
+        if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
             from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
             v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}

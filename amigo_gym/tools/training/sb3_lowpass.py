@@ -92,8 +92,9 @@ class LowPassTD3Policy(TD3Policy):
 def policy_for(venv: Any, policy_kwargs: dict[str, Any] | None) -> tuple[type[LowPassTD3Policy], dict[str, Any]]:
     """The policy class and its ``policy_kwargs`` for a TD3 run on ``venv`` (an SB3 VecEnv of AmigoBot-v1)."""
     params = venv.get_attr("params")[0]
-    if not isinstance(params, TrackingParams):
-        raise ValueError(f"{POLICY_NAME}: needs AmigoBot-v1 (TrackingParams), got {type(params).__name__}")
+    if not isinstance(params, TrackingParams) or params.observation != "v1":
+        got = "AmigoBot-v0's settings" if isinstance(params, TrackingParams) else type(params).__name__
+        raise ValueError(f"{POLICY_NAME}: needs AmigoBot-v1 (its observation layout), got {got}")
     names = list(obs_fields(params))
     if "previous_command_1" not in names or "previous_command_2" not in names:
         raise ValueError(
