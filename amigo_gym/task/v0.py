@@ -4,33 +4,10 @@ The compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles the scalar functio
 (:mod:`amigo_gym.task.v1`, the reference) and the agents call them too; nothing here keeps state. Shapes: a leading
 batch axis is optional everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
 
-Observation (all dimensionless, ``psi = wrap(beta - theta)`` is the heading error against the path
-tangent ``theta`` at H's closest point, ``e`` H's signed cross-track error, positive left):
-
-====  ==============================  ==========================================
-idx   component                       bounds
-====  ==============================  ==========================================
-0     ``e / error_scale``             +-2 termination_distance / error_scale (clipped)
-1     ``sin(psi)``                    [-1, 1]
-2     ``cos(psi)``                    [-1, 1]
-3     ``kappa(s_H) l3``               [-1, 1]  (curvature at H's closest point)
-4..   ``kappa(s_H + d_i) l3``         [-1, 1]  (one per ``preview`` distance d_i)
--4    ``alpha1dot / w_max``           [-1, 1]  (applied rate of wheel 1, right)
--3    ``alpha2dot / w_max``           [-1, 1]  (applied rate of wheel 2, left)
--2    ``(v_A - v_ref) / v_max``       [-2, 2]
--1    ``v_ref / v_max``               [0, 1]
-====  ==============================  ==========================================
-
-Reward: the product of four named terms, each in [0, 1], so the reward lies in [0, 1] per step:
-
-.. math::
-    r = \underbrace{e^{-|e|/\sigma_e}}_{\text{track}}
-        \cdot \underbrace{e^{-|v_A - v_{ref}|/\sigma_v}}_{\text{speed}}
-        \cdot \underbrace{\tfrac{1}{2}\left(1 + \cos(\psi - \psi_{ss})\right)}_{\text{heading}}
-        \cdot \underbrace{\left(1 - w_s\left(1 - e^{-(\|\Delta a\|/\sigma_a)^2}\right)\right)}_{\text{smooth}}
-
-with ``psi_ss = -asin(kappa l3)`` the steady heading error of the exact inverse solution on the
-local curvature and ``Delta a`` the change of the normalised wheel-rate command.
+Observation and reward: the tables and equations of AmigoBot-v0's env card (:class:`amigo_gym.envs.AmigoBotEnv`,
+docs/env_card.md): ``e`` H's signed cross-track error (positive left), ``psi = wrap(beta - theta)`` the heading
+error against the path tangent ``theta`` at H's closest point, ``psi_ss = -asin(kappa l3)`` the steady heading
+error of the exact inverse solution, ``Delta a`` the change of the normalised wheel-rate command.
 
 Evaluation without angles: the cosine and sine of the heading error come from the unit vectors of
 the heading, ``u = (cos beta, sin beta)``, and of the path tangent, ``t = (cos theta, sin theta)``
