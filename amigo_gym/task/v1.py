@@ -71,7 +71,6 @@ from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
 from amigo_gym.paths.clothoid import PathLoops
 from amigo_gym.task.v0 import (
     OBS_HEAD,
-    OBS_TAIL,
     V0_DEFAULTS,
     bound_angle,
     check_v0,
@@ -79,6 +78,7 @@ from amigo_gym.task.v0 import (
     error_bound,
     heading_error,
     obs_bounds_of,
+    obs_names,
     observe_columns,
     observe_head,
     off_path,
@@ -487,7 +487,7 @@ def _from_mapping(owner: str, name: str, base: Any, values: Mapping[str, Any]) -
 def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     """Names of the observation's components, in order (module table; ``observation="v0"``: AmigoBot-v0's)."""
     if p.observation == "v0":
-        return (*OBS_HEAD, *(f"curvature_ahead_{i + 1}" for i in range(len(p.preview))), *OBS_TAIL)
+        return tuple(obs_names(p))
     out = list(OBS_HEAD)
     for d in p.preview:
         out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
