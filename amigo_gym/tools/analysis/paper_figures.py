@@ -1,42 +1,173 @@
-"""The paper's manoeuvre, "starting, driving straight, driving on circular curve, braking" (its Figs 2, 3).
+"""``amigo-gym inverse`` and ``amigo-gym paper``: the analytic inverse solution of H on a path (docs/core.md).
 
-``amigo-gym paper --out DIR`` solves the inverse problem exactly (:func:`amigo_gym.task.inverse.solve_inverse`) for H on
-the manoeuvre path and writes ``DIR/paper_fig2_angles.png`` (wheel angles, as Fig. 2), ``DIR/paper_fig3_rates.png``
-(their rates, as Fig. 3, the closed-form steady state dotted) and ``DIR/paper_manoeuvre.csv`` (every column, SI units,
-radians), the phases shaded. The default path and speed profile and why: docs/core.md."""
+``inverse``, ``--path circle``: H starts at the origin on eq. (6)'s circle with ``beta = 0``, ``v_A`` constant from
+t = 0 unless ``--accel``, ``--t-start`` or ``--brake-at`` ask for a ramp; ``--path manoeuvre``: the straight, then the
+circle, with a trapezoidal speed profile that stops A after the straight plus ``--laps`` laps of its steady circle.
+It prints a summary, or writes the solution as CSV (SI units, radians): ``t, s, x_A, y_A, beta, v_A, betadot,
+alpha1, alpha2, alpha3, alpha1_dot, alpha2_dot, alpha3_dot, x_H, y_H``.
+
+``paper --out DIR``: the paper's manoeuvre, "starting, driving straight, driving on circular curve, braking",
+as ``DIR/paper_fig2_angles.png`` (wheel angles, as its Fig. 2), ``DIR/paper_fig3_rates.png`` (their rates, as Fig. 3,
+the closed-form steady state dotted) and ``DIR/paper_manoeuvre.csv`` (the same columns), the phases shaded.
+"""
 
 from __future__ import annotations
 
 import math
 import os
-import sys
+import re
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
-from typing import Any
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
 
 import numpy as np
 
-from amigo_gym.model.params import RobotParams
-from amigo_gym.paths import ManoeuvrePath
-from amigo_gym.task.inverse import (
-    MANOEUVRE_ACCEL,
-    MANOEUVRE_DECEL,
-    MANOEUVRE_LAPS,
-    MANOEUVRE_T_START,
-    InverseSolution,
-    TrapezoidProfile,
-    circle_steady_state,
-    manoeuvre_profile,
-    solve_inverse,
-    time_grid,
-)
-from amigo_gym.tools.options import check_fields, run_command
+from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.paths import CirclePath, ManoeuvrePath
+from amigo_gym.task import inverse as inv
+from amigo_gym.tools.options import check_fields, cli, run_command
 from amigo_gym.tools.plots import pyplot, save_figure
 
-PROG = "amigo-gym paper"
 FIG2 = "paper_fig2_angles.png"
 FIG3 = "paper_fig3_rates.png"
 CSV = "paper_manoeuvre.csv"
+#: default duration of a circle run without braking [s]: more than one lap of the default circle (31.3 s)
+DEFAULT_DURATION = 40.0
+
+
+@dataclass(frozen=True)
+class InverseSettings:
+    __doc__ = f"""Options of ``amigo-gym inverse``, each the option of the same name (checked by :meth:`validate`).
+
+    Attributes:
+        path: path of H.
+        radius: circle radius R [m], > l3, at most 1000.
+        speed: cruise speed of A, v_A [m/s], in (0, the robot's max speed].
+        direction: +1 left turn (eq. 6), -1 right.
+        straight_length: manoeuvre: straight part [m], in [0, 1000].
+        duration: simulated time [s], in (0, 1e5] (default: {DEFAULT_DURATION:g}, or until 1 s after stopping).
+        dt: output time step [s], in (0, 10], at most the duration.
+        accel: acceleration [m/s^2], > 0 (default: circle: step to v_A at t=0; manoeuvre: {inv.MANOEUVRE_ACCEL}).
+        decel: braking deceleration [m/s^2], > 0 (default {inv.MANOEUVRE_DECEL}).
+        t_start: start of motion [s], >= 0 (default: circle 0, else {inv.MANOEUVRE_T_START}).
+        brake_at: time at which braking starts [s], once cruising (default: none).
+        laps: manoeuvre: stop after the straight plus this many laps of A's circle [laps], in [0, 1000] (default
+            {inv.MANOEUVRE_LAPS}).
+        no_brake: manoeuvre: never brake.
+        csv: write the solution as CSV, atomically [file] (default: none, a summary).
+    """
+
+    path: Literal["circle", "manoeuvre"] = "circle"
+    radius: float = 1.0
+    speed: float = 0.2
+    direction: Literal[1, -1] = 1
+    straight_length: float = 1.0
+    duration: float | None = None
+    dt: float = 0.1
+    accel: float | None = None
+    decel: float | None = None
+    t_start: float | None = None
+    brake_at: float | None = field(default=None, metadata=cli(group="brake"))
+    laps: float | None = field(default=None, metadata=cli(group="brake"))
+    no_brake: bool = field(default=False, metadata=cli(group="brake"))
+    csv: str | None = field(default=None, metadata=cli(metavar="FILE"))
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming the option, its allowed range and the value (the limits: the AmigoBot's)."""
+        robot, inf = RobotParams(), math.inf
+        limits = {"radius": (robot.l3, 1e3, True), "speed": (0.0, robot.max_speed, True), "dt": (0.0, 10.0, True)}
+        limits |= {"duration": (0.0, 1e5, True), "accel": (0.0, inf, True), "decel": (0.0, inf, True)}
+        limits |= {"t_start": (0.0, inf), "laps": (0.0, 1e3)}
+        if self.path == "manoeuvre":
+            limits["straight_length"] = (0.0, 1e3)
+        _as_options(check_fields, "_", self, **limits)
+        if self.csv is not None:
+            folder = os.path.dirname(os.path.abspath(self.csv))
+            if os.path.isdir(self.csv):
+                raise ValueError(f"--csv {self.csv!r} is a directory")
+            if not os.path.isdir(folder):
+                raise ValueError(f"--csv: folder {folder!r} does not exist")
+            if not os.access(folder, os.W_OK):
+                raise ValueError(f"--csv: folder {folder!r} is not writable")
+
+
+def _as_options(check: Any, *args: Any, **kw: Any) -> None:
+    """``check(*args, **kw)`` with its message's ``_.field_name`` as the option ``--field-name``."""
+    try:
+        check(*args, **kw)
+    except ValueError as exc:
+        raise ValueError(re.sub(r"^_\.(\w+)", lambda m: "--" + m[1].replace("_", "-"), str(exc))) from None
+
+
+def _profile(args: InverseSettings, path: CirclePath | ManoeuvrePath, robot: RobotParams) -> inv.SpeedProfile:
+    manoeuvre = isinstance(path, ManoeuvrePath)
+    accel = args.accel if args.accel is not None or not manoeuvre else inv.MANOEUVRE_ACCEL
+    decel = inv.MANOEUVRE_DECEL if args.decel is None else args.decel
+    t_start = args.t_start if args.t_start is not None else (inv.MANOEUVRE_T_START if manoeuvre else 0.0)
+    if args.brake_at is not None:
+        t_cruise = t_start + (0.0 if accel is None else args.speed / accel)
+        _as_options(check_range, "_", "brake_at", args.brake_at, t_cruise)
+        return inv.TrapezoidProfile(args.speed, accel, decel, t_start, args.brake_at)
+    if isinstance(path, ManoeuvrePath) and not args.no_brake:
+        laps = inv.MANOEUVRE_LAPS if args.laps is None else args.laps
+        return inv.manoeuvre_profile(path, args.speed, robot, accel=accel, decel=decel, t_start=t_start, laps=laps)
+    if args.laps is not None:
+        raise ValueError("--laps applies to --path manoeuvre only (use --brake-at for the circle)")
+    if accel is None and t_start == 0.0:
+        return inv.ConstantSpeed(args.speed)
+    return inv.TrapezoidProfile(args.speed, accel, decel, t_start, None)
+
+
+def _summary(sol: inv.InverseSolution, path: CirclePath | ManoeuvrePath, robot: RobotParams, speed: float) -> str:
+    e = path.project(np.stack((sol.x_H, sol.y_H), axis=-1)).cross_track_error
+    peak = float(np.max(np.abs(sol.wheel_rates)))
+    ss = inv.circle_steady_state(path.radius, speed, robot, path.direction)
+    lines = [
+        f"path: {type(path).__name__}, R = {path.radius:g} m, direction {path.direction:+d}; "
+        f"{sol.t.size} samples, t = {sol.t[0]:g}..{sol.t[-1]:g} s",
+        f"end: s = {sol.s[-1]:.6f} m, H = ({sol.x_H[-1]:.6f}, {sol.y_H[-1]:.6f}) m, beta = {sol.beta[-1]:.6f} rad",
+        f"end rates [rad/s]: betadot = {sol.betadot[-1]:.6f}, alpha1_dot = {sol.alpha1_dot[-1]:.6f}, "
+        f"alpha2_dot = {sol.alpha2_dot[-1]:.6f}, alpha3_dot = {sol.alpha3_dot[-1]:.6f}",
+        f"end angles [rad]: alpha1 = {sol.alpha1[-1]:.6f}, alpha2 = {sol.alpha2[-1]:.6f}, "
+        f"alpha3 = {sol.alpha3[-1]:.6f}",
+        f"peak |drive wheel rate| = {peak:.4f} rad/s (limit {robot.max_wheel_rate:g}); max |cross-track error of H| = "
+        f"{float(np.max(np.abs(e))):.2e} m",
+        f"steady state on the circle (closed form): betadot = {float(ss.betadot):.6f}, "
+        f"alpha1_dot = {float(ss.wheel_rates[0]):.6f}, alpha2_dot = {float(ss.wheel_rates[1]):.6f}, "
+        f"alpha3_dot = {float(ss.castor_rate):.6f}",
+    ]
+    return "\n".join(lines)
+
+
+def _inverse(args: InverseSettings) -> None:
+    robot = RobotParams()
+    path: CirclePath | ManoeuvrePath
+    if args.path == "circle":
+        path = CirclePath(radius=args.radius, direction=args.direction)
+    else:
+        path = ManoeuvrePath(radius=args.radius, straight_length=args.straight_length, direction=args.direction)
+    profile = _profile(args, path, robot)
+    duration = args.duration
+    if duration is None:
+        t_stop = getattr(profile, "t_stop", math.inf)
+        duration = t_stop + 1.0 if math.isfinite(t_stop) else DEFAULT_DURATION
+    if args.dt > duration:
+        raise ValueError(f"--dt must not exceed --duration ({duration:g} s), got {args.dt!r}")
+    sol = inv.solve_inverse(path, profile, inv.time_grid(duration, args.dt), robot)
+    if args.csv is None:
+        print(_summary(sol, path, robot, args.speed))
+        return
+    try:
+        sol.to_csv(args.csv)
+    except OSError as exc:
+        raise ValueError(f"--csv: cannot write {args.csv!r}: {exc.strerror or exc}") from None
+    print(f"wrote {sol.t.size} rows x {len(sol.columns())} columns to {args.csv}")
+
+
+def main_inverse(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym inverse`` (module docstring); returns the exit status."""
+    doc = "Analytic inverse solution of point H on a path (CSV or summary)."
+    return run_command(InverseSettings, _inverse, argv, "amigo-gym inverse", doc)
 
 
 @dataclass(frozen=True)
@@ -63,10 +194,10 @@ class Settings:
     radius: float = 1.0
     straight_length: float = 1.0
     direction: int = 1
-    accel: float = MANOEUVRE_ACCEL
-    decel: float = MANOEUVRE_DECEL
-    t_start: float = MANOEUVRE_T_START
-    laps: float = MANOEUVRE_LAPS
+    accel: float = inv.MANOEUVRE_ACCEL
+    decel: float = inv.MANOEUVRE_DECEL
+    t_start: float = inv.MANOEUVRE_T_START
+    laps: float = inv.MANOEUVRE_LAPS
     tail: float = 1.0
     dt: float = 0.01
     dpi: int = 120
@@ -90,7 +221,7 @@ class Phase:
     t1: float
 
 
-def phases(sol: InverseSolution, profile: TrapezoidProfile, path: ManoeuvrePath) -> list[Phase]:
+def phases(sol: inv.InverseSolution, profile: inv.TrapezoidProfile, path: ManoeuvrePath) -> list[Phase]:
     """The phases standstill, starting (A accelerates), straight (until H's ``s = straight_length``), circle,
     braking, rest (empty ones dropped)."""
     t_end = float(sol.t[-1])
@@ -123,7 +254,7 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
         ax.text(0.5 * (p.t0 + p.t1), 1.01, p.name, transform=ax.get_xaxis_transform(), **kw)
 
 
-def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str]]:
+def run(settings: Settings) -> tuple[inv.InverseSolution, list[Phase], dict[str, str]]:
     """Solve the manoeuvre, write the two figures and the CSV; return the solution, phases and paths."""
     robot = RobotParams()
     os.makedirs(settings.out, exist_ok=True)
@@ -131,10 +262,10 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
         raise ValueError(f"--out folder {settings.out!r} is not writable")
     path = ManoeuvrePath(settings.radius, settings.straight_length, settings.direction)
     kw = {k: getattr(settings, k) for k in ("accel", "decel", "t_start", "laps")}
-    profile = manoeuvre_profile(path, settings.speed, robot, **kw)
-    sol = solve_inverse(path, profile, time_grid(profile.t_stop + settings.tail, settings.dt), robot)
+    profile = inv.manoeuvre_profile(path, settings.speed, robot, **kw)
+    sol = inv.solve_inverse(path, profile, inv.time_grid(profile.t_stop + settings.tail, settings.dt), robot)
     ph = phases(sol, profile, path)
-    ss = circle_steady_state(settings.radius, settings.speed, robot, settings.direction)
+    ss = inv.circle_steady_state(settings.radius, settings.speed, robot, settings.direction)
     files = {k: os.path.join(settings.out, v) for k, v in (("fig2", FIG2), ("fig3", FIG3), ("csv", CSV))}
     title = (
         f"v_A = {settings.speed:g} m/s, straight {settings.straight_length:g} m, R = {settings.radius:g} m, "
@@ -163,13 +294,7 @@ def run(settings: Settings) -> tuple[InverseSolution, list[Phase], dict[str, str
     return sol, ph, files
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``amigo-gym paper``."""
-    return run_command(Settings, _report, argv, PROG, "The paper's manoeuvre: Fig. 2/3-style plots and a CSV.")
-
-
-def _report(settings: Settings) -> int:
-    """:func:`run`, then what it found on stdout."""
+def _report(settings: Settings) -> None:
     sol, ph, files = run(settings)
     robot = RobotParams()
     print("settings: " + ", ".join(f"{k} {v}" for k, v in asdict(settings).items()))
@@ -185,8 +310,9 @@ def _report(settings: Settings) -> int:
     )
     for v in files.values():
         print(f"wrote {v}")
-    return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def main(argv: Sequence[str] | None = None) -> int:
+    """``amigo-gym paper`` (module docstring); returns the exit status."""
+    doc = "The paper's manoeuvre: Fig. 2/3-style plots and a CSV."
+    return run_command(Settings, _report, argv, "amigo-gym paper", doc)

@@ -43,7 +43,7 @@ _TRAIN = "train: torch stable_baselines3 yaml matplotlib filelock"
 #: name, module under amigo_gym.tools (``:function``, default ``main``), "extra: the modules of it that the command
 #: imports" ("": none; "unless FLAG": the flag lifts the need), summary
 _TABLE = (
-    ("inverse", "cli.inverse", "", "analytic inverse solution of H on a path, as CSV"),
+    ("inverse", "analysis.paper_figures:main_inverse", "", "analytic inverse solution of H on a path, as CSV"),
     ("paper", "analysis.paper_figures", "plot: matplotlib", "the paper's manoeuvre: Fig. 2/3-style plots and CSV"),
     ("derive", "symbolic", "symbolic: sympy", "symbolic D-H derivation; print the equations (LaTeX)"),
     ("train", "training.train", "train: torch stable_baselines3 yaml tqdm rich",
