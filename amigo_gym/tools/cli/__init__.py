@@ -7,32 +7,25 @@ A missing extra is one line naming it (exit status 2); every other error is one 
 from __future__ import annotations
 
 import importlib
-import importlib.util
 import os
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from amigo_gym.tools.options import _one_line, install_hint, missing_modules
 
 
-@dataclass(frozen=True)
-class Command:
-    """A sub-command of ``amigo-gym``.
-
-    Attributes:
-        target: ``module:function`` taking the remaining arguments and returning the exit status.
-        summary: one line for ``amigo-gym --help``.
-        extra: the optional extra of ``pip install "amigo-gym[<extra>]"`` it needs (``None``: none).
-        modules: the top-level modules that extra provides and the command imports.
-        unless: flags that lift the need (e.g. ``verify --quick`` needs no SymPy).
-    """
+class Command(NamedTuple):
+    """A sub-command: ``target`` (``module:function`` taking the remaining arguments, returning the exit status),
+    ``summary`` (one line of ``--help``), the ``extra`` of ``pip install "amigo-gym[<extra>]"`` it needs (``None``:
+    none), the ``modules`` of that extra it imports, and the flags that lift the need (``unless``: ``verify
+    --quick`` needs no SymPy)."""
 
     target: str
     summary: str
-    extra: str | None = None
-    modules: tuple[str, ...] = ()
-    unless: tuple[str, ...] = ()
+    extra: str | None
+    modules: tuple[str, ...]
+    unless: tuple[str, ...]
 
 
 #: amigo_gym.io.TRUST_ENV (this module imports the standard library only)
