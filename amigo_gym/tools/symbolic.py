@@ -56,8 +56,6 @@ PLAIN_SYMBOLS: dict[str, Any] = {
 def to_plain(expr: Any) -> Any:
     """Replace the time functions ``q(t)`` and their derivatives ``dq/dt`` by the plain symbols ``q``, ``qdot`` (in
     an expression or a matrix: an immutable matrix)."""
-    if isinstance(expr, sp.MatrixBase):
-        return sp.ImmutableMatrix(expr.applyfunc(lambda e: e.xreplace(_TO_PLAIN)))
     return sp.sympify(expr).xreplace(_TO_PLAIN)
 
 
@@ -284,10 +282,9 @@ def derive() -> Derivation:
     v_C = _simp(to_plain(material_velocity([T.T40S, T.TSw, T.T3S], T.rho_C)))
 
     # 4: rolling constraints, reduced with the motion of A
-    slip_K = _simp((across.T * v_K)[0].subs(motion_of_a))
-    slip_L = _simp((across.T * v_L)[0].subs(motion_of_a))
-    roll_K = _simp((on_heading.T * v_K)[0].subs(motion_of_a))
-    roll_L = _simp((on_heading.T * v_L)[0].subs(motion_of_a))
+    slip_K, slip_L, roll_K, roll_L = (
+        _simp((e.T * v)[0].subs(motion_of_a)) for e in (across, on_heading) for v in (v_K, v_L)
+    )
     wheel_rates = _solve_one([roll_K, roll_L], [alphadot_1, alphadot_2])
     body_velocity = _solve_one([roll_K, roll_L], [v_A, betadot])
 
@@ -480,10 +477,4 @@ def _derive(args: DeriveSettings) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym derive [--latex] [--out FILE]``: print (or write) the symbolic derivation and system (29)."""
-    doc = "Symbolic D-H derivation of the AmigoBot kinematics (SymPy): positions, contact-point velocities, the "
-    doc += "corrected system (29) with seven equations, its solution, and the paper's misprints."
-    return run_command(DeriveSettings, _derive, argv, "amigo-gym derive", doc)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    return run_command(DeriveSettings, _derive, argv, "amigo-gym derive", __doc__.splitlines()[0])
