@@ -6,7 +6,6 @@ The rows and values: docs/model.md, "Exactness, measured"."""
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -28,40 +27,28 @@ R, V = 1.0, 0.2
 LAP = 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V
 
 
-def _steady_pose() -> tuple[np.ndarray, np.ndarray]:
-    """Steady pose with H at the origin on the circle of eq. 6 (centre (0, R)), and the steady rates."""
+def _laps_error(dt: float, how: str) -> float:
+    """Largest distance of H from the circle of eq. 6 [m] over 10 laps at the steady rates, H starting at the origin
+    in the steady pose, stepped ``how``: ``"exact"`` (the arc step), ``"euler"``, ``"env"`` (AmigoBot-v0, dt 0.1 s)."""
+    import amigo_gym  # noqa: F401
+
     ss = circle_steady_state(R, V, ROBOT)
-    beta = -float(ss.heading_lag)
+    beta, w = -float(ss.heading_lag), np.asarray(ss.wheel_rates)
     pose = np.array([*a_from_h(0.0, 0.0, math.cos(beta), math.sin(beta), ROBOT.l3), beta])
-    return pose, np.asarray(ss.wheel_rates)
-
-
-def _laps_error(dt: float, euler: bool) -> float:
-    pose, w = _steady_pose()
     v, bd = body_velocity(w, ROBOT)
+    env = gym.make("AmigoBot-v0", max_episode_steps=None)
+    env.reset(options={"pose": pose})
     err = 0.0
     for _ in range(math.ceil(10 * LAP / dt)):
-        if euler:
-            b = pose[2]
-            pose = pose + dt * np.array([v * math.cos(b), v * math.sin(b), bd])
+        if how == "env":
+            err = max(err, abs(env.step(w / ROBOT.max_wheel_rate)[4]["cross_track_error"]))
+            continue
+        if how == "euler":
+            pose = pose + dt * np.array([v * math.cos(pose[2]), v * math.sin(pose[2]), bd])
         else:
             pose = step_pose(pose, w, dt, ROBOT)
         h = h_position(pose, ROBOT)
         err = max(err, abs(math.hypot(h[0], h[1] - R) - R))
-    return err
-
-
-def _env_laps_error() -> float:
-    import amigo_gym  # noqa: F401
-
-    pose, w = _steady_pose()
-    env = gym.make("AmigoBot-v0", max_episode_steps=None)
-    env.reset(options={"pose": pose})
-    action = w / ROBOT.max_wheel_rate
-    err = 0.0
-    for _ in range(math.ceil(10 * LAP / 0.1)):
-        _, _, _, _, info = env.step(action)
-        err = max(err, abs(info["cross_track_error"]))
     return err
 
 
@@ -117,10 +104,10 @@ def rows(quick: bool = False) -> list[Check]:
         out.append(_check(what, float(got[k]) - ref, "abs < 5e-7 (6 decimals)", lambda v: abs(v) < 5e-7))
     for dt in (0.01, 0.1, 0.5):
         what = f"step, 10 laps, dt = {dt} s: max H off circle [m]"
-        out.append(_check(f"exact {what}", _laps_error(dt, False), "<= 1e-9", lambda v: v <= 1e-9))
-        out.append(_check(f"Euler {what}", _laps_error(dt, True), "> 1e-4: not exact", lambda v: v > 1e-4))
+        out.append(_check(f"exact {what}", _laps_error(dt, "exact"), "<= 1e-9", lambda v: v <= 1e-9))
+        out.append(_check(f"Euler {what}", _laps_error(dt, "euler"), "> 1e-4: not exact", lambda v: v > 1e-4))
     what = "AmigoBot-v0, 10 laps, dt = 0.1 s: max abs(e) [m]"
-    out.append(_check(what, _env_laps_error(), "<= 1e-9", lambda v: v <= 1e-9))
+    out.append(_check(what, _laps_error(0.1, "env"), "<= 1e-9", lambda v: v <= 1e-9))
     if not quick:
         sol = paper_circle(radius=R, speed=V, duration=60.0, dt=0.1)
         e = np.hypot(sol.x_H, sol.y_H - R) - R
@@ -160,7 +147,3 @@ def _report(args: VerifySettings) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym verify [--quick]``: print the table of residuals with PASS/FAIL; status 1 if one fails."""
     return run_command(VerifySettings, _report, argv, "amigo-gym verify", __doc__.splitlines()[0])
-
-
-if __name__ == "__main__":
-    sys.exit(main())
