@@ -7,8 +7,6 @@ the true robot and writes ``robot.json`` (for ``gym.make("AmigoBot-v1", true_rob
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import shutil
@@ -41,12 +39,8 @@ def trajectory_csv(log: Log, rep: Replay) -> str:
     if log.rates is not None:
         cols["w1_meas"], cols["w2_meas"] = log.rates[:, 0], log.rates[:, 1]
     cols["w1_sim"], cols["w2_sim"] = rep.rates[:, 0], rep.rates[:, 1]
-    buf = io.StringIO()
-    wr = csv.writer(buf, lineterminator="\n")
-    wr.writerow(list(cols))
-    for row in zip(*cols.values(), strict=True):
-        wr.writerow([repr(float(v)) for v in row])
-    return buf.getvalue()
+    rows = (",".join(repr(float(v)) for v in row) for row in zip(*cols.values(), strict=True))
+    return "\n".join([",".join(cols), *rows]) + "\n"
 
 
 def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) -> None:
@@ -57,8 +51,7 @@ def plot(path: str, log: Log, reps: Sequence[tuple[str, Replay]], title: str) ->
     ax_xy = fig.add_subplot(grid[:, 0])
     ax_w = fig.add_subplot(grid[0, 1])
     ax_e = fig.add_subplot(grid[1, 1], sharex=ax_w)
-    styles: list[dict[str, Any]] = [{"lw": 0.9, "ls": "--", "alpha": 0.8}] * (len(reps) - 1)
-    styles.append({"lw": 1.4, "ls": "-", "alpha": 1.0})
+    styles = [{"lw": 0.9, "ls": "--", "alpha": 0.8}] * (len(reps) - 1) + [{"lw": 1.4, "ls": "-", "alpha": 1.0}]
     if log.pose is not None:
         ax_xy.plot(log.pose[:, 0], log.pose[:, 1], ".", color="k", ms=2.5, label="measured")
     for (label, rep), st in zip(reps, styles, strict=True):
@@ -150,7 +143,7 @@ def _alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except OSError:  # another user's
-        return True
+        pass
     return True
 
 
@@ -249,9 +242,8 @@ def _replay(args: ReplaySettings) -> None:
 
 def main_replay(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym replay`` (module docstring)."""
-    return run_command(
-        ReplaySettings, _replay, argv, "amigo-gym replay", "Replay a robot's log through the model; compare."
-    )
+    doc = "Replay a robot's log through the model; compare."
+    return run_command(ReplaySettings, _replay, argv, "amigo-gym replay", doc)
 
 
 def _fit_summary(fit: Fit) -> dict[str, Any]:
