@@ -9,7 +9,6 @@ draws ``|e(t)|`` for every gain.
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -88,18 +87,15 @@ def halving_times(settings: Settings) -> list[GainFit]:
     out: list[GainFit] = []
     for k in settings.gain_list():
         policy = AnalyticPolicy(params, gain=k)
-        ts: list[float] = []
-        logs: list[float] = []
         curves: list[tuple[list[float], list[float]]] = []
         for seed in range(settings.first_seed, settings.first_seed + settings.seeds):
             tr = rollout(policy, env, {"seed": seed}, settings.steps, gain=k)
             if tr.terminated:
                 raise ValueError(f"gain {k}: the episode with seed {seed} left the path")
             curves.append((tr.time.tolist(), np.abs(tr.e).tolist()))
-            win = (tr.time >= settings.t_from) & (tr.time <= settings.t_to) & (np.abs(tr.e) > 0)
-            ts += tr.time[win].tolist()
-            logs += np.log(np.abs(tr.e[win])).tolist()
-        slope = float(np.polyfit(np.asarray(ts), np.asarray(logs), 1)[0])
+        t, e = (np.concatenate(c) for c in zip(*curves, strict=True))
+        win = (t >= settings.t_from) & (t <= settings.t_to) & (e > 0)
+        slope = float(np.polyfit(t[win], np.log(e[win]), 1)[0])
         halving = math.log(2.0) / -slope if slope < 0 else math.inf
         out.append(GainFit(k, slope, halving, math.log(2.0) / k, curves))
     env.close()
@@ -135,7 +131,3 @@ def _report(settings: Settings) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym convergence [--gains 1,2,3,5] [--plot FILE]``: the halving-time table."""
     return run_command(Settings, _report, argv, "amigo-gym convergence", __doc__.splitlines()[0])
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -40,12 +40,9 @@ def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np
     env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
     policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
     obs, _ = env.reset(seed=seed)
-    state = None
-    start = np.array([True])
-    worst = 0.0
+    state, worst = None, 0.0
     for t in range(steps):
-        action, state = policy.predict(obs[None, :], state, start)
-        start = np.array([False])
+        action, state = policy.predict(obs[None, :], state, np.array([t == 0]))
         obs, _, term, trunc, info = env.step(action[0])
         if t * env.unwrapped.params.dt > 5.0:  # type: ignore[attr-defined]
             worst = max(worst, abs(info["cross_track_error"]))
