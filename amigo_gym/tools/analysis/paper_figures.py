@@ -118,23 +118,24 @@ def _profile(args: InverseSettings, path: CirclePath | ManoeuvrePath, robot: Rob
     return inv.TrapezoidProfile(args.speed, accel, decel, t_start, None)
 
 
+def _end(sol: inv.InverseSolution, names: str) -> str:
+    return ", ".join(f"{k} = {getattr(sol, k)[-1]:.6f}" for k in names.split())
+
+
 def _summary(sol: inv.InverseSolution, path: CirclePath | ManoeuvrePath, robot: RobotParams, speed: float) -> str:
     e = path.project(np.stack((sol.x_H, sol.y_H), axis=-1)).cross_track_error
-    peak = float(np.max(np.abs(sol.wheel_rates)))
     ss = inv.circle_steady_state(path.radius, speed, robot, path.direction)
+    steady = {"betadot": ss.betadot, "alpha1_dot": ss.wheel_rates[0], "alpha2_dot": ss.wheel_rates[1]}
+    steady["alpha3_dot"] = ss.castor_rate
     lines = [
         f"path: {type(path).__name__}, R = {path.radius:g} m, direction {path.direction:+d}; "
         f"{sol.t.size} samples, t = {sol.t[0]:g}..{sol.t[-1]:g} s",
         f"end: s = {sol.s[-1]:.6f} m, H = ({sol.x_H[-1]:.6f}, {sol.y_H[-1]:.6f}) m, beta = {sol.beta[-1]:.6f} rad",
-        f"end rates [rad/s]: betadot = {sol.betadot[-1]:.6f}, alpha1_dot = {sol.alpha1_dot[-1]:.6f}, "
-        f"alpha2_dot = {sol.alpha2_dot[-1]:.6f}, alpha3_dot = {sol.alpha3_dot[-1]:.6f}",
-        f"end angles [rad]: alpha1 = {sol.alpha1[-1]:.6f}, alpha2 = {sol.alpha2[-1]:.6f}, "
-        f"alpha3 = {sol.alpha3[-1]:.6f}",
-        f"peak |drive wheel rate| = {peak:.4f} rad/s (limit {robot.max_wheel_rate:g}); max |cross-track error of H| = "
-        f"{float(np.max(np.abs(e))):.2e} m",
-        f"steady state on the circle (closed form): betadot = {float(ss.betadot):.6f}, "
-        f"alpha1_dot = {float(ss.wheel_rates[0]):.6f}, alpha2_dot = {float(ss.wheel_rates[1]):.6f}, "
-        f"alpha3_dot = {float(ss.castor_rate):.6f}",
+        f"end rates [rad/s]: {_end(sol, 'betadot alpha1_dot alpha2_dot alpha3_dot')}",
+        f"end angles [rad]: {_end(sol, 'alpha1 alpha2 alpha3')}",
+        f"peak |drive wheel rate| = {float(np.max(np.abs(sol.wheel_rates))):.4f} rad/s (limit "
+        f"{robot.max_wheel_rate:g}); max |cross-track error of H| = {float(np.max(np.abs(e))):.2e} m",
+        "steady state on the circle (closed form): " + ", ".join(f"{k} = {float(v):.6f}" for k, v in steady.items()),
     ]
     return "\n".join(lines)
 

@@ -123,10 +123,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     cmd = COMMANDS[name]
     prog = f"amigo-gym {name}"
-    if cmd.extra is not None and not any(flag in rest for flag in cmd.unless):
-        missing = missing_modules(cmd.modules)
-        if missing:
-            return _needs_extra(prog, cmd.extra, missing)
+    if cmd.extra and not set(cmd.unless) & set(rest) and (missing := missing_modules(cmd.modules)):
+        return _needs_extra(prog, cmd.extra, missing)
     trust = "--trust-unverified" in rest  # every command: load pickles that are neither shipped nor written here
     before = os.environ.get(TRUST_ENV)
     if trust:
