@@ -16,11 +16,10 @@ import gymnasium as gym
 import numpy as np
 
 from amigo_gym.envs.rendering import headless
+from amigo_gym.io import atomic_save
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.tools.options import cli, run_command
 from amigo_gym.tools.plots import pyplot
-
-PROG = "amigo-gym gallery"
 
 #: name -> (keyword arguments of gym.make("AmigoBot-v1"), steps)
 GALLERY: dict[str, tuple[dict[str, Any], int]] = {
@@ -75,17 +74,13 @@ class GallerySettings:
 
 def _draw(args: GallerySettings) -> None:
     headless()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     for name in args.only or GALLERY:
         frame, worst = render_family(*GALLERY[name])
-        target = out / f"v1_{name}.png"
-        tmp = target.with_suffix(".tmp.png")
-        pyplot().imsave(tmp, frame)
-        tmp.replace(target)
+        target = Path(args.out) / f"v1_{name}.png"
+        atomic_save(lambda tmp, frame=frame: pyplot().imsave(tmp, frame), target, parents=True)
         print(f"{target}: max |e| of H after 5 s = {worst:.3g} m", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym gallery [--out DIR] [--only NAME ...]`` (module docstring)."""
-    return run_command(GallerySettings, _draw, argv, PROG, __doc__.splitlines()[0])
+    return run_command(GallerySettings, _draw, argv, "amigo-gym gallery", __doc__.splitlines()[0])
