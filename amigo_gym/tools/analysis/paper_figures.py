@@ -255,8 +255,8 @@ def _shade(ax: Any, ph: list[Phase]) -> None:
         ax.text(0.5 * (p.t0 + p.t1), 1.01, p.name, transform=ax.get_xaxis_transform(), **kw)
 
 
-def run(settings: Settings) -> tuple[inv.InverseSolution, list[Phase], dict[str, str]]:
-    """Solve the manoeuvre, write the two figures and the CSV; return the solution, phases and paths."""
+def _paper(settings: Settings) -> None:
+    """Solve the manoeuvre, write the two figures and the CSV, print what it found."""
     robot = RobotParams()
     os.makedirs(settings.out, exist_ok=True)
     if not os.access(settings.out, os.W_OK):
@@ -292,12 +292,6 @@ def run(settings: Settings) -> tuple[inv.InverseSolution, list[Phase], dict[str,
         save_figure(fig, files[key], settings.dpi)
 
     sol.to_csv(files["csv"])
-    return sol, ph, files
-
-
-def _report(settings: Settings) -> None:
-    sol, ph, files = run(settings)
-    robot = RobotParams()
     print("settings: " + ", ".join(f"{k} {v}" for k, v in asdict(settings).items()))
     print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
     print(
@@ -316,4 +310,4 @@ def _report(settings: Settings) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """``amigo-gym paper`` (module docstring); returns the exit status."""
     doc = "The paper's manoeuvre: Fig. 2/3-style plots and a CSV."
-    return run_command(Settings, _report, argv, "amigo-gym paper", doc)
+    return run_command(Settings, _paper, argv, "amigo-gym paper", doc)
