@@ -6,6 +6,7 @@ with :class:`amigo_gym.policies.AnalyticTrackingPolicy`, written as ``<out>/v1_<
 
 from __future__ import annotations
 
+import functools
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -77,7 +78,7 @@ def _draw(args: GallerySettings) -> None:
     for name in args.only or GALLERY:
         frame, worst = render_family(*GALLERY[name])
         target = Path(args.out) / f"v1_{name}.png"
-        atomic_save(lambda tmp, frame=frame: pyplot().imsave(tmp, frame), target, parents=True)
+        atomic_save(functools.partial(pyplot().imsave, arr=frame), target, parents=True)
         print(f"{target}: max |e| of H after 5 s = {worst:.3g} m", file=sys.stderr)
 
 

@@ -75,9 +75,9 @@ class InverseSettings:
     def validate(self) -> None:
         """Raise ``ValueError`` naming the option, its allowed range and the value (the limits: the AmigoBot's)."""
         robot, inf = RobotParams(), math.inf
-        limits = {"radius": (robot.l3, 1e3, True), "speed": (0.0, robot.max_speed, True), "dt": (0.0, 10.0, True)}
-        limits |= {"duration": (0.0, 1e5, True), "accel": (0.0, inf, True), "decel": (0.0, inf, True)}
-        limits |= {"t_start": (0.0, inf), "laps": (0.0, 1e3)}
+        limits: dict[str, tuple[float, ...]] = {"radius": (robot.l3, 1e3, True), "dt": (0.0, 10.0, True)}
+        limits |= {"speed": (0.0, robot.max_speed, True), "duration": (0.0, 1e5, True), "accel": (0.0, inf, True)}
+        limits |= {"decel": (0.0, inf, True), "t_start": (0.0, inf), "laps": (0.0, 1e3)}
         if self.path == "manoeuvre":
             limits["straight_length"] = (0.0, 1e3)
         _as_options(check_fields, "_", self, **limits)
