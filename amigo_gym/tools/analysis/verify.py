@@ -36,8 +36,9 @@ def _laps_error(dt: float, how: str) -> float:
     beta, w = -float(ss.heading_lag), np.asarray(ss.wheel_rates)
     pose = np.array([*a_from_h(0.0, 0.0, math.cos(beta), math.sin(beta), ROBOT.l3), beta])
     v, bd = body_velocity(w, ROBOT)
-    env = gym.make("AmigoBot-v0", max_episode_steps=None)
-    env.reset(options={"pose": pose})
+    if how == "env":
+        env = gym.make("AmigoBot-v0", max_episode_steps=None)
+        env.reset(options={"pose": pose})
     err = 0.0
     for _ in range(math.ceil(10 * LAP / dt)):
         if how == "env":
