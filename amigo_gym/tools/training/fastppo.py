@@ -234,8 +234,7 @@ class FastPPOSettings:
         bad = sorted(set(d) - {f.name for f in fields(cls)})
         if bad:
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
-        kw: dict[str, Any] = {k: (tuple(v) if k == "hidden" else v) for k, v in d.items()}
-        return cls(**kw)
+        return cls(**d)  # __post_init__ makes hidden a tuple
 
 
 def _check_curriculum(s: FastPPOSettings) -> None:
