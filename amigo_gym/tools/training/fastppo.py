@@ -736,7 +736,7 @@ def _train(
     env_s, spent = 0.0, np.zeros(4)  # this call's seconds: CPU of rollouts, updates; wall of rollouts, updates
     buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
 
-    sync = torch.cuda.synchronize if device == "cuda" else lambda: None
+    sync: Callable[[], None] = torch.cuda.synchronize if device == "cuda" else lambda: None
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:

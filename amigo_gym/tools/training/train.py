@@ -341,7 +341,7 @@ def rollout_steps(model: Any) -> tuple[int, str] | None:
     n, freq = int(model.n_envs), getattr(model, "train_freq", None)
     if hasattr(model, "n_steps"):
         return int(model.n_steps) * n, f"n_steps {int(model.n_steps)} x {n} envs"
-    if getattr(getattr(freq, "unit", None), "value", None) != "step":
+    if freq is None or getattr(freq.unit, "value", None) != "step":
         return None
     return int(freq.frequency) * n, f"train_freq {int(freq.frequency)} x {n} envs"
 
