@@ -330,9 +330,8 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
     with runs.handling(stop), runs.RunLock(s.out):
         result = _train(s, hp_path, hp, parsed, stop, after_eval)
-    if stop.requested and result is None:
+    if result is None:  # stopped by a signal, after the checkpoint
         raise KeyboardInterrupt
-    assert result is not None
     return result
 
 
