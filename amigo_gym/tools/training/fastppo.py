@@ -398,14 +398,15 @@ class _Buffers:
 
 
 class _ConcatVectorEnv:
-    """Two vector envs side by side as one; ``step``'s info holds only ``final_obs`` (``None`` where none ended)."""
+    """Vector envs side by side as one; ``step``'s info holds only ``final_obs`` (``None`` where no episode ended)."""
 
-    def __init__(self, *envs: Any) -> None:
-        self.envs, self.cut = envs, int(envs[0].num_envs)
-        self.num_envs = sum(int(e.num_envs) for e in envs)
+    def __init__(self, envs: Sequence[Any]) -> None:
+        self.envs = list(envs)
+        self.edges = [0, *itertools.accumulate(int(e.num_envs) for e in self.envs)]
+        self.num_envs = self.edges[-1]
 
     def _split(self, x: Any) -> list[Any]:
-        return [x[: self.cut], x[self.cut :]]
+        return [x[a:b] for a, b in itertools.pairwise(self.edges)]
 
     def reset(self, seed: list[int]) -> tuple[Array, dict[str, Any]]:
         return np.concatenate([e.reset(seed=s)[0] for e, s in zip(self.envs, self._split(seed), strict=True)]), {}
@@ -413,7 +414,7 @@ class _ConcatVectorEnv:
     def step(self, action: Array) -> tuple[Array, Array, Array, Array, dict[str, Any]]:
         outs = [e.step(a) for e, a in zip(self.envs, self._split(action), strict=True)]
         final = np.full(self.num_envs, None, dtype=object)
-        for (*_, info), k in zip(outs, (0, self.cut), strict=True):
+        for (*_, info), k in zip(outs, self.edges, strict=False):
             for i in np.flatnonzero(info.get("_final_obs", ())):
                 final[k + i] = info["final_obs"][i]
         o, r, te, tr = (np.concatenate([out[j] for out in outs]) for j in range(4))
@@ -444,7 +445,7 @@ def _training_env(s: FastPPOSettings) -> Any:
     nominal = {key: v for key, v in s.env_kwargs.items() if key not in ("randomize", "true_robot")}
     if k in (0, s.num_envs):
         return make(s.num_envs, nominal if k else s.env_kwargs)
-    return _ConcatVectorEnv(make(s.num_envs - k, s.env_kwargs), make(k, nominal))
+    return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
 
 
 def _networks(s: FastPPOSettings, dim: int, device: str) -> tuple[ActorCritic, torch.optim.Adam]:
