@@ -1,9 +1,7 @@
-"""Training, evaluation and the main comparison: functions of typed settings dataclasses.
+"""Training, evaluation and the main comparison: functions of typed settings dataclasses (the ``train`` extra).
 
-The modules here import torch and stable-baselines3 lazily or at their top (install the ``train``
-extra); ``import amigo_gym.tools.training`` itself imports nothing heavy. They may import the core,
-``amigo_gym.policies``, ``amigo_gym.envs`` and ``amigo_gym.io``; never the CLI parser of another
-module and never the repository's ``experiments/`` scripts.
+``import amigo_gym.tools.training`` imports nothing heavy. Its modules may import the core, ``amigo_gym.policies``,
+``envs`` and ``io``; never another module's CLI parser, never the repository's ``experiments/`` scripts.
 """
 
 from __future__ import annotations

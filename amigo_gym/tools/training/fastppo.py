@@ -2,15 +2,14 @@ r"""``amigo-gym train-fast``: PPO over the native ``AmigoBot-v1`` vector env (Cl
 
     amigo-gym train-fast --out runs/fast_s0 --hyperparams agents/hyperparams/fastppo.yml  # --resume: continue
 
-``N = num_envs`` robots step on the CPU; networks, buffers, GAE and updates run on ``device``. Per iteration of ``T =
-rollout_steps`` steps: features normalised by a running mean/std, Gaussian policy ``u ~ N(mu(x), exp(2 log_std))``,
-rewards scaled by the running std of the discounted return (clipped to +-10), time-limit truncation bootstrapped with
-``gamma V(x_final)``, GAE; ``epochs`` passes of minibatch clipped PPO (value loss, entropy, optional CAPS and residual
-penalties), Adam with the learning rate annealed to 0. The last ``round(nominal_fraction N)`` robots are nominal.
+``N = num_envs`` robots step on the CPU; networks, buffers, GAE and updates on ``device``. Features normalised by a
+running mean/std, Gaussian policy ``u ~ N(mu(x), exp(2 log_std))``, rewards scaled by the running std of the
+discounted return (clipped to +-10), time-limit truncation bootstrapped with ``gamma V(x_final)``, GAE, ``epochs``
+passes of minibatch clipped PPO (optional CAPS and residual penalties), learning rate annealed to 0.
 
 Outputs in ``--out``: ``settings.json``, ``checkpoint.pt`` (to continue bit for bit), ``curve.csv``/``curve.json``,
-``model.zip``, ``best.zip`` (lowest validation H RMS), ``run.json`` (steps, timings, versions, machine, sha256). The
-first ``SIGTERM``/``SIGINT`` stops after the iteration's checkpoint (status 130), a second at once.
+``model.zip``, ``best.zip`` (lowest validation H RMS), ``run.json``. The first ``SIGTERM``/``SIGINT`` stops after
+the iteration's checkpoint (status 130), a second at once.
 """
 
 from __future__ import annotations
@@ -235,8 +234,7 @@ class FastPPOSettings:
         bad = sorted(set(d) - {f.name for f in fields(cls)})
         if bad:
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
-        kw: dict[str, Any] = {k: (tuple(v) if k == "hidden" else v) for k, v in d.items()}
-        return cls(**kw)
+        return cls(**d)  # __post_init__ makes hidden a tuple
 
 
 def _check_curriculum(s: FastPPOSettings) -> None:
@@ -322,10 +320,6 @@ class ActorCritic(nn.Module):
     def value(self, x: torch.Tensor) -> torch.Tensor:
         out: torch.Tensor = self.critic(x).squeeze(-1)
         return out
-
-    def numpy_layers(self) -> list[tuple[Array, Array]]:
-        """The actor as ``[(W (in, out), b (out,))]`` for :class:`FastPolicy` (``x W + b``)."""
-        return [(_np(m.weight).T.copy(), _np(m.bias)) for m in self.actor if isinstance(m, nn.Linear)]
 
 
 def _np(t: torch.Tensor) -> Array:
@@ -509,8 +503,10 @@ def _load_checkpoint(path: Path, s: FastPPOSettings, builder: FeatureBuilder, de
 
 
 def _policy(s: FastPPOSettings, r: _Run, info: Mapping[str, Any] | None = None) -> FastPolicy:
+    """The actor as numpy ``[(W (in, out), b)]`` layers with a copy of the normaliser."""
+    layers = [(_np(m.weight).T.copy(), _np(m.bias)) for m in r.net.actor if isinstance(m, nn.Linear)]
     obs_rms = RunningMeanStd(r.obs_rms.mean.copy(), r.obs_rms.var.copy(), r.obs_rms.count)
-    return FastPolicy(s.spec(), r.net.numpy_layers(), _np(r.net.log_std), obs_rms, info)
+    return FastPolicy(s.spec(), layers, _np(r.net.log_std), obs_rms, info)
 
 
 def machine_record(device: str) -> dict[str, Any]:
@@ -702,6 +698,7 @@ def _train(
     t_start, wall0 = time.perf_counter(), r.wall_s
 
     def evaluate() -> bool:
+        """Evaluate, record and say; advance ``next_eval``; ``after_eval``'s verdict."""
         t0 = time.perf_counter()
         pol = _policy(s, r)
         m = evaluate_policy(pol, s)
@@ -732,20 +729,15 @@ def _train(
             f"{1e3 * m['h_rms_settled_m']:.2f} mm  chatter(settled) {m['chatter_settled_rms']:.2f} rad/s  speed err"
             f"(settled) {1e3 * m.get('speed_err_settled_rms', math.nan):.1f} mm/s  fail {m['failure']:.2f}"
         )
+        while r.next_eval <= r.global_step:
+            r.next_eval += s.eval_every
         return True if after_eval is None else bool(after_eval(dict(row)))
 
-    stopped_by: str | None = None
-    if evaluate_runs and r.global_step >= r.next_eval:
-        if not evaluate():
-            stopped_by = "after_eval"
-        r.next_eval += s.eval_every
+    stopped_by = "after_eval" if evaluate_runs and r.global_step >= r.next_eval and not evaluate() else None
     env_s, spent = 0.0, np.zeros(4)  # this call's seconds: CPU of rollouts, updates; wall of rollouts, updates
     buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
 
-    def sync() -> None:
-        if device == "cuda":
-            torch.cuda.synchronize()
-
+    sync: Callable[[], None] = torch.cuda.synchronize if device == "cuda" else lambda: None
     while r.global_step < stop and stopped_by is None:
         stage = curriculum_path_params(s, r.global_step)
         if stage is not None and dict(r.env.params.path_params) != stage:
@@ -769,12 +761,9 @@ def _train(
             say(f"{r.global_step:>11,d} / {n_iter * batch:,d} steps  {wall:7.0f} s  "
                 f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  {ret}  "
                 f"std {float(r.net.log_std.detach().exp().mean()):.3f}")  # fmt: skip
-        if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps):
-            if not evaluate():
-                stopped_by = "after_eval"
-                break
-            while r.next_eval <= r.global_step:
-                r.next_eval += s.eval_every
+        if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps) and not evaluate():
+            stopped_by = "after_eval"
+            break
         if stop_request.requested and r.global_step < stop:
             stopped_by = "signal"
         if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
@@ -812,28 +801,19 @@ def _train(
 
 # --------------------------------------------------------------------------- CLI
 @dataclass(frozen=True)
-class HyperparamsFile:
-    """The option read first (its file's values become the other options' defaults).
-
-    Attributes:
-        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping replaces the defaults; options override it
-            (default: none).
-    """
-
-    hyperparams: str | None = None
-
-
-@dataclass(frozen=True)
-class TrainFastRun(HyperparamsFile):
+class TrainFastRun:
     """The run's options besides the :class:`FastPPOSettings`.
 
     Attributes:
         out: run folder [folder] (required).
+        hyperparams: settings file [YAML]: its AmigoBot-v1 mapping replaces the defaults; options override it
+            (default: none).
         resume: continue the run in --out from its checkpoint.
         quiet: no progress lines.
     """
 
-    out: str = field(kw_only=True)
+    out: str
+    hyperparams: str | None = None
     resume: bool = False
     quiet: bool = False
 
@@ -842,7 +822,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym train-fast``."""
     args_in = list(sys.argv[1:] if argv is None else argv)
     first = argparse.ArgumentParser(add_help=False)
-    add_dataclass_options(first, HyperparamsFile)
+    first.add_argument("--hyperparams")
     defaults: dict[str, Any] = {}
     hp_file = first.parse_known_args(args_in)[0].hyperparams
     if hp_file is not None and (rc := run_guarded(lambda: defaults.update(load_settings_yaml(hp_file)), PROG)):

@@ -163,11 +163,6 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
     return kw
 
 
-def check_filter_alpha(value: object, owner: str = "policy_kwargs") -> float:
-    """The low-pass filter factor ``alpha`` in (0, 1] (``ValueError`` naming ``<owner>.filter_alpha``)."""
-    return check_real(owner, "filter_alpha", value, 0.0, 1.0, low_open=True)
-
-
 def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
     """The checked mapping ``hp`` of a file for ``algo``; ``ValueError``: unknown keys (all) or the first bad value."""
     allowed = _algo_keywords(algo) | set(META_KEYS)
@@ -191,7 +186,8 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
     if policy == LOWPASS_POLICY:
         if algo != "td3":
             raise ValueError(f"{where}: policy {LOWPASS_POLICY} is for td3, not {algo}")
-        check_filter_alpha(pk.get("filter_alpha") if isinstance(pk, Mapping) else None, f"{where}: policy_kwargs")
+        alpha = pk.get("filter_alpha") if isinstance(pk, Mapping) else None
+        check_real(f"{where}: policy_kwargs", "filter_alpha", alpha, 0.0, 1.0, low_open=True)
         if isinstance(pk, Mapping) and "prev_index" in pk:
             raise ValueError(f"{where}: policy_kwargs.prev_index comes from the env's observation, not the file")
         out.policy = LOWPASS_POLICY

@@ -15,21 +15,17 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3.td3.policies import Actor, TD3Policy
 
+from amigo_gym.model.params import check_real
 from amigo_gym.task.v1 import TrackingParams, obs_fields
 from amigo_gym.tools.training.hyperparams import LOWPASS_POLICY as POLICY_NAME
-from amigo_gym.tools.training.hyperparams import check_filter_alpha
 
 
 def check_filter(filter_alpha: object, prev_index: object, obs_dim: int) -> tuple[float, tuple[int, int]]:
     """The checked ``(alpha, (i1, i2))``: ``alpha`` in (0, 1], two distinct indices in [0, ``obs_dim``)."""
-    a = check_filter_alpha(filter_alpha)
-    idx = tuple(prev_index) if isinstance(prev_index, Sequence) and not isinstance(prev_index, str) else None
-    if (
-        idx is None
-        or len(idx) != 2
-        or any(isinstance(i, bool) or not isinstance(i, int | np.integer) or not 0 <= int(i) < obs_dim for i in idx)
-        or idx[0] == idx[1]
-    ):
+    a = check_real("policy_kwargs", "filter_alpha", filter_alpha, 0.0, 1.0, low_open=True)
+    idx = list(prev_index) if isinstance(prev_index, Sequence) and not isinstance(prev_index, str) else []
+    ok = all(not isinstance(i, bool) and isinstance(i, int | np.integer) and 0 <= int(i) < obs_dim for i in idx)
+    if not (ok and len(idx) == 2 and idx[0] != idx[1]):
         raise ValueError(
             f"policy_kwargs.prev_index must be two distinct observation indices in [0, {obs_dim}), got {prev_index!r}"
         )
@@ -43,11 +39,6 @@ class LowPassActor(Actor):
         super().__init__(*args, **kwargs)
         self.filter_alpha, self.prev_index = filter_alpha, tuple(prev_index)  # checked by LowPassTD3Policy
         self.register_buffer("_prev_idx", th.as_tensor(self.prev_index, dtype=th.long), persistent=False)
-
-    def _get_constructor_parameters(self) -> dict[str, Any]:
-        data = super()._get_constructor_parameters()
-        data.update(filter_alpha=self.filter_alpha, prev_index=self.prev_index)
-        return data
 
     def forward(self, obs: th.Tensor) -> th.Tensor:
         u = super().forward(obs)

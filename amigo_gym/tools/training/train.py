@@ -140,15 +140,6 @@ def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) ->
     return kwargs
 
 
-def _make_kwargs(kwargs: dict[str, Any] | None) -> dict[str, Any]:
-    """JSON env kwargs as ``gym.make`` keywords (pairs as tuples)."""
-    out = dict(kwargs or {})
-    for key in ("speed", "preview"):
-        if isinstance(out.get(key), list):
-            out[key] = tuple(out[key])
-    return out
-
-
 def _native(vec: str, n_envs: int) -> bool:
     return vec == "native" or (vec == "auto" and n_envs > 1)
 
@@ -171,9 +162,9 @@ def make_train_env(
 
     venv: Any
     if _native(vec, n_envs):
-        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs, env_id=env_id, **_make_kwargs(kwargs)))
+        venv = VecMonitor(AmigoBotSB3VecEnv(n_envs, env_id=env_id, **(kwargs or {})))
     else:
-        venv = DummyVecEnv([lambda: Monitor(gym.make(env_id, **_make_kwargs(kwargs))) for _ in range(n_envs)])
+        venv = DummyVecEnv([lambda: Monitor(gym.make(env_id, **(kwargs or {}))) for _ in range(n_envs)])
     venv.seed(seed)
     venv.action_space.seed(seed)
     if normalize is not None:
@@ -191,7 +182,6 @@ def _callbacks(
     s: Settings,
     out: Path,
     n_envs: int,
-    eval_seed: int,
     done_steps: int,
     wall: Callable[[], float],
     stop: runs.StopRequest,
@@ -201,16 +191,13 @@ def _callbacks(
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
     class Checkpoint(BaseCallback):
-        """At a rollout's start: a checkpoint every ``freq`` steps, and the stop asked for by a signal."""
+        """At a rollout's start: a checkpoint every ``checkpoint_freq`` steps, and the stop asked for by a signal."""
 
-        def __init__(self, freq: int) -> None:
-            super().__init__()
-            self.freq = freq
-            self.last = done_steps
+        last = done_steps
 
         def _on_rollout_start(self) -> None:
-            due = self.freq and self.num_timesteps - self.last >= self.freq
-            if due or stop.requested:
+            freq = s.checkpoint_freq
+            if (freq and self.num_timesteps - self.last >= freq) or stop.requested:
                 self.last = self.num_timesteps
                 save_checkpoint(self.model, out, s.algo, wall())
             if stop.requested:
@@ -226,7 +213,7 @@ def _callbacks(
 
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
-            probe = gym.make(s.env_id, **_make_kwargs(s.env_kwargs))
+            probe = gym.make(s.env_id, **s.env_kwargs)
             self.adapter = InfoAdapter.for_env(probe)
             self.dt = float(probe.unwrapped.params.dt)  # type: ignore[attr-defined]
             probe.close()
@@ -273,12 +260,12 @@ def _callbacks(
                     self.task_metrics[key] = value
                     self.logger.record(f"eval/{key}", value)
 
-    cbs: list[Any] = [Checkpoint(s.checkpoint_freq)]
+    cbs: list[Any] = [Checkpoint()]
     if s.eval_freq > 0:
         # the training's VecEnv type (SB3 warns otherwise); EvalCallback copies the VecNormalize statistics
         vec = "native" if _native(s.vec, n_envs) else "dummy"
         stats = {"training": False, "norm_reward": False} if normalize else None
-        eval_env = make_train_env(1, vec, eval_seed, stats, s.env_id, s.env_kwargs)
+        eval_env = make_train_env(1, vec, s.seed + EVAL_SEED_OFFSET, stats, s.env_id, s.env_kwargs)
         every = max(1, s.eval_freq // n_envs)
         ev = TaskEvalCallback(eval_env, n_eval_episodes=s.eval_episodes, eval_freq=every, deterministic=True, verbose=0)
         ev.n_calls = done_steps // n_envs  # resumed: evaluate at the same steps as an uninterrupted run
@@ -339,26 +326,23 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     hp_path = Path(s.hyperparams) if s.hyperparams else HYPERPARAMS_DIR / f"{s.algo}.yml"
     hp = load_hyperparams(hp_path, s.env_id)
     parsed = parse_hyperparams(s.algo, hp, str(hp_path))  # a refused run writes nothing
-    gym.make(s.env_id, **_make_kwargs(s.env_kwargs)).close()
+    gym.make(s.env_id, **s.env_kwargs).close()
     stop = runs.StopRequest("amigo-gym train: stopping at the end of this rollout (checkpoint first)")
     with runs.handling(stop), runs.RunLock(s.out):
         result = _train(s, hp_path, hp, parsed, stop, after_eval)
-    if stop.requested and result is None:
+    if result is None:  # stopped by a signal, after the checkpoint
         raise KeyboardInterrupt
-    assert result is not None
     return result
 
 
 def rollout_steps(model: Any) -> tuple[int, str] | None:
     """The env steps SB3 collects between two checks of the step budget and why (``None``: episodes)."""
-    n_envs = int(model.n_envs)
+    n, freq = int(model.n_envs), getattr(model, "train_freq", None)
     if hasattr(model, "n_steps"):
-        return int(model.n_steps) * n_envs, f"n_steps {int(model.n_steps)} x {n_envs} envs"
-    freq = getattr(model, "train_freq", None)
-    unit = getattr(getattr(freq, "unit", None), "value", None)
-    if freq is None or unit != "step":
+        return int(model.n_steps) * n, f"n_steps {int(model.n_steps)} x {n} envs"
+    if freq is None or getattr(freq.unit, "value", None) != "step":
         return None
-    return int(freq.frequency) * n_envs, f"train_freq {int(freq.frequency)} x {n_envs} envs"
+    return int(freq.frequency) * n, f"train_freq {int(freq.frequency)} x {n} envs"
 
 
 def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None) -> tuple[int, str]:
@@ -431,14 +415,12 @@ def _train(
     atomic_write_json(config_file, config, parents=True)
 
     if loaded is not None:
-        ck, model = loaded
-        done_steps, previous_wall = ck.step, ck.wall_time_s
+        done_steps, previous_wall, model = loaded[0].step, loaded[0].wall_time_s, loaded[1]
         set_random_seed(s.seed + done_steps)
     else:
         venv = make_train_env(n_envs, s.vec, s.seed, parsed.normalize, s.env_id, s.env_kwargs)
         kw = dict(parsed.kwargs)
-        noise = parsed.action_noise(int(venv.action_space.shape[0]))
-        if noise is not None:
+        if (noise := parsed.action_noise(int(venv.action_space.shape[0]))) is not None:
             kw["action_noise"] = noise
         policy: Any = parsed.policy
         if policy == LOWPASS_POLICY:
@@ -460,7 +442,7 @@ def _train(
         return previous_wall + time.perf_counter() - t0
 
     normalize = model.get_vec_normalize_env() is not None
-    cbs = _callbacks(s, out, n_envs, s.seed + EVAL_SEED_OFFSET, done_steps, wall, stop, normalize, after_eval)
+    cbs = _callbacks(s, out, n_envs, done_steps, wall, stop, normalize, after_eval)
     try:
         if remaining > 0:
             model.learn(
@@ -476,8 +458,7 @@ def _train(
     if int(model.num_timesteps) != done_steps or loaded is None:
         save_checkpoint(model, out, s.algo, wall())
     atomic_save(model.save, out / "model.zip", parents=True)
-    vecnormalize = model.get_vec_normalize_env()
-    if vecnormalize is not None:
+    if (vecnormalize := model.get_vec_normalize_env()) is not None:
         atomic_save(vecnormalize.save, out / VECNORMALIZE, parents=True)
 
     evals = runs.read_json(out / "eval.json") if (out / "eval.json").is_file() else []
@@ -499,15 +480,12 @@ def _train(
     }
     # every pickle a loader reads, with its sha256 (checked before unpickling); written here: trusted
     record["files"] = {
-        name: sha256_file(out / name)
-        for name in ("model.zip", "best_model.zip", VECNORMALIZE)
-        if (out / name).is_file()
+        n: sha256_file(out / n) for n in ("model.zip", "best_model.zip", VECNORMALIZE) if (out / n).is_file()
     }
     vouch(*record["files"].values())
     atomic_write_json(out / "run.json", record, parents=True)
     if s.export:
-        exp = Path(s.export)
-        src = out / "model.zip"
+        exp, src = Path(s.export), out / "model.zip"
         exported = {"exported_model": "final", "exported_timesteps": record["timesteps"]}
         if s.export_model == "best":
             if not evals or not (out / "best_model.zip").is_file():
