@@ -38,13 +38,13 @@ META = "meta.json"
 SNAPSHOT = ("eval.json", "best_model.zip")
 
 
+@dataclasses.dataclass
 class StopRequest:
     """A ``SIGTERM``/``SIGINT`` handler: the first signal sets :attr:`requested` (the run stops at its next safe
     point) and prints ``message`` to stderr; a second raises ``KeyboardInterrupt``."""
 
-    def __init__(self, message: str) -> None:
-        self.message = message
-        self.requested = False
+    message: str
+    requested: bool = False
 
     def __call__(self, signum: int, frame: Any) -> None:
         if self.requested:
@@ -102,10 +102,9 @@ class RunLock:
                     break
                 lock.release()  # a finishing owner removed the file we locked: take the new one
         except filelock.Timeout:
-            try:
+            owner = "?"
+            with contextlib.suppress(OSError):
                 owner = path.read_text(errors="replace").strip() or "?"
-            except OSError:
-                owner = "?"
             raise RunLockedError(
                 f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
                 "or stop it, then --resume"
@@ -132,12 +131,9 @@ class RunLock:
 
 def is_current_lock(fd: int, path: Path) -> bool:
     """Whether ``path`` still names the file open as ``fd`` (same device and inode)."""
-    try:
-        named = os.stat(path)
-    except FileNotFoundError:
-        return False
-    held = os.fstat(fd)
-    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
+    with contextlib.suppress(FileNotFoundError):
+        return os.path.samestat(os.stat(path), os.fstat(fd))
+    return False
 
 
 #: the package's temporaries: ``.tmp-*``, ``.staging-*``, ``.trash-*`` and :func:`amigo_gym.io.atomic_save`'s
@@ -185,10 +181,9 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
 
 def _key(path: Path, out: Path) -> str:
     """A file's name in a manifest: relative to ``out`` when inside it, else absolute."""
-    try:
+    with contextlib.suppress(ValueError):
         return str(path.resolve().relative_to(out.resolve()))
-    except ValueError:
-        return str(path.resolve())
+    return str(path.resolve())
 
 
 def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
@@ -305,12 +300,8 @@ def _inside(out: Path, rel: Any) -> Path | None:
 
 def _step_of(folder: Path) -> tuple[int, int]:
     """Sort key of ``step_<n>[.<k>]``: ``(n, k)`` (``(-1, 0)`` if the name does not parse)."""
-    name = folder.name.removeprefix("step_")
-    n, _, k = name.partition(".")
-    try:
-        return int(n), int(k or 0)
-    except ValueError:
-        return -1, 0
+    m = re.fullmatch(r"step_(\d+)(?:\.(\d+))?", folder.name)
+    return (int(m[1]), int(m[2] or 0)) if m else (-1, 0)
 
 
 def candidates(out: Path, report: bool = True) -> list[Path]:
@@ -401,10 +392,8 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
     fsync_dir(root)
     fault_point("checkpoint:rename")
     rel, previous = _write_pointer(out, algo, final, step)
-    keep = {rel, previous}
-    for old in list(root.iterdir()):
-        name = str(old.relative_to(out))
-        if name in keep or old.name.startswith("."):
+    for old in [p for p in root.iterdir() if str(p.relative_to(out)) not in (rel, previous)]:
+        if old.name.startswith("."):
             continue
         trash = root / f".trash-{old.name}"
         os.replace(old, trash)
@@ -415,22 +404,16 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
 
 
 def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, str | None]:
-    """Switch ``checkpoint.json`` atomically to ``folder`` (and the previous good checkpoint)."""
-    previous = _previous_good(out, algo, folder)
+    """Switch ``checkpoint.json`` atomically to ``folder`` and the previous good checkpoint (the first other
+    candidate that verifies); their names."""
+    previous = None
+    for other in (p for p in candidates(out, report=False) if p != folder):
+        with contextlib.suppress(CorruptFileError):
+            previous = str(verify_checkpoint(other, algo).folder.relative_to(out))
+            break
     rel = str(folder.relative_to(out))
     atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
     return rel, previous
-
-
-def _previous_good(out: Path, algo: str, new: Path) -> str | None:
-    """The checkpoint to keep beside ``new``: the first other candidate that verifies."""
-    for folder in (p for p in candidates(out, report=False) if p != new):
-        try:
-            verify_checkpoint(folder, algo)
-        except CorruptFileError:
-            continue
-        return str(folder.relative_to(out))
-    return None
 
 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
