@@ -12,7 +12,7 @@ import numpy as np
 from amigo_gym.data import hyperparams_dir
 from amigo_gym.tools.bench import clock, rates
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.hyperparams import Hyperparams, load_hyperparams
 
 #: the off-policy algorithms measured: name -> (module, class)
 ALGOS: dict[str, tuple[str, str]] = {
@@ -50,17 +50,13 @@ def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
 
 def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> Any:
     """The ``algo`` model of the mapping ``hp`` (:func:`offpolicy_config`) on ``venv``, CPU, ``MlpPolicy``."""
-    from stable_baselines3.common.noise import NormalActionNoise
-
     kw = {k: v for k, v in hp.items() if k not in ("n_envs", "noise_type", "noise_std")}
     if isinstance(kw.get("train_freq"), list):
         kw["train_freq"] = tuple(kw["train_freq"])
-    noise = None
-    if hp.get("noise_type") is not None:
-        if hp["noise_type"] != "normal":
-            raise ValueError(f"offpolicy: noise_type must be 'normal', got {hp['noise_type']!r}")
-        n = int(np.prod(venv.action_space.shape))
-        noise = NormalActionNoise(np.zeros(n), float(hp.get("noise_std", 0.1)) * np.ones(n))
+    if hp.get("noise_type") not in (None, "normal"):
+        raise ValueError(f"offpolicy: noise_type must be 'normal', got {hp['noise_type']!r}")
+    parsed = Hyperparams(noise_type=hp.get("noise_type"), noise_std=float(hp.get("noise_std", 0.1)))
+    noise = parsed.action_noise(int(np.prod(venv.action_space.shape)))
     return algo_class(algo)("MlpPolicy", venv, action_noise=noise, seed=seed, device="cpu", verbose=0, **kw)
 
 
