@@ -150,16 +150,13 @@ def clean_temporaries(folder: Path) -> None:
 
 def remove_matching(folder: Path, pattern: re.Pattern[str]) -> list[str]:
     """Remove the entries of ``folder`` whose names ``pattern`` matches (links, never their targets); their names."""
-    removed = []
-    if folder.is_dir():
-        for p in folder.iterdir():
-            if pattern.match(p.name):
-                if p.is_dir() and not p.is_symlink():
-                    shutil.rmtree(p, ignore_errors=True)
-                else:
-                    p.unlink(missing_ok=True)
-                removed.append(p.name)
-    return removed
+    removed = [p for p in folder.iterdir() if pattern.match(p.name)] if folder.is_dir() else []
+    for p in removed:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    return [p.name for p in removed]
 
 
 def has_run_files(folder: Path) -> bool:
@@ -171,8 +168,7 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():
         raise CorruptFileError(f"{path}: missing (listed in {source})")
-    got = sha256_file(path)
-    if got != expected:
+    if (got := sha256_file(path)) != expected:
         raise CorruptFileError(
             f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
             "(changed, truncated or replaced)"
@@ -210,8 +206,7 @@ def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any
 def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
     """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file;
     ``FileNotFoundError`` without a manifest, :class:`CorruptFileError` for a file missing or changed."""
-    path = out / manifest
-    if not path.is_file():
+    if not (path := out / manifest).is_file():
         raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
     doc = read_json(path)
     if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
@@ -259,8 +254,7 @@ class Checkpoint:
 def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
     """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling);
     :class:`CorruptFileError` for a missing or damaged ``meta.json``, another algorithm, a file missing or changed."""
-    meta_path = folder / META
-    if not meta_path.is_file():
+    if not (meta_path := folder / META).is_file():
         raise CorruptFileError(f"{meta_path}: missing (the checkpoint is incomplete)")
     meta = read_json(meta_path)
     if not (
@@ -310,11 +304,9 @@ def candidates(out: Path, report: bool = True) -> list[Path]:
     found: list[Path] = []
     if (ptr := _read_pointer(out, report)) is not None:
         for key in ("path", "previous"):
-            p = _inside(out, ptr.get(key))
-            if p is not None and p.is_dir() and p not in found:
+            if (p := _inside(out, ptr.get(key))) is not None and p.is_dir() and p not in found:
                 found.append(p)
-    root = out / CHECKPOINTS
-    if root.is_dir():
+    if (root := out / CHECKPOINTS).is_dir():
         rest = [p for p in root.iterdir() if p.is_dir() and p.name.startswith("step_") and p not in found]
         found += sorted(rest, key=_step_of, reverse=True)
     return found
@@ -339,8 +331,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
             nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
             warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
             continue
-        ptr = _read_pointer(out)
-        if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
+        if (ptr := _read_pointer(out)) is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
             _write_pointer(out, algo, folder, ck.step)
         return ck, result
     if tried:
@@ -363,8 +354,7 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
         os.chmod(tmp, file_mode(folder=True))
         names = list(write(tmp))
         for name in SNAPSHOT:  # the run's evaluation record as of this step
-            src = out / name
-            if src.is_file():
+            if (src := out / name).is_file():
                 try:
                     os.link(src, tmp / name)  # the run replaces these files atomically: a link is a snapshot
                 except OSError:
