@@ -37,9 +37,7 @@ class OneLineParser(argparse.ArgumentParser):
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
-        for key in ("description", "epilog"):
-            if isinstance(kwargs.get(key), str):
-                kwargs[key] = _plain(str(kwargs[key]))
+        kwargs |= {k: _plain(v) for k, v in kwargs.items() if k in ("description", "epilog") and isinstance(v, str)}
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:
