@@ -180,13 +180,9 @@ def bench_startup(repeats: int = 3) -> dict[str, float | None]:
     def median(code: str) -> float:
         return statistics.median(_wall(code) for _ in range(repeats))
 
-    out: dict[str, float | None] = {
-        "import_s": median("import amigo_gym"),
-        "python_s": median("pass"),
-        "numpy_first_s": median(_numpy_route(_FIRST_STEP)),
-        "v1_numpy_first_s": median(_numpy_route(_FIRST_STEP_V1)),
-    }
-    out |= dict.fromkeys(("kernel_cold_s", "kernel_warm_s", "v1_cold_s", "v1_warm_s", "numba_import_s"))
+    out: dict[str, float | None] = dict.fromkeys(key for key, _ in STARTUP_ROWS)
+    out |= {"import_s": median("import amigo_gym"), "python_s": median("pass")}
+    out["numpy_first_s"], out["v1_numpy_first_s"] = (median(_numpy_route(c)) for c in (_FIRST_STEP, _FIRST_STEP_V1))
     if numba_available():
         out["kernel_cold_s"], out["kernel_warm_s"] = _cold_warm(_FIRST_STEP, repeats)
         out["v1_cold_s"], out["v1_warm_s"] = _cold_warm(_FIRST_STEP_V1, repeats)

@@ -85,8 +85,7 @@ def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: 
 
 def fixed_cost(rows: Sequence[Doc]) -> Doc | None:
     """The time of one ``step`` call at N = 1 [us]: native, CartPole, their ratio (target <= 0.5), per kernel."""
-    r = next((r for r in rows if r["n"] == 1), None)
-    if r is None:
+    if (r := next((r for r in rows if r["n"] == 1), None)) is None:
         return None
     a, c = r["call_us"], r["cartpole_call_us"]
     kernels = {f"amigobot_{k}_us": 1e6 / v for k, v in r["kernels"].items()}
@@ -203,8 +202,7 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
         vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard")}
     us = {f"{k}_us": t * 1e6 for k, t in ts.items()}
     ratios = {"ratio": ts["v1"] / ts["v0"], "ratio_hard": ts["v1_hard"] / ts["v0"]}
-    hard = {k: list(v) if isinstance(v, tuple) else v for k, v in V1_HARD.items()}
-    return us | ratios | {"hard_task": hard, "vector": vector}
+    return us | ratios | {"hard_task": dict(V1_HARD), "vector": vector}
 
 
 def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[Doc]:
@@ -227,7 +225,7 @@ def targets(doc: Doc, n_vector: int = 4096) -> list[Doc]:
     reported only) and whether it is met."""
     out = []
 
-    def add(name: str, label: str, ratio: float) -> None:
+    def add(name: str, label: str, ratio: Any) -> None:
         op, bound = TARGETS.get(name, (None, None))
         met = None if op is None else (ratio <= bound if op == "<=" else ratio >= bound)
         out.append({"name": name, "label": label, "ratio": ratio, "op": op, "bound": bound, "met": met})
@@ -489,8 +487,7 @@ def run(s: EnvSettings) -> int:
         doc["notes"].append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
     elif not s.skip_ppo:
         say(f"SB3 PPO learn, {s.ppo_steps} steps per run")
-        rollout = 64 if s.quick else 2048
-        doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=rollout, repeats=s.ppo_repeats, v1=s.v1)
+        doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=64 if s.quick else 2048, repeats=s.ppo_repeats, v1=s.v1)
     if s.v1:
         say("AmigoBot-v1 vs v0")
         doc["v1"] = bench_v1(sizes, s.repeats, s.min_time)

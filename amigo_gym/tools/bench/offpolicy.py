@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -65,8 +66,7 @@ def _venv(n_envs: int, seed: int) -> Any:
 
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
-    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
-    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
+    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **TRAINING_DISTRIBUTION["env_kwargs"]))
     venv.seed(seed)
     return venv
 
@@ -102,11 +102,11 @@ def bench_offpolicy(
     return out | {"config": cfg}
 
 
+@dataclass
 class DeterministicPolicy:
     """An SB3 model's ``predict``, deterministic by default (as ``fastppo.evaluate_policy`` calls it)."""
 
-    def __init__(self, model: Any) -> None:
-        self.model = model
+    model: Any
 
     def predict(
         self, obs: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
