@@ -301,11 +301,8 @@ def _step_of(folder: Path) -> tuple[int, int]:
 def candidates(out: Path, report: bool = True) -> list[Path]:
     """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first (a
     damaged pointer is reported with a warning)."""
-    found: list[Path] = []
-    if (ptr := _read_pointer(out, report)) is not None:
-        for key in ("path", "previous"):
-            if (p := _inside(out, ptr.get(key))) is not None and p.is_dir() and p not in found:
-                found.append(p)
+    ptr = _read_pointer(out, report) or {}
+    found = list(dict.fromkeys(p for key in ("path", "previous") if (p := _inside(out, ptr.get(key))) and p.is_dir()))
     if (root := out / CHECKPOINTS).is_dir():
         rest = [p for p in root.iterdir() if p.is_dir() and p.name.startswith("step_") and p not in found]
         found += sorted(rest, key=_step_of, reverse=True)
