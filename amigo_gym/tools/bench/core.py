@@ -43,7 +43,7 @@ def euler_step(pose: Array, w: Array, dt: float, robot: RobotParams) -> Array:
 
 
 def loop_step(
-    poses: list[tuple[float, float, float]], w: list[tuple[float, float]], dt: float, robot: RobotParams
+    poses: Sequence[Sequence[float]], w: Sequence[Sequence[float]], dt: float, robot: RobotParams
 ) -> list[tuple[float, float, float]]:
     """Peer: the exact arc step of :func:`step_pose`, one state at a time in plain Python."""
     out = []
