@@ -4,6 +4,7 @@ errors, range checks, the extra-module probe."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import itertools
 import json
@@ -21,16 +22,13 @@ class HelpFormatter(argparse.HelpFormatter):
     """Appends ``(default: X)`` (a flag: ``(default: off)``) to an option's help unless it names its default."""
 
     def _get_help_string(self, action: argparse.Action) -> str:
-        text = action.help or ""
-        if "default" in text.lower() or not action.option_strings or action.default is argparse.SUPPRESS:
+        text, default = action.help or "", action.default
+        if "default" in text.lower() or not action.option_strings or default in (None, argparse.SUPPRESS):
             return text
         if isinstance(action, argparse._StoreTrueAction | argparse._StoreFalseAction):
             return f"{text} (default: off)"
-        if action.default is None:
-            return text
-        default = action.default
         shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else str(default)
-        return f"{text} (default: {shown!r})" if shown == "" else f"{text} (default: {shown})"
+        return f"{text} (default: {shown or repr(shown)})"
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -39,9 +37,7 @@ class OneLineParser(argparse.ArgumentParser):
 
     def __init__(self, *args: object, **kwargs: object) -> None:
         kwargs.setdefault("formatter_class", HelpFormatter)
-        for key in ("description", "epilog"):
-            if isinstance(kwargs.get(key), str):
-                kwargs[key] = _plain(str(kwargs[key]))
+        kwargs |= {k: _plain(v) for k, v in kwargs.items() if k in ("description", "epilog") and isinstance(v, str)}
         super().__init__(*args, **kwargs)  # type: ignore[arg-type]
 
     def error(self, message: str) -> NoReturn:
@@ -53,21 +49,15 @@ def attribute_help(cls: type) -> dict[str, str]:
     lines joined, reST markup and the final full stop removed; a class's entry replaces its bases')."""
     out: dict[str, str] = {}
     for klass in reversed(cls.__mro__):
-        out.update(_attributes(klass.__dict__.get("__doc__") or ""))
+        lines = (klass.__dict__.get("__doc__") or "").partition("Attributes:\n")[2].splitlines()
+        indent, current = len(lines[0]) - len(lines[0].lstrip()) if lines else 0, ""
+        for line in itertools.takewhile(str.strip, lines):  # an entry starts at the first entry's indent
+            name, colon, text = line.strip().partition(": ")
+            if colon and name.isidentifier() and len(line) - len(line.lstrip()) == indent:
+                current, out[name] = name, text
+            elif current:
+                out[current] += " " + line.strip()
     return {name: _plain(text).rstrip(".") for name, text in out.items()}
-
-
-def _attributes(doc: str) -> dict[str, str]:
-    out: dict[str, str] = {}
-    lines = doc.partition("Attributes:\n")[2].splitlines()
-    indent, current = len(lines[0]) - len(lines[0].lstrip()) if lines else 0, ""
-    for line in itertools.takewhile(str.strip, lines):  # an entry starts at the first entry's indent
-        name, colon, text = line.strip().partition(": ")
-        if colon and name.isidentifier() and len(line) - len(line.lstrip()) == indent:
-            current, out[name] = name, text
-        elif current:
-            out[current] += " " + line.strip()
-    return out
 
 
 def _plain(text: str) -> str:
@@ -101,31 +91,30 @@ def cli(
 
 def json_object(text: str) -> dict[str, Any]:
     """``text`` as a JSON object; ``ValueError`` otherwise."""
-    try:
-        value = json.loads(text)
-    except ValueError:
-        value = None
-    if not isinstance(value, dict):
-        raise ValueError(f"must be a JSON object, got {text!r}")
-    return value
+    with contextlib.suppress(ValueError):
+        if isinstance(value := json.loads(text), dict):
+            return value
+    raise ValueError(f"must be a JSON object, got {text!r}")
+
+
+_BOOLS = {"1": True, "true": True, "yes": True, "on": True, "0": False, "false": False, "no": False, "off": False}
 
 
 def parse_bool(text: str) -> bool:
     """``true/yes/on/1`` or ``false/no/off/0`` (any case) as a ``bool``."""
-    t = text.strip().lower()
-    if t in ("1", "true", "yes", "on"):
-        return True
-    if t in ("0", "false", "no", "off"):
-        return False
-    raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
+    if (value := _BOOLS.get(text.strip().lower())) is None:
+        raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
+    return value
 
 
-def _meta(f: Field[Any]) -> dict[str, Any]:
-    return {**cli()["cli"], **f.metadata.get("cli", {})}
-
-
-def _flag(f: Field[Any]) -> str:
-    return str(_meta(f)["flag"] or "--" + f.name.replace("_", "-"))
+def _options(cls: type) -> list[tuple[Field[Any], dict[str, Any], str]]:
+    """The fields of ``cls`` that are options: each with its :func:`cli` metadata and its flag."""
+    out = []
+    for f in fields(cls):
+        meta = {**cli()["cli"], **f.metadata.get("cli", {})}
+        if f.init and not meta["skip"]:
+            out.append((f, meta, str(meta["flag"] or "--" + f.name.replace("_", "-"))))
+    return out
 
 
 def _strip_optional(tp: Any) -> Any:
@@ -137,9 +126,8 @@ def _strip_optional(tp: Any) -> Any:
 
 def _scalar(tp: Any) -> dict[str, Any]:
     if get_origin(tp) is Literal:
-        choices = get_args(tp)
-        return {"type": type(choices[0]), "choices": choices}
-    if tp in (int, float, str) or isinstance(tp, type):
+        return {"type": type(get_args(tp)[0]), "choices": get_args(tp)}
+    if isinstance(tp, type):
         return {"type": tp}
     raise TypeError(f"no command-line type for {tp!r}")
 
@@ -152,51 +140,41 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag (default ``False``), a ``--no-x`` flag, else ``true``/``false``.
     No default: a required option.
     """
-    helps = attribute_help(cls)
-    hints = get_type_hints(cls)
+    helps, hints = attribute_help(cls), get_type_hints(cls)
     groups: dict[str, Any] = {}
-    for f in fields(cls):
-        meta = _meta(f)
-        if meta["skip"] or not f.init:
-            continue
-        flag = _flag(f)
+    for f, meta, flag in _options(cls):
         default = f.default_factory() if f.default_factory is not MISSING else f.default
         help_text = argparse.SUPPRESS if meta["hidden"] else helps.get(f.name, "")
-        kw: dict[str, Any] = {"dest": f.name, "help": help_text}
+        kw: dict[str, Any] = {"help": help_text}
         if default is MISSING or meta["required"]:
             kw["required"] = True
         else:
-            kw["default"] = default
+            kw["default"] = list(default) if isinstance(default, tuple) else default
         tp = _strip_optional(hints[f.name])
         origin, args = get_origin(tp), get_args(tp)
         if meta["parse"] is not None:
             kw.update(type=str, default=None)
+        elif tp is bool and flag.startswith("--no-"):  # its help: what the field's help says after "--no-x: "
+            kw.update(action="store_false", help=help_text.partition(f"{flag}: ")[2] or help_text)
+        elif tp is bool and default is False:
+            kw["action"] = "store_true"
         elif tp is bool:
-            if flag.startswith("--no-"):  # the help of the flag: what the field's help says after "--no-x: "
-                kw.update(action="store_false", help=help_text.partition(f"{flag}: ")[2] or help_text)
-            elif default is False:
-                kw["action"] = "store_true"
-            else:
-                kw.update(type=parse_bool, help=f"{help_text} [true/false]")
+            kw.update(type=parse_bool, help=f"{help_text} [true/false]")
         elif origin in (list, tuple):
-            fixed = origin is tuple and Ellipsis not in args
-            kw.update(_scalar(args[0]), nargs=len(args) if fixed else "+")
-            if "default" in kw and kw["default"] is not None:
-                kw["default"] = list(kw["default"])
+            kw.update(_scalar(args[0]), nargs=len(args) if origin is tuple and Ellipsis not in args else "+")
         else:
             kw.update(_scalar(tp))
-        if meta["metavar"] is None and "[file]" in help_text and not meta["positional"] and "action" not in kw:
+        if "[file]" in help_text and not meta["positional"] and "action" not in kw:
             kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
         kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
         if meta["group"] is not None and meta["group"] not in groups:
             groups[meta["group"]] = parser.add_mutually_exclusive_group()
         target = groups.get(meta["group"], parser)
         if meta["positional"]:
-            del kw["dest"]
             kw.pop("required", None)
             target.add_argument(f.name, **kw)
         else:
-            target.add_argument(flag, **kw)
+            target.add_argument(flag, dest=f.name, **kw)
 
 
 def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
@@ -204,54 +182,50 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     ``cli(parse=...)`` options are parsed here (a ``ValueError`` becomes ``<flag> <message>``)."""
     hints = get_type_hints(cls)
     kw: dict[str, Any] = {}
-    for f in fields(cls):  # type: ignore[arg-type]
-        meta = _meta(f)
-        if meta["skip"] or not f.init or not hasattr(namespace, f.name):
-            continue
-        value = getattr(namespace, f.name)
-        if meta["parse"] is not None and value is None:
+    for f, meta, flag in _options(cls):
+        value = getattr(namespace, f.name, None)
+        if value is None and (meta["parse"] is not None or not hasattr(namespace, f.name)):
             continue
         if meta["parse"] is not None and isinstance(value, str):  # else a parsed default set on the parser
             try:
                 value = meta["parse"](value)
             except ValueError as exc:
-                raise ValueError(f"{_flag(f)} {exc}") from None
+                raise ValueError(f"{flag} {exc}") from None
         elif isinstance(value, list):
             value = tuple(value) if get_origin(_strip_optional(hints[f.name])) is tuple else list(value)
         kw[f.name] = value
-    kw.update(extra)
-    return cls(**kw)
+    return cls(**kw, **extra)
 
 
-def _parse(cls: type, argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, argparse.Namespace]:
+def _parse(cls: type[T], argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, Callable[[], T]]:
+    """The parser and a function making the ``validate()``d settings from ``argv`` (``None``: ``sys.argv[1:]``)."""
     parser = OneLineParser(prog=prog, description=doc)
     add_dataclass_options(parser, cls)
-    return parser, parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+
+    def settings(**extra: Any) -> T:
+        out = settings_from_args(cls, namespace, **extra)
+        getattr(out, "validate", lambda: None)()
+        return out
+
+    return parser, settings
 
 
 def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
     """The settings ``cls`` of the command ``prog`` from ``argv`` (``None``: ``sys.argv[1:]``), ``validate()``d when
     ``cls`` has it; a bad value exits with the parser's one-line error (status 2)."""
-    parser, namespace = _parse(cls, argv, prog, description)
+    parser, settings = _parse(cls, argv, prog, description)
     try:
-        settings = settings_from_args(cls, namespace, **extra)
-        getattr(settings, "validate", lambda: None)()
+        return settings(**extra)
     except ValueError as exc:
         parser.error(str(exc))
-    return settings
 
 
 def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str] | None, prog: str, doc: str) -> int:
     """``run(settings)`` with the settings ``cls`` from ``argv``, ``validate()``d when ``cls`` has it: a malformed
     option exits (status 2); a value ``cls`` or ``run`` refuses is one line and the returned status 2."""
-    namespace = _parse(cls, argv, prog, doc)[1]
-
-    def go() -> int | None:
-        settings = settings_from_args(cls, namespace)
-        getattr(settings, "validate", lambda: None)()
-        return run(settings)
-
-    return run_guarded(go, prog)
+    settings = _parse(cls, argv, prog, doc)[1]
+    return run_guarded(lambda: run(settings()), prog)
 
 
 def _one_line(text: object) -> str:
@@ -278,15 +252,13 @@ def say(message: str) -> None:
 
 def missing_modules(modules: Sequence[str]) -> list[str]:
     """The modules of ``modules`` that ``importlib.util.find_spec`` cannot find (nothing is imported)."""
-    out = []
-    for m in modules:
-        try:
-            found = importlib.util.find_spec(m) is not None
-        except (ImportError, ValueError):
-            found = False
-        if not found:
-            out.append(m)
-    return out
+
+    def found(module: str) -> bool:
+        with contextlib.suppress(ImportError, ValueError):
+            return importlib.util.find_spec(module) is not None
+        return False
+
+    return [m for m in modules if not found(m)]
 
 
 def install_hint(extra: str) -> str:

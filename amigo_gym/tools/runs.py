@@ -38,13 +38,13 @@ META = "meta.json"
 SNAPSHOT = ("eval.json", "best_model.zip")
 
 
+@dataclasses.dataclass
 class StopRequest:
     """A ``SIGTERM``/``SIGINT`` handler: the first signal sets :attr:`requested` (the run stops at its next safe
     point) and prints ``message`` to stderr; a second raises ``KeyboardInterrupt``."""
 
-    def __init__(self, message: str) -> None:
-        self.message = message
-        self.requested = False
+    message: str
+    requested: bool = False
 
     def __call__(self, signum: int, frame: Any) -> None:
         if self.requested:
@@ -102,10 +102,9 @@ class RunLock:
                     break
                 lock.release()  # a finishing owner removed the file we locked: take the new one
         except filelock.Timeout:
-            try:
+            owner = "?"
+            with contextlib.suppress(OSError):
                 owner = path.read_text(errors="replace").strip() or "?"
-            except OSError:
-                owner = "?"
             raise RunLockedError(
                 f"{self.folder} is in use by another amigo-gym process (pid {owner}); wait for it to finish "
                 "or stop it, then --resume"
@@ -132,12 +131,9 @@ class RunLock:
 
 def is_current_lock(fd: int, path: Path) -> bool:
     """Whether ``path`` still names the file open as ``fd`` (same device and inode)."""
-    try:
-        named = os.stat(path)
-    except FileNotFoundError:
-        return False
-    held = os.fstat(fd)
-    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)
+    with contextlib.suppress(FileNotFoundError):
+        return os.path.samestat(os.stat(path), os.fstat(fd))
+    return False
 
 
 #: the package's temporaries: ``.tmp-*``, ``.staging-*``, ``.trash-*`` and :func:`amigo_gym.io.atomic_save`'s
@@ -154,16 +150,13 @@ def clean_temporaries(folder: Path) -> None:
 
 def remove_matching(folder: Path, pattern: re.Pattern[str]) -> list[str]:
     """Remove the entries of ``folder`` whose names ``pattern`` matches (links, never their targets); their names."""
-    removed = []
-    if folder.is_dir():
-        for p in folder.iterdir():
-            if pattern.match(p.name):
-                if p.is_dir() and not p.is_symlink():
-                    shutil.rmtree(p, ignore_errors=True)
-                else:
-                    p.unlink(missing_ok=True)
-                removed.append(p.name)
-    return removed
+    removed = [p for p in folder.iterdir() if pattern.match(p.name)] if folder.is_dir() else []
+    for p in removed:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    return [p.name for p in removed]
 
 
 def has_run_files(folder: Path) -> bool:
@@ -175,8 +168,7 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
     """Raise :class:`CorruptFileError` unless ``path``'s sha256 is ``expected`` (as recorded in ``source``)."""
     if not path.is_file():
         raise CorruptFileError(f"{path}: missing (listed in {source})")
-    got = sha256_file(path)
-    if got != expected:
+    if (got := sha256_file(path)) != expected:
         raise CorruptFileError(
             f"{path}: sha256 {got[:12]}... does not match {expected[:12]}... recorded in {source} "
             "(changed, truncated or replaced)"
@@ -185,10 +177,9 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
 
 def _key(path: Path, out: Path) -> str:
     """A file's name in a manifest: relative to ``out`` when inside it, else absolute."""
-    try:
+    with contextlib.suppress(ValueError):
         return str(path.resolve().relative_to(out.resolve()))
-    except ValueError:
-        return str(path.resolve())
+    return str(path.resolve())
 
 
 def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
@@ -215,8 +206,7 @@ def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any
 def verify_manifest(out: Path, manifest: str) -> dict[str, str]:
     """The ``{file: sha256}`` of the manifest ``out/<manifest>`` of :func:`publish`, after checking every file;
     ``FileNotFoundError`` without a manifest, :class:`CorruptFileError` for a file missing or changed."""
-    path = out / manifest
-    if not path.is_file():
+    if not (path := out / manifest).is_file():
         raise FileNotFoundError(f"{path}: missing; the outputs in {out} are not a complete set")
     doc = read_json(path)
     if not isinstance(doc, dict) or not isinstance(doc.get("files"), dict):
@@ -264,8 +254,7 @@ class Checkpoint:
 def verify_checkpoint(folder: Path, algo: str) -> Checkpoint:
     """Read ``meta.json`` of a checkpoint folder and check every file's sha256 (no unpickling);
     :class:`CorruptFileError` for a missing or damaged ``meta.json``, another algorithm, a file missing or changed."""
-    meta_path = folder / META
-    if not meta_path.is_file():
+    if not (meta_path := folder / META).is_file():
         raise CorruptFileError(f"{meta_path}: missing (the checkpoint is incomplete)")
     meta = read_json(meta_path)
     if not (
@@ -305,25 +294,16 @@ def _inside(out: Path, rel: Any) -> Path | None:
 
 def _step_of(folder: Path) -> tuple[int, int]:
     """Sort key of ``step_<n>[.<k>]``: ``(n, k)`` (``(-1, 0)`` if the name does not parse)."""
-    name = folder.name.removeprefix("step_")
-    n, _, k = name.partition(".")
-    try:
-        return int(n), int(k or 0)
-    except ValueError:
-        return -1, 0
+    m = re.fullmatch(r"step_(\d+)(?:\.(\d+))?", folder.name)
+    return (int(m[1]), int(m[2] or 0)) if m else (-1, 0)
 
 
 def candidates(out: Path, report: bool = True) -> list[Path]:
     """Checkpoint folders to try, best first: the pointer's, its previous one, then the others newest first (a
     damaged pointer is reported with a warning)."""
-    found: list[Path] = []
-    if (ptr := _read_pointer(out, report)) is not None:
-        for key in ("path", "previous"):
-            p = _inside(out, ptr.get(key))
-            if p is not None and p.is_dir() and p not in found:
-                found.append(p)
-    root = out / CHECKPOINTS
-    if root.is_dir():
+    ptr = _read_pointer(out, report) or {}
+    found = list(dict.fromkeys(p for key in ("path", "previous") if (p := _inside(out, ptr.get(key))) and p.is_dir()))
+    if (root := out / CHECKPOINTS).is_dir():
         rest = [p for p in root.iterdir() if p.is_dir() and p.name.startswith("step_") and p not in found]
         found += sorted(rest, key=_step_of, reverse=True)
     return found
@@ -348,8 +328,7 @@ def load_checkpoint(out: Path, algo: str, load: Callable[[Checkpoint], Any]) -> 
             nxt = f"falling back to {cands[i + 1].name}" if i + 1 < len(cands) else "no other checkpoint"
             warn(f"checkpoint {folder.name} is unusable: {exc}; {nxt}")
             continue
-        ptr = _read_pointer(out)
-        if ptr is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
+        if (ptr := _read_pointer(out)) is None or _inside(out, ptr.get("path")) != folder:  # repair the pointer
             _write_pointer(out, algo, folder, ck.step)
         return ck, result
     if tried:
@@ -372,8 +351,7 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
         os.chmod(tmp, file_mode(folder=True))
         names = list(write(tmp))
         for name in SNAPSHOT:  # the run's evaluation record as of this step
-            src = out / name
-            if src.is_file():
+            if (src := out / name).is_file():
                 try:
                     os.link(src, tmp / name)  # the run replaces these files atomically: a link is a snapshot
                 except OSError:
@@ -401,10 +379,8 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
     fsync_dir(root)
     fault_point("checkpoint:rename")
     rel, previous = _write_pointer(out, algo, final, step)
-    keep = {rel, previous}
-    for old in list(root.iterdir()):
-        name = str(old.relative_to(out))
-        if name in keep or old.name.startswith("."):
+    for old in [p for p in root.iterdir() if str(p.relative_to(out)) not in (rel, previous)]:
+        if old.name.startswith("."):
             continue
         trash = root / f".trash-{old.name}"
         os.replace(old, trash)
@@ -415,22 +391,16 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
 
 
 def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, str | None]:
-    """Switch ``checkpoint.json`` atomically to ``folder`` (and the previous good checkpoint)."""
-    previous = _previous_good(out, algo, folder)
+    """Switch ``checkpoint.json`` atomically to ``folder`` and the previous good checkpoint (the first other
+    candidate that verifies); their names."""
+    previous = None
+    for other in (p for p in candidates(out, report=False) if p != folder):
+        with contextlib.suppress(CorruptFileError):
+            previous = str(verify_checkpoint(other, algo).folder.relative_to(out))
+            break
     rel = str(folder.relative_to(out))
     atomic_write_json(out / POINTER, {"num_timesteps": int(step), "path": rel, "previous": previous})
     return rel, previous
-
-
-def _previous_good(out: Path, algo: str, new: Path) -> str | None:
-    """The checkpoint to keep beside ``new``: the first other candidate that verifies."""
-    for folder in (p for p in candidates(out, report=False) if p != new):
-        try:
-            verify_checkpoint(folder, algo)
-        except CorruptFileError:
-            continue
-        return str(folder.relative_to(out))
-    return None
 
 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import statistics
@@ -10,7 +11,6 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 #: random actions drawn in advance per env, cycled
 POOL = 16
@@ -28,31 +28,23 @@ def measure_many(fns: Mapping[str, Callable[[], object]], repeats: int, min_time
     samples: dict[str, list[float]] = {name: [] for name in fns}
     for _ in range(repeats):
         for name, fn in fns.items():
-            m = inner[name]
             t0 = time.perf_counter()
-            for _ in range(m):
+            for _ in range(inner[name]):
                 fn()
-            samples[name].append((time.perf_counter() - t0) / m)
+            samples[name].append((time.perf_counter() - t0) / inner[name])
     return {name: statistics.median(v) for name, v in samples.items()}
 
 
 def stepper(env: Any, seed: int = 0) -> Callable[[], object]:
-    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`; a single env is reset
-    when its episode ends."""
-    space = env.action_space
-    if isinstance(space, gym.spaces.Box):
-        rng = np.random.default_rng(seed)
-        pool = list(rng.uniform(space.low, space.high, (POOL, *space.shape)).astype(space.dtype))
-    else:  # CartPole: discrete actions
-        space.seed(seed)
-        pool = [space.sample() for _ in range(POOL)]
+    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`, drawn with ``seed``; a
+    single env is reset when its episode ends."""
+    env.action_space.seed(seed)
+    actions = itertools.cycle([env.action_space.sample() for _ in range(POOL)])
     env.reset(seed=seed)
     single = not isinstance(env, gym.vector.VectorEnv)
-    k = [0]
 
     def step() -> object:
-        i = k[0] = (k[0] + 1) % POOL
-        out = env.step(pool[i])
+        out = env.step(next(actions))
         if single and (out[2] or out[3]):
             env.reset()
         return None

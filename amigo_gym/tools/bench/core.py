@@ -43,7 +43,7 @@ def euler_step(pose: Array, w: Array, dt: float, robot: RobotParams) -> Array:
 
 
 def loop_step(
-    poses: list[tuple[float, float, float]], w: list[tuple[float, float]], dt: float, robot: RobotParams
+    poses: Sequence[Sequence[float]], w: Sequence[Sequence[float]], dt: float, robot: RobotParams
 ) -> list[tuple[float, float, float]]:
     """Peer: the exact arc step of :func:`step_pose`, one state at a time in plain Python."""
     out = []
@@ -60,37 +60,32 @@ def loop_step(
 def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.random.Generator, kernels: bool) -> Row:
     """Env-steps per second of each method at batch size ``n`` (``None``: not measured) and ``ratio_kernel``."""
     params = tracking.TrackingParams.v0()
-    robot = params.robot
-    path = params.path
+    robot, dt = params.robot, params.dt
     pose = np.column_stack((rng.normal(0.0, 0.05, (n, 2)), rng.normal(0.0, 0.1, n)))
-    angles = np.zeros((n, 3))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
     k, st, ep = v0_columns(params, pose, w)
-    ring = np.zeros((n, k.ring_length, 2))
+    ring, castor = np.zeros((n, k.ring_length, 2)), np.zeros(n)
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
 
     def columns() -> tracking.State:
-        return tracking.step_columns(k, path, st, ep, ring, 0, a1, a2)[0]
+        return tracking.step_columns(k, params.path, st, ep, ring, 0, a1, a2)[0]
 
     def transition() -> object:  # the step and the castor angle, as the env's reference route
         new = columns()
-        v, bdot = body_velocity_columns(new.w1, new.w2, robot)
-        return new, angles[:, 2] + castor_rate_columns(v, bdot, robot) * params.dt
+        return new, castor + castor_rate_columns(*body_velocity_columns(new.w1, new.w2, robot), robot) * dt
 
     fns: dict[str, Callable[[], object]] = {
         "transition": transition,
         "columns": columns,
-        "step_pose": lambda: step_pose(pose, w, params.dt, robot),
-        "euler": lambda: euler_step(pose, w, params.dt, robot),
+        "step_pose": lambda: step_pose(pose, w, dt, robot),
+        "euler": lambda: euler_step(pose, w, dt, robot),
     }
     if n <= loop_max:
-        pl = [(float(a), float(b), float(c)) for a, b, c in pose]
-        wl = [(float(a), float(b)) for a, b in w]
-        fns["loop"] = lambda: loop_step(pl, wl, params.dt, robot)
+        pl, wl = pose.tolist(), w.tolist()
+        fns["loop"] = lambda: loop_step(pl, wl, dt, robot)
     if kernels:
-        fns["kernel"] = kernel_stepper(params, pose, w, action, False)
-        fns["kernel_par"] = kernel_stepper(params, pose, w, action, True)
+        fns |= {m: kernel_stepper(params, pose, w, action, m == "kernel_par") for m in ("kernel", "kernel_par")}
     t = measure_many(fns, repeats, min_time)
     row: Row = {"n": n} | {m: n / t[m] if m in t else None for m in METHODS}
     row["ratio_kernel"] = None if row["kernel"] is None else row["kernel"] / row["columns"]
@@ -126,14 +121,6 @@ def kernel_stepper(
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
     obs = np.empty((n, len(tracking.obs_fields(k.params))), dtype=np.float32)
     return lambda: b.step(rings, 1, a1, a2, obs)
-
-
-def bench(
-    sizes: Sequence[int], repeats: int, min_time: float, loop_max: int, kernels: bool, seed: int = 0
-) -> list[Row]:
-    """One :func:`_bench_one` row per size; ``kernels=False`` (or no numba) leaves the kernel columns ``None``."""
-    rng = np.random.default_rng(seed)
-    return [_bench_one(n, repeats, min_time, loop_max, rng, kernels and numba_available()) for n in sizes]
 
 
 _FIRST_STEP = (
@@ -193,13 +180,9 @@ def bench_startup(repeats: int = 3) -> dict[str, float | None]:
     def median(code: str) -> float:
         return statistics.median(_wall(code) for _ in range(repeats))
 
-    out: dict[str, float | None] = {
-        "import_s": median("import amigo_gym"),
-        "python_s": median("pass"),
-        "numpy_first_s": median(_numpy_route(_FIRST_STEP)),
-        "v1_numpy_first_s": median(_numpy_route(_FIRST_STEP_V1)),
-    }
-    out |= dict.fromkeys(("kernel_cold_s", "kernel_warm_s", "v1_cold_s", "v1_warm_s", "numba_import_s"))
+    out: dict[str, float | None] = dict.fromkeys(key for key, _ in STARTUP_ROWS)
+    out |= {"import_s": median("import amigo_gym"), "python_s": median("pass")}
+    out["numpy_first_s"], out["v1_numpy_first_s"] = (median(_numpy_route(c)) for c in (_FIRST_STEP, _FIRST_STEP_V1))
     if numba_available():
         out["kernel_cold_s"], out["kernel_warm_s"] = _cold_warm(_FIRST_STEP, repeats)
         out["v1_cold_s"], out["v1_warm_s"] = _cold_warm(_FIRST_STEP_V1, repeats)
@@ -263,8 +246,8 @@ def run(s: CoreSettings) -> int:
     """``amigo-gym bench-core`` with the settings ``s``: the table on stdout (progress on stderr), ``--json``."""
     sizes = list(s.sizes or ((1, 64) if s.quick else DEFAULT_SIZES))
     repeats, min_time = (1, 0.01) if s.quick else (s.repeats, s.min_time)
-    threads = None
-    if not s.skip_kernel and numba_available():
+    threads, kernels = None, not s.skip_kernel and numba_available()
+    if kernels:
         import numba
 
         if s.threads is not None:
@@ -272,7 +255,8 @@ def run(s: CoreSettings) -> int:
         threads = int(numba.get_num_threads())
     print(f"{machine_line()}; median of {repeats} repeats", flush=True)
     say(f"{PROG}: sizes {sizes}")
-    rows = bench(sizes, repeats, min_time, s.loop_max, not s.skip_kernel)
+    rng = np.random.default_rng(0)
+    rows = [_bench_one(n, repeats, min_time, s.loop_max, rng, kernels) for n in sizes]  # kernels off: columns None
     startup = None
     if not s.skip_startup:
         say(f"{PROG}: start-up of fresh processes")
@@ -286,7 +270,3 @@ def run(s: CoreSettings) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym bench-core``."""
     return run_command(CoreSettings, run, argv, PROG, "Env-steps per second of the batched exact step, with peers.")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -4,9 +4,9 @@
 from __future__ import annotations
 
 import gc
+import json
 import os
 import statistics
-import sys
 import time
 import tracemalloc
 from collections.abc import Callable, Sequence
@@ -17,7 +17,6 @@ from typing import Any
 
 import gymnasium as gym
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-from llvmlite import binding
 
 from amigo_gym.io import atomic_write_json
 from amigo_gym.sim.fast_v1 import numba_available
@@ -37,8 +36,7 @@ V1_MAX_N = 4096
 #: the step implementations ``--kernels`` compares (the vector envs also run ``"numba-parallel"``)
 KERNEL_CHOICES = ("numpy", "numba")
 #: the speed targets for one core: name -> (comparison, bound)
-TARGETS: dict[str, tuple[str, float]] = {"single": ("<=", 0.4), "vector_4096": (">=", 1.0), "call_n1": ("<=", 0.5)}
-TARGETS["v1_v0"] = ("<=", 1.5)
+TARGETS = {"single": ("<=", 0.4), "vector_4096": (">=", 1.0), "call_n1": ("<=", 0.5), "v1_v0": ("<=", 1.5)}
 Doc = dict[str, Any]
 
 
@@ -87,8 +85,7 @@ def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: 
 
 def fixed_cost(rows: Sequence[Doc]) -> Doc | None:
     """The time of one ``step`` call at N = 1 [us]: native, CartPole, their ratio (target <= 0.5), per kernel."""
-    r = next((r for r in rows if r["n"] == 1), None)
-    if r is None:
+    if (r := next((r for r in rows if r["n"] == 1), None)) is None:
         return None
     a, c = r["call_us"], r["cartpole_call_us"]
     kernels = {f"amigobot_{k}_us": 1e6 / v for k, v in r["kernels"].items()}
@@ -112,7 +109,6 @@ def _traced(make: Callable[[], Any], seed: int, steps: int = 3) -> tuple[int, in
         step()
         peak = tracemalloc.get_traced_memory()[1] - before
         envs.close()
-        del envs, step
     finally:
         tracemalloc.stop()
     return retained, peak
@@ -138,9 +134,10 @@ def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> tuple[float
     def timed(fn: Callable[..., Any]) -> Callable[..., Any]:
         def call(*args: Any) -> Any:
             t0 = time.perf_counter()
-            out = fn(*args)
-            env_time[0] += time.perf_counter() - t0
-            return out
+            try:
+                return fn(*args)
+            finally:
+                env_time[0] += time.perf_counter() - t0
 
         return call
 
@@ -205,8 +202,7 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
         vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard")}
     us = {f"{k}_us": t * 1e6 for k, t in ts.items()}
     ratios = {"ratio": ts["v1"] / ts["v0"], "ratio_hard": ts["v1_hard"] / ts["v0"]}
-    hard = {k: list(v) if isinstance(v, tuple) else v for k, v in V1_HARD.items()}
-    return us | ratios | {"hard_task": hard, "vector": vector}
+    return us | ratios | {"hard_task": dict(V1_HARD), "vector": vector}
 
 
 def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[Doc]:
@@ -227,29 +223,27 @@ def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[
 def targets(doc: Doc, n_vector: int = 4096) -> list[Doc]:
     """The speed targets' figures that ``doc`` holds, each with its ratio, bound (:data:`TARGETS`; ``None``:
     reported only) and whether it is met."""
-    found = []
-    if doc.get("single"):
-        found.append(("single", "single step, AmigoBot-v0 / Pendulum-v1 (time)", doc["single"]["ratio"]))
-    for r in (r for r in doc.get("vector", []) if r["n"] == n_vector):
-        label = f"vector env, N = {n_vector}, native (default kernel) / CartPoleVectorEnv (env-steps/s)"
-        found.append(("vector_4096", label, r["ratio_cartpole"]))
-        if "numba-parallel" in r["kernels"]:
-            label = f"vector env, N = {n_vector}, kernel=numba-parallel / CartPoleVectorEnv (env-steps/s)"
-            found.append(("vector_4096_threads", label, r["kernels"]["numba-parallel"] / r["cartpole"]))
-    fc = fixed_cost(doc.get("vector", []))
-    if fc is not None:
-        found.append(("call_n1", "fixed cost per call at N = 1, native / CartPoleVectorEnv (time)", fc["ratio"]))
-    if doc.get("v1"):
-        found.append(("v1_v0", "single step, AmigoBot-v1 / AmigoBot-v0 (time)", doc["v1"]["ratio"]))
-        vec = doc["v1"]["vector"].get(str(n_vector))
-        if vec:
-            label = f"vector env, N = {n_vector}, AmigoBot-v1 / AmigoBot-v0 (time)"
-            found.append(("v1_v0_vector", label, vec["v0"] / vec["v1"]))
     out = []
-    for name, label, ratio in found:
+
+    def add(name: str, label: str, ratio: Any) -> None:
         op, bound = TARGETS.get(name, (None, None))
         met = None if op is None else (ratio <= bound if op == "<=" else ratio >= bound)
         out.append({"name": name, "label": label, "ratio": ratio, "op": op, "bound": bound, "met": met})
+
+    if doc.get("single"):
+        add("single", "single step, AmigoBot-v0 / Pendulum-v1 (time)", doc["single"]["ratio"])
+    for r in (r for r in doc.get("vector", []) if r["n"] == n_vector):
+        add("vector_4096", f"vector env, N = {n_vector}, native (default kernel) / CartPoleVectorEnv (env-steps/s)",
+            r["ratio_cartpole"])  # fmt: skip
+        if "numba-parallel" in r["kernels"]:
+            label = f"vector env, N = {n_vector}, kernel=numba-parallel / CartPoleVectorEnv (env-steps/s)"
+            add("vector_4096_threads", label, r["kernels"]["numba-parallel"] / r["cartpole"])
+    if (fc := fixed_cost(doc.get("vector", []))) is not None:
+        add("call_n1", "fixed cost per call at N = 1, native / CartPoleVectorEnv (time)", fc["ratio"])
+    if doc.get("v1"):
+        add("v1_v0", "single step, AmigoBot-v1 / AmigoBot-v0 (time)", doc["v1"]["ratio"])
+        if vec := doc["v1"]["vector"].get(str(n_vector)):
+            add("v1_v0_vector", f"vector env, N = {n_vector}, AmigoBot-v1 / AmigoBot-v0 (time)", vec["v0"] / vec["v1"])
     return out
 
 
@@ -259,6 +253,7 @@ def numba_state() -> str:
     if not numba_available():
         return "numba not installed"
     import numba
+    from llvmlite import binding
 
     target = getattr(numba.config, "CPU_NAME", None) or binding.get_host_cpu_name()
     svml = "on" if getattr(numba.config, "USING_SVML", False) else "off"
@@ -286,9 +281,8 @@ def format_report(doc: Doc) -> str:
         out += md_table(head, cells, first="---:")
         out.append(f"(Sync measured up to N = {max([r['n'] for r in rows if r['sync'] is not None], default=0)})")
         if (fc := doc["fixed_cost_n1"]) is not None:
-            one = next(r for r in rows if r["n"] == 1)
             cells = [f"AmigoBotVectorEnv | {fc['amigobot_us']:.1f}"]
-            cells += [f"AmigoBotVectorEnv, {k} | {1e6 / v:.1f}" for k, v in one["kernels"].items()]
+            cells += [f"AmigoBotVectorEnv, {k} | {fc[f'amigobot_{k}_us']:.1f}" for k in names]
             cells += [f"CartPoleVectorEnv | {fc['cartpole_us']:.1f}"]
             cells += [f"ratio AmigoBot / CartPole (target <= 0.5) | {fc['ratio']:.2f}"]
             out += ["", *md_table("fixed cost per step call at N = 1 | [us]", cells)]
@@ -457,8 +451,6 @@ def run(s: EnvSettings) -> int:
     """``amigo-gym bench-env``: the report on stdout (progress on stderr), ``--plot``, ``--json``; with
     ``--table-from``, only :func:`headline_table`."""
     if s.table_from is not None:
-        import json
-
         env_doc = json.loads(Path(s.table_from).read_text(encoding="utf-8"))
         core_doc = json.loads(Path(s.core_json).read_text(encoding="utf-8")) if s.core_json else None
         try:
@@ -495,8 +487,7 @@ def run(s: EnvSettings) -> int:
         doc["notes"].append("SB3 PPO comparison skipped: install amigo_gym[train] (torch, stable-baselines3)")
     elif not s.skip_ppo:
         say(f"SB3 PPO learn, {s.ppo_steps} steps per run")
-        rollout = 64 if s.quick else 2048
-        doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=rollout, repeats=s.ppo_repeats, v1=s.v1)
+        doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=64 if s.quick else 2048, repeats=s.ppo_repeats, v1=s.v1)
     if s.v1:
         say("AmigoBot-v1 vs v0")
         doc["v1"] = bench_v1(sizes, s.repeats, s.min_time)
@@ -522,7 +513,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym bench-env``."""
     description = "Speed of AmigoBot-v0 against Pendulum, CartPoleVectorEnv and SyncVectorEnv."
     return run_command(EnvSettings, run, argv, PROG, description)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

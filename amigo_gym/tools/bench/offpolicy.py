@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -12,7 +13,7 @@ import numpy as np
 from amigo_gym.data import hyperparams_dir
 from amigo_gym.tools.bench import clock, rates
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.hyperparams import Hyperparams, load_hyperparams
 
 #: the off-policy algorithms measured: name -> (module, class)
 ALGOS: dict[str, tuple[str, str]] = {
@@ -50,17 +51,13 @@ def offpolicy_config(algo: str, config: str) -> dict[str, Any]:
 
 def make_model(algo: str, hp: Mapping[str, Any], venv: Any, seed: int = 0) -> Any:
     """The ``algo`` model of the mapping ``hp`` (:func:`offpolicy_config`) on ``venv``, CPU, ``MlpPolicy``."""
-    from stable_baselines3.common.noise import NormalActionNoise
-
     kw = {k: v for k, v in hp.items() if k not in ("n_envs", "noise_type", "noise_std")}
     if isinstance(kw.get("train_freq"), list):
         kw["train_freq"] = tuple(kw["train_freq"])
-    noise = None
-    if hp.get("noise_type") is not None:
-        if hp["noise_type"] != "normal":
-            raise ValueError(f"offpolicy: noise_type must be 'normal', got {hp['noise_type']!r}")
-        n = int(np.prod(venv.action_space.shape))
-        noise = NormalActionNoise(np.zeros(n), float(hp.get("noise_std", 0.1)) * np.ones(n))
+    if hp.get("noise_type") not in (None, "normal"):
+        raise ValueError(f"offpolicy: noise_type must be 'normal', got {hp['noise_type']!r}")
+    parsed = Hyperparams(noise_type=hp.get("noise_type"), noise_std=float(hp.get("noise_std", 0.1)))
+    noise = parsed.action_noise(int(np.prod(venv.action_space.shape)))
     return algo_class(algo)("MlpPolicy", venv, action_noise=noise, seed=seed, device="cpu", verbose=0, **kw)
 
 
@@ -69,8 +66,7 @@ def _venv(n_envs: int, seed: int) -> Any:
 
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
-    kw = dict(TRAINING_DISTRIBUTION["env_kwargs"])
-    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **kw))
+    venv = VecMonitor(AmigoBotSB3VecEnv(num_envs=n_envs, env_id="AmigoBot-v1", **TRAINING_DISTRIBUTION["env_kwargs"]))
     venv.seed(seed)
     return venv
 
@@ -106,11 +102,11 @@ def bench_offpolicy(
     return out | {"config": cfg}
 
 
+@dataclass
 class DeterministicPolicy:
     """An SB3 model's ``predict``, deterministic by default (as ``fastppo.evaluate_policy`` calls it)."""
 
-    def __init__(self, model: Any) -> None:
-        self.model = model
+    model: Any
 
     def predict(
         self, obs: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True

@@ -48,8 +48,7 @@ def profile_steps(step: Callable[[], object], steps: int, top: int) -> tuple[flo
     for _ in range(steps):
         step()
     prof.disable()
-    st = pstats.Stats(prof)
-    raw: dict[Any, Any] = st.stats  # type: ignore[attr-defined]
+    raw: dict[Any, Any] = pstats.Stats(prof).stats  # type: ignore[attr-defined]
     total = sum(v[2] for v in raw.values())
     rows = sorted(((_label(f), v[2] / total, v[1]) for f, v in raw.items()), key=lambda r: -r[1])
     return total, rows[:top]
@@ -61,38 +60,14 @@ def _table(title: str, steps: int, total: float, rows: Sequence[tuple[str, float
     return "\n".join(out + md_table("function | own time | calls per step", cells))
 
 
-def _gap_row(n: int, repeats: int, min_time: float) -> str:
-    quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
-    bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
-    pose = np.zeros((n, 3))
-    w = np.full((n, 2), 4.0)
-    a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
-    kernel = kernel_stepper(tracking.TrackingParams.v0(), pose, w, a, False)
-
-    fns = {
-        "kernel": kernel,
-        "fresh": kernel,
-        "quiet": stepper(quiet, 0),
-        "bench": stepper(bench, 0),
-        "cart": stepper(CartPoleVectorEnv(num_envs=n), 0),
-    }
-    t = measure_many(fns, repeats, min_time)
-    c = t["cart"]
-    cells = " | ".join(f"{1e6 * t[k]:.0f} ({c / t[k]:.2f})" for k in ("kernel", "fresh", "quiet", "bench"))
-    return f"{n} | {cells} | {1e6 * c:.0f}"
-
-
 def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
     """Markdown table: a single-env step and its parts against Pendulum-v1's step (interleaved repeats)."""
-    env = gym.make("AmigoBot-v0")
-    env.reset(seed=0)
-    raw: Any = env.unwrapped
+    env, pend = gym.make("AmigoBot-v0"), gym.make("Pendulum-v1")
     ref: Any = gym.make("AmigoBot-v0", kernel="numpy").unwrapped  # v0's reference: AmigoBot-v1's ideal step
-    ref.reset(seed=0)
-    pend = gym.make("Pendulum-v1")
-    pend.reset(seed=0)
-    a = np.array([0.27, 0.27], np.float32)
-    ap = np.array([0.5], np.float32)
+    for e in (env, ref, pend):
+        e.reset(seed=0)
+    raw: Any = env.unwrapped
+    a, ap = np.array([0.27, 0.27], np.float32), np.array([0.5], np.float32)
     kern = raw._kernel  # the compiled step (None without numba: the steps then go on from the last state)
     start = kern.ws.copy() if kern is not None else None
     k, ref_start, ep, ring = ref._k, ref._state, ref._episode, ref._ring  # the reference's start state (floats)
@@ -119,20 +94,28 @@ def single_parts(repeats: int = 7, min_time: float = 0.1) -> str:
         "Pendulum unwrapped step": lambda: pend.unwrapped.step(ap),
     }
     t = measure_many(fns, repeats, min_time)
-    ref = t["Pendulum `gym.make` step"]
-    return "\n".join(
-        md_table("part | [us] | / Pendulum step", [f"{k} | {1e6 * v:.1f} | {v / ref:.2f}" for k, v in t.items()])
-    )
+    cells = [f"{k} | {1e6 * v:.1f} | {v / t['Pendulum `gym.make` step']:.2f}" for k, v in t.items()]
+    return "\n".join(md_table("part | [us] | / Pendulum step", cells))
 
 
 def gap(sizes: Sequence[int], repeats: int = 7, min_time: float = 0.2) -> str:
     """Markdown table: time per ``step`` call [us] of the kernel alone, the kernel env without and with episode
     restarts, and CartPole's (CartPole's time over each in brackets). Needs numba."""
+    rows = []
+    for n in sizes:
+        quiet = AmigoBotVectorEnv(num_envs=n, kernel="numba", termination_distance=10.0, max_episode_steps=None)
+        bench = AmigoBotVectorEnv(num_envs=n, kernel="numba", max_episode_steps=400)
+        a = np.ascontiguousarray(np.random.default_rng(0).uniform(-1.0, 1.0, (n, 2)))
+        kernel = kernel_stepper(tracking.TrackingParams.v0(), np.zeros((n, 3)), np.full((n, 2), 4.0), a, False)
+        fns = {"kernel": kernel, "fresh": kernel, "quiet": stepper(quiet, 0), "bench": stepper(bench, 0)}
+        t = measure_many(fns | {"cart": stepper(CartPoleVectorEnv(num_envs=n), 0)}, repeats, min_time)
+        cells = " | ".join(f"{1e6 * t[k]:.0f} ({t['cart'] / t[k]:.2f})" for k in fns)
+        rows.append(f"{n} | {cells} | {1e6 * t['cart']:.0f}")
     head = (
         "N | kernel alone, preallocated | kernel, fresh outputs | env.step, no episode ends "
         "| env.step, random actions (benchmark) | CartPoleVectorEnv"
     )
-    return "\n".join(md_table(head, (_gap_row(n, repeats, min_time) for n in sizes), first="---:"))
+    return "\n".join(md_table(head, rows, first="---:"))
 
 
 def libm(n: int = 100_000, seed: int = 0) -> str:
@@ -177,16 +160,14 @@ class ProfileSettings:
 
 def run(s: ProfileSettings) -> int:
     """The tables of the settings ``s`` on stdout."""
-    tables: dict[str, Callable[[], str]] = {"gap": lambda: gap(s.sizes), "single_parts": single_parts, "libm": libm}
-    for flag, table in tables.items():
-        if getattr(s, flag):
-            print(table())
-            return 0
+    if s.gap or s.single_parts or s.libm:
+        print(gap(s.sizes) if s.gap else single_parts() if s.single_parts else libm())
+        return 0
     total, rows = profile_steps(stepper(gym.make("AmigoBot-v0"), 0), s.steps, s.top)
     print(_table('`gym.make("AmigoBot-v0")`, one step', s.steps, total, rows), end="\n\n")
+    kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
     for n in s.sizes:
         steps = max(20, s.steps // max(1, n // 64))
-        kw: dict[str, Any] = {} if s.kernel is None else {"kernel": s.kernel}
         envs = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="vector_entry_point", **kw)
         total, rows = profile_steps(stepper(envs, 0), steps, s.top)
         name = f"`AmigoBotVectorEnv`, N = {n}" + ("" if s.kernel is None else f", kernel={s.kernel}")

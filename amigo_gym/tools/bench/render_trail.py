@@ -1,43 +1,39 @@
 """``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
 
-At ``--n`` robots on ``--path``, with and without rendering (same seeds and actions): the growth of the resident memory
-[MiB] over ``--steps`` steps (each in a fresh subprocess; target <= 20 MiB) and the step-time ratio
-(:func:`amigo_gym.tools.bench.measure_many`; target <= 1.1). ``--json FILE`` writes them. The figures:
-docs/amigobot_v1.md."""
+At ``--n`` robots on ``--path``, with and without rendering: the growth of the resident memory [MiB] over
+``--steps`` steps (each in a fresh process) and the step-time ratio (interleaved repeats); docs/amigobot_v1.md."""
 
 from __future__ import annotations
 
+import contextlib
 import gc
-import json
+import multiprocessing
 import os
-import subprocess
-import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any, Literal
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from typing import Any
 
 from amigo_gym.envs import AmigoBotV1VectorEnv
 from amigo_gym.io import atomic_write_json
 from amigo_gym.tools.bench import stepper, time_envs
-from amigo_gym.tools.options import cli, run_command
+from amigo_gym.tools.bench.env import V1_HARD
+from amigo_gym.tools.options import run_command
 
 PROG = "python -m amigo_gym.tools.bench.render_trail"
-
 MiB = 2**20
 
 
 def _env(n: int, path: str, render: bool) -> Any:
-    kw: dict[str, Any] = {"path": path, "speed": (0.1, 0.4), "randomize": "hard"} if path == "mixed" else {"path": path}
+    kw = V1_HARD if path == "mixed" else {"path": path}
     return AmigoBotV1VectorEnv(num_envs=n, render_mode="rgb_array" if render else None, **kw)
 
 
 def _rss() -> int:
     """Resident memory of this process [bytes] (``/proc/self/statm``; 0 where there is none)."""
-    try:
-        with open("/proc/self/statm") as fh:
-            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
+    with contextlib.suppress(OSError, ValueError, IndexError), open("/proc/self/statm") as fh:
+        return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    return 0
 
 
 def measure_memory(n: int, steps: int, path: str = "mixed", render: bool = True, frames: int = 2) -> dict[str, float]:
@@ -71,7 +67,6 @@ class RenderTrailSettings:
     Attributes:
         n: robots [envs].
         steps: rendered steps of the memory measurement [steps].
-        memory_only: the subprocess of one memory measurement, ``render`` or ``plain`` (internal).
         path: path= of the envs (mixed: with hard randomisation) [name].
         repeats: interleaved repeats of the timing (median) [repeats].
         min_time: least duration of one timing repeat [s].
@@ -82,7 +77,6 @@ class RenderTrailSettings:
 
     n: int = 1024
     steps: int = 3000
-    memory_only: Literal["render", "plain"] | None = field(default=None, metadata=cli(hidden=True))
     path: str = "mixed"
     repeats: int = 5
     min_time: float = 0.5
@@ -91,26 +85,19 @@ class RenderTrailSettings:
     json: str | None = None
 
     def __post_init__(self) -> None:
-        for name in ("n", "steps", "repeats"):
-            if getattr(self, name) < 1:
-                raise ValueError(f"--{name} must be >= 1, got {getattr(self, name)}")
+        if bad := [name for name in ("n", "steps", "repeats") if getattr(self, name) < 1]:
+            raise ValueError(f"--{bad[0]} must be >= 1, got {getattr(self, bad[0])}")
 
 
 def run(s: RenderTrailSettings) -> int:
     """The measurements of the settings ``s``, one line per figure on stdout, ``--json``."""
     out: dict[str, Any] = {"n": s.n, "steps": s.steps, "path": s.path}
-    if s.memory_only is not None:  # the subprocess of one memory measurement: its figures as JSON on stdout
-        print(json.dumps(measure_memory(s.n, s.steps, s.path, render=s.memory_only == "render")))
-        return 0
     if not s.skip_memory:
-        for kind in ("render", "plain"):
-            cmd = [sys.executable, os.path.abspath(__file__), "--memory-only", kind]  # this module, as a script
-            cmd += ["--n", str(s.n), "--steps", str(s.steps), "--path", s.path]
-            r = subprocess.run(cmd, capture_output=True, text=True, check=True)
-            got = json.loads(r.stdout.strip().splitlines()[-1])
+        for kind in ("render", "plain"):  # each in a fresh process
+            with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+                got = pool.submit(measure_memory, s.n, s.steps, s.path, kind == "render").result()
             out[f"growth_{kind}_mib"] = got["growth_mib"]
-            if kind == "render":
-                out["trail_ring_mib"] = got["trail_ring_mib"]
+            out.setdefault("trail_ring_mib", got["trail_ring_mib"])  # render's: the first run
         print(
             f"resident memory growth over {s.steps} steps at N={s.n} ({s.path}): "
             f"{out['growth_render_mib']:.1f} MiB with render_mode='rgb_array' (target <= 20; its trail ring: "

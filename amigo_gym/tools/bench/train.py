@@ -47,13 +47,11 @@ def bench_fastppo(
     keys = ("num_envs", "rollout_steps", "epochs", "minibatch_size", "hidden", "env_threads", "device")
     out = _result(n, t1 - t0, c1 - c0, {k: getattr(s, k) for k in keys})
     out |= {k: rec[k] for k in ("device", "device_name", "torch_threads", "numba_threads")}
-    split = rec["cpu_s_this_call"]  # CPU s of the rollouts (env + policy) and updates; wall s of the iterations
+    split, w = rec["cpu_s_this_call"], rec["wall_s_this_call"]  # CPU s of rollouts and updates; wall s of the loop
     out |= {"cpu_s_rollout": split["rollout"], "cpu_s_update": split["update"], "loop_wall_s": split["loop_wall"]}
     # steady state: the training iterations only, without building the env, the first resets and the final save
     out |= rates("sps_loop", n, split["loop_wall"], split["rollout"] + split["update"])
-    w = rec["wall_s_this_call"]
-    out["env_share"] = round(w["env"] / max(w["loop"], 1e-9), 3)  # the learner's: 1 - env_share
-    return out
+    return out | {"env_share": round(w["env"] / max(w["loop"], 1e-9), 3)}  # the learner's: 1 - env_share
 
 
 def _result(n: int, wall: float, cpu: float, cfg: dict[str, Any]) -> dict[str, Any]:
@@ -154,8 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         import torch
 
         head: dict[str, Any] = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
-        head["torch_threads"] = s.threads
-        head |= {"env_threads": s.env_threads, "fast_hyperparams": s.fast_hyperparams}
+        head |= {"torch_threads": s.threads, "env_threads": s.env_threads, "fast_hyperparams": s.fast_hyperparams}
         head |= {"python": platform.python_version(), "numpy": np.__version__, "torch": torch.__version__}
         command = "amigo-gym bench-train " + " ".join(argv if argv is not None else sys.argv[1:])
         head |= {"load_average_start": _load(), "command": command}
