@@ -434,10 +434,9 @@ def mark_abandoned(study: Any) -> list[int]:
             if u.number != t.number and t.number in (u.system_attrs.get("failed_trial"), u.user_attrs.get("retry_of"))
         ]
         path = Path(str(ua["run_dir"])) / ABANDONED
-        try:  # marked before: rewritten only when a retry appeared since
+        old: Any = {}
+        with contextlib.suppress(OSError, ValueError):  # marked before: rewritten only when a retry appeared since
             old = json.loads(path.read_text())
-        except (OSError, ValueError):
-            old = None
         old = old if isinstance(old, dict) else {}
         if old.get("retried_as") == retries:
             continue
@@ -455,10 +454,6 @@ def _requeue(study: Any, trial: Any, how: str) -> None:
     frozen = study._storage.get_trial(trial._trial_id)
     attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
     study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
-
-
-class _OverBudget(Exception):
-    """This trial is over the budget (or not from the grid)."""
 
 
 # --------------------------------------------------------------------------- search spaces
@@ -576,7 +571,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any
         if over:
             study.stop()
             trial.set_user_attr("over_budget", True)
-            raise _OverBudget(why)
+            raise RuntimeError(f"over budget: {why}")
         algo: str = trial.suggest_categorical("algo", cfg.algos) if cfg.mode == "seeds" else cfg.algos[0]
         seed = int(trial.suggest_categorical("seed", cfg.seeds)) if cfg.mode == "seeds" else cfg.train_seed
         run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
@@ -743,7 +738,7 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
 
     with handling(signal.default_int_handler, signal.SIGTERM):
         if not _exhausted(study, cfg):
-            study.optimize(_objective(cfg, study, sampler_seed), catch=(*TRIAL_ERRORS, _OverBudget),
+            study.optimize(_objective(cfg, study, sampler_seed), catch=TRIAL_ERRORS,
                            callbacks=[stop_when_spent])  # fmt: skip
 
 
@@ -865,7 +860,9 @@ def _run(cfg: SweepConfig) -> int:
     """The command: the workers, then the summary, the ``--save-best`` file and the exit status."""
     import optuna
 
-    interrupted, failed, opened = False, list[str](), list[Any]()
+    failed: list[str] = []
+    opened: list[Any] = []
+    interrupted = False
     with handling(signal.default_int_handler, signal.SIGTERM):
         try:
             if cfg.n_jobs > 1:
