@@ -187,8 +187,13 @@ class SweepConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
-        sb3 = [a for a in self.algos if a != FASTPPO]
-        n = self.study_name
+        try:
+            memory = self.storage is not None and _in_memory(self.storage)
+        except ImportError:
+            raise
+        except Exception:  # SQLAlchemy's error for a malformed URL
+            raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(str(self.storage))!r}") from None
+        sb3, n = [a for a in self.algos if a != FASTPPO], self.study_name
         rules = (
             (self.enqueue_base and (self.mode != "hyperparams" or FASTPPO in self.algos),
              f"--enqueue-base is for --mode hyperparams of an SB3 algorithm, got {self.mode} {self.algos}"),
@@ -211,6 +216,10 @@ class SweepConfig:
             (n is not None and (not n or n.startswith(".") or ".." in n or bool(re.search(r"[/\\\x00-\x1f\x7f]", n))),
              f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control characters), "
              f"got {n!r}"),
+            (memory and self.n_jobs > 1,
+             f"--storage {masked_url(str(self.storage))} is an in-memory database, private to each process: with "
+             f"--n-jobs {self.n_jobs} the workers would not share one study; use a file (sqlite:///path/sweep.db, the "
+             "default) or a server"),
         )  # fmt: skip
         for bad, message in rules:
             if bad:
@@ -223,19 +232,6 @@ class SweepConfig:
                 FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
             except (TypeError, ValueError) as exc:
                 raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
-        if self.storage is not None:
-            try:
-                memory = _in_memory(self.storage)
-            except ImportError:
-                raise
-            except Exception:  # SQLAlchemy's error for a malformed URL
-                raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(self.storage)!r}") from None
-            if memory and self.n_jobs > 1:
-                raise ValueError(
-                    f"--storage {masked_url(self.storage)} is an in-memory database, private to each process: "
-                    f"with --n-jobs {self.n_jobs} the workers would not share one study; use a file "
-                    "(sqlite:///path/sweep.db, the default) or a server"
-                )
 
     def base_file(self, algo: str) -> Path:
         return Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
@@ -651,8 +647,8 @@ def _fit_sb3(
 def _fit_fast(
     cfg: SweepConfig, study: Any, trial: Any, seed: int, hp: dict[str, Any], run_dir: Path, report: Callable[..., bool]
 ) -> tuple[dict[str, Any], dict[str, Any], Callable[[], Any]]:
-    """Fast-PPO training (``amigo-gym train-fast``) in ``out``, resumed from an abandoned trial's checkpoint when one
-    has the same settings; every evaluation reported at its scheduled step (a multiple of ``--eval-freq``, equal in
+    """Fast-PPO training (``amigo-gym train-fast``) in ``run_dir/run``, resumed from an abandoned trial's checkpoint
+    of the same settings; every evaluation reported at its scheduled step (a multiple of ``--eval-freq``, equal in
     every trial whatever its batch)."""
     from amigo_gym.tools.training import fastppo
 
