@@ -51,8 +51,6 @@ OBJECTIVE = "validation_h_rms_iqm_m"
 INTERRUPTED = 130
 #: how long a worker joining a study waits for its creator to set it up [s]
 READY_TIMEOUT_S = 120.0
-#: errors of a trial's own: the trial ends FAIL with a ``fail_reason`` and the worker goes on
-TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
 #: the least value of each integer option
 LOWS = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
         "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0, "train_seed": 0,
@@ -734,8 +732,8 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
 
     with handling(signal.default_int_handler, signal.SIGTERM):
         if not _exhausted(study, cfg):
-            study.optimize(_objective(cfg, study, sampler_seed), catch=TRIAL_ERRORS,
-                           callbacks=[stop_when_spent])  # fmt: skip
+            errors = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)  # the trial's: FAIL, go on
+            study.optimize(_objective(cfg, study, sampler_seed), catch=errors, callbacks=[stop_when_spent])
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
@@ -743,9 +741,7 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     from optuna.trial import TrialState
 
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
-    best = None
-    if any(t.state == TrialState.COMPLETE for t in trials):
-        best = {"number": study.best_trial.number, "value": study.best_trial.value, "params": study.best_trial.params}
+    best = study.best_trial if any(t.state == TrialState.COMPLETE for t in trials) else None
     attrs = dict(sorted(study.user_attrs.items()))
     return {
         "study": study.study_name,
@@ -754,7 +750,7 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
         "states": {s.name: sum(t.state == s for t in trials) for s in TrialState},
         "finished": sum(t.state not in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
         "counted": budget_count(study),
-        "best": best,
+        "best": best and {"number": best.number, "value": best.value, "params": best.params},
         "study_attrs": attrs,
         "trials": [
             {
@@ -875,9 +871,8 @@ def _run(cfg: SweepConfig) -> int:
     summary = summarize(study, cfg.budget)
     write_summary(Path(cfg.out) / cfg.name, summary)
     status, best = summary["status"], summary["best"]
-    print(
-        f"study {cfg.name}: {status}; {summary['states']}; counted {summary['counted']} of budget {summary['budget']}"
-    )
+    counted = f"counted {summary['counted']} of budget {summary['budget']}"
+    print(f"study {cfg.name}: {status}; {summary['states']}; {counted}")
     if best is not None:
         print(f"best trial {best['number']}: {best['value']:.4g} {best['params']}")
     if status == "running":
