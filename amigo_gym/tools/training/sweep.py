@@ -40,27 +40,26 @@ from amigo_gym.tools.training.task_metrics import run_scenario
 from amigo_gym.tools.training.train import ENV_IDS, HYPERPARAMS_DIR, EnvId, Settings, train
 
 Mode = Literal["hyperparams", "seeds"]
-MODES = get_args(Mode)
 SweepAlgo = Literal["ppo", "sac", "td3", "fastppo"]
-SWEEP_ALGOS = get_args(SweepAlgo)
 FASTPPO = "fastppo"
 #: a fast-PPO trial's rollout batch ``num_envs * rollout_steps`` is at most ``--timesteps / MIN_ITERATIONS``
 MIN_ITERATIONS = 8
 #: the marker in the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
 OBJECTIVE = "validation_h_rms_iqm_m"
-SUMMARY = "summary.json"
 #: exit status of a worker stopped by SIGTERM / Ctrl-C
 INTERRUPTED = 130
 #: how long a worker joining a study waits for its creator to set it up [s]
 READY_TIMEOUT_S = 120.0
-
-
-# --------------------------------------------------------------------------- secrets
+#: the least value of each integer option
+LOWS = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
+        "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0, "train_seed": 0,
+        "val_episodes": 1, "val_max_steps": 0}  # fmt: skip
 #: a query parameter whose name has one of these holds a credential
 _SECRET_PARAM = re.compile(r"pass|pwd|secret|token|key|auth|cred", re.IGNORECASE)
 
 
+# --------------------------------------------------------------------------- secrets
 def _secrets(url: str | None) -> set[str]:
     """Every form (as typed, decoded, quoted) of each credential in ``url`` (``user:pw@``, credential parameters)."""
     found = set()
@@ -89,13 +88,7 @@ def masked_url(url: str) -> str:
 
 def public_argv(argv: Sequence[str]) -> list[str]:
     """The command line with every URL's credentials masked."""
-    out = []
-    for a in argv:
-        if "://" in a:
-            head, eq, tail = a.partition("=") if a.startswith("--") else ("", "", a)
-            a = head + eq + masked_url(tail)
-        out.append(a)
-    return out
+    return [scrub(a, a.partition("=")[2] if a.startswith("--") else a) if "://" in a else a for a in argv]
 
 
 def _in_memory(url: str) -> bool:
@@ -103,10 +96,9 @@ def _in_memory(url: str) -> bool:
     from sqlalchemy.engine import make_url
 
     u = make_url(url)
-    if not u.drivername.startswith("sqlite"):
-        return False
     db = u.database or ""
-    return db in ("", ":memory:") or db.startswith("file::memory:") or u.query.get("mode") == "memory"
+    memory = db in ("", ":memory:") or db.startswith("file::memory:") or u.query.get("mode") == "memory"
+    return u.drivername.startswith("sqlite") and memory
 
 
 # --------------------------------------------------------------------------- settings
@@ -182,77 +174,62 @@ class SweepConfig:
             self.seeds = list(range(self.seeds[0]))  # a count
 
     def validate(self) -> None:
-        if not self.algos or any(a not in SWEEP_ALGOS for a in self.algos):
-            raise ValueError(f"--algo must be among {list(SWEEP_ALGOS)}, got {self.algos}")
-        if self.mode not in MODES:
-            raise ValueError(f"--mode must be one of {list(MODES)}, got {self.mode!r}")
-        if self.enqueue_base and (self.mode != "hyperparams" or FASTPPO in self.algos):
-            raise ValueError(
-                f"--enqueue-base is for --mode hyperparams of an SB3 algorithm, got {self.mode} {self.algos}"
-            )
-        if self.mode == "hyperparams" and len(self.algos) != 1:
-            raise ValueError(f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}")
-        choices = (("sampler", self.sampler, ("tpe", "random")), ("pruner", self.pruner, ("median", "none")),
-                   ("env", self.env_id, ENV_IDS))  # fmt: skip
+        if not self.algos or any(a not in get_args(SweepAlgo) for a in self.algos):
+            raise ValueError(f"--algo must be among {list(get_args(SweepAlgo))}, got {self.algos}")
+        choices = (("mode", self.mode, get_args(Mode)), ("sampler", self.sampler, ("tpe", "random")),
+                   ("pruner", self.pruner, ("median", "none")), ("env", self.env_id, ENV_IDS))  # fmt: skip
         for flag, value, allowed in choices:
             if value not in allowed:
                 raise ValueError(f"--{flag} must be one of {list(allowed)}, got {value!r}")
-        if self.env_kwargs is not None and not isinstance(self.env_kwargs, dict):
-            raise ValueError(f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}")
-        lows = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
-                "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0,
-                "train_seed": 0, "val_episodes": 1, "val_max_steps": 0}  # fmt: skip
-        for name, low in lows.items():
+        for name, low in LOWS.items():
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {v!r}")
-        if self.val_episodes > len(VALIDATION_SEEDS):
-            raise ValueError(f"--val-episodes must be at most {len(VALIDATION_SEEDS)}, got {self.val_episodes}")
-        if self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)):
-            raise ValueError(f"--seeds must be a count >= 1 or two or more distinct seeds, got {self.seeds}")
-        if self.save_best is not None and self.mode != "hyperparams":
-            raise ValueError(f"--save-best applies to --mode hyperparams, not {self.mode}")
-        if FASTPPO in self.algos:
-            self._validate_fastppo()
-        n = self.study_name
-        if n is not None and (not n or n.startswith(".") or ".." in n or re.search(r"[/\\\x00-\x1f\x7f]", n)):
-            raise ValueError(
-                f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control "
-                f"characters), got {n!r}"
-            )
-        if self.storage is not None:
-            try:
-                memory = _in_memory(self.storage)
-            except ImportError:
-                raise
-            except Exception:  # SQLAlchemy's error for a malformed URL
-                raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(self.storage)!r}") from None
-            if memory and self.n_jobs > 1:
-                raise ValueError(
-                    f"--storage {masked_url(self.storage)} is an in-memory database, private to each process: "
-                    f"with --n-jobs {self.n_jobs} the workers would not share one study; use a file "
-                    "(sqlite:///path/sweep.db, the default) or a server"
-                )
-
-    def _validate_fastppo(self) -> None:
-        """``--algo fastppo``: AmigoBot-v1 only; its settings file checked with ``--env-kwargs`` up front."""
-        if self.env_id != "AmigoBot-v1":
-            raise ValueError(
-                f"--algo fastppo trains the native AmigoBot-v1 vector env: add --env AmigoBot-v1 "
-                f"(got --env {self.env_id})"
-            )
-        if self.hyperparams is not None and len(set(self.algos)) > 1:
-            raise ValueError(
-                f"--hyperparams {self.hyperparams}: one file cannot hold the settings of fastppo and of "
-                f"{', '.join(a for a in self.algos if a != FASTPPO)}; leave it out (agents/hyperparams/<algo>.yml each)"
-            )
-        from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
-
-        base = load_settings_yaml(self.base_file(FASTPPO))
         try:
-            FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
+            memory = self.storage is not None and _in_memory(self.storage)
+        except ImportError:
+            raise
+        except Exception:  # SQLAlchemy's error for a malformed URL
+            raise ValueError(f"--storage must be a SQLAlchemy URL, got {masked_url(str(self.storage))!r}") from None
+        sb3, n = [a for a in self.algos if a != FASTPPO], self.study_name
+        rules = (
+            (self.enqueue_base and (self.mode != "hyperparams" or FASTPPO in self.algos),
+             f"--enqueue-base is for --mode hyperparams of an SB3 algorithm, got {self.mode} {self.algos}"),
+            (self.mode == "hyperparams" and len(self.algos) != 1,
+             f"--mode hyperparams tunes one algorithm, got --algo {' '.join(self.algos)}"),
+            (self.env_kwargs is not None and not isinstance(self.env_kwargs, dict),
+             f"--env-kwargs must be a JSON object, got {type(self.env_kwargs).__name__}"),
+            (self.val_episodes > len(VALIDATION_SEEDS),
+             f"--val-episodes must be at most {len(VALIDATION_SEEDS)}, got {self.val_episodes}"),
+            (self.mode == "seeds" and (not self.seeds or len(set(self.seeds)) != len(self.seeds)),
+             f"--seeds must be a count >= 1 or two or more distinct seeds, got {self.seeds}"),
+            (self.save_best is not None and self.mode != "hyperparams",
+             f"--save-best applies to --mode hyperparams, not {self.mode}"),
+            (FASTPPO in self.algos and self.env_id != "AmigoBot-v1",
+             f"--algo fastppo trains the native AmigoBot-v1 vector env: add --env AmigoBot-v1 "
+             f"(got --env {self.env_id})"),
+            (FASTPPO in self.algos and bool(sb3) and self.hyperparams is not None,
+             f"--hyperparams {self.hyperparams}: one file cannot hold the settings of fastppo and of {', '.join(sb3)}; "
+             "leave it out (agents/hyperparams/<algo>.yml each)"),
+            (n is not None and (not n or n.startswith(".") or ".." in n or bool(re.search(r"[/\\\x00-\x1f\x7f]", n))),
+             f"--study-name must be a name, not a path (no '/', '\\', '..', leading '.' or control characters), "
+             f"got {n!r}"),
+            (memory and self.n_jobs > 1,
+             f"--storage {masked_url(str(self.storage))} is an in-memory database, private to each process: with "
+             f"--n-jobs {self.n_jobs} the workers would not share one study; use a file (sqlite:///path/sweep.db, the "
+             "default) or a server"),
+        )  # fmt: skip
+        for bad, message in rules:
+            if bad:
+                raise ValueError(message)
+        if FASTPPO in self.algos:  # the settings file, checked with --env-kwargs up front
+            from amigo_gym.tools.training.fastppo import FastPPOSettings, load_settings_yaml
+
+            base = load_settings_yaml(self.base_file(FASTPPO))
+            try:
+                FastPPOSettings.from_json({**base, "env_kwargs": self.train_env_kwargs})
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"--algo fastppo: {' '.join(str(exc).split())}") from None
 
     def base_file(self, algo: str) -> Path:
         return Path(self.hyperparams) if self.hyperparams else HYPERPARAMS_DIR / f"{algo}.yml"
@@ -290,35 +267,34 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, f
     for sc in cells:
         vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
         per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
-    finite = [v for v in per_cell.values() if v is not None]
-    if len(finite) != len(per_cell):
+    if any(v is None for v in per_cell.values()):
         return math.nan, per_cell
-    return float(iqm(np.array([finite]))), per_cell
+    return float(iqm(np.array([list(per_cell.values())]))), per_cell
 
 
 # --------------------------------------------------------------------------- storage and study
 def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (in memory: without them)."""
     import optuna.storages
+    from sqlalchemy import event
 
     url = driver_url(cfg.storage_url)
-    sqlite = url.startswith("sqlite")
-    if sqlite and not _in_memory(url):
+    sqlite, memory = url.startswith("sqlite"), _in_memory(url)
+    if sqlite and not memory:
         Path(url.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
-    # pysqlite's BEGIN is deferred: take the write lock at BEGIN (below)
-    engine_kwargs = {"connect_args": {"timeout": 120, "isolation_level": None}} if sqlite else {}
-    retry_cls = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)
-    kwargs: dict[str, Any] = {}
-    if not _in_memory(url):  # in memory: no other worker, and the heartbeat's thread would get its own database
-        kwargs = {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
-        if retry_cls is not None:
-            kwargs["heartbeat_stale_trial_callback"] = retry_cls(max_retry=cfg.max_retry)
-        else:  # Optuna < 4.9
+    # pysqlite's BEGIN is deferred: the listener below takes the write lock at BEGIN
+    connect = {"connect_args": {"timeout": 120, "isolation_level": None}}
+    kwargs: dict[str, Any] = {"engine_kwargs": connect if sqlite else {}}
+    if not memory:  # in memory: no other worker, and the heartbeat's thread would get its own database
+        kwargs |= {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
+        retry = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)  # Optuna >= 4.9
+        if retry is not None:
+            kwargs["heartbeat_stale_trial_callback"] = retry(max_retry=cfg.max_retry)
+        else:
             kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
-    last: Exception | None = None
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
-            storage = optuna.storages.RDBStorage(url, engine_kwargs=engine_kwargs, **kwargs)
+            storage = optuna.storages.RDBStorage(url, **kwargs)
             break
         except ImportError:
             raise
@@ -329,12 +305,7 @@ def make_storage(cfg: SweepConfig) -> Any:
         detail = scrub(" ".join(f"{type(last).__name__}: {last}".split()), url)
         raise RuntimeError(f"cannot open the storage {masked_url(url)}: {detail}") from None
     if sqlite:
-        from sqlalchemy import event
-
-        @event.listens_for(storage.engine, "begin")
-        def _begin_immediate(conn: Any) -> None:
-            conn.exec_driver_sql("BEGIN IMMEDIATE")
-
+        event.listen(storage.engine, "begin", lambda conn: conn.exec_driver_sql("BEGIN IMMEDIATE"))
     return storage
 
 
@@ -367,157 +338,127 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     kw: dict[str, Any] = {"storage": storage, "study_name": cfg.name, "sampler": sampler, "pruner": pruner}
     try:  # exactly one process creates the study (unique name) and enqueues the grid
         study = optuna.create_study(direction="minimize", **kw)
-        created = True
     except optuna.exceptions.DuplicatedStudyError:
-        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)
-        created = False
-    if created:
-        for key, value in (
-            ("command", cfg.command),
-            ("argv", public_argv(cfg.argv)),
-            ("mode", cfg.mode),
-            ("algos", cfg.algos),
-            ("budget", cfg.budget),
-            ("env_id", cfg.env_id),
-            ("env_kwargs", cfg.train_env_kwargs),
-            ("objective", OBJECTIVE),
-            ("created", time.strftime("%Y-%m-%dT%H:%M:%S%z")),
-            ("host", socket.gethostname()),
-        ):
-            study.set_user_attr(key, value)
-        if cfg.mode == "seeds":
-            for algo in cfg.algos:
-                for s in cfg.seeds:
-                    study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
-        elif cfg.enqueue_base:
-            base = load_hyperparams(cfg.base_file(cfg.algos[0]), cfg.env_id)
-            study.enqueue_trial(base_params(cfg.algos[0], base), user_attrs={"baseline": True})
-        study.set_user_attr("ready", True)  # joiners wait for the whole grid
-    else:
-        deadline = time.monotonic() + READY_TIMEOUT_S
-        while not study.user_attrs.get("ready"):
-            if time.monotonic() > deadline:
-                raise RuntimeError(
-                    f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
-                    "stopped while queuing the grid?); delete the study and start again"
-                )
-            time.sleep(0.5)
-        attrs = study.user_attrs
-        for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
-            theirs = attrs.get(key)
-            if theirs is not None and theirs != mine:
-                raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
-        if study.direction != optuna.study.StudyDirection.MINIMIZE:
-            raise ValueError(f"study {cfg.name!r} maximises another objective (made by an older amigo-gym)")
+        return _join(cfg, optuna.create_study(direction="minimize", load_if_exists=True, **kw))
+    attrs = {"command": cfg.command, "argv": public_argv(cfg.argv), "mode": cfg.mode, "algos": cfg.algos,
+             "budget": cfg.budget, "env_id": cfg.env_id, "env_kwargs": cfg.train_env_kwargs, "objective": OBJECTIVE,
+             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname()}  # fmt: skip
+    for key, value in attrs.items():
+        study.set_user_attr(key, value)
+    if cfg.mode == "seeds":
+        for algo in cfg.algos:
+            for s in cfg.seeds:
+                study.enqueue_trial({"algo": algo, "seed": s}, user_attrs={"grid": True})
+    elif cfg.enqueue_base:
+        base = load_hyperparams(cfg.base_file(cfg.algos[0]), cfg.env_id)
+        study.enqueue_trial(base_params(cfg.algos[0], base), user_attrs={"baseline": True})
+    study.set_user_attr("ready", True)  # joiners wait for the whole grid
     return study
 
 
-# --------------------------------------------------------------------------- budget and status
-def _counted(t: Any) -> bool:
-    from optuna.trial import TrialState
+def _join(cfg: SweepConfig, study: Any) -> Any:
+    """``study``, once its creator made it ready; ``ValueError``: it is of another mode, environment or objective."""
+    deadline = time.monotonic() + READY_TIMEOUT_S
+    while not study.user_attrs.get("ready"):
+        if time.monotonic() > deadline:
+            raise RuntimeError(
+                f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
+                "stopped while queuing the grid?); delete the study and start again"
+            )
+        time.sleep(0.5)
+    for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
+        theirs = study.user_attrs.get(key)
+        if theirs is not None and theirs != mine:
+            raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
+    if study.direction.name != "MINIMIZE":
+        raise ValueError(f"study {cfg.name!r} maximises another objective (made by an older amigo-gym)")
+    return study
 
-    if t.state in (TrialState.COMPLETE, TrialState.PRUNED):
-        return True
-    return bool(t.state == TrialState.FAIL and "fail_reason" in t.user_attrs)
 
-
+# --------------------------------------------------------------------------- budget, status, abandoned trials
 def budget_count(study: Any, before: int | None = None) -> int:
     """Trials that count against the budget: COMPLETE, PRUNED, FAIL by an error, and RUNNING below ``before``."""
-    from optuna.trial import TrialState
-
-    n = 0
-    for t in study.get_trials(deepcopy=False):
-        if _counted(t) or (before is not None and t.state == TrialState.RUNNING and t.number < before):
-            n += 1
-    return n
+    return sum(
+        t.state.name in ("COMPLETE", "PRUNED")
+        or (t.state.name == "FAIL" and "fail_reason" in t.user_attrs)
+        or (before is not None and t.state.name == "RUNNING" and t.number < before)
+        for t in study.get_trials(deepcopy=False)
+    )
 
 
 def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
-    """No queued trial left (seeds mode), or the budget spent (``running``: with RUNNING trials) and none queued."""
-    from optuna.trial import TrialState
-
-    waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
-    if cfg.mode == "seeds":
-        return not waiting
-    return budget_count(study, before=sys.maxsize if running else None) >= cfg.budget and not waiting
+    """No queued trial left and (hyperparams mode) the budget spent, counting RUNNING trials when ``running``."""
+    if any(t.state.name == "WAITING" for t in study.get_trials(deepcopy=False)):
+        return False
+    return cfg.mode == "seeds" or budget_count(study, before=sys.maxsize if running else None) >= cfg.budget
 
 
 def study_status(study: Any, budget: int | None = None) -> str:
     """``complete``, ``running`` or ``incomplete``, from the study alone."""
-    from optuna.trial import TrialState
-
     trials = study.get_trials(deepcopy=False)
-    if any(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials):
+    if any(t.state.name in ("RUNNING", "WAITING") for t in trials):
         return "running"
     attrs = study.user_attrs
     if attrs.get("mode") == "seeds":
         cells = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.user_attrs.get("grid") is True}
-        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state == TrialState.COMPLETE}
+        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state.name == "COMPLETE"}
         return "complete" if cells and cells <= done else "incomplete"
-    want = int(attrs.get("budget", budget or 0))
-    return "complete" if budget_count(study) >= want else "incomplete"
+    return "complete" if budget_count(study) >= int(attrs.get("budget", budget or 0)) else "incomplete"
 
 
 def _abandoned(t: Any) -> bool:
     """Whether trial ``t`` ended FAIL because its worker was stopped or killed (no error of its own)."""
-    from optuna.trial import TrialState
-
     ua = t.user_attrs
-    return bool(t.state == TrialState.FAIL and "run_dir" in ua and not {"fail_reason", "over_budget"} & set(ua))
+    return bool(t.state.name == "FAIL" and "run_dir" in ua and not {"fail_reason", "over_budget"} & set(ua))
 
 
-class _OverBudget(Exception):
-    """This trial is over the budget (or not from the grid)."""
-
-
-# --------------------------------------------------------------------------- abandoned trials
 def mark_abandoned(study: Any) -> list[int]:
     """Write (or update the ``retried_as`` of) ``ABANDONED.json`` in the folder of every trial that ended FAIL
     because its worker was stopped or killed; the numbers of the trials marked now."""
-    trials = study.get_trials(deepcopy=False)
-    marked = []
+    trials, marked = study.get_trials(deepcopy=False), []
     for t in trials:
-        ua = t.user_attrs
-        if not _abandoned(t):
+        ua, origin = t.user_attrs, t.system_attrs.get("failed_trial")
+        if not _abandoned(t) or not Path(str(ua["run_dir"])).is_dir():
             continue
-        folder = Path(str(ua["run_dir"]))
-        if not folder.is_dir():
-            continue
-        origin = t.system_attrs.get("failed_trial")
         if any(u.number == origin != t.number and u.user_attrs.get("run_dir") == ua["run_dir"] for u in trials):
             continue  # a retry that died before it had a folder of its own: the folder is its original's
         retries = [
             u.number
             for u in trials
-            if u.number != t.number
-            and (u.system_attrs.get("failed_trial") == t.number or u.user_attrs.get("retry_of") == t.number)
+            if u.number != t.number and t.number in (u.system_attrs.get("failed_trial"), u.user_attrs.get("retry_of"))
         ]
-        try:  # marked before: rewritten only when a retry appeared since
-            old = json.loads((folder / ABANDONED).read_text())
-        except (OSError, ValueError):
-            old = None
-        if isinstance(old, dict) and old.get("retried_as") == retries:
+        path = Path(str(ua["run_dir"])) / ABANDONED
+        old: Any = {}
+        with contextlib.suppress(OSError, ValueError):  # marked before: rewritten only when a retry appeared since
+            old = json.loads(path.read_text())
+        old = old if isinstance(old, dict) else {}
+        if old.get("retried_as") == retries:
             continue
         reason = ua.get("interrupted") or "its worker stopped sending heartbeats (killed, or its machine lost)"
-        doc = {
-            "study": study.study_name,
-            "trial": t.number,
-            "state": "FAIL",
-            "reason": reason,
-            "retried_as": retries,
-            "worker": ua.get("worker"),
-            "marked": old.get("marked") if isinstance(old, dict) else time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        }
-        atomic_write_json(folder / ABANDONED, doc)
+        marked_at = old.get("marked") or time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        doc = {"study": study.study_name, "trial": t.number, "state": "FAIL", "reason": reason, "retried_as": retries,
+               "worker": ua.get("worker"), "marked": marked_at}  # fmt: skip
+        atomic_write_json(path, doc)
         marked.append(t.number)
     return marked
 
 
-# --------------------------------------------------------------------------- the objective
+def _requeue(study: Any, trial: Any, how: str) -> None:
+    trial.set_user_attr("interrupted", how)
+    frozen = study._storage.get_trial(trial._trial_id)
+    attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
+    study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
+
+
+# --------------------------------------------------------------------------- search spaces
 #: off-policy batch sizes sampled over a base YAML of many sub-envs (>= HT_MIN_ENVS), else rl-zoo's
 HT_BATCH_SIZES = (512, 1024, 2048, 4096)
 HT_MIN_ENVS = 64
 BATCH_SIZES = (64, 128, 256)
+#: fast-PPO sampling choices (powers of two: every minibatch count divides the batch ``N T``)
+FAST_NUM_ENVS = (64, 128, 256, 512, 1024)
+FAST_ROLLOUT_STEPS = (8, 16, 32, 64, 128)
+FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
 
 
 def batch_choices(base: Mapping[str, Any] | None) -> tuple[int, ...]:
@@ -548,27 +489,16 @@ def sample_hyperparams(trial: Any, algo: str, base: Mapping[str, Any] | None = N
 def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
     """The Optuna parameters of :func:`sample_hyperparams` that reproduce the base YAML ``base`` (``--enqueue-base``);
     ``ValueError``: a sampled key is missing or outside its range."""
-    names = ["learning_rate", "gamma"] + (
-        ["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo" else ["tau", "batch_size"]
-    )
-    if algo == "td3":
-        names.append("noise_std")
+    names = ["learning_rate", "gamma"] + (["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo"
+                                          else ["tau", "batch_size"] + ["noise_std"] * (algo == "td3"))  # fmt: skip
     missing = [n for n in names if n not in base]
     if missing:
         raise ValueError(f"--enqueue-base: the base file has no {', '.join(missing)} for {algo}")
-    out = {n: base[n] for n in names if n != "gamma"}
-    out["one_minus_gamma"] = 1.0 - float(base["gamma"])
-    if algo != "ppo":
-        choices = batch_choices(base)
-        if base["batch_size"] not in choices:
-            raise ValueError(f"--enqueue-base: batch_size must be one of {list(choices)}, got {base['batch_size']!r}")
-    return out
-
-
-#: fast-PPO sampling choices (powers of two: every minibatch count divides the batch ``N T``)
-FAST_NUM_ENVS = (64, 128, 256, 512, 1024)
-FAST_ROLLOUT_STEPS = (8, 16, 32, 64, 128)
-FAST_MINIBATCHES = (1, 2, 4, 8, 16, 32)
+    if algo != "ppo" and base["batch_size"] not in batch_choices(base):
+        raise ValueError(
+            f"--enqueue-base: batch_size must be one of {list(batch_choices(base))}, got {base['batch_size']!r}"
+        )
+    return {n: base[n] for n in names if n != "gamma"} | {"one_minus_gamma": 1.0 - float(base["gamma"])}
 
 
 def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
@@ -597,25 +527,19 @@ def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
     }
 
 
-def _requeue(study: Any, trial: Any, how: str) -> None:
-    trial.set_user_attr("interrupted", how)
-    frozen = study._storage.get_trial(trial._trial_id)
-    attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
-    study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
-
-
-#: errors of a trial's own: recorded as its ``fail_reason``, then raised (Optuna marks it FAIL)
-_TRIAL_ERRORS = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)
-
-
+# --------------------------------------------------------------------------- the objective
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """``fit_and_validate()``'s objective, its per-cell values stored (``validation``); an error or a non-finite value
-    is the trial's ``fail_reason`` (raised again / returned: Optuna marks it FAIL)."""
+    """``fit_and_validate()``'s objective, its per-cell values stored (``validation``); an error (but a prune) or a
+    non-finite value is the trial's ``fail_reason`` (raised again / returned: Optuna marks it FAIL)."""
+    import optuna
+
     try:
         value, per_cell = fit_and_validate()
-    except _TRIAL_ERRORS as exc:
+    except optuna.TrialPruned:
+        raise
+    except Exception as exc:
         trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
         raise
     trial.set_user_attr("validation", {"metric": OBJECTIVE, "seeds": list(cells[0].seeds), "cells": per_cell})
@@ -624,9 +548,7 @@ def _validated_trial(
     return value
 
 
-def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
-    import optuna
-
+def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any], float]:
     cells = validation_cells(cfg.env_id, cfg.val_episodes, cfg.val_max_steps)
 
     def objective(trial: Any) -> float:
@@ -643,21 +565,15 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
         if over:
             study.stop()
             trial.set_user_attr("over_budget", True)
-            raise _OverBudget(why)
+            raise RuntimeError(f"over budget: {why}")
         algo: str = trial.suggest_categorical("algo", cfg.algos) if cfg.mode == "seeds" else cfg.algos[0]
         seed = int(trial.suggest_categorical("seed", cfg.seeds)) if cfg.mode == "seeds" else cfg.train_seed
         run_dir = (Path(cfg.out) / cfg.name / f"trial_{trial.number}_{trial._trial_id}").resolve()
         trial.set_user_attr("run_dir", str(run_dir))
         try:
-            return _trial(cfg, study, trial, algo, seed, run_dir, cells)
+            return _validated_trial(trial, cells, lambda: _trial(cfg, study, trial, algo, seed, run_dir, cells))
         except KeyboardInterrupt:  # queue the trial again before the worker stops
             _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
-            raise
-        except optuna.TrialPruned:
-            raise
-        except Exception as exc:  # any other error is the trial's own (never "abandoned")
-            if "fail_reason" not in trial.user_attrs:
-                trial.set_user_attr("fail_reason", f"{type(exc).__name__}: {exc}")
             raise
 
     return objective
@@ -665,7 +581,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Any:
 
 def _trial(
     cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
-) -> float:
+) -> tuple[float, dict[str, float | None]]:
     """One trial: the settings (base file, sampled in hyperparams mode) in ``run_dir/hyperparams.yml``, training in
     ``run_dir/run`` with evaluations reported to the pruner (hyperparams mode), then the objective on ``cells``."""
     import optuna
@@ -674,17 +590,18 @@ def _trial(
     from amigo_gym.tools.training import fastppo
 
     fast = algo == FASTPPO
-    base_file = cfg.base_file(algo)
-    hp = fastppo.load_settings_yaml(base_file) if fast else load_hyperparams(base_file, cfg.env_id)
+    hp = fastppo.load_settings_yaml(cfg.base_file(algo)) if fast else load_hyperparams(cfg.base_file(algo), cfg.env_id)
     if cfg.mode == "hyperparams":
         hp |= sample_fastppo(trial, cfg.timesteps) if fast else sample_hyperparams(trial, algo, hp)
     trial.set_user_attr("hyperparams", hp)
-    hp_file = run_dir / "hyperparams.yml"
     hp_key = fastppo.YAML_ENV_ID if fast else cfg.env_id
-    atomic_write(hp_file, yaml.safe_dump({hp_key: hp}, sort_keys=True), parents=True)
-    out, env_kwargs, reported, pruned = run_dir / "run", cfg.train_env_kwargs, set(), []
+    atomic_write(run_dir / "hyperparams.yml", yaml.safe_dump({hp_key: hp}, sort_keys=True), parents=True)
+    reported: set[int] = set()
+    pruned: list[int] = []
 
-    def report(value: float, at: int, step: int) -> bool:
+    def report(value: float, at: int, step: int | None = None) -> bool:
+        """Report an evaluation ``value`` at env-step ``at`` as ``step`` (default ``at``); whether training goes on."""
+        step = at if step is None else step
         if not math.isfinite(value):
             raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
         if cfg.mode == "hyperparams" and step not in reported:
@@ -695,94 +612,90 @@ def _trial(
                 return False
         return True
 
-    def fit_sb3() -> tuple[dict[str, Any], dict[str, Any], Any]:
-        train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
-        s = Settings(
-            algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here
-            seed=seed, out=str(out), timesteps=cfg.timesteps, eval_freq=cfg.eval_freq,
-            eval_episodes=cfg.eval_episodes, checkpoint_freq=0, threads=cfg.threads, progress=False,
-            hyperparams=str(hp_file), env_id=cfg.env_id, env_kwargs=env_kwargs,
-            argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
-        )  # fmt: skip
+    if fast:
+        record, attrs, load = _fit_fast(cfg, study, trial, seed, hp, run_dir, report)
+    else:
+        record, attrs, load = _fit_sb3(cfg, algo, seed, run_dir, report)
+    for key, value in (attrs | {"wall_time_s": record["wall_time_s"]}).items():
+        trial.set_user_attr(key, value)
+    if pruned:
+        raise optuna.TrialPruned(f"pruned at step {pruned[0]}")
+    return validate_agent(load(), cells)
 
-        def after_eval(entry: dict[str, Any]) -> bool:
-            step = int(entry["timesteps"])
-            return report(float(entry.get("h_rms_m", math.nan)), step, step)
 
-        record = train(s, after_eval=after_eval)
-        last = record.get("last_eval") or {}
-        keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
-        attrs = {f"last_eval_{k}": last[k] for k in keys if k in last}
-        return record, attrs, lambda: load_model(find_models(out)[0])
+def _fit_sb3(
+    cfg: SweepConfig, algo: str, seed: int, run_dir: Path, report: Callable[..., bool]
+) -> tuple[dict[str, Any], dict[str, Any], Callable[[], Any]]:
+    """SB3 training (``amigo-gym train``) in ``run_dir/run``, every evaluation reported at its own step."""
+    env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
+    train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
+    s = Settings(
+        algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here
+        seed=seed, out=str(out), timesteps=cfg.timesteps, eval_freq=cfg.eval_freq,
+        eval_episodes=cfg.eval_episodes, checkpoint_freq=0, threads=cfg.threads, progress=False,
+        hyperparams=str(hp_file), env_id=cfg.env_id, env_kwargs=env_kwargs,
+        argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
+    )  # fmt: skip
+    record = train(s, after_eval=lambda e: report(float(e.get("h_rms_m", math.nan)), int(e["timesteps"])))
+    last = record.get("last_eval") or {}
+    keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
+    return record, {f"last_eval_{k}": last[k] for k in keys if k in last}, lambda: load_model(find_models(out)[0])
 
-    def fit_fast() -> tuple[dict[str, Any], dict[str, Any], Any]:
-        run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes}
-        run["threads"] = cfg.threads
-        s = fastppo.FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
-        resumed = _resume_fastppo(study, trial, s, out)
-        if resumed is not None:
-            trial.set_user_attr("resumed_from", resumed)
-        flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
-        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
-        command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
-        config = {
-            "settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
-            "fastppo_settings": s.to_json(),
-            "env_id": cfg.env_id,
-            "env_kwargs": env_kwargs,
-            "command": command,
-            "resumed_from": resumed,
-            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        }
-        atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
 
-        def after_eval(row: dict[str, float]) -> bool:
-            # the pruner compares trials at the scheduled step (a multiple of --eval-freq), whatever their N T
-            at = int(row["env_steps"])
-            return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
+def _fit_fast(
+    cfg: SweepConfig, study: Any, trial: Any, seed: int, hp: dict[str, Any], run_dir: Path, report: Callable[..., bool]
+) -> tuple[dict[str, Any], dict[str, Any], Callable[[], Any]]:
+    """Fast-PPO training (``amigo-gym train-fast``) in ``run_dir/run``, resumed from an abandoned trial's checkpoint
+    of the same settings; every evaluation reported at its scheduled step (a multiple of ``--eval-freq``, equal in
+    every trial whatever its batch)."""
+    from amigo_gym.tools.training import fastppo
 
-        def log(msg: str) -> None:
-            with open(out / "train.log", "a", encoding="utf-8") as f:
-                f.write(msg + "\n")
+    env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
+    run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes,
+           "threads": cfg.threads}  # fmt: skip
+    s = fastppo.FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
+    resumed = _resume_fastppo(study, trial, s, out)
+    if resumed is not None:
+        trial.set_user_attr("resumed_from", resumed)
+    flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
+    command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
+    command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
+    config = {"settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
+              "fastppo_settings": s.to_json(), "env_id": cfg.env_id, "env_kwargs": env_kwargs, "command": command,
+              "resumed_from": resumed, "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}  # fmt: skip
+    atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
 
-        record = fastppo.train(s, out, resume=resumed is not None, log=log, command=command, after_eval=after_eval)
-        last = record.get("last_eval") or {}
-        keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
-        attrs = {f"last_eval_{k}": last[f"eval_{k}"] for k in keys if f"eval_{k}" in last}
-        attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]}
+    def after_eval(row: dict[str, float]) -> bool:
+        at = int(row["env_steps"])
+        return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
 
-        def load() -> FastPolicy:
-            model, manifest = out / "model.zip", out / "run.json"
-            verify_sha256(model, str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
-            return FastPolicy.load(model)
+    with open(out / "train.log", "a", encoding="utf-8") as log:
+        record = fastppo.train(s, out, resume=resumed is not None, log=lambda m: print(m, file=log, flush=True),
+                               command=command, after_eval=after_eval)  # fmt: skip
+    last = record.get("last_eval") or {}
+    keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
+    attrs = {f"last_eval_{k}": last[f"eval_{k}"] for k in keys if f"eval_{k}" in last}
+    attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]}
 
-        return record, attrs, load
+    def load() -> FastPolicy:
+        model, manifest = out / "model.zip", out / "run.json"
+        verify_sha256(model, str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
+        return FastPolicy.load(model)
 
-    def fit_and_validate() -> tuple[float, dict[str, float | None]]:
-        record, attrs, load = fit_fast() if fast else fit_sb3()
-        for key, value in (attrs | {"wall_time_s": record["wall_time_s"]}).items():
-            trial.set_user_attr(key, value)
-        if pruned:
-            raise optuna.TrialPruned(f"pruned at step {pruned[0]}")
-        return validate_agent(load(), cells)
-
-    return _validated_trial(trial, cells, fit_and_validate)
+    return record, attrs, load
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
     """Copy into ``out`` the run files of the newest checkpoint of an abandoned FAIL trial with the same parameters and
     settings ``s``; the trial it came from (``None``: none)."""
-    from optuna.trial import TrialState
-
     best: tuple[float, Any, Path] | None = None
-    for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,)):
+    for t in study.get_trials(deepcopy=False):
         if t.number == trial.number or t.params != trial.params or not _abandoned(t):
             continue
         src = Path(str(t.user_attrs["run_dir"])) / "run"
-        ckpt = src / "checkpoint.pt"
         try:
             same = json.loads((src / "settings.json").read_text()) == s.to_json()
-            mtime = ckpt.stat().st_mtime
+            mtime = (src / "checkpoint.pt").stat().st_mtime
         except (OSError, ValueError):
             continue
         if same and (best is None or mtime > best[0]):
@@ -801,13 +714,10 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
     """One worker: join the study, run trials until the budget (or the grid) is spent; ``opened`` receives the
     study as soon as it is open."""
     import optuna
-    from optuna.study import MaxTrialsCallback
-    from optuna.trial import TrialState
 
     cfg.validate()
     sampler_seed = _worker_seed(cfg)
-    storage = make_storage(cfg)
-    study = open_study(cfg, storage, sampler_seed)
+    study = open_study(cfg, make_storage(cfg), sampler_seed)
     if opened is not None:
         opened.append(study)
     study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
@@ -822,15 +732,8 @@ def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
 
     with handling(signal.default_int_handler, signal.SIGTERM):
         if not _exhausted(study, cfg):
-            study.optimize(
-                _objective(cfg, study, sampler_seed),
-                n_trials=None,
-                catch=(ValueError, RuntimeError, FloatingPointError, FileNotFoundError, _OverBudget),
-                callbacks=[
-                    MaxTrialsCallback(cfg.budget, states=(TrialState.COMPLETE, TrialState.PRUNED)),
-                    stop_when_spent,
-                ],
-            )
+            errors = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)  # the trial's: FAIL, go on
+            study.optimize(_objective(cfg, study, sampler_seed), catch=errors, callbacks=[stop_when_spent])
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
@@ -838,20 +741,16 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     from optuna.trial import TrialState
 
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
-    states = {s.name: sum(t.state == s for t in trials) for s in TrialState}
-    best = None
-    if any(t.state == TrialState.COMPLETE for t in trials):
-        b = study.best_trial
-        best = {"number": b.number, "value": b.value, "params": b.params}
+    best = study.best_trial if any(t.state == TrialState.COMPLETE for t in trials) else None
     attrs = dict(sorted(study.user_attrs.items()))
     return {
         "study": study.study_name,
         "status": study_status(study, budget),
         "budget": attrs.get("budget", budget),
-        "states": states,
+        "states": {s.name: sum(t.state == s for t in trials) for s in TrialState},
         "finished": sum(t.state not in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
         "counted": budget_count(study),
-        "best": best,
+        "best": best and {"number": best.number, "value": best.value, "params": best.params},
         "study_attrs": attrs,
         "trials": [
             {
@@ -869,7 +768,7 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
 
 def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
     """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials; whether it did."""
-    path = folder / SUMMARY
+    path = folder / "summary.json"
     with RunLock(folder, name="summary.lock", wait=60.0):
         with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
             if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
@@ -879,63 +778,43 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
 
 
 # --------------------------------------------------------------------------- the winners into a YAML file
-_TOP_KEY = re.compile(r"^([^\s#:-][^:]*|'[^']*'|\"[^\"]*\"):")
-
-
-def _block_start(lines: list[str], i: int) -> int:
-    while i > 0 and lines[i - 1].startswith("#"):
-        i -= 1
-    return i
-
-
 def replace_yaml_block(text: str, key: str, block: str) -> str:
-    """``text`` (YAML of top-level mappings) with ``key`` and its comment lines replaced by ``block`` (appended
-    when missing); the rest kept as written."""
-    lines = text.splitlines(keepends=True)
-    keys = [(i, m.group(1).strip("'\"")) for i, line in enumerate(lines) if (m := _TOP_KEY.match(line))]
-    at = [n for n, (_, k) in enumerate(keys) if k == key]
-    if not block.endswith("\n"):
-        block += "\n"
-    if not at:
-        head = "".join(lines)
-        return head + ("\n" if head and not head.endswith("\n\n") else "") + block
-    n = at[0]
-    start = _block_start(lines, keys[n][0])
-    end = _block_start(lines, keys[n + 1][0]) if n + 1 < len(keys) else len(lines)
-    while end > start and not lines[end - 1].strip():  # keep the blank lines before the next block
-        end -= 1
-    return "".join(lines[:start]) + block + "".join(lines[end:])
+    """``text`` (YAML of top-level mappings) with ``key``'s lines and the comment lines above them replaced by
+    ``block`` (appended when missing); the rest kept as written."""
+    text = text if not text or text.endswith("\n") else text + "\n"
+    block = block if block.endswith("\n") else block + "\n"
+    names = "|".join(re.escape(q + key + q) for q in ("", "'", '"'))
+    m = re.search(rf"^(?:#.*\n)*(?:{names}):.*\n(?:[ \t].*\n|\n)*", text, re.MULTILINE)
+    if m is None:
+        return text + ("\n" if text and not text.endswith("\n\n") else "") + block
+    old = m.group(0)
+    blank = "\n" * (len(old) - len(old.rstrip("\n")) - 1)  # the blank lines before the next block stay
+    return text[: m.start()] + block + blank + text[m.end() :]
 
 
 def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any] | None:
     """``--save-best``: the best COMPLETE trial's hyperparameters under ``env_id`` in the YAML file ``path``, with
     comments naming the command, trial and value; the mapping written (``None``: no COMPLETE trial)."""
     import yaml
-    from optuna.trial import TrialState
 
-    done = [t for t in study.get_trials(deepcopy=False) if t.state == TrialState.COMPLETE and t.value is not None]
-    if not done:
+    trials = study.get_trials(deepcopy=False)
+    if not any(t.state.name == "COMPLETE" and t.value is not None for t in trials):
         return None
-    best = study.best_trial
+    best, attrs = study.best_trial, study.user_attrs
     hp = best.user_attrs["hyperparams"]
-    attrs = study.user_attrs
-    finished = sum(t.state in (TrialState.COMPLETE, TrialState.PRUNED) for t in study.get_trials(deepcopy=False))
-    seeds = (best.user_attrs.get("validation") or {}).get("seeds", [])
-    comment = [
-        f"# {env_id}: the best of {finished} finished trials (COMPLETE or PRUNED) of the study {study.study_name!r}",
-        f"# ({attrs.get('objective', OBJECTIVE)}, held-in validation cells, seeds {seeds[0] if seeds else '?'}.."
-        f"{seeds[-1] if seeds else '?'}): "
-        f"trial {best.number}, {1e3 * float(best.value):.4g} mm; written {time.strftime('%Y-%m-%d %H:%M %Z')}.",
-        f"# Found by: {attrs.get('command', '?')}",
-    ]
-    body = yaml.safe_dump({env_id: hp}, sort_keys=False, default_flow_style=None)
+    seeds = (best.user_attrs.get("validation") or {}).get("seeds") or ["?"]
+    finished = sum(t.state.name in ("COMPLETE", "PRUNED") for t in trials)
+    block = (
+        f"# {env_id}: the best of {finished} finished trials (COMPLETE or PRUNED) of the study {study.study_name!r}\n"
+        f"# ({attrs.get('objective', OBJECTIVE)}, held-in validation cells, seeds {seeds[0]}..{seeds[-1]}): "
+        f"trial {best.number}, {1e3 * float(best.value):.4g} mm; written {time.strftime('%Y-%m-%d %H:%M %Z')}.\n"
+        f"# Found by: {attrs.get('command', '?')}\n"
+    ) + yaml.safe_dump({env_id: hp}, sort_keys=False, default_flow_style=None)
     path = Path(path)
     old = path.read_text(encoding="utf-8") if path.is_file() else ""
-    new = replace_yaml_block(old, env_id, "\n".join(comment) + "\n" + body)
-    before, after = (yaml.safe_load(old) or {}) if old else {}, yaml.safe_load(new)
-    if after.get(env_id) != hp or {k: v for k, v in after.items() if k != env_id} != {
-        k: v for k, v in before.items() if k != env_id
-    }:  # pragma: no cover - a file layout replace_yaml_block does not understand
+    new = replace_yaml_block(old, env_id, block)
+    want = (yaml.safe_load(old) or {}) | {env_id: hp}
+    if yaml.safe_load(new) != want:  # pragma: no cover - a file layout replace_yaml_block does not understand
         raise ValueError(f"--save-best {path}: could not replace the {env_id} block of this file safely")
     atomic_write(path, new, parents=True)
     return dict(hp)
@@ -969,80 +848,68 @@ def _describe(code: int) -> str:
     return f"killed by {signal.Signals(-code).name if -code in signal.valid_signals() else f'signal {-code}'}"
 
 
+def _run(cfg: SweepConfig) -> int:
+    """The command: the workers, then the summary, the ``--save-best`` file and the exit status."""
+    import optuna
+
+    failed: list[str] = []
+    opened: list[Any] = []
+    interrupted = False
+    with handling(signal.default_int_handler, signal.SIGTERM):
+        try:
+            if cfg.n_jobs > 1:
+                codes = _spawn_workers(cfg)
+                failed = [f"worker {i}: {_describe(c)}" for i, c in enumerate(codes) if c not in (0, INTERRUPTED)]
+                interrupted = INTERRUPTED in codes
+            else:
+                run_worker(cfg, opened)
+        except KeyboardInterrupt:
+            interrupted = True
+    # this process's own study when it has one (an in-memory storage lives only in it)
+    study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
+    mark_abandoned(study)
+    summary = summarize(study, cfg.budget)
+    write_summary(Path(cfg.out) / cfg.name, summary)
+    status, best = summary["status"], summary["best"]
+    counted = f"counted {summary['counted']} of budget {summary['budget']}"
+    print(f"study {cfg.name}: {status}; {summary['states']}; {counted}")
+    if best is not None:
+        print(f"best trial {best['number']}: {best['value']:.4g} {best['params']}")
+    if status == "running":
+        print("the study is still running (trials RUNNING or WAITING on other workers)")
+    if cfg.save_best is not None:
+        saved = write_best_yaml(cfg.save_best, study, cfg.env_id) is not None
+        print(f"wrote the best trial's hyperparameters under {cfg.env_id} in {cfg.save_best}" if saved
+              else f"no COMPLETE trial yet: {cfg.save_best} not written")  # fmt: skip
+    error = "; ".join(failed) + "; rerun to continue the study" if failed else None  # a worker that died comes first
+    if error is None and not interrupted and status == "incomplete":
+        error = "the study is incomplete (trials failed or were lost); see summary.json"
+    if error is not None:
+        print(f"amigo-gym sweep: error: {error}", file=sys.stderr)
+        return 1
+    if interrupted:
+        print("amigo-gym sweep: stopped; the interrupted trial is queued again: rerun to continue", file=sys.stderr)
+        return INTERRUPTED
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym sweep``."""
     args = list(sys.argv[1:] if argv is None else argv)
     cfg = parse_settings(SweepConfig, args, "amigo-gym sweep", "Optuna studies over amigo-gym training.", argv=args)
-    url = cfg.storage_url
-
-    def run() -> int:
-        import optuna
-
-        interrupted = False
-        failed: list[str] = []
-        opened: list[Any] = []
-        with handling(signal.default_int_handler, signal.SIGTERM):
-            if cfg.n_jobs > 1:
-                try:
-                    codes = _spawn_workers(cfg)
-                except KeyboardInterrupt:
-                    interrupted, codes = True, []
-                failed = [f"worker {i}: {_describe(c)}" for i, c in enumerate(codes) if c not in (0, INTERRUPTED)]
-                interrupted = interrupted or INTERRUPTED in codes
-            else:
-                try:
-                    run_worker(cfg, opened)
-                except KeyboardInterrupt:
-                    interrupted = True
-        # this process's own study when it has one (an in-memory storage lives only in it)
-        study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
-        mark_abandoned(study)
-        summary = summarize(study, cfg.budget)
-        write_summary(Path(cfg.out) / cfg.name, summary)
-        status = summary["status"]
-        print(
-            f"study {summary['study']}: {status}; {summary['states']}; counted {summary['counted']} of budget "
-            f"{summary['budget']}"
-        )
-        if summary["best"] is not None:
-            print(f"best trial {summary['best']['number']}: {summary['best']['value']:.4g} {summary['best']['params']}")
-        if status == "running":
-            print("the study is still running (trials RUNNING or WAITING on other workers)")
-        if cfg.save_best is not None:
-            saved = write_best_yaml(cfg.save_best, study, cfg.env_id)
-            print(
-                f"wrote the best trial's hyperparameters under {cfg.env_id} in {cfg.save_best}"
-                if saved is not None
-                else f"no COMPLETE trial yet: {cfg.save_best} not written"
-            )
-        if failed:  # a worker that died counts before a stop
-            print(f"amigo-gym sweep: error: {'; '.join(failed)}; rerun to continue the study", file=sys.stderr)
-            return 1
-        if interrupted:
-            print("amigo-gym sweep: stopped; the interrupted trial is queued again: rerun to continue", file=sys.stderr)
-            return INTERRUPTED
-        if status == "incomplete":
-            print(
-                "amigo-gym sweep: error: the study is incomplete (trials failed or were lost); see summary.json",
-                file=sys.stderr,
-            )
-            return 1
-        return 0
 
     def guarded() -> int:
         try:
-            return run()
-        except ValueError as exc:  # status 2, one line, password masked
-            raise ValueError(scrub(str(exc), url)) from None
+            return _run(cfg)
         except (KeyboardInterrupt, FileNotFoundError, FileExistsError):
             raise
+        except ValueError as exc:  # status 2, one line, password masked
+            raise ValueError(scrub(str(exc), cfg.storage_url)) from None
         except Exception as exc:
             if os.environ.get("AMIGO_GYM_TRACEBACK"):
                 raise
-            print(
-                f"amigo-gym sweep: error: {scrub(' '.join(f'{type(exc).__name__}: {exc}'.split()), url)}",
-                file=sys.stderr,
-            )
+            detail = scrub(" ".join(f"{type(exc).__name__}: {exc}".split()), cfg.storage_url)
+            print(f"amigo-gym sweep: error: {detail}", file=sys.stderr)
             return 1
 
     return run_guarded(guarded, "amigo-gym sweep")
