@@ -30,8 +30,9 @@ from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import RunLock, publish, remove_matching, verify_manifest
 from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training import random_paths as rp
+from amigo_gym.tools.training import task_metrics as tm
 from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
-from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
+from amigo_gym.tools.training.intervals import iqm, optimality_gap, score_distribution, stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import METRIC_NAMES, SUITE_VERSION, Scenario, run_grid, run_scenario
 from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable
 from amigo_gym.tools.training.task_metrics import make_env as make_env
@@ -328,6 +329,11 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
+def _profile(scores: Any) -> Any:
+    """rliable's performance profile of ``-H``: the fraction of scores above each ``-tau``."""
+    return score_distribution(scores, -np.asarray(PROFILE_TAUS))
+
+
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -371,7 +377,7 @@ def aggregate(
                 gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
-                prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
+                prof, band = stratified_bootstrap(-h, _profile, reps=profile_reps, seed=seed)
                 keys_ = ("fraction_below", "ci95_low", "ci95_high")
                 profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
         if entry["all"] is not None:
@@ -407,9 +413,6 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         f"IQM and optimality gap over (training seed, scenario) runs; [95 % stratified-bootstrap interval, "
         f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
         "",
-        "| agent | seeds | scenarios | failed episodes | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] "
-        "| failure rate | return/step IQM | held-out H RMS IQM [mm] |",
-        "|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
@@ -418,18 +421,20 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         lo, hi = d["ci95"]
         return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
 
+    rows = []
     for agent, a in doc["aggregates"].items():
-        g = a.get("all")
-        if g is None:
+        if (g := a.get("all")) is None:
             continue
         h = a.get("held_out")
         failed, episodes = failed_episodes(doc, agent)
-        lines.append(
-            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {failed} of {episodes} | {iv(g['h_rms_m_iqm'])} | "
-            f"{iv(g['h_rms_m_optimality_gap'])} | {iv(g['speed_err_rms_iqm'])} | "
-            f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
-            f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
-        )
+        rows.append((
+            agent, a["n_runs"], g["n_scenarios"], f"{failed} of {episodes}", iv(g["h_rms_m_iqm"]),
+            iv(g["h_rms_m_optimality_gap"]), iv(g["speed_err_rms_iqm"]), iv(g["failure_rate_mean"], 1.0, ".2f"),
+            iv(g["return_per_step_iqm"], 1.0, ".3f"), iv(h["h_rms_m_iqm"]) if h else "–",
+        ))  # fmt: skip
+    header = ("agent", "seeds", "scenarios", "failed episodes", "H RMS IQM [mm]", "H gap [mm]")
+    header += ("speed err IQM [mm/s]", "failure rate", "return/step IQM", "held-out H RMS IQM [mm]")
+    lines += tm.md_table(header, rows)
     algos = {a["agent"]: a.get("algo") for a in doc.get("agents", [])}
     legend = [f"`{name}`: {agent_label(name, algos.get(name))}" for name in doc["aggregates"]]
     lines += ["", "Agents: " + "; ".join(legend) + "."]
@@ -442,16 +447,20 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
     )
     for key, title, fmt in per_scenario:
-        lines += ["", f"## {title} (mean over training seeds)", ""]
-        lines.append("| scenario | held out | " + " | ".join(agents) + " |")
-        lines.append("|---|---|" + "---|" * len(agents))
+        rows = []
         for sc in doc["scenarios"]:
             cells = []
             for agent in agents:
-                vals = [r.get(key) for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
-                vals = [v for v in vals if v is not None]
+                run = [r for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, sc["name"])]
+                vals = [r[key] for r in run if r.get(key) is not None]
                 cells.append(fmt(float(np.mean(vals))) if vals else "–")
-            lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+            rows.append((sc["name"], "yes" if sc["held_out"] else "", *cells))
+        lines += [
+            "",
+            f"## {title} (mean over training seeds)",
+            "",
+            *tm.md_table(("scenario", "held out", *agents), rows),
+        ]
     infeasible = {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}
     if infeasible:
         lines += ["", "## Paths beyond the robot's limits (feasibility='warn' or 'off')", ""]
@@ -493,10 +502,7 @@ def readme_table(doc: Mapping[str, Any]) -> str:
         raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
     cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
     best = [min(1e3 * agg[g][k]["value"] for _, agg, _, _ in rows if agg.get(g)) for g, k, _ in cols]
-    lines = [
-        "| agent | failed episodes | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
-        "|---|---:|---:|---:|---:|",
-    ]
+    table: list[tuple[str, ...]] = []
     for label, agg, n, failed in rows:
         cells = []
         for (g, k, fmt), low in zip(cols, best, strict=True):
@@ -510,8 +516,9 @@ def readme_table(doc: Mapping[str, Any]) -> str:
                 lo, hi = (1e3 * x for x in d[k]["ci95"])
                 text += f" [{lo:{fmt}}, {hi:{fmt}}]"
             cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
-        lines.append(f"| {label} | {failed} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        table.append((label, failed, *cells))
+    header = ("agent", "failed episodes", "H RMS IQM [mm] (95 % CI)", "held-out H RMS IQM [mm]")
+    return "\n".join(tm.md_table((*header, "speed error IQM [mm/s]"), table, right=4)) + "\n"
 
 
 def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -532,11 +539,6 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
             who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
         out.append(f"{who} on {', '.join(scenarios)}: {reason}")
     return out
-
-
-def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
-    """:func:`scenarios_figure` saved as PNG."""
-    save_figure(scenarios_figure(doc, reps, seed), path)
 
 
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
@@ -595,7 +597,8 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
 
 def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
     """Draw ``benchmark_scenarios.png`` and ``benchmark_profiles.png`` into ``folder``; their names."""
-    plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+    fig = scenarios_figure(doc, seed=int(doc["protocol"]["bootstrap_seed"]))
+    save_figure(fig, folder / "benchmark_scenarios.png")
     plot_profiles(doc, folder / "benchmark_profiles.png")
     return ["benchmark_scenarios.png", "benchmark_profiles.png"]
 
@@ -604,11 +607,6 @@ def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
 MANIFEST = "benchmark_manifest.json"
 #: names of the temporary files and folders a benchmark writes in ``--out`` (removed by the next run)
 _TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_manifest\..*)$")
-
-
-def clean_temporaries(out: Path) -> list[str]:
-    """Remove what killed benchmarks left in ``out`` (hold ``out``'s lock); the names removed."""
-    return remove_matching(out, _TEMPORARY)
 
 
 def write_outputs(
@@ -731,7 +729,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError("--path and --scenarios exclude each other")
         paths = rp.path_set(a.random_paths, a.condition, a.random_paths_seed, a.speed, a.tolerance)
         if a.curvature:
-            scenarios = curvature_scenarios(a.curvature_episodes)
+            scenarios = curvature.cell_specs(episodes=a.curvature_episodes)
         elif a.random_paths:
             scenarios = paths.scenarios
         elif a.path:
@@ -762,7 +760,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 atomic_write_json(written[0], doc)
                 atomic_write(written[1], report)
             else:
-                clean_temporaries(out)
+                remove_matching(out, _TEMPORARY)  # what killed benchmarks left
                 doc = run_benchmark(
                     agents,
                     scenarios,
@@ -782,11 +780,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
-
-
-def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
-    """The cells of ``--curvature``, ``episodes`` each (not part of the suite)."""
-    return curvature.cell_specs(episodes=episodes)
 
 
 if __name__ == "__main__":

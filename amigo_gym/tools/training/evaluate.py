@@ -32,7 +32,7 @@ from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json, verify_sha256
 from amigo_gym.tools.training.hyperparams import sb3_class
-from amigo_gym.tools.training.task_metrics import Scenario, Unavailable, _rms, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, Unavailable, _rms, md_table, run_scenario
 
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
@@ -469,12 +469,11 @@ COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     """The results as a Markdown table (one row per agent and scenario)."""
-    lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
+    rows = []
     for r in results:  # a metric that does not exist: None (as read back from JSON) or NaN
         missing = {k for k, v in r.items() if v is None or (isinstance(v, float) and math.isnan(v))}
-        cells = ("n/a" if key in missing and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        rows.append(["n/a" if k in missing and k != "settling_time_s" else fmt(r[k]) for k, _, fmt in COLUMNS])
+    return "\n".join(md_table([c[1] for c in COLUMNS], rows)) + "\n"
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path) -> None:
