@@ -10,7 +10,6 @@ import glob
 import json
 import math
 import re
-import shutil
 import sys
 import tempfile
 import time
@@ -432,7 +431,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             iv(g["h_rms_m_optimality_gap"]), iv(g["speed_err_rms_iqm"]), iv(g["failure_rate_mean"], 1.0, ".2f"),
             iv(g["return_per_step_iqm"], 1.0, ".3f"), iv(h["h_rms_m_iqm"]) if h else "–",
         ))  # fmt: skip
-    header = ("agent", "seeds", "scenarios", "failed episodes", "H RMS IQM [mm]", "H gap [mm]")
+    header: tuple[str, ...] = ("agent", "seeds", "scenarios", "failed episodes", "H RMS IQM [mm]", "H gap [mm]")
     header += ("speed err IQM [mm/s]", "failure rate", "return/step IQM", "held-out H RMS IQM [mm]")
     lines += tm.md_table(header, rows)
     algos = {a["agent"]: a.get("algo") for a in doc.get("agents", [])}
@@ -615,16 +614,14 @@ def write_outputs(
     """Publish the JSON, the Markdown and (``plots``) the two figures as one set with :data:`MANIFEST` written last
     (:func:`amigo_gym.tools.runs.publish`); the paths written."""
     out.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
-    try:
+    with tempfile.TemporaryDirectory(dir=out, prefix=".staging-benchmark-", ignore_cleanup_errors=True) as tmp:
+        staging = Path(tmp)
         targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
         atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
             targets |= {out / name: staging / name for name in plot_all(doc, staging)}
         publish(targets, out, MANIFEST, command=doc.get("command"))
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     return list(targets)
 
 

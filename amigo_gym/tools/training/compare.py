@@ -21,7 +21,6 @@ from typing import Any
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
-from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training import benchmark as bm
@@ -314,15 +313,9 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
     out, models = Path(s.out), Path(s.models) if s.models else None
     hyperparams = Path(s.hyperparams) if s.hyperparams else None
     train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
-    proto = ev.EvalProtocol(steps=s.steps, perturbed_seeds=tuple(range(100, 100 + s.seeds)))
-    agents = ev.default_agents(TrackingParams.v0(), proto.analytic_gain)
-    specs = [ev.AgentSpec(name) for name in agents]  # the benchmark builds the classical ones per scenario
-    training: dict[str, Any] = {}
     if models is not None:
         say(f"loading pretrained agents from {models}")
-        found, training = ev.trained_agents(models)
-        specs += found
-        agents.update({spec.name: spec.load() for spec in found})
+    proto, agents, specs, training = ev.protocol_agents(s.steps, s.seeds, models)
     if train_steps > 0:
         from amigo_gym.tools.training.train import Settings, train
 
@@ -369,16 +362,14 @@ def _run_compare(s: CompareSettings) -> dict[str, Any]:
         bench = quick_benchmark(specs, generalists, progress=progress)
         extra["benchmark"] = json_safe(bench)
         extra["benchmark_plots"] = plots and bool(bench["results"])
-    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
-    try:
+    with tempfile.TemporaryDirectory(dir=out, prefix=".staging-", ignore_cleanup_errors=True) as tmp:
+        staging = Path(tmp)
         doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
         if bench is not None and extra["benchmark_plots"]:
             bm.plot_all(bench, staging)
         atomic_write(staging / "report.md", report_markdown(doc).encode())
         # every file of staging moved into out as one set, the manifest last
         runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     return doc
 
 

@@ -38,10 +38,9 @@ def cell_specs(
 ) -> tuple[Scenario, ...]:
     """The held-out cells: AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``, ``episodes``
     seeds from 100."""
-    if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
-        raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
-        raise ValueError(f"curvature cells: episodes must be an integer in [1, 10000], got {episodes!r}")
+    for name, x, hi in (("levels", levels, 100), ("episodes", episodes, 10_000)):
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= hi:
+            raise ValueError(f"curvature cells: {name} must be an integer in [1, {hi}], got {x!r}")
     out = []
     for v in speeds:
         k_v = feasible_random_curvature(v)

@@ -125,7 +125,7 @@ def run_scenario(
 
     mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
     kw = dict(sc.env_kwargs)
-    venv = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
+    venv: Any = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
     try:
         options = None if sc.pose is None else {"pose": np.asarray(sc.pose, dtype=np.float64)}
         obs, infos = venv.reset(seed=list(sc.seeds), options=options)
