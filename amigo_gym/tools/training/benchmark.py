@@ -259,18 +259,14 @@ def evaluate(agent: Any, env: Any, sc: Scenario) -> list[dict[str, float]]:
     return [r.metrics() for r in run_scenario(agent, sc)]
 
 
-def _nanmean(x: Sequence[float]) -> float | None:
-    a = np.asarray(x, dtype=np.float64)
-    a = a[np.isfinite(a)]
-    return float(a.mean()) if a.size else None
-
-
 def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[str, Any]:
     col = {k: [e[k] for e in eps] for k in eps[0]}
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
-    for k in METRIC_NAMES[:-1]:
-        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = _nanmean(col[k])
+    for k in METRIC_NAMES[:-1]:  # means over the finite values (None: none)
+        x = np.asarray(col[k], dtype=np.float64)
+        x = x[np.isfinite(x)]
+        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = float(x.mean()) if x.size else None
         if k == "return":
             rec["return_per_step"] = None if v is None else v / sc.max_steps
     rec["terminated"] = int(sum(col["terminated"]))
@@ -522,21 +518,15 @@ def readme_table(doc: Mapping[str, Any]) -> str:
 
 def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
     """The unavailable runs, one line per agent and reason, its seeds and scenarios listed once."""
-    groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
+    groups: dict[tuple[Any, str], list[Mapping[str, Any]]] = {}
     for u in unavailable:
-        seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
-        if u.get("seed") not in seeds:
-            seeds.append(u.get("seed"))
-        if u["scenario"] not in scenarios:
-            scenarios.append(u["scenario"])
+        groups.setdefault((u["agent"], str(u["reason"])), []).append(u)
     out = []
-    for (agent, reason), (seeds, scenarios) in groups.items():
-        if agent is None:
-            who = "all agents"
-        else:
-            n = len(seeds)
-            who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
-        out.append(f"{who} on {', '.join(scenarios)}: {reason}")
+    for (agent, reason), us in groups.items():
+        seeds = list(dict.fromkeys(u.get("seed") for u in us))
+        who = f"{agent} (seed {seeds[0]})" if len(seeds) == 1 else f"{agent} ({len(seeds)} training seeds)"
+        scenarios = ", ".join(dict.fromkeys(u["scenario"] for u in us))
+        out.append(f"{'all agents' if agent is None else who} on {scenarios}: {reason}")
     return out
 
 

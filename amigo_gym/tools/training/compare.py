@@ -303,74 +303,69 @@ class CompareSettings:
 
 def run_compare(s: CompareSettings) -> dict[str, Any]:
     """Run the main job; the JSON document."""
-    out = Path(s.out)
+    out, models = Path(s.out), Path(s.models) if s.models else None
     with runs.RunLock(out):
         runs.clean_temporaries(out)
-        return _run_compare(s)
+        hyperparams = Path(s.hyperparams) if s.hyperparams else None
+        train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
+        if models is not None:
+            say(f"loading pretrained agents from {models}")
+        proto, agents, specs, training = ev.protocol_agents(s.steps, s.seeds, models)
+        if train_steps > 0:
+            from amigo_gym.tools.training.train import Settings, train
 
-
-def _run_compare(s: CompareSettings) -> dict[str, Any]:
-    out, models = Path(s.out), Path(s.models) if s.models else None
-    hyperparams = Path(s.hyperparams) if s.hyperparams else None
-    train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
-    if models is not None:
-        say(f"loading pretrained agents from {models}")
-    proto, agents, specs, training = ev.protocol_agents(s.steps, s.seeds, models)
-    if train_steps > 0:
-        from amigo_gym.tools.training.train import Settings, train
-
-        run_dir = out / "train_ppo"
-        request = fresh_run_request(train_steps, seed, hyperparams)
-        stale = reuse_mismatch(run_dir, request)
-        if stale is not None and run_dir.exists():
-            say(f"retraining: the run in {run_dir} does not match the request ({stale})")
-            shutil.rmtree(run_dir)
-        argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
-        fresh = Settings(
-            algo="ppo",
-            seed=seed,
-            out=str(run_dir),
-            timesteps=train_steps,
-            hyperparams=None if hyperparams is None else str(hyperparams),
-            resume=stale is None,
-            eval_freq=0,
-            checkpoint_freq=max(train_steps // 4, 1),
-            progress=progress,
-            argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
-        )
-        if stale is None:
-            say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
-        else:
-            say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
-        t0 = time.perf_counter()
-        training["ppo_fresh"] = train(fresh)
-        rec = training["ppo_fresh"]
-        took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
-        print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
-        trained = ev.find_models(run_dir)[0]
-        agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
-        specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
-    say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
-    results, trajs = ev.evaluate_agents(agents, proto)
-    best = best_learned(results)
-    extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
-    bench: dict[str, Any] | None = None
-    if s.benchmark:
-        generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
-        also = f" and {generalists}" if generalists else ""
-        say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
-        bench = quick_benchmark(specs, generalists, progress=progress)
-        extra["benchmark"] = json_safe(bench)
-        extra["benchmark_plots"] = plots and bool(bench["results"])
-    with tempfile.TemporaryDirectory(dir=out, prefix=".staging-", ignore_cleanup_errors=True) as tmp:
-        staging = Path(tmp)
-        doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
-        if bench is not None and extra["benchmark_plots"]:
-            bm.plot_all(bench, staging)
-        atomic_write(staging / "report.md", report_markdown(doc).encode())
-        # every file of staging moved into out as one set, the manifest last
-        runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
-    return doc
+            run_dir = out / "train_ppo"
+            request = fresh_run_request(train_steps, seed, hyperparams)
+            stale = reuse_mismatch(run_dir, request)
+            if stale is not None and run_dir.exists():
+                say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+                shutil.rmtree(run_dir)
+            argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
+            fresh = Settings(
+                algo="ppo",
+                seed=seed,
+                out=str(run_dir),
+                timesteps=train_steps,
+                hyperparams=None if hyperparams is None else str(hyperparams),
+                resume=stale is None,
+                eval_freq=0,
+                checkpoint_freq=max(train_steps // 4, 1),
+                progress=progress,
+                argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
+            )
+            if stale is None:
+                say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+            else:
+                say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+            t0 = time.perf_counter()
+            training["ppo_fresh"] = train(fresh)
+            rec = training["ppo_fresh"]
+            took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
+            print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
+            trained = ev.find_models(run_dir)[0]
+            agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
+            specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
+        say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
+        results, trajs = ev.evaluate_agents(agents, proto)
+        best = best_learned(results)
+        extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
+        bench: dict[str, Any] | None = None
+        if s.benchmark:
+            generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
+            also = f" and {generalists}" if generalists else ""
+            say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
+            bench = quick_benchmark(specs, generalists, progress=progress)
+            extra["benchmark"] = json_safe(bench)
+            extra["benchmark_plots"] = plots and bool(bench["results"])
+        with tempfile.TemporaryDirectory(dir=out, prefix=".staging-", ignore_cleanup_errors=True) as tmp:
+            staging = Path(tmp)
+            doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+            if bench is not None and extra["benchmark_plots"]:
+                bm.plot_all(bench, staging)
+            atomic_write(staging / "report.md", report_markdown(doc).encode())
+            # every file of staging moved into out as one set, the manifest last
+            runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
+        return doc
 
 
 def main(argv: Sequence[str] | None = None) -> int:
