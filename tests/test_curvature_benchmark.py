@@ -16,16 +16,14 @@ import pytest
 
 from amigo_gym.paths import random_path
 from amigo_gym.task.v1 import feasible_random_curvature
-from amigo_gym.tools.training.benchmark import curvature_scenarios
 from amigo_gym.tools.training.curvature import (
     BIN_EDGES,
-    Z95,
     bin_table,
     cell_specs,
     evaluate_tagged,
     markdown_curvature,
-    wilson_interval,
 )
+from amigo_gym.tools.training.intervals import Z95, wilson_interval
 
 
 def _seg_max(path: object) -> float:
@@ -91,7 +89,7 @@ def test_bin_table_on_hand_made_episodes() -> None:
 
 # --------------------------------------------------------------------------- the cells
 def test_cells_follow_the_feasible_limit_and_the_env_accepts_them() -> None:
-    cells = curvature_scenarios(episodes=3)
+    cells = cell_specs(episodes=3)
     assert [c.name for c in cells] == [f"curv_v{v:g}_k{j}" for v in (0.1, 0.4) for j in (1, 2, 3, 4)]
     for c in cells:
         v = c.env_kwargs["speed"]
@@ -104,12 +102,12 @@ def test_cells_follow_the_feasible_limit_and_the_env_accepts_them() -> None:
     with pytest.raises(ValueError, match="levels"):
         cell_specs(levels=0)
     with pytest.raises(ValueError, match="episodes"):
-        curvature_scenarios(episodes=0)
+        cell_specs(episodes=0)
 
 
 @pytest.mark.parametrize("cell", [3, 7])  # the sharpest level at 0.1 and at 0.4 m/s
 def test_cells_paths_have_the_claimed_curvature(cell: int) -> None:
-    sc = curvature_scenarios(episodes=12)[cell]
+    sc = cell_specs(episodes=12)[cell]
     pp = sc.env_kwargs["path_params"]
     venv = gym.make_vec("AmigoBot-v1", num_envs=12, **sc.env_kwargs)
     venv.reset(seed=list(sc.seeds))
@@ -127,7 +125,7 @@ def test_cells_paths_have_the_claimed_curvature(cell: int) -> None:
 def test_tags_of_a_run_match_the_paths_rebuilt_independently() -> None:
     from amigo_gym.tools.training.benchmark import make_env, parse_agents
 
-    sc = replace(curvature_scenarios(episodes=3)[7], max_steps=80)
+    sc = replace(cell_specs(episodes=3)[7], max_steps=80)
     env = make_env(sc)
     agent = parse_agents(["analytic"])[0].instantiate(env)
     eps = evaluate_tagged(agent, sc)

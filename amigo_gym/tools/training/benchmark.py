@@ -10,7 +10,6 @@ import glob
 import json
 import math
 import re
-import shutil
 import sys
 import tempfile
 import time
@@ -30,8 +29,9 @@ from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import RunLock, publish, remove_matching, verify_manifest
 from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training import random_paths as rp
+from amigo_gym.tools.training import task_metrics as tm
 from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
-from amigo_gym.tools.training.intervals import iqm, optimality_gap, performance_profile, stratified_bootstrap
+from amigo_gym.tools.training.intervals import iqm, optimality_gap, score_distribution, stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import METRIC_NAMES, SUITE_VERSION, Scenario, run_grid, run_scenario
 from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable
 from amigo_gym.tools.training.task_metrics import make_env as make_env
@@ -259,18 +259,14 @@ def evaluate(agent: Any, env: Any, sc: Scenario) -> list[dict[str, float]]:
     return [r.metrics() for r in run_scenario(agent, sc)]
 
 
-def _nanmean(x: Sequence[float]) -> float | None:
-    a = np.asarray(x, dtype=np.float64)
-    a = a[np.isfinite(a)]
-    return float(a.mean()) if a.size else None
-
-
 def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[str, Any]:
     col = {k: [e[k] for e in eps] for k in eps[0]}
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
-    for k in METRIC_NAMES[:-1]:
-        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = _nanmean(col[k])
+    for k in METRIC_NAMES[:-1]:  # means over the finite values (None: none)
+        x = np.asarray(col[k], dtype=np.float64)
+        x = x[np.isfinite(x)]
+        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = float(x.mean()) if x.size else None
         if k == "return":
             rec["return_per_step"] = None if v is None else v / sc.max_steps
     rec["terminated"] = int(sum(col["terminated"]))
@@ -328,6 +324,11 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
+def _profile(scores: Any) -> Any:
+    """rliable's performance profile of ``-H``: the fraction of scores above each ``-tau``."""
+    return score_distribution(scores, -np.asarray(PROFILE_TAUS))
+
+
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -371,7 +372,7 @@ def aggregate(
                 gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
-                prof, band = performance_profile(-h, [-t for t in PROFILE_TAUS], reps=profile_reps, seed=seed)
+                prof, band = stratified_bootstrap(-h, _profile, reps=profile_reps, seed=seed)
                 keys_ = ("fraction_below", "ci95_low", "ci95_high")
                 profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
         if entry["all"] is not None:
@@ -407,9 +408,6 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         f"IQM and optimality gap over (training seed, scenario) runs; [95 % stratified-bootstrap interval, "
         f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
         "",
-        "| agent | seeds | scenarios | failed episodes | H RMS IQM [mm] | H gap [mm] | speed err IQM [mm/s] "
-        "| failure rate | return/step IQM | held-out H RMS IQM [mm] |",
-        "|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
@@ -418,18 +416,20 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         lo, hi = d["ci95"]
         return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
 
+    rows = []
     for agent, a in doc["aggregates"].items():
-        g = a.get("all")
-        if g is None:
+        if (g := a.get("all")) is None:
             continue
         h = a.get("held_out")
         failed, episodes = failed_episodes(doc, agent)
-        lines.append(
-            f"| {agent} | {a['n_runs']} | {g['n_scenarios']} | {failed} of {episodes} | {iv(g['h_rms_m_iqm'])} | "
-            f"{iv(g['h_rms_m_optimality_gap'])} | {iv(g['speed_err_rms_iqm'])} | "
-            f"{iv(g['failure_rate_mean'], 1.0, '.2f')} | {iv(g['return_per_step_iqm'], 1.0, '.3f')} | "
-            f"{iv(h['h_rms_m_iqm']) if h else '–'} |"
-        )
+        rows.append((
+            agent, a["n_runs"], g["n_scenarios"], f"{failed} of {episodes}", iv(g["h_rms_m_iqm"]),
+            iv(g["h_rms_m_optimality_gap"]), iv(g["speed_err_rms_iqm"]), iv(g["failure_rate_mean"], 1.0, ".2f"),
+            iv(g["return_per_step_iqm"], 1.0, ".3f"), iv(h["h_rms_m_iqm"]) if h else "–",
+        ))  # fmt: skip
+    header: tuple[str, ...] = ("agent", "seeds", "scenarios", "failed episodes", "H RMS IQM [mm]", "H gap [mm]")
+    header += ("speed err IQM [mm/s]", "failure rate", "return/step IQM", "held-out H RMS IQM [mm]")
+    lines += tm.md_table(header, rows)
     algos = {a["agent"]: a.get("algo") for a in doc.get("agents", [])}
     legend = [f"`{name}`: {agent_label(name, algos.get(name))}" for name in doc["aggregates"]]
     lines += ["", "Agents: " + "; ".join(legend) + "."]
@@ -442,16 +442,20 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         ("chatter_settled_rms", "Command chatter after settling per scenario [rad/s]", lambda x: f"{x:.3g}"),
     )
     for key, title, fmt in per_scenario:
-        lines += ["", f"## {title} (mean over training seeds)", ""]
-        lines.append("| scenario | held out | " + " | ".join(agents) + " |")
-        lines.append("|---|---|" + "---|" * len(agents))
+        rows = []
         for sc in doc["scenarios"]:
             cells = []
             for agent in agents:
-                vals = [r.get(key) for r in doc["results"] if r["agent"] == agent and r["scenario"] == sc["name"]]
-                vals = [v for v in vals if v is not None]
+                run = [r for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, sc["name"])]
+                vals = [r[key] for r in run if r.get(key) is not None]
                 cells.append(fmt(float(np.mean(vals))) if vals else "–")
-            lines.append(f"| {sc['name']} | {'yes' if sc['held_out'] else ''} | " + " | ".join(cells) + " |")
+            rows.append((sc["name"], "yes" if sc["held_out"] else "", *cells))
+        lines += [
+            "",
+            f"## {title} (mean over training seeds)",
+            "",
+            *tm.md_table(("scenario", "held out", *agents), rows),
+        ]
     infeasible = {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}
     if infeasible:
         lines += ["", "## Paths beyond the robot's limits (feasibility='warn' or 'off')", ""]
@@ -493,10 +497,7 @@ def readme_table(doc: Mapping[str, Any]) -> str:
         raise ValueError("the benchmark document lacks the analytic, pure pursuit or generalist rows")
     cols = (("all", "h_rms_m_iqm", ".2f"), ("held_out", "h_rms_m_iqm", ".2f"), ("all", "speed_err_rms_iqm", ".1f"))
     best = [min(1e3 * agg[g][k]["value"] for _, agg, _, _ in rows if agg.get(g)) for g, k, _ in cols]
-    lines = [
-        "| agent | failed episodes | H RMS IQM [mm] (95 % CI) | held-out H RMS IQM [mm] | speed error IQM [mm/s] |",
-        "|---|---:|---:|---:|---:|",
-    ]
+    table: list[tuple[str, ...]] = []
     for label, agg, n, failed in rows:
         cells = []
         for (g, k, fmt), low in zip(cols, best, strict=True):
@@ -510,27 +511,22 @@ def readme_table(doc: Mapping[str, Any]) -> str:
                 lo, hi = (1e3 * x for x in d[k]["ci95"])
                 text += f" [{lo:{fmt}}, {hi:{fmt}}]"
             cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
-        lines.append(f"| {label} | {failed} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        table.append((label, failed, *cells))
+    header = ("agent", "failed episodes", "H RMS IQM [mm] (95 % CI)", "held-out H RMS IQM [mm]")
+    return "\n".join(tm.md_table((*header, "speed error IQM [mm/s]"), table, right=4)) + "\n"
 
 
 def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
     """The unavailable runs, one line per agent and reason, its seeds and scenarios listed once."""
-    groups: dict[tuple[Any, str], tuple[list[Any], list[str]]] = {}
+    groups: dict[tuple[Any, str], list[Mapping[str, Any]]] = {}
     for u in unavailable:
-        seeds, scenarios = groups.setdefault((u["agent"], str(u["reason"])), ([], []))
-        if u.get("seed") not in seeds:
-            seeds.append(u.get("seed"))
-        if u["scenario"] not in scenarios:
-            scenarios.append(u["scenario"])
+        groups.setdefault((u["agent"], str(u["reason"])), []).append(u)
     out = []
-    for (agent, reason), (seeds, scenarios) in groups.items():
-        if agent is None:
-            who = "all agents"
-        else:
-            n = len(seeds)
-            who = f"{agent} (seed {seeds[0]})" if n == 1 else f"{agent} ({n} training seeds)"
-        out.append(f"{who} on {', '.join(scenarios)}: {reason}")
+    for (agent, reason), us in groups.items():
+        seeds = list(dict.fromkeys(u.get("seed") for u in us))
+        who = f"{agent} (seed {seeds[0]})" if len(seeds) == 1 else f"{agent} ({len(seeds)} training seeds)"
+        scenarios = ", ".join(dict.fromkeys(u["scenario"] for u in us))
+        out.append(f"{'all agents' if agent is None else who} on {scenarios}: {reason}")
     return out
 
 
@@ -606,27 +602,20 @@ MANIFEST = "benchmark_manifest.json"
 _TEMPORARY = re.compile(r"^\.(staging-benchmark-.*|benchmark[._].*|benchmark_manifest\..*)$")
 
 
-def clean_temporaries(out: Path) -> list[str]:
-    """Remove what killed benchmarks left in ``out`` (hold ``out``'s lock); the names removed."""
-    return remove_matching(out, _TEMPORARY)
-
-
 def write_outputs(
     doc: Mapping[str, Any], out: Path, json_path: Path, md_path: Path, *, plots: bool = True
 ) -> list[Path]:
     """Publish the JSON, the Markdown and (``plots``) the two figures as one set with :data:`MANIFEST` written last
     (:func:`amigo_gym.tools.runs.publish`); the paths written."""
     out.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-benchmark-"))
-    try:
+    with tempfile.TemporaryDirectory(dir=out, prefix=".staging-benchmark-", ignore_cleanup_errors=True) as tmp:
+        staging = Path(tmp)
         targets = {json_path: staging / "benchmark.json", md_path: staging / "benchmark.md"}
         atomic_write_json(targets[json_path], doc)
         atomic_write(targets[md_path], markdown_report(doc))
         if plots and doc["results"]:
             targets |= {out / name: staging / name for name in plot_all(doc, staging)}
         publish(targets, out, MANIFEST, command=doc.get("command"))
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
     return list(targets)
 
 
@@ -731,7 +720,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError("--path and --scenarios exclude each other")
         paths = rp.path_set(a.random_paths, a.condition, a.random_paths_seed, a.speed, a.tolerance)
         if a.curvature:
-            scenarios = curvature_scenarios(a.curvature_episodes)
+            scenarios = curvature.cell_specs(episodes=a.curvature_episodes)
         elif a.random_paths:
             scenarios = paths.scenarios
         elif a.path:
@@ -762,7 +751,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 atomic_write_json(written[0], doc)
                 atomic_write(written[1], report)
             else:
-                clean_temporaries(out)
+                remove_matching(out, _TEMPORARY)  # what killed benchmarks left
                 doc = run_benchmark(
                     agents,
                     scenarios,
@@ -782,11 +771,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
-
-
-def curvature_scenarios(episodes: int = 50) -> tuple[Scenario, ...]:
-    """The cells of ``--curvature``, ``episodes`` each (not part of the suite)."""
-    return curvature.cell_specs(episodes=episodes)
 
 
 if __name__ == "__main__":

@@ -21,30 +21,12 @@ from typing import Any
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
 from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
-from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
-from amigo_gym.tools.training.benchmark import (
-    RETIRED_V1_AGENTS,
-    V1_AGENTS,
-    failed_episodes,
-    parse_agents,
-    plot_all,
-    quick_suite,
-    run_benchmark,
-)
-from amigo_gym.tools.training.evaluate import (
-    AgentSpec,
-    EvalProtocol,
-    default_agents,
-    evaluate_agents,
-    find_models,
-    markdown_table,
-    one_torch_thread,
-    trained_agents,
-    write_outputs,
-)
+from amigo_gym.tools.training import benchmark as bm
+from amigo_gym.tools.training import evaluate as ev
 from amigo_gym.tools.training.hyperparams import load_hyperparams
+from amigo_gym.tools.training.task_metrics import md_table
 from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
 
 MANIFEST = "manifest.json"
@@ -69,7 +51,7 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
             text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
         elif name.endswith("_v1"):
             folder = name[:-3]
-            label = {**RETIRED_V1_AGENTS, **V1_AGENTS}.get(folder, folder.upper())
+            label = {**bm.RETIRED_V1_AGENTS, **bm.V1_AGENTS}.get(folder, folder.upper())
             how = {
                 "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
                 "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
@@ -122,7 +104,7 @@ def report_markdown(doc: dict[str, Any]) -> str:
         "",
         "Agents: " + "; ".join(agent_legend([r["agent"] for r in doc["results"]], proto["analytic_gain"])) + ".",
         "",
-        markdown_table(doc["results"]),
+        ev.markdown_table(doc["results"]),
     ]
     best = doc.get("best_learned")
     if best:
@@ -143,25 +125,18 @@ def report_markdown(doc: dict[str, Any]) -> str:
             )
         lines.append("")
     if doc.get("training"):
-        lines += [
-            "## Training records",
-            "",
-            "| agent | steps | wall time [s] | model | command (then resumes) |",
-            "|---|---|---|---|---|",
-        ]
+        rows = []
         for name, rec in doc["training"].items():
             model = f"{rec.get('exported_model', 'final')} @ {rec.get('exported_timesteps', rec['timesteps'])}"
-            cmds = "<br>".join(
-                f"`{display_command(c)}`" for c in [rec["command"], *(r["command"] for r in rec.get("resumes", []))]
-            )
-            lines.append(f"| {name} | {rec['timesteps']} | {rec['wall_time_s']:.0f} | {model} | {cmds} |")
-        lines.append("")
+            cmds = [rec["command"], *(r["command"] for r in rec.get("resumes", []))]
+            cmd = "<br>".join(f"`{display_command(c)}`" for c in cmds)
+            rows.append((name, rec["timesteps"], f"{rec['wall_time_s']:.0f}", model, cmd))
+        header = ("agent", "steps", "wall time [s]", "model", "command (then resumes)")
+        lines += ["## Training records", "", *md_table(header, rows), ""]
     lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
     bench = doc.get("benchmark")
     if bench:
-        from amigo_gym.tools.training.benchmark import markdown_report as benchmark_markdown
-
-        table = benchmark_markdown(bench).splitlines()
+        table = bm.markdown_report(bench).splitlines()
         lines += [
             "#" + table[0],  # one level down
             "",
@@ -190,9 +165,11 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
         f"AmigoBot-v0, {n} perturbed starts of {proto['duration_s']:.0f} s on the circle R = "
         f"{proto['env_params']['radius']} m (H within 2 cm, heading within 0.1 rad):",
         "",
-        "| agent | H RMS error [mm] | wheel-rate deviation from the analytic policy, RMS [rad/s] |",
-        "|---|---:|---:|",
-        *(f"| {r['agent']} | {r['h_rms_m'] * 1e3:.3f} | {r['wheel_rate_dev_rms']:.3f} |" for r in rows),
+        *md_table(
+            ("agent", "H RMS error [mm]", "wheel-rate deviation from the analytic policy, RMS [rad/s]"),
+            [(r["agent"], f"{r['h_rms_m'] * 1e3:.3f}", f"{r['wheel_rate_dev_rms']:.3f}") for r in rows],
+            right=2,
+        ),
         "",
     ]
     best = doc.get("best_learned")
@@ -211,7 +188,7 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
             g = a.get("all")
             if g is not None:
                 runs_ = f", {a['n_runs']} seeds" if a["n_runs"] > 1 else ""
-                failed, episodes = failed_episodes(bench, agent)
+                failed, episodes = bm.failed_episodes(bench, agent)
                 cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g} ({failed} of {episodes} failed{runs_})")
             names.append(agent)
         lines.append(
@@ -232,15 +209,15 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
 
 
 def quick_benchmark(
-    specs: Sequence[AgentSpec], generalists: Path | None = None, *, progress: bool = False
+    specs: Sequence[ev.AgentSpec], generalists: Path | None = None, *, progress: bool = False
 ) -> dict[str, Any]:
     """The benchmark's ``--quick`` subset on ``specs`` and the v1 generalists in ``generalists`` (``<folder>_v1``)."""
     specs = list(specs)
     if generalists is not None:
-        for folder in V1_AGENTS:
+        for folder in bm.V1_AGENTS:
             if any((generalists / folder).glob("*.zip")):
-                specs += parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
-    doc = run_benchmark(specs, quick_suite(), progress=progress, quick=True)
+                specs += bm.parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
+    doc = bm.run_benchmark(specs, bm.quick_suite(), progress=progress, quick=True)
     doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
     return doc
 
@@ -326,82 +303,69 @@ class CompareSettings:
 
 def run_compare(s: CompareSettings) -> dict[str, Any]:
     """Run the main job; the JSON document."""
-    out = Path(s.out)
+    out, models = Path(s.out), Path(s.models) if s.models else None
     with runs.RunLock(out):
         runs.clean_temporaries(out)
-        return _run_compare(s)
+        hyperparams = Path(s.hyperparams) if s.hyperparams else None
+        train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
+        if models is not None:
+            say(f"loading pretrained agents from {models}")
+        proto, agents, specs, training = ev.protocol_agents(s.steps, s.seeds, models)
+        if train_steps > 0:
+            from amigo_gym.tools.training.train import Settings, train
 
-
-def _run_compare(s: CompareSettings) -> dict[str, Any]:
-    out, models = Path(s.out), Path(s.models) if s.models else None
-    hyperparams = Path(s.hyperparams) if s.hyperparams else None
-    train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
-    proto = EvalProtocol(steps=s.steps, perturbed_seeds=tuple(range(100, 100 + s.seeds)))
-    agents = default_agents(TrackingParams.v0(), proto.analytic_gain)
-    specs = [AgentSpec(name) for name in agents]  # the benchmark builds the classical ones per scenario
-    training: dict[str, Any] = {}
-    if models is not None:
-        say(f"loading pretrained agents from {models}")
-        found, training = trained_agents(models)
-        specs += found
-        agents.update({spec.name: spec.load() for spec in found})
-    if train_steps > 0:
-        from amigo_gym.tools.training.train import Settings, train
-
-        run_dir = out / "train_ppo"
-        request = fresh_run_request(train_steps, seed, hyperparams)
-        stale = reuse_mismatch(run_dir, request)
-        if stale is not None and run_dir.exists():
-            say(f"retraining: the run in {run_dir} does not match the request ({stale})")
-            shutil.rmtree(run_dir)
-        argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
-        fresh = Settings(
-            algo="ppo",
-            seed=seed,
-            out=str(run_dir),
-            timesteps=train_steps,
-            hyperparams=None if hyperparams is None else str(hyperparams),
-            resume=stale is None,
-            eval_freq=0,
-            checkpoint_freq=max(train_steps // 4, 1),
-            progress=progress,
-            argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
-        )
-        if stale is None:
-            say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
-        else:
-            say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
-        t0 = time.perf_counter()
-        training["ppo_fresh"] = train(fresh)
-        rec = training["ppo_fresh"]
-        took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
-        print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
-        trained = find_models(run_dir)[0]
-        agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
-        specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
-    say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
-    results, trajs = evaluate_agents(agents, proto)
-    best = best_learned(results)
-    extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
-    bench: dict[str, Any] | None = None
-    if s.benchmark:
-        generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
-        also = f" and {generalists}" if generalists else ""
-        say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
-        bench = quick_benchmark(specs, generalists, progress=progress)
-        extra["benchmark"] = json_safe(bench)
-        extra["benchmark_plots"] = plots and bool(bench["results"])
-    staging = Path(tempfile.mkdtemp(dir=out, prefix=".staging-"))
-    try:
-        doc = write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
-        if bench is not None and extra["benchmark_plots"]:
-            plot_all(bench, staging)
-        atomic_write(staging / "report.md", report_markdown(doc).encode())
-        # every file of staging moved into out as one set, the manifest last
-        runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return doc
+            run_dir = out / "train_ppo"
+            request = fresh_run_request(train_steps, seed, hyperparams)
+            stale = reuse_mismatch(run_dir, request)
+            if stale is not None and run_dir.exists():
+                say(f"retraining: the run in {run_dir} does not match the request ({stale})")
+                shutil.rmtree(run_dir)
+            argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
+            fresh = Settings(
+                algo="ppo",
+                seed=seed,
+                out=str(run_dir),
+                timesteps=train_steps,
+                hyperparams=None if hyperparams is None else str(hyperparams),
+                resume=stale is None,
+                eval_freq=0,
+                checkpoint_freq=max(train_steps // 4, 1),
+                progress=progress,
+                argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
+            )
+            if stale is None:
+                say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
+            else:
+                say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+            t0 = time.perf_counter()
+            training["ppo_fresh"] = train(fresh)
+            rec = training["ppo_fresh"]
+            took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
+            print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
+            trained = ev.find_models(run_dir)[0]
+            agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
+            specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
+        say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
+        results, trajs = ev.evaluate_agents(agents, proto)
+        best = best_learned(results)
+        extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
+        bench: dict[str, Any] | None = None
+        if s.benchmark:
+            generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
+            also = f" and {generalists}" if generalists else ""
+            say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
+            bench = quick_benchmark(specs, generalists, progress=progress)
+            extra["benchmark"] = json_safe(bench)
+            extra["benchmark_plots"] = plots and bool(bench["results"])
+        with tempfile.TemporaryDirectory(dir=out, prefix=".staging-", ignore_cleanup_errors=True) as tmp:
+            staging = Path(tmp)
+            doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+            if bench is not None and extra["benchmark_plots"]:
+                bm.plot_all(bench, staging)
+            atomic_write(staging / "report.md", report_markdown(doc).encode())
+            # every file of staging moved into out as one set, the manifest last
+            runs.publish({out / p.name: p for p in sorted(staging.iterdir()) if p.is_file()}, out, MANIFEST)
+        return doc
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -412,7 +376,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
 
     def run() -> int:
-        one_torch_thread()
+        ev.one_torch_thread()
         doc = run_compare(replace(s, progress=s.progress and sys.stderr.isatty()))
         print(summary_text(doc, Path(s.out)))
         return 0

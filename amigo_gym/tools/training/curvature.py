@@ -15,10 +15,8 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.task.v1 import feasible_random_curvature
-from amigo_gym.tools.training.intervals import Z95 as Z95
 from amigo_gym.tools.training.intervals import failure_rate
-from amigo_gym.tools.training.intervals import wilson_interval as wilson_interval
-from amigo_gym.tools.training.task_metrics import Scenario, run_grid, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, md_table, run_grid, run_scenario
 
 #: speeds of the cells [m/s]: the ends of the training distribution's range
 CURVATURE_SPEEDS: tuple[float, ...] = (0.1, 0.4)
@@ -40,10 +38,9 @@ def cell_specs(
 ) -> tuple[Scenario, ...]:
     """The held-out cells: AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``, ``episodes``
     seeds from 100."""
-    if isinstance(levels, bool) or not isinstance(levels, int) or not 1 <= levels <= 100:
-        raise ValueError(f"curvature cells: levels must be an integer in [1, 100], got {levels!r}")
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
-        raise ValueError(f"curvature cells: episodes must be an integer in [1, 10000], got {episodes!r}")
+    for name, x, hi in (("levels", levels, 100), ("episodes", episodes, 10_000)):
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= hi:
+            raise ValueError(f"curvature cells: {name} must be an integer in [1, {hi}], got {x!r}")
     out = []
     for v in speeds:
         k_v = feasible_random_curvature(v)
@@ -155,19 +152,17 @@ def markdown_curvature(doc: Mapping[str, Any]) -> str:
         f"interval] (failures / episodes, training seeds pooled). {doc['protocol']['failure']}.",
     ]
     for v in sorted({r["speed"] for r in rows}):
-        lines += ["", f"## {v:g} m/s", "", "| max \\|kappa\\| [1/m] | " + " | ".join(agents) + " |"]
-        lines.append("|---|" + "---|" * len(agents))
-        sub = [r for r in rows if r["speed"] == v]
+        sub, table = [r for r in rows if r["speed"] == v], []
         for j in sorted({r["bin"] for r in sub}):
             by = {r["agent"]: r for r in sub if r["bin"] == j}
             r = next(iter(by.values()))
             head = f"[{r['kappa_lo']:.2f}, {r['kappa_hi']:.2f}{']' if j == len(BIN_EDGES) - 2 else ')'}"
-            cells = [
+            table.append([head] + [
                 "–" if (c := by.get(a)) is None else "– (0)" if c["n"] == 0
                 else f"{c['rate']:.3f} [{c['ci95'][0]:.3f}, {c['ci95'][1]:.3f}] ({c['failures']}/{c['n']})"
                 for a in agents
-            ]  # fmt: skip
-            lines.append(f"| {head} | " + " | ".join(cells) + " |")
+            ])  # fmt: skip
+        lines += ["", f"## {v:g} m/s", "", *md_table(["max \\|kappa\\| [1/m]", *agents], table)]
     if doc.get("unavailable"):
         lines += ["", "## Unavailable", ""]
         lines += [f"- {u['agent']} s{u['seed']} on {u['scenario']}: {u['reason']}" for u in doc["unavailable"]]

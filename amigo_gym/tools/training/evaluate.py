@@ -32,7 +32,7 @@ from amigo_gym.tools.options import cli, parse_settings, run_guarded
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.runs import CorruptFileError, check_pickle, corrupt_errors, read_json, verify_sha256
 from amigo_gym.tools.training.hyperparams import sb3_class
-from amigo_gym.tools.training.task_metrics import Scenario, Unavailable, _rms, run_scenario
+from amigo_gym.tools.training.task_metrics import Scenario, Unavailable, _rms, md_table, run_scenario
 
 Array = NDArray[np.float64]
 ENV_ID = "AmigoBot-v0"
@@ -108,14 +108,12 @@ def protocol_scenarios(proto: EvalProtocol, params: TrackingParams | None = None
         "paper_start": ((-params.robot.l3, 0.0, 0.0), "H at the origin, beta = 0"),
         "perturbed": (None, "env's random start (reset(seed=s))"),
     }
-    out = []
-    for name in proto.scenarios:
-        pose, desc = poses[name]
-        seeds = proto.perturbed_seeds if pose is None else (0,)
-        out.append(
-            Scenario(name, ENV_ID, {}, seeds, proto.steps, False, desc, settle_time_s=proto.settle_time_s, pose=pose)
-        )
-    return tuple(out)
+    return tuple(
+        Scenario(n, ENV_ID, {}, proto.perturbed_seeds if pose is None else (0,), proto.steps, False, desc,
+                 settle_time_s=proto.settle_time_s, pose=pose)
+        for n in proto.scenarios
+        for pose, desc in [poses[n]]
+    )  # fmt: skip
 
 
 def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
@@ -420,18 +418,23 @@ def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str
     return {ref.name: load_model(ref, trust) for ref in find_models(models)}
 
 
-def trained_agents(models: str | os.PathLike[str]) -> tuple[list[AgentSpec], dict[str, Any]]:
-    """The models at ``models``, loaded, named by :func:`v0_name`, with their records' training seeds (0 without);
-    and the training records by name."""
-    specs, training = [], {}
-    for ref in find_models(models):
-        model = ref.load()
-        name = v0_name(ref.name)
+def protocol_agents(
+    steps: int, seeds: int, models: str | os.PathLike[str] | None
+) -> tuple[EvalProtocol, dict[str, Agent], list[AgentSpec], dict[str, Any]]:
+    """The protocol of ``steps`` per episode and ``seeds`` perturbed starts (100, 101, ...), its agents by name (the
+    analytic policies and the models at ``models``, if any, loaded and named by :func:`v0_name`), their specs (a
+    model's seed: its record's, else 0) and the models' training records by name."""
+    proto = EvalProtocol(steps=steps, perturbed_seeds=tuple(range(100, 100 + seeds)))
+    agents = default_agents(TrackingParams.v0(), proto.analytic_gain)
+    specs, training = [AgentSpec(name) for name in agents], dict[str, Any]()
+    for ref in find_models(models) if models is not None else []:
+        name, model = v0_name(ref.name), ref.load()
+        agents[name] = model
         if ref.record is not None:
             training[name] = json.loads(ref.record.read_text())
         seed = training.get(name, {}).get("seed")
         specs.append(replace(ref, name=name, seed=seed if isinstance(seed, int) else 0, _model=model))
-    return specs, training
+    return proto, agents, specs, training
 
 
 def evaluate_agents(
@@ -469,12 +472,11 @@ COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
 
 def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     """The results as a Markdown table (one row per agent and scenario)."""
-    lines = ["| " + " | ".join(c[1] for c in COLUMNS) + " |", "|" + "|".join("---" for _ in COLUMNS) + "|"]
+    rows = []
     for r in results:  # a metric that does not exist: None (as read back from JSON) or NaN
         missing = {k for k, v in r.items() if v is None or (isinstance(v, float) and math.isnan(v))}
-        cells = ("n/a" if key in missing and key != "settling_time_s" else fmt(r[key]) for key, _, fmt in COLUMNS)
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        rows.append(["n/a" if k in missing and k != "settling_time_s" else fmt(r[k]) for k, _, fmt in COLUMNS])
+    return "\n".join(md_table([c[1] for c in COLUMNS], rows)) + "\n"
 
 
 def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path) -> None:
@@ -648,13 +650,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     def run() -> int:
         one_torch_thread()
-        proto = EvalProtocol(steps=a.steps, perturbed_seeds=tuple(range(100, 100 + a.seeds)))
-        agents = default_agents(TrackingParams.v0(), proto.analytic_gain)
-        training: dict[str, Any] = {}
-        if a.load_models:
-            models = a.models if a.models is not None else PRETRAINED_DIR
-            specs, training = trained_agents(models)
-            agents.update({spec.name: spec.load() for spec in specs})
+        models = (a.models if a.models is not None else PRETRAINED_DIR) if a.load_models else None
+        proto, agents, _, training = protocol_agents(a.steps, a.seeds, models)
         results, trajs = evaluate_agents(agents, proto)
         out = Path(a.out)
         if (out / "manifest.json").is_file() and not a.force:

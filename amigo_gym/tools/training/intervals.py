@@ -9,7 +9,7 @@ replacement; with one run per task the interval has zero width. Why not rliable 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -20,15 +20,6 @@ Stat = Callable[[Array], Array]
 
 #: largest number of resampled scores held in memory at once
 _CHUNK = 4_000_000
-
-
-def _matrix(scores: ArrayLike) -> Array:
-    x = np.asarray(scores, dtype=np.float64)
-    if x.ndim != 2 or x.size == 0:
-        raise ValueError(f"scores must be a non-empty matrix (num_runs, num_tasks), got shape {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("scores must be finite (drop or replace NaN before aggregating)")
-    return x
 
 
 def iqm(scores: ArrayLike) -> Array:
@@ -61,7 +52,11 @@ def stratified_bootstrap(
     """``(stat(scores), interval (2, ...))`` under rliable's stratified bootstrap: ``scores`` ``(num_runs,
     num_tasks)``, ``stat`` vectorised from ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``, ``reps``
     replications, percentile interval of coverage ``size``, resampling seeded by ``seed``."""
-    x = _matrix(scores)
+    x = np.asarray(scores, dtype=np.float64)
+    if x.ndim != 2 or x.size == 0:
+        raise ValueError(f"scores must be a non-empty matrix (num_runs, num_tasks), got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("scores must be finite (drop or replace NaN before aggregating)")
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ValueError(f"reps must be an integer >= 1, got {reps!r}")
     if not 0.0 < size < 1.0:
@@ -81,30 +76,13 @@ def stratified_bootstrap(
     return point, np.asarray(interval, dtype=np.float64)
 
 
-def performance_profile(
-    scores: ArrayLike,
-    taus: Sequence[float] | Array,
-    *,
-    reps: int = 2_000,
-    size: float = 0.95,
-    seed: int | np.random.Generator = 0,
-) -> tuple[Array, Array]:
-    """rliable's performance profile: fractions of scores above each ``tau`` and their interval ``(2, len(taus))``."""
-    t = np.asarray(taus, dtype=np.float64)
-    return stratified_bootstrap(scores, lambda s: score_distribution(s, t), reps=reps, size=size, seed=seed)
-
-
 #: the 95 % normal quantile
 Z95 = 1.959963984540054
 
 
 def wilson_interval(failures: int, n: int, z: float = Z95) -> tuple[float, float]:
-    r"""Wilson score interval of a binomial proportion ``p = f / n``:
-
-    .. math:: \frac{p + z^2/(2n) \pm z \sqrt{p (1 - p) / n + z^2 / (4 n^2)}}{1 + z^2 / n}
-
-    ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval.
-    """
+    """Wilson score interval of a binomial proportion ``p = f / n``, ``(p + z^2/(2n) +- z sqrt(p (1 - p) / n +
+    z^2 / (4 n^2))) / (1 + z^2 / n)``; ``(nan, nan)`` for ``n = 0``. ``z`` = 1.96 gives the 95 % interval."""
     if n <= 0:
         return math.nan, math.nan
     if not 0 <= failures <= n:

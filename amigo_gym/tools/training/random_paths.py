@@ -19,7 +19,7 @@ from scipy.interpolate import CubicSpline
 
 from amigo_gym.paths import from_points
 from amigo_gym.tools.training.intervals import failure_rate
-from amigo_gym.tools.training.task_metrics import Scenario, run_grid
+from amigo_gym.tools.training.task_metrics import Scenario, md_row, run_grid
 
 #: the authors' failure_rate.npy at 0.2 m/s: tolerance [m] -> failure rate
 PUBLISHED = {0.1: 0.276, 0.2: 0.053, 0.3: 0.002}
@@ -178,9 +178,6 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
     tols = p["tolerances"]
     agents = list(dict.fromkeys(r["agent"] for r in rows))
 
-    def row(*cells: Any) -> str:
-        return "| " + " | ".join(map(str, cells)) + " |"
-
     def cell(agent: str, group: str, tol: float, **key: Any) -> str:
         r = next(r for r in rows if (r["agent"], r["group"], r["tolerance"]) == (agent, group, tol)
                  and all(r.get(k) == v for k, v in key.items()))  # fmt: skip
@@ -196,20 +193,20 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
         f"95 % Wilson interval (failures/episodes, training seeds pooled); AmigoBot-v1 accepts {doc['accepted']} of "
         "the paths.",
         "",
-        row("agent", *(f"{t:g} m" for t in tols), f"accepted paths, {tols[0]:g} m"),
-        row(*["---"] * (len(tols) + 2)),
+        md_row("agent", *(f"{t:g} m" for t in tols), f"accepted paths, {tols[0]:g} m"),
+        md_row(*["---"] * (len(tols) + 2)),
     ]
     if p["condition"] == "paper" and p["speed"] == 0.2:
-        lines.append(row("published (Cao et al.)", *(f"{100 * PUBLISHED.get(t, math.nan):.1f}" for t in tols), ""))
-    lines += [row(a, *(cell(a, "all", t) for t in tols), cell(a, "accepted", tols[0])) for a in agents]
+        lines.append(md_row("published (Cao et al.)", *(f"{100 * PUBLISHED.get(t, math.nan):.1f}" for t in tols), ""))
+    lines += [md_row(a, *(cell(a, "all", t) for t in tols), cell(a, "accepted", tols[0])) for a in agents]
     lines += ["", f"Per bin of the path's peak |kappa| [1/m], {tols[0]:g} m:", ""]
-    lines += [row("agent", *(f"[{lo:g}, {hi:g})" for lo, hi in bins)), row(*["---"] * (len(bins) + 1))]
-    lines += [row(a, *(cell(a, "curvature", tols[0], kappa=b) for b in bins)) for a in agents]
+    lines += [md_row("agent", *(f"[{lo:g}, {hi:g})" for lo, hi in bins)), md_row(*["---"] * (len(bins) + 1))]
+    lines += [md_row(a, *(cell(a, "curvature", tols[0], kappa=b) for b in bins)) for a in agents]
     seeds = [(r["agent"], r["seed"]) for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]
     if seeds:
-        lines += ["", "Per training seed:", "", row("agent", "seed", *(f"{t:g} m" for t in tols))]
-        lines += [row(*["---"] * (len(tols) + 2))] + [
-            row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
+        lines += ["", "Per training seed:", "", md_row("agent", "seed", *(f"{t:g} m" for t in tols))]
+        lines += [md_row(*["---"] * (len(tols) + 2))] + [
+            md_row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
         ]
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]

@@ -1,4 +1,5 @@
-"""The protocol engine: scenarios, the episode runner and the task metrics read from the environments' ``info``.
+"""The protocol engine: scenarios, the episode runner, the task metrics read from the environments' ``info`` and the
+Markdown table writer.
 
 One engine for ``evaluate``, ``benchmark``, ``compare`` and the training's evaluation callback; the metrics:
 docs/benchmark.md, "Reference: task metrics".
@@ -8,7 +9,7 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
@@ -80,6 +81,16 @@ class Scenario:
         return json_safe(d)  # type: ignore[no-any-return]
 
 
+def md_row(*cells: object) -> str:
+    """One Markdown table row: ``| a | b |``."""
+    return "| " + " | ".join(map(str, cells)) + " |"
+
+
+def md_table(header: Sequence[object], rows: Iterable[Sequence[object]], right: int = 0) -> list[str]:
+    """The lines of a Markdown table: ``header``, its rule (the last ``right`` columns right-aligned), ``rows``."""
+    return [md_row(*header), "|" + "---|" * (len(header) - right) + "---:|" * right, *(md_row(*r) for r in rows)]
+
+
 class Unavailable(Exception):
     """An agent or scenario that cannot run here; the message says why (reported, never dropped)."""
 
@@ -96,15 +107,6 @@ def make_env(sc: Scenario) -> Any:
         raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
 
 
-def vector_env(sc: Scenario) -> Any:
-    """The native vector env of ``sc`` (else Gymnasium's ``SyncVectorEnv``): one robot per seed."""
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
-    mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
-    kw = dict(sc.env_kwargs)
-    return gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
-
-
 #: ``on_row(i, info, ended, obs)`` after each recorded step of row ``i``, ``obs`` what the agent acted on
 OnRow = Callable[[int, dict[str, Any], bool, Any], object]
 
@@ -116,9 +118,14 @@ def run_scenario(
     on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
     on_row: OnRow | None = None,
 ) -> list[EpisodeRecorder]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``, side by side in its vector env; one
-    recorder per episode. ``on_reset(venv, infos)`` is called after the reset."""
-    venv = vector_env(sc)
+    """Run ``agent`` deterministically for one episode per seed of ``sc``, side by side in its native vector env
+    (else Gymnasium's ``SyncVectorEnv``); one recorder per episode. ``on_reset(venv, infos)`` is called after the
+    reset."""
+    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
+
+    mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
+    kw = dict(sc.env_kwargs)
+    venv: Any = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
     try:
         options = None if sc.pose is None else {"pose": np.asarray(sc.pose, dtype=np.float64)}
         obs, infos = venv.reset(seed=list(sc.seeds), options=options)
@@ -253,17 +260,12 @@ class EpisodeRecorder:
         self.rewards.append(float(reward))
 
     def metrics(self) -> dict[str, float]:
+        cols = (self.e, self.speed_error, self.command, self.wheel_rates, self.rewards)
+        e, ve, cmd, w, r = (np.asarray(c, dtype=np.float64) for c in cols)
         return episode_metrics(
-            np.asarray(self.e, dtype=np.float64),
-            np.asarray(self.speed_error, dtype=np.float64),
-            np.asarray(self.command, dtype=np.float64).reshape(-1, 2),
-            np.asarray(self.wheel_rates, dtype=np.float64).reshape(-1, 2),
-            np.asarray(self.rewards, dtype=np.float64),
-            dt=self.dt,
-            terminated=self.terminated,
-            settle_time_s=self.settle_time_s,
-            failure_tolerance_m=self.failure_tolerance_m,
-        )
+            e, ve, cmd.reshape(-1, 2), w.reshape(-1, 2), r, dt=self.dt, terminated=self.terminated,
+            settle_time_s=self.settle_time_s, failure_tolerance_m=self.failure_tolerance_m,
+        )  # fmt: skip
 
 
 def _rms(x: Array) -> float:
