@@ -102,7 +102,7 @@ def halving_times(settings: Settings) -> list[GainFit]:
     return out
 
 
-def _plot(rows: list[GainFit], path: str) -> None:
+def _plot(rows: list[GainFit], path: str, seeds: range) -> None:
     fig, ax = pyplot().subplots(figsize=(7.0, 3.8), layout="constrained")
     for i, row in enumerate(rows):
         color = f"C{i}"
@@ -110,7 +110,7 @@ def _plot(rows: list[GainFit], path: str) -> None:
             label = f"k = {row.gain:g} 1/s (halves every {row.halving_s:.2f} s)" if j == 0 else None
             ax.semilogy(t, np.maximum(e, 1e-12), color=color, lw=0.8, alpha=0.7, label=label)
     ax.set(xlabel="t [s]", ylabel="|cross-track error of H| [m]", ylim=(1e-12, 0.05))
-    ax.set_title("Analytic policy from perturbed starts (seeds 100-109), dt = 0.1 s")
+    ax.set_title(f"Analytic policy from perturbed starts (seeds {seeds[0]}-{seeds[-1]}), dt = 0.1 s")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     save_figure(fig, path)
@@ -124,7 +124,7 @@ def _report(settings: Settings) -> None:
     print("| error halves every [s] | " + " | ".join(f"{r.halving_s:.2f}" for r in rows) + " |")
     print("| continuous-time ln2/k [s] | " + " | ".join(f"{r.continuous_halving_s:.2f}" for r in rows) + " |")
     if settings.plot:
-        _plot(rows, settings.plot)
+        _plot(rows, settings.plot, range(settings.first_seed, settings.first_seed + settings.seeds))
         print(f"plot: {settings.plot}")
 
 
