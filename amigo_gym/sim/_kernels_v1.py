@@ -625,6 +625,38 @@ def start_rows(
         fill_record(ws[i], rec[j], smooth_weight)
 
 
+@_jit
+def restart_rows(
+    c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
+    rec: F64, rows: NDArray[np.int64], template: F64, start: F64, u: F64, smooth_weight: float,
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.task.v1.start_state`, then :func:`start_rows`, of the rows ``rows (m,)`` with one episode:
+    each row's episode entries from the workspace row ``template``; ``start``: the path's start ``(x, y, theta)``
+    [m, rad], the initial position and heading noise [m, rad], the start wheel rates [rad/s] and previous actions;
+    ``u (m, 3)``: the draws in [-1, 1]."""
+    c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        row = ws[i]
+        pv = flat[starts[i] : stops[i]]
+        row[L.W_R1 : L.W_L3D + 1] = template[L.W_R1 : L.W_L3D + 1]  # the episode
+        row[L.W_SLIP_MAX : L.W_NOISE_ON + 1] = template[L.W_SLIP_MAX : L.W_NOISE_ON + 1]
+        beta = start[2] + u[j, 2] * start[4]
+        hx = start[0] + u[j, 0] * start[3]
+        hy = start[1] + u[j, 1] * start[3]
+        l3 = row[L.W_L3]
+        row[L.W_X] = hx - l3 * math.cos(beta)
+        row[L.W_Y] = hy - l3 * math.sin(beta)
+        row[L.W_BETA] = beta
+        row[L.W_W1 : L.W_W2 + 1] = start[5:7]
+        row[L.W_A1 : L.W_A2 + 1] = start[7:9]
+        row[L.W_AL1] = row[L.W_AL2] = row[L.W_STEPS] = row[L.W_CASTOR] = 0.0
+        row[L.W_PROGRESS] = progress(c, pv, hx, hy, 0.0)
+        v_true = kinematics.body_velocity_of(row[L.W_W1], row[L.W_W2], row[L.W_R1], row[L.W_R2], 2.0 * row[L.W_L1])[0]
+        evaluate(c, pv, row, obs[j], v_true, 0.0)
+        fill_record(row, rec[j], smooth_weight)
+
+
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
