@@ -42,7 +42,6 @@ from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-_W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
 
@@ -410,8 +409,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
         # the rows' columns (_set_rows) and their start records: the command being executed, no slip
         self._set_rows(idx, st, ep)
-        assert self._batch is not None
-        rec[:, _R_COMMAND] = self._batch.ws[idx, _W_A1 : _W_A2 + 1] * self._k.w_max
+        rec[:, _R_COMMAND] = self._ring[idx, 0]  # (a1, a2) w_max
         rec[:, _R_SLIP] = 0.0
         return rec
 
@@ -419,17 +417,15 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         # st None: the start states are in the compiled step's workspace (self._state's columns are its views)
         if st is None:
             np.asarray(self._state.steps)[idx] = 0
-            a1, a2 = np.asarray(self._state.a1)[idx], np.asarray(self._state.a2)[idx]
         else:
             for name, col in zip(_STATE_FIELDS, st, strict=True):
                 np.asarray(getattr(self._state, name))[idx] = col
-            a1, a2 = np.asarray(st.a1), np.asarray(st.a2)
         for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
             np.asarray(getattr(self._episode, name))[idx] = col
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
         w_max = self._k.w_max
-        self._ring[idx, :, 0] = (a1 * w_max)[:, None]
-        self._ring[idx, :, 1] = (a2 * w_max)[:, None]
+        self._ring[idx, :, 0] = (np.asarray(self._state.a1)[idx] * w_max)[:, None]
+        self._ring[idx, :, 1] = (np.asarray(self._state.a2)[idx] * w_max)[:, None]
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
         if self.v0_params is not None:

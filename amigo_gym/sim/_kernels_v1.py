@@ -631,9 +631,9 @@ def restart_rows(
     rec: F64, rows: NDArray[np.int64], template: F64, start: F64, u: F64, smooth_weight: float,
 ) -> None:  # fmt: skip
     """:func:`amigo_gym.task.v1.start_state`, then :func:`start_rows`, of the rows ``rows (m,)`` with one episode:
-    each row's episode entries from the workspace row ``template``; ``start``: the path's start ``(x, y, theta)``
-    [m, rad], the initial position and heading noise [m, rad], the start wheel rates [rad/s] and previous actions;
-    ``u (m, 3)``: the draws in [-1, 1]."""
+    its workspace entries from the row ``template``; ``start``: the path's start ``(x, y, theta)`` [m, rad], the
+    initial position and heading noise [m, rad], the start wheel rates [rad/s], previous actions and speed of A
+    [m/s]; ``u (m, 3)``: the draws in [-1, 1]."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     for j in range(rows.shape[0]):
         i = rows[j]
@@ -644,16 +644,13 @@ def restart_rows(
         beta = start[2] + u[j, 2] * start[4]
         hx = start[0] + u[j, 0] * start[3]
         hy = start[1] + u[j, 1] * start[3]
-        l3 = row[L.W_L3]
-        row[L.W_X] = hx - l3 * math.cos(beta)
-        row[L.W_Y] = hy - l3 * math.sin(beta)
+        row[L.W_X], row[L.W_Y] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), row[L.W_L3])
         row[L.W_BETA] = beta
         row[L.W_W1 : L.W_W2 + 1] = start[5:7]
         row[L.W_A1 : L.W_A2 + 1] = start[7:9]
         row[L.W_AL1] = row[L.W_AL2] = row[L.W_STEPS] = row[L.W_CASTOR] = 0.0
         row[L.W_PROGRESS] = progress(c, pv, hx, hy, 0.0)
-        v_true = kinematics.body_velocity_of(row[L.W_W1], row[L.W_W2], row[L.W_R1], row[L.W_R2], 2.0 * row[L.W_L1])[0]
-        evaluate(c, pv, row, obs[j], v_true, 0.0)
+        evaluate(c, pv, row, obs[j], start[9], 0.0)
         fill_record(row, rec[j], smooth_weight)
 
 

@@ -104,7 +104,7 @@ class BatchKernel:
         self.ideal = k.params.ideal_actuators and m == 0
         self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
         self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
-        self._restart: tuple[Any, ...] | None = None  # restart's path, template row, start, loop
+        self._restart: tuple[Any, ...] | None = None  # restart's path, template row and start
         self._bind()
 
     def _bind(self) -> None:
@@ -128,7 +128,6 @@ class BatchKernel:
         state = self.__dict__.copy()
         for name in ("_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
             state.pop(name, None)
-        state["_restart"] = None
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -191,20 +190,19 @@ class BatchKernel:
             st = tracking.start_state(self._k, path, ep, (zero, zero, zero))
             self.load(rows[:1], [path], st, ep)
             q, p = path.pose_columns(zero), self._k.params
-            start = (q.x, q.y, q.theta, p.init_position_noise, p.init_heading_noise, st.w1, st.w2, st.a1, st.a2)
-            f1, f2, i1 = np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64)
-            args = (f1, f1, i1, i1, f2, np.zeros((1, 1), dtype=np.float32), f2, i1, f1, f1, f2, 0.0)
-            fn = fast_v1.direct_call(fast_v1.kernels().restart_rows, *args)
-            self._restart = (path, self.ws[rows[0]].copy(), np.hstack(start).astype(np.float64), fn)
-        _, template, start, restart_rows = self._restart
+            v_a = tracking.start_speed_time(st, ep)[0]
+            start = (q.x, q.y, q.theta, p.init_position_noise, p.init_heading_noise, st.w1, st.w2, st.a1, st.a2, v_a)
+            self._restart = (path, self.ws[rows[0]].copy(), np.hstack(start).astype(np.float64))
+        _, template, start = self._restart
         r = np.asarray(rows, dtype=np.int64)
         self.keys[r] = ep.key
         self.noise_on[r] = template[layout_v1.W_NOISE_ON] != 0.0
         self.arena.assign(rows, [path] * len(rows))
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
         a = self.arena
-        restart_rows(self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u,
-                     self._row.smooth_weight)  # fmt: skip
+        fast_v1.kernels().restart_rows(
+            self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u, self._row.smooth_weight
+        )
         return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
