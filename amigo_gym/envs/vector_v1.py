@@ -42,7 +42,6 @@ from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-_W_A1, _W_A2 = layout_v1.W_A1, layout_v1.W_A2
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
 
@@ -369,9 +368,12 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
             for i in rows:
                 self.path_infos[i] = dict(info)
-            ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
             # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
             u_all = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in rows]).reshape(m, 3)
+            if pose_opt is None:  # the start states and their evaluation in one compiled call
+                self._goal[idx] = tracking.goal_point(k.params, fixed)
+                return self._started(idx, b.restart(rows, fixed, self._template_row, u_all, obs), None, template)
+            ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
             groups = {id(fixed): list(range(m))}
         else:  # each row draws its path (built by the compiled loops) and episode
             loops = fast_v1.path_loops()
@@ -400,23 +402,30 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 col[sel] = value
             self._goal[idx[sel]] = tracking.goal_point(k.params, path)
         st_all = tracking.State(*cols)
-        self._set_rows(idx, st_all, ep_all)
         if template is None:
             self.paths.replace(idx, paths)
-        rec = b.start(rows, paths, st_all, ep_all, obs)
-        rec[:, _R_COMMAND] = b.ws[idx, _W_A1 : _W_A2 + 1] * k.w_max  # a start: the command being executed, no slip
+        return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
+
+    def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
+        # the rows' columns (_set_rows) and their start records: the command being executed, no slip
+        self._set_rows(idx, st, ep)
+        rec[:, _R_COMMAND] = self._ring[idx, 0]  # (a1, a2) w_max
         rec[:, _R_SLIP] = 0.0
         return rec
 
-    def _set_rows(self, idx: NDArray[np.intp], st: tracking.State, ep: tracking.Episode) -> None:
-        for name, col in zip(_STATE_FIELDS, st, strict=True):
-            np.asarray(getattr(self._state, name))[idx] = col
+    def _set_rows(self, idx: NDArray[np.intp], st: tracking.State | None, ep: tracking.Episode) -> None:
+        # st None: the start states are in the compiled step's workspace (self._state's columns are its views)
+        if st is None:
+            np.asarray(self._state.steps)[idx] = 0
+        else:
+            for name, col in zip(_STATE_FIELDS, st, strict=True):
+                np.asarray(getattr(self._state, name))[idx] = col
         for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
             np.asarray(getattr(self._episode, name))[idx] = col
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
         w_max = self._k.w_max
-        self._ring[idx, :, 0] = (np.asarray(st.a1) * w_max)[:, None]
-        self._ring[idx, :, 1] = (np.asarray(st.a2) * w_max)[:, None]
+        self._ring[idx, :, 0] = (np.asarray(self._state.a1)[idx] * w_max)[:, None]
+        self._ring[idx, :, 1] = (np.asarray(self._state.a2)[idx] * w_max)[:, None]
 
     def _mark_restarted(self, infos: dict[str, Any], idx: NDArray[np.intp]) -> None:
         if self.v0_params is not None:

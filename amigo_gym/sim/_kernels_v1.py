@@ -145,7 +145,9 @@ _data_ptr: Any = intrinsic(_data_ptr_typing)
 
 @_jit_inline
 def _bare(a: Any) -> Any:
-    return _carray(_data_ptr(a), a.shape[0])
+    # ``a`` (C-contiguous) without a reference count: its views and slices take none either (no atomic operations
+    # per row in the loops below)
+    return _carray(_data_ptr(a), a.shape)
 
 
 #: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
@@ -546,9 +548,8 @@ def step_record(
     smooth_weight: float, key: np.uint64,
 ) -> None:  # fmt: skip
     """:func:`step`, then :func:`fill_record` (the arguments after ``a2``: :attr:`fast_v1.StepKernel.args`)."""
-    ring2 = _carray(_data_ptr(ring), ring.shape)
     c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
-    step(c, pv, ring2, ws, obs, ring_step, a1, a2, key)
+    step(c, pv, _bare(ring), ws, obs, ring_step, a1, a2, key)
     fill_record(ws, rec, smooth_weight)
 
 
@@ -563,23 +564,19 @@ def _step_rows(
 ) -> None:  # fmt: skip
     """:func:`step_record` of every row ``i``: its path ``flat[starts[i]:stops[i]]``, ring ``rings[i]``, workspace
     ``ws[i]``, observation ``obs[i]``, action ``(a1[i], a2[i])``, record ``rec[i]`` and key ``keys[i]``."""
-    c = _bare(c)
+    c, flat, rings, ws, obs, rec = _bare(c), _bare(flat), _bare(rings), _bare(ws), _bare(obs), _bare(rec)
     for i in numba.prange(ws.shape[0]):
-        row = _bare(ws[i])
-        ring = _carray(_data_ptr(rings[i]), rings.shape[1:])
-        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
-        rec_i = _bare(rec[i])
-        step(c, pv, ring, row, _bare(obs[i]), ring_step, a1[i], a2[i], keys[i])
-        fill_record(row, rec_i, smooth_weight)
+        step(c, flat[starts[i] : stops[i]], rings[i], ws[i], obs[i], ring_step, a1[i], a2[i], keys[i])
+        fill_record(ws[i], rec[i], smooth_weight)
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
     """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (N, 2)``, whose
     ``np.tan`` the caller takes."""
-    c = _bare(c)
+    c, ws = _bare(c), _bare(ws)
     for i in numba.prange(ws.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
-        arg_h, arg_m = _ideal_motion(c, _bare(ws[i]), w1, w2)[3:]
+        arg_h, arg_m = _ideal_motion(c, ws[i], w1, w2)[3:]
         tans[i, 0] = arg_h
         tans[i, 1] = arg_m
 
@@ -590,15 +587,14 @@ def _ideal_rows(
 ) -> None:  # fmt: skip
     """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (N, 2)``; the record's entries into ``rec``,
     the reward's exponential arguments into ``exps (N, 3)``."""
-    c = _bare(c)
+    c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     for i in numba.prange(ws.shape[0]):
-        row = _bare(ws[i])
-        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
+        row = ws[i]
         _no_draws(row)
         c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
         v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
-        _ideal_move(c, pv, row, _bare(obs[i]), c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
-        _record_entries(row, _bare(rec[i]))
+        _ideal_move(c, flat[starts[i] : stops[i]], row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
+        _record_entries(row, rec[i])
         exps[i, 0] = row[L.W_ARG_T]
         exps[i, 1] = row[L.W_ARG_V]
         exps[i, 2] = row[L.W_ARG_S]
@@ -606,8 +602,9 @@ def _ideal_rows(
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
     """Pass 3: the records' exponentials ``exps (N, 3)`` (``np.exp`` taken by the caller), terms and rewards."""
+    rec = _bare(rec)
     for i in numba.prange(rec.shape[0]):
-        r = _bare(rec[i])
+        r = rec[i]
         r[L.R_TRACK] = exps[i, 0]
         r[L.R_SPEED] = exps[i, 1]
         r[L.R_SMOOTH_EXP] = exps[i, 2]
@@ -621,13 +618,40 @@ def start_rows(
 ) -> None:  # fmt: skip
     """:func:`evaluate` and :func:`fill_record` of the rows ``rows (m,)`` of ``ws``, at the start speeds ``v_true``
     [m/s] and times ``t`` [s]: observations into ``obs (m, D)``, records into ``rec (m, RECORD_WIDTH)``."""
-    c = _bare(c)
+    c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     for j in range(rows.shape[0]):
         i = rows[j]
-        row = _bare(ws[i])
-        pv = _carray(_data_ptr(flat[starts[i] :]), stops[i] - starts[i])
-        evaluate(c, pv, row, _bare(obs[j]), v_true[j], t[j])
-        fill_record(row, _bare(rec[j]), smooth_weight)
+        evaluate(c, flat[starts[i] : stops[i]], ws[i], obs[j], v_true[j], t[j])
+        fill_record(ws[i], rec[j], smooth_weight)
+
+
+@_jit
+def restart_rows(
+    c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
+    rec: F64, rows: NDArray[np.int64], template: F64, start: F64, u: F64, smooth_weight: float,
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.task.v1.start_state`, then :func:`start_rows`, of the rows ``rows (m,)`` with one episode:
+    its workspace entries from the row ``template``; ``start``: the path's start ``(x, y, theta)`` [m, rad], the
+    initial position and heading noise [m, rad], the start wheel rates [rad/s], previous actions and speed of A
+    [m/s]; ``u (m, 3)``: the draws in [-1, 1]."""
+    c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        row = ws[i]
+        pv = flat[starts[i] : stops[i]]
+        row[L.W_R1 : L.W_L3D + 1] = template[L.W_R1 : L.W_L3D + 1]  # the episode
+        row[L.W_SLIP_MAX : L.W_NOISE_ON + 1] = template[L.W_SLIP_MAX : L.W_NOISE_ON + 1]
+        beta = start[2] + u[j, 2] * start[4]
+        hx = start[0] + u[j, 0] * start[3]
+        hy = start[1] + u[j, 1] * start[3]
+        row[L.W_X], row[L.W_Y] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), row[L.W_L3])
+        row[L.W_BETA] = beta
+        row[L.W_W1 : L.W_W2 + 1] = start[5:7]
+        row[L.W_A1 : L.W_A2 + 1] = start[7:9]
+        row[L.W_AL1] = row[L.W_AL2] = row[L.W_STEPS] = row[L.W_CASTOR] = 0.0
+        row[L.W_PROGRESS] = progress(c, pv, hx, hy, 0.0)
+        evaluate(c, pv, row, obs[j], start[9], 0.0)
+        fill_record(row, rec[j], smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

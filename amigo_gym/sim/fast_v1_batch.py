@@ -104,6 +104,7 @@ class BatchKernel:
         self.ideal = k.params.ideal_actuators and m == 0
         self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
         self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
+        self._restart: tuple[Any, ...] | None = None  # restart's path, template row and start
         self._bind()
 
     def _bind(self) -> None:
@@ -177,6 +178,31 @@ class BatchKernel:
             np.broadcast_to(np.asarray(v_true, dtype=np.float64), (m,)).copy(),
             np.broadcast_to(np.asarray(t, dtype=np.float64), (m,)).copy(), self._row.smooth_weight,
         )  # fmt: skip
+        return rec
+
+    def restart(
+        self, rows: Sequence[int], path: Any, ep: tracking.Episode, u: Array, obs: NDArray[np.floating[Any]]
+    ) -> Array:
+        """:meth:`start` of ``rows`` on one fixed ``path`` with one episode ``ep`` (columns of one row) and the start
+        draws ``u (m, 3)`` in [-1, 1] (:func:`amigo_gym.task.v1.start_state`'s ``u``), in one compiled call."""
+        if self._restart is None or self._restart[0] is not path:  # the first row's episode entries: the template
+            zero = np.zeros(1)
+            st = tracking.start_state(self._k, path, ep, (zero, zero, zero))
+            self.load(rows[:1], [path], st, ep)
+            q, p = path.pose_columns(zero), self._k.params
+            v_a = tracking.start_speed_time(st, ep)[0]
+            start = (q.x, q.y, q.theta, p.init_position_noise, p.init_heading_noise, st.w1, st.w2, st.a1, st.a2, v_a)
+            self._restart = (path, self.ws[rows[0]].copy(), np.hstack(start).astype(np.float64))
+        _, template, start = self._restart
+        r = np.asarray(rows, dtype=np.int64)
+        self.keys[r] = ep.key
+        self.noise_on[r] = template[layout_v1.W_NOISE_ON] != 0.0
+        self.arena.assign(rows, [path] * len(rows))
+        rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
+        a = self.arena
+        fast_v1.kernels().restart_rows(
+            self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u, self._row.smooth_weight
+        )
         return rec
 
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
