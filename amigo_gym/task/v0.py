@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -37,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, circle_steady_state, col_sqrt
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, SIGMA_RANGE, RobotParams, check_real, show_value
+from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, RobotParams, check_real, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 Array = NDArray[np.float64]
@@ -86,8 +85,8 @@ V0_DEFAULTS: dict[str, Any] = {
 
 
 def check_v0(**settings: Any) -> dict[str, Any]:
-    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, checked: numbers as Python floats, ``direction``
-    an int, ``preview`` a tuple (``dt=np.float32(0.1)`` is stored as ``0.10000000149011612``).
+    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, with the checks :class:`TrackingParams` does not
+    make (it checks the rest when :meth:`TrackingParams.v0` builds it, in v0's ranges).
 
     ``robot`` a :class:`~amigo_gym.model.params.RobotParams`; ``dt`` in [1e-6, 2] s; ``radius`` of the circle H
     follows in (robot.l3, 1e3] m; ``speed`` of A in [1e-6, robot.max_speed] m/s; ``direction`` +1 (left, eq. 6) or
@@ -112,32 +111,16 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     robot = s["robot"]
     if not isinstance(robot, RobotParams):
         raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(robot)}")
-
-    def real(name: str, low: float, high: float, **kw: bool) -> None:
-        s[name] = check_real(o, name, s[name], low, high, **kw)
-
-    real("dt", 1e-6, 2.0)
-    real("radius", robot.l3, 1e3, low_open=True)
-    real("speed", MIN_SPEED, robot.max_speed)
+    s["speed"] = check_real(o, "speed", s["speed"], MIN_SPEED, robot.max_speed)
+    s["radius"] = check_real(o, "radius", s["radius"], robot.l3, 1e3, low_open=True)
+    s["straight_length"] = check_real(o, "straight_length", s["straight_length"], 0.0, 1e3)
+    s["termination_distance"] = check_real(o, "termination_distance", s["termination_distance"], 1e-3, 10.0)
     d = s["direction"]
     if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
         raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
     s["direction"] = int(d)
     if not isinstance(s["path"], str) or s["path"] not in ("circle", "manoeuvre"):
         raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(s['path'])}")
-    s["path"] = str(s["path"])
-    real("straight_length", 0.0, 1e3)
-    real("termination_distance", 1e-3, 10.0)
-    real("init_position_noise", 0.0, s["termination_distance"] / 2)
-    real("init_heading_noise", 0.0, math.pi / 4)
-    real("error_scale", 1e-6, 10.0)
-    pv = s["preview"]
-    if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
-        raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
-    s["preview"] = tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv))
-    for name in ("sigma_track", "sigma_speed", "sigma_smooth"):
-        real(name, *SIGMA_RANGE)
-    real("smooth_weight", 0.0, 1.0, high_open=True)
     # drivable: the straight roll at the start, the exact steady state on the circle; the rates are linear in the
     # speed, so at most speed * w_max / need fits
     v, radius = s["speed"], s["radius"]
@@ -147,14 +130,14 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     need = v / r_min
     if need > w_max:
         raise ValueError(
-            f"TrackingParams.v0: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+            f"{o}: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
             f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
         )
     rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
     need = max(abs(rates[0]), abs(rates[1]))
     if not need <= w_max:
         raise ValueError(
-            f"TrackingParams.v0: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
+            f"{o}: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
     return s

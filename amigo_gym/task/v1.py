@@ -93,7 +93,6 @@ if TYPE_CHECKING:
 #: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
 STATUS_END = 2
 
-REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
 #: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
 PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
 #: the families ``"mixed"`` draws from, with equal probability
@@ -126,9 +125,6 @@ _CHOICES: tuple[tuple[str, tuple[Any, ...]], ...] = (
     ("start_at_rest", (True, False)),
     ("feasibility", FEASIBILITY_MODES),
 )
-#: the range checks whose low (high) end is open
-_LOW_OPEN = frozenset({"radius", "profile_accel", "profile_decel", "profile_duration", "termination_distance"})
-_HIGH_OPEN = frozenset({"smooth_weight"})
 
 
 def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
@@ -265,33 +261,28 @@ class TrackingParams:
 
             s(self, "path", check_path(self.path, "AmigoBot-v1"))
         # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
-        # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s
+        # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s. (name, low, high, low end open)
         v0 = self.ideal_actuators and self.observation == "v0" and self.reward == "v0"
         r = self.robot
         sigma_high = 1e6 if v0 else 10.0
         ranges = (
-            ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0))),
-            ("radius", r.l3, 1e3),
-            ("profile_accel", 0.0, r.max_acceleration),
-            ("profile_decel", 0.0, r.max_deceleration),
-            ("profile_duration", 0.0, 1e5),
-            ("termination_distance", 0.0, 10.0),
-            ("init_heading_noise", 0.0, math.pi / 4),
-            ("error_scale", 1e-6 if v0 else 1e-4, 10.0),
-            ("preview_scale", 1e-2, 10.0),
-            ("sigma_track", 1e-6, sigma_high),
-            ("sigma_speed", 1e-6, sigma_high),
-            ("sigma_smooth", 1e-6, sigma_high),
-            ("smooth_weight", 0.0, 1.0),
-            ("goal_tolerance", 0.0, 10.0),
+            ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0)), False),
+            ("radius", r.l3, 1e3, True),
+            ("profile_accel", 0.0, r.max_acceleration, True),
+            ("profile_decel", 0.0, r.max_deceleration, True),
+            ("profile_duration", 0.0, 1e5, True),
+            ("termination_distance", 0.0, 10.0, True),
+            ("init_heading_noise", 0.0, math.pi / 4, False),
+            ("error_scale", 1e-6 if v0 else 1e-4, 10.0, False),
+            ("preview_scale", 1e-2, 10.0, False),
+            ("sigma_track", 1e-6, sigma_high, False),
+            ("sigma_speed", 1e-6, sigma_high, False),
+            ("sigma_smooth", 1e-6, sigma_high, False),
+            ("goal_tolerance", 0.0, 10.0, False),
         )
-        for name, low, high in ranges:
-            value = getattr(self, name)
-            s(
-                self,
-                name,
-                check_range(o, name, value, low, high, low_open=name in _LOW_OPEN, high_open=name in _HIGH_OPEN),
-            )
+        for name, low, high, low_open in ranges:
+            s(self, name, check_range(o, name, getattr(self, name), low, high, low_open=low_open))
+        s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
         high = self.termination_distance / 2
         s(self, "init_position_noise", check_range(o, "init_position_noise", self.init_position_noise, 0.0, high))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
@@ -299,7 +290,8 @@ class TrackingParams:
         if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
             raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
         s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, r.max_speed))
-        if isinstance(self.preview, (str, bytes)) or not hasattr(self.preview, "__iter__"):
+        pv = self.preview
+        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
             raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
         far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
         prev = (check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
@@ -320,7 +312,10 @@ class TrackingParams:
         else:
             path = ManoeuvrePath(radius=radius, straight_length=straight, direction=d)
         v0: dict[str, Any] = {"ideal_actuators": True, "observation": "v0", "reward": "v0", "start_at_rest": False}
-        return cls(**s, **v0, path=path, radius=radius, direction=d, feasibility="off")
+        try:
+            return cls(**s, **v0, path=path, radius=radius, direction=d, feasibility="off")
+        except ValueError as exc:  # the message names the keyword of v0's settings
+            raise ValueError(str(exc).replace("TrackingParams", "TrackingParams.v0", 1)) from None
 
     @property
     def simulated_robot(self) -> RobotParams:
@@ -621,7 +616,7 @@ class State(NamedTuple):
 
 class Outcome(NamedTuple):
     """What the environments report about a state: the observation (:func:`obs_fields` order, float64), the reward
-    ``terms`` (:data:`REWARD_TERMS` order) and their product, ``terminated``, true H ``h_x, h_y`` [m], its
+    ``terms`` (:data:`~amigo_gym.task.v0.REWARD_TERMS`) and their product, ``terminated``, true H ``h_x, h_y`` [m], its
     cross-track ``error`` [m], the true and reference speeds of A [m/s], the measured pose [m, m, rad] and wheel
     rates [rad/s], and ``end_of_path`` (H reached an open path's end: a success)."""
 
