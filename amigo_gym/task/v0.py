@@ -17,9 +17,8 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
 ``Delta w`` of the wheel rates.
 
-AmigoBot-v0's step is AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns` of
-:meth:`amigo_gym.task.v1.TrackingParams.v0`), which calls the pieces here on floats or ``(N,)`` columns alike. The
-observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts readers use.
+The observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts
+readers use.
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -85,8 +84,9 @@ V0_DEFAULTS: dict[str, Any] = {
 
 
 def check_v0(**settings: Any) -> dict[str, Any]:
-    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, with the checks :class:`TrackingParams` does not
-    make (it checks the rest when :meth:`TrackingParams.v0` builds it, in v0's ranges).
+    """The keywords of :class:`~amigo_gym.task.v1.TrackingParams` of AmigoBot-v0's settings (:data:`V0_DEFAULTS`
+    where not given; ``path`` a :class:`~amigo_gym.paths.CirclePath` or :class:`~amigo_gym.paths.ManoeuvrePath`),
+    with the checks ``TrackingParams`` does not make (it checks the rest, in v0's ranges).
 
     ``robot`` a :class:`~amigo_gym.model.params.RobotParams`; ``dt`` in [1e-6, 2] s; ``radius`` of the circle H
     follows in (robot.l3, 1e3] m; ``speed`` of A in [1e-6, robot.max_speed] m/s; ``direction`` +1 (left, eq. 6) or
@@ -140,6 +140,9 @@ def check_v0(**settings: Any) -> dict[str, Any]:
             f"{o}: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
+    straight = s.pop("straight_length")
+    d = s["direction"]
+    s["path"] = CirclePath(radius, direction=d) if s["path"] == "circle" else ManoeuvrePath(radius, straight, d)
     return s
 
 
@@ -223,22 +226,14 @@ def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Arr
 
 
 def action_pair(action: ArrayLike) -> tuple[float, float]:
-    """:func:`validate_action` of one robot's action, as two Python floats (the same checks and errors).
-
-    A float32 or float64 array of shape ``(2,)`` (what agents and ``action_space.sample()`` give) is
-    checked directly: ``tolist`` gives the exact float64 values, and ``a - a == 0`` holds exactly for
-    finite ``a`` (``inf - inf`` and ``nan - nan`` are NaN). Anything else goes through
-    :func:`validate_action`.
-    """
-    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in _PAIR_CHARS:
+    """:func:`validate_action` of one robot's action, as two Python floats (the same checks and errors); a float32
+    or float64 ``(2,)`` array is checked directly (``a - a == 0`` holds exactly for finite ``a`` only)."""
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in ("f", "d"):
         a1, a2 = action.tolist()
         if a1 - a1 == 0.0 and a2 - a2 == 0.0:
             return a1, a2
     b1, b2 = validate_action(action).tolist()
     return b1, b2
-
-
-_PAIR_CHARS = ("f", "d")
 
 
 def bound_angle(b: Real) -> Real:
@@ -309,12 +304,6 @@ def curvature_feature(curvature: Real, l3: float) -> Real:
     return clip(curvature * l3, -1.0, 1.0)
 
 
-def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real, Real]:
-    """The observation's last four fields (:data:`OBS_TAIL`): :func:`observe_rates`, then :func:`observe_reference`."""
-    rate1, rate2, speed_error = observe_rates(w1, w2, v, v_ref, w_max, v_max)
-    return rate1, rate2, speed_error, observe_reference(v_ref, v_max)
-
-
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
@@ -360,7 +349,8 @@ def observe_columns(
     return (
         *observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max),
         *ahead,
-        *observe_tail(w1, w2, v, v_ref, w_max, v_max),
+        *observe_rates(w1, w2, v, v_ref, w_max, v_max),
+        observe_reference(v_ref, v_max),
     )
 
 

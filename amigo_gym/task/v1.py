@@ -65,10 +65,10 @@ from amigo_gym.model.kinematics import (
     h_from_a,
 )
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import RobotParams, check_range, show_value
+from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
-from amigo_gym.paths.clothoid import PathLoops
+from amigo_gym.paths.clothoid import STATUS_END, PathLoops
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     V0_DEFAULTS,
@@ -90,8 +90,6 @@ from amigo_gym.task.v0 import (
 if TYPE_CHECKING:
     from amigo_gym.paths import Feasibility
 
-#: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
-STATUS_END = 2
 
 #: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
 PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
@@ -125,21 +123,6 @@ _CHOICES: tuple[tuple[str, tuple[Any, ...]], ...] = (
     ("start_at_rest", (True, False)),
     ("feasibility", FEASIBILITY_MODES),
 )
-
-
-def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
-    """A float in ``(low, high]`` or a pair ``(a, b)`` with ``low < a <= b <= high``."""
-    if isinstance(value, (tuple, list)) and not isinstance(value, str):
-        if len(value) != 2:
-            raise ValueError(
-                f"{owner}.{name} must be a number or a pair (low, high) in ({low:g}, {high:g}], got {value!r}"
-            )
-        a = check_range(owner, f"{name}[0]", value[0], low, high, low_open=True)
-        b = check_range(owner, f"{name}[1]", value[1], low, high, low_open=True)
-        if a > b:
-            raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
-        return (a, b)
-    return check_range(owner, name, value, low, high, low_open=True)
 
 
 @dataclass(frozen=True)
@@ -289,7 +272,8 @@ class TrackingParams:
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
         if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
             raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
-        s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, r.max_speed))
+        check = check_pair if isinstance(self.speed, tuple | list) else check_range  # a pair drawn per episode
+        s(self, "speed", check(o, "speed", self.speed, 0.0, r.max_speed, low_open=True))
         pv = self.preview
         if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
             raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
@@ -305,22 +289,11 @@ class TrackingParams:
         :func:`amigo_gym.task.v0.check_v0`) with ideal actuators, v0's observation and reward, no randomisation, the
         wheels rolling at the start, the circle or manoeuvre as a path object and ``feasibility="off"`` (``check_v0``
         checked that the robot can drive it)."""
-        s = check_v0(**settings)
-        radius, d, straight = s.pop("radius"), s.pop("direction"), s.pop("straight_length")
-        if s.pop("path") == "circle":
-            path: CirclePath | ManoeuvrePath = CirclePath(radius=radius, direction=d)
-        else:
-            path = ManoeuvrePath(radius=radius, straight_length=straight, direction=d)
-        v0: dict[str, Any] = {"ideal_actuators": True, "observation": "v0", "reward": "v0", "start_at_rest": False}
+        kw = check_v0(**settings) | {"ideal_actuators": True, "observation": "v0", "reward": "v0"}
         try:
-            return cls(**s, **v0, path=path, radius=radius, direction=d, feasibility="off")
+            return cls(**kw, start_at_rest=False, feasibility="off")
         except ValueError as exc:  # the message names the keyword of v0's settings
             raise ValueError(str(exc).replace("TrackingParams", "TrackingParams.v0", 1)) from None
-
-    @property
-    def simulated_robot(self) -> RobotParams:
-        """The robot that is simulated before randomisation: ``true_robot``, or the nominal one."""
-        return self.robot if self.true_robot is None else self.true_robot
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -679,7 +652,7 @@ def measured_differs(position_noise: float, heading_noise: float, l3_differs: bo
 
 def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) -> tuple[Any, Any]:
     """``(terminated, at_end)``: ``|e| > termination_distance`` [m], or H reached an open path's end (``status`` is
-    :data:`STATUS_END`, ``closed`` 0)."""
+    :data:`amigo_gym.paths.STATUS_END`, ``closed`` 0)."""
     at_end = (status == STATUS_END) & (closed == 0)
     terminated = off_path(np.abs(e), termination_distance) | at_end
     return terminated, at_end
@@ -999,7 +972,7 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
     key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
-    true = p.simulated_robot
+    true = p.robot if p.true_robot is None else p.true_robot  # the simulated robot before randomisation
     delay = min(p.actuators.delay + d.delay, actuators.MAX_DELAY)
     lag, t_switch = actuators.delay_split(delay, p.dt)
     t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
