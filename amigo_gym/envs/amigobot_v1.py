@@ -41,11 +41,12 @@ _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
     i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
                              _L.R_CASTOR, _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
+_TERMS = (_TRACK, _SPEED, _HEADING, _SMOOTH)  # the reward terms, task.REWARD_TERMS order
 
 
 def v0_record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
     """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of info records, arguments as :func:`record_info`."""
-    terms = (values[_TRACK], values[_SPEED], values[_HEADING], values[_SMOOTH])
+    terms = [values[i] for i in _TERMS]
     return task.info_dict(
         record[_POSE], record[_H], values[_E], record[_RATES], record[_ANGLES], values[_CASTOR], terms, time
     )
@@ -82,12 +83,7 @@ def record_info(
         "command": record[_COMMAND],
         "wheel_angles": record[_ANGLES],
         "measured_pose": record[_MEASURED],
-        "reward_terms": {
-            "track": values[_TRACK],
-            "speed": values[_SPEED],
-            "heading": values[_HEADING],
-            "smooth": values[_SMOOTH],
-        },
+        "reward_terms": dict(zip(task.REWARD_TERMS, (values[i] for i in _TERMS), strict=True)),
         "time": time,
         **({} if path is None else {"path": path}),
         "true_robot": true_robot,
