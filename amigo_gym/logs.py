@@ -32,6 +32,7 @@ from amigo_gym.model.actuators import (
 )
 from amigo_gym.model.kinematics import body_velocity
 from amigo_gym.model.params import RobotParams, show_value
+from amigo_gym.paths.classic import wrap_angle
 
 Array = NDArray[np.float64]
 
@@ -365,11 +366,6 @@ def simulate(
     return Replay(t.copy(), out[:, :3].copy(), out[:, 3:].copy())
 
 
-def _wrap(a: Array) -> Array:
-    """Angles wrapped to ``[-pi, pi)`` [rad]."""
-    return np.asarray(np.mod(a + math.pi, 2.0 * math.pi) - math.pi, dtype=np.float64)
-
-
 def errors(log: Log, rep: Replay) -> dict[str, Array]:
     """Simulated minus measured per sample, of what the log measures: ``position`` (distance of A [m]), ``heading``
     (wrapped [rad]), ``rate1``, ``rate2`` [rad/s]."""
@@ -377,7 +373,7 @@ def errors(log: Log, rep: Replay) -> dict[str, Array]:
     if log.pose is not None:
         d = rep.pose - log.pose
         out["position"] = np.hypot(d[:, 0], d[:, 1])
-        out["heading"] = _wrap(d[:, 2])
+        out["heading"] = wrap_angle(d[:, 2])
     if log.rates is not None:
         out["rate1"] = rep.rates[:, 0] - log.rates[:, 0]
         out["rate2"] = rep.rates[:, 1] - log.rates[:, 1]
@@ -429,7 +425,7 @@ def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, f
 
     def residuals(z: Array) -> Array:
         d = placed(sim, z) - meas
-        return np.concatenate([d[:, 0], d[:, 1], heading_weight * _wrap(d[:, 2])])
+        return np.concatenate([d[:, 0], d[:, 1], heading_weight * wrap_angle(d[:, 2])])
 
     sol = least_squares(residuals, meas[0], x_scale=np.array([0.01, 0.01, 0.01]), xtol=1e-12, ftol=1e-12)
     return float(sol.x[0]), float(sol.x[1]), float(sol.x[2])
@@ -621,7 +617,7 @@ def identify(
         parts = []
         if log.pose is not None and start is not None:
             d = placed(rep.pose[1:], start) - log.pose[1:]
-            parts += [d[:, 0], d[:, 1], lam * _wrap(d[:, 2])]
+            parts += [d[:, 0], d[:, 1], lam * wrap_angle(d[:, 2])]
         if log.rates is not None:
             d = (rep.rates[1:] - log.rates[1:]) * rate_w
             parts += [d[:, 0], d[:, 1]]
