@@ -579,21 +579,16 @@ def identify(
     base_act = ActuatorParams() if actuators is None else actuators
     step = float(np.median(np.diff(log.t_meas)))
     excited = ramp_excitation(log, nominal, base_act)
-    names: list[str] = []
-    if log.pose is not None:
-        names += ["r1", "r2", "l1"]
-    names.append("delay")
-    names += [k for k in RAMP_NAMES if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step)]
+    ramped = [k for k in RAMP_NAMES if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step)]
+    names = [*(["r1", "r2", "l1"] if log.pose is not None else []), "delay", *ramped]
     n_fit = len(names)
-    if log.pose is not None:
-        names += ["x0", "y0", "theta0"]
+    names += ["x0", "y0", "theta0"] if log.pose is not None else []
     nom = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1, "delay": base_act.delay,
            "acceleration": base_act.acceleration, "rot_acceleration": base_act.rot_acceleration}  # fmt: skip
     box = {"delay": (0.0, MAX_DELAY, 0.01)}  # (low, high, scale) of each parameter; the start pose: unbounded
     box |= {n: (nom[n] * (1 - FIT_BOUNDS), nom[n] * (1 + FIT_BOUNDS), nom[n] * 0.01) for n in ("r1", "r2", "l1")}
     box |= {n: (nom[n] * RAMP_FACTORS[0], nom[n] * RAMP_FACTORS[1], nom[n] * 0.1) for n in RAMP_NAMES}
     lo, hi, x_scale = zip(*(box.get(n, (-np.inf, np.inf, 0.01)) for n in names), strict=True)
-    pose0 = None if log.pose is None else log.pose[0]
     rate_w = np.array([nominal.r1, nominal.r2]) * step
 
     def unpack(z: Sequence[float]) -> tuple[RobotParams, ActuatorParams, tuple[float, float, float] | None]:
@@ -623,17 +618,10 @@ def identify(
             parts += [d[:, 0], d[:, 1]]
         return np.concatenate(parts)
 
-    z0 = [nom.get(n, 0.0) for n in names]
-    if pose0 is not None:
-        z0[-3:] = pose0.tolist()
-    i_delay = names.index("delay")
-    best = math.inf
-    for d in np.linspace(0.0, MAX_DELAY, 11).tolist():
-        z = list(z0)
-        z[i_delay] = d
-        c = float(np.sum(residuals(z) ** 2))
-        if c < best:
-            best, z_start = c, z
+    z0 = [nom[n] for n in names[:n_fit]] + ([] if log.pose is None else log.pose[0].tolist())
+    i = names.index("delay")  # start from the best delay of the grid
+    grid = ([*z0[:i], d, *z0[i + 1 :]] for d in np.linspace(0.0, MAX_DELAY, 11).tolist())
+    z_start = min(grid, key=lambda z: float(np.sum(residuals(z) ** 2)))
     sol = least_squares(
         residuals, np.asarray(z_start), bounds=(np.asarray(lo), np.asarray(hi)), x_scale=np.asarray(x_scale),
         method="trf", jac="2-point", xtol=XTOL, ftol=XTOL, gtol=XTOL, max_nfev=200,
