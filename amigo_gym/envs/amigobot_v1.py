@@ -226,7 +226,6 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._path_info: dict[str, Any] = {}
         self._true_robot: dict[str, float] = {}
 
-    # ------------------------------------------------------------------ gym API
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
@@ -394,8 +393,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         from amigo_gym.envs.rendering import Renderer
 
         if self._renderer is None or self._renderer.path is not self.path:
-            if self._renderer is not None:
-                self._renderer.close()
+            self.close()
             self._renderer = Renderer(self.params, self.path, self.render_mode)
         frame: NDArray[np.uint8] | None = self._renderer.draw(trail=self._trail, **self._render_state())
         return frame
