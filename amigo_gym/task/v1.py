@@ -247,7 +247,6 @@ class TrackingParams:
         # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s. (name, low, high, low end open)
         v0 = self.ideal_actuators and self.observation == "v0" and self.reward == "v0"
         r = self.robot
-        sigma_high = 1e6 if v0 else 10.0
         ranges = (
             ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0)), False),
             ("radius", r.l3, 1e3, True),
@@ -258,9 +257,7 @@ class TrackingParams:
             ("init_heading_noise", 0.0, math.pi / 4, False),
             ("error_scale", 1e-6 if v0 else 1e-4, 10.0, False),
             ("preview_scale", 1e-2, 10.0, False),
-            ("sigma_track", 1e-6, sigma_high, False),
-            ("sigma_speed", 1e-6, sigma_high, False),
-            ("sigma_smooth", 1e-6, sigma_high, False),
+            *((name, 1e-6, 1e6 if v0 else 10.0, False) for name in ("sigma_track", "sigma_speed", "sigma_smooth")),
             ("goal_tolerance", 0.0, 10.0, False),
         )
         for name, low, high, low_open in ranges:
@@ -275,9 +272,10 @@ class TrackingParams:
         check = check_pair if isinstance(self.speed, tuple | list) else check_range  # a pair drawn per episode
         s(self, "speed", check(o, "speed", self.speed, 0.0, r.max_speed, low_open=True))
         pv = self.preview
-        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
-            raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
         far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
+        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
+            within = f"{'(' if near_open else '['}0, {far:g}]"
+            raise ValueError(f"{o}.preview must be a sequence of distances in {within} m, got {show_value(pv)}")
         prev = (check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
         s(self, "preview", tuple(prev))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
@@ -438,9 +436,6 @@ def make_tracking_params(
         settings["actuators"] = _from_mapping(owner, "actuators", ActuatorParams(), act)
     if "randomize" in settings:
         settings["randomize"] = make_randomization(settings["randomize"])
-    for name in ("preview", "speed"):
-        if isinstance(settings.get(name), list):
-            settings[name] = tuple(settings[name])
     return replace(base, **settings) if settings else base
 
 
@@ -532,24 +527,18 @@ def v0_settings(p: TrackingParams) -> dict[str, Any] | None:
     (``CirclePath(radius, direction=...)`` or ``ManoeuvrePath(radius, straight_length, direction)``).
     """
     path = p.path
-    if (
-        type(path) not in (CirclePath, ManoeuvrePath)
-        or not (p.ideal_actuators and p.observation == "v0" and p.reward == "v0")
-        or p.randomize.has_noise
-        or p.start_at_rest
-        or isinstance(p.speed, tuple)
-        or p.speed_profile != "constant"
-        or p.goal_tolerance != 0.0
-    ):
+    if type(path) not in (CirclePath, ManoeuvrePath) or not (p.ideal_actuators and p.observation == p.reward == "v0"):
         return None
     kind = "circle" if type(path) is CirclePath else "manoeuvre"
     of_path = {"radius": path.radius, "direction": path.direction, "path": kind}
     of_path["straight_length"] = getattr(path, "straight_length", 1.0)
     s = {k: of_path[k] if k in of_path else getattr(p, k) for k in V0_DEFAULTS}
     try:
-        return s if TrackingParams.v0(**s).path == path else None
-    except ValueError:
+        q = TrackingParams.v0(**s)
+    except ValueError:  # e.g. a speed range
         return None
+    same = ("path", "randomize", "start_at_rest", "speed_profile", "goal_tolerance")  # what v0's settings fix
+    return s if all(getattr(q, k) == getattr(p, k) for k in same) else None
 
 
 class Episode(NamedTuple):
