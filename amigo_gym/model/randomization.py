@@ -87,8 +87,7 @@ def make_randomization(value: str | Randomization | Mapping[str, Any] | None) ->
         bad = sorted(str(k) for k in value if k not in names)
         if bad:
             raise ValueError(f"randomize: unknown field(s) {bad}; allowed: {sorted(names)}")
-        kwargs: dict[str, Any] = {str(k): (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
-        return Randomization(**kwargs)
+        return Randomization(**{str(k): v for k, v in value.items()})  # (pairs as lists too: JSON)
     raise ValueError(f"randomize must be a preset name, a Randomization or a mapping, got {type(value).__name__}")
 
 

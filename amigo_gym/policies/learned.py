@@ -99,8 +99,7 @@ class FeatureSpec:
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
-        kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in self.env_kwargs.items()}
-        return make_tracking_params("FeatureSpec", None, **kw)
+        return make_tracking_params("FeatureSpec", None, **self.env_kwargs)
 
 
 class FeatureBuilder:
