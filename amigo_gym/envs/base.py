@@ -190,12 +190,10 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
             continue
         if isinstance(v, dict):
             out[k] = info_row(v, i)
+        elif (a := np.asarray(v)).dtype == object:
+            out[k] = a[i]
         else:
-            a = np.asarray(v)
-            if a.dtype == object:
-                out[k] = a[i]
-            else:
-                out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
+            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
     return out
 
 
