@@ -426,14 +426,10 @@ def make_tracking_params(
     if isinstance(tr, Mapping):
         settings["true_robot"] = _from_mapping(owner, "true_robot", robot, tr)
     act = settings.get("actuators")
-    if act_file:
-        if isinstance(act, Mapping):
-            act = {**act_file, **act}
-        else:
-            act = replace(base.actuators if act is None else act, **act_file)
-        settings["actuators"] = act
-    if isinstance(act, Mapping):
-        settings["actuators"] = _from_mapping(owner, "actuators", ActuatorParams(), act)
+    if act_file or isinstance(act, Mapping):  # a mapping's fields win over the file's
+        given = act if isinstance(act, Mapping) else {}
+        start = ActuatorParams() if isinstance(act, Mapping) else base.actuators if act is None else act
+        settings["actuators"] = _from_mapping(owner, "actuators", start, {**act_file, **given})
     if "randomize" in settings:
         settings["randomize"] = make_randomization(settings["randomize"])
     return replace(base, **settings) if settings else base
