@@ -725,11 +725,7 @@ def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> A
 
 def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
     """The entry of :data:`END_CONDITIONS` for one robot's step."""
-    if goal:
-        return "goal"
-    if end_of_path:
-        return "end_of_path"
-    return "off_path" if terminated else ""
+    return "goal" if goal else "end_of_path" if end_of_path else "off_path" if terminated else ""
 
 
 class Envelope(NamedTuple):
@@ -879,10 +875,9 @@ def fixed_path(p: TrackingParams) -> Any:
     """The path of a task whose path is not drawn per episode, else ``None`` (``"random"`` and ``"mixed"``)."""
     if not isinstance(p.path, str):
         return p.path
-    extra = tuple(sorted(dict(p.path_params).items()))
-    if p.path in ("circle", "manoeuvre"):
-        return _cached_family(p.path, (("direction", p.direction), ("radius", p.radius), *extra))
-    return _cached_family(p.path, extra) if p.path in ("figure8", "lane_change") else None
+    if p.path in ("circle", "manoeuvre"):  # (path_params: sorted pairs)
+        return _cached_family(p.path, (("direction", p.direction), ("radius", p.radius), *p.path_params))
+    return _cached_family(p.path, p.path_params) if p.path in ("figure8", "lane_change") else None
 
 
 #: bytes of family paths a process keeps built (the least recently used dropped beyond it)
@@ -921,8 +916,7 @@ def _cached_family(
 
 def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = None) -> Any:
     """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
-    extra = tuple(sorted(dict(p.path_params).items())) if p.path in ("random", "mixed") else ()
-    return _cached_family("random", extra, rng_seed=path_id, loops=loops)
+    return _cached_family("random", p.path_params if p.path in ("random", "mixed") else (), path_id, loops)
 
 
 def draw_path(
