@@ -6,6 +6,7 @@ untouched), strict JSON, file digests and the trust check of pickles. Fault inje
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -38,16 +39,12 @@ def fault_point(stage: str) -> None:
 
 def fsync_dir(folder: str | os.PathLike[str]) -> None:
     """fsync a folder, so that renames in it are durable (a no-op where folders cannot be opened)."""
-    try:
+    with contextlib.suppress(OSError):  # Windows; file systems without directory fsync
         fd = os.open(folder, os.O_RDONLY)
-    except OSError:  # pragma: no cover - Windows
-        return
-    try:
-        os.fsync(fd)
-    except OSError:  # pragma: no cover - file systems without directory fsync
-        pass
-    finally:
-        os.close(fd)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
 
 def json_safe(obj: Any) -> Any:

@@ -32,6 +32,7 @@ from amigo_gym.model.actuators import (
 )
 from amigo_gym.model.kinematics import body_velocity
 from amigo_gym.model.params import RobotParams, show_value
+from amigo_gym.paths.classic import wrap_angle
 
 Array = NDArray[np.float64]
 
@@ -365,11 +366,6 @@ def simulate(
     return Replay(t.copy(), out[:, :3].copy(), out[:, 3:].copy())
 
 
-def _wrap(a: Array) -> Array:
-    """Angles wrapped to ``[-pi, pi)`` [rad]."""
-    return np.asarray(np.mod(a + math.pi, 2.0 * math.pi) - math.pi, dtype=np.float64)
-
-
 def errors(log: Log, rep: Replay) -> dict[str, Array]:
     """Simulated minus measured per sample, of what the log measures: ``position`` (distance of A [m]), ``heading``
     (wrapped [rad]), ``rate1``, ``rate2`` [rad/s]."""
@@ -377,7 +373,7 @@ def errors(log: Log, rep: Replay) -> dict[str, Array]:
     if log.pose is not None:
         d = rep.pose - log.pose
         out["position"] = np.hypot(d[:, 0], d[:, 1])
-        out["heading"] = _wrap(d[:, 2])
+        out["heading"] = wrap_angle(d[:, 2])
     if log.rates is not None:
         out["rate1"] = rep.rates[:, 0] - log.rates[:, 0]
         out["rate2"] = rep.rates[:, 1] - log.rates[:, 1]
@@ -429,7 +425,7 @@ def fit_start(log: Log, origin: Replay, heading_weight: float) -> tuple[float, f
 
     def residuals(z: Array) -> Array:
         d = placed(sim, z) - meas
-        return np.concatenate([d[:, 0], d[:, 1], heading_weight * _wrap(d[:, 2])])
+        return np.concatenate([d[:, 0], d[:, 1], heading_weight * wrap_angle(d[:, 2])])
 
     sol = least_squares(residuals, meas[0], x_scale=np.array([0.01, 0.01, 0.01]), xtol=1e-12, ftol=1e-12)
     return float(sol.x[0]), float(sol.x[1]), float(sol.x[2])
@@ -583,21 +579,16 @@ def identify(
     base_act = ActuatorParams() if actuators is None else actuators
     step = float(np.median(np.diff(log.t_meas)))
     excited = ramp_excitation(log, nominal, base_act)
-    names: list[str] = []
-    if log.pose is not None:
-        names += ["r1", "r2", "l1"]
-    names.append("delay")
-    names += [k for k in RAMP_NAMES if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step)]
+    ramped = [k for k in RAMP_NAMES if ramps == "fit" or (ramps == "auto" and excited[k] >= 3.0 * step)]
+    names = [*(["r1", "r2", "l1"] if log.pose is not None else []), "delay", *ramped]
     n_fit = len(names)
-    if log.pose is not None:
-        names += ["x0", "y0", "theta0"]
+    names += ["x0", "y0", "theta0"] if log.pose is not None else []
     nom = {"r1": nominal.r1, "r2": nominal.r2, "l1": nominal.l1, "delay": base_act.delay,
            "acceleration": base_act.acceleration, "rot_acceleration": base_act.rot_acceleration}  # fmt: skip
     box = {"delay": (0.0, MAX_DELAY, 0.01)}  # (low, high, scale) of each parameter; the start pose: unbounded
     box |= {n: (nom[n] * (1 - FIT_BOUNDS), nom[n] * (1 + FIT_BOUNDS), nom[n] * 0.01) for n in ("r1", "r2", "l1")}
     box |= {n: (nom[n] * RAMP_FACTORS[0], nom[n] * RAMP_FACTORS[1], nom[n] * 0.1) for n in RAMP_NAMES}
     lo, hi, x_scale = zip(*(box.get(n, (-np.inf, np.inf, 0.01)) for n in names), strict=True)
-    pose0 = None if log.pose is None else log.pose[0]
     rate_w = np.array([nominal.r1, nominal.r2]) * step
 
     def unpack(z: Sequence[float]) -> tuple[RobotParams, ActuatorParams, tuple[float, float, float] | None]:
@@ -621,23 +612,16 @@ def identify(
         parts = []
         if log.pose is not None and start is not None:
             d = placed(rep.pose[1:], start) - log.pose[1:]
-            parts += [d[:, 0], d[:, 1], lam * _wrap(d[:, 2])]
+            parts += [d[:, 0], d[:, 1], lam * wrap_angle(d[:, 2])]
         if log.rates is not None:
             d = (rep.rates[1:] - log.rates[1:]) * rate_w
             parts += [d[:, 0], d[:, 1]]
         return np.concatenate(parts)
 
-    z0 = [nom.get(n, 0.0) for n in names]
-    if pose0 is not None:
-        z0[-3:] = pose0.tolist()
-    i_delay = names.index("delay")
-    best = math.inf
-    for d in np.linspace(0.0, MAX_DELAY, 11).tolist():
-        z = list(z0)
-        z[i_delay] = d
-        c = float(np.sum(residuals(z) ** 2))
-        if c < best:
-            best, z_start = c, z
+    z0 = [nom[n] for n in names[:n_fit]] + ([] if log.pose is None else log.pose[0].tolist())
+    i = names.index("delay")  # start from the best delay of the grid
+    grid = ([*z0[:i], d, *z0[i + 1 :]] for d in np.linspace(0.0, MAX_DELAY, 11).tolist())
+    z_start = min(grid, key=lambda z: float(np.sum(residuals(z) ** 2)))
     sol = least_squares(
         residuals, np.asarray(z_start), bounds=(np.asarray(lo), np.asarray(hi)), x_scale=np.asarray(x_scale),
         method="trf", jac="2-point", xtol=XTOL, ftol=XTOL, gtol=XTOL, max_nfev=200,

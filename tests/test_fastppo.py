@@ -22,7 +22,6 @@ from amigo_gym.policies.learned import (  # noqa: E402
     FeatureSpec,
     RunningMeanStd,
     env_action,
-    sha256_of,
 )
 from amigo_gym.task.v1 import obs_fields  # noqa: E402
 from amigo_gym.tools.training.fastppo import FastPPOSettings, train  # noqa: E402
@@ -120,7 +119,7 @@ def test_same_seed_same_weights_other_seed_other_weights(tmp_path: Path) -> None
     for k in wa:
         np.testing.assert_array_equal(wa[k], wb[k])
     assert any(not np.array_equal(wa[k], wc[k]) for k in wa)
-    assert sha256_of(tmp_path / "a" / "model.zip") != ""
+    assert sha256_file(tmp_path / "a" / "model.zip") != ""
     ja = json.loads((tmp_path / "a" / "curve.json").read_text())
     jb = json.loads((tmp_path / "b" / "curve.json").read_text())
     assert [r["eval_h_rms_m"] for r in ja] == [r["eval_h_rms_m"] for r in jb]
@@ -146,7 +145,7 @@ def test_resume_gives_the_uninterrupted_result(tmp_path: Path) -> None:
     ck1 = torch.load(tmp_path / "whole" / "checkpoint.pt", weights_only=False)
     ck2 = torch.load(tmp_path / "cut" / "checkpoint.pt", weights_only=False)
     assert ck1["obs_rms"] == ck2["obs_rms"] and ck1["ret_rms"] == ck2["ret_rms"]
-    assert sha256_of(tmp_path / "whole" / "model.zip") == sha256_of(tmp_path / "cut" / "model.zip")
+    assert sha256_file(tmp_path / "whole" / "model.zip") == sha256_file(tmp_path / "cut" / "model.zip")
 
 
 def test_a_second_process_on_the_run_folder_is_refused_and_changes_nothing(
@@ -373,7 +372,7 @@ def test_load_pretrained_checks_sha256(tmp_path: Path) -> None:
     (tmp_path / "m.json").write_text(json.dumps({"algo": "fastppo"}))
     with pytest.raises(ValueError, match="no sha256"):
         load_pretrained(z)
-    (tmp_path / "m.json").write_text(json.dumps({"sha256": sha256_of(z)}))
+    (tmp_path / "m.json").write_text(json.dumps({"sha256": sha256_file(z)}))
     got = load_pretrained(z)
     obs = np.zeros((3, dim), np.float32)
     obs[:, 2] = 1.0

@@ -1,12 +1,7 @@
 r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
 
-AmigoBot-v0 is a configuration of the one robot and task: :class:`AmigoBotEnv` and :class:`AmigoBotVectorEnv` are
-the AmigoBot-v1 classes (:class:`amigo_gym.envs.AmigoBotV1Env`, :class:`amigo_gym.envs.AmigoBotV1VectorEnv`) built
-with :meth:`amigo_gym.task.v1.TrackingParams.v0` of AmigoBot-v0's keywords: ideal actuators, v0's observation
-layout and reward, no randomisation, the wheels rolling at the start, the circle or manoeuvre as a path object. They
-run AmigoBot-v1's compiled step with ideal actuators (:mod:`amigo_gym.sim.fast_v1`; ``kernel="numpy"``: the
-reference, :mod:`amigo_gym.task.v1`'s ideal step) and report v0's info keys. ``env.params`` is that
-``TrackingParams``.
+:class:`AmigoBotEnv` and :class:`AmigoBotVectorEnv` are the AmigoBot-v1 classes built with
+:meth:`amigo_gym.task.v1.TrackingParams.v0` of AmigoBot-v0's keywords (``env.params``), reporting v0's info keys.
 """
 
 from __future__ import annotations
@@ -52,20 +47,14 @@ def make_env_params(
     **settings: Any,
 ) -> TrackingParams:
     """AmigoBot-v0's task (:meth:`amigo_gym.task.v1.TrackingParams.v0`) from the keywords of ``gym.make`` /
-    ``gym.make_vec``. Every keyword accepts a plain mapping as well as its dataclass, so that the settings survive
-    ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's ``--env-kwargs``.
-
-    Args:
-        owner: name of the caller, for error messages.
-        params: AmigoBot-v0's ``TrackingParams`` (an env's ``params``), or a mapping of AmigoBot-v0's settings
-            (``robot`` inside it may be a mapping too); defaults if ``None``.
-        robot: a :class:`RobotParams`, or a mapping of its field names to values (e.g. from a YAML file).
-        **settings: any other of AmigoBot-v0's settings (``dt``, ``radius``, ``speed``, ...); they override
-            those of ``params``.
+    ``gym.make_vec`` of ``owner`` (named in errors): ``params`` (an AmigoBot-v0 env's ``params`` or a mapping of
+    AmigoBot-v0's settings), ``robot`` (a :class:`RobotParams` or a mapping of its fields) and any other setting
+    (overriding ``params``'). Mappings let the settings survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's
+    ``--env-kwargs``.
 
     Raises:
-        TypeError: on an unknown keyword or field, or a ``params`` / ``robot`` of another type.
-        ValueError: on a bad value, naming the field and range (:func:`amigo_gym.task.v0.check_v0`).
+        TypeError: an unknown keyword or field, or a ``params`` / ``robot`` of another type.
+        ValueError: a bad value, naming the field and range (:func:`amigo_gym.task.v0.check_v0`).
     """
     unknown = sorted(k for k in settings if k not in V0_DEFAULTS)
     if unknown:
@@ -257,33 +246,12 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
 
 
 class AmigoBotVectorEnv(_V0Spec, AmigoBotV1VectorEnv):
-    """``N`` AmigoBot tracking tasks stepped as numpy batches (see :class:`amigo_gym.envs.AmigoBotEnv`).
-
-    Args:
-        num_envs: number of robots ``N`` >= 1.
-        max_episode_steps: truncation after this many steps (``None``: never); ``gym.make_vec``
-            passes the registration's 400 unless given.
-        render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
-        autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``
-            (:class:`gymnasium.vector.AutoresetMode`), as in ``SyncVectorEnv``.
-        kernel: the step's implementation (:mod:`amigo_gym.sim.fast_v1`): ``"auto"`` (default: the compiled
-            kernel when numba is installed, unless ``AMIGO_GYM_KERNEL=numpy``; else numpy), ``"numpy"`` (the
-            reference column functions of :mod:`amigo_gym.task.v1`, ideal actuators), ``"numba"`` (the compiled
-            kernel, the same results to 1e-9; needs numba), or ``"numba-parallel"``
-            (the kernel's loops on numba's threads).
-        params, robot, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v0", ...)``.
-
-    Spaces: ``single_action_space = Box(-1, 1, (2,), float32)``, ``action_space`` its batch
-    ``(N, 2)``; ``single_observation_space`` as the single env's, ``observation_space`` ``(N, obs_dim)``.
-    ``step`` accepts actions of shape ``(N, 2)`` (float64 applied exactly; NaN/inf or a wrong
-    shape raise ``ValueError``) and returns rewards ``(N,)`` float64, terminations and truncations
-    ``(N,)`` bool, and infos with the single env's keys as ``(N, ...)`` arrays plus ``_key`` masks.
-    ``reset`` accepts ``seed`` (``None``, an int ``s`` for seeds ``s + i``, or a list of ``N``) and
-    ``options`` with ``"pose"`` (``(3,)`` for all or ``(N, 3)``) and ``"reset_mask"`` (``(N,)`` bool).
-
-    Rendering keeps the last ``trail_length`` (1000) positions of H per robot in a ring buffer, so memory
-    stays flat however many steps are rendered. The environment pickles and deep-copies (also after
-    ``render()``: the renderers are dropped and recreated when next used).
+    """``N`` AmigoBot-v0 tasks stepped as numpy batches: :class:`amigo_gym.envs.AmigoBotV1VectorEnv` (its
+    ``num_envs``, ``max_episode_steps`` (400 from ``gym.make_vec``), ``render_mode``, ``autoreset_mode`` and
+    ``kernel``) on AmigoBot-v0's task; ``params``, ``robot``, ``**settings`` exactly as for
+    ``gym.make("AmigoBot-v0", ...)``. Spaces, seeds, reset options (``"pose"``, ``"reset_mask"``) and infos (the
+    single env's keys as ``(N, ...)`` arrays with ``_key`` masks) as ``SyncVectorEnv`` of :class:`AmigoBotEnv`
+    (docs/env_card.md, "Vector environment").
     """
 
     _v0 = True

@@ -41,11 +41,12 @@ _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
     i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
                              _L.R_CASTOR, _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
+_TERMS = (_TRACK, _SPEED, _HEADING, _SMOOTH)  # the reward terms, task.REWARD_TERMS order
 
 
 def v0_record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
     """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of info records, arguments as :func:`record_info`."""
-    terms = (values[_TRACK], values[_SPEED], values[_HEADING], values[_SMOOTH])
+    terms = [values[i] for i in _TERMS]
     return task.info_dict(
         record[_POSE], record[_H], values[_E], record[_RATES], record[_ANGLES], values[_CASTOR], terms, time
     )
@@ -82,12 +83,7 @@ def record_info(
         "command": record[_COMMAND],
         "wheel_angles": record[_ANGLES],
         "measured_pose": record[_MEASURED],
-        "reward_terms": {
-            "track": values[_TRACK],
-            "speed": values[_SPEED],
-            "heading": values[_HEADING],
-            "smooth": values[_SMOOTH],
-        },
+        "reward_terms": dict(zip(task.REWARD_TERMS, (values[i] for i in _TERMS), strict=True)),
         "time": time,
         **({} if path is None else {"path": path}),
         "true_robot": true_robot,
@@ -198,8 +194,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self, render_mode: str | None = None, *, params: Any = None, kernel: str = "auto", **settings: Any
     ) -> None:
         owner = type(self).__name__
-        self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
-        p = self.params
+        p = self.params = tracking.make_tracking_params(owner, params, **settings)
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be one of {list(RENDER_MODES)} or None, got {render_mode!r}")
         self.render_mode = render_mode
@@ -210,19 +205,16 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._needs_reset = True
         self._ended: bool | None = False  # None: terminated and warned
         self._k = tracking.constants(p)
-        self._kernel: fast_v1.StepKernel | None = None
-        if fast_v1.use_kernel(owner, kernel):
-            self._kernel = fast_v1.StepKernel(self._k)
+        self._kernel = fast_v1.StepKernel(self._k) if fast_v1.use_kernel(owner, kernel) else None
         self._in_kernel = False  # this episode's state lives in the kernel's workspace
         self._steps = 0
         self._delay = 0.0
-        #: the fixed path's feasibility report (None for drawn paths)
-        fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
+        #: the fixed path (None for drawn paths) and its feasibility report (None for drawn paths and AmigoBot-v0)
+        self.path, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`), or None
         self.v0_params = tracking.v0_settings(p)
         self._castor = 0.0  # the castor's rolling angle [rad] (v0's info) on the reference route
         self._goal = (math.nan, math.nan)
-        self.path: Any = fixed
         self._obs_shape: tuple[int, ...] = self.observation_space.shape  # type: ignore[assignment]
         self._ring = np.zeros((self._k.ring_length, 2)) if self._kernel is None else self._kernel.ring
         self._state: tracking.State | None = None
@@ -230,7 +222,6 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._path_info: dict[str, Any] = {}
         self._true_robot: dict[str, float] = {}
 
-    # ------------------------------------------------------------------ gym API
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
@@ -246,8 +237,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._episode = ep
         self._state = st
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
-        self._ring[:, 0] = st.a1 * k.w_max
-        self._ring[:, 1] = st.a2 * k.w_max
+        self._ring[:] = (st.a1 * k.w_max, st.a2 * k.w_max)
         self._ring_step = 0
         self._steps = int(st.steps)
         self._delay = int(ep.lag) * self.params.dt + float(ep.t_switch)
@@ -346,11 +336,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
         # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"]
-        gx, gy = self._goal
-        goal = False
-        if gx == gx:
-            hx, hy = info["h_position"].tolist()
-            goal = tracking.goal_reached(self._k.params, hx, hy, gx, gy)
+        hx, hy = info["h_position"].tolist()
+        goal = bool(tracking.goal_reached(self._k.params, hx, hy, *self._goal))  # False for no goal (NaN)
         if goal:
             terminated = True
             info["end_of_path"] = True
@@ -398,8 +385,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         from amigo_gym.envs.rendering import Renderer
 
         if self._renderer is None or self._renderer.path is not self.path:
-            if self._renderer is not None:
-                self._renderer.close()
+            self.close()
             self._renderer = Renderer(self.params, self.path, self.render_mode)
         frame: NDArray[np.uint8] | None = self._renderer.draw(trail=self._trail, **self._render_state())
         return frame

@@ -66,13 +66,9 @@ def check_reset_options(options: Mapping[str, Any] | None, extra: tuple[str, ...
 
 def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_mode: Any) -> None:
     """Refuse a bad ``num_envs`` (an integer >= 1), ``max_episode_steps`` (>= 1 or None) or ``render_mode``."""
-    if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+    if not _is_int(num_envs) or num_envs < 1:
         raise ValueError(f"{owner}.num_envs must be an integer >= 1, got {num_envs!r}")
-    if max_episode_steps is not None and (
-        isinstance(max_episode_steps, bool)
-        or not isinstance(max_episode_steps, int | np.integer)
-        or max_episode_steps < 1
-    ):
+    if max_episode_steps is not None and (not _is_int(max_episode_steps) or max_episode_steps < 1):
         raise ValueError(f"{owner}.max_episode_steps must be an integer >= 1 or None, got {max_episode_steps!r}")
     if render_mode is not None and render_mode != "rgb_array":
         raise ValueError(f"{owner}.render_mode must be 'rgb_array' or None, got {render_mode!r}")
@@ -194,12 +190,10 @@ def info_row(vinfo: dict[str, Any], i: int) -> dict[str, Any]:
             continue
         if isinstance(v, dict):
             out[k] = info_row(v, i)
+        elif (a := np.asarray(v)).dtype == object:
+            out[k] = a[i]
         else:
-            a = np.asarray(v)
-            if a.dtype == object:
-                out[k] = a[i]
-            else:
-                out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
+            out[k] = float(a[i]) if a.ndim == 1 else a[i].copy()
     return out
 
 

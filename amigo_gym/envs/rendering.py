@@ -12,33 +12,16 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import castor_position, contact_points, h_position
-from amigo_gym.model.params import RobotParams
+from amigo_gym.paths.clothoid import PathSpec
 
-
-class RenderSettings(Protocol):
-    """What the renderer needs of the task settings (a ``TrackingParams``)."""
-
-    @property
-    def robot(self) -> RobotParams: ...
-    @property
-    def termination_distance(self) -> float: ...
-    @property
-    def dt(self) -> float: ...
-
-
-class DrawablePath(Protocol):
-    """What the renderer needs of a path: its length [m] and points at arc lengths ``(..., 2)`` [m] (or
-    ``pose_columns``)."""
-
-    @property
-    def length(self) -> float: ...
-    def point(self, s: ArrayLike) -> NDArray[np.float64]: ...
+if TYPE_CHECKING:
+    from amigo_gym.task.v1 import TrackingParams
 
 
 BACKGROUND = (255, 255, 255)
@@ -55,14 +38,11 @@ POINT_A = (0, 0, 0)
 TEXT = (20, 20, 20)
 
 
-def path_polyline(path: DrawablePath, n: int = 400) -> NDArray[np.float64]:
+def path_polyline(path: PathSpec, n: int = 400) -> NDArray[np.float64]:
     """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
     s = np.linspace(0.0, path.length, n + 1)
-    if hasattr(path, "pose_columns"):
-        q = path.pose_columns(s)
-        return np.stack((np.broadcast_to(q.x, s.shape), np.broadcast_to(q.y, s.shape)), axis=-1).astype(np.float64)
-    pts: NDArray[np.float64] = np.asarray(path.point(s), dtype=np.float64)
-    return pts
+    q = path.pose_columns(s)
+    return np.stack((np.broadcast_to(q.x, s.shape), np.broadcast_to(q.y, s.shape)), axis=-1).astype(np.float64)
 
 
 def _rotated_rect(cx: float, cy: float, heading: float, length: float, width: float) -> NDArray[np.float64]:
@@ -78,7 +58,7 @@ class Renderer:
     """Draws frames of one robot on ``path`` (one per environment; holds the window in ``"human"`` mode), ``size``
     pixels square."""
 
-    def __init__(self, params: RenderSettings, path: DrawablePath, mode: str = "rgb_array", size: int = 600) -> None:
+    def __init__(self, params: TrackingParams, path: PathSpec, mode: str = "rgb_array", size: int = 600) -> None:
         if mode not in ("rgb_array", "human"):
             raise ValueError(f"render mode must be 'rgb_array' or 'human', got {mode!r}")
         try:

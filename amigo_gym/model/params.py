@@ -99,6 +99,23 @@ def check_real(
     return v
 
 
+def check_pair(
+    owner: str, name: str, value: Any, low: float, high: float, *, low_open: bool = False
+) -> tuple[float, float]:
+    """``value`` as a pair of floats ``(a, b)`` with ``a <= b``, each a :func:`check_real` of the interval.
+
+    Raises:
+        ValueError: one line naming ``owner.name``, the interval and the value.
+    """
+    if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 2:
+        rng = _interval(low, high, low_open, False)
+        raise ValueError(f"{owner}.{name} must be a pair (low, high) within {rng}, got {value!r}")
+    a, b = (check_real(owner, f"{name}[{i}]", v, low, high, low_open=low_open) for i, v in enumerate(value))
+    if a > b:
+        raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
+    return a, b
+
+
 def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
     """The interval of :func:`check_real`'s messages, e.g. ``(0, inf]``."""
     lo_b = "(" if low_open else "["
@@ -155,15 +172,9 @@ class RobotParams:
     def __post_init__(self) -> None:
         o = "RobotParams"
         for f in fields(self):
-            if f.name in ("max_acceleration", "max_deceleration", "max_rotation_rate"):
-                low, high = LIMIT_RANGE
-            elif f.name == "max_speed":
-                low, high = SPEED_RANGE
-            elif f.name == "l4":
-                continue
-            else:
-                low, high = LENGTH_RANGE
-            _set(self, f.name, check_real(o, f.name, getattr(self, f.name), low, high))
+            low, high = SPEED_RANGE if f.name == "max_speed" else LIMIT_RANGE if f.name[:4] == "max_" else LENGTH_RANGE
+            if f.name != "l4":
+                _set(self, f.name, check_real(o, f.name, getattr(self, f.name), low, high))
         _set(self, "l4", check_real(o, "l4", self.l4, LIMIT_RANGE[0], self.r1, high_open=True))
 
     @property

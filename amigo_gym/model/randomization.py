@@ -20,18 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.actuators import MAX_DELAY
 from amigo_gym.model.kinematics import Real
-from amigo_gym.model.params import check_range
-
-
-def _interval(owner: str, name: str, value: Any, low: float, high: float) -> tuple[float, float]:
-    """The pair ``value`` as floats, checked within ``[low, high]`` and ordered."""
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
-        raise ValueError(f"{owner}.{name} must be a pair (low, high) within [{low:g}, {high:g}], got {value!r}")
-    lo = check_range(owner, f"{name}[0]", value[0], low, high)
-    hi = check_range(owner, f"{name}[1]", value[1], low, high)
-    if lo > hi:
-        raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
-    return (lo, hi)
+from amigo_gym.model.params import check_pair, check_range
 
 
 @dataclass(frozen=True)
@@ -54,7 +43,7 @@ class Randomization:
                   "position_noise": (0.0, 0.1), "heading_noise": (0.0, 0.2),
                   "wheel_rate_noise": (0.0, 2.0)}  # fmt: skip
         for i, (name, (low, high)) in enumerate(ranges.items()):
-            check = _interval if i < 4 else check_range  # the four ranges, then the noise levels
+            check = check_pair if i < 4 else check_range  # the four ranges, then the noise levels
             object.__setattr__(self, name, check("Randomization", name, getattr(self, name), low, high))
 
     @property
@@ -98,8 +87,7 @@ def make_randomization(value: str | Randomization | Mapping[str, Any] | None) ->
         bad = sorted(str(k) for k in value if k not in names)
         if bad:
             raise ValueError(f"randomize: unknown field(s) {bad}; allowed: {sorted(names)}")
-        kwargs: dict[str, Any] = {str(k): (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
-        return Randomization(**kwargs)
+        return Randomization(**{str(k): v for k, v in value.items()})  # (pairs as lists too: JSON)
     raise ValueError(f"randomize must be a preset name, a Randomization or a mapping, got {type(value).__name__}")
 
 

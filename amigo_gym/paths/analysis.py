@@ -86,15 +86,14 @@ def _grid(path: PathSpec, start: float, stop: float, h_max: float) -> tuple[Arra
         for lap in range(lap0, lap1 + 1):
             pts.extend(b + lap * length for b in base)
     knots = np.unique(np.clip(np.asarray(pts, dtype=np.float64), start, stop))
-    a_list: list[Array] = []
-    b_list: list[Array] = []
+    edges = [knots[:1]]
     for a, b in itertools.pairwise(knots):
         n = max(1, math.ceil((b - a) / h_max))
-        e = a + (b - a) * np.arange(n + 1) / n
+        e = a + (b - a) * np.arange(1, n + 1) / n
         e[-1] = b
-        a_list.append(e[:-1])
-        b_list.append(e[1:])
-    return np.concatenate(a_list), np.concatenate(b_list)
+        edges.append(e)
+    e = np.concatenate(edges)
+    return e[:-1], e[1:]
 
 
 def heading_lag_profile(

@@ -332,17 +332,8 @@ def from_points(
     points: Any, closed: bool = False, *, smoothing: float | None = None, tolerance: float = 1e-3, step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> ClothoidPath:  # fmt: skip
-    """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`).
-
-    ```python
-    import numpy as np, gymnasium as gym, amigo_gym
-    from amigo_gym.paths import from_points
-
-    s = np.linspace(0.0, 2.0 * np.pi, 60, endpoint=False)
-    path = from_points(np.c_[np.cos(s), np.sin(s)], closed=True)
-    env = gym.make("AmigoBot-v1", path=path)
-    ```
-    """
+    """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`; examples:
+    docs/amigobot_v1.md, "Paths of your own")."""
     fit = fit_points(points, closed, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     return fit.path
 

@@ -31,7 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import wheel_rates
 from amigo_gym.model.params import check_range
-from amigo_gym.policies.base import Fields, Params, Policy
+from amigo_gym.policies.base import Fields, Policy
+from amigo_gym.task.v1 import TrackingParams
 
 Array = NDArray[np.float64]
 
@@ -95,7 +96,7 @@ def _body_velocity(f: Fields, o: Array, gain: float, speed_reference: str) -> tu
 
 
 def analytic_body_velocity(
-    obs: ArrayLike, params: Params, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
+    obs: ArrayLike, params: TrackingParams, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
 ) -> tuple[Array, Array]:
     """Commanded ``(v_A [m/s], betadot [rad/s])``, each ``()`` or ``(N,)``, of the law (module docstring) with gain
     ``k`` [1/s] >= 0 for observations ``(d,)`` or ``(N, d)`` made with ``params`` (v0's or v1's)."""
@@ -106,7 +107,7 @@ def analytic_body_velocity(
 
 
 def analytic_wheel_rates(
-    obs: ArrayLike, params: Params, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
+    obs: ArrayLike, params: TrackingParams, gain: float = DEFAULT_GAIN, speed_reference: SpeedReference = "A"
 ) -> Array:
     """Wheel rates ``(..., 2)`` [rad/s] of the analytic law, unclipped (``r1 w1 = v_A + l1 betadot``, ...)."""
     v, bd = analytic_body_velocity(obs, params, gain, speed_reference)
@@ -119,7 +120,7 @@ class AnalyticPolicy(Policy):
 
     def __init__(
         self,
-        params: Params,
+        params: TrackingParams,
         gain: float = DEFAULT_GAIN,
         feedforward_only: bool = False,
         speed_reference: SpeedReference = "A",

@@ -11,8 +11,6 @@ from amigo_gym.model.params import RobotParams
 from amigo_gym.task.v1 import TrackingParams, obs_fields
 
 Array = NDArray[np.float64]
-#: the task settings of either environment
-Params = TrackingParams
 
 
 class Fields:
@@ -25,7 +23,7 @@ class Fields:
             got = f"observation={params.observation!r}" if isinstance(params, TrackingParams) else type(params).__name__
             raise ValueError(f"{owner}.params must be {want}, got {got}")
         self.owner = owner
-        self.params: Params = params
+        self.params: TrackingParams = params
         self.robot: RobotParams = params.robot
         self.names = obs_fields(params)
         self.dim = len(self.names)

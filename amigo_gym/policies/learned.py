@@ -99,8 +99,7 @@ class FeatureSpec:
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
-        kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in self.env_kwargs.items()}
-        return make_tracking_params("FeatureSpec", None, **kw)
+        return make_tracking_params("FeatureSpec", None, **self.env_kwargs)
 
 
 class FeatureBuilder:
@@ -266,10 +265,6 @@ class FastPolicy(Policy):
         return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
 
 
-#: Hex SHA-256 of a file (the manifests' checksums): :func:`amigo_gym.io.sha256_file`
-sha256_of = sha256_file
-
-
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
     """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
     zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
@@ -290,7 +285,7 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
     want = meta.get("sha256") if isinstance(meta, dict) else None
     if not isinstance(want, str) or len(want) != 64:
         raise ValueError(f"load_pretrained: manifest {m} has no sha256 (64 hex digits), got {want!r}")
-    got = sha256_of(p)
+    got = sha256_file(p)
     if got != want.lower():
         raise ValueError(f"load_pretrained: sha256 of {p} is {got}, the manifest {m.name} says {want}")
     with zipfile.ZipFile(p) as z:

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.model.actuators import wheel_rates_columns
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import analytic_tracking_command
-from amigo_gym.policies.base import Fields, Params, Policy
+from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams
 
 Array = NDArray[np.float64]
@@ -44,7 +44,7 @@ DEFAULT_INTEGRAL_LIMIT = 0.1
 DEFAULT_LOOKAHEAD = 0.5
 
 
-def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: Params) -> Array:
+def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) -> Array:
     """The action ``(..., 2)`` in [-1, 1] for speeds ``v`` [m/s] and turn rates ``omega`` [rad/s]: the wheel rates
     ``(v +- l1 omega) / r_i`` divided by ``max(1, |w1| / w_max, |w2| / w_max)``, then by ``w_max``."""
     r = params.robot
@@ -104,7 +104,7 @@ class AnalyticTrackingPolicy(Policy):
 
     def __init__(
         self,
-        params: Params,
+        params: TrackingParams,
         gain: float = DEFAULT_TRACKING_GAIN,
         integral_gain: float | None = None,
         integral_limit: float = DEFAULT_INTEGRAL_LIMIT,

@@ -17,9 +17,8 @@ sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kap
 ``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
 ``Delta w`` of the wheel rates.
 
-AmigoBot-v0's step is AmigoBot-v1's ideal step with v0's settings (:func:`amigo_gym.task.v1.step_columns` of
-:meth:`amigo_gym.task.v1.TrackingParams.v0`), which calls the pieces here on floats or ``(N,)`` columns alike. The
-observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts readers use.
+The observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts
+readers use.
 
 May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
 """
@@ -29,7 +28,6 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -37,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, circle_steady_state, col_sqrt
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, SIGMA_RANGE, RobotParams, check_real, show_value
+from amigo_gym.model.params import HEADING_LIMIT, MIN_SPEED, RobotParams, check_real, show_value
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 
 Array = NDArray[np.float64]
@@ -86,8 +84,9 @@ V0_DEFAULTS: dict[str, Any] = {
 
 
 def check_v0(**settings: Any) -> dict[str, Any]:
-    """AmigoBot-v0's settings, :data:`V0_DEFAULTS` where not given, checked: numbers as Python floats, ``direction``
-    an int, ``preview`` a tuple (``dt=np.float32(0.1)`` is stored as ``0.10000000149011612``).
+    """The keywords of :class:`~amigo_gym.task.v1.TrackingParams` of AmigoBot-v0's settings (:data:`V0_DEFAULTS`
+    where not given; ``path`` a :class:`~amigo_gym.paths.CirclePath` or :class:`~amigo_gym.paths.ManoeuvrePath`),
+    with the checks ``TrackingParams`` does not make (it checks the rest, in v0's ranges).
 
     ``robot`` a :class:`~amigo_gym.model.params.RobotParams`; ``dt`` in [1e-6, 2] s; ``radius`` of the circle H
     follows in (robot.l3, 1e3] m; ``speed`` of A in [1e-6, robot.max_speed] m/s; ``direction`` +1 (left, eq. 6) or
@@ -112,32 +111,16 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     robot = s["robot"]
     if not isinstance(robot, RobotParams):
         raise ValueError(f"{o}.robot must be a RobotParams, got {show_value(robot)}")
-
-    def real(name: str, low: float, high: float, **kw: bool) -> None:
-        s[name] = check_real(o, name, s[name], low, high, **kw)
-
-    real("dt", 1e-6, 2.0)
-    real("radius", robot.l3, 1e3, low_open=True)
-    real("speed", MIN_SPEED, robot.max_speed)
+    s["speed"] = check_real(o, "speed", s["speed"], MIN_SPEED, robot.max_speed)
+    s["radius"] = check_real(o, "radius", s["radius"], robot.l3, 1e3, low_open=True)
+    s["straight_length"] = check_real(o, "straight_length", s["straight_length"], 0.0, 1e3)
+    s["termination_distance"] = check_real(o, "termination_distance", s["termination_distance"], 1e-3, 10.0)
     d = s["direction"]
     if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
         raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
     s["direction"] = int(d)
     if not isinstance(s["path"], str) or s["path"] not in ("circle", "manoeuvre"):
         raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(s['path'])}")
-    s["path"] = str(s["path"])
-    real("straight_length", 0.0, 1e3)
-    real("termination_distance", 1e-3, 10.0)
-    real("init_position_noise", 0.0, s["termination_distance"] / 2)
-    real("init_heading_noise", 0.0, math.pi / 4)
-    real("error_scale", 1e-6, 10.0)
-    pv = s["preview"]
-    if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
-        raise ValueError(f"{o}.preview must be a sequence of distances in [0, 10] m, got {show_value(pv)}")
-    s["preview"] = tuple(check_real(o, f"preview[{i}]", x, 0.0, 10.0) for i, x in enumerate(pv))
-    for name in ("sigma_track", "sigma_speed", "sigma_smooth"):
-        real(name, *SIGMA_RANGE)
-    real("smooth_weight", 0.0, 1.0, high_open=True)
     # drivable: the straight roll at the start, the exact steady state on the circle; the rates are linear in the
     # speed, so at most speed * w_max / need fits
     v, radius = s["speed"], s["radius"]
@@ -147,16 +130,19 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     need = v / r_min
     if need > w_max:
         raise ValueError(
-            f"TrackingParams.v0: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
+            f"{o}: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
             f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
         )
     rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
     need = max(abs(rates[0]), abs(rates[1]))
     if not need <= w_max:
         raise ValueError(
-            f"TrackingParams.v0: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
+            f"{o}: speed {v:g} m/s on a {radius:g} m circle needs {need:.3g} rad/s on the outer "
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
+    straight = s.pop("straight_length")
+    d = s["direction"]
+    s["path"] = CirclePath(radius, direction=d) if s["path"] == "circle" else ManoeuvrePath(radius, straight, d)
     return s
 
 
@@ -240,22 +226,14 @@ def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Arr
 
 
 def action_pair(action: ArrayLike) -> tuple[float, float]:
-    """:func:`validate_action` of one robot's action, as two Python floats (the same checks and errors).
-
-    A float32 or float64 array of shape ``(2,)`` (what agents and ``action_space.sample()`` give) is
-    checked directly: ``tolist`` gives the exact float64 values, and ``a - a == 0`` holds exactly for
-    finite ``a`` (``inf - inf`` and ``nan - nan`` are NaN). Anything else goes through
-    :func:`validate_action`.
-    """
-    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in _PAIR_CHARS:
+    """:func:`validate_action` of one robot's action, as two Python floats (the same checks and errors); a float32
+    or float64 ``(2,)`` array is checked directly (``a - a == 0`` holds exactly for finite ``a`` only)."""
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.char in ("f", "d"):
         a1, a2 = action.tolist()
         if a1 - a1 == 0.0 and a2 - a2 == 0.0:
             return a1, a2
     b1, b2 = validate_action(action).tolist()
     return b1, b2
-
-
-_PAIR_CHARS = ("f", "d")
 
 
 def bound_angle(b: Real) -> Real:
@@ -326,12 +304,6 @@ def curvature_feature(curvature: Real, l3: float) -> Real:
     return clip(curvature * l3, -1.0, 1.0)
 
 
-def observe_tail(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real, Real]:
-    """The observation's last four fields (:data:`OBS_TAIL`): :func:`observe_rates`, then :func:`observe_reference`."""
-    rate1, rate2, speed_error = observe_rates(w1, w2, v, v_ref, w_max, v_max)
-    return rate1, rate2, speed_error, observe_reference(v_ref, v_max)
-
-
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
     """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
     v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
@@ -377,7 +349,8 @@ def observe_columns(
     return (
         *observe_head(e, sin_psi, cos_psi, curvature, l3, error_scale, e_max),
         *ahead,
-        *observe_tail(w1, w2, v, v_ref, w_max, v_max),
+        *observe_rates(w1, w2, v, v_ref, w_max, v_max),
+        observe_reference(v_ref, v_max),
     )
 
 
@@ -457,13 +430,5 @@ def info_dict(
     ``error`` H's cross-track error [m], ``rates`` the wheel rates [rad/s], ``angles`` the wheel angles and
     ``castor`` the castor's [rad], ``terms`` the 4 reward terms (:data:`REWARD_TERMS` order), ``time`` [s]: any
     types, handed out as they are."""
-    return {
-        "pose": pose,
-        "h_position": h_position,
-        "cross_track_error": error,
-        "wheel_rates": rates,
-        "wheel_angles": angles,
-        "castor_angle": castor,
-        "reward_terms": dict(zip(REWARD_TERMS, terms, strict=True)),
-        "time": time,
-    }
+    values = (pose, h_position, error, rates, angles, castor, dict(zip(REWARD_TERMS, terms, strict=True)), time)
+    return dict(zip(INFO_KEYS, values, strict=True))

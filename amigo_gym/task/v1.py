@@ -65,10 +65,10 @@ from amigo_gym.model.kinematics import (
     h_from_a,
 )
 from amigo_gym.model.numeric import clip
-from amigo_gym.model.params import RobotParams, check_range, show_value
+from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
-from amigo_gym.paths.clothoid import PathLoops
+from amigo_gym.paths.clothoid import STATUS_END, PathLoops
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     V0_DEFAULTS,
@@ -90,10 +90,7 @@ from amigo_gym.task.v0 import (
 if TYPE_CHECKING:
     from amigo_gym.paths import Feasibility
 
-#: :data:`amigo_gym.paths.STATUS_END`: the projection is clamped at an open path's end
-STATUS_END = 2
 
-REWARD_TERMS: tuple[str, ...] = ("track", "speed", "heading", "smooth")
 #: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
 PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
 #: the families ``"mixed"`` draws from, with equal probability
@@ -126,24 +123,6 @@ _CHOICES: tuple[tuple[str, tuple[Any, ...]], ...] = (
     ("start_at_rest", (True, False)),
     ("feasibility", FEASIBILITY_MODES),
 )
-#: the range checks whose low (high) end is open
-_LOW_OPEN = frozenset({"radius", "profile_accel", "profile_decel", "profile_duration", "termination_distance"})
-_HIGH_OPEN = frozenset({"smooth_weight"})
-
-
-def _pair_or_float(owner: str, name: str, value: Any, low: float, high: float) -> float | tuple[float, float]:
-    """A float in ``(low, high]`` or a pair ``(a, b)`` with ``low < a <= b <= high``."""
-    if isinstance(value, (tuple, list)) and not isinstance(value, str):
-        if len(value) != 2:
-            raise ValueError(
-                f"{owner}.{name} must be a number or a pair (low, high) in ({low:g}, {high:g}], got {value!r}"
-            )
-        a = check_range(owner, f"{name}[0]", value[0], low, high, low_open=True)
-        b = check_range(owner, f"{name}[1]", value[1], low, high, low_open=True)
-        if a > b:
-            raise ValueError(f"{owner}.{name} must have low <= high, got {value!r}")
-        return (a, b)
-    return check_range(owner, name, value, low, high, low_open=True)
 
 
 @dataclass(frozen=True)
@@ -265,43 +244,38 @@ class TrackingParams:
 
             s(self, "path", check_path(self.path, "AmigoBot-v1"))
         # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
-        # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s
+        # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s. (name, low, high, low end open)
         v0 = self.ideal_actuators and self.observation == "v0" and self.reward == "v0"
         r = self.robot
-        sigma_high = 1e6 if v0 else 10.0
         ranges = (
-            ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0))),
-            ("radius", r.l3, 1e3),
-            ("profile_accel", 0.0, r.max_acceleration),
-            ("profile_decel", 0.0, r.max_deceleration),
-            ("profile_duration", 0.0, 1e5),
-            ("termination_distance", 0.0, 10.0),
-            ("init_heading_noise", 0.0, math.pi / 4),
-            ("error_scale", 1e-6 if v0 else 1e-4, 10.0),
-            ("preview_scale", 1e-2, 10.0),
-            ("sigma_track", 1e-6, sigma_high),
-            ("sigma_speed", 1e-6, sigma_high),
-            ("sigma_smooth", 1e-6, sigma_high),
-            ("smooth_weight", 0.0, 1.0),
-            ("goal_tolerance", 0.0, 10.0),
+            ("dt", *((1e-6, 2.0) if v0 else (MIN_DT, 1.0)), False),
+            ("radius", r.l3, 1e3, True),
+            ("profile_accel", 0.0, r.max_acceleration, True),
+            ("profile_decel", 0.0, r.max_deceleration, True),
+            ("profile_duration", 0.0, 1e5, True),
+            ("termination_distance", 0.0, 10.0, True),
+            ("init_heading_noise", 0.0, math.pi / 4, False),
+            ("error_scale", 1e-6 if v0 else 1e-4, 10.0, False),
+            ("preview_scale", 1e-2, 10.0, False),
+            *((name, 1e-6, 1e6 if v0 else 10.0, False) for name in ("sigma_track", "sigma_speed", "sigma_smooth")),
+            ("goal_tolerance", 0.0, 10.0, False),
         )
-        for name, low, high in ranges:
-            value = getattr(self, name)
-            s(
-                self,
-                name,
-                check_range(o, name, value, low, high, low_open=name in _LOW_OPEN, high_open=name in _HIGH_OPEN),
-            )
+        for name, low, high, low_open in ranges:
+            s(self, name, check_range(o, name, getattr(self, name), low, high, low_open=low_open))
+        s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
         high = self.termination_distance / 2
         s(self, "init_position_noise", check_range(o, "init_position_noise", self.init_position_noise, 0.0, high))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
         if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
             raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
-        s(self, "speed", _pair_or_float(o, "speed", self.speed, 0.0, r.max_speed))
-        if isinstance(self.preview, (str, bytes)) or not hasattr(self.preview, "__iter__"):
-            raise ValueError(f"{o}.preview must be a sequence of distances in (0, 5] m, got {self.preview!r}")
+        check = check_pair if isinstance(self.speed, tuple | list) else check_range  # a pair drawn per episode
+        s(self, "speed", check(o, "speed", self.speed, 0.0, r.max_speed, low_open=True))
+        pv = self.preview
         far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
+        if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
+            within = f"{'(' if near_open else '['}0, {far:g}]"
+            raise ValueError(f"{o}.preview must be a sequence of distances in {within} m, got {show_value(pv)}")
         prev = (check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
         s(self, "preview", tuple(prev))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
@@ -313,19 +287,11 @@ class TrackingParams:
         :func:`amigo_gym.task.v0.check_v0`) with ideal actuators, v0's observation and reward, no randomisation, the
         wheels rolling at the start, the circle or manoeuvre as a path object and ``feasibility="off"`` (``check_v0``
         checked that the robot can drive it)."""
-        s = check_v0(**settings)
-        radius, d, straight = s.pop("radius"), s.pop("direction"), s.pop("straight_length")
-        if s.pop("path") == "circle":
-            path: CirclePath | ManoeuvrePath = CirclePath(radius=radius, direction=d)
-        else:
-            path = ManoeuvrePath(radius=radius, straight_length=straight, direction=d)
-        v0: dict[str, Any] = {"ideal_actuators": True, "observation": "v0", "reward": "v0", "start_at_rest": False}
-        return cls(**s, **v0, path=path, radius=radius, direction=d, feasibility="off")
-
-    @property
-    def simulated_robot(self) -> RobotParams:
-        """The robot that is simulated before randomisation: ``true_robot``, or the nominal one."""
-        return self.robot if self.true_robot is None else self.true_robot
+        kw = check_v0(**settings) | {"ideal_actuators": True, "observation": "v0", "reward": "v0"}
+        try:
+            return cls(**kw, start_at_rest=False, feasibility="off")
+        except ValueError as exc:  # the message names the keyword of v0's settings
+            raise ValueError(str(exc).replace("TrackingParams", "TrackingParams.v0", 1)) from None
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -460,19 +426,12 @@ def make_tracking_params(
     if isinstance(tr, Mapping):
         settings["true_robot"] = _from_mapping(owner, "true_robot", robot, tr)
     act = settings.get("actuators")
-    if act_file:
-        if isinstance(act, Mapping):
-            act = {**act_file, **act}
-        else:
-            act = replace(base.actuators if act is None else act, **act_file)
-        settings["actuators"] = act
-    if isinstance(act, Mapping):
-        settings["actuators"] = _from_mapping(owner, "actuators", ActuatorParams(), act)
+    if act_file or isinstance(act, Mapping):  # a mapping's fields win over the file's
+        given = act if isinstance(act, Mapping) else {}
+        start = ActuatorParams() if isinstance(act, Mapping) else base.actuators if act is None else act
+        settings["actuators"] = _from_mapping(owner, "actuators", start, {**act_file, **given})
     if "randomize" in settings:
         settings["randomize"] = make_randomization(settings["randomize"])
-    for name in ("preview", "speed"):
-        if isinstance(settings.get(name), list):
-            settings[name] = tuple(settings[name])
     return replace(base, **settings) if settings else base
 
 
@@ -564,24 +523,18 @@ def v0_settings(p: TrackingParams) -> dict[str, Any] | None:
     (``CirclePath(radius, direction=...)`` or ``ManoeuvrePath(radius, straight_length, direction)``).
     """
     path = p.path
-    if (
-        type(path) not in (CirclePath, ManoeuvrePath)
-        or not (p.ideal_actuators and p.observation == "v0" and p.reward == "v0")
-        or p.randomize.has_noise
-        or p.start_at_rest
-        or isinstance(p.speed, tuple)
-        or p.speed_profile != "constant"
-        or p.goal_tolerance != 0.0
-    ):
+    if type(path) not in (CirclePath, ManoeuvrePath) or not (p.ideal_actuators and p.observation == p.reward == "v0"):
         return None
     kind = "circle" if type(path) is CirclePath else "manoeuvre"
     of_path = {"radius": path.radius, "direction": path.direction, "path": kind}
     of_path["straight_length"] = getattr(path, "straight_length", 1.0)
     s = {k: of_path[k] if k in of_path else getattr(p, k) for k in V0_DEFAULTS}
     try:
-        return s if TrackingParams.v0(**s).path == path else None
-    except ValueError:
+        q = TrackingParams.v0(**s)
+    except ValueError:  # e.g. a speed range
         return None
+    same = ("path", "randomize", "start_at_rest", "speed_profile", "goal_tolerance")  # what v0's settings fix
+    return s if all(getattr(q, k) == getattr(p, k) for k in same) else None
 
 
 class Episode(NamedTuple):
@@ -621,7 +574,7 @@ class State(NamedTuple):
 
 class Outcome(NamedTuple):
     """What the environments report about a state: the observation (:func:`obs_fields` order, float64), the reward
-    ``terms`` (:data:`REWARD_TERMS` order) and their product, ``terminated``, true H ``h_x, h_y`` [m], its
+    ``terms`` (:data:`~amigo_gym.task.v0.REWARD_TERMS`) and their product, ``terminated``, true H ``h_x, h_y`` [m], its
     cross-track ``error`` [m], the true and reference speeds of A [m/s], the measured pose [m, m, rad] and wheel
     rates [rad/s], and ``end_of_path`` (H reached an open path's end: a success)."""
 
@@ -684,7 +637,7 @@ def measured_differs(position_noise: float, heading_noise: float, l3_differs: bo
 
 def end_flags(e: Real, termination_distance: float, closed: Any, status: Any) -> tuple[Any, Any]:
     """``(terminated, at_end)``: ``|e| > termination_distance`` [m], or H reached an open path's end (``status`` is
-    :data:`STATUS_END`, ``closed`` 0)."""
+    :data:`amigo_gym.paths.STATUS_END`, ``closed`` 0)."""
     at_end = (status == STATUS_END) & (closed == 0)
     terminated = off_path(np.abs(e), termination_distance) | at_end
     return terminated, at_end
@@ -772,11 +725,7 @@ def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> A
 
 def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
     """The entry of :data:`END_CONDITIONS` for one robot's step."""
-    if goal:
-        return "goal"
-    if end_of_path:
-        return "end_of_path"
-    return "off_path" if terminated else ""
+    return "goal" if goal else "end_of_path" if end_of_path else "off_path" if terminated else ""
 
 
 class Envelope(NamedTuple):
@@ -926,10 +875,9 @@ def fixed_path(p: TrackingParams) -> Any:
     """The path of a task whose path is not drawn per episode, else ``None`` (``"random"`` and ``"mixed"``)."""
     if not isinstance(p.path, str):
         return p.path
-    extra = tuple(sorted(dict(p.path_params).items()))
-    if p.path in ("circle", "manoeuvre"):
-        return _cached_family(p.path, (("direction", p.direction), ("radius", p.radius), *extra))
-    return _cached_family(p.path, extra) if p.path in ("figure8", "lane_change") else None
+    if p.path in ("circle", "manoeuvre"):  # (path_params: sorted pairs)
+        return _cached_family(p.path, (("direction", p.direction), ("radius", p.radius), *p.path_params))
+    return _cached_family(p.path, p.path_params) if p.path in ("figure8", "lane_change") else None
 
 
 #: bytes of family paths a process keeps built (the least recently used dropped beyond it)
@@ -968,8 +916,7 @@ def _cached_family(
 
 def random_pool_path(p: TrackingParams, path_id: int, loops: PathLoops | None = None) -> Any:
     """Random path number ``path_id`` of the pool: ``random_path(default_rng(path_id), **path_params)``, cached."""
-    extra = tuple(sorted(dict(p.path_params).items())) if p.path in ("random", "mixed") else ()
-    return _cached_family("random", extra, rng_seed=path_id, loops=loops)
+    return _cached_family("random", p.path_params if p.path in ("random", "mixed") else (), path_id, loops)
 
 
 def draw_path(
@@ -1004,7 +951,7 @@ def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, 
     d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
     key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
-    true = p.simulated_robot
+    true = p.robot if p.true_robot is None else p.true_robot  # the simulated robot before randomisation
     delay = min(p.actuators.delay + d.delay, actuators.MAX_DELAY)
     lag, t_switch = actuators.delay_split(delay, p.dt)
     t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
