@@ -158,12 +158,11 @@ def unit_speed_nodes(
 ) -> tuple[float, float, float, float, float]:
     """``(x', y', theta', cos theta', sin theta')`` of ``advance(x, y, theta, 1, 0, w0, alpha, t)`` on a node buffer of
     ``3 (nn + 1)``; for ``alpha == 0`` in closed form: the chord ``t sin(h)/h`` along ``theta + h``, ``h = w0 t/2``."""
-    if alpha == 0.0:
+    if alpha == 0.0:  # the end's cosine and sine by the angle sum mid + h: two sincos
         h = 0.5 * w0 * t
-        chord = t if h == 0.0 else t * (math.sin(h) / h)
-        mid = theta + h
-        end = theta + w0 * t
-        return x + chord * math.cos(mid), y + chord * math.sin(mid), end, math.cos(end), math.sin(end)
+        ch, sh, cm, sm = math.cos(h), math.sin(h), math.cos(theta + h), math.sin(theta + h)
+        chord = t if h == 0.0 else t * (sh / h)
+        return x + chord * cm, y + chord * sm, theta + w0 * t, cm * ch - sm * sh, sm * ch + cm * sh
     m = nn + 1
     unit_speed_phases(buf, 0, theta, w0, alpha, t, nodes, j, nn)
     cos_sin_nodes(buf, 0, m, m)
