@@ -26,7 +26,6 @@ from amigo_gym.model.actuators import (
     actuator_step,
     clip_setpoints,
     delay_split,
-    make_ring,
     ramp,
     ring_length,
     ring_read,
@@ -141,8 +140,7 @@ def test_delay_split_and_ring() -> None:
             m, _ = delay_split(float(d), dt)
             assert m + 2 <= ring_length(dt)
     # the ring: slot j % length holds the command of step j
-    ring = make_ring(4, 1.0, 2.0)
-    assert ring.shape == (4, 2) and np.all(ring[:, 0] == 1.0) and np.all(ring[:, 1] == 2.0)
+    ring = np.array([[1.0, 2.0]] * 4)
     for k in range(10):
         ring_write(ring, k, 10.0 + k, -10.0 - k)
         assert ring_read(ring, k, 0) == ((1.0, 2.0) if k == 0 else (9.0 + k, -9.0 - k)) + (10.0 + k, -10.0 - k)
@@ -150,8 +148,8 @@ def test_delay_split_and_ring() -> None:
             assert ring_read(ring, k, 2) == (7.0 + k, -7.0 - k, 8.0 + k, -8.0 - k)
     with pytest.raises(ValueError, match="lag"):
         ring_read(ring, 5, 3)
-    batch = make_ring(3, np.zeros(2), np.ones(2))
-    assert batch.shape == (2, 3, 2)
+    batch = np.zeros((2, 3, 2))
+    batch[..., 1] = 1.0
     ring_write(batch, 0, np.array([5.0, 6.0]), np.array([7.0, 8.0]))
     o1, o2, n1, n2 = ring_read(batch, 0, np.array([0, 1]))
     assert o1.tolist() == [0.0, 0.0] and o2.tolist() == [1.0, 1.0]
@@ -307,7 +305,7 @@ def _run_delayed(state: tuple, cmds: Array, init: Array, delay: Array, dt: float
     """Issue ``cmds[k]`` ((K, 2, n)) at steps of ``dt``, each held for ``repeat`` steps of ``dt / repeat``."""
     h = dt / repeat
     lag, f = delay_split(delay, h)
-    ring = make_ring(ring_length(h), init[0], init[1])
+    ring = np.repeat(np.stack((init[0], init[1]), -1)[:, None], ring_length(h), axis=1)  # (n, length, 2)
     s: ActuatorStep | None = None
     for k in range(len(cmds) * repeat):
         ring_write(ring, k, cmds[k // repeat][0], cmds[k // repeat][1])

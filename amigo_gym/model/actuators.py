@@ -143,16 +143,6 @@ def ring_length(dt: float, max_delay: float = MAX_DELAY) -> int:
     return int(m) + 2
 
 
-def make_ring(length: int, w1c: Real, w2c: Real) -> NDArray[np.float64]:
-    """A ring of ``length`` commands, each ``(w1c, w2c)`` [rad/s] (columns ``()`` or ``(N,)``): ``(length, 2)`` or
-    ``(N, length, 2)``; slot ``j % length`` holds the command of step ``j``."""
-    shape = np.broadcast_shapes(np.shape(w1c), np.shape(w2c))
-    ring = np.empty((*shape, length, 2))
-    ring[..., 0] = np.asarray(w1c)[..., None]
-    ring[..., 1] = np.asarray(w2c)[..., None]
-    return ring
-
-
 def ring_write(ring: NDArray[np.float64], step: int, w1c: Real, w2c: Real) -> None:
     """Store the command ``(w1c, w2c)`` [rad/s] of ``step >= 0`` in its slot of ``ring``, in place."""
     slot = ring_slot(step, ring.shape[-2])

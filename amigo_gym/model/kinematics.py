@@ -53,11 +53,6 @@ def col_tan(x: Real) -> Real:
     return np.tan(x) if isinstance(x, np.ndarray) else float(np.tan(x))
 
 
-def cos_sin(x: Real) -> tuple[Real, Real]:
-    """``(cos x, sin x)`` from ``t = tan(x / 2)`` (:func:`half_tan_cos_sin`), within about 2e-16 of numpy's."""
-    return half_tan_cos_sin(col_tan(0.5 * x))
-
-
 def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:
     """``(cos x, sin x)`` from ``t = tan(x / 2)``: ``((1 - t^2) / (1 + t^2), 2 t / (1 + t^2))``."""
     t2 = t * t
