@@ -72,7 +72,8 @@ def _sweep(args: list[str], **kw: object) -> subprocess.Popen[str]:
     )
 
 
-def _finish(p: subprocess.Popen[str], timeout: float = 120) -> str:
+def _finish(p: subprocess.Popen[str], timeout: float = 400) -> str:
+    """A worker's output; ``timeout`` only guards against a hang (a loaded 2-core machine takes ~2 min)."""
     out, _ = p.communicate(timeout=timeout)
     assert p.returncode == 0, out[-3000:]
     return out
