@@ -536,12 +536,14 @@ _K_SIZE = K_O + 8 * _BLOCK
 
 @_jit
 def _ideal_block(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int
-) -> None:
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64,
+    exps: F64,
+) -> None:  # fmt: skip
     """:func:`_ideal_move` of the rows ``i0:i1`` (at most :data:`_BLOCK`) on a circle or manoeuvre path with the v0
     observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
     columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
-    evaluation; the stores into ``ws`` and ``obs``. The stages without calls to the C library vectorise."""
+    evaluation; the stores into ``ws``, ``obs`` and :func:`_ideal_rows`' ``rec`` and ``exps``. The stages without
+    calls to the C library vectorise."""
     k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
     m = i1 - i0
     dt, l3 = c[L.C_DT], c[L.C_L3]
@@ -610,6 +612,10 @@ def _ideal_block(
             row[L.W_X], row[L.W_Y], row[L.W_BETA], row[L.W_W1], row[L.W_W2], 0.0, 0.0, 0.0, 0.0, 0.0
         )
         row[L.W_END] = 0.0
+        _record_entries(row, rec[i])
+        exps[i, 0] = row[L.W_ARG_T]
+        exps[i, 1] = row[L.W_ARG_V]
+        exps[i, 2] = row[L.W_ARG_S]
         for f in range(4):
             obs[i, f] = k[K_O + f * _BLOCK + j]
         for f in range(4):
@@ -704,20 +710,19 @@ def _ideal_rows(
         i0 = b * _BLOCK
         i1 = min(i0 + _BLOCK, ws.shape[0])
         if staged and not ws[i0:i1, L.W_L3D].any():
-            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1)
-        else:
-            for i in range(i0, i1):
-                row = ws[i]
-                _no_draws(row)
-                c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-                v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
-                pv = flat[starts[i] : stops[i]]
-                _ideal_move(c, pv, row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
+            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec, exps)
+            continue
         for i in range(i0, i1):
-            _record_entries(ws[i], rec[i])
-            exps[i, 0] = ws[i, L.W_ARG_T]
-            exps[i, 1] = ws[i, L.W_ARG_V]
-            exps[i, 2] = ws[i, L.W_ARG_S]
+            row = ws[i]
+            _no_draws(row)
+            c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
+            v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
+            pv = flat[starts[i] : stops[i]]
+            _ideal_move(c, pv, row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
+            _record_entries(row, rec[i])
+            exps[i, 0] = row[L.W_ARG_T]
+            exps[i, 1] = row[L.W_ARG_V]
+            exps[i, 2] = row[L.W_ARG_S]
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
