@@ -613,12 +613,9 @@ def _ideal_block(
         )
         row[L.W_END] = 0.0
         _record_entries(row, rec[i])
-        exps[i, 0] = row[L.W_ARG_T]
-        exps[i, 1] = row[L.W_ARG_V]
-        exps[i, 2] = row[L.W_ARG_S]
+        exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
         for f in range(4):
             obs[i, f] = k[K_O + f * _BLOCK + j]
-        for f in range(4):
             obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
     curvature, straight = c[L.C_DIRECTION] / c[L.C_RADIUS], c[L.C_STRAIGHT]
     circle = c[L.C_PATH_KIND] == L.PATH_CIRCLE
@@ -720,9 +717,7 @@ def _ideal_rows(
             pv = flat[starts[i] : stops[i]]
             _ideal_move(c, pv, row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
             _record_entries(row, rec[i])
-            exps[i, 0] = row[L.W_ARG_T]
-            exps[i, 1] = row[L.W_ARG_V]
-            exps[i, 2] = row[L.W_ARG_S]
+            exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
