@@ -20,7 +20,7 @@ from gymnasium.vector import AutoresetMode
 
 import amigo_gym  # noqa: F401
 from amigo_gym.envs import AmigoBotV1VectorEnv
-from amigo_gym.sim import fast_v1
+from amigo_gym.sim import fast_v1, layout_v1
 
 pytest.importorskip("numba")
 
@@ -381,3 +381,33 @@ def test_pickled_env_continues_identically_in_another_process(tmp_path: Path) ->
     assert got["reward"].tobytes() == np.stack([r[1] for r in res]).tobytes()
     assert got["pose"].tobytes() == np.stack([r[4]["pose"] for r in res]).tobytes()
     assert got["track"].tobytes() == np.stack([r[4]["reward_terms"]["track"] for r in res]).tobytes()
+
+
+@pytest.mark.parametrize("path", ["circle", "manoeuvre"])
+@pytest.mark.parametrize("n", [1, 7, 300])
+def test_ideal_blocks_equal_the_row_step(path: str, n: int) -> None:
+    """AmigoBot-v0's step by blocks (``_kernels_v1._ideal_block``) equals ``ideal_rows``' row loop bit for bit (rows
+    flagged ``l3_differs`` with the nominal ``l3`` take it; the same values) and the general row step (``step_rows``,
+    the C library's ``tan``) to 1e-12 relative to ``1 + |value|``, over random actions with restarts."""
+    envs = [
+        gym.make_vec("AmigoBot-v0", n, vectorization_mode="vector_entry_point", path=path, max_episode_steps=25)
+        for _ in range(3)
+    ]
+    envs[1].unwrapped._batch.ideal = False  # type: ignore[attr-defined]
+    outs = [e.reset(seed=n) for e in envs]
+    np.testing.assert_array_equal(outs[0][0], outs[1][0])
+    rng = np.random.default_rng(n)
+    ended = 0
+    for t in range(60):
+        a = rng.uniform(-1.0, 1.0, (n, 2))
+        envs[2].unwrapped._batch.ws[:, layout_v1.W_L3D] = 1.0  # type: ignore[attr-defined]
+        r = [e.step(a) for e in envs]
+        envs[2].unwrapped._batch.ws[:, layout_v1.W_L3D] = 0.0  # type: ignore[attr-defined]
+        _equal_results(r[0], r[2], f"step {t}: rows", exact=True)
+        for name, x, y in zip(("obs", "reward", "terminated", "truncated"), r[0], r[1], strict=False):
+            np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12, err_msg=f"step {t}: {name}")
+        for key, x in r[0][4].items():
+            if key != "final_obs" and not isinstance(x, dict) and x.dtype != object:
+                np.testing.assert_allclose(x, r[1][4][key], rtol=1e-12, atol=1e-12, err_msg=f"step {t}: {key}")
+        ended += int((r[0][2] | r[0][3]).sum())
+    assert ended > 0

@@ -491,27 +491,139 @@ def _ideal_motion(c: F64, ws: F64, w1: float, w2: float) -> tuple[float, float, 
 
 
 @_jit
+def _ideal_arc(
+    c: F64, x: float, y: float, beta: float, w1: float, w2: float, v: float, bdot: float, h: float, t_h: float,
+    t_m: float, al1: float, al2: float, castor: float,
+) -> tuple[float, float, float, float, float, float, float, float]:  # fmt: skip
+    # the exact arc step over dt at the wheel rates (w1, w2): (x, y, beta, cos, sin, alpha1, alpha2, castor)
+    dt = c[L.C_DT]
+    x1, y1, cb, sb = _arc_from_tangents(x, y, v, dt, h, t_h, t_m)
+    castor_rate = kinematics.castor_rate_float(v, bdot, c[L.C_L5], c[L.C_R3])
+    return (x1, y1, task.bound_angle_float(beta + bdot * dt), cb, sb, kinematics.advance_angle(al1, w1, dt),
+            kinematics.advance_angle(al2, w2, dt), kinematics.advance_angle(castor, castor_rate, dt))  # fmt: skip
+
+
+@_jit
 def _ideal_move(
     c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float, v: float,
     bdot: float, h: float, t_h: float, t_m: float,
 ) -> None:  # fmt: skip
     """``tracking._ideal_step``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact arc step
     with ``t_h = tan(h / 2)``, ``t_m = tan((beta + h) / 2)``, then the evaluation."""
-    dt = c[L.C_DT]
-    beta = ws[L.W_BETA]
-    x1, y1, cb, sb = _arc_from_tangents(ws[L.W_X], ws[L.W_Y], v, dt, h, t_h, t_m)
+    x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
+        c, ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], w1, w2, v, bdot, h, t_h, t_m, ws[L.W_AL1], ws[L.W_AL2], ws[L.W_CASTOR]
+    )
     da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, ws[L.W_W1], ws[L.W_W2], c1, c2, ws[L.W_A1], ws[L.W_A2])
     ws[L.W_X] = x1
     ws[L.W_Y] = y1
-    ws[L.W_BETA] = task.bound_angle_float(beta + bdot * dt)
+    ws[L.W_BETA] = b1
     ws[L.W_W1] = w1
     ws[L.W_W2] = w2
-    ws[L.W_AL1] = kinematics.advance_angle(ws[L.W_AL1], w1, dt)
-    ws[L.W_AL2] = kinematics.advance_angle(ws[L.W_AL2], w2, dt)
-    ws[L.W_CASTOR] = kinematics.advance_angle(
-        ws[L.W_CASTOR], kinematics.castor_rate_float(v, bdot, c[L.C_L5], c[L.C_R3]), dt
-    )
+    ws[L.W_AL1] = al1
+    ws[L.W_AL2] = al2
+    ws[L.W_CASTOR] = castor
     _finish(c, pv, ws, obs, v, cb, sb, da1, da2, c1, c2, w1, w2)
+
+
+#: rows per block of :func:`_ideal_block`, and its scratch: columns of ``_BLOCK`` floats each, on the stack (``K_O``:
+#: the observation's four head and four tail fields)
+_BLOCK = 128
+K_X, K_Y, K_B, K_CB, K_SB, K_AL1, K_AL2, K_CAS, K_C1, K_C2, K_W1, K_W2 = (i * _BLOCK for i in range(12))
+K_V, K_STEPS, K_VREF, K_CHG, K_HX, K_HY, K_S, K_K, K_E, K_CT, K_ST = (i * _BLOCK for i in range(12, 23))
+K_AT, K_AV, K_AS, K_HEAD, K_TERM, K_O = (i * _BLOCK for i in range(23, 29))
+_K_SIZE = K_O + 8 * _BLOCK
+
+
+@_jit
+def _ideal_block(
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64,
+    exps: F64,
+) -> None:  # fmt: skip
+    """:func:`_ideal_move` of the rows ``i0:i1`` (at most :data:`_BLOCK`) on a circle or manoeuvre path with the v0
+    observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
+    columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
+    evaluation; the stores into ``ws``, ``obs`` and :func:`_ideal_rows`' ``rec`` and ``exps``. The stages without
+    calls to the C library vectorise."""
+    k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
+    m = i1 - i0
+    dt, l3 = c[L.C_DT], c[L.C_L3]
+    for j in range(m):  # the arc step
+        i = i0 + j
+        c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
+        v, bdot, h = _ideal_motion(c, ws[i], w1, w2)[:3]
+        x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
+            c, ws[i, L.W_X], ws[i, L.W_Y], ws[i, L.W_BETA], w1, w2, v, bdot, h, tans[i, 0], tans[i, 1],
+            ws[i, L.W_AL1], ws[i, L.W_AL2], ws[i, L.W_CASTOR],
+        )  # fmt: skip
+        da1, da2 = _command_change(
+            c[L.C_REWARD_V0] != 0.0, w1, w2, ws[i, L.W_W1], ws[i, L.W_W2], c1, c2, ws[i, L.W_A1], ws[i, L.W_A2]
+        )
+        steps = ws[i, L.W_STEPS] + 1.0
+        k[K_X + j], k[K_Y + j], k[K_B + j], k[K_CB + j], k[K_SB + j] = x1, y1, b1, cb, sb
+        k[K_AL1 + j], k[K_AL2 + j], k[K_CAS + j], k[K_C1 + j], k[K_C2 + j] = al1, al2, castor, c1, c2
+        k[K_W1 + j], k[K_W2 + j], k[K_V + j], k[K_STEPS + j] = w1, w2, v, steps
+        k[K_VREF + j] = _reference_speed(c, ws[i], steps * dt)
+        k[K_CHG + j] = da1 * da1 + da2 * da2
+        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, ws[i, L.W_L3])
+    if c[L.C_PATH_KIND] == L.PATH_CIRCLE:  # H's projection: _locate's closed form, atan2's loop on its own
+        d, r, cx, cy, r0x, r0y = c[L.C_DIRECTION], c[L.C_RADIUS], c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
+        for j in range(m):  # the foot; u = (x, y) - centre into the columns of s and kappa
+            k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j], k[K_K + j] = classic.circle_foot(
+                k[K_HX + j], k[K_HY + j], cx, cy, r0x, r0y, d, r
+            )
+        for j in range(m):
+            k[K_S + j] = classic.circle_arc(k[K_S + j], k[K_K + j], r0x, r0y, d, r)
+        lap = task.TWO_PI * r
+        for j in range(m):  # the lap nearest the progress before
+            s = k[K_S + j]
+            k[K_S + j] = s + lap * task.round_half_even((ws[i0 + j, L.W_PROGRESS] - s) / lap)
+            k[K_K + j] = d / r
+    else:
+        for j in range(m):
+            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], ws[i0 + j, L.W_PROGRESS])
+            k[K_S + j], k[K_K + j], k[K_E + j], k[K_CT + j], k[K_ST + j] = s, kappa, e, ct, st
+    for j in range(m):  # _evaluate's terms and observation
+        e, kappa, v_ref, w1, w2 = k[K_E + j], k[K_K + j], k[K_VREF + j], k[K_W1 + j], k[K_W2 + j]
+        cos_psi, sin_psi = task.heading_error(k[K_CB + j], k[K_SB + j], k[K_CT + j], k[K_ST + j])
+        cos_ss, sin_ss = task.steady_heading_float(kappa, l3)
+        k[K_AT + j], k[K_AV + j], k[K_AS + j] = task.reward_arguments(
+            abs(e), abs(k[K_V + j] - v_ref), k[K_CHG + j], c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
+        )
+        k[K_HEAD + j] = task.heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
+        k[K_TERM + j] = 1.0 if tracking.end_flags(e, c[L.C_TERM], 1.0, 0)[0] else 0.0
+        o = task.observe_head(e, sin_psi, cos_psi, kappa, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
+        v_meas = kinematics.body_velocity_of(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
+        q = task.observe_rates(w1, w2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
+        k[K_O + j], k[K_O + _BLOCK + j], k[K_O + 2 * _BLOCK + j], k[K_O + 3 * _BLOCK + j] = o
+        k[K_O + 4 * _BLOCK + j], k[K_O + 5 * _BLOCK + j], k[K_O + 6 * _BLOCK + j] = q
+        k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
+    n_prev = int(c[L.C_N_PREVIEW])
+    for j in range(m):  # the stores
+        i = i0 + j
+        row = ws[i]
+        _no_draws(row)
+        for f, w in ((K_X, L.W_X), (K_Y, L.W_Y), (K_B, L.W_BETA), (K_W1, L.W_W1), (K_W2, L.W_W2), (K_AL1, L.W_AL1),
+                     (K_AL2, L.W_AL2), (K_CAS, L.W_CASTOR), (K_C1, L.W_A1), (K_C2, L.W_A2), (K_STEPS, L.W_STEPS),
+                     (K_W1, L.W_CMD1), (K_W2, L.W_CMD2), (K_S, L.W_PROGRESS), (K_HX, L.W_HX), (K_HY, L.W_HY),
+                     (K_E, L.W_E), (K_V, L.W_VT), (K_VREF, L.W_VREF), (K_TERM, L.W_TERM), (K_HEAD, L.W_HEADING),
+                     (K_AT, L.W_ARG_T), (K_AV, L.W_ARG_V), (K_AS, L.W_ARG_S)):  # fmt: skip
+            row[w] = k[f + j]
+        row[L.W_MX], row[L.W_MY], row[L.W_MB], row[L.W_MW1], row[L.W_MW2] = _measurements(
+            row[L.W_X], row[L.W_Y], row[L.W_BETA], row[L.W_W1], row[L.W_W2], 0.0, 0.0, 0.0, 0.0, 0.0
+        )
+        row[L.W_END] = 0.0
+        _record_entries(row, rec[i])
+        exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
+        for f in range(4):
+            obs[i, f] = k[K_O + f * _BLOCK + j]
+            obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
+    curvature, straight = c[L.C_DIRECTION] / c[L.C_RADIUS], c[L.C_STRAIGHT]
+    circle = c[L.C_PATH_KIND] == L.PATH_CIRCLE
+    for p in range(n_prev):  # the previews' curvature fields (_curvature_at)
+        ahead = c[L.C_TAIL + p]
+        for j in range(m):
+            kp = curvature if circle else classic.manoeuvre_curvature(k[K_S + j] + ahead, straight, curvature)
+            obs[i0 + j, 4 + p] = task.curvature_feature(kp, l3)
 
 
 _RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
@@ -586,18 +698,26 @@ def _ideal_rows(
     a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
 ) -> None:  # fmt: skip
     """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (N, 2)``; the record's entries into ``rec``,
-    the reward's exponential arguments into ``exps (N, 3)``."""
+    the reward's exponential arguments into ``exps (N, 3)``. By blocks of :data:`_BLOCK` rows: on a circle or
+    manoeuvre with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
-    for i in numba.prange(ws.shape[0]):
-        row = ws[i]
-        _no_draws(row)
-        c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-        v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
-        _ideal_move(c, flat[starts[i] : stops[i]], row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
-        _record_entries(row, rec[i])
-        exps[i, 0] = row[L.W_ARG_T]
-        exps[i, 1] = row[L.W_ARG_V]
-        exps[i, 2] = row[L.W_ARG_S]
+    staged = c[L.C_PATH_KIND] != L.PATH_CLOTHOID and c[L.C_OBS_V0] != 0.0
+    staged = staged and not tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], False)
+    for b in numba.prange((ws.shape[0] + _BLOCK - 1) // _BLOCK):
+        i0 = b * _BLOCK
+        i1 = min(i0 + _BLOCK, ws.shape[0])
+        if staged and not ws[i0:i1, L.W_L3D].any():
+            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec, exps)
+            continue
+        for i in range(i0, i1):
+            row = ws[i]
+            _no_draws(row)
+            c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
+            v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
+            pv = flat[starts[i] : stops[i]]
+            _ideal_move(c, pv, row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
+            _record_entries(row, rec[i])
+            exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
