@@ -41,12 +41,11 @@ _POSE, _H, _RATES, _COMMAND, _ANGLES, _MEASURED, _SLIP = (
 _E, _PROGRESS, _VT, _VREF, _HEADING, _END, _TERM, _CASTOR, _TRACK, _SPEED, _SMOOTH, _REWARD = (
     i - _L.R_ERROR for i in (_L.R_ERROR, _L.R_PROGRESS, _L.R_VT, _L.R_VREF, _L.R_HEADING, _L.R_END, _L.R_TERM,
                              _L.R_CASTOR, _L.R_TRACK, _L.R_SPEED, _L.R_SMOOTH, _L.R_REWARD))  # fmt: skip
-_TERMS = (_TRACK, _SPEED, _HEADING, _SMOOTH)  # the reward terms, task.REWARD_TERMS order
 
 
 def v0_record_info(record: Any, values: Any, time: Any) -> dict[str, Any]:
     """AmigoBot-v0's info (:func:`amigo_gym.task.v0.info_dict`) of info records, arguments as :func:`record_info`."""
-    terms = [values[i] for i in _TERMS]
+    terms = (values[_TRACK], values[_SPEED], values[_HEADING], values[_SMOOTH])
     return task.info_dict(
         record[_POSE], record[_H], values[_E], record[_RATES], record[_ANGLES], values[_CASTOR], terms, time
     )
@@ -83,7 +82,12 @@ def record_info(
         "command": record[_COMMAND],
         "wheel_angles": record[_ANGLES],
         "measured_pose": record[_MEASURED],
-        "reward_terms": dict(zip(task.REWARD_TERMS, (values[i] for i in _TERMS), strict=True)),
+        "reward_terms": {
+            "track": values[_TRACK],
+            "speed": values[_SPEED],
+            "heading": values[_HEADING],
+            "smooth": values[_SMOOTH],
+        },
         "time": time,
         **({} if path is None else {"path": path}),
         "true_robot": true_robot,
@@ -336,8 +340,11 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
         # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"]
-        hx, hy = info["h_position"].tolist()
-        goal = bool(tracking.goal_reached(self._k.params, hx, hy, *self._goal))  # False for no goal (NaN)
+        gx, gy = self._goal
+        goal = False
+        if gx == gx:  # a goal (not NaN)
+            hx, hy = info["h_position"].tolist()
+            goal = bool(tracking.goal_reached(self._k.params, hx, hy, gx, gy))
         if goal:
             terminated = True
             info["end_of_path"] = True

@@ -430,5 +430,13 @@ def info_dict(
     ``error`` H's cross-track error [m], ``rates`` the wheel rates [rad/s], ``angles`` the wheel angles and
     ``castor`` the castor's [rad], ``terms`` the 4 reward terms (:data:`REWARD_TERMS` order), ``time`` [s]: any
     types, handed out as they are."""
-    values = (pose, h_position, error, rates, angles, castor, dict(zip(REWARD_TERMS, terms, strict=True)), time)
-    return dict(zip(INFO_KEYS, values, strict=True))
+    return {
+        "pose": pose,
+        "h_position": h_position,
+        "cross_track_error": error,
+        "wheel_rates": rates,
+        "wheel_angles": angles,
+        "castor_angle": castor,
+        "reward_terms": dict(zip(REWARD_TERMS, terms, strict=True)),
+        "time": time,
+    }
