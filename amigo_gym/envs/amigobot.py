@@ -1,7 +1,8 @@
 r"""``AmigoBot-v0``: point H of an AmigoBot follows a path, steered by the two wheel rates.
 
-:class:`AmigoBotEnv` and :class:`AmigoBotVectorEnv` are the AmigoBot-v1 classes built with
-:meth:`amigo_gym.task.v1.TrackingParams.v0` of AmigoBot-v0's keywords (``env.params``), reporting v0's info keys.
+AmigoBot-v0 is a configuration of the one robot and task: :class:`AmigoBotEnv` and :class:`AmigoBotVectorEnv` are
+the AmigoBot-v1 classes built with :meth:`amigo_gym.task.v1.TrackingParams.v0` of AmigoBot-v0's keywords
+(``env.params``), reporting v0's info keys.
 """
 
 from __future__ import annotations
