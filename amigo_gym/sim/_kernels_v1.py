@@ -761,9 +761,8 @@ def restart_rows(
         pv = flat[starts[i] : stops[i]]
         row[L.W_R1 : L.W_L3D + 1] = template[L.W_R1 : L.W_L3D + 1]  # the episode
         row[L.W_SLIP_MAX : L.W_NOISE_ON + 1] = template[L.W_SLIP_MAX : L.W_NOISE_ON + 1]
-        beta = start[2] + u[j, 2] * start[4]
-        hx = start[0] + u[j, 0] * start[3]
-        hy = start[1] + u[j, 1] * start[3]
+        uj = (u[j, 0], u[j, 1], u[j, 2])
+        hx, hy, beta = tracking.start_offsets(start[0], start[1], start[2], uj, start[3], start[4])
         row[L.W_X], row[L.W_Y] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), row[L.W_L3])
         row[L.W_BETA] = beta
         row[L.W_W1 : L.W_W2 + 1] = start[5:7]

@@ -56,6 +56,7 @@ from amigo_gym.model import actuators
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.kinematics import (
     Real,
+    a_from_h,
     advance_angle,
     arc_step,
     body_velocity_columns,
@@ -991,6 +992,14 @@ def _progress(k: Constants, path: Any, x: Real, y: Real, hint: Real, progress: P
     return s_h
 
 
+def start_offsets(
+    x: Real, y: Real, theta: Real, u: tuple[Real, Real, Real], position_noise: float, heading_noise: float
+) -> tuple[Real, Real, Real]:
+    """H's start ``(x + u0 position_noise, y + u1 position_noise)`` [m] and heading ``theta + u2 heading_noise``
+    [rad] from the path's start ``(x, y, theta)`` and the draws ``u`` in [-1, 1]."""
+    return x + u[0] * position_noise, y + u[1] * position_noise, theta + u[2] * heading_noise
+
+
 def start_state(
     k: Constants,
     path: Any,
@@ -1005,11 +1014,8 @@ def start_state(
     methods)."""
     p = k.params
     start = path.pose_columns(0.0 * u[0]) if path_pose is None else path_pose(path, 0.0 * u[0])
-    beta = start.theta + u[2] * p.init_heading_noise
-    hx = start.x + u[0] * p.init_position_noise
-    hy = start.y + u[1] * p.init_position_noise
-    ax = hx - ep.l3 * col_cos(beta)
-    ay = hy - ep.l3 * col_sin(beta)
+    hx, hy, beta = start_offsets(start.x, start.y, start.theta, u, p.init_position_noise, p.init_heading_noise)
+    ax, ay = a_from_h(hx, hy, col_cos(beta), col_sin(beta), ep.l3)
     zero = 0.0 * u[0]
     if p.start_at_rest:
         w1 = w2 = zero
