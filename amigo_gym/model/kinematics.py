@@ -209,7 +209,7 @@ def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> 
     return x_a + l3 * cos_beta, y_a + l3 * sin_beta
 
 
-def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: float) -> tuple[Real, Real]:
+def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
     """Point A, ``l3`` behind H: ``(x_H - l3 cos beta, y_H - l3 sin beta)``; columns."""
     return x_h - l3 * cos_beta, y_h - l3 * sin_beta
 

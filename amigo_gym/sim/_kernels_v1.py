@@ -768,7 +768,7 @@ def restart_rows(
         row[L.W_W1 : L.W_W2 + 1] = start[5:7]
         row[L.W_A1 : L.W_A2 + 1] = start[7:9]
         row[L.W_AL1] = row[L.W_AL2] = row[L.W_STEPS] = row[L.W_CASTOR] = 0.0
-        row[L.W_PROGRESS] = progress(c, pv, hx, hy, 0.0)
+        row[L.W_PROGRESS] = progress(c, pv, float(hx), float(hy), 0.0)
         evaluate(c, pv, row, obs[j], start[9], 0.0)
         fill_record(row, rec[j], smooth_weight)
 
