@@ -56,16 +56,10 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
 @dataclass(frozen=True)
 class PointsFit:
-    """The result of :func:`fit_points`.
-
-    Attributes:
-        path: the fitted :class:`~amigo_gym.paths.ClothoidPath`.
-        max_error: ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length (``<= tolerance``).
-        point_s: ``(n,)`` arc length of each input point along the path [m].
-        step: the largest chord of a clothoid step used [m].
-        closure_correction: ``(c_0, ..., c_4)`` [1/m] of a closed path's curvature correction (empty if open).
-        smoothed: RMS distance [m] the smoothing moved the grouped points (0 without ``smoothing``; with it,
-            ``max_error`` and ``point_s`` refer to the smoothed points).
+    """The result of :func:`fit_points`: the ``path``, ``max_error = max_i |c(s_i) - p_i|`` [m] (``<= tolerance``)
+    at the points' arc lengths ``point_s`` ``(n,)`` [m], the largest chord ``step`` [m] used, a closed path's
+    ``closure_correction`` ``(c_0, ..., c_4)`` [1/m] (empty if open), and ``smoothed``: the RMS distance [m] the
+    smoothing moved the grouped points (0 without; with it, the errors and ``point_s`` are of the smoothed points).
     """
 
     path: ClothoidPath
@@ -216,13 +210,9 @@ def fit_points(
 ) -> PointsFit:  # fmt: skip
     """Fit a continuous-curvature :class:`~amigo_gym.paths.ClothoidPath` to points (module docstring).
 
-    Args:
-        points: ``(n, 2)`` x, y [m] in path order; a closed path may repeat its first point at the end.
-        closed: the path loops from the last point back to the first.
-        smoothing: None: through the points; ``sigma`` [m] in (0, 1]: the points' noise (module docstring).
-        tolerance: largest distance of a (smoothed) point from the path at its own arc length [m], in [1e-9, 1].
-        step: first largest chord of a clothoid step [m], in [1e-4, 10].
-        sample_spacing: the path's coarse projection samples [m].
+    ``points`` ``(n, 2)`` [m] in path order (a closed path may repeat its first point at the end); ``smoothing``
+    None (through the points) or the points' noise ``sigma`` [m] in (0, 1]; ``tolerance`` [m] in [1e-9, 1]; the
+    first ``step`` [m] in [1e-4, 10]; ``sample_spacing`` [m] of the path's coarse projection samples.
 
     Raises:
         ValueError: bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached
@@ -332,8 +322,7 @@ def from_points(
     points: Any, closed: bool = False, *, smoothing: float | None = None, tolerance: float = 1e-3, step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> ClothoidPath:  # fmt: skip
-    """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`; examples:
-    docs/amigobot_v1.md, "Paths of your own")."""
+    """The path of :func:`fit_points` (examples: docs/amigobot_v1.md, "Paths of your own")."""
     fit = fit_points(points, closed, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     return fit.path
 
@@ -346,12 +335,8 @@ def _number(text: str, file: str, row: int, col: str) -> float:
 def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
     """The points ``(n, 2)`` [m] of a file, and the JSON's ``"closed"`` if given. JSON (``.json``):
     ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects; CSV (any
-    other suffix): a header naming ``x`` and ``y`` (case-insensitive), one point per row, blank and ``#`` lines
-    skipped.
-
-    Raises:
-        FileNotFoundError: no such file.
-        ValueError: one line naming the file and the row or key.
+    other suffix): a header naming ``x`` and ``y`` (any case), one point per row, blank and ``#`` lines skipped.
+    Raises ``FileNotFoundError`` (no such file) or ``ValueError`` (one line naming the file and the row or key).
     """
     f = Path(file)
     name = str(f)
@@ -410,15 +395,9 @@ def from_file(
     file: str | os.PathLike[str], closed: bool | None = None, *, smoothing: float | None = None,
     tolerance: float = 1e-3, step: float = 0.02, sample_spacing: float = 0.02,
 ) -> ClothoidPath:  # fmt: skip
-    """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`).
-
-    Args:
-        closed: None: the JSON's ``"closed"`` if it has one, else closed when the last point repeats the first
-            (to 1e-9 m), else open.
-
-    Raises:
-        ValueError: the file's or the fit's problem, one line naming the file.
-    """
+    """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`); ``closed`` None: the JSON's
+    ``"closed"`` if given, else whether the last point repeats the first (to 1e-9 m). Raises ``ValueError`` (the
+    file's or the fit's problem, one line naming the file)."""
     pts, use = load_points(file)
     if closed is not None:
         use = closed
