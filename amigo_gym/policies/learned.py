@@ -268,12 +268,8 @@ class FastPolicy(Policy):
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
     """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
     zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
-    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here.
-
-    Raises:
-        FileNotFoundError: no zip or no manifest.
-        ValueError: no ``sha256`` in the manifest, a different digest, or an unknown SB3 algorithm.
-        UntrustedFileError: an SB3 zip not trusted.
+    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here. Raises ``FileNotFoundError``
+    (no zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``.
     """
     p = Path(path)
     if not p.is_file():
