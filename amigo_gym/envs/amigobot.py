@@ -48,14 +48,10 @@ def make_env_params(
     **settings: Any,
 ) -> TrackingParams:
     """AmigoBot-v0's task (:meth:`amigo_gym.task.v1.TrackingParams.v0`) from the keywords of ``gym.make`` /
-    ``gym.make_vec`` of ``owner`` (named in errors): ``params`` (an AmigoBot-v0 env's ``params`` or a mapping of
-    AmigoBot-v0's settings), ``robot`` (a :class:`RobotParams` or a mapping of its fields) and any other setting
-    (overriding ``params``'). Mappings let the settings survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's
-    ``--env-kwargs``.
-
-    Raises:
-        TypeError: an unknown keyword or field, or a ``params`` / ``robot`` of another type.
-        ValueError: a bad value, naming the field and range (:func:`amigo_gym.task.v0.check_v0`).
+    ``gym.make_vec`` of ``owner`` (named in errors): ``params`` (an AmigoBot-v0 env's ``params`` or a mapping of its
+    settings, as ``EnvSpec`` JSON and rl-zoo's ``--env-kwargs`` hold them), ``robot`` (a :class:`RobotParams` or a
+    mapping of its fields) and any other setting (overriding ``params``'). Raises ``TypeError`` (an unknown keyword
+    or field, a ``params`` / ``robot`` of another type) or ``ValueError`` (:func:`amigo_gym.task.v0.check_v0`).
     """
     unknown = sorted(k for k in settings if k not in V0_DEFAULTS)
     if unknown:
