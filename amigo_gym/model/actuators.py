@@ -317,14 +317,10 @@ def actuator_step_ws(
     accel: float, decel: float, rot_accel: float, rot_decel: float, r1t: Real, r2t: Real, l1t: Real, s1: Real, s2: Real,
 ) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real, Real, Real]:  # fmt: skip
     """:func:`actuator_step` on floats or columns of one shape (``ws``, ``buf`` lists), also compiled as it is; the
-    fields of :class:`ActuatorStep` as a tuple.
-
-    Args:
-        ws, k: scratch of :data:`SCRATCH` entries from ``ws[k]``. buf, b: node buffer of ``3 PIECES nn`` from
-            ``buf[b]``. nodes, node_at, nn: ``nn = NODES n_sub`` nodes, then weights, from ``nodes[node_at]``
-            (:func:`amigo_gym.model.fresnel.node_table`).
-        w_max, l1n, r1n, r2n, two_l1: the nominal wheel-rate limit [rad/s], half track, radii and ``2 l1`` [m].
-        accel, decel, rot_accel, rot_decel: the ramps. The others: as :func:`actuator_step`.
+    fields of :class:`ActuatorStep` as a tuple. Scratch of :data:`SCRATCH` from ``ws[k]``, a node buffer of
+    ``3 PIECES nn`` from ``buf[b]``, ``nn = NODES n_sub`` nodes then weights from ``nodes[node_at]``
+    (:func:`amigo_gym.model.fresnel.node_table`); the nominal ``w_max`` [rad/s], ``l1n``, ``r1n``, ``r2n``,
+    ``two_l1 = 2 l1`` [m]; the ramps; the others as :func:`actuator_step`.
     """
     # 1. commands (clip_setpoints, body_velocity_columns)
     vc_old, wc_old = body_velocity_of(clip(w1c_old, -w_max, w_max), clip(w2c_old, -w_max, w_max), r1n, r2n, two_l1)

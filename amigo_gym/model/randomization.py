@@ -67,11 +67,8 @@ PRESETS: dict[str, Randomization] = {
 
 
 def make_randomization(value: str | Randomization | Mapping[str, Any] | None) -> Randomization:
-    """``randomize=``: a preset name, a :class:`Randomization`, or a mapping of its fields.
-
-    Raises:
-        ValueError: an unknown preset or field, or a bad range (naming the field, value and allowed range).
-    """
+    """``randomize=``: a preset name, a :class:`Randomization`, or a mapping of its fields; ``ValueError`` for an
+    unknown preset or field, or a bad range (naming the field, value and allowed range)."""
     if value is None:
         return PRESETS["none"]
     if isinstance(value, Randomization):

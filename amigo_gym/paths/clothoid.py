@@ -486,10 +486,9 @@ def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
     """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most
-    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)``, the last one below
-    :data:`NEWTON_TAYLOR_STEP` (its pose to first order), with
-    ``d = g / q``, ``q = max(1 - kappa e, MIN_NEWTON_DENOMINATOR)``, or on an arc (``c = 0``, ``kappa != 0``) the
-    exact ``d = atan2(kappa g, q) / kappa``; then the foot terms and the status."""
+    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` (the last below
+    :data:`NEWTON_TAYLOR_STEP`, its pose to first order), ``d = g / q``, ``q = max(1 - kappa e,
+    MIN_NEWTON_DENOMINATOR)`` (on an arc exactly ``atan2(kappa g, q) / kappa``); then the foot terms and status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):

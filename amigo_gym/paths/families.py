@@ -289,11 +289,8 @@ FAMILIES: dict[str, Family] = {
 def make_family_path(
     name: str, rng: np.random.Generator | None = None, *, loops: PathLoops | None = None, **params: Any
 ) -> ClothoidPath:
-    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at defaults).
-
-    Raises:
-        ValueError: unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``.
-    """
+    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at defaults); ``ValueError``
+    for an unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``."""
     fam = FAMILIES.get(name) if isinstance(name, str) else None
     if fam is None:
         raise ValueError(f"path family must be one of {sorted(FAMILIES)}, got {name!r}")

@@ -1,12 +1,11 @@
 """Learned ``AmigoBot-v1`` policies in numpy (fast-PPO models, the residual policy) and :func:`load_pretrained`.
 
-A fast-PPO model is a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor's
-layers, the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``; with ``history = H > 0``
-the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (the first observation at an episode's start);
-with ``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``. All are
-normalised, ``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action from the network's output ``u``:
-``a = clip(u, -1, 1)``, or ``clip(a0 + b clip(u, -1, 1), -1, 1)``; with ``filter_alpha = alpha < 1``,
-``a = p + alpha (a - p)`` from the previous command ``p``.
+A fast-PPO model: a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor,
+the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``, with ``history = H > 0`` the
+:data:`HISTORY_FIELDS` of the ``H`` previous steps (oldest first; at an episode's start the first observation), with
+``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``; normalised,
+``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action ``a = clip(u, -1, 1)`` of the output ``u`` (or ``clip(a0
++ b clip(u, -1, 1), -1, 1)``), with ``filter_alpha = alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``.
 """
 
 from __future__ import annotations

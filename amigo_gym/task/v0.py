@@ -261,9 +261,8 @@ def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
 def observe_head(
     e: Real, sin_psi: Real, cos_psi: Real, curvature: Real, l3: float, error_scale: float, e_max: float
 ) -> tuple[Real, Real, Real, Real]:
-    """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
-    clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
-    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns."""
+    """The fields :data:`OBS_HEAD`, ``(clip(e / error_scale, +-e_max), sin psi, cos psi, clip(kappa l3, +-1))``, of
+    H's cross-track error ``e`` [m] and curvature ``kappa`` [1/m] (``l3``, ``error_scale`` [m]); floats or columns."""
     return clip(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
@@ -274,9 +273,8 @@ def curvature_feature(curvature: Real, l3: float) -> Real:
 
 
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
-    """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
-    v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
-    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns."""
+    """``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) / v_max, +-2))`` of the wheel rates [rad/s]
+    and the speeds of A and the reference [m/s]; floats or columns."""
     return (clip(w1 / w_max, -1.0, 1.0), clip(w2 / w_max, -1.0, 1.0), clip((v - v_ref) / v_max, -2.0, 2.0))
 
 
@@ -354,10 +352,8 @@ def reward_term_columns(
 def reward_arguments(
     abs_error: Real, abs_dv: Real, change_sq: Real, sigma_track: float, sigma_speed: float, smooth_scale_sq: float
 ) -> tuple[Real, Real, Real]:
-    r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`):
-    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale. ``abs_error``
-    [m], ``abs_dv`` [m/s], ``change_sq`` in the units of ``smooth_scale_sq``; the scales ``sigma_track`` [m],
-    ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive. Floats or columns."""
+    r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`),
+    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale; floats or columns."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
