@@ -78,11 +78,8 @@ def check_real(
 def check_pair(
     owner: str, name: str, value: Any, low: float, high: float, *, low_open: bool = False
 ) -> tuple[float, float]:
-    """``value`` as a pair of floats ``(a, b)`` with ``a <= b``, each a :func:`check_real` of the interval.
-
-    Raises:
-        ValueError: one line naming ``owner.name``, the interval and the value.
-    """
+    """``value`` as a pair of floats ``(a, b)`` with ``a <= b``, each a :func:`check_real` of the interval; else a
+    one-line ``ValueError`` naming ``owner.name``, the interval and the value."""
     if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 2:
         rng = _interval(low, high, low_open, False)
         raise ValueError(f"{owner}.{name} must be a pair (low, high) within {rng}, got {value!r}")

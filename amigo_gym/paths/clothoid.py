@@ -324,10 +324,8 @@ class ClothoidPath(_Projecting):
         1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
            window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
            ``max_advance``), less than half the arc length between branches that pass near each other.
-        2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
-           ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
-           ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations, the last below
-           :data:`NEWTON_TAYLOR_STEP`.
+        2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``, steps limited to ``h``,
+           ``s`` kept in the window (and in ``[0, L]`` on an open path) (:func:`project_flat`).
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
         ``x``, ``y``, ``s_prev``: floats or arrays, broadcast; a :class:`PathPoint` of their shape.

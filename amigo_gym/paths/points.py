@@ -1,19 +1,18 @@
 """Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` of continuous curvature fitted to points ``(n, 2)``
-``(x, y)`` [m] in path order (:func:`fit_points`; docs/amigobot_v1.md, "Paths of your own"):
+[m] in path order (:func:`fit_points`; docs/amigobot_v1.md, "Paths of your own"):
 
-1. an interpolating cubic spline in the chord-length parameter (not-a-knot ends if open, periodic if closed);
-2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a
-   :class:`~amigo_gym.paths.ClothoidSegment` of the spline's arc length, its curvature linear between the
-   spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at the step's ends;
+1. a cubic spline through them in the chord-length parameter (not-a-knot ends if open, periodic if closed);
+2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a clothoid of the spline's arc
+   length, its curvature linear between the spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at its ends;
 3. a closed path's curvature corrected by the smallest ``c_0 + sum_q (c cos + c sin)(q w s)``, ``q = 1, 2``,
    ``w = 2 pi / L``, closing it to rounding (Gauss–Newton);
-4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved up to
+4. ``max_i |c(s_i) - p_i|`` [m] at each point's arc length within ``tolerance`` (``step`` halved up to
    :data:`MAX_REFINEMENTS` times), else ``ValueError``.
 
-With ``smoothing=sigma`` [m] (the points' noise) points are first averaged in groups of ``g`` (a power of 2,
-points ``g`` apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline
-(Whittaker–Reinsch, least ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the
-means; at an open path's ends the curvature falls to 0.
+With ``smoothing=sigma`` [m] (the points' noise) points are averaged in groups of ``g`` (a power of 2: points ``g``
+apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline (Whittaker–Reinsch, least
+``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the means (an open path's end
+curvature 0).
 """
 
 from __future__ import annotations
