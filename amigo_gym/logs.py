@@ -274,16 +274,12 @@ def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: s
     # windows of about 1 s, and the integrals of the commanded speed and turn rate (nominal robot) at their ends
     win = np.unique(np.clip(np.searchsorted(t, np.arange(t[0], t[-1] + 1.0, 1.0)), 0, t.size - 1))
     win = win if win.size >= 2 else np.array([0, t.size - 1])
-    v, w = body_velocity(log.cmd, nominal)
+    vw = np.stack(body_velocity(log.cmd, nominal))  # (2, n): speed and turn rate
     grid = np.union1d(log.t_cmd, t[win])
     j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
-    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
-    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
-    k = np.searchsorted(grid, t[win])
-    s_v = np.concatenate([[0.0], np.cumsum(vj * np.diff(grid))])[k]
-    s_w = np.concatenate([[0.0], np.cumsum(wj * np.diff(grid))])[k]
-    cmd_travel = float(np.sum(np.abs(np.diff(s_v))))
-    cmd_turn = float(np.sum(np.abs(np.diff(s_w))))
+    held = np.where(j >= 0, vw[:, np.maximum(j, 0)], 0.0)
+    s = np.concatenate([np.zeros((2, 1)), np.cumsum(held * np.diff(grid), axis=1)], axis=1)
+    cmd_travel, cmd_turn = np.sum(np.abs(np.diff(s[:, np.searchsorted(grid, t[win])], axis=1)), axis=1).tolist()
     if log.pose is not None:
         xy = log.pose[win, :2]
         hops = np.hypot(*np.diff(xy, axis=0).T)

@@ -235,7 +235,7 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
         return self._steps * self.params.dt
 
     def _render_state(self) -> dict[str, Any]:
-        """AmigoBot-v1's, with H's cross-track error (drawn in the frame, as AmigoBot-v0 always drew it)."""
+        """AmigoBot-v1's, with H's cross-track error (drawn in the frame)."""
         out = super()._render_state()
         h = h_position(out["pose"], self.params.robot)
         out["cross_track_error"] = float(self.path.project(h).cross_track_error)
@@ -243,12 +243,10 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
 
 
 class AmigoBotVectorEnv(_V0Spec, AmigoBotV1VectorEnv):
-    """``N`` AmigoBot-v0 tasks stepped as numpy batches: :class:`amigo_gym.envs.AmigoBotV1VectorEnv` (its
-    ``num_envs``, ``max_episode_steps`` (400 from ``gym.make_vec``), ``render_mode``, ``autoreset_mode`` and
-    ``kernel``) on AmigoBot-v0's task; ``params``, ``robot``, ``**settings`` exactly as for
-    ``gym.make("AmigoBot-v0", ...)``. Spaces, seeds, reset options (``"pose"``, ``"reset_mask"``) and infos (the
-    single env's keys as ``(N, ...)`` arrays with ``_key`` masks) as ``SyncVectorEnv`` of :class:`AmigoBotEnv`
-    (docs/env_card.md, "Vector environment").
+    """``N`` AmigoBot-v0 tasks stepped as numpy batches: :class:`amigo_gym.envs.AmigoBotV1VectorEnv` (its arguments;
+    ``max_episode_steps`` 400 from ``gym.make_vec``) on AmigoBot-v0's task, ``params``, ``robot``, ``**settings`` as
+    for ``gym.make("AmigoBot-v0", ...)``. Spaces, seeds, reset options and infos as ``SyncVectorEnv`` of
+    :class:`AmigoBotEnv` (docs/env_card.md, "Vector environment").
     """
 
     _v0 = True
