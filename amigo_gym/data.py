@@ -15,11 +15,8 @@ def repository_root() -> Path | None:
 
 
 def agents_dir() -> Path:
-    """The ``agents/`` data folder: ``amigo_gym/agents`` in a wheel, ``<repository>/agents`` in a checkout.
-
-    Raises:
-        FileNotFoundError: neither exists.
-    """
+    """The ``agents/`` data folder: ``amigo_gym/agents`` in a wheel, ``<repository>/agents`` in a checkout
+    (``FileNotFoundError`` if neither exists)."""
     installed = _PACKAGE / "agents"
     if installed.is_dir():
         return installed

@@ -127,11 +127,8 @@ def _shipped_digests() -> set[str]:
 
 def require_trust(path: str | os.PathLike[str], digest: str | None = None, trust: bool = False) -> None:
     """Refuse to unpickle ``path`` (sha256 ``digest``, computed if ``None``) unless ``trust`` (or
-    ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or a shipped manifest (``agents/pretrained``) or :func:`vouch` recorded it.
-
-    Raises:
-        UntrustedFileError: one line naming the file and the flag.
-    """
+    ``AMIGO_GYM_TRUST_UNVERIFIED=1``), or a shipped manifest (``agents/pretrained``) or :func:`vouch` recorded it:
+    :class:`UntrustedFileError`, one line naming the file and the flag."""
     if trust or os.environ.get(TRUST_ENV) == "1":
         return
     digest = digest or sha256_file(path)

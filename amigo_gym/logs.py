@@ -249,14 +249,10 @@ def read_log(
 
 
 def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: str) -> None:
-    """Refuse a log whose units look wrong by orders of magnitude: median sample interval outside [1e-4, 5] s,
-    wheel rates over 3 times the limit, A over 3 times its top speed, measured travel, turn or wheel rates off by
-    more than 10 times from what the commands give. ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to
-    the user's column or topic names.
-
-    Raises:
-        LogError: one line naming the quantity, what was found and the likely unit mistake.
-    """
+    """Refuse (:class:`LogError`: one line naming the quantity, what was found and the likely unit mistake) a log
+    whose units look wrong: median sample interval outside [1e-4, 5] s, wheel rates over 3 times the limit, A over 3
+    times its top speed, measured travel, turn or wheel rates off by more than 10 times from what the commands give.
+    ``names`` maps ``t``, ``cmd``, ``pose``, ``theta``, ``rates`` to the user's column or topic names."""
     t = log.t_meas
     step = float(np.median(np.diff(t)))
     if not 1e-4 <= step <= 5.0:
@@ -278,16 +274,12 @@ def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: s
     # windows of about 1 s, and the integrals of the commanded speed and turn rate (nominal robot) at their ends
     win = np.unique(np.clip(np.searchsorted(t, np.arange(t[0], t[-1] + 1.0, 1.0)), 0, t.size - 1))
     win = win if win.size >= 2 else np.array([0, t.size - 1])
-    v, w = body_velocity(log.cmd, nominal)
+    vw = np.stack(body_velocity(log.cmd, nominal))  # (2, n): speed and turn rate
     grid = np.union1d(log.t_cmd, t[win])
     j = np.searchsorted(log.t_cmd, grid[:-1], side="right") - 1
-    vj = np.where(j >= 0, v[np.maximum(j, 0)], 0.0)
-    wj = np.where(j >= 0, w[np.maximum(j, 0)], 0.0)
-    k = np.searchsorted(grid, t[win])
-    s_v = np.concatenate([[0.0], np.cumsum(vj * np.diff(grid))])[k]
-    s_w = np.concatenate([[0.0], np.cumsum(wj * np.diff(grid))])[k]
-    cmd_travel = float(np.sum(np.abs(np.diff(s_v))))
-    cmd_turn = float(np.sum(np.abs(np.diff(s_w))))
+    held = np.where(j >= 0, vw[:, np.maximum(j, 0)], 0.0)
+    s = np.concatenate([np.zeros((2, 1)), np.cumsum(held * np.diff(grid), axis=1)], axis=1)
+    cmd_travel, cmd_turn = np.sum(np.abs(np.diff(s[:, np.searchsorted(grid, t[win])], axis=1)), axis=1).tolist()
     if log.pose is not None:
         xy = log.pose[win, :2]
         hops = np.hypot(*np.diff(xy, axis=0).T)
@@ -322,15 +314,11 @@ def simulate(
     log: Log, true_robot: RobotParams | None = None, actuators: ActuatorParams | None = None,
     nominal: RobotParams | None = None, start: Sequence[float] | None = None,
 ) -> Replay:  # fmt: skip
-    """Drive the model with the log's commands; a :class:`Replay` at ``log.t_meas``.
-
-    The command of ``t_cmd[j]`` takes effect at ``t_cmd[j] + delay`` (before the first: the start wheel rates held);
-    between measurements :func:`amigo_gym.model.actuators.actuator_step` (no slip), split at every switch.
-
-    ``true_robot`` moves (default ``nominal``, itself default :class:`RobotParams`) with ``actuators`` (default
-    :class:`ActuatorParams`) from ``start``, the pose of A [m, m, rad] at ``t_meas[0]`` (default the first measured
-    pose, else the origin), and the first measured wheel rates (else 0).
-    """
+    """A :class:`Replay` at ``log.t_meas`` of ``true_robot`` (default ``nominal``, default :class:`RobotParams`) with
+    ``actuators`` (default :class:`ActuatorParams`) driven by the log's commands, that of ``t_cmd[j]`` from
+    ``t_cmd[j] + delay`` (before: the start rates held), by :func:`amigo_gym.model.actuators.actuator_step` (no slip)
+    split at every switch; from ``start`` [m, m, rad] at ``t_meas[0]`` (default the first measured pose, else the
+    origin) and the first measured wheel rates (else 0)."""
     nominal = RobotParams() if nominal is None else nominal
     robot = nominal if true_robot is None else true_robot
     act = ActuatorParams() if actuators is None else actuators
@@ -458,11 +446,8 @@ def replay(
 
 def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dict[str, float]]:
     """The :class:`RobotParams` and :class:`ActuatorParams` fields of a robot file (a JSON object, e.g. the
-    ``robot.json`` of ``amigo-gym identify``, whose report keys are ignored), unchecked.
-
-    Raises:
-        FileNotFoundError: no such file. ValueError: not a JSON object, an unknown key, a value not a number.
-    """
+    ``robot.json`` of ``amigo-gym identify``, report keys ignored), unchecked. Raises ``FileNotFoundError`` or
+    ``ValueError`` (not a JSON object, an unknown key, a value not a number)."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"robot file {str(p)!r} does not exist or is not a file")
@@ -565,10 +550,7 @@ def identify(
     nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramps in nominal ``* [0.1, 10]``, from the nominal robot
     (``nominal``, :class:`RobotParams` by default; ramps of ``actuators``) and the best delay of a grid of
     ``MAX_DELAY / 10``. ``lambda = heading_weight`` [m/rad], default ``nominal.l1``. Uncertainties:
-    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)``.
-
-    Raises:
-        ValueError: a bad ``ramps``.
+    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)``. ``ValueError`` for a bad ``ramps``.
     """
     from scipy.optimize import least_squares  # heavy: only here
 

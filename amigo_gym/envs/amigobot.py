@@ -48,14 +48,10 @@ def make_env_params(
     **settings: Any,
 ) -> TrackingParams:
     """AmigoBot-v0's task (:meth:`amigo_gym.task.v1.TrackingParams.v0`) from the keywords of ``gym.make`` /
-    ``gym.make_vec`` of ``owner`` (named in errors): ``params`` (an AmigoBot-v0 env's ``params`` or a mapping of
-    AmigoBot-v0's settings), ``robot`` (a :class:`RobotParams` or a mapping of its fields) and any other setting
-    (overriding ``params``'). Mappings let the settings survive ``EnvSpec.to_json`` / ``from_json`` and rl-zoo's
-    ``--env-kwargs``.
-
-    Raises:
-        TypeError: an unknown keyword or field, or a ``params`` / ``robot`` of another type.
-        ValueError: a bad value, naming the field and range (:func:`amigo_gym.task.v0.check_v0`).
+    ``gym.make_vec`` of ``owner`` (named in errors): ``params`` (an AmigoBot-v0 env's ``params`` or a mapping of its
+    settings, as ``EnvSpec`` JSON and rl-zoo's ``--env-kwargs`` hold them), ``robot`` (a :class:`RobotParams` or a
+    mapping of its fields) and any other setting (overriding ``params``'). Raises ``TypeError`` (an unknown keyword
+    or field, a ``params`` / ``robot`` of another type) or ``ValueError`` (:func:`amigo_gym.task.v0.check_v0`).
     """
     unknown = sorted(k for k in settings if k not in V0_DEFAULTS)
     if unknown:
@@ -239,7 +235,7 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
         return self._steps * self.params.dt
 
     def _render_state(self) -> dict[str, Any]:
-        """AmigoBot-v1's, with H's cross-track error (drawn in the frame, as AmigoBot-v0 always drew it)."""
+        """AmigoBot-v1's, with H's cross-track error (drawn in the frame)."""
         out = super()._render_state()
         h = h_position(out["pose"], self.params.robot)
         out["cross_track_error"] = float(self.path.project(h).cross_track_error)
@@ -247,12 +243,10 @@ class AmigoBotEnv(_V0Spec, AmigoBotV1Env):
 
 
 class AmigoBotVectorEnv(_V0Spec, AmigoBotV1VectorEnv):
-    """``N`` AmigoBot-v0 tasks stepped as numpy batches: :class:`amigo_gym.envs.AmigoBotV1VectorEnv` (its
-    ``num_envs``, ``max_episode_steps`` (400 from ``gym.make_vec``), ``render_mode``, ``autoreset_mode`` and
-    ``kernel``) on AmigoBot-v0's task; ``params``, ``robot``, ``**settings`` exactly as for
-    ``gym.make("AmigoBot-v0", ...)``. Spaces, seeds, reset options (``"pose"``, ``"reset_mask"``) and infos (the
-    single env's keys as ``(N, ...)`` arrays with ``_key`` masks) as ``SyncVectorEnv`` of :class:`AmigoBotEnv`
-    (docs/env_card.md, "Vector environment").
+    """``N`` AmigoBot-v0 tasks stepped as numpy batches: :class:`amigo_gym.envs.AmigoBotV1VectorEnv` (its arguments;
+    ``max_episode_steps`` 400 from ``gym.make_vec``) on AmigoBot-v0's task, ``params``, ``robot``, ``**settings`` as
+    for ``gym.make("AmigoBot-v0", ...)``. Spaces, seeds, reset options and infos as ``SyncVectorEnv`` of
+    :class:`AmigoBotEnv` (docs/env_card.md, "Vector environment").
     """
 
     _v0 = True

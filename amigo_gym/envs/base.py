@@ -29,12 +29,8 @@ VECTOR_KERNELS: tuple[str, ...] = (*fast_v1.KERNELS, "numba-parallel")
 
 
 def parse_pose_option(value: Any, batch_shape: tuple[int, ...] = ()) -> Array:
-    """``options["pose"]``, ``(x_A [m], y_A [m], beta [rad])`` of shape ``(3,)`` or ``batch_shape + (3,)``, checked:
-    finite, ``|x_A|, |y_A| <= POSE_LIMIT`` (1e6 m), ``|beta| <= HEADING_LIMIT`` (1e6 rad).
-
-    Raises:
-        ValueError: not real numbers, a wrong shape, NaN/inf, or a value out of range.
-    """
+    """``options["pose"]``, ``(x_A [m], y_A [m], beta [rad])`` of shape ``(3,)`` or ``batch_shape + (3,)``, checked
+    finite, ``|x_A|, |y_A| <= POSE_LIMIT`` (1e6 m), ``|beta| <= HEADING_LIMIT`` (1e6 rad); else ``ValueError``."""
     try:
         pose = task.real_array(value, 'options["pose"]').copy()
     except TypeError as exc:  # reset options are refused with ValueError
@@ -107,12 +103,9 @@ def check_reset_mask(mask: Any, n: int) -> BoolArray:
 
 
 def parse_seeds(seed: Any, n: int) -> list[int | None]:
-    """``reset(seed=...)`` of a vector env: ``None``, an int ``s >= 0`` (seeds ``s + i``) or a list/tuple of ``n``
-    ints ``>= 0``/None, as ``SyncVectorEnv`` takes them.
-
-    Raises:
-        TypeError: a seed of another type. ValueError: a negative seed, or a list of the wrong length.
-    """
+    """``reset(seed=...)`` of a vector env as ``SyncVectorEnv`` takes it: ``None``, an int ``s >= 0`` (seeds
+    ``s + i``) or a list/tuple of ``n`` ints ``>= 0`` or None. ``TypeError`` for another type, ``ValueError`` for a
+    negative seed or a list of the wrong length."""
     accepted = f"None, an int >= 0, or a list of num_envs={n} ints >= 0 / None"
     if seed is None:
         return [None] * n

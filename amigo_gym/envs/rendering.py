@@ -134,11 +134,8 @@ class Renderer:
         cross_track_error: float | None = None,
     ) -> NDArray[np.uint8] | None:
         """Draw the robot at ``pose`` ``(x_A [m], y_A [m], beta [rad])`` with H's ``trail`` (``(x, y)`` [m], oldest
-        first), the ``wheel_angles`` [rad], and the ``time`` [s] and ``cross_track_error`` [m] printed when given.
-
-        Returns:
-            the frame ``(size, size, 3)`` uint8 in ``rgb_array`` mode; ``None`` in ``human`` mode.
-        """
+        first), the ``wheel_angles`` [rad], and the ``time`` [s] and ``cross_track_error`` [m] printed when given;
+        the frame ``(size, size, 3)`` uint8 in ``rgb_array`` mode, ``None`` in ``human`` mode."""
         pg = self._pg
         robot = self.params.robot
         pose = np.asarray(pose, dtype=np.float64)

@@ -1,8 +1,7 @@
 """The real robot's actuators for ``AmigoBot-v1``: firmware speed ramps, actuation delay, slip, true geometry.
 
-Pure functions of *columns* (floats, or float64 arrays that broadcast together), returning the same kind. May import
-only numpy, the standard library and the model's ``params``, ``numeric``, ``kinematics`` and ``fresnel``.
-One control step of length ``dt``:
+Pure functions of *columns* (floats, or float64 arrays that broadcast together), returning the same kind. One
+control step of length ``dt``:
 
 1. **Setpoints** ``(w1c, w2c)`` [rad/s] (wheel 1 right), clipped to ``[-w_max, w_max]``, become commanded speeds
    with the **nominal** robot: ``v_c = (r1 w1c + r2 w2c) / 2``, ``w_c = (r1 w1c - r2 w2c) / (2 l1)``.
@@ -16,8 +15,8 @@ One control step of length ``dt``:
 6. **Exact step** (:func:`actuator_step`): on each piece where both are linear the pose advances by
    :func:`amigo_gym.model.fresnel.advance`, the wheel angles by the exact integral of the rates.
 
-The limits are the manufacturer's (AmigoBot parameter file, MobileSim; ``docs/model.md``); the ramp rule is the
-project's model of the ARCOS firmware, not checked against the robot; ``MAX_DELAY`` is the project's choice.
+The limits are the manufacturer's (``docs/model.md``); the ramp rule (a model of the ARCOS firmware, not checked
+against the robot) and ``MAX_DELAY`` are the project's.
 """
 
 from __future__ import annotations
@@ -55,14 +54,10 @@ class ActuatorParams:
     delay: float = 0.0
 
     def __post_init__(self) -> None:
-        o = "ActuatorParams"
         highs = {"acceleration": 10.0, "deceleration": 10.0, "rot_acceleration": 100.0, "rot_deceleration": 100.0}
         for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name == "delay":
-                v = check_range(o, f.name, value, 0.0, MAX_DELAY)
-            else:
-                v = check_range(o, f.name, value, 0.0, highs[f.name], low_open=True)
+            high, low_open = highs.get(f.name, MAX_DELAY), f.name != "delay"
+            v = check_range("ActuatorParams", f.name, getattr(self, f.name), 0.0, high, low_open=low_open)
             object.__setattr__(self, f.name, v)
 
 
@@ -201,15 +196,12 @@ def actuator_step(
 ) -> ActuatorStep:  # fmt: skip
     r"""One control step of the robot with its actuators, exact (module docstring); an :class:`ActuatorStep`.
 
-    Each channel is ramped towards the old, then the new command (:func:`ramp`); their breakpoints split the step
-    into :data:`PIECES` pieces on which ``v`` and ``w`` are linear. On a piece of length ``L`` the pose advances by
-    :func:`amigo_gym.model.fresnel.advance_nodes` of the true speeds, the wheel angles by
-    ``L (w_i + \dot w_i L / 2)`` and the distance by ``L (v_true + \dot v_true L / 2)``.
-
-    From the pose of A ``x, y, beta`` [m, m, rad] and wheel rates ``w1, w2`` [rad/s], with the setpoints ``*_old``
-    before the switch time ``t_switch`` in ``[0, dt]`` [s] and ``*_new`` after, the ramps of ``limits`` (its delay
-    unused), the true radii and half track [m] and slips in ``[0, 1)`` (unchecked); ``n_sub`` default
-    :func:`step_subintervals`. Floats in, floats out; any array in: arrays of the broadcast shape out.
+    From the pose of A ``x, y, beta`` [m, m, rad] and wheel rates ``w1, w2`` [rad/s], the setpoints ``*_old`` before
+    ``t_switch`` in ``[0, dt]`` [s] and ``*_new`` after, the ramps of ``limits`` (delay unused), the true radii and
+    half track [m], slips in ``[0, 1)`` (unchecked); ``n_sub`` default :func:`step_subintervals`. The ramps'
+    breakpoints split the step into :data:`PIECES` pieces with ``v``, ``w`` linear: on one of length ``L`` the pose
+    advances by :func:`amigo_gym.model.fresnel.advance_nodes`, the wheel angles by ``L (w_i + \dot w_i L / 2)``, the
+    distance by ``L (v_true + \dot v_true L / 2)``. Floats in, floats out; any array in: broadcast arrays out.
     """
     if n_sub is None:
         n_sub = step_subintervals(dt, nominal)
@@ -325,14 +317,10 @@ def actuator_step_ws(
     accel: float, decel: float, rot_accel: float, rot_decel: float, r1t: Real, r2t: Real, l1t: Real, s1: Real, s2: Real,
 ) -> tuple[Real, Real, Real, Real, Real, Real, Real, Real, Real, Real]:  # fmt: skip
     """:func:`actuator_step` on floats or columns of one shape (``ws``, ``buf`` lists), also compiled as it is; the
-    fields of :class:`ActuatorStep` as a tuple.
-
-    Args:
-        ws, k: scratch of :data:`SCRATCH` entries from ``ws[k]``. buf, b: node buffer of ``3 PIECES nn`` from
-            ``buf[b]``. nodes, node_at, nn: ``nn = NODES n_sub`` nodes, then weights, from ``nodes[node_at]``
-            (:func:`amigo_gym.model.fresnel.node_table`).
-        w_max, l1n, r1n, r2n, two_l1: the nominal wheel-rate limit [rad/s], half track, radii and ``2 l1`` [m].
-        accel, decel, rot_accel, rot_decel: the ramps. The others: as :func:`actuator_step`.
+    fields of :class:`ActuatorStep` as a tuple. Scratch of :data:`SCRATCH` from ``ws[k]``, a node buffer of
+    ``3 PIECES nn`` from ``buf[b]``, ``nn = NODES n_sub`` nodes then weights from ``nodes[node_at]``
+    (:func:`amigo_gym.model.fresnel.node_table`); the nominal ``w_max`` [rad/s], ``l1n``, ``r1n``, ``r2n``,
+    ``two_l1 = 2 l1`` [m]; the ramps; the others as :func:`actuator_step`.
     """
     # 1. commands (clip_setpoints, body_velocity_columns)
     vc_old, wc_old = body_velocity_of(clip(w1c_old, -w_max, w_max), clip(w2c_old, -w_max, w_max), r1n, r2n, two_l1)

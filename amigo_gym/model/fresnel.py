@@ -4,10 +4,10 @@ Speed ``v0 + a t`` and turn rate ``w0 + alpha t`` give the heading ``theta(t) = 
 the position ``p(T) = p0 + int_0^T (v0 + a t) (cos, sin)(theta(t)) dt``, a generalised Fresnel integral: point A over
 a linear piece of the firmware's ramps, and a clothoid path piece (arc length as time, ``v = 1``, ``a = 0``).
 
-Gauss–Legendre quadrature with :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals (:func:`subintervals`):
-with a phase change of at most :data:`MAX_PHASE_PER_SUB` rad per sub-interval the error bound is below 1e-20
-relative to ``|v| h``, exact to rounding. The node functions work on a buffer ``buf`` of stride ``m`` from
-``buf[b]``: phases, then cosines at ``+ m``, sines at ``+ 2m``; numba compiles them as they are.
+Gauss–Legendre quadrature, :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals (:func:`subintervals`) of
+phase change at most :data:`MAX_PHASE_PER_SUB` rad: error below 1e-20 relative to ``|v| h`` (exact to rounding).
+The node functions (numba's subset) use a buffer ``buf`` of stride ``m`` from ``buf[b]``: phases, cosines at
+``+ m``, sines at ``+ 2m``.
 """
 
 from __future__ import annotations

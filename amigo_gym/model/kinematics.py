@@ -261,11 +261,8 @@ class SteadyCircle(NamedTuple):
 
 def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
     """Steady state of H on a circle of radius ``R`` [m] with A at constant speed ``v_A`` [m/s], ``direction`` ``d``
-    +1 (left turn) or -1: ``R_A = sqrt(R^2 - l3^2)``, ``betadot = d v_A / R_A``, ``theta - beta = d atan(l3 / R_A)``.
-
-    Raises:
-        ValueError: unless ``R > l3``.
-    """
+    +1 (left turn) or -1: ``R_A = sqrt(R^2 - l3^2)``, ``betadot = d v_A / R_A``, ``theta - beta = d atan(l3 / R_A)``;
+    ``ValueError`` unless ``R > l3``."""
     r = np.asarray(radius, dtype=np.float64)
     if np.any(~(r > robot.l3)):
         raise ValueError(f"radius must exceed l3 = {robot.l3} m for a steady state, got {radius!r}")

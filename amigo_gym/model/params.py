@@ -1,18 +1,7 @@
 """The robot's parameters as a frozen, validated dataclass, and the checks every setting uses.
 
-Every length is in metres, every angle in radians, every time in seconds. Parameters are passed
-explicitly to the pure functions of :mod:`amigo_gym.model.kinematics`, :mod:`amigo_gym.paths` and
-:mod:`amigo_gym.task.v1` (whose ``TrackingParams`` holds the task's settings); there are no module-level settings.
-
-Sources
--------
-* Construction data: Table 1 of the AmigoBot paper (docs/model.md), read as in ``docs/model.md``:
-  ``l1 = 0.12, l3 = 0.08, l4 = 0.03, l5 = 0.12, r1 = r2 = 0.05, r3 = 0.03`` m.
-* Limits of the real robot: Adept MobileRobots' (formerly ActivMedia) AmigoBot robot parameter
-  files and the MobileSim simulator model of the AmigoBot-SH, as collected in ``docs/model.md``:
-  maximum speed 0.75 m/s (0.5 m/s for the older AmigoBot), acceleration 0.3 m/s^2, deceleration
-  0.75 m/s^2, rotation 0.87 rad/s with rotational acceleration 0.87 rad/s^2 and deceleration
-  2.5 rad/s^2; body 0.330 m long and 0.279 m wide, bounding radius 0.18 m.
+Lengths in metres, angles in radians, times in seconds; parameters are passed explicitly (no module-level
+settings). Sources (the paper's Table 1, the manufacturer's parameter files and MobileSim model): ``docs/model.md``.
 """
 
 from __future__ import annotations
@@ -25,20 +14,15 @@ from typing import Any
 #: largest ``|x_A|``, ``|y_A|`` of a start pose [m]: float64 still resolves 2.3e-10 m there (ulp(1e6)),
 #: far below any tracking error the task measures
 POSE_LIMIT = 1e6
-#: largest ``|beta|`` of a start pose [rad] (159 155 turns): the heading keeps a resolution of 1.2e-10 rad.
-#: At 1e17 rad one ulp is 16 rad and a step's turn of under a radian is lost: the robot could not turn.
+#: largest ``|beta|`` of a start pose [rad] (159 155 turns): the heading keeps a resolution of 1.2e-10 rad
 HEADING_LIMIT = 1e6
 
-# Ranges of the parameters. They are physical (a millimetre to a hundred metres for the robot's lengths,
-# up to 100 m/s) and chosen so that every intermediate of a step stays finite and resolved in float64:
-# the largest wheel rate is max_speed / r <= 1e5 rad/s, the largest turn rate max_speed / l1 <= 1e5 rad/s,
-# squares of rate changes <= 4e10, the smoothness scale (w_max sigma_smooth)^2 in [1e-28, 1e22], the
-# observation bound 2 termination_distance / error_scale <= 2e7 (finite in float32), the lap time finite.
+# Ranges: physical, and such that every intermediate of a step stays finite and resolved in float64 (wheel and
+# turn rates <= 1e5 rad/s, (w_max sigma_smooth)^2 in [1e-28, 1e22], observation bound <= 2e7).
 LENGTH_RANGE = (1e-3, 1e2)  # robot lengths [m]
 SPEED_RANGE = (1e-3, 1e2)  # max_speed [m/s]
 MIN_SPEED = 1e-6  # reference speed [m/s]
 LIMIT_RANGE = (1e-6, 1e3)  # max_acceleration, max_deceleration [m/s^2], max_rotation_rate [rad/s]
-SIGMA_RANGE = (1e-6, 1e6)  # reward scales
 
 
 def show_value(value: Any, width: int = 60) -> str:
@@ -50,12 +34,7 @@ def show_value(value: Any, width: int = 60) -> str:
 
 
 def _real(value: Any) -> float | None:
-    """``value`` as a Python float if it is a real number (not a bool), else ``None``.
-
-    Accepted: ``int``, ``float``, numpy integer and floating scalars, ``fractions.Fraction`` (every
-    :class:`numbers.Real`) and 0-d numpy arrays of an integer or floating dtype. Refused: ``bool`` and
-    ``numpy.bool_``, strings, complex numbers, ``None``, sequences and arrays of other shapes.
-    """
+    """``value`` as a float if a :class:`numbers.Real` or a 0-d integer or floating array (not a bool), else None."""
     if isinstance(value, bool) or type(value).__name__ == "bool_":
         return None
     if isinstance(value, numbers.Real):
@@ -77,10 +56,7 @@ def check_real(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """``value`` as a Python ``float``, checked to be a finite real number in the given interval.
-
-    Converting to ``float`` keeps numpy scalar types (``np.float32``) out of the exact state and makes
-    equal settings compare (and hash) equal only when their values are equal.
+    """``value`` as a Python ``float`` (no numpy scalars in the state), checked finite and in the interval.
 
     Raises:
         ValueError: one line naming ``owner.name``, the allowed range and the offending value (also for
@@ -102,11 +78,8 @@ def check_real(
 def check_pair(
     owner: str, name: str, value: Any, low: float, high: float, *, low_open: bool = False
 ) -> tuple[float, float]:
-    """``value`` as a pair of floats ``(a, b)`` with ``a <= b``, each a :func:`check_real` of the interval.
-
-    Raises:
-        ValueError: one line naming ``owner.name``, the interval and the value.
-    """
+    """``value`` as a pair of floats ``(a, b)`` with ``a <= b``, each a :func:`check_real` of the interval; else a
+    one-line ``ValueError`` naming ``owner.name``, the interval and the value."""
     if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 2:
         rng = _interval(low, high, low_open, False)
         raise ValueError(f"{owner}.{name} must be a pair (low, high) within {rng}, got {value!r}")
@@ -118,9 +91,7 @@ def check_pair(
 
 def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
     """The interval of :func:`check_real`'s messages, e.g. ``(0, inf]``."""
-    lo_b = "(" if low_open else "["
-    hi_b = ")" if high_open else "]"
-    return f"{lo_b}{low:g}, {high:g}{hi_b}"
+    return f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
 
 
 #: the former name of :func:`check_real`
@@ -150,9 +121,8 @@ class RobotParams:
         body_length: body length, for rendering [m]: 0.330.
         body_width: body width, for rendering [m]: 0.279.
 
-    Ranges (refused outside, with a one-line ``ValueError``; see the module's range constants): every
-    length in [1e-3, 100] m, ``l4`` in [1e-6, r1), ``max_speed`` in [1e-3, 100] m/s, the other limits
-    in [1e-6, 1e3]. Values are stored as Python floats; bools, strings and other non-numbers are refused.
+    Ranges (else a one-line ``ValueError``): lengths in [1e-3, 100] m, ``l4`` in [1e-6, r1), ``max_speed`` in
+    [1e-3, 100] m/s, the other limits in [1e-6, 1e3]; stored as Python floats, non-numbers and bools refused.
     """
 
     l1: float = 0.12
@@ -179,8 +149,5 @@ class RobotParams:
 
     @property
     def max_wheel_rate(self) -> float:
-        """Largest wheel rate magnitude [rad/s]: ``max_speed / max(r1, r2)`` (15 rad/s by default).
-
-        Both wheels share this limit so that neither rim exceeds ``max_speed``.
-        """
+        """Largest wheel rate magnitude [rad/s] of both wheels: ``max_speed / max(r1, r2)`` (15 by default)."""
         return self.max_speed / max(self.r1, self.r2)

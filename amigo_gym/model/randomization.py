@@ -1,11 +1,9 @@
-"""Domain randomisation of AmigoBot-v1: ranges in frozen dataclasses, drawn from the env's generator.
+"""Domain randomisation of AmigoBot-v1 (:class:`Randomization`; :data:`PRESETS` are the project's choices).
 
 :func:`sample` draws one episode's values from the env's ``np_random`` in a fixed order (``reset(seed=...)``
-reproduces them); per-step draws (slip, measurement noise) are a pure function of a per-episode key and the step
-(:func:`step_noise`, a counter-based SplitMix64), identical for one robot and a batch. The ranges: scales of each
-true wheel radius and of the half track [-], the slip bound ``s_max`` (each step ``s_i ~ U(0, s_max)``), the delay
-[s], and the standard deviations of Gaussian noise on the measured position [m], heading [rad] and wheel rates
-[rad/s] (the true state is never perturbed). :data:`PRESETS` are the project's choices, not measurements.
+reproduces them); per-step draws (slips ``s_i ~ U(0, s_max)``, Gaussian measurement noise; the true state is never
+perturbed) are a pure function of a per-episode key and the step (:func:`step_noise`, a counter-based SplitMix64),
+the same for one robot and a batch.
 """
 
 from __future__ import annotations
@@ -69,11 +67,8 @@ PRESETS: dict[str, Randomization] = {
 
 
 def make_randomization(value: str | Randomization | Mapping[str, Any] | None) -> Randomization:
-    """``randomize=``: a preset name, a :class:`Randomization`, or a mapping of its fields.
-
-    Raises:
-        ValueError: an unknown preset or field, or a bad range (naming the field, value and allowed range).
-    """
+    """``randomize=``: a preset name, a :class:`Randomization`, or a mapping of its fields; ``ValueError`` for an
+    unknown preset or field, or a bad range (naming the field, value and allowed range)."""
     if value is None:
         return PRESETS["none"]
     if isinstance(value, Randomization):

@@ -32,19 +32,11 @@ class Preview(NamedTuple):
 
 
 def preview(path: PathSpec, x: Real, y: Real, heading: Real, s: Real, distances: Sequence[float]) -> Preview:
-    r"""Path points at arc lengths ``s + d_i`` in the frame of the pose ``(x, y, heading)``, with the curvature.
-
-    With ``(dx, dy) = c(s + d_i) - (x, y)``:
+    r"""The :class:`Preview` ``(..., K)`` of the path points at arc lengths ``s + d_i`` [m] (``s`` [m] a column
+    ``(...)``, ``distances`` ``d_i`` [m] ``K`` finite numbers, negative behind) in the frame of the pose ``x, y``
+    [m], ``heading`` ``beta`` [rad] (columns ``(...)``): with ``(dx, dy) = c(s + d_i) - (x, y)``,
 
     .. math:: f_i = \cos\beta\,dx + \sin\beta\,dy, \qquad l_i = -\sin\beta\,dx + \cos\beta\,dy.
-
-    Args:
-        x, y, heading: the frame's origin [m] and heading ``beta`` [rad], columns of one shape ``(...)``.
-        s: progress of the reference point on the path [m], a column of the same shape.
-        distances: ``d_i`` [m], ``K`` finite numbers (negative: behind).
-
-    Returns:
-        :class:`Preview` with arrays of shape ``(..., K)``.
     """
     d = np.asarray([check_real("preview", f"distances[{i}]", v) for i, v in enumerate(distances)], dtype=np.float64)
     sk = np.asarray(s, dtype=np.float64)[..., None] + d
@@ -167,24 +159,14 @@ QUANTITIES = {
 
 @dataclass(frozen=True)
 class Feasibility:
-    """What tracking a path at a reference speed needs, and the binding limit.
-
-    Attributes:
-        speed: the reference speed [m/s] of ``speed_of``: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
-        peaks: largest magnitude of each quantity over the path: ``wheel_rate`` [rad/s], ``wheel_acceleration``
-            [rad/s^2], ``acceleration`` (of A along its heading, [m/s^2]), ``rotation_rate`` [rad/s],
-            ``rotational_acceleration`` [rad/s^2].
-        peak_s: arc length of each peak [m].
-        peak_wheel: for the wheel quantities, ``"outer"``, ``"inner"`` (of the turn there) or ``"each"``.
-        limits: the limits checked (name as in ``peaks``, value).
-        binding: the quantity with the largest ratio of need to limit (``"heading lag"`` if the lag reaches
-            90 degrees: H cannot follow the path forward); ``needed``, ``limit``: its peak and limit.
-        radius: path radius ``1/|kappa|`` at the binding peak [m] (``inf`` on a straight).
-        feasible: every peak within its limit and the lag below 90 degrees.
-        max_heading_lag: largest ``|theta - beta|`` [rad].
-        exceeded: for each checked quantity the arc-length intervals ``(s_from, s_to)`` [m] over whose samples the
-            need exceeds the limit (at most :data:`MAX_INTERVALS`, the rest merged into the last), and
-            ``"heading lag"`` where the lag reaches 90 degrees.
+    """What tracking a path at the reference ``speed`` [m/s] of ``speed_of`` (``"A"``, AmigoBot-v0's, or ``"H"``)
+    needs: the ``peaks`` over the path of the :data:`QUANTITIES` (units there; ``acceleration`` of A along its
+    heading) at arc lengths ``peak_s`` [m], ``peak_wheel`` ``"outer"``, ``"inner"`` or ``"each"`` for the wheel
+    ones, the ``limits`` checked; ``binding``: the quantity of the largest need over limit (``"heading lag"`` if the
+    lag reaches 90 degrees: H cannot follow), its ``needed`` and ``limit``, the path ``radius`` ``1/|kappa|`` [m]
+    there (``inf`` on a straight); ``feasible``: all within the limits and the lag below 90 degrees;
+    ``max_heading_lag`` ``max |theta - beta|`` [rad]; ``exceeded``: per quantity (and ``"heading lag"``) the
+    arc-length intervals ``(s_from, s_to)`` [m] over the limit (at most :data:`MAX_INTERVALS`, the rest merged).
     """
 
     speed: float
@@ -248,13 +230,9 @@ def feasibility(
     Peaks are over the samples (both sides of every breakpoint): a smooth maximum between samples ``h`` apart is
     underestimated by at most ``h^2/8 max|f''|``.
 
-    Args:
-        speed: the reference speed [m/s], in (0, 10], of ``speed_of``: ``"A"`` (AmigoBot-v0's ``speed``) or ``"H"``.
-        robot: geometry and the wheel-rate limit (default :class:`RobotParams`).
-        max_wheel_rate: [rad/s], default ``robot.max_wheel_rate``.
-        max_wheel_acceleration, max_acceleration, max_rotation_rate, max_rotational_acceleration: further
-            limits [rad/s^2, m/s^2, rad/s, rad/s^2]; None: not checked (the peaks are still reported).
-        initial_lag: as :func:`heading_lag_profile`.
+    ``speed`` [m/s] in (0, 10]; ``robot`` default :class:`RobotParams`; ``max_wheel_rate`` [rad/s] default
+    ``robot.max_wheel_rate``; the other limits (units of :data:`QUANTITIES`) None: not checked (peaks reported);
+    ``initial_lag`` as :func:`heading_lag_profile`.
     """
     robot = RobotParams() if robot is None else robot
     v = check_real("feasibility", "speed", speed, 0.0, 10.0, low_open=True)

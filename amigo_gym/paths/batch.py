@@ -1,10 +1,7 @@
-"""A batch of paths, one per sub-environment: the column interface of a path on ``(N,)`` columns.
-
-:class:`PathBatch` holds ``N`` paths (any mix of families and user paths) and offers
-:class:`~amigo_gym.paths.clothoid.PathSpec` on ``(N,)`` columns: row ``i`` of its results equals ``paths[i]``'s own
-result for row ``i``'s floats. The :class:`~amigo_gym.paths.clothoid.ClothoidPath` s' flat vectors are stacked into
-a padded ``(N, W)`` table evaluated row by row; a batch of one object calls it on the columns directly (no table);
-other paths are called once per object on their rows' ``(k,)`` columns.
+"""A batch of ``N`` paths, one per sub-environment (any mix of families and user paths), with
+:class:`~amigo_gym.paths.clothoid.PathSpec` on ``(N,)`` columns: row ``i`` of a result equals ``paths[i]``'s own for
+row ``i``'s floats. :class:`~amigo_gym.paths.clothoid.ClothoidPath` s are evaluated row by row from a padded
+``(N, W)`` table of their flat vectors, one object for all rows on the columns, other paths once per object.
 """
 
 from __future__ import annotations

@@ -89,20 +89,12 @@ def _pose(x: Any, y: Any, th: Any, k: Any, s: Real) -> PathPose:
 
 
 class PathPoint(NamedTuple):
-    """The closest path point to query points (``locate`` of every path), as columns.
-
-    Attributes:
-        s: arc length within one traversal [m]: ``[0, length)`` closed, ``[0, length]`` open.
-        progress: the unwrapped arc length [m] (``s`` plus whole laps, continuing from the hint ``s_prev``).
-        x, y: the closest point [m].
-        tangent_angle: ``theta(progress)`` [rad], unwrapped.
-        curvature: signed curvature [1/m].
-        curvature_rate: ``dkappa/ds`` [1/m^2].
-        cross_track_error: ``(p - c) . n`` [m], positive left (at a clamped end, the lateral part only).
-        cos_theta, sin_theta: the unit tangent [-].
-        distance: ``|p - c|`` [m].
-        status: :data:`~amigo_gym.paths.clothoid.STATUS_INTERIOR` (0), ``STATUS_START``, ``STATUS_END`` or
-            ``STATUS_WINDOW``.
+    """The closest path point ``c`` to query points ``p`` (``locate`` of every path), as columns: ``s`` [m] within
+    one traversal (``[0, length)`` closed, ``[0, length]`` open), ``progress`` [m] unwrapped (``s`` plus whole laps
+    from the hint ``s_prev``), ``x, y`` [m], ``tangent_angle`` [rad] unwrapped, ``curvature`` [1/m],
+    ``curvature_rate`` [1/m^2], ``cross_track_error = (p - c) . n`` [m] (positive left; at a clamped end the
+    lateral part), ``cos_theta, sin_theta``, ``distance = |p - c|`` [m] and ``status`` (``STATUS_INTERIOR`` 0,
+    ``STATUS_START``, ``STATUS_END``, ``STATUS_WINDOW`` of :mod:`amigo_gym.paths.clothoid`).
     """
 
     s: Real
@@ -140,14 +132,8 @@ class CirclePath(_Projecting):
     .. math:: x_H = R \sin\phi, \quad y_H = R(1 - \cos\phi), \quad \phi = s / R.
 
     In general ``theta(s) = theta0 + d s / R``, ``p(s) = c + d R (sin theta, -cos theta)``, centre
-    ``c = p0 + d R (-sin theta0, cos theta0)``. Projections' arc lengths lie in ``[0, 2 pi R)``; any ``s`` is
-    accepted (laps repeat).
-
-    Attributes:
-        radius: R [m], > 0.
-        start: start point ``(x, y)`` [m].
-        start_angle: tangent angle at the start [rad].
-        direction: +1 (left) or -1 (right).
+    ``c = p0 + d R (-sin theta0, cos theta0)``, with ``R = radius`` [m] > 0, ``p0 = start`` [m], ``theta0 =
+    start_angle`` [rad], ``d = direction``. Projections' arc lengths lie in ``[0, 2 pi R)``; laps repeat.
     """
 
     radius: float = 1.0
@@ -189,10 +175,8 @@ class CirclePath(_Projecting):
         return np.full(np.shape(s), self.direction / self.radius)
 
     def point(self, s: ArrayLike) -> Array:
-        th = self.tangent_angle(s)
-        c = self.center
-        dr = self.direction * self.radius
-        return np.stack((c[0] + dr * np.sin(th), c[1] - dr * np.cos(th)), axis=-1)
+        p = self.pose_columns(np.asarray(s, dtype=np.float64))
+        return pack(p.x, p.y)
 
     def curvature_columns(self, s: Real) -> Real:
         return self.direction / self.radius

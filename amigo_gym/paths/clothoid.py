@@ -7,16 +7,11 @@ optionally closed (laps). On a piece of curvature ``kappa(u) = k0 + c u`` from `
     \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
     \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
 
-by :func:`amigo_gym.model.fresnel.advance`, exact to rounding while ``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``
-(segments are split into such pieces, their start poses chained at construction).
-
-Conventions: arc length ``s`` [m], tangent angle ``theta(s)`` [rad] continuous (laps add the total turn),
-curvature ``kappa = dtheta/ds`` [1/m] positive turning left, cross-track error ``e = (p - c(s)) . n`` [m],
-``n = (-sin theta, cos theta)``. An open path continues straight beyond its ends; a closed one repeats with period
-:attr:`ClothoidPath.length`.
-
-A path is stored as a flat float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse
-samples' ``x``, ``y``); the functions on it are in numba's subset (compiled by :mod:`amigo_gym.sim._kernels_v1`).
+by :func:`amigo_gym.model.fresnel.advance`, exact to rounding on pieces with ``|k0| u + |c| u^2 / 2 <=
+MAX_PHASE_PER_SUB``. Conventions as :mod:`amigo_gym.paths.classic` (``theta`` continuous: laps add the total turn);
+an open path continues straight beyond its ends, a closed one repeats with period :attr:`ClothoidPath.length`.
+Stored as a flat float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse samples'
+``x``, ``y``); the functions on it are in numba's subset.
 """
 
 from __future__ import annotations
@@ -64,14 +59,9 @@ CLOSURE_TOLERANCE = 1e-9
 
 @dataclass(frozen=True)
 class ClothoidSegment:
-    """One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` for ``0 <= u <= length``
-    (a line: both 0; an arc: ``curvature_rate = 0``).
-
-    Attributes:
-        length: arc length [m], in (0, 1e5].
-        curvature: signed curvature at the start [1/m], in [-1e4, 1e4] (positive turns left).
-        curvature_rate: ``dkappa/ds`` [1/m^2], finite; the end curvature must lie in [-1e4, 1e4] too.
-    """
+    """One clothoid segment: curvature ``kappa(u) = curvature + curvature_rate u`` [1/m] for ``0 <= u <= length``
+    [m] in (0, 1e5]; ``curvature`` (positive left) and the end curvature in [-1e4, 1e4], ``curvature_rate``
+    [1/m^2] finite (a line: both 0; an arc: rate 0)."""
 
     length: float
     curvature: float = 0.0
@@ -161,11 +151,9 @@ class _Tables:
 
 
 class PathLoops(NamedTuple):
-    """Compiled path-building loops (:func:`amigo_gym.sim.fast_v1.path_loops`), the ``loops=`` of the path
-    constructors (without them Python runs the same functions): ``chain`` :func:`chain_pieces`, ``samples``
-    :func:`sample_points`, ``run`` :func:`amigo_gym.paths.families.run_segments`, ``lane``
-    :func:`amigo_gym.paths.families.lane_change_shape`, ``locate`` :func:`locate_rows`, ``pose`` :func:`pose_rows`;
-    their scratch and nodes supplied."""
+    """The compiled :func:`chain_pieces`, :func:`sample_points`, :func:`~amigo_gym.paths.families.run_segments`,
+    :func:`~amigo_gym.paths.families.lane_change_shape`, :func:`locate_rows`, :func:`pose_rows` (scratch and nodes
+    supplied): the ``loops=`` of the path constructors (:func:`amigo_gym.sim.fast_v1.path_loops`)."""
 
     chain: Callable[..., tuple[float, float, float, float]]
     samples: Callable[..., None]
@@ -177,18 +165,11 @@ class PathLoops(NamedTuple):
 
 @dataclass(frozen=True)
 class ClothoidPath(_Projecting):
-    """A path of clothoid segments from a start pose; exact geometry, batched evaluation and projection.
-
-    Attributes:
-        segments: the segments in order (a non-empty tuple of :class:`ClothoidSegment`).
-        start: start point ``(x, y)`` [m].
-        start_angle: tangent angle at the start [rad].
-        closed: the path repeats; its end pose must then equal its start pose (to 1e-9 relative to
-            ``max(1 m, length)`` in position and 1e-9 rad in angle modulo ``2 pi``).
-        sample_spacing: largest spacing [m] of the coarse projection samples, in [1e-4, 1]; they are also at most
-            ``0.1 / max|kappa|`` apart. Default 0.02.
-        loops: (constructor only, not stored) the compiled path-building loops (:class:`PathLoops`), or None:
-            Python; the same path either way.
+    """A path of clothoid ``segments`` (a non-empty tuple) from ``start`` ``(x, y)`` [m] at ``start_angle`` [rad];
+    exact geometry, batched evaluation and projection. ``closed``: it repeats, its end pose equal to its start pose
+    (to 1e-9 relative to ``max(1 m, length)`` and 1e-9 rad modulo ``2 pi``). ``sample_spacing`` [m] in [1e-4, 1]:
+    of the coarse projection samples (also at most ``0.1 / max|kappa|``). ``loops`` (not stored):
+    :class:`PathLoops` or None (Python), the same path either way.
     """
 
     segments: tuple[ClothoidSegment, ...]
@@ -267,8 +248,7 @@ class ClothoidPath(_Projecting):
 
     @cached_property
     def _flat_list(self) -> list[float]:
-        # the flat vector as Python floats (faster to index than the array)
-        out: list[float] = self._t.flat.tolist()
+        out: list[float] = self._t.flat.tolist()  # faster to index than the array
         return out
 
     @property
@@ -343,12 +323,9 @@ class ClothoidPath(_Projecting):
 
         1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
            window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
-           ``max_advance``), smaller than half the arc length between branches that pass near each other (a
-           figure-8's crossing) and larger than the advance between calls.
-        2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``:
-           ``s <- s + g / max(1 - kappa e, 0.05)``, the step limited to ``h``, ``s`` kept in the window (and in
-           ``[0, L]`` on an open path); at most :data:`NEWTON_ITERATIONS` iterations, the last below
-           :data:`NEWTON_TAYLOR_STEP`.
+           ``max_advance``), less than half the arc length between branches that pass near each other.
+        2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``, steps limited to ``h``,
+           ``s`` kept in the window (and in ``[0, L]`` on an open path) (:func:`project_flat`).
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
 
         ``x``, ``y``, ``s_prev``: floats or arrays, broadcast; a :class:`PathPoint` of their shape.
@@ -507,10 +484,9 @@ def project_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
 ) -> FlatPoint:
     """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most
-    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)``, the last one below
-    :data:`NEWTON_TAYLOR_STEP` (its pose to first order), with
-    ``d = g / q``, ``q = max(1 - kappa e, MIN_NEWTON_DENOMINATOR)``, or on an arc (``c = 0``, ``kappa != 0``) the
-    exact ``d = atan2(kappa g, q) / kappa``; then the foot terms and the status."""
+    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` (the last below
+    :data:`NEWTON_TAYLOR_STEP`, its pose to first order), ``d = g / q``, ``q = max(1 - kappa e,
+    MIN_NEWTON_DENOMINATOR)`` (on an arc exactly ``atan2(kappa g, q) / kappa``); then the foot terms and status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
     for _ in range(NEWTON_ITERATIONS):
@@ -612,12 +588,8 @@ def chain_pieces(
     out: Buffer, n: int, segs: Buffer, n_segs: int, x: float, y: float, th: float, buf: Buffer, nodes: Buffer
 ) -> tuple[float, float, float, float]:
     """Split the segments ``segs[4 g : 4 g + 4]`` (length [m], curvature [1/m], rate [1/m^2], piece count) into
-    pieces and chain their start poses from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into
-    ``out[q], out[n + q], ..., out[5 n + q]`` (``buf``, ``nodes`` as :func:`pose_flat`).
-
-    Returns:
-        ``(x, y, theta, length)`` at the path's end.
-    """
+    pieces chained from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into ``out[q], out[n + q], ...,
+    out[5 n + q]`` (``buf``, ``nodes`` as :func:`pose_flat`); returns ``(x, y, theta, length)`` at the end."""
     q = 0
     s_seg = 0.0
     for g in range(n_segs):

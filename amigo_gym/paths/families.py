@@ -1,9 +1,7 @@
-"""Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry.
-
-:data:`FAMILIES` names them with their parameter ranges; :func:`make_family_path` builds one by name, checking
-every parameter (a one-line ``ValueError`` naming the field, the value and the range). Every constructor takes
-``loops``: the compiled path-building loops (:class:`~amigo_gym.paths.clothoid.PathLoops`) or None (Python); the
-path is the same either way. :func:`run_segments` and :func:`lane_change_shape` are in numba's subset.
+"""Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry
+:data:`FAMILIES` (parameter ranges; :func:`make_family_path` builds one by name, a one-line ``ValueError`` naming a
+bad field, value and range). ``loops``: :class:`~amigo_gym.paths.clothoid.PathLoops` or None (Python), the same
+path either way; :func:`run_segments` and :func:`lane_change_shape` are in numba's subset.
 """
 
 from __future__ import annotations
@@ -168,13 +166,11 @@ def figure8(
     size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
     """A closed figure-8 of width ``size`` [m] in (0, 1000] crossing itself at the origin at ``crossing_angle``
-    [rad] in [0.3, 2.0], with continuous curvature.
-
-    With lobe radius 1, the right lobe leaves the origin at heading ``phi = crossing_angle / 2`` along a line of
-    length ``a``, turns right through a clothoid (curvature 0 to -1 over ``b = transition`` in [0, 1.5]), an arc and
-    the mirror clothoid, and returns along a line of length ``a = -y_m / sin(phi)`` (the lobe's middle on the x
-    axis). The left lobe is the mirror image; the whole is scaled to ``size``. The path starts at the right lobe's
-    rightmost point heading ``-pi/2`` and crosses the origin at ``s = L/4`` and ``3L/4``.
+    [rad] in [0.3, 2.0], curvature continuous. With lobe radius 1, the right lobe leaves the origin at heading
+    ``phi = crossing_angle / 2`` along a line of length ``a = -y_m / sin(phi)`` (the lobe's middle on the x axis),
+    turns right through a clothoid (curvature 0 to -1 over ``b = transition`` in [0, 1.5]), an arc and the mirror
+    clothoid, and returns; the left lobe mirrors it, the whole scaled to ``size``. Starts at the right lobe's
+    rightmost point heading ``-pi/2``; crosses the origin at ``s = L/4`` and ``3L/4``.
     """
     size, phi, b = _checked("figure8", FIGURE8_RANGES, (size, crossing_angle, transition))
     phi = 0.5 * phi
@@ -210,11 +206,9 @@ def lane_change(
     offset: float = 0.5, length: float = 3.0, lead: float = 1.0, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
     """A lane change: ``lead`` [m] in [0, 1000] along x0, a sideways shift by ``offset`` [m] in [-100, 100]
-    (positive left) over ``length`` [m] in (0, 1000], ``lead`` again.
-
-    The shift is four clothoids of length ``q``, curvature ``0 -> k -> 0 -> -k -> 0`` (left shift), the heading
-    rising to ``theta_m = k q``; ``theta_m`` solves ``Y1/X1 = |offset| / length`` for the unit half S-curve
-    (:func:`lane_change_shape`), ``q = length / (2 X1)``; ``theta_m <= 1.2 rad`` (``|offset| <~ 0.68 length``).
+    (positive left) over ``length`` [m] in (0, 1000], ``lead`` again. The shift: four clothoids of length ``q``,
+    curvature ``0 -> k -> 0 -> -k -> 0``, heading up to ``theta_m = k q <= 1.2 rad`` (``|offset| <~ 0.68 length``)
+    solving ``Y1/X1 = |offset| / length`` for the unit half S-curve (:func:`lane_change_shape`), ``q = L / (2 X1)``.
     """
     off, ln, lead = _checked("lane_change", LANE_CHANGE_RANGES, (offset, length, lead))
     ratio = abs(off) / ln
@@ -239,11 +233,10 @@ def random_path(
     min_piece: float = 0.5, max_piece: float = 3.0, *, loops: PathLoops | None = None,
 ) -> ClothoidPath:  # fmt: skip
     """A random smooth open path of ``length`` [m] in (0, 10000] from the origin along x0, ``|kappa| <=
-    max_curvature`` [1/m] in (0, 100], ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] in (0, 1000].
-
-    From 0 the curvature alternates ramps (linear to a target ``U(-max_curvature, max_curvature)`` over a length
-    ``U(min_piece, max_piece)`` [m] in [0.01, 100], stretched to ``|delta kappa| / max_curvature_rate`` if needed)
-    and holds (an arc of length ``U(0, max_piece)``); the last piece is cut at ``length``. ``rng`` is consumed.
+    max_curvature`` [1/m] in (0, 100], ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] in (0, 1000]: from 0 the
+    curvature alternates ramps (linear to ``U(-max_curvature, max_curvature)`` over ``U(min_piece, max_piece)`` [m]
+    in [0.01, 100], stretched to ``|delta kappa| / max_curvature_rate`` if needed) and holds (arcs of
+    ``U(0, max_piece)``), cut at ``length``; ``rng`` is consumed.
     """
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"random_path.rng must be a numpy.random.Generator, got {rng!r}")
@@ -296,11 +289,8 @@ FAMILIES: dict[str, Family] = {
 def make_family_path(
     name: str, rng: np.random.Generator | None = None, *, loops: PathLoops | None = None, **params: Any
 ) -> ClothoidPath:
-    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at defaults).
-
-    Raises:
-        ValueError: unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``.
-    """
+    """The path of family ``name`` (a key of :data:`FAMILIES`) with ``params`` (the rest at defaults); ``ValueError``
+    for an unknown family or parameter, a parameter out of range, or no ``rng`` for ``"random"``."""
     fam = FAMILIES.get(name) if isinstance(name, str) else None
     if fam is None:
         raise ValueError(f"path family must be one of {sorted(FAMILIES)}, got {name!r}")

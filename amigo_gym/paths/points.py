@@ -1,19 +1,18 @@
 """Paths from data: a :class:`~amigo_gym.paths.ClothoidPath` of continuous curvature fitted to points ``(n, 2)``
-``(x, y)`` [m] in path order (:func:`fit_points`; docs/amigobot_v1.md, "Paths of your own"):
+[m] in path order (:func:`fit_points`; docs/amigobot_v1.md, "Paths of your own"):
 
-1. an interpolating cubic spline in the chord-length parameter (not-a-knot ends if open, periodic if closed);
-2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a
-   :class:`~amigo_gym.paths.ClothoidSegment` of the spline's arc length, its curvature linear between the
-   spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at the step's ends;
+1. a cubic spline through them in the chord-length parameter (not-a-knot ends if open, periodic if closed);
+2. steps of at most ``step`` [m] of chord and :data:`MAX_STEP_TURN` of turn, each a clothoid of the spline's arc
+   length, its curvature linear between the spline's ``kappa = (x' y'' - y' x'') / (x'^2 + y'^2)^{3/2}`` at its ends;
 3. a closed path's curvature corrected by the smallest ``c_0 + sum_q (c cos + c sin)(q w s)``, ``q = 1, 2``,
    ``w = 2 pi / L``, closing it to rounding (Gauss–Newton);
-4. ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length must be within ``tolerance`` (``step`` halved up to
+4. ``max_i |c(s_i) - p_i|`` [m] at each point's arc length within ``tolerance`` (``step`` halved up to
    :data:`MAX_REFINEMENTS` times), else ``ValueError``.
 
-With ``smoothing=sigma`` [m] (the points' noise) points are first averaged in groups of ``g`` (a power of 2,
-points ``g`` apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline
-(Whittaker–Reinsch, least ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the
-means; at an open path's ends the curvature falls to 0.
+With ``smoothing=sigma`` [m] (the points' noise) points are averaged in groups of ``g`` (a power of 2: points ``g``
+apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline (Whittaker–Reinsch, least
+``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the means (an open path's end
+curvature 0).
 """
 
 from __future__ import annotations
@@ -56,16 +55,10 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
 @dataclass(frozen=True)
 class PointsFit:
-    """The result of :func:`fit_points`.
-
-    Attributes:
-        path: the fitted :class:`~amigo_gym.paths.ClothoidPath`.
-        max_error: ``max_i |c(s_i) - p_i|`` [m] at each point's own arc length (``<= tolerance``).
-        point_s: ``(n,)`` arc length of each input point along the path [m].
-        step: the largest chord of a clothoid step used [m].
-        closure_correction: ``(c_0, ..., c_4)`` [1/m] of a closed path's curvature correction (empty if open).
-        smoothed: RMS distance [m] the smoothing moved the grouped points (0 without ``smoothing``; with it,
-            ``max_error`` and ``point_s`` refer to the smoothed points).
+    """The result of :func:`fit_points`: the ``path``, ``max_error = max_i |c(s_i) - p_i|`` [m] (``<= tolerance``)
+    at the points' arc lengths ``point_s`` ``(n,)`` [m], the largest chord ``step`` [m] used, a closed path's
+    ``closure_correction`` ``(c_0, ..., c_4)`` [1/m] (empty if open), and ``smoothed``: the RMS distance [m] the
+    smoothing moved the grouped points (0 without; with it, the errors and ``point_s`` are of the smoothed points).
     """
 
     path: ClothoidPath
@@ -216,13 +209,9 @@ def fit_points(
 ) -> PointsFit:  # fmt: skip
     """Fit a continuous-curvature :class:`~amigo_gym.paths.ClothoidPath` to points (module docstring).
 
-    Args:
-        points: ``(n, 2)`` x, y [m] in path order; a closed path may repeat its first point at the end.
-        closed: the path loops from the last point back to the first.
-        smoothing: None: through the points; ``sigma`` [m] in (0, 1]: the points' noise (module docstring).
-        tolerance: largest distance of a (smoothed) point from the path at its own arc length [m], in [1e-9, 1].
-        step: first largest chord of a clothoid step [m], in [1e-4, 10].
-        sample_spacing: the path's coarse projection samples [m].
+    ``points`` ``(n, 2)`` [m] in path order (a closed path may repeat its first point at the end); ``smoothing``
+    None (through the points) or the points' noise ``sigma`` [m] in (0, 1]; ``tolerance`` [m] in [1e-9, 1]; the
+    first ``step`` [m] in [1e-4, 10]; ``sample_spacing`` [m] of the path's coarse projection samples.
 
     Raises:
         ValueError: bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached
@@ -332,8 +321,7 @@ def from_points(
     points: Any, closed: bool = False, *, smoothing: float | None = None, tolerance: float = 1e-3, step: float = 0.02,
     sample_spacing: float = 0.02,
 ) -> ClothoidPath:  # fmt: skip
-    """A path ``AmigoBot-v1`` accepts, fitted to points ``(n, 2)`` [m] (:func:`fit_points`; examples:
-    docs/amigobot_v1.md, "Paths of your own")."""
+    """The path of :func:`fit_points` (examples: docs/amigobot_v1.md, "Paths of your own")."""
     fit = fit_points(points, closed, smoothing=smoothing, tolerance=tolerance, step=step, sample_spacing=sample_spacing)
     return fit.path
 
@@ -346,12 +334,8 @@ def _number(text: str, file: str, row: int, col: str) -> float:
 def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
     """The points ``(n, 2)`` [m] of a file, and the JSON's ``"closed"`` if given. JSON (``.json``):
     ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects; CSV (any
-    other suffix): a header naming ``x`` and ``y`` (case-insensitive), one point per row, blank and ``#`` lines
-    skipped.
-
-    Raises:
-        FileNotFoundError: no such file.
-        ValueError: one line naming the file and the row or key.
+    other suffix): a header naming ``x`` and ``y`` (any case), one point per row, blank and ``#`` lines skipped.
+    Raises ``FileNotFoundError`` (no such file) or ``ValueError`` (one line naming the file and the row or key).
     """
     f = Path(file)
     name = str(f)
@@ -410,15 +394,9 @@ def from_file(
     file: str | os.PathLike[str], closed: bool | None = None, *, smoothing: float | None = None,
     tolerance: float = 1e-3, step: float = 0.02, sample_spacing: float = 0.02,
 ) -> ClothoidPath:  # fmt: skip
-    """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`).
-
-    Args:
-        closed: None: the JSON's ``"closed"`` if it has one, else closed when the last point repeats the first
-            (to 1e-9 m), else open.
-
-    Raises:
-        ValueError: the file's or the fit's problem, one line naming the file.
-    """
+    """:func:`from_points` of the points of a CSV or JSON file (:func:`load_points`); ``closed`` None: the JSON's
+    ``"closed"`` if given, else whether the last point repeats the first (to 1e-9 m). Raises ``ValueError`` (the
+    file's or the fit's problem, one line naming the file)."""
     pts, use = load_points(file)
     if closed is not None:
         use = closed

@@ -1,18 +1,12 @@
-"""Path objects of your own: the duck-typed protocol ``AmigoBot-v1`` checks, and the wrapper that runs them.
+"""Path objects of your own: the duck-typed protocol ``AmigoBot-v1`` checks (:func:`check_path`, at ``gym.make``).
 
-The protocol (:func:`check_path` checks it at ``gym.make``):
-
-* ``length``: arc length of one traversal [m], a finite real number > 0;
-* ``closed``: ``True`` if the path repeats with period ``length``, else ``False``;
-* ``pose_columns(s)``: for arc lengths ``s`` [m] (a float or a float64 array), an object with ``x``, ``y`` [m],
-  ``theta`` (tangent angle [rad], continuous) and ``curvature`` [1/m, positive left], each of the shape of
-  ``s``; an open path is also asked for ``s < 0`` or ``s > length`` (continue along the end tangent).
-
-Optional: ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a :class:`~amigo_gym.paths.PathPoint`;
-without it samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`) are searched, then the Newton
-iteration of :meth:`~amigo_gym.paths.ClothoidPath.locate` runs on ``pose_columns``.
-
-Errors (at ``gym.make``, on a probe, and at any later step) name the path, the member and the value.
+``length`` [m] finite > 0 (one traversal); ``closed`` (repeats with period ``length``); ``pose_columns(s)``: for
+arc lengths ``s`` [m] (a float or a float64 array) an object with ``x``, ``y`` [m], ``theta`` [rad, continuous]
+and ``curvature`` [1/m, positive left] of the shape of ``s`` (an open path also for ``s`` beyond its ends: along
+the end tangent). Optional ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a
+:class:`~amigo_gym.paths.PathPoint`; else samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`)
+are searched, then :meth:`~amigo_gym.paths.ClothoidPath.locate`'s Newton iteration runs on ``pose_columns``.
+Errors (at ``gym.make``, on a probe, at any later step) name the path, the member and the value.
 """
 
 from __future__ import annotations
@@ -178,11 +172,8 @@ def _point(vals: list[Any], scalar: bool) -> PathPoint:
 
 def check_path(path: Any, owner: str = "AmigoBot-v1") -> Any:
     """``path`` as it is if a :class:`~amigo_gym.paths.ClothoidPath`, :class:`~amigo_gym.paths.CirclePath`,
-    :class:`~amigo_gym.paths.ManoeuvrePath` or :class:`UserPath`, else wrapped in a :class:`UserPath` (checked).
-
-    Raises:
-        ValueError: one line naming the path, the member and the value.
-    """
+    :class:`~amigo_gym.paths.ManoeuvrePath` or :class:`UserPath`, else a :class:`UserPath` of it (checked; a
+    one-line ``ValueError`` naming the path, the member and the value)."""
     if type(path) in (ClothoidPath, CirclePath, ManoeuvrePath) or isinstance(path, UserPath):
         return path
     return UserPath(path, owner)

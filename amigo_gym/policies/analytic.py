@@ -1,25 +1,19 @@
 r"""The analytic inverse solution as a state-feedback policy: the law of both envs, and ``AmigoBot-v0``'s policy.
 
-It reads either env's observation by field name: ``e = cross_track_error * error_scale`` [m] (positive left),
-``psi = atan2(sin_heading_error, cos_heading_error)`` [rad], ``kappa = curvature / l3`` [1/m] and
-``v_ref = reference_speed * max_speed`` [m/s]. H = A + l3 (cos beta, sin beta) moves along the path tangent and
-normal as
+From either env's observation (by field name): ``e = cross_track_error * error_scale`` [m] (positive left),
+``psi = atan2(sin_heading_error, cos_heading_error)`` [rad], ``kappa = curvature / l3`` [1/m], ``v_ref =
+reference_speed * max_speed`` [m/s]. H = A + l3 (cos beta, sin beta) moves along the path's tangent and normal as
 
 .. math::
     \begin{pmatrix} \dot H \cdot t \\ \dot H \cdot n \end{pmatrix}
     = \begin{pmatrix} \cos\psi & -l_3 \sin\psi \\ \sin\psi & l_3\cos\psi \end{pmatrix}
       \begin{pmatrix} v_A \\ \dot\beta \end{pmatrix},
 
-so H can be steered directly. ``speed_reference="A"`` (default, the paper's eqs 11-12) imposes ``v_A = v_ref`` and
-``edot = -k e``:
-
-.. math::
-    \dot\beta = \frac{-k\,e - v_{ref}\sin\psi}{l_3\cos\psi}
-
-(``k = 0``, ``feedforward_only=True``: the paper's inverse ODE in closed loop). ``speed_reference="H"`` imposes a
-constant tangential speed of H, ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)`` with
-``sin delta_ss = kappa l3``. The wheel rates are ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, the
-action ``clip(w / max_wheel_rate, -1, 1)``; ``cos psi`` is floored at :data:`COS_MIN`.
+``speed_reference="A"`` (default, the paper's eqs 11-12; ``k = 0``: its inverse ODE in closed loop) imposes
+``v_A = v_ref`` and ``edot = -k e``: :math:`\dot\beta = (-k e - v_{ref}\sin\psi) / (l_3\cos\psi)`.
+``speed_reference="H"`` imposes ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)``, ``sin delta_ss =
+kappa l3``. The wheel rates ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, the action ``clip(w /
+max_wheel_rate, -1, 1)``; ``cos psi`` floored at :data:`COS_MIN`.
 """
 
 from __future__ import annotations

@@ -1,12 +1,11 @@
 """Learned ``AmigoBot-v1`` policies in numpy (fast-PPO models, the residual policy) and :func:`load_pretrained`.
 
-A fast-PPO model is a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor's
-layers, the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``; with ``history = H > 0``
-the :data:`HISTORY_FIELDS` of the ``H`` previous steps, oldest first (the first observation at an episode's start);
-with ``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``. All are
-normalised, ``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action from the network's output ``u``:
-``a = clip(u, -1, 1)``, or ``clip(a0 + b clip(u, -1, 1), -1, 1)``; with ``filter_alpha = alpha < 1``,
-``a = p + alpha (a - p)`` from the previous command ``p``.
+A fast-PPO model: a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor,
+the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``, with ``history = H > 0`` the
+:data:`HISTORY_FIELDS` of the ``H`` previous steps (oldest first; at an episode's start the first observation), with
+``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``; normalised,
+``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action ``a = clip(u, -1, 1)`` of the output ``u`` (or ``clip(a0
++ b clip(u, -1, 1), -1, 1)``), with ``filter_alpha = alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``.
 """
 
 from __future__ import annotations
@@ -268,12 +267,8 @@ class FastPolicy(Policy):
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
     """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
     zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
-    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here.
-
-    Raises:
-        FileNotFoundError: no zip or no manifest.
-        ValueError: no ``sha256`` in the manifest, a different digest, or an unknown SB3 algorithm.
-        UntrustedFileError: an SB3 zip not trusted.
+    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here. Raises ``FileNotFoundError``
+    (no zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``.
     """
     p = Path(path)
     if not p.is_file():

@@ -1,16 +1,14 @@
 r"""Classical path trackers for ``AmigoBot-v1``: the exact inverse solution with integral action, and pure pursuit.
 
-Both read the observation by field name (``e``, ``psi``, ``kappa``, ``v_ref`` as in
-:mod:`amigo_gym.policies.analytic`; ``v_ahead = reference_speed_ahead * v_max``, the reference 1 s later; preview
-points ``(x_d, y_d)`` [m] in the frame of A).
+Both read the observation by field name (as :mod:`amigo_gym.policies.analytic`; ``v_ahead`` the reference 1 s
+later; preview points ``(x_d, y_d)`` [m] in the frame of A).
 
 :class:`AnalyticTrackingPolicy`: H's normal speed ``c = -k e - k_i z``, ``z = int e dt`` (``k_i |z| <=
-integral_limit``), and ``v = v_ref``: ``e'' + k e' + k_i e = 0`` on every path and speed profile; defaults
-``k = 1 1/s``, ``k_i = k^2/4`` (critically damped). Setpoints are scaled into ``+-w_max`` keeping ``omega / v``
-(:func:`limit_wheel_rates`). With a held command and the firmware's ramp ``a_w`` [rad/s^2], each step adds at
-most ``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))``, ``Wdot = v^2 K / (1 - (l3 kappa_max)^2)^2``
-(``K = max |dkappa/ds|``), so ``|e| <= ||h||_1 delta`` with ``h`` the loop's impulse response
-(:func:`zoh_error_bound`).
+integral_limit``), ``v = v_ref``: ``e'' + k e' + k_i e = 0`` on any path; defaults ``k = 1 1/s``, ``k_i = k^2/4``
+(critically damped); setpoints scaled into ``+-w_max`` keeping ``omega / v`` (:func:`limit_wheel_rates`). A held
+command with the ramp ``a_w`` [rad/s^2] adds per step at most ``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))``,
+``Wdot = v^2 K / (1 - (l3 kappa_max)^2)^2`` (``K = max |dkappa/ds|``): ``|e| <= ||h||_1 delta``, ``h`` the loop's
+impulse response (:func:`zoh_error_bound`).
 
 :class:`PurePursuitPolicy` (Coulter 1992, CMU-RI-TR-92-01): A drives on the arc through the goal point
 ``(x_L, y_L)`` (the preview point ``d`` ahead) tangent to its heading,

@@ -76,7 +76,7 @@ class ConstantSpeed:
 
 @dataclass(frozen=True)
 class TrapezoidProfile:
-    r"""Start, cruise, brake: a trapezoidal speed profile of A.
+    r"""Start, cruise, brake: a trapezoidal speed profile of A,
 
     .. math::
         v_A(t) = \begin{cases}
@@ -274,10 +274,9 @@ def solve_inverse(
         \dot\alpha_{1,2} = \frac{v_A \pm l_1\dot\beta}{r_{1,2}},\quad
         \dot\alpha_3 = \frac{\sqrt{l_5^2\dot\beta^2 + v_A^2}}{r_3}
 
-    At ``t[0]`` (the increasing grid's first time) H is at ``path.point(s0)`` [m] with heading ``beta0`` [rad]
-    (default ``theta(s0)``; ``|theta(s0) - beta0| < pi/2``), A ``l3`` behind, the wheel angles ``alpha0`` [rad].
-    ``path``: a ``CirclePath`` or ``ManoeuvrePath`` of radius above ``l3``; ``profile``: peak at most
-    ``robot.max_speed``. Raises ``ValueError`` naming a bad field and its range.
+    At ``t[0]`` (of the increasing grid) H is at ``path.point(s0)`` [m] (a ``CirclePath`` or ``ManoeuvrePath`` of
+    radius above ``l3``), heading ``beta0`` [rad] (default ``theta(s0)``; ``|theta(s0) - beta0| < pi/2``), the wheel
+    angles ``alpha0`` [rad]; the ``profile``'s peak at most ``robot.max_speed``. ``ValueError`` names a bad field.
     """
     from scipy.integrate import solve_ivp
 

@@ -1,26 +1,11 @@
-r"""The tracking task as pure, batched functions: actions, observation, reward, start, end.
+r"""The tracking task as pure, batched functions (no state): actions, observation, reward, start, end.
 
-The compiled step (:mod:`amigo_gym.sim._kernels_v1`) compiles the scalar functions here; AmigoBot-v1's task
-(:mod:`amigo_gym.task.v1`, the reference) and the agents call them too; nothing here keeps state. Shapes: a leading
-batch axis is optional everywhere, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``, ``obs (..., obs_dim)``.
-
-Observation and reward: the tables and equations of AmigoBot-v0's env card (:class:`amigo_gym.envs.AmigoBotEnv`,
-docs/env_card.md): ``e`` H's signed cross-track error (positive left), ``psi = wrap(beta - theta)`` the heading
-error against the path tangent ``theta`` at H's closest point, ``psi_ss = -asin(kappa l3)`` the steady heading
-error of the exact inverse solution, ``Delta a`` the change of the normalised wheel-rate command.
-
-Evaluation without angles: the cosine and sine of the heading error come from the unit vectors of
-the heading, ``u = (cos beta, sin beta)``, and of the path tangent, ``t = (cos theta, sin theta)``
-(:attr:`amigo_gym.paths.Projection.cos_theta`, ``sin_theta``), as ``cos(psi) = u . t`` and
-``sin(psi) = t x u``; the heading term as ``cos(psi - psi_ss) = cos(psi) cos(psi_ss) + sin(psi)
-sin(psi_ss)`` with ``sin(psi_ss) = -kappa l3`` and ``cos(psi_ss) = sqrt(1 - (kappa l3)^2)``; and
-``(||Delta a|| / sigma_a)^2`` as ``(Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2`` from the change
-``Delta w`` of the wheel rates.
-
-The observation's field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`) are the contracts
-readers use.
-
-May import numpy and the core (params, kinematics, paths); never envs, policies, training or the CLI.
+Shapes: a leading batch axis is optional, ``pose (..., 3)``, ``rates (..., 2)``, ``action (..., 2)``,
+``obs (..., obs_dim)``. Observation and reward: AmigoBot-v0's env card (docs/env_card.md), ``e`` H's signed
+cross-track error (positive left), ``psi = wrap(beta - theta)`` the heading error against the path tangent at H,
+``psi_ss = -asin(kappa l3)`` the steady one. Without angles: ``cos(psi) = u . t``, ``sin(psi) = t x u`` of the unit
+heading ``u`` and tangent ``t``, ``(||Delta a|| / sigma_a)^2 = (Delta w_1^2 + Delta w_2^2) / (w_max sigma_a)^2``.
+The contracts readers use: the field names (:func:`obs_names`) and the info's keys (:data:`INFO_KEYS`).
 """
 
 from __future__ import annotations
@@ -94,14 +79,13 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     [0, 1e3] m along x0, then the circle); ``termination_distance`` in [1e-3, 10] m; ``init_position_noise`` in
     [0, termination_distance / 2] m per axis; ``init_heading_noise`` in [0, pi/4] rad; ``error_scale`` in
     [1e-6, 10] m; each ``preview`` distance in [0, 10] m; ``sigma_track`` [m], ``sigma_speed`` [m/s],
-    ``sigma_smooth`` in [1e-6, 1e6]; ``smooth_weight`` in [0, 1). The task must be drivable: the straight roll at
-    ``speed`` (``speed / r`` on each wheel) and the exact steady state on the circle
-    (:func:`~amigo_gym.model.kinematics.circle_steady_state`) within ``robot.max_wheel_rate``.
+    ``sigma_smooth`` in [1e-6, 1e6]; ``smooth_weight`` in [0, 1). Drivable: the straight roll (``speed / r``) and
+    the steady state (:func:`~amigo_gym.model.kinematics.circle_steady_state`) within ``robot.max_wheel_rate``.
 
     Raises:
         TypeError: an unknown setting.
-        ValueError: one line naming ``TrackingParams.v0.<setting>``, the range and the value, or
-            the wheel rate a task needs and the limit.
+        ValueError: one line naming ``TrackingParams.v0.<setting>``, the range and the value, or the wheel rate
+            a task needs and the limit.
     """
     o = "TrackingParams.v0"
     unknown = sorted(set(settings) - set(V0_DEFAULTS))
@@ -181,12 +165,8 @@ def _has_bool(value: Any, depth: int = 0) -> bool:
 
 
 def real_array(value: Any, what: str) -> Array:
-    """``value`` as a float64 array, refusing what is not an array of real numbers (one-line errors).
-
-    Accepted: numbers, (nested) sequences of numbers, arrays of an integer or floating dtype (float32
-    included; the conversion to float64 is exact). Refused with ``TypeError``: strings, bools, complex
-    numbers, ``None`` and other objects; with ``ValueError``: ragged sequences.
-    """
+    """``value`` (numbers, nested sequences, integer or floating arrays) as a float64 array. Raises a one-line
+    ``TypeError`` for strings, bools, complex numbers, ``None``, other objects; ``ValueError`` for ragged ones."""
     if isinstance(value, str | bytes):
         raise TypeError(f"{what} must be real numbers, got a string: {show_value(value)}")
     if isinstance(value, list | tuple) and _has_bool(value):  # numpy would read True as 1.0
@@ -206,12 +186,8 @@ def real_array(value: Any, what: str) -> Array:
 
 
 def validate_action(action: ArrayLike, batch_shape: tuple[int, ...] = ()) -> Array:
-    """Check a normalised action: real numbers of shape ``batch_shape + (2,)``, all finite.
-
-    Raises:
-        TypeError: not real numbers (strings, bools, complex numbers, objects; see :func:`real_array`).
-        ValueError: a ragged sequence, a wrong shape, or NaN or infinite entries (never silently clipped).
-    """
+    """A normalised action as float64 of shape ``batch_shape + (2,)``, checked finite. Raises ``TypeError`` (not
+    real numbers, :func:`real_array`) or ``ValueError`` (ragged, wrong shape, NaN or infinite: never clipped)."""
     if type(action) is np.ndarray and action.dtype.kind == "f":  # the common case, checked quickly
         a = action.astype(np.float64, copy=False)
     else:
@@ -237,12 +213,8 @@ def action_pair(action: ArrayLike) -> tuple[float, float]:
 
 
 def bound_angle(b: Real) -> Real:
-    """A heading ``b`` [rad] (a float or a column) reduced by whole turns where ``|b| > HEADING_LIMIT`` (1e6 rad).
-
-    The heading is kept unwrapped (continuous) along an episode; only a robot that has spun more than
-    159 155 turns gets ``beta - 2 pi round(beta / 2 pi)``, so that float64 keeps resolving a step's turn.
-    Cosine and sine are unchanged up to rounding. ``b`` itself (the same object) when nothing is reduced.
-    """
+    """A heading ``b`` [rad] (float or column), unwrapped, reduced to ``b - 2 pi round(b / 2 pi)`` where ``|b| >
+    HEADING_LIMIT`` (1e6 rad) so float64 keeps resolving a step's turn; ``b`` itself when nothing is reduced."""
     if isinstance(b, np.ndarray):
         if b.size == 0 or (b.max() <= HEADING_LIMIT and b.min() >= -HEADING_LIMIT):
             return b
@@ -268,9 +240,6 @@ def bound_angle_float(b: float) -> float:
     return b - TWO_PI * round_half_even(b / TWO_PI)
 
 
-# The scalar pieces of the step in numba's subset: the compiled step (amigo_gym.sim._kernels_v1) compiles them.
-
-
 def heading_error(cos_beta: Real, sin_beta: Real, cos_theta: Real, sin_theta: Real) -> tuple[Real, Real]:
     """``(cos(psi), sin(psi))`` of ``psi = beta - theta`` from the unit vectors: ``u . t`` and ``t x u``."""
     return cos_beta * cos_theta + sin_beta * sin_theta, sin_beta * cos_theta - cos_beta * sin_theta
@@ -292,9 +261,8 @@ def steady_heading_float(curvature: float, l3: float) -> tuple[float, float]:
 def observe_head(
     e: Real, sin_psi: Real, cos_psi: Real, curvature: Real, l3: float, error_scale: float, e_max: float
 ) -> tuple[Real, Real, Real, Real]:
-    """The observation's first four fields (:data:`OBS_HEAD`): ``(clip(e / error_scale, +-e_max), sin psi, cos psi,
-    clip(kappa l3, +-1))`` from H's cross-track error ``e`` [m], the heading error's sine and cosine and the
-    curvature ``kappa`` [1/m] at H; ``l3``, ``error_scale`` [m], ``e_max`` [-]. Floats or columns."""
+    """The fields :data:`OBS_HEAD`, ``(clip(e / error_scale, +-e_max), sin psi, cos psi, clip(kappa l3, +-1))``, of
+    H's cross-track error ``e`` [m] and curvature ``kappa`` [1/m] (``l3``, ``error_scale`` [m]); floats or columns."""
     return clip(e / error_scale, -e_max, e_max), sin_psi, cos_psi, curvature_feature(curvature, l3)
 
 
@@ -305,9 +273,8 @@ def curvature_feature(curvature: Real, l3: float) -> Real:
 
 
 def observe_rates(w1: Real, w2: Real, v: Real, v_ref: Real, w_max: float, v_max: float) -> tuple[Real, Real, Real]:
-    """The observed wheel rates and speed error: ``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) /
-    v_max, +-2))`` from the wheel rates ``w1, w2`` [rad/s], the speed ``v`` of A and the reference speed ``v_ref``
-    [m/s]; ``w_max`` [rad/s], ``v_max`` [m/s]. Floats or columns."""
+    """``(clip(w1 / w_max, +-1), clip(w2 / w_max, +-1), clip((v - v_ref) / v_max, +-2))`` of the wheel rates [rad/s]
+    and the speeds of A and the reference [m/s]; floats or columns."""
     return (clip(w1 / w_max, -1.0, 1.0), clip(w2 / w_max, -1.0, 1.0), clip((v - v_ref) / v_max, -2.0, 2.0))
 
 
@@ -334,14 +301,9 @@ def observe_columns(
     v: Real,
     v_ref: Real,
 ) -> tuple[Real, ...]:
-    """AmigoBot-v0's observation, in the order of the module table (also AmigoBot-v1's ``observation="v0"``).
-
-    ``(clip(e / error_scale, +-e_max), sin psi, cos psi, kappa l3, kappa(s + d_i) l3 ..., w1 / w_max, w2 / w_max,
-    (v - v_ref) / v_max, v_ref / v_max)``, each clipped to its bound (:func:`obs_bounds_of`; a no-op on v0's task).
-    ``path``: the path, ``s`` [m] H's arc length on it (the preview points lie ``preview`` [m] ahead), ``e`` [m] and
-    ``curvature`` [1/m] at H; ``w1, w2`` the wheel rates [rad/s], ``v`` the speed of A and ``v_ref`` the reference
-    speed [m/s]; ``l3``, ``error_scale`` [m], ``e_max`` [-], ``w_max`` [rad/s], ``v_max`` [m/s] the scales.
-    """
+    """AmigoBot-v0's observation (also AmigoBot-v1's ``observation="v0"``): :func:`observe_head`, the curvature
+    fields at ``s + preview`` [m] on ``path`` (``s`` H's arc length), :func:`observe_rates`,
+    :func:`observe_reference`; each clipped to its bound (:func:`obs_bounds_of`)."""
     if type(path) in (CirclePath, ManoeuvrePath):  # AmigoBot-v0's paths: the curvature alone (the same number)
         ahead = [curvature_feature(path.curvature_columns(s + d), l3) for d in preview]
     else:
@@ -373,11 +335,8 @@ def reward_term_columns(
         e^{-|e|/\sigma_e},\quad e^{-|\Delta v|/\sigma_v},\quad \tfrac12(1 + \cos\psi\cos\psi_{ss}
         + \sin\psi\sin\psi_{ss}),\quad 1 - w_s\left(1 - e^{-c/s^2}\right)
 
-    Args:
-        abs_error: ``|e|`` [m]; abs_dv: ``|v_A - v_ref|`` [m/s].
-        cos_psi, sin_psi: of the heading error; cos_ss, sin_ss: of the steady one (:func:`steady_heading`).
-        change_sq: squared change of the command, in the units of ``smooth_scale_sq``.
-        sigma_track [m], sigma_speed [m/s], smooth_weight [-], smooth_scale_sq: the scales.
+    with ``|e|`` [m], ``|Delta v|`` [m/s], the heading error's and steady one's (:func:`steady_heading`) cosine and
+    sine, and the squared command change ``c`` in the units of ``s^2 = smooth_scale_sq``.
     """
     arg_track, arg_speed, arg_smooth = reward_arguments(
         abs_error, abs_dv, change_sq, sigma_track, sigma_speed, smooth_scale_sq
@@ -393,10 +352,8 @@ def reward_term_columns(
 def reward_arguments(
     abs_error: Real, abs_dv: Real, change_sq: Real, sigma_track: float, sigma_speed: float, smooth_scale_sq: float
 ) -> tuple[Real, Real, Real]:
-    r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`):
-    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale. ``abs_error``
-    [m], ``abs_dv`` [m/s], ``change_sq`` in the units of ``smooth_scale_sq``; the scales ``sigma_track`` [m],
-    ``sigma_speed`` [m/s] and ``smooth_scale_sq`` positive. Floats or columns."""
+    r"""The arguments of the reward's three exponentials (:func:`reward_term_columns`),
+    :math:`(-|e|/\sigma_e,\ -|\Delta v|/\sigma_v,\ -c/s^2)`, each a division by the negated scale; floats or columns."""
     return abs_error / -sigma_track, abs_dv / -sigma_speed, change_sq / -smooth_scale_sq
 
 
