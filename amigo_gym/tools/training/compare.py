@@ -382,7 +382,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym compare")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

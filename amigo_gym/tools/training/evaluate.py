@@ -11,7 +11,6 @@ import json
 import math
 import os
 import pickle
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -661,7 +660,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym evaluate")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

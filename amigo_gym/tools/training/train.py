@@ -515,7 +515,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym train")
-
-
-if __name__ == "__main__":
-    sys.exit(main())
