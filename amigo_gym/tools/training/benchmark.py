@@ -16,6 +16,7 @@ import time
 import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -324,11 +325,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _profile(scores: Any) -> Any:
-    """rliable's performance profile of ``-H``: the fraction of scores above each ``-tau``."""
-    return score_distribution(scores, -np.asarray(PROFILE_TAUS))
-
-
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -372,7 +368,8 @@ def aggregate(
                 gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
-                prof, band = stratified_bootstrap(-h, _profile, reps=profile_reps, seed=seed)
+                profile = partial(score_distribution, taus=-np.asarray(PROFILE_TAUS))  # fraction of -H above -tau
+                prof, band = stratified_bootstrap(-h, profile, reps=profile_reps, seed=seed)
                 keys_ = ("fraction_below", "ci95_low", "ci95_high")
                 profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
         if entry["all"] is not None:

@@ -11,7 +11,7 @@ import math
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -197,8 +197,7 @@ def run_grid(
     return grid
 
 
-@dataclass(frozen=True)
-class StepSample:
+class StepSample(NamedTuple):
     """What the metrics need from one step's ``info``."""
 
     cross_track_error: float
@@ -245,23 +244,17 @@ class EpisodeRecorder:
     dt: float
     settle_time_s: float = DEFAULT_SETTLE_TIME_S
     failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
-    e: list[float] = field(default_factory=list)
-    speed_error: list[float] = field(default_factory=list)
-    command: list[tuple[float, float]] = field(default_factory=list)
-    wheel_rates: list[tuple[float, float]] = field(default_factory=list)
+    samples: list[StepSample] = field(default_factory=list)
     rewards: list[float] = field(default_factory=list)
     terminated: bool = False
 
     def add(self, sample: StepSample, reward: float) -> None:
-        self.e.append(sample.cross_track_error)
-        self.speed_error.append(sample.speed_error)
-        self.command.append(sample.command)
-        self.wheel_rates.append(sample.wheel_rates)
+        self.samples.append(sample)
         self.rewards.append(float(reward))
 
     def metrics(self) -> dict[str, float]:
-        cols = (self.e, self.speed_error, self.command, self.wheel_rates, self.rewards)
-        e, ve, cmd, w, r = (np.asarray(c, dtype=np.float64) for c in cols)
+        e, ve, cmd, w = (np.asarray([x[k] for x in self.samples], dtype=np.float64) for k in range(4))
+        r = np.asarray(self.rewards, dtype=np.float64)
         return episode_metrics(
             e, ve, cmd.reshape(-1, 2), w.reshape(-1, 2), r, dt=self.dt, terminated=self.terminated,
             settle_time_s=self.settle_time_s, failure_tolerance_m=self.failure_tolerance_m,
