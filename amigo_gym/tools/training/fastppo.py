@@ -375,9 +375,8 @@ class _Run:
     episode_returns: list[float] = field(default_factory=list)
 
 
-#: the :class:`_Run` fields a checkpoint stores under their own names
-_RUN_STATE = ("ret_acc", "obs", "fstate", "starts", "ep_ret", "iteration", "global_step", "wall_s", "next_eval",
-              "next_ckpt", "best_h", "curve", "episode_returns")  # fmt: skip
+#: the :class:`_Run` fields a checkpoint stores under their own names (all but the objects rebuilt on loading)
+_RUN_STATE = tuple(f.name for f in fields(_Run))[5:]
 
 
 @dataclass
