@@ -370,9 +370,8 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym compare``."""
-    args = sys.argv[1:] if argv is None else argv
     s = parse_settings(
-        CompareSettings, args, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
+        CompareSettings, argv, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
     )
 
     def run() -> int:
