@@ -118,9 +118,10 @@ def run_scenario(
     on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
     on_row: OnRow | None = None,
 ) -> list[EpisodeRecorder]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``, side by side in its native vector env
-    (else Gymnasium's ``SyncVectorEnv``); one recorder per episode. ``on_reset(venv, infos)`` is called after the
-    reset."""
+    """Run ``agent`` (SB3's ``predict``) deterministically for one episode per seed of ``sc``, side by side in its
+    native vector env (else Gymnasium's ``SyncVectorEnv``), until every row's first episode has ended; one recorder
+    per episode. The whole batch is predicted at every step (a network's outputs do not depend on how many rows still
+    run); reaching the end of an open path is a success. ``on_reset(venv, infos)`` is called after the reset."""
     import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
 
     mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
@@ -134,7 +135,22 @@ def run_scenario(
         dt = getattr(getattr(venv.unwrapped, "params", None), "dt", None)
         dt = float(dt) if isinstance(dt, (int, float)) else float(sc.env_kwargs.get("dt", 0.1))
         recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
-        run_vector_episodes(agent, venv, obs, recs, InfoAdapter.for_env(venv), on_row)
+        adapter, live, state = InfoAdapter.for_env(venv), np.ones(len(recs), dtype=np.bool_), None
+        start = live.copy()
+        while live.any():
+            action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
+            seen = obs
+            obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
+            for i in np.flatnonzero(live).tolist():
+                info = info_row(vinfo, i)
+                recs[i].add(adapter.read(info), float(reward[i]))
+                ended = bool(terminated[i] or truncated[i])
+                if ended:
+                    recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
+                    live[i] = False
+                if on_row is not None:
+                    on_row(i, info, ended, seen[i])
+            start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
     finally:
         venv.close()
     return recs
@@ -299,35 +315,3 @@ def episode_metrics(
         "steps": float(e.size),
         "terminated": float(bool(terminated)),
     }
-
-
-def run_vector_episodes(
-    agent: Any,
-    venv: Any,
-    obs: Any,
-    recorders: Sequence[EpisodeRecorder],
-    adapter: InfoAdapter,
-    on_row: OnRow | None = None,
-) -> None:
-    """Run ``agent`` (SB3's ``predict``) deterministically on ``venv``, just reset to ``obs``, until every row's first
-    episode has ended; row ``i``'s steps go to ``recorders[i]``. The whole batch is predicted at every step (a
-    network's outputs do not depend on how many rows still run). Reaching the end of an open path is a success."""
-    n = len(recorders)
-    live = np.ones(n, dtype=np.bool_)
-    state: Any = None
-    start = np.ones(n, dtype=np.bool_)
-    while live.any():
-        action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
-        start = np.zeros(n, dtype=np.bool_)
-        seen = obs
-        obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
-        for i in np.flatnonzero(live).tolist():
-            info = info_row(vinfo, i)
-            recorders[i].add(adapter.read(info), float(reward[i]))
-            ended = bool(terminated[i] or truncated[i])
-            if ended:
-                recorders[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
-                live[i] = False
-            if on_row is not None:
-                on_row(i, info, ended, seen[i])
-        start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
