@@ -78,8 +78,6 @@ class Settings:
 
 def halving_times(settings: Settings) -> list[GainFit]:
     """Fit the error's decay for every gain; ``ValueError`` on a bad window, or if an episode leaves the path."""
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
     if settings.seeds < 1 or settings.steps < 1:

@@ -20,7 +20,6 @@ from typing import Any
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
-from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training import benchmark as bm

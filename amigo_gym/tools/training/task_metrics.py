@@ -97,8 +97,6 @@ class Unavailable(Exception):
 
 def make_env(sc: Scenario) -> Any:
     """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
     if sc.env_id not in gym.registry:
         raise Unavailable(f"environment {sc.env_id} is not registered")
     try:
@@ -122,8 +120,6 @@ def run_scenario(
     native vector env (else Gymnasium's ``SyncVectorEnv``), until every row's first episode has ended; one recorder
     per episode. The whole batch is predicted at every step (a network's outputs do not depend on how many rows still
     run); reaching the end of an open path is a success. ``on_reset(venv, infos)`` is called after the reset."""
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
     mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
     kw = dict(sc.env_kwargs)
     venv: Any = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
