@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench.offpolicy import DeterministicPolicy, _venv, make_model, offpolicy_config
+from amigo_gym.tools.bench.offpolicy import _venv, make_model, offpolicy_config
 from amigo_gym.tools.bench.train import _load, cpu_model
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
@@ -145,7 +145,7 @@ def main() -> int:
         model = make_model(a.algo, hp, venv, a.seed)
         wall += time.perf_counter() - t0
         cpu += time.process_time() - c0
-        record(0, 0, DeterministicPolicy(model))
+        record(0, 0, model)  # evaluate_policy predicts deterministically
         first = True
         while cpu < a.cpu_budget and wall < a.wall_budget:
             t0, c0 = time.perf_counter(), time.process_time()
@@ -153,7 +153,7 @@ def main() -> int:
             first = False
             wall += time.perf_counter() - t0
             cpu += time.process_time() - c0
-            record(int(model.num_timesteps), int(model._n_updates), DeterministicPolicy(model))
+            record(int(model.num_timesteps), int(model._n_updates), model)
         venv.close()
     summary |= {"rows": len(rows), "last": rows[-1], "load_average_end": _load()}
     atomic_write_json(out.with_suffix("").with_suffix(".json"), summary, parents=True)

@@ -2,13 +2,26 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
+import sys
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
-from amigo_gym.tools.bench import core, env, profile
+from amigo_gym.tools.bench import core, env
+
+
+def _render_trail() -> ModuleType:
+    """``experiments/render_trail.py``, imported by its path (registered, as its dataclass needs)."""
+    path = Path(__file__).resolve().parents[1] / "experiments" / "render_trail.py"
+    spec = importlib.util.spec_from_file_location("render_trail", path)
+    assert spec is not None and spec.loader is not None
+    mod = sys.modules.setdefault("render_trail", importlib.util.module_from_spec(spec))
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def test_measure_many_times_every_function() -> None:
@@ -124,23 +137,6 @@ def test_bench_core_startup_rows_name_both_routes() -> None:
     assert "| import + first AmigoBot-v1 step, kernel=numpy | 0.650 |" in table
 
 
-def test_profile_prints_tables(capsys: pytest.CaptureFixture[str]) -> None:
-    assert profile.main(["--steps", "30", "--top", "3", "--sizes", "2"]) == 0
-    out = capsys.readouterr().out
-    assert out.count("| function | own time |") == 2 and "N = 2" in out
-
-
-def test_profile_gap_table(capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("numba")
-    assert profile.main(["--gap", "--sizes", "8"]) == 0
-    assert "| 8 |" in capsys.readouterr().out
-
-
-def test_profile_single_parts(capsys: pytest.CaptureFixture[str]) -> None:
-    assert profile.main(["--single-parts"]) == 0
-    assert "Pendulum unwrapped step" in capsys.readouterr().out
-
-
 def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
     """``simd_level`` (numpy's run-time detection) against the flags the kernel lists in /proc/cpuinfo."""
     from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
@@ -174,7 +170,6 @@ def test_simd_level_agrees_with_the_kernels_cpu_flags() -> None:
         (core.CoreSettings, {"sizes": (1, 0)}),
         (env.EnvSettings, {"min_time": float("nan")}),
         (env.EnvSettings, {"ppo_envs": 5000}),
-        (profile.ProfileSettings, {"top": 0}),
     ],
 )
 def test_bench_settings_refuse_a_bad_value_in_one_line(cls: type, bad: dict[str, object]) -> None:
@@ -193,10 +188,11 @@ def test_bench_options_come_from_the_settings(capsys: pytest.CaptureFixture[str]
     status 2 (not a traceback), also for the commands run as modules."""
     from dataclasses import fields
 
-    from amigo_gym.tools.bench import render_trail, train
+    from amigo_gym.tools.bench import train
     from amigo_gym.tools.options import OneLineParser, add_dataclass_options, attribute_help, settings_from_args
 
-    for cls in (core.CoreSettings, env.EnvSettings, profile.ProfileSettings, render_trail.RenderTrailSettings):
+    render_trail = _render_trail()
+    for cls in (core.CoreSettings, env.EnvSettings, render_trail.RenderTrailSettings):
         p = OneLineParser(prog="x")
         add_dataclass_options(p, cls)
         assert settings_from_args(cls, p.parse_args([])) == cls()
@@ -206,7 +202,6 @@ def test_bench_options_come_from_the_settings(capsys: pytest.CaptureFixture[str]
     assert str(env.QUICK_SIZES) in attribute_help(env.EnvSettings)["quick"]
     assert train.TrainSettings(offpolicy=" sac, tqc ,").offpolicy_algos == ["sac", "tqc"]
     for main, argv, name in (
-        (profile.main, ["--steps", "0"], "steps"),
         (render_trail.main, ["--n", "0", "--skip-memory", "--skip-time"], "--n"),
         (train.main, ["--offpolicy", "ddpg"], "offpolicy"),
     ):

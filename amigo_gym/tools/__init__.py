@@ -4,5 +4,3 @@ The environment core (``amigo_gym`` outside this subpackage) never imports it. I
 stable-baselines3, optuna, matplotlib, sympy) come with the ``train`` and ``bench`` extras and are imported only
 by the modules that use them; ``import amigo_gym.tools`` itself imports nothing.
 """
-
-from __future__ import annotations

@@ -3,5 +3,3 @@
 May import the core, ``amigo_gym.policies``, ``amigo_gym.envs`` and ``amigo_gym.io``; heavy
 packages (matplotlib, sympy) only inside the functions that need them.
 """
-
-from __future__ import annotations

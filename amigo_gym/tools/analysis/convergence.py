@@ -17,9 +17,11 @@ import numpy as np
 
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.analytic import AnalyticPolicy
+from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import run_command
 from amigo_gym.tools.plots import pyplot, save_figure
-from amigo_gym.tools.training.evaluate import rollout
+from amigo_gym.tools.training.evaluate import trajectories
+from amigo_gym.tools.training.task_metrics import Scenario
 
 
 @dataclass(frozen=True)
@@ -76,29 +78,24 @@ class Settings:
 
 def halving_times(settings: Settings) -> list[GainFit]:
     """Fit the error's decay for every gain; ``ValueError`` on a bad window, or if an episode leaves the path."""
-    import amigo_gym  # noqa: F401  (registers AmigoBot-v0)
-
     check_range("Settings", "t_from", settings.t_from, 0.0)
     check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
     if settings.seeds < 1 or settings.steps < 1:
         raise ValueError(f"--seeds and --steps must be >= 1, got {settings.seeds} and {settings.steps}")
-    env = gym.make("AmigoBot-v0")
-    params = env.unwrapped.params  # type: ignore[attr-defined]
+    seeds = tuple(range(settings.first_seed, settings.first_seed + settings.seeds))
+    steps = min(settings.steps, gym.spec("AmigoBot-v0").max_episode_steps or settings.steps)
+    sc = Scenario("convergence", "AmigoBot-v0", {}, seeds, steps)
     out: list[GainFit] = []
     for k in settings.gain_list():
-        policy = AnalyticPolicy(params, gain=k)
-        curves: list[tuple[list[float], list[float]]] = []
-        for seed in range(settings.first_seed, settings.first_seed + settings.seeds):
-            tr = rollout(policy, env, {"seed": seed}, settings.steps, gain=k)
-            if tr.terminated:
-                raise ValueError(f"gain {k}: the episode with seed {seed} left the path")
-            curves.append((tr.time.tolist(), np.abs(tr.e).tolist()))
+        trs = trajectories(AnalyticPolicy(TrackingParams.v0(), gain=k), sc, gain=k)
+        if left := [seed for seed, tr in zip(seeds, trs, strict=True) if tr.terminated]:
+            raise ValueError(f"gain {k}: the episode with seed {left[0]} left the path")
+        curves = [(tr.time.tolist(), np.abs(tr.e).tolist()) for tr in trs]
         t, e = (np.concatenate(c) for c in zip(*curves, strict=True))
         win = (t >= settings.t_from) & (t <= settings.t_to) & (e > 0)
         slope = float(np.polyfit(t[win], np.log(e[win]), 1)[0])
         halving = math.log(2.0) / -slope if slope < 0 else math.inf
         out.append(GainFit(k, slope, halving, math.log(2.0) / k, curves))
-    env.close()
     return out
 
 

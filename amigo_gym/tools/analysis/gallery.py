@@ -35,8 +35,6 @@ GALLERY: dict[str, tuple[dict[str, Any], int]] = {
 
 def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray, float]:
     """The last frame of one episode with the analytic policy and H's largest error after 5 s [m]."""
-    import amigo_gym  # noqa: F401
-
     env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
     policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]
     obs, _ = env.reset(seed=seed)

@@ -28,9 +28,6 @@ from amigo_gym.task import inverse as inv
 from amigo_gym.tools.options import check_fields, cli, run_command
 from amigo_gym.tools.plots import pyplot, save_figure
 
-FIG2 = "paper_fig2_angles.png"
-FIG3 = "paper_fig3_rates.png"
-CSV = "paper_manoeuvre.csv"
 #: default duration of a circle run without braking [s]: more than one lap of the default circle (31.3 s)
 DEFAULT_DURATION = 40.0
 
@@ -267,7 +264,8 @@ def _paper(settings: Settings) -> None:
     sol = inv.solve_inverse(path, profile, inv.time_grid(profile.t_stop + settings.tail, settings.dt), robot)
     ph = phases(sol, profile, path)
     ss = inv.circle_steady_state(settings.radius, settings.speed, robot, settings.direction)
-    files = {k: os.path.join(settings.out, v) for k, v in (("fig2", FIG2), ("fig3", FIG3), ("csv", CSV))}
+    names = {"fig2": "paper_fig2_angles.png", "fig3": "paper_fig3_rates.png", "csv": "paper_manoeuvre.csv"}
+    files = {k: os.path.join(settings.out, v) for k, v in names.items()}
     title = (
         f"v_A = {settings.speed:g} m/s, straight {settings.straight_length:g} m, R = {settings.radius:g} m, "
         f"a = {settings.accel:g} m/s², braking {settings.decel:g} m/s²"

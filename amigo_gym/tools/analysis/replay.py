@@ -19,7 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from amigo_gym.io import file_mode, fsync_dir, json_safe
-from amigo_gym.logs import Fit, Log, Replay, errors, identify, noise_level, read_log, replay, robot_from_file
+from amigo_gym.logs import Log, Replay, errors, identify, noise_level, read_log, replay, robot_from_file
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.params import RobotParams
 from amigo_gym.tools.options import cli, run_command
@@ -216,18 +216,15 @@ def _read(args: LogSettings) -> tuple[Path, RobotParams, ActuatorParams, Log]:
     return Path(args.out), nominal, act, read_log(args.log, nominal, args.cmd_topic, args.pose_topic)
 
 
-def _robot_dict(robot: RobotParams, act: ActuatorParams) -> dict[str, float]:
-    return {"r1": robot.r1, "r2": robot.r2, "l1": robot.l1, "delay": act.delay, "acceleration": act.acceleration,
-            "rot_acceleration": act.rot_acceleration}  # fmt: skip
-
-
 def _replay(args: ReplaySettings) -> None:
     out, nominal, nominal_act, log = _read(args)
     robot, act, label = nominal, nominal_act, "nominal robot"
     if args.robot is not None:
         (robot, act), label = robot_from_file(args.robot, nominal, nominal_act), Path(args.robot).name
     rep, summary = replay(log, robot, act, nominal)
-    summary = {**summary, "robot": _robot_dict(robot, act), "robot_file": args.robot, "log": log.source}
+    used = {"r1": robot.r1, "r2": robot.r2, "l1": robot.l1, "delay": act.delay, "acceleration": act.acceleration,
+            "rot_acceleration": act.rot_acceleration}  # fmt: skip
+    summary = {**summary, "robot": used, "robot_file": args.robot, "log": log.source}
     files: dict[str, Callable[[str], object]] = {
         "trajectory.csv": _text(trajectory_csv(log, rep)),
         "replay.png": lambda path: plot(path, log, [(label, rep)], f"replay of {log.source}: {label}"),
@@ -246,24 +243,21 @@ def main_replay(argv: Sequence[str] | None = None) -> int:
     return run_command(ReplaySettings, _replay, argv, "amigo-gym replay", doc)
 
 
-def _fit_summary(fit: Fit) -> dict[str, Any]:
-    return {"values": fit.values, "uncertainty": fit.uncertainty, "fitted": list(fit.fitted), "fixed": fit.fixed,
-            "replay_before": fit.before, "replay_after": fit.after, "cost": fit.cost,
-            "n_residuals": fit.n_residuals, "model_evaluations": fit.nfev, "ramping_s": fit.excited}  # fmt: skip
-
-
 def _identify(args: IdentifySettings) -> None:
     out, nominal, nominal_act, log = _read(args)
     fit = identify(log, nominal, args.ramps, args.heading_weight, nominal_act)
     before = replay(log, nominal, nominal_act, nominal)[0]
     after = replay(log, fit.robot, fit.actuators, nominal)[0]
+    summary = {"values": fit.values, "uncertainty": fit.uncertainty, "fitted": list(fit.fitted), "fixed": fit.fixed,
+               "replay_before": fit.before, "replay_after": fit.after, "cost": fit.cost, "n_residuals": fit.n_residuals,
+               "model_evaluations": fit.nfev, "ramping_s": fit.excited, "log": log.source}  # fmt: skip
     files: dict[str, Callable[[str], object]] = {
         "robot.json": _json(fit.robot_json(log, nominal)),
         "trajectory.csv": _text(trajectory_csv(log, after)),
         "identify.png": lambda path: plot(
             path, log, [("nominal", before), ("identified", after)], f"identification from {log.source}"
         ),
-        "summary.json": _json({**_fit_summary(fit), "log": log.source}),
+        "summary.json": _json(summary),
     }
     write_folder(out, files, args.force)
     parts = [f"{k} = {fit.values[k]:.5g} ± {u:.2g}" if (u := fit.uncertainty.get(k)) is not None

@@ -30,8 +30,6 @@ LAP = 2 * math.pi * math.sqrt(R * R - ROBOT.l3**2) / V
 def _laps_error(dt: float, how: str) -> float:
     """Largest distance of H from the circle of eq. 6 [m] over 10 laps at the steady rates, H starting at the origin
     in the steady pose, stepped ``how``: ``"exact"`` (the arc step), ``"euler"``, ``"env"`` (AmigoBot-v0, dt 0.1 s)."""
-    import amigo_gym  # noqa: F401
-
     ss = circle_steady_state(R, V, ROBOT)
     beta, w = -float(ss.heading_lag), np.asarray(ss.wheel_rates)
     pose = np.array([*a_from_h(0.0, 0.0, math.cos(beta), math.sin(beta), ROBOT.l3), beta])

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -100,16 +99,3 @@ def bench_offpolicy(
     out |= {"loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2), "loop_cpu_s": round(c2 - c1, 2)}
     out |= rates("sps_loop", n - n1, t2 - t1, c2 - c1) | rates("gsps_loop", g - g1, t2 - t1, c2 - c1)
     return out | {"config": cfg}
-
-
-@dataclass
-class DeterministicPolicy:
-    """An SB3 model's ``predict``, deterministic by default (as ``fastppo.evaluate_policy`` calls it)."""
-
-    model: Any
-
-    def predict(
-        self, obs: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
-    ) -> tuple[Any, Any]:
-        action, _ = self.model.predict(obs, deterministic=deterministic)
-        return action, state

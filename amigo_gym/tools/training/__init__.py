@@ -3,5 +3,3 @@
 ``import amigo_gym.tools.training`` imports nothing heavy. Its modules may import the core, ``amigo_gym.policies``,
 ``envs`` and ``io``; never another module's CLI parser, never the repository's ``experiments/`` scripts.
 """
-
-from __future__ import annotations

@@ -16,6 +16,7 @@ import time
 import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -98,11 +99,8 @@ def user_scenarios(
 
 
 def _v1(name: str, desc: str, held_out: bool = False, env_id: str = "AmigoBot-v1", **kw: Any) -> Scenario:
+    """A suite 1.0 scenario: :func:`protocol.cell` on seeds 100-109."""
     return protocol.cell(name, desc, env_id, held_out, seeds=tuple(range(100, 110)), version="1.0", **kw)
-
-
-def _v0(name: str, desc: str, held_out: bool = False, **kw: Any) -> Scenario:
-    return _v1(name, desc, held_out, "AmigoBot-v0", **kw)
 
 
 _WHEELS_PLUS5 = {"r1": 0.0525, "r2": 0.0525, "l1": 0.126}
@@ -114,10 +112,10 @@ _MIXED: dict[str, Any] = {"path": "mixed", "speed": (0.1, 0.4)}
 # fmt: off
 SUITE_1_0: tuple[Scenario, ...] = (
     # the paper's task on the exact v0 environment (the v0 specialists were trained on it)
-    _v0("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s"),
-    _v0("v0_speed_0.1", "v0: paper circle at 0.1 m/s", True, speed=0.1),
-    _v0("v0_speed_0.4", "v0: paper circle at 0.4 m/s", True, speed=0.4),
-    _v0("v0_dt_0.2", "v0: paper circle, dt 0.2 s", True, dt=0.2, max_steps=200),
+    _v1("v0_paper_circle", "v0: the paper's circle R = 1 m, 0.2 m/s, dt 0.1 s", False, "AmigoBot-v0"),
+    _v1("v0_speed_0.1", "v0: paper circle at 0.1 m/s", True, "AmigoBot-v0", speed=0.1),
+    _v1("v0_speed_0.4", "v0: paper circle at 0.4 m/s", True, "AmigoBot-v0", speed=0.4),
+    _v1("v0_dt_0.2", "v0: paper circle, dt 0.2 s", True, "AmigoBot-v0", dt=0.2, max_steps=200),
     # circles: radii and both directions
     _v1("circle_r1_ccw", "paper circle on v1 (actuator limits)", path="circle", radius=1.0, direction=1, speed=0.2),
     _v1("circle_r0.5_ccw", "circle R 0.5 m, left", path="circle", radius=0.5, direction=1, speed=0.2),
@@ -324,11 +322,6 @@ def run_benchmark(
 
 
 # --------------------------------------------------------------------------- aggregation
-def _profile(scores: Any) -> Any:
-    """rliable's performance profile of ``-H``: the fraction of scores above each ``-tau``."""
-    return score_distribution(scores, -np.asarray(PROFILE_TAUS))
-
-
 def aggregate(
     results: Sequence[dict[str, Any]],
     held_out: Mapping[str, bool],
@@ -372,7 +365,8 @@ def aggregate(
                 gi[name] = {"value": float(pt), "ci95": [float(ci[0]), float(ci[1])]}
             entry[g] = gi
             if g == "all":
-                prof, band = stratified_bootstrap(-h, _profile, reps=profile_reps, seed=seed)
+                profile = partial(score_distribution, taus=-np.asarray(PROFILE_TAUS))  # fraction of -H above -tau
+                prof, band = stratified_bootstrap(-h, profile, reps=profile_reps, seed=seed)
                 keys_ = ("fraction_below", "ci95_low", "ci95_high")
                 profiles["agents"][agent] = dict(zip(keys_, (prof.tolist(), *band.tolist()), strict=True))
         if entry["all"] is not None:
@@ -771,7 +765,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym benchmark")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -20,7 +20,6 @@ from typing import Any
 
 from amigo_gym.data import pretrained_dir
 from amigo_gym.io import atomic_write, json_safe
-from amigo_gym.policies.analytic import AnalyticPolicy  # noqa: F401  (fail early without the agents package)
 from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.training import benchmark as bm
@@ -370,9 +369,8 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym compare``."""
-    args = sys.argv[1:] if argv is None else argv
     s = parse_settings(
-        CompareSettings, args, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
+        CompareSettings, argv, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
     )
 
     def run() -> int:
@@ -382,7 +380,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym compare")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -371,7 +371,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym curves")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -6,11 +6,11 @@ Usage, the protocol, the agents and models read, the metrics and the output file
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import pickle
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -147,14 +147,6 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
             ds = (ds + 0.5 * path.length) % path.length - 0.5 * path.length
         out.append(Trajectory(**arrays, arc=np.cumsum(ds), ret=sum(rec.rewards), terminated=rec.terminated, h0=h0))
     return out
-
-
-def rollout(agent: Agent, env: Any, reset_kwargs: dict[str, Any], steps: int, gain: float = 3.0) -> Trajectory:
-    """One episode of ``agent`` on ``env``'s id and settings after ``reset(**reset_kwargs)``, at most ``steps``."""
-    spec, pose = env.spec, (reset_kwargs.get("options") or {}).get("pose")
-    seeds, limit = (int(reset_kwargs.get("seed") or 0),), min(steps, spec.max_episode_steps or steps)
-    pose = None if pose is None else tuple(np.asarray(pose, dtype=np.float64).tolist())
-    return trajectories(agent, Scenario("rollout", spec.id, dict(spec.kwargs), seeds, limit, pose=pose), gain)[0]
 
 
 def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
@@ -415,7 +407,7 @@ def load_model(ref: AgentSpec, trust: bool = False) -> Agent:
 
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
     """Every model :func:`find_models` finds at ``models``, loaded, by name."""
-    return {ref.name: load_model(ref, trust) for ref in find_models(models)}
+    return {ref.name: ref.load(trust) for ref in find_models(models)}
 
 
 def protocol_agents(
@@ -596,11 +588,10 @@ def write_outputs(
 
 def one_torch_thread() -> None:
     """``torch.set_num_threads(1)`` when torch is installed: small MLPs run fastest on one thread."""
-    try:
+    with contextlib.suppress(ImportError):
         import torch
-    except ImportError:
-        return
-    torch.set_num_threads(1)
+
+        torch.set_num_threads(1)
 
 
 #: evaluate's own default output folder (``amigo-gym compare`` writes to ``results``)
@@ -669,7 +660,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym evaluate")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

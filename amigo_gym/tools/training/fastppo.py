@@ -55,7 +55,7 @@ from amigo_gym.tools.options import (
 from amigo_gym.tools.runs import RunLock, StopRequest, handling
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.hyperparams import load_hyperparams
-from amigo_gym.tools.training.task_metrics import EpisodeRecorder, InfoAdapter, run_vector_episodes
+from amigo_gym.tools.training.task_metrics import Scenario, run_scenario
 from amigo_gym.tools.training.train import git_revision, versions
 
 Array = NDArray[np.float64]
@@ -337,15 +337,9 @@ def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch
 def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
     """Mean task metrics (NaN-aware) of the first deterministic episodes of ``eval_envs`` robots of ``s.env_kwargs``
     seeded ``eval_seed + i``; ``policy``: anything with SB3's ``predict``."""
-    n = s.eval_envs
-    env = gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps, **s.env_kwargs)
-    try:
-        obs, _ = env.reset(seed=[s.eval_seed + i for i in range(n)])  # type: ignore[arg-type]
-        recs = [EpisodeRecorder(float(env.params.dt)) for _ in range(n)]  # type: ignore[attr-defined]
-        run_vector_episodes(policy, env, obs, recs, InfoAdapter())
-    finally:
-        env.close()
-    rows = [r.metrics() for r in recs]
+    seeds = tuple(range(s.eval_seed, s.eval_seed + s.eval_envs))
+    sc = Scenario("eval", "AmigoBot-v1", s.env_kwargs, seeds, s.max_episode_steps)
+    rows = [r.metrics() for r in run_scenario(policy, sc)]
     vals = {k: np.array([r[k] for r in rows], dtype=np.float64) for k in rows[0]}
     return {k: float(np.nanmean(v)) if np.isfinite(v).any() else math.nan for k, v in vals.items()}
 
@@ -375,9 +369,8 @@ class _Run:
     episode_returns: list[float] = field(default_factory=list)
 
 
-#: the :class:`_Run` fields a checkpoint stores under their own names
-_RUN_STATE = ("ret_acc", "obs", "fstate", "starts", "ep_ret", "iteration", "global_step", "wall_s", "next_eval",
-              "next_ckpt", "best_h", "curve", "episode_returns")  # fmt: skip
+#: the :class:`_Run` fields a checkpoint stores under their own names (all but the objects rebuilt on loading)
+_RUN_STATE = tuple(f.name for f in fields(_Run))[5:]
 
 
 @dataclass

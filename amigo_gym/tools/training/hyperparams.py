@@ -139,10 +139,6 @@ def sb3_class(algo: str) -> Any:
     return getattr(stable_baselines3, algo.upper())
 
 
-def _algo_keywords(algo: str) -> set[str]:
-    return set(inspect.signature(sb3_class(algo)).parameters) - {"self", *RESERVED}
-
-
 def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
     if isinstance(value, str):
         text = value.strip().lower()
@@ -165,7 +161,7 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
 
 def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
     """The checked mapping ``hp`` of a file for ``algo``; ``ValueError``: unknown keys (all) or the first bad value."""
-    allowed = _algo_keywords(algo) | set(META_KEYS)
+    allowed = (set(inspect.signature(sb3_class(algo)).parameters) - {"self", *RESERVED}) | set(META_KEYS)
     unknown = sorted(str(k) for k in hp if k not in allowed)
     if unknown:
         raise ValueError(

@@ -913,7 +913,3 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 1
 
     return run_guarded(guarded, "amigo-gym sweep")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

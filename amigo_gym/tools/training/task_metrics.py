@@ -11,7 +11,7 @@ import math
 import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -97,8 +97,6 @@ class Unavailable(Exception):
 
 def make_env(sc: Scenario) -> Any:
     """``gym.make(sc.env_id, max_episode_steps=sc.max_steps, **sc.env_kwargs)``; :class:`Unavailable` if it cannot."""
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
     if sc.env_id not in gym.registry:
         raise Unavailable(f"environment {sc.env_id} is not registered")
     try:
@@ -118,11 +116,10 @@ def run_scenario(
     on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
     on_row: OnRow | None = None,
 ) -> list[EpisodeRecorder]:
-    """Run ``agent`` deterministically for one episode per seed of ``sc``, side by side in its native vector env
-    (else Gymnasium's ``SyncVectorEnv``); one recorder per episode. ``on_reset(venv, infos)`` is called after the
-    reset."""
-    import amigo_gym  # noqa: F401  (registers the AmigoBot environments)
-
+    """Run ``agent`` (SB3's ``predict``) deterministically for one episode per seed of ``sc``, side by side in its
+    native vector env (else Gymnasium's ``SyncVectorEnv``), until every row's first episode has ended; one recorder
+    per episode. The whole batch is predicted at every step (a network's outputs do not depend on how many rows still
+    run); reaching the end of an open path is a success. ``on_reset(venv, infos)`` is called after the reset."""
     mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
     kw = dict(sc.env_kwargs)
     venv: Any = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
@@ -134,7 +131,22 @@ def run_scenario(
         dt = getattr(getattr(venv.unwrapped, "params", None), "dt", None)
         dt = float(dt) if isinstance(dt, (int, float)) else float(sc.env_kwargs.get("dt", 0.1))
         recs = [EpisodeRecorder(dt, sc.settle_time_s, sc.failure_tolerance_m) for _ in sc.seeds]
-        run_vector_episodes(agent, venv, obs, recs, InfoAdapter.for_env(venv), on_row)
+        adapter, live, state = InfoAdapter.for_env(venv), np.ones(len(recs), dtype=np.bool_), None
+        start = live.copy()
+        while live.any():
+            action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
+            seen = obs
+            obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
+            for i in np.flatnonzero(live).tolist():
+                info = info_row(vinfo, i)
+                recs[i].add(adapter.read(info), float(reward[i]))
+                ended = bool(terminated[i] or truncated[i])
+                if ended:
+                    recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
+                    live[i] = False
+                if on_row is not None:
+                    on_row(i, info, ended, seen[i])
+            start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent
     finally:
         venv.close()
     return recs
@@ -197,8 +209,7 @@ def run_grid(
     return grid
 
 
-@dataclass(frozen=True)
-class StepSample:
+class StepSample(NamedTuple):
     """What the metrics need from one step's ``info``."""
 
     cross_track_error: float
@@ -245,23 +256,17 @@ class EpisodeRecorder:
     dt: float
     settle_time_s: float = DEFAULT_SETTLE_TIME_S
     failure_tolerance_m: float = DEFAULT_FAILURE_TOLERANCE_M
-    e: list[float] = field(default_factory=list)
-    speed_error: list[float] = field(default_factory=list)
-    command: list[tuple[float, float]] = field(default_factory=list)
-    wheel_rates: list[tuple[float, float]] = field(default_factory=list)
+    samples: list[StepSample] = field(default_factory=list)
     rewards: list[float] = field(default_factory=list)
     terminated: bool = False
 
     def add(self, sample: StepSample, reward: float) -> None:
-        self.e.append(sample.cross_track_error)
-        self.speed_error.append(sample.speed_error)
-        self.command.append(sample.command)
-        self.wheel_rates.append(sample.wheel_rates)
+        self.samples.append(sample)
         self.rewards.append(float(reward))
 
     def metrics(self) -> dict[str, float]:
-        cols = (self.e, self.speed_error, self.command, self.wheel_rates, self.rewards)
-        e, ve, cmd, w, r = (np.asarray(c, dtype=np.float64) for c in cols)
+        e, ve, cmd, w = (np.asarray([x[k] for x in self.samples], dtype=np.float64) for k in range(4))
+        r = np.asarray(self.rewards, dtype=np.float64)
         return episode_metrics(
             e, ve, cmd.reshape(-1, 2), w.reshape(-1, 2), r, dt=self.dt, terminated=self.terminated,
             settle_time_s=self.settle_time_s, failure_tolerance_m=self.failure_tolerance_m,
@@ -306,35 +311,3 @@ def episode_metrics(
         "steps": float(e.size),
         "terminated": float(bool(terminated)),
     }
-
-
-def run_vector_episodes(
-    agent: Any,
-    venv: Any,
-    obs: Any,
-    recorders: Sequence[EpisodeRecorder],
-    adapter: InfoAdapter,
-    on_row: OnRow | None = None,
-) -> None:
-    """Run ``agent`` (SB3's ``predict``) deterministically on ``venv``, just reset to ``obs``, until every row's first
-    episode has ended; row ``i``'s steps go to ``recorders[i]``. The whole batch is predicted at every step (a
-    network's outputs do not depend on how many rows still run). Reaching the end of an open path is a success."""
-    n = len(recorders)
-    live = np.ones(n, dtype=np.bool_)
-    state: Any = None
-    start = np.ones(n, dtype=np.bool_)
-    while live.any():
-        action, state = agent.predict(obs, state=state, episode_start=start, deterministic=True)
-        start = np.zeros(n, dtype=np.bool_)
-        seen = obs
-        obs, reward, terminated, truncated, vinfo = venv.step(np.asarray(action))
-        for i in np.flatnonzero(live).tolist():
-            info = info_row(vinfo, i)
-            recorders[i].add(adapter.read(info), float(reward[i]))
-            ended = bool(terminated[i] or truncated[i])
-            if ended:
-                recorders[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
-                live[i] = False
-            if on_row is not None:
-                on_row(i, info, ended, seen[i])
-        start = ~live  # rows that ended were reset by the autoreset: tell a stateful agent

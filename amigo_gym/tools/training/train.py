@@ -157,7 +157,6 @@ def make_train_env(
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
-    import amigo_gym  # noqa: F401  (registers the envs)
     from amigo_gym.tools.training.sb3_vec import AmigoBotSB3VecEnv
 
     venv: Any
@@ -515,7 +514,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
 
     return run_guarded(run, "amigo-gym train")
-
-
-if __name__ == "__main__":
-    sys.exit(main())

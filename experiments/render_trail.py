@@ -1,4 +1,4 @@
-"""``python -m amigo_gym.tools.bench.render_trail``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
+"""``python experiments/render_trail.py``: the cost of ``render_mode="rgb_array"`` in v1's vector env.
 
 At ``--n`` robots on ``--path``, with and without rendering: the growth of the resident memory [MiB] over
 ``--steps`` steps (each in a fresh process) and the step-time ratio (interleaved repeats); docs/amigobot_v1.md."""
@@ -20,7 +20,7 @@ from amigo_gym.tools.bench import stepper, time_envs
 from amigo_gym.tools.bench.env import V1_HARD
 from amigo_gym.tools.options import run_command
 
-PROG = "python -m amigo_gym.tools.bench.render_trail"
+PROG = "python experiments/render_trail.py"
 MiB = 2**20
 
 
@@ -62,7 +62,7 @@ def measure_time(n: int, path: str = "mixed", repeats: int = 5, min_time: float 
 
 @dataclass(frozen=True)
 class RenderTrailSettings:
-    """Settings of ``python -m amigo_gym.tools.bench.render_trail``, each the option of the same name.
+    """Settings of ``python experiments/render_trail.py``, each the option of the same name.
 
     Attributes:
         n: robots [envs].
@@ -115,7 +115,7 @@ def run(s: RenderTrailSettings) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``python -m amigo_gym.tools.bench.render_trail``."""
+    """Entry point of ``python experiments/render_trail.py``."""
     return run_command(RenderTrailSettings, run, argv, PROG, (__doc__ or "").split("\n")[0])
 
 
