@@ -250,9 +250,7 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
 
 
 @_jit
-def _draws(
-    c: F64, steps: float, slip_max: float, key: np.uint64
-) -> tuple[float, float, float, float, float, float, float]:
+def _draws(c: F64, steps: float, slip_max: float, key: np.uint64) -> tuple[float, ...]:
     # randomization.step_noise of the step counter: (slip1, slip2, the five normals), the normals by Box-Muller
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
@@ -263,7 +261,7 @@ def _draws(
         u[j] = math.log(u[j])
         u[5 + j] = math.cos(u[5 + j])
     randomization.step_normals(u, 10, u, 0, u, 5, position, heading, rate)
-    return s1, s2, u[10], u[11], u[12], u[13], u[14]
+    return s1, s2, u[10], u[11], u[12], u[13], u[14]  # type: ignore[return-value]  # floats here
 
 
 _NO_DRAWS = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -626,11 +624,11 @@ def _ideal_block(
     n_prev = int(c[L.C_N_PREVIEW])
     for j in range(m):  # the records' and observations' stores
         i = i0 + j
-        for f, q in ((K_X, L.R_X), (K_Y, L.R_Y), (K_B, L.R_BETA), (K_HX, L.R_HX), (K_HY, L.R_HY), (K_W1, L.R_W1),
-                     (K_W2, L.R_W2), (K_W1, L.R_CMD1), (K_W2, L.R_CMD2), (K_AL1, L.R_AL1), (K_AL2, L.R_AL2),
-                     (K_E, L.R_ERROR), (K_S, L.R_PROGRESS), (K_V, L.R_VT), (K_VREF, L.R_VREF),
-                     (K_HEAD, L.R_HEADING), (K_TERM, L.R_TERM), (K_CAS, L.R_CASTOR)):  # fmt: skip
-            rec[i, q] = k[f + j]
+        for f, at in ((K_X, L.R_X), (K_Y, L.R_Y), (K_B, L.R_BETA), (K_HX, L.R_HX), (K_HY, L.R_HY), (K_W1, L.R_W1),
+                      (K_W2, L.R_W2), (K_W1, L.R_CMD1), (K_W2, L.R_CMD2), (K_AL1, L.R_AL1), (K_AL2, L.R_AL2),
+                      (K_E, L.R_ERROR), (K_S, L.R_PROGRESS), (K_V, L.R_VT), (K_VREF, L.R_VREF),
+                      (K_HEAD, L.R_HEADING), (K_TERM, L.R_TERM), (K_CAS, L.R_CASTOR)):  # fmt: skip
+            rec[i, at] = k[f + j]
         rec[i, L.R_MX], rec[i, L.R_MY], rec[i, L.R_MB] = _measurements(
             k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
         )[:3]

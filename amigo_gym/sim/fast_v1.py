@@ -295,4 +295,6 @@ class StepKernel:
 
     def state(self, steps: int) -> tracking.State:
         """The state in the block as a :class:`tracking.State` of floats, ``steps`` given."""
-        return tracking.State(*(float(getattr(self.rows, name)[0]) for name in tracking.State._fields[:-1]), steps)
+        return tracking.State._make(
+            [*(float(getattr(self.rows, name)[0]) for name in tracking.State._fields[:-1]), steps]
+        )
