@@ -573,7 +573,7 @@ def _ideal_block(
         c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
         v, bdot, h = _ideal_motion(c, r.beta[i], w1, w2)[:3]
         x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
-            c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, tans[i, 0], tans[i, 1], r.alpha1[i], r.alpha2[i],
+            c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, tans[0, i], tans[1, i], r.alpha1[i], r.alpha2[i],
             r.castor[i],
         )  # fmt: skip
         da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[i], r.w2[i], c1, c2, r.a1[i], r.a2[i])
@@ -618,8 +618,8 @@ def _ideal_block(
         k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
     for f, col in ((K_X, r.x), (K_Y, r.y), (K_B, r.beta), (K_W1, r.w1), (K_W2, r.w2), (K_AL1, r.alpha1),
                    (K_AL2, r.alpha2), (K_CAS, r.castor), (K_C1, r.a1), (K_C2, r.a2), (K_STEPS, r.steps),
-                   (K_S, r.progress)):  # fmt: skip
-        for j in range(m):  # the rows' stores
+                   (K_S, r.progress), (K_AT, exps[0]), (K_AV, exps[1]), (K_AS, exps[2])):  # fmt: skip
+        for j in range(m):  # the stores of the rows and the exponentials' arguments
             col[i0 + j] = k[f + j]
     n_prev = int(c[L.C_N_PREVIEW])
     for j in range(m):  # the records' and observations' stores
@@ -633,7 +633,6 @@ def _ideal_block(
             k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
         )[:3]
         rec[i, L.R_SLIP1] = rec[i, L.R_SLIP2] = rec[i, L.R_END] = 0.0
-        exps[i, 0], exps[i, 1], exps[i, 2] = k[K_AT + j], k[K_AV + j], k[K_AS + j]
         for f in range(4):
             obs[i, f] = k[K_O + f * _BLOCK + j]
             obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
@@ -693,23 +692,23 @@ def _step_rows(
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (N, 2)``, whose
+    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (2, N)``, whose
     ``np.tan`` the caller takes."""
     c = _bare(c)
     beta = _rows(ws).beta
     for i in numba.prange(beta.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
         arg_h, arg_m = _ideal_motion(c, beta[i], w1, w2)[3:]
-        tans[i, 0] = arg_h
-        tans[i, 1] = arg_m
+        tans[0, i] = arg_h
+        tans[1, i] = arg_m
 
 
 def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (N, 2)``; the records into ``rec``, the
-    reward's exponential arguments into ``exps (N, 3)``. By blocks of :data:`_BLOCK` rows: on a circle or manoeuvre
+    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records into ``rec``, the
+    reward's exponential arguments into ``exps (3, N)``. By blocks of :data:`_BLOCK` rows: on a circle or manoeuvre
     with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     r = _rows(ws)
@@ -727,18 +726,18 @@ def _ideal_rows(
             c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
             v, bdot, h = _ideal_motion(c, beta[i], w1, w2)[:3]
             pv = flat[starts[i] : stops[i]]
-            _ideal_move(c, pv, ws, i, obs[i], rec[i], _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
-            exps[i, 0], exps[i, 1], exps[i, 2] = rec[i, L.R_TRACK], rec[i, L.R_SPEED], rec[i, L.R_SMOOTH_EXP]
+            _ideal_move(c, pv, ws, i, obs[i], rec[i], _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
+            exps[0, i], exps[1, i], exps[2, i] = rec[i, L.R_TRACK], rec[i, L.R_SPEED], rec[i, L.R_SMOOTH_EXP]
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the records' exponentials ``exps (N, 3)`` (``np.exp`` taken by the caller), terms and rewards."""
+    """Pass 3: the records' exponentials ``exps (3, N)`` (``np.exp`` taken by the caller), terms and rewards."""
     rec = _bare(rec)
     for i in numba.prange(rec.shape[0]):
         r = rec[i]
-        r[L.R_TRACK] = exps[i, 0]
-        r[L.R_SPEED] = exps[i, 1]
-        r[L.R_SMOOTH_EXP] = exps[i, 2]
+        r[L.R_TRACK] = exps[0, i]
+        r[L.R_SPEED] = exps[1, i]
+        r[L.R_SMOOTH_EXP] = exps[2, i]
         record_terms(r, smooth_weight)
 
 

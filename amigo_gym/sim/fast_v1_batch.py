@@ -101,8 +101,8 @@ class BatchKernel:
         self.ws: Array = np.zeros((len(layout_v1.Rows._fields), n))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         self.ideal = k.params.ideal_actuators and self._row.n_normal == 0
-        self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
-        self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
+        self._tans: Array = np.zeros((2, n if self.ideal else 0))
+        self._exps: Array = np.zeros((3, n if self.ideal else 0))
         self._restart: tuple[Any, ...] | None = None  # restart's path, template row and start
         self._bind()
 
