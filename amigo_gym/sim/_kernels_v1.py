@@ -157,7 +157,7 @@ def _rows(ws: F64) -> L.Rows:
     # the named rows of the block ``ws`` (:data:`amigo_gym.sim.layout_v1.Rows`), without reference counts
     w = _bare(ws)
     return L.Rows(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8], w[9], w[10], w[11], w[12], w[13], w[14],
-                  w[15], w[16], w[17], w[18], w[19], w[20], w[21], w[22])  # fmt: skip
+                  w[15], w[16], w[17], w[18], w[19], w[20], w[21])  # fmt: skip
 
 
 #: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
@@ -458,10 +458,11 @@ def step(
 ) -> None:  # fmt: skip
     """:func:`amigo_gym.task.v1.step_columns` of the state of row ``i``, updated in place, for the finite action
     ``(a1, a2)`` [-] (clipped here); ``ring_step`` is the ring's counter. This step's draws (the episode's ``key``)
-    when the row's ``noise_on`` is set, else zeros. The observation into ``obs``, the record into ``rec`` (the
-    exponentials' arguments in their place: :func:`fill_record`)."""
+    when the row's ``slip_max`` or a noise level is above 0, else zeros. The observation into ``obs``, the record into
+    ``rec`` (the exponentials' arguments in their place: :func:`fill_record`)."""
     r = _rows(ws)
-    dr = _draws(c, r.steps[i], r.slip_max[i], key) if r.noise_on[i] != 0.0 else _NO_DRAWS
+    on = randomization.channels_on(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], c[L.C_RATE_NOISE])
+    dr = _draws(c, r.steps[i], r.slip_max[i], key) if r.slip_max[i] > 0.0 or on > 0 else _NO_DRAWS
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     if c[L.C_IDEAL] != 0.0:
         v, bdot, h, arg_h, arg_m = _ideal_motion(c, r.beta[i], cmd1, cmd2)

@@ -214,11 +214,13 @@ def flat_path(path: Any) -> Array:
     return flat
 
 
-def load_rows(ws: Array, rows: Any, st: tracking.State, ep: tracking.Episode, l3_differs: Any, n_normal: int) -> None:
+def load_rows(ws: Array, rows: Any, st: tracking.State, ep: tracking.Episode, l3_differs: Any) -> None:
     """The states ``st`` and episodes ``ep`` (floats, or columns of ``rows``) into the columns ``rows`` of the block
-    ``ws`` (:data:`amigo_gym.sim.layout_v1.Rows`); ``n_normal``: the noise channels on."""
-    noise_on = (np.asarray(ep.slip_max) > 0.0) | (n_normal > 0)
-    values = {**ep._asdict(), **st._asdict(), "castor": 0.0, "l3_differs": l3_differs, "noise_on": noise_on}
+    ``ws`` (:data:`amigo_gym.sim.layout_v1.Rows`), the castor's angle 0."""
+    values = {**ep._asdict(), **st._asdict(), "castor": 0.0, "l3_differs": l3_differs}
+    if isinstance(rows, int):  # one robot's floats: one store
+        ws[:, rows] = [values[name] for name in layout_v1.Rows._fields]
+        return
     for name, row in zip(layout_v1.Rows._fields, ws, strict=True):
         row[rows] = values[name]
 
@@ -285,7 +287,7 @@ class StepKernel:
     def load(self, path: Any, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
         """Start an episode: the path's vector, the state and the episode into the block."""
         self.path = flat_path(path)
-        load_rows(self.ws, 0, st, ep, l3_differs, self.n_normal)
+        load_rows(self.ws, 0, st, ep, l3_differs)
         self.key = np.uint64(ep.key)
         self._args()
 

@@ -144,7 +144,7 @@ class BatchKernel:
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
-        fast_v1.load_rows(self.ws, r, st, ep, np.asarray(ep.l3) != self._k.l3, self._row.n_normal)
+        fast_v1.load_rows(self.ws, r, st, ep, np.asarray(ep.l3) != self._k.l3)
         self.keys[r] = ep.key
         self.arena.assign(rows, paths)
 
@@ -203,7 +203,7 @@ class BatchKernel:
         a = self.arena
         rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         sw = self._row.smooth_weight
-        if self.ideal and not self.rows.noise_on.any():
+        if self.ideal and not self.rows.slip_max.any():  # no draws
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
             np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)

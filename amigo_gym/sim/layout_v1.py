@@ -42,11 +42,11 @@ PATH_NODES = 10
 #: the compiled step's per-robot values, each a row ``(N,)`` of the float64 block ``ws (len(Rows._fields), N)``: the
 #: state, updated by each step (:class:`amigo_gym.task.v1.State`'s fields, ``steps`` a float, then ``castor`` the
 #: castor wheel's rolling angle [rad]), and the episode, read only (:class:`amigo_gym.task.v1.Episode`'s fields but
-#: ``key``; ``l3_differs``, ``noise_on``: 1.0 when the true l3 is not the nominal one, when a step draws, else 0.0)
+#: ``key``; ``l3_differs`` 1.0 when the true l3 is not the nominal one, else 0.0)
 Rows = namedtuple(
     "Rows",
     "x y beta w1 w2 alpha1 alpha2 progress a1 a2 steps castor "
-    "r1 r2 l1 l3 lag t_switch v_cruise t_brake slip_max l3_differs noise_on",
+    "r1 r2 l1 l3 lag t_switch v_cruise t_brake slip_max l3_differs",
 )
 #: the info record of a step (a row of ``rec``): :data:`RECORD_ROWS`, the entries of the info's seven arrays
 #: [m, rad, rad/s], then :data:`RECORD_SCALARS`, then the exponentials of the track, speed and smoothness
