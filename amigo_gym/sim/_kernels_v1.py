@@ -381,37 +381,30 @@ def _evaluate(
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
     m_cos_psi, m_sin_psi = task.heading_error(mcb, msb, m_ct, m_st)
-    o0, o1, o2, o3 = task.observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
-    obs[0] = o0
-    obs[1] = o1
-    obs[2] = o2
-    obs[3] = o3
+    obs[0], obs[1], obs[2], obs[3] = task.observe_head(
+        m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX]
+    )
     n_prev = int(c[L.C_N_PREVIEW])
     v_meas = kinematics.body_velocity_of(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
     if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns
         for j in range(n_prev):
             obs[4 + j] = task.curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + j]), l3)
-        q1, q2, q3 = task.observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
-        obs[4 + n_prev] = q1
-        obs[5 + n_prev] = q2
-        obs[6 + n_prev] = q3
+        obs[4 + n_prev], obs[5 + n_prev], obs[6 + n_prev] = task.observe_rates(
+            mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX]
+        )
         obs[7 + n_prev] = task.observe_reference(v_ref, c[L.C_V_MAX])
     else:
         scale = c[L.C_PREVIEW_SCALE]
         for j in range(n_prev):
             qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + j])
-            px, py, pk = tracking.preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + j])
-            obs[4 + 3 * j] = px
-            obs[5 + 3 * j] = py
-            obs[6 + 3 * j] = pk
+            obs[4 + 3 * j], obs[5 + 3 * j], obs[6 + 3 * j] = tracking.preview_entry(
+                mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + j]
+            )
         v_ahead = _reference_speed(c, r.v_cruise[i], r.t_brake[i], t + c[L.C_LOOKAHEAD])
-        s0, s1, s2, s3, s4 = tracking.speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
         k = 4 + 3 * n_prev
-        obs[k] = s0
-        obs[k + 1] = s1
-        obs[k + 2] = s2
-        obs[k + 3] = s3
-        obs[k + 4] = s4
+        obs[k], obs[k + 1], obs[k + 2], obs[k + 3], obs[k + 4] = tracking.speed_observations(
+            v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX]
+        )
         obs[k + 5] = r.a1[i]
         obs[k + 6] = r.a2[i]
     r.progress[i] = s_h
