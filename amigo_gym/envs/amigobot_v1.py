@@ -23,7 +23,7 @@ from amigo_gym.task import v1 as tracking
 
 
 def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
-    """The info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state, outcome and draws:
+    """The info record (:data:`amigo_gym.sim.layout_v1.RECORD_WIDTH`) of the reference's state, outcome and draws:
     ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``; ``w_max`` [rad/s] scales the command, ``castor`` [rad]."""
     track, speed, heading, smooth = out.terms
     cols = (

@@ -48,17 +48,16 @@ Rows = namedtuple(
     "x y beta w1 w2 alpha1 alpha2 progress a1 a2 steps castor "
     "r1 r2 l1 l3 lag t_switch v_cruise t_brake slip_max l3_differs",
 )
-#: the info record of a step (a row of ``rec``): :data:`RECORD_ROWS`, the entries of the info's seven arrays
-#: [m, rad, rad/s], then :data:`RECORD_SCALARS`, then the exponentials of the track, speed and smoothness
-#: arguments (the arguments until :func:`amigo_gym.sim._kernels_v1.fill_record`), the smoothness term and the reward
-RECORD_ROWS = ("x", "y", "beta", "h_x", "h_y", "w1", "w2", "command1", "command2", "alpha1", "alpha2", "meas_x",
-               "meas_y", "meas_beta", "slip1", "slip2")  # fmt: skip
-RECORD_SCALARS = ("error", "progress", "v_true", "v_ref", "heading", "end_of_path", "terminated", "castor")
-RECORD_WIDTH = len(RECORD_ROWS) + len(RECORD_SCALARS) + 5
+#: the info record of a step, a row of ``rec`` (``R_*`` its entries): the entries of the info's seven arrays (pose,
+#: H, wheel rates, commands, wheel angles, measured pose [m, rad, rad/s], slips [-]), its scalars (cross-track error,
+#: progress [m], true and reference speeds of A [m/s], heading term, end_of_path and terminated 1.0 / 0.0, castor
+#: angle [rad]), the exponentials of the track, speed and smoothness arguments (the arguments until
+#: :func:`amigo_gym.sim._kernels_v1.fill_record`), the smoothness term and the reward
+RECORD_WIDTH = 29
 (R_X, R_Y, R_BETA, R_HX, R_HY, R_W1, R_W2, R_CMD1, R_CMD2, R_AL1, R_AL2, R_MX, R_MY, R_MB, R_SLIP1, R_SLIP2,
  R_ERROR, R_PROGRESS, R_VT, R_VREF, R_HEADING, R_END, R_TERM, R_CASTOR,
  R_TRACK, R_SPEED, R_SMOOTH_EXP, R_SMOOTH, R_REWARD) = range(RECORD_WIDTH)  # fmt: skip
-#: the record's slices of the info's seven arrays, in :data:`RECORD_ROWS`' order
+#: the record's slices of the info's seven arrays, in their order
 R_POSE, R_H, R_RATES, R_COMMAND, R_ANGLES, R_MEASURED, R_SLIP = (
     slice(a, b + 1) for a, b in ((R_X, R_BETA), (R_HX, R_HY), (R_W1, R_W2), (R_CMD1, R_CMD2), (R_AL1, R_AL2),
                                  (R_MX, R_MB), (R_SLIP1, R_SLIP2))
