@@ -20,7 +20,7 @@ from gymnasium.vector import AutoresetMode
 
 import amigo_gym  # noqa: F401
 from amigo_gym.envs import AmigoBotV1VectorEnv
-from amigo_gym.sim import fast_v1, layout_v1
+from amigo_gym.sim import fast_v1
 
 pytest.importorskip("numba")
 
@@ -400,9 +400,9 @@ def test_ideal_blocks_equal_the_row_step(path: str, n: int) -> None:
     ended = 0
     for t in range(60):
         a = rng.uniform(-1.0, 1.0, (n, 2))
-        envs[2].unwrapped._batch.ws[:, layout_v1.W_L3D] = 1.0  # type: ignore[attr-defined]
+        envs[2].unwrapped._batch.rows.l3_differs[:] = 1.0  # type: ignore[attr-defined]
         r = [e.step(a) for e in envs]
-        envs[2].unwrapped._batch.ws[:, layout_v1.W_L3D] = 0.0  # type: ignore[attr-defined]
+        envs[2].unwrapped._batch.rows.l3_differs[:] = 0.0  # type: ignore[attr-defined]
         _equal_results(r[0], r[2], f"step {t}: rows", exact=True)
         for name, x, y in zip(("obs", "reward", "terminated", "truncated"), r[0], r[1], strict=False):
             np.testing.assert_allclose(x, y, rtol=1e-12, atol=1e-12, err_msg=f"step {t}: {name}")

@@ -23,7 +23,7 @@ from amigo_gym.task import v1 as tracking
 
 
 def reference_record(w_max: float, st: tracking.State, out: tracking.Outcome, noise: StepNoise, castor: Any) -> Array:
-    """The info record (:data:`amigo_gym.sim.layout_v1.RECORD_ROWS`) of the reference's state, outcome and draws:
+    """The info record (:data:`amigo_gym.sim.layout_v1.RECORD_WIDTH`) of the reference's state, outcome and draws:
     ``(RECORD_WIDTH,)`` or ``(N, RECORD_WIDTH)``; ``w_max`` [rad/s] scales the command, ``castor`` [rad]."""
     track, speed, heading, smooth = out.terms
     cols = (
@@ -210,7 +210,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._ended: bool | None = False  # None: terminated and warned
         self._k = tracking.constants(p)
         self._kernel = fast_v1.StepKernel(self._k) if fast_v1.use_kernel(owner, kernel) else None
-        self._in_kernel = False  # this episode's state lives in the kernel's workspace
+        self._in_kernel = False  # this episode's state lives in the kernel's block
         self._steps = 0
         self._delay = 0.0
         #: the fixed path (None for drawn paths) and its feasibility report (None for drawn paths and AmigoBot-v0)
@@ -253,7 +253,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             kern.load(self.path, st, ep, tracking.ep_l3_differs(k, ep))
             v_true, t = tracking.start_speed_time(st, ep)
             obs = np.empty(self._obs_shape, dtype=np.float32)
-            kern.evaluate(kern.consts, kern.path, kern.ws, obs, v_true, t)
+            kern.evaluate(kern.consts, kern.path, kern.ws, 0, obs, kern.record, v_true, t)
             kern.fill()
             rec = kern.record.copy()
             rec[_L.R_COMMAND] = self._ring[0]  # a start: the command the robot was executing, no slip

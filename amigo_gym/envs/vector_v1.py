@@ -414,7 +414,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return rec
 
     def _set_rows(self, idx: NDArray[np.intp], st: tracking.State | None, ep: tracking.Episode) -> None:
-        # st None: the start states are in the compiled step's workspace (self._state's columns are its views)
+        # st None: the start states are in the compiled step's block (self._state's columns are its rows)
         if st is None:
             np.asarray(self._state.steps)[idx] = 0
         else:
@@ -495,9 +495,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
         assert self._batch is not None
-        ws = self._batch.ws
-        cols: list[Any] = [ws[:, layout_v1.WS_FIELDS.index(name)] for name in _STATE_FIELDS[:-1]]
-        return tracking.State._make([*cols, steps])
+        rows = self._batch.rows
+        return tracking.State._make([*(getattr(rows, name) for name in _STATE_FIELDS[:-1]), steps])
 
     def _append_trail(self) -> None:
         length = max(1, int(self.trail_length))
@@ -562,7 +561,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        if self._batch is not None:  # the state columns are views of the workspace again
+        if self._batch is not None:  # the state columns are views of the block's rows again
             self._state = self._state_views(np.asarray(self._state.steps))
         elif fast_v1.use_fast_path(None):
             fast_v1.path_loops()

@@ -9,8 +9,9 @@ Layouts (float64, C-contiguous; index constants in :mod:`amigo_gym.sim.layout_v1
   quadrature's nodes and weights on [0, 1] (``10 n_sub`` each), the path quadrature's (10 each);
 * ``path``: a clothoid path's flat vector; empty for a circle or manoeuvre (closed forms in ``consts``);
 * ``ring (L, 2)``: the command ring [rad/s], updated in place;
-* ``ws``: ``WS_FIELDS`` (state, episode, draws, outputs), then ``WS_SCRATCH`` entries of scratch;
-* ``obs``: the observation (float32 or float64), written.
+* ``ws (len(Rows._fields), N)``: the robots' state and episode, one named row ``(N,)`` each (``layout_v1.Rows``);
+  the per-robot functions take the block and a robot's index ``i``;
+* ``obs``: the observation (float32 or float64), ``rec``: the info record (``layout_v1.R_*``), written.
 """
 
 from __future__ import annotations
@@ -105,10 +106,11 @@ def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int,
 _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / math.factorial(k) for k in range(2, 15))
 
 
-#: entries of the path pose's node buffer (stride ``NODES + 1``) and of the actuator step's (one sub-interval per
-#: piece; more sub-intervals allocate theirs), on the stack
+#: entries of the path pose's node buffer (stride ``NODES + 1``), of the actuator step's (one sub-interval per piece;
+#: more sub-intervals allocate theirs) and of its scratch, on the stack
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
+_ACT_SCRATCH = actuators.SCRATCH
 
 
 def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
@@ -150,6 +152,14 @@ def _bare(a: Any) -> Any:
     return _carray(_data_ptr(a), a.shape)
 
 
+@_jit_inline
+def _rows(ws: F64) -> L.Rows:
+    # the named rows of the block ``ws`` (:data:`amigo_gym.sim.layout_v1.Rows`), without reference counts
+    w = _bare(ws)
+    return L.Rows(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8], w[9], w[10], w[11], w[12], w[13], w[14],
+                  w[15], w[16], w[17], w[18], w[19], w[20], w[21])  # fmt: skip
+
+
 #: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
@@ -173,28 +183,30 @@ def _uint64_of(n: int) -> Callable[[int], np.uint64]:
 
 
 @_jit
-def _actuator_step(c: F64, ws: F64, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
-    """:func:`amigo_gym.model.actuators.actuator_step_ws` of the state in ``ws``, updated in place; returns the true
+def _actuator_step(c: F64, ws: F64, i: int, o1: float, o2: float, n1: float, n2: float, s1: float, s2: float) -> float:
+    """:func:`amigo_gym.model.actuators.actuator_step_ws` of the state of row ``i``, updated in place; returns the true
     speed of A at the end of the step [m/s]."""
+    r = _rows(ws)
     nn = int(c[L.C_N_NODES])
     base = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW])
     size = 3 * PIECES * nn
     # on the stack for n_sub = 1 (dt = 0.1 s), else allocated
     nodes = _carray(_stack_ptr(_STEP_NODES), _STEP_NODES) if size <= _STEP_NODES else np.empty(size)
+    scratch = _carray(_stack_ptr(_ACT_SCRATCH), _ACT_SCRATCH)
     x, y, beta, w1n, w2n, da1, da2, _dist, v_true, _w_true = actuators.actuator_step_ws(
-        ws, L.S_ACT, nodes, 0, c, base, nn,
-        ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], ws[L.W_W1], ws[L.W_W2], o1, o2, n1, n2, ws[L.W_TS], c[L.C_DT],
+        scratch, 0, nodes, 0, c, base, nn,
+        r.x[i], r.y[i], r.beta[i], r.w1[i], r.w2[i], o1, o2, n1, n2, r.t_switch[i], c[L.C_DT],
         c[L.C_W_MAX], c[L.C_L1], c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1],
         c[L.C_ACC], c[L.C_DEC], c[L.C_RACC], c[L.C_RDEC],
-        ws[L.W_R1], ws[L.W_R2], ws[L.W_L1], s1, s2,
+        r.r1[i], r.r2[i], r.l1[i], s1, s2,
     )  # fmt: skip
-    ws[L.W_X] = x
-    ws[L.W_Y] = y
-    ws[L.W_BETA] = beta
-    ws[L.W_W1] = w1n
-    ws[L.W_W2] = w2n
-    ws[L.W_AL1] = ws[L.W_AL1] + da1
-    ws[L.W_AL2] = ws[L.W_AL2] + da2
+    r.x[i] = x
+    r.y[i] = y
+    r.beta[i] = beta
+    r.w1[i] = w1n
+    r.w2[i] = w2n
+    r.alpha1[i] = r.alpha1[i] + da1
+    r.alpha2[i] = r.alpha2[i] + da2
     return v_true  # type: ignore[return-value]  # a float here
 
 
@@ -238,20 +250,21 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
 
 
 @_jit
-def _draws(c: F64, ws: F64, key: np.uint64) -> None:
-    # randomization.step_noise of the state's step counter into ws: the slips, the normals by Box-Muller
+def _draws(c: F64, steps: float, slip_max: float, key: np.uint64) -> tuple[float, ...]:
+    # randomization.step_noise of the step counter: (slip1, slip2, the five normals), the normals by Box-Muller
     position = c[L.C_POS_NOISE]
     heading = c[L.C_HEAD_NOISE]
     rate = c[L.C_RATE_NOISE]
-    s1, s2, on = randomization.step_uniforms(
-        ws, L.S_U1, L.S_U2, key, int(ws[L.W_STEPS]), ws[L.W_SLIP_MAX], position, heading, rate
-    )
-    ws[L.W_SLIP1] = s1
-    ws[L.W_SLIP2] = s2
+    u = _carray(_stack_ptr(15), 15)  # u1, 2 pi u2, the normals: 5 each
+    s1, s2, on = randomization.step_uniforms(u, 0, 5, key, int(steps), slip_max, position, heading, rate)
     for j in range(on):
-        ws[L.S_U1 + j] = math.log(ws[L.S_U1 + j])
-        ws[L.S_U2 + j] = math.cos(ws[L.S_U2 + j])
-    randomization.step_normals(ws, L.W_NX, ws, L.S_U1, ws, L.S_U2, position, heading, rate)
+        u[j] = math.log(u[j])
+        u[5 + j] = math.cos(u[5 + j])
+    randomization.step_normals(u, 10, u, 0, u, 5, position, heading, rate)
+    return s1, s2, u[10], u[11], u[12], u[13], u[14]  # type: ignore[return-value]  # floats here
+
+
+_NO_DRAWS = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 # The path-building loops (clothoid.PathLoops), their scratch on the stack; ``nodes``: the quadrature's node table.
@@ -328,37 +341,37 @@ def progress(c: F64, pv: F64, x: float, y: float, s_prev: float) -> float:
 
 
 @_jit
-def _reference_speed(c: F64, ws: F64, t: float) -> float:
-    return _reference_speed_of(c[L.C_TRAPEZOID] != 0.0, ws[L.W_VC], c[L.C_PACC], c[L.C_PDEC], ws[L.W_TB], t)
+def _reference_speed(c: F64, v_cruise: float, t_brake: float, t: float) -> float:
+    return _reference_speed_of(c[L.C_TRAPEZOID] != 0.0, v_cruise, c[L.C_PACC], c[L.C_PDEC], t_brake, t)
 
 
 @_jit
 def _evaluate(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, cb: float, sb: float, da1: float, da2: float,
-    t: float, nx: float, ny: float, nbeta: float, nr1: float, nr2: float,
+    c: F64, pv: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, v_true: float, cb: float, sb: float,
+    da1: float, da2: float, t: float, nx: float, ny: float, nbeta: float, nr1: float, nr2: float,
 ) -> None:  # fmt: skip
-    """:func:`amigo_gym.task.v1.evaluate_columns` of the state in ``ws`` with the heading's ``cos``, ``sin`` (``cb``,
-    ``sb``), the command's change ``(da1, da2)`` and the noise ``(nx, ny, nbeta, nr1, nr2)``; outputs into ``ws``."""
+    """:func:`amigo_gym.task.v1.evaluate_columns` of the state of row ``i`` with the heading's ``cos``, ``sin`` (``cb``,
+    ``sb``), the command's change ``(da1, da2)`` and the noise ``(nx, ny, nbeta, nr1, nr2)``: H's progress into the
+    row, the observation into ``obs``, the record but its command and slips into ``rec`` (the exponentials'
+    arguments in their place)."""
+    r = _rows(ws)
     l3 = c[L.C_L3]
-    x = ws[L.W_X]
-    y = ws[L.W_Y]
-    beta = ws[L.W_BETA]
-    hx, hy = kinematics.h_from_a(x, y, cb, sb, ws[L.W_L3])
-    s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, ws[L.W_PROGRESS])
+    x = r.x[i]
+    y = r.y[i]
+    beta = r.beta[i]
+    hx, hy = kinematics.h_from_a(x, y, cb, sb, r.l3[i])
+    s_h, kappa, e, ct, st, status = _locate(c, pv, hx, hy, r.progress[i])
     cos_psi, sin_psi = task.heading_error(cb, sb, ct, st)
-    v_ref = _reference_speed(c, ws, t)
+    v_ref = _reference_speed(c, r.v_cruise[i], r.t_brake[i], t)
     cos_ss, sin_ss = task.steady_heading_float(kappa, l3)
-    arg_t, arg_v, arg_s = task.reward_arguments(
+    rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_SMOOTH_EXP] = task.reward_arguments(
         abs(e), abs(v_true - v_ref), da1 * da1 + da2 * da2, c[L.C_SIG_T], c[L.C_SIG_V], c[L.C_SMOOTH_SQ]
     )
-    ws[L.W_ARG_T] = arg_t
-    ws[L.W_ARG_V] = arg_v
-    ws[L.W_HEADING] = task.heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
-    ws[L.W_ARG_S] = arg_s
+    rec[L.R_HEADING] = task.heading_term(cos_psi, sin_psi, cos_ss, sin_ss)
     closed = pv[clothoid.P_CLOSED] if c[L.C_PATH_KIND] == L.PATH_CLOTHOID else 1.0
     terminated, at_end = tracking.end_flags(e, c[L.C_TERM], closed, status)
-    mx, my, mb, mw1, mw2 = _measurements(x, y, beta, ws[L.W_W1], ws[L.W_W2], nx, ny, nbeta, nr1, nr2)
-    if tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], ws[L.W_L3D] != 0.0):
+    mx, my, mb, mw1, mw2 = _measurements(x, y, beta, r.w1[i], r.w2[i], nx, ny, nbeta, nr1, nr2)
+    if tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], r.l3_differs[i] != 0.0):
         mcb = math.cos(mb)
         msb = math.sin(mb)
         mhx, mhy = kinematics.h_from_a(mx, my, mcb, msb, l3)
@@ -368,126 +381,126 @@ def _evaluate(
         msb = sb
         m_s, m_k, m_e, m_ct, m_st = s_h, kappa, e, ct, st
     m_cos_psi, m_sin_psi = task.heading_error(mcb, msb, m_ct, m_st)
-    o0, o1, o2, o3 = task.observe_head(m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX])
-    obs[0] = o0
-    obs[1] = o1
-    obs[2] = o2
-    obs[3] = o3
+    obs[0], obs[1], obs[2], obs[3] = task.observe_head(
+        m_e, m_sin_psi, m_cos_psi, m_k, l3, c[L.C_ERROR_SCALE], c[L.C_E_MAX]
+    )
     n_prev = int(c[L.C_N_PREVIEW])
     v_meas = kinematics.body_velocity_of(mw1, mw2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])[0]
     if c[L.C_OBS_V0] != 0.0:  # task.v0.observe_columns
-        for i in range(n_prev):
-            obs[4 + i] = task.curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + i]), l3)
-        q1, q2, q3 = task.observe_rates(mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX])
-        obs[4 + n_prev] = q1
-        obs[5 + n_prev] = q2
-        obs[6 + n_prev] = q3
+        for j in range(n_prev):
+            obs[4 + j] = task.curvature_feature(_curvature_at(c, pv, m_s + c[L.C_TAIL + j]), l3)
+        obs[4 + n_prev], obs[5 + n_prev], obs[6 + n_prev] = task.observe_rates(
+            mw1, mw2, v_meas, v_ref, c[L.C_W_MAX], c[L.C_V_MAX]
+        )
         obs[7 + n_prev] = task.observe_reference(v_ref, c[L.C_V_MAX])
     else:
         scale = c[L.C_PREVIEW_SCALE]
-        for i in range(n_prev):
-            qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + i])
-            px, py, pk = tracking.preview_entry(mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + i])
-            obs[4 + 3 * i] = px
-            obs[5 + 3 * i] = py
-            obs[6 + 3 * i] = pk
-        v_ahead = _reference_speed(c, ws, t + c[L.C_LOOKAHEAD])
-        s0, s1, s2, s3, s4 = tracking.speed_observations(v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX])
+        for j in range(n_prev):
+            qx, qy, _th, qk, _cr, _ct, _st = pose(c, pv, m_s + c[L.C_TAIL + j])
+            obs[4 + 3 * j], obs[5 + 3 * j], obs[6 + 3 * j] = tracking.preview_entry(
+                mcb, msb, mx, my, qx, qy, qk, l3, scale, c[L.C_TAIL + n_prev + j]
+            )
+        v_ahead = _reference_speed(c, r.v_cruise[i], r.t_brake[i], t + c[L.C_LOOKAHEAD])
         k = 4 + 3 * n_prev
-        obs[k] = s0
-        obs[k + 1] = s1
-        obs[k + 2] = s2
-        obs[k + 3] = s3
-        obs[k + 4] = s4
-        obs[k + 5] = ws[L.W_A1]
-        obs[k + 6] = ws[L.W_A2]
-    ws[L.W_PROGRESS] = s_h
-    ws[L.W_HX] = hx
-    ws[L.W_HY] = hy
-    ws[L.W_E] = e
-    ws[L.W_VT] = v_true
-    ws[L.W_VREF] = v_ref
-    ws[L.W_MX] = mx
-    ws[L.W_MY] = my
-    ws[L.W_MB] = mb
-    ws[L.W_MW1] = mw1
-    ws[L.W_MW2] = mw2
-    ws[L.W_TERM] = 1.0 if terminated else 0.0
-    ws[L.W_END] = 1.0 if at_end else 0.0
+        obs[k], obs[k + 1], obs[k + 2], obs[k + 3], obs[k + 4] = tracking.speed_observations(
+            v_ref, v_ahead, v_meas, mw1, mw2, c[L.C_V_MAX], c[L.C_W_MAX]
+        )
+        obs[k + 5] = r.a1[i]
+        obs[k + 6] = r.a2[i]
+    r.progress[i] = s_h
+    rec[L.R_X] = x
+    rec[L.R_Y] = y
+    rec[L.R_BETA] = beta
+    rec[L.R_HX] = hx
+    rec[L.R_HY] = hy
+    rec[L.R_W1] = r.w1[i]
+    rec[L.R_W2] = r.w2[i]
+    rec[L.R_AL1] = r.alpha1[i]
+    rec[L.R_AL2] = r.alpha2[i]
+    rec[L.R_MX] = mx
+    rec[L.R_MY] = my
+    rec[L.R_MB] = mb
+    rec[L.R_ERROR] = e
+    rec[L.R_PROGRESS] = s_h
+    rec[L.R_VT] = v_true
+    rec[L.R_VREF] = v_ref
+    rec[L.R_END] = 1.0 if at_end else 0.0
+    rec[L.R_TERM] = 1.0 if terminated else 0.0
+    rec[L.R_CASTOR] = r.castor[i]
 
 
 @_jit
-def evaluate(c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, t: float) -> None:
-    """:func:`amigo_gym.task.v1.reset_columns` of the state in ``ws`` (no noise, no command change) at the true speed
-    ``v_true`` [m/s] and time ``t`` [s]: writes the outputs of ``ws`` and ``obs``; the progress is kept."""
-    progress = ws[L.W_PROGRESS]
-    beta = ws[L.W_BETA]
-    _evaluate(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), 0.0, 0.0, t, 0.0, 0.0, 0.0, 0.0, 0.0)
-    ws[L.W_PROGRESS] = progress
+def evaluate(
+    c: F64, pv: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, v_true: float, t: float
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.task.v1.reset_columns` of the state of row ``i`` (no noise, no command change) at the true
+    speed ``v_true`` [m/s] and time ``t`` [s]: the observation into ``obs``, the record but its command and slips into
+    ``rec`` (the exponentials' arguments in their place: :func:`fill_record`); the progress is kept."""
+    r = _rows(ws)
+    progress = r.progress[i]
+    beta = r.beta[i]
+    _evaluate(c, pv, ws, i, obs, rec, v_true, math.cos(beta), math.sin(beta), 0.0, 0.0, t, 0.0, 0.0, 0.0, 0.0, 0.0)
+    r.progress[i] = progress
+    rec[L.R_PROGRESS] = progress
 
 
 @_jit
 def step(
-    c: F64, pv: F64, ring: F64, ws: F64, obs: NDArray[np.floating], ring_step: int, a1: float, a2: float, key: np.uint64
-) -> None:
-    """:func:`amigo_gym.task.v1.step_columns` of the state in ``ws``, updated in place, for the finite action
+    c: F64, pv: F64, ring: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, ring_step: int, a1: float,
+    a2: float, key: np.uint64,
+) -> None:  # fmt: skip
+    """:func:`amigo_gym.task.v1.step_columns` of the state of row ``i``, updated in place, for the finite action
     ``(a1, a2)`` [-] (clipped here); ``ring_step`` is the ring's counter. This step's draws (the episode's ``key``)
-    when ``ws[L.W_NOISE_ON]`` is set, else zeros, go into ``ws``."""
-    if ws[L.W_NOISE_ON] != 0.0:
-        _draws(c, ws, key)
-    else:
-        _no_draws(ws)
+    when the row's ``slip_max`` or a noise level is above 0, else zeros. The observation into ``obs``, the record into
+    ``rec`` (the exponentials' arguments in their place: :func:`fill_record`)."""
+    r = _rows(ws)
+    on = randomization.channels_on(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], c[L.C_RATE_NOISE])
+    dr = _draws(c, r.steps[i], r.slip_max[i], key) if r.slip_max[i] > 0.0 or on > 0 else _NO_DRAWS
     c1, c2, cmd1, cmd2 = _action_commands(a1, a2, c[L.C_W_MAX])
     if c[L.C_IDEAL] != 0.0:
-        v, bdot, h, arg_h, arg_m = _ideal_motion(c, ws, cmd1, cmd2)
-        _ideal_move(c, pv, ws, obs, c1, c2, cmd1, cmd2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
+        v, bdot, h, arg_h, arg_m = _ideal_motion(c, r.beta[i], cmd1, cmd2)
+        _ideal_move(c, pv, ws, i, obs, rec, dr, c1, c2, cmd1, cmd2, v, bdot, h, math.tan(arg_h), math.tan(arg_m))
         return
     length = ring.shape[0]
     slot = actuators.ring_slot(ring_step, length)
     ring[slot, 0] = cmd1
     ring[slot, 1] = cmd2
-    i_old, i_new = actuators.ring_read_slots(ring_step, int(ws[L.W_LAG]), length)
+    i_old, i_new = actuators.ring_read_slots(ring_step, int(r.lag[i]), length)
     o1 = ring[i_old, 0]
     o2 = ring[i_old, 1]
-    w1_old = ws[L.W_W1]
-    w2_old = ws[L.W_W2]
-    v_true = _actuator_step(c, ws, o1, o2, ring[i_new, 0], ring[i_new, 1], ws[L.W_SLIP1], ws[L.W_SLIP2])
-    da1, da2 = _command_change(
-        c[L.C_REWARD_V0] != 0.0, ws[L.W_W1], ws[L.W_W2], w1_old, w2_old, c1, c2, ws[L.W_A1], ws[L.W_A2]
-    )
-    beta = ws[L.W_BETA]
-    _finish(c, pv, ws, obs, v_true, math.cos(beta), math.sin(beta), da1, da2, c1, c2, cmd1, cmd2)
+    w1_old = r.w1[i]
+    w2_old = r.w2[i]
+    v_true = _actuator_step(c, ws, i, o1, o2, ring[i_new, 0], ring[i_new, 1], dr[0], dr[1])
+    da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, r.w1[i], r.w2[i], w1_old, w2_old, c1, c2, r.a1[i], r.a2[i])
+    beta = r.beta[i]
+    _finish(c, pv, ws, i, obs, rec, dr, v_true, math.cos(beta), math.sin(beta), da1, da2, c1, c2, cmd1, cmd2)
 
 
 @_jit
 def _finish(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], v_true: float, cb: float, sb: float, da1: float, da2: float,
-    c1: float, c2: float, cmd1: float, cmd2: float,
+    c: F64, pv: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, dr: tuple[float, ...], v_true: float,
+    cb: float, sb: float, da1: float, da2: float, c1: float, c2: float, cmd1: float, cmd2: float,
 ) -> None:  # fmt: skip
-    # the step's command and counter into ws, then the evaluation of the new state
-    steps = ws[L.W_STEPS] + 1.0
-    ws[L.W_A1] = c1
-    ws[L.W_A2] = c2
-    ws[L.W_STEPS] = steps
-    ws[L.W_CMD1] = cmd1
-    ws[L.W_CMD2] = cmd2
+    # the step's command and counter into the row, its commands and slips into rec, then the evaluation
+    r = _rows(ws)
+    steps = r.steps[i] + 1.0
+    r.a1[i] = c1
+    r.a2[i] = c2
+    r.steps[i] = steps
+    rec[L.R_CMD1] = cmd1
+    rec[L.R_CMD2] = cmd2
+    rec[L.R_SLIP1] = dr[0]
+    rec[L.R_SLIP2] = dr[1]
     t = steps * c[L.C_DT]
-    nx, ny, nb, nr1, nr2 = ws[L.W_NX], ws[L.W_NY], ws[L.W_NB], ws[L.W_NR1], ws[L.W_NR2]
-    _evaluate(c, pv, ws, obs, v_true, cb, sb, da1, da2, t, nx, ny, nb, nr1, nr2)
+    _evaluate(c, pv, ws, i, obs, rec, v_true, cb, sb, da1, da2, t, dr[2], dr[3], dr[4], dr[5], dr[6])
 
 
 @_jit
-def _no_draws(ws: F64) -> None:
-    for j in (L.W_SLIP1, L.W_SLIP2, L.W_NX, L.W_NY, L.W_NB, L.W_NR1, L.W_NR2):
-        ws[j] = 0.0
-
-
-@_jit
-def _ideal_motion(c: F64, ws: F64, w1: float, w2: float) -> tuple[float, float, float, float, float]:
+def _ideal_motion(c: F64, beta: float, w1: float, w2: float) -> tuple[float, float, float, float, float]:
     # (v_A [m/s], betadot [rad/s], h = betadot dt / 2, the tangents' arguments h / 2, (beta + h) / 2 [rad])
     v, bdot = kinematics.body_velocity_of(w1, w2, c[L.C_R1], c[L.C_R2], c[L.C_TWO_L1])
     h = 0.5 * (bdot * c[L.C_DT])
-    return v, bdot, h, 0.5 * h, 0.5 * (ws[L.W_BETA] + h)
+    return v, bdot, h, 0.5 * h, 0.5 * (beta + h)
 
 
 @_jit
@@ -505,24 +518,25 @@ def _ideal_arc(
 
 @_jit
 def _ideal_move(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], c1: float, c2: float, w1: float, w2: float, v: float,
-    bdot: float, h: float, t_h: float, t_m: float,
+    c: F64, pv: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, dr: tuple[float, ...], c1: float,
+    c2: float, w1: float, w2: float, v: float, bdot: float, h: float, t_h: float, t_m: float,
 ) -> None:  # fmt: skip
-    """``tracking._ideal_step``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact arc step
-    with ``t_h = tan(h / 2)``, ``t_m = tan((beta + h) / 2)``, then the evaluation."""
+    """``tracking._ideal_step`` of row ``i``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact
+    arc step with ``t_h = tan(h / 2)``, ``t_m = tan((beta + h) / 2)``, then the evaluation with the draws ``dr``."""
+    r = _rows(ws)
     x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
-        c, ws[L.W_X], ws[L.W_Y], ws[L.W_BETA], w1, w2, v, bdot, h, t_h, t_m, ws[L.W_AL1], ws[L.W_AL2], ws[L.W_CASTOR]
+        c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, t_h, t_m, r.alpha1[i], r.alpha2[i], r.castor[i]
     )
-    da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, ws[L.W_W1], ws[L.W_W2], c1, c2, ws[L.W_A1], ws[L.W_A2])
-    ws[L.W_X] = x1
-    ws[L.W_Y] = y1
-    ws[L.W_BETA] = b1
-    ws[L.W_W1] = w1
-    ws[L.W_W2] = w2
-    ws[L.W_AL1] = al1
-    ws[L.W_AL2] = al2
-    ws[L.W_CASTOR] = castor
-    _finish(c, pv, ws, obs, v, cb, sb, da1, da2, c1, c2, w1, w2)
+    da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[i], r.w2[i], c1, c2, r.a1[i], r.a2[i])
+    r.x[i] = x1
+    r.y[i] = y1
+    r.beta[i] = b1
+    r.w1[i] = w1
+    r.w2[i] = w2
+    r.alpha1[i] = al1
+    r.alpha2[i] = al2
+    r.castor[i] = castor
+    _finish(c, pv, ws, i, obs, rec, dr, v, cb, sb, da1, da2, c1, c2, w1, w2)
 
 
 #: rows per block of :func:`_ideal_block`, and its scratch: columns of ``_BLOCK`` floats each, on the stack (``K_O``:
@@ -542,45 +556,44 @@ def _ideal_block(
     """:func:`_ideal_move` of the rows ``i0:i1`` (at most :data:`_BLOCK`) on a circle or manoeuvre path with the v0
     observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
     columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
-    evaluation; the stores into ``ws``, ``obs`` and :func:`_ideal_rows`' ``rec`` and ``exps``. The stages without
-    calls to the C library vectorise."""
+    evaluation; the stores into the rows of ``ws`` (contiguous columns), ``obs`` and :func:`_ideal_rows`' ``rec`` and
+    ``exps``. The stages without calls to the C library vectorise."""
     k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
+    r = _rows(ws)
     m = i1 - i0
     dt, l3 = c[L.C_DT], c[L.C_L3]
     for j in range(m):  # the arc step
         i = i0 + j
         c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-        v, bdot, h = _ideal_motion(c, ws[i], w1, w2)[:3]
+        v, bdot, h = _ideal_motion(c, r.beta[i], w1, w2)[:3]
         x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
-            c, ws[i, L.W_X], ws[i, L.W_Y], ws[i, L.W_BETA], w1, w2, v, bdot, h, tans[i, 0], tans[i, 1],
-            ws[i, L.W_AL1], ws[i, L.W_AL2], ws[i, L.W_CASTOR],
+            c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, tans[0, i], tans[1, i], r.alpha1[i], r.alpha2[i],
+            r.castor[i],
         )  # fmt: skip
-        da1, da2 = _command_change(
-            c[L.C_REWARD_V0] != 0.0, w1, w2, ws[i, L.W_W1], ws[i, L.W_W2], c1, c2, ws[i, L.W_A1], ws[i, L.W_A2]
-        )
-        steps = ws[i, L.W_STEPS] + 1.0
+        da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[i], r.w2[i], c1, c2, r.a1[i], r.a2[i])
+        steps = r.steps[i] + 1.0
         k[K_X + j], k[K_Y + j], k[K_B + j], k[K_CB + j], k[K_SB + j] = x1, y1, b1, cb, sb
         k[K_AL1 + j], k[K_AL2 + j], k[K_CAS + j], k[K_C1 + j], k[K_C2 + j] = al1, al2, castor, c1, c2
         k[K_W1 + j], k[K_W2 + j], k[K_V + j], k[K_STEPS + j] = w1, w2, v, steps
-        k[K_VREF + j] = _reference_speed(c, ws[i], steps * dt)
+        k[K_VREF + j] = _reference_speed(c, r.v_cruise[i], r.t_brake[i], steps * dt)
         k[K_CHG + j] = da1 * da1 + da2 * da2
-        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, ws[i, L.W_L3])
+        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, r.l3[i])
     if c[L.C_PATH_KIND] == L.PATH_CIRCLE:  # H's projection: _locate's closed form, atan2's loop on its own
-        d, r, cx, cy, r0x, r0y = c[L.C_DIRECTION], c[L.C_RADIUS], c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
+        d, rad, cx, cy, r0x, r0y = c[L.C_DIRECTION], c[L.C_RADIUS], c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
         for j in range(m):  # the foot; u = (x, y) - centre into the columns of s and kappa
             k[K_E + j], k[K_CT + j], k[K_ST + j], k[K_S + j], k[K_K + j] = classic.circle_foot(
-                k[K_HX + j], k[K_HY + j], cx, cy, r0x, r0y, d, r
+                k[K_HX + j], k[K_HY + j], cx, cy, r0x, r0y, d, rad
             )
         for j in range(m):
-            k[K_S + j] = classic.circle_arc(k[K_S + j], k[K_K + j], r0x, r0y, d, r)
-        lap = task.TWO_PI * r
+            k[K_S + j] = classic.circle_arc(k[K_S + j], k[K_K + j], r0x, r0y, d, rad)
+        lap = task.TWO_PI * rad
         for j in range(m):  # the lap nearest the progress before
             s = k[K_S + j]
-            k[K_S + j] = s + lap * task.round_half_even((ws[i0 + j, L.W_PROGRESS] - s) / lap)
-            k[K_K + j] = d / r
+            k[K_S + j] = s + lap * task.round_half_even((r.progress[i0 + j] - s) / lap)
+            k[K_K + j] = d / rad
     else:
         for j in range(m):
-            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], ws[i0 + j, L.W_PROGRESS])
+            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], r.progress[i0 + j])
             k[K_S + j], k[K_K + j], k[K_E + j], k[K_CT + j], k[K_ST + j] = s, kappa, e, ct, st
     for j in range(m):  # _evaluate's terms and observation
         e, kappa, v_ref, w1, w2 = k[K_E + j], k[K_K + j], k[K_VREF + j], k[K_W1 + j], k[K_W2 + j]
@@ -597,23 +610,23 @@ def _ideal_block(
         k[K_O + j], k[K_O + _BLOCK + j], k[K_O + 2 * _BLOCK + j], k[K_O + 3 * _BLOCK + j] = o
         k[K_O + 4 * _BLOCK + j], k[K_O + 5 * _BLOCK + j], k[K_O + 6 * _BLOCK + j] = q
         k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
+    for f, col in ((K_X, r.x), (K_Y, r.y), (K_B, r.beta), (K_W1, r.w1), (K_W2, r.w2), (K_AL1, r.alpha1),
+                   (K_AL2, r.alpha2), (K_CAS, r.castor), (K_C1, r.a1), (K_C2, r.a2), (K_STEPS, r.steps),
+                   (K_S, r.progress), (K_AT, exps[0]), (K_AV, exps[1]), (K_AS, exps[2])):  # fmt: skip
+        for j in range(m):  # the stores of the rows and the exponentials' arguments
+            col[i0 + j] = k[f + j]
     n_prev = int(c[L.C_N_PREVIEW])
-    for j in range(m):  # the stores
+    for j in range(m):  # the records' and observations' stores
         i = i0 + j
-        row = ws[i]
-        _no_draws(row)
-        for f, w in ((K_X, L.W_X), (K_Y, L.W_Y), (K_B, L.W_BETA), (K_W1, L.W_W1), (K_W2, L.W_W2), (K_AL1, L.W_AL1),
-                     (K_AL2, L.W_AL2), (K_CAS, L.W_CASTOR), (K_C1, L.W_A1), (K_C2, L.W_A2), (K_STEPS, L.W_STEPS),
-                     (K_W1, L.W_CMD1), (K_W2, L.W_CMD2), (K_S, L.W_PROGRESS), (K_HX, L.W_HX), (K_HY, L.W_HY),
-                     (K_E, L.W_E), (K_V, L.W_VT), (K_VREF, L.W_VREF), (K_TERM, L.W_TERM), (K_HEAD, L.W_HEADING),
-                     (K_AT, L.W_ARG_T), (K_AV, L.W_ARG_V), (K_AS, L.W_ARG_S)):  # fmt: skip
-            row[w] = k[f + j]
-        row[L.W_MX], row[L.W_MY], row[L.W_MB], row[L.W_MW1], row[L.W_MW2] = _measurements(
-            row[L.W_X], row[L.W_Y], row[L.W_BETA], row[L.W_W1], row[L.W_W2], 0.0, 0.0, 0.0, 0.0, 0.0
-        )
-        row[L.W_END] = 0.0
-        _record_entries(row, rec[i])
-        exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
+        for f, at in ((K_X, L.R_X), (K_Y, L.R_Y), (K_B, L.R_BETA), (K_HX, L.R_HX), (K_HY, L.R_HY), (K_W1, L.R_W1),
+                      (K_W2, L.R_W2), (K_W1, L.R_CMD1), (K_W2, L.R_CMD2), (K_AL1, L.R_AL1), (K_AL2, L.R_AL2),
+                      (K_E, L.R_ERROR), (K_S, L.R_PROGRESS), (K_V, L.R_VT), (K_VREF, L.R_VREF),
+                      (K_HEAD, L.R_HEADING), (K_TERM, L.R_TERM), (K_CAS, L.R_CASTOR)):  # fmt: skip
+            rec[i, at] = k[f + j]
+        rec[i, L.R_MX], rec[i, L.R_MY], rec[i, L.R_MB] = _measurements(
+            k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
+        )[:3]
+        rec[i, L.R_SLIP1] = rec[i, L.R_SLIP2] = rec[i, L.R_END] = 0.0
         for f in range(4):
             obs[i, f] = k[K_O + f * _BLOCK + j]
             obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
@@ -626,24 +639,13 @@ def _ideal_block(
             obs[i0 + j, 4 + p] = task.curvature_feature(kp, l3)
 
 
-_RECORD_WS = np.array(L.RECORD_WS, dtype=np.int64)
-_N_RECORD_WS = len(L.RECORD_WS)
-
-
 @_jit
-def fill_record(ws: F64, rec: F64, smooth_weight: float) -> None:
-    """The info record ``rec (RECORD_WIDTH,)`` of the workspace: its entries, the exponentials, terms and reward."""
-    _record_entries(ws, rec)
-    rec[L.R_TRACK] = math.exp(ws[L.W_ARG_T])
-    rec[L.R_SPEED] = math.exp(ws[L.W_ARG_V])
-    rec[L.R_SMOOTH_EXP] = math.exp(ws[L.W_ARG_S])
+def fill_record(rec: F64, smooth_weight: float) -> None:
+    """The info record ``rec (RECORD_WIDTH,)``: the exponentials of the arguments in their place, terms and reward."""
+    rec[L.R_TRACK] = math.exp(rec[L.R_TRACK])
+    rec[L.R_SPEED] = math.exp(rec[L.R_SPEED])
+    rec[L.R_SMOOTH_EXP] = math.exp(rec[L.R_SMOOTH_EXP])
     record_terms(rec, smooth_weight)
-
-
-@_jit
-def _record_entries(ws: F64, rec: F64) -> None:
-    for j in range(_N_RECORD_WS):
-        rec[j] = ws[_RECORD_WS[j]]
 
 
 @_jit
@@ -659,10 +661,11 @@ def step_record(
     ring_step: int, a1: float, a2: float, c: F64, pv: F64, ring: F64, ws: F64, obs: NDArray[np.floating], rec: F64,
     smooth_weight: float, key: np.uint64,
 ) -> None:  # fmt: skip
-    """:func:`step`, then :func:`fill_record` (the arguments after ``a2``: :attr:`fast_v1.StepKernel.args`)."""
+    """:func:`step` of the one row of ``ws``, then :func:`fill_record` (the arguments after ``a2``:
+    :attr:`fast_v1.StepKernel.args`)."""
     c, pv, ws, obs, rec = _bare(c), _bare(pv), _bare(ws), _bare(obs), _bare(rec)
-    step(c, pv, _bare(ring), ws, obs, ring_step, a1, a2, key)
-    fill_record(ws, rec, smooth_weight)
+    step(c, pv, _bare(ring), ws, 0, obs, rec, ring_step, a1, a2, key)
+    fill_record(rec, smooth_weight)
 
 
 # The batch: each row loop is written once with ``prange`` and compiled twice (serial, and ``parallel=True`` under
@@ -674,60 +677,61 @@ def _step_rows(
     obs: NDArray[np.floating], ring_step: int, a1: F64, a2: F64, keys: NDArray[np.uint64], rec: F64,
     smooth_weight: float,
 ) -> None:  # fmt: skip
-    """:func:`step_record` of every row ``i``: its path ``flat[starts[i]:stops[i]]``, ring ``rings[i]``, workspace
-    ``ws[i]``, observation ``obs[i]``, action ``(a1[i], a2[i])``, record ``rec[i]`` and key ``keys[i]``."""
+    """:func:`step` and :func:`fill_record` of every row ``i``: its path ``flat[starts[i]:stops[i]]``, ring
+    ``rings[i]``, observation ``obs[i]``, action ``(a1[i], a2[i])``, record ``rec[i]`` and key ``keys[i]``."""
     c, flat, rings, ws, obs, rec = _bare(c), _bare(flat), _bare(rings), _bare(ws), _bare(obs), _bare(rec)
-    for i in numba.prange(ws.shape[0]):
-        step(c, flat[starts[i] : stops[i]], rings[i], ws[i], obs[i], ring_step, a1[i], a2[i], keys[i])
-        fill_record(ws[i], rec[i], smooth_weight)
+    for i in numba.prange(ws.shape[1]):
+        step(c, flat[starts[i] : stops[i]], rings[i], ws, i, obs[i], rec[i], ring_step, a1[i], a2[i], keys[i])
+        fill_record(rec[i], smooth_weight)
 
 
 def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (N, 2)``, whose
+    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (2, N)``, whose
     ``np.tan`` the caller takes."""
-    c, ws = _bare(c), _bare(ws)
-    for i in numba.prange(ws.shape[0]):
+    c = _bare(c)
+    beta = _rows(ws).beta
+    for i in numba.prange(beta.shape[0]):
         w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])[2:]
-        arg_h, arg_m = _ideal_motion(c, ws[i], w1, w2)[3:]
-        tans[i, 0] = arg_h
-        tans[i, 1] = arg_m
+        arg_h, arg_m = _ideal_motion(c, beta[i], w1, w2)[3:]
+        tans[0, i] = arg_h
+        tans[1, i] = arg_m
 
 
 def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (N, 2)``; the record's entries into ``rec``,
-    the reward's exponential arguments into ``exps (N, 3)``. By blocks of :data:`_BLOCK` rows: on a circle or
-    manoeuvre with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
+    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records into ``rec``, the
+    reward's exponential arguments into ``exps (3, N)``. By blocks of :data:`_BLOCK` rows: on a circle or manoeuvre
+    with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
+    r = _rows(ws)
+    beta, l3_differs = r.beta, r.l3_differs  # arrays: the parallel loop takes no named tuple
+    n = ws.shape[1]
     staged = c[L.C_PATH_KIND] != L.PATH_CLOTHOID and c[L.C_OBS_V0] != 0.0
     staged = staged and not tracking.measured_differs(c[L.C_POS_NOISE], c[L.C_HEAD_NOISE], False)
-    for b in numba.prange((ws.shape[0] + _BLOCK - 1) // _BLOCK):
+    for b in numba.prange((n + _BLOCK - 1) // _BLOCK):
         i0 = b * _BLOCK
-        i1 = min(i0 + _BLOCK, ws.shape[0])
-        if staged and not ws[i0:i1, L.W_L3D].any():
+        i1 = min(i0 + _BLOCK, n)
+        if staged and not l3_differs[i0:i1].any():
             _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec, exps)
             continue
         for i in range(i0, i1):
-            row = ws[i]
-            _no_draws(row)
             c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-            v, bdot, h, _arg_h, _arg_m = _ideal_motion(c, row, w1, w2)
+            v, bdot, h = _ideal_motion(c, beta[i], w1, w2)[:3]
             pv = flat[starts[i] : stops[i]]
-            _ideal_move(c, pv, row, obs[i], c1, c2, w1, w2, v, bdot, h, tans[i, 0], tans[i, 1])
-            _record_entries(row, rec[i])
-            exps[i, 0], exps[i, 1], exps[i, 2] = row[L.W_ARG_T], row[L.W_ARG_V], row[L.W_ARG_S]
+            _ideal_move(c, pv, ws, i, obs[i], rec[i], _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
+            exps[0, i], exps[1, i], exps[2, i] = rec[i, L.R_TRACK], rec[i, L.R_SPEED], rec[i, L.R_SMOOTH_EXP]
 
 
 def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the records' exponentials ``exps (N, 3)`` (``np.exp`` taken by the caller), terms and rewards."""
+    """Pass 3: the records' exponentials ``exps (3, N)`` (``np.exp`` taken by the caller), terms and rewards."""
     rec = _bare(rec)
     for i in numba.prange(rec.shape[0]):
         r = rec[i]
-        r[L.R_TRACK] = exps[i, 0]
-        r[L.R_SPEED] = exps[i, 1]
-        r[L.R_SMOOTH_EXP] = exps[i, 2]
+        r[L.R_TRACK] = exps[0, i]
+        r[L.R_SPEED] = exps[1, i]
+        r[L.R_SMOOTH_EXP] = exps[2, i]
         record_terms(r, smooth_weight)
 
 
@@ -741,8 +745,8 @@ def start_rows(
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     for j in range(rows.shape[0]):
         i = rows[j]
-        evaluate(c, flat[starts[i] : stops[i]], ws[i], obs[j], v_true[j], t[j])
-        fill_record(ws[i], rec[j], smooth_weight)
+        evaluate(c, flat[starts[i] : stops[i]], ws, i, obs[j], rec[j], v_true[j], t[j])
+        fill_record(rec[j], smooth_weight)
 
 
 @_jit
@@ -751,26 +755,22 @@ def restart_rows(
     rec: F64, rows: NDArray[np.int64], template: F64, start: F64, u: F64, smooth_weight: float,
 ) -> None:  # fmt: skip
     """:func:`amigo_gym.task.v1.start_state`, then :func:`start_rows`, of the rows ``rows (m,)`` with one episode:
-    its workspace entries from the row ``template``; ``start``: the path's start ``(x, y, theta)`` [m, rad], the
-    initial position and heading noise [m, rad], the start wheel rates [rad/s], previous actions and speed of A
-    [m/s]; ``u (m, 3)``: the draws in [-1, 1]."""
+    their columns of ``ws`` from the column ``template`` (the episode and the start state but its pose and progress);
+    ``start``: the path's start ``(x, y, theta)`` [m, rad], the initial position and heading noise [m, rad] and the
+    start speed of A [m/s]; ``u (m, 3)``: the draws in [-1, 1]."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
+    r = _rows(ws)
     for j in range(rows.shape[0]):
         i = rows[j]
-        row = ws[i]
         pv = flat[starts[i] : stops[i]]
-        row[L.W_R1 : L.W_L3D + 1] = template[L.W_R1 : L.W_L3D + 1]  # the episode
-        row[L.W_SLIP_MAX : L.W_NOISE_ON + 1] = template[L.W_SLIP_MAX : L.W_NOISE_ON + 1]
+        ws[:, i] = template
         uj = (u[j, 0], u[j, 1], u[j, 2])
         hx, hy, beta = tracking.start_offsets(start[0], start[1], start[2], uj, start[3], start[4])
-        row[L.W_X], row[L.W_Y] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), row[L.W_L3])
-        row[L.W_BETA] = beta
-        row[L.W_W1 : L.W_W2 + 1] = start[5:7]
-        row[L.W_A1 : L.W_A2 + 1] = start[7:9]
-        row[L.W_AL1] = row[L.W_AL2] = row[L.W_STEPS] = row[L.W_CASTOR] = 0.0
-        row[L.W_PROGRESS] = progress(c, pv, float(hx), float(hy), 0.0)
-        evaluate(c, pv, row, obs[j], start[9], 0.0)
-        fill_record(row, rec[j], smooth_weight)
+        r.x[i], r.y[i] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), r.l3[i])
+        r.beta[i] = beta
+        r.progress[i] = progress(c, pv, float(hx), float(hy), 0.0)
+        evaluate(c, pv, ws, i, obs[j], rec[j], start[5], 0.0)
+        fill_record(rec[j], smooth_weight)
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

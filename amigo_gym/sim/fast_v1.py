@@ -214,14 +214,26 @@ def flat_path(path: Any) -> Array:
     return flat
 
 
+def load_rows(ws: Array, rows: Any, st: tracking.State, ep: tracking.Episode, l3_differs: Any) -> None:
+    """The states ``st`` and episodes ``ep`` (floats, or columns of ``rows``) into the columns ``rows`` of the block
+    ``ws`` (:data:`amigo_gym.sim.layout_v1.Rows`), the castor's angle 0."""
+    values = {**ep._asdict(), **st._asdict(), "castor": 0.0, "l3_differs": l3_differs}
+    if isinstance(rows, int):  # one robot's floats: one store
+        ws[:, rows] = [values[name] for name in layout_v1.Rows._fields]
+        return
+    for name, row in zip(layout_v1.Rows._fields, ws, strict=True):
+        row[rows] = values[name]
+
+
 class StepKernel:
-    """The compiled step of one robot: constants :attr:`consts`, the path's vector :attr:`path`, the workspace
-    :attr:`ws` (the episode's state between steps), the observation :attr:`obs`, the info record :attr:`record` and
-    the command ring :attr:`ring`. A step: ``run_record(ring_step, a1, a2, *args)``."""
+    """The compiled step of one robot: constants :attr:`consts`, the path's vector :attr:`path`, the block :attr:`ws`
+    ``(len(Rows._fields), 1)`` (the episode and its state between steps; :attr:`rows` names its rows), the observation
+    :attr:`obs`, the info record :attr:`record` and the command ring :attr:`ring`. A step:
+    ``run_record(ring_step, a1, a2, *args)``."""
 
     def __init__(self, k: tracking.Constants) -> None:
         self.consts: Array = kernel_constants(k)
-        self.ws: Array = np.zeros(len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH)
+        self.ws: Array = np.zeros((len(layout_v1.Rows._fields), 1))
         self.obs: NDArray[np.float32] = np.zeros(len(tracking.obs_bounds(k.params)[0]), dtype=np.float32)
         self.record: Array = np.zeros(layout_v1.RECORD_WIDTH)
         self.ring: Array = np.zeros((k.ring_length, 2))
@@ -235,17 +247,18 @@ class StepKernel:
 
     def _bind(self) -> None:
         kv = kernels()
+        self.rows = layout_v1.Rows(*self.ws)
         self.evaluate: Any = kv.evaluate
         self.locate_progress: Any = kv.progress
         self.path_pose: Any = kv.pose
         self._args()
         self.run_record: Any = direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
-        self._fill: Any = direct_call(kv.fill_record, self.ws, self.record, 0.0)
+        self._fill: Any = direct_call(kv.fill_record, self.record, 0.0)
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("evaluate", "locate_progress", "path_pose", "scalars", "args", "run_record", "_fill"):
+        for name in ("rows", "evaluate", "locate_progress", "path_pose", "scalars", "args", "run_record", "_fill"):
             del state[name]
         return state
 
@@ -272,26 +285,18 @@ class StepKernel:
         return got
 
     def load(self, path: Any, st: tracking.State, ep: tracking.Episode, l3_differs: bool) -> None:
-        """Start an episode: the path's vector, the state and the episode's constants into the workspace."""
+        """Start an episode: the path's vector, the state and the episode into the block."""
         self.path = flat_path(path)
-        ws = self.ws
-        ws[layout_v1.W_X : layout_v1.W_STEPS + 1] = (
-            st.x, st.y, st.beta, st.w1, st.w2, st.alpha1, st.alpha2, st.progress, st.a1, st.a2, float(st.steps),
-        )  # fmt: skip
-        ws[layout_v1.W_CASTOR] = 0.0
-        ws[layout_v1.W_R1 : layout_v1.W_L3D + 1] = (
-            ep.r1, ep.r2, ep.l1, ep.l3, float(ep.lag), ep.t_switch, ep.v_cruise, ep.t_brake, float(l3_differs),
-        )  # fmt: skip
-        ws[layout_v1.W_SLIP_MAX] = ep.slip_max
-        ws[layout_v1.W_NOISE_ON] = 1.0 if float(ep.slip_max) > 0.0 or self.n_normal > 0 else 0.0
+        load_rows(self.ws, 0, st, ep, l3_differs)
         self.key = np.uint64(ep.key)
         self._args()
 
     def fill(self) -> None:
-        """The info record of the workspace as it is (after :attr:`evaluate`)."""
-        self._fill(self.ws, self.record, self.smooth_weight)
+        """The info record's exponentials, terms and reward (after :attr:`evaluate`)."""
+        self._fill(self.record, self.smooth_weight)
 
     def state(self, steps: int) -> tracking.State:
-        """The state in the workspace as a :class:`tracking.State` of floats, ``steps`` given."""
-        x, y, beta, w1, w2, al1, al2, prog, a1, a2 = self.ws[layout_v1.W_X : layout_v1.W_A2 + 1].tolist()
-        return tracking.State(x, y, beta, w1, w2, al1, al2, prog, a1, a2, steps)
+        """The state in the block as a :class:`tracking.State` of floats, ``steps`` given."""
+        return tracking.State._make(
+            [*(float(getattr(self.rows, name)[0]) for name in tracking.State._fields[:-1]), steps]
+        )

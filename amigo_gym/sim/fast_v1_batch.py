@@ -1,4 +1,4 @@
-"""The compiled step of ``N`` robots (numba): the single robot's step over the rows of an ``(N, W)`` workspace in one
+"""The compiled step of ``N`` robots (numba): the single robot's step over the columns of the ``(F, N)`` block in one
 compiled loop; with ideal actuators and no per-step draws, three loops with numpy's ``tan`` and ``exp`` between."""
 
 from __future__ import annotations
@@ -88,8 +88,9 @@ class PathArena:
 
 
 class BatchKernel:
-    """The compiled step of ``n`` robots: constants :attr:`consts`, paths :attr:`arena`, workspace rows :attr:`ws`
-    and the episodes' keys :attr:`keys`; ``parallel`` runs the loops on numba's threads (the same results)."""
+    """The compiled step of ``n`` robots: constants :attr:`consts`, paths :attr:`arena`, the block :attr:`ws`
+    ``(len(Rows._fields), n)`` (:attr:`rows` names its rows) and the episodes' keys :attr:`keys`; ``parallel`` runs
+    the loops on numba's threads (the same results)."""
 
     def __init__(self, k: tracking.Constants, n: int, parallel: bool = False) -> None:
         self._k = k
@@ -97,19 +98,18 @@ class BatchKernel:
         self.consts: Array = self._row.consts
         self.parallel = parallel
         self.arena = PathArena(n)
-        self.ws: Array = np.zeros((n, len(layout_v1.WS_FIELDS) + layout_v1.WS_SCRATCH))
+        self.ws: Array = np.zeros((len(layout_v1.Rows._fields), n))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
-        m = self._row.n_normal
-        self.noise_on = np.zeros(n, dtype=np.bool_)
-        self.ideal = k.params.ideal_actuators and m == 0
-        self._tans: Array = np.zeros((n, 2) if self.ideal else (0, 2))
-        self._exps: Array = np.zeros((n, 3) if self.ideal else (0, 3))
+        self.ideal = k.params.ideal_actuators and self._row.n_normal == 0
+        self._tans: Array = np.zeros((2, n if self.ideal else 0))
+        self._exps: Array = np.zeros((3, n if self.ideal else 0))
         self._restart: tuple[Any, ...] | None = None  # restart's path, template row and start
         self._bind()
 
     def _bind(self) -> None:
         # the loops for exactly the types of step's arguments (fast_v1.direct_call)
         kv = fast_v1.kernels()
+        self.rows = layout_v1.Rows(*self.ws)
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
@@ -126,7 +126,7 @@ class BatchKernel:
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        for name in ("_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
+        for name in ("rows", "_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
             state.pop(name, None)
         return state
 
@@ -135,7 +135,7 @@ class BatchKernel:
         self._bind()
 
     def load(self, rows: Sequence[int], paths: Sequence[Any], st: tracking.State, ep: tracking.Episode) -> None:
-        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the workspace.
+        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the block.
 
         Raises:
             TypeError: a path the compiled step does not run (:func:`amigo_gym.sim.fast_v1.compiled_path`).
@@ -144,18 +144,8 @@ class BatchKernel:
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
         r = np.asarray(rows, dtype=np.intp)
-        ws = self.ws
-        ws[r, layout_v1.W_X : layout_v1.W_STEPS + 1] = np.column_stack([np.asarray(c, dtype=np.float64) for c in st])
-        ws[r, layout_v1.W_CASTOR] = 0.0
-        l3_differs = np.asarray(ep.l3) != self._k.l3
-        ws[r, layout_v1.W_R1 : layout_v1.W_L3D + 1] = np.column_stack(
-            (ep.r1, ep.r2, ep.l1, ep.l3, ep.lag, ep.t_switch, ep.v_cruise, ep.t_brake, l3_differs)
-        )
-        noise_on = (np.asarray(ep.slip_max) > 0.0) | (self._row.n_normal > 0)
-        ws[r, layout_v1.W_SLIP_MAX] = ep.slip_max
-        ws[r, layout_v1.W_NOISE_ON] = noise_on
+        fast_v1.load_rows(self.ws, r, st, ep, np.asarray(ep.l3) != self._k.l3)
         self.keys[r] = ep.key
-        self.noise_on[r] = noise_on
         self.arena.assign(rows, paths)
 
     def start(
@@ -185,18 +175,17 @@ class BatchKernel:
     ) -> Array:
         """:meth:`start` of ``rows`` on one fixed ``path`` with one episode ``ep`` (columns of one row) and the start
         draws ``u (m, 3)`` in [-1, 1] (:func:`amigo_gym.task.v1.start_state`'s ``u``), in one compiled call."""
-        if self._restart is None or self._restart[0] is not path:  # the first row's episode entries: the template
+        if self._restart is None or self._restart[0] is not path:  # the first row's column: the template
             zero = np.zeros(1)
             st = tracking.start_state(self._k, path, ep, (zero, zero, zero))
             self.load(rows[:1], [path], st, ep)
             q, p = path.pose_columns(zero), self._k.params
             v_a = tracking.start_speed_time(st, ep)[0]
-            start = (q.x, q.y, q.theta, p.init_position_noise, p.init_heading_noise, st.w1, st.w2, st.a1, st.a2, v_a)
-            self._restart = (path, self.ws[rows[0]].copy(), np.hstack(start).astype(np.float64))
+            start = (q.x, q.y, q.theta, p.init_position_noise, p.init_heading_noise, v_a)
+            self._restart = (path, self.ws[:, rows[0]].copy(), np.hstack(start).astype(np.float64))
         _, template, start = self._restart
         r = np.asarray(rows, dtype=np.int64)
         self.keys[r] = ep.key
-        self.noise_on[r] = template[layout_v1.W_NOISE_ON] != 0.0
         self.arena.assign(rows, [path] * len(rows))
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
         a = self.arena
@@ -212,9 +201,9 @@ class BatchKernel:
         c = self.consts
         ws = self.ws
         a = self.arena
-        rec = np.empty((ws.shape[0], layout_v1.RECORD_WIDTH))
+        rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         sw = self._row.smooth_weight
-        if self.ideal and not self.noise_on.any():
+        if self.ideal and not self.rows.slip_max.any():  # no draws
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
             np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
