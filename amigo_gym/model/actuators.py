@@ -225,7 +225,7 @@ def actuator_step(
     return ActuatorStep(*out)
 
 
-# The step on a scratch ``ws`` (a list of floats or of columns, or the compiled step's workspace): per channel (v,
+# The step on a scratch ``ws`` (a list of floats or of columns, or a stack buffer in the compiled step): per channel (v,
 # then w) 7 knots, 6 values and 6 slopes; the 11 piece boundaries; ``(vt, at, wt, alt, length)`` of each live piece.
 
 #: scratch entries of one speed channel: 7 knots, 6 values, 6 slopes
