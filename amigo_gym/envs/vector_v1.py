@@ -366,10 +366,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             assert self._template_row is not None
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            for i in rows:
-                self.path_infos[i] = dict(info)
             # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
-            u_all = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in rows]).reshape(m, 3)
+            u_all = np.empty((m, 3))
+            rngs, infos = self._rngs, self.path_infos
+            for j, i in enumerate(rows):
+                infos[i] = dict(info)
+                (rngs[i] or self._rng(i)).random(out=u_all[j])
+            u_all *= 2.0
+            u_all -= 1.0
             if pose_opt is None:  # the start states and their evaluation in one compiled call
                 self._goal[idx] = tracking.goal_point(k.params, fixed)
                 return self._started(idx, b.restart(rows, fixed, self._template_row, u_all, obs), None, template)
