@@ -142,6 +142,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
         self._template_row = None if self._template is None else tracking.episode_columns([self._template])
+        self._templated = False  # every row's episode is the template (restarts need not write it)
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         self.render_mode = render_mode
@@ -430,8 +431,10 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         else:
             for name, col in zip(_STATE_FIELDS, st, strict=True):
                 np.asarray(getattr(self._state, name))[idx] = col
-        for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
-            np.asarray(getattr(self._episode, name))[idx] = col
+        if ep is not self._template or not self._templated:
+            for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
+                np.asarray(getattr(self._episode, name))[idx] = col
+        self._templated = ep is self._template and (self._templated or len(idx) == self.num_envs)
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
         w_max = self._k.w_max
         self._ring[idx, :, 0] = (np.asarray(self._state.a1)[idx] * w_max)[:, None]
