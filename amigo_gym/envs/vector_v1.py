@@ -265,7 +265,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
         obs, rec = self._step_kernel(a1, a2) if self._batch is not None else self._step_columns(a1, a2)
-        restarted = None
+        restarted: NDArray[np.intp] | None = None
         if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
             # the new episodes' records replace the step's: no reward, not terminated
             restarted = np.flatnonzero(self._autoreset)
