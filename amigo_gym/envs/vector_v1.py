@@ -142,6 +142,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
         self._template_row = None if self._template is None else tracking.episode_columns([self._template])
+        self._templated = False  # every row's episode is the template (restarts need not write it)
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         self.render_mode = render_mode
@@ -264,25 +265,26 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         a1, a2 = a[:, 0].copy(), a[:, 1].copy()
         self._ring_step += 1
         obs, rec = self._step_kernel(a1, a2) if self._batch is not None else self._step_columns(a1, a2)
+        restarted: NDArray[np.intp] | None = None
+        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
+            # the new episodes' records replace the step's: no reward, not terminated
+            restarted = np.flatnonzero(self._autoreset)
+            obs[restarted], rec[restarted] = self._begin_rows(restarted)
+            rec[restarted, _R_REWARD] = 0.0
+            rec[restarted, _R_TERM] = 0.0
         infos, reward, terminated = self._record_infos(slice(None), rec)
         hx, hy = rec[:, _R_HX], rec[:, _R_HY]
         if self.render_mode is not None:
             self._h_now[:, 0] = hx
             self._h_now[:, 1] = hy
         if self.v0_params is None:
-            terminated = self._end(terminated, infos, hx, hy)
+            terminated = self._end(terminated, infos, hx, hy, restarted)
         truncated: BoolArray = np.zeros(n, dtype=np.bool_)
         if self.max_episode_steps is not None:
             truncated = np.asarray(self._state.steps) >= self.max_episode_steps
-        if mode == AutoresetMode.NEXT_STEP and _np_count_nonzero(self._autoreset):
-            idx = np.flatnonzero(self._autoreset)
-            obs[idx], info_r = self._reset_rows(idx)
-            assign_rows(infos, info_r, idx)
-            reward[idx] = 0.0
-            terminated[idx] = False
-            truncated[idx] = False
-            self._mark_restarted(infos, idx)
-        elif mode == AutoresetMode.SAME_STEP and _np_count_nonzero(done := terminated | truncated):
+            if restarted is not None:
+                truncated[restarted] = False
+        if mode == AutoresetMode.SAME_STEP and _np_count_nonzero(done := terminated | truncated):
             idx = np.flatnonzero(done)
             final_obs = np.full(n, None, dtype=object)
             for i in idx.tolist():
@@ -323,16 +325,21 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def _reset_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, dict[str, Any]]:
         """New episodes for the robots ``idx``: their observations ``(m, D)`` and compact infos."""
+        obs, rec = self._begin_rows(idx, pose_opt)
+        return obs, self._record_infos(idx, rec)[0]
+
+    def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, Array]:
+        """New episodes for the robots ``idx``: their observations ``(m, D)`` and info records."""
         obs = np.empty((len(idx), self._obs.shape[1]), dtype=np.float32)
         if self._batch is not None:
             rec = self._begin_rows_kernel(idx, pose_opt, obs)
         else:
             rec = self._begin_rows_columns(idx, pose_opt, obs)
-        infos = self._record_infos(idx, rec)[0]
         if self.render_mode is not None:  # the robots' trails start at the next position
             self._trail_start[idx] = self._trail_count
-            self._h_now[idx] = infos["h_position"]
-        return obs, infos
+            self._h_now[idx, 0] = rec[:, _R_HX]
+            self._h_now[idx, 1] = rec[:, _R_HY]
+        return obs, rec
 
     def _begin_rows_columns(self, idx: NDArray[np.intp], pose_opt: Array | None, obs: ObsArray) -> Array:
         k = self._k
@@ -366,10 +373,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             assert self._template_row is not None
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            for i in rows:
-                self.path_infos[i] = dict(info)
             # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
-            u_all = -1.0 + 2.0 * np.array([self._rng(i).random(3) for i in rows]).reshape(m, 3)
+            u_all = np.empty((m, 3))
+            rngs, infos = self._rngs, self.path_infos
+            for j, i in enumerate(rows):
+                infos[i] = dict(info)
+                (rngs[i] or self._rng(i)).random(out=u_all[j])
+            u_all *= 2.0
+            u_all -= 1.0
             if pose_opt is None:  # the start states and their evaluation in one compiled call
                 self._goal[idx] = tracking.goal_point(k.params, fixed)
                 return self._started(idx, b.restart(rows, fixed, self._template_row, u_all, obs), None, template)
@@ -420,8 +431,10 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         else:
             for name, col in zip(_STATE_FIELDS, st, strict=True):
                 np.asarray(getattr(self._state, name))[idx] = col
-        for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
-            np.asarray(getattr(self._episode, name))[idx] = col
+        if ep is not self._template or not self._templated:
+            for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
+                np.asarray(getattr(self._episode, name))[idx] = col
+        self._templated = ep is self._template and (self._templated or len(idx) == self.num_envs)
         # the command the robot was executing before the first step: its wheels' state (0 at rest)
         w_max = self._k.w_max
         self._ring[idx, :, 0] = (np.asarray(self._state.a1)[idx] * w_max)[:, None]
@@ -433,11 +446,16 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         infos["end_condition"] = infos["end_condition"].copy()
         infos["end_condition"][idx] = ""
 
-    def _end(self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array) -> BoolArray:
-        # with the goals of open paths (goal_tolerance), which set end_of_path; and infos["end_condition"]
+    def _end(
+        self, terminated: BoolArray, infos: dict[str, Any], hx: Array, hy: Array, restarted: NDArray[np.intp] | None
+    ) -> BoolArray:
+        # with the goals of open paths (goal_tolerance; not at the restarted rows' starts), which set end_of_path;
+        # and infos["end_condition"]
         cond = np.full(self.num_envs, "", dtype=object)
         if self._k.params.goal_tolerance > 0.0:
             goal = tracking.goal_reached(self._k.params, hx, hy, self._goal[:, 0], self._goal[:, 1])
+            if restarted is not None:
+                goal[restarted] = False
             if _np_count_nonzero(goal):
                 terminated = terminated | goal
                 infos["end_of_path"] = np.where(goal, 1.0, infos["end_of_path"])
@@ -448,6 +466,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             cond[np.asarray(infos["end_of_path"]) != 0.0] = "end_of_path"
             if goal is not None:
                 cond[goal] = "goal"
+            if restarted is not None:
+                cond[restarted] = ""
         infos["end_condition"] = cond
         return terminated
 

@@ -186,9 +186,11 @@ class BatchKernel:
         _, template, start = self._restart
         r = np.asarray(rows, dtype=np.int64)
         self.keys[r] = ep.key
-        self.arena.assign(rows, [path] * len(rows))
-        rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
         a = self.arena
+        on_path = a._live.get(id(path))
+        if on_path is None or on_path[3] != len(a.starts):  # not every row on the path already
+            a.assign(rows, [path] * len(rows))
+        rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
         fast_v1.kernels().restart_rows(
             self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u, self._row.smooth_weight
         )
