@@ -11,6 +11,7 @@ import sys
 import textwrap
 import tracemalloc
 import warnings
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -203,10 +204,13 @@ def test_huge_num_envs_refused_before_allocating() -> None:
     assert peak < 50 * 2**20
 
 
-def test_memory_estimate_matches_tracemalloc() -> None:
-    """:func:`vector_v1.memory_needed` per robot against tracemalloc's count (N = 96 minus N = 32, over 64)."""
+def test_memory_estimate_matches_tracemalloc(monkeypatch: pytest.MonkeyPatch) -> None:
+    """:func:`vector_v1.memory_needed` per robot against tracemalloc's count (N = 96 minus N = 32, over 64), each count
+    from an empty family-path cache (paths an earlier test built would otherwise not be counted)."""
 
     def count(n: int, **kw: Any) -> int:
+        monkeypatch.setattr(tracking, "_FAMILY_CACHE", OrderedDict())
+        monkeypatch.setattr(tracking, "_cache_bytes", 0)
         tracemalloc.start()
         try:
             e = AmigoBotV1VectorEnv(num_envs=n, **kw)
