@@ -62,6 +62,11 @@ class PathArena:
         if self._dead > self.COMPACT_MIN and 2 * self._dead > self.used:
             self._compact()
 
+    def rows_on(self, path: ClothoidPath) -> int:
+        """How many rows hold ``path``."""
+        entry = self._live.get(id(path))
+        return 0 if entry is None else int(entry[3])
+
     def _append(self, vec: Array) -> tuple[int, int]:
         start = self.used
         stop = start + vec.shape[0]
@@ -187,8 +192,7 @@ class BatchKernel:
         r = np.asarray(rows, dtype=np.int64)
         self.keys[r] = ep.key
         a = self.arena
-        on_path = a._live.get(id(path))
-        if on_path is None or on_path[3] != len(a.starts):  # not every row on the path already
+        if a.rows_on(path) != len(a.starts):  # not every row on the path already
             a.assign(rows, [path] * len(rows))
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
         fast_v1.kernels().restart_rows(
