@@ -42,21 +42,21 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         "pure_pursuit": "pure pursuit of the axle midpoint A (AmigoBot-v1's classical baseline)",
         "ppo_fresh": "the PPO agent trained by this run (AmigoBot-v0, --train-steps)",
     }
+    how = {
+        "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
+        "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
+        " controller's command; a numpy policy)",
+    }
     out = []
     for name in dict.fromkeys(names):
+        stem = name[:-3]
         if name in fixed:
             text = fixed[name]
         elif name.endswith("_v0"):
-            text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
+            text = f"pretrained SB3 {stem.upper()} AmigoBot-v0 specialist (agents/pretrained/{stem}.zip)"
         elif name.endswith("_v1"):
-            folder = name[:-3]
-            label = {**bm.RETIRED_V1_AGENTS, **bm.V1_AGENTS}.get(folder, folder.upper())
-            how = {
-                "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
-                "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
-                " controller's command; a numpy policy)",
-            }.get(folder, "")
-            text = f"pretrained {label} AmigoBot-v1 generalists{how} (agents/pretrained/v1/{folder}/)"
+            label = {**bm.RETIRED_V1_AGENTS, **bm.V1_AGENTS}.get(stem, stem.upper())
+            text = f"pretrained {label} AmigoBot-v1 generalists{how.get(stem, '')} (agents/pretrained/v1/{stem}/)"
         else:
             text = "a model from --models"
         out.append(f"`{name}`: {text}")

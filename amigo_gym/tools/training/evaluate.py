@@ -331,26 +331,22 @@ class AgentSpec:
         return d
 
 
-def _run_algo(run_dir: Path) -> str:
-    cfg = run_dir / "config.json"
-    try:
-        algo = json.loads(cfg.read_text())["settings"]["algo"]
-    except (OSError, ValueError, KeyError, TypeError):
-        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
-    if algo not in ALGOS:
-        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
-    return str(algo)
-
-
 def _beside(model: Path, name: str) -> Path | None:
     f = model.parent / name
     return f if f.is_file() else None
 
 
 def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
-    model = model or run_dir / "model.zip"
-    record, stats = _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
-    return AgentSpec(run_dir.name, 0, str(model), _run_algo(run_dir), None, record, stats)
+    model, cfg = model or run_dir / "model.zip", run_dir / "config.json"
+    try:
+        algo = json.loads(cfg.read_text())["settings"]["algo"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
+    if algo not in ALGOS:
+        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
+    return AgentSpec(
+        run_dir.name, 0, str(model), algo, None, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    )
 
 
 def _is_run(d: Path) -> bool:
@@ -400,9 +396,8 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
     return refs
 
 
-def load_model(ref: AgentSpec, trust: bool = False) -> Agent:
-    """:meth:`AgentSpec.load`."""
-    return ref.load(trust)
+#: :meth:`AgentSpec.load` as a function of the spec
+load_model = AgentSpec.load
 
 
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
@@ -488,10 +483,9 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Tra
         if zoom:
             ax.set(xlim=(-0.03, 0.25), ylim=(-0.025, 0.04), title=f"H's trajectory near the start ({top} start)")
         else:
-            ax.set_aspect("equal")
-            ax.set_title(f"H's trajectory, {top} start")
+            ax.set(aspect="equal", title=f"H's trajectory, {top} start")
         ax.set(xlabel="x0 [m]", ylabel="y0 [m]")
-        ax.legend(fontsize=8, loc="center" if not zoom else "upper left")
+        ax.legend(fontsize=8, loc="upper left" if zoom else "center")
     for j, sc in enumerate(s for s in ("nominal", "perturbed") if s in have):
         ax = axes[1, j]
         for name, per in trajs.items():
@@ -529,15 +523,12 @@ def plot_wheels(
             ax_diff.plot(tr.time[:n], tr.angles[:n, k] - ref.angles[:n, k], color=c, lw=1.0, label=a)
         ax_rate.set_xlim(0.0, 10.0)
         ax_diff.axhline(0.0, color="k", lw=0.5)
-        for ax, ylabel, title, ncol in (
-            (ax_angle, "wheel angle [rad]", f"wheel angles ({scenario} start)", 2),
-            (ax_rate, "wheel rate [rad/s]", "wheel rates, first 10 s (dotted: steady state)", 2),
-            (ax_diff, "angle minus analytic [rad]", "wheel angles minus the analytic policy's", 1),
-        ):
-            ax.set(ylabel=ylabel, title=f"{name}: {title}")
-            ax.legend(fontsize=7, ncol=ncol)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
+        ax_angle.set(ylabel="wheel angle [rad]", title=f"{name}: wheel angles ({scenario} start)")
+        ax_rate.set(ylabel="wheel rate [rad/s]", title=f"{name}: wheel rates, first 10 s (dotted: steady state)")
+        ax_diff.set(ylabel="angle minus analytic [rad]", title=f"{name}: wheel angles minus the analytic policy's")
+        for ax in axes[i]:
+            ax.legend(fontsize=7, ncol=1 if ax is ax_diff else 2)
+            ax.set_xlabel("t [s]" if i == len(others) - 1 else "")
     fig.tight_layout()
     save_figure(fig, path)
 
