@@ -702,8 +702,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif a.path:
             scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
         else:
-            scenarios = quick_suite(suite) if a.quick else suite
-        if a.quick and (a.curvature or a.random_paths or a.path):  # every cell, shorter
+            scenarios = tuple(sc for sc in suite if not a.quick or sc.name in QUICK_SCENARIOS)
+        if a.quick:  # every cell, shorter
             scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
@@ -715,33 +715,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
-            if a.curvature or a.random_paths:
-                if a.curvature:
-                    name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
-                else:
-                    ps = replace(paths, scenarios=scenarios)
-                    name, doc = "random_paths", rp.run_random_paths(agents, ps, progress=a.progress)
-                doc["command"] = command
-                report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
-                written = [out / f"{name}.json", out / f"{name}.md"]
-                atomic_write_json(written[0], doc)
-                atomic_write(written[1], report)
+            if a.curvature:
+                name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
+            elif a.random_paths:
+                ps = replace(paths, scenarios=scenarios)
+                name, doc = "random_paths", rp.run_random_paths(agents, ps, progress=a.progress)
             else:
                 remove_matching(out, _TEMPORARY)  # what killed benchmarks left
-                doc = run_benchmark(
-                    agents,
-                    scenarios,
-                    progress=a.progress,
-                    reps=a.reps,
-                    profile_reps=a.profile_reps,
-                    bootstrap_seed=a.bootstrap_seed,
-                    quick=a.quick,
-                )
-                doc["command"] = command
+                kw = {"reps": a.reps, "profile_reps": a.profile_reps, "bootstrap_seed": a.bootstrap_seed}
+                name, doc = "benchmark", run_benchmark(agents, scenarios, progress=a.progress, quick=a.quick, **kw)
+            doc["command"] = command
+            if name == "benchmark":
                 json_path = Path(a.json) if a.json else out / "benchmark.json"
                 md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
                 written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
                 report = markdown_report(doc)
+            else:
+                report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
+                written = [out / f"{name}.json", out / f"{name}.md"]
+                atomic_write_json(written[0], doc)
+                atomic_write(written[1], report)
         print(report, end="")
         print("wrote " + ", ".join(map(str, written)))
         return 0
