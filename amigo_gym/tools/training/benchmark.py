@@ -216,14 +216,17 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
     return out
 
 
+def generalists(root: Path) -> list[AgentSpec]:
+    """The v1 generalists ``root/<folder>/*.zip`` of every folder of :data:`V1_AGENTS`, named ``<folder>_v1``."""
+    return [_model_spec(f"{f}_v1", z, i) for f in V1_AGENTS for i, z in enumerate(sorted((root / f).glob("*.zip")))]
+
+
 def default_agents() -> list[AgentSpec]:
     """The classical policies, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<folder>_v1``)."""
-    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
+    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     out += [_model_spec(f"{a}_v0", d / f"{a}.zip", 0) for a in ALGOS if (d / f"{a}.zip").is_file()]
-    for folder in V1_AGENTS:
-        out += [_model_spec(f"{folder}_v1", z, i) for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip")))]
-    return out
+    return out + generalists(d / "v1")
 
 
 def agent_label(name: str, algo: str | None = None) -> str:

@@ -6,7 +6,6 @@ docs/baselines.md, "Reference: `amigo-gym compare`".
 
 from __future__ import annotations
 
-import glob
 import json
 import shlex
 import shutil
@@ -211,11 +210,7 @@ def quick_benchmark(
     specs: Sequence[ev.AgentSpec], generalists: Path | None = None, *, progress: bool = False
 ) -> dict[str, Any]:
     """The benchmark's ``--quick`` subset on ``specs`` and the v1 generalists in ``generalists`` (``<folder>_v1``)."""
-    specs = list(specs)
-    if generalists is not None:
-        for folder in bm.V1_AGENTS:
-            if any((generalists / folder).glob("*.zip")):
-                specs += bm.parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
+    specs = [*specs, *([] if generalists is None else bm.generalists(generalists))]
     doc = bm.run_benchmark(specs, bm.quick_suite(), progress=progress, quick=True)
     doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
     return doc
@@ -241,14 +236,10 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
         return "no complete earlier run"
     try:
         cfg = json.loads(cfg_file.read_text())
-        recorded = {
-            "algo": cfg["settings"]["algo"],
-            "timesteps": cfg["settings"]["timesteps"],
-            "seed": cfg["settings"]["seed"],
-            "env_kwargs": cfg.get("env_kwargs"),
-            "hyperparams": cfg["hyperparams"],
-            "versions": cfg["versions"],
+        recorded = {k: cfg["settings"][k] for k in ("algo", "timesteps", "seed")} | {
+            "env_kwargs": cfg.get("env_kwargs")
         }
+        recorded |= {k: cfg[k] for k in ("hyperparams", "versions")}
     except (ValueError, KeyError, TypeError):
         return f"unreadable {cfg_file}"
     differ = [k for k in request if json.dumps(recorded[k], sort_keys=True) != json.dumps(request[k], sort_keys=True)]
