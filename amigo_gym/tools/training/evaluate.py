@@ -13,6 +13,7 @@ import os
 import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -192,33 +193,31 @@ def default_agents(params: TrackingParams, gain: float = 3.0) -> dict[str, Agent
 
 
 # --------------------------------------------------------------------------- agents
-def _classical(name: str) -> Callable[[Any], Any]:
-    def make(env: Any) -> Any:
-        base = env.unwrapped
-        hook = getattr(base, "classical_policy", None)
-        if callable(hook):
-            return hook(name)
-        params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
-            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
+def _classical(name: str, env: Any) -> Any:
+    """The classical policy ``name`` built for ``env``; :class:`Unavailable` if it has none."""
+    base = env.unwrapped
+    hook = getattr(base, "classical_policy", None)
+    if callable(hook):
+        return hook(name)
+    params = getattr(base, "params", None)
+    if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
+        from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
-            v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
-            v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
-            if name in v1:
-                return v1[name](params)
-            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
-        if not isinstance(params, TrackingParams):
-            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
-        if name in ("analytic", "analytic_ff"):
-            return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
-        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
-
-    return make
+        v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
+        v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
+        if name in v1:
+            return v1[name](params)
+        raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
+    if not isinstance(params, TrackingParams):
+        raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
+    if name in ("analytic", "analytic_ff"):
+        return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
+    raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
 
 
 #: classical policies by name: built per scenario from the environment
 CLASSICAL: dict[str, Callable[[Any], Any]] = {
-    n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
+    n: partial(_classical, n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
 }
 
 
