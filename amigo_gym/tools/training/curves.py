@@ -344,13 +344,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
 
     def run() -> int:
+        tty = a.progress and sys.stderr.isatty()
         doc = learning_curves(
-            a.runs,
-            metric=a.metric,
-            threshold=a.threshold,
-            reps=a.reps,
-            bootstrap_seed=a.bootstrap_seed,
-            progress=a.progress and sys.stderr.isatty(),
+            a.runs, metric=a.metric, threshold=a.threshold, reps=a.reps, bootstrap_seed=a.bootstrap_seed, progress=tty
         )
         doc["command"] = "amigo-gym curves " + " ".join(args)
         written = write_outputs(doc, Path(a.out), plots=a.plots)
