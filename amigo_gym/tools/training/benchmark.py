@@ -77,7 +77,6 @@ def user_scenarios(
 ) -> tuple[Scenario, ...]:
     """One ``AmigoBot-v1`` scenario per points file, named after the file, at ``speed`` [m/s], ``feasibility``,
     ``goal_tolerance`` [m] and ``duration`` [s]. Raises ``FileNotFoundError`` / ``ValueError`` (one line)."""
-    out = []
     for f in files:
         if not is_points_file(str(f)):
             raise ValueError(f"--path {f}: a points file must end in .csv or .json")
@@ -89,13 +88,12 @@ def user_scenarios(
             raise ValueError(f"--path {exc}") from None
     if not (0.0 < duration <= 3600.0):
         raise ValueError(f"--duration must be in (0, 3600] s, got {duration}")
-    names = [Path(f).stem for f in files]
-    for f, stem in zip(files, names, strict=True):
-        name = f"path:{stem}" if names.count(stem) == 1 else f"path:{f}"
-        kw: dict[str, Any] = {"path": str(f), "speed": speed, "feasibility": feasibility}
-        kw["goal_tolerance"] = goal_tolerance
-        out.append(_v1(name, f"points of {f} at {speed:g} m/s", True, duration=duration, **kw))
-    return tuple(out)
+    stems = [Path(f).stem for f in files]
+    return tuple(
+        _v1(f"path:{s}" if stems.count(s) == 1 else f"path:{f}", f"points of {f} at {speed:g} m/s", True,
+            duration=duration, path=str(f), speed=speed, feasibility=feasibility, goal_tolerance=goal_tolerance)
+        for f, s in zip(files, stems, strict=True)
+    )  # fmt: skip
 
 
 def _v1(name: str, desc: str, held_out: bool = False, env_id: str = "AmigoBot-v1", **kw: Any) -> Scenario:
@@ -218,14 +216,17 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
     return out
 
 
+def generalists(root: Path) -> list[AgentSpec]:
+    """The v1 generalists ``root/<folder>/*.zip`` of every folder of :data:`V1_AGENTS`, named ``<folder>_v1``."""
+    return [_model_spec(f"{f}_v1", z, i) for f in V1_AGENTS for i, z in enumerate(sorted((root / f).glob("*.zip")))]
+
+
 def default_agents() -> list[AgentSpec]:
     """The classical policies, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<folder>_v1``)."""
-    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     d = pretrained_dir()
+    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
     out += [_model_spec(f"{a}_v0", d / f"{a}.zip", 0) for a in ALGOS if (d / f"{a}.zip").is_file()]
-    for folder in V1_AGENTS:
-        out += [_model_spec(f"{folder}_v1", z, i) for i, z in enumerate(sorted((d / "v1" / folder).glob("*.zip")))]
-    return out
+    return out + generalists(d / "v1")
 
 
 def agent_label(name: str, algo: str | None = None) -> str:
@@ -394,6 +395,20 @@ def _mm(x: float | None) -> str:
     return "–" if x is None else f"{1e3 * x:.3g}"
 
 
+def _iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
+    """``value [low, high]`` of an aggregate times ``scale``; "–" for none."""
+    if d is None:
+        return "–"
+    lo, hi = d["ci95"]
+    return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
+
+
+def _values(doc: Mapping[str, Any], agent: str, scenario: str, key: str) -> list[Any]:
+    """``key`` of every training seed's run of ``agent`` on ``scenario`` (``None`` left out)."""
+    rs = doc["results"]
+    return [r[key] for r in rs if (r["agent"], r["scenario"]) == (agent, scenario) and r.get(key) is not None]
+
+
 def markdown_report(doc: Mapping[str, Any]) -> str:
     """Markdown: the aggregate table, the per-scenario table of H RMS, the unavailable scenarios."""
     lines = [
@@ -403,13 +418,6 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         f"{doc['protocol']['reps']} replications]. H-error gap target {1e3 * H_TARGET_M:g} mm.",
         "",
     ]
-
-    def iv(d: Mapping[str, Any] | None, scale: float = 1e3, fmt: str = ".3g") -> str:
-        if d is None:
-            return "–"
-        lo, hi = d["ci95"]
-        return f"{scale * d['value']:{fmt}} [{scale * lo:{fmt}}, {scale * hi:{fmt}}]"
-
     rows = []
     for agent, a in doc["aggregates"].items():
         if (g := a.get("all")) is None:
@@ -417,9 +425,9 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         h = a.get("held_out")
         failed, episodes = failed_episodes(doc, agent)
         rows.append((
-            agent, a["n_runs"], g["n_scenarios"], f"{failed} of {episodes}", iv(g["h_rms_m_iqm"]),
-            iv(g["h_rms_m_optimality_gap"]), iv(g["speed_err_rms_iqm"]), iv(g["failure_rate_mean"], 1.0, ".2f"),
-            iv(g["return_per_step_iqm"], 1.0, ".3f"), iv(h["h_rms_m_iqm"]) if h else "–",
+            agent, a["n_runs"], g["n_scenarios"], f"{failed} of {episodes}", _iv(g["h_rms_m_iqm"]),
+            _iv(g["h_rms_m_optimality_gap"]), _iv(g["speed_err_rms_iqm"]), _iv(g["failure_rate_mean"], 1.0, ".2f"),
+            _iv(g["return_per_step_iqm"], 1.0, ".3f"), _iv(h["h_rms_m_iqm"]) if h else "–",
         ))  # fmt: skip
     header: tuple[str, ...] = ("agent", "seeds", "scenarios", "failed episodes", "H RMS IQM [mm]", "H gap [mm]")
     header += ("speed err IQM [mm/s]", "failure rate", "return/step IQM", "held-out H RMS IQM [mm]")
@@ -438,11 +446,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     for key, title, fmt in per_scenario:
         rows = []
         for sc in doc["scenarios"]:
-            cells = []
-            for agent in agents:
-                run = [r for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, sc["name"])]
-                vals = [r[key] for r in run if r.get(key) is not None]
-                cells.append(fmt(float(np.mean(vals))) if vals else "–")
+            cells = (fmt(float(np.mean(v))) if (v := _values(doc, a, sc["name"], key)) else "–" for a in agents)
             rows.append((sc["name"], "yes" if sc["held_out"] else "", *cells))
         lines += [
             "",
@@ -496,15 +500,9 @@ def readme_table(doc: Mapping[str, Any]) -> str:
         cells = []
         for (g, k, fmt), low in zip(cols, best, strict=True):
             d = agg.get(g)
-            if d is None:
-                cells.append("–")
-                continue
-            v = 1e3 * d[k]["value"]
-            text = f"{v:{fmt}}"
-            if n > 1:
-                lo, hi = (1e3 * x for x in d[k]["ci95"])
-                text += f" [{lo:{fmt}}, {hi:{fmt}}]"
-            cells.append(f"**{text}**" if f"{v:{fmt}}" == f"{low:{fmt}}" else text)
+            v = f"{1e3 * d[k]['value']:{fmt}}" if d else "–"
+            text = _iv(d[k], fmt=fmt) if d and n > 1 else v
+            cells.append(f"**{text}**" if d and v == f"{low:{fmt}}" else text)
         table.append((label, failed, *cells))
     header = ("agent", "failed episodes", "H RMS IQM [mm] (95 % CI)", "held-out H RMS IQM [mm]")
     return "\n".join(tm.md_table((*header, "speed error IQM [mm/s]"), table, right=4)) + "\n"
@@ -524,11 +522,6 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
     return out
 
 
-def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
-    """:func:`scenarios_figure` saved as PNG."""
-    save_figure(scenarios_figure(doc, reps, seed), path)
-
-
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
     """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
     plt = pyplot()
@@ -541,8 +534,7 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
     for j, agent in enumerate(agents):
         xs, ys, lo, hi = [], [], [], []
         for i, name in enumerate(scen):
-            vals = [r["h_rms_m"] for r in doc["results"] if (r["agent"], r["scenario"]) == (agent, name)]
-            if not (vals := [v for v in vals if v is not None]):
+            if not (vals := _values(doc, agent, name, "h_rms_m")):
                 continue
             m = np.asarray(vals, dtype=np.float64).reshape(-1, 1)
             pt, ci = stratified_bootstrap(m, lambda s: np.mean(s, axis=(-2, -1)), reps=reps, seed=seed)
@@ -551,15 +543,11 @@ def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -
             lo.append(max(float(pt), floor) - max(float(ci[0]), floor))
             hi.append(max(float(ci[1]), floor) - max(float(pt), floor))
         ax.bar(xs, ys, width, yerr=[lo, hi], capsize=2, label=agent)
-    ax.set_yscale("log")
     ax.set_xticks(range(len(scen)), scen, rotation=60, ha="right", fontsize=8)
-    ax.set_ylabel("H cross-track RMS [m]")
     quick = " (quick subset)" if doc.get("quick") else ""
-    ax.set_title(
-        f"AmigoBot benchmark {doc['suite_version']}{quick}: H error per scenario\n"
-        "mean over training seeds, 95 % bootstrap interval",
-        fontsize=10,
-    )
+    title = f"AmigoBot benchmark {doc['suite_version']}{quick}: H error per scenario\n"
+    ax.set(yscale="log", ylabel="H cross-track RMS [m]")
+    ax.set_title(title + "mean over training seeds, 95 % bootstrap interval", fontsize=10)
     fig.legend(loc="outside right upper", fontsize=8, title="agent", title_fontsize=8)
     return fig
 
@@ -573,11 +561,8 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
     for agent, p in prof["agents"].items():
         (line,) = ax.plot(taus, p["fraction_below"], label=agent)
         ax.fill_between(taus, p["ci95_low"], p["ci95_high"], color=line.get_color(), alpha=0.2)
-    ax.set_xscale("log")
-    ax.set_xlabel(r"threshold $\tau$ on H cross-track RMS [m]")
-    ax.set_ylabel(r"fraction of runs with RMS $< \tau$")
-    ax.set_ylim(-0.02, 1.02)
-    ax.set_title("Performance profiles (rliable score distributions)")
+    ax.set(xscale="log", xlabel=r"threshold $\tau$ on H cross-track RMS [m]", ylim=(-0.02, 1.02))
+    ax.set(ylabel=r"fraction of runs with RMS $< \tau$", title="Performance profiles (rliable score distributions)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
@@ -585,7 +570,7 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
 
 def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
     """Draw ``benchmark_scenarios.png`` and ``benchmark_profiles.png`` into ``folder``; their names."""
-    plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
+    save_figure(scenarios_figure(doc, seed=int(doc["protocol"]["bootstrap_seed"])), folder / "benchmark_scenarios.png")
     plot_profiles(doc, folder / "benchmark_profiles.png")
     return ["benchmark_scenarios.png", "benchmark_profiles.png"]
 
@@ -720,8 +705,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif a.path:
             scenarios = user_scenarios(a.path, a.speed, a.feasibility, a.goal_tolerance, a.duration)
         else:
-            scenarios = quick_suite(suite) if a.quick else suite
-        if a.quick and (a.curvature or a.random_paths or a.path):  # every cell, shorter
+            scenarios = tuple(sc for sc in suite if not a.quick or sc.name in QUICK_SCENARIOS)
+        if a.quick:  # every cell, shorter
             scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
@@ -733,33 +718,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         agents = parse_agents(a.agents) if a.agents else default_agents()
         out = Path(a.out)
         with RunLock(out):  # one benchmark at a time on --out (a second one stops with one line)
-            if a.curvature or a.random_paths:
-                if a.curvature:
-                    name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
-                else:
-                    ps = replace(paths, scenarios=scenarios)
-                    name, doc = "random_paths", rp.run_random_paths(agents, ps, progress=a.progress)
-                doc["command"] = command
-                report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
-                written = [out / f"{name}.json", out / f"{name}.md"]
-                atomic_write_json(written[0], doc)
-                atomic_write(written[1], report)
+            if a.curvature:
+                name, doc = "curvature", curvature.run_curvature(agents, scenarios, progress=a.progress)
+            elif a.random_paths:
+                ps = replace(paths, scenarios=scenarios)
+                name, doc = "random_paths", rp.run_random_paths(agents, ps, progress=a.progress)
             else:
                 remove_matching(out, _TEMPORARY)  # what killed benchmarks left
-                doc = run_benchmark(
-                    agents,
-                    scenarios,
-                    progress=a.progress,
-                    reps=a.reps,
-                    profile_reps=a.profile_reps,
-                    bootstrap_seed=a.bootstrap_seed,
-                    quick=a.quick,
-                )
-                doc["command"] = command
+                kw = {"reps": a.reps, "profile_reps": a.profile_reps, "bootstrap_seed": a.bootstrap_seed}
+                name, doc = "benchmark", run_benchmark(agents, scenarios, progress=a.progress, quick=a.quick, **kw)
+            doc["command"] = command
+            if name == "benchmark":
                 json_path = Path(a.json) if a.json else out / "benchmark.json"
                 md_path = Path(a.markdown) if a.markdown else out / "benchmark.md"
                 written = write_outputs(doc, out, json_path, md_path, plots=a.plots)
                 report = markdown_report(doc)
+            else:
+                report = (curvature.markdown_curvature if a.curvature else rp.markdown_random_paths)(doc)
+                written = [out / f"{name}.json", out / f"{name}.md"]
+                atomic_write_json(written[0], doc)
+                atomic_write(written[1], report)
         print(report, end="")
         print("wrote " + ", ".join(map(str, written)))
         return 0

@@ -6,7 +6,6 @@ docs/baselines.md, "Reference: `amigo-gym compare`".
 
 from __future__ import annotations
 
-import glob
 import json
 import shlex
 import shutil
@@ -42,21 +41,21 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         "pure_pursuit": "pure pursuit of the axle midpoint A (AmigoBot-v1's classical baseline)",
         "ppo_fresh": "the PPO agent trained by this run (AmigoBot-v0, --train-steps)",
     }
+    how = {
+        "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
+        "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
+        " controller's command; a numpy policy)",
+    }
     out = []
     for name in dict.fromkeys(names):
+        stem = name[:-3]
         if name in fixed:
             text = fixed[name]
         elif name.endswith("_v0"):
-            text = f"pretrained SB3 {name[:-3].upper()} AmigoBot-v0 specialist (agents/pretrained/{name[:-3]}.zip)"
+            text = f"pretrained SB3 {stem.upper()} AmigoBot-v0 specialist (agents/pretrained/{stem}.zip)"
         elif name.endswith("_v1"):
-            folder = name[:-3]
-            label = {**bm.RETIRED_V1_AGENTS, **bm.V1_AGENTS}.get(folder, folder.upper())
-            how = {
-                "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
-                "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
-                " controller's command; a numpy policy)",
-            }.get(folder, "")
-            text = f"pretrained {label} AmigoBot-v1 generalists{how} (agents/pretrained/v1/{folder}/)"
+            label = {**bm.RETIRED_V1_AGENTS, **bm.V1_AGENTS}.get(stem, stem.upper())
+            text = f"pretrained {label} AmigoBot-v1 generalists{how.get(stem, '')} (agents/pretrained/v1/{stem}/)"
         else:
             text = "a model from --models"
         out.append(f"`{name}`: {text}")
@@ -211,11 +210,7 @@ def quick_benchmark(
     specs: Sequence[ev.AgentSpec], generalists: Path | None = None, *, progress: bool = False
 ) -> dict[str, Any]:
     """The benchmark's ``--quick`` subset on ``specs`` and the v1 generalists in ``generalists`` (``<folder>_v1``)."""
-    specs = list(specs)
-    if generalists is not None:
-        for folder in bm.V1_AGENTS:
-            if any((generalists / folder).glob("*.zip")):
-                specs += bm.parse_agents([f"{folder}_v1={glob.escape(str(generalists / folder))}/*.zip"])
+    specs = [*specs, *([] if generalists is None else bm.generalists(generalists))]
     doc = bm.run_benchmark(specs, bm.quick_suite(), progress=progress, quick=True)
     doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
     return doc
@@ -241,14 +236,10 @@ def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
         return "no complete earlier run"
     try:
         cfg = json.loads(cfg_file.read_text())
-        recorded = {
-            "algo": cfg["settings"]["algo"],
-            "timesteps": cfg["settings"]["timesteps"],
-            "seed": cfg["settings"]["seed"],
-            "env_kwargs": cfg.get("env_kwargs"),
-            "hyperparams": cfg["hyperparams"],
-            "versions": cfg["versions"],
+        recorded = {k: cfg["settings"][k] for k in ("algo", "timesteps", "seed")} | {
+            "env_kwargs": cfg.get("env_kwargs")
         }
+        recorded |= {k: cfg[k] for k in ("hyperparams", "versions")}
     except (ValueError, KeyError, TypeError):
         return f"unreadable {cfg_file}"
     differ = [k for k in request if json.dumps(recorded[k], sort_keys=True) != json.dumps(request[k], sort_keys=True)]

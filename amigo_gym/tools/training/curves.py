@@ -11,7 +11,7 @@ import re
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +22,7 @@ from amigo_gym.tools import runs
 from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.training.intervals import stratified_bootstrap
+from amigo_gym.tools.training.task_metrics import md_table
 
 #: the metric of the tracking threshold: H's cross-track RMS once settled (t >= 5 s) [m]
 THRESHOLD_METRIC = "h_rms_settled_m"
@@ -71,9 +72,7 @@ def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
     data = runs.read_json(path)
     if not isinstance(data, list) or not all(isinstance(e, dict) and _finite(e.get("timesteps")) for e in data):
         raise ValueError("eval.json is not a list of evaluations with 'timesteps'")
-    by_step: dict[int, dict[str, Any]] = {}
-    for e in data:  # in file order: a repeated step (resumed run) keeps its later evaluation
-        by_step[int(e["timesteps"])] = e
+    by_step = {int(e["timesteps"]): e for e in data}  # a repeated step (resumed run) keeps its later evaluation
     return tuple(by_step[k] for k in sorted(by_step))
 
 
@@ -98,10 +97,7 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
                 continue
             found.append(Run(algo, seed, run_dir, env_id, evals))
     several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1
-    runs_out = [
-        Run(r.algo, r.seed, r.path, r.env_id, r.evals, f"{r.algo} {r.env_id}" if several_envs and r.env_id else r.algo)
-        for r in found
-    ]
+    runs_out = [replace(r, group=f"{r.algo} {r.env_id}" if several_envs and r.env_id else r.algo) for r in found]
     seen: dict[tuple[str, int], Path] = {}
     for r in runs_out:
         key = (r.group, r.seed)
@@ -251,28 +247,23 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
         "median over all seeds (a seed that never reached it counts as later than any that did; "
         "'not reached': fewer than half did).",
         "",
-        f"| algorithm | seeds reaching {thr_mm:g} mm | median steps | median wall time [s] | per seed: steps |",
-        "|---|---|---|---|---|",
     ]
+    rows = []
     for g, t in doc["threshold"].items():
         per = ", ".join(
             f"s{q['seed']}: {q['timesteps']}" if q["reached"] else f"s{q['seed']}: not by {q['last_timesteps']}"
             for q in t["per_seed"]
         )
         med = ("not reached" if t[k] is None else f"{t[k]:.0f}" for k in ("median_timesteps", "median_wall_time_s"))
-        lines.append(f"| {g} | {t['n_reached']}/{t['n_seeds']} | {' | '.join(med)} | {per} |")
-    lines += [
-        "",
-        "Final values (last step every seed reached; mean [95 % interval]):",
-        "",
-        "| algorithm | seeds | step | H RMS [mm] | return |",
-        "|---|---|---|---|---|",
-    ]
+        rows.append((g, f"{t['n_reached']}/{t['n_seeds']}", *med, per))
+    header = ("algorithm", f"seeds reaching {thr_mm:g} mm", "median steps", "median wall time [s]", "per seed: steps")
+    lines += [*md_table(header, rows), "", "Final values (last step every seed reached; mean [95 % interval]):", ""]
+    rows = []
     for g, axes in doc["curves"].items():
         h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
         c = h or ret
-        step = f"{c['x'][-1]:.0f}" if c else "–"
-        lines.append(f"| {g} | {c['n_seeds'] if c else 0} | {step} | {_final(h, 1e3)} | {_final(ret, 1.0)} |")
+        rows.append((g, c["n_seeds"] if c else 0, f"{c['x'][-1]:.0f}" if c else "–", _final(h, 1e3), _final(ret, 1.0)))
+    lines += md_table(("algorithm", "seeds", "step", "H RMS [mm]", "return"), rows)
     lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
     if doc["skipped"]:
         lines += ["Skipped folders:", ""] + [f"- {s['path']}: {s['reason']}" for s in doc["skipped"]] + [""]
@@ -295,10 +286,7 @@ def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
             seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
             ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
             ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
-        if metric == "h_rms_m":
-            ax.set_yscale("log")
-        ax.set_xlabel(AXES[axis])
-        ax.set_ylabel(label)
+        ax.set(xlabel=AXES[axis], ylabel=label, yscale="log" if metric == "h_rms_m" else "linear")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     p = doc["protocol"]
@@ -356,13 +344,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
 
     def run() -> int:
+        tty = a.progress and sys.stderr.isatty()
         doc = learning_curves(
-            a.runs,
-            metric=a.metric,
-            threshold=a.threshold,
-            reps=a.reps,
-            bootstrap_seed=a.bootstrap_seed,
-            progress=a.progress and sys.stderr.isatty(),
+            a.runs, metric=a.metric, threshold=a.threshold, reps=a.reps, bootstrap_seed=a.bootstrap_seed, progress=tty
         )
         doc["command"] = "amigo-gym curves " + " ".join(args)
         written = write_outputs(doc, Path(a.out), plots=a.plots)

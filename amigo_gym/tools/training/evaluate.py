@@ -13,6 +13,7 @@ import os
 import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -192,33 +193,31 @@ def default_agents(params: TrackingParams, gain: float = 3.0) -> dict[str, Agent
 
 
 # --------------------------------------------------------------------------- agents
-def _classical(name: str) -> Callable[[Any], Any]:
-    def make(env: Any) -> Any:
-        base = env.unwrapped
-        hook = getattr(base, "classical_policy", None)
-        if callable(hook):
-            return hook(name)
-        params = getattr(base, "params", None)
-        if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
-            from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
+def _classical(name: str, env: Any) -> Any:
+    """The classical policy ``name`` built for ``env``; :class:`Unavailable` if it has none."""
+    base = env.unwrapped
+    hook = getattr(base, "classical_policy", None)
+    if callable(hook):
+        return hook(name)
+    params = getattr(base, "params", None)
+    if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
+        from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
 
-            v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
-            v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
-            if name in v1:
-                return v1[name](params)
-            raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
-        if not isinstance(params, TrackingParams):
-            raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
-        if name in ("analytic", "analytic_ff"):
-            return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
-        raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
-
-    return make
+        v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
+        v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
+        if name in v1:
+            return v1[name](params)
+        raise Unavailable(f"{name}: the feedforward-only law is AmigoBot-v0's (v1 starts at rest, off the path)")
+    if not isinstance(params, TrackingParams):
+        raise Unavailable(f"{name}: no classical policy for {type(base).__name__}")
+    if name in ("analytic", "analytic_ff"):
+        return AnalyticPolicy(params, feedforward_only=name == "analytic_ff")
+    raise Unavailable(f"{name}: not available on {type(base).__name__} (needs AmigoBot-v1)")
 
 
 #: classical policies by name: built per scenario from the environment
 CLASSICAL: dict[str, Callable[[Any], Any]] = {
-    n: _classical(n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
+    n: partial(_classical, n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
 }
 
 
@@ -331,26 +330,22 @@ class AgentSpec:
         return d
 
 
-def _run_algo(run_dir: Path) -> str:
-    cfg = run_dir / "config.json"
-    try:
-        algo = json.loads(cfg.read_text())["settings"]["algo"]
-    except (OSError, ValueError, KeyError, TypeError):
-        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
-    if algo not in ALGOS:
-        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
-    return str(algo)
-
-
 def _beside(model: Path, name: str) -> Path | None:
     f = model.parent / name
     return f if f.is_file() else None
 
 
 def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
-    model = model or run_dir / "model.zip"
-    record, stats = _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
-    return AgentSpec(run_dir.name, 0, str(model), _run_algo(run_dir), None, record, stats)
+    model, cfg = model or run_dir / "model.zip", run_dir / "config.json"
+    try:
+        algo = json.loads(cfg.read_text())["settings"]["algo"]
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
+    if algo not in ALGOS:
+        raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
+    return AgentSpec(
+        run_dir.name, 0, str(model), algo, None, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
+    )
 
 
 def _is_run(d: Path) -> bool:
@@ -400,9 +395,8 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
     return refs
 
 
-def load_model(ref: AgentSpec, trust: bool = False) -> Agent:
-    """:meth:`AgentSpec.load`."""
-    return ref.load(trust)
+#: :meth:`AgentSpec.load` as a function of the spec
+load_model = AgentSpec.load
 
 
 def load_agents(models: str | os.PathLike[str], trust: bool = False) -> dict[str, Agent]:
@@ -488,10 +482,9 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Tra
         if zoom:
             ax.set(xlim=(-0.03, 0.25), ylim=(-0.025, 0.04), title=f"H's trajectory near the start ({top} start)")
         else:
-            ax.set_aspect("equal")
-            ax.set_title(f"H's trajectory, {top} start")
+            ax.set(aspect="equal", title=f"H's trajectory, {top} start")
         ax.set(xlabel="x0 [m]", ylabel="y0 [m]")
-        ax.legend(fontsize=8, loc="center" if not zoom else "upper left")
+        ax.legend(fontsize=8, loc="upper left" if zoom else "center")
     for j, sc in enumerate(s for s in ("nominal", "perturbed") if s in have):
         ax = axes[1, j]
         for name, per in trajs.items():
@@ -529,15 +522,12 @@ def plot_wheels(
             ax_diff.plot(tr.time[:n], tr.angles[:n, k] - ref.angles[:n, k], color=c, lw=1.0, label=a)
         ax_rate.set_xlim(0.0, 10.0)
         ax_diff.axhline(0.0, color="k", lw=0.5)
-        for ax, ylabel, title, ncol in (
-            (ax_angle, "wheel angle [rad]", f"wheel angles ({scenario} start)", 2),
-            (ax_rate, "wheel rate [rad/s]", "wheel rates, first 10 s (dotted: steady state)", 2),
-            (ax_diff, "angle minus analytic [rad]", "wheel angles minus the analytic policy's", 1),
-        ):
-            ax.set(ylabel=ylabel, title=f"{name}: {title}")
-            ax.legend(fontsize=7, ncol=ncol)
-    for ax in axes[-1]:
-        ax.set_xlabel("t [s]")
+        ax_angle.set(ylabel="wheel angle [rad]", title=f"{name}: wheel angles ({scenario} start)")
+        ax_rate.set(ylabel="wheel rate [rad/s]", title=f"{name}: wheel rates, first 10 s (dotted: steady state)")
+        ax_diff.set(ylabel="angle minus analytic [rad]", title=f"{name}: wheel angles minus the analytic policy's")
+        for ax in axes[i]:
+            ax.legend(fontsize=7, ncol=1 if ax is ax_diff else 2)
+            ax.set_xlabel("t [s]" if i == len(others) - 1 else "")
     fig.tight_layout()
     save_figure(fig, path)
 

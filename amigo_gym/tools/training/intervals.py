@@ -46,12 +46,10 @@ def score_distribution(scores: ArrayLike, taus: ArrayLike) -> Array:
     return np.asarray(np.mean(flat[..., None, :] > t[:, None], axis=-1), dtype=np.float64)
 
 
-def stratified_bootstrap(
-    scores: ArrayLike, stat: Stat, *, reps: int = 10_000, size: float = 0.95, seed: int | np.random.Generator = 0
-) -> tuple[Array, Array]:
+def stratified_bootstrap(scores: ArrayLike, stat: Stat, *, reps: int = 10_000, seed: int = 0) -> tuple[Array, Array]:
     """``(stat(scores), interval (2, ...))`` under rliable's stratified bootstrap: ``scores`` ``(num_runs,
     num_tasks)``, ``stat`` vectorised from ``(..., num_runs, num_tasks)`` to ``(...)`` or ``(..., k)``, ``reps``
-    replications, percentile interval of coverage ``size``, resampling seeded by ``seed``."""
+    replications, the percentile 95 % interval, resampling seeded by ``seed``."""
     x = np.asarray(scores, dtype=np.float64)
     if x.ndim != 2 or x.size == 0:
         raise ValueError(f"scores must be a non-empty matrix (num_runs, num_tasks), got shape {x.shape}")
@@ -59,9 +57,7 @@ def stratified_bootstrap(
         raise ValueError("scores must be finite (drop or replace NaN before aggregating)")
     if isinstance(reps, bool) or not isinstance(reps, int) or reps < 1:
         raise ValueError(f"reps must be an integer >= 1, got {reps!r}")
-    if not 0.0 < size < 1.0:
-        raise ValueError(f"size must be in (0, 1), got {size!r}")
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    rng = np.random.default_rng(seed)
     n, m = x.shape
     point = np.asarray(stat(x), dtype=np.float64)
     chunk = max(1, _CHUNK // (n * m))
@@ -70,9 +66,8 @@ def stratified_bootstrap(
     for done in range(0, reps, chunk):
         idx = rng.integers(0, n, size=(min(chunk, reps - done), n, m))
         out.append(np.asarray(stat(x[idx, cols]), dtype=np.float64))
-    values = np.concatenate(out, axis=0)
-    tail = 100.0 * (1.0 - size) / 2.0
-    interval = np.percentile(values, [tail, 100.0 - tail], axis=0)
+    tail = 100.0 * (1.0 - 0.95) / 2.0  # each tail of the 95 % interval [%]
+    interval = np.percentile(np.concatenate(out, axis=0), [tail, 100.0 - tail], axis=0)
     return point, np.asarray(interval, dtype=np.float64)
 
 

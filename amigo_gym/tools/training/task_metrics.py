@@ -199,7 +199,7 @@ def run_grid(
                     grid.runs.append((spec, sc, run(spec.instantiate(envs[sc.name]), sc)))
                 except Unavailable as exc:
                     grid.unavailable.append(
-                        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name} | {"reason": str(exc)}
+                        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)}
                     )
                 bar.update(sc.episodes)
     finally:
@@ -218,13 +218,13 @@ class StepSample(NamedTuple):
     wheel_rates: tuple[float, float]
 
 
+@dataclass(frozen=True)
 class InfoAdapter:
     """Read a :class:`StepSample` from an ``info``; without ``speed_error`` (v0) it is computed from ``robot``'s
     wheel radii and the ``reference_speed`` [m/s] (NaN without them)."""
 
-    def __init__(self, robot: Any = None, reference_speed: float | None = None) -> None:
-        self.robot = robot
-        self.reference_speed = reference_speed
+    robot: Any = None
+    reference_speed: float | None = None
 
     @classmethod
     def for_env(cls, env: Any) -> InfoAdapter:
