@@ -17,8 +17,8 @@ import argparse
 import sys
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench import offpolicy
-from amigo_gym.tools.bench.train import _load, cpu_model
+from amigo_gym.tools.bench import load_values, offpolicy
+from amigo_gym.tools.bench.train import cpu_model
 
 
 def main() -> int:
@@ -39,7 +39,7 @@ def main() -> int:
         "sbx": sbx.__version__,
         "jax": jax.__version__,
         "devices": [str(d) for d in jax.devices()],
-        "load_average_start": _load(),
+        "load_average_start": load_values(),
         "command": "python experiments/bench_sbx.py " + " ".join(sys.argv[1:]),
         "runs": {},
     }
@@ -52,7 +52,7 @@ def main() -> int:
             print(f"sbx_{algo}_{config}: {r['sps_loop']:,.0f} env-steps/s ({r['sps_loop_cpu']:,.0f} per CPU s), "
                   f"{r['gsps_loop']:,.1f} gradient steps/s ({r['gsps_loop_cpu']:,.1f} per CPU s)",
                   flush=True)  # fmt: skip
-    doc["load_average_end"] = _load()
+    doc["load_average_end"] = load_values()
     if a.json:
         atomic_write_json(a.json, doc, parents=True)
     return 0

@@ -37,8 +37,9 @@ from pathlib import Path
 from typing import Any
 
 from amigo_gym.io import atomic_write_json
+from amigo_gym.tools.bench import load_values
 from amigo_gym.tools.bench.offpolicy import _venv, make_model, offpolicy_config
-from amigo_gym.tools.bench.train import _load, cpu_model
+from amigo_gym.tools.bench.train import cpu_model
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
@@ -82,7 +83,7 @@ def main() -> int:
         "cpu_model": cpu_model(),
         "torch": torch.__version__,
         "torch_threads": 1,
-        "load_average_start": _load(),
+        "load_average_start": load_values(),
         "validation": EVAL | {"env_kwargs": kw},
     }
 
@@ -155,7 +156,7 @@ def main() -> int:
             cpu += time.process_time() - c0
             record(int(model.num_timesteps), int(model._n_updates), model)
         venv.close()
-    summary |= {"rows": len(rows), "last": rows[-1], "load_average_end": _load()}
+    summary |= {"rows": len(rows), "last": rows[-1], "load_average_end": load_values()}
     atomic_write_json(out.with_suffix("").with_suffix(".json"), summary, parents=True)
     return 0
 

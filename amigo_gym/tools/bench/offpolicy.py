@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from amigo_gym.data import hyperparams_dir
-from amigo_gym.tools.bench import clock, rates
+from amigo_gym.tools.bench import clock, clocked, rates
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.hyperparams import Hyperparams, load_hyperparams
 
@@ -81,7 +81,7 @@ def bench_offpolicy(
     hp = offpolicy_config(algo, config)
     torch.set_num_threads(threads)
     n_envs = int(hp.get("n_envs", 1))
-    t0, c0 = clock()
+    start = clock()
     venv = _venv(n_envs, seed)
     model = make_model(algo, hp, venv, seed)
     model.learn(total_timesteps=int(hp["learning_starts"]))  # warm-up: random actions, no update
@@ -94,8 +94,7 @@ def bench_offpolicy(
     train_freq = hp["train_freq"][0] if isinstance(hp["train_freq"], list | tuple) else hp["train_freq"]
     cfg = {k: (list(v) if isinstance(v, tuple) else v) for k, v in hp.items()} | {"net_arch": [64, 64]}
     cfg["gradient_steps_per_env_step"] = round(float(hp["gradient_steps"]) / (float(train_freq) * n_envs), 4)
-    out = {"algo": algo, "env_steps": n, "grad_steps": g, "wall_s": round(t2 - t0, 2), "cpu_s": round(c2 - c0, 2)}
-    out |= rates("sps", n, t2 - t0, c2 - c0) | {"warmup_wall_s": round(t1 - t0, 2), "loop_env_steps": n - n1}
-    out |= {"loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2), "loop_cpu_s": round(c2 - c1, 2)}
-    out |= rates("sps_loop", n - n1, t2 - t1, c2 - c1) | rates("gsps_loop", g - g1, t2 - t1, c2 - c1)
-    return out | {"config": cfg}
+    out = {"algo": algo, "grad_steps": g} | clocked(n, start, (t2, c2)) | {"warmup_wall_s": round(t1 - start[0], 2)}
+    out |= {"loop_env_steps": n - n1, "loop_grad_steps": g - g1, "loop_wall_s": round(t2 - t1, 2)}
+    out |= {"loop_cpu_s": round(c2 - c1, 2)} | rates("sps_loop", n - n1, t2 - t1, c2 - c1)
+    return out | rates("gsps_loop", g - g1, t2 - t1, c2 - c1) | {"config": cfg}
