@@ -65,7 +65,12 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     pose = np.column_stack((rng.normal(0.0, 0.05, (n, 2)), rng.normal(0.0, 0.1, n)))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
-    k, st, ep = v0_columns(params, pose, w)
+    k = tracking.constants(params)
+    one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
+    ep = tracking.Episode(*(np.full(n, v) for v in one))  # the (N,) columns of the state and the nominal episode
+    z, a = np.zeros(n), w / k.w_max
+    cols = [np.array(c) for c in (pose[:, 0], pose[:, 1], pose[:, 2], w[:, 0], w[:, 1], z, z, z, a[:, 0], a[:, 1])]
+    st = tracking.State(*cols, np.zeros(n, dtype=np.int64))  # type: ignore[call-arg]
     ring, castor = np.zeros((n, k.ring_length, 2)), np.zeros(n)
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
 
@@ -95,22 +100,6 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     row: Row = {"n": n} | {m: n / t[m] if m in t else None for m in METHODS}
     row["ratio_kernel"] = None if row["kernel"] is None else row["kernel"] / row["columns"]
     return row
-
-
-def v0_columns(
-    params: tracking.TrackingParams, pose: Array, w: Array
-) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
-    """AmigoBot-v0's constants (``params`` from ``TrackingParams.v0``) and the ``(N,)`` columns of the state at
-    ``pose (N, 3)`` with wheel rates ``w (N, 2)`` [rad/s] and of the nominal episode."""
-    k = tracking.constants(params)
-    n = len(pose)
-    one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
-    ep = tracking.Episode(*(np.full(n, v) for v in one))
-    z = np.zeros(n)
-    a = w / k.w_max
-    cols = [np.array(c) for c in (pose[:, 0], pose[:, 1], pose[:, 2], w[:, 0], w[:, 1], z, z, z, a[:, 0], a[:, 1])]
-    st = tracking.State(*cols, np.zeros(n, dtype=np.int64))  # type: ignore[call-arg]
-    return k, st, ep
 
 
 _FIRST_STEP = (
