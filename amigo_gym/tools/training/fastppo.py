@@ -825,12 +825,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = p.parse_args(args_in)
     run_opts = settings_from_args(TrainFastRun, args)
 
-    def run() -> int:
+    def run() -> None:
         s = settings_from_args(FastPPOSettings, args)
         cmd = f"{PROG} " + " ".join(shlex.quote(a) for a in args_in)
         log = None if run_opts.quiet else functools.partial(print, flush=True)
         rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
-        return 0
 
     return run_guarded(run, PROG)

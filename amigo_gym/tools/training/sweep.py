@@ -520,8 +520,7 @@ def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """``fit_and_validate()``'s objective, its per-cell values stored (``validation``); an error (but a prune) or a
-    non-finite value is the trial's ``fail_reason`` (raised again / returned: Optuna marks it FAIL)."""
+    """``fit_and_validate()``'s value, cells in ``validation``; an error (not a prune) or NaN sets ``fail_reason``."""
     import optuna
 
     try:
@@ -574,8 +573,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any
 def _trial(
     cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
 ) -> tuple[float, dict[str, float | None]]:
-    """One trial: the settings (base file, sampled in hyperparams mode) in ``run_dir/hyperparams.yml``, training in
-    ``run_dir/run`` with evaluations reported to the pruner (hyperparams mode), then the objective on ``cells``."""
+    """One trial: its settings in ``run_dir/hyperparams.yml``, training in ``run_dir/run``, the value on ``cells``."""
     import optuna
     import yaml
 
@@ -621,8 +619,7 @@ def _trial(
 def _fit_sb3(
     cfg: SweepConfig, algo: str, seed: int, run_dir: Path, report: Callable[..., bool]
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """SB3 training (``amigo-gym train``) in ``run_dir/run``, every evaluation reported at its own step; the record
-    and the trial's attributes."""
+    """``amigo-gym train`` in ``run_dir/run``, evaluations reported at their steps; the record, the trial's attrs."""
     argv = ["--algo", algo, "--seed", str(seed), "--out", str(run_dir / "run"), "--timesteps", str(cfg.timesteps),
             "--eval-freq", str(cfg.eval_freq), "--eval-episodes", str(cfg.eval_episodes), "--checkpoint-freq", "0",
             "--threads", str(cfg.threads), "--no-progress", "--hyperparams", str(run_dir / "hyperparams.yml"),
@@ -637,9 +634,7 @@ def _fit_sb3(
 def _fit_fast(
     cfg: SweepConfig, study: Any, trial: Any, seed: int, hp: dict[str, Any], run_dir: Path, report: Callable[..., bool]
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Fast-PPO training (``amigo-gym train-fast``) in ``run_dir/run``, resumed from an abandoned trial's checkpoint
-    of the same settings; every evaluation reported at its scheduled step (a multiple of ``--eval-freq``, equal in
-    every trial whatever its batch)."""
+    """``amigo-gym train-fast`` in ``run_dir/run`` (resumed: :func:`_resume_fastppo`), at multiples of --eval-freq."""
     from amigo_gym.tools.training import fastppo
 
     env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
@@ -672,8 +667,7 @@ def _fit_fast(
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
-    """Copy into ``out`` the run files of the newest checkpoint of an abandoned FAIL trial with the same parameters and
-    settings ``s``; the trial it came from (``None``: none)."""
+    """Copy into ``out`` the newest run of an abandoned trial of these params and settings ``s``; its origin or None."""
     best: tuple[float, Any, Path] | None = None
     for t in study.get_trials(deepcopy=False):
         if t.number == trial.number or t.params != trial.params or not _abandoned(t):
@@ -752,15 +746,14 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     }
 
 
-def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
-    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials; whether it did."""
+def write_summary(folder: Path, summary: dict[str, Any]) -> None:
+    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials."""
     path = folder / "summary.json"
     with RunLock(folder, name="summary.lock", wait=60.0):
         with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
             if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
-                return False
+                return
         atomic_write_json(path, summary, parents=True)
-    return True
 
 
 # --------------------------------------------------------------------------- the winners into a YAML file
@@ -808,8 +801,7 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
 
 # --------------------------------------------------------------------------- command line
 def _spawn_workers(cfg: SweepConfig) -> list[int]:
-    """Open the study once, then run ``n_jobs`` workers of this command; their exit statuses. A stop of this process
-    stops them with ``SIGTERM`` and waits for them."""
+    """Open the study, then run ``n_jobs`` workers of this command (SIGTERM'd on a stop); their exit statuses."""
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()

@@ -498,12 +498,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     doc = "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1."
     s = parse_settings(Settings, args, "amigo-gym train", doc, argv=args)
 
-    def run() -> int:
+    def run() -> None:
         record = train(s)
         lines = [f"{k}: {record[k]}" for k in ("algo", "seed", "timesteps", "wall_time_s")]
         if record["last_eval"]:
             lines.append(f"last eval mean reward: {record['last_eval']['mean_reward']:.2f}")
         print("\n".join(lines))
-        return 0
 
     return run_guarded(run, "amigo-gym train")
