@@ -792,18 +792,27 @@ def _run_folder(s: FastPPOSettings, out: Path, resume: bool) -> Iterator[tuple[s
 
 # --------------------------------------------------------------------------- CLI
 @dataclass(frozen=True)
-class TrainFastRun:
-    """The run's options besides the :class:`FastPPOSettings`.
+class HyperparamsFile:
+    """The option read first (its file's values become the other options' defaults).
 
     Attributes:
         hyperparams: settings file [YAML]: its AmigoBot-v1 mapping replaces the defaults; options override it
             (default: none).
+    """
+
+    hyperparams: str | None = None
+
+
+@dataclass(frozen=True)
+class TrainFastRun(HyperparamsFile):
+    """The run's options besides the :class:`FastPPOSettings`.
+
+    Attributes:
         out: run folder [folder] (required).
         resume: continue the run in --out from its checkpoint.
         quiet: no progress lines.
     """
 
-    hyperparams: str | None = None
     out: str = field(kw_only=True)
     resume: bool = False
     quiet: bool = False
@@ -813,7 +822,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym train-fast``."""
     args_in = list(sys.argv[1:] if argv is None else argv)
     first = argparse.ArgumentParser(add_help=False)
-    first.add_argument("--hyperparams")
+    add_dataclass_options(first, HyperparamsFile)
     defaults: dict[str, Any] = {}
     hp_file = first.parse_known_args(args_in)[0].hyperparams
     if hp_file is not None and (rc := run_guarded(lambda: defaults.update(load_settings_yaml(hp_file)), PROG)):
