@@ -111,6 +111,7 @@ _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / ma
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
 _ACT_SCRATCH = actuators.SCRATCH
+_RECORD = L.RECORD_WIDTH
 
 
 def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
@@ -550,14 +551,13 @@ _K_SIZE = K_O + 8 * _BLOCK
 
 @_jit
 def _ideal_block(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64,
-    exps: F64,
-) -> None:  # fmt: skip
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64
+) -> None:
     """:func:`_ideal_move` of the rows ``i0:i1`` (at most :data:`_BLOCK`) on a circle or manoeuvre path with the v0
     observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
     columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
-    evaluation; the stores into the rows of ``ws`` (contiguous columns), ``obs`` and :func:`_ideal_rows`' ``rec`` and
-    ``exps``. The stages without calls to the C library vectorise."""
+    evaluation; the stores into the rows of ``ws`` and of :func:`_ideal_rows`' field-major ``rec`` (contiguous
+    columns) and into ``obs``. The stages without calls to the C library vectorise."""
     k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
     r = _rows(ws)
     m = i1 - i0
@@ -612,21 +612,23 @@ def _ideal_block(
         k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
     for f, col in ((K_X, r.x), (K_Y, r.y), (K_B, r.beta), (K_W1, r.w1), (K_W2, r.w2), (K_AL1, r.alpha1),
                    (K_AL2, r.alpha2), (K_CAS, r.castor), (K_C1, r.a1), (K_C2, r.a2), (K_STEPS, r.steps),
-                   (K_S, r.progress), (K_AT, exps[0]), (K_AV, exps[1]), (K_AS, exps[2])):  # fmt: skip
-        for j in range(m):  # the stores of the rows and the exponentials' arguments
+                   (K_S, r.progress), (K_X, rec[L.R_X]), (K_Y, rec[L.R_Y]), (K_B, rec[L.R_BETA]),
+                   (K_HX, rec[L.R_HX]), (K_HY, rec[L.R_HY]), (K_W1, rec[L.R_W1]), (K_W2, rec[L.R_W2]),
+                   (K_W1, rec[L.R_CMD1]), (K_W2, rec[L.R_CMD2]), (K_AL1, rec[L.R_AL1]), (K_AL2, rec[L.R_AL2]),
+                   (K_E, rec[L.R_ERROR]), (K_S, rec[L.R_PROGRESS]), (K_V, rec[L.R_VT]), (K_VREF, rec[L.R_VREF]),
+                   (K_HEAD, rec[L.R_HEADING]), (K_TERM, rec[L.R_TERM]), (K_CAS, rec[L.R_CASTOR]),
+                   (K_AT, rec[L.R_TRACK]), (K_AV, rec[L.R_SPEED]), (K_AS, rec[L.R_SMOOTH_EXP])):  # fmt: skip
+        for j in range(m):  # the stores of the rows, the records and the exponentials' arguments
             col[i0 + j] = k[f + j]
-    n_prev = int(c[L.C_N_PREVIEW])
-    for j in range(m):  # the records' and observations' stores
+    for j in range(m):
         i = i0 + j
-        for f, at in ((K_X, L.R_X), (K_Y, L.R_Y), (K_B, L.R_BETA), (K_HX, L.R_HX), (K_HY, L.R_HY), (K_W1, L.R_W1),
-                      (K_W2, L.R_W2), (K_W1, L.R_CMD1), (K_W2, L.R_CMD2), (K_AL1, L.R_AL1), (K_AL2, L.R_AL2),
-                      (K_E, L.R_ERROR), (K_S, L.R_PROGRESS), (K_V, L.R_VT), (K_VREF, L.R_VREF),
-                      (K_HEAD, L.R_HEADING), (K_TERM, L.R_TERM), (K_CAS, L.R_CASTOR)):  # fmt: skip
-            rec[i, at] = k[f + j]
-        rec[i, L.R_MX], rec[i, L.R_MY], rec[i, L.R_MB] = _measurements(
+        rec[L.R_MX, i], rec[L.R_MY, i], rec[L.R_MB, i] = _measurements(
             k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
         )[:3]
-        rec[i, L.R_SLIP1] = rec[i, L.R_SLIP2] = rec[i, L.R_END] = 0.0
+        rec[L.R_SLIP1, i] = rec[L.R_SLIP2, i] = rec[L.R_END, i] = 0.0
+    n_prev = int(c[L.C_N_PREVIEW])
+    for j in range(m):  # the observations' stores
+        i = i0 + j
         for f in range(4):
             obs[i, f] = k[K_O + f * _BLOCK + j]
             obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
@@ -699,11 +701,12 @@ def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
 
 def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
-    a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
+    a1: F64, a2: F64, tans: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records into ``rec``, the
-    reward's exponential arguments into ``exps (3, N)``. By blocks of :data:`_BLOCK` rows: on a circle or manoeuvre
-    with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
+    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records, field-major, into the
+    columns of ``rec (RECORD_WIDTH, N)`` (the reward's exponential arguments in their place). By blocks of
+    :data:`_BLOCK` rows: on a circle or manoeuvre with the v0 observation and the nominal ``l3``,
+    :func:`_ideal_block`'s stages, else row by row."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     r = _rows(ws)
     beta, l3_differs = r.beta, r.l3_differs  # arrays: the parallel loop takes no named tuple
@@ -714,25 +717,28 @@ def _ideal_rows(
         i0 = b * _BLOCK
         i1 = min(i0 + _BLOCK, n)
         if staged and not l3_differs[i0:i1].any():
-            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec, exps)
+            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec)
             continue
+        one = _carray(_stack_ptr(_RECORD), _RECORD)  # a row's record
         for i in range(i0, i1):
             c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
             v, bdot, h = _ideal_motion(c, beta[i], w1, w2)[:3]
             pv = flat[starts[i] : stops[i]]
-            _ideal_move(c, pv, ws, i, obs[i], rec[i], _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
-            exps[0, i], exps[1, i], exps[2, i] = rec[i, L.R_TRACK], rec[i, L.R_SPEED], rec[i, L.R_SMOOTH_EXP]
+            _ideal_move(c, pv, ws, i, obs[i], one, _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
+            for f in range(_RECORD):
+                rec[f, i] = one[f]
 
 
-def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the records' exponentials ``exps (3, N)`` (``np.exp`` taken by the caller), terms and rewards."""
+def _record_rows(rec: F64, smooth_weight: float) -> None:
+    """Pass 3: the smoothness terms and rewards of the field-major records ``rec (RECORD_WIDTH, N)`` whose
+    exponentials are in place (``np.exp`` taken by the caller)."""
     rec = _bare(rec)
-    for i in numba.prange(rec.shape[0]):
-        r = rec[i]
-        r[L.R_TRACK] = exps[0, i]
-        r[L.R_SPEED] = exps[1, i]
-        r[L.R_SMOOTH_EXP] = exps[2, i]
-        record_terms(r, smooth_weight)
+    ex, track, speed, heading = rec[L.R_SMOOTH_EXP], rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING]
+    smooth, reward = rec[L.R_SMOOTH], rec[L.R_REWARD]
+    for i in numba.prange(rec.shape[1]):
+        s = task.smooth_term(ex[i], smooth_weight)
+        smooth[i] = s
+        reward[i] = task.reward_product(track[i], speed[i], heading[i], s)
 
 
 @_jit
