@@ -53,6 +53,7 @@ _FLOAT_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     numeric.where: numeric.where_float,
     actuators.sort_knots: actuators.sort_knots_float,
     actuators.advance_pieces: fresnel.advance_nodes,
+    classic.angle_of: classic.atan2_float,
 }
 _OVERLOADED: set[Any] = {*_FLOAT_FORMS, fresnel.cos_sin_nodes, randomization._uint64}
 
