@@ -162,6 +162,16 @@ def _rows(ws: F64) -> L.Rows:
                   w[15], w[16], w[17], w[18], w[19], w[20], w[21])  # fmt: skip
 
 
+@_jit_inline
+def _rows_in(ws: F64, i0: int, i1: int) -> L.Rows:
+    # the named rows of the columns i0:i1 of the block ``ws``, indexed from 0, without reference counts
+    w = _bare(ws)
+    return L.Rows(w[0, i0:i1], w[1, i0:i1], w[2, i0:i1], w[3, i0:i1], w[4, i0:i1], w[5, i0:i1], w[6, i0:i1],
+                  w[7, i0:i1], w[8, i0:i1], w[9, i0:i1], w[10, i0:i1], w[11, i0:i1], w[12, i0:i1], w[13, i0:i1],
+                  w[14, i0:i1], w[15, i0:i1], w[16, i0:i1], w[17, i0:i1], w[18, i0:i1], w[19, i0:i1],
+                  w[20, i0:i1], w[21, i0:i1])  # fmt: skip
+
+
 #: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
 _stack_ptr: Any = intrinsic(_stack_ptr_typing)
 
@@ -558,27 +568,27 @@ def _ideal_block(
     observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
     columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
     evaluation; the stores into the rows of ``ws`` and of :func:`_ideal_rows`' field-major ``rec`` (contiguous
-    columns) and into ``obs``. The stages without calls to the C library vectorise."""
+    columns) and into ``obs``. The stages without calls to the C library vectorise: they index views of the
+    block's columns from 0 (no negative index to wrap, so contiguous loads and stores, not gathers and scatters)."""
     k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
-    r = _rows(ws)
+    r = _rows_in(ws, i0, i1)
+    a1, a2, t_h, t_m, obs = a1[i0:i1], a2[i0:i1], tans[0, i0:i1], tans[1, i0:i1], obs[i0:i1]
     m = i1 - i0
     dt, l3 = c[L.C_DT], c[L.C_L3]
     for j in range(m):  # the arc step
-        i = i0 + j
-        c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-        v, bdot, h = _ideal_motion(c, r.beta[i], w1, w2)[:3]
+        c1, c2, w1, w2 = _action_commands(a1[j], a2[j], c[L.C_W_MAX])
+        v, bdot, h = _ideal_motion(c, r.beta[j], w1, w2)[:3]
         x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
-            c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, tans[0, i], tans[1, i], r.alpha1[i], r.alpha2[i],
-            r.castor[i],
-        )  # fmt: skip
-        da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[i], r.w2[i], c1, c2, r.a1[i], r.a2[i])
-        steps = r.steps[i] + 1.0
+            c, r.x[j], r.y[j], r.beta[j], w1, w2, v, bdot, h, t_h[j], t_m[j], r.alpha1[j], r.alpha2[j], r.castor[j]
+        )
+        da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[j], r.w2[j], c1, c2, r.a1[j], r.a2[j])
+        steps = r.steps[j] + 1.0
         k[K_X + j], k[K_Y + j], k[K_B + j], k[K_CB + j], k[K_SB + j] = x1, y1, b1, cb, sb
         k[K_AL1 + j], k[K_AL2 + j], k[K_CAS + j], k[K_C1 + j], k[K_C2 + j] = al1, al2, castor, c1, c2
         k[K_W1 + j], k[K_W2 + j], k[K_V + j], k[K_STEPS + j] = w1, w2, v, steps
-        k[K_VREF + j] = _reference_speed(c, r.v_cruise[i], r.t_brake[i], steps * dt)
+        k[K_VREF + j] = _reference_speed(c, r.v_cruise[j], r.t_brake[j], steps * dt)
         k[K_CHG + j] = da1 * da1 + da2 * da2
-        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, r.l3[i])
+        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, r.l3[j])
     if c[L.C_PATH_KIND] == L.PATH_CIRCLE:  # H's projection: _locate's closed form, atan2's loop on its own
         d, rad, cx, cy, r0x, r0y = c[L.C_DIRECTION], c[L.C_RADIUS], c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
         for j in range(m):  # the foot; u = (x, y) - centre into the columns of s and kappa
@@ -590,11 +600,11 @@ def _ideal_block(
         lap = task.TWO_PI * rad
         for j in range(m):  # the lap nearest the progress before
             s = k[K_S + j]
-            k[K_S + j] = s + lap * task.round_half_even((r.progress[i0 + j] - s) / lap)
+            k[K_S + j] = s + lap * task.round_half_even((r.progress[j] - s) / lap)
             k[K_K + j] = d / rad
     else:
         for j in range(m):
-            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], r.progress[i0 + j])
+            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], r.progress[j])
             k[K_S + j], k[K_K + j], k[K_E + j], k[K_CT + j], k[K_ST + j] = s, kappa, e, ct, st
     for j in range(m):  # _evaluate's terms and observation
         e, kappa, v_ref, w1, w2 = k[K_E + j], k[K_K + j], k[K_VREF + j], k[K_W1 + j], k[K_W2 + j]
@@ -613,33 +623,36 @@ def _ideal_block(
         k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
     for f, col in ((K_X, r.x), (K_Y, r.y), (K_B, r.beta), (K_W1, r.w1), (K_W2, r.w2), (K_AL1, r.alpha1),
                    (K_AL2, r.alpha2), (K_CAS, r.castor), (K_C1, r.a1), (K_C2, r.a2), (K_STEPS, r.steps),
-                   (K_S, r.progress), (K_X, rec[L.R_X]), (K_Y, rec[L.R_Y]), (K_B, rec[L.R_BETA]),
-                   (K_HX, rec[L.R_HX]), (K_HY, rec[L.R_HY]), (K_W1, rec[L.R_W1]), (K_W2, rec[L.R_W2]),
-                   (K_W1, rec[L.R_CMD1]), (K_W2, rec[L.R_CMD2]), (K_AL1, rec[L.R_AL1]), (K_AL2, rec[L.R_AL2]),
-                   (K_E, rec[L.R_ERROR]), (K_S, rec[L.R_PROGRESS]), (K_V, rec[L.R_VT]), (K_VREF, rec[L.R_VREF]),
-                   (K_HEAD, rec[L.R_HEADING]), (K_TERM, rec[L.R_TERM]), (K_CAS, rec[L.R_CASTOR]),
-                   (K_AT, rec[L.R_TRACK]), (K_AV, rec[L.R_SPEED]), (K_AS, rec[L.R_SMOOTH_EXP])):  # fmt: skip
+                   (K_S, r.progress), (K_X, rec[L.R_X, i0:i1]), (K_Y, rec[L.R_Y, i0:i1]),
+                   (K_B, rec[L.R_BETA, i0:i1]), (K_HX, rec[L.R_HX, i0:i1]), (K_HY, rec[L.R_HY, i0:i1]),
+                   (K_W1, rec[L.R_W1, i0:i1]), (K_W2, rec[L.R_W2, i0:i1]), (K_W1, rec[L.R_CMD1, i0:i1]),
+                   (K_W2, rec[L.R_CMD2, i0:i1]), (K_AL1, rec[L.R_AL1, i0:i1]), (K_AL2, rec[L.R_AL2, i0:i1]),
+                   (K_E, rec[L.R_ERROR, i0:i1]), (K_S, rec[L.R_PROGRESS, i0:i1]), (K_V, rec[L.R_VT, i0:i1]),
+                   (K_VREF, rec[L.R_VREF, i0:i1]), (K_HEAD, rec[L.R_HEADING, i0:i1]),
+                   (K_TERM, rec[L.R_TERM, i0:i1]), (K_CAS, rec[L.R_CASTOR, i0:i1]),
+                   (K_AT, rec[L.R_TRACK, i0:i1]), (K_AV, rec[L.R_SPEED, i0:i1]),
+                   (K_AS, rec[L.R_SMOOTH_EXP, i0:i1])):  # fmt: skip
         for j in range(m):  # the stores of the rows, the records and the exponentials' arguments
-            col[i0 + j] = k[f + j]
+            col[j] = k[f + j]
+    mx, my, mb = rec[L.R_MX, i0:i1], rec[L.R_MY, i0:i1], rec[L.R_MB, i0:i1]
+    slip1, slip2, end = rec[L.R_SLIP1, i0:i1], rec[L.R_SLIP2, i0:i1], rec[L.R_END, i0:i1]
     for j in range(m):
-        i = i0 + j
-        rec[L.R_MX, i], rec[L.R_MY, i], rec[L.R_MB, i] = _measurements(
+        mx[j], my[j], mb[j] = _measurements(
             k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
         )[:3]
-        rec[L.R_SLIP1, i] = rec[L.R_SLIP2, i] = rec[L.R_END, i] = 0.0
+        slip1[j] = slip2[j] = end[j] = 0.0
     n_prev = int(c[L.C_N_PREVIEW])
     for j in range(m):  # the observations' stores
-        i = i0 + j
         for f in range(4):
-            obs[i, f] = k[K_O + f * _BLOCK + j]
-            obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
+            obs[j, f] = k[K_O + f * _BLOCK + j]
+            obs[j, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
     curvature, straight = c[L.C_DIRECTION] / c[L.C_RADIUS], c[L.C_STRAIGHT]
     circle = c[L.C_PATH_KIND] == L.PATH_CIRCLE
     for p in range(n_prev):  # the previews' curvature fields (_curvature_at)
         ahead = c[L.C_TAIL + p]
         for j in range(m):
             kp = curvature if circle else classic.manoeuvre_curvature(k[K_S + j] + ahead, straight, curvature)
-            obs[i0 + j, 4 + p] = task.curvature_feature(kp, l3)
+            obs[j, 4 + p] = task.curvature_feature(kp, l3)
 
 
 @_jit
