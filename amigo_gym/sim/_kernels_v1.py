@@ -747,12 +747,10 @@ def _record_rows(rec: F64, smooth_weight: float) -> None:
     """Pass 3: the smoothness terms and rewards of the field-major records ``rec (RECORD_WIDTH, N)`` whose
     exponentials are in place (``np.exp`` taken by the caller)."""
     rec = _bare(rec)
-    ex, track, speed, heading = rec[L.R_SMOOTH_EXP], rec[L.R_TRACK], rec[L.R_SPEED], rec[L.R_HEADING]
-    smooth, reward = rec[L.R_SMOOTH], rec[L.R_REWARD]
     for i in numba.prange(rec.shape[1]):
-        s = task.smooth_term(ex[i], smooth_weight)
-        smooth[i] = s
-        reward[i] = task.reward_product(track[i], speed[i], heading[i], s)
+        s = task.smooth_term(rec[L.R_SMOOTH_EXP, i], smooth_weight)
+        rec[L.R_SMOOTH, i] = s
+        rec[L.R_REWARD, i] = task.reward_product(rec[L.R_TRACK, i], rec[L.R_SPEED, i], rec[L.R_HEADING, i], s)
 
 
 @_jit
