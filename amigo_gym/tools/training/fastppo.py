@@ -534,7 +534,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
             eps = torch.randn_like(mu)  # u's log density: -|eps|^2 / 2 - sum log_std - log 2 pi (2 components)
             u = mu + net.log_std.exp() * eps
             logp = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
-            buf.x[t], buf.u[t], buf.v[t], buf.logp[t] = x, u, net.value(x), logp
+            buf.x[t], buf.u[t], buf.logp[t] = x, u, logp
         a = env_action(_np(u), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
         t0 = time.perf_counter()
         obs, rew, term, trunc, info = r.env.step(a)
@@ -565,8 +565,8 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
             rew_buf[t, cut] += gamma * v_fin[k : k + cut.size]
             k += cut.size
     buf.x[t_len] = _features(r, builder, device, learn=False)[0]  # the next rollout learns them
-    with torch.inference_mode():
-        buf.v[t_len] = net.value(buf.x[t_len])
+    with torch.inference_mode():  # the values of all T + 1 steps' features in one pass
+        buf.v.copy_(net.value(buf.x))
     buf.r.copy_(torch.from_numpy(rew_buf.astype(np.float32)))
     buf.done.copy_(torch.from_numpy(done_buf.astype(np.float32)))
     r.global_step += s.num_envs * t_len
@@ -603,8 +603,8 @@ def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
     shift = torch.tensor([0, n] if s.caps_temporal > 0 else [0], device=buf.x.device).view(1, -1, 1)
     for _ in range(s.epochs):  # each gathers its shuffled samples once
         perm = torch.randperm(batch, device=buf.x.device).view(-1, 1, mb)
-        xs = buf.x.reshape(-1, d)[(perm + shift).flatten()].view(batch // mb, -1, d)  # minibatch j: its x, then its x'
-        c = cols[perm.flatten()].view(batch // mb, mb, 6)
+        xs = buf.x.reshape(-1, d).index_select(0, (perm + shift).flatten()).view(batch // mb, -1, d)  # j: x, then x'
+        c = cols.index_select(0, perm.flatten()).view(batch // mb, mb, 6)
         neg_a = (c[..., 3].mean(1, keepdim=True) - c[..., 3]) / (c[..., 3].std(1, keepdim=True) + 1e-8)
         w = c[..., 5:] * (2.0 * s.caps_temporal) / c[..., 5:].sum(1, keepdim=True).clamp(min=1.0)
         for j in range(batch // mb):
