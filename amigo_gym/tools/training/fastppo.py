@@ -438,7 +438,8 @@ def _training_env(s: FastPPOSettings) -> Any:
 
 def _networks(s: FastPPOSettings, dim: int, device: str) -> tuple[ActorCritic, torch.optim.Adam]:
     net = ActorCritic(dim, s.hidden, s.log_std_init).to(device)
-    return net, torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5, fused=True)
+    fused = device == "cuda" or torch.__version__ >= "2.4"  # one kernel per step; on the CPU from torch 2.4
+    return net, torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5, fused=fused)
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
@@ -525,17 +526,16 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
     """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env."""
     net, gamma, t_len = r.net, s.gamma, s.rollout_steps
     rew_buf, done_buf = np.zeros((2, t_len, s.num_envs))
-    finals: list[tuple[int, NDArray[np.intp], NDArray[np.float32]]] = []  # time-limit cuts: (t, rows, features)
+    finals: list[tuple[NDArray[np.intp], ...]] = []  # time-limit cuts: (steps, rows, features)
     env_s = 0.0
     for t in range(t_len):
         x, base, s_next = _features(r, builder, device)
         with torch.inference_mode():
             mu = net.actor(x)
-            eps = torch.randn_like(mu)  # u's log density: -|eps|^2 / 2 - sum log_std - log 2 pi (2 components)
-            u = mu + net.log_std.exp() * eps
-            logp = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
-            buf.x[t], buf.u[t], buf.logp[t] = x, u, logp
-        a = env_action(_np(u), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
+            eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
+            buf.x[t], buf.u[t] = x, mu + net.log_std.exp() * eps
+            buf.logp[t] = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
+        a = env_action(_np(buf.u[t]), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
         t0 = time.perf_counter()
         obs, rew, term, trunc, info = r.env.step(a)
         env_s += time.perf_counter() - t0
@@ -554,16 +554,13 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
         if cut.size:  # the time limit: bootstrapped below with V of the final observation
             final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
             f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
-            finals.append((t, cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
+            finals.append((np.full(cut.size, t), cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
         rew_buf[t], done_buf[t] = rew, done
         r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
     if finals:  # one forward pass for every truncated row of the rollout
+        steps, rows, feats = (np.concatenate(z) for z in zip(*finals, strict=True))
         with torch.inference_mode():
-            v_fin = _np(net.value(torch.from_numpy(np.concatenate([f for *_, f in finals])).to(device)))
-        k = 0
-        for t, cut, _ in finals:
-            rew_buf[t, cut] += gamma * v_fin[k : k + cut.size]
-            k += cut.size
+            rew_buf[steps, rows] += gamma * _np(net.value(torch.from_numpy(feats).to(device)))
     buf.x[t_len] = _features(r, builder, device, learn=False)[0]  # the next rollout learns them
     with torch.inference_mode():  # the values of all T + 1 steps' features in one pass
         buf.v.copy_(net.value(buf.x))
@@ -628,7 +625,7 @@ def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
             r.opt.zero_grad()
             torch.autograd.backward(outs, grads)
             net.log_std.grad = (g[:, None] * (z * z - 1.0)).sum(0) - s.ent_coef  # g, z: no graph
-            nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm, foreach=True)
+            nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
             r.opt.step()
 
 
