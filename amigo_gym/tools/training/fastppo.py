@@ -572,8 +572,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
 
 def gae(s: FastPPOSettings, buf: _Buffers) -> tuple[torch.Tensor, torch.Tensor]:
     """Advantages and returns ``(T, N)`` (GAE; an episode end cuts the recursion)."""
-    adv = torch.zeros_like(buf.r)
-    last = torch.zeros_like(buf.r[0])
+    adv, last = torch.zeros_like(buf.r), torch.zeros_like(buf.r[0])
     for t in reversed(range(s.rollout_steps)):
         nonterm = 1.0 - buf.done[t]
         delta = buf.r[t] + s.gamma * buf.v[t + 1] * nonterm - buf.v[t]
