@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import json
 import subprocess
 import sys
@@ -24,7 +25,16 @@ from amigo_gym.policies.learned import (  # noqa: E402
     env_action,
 )
 from amigo_gym.task.v1 import obs_fields  # noqa: E402
-from amigo_gym.tools.training.fastppo import FastPPOSettings, train  # noqa: E402
+from amigo_gym.tools.training.fastppo import (  # noqa: E402
+    ActorCritic,
+    FastPPOSettings,
+    _Buffers,
+    _new_run,
+    gae,
+    rollout,
+    train,
+    update,
+)
 
 KW = {"path": "mixed", "speed": [0.1, 0.4], "randomize": "mild"}
 
@@ -264,6 +274,65 @@ def test_residual_penalty_shrinks_the_mean_correction(tmp_path: Path) -> None:
     assert mags[1] < 0.5 * mags[0]
 
 
+def _autograd_update(s: FastPPOSettings, net: ActorCritic, opt: torch.optim.Optimizer, buf: _Buffers) -> None:
+    """The PPO update written as a loss for autograd (the reference of ``fastppo.update``'s closed-form gradient)."""
+    t_len, log_std = s.rollout_steps, net.log_std
+    batch, d = s.num_envs * t_len, buf.x.shape[-1]
+    adv, ret = (v.reshape(batch) for v in gae(s, buf))
+    bx, bnext = buf.x[:t_len].reshape(batch, d), buf.x[1:].reshape(batch, d)
+    bu, blogp, bsame = buf.u.reshape(batch, 2), buf.logp.reshape(batch), 1.0 - buf.done.reshape(batch)
+    for _ in range(s.epochs):
+        perm = torch.randperm(batch)
+        for k in range(0, batch, s.minibatch_size):
+            idx = perm[k : k + s.minibatch_size]
+            xb, mu, same = bx[idx], net.actor(bx[idx]), bsame[idx]
+            z = (bu[idx] - mu) / log_std.exp()
+            ratio = ((-0.5 * z * z - log_std - 0.5 * np.log(2.0 * np.pi)).sum(-1) - blogp[idx]).exp()
+            a = (adv[idx] - adv[idx].mean()) / (adv[idx].std() + 1e-8)
+            pg = torch.max(-a * ratio, -a * ratio.clamp(1.0 - s.clip_coef, 1.0 + s.clip_coef)).mean()
+            vloss = 0.5 * (net.value(xb) - ret[idx]).pow(2).mean()
+            entropy = (log_std + 0.5 * np.log(2.0 * np.pi * np.e)).sum()
+            caps_t = ((net.actor(bnext[idx]) - mu).pow(2).sum(-1) * same).sum() / same.sum().clamp(min=1.0)
+            loss = pg + s.vf_coef * vloss - s.ent_coef * entropy + s.caps_temporal * caps_t
+            loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
+            if s.caps_spatial > 0:  # draws the noise only then
+                mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
+                loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()
+            opt.zero_grad()
+            loss.backward()  # type: ignore[no-untyped-call]
+            torch.nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
+            opt.step()
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"epochs": 1, "minibatch_size": 128, "max_grad_norm": 100.0},  # one step: the raw gradients compared
+        {"caps_temporal": 0.0, "caps_spatial": 0.0, "residual_penalty": 0.0, "ent_coef": 0.0},
+    ],
+)
+def test_update_matches_autograd_of_the_ppo_loss(kw: dict[str, object]) -> None:
+    """``update``'s closed-form gradient of the loss (clipped surrogate, value, entropy, CAPS temporal and spatial,
+    residual penalty) is autograd's: from the same state and random draws, the same gradients and weights."""
+    s = tiny(**{"caps_temporal": 0.3, "caps_spatial": 0.2, "caps_sigma": 0.5, "residual_bound": 0.5,
+                "residual_penalty": 0.4, "ent_coef": 0.01, "clip_coef": 0.1, "learning_rate": 3e-3, **kw})  # fmt: skip
+    builder = FeatureBuilder(s.spec())
+    r = _new_run(s, builder, "cpu")
+    buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, "cpu")
+    for _ in range(3):  # past the 20-step time limit: episode ends in the last rollout
+        rollout(s, r, builder, buf, "cpu")
+        update(s, r, buf)
+    assert float(buf.done.sum()) > 0
+    net, opt = copy.deepcopy((r.net, r.opt))
+    rng = torch.get_rng_state()
+    update(s, r, buf)
+    torch.set_rng_state(rng)
+    _autograd_update(s, net, opt, buf)
+    for (name, p), q in zip(r.net.named_parameters(), net.parameters(), strict=True):
+        assert torch.allclose(p.grad, q.grad, rtol=1e-4, atol=1e-7), name
+        assert torch.allclose(p, q, rtol=1e-5, atol=1e-6), name
+
+
 def test_numpy_policy_matches_the_torch_actor_and_round_trips(tmp_path: Path) -> None:
     s = tiny(history=1)
     train(s, tmp_path / "r", log=None)
@@ -271,7 +340,6 @@ def test_numpy_policy_matches_the_torch_actor_and_round_trips(tmp_path: Path) ->
     ck = torch.load(tmp_path / "r" / "checkpoint.pt", weights_only=False)
     # the checkpoint's normaliser is the one saved in the model
     np.testing.assert_array_equal(pol.obs_rms.mean, np.asarray(ck["obs_rms"]["mean"]))
-    from amigo_gym.tools.training.fastppo import ActorCritic
 
     net = ActorCritic(pol.builder.dim, s.hidden, s.log_std_init)
     net.load_state_dict(ck["net"])

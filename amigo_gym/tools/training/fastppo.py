@@ -329,12 +329,6 @@ def _np(t: torch.Tensor) -> Array:
     return out
 
 
-def _log_prob(mu: torch.Tensor, log_std: torch.Tensor, u: torch.Tensor) -> torch.Tensor:
-    """Diagonal Gaussian log density summed over the 2 action components."""
-    z = (u - mu) / log_std.exp()
-    return (-0.5 * z * z - log_std - 0.5 * math.log(2.0 * math.pi)).sum(-1)
-
-
 def evaluate_policy(policy: Any, s: FastPPOSettings) -> dict[str, float]:
     """Mean task metrics (NaN-aware) of the first deterministic episodes of ``eval_envs`` robots of ``s.env_kwargs``
     seeded ``eval_seed + i``; ``policy``: anything with SB3's ``predict``."""
@@ -444,7 +438,8 @@ def _training_env(s: FastPPOSettings) -> Any:
 
 def _networks(s: FastPPOSettings, dim: int, device: str) -> tuple[ActorCritic, torch.optim.Adam]:
     net = ActorCritic(dim, s.hidden, s.log_std_init).to(device)
-    return net, torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5)
+    fused = device == "cuda" or torch.__version__ >= "2.4"  # one kernel per step; on the CPU from torch 2.4
+    return net, torch.optim.Adam(net.parameters(), lr=s.learning_rate, eps=1e-5, fused=fused)
 
 
 def _new_run(s: FastPPOSettings, builder: FeatureBuilder, device: str) -> _Run:
@@ -530,17 +525,17 @@ def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True)
 def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str) -> float:
     """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env."""
     net, gamma, t_len = r.net, s.gamma, s.rollout_steps
-    rew_buf = np.zeros((t_len, s.num_envs))
-    done_buf = np.zeros((t_len, s.num_envs))
-    finals: list[tuple[int, NDArray[np.intp], NDArray[np.float32]]] = []  # time-limit cuts: (t, rows, features)
+    rew_buf, done_buf = np.zeros((2, t_len, s.num_envs))
+    finals: list[tuple[NDArray[np.intp], ...]] = []  # time-limit cuts: (steps, rows, features)
     env_s = 0.0
     for t in range(t_len):
         x, base, s_next = _features(r, builder, device)
-        with torch.no_grad():
+        with torch.inference_mode():
             mu = net.actor(x)
-            u = mu + net.log_std.exp() * torch.randn_like(mu)
-            buf.x[t], buf.u[t], buf.v[t], buf.logp[t] = x, u, net.value(x), _log_prob(mu, net.log_std, u)
-        a = env_action(_np(u), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
+            eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
+            buf.x[t], buf.u[t] = x, mu + net.log_std.exp() * eps
+            buf.logp[t] = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
+        a = env_action(_np(buf.u[t]), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
         t0 = time.perf_counter()
         obs, rew, term, trunc, info = r.env.step(a)
         env_s += time.perf_counter() - t0
@@ -559,19 +554,16 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
         if cut.size:  # the time limit: bootstrapped below with V of the final observation
             final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
             f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
-            finals.append((t, cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
+            finals.append((np.full(cut.size, t), cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
         rew_buf[t], done_buf[t] = rew, done
         r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
     if finals:  # one forward pass for every truncated row of the rollout
-        with torch.no_grad():
-            v_fin = _np(net.value(torch.from_numpy(np.concatenate([f for *_, f in finals])).to(device)))
-        k = 0
-        for t, cut, _ in finals:
-            rew_buf[t, cut] += gamma * v_fin[k : k + cut.size]
-            k += cut.size
+        steps, rows, feats = (np.concatenate(z) for z in zip(*finals, strict=True))
+        with torch.inference_mode():
+            rew_buf[steps, rows] += gamma * _np(net.value(torch.from_numpy(feats).to(device)))
     buf.x[t_len] = _features(r, builder, device, learn=False)[0]  # the next rollout learns them
-    with torch.no_grad():
-        buf.v[t_len] = net.value(buf.x[t_len])
+    with torch.inference_mode():  # the values of all T + 1 steps' features in one pass
+        buf.v.copy_(net.value(buf.x))
     buf.r.copy_(torch.from_numpy(rew_buf.astype(np.float32)))
     buf.done.copy_(torch.from_numpy(done_buf.astype(np.float32)))
     r.global_step += s.num_envs * t_len
@@ -580,8 +572,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
 
 def gae(s: FastPPOSettings, buf: _Buffers) -> tuple[torch.Tensor, torch.Tensor]:
     """Advantages and returns ``(T, N)`` (GAE; an episode end cuts the recursion)."""
-    adv = torch.zeros_like(buf.r)
-    last = torch.zeros_like(buf.r[0])
+    adv, last = torch.zeros_like(buf.r), torch.zeros_like(buf.r[0])
     for t in reversed(range(s.rollout_steps)):
         nonterm = 1.0 - buf.done[t]
         delta = buf.r[t] + s.gamma * buf.v[t + 1] * nonterm - buf.v[t]
@@ -591,37 +582,48 @@ def gae(s: FastPPOSettings, buf: _Buffers) -> tuple[torch.Tensor, torch.Tensor]:
 
 
 def update(s: FastPPOSettings, r: _Run, buf: _Buffers) -> None:
-    """``epochs`` passes of minibatch PPO over the rollout, on the buffers' device."""
-    net, t_len = r.net, s.rollout_steps
-    batch, d = s.num_envs * t_len, buf.x.shape[-1]
+    """``epochs`` passes of minibatch PPO over the rollout, on the buffers' device; the loss's gradient in closed form.
+
+    Minibatch of ``B``: ``A`` advantages normalised to mean 0, std 1; ``z = (u - mu) / std``; ``r = pi(u) / pi_old(u)``;
+    ``L = mean max(-A r, -A clip(r, 1 +- eps)) + vf_coef mean (V - R)^2 / 2 - ent_coef H + caps_temporal sum w ||mu(x')
+    - mu||^2 + residual_penalty mean ||mu||^2 + caps_spatial mean ||mu(x + caps_sigma n) - mu||^2`` (``w``: 1 where the
+    episode goes on to ``x'``, over their count). ``dL/dlog pi = -A r / B`` where the unclipped term is the larger, else
+    0; ``dlog pi/dmu = z / std``; ``dlog pi/dlog std = z^2 - 1``; ``dH/dlog std = 1``; autograd backpropagates
+    ``dL/dmu`` and ``dL/dV``. One actor pass gives ``mu(x)`` and ``mu(x')`` (features row ``i + N`` follows row ``i``).
+    """
+    net, t_len, n, mb = r.net, s.rollout_steps, s.num_envs, s.minibatch_size
+    batch, d = n * t_len, buf.x.shape[-1]
     adv, ret = gae(s, buf)
-    bx, bu, blogp = buf.x[:t_len].reshape(batch, d), buf.u.reshape(batch, 2), buf.logp.reshape(batch)
-    badv, bret = adv.reshape(batch), ret.reshape(batch)
-    bnext, bsame = buf.x[1:].reshape(batch, d), 1.0 - buf.done.reshape(batch)
-    for _ in range(s.epochs):
-        perm = torch.randperm(batch, device=bx.device)
-        for k in range(0, batch, s.minibatch_size):
-            idx = perm[k : k + s.minibatch_size]
-            xb = bx[idx]
-            mu = net.actor(xb)
-            ratio = (_log_prob(mu, net.log_std, bu[idx]) - blogp[idx]).exp()
-            ab = badv[idx]
-            ab = (ab - ab.mean()) / (ab.std() + 1e-8)
-            pg = torch.max(-ab * ratio, -ab * ratio.clamp(1.0 - s.clip_coef, 1.0 + s.clip_coef)).mean()
-            vloss = 0.5 * (net.value(xb) - bret[idx]).pow(2).mean()
-            entropy = (net.log_std + 0.5 * math.log(2.0 * math.pi * math.e)).sum()
-            loss = pg + s.vf_coef * vloss - s.ent_coef * entropy
-            if s.caps_temporal > 0:
-                same = bsame[idx]
-                dmu = (net.actor(bnext[idx]) - mu).pow(2).sum(-1)
-                loss = loss + s.caps_temporal * (dmu * same).sum() / same.sum().clamp(min=1.0)
-            if s.residual_penalty > 0:
-                loss = loss + s.residual_penalty * mu.pow(2).sum(-1).mean()
+    # per sample: action (2), old log-probability, advantage, return, 1 if the episode goes on
+    cols = torch.stack((buf.u[..., 0], buf.u[..., 1], buf.logp, adv, ret, 1.0 - buf.done), -1).reshape(batch, 6)
+    shift = torch.tensor([0, n] if s.caps_temporal > 0 else [0], device=buf.x.device).view(1, -1, 1)
+    for _ in range(s.epochs):  # each gathers its shuffled samples once
+        perm = torch.randperm(batch, device=buf.x.device).view(-1, 1, mb)
+        xs = buf.x.reshape(-1, d).index_select(0, (perm + shift).flatten()).view(batch // mb, -1, d)  # j: x, then x'
+        c = cols.index_select(0, perm.flatten()).view(batch // mb, mb, 6)
+        neg_a = (c[..., 3].mean(1, keepdim=True) - c[..., 3]) / (c[..., 3].std(1, keepdim=True) + 1e-8)
+        w = c[..., 5:] * (2.0 * s.caps_temporal) / c[..., 5:].sum(1, keepdim=True).clamp(min=1.0)
+        for j in range(batch // mb):
+            outs = [net.actor(xs[j]), net.value(xs[j, :mb])]
             if s.caps_spatial > 0:
-                mu_n = net.actor(xb + s.caps_sigma * torch.randn_like(xb))
-                loss = loss + s.caps_spatial * (mu_n - mu).pow(2).sum(-1).mean()
+                outs.append(net.actor(xs[j, :mb] + s.caps_sigma * torch.randn_like(xs[j, :mb])))
+            with torch.no_grad():
+                mu, inv_std = outs[0][:mb], (-net.log_std).exp()
+                z = (c[j, :, :2] - mu) * inv_std
+                ratio = (-0.5 * z.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi)) - c[j, :, 2]).exp()
+                nar = neg_a[j] * ratio
+                g = torch.where(nar >= neg_a[j] * ratio.clamp(1.0 - s.clip_coef, 1.0 + s.clip_coef), nar / mb, 0.0)
+                g_mu = g[:, None] * z * inv_std + (2.0 * s.residual_penalty / mb) * mu
+                grads = [g_mu, (outs[1] - c[j, :, 4]) * (s.vf_coef / mb)]
+                if s.caps_spatial > 0:
+                    grads.append((2.0 * s.caps_spatial / mb) * (outs[2] - mu))
+                    grads[0] = g_mu - grads[2]
+                if s.caps_temporal > 0:
+                    dmu = (outs[0][mb:] - mu) * w[j]
+                    grads[0] = torch.cat((grads[0] - dmu, dmu))
             r.opt.zero_grad()
-            loss.backward()  # type: ignore[no-untyped-call]
+            torch.autograd.backward(outs, grads)
+            net.log_std.grad = (g[:, None] * (z * z - 1.0)).sum(0) - s.ent_coef  # g, z: no graph
             nn.utils.clip_grad_norm_(net.parameters(), s.max_grad_norm)
             r.opt.step()
 
