@@ -4,7 +4,7 @@
     XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" PYTHONPATH=$PWD \\
         nice -n 10 /tmp/sbxenv/bin/python experiments/bench_sbx.py --json docs/figures/offpolicy/bench_sbx.json
 
-The same function as the bench (:func:`amigo_gym.tools.bench.offpolicy.bench_offpolicy`: the same env, adapter,
+The same function as the bench (:func:`amigo_gym.tools.bench.train.bench_offpolicy`: the same env, adapter,
 configurations, 64x64 networks, warm-up/loop split; one round of updates after the warm-up (8 env-steps per env,
 while JAX compiles) is left out of the loop's time), with sbx's classes in place of SB3's / sb3-contrib's, JAX on
 the CPU (one XLA thread with the flags above). Budgets as the bench's defaults: 1024 env-steps after the warm-up in the
@@ -17,8 +17,9 @@ import argparse
 import sys
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench import offpolicy
-from amigo_gym.tools.bench.train import _load, cpu_model
+from amigo_gym.tools.bench import load_values
+from amigo_gym.tools.bench import train as bench_train
+from amigo_gym.tools.bench.train import cpu_model
 
 
 def main() -> int:
@@ -31,7 +32,7 @@ def main() -> int:
     import jax
     import sbx
 
-    offpolicy.ALGOS.update(
+    bench_train.ALGOS.update(
         {k: ("sbx", v) for k, v in (("sac", "SAC"), ("td3", "TD3"), ("crossq", "CrossQ"), ("tqc", "TQC"))}
     )
     doc = {
@@ -39,20 +40,20 @@ def main() -> int:
         "sbx": sbx.__version__,
         "jax": jax.__version__,
         "devices": [str(d) for d in jax.devices()],
-        "load_average_start": _load(),
+        "load_average_start": load_values(),
         "command": "python experiments/bench_sbx.py " + " ".join(sys.argv[1:]),
         "runs": {},
     }
     for algo in a.algos.split(","):
         for config, steps in (("shipped", a.steps), ("ht", a.ht_steps)):
             # the first updates compile (JIT): one training round after the warm-up is left out of the loop's time
-            hp = offpolicy.offpolicy_config(algo, config)
-            r = offpolicy.bench_offpolicy(algo, config, steps, threads=1, pre_steps=8 * int(hp.get("n_envs", 1)))
+            hp = bench_train.offpolicy_config(algo, config)
+            r = bench_train.bench_offpolicy(algo, config, steps, threads=1, pre_steps=8 * int(hp.get("n_envs", 1)))
             doc["runs"][f"sbx_{algo}_{config}"] = r
             print(f"sbx_{algo}_{config}: {r['sps_loop']:,.0f} env-steps/s ({r['sps_loop_cpu']:,.0f} per CPU s), "
                   f"{r['gsps_loop']:,.1f} gradient steps/s ({r['gsps_loop_cpu']:,.1f} per CPU s)",
                   flush=True)  # fmt: skip
-    doc["load_average_end"] = _load()
+    doc["load_average_end"] = load_values()
     if a.json:
         atomic_write_json(a.json, doc, parents=True)
     return 0

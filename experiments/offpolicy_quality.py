@@ -7,7 +7,7 @@
 
 Trains on ``AmigoBot-v1`` with the training distribution (``TRAINING_DISTRIBUTION``), one torch thread, seed 0:
 
-* ``sac``, ``td3``, ``crossq``, ``tqc``: the configuration ``--config`` of :mod:`amigo_gym.tools.bench.offpolicy`
+* ``sac``, ``td3``, ``crossq``, ``tqc``: the configuration ``--config`` of :mod:`amigo_gym.tools.bench.train`
   (``shipped`` or ``ht``) over the SB3 adapter of the native vector env, in chunks of ``--eval-every`` env-steps;
 * ``fastppo``: :func:`amigo_gym.tools.training.fastppo.train` with its defaults, ``--filter-alpha 0.5`` and
   ``--total-steps 15000000`` (the learning-rate schedule of the published fast-PPO curve,
@@ -37,8 +37,8 @@ from pathlib import Path
 from typing import Any
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.tools.bench.offpolicy import _venv, make_model, offpolicy_config
-from amigo_gym.tools.bench.train import _load, cpu_model
+from amigo_gym.tools.bench import load_values
+from amigo_gym.tools.bench.train import _venv, cpu_model, make_model, offpolicy_config
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 from amigo_gym.tools.training.fastppo import FastPPOSettings, evaluate_policy
 
@@ -82,7 +82,7 @@ def main() -> int:
         "cpu_model": cpu_model(),
         "torch": torch.__version__,
         "torch_threads": 1,
-        "load_average_start": _load(),
+        "load_average_start": load_values(),
         "validation": EVAL | {"env_kwargs": kw},
     }
 
@@ -155,7 +155,7 @@ def main() -> int:
             cpu += time.process_time() - c0
             record(int(model.num_timesteps), int(model._n_updates), model)
         venv.close()
-    summary |= {"rows": len(rows), "last": rows[-1], "load_average_end": _load()}
+    summary |= {"rows": len(rows), "last": rows[-1], "load_average_end": load_values()}
     atomic_write_json(out.with_suffix("").with_suffix(".json"), summary, parents=True)
     return 0
 

@@ -495,8 +495,7 @@ def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
     import yaml
 
     from amigo_gym.data import hyperparams_dir
-    from amigo_gym.tools.bench.offpolicy import algo_class
-    from amigo_gym.tools.bench.train import main
+    from amigo_gym.tools.bench.train import algo_class, main
 
     assert algo_class("crossq") is sb3_contrib.CrossQ and algo_class("tqc") is sb3_contrib.TQC
     assert algo_class("sac") is stable_baselines3.SAC and algo_class("td3") is stable_baselines3.TD3
@@ -533,7 +532,7 @@ def test_bench_train_offpolicy_entries_write_rates(tmp_path: Path) -> None:
 
 def test_offpolicy_models_have_64x64_networks() -> None:
     """Actor and every critic of each off-policy model: two hidden layers of 64 units (the bench's "same network")."""
-    from amigo_gym.tools.bench.offpolicy import _venv, make_model, offpolicy_config
+    from amigo_gym.tools.bench.train import _venv, make_model, offpolicy_config
 
     venv = _venv(1, 0)
     try:

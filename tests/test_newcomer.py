@@ -74,13 +74,18 @@ def test_evaluate_has_its_own_default_folder_and_refuses_a_compare_output_set(
 
 # --------------------------------------------------------------------------- train says what it rounds to
 def test_planned_timesteps_is_the_next_whole_rollout() -> None:
+    from types import SimpleNamespace as Model
+
     from amigo_gym.tools.training.train import planned_timesteps
 
-    assert planned_timesteps(0, 1, (4096, "n_steps 256 x 16 envs")) == (4096, "n_steps 256 x 16 envs")
-    assert planned_timesteps(0, 4096, (4096, "x"))[0] == 4096
-    assert planned_timesteps(0, 4097, (4096, "x"))[0] == 8192
-    assert planned_timesteps(400, 201, (8, "x"))[0] == 608  # a resume continues from its step
-    assert planned_timesteps(0, 10, None)[0] == 10
+    ppo = Model(num_timesteps=0, n_envs=16, n_steps=256)
+    assert planned_timesteps(ppo, 1) == (4096, "n_steps 256 x 16 envs")
+    assert planned_timesteps(ppo, 4096)[0] == 4096
+    assert planned_timesteps(ppo, 4097)[0] == 8192
+    steps = Model(unit=Model(value="step"), frequency=8)
+    resumed = Model(num_timesteps=400, n_envs=1, train_freq=steps)  # a resume continues from its step
+    assert planned_timesteps(resumed, 601) == (608, "train_freq 8 x 1 envs")
+    assert planned_timesteps(Model(num_timesteps=0, n_envs=1, train_freq=None), 10)[0] == 10
 
 
 def test_train_timesteps_1_says_it_trains_a_whole_rollout(tmp_path: Path, here: Callable[..., Ran]) -> None:

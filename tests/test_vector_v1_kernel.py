@@ -187,6 +187,27 @@ def test_parallel_twin_equals_serial() -> None:
         _equal_results(r[0], r[1], f"step {t}", exact=True)
 
 
+@pytest.mark.parametrize("path", ["circle", "manoeuvre"])
+def test_parallel_twin_equals_serial_ideal(path: str) -> None:
+    """AmigoBot-v0's ideal step (blocks of ``ideal_rows`` and the record pass) on numba's threads equals the serial
+    one bit for bit, with some rows flagged ``l3_differs`` (the row loop) every other step."""
+    n = 300
+    envs = [
+        gym.make_vec("AmigoBot-v0", n, vectorization_mode="vector_entry_point", kernel=k, path=path,
+                     max_episode_steps=25)
+        for k in ("numba-parallel", "numba")
+    ]  # fmt: skip
+    outs = [e.reset(seed=3) for e in envs]
+    np.testing.assert_array_equal(outs[0][0], outs[1][0])
+    rng = np.random.default_rng(3)
+    for t in range(40):
+        a = rng.uniform(-1.0, 1.0, (n, 2))
+        for e in envs:
+            e.unwrapped._batch.rows.l3_differs[130:200] = float(t % 2)  # type: ignore[attr-defined]
+        r = [e.step(a) for e in envs]
+        _equal_results(r[0], r[1], f"step {t}", exact=True)
+
+
 def test_partial_resets_reseeding_and_poses() -> None:
     n = 13
     kw = {"path": "mixed", "randomize": "mild", "speed": (0.1, 0.3)}

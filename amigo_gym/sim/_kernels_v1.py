@@ -53,6 +53,7 @@ _FLOAT_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     numeric.where: numeric.where_float,
     actuators.sort_knots: actuators.sort_knots_float,
     actuators.advance_pieces: fresnel.advance_nodes,
+    classic.angle_of: classic.atan2_float,
 }
 _OVERLOADED: set[Any] = {*_FLOAT_FORMS, fresnel.cos_sin_nodes, randomization._uint64}
 
@@ -111,6 +112,7 @@ _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / ma
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
 _ACT_SCRATCH = actuators.SCRATCH
+_RECORD = L.RECORD_WIDTH
 
 
 def _stack_ptr_typing(typingctx: Any, n: Any) -> Any:
@@ -158,6 +160,16 @@ def _rows(ws: F64) -> L.Rows:
     w = _bare(ws)
     return L.Rows(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8], w[9], w[10], w[11], w[12], w[13], w[14],
                   w[15], w[16], w[17], w[18], w[19], w[20], w[21])  # fmt: skip
+
+
+@_jit_inline
+def _rows_in(ws: F64, i0: int, i1: int) -> L.Rows:
+    # the named rows of the columns i0:i1 of the block ``ws``, indexed from 0, without reference counts
+    w = _bare(ws)
+    return L.Rows(w[0, i0:i1], w[1, i0:i1], w[2, i0:i1], w[3, i0:i1], w[4, i0:i1], w[5, i0:i1], w[6, i0:i1],
+                  w[7, i0:i1], w[8, i0:i1], w[9, i0:i1], w[10, i0:i1], w[11, i0:i1], w[12, i0:i1], w[13, i0:i1],
+                  w[14, i0:i1], w[15, i0:i1], w[16, i0:i1], w[17, i0:i1], w[18, i0:i1], w[19, i0:i1],
+                  w[20, i0:i1], w[21, i0:i1])  # fmt: skip
 
 
 #: ``_stack_ptr(n)``: ``n`` float64 (a compile-time constant) on the caller's stack, no allocation per call
@@ -550,34 +562,33 @@ _K_SIZE = K_O + 8 * _BLOCK
 
 @_jit
 def _ideal_block(
-    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64,
-    exps: F64,
-) -> None:  # fmt: skip
+    c: F64, pv: F64, ws: F64, obs: NDArray[np.floating], a1: F64, a2: F64, tans: F64, i0: int, i1: int, rec: F64
+) -> None:
     """:func:`_ideal_move` of the rows ``i0:i1`` (at most :data:`_BLOCK`) on a circle or manoeuvre path with the v0
     observation, no draws and the nominal ``l3``, in stages over the block (each a short loop over the block's
     columns of a scratch, the same functions in the same order: the same bits): the arc step; H's projection; the
-    evaluation; the stores into the rows of ``ws`` (contiguous columns), ``obs`` and :func:`_ideal_rows`' ``rec`` and
-    ``exps``. The stages without calls to the C library vectorise."""
+    evaluation; the stores into the rows of ``ws`` and of :func:`_ideal_rows`' field-major ``rec`` (contiguous
+    columns) and into ``obs``. The stages without calls to the C library vectorise: they index views of the
+    block's columns from 0 (no negative index to wrap, so contiguous loads and stores, not gathers and scatters)."""
     k = _carray(_stack_ptr(_K_SIZE), _K_SIZE)
-    r = _rows(ws)
+    r = _rows_in(ws, i0, i1)
+    a1, a2, t_h, t_m, obs = a1[i0:i1], a2[i0:i1], tans[0, i0:i1], tans[1, i0:i1], obs[i0:i1]
     m = i1 - i0
     dt, l3 = c[L.C_DT], c[L.C_L3]
     for j in range(m):  # the arc step
-        i = i0 + j
-        c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
-        v, bdot, h = _ideal_motion(c, r.beta[i], w1, w2)[:3]
+        c1, c2, w1, w2 = _action_commands(a1[j], a2[j], c[L.C_W_MAX])
+        v, bdot, h = _ideal_motion(c, r.beta[j], w1, w2)[:3]
         x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(
-            c, r.x[i], r.y[i], r.beta[i], w1, w2, v, bdot, h, tans[0, i], tans[1, i], r.alpha1[i], r.alpha2[i],
-            r.castor[i],
-        )  # fmt: skip
-        da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[i], r.w2[i], c1, c2, r.a1[i], r.a2[i])
-        steps = r.steps[i] + 1.0
+            c, r.x[j], r.y[j], r.beta[j], w1, w2, v, bdot, h, t_h[j], t_m[j], r.alpha1[j], r.alpha2[j], r.castor[j]
+        )
+        da1, da2 = _command_change(c[L.C_REWARD_V0] != 0.0, w1, w2, r.w1[j], r.w2[j], c1, c2, r.a1[j], r.a2[j])
+        steps = r.steps[j] + 1.0
         k[K_X + j], k[K_Y + j], k[K_B + j], k[K_CB + j], k[K_SB + j] = x1, y1, b1, cb, sb
         k[K_AL1 + j], k[K_AL2 + j], k[K_CAS + j], k[K_C1 + j], k[K_C2 + j] = al1, al2, castor, c1, c2
         k[K_W1 + j], k[K_W2 + j], k[K_V + j], k[K_STEPS + j] = w1, w2, v, steps
-        k[K_VREF + j] = _reference_speed(c, r.v_cruise[i], r.t_brake[i], steps * dt)
+        k[K_VREF + j] = _reference_speed(c, r.v_cruise[j], r.t_brake[j], steps * dt)
         k[K_CHG + j] = da1 * da1 + da2 * da2
-        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, r.l3[i])
+        k[K_HX + j], k[K_HY + j] = kinematics.h_from_a(x1, y1, cb, sb, r.l3[j])
     if c[L.C_PATH_KIND] == L.PATH_CIRCLE:  # H's projection: _locate's closed form, atan2's loop on its own
         d, rad, cx, cy, r0x, r0y = c[L.C_DIRECTION], c[L.C_RADIUS], c[L.C_CX], c[L.C_CY], c[L.C_R0X], c[L.C_R0Y]
         for j in range(m):  # the foot; u = (x, y) - centre into the columns of s and kappa
@@ -589,11 +600,11 @@ def _ideal_block(
         lap = task.TWO_PI * rad
         for j in range(m):  # the lap nearest the progress before
             s = k[K_S + j]
-            k[K_S + j] = s + lap * task.round_half_even((r.progress[i0 + j] - s) / lap)
+            k[K_S + j] = s + lap * task.round_half_even((r.progress[j] - s) / lap)
             k[K_K + j] = d / rad
     else:
         for j in range(m):
-            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], r.progress[i0 + j])
+            s, kappa, e, ct, st, _ = _locate(c, pv, k[K_HX + j], k[K_HY + j], r.progress[j])
             k[K_S + j], k[K_K + j], k[K_E + j], k[K_CT + j], k[K_ST + j] = s, kappa, e, ct, st
     for j in range(m):  # _evaluate's terms and observation
         e, kappa, v_ref, w1, w2 = k[K_E + j], k[K_K + j], k[K_VREF + j], k[K_W1 + j], k[K_W2 + j]
@@ -612,31 +623,36 @@ def _ideal_block(
         k[K_O + 7 * _BLOCK + j] = task.observe_reference(v_ref, c[L.C_V_MAX])
     for f, col in ((K_X, r.x), (K_Y, r.y), (K_B, r.beta), (K_W1, r.w1), (K_W2, r.w2), (K_AL1, r.alpha1),
                    (K_AL2, r.alpha2), (K_CAS, r.castor), (K_C1, r.a1), (K_C2, r.a2), (K_STEPS, r.steps),
-                   (K_S, r.progress), (K_AT, exps[0]), (K_AV, exps[1]), (K_AS, exps[2])):  # fmt: skip
-        for j in range(m):  # the stores of the rows and the exponentials' arguments
-            col[i0 + j] = k[f + j]
-    n_prev = int(c[L.C_N_PREVIEW])
-    for j in range(m):  # the records' and observations' stores
-        i = i0 + j
-        for f, at in ((K_X, L.R_X), (K_Y, L.R_Y), (K_B, L.R_BETA), (K_HX, L.R_HX), (K_HY, L.R_HY), (K_W1, L.R_W1),
-                      (K_W2, L.R_W2), (K_W1, L.R_CMD1), (K_W2, L.R_CMD2), (K_AL1, L.R_AL1), (K_AL2, L.R_AL2),
-                      (K_E, L.R_ERROR), (K_S, L.R_PROGRESS), (K_V, L.R_VT), (K_VREF, L.R_VREF),
-                      (K_HEAD, L.R_HEADING), (K_TERM, L.R_TERM), (K_CAS, L.R_CASTOR)):  # fmt: skip
-            rec[i, at] = k[f + j]
-        rec[i, L.R_MX], rec[i, L.R_MY], rec[i, L.R_MB] = _measurements(
+                   (K_S, r.progress), (K_X, rec[L.R_X, i0:i1]), (K_Y, rec[L.R_Y, i0:i1]),
+                   (K_B, rec[L.R_BETA, i0:i1]), (K_HX, rec[L.R_HX, i0:i1]), (K_HY, rec[L.R_HY, i0:i1]),
+                   (K_W1, rec[L.R_W1, i0:i1]), (K_W2, rec[L.R_W2, i0:i1]), (K_W1, rec[L.R_CMD1, i0:i1]),
+                   (K_W2, rec[L.R_CMD2, i0:i1]), (K_AL1, rec[L.R_AL1, i0:i1]), (K_AL2, rec[L.R_AL2, i0:i1]),
+                   (K_E, rec[L.R_ERROR, i0:i1]), (K_S, rec[L.R_PROGRESS, i0:i1]), (K_V, rec[L.R_VT, i0:i1]),
+                   (K_VREF, rec[L.R_VREF, i0:i1]), (K_HEAD, rec[L.R_HEADING, i0:i1]),
+                   (K_TERM, rec[L.R_TERM, i0:i1]), (K_CAS, rec[L.R_CASTOR, i0:i1]),
+                   (K_AT, rec[L.R_TRACK, i0:i1]), (K_AV, rec[L.R_SPEED, i0:i1]),
+                   (K_AS, rec[L.R_SMOOTH_EXP, i0:i1])):  # fmt: skip
+        for j in range(m):  # the stores of the rows, the records and the exponentials' arguments
+            col[j] = k[f + j]
+    mx, my, mb = rec[L.R_MX, i0:i1], rec[L.R_MY, i0:i1], rec[L.R_MB, i0:i1]
+    slip1, slip2, end = rec[L.R_SLIP1, i0:i1], rec[L.R_SLIP2, i0:i1], rec[L.R_END, i0:i1]
+    for j in range(m):
+        mx[j], my[j], mb[j] = _measurements(
             k[K_X + j], k[K_Y + j], k[K_B + j], k[K_W1 + j], k[K_W2 + j], 0.0, 0.0, 0.0, 0.0, 0.0
         )[:3]
-        rec[i, L.R_SLIP1] = rec[i, L.R_SLIP2] = rec[i, L.R_END] = 0.0
+        slip1[j] = slip2[j] = end[j] = 0.0
+    n_prev = int(c[L.C_N_PREVIEW])
+    for j in range(m):  # the observations' stores
         for f in range(4):
-            obs[i, f] = k[K_O + f * _BLOCK + j]
-            obs[i, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
+            obs[j, f] = k[K_O + f * _BLOCK + j]
+            obs[j, 4 + n_prev + f] = k[K_O + (4 + f) * _BLOCK + j]
     curvature, straight = c[L.C_DIRECTION] / c[L.C_RADIUS], c[L.C_STRAIGHT]
     circle = c[L.C_PATH_KIND] == L.PATH_CIRCLE
     for p in range(n_prev):  # the previews' curvature fields (_curvature_at)
         ahead = c[L.C_TAIL + p]
         for j in range(m):
             kp = curvature if circle else classic.manoeuvre_curvature(k[K_S + j] + ahead, straight, curvature)
-            obs[i0 + j, 4 + p] = task.curvature_feature(kp, l3)
+            obs[j, 4 + p] = task.curvature_feature(kp, l3)
 
 
 @_jit
@@ -699,11 +715,12 @@ def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
 
 def _ideal_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
-    a1: F64, a2: F64, tans: F64, exps: F64, rec: F64,
+    a1: F64, a2: F64, tans: F64, rec: F64,
 ) -> None:  # fmt: skip
-    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records into ``rec``, the
-    reward's exponential arguments into ``exps (3, N)``. By blocks of :data:`_BLOCK` rows: on a circle or manoeuvre
-    with the v0 observation and the nominal ``l3``, :func:`_ideal_block`'s stages, else row by row."""
+    """Pass 2: :func:`_ideal_move` of every row with the tangents ``tans (2, N)``; the records, field-major, into the
+    columns of ``rec (RECORD_WIDTH, N)`` (the reward's exponential arguments in their place). By blocks of
+    :data:`_BLOCK` rows: on a circle or manoeuvre with the v0 observation and the nominal ``l3``,
+    :func:`_ideal_block`'s stages, else row by row."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     r = _rows(ws)
     beta, l3_differs = r.beta, r.l3_differs  # arrays: the parallel loop takes no named tuple
@@ -714,25 +731,26 @@ def _ideal_rows(
         i0 = b * _BLOCK
         i1 = min(i0 + _BLOCK, n)
         if staged and not l3_differs[i0:i1].any():
-            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec, exps)
+            _ideal_block(c, flat[0:0], ws, obs, a1, a2, tans, i0, i1, rec)
             continue
+        one = _carray(_stack_ptr(_RECORD), _RECORD)  # a row's record
         for i in range(i0, i1):
             c1, c2, w1, w2 = _action_commands(a1[i], a2[i], c[L.C_W_MAX])
             v, bdot, h = _ideal_motion(c, beta[i], w1, w2)[:3]
             pv = flat[starts[i] : stops[i]]
-            _ideal_move(c, pv, ws, i, obs[i], rec[i], _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
-            exps[0, i], exps[1, i], exps[2, i] = rec[i, L.R_TRACK], rec[i, L.R_SPEED], rec[i, L.R_SMOOTH_EXP]
+            _ideal_move(c, pv, ws, i, obs[i], one, _NO_DRAWS, c1, c2, w1, w2, v, bdot, h, tans[0, i], tans[1, i])
+            for f in range(_RECORD):
+                rec[f, i] = one[f]
 
 
-def _record_rows(exps: F64, rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the records' exponentials ``exps (3, N)`` (``np.exp`` taken by the caller), terms and rewards."""
+def _record_rows(rec: F64, smooth_weight: float) -> None:
+    """Pass 3: the smoothness terms and rewards of the field-major records ``rec (RECORD_WIDTH, N)`` whose
+    exponentials are in place (``np.exp`` taken by the caller)."""
     rec = _bare(rec)
-    for i in numba.prange(rec.shape[0]):
-        r = rec[i]
-        r[L.R_TRACK] = exps[0, i]
-        r[L.R_SPEED] = exps[1, i]
-        r[L.R_SMOOTH_EXP] = exps[2, i]
-        record_terms(r, smooth_weight)
+    for i in numba.prange(rec.shape[1]):
+        s = task.smooth_term(rec[L.R_SMOOTH_EXP, i], smooth_weight)
+        rec[L.R_SMOOTH, i] = s
+        rec[L.R_REWARD, i] = task.reward_product(rec[L.R_TRACK, i], rec[L.R_SPEED, i], rec[L.R_HEADING, i], s)
 
 
 @_jit

@@ -107,7 +107,6 @@ class BatchKernel:
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         self.ideal = k.params.ideal_actuators and self._row.n_normal == 0
         self._tans: Array = np.zeros((2, n if self.ideal else 0))
-        self._exps: Array = np.zeros((3, n if self.ideal else 0))
         self._restart: tuple[Any, ...] | None = None  # restart's path, template row and start
         self._bind()
 
@@ -125,9 +124,9 @@ class BatchKernel:
             self._ideal_tangent_rows: Any = fast_v1.direct_call(
                 getattr(kv, "ideal_tangent_rows" + par), f1, f2, f1, f1, f2
             )
-            ideal = (f1, f1, i1, i1, f2, obs, f1, f1, f2, f2, f2)
+            ideal = (f1, f1, i1, i1, f2, obs, f1, f1, f2, f2)
             self._ideal_rows: Any = fast_v1.direct_call(getattr(kv, "ideal_rows" + par), *ideal)
-            self._record_rows: Any = fast_v1.direct_call(getattr(kv, "record_rows" + par), f2, f2, 0.0)
+            self._record_rows: Any = fast_v1.direct_call(getattr(kv, "record_rows" + par), f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -203,18 +202,21 @@ class BatchKernel:
     def step(self, rings: Array, ring_step: int, a1: Array, a2: Array, obs: NDArray[np.floating[Any]]) -> Array:
         """Step every row (:func:`amigo_gym.task.v1.step_columns`) with the actions ``a1, a2 (n,)`` [-], the command
         rings ``rings (n, L, 2)`` [rad/s] (updated) and their counter ``ring_step``; the observations into
-        ``obs (n, D)``. Returns every row's info record ``(n, RECORD_WIDTH)``, new."""
+        ``obs (n, D)``. Returns every row's info record ``(n, RECORD_WIDTH)``, new: with ideal actuators and no draws
+        the transpose of a field-major ``(RECORD_WIDTH, n)`` array (each entry's column contiguous), else C-ordered."""
         c = self.consts
         ws = self.ws
         a = self.arena
-        rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         sw = self._row.smooth_weight
         if self.ideal and not self.rows.slip_max.any():  # no draws
+            rec = np.empty((layout_v1.RECORD_WIDTH, ws.shape[1]))
             self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
             np.tan(self._tans, out=self._tans)
-            self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, self._exps, rec)
-            np.exp(self._exps, out=self._exps)
-            self._record_rows(self._exps, rec, sw)
-            return rec
+            self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, rec)
+            exps = rec[layout_v1.R_TRACK : layout_v1.R_SMOOTH_EXP + 1]  # the three arguments' contiguous rows
+            np.exp(exps, out=exps)
+            self._record_rows(rec, sw)
+            return rec.T
+        rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self.keys, rec, sw)
         return rec

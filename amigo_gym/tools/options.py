@@ -178,8 +178,9 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
 
 
 def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any) -> T:
-    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields);
-    ``cli(parse=...)`` options are parsed here (a ``ValueError`` becomes ``<flag> <message>``)."""
+    """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields),
+    ``validate()``d when ``cls`` has it; ``cli(parse=...)`` options are parsed here (a ``ValueError`` becomes ``<flag>
+    <message>``)."""
     hints = get_type_hints(cls)
     kw: dict[str, Any] = {}
     for f, meta, flag in _options(cls):
@@ -194,29 +195,24 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
         elif isinstance(value, list):
             value = tuple(value) if get_origin(_strip_optional(hints[f.name])) is tuple else list(value)
         kw[f.name] = value
-    return cls(**kw, **extra)
+    out = cls(**kw, **extra)
+    getattr(out, "validate", lambda: None)()
+    return out
 
 
-def _parse(cls: type[T], argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, Callable[[], T]]:
-    """The parser and a function making the ``validate()``d settings from ``argv`` (``None``: ``sys.argv[1:]``)."""
+def _parse(cls: type, argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, argparse.Namespace]:
+    """The parser of ``cls``'s options and the namespace it parsed from ``argv`` (``None``: ``sys.argv[1:]``)."""
     parser = OneLineParser(prog=prog, description=doc)
     add_dataclass_options(parser, cls)
-    namespace = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
-
-    def settings(**extra: Any) -> T:
-        out = settings_from_args(cls, namespace, **extra)
-        getattr(out, "validate", lambda: None)()
-        return out
-
-    return parser, settings
+    return parser, parser.parse_args(sys.argv[1:] if argv is None else list(argv))
 
 
 def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, description: str = "", **extra: Any) -> T:
     """The settings ``cls`` of the command ``prog`` from ``argv`` (``None``: ``sys.argv[1:]``), ``validate()``d when
     ``cls`` has it; a bad value exits with the parser's one-line error (status 2)."""
-    parser, settings = _parse(cls, argv, prog, description)
+    parser, namespace = _parse(cls, argv, prog, description)
     try:
-        return settings(**extra)
+        return settings_from_args(cls, namespace, **extra)
     except ValueError as exc:
         parser.error(str(exc))
 
@@ -224,8 +220,8 @@ def parse_settings(cls: type[T], argv: Sequence[str] | None, /, prog: str, descr
 def run_command(cls: type[T], run: Callable[[T], int | None], argv: Sequence[str] | None, prog: str, doc: str) -> int:
     """``run(settings)`` with the settings ``cls`` from ``argv``, ``validate()``d when ``cls`` has it: a malformed
     option exits (status 2); a value ``cls`` or ``run`` refuses is one line and the returned status 2."""
-    settings = _parse(cls, argv, prog, doc)[1]
-    return run_guarded(lambda: run(settings()), prog)
+    namespace = _parse(cls, argv, prog, doc)[1]
+    return run_guarded(lambda: run(settings_from_args(cls, namespace)), prog)
 
 
 def _one_line(text: object) -> str:

@@ -367,11 +367,9 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
         _fsync_file(tmp / META)
         fsync_dir(tmp)
         fault_point("checkpoint:meta")
-        final = root / f"step_{step}"
         k = 0
-        while final.exists():
+        while (final := root / (f"step_{step}.{k}" if k else f"step_{step}")).exists():
             k += 1
-            final = root / f"step_{step}.{k}"
         os.replace(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -406,15 +404,13 @@ def _write_pointer(out: Path, algo: str, folder: Path, step: int) -> tuple[str, 
 def restore_snapshot(out: Path, ck: Checkpoint | None) -> None:
     """Put the run's evaluation record (:data:`SNAPSHOT`) back to the checkpoint's (``None``: none)."""
     for name in SNAPSHOT:
-        src = None if ck is None else ck.folder / name
-        dst = out / name
-        if src is not None and src.is_file():
+        if ck is not None and (src := ck.folder / name).is_file():
             tmp = out / f".{name}.restore"
             shutil.copyfile(src, tmp)
             _fsync_file(tmp)
-            os.replace(tmp, dst)
+            os.replace(tmp, out / name)
         else:
-            dst.unlink(missing_ok=True)
+            (out / name).unlink(missing_ok=True)
     fsync_dir(out)
 
 

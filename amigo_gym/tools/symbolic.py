@@ -27,14 +27,10 @@ Array = NDArray[np.float64]
 t = sp.Symbol("t", real=True)
 
 
-def _q(name: str) -> Any:
-    return sp.Function(name, real=True)(t)
-
-
 # each coordinate q: its time function q(t) (the paper's Maple variables) and plain symbols q, qdot at one instant
 _NAMES = ("x_A", "y_A", "beta", "alpha_1", "alpha_2", "alpha_3", "phi", "s", "gamma")
 _COORDS: tuple[tuple[Any, Any, Any], ...] = tuple(
-    (_q(n), sp.Symbol(n, real=True), sp.Symbol(n.replace("_", "dot_") if "_" in n else n + "dot", real=True))
+    (sp.Function(n, real=True)(t), *sp.symbols([n, n.replace("_", "dot_") if "_" in n else n + "dot"], real=True))
     for n in _NAMES
 )
 xA_t, yA_t, beta_t, alpha1_t, alpha2_t, alpha3_t, phi_t, s_t, gamma_t = (c[0] for c in _COORDS)
@@ -47,10 +43,8 @@ l1, l3, l4, l5, r1, r2, r3, R = sp.symbols("l_1 l_3 l_4 l_5 r_1 r_2 r_3 R", posi
 v_A, theta, delta = sp.symbols("v_A theta delta", real=True)
 
 #: every plain symbol an expression of :func:`derive` may contain, by name (the keyword names of :func:`lambdify`)
-_CONSTANTS = (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta, delta)
-PLAIN_SYMBOLS: dict[str, Any] = {
-    str(sym): sym for sym in (*(p for _, p, _ in _COORDS), *(pd for _, _, pd in _COORDS), *_CONSTANTS)
-}
+PLAIN_SYMBOLS: dict[str, Any] = {str(x): x for c in _COORDS for x in c[1:]}
+PLAIN_SYMBOLS |= {str(x): x for x in (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta, delta)}
 
 
 def to_plain(expr: Any) -> Any:

@@ -210,18 +210,11 @@ class Settings:
         check_fields("Settings", self, **limits)
 
 
-@dataclass(frozen=True)
-class Phase:
-    """A phase of the manoeuvre: ``name`` from ``t0`` to ``t1`` [s]."""
-
-    name: str
-    t0: float
-    t1: float
-
-
-def phases(sol: inv.InverseSolution, profile: inv.TrapezoidProfile, path: ManoeuvrePath) -> list[Phase]:
-    """The phases standstill, starting (A accelerates), straight (until H's ``s = straight_length``), circle,
-    braking, rest (empty ones dropped)."""
+def phases(
+    sol: inv.InverseSolution, profile: inv.TrapezoidProfile, path: ManoeuvrePath
+) -> list[tuple[str, float, float]]:
+    """The phases ``(name, t0, t1 [s])`` standstill, starting (A accelerates), straight (until H's ``s =
+    straight_length``), circle, braking, rest (empty ones dropped)."""
     t_end = float(sol.t[-1])
     moving = sol.s > sol.s[0]
     if path.straight_length > 0.0 and np.any(sol.s >= path.straight_length) and np.any(moving):
@@ -238,18 +231,17 @@ def phases(sol: inv.InverseSolution, profile: inv.TrapezoidProfile, path: Manoeu
         ("braking", t_brake, profile.t_stop),
         ("rest", profile.t_stop, t_end),
     ]
-    out = [Phase(name, max(float(sol.t[0]), a), min(t_end, b)) for name, a, b in cuts]
-    return [p for p in out if p.t1 > p.t0]
+    out = [(name, max(float(sol.t[0]), a), min(t_end, b)) for name, a, b in cuts]
+    return [(name, a, b) for name, a, b in out if b > a]
 
 
-def _shade(ax: Any, ph: list[Phase]) -> None:
-    colours = ("#f2f2f2", "#ffffff")
-    for i, p in enumerate(ph):
-        ax.axvspan(p.t0, p.t1, color=colours[i % 2], zorder=0)
+def _shade(ax: Any, ph: list[tuple[str, float, float]]) -> None:
+    for i, (name, t0, t1) in enumerate(ph):
+        ax.axvspan(t0, t1, color=("#f2f2f2", "#ffffff")[i % 2], zorder=0)
         if i:
-            ax.axvline(p.t0, color="0.6", lw=0.6, ls="--", zorder=1)
-        kw = {"ha": "center", "va": "bottom", "fontsize": 7, "rotation": 0 if p.t1 - p.t0 > 4.0 else 60}
-        ax.text(0.5 * (p.t0 + p.t1), 1.01, p.name, transform=ax.get_xaxis_transform(), **kw)
+            ax.axvline(t0, color="0.6", lw=0.6, ls="--", zorder=1)
+        kw = {"ha": "center", "va": "bottom", "fontsize": 7, "rotation": 0 if t1 - t0 > 4.0 else 60}
+        ax.text(0.5 * (t0 + t1), 1.01, name, transform=ax.get_xaxis_transform(), **kw)
 
 
 def _paper(settings: Settings) -> None:
@@ -291,7 +283,7 @@ def _paper(settings: Settings) -> None:
 
     sol.to_csv(files["csv"])
     print("settings: " + ", ".join(f"{k} {v}" for k, v in asdict(settings).items()))
-    print("phases: " + ", ".join(f"{p.name} {p.t0:.2f}-{p.t1:.2f} s" for p in ph))
+    print("phases: " + ", ".join(f"{n} {a:.2f}-{b:.2f} s" for n, a, b in ph))
     print(
         f"peak wheel rates: alpha1_dot {float(np.max(np.abs(sol.alpha1_dot))):.4f}, "
         f"alpha2_dot {float(np.max(np.abs(sol.alpha2_dot))):.4f} rad/s (limit {robot.max_wheel_rate:g}); "

@@ -82,9 +82,20 @@ def clock() -> tuple[float, float]:
     return time.perf_counter(), time.process_time()
 
 
-def load_average() -> str:
-    """The machine's load average over 1, 5 and 15 minutes (``"-"`` where the OS has none)."""
+def clocked(count: int, start: tuple[float, float], end: tuple[float, float]) -> dict[str, Any]:
+    """``env_steps``, ``wall_s`` and ``cpu_s`` between two :func:`clock` readings, and :func:`rates` ``sps``."""
+    wall, cpu = end[0] - start[0], end[1] - start[1]
+    return {"env_steps": count, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2)} | rates("sps", count, wall, cpu)
+
+
+def load_values() -> list[float]:
+    """The machine's load average over 1, 5 and 15 minutes (``[]`` where the OS has none)."""
     try:
-        return " ".join(f"{x:.2f}" for x in os.getloadavg())
-    except OSError:
-        return "-"
+        return [round(x, 2) for x in os.getloadavg()]
+    except OSError:  # pragma: no cover - Windows
+        return []
+
+
+def load_average() -> str:
+    """:func:`load_values` as text (``"-"`` where the OS has none)."""
+    return " ".join(f"{x:.2f}" for x in load_values()) or "-"

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import statistics
@@ -64,7 +65,12 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     pose = np.column_stack((rng.normal(0.0, 0.05, (n, 2)), rng.normal(0.0, 0.1, n)))
     action = rng.uniform(0.2, 0.35, (n, 2))
     w = action * robot.max_wheel_rate
-    k, st, ep = v0_columns(params, pose, w)
+    k = tracking.constants(params)
+    one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
+    ep = tracking.Episode(*(np.full(n, v) for v in one))  # the (N,) columns of the state and the nominal episode
+    z, a = np.zeros(n), w / k.w_max
+    cols = [np.array(c) for c in (pose[:, 0], pose[:, 1], pose[:, 2], w[:, 0], w[:, 1], z, z, z, a[:, 0], a[:, 1])]
+    st = tracking.State(*cols, np.zeros(n, dtype=np.int64))  # type: ignore[call-arg]
     ring, castor = np.zeros((n, k.ring_length, 2)), np.zeros(n)
     a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
 
@@ -84,43 +90,16 @@ def _bench_one(n: int, repeats: int, min_time: float, loop_max: int, rng: np.ran
     if n <= loop_max:
         pl, wl = pose.tolist(), w.tolist()
         fns["loop"] = lambda: loop_step(pl, wl, dt, robot)
-    if kernels:
-        fns |= {m: kernel_stepper(params, pose, w, action, m == "kernel_par") for m in ("kernel", "kernel_par")}
+    if kernels:  # one compiled step each, outputs preallocated
+        obs = np.empty((n, len(tracking.obs_fields(params))), dtype=np.float32)
+        for m in ("kernel", "kernel_par"):
+            b = BatchKernel(k, n, parallel=m == "kernel_par")
+            b.load(range(n), [params.path] * n, st, ep)
+            fns[m] = functools.partial(b.step, np.zeros_like(ring), 1, a1, a2, obs)
     t = measure_many(fns, repeats, min_time)
     row: Row = {"n": n} | {m: n / t[m] if m in t else None for m in METHODS}
     row["ratio_kernel"] = None if row["kernel"] is None else row["kernel"] / row["columns"]
     return row
-
-
-def v0_columns(
-    params: tracking.TrackingParams, pose: Array, w: Array
-) -> tuple[tracking.Constants, tracking.State, tracking.Episode]:
-    """AmigoBot-v0's constants (``params`` from ``TrackingParams.v0``) and the ``(N,)`` columns of the state at
-    ``pose (N, 3)`` with wheel rates ``w (N, 2)`` [rad/s] and of the nominal episode."""
-    k = tracking.constants(params)
-    n = len(pose)
-    one = tracking.begin_episode(np.random.default_rng(0), k).episode  # v0's settings draw nothing that matters
-    ep = tracking.Episode(*(np.full(n, v) for v in one))
-    z = np.zeros(n)
-    a = w / k.w_max
-    cols = [np.array(c) for c in (pose[:, 0], pose[:, 1], pose[:, 2], w[:, 0], w[:, 1], z, z, z, a[:, 0], a[:, 1])]
-    st = tracking.State(*cols, np.zeros(n, dtype=np.int64))  # type: ignore[call-arg]
-    return k, st, ep
-
-
-def kernel_stepper(
-    params: tracking.TrackingParams, pose: Array, w: Array, action: Array, parallel: bool
-) -> Callable[[], object]:
-    """One compiled step (preallocated outputs) of AmigoBot-v0's robots at ``pose`` with wheel rates ``w`` [rad/s] and
-    actions ``action (N, 2)``."""
-    k, st, ep = v0_columns(params, pose, w)
-    n = len(pose)
-    b = BatchKernel(k, n, parallel=parallel)
-    b.load(range(n), [k.params.path] * n, st, ep)
-    rings = np.zeros((n, k.ring_length, 2))
-    a1, a2 = np.ascontiguousarray(action[:, 0]), np.ascontiguousarray(action[:, 1])
-    obs = np.empty((n, len(tracking.obs_fields(k.params))), dtype=np.float32)
-    return lambda: b.step(rings, 1, a1, a2, obs)
 
 
 _FIRST_STEP = (

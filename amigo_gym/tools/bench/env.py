@@ -51,12 +51,6 @@ def _vector_kernels(parallel: bool = False) -> list[str]:
     return [*KERNEL_CHOICES, "numba-parallel"] if parallel else list(KERNEL_CHOICES)
 
 
-def bench_single(repeats: int, min_time: float, seed: int = 0) -> Doc:
-    """Time of one step [us] of ``gym.make("AmigoBot-v0")`` and of ``gym.make("Pendulum-v1")``, and their ratio."""
-    t = time_envs({"a": gym.make("AmigoBot-v0"), "p": gym.make("Pendulum-v1")}, repeats, min_time, seed)
-    return {"amigobot_us": t["a"] * 1e6, "pendulum_us": t["p"] * 1e6, "ratio": t["a"] / t["p"]}
-
-
 def vector_row(n: int, native: float, cartpole: float, sync: float | None = None, kernels: Doc | None = None) -> Doc:
     """Env-steps/s at ``N`` robots of the native env (and per ``kernel``), CartPole's and Sync's, with the ratios
     (native / CartPole: target >= 0.8 at N = 4096; native / Sync: >= 20) and the time of one call [us]."""
@@ -134,10 +128,9 @@ def _ppo_rate(venv: Any, timesteps: int, n_steps: int, seed: int) -> tuple[float
     def timed(fn: Callable[..., Any]) -> Callable[..., Any]:
         def call(*args: Any) -> Any:
             t0 = time.perf_counter()
-            try:
-                return fn(*args)
-            finally:
-                env_time[0] += time.perf_counter() - t0
+            out = fn(*args)
+            env_time[0] += time.perf_counter() - t0
+            return out
 
         return call
 
@@ -475,7 +468,8 @@ def run(s: EnvSettings) -> int:
     print(f"median of {s.repeats} repeats of >= {s.min_time:g} s", flush=True)
     if not s.skip_single:
         say("single env: AmigoBot-v0 vs Pendulum-v1")
-        doc["single"] = bench_single(s.repeats, s.min_time)
+        t = time_envs({"a": gym.make("AmigoBot-v0"), "p": gym.make("Pendulum-v1")}, s.repeats, s.min_time)
+        doc["single"] = {"amigobot_us": t["a"] * 1e6, "pendulum_us": t["p"] * 1e6, "ratio": t["a"] / t["p"]}
     if not s.skip_vector:
         say(f"vector env at N = {sizes} (Sync up to N = {s.sync_max})")
         doc["vector"] = bench_vector(sizes, s.repeats, s.min_time, s.sync_max)

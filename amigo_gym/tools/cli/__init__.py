@@ -98,19 +98,15 @@ def _needs_extra(prog: str, extra: str, missing: Sequence[str]) -> int:
     return 2
 
 
-def _usage() -> str:
-    lines = ["usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)", ""]
-    lines += ["Every command takes --trust-unverified: load model zips, statistics, replay buffers and checkpoints"]
-    lines += ["(pickles: loading one runs code) that are neither shipped nor written by a run here.", "", "commands:"]
-    lines += [f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else "") for name, c in COMMANDS.items()]
-    return "\n".join(lines)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym``."""
     args = list(sys.argv[1:] if argv is None else argv)
     if not args or args[0] in ("-h", "--help"):
-        print(_usage())
+        print("usage: amigo-gym COMMAND [options]   (amigo-gym COMMAND --help for its options)\n")
+        print("Every command takes --trust-unverified: load model zips, statistics, replay buffers and checkpoints")
+        print("(pickles: loading one runs code) that are neither shipped nor written by a run here.\n\ncommands:")
+        for name, c in COMMANDS.items():
+            print(f"  {name:<11} {c.summary}" + (f"  [{c.extra}]" if c.extra else ""))
         return 0 if args else 2
     if args[0] == "--version":
         from amigo_gym import __version__

@@ -33,22 +33,19 @@ DT_S = 0.1
 POOL = 2**20
 
 
-def cell_specs(
-    speeds: Sequence[float] = CURVATURE_SPEEDS, levels: int = LEVELS, episodes: int = CURVATURE_EPISODES
-) -> tuple[Scenario, ...]:
-    """The held-out cells: AmigoBot-v1 random paths at each speed, ``max_curvature = K(v) j / levels``, ``episodes``
-    seeds from 100."""
-    for name, x, hi in (("levels", levels, 100), ("episodes", episodes, 10_000)):
-        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= hi:
-            raise ValueError(f"curvature cells: {name} must be an integer in [1, {hi}], got {x!r}")
+def cell_specs(episodes: int = CURVATURE_EPISODES) -> tuple[Scenario, ...]:
+    """The held-out cells: AmigoBot-v1 random paths at each of :data:`CURVATURE_SPEEDS` ``v``, ``max_curvature =
+    K(v) j / LEVELS``, ``episodes`` seeds from 100."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= 10_000:
+        raise ValueError(f"curvature cells: episodes must be an integer in [1, 10000], got {episodes!r}")
     out = []
-    for v in speeds:
+    for v in CURVATURE_SPEEDS:
         k_v = feasible_random_curvature(v)
-        for j in range(1, levels + 1):
-            k = k_v * j / levels
+        for j in range(1, LEVELS + 1):
+            k = k_v * j / LEVELS
             kw = {"dt": DT_S, "randomize": "none", "path": "random", "speed": float(v), "random_pool": POOL}
             kw["path_params"] = {"max_curvature": k, "max_curvature_rate": k, "length": float(v) * DURATION_S}
-            desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{levels} of K = {k_v:.4g} 1/m), {v:g} m/s"
+            desc = f"random paths, |kappa| <= {k:.3g} 1/m (level {j}/{LEVELS} of K = {k_v:.4g} 1/m), {v:g} m/s"
             seeds = tuple(range(100, 100 + episodes))
             out.append(Scenario(f"curv_v{v:g}_k{j}", "AmigoBot-v1", kw, seeds, round(DURATION_S / DT_S), True, desc))
     return tuple(out)
@@ -77,14 +74,12 @@ def evaluate_tagged(agent: Any, sc: Any) -> list[dict[str, Any]]:
     return out
 
 
-def bin_table(episodes: Sequence[Mapping[str, Any]], edges: Sequence[float] = BIN_EDGES) -> list[dict[str, Any]]:
+def bin_table(episodes: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Failure rate per (agent, speed, bin) of tagged episodes, binned by ``x = path_max_kappa / k_limit`` in
-    ``[edges[b], edges[b+1])`` (the last bin closed; an ``x`` outside the edges is an error): rows with ``x_lo``,
-    ``x_hi``, ``kappa_lo``, ``kappa_hi`` [1/m], :func:`~amigo_gym.tools.training.intervals.failure_rate`'s keys and
-    ``kappa_end_failed`` (median ``kappa_end`` of the failures [1/m])."""
-    e = np.asarray(edges, dtype=np.float64)
-    if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0) or not np.all(np.isfinite(e)):
-        raise ValueError(f"bin_table: edges must be 2 or more increasing finite numbers, got {list(edges)!r}")
+    ``[e[b], e[b+1])`` of :data:`BIN_EDGES` (the last bin closed; an ``x`` outside them is an error): rows with
+    ``x_lo``, ``x_hi``, ``kappa_lo``, ``kappa_hi`` [1/m], :func:`~amigo_gym.tools.training.intervals.failure_rate`'s
+    keys and ``kappa_end_failed`` (median ``kappa_end`` of the failures [1/m])."""
+    e = np.asarray(BIN_EDGES)
     groups: dict[tuple[str, float], list[Mapping[str, Any]]] = {}
     limits: dict[float, float] = {}
     for ep in episodes:

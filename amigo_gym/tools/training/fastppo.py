@@ -15,6 +15,7 @@ the iteration's checkpoint (status 130), a second at once.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import functools
 import importlib.util
@@ -27,7 +28,7 @@ import pickle
 import shlex
 import sys
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Literal
@@ -652,7 +653,130 @@ def train(
     checkpoint, no ``model.zip``, ``stopped_by`` ``after_eval``). Raises ``FileExistsError`` (a checkpoint without
     ``resume``), ``FileNotFoundError``, ``ValueError``, ``RunLockedError``, ``KeyboardInterrupt`` (a signal).
     """
-    out = Path(out)
+    out, say = Path(out), log or (lambda _msg: None)
+    with _run_folder(s, out, resume) as (device, stop_request):
+        if numba is not None:  # first: starting numba's threads resets torch's count
+            numba.set_num_threads(s.env_threads)
+        torch.set_num_threads(s.threads)
+        builder = FeatureBuilder(s.spec())
+        r = _load_checkpoint(out / "checkpoint.pt", s, builder, device) if resume else _new_run(s, builder, device)
+        if not resume:
+            atomic_write_json(out / "settings.json", s.to_json())
+        batch = s.num_envs * s.rollout_steps
+        n_iter = -(-s.total_steps // batch)
+        if n_iter * batch != s.total_steps and not resume:
+            say(f"total_steps {s.total_steps:,d} rounded up to {n_iter * batch:,d}: whole rollouts of num_envs x "
+                f"rollout_steps = {batch:,d} env-steps")  # fmt: skip
+        stop = s.total_steps if until_steps is None else min(s.total_steps, until_steps)
+        t_start, wall0 = time.perf_counter(), r.wall_s
+
+        def evaluate() -> bool:
+            """Evaluate, record and say; advance ``next_eval``; ``after_eval``'s verdict."""
+            t0 = time.perf_counter()
+            pol = _policy(s, r)
+            m = evaluate_policy(pol, s)
+            wall = wall0 + time.perf_counter() - t_start
+            train_wall = max(wall - sum(c.get("eval_s", 0.0) for c in r.curve), 1e-9)
+            row = {
+                "env_steps": float(r.global_step),
+                "wall_s": round(wall, 2),
+                "train_sps": round(r.global_step / train_wall, 1),
+            }
+            if s.curriculum_max_curvature > 0:
+                row["curriculum_max_curvature"] = float(dict(r.env.params.path_params).get("max_curvature", 1.0))
+            row |= {f"eval_{k}": v for k, v in m.items()}
+            row["eval_s"] = round(time.perf_counter() - t0, 2)
+            r.curve.append(row)
+            atomic_write_json(out / "curve.json", r.curve)
+            text = io.StringIO()
+            w = csv.DictWriter(text, fieldnames=list(r.curve[0]))
+            w.writeheader()
+            w.writerows(r.curve)
+            atomic_write(out / "curve.csv", text.getvalue())
+            if m["h_rms_m"] < r.best_h:
+                r.best_h = m["h_rms_m"]
+                pol.info.update({"env_steps": r.global_step, "selected_by": "lowest eval_h_rms_m (validation seeds)"})
+                pol.save(out / "best.zip")
+            say(
+                f"[eval] {r.global_step:>11,d} steps {wall:7.0f} s  H rms {1e3 * m['h_rms_m']:.2f} mm  settled "
+                f"{1e3 * m['h_rms_settled_m']:.2f} mm  chatter(settled) {m['chatter_settled_rms']:.2f} rad/s  speed err"
+                f"(settled) {1e3 * m.get('speed_err_settled_rms', math.nan):.1f} mm/s  fail {m['failure']:.2f}"
+            )
+            while r.next_eval <= r.global_step:
+                r.next_eval += s.eval_every
+            return True if after_eval is None else bool(after_eval(dict(row)))
+
+        stopped_by = "after_eval" if evaluate_runs and r.global_step >= r.next_eval and not evaluate() else None
+        env_s, spent = 0.0, np.zeros(4)  # this call's seconds: CPU of rollouts, updates; wall of rollouts, updates
+        buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
+
+        sync: Callable[[], None] = torch.cuda.synchronize if device == "cuda" else lambda: None
+        while r.global_step < stop and stopped_by is None:
+            stage = curriculum_path_params(s, r.global_step)
+            if stage is not None and dict(r.env.params.path_params) != stage:
+                r.env.set_path_params(stage)
+                say(f"[curriculum] {r.global_step:>11,d} steps: random paths {stage}")
+            r.iteration += 1
+            for g in r.opt.param_groups:
+                g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
+            c0, w0 = time.process_time(), time.perf_counter()
+            env_s += rollout(s, r, builder, buf, device)
+            sync()
+            c1, w1 = time.process_time(), time.perf_counter()
+            update(s, r, buf)
+            sync()
+            c2, w2 = time.process_time(), time.perf_counter()
+            spent += (c1 - c0, c2 - c1, w1 - w0, w2 - w1)
+            r.wall_s = wall = wall0 + time.perf_counter() - t_start
+            if r.iteration % 20 == 0 or r.global_step >= stop:
+                recent = r.episode_returns[-200:]
+                ret = f"episode return {np.mean(recent):7.1f}" if recent else "no episode finished yet"
+                say(f"{r.global_step:>11,d} / {n_iter * batch:,d} steps  {wall:7.0f} s  "
+                    f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  {ret}  "
+                    f"std {float(r.net.log_std.detach().exp().mean()):.3f}")  # fmt: skip
+            if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps) and not evaluate():
+                stopped_by = "after_eval"
+                break
+            if stop_request.requested and r.global_step < stop:
+                stopped_by = "signal"
+            if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
+                r.wall_s = wall0 + time.perf_counter() - t_start
+                checkpoint(out / "checkpoint.pt", s, r)
+                while r.next_ckpt <= r.global_step:
+                    r.next_ckpt += s.checkpoint_every
+        r.wall_s = wall0 + time.perf_counter() - t_start
+        r.env.close()
+        cpu_s = dict(zip(("rollout", "update", "loop_wall"), (*spent[:2], spent[2:].sum()), strict=True))
+        wall_s = dict(zip(("env", "rollout", "update", "loop"), (env_s, *spent[2:], spent[2:].sum()), strict=True))
+        record: dict[str, Any] = {
+            "algo": "fastppo_residual" if s.residual_bound > 0 else "fastppo",
+            "seed": s.seed,
+            "timesteps": r.global_step,
+            "finished": r.global_step >= s.total_steps and stopped_by is None,
+            "stopped_by": stopped_by,
+            "n_envs": s.num_envs,
+            "wall_time_s": round(r.wall_s, 1),
+            "train_sps": round(r.global_step / max(r.wall_s, 1e-9), 1),
+            "last_eval": r.curve[-1] if r.curve else None,
+            "settings": s.to_json(),
+            "command": command,
+            "versions": versions(("gymnasium", "torch")),
+            **machine_record(device),
+            "cpu_s_this_call": {k: round(float(v), 2) for k, v in cpu_s.items()},
+            "wall_s_this_call": {k: round(float(v), 3) for k, v in wall_s.items()},
+        }
+        if record["finished"]:
+            _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
+            record["sha256"] = sha256_file(out / "model.zip")
+            atomic_write_json(out / "run.json", record)
+    if stop_request.requested and stopped_by == "signal":
+        raise KeyboardInterrupt
+    return record
+
+
+@contextlib.contextmanager
+def _run_folder(s: FastPPOSettings, out: Path, resume: bool) -> Iterator[tuple[str, StopRequest]]:
+    """The checks of a run's start, then ``out`` locked and the signals handled: the device and the stop request."""
     _check_start(out, resume)
     stop = StopRequest(f"{PROG}: stopping at the end of this iteration (checkpoint first)")
     with handling(stop):
@@ -663,133 +787,7 @@ def train(
         out.mkdir(parents=True, exist_ok=True)
         with RunLock(out):
             _check_start(out, resume)  # again, under the lock
-            record = _train(s, out, device, resume, until_steps, log or (lambda _msg: None), command,
-                            evaluate_runs, after_eval, stop)  # fmt: skip
-    if stop.requested and record.get("stopped_by") == "signal":
-        raise KeyboardInterrupt
-    return record
-
-
-def _train(
-    s: FastPPOSettings, out: Path, device: str, resume: bool, until_steps: int | None, say: Callable[[str], None],
-    command: str | None, evaluate_runs: bool, after_eval: Callable[[dict[str, float]], bool] | None,
-    stop_request: StopRequest,
-) -> dict[str, Any]:  # fmt: skip
-    if numba is not None:  # first: starting numba's threads resets torch's count
-        numba.set_num_threads(s.env_threads)
-    torch.set_num_threads(s.threads)
-    builder = FeatureBuilder(s.spec())
-    r = _load_checkpoint(out / "checkpoint.pt", s, builder, device) if resume else _new_run(s, builder, device)
-    if not resume:
-        atomic_write_json(out / "settings.json", s.to_json())
-    batch = s.num_envs * s.rollout_steps
-    n_iter = -(-s.total_steps // batch)
-    if n_iter * batch != s.total_steps and not resume:
-        say(f"total_steps {s.total_steps:,d} rounded up to {n_iter * batch:,d}: whole rollouts of num_envs x "
-            f"rollout_steps = {batch:,d} env-steps")  # fmt: skip
-    stop = s.total_steps if until_steps is None else min(s.total_steps, until_steps)
-    t_start, wall0 = time.perf_counter(), r.wall_s
-
-    def evaluate() -> bool:
-        """Evaluate, record and say; advance ``next_eval``; ``after_eval``'s verdict."""
-        t0 = time.perf_counter()
-        pol = _policy(s, r)
-        m = evaluate_policy(pol, s)
-        wall = wall0 + time.perf_counter() - t_start
-        train_wall = max(wall - sum(c.get("eval_s", 0.0) for c in r.curve), 1e-9)
-        row = {
-            "env_steps": float(r.global_step),
-            "wall_s": round(wall, 2),
-            "train_sps": round(r.global_step / train_wall, 1),
-        }
-        if s.curriculum_max_curvature > 0:
-            row["curriculum_max_curvature"] = float(dict(r.env.params.path_params).get("max_curvature", 1.0))
-        row |= {f"eval_{k}": v for k, v in m.items()}
-        row["eval_s"] = round(time.perf_counter() - t0, 2)
-        r.curve.append(row)
-        atomic_write_json(out / "curve.json", r.curve)
-        text = io.StringIO()
-        w = csv.DictWriter(text, fieldnames=list(r.curve[0]))
-        w.writeheader()
-        w.writerows(r.curve)
-        atomic_write(out / "curve.csv", text.getvalue())
-        if m["h_rms_m"] < r.best_h:
-            r.best_h = m["h_rms_m"]
-            pol.info.update({"env_steps": r.global_step, "selected_by": "lowest eval_h_rms_m (validation seeds)"})
-            pol.save(out / "best.zip")
-        say(
-            f"[eval] {r.global_step:>11,d} steps {wall:7.0f} s  H rms {1e3 * m['h_rms_m']:.2f} mm  settled "
-            f"{1e3 * m['h_rms_settled_m']:.2f} mm  chatter(settled) {m['chatter_settled_rms']:.2f} rad/s  speed err"
-            f"(settled) {1e3 * m.get('speed_err_settled_rms', math.nan):.1f} mm/s  fail {m['failure']:.2f}"
-        )
-        while r.next_eval <= r.global_step:
-            r.next_eval += s.eval_every
-        return True if after_eval is None else bool(after_eval(dict(row)))
-
-    stopped_by = "after_eval" if evaluate_runs and r.global_step >= r.next_eval and not evaluate() else None
-    env_s, spent = 0.0, np.zeros(4)  # this call's seconds: CPU of rollouts, updates; wall of rollouts, updates
-    buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
-
-    sync: Callable[[], None] = torch.cuda.synchronize if device == "cuda" else lambda: None
-    while r.global_step < stop and stopped_by is None:
-        stage = curriculum_path_params(s, r.global_step)
-        if stage is not None and dict(r.env.params.path_params) != stage:
-            r.env.set_path_params(stage)
-            say(f"[curriculum] {r.global_step:>11,d} steps: random paths {stage}")
-        r.iteration += 1
-        for g in r.opt.param_groups:
-            g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
-        c0, w0 = time.process_time(), time.perf_counter()
-        env_s += rollout(s, r, builder, buf, device)
-        sync()
-        c1, w1 = time.process_time(), time.perf_counter()
-        update(s, r, buf)
-        sync()
-        c2, w2 = time.process_time(), time.perf_counter()
-        spent += (c1 - c0, c2 - c1, w1 - w0, w2 - w1)
-        r.wall_s = wall = wall0 + time.perf_counter() - t_start
-        if r.iteration % 20 == 0 or r.global_step >= stop:
-            recent = r.episode_returns[-200:]
-            ret = f"episode return {np.mean(recent):7.1f}" if recent else "no episode finished yet"
-            say(f"{r.global_step:>11,d} / {n_iter * batch:,d} steps  {wall:7.0f} s  "
-                f"{r.global_step / max(wall, 1e-9):8.0f} steps/s  {ret}  "
-                f"std {float(r.net.log_std.detach().exp().mean()):.3f}")  # fmt: skip
-        if evaluate_runs and (r.global_step >= r.next_eval or r.global_step >= s.total_steps) and not evaluate():
-            stopped_by = "after_eval"
-            break
-        if stop_request.requested and r.global_step < stop:
-            stopped_by = "signal"
-        if r.global_step >= r.next_ckpt or r.global_step >= stop or stopped_by == "signal":
-            r.wall_s = wall0 + time.perf_counter() - t_start
-            checkpoint(out / "checkpoint.pt", s, r)
-            while r.next_ckpt <= r.global_step:
-                r.next_ckpt += s.checkpoint_every
-    r.wall_s = wall0 + time.perf_counter() - t_start
-    r.env.close()
-    cpu_s = dict(zip(("rollout", "update", "loop_wall"), (*spent[:2], spent[2:].sum()), strict=True))
-    wall_s = dict(zip(("env", "rollout", "update", "loop"), (env_s, *spent[2:], spent[2:].sum()), strict=True))
-    record: dict[str, Any] = {
-        "algo": "fastppo_residual" if s.residual_bound > 0 else "fastppo",
-        "seed": s.seed,
-        "timesteps": r.global_step,
-        "finished": r.global_step >= s.total_steps and stopped_by is None,
-        "stopped_by": stopped_by,
-        "n_envs": s.num_envs,
-        "wall_time_s": round(r.wall_s, 1),
-        "train_sps": round(r.global_step / max(r.wall_s, 1e-9), 1),
-        "last_eval": r.curve[-1] if r.curve else None,
-        "settings": s.to_json(),
-        "command": command,
-        "versions": versions(("gymnasium", "torch")),
-        **machine_record(device),
-        "cpu_s_this_call": {k: round(float(v), 2) for k, v in cpu_s.items()},
-        "wall_s_this_call": {k: round(float(v), 3) for k, v in wall_s.items()},
-    }
-    if record["finished"]:
-        _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
-        record["sha256"] = sha256_file(out / "model.zip")
-        atomic_write_json(out / "run.json", record)
-    return record
+            yield device, stop
 
 
 # --------------------------------------------------------------------------- CLI
@@ -836,12 +834,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = p.parse_args(args_in)
     run_opts = settings_from_args(TrainFastRun, args)
 
-    def run() -> int:
+    def run() -> None:
         s = settings_from_args(FastPPOSettings, args)
         cmd = f"{PROG} " + " ".join(shlex.quote(a) for a in args_in)
         log = None if run_opts.quiet else functools.partial(print, flush=True)
         rec = train(s, run_opts.out, resume=run_opts.resume, log=log, command=cmd)
         print(json.dumps({k: rec[k] for k in ("timesteps", "wall_time_s", "train_sps", "last_eval")}, default=str))
-        return 0
 
     return run_guarded(run, PROG)

@@ -7,6 +7,7 @@ other key must be a keyword of the algorithm's SB3 class.
 from __future__ import annotations
 
 import ast
+import contextlib
 import inspect
 import os
 from collections.abc import Callable, Mapping
@@ -59,13 +60,11 @@ def parse_python_literal(text: str, what: str = "policy_kwargs") -> Any:
         raise ValueError(f"{what}: cannot parse {text!r}: {exc.msg}") from None
 
     def walk(node: ast.expr) -> Any:
-        if isinstance(node, ast.Constant) and isinstance(node.value, int | float | str | bool | type(None)):
-            return node.value
-        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-            v = walk(node.operand)
-            if isinstance(v, bool) or not isinstance(v, int | float):
-                raise ValueError(f"{what}: a sign applies to numbers only, in {text!r}")
-            return -v if isinstance(node.op, ast.USub) else v
+        if isinstance(node, ast.Constant | ast.UnaryOp):
+            with contextlib.suppress(ValueError):
+                value = ast.literal_eval(node)
+                if isinstance(value, int | float | str | bool | type(None)):
+                    return value
         if isinstance(node, ast.List):
             return [walk(e) for e in node.elts]
         if isinstance(node, ast.Tuple):

@@ -31,10 +31,6 @@ CURVATURE_BINS: tuple[float, ...] = (0.0, 2.0, 5.0, 10.0, 20.0, 60.0)
 DURATION_S, GOAL_M, SEED = 20.0, 0.02, 100
 
 
-def _natural(s: Any, v: Any) -> CubicSpline:
-    return CubicSpline(s, v, bc_type=((2, 0.0), (2, 0.0)))
-
-
 def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray, float]:
     """One path from the authors' ``RandomState`` calls: points ``(n, 2)`` [m] every ``spacing`` [m] and its peak
     |curvature| [1/m]. Five waypoints, legs U(0.5, 2) m in direction U[0, 2 pi), a natural cubic spline redrawn
@@ -47,7 +43,7 @@ def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.nda
             x.append(x[-1] + d * np.cos(th))
             y.append(y[-1] + d * np.sin(th))
         s = np.linspace(0.0, np.hypot(np.diff(x), np.diff(y)).sum(), len(x))
-        fx, fy = _natural(s, x), _natural(s, y)
+        fx, fy = CubicSpline(s, x, bc_type="natural"), CubicSpline(s, y, bc_type="natural")
         u = np.linspace(0.0, s[-1], 200)
         dx, dy = fx(u, 1), fy(u, 1)
         if np.all(np.abs((fy(u, 2) * dx - fx(u, 2) * dy) / (dx**2 + dy**2) ** 1.5) <= 50.0):
@@ -55,7 +51,7 @@ def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.nda
     g, w = np.polynomial.legendre.leggauss(8)
     h, m = np.diff(u) / 2, (u[:-1] + u[1:])[:, None] / 2
     arc = np.concatenate([[0.0], np.cumsum(h * (np.hypot(fx(m + h[:, None] * g, 1), fy(m + h[:, None] * g, 1)) @ w))])
-    X, Y = _natural(arc, fx(u)), _natural(arc, fy(u))
+    X, Y = CubicSpline(arc, fx(u), bc_type="natural"), CubicSpline(arc, fy(u), bc_type="natural")
     t = np.linspace(0.0, arc[-1], math.ceil(arc[-1] / spacing) + 1)
     k = (Y(t, 2) * X(t, 1) - X(t, 2) * Y(t, 1)) / (X(t, 1) ** 2 + Y(t, 1) ** 2) ** 1.5
     return np.column_stack([X(t), Y(t)]), float(np.abs(k).max())

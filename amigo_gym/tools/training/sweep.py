@@ -370,8 +370,6 @@ def _join(cfg: SweepConfig, study: Any) -> Any:
         theirs = study.user_attrs.get(key)
         if theirs is not None and theirs != mine:
             raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
-    if study.direction.name != "MINIMIZE":
-        raise ValueError(f"study {cfg.name!r} maximises another objective (made by an older amigo-gym)")
     return study
 
 
@@ -412,10 +410,10 @@ def _abandoned(t: Any) -> bool:
     return bool(t.state.name == "FAIL" and "run_dir" in ua and not {"fail_reason", "over_budget"} & set(ua))
 
 
-def mark_abandoned(study: Any) -> list[int]:
+def mark_abandoned(study: Any) -> None:
     """Write (or update the ``retried_as`` of) ``ABANDONED.json`` in the folder of every trial that ended FAIL
-    because its worker was stopped or killed; the numbers of the trials marked now."""
-    trials, marked = study.get_trials(deepcopy=False), []
+    because its worker was stopped or killed."""
+    trials = study.get_trials(deepcopy=False)
     for t in trials:
         ua, origin = t.user_attrs, t.system_attrs.get("failed_trial")
         if not _abandoned(t) or not Path(str(ua["run_dir"])).is_dir():
@@ -439,15 +437,6 @@ def mark_abandoned(study: Any) -> list[int]:
         doc = {"study": study.study_name, "trial": t.number, "state": "FAIL", "reason": reason, "retried_as": retries,
                "worker": ua.get("worker"), "marked": marked_at}  # fmt: skip
         atomic_write_json(path, doc)
-        marked.append(t.number)
-    return marked
-
-
-def _requeue(study: Any, trial: Any, how: str) -> None:
-    trial.set_user_attr("interrupted", how)
-    frozen = study._storage.get_trial(trial._trial_id)
-    attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
-    study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
 
 
 # --------------------------------------------------------------------------- search spaces
@@ -531,8 +520,7 @@ def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
 def _validated_trial(
     trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
 ) -> float:
-    """``fit_and_validate()``'s objective, its per-cell values stored (``validation``); an error (but a prune) or a
-    non-finite value is the trial's ``fail_reason`` (raised again / returned: Optuna marks it FAIL)."""
+    """``fit_and_validate()``'s value, cells in ``validation``; an error (not a prune) or NaN sets ``fail_reason``."""
     import optuna
 
     try:
@@ -573,7 +561,10 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any
         try:
             return _validated_trial(trial, cells, lambda: _trial(cfg, study, trial, algo, seed, run_dir, cells))
         except KeyboardInterrupt:  # queue the trial again before the worker stops
-            _requeue(study, trial, "stopped by SIGTERM or Ctrl-C")
+            trial.set_user_attr("interrupted", "stopped by SIGTERM or Ctrl-C")
+            frozen = study._storage.get_trial(trial._trial_id)
+            attrs = {"retry_of": trial.number} | ({"grid": True} if frozen.user_attrs.get("grid") is True else {})
+            study.enqueue_trial(dict(frozen.params), user_attrs=attrs, skip_if_exists=False)
             raise
 
     return objective
@@ -582,8 +573,7 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any
 def _trial(
     cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
 ) -> tuple[float, dict[str, float | None]]:
-    """One trial: the settings (base file, sampled in hyperparams mode) in ``run_dir/hyperparams.yml``, training in
-    ``run_dir/run`` with evaluations reported to the pruner (hyperparams mode), then the objective on ``cells``."""
+    """One trial: its settings in ``run_dir/hyperparams.yml``, training in ``run_dir/run``, the value on ``cells``."""
     import optuna
     import yaml
 
@@ -612,42 +602,39 @@ def _trial(
                 return False
         return True
 
-    if fast:
-        record, attrs, load = _fit_fast(cfg, study, trial, seed, hp, run_dir, report)
-    else:
-        record, attrs, load = _fit_sb3(cfg, algo, seed, run_dir, report)
+    record, attrs = (
+        _fit_fast(cfg, study, trial, seed, hp, run_dir, report) if fast else _fit_sb3(cfg, algo, seed, run_dir, report)
+    )
     for key, value in (attrs | {"wall_time_s": record["wall_time_s"]}).items():
         trial.set_user_attr(key, value)
     if pruned:
         raise optuna.TrialPruned(f"pruned at step {pruned[0]}")
-    return validate_agent(load(), cells)
+    out, manifest = run_dir / "run", run_dir / "run" / "run.json"
+    if not fast:
+        return validate_agent(load_model(find_models(out)[0]), cells)
+    verify_sha256(out / "model.zip", str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
+    return validate_agent(FastPolicy.load(out / "model.zip"), cells)
 
 
 def _fit_sb3(
     cfg: SweepConfig, algo: str, seed: int, run_dir: Path, report: Callable[..., bool]
-) -> tuple[dict[str, Any], dict[str, Any], Callable[[], Any]]:
-    """SB3 training (``amigo-gym train``) in ``run_dir/run``, every evaluation reported at its own step."""
-    env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
-    train_args = ["--algo", algo, "--seed", str(seed), "--hyperparams", str(hp_file), "--env", cfg.env_id]
-    s = Settings(
-        algo=algo,  # type: ignore[arg-type]  # an SB3 algorithm here
-        seed=seed, out=str(out), timesteps=cfg.timesteps, eval_freq=cfg.eval_freq,
-        eval_episodes=cfg.eval_episodes, checkpoint_freq=0, threads=cfg.threads, progress=False,
-        hyperparams=str(hp_file), env_id=cfg.env_id, env_kwargs=env_kwargs,
-        argv=[*train_args, "--env-kwargs", json.dumps(env_kwargs)],
-    )  # fmt: skip
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``amigo-gym train`` in ``run_dir/run``, evaluations reported at their steps; the record, the trial's attrs."""
+    argv = ["--algo", algo, "--seed", str(seed), "--out", str(run_dir / "run"), "--timesteps", str(cfg.timesteps),
+            "--eval-freq", str(cfg.eval_freq), "--eval-episodes", str(cfg.eval_episodes), "--checkpoint-freq", "0",
+            "--threads", str(cfg.threads), "--no-progress", "--hyperparams", str(run_dir / "hyperparams.yml"),
+            "--env", cfg.env_id, "--env-kwargs", json.dumps(cfg.train_env_kwargs)]  # fmt: skip
+    s = parse_settings(Settings, argv, "amigo-gym train", argv=argv)
     record = train(s, after_eval=lambda e: report(float(e.get("h_rms_m", math.nan)), int(e["timesteps"])))
     last = record.get("last_eval") or {}
     keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
-    return record, {f"last_eval_{k}": last[k] for k in keys if k in last}, lambda: load_model(find_models(out)[0])
+    return record, {f"last_eval_{k}": last[k] for k in keys if k in last}
 
 
 def _fit_fast(
     cfg: SweepConfig, study: Any, trial: Any, seed: int, hp: dict[str, Any], run_dir: Path, report: Callable[..., bool]
-) -> tuple[dict[str, Any], dict[str, Any], Callable[[], Any]]:
-    """Fast-PPO training (``amigo-gym train-fast``) in ``run_dir/run``, resumed from an abandoned trial's checkpoint
-    of the same settings; every evaluation reported at its scheduled step (a multiple of ``--eval-freq``, equal in
-    every trial whatever its batch)."""
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``amigo-gym train-fast`` in ``run_dir/run`` (resumed: :func:`_resume_fastppo`), at multiples of --eval-freq."""
     from amigo_gym.tools.training import fastppo
 
     env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
@@ -676,18 +663,11 @@ def _fit_fast(
     keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
     attrs = {f"last_eval_{k}": last[f"eval_{k}"] for k in keys if f"eval_{k}" in last}
     attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]}
-
-    def load() -> FastPolicy:
-        model, manifest = out / "model.zip", out / "run.json"
-        verify_sha256(model, str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
-        return FastPolicy.load(model)
-
-    return record, attrs, load
+    return record, attrs
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
-    """Copy into ``out`` the run files of the newest checkpoint of an abandoned FAIL trial with the same parameters and
-    settings ``s``; the trial it came from (``None``: none)."""
+    """Copy into ``out`` the newest run of an abandoned trial of these params and settings ``s``; its origin or None."""
     best: tuple[float, Any, Path] | None = None
     for t in study.get_trials(deepcopy=False):
         if t.number == trial.number or t.params != trial.params or not _abandoned(t):
@@ -766,15 +746,14 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
     }
 
 
-def write_summary(folder: Path, summary: dict[str, Any]) -> bool:
-    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials; whether it did."""
+def write_summary(folder: Path, summary: dict[str, Any]) -> None:
+    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials."""
     path = folder / "summary.json"
     with RunLock(folder, name="summary.lock", wait=60.0):
         with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
             if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
-                return False
+                return
         atomic_write_json(path, summary, parents=True)
-    return True
 
 
 # --------------------------------------------------------------------------- the winners into a YAML file
@@ -822,8 +801,7 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
 
 # --------------------------------------------------------------------------- command line
 def _spawn_workers(cfg: SweepConfig) -> list[int]:
-    """Open the study once, then run ``n_jobs`` workers of this command; their exit statuses. A stop of this process
-    stops them with ``SIGTERM`` and waits for them."""
+    """Open the study, then run ``n_jobs`` workers of this command (SIGTERM'd on a stop); their exit statuses."""
     storage = make_storage(cfg)
     open_study(cfg, storage, _worker_seed(cfg))
     storage.engine.dispose()

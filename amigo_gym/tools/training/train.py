@@ -99,12 +99,10 @@ class Settings:
                 raise ValueError(f"{name} must be one of {list(allowed)}, got {getattr(self, name)!r}")
         if not isinstance(self.env_kwargs, dict):
             raise ValueError(f"env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
-        lows = {"seed": 0, "eval_freq": 0, "checkpoint_freq": 0, "eval_episodes": 1, "threads": 1, "timesteps": 1}
-        for name, low in (lows | {"n_envs": 1}).items():
+        lows = {"seed": 0, "eval_freq": 0, "checkpoint_freq": 0, "eval_episodes": 1, "threads": 1}
+        for name, low in (lows | {"timesteps": 1, "n_envs": 1}).items():  # the last two: None is their default
             v = getattr(self, name)
-            if (v is not None or name not in ("timesteps", "n_envs")) and (
-                isinstance(v, bool) or not isinstance(v, int) or v < low
-            ):
+            if (v is not None or name in lows) and (isinstance(v, bool) or not isinstance(v, int) or v < low):
                 raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
 
 
@@ -334,22 +332,17 @@ def train(s: Settings, after_eval: AfterEvalHook | None = None) -> dict[str, Any
     return result
 
 
-def rollout_steps(model: Any) -> tuple[int, str] | None:
-    """The env steps SB3 collects between two checks of the step budget and why (``None``: episodes)."""
-    n, freq = int(model.n_envs), getattr(model, "train_freq", None)
+def planned_timesteps(model: Any, total: int) -> tuple[int, str]:
+    """The step a run of ``total`` steps ends at and why: SB3 checks the budget after whole rollouts (``n_steps``, or
+    a ``train_freq`` in steps, times ``n_envs``; episodes: at once)."""
+    done, n, freq = int(model.num_timesteps), int(model.n_envs), getattr(model, "train_freq", None)
     if hasattr(model, "n_steps"):
-        return int(model.n_steps) * n, f"n_steps {int(model.n_steps)} x {n} envs"
-    if freq is None or getattr(freq.unit, "value", None) != "step":
-        return None
-    return int(freq.frequency) * n, f"train_freq {int(freq.frequency)} x {n} envs"
-
-
-def planned_timesteps(done: int, remaining: int, rollout: tuple[int, str] | None) -> tuple[int, str]:
-    """The step a run ends at with ``done`` steps and ``remaining`` to go: the first whole rollout past the budget."""
-    if remaining <= 0 or rollout is None:
-        return done + max(remaining, 0), "" if rollout is None else rollout[1]
-    size, why = rollout
-    return done + -(-remaining // size) * size, why
+        size, why = int(model.n_steps) * n, f"n_steps {int(model.n_steps)} x {n} envs"
+    elif freq is not None and getattr(freq.unit, "value", None) == "step":
+        size, why = int(freq.frequency) * n, f"train_freq {int(freq.frequency)} x {n} envs"
+    else:
+        return max(done, total), ""
+    return done + -(-max(total - done, 0) // size) * size, why
 
 
 def _new_config(s: Settings, total: int, n_envs: int, hp_path: Path, hp: dict[str, Any]) -> dict[str, Any]:
@@ -431,7 +424,7 @@ def _train(
     venv = model.get_env()
 
     remaining = total - int(model.num_timesteps)
-    planned = planned_timesteps(int(model.num_timesteps), remaining, rollout_steps(model))
+    planned = planned_timesteps(model, total)
     if planned[0] != total:
         say(f"amigo-gym train: --timesteps {total} becomes {planned[0]} steps: SB3 trains whole rollouts "
             f"({planned[1]})")  # fmt: skip
@@ -505,12 +498,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     doc = "Train a PPO/SAC/TD3 baseline on AmigoBot-v0 or -v1."
     s = parse_settings(Settings, args, "amigo-gym train", doc, argv=args)
 
-    def run() -> int:
+    def run() -> None:
         record = train(s)
         lines = [f"{k}: {record[k]}" for k in ("algo", "seed", "timesteps", "wall_time_s")]
         if record["last_eval"]:
             lines.append(f"last eval mean reward: {record['last_eval']['mean_reward']:.2f}")
         print("\n".join(lines))
-        return 0
 
     return run_guarded(run, "amigo-gym train")
