@@ -243,7 +243,9 @@ def agent_label(name: str, algo: str | None = None) -> str:
     v1 = name.endswith("_v1") and name[:-3] in labels
     v0 = name.endswith("_v0") and name[:-3] in ALGOS
     if algo is not None and str(algo).startswith(FAST_ALGO):
-        kind = labels[name[:-3]] if v1 else "fast PPO" + (" residual" if "residual" in str(algo) else "")
+        kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
+        if v1 and labels[name[:-3]].startswith("fast PPO"):  # a variant, e.g. "fast PPO robust residual"
+            kind = labels[name[:-3]]
     elif algo in ALGOS:
         kind = f"SB3 {str(algo).upper()}"
         if v1 and labels[name[:-3]].startswith(kind):  # a variant, e.g. "SB3 TD3 low-pass"
