@@ -53,18 +53,21 @@ def test_manifest_is_complete_and_matches_the_model(manifest: Path) -> None:
 
 FAST = sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.zip"))
 RESIDUAL = sorted((pretrained_dir() / "v1" / "residual").glob("*.zip"))
+ROBUST = sorted((pretrained_dir() / "v1" / "robust_residual").glob("*.zip"))
 
 
 @pytest.mark.parametrize(
-    ("models", "algo"), [(FAST, "fastppo"), (RESIDUAL, "fastppo_residual")], ids=["fast", "residual"]
+    ("models", "algo", "seeds"),
+    [(FAST, "fastppo", 5), (RESIDUAL, "fastppo_residual", 5), (ROBUST, "fastppo_residual", 3)],
+    ids=["fast", "residual", "robust_residual"],
 )
-def test_five_seeds_of_the_fast_ppo_generalist_are_shipped(models: list[Path], algo: str) -> None:
+def test_every_seed_of_the_fast_ppo_generalists_is_shipped(models: list[Path], algo: str, seeds: int) -> None:
     docs = [json.loads(z.with_suffix(".json").read_text()) for z in models]
-    assert sorted(d["seed"] for d in docs) == [0, 1, 2, 3, 4]
+    assert sorted(d["seed"] for d in docs) == list(range(seeds))
     assert {d["algo"] for d in docs} == {algo}
 
 
-@pytest.mark.parametrize("model", FAST + RESIDUAL, ids=[z.stem for z in FAST + RESIDUAL])
+@pytest.mark.parametrize("model", FAST + RESIDUAL + ROBUST, ids=[z.stem for z in FAST + RESIDUAL + ROBUST])
 def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -> None:
     """``load_pretrained`` checks the sha256 and gives SB3's ``predict`` on a batch of raw v1 observations; the
     actions are finite and inside the action space, and deterministic: two loaded copies act alike (a policy keeps

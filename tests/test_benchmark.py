@@ -288,6 +288,7 @@ def test_default_agents_include_the_fast_ppo_generalist_labelled_apart_from_sb3s
     assert bm.agent_label("mine", "fastppo_residual") == "fast PPO residual" and bm.agent_label("x") == "model"
     assert bm.agent_label("ppo_v0") == "SB3 PPO v0 specialist" and bm.agent_label("analytic") == "classical"
     assert bm.agent_label("ppo_v1", "fastppo") == "fast PPO generalist"  # the manifest's algorithm decides
+    assert bm.agent_label("robust_residual_v1", "fastppo_residual") == "fast PPO robust residual generalist"
     # a variant of the manifest's algorithm keeps its folder's label; another algorithm's zip under it does not
     assert bm.agent_label("td3lp_v1", "td3") == "SB3 TD3 low-pass generalist"
     assert bm.agent_label("td3lp_v1", "sac") == "SB3 SAC generalist"

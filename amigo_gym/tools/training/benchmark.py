@@ -38,7 +38,12 @@ from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable
 from amigo_gym.tools.training.task_metrics import make_env as make_env
 
 #: the shipped AmigoBot-v1 generalists: folder under ``agents/pretrained/v1`` -> the label of its algorithm
-V1_AGENTS: dict[str, str] = {"td3lp": "SB3 TD3 low-pass", "ppo_fast": "fast PPO", "residual": "fast PPO residual"}
+V1_AGENTS: dict[str, str] = {
+    "td3lp": "SB3 TD3 low-pass",
+    "ppo_fast": "fast PPO",
+    "residual": "fast PPO residual",
+    "robust_residual": "fast PPO robust residual",
+}
 #: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents)
 RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
 #: target of the H-error optimality gap [m]
@@ -239,6 +244,8 @@ def agent_label(name: str, algo: str | None = None) -> str:
     v0 = name.endswith("_v0") and name[:-3] in ALGOS
     if algo is not None and str(algo).startswith(FAST_ALGO):
         kind = "fast PPO" + (" residual" if "residual" in str(algo) else "")
+        if v1 and labels[name[:-3]].startswith("fast PPO"):  # a variant, e.g. "fast PPO robust residual"
+            kind = labels[name[:-3]]
     elif algo in ALGOS:
         kind = f"SB3 {str(algo).upper()}"
         if v1 and labels[name[:-3]].startswith(kind):  # a variant, e.g. "SB3 TD3 low-pass"

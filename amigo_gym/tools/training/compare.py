@@ -45,6 +45,8 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         "ppo_fast": " (amigo-gym train-fast; a numpy policy)",
         "residual": " (amigo-gym train-fast --residual-bound: a bounded learned correction of the analytic"
         " controller's command; a numpy policy)",
+        "robust_residual": " (the residual trained over delays to 0.3 s, wheels and track ±7 % and noise; a numpy"
+        " policy)",
     }
     out = []
     for name in dict.fromkeys(names):
