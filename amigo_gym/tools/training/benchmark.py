@@ -529,6 +529,11 @@ def unavailable_lines(unavailable: Sequence[Mapping[str, Any]]) -> list[str]:
     return out
 
 
+def plot_scenarios(doc: Mapping[str, Any], path: Path, reps: int = 2_000, seed: int = 0) -> None:
+    """:func:`scenarios_figure` saved as PNG (the evaluation notebook draws it)."""
+    save_figure(scenarios_figure(doc, reps, seed), path)
+
+
 def scenarios_figure(doc: Mapping[str, Any], reps: int = 2_000, seed: int = 0) -> Any:
     """Per-scenario bars of H RMS (mean over training seeds, 95 % bootstrap interval), log scale."""
     plt = pyplot()
@@ -577,7 +582,7 @@ def plot_profiles(doc: Mapping[str, Any], path: Path) -> None:
 
 def plot_all(doc: Mapping[str, Any], folder: Path) -> list[str]:
     """Draw ``benchmark_scenarios.png`` and ``benchmark_profiles.png`` into ``folder``; their names."""
-    save_figure(scenarios_figure(doc, seed=int(doc["protocol"]["bootstrap_seed"])), folder / "benchmark_scenarios.png")
+    plot_scenarios(doc, folder / "benchmark_scenarios.png", seed=int(doc["protocol"]["bootstrap_seed"]))
     plot_profiles(doc, folder / "benchmark_profiles.png")
     return ["benchmark_scenarios.png", "benchmark_profiles.png"]
 
