@@ -410,42 +410,58 @@ def place(
 
 
 def nearest_sample(pv: FlatPath, x: float, y: float, j0: float, count: int) -> float:
-    """``s = j h`` [m] of the coarse sample nearest to ``(x, y)`` among ``j = j0 + k``, ``k < count`` (a closed path
-    reads sample ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum wins (the first NaN if any, as
-    ``np.argmin``)."""
+    """``s = j h`` [m] of the coarse sample nearest to ``(x, y)`` among ``j = j0 + k``, ``k < count`` (``count >= 1``;
+    a closed path reads sample ``j mod m``, an open one ``clip(j, 0, m - 1)``); the first minimum wins (the first NaN
+    if any, as ``np.argmin``). The samples read are runs of consecutive ones, each scanned by :func:`nearest_in_run`:
+    an open path's clipped repeats are equal to the first, which wins."""
     h = pv[P_SPACING]
     n = int(pv[P_N])
     m = int(pv[P_M])
     sx = P_TAIL + 6 * n
-    sy = sx + m
-    closed = pv[P_CLOSED] != 0.0
     m_f = float(m)
-    top = m_f - 1.0
-    # below 2^53 the sample numbers are exact whole numbers: j mod m steps by one
-    stepping = abs(j0) + float(count) < 9007199254740992.0
-    idx = int(j0 % m_f) if closed else 0
-    best = 0.0
-    best_j = 0.0
-    for k in range(count):
-        jj = j0 + float(k)
-        if closed:
-            if k > 0:
-                if stepping:
-                    idx += 1
-                    if idx == m:
-                        idx = 0
-                else:
-                    idx = int(jj % m_f)
-        else:
-            jj = min(max(jj, 0.0), top)
-            idx = int(jj)
-        ddx = pv[sx + idx] - x
-        ddy = pv[sy + idx] - y
+    if pv[P_CLOSED] == 0.0:
+        top = m_f - 1.0
+        i0 = int(min(max(j0, 0.0), top))
+        i1 = int(min(max(j0 + float(count - 1), 0.0), top)) + 1
+        return float(nearest_in_run(pv, sx, sx + m, x, y, i0, i1, math.inf, i0)[1]) * h
+    if abs(j0) + float(count) >= 9007199254740992.0:  # beyond 2^53 the sample numbers are not whole: one by one
+        best = math.inf
+        best_j = j0
+        for k in range(count):
+            jj = j0 + float(k)
+            idx = int(jj % m_f)
+            best, at = nearest_in_run(pv, sx, sx + m, x, y, idx, idx + 1, best, -1)
+            best_j = jj if at >= 0 else best_j
+        return best_j * h
+    # j mod m steps by one: runs from j0 mod m to the end of the samples, then from 0
+    i0 = int(j0 % m_f)
+    best = math.inf
+    best_k = 0
+    k = 0
+    while k < count:
+        i1 = min(m, i0 + count - k)
+        best, at = nearest_in_run(pv, sx, sx + m, x, y, i0, i1, best, -1)
+        best_k = k + at - i0 if at >= 0 else best_k
+        k += i1 - i0
+        i0 = 0
+    return (j0 + float(best_k)) * h
+
+
+def nearest_in_run(
+    pv: FlatPath, sx: int, sy: int, x: float, y: float, i0: int, i1: int, best: float, at: int
+) -> tuple[float, int]:
+    """``(best, at)`` after the samples ``i0 <= i < i1`` (``pv[sx + i]``, ``pv[sy + i]``): a squared distance to
+    ``(x, y)`` below ``best``, or the first NaN, replaces ``best`` and ``at`` by it and its ``i``."""
+    xs = pv[sx + i0 : sx + i1]  # indexed from 0: no negative index to wrap
+    ys = pv[sy + i0 : sy + i1]
+    for j in range(len(xs)):
+        ddx = xs[j] - x
+        ddy = ys[j] - y
         d2 = ddx * ddx + ddy * ddy
-        if k == 0 or d2 < best or (d2 != d2 and best == best):
+        if d2 < best or (d2 != d2 and best == best):
             best = d2
-            best_j = jj
-    return best_j * h
+            at = i0 + j
+    return best, at
 
 
 def locate_flat(

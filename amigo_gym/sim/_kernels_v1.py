@@ -228,7 +228,7 @@ def _path_nodes(c: F64) -> int:
     return nodes
 
 
-@_jit
+@_jit_inline
 def pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, float, float]:
     """:func:`amigo_gym.paths.clothoid.pose_flat`: ``(x, y, theta, kappa, curvature_rate, cos theta, sin theta)`` at
     the arc length ``s`` [m]."""
