@@ -7,6 +7,7 @@ are equal."""
 
 from __future__ import annotations
 
+import os
 import pickle
 import subprocess
 import sys
@@ -185,6 +186,29 @@ def test_parallel_twin_equals_serial() -> None:
         a = _actions(rng, n)
         r = [e.step(a) for e in envs]
         _equal_results(r[0], r[1], f"step {t}", exact=True)
+
+
+_WAIT_SCRIPT = """
+import os, gymnasium as gym, numpy as np, numba, amigo_gym
+e = gym.make_vec("AmigoBot-v0", 8, vectorization_mode="vector_entry_point", kernel="numba-parallel")
+e.reset(seed=0)
+e.step(np.zeros((8, 2)))
+print("layer", numba.threading_layer(), "env", os.environ.get("OMP_WAIT_POLICY"))
+"""
+
+
+@pytest.mark.parametrize("given", [None, "ACTIVE"])
+def test_parallel_threads_wait_passively(given: str | None) -> None:
+    """The parallel kernel's OpenMP threads sleep between steps (``OMP_WAIT_POLICY=PASSIVE``, as libgomp itself
+    reports it with ``OMP_DISPLAY_ENV``) unless the user set the policy; spinning threads made a 2-thread step 8-10x
+    slower than one thread on a busy 2-core machine (docs/performance.md)."""
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    env |= {"OMP_DISPLAY_ENV": "TRUE", "NUMBA_NUM_THREADS": "2"} | ({"OMP_WAIT_POLICY": given} if given else {})
+    out = subprocess.run([sys.executable, "-c", _WAIT_SCRIPT], env=env, capture_output=True, text=True, check=True)
+    want = given or "PASSIVE"
+    assert f"env {want}" in out.stdout
+    if "layer omp" in out.stdout:  # libgomp read the policy when numba started its threads
+        assert f"OMP_WAIT_POLICY = '{want}'" in out.stdout + out.stderr
 
 
 @pytest.mark.parametrize("path", ["circle", "manoeuvre"])

@@ -70,6 +70,13 @@ def use_fast_path(requested: bool | None = None) -> bool:
     return False
 
 
+def wait_passively() -> None:
+    """``OMP_WAIT_POLICY=PASSIVE`` unless it is set: numba's OpenMP threads, which read it when numba starts them (the
+    first parallel call or ``numba.set_num_threads``), then sleep between calls instead of spinning against the
+    calling thread. Call it before either."""
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+
 #: the one line printed (stderr) when numba starts compiling a kernel of this package in this process
 COMPILE_NOTICE = (
     "amigo_gym: compiling the numba step (once per install, up to about 20 s; "

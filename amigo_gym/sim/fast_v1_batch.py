@@ -95,13 +95,15 @@ class PathArena:
 class BatchKernel:
     """The compiled step of ``n`` robots: constants :attr:`consts`, paths :attr:`arena`, the block :attr:`ws`
     ``(len(Rows._fields), n)`` (:attr:`rows` names its rows) and the episodes' keys :attr:`keys`; ``parallel`` runs
-    the loops on numba's threads (the same results)."""
+    the loops on numba's threads (the same results; :func:`amigo_gym.sim.fast_v1.wait_passively`)."""
 
     def __init__(self, k: tracking.Constants, n: int, parallel: bool = False) -> None:
         self._k = k
         self._row = fast_v1.StepKernel(k)
         self.consts: Array = self._row.consts
         self.parallel = parallel
+        if parallel:
+            fast_v1.wait_passively()
         self.arena = PathArena(n)
         self.ws: Array = np.zeros((len(layout_v1.Rows._fields), n))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
