@@ -263,7 +263,9 @@ class FastPolicy(Policy):
 
     def __repr__(self) -> str:
         s = self.spec
-        return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
+        gain = f", residual_gain={s.residual_gain:g}" if s.residual_bound > 0 else ""
+        bound = f"residual_bound={s.residual_bound:g}"
+        return f"FastPolicy(history={s.history}, {bound}, filter_alpha={s.filter_alpha:g}{gain})"
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
