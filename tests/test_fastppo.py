@@ -397,10 +397,12 @@ def test_env_action_residual_stays_within_bound_and_filter_limits_change() -> No
     np.testing.assert_allclose(f, prev + 0.25 * (np.clip(u, -1, 1) - prev))
 
 
-def test_residual_policy_in_an_env_stays_within_its_bound_of_the_analytic_action() -> None:
+@pytest.mark.parametrize("gain", [1.0, 1.8])
+def test_residual_policy_in_an_env_stays_within_its_bound_of_the_analytic_action(gain: float) -> None:
     """A residual network with huge random weights (saturated output) in real episodes: every action within
-    0.2 of the analytic controller's, computed independently with its own integral state."""
-    spec = FeatureSpec({"path": "circle", "randomize": {"delay": [0.0, 0.2]}}, history=2, residual_bound=0.2)
+    0.2 of the analytic controller's of gain ``residual_gain``, computed independently with its own integral state."""
+    kw = {"path": "circle", "randomize": {"delay": [0.0, 0.2]}}
+    spec = FeatureSpec(kw, history=2, residual_bound=0.2, residual_gain=gain)
     dim = FeatureBuilder(spec).dim
     rng = np.random.default_rng(5)
     layers = [
@@ -408,7 +410,7 @@ def test_residual_policy_in_an_env_stays_within_its_bound_of_the_analytic_action
         (rng.normal(scale=30, size=(8, 2)), np.zeros(2)),
     ]
     pol = FastPolicy(spec, layers, np.zeros(2), RunningMeanStd.zeros(dim))
-    ref = AnalyticTrackingPolicy(spec.params())
+    ref = AnalyticTrackingPolicy(spec.params(), gain=gain)
     env = gym.make_vec("AmigoBot-v1", num_envs=4, path="circle", randomize={"delay": [0.0, 0.2]})
     obs, _ = env.reset(seed=[0, 1, 2, 3])
     starts = np.ones(4, bool)
@@ -421,6 +423,8 @@ def test_residual_policy_in_an_env_stays_within_its_bound_of_the_analytic_action
         starts = te | tr
     env.close()
     assert 0.15 < worst <= 0.2 + 1e-6
+    with pytest.raises(ValueError, match=r"FeatureSpec.residual_gain must be a finite number in \(0, 10\], got 12.0"):
+        FeatureSpec(kw, residual_bound=0.2, residual_gain=12.0)
 
 
 # --------------------------------------------------------------------------- load_pretrained

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.io import atomic_save, require_trust, sha256_file
 from amigo_gym.model.params import check_range
 from amigo_gym.policies.base import Fields, Policy
-from amigo_gym.policies.tracking import AnalyticTrackingPolicy
+from amigo_gym.policies.tracking import DEFAULT_TRACKING_GAIN, AnalyticTrackingPolicy
 from amigo_gym.task.v1 import TrackingParams, make_tracking_params
 
 Array = NDArray[np.float64]
@@ -77,13 +77,15 @@ class RunningMeanStd:
 @dataclass(frozen=True)
 class FeatureSpec:
     """What the network observes and how its output becomes an action (module docstring): the training task's
-    ``gym.make`` keywords ``env_kwargs``, ``history`` in [0, 20], ``residual_bound`` in [0, 2] (0: no residual) and
-    ``filter_alpha`` in (0, 1] (1: no filter)."""
+    ``gym.make`` keywords ``env_kwargs``, ``history`` in [0, 20], ``residual_bound`` in [0, 2] (0: no residual),
+    ``filter_alpha`` in (0, 1] (1: no filter) and ``residual_gain``, the analytic base's gain ``k`` [1/s] in
+    (0, 1/dt]."""
 
     env_kwargs: Mapping[str, Any]
     history: int = 0
     residual_bound: float = 0.0
     filter_alpha: float = 1.0
+    residual_gain: float = DEFAULT_TRACKING_GAIN
 
     def __post_init__(self) -> None:
         o = "FeatureSpec"
@@ -94,7 +96,7 @@ class FeatureSpec:
         check_range(o, "filter_alpha", self.filter_alpha, 0.0, 1.0, low_open=True)
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
-        self.params()
+        check_range(o, "residual_gain", self.residual_gain, 0.0, 1.0 / self.params().dt, low_open=True)
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
@@ -113,7 +115,7 @@ class FeatureBuilder:
         self.obs_dim = len(names)
         self._hist_idx = np.array([names.index(f) for f in HISTORY_FIELDS])
         self._prev_idx = np.array([names.index("previous_command_1"), names.index("previous_command_2")])
-        self.analytic = AnalyticTrackingPolicy(p) if spec.residual_bound > 0 else None
+        self.analytic = AnalyticTrackingPolicy(p, spec.residual_gain) if spec.residual_bound > 0 else None
         h = spec.history
         self.dim = self.obs_dim + h * len(HISTORY_FIELDS) + (2 if self.analytic is not None else 0)
         self.state_dim = 1 + h * len(HISTORY_FIELDS)
@@ -261,7 +263,9 @@ class FastPolicy(Policy):
 
     def __repr__(self) -> str:
         s = self.spec
-        return f"FastPolicy(history={s.history}, residual_bound={s.residual_bound:g}, filter_alpha={s.filter_alpha:g})"
+        gain = f", residual_gain={s.residual_gain:g}" if s.residual_bound > 0 else ""
+        bound = f"residual_bound={s.residual_bound:g}"
+        return f"FastPolicy(history={s.history}, {bound}, filter_alpha={s.filter_alpha:g}{gain})"
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:

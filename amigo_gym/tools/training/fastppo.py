@@ -91,7 +91,7 @@ _RANGES = {
     "vf_coef": "[0, 10]", "max_grad_norm": "(0, 100]", "log_std_init": "[-5, 1]", "caps_temporal": "[0, 100]",
     "caps_spatial": "[0, 100]", "caps_sigma": "(0, 10]", "residual_penalty": "[0, 100]", "nominal_fraction": "[0, 1)",
     "curriculum_max_curvature": "[0, 100]", "curriculum_max_curvature_rate": "[0, 1000]",
-    "curriculum_fraction": "(0, 1]",
+    "curriculum_fraction": "(0, 1]", "residual_gain": "(0, 10]",
 }  # fmt: skip
 
 
@@ -119,6 +119,7 @@ class FastPPOSettings:
         history: previous steps of commands and measurements in the features [steps].
         residual_bound: bound of the learned correction to the analytic action [normalised action units]; 0: none.
         residual_penalty: weight of the L2 penalty on the residual's mean correction [-]; needs residual_bound > 0.
+        residual_gain: feedback gain k [1/s] of the residual's analytic base, at most 1/dt (the analytic policy's 1).
         nominal_fraction: share of the N robots simulated as the nominal robot [-].
         filter_alpha: low-pass factor of the action parameterisation [-]; 1: none.
         caps_temporal: CAPS temporal smoothness weight [-].
@@ -160,6 +161,7 @@ class FastPPOSettings:
     history: int = 0
     residual_bound: float = 0.0
     residual_penalty: float = 0.0
+    residual_gain: float = 1.0
     nominal_fraction: float = 0.0
     filter_alpha: float = 1.0
     caps_temporal: float = 0.0
@@ -226,7 +228,7 @@ class FastPPOSettings:
         return start, {**start, "max_curvature": k_end, "max_curvature_rate": float(c_end)}
 
     def spec(self) -> FeatureSpec:
-        return FeatureSpec(self.env_kwargs, self.history, self.residual_bound, self.filter_alpha)
+        return FeatureSpec(self.env_kwargs, self.history, self.residual_bound, self.filter_alpha, self.residual_gain)
 
     def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "hidden": list(self.hidden), "env_kwargs": dict(self.env_kwargs)}
