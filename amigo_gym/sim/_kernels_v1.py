@@ -792,6 +792,32 @@ def restart_rows(
         fill_record(rec[j], smooth_weight)
 
 
+def _call_double_typing(typingctx: Any, fn: Any, state: Any) -> Any:
+    if not (isinstance(fn, numba.types.Integer) and isinstance(state, numba.types.Integer)):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        void_p = llvm_ir.IntType(8).as_pointer()
+        f = builder.inttoptr(args[0], llvm_ir.FunctionType(llvm_ir.DoubleType(), [void_p]).as_pointer())
+        return builder.call(f, [builder.inttoptr(args[1], void_p)])
+
+    return numba.types.float64(fn, state), codegen
+
+
+#: ``_call_double(fn, state)``: the C function ``double (*)(void *)`` at the address ``fn`` called with the pointer
+#: ``state`` (both int64, run-time values: a bit generator's ``ctypes.next_double`` and ``ctypes.state_address``)
+_call_double: Any = intrinsic(_call_double_typing)
+
+
+@_jit
+def draw_uniforms(ptrs: NDArray[np.int64], out: F64) -> None:
+    """``out[j] = 2 random(3) - 1`` of the bit generator ``j`` of ``ptrs (2, m)`` (its ``next_double`` and state
+    addresses), as ``Generator.random(out=out[j])`` then ``out *= 2; out -= 1``: the same bits and states after."""
+    for j in range(out.shape[0]):
+        for q in range(3):
+            out[j, q] = _call_double(ptrs[0, j], ptrs[1, j]) * 2.0 - 1.0
+
+
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
