@@ -423,7 +423,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         ptrs = self._draw_ptrs
         for i in idx[ptrs[0, idx] == 0].tolist():  # addresses of the generators not yet drawn from
             c = self._rng(i).bit_generator.ctypes
-            ptrs[:, i] = (ctypes.cast(c.next_double, ctypes.c_void_p).value, c.state_address)
+            ptrs[:, i] = (ctypes.cast(c.next_double, ctypes.c_void_p).value or 0, c.state_address)
         u_all = np.empty((len(idx), 3))
         fast_v1.kernels().draw_uniforms(ptrs[:, idx], u_all)
         return u_all
