@@ -462,19 +462,14 @@ def test_compiled_start_draws_equal_the_generators() -> None:
     """The restarts' compiled draws (``draw_uniforms``) are ``2 Generator.random(3) - 1`` bit for bit and leave each
     generator in the same state (one with a buffered 32-bit half included); a reseeded row draws from its new
     generator."""
-    import ctypes
-
     from gymnasium.utils import seeding
 
     gens, refs = ([seeding.np_random(s)[0] for s in range(4)] for _ in range(2))
     for g in (gens[1], refs[1]):
         g.random(dtype=np.float32)
-    addr = [
-        (ctypes.cast(g.bit_generator.ctypes.next_double, ctypes.c_void_p).value, g.bit_generator.ctypes.state_address)
-        for g in gens
-    ]
+    addr = np.array([g.bit_generator.ctypes.bit_generator.value for g in gens], dtype=np.int64)
     out, want = np.empty((4, 3)), np.empty((4, 3))
-    fast_v1.kernels().draw_uniforms(np.array(addr, dtype=np.int64).T.copy(), out)
+    fast_v1.kernels().draw_uniforms(addr, out)
     for j, g in enumerate(refs):
         g.random(out=want[j])
     want *= 2.0

@@ -48,6 +48,9 @@ _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWA
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
+#: ``(BitGenerator.capsule, b"BitGenerator") -> int``: its ``bitgen_t`` address (as ``.ctypes.bit_generator``, faster)
+_capsule_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+_capsule_pointer.restype, _capsule_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
 
 #: bytes per robot besides the command ring, the trail and the paths
 ROW_BYTES = 3200
@@ -160,8 +163,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.observation_space = batch_space(obs_space, n)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
-        #: each generator's bit generator: its ``next_double`` and state addresses (0: not yet; :meth:`_draw_starts`)
-        self._draw_ptrs = np.zeros((2, n), dtype=np.int64)
+        #: each generator's ``bitgen_t`` address (0: not yet; :meth:`_draw_starts`)
+        self._draw_ptrs = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
         self._trail: Array | None = None  # H's trail: a ring (trail_length, N, 2), allocated when first written
@@ -234,7 +237,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         for i in idx.tolist():
             if seeds[i] is not None:
                 self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
-                self._draw_ptrs[:, i] = 0
+                self._draw_ptrs[i] = 0
         self._autoreset[idx] = False
         obs, infos = self._reset_rows(idx, pose_opt)
         self._obs = self._obs.copy()
@@ -421,11 +424,10 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def _draw_starts(self, idx: NDArray[np.intp]) -> Array:
         # uniform(-1, 1, 3) of each row's generator, -1 + 2 random(3) (numpy's formula, the same bits), (m, 3)
         ptrs = self._draw_ptrs
-        for i in idx[ptrs[0, idx] == 0].tolist():  # addresses of the generators not yet drawn from
-            c = self._rng(i).bit_generator.ctypes
-            ptrs[:, i] = (ctypes.cast(c.next_double, ctypes.c_void_p).value or 0, c.state_address)
+        for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
+            ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0
         u_all = np.empty((len(idx), 3))
-        fast_v1.kernels().draw_uniforms(ptrs[:, idx], u_all)
+        fast_v1.kernels().draw_uniforms(ptrs[idx], u_all)
         return u_all
 
     def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
@@ -592,7 +594,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self._draw_ptrs = np.zeros((2, self.num_envs), dtype=np.int64)  # the generators are new objects
+        self._draw_ptrs = np.zeros(self.num_envs, dtype=np.int64)  # the generators are new objects
         if self._batch is not None:  # the state columns are views of the block's rows again
             self._state = self._state_views(np.asarray(self._state.steps))
         elif fast_v1.use_fast_path(None):
