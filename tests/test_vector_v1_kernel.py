@@ -456,3 +456,30 @@ def test_ideal_blocks_equal_the_row_step(path: str, n: int) -> None:
                 np.testing.assert_allclose(x, r[1][4][key], rtol=1e-12, atol=1e-12, err_msg=f"step {t}: {key}")
         ended += int((r[0][2] | r[0][3]).sum())
     assert ended > 0
+
+
+def test_compiled_start_draws_equal_the_generators() -> None:
+    """The restarts' compiled draws (``draw_uniforms``) are ``2 Generator.random(3) - 1`` bit for bit and leave each
+    generator in the same state (one with a buffered 32-bit half included); a reseeded row draws from its new
+    generator."""
+    from gymnasium.utils import seeding
+
+    gens, refs = ([seeding.np_random(s)[0] for s in range(4)] for _ in range(2))
+    for g in (gens[1], refs[1]):
+        g.random(dtype=np.float32)
+    addr = np.array([g.bit_generator.ctypes.bit_generator.value for g in gens], dtype=np.int64)
+    out, want = np.empty((4, 3)), np.empty((4, 3))
+    fast_v1.kernels().draw_uniforms(addr, out)
+    for j, g in enumerate(refs):
+        g.random(out=want[j])
+    want *= 2.0
+    want -= 1.0
+    assert out.tobytes() == want.tobytes()
+    assert [g.bit_generator.state for g in gens] == [g.bit_generator.state for g in refs]
+    assert [g.random() for g in gens] == [g.random() for g in refs]
+    env = gym.make_vec("AmigoBot-v0", 3, vectorization_mode="vector_entry_point", kernel="numba")
+    assert env.unwrapped._template is not None  # the restarts of one fixed path (the compiled draws)
+    env.reset(seed=1)
+    again = env.reset(seed=2)[0]
+    fresh = gym.make_vec("AmigoBot-v0", 3, vectorization_mode="vector_entry_point", kernel="numba")
+    assert again.tobytes() == fresh.reset(seed=2)[0].tobytes()

@@ -4,6 +4,7 @@ with its own path, speed, true robot, slip, delay and noise. For the same seeds 
 
 from __future__ import annotations
 
+import ctypes
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -47,6 +48,9 @@ _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWA
 
 
 _np_count_nonzero = np.count_nonzero  # any() of a bool mask, faster than ndarray.any for a few robots
+#: ``(BitGenerator.capsule, b"BitGenerator") -> int``: its ``bitgen_t`` address (as ``.ctypes.bit_generator``, faster)
+_capsule_pointer = ctypes.pythonapi.PyCapsule_GetPointer
+_capsule_pointer.restype, _capsule_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
 
 #: bytes per robot besides the command ring, the trail and the paths
 ROW_BYTES = 3200
@@ -159,6 +163,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.observation_space = batch_space(obs_space, n)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
+        #: each generator's ``bitgen_t`` address (0: not yet; :meth:`_draw_starts`)
+        self._draw_ptrs = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
         self._trail: Array | None = None  # H's trail: a ring (trail_length, N, 2), allocated when first written
@@ -231,6 +237,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         for i in idx.tolist():
             if seeds[i] is not None:
                 self._rngs[i], self._seeds[i] = seeding.np_random(seeds[i])
+                self._draw_ptrs[i] = 0
         self._autoreset[idx] = False
         obs, infos = self._reset_rows(idx, pose_opt)
         self._obs = self._obs.copy()
@@ -374,14 +381,10 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             assert self._template_row is not None
             paths: list[Any] = [fixed] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            # uniform(-1, 1, 3) of each row's generator: -1 + 2 random(3), numpy's own formula (the same bits)
-            u_all = np.empty((m, 3))
-            rngs, infos = self._rngs, self.path_infos
-            for j, i in enumerate(rows):
+            infos = self.path_infos
+            for i in rows:
                 infos[i] = dict(info)
-                (rngs[i] or self._rng(i)).random(out=u_all[j])
-            u_all *= 2.0
-            u_all -= 1.0
+            u_all = self._draw_starts(idx)
             if pose_opt is None:  # the start states and their evaluation in one compiled call
                 self._goal[idx] = tracking.goal_point(k.params, fixed)
                 return self._started(idx, b.restart(rows, fixed, self._template_row, u_all, obs), None, template)
@@ -417,6 +420,15 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         if template is None:
             self.paths.replace(idx, paths)
         return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
+
+    def _draw_starts(self, idx: NDArray[np.intp]) -> Array:
+        # uniform(-1, 1, 3) of each row's generator, -1 + 2 random(3) (numpy's formula, the same bits), (m, 3)
+        ptrs = self._draw_ptrs
+        for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
+            ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0
+        u_all = np.empty((len(idx), 3))
+        fast_v1.kernels().draw_uniforms(ptrs[idx], u_all)
+        return u_all
 
     def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
         # the rows' columns (_set_rows) and their start records: the command being executed, no slip
@@ -582,6 +594,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
+        self._draw_ptrs = np.zeros(self.num_envs, dtype=np.int64)  # the generators are new objects
         if self._batch is not None:  # the state columns are views of the block's rows again
             self._state = self._state_views(np.asarray(self._state.steps))
         elif fast_v1.use_fast_path(None):

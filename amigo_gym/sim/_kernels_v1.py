@@ -792,6 +792,34 @@ def restart_rows(
         fill_record(rec[j], smooth_weight)
 
 
+def _next_double_typing(typingctx: Any, bitgen: Any) -> Any:
+    if not isinstance(bitgen, numba.types.Integer):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        void_p = llvm_ir.IntType(8).as_pointer()
+        fn_t = llvm_ir.FunctionType(llvm_ir.DoubleType(), [void_p])
+        base = builder.inttoptr(args[0], void_p.as_pointer())  # bitgen_t: state, next_uint64, _uint32, _double
+        fn = builder.bitcast(builder.load(builder.gep(base, [llvm_ir.IntType(32)(3)])), fn_t.as_pointer())
+        return builder.call(fn, [builder.load(base)])
+
+    return numba.types.float64(bitgen), codegen
+
+
+#: ``_next_double(bitgen)``: ``next_double(state)`` of numpy's ``bitgen_t`` at the address ``bitgen`` (int64, a
+#: run-time value: ``BitGenerator.ctypes.bit_generator``, the pointer of ``BitGenerator.capsule``)
+_next_double: Any = intrinsic(_next_double_typing)
+
+
+@_jit
+def draw_uniforms(bitgens: NDArray[np.int64], out: F64) -> None:
+    """``out[j] = 2 random(3) - 1`` of the bit generator at ``bitgens[j]`` (``bitgen_t`` addresses, ``(m,)``), as
+    ``Generator.random(out=out[j])`` then ``out *= 2; out -= 1``: the same bits and states after."""
+    for j in range(out.shape[0]):
+        for q in range(3):
+            out[j, q] = _next_double(bitgens[j]) * 2.0 - 1.0
+
+
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
 step_rows = _jit(_twin(_step_rows, "step_rows"))
 step_rows_parallel = _jit_parallel(_twin(_step_rows, "step_rows_parallel"))
