@@ -77,6 +77,14 @@ def wait_passively() -> None:
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
+def set_threads(n: int) -> None:
+    """``numba.set_num_threads(n)`` after :func:`wait_passively` (it starts numba's threads)."""
+    wait_passively()
+    import numba
+
+    numba.set_num_threads(n)
+
+
 #: the one line printed (stderr) when numba starts compiling a kernel of this package in this process
 COMPILE_NOTICE = (
     "amigo_gym: compiling the numba step (once per install, up to about 20 s; "

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from amigo_gym.io import atomic_write_json
 from amigo_gym.model.kinematics import body_velocity, body_velocity_columns, castor_rate_columns, step_pose
 from amigo_gym.model.params import RobotParams
-from amigo_gym.sim.fast_v1 import numba_available, wait_passively
+from amigo_gym.sim.fast_v1 import numba_available, set_threads
 from amigo_gym.sim.fast_v1_batch import BatchKernel
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.bench import fmt, md_table, measure_many
@@ -230,8 +230,7 @@ def run(s: CoreSettings) -> int:
         import numba
 
         if s.threads is not None:
-            wait_passively()
-            numba.set_num_threads(s.threads)
+            set_threads(s.threads)
         threads = int(numba.get_num_threads())
     print(f"{machine_line()}; median of {repeats} repeats", flush=True)
     say(f"{PROG}: sizes {sizes}")

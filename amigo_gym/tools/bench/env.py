@@ -19,7 +19,7 @@ import gymnasium as gym
 from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
 
 from amigo_gym.io import atomic_write_json
-from amigo_gym.sim.fast_v1 import numba_available, wait_passively
+from amigo_gym.sim.fast_v1 import numba_available, set_threads
 from amigo_gym.tools.bench import fmt, load_average, md_table, stepper, time_envs
 from amigo_gym.tools.machine import cpu_model, machine_line, simd_level
 from amigo_gym.tools.options import check_fields, missing_modules, run_command, say
@@ -460,8 +460,7 @@ def run(s: EnvSettings) -> int:
         import numba
 
         check_fields(PROG, s, threads=(1, int(getattr(numba.config, "NUMBA_NUM_THREADS", 1))))  # numba's pool
-        wait_passively()
-        numba.set_num_threads(s.threads)
+        set_threads(s.threads)
     doc: Doc = dict.fromkeys(("machine", "single", "vector", "fixed_cost_n1", "memory", "ppo", "v1", "kernels"))
     doc |= {"vector": [], "ppo": [], "kernels": [], "targets": [], "notes": []}
     start = load_average()

@@ -43,7 +43,7 @@ from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_t
 from amigo_gym.model.params import check_range
 from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
-from amigo_gym.sim.fast_v1 import wait_passively
+from amigo_gym.sim.fast_v1 import set_threads
 from amigo_gym.task import v1 as tracking
 from amigo_gym.tools.machine import cpu_model
 from amigo_gym.tools.options import (
@@ -661,8 +661,7 @@ def train(
     out, say = Path(out), log or (lambda _msg: None)
     with _run_folder(s, out, resume) as (device, stop_request):
         if numba is not None:  # first: starting numba's threads resets torch's count
-            wait_passively()
-            numba.set_num_threads(s.env_threads)
+            set_threads(s.env_threads)
         torch.set_num_threads(s.threads)
         builder = FeatureBuilder(s.spec())
         r = _load_checkpoint(out / "checkpoint.pt", s, builder, device) if resume else _new_run(s, builder, device)
