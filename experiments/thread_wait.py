@@ -1,10 +1,11 @@
 """The vector env's step on numba's threads under the OpenMP wait policy the caller sets: wall and process CPU time.
 
-    NUMBA_NUM_THREADS=2 [OMP_WAIT_POLICY=ACTIVE|PASSIVE] python experiments/thread_wait.py AmigoBot-v0 16384 2
+    NUMBA_NUM_THREADS=2 [OMP_WAIT_POLICY=ACTIVE|PASSIVE] python experiments/thread_wait.py AmigoBot-v0 16384 2 [work] [training]
 
-Arguments: env id, N, threads (1: ``kernel="numba"``; more: ``"numba-parallel"``). Each step is followed by about
-200 µs of numpy work in the calling thread (where a learner would run), the time when spinning workers compete with
-it. Prints the least wall time per step over 3 repeats, the process CPU time of that repeat, the threading layer and
+Arguments: env id, N, threads (1: ``kernel="numba"``; more: ``"numba-parallel"``), then optionally ``work`` 1 or 0
+(default 1: each step is followed by about 200 µs of numpy work in the calling thread, where a learner would run, the
+time when spinning workers compete with it; 0: the step alone, for the scaling with threads) and ``training``
+(AmigoBot-v1 with the training distribution's ``env_kwargs``, ``benchmark.TRAINING_DISTRIBUTION``). Prints the least wall time per step over 3 repeats, the process CPU time of that repeat, the threading layer and
 the wait policy libgomp was given (the env sets PASSIVE unless the caller set one), and the CPU.
 """
 
@@ -22,8 +23,14 @@ import amigo_gym  # noqa: F401
 from amigo_gym.tools.machine import cpu_model
 
 env_id, n, threads = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+work = len(sys.argv) < 5 or sys.argv[4] != "0"
+kwargs = {}
+if "training" in sys.argv[5:]:
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+
+    kwargs = dict(TRAINING_DISTRIBUTION["env_kwargs"])
 kernel = "numba-parallel" if threads > 1 else "numba"
-env = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", kernel=kernel)
+env = gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", kernel=kernel, **kwargs)
 env.reset(seed=0)
 numba.set_num_threads(threads)
 actions = [np.random.default_rng(k).uniform(-1, 1, (n, 2)).astype(np.float32) for k in range(8)]
@@ -35,11 +42,12 @@ for _ in range(3):
     w0, c0 = time.perf_counter(), time.process_time()
     for k in range(steps):
         env.step(actions[k % 8])
-        np.sin(np.arange(20000.0)).sum()  # the caller's own work between steps
+        if work:
+            np.sin(np.arange(20000.0)).sum()  # the caller's own work between steps
     w, c = (time.perf_counter() - w0) / steps, (time.process_time() - c0) / steps
     best = min(best, (w, c))
 wait = os.environ.get("OMP_WAIT_POLICY", "default")
 print(
-    f"{env_id} N={n} threads={threads} layer={numba.threading_layer()} OMP_WAIT_POLICY={wait}: "
+    f"{env_id}{' training' if kwargs else ''} N={n} threads={threads} work={int(work)} layer={numba.threading_layer()} OMP_WAIT_POLICY={wait}: "
     f"wall {best[0] * 1e6:.0f} us, CPU {best[1] * 1e6:.0f} us a step; {cpu_model()}, load {os.getloadavg()[0]:.1f}"
 )
