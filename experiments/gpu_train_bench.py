@@ -10,9 +10,10 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
 
 1. the machine: CPU name, CPUs, torch device (and GPU name), torch and numba thread counts, load average;
 2. env only: the vector env (the training distribution, numba-parallel) stepped with random actions;
-3. training throughput: ``--measure-iters`` iterations after one warm-up iteration (compilation, CUDA start), the
-   env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates); both runs
-   without the curriculum, whose raises would fall on every timed iteration;
+3. training throughput: ``--measure-iters`` iterations after one warm-up iteration (compilation, CUDA start), timed
+   over their second half (by then episodes end and restart, as in a long run; right after reset none does), the
+   env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates); without the
+   curriculum; the same at each of ``--sizes`` (N) besides ``--n-envs``;
 4. training for ``--budget-s`` seconds of iterations: ``total_steps`` = the measured rate times the budget (whole
    rollouts; the learning rate anneals over it), then ``model.zip``;
    (shrunk if the steps before it took so long that the run would pass ``--deadline-s``, default 7 minutes);
@@ -94,11 +95,32 @@ def env_only(s: FastPPOSettings, steps: int) -> float:
     return s.num_envs * steps / wall
 
 
-def timed_train(s: FastPPOSettings, out: Path) -> dict[str, Any]:
+def timed_train(s: FastPPOSettings, out: Path, **kw: Any) -> dict[str, Any]:
     t0 = time.perf_counter()
-    rec = train(s, out, log=None, evaluate_runs=False)
+    rec = train(s, out, log=None, evaluate_runs=False, **kw)
     rec["call_s"] = time.perf_counter() - t0
     return rec
+
+
+def throughput(args: argparse.Namespace, out: Path) -> dict[str, Any]:
+    """Training env-steps/s over the second half of ``--measure-iters`` iterations at ``args.n_envs``."""
+    s = settings(args, 1, args.seed, False)
+    batch = s.num_envs * s.rollout_steps
+    s = settings(args, batch * args.measure_iters, args.seed, False)
+    timed_train(s, out, until_steps=batch * (args.measure_iters // 2))
+    m = timed_train(s, out, resume=True)
+    w = m["wall_s_this_call"]
+    sps = (m["timesteps"] - batch * (args.measure_iters // 2)) / w["loop"]
+    return {
+        "n_envs": s.num_envs,
+        "env_steps": m["timesteps"] - batch * (args.measure_iters // 2),
+        "loop_s": w["loop"],
+        "train_sps": round(sps),
+        "env_share": round(w["env"] / w["loop"], 3),
+        "learner_share": round(1 - w["env"] / w["loop"], 3),
+        "rollout_share": round(w["rollout"] / w["loop"], 3),
+        "update_share": round(w["update"] / w["loop"], 3),
+    }
 
 
 def ideal_cells(model: Path, episodes: int) -> dict[str, Any]:
@@ -130,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, help="torch threads (default: the file's)")
     ap.add_argument("--deadline-s", type=float, default=420.0, help="shrink the budget to end by then [s]")
     ap.add_argument("--device", default="auto", choices=("auto", "cpu", "cuda"))
-    ap.add_argument("--measure-iters", type=int, default=6, help="iterations timed for the throughput")
+    ap.add_argument("--measure-iters", type=int, default=48, help="iterations of the throughput (half timed)")
+    ap.add_argument("--sizes", type=int, nargs="*", default=[], help="other N whose throughput is measured too")
     ap.add_argument("--env-steps", type=int, default=50, help="steps of the env-only timing")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--episodes", type=int, default=10, help="test seeds per ideal cell (the suite's: 10)")
@@ -161,22 +184,16 @@ def main(argv: list[str] | None = None) -> int:
             f"warm-up {warm['call_s']:.1f} s")  # fmt: skip
         doc["env_only_sps"] = round(env_only(s, args.env_steps))
         say(f"env only: {doc['env_only_sps']:,} env-steps/s (numba threads {numba.get_num_threads()})")
-        m = timed_train(settings(args, batch * args.measure_iters, args.seed, False), Path(tmp) / "measure")
-        w = m["wall_s_this_call"]
-        sps = m["timesteps"] / w["loop"]
-        doc["throughput"] = {
-            "env_steps": m["timesteps"],
-            "loop_s": w["loop"],
-            "train_sps": round(sps),
-            "env_share": round(w["env"] / w["loop"], 3),
-            "learner_share": round(1 - w["env"] / w["loop"], 3),
-            "rollout_share": round(w["rollout"] / w["loop"], 3),
-            "update_share": round(w["update"] / w["loop"], 3),
-        }
-        t = doc["throughput"]
-        say(f"training: {sps:,.0f} env-steps/s over {args.measure_iters} iterations; env {100 * t['env_share']:.0f} "
-            f"%, learner {100 * t['learner_share']:.0f} % (rollout {100 * t['rollout_share']:.0f} % incl. env, "
-            f"update {100 * t['update_share']:.0f} %)")  # fmt: skip
+        doc["throughput_sizes"] = []
+        for n in [*args.sizes, args.n_envs]:
+            t = throughput(argparse.Namespace(**{**vars(args), "n_envs": n}), Path(tmp) / f"measure{n}")
+            doc["throughput_sizes"].append(t)
+            shares = f"rollout {100 * t['rollout_share']:.0f} % incl. env, update {100 * t['update_share']:.0f} %"
+            say(f"training, N = {n:,}: {t['train_sps']:,} env-steps/s over the iterations after the first "
+                f"{args.measure_iters // 2}; env {100 * t['env_share']:.0f} %, learner {100 * t['learner_share']:.0f} "
+                f"% ({shares})")  # fmt: skip
+        doc["throughput"] = t
+        sps = t["train_sps"]
         # 90 s for the evaluation (it compiles the env's one-thread kernel on a fresh machine)
         budget = min(args.budget_s, args.deadline_s - (time.perf_counter() - t_all) - 90.0)
         if budget < args.budget_s:
