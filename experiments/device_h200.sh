@@ -22,7 +22,7 @@ last=${THREADS##* } first=${THREADS%% *}
 export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
 {
     echo "== machine: $(date -u +%FT%TZ)"
-    grep -m1 'model name' /proc/cpuinfo
+    lscpu | grep -Ei 'model name|thread\(s\)|core\(s\)|socket'
     echo "cpus $(nproc), load $(cut -d' ' -f1-3 /proc/loadavg)"
     nvidia-smi -L 2>/dev/null || echo "no nvidia-smi"
     $py -c "import sys, numpy, numba, torch, gymnasium; print('python', sys.version.split()[0], 'numpy', numpy.__version__,
