@@ -15,7 +15,8 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
    env's and the learner's shares of their wall time (the learner: policy, transfers, GAE, updates); without the
    curriculum; the same at each of ``--sizes`` (N) besides ``--n-envs``;
 4. training for ``--budget-s`` seconds of iterations: ``total_steps`` = the measured rate times the budget (whole
-   rollouts; the learning rate anneals over it), then ``model.zip``;
+   rollouts; the learning rate anneals over it), then ``model.zip`` (copied beside the JSON as ``gpu_model.zip``, with
+   ``gpu_run.json`` and ``gpu_settings.json``);
    (shrunk if the steps before it took so long that the run would pass ``--deadline-s``, default 7 minutes);
 5. the generalist and the analytic controller on the 11 ideal-robot cells of ``experiments/targets_v1.py``
    (:data:`targets_v1.IDEAL`, the benchmark suite's scenarios and test seeds, ``amigo-gym benchmark``'s
@@ -30,6 +31,7 @@ import argparse
 import dataclasses
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -216,6 +218,10 @@ def main(argv: list[str] | None = None) -> int:
             f"call {rec['call_s']:.1f} s); evaluating on the ideal cells ...")  # fmt: skip
         t0 = time.perf_counter()
         doc["ideal_cells"] = q = ideal_cells(run / "model.zip", args.episodes)
+        path = args.json or (Path(os.environ["OUT"]) / "gpu_train_bench.json" if os.environ.get("OUT") else None)
+        for name in ("model.zip", "run.json", "settings.json") if path is not None else ():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(run / name, path.parent / f"gpu_{name}")  # the trained generalist, kept
         q["eval_s"] = round(time.perf_counter() - t0, 1)
     a, f = q["analytic"], q["fastppo"]
     say(f"ideal cells ({len(IDEAL)} x {q['episodes_per_cell']} episodes): H RMS IQM analytic {a['h_rms_iqm_mm']:.2f} "
@@ -224,7 +230,6 @@ def main(argv: list[str] | None = None) -> int:
         "target <= 0.1)")  # fmt: skip
     doc["load_average_end"] = list(os.getloadavg())
     doc["total_s"] = round(time.perf_counter() - t_all, 1)
-    path = args.json or (Path(os.environ["OUT"]) / "gpu_train_bench.json" if os.environ.get("OUT") else None)
     if path is not None:
         atomic_write_json(path, doc, parents=True)
         say(f"wrote {path}")
