@@ -109,13 +109,15 @@ def throughput(args: argparse.Namespace, out: Path) -> dict[str, Any]:
     s = settings(args, 1, args.seed, False)
     batch = s.num_envs * s.rollout_steps
     s = settings(args, batch * args.measure_iters, args.seed, False)
-    timed_train(s, out, until_steps=batch * (args.measure_iters // 2))
-    m = timed_train(s, out, resume=True)
+    half = args.measure_iters // 2
+    if half:
+        timed_train(s, out, until_steps=batch * half)
+    m = timed_train(s, out, resume=half > 0)
     w = m["wall_s_this_call"]
-    sps = (m["timesteps"] - batch * (args.measure_iters // 2)) / w["loop"]
+    sps = (m["timesteps"] - batch * half) / w["loop"]
     return {
         "n_envs": s.num_envs,
-        "env_steps": m["timesteps"] - batch * (args.measure_iters // 2),
+        "env_steps": m["timesteps"] - batch * half,
         "loop_s": w["loop"],
         "train_sps": round(sps),
         "env_share": round(w["env"] / w["loop"], 3),

@@ -715,7 +715,7 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     """experiments/gpu_train_bench.py (the GPU node's prepared measurement) runs here with tiny settings: the
     machine, the throughput and its shares, the trained steps and the ideal-cell figures land in $OUT."""
     root = Path(__file__).resolve().parent.parent
-    argv = ["--budget-s", "1", "--n-envs", "32", "--measure-iters", "1", "--env-steps", "2", "--episodes", "1"]
+    argv = ["--budget-s", "1", "--n-envs", "32", "--measure-iters", "2", "--env-steps", "2", "--episodes", "1"]
     env = {**__import__("os").environ, "OUT": str(tmp_path), "PYTHONPATH": str(root)}
     r = subprocess.run([sys.executable, str(root / "experiments" / "gpu_train_bench.py"), *argv], env=env,
                        capture_output=True, text=True, timeout=600)  # fmt: skip
@@ -730,3 +730,6 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     q = doc["ideal_cells"]
     assert len(q["cells"]) == 11 and q["episodes_per_cell"] == 1 and q["analytic"]["h_rms_iqm_mm"] > 0
     assert q["ratio"] == pytest.approx(q["fastppo"]["h_rms_iqm_mm"] / q["analytic"]["h_rms_iqm_mm"])
+    assert t["env_steps"] == 32 * 16 and [x["n_envs"] for x in doc["throughput_sizes"]] == [32]
+    assert json.loads((tmp_path / "gpu_run.json").read_text())["sha256"] == doc["training"]["sha256"]
+    assert (tmp_path / "gpu_model.zip").stat().st_size > 0
