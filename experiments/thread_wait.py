@@ -1,12 +1,14 @@
 """The vector env's step on numba's threads under the OpenMP wait policy the caller sets: wall and process CPU time.
 
-    NUMBA_NUM_THREADS=2 [OMP_WAIT_POLICY=ACTIVE|PASSIVE] python experiments/thread_wait.py AmigoBot-v0 16384 2 [work] [training]
+    NUMBA_NUM_THREADS=2 [OMP_WAIT_POLICY=ACTIVE|PASSIVE] python experiments/thread_wait.py AmigoBot-v0 16384 2
+    NUMBA_NUM_THREADS=16 python experiments/thread_wait.py AmigoBot-v1 65536 16 0 training
 
 Arguments: env id, N, threads (1: ``kernel="numba"``; more: ``"numba-parallel"``), then optionally ``work`` 1 or 0
 (default 1: each step is followed by about 200 µs of numpy work in the calling thread, where a learner would run, the
 time when spinning workers compete with it; 0: the step alone, for the scaling with threads) and ``training``
-(AmigoBot-v1 with the training distribution's ``env_kwargs``, ``benchmark.TRAINING_DISTRIBUTION``). Prints the least wall time per step over 3 repeats, the process CPU time of that repeat, the threading layer and
-the wait policy libgomp was given (the env sets PASSIVE unless the caller set one), and the CPU.
+(AmigoBot-v1 with the training distribution's ``env_kwargs``, ``benchmark.TRAINING_DISTRIBUTION``). Prints the least
+wall time per step over 3 repeats, the process CPU time of that repeat, the threading layer and the wait policy
+libgomp was given (the env sets PASSIVE unless the caller set one), and the CPU.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ for _ in range(3):
     best = min(best, (w, c))
 wait = os.environ.get("OMP_WAIT_POLICY", "default")
 print(
-    f"{env_id}{' training' if kwargs else ''} N={n} threads={threads} work={int(work)} layer={numba.threading_layer()} OMP_WAIT_POLICY={wait}: "
+    f"{env_id}{' training' if kwargs else ''} N={n} threads={threads} work={int(work)} "
+    f"layer={numba.threading_layer()} OMP_WAIT_POLICY={wait}: "
     f"wall {best[0] * 1e6:.0f} us, CPU {best[1] * 1e6:.0f} us a step; {cpu_model()}, load {os.getloadavg()[0]:.1f}"
 )
