@@ -522,6 +522,7 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
     rew_buf, done_buf = np.zeros((t_len, s.num_envs)), np.zeros((t_len, s.num_envs), dtype=bool)
     x_host = torch.empty(buf.x.shape[1:], pin_memory=buf.x.is_cuda)  # a step's features and outputs on the host
     u_host = torch.empty(buf.u.shape[1:], dtype=torch.float64, pin_memory=buf.x.is_cuda)
+    std, log_norm = net.log_std.detach().exp(), net.log_std.detach().sum() + math.log(2.0 * math.pi)
     finals: list[tuple[NDArray[np.intp], ...]] = []  # time-limit cuts: (steps, rows, features)
     env_s = 0.0
     for t in range(t_len + 1):  # t = T: the features alone, for the values (the next rollout learns them)
@@ -536,8 +537,8 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
         with torch.inference_mode():
             mu = net.actor(buf.x[t])
             eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
-            buf.u[t] = mu + net.log_std.exp() * eps
-            buf.logp[t] = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
+            torch.add(mu, std * eps, out=buf.u[t])
+            torch.sub(-0.5 * eps.pow(2).sum(-1), log_norm, out=buf.logp[t])
             u_host.copy_(buf.u[t])  # the step's one device-to-host copy
         a = env_action(u_host.numpy(), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
         t0 = time.perf_counter()
