@@ -54,17 +54,19 @@ class RunningMeanStd:
         n_b = a.shape[0]
         if n_b == 0:
             return
-        m_b, v_b = a.mean(axis=0), a.var(axis=0)
+        m_b = np.einsum("ij->j", a) / n_b  # einsum: no per-row loop of the axis-0 reduction
+        dev = a - m_b
+        v_b = np.einsum("ij,ij->j", dev, dev) / n_b
         d = m_b - self.mean
         n = self.count + n_b
         self.mean = self.mean + d * (n_b / n)
         self.var = (self.var * self.count + v_b * n_b + d * d * (self.count * n_b / n)) / n
         self.count = n
 
-    def normalize(self, x: Array) -> Array:
-        """``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``."""
-        out: Array = np.clip((x - self.mean) / np.sqrt(self.var + 1e-8), -10.0, 10.0)
-        return out
+    def normalize(self, x: Array, out: NDArray[Any] | None = None) -> Array:
+        """``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``, into ``out`` (e.g. float32) when given."""
+        res: Array = np.divide(np.subtract(x, self.mean), np.sqrt(self.var + 1e-8), out=out)
+        return np.clip(res, -10.0, 10.0, out=res)
 
     def to_dict(self) -> dict[str, Any]:
         return {"mean": self.mean.tolist(), "var": self.var.tolist(), "count": float(self.count)}
@@ -125,8 +127,8 @@ class FeatureBuilder:
         return np.zeros((n, self.state_dim))
 
     def __call__(self, obs: Array, state: Array, starts: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
-        """``(raw features (N, dim), base action (N, 2) or zeros, new state)``; rows with ``starts`` begin an
-        episode."""
+        """``(raw features (N, dim), base action (N, 2) or zeros, new state)``, the features ``obs`` itself without
+        history or residual; rows with ``starts`` begin an episode."""
         n = obs.shape[0]
         h, f = self.spec.history, len(HISTORY_FIELDS)
         z = np.where(starts, 0.0, state[:, 0])
@@ -145,20 +147,18 @@ class FeatureBuilder:
             z = z_out.reshape(n)
             parts.append(base)
         new_state[:, 0] = z
-        return np.concatenate(parts, axis=1), base, new_state
+        return np.concatenate(parts, axis=1) if len(parts) > 1 else obs, base, new_state
 
     def previous_command(self, obs: Array) -> Array:
         """``(N, 2)`` previous command of the observation (normalised units)."""
-        out: Array = obs[:, self._prev_idx].astype(np.float64)
-        return out
+        return obs[:, self._prev_idx].astype(np.float64, copy=False)
 
 
 def env_action(u: Array, base: Array, prev: Array, residual_bound: float, filter_alpha: float) -> Array:
     """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring)."""
     c = np.clip(u, -1.0, 1.0)
     target = np.clip(base + residual_bound * c, -1.0, 1.0) if residual_bound > 0 else c
-    out: Array = prev + filter_alpha * (target - prev) if filter_alpha < 1.0 else target
-    return out
+    return prev + filter_alpha * (target - prev) if filter_alpha < 1.0 else target
 
 
 def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:

@@ -516,59 +516,59 @@ def machine_record(device: str) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- rollout, update
-def _features(r: _Run, builder: FeatureBuilder, device: str, learn: bool = True) -> tuple[torch.Tensor, Array, Array]:
-    """Normalised features of the current observations on the device (``learn``: update the normaliser first)."""
-    feats, base, s_next = builder(r.obs, r.fstate, r.starts)
-    if learn:
-        r.obs_rms.update(feats)
-    x = torch.from_numpy(r.obs_rms.normalize(feats).astype(np.float32)).to(device)
-    return x, base, s_next
-
-
 def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str) -> float:
     """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env."""
     net, gamma, t_len = r.net, s.gamma, s.rollout_steps
-    rew_buf, done_buf = np.zeros((2, t_len, s.num_envs))
+    rew_buf, done_buf = np.zeros((t_len, s.num_envs)), np.zeros((t_len, s.num_envs), dtype=bool)
+    x_host = torch.empty(buf.x.shape[1:], pin_memory=buf.x.is_cuda)  # a step's features and outputs on the host
+    u_host = torch.empty(buf.u.shape[1:], dtype=torch.float64, pin_memory=buf.x.is_cuda)
+    std, log_norm = net.log_std.detach().exp(), net.log_std.detach().sum() + math.log(2.0 * math.pi)
     finals: list[tuple[NDArray[np.intp], ...]] = []  # time-limit cuts: (steps, rows, features)
     env_s = 0.0
-    for t in range(t_len):
-        x, base, s_next = _features(r, builder, device)
+    for t in range(t_len + 1):  # t = T: the features alone, for the values (the next rollout learns them)
+        feats, base, s_next = builder(r.obs, r.fstate, r.starts)
+        if t < t_len:
+            r.obs_rms.update(feats)
+        host = x_host if buf.x.is_cuda else buf.x[t]  # on the CPU: x[t] itself
+        r.obs_rms.normalize(feats, out=host.numpy())
+        buf.x[t].copy_(host)  # the step's one host-to-device copy
+        if t == t_len:
+            break
         with torch.inference_mode():
-            mu = net.actor(x)
+            mu = net.actor(buf.x[t])
             eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
-            buf.x[t], buf.u[t] = x, mu + net.log_std.exp() * eps
-            buf.logp[t] = -0.5 * eps.pow(2).sum(-1) - (net.log_std.sum() + math.log(2.0 * math.pi))
-        a = env_action(_np(buf.u[t]), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
+            torch.add(mu, std * eps, out=buf.u[t])
+            torch.sub(-0.5 * eps.pow(2).sum(-1), log_norm, out=buf.logp[t])
+            u_host.copy_(buf.u[t])  # the step's one device-to-host copy
+        a = env_action(u_host.numpy(), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
         t0 = time.perf_counter()
         obs, rew, term, trunc, info = r.env.step(a)
         env_s += time.perf_counter() - t0
-        rew = np.asarray(rew, dtype=np.float64)
-        done = np.logical_or(term, trunc)
+        done = np.logical_or(term, trunc, out=done_buf[t])
         r.ep_ret += rew
         if done.any():
             r.episode_returns.extend(r.ep_ret[done].tolist())
             r.ep_ret[done] = 0.0
+        rew_buf[t] = rew
         if s.norm_reward:
             r.ret_acc = r.ret_acc * gamma + rew
             r.ret_rms.update(r.ret_acc)
-            rew = np.clip(rew / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0)
+            np.clip(rew_buf[t] / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0, out=rew_buf[t])
             r.ret_acc[done] = 0.0
         cut = np.flatnonzero(np.logical_and(trunc, np.logical_not(term)))
         if cut.size:  # the time limit: bootstrapped below with V of the final observation
             final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
             f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
             finals.append((np.full(cut.size, t), cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
-        rew_buf[t], done_buf[t] = rew, done
         r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
     if finals:  # one forward pass for every truncated row of the rollout
         steps, rows, feats = (np.concatenate(z) for z in zip(*finals, strict=True))
         with torch.inference_mode():
             rew_buf[steps, rows] += gamma * _np(net.value(torch.from_numpy(feats).to(device)))
-    buf.x[t_len] = _features(r, builder, device, learn=False)[0]  # the next rollout learns them
     with torch.inference_mode():  # the values of all T + 1 steps' features in one pass
         buf.v.copy_(net.value(buf.x))
-    buf.r.copy_(torch.from_numpy(rew_buf.astype(np.float32)))
-    buf.done.copy_(torch.from_numpy(done_buf.astype(np.float32)))
+    buf.r.copy_(torch.from_numpy(rew_buf))
+    buf.done.copy_(torch.from_numpy(done_buf))
     r.global_step += s.num_envs * t_len
     return env_s
 
