@@ -65,7 +65,7 @@ from amigo_gym.model.kinematics import (
     col_sin,
     h_from_a,
 )
-from amigo_gym.model.numeric import clip
+from amigo_gym.model.numeric import clip, where
 from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
 from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
@@ -941,34 +941,47 @@ def draw_path(
     return make_family_path(fam, None, loops=loops, **values), {"family": fam, **values}
 
 
+def episode_draws(p: TrackingParams) -> tuple[list[tuple[float, float]], bool]:
+    """The intervals ``(lo, hi)`` of :func:`draw_episode`'s uniform draws before ``u`` (speed, then
+    :class:`~amigo_gym.model.randomization.EpisodeDraw`'s fields; none drawn where ``lo == hi``) and whether it draws
+    a key."""
+    r = p.randomize
+    return [p.speed_range, r.wheel_radius, r.wheel_radius, r.track, r.slip, r.delay], not (
+        p.ideal_actuators and not r.has_noise
+    )
+
+
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
     """Draw one episode (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from ``rng``, in this
     order: speed (when a range), randomisation, ``u``, the key of the per-step draws (0, not drawn, with
-    ``ideal_actuators`` and no noise)."""
-    from amigo_gym.model.randomization import draw_key, sample
+    ``ideal_actuators`` and no noise); :func:`episode_draws`."""
+    from amigo_gym.model.randomization import EpisodeDraw, draw_key
 
-    lo, hi = p.speed_range
-    v = lo if lo == hi else float(rng.uniform(lo, hi))
-    d = sample(rng, p.randomize)
+    intervals, keyed = episode_draws(p)
+    v, *d = (lo if lo == hi else float(rng.uniform(lo, hi)) for lo, hi in intervals)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
+    return episode_of(p, v, EpisodeDraw(*d), draw_key(rng) if keyed else 0), (u0, u1, u2)
+
+
+def episode_of(p: TrackingParams, v: Real, d: Any, key: Any) -> Episode:
+    """The :class:`Episode` of the speed ``v`` [m/s], the randomisation ``d`` (an
+    :class:`~amigo_gym.model.randomization.EpisodeDraw`) and the ``key``: floats, or columns (``lag`` int64)."""
     true = p.robot if p.true_robot is None else p.true_robot  # the simulated robot before randomisation
-    delay = min(p.actuators.delay + d.delay, actuators.MAX_DELAY)
-    lag, t_switch = actuators.delay_split(delay, p.dt)
+    delay = p.actuators.delay + d.delay
+    lag, t_switch = actuators.delay_split(where(delay > actuators.MAX_DELAY, actuators.MAX_DELAY, delay), p.dt)
     t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
-    ep = Episode(
+    return Episode(
         r1=true.r1 * d.r1_scale,
         r2=true.r2 * d.r2_scale,
         l1=true.l1 * d.track_scale,
         l3=true.l3,
         slip_max=d.slip_max,
-        lag=int(lag),
-        t_switch=float(t_switch),
+        lag=lag,
+        t_switch=t_switch,
         key=key,
         v_cruise=v,
         t_brake=t_brake,
     )
-    return ep, (u0, u1, u2)
 
 
 def episode_template(p: TrackingParams) -> Episode | None:
