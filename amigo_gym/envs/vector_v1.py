@@ -45,8 +45,7 @@ from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
-_STATE_TYPES = (*(np.float64 for _ in _STATE_FIELDS[:-1]), np.int64)
-_EPISODE_TYPES = [{"lag": np.int64, "key": np.uint64}.get(f, np.float64) for f in _EPISODE_FIELDS]
+_INT_FIELDS = {"lag": np.int64, "key": np.uint64, "steps": np.int64}  # of Episode and State (the others float64)
 _U3 = [(-1.0, 1.0)] * 3  # draw_episode's u
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
@@ -86,9 +85,10 @@ def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: st
         )
 
 
-def _columns(values: Any, types: Any, m: int) -> list[Any]:
-    # floats or (m,) columns as (m,) arrays of the types, new
-    return [np.broadcast_to(c, (m,)).astype(t) for c, t in zip(values, types, strict=True)]
+def _columns(kind: Any, values: Any, m: int) -> Any:
+    # floats or (m,) columns as the NamedTuple kind (Episode, State) of new (m,) arrays
+    cols = zip(kind._fields, values, strict=True)
+    return kind(*(np.broadcast_to(np.asarray(c, dtype=_INT_FIELDS.get(f, np.float64)), (m,)).copy() for f, c in cols))
 
 
 def _is_scalar(x: Any) -> bool:
@@ -156,7 +156,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
         # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
-        self._template_row = None if self._template is None else tracking.episode_columns([self._template])
+        self._template_row = None if self._template is None else _columns(tracking.Episode, self._template, 1)
         self._templated = False  # every row's episode is the template (restarts need not write it)
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
@@ -186,7 +186,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
         self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
-        self._episode = tracking.episode_columns([tracking.Episode(*(0 for _ in _EPISODE_FIELDS))] * n)
+        self._episode = _columns(tracking.Episode, [0] * len(_EPISODE_FIELDS), n)
         self._ring = np.zeros((n, self._k.ring_length, 2))
         self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or fast_v1.compiled_path(fixed, p)  # drawn paths are built-in ones
@@ -372,7 +372,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             obs[j] = b.outcome.obs
             recs.append(reference_record(k.w_max, b.state, b.outcome, tracking.NO_NOISE, 0.0))
         st = tracking.State(*(np.array(c) for c in zip(*states, strict=True)))
-        self._set_rows(idx, st, tracking.episode_columns(episodes))
+        self._set_rows(idx, st, _columns(tracking.Episode, zip(*episodes, strict=True), len(idx)))
         self.paths.replace(idx, paths)
         self._castor[idx] = 0.0
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
@@ -392,9 +392,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             assert self._template_row is not None
             paths: list[Any] = [path] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            infos = self.path_infos
             for i in rows:
-                infos[i] = dict(info)
+                self.path_infos[i] = dict(info)
             u_all = self._draws(idx, _U3, False)[0]
             if pose_opt is None:  # the start states and their evaluation in one compiled call
                 self._goal[idx] = tracking.goal_point(k.params, path)
@@ -409,7 +408,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             intervals, keyed = tracking.episode_draws(k.params)  # then each row's draw_episode
             draws, keys = self._draws(idx, [*intervals, *_U3], keyed)
             ep = tracking.episode_of(k.params, draws[:, 0], EpisodeDraw(*draws[:, 1:6].T), keys)
-            ep_all = tracking.Episode(*_columns(ep, _EPISODE_TYPES, m))
+            ep_all = _columns(tracking.Episode, ep, m)
             u_all = draws[:, 6:]
             b.arena.assign(rows, paths)  # the rows' flat paths: their poses and projections in one call each
             flat, at, w = b.arena.flat, b.arena.starts[idx], k.window
@@ -418,7 +417,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         st = tracking.start_state(k, path, ep_all, tuple(u_all.T), *fns)
         if pose_opt is not None:
             st = tracking.placed_state(k, path, ep_all, st, tuple(pose_opt[idx].T), fns[0])
-        st_all = tracking.State(*_columns(st, _STATE_TYPES, m))
+        st_all = _columns(tracking.State, st, m)
         goals = {id(q): tracking.goal_point(k.params, q) for q in paths}
         self._goal[idx] = [goals[id(q)] for q in paths]
         if template is None:
@@ -426,8 +425,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
 
     def _draws(self, idx: NDArray[np.intp], intervals: list[Any], keyed: bool) -> tuple[Array, NDArray[np.uint64]]:
-        # each row's uniform draws of the intervals (lo, hi), (m, q), then its key (0 unless keyed), from the rows'
-        # generators in one compiled call (numpy's formulas on the same bits: the same numbers and states)
+        # each row's draws (m, q) of the intervals (lo, hi) and key (0 unless keyed), as numpy's: one compiled call
         ptrs = self._draw_ptrs
         for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
             ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0

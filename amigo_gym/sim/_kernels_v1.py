@@ -793,13 +793,9 @@ def restart_rows(
 
 
 def _bitgen_call(slot: int, ret: Any, ret_ir: Any) -> Any:
-    # ``f(bitgen)``: the function in ``slot`` of numpy's ``bitgen_t`` at the address ``bitgen`` (int64, a run-time
-    # value: the pointer of ``BitGenerator.capsule``) called on its state; ``bitgen_t``: state, next_uint64,
-    # next_uint32, next_double
+    # f(bitgen): the function in ``slot`` of numpy's ``bitgen_t`` (state, next_uint64, next_uint32, next_double) at
+    # the address ``bitgen`` (int64: the pointer of ``BitGenerator.capsule``), called on its state
     def typing(typingctx: Any, bitgen: Any) -> Any:
-        if not isinstance(bitgen, numba.types.Integer):
-            return None
-
         def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
             void_p = llvm_ir.IntType(8).as_pointer()
             fn_t = llvm_ir.FunctionType(ret_ir, [void_p])
@@ -819,20 +815,16 @@ _next_double: Any = _bitgen_call(3, numba.types.float64, llvm_ir.DoubleType())
 
 @_jit
 def draw_uniforms(bitgens: NDArray[np.int64], intervals: F64, out: F64, keys: NDArray[np.uint64]) -> None:
-    """Row ``j``'s draws from the bit generator at ``bitgens[j]`` (``bitgen_t`` addresses, ``(m,)``), in order:
-    ``out[j, q] = U(lo, hi)`` of ``intervals[q] = (lo, hi)`` (``lo + (hi - lo) next_double``, as
-    ``Generator.uniform``; ``lo`` without a draw where ``lo == hi``), then, if ``keys`` is not empty, ``keys[j]``
-    as :func:`amigo_gym.model.randomization.draw_key` (``Generator.integers``' Lemire draws: the top 63 bits of a
-    ``next_uint64``, the top bit of a ``next_uint32``). The same numbers and generator states as numpy's calls."""
+    """Row ``j``'s draws from the bit generator at ``bitgens[j]``, numpy's numbers and states: ``out[j, q] =
+    U(intervals[q])`` (``lo + (hi - lo) next_double``; ``lo`` undrawn where ``lo == hi``), then ``keys[j]`` (if not
+    empty) as ``draw_key`` (``Generator.integers``' Lemire bits: ``next_uint64 >> 1``, ``next_uint32 >> 31``)."""
     one = np.uint64(1)
     for j in range(out.shape[0]):
         for q in range(out.shape[1]):
-            lo = intervals[q, 0]
-            hi = intervals[q, 1]
+            lo, hi = intervals[q, 0], intervals[q, 1]
             out[j, q] = lo if lo == hi else lo + (hi - lo) * _next_double(bitgens[j])
         if keys.shape[0]:
-            high = _next_uint64(bitgens[j]) >> one
-            keys[j] = (high << one) + np.uint64(_next_uint32(bitgens[j]) >> np.uint32(31))
+            keys[j] = ((_next_uint64(bitgens[j]) >> one) << one) + np.uint64(_next_uint32(bitgens[j]) >> np.uint32(31))
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)
