@@ -156,8 +156,6 @@ class _Tables:
         return self.flat[a : a + (n if k < 6 else m)]
 
     s0 = property(lambda self: self.column(0).tolist())
-    sample_x = property(lambda self: self.column(6))
-    sample_y = property(lambda self: self.column(7))
 
 
 class PathLoops(NamedTuple):
