@@ -355,7 +355,7 @@ def test_compiled_path_loops_build_the_same_paths(family: str) -> None:
     for seed in range(5):
         a = families.make_family_path(family, np.random.default_rng(seed))
         b = families.make_family_path(family, np.random.default_rng(seed), loops=loops)
-        for name in ("flat", "sample_x", "sample_y"):
-            x, y = np.asarray(getattr(a._t, name)), np.asarray(getattr(b._t, name))
-            assert x.shape == y.shape and np.allclose(x, y, rtol=0, atol=1e-12 * max(1.0, np.abs(x).max())), name
+        for k in range(8):  # the pieces' columns, then the samples'
+            x, y = a._t.column(k), b._t.column(k)
+            assert x.shape == y.shape and np.allclose(x, y, rtol=0, atol=1e-12 * max(1.0, np.abs(x).max())), k
         assert a._t.length == pytest.approx(b._t.length, rel=1e-12)

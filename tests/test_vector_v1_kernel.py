@@ -459,22 +459,26 @@ def test_ideal_blocks_equal_the_row_step(path: str, n: int) -> None:
 
 
 def test_compiled_start_draws_equal_the_generators() -> None:
-    """The restarts' compiled draws (``draw_uniforms``) are ``2 Generator.random(3) - 1`` bit for bit and leave each
-    generator in the same state (one with a buffered 32-bit half included); a reseeded row draws from its new
-    generator."""
+    """The restarts' compiled draws (``draw_uniforms``) are ``2 Generator.random(3) - 1`` and ``draw_key`` bit for
+    bit and leave each generator in the same state (one with a buffered 32-bit half included); a reseeded row draws
+    from its new generator."""
     from gymnasium.utils import seeding
+
+    from amigo_gym.model.randomization import draw_key
 
     gens, refs = ([seeding.np_random(s)[0] for s in range(4)] for _ in range(2))
     for g in (gens[1], refs[1]):
         g.random(dtype=np.float32)
     addr = np.array([g.bit_generator.ctypes.bit_generator.value for g in gens], dtype=np.int64)
     out, want = np.empty((4, 3)), np.empty((4, 3))
-    fast_v1.kernels().draw_uniforms(addr, out)
+    keys = np.zeros(4, dtype=np.uint64)
+    fast_v1.kernels().draw_uniforms(addr, np.array([(-1.0, 1.0)] * 3), out, keys)
     for j, g in enumerate(refs):
         g.random(out=want[j])
     want *= 2.0
     want -= 1.0
     assert out.tobytes() == want.tobytes()
+    assert keys.tolist() == [draw_key(g) for g in refs]
     assert [g.bit_generator.state for g in gens] == [g.bit_generator.state for g in refs]
     assert [g.random() for g in gens] == [g.random() for g in refs]
     env = gym.make_vec("AmigoBot-v0", 3, vectorization_mode="vector_entry_point", kernel="numba")

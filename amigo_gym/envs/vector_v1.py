@@ -37,12 +37,16 @@ from amigo_gym.envs.base import (
 )
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
+from amigo_gym.model.randomization import EpisodeDraw
+from amigo_gym.paths.clothoid import locate_columns, pose_columns_of
 from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
 
 _EPISODE_FIELDS = tracking.Episode._fields
 _STATE_FIELDS = tracking.State._fields
+_INT_FIELDS = {"lag": np.int64, "key": np.uint64, "steps": np.int64}  # of Episode and State (the others float64)
+_U3 = [(-1.0, 1.0)] * 3  # draw_episode's u
 _R_COMMAND, _R_SLIP, _R_HX, _R_HY = layout_v1.R_COMMAND, layout_v1.R_SLIP, layout_v1.R_HX, layout_v1.R_HY
 _R_END, _R_TERM, _R_REWARD = layout_v1.R_END, layout_v1.R_TERM, layout_v1.R_REWARD
 
@@ -79,6 +83,12 @@ def check_memory(owner: str, n: int, p: tracking.TrackingParams, render_mode: st
             f"{owner}.num_envs={n} needs about {need:,} bytes ({need // n:,} per robot), more than this machine's "
             f"memory of {total:,} bytes; use fewer robots"
         )
+
+
+def _columns(kind: Any, values: Any, m: int) -> Any:
+    # floats or (m,) columns as the NamedTuple kind (Episode, State) of new (m,) arrays
+    cols = zip(kind._fields, values, strict=True)
+    return kind(*(np.broadcast_to(np.asarray(c, dtype=_INT_FIELDS.get(f, np.float64)), (m,)).copy() for f, c in cols))
 
 
 def _is_scalar(x: Any) -> bool:
@@ -146,7 +156,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         fixed, self.feasibility = (p.path, None) if self._v0 else tracking.check_task(p)
         # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
-        self._template_row = None if self._template is None else tracking.episode_columns([self._template])
+        self._template_row = None if self._template is None else _columns(tracking.Episode, self._template, 1)
         self._templated = False  # every row's episode is the template (restarts need not write it)
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
@@ -163,7 +173,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.observation_space = batch_space(obs_space, n)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._seeds: list[int | None] = [None] * n
-        #: each generator's ``bitgen_t`` address (0: not yet; :meth:`_draw_starts`)
+        #: each generator's ``bitgen_t`` address (0: not yet; :meth:`_draws`)
         self._draw_ptrs = np.zeros(n, dtype=np.int64)
         self._autoreset: BoolArray = np.zeros(n, dtype=np.bool_)
         self._obs: ObsArray = np.zeros((n, obs_space.shape[0]), dtype=np.float32)
@@ -176,7 +186,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.paths = PathBatch([placeholder] * n)
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
         self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
-        self._episode = tracking.episode_columns([tracking.Episode(*(0 for _ in _EPISODE_FIELDS))] * n)
+        self._episode = _columns(tracking.Episode, [0] * len(_EPISODE_FIELDS), n)
         self._ring = np.zeros((n, self._k.ring_length, 2))
         self._batch: fast_v1_batch.BatchKernel | None = None
         compiled = fixed is None or fast_v1.compiled_path(fixed, p)  # drawn paths are built-in ones
@@ -362,73 +372,66 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             obs[j] = b.outcome.obs
             recs.append(reference_record(k.w_max, b.state, b.outcome, tracking.NO_NOISE, 0.0))
         st = tracking.State(*(np.array(c) for c in zip(*states, strict=True)))
-        self._set_rows(idx, st, tracking.episode_columns(episodes))
+        self._set_rows(idx, st, _columns(tracking.Episode, zip(*episodes, strict=True), len(idx)))
         self.paths.replace(idx, paths)
         self._castor[idx] = 0.0
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         return np.stack(recs)
 
     def _begin_rows_kernel(self, idx: NDArray[np.intp], pose_opt: Array | None, obs: ObsArray) -> Array:
-        # each row draws from its own generator; the rows that share a path start together on columns
+        # each row draws from its own generator; the start states on the columns of all rows at once
         b = self._batch
         assert b is not None
         k = self._k
         rows = idx.tolist()
         m = len(rows)
         template = self._template
-        fixed = None if template is None else tracking.fixed_path(k.params)
+        path: Any = None if template is None else tracking.fixed_path(k.params)
+        fns: tuple[Any, Any] = (None, None)  # start_state's progress and path_pose: the path's methods
         if template is not None:  # one path: the episodes differ in their start offsets alone
             assert self._template_row is not None
-            paths: list[Any] = [fixed] * m
+            paths: list[Any] = [path] * m
             info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            infos = self.path_infos
             for i in rows:
-                infos[i] = dict(info)
-            u_all = self._draw_starts(idx)
+                self.path_infos[i] = dict(info)
+            u_all = self._draws(idx, _U3, False)[0]
             if pose_opt is None:  # the start states and their evaluation in one compiled call
-                self._goal[idx] = tracking.goal_point(k.params, fixed)
-                return self._started(idx, b.restart(rows, fixed, self._template_row, u_all, obs), None, template)
+                self._goal[idx] = tracking.goal_point(k.params, path)
+                return self._started(idx, b.restart(rows, path, self._template_row, u_all, obs), None, template)
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
-            groups = {id(fixed): list(range(m))}
         else:  # each row draws its path (built by the compiled loops) and episode
             loops = fast_v1.path_loops()
-            paths, groups = [], {}
-            episodes: list[tracking.Episode] = []
-            draws: list[tuple[float, float, float]] = []
-            for j, i in enumerate(rows):
-                rng = self._rng(i)
-                path, self.path_infos[i] = tracking.draw_path(rng, k.params, loops)
-                ep, u = tracking.draw_episode(rng, k.params)
-                paths.append(path)
-                episodes.append(ep)
-                draws.append(u)
-                groups.setdefault(id(path), []).append(j)
-            ep_all = tracking.episode_columns(episodes)
-            u_all = np.array(draws, dtype=np.float64).reshape(-1, 3)
-        cols: list[Any] = [np.zeros(m) for _ in _STATE_FIELDS[:-1]] + [np.zeros(m, dtype=np.int64)]
-        for js in groups.values():
-            sel = np.array(js, dtype=np.intp)
-            path = paths[js[0]]
-            ep = tracking.Episode(*(np.asarray(c)[sel] for c in ep_all))
-            st = tracking.start_state(k, path, ep, (u_all[sel, 0], u_all[sel, 1], u_all[sel, 2]))
-            if pose_opt is not None:
-                st = tracking.placed_state(k, path, ep, st, tuple(pose_opt[idx[sel]].T))
-            for col, value in zip(cols, st, strict=True):
-                col[sel] = value
-            self._goal[idx[sel]] = tracking.goal_point(k.params, path)
-        st_all = tracking.State(*cols)
+            paths = []
+            for i in rows:
+                q, self.path_infos[i] = tracking.draw_path(self._rng(i), k.params, loops)
+                paths.append(q)
+            intervals, keyed = tracking.episode_draws(k.params)  # then each row's draw_episode
+            draws, keys = self._draws(idx, [*intervals, *_U3], keyed)
+            ep = tracking.episode_of(k.params, draws[:, 0], EpisodeDraw(*draws[:, 1:6].T), keys)
+            ep_all = _columns(tracking.Episode, ep, m)
+            u_all = draws[:, 6:]
+            b.arena.assign(rows, paths)  # the rows' flat paths: their poses and projections in one call each
+            flat, at, w = b.arena.flat, b.arena.starts[idx], k.window
+            fns = (lambda _, x, y, s: locate_columns(flat, at, x, y, np.full(m, s), w, w).progress,
+                   lambda _, s: pose_columns_of(flat, at, s))  # fmt: skip
+        st = tracking.start_state(k, path, ep_all, tuple(u_all.T), *fns)
+        if pose_opt is not None:
+            st = tracking.placed_state(k, path, ep_all, st, tuple(pose_opt[idx].T), fns[0])
+        st_all = _columns(tracking.State, st, m)
+        goals = {id(q): tracking.goal_point(k.params, q) for q in paths}
+        self._goal[idx] = [goals[id(q)] for q in paths]
         if template is None:
             self.paths.replace(idx, paths)
         return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
 
-    def _draw_starts(self, idx: NDArray[np.intp]) -> Array:
-        # uniform(-1, 1, 3) of each row's generator, -1 + 2 random(3) (numpy's formula, the same bits), (m, 3)
+    def _draws(self, idx: NDArray[np.intp], intervals: list[Any], keyed: bool) -> tuple[Array, NDArray[np.uint64]]:
+        # each row's draws (m, q) of the intervals (lo, hi) and key (0 unless keyed), as numpy's: one compiled call
         ptrs = self._draw_ptrs
         for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
             ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0
-        u_all = np.empty((len(idx), 3))
-        fast_v1.kernels().draw_uniforms(ptrs[idx], u_all)
-        return u_all
+        out, keys = np.empty((len(idx), len(intervals))), np.zeros(len(idx), dtype=np.uint64)
+        fast_v1.kernels().draw_uniforms(ptrs[idx], np.array(intervals), out, keys[: len(keys) * keyed])
+        return out, keys
 
     def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
         # the rows' columns (_set_rows) and their start records: the command being executed, no slip

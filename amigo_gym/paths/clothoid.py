@@ -25,7 +25,7 @@ from typing import Any, NamedTuple, Protocol, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.fresnel import NODES, Buffer, node_table, subintervals, unit_speed_nodes, unit_speed_poses
+from amigo_gym.model.fresnel import NODES, Buffer, node_table, subinterval_count, unit_speed_nodes, unit_speed_poses
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.params import check_range, check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, _Projecting
@@ -75,20 +75,30 @@ class ClothoidSegment:
         check_range("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
 
     @classmethod
+    def _of(cls, g: float, k: float, c: float) -> ClothoidSegment:
+        """``cls(g, k, c)``, built faster when they are floats that pass its checks."""
+        floats = type(g) is type(k) is type(c) is float and 0.0 < g <= MAX_SEGMENT_LENGTH and c - c == 0.0
+        if floats and abs(k) <= MAX_CURVATURE and abs(k + c * g) <= MAX_CURVATURE:
+            seg = object.__new__(cls)
+            seg.__dict__.update(length=g, curvature=k, curvature_rate=c)
+            return seg
+        return cls(g, k, c)
+
+    @classmethod
     def line(cls, length: float) -> ClothoidSegment:
         """A straight segment of ``length`` [m]."""
-        return cls(length, 0.0, 0.0)
+        return cls._of(length, 0.0, 0.0)
 
     @classmethod
     def arc(cls, length: float, curvature: float) -> ClothoidSegment:
         """A circular arc of ``length`` [m] and signed ``curvature`` [1/m]."""
-        return cls(length, curvature, 0.0)
+        return cls._of(length, curvature, 0.0)
 
     @classmethod
     def transition(cls, length: float, curvature_start: float, curvature_end: float) -> ClothoidSegment:
         """A clothoid from ``curvature_start`` to ``curvature_end`` [1/m] over ``length`` [m]."""
         check_real("ClothoidSegment", "length", length, 0.0, MAX_SEGMENT_LENGTH, low_open=True)
-        return cls(length, curvature_start, (curvature_end - curvature_start) / length)
+        return cls._of(length, curvature_start, (curvature_end - curvature_start) / length)
 
     @property
     def curvature_end(self) -> float:
@@ -146,8 +156,6 @@ class _Tables:
         return self.flat[a : a + (n if k < 6 else m)]
 
     s0 = property(lambda self: self.column(0).tolist())
-    sample_x = property(lambda self: self.column(6))
-    sample_y = property(lambda self: self.column(7))
 
 
 class PathLoops(NamedTuple):
@@ -202,12 +210,12 @@ class ClothoidPath(_Projecting):
         segs: list[float] = []
         n = 0
         kmax = 0.0
-        for g in self.segments:
-            length, k, rate = float(g.length), float(g.curvature), float(g.curvature_rate)
-            kabs = max(abs(k), abs(g.curvature_end))
+        for g in self.segments:  # (floats: checked, finite)
+            length, k, rate = g.length, g.curvature, g.curvature_rate
+            kabs = max(abs(k), abs(k + rate * length))
             kmax = max(kmax, kabs)
             # piece j of n: |k_j| h + |c| h^2 / 2 <= (kabs L + |c| L^2 / 2) / n <= MAX_PHASE_PER_SUB
-            count = subintervals(kabs * length + 0.5 * abs(rate) * length * length)
+            count = subinterval_count(kabs * length + 0.5 * abs(rate) * length * length)
             segs += (length, k, rate, float(count))
             n += count
         n_segs = len(self.segments)
@@ -236,11 +244,8 @@ class ClothoidPath(_Projecting):
         flat = np.zeros(o + 2 * m)
         flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0)
         flat[P_TAIL:o] = out
-        if loops is not None:
-            loops.samples(flat, o, m, spacing)
-        elif _COMPILED:
-            q = pose_columns_of(flat, np.zeros(m, dtype=np.int64), np.arange(m, dtype=np.float64) * spacing)
-            flat[o : o + m], flat[o + m :] = q.x, q.y
+        if loops is not None or _COMPILED:  # (the compiled pose either way)
+            (loops or _COMPILED[0]).samples(flat, o, m, spacing)
         else:
             poses = _poses_flat(flat.tolist(), (np.arange(m, dtype=np.float64) * spacing).tolist())
             flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]

@@ -792,32 +792,39 @@ def restart_rows(
         fill_record(rec[j], smooth_weight)
 
 
-def _next_double_typing(typingctx: Any, bitgen: Any) -> Any:
-    if not isinstance(bitgen, numba.types.Integer):
-        return None
+def _bitgen_call(slot: int, ret: Any, ret_ir: Any) -> Any:
+    # f(bitgen): the function in ``slot`` of numpy's ``bitgen_t`` (state, next_uint64, next_uint32, next_double) at
+    # the address ``bitgen`` (int64: the pointer of ``BitGenerator.capsule``), called on its state
+    def typing(typingctx: Any, bitgen: Any) -> Any:
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            void_p = llvm_ir.IntType(8).as_pointer()
+            fn_t = llvm_ir.FunctionType(ret_ir, [void_p])
+            base = builder.inttoptr(args[0], void_p.as_pointer())
+            fn = builder.bitcast(builder.load(builder.gep(base, [llvm_ir.IntType(32)(slot)])), fn_t.as_pointer())
+            return builder.call(fn, [builder.load(base)])
 
-    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
-        void_p = llvm_ir.IntType(8).as_pointer()
-        fn_t = llvm_ir.FunctionType(llvm_ir.DoubleType(), [void_p])
-        base = builder.inttoptr(args[0], void_p.as_pointer())  # bitgen_t: state, next_uint64, _uint32, _double
-        fn = builder.bitcast(builder.load(builder.gep(base, [llvm_ir.IntType(32)(3)])), fn_t.as_pointer())
-        return builder.call(fn, [builder.load(base)])
+        return ret(bitgen), codegen
 
-    return numba.types.float64(bitgen), codegen
+    return intrinsic(typing)
 
 
-#: ``_next_double(bitgen)``: ``next_double(state)`` of numpy's ``bitgen_t`` at the address ``bitgen`` (int64, a
-#: run-time value: ``BitGenerator.ctypes.bit_generator``, the pointer of ``BitGenerator.capsule``)
-_next_double: Any = intrinsic(_next_double_typing)
+_next_uint64: Any = _bitgen_call(1, numba.types.uint64, llvm_ir.IntType(64))
+_next_uint32: Any = _bitgen_call(2, numba.types.uint32, llvm_ir.IntType(32))
+_next_double: Any = _bitgen_call(3, numba.types.float64, llvm_ir.DoubleType())
 
 
 @_jit
-def draw_uniforms(bitgens: NDArray[np.int64], out: F64) -> None:
-    """``out[j] = 2 random(3) - 1`` of the bit generator at ``bitgens[j]`` (``bitgen_t`` addresses, ``(m,)``), as
-    ``Generator.random(out=out[j])`` then ``out *= 2; out -= 1``: the same bits and states after."""
+def draw_uniforms(bitgens: NDArray[np.int64], intervals: F64, out: F64, keys: NDArray[np.uint64]) -> None:
+    """Row ``j``'s draws from the bit generator at ``bitgens[j]``, numpy's numbers and states: ``out[j, q] =
+    U(intervals[q])`` (``lo + (hi - lo) next_double``; ``lo`` undrawn where ``lo == hi``), then ``keys[j]`` (if not
+    empty) as ``draw_key`` (``Generator.integers``' Lemire bits: ``next_uint64 >> 1``, ``next_uint32 >> 31``)."""
+    one = np.uint64(1)
     for j in range(out.shape[0]):
-        for q in range(3):
-            out[j, q] = _next_double(bitgens[j]) * 2.0 - 1.0
+        for q in range(out.shape[1]):
+            lo, hi = intervals[q, 0], intervals[q, 1]
+            out[j, q] = lo if lo == hi else lo + (hi - lo) * _next_double(bitgens[j])
+        if keys.shape[0]:
+            keys[j] = ((_next_uint64(bitgens[j]) >> one) << one) + np.uint64(_next_uint32(bitgens[j]) >> np.uint32(31))
 
 
 _jit_parallel = numba.njit(cache=True, nogil=True, error_model="numpy", boundscheck=False, parallel=True)

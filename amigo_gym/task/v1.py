@@ -65,11 +65,12 @@ from amigo_gym.model.kinematics import (
     col_sin,
     h_from_a,
 )
-from amigo_gym.model.numeric import clip
+from amigo_gym.model.numeric import clip, where
 from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
-from amigo_gym.model.randomization import Randomization, StepNoise, make_randomization
-from amigo_gym.paths import CirclePath, ClothoidPath, ManoeuvrePath
+from amigo_gym.model.randomization import EpisodeDraw, Randomization, StepNoise, draw_key, make_randomization
+from amigo_gym.paths import FAMILIES, CirclePath, ClothoidPath, ManoeuvrePath, make_family_path
 from amigo_gym.paths.clothoid import STATUS_END, PathLoops
+from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     V0_DEFAULTS,
@@ -304,8 +305,6 @@ class TrackingParams:
 def _path_params(owner: str, path: Any, value: Any) -> tuple[tuple[str, float], ...]:
     """``path_params`` (a mapping or ``(name, value)`` pairs) as sorted ``(name, float)`` pairs, checked against the
     family of ``path``: one-line ``ValueError`` for an unknown, out-of-range or unused parameter."""
-    from amigo_gym.paths.families import FAMILIES, RANDOM_RANGES
-
     name = f"{owner}.path_params"
     if isinstance(value, Mapping):
         items = list(value.items())
@@ -751,8 +750,6 @@ def drawn_envelopes(p: TrackingParams) -> list[Envelope]:
     min_piece)``. Mixed adds circles of radius >= 0.5 m and the sharpest figure-8 and lane change of
     :data:`MIXED_RANGES` (read from their segments).
     """
-    from amigo_gym.paths.families import RANDOM_RANGES
-
     if p.path not in ("random", "mixed"):
         return []
     vals = {k: r.default for k, r in RANDOM_RANGES.items()} | dict(p.path_params)
@@ -896,8 +893,6 @@ def _cached_family(
     name: str, items: tuple[tuple[str, Any], ...], rng_seed: int | None = None, loops: PathLoops | None = None
 ) -> Any:
     """A family path, built once per process for each parameter set (and seed), within :data:`PATH_CACHE_BYTES`."""
-    from amigo_gym.paths import make_family_path
-
     global _cache_bytes
     key = (name, items) if rng_seed is None else (name, (("id", rng_seed), *items))
     got = _FAMILY_CACHE.get(key)
@@ -925,8 +920,6 @@ def draw_path(
 ) -> tuple[Any, dict[str, Any]]:
     """The episode's path and its ``info`` description (family, parameters), drawn from ``rng`` for ``"random"`` and
     ``"mixed"``. ``loops``: the compiled path-building loops or None (the same path either way)."""
-    from amigo_gym.paths import make_family_path
-
     if not isinstance(p.path, str) or p.path not in ("random", "mixed"):
         fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
@@ -938,37 +931,47 @@ def draw_path(
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
     # continuous parameters do not repeat: built, not cached
-    return make_family_path(fam, None, loops=loops, **values), {"family": fam, **values}
+    return FAMILIES[fam].build(loops=loops, **values), {"family": fam, **values}
+
+
+def episode_draws(p: TrackingParams) -> tuple[list[tuple[float, float]], bool]:
+    """The intervals ``(lo, hi)`` of :func:`draw_episode`'s uniform draws before ``u`` (speed, then
+    :class:`~amigo_gym.model.randomization.EpisodeDraw`'s fields; none drawn where ``lo == hi``) and whether it draws
+    a key."""
+    r = p.randomize
+    keyed = r.has_noise or not p.ideal_actuators
+    return [p.speed_range, r.wheel_radius, r.wheel_radius, r.track, r.slip, r.delay], keyed
 
 
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
     """Draw one episode (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from ``rng``, in this
     order: speed (when a range), randomisation, ``u``, the key of the per-step draws (0, not drawn, with
-    ``ideal_actuators`` and no noise)."""
-    from amigo_gym.model.randomization import draw_key, sample
-
-    lo, hi = p.speed_range
-    v = lo if lo == hi else float(rng.uniform(lo, hi))
-    d = sample(rng, p.randomize)
+    ``ideal_actuators`` and no noise); :func:`episode_draws`."""
+    intervals, keyed = episode_draws(p)
+    v, *d = (lo if lo == hi else float(rng.uniform(lo, hi)) for lo, hi in intervals)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    key = 0 if p.ideal_actuators and not p.randomize.has_noise else draw_key(rng)
+    return episode_of(p, v, EpisodeDraw(*d), draw_key(rng) if keyed else 0), (u0, u1, u2)
+
+
+def episode_of(p: TrackingParams, v: Real, d: Any, key: Any) -> Episode:
+    """The :class:`Episode` of the speed ``v`` [m/s], the randomisation ``d`` (an
+    :class:`~amigo_gym.model.randomization.EpisodeDraw`) and the ``key``: floats, or columns (``lag`` int64)."""
     true = p.robot if p.true_robot is None else p.true_robot  # the simulated robot before randomisation
-    delay = min(p.actuators.delay + d.delay, actuators.MAX_DELAY)
-    lag, t_switch = actuators.delay_split(delay, p.dt)
+    delay = p.actuators.delay + d.delay
+    lag, t_switch = actuators.delay_split(where(delay > actuators.MAX_DELAY, actuators.MAX_DELAY, delay), p.dt)
     t_brake = p.profile_duration - v / p.profile_decel if p.speed_profile == "trapezoid" else math.inf
-    ep = Episode(
+    return Episode(
         r1=true.r1 * d.r1_scale,
         r2=true.r2 * d.r2_scale,
         l1=true.l1 * d.track_scale,
         l3=true.l3,
         slip_max=d.slip_max,
-        lag=int(lag),
-        t_switch=float(t_switch),
+        lag=lag,
+        t_switch=t_switch,
         key=key,
         v_cruise=v,
         t_brake=t_brake,
     )
-    return ep, (u0, u1, u2)
 
 
 def episode_template(p: TrackingParams) -> Episode | None:
@@ -1206,12 +1209,3 @@ def placed_state(
     hx = x + ep.l3 * col_cos(b)
     hy = y + ep.l3 * col_sin(b)
     return st._replace(x=x, y=y, beta=b, progress=_progress(k, path, hx, hy, 0.0, progress))
-
-
-def episode_columns(episodes: list[Episode]) -> Episode:
-    """Episodes of several robots as one :class:`Episode` of ``(m,)`` columns (``lag`` int64, ``key`` uint64)."""
-    cols = list(zip(*episodes, strict=True))
-    types: dict[str, Any] = {"lag": np.int64, "key": np.uint64}
-    fields = zip(Episode._fields, cols, strict=True)
-    arrays: list[Any] = [np.array(c, dtype=types.get(f, np.float64)) for f, c in fields]
-    return Episode(*arrays)
