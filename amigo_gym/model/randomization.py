@@ -96,21 +96,14 @@ class EpisodeDraw(NamedTuple):
     delay: float
 
 
-def _uniform(rng: np.random.Generator, interval: tuple[float, float]) -> float:
-    """A draw from ``U(low, high)``; ``low`` without using the generator when fixed."""
-    lo, hi = interval
-    return lo if lo == hi else float(rng.uniform(lo, hi))
+def intervals(r: Randomization) -> list[tuple[float, float]]:
+    """The intervals ``(lo, hi)`` of one episode's uniform draws, in the order of :class:`EpisodeDraw`."""
+    return [r.wheel_radius, r.wheel_radius, r.track, r.slip, r.delay]
 
 
 def sample(rng: np.random.Generator, r: Randomization) -> EpisodeDraw:
-    """Draw one episode's values from ``rng`` in the order of :class:`EpisodeDraw` (a fixed range draws nothing)."""
-    return EpisodeDraw(
-        r1_scale=_uniform(rng, r.wheel_radius),
-        r2_scale=_uniform(rng, r.wheel_radius),
-        track_scale=_uniform(rng, r.track),
-        slip_max=_uniform(rng, r.slip),
-        delay=_uniform(rng, r.delay),
-    )
+    """Draw one episode's values from ``rng``: ``U(lo, hi)`` of each of :func:`intervals` (none where ``lo == hi``)."""
+    return EpisodeDraw(*(lo if lo == hi else float(rng.uniform(lo, hi)) for lo, hi in intervals(r)))
 
 
 class StepNoise(NamedTuple):

@@ -67,7 +67,7 @@ from amigo_gym.model.kinematics import (
 )
 from amigo_gym.model.numeric import clip, where
 from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
-from amigo_gym.model.randomization import EpisodeDraw, Randomization, StepNoise, draw_key, make_randomization
+from amigo_gym.model.randomization import Randomization, StepNoise, draw_key, intervals, make_randomization, sample
 from amigo_gym.paths import FAMILIES, CirclePath, ClothoidPath, ManoeuvrePath, make_family_path
 from amigo_gym.paths.clothoid import STATUS_END, PathLoops
 from amigo_gym.paths.families import RANDOM_RANGES
@@ -939,18 +939,18 @@ def episode_draws(p: TrackingParams) -> tuple[list[tuple[float, float]], bool]:
     :class:`~amigo_gym.model.randomization.EpisodeDraw`'s fields; none drawn where ``lo == hi``) and whether it draws
     a key."""
     r = p.randomize
-    keyed = r.has_noise or not p.ideal_actuators
-    return [p.speed_range, r.wheel_radius, r.wheel_radius, r.track, r.slip, r.delay], keyed
+    return [p.speed_range, *intervals(r)], r.has_noise or not p.ideal_actuators
 
 
 def draw_episode(rng: np.random.Generator, p: TrackingParams) -> tuple[Episode, tuple[float, float, float]]:
     """Draw one episode (:class:`Episode` of floats) and the start offsets ``u ~ U[-1, 1]^3`` from ``rng``, in this
     order: speed (when a range), randomisation, ``u``, the key of the per-step draws (0, not drawn, with
     ``ideal_actuators`` and no noise); :func:`episode_draws`."""
-    intervals, keyed = episode_draws(p)
-    v, *d = (lo if lo == hi else float(rng.uniform(lo, hi)) for lo, hi in intervals)
+    (lo, hi), keyed = p.speed_range, episode_draws(p)[1]
+    v = lo if lo == hi else float(rng.uniform(lo, hi))
+    d = sample(rng, p.randomize)
     u0, u1, u2 = rng.uniform(-1.0, 1.0, size=3).tolist()
-    return episode_of(p, v, EpisodeDraw(*d), draw_key(rng) if keyed else 0), (u0, u1, u2)
+    return episode_of(p, v, d, draw_key(rng) if keyed else 0), (u0, u1, u2)
 
 
 def episode_of(p: TrackingParams, v: Real, d: Any, key: Any) -> Episode:
