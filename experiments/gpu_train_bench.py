@@ -18,7 +18,9 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
    rollouts; the learning rate anneals over it), then ``model.zip`` (copied beside the JSON as ``gpu_model.zip``, with
    ``gpu_run.json`` and ``gpu_settings.json``);
    (shrunk if the steps before it took so long that the run would pass ``--deadline-s``, default 7 minutes);
-5. the generalist and the analytic controller on the 11 ideal-robot cells of ``experiments/targets_v1.py``
+5. the validation curve of that training (``--curve-points`` evaluations of ``eval_envs`` validation episodes,
+   against training time without the evaluations' time, beside the analytic controller's H RMS on them);
+6. the generalist and the analytic controller on the 11 ideal-robot cells of ``experiments/targets_v1.py``
    (:data:`targets_v1.IDEAL`, the benchmark suite's scenarios and test seeds, ``amigo-gym benchmark``'s
    evaluation): IQM of H RMS over (seed, cell) as ``targets_v1`` computes it, its ratio to the analytic's, the
    median over the cells of the settled chatter (issue 35's targets: ratio <= 1.2, chatter <= 0.1 rad/s, in <= 3
@@ -99,7 +101,7 @@ def env_only(s: FastPPOSettings, steps: int) -> float:
 
 def timed_train(s: FastPPOSettings, out: Path, **kw: Any) -> dict[str, Any]:
     t0 = time.perf_counter()
-    rec = train(s, out, log=None, evaluate_runs=False, **kw)
+    rec = train(s, out, log=None, **{"evaluate_runs": False, **kw})
     rec["call_s"] = time.perf_counter() - t0
     return rec
 
@@ -125,6 +127,29 @@ def throughput(args: argparse.Namespace, out: Path) -> dict[str, Any]:
         "rollout_share": round(w["rollout"] / w["loop"], 3),
         "update_share": round(w["update"] / w["loop"], 3),
     }
+
+
+def curve(s: FastPPOSettings, run: Path) -> list[dict[str, float]]:
+    """The run's validation curve against training time (its evaluations' time taken out) and the analytic
+    controller's H RMS on the same validation episodes: the time to quality."""
+    import gymnasium as gym
+
+    from amigo_gym.policies.tracking import AnalyticTrackingPolicy
+    from amigo_gym.tools.training.fastppo import evaluate_policy
+
+    ref = evaluate_policy(AnalyticTrackingPolicy(gym.make("AmigoBot-v1", **s.env_kwargs).unwrapped.params), s)
+    rows, spent = [], 0.0
+    for row in json.loads((run / "curve.json").read_text()):
+        spent += row["eval_s"]
+        h = row["eval_h_rms_m"]
+        rows.append({"env_steps": row["env_steps"], "train_s": round(row["wall_s"] - spent, 1), "h_rms_mm": 1e3 * h,
+                     "ratio_to_analytic": h / ref["h_rms_m"],
+                     "chatter_settled": row["eval_chatter_settled_rms"]})  # fmt: skip
+        say(
+            f"  curve: {row['env_steps']:>13,.0f} env-steps, {rows[-1]['train_s']:6.1f} s of training: H RMS "
+            f"{1e3 * h:.2f} mm, {rows[-1]['ratio_to_analytic']:.2f}x the analytic controller's (validation)"
+        )
+    return rows
 
 
 def ideal_cells(model: Path, episodes: int) -> dict[str, Any]:
@@ -157,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--deadline-s", type=float, default=420.0, help="shrink the budget to end by then [s]")
     ap.add_argument("--device", default="auto", choices=("auto", "cpu", "cuda"))
     ap.add_argument("--measure-iters", type=int, default=48, help="iterations of the throughput (half timed)")
+    ap.add_argument("--curve-points", type=int, default=6, help="validation evaluations during the training")
     ap.add_argument("--sizes", type=int, nargs="*", default=[], help="other N whose throughput is measured too")
     ap.add_argument("--env-steps", type=int, default=50, help="steps of the env-only timing")
     ap.add_argument("--seed", type=int, default=0)
@@ -198,15 +224,17 @@ def main(argv: list[str] | None = None) -> int:
                 f"% ({shares})")  # fmt: skip
         doc["throughput"] = t
         sps = t["train_sps"]
-        # 90 s for the evaluation (it compiles the env's one-thread kernel on a fresh machine)
-        budget = min(args.budget_s, args.deadline_s - (time.perf_counter() - t_all) - 90.0)
+        # 90 s for the evaluation (it compiles the env's one-thread kernel on a fresh machine), 10 s per curve point
+        budget = min(args.budget_s, args.deadline_s - (time.perf_counter() - t_all) - 90.0 - 10.0 * args.curve_points)
         if budget < args.budget_s:
             say(f"budget cut to {budget:.0f} s to end within --deadline-s {args.deadline_s:g} s")
         doc["budget_s"] = budget = max(budget, 1.0)
         total = max(1, round(sps * budget / batch)) * batch
         say(f"training {total:,} env-steps (budget {budget:g} s at the measured rate) ...")
         run = Path(tmp) / "run"
-        rec = timed_train(settings(args, total, args.seed), run)
+        every = -(-total // (args.curve_points * batch)) * batch  # whole rollouts
+        final = dataclasses.replace(settings(args, total, args.seed), eval_every=every)
+        rec = timed_train(final, run, evaluate_runs=args.curve_points > 0)
         w = rec["wall_s_this_call"]
         doc["training"] = {
             "total_steps": total,
@@ -220,8 +248,10 @@ def main(argv: list[str] | None = None) -> int:
             f"call {rec['call_s']:.1f} s); evaluating on the ideal cells ...")  # fmt: skip
         t0 = time.perf_counter()
         doc["ideal_cells"] = q = ideal_cells(run / "model.zip", args.episodes)
+        if args.curve_points > 0:
+            doc["curve"] = curve(final, run)
         path = args.json or (Path(os.environ["OUT"]) / "gpu_train_bench.json" if os.environ.get("OUT") else None)
-        for name in ("model.zip", "run.json", "settings.json") if path is not None else ():
+        for name in ("model.zip", "run.json", "settings.json", "curve.csv") if path is not None else ():
             path.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(run / name, path.parent / f"gpu_{name}")  # the trained generalist, kept
         q["eval_s"] = round(time.perf_counter() - t0, 1)

@@ -733,3 +733,6 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     assert t["env_steps"] == 32 * 16 and [x["n_envs"] for x in doc["throughput_sizes"]] == [32]
     assert json.loads((tmp_path / "gpu_run.json").read_text())["sha256"] == doc["training"]["sha256"]
     assert (tmp_path / "gpu_model.zip").stat().st_size > 0
+    c = doc["curve"]  # the validation curve: from the untrained policy to the trained one, against training time
+    assert c[0]["env_steps"] == 0 and c[-1]["env_steps"] == doc["training"]["total_steps"]
+    assert np.all(np.diff([row["train_s"] for row in c]) >= 0) and c[-1]["ratio_to_analytic"] > 0
