@@ -68,6 +68,10 @@ class ClothoidSegment:
     curvature_rate: float = 0.0
 
     def __post_init__(self) -> None:
+        g, k, c = self.length, self.curvature, self.curvature_rate
+        floats = type(g) is type(k) is type(c) is float and 0.0 < g <= MAX_SEGMENT_LENGTH and c - c == 0.0
+        if floats and abs(k) <= MAX_CURVATURE and abs(k + c * g) <= MAX_CURVATURE:
+            return  # floats in range: what the checks below keep (the family paths build many segments)
         o = "ClothoidSegment"
         object.__setattr__(self, "length", check_real(o, "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True))
         object.__setattr__(self, "curvature", check_real(o, "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE))
@@ -75,30 +79,20 @@ class ClothoidSegment:
         check_range("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
 
     @classmethod
-    def _of(cls, g: float, k: float, c: float) -> ClothoidSegment:
-        """``cls(g, k, c)``, built faster when they are floats that pass its checks."""
-        floats = type(g) is type(k) is type(c) is float and 0.0 < g <= MAX_SEGMENT_LENGTH and c - c == 0.0
-        if floats and abs(k) <= MAX_CURVATURE and abs(k + c * g) <= MAX_CURVATURE:
-            seg = object.__new__(cls)
-            seg.__dict__.update(length=g, curvature=k, curvature_rate=c)
-            return seg
-        return cls(g, k, c)
-
-    @classmethod
     def line(cls, length: float) -> ClothoidSegment:
         """A straight segment of ``length`` [m]."""
-        return cls._of(length, 0.0, 0.0)
+        return cls(length, 0.0, 0.0)
 
     @classmethod
     def arc(cls, length: float, curvature: float) -> ClothoidSegment:
         """A circular arc of ``length`` [m] and signed ``curvature`` [1/m]."""
-        return cls._of(length, curvature, 0.0)
+        return cls(length, curvature, 0.0)
 
     @classmethod
     def transition(cls, length: float, curvature_start: float, curvature_end: float) -> ClothoidSegment:
         """A clothoid from ``curvature_start`` to ``curvature_end`` [1/m] over ``length`` [m]."""
         check_real("ClothoidSegment", "length", length, 0.0, MAX_SEGMENT_LENGTH, low_open=True)
-        return cls._of(length, curvature_start, (curvature_end - curvature_start) / length)
+        return cls(length, curvature_start, (curvature_end - curvature_start) / length)
 
     @property
     def curvature_end(self) -> float:

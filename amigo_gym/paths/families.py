@@ -253,7 +253,7 @@ def random_path(
         hold = float(rng.uniform(0.0, pmax))
         rate = (target - k) / ramp
         ramp = min(ramp, total - s)
-        segs.append(ClothoidSegment._of(ramp, k, rate))
+        segs.append(ClothoidSegment(ramp, k, rate))
         s += ramp
         k = min(max(k + rate * ramp, -kmax), kmax)
         if s < total and hold > 0.0:
