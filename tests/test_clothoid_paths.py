@@ -121,6 +121,34 @@ def test_circle_family_matches_circlepath(radius: float, d: int, start: tuple[fl
     assert np.abs(a.curvature - b.curvature).max() == 0.0
 
 
+@pytest.mark.parametrize(
+    ("radius", "d", "start", "angle", "pieces"),
+    [(1.0, 1, (0.0, 0.0), 0.0, 1), (0.3, -1, (2.0, -1.0), 1.3, 1), (0.8, -1, (1.0, 2.0), -2.9, 3)],
+)
+def test_hinted_projection_on_a_circle_in_closed_form(
+    radius: float, d: int, start: tuple[float, float], angle: float, pieces: int
+) -> None:  # fmt: skip
+    """With a hint on a circle (arcs of one curvature, closed) the foot is in closed form (no coarse search): against
+    :class:`CirclePath` to 1e-12 m on the lap nearest the hint, and clamped at the window's edge beyond it."""
+    arc = Seg.arc(2.0 * math.pi * radius / pieces, d / radius)
+    path = ClothoidPath((arc,) * pieces, start, angle, closed=True)
+    ref = CirclePath(radius, start, angle, d)
+    assert path._t.flat[6:9].tolist() == pytest.approx([d / radius, *ref.center], abs=1e-15)
+    assert figure8(4.0)._t.flat[6:9].tolist() == [0.0, 0.0, 0.0]  # not a circle: the coarse search
+    rng = np.random.default_rng(5)
+    s_true = rng.uniform(-3 * ref.length, 3 * ref.length, 400)
+    e = rng.uniform(-0.6, 0.6, 400) * radius
+    th = ref.tangent_angle(s_true)
+    q = ref.point(s_true) + e[:, None] * np.column_stack((-np.sin(th), np.cos(th)))
+    hint = s_true + rng.uniform(-0.4, 0.4, 400) * radius
+    r = path.locate(q[:, 0], q[:, 1], s_prev=hint, max_advance=0.475)
+    assert np.abs(r.progress - s_true).max() < 1e-12
+    assert np.abs(r.cross_track_error - e).max() < 1e-12
+    assert (r.status == STATUS_INTERIOR).all()
+    far = path.locate(float(q[0, 0]), float(q[0, 1]), s_prev=float(s_true[0]) - 0.5, max_advance=0.2)
+    assert (far.progress, far.status) == (pytest.approx(float(s_true[0]) - 0.3, abs=1e-12), STATUS_WINDOW)
+
+
 def test_manoeuvre_family_matches_manoeuvrepath() -> None:
     path = manoeuvre(0.8, 1.5, -1)
     ref = ManoeuvrePath(0.8, 1.5, -1)

@@ -11,7 +11,8 @@ by :func:`amigo_gym.model.fresnel.advance`, exact to rounding on pieces with ``|
 MAX_PHASE_PER_SUB``. Conventions as :mod:`amigo_gym.paths.classic` (``theta`` continuous: laps add the total turn);
 an open path continues straight beyond its ends, a closed one repeats with period :attr:`ClothoidPath.length`.
 Stored as a flat float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse samples'
-``x``, ``y``); the functions on it are in numba's subset.
+``x``, ``y``); the functions on it are in numba's subset. A closed path of arcs of one curvature (a circle) also
+stores its curvature and centre: its projection starts at the foot in closed form instead of the coarse search.
 """
 
 from __future__ import annotations
@@ -236,7 +237,7 @@ class ClothoidPath(_Projecting):
         m = n_samples + (0 if self.closed else 1)  # s_j = j spacing up to the end (open) or before it (closed)
         o = P_TAIL + 6 * n
         flat = np.zeros(o + 2 * m)
-        flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0)
+        flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0, *self._circle())
         flat[P_TAIL:o] = out
         if loops is not None or _COMPILED:  # (the compiled pose either way)
             (loops or _COMPILED[0]).samples(flat, o, m, spacing)
@@ -244,6 +245,14 @@ class ClothoidPath(_Projecting):
             poses = _poses_flat(flat.tolist(), (np.arange(m, dtype=np.float64) * spacing).tolist())
             flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]
         return _Tables(flat, kmax, float(flat[P_LENGTH]), float(flat[P_TURN]))
+
+    def _circle(self) -> tuple[float, float, float]:
+        # a closed path of arcs of one curvature k: (k, centre x, centre y) [1/m, m, m], else zeros
+        k = self.segments[0].curvature
+        if not self.closed or k == 0.0 or any(g.curvature != k or g.curvature_rate != 0.0 for g in self.segments):
+            return 0.0, 0.0, 0.0
+        th = float(self.start_angle)
+        return k, self.start[0] - math.sin(th) / k, self.start[1] + math.cos(th) / k
 
     @cached_property
     def _flat_list(self) -> list[float]:
@@ -322,7 +331,8 @@ class ClothoidPath(_Projecting):
 
         1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
            window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
-           ``max_advance``), less than half the arc length between branches that pass near each other.
+           ``max_advance``), less than half the arc length between branches that pass near each other; with a
+           hint on a circle (arcs of one curvature, closed), the foot in closed form on the lap nearest the hint.
         2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``, steps limited to ``h``,
            ``s`` kept in the window (and in ``[0, L]`` on an open path) (:func:`project_flat`).
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
@@ -358,8 +368,10 @@ FlatPoint = tuple[float, float, float, float, float, float, float, float, float,
 # --------------------------------------------------------------------------- the flat path vector
 
 #: the head of a flat path vector (then the arrays)
-PATH_HEADER: tuple[str, ...] = ("n_pieces", "n_samples", "length", "turn", "spacing", "closed")
-P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED = range(len(PATH_HEADER))
+PATH_HEADER: tuple[str, ...] = (
+    "n_pieces", "n_samples", "length", "turn", "spacing", "closed", "circle_curvature", "circle_x", "circle_y"
+)  # fmt: skip
+P_N, P_M, P_LENGTH, P_TURN, P_SPACING, P_CLOSED, P_CIRCLE_K, P_CIRCLE_X, P_CIRCLE_Y = range(len(PATH_HEADER))
 #: where the pieces' arrays start
 P_TAIL = len(PATH_HEADER)
 #: a flat path vector: a float64 array or a list of Python floats
@@ -474,9 +486,27 @@ def locate_flat(
     if pv[P_CLOSED] == 0.0:
         lo = min(max(lo, 0.0), pv[P_LENGTH])
         hi = min(max(hi, 0.0), pv[P_LENGTH])
-    h = pv[P_SPACING]
-    s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
+    if pv[P_CIRCLE_K] != 0.0:
+        s = circle_foot(pv, x, y, sp)
+    else:
+        h = pv[P_SPACING]
+        s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
     return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(s, lo), hi), lo, hi)
+
+
+def circle_foot(pv: FlatPath, x: float, y: float, sp: float) -> float:
+    """On a circle (``pv[P_CIRCLE_K] != 0``): the arc length [m] of the foot of ``(x, y)`` [m] on the lap nearest
+    ``sp`` [m], ``s = Delta / k`` with ``Delta`` the signed angle at the centre from the start point to ``(x, y)``."""
+    n = int(pv[P_N])
+    cx = pv[P_CIRCLE_X]
+    cy = pv[P_CIRCLE_Y]
+    ax = pv[P_TAIL + n] - cx  # the start point (piece 0's), s = 0
+    ay = pv[P_TAIL + 2 * n] - cy
+    bx = x - cx
+    by = y - cy
+    s = math.atan2(ax * by - ay * bx, ax * bx + ay * by) / pv[P_CIRCLE_K]
+    length = pv[P_LENGTH]
+    return s + length * _floor_float((sp - s) / length + 0.5)
 
 
 def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float) -> FlatPoint:

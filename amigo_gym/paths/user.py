@@ -106,8 +106,8 @@ class UserPath:
         js = np.arange(n + (0 if self.closed else 1), dtype=np.float64)
         samples = self.pose_columns(js * self._spacing)
         sx, sy = (np.asarray(v, dtype=np.float64) for v in (samples.x, samples.y))
-        # a flat path vector of no pieces: the samples the projection searches
-        head = [0.0, float(sx.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0]
+        # a flat path vector of no pieces (clothoid.PATH_HEADER; not a circle): the samples the projection searches
+        head = [0.0, float(sx.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0, 0.0, 0.0, 0.0]
         self._flat = np.concatenate((head, sx, sy))
         loc = self.locate(np.asarray(pose.x), np.asarray(pose.y), probe, 0.5, 0.5)
         _finite_column(loc.progress, probe.shape, f"{who}: locate(...).progress")

@@ -1,0 +1,39 @@
+"""AmigoBot-v1's native vector env at N = 4096, defaults and the training distribution, timed by CPU time: run it on
+two trees alternately to compare them.
+
+    PYTHONPATH=<tree> NUMBA_NUM_THREADS=1 python experiments/v1_vector_speed.py [label] [N]
+
+Prints, per configuration, the least over 5 repeats of 10 steps (``time.thread_time_ns``: a busy host's stolen time
+does not count) of ``gym.make_vec("AmigoBot-v1", N, vectorization_mode="vector_entry_point", **kwargs)`` stepped
+with uniform random actions in [-1, 1] after ``reset(seed=repeat)``, in µs a step and env-steps/s, and the CPU.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import amigo_gym  # noqa: F401  (registers the envs)
+from amigo_gym.tools.machine import machine_line
+from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
+
+n = int(sys.argv[2]) if len(sys.argv) > 2 else 4096
+out = []
+for label, kw in (("defaults", {}), ("training distribution", dict(TRAINING_DISTRIBUTION["env_kwargs"]))):
+    env = gym.make_vec("AmigoBot-v1", n, vectorization_mode="vector_entry_point", **kw)
+    env.reset(seed=0)
+    acts = np.random.default_rng(0).uniform(-1.0, 1.0, (10, n, 2))
+    env.step(acts[0])  # compiled
+    best = float("inf")
+    for r in range(5):
+        env.reset(seed=r)
+        t = time.thread_time_ns()
+        for k in range(10):
+            env.step(acts[k])
+        best = min(best, (time.thread_time_ns() - t) / 10)
+    env.close()
+    out.append(f"{label} {best / 1e3:.0f} us/step ({n / best * 1e3:.2f}M env-steps/s)")
+print(f"{sys.argv[1] if len(sys.argv) > 1 else ''} N={n}: " + " | ".join(out) + f" [{machine_line()}]")
