@@ -659,13 +659,19 @@ def test_cuda_without_one_and_too_many_env_threads_are_one_line_errors(
 
 
 def test_same_command_twice_same_weights_and_the_manifest_names_the_machine(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The determinism users can check: one train-fast command line run twice (same machine, same seed) gives the
-    same weights bit for bit; run.json records the git revision, CPU, thread counts and device; a --total-steps
-    below one rollout is rounded up in one said line, and no 'nan' return is printed before an episode ends."""
+    same weights bit for bit; run.json records the git revision (the one at the start: a checkout that moves during
+    training does not rename the code that ran), CPU, thread counts and device; a --total-steps below one rollout is
+    rounded up in one said line, and no 'nan' return is printed before an episode ends."""
     from amigo_gym.tools.machine import cpu_model
+    from amigo_gym.tools.training import fastppo
     from amigo_gym.tools.training.fastppo import main
+
+    updated, real_update, real_revision = [], fastppo.update, fastppo.git_revision
+    monkeypatch.setattr(fastppo, "update", lambda *a: (updated.append(1), real_update(*a))[1])
+    monkeypatch.setattr(fastppo, "git_revision", lambda: "b" * 40 if updated else real_revision())
 
     argv = ["--env-kwargs", json.dumps(KW), "--total-steps", "100", "--num-envs", "16", "--rollout-steps", "8",
             "--epochs", "2", "--minibatch-size", "64", "--hidden", "8", "8", "--max-episode-steps", "20",
@@ -687,7 +693,7 @@ def test_same_command_twice_same_weights_and_the_manifest_names_the_machine(
     assert rec["timesteps"] == 128 and rec["device"] == "cpu" and rec["cpu"] == cpu_model()
     assert rec["torch_threads"] == 1 and rec["numba_threads"] >= 1 and rec["settings"]["device"] == "cpu"
     rev = rec["git_revision"]
-    assert rev == "unknown" or len(rev.removesuffix("-dirty")) == 40, rev
+    assert rev != "b" * 40 and (rev == "unknown" or len(rev.removesuffix("-dirty")) == 40), rev
     assert set(rec["wall_s_this_call"]) == {"env", "rollout", "update", "loop"}
     assert 0 < rec["wall_s_this_call"]["env"] < rec["wall_s_this_call"]["rollout"] <= rec["wall_s_this_call"]["loop"]
 

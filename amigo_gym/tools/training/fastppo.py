@@ -663,6 +663,7 @@ def train(
         if numba is not None:  # first: starting numba's threads resets torch's count
             set_threads(s.env_threads)
         torch.set_num_threads(s.threads)
+        where = machine_record(device)  # at the start: the revision whose code this call runs
         builder = FeatureBuilder(s.spec())
         r = _load_checkpoint(out / "checkpoint.pt", s, builder, device) if resume else _new_run(s, builder, device)
         if not resume:
@@ -766,7 +767,7 @@ def train(
             "settings": s.to_json(),
             "command": command,
             "versions": versions(("gymnasium", "torch")),
-            **machine_record(device),
+            **where,
             "cpu_s_this_call": {k: round(float(v), 2) for k, v in cpu_s.items()},
             "wall_s_this_call": {k: round(float(v), 3) for k, v in wall_s.items()},
         }
