@@ -9,8 +9,9 @@
 #    generalist trained for BUDGET_S seconds, its validation curve, and it against the analytic controller on the
 #    ideal cells; the model comes back as gpu_model.zip);
 # 3. the vector env's step against numba's threads at N = N_SCALE, the step alone (thread_wait.py's work = 0):
-#    AmigoBot-v0 and v1 (defaults) on each of THREADS, the last also with OMP_WAIT_POLICY=ACTIVE (the env's
-#    default is PASSIVE); v1's training distribution on the first and the last.
+#    AmigoBot-v0 and v1 (defaults) on each of THREADS, v1 on the last also with OMP_WAIT_POLICY=ACTIVE (the env's
+#    default is PASSIVE); v1's training distribution on the first and the last; then the share of v1's one-thread
+#    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up).
 # Each step has its own time limit, so one that fails or runs long leaves the others their time.
 set -u
 OUT=${OUT:-/tmp/amigo_device}
@@ -37,10 +38,11 @@ export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
         for t in $THREADS; do
             timeout 60 $py experiments/thread_wait.py $env "$N_SCALE" "$t" 0 || echo "$env $t: exit $?"
         done
-        OMP_WAIT_POLICY=ACTIVE timeout 60 $py experiments/thread_wait.py $env "$N_SCALE" "$last" 0 || echo "exit $?"
     done
+    OMP_WAIT_POLICY=ACTIVE timeout 60 $py experiments/thread_wait.py AmigoBot-v1 "$N_SCALE" "$last" 0 || echo "exit $?"
     for t in $first $last; do
         timeout 90 $py experiments/thread_wait.py AmigoBot-v1 "$N_SCALE" "$t" 0 training || echo "training $t: exit $?"
     done
+    timeout 60 $py experiments/serial_share.py "$N_SCALE" || echo "serial_share: exit $?"
     echo "== done: $(date -u +%FT%TZ)"
 } 2>&1 | tee "$OUT/device.log"
