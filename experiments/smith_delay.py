@@ -2,6 +2,7 @@
 delay (a Smith predictor with the nominal model), the delay known or estimated online, on the validation cells.
 
     python experiments/smith_delay.py [--seeds 20] [--gains 1 2 3] [--cells val_delay_0.25 ...]
+    python experiments/smith_delay.py --estimates     # the delay estimate step by step, true delays 0 to 0.3 s
 
 The prediction (:class:`Smith`): H's cross-track error ``e`` and heading error ``psi`` (from the observation) moved
 over the delay ``d`` by the Frenet equations of H, ``de/dt = v sin psi + l3 omega cos psi``, ``dpsi/dt = omega -
@@ -28,7 +29,7 @@ import amigo_gym  # noqa: F401
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.task.v1 import obs_fields
 from amigo_gym.tools.machine import machine_line
-from amigo_gym.tools.training.protocol import validation_cells
+from amigo_gym.tools.training.protocol import VALIDATION_SEEDS, validation_cells
 
 CANDIDATES = tuple(0.05 * i for i in range(7))  # delays the estimator chooses from [s]
 
@@ -141,12 +142,30 @@ def run(sc: Any, make: Any) -> tuple[float, int]:
     return 1e3 * float(np.mean([r[0] for r in rs])), sum(r[1] for r in rs)
 
 
+def estimates(seed: int) -> None:
+    """Print :class:`SmithEstimated`'s delay after steps 1-10 and 100 on the circle R 1 m at 0.2 m/s (``k = 2``)."""
+    for true in (0.0, 0.1, 0.25, 0.3):
+        env = gym.make("AmigoBot-v1", path="circle", speed=0.2, dt=0.1, randomize={"delay": (true, true)})
+        ctl = SmithEstimated(env.unwrapped.params, 2.0)  # type: ignore[attr-defined]
+        obs, _ = env.reset(seed=seed)
+        got = []
+        for t in range(101):
+            obs = env.step(ctl.act(obs, t == 0))[0]
+            got.append(ctl.delay)
+        first = [round(d, 2) for d in got[1:11]]
+        print(f"true delay {true:.2f} s: estimates after steps 1-10 {first}, after 100 {got[100]:.2f}")
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=int, default=20)
     p.add_argument("--gains", type=float, nargs="+", default=[1.0, 2.0, 3.0])
     p.add_argument("--cells", nargs="*", default=None, help="validation cells (default: every AmigoBot-v1 one)")
+    p.add_argument("--estimates", action="store_true", help="print the delay estimate step by step, then stop")
     a = p.parse_args()
+    if a.estimates:
+        estimates(VALIDATION_SEEDS[0])
+        return
     cells = [sc for sc in validation_cells("AmigoBot-v1", a.seeds) if a.cells is None or sc.name in a.cells]
     print(machine_line())
     heads = [f"estimated, k = {g:g}" for g in a.gains] + [f"known, k = {g:g}" for g in a.gains]
