@@ -22,6 +22,7 @@ TUNING = (
     "amigo_gym/tools/training/train.py",
     "experiments/sweep_objective.py",
     "experiments/residual_val_cells.py",
+    "experiments/smith_delay.py",
 )
 #: the names that reach test cells or test seeds
 TEST_NAMES = {"TEST", "TEST_SEEDS", "SUITE", "SUITES", "SUITE_1_0", "quick_suite", "curvature_scenarios"}
