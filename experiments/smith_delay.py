@@ -100,16 +100,21 @@ class Smith:
 
 
 class SmithEstimated(Smith):
-    """:class:`Smith` with the delay chosen among :data:`CANDIDATES` by the measured wheel rates (module docstring)."""
+    """:class:`Smith` with the delay chosen among :data:`CANDIDATES` by the measured wheel rates (module docstring).
+    ``quiet`` [(m/s)^2]: if given, the gain ``k`` only while the chosen candidate's mean squared distance per step to
+    the measured ``v``, ``l1 omega`` stays at or below it (measurements that the nominal model explains), else the
+    analytic controller's ``k = 1`` (noisy measurements: a higher gain amplifies them)."""
 
-    def __init__(self, params: Any, gain: float) -> None:
+    def __init__(self, params: Any, gain: float, quiet: float | None = None) -> None:
         super().__init__(params, 0.0, gain)
+        self.quiet, self.fast, self.slow = quiet, self.pol, AnalyticTrackingPolicy(params, gain=1.0)
 
     def observe(self, obs: np.ndarray, start: bool) -> None:
         super().observe(obs, start)
         if start:
             self.sim, self.err = [(0.0, 0.0)] * len(CANDIDATES), np.zeros(len(CANDIDATES))
             self.delay = 0.0
+            self.pol = self.fast
             return
         t0 = (len(self.issued) - 1) * self.p.dt
         v, om = self.body(float(obs[self.at["wheel_rate_1"]]), float(obs[self.at["wheel_rate_2"]]))
@@ -120,6 +125,9 @@ class SmithEstimated(Smith):
             self.sim[i] = (sv, so)
             self.err[i] += (sv - v) ** 2 + (self.p.robot.l1 * (so - om)) ** 2
         self.delay = CANDIDATES[int(np.argmin(self.err))]
+        if self.quiet is not None:
+            steps = len(self.issued)
+            self.pol = self.fast if self.err.min() / steps <= self.quiet else self.slow
 
 
 def h_rms(make: Any, env_id: str, kwargs: dict[str, Any], seed: int, steps: int) -> tuple[float, bool]:
@@ -162,6 +170,7 @@ def main() -> None:
     p.add_argument("--gains", type=float, nargs="+", default=[1.0, 2.0, 3.0])
     p.add_argument("--cells", nargs="*", default=None, help="validation cells (default: every AmigoBot-v1 one)")
     p.add_argument("--estimates", action="store_true", help="print the delay estimate step by step, then stop")
+    p.add_argument("--quiet", type=float, default=None, help="SmithEstimated's quiet threshold [(m/s)^2]")
     a = p.parse_args()
     if a.estimates:
         estimates(VALIDATION_SEEDS[0])
@@ -176,7 +185,7 @@ def main() -> None:
         rz = dict(sc.env_kwargs).get("randomize", {})
         known = rz["delay"][0] if isinstance(rz, dict) and "delay" in rz else None
         row = [f"{base:.2f}" + (f" ({base_end} end)" if base_end else "")]
-        makers = [lambda q, g=g: SmithEstimated(q, g) for g in a.gains]
+        makers = [lambda q, g=g: SmithEstimated(q, g, a.quiet) for g in a.gains]
         makers += [None if known is None else (lambda q, g=g, d=known: Smith(q, d, g)) for g in a.gains]
         for make in makers:
             if make is None:

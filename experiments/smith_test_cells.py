@@ -2,7 +2,7 @@
 estimated online), run once on suite 2.0's AmigoBot-v1 test cells against the analytic controller (``k = 1``) on the
 same episodes.
 
-    python experiments/smith_test_cells.py [--json out.json]
+    python experiments/smith_test_cells.py [--json out.json] [--quiet 1e-6]
 
 Per cell (30 episodes on the test seeds, :func:`amigo_gym.tools.training.task_metrics.run_scenario`, the benchmark's
 episode metrics): the mean H RMS [mm] of both, their ratio, the mean paired difference [mm] with its 95 % bootstrap
@@ -41,6 +41,7 @@ class Rows:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--json", default=None)
+    p.add_argument("--quiet", type=float, default=None, help="SmithEstimated's quiet threshold [(m/s)^2]")
     a = p.parse_args()
     print(machine_line())
     print("| cell | analytic [mm] | compensator [mm] | ratio | paired diff [mm] (95 % CI) | failed (analytic, comp.) "
@@ -53,7 +54,7 @@ def main() -> None:
         got = {}
         for name, make in (
             ("analytic", lambda q=params: Smith(q, 0.0, 1.0)),
-            ("comp", lambda q=params: SmithEstimated(q, GAIN)),
+            ("comp", lambda q=params: SmithEstimated(q, GAIN, a.quiet)),
         ):
             got[name] = [r.metrics() for r in run_scenario(Rows(make, n), sc)]
         base = np.array([m["h_rms_m"] for m in got["analytic"]]) * 1e3
