@@ -8,9 +8,10 @@ The prediction (:class:`Smith`): H's cross-track error ``e`` and heading error `
 over the delay ``d`` by the Frenet equations of H, ``de/dt = v sin psi + l3 omega cos psi``, ``dpsi/dt = omega -
 kappa (v cos psi - l3 omega sin psi) / (1 - kappa e)`` (the path's curvature ``kappa`` held), with ``v``, ``omega``
 of the nominal robot from the measured wheel rates, ramped by the firmware's limits towards the commands this
-controller issued ``d`` before (episodes start at rest); 5 ms Euler steps. :class:`SmithEstimated` estimates ``d``
-among 0, 0.05, ..., 0.3 s: each candidate simulates the nominal ramps' ``v``, ``omega`` from the commands issued
-so far under that delay, and the one with the least squared distance to the measured ones so far wins.
+controller issued ``d`` before (episodes start at rest; the package's :func:`amigo_gym.model.actuators.ramp`); 5 ms
+steps. :class:`SmithEstimated` estimates ``d`` among 0, 0.05, ..., 0.3 s: each candidate simulates the nominal
+ramps' ``v``, ``omega`` from the commands issued so far under that delay, and the one with the least squared distance
+to the measured ones so far wins.
 Prints one Markdown row per cell: the mean H RMS [mm] over the validation seeds of the analytic controller
 (``k = 1``), and the ratio to it of the compensator per gain (estimated delay; on the delay cells also known), and
 the episodes ended early. Validation cells and seeds only (:mod:`amigo_gym.tools.training.protocol`).
@@ -26,6 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import amigo_gym  # noqa: F401
+from amigo_gym.model import actuators
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.task.v1 import obs_fields
 from amigo_gym.tools.machine import machine_line
@@ -53,12 +55,13 @@ class Smith:
         return 0.5 * (r.r1 * w1 + r.r2 * w2), (r.r1 * w1 - r.r2 * w2) / (2.0 * r.l1)
 
     def ramp(self, v: float, om: float, a: tuple[float, float]) -> tuple[float, float]:
-        """One Euler step of the firmware's ramps of ``v``, ``omega`` towards the setpoint ``a``."""
+        """``v``, ``omega`` after one step ``h`` of the firmware's ramps towards the setpoint ``a``
+        (:func:`amigo_gym.model.actuators.ramp`)."""
         act, h = self.p.actuators, self.h
         vc, oc = self.body(*a)
-        rv = act.acceleration if abs(vc) > abs(v) and v * vc >= 0.0 else act.deceleration
-        ro = act.rot_acceleration if abs(oc) > abs(om) and om * oc >= 0.0 else act.rot_deceleration
-        return v + max(-rv * h, min(rv * h, vc - v)), om + max(-ro * h, min(ro * h, oc - om))
+        v2 = actuators.ramp(v, vc, act.acceleration, act.deceleration, h).u_b
+        om2 = actuators.ramp(om, oc, act.rot_acceleration, act.rot_deceleration, h).u_b
+        return float(v2), float(om2)
 
     def command_at(self, t: float, delay: float) -> tuple[float, float]:
         """The setpoint acting at time ``t`` [s] since the reset: the action issued last at or before ``t - delay``."""
