@@ -79,12 +79,16 @@ class PathArena:
         return start, stop
 
     def _compact(self) -> None:
-        old = self.flat
-        self.flat = np.zeros(max(1024, 2 * (self.used - self._dead)))
+        # in place, the live paths moved down in the order they lie: the array's pages stay mapped (a new array's
+        # first touch page-faults on every append after it, most of a restart's cost in the arena)
+        live = sorted(self._live.values(), key=lambda entry: entry[1])
         self.used = 0
         self._dead = 0
-        for entry in self._live.values():
-            entry[1], entry[2] = self._append(old[entry[1] : entry[2]])
+        for entry in live:
+            start, stop = entry[1], entry[2]
+            entry[1], entry[2] = self.used, self.used + stop - start
+            self.flat[entry[1] : entry[2]] = self.flat[start:stop]  # (downwards: a source is never overwritten first)
+            self.used = entry[2]
         for i, oid in enumerate(self._row_ids):
             if oid:
                 entry = self._live[oid]
