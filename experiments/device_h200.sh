@@ -11,7 +11,8 @@
 # 3. the vector env's step against numba's threads at N = N_SCALE, the step alone (thread_wait.py's work = 0):
 #    AmigoBot-v0 and v1 (defaults) on each of THREADS, v1 on the last also with OMP_WAIT_POLICY=ACTIVE (the env's
 #    default is PASSIVE); v1's training distribution on the first and the last; then the share of v1's one-thread
-#    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up).
+#    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up), at N_SCALE with
+#    the defaults and at N_TRAIN as train-fast steps it (restarts and the final infos included).
 # Each step has its own time limit, so one that fails or runs long leaves the others their time.
 set -u
 OUT=${OUT:-/tmp/amigo_device}
@@ -44,5 +45,6 @@ export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
         timeout 90 $py experiments/thread_wait.py AmigoBot-v1 "$N_SCALE" "$t" 0 training || echo "training $t: exit $?"
     done
     timeout 60 $py experiments/serial_share.py "$N_SCALE" || echo "serial_share: exit $?"
+    timeout 120 $py experiments/serial_share.py "$N_TRAIN" training || echo "serial_share training: exit $?"
     echo "== done: $(date -u +%FT%TZ)"
 } 2>&1 | tee "$OUT/device.log"
