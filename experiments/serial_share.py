@@ -78,5 +78,6 @@ for r, actions in enumerate(runs):
 w, inside, restarts, scatter = best
 cap = w / (w - inside + inside / 16)
 parts = f" (restarts {restarts * 1e3:.2f} ms, infos' scatter {scatter * 1e3:.2f} ms)" if training else ""
-print(f"N={n}{' training' if training else ''}: step {w * 1e3:.2f} ms, step_rows {inside * 1e3:.2f} ms, outside "
-      f"{1e3 * (w - inside):.2f} ms ({(w - inside) / w:.1%}){parts}; 16 threads at most {cap:.1f}x [{machine_line()}]")  # fmt: skip
+label = f"N={n}{' training' if training else ''}"
+print(f"{label}: step {w * 1e3:.2f} ms, step_rows {inside * 1e3:.2f} ms, outside {1e3 * (w - inside):.2f} ms "
+      f"({(w - inside) / w:.1%}){parts}; 16 threads at most {cap:.1f}x [{machine_line()}]")  # fmt: skip
