@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import amigo_gym  # noqa: F401
-from amigo_gym.model import actuators
+from amigo_gym.model import actuators, kinematics
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.task.v1 import obs_fields
 from amigo_gym.tools.machine import machine_line
@@ -49,10 +49,9 @@ class Smith:
         self.state: Any = None
 
     def body(self, a1: float, a2: float) -> tuple[float, float]:
-        """``(v, omega)`` [m/s, rad/s] of the nominal robot for normalised wheel rates."""
+        """``(v, omega)`` [m/s, rad/s] of the nominal robot for normalised wheel rates (the package's kinematics)."""
         r = self.p.robot
-        w1, w2 = a1 * r.max_wheel_rate, a2 * r.max_wheel_rate
-        return 0.5 * (r.r1 * w1 + r.r2 * w2), (r.r1 * w1 - r.r2 * w2) / (2.0 * r.l1)
+        return kinematics.body_velocity_of(a1 * r.max_wheel_rate, a2 * r.max_wheel_rate, r.r1, r.r2, 2.0 * r.l1)
 
     def ramp(self, v: float, om: float, a: tuple[float, float]) -> tuple[float, float]:
         """``v``, ``omega`` after one step ``h`` of the firmware's ramps towards the setpoint ``a``
