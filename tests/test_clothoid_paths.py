@@ -129,7 +129,8 @@ def test_hinted_projection_on_a_circle_in_closed_form(
     radius: float, d: int, start: tuple[float, float], angle: float, pieces: int
 ) -> None:  # fmt: skip
     """With a hint on a circle (arcs of one curvature, closed) the foot is in closed form (no coarse search): against
-    :class:`CirclePath` to 1e-12 m on the lap nearest the hint, and clamped at the window's edge beyond it."""
+    :class:`CirclePath` to 1e-12 m on the lap nearest the hint, and clamped at the window's edge beyond it; the pose
+    (also in closed form) against :class:`CirclePath`'s too."""
     arc = Seg.arc(2.0 * math.pi * radius / pieces, d / radius)
     path = ClothoidPath((arc,) * pieces, start, angle, closed=True)
     ref = CirclePath(radius, start, angle, d)
@@ -143,6 +144,9 @@ def test_hinted_projection_on_a_circle_in_closed_form(
     hint = s_true + rng.uniform(-0.4, 0.4, 400) * radius
     r = path.locate(q[:, 0], q[:, 1], s_prev=hint, max_advance=0.475)
     assert np.abs(r.progress - s_true).max() < 1e-12
+    assert np.abs(path.point(s_true) - ref.point(s_true)).max() < 1e-12  # the pose in closed form too, laps included
+    assert np.abs(path.tangent_angle(s_true) - th).max() < 1e-12
+    assert path.pose_columns(float(s_true[0])).x == pytest.approx(float(ref.point(s_true[0])[0]), abs=1e-12)
     assert np.abs(r.cross_track_error - e).max() < 1e-12
     assert (r.status == STATUS_INTERIOR).all()
     far = path.locate(float(q[0, 0]), float(q[0, 1]), s_prev=float(s_true[0]) - 0.5, max_advance=0.2)

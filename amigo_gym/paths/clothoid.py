@@ -332,7 +332,7 @@ class ClothoidPath(_Projecting):
         1. Coarse search over the samples ``s_j = j h``: over one lap without a hint ``s_prev`` [m], else over the
            window ``[s_prev - max_retreat, s_prev + max_advance]`` [m] (> 0; ``max_retreat`` defaults to
            ``max_advance``), less than half the arc length between branches that pass near each other; with a
-           hint on a circle (arcs of one curvature, closed), the foot in closed form on the lap nearest the hint.
+           hint on a circle (arcs of one curvature, closed), the foot in closed form, lap nearest the hint (no step 2).
         2. Newton's method on ``g(s) = (p - c(s)) . t(s)``, ``g'(s) = -(1 - kappa e)``, steps limited to ``h``,
            ``s`` kept in the window (and in ``[0, L]`` on an open path) (:func:`project_flat`).
         3. The status says whether ``s`` was clamped at an end of an open path or at a window edge.
@@ -486,12 +486,11 @@ def locate_flat(
     if pv[P_CLOSED] == 0.0:
         lo = min(max(lo, 0.0), pv[P_LENGTH])
         hi = min(max(hi, 0.0), pv[P_LENGTH])
-    if pv[P_CIRCLE_K] != 0.0:
-        s = circle_foot(pv, x, y, sp)
-    else:
-        h = pv[P_SPACING]
-        s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
-    return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(s, lo), hi), lo, hi)
+    if pv[P_CIRCLE_K] != 0.0:  # the foot in closed form: no Newton step
+        return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(circle_foot(pv, x, y, sp), lo), hi), lo, hi, 0)
+    h = pv[P_SPACING]
+    s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(s, lo), hi), lo, hi, NEWTON_ITERATIONS)
 
 
 def circle_foot(pv: FlatPath, x: float, y: float, sp: float) -> float:
@@ -514,8 +513,8 @@ def locate_global(pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPat
     unbounded (closed)."""
     s = nearest_sample(pv, x, y, 0.0, int(pv[P_M]))
     if pv[P_CLOSED] != 0.0:
-        return project_flat(pose, buf, nodes, nb, pv, x, y, s, -math.inf, math.inf)
-    return project_flat(pose, buf, nodes, nb, pv, x, y, s, 0.0, pv[P_LENGTH])
+        return project_flat(pose, buf, nodes, nb, pv, x, y, s, -math.inf, math.inf, NEWTON_ITERATIONS)
+    return project_flat(pose, buf, nodes, nb, pv, x, y, s, 0.0, pv[P_LENGTH], NEWTON_ITERATIONS)
 
 
 def foot_terms(x: float, y: float, px: float, py: float, ct: float, st: float) -> tuple[float, float, float, float]:
@@ -526,15 +525,16 @@ def foot_terms(x: float, y: float, px: float, py: float, ct: float, st: float) -
 
 
 def project_flat(
-    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float, hi: float
-) -> FlatPoint:
-    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most
-    :data:`NEWTON_ITERATIONS` steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` (the last below
+    pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, s: float, lo: float,
+    hi: float, iterations: int,
+) -> FlatPoint:  # fmt: skip
+    """Steps 2 and 3 of :meth:`ClothoidPath.locate` from ``s`` [m] in ``[lo, hi]``: at most ``iterations``
+    steps ``s <- clip(s + clip(d, -h, h), lo, hi)`` (the last below
     :data:`NEWTON_TAYLOR_STEP`, its pose to first order), ``d = g / q``, ``q = max(1 - kappa e,
     MIN_NEWTON_DENOMINATOR)`` (on an arc exactly ``atan2(kappa g, q) / kappa``); then the foot terms and status."""
     h = pv[P_SPACING]
     px, py, th, kappa, c, ct, st = pose(buf, nodes, nb, pv, s)
-    for _ in range(NEWTON_ITERATIONS):
+    for _ in range(iterations):
         _dx, _dy, g, e = foot_terms(x, y, px, py, ct, st)
         den = py_max(1.0 - kappa * e, MIN_NEWTON_DENOMINATOR)
         d = math.atan2(kappa * g, den) / kappa if c == 0.0 and kappa != 0.0 else g / den
@@ -613,9 +613,17 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
     ``(x, y, theta, kappa, dkappa/ds, cos theta, sin theta)`` [m, m, rad, 1/m, 1/m^2, -, -].
 
     ``buf``: scratch of ``3 (NODES + 1)`` floats; ``nodes[nb:]``: :func:`amigo_gym.model.fresnel.node_table` of 1.
+    On a circle (``pv[P_CIRCLE_K] = k != 0``) in closed form: ``theta = theta_0 + k s``, the point
+    ``c + (sin theta, -cos theta) / k``.
     """
-    j, du, lap, extra = piece_at(pv, s)
     n = int(pv[P_N])
+    k = pv[P_CIRCLE_K]
+    if k != 0.0:
+        th = pv[P_TAIL + 3 * n] + k * s
+        ct = math.cos(th)
+        st = math.sin(th)
+        return pv[P_CIRCLE_X] + st / k, pv[P_CIRCLE_Y] - ct / k, th, k, 0.0, ct, st
+    j, du, lap, extra = piece_at(pv, s)
     b = P_TAIL + n + j
     x, y, th, ct, st = unit_speed_nodes(
         buf, pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du, nodes, nb, NODES
