@@ -1,5 +1,5 @@
-"""AmigoBot-v1's native vector env at N = 4096, defaults and the training distribution, timed by CPU time: run it on
-two trees alternately to compare them.
+"""AmigoBot-v1's native vector env at N = 4096, defaults, the training distribution and ``V1_HARD`` (mixed paths, hard
+randomisation), timed by CPU time: run it on two trees alternately to compare them.
 
     PYTHONPATH=<tree> NUMBA_NUM_THREADS=1 python experiments/v1_vector_speed.py [label] [N]
 
@@ -17,12 +17,14 @@ import gymnasium as gym
 import numpy as np
 
 import amigo_gym  # noqa: F401  (registers the envs)
+from amigo_gym.tools.bench.env import V1_HARD
 from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 4096
 out = []
-for label, kw in (("defaults", {}), ("training distribution", dict(TRAINING_DISTRIBUTION["env_kwargs"]))):
+configs = (("defaults", {}), ("training distribution", dict(TRAINING_DISTRIBUTION["env_kwargs"])), ("hard", V1_HARD))
+for label, kw in configs:
     env = gym.make_vec("AmigoBot-v1", n, vectorization_mode="vector_entry_point", **kw)
     env.reset(seed=0)
     acts = np.random.default_rng(0).uniform(-1.0, 1.0, (10, n, 2))
