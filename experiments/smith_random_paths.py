@@ -5,26 +5,41 @@ fail tight paths?
 
     python experiments/smith_random_paths.py [--paths 200] [--quiet 1e-6] [--json out.json]
 
-One episode per path from the protocol's start offset (:func:`~amigo_gym.tools.training.task_metrics.run_scenario`);
-a failure is a peak |e| of H at or above the tolerance. Prints the protocol's tables
-(:func:`~amigo_gym.tools.training.random_paths.markdown_random_paths`: all paths, the paths within the wheel-rate
-limits, per curvature bin), with Wilson 95 % intervals.
+The benchmark's own run (:func:`~amigo_gym.tools.training.random_paths.run_random_paths`: one episode per path from
+the protocol's start offset, a failure a peak |e| of H at or above the tolerance) with the two controllers as its
+agents; prints the protocol's tables (all paths, the paths within the wheel-rate limits, per curvature bin, Wilson
+95 % intervals).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
-import gymnasium as gym
 from smith_delay import Smith, SmithEstimated
 from smith_test_cells import GAIN, Rows
 
 import amigo_gym  # noqa: F401
 from amigo_gym.tools.machine import machine_line
-from amigo_gym.tools.training.random_paths import failure_table, markdown_random_paths, path_set
-from amigo_gym.tools.training.task_metrics import run_scenario
+from amigo_gym.tools.training.random_paths import markdown_random_paths, path_set, run_random_paths
+
+
+@dataclass(frozen=True)
+class Controller:
+    """A controller as the benchmark's agent spec: ``make(params)`` per episode row, one seed."""
+
+    name: str
+    make: Callable[[Any], Any]
+    seed: int = 0
+
+    def instantiate(self, env: Any) -> Rows:
+        return Rows(lambda q=env.unwrapped.params: self.make(q), 1)
+
+    def describe(self) -> dict[str, Any]:
+        return {"name": self.name, "seed": self.seed}
 
 
 def main() -> None:
@@ -33,28 +48,9 @@ def main() -> None:
     p.add_argument("--quiet", type=float, default=1e-6, help="SmithEstimated's quiet threshold [(m/s)^2]")
     p.add_argument("--json", default=None)
     a = p.parse_args()
-    t0 = time.perf_counter()
-    ps = path_set(a.paths, "firmware")
-    agents = {"analytic": lambda q: Smith(q, 0.0, 1.0), "compensator": lambda q: SmithEstimated(q, GAIN, a.quiet)}
-    episodes = []
-    for sc in ps.scenarios:
-        env = gym.make(sc.env_id, **dict(sc.env_kwargs))
-        params, feasible = env.unwrapped.params, bool(env.unwrapped.feasibility["feasible"])  # type: ignore[attr-defined]
-        env.close()
-        for name, make in agents.items():
-            m = run_scenario(Rows(lambda q=params, f=make: f(q), 1), sc)[0].metrics()
-            episodes.append({"agent": name, "seed": 0, "scenario": sc.name, **ps.tags[sc.name], "feasible": feasible,
-                             "peak_m": round(m["h_max_m"], 5), "steps": int(m.get("steps", 0))})  # fmt: skip
-    doc = {
-        "protocol": {**ps.settings, "failure": "peak |cross-track error| of H over the episode >= tolerance"},
-        "agents": [{"name": n} for n in agents],
-        "accepted": sum(e["feasible"] for e in episodes) // len(agents),
-        "skipped": list(ps.skipped),
-        "table": failure_table(episodes, ps.settings["tolerances"]),
-        "episodes": episodes,
-        "unavailable": [],
-        "wall_time_s": round(time.perf_counter() - t0, 2),
-    }
+    agents = [Controller("analytic", lambda q: Smith(q, 0.0, 1.0)),
+              Controller("compensator", lambda q: SmithEstimated(q, GAIN, a.quiet))]  # fmt: skip
+    doc = run_random_paths(agents, path_set(a.paths, "firmware"), progress=False)
     print(machine_line())
     print(markdown_random_paths(doc))
     if a.json:
