@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_real
 from amigo_gym.paths import CirclePath
 from amigo_gym.task.v1 import TrackingParams
 
@@ -131,14 +131,14 @@ def test_limits_follow_the_robot() -> None:
     assert TrackingParams.v0(preview=[0.1, 0.3]).preview == (0.1, 0.3)  # type: ignore[arg-type]
 
 
-def test_check_range() -> None:
-    assert check_range("O", "x", 1, 0.0, 1.0) == 1.0
-    assert isinstance(check_range("O", "x", 1, 0.0, 1.0), float)
+def test_check_real() -> None:
+    assert check_real("O", "x", 1, 0.0, 1.0) == 1.0
+    assert isinstance(check_real("O", "x", 1, 0.0, 1.0), float)
     with pytest.raises(ValueError, match=re.escape("O.x must be a finite number in (0, 1]")):
-        check_range("O", "x", 0.0, 0.0, 1.0, low_open=True)
+        check_real("O", "x", 0.0, 0.0, 1.0, low_open=True)
     with pytest.raises(ValueError, match=re.escape("O.x must be a finite number in [0, 1)")):
-        check_range("O", "x", 1.0, 0.0, 1.0, high_open=True)
+        check_real("O", "x", 1.0, 0.0, 1.0, high_open=True)
     with pytest.raises(ValueError, match=re.escape("O.x must be a real number")):
-        check_range("O", "x", None)  # type: ignore[arg-type]
+        check_real("O", "x", None)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=r"O\.x must be a finite number"):
-        check_range("O", "x", -math.inf)
+        check_real("O", "x", -math.inf)

@@ -340,11 +340,9 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
         # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"]
-        gx, gy = self._goal
-        goal = False
-        if gx == gx:  # a goal (not NaN)
-            hx, hy = info["h_position"].tolist()
-            goal = bool(tracking.goal_reached(self._k.params, hx, hy, gx, gy))
+        gx, gy = self._goal  # NaN: no goal
+        h = info["h_position"]
+        goal = gx == gx and bool(tracking.goal_reached(self._k.params, float(h[0]), float(h[1]), gx, gy))
         if goal:
             terminated = True
             info["end_of_path"] = True

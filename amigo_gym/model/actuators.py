@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from amigo_gym.model import fresnel
 from amigo_gym.model.kinematics import Real, body_velocity_of, wheel_rates_of
 from amigo_gym.model.numeric import any_array, clip, where
-from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_real
 
 #: largest actuation delay supported [s] (the project's choice: a few 0.1 s control cycles)
 MAX_DELAY = 0.5
@@ -57,7 +57,7 @@ class ActuatorParams:
         highs = {"acceleration": 10.0, "deceleration": 10.0, "rot_acceleration": 100.0, "rot_deceleration": 100.0}
         for f in fields(self):
             high, low_open = highs.get(f.name, MAX_DELAY), f.name != "delay"
-            v = check_range("ActuatorParams", f.name, getattr(self, f.name), 0.0, high, low_open=low_open)
+            v = check_real("ActuatorParams", f.name, getattr(self, f.name), 0.0, high, low_open=low_open)
             object.__setattr__(self, f.name, v)
 
 
@@ -109,7 +109,7 @@ def ramp(u0: Real, target: Real, accel: float, decel: float, duration: Real) -> 
 def turn_rate_bound(nominal: RobotParams, deviation: float = MAX_TRUE_DEVIATION) -> float:
     r"""A bound of the true turn rate [rad/s] in :func:`actuator_step`, true radii and half track within a relative
     ``deviation`` of nominal: :math:`(1 + \delta)^2 \, 2 V / l_1`, ``V = (r1 + r2) w_max / 2`` (19.5 by default)."""
-    check_range("turn_rate_bound", "deviation", deviation, 0.0, 1.0)
+    check_real("turn_rate_bound", "deviation", deviation, 0.0, 1.0)
     v_max = 0.5 * (nominal.r1 + nominal.r2) * nominal.max_wheel_rate
     return (1.0 + deviation) ** 2 * 2.0 * v_max / nominal.l1
 
@@ -132,8 +132,8 @@ def delay_split(delay: Real, dt: float) -> tuple[int | NDArray[np.int64], Real]:
 def ring_length(dt: float, max_delay: float = MAX_DELAY) -> int:
     """Past commands to keep for delays up to ``max_delay`` [s] with step ``dt`` [s]: ``m + 2``, ``m`` of
     :func:`delay_split` (6 for 0.5 / 0.1)."""
-    check_range("ring_length", "dt", dt, 0.0, low_open=True)
-    check_range("ring_length", "max_delay", max_delay, 0.0, MAX_DELAY)
+    check_real("ring_length", "dt", dt, 0.0, low_open=True)
+    check_real("ring_length", "max_delay", max_delay, 0.0, MAX_DELAY)
     m, _ = delay_split(max_delay, dt)
     return int(m) + 2
 
@@ -216,7 +216,7 @@ def actuator_step(
     x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, r1t, r2t, l1t, s1, s2 = cols
     nn = fresnel.NODES * n_sub
     out = actuator_step_ws(
-        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.node_table(n_sub), 0, nn,
+        [0.0] * SCRATCH, 0, [0.0] * (3 * PIECES * nn), 0, fresnel.step_table(n_sub), 0, nn,
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, dt,
         nominal.max_wheel_rate, nominal.l1, nominal.r1, nominal.r2, 2.0 * nominal.l1,
         limits.acceleration, limits.deceleration, limits.rot_acceleration, limits.rot_deceleration,
@@ -319,7 +319,7 @@ def actuator_step_ws(
     """:func:`actuator_step` on floats or columns of one shape (``ws``, ``buf`` lists), also compiled as it is; the
     fields of :class:`ActuatorStep` as a tuple. Scratch of :data:`SCRATCH` from ``ws[k]``, a node buffer of
     ``3 PIECES nn`` from ``buf[b]``, ``nn = NODES n_sub`` nodes then weights from ``nodes[node_at]``
-    (:func:`amigo_gym.model.fresnel.node_table`); the nominal ``w_max`` [rad/s], ``l1n``, ``r1n``, ``r2n``,
+    (:func:`amigo_gym.model.fresnel.step_table`); the nominal ``w_max`` [rad/s], ``l1n``, ``r1n``, ``r2n``,
     ``two_l1 = 2 l1`` [m]; the ramps; the others as :func:`actuator_step`.
     """
     # 1. commands (clip_setpoints, body_velocity_columns)

@@ -5,7 +5,9 @@ the position ``p(T) = p0 + int_0^T (v0 + a t) (cos, sin)(theta(t)) dt``, a gener
 a linear piece of the firmware's ramps, and a clothoid path piece (arc length as time, ``v = 1``, ``a = 0``).
 
 Gauss–Legendre quadrature, :data:`NODES` nodes on each of ``n_sub`` equal sub-intervals (:func:`subintervals`) of
-phase change at most :data:`MAX_PHASE_PER_SUB` rad: error below 1e-20 relative to ``|v| h`` (exact to rounding).
+phase change ``Phi = |w0| h + |alpha| h^2 / 2`` at most :data:`MAX_PHASE_PER_SUB` rad; with one sub-interval a piece of
+``Phi <= TIER_PHASE[i]`` takes the rule of ``TIER_NODES[i]`` nodes (:func:`tier`). Error relative to ``int |v| dt``
+(against mpmath, ``tests/test_fresnel.py``): 4e-16 where ``Phi <= 1``, 5e-14 where ``Phi <= 2``.
 The node functions (numba's subset) use a buffer ``buf`` of stride ``m`` from ``buf[b]``: phases, cosines at
 ``+ m``, sines at ``+ 2m``.
 """
@@ -21,20 +23,23 @@ from amigo_gym.model.kinematics import Real
 
 #: Gauss–Legendre nodes per sub-interval
 NODES = 10
-#: largest phase change [rad] on one sub-interval for which the quadrature is exact to rounding
+#: largest phase change [rad] on one sub-interval (the error there: module docstring)
 MAX_PHASE_PER_SUB = 2.0
+#: the smaller rules of one sub-interval: node counts, the largest ``Phi`` [rad] of each (:func:`tier`), where their
+#: nodes then weights on [0, 1] stand after the ``2 NODES`` entries of the 10-node rule (:func:`step_table`)
+TIER_NODES, TIER_PHASE, TIER_AT = (6, 8), (0.0625, 0.25), (0, 12)
 
-_X, _W = np.polynomial.legendre.leggauss(NODES)
-#: nodes on [0, 1] and their weights (summing to 1)
-_U_LIST: list[float] = (0.5 * (_X + 1.0)).tolist()
-_UW_LIST: list[float] = (0.5 * _W).tolist()
+
+def _leg(n: int) -> list[float]:
+    """The ``n`` Gauss–Legendre nodes on [0, 1], then their weights (summing to 1)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    return [*(0.5 * (x + 1.0)).tolist(), *(0.5 * w).tolist()]
+
+
 #: :func:`node_table` for one sub-interval (a path piece's quadrature), and the cache of the others
-_TABLE_1: list[float] = _U_LIST + _UW_LIST
+_TABLE_1: list[float] = _leg(NODES)
+_TIERS: list[float] = [v for n in TIER_NODES for v in _leg(n)]
 _TABLE_CACHE: dict[int, list[float]] = {1: _TABLE_1}
-
-_np_array = np.array
-_np_cos = np.cos
-_np_sin = np.sin
 
 
 def subintervals(max_phase_change: float) -> int:
@@ -56,18 +61,31 @@ def advance(
     """Pose ``(x', y', theta')`` [m, m, rad] after ``t >= 0`` [s] from ``(x, y, theta)`` with speed ``v0 + a tau``
     [m/s] and turn rate ``w0 + alpha tau`` [rad/s] (module docstring); floats or broadcasting arrays, ``n_sub`` of
     :func:`subintervals`."""
-    table = node_table(n_sub)
     m = NODES * n_sub
-    buf: list[Any] = [0.0] * (3 * m)
     pieces: list[Any] = [v0, a, w0, alpha, t]
-    out: tuple[Real, Real, Real] = advance_nodes(buf, 0, m, x, y, theta, pieces, 0, 1, table, 0, m)  # type: ignore[arg-type]
-    return out
+    return advance_nodes([0.0] * (3 * m), 0, m, x, y, theta, pieces, 0, 1, step_table(n_sub), 0, m)  # type: ignore
 
 
-def _nodes(n_sub: int) -> tuple[list[float], list[float]]:
-    """Nodes and weights on [0, 1] for ``n_sub`` equal sub-intervals."""
-    table = node_table(n_sub)
-    return table[: NODES * n_sub], table[NODES * n_sub :]
+def step_table(n_sub: int) -> list[float]:
+    """:func:`node_table` of ``n_sub``, then the smaller rules that :func:`advance_nodes` takes (``TIER_AT``)."""
+    return node_table(n_sub) + _TIERS
+
+
+def tier(phase: Real) -> int:
+    """The first ``i`` with every entry of ``phase <= TIER_PHASE[i]`` [rad], else 2 (the 10-node rule)."""
+    return tier_float(float(np.max(phase)))
+
+
+def tier_float(phase: float) -> int:
+    """:func:`tier` of a float."""
+    return 0 if phase <= TIER_PHASE[0] else (1 if phase <= TIER_PHASE[1] else 2)
+
+
+def piece_rule(w0: Any, alpha: Any, t: Any, j: int, nn: int) -> tuple[int, int]:
+    """Where the nodes of a piece's rule start and how many: ``(j, nn)``, or with ``nn == NODES`` (one sub-interval
+    of :func:`step_table` at ``j``) the smaller rule of :func:`tier` where it takes one."""
+    i = tier(abs(w0) * t + 0.5 * abs(alpha) * t * t) if nn == NODES else 2
+    return (j + 2 * NODES + TIER_AT[i], TIER_NODES[i]) if i < 2 else (j, nn)
 
 
 class Buffer(Protocol):
@@ -81,9 +99,9 @@ class Buffer(Protocol):
 def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
     """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``; floats or columns."""
     lst = cast("list[Any]", buf)
-    arr = _np_array(lst[b : b + n])
-    cos = _np_cos(arr)
-    sin = _np_sin(arr)
+    arr = np.array(lst[b : b + n])
+    cos = np.cos(arr)
+    sin = np.sin(arr)
     if arr.ndim > 1:  # a list of columns (fresnel.advance of columns): the rows
         lst[b + m : b + m + n] = list(cos)
         lst[b + 2 * m : b + 2 * m + n] = list(sin)
@@ -121,17 +139,24 @@ def advance_nodes(
     buf: Buffer, b: int, m: int, x: float, y: float, theta: float, pieces: Buffer, p: int, n_pieces: int,
     nodes: Buffer, j: int, nn: int,
 ) -> tuple[float, float, float]:  # fmt: skip
-    """:func:`advance` of ``n_pieces`` pieces ``(v0, a, w0, alpha, t)`` at ``pieces[p + 5 q]`` in turn, on a node buffer
-    of stride ``m >= n_pieces * nn``; the pose after the last."""
+    """:func:`advance` of ``n_pieces`` pieces ``(v0, a, w0, alpha, t)`` at ``pieces[p + 5 q]`` in turn, each by
+    :func:`piece_rule` of the rule of ``nn`` nodes at ``nodes[j]`` (:func:`step_table`), on a node buffer of stride ``m
+    >= n_pieces * nn``; the pose after the last."""
     th = theta
+    k = b
     for q in range(n_pieces):
         o = p + 5 * q
-        th = node_phases(buf, b + q * nn, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], nodes, j, nn)
-    cos_sin_nodes(buf, b, n_pieces * nn, m)
+        jq, nq = piece_rule(pieces[o + 2], pieces[o + 3], pieces[o + 4], j, nn)
+        th = node_phases(buf, k, th, pieces[o + 2], pieces[o + 3], pieces[o + 4], nodes, jq, nq)
+        k += nq
+    cos_sin_nodes(buf, b, k - b, m)
+    k = b
     for q in range(n_pieces):
         o = p + 5 * q
         t = pieces[o + 4]
-        dx, dy = node_sums(buf, b + q * nn, m, pieces[o], pieces[o + 1], t, nodes, j, nn)
+        jq, nq = piece_rule(pieces[o + 2], pieces[o + 3], t, j, nn)
+        dx, dy = node_sums(buf, k, m, pieces[o], pieces[o + 1], t, nodes, jq, nq)
+        k += nq
         x = x + dx * t
         y = y + dy * t
     return x, y, th
@@ -173,8 +198,8 @@ def node_table(n_sub: int) -> list[float]:
     """The ``NODES n_sub`` nodes on [0, 1] of ``n_sub`` equal sub-intervals, then their weights (cached)."""
     got = _TABLE_CACHE.get(n_sub)
     if got is None:
-        got = [(k + ui) / n_sub for k in range(n_sub) for ui in _U_LIST]
-        got += [wi / n_sub for _ in range(n_sub) for wi in _UW_LIST]
+        got = [(k + ui) / n_sub for k in range(n_sub) for ui in _TABLE_1[:NODES]]
+        got += [wi / n_sub for _ in range(n_sub) for wi in _TABLE_1[NODES:]]
         if len(_TABLE_CACHE) < 64:
             _TABLE_CACHE[n_sub] = got
     return got

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.actuators import MAX_DELAY
 from amigo_gym.model.kinematics import Real
-from amigo_gym.model.params import check_pair, check_range
+from amigo_gym.model.params import check_pair, check_real
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class Randomization:
                   "position_noise": (0.0, 0.1), "heading_noise": (0.0, 0.2),
                   "wheel_rate_noise": (0.0, 2.0)}  # fmt: skip
         for i, (name, (low, high)) in enumerate(ranges.items()):
-            check = check_pair if i < 4 else check_range  # the four ranges, then the noise levels
+            check = check_pair if i < 4 else check_real  # the four ranges, then the noise levels
             object.__setattr__(self, name, check("Randomization", name, getattr(self, name), low, high))
 
     @property

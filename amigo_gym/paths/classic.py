@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import Real, pack
 from amigo_gym.model.numeric import where
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * math.pi
@@ -142,10 +142,10 @@ class CirclePath(_Projecting):
     direction: int = 1
 
     def __post_init__(self) -> None:
-        check_range("CirclePath", "radius", self.radius, 0.0, low_open=True)
-        check_range("CirclePath", "start_angle", self.start_angle)
+        check_real("CirclePath", "radius", self.radius, 0.0, low_open=True)
+        check_real("CirclePath", "start_angle", self.start_angle)
         for i, c in enumerate(self.start):
-            check_range("CirclePath", f"start[{i}]", c)
+            check_real("CirclePath", f"start[{i}]", c)
         if self.direction not in (1, -1):
             raise ValueError(f"CirclePath.direction must be +1 or -1, got {self.direction!r}")
 
@@ -317,8 +317,8 @@ class ManoeuvrePath(_Projecting):
     direction: int = 1
 
     def __post_init__(self) -> None:
-        check_range("ManoeuvrePath", "radius", self.radius, 0.0, low_open=True)
-        check_range("ManoeuvrePath", "straight_length", self.straight_length, 0.0)
+        check_real("ManoeuvrePath", "radius", self.radius, 0.0, low_open=True)
+        check_real("ManoeuvrePath", "straight_length", self.straight_length, 0.0)
         if self.direction not in (1, -1):
             raise ValueError(f"ManoeuvrePath.direction must be +1 or -1, got {self.direction!r}")
 

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.fresnel import NODES, Buffer, node_table, subinterval_count, unit_speed_nodes, unit_speed_poses
 from amigo_gym.model.kinematics import Real, pack
-from amigo_gym.model.params import check_range, check_real
+from amigo_gym.model.params import check_real
 from amigo_gym.paths.classic import ClosestPoint, PathPoint, PathPose, _Projecting
 
 Array = NDArray[np.float64]
@@ -77,7 +77,7 @@ class ClothoidSegment:
         object.__setattr__(self, "length", check_real(o, "length", self.length, 0.0, MAX_SEGMENT_LENGTH, low_open=True))
         object.__setattr__(self, "curvature", check_real(o, "curvature", self.curvature, -MAX_CURVATURE, MAX_CURVATURE))
         object.__setattr__(self, "curvature_rate", check_real(o, "curvature_rate", self.curvature_rate))
-        check_range("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
+        check_real("ClothoidSegment", "curvature_end", self.curvature_end, -MAX_CURVATURE, MAX_CURVATURE)
 
     @classmethod
     def line(cls, length: float) -> ClothoidSegment:

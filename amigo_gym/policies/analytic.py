@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.kinematics import wheel_rates
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.task.v1 import TrackingParams
 
@@ -121,7 +121,7 @@ class AnalyticPolicy(Policy):
     ) -> None:
         self._fields = Fields("AnalyticPolicy", params)
         self.params = params
-        self.gain = 0.0 if feedforward_only else check_range("AnalyticPolicy", "gain", gain, 0.0, 1.0 / params.dt)
+        self.gain = 0.0 if feedforward_only else check_real("AnalyticPolicy", "gain", gain, 0.0, 1.0 / params.dt)
         self.feedforward_only = bool(feedforward_only)
         if speed_reference not in ("A", "H"):
             raise ValueError(f"AnalyticPolicy.speed_reference must be 'A' or 'H', got {speed_reference!r}")

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.io import atomic_save, require_trust, sha256_file
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import DEFAULT_TRACKING_GAIN, AnalyticTrackingPolicy
 from amigo_gym.task.v1 import TrackingParams, make_tracking_params
@@ -91,14 +91,14 @@ class FeatureSpec:
 
     def __post_init__(self) -> None:
         o = "FeatureSpec"
-        check_range(o, "history", self.history, 0, 20)
+        check_real(o, "history", self.history, 0, 20)
         if isinstance(self.history, bool) or not isinstance(self.history, (int, np.integer)):
             raise TypeError(f"{o}.history must be an integer in [0, 20], got {self.history!r}")
-        check_range(o, "residual_bound", self.residual_bound, 0.0, 2.0)
-        check_range(o, "filter_alpha", self.filter_alpha, 0.0, 1.0, low_open=True)
+        check_real(o, "residual_bound", self.residual_bound, 0.0, 2.0)
+        check_real(o, "filter_alpha", self.filter_alpha, 0.0, 1.0, low_open=True)
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
-        check_range(o, "residual_gain", self.residual_gain, 0.0, 1.0 / self.params().dt, low_open=True)
+        check_real(o, "residual_gain", self.residual_gain, 0.0, 1.0 / self.params().dt, low_open=True)
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""

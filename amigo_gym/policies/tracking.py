@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from amigo_gym.model.actuators import wheel_rates_columns
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.policies.analytic import analytic_tracking_command
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.task.v1 import SPEED_LOOKAHEAD, TrackingParams
@@ -111,10 +111,10 @@ class AnalyticTrackingPolicy(Policy):
         o = "AnalyticTrackingPolicy"
         self._fields = Fields(o, params)
         self.params = params
-        self.gain = check_range(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
+        self.gain = check_real(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
         ki = self.gain * self.gain / 4.0 if integral_gain is None else integral_gain
-        self.integral_gain = check_range(o, "integral_gain", ki, 0.0, 1.0 / params.dt**2)
-        self.integral_limit = check_range(o, "integral_limit", integral_limit, 0.0, 10.0, low_open=True)
+        self.integral_gain = check_real(o, "integral_gain", ki, 0.0, 1.0 / params.dt**2)
+        self.integral_limit = check_real(o, "integral_limit", integral_limit, 0.0, 10.0, low_open=True)
         self.feedforward = bool(feedforward)
 
     name = "analytic_v1"
@@ -185,7 +185,7 @@ class PurePursuitPolicy(Policy):
         prev = params.preview
         if lookahead is None:
             lookahead = min(prev, key=lambda d: abs(d - DEFAULT_LOOKAHEAD))
-        la = check_range(o, "lookahead", lookahead, 0.0, 5.0, low_open=True)
+        la = check_real(o, "lookahead", lookahead, 0.0, 5.0, low_open=True)
         if la not in prev:
             raise ValueError(f"{o}.lookahead must be one of the preview distances {list(prev)} m, got {lookahead!r}")
         if origin not in ("axle", "H"):
@@ -193,7 +193,7 @@ class PurePursuitPolicy(Policy):
         self.origin = origin
         opt = {"max_turn_rate": (max_turn_rate, 1e3), "lookahead_time": (lookahead_time, 60.0)}
         for k, (v, top) in opt.items():
-            setattr(self, k, None if v is None else check_range(o, k, v, 0.0, top, low_open=True))
+            setattr(self, k, None if v is None else check_real(o, k, v, 0.0, top, low_open=True))
         self.lookahead = la
         self._prev = np.asarray(prev, dtype=np.float64)
         self._fixed = list(prev).index(la)

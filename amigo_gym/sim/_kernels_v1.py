@@ -6,7 +6,8 @@ reference to 1e-9, not bit for bit (``sin``, ``cos``, ``tan``, ``exp`` and ``log
 Layouts (float64, C-contiguous; index constants in :mod:`amigo_gym.sim.layout_v1`, ``L`` here):
 
 * ``consts``: ``CONSTANT_FIELDS``, the ``n_preview`` preview distances [m], their observation bounds, the actuator
-  quadrature's nodes and weights on [0, 1] (``10 n_sub`` each), the path quadrature's (10 each);
+  quadrature's nodes and weights on [0, 1] (``10 n_sub`` each, then its smaller rules: ``fresnel.step_table``), the
+  path quadrature's (10 each);
 * ``path``: a clothoid path's flat vector; empty for a circle or manoeuvre (closed forms in ``consts``);
 * ``ring (L, 2)``: the command ring [rad/s], updated in place;
 * ``ws (len(Rows._fields), N)``: the robots' state and episode, one named row ``(N,)`` each (``layout_v1.Rows``);
@@ -54,6 +55,7 @@ _FLOAT_FORMS: dict[Callable[..., Any], Callable[..., Any]] = {
     actuators.sort_knots: actuators.sort_knots_float,
     actuators.advance_pieces: fresnel.advance_nodes,
     classic.angle_of: classic.atan2_float,
+    fresnel.tier: fresnel.tier_float,
 }
 _OVERLOADED: set[Any] = {*_FLOAT_FORMS, fresnel.cos_sin_nodes, randomization._uint64}
 
@@ -74,37 +76,15 @@ _register()
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
 def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
-    """:func:`amigo_gym.model.fresnel.cos_sin_nodes`: ``cos``/``sin`` of the first phase ``p0``, each node's by the
-    angle sum with ``d = p - p0`` and Taylor polynomials of ``cos d``, ``sin d`` when every ``|d| <= 0.5`` (terms left
-    out < 1e-16), else ``math.cos``/``math.sin`` of each."""
+    """:func:`amigo_gym.model.fresnel.cos_sin_nodes` by ``math.cos``/``math.sin`` of each phase."""
 
     def impl(buf: F64, b: int, n: int, m: int) -> None:
-        if n == 0:
-            return
-        p0 = buf[b]
-        near = True
         for i in range(b, b + n):
-            near = near & (abs(buf[i] - p0) <= 0.5)
-        if not near:
-            for i in range(b, b + n):
-                phase = buf[i]  # one load: LLVM fuses the cosine and sine into one sincos call
-                buf[m + i] = math.cos(phase)
-                buf[2 * m + i] = math.sin(phase)
-            return
-        c0 = math.cos(p0)
-        s0 = math.sin(p0)
-        for i in range(b, b + n):
-            d = buf[i] - p0
-            d2 = d * d
-            cd = 1.0 + d2 * (-_C2 + d2 * (_C4 + d2 * (-_C6 + d2 * (_C8 + d2 * (-_C10 + d2 * (_C12 - d2 * _C14))))))
-            sd = d * (1.0 + d2 * (-_C3 + d2 * (_C5 + d2 * (-_C7 + d2 * (_C9 + d2 * (-_C11 + d2 * _C13))))))
-            buf[m + i] = c0 * cd - s0 * sd
-            buf[2 * m + i] = s0 * cd + c0 * sd
+            phase = buf[i]  # one load: LLVM fuses the cosine and sine into one sincos call
+            buf[m + i] = math.cos(phase)
+            buf[2 * m + i] = math.sin(phase)
 
     return impl
-
-
-_C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / math.factorial(k) for k in range(2, 15))
 
 
 #: entries of the path pose's node buffer (stride ``NODES + 1``), of the actuator step's (one sub-interval per piece;
@@ -223,9 +203,12 @@ def _actuator_step(c: F64, ws: F64, i: int, o1: float, o2: float, n1: float, n2:
     return v_true  # type: ignore[return-value]  # a float here
 
 
+_TIERS = len(fresnel._TIERS)  # the step table's smaller rules (fresnel.step_table)
+
+
 @_jit
 def _path_nodes(c: F64) -> int:
-    nodes: int = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES])
+    nodes: int = L.C_TAIL + 2 * int(c[L.C_N_PREVIEW]) + 2 * int(c[L.C_N_NODES]) + _TIERS
     return nodes
 
 

@@ -199,21 +199,21 @@ def kernel_constants(k: tracking.Constants) -> Array:
     n = k.nominal
     act = p.actuators
     rz = p.randomize
-    u, uw = fresnel._nodes(k.n_sub)
+    table = fresnel.step_table(k.n_sub)
     head = [  # in the order of layout_v1.CONSTANT_FIELDS, line by line
         p.dt, k.w_max, n.r1, n.r2, n.l1, 2.0 * n.l1,
         act.acceleration, act.deceleration, act.rot_acceleration, act.rot_deceleration,
         k.l3, p.error_scale, k.e_max, p.termination_distance, p.preview_scale, k.v_max,
         p.sigma_track, p.sigma_speed, k.smooth_scale_sq,
         1.0 if p.speed_profile == "trapezoid" else 0.0, p.profile_accel, p.profile_decel,
-        k.window, tracking.SPEED_LOOKAHEAD, float(len(p.preview)), float(len(u)),
+        k.window, tracking.SPEED_LOOKAHEAD, float(len(p.preview)), float(fresnel.NODES * k.n_sub),
         rz.position_noise, rz.heading_noise, rz.wheel_rate_noise,
         1.0 if p.ideal_actuators else 0.0, 1.0 if p.observation == "v0" else 0.0, 1.0 if p.reward == "v0" else 0.0,
         n.l5, n.r3,
         kind,
         cx, cy, r0x, r0y, float(circle.direction), circle.radius, straight,
     ]  # fmt: skip
-    tail = [*p.preview, *k.preview_bounds, *u, *uw, *fresnel._U_LIST, *fresnel._UW_LIST]
+    tail = [*p.preview, *k.preview_bounds, *table, *fresnel.node_table(1)]
     return np.array(head + tail, dtype=np.float64)
 
 

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.io import atomic_save
 from amigo_gym.model.kinematics import a_from_h, castor_rate, h_position, wheel_rates
 from amigo_gym.model.kinematics import circle_steady_state as circle_steady_state
-from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_real
 from amigo_gym.paths import CirclePath, ManoeuvrePath, wrap_angle
 
 Array = NDArray[np.float64]
@@ -61,7 +61,7 @@ class ConstantSpeed:
     speed: float = 0.2
 
     def __post_init__(self) -> None:
-        check_range("ConstantSpeed", "speed", self.speed, 0.0, low_open=True)
+        check_real("ConstantSpeed", "speed", self.speed, 0.0, low_open=True)
 
     @property
     def peak_speed(self) -> float:
@@ -97,13 +97,13 @@ class TrapezoidProfile:
 
     def __post_init__(self) -> None:
         o = "TrapezoidProfile"
-        check_range(o, "speed", self.speed, 0.0, low_open=True)
+        check_real(o, "speed", self.speed, 0.0, low_open=True)
         if self.accel is not None:
-            check_range(o, "accel", self.accel, 0.0, low_open=True)
-        check_range(o, "decel", self.decel, 0.0, low_open=True)
-        check_range(o, "t_start", self.t_start, 0.0)
+            check_real(o, "accel", self.accel, 0.0, low_open=True)
+        check_real(o, "decel", self.decel, 0.0, low_open=True)
+        check_real(o, "t_start", self.t_start, 0.0)
         if self.t_brake is not None:
-            check_range(o, "t_brake", self.t_brake, self.t_cruise)
+            check_real(o, "t_brake", self.t_brake, self.t_cruise)
 
     @classmethod
     def from_distance(
@@ -112,10 +112,10 @@ class TrapezoidProfile:
         """The profile whose A travels ``distance = v^2/(2a) + v (t_b - t_s - v/a) + v^2/(2d)`` [m] in all (solved for
         ``t_b``; at least ``v^2/(2a) + v^2/(2d)``)."""
         o = "TrapezoidProfile"
-        v = check_range(o, "speed", speed, 0.0, low_open=True)
-        d_acc = 0.0 if accel is None else v * v / (2.0 * check_range(o, "accel", accel, 0.0, low_open=True))
-        d_dec = v * v / (2.0 * check_range(o, "decel", decel, 0.0, low_open=True))
-        dist = check_range(o, "distance", distance, d_acc + d_dec)
+        v = check_real(o, "speed", speed, 0.0, low_open=True)
+        d_acc = 0.0 if accel is None else v * v / (2.0 * check_real(o, "accel", accel, 0.0, low_open=True))
+        d_dec = v * v / (2.0 * check_real(o, "decel", decel, 0.0, low_open=True))
+        dist = check_real(o, "distance", distance, d_acc + d_dec)
         t_cruise = float(t_start) + (0.0 if accel is None else v / float(accel))
         return cls(v, accel, float(decel), float(t_start), t_cruise + (dist - d_acc - d_dec) / v)
 
@@ -240,9 +240,9 @@ class InverseSolution:
 def time_grid(duration: float, dt: float, t0: float = 0.0) -> Array:
     """Uniform grid ``t0, t0 + dt, ..., t0 + n dt`` [s], ``n = floor(duration/dt)``; ``ValueError`` unless
     ``0 < dt <= duration`` are finite and the grid has at most :data:`MAX_GRID_POINTS` points."""
-    check_range("time_grid", "duration", duration, 0.0, low_open=True)
-    check_range("time_grid", "dt", dt, 0.0, duration, low_open=True)
-    check_range("time_grid", "t0", t0)
+    check_real("time_grid", "duration", duration, 0.0, low_open=True)
+    check_real("time_grid", "dt", dt, 0.0, duration, low_open=True)
+    check_real("time_grid", "t0", t0)
     n = math.floor(duration / dt + 1e-9)
     if n + 1 > MAX_GRID_POINTS:
         raise ValueError(f"time_grid: duration/dt = {duration / dt:.3g} gives more than {MAX_GRID_POINTS} points")
@@ -284,8 +284,8 @@ def solve_inverse(
     o = "solve_inverse"
     if not isinstance(path, (CirclePath, ManoeuvrePath)):
         raise ValueError(f"{o}.path must be a CirclePath or ManoeuvrePath, got {type(path).__name__}")
-    check_range(o, "path.radius", float(path.radius), robot.l3, low_open=True)
-    check_range(o, "profile.peak_speed", profile.peak_speed, 0.0, robot.max_speed, low_open=True)
+    check_real(o, "path.radius", float(path.radius), robot.l3, low_open=True)
+    check_real(o, "profile.peak_speed", profile.peak_speed, 0.0, robot.max_speed, low_open=True)
     tg = np.asarray(t, dtype=np.float64)
     if tg.ndim != 1 or tg.size < 1:
         raise ValueError(f"{o}.t must be a 1-D time grid with at least one point, got shape {tg.shape}")
@@ -293,18 +293,18 @@ def solve_inverse(
         raise ValueError(f"{o}.t must be finite")
     if tg.size > 1 and not np.all(np.diff(tg) > 0.0):
         raise ValueError(f"{o}.t must be strictly increasing")
-    check_range(o, "s0", s0, 0.0)
+    check_real(o, "s0", s0, 0.0)
     theta0 = float(path.tangent_angle(s0))
-    b0 = theta0 if beta0 is None else check_range(o, "beta0", beta0)
+    b0 = theta0 if beta0 is None else check_real(o, "beta0", beta0)
     if not abs(float(wrap_angle(theta0 - b0))) < 0.5 * math.pi:
         raise ValueError(
             f"{o}.beta0 must satisfy |theta(s0) - beta0| in [0, pi/2) (the inverse ODE is singular at pi/2); "
             f"theta(s0) = {theta0!r}, got beta0 = {b0!r}"
         )
     for i, a in enumerate(alpha0):
-        check_range(o, f"alpha0[{i}]", a)
-    check_range(o, "rtol", rtol, 0.0, 1.0, low_open=True)
-    check_range(o, "atol", atol, 0.0, 1.0, low_open=True)
+        check_real(o, f"alpha0[{i}]", a)
+    check_real(o, "rtol", rtol, 0.0, 1.0, low_open=True)
+    check_real(o, "atol", atol, 0.0, 1.0, low_open=True)
 
     l3 = robot.l3
     h0 = path.point(s0)
@@ -383,8 +383,8 @@ def manoeuvre_profile(
     """Speed profile of the manoeuvre "starting, driving straight, circular curve, braking": A rests until
     ``t_start`` [s] and comes to rest after ``straight_length + laps 2 pi R_A`` [m], ``R_A = sqrt(R^2 - l3^2)``."""
     robot = RobotParams() if robot is None else robot
-    check_range("manoeuvre_profile", "laps", laps, 0.0, 1e3)
-    ra = math.sqrt(check_range("manoeuvre_profile", "radius", path.radius, robot.l3, low_open=True) ** 2 - robot.l3**2)
+    check_real("manoeuvre_profile", "laps", laps, 0.0, 1e3)
+    ra = math.sqrt(check_real("manoeuvre_profile", "radius", path.radius, robot.l3, low_open=True) ** 2 - robot.l3**2)
     return TrapezoidProfile.from_distance(
         speed, path.straight_length + laps * 2.0 * math.pi * ra, accel=accel, decel=decel, t_start=t_start
     )

@@ -66,7 +66,7 @@ from amigo_gym.model.kinematics import (
     h_from_a,
 )
 from amigo_gym.model.numeric import clip, where
-from amigo_gym.model.params import RobotParams, check_pair, check_range, show_value
+from amigo_gym.model.params import RobotParams, check_pair, check_real, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, draw_key, intervals, make_randomization, sample
 from amigo_gym.paths import FAMILIES, CirclePath, ClothoidPath, ManoeuvrePath, make_family_path
 from amigo_gym.paths.clothoid import STATUS_END, PathLoops
@@ -263,22 +263,22 @@ class TrackingParams:
             ("goal_tolerance", 0.0, 10.0, False),
         )
         for name, low, high, low_open in ranges:
-            s(self, name, check_range(o, name, getattr(self, name), low, high, low_open=low_open))
-        s(self, "smooth_weight", check_range(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
+            s(self, name, check_real(o, name, getattr(self, name), low, high, low_open=low_open))
+        s(self, "smooth_weight", check_real(o, "smooth_weight", self.smooth_weight, 0.0, 1.0, high_open=True))
         high = self.termination_distance / 2
-        s(self, "init_position_noise", check_range(o, "init_position_noise", self.init_position_noise, 0.0, high))
+        s(self, "init_position_noise", check_real(o, "init_position_noise", self.init_position_noise, 0.0, high))
         if isinstance(self.direction, bool) or self.direction not in (1, -1):
             raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {self.direction!r}")
         if isinstance(self.random_pool, bool) or not isinstance(self.random_pool, int) or self.random_pool < 1:
             raise ValueError(f"{o}.random_pool must be an integer >= 1, got {self.random_pool!r}")
-        check = check_pair if isinstance(self.speed, tuple | list) else check_range  # a pair drawn per episode
+        check = check_pair if isinstance(self.speed, tuple | list) else check_real  # a pair drawn per episode
         s(self, "speed", check(o, "speed", self.speed, 0.0, r.max_speed, low_open=True))
         pv = self.preview
         far, near_open = (10.0, False) if v0 else (5.0, True)  # v0's previews: [0, 10] m
         if isinstance(pv, str | bytes | Mapping) or not hasattr(pv, "__iter__") or getattr(pv, "ndim", 1) != 1:
             within = f"{'(' if near_open else '['}0, {far:g}]"
             raise ValueError(f"{o}.preview must be a sequence of distances in {within} m, got {show_value(pv)}")
-        prev = (check_range(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
+        prev = (check_real(o, f"preview[{i}]", d, 0.0, far, low_open=near_open) for i, d in enumerate(self.preview))
         s(self, "preview", tuple(prev))
         s(self, "path_params", _path_params(o, self.path, self.path_params))
         _check_combined(o, self)
@@ -805,10 +805,10 @@ def feasible_random_curvature(
     robot = RobotParams() if robot is None else robot
     acc = ActuatorParams().rot_acceleration if rot_acceleration is None else rot_acceleration
     o = "feasible_random_curvature"
-    check_range(o, "speed", speed, 0.0, robot.max_speed, low_open=True)
-    check_range(o, "rot_acceleration", acc, 0.0, 100.0, low_open=True)
-    check_range(o, "rate_per_curvature", rate_per_curvature, 0.0, 1e3, low_open=True)
-    check_range(o, "min_piece", min_piece, 0.01, 100.0)
+    check_real(o, "speed", speed, 0.0, robot.max_speed, low_open=True)
+    check_real(o, "rot_acceleration", acc, 0.0, 100.0, low_open=True)
+    check_real(o, "rate_per_curvature", rate_per_curvature, 0.0, 1e3, low_open=True)
+    check_real(o, "min_piece", min_piece, 0.01, 100.0)
     slope = min(rate_per_curvature, 2.0 / min_piece)
 
     def ok(kappa: float) -> bool:

@@ -263,12 +263,12 @@ def install_hint(extra: str) -> str:
 
 
 def check_fields(owner: str, obj: object, **ranges: tuple[float, ...]) -> None:
-    """``check_range(owner, name, ...)`` of each named field of ``obj`` in ``(low, high[, low_open])``: ``None``
+    """``check_real(owner, name, ...)`` of each named field of ``obj`` in ``(low, high[, low_open])``: ``None``
     passes, a tuple is checked item by item (``name[i]``)."""
-    from amigo_gym.model.params import check_range
+    from amigo_gym.model.params import check_real
 
     for name, (low, high, *opened) in ranges.items():
         value = getattr(obj, name)
         items = enumerate(value) if isinstance(value, tuple) else [] if value is None else [(None, value)]
         for i, v in items:
-            check_range(owner, name if i is None else f"{name}[{i}]", v, low, high, low_open=any(opened))
+            check_real(owner, name if i is None else f"{name}[{i}]", v, low, high, low_open=any(opened))

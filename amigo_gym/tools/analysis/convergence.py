@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.policies.analytic import AnalyticPolicy
 from amigo_gym.task.v1 import TrackingParams
 from amigo_gym.tools.options import run_command
@@ -73,13 +73,13 @@ class Settings:
             raise ValueError(f"--gains must be comma-separated numbers, got {self.gains!r}") from None
         if not gains:
             raise ValueError("--gains must name at least one gain")
-        return [check_range("Settings", "gains", g, 0.0, 10.0, low_open=True) for g in gains]
+        return [check_real("Settings", "gains", g, 0.0, 10.0, low_open=True) for g in gains]
 
 
 def halving_times(settings: Settings) -> list[GainFit]:
     """Fit the error's decay for every gain; ``ValueError`` on a bad window, or if an episode leaves the path."""
-    check_range("Settings", "t_from", settings.t_from, 0.0)
-    check_range("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
+    check_real("Settings", "t_from", settings.t_from, 0.0)
+    check_real("Settings", "t_to", settings.t_to, settings.t_from, low_open=True)
     if settings.seeds < 1 or settings.steps < 1:
         raise ValueError(f"--seeds and --steps must be >= 1, got {settings.seeds} and {settings.steps}")
     seeds = tuple(range(settings.first_seed, settings.first_seed + settings.seeds))

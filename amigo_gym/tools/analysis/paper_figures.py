@@ -22,7 +22,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from amigo_gym.model.params import RobotParams, check_range
+from amigo_gym.model.params import RobotParams, check_real
 from amigo_gym.paths import CirclePath, ManoeuvrePath
 from amigo_gym.task import inverse as inv
 from amigo_gym.tools.options import check_fields, cli, run_command
@@ -103,7 +103,7 @@ def _profile(args: InverseSettings, path: CirclePath | ManoeuvrePath, robot: Rob
     t_start = args.t_start if args.t_start is not None else (inv.MANOEUVRE_T_START if manoeuvre else 0.0)
     if args.brake_at is not None:
         t_cruise = t_start + (0.0 if accel is None else args.speed / accel)
-        _as_options(check_range, "_", "brake_at", args.brake_at, t_cruise)
+        _as_options(check_real, "_", "brake_at", args.brake_at, t_cruise)
         return inv.TrapezoidProfile(args.speed, accel, decel, t_start, args.brake_at)
     if isinstance(path, ManoeuvrePath) and not args.no_brake:
         laps = inv.MANOEUVRE_LAPS if args.laps is None else args.laps

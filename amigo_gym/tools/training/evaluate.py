@@ -24,7 +24,7 @@ from amigo_gym.data import pretrained_dir
 from amigo_gym.envs.base import info_row
 from amigo_gym.io import atomic_write, atomic_write_json, json_safe, sha256_file
 from amigo_gym.model.kinematics import a_from_h, circle_steady_state
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.paths import CirclePath
 from amigo_gym.policies.analytic import AnalyticPolicy, analytic_wheel_rates
 from amigo_gym.policies.learned import FastPolicy
@@ -66,8 +66,8 @@ class EvalProtocol:
         bad = [s for s in self.scenarios if s not in SCENARIOS]
         if bad or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
-        check_range("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
-        check_range("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
+        check_real("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
+        check_real("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
 
 
 @dataclass

@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from torch import nn
 
 from amigo_gym.io import atomic_save, atomic_write, atomic_write_json, require_trust, sha256_file, vouch
-from amigo_gym.model.params import check_range
+from amigo_gym.model.params import check_real
 from amigo_gym.paths.families import RANDOM_RANGES
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd, env_action
 from amigo_gym.sim.fast_v1 import set_threads
@@ -191,7 +191,7 @@ class FastPPOSettings:
                 raise TypeError(f"{o}.{f.name} must be True or False, got {v!r}")
             if rng is not None:
                 lo, hi = (float(x) for x in rng[1:-1].split(","))
-                check_range(o, f.name, v, lo, hi, low_open=rng[0] == "(", high_open=rng[-1] == ")")
+                check_real(o, f.name, v, lo, hi, low_open=rng[0] == "(", high_open=rng[-1] == ")")
         batch = self.num_envs * self.rollout_steps
         if self.minibatch_size > batch or batch % self.minibatch_size:
             raise ValueError(
