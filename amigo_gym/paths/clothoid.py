@@ -7,12 +7,12 @@ optionally closed (laps). On a piece of curvature ``kappa(u) = k0 + c u`` from `
     \theta(u) = \theta_0 + k_0 u + \tfrac12 c u^2, \qquad
     \mathbf{p}(u) = \mathbf{p}_0 + \int_0^u (\cos\theta(\tau), \sin\theta(\tau))\,d\tau,
 
-by :func:`amigo_gym.model.fresnel.advance`, exact to rounding on pieces with ``|k0| u + |c| u^2 / 2 <=
-MAX_PHASE_PER_SUB``. Conventions as :mod:`amigo_gym.paths.classic` (``theta`` continuous: laps add the total turn);
-an open path continues straight beyond its ends, a closed one repeats with period :attr:`ClothoidPath.length`.
-Stored as a flat float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse samples'
-``x``, ``y``); the functions on it are in numba's subset. A closed path of arcs of one curvature (a circle) also
-stores its curvature and centre: its projection starts at the foot in closed form instead of the coarse search.
+by :func:`amigo_gym.model.fresnel.advance`'s 10-node rule on pieces of ``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``
+(within 5e-14 of ``u``, 4e-16 up to 1 rad). Conventions as :mod:`amigo_gym.paths.classic` (``theta`` continuous: laps
+add the total turn); an open path goes on straight beyond its ends, a closed one repeats with period ``length``. A flat
+float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse samples' ``x``, ``y``), in
+numba's subset; a closed path of arcs of one curvature (a circle) also stores its curvature and centre: its projection
+starts at the foot in closed form instead of the coarse search.
 """
 
 from __future__ import annotations
