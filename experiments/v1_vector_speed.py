@@ -1,11 +1,13 @@
 """AmigoBot-v1's native vector env at N = 4096, defaults, the training distribution and ``V1_HARD`` (mixed paths, hard
 randomisation), timed by CPU time: run it on two trees alternately to compare them.
 
-    PYTHONPATH=<tree> NUMBA_NUM_THREADS=1 python experiments/v1_vector_speed.py [label] [N]
+    PYTHONPATH=<tree> NUMBA_NUM_THREADS=1 python experiments/v1_vector_speed.py [label] [N] [steps]
 
-Prints, per configuration, the least over 5 repeats of 10 steps (``time.thread_time_ns``: a busy host's stolen time
-does not count) of ``gym.make_vec("AmigoBot-v1", N, vectorization_mode="vector_entry_point", **kwargs)`` stepped
-with uniform random actions in [-1, 1] after ``reset(seed=repeat)``, in µs a step and env-steps/s, and the CPU.
+Prints, per configuration, the least over 5 repeats of ``steps`` steps (default 10; ``time.thread_time_ns``: a busy
+host's stolen time does not count) of ``gym.make_vec("AmigoBot-v1", N, vectorization_mode="vector_entry_point",
+**kwargs)`` stepped with uniform random actions in [-1, 1] (10 drawn, in turn) after ``reset(seed=repeat)``, in µs a
+step and env-steps/s, and the CPU. The robots start at rest, so the first steps turn slowly: ``steps`` of 1000 time
+the steady state of random actions, with its restarts.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from amigo_gym.tools.machine import machine_line
 from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
 
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 4096
+steps = int(sys.argv[3]) if len(sys.argv) > 3 else 10
 out = []
 configs = (("defaults", {}), ("training distribution", dict(TRAINING_DISTRIBUTION["env_kwargs"])), ("hard", V1_HARD))
 for label, kw in configs:
@@ -33,9 +36,9 @@ for label, kw in configs:
     for r in range(5):
         env.reset(seed=r)
         t = time.thread_time_ns()
-        for k in range(10):
-            env.step(acts[k])
-        best = min(best, (time.thread_time_ns() - t) / 10)
+        for k in range(steps):
+            env.step(acts[k % 10])
+        best = min(best, (time.thread_time_ns() - t) / steps)
     env.close()
     out.append(f"{label} {best / 1e3:.0f} us/step ({n / best * 1e3:.2f}M env-steps/s)")
 print(f"{sys.argv[1] if len(sys.argv) > 1 else ''} N={n}: " + " | ".join(out) + f" [{machine_line()}]")

@@ -106,8 +106,8 @@ def test_subintervals_refuses_bad_input() -> None:
 
 
 def test_compiled_nodes_against_mpmath() -> None:
-    """The compiled quadrature (its smaller rules included) and the compiled path pose (arcs in closed form) against
-    mpmath: 1e-15 m over the actuator's and the path's regimes."""
+    """The compiled quadrature (its smaller rules; its node cosines by angle addition and Taylor polynomials) and the
+    compiled path pose (arcs in closed form) against mpmath: 1e-15 m over the actuator's and the path's regimes."""
     import numba
 
     from amigo_gym.model import fresnel

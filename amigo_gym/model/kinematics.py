@@ -9,7 +9,7 @@ leading batch axes (pose ``(..., 3)``, rates ``(..., 2)``); column functions (``
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Protocol, TypeAlias, overload
+from typing import Any, NamedTuple, Protocol, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -60,17 +60,9 @@ def half_tan_cos_sin(t: Real) -> tuple[Real, Real]:
     return (1.0 - t2) * r, (t + t) * r
 
 
-@overload
-def arc_from_tangents(
-    x: float, y: float, v_a: float, dt: float, h: float, t_h: float, t_m: float
-) -> tuple[float, float, float, float]: ...
-@overload
 def arc_from_tangents(
     x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
-) -> tuple[Real, Real, Real, Real]: ...
-def arc_from_tangents(
-    x: Real, y: Real, v_a: Real, dt: Real, h: Real, t_h: Real, t_m: Real
-) -> tuple[Real, Real, Real, Real]:
+) -> tuple[Any, Any, Any, Any]:
     """:func:`arc_step`'s ``(x', y', cos beta', sin beta')`` from ``t_h = tan(h / 2)`` and ``t_m = tan(m / 2)``."""
     cos_h, sin_h = half_tan_cos_sin(t_h)
     cos_mid, sin_mid = half_tan_cos_sin(t_m)
@@ -84,22 +76,14 @@ def arc_from_tangents(
     )
 
 
-@overload
-def body_velocity_of(w1: float, w2: float, r1: float, r2: float, two_l1: float) -> tuple[float, float]: ...
-@overload
-def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]: ...
-def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Real, Real]:
+def body_velocity_of(w1: Real, w2: Real, r1: Real, r2: Real, two_l1: Real) -> tuple[Any, Any]:
     """``(v_A, betadot)`` [m/s, rad/s] of wheel rates [rad/s]: ``((r1 w1 + r2 w2) / 2, (r1 w1 - r2 w2) / two_l1)``."""
     u1 = r1 * w1
     u2 = r2 * w2
     return 0.5 * (u1 + u2), (u1 - u2) / two_l1
 
 
-@overload
-def wheel_rates_of(v_a: float, betadot: float, l1: float, r1: float, r2: float) -> tuple[float, float]: ...
-@overload
-def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]: ...
-def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Real, Real]:
+def wheel_rates_of(v_a: Real, betadot: Real, l1: Real, r1: Real, r2: Real) -> tuple[Any, Any]:
     """The wheel rates [rad/s] ``((v_A + l1 betadot) / r1, (v_A - l1 betadot) / r2)``."""
     lw = l1 * betadot
     return (v_a + lw) / r1, (v_a - lw) / r2
@@ -111,13 +95,7 @@ def castor_rate_float(v_a: float, betadot: float, l5: float, r3: float) -> float
     return math.copysign(math.sqrt(lb * lb + v_a * v_a), v_a) / r3
 
 
-@overload
-def advance_angle(alpha: float, rate: float, dt: float) -> float: ...
-@overload
-def advance_angle(alpha: NDArray[np.float64], rate: Real, dt: float) -> NDArray[np.float64]: ...
-@overload
-def advance_angle(alpha: Real, rate: Real, dt: float) -> Real: ...
-def advance_angle(alpha: Real, rate: Real, dt: float) -> Real:
+def advance_angle(alpha: Real, rate: Real, dt: float) -> Any:
     """A wheel's angle [rad] after ``dt`` [s] at ``rate`` [rad/s]: ``alpha + rate dt``."""
     return alpha + rate * dt
 
@@ -200,11 +178,7 @@ def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     return np.asarray(castor_rate_columns(v + 0.0, b, robot))  # + 0.0: positive for v_A = -0.0 too
 
 
-@overload
-def h_from_a(x_a: float, y_a: float, cos_beta: float, sin_beta: float, l3: float) -> tuple[float, float]: ...
-@overload
-def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]: ...
-def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Real, Real]:
+def h_from_a(x_a: Real, y_a: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> tuple[Any, Any]:
     """Point H, ``l3`` [m] ahead of A (paper eq. 4): ``(x_A + l3 cos beta, y_A + l3 sin beta)``; columns."""
     return x_a + l3 * cos_beta, y_a + l3 * sin_beta
 

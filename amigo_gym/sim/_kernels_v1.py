@@ -76,15 +76,37 @@ _register()
 
 @overload(fresnel.cos_sin_nodes, jit_options={"error_model": "numpy"}, inline="always")
 def _cos_sin_nodes(buf: F64, b: int, n: int, m: int) -> Callable[[F64, int, int, int], None]:
-    """:func:`amigo_gym.model.fresnel.cos_sin_nodes` by ``math.cos``/``math.sin`` of each phase."""
+    """:func:`amigo_gym.model.fresnel.cos_sin_nodes`: ``cos``/``sin`` of the first phase ``p0``, each node's by the
+    angle sum with ``d = p - p0`` and Taylor polynomials of ``cos d``, ``sin d`` when every ``|d| <= 0.5`` (terms left
+    out < 1e-16), else ``math.cos``/``math.sin`` of each."""
 
     def impl(buf: F64, b: int, n: int, m: int) -> None:
+        if n == 0:
+            return
+        p0 = buf[b]
+        near = True
         for i in range(b, b + n):
-            phase = buf[i]  # one load: LLVM fuses the cosine and sine into one sincos call
-            buf[m + i] = math.cos(phase)
-            buf[2 * m + i] = math.sin(phase)
+            near = near & (abs(buf[i] - p0) <= 0.5)
+        if not near:
+            for i in range(b, b + n):
+                phase = buf[i]  # one load: LLVM fuses the cosine and sine into one sincos call
+                buf[m + i] = math.cos(phase)
+                buf[2 * m + i] = math.sin(phase)
+            return
+        c0 = math.cos(p0)
+        s0 = math.sin(p0)
+        for i in range(b, b + n):
+            d = buf[i] - p0
+            d2 = d * d
+            cd = 1.0 + d2 * (-_C2 + d2 * (_C4 + d2 * (-_C6 + d2 * (_C8 + d2 * (-_C10 + d2 * (_C12 - d2 * _C14))))))
+            sd = d * (1.0 + d2 * (-_C3 + d2 * (_C5 + d2 * (-_C7 + d2 * (_C9 + d2 * (-_C11 + d2 * _C13))))))
+            buf[m + i] = c0 * cd - s0 * sd
+            buf[2 * m + i] = s0 * cd + c0 * sd
 
     return impl
+
+
+_C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / math.factorial(k) for k in range(2, 15))
 
 
 #: entries of the path pose's node buffer (stride ``NODES + 1``), of the actuator step's (one sub-interval per piece;
