@@ -3,7 +3,8 @@
 ``pose = (x_A, y_A, beta)``: the axle midpoint A [m] and the heading [rad], ground frame z up. Wheel 1 is the
 right wheel, 2 the left; wheel rates ``w = (alpha1dot, alpha2dot)`` [rad/s], positive forward. Array functions take
 leading batch axes (pose ``(..., 3)``, rates ``(..., 2)``); column functions (``*_columns``, ``*_of``,
-:func:`arc_step`) take floats or arrays of any shape, and the pure-arithmetic ones are also compiled (numba).
+:func:`arc_step`) take floats or arrays of any shape (floats in, floats out), and the pure-arithmetic ones are also
+compiled (numba).
 """
 
 from __future__ import annotations
