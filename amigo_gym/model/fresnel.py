@@ -27,7 +27,8 @@ NODES = 10
 MAX_PHASE_PER_SUB = 2.0
 #: the smaller rules of one sub-interval: node counts, the largest ``Phi`` [rad] of each (:func:`tier`), where their
 #: nodes then weights on [0, 1] stand after the ``2 NODES`` entries of the 10-node rule (:func:`step_table`)
-TIER_NODES, TIER_PHASE, TIER_AT = (6, 8), (0.0625, 0.25), (0, 12)
+TIER_NODES, TIER_PHASE = (6, 8), (0.0625, 0.25)
+TIER_AT = tuple(2 * sum(TIER_NODES[:i]) for i in range(len(TIER_NODES)))
 
 
 def _leg(n: int) -> list[float]:
@@ -72,20 +73,24 @@ def step_table(n_sub: int) -> list[float]:
 
 
 def tier(phase: Real) -> int:
-    """The first ``i`` with every entry of ``phase <= TIER_PHASE[i]`` [rad], else 2 (the 10-node rule)."""
+    """The first ``i`` with every entry of ``phase <= TIER_PHASE[i]`` [rad], else ``len(TIER_PHASE)`` (the 10-node
+    rule; NaN too)."""
     return tier_float(float(np.max(phase)))
 
 
 def tier_float(phase: float) -> int:
     """:func:`tier` of a float."""
-    return 0 if phase <= TIER_PHASE[0] else (1 if phase <= TIER_PHASE[1] else 2)
+    i = 0
+    while i < len(TIER_PHASE) and not phase <= TIER_PHASE[i]:
+        i += 1
+    return i
 
 
 def piece_rule(w0: Any, alpha: Any, t: Any, j: int, nn: int) -> tuple[int, int]:
     """Where the nodes of a piece's rule start and how many: ``(j, nn)``, or with ``nn == NODES`` (one sub-interval
     of :func:`step_table` at ``j``) the smaller rule of :func:`tier` where it takes one."""
-    i = tier(abs(w0) * t + 0.5 * abs(alpha) * t * t) if nn == NODES else 2
-    return (j + 2 * NODES + TIER_AT[i], TIER_NODES[i]) if i < 2 else (j, nn)
+    i = tier(abs(w0) * t + 0.5 * abs(alpha) * t * t) if nn == NODES else len(TIER_NODES)
+    return (j + 2 * NODES + TIER_AT[i], TIER_NODES[i]) if i < len(TIER_NODES) else (j, nn)
 
 
 class Buffer(Protocol):

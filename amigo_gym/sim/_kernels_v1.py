@@ -113,6 +113,7 @@ _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / ma
 #: more sub-intervals allocate theirs) and of its scratch, on the stack
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
+_TIERS = len(fresnel._TIERS)  # the step table's smaller rules after its 10-node one (fresnel.step_table)
 _ACT_SCRATCH = actuators.SCRATCH
 _RECORD = L.RECORD_WIDTH
 
@@ -223,9 +224,6 @@ def _actuator_step(c: F64, ws: F64, i: int, o1: float, o2: float, n1: float, n2:
     r.alpha1[i] = r.alpha1[i] + da1
     r.alpha2[i] = r.alpha2[i] + da2
     return v_true  # type: ignore[return-value]  # a float here
-
-
-_TIERS = len(fresnel._TIERS)  # the step table's smaller rules (fresnel.step_table)
 
 
 @_jit
