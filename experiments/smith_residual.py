@@ -1,0 +1,275 @@
+"""A learned residual on the delay compensator: fast PPO's residual recipe with the Smith predictor of
+``experiments/smith_delay.py`` (``SmithEstimated``, ``k = 2``, ``--quiet 1e-6``) as its base instead of the
+analytic controller (issue 36, item 1).
+
+    python experiments/smith_residual.py check                       # the base against smith_delay.py's, per step
+    python experiments/smith_residual.py train -- <train-fast arguments>   # e.g. --out runs/sr_s0 --seed 0 ...
+    python experiments/smith_residual.py val --models sr_s0=runs/sr_s0/model.zip [--seeds 20] [--cells ...]
+    python experiments/smith_residual.py bench -- <amigo-gym benchmark arguments>   # the test cells, once
+
+:class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips
+it writes need it to act: loaded without it they get the analytic base): the base action is the compensator's,
+computed for all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row (the commands
+issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated ``v``,
+``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on
+(the quiet rule) to the recipe's. ``check`` steps one episode per validation cell with the base alone (the residual
+zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the validation
+cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
+``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
+'sr=experiments/candidates/sr_s*.zip' --out docs/benchmark/smith_residual``). Validation cells and seeds for
+every decision (:mod:`amigo_gym.tools.training.protocol`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numba
+import numpy as np
+
+import amigo_gym.policies.learned as learned
+import amigo_gym.tools.training.fastppo as fastppo
+from amigo_gym.policies import AnalyticTrackingPolicy
+from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from smith_delay import CANDIDATES, SmithEstimated  # noqa: E402
+
+GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
+RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDATES) / dt + 1 steps
+N_CAND = len(CANDIDATES)
+
+
+@numba.njit(cache=True, inline="always")
+def _ramp(u0: float, c: float, accel: float, decel: float, t: float) -> float:
+    """``u_b`` of :func:`amigo_gym.model.actuators.ramp` (the speed after ``t`` [s]) for floats."""
+    reverse = u0 * c < 0.0
+    u_z = 0.0 if reverse else u0
+    t_z = abs(u0) / decel if reverse else 0.0
+    s_a = math.copysign(decel, -u0) if reverse else 0.0
+    d = c - u_z
+    rate = accel if abs(c) > abs(u_z) else decel
+    t_r = t_z + abs(d) / rate
+    if t_r <= t:
+        return c
+    if t_z <= t:
+        return u_z + math.copysign(rate, d) * (t - t_z)
+    return u0 + s_a * t
+
+
+@numba.njit(cache=True)
+def _smith_rows(
+    obs: np.ndarray, starts: np.ndarray, st: np.ndarray, col: np.ndarray, cand: np.ndarray, rob: np.ndarray,
+    dt: float, error_scale: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per row: the estimated delay [s], the quiet flag and ``(e [m], psi [rad])`` moved over it; ``st`` (a copy,
+    updated): ``[count, ring (RING, 2), sims (C, 2), err (C,)]``. ``col``: the observation's columns of ``e``, sin
+    and cos ``psi``, curvature, wheel rates 1, 2, previous commands 1, 2; ``rob``: ``r1, r2, l1, l3, w_max, accel,
+    decel, rot_accel, rot_decel``."""
+    n, nc = obs.shape[0], cand.size
+    r1, r2, l1, l3, w_max, acc, dec, racc, rdec = rob[0], rob[1], rob[2], rob[3], rob[4], rob[5], rob[6], rob[7], rob[8]
+    delay, fast, pred = np.zeros(n), np.ones(n, dtype=np.bool_), np.zeros((n, 2))
+    ring0, sim0, err0 = 1, 1 + 2 * RING, 1 + 2 * RING + 2 * nc
+    n_dt = round(dt / H)
+    for i in range(n):
+        s = st[i]
+        if starts[i]:
+            s[:] = 0.0
+        else:  # the command issued a step ago, then the candidates' ramps over the last step
+            c = int(s[0])
+            s[ring0 + 2 * (c % RING)] = obs[i, col[6]]
+            s[ring0 + 2 * (c % RING) + 1] = obs[i, col[7]]
+            s[0] = c + 1
+        count = int(s[0])
+        u1, u2 = r1 * obs[i, col[4]] * w_max, r2 * obs[i, col[5]] * w_max
+        v, om = 0.5 * (u1 + u2), (u1 - u2) / (2.0 * l1)
+        if count > 0:
+            t0 = (count - 1) * dt
+            best, j = np.inf, 0
+            for k in range(nc):
+                sv, so = s[sim0 + 2 * k], s[sim0 + 2 * k + 1]
+                for q in range(n_dt):
+                    m = math.floor((t0 + q * H - cand[k]) / dt + 1e-9)
+                    a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
+                    a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
+                    c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
+                    sv = _ramp(sv, 0.5 * (c1 + c2), acc, dec, H)
+                    so = _ramp(so, (c1 - c2) / (2.0 * l1), racc, rdec, H)
+                s[sim0 + 2 * k], s[sim0 + 2 * k + 1] = sv, so
+                s[err0 + k] += (sv - v) ** 2 + (l1 * (so - om)) ** 2
+                if s[err0 + k] < best:
+                    best, j = s[err0 + k], k
+            delay[i] = cand[j]
+            fast[i] = best / count <= QUIET
+        e = obs[i, col[0]] * error_scale
+        psi = math.atan2(obs[i, col[1]], obs[i, col[2]])
+        kappa = obs[i, col[3]] / l3
+        now, d = count * dt, delay[i]
+        for q in range(round(d / H)):
+            m = math.floor((now + q * H - d) / dt + 1e-9)
+            a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
+            a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
+            c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
+            v2 = _ramp(v, 0.5 * (c1 + c2), acc, dec, H)
+            om2 = _ramp(om, (c1 - c2) / (2.0 * l1), racc, rdec, H)
+            vm, omm = 0.5 * (v + v2), 0.5 * (om + om2)
+            s_dot = (vm * math.cos(psi) - l3 * omm * math.sin(psi)) / max(1.0 - kappa * e, 0.05)
+            e += H * (vm * math.sin(psi) + l3 * omm * math.cos(psi))
+            psi += H * (omm - kappa * s_dot)
+            v, om = v2, om2
+        pred[i, 0], pred[i, 1] = e, psi
+    return delay, fast, pred
+
+
+class SmithBuilder(FeatureBuilder):
+    """:class:`FeatureBuilder` with the compensator's base action and two more features (module docstring); the
+    state per row: the recipe's, then :func:`_smith_rows`'."""
+
+    def __init__(self, spec: FeatureSpec) -> None:
+        super().__init__(spec)
+        if spec.residual_bound <= 0:
+            raise ValueError("SmithBuilder: a residual (residual_bound > 0) is its only use")
+        p = spec.params()
+        if max(CANDIDATES) / p.dt + 2 > RING:
+            raise ValueError(f"SmithBuilder: dt = {p.dt} s is too short for a ring of {RING} commands")
+        self.p, r, a = p, p.robot, p.actuators
+        self.fast_pol, self.slow_pol = AnalyticTrackingPolicy(p, GAIN), AnalyticTrackingPolicy(p, 1.0)
+        names = self.fields.names
+        self.col = np.array([names.index(f) for f in ("cross_track_error", "sin_heading_error", "cos_heading_error",
+                             "curvature", "wheel_rate_1", "wheel_rate_2", "previous_command_1",
+                             "previous_command_2")])  # fmt: skip
+        self.rob = np.array([r.r1, r.r2, r.l1, r.l3, r.max_wheel_rate, a.acceleration, a.deceleration,
+                             a.rot_acceleration, a.rot_deceleration])  # fmt: skip
+        self.cand = np.array(CANDIDATES)
+        self.base_state = self.state_dim
+        self.state_dim += 1 + 2 * RING + 3 * N_CAND
+        self.dim += 2
+
+    def __call__(self, obs: Any, state: Any, starts: Any) -> tuple[Any, Any, Any]:
+        n, b = obs.shape[0], self.base_state
+        feats, _, s_base = super().__call__(obs, state[:, :b], starts)  # the recipe's features (analytic base)
+        st = np.array(state[:, b:], dtype=np.float64)
+        delay, fast, pred = _smith_rows(obs, np.asarray(starts, dtype=np.bool_), st, self.col, self.cand, self.rob,
+                                        self.p.dt, self.p.error_scale)  # fmt: skip
+        seen = np.array(obs, dtype=np.float64)
+        seen[:, self.col[0]] = pred[:, 0] / self.p.error_scale
+        seen[:, self.col[1]], seen[:, self.col[2]] = np.sin(pred[:, 1]), np.cos(pred[:, 1])
+        z = np.where(starts, 0.0, state[:, 0]).reshape(n, 1)
+        a_f, z_f = self.fast_pol.predict(seen, state=z, episode_start=None)
+        a_s, z_s = self.slow_pol.predict(seen, state=z, episode_start=None)
+        base = np.where(fast[:, None], a_f, a_s).astype(np.float64)
+        s_base[:, 0] = np.where(fast, z_f[:, 0], z_s[:, 0])
+        feats = feats.copy()
+        feats[:, -2:] = base
+        feats = np.concatenate([feats, delay[:, None], fast[:, None].astype(np.float64)], axis=1)
+        return feats, base, np.concatenate([s_base, st], axis=1)
+
+
+def install() -> None:
+    """Make every fast-PPO model and run in this process use :class:`SmithBuilder`."""
+    learned.FeatureBuilder = SmithBuilder  # type: ignore[misc]
+    fastppo.FeatureBuilder = SmithBuilder  # type: ignore[misc]
+
+
+def compensator(env_kwargs: dict[str, Any]) -> FastPolicy:
+    """The compensator alone: a residual policy whose network outputs 0."""
+    spec = FeatureSpec(env_kwargs, history=4, residual_bound=0.3)
+    dim = SmithBuilder(spec).dim
+    layers = [(np.zeros((dim, 2)), np.zeros(2))]
+    return FastPolicy(spec, layers, np.zeros(2), RunningMeanStd.zeros(dim))
+
+
+def check() -> None:
+    """Per validation cell, one episode (the first validation seed): the base alone against ``SmithEstimated``."""
+    from amigo_gym.tools.training.protocol import VALIDATION_SEEDS, validation_cells
+
+    for sc in validation_cells("AmigoBot-v1", 1):
+        kw = dict(sc.env_kwargs)
+        env_a, env_b = gym.make(sc.env_id, **kw), gym.make(sc.env_id, **kw)
+        ref = SmithEstimated(env_a.unwrapped.params, GAIN, QUIET)  # type: ignore[attr-defined]
+        pol = compensator(kw)
+        oa, _ = env_a.reset(seed=VALIDATION_SEEDS[0])
+        ob, _ = env_b.reset(seed=VALIDATION_SEEDS[0])
+        worst, state, h_a, h_b = 0.0, None, [], []
+        for t in range(sc.max_steps):
+            a = ref.act(oa, t == 0)
+            b, state = pol.predict(ob[None], state=state, episode_start=np.array([t == 0]), deterministic=True)
+            b = np.asarray(b, dtype=np.float32).reshape(-1)
+            worst = max(worst, float(np.abs(a - b).max()))
+            oa, _, ta, ua, ia = env_a.step(a)
+            ob, _, tb, ub, ib = env_b.step(b)
+            h_a.append(ia["cross_track_error"])
+            h_b.append(ib["cross_track_error"])
+            if ta or ua or tb or ub:
+                break
+        rms = [1e3 * float(np.sqrt(np.mean(np.square(h)))) for h in (h_a, h_b)]
+        print(f"{sc.name}: {t + 1} steps, largest action difference {worst:.1e}, H RMS {rms[0]:.6f} / {rms[1]:.6f} mm")
+
+
+def _models(items: list[str]) -> list[tuple[str, FastPolicy]]:
+    out = []
+    for m in items:
+        name, pattern = m.split("=", 1)
+        paths = sorted(glob.glob(pattern)) or [pattern]
+        for i, path in enumerate(paths):
+            out.append((name if len(paths) == 1 else f"{name}_{i}", FastPolicy.load(path)))
+    return out
+
+
+def val(a: argparse.Namespace) -> None:
+    """The validation table (module docstring)."""
+    from amigo_gym.tools.machine import machine_line
+    from amigo_gym.tools.training.benchmark import evaluate, make_env
+    from amigo_gym.tools.training.protocol import validation_cells
+
+    models = _models(a.models)
+    print(machine_line())
+    names = ["analytic", "compensator"] + [n for n, _ in models]
+    print("| cell | " + " | ".join(f"{n} [mm]" for n in names) + " | " +
+          " | ".join(f"{n}/analytic" for n in names[1:]) + " |")  # fmt: skip
+    print("|---" * (2 * len(names)) + "|")
+    for sc in validation_cells("AmigoBot-v1", a.seeds):
+        if a.cells and sc.name not in a.cells:
+            continue
+        env = make_env(sc)
+        p = env.unwrapped.params if hasattr(env, "unwrapped") else env.params
+        agents = [AnalyticTrackingPolicy(p), compensator(dict(sc.env_kwargs))] + [m for _, m in models]
+        means = [float(np.mean([1e3 * e["h_rms_m"] for e in evaluate(ag, env, sc)])) for ag in agents]
+        env.close()
+        print(f"| {sc.name} | " + " | ".join(f"{m:.2f}" for m in means) + " | " +
+              " | ".join(f"{m / means[0]:.2f}" for m in means[1:]) + " |", flush=True)  # fmt: skip
+
+
+def main() -> int:
+    install()
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    sub.add_parser("check")
+    t = sub.add_parser("train")
+    t.add_argument("rest", nargs=argparse.REMAINDER)
+    v = sub.add_parser("val")
+    v.add_argument("--models", nargs="*", default=[])
+    v.add_argument("--seeds", type=int, default=20)
+    v.add_argument("--cells", nargs="*", default=None)
+    sub.add_parser("bench").add_argument("rest", nargs=argparse.REMAINDER)
+    a = p.parse_args()
+    if a.cmd == "check":
+        check()
+    elif a.cmd in ("train", "bench"):
+        from amigo_gym.tools.training import benchmark
+
+        run = fastppo.main if a.cmd == "train" else benchmark.main
+        return run([x for x in a.rest if x != "--"])
+    else:
+        val(a)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
