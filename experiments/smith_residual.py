@@ -12,7 +12,9 @@ it writes need it to act: loaded without it they get the analytic base): the bas
 computed for all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row (the commands
 issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated ``v``,
 ``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on
-(the quiet rule) to the recipe's. ``check`` steps one episode per validation cell with the base alone (the residual
+(the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
+(elsewhere the action is the compensator's), in training (``train --gate``), for named models (``val --gate
+NAME``) or all (``bench --gate``). ``check`` steps one episode per validation cell with the base alone (the residual
 zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the validation
 cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
 ``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
@@ -42,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from smith_delay import CANDIDATES, SmithEstimated  # noqa: E402
 
 GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
+GATE: dict[str, Any] = {"on": False, "flags": None}  # --gate: the correction only where the quiet flag is on
 RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDATES) / dt + 1 steps
 N_CAND = len(CANDIDATES)
 
@@ -168,13 +171,44 @@ class SmithBuilder(FeatureBuilder):
         feats = feats.copy()
         feats[:, -2:] = base
         feats = np.concatenate([feats, delay[:, None], fast[:, None].astype(np.float64)], axis=1)
+        GATE["flags"] = fast  # for the env_action that follows this call (rollout, FastPolicy._act)
         return feats, base, np.concatenate([s_base, st], axis=1)
 
 
+_env_action = learned.env_action
+
+
+def gated_env_action(u: Any, base: Any, prev: Any, residual_bound: float, filter_alpha: float) -> Any:
+    """:func:`amigo_gym.policies.learned.env_action` with the network's output zeroed on the rows whose quiet flag
+    is off when ``GATE["on"]`` (the action there: the compensator's)."""
+    if GATE["on"] and GATE["flags"] is not None and residual_bound > 0:
+        u = np.where(GATE["flags"][:, None], u, 0.0)
+    return _env_action(u, base, prev, residual_bound, filter_alpha)
+
+
+class Gated:
+    """A model acting with ``GATE["on"]`` (its correction only where the quiet flag is on)."""
+
+    def __init__(self, policy: FastPolicy) -> None:
+        self.policy = policy
+
+    def predict(self, *a: Any, **k: Any) -> Any:
+        GATE["on"] = True
+        try:
+            return self.policy.predict(*a, **k)
+        finally:
+            GATE["on"] = False
+
+    def reset(self) -> None:
+        self.policy.reset()
+
+
 def install() -> None:
-    """Make every fast-PPO model and run in this process use :class:`SmithBuilder`."""
+    """Make every fast-PPO model and run in this process use :class:`SmithBuilder` (and the gate, when on)."""
     learned.FeatureBuilder = SmithBuilder  # type: ignore[misc]
     fastppo.FeatureBuilder = SmithBuilder  # type: ignore[misc]
+    learned.env_action = gated_env_action
+    fastppo.env_action = gated_env_action
 
 
 def compensator(env_kwargs: dict[str, Any]) -> FastPolicy:
@@ -212,13 +246,15 @@ def check() -> None:
         print(f"{sc.name}: {t + 1} steps, largest action difference {worst:.1e}, H RMS {rms[0]:.6f} / {rms[1]:.6f} mm")
 
 
-def _models(items: list[str]) -> list[tuple[str, FastPolicy]]:
-    out = []
+def _models(items: list[str], gated: list[str]) -> list[tuple[str, Any]]:
+    """``NAME=ZIP`` (a glob: ``NAME_0``, ...) models; ``NAME`` in ``gated`` (``--gate``): acting with the gate."""
+    out: list[tuple[str, Any]] = []
     for m in items:
         name, pattern = m.split("=", 1)
         paths = sorted(glob.glob(pattern)) or [pattern]
         for i, path in enumerate(paths):
-            out.append((name if len(paths) == 1 else f"{name}_{i}", FastPolicy.load(path)))
+            pol = FastPolicy.load(path)
+            out.append((name if len(paths) == 1 else f"{name}_{i}", Gated(pol) if name in gated else pol))
     return out
 
 
@@ -228,7 +264,7 @@ def val(a: argparse.Namespace) -> None:
     from amigo_gym.tools.training.benchmark import evaluate, make_env
     from amigo_gym.tools.training.protocol import validation_cells
 
-    models = _models(a.models)
+    models = _models(a.models, a.gate)
     print(machine_line())
     names = ["analytic", "compensator"] + [n for n, _ in models]
     print("| cell | " + " | ".join(f"{n} [mm]" for n in names) + " | " +
@@ -243,7 +279,7 @@ def val(a: argparse.Namespace) -> None:
         means = [float(np.mean([1e3 * e["h_rms_m"] for e in evaluate(ag, env, sc)])) for ag in agents]
         env.close()
         print(f"| {sc.name} | " + " | ".join(f"{m:.2f}" for m in means) + " | " +
-              " | ".join(f"{m / means[0]:.2f}" for m in means[1:]) + " |", flush=True)  # fmt: skip
+              " | ".join(f"{m / means[0]:.3f}" for m in means[1:]) + " |", flush=True)  # fmt: skip
 
 
 def main() -> int:
@@ -252,18 +288,23 @@ def main() -> int:
     sub = p.add_subparsers(dest="cmd", required=True)
     sub.add_parser("check")
     t = sub.add_parser("train")
+    t.add_argument("--gate", action="store_true", help="train with the correction only where the quiet flag is on")
     t.add_argument("rest", nargs=argparse.REMAINDER)
     v = sub.add_parser("val")
     v.add_argument("--models", nargs="*", default=[])
     v.add_argument("--seeds", type=int, default=20)
     v.add_argument("--cells", nargs="*", default=None)
-    sub.add_parser("bench").add_argument("rest", nargs=argparse.REMAINDER)
+    v.add_argument("--gate", nargs="*", default=[], help="model names that act with the gate")
+    b = sub.add_parser("bench")
+    b.add_argument("--gate", action="store_true", help="every model acts with the gate")
+    b.add_argument("rest", nargs=argparse.REMAINDER)
     a = p.parse_args()
     if a.cmd == "check":
         check()
     elif a.cmd in ("train", "bench"):
         from amigo_gym.tools.training import benchmark
 
+        GATE["on"] = a.gate
         run = fastppo.main if a.cmd == "train" else benchmark.main
         return run([x for x in a.rest if x != "--"])
     else:
