@@ -41,7 +41,7 @@ from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from smith_delay import CANDIDATES, SmithEstimated  # noqa: E402
+from smith_delay import CANDIDATES, SmithEstimated
 
 GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
 GATE: dict[str, Any] = {"on": False, "flags": None}  # --gate: the correction only where the quiet flag is on
@@ -68,8 +68,14 @@ def _ramp(u0: float, c: float, accel: float, decel: float, t: float) -> float:
 
 @numba.njit(cache=True)
 def _smith_rows(
-    obs: np.ndarray, starts: np.ndarray, st: np.ndarray, col: np.ndarray, cand: np.ndarray, rob: np.ndarray,
-    dt: float, error_scale: float,
+    obs: np.ndarray,
+    starts: np.ndarray,
+    st: np.ndarray,
+    col: np.ndarray,
+    cand: np.ndarray,
+    rob: np.ndarray,
+    dt: float,
+    error_scale: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per row: the estimated delay [s], the quiet flag and ``(e [m], psi [rad])`` moved over it; ``st`` (a copy,
     updated): ``[count, ring (RING, 2), sims (C, 2), err (C,)]``. ``col``: the observation's columns of ``e``, sin
@@ -270,6 +276,7 @@ def val(a: argparse.Namespace) -> None:
     print("| cell | " + " | ".join(f"{n} [mm]" for n in names) + " | " +
           " | ".join(f"{n}/analytic" for n in names[1:]) + " |")  # fmt: skip
     print("|---" * (2 * len(names)) + "|")
+    rows: list[tuple[str, list[float]]] = []
     for sc in validation_cells("AmigoBot-v1", a.seeds):
         if a.cells and sc.name not in a.cells:
             continue
@@ -280,6 +287,31 @@ def val(a: argparse.Namespace) -> None:
         env.close()
         print(f"| {sc.name} | " + " | ".join(f"{m:.2f}" for m in means) + " | " +
               " | ".join(f"{m / means[0]:.3f}" for m in means[1:]) + " |", flush=True)  # fmt: skip
+        rows.append((sc.name, [m / means[0] for m in means[1:]]))
+    if a.plot:
+        plot(rows, names[1:], a.plot, a.seeds)
+
+
+def plot(rows: list[tuple[str, list[float]]], names: list[str], path: str, seeds: int) -> None:
+    """Grouped bars: each agent's ratio to the analytic controller per validation cell, 1 and 0.8 marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    width = 0.8 / len(names)
+    for j, name in enumerate(names):
+        ax.bar(np.arange(len(rows)) + (j - (len(names) - 1) / 2) * width, [r[1][j] for r in rows], width, label=name)
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.axhline(0.8, color="k", lw=0.8, ls="--", label="20 % below the analytic controller")
+    ax.set_xticks(np.arange(len(rows)), [r[0].removeprefix("val_") for r in rows], rotation=30, ha="right")
+    ax.set_ylabel("mean H RMS / analytic controller's")
+    ax.set_title(f"Validation cells, {seeds} seeds each (experiments/smith_residual.py val)")
+    ax.legend(fontsize=8, ncol=3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
 
 
 def main() -> int:
@@ -295,6 +327,7 @@ def main() -> int:
     v.add_argument("--seeds", type=int, default=20)
     v.add_argument("--cells", nargs="*", default=None)
     v.add_argument("--gate", nargs="*", default=[], help="model names that act with the gate")
+    v.add_argument("--plot", default=None, help="write the ratios as a bar chart (PNG) here")
     b = sub.add_parser("bench")
     b.add_argument("--gate", action="store_true", help="every model acts with the gate")
     b.add_argument("rest", nargs=argparse.REMAINDER)

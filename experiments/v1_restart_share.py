@@ -91,5 +91,7 @@ for _, _, label in parts:
     us = spent[label] / steps / 1e3
     print(f"  {label:58s} {us:7,.0f} µs a step ({spent[label] / total:4.0%})")
 per_row = spent["restarts, all"] / max(rows_restarted[0], 1) / 1e3
-print(f"  a restarted row: {per_row:.0f} µs; the rest of the step (Python around the kernel, infos) "
-      f"{(total - spent['restarts, all'] - spent['the compiled step']) / steps / 1e3:,.0f} µs")
+print(
+    f"  a restarted row: {per_row:.0f} µs; the rest of the step (Python around the kernel, infos) "
+    f"{(total - spent['restarts, all'] - spent['the compiled step']) / steps / 1e3:,.0f} µs"
+)
