@@ -6,7 +6,9 @@ Reads a ``benchmark.json`` of ``amigo-gym benchmark`` that ran ``analytic`` and 
 seeds) on the same cells and reset seeds. Prints one Markdown row per cell: the analytic controller's mean H RMS
 [mm], the agent's per training seed and over seeds, the ratio of the means, and the paired difference (agent minus
 analytic, per reset seed, averaged over the training seeds) with a 95 % percentile bootstrap interval over the reset
-seeds (10,000 resamples, seed 0), the failed episodes and the settled chatter [rad/s].
+seeds (10,000 resamples, seed 0), the failed episodes and the settled chatter [rad/s]. ``--marginal``: then one row
+per cell with each side's own 95 % percentile bootstrap interval of its mean H RMS over its episodes (10,000
+resamples, seed 0; the agent's episodes of all training seeds pooled) and whether the two overlap.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("json")
     p.add_argument("--agent", required=True)
+    p.add_argument("--marginal", action="store_true", help="also each side's own interval over its episodes")
     a = p.parse_args()
     with open(a.json, encoding="utf-8") as f:
         doc = json.load(f)
@@ -33,6 +36,7 @@ def main() -> None:
         "| failed | chatter settled [rad/s] |"
     )
     print("|---|---|---:|---:|---:|---:|---:|---:|")
+    marginal = []
     for sc in doc["scenarios"]:
         name = sc["name"]
         if (a.agent, name) not in by:
@@ -51,6 +55,16 @@ def main() -> None:
             f"{ag.mean() / base.mean():.2f} | {diff.mean():+.2f} [{lo:+.2f}, {hi:+.2f}] | "
             f"{failed} of {ag.size} | {chatter:.3f} |"
         )
+        cis = []
+        for x in (base, ag.ravel()):
+            lo_hi = np.percentile(x[rng.integers(0, x.size, (10_000, x.size))].mean(axis=1), [2.5, 97.5])
+            cis.append((float(lo_hi[0]), float(lo_hi[1])))
+        overlap = cis[0][0] <= cis[1][1] and cis[1][0] <= cis[0][1]
+        marginal.append(f"| {name} | [{cis[0][0]:.2f}, {cis[0][1]:.2f}] | [{cis[1][0]:.2f}, {cis[1][1]:.2f}] | "
+                        f"{'yes' if overlap else 'no'} |")  # fmt: skip
+    if a.marginal:
+        print(f"\n| cell | analytic, 95 % CI [mm] | {a.agent}, 95 % CI [mm] | overlap |\n|---|---:|---:|---|")
+        print("\n".join(marginal))
 
 
 if __name__ == "__main__":
