@@ -314,6 +314,18 @@ def plot(rows: list[tuple[str, list[float]]], names: list[str], path: str, seeds
     print(f"wrote {path}")
 
 
+def _record_command(command: str) -> None:
+    """Make ``amigo-gym benchmark``'s outputs in this process record ``command`` (this script's), not its own."""
+    from amigo_gym.tools.training import benchmark
+
+    def fix(doc: Any) -> Any:
+        return {**doc, "command": command} if isinstance(doc, dict) and "command" in doc else doc
+
+    write_outputs, write_json = benchmark.write_outputs, benchmark.atomic_write_json
+    benchmark.write_outputs = lambda doc, *a, **k: write_outputs(fix(doc), *a, **k)  # type: ignore[assignment]
+    benchmark.atomic_write_json = lambda path, doc, *a, **k: write_json(path, fix(doc), *a, **k)  # type: ignore[assignment]
+
+
 def main() -> int:
     install()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -338,8 +350,11 @@ def main() -> int:
         from amigo_gym.tools.training import benchmark
 
         GATE["on"] = a.gate
-        run = fastppo.main if a.cmd == "train" else benchmark.main
-        return run([x for x in a.rest if x != "--"])
+        rest = [x for x in a.rest if x != "--"]
+        if a.cmd == "train":
+            return fastppo.main(rest)
+        _record_command(f"python experiments/smith_residual.py bench {'--gate ' if a.gate else ''}-- " + " ".join(rest))
+        return benchmark.main(rest)
     else:
         val(a)
     return 0
