@@ -14,7 +14,9 @@ issued, read from the observation's ``previous_command`` fields; the seven candi
 ``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on
 (the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
 (elsewhere the action is the compensator's), in training (``train --gate``), for named models (``val --gate
-NAME``) or all (``bench --gate``). ``check`` steps one episode per validation cell with the base alone (the residual
+NAME``) or all (``bench --gate``). ``--saturation step|hold --hold N`` (before the command): the gain
+``k = 1`` on a step whose ``k = 2`` command reaches a wheel's limit (``hold``: and the ``N`` steps after).
+``check`` steps one episode per validation cell with the base alone (the residual
 zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the validation
 cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
 ``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
@@ -44,7 +46,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from smith_delay import CANDIDATES, SmithEstimated
 
 GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
-GATE: dict[str, Any] = {"on": False, "flags": None}  # --gate: the correction only where the quiet flag is on
+GATE: dict[str, Any] = {"on": False, "flags": None}
+#: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold`` steps on
+SATURATION: dict[str, Any] = {"rule": "none", "hold": 0}  # --gate: the correction only where the quiet flag is on
 RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDATES) / dt + 1 steps
 N_CAND = len(CANDIDATES)
 
@@ -157,7 +161,7 @@ class SmithBuilder(FeatureBuilder):
                              a.rot_acceleration, a.rot_deceleration])  # fmt: skip
         self.cand = np.array(CANDIDATES)
         self.base_state = self.state_dim
-        self.state_dim += 1 + 2 * RING + 3 * N_CAND
+        self.state_dim += 1 + 2 * RING + 3 * N_CAND + 1  # + the steps left at k = 1 after a saturation
         self.dim += 2
 
     def __call__(self, obs: Any, state: Any, starts: Any) -> tuple[Any, Any, Any]:
@@ -172,6 +176,11 @@ class SmithBuilder(FeatureBuilder):
         z = np.where(starts, 0.0, state[:, 0]).reshape(n, 1)
         a_f, z_f = self.fast_pol.predict(seen, state=z, episode_start=None)
         a_s, z_s = self.slow_pol.predict(seen, state=z, episode_start=None)
+        if SATURATION["rule"] != "none":  # the k = 2 command at a wheel's limit: k = 1 (and for ``hold`` steps on)
+            sat = np.abs(a_f).max(axis=1) >= 1.0 - 1e-9
+            hold = np.where(sat, float(SATURATION["hold"]), np.maximum(np.where(starts, 0.0, st[:, -1]) - 1.0, 0.0))
+            fast = fast & ~sat & (hold <= 0.0)
+            st[:, -1] = hold
         base = np.where(fast[:, None], a_f, a_s).astype(np.float64)
         s_base[:, 0] = np.where(fast, z_f[:, 0], z_s[:, 0])
         feats = feats.copy()
@@ -329,6 +338,8 @@ def _record_command(command: str) -> None:
 def main() -> int:
     install()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--saturation", choices=("none", "step", "hold"), default="none", help="SATURATION's rule")
+    p.add_argument("--hold", type=int, default=0, help="with --saturation hold: steps at k = 1 after a saturation")
     sub = p.add_subparsers(dest="cmd", required=True)
     sub.add_parser("check")
     t = sub.add_parser("train")
@@ -344,6 +355,7 @@ def main() -> int:
     b.add_argument("--gate", action="store_true", help="every model acts with the gate")
     b.add_argument("rest", nargs=argparse.REMAINDER)
     a = p.parse_args()
+    SATURATION.update(rule=a.saturation, hold=a.hold)
     if a.cmd == "check":
         check()
     elif a.cmd in ("train", "bench"):
@@ -353,7 +365,10 @@ def main() -> int:
         rest = [x for x in a.rest if x != "--"]
         if a.cmd == "train":
             return fastppo.main(rest)
-        _record_command(f"python experiments/smith_residual.py bench {'--gate ' if a.gate else ''}-- " + " ".join(rest))
+        sat = "" if a.saturation == "none" else f"--saturation {a.saturation} --hold {a.hold} "
+        _record_command(
+            f"python experiments/smith_residual.py {sat}bench {'--gate ' if a.gate else ''}-- " + " ".join(rest)
+        )
         return benchmark.main(rest)
     else:
         val(a)
