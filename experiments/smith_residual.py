@@ -7,21 +7,21 @@ analytic controller (issue 36, item 1).
     python experiments/smith_residual.py val --models sr_s0=runs/sr_s0/model.zip [--seeds 20] [--cells ...]
     python experiments/smith_residual.py bench -- <amigo-gym benchmark arguments>   # the test cells, once
 
-:class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips
-it writes need it to act: loaded without it they get the analytic base): the base action is the compensator's,
-computed for all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row (the commands
-issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated ``v``,
-``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on
-(the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
-(elsewhere the action is the compensator's), in training (``train --gate``), for named models (``val --gate
-NAME``) or all (``bench --gate``). ``--saturation step|hold --hold N`` (before the command): the gain
-``k = 1`` on a step whose ``k = 2`` command reaches a wheel's limit (``hold``: and the ``N`` steps after).
-``check`` steps one episode per validation cell with the base alone (the residual
-zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the validation
-cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
+:class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips it
+writes need it to act: loaded without it they get the analytic base): the base action is the compensator's, computed for
+all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row (the commands issued, read from
+the observation's ``previous_command`` fields; the seven candidate delays' simulated ``v``, ``omega`` and their squared
+mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on (the quiet rule) to the
+recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on (elsewhere the action is the
+compensator's), in training (``train --gate``), for named models (``val --gate NAME``) or all (``bench --gate``).
+``--saturation step|hold --hold N`` (before the command): the gain ``k = 1`` on a step whose ``k = 2`` command reaches a
+wheel's limit (``hold``: and the ``N`` steps after); ``--saturation sharp --kappa K``: ``k = 1`` while the curvature at
+H or at a preview point exceeds ``K`` [1/m]. ``check`` steps one episode per validation cell with the base alone (the
+residual zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the
+validation cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
 ``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
-'sr=experiments/candidates/sr_s*.zip' --out docs/benchmark/smith_residual``). Validation cells and seeds for
-every decision (:mod:`amigo_gym.tools.training.protocol`).
+'sr=experiments/candidates/sr_s*.zip' --out docs/benchmark/smith_residual``). Validation cells and seeds for every
+decision (:mod:`amigo_gym.tools.training.protocol`).
 """
 
 from __future__ import annotations
@@ -47,8 +47,13 @@ from smith_delay import CANDIDATES, SmithEstimated
 
 GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
 GATE: dict[str, Any] = {"on": False, "flags": None}
-#: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold`` steps on
-SATURATION: dict[str, Any] = {"rule": "none", "hold": 0}  # --gate: the correction only where the quiet flag is on
+#: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold``
+#: steps on; "sharp": k = 1 while the curvature at H or at a preview point exceeds ``kappa`` [1/m] in magnitude
+SATURATION: dict[str, Any] = {
+    "rule": "none",
+    "hold": 0,
+    "kappa": 0.0,
+}  # --gate: the correction only where the quiet flag is on
 RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDATES) / dt + 1 steps
 N_CAND = len(CANDIDATES)
 
@@ -160,6 +165,7 @@ class SmithBuilder(FeatureBuilder):
         self.rob = np.array([r.r1, r.r2, r.l1, r.l3, r.max_wheel_rate, a.acceleration, a.deceleration,
                              a.rot_acceleration, a.rot_deceleration])  # fmt: skip
         self.cand = np.array(CANDIDATES)
+        self.curv_cols = np.array([i for i, f in enumerate(names) if f == "curvature" or f.startswith("preview_curv")])
         self.base_state = self.state_dim
         self.state_dim += 1 + 2 * RING + 3 * N_CAND + 1  # + the steps left at k = 1 after a saturation
         self.dim += 2
@@ -176,7 +182,10 @@ class SmithBuilder(FeatureBuilder):
         z = np.where(starts, 0.0, state[:, 0]).reshape(n, 1)
         a_f, z_f = self.fast_pol.predict(seen, state=z, episode_start=None)
         a_s, z_s = self.slow_pol.predict(seen, state=z, episode_start=None)
-        if SATURATION["rule"] != "none":  # the k = 2 command at a wheel's limit: k = 1 (and for ``hold`` steps on)
+        if SATURATION["rule"] == "sharp":
+            curv = np.abs(obs[:, self.curv_cols]).max(axis=1)  # |kappa| l3, clipped to 1
+            fast = fast & ~(curv > SATURATION["kappa"] * self.p.robot.l3)
+        elif SATURATION["rule"] != "none":  # the k = 2 command at a wheel's limit: k = 1 (and for ``hold`` steps on)
             sat = np.abs(a_f).max(axis=1) >= 1.0 - 1e-9
             hold = np.where(sat, float(SATURATION["hold"]), np.maximum(np.where(starts, 0.0, st[:, -1]) - 1.0, 0.0))
             fast = fast & ~sat & (hold <= 0.0)
@@ -338,7 +347,8 @@ def _record_command(command: str) -> None:
 def main() -> int:
     install()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--saturation", choices=("none", "step", "hold"), default="none", help="SATURATION's rule")
+    p.add_argument("--saturation", choices=("none", "step", "hold", "sharp"), default="none", help="SATURATION's rule")
+    p.add_argument("--kappa", type=float, default=0.0, help="with --saturation sharp: the curvature limit [1/m]")
     p.add_argument("--hold", type=int, default=0, help="with --saturation hold: steps at k = 1 after a saturation")
     sub = p.add_subparsers(dest="cmd", required=True)
     sub.add_parser("check")
@@ -355,7 +365,7 @@ def main() -> int:
     b.add_argument("--gate", action="store_true", help="every model acts with the gate")
     b.add_argument("rest", nargs=argparse.REMAINDER)
     a = p.parse_args()
-    SATURATION.update(rule=a.saturation, hold=a.hold)
+    SATURATION.update(rule=a.saturation, hold=a.hold, kappa=a.kappa)
     if a.cmd == "check":
         check()
     elif a.cmd in ("train", "bench"):
@@ -365,7 +375,7 @@ def main() -> int:
         rest = [x for x in a.rest if x != "--"]
         if a.cmd == "train":
             return fastppo.main(rest)
-        sat = "" if a.saturation == "none" else f"--saturation {a.saturation} --hold {a.hold} "
+        sat = "" if a.saturation == "none" else f"--saturation {a.saturation} --hold {a.hold} --kappa {a.kappa:g} "
         _record_command(
             f"python experiments/smith_residual.py {sat}bench {'--gate ' if a.gate else ''}-- " + " ".join(rest)
         )
