@@ -8,18 +8,18 @@ analytic controller (issue 36, item 1).
     python experiments/smith_residual.py bench -- <amigo-gym benchmark arguments>   # the test cells, once
 
 :class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips it
-writes need it to act: loaded without it they get the analytic base): the base action is the compensator's, computed for
-all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row (the commands issued, read from
-the observation's ``previous_command`` fields; the seven candidate delays' simulated ``v``, ``omega`` and their squared
-mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is on (the quiet rule) to the
-recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on (elsewhere the action is the
-compensator's), in training (``train --gate``), for named models (``val --gate NAME``) or all (``bench --gate``).
-``--saturation step|hold --hold N`` (before the command): the gain ``k = 1`` on a step whose ``k = 2`` command reaches a
-wheel's limit (``hold``: and the ``N`` steps after); ``--saturation sharp --kappa K``: ``k = 1`` while the curvature at
-H or at a preview point exceeds ``K`` [1/m]. ``check`` steps one episode per validation cell with the base alone (the
-residual zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val`` prints the
-validation cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their ratios;
-``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
+writes need it: loaded without it, their networks' two more inputs make ``FastPolicy`` refuse them): the base action is
+the compensator's, computed for all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row
+(the commands issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated
+``v``, ``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is
+on (the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
+(elsewhere the action is the compensator's), in training (``train --gate``), for named models (``val --gate NAME``) or
+all (``bench --gate``). ``--saturation step|hold --hold N`` (before the command): the gain ``k = 1`` on a step whose ``k
+= 2`` command reaches a wheel's limit (``hold``: and the ``N`` steps after); ``--saturation sharp --kappa K``: ``k = 1``
+while the curvature at H or at a preview point exceeds ``K`` [1/m]. ``check`` steps one episode per validation cell with
+the base alone (the residual zero) beside ``SmithEstimated`` and prints the largest difference of their actions. ``val``
+prints the validation cells' mean H RMS [mm] of the analytic controller, the compensator alone and each model, and their
+ratios; ``bench`` is ``amigo-gym benchmark`` with these models (e.g. ``--suite 2.0 --agents analytic
 'sr=experiments/candidates/sr_s*.zip' --out docs/benchmark/smith_residual``). Validation cells and seeds for every
 decision (:mod:`amigo_gym.tools.training.protocol`).
 """
