@@ -39,8 +39,10 @@ import numpy as np
 
 import amigo_gym.policies.learned as learned
 import amigo_gym.tools.training.fastppo as fastppo
+from amigo_gym.model import actuators
 from amigo_gym.policies import AnalyticTrackingPolicy
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd
+from amigo_gym.sim import fast_v1
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from smith_delay import CANDIDATES, SmithEstimated
@@ -58,21 +60,13 @@ RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDAT
 N_CAND = len(CANDIDATES)
 
 
+fast_v1.kernels()  # registers the package's model functions (actuators.ramp) for numba
+
+
 @numba.njit(cache=True, inline="always")
 def _ramp(u0: float, c: float, accel: float, decel: float, t: float) -> float:
-    """``u_b`` of :func:`amigo_gym.model.actuators.ramp` (the speed after ``t`` [s]) for floats."""
-    reverse = u0 * c < 0.0
-    u_z = 0.0 if reverse else u0
-    t_z = abs(u0) / decel if reverse else 0.0
-    s_a = math.copysign(decel, -u0) if reverse else 0.0
-    d = c - u_z
-    rate = accel if abs(c) > abs(u_z) else decel
-    t_r = t_z + abs(d) / rate
-    if t_r <= t:
-        return c
-    if t_z <= t:
-        return u_z + math.copysign(rate, d) * (t - t_z)
-    return u0 + s_a * t
+    """The speed after ``t`` [s]: ``u_b`` of :func:`amigo_gym.model.actuators.ramp` (the package's, compiled)."""
+    return actuators.ramp(u0, c, accel, decel, t).u_b
 
 
 @numba.njit(cache=True)
