@@ -113,7 +113,7 @@ _C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13, _C14 = (1.0 / ma
 #: more sub-intervals allocate theirs) and of its scratch, on the stack
 _POSE_NODES = 3 * (L.PATH_NODES + 1)
 _STEP_NODES = 3 * PIECES * L.PATH_NODES
-_TIERS = len(fresnel._TIERS)  # the step table's smaller rules after its 10-node one (fresnel.step_table)
+_TIERS = 2 * sum(fresnel.TIER_NODES)  # the smaller rules' nodes and weights after the 10-node one (step_table)
 _ACT_SCRATCH = actuators.SCRATCH
 _RECORD = L.RECORD_WIDTH
 
