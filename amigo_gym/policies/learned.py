@@ -3,9 +3,12 @@
 A fast-PPO model: a zip of ``model.json`` (format, settings, observation layout) and ``weights.npz`` (the actor,
 the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``, with ``history = H > 0`` the
 :data:`HISTORY_FIELDS` of the ``H`` previous steps (oldest first; at an episode's start the first observation), with
-``residual_bound = b > 0`` the :class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s action ``a0``; normalised,
+``residual_bound = b > 0`` the base policy's action ``a0`` (``base="analytic"``: the
+:class:`~amigo_gym.policies.AnalyticTrackingPolicy`'s; ``"compensator"``: the
+:class:`~amigo_gym.policies.DelayCompensatedPolicy`'s, then its estimated delay [s] and quiet flag); normalised,
 ``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action ``a = clip(u, -1, 1)`` of the output ``u`` (or ``clip(a0
-+ b clip(u, -1, 1), -1, 1)``), with ``filter_alpha = alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``.
++ b clip(u, -1, 1), -1, 1)``, with ``gate`` the correction zeroed where the quiet flag is off), with ``filter_alpha =
+alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from amigo_gym.io import atomic_save, require_trust, sha256_file
 from amigo_gym.model.params import check_real
 from amigo_gym.policies.base import Fields, Policy
+from amigo_gym.policies.compensator import DelayCompensatedPolicy
 from amigo_gym.policies.tracking import DEFAULT_TRACKING_GAIN, AnalyticTrackingPolicy
 from amigo_gym.task.v1 import TrackingParams, make_tracking_params
 
@@ -80,14 +84,16 @@ class RunningMeanStd:
 class FeatureSpec:
     """What the network observes and how its output becomes an action (module docstring): the training task's
     ``gym.make`` keywords ``env_kwargs``, ``history`` in [0, 20], ``residual_bound`` in [0, 2] (0: no residual),
-    ``filter_alpha`` in (0, 1] (1: no filter) and ``residual_gain``, the analytic base's gain ``k`` [1/s] in
-    (0, 1/dt]."""
+    ``filter_alpha`` in (0, 1] (1: no filter), ``residual_gain``, the base's gain ``k`` [1/s] in (0, 1/dt] (the
+    compensator's while quiet), ``base`` ``"analytic"`` or ``"compensator"`` and ``gate`` (compensator only)."""
 
     env_kwargs: Mapping[str, Any]
     history: int = 0
     residual_bound: float = 0.0
     filter_alpha: float = 1.0
     residual_gain: float = DEFAULT_TRACKING_GAIN
+    base: str = "analytic"
+    gate: bool = False
 
     def __post_init__(self) -> None:
         o = "FeatureSpec"
@@ -99,6 +105,10 @@ class FeatureSpec:
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"{o}.env_kwargs must be a mapping, got {type(self.env_kwargs).__name__}")
         check_real(o, "residual_gain", self.residual_gain, 0.0, 1.0 / self.params().dt, low_open=True)
+        if self.base not in ("analytic", "compensator"):
+            raise ValueError(f"{o}.base must be 'analytic' or 'compensator', got {self.base!r}")
+        if self.gate not in (False, True) or (self.gate and self.base != "compensator"):
+            raise ValueError(f"{o}.gate must be a bool, True only with base='compensator', got {self.gate!r}")
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
@@ -106,8 +116,8 @@ class FeatureSpec:
 
 
 class FeatureBuilder:
-    """The features of raw observations and the analytic base action; the state per row is ``[z, hist.ravel()]``
-    (the analytic controller's integral [m s], the history ``(H, 7)``)."""
+    """The features of raw observations and the base action; the state per row is ``[base state, hist.ravel()]``
+    (the analytic controller's integral [m s] or the compensator's state, the history ``(H, 7)``)."""
 
     def __init__(self, spec: FeatureSpec) -> None:
         self.spec = spec
@@ -117,10 +127,13 @@ class FeatureBuilder:
         self.obs_dim = len(names)
         self._hist_idx = np.array([names.index(f) for f in HISTORY_FIELDS])
         self._prev_idx = np.array([names.index("previous_command_1"), names.index("previous_command_2")])
-        self.analytic = AnalyticTrackingPolicy(p, spec.residual_gain) if spec.residual_bound > 0 else None
+        comp = spec.residual_bound > 0 and spec.base == "compensator"
+        self.analytic = AnalyticTrackingPolicy(p, spec.residual_gain) if spec.residual_bound > 0 and not comp else None
+        self.compensator = DelayCompensatedPolicy(p, spec.residual_gain) if comp else None
         h = spec.history
-        self.dim = self.obs_dim + h * len(HISTORY_FIELDS) + (2 if self.analytic is not None else 0)
-        self.state_dim = 1 + h * len(HISTORY_FIELDS)
+        self.dim = self.obs_dim + h * len(HISTORY_FIELDS) + (0 if spec.residual_bound <= 0 else 4 if comp else 2)
+        self.base_dim = self.compensator.state_dim if self.compensator is not None else 1
+        self.state_dim = self.base_dim + h * len(HISTORY_FIELDS)
 
     def initial_state(self, n: int) -> Array:
         """``(N, state_dim)`` zeros."""
@@ -129,34 +142,45 @@ class FeatureBuilder:
     def __call__(self, obs: Array, state: Array, starts: NDArray[np.bool_]) -> tuple[Array, Array, Array]:
         """``(raw features (N, dim), base action (N, 2) or zeros, new state)``, the features ``obs`` itself without
         history or residual; rows with ``starts`` begin an episode."""
-        n = obs.shape[0]
+        n, k = obs.shape[0], self.base_dim
         h, f = self.spec.history, len(HISTORY_FIELDS)
-        z = np.where(starts, 0.0, state[:, 0])
         parts = [obs]
         new_state = np.empty_like(state)
         if h:
             cur = obs[:, self._hist_idx]
-            hist = state[:, 1:].reshape(n, h, f)
+            hist = state[:, k:].reshape(n, h, f)
             hist = np.where(starts[:, None, None], cur[:, None, :], hist)
             parts.append(hist.reshape(n, h * f))
-            new_state[:, 1:] = np.concatenate([hist[:, 1:], cur[:, None, :]], axis=1).reshape(n, h * f)
+            new_state[:, k:] = np.concatenate([hist[:, 1:], cur[:, None, :]], axis=1).reshape(n, h * f)
         base = np.zeros((n, 2))
+        new_state[:, :k] = np.where(starts[:, None], 0.0, state[:, :k])
         if self.analytic is not None:
-            a0, z_out = self.analytic.predict(obs, state=z.reshape(n, 1), episode_start=None)
+            a0, z_out = self.analytic.predict(obs, state=new_state[:, :1], episode_start=None)
             base = np.asarray(a0, dtype=np.float64).reshape(n, 2)
-            z = z_out.reshape(n)
+            new_state[:, 0] = z_out.reshape(n)
             parts.append(base)
-        new_state[:, 0] = z
+        elif self.compensator is not None:
+            c0, delay, quiet, new_state[:, :k] = self.compensator.compensate(obs, state[:, :k], starts)
+            base = c0.astype(np.float32).astype(np.float64)  # as ``predict`` gives it, like the analytic base
+            parts += [base, delay[:, None], quiet[:, None]]
         return np.concatenate(parts, axis=1) if len(parts) > 1 else obs, base, new_state
+
+    def correcting(self, features: Array) -> NDArray[np.bool_] | None:
+        """With ``gate``: the rows whose correction counts (the compensator's quiet flag, the features' last raw
+        column); else None (every row)."""
+        return features[:, -1] > 0.5 if self.spec.gate else None
 
     def previous_command(self, obs: Array) -> Array:
         """``(N, 2)`` previous command of the observation (normalised units)."""
         return obs[:, self._prev_idx].astype(np.float64, copy=False)
 
 
-def env_action(u: Array, base: Array, prev: Array, residual_bound: float, filter_alpha: float) -> Array:
-    """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring)."""
-    c = np.clip(u, -1.0, 1.0)
+def env_action(
+    u: Array, base: Array, prev: Array, residual_bound: float, filter_alpha: float, mask: Any = None
+) -> Array:
+    """The environment's action from the network's output ``u`` ``(N, 2)`` (module docstring); ``mask`` ``(N,)``:
+    the rows whose correction counts (None: all)."""
+    c = np.clip(u, -1.0, 1.0) if mask is None else np.where(mask[:, None], np.clip(u, -1.0, 1.0), 0.0)
     target = np.clip(base + residual_bound * c, -1.0, 1.0) if residual_bound > 0 else c
     return prev + filter_alpha * (target - prev) if filter_alpha < 1.0 else target
 
@@ -198,7 +222,8 @@ class FastPolicy(Policy):
 
     @property
     def name(self) -> str:
-        return "fastppo_residual" if self.spec.residual_bound > 0 else "fastppo"
+        s = self.spec
+        return "fastppo" if s.residual_bound <= 0 else f"fastppo_{'compensator_' * (s.base == 'compensator')}residual"
 
     def mean_output(self, features: Array) -> Array:
         """The network's mean output ``u`` for raw features ``(N, dim)``."""
@@ -215,9 +240,8 @@ class FastPolicy(Policy):
             u = u + np.exp(self.log_std) * self._rng.standard_normal(u.shape)
         if state is None:
             self._state = s_new
-        return env_action(
-            u, base, b.previous_command(obs), self.spec.residual_bound, self.spec.filter_alpha
-        ), s_new.copy()
+        prev, sp = b.previous_command(obs), self.spec
+        return env_action(u, base, prev, sp.residual_bound, sp.filter_alpha, b.correcting(feats)), s_new.copy()
 
     def save(self, path: str | Path) -> None:
         """Write the model zip atomically (``model.json`` + ``weights.npz``)."""
@@ -263,7 +287,7 @@ class FastPolicy(Policy):
 
     def __repr__(self) -> str:
         s = self.spec
-        gain = f", residual_gain={s.residual_gain:g}" if s.residual_bound > 0 else ""
+        gain = f", residual_gain={s.residual_gain:g}, base={s.base!r}, gate={s.gate}" if s.residual_bound > 0 else ""
         bound = f"residual_bound={s.residual_bound:g}"
         return f"FastPolicy(history={s.history}, {bound}, filter_alpha={s.filter_alpha:g}{gain})"
 

@@ -119,7 +119,9 @@ class FastPPOSettings:
         history: previous steps of commands and measurements in the features [steps].
         residual_bound: bound of the learned correction to the analytic action [normalised action units]; 0: none.
         residual_penalty: weight of the L2 penalty on the residual's mean correction [-]; needs residual_bound > 0.
-        residual_gain: feedback gain k [1/s] of the residual's analytic base, at most 1/dt (the analytic policy's 1).
+        residual_gain: feedback gain k [1/s] of the residual's base, at most 1/dt (the analytic policy's 1).
+        residual_base: the residual's base: analytic (AnalyticTrackingPolicy) or compensator (DelayCompensatedPolicy).
+        residual_gate: the correction only where the compensator's quiet flag is on (residual_base compensator).
         nominal_fraction: share of the N robots simulated as the nominal robot [-].
         filter_alpha: low-pass factor of the action parameterisation [-]; 1: none.
         caps_temporal: CAPS temporal smoothness weight [-].
@@ -162,6 +164,8 @@ class FastPPOSettings:
     residual_bound: float = 0.0
     residual_penalty: float = 0.0
     residual_gain: float = 1.0
+    residual_base: Literal["analytic", "compensator"] = "analytic"
+    residual_gate: bool = False
     nominal_fraction: float = 0.0
     filter_alpha: float = 1.0
     caps_temporal: float = 0.0
@@ -228,7 +232,8 @@ class FastPPOSettings:
         return start, {**start, "max_curvature": k_end, "max_curvature_rate": float(c_end)}
 
     def spec(self) -> FeatureSpec:
-        return FeatureSpec(self.env_kwargs, self.history, self.residual_bound, self.filter_alpha, self.residual_gain)
+        return FeatureSpec(self.env_kwargs, self.history, self.residual_bound, self.filter_alpha, self.residual_gain,
+                           self.residual_base, self.residual_gate)  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "hidden": list(self.hidden), "env_kwargs": dict(self.env_kwargs)}
@@ -540,7 +545,8 @@ def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers,
             torch.add(mu, std * eps, out=buf.u[t])
             torch.sub(-0.5 * eps.pow(2).sum(-1), log_norm, out=buf.logp[t])
             u_host.copy_(buf.u[t])  # the step's one device-to-host copy
-        a = env_action(u_host.numpy(), base, builder.previous_command(r.obs), s.residual_bound, s.filter_alpha)
+        prev, mask = builder.previous_command(r.obs), builder.correcting(feats)
+        a = env_action(u_host.numpy(), base, prev, s.residual_bound, s.filter_alpha, mask)
         t0 = time.perf_counter()
         obs, rew, term, trunc, info = r.env.step(a)
         env_s += time.perf_counter() - t0
