@@ -9,7 +9,8 @@ analytic controller (issue 36, item 1).
 
 :class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips it
 writes need it: loaded without it, their networks' two more inputs make ``FastPolicy`` refuse them): the base action is
-the compensator's, computed for all rows at once by :func:`_smith_rows` (numba) from the observation and a state per row
+the compensator's, computed for all rows at once by the package's
+:func:`amigo_gym.policies.compensator.predict_rows` (compiled) from the observation and a state per row
 (the commands issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated
 ``v``, ``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is
 on (the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
@@ -28,26 +29,23 @@ from __future__ import annotations
 
 import argparse
 import glob
-import math
 import sys
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numba
 import numpy as np
 
 import amigo_gym.policies.learned as learned
 import amigo_gym.tools.training.fastppo as fastppo
-from amigo_gym.model import actuators
 from amigo_gym.policies import AnalyticTrackingPolicy
+from amigo_gym.policies import compensator as comp
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd
-from amigo_gym.sim import fast_v1
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from smith_delay import CANDIDATES, SmithEstimated
 
-GAIN, QUIET, H = 2.0, 1e-6, 0.005  # the compensator chosen on the validation cells (baselines.md); Euler step [s]
+GAIN, QUIET = 2.0, 1e-6  # the compensator chosen on the validation cells (baselines.md)
 GATE: dict[str, Any] = {"on": False, "flags": None}
 #: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold``
 #: steps on; "sharp": k = 1 while the curvature at H or at a preview point exceeds ``kappa`` [1/m] in magnitude
@@ -56,87 +54,8 @@ SATURATION: dict[str, Any] = {
     "hold": 0,
     "kappa": 0.0,
 }  # --gate: the correction only where the quiet flag is on
-RING = 8  # commands kept per row: the estimator looks back at most max(CANDIDATES) / dt + 1 steps
+RING = comp.RING
 N_CAND = len(CANDIDATES)
-
-
-fast_v1.kernels()  # registers the package's model functions (actuators.ramp) for numba
-
-
-@numba.njit(cache=True, inline="always")
-def _ramp(u0: float, c: float, accel: float, decel: float, t: float) -> float:
-    """The speed after ``t`` [s]: ``u_b`` of :func:`amigo_gym.model.actuators.ramp` (the package's, compiled)."""
-    return actuators.ramp(u0, c, accel, decel, t).u_b
-
-
-@numba.njit(cache=True)
-def _smith_rows(
-    obs: np.ndarray,
-    starts: np.ndarray,
-    st: np.ndarray,
-    col: np.ndarray,
-    cand: np.ndarray,
-    rob: np.ndarray,
-    dt: float,
-    error_scale: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per row: the estimated delay [s], the quiet flag and ``(e [m], psi [rad])`` moved over it; ``st`` (a copy,
-    updated): ``[count, ring (RING, 2), sims (C, 2), err (C,)]``. ``col``: the observation's columns of ``e``, sin
-    and cos ``psi``, curvature, wheel rates 1, 2, previous commands 1, 2; ``rob``: ``r1, r2, l1, l3, w_max, accel,
-    decel, rot_accel, rot_decel``."""
-    n, nc = obs.shape[0], cand.size
-    r1, r2, l1, l3, w_max, acc, dec, racc, rdec = rob[0], rob[1], rob[2], rob[3], rob[4], rob[5], rob[6], rob[7], rob[8]
-    delay, fast, pred = np.zeros(n), np.ones(n, dtype=np.bool_), np.zeros((n, 2))
-    ring0, sim0, err0 = 1, 1 + 2 * RING, 1 + 2 * RING + 2 * nc
-    n_dt = round(dt / H)
-    for i in range(n):
-        s = st[i]
-        if starts[i]:
-            s[:] = 0.0
-        else:  # the command issued a step ago, then the candidates' ramps over the last step
-            c = int(s[0])
-            s[ring0 + 2 * (c % RING)] = obs[i, col[6]]
-            s[ring0 + 2 * (c % RING) + 1] = obs[i, col[7]]
-            s[0] = c + 1
-        count = int(s[0])
-        u1, u2 = r1 * obs[i, col[4]] * w_max, r2 * obs[i, col[5]] * w_max
-        v, om = 0.5 * (u1 + u2), (u1 - u2) / (2.0 * l1)
-        if count > 0:
-            t0 = (count - 1) * dt
-            best, j = np.inf, 0
-            for k in range(nc):
-                sv, so = s[sim0 + 2 * k], s[sim0 + 2 * k + 1]
-                for q in range(n_dt):
-                    m = math.floor((t0 + q * H - cand[k]) / dt + 1e-9)
-                    a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
-                    a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
-                    c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
-                    sv = _ramp(sv, 0.5 * (c1 + c2), acc, dec, H)
-                    so = _ramp(so, (c1 - c2) / (2.0 * l1), racc, rdec, H)
-                s[sim0 + 2 * k], s[sim0 + 2 * k + 1] = sv, so
-                s[err0 + k] += (sv - v) ** 2 + (l1 * (so - om)) ** 2
-                if s[err0 + k] < best:
-                    best, j = s[err0 + k], k
-            delay[i] = cand[j]
-            fast[i] = best / count <= QUIET
-        e = obs[i, col[0]] * error_scale
-        psi = math.atan2(obs[i, col[1]], obs[i, col[2]])
-        kappa = obs[i, col[3]] / l3
-        now, d = count * dt, delay[i]
-        for q in range(round(d / H)):
-            m = math.floor((now + q * H - d) / dt + 1e-9)
-            a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
-            a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
-            c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
-            v2 = _ramp(v, 0.5 * (c1 + c2), acc, dec, H)
-            om2 = _ramp(om, (c1 - c2) / (2.0 * l1), racc, rdec, H)
-            vm, omm = 0.5 * (v + v2), 0.5 * (om + om2)
-            s_dot = (vm * math.cos(psi) - l3 * omm * math.sin(psi)) / max(1.0 - kappa * e, 0.05)
-            e += H * (vm * math.sin(psi) + l3 * omm * math.cos(psi))
-            psi += H * (omm - kappa * s_dot)
-            v, om = v2, om2
-        pred[i, 0], pred[i, 1] = e, psi
-    return delay, fast, pred
 
 
 class SmithBuilder(FeatureBuilder):
@@ -168,8 +87,9 @@ class SmithBuilder(FeatureBuilder):
         n, b = obs.shape[0], self.base_state
         feats, _, s_base = super().__call__(obs, state[:, :b], starts)  # the recipe's features (analytic base)
         st = np.array(state[:, b:], dtype=np.float64)
-        delay, fast, pred = _smith_rows(obs, np.asarray(starts, dtype=np.bool_), st, self.col, self.cand, self.rob,
-                                        self.p.dt, self.p.error_scale)  # fmt: skip
+        delay, dist, pred = comp._predictor()(obs, np.asarray(starts, dtype=np.bool_), st[:, :-1], self.col,
+                                                     self.cand, self.rob, self.p.dt, self.p.error_scale)  # fmt: skip
+        fast = dist <= QUIET
         seen = np.array(obs, dtype=np.float64)
         seen[:, self.col[0]] = pred[:, 0] / self.p.error_scale
         seen[:, self.col[1]], seen[:, self.col[2]] = np.sin(pred[:, 1]), np.cos(pred[:, 1])
@@ -196,12 +116,12 @@ class SmithBuilder(FeatureBuilder):
 _env_action = learned.env_action
 
 
-def gated_env_action(u: Any, base: Any, prev: Any, residual_bound: float, filter_alpha: float) -> Any:
+def gated_env_action(u: Any, base: Any, prev: Any, residual_bound: float, filter_alpha: float, mask: Any = None) -> Any:
     """:func:`amigo_gym.policies.learned.env_action` with the network's output zeroed on the rows whose quiet flag
     is off when ``GATE["on"]`` (the action there: the compensator's)."""
     if GATE["on"] and GATE["flags"] is not None and residual_bound > 0:
         u = np.where(GATE["flags"][:, None], u, 0.0)
-    return _env_action(u, base, prev, residual_bound, filter_alpha)
+    return _env_action(u, base, prev, residual_bound, filter_alpha, mask)
 
 
 class Gated:

@@ -43,6 +43,7 @@ V1_AGENTS: dict[str, str] = {
     "ppo_fast": "fast PPO",
     "residual": "fast PPO residual",
     "robust_residual": "fast PPO robust residual",
+    "compensator_residual": "fast PPO residual on the delay compensator",
 }
 #: retired v1 generalists, labels only (``--agents ppo_v1=...`` and older documents)
 RETIRED_V1_AGENTS: dict[str, str] = {"ppo": "SB3 PPO", "sac": "SB3 SAC", "td3": "SB3 TD3"}
@@ -229,7 +230,7 @@ def generalists(root: Path) -> list[AgentSpec]:
 def default_agents() -> list[AgentSpec]:
     """The classical policies, the shipped v0 specialists (``<algo>_v0``) and v1 generalists (``<folder>_v1``)."""
     d = pretrained_dir()
-    out = [AgentSpec("analytic"), AgentSpec("analytic_ff"), AgentSpec("pure_pursuit")]
+    out = [AgentSpec(n) for n in ("analytic", "analytic_ff", "pure_pursuit", "delay_compensated")]
     out += [_model_spec(f"{a}_v0", d / f"{a}.zip", 0) for a in ALGOS if (d / f"{a}.zip").is_file()]
     return out + generalists(d / "v1")
 
@@ -481,6 +482,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 README_ROWS = (
     ("analytic", "analytic tracking (exact inverse solution + PI feedback)"),
     ("pure_pursuit", "pure pursuit (of A)"),
+    ("delay_compensated", "delay compensator (analytic on the predicted error)"),
     *((f"{folder}_v1", label) for folder, label in V1_AGENTS.items()),
 )
 

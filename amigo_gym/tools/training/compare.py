@@ -39,6 +39,8 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         "analytic": f"the exact analytic inverse solution with feedback (gain k = {gain:g}/s): the reference",
         "analytic_ff": "the same inverse solution feed-forward only (k = 0): it never corrects a start error",
         "pure_pursuit": "pure pursuit of the axle midpoint A (AmigoBot-v1's classical baseline)",
+        "delay_compensated": "the analytic controller (k = 2/s while the nominal model explains the measurements,"
+        " else 1/s) on the error predicted over the actuation delay it estimates online (a Smith predictor)",
         "ppo_fresh": "the PPO agent trained by this run (AmigoBot-v0, --train-steps)",
     }
     how = {
@@ -47,6 +49,8 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
         " controller's command; a numpy policy)",
         "robust_residual": " (the residual trained over delays to 0.3 s, wheels and track ±7 % and noise; a numpy"
         " policy)",
+        "compensator_residual": " (the robust residual's recipe on the delay compensator, its correction only where"
+        " the nominal model explains the measurements; a numpy policy)",
     }
     out = []
     for name in dict.fromkeys(names):

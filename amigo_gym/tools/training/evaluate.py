@@ -201,9 +201,10 @@ def _classical(name: str, env: Any) -> Any:
         return hook(name)
     params = getattr(base, "params", None)
     if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
-        from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
+        from amigo_gym.policies import AnalyticTrackingPolicy, DelayCompensatedPolicy, PurePursuitPolicy
 
         v1: dict[str, Any] = {"analytic": AnalyticTrackingPolicy, "pure_pursuit": PurePursuitPolicy}
+        v1["delay_compensated"] = DelayCompensatedPolicy
         v1["pure_pursuit_textbook"] = PurePursuitPolicy.textbook  # Cao et al. (2024)'s preset
         if name in v1:
             return v1[name](params)
@@ -217,7 +218,8 @@ def _classical(name: str, env: Any) -> Any:
 
 #: classical policies by name: built per scenario from the environment
 CLASSICAL: dict[str, Callable[[Any], Any]] = {
-    n: partial(_classical, n) for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook")
+    n: partial(_classical, n)
+    for n in ("analytic", "analytic_ff", "pure_pursuit", "pure_pursuit_textbook", "delay_compensated")
 }
 
 
