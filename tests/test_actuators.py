@@ -24,7 +24,6 @@ from amigo_gym.model.actuators import (
     ActuatorParams,
     ActuatorStep,
     actuator_step,
-    clip_setpoints,
     delay_split,
     ramp,
     ring_length,
@@ -39,6 +38,14 @@ from amigo_gym.model.params import RobotParams
 ROBOT = RobotParams()
 LIM = ActuatorParams()
 W_MAX = ROBOT.max_wheel_rate
+
+
+def clip_setpoints(w1c: object, w2c: object, nominal: RobotParams) -> tuple:
+    """Setpoints [rad/s] (columns) clipped to ``[-w_max, w_max]``, ``w_max = nominal.max_wheel_rate``."""
+    w_max = nominal.max_wheel_rate
+    return np.clip(w1c, -w_max, w_max), np.clip(w2c, -w_max, w_max)
+
+
 NOMINAL_TRUE = (ROBOT.r1, ROBOT.r2, ROBOT.l1)
 Array = np.ndarray
 

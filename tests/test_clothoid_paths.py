@@ -306,7 +306,7 @@ def test_figure8_geometry() -> None:
     assert pts[:, 0].min() == pytest.approx(-2.5, abs=1e-7)
     th = path.tangent_angle([path.length / 4, 3 * path.length / 4])
     assert abs(math.remainder(th[0] - th[1], math.pi)) == pytest.approx(1.2, abs=1e-12)
-    assert path.total_turn == 0.0
+    assert path._t.turn == 0.0  # total tangent turn [rad]
     brk = np.asarray(path.breakpoints())
     assert np.abs(path.curvature(np.nextafter(brk[1:-1], -np.inf)) - path.curvature(brk[1:-1])).max() < 1e-9
 

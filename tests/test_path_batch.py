@@ -203,8 +203,8 @@ def test_replace_grows_and_keeps_rows_exact() -> None:
 def test_from_path_uniform_needs_no_tables_and_switches_to_mixed() -> None:
     rng = np.random.default_rng(8)
     path = figure8(3.0)
-    batch = PathBatch.from_path(path, 40)
-    assert batch.num_paths == len(batch) == 40 and batch[17] is path
+    batch = PathBatch([path] * 40)
+    assert len(batch) == 40 and batch[17] is path
     paths = [path] * 40
     x, y, sp = _queries(rng, paths)
     _assert_rows(batch.locate(x, y, sp), _ref_locate(paths, x, y, sp))
@@ -272,7 +272,7 @@ def test_own_paths_grouped_by_object() -> None:
     only = [own_a, own_b, own_b, own_a]
     x, y, sp = _queries(rng, only)
     _assert_rows(PathBatch(only).locate(x, y, sp), _ref_locate(only, x, y, sp))
-    one = PathBatch.from_path(own_b, 3)
+    one = PathBatch([own_b] * 3)
     _assert_rows(one.locate(x[1:], y[1:], sp[1:]), _ref_locate([own_b] * 3, x[1:], y[1:], sp[1:]))
 
 
@@ -300,8 +300,6 @@ def test_properties_and_errors() -> None:
         batch.replace(np.array([2]), [circle(2.0)])
     with pytest.raises(ValueError, match="1 rows but 2 paths"):
         batch.replace(np.array([0]), [circle(2.0), circle(2.0)])
-    with pytest.raises(ValueError, match=r"from_path\.n"):
-        PathBatch.from_path(circle(1.0), 0)
     assert batch[0] is paths[0] and batch[1] is paths[1]  # unchanged by the refused calls
 
 

@@ -38,6 +38,12 @@ def test_paper_circle_eq6(radius: float) -> None:
     assert p.length == pytest.approx(2 * math.pi * radius, rel=1e-15)
 
 
+def _from_center(center: tuple[float, float], radius: float, direction: int, start_phase: float) -> CirclePath:
+    """Circle given by its centre [m]; the start is at polar angle ``start_phase`` [rad] about it."""
+    p0 = (center[0] + radius * math.cos(start_phase), center[1] + radius * math.sin(start_phase))
+    return CirclePath(radius, p0, start_phase + direction * math.pi / 2, direction)
+
+
 CIRCLES = [
     ((0.0, 0.0), 1.0, 1, 0.0),
     ((2.0, -1.0), 0.7, -1, 1.3),
@@ -49,7 +55,7 @@ CIRCLES = [
 @pytest.mark.parametrize(("center", "radius", "d", "phase"), CIRCLES)
 def test_general_circle(center: tuple[float, float], radius: float, d: int, phase: float) -> None:
     """Any centre, radius, direction: p(s) = c + R (cos a, sin a), a = phase + d s / R."""
-    p = CirclePath.from_center(center, radius, d, phase)
+    p = _from_center(center, radius, d, phase)
     c = np.array(center)
     s = np.linspace(0.0, 3 * p.length, 97)
     a = phase + d * s / radius
@@ -71,7 +77,7 @@ def test_general_circle(center: tuple[float, float], radius: float, d: int, phas
 @pytest.mark.parametrize(("center", "radius", "d", "phase"), CIRCLES)
 def test_circle_projection(center: tuple[float, float], radius: float, d: int, phase: float) -> None:
     """A point at polar angle a and distance rho from the centre projects to c + R (cos a, sin a)."""
-    p = CirclePath.from_center(center, radius, d, phase)
+    p = _from_center(center, radius, d, phase)
     g = rng()
     a = g.uniform(-math.pi, math.pi, 200)
     rho = g.uniform(0.05, 2.0, 200) * radius

@@ -53,7 +53,7 @@ def test_a_figure8_closes_and_keeps_its_shape() -> None:
     fig = make_family_path("figure8", None)
     pts = fig.point(np.arange(0.0, fig.length, 0.05))
     fit = fit_points(pts, closed=True)
-    assert fit.path.closed and abs(fit.path.total_turn) < 1e-12
+    assert fit.path.closed and abs(fit.path._t.turn) < 1e-12
     assert abs(fit.path.length - fig.length) < 1e-5
     s = np.linspace(0.0, fig.length, 1000, endpoint=False)
     assert np.max(np.abs(fit.path.point(s) - fig.point(s))) < 1e-4

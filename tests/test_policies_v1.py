@@ -16,16 +16,49 @@ import pytest
 from amigo_gym.envs.amigobot_v1 import AmigoBotV1Env
 from amigo_gym.paths import feasibility
 from amigo_gym.policies import AnalyticTrackingPolicy, PurePursuitPolicy
-from amigo_gym.policies.tracking import (
-    closed_loop_impulse_response,
-    limit_wheel_rates,
-    pure_pursuit_circle_offset,
-    zoh_error_bound,
-)
+from amigo_gym.policies.tracking import DEFAULT_TRACKING_GAIN, limit_wheel_rates
 from amigo_gym.task import v1 as tracking
 
 QUIET = {"init_position_noise": 0.0, "init_heading_noise": 0.0}
 TRUE_PLUS_5 = {"r1": 0.05 * 1.05, "r2": 0.05 * 1.05, "l1": 0.12 * 1.05}
+
+
+def closed_loop_impulse_response(gain: float, integral_gain: float, dt: float, steps: int = 20000) -> np.ndarray:
+    """Response ``h_n`` ``(steps,)`` [m per m] of ``z_k = z_{k-1} + dt e_k``, ``e_{k+1} = e_k + dt (-k e_k - k_i z_k)
+    + delta_k`` to ``delta_0 = 1`` m."""
+    h = np.zeros(steps)
+    e, z = 0.0, 0.0
+    for n in range(1, steps):
+        z += dt * e
+        c = -gain * e - integral_gain * z
+        e = e + dt * c + (1.0 if n == 1 else 0.0)
+        h[n] = e
+    return h
+
+
+def zoh_error_bound(
+    params: tracking.TrackingParams,
+    speed: float,
+    max_curvature: float,
+    max_curvature_rate: float,
+    gain: float = DEFAULT_TRACKING_GAIN,
+    integral_gain: float | None = None,
+) -> float:
+    """Bound [m] on H's settled cross-track error on a path with ``|kappa| <= max_curvature`` [1/m] and
+    ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] at the constant ``speed`` [m/s] of A (amigo_gym.policies.tracking's
+    module docstring): ``||h||_1 delta``."""
+    ki = gain * gain / 4.0 if integral_gain is None else integral_gain
+    l3 = params.robot.l3
+    dt = params.dt
+    w_dot = speed * speed * max_curvature_rate / (1.0 - (l3 * max_curvature) ** 2) ** 2
+    delta = l3 * w_dot * dt * dt * (0.5 + w_dot / (2.0 * params.actuators.rot_acceleration))
+    h1 = float(np.abs(closed_loop_impulse_response(gain, ki, dt)).sum())
+    return h1 * delta
+
+
+def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> float:
+    """Steady cross-track error [m] of H under pure pursuit on a circle: ``-direction (sqrt(R^2 + l3^2) - R)``."""
+    return -direction * (math.hypot(radius, l3) - radius)
 
 
 def rollout(policy_cls: Any, steps: int, pkw: dict[str, Any] | None = None, seed: int = 1, **kw: Any) -> dict[str, Any]:

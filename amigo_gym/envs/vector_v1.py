@@ -211,11 +211,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             self._rng(i)
         return tuple(int(s) for s in self._seeds if s is not None)
 
-    @property
-    def np_randoms(self) -> tuple[np.random.Generator | None, ...]:
-        """The sub-environments' generators (``None`` before the first reset)."""
-        return tuple(self._rngs)
-
     def _rng(self, i: int) -> np.random.Generator:
         g = self._rngs[i]
         if g is None:

@@ -61,12 +61,6 @@ class ActuatorParams:
             object.__setattr__(self, f.name, v)
 
 
-def clip_setpoints(w1c: Real, w2c: Real, nominal: RobotParams) -> tuple[Real, Real]:
-    """Setpoints [rad/s] (columns) clipped to ``[-w_max, w_max]``, ``w_max = nominal.max_wheel_rate``."""
-    w_max = nominal.max_wheel_rate
-    return clip(w1c, -w_max, w_max), clip(w2c, -w_max, w_max)
-
-
 def wheel_rates_columns(v: Real, w: Real, robot: RobotParams) -> tuple[Real, Real]:
     """Wheel rates [rad/s] rolling without slip at ``v`` [m/s], ``w`` [rad/s]: ``((v + l1 w)/r1, (v - l1 w)/r2)``."""
     return wheel_rates_of(v, w, robot.l1, robot.r1, robot.r2)

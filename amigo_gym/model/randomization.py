@@ -14,7 +14,7 @@ from dataclasses import dataclass, fields
 from typing import Any, NamedTuple
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from amigo_gym.model.actuators import MAX_DELAY
 from amigo_gym.model.kinematics import Real
@@ -43,11 +43,6 @@ class Randomization:
         for i, (name, (low, high)) in enumerate(ranges.items()):
             check = check_pair if i < 4 else check_real  # the four ranges, then the noise levels
             object.__setattr__(self, name, check("Randomization", name, getattr(self, name), low, high))
-
-    @property
-    def is_off(self) -> bool:
-        """True when nothing is randomised (the default)."""
-        return self == Randomization()
 
     @property
     def has_noise(self) -> bool:
@@ -121,17 +116,6 @@ class StepNoise(NamedTuple):
 _M64 = 0xFFFFFFFFFFFFFFFF
 
 
-def counter_uniform(key: ArrayLike, step: ArrayLike, channel: int) -> NDArray[np.float64]:
-    """Uniform numbers in ``(0, 1)`` of uint64 ``key`` and ``step`` ``(...)`` and ``channel`` in ``[0, 256)``:
-    ``u = (floor(h / 2^11) + 1/2) / 2^53``, ``h = splitmix64(key + gamma (256 step + channel + 1))``,
-    ``gamma = 0x9E3779B97F4A7C15``."""
-    with np.errstate(over="ignore"):  # numpy scalars (0-d) warn where uint64 wraps; arrays do not
-        u: NDArray[np.float64] = _counter_uniform_int(
-            np.asarray(key, dtype=np.uint64), np.asarray(step, dtype=np.uint64), channel
-        )
-    return u
-
-
 def draw_key(rng: np.random.Generator) -> int:
     """A fresh 64-bit episode key for :func:`step_noise`, from the env's generator."""
     return int(rng.integers(0, 2**63, dtype=np.int64)) * 2 + int(rng.integers(0, 2, dtype=np.int64))
@@ -168,7 +152,9 @@ def _uint64(n: int) -> int:
 
 
 def _counter_uniform_int(key: Any, step: Any, channel: int) -> Any:
-    """:func:`counter_uniform` of Python ints (``uint64`` when compiled) or ``uint64`` columns, mod ``2**64``."""
+    """Uniform numbers in ``(0, 1)`` of ``key``, ``step`` (Python ints, ``uint64`` when compiled, or ``uint64``
+    columns) and ``channel`` in ``[0, 256)``: ``u = (floor(h / 2^11) + 1/2) / 2^53``,
+    ``h = splitmix64(key + gamma (256 step + channel + 1))`` mod ``2**64``, ``gamma = 0x9E3779B97F4A7C15``."""
     z = (key + _uint64(step * 256 + channel + 1) * _GAMMA) & _M64
     z = ((z ^ (z >> 30)) * _MIX1) & _M64
     z = ((z ^ (z >> 27)) * _MIX2) & _M64

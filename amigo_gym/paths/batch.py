@@ -81,13 +81,6 @@ class PathBatch:
         self._tables: _Padded | None = None
         self._set(np.arange(n, dtype=np.intp), seq)
 
-    @classmethod
-    def from_path(cls, path: PathSpec, n: int) -> PathBatch:
-        """A batch of ``n >= 1`` rows all using ``path``: evaluated by ``path`` itself on the columns (no padding)."""
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(f"PathBatch.from_path.n must be an int >= 1, got {n!r}")
-        return cls([path] * int(n))
-
     def _set(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> None:
         for r in rows.tolist():
             old = self._counts.get(int(self._ids[r]))
@@ -144,11 +137,6 @@ class PathBatch:
         if np.unique(ra).size != ra.size:
             raise ValueError(f"PathBatch.replace.rows must be distinct, got {rows!r}")
         self._set(ra, ps)
-
-    @property
-    def num_paths(self) -> int:
-        """Number of rows ``N``."""
-        return len(self._paths)
 
     def __len__(self) -> int:
         return len(self._paths)

@@ -149,14 +149,6 @@ class CirclePath(_Projecting):
         if self.direction not in (1, -1):
             raise ValueError(f"CirclePath.direction must be +1 or -1, got {self.direction!r}")
 
-    @classmethod
-    def from_center(
-        cls, center: tuple[float, float], radius: float, direction: int = 1, start_phase: float = 0.0
-    ) -> CirclePath:
-        """Circle given by its centre [m]; the start is at polar angle ``start_phase`` [rad] about it."""
-        p0 = (center[0] + radius * math.cos(start_phase), center[1] + radius * math.sin(start_phase))
-        return cls(radius=radius, start=p0, start_angle=start_phase + direction * math.pi / 2, direction=direction)
-
     @property
     def center(self) -> tuple[float, float]:
         """Centre of the circle [m]."""

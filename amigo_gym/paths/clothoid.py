@@ -265,11 +265,6 @@ class ClothoidPath(_Projecting):
         return self._t.length
 
     @property
-    def total_turn(self) -> float:
-        """Tangent angle change over one traversal [rad] (a multiple of ``2 pi`` if closed: 0 for a figure-8)."""
-        return self._t.turn
-
-    @property
     def max_abs_curvature(self) -> float:
         """``max |kappa|`` over the path [1/m]."""
         return self._t.max_abs_curvature

@@ -8,7 +8,7 @@ integral_limit``), ``v = v_ref``: ``e'' + k e' + k_i e = 0`` on any path; defaul
 (critically damped); setpoints scaled into ``+-w_max`` keeping ``omega / v`` (:func:`limit_wheel_rates`). A held
 command with the ramp ``a_w`` [rad/s^2] adds per step at most ``delta = l3 Wdot dt^2 (1/2 + Wdot / (2 a_w))``,
 ``Wdot = v^2 K / (1 - (l3 kappa_max)^2)^2`` (``K = max |dkappa/ds|``): ``|e| <= ||h||_1 delta``, ``h`` the loop's
-impulse response (:func:`zoh_error_bound`).
+impulse response (``zoh_error_bound`` in tests/test_policies_v1.py).
 
 :class:`PurePursuitPolicy` (Coulter 1992, CMU-RI-TR-92-01): A drives on the arc through the goal point
 ``(x_L, y_L)`` (the preview point ``d`` ahead) tangent to its heading,
@@ -53,43 +53,6 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) ->
     m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
     out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max
     return np.clip(out, -1.0, 1.0)
-
-
-def closed_loop_impulse_response(gain: float, integral_gain: float, dt: float, steps: int = 20000) -> Array:
-    """Response ``h_n`` ``(steps,)`` [m per m] of ``z_k = z_{k-1} + dt e_k``, ``e_{k+1} = e_k + dt (-k e_k - k_i z_k)
-    + delta_k`` to ``delta_0 = 1`` m."""
-    h = np.zeros(steps)
-    e, z = 0.0, 0.0
-    for n in range(1, steps):
-        z += dt * e
-        c = -gain * e - integral_gain * z
-        e = e + dt * c + (1.0 if n == 1 else 0.0)
-        h[n] = e
-    return h
-
-
-def zoh_error_bound(
-    params: TrackingParams,
-    speed: float,
-    max_curvature: float,
-    max_curvature_rate: float,
-    gain: float = DEFAULT_TRACKING_GAIN,
-    integral_gain: float | None = None,
-) -> float:
-    """Bound [m] on H's settled cross-track error on a path with ``|kappa| <= max_curvature`` [1/m] and
-    ``|dkappa/ds| <= max_curvature_rate`` [1/m^2] at the constant ``speed`` [m/s] of A (module docstring)."""
-    ki = gain * gain / 4.0 if integral_gain is None else integral_gain
-    l3 = params.robot.l3
-    dt = params.dt
-    w_dot = speed * speed * max_curvature_rate / (1.0 - (l3 * max_curvature) ** 2) ** 2
-    delta = l3 * w_dot * dt * dt * (0.5 + w_dot / (2.0 * params.actuators.rot_acceleration))
-    h1 = float(np.abs(closed_loop_impulse_response(gain, ki, dt)).sum())
-    return h1 * delta
-
-
-def pure_pursuit_circle_offset(radius: float, l3: float, direction: int = 1) -> float:
-    """Steady cross-track error [m] of H under pure pursuit on a circle: ``-direction (sqrt(R^2 + l3^2) - R)``."""
-    return -direction * (math.hypot(radius, l3) - radius)
 
 
 class AnalyticTrackingPolicy(Policy):
