@@ -54,12 +54,18 @@ def test_manifest_is_complete_and_matches_the_model(manifest: Path) -> None:
 FAST = sorted((pretrained_dir() / "v1" / "ppo_fast").glob("*.zip"))
 RESIDUAL = sorted((pretrained_dir() / "v1" / "residual").glob("*.zip"))
 ROBUST = sorted((pretrained_dir() / "v1" / "robust_residual").glob("*.zip"))
+COMPENSATOR = sorted((pretrained_dir() / "v1" / "compensator_residual").glob("*.zip"))
 
 
 @pytest.mark.parametrize(
     ("models", "algo", "seeds"),
-    [(FAST, "fastppo", 5), (RESIDUAL, "fastppo_residual", 5), (ROBUST, "fastppo_residual", 3)],
-    ids=["fast", "residual", "robust_residual"],
+    [
+        (FAST, "fastppo", 5),
+        (RESIDUAL, "fastppo_residual", 5),
+        (ROBUST, "fastppo_residual", 3),
+        (COMPENSATOR, "fastppo_residual", 3),
+    ],
+    ids=["fast", "residual", "robust_residual", "compensator_residual"],
 )
 def test_every_seed_of_the_fast_ppo_generalists_is_shipped(models: list[Path], algo: str, seeds: int) -> None:
     docs = [json.loads(z.with_suffix(".json").read_text()) for z in models]
@@ -67,7 +73,7 @@ def test_every_seed_of_the_fast_ppo_generalists_is_shipped(models: list[Path], a
     assert {d["algo"] for d in docs} == {algo}
 
 
-@pytest.mark.parametrize("model", FAST + RESIDUAL + ROBUST, ids=[z.stem for z in FAST + RESIDUAL + ROBUST])
+@pytest.mark.parametrize("model", FAST + RESIDUAL + ROBUST + COMPENSATOR, ids=lambda z: z.stem)
 def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -> None:
     """``load_pretrained`` checks the sha256 and gives SB3's ``predict`` on a batch of raw v1 observations; the
     actions are finite and inside the action space, and deterministic: two loaded copies act alike (a policy keeps
@@ -83,6 +89,9 @@ def test_fast_ppo_models_load_checked_and_act_on_raw_observations(model: Path) -
         a, _ = policy.predict(obs, deterministic=True)
         b, _ = twin.predict(obs, deterministic=True)
         assert a.shape == (8, 2) and np.all(np.isfinite(a)) and np.array_equal(a, b)
+        assert (policy.spec.base, policy.spec.gate) == (
+            ("compensator", True) if model in COMPENSATOR else ("analytic", False)
+        )
         assert np.all(a >= env.single_action_space.low) and np.all(a <= env.single_action_space.high)
         obs, *_ = env.step(a)
     env.close()
