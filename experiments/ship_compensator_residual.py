@@ -6,6 +6,7 @@ on the validation cells, experiments/candidates/README.md, "sr_s1, sr_s2 and the
 ``run.json``, the zip's sha256, the training command, the weights' sha256 and that of the candidate they equal).
 
     python experiments/ship_compensator_residual.py /work/runs/cr_s0 /work/runs/cr_s1 /work/runs/cr_s2
+    python experiments/ship_compensator_residual.py runs/cr_k3_s0 --out experiments/candidates --agent cr_k3
 """
 
 from __future__ import annotations
@@ -34,15 +35,17 @@ def weights_digest(path: Path) -> str:
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("runs", nargs="+", type=Path, help="train-fast run folders")
+    p.add_argument("--out", type=Path, default=pretrained_dir() / "v1" / AGENT, help="folder of the zips")
+    p.add_argument("--agent", default=AGENT, help="the zips' stem before _s<seed>")
     a = p.parse_args()
-    out = pretrained_dir() / "v1" / AGENT
+    out = a.out
     for run in a.runs:
         meta = json.loads((run / "run.json").read_text())
         policy = FastPolicy.load(run / "model.zip")
         if policy.spec.base != "compensator" or not meta.get("finished"):
             raise SystemExit(f"{run}: not a finished run of a residual on the compensator")
         policy.spec = dataclasses.replace(policy.spec, gate=True)
-        zip_path = out / f"{AGENT}_s{meta['seed']}.zip"
+        zip_path = out / f"{a.agent}_s{meta['seed']}.zip"
         policy.save(zip_path)
         w = weights_digest(zip_path)
         same = [c.stem for c in sorted(CANDIDATES.glob("sr_s*.zip")) if weights_digest(c) == w]
@@ -53,7 +56,7 @@ def main() -> int:
                 "sha256": sha256_file(zip_path),
                 "weights_sha256": w,
                 "same_weights_as": [f"experiments/candidates/{s}.zip" for s in same],
-                "agent": AGENT,
+                "agent": a.agent,
                 "env_id": "AmigoBot-v1",
                 "env_kwargs": policy.spec.env_kwargs,
                 "training_command": meta["command"],
