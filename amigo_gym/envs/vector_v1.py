@@ -230,12 +230,9 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
         seeds = parse_seeds(seed, n)
-        mask: BoolArray = np.ones(n, dtype=np.bool_)
-        if options is not None and "reset_mask" in options:
-            mask = check_reset_mask(options["reset_mask"], n)
-        pose_opt = None
-        if options is not None and "pose" in options:
-            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        opts = {} if options is None else options
+        mask = check_reset_mask(opts["reset_mask"], n) if "reset_mask" in opts else np.ones(n, dtype=np.bool_)
+        pose_opt = np.broadcast_to(parse_pose_option(opts["pose"], (n,)), (n, 3)) if "pose" in opts else None
         if not mask.all() and not self._was_reset:
             raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
         self._was_reset = True
