@@ -26,7 +26,6 @@ from amigo_gym.envs.base import (
     StepResult,
     assign_rows,
     box_spaces,
-    check_kernel,
     check_reset_mask,
     check_reset_options,
     check_vector_args,
@@ -147,7 +146,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        check_kernel(owner, kernel, VECTOR_KERNELS)
+        fast_v1.check_kernel(owner, kernel, VECTOR_KERNELS)
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
@@ -221,12 +220,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
-        """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
-
-        Raises:
-            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
-            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
-        """
+        """Reset all robots, or those of ``options["reset_mask"]``. Raises ``TypeError`` for a ``reset_mask`` that is
+        not a bool numpy array (as ``SyncVectorEnv``), ``ValueError`` for a bad seed list, option, pose or mask."""
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
         seeds = parse_seeds(seed, n)
@@ -250,13 +245,9 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return self._obs.copy(), scatter_infos(infos, mask, self.num_envs)
 
     def step(self, actions: NDArray[np.floating[Any]]) -> StepResult:
-        """Step every robot; autoreset finished ones according to ``autoreset_mode``.
-
-        Raises:
-            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``; actions that are not real numbers.
-            ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
-            RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
-        """
+        """Step every robot; autoreset finished ones according to ``autoreset_mode``. Raises ``TypeError`` for a
+        scalar (as ``SyncVectorEnv``) or non-numeric action, ``ValueError`` for actions not of shape ``(N, 2)`` or
+        NaN/inf, ``RuntimeError`` in ``Disabled`` mode on a robot whose episode ended (reset it first)."""
         n = self.num_envs
         if not self._was_reset:
             raise gym.error.ResetNeeded(f"call reset() before step() on {type(self).__name__}")
@@ -544,11 +535,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-        """
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``, else ``None``; ``ResetNeeded``
+        before the first ``reset()``."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
             return None
