@@ -279,13 +279,9 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
         """Hold the wheel-rate commands ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
 
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-            TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
-            ValueError: action of a wrong shape or with NaN/inf entries.
-
-        Stepping a terminated episode warns once per episode and goes on integrating. Truncation belongs to the
-        ``TimeLimit`` wrapper of ``gym.make``.
+        Raises ``ResetNeeded`` before the first ``reset()``, ``TypeError`` for an action that is not real numbers,
+        ``ValueError`` for a wrong shape or NaN/inf entries. Stepping a terminated episode warns once per episode and
+        goes on integrating; truncation belongs to the ``TimeLimit`` wrapper of ``gym.make``.
         """
         if self._needs_reset:
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
