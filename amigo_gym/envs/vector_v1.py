@@ -333,10 +333,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, Array]:
         """New episodes for the robots ``idx``: their observations ``(m, D)`` and info records."""
         obs = np.empty((len(idx), self._obs.shape[1]), dtype=np.float32)
-        if self._batch is not None:
-            rec = self._begin_rows_kernel(idx, pose_opt, obs)
-        else:
-            rec = self._begin_rows_columns(idx, pose_opt, obs)
+        begin = self._begin_rows_kernel if self._batch is not None else self._begin_rows_columns
+        rec = begin(idx, pose_opt, obs)
         if self.render_mode is not None:  # the robots' trails start at the next position
             self._trail_start[idx] = self._trail_count
             self._h_now[idx, 0] = rec[:, _R_HX]
@@ -500,17 +498,13 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         """The compact infos, rewards and ``terminated`` of ``rows`` from their info records ``rec``, a new array."""
         ep = self._episode
         dt = self.params.dt
+        time = np.asarray(self._state.steps)[rows] * dt
         if self.v0_params is not None:
-            infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], np.asarray(self._state.steps)[rows] * dt)
-            return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
-        infos = record_info(
-            rec,
-            rec.T[layout_v1.R_ERROR :],
-            np.asarray(self._state.steps)[rows] * dt,
-            {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
-            np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
-            rec[:, _R_END],
-        )
+            infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], time)
+        else:
+            true_robot = {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")}
+            delay = np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows]
+            infos = record_info(rec, rec.T[layout_v1.R_ERROR :], time, true_robot, delay, rec[:, _R_END])
         return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
