@@ -168,10 +168,9 @@ class TrackingParams:
         preview: distances ahead of H's closest point at which the path is observed [m], each in (0, 5].
         preview_scale: the observation divides preview coordinates by this [m].
         sigma_track, sigma_speed, sigma_smooth, smooth_weight: reward scales (module docstring).
-        feasibility: what a fixed path the robot cannot track at the highest ``speed`` does at construction
-            (:func:`check_feasible`): ``"error"`` (default) refuses it, ``"warn"`` warns and runs it, ``"off"``
-            runs it silently; the report (where the path exceeds the wheel-rate or acceleration limits) is the
-            env's ``feasibility`` attribute and ``info["feasibility"]`` at reset in every mode.
+        feasibility: a fixed path the robot cannot track at the highest ``speed`` (:func:`check_feasible`):
+            ``"error"`` refuses it, ``"warn"`` warns and runs it, ``"off"`` runs it; in every mode the report is the
+            env's ``feasibility`` and ``info["feasibility"]`` at reset.
         goal_tolerance: an open path's episode terminates as a success when H is within this distance [m] of
             the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
             passes the end (``"end_of_path"``).
