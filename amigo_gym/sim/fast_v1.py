@@ -66,9 +66,8 @@ def use_fast_path(requested: bool | None = None) -> bool:
 
 
 def wait_passively() -> None:
-    """``OMP_WAIT_POLICY=PASSIVE`` unless it is set: numba's OpenMP threads, which read it when numba starts them (the
-    first parallel call or ``numba.set_num_threads``), then sleep between calls instead of spinning against the
-    calling thread. Call it before either."""
+    """``OMP_WAIT_POLICY=PASSIVE`` unless set, so that numba's OpenMP threads sleep between calls instead of spinning;
+    call it before they start (the first parallel call or ``numba.set_num_threads``)."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
