@@ -24,11 +24,8 @@ _fault_counts: dict[str, int] = {}
 
 def fault_point(stage: str) -> None:
     """Kill this process here if ``AMIGO_GYM_FAULT`` names ``stage`` (module docstring; tests only)."""
-    spec = os.environ.get(FAULT_ENV)
-    if not spec:
-        return
-    name, _, nth = spec.partition("@")
-    if name != stage:
+    name, _, nth = os.environ.get(FAULT_ENV, "").partition("@")
+    if name != stage:  # (unset: name "", never a stage)
         return
     _fault_counts[stage] = count = _fault_counts.get(stage, 0) + 1
     if count == int(nth or 1):

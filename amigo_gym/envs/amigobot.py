@@ -8,11 +8,10 @@ the AmigoBot-v1 classes built with :meth:`amigo_gym.task.v1.TrackingParams.v0` o
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping
-from dataclasses import fields, replace
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
-from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode
 from numpy.typing import NDArray
 
@@ -31,9 +30,8 @@ Array = NDArray[np.float64]
 def _fields(owner: str, what: str, value: Any, names: Collection[str]) -> dict[str, Any]:
     """The mapping ``value`` as a dict (``TypeError`` on another type or a name not in ``names``)."""
     if not isinstance(value, Mapping):
-        kind = "a RobotParams or a mapping of its fields"
-        if what == "params":
-            kind = "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its keywords"
+        kinds = {"params": "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its keywords"}
+        kind = kinds.get(what, "a RobotParams or a mapping of its fields")
         raise TypeError(f"{owner}: {what} must be {kind}, got {type(value).__name__}")
     bad = sorted(str(k) for k in value if k not in names)
     if bad:
@@ -70,17 +68,9 @@ def make_env_params(
 class _V0Spec(JsonSpecMixin):
     """``spec`` whose ``params``, if a ``TrackingParams``, is kept as AmigoBot-v0's settings (a JSON mapping)."""
 
-    @property
-    def spec(self) -> EnvSpec | None:
-        """The environment's :class:`gymnasium.envs.registration.EnvSpec`, keywords in JSON form (None before set)."""
-        return self._json_spec
-
-    @spec.setter
-    def spec(self, value: EnvSpec | None) -> None:
-        given = None if value is None else value.kwargs.get("params")
-        if value is not None and isinstance(given, TrackingParams):
-            value = replace(value, kwargs={**value.kwargs, "params": v0_settings(given)})
-        JsonSpecMixin.spec.fset(self, value)  # type: ignore[attr-defined]
+    def _spec_kwargs(self, kwargs: dict[str, Any]) -> dict[str, Any]:
+        given = kwargs.get("params")
+        return {**kwargs, "params": v0_settings(given)} if isinstance(given, TrackingParams) else kwargs
 
 
 class AmigoBotEnv(_V0Spec, AmigoBotV1Env):

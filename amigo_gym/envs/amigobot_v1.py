@@ -279,13 +279,9 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
     def step(self, action: NDArray[np.floating[Any]]) -> tuple[ObsArray, SupportsFloat, bool, bool, dict[str, Any]]:
         """Hold the wheel-rate commands ``clip(action, -1, 1) * w_max`` for ``dt`` and report the new state.
 
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-            TypeError: an action that is not real numbers (:func:`amigo_gym.task.v0.validate_action`).
-            ValueError: action of a wrong shape or with NaN/inf entries.
-
-        Stepping a terminated episode warns once per episode and goes on integrating. Truncation belongs to the
-        ``TimeLimit`` wrapper of ``gym.make``.
+        Raises ``ResetNeeded`` before the first ``reset()``, ``TypeError`` for an action that is not real numbers,
+        ``ValueError`` for a wrong shape or NaN/inf entries. Stepping a terminated episode warns once per episode and
+        goes on integrating; truncation belongs to the ``TimeLimit`` wrapper of ``gym.make``.
         """
         if self._needs_reset:
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before step()")
@@ -321,10 +317,8 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             robot = self._k.nominal
             v, bdot = body_velocity_of(float(st.w1), float(st.w2), robot.r1, robot.r2, 2.0 * robot.l1)
             self._castor = advance_angle(self._castor, castor_rate_float(v, bdot, robot.l5, robot.r3), self.params.dt)
-            return np.array(out.obs, dtype=np.float32), float(out.reward), bool(out.terminated), self._info(out, noise)
         info = self._info(out, noise)
-        terminated = self._end(bool(out.terminated), info)
-        return np.array(out.obs, dtype=np.float32), float(out.reward), terminated, info
+        return np.array(out.obs, dtype=np.float32), float(out.reward), self._end(bool(out.terminated), info), info
 
     def _step_kernel(self, a1: float, a2: float) -> tuple[ObsArray, float, bool, dict[str, Any]]:
         kern = self._kernel
@@ -333,13 +327,12 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._steps += 1
         v = kern.scalars.tolist()
         info = self._record_info(kern.record.copy(), v)
-        terminated = v[_TERM] != 0.0
-        if self.v0_params is None:
-            terminated = self._end(terminated, info)
-        return kern.obs.copy(), v[_REWARD], terminated, info
+        return kern.obs.copy(), v[_REWARD], self._end(v[_TERM] != 0.0, info), info
 
     def _end(self, terminated: bool, info: dict[str, Any]) -> bool:
-        # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"]
+        # with the goal of an open path (goal_tolerance), which sets end_of_path; and info["end_condition"] (not v0's)
+        if self.v0_params is not None:
+            return terminated
         gx, gy = self._goal  # NaN: no goal
         h = info["h_position"]
         goal = gx == gx and bool(tracking.goal_reached(self._k.params, float(h[0]), float(h[1]), gx, gy))

@@ -79,13 +79,6 @@ def box_spaces(bounds: tuple[Array, Array]) -> tuple[spaces.Box, spaces.Box]:
     )
 
 
-def check_kernel(owner: str, kernel: Any, allowed: tuple[str, ...]) -> str:
-    """``kernel`` if it is one of ``allowed``; else ``ValueError`` naming them."""
-    if not isinstance(kernel, str) or kernel not in allowed:
-        raise ValueError(f"{owner}.kernel must be {fast_v1.choices(allowed)}, got {kernel!r}")
-    return kernel
-
-
 def check_reset_mask(mask: Any, n: int) -> BoolArray:
     """``options["reset_mask"]`` checked as ``SyncVectorEnv.reset`` checks it (same exceptions and messages)."""
     if not isinstance(mask, np.ndarray):

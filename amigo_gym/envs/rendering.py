@@ -83,7 +83,6 @@ class Renderer:
         self._path_px = [self._px(p) for p in pts]
         self._window: Any = None
         self._clock: Any = None
-        self._font: Any = None
         if mode == "human":
             pygame.display.init()
             pygame.display.set_caption("AmigoBot")
@@ -91,7 +90,7 @@ class Renderer:
             self._clock = pygame.time.Clock()
         try:
             pygame.font.init()
-            self._font = pygame.font.Font(None, 20)
+            self._font: Any = pygame.font.Font(None, 20)
         except Exception:  # fonts are optional
             self._font = None
         self._background = self._draw_background()

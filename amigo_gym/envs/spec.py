@@ -40,5 +40,8 @@ class JsonSpecMixin:
     @spec.setter
     def spec(self, value: EnvSpec | None) -> None:
         if value is not None and isinstance(value.kwargs, dict):
-            value = dataclasses.replace(value, kwargs=json_kwargs(value.kwargs))
+            value = dataclasses.replace(value, kwargs=json_kwargs(self._spec_kwargs(value.kwargs)))
         self._json_spec = value
+
+    def _spec_kwargs(self, kwargs: dict[str, Any]) -> dict[str, Any]:
+        return kwargs  # what a subclass stores of the keywords, before the JSON form

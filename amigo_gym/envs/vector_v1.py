@@ -26,7 +26,6 @@ from amigo_gym.envs.base import (
     StepResult,
     assign_rows,
     box_spaces,
-    check_kernel,
     check_reset_mask,
     check_reset_options,
     check_vector_args,
@@ -147,7 +146,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
 
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
-        check_kernel(owner, kernel, VECTOR_KERNELS)
+        fast_v1.check_kernel(owner, kernel, VECTOR_KERNELS)
         self.params: tracking.TrackingParams = tracking.make_tracking_params(owner, params, **settings)
         p = self.params
         self._k = tracking.constants(p)
@@ -221,21 +220,14 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[ObsArray, dict[str, Any]]:
-        """Reset all robots, or those of ``options["reset_mask"]`` (see the class docstring).
-
-        Raises:
-            TypeError: a ``reset_mask`` that is not a bool numpy array (as ``SyncVectorEnv``).
-            ValueError: bad seed list, unknown option, bad pose, a mask of the wrong shape or all False.
-        """
+        """Reset all robots, or those of ``options["reset_mask"]``. Raises ``TypeError`` for a ``reset_mask`` that is
+        not a bool numpy array (as ``SyncVectorEnv``), ``ValueError`` for a bad seed list, option, pose or mask."""
         n = self.num_envs
         check_reset_options(options, extra=("reset_mask",))
         seeds = parse_seeds(seed, n)
-        mask: BoolArray = np.ones(n, dtype=np.bool_)
-        if options is not None and "reset_mask" in options:
-            mask = check_reset_mask(options["reset_mask"], n)
-        pose_opt = None
-        if options is not None and "pose" in options:
-            pose_opt = np.broadcast_to(parse_pose_option(options["pose"], (n,)), (n, 3))
+        opts = {} if options is None else options
+        mask = check_reset_mask(opts["reset_mask"], n) if "reset_mask" in opts else np.ones(n, dtype=np.bool_)
+        pose_opt = np.broadcast_to(parse_pose_option(opts["pose"], (n,)), (n, 3)) if "pose" in opts else None
         if not mask.all() and not self._was_reset:
             raise gym.error.ResetNeeded('reset all robots (no "reset_mask") before a partial reset')
         self._was_reset = True
@@ -253,13 +245,9 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return self._obs.copy(), scatter_infos(infos, mask, self.num_envs)
 
     def step(self, actions: NDArray[np.floating[Any]]) -> StepResult:
-        """Step every robot; autoreset finished ones according to ``autoreset_mode``.
-
-        Raises:
-            TypeError: a scalar (not iterable) action, as ``SyncVectorEnv``; actions that are not real numbers.
-            ValueError: actions not of shape ``(N, 2)`` or with NaN/inf entries.
-            RuntimeError: in ``Disabled`` mode, stepping a robot whose episode ended (reset it first).
-        """
+        """Step every robot; autoreset finished ones according to ``autoreset_mode``. Raises ``TypeError`` for a
+        scalar (as ``SyncVectorEnv``) or non-numeric action, ``ValueError`` for actions not of shape ``(N, 2)`` or
+        NaN/inf, ``RuntimeError`` in ``Disabled`` mode on a robot whose episode ended (reset it first)."""
         n = self.num_envs
         if not self._was_reset:
             raise gym.error.ResetNeeded(f"call reset() before step() on {type(self).__name__}")
@@ -345,10 +333,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
     def _begin_rows(self, idx: NDArray[np.intp], pose_opt: Array | None = None) -> tuple[ObsArray, Array]:
         """New episodes for the robots ``idx``: their observations ``(m, D)`` and info records."""
         obs = np.empty((len(idx), self._obs.shape[1]), dtype=np.float32)
-        if self._batch is not None:
-            rec = self._begin_rows_kernel(idx, pose_opt, obs)
-        else:
-            rec = self._begin_rows_columns(idx, pose_opt, obs)
+        begin = self._begin_rows_kernel if self._batch is not None else self._begin_rows_columns
+        rec = begin(idx, pose_opt, obs)
         if self.render_mode is not None:  # the robots' trails start at the next position
             self._trail_start[idx] = self._trail_count
             self._h_now[idx, 0] = rec[:, _R_HX]
@@ -512,17 +498,13 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         """The compact infos, rewards and ``terminated`` of ``rows`` from their info records ``rec``, a new array."""
         ep = self._episode
         dt = self.params.dt
+        time = np.asarray(self._state.steps)[rows] * dt
         if self.v0_params is not None:
-            infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], np.asarray(self._state.steps)[rows] * dt)
-            return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
-        infos = record_info(
-            rec,
-            rec.T[layout_v1.R_ERROR :],
-            np.asarray(self._state.steps)[rows] * dt,
-            {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")},
-            np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows],
-            rec[:, _R_END],
-        )
+            infos = v0_record_info(rec, rec.T[layout_v1.R_ERROR :], time)
+        else:
+            true_robot = {name: np.array(np.asarray(getattr(ep, name))[rows]) for name in ("r1", "r2", "l1")}
+            delay = np.asarray(ep.lag)[rows] * dt + np.asarray(ep.t_switch)[rows]
+            infos = record_info(rec, rec.T[layout_v1.R_ERROR :], time, true_robot, delay, rec[:, _R_END])
         return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
     def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
@@ -547,11 +529,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         return [(float(x), float(y)) for x, y in self._trail[rows, i].tolist()]
 
     def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``; ``None`` otherwise.
-
-        Raises:
-            gymnasium.error.ResetNeeded: before the first ``reset()``.
-        """
+        """One ``(H, W, 3)`` uint8 frame per robot for ``render_mode="rgb_array"``, else ``None``; ``ResetNeeded``
+        before the first ``reset()``."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gym.make_vec")
             return None

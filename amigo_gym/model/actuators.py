@@ -316,7 +316,7 @@ def actuator_step_ws(
     (:func:`amigo_gym.model.fresnel.step_table`); the nominal ``w_max`` [rad/s], ``l1n``, ``r1n``, ``r2n``,
     ``two_l1 = 2 l1`` [m]; the ramps; the others as :func:`actuator_step`.
     """
-    # 1. commands (clip_setpoints, body_velocity_columns)
+    # 1. commands (clipped; body_velocity_columns)
     vc_old, wc_old = body_velocity_of(clip(w1c_old, -w_max, w_max), clip(w2c_old, -w_max, w_max), r1n, r2n, two_l1)
     vc_new, wc_new = body_velocity_of(clip(w1c_new, -w_max, w_max), clip(w2c_new, -w_max, w_max), r1n, r2n, two_l1)
     # 2. ramps

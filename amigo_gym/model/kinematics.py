@@ -10,29 +10,15 @@ compiled (numba).
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple, Protocol, TypeAlias
+from typing import TYPE_CHECKING, Any, NamedTuple, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+if TYPE_CHECKING:
+    from amigo_gym.model.params import RobotParams
+
 Array = NDArray[np.float64]
-
-
-class Geometry(Protocol):
-    """The robot's geometry [m] as read here (:class:`amigo_gym.model.params.RobotParams` provides it)."""
-
-    @property
-    def l1(self) -> float: ...
-    @property
-    def l3(self) -> float: ...
-    @property
-    def l5(self) -> float: ...
-    @property
-    def r1(self) -> float: ...
-    @property
-    def r2(self) -> float: ...
-    @property
-    def r3(self) -> float: ...
 
 
 #: one column of a batch: a float (``np.float64`` included) or a float64 array of any shape
@@ -112,12 +98,12 @@ def sinc(x: ArrayLike) -> Array:
     return np.asarray((np.sin(x) + zero) / (x + zero))
 
 
-def body_velocity_columns(w1: Real, w2: Real, robot: Geometry) -> tuple[Real, Real]:
+def body_velocity_columns(w1: Real, w2: Real, robot: RobotParams) -> tuple[Real, Real]:
     """Column form of :func:`body_velocity`: ``(v_A, betadot)`` from the wheel rates ``w1``, ``w2`` [rad/s]."""
     return body_velocity_of(w1, w2, robot.r1, robot.r2, 2.0 * robot.l1)
 
 
-def castor_rate_columns(v_a: Real, betadot: Real, robot: Geometry) -> Real:
+def castor_rate_columns(v_a: Real, betadot: Real, robot: RobotParams) -> Real:
     """Column form of :func:`castor_rate` (the sign of ``-0.0`` is negative)."""
     if not (isinstance(v_a, np.ndarray) or isinstance(betadot, np.ndarray)):
         return castor_rate_float(v_a, betadot, robot.l5, robot.r3)
@@ -156,7 +142,7 @@ def pack(*columns: Real) -> Array:
     return out
 
 
-def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
+def body_velocity(w: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     """Speed of A and turn rate ``(v_A [m/s], betadot [rad/s])``, each ``(...)``, of wheel rates ``w`` ``(..., 2)``
     [rad/s]: ``v_A = (r1 w1 + r2 w2) / 2``, ``betadot = (r1 w1 - r2 w2) / (2 l1)``."""
     w = np.asarray(w, dtype=np.float64)
@@ -164,7 +150,7 @@ def body_velocity(w: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     return np.asarray(v), np.asarray(b)
 
 
-def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
+def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
     """Wheel rates ``(..., 2)`` [rad/s] rolling without slip at ``v_A`` [m/s] and ``betadot`` [rad/s], ``(...)``:
     ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``."""
     v = np.asarray(v_a, dtype=np.float64)
@@ -172,7 +158,7 @@ def wheel_rates(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
     return pack(*wheel_rates_of(v, b, robot.l1, robot.r1, robot.r2))
 
 
-def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: Geometry) -> Array:
+def castor_rate(v_a: ArrayLike, betadot: ArrayLike, robot: RobotParams) -> Array:
     """Rolling rate ``(...)`` [rad/s] of the self-aligned castor: ``sign(v_A) sqrt(l5^2 betadot^2 + v_A^2) / r3``."""
     v = np.asarray(v_a, dtype=np.float64)
     b = np.asarray(betadot, dtype=np.float64)
@@ -189,14 +175,14 @@ def a_from_h(x_h: Real, y_h: Real, cos_beta: Real, sin_beta: Real, l3: Real) -> 
     return x_h - l3 * cos_beta, y_h - l3 * sin_beta
 
 
-def h_position(pose: ArrayLike, robot: Geometry) -> Array:
+def h_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """Ground point H ``(..., 2)`` [m] of poses ``(..., 3)``, ``l3`` ahead of A (paper eq. 4)."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(*h_from_a(p[..., 0], p[..., 1], np.cos(b), np.sin(b), robot.l3))
 
 
-def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
+def contact_points(pose: ArrayLike, robot: RobotParams) -> tuple[Array, Array]:
     """Contact points ``(K, L)``, each ``(..., 2)`` [m], of wheel 1 (right) and 2 (left) (paper eqs 14, 22):
     ``K = A + l1 (sin b, -cos b)``, ``L = A - l1 (sin b, -cos b)``."""
     p = np.asarray(pose, dtype=np.float64)
@@ -204,14 +190,14 @@ def contact_points(pose: ArrayLike, robot: Geometry) -> tuple[Array, Array]:
     return p[..., :2] + side, p[..., :2] - side
 
 
-def castor_position(pose: ArrayLike, robot: Geometry) -> Array:
+def castor_position(pose: ArrayLike, robot: RobotParams) -> Array:
     """Ground position of the castor swivel, ``l5`` behind A on the body axis: ``(..., 2)`` [m]."""
     p = np.asarray(pose, dtype=np.float64)
     b = p[..., 2]
     return pack(p[..., 0] - robot.l5 * np.cos(b), p[..., 1] - robot.l5 * np.sin(b))
 
 
-def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: Geometry) -> Array:
+def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) -> Array:
     """Exact pose ``(..., 3)`` after ``dt`` [s] of ``pose`` ``(..., 3)`` with wheel rates ``w`` ``(..., 2)`` [rad/s]
     held (heading not wrapped): ``d beta = betadot dt``, ``d A = v_A dt sinc(d beta / 2) (cos, sin)(beta + d beta / 2)``
     (:func:`arc_step`)."""
@@ -234,7 +220,7 @@ class SteadyCircle(NamedTuple):
     speed_h: Array
 
 
-def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: Geometry, direction: int = 1) -> SteadyCircle:
+def circle_steady_state(radius: ArrayLike, v_a: ArrayLike, robot: RobotParams, direction: int = 1) -> SteadyCircle:
     """Steady state of H on a circle of radius ``R`` [m] with A at constant speed ``v_A`` [m/s], ``direction`` ``d``
     +1 (left turn) or -1: ``R_A = sqrt(R^2 - l3^2)``, ``betadot = d v_A / R_A``, ``theta - beta = d atan(l3 / R_A)``;
     ``ValueError`` unless ``R > l3``."""

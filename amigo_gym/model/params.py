@@ -56,12 +56,9 @@ def check_real(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """``value`` as a Python ``float`` (no numpy scalars in the state), checked finite and in the interval.
-
-    Raises:
-        ValueError: one line naming ``owner.name``, the allowed range and the offending value (also for
-            a wrong type: ``bool``, ``str``, complex, ``None``, sequences).
-    """
+    """``value`` as a Python ``float`` (no numpy scalars in the state), checked finite and in the interval; else a
+    one-line ``ValueError`` naming ``owner.name``, the range and the value (also for ``bool``, ``str``, complex,
+    ``None``, sequences)."""
     v = value if type(value) is float else _real(value)  # (a float as it is: the common case, no call)
     if v is None:
         rng = _interval(low, high, low_open, high_open)

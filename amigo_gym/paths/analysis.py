@@ -107,9 +107,7 @@ def heading_lag_profile(
     frac = check_real("heading_lag_profile", "step_fraction", step_fraction, 1e-3, 0.5)
     h_max = frac * l3
     length = path.length
-    warm = 0.0
-    if path.closed:
-        warm = length * math.ceil(WARMUP_L3 * l3 / length)
+    warm = length * math.ceil(WARMUP_L3 * l3 / length) if path.closed else 0.0
     a, b = _grid(path, 0.0 - warm, length, h_max)  # (+0.0 when open)
     mid = 0.5 * (a + b)
     b_left = np.nextafter(b, a)

@@ -21,6 +21,7 @@ import math
 from collections.abc import Callable
 from dataclasses import InitVar, dataclass, field
 from functools import cached_property
+from itertools import accumulate
 from typing import Any, NamedTuple, Protocol, cast
 
 import numpy as np
@@ -271,10 +272,7 @@ class ClothoidPath(_Projecting):
 
     def breakpoints(self) -> tuple[float, ...]:
         """Arc lengths of the segment joints, with 0 and :attr:`length` [m] (where the curvature may have a kink)."""
-        out = [0.0]
-        for g in self.segments:
-            out.append(out[-1] + float(g.length))
-        return tuple(out)
+        return (0.0, *accumulate(float(g.length) for g in self.segments))
 
     def pose_columns(self, s: Real) -> PathPose:
         """Point, tangent angle, curvature and curvature rate at arc lengths ``s`` [m] (columns, any shape)."""

@@ -211,11 +211,9 @@ def fit_points(
 
     ``points`` ``(n, 2)`` [m] in path order (a closed path may repeat its first point at the end); ``smoothing``
     None (through the points) or the points' noise ``sigma`` [m] in (0, 1]; ``tolerance`` [m] in [1e-9, 1]; the
-    first ``step`` [m] in [1e-4, 10]; ``sample_spacing`` [m] of the path's coarse projection samples.
-
-    Raises:
-        ValueError: bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached
-            after :data:`MAX_REFINEMENTS` halvings of ``step``.
+    first ``step`` [m] in [1e-4, 10]; ``sample_spacing`` [m] of the path's coarse projection samples. ``ValueError``
+    for bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached after
+    :data:`MAX_REFINEMENTS` halvings of ``step``.
     """
     from scipy.interpolate import CubicSpline
 

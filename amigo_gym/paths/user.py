@@ -125,9 +125,7 @@ class UserPath:
         rate = getattr(got, "curvature_rate", None)
         cr = np.zeros(shape) if rate is None else _finite_column(rate, shape, f"{where}.curvature_rate")
         out = PathPose(x, y, th, k, cr, np.cos(th), np.sin(th))
-        if scalar:
-            return PathPose(*(float(v) for v in out))
-        return out
+        return PathPose(*(float(v) for v in out)) if scalar else out
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None

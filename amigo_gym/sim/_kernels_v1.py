@@ -537,7 +537,7 @@ def _ideal_move(
     c: F64, pv: F64, ws: F64, i: int, obs: NDArray[np.floating], rec: F64, dr: tuple[float, ...], c1: float,
     c2: float, w1: float, w2: float, v: float, bdot: float, h: float, t_h: float, t_m: float,
 ) -> None:  # fmt: skip
-    """``tracking._ideal_step`` of row ``i``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact
+    """The ideal step of row ``i``: the wheel rates are the commands ``(w1, w2)`` [rad/s] over dt, the exact
     arc step with ``t_h = tan(h / 2)``, ``t_m = tan((beta + h) / 2)``, then the evaluation with the draws ``dr``."""
     r = _rows(ws)
     x1, y1, b1, cb, sb, al1, al2, castor = _ideal_arc(

@@ -45,12 +45,7 @@ def numba_available() -> bool:
 
 def use_fast_path(requested: bool | None = None) -> bool:
     """Whether to run the compiled kernel: ``requested`` ``True`` requires it, ``False`` refuses it, ``None`` follows
-    :data:`KERNEL_ENV`.
-
-    Raises:
-        ValueError: :data:`KERNEL_ENV` is not ``auto``, ``numba`` or ``numpy``.
-        ImportError: the fast path is required (argument or ``AMIGO_GYM_KERNEL=numba``) but numba is missing.
-    """
+    :data:`KERNEL_ENV` (else ``ValueError``). ``ImportError`` where it is required but numba is missing."""
     if requested is None:
         mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
         if mode not in KERNELS:
@@ -71,9 +66,8 @@ def use_fast_path(requested: bool | None = None) -> bool:
 
 
 def wait_passively() -> None:
-    """``OMP_WAIT_POLICY=PASSIVE`` unless it is set: numba's OpenMP threads, which read it when numba starts them (the
-    first parallel call or ``numba.set_num_threads``), then sleep between calls instead of spinning against the
-    calling thread. Call it before either."""
+    """``OMP_WAIT_POLICY=PASSIVE`` unless set, so that numba's OpenMP threads sleep between calls instead of spinning;
+    call it before they start (the first parallel call or ``numba.set_num_threads``)."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
@@ -136,16 +130,16 @@ def direct_call(dispatcher: Any, *args: Any) -> Any:
 
 
 def use_kernel(owner: str, kernel: object) -> bool:
-    """Whether ``kernel=`` selects the compiled step: ``"numba"`` requires it, ``"numpy"`` refuses it, ``"auto"``
-    follows :data:`KERNEL_ENV`.
+    """Whether ``kernel=`` (one of :data:`KERNELS`, else ``ValueError``) selects the compiled step: ``"numba"``
+    requires it, ``"numpy"`` refuses it, ``"auto"`` follows :data:`KERNEL_ENV` (:func:`use_fast_path`)."""
+    return use_fast_path(None if check_kernel(owner, kernel) == "auto" else kernel == "numba")
 
-    Raises:
-        ValueError: not one of :data:`KERNELS`.
-        ImportError: ``"numba"`` (or ``AMIGO_GYM_KERNEL=numba`` with ``"auto"``) without numba installed.
-    """
-    if not isinstance(kernel, str) or kernel not in KERNELS:
-        raise ValueError(f"{owner}.kernel must be {choices(KERNELS)}, got {kernel!r}")
-    return use_fast_path(None if kernel == "auto" else kernel == "numba")
+
+def check_kernel(owner: str, kernel: object, allowed: Sequence[str] = KERNELS) -> str:
+    """``kernel`` if it is one of ``allowed``; else ``ValueError`` naming them."""
+    if not isinstance(kernel, str) or kernel not in allowed:
+        raise ValueError(f"{owner}.kernel must be {choices(allowed)}, got {kernel!r}")
+    return kernel
 
 
 def compiled_path(path: Any, p: tracking.TrackingParams) -> bool:

@@ -145,11 +145,8 @@ class BatchKernel:
         self._bind()
 
     def load(self, rows: Sequence[int], paths: Sequence[Any], st: tracking.State, ep: tracking.Episode) -> None:
-        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the block.
-
-        Raises:
-            TypeError: a path the compiled step does not run (:func:`amigo_gym.sim.fast_v1.compiled_path`).
-        """
+        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the block;
+        ``TypeError`` for a path the compiled step does not run (:func:`amigo_gym.sim.fast_v1.compiled_path`)."""
         for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
             if not fast_v1.compiled_path(path, self._k.params):
                 raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")

@@ -81,11 +81,8 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     [1e-6, 10] m; each ``preview`` distance in [0, 10] m; ``sigma_track`` [m], ``sigma_speed`` [m/s],
     ``sigma_smooth`` in [1e-6, 1e6]; ``smooth_weight`` in [0, 1). Drivable: the straight roll (``speed / r``) and
     the steady state (:func:`~amigo_gym.model.kinematics.circle_steady_state`) within ``robot.max_wheel_rate``.
-
-    Raises:
-        TypeError: an unknown setting.
-        ValueError: one line naming ``TrackingParams.v0.<setting>``, the range and the value, or the wheel rate
-            a task needs and the limit.
+    ``TypeError`` for an unknown setting; a one-line ``ValueError`` names ``TrackingParams.v0.<setting>``, the range
+    and the value, or the wheel rate a task needs and the limit.
     """
     o = "TrackingParams.v0"
     unknown = sorted(set(settings) - set(V0_DEFAULTS))

@@ -154,15 +154,13 @@ class TrackingParams:
             ``path="mixed"`` only its random paths take them; ``radius``/``direction`` are keywords).
         random_pool: ``"random"`` paths are drawn from this many seeded paths (ids ``[0, pool)``), each built once
             per process and cached within :data:`PATH_CACHE_BYTES`. Default 1024.
-        speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)``
-            drawn per episode. Default 0.2.
+        speed: reference speed of A [m/s]: a number in (0, robot.max_speed] or a pair ``(low, high)`` per episode.
         speed_profile: ``"constant"``, or ``"trapezoid"`` (start at 0, accelerate at ``profile_accel``,
             cruise at ``speed``, brake at ``profile_decel`` to stop at ``profile_duration``).
-        profile_accel, profile_decel: the trapezoid's rates [m/s^2], within the robot's
-            (``max_acceleration`` 0.3, ``max_deceleration`` 0.75). Defaults 0.2 and 0.5.
-        profile_duration: time at which the trapezoid stops [s]. Default 40.
-        start_at_rest: the wheels start at rest (a real robot's start); else rolling straight at the
-            reference speed. Default True.
+        profile_accel, profile_decel: the trapezoid's rates [m/s^2], within the robot's (``max_acceleration``
+            0.3, ``max_deceleration`` 0.75).
+        profile_duration: time at which the trapezoid stops [s].
+        start_at_rest: the wheels start at rest (a real robot's start); else rolling straight at the reference speed.
         termination_distance: the episode terminates when H is farther than this from the path [m].
         init_position_noise: half-width of the uniform start offset of H per axis [m].
         init_heading_noise: half-width of the uniform start heading offset [rad].
@@ -170,22 +168,19 @@ class TrackingParams:
         preview: distances ahead of H's closest point at which the path is observed [m], each in (0, 5].
         preview_scale: the observation divides preview coordinates by this [m].
         sigma_track, sigma_speed, sigma_smooth, smooth_weight: reward scales (module docstring).
-        feasibility: what a fixed path the robot cannot track at the highest ``speed`` does at construction
-            (:func:`check_feasible`): ``"error"`` (default) refuses it, ``"warn"`` warns and runs it, ``"off"``
-            runs it silently; the report (where the path exceeds the wheel-rate or acceleration limits) is the
-            env's ``feasibility`` attribute and ``info["feasibility"]`` at reset in every mode.
+        feasibility: a fixed path the robot cannot track at the highest ``speed`` (:func:`check_feasible`):
+            ``"error"`` refuses it, ``"warn"`` warns and runs it, ``"off"`` runs it; in every mode the report is the
+            env's ``feasibility`` and ``info["feasibility"]`` at reset.
         goal_tolerance: an open path's episode terminates as a success when H is within this distance [m] of
             the path's end point (``info["end_condition"] == "goal"``), in [0, 10]; 0 (default): only when H
             passes the end (``"end_of_path"``).
-        ideal_actuators: ``True``: the wheels take the commanded rates ``a w_max`` at once and hold them over the
-            step (AmigoBot-v0's actuators; the pose advances by the exact arc). Requires no delay, no slip, no
-            ``true_robot`` and no randomised geometry. Default False (the firmware's ramps).
+        ideal_actuators: the wheels take the commanded rates ``a w_max`` at once and hold them over the step
+            (AmigoBot-v0's; the exact arc), else the firmware's ramps. Requires no delay, slip, ``true_robot`` or
+            randomised geometry.
         observation: the observation layout: ``"v1"`` (default, module table) or ``"v0"``, AmigoBot-v0's
             (:func:`amigo_gym.task.v0.obs_names`), from the measured state.
         reward: ``"v1"`` (default): the smoothness term's change is that of the normalised command over
             ``2 sigma_smooth``; ``"v0"``: AmigoBot-v0's, the change of the wheel rates over ``w_max sigma_smooth``.
-
-    AmigoBot-v0 is the configuration :meth:`v0` (``tests/test_v0_as_v1.py``).
     """
 
     robot: RobotParams = field(default_factory=RobotParams)
@@ -393,10 +388,7 @@ def make_tracking_params(
     differ from the nominal robot, a ``RobotParams``, or a robot file (``robot.json`` of ``amigo-gym identify``: its
     ``r1``, ``r2``, ``l1`` [m], and its ``delay`` [s] and ramps on ``actuators``, whose own fields win);
     ``randomize``: a preset name or a mapping; ``params``: a :class:`TrackingParams` or a mapping of its fields.
-
-    Raises:
-        TypeError: an unknown keyword (listing the allowed ones).
-        ValueError: a bad value, naming the field, the value and the allowed range.
+    Raises ``TypeError`` for an unknown keyword, ``ValueError`` for a bad value (naming field, value and range).
     """
     names = [f.name for f in fields(TrackingParams)]
     if isinstance(params, Mapping):
@@ -516,12 +508,7 @@ def constants(p: TrackingParams) -> Constants:
 
 def v0_settings(p: TrackingParams) -> dict[str, Any] | None:
     """AmigoBot-v0's settings that make ``p`` (``TrackingParams.v0(**v0_settings(p))`` is ``p`` with
-    ``feasibility="off"``), or ``None``: the settings AmigoBot-v0's compiled step runs, whose info has v0's keys.
-
-    v0's settings: ``ideal_actuators=True, observation="v0", reward="v0"``, no measurement noise,
-    ``start_at_rest=False``, a constant ``speed`` and profile, ``goal_tolerance=0`` and the path of a drivable v0 task
-    (``CirclePath(radius, direction=...)`` or ``ManoeuvrePath(radius, straight_length, direction)``).
-    """
+    ``feasibility="off"``), or ``None`` when ``p`` is no AmigoBot-v0 task (:meth:`TrackingParams.v0`)."""
     path = p.path
     if type(path) not in (CirclePath, ManoeuvrePath) or not (p.ideal_actuators and p.observation == p.reward == "v0"):
         return None
@@ -674,11 +661,7 @@ def speed_observations(
 def check_feasible(p: TrackingParams, path: Any) -> dict[str, Any]:
     """Check a fixed path against the nominal robot's wheel rate and rotational ramp (none with ``ideal_actuators``)
     at the highest reference speed (:func:`amigo_gym.paths.feasibility`); apply ``p.feasibility`` to a problem.
-
-    Returns:
-        the report (:meth:`amigo_gym.paths.Feasibility.report`): ``feasible``, ``message``, the peaks and, in
-        ``exceeded``, the arc-length intervals [m] where each limit is exceeded.
-    """
+    Returns the report (:meth:`amigo_gym.paths.Feasibility.report`)."""
     # cached for a ClothoidPath (frozen: its value is its key); a user's path object is analysed each time
     analyse = _feasibility if type(path) is ClothoidPath else _feasibility.__wrapped__
     f = analyse(path, p.speed_range[1], p.robot, None if p.ideal_actuators else p.actuators.rot_acceleration)
@@ -1036,9 +1019,7 @@ def step_columns(
     ``dt`` (the pose advances by the exact arc, the heading bounded as AmigoBot-v0's), else write them into the
     command ``ring`` (``(L, 2)`` or ``(N, L, 2)``, in place, at ``ring_step``), read those in effect after the delay
     and take the exact actuator step with the step's slip; then evaluate the new state (:func:`evaluate_columns`).
-
-    Returns:
-        the new state, its :class:`Outcome`, and the per-step draws (:class:`amigo_gym.model.randomization.StepNoise`).
+    Returns the new state, its :class:`Outcome`, the draws (:class:`~amigo_gym.model.randomization.StepNoise`).
     """
     from amigo_gym.model.randomization import step_noise
 
@@ -1136,9 +1117,7 @@ def command_change(
 ) -> tuple[Real, Real]:
     """The change the smoothness term penalises: with ``wheel_rates`` (``reward="v0"``) ``(w1 - pw1, w2 - pw2)``
     [rad/s], else ``(a1 - pa1, a2 - pa2)`` [-]."""
-    if wheel_rates:
-        return w1 - pw1, w2 - pw2
-    return a1 - pa1, a2 - pa2
+    return (w1 - pw1, w2 - pw2) if wheel_rates else (a1 - pa1, a2 - pa2)
 
 
 def ep_l3_differs(k: Constants, ep: Episode) -> bool:
