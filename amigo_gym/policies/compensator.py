@@ -26,6 +26,8 @@ from amigo_gym.model import actuators
 from amigo_gym.model.params import check_real
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy, limit_wheel_rates
+from amigo_gym.sim import fast_v1
+from amigo_gym.sim.layout import kernel_cache
 from amigo_gym.task.v1 import TrackingParams
 
 Array = NDArray[np.float64]
@@ -40,34 +42,35 @@ COLUMNS = ("cross_track_error", "sin_heading_error", "cos_heading_error", "curva
            "wheel_rate_2", "previous_command_1", "previous_command_2")  # fmt: skip
 
 
+def _ramped(s: Array, m: int, count: int, v: float, om: float, rob: Array) -> tuple[Any, Any]:
+    """``(v, omega)`` after :data:`STEP` of the nominal ramps towards the ring's command ``m`` (0 outside [0, count))"""
+    a1 = s[1 + 2 * (m % RING)] if 0 <= m < count else 0.0
+    a2 = s[2 + 2 * (m % RING)] if 0 <= m < count else 0.0
+    c1, c2 = rob[0] * a1 * rob[4], rob[1] * a2 * rob[4]
+    v2 = actuators.ramp(v, 0.5 * (c1 + c2), rob[5], rob[6], STEP).u_b
+    return v2, actuators.ramp(om, (c1 - c2) / (2.0 * rob[2]), rob[7], rob[8], STEP).u_b
+
+
 def predict_rows(
-    obs: Array,
-    starts: NDArray[np.bool_],
-    st: Array,
-    col: NDArray[np.int64],
-    cand: Array,
-    rob: Array,
-    dt: float,
+    obs: Array, starts: NDArray[np.bool_], st: Array, col: NDArray[np.int64], cand: Array, rob: Array, dt: float,
     error_scale: float,
-) -> tuple[Array, Array, Array]:
+) -> tuple[Array, Array, Array]:  # fmt: skip
     """Per row of ``obs`` ``(N, d)``: the estimated delay [s], the chosen candidate's distance per step [(m/s)^2] (0
     before the first measurement) and ``(e [m], psi [rad])`` moved over the delay. ``st`` ``(N, 1 + 2 RING + 3 C)``
     is updated: ``[steps, ring of commands (RING, 2), candidates' (v, omega) (C, 2), their summed distance (C,)]``;
     ``col``: the indices of :data:`COLUMNS`; ``rob``: ``r1, r2, l1, l3, max_wheel_rate, acceleration, deceleration,
     rot_acceleration, rot_deceleration``."""
-    n, nc = obs.shape[0], cand.size
-    r1, r2, l1, l3, w_max, acc, dec, racc, rdec = rob[0], rob[1], rob[2], rob[3], rob[4], rob[5], rob[6], rob[7], rob[8]
+    n, nc, r1, r2, l1, l3, w_max = obs.shape[0], cand.size, rob[0], rob[1], rob[2], rob[3], rob[4]
     delay, dist, pred = np.zeros(n), np.zeros(n), np.zeros((n, 2))
-    ring0, sim0, err0 = 1, 1 + 2 * RING, 1 + 2 * RING + 2 * nc
+    sim0, err0 = 1 + 2 * RING, 1 + 2 * RING + 2 * nc
     n_dt = round(dt / STEP)
     for i in range(n):
         s = st[i]
         if starts[i]:
             s[:] = 0.0
-        else:  # the command issued a step ago, then each candidate's ramps over the last step
+        else:  # the command issued a step ago (ring from index 1), then each candidate's ramps over the last step
             c = int(s[0])
-            s[ring0 + 2 * (c % RING)] = obs[i, col[6]]
-            s[ring0 + 2 * (c % RING) + 1] = obs[i, col[7]]
+            s[1 + 2 * (c % RING)], s[2 + 2 * (c % RING)] = obs[i, col[6]], obs[i, col[7]]
             s[0] = c + 1
         count = int(s[0])
         u1, u2 = r1 * obs[i, col[4]] * w_max, r2 * obs[i, col[5]] * w_max
@@ -77,12 +80,7 @@ def predict_rows(
             for k in range(nc):
                 sv, so = s[sim0 + 2 * k], s[sim0 + 2 * k + 1]
                 for q in range(n_dt):
-                    m = math.floor((t0 + q * STEP - cand[k]) / dt + 1e-9)
-                    a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
-                    a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
-                    c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
-                    sv = actuators.ramp(sv, 0.5 * (c1 + c2), acc, dec, STEP).u_b
-                    so = actuators.ramp(so, (c1 - c2) / (2.0 * l1), racc, rdec, STEP).u_b
+                    sv, so = _ramped(s, math.floor((t0 + q * STEP - cand[k]) / dt + 1e-9), count, sv, so, rob)
                 s[sim0 + 2 * k], s[sim0 + 2 * k + 1] = sv, so
                 s[err0 + k] += (sv - v) ** 2 + (l1 * (so - om)) ** 2
                 if s[err0 + k] < best:
@@ -93,12 +91,7 @@ def predict_rows(
         kappa = obs[i, col[3]] / l3
         now, d = count * dt, delay[i]
         for q in range(round(d / STEP)):
-            m = math.floor((now + q * STEP - d) / dt + 1e-9)
-            a1 = s[ring0 + 2 * (m % RING)] if 0 <= m < count else 0.0
-            a2 = s[ring0 + 2 * (m % RING) + 1] if 0 <= m < count else 0.0
-            c1, c2 = r1 * a1 * w_max, r2 * a2 * w_max
-            v2 = actuators.ramp(v, 0.5 * (c1 + c2), acc, dec, STEP).u_b
-            om2 = actuators.ramp(om, (c1 - c2) / (2.0 * l1), racc, rdec, STEP).u_b
+            v2, om2 = _ramped(s, math.floor((now + q * STEP - d) / dt + 1e-9), count, v, om, rob)
             vm, omm = 0.5 * (v + v2), 0.5 * (om + om2)
             s_dot = (vm * math.cos(psi) - l3 * omm * math.sin(psi)) / max(1.0 - kappa * e, 0.05)
             e += STEP * (vm * math.sin(psi) + l3 * omm * math.cos(psi))
@@ -111,15 +104,13 @@ def predict_rows(
 @lru_cache(maxsize=1)
 def _predictor() -> Any:
     """:func:`predict_rows` compiled (numba, cached with the step's kernels), or as it is without numba."""
-    from amigo_gym.sim import fast_v1
-
     if not fast_v1.use_fast_path():
         return predict_rows
     fast_v1.kernels()  # registers the model's functions (actuators.ramp) with numba
     import numba
+    from numba.extending import register_jitable
 
-    from amigo_gym.sim.layout import kernel_cache
-
+    register_jitable(inline="always")(_ramped)
     with kernel_cache():
         return numba.njit(cache=True, nogil=True)(predict_rows)
 
@@ -137,9 +128,6 @@ class DelayCompensatedPolicy(Policy):
         self.params, self.quiet = params, check_real(o, "quiet", quiet, 0.0, 1.0)
         if max(CANDIDATES) / params.dt + 2 > RING:
             raise ValueError(f"{o}: params.dt = {params.dt} s is too short for the {max(CANDIDATES):g} s delays")
-        missing = [c for c in COLUMNS if c not in f.index]
-        if missing:
-            raise ValueError(f"{o}: the observation lacks {missing}")
         self.gain = check_real(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
         self.fast, self.slow = AnalyticTrackingPolicy(params, gain), AnalyticTrackingPolicy(params, 1.0)
         self._col = np.array([f.index[c] for c in COLUMNS], dtype=np.int64)

@@ -286,10 +286,8 @@ class FastPolicy(Policy):
         return cls(spec, layers, w["log_std"], rms, meta.get("info"))
 
     def __repr__(self) -> str:
-        s = self.spec
-        gain = f", residual_gain={s.residual_gain:g}, base={s.base!r}, gate={s.gate}" if s.residual_bound > 0 else ""
-        bound = f"residual_bound={s.residual_bound:g}"
-        return f"FastPolicy(history={s.history}, {bound}, filter_alpha={s.filter_alpha:g}{gain})"
+        kw = ", ".join(f"{k}={v!r}" for k, v in asdict(self.spec).items() if k != "env_kwargs")
+        return f"FastPolicy({kw})"
 
 
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
