@@ -193,8 +193,9 @@ def test_env_action_mask_zeroes_the_correction_on_masked_rows() -> None:
         ),
         (lambda p: FeatureSpec(CIRCLE, residual_bound=0.3, base="smith"), r"FeatureSpec\.base must be 'analytic' or"),
         (lambda p: FeatureSpec(CIRCLE, residual_bound=0.3, gate=True), r"FeatureSpec\.gate must be a bool, True only"),
+        (lambda p: FeatureSpec(CIRCLE, base="compensator", gate=True), r"True only for a residual on the compensator"),
     ],
-    ids=["quiet", "gain", "base", "gate"],
+    ids=["quiet", "gain", "base", "gate", "gate_without_residual"],
 )
 def test_bad_settings_are_one_line_errors(call: object, match: str) -> None:
     params = gym.make("AmigoBot-v1", **CIRCLE).unwrapped.params  # type: ignore[attr-defined]

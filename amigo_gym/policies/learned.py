@@ -107,8 +107,8 @@ class FeatureSpec:
         check_real(o, "residual_gain", self.residual_gain, 0.0, 1.0 / self.params().dt, low_open=True)
         if self.base not in ("analytic", "compensator"):
             raise ValueError(f"{o}.base must be 'analytic' or 'compensator', got {self.base!r}")
-        if self.gate not in (False, True) or (self.gate and self.base != "compensator"):
-            raise ValueError(f"{o}.gate must be a bool, True only with base='compensator', got {self.gate!r}")
+        if self.gate not in (False, True) or (self.gate and (self.base != "compensator" or self.residual_bound <= 0)):
+            raise ValueError(f"{o}.gate must be a bool, True only for a residual on the compensator, got {self.gate!r}")
 
     def params(self) -> TrackingParams:
         """The task settings of ``env_kwargs`` (observation layout, nominal robot, ``dt``)."""
