@@ -1,6 +1,9 @@
 """Learning curves and time to quality of the shipped fast-PPO generalist (five seeds) against the analytic controller.
 
     python experiments/plot_curves_v1.py      # docs/figures/fastppo/{learning_curves,time_to_quality}.png
+    python experiments/plot_curves_v1.py --stem compensator_residual --label "compensator residual" --seeds 0 1 2 \
+        --curves docs/figures/compensator_residual --out docs/figures/compensator_residual \
+        --manifests agents/pretrained/v1/compensator_residual
 
 Inputs: the training curves ``docs/figures/fastppo/ppo_fast_s{0..4}.curve.csv`` (copies of the runs'
 ``curve.csv``, written by ``amigo-gym train-fast`` every ``--eval-every`` env-steps: columns ``env_steps``,
@@ -72,6 +75,8 @@ def main() -> int:
     p.add_argument("--curves", default=str(ROOT / "docs/figures/fastppo"), help="folder of ppo_fast_s<i>.curve.csv")
     p.add_argument("--manifests", default=str(ROOT / "agents/pretrained/v1/ppo_fast"), help="shipped manifests")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    p.add_argument("--stem", default="ppo_fast", help="the files' stem before _s<seed>")
+    p.add_argument("--label", default="fast PPO", help="the agent's name in the figures")
     p.add_argument("--out", default=str(ROOT / "docs/figures/fastppo"), help="output folder")
     a = p.parse_args()
 
@@ -80,8 +85,8 @@ def main() -> int:
 
     curves, settings = [], []
     for seed in a.seeds:
-        c = read_curve(Path(a.curves) / f"ppo_fast_s{seed}.curve.csv")
-        m = json.loads((Path(a.manifests) / f"ppo_fast_s{seed}.json").read_text())
+        c = read_curve(Path(a.curves) / f"{a.stem}_s{seed}.curve.csv")
+        m = json.loads((Path(a.manifests) / f"{a.stem}_s{seed}.json").read_text())
         last = m["last_eval"]
         for key in ("env_steps", "eval_h_rms_m", "eval_chatter_settled_rms"):
             if not np.isclose(c[key][-1], float(last[key]), rtol=1e-12, atol=0.0):
@@ -147,7 +152,9 @@ def main() -> int:
     }
     out = Path(a.out)
     atomic_write_json(out / "curves_summary.json", summary)
-    plot(out, steps, h, h_iqm, ch, ch_iqm, curves, grid, h_wall_iqm, h_ref, quality, ref["chatter_settled_rms"])
+    plot(
+        out, steps, h, h_iqm, ch, ch_iqm, curves, grid, h_wall_iqm, h_ref, quality, ref["chatter_settled_rms"], a.label
+    )
 
     mm = 1e3
     print(f"analytic on the validation episodes: H RMS {mm * h_ref:.3f} mm, 1.5x = {mm * quality:.3f} mm, settled "
@@ -194,6 +201,7 @@ def plot(
     h_ref: float,
     quality: float,
     ch_ref: float,
+    label: str,
 ) -> None:
     import matplotlib
 
@@ -204,7 +212,7 @@ def plot(
     x = steps / 1e6
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
     ax1.fill_between(x, 1e3 * h.min(0), 1e3 * h.max(0), alpha=0.25, label=f"min-max over {n} seeds")
-    ax1.plot(x, 1e3 * h_iqm, lw=2, label="fast PPO, IQM over seeds")
+    ax1.plot(x, 1e3 * h_iqm, lw=2, label=f"{label}, IQM over seeds")
     ax1.axhline(1e3 * h_ref, color="k", ls="-", lw=1, label=f"analytic ({1e3 * h_ref:.2f} mm)")
     ax1.axhline(1e3 * quality, color="k", ls="--", lw=1, label="1.5x analytic")
     ax1.set_yscale("log")
@@ -215,7 +223,7 @@ def plot(
     ax1.legend(fontsize=8)
     ax1.grid(alpha=0.3, which="both")
     ax2.fill_between(x[1:], ch.min(0)[1:], ch.max(0)[1:], alpha=0.25, label=f"min-max over {n} seeds")
-    ax2.plot(x[1:], ch_iqm[1:], lw=2, label="fast PPO, IQM over seeds")  # step 0: an untrained policy, ~0 commands
+    ax2.plot(x[1:], ch_iqm[1:], lw=2, label=f"{label}, IQM over seeds")  # step 0: an untrained policy, ~0 commands
     ax2.axhline(CHATTER_TARGET, color="r", ls="--", lw=1, label="target 1 rad/s")
     ax2.axhline(ch_ref, color="k", lw=1, label=f"analytic ({ch_ref:.2f} rad/s)")
     ax2.set_xlabel("env-steps of training [millions]")
@@ -238,7 +246,7 @@ def plot(
     mm_ticks(ax)
     ax.set_xlabel("wall-clock of training [min] (loaded, shared 2-core machine)")
     ax.set_ylabel("validation H cross-track RMS [mm]")
-    ax.set_title("Time to quality: fast PPO generalist, 15M env-steps per seed", fontsize=10)
+    ax.set_title(f"Time to quality: {label}, {steps[-1] / 1e6:.0f}M env-steps per seed", fontsize=10)
     ax.legend(fontsize=8, ncol=2)
     ax.grid(alpha=0.3, which="both")
     atomic_save(lambda tmp: fig.savefig(tmp, dpi=110, format="png"), out / "time_to_quality.png", parents=True)
