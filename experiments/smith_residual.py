@@ -7,13 +7,11 @@ analytic controller (issue 36, item 1).
     python experiments/smith_residual.py val --models sr_s0=runs/sr_s0/model.zip [--seeds 20] [--cells ...]
     python experiments/smith_residual.py bench -- <amigo-gym benchmark arguments>   # the test cells, once
 
-:class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process (the model zips it
-writes need it: loaded without it, their networks' two more inputs make ``FastPolicy`` refuse them): the base action is
-the compensator's, computed for all rows at once by the package's
-:func:`amigo_gym.policies.compensator.predict_rows` (compiled) from the observation and a state per row
-(the commands issued, read from the observation's ``previous_command`` fields; the seven candidate delays' simulated
-``v``, ``omega`` and their squared mismatch); the features add the estimated delay [s] and whether the gain ``k = 2`` is
-on (the quiet rule) to the recipe's. ``--gate``: the network's output counts only on the rows whose quiet flag is on
+:class:`SmithBuilder` replaces :class:`amigo_gym.policies.learned.FeatureBuilder` in this process: the package's
+builder for a residual on :class:`amigo_gym.policies.DelayCompensatedPolicy` (``FeatureSpec(base="compensator",
+residual_gain=2)``), which the candidate zips written here before the package had it need (their specs say
+``base="analytic"``; loaded elsewhere, ``FastPolicy`` refuses them: their networks take two inputs more).
+``--gate``: the network's output counts only on the rows whose quiet flag is on
 (elsewhere the action is the compensator's), in training (``train --gate``), for named models (``val --gate NAME``) or
 all (``bench --gate``). ``--saturation step|hold --hold N`` (before the command): the gain ``k = 1`` on a step whose ``k
 = 2`` command reaches a wheel's limit (``hold``: and the ``N`` steps after); ``--saturation sharp --kappa K``: ``k = 1``
@@ -28,6 +26,7 @@ decision (:mod:`amigo_gym.tools.training.protocol`).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import glob
 import sys
 from pathlib import Path
@@ -43,110 +42,72 @@ from amigo_gym.policies import compensator as comp
 from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, RunningMeanStd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from smith_delay import CANDIDATES, SmithEstimated
+from smith_delay import SmithEstimated
 
 GAIN, QUIET = 2.0, 1e-6  # the compensator chosen on the validation cells (baselines.md)
-GATE: dict[str, Any] = {"on": False, "flags": None}
+#: the gate for builders made inside the package's code (``train --gate``, ``bench --gate``)
+GATE: dict[str, bool] = {"on": False}
 #: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold``
 #: steps on; "sharp": k = 1 while the curvature at H or at a preview point exceeds ``kappa`` [1/m] in magnitude
-SATURATION: dict[str, Any] = {
-    "rule": "none",
-    "hold": 0,
-    "kappa": 0.0,
-}  # --gate: the correction only where the quiet flag is on
-RING = comp.RING
-N_CAND = len(CANDIDATES)
+SATURATION: dict[str, Any] = {"rule": "none", "hold": 0, "kappa": 0.0}
+
+
+class Saturating(comp.DelayCompensatedPolicy):
+    """The package's compensator with :data:`SATURATION`'s rule as well deciding where ``k = 1``; its state: the
+    package's, then the steps left at ``k = 1`` after a saturation."""
+
+    def __init__(self, params: Any, gain: float) -> None:
+        super().__init__(params, gain, QUIET)
+        names = self._fields.names
+        self.curv_cols = np.array([i for i, f in enumerate(names) if f == "curvature" or f.startswith("preview_curv")])
+        self.state_dim += 1
+
+    def compensate(self, obs: Any, state: Any, starts: Any) -> tuple[Any, Any, Any, Any]:
+        """:meth:`DelayCompensatedPolicy.compensate`, the gain chosen by the quiet flag and the rule."""
+        p, st = self.params, np.array(state[:, 1:-1], dtype=np.float64)
+        delay, dist, pred = comp._predictor()(obs, starts, st, self._col, np.array(comp.CANDIDATES), self._rob, p.dt,
+                                              p.error_scale)  # fmt: skip
+        seen = np.array(obs, dtype=np.float64)
+        seen[:, self._col[0]] = pred[:, 0] / p.error_scale
+        seen[:, self._col[1]], seen[:, self._col[2]] = np.sin(pred[:, 1]), np.cos(pred[:, 1])
+        z = np.where(starts, 0.0, state[:, 0])
+        (v_f, om_f, z_f), (v_s, om_s, z_s) = self.fast.command(seen, z), self.slow.command(seen, z)
+        a_f, a_s = comp.limit_wheel_rates(v_f, om_f, p), comp.limit_wheel_rates(v_s, om_s, p)
+        fast, hold = dist <= self.quiet, np.zeros(len(z))
+        if SATURATION["rule"] == "sharp":
+            fast &= ~(np.abs(obs[:, self.curv_cols]).max(axis=1) > SATURATION["kappa"] * p.robot.l3)  # |kappa| l3
+        elif SATURATION["rule"] != "none":  # the k = 2 command at a wheel's limit: k = 1 (and for ``hold`` steps on)
+            sat = np.abs(a_f.astype(np.float32)).max(axis=1) >= 1.0 - 1e-9
+            hold = np.where(sat, float(SATURATION["hold"]), np.maximum(np.where(starts, 0.0, state[:, -1]) - 1.0, 0.0))
+            fast &= ~sat & (hold <= 0.0)
+        new_state = np.concatenate([np.where(fast, z_f, z_s)[:, None], st, hold[:, None]], axis=1)
+        return np.where(fast[:, None], a_f, a_s), delay, fast.astype(np.float64), new_state
 
 
 class SmithBuilder(FeatureBuilder):
-    """:class:`FeatureBuilder` with the compensator's base action and two more features (module docstring); the
-    state per row: the recipe's, then :func:`_smith_rows`'."""
+    """The package's :class:`FeatureBuilder` for a residual on the compensator (``base="compensator"``, gain
+    :data:`GAIN`, ``gate`` as given or :data:`GATE`) whatever the spec says (the candidate zips written before the
+    package had it say ``base="analytic"``), its compensator :class:`Saturating` under a ``--saturation`` rule."""
 
-    def __init__(self, spec: FeatureSpec) -> None:
-        super().__init__(spec)
-        if spec.residual_bound <= 0:
-            raise ValueError("SmithBuilder: a residual (residual_bound > 0) is its only use")
-        p = spec.params()
-        if max(CANDIDATES) / p.dt + 2 > RING:
-            raise ValueError(f"SmithBuilder: dt = {p.dt} s is too short for a ring of {RING} commands")
-        self.p, r, a = p, p.robot, p.actuators
-        self.fast_pol, self.slow_pol = AnalyticTrackingPolicy(p, GAIN), AnalyticTrackingPolicy(p, 1.0)
-        names = self.fields.names
-        self.col = np.array([names.index(f) for f in ("cross_track_error", "sin_heading_error", "cos_heading_error",
-                             "curvature", "wheel_rate_1", "wheel_rate_2", "previous_command_1",
-                             "previous_command_2")])  # fmt: skip
-        self.rob = np.array([r.r1, r.r2, r.l1, r.l3, r.max_wheel_rate, a.acceleration, a.deceleration,
-                             a.rot_acceleration, a.rot_deceleration])  # fmt: skip
-        self.cand = np.array(CANDIDATES)
-        self.curv_cols = np.array([i for i, f in enumerate(names) if f == "curvature" or f.startswith("preview_curv")])
-        self.base_state = self.state_dim
-        self.state_dim += 1 + 2 * RING + 3 * N_CAND + 1  # + the steps left at k = 1 after a saturation
-        self.dim += 2
-
-    def __call__(self, obs: Any, state: Any, starts: Any) -> tuple[Any, Any, Any]:
-        n, b = obs.shape[0], self.base_state
-        feats, _, s_base = super().__call__(obs, state[:, :b], starts)  # the recipe's features (analytic base)
-        st = np.array(state[:, b:], dtype=np.float64)
-        delay, dist, pred = comp._predictor()(obs, np.asarray(starts, dtype=np.bool_), st[:, :-1], self.col,
-                                                     self.cand, self.rob, self.p.dt, self.p.error_scale)  # fmt: skip
-        fast = dist <= QUIET
-        seen = np.array(obs, dtype=np.float64)
-        seen[:, self.col[0]] = pred[:, 0] / self.p.error_scale
-        seen[:, self.col[1]], seen[:, self.col[2]] = np.sin(pred[:, 1]), np.cos(pred[:, 1])
-        z = np.where(starts, 0.0, state[:, 0]).reshape(n, 1)
-        a_f, z_f = self.fast_pol.predict(seen, state=z, episode_start=None)
-        a_s, z_s = self.slow_pol.predict(seen, state=z, episode_start=None)
-        if SATURATION["rule"] == "sharp":
-            curv = np.abs(obs[:, self.curv_cols]).max(axis=1)  # |kappa| l3, clipped to 1
-            fast = fast & ~(curv > SATURATION["kappa"] * self.p.robot.l3)
-        elif SATURATION["rule"] != "none":  # the k = 2 command at a wheel's limit: k = 1 (and for ``hold`` steps on)
-            sat = np.abs(a_f).max(axis=1) >= 1.0 - 1e-9
-            hold = np.where(sat, float(SATURATION["hold"]), np.maximum(np.where(starts, 0.0, st[:, -1]) - 1.0, 0.0))
-            fast = fast & ~sat & (hold <= 0.0)
-            st[:, -1] = hold
-        base = np.where(fast[:, None], a_f, a_s).astype(np.float64)
-        s_base[:, 0] = np.where(fast, z_f[:, 0], z_s[:, 0])
-        feats = feats.copy()
-        feats[:, -2:] = base
-        feats = np.concatenate([feats, delay[:, None], fast[:, None].astype(np.float64)], axis=1)
-        GATE["flags"] = fast  # for the env_action that follows this call (rollout, FastPolicy._act)
-        return feats, base, np.concatenate([s_base, st], axis=1)
+    def __init__(self, spec: FeatureSpec, gate: bool | None = None) -> None:
+        on = GATE["on"] if gate is None else gate
+        super().__init__(dataclasses.replace(spec, base="compensator", residual_gain=GAIN, gate=on))
+        if SATURATION["rule"] != "none":
+            self.compensator = Saturating(self.spec.params(), GAIN)
+            self.base_dim = self.compensator.state_dim
+            self.state_dim = self.base_dim + self.spec.history * len(learned.HISTORY_FIELDS)
 
 
-_env_action = learned.env_action
-
-
-def gated_env_action(u: Any, base: Any, prev: Any, residual_bound: float, filter_alpha: float, mask: Any = None) -> Any:
-    """:func:`amigo_gym.policies.learned.env_action` with the network's output zeroed on the rows whose quiet flag
-    is off when ``GATE["on"]`` (the action there: the compensator's)."""
-    if GATE["on"] and GATE["flags"] is not None and residual_bound > 0:
-        u = np.where(GATE["flags"][:, None], u, 0.0)
-    return _env_action(u, base, prev, residual_bound, filter_alpha, mask)
-
-
-class Gated:
-    """A model acting with ``GATE["on"]`` (its correction only where the quiet flag is on)."""
-
-    def __init__(self, policy: FastPolicy) -> None:
-        self.policy = policy
-
-    def predict(self, *a: Any, **k: Any) -> Any:
-        GATE["on"] = True
-        try:
-            return self.policy.predict(*a, **k)
-        finally:
-            GATE["on"] = False
-
-    def reset(self) -> None:
-        self.policy.reset()
+def acting_gated(policy: FastPolicy) -> FastPolicy:
+    """``policy`` acting with the gate (its correction only where the quiet flag is on)."""
+    policy.builder = SmithBuilder(policy.spec, gate=True)
+    return policy
 
 
 def install() -> None:
-    """Make every fast-PPO model and run in this process use :class:`SmithBuilder` (and the gate, when on)."""
+    """Make every fast-PPO model and run in this process use :class:`SmithBuilder`."""
     learned.FeatureBuilder = SmithBuilder  # type: ignore[misc]
     fastppo.FeatureBuilder = SmithBuilder  # type: ignore[misc]
-    learned.env_action = gated_env_action
-    fastppo.env_action = gated_env_action
 
 
 def compensator(env_kwargs: dict[str, Any]) -> FastPolicy:
@@ -192,7 +153,7 @@ def _models(items: list[str], gated: list[str]) -> list[tuple[str, Any]]:
         paths = sorted(glob.glob(pattern)) or [pattern]
         for i, path in enumerate(paths):
             pol = FastPolicy.load(path)
-            out.append((name if len(paths) == 1 else f"{name}_{i}", Gated(pol) if name in gated else pol))
+            out.append((name if len(paths) == 1 else f"{name}_{i}", acting_gated(pol) if name in gated else pol))
     return out
 
 
