@@ -6,7 +6,8 @@ against the episode restarts (autoreset) and the parts of a restart, by CPU time
 ``gym.make_vec("AmigoBot-v1", N, vectorization_mode="vector_entry_point", **kwargs)`` (default: the training
 distribution, N = 4096) stepped 300 times with uniform random actions in [-1, 1] (10 drawn, in turn), then
 ``steps`` (default 1000) more timed: ``time.thread_time_ns`` around the whole step and around each named function
-of a restart (wrapped in this process only). Prints µs a step for each, the restarted rows a step and the CPU.
+of a restart (wrapped in this process only). Prints µs a step for each, the restarted rows a step, the size of the
+path arena (the rows' flat paths) against its live paths at the end, and the CPU.
 """
 
 from __future__ import annotations
@@ -95,3 +96,7 @@ print(
     f"  a restarted row: {per_row:.0f} µs; the rest of the step (Python around the kernel, infos) "
     f"{(total - spent['restarts, all'] - spent['the compiled step']) / steps / 1e3:,.0f} µs"
 )
+if (batch := env.unwrapped._batch) is not None:
+    a = batch.arena
+    live = a.used - a._dead
+    print(f"  the path arena: {a.flat.size / 1e6:.2f}M floats for {live / 1e6:.2f}M live ({a.flat.size / live:.1f}x)")

@@ -343,12 +343,15 @@ def test_path_arena_rows_read_their_paths() -> None:
     rows: list[Any] = [None] * n
     rng = np.random.default_rng(0)
     compacted = False
+    peak, biggest = 0, max(fast_v1.flat_path(q).size for q in pool)  # the array stays within 8/3 of the most floats
     for _ in range(300):
         idx = sorted(set(rng.integers(0, n, 5).tolist()))
         paths = [pool[int(j)] for j in rng.integers(0, len(pool), len(idx))]
         used = arena.used
         arena.assign(idx, paths)
         compacted |= arena.used < used
+        peak = max(peak, arena.used - arena._dead + biggest)  # live at once, plus a path (the docstring's rule)
+        assert arena.flat.size <= 8 / 3 * peak
         for i, q in zip(idx, paths, strict=True):
             rows[i] = q
         for i, q in enumerate(rows):

@@ -19,10 +19,8 @@ IntArray = NDArray[np.int64]
 
 class PathArena:
     """The flattened paths of ``n`` rows in one float64 array :attr:`flat`: row ``i``'s is
-    ``flat[starts[i]:stops[i]]``. Each distinct path object is stored once while a row uses it; the arena grows by
-    doubling and is compacted when over half of it (and over :attr:`COMPACT_MIN` entries) is dead."""
-
-    COMPACT_MIN = 4096
+    ``flat[starts[i]:stops[i]]``. Each distinct path object is stored once while a row uses it; a path that does not
+    fit is appended after compacting the live paths if they fill <= 3/4 of :attr:`flat`, else after doubling it."""
 
     def __init__(self, n: int) -> None:
         self.flat: Array = np.zeros(1024)
@@ -48,6 +46,7 @@ class PathArena:
             if old:
                 entry = self._live[old]
                 entry[3] -= 1
+                self._row_ids[i] = 0  # (a compaction below skips the row)
                 if entry[3] == 0:
                     del self._live[old]
                     self._dead += entry[2] - entry[1]
@@ -59,8 +58,6 @@ class PathArena:
             self._row_ids[i] = id(path)
             self.starts[i] = got[1]
             self.stops[i] = got[2]
-        if self._dead > self.COMPACT_MIN and 2 * self._dead > self.used:
-            self._compact()
 
     def rows_on(self, path: ClothoidPath) -> int:
         """How many rows hold ``path``."""
@@ -68,10 +65,13 @@ class PathArena:
         return 0 if entry is None else int(entry[3])
 
     def _append(self, vec: Array) -> tuple[int, int]:
+        size = self.flat.shape[0]
+        if self.used + vec.shape[0] > size and 4 * (self.used - self._dead + vec.shape[0]) <= 3 * size:
+            self._compact()
         start = self.used
         stop = start + vec.shape[0]
-        if stop > self.flat.shape[0]:
-            grown = np.zeros(max(2 * self.flat.shape[0], stop))
+        if stop > size:
+            grown = np.zeros(max(2 * size, stop))
             grown[:start] = self.flat[:start]
             self.flat = grown
         self.flat[start:stop] = vec
