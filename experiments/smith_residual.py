@@ -44,7 +44,7 @@ from amigo_gym.policies.learned import FastPolicy, FeatureBuilder, FeatureSpec, 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from smith_delay import SmithEstimated
 
-GAIN, QUIET = 2.0, 1e-6  # the compensator chosen on the validation cells (baselines.md)
+GAIN, QUIET = 2.0, 1e-6  # the compensator chosen on the validation cells (docs/experiments.md)
 #: the gate for builders made inside the package's code (``train --gate``, ``bench --gate``)
 GATE: dict[str, bool] = {"on": False}
 #: --saturation: "none"; "step": k = 1 on a step whose k = 2 command saturates the wheels; "hold": and ``hold``

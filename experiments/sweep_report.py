@@ -11,7 +11,7 @@ Read-only on the study (it never adds, changes or resumes a trial). Writes into 
   trials: with a few tens of trials the ranking moves with which trials are in the top quarter;
 * ``history.png``: the objective of each trial against its number (pruned trials at the value of their last
   report), the best so far, and the baseline trial (user attribute ``baseline``) marked;
-* ``report.md``: the tables behind both, for docs/baselines.md.
+* ``report.md``: the tables behind both, for docs/experiments.md.
 
     python experiments/sweep_report.py --storage sqlite:////work/runs/sweep_fastppo/sweep.db --study fastppo-hp \\
         --out docs/figures/sweep_fastppo

@@ -26,11 +26,11 @@ Distributions (never the benchmark's cells; the evaluations during training use 
   2 1/m at 0.4 m/s);
 * ``ppo_fast_hand``: the previous release's ``ppo_fast``, before the sweep: the module's defaults with the low-pass
   action parameterisation ``--filter-alpha 0.5`` (of the smoothness variants measured on the validation seeds,
-  docs/baselines.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
+  docs/experiments.md, 1.5M steps each, it had both the lowest settled chatter and H error), 15M env-steps;
 * ``ppo_fast_curv``: ``ppo_fast`` with the curvature curriculum up to 4.25 1/m (K(0.4), the most the env accepts
-  at the top speed; docs/baselines.md, "Failure rate per curvature bin");
+  at the top speed; docs/experiments.md, "Failure rate per curvature bin");
 * ``ppo_fast_30m``: ``ppo_fast_hand`` for 30M env-steps (the learning rate anneals over the longer run): the
-  settled chatter keeps falling; seeds 1-4 not continued, superseded by the tuned ``ppo_fast`` (docs/baselines.md,
+  settled chatter keeps falling; seeds 1-4 not continued, superseded by the tuned ``ppo_fast`` (docs/experiments.md,
   "Time to quality"; ``experiments/time_to_quality.py``);
 * ``residual``: the same paths and speeds with a wider randomisation: wheel radii and track +-7 %, slip <= 2 %,
   actuation delay 0-0.3 s, ``mild``'s noise; the correction is bounded to +-0.3 of the action range and the
@@ -38,7 +38,7 @@ Distributions (never the benchmark's cells; the evaluations during training use 
 * ``residual2``: the same robots, delays and paths without measurement noise and with a 4x sharper tracking
   reward (``sigma_track`` 5 mm); correction bound 0.15, an L2 penalty on the correction (``--residual-penalty 3``),
   30 % of the training robots nominal (``--nominal-fraction 0.3``), 3M steps; the kept model is ``best.zip``
-  (:data:`KEEP_BEST`), chosen on validation versions of the benchmark's cells (docs/baselines.md, "Residual
+  (:data:`KEEP_BEST`), chosen on validation versions of the benchmark's cells (docs/experiments.md, "Residual
   policy, second round"; ``experiments/residual_val_cells.py``).
 """
 
@@ -74,7 +74,7 @@ RESIDUAL_ENV_KWARGS: dict[str, object] = {
     },
 }
 
-#: the second residual (docs/baselines.md, "Residual policy, second round"): no measurement noise, a tracking reward
+#: the second residual (docs/experiments.md, "Residual policy, second round"): no measurement noise, a tracking reward
 #: 4x sharper (sigma_track 5 mm), the same robots, delays and paths as RESIDUAL_ENV_KWARGS
 RESIDUAL2_ENV_KWARGS: dict[str, object] = {
     "path": "mixed",

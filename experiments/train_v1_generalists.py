@@ -14,14 +14,14 @@ exported to ``agents/pretrained/v1/<algo>/<algo>_s<seed>.zip`` with a manifest `
 
 Agents (:data:`AGENTS`): ``ppo``, ``sac``, ``td3`` (the SB3 generalists, ``agents/hyperparams/<algo>.yml``, the
 v0 settings on small budgets: untuned references, **not shipped**: retired from ``agents/pretrained/v1`` because
-the kept agents supersede them and they miss the smoothness targets, docs/baselines.md "Retired references"; the
+the kept agents supersede them and they miss the smoothness targets, docs/experiments.md "Retired references"; the
 commands above still train them, and their export lands in ``agents/pretrained/v1/<algo>/`` (or ``--export``),
 which ``amigo-gym benchmark`` does not pick up by default: name them,
 ``--agents 'ppo_v1=agents/pretrained/v1/ppo/*.zip'``;
 the retired zips themselves are in git history: ``git checkout 8f0a874 -- agents/pretrained/v1/ppo
 agents/pretrained/v1/sac agents/pretrained/v1/td3``); ``td3lp``: shipped, the off-policy choice of issue 18, SB3's
 TD3 in the high-throughput configuration with the low-pass actor (``agents/hyperparams/td3_lowpass.yml``, 500k
-env-steps, evaluated every 100k; docs/baselines.md, "TD3 with a low-pass actor").
+env-steps, evaluated every 100k; docs/experiments.md, "TD3 with a low-pass actor: the full record").
 
 The claimed benchmark numbers are added to the manifests by ``amigo-gym benchmark --claim`` afterwards.
 """
