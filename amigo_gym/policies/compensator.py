@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model import actuators
+from amigo_gym.model import actuators, kinematics
 from amigo_gym.model.params import check_real
 from amigo_gym.policies.base import Fields, Policy
 from amigo_gym.policies.tracking import AnalyticTrackingPolicy, limit_wheel_rates
@@ -46,9 +46,8 @@ def _ramped(s: Array, m: int, count: int, v: float, om: float, rob: Array) -> tu
     """``(v, omega)`` after :data:`STEP` of the nominal ramps towards the ring's command ``m`` (0 outside [0, count))"""
     a1 = s[1 + 2 * (m % RING)] if 0 <= m < count else 0.0
     a2 = s[2 + 2 * (m % RING)] if 0 <= m < count else 0.0
-    c1, c2 = rob[0] * a1 * rob[4], rob[1] * a2 * rob[4]
-    v2 = actuators.ramp(v, 0.5 * (c1 + c2), rob[5], rob[6], STEP).u_b
-    return v2, actuators.ramp(om, (c1 - c2) / (2.0 * rob[2]), rob[7], rob[8], STEP).u_b
+    vc, omc = kinematics.body_velocity_of(a1 * rob[4], a2 * rob[4], rob[0], rob[1], 2.0 * rob[2])
+    return actuators.ramp(v, vc, rob[5], rob[6], STEP).u_b, actuators.ramp(om, omc, rob[7], rob[8], STEP).u_b
 
 
 def predict_rows(
@@ -73,8 +72,7 @@ def predict_rows(
             s[1 + 2 * (c % RING)], s[2 + 2 * (c % RING)] = obs[i, col[6]], obs[i, col[7]]
             s[0] = c + 1
         count = int(s[0])
-        u1, u2 = r1 * obs[i, col[4]] * w_max, r2 * obs[i, col[5]] * w_max
-        v, om = 0.5 * (u1 + u2), (u1 - u2) / (2.0 * l1)
+        v, om = kinematics.body_velocity_of(obs[i, col[4]] * w_max, obs[i, col[5]] * w_max, r1, r2, 2.0 * l1)
         if count > 0:
             t0, best, j = (count - 1) * dt, np.inf, 0
             for k in range(nc):
