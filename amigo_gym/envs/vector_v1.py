@@ -373,12 +373,11 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         if template is not None:  # one path: the episodes differ in their start offsets alone
             assert self._template_row is not None
             paths: list[Any] = [path] * m
-            info = tracking.draw_path(self._rng(rows[0]), k.params)[1]
-            for i in rows:
-                self.path_infos[i] = dict(info)
+            if not self.path_infos[rows[0]]:  # the first reset, of every row: the path's description and goal
+                self.path_infos = [tracking.draw_path(self._rng(0), k.params)[1] for _ in range(self.num_envs)]
+                self._goal[:] = tracking.goal_point(k.params, path)
             u_all = self._draws(idx, _U3, False)[0]
             if pose_opt is None:  # the start states and their evaluation in one compiled call
-                self._goal[idx] = tracking.goal_point(k.params, path)
                 return self._started(idx, b.restart(rows, path, self._template_row, u_all, obs), None, template)
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
         else:  # each row draws its path (built by the compiled loops) and episode
