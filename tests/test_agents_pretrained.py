@@ -43,6 +43,9 @@ def test_pretrained_files_and_records() -> None:
         assert rec["command"].startswith(f"amigo-gym train --algo {algo}")
         assert f"--seed {rec['seed']}" in rec["command"]
         assert rec["git_revision"] and rec["versions"]["torch"]
+        # where it was trained: CPU and threads ("unknown: ..." where the trainer did not record them yet), device
+        assert all(rec.get(k) not in (None, "") for k in ("cpu", "torch_threads", "numba_threads")), algo
+        assert rec.get("device") in ("cpu", "cuda"), algo
 
 
 @pytest.fixture(scope="module")

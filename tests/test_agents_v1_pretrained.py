@@ -38,6 +38,11 @@ def test_manifest_is_complete_and_matches_the_model(manifest: Path) -> None:
     m = json.loads(manifest.read_text())
     for key in ("algo", "seed", "timesteps", "wall_time_s", "versions", "sha256", "training_command", "env_id"):
         assert key in m, key
+    # where it was trained (issue 36, item 5): a revision, CPU and thread count, or "unknown: ..." where the agent
+    # predates the trainer's recording them; the device is known (these machines had no GPU)
+    for key in ("git_revision", "cpu", "torch_threads", "numba_threads"):
+        assert m.get(key) not in (None, ""), f"{manifest.name}: {key} missing"
+    assert m.get("device") in ("cpu", "cuda"), f"{manifest.name}: device {m.get('device')!r}"
     assert m["env_id"] == "AmigoBot-v1" and manifest.parent.name in (m["algo"], m.get("agent"))
     assert hashlib.sha256(manifest.with_suffix(".zip").read_bytes()).hexdigest() == m["sha256"]
     if str(m["algo"]).startswith("fastppo"):  # amigo-gym train-fast trains AmigoBot-v1 only: no --env

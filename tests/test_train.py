@@ -93,6 +93,7 @@ def test_sac_train_then_resume(tmp_path: Path, train_here: Callable[..., Ran]) -
     assert r.returncode == 0, r.stderr
     rec = json.loads((out / "run.json").read_text())
     assert rec["timesteps"] == 400 and rec["seed"] == 3 and rec["resumed_from"] is None
+    assert rec["cpu"] and rec["device"] == "cpu" and rec["torch_threads"] >= 1 and rec["numba_threads"] >= 1
     cfg = json.loads((out / "config.json").read_text())
     assert cfg["settings"]["algo"] == "sac" and cfg["hyperparams"]["batch_size"] == 32
     assert len(cfg["git_revision"]) >= 40 and cfg["versions"]["torch"]

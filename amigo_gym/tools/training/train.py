@@ -24,7 +24,8 @@ from amigo_gym.envs.amigobot import make_env_params
 from amigo_gym.io import atomic_save, atomic_write_json, fault_point, sha256_file, vouch
 from amigo_gym.task.v1 import v0_settings
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, json_object, parse_settings, run_guarded, say
+from amigo_gym.tools.machine import cpu_model
+from amigo_gym.tools.options import cli, json_object, missing_modules, parse_settings, run_guarded, say
 from amigo_gym.tools.training.hyperparams import (
     LOWPASS_POLICY,
     Hyperparams,
@@ -466,8 +467,11 @@ def _train(
         "resumes": config.get("resumes", []),
         "git_revision": config["git_revision"],
         "versions": versions(),
+        "cpu": cpu_model(),
         "cpu_count": os.cpu_count(),
         "torch_threads": s.threads,
+        "numba_threads": None if missing_modules(["numba"]) else importlib.import_module("numba").get_num_threads(),
+        "device": "cpu",  # SB3 on the CPU here (its MLPs are faster there)
         "sha256": sha256_file(out / "model.zip"),
     }
     # every pickle a loader reads, with its sha256 (checked before unpickling); written here: trusted
