@@ -245,11 +245,86 @@ def test_run_benchmark_on_v0_and_fake_v1(fake_v1: str, tmp_path: Path) -> None:
     assert agg["metric"] == "h_rms_m" and agg["ci95"][0] <= agg["iqm"] <= agg["ci95"][1]
     assert agg["held_out"]["scenarios"] == ["fake_v1"] and agg["in_distribution"]["scenarios"] == ["v0_circle"]
     assert set(doc["performance_profiles"]["agents"]) == {"analytic", "counting"}
+    paired = doc["paired"]  # the agent against the analytic controller on the cells where both ran
+    assert (paired["baseline"], paired["reps"], set(paired["agents"])) == ("analytic", 200, {"counting"})
+    cells = {c["scenario"]: c for c in paired["agents"]["counting"]["cells"]}
+    assert set(cells) == {"v0_circle", "fake_v1"} and cells["v0_circle"]["episodes"] == 2
+    base = [1e3 * h for h in recs[("analytic", "v0_circle")]["per_episode"]["h_rms_m"]]
+    agent = [1e3 * h for h in recs[("counting", "v0_circle")]["per_episode"]["h_rms_m"]]
+    assert cells["v0_circle"]["diff_mm"] == pytest.approx(np.mean(agent) - np.mean(base), rel=1e-12, abs=1e-12)
     md = bm.markdown_report(doc)
     assert "Unavailable" in md and "AmigoBot-v77" in md
+    assert "## Paired difference to the analytic controller" in md and "| counting | fake_v1 | yes |" in md
     written = bm.write_outputs(doc, tmp_path, tmp_path / "b.json", tmp_path / "b.md")
     assert all(p.is_file() and p.stat().st_size > 0 for p in written)
     json.loads((tmp_path / "b.json").read_text())
+
+
+# --------------------------------------------------------------------------- paired difference to the analytic
+def _paired_doc(base_mm: list[float], seeds_mm: dict[int, list[float]], agent: str = "a") -> dict[str, Any]:
+    """A benchmark document of one cell ``c``: the analytic controller's and ``agent``'s episodes [mm]."""
+
+    def rec(name: str, seed: int, mm: list[float]) -> dict[str, Any]:
+        per = {"h_rms_m": [x / 1e3 for x in mm], "failure": [float(x > 9.0) for x in mm]}
+        return {"agent": name, "seed": seed, "scenario": "c", "chatter_settled_rms": 0.5 + seed, "per_episode": per}
+
+    results = [rec("analytic", 0, base_mm)] + [rec(agent, s, mm) for s, mm in seeds_mm.items()]
+    results.append(rec(agent, 0, [1.0]) | {"scenario": "only_agent"})  # no analytic run there: not paired
+    scenarios = [{"name": n, "held_out": n == "c"} for n in ("only_agent", "c")]
+    return {"scenarios": scenarios, "results": results}
+
+
+def test_paired_difference_closed_form() -> None:
+    """Agent minus analytic per episode, averaged over the training seeds: with offsets +0.1 and +0.3 mm on every
+    episode of a very spread analytic controller, Δ = +0.2 mm exactly and its paired interval has zero width (an
+    unpaired or seed-pooled bootstrap would be wide); the ratio, failures and trimmed means are the closed forms."""
+    base = [1.0, 5.0, 2.0, 9.5, 3.0]
+    doc = _paired_doc(base, {1: [x + 0.1 for x in base], 0: [x + 0.3 for x in base]})
+    p = bm.paired_differences(doc, reps=500, seed=3)
+    assert (p["baseline"], p["unit"], p["reps"], p["seed"], list(p["agents"])) == ("analytic", "mm", 500, 3, ["a"])
+    (c,) = p["agents"]["a"]["cells"]  # the cell without an analytic run is left out
+    assert (c["scenario"], c["held_out"], c["seeds"], c["episodes"]) == ("c", True, [0, 1], 5)
+    assert c["diff_mm"] == pytest.approx(0.2, abs=1e-12)
+    assert c["diff_ci95_mm"] == pytest.approx([0.2, 0.2], abs=1e-12)
+    assert c["baseline_mm"] == pytest.approx(4.1) and c["agent_mm"] == pytest.approx(4.3)
+    assert c["agent_seeds_mm"] == pytest.approx([4.4, 4.2])  # sorted by training seed
+    assert c["ratio"] == pytest.approx(4.3 / 4.1) and c["chatter_settled_rms"] == pytest.approx(1.0)
+    assert (c["failed"], c["agent_episodes"], c["baseline_failed"]) == (2, 10, 1)  # 9.5 + 0.1, 9.5 + 0.3 > 9
+    assert c["baseline_ci95_mm"][1] - c["baseline_ci95_mm"][0] > 1.0 and c["overlap"]  # the marginal is wide
+    assert p["agents"]["a"]["trimmed_mean_mm"] == pytest.approx({"baseline": 4.1, "agent": 4.3})
+    md = "\n".join(bm.paired_lines(p))
+    assert "| a | c | yes | 4.10 | 4.30 | 1.05 | +0.20 [+0.20, +0.20] | 2 of 10 | 1 of 5 |" in md
+    assert "- `a`: interval below 0 on 0, above 0 on 1 of 1 cells" in md
+    assert bm.paired_lines(bm.paired_differences(_paired_doc(base, {}))) == []  # the analytic controller alone
+
+
+def test_paired_difference_bootstrap_percentiles_and_determinism() -> None:
+    """Differences (0, 1) mm: resampled means 0, 0.5, 1 with probabilities 1/4, 1/2, 1/4, so the 2.5 and 97.5
+    percentiles are 0 and 1; the agent's sign is kept; the same seed gives the same document."""
+    doc = _paired_doc([2.0, 4.0], {7: [1.0, 4.0]})  # agent - analytic = (-1, 0)
+    p = bm.paired_differences(doc, reps=2_000, seed=0)
+    (c,) = p["agents"]["a"]["cells"]
+    assert c["diff_mm"] == pytest.approx(-0.5) and c["diff_ci95_mm"] == pytest.approx([-1.0, 0.0])
+    assert p == bm.paired_differences(doc, reps=2_000, seed=0)
+    short = _paired_doc([2.0, 4.0], {7: [1.0]})  # other episode counts: not paired
+    assert bm.paired_differences(short)["agents"] == {}
+
+
+def test_paired_difference_reproduces_paired_cells_on_the_committed_suite() -> None:
+    """The numbers experiments/paired_cells.py printed before it read them from the package (12 decimals)."""
+    doc = json.loads((ROOT / "docs/benchmark/suite_2.0/benchmark.json").read_text())
+    entry = bm.paired_differences(doc)["agents"]["compensator_residual_v1"]
+    cells = {c["scenario"]: c for c in entry["cells"]}
+    assert len(cells) == 12
+    c = cells["wheels_unequal7"]
+    assert c["baseline_mm"] == pytest.approx(3.393459670349, abs=1e-11)
+    assert c["agent_seeds_mm"] == pytest.approx([1.189551607061, 1.261602464769, 1.213295548962], abs=1e-11)
+    assert c["diff_mm"] == pytest.approx(-2.171976463418, abs=1e-11)
+    assert c["diff_ci95_mm"] == pytest.approx([-2.300529993050, -2.036903576109], abs=1e-11)
+    assert c["baseline_ci95_mm"] == pytest.approx([3.254268561476, 3.550364810797], abs=1e-11)
+    assert c["agent_ci95_mm"] == pytest.approx([1.107907673231, 1.332828842991], abs=1e-11)
+    assert cells["noise_2x"]["diff_ci95_mm"] == pytest.approx([-0.015749125832, -0.001594231658], abs=1e-11)
+    assert entry["trimmed_mean_mm"] == pytest.approx({"baseline": 1.399899117127, "agent": 1.017417962981}, abs=1e-11)
 
 
 def test_parse_agents(tmp_path: Path) -> None:
