@@ -2,6 +2,15 @@
 
 The protocol, its sources, the two conditions and the outputs: docs/benchmark.md, "Random paths: the published
 protocol (Cao et al., Sensors 2024)".
+
+``random_paths.json``'s ``seed_spread`` (:func:`seed_spread`; issue 36's "no failed seed"): per learned agent with
+two or more training seeds, per path set (``paths``: ``"accepted"``, the paths within the wheel limits, or
+``"all"``) and ``tolerance`` [m]: ``seed_rates`` (each seed's failure rate [-] on those paths, seeds without such
+paths left out), ``median_rate`` (the median over the seeds [-], the mean of the two middle seeds for an even
+number), ``worst_rate`` and ``worst_seed`` (the highest rate [-], the first seed of it), ``ratio`` (worst / median
+[-], ``None`` for a median of 0) and ``within`` (the verdict: ``worst_rate <= factor * median_rate``, ``factor``
+= :data:`SEED_FACTOR` = 1.5, so with a median of 0 every seed must fail on no path; ``None`` with fewer than two
+seeds on those paths).
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ CONDITIONS: tuple[str, ...] = ("paper", "firmware")
 CURVATURE_BINS: tuple[float, ...] = (0.0, 2.0, 5.0, 10.0, 20.0, 60.0)
 #: episode length [s], success when H is this close to the end [m], the paper's stream seed
 DURATION_S, GOAL_M, SEED = 20.0, 0.02, 100
+#: no failed seed: every training seed's failure rate is at most this times the median seed's
+SEED_FACTOR = 1.5
 
 
 def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray, float]:
@@ -138,6 +149,37 @@ def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[fl
     return rows
 
 
+def seed_spread(
+    episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[float], factor: float = SEED_FACTOR
+) -> list[dict[str, Any]]:
+    """Per agent with >= 2 training seeds, path set (``accepted``, ``all``) and tolerance: the median and the worst
+    seed's failure rate and whether every seed is within ``factor`` of the median (the module docstring)."""
+    rows = []
+    for agent in dict.fromkeys(e["agent"] for e in episodes):
+        mine = [e for e in episodes if e["agent"] == agent]
+        seeds = list(dict.fromkeys(e["seed"] for e in mine))
+        if len(seeds) < 2:
+            continue
+        for paths in ("accepted", "all"):
+            chosen = [e for e in mine if paths == "all" or e["feasible"]]
+            for t in tolerances:
+                rates = []
+                for s in seeds:
+                    eps = [e for e in chosen if e["seed"] == s]
+                    if eps:
+                        rates.append({"seed": s, "rate": sum(e["peak_m"] >= t for e in eps) / len(eps)})
+                row: dict[str, Any] = {"agent": agent, "paths": paths, "tolerance": t, "seed_rates": rates}
+                row |= {"median_rate": None, "worst_rate": None, "worst_seed": None, "ratio": None, "within": None}
+                if len(rates) >= 2:
+                    median = float(np.median([r["rate"] for r in rates]))
+                    worst = max(rates, key=lambda r: r["rate"])  # the first seed of the highest rate
+                    row |= {"median_rate": median, "worst_rate": worst["rate"], "worst_seed": worst["seed"]}
+                    row["ratio"] = worst["rate"] / median if median > 0 else None
+                    row["within"] = bool(worst["rate"] <= factor * median + 1e-12)  # 1e-12: rounding of the rates
+                rows.append(row)
+    return rows
+
+
 def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = True) -> dict[str, Any]:
     """Every agent seed on every path; the JSON document (``table``: :func:`failure_table`)."""
     t0 = time.perf_counter()
@@ -157,11 +199,13 @@ def run_random_paths(agents: Sequence[Any], ps: PathSet, *, progress: bool = Tru
             "failure": "peak |cross-track error| of H over the episode >= tolerance",
             "interval": "Wilson score 95 %, episodes of every training seed pooled",
             "published": {str(t): r for t, r in PUBLISHED.items()},
+            "seed_factor": SEED_FACTOR,
         },
         "agents": [a.describe() for a in agents],
         "accepted": sum(ok.values()),
         "skipped": list(ps.skipped),
         "table": failure_table(episodes, tolerances),
+        "seed_spread": seed_spread(episodes, tolerances),
         "episodes": episodes,
         "unavailable": grid.unavailable,
         "wall_time_s": round(time.perf_counter() - t0, 2),
@@ -204,6 +248,32 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
         lines += [md_row(*["---"] * (len(tols) + 2))] + [
             md_row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
         ]
+    lines += seed_spread_lines(doc.get("seed_spread") or [], p.get("seed_factor", SEED_FACTOR))
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
     return "\n".join(lines) + "\n"
+
+
+def seed_spread_lines(rows: Sequence[Mapping[str, Any]], factor: float = SEED_FACTOR) -> list[str]:
+    """The Markdown of :func:`seed_spread`'s rows (none: no lines)."""
+    if not rows:
+        return []
+
+    def pct(x: float | None) -> str:
+        return "–" if x is None else f"{100 * x:.1f}"
+
+    lines = [
+        "",
+        f"No failed seed: every training seed's failure rate within {factor:g}x of the median seed's (worst <= "
+        f"{factor:g} x median; a median of 0 asks every seed to fail on no path), on the paths within the wheel "
+        "limits (accepted) and on all paths:",
+        "",
+        md_row("agent", "paths", "tolerance", "seeds", "median seed [%]", "worst seed [%]", f"within {factor:g}x"),
+        md_row(*["---"] * 7),
+    ]
+    for r in rows:
+        worst = "–" if r["worst_rate"] is None else f"{pct(r['worst_rate'])} (seed {r['worst_seed']})"
+        verdict = {True: "yes", False: "**no**", None: "–"}[r["within"]]
+        lines.append(md_row(r["agent"], r["paths"], f"{r['tolerance']:g} m", len(r["seed_rates"]),
+                            pct(r["median_rate"]), worst, verdict))  # fmt: skip
+    return lines
