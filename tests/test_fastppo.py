@@ -6,6 +6,7 @@ import copy
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import gymnasium as gym
@@ -742,3 +743,68 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     c = doc["curve"]  # the validation curve: from the untrained policy to the trained one, against training time
     assert c[0]["env_steps"] == 0 and c[-1]["env_steps"] == doc["training"]["total_steps"]
     assert np.all(np.diff([row["train_s"] for row in c]) >= 0) and c[-1]["ratio_to_analytic"] > 0
+
+
+def test_overlap_is_deterministic_and_resumes(tmp_path: Path) -> None:
+    """overlap: the halves' env steps on a second thread; twice the same weights, and a run cut and resumed too."""
+    s = tiny(overlap=True, nominal_fraction=0.25, history=2, device="cpu")
+    for name in ("a", "b"):
+        train(s, tmp_path / name, log=None)
+    train(s, tmp_path / "c", log=None, until_steps=256)
+    train(s, tmp_path / "c", log=None, resume=True)
+    wa, wb, wc = (weights(tmp_path / n) for n in "abc")
+    for k in wa:
+        np.testing.assert_array_equal(wa[k], wb[k])
+        np.testing.assert_array_equal(wa[k], wc[k])
+
+
+@pytest.mark.parametrize("env_threads", [1, 2])
+def test_overlap_threaded_equals_the_same_schedule_inline(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, env_threads: int
+) -> None:
+    """The threaded schedule gives the weights of the same two halves stepped inline (no thread), bit for bit; the
+    env steps run on the second thread with env_threads of numba's, never two at once; each robot starts as
+    without overlap (its env seed kept)."""
+    import threading
+
+    from amigo_gym.tools.training import fastppo
+
+    lock, seen, real = threading.Lock(), list[tuple[bool, bool, int]](), fastppo._timed_step
+
+    def step(env: object, a: np.ndarray) -> tuple[tuple[object, ...], float]:
+        alone = lock.acquire(blocking=False)  # False: another env step is under way
+        seen.append((alone, threading.current_thread() is threading.main_thread(), fastppo.numba.get_num_threads()))
+        try:
+            time.sleep(0.002)  # widens the window of a second step
+            return real(env, a)
+        finally:
+            if alone:
+                lock.release()
+
+    monkeypatch.setattr(fastppo, "_timed_step", step)
+    s = tiny(overlap=True, env_threads=env_threads, device="cpu", residual_bound=0.3, caps_temporal=0.1)
+    train(s, tmp_path / "thread", log=None, evaluate_runs=False)
+    assert seen == [(True, False, env_threads)] * 64  # 4 iterations x 8 steps x 2 halves
+    monkeypatch.setattr(fastppo, "_OVERLAP_THREAD", False)
+    train(s, tmp_path / "inline", log=None, evaluate_runs=False)
+    assert seen[64:] == [(True, True, env_threads)] * 64
+    w1, w2 = weights(tmp_path / "thread"), weights(tmp_path / "inline")
+    for k in w1:
+        np.testing.assert_array_equal(w1[k], w2[k])
+    b = FeatureBuilder(s.spec())
+    np.testing.assert_array_equal(_new_run(s, b, "cpu").obs, _new_run(tiny(), b, "cpu").obs)
+
+
+def test_overlap_option_is_recorded(tmp_path: Path) -> None:
+    from amigo_gym.tools.training.fastppo import main
+
+    argv = ["--env-kwargs", json.dumps(KW), "--total-steps", "128", "--num-envs", "16", "--rollout-steps", "8",
+            "--epochs", "1", "--minibatch-size", "64", "--hidden", "8", "--max-episode-steps", "20",
+            "--eval-envs", "1", "--device", "cpu", "--quiet", "--overlap"]  # fmt: skip
+    assert main(["--out", str(tmp_path / "on"), *argv]) == 0
+    assert main(["--out", str(tmp_path / "off"), *argv[:-1]]) == 0
+    for name, on in (("on", True), ("off", False)):
+        assert json.loads((tmp_path / name / "settings.json").read_text())["overlap"] is on
+        assert json.loads((tmp_path / name / "run.json").read_text())["settings"]["overlap"] is on
+    with pytest.raises(ValueError, match="even num_envs"):
+        tiny(overlap=True, num_envs=15, minibatch_size=15)

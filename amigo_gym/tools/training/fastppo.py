@@ -29,6 +29,7 @@ import shlex
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Literal
@@ -135,6 +136,8 @@ class FastPPOSettings:
         threads: torch threads [threads].
         env_threads: threads of the vector env's step [threads], at most NUMBA_NUM_THREADS (same results).
         device: where the networks and updates run: auto (cuda if torch sees one), cpu or cuda.
+        overlap: step the robots as two vector envs of N/2 in turn, one's env step on a second thread while this one
+            computes the other's policy (N even; other numbers than without it).
         max_episode_steps: episode time limit [steps].
         curriculum_max_curvature: final bound of the random paths' curvature [1/m]; 0: no curriculum.
         curriculum_max_curvature_rate: final bound of its rate [1/m^2]; 0: the start's ratio kept.
@@ -179,6 +182,7 @@ class FastPPOSettings:
     threads: int = 1
     env_threads: int = 1
     device: Literal["auto", "cpu", "cuda"] = "auto"
+    overlap: bool = False
     max_episode_steps: int = 600
     curriculum_max_curvature: float = 0.0
     curriculum_max_curvature_rate: float = 0.0
@@ -206,6 +210,8 @@ class FastPPOSettings:
                 f"{o}.residual_penalty = {self.residual_penalty} needs residual_bound > 0 (a residual policy), "
                 f"got residual_bound = {self.residual_bound}"
             )
+        if self.overlap and self.num_envs % 2:
+            raise ValueError(f"{o}.overlap needs an even num_envs (two halves), got {self.num_envs}")
         if self.device not in DEVICES:
             raise ValueError(f"{o}.device must be one of {', '.join(DEVICES)}, got {self.device!r}")
         hid = tuple(self.hidden)
@@ -429,19 +435,23 @@ class _ConcatVectorEnv:
             e.close()
 
 
-def _training_env(s: FastPPOSettings) -> Any:
-    """The training robots: one native vector env of ``env_kwargs``, or that and one of nominal robots."""
+def _training_env(s: FastPPOSettings, n: int = 0) -> Any:
+    """The ``n`` (0: ``N``) training robots: one native vector env of ``env_kwargs``, or that and one of nominal
+    robots; ``overlap``: two such halves of ``N / 2`` side by side."""
+    if s.overlap and not n:
+        return _ConcatVectorEnv([_training_env(s, s.num_envs // 2) for _ in range(2)])
+    n = n or s.num_envs
     kernel: dict[str, Any] = {"kernel": "numba-parallel"} if s.env_threads > 1 else {}
 
     def make(n: int, kw: Mapping[str, Any]) -> Any:
         return gym.make_vec("AmigoBot-v1", num_envs=n, max_episode_steps=s.max_episode_steps,
                             autoreset_mode="SameStep", **kernel, **kw)  # fmt: skip
 
-    k = round(s.nominal_fraction * s.num_envs)
+    k = round(s.nominal_fraction * n)
     nominal = {key: v for key, v in s.env_kwargs.items() if key not in ("randomize", "true_robot")}
-    if k in (0, s.num_envs):
-        return make(s.num_envs, nominal if k else s.env_kwargs)
-    return _ConcatVectorEnv([make(s.num_envs - k, s.env_kwargs), make(k, nominal)])
+    if k in (0, n):
+        return make(n, nominal if k else s.env_kwargs)
+    return _ConcatVectorEnv([make(n - k, s.env_kwargs), make(k, nominal)])
 
 
 def _networks(s: FastPPOSettings, dim: int, device: str) -> tuple[ActorCritic, torch.optim.Adam]:
@@ -521,52 +531,80 @@ def machine_record(device: str) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- rollout, update
-def rollout(s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str) -> float:
-    """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env."""
+#: False: ``overlap``'s halves stepped inline, in the same order (the tests' reference for the threaded schedule)
+_OVERLAP_THREAD = True
+
+
+def _timed_step(env: Any, a: Array) -> tuple[tuple[Any, ...], float]:
+    t0 = time.perf_counter()
+    return env.step(a), time.perf_counter() - t0
+
+
+def rollout(
+    s: FastPPOSettings, r: _Run, builder: FeatureBuilder, buf: _Buffers, device: str, pool: Executor | None = None
+) -> float:
+    """Step the ``N`` robots ``T`` times into ``buf``; the wall seconds spent in the env. ``overlap``: the halves of
+    ``r.env`` in turn, each one's env step on ``pool``'s one thread while this one does the other's features, policy
+    and storage (so never two env steps at once); ``pool`` None: inline, the same numbers."""
     net, gamma, t_len = r.net, s.gamma, s.rollout_steps
     rew_buf, done_buf = np.zeros((t_len, s.num_envs)), np.zeros((t_len, s.num_envs), dtype=bool)
     x_host = torch.empty(buf.x.shape[1:], pin_memory=buf.x.is_cuda)  # a step's features and outputs on the host
     u_host = torch.empty(buf.u.shape[1:], dtype=torch.float64, pin_memory=buf.x.is_cuda)
     std, log_norm = net.log_std.detach().exp(), net.log_std.detach().sum() + math.log(2.0 * math.pi)
     finals: list[tuple[NDArray[np.intp], ...]] = []  # time-limit cuts: (steps, rows, features)
+    envs = r.env.envs if s.overlap else [r.env]
+    parts = [slice(a, b) for a, b in itertools.pairwise(r.env.edges)] if s.overlap else [slice(0, s.num_envs)]
+    pending: dict[int, Callable[[], tuple[tuple[Any, ...], float]]] = {}  # each part's env step under way
+    s_next: dict[int, Array] = {}  # each part's feature state after it
     env_s = 0.0
     for t in range(t_len + 1):  # t = T: the features alone, for the values (the next rollout learns them)
-        feats, base, s_next = builder(r.obs, r.fstate, r.starts)
-        if t < t_len:
-            r.obs_rms.update(feats)
-        host = x_host if buf.x.is_cuda else buf.x[t]  # on the CPU: x[t] itself
-        r.obs_rms.normalize(feats, out=host.numpy())
-        buf.x[t].copy_(host)  # the step's one host-to-device copy
-        if t == t_len:
-            break
-        with torch.inference_mode():
-            mu = net.actor(buf.x[t])
-            eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
-            torch.add(mu, std * eps, out=buf.u[t])
-            torch.sub(-0.5 * eps.pow(2).sum(-1), log_norm, out=buf.logp[t])
-            u_host.copy_(buf.u[t])  # the step's one device-to-host copy
-        prev, mask = builder.previous_command(r.obs), builder.correcting(feats)
-        a = env_action(u_host.numpy(), base, prev, s.residual_bound, s.filter_alpha, mask)
-        t0 = time.perf_counter()
-        obs, rew, term, trunc, info = r.env.step(a)
-        env_s += time.perf_counter() - t0
-        done = np.logical_or(term, trunc, out=done_buf[t])
-        r.ep_ret += rew
-        if done.any():
-            r.episode_returns.extend(r.ep_ret[done].tolist())
-            r.ep_ret[done] = 0.0
-        rew_buf[t] = rew
-        if s.norm_reward:
-            r.ret_acc = r.ret_acc * gamma + rew
-            r.ret_rms.update(r.ret_acc)
-            np.clip(rew_buf[t] / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0, out=rew_buf[t])
-            r.ret_acc[done] = 0.0
-        cut = np.flatnonzero(np.logical_and(trunc, np.logical_not(term)))
-        if cut.size:  # the time limit: bootstrapped below with V of the final observation
-            final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
-            f_fin, _, _ = builder(final, s_next[cut], np.zeros(cut.size, dtype=bool))
-            finals.append((np.full(cut.size, t), cut, r.obs_rms.normalize(f_fin).astype(np.float32)))
-        r.obs, r.fstate, r.starts = np.asarray(obs, dtype=np.float64), s_next, done
+        for p, sl in enumerate(parts):
+            if t:  # the part's step t - 1
+                (obs, rew, term, trunc, info), dt = pending[p]()
+                env_s += dt
+                done = np.logical_or(term, trunc, out=done_buf[t - 1, sl])
+                ep_ret, ret_acc = r.ep_ret[sl], r.ret_acc[sl]
+                ep_ret += rew
+                if done.any():
+                    r.episode_returns.extend(ep_ret[done].tolist())
+                    ep_ret[done] = 0.0
+                rew_t = rew_buf[t - 1, sl]
+                rew_t[:] = rew
+                if s.norm_reward:
+                    ret_acc *= gamma
+                    ret_acc += rew
+                    r.ret_rms.update(ret_acc)
+                    np.clip(rew_t / np.sqrt(r.ret_rms.var[0] + 1e-8), -10.0, 10.0, out=rew_t)
+                    ret_acc[done] = 0.0
+                cut = np.flatnonzero(np.logical_and(trunc, np.logical_not(term)))
+                if cut.size:  # the time limit: bootstrapped below with V of the final observation
+                    final = np.stack([np.asarray(info["final_obs"][i], dtype=np.float64) for i in cut])
+                    f_fin, _, _ = builder(final, s_next[p][cut], np.zeros(cut.size, dtype=bool))
+                    finals.append((np.full(cut.size, t - 1), sl.start + cut,
+                                   r.obs_rms.normalize(f_fin).astype(np.float32)))  # fmt: skip
+                r.obs[sl], r.fstate[sl], r.starts[sl] = obs, s_next[p], done
+            feats, base, nxt = builder(r.obs[sl], r.fstate[sl], r.starts[sl])
+            if t < t_len:
+                r.obs_rms.update(feats)
+            host = x_host if buf.x.is_cuda else buf.x[t]  # on the CPU: x[t] itself
+            r.obs_rms.normalize(feats, out=host[sl].numpy())
+            buf.x[t, sl].copy_(host[sl])  # the step's one host-to-device copy
+            if t == t_len:
+                continue
+            with torch.inference_mode():
+                mu = net.actor(buf.x[t, sl])
+                eps = torch.randn_like(mu)  # u = mu + std eps; its log density: -|eps|^2 / 2 - sum log std - log 2 pi
+                torch.add(mu, std * eps, out=buf.u[t, sl])
+                torch.sub(-0.5 * eps.pow(2).sum(-1), log_norm, out=buf.logp[t, sl])
+                u_host[sl].copy_(buf.u[t, sl])  # the step's one device-to-host copy
+            prev, mask = builder.previous_command(r.obs[sl]), builder.correcting(feats)
+            a = env_action(u_host[sl].numpy(), base, prev, s.residual_bound, s.filter_alpha, mask)
+            if pool is None:
+                out = _timed_step(envs[p], a)
+                pending[p] = lambda out=out: out  # type: ignore[misc]
+            else:
+                pending[p] = pool.submit(_timed_step, envs[p], a).result
+            s_next[p] = nxt
     if finals:  # one forward pass for every truncated row of the rollout
         steps, rows, feats = (np.concatenate(z) for z in zip(*finals, strict=True))
         with torch.inference_mode():
@@ -723,6 +761,8 @@ def train(
         buf = _Buffers.allocate(s.rollout_steps, s.num_envs, builder.dim, device)
 
         sync: Callable[[], None] = torch.cuda.synchronize if device == "cuda" else lambda: None
+        threads = functools.partial(set_threads, s.env_threads) if numba else None  # numba's count is per thread
+        pool = ThreadPoolExecutor(1, initializer=threads) if s.overlap and _OVERLAP_THREAD else None
         while r.global_step < stop and stopped_by is None:
             stage = curriculum_path_params(s, r.global_step)
             if stage is not None and dict(r.env.params.path_params) != stage:
@@ -732,7 +772,7 @@ def train(
             for g in r.opt.param_groups:
                 g["lr"] = (1.0 - (r.iteration - 1.0) / n_iter) * s.learning_rate
             c0, w0 = time.process_time(), time.perf_counter()
-            env_s += rollout(s, r, builder, buf, device)
+            env_s += rollout(s, r, builder, buf, device, pool)
             sync()
             c1, w1 = time.process_time(), time.perf_counter()
             update(s, r, buf)
@@ -758,6 +798,8 @@ def train(
                     r.next_ckpt += s.checkpoint_every
         r.wall_s = wall0 + time.perf_counter() - t_start
         r.env.close()
+        if pool is not None:
+            pool.shutdown()
         cpu_s = dict(zip(("rollout", "update", "loop_wall"), (*spent[:2], spent[2:].sum()), strict=True))
         wall_s = dict(zip(("env", "rollout", "update", "loop"), (env_s, *spent[2:], spent[2:].sum()), strict=True))
         record: dict[str, Any] = {
