@@ -14,18 +14,34 @@ from amigo_gym.tools.training.protocol import TEST, TEST_SEEDS, VALIDATION, VALI
 from amigo_gym.tools.training.task_metrics import Scenario, make_env
 
 ROOT = Path(__file__).resolve().parents[1]
+#: the names that reach test cells or test seeds, and those that reach validation cells
+TEST_NAMES = {"TEST", "TEST_SEEDS", "SUITE", "SUITES", "SUITE_1_0", "quick_suite", "curvature_scenarios"}
+VALIDATION_NAMES = {"VALIDATION", "VALIDATION_SEEDS", "validation_cells"}
+
+
+def _names(path: Path) -> set[str]:
+    # the names, attributes and imported names of a module
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    names |= {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
+    return names | {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
+
+
 #: every module that takes a decision while building an agent: the sweep's objective, training (evaluation during
-#: training, early stopping), the choice between agents
+#: training, early stopping), and every experiment that reads validation cells (the choice between agents, gains,
+#: rules), found rather than listed
 TUNING = (
     "amigo_gym/tools/training/sweep.py",
     "amigo_gym/tools/training/fastppo.py",
     "amigo_gym/tools/training/train.py",
-    "experiments/sweep_objective.py",
-    "experiments/residual_val_cells.py",
-    "experiments/smith_delay.py",
+    *sorted(str(p.relative_to(ROOT)) for p in (ROOT / "experiments").glob("*.py") if _names(p) & VALIDATION_NAMES),
 )
-#: the names that reach test cells or test seeds
-TEST_NAMES = {"TEST", "TEST_SEEDS", "SUITE", "SUITES", "SUITE_1_0", "quick_suite", "curvature_scenarios"}
+
+
+def test_the_experiments_that_decide_on_validation_cells_are_found() -> None:
+    found = set(TUNING)
+    for name in ("sweep_objective", "residual_val_cells", "smith_delay", "compensator_val", "oracle_delay"):
+        assert f"experiments/{name}.py" in found, name
 
 
 def _key(sc: Scenario) -> tuple[str, str]:
@@ -65,10 +81,7 @@ def test_validation_cells_hold_no_test_cell_or_seed(env_id: str) -> None:
 def test_tuning_code_names_no_test_cell(path: str) -> None:
     """Decisions see validation cells only: no tuning module names the test suites (the sweep once took its cells
     from the benchmark's ``SUITE``; this fails on that code)."""
-    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
-    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
-    names |= {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
-    names |= {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
+    names = _names(ROOT / path)
     assert not names & TEST_NAMES, f"{path} names {sorted(names & TEST_NAMES)}"
 
 
