@@ -174,6 +174,24 @@ def test_td3_runs_with_noise_and_schedule(tmp_path: Path, train_here: Callable[.
     assert (exp / "td3.zip").read_bytes() == (out / "best_model.zip").read_bytes()
 
 
+def test_the_same_command_twice_gives_the_same_weights(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
+    """Issue 36, item 5: the training command re-run on the same machine gives the same weights (SB3's TD3, the
+    shipped low-pass agent's algorithm, past its first gradient steps); another seed does not."""
+    import torch
+    from stable_baselines3 import TD3
+
+    hp = hp_file(tmp_path, "td3")
+    weights = []
+    for name, seed in (("a", "5"), ("b", "5"), ("c", "6")):
+        r = train_here("--algo", "td3", "--seed", seed, "--out", str(tmp_path / name), "--hyperparams", hp,
+                       "--timesteps", "300", "--eval-freq", "1000", "--eval-episodes", "1")  # fmt: skip
+        assert r.returncode == 0, r.stderr
+        weights.append(TD3.load(tmp_path / name / "model.zip", device="cpu").policy.state_dict())
+    assert weights[0].keys() == weights[1].keys()
+    assert all(torch.equal(weights[0][k], weights[1][k]) for k in weights[0])
+    assert not all(torch.equal(weights[0][k], weights[2][k]) for k in weights[0])
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
