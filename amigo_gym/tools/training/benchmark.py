@@ -3,22 +3,21 @@
 Usage, the suite and its versions, agents, seeds, metrics, statistics and the output files:
 docs/benchmark.md, "Reference: `amigo-gym benchmark`".
 
-``benchmark.json``'s ``paired`` (:func:`paired_differences`): every agent other than the analytic controller
-against it, per cell where both ran, on the same episodes (the cell's reset seeds, hence the same start offsets):
-``baseline`` ("analytic"), ``metric`` ("h_rms_m"), ``unit`` ("mm"), ``reps`` and ``seed`` of the bootstrap (the
-run's ``--reps`` and ``--bootstrap-seed``), ``agents``: per agent ``cells`` and ``trimmed_mean_mm``
-(``{"baseline", "agent"}``: the 25 % trimmed mean of the per-cell means [mm], ``scipy.stats.trim_mean``). Each cell:
-``scenario``, ``held_out``, ``seeds`` (the agent's training seeds), ``episodes`` (paired episodes, those finite for
-both), ``baseline_mm`` and ``agent_mm`` (mean H RMS [mm]; the agent's over seeds and episodes), ``agent_seeds_mm``
-(per training seed [mm]), ``ratio`` (``agent_mm / baseline_mm`` [-], ``None`` for a zero baseline), ``diff_mm``
-(the paired mean difference agent minus analytic [mm]: per episode the agent's mean over training seeds minus the
-analytic value, averaged over the episodes) and ``diff_ci95_mm`` (its 95 % percentile bootstrap interval over the
-episodes [mm]), ``baseline_ci95_mm`` / ``agent_ci95_mm`` (each side's own 95 % interval of its mean over its
-episodes, the agent's training seeds pooled [mm]) and ``overlap`` (whether these two overlap), ``failed`` of
-``agent_episodes`` (the agent's failed episodes over all its seeds), ``baseline_failed`` (of ``episodes``) and
-``chatter_settled_rms`` (the agent's settled command chatter, mean over seeds [rad/s]). One generator
-``numpy.random.default_rng(seed)`` per agent draws, cell after cell in the suite's order, the paired resamples, then
-the analytic side's, then the agent's (``experiments/paired_cells.py`` prints these tables).
+``benchmark.json``'s ``paired`` (:func:`paired_differences`): every agent against the analytic controller, per cell
+where both ran, on the same episodes (the cell's reset seeds, hence start offsets): ``baseline`` ("analytic"),
+``metric`` ("h_rms_m"), ``unit`` ("mm"), the bootstrap's ``reps`` and ``seed`` (``--reps``, ``--bootstrap-seed``),
+``agents``: per agent ``cells`` and ``trimmed_mean_mm`` (``{"baseline", "agent"}``: the 25 % trimmed mean of the
+per-cell means [mm], ``scipy.stats.trim_mean``). Each cell: ``scenario``, ``held_out``, ``seeds`` (the agent's
+training seeds), ``episodes`` (paired: finite for both), ``baseline_mm`` and ``agent_mm`` (mean H RMS [mm], the
+agent's over seeds and episodes), ``agent_seeds_mm`` (per training seed [mm]), ``ratio`` (``agent_mm / baseline_mm``
+[-], ``None`` for a zero baseline), ``diff_mm`` (paired mean difference [mm]: per episode the agent's mean over its
+seeds minus the analytic value, averaged over the episodes), ``diff_ci95_mm`` (its 95 % percentile bootstrap
+interval over the episodes [mm]), ``baseline_ci95_mm`` / ``agent_ci95_mm`` (each side's own 95 % interval of its
+mean over its episodes, the agent's seeds pooled [mm]), ``overlap`` (of these two), ``failed`` of ``agent_episodes``
+(the agent's failed episodes, all seeds), ``baseline_failed`` (of ``episodes``), ``chatter_settled_rms`` (the
+agent's settled command chatter, mean over seeds [rad/s]). One ``numpy.random.default_rng(seed)`` per agent draws,
+cell after cell in suite order, the paired resamples, then the analytic side's, then the agent's
+(``experiments/paired_cells.py`` prints these tables).
 """
 
 from __future__ import annotations
@@ -31,14 +30,13 @@ import sys
 import tempfile
 import time
 import zipfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.stats import trim_mean
 
 from amigo_gym.data import pretrained_dir
@@ -51,7 +49,7 @@ from amigo_gym.tools.training import curvature, protocol
 from amigo_gym.tools.training import random_paths as rp
 from amigo_gym.tools.training import task_metrics as tm
 from amigo_gym.tools.training.evaluate import ALGOS, CLASSICAL, FAST_ALGO, AgentSpec, one_torch_thread
-from amigo_gym.tools.training.intervals import iqm, optimality_gap, score_distribution, stratified_bootstrap
+from amigo_gym.tools.training.intervals import Array, iqm, optimality_gap, score_distribution, stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import METRIC_NAMES, SUITE_VERSION, Scenario, run_grid, run_scenario
 from amigo_gym.tools.training.task_metrics import Unavailable as Unavailable
 from amigo_gym.tools.training.task_metrics import make_env as make_env
@@ -290,9 +288,7 @@ def _record(spec: AgentSpec, sc: Scenario, eps: list[dict[str, float]]) -> dict[
     rec: dict[str, Any] = {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "held_out": sc.held_out}
     rec["episodes"] = len(eps)
     for k in METRIC_NAMES[:-1]:  # means over the finite values (None: none)
-        x = np.asarray(col[k], dtype=np.float64)
-        x = x[np.isfinite(x)]
-        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = float(x.mean()) if x.size else None
+        rec[{"failure": "failure_rate", "steps": "mean_steps"}.get(k, k)] = v = _finite_mean(col[k])
         if k == "return":
             rec["return_per_step"] = None if v is None else v / sc.max_steps
     rec["terminated"] = int(sum(col["terminated"]))
@@ -410,86 +406,57 @@ def aggregate(
 BASELINE = "analytic"
 
 
-def _episodes_mm(runs: Sequence[Mapping[str, Any]]) -> NDArray[np.float64] | None:
-    """H RMS [mm] of ``runs`` as ``(runs, episodes)`` (``None`` -> NaN); ``None`` if their episode counts differ."""
+def _episodes_mm(runs: Sequence[Mapping[str, Any]]) -> Array | None:
+    """H RMS [mm] of ``runs`` as ``(runs, episodes)`` (``None`` -> NaN); ``None`` for no runs or unequal counts."""
     h = [r["per_episode"]["h_rms_m"] for r in runs]
-    if len({len(x) for x in h}) != 1:
-        return None
-    return np.array([[math.nan if v is None else v for v in x] for x in h], dtype=np.float64) * 1e3
+    return np.array(h, dtype=np.float64) * 1e3 if len({len(x) for x in h}) == 1 else None
 
 
-def _finite_mean(values: Sequence[Any]) -> float | None:
-    x = np.array([math.nan if v is None else v for v in values], dtype=np.float64)
-    x = x[np.isfinite(x)]
-    return float(x.mean()) if x.size else None
+def _failures(runs: Iterable[Mapping[str, Any]]) -> list[float]:
+    """The finite per-episode failure flags (1: failed) of ``runs``."""
+    return [f for r in runs for f in r["per_episode"]["failure"] if f is not None and math.isfinite(f)]
 
 
-def _paired_cell(
-    sc: Mapping[str, Any], base_runs: Sequence[Mapping[str, Any]], runs: Sequence[Mapping[str, Any]], rng: Any, n: int
-) -> dict[str, Any] | None:
-    """One cell of :func:`paired_differences` (``None``: not paired: other episode counts, no finite pair)."""
-    base, ag = _episodes_mm(base_runs), _episodes_mm(runs)
-    if base is None or ag is None or base.shape[1] != ag.shape[1]:
-        return None
-    keep = np.isfinite(base).all(axis=0) & np.isfinite(ag).all(axis=0)
-    if not keep.any():
-        return None
-    base, ag = base[:, keep].mean(axis=0), ag[:, keep]
-    diff = ag.mean(axis=0) - base
-    boot = diff[rng.integers(0, diff.size, (n, diff.size))].mean(axis=1)  # n: the resamples
-    lo, hi = np.percentile(boot, [2.5, 97.5])
-    marginal = []
-    for x in (base, ag.ravel()):  # each side's own interval over its episodes
-        m_lo, m_hi = np.percentile(x[rng.integers(0, x.size, (n, x.size))].mean(axis=1), [2.5, 97.5])
-        marginal.append([float(m_lo), float(m_hi)])
-    flags = [f for r in runs for f in r["per_episode"]["failure"] if f is not None and math.isfinite(f)]
-    base_flags = [f for f in base_runs[0]["per_episode"]["failure"] if f is not None and math.isfinite(f)]
-    return {
-        "scenario": sc["name"],
-        "held_out": bool(sc["held_out"]),
-        "seeds": [r["seed"] for r in runs],
-        "episodes": int(diff.size),
-        "baseline_mm": float(base.mean()),
-        "agent_mm": float(ag.mean()),
-        "agent_seeds_mm": [float(x) for x in ag.mean(axis=1)],
-        "ratio": float(ag.mean() / base.mean()) if base.mean() != 0 else None,
-        "diff_mm": float(diff.mean()),
-        "diff_ci95_mm": [float(lo), float(hi)],
-        "baseline_ci95_mm": marginal[0],
-        "agent_ci95_mm": marginal[1],
-        "overlap": bool(marginal[0][0] <= marginal[1][1] and marginal[1][0] <= marginal[0][1]),
-        "failed": int(sum(flags)),
-        "agent_episodes": int(ag.size),
-        "baseline_failed": int(sum(base_flags)),
-        "chatter_settled_rms": _finite_mean([r.get("chatter_settled_rms") for r in runs]),
-    }
+def _finite_mean(values: Iterable[Any]) -> float | None:
+    """The mean of the finite ``values`` (``None`` -> NaN); ``None`` if there is none."""
+    x = np.asarray(list(values), dtype=np.float64)
+    return float(x[np.isfinite(x)].mean()) if np.isfinite(x).any() else None
 
 
 def paired_differences(
     doc: Mapping[str, Any], baseline: str = BASELINE, *, reps: int = 10_000, seed: int = 0
 ) -> dict[str, Any]:
-    """Every agent but ``baseline`` against it on the same episodes, per cell where both ran: the paired mean
-    difference of H RMS [mm] with its 95 % percentile bootstrap interval over the episodes (``reps`` resamples, one
-    ``default_rng(seed)`` per agent), the ratio of the means, each side's own interval, the failed episodes; the
-    JSON ``paired`` (its fields: the module docstring). ``doc``: a benchmark document (its ``scenarios`` and
-    ``results``)."""
+    """The JSON ``paired`` (module docstring) of a benchmark document ``doc`` (its ``scenarios`` and ``results``):
+    every agent against ``baseline``, ``reps`` bootstrap resamples."""
     by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
-    for r in doc["results"]:
+    for r in sorted(doc["results"], key=lambda r: r["seed"]):
         by.setdefault((r["agent"], r["scenario"]), []).append(r)
     agents: dict[str, Any] = {}
-    for agent in dict.fromkeys(r["agent"] for r in doc["results"]):
-        if agent == baseline:
-            continue
-        rng = np.random.default_rng(seed)
-        cells = []
+    for agent in dict.fromkeys(r["agent"] for r in doc["results"] if r["agent"] != baseline):
+        rng, cells = np.random.default_rng(seed), []
         for sc in doc["scenarios"]:
-            name = sc["name"]
-            if (agent, name) not in by or (baseline, name) not in by:
+            base_runs, runs = by.get((baseline, sc["name"]), []), by.get((agent, sc["name"]), [])
+            base, ag = _episodes_mm(base_runs), _episodes_mm(runs)
+            if base is None or ag is None or base.shape[1] != ag.shape[1]:
                 continue
-            base_runs = sorted(by[(baseline, name)], key=lambda r: r["seed"])
-            cell = _paired_cell(sc, base_runs, sorted(by[(agent, name)], key=lambda r: r["seed"]), rng, reps)
-            if cell is not None:
-                cells.append(cell)
+            if not (keep := np.isfinite(base).all(axis=0) & np.isfinite(ag).all(axis=0)).any():
+                continue
+            base, ag = base[:, keep].mean(axis=0), ag[:, keep]
+            diff = ag.mean(axis=0) - base
+            diff_ci, base_ci, ag_ci = (  # percentile 95 % intervals of the mean, in this order from rng
+                [float(v) for v in np.percentile(x[rng.integers(0, x.size, (reps, x.size))].mean(axis=1), [2.5, 97.5])]
+                for x in (diff, base, ag.ravel())
+            )
+            cells.append({
+                "scenario": sc["name"], "held_out": bool(sc["held_out"]), "seeds": [r["seed"] for r in runs],
+                "episodes": int(diff.size), "baseline_mm": float(base.mean()), "agent_mm": float(ag.mean()),
+                "agent_seeds_mm": [float(x) for x in ag.mean(axis=1)],
+                "ratio": float(ag.mean() / base.mean()) if base.mean() != 0 else None, "diff_mm": float(diff.mean()),
+                "diff_ci95_mm": diff_ci, "baseline_ci95_mm": base_ci, "agent_ci95_mm": ag_ci,
+                "overlap": base_ci[0] <= ag_ci[1] and ag_ci[0] <= base_ci[1], "failed": int(sum(_failures(runs))),
+                "agent_episodes": int(ag.size), "baseline_failed": int(sum(_failures(base_runs[:1]))),
+                "chatter_settled_rms": _finite_mean(r.get("chatter_settled_rms") for r in runs),
+            })  # fmt: skip
         if cells:
             trimmed = {k: float(trim_mean([c[f"{k}_mm"] for c in cells], 0.25)) for k in ("baseline", "agent")}
             agents[str(agent)] = {"cells": cells, "trimmed_mean_mm": trimmed}
@@ -513,20 +480,17 @@ def paired_lines(paired: Mapping[str, Any]) -> list[str]:
     ]
     rows, summary = [], []
     for agent, a in paired["agents"].items():
-        for c in a["cells"]:
-            lo, hi = c["diff_ci95_mm"]
-            ratio = "–" if c["ratio"] is None else f"{c['ratio']:.2f}"
-            rows.append((
-                agent, c["scenario"], "yes" if c["held_out"] else "", f"{c['baseline_mm']:.2f}", f"{c['agent_mm']:.2f}",
-                ratio, f"{c['diff_mm']:+.2f} [{lo:+.2f}, {hi:+.2f}]", f"{c['failed']} of {c['agent_episodes']}",
-                f"{c['baseline_failed']} of {c['episodes']}",
-            ))  # fmt: skip
-        below = sum(c["diff_ci95_mm"][1] < 0 for c in a["cells"])
-        above = sum(c["diff_ci95_mm"][0] > 0 for c in a["cells"])
-        t = a["trimmed_mean_mm"]
+        rows += [(
+            agent, c["scenario"], "yes" if c["held_out"] else "", f"{c['baseline_mm']:.2f}", f"{c['agent_mm']:.2f}",
+            "–" if c["ratio"] is None else f"{c['ratio']:.2f}",
+            "{:+.2f} [{:+.2f}, {:+.2f}]".format(c["diff_mm"], *c["diff_ci95_mm"]),
+            f"{c['failed']} of {c['agent_episodes']}", f"{c['baseline_failed']} of {c['episodes']}",
+        ) for c in a["cells"]]  # fmt: skip
+        t, cis = a["trimmed_mean_mm"], [c["diff_ci95_mm"] for c in a["cells"]]
         summary.append(
-            f"- `{agent}`: interval below 0 on {below}, above 0 on {above} of {len(a['cells'])} cells; trimmed mean "
-            f"(25 %) of the per-cell means {t['agent']:.2f} mm against {base}'s {t['baseline']:.2f} mm"
+            f"- `{agent}`: interval below 0 on {sum(h < 0 for _, h in cis)}, above 0 on {sum(lo > 0 for lo, _ in cis)}"
+            f" of {len(cis)} cells; trimmed mean (25 %) of the per-cell means {t['agent']:.2f} mm against {base}'s "
+            f"{t['baseline']:.2f} mm"
         )
     header = ("agent", "cell", "held out", f"{base} [mm]", "agent [mm]", "ratio", "Δ [mm] (95 % CI)", "failed")
     return lines + tm.md_table((*header, f"{base} failed"), rows, right=6) + ["", *summary]
@@ -536,13 +500,7 @@ def paired_lines(paired: Mapping[str, Any]) -> list[str]:
 def failed_episodes(doc: Mapping[str, Any], agent: str) -> tuple[int, int]:
     """``(failed, episodes)`` of ``agent`` on the scenarios its aggregate covers."""
     scenarios = set(doc["aggregates"][agent]["all"]["scenarios"])
-    flags = [
-        f
-        for r in doc["results"]
-        if r["agent"] == agent and r["scenario"] in scenarios
-        for f in r["per_episode"]["failure"]
-        if f is not None and math.isfinite(f)
-    ]
+    flags = _failures(r for r in doc["results"] if r["agent"] == agent and r["scenario"] in scenarios)
     return int(sum(flags)), len(flags)
 
 

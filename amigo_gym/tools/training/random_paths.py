@@ -3,14 +3,13 @@
 The protocol, its sources, the two conditions and the outputs: docs/benchmark.md, "Random paths: the published
 protocol (Cao et al., Sensors 2024)".
 
-``random_paths.json``'s ``seed_spread`` (:func:`seed_spread`; issue 36's "no failed seed"): per learned agent with
-two or more training seeds, per path set (``paths``: ``"accepted"``, the paths within the wheel limits, or
-``"all"``) and ``tolerance`` [m]: ``seed_rates`` (each seed's failure rate [-] on those paths, seeds without such
-paths left out), ``median_rate`` (the median over the seeds [-], the mean of the two middle seeds for an even
-number), ``worst_rate`` and ``worst_seed`` (the highest rate [-], the first seed of it), ``ratio`` (worst / median
-[-], ``None`` for a median of 0) and ``within`` (the verdict: ``worst_rate <= factor * median_rate``, ``factor``
-= :data:`SEED_FACTOR` = 1.5, so with a median of 0 every seed must fail on no path; ``None`` with fewer than two
-seeds on those paths).
+``random_paths.json``'s ``seed_spread`` (:func:`seed_spread`; issue 36's "no failed seed"), per agent with two or
+more training seeds, path set (``paths``: ``"accepted"``, within the wheel limits, or ``"all"``) and ``tolerance``
+[m]: ``seed_rates`` (each seed's failure rate [-] on those paths; seeds without any left out), ``median_rate`` (over
+the seeds [-]; of an even number, the mean of the two middle ones), ``worst_rate`` and ``worst_seed`` (the highest
+rate [-], its first seed), ``ratio`` (worst / median [-], ``None`` for a median of 0), ``within`` (``worst_rate <=
+factor * median_rate``, ``factor`` = :data:`SEED_FACTOR` = 1.5: with a median of 0 no seed may fail on any path;
+``None`` with fewer than two seeds on those paths).
 """
 
 from __future__ import annotations
@@ -152,31 +151,24 @@ def failure_table(episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[fl
 def seed_spread(
     episodes: Sequence[Mapping[str, Any]], tolerances: Sequence[float], factor: float = SEED_FACTOR
 ) -> list[dict[str, Any]]:
-    """Per agent with >= 2 training seeds, path set (``accepted``, ``all``) and tolerance: the median and the worst
-    seed's failure rate and whether every seed is within ``factor`` of the median (the module docstring)."""
+    """The rows of ``seed_spread`` (module docstring), every seed within ``factor`` of the median seed or not."""
     rows = []
     for agent in dict.fromkeys(e["agent"] for e in episodes):
         mine = [e for e in episodes if e["agent"] == agent]
         seeds = list(dict.fromkeys(e["seed"] for e in mine))
-        if len(seeds) < 2:
-            continue
-        for paths in ("accepted", "all"):
+        for paths, t in itertools.product(("accepted", "all") if len(seeds) > 1 else (), tolerances):
             chosen = [e for e in mine if paths == "all" or e["feasible"]]
-            for t in tolerances:
-                rates = []
-                for s in seeds:
-                    eps = [e for e in chosen if e["seed"] == s]
-                    if eps:
-                        rates.append({"seed": s, "rate": sum(e["peak_m"] >= t for e in eps) / len(eps)})
-                row: dict[str, Any] = {"agent": agent, "paths": paths, "tolerance": t, "seed_rates": rates}
-                row |= {"median_rate": None, "worst_rate": None, "worst_seed": None, "ratio": None, "within": None}
-                if len(rates) >= 2:
-                    median = float(np.median([r["rate"] for r in rates]))
-                    worst = max(rates, key=lambda r: r["rate"])  # the first seed of the highest rate
-                    row |= {"median_rate": median, "worst_rate": worst["rate"], "worst_seed": worst["seed"]}
-                    row["ratio"] = worst["rate"] / median if median > 0 else None
-                    row["within"] = bool(worst["rate"] <= factor * median + 1e-12)  # 1e-12: rounding of the rates
-                rows.append(row)
+            fails = {s: [e["peak_m"] >= t for e in chosen if e["seed"] == s] for s in seeds}
+            rates = [{"seed": s, "rate": sum(f) / len(f)} for s, f in fails.items() if f]
+            row: dict[str, Any] = {"agent": agent, "paths": paths, "tolerance": t, "seed_rates": rates}
+            row |= dict.fromkeys(("median_rate", "worst_rate", "worst_seed", "ratio", "within"))
+            if len(rates) >= 2:
+                median = float(np.median([r["rate"] for r in rates]))
+                worst = max(rates, key=lambda r: r["rate"])  # the first seed of the highest rate
+                row |= {"median_rate": median, "worst_rate": worst["rate"], "worst_seed": worst["seed"]}
+                row["ratio"] = worst["rate"] / median if median > 0 else None
+                row["within"] = bool(worst["rate"] <= factor * median + 1e-12)  # 1e-12: rounding of the rates
+            rows.append(row)
     return rows
 
 
@@ -248,32 +240,24 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
         lines += [md_row(*["---"] * (len(tols) + 2))] + [
             md_row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds
         ]
-    lines += seed_spread_lines(doc.get("seed_spread") or [], p.get("seed_factor", SEED_FACTOR))
+    if spread := doc.get("seed_spread"):
+        f = p.get("seed_factor", SEED_FACTOR)
+        lines += [
+            "",
+            f"No failed seed: every training seed's failure rate within {f:g}x of the median seed's (worst <= {f:g} x "
+            "median; a median of 0 asks every seed to fail on no path), on the paths within the wheel limits "
+            "(accepted) and on all paths:",
+            "",
+            md_row("agent", "paths", "tolerance", "seeds", "median seed [%]", "worst seed [%]", f"within {f:g}x"),
+            md_row(*["---"] * 7),
+        ]
+        lines += [
+            md_row(r["agent"], r["paths"], f"{r['tolerance']:g} m", len(r["seed_rates"]),
+                   "–" if r["median_rate"] is None else f"{100 * r['median_rate']:.1f}",
+                   "–" if r["worst_rate"] is None else f"{100 * r['worst_rate']:.1f} (seed {r['worst_seed']})",
+                   {True: "yes", False: "**no**", None: "–"}[r["within"]])
+            for r in spread
+        ]  # fmt: skip
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
     return "\n".join(lines) + "\n"
-
-
-def seed_spread_lines(rows: Sequence[Mapping[str, Any]], factor: float = SEED_FACTOR) -> list[str]:
-    """The Markdown of :func:`seed_spread`'s rows (none: no lines)."""
-    if not rows:
-        return []
-
-    def pct(x: float | None) -> str:
-        return "–" if x is None else f"{100 * x:.1f}"
-
-    lines = [
-        "",
-        f"No failed seed: every training seed's failure rate within {factor:g}x of the median seed's (worst <= "
-        f"{factor:g} x median; a median of 0 asks every seed to fail on no path), on the paths within the wheel "
-        "limits (accepted) and on all paths:",
-        "",
-        md_row("agent", "paths", "tolerance", "seeds", "median seed [%]", "worst seed [%]", f"within {factor:g}x"),
-        md_row(*["---"] * 7),
-    ]
-    for r in rows:
-        worst = "–" if r["worst_rate"] is None else f"{pct(r['worst_rate'])} (seed {r['worst_seed']})"
-        verdict = {True: "yes", False: "**no**", None: "–"}[r["within"]]
-        lines.append(md_row(r["agent"], r["paths"], f"{r['tolerance']:g} m", len(r["seed_rates"]),
-                            pct(r["median_rate"]), worst, verdict))  # fmt: skip
-    return lines
