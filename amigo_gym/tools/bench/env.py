@@ -62,28 +62,15 @@ TARGETS: dict[str, Target] = {
 }
 
 
-def _number(x: float) -> str:
-    """``x`` as a table shows it: millions as ``2.5M``, else ``%g``."""
-    return f"{x / 1e6:g}M" if abs(x) >= 1e5 else f"{x:g}"
+def _number(x: float, spec: str = "g") -> str:
+    """``x`` as the tables show it, in ``spec``: from 1e5 on in millions (``2.5M``)."""
+    return f"{x / 1e6:{spec}}M" if abs(x) >= 1e5 else f"{x:{spec}}"
 
 
 def target_text(name: str) -> str:
     """The target ``name`` of :data:`TARGETS` as the tables print it, e.g. ``"<= 0.5"``, ``">= 2.5M env-steps/s"``."""
     t = TARGETS[name]
     return f"{t.op} {_number(t.bound)}{t.unit}"
-
-
-def _measured(x: float) -> str:
-    """A measured figure of the targets table: a ratio to two decimals, a rate in millions (``0.98M``)."""
-    return f"{x / 1e6:.2f}M" if abs(x) >= 1e5 else f"{x:.2f}"
-
-
-def _training_kwargs() -> dict[str, Any]:
-    """The settings of the v1 generalists' training distribution (issue 35's "training distribution"), imported only
-    when ``--v1`` runs: the rest of bench-env imports no training module (and none imports torch)."""
-    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION
-
-    return dict(TRAINING_DISTRIBUTION["env_kwargs"])
 
 
 def _vec(env_id: str, n: int, **kw: Any) -> Any:
@@ -234,7 +221,9 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
     """v1 (its default task, :data:`V1_HARD` and the training distribution of the v1 generalists, ``v1_training``)
     against v0: single step [us] and the ratios, and the vector envs' env-steps/s at ``sizes`` up to
     :data:`V1_MAX_N`."""
-    training = _training_kwargs()
+    from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION  # here: bench-env imports no torch
+
+    training = dict(TRAINING_DISTRIBUTION["env_kwargs"])
     tasks = {"v1": ("AmigoBot-v1", {}), "v1_hard": ("AmigoBot-v1", V1_HARD)}
     tasks |= {"v1_training": ("AmigoBot-v1", training), "v0": ("AmigoBot-v0", {})}
     ts = time_envs({k: gym.make(e, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
@@ -244,8 +233,7 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
         vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard", "v1_training")}
         say(f"  N = {n}: " + ", ".join(f"{k} {v:.3g}" for k, v in vector[str(n)].items()) + " env-steps/s")
     us = {f"{k}_us": t * 1e6 for k, t in ts.items()}
-    ratios = {"ratio": ts["v1"] / ts["v0"], "ratio_hard": ts["v1_hard"] / ts["v0"]}
-    ratios["ratio_training"] = ts["v1_training"] / ts["v0"]
+    ratios = {f"ratio{k[2:]}": ts[k] / ts["v0"] for k in ("v1", "v1_hard", "v1_training")}  # ratio, ratio_hard, ...
     return us | ratios | {"hard_task": dict(V1_HARD), "training_task": training, "vector": vector}
 
 
@@ -271,9 +259,8 @@ def targets(doc: Doc, n_vector: int = 4096, n_sync: int = 1024) -> list[Doc]:
 
     def add(name: str, label: str, ratio: Any, target: str | None = None) -> None:
         t = TARGETS.get(target or name)
-        op, bound = (None, None) if t is None else (t.op, t.bound)
         met = None if t is None else {"<=": ratio <= t.bound, ">=": ratio >= t.bound, "<": ratio < t.bound}[t.op]
-        out.append({"name": name, "label": label, "ratio": ratio, "op": op, "bound": bound, "met": met})
+        out.append({"name": name, "label": label, "ratio": ratio, "op": t and t.op, "bound": t and t.bound, "met": met})
 
     if doc.get("single"):
         add("single", "single step, AmigoBot-v0 / Pendulum-v1 (time)", doc["single"]["ratio"])
@@ -364,8 +351,24 @@ def format_report(doc: Doc) -> str:
             for p in doc["ppo"]
         ]
         out += [*md_table(head + " | env's share of learn: AmigoBot | Pendulum", cells), ""]
-    if (v := doc["v1"]) is not None:
-        out += [*_v1_table(v), ""]
+    if (v := doc["v1"]) is not None:  # "-" for the training distribution in a document from before it was measured
+        tasks = f"v1 hard ({_task_text(v.get('hard_task') or V1_HARD)}) | v1 training distribution "
+        tasks += f"({_task_text(v.get('training_task')) or 'not measured'})"
+        head = f"AmigoBot-v1 vs v0 | v1 defaults | {tasks} | v0 | v1 / v0 | v1 hard / v0 | v1 training / v0"
+        cells = [
+            f"single step [us] (v1 / v0: target {target_text('v1_v0')}) | {v['v1_us']:.1f} | "
+            f"{fmt(v['v1_hard_us'], '.1f')} | {fmt(v.get('v1_training_us'), '.1f')} | {v['v0_us']:.1f} | "
+            f"{v['ratio']:.2f} | {fmt(v['ratio_hard'], '.2f')} | {fmt(v.get('ratio_training'), '.2f')}"
+        ]
+        cells += [
+            f"vector, N = {n} [steps/s] | {r['v1']:.3g} | {r['v1_hard']:.3g} | {fmt(tr)} | {r['v0']:.3g} | "
+            f"{r['v0'] / r['v1']:.2f} (time) | {r['v0'] / r['v1_hard']:.2f} (time) | "
+            + ("-" if tr is None else f"{r['v0'] / tr:.2f} (time)")
+            for n, r in v["vector"].items()
+            for tr in [r.get("v1_training")]
+        ]
+        out += [*md_table(head, cells), f"(N = 4096 targets: v1 defaults {target_text('v1_vector_4096')}, v1 training "
+                f"distribution {target_text('v1_training_4096')})", ""]  # fmt: skip
     if doc["kernels"]:
         names = list(dict.fromkeys(k for r in doc["kernels"] for k in r["us"]))
         head = "step implementation: time per env-step [us] | " + " | ".join(f"kernel={k}" for k in names)
@@ -378,7 +381,7 @@ def format_report(doc: Doc) -> str:
     if doc["targets"]:
         machine = f"{cpu_model()} (SIMD {simd_level()}; {numba_state()})"
         cells = [
-            f"{t['label']} | {_measured(t['ratio'])} | "
+            f"{t['label']} | {_number(t['ratio'], '.2f')} | "
             + ("reported" if t["op"] is None else f"{t['op']} {_number(t['bound'])}")
             + " | " + ("-" if t["met"] is None else ("yes" if t["met"] else "no"))
             for t in doc["targets"]
@@ -393,34 +396,6 @@ def format_report(doc: Doc) -> str:
 def _task_text(kw: Doc | None) -> str:
     """A v1 task's settings as the tables name them, ``path=mixed, speed=(0.1, 0.4), randomize=hard``."""
     return ", ".join(f"{k}={tuple(x) if isinstance(x, list) else x}" for k, x in (kw or {}).items())
-
-
-def _v1_table(v: Doc) -> list[str]:
-    """The ``--v1`` section's table: v1's defaults, :data:`V1_HARD` and the training distribution against v0 (a
-    document from before the training distribution was measured shows ``-`` for it)."""
-    hard = _task_text(v.get("hard_task") or V1_HARD)
-    training = _task_text(v.get("training_task")) or "not measured"
-    head = f"AmigoBot-v1 vs v0 | v1 defaults | v1 hard ({hard}) | v1 training distribution ({training}) | v0"
-    head += " | v1 / v0 | v1 hard / v0 | v1 training / v0"
-
-    def ratio(x: float | None) -> str:
-        return fmt(x, ".2f")
-
-    cells = [
-        f"single step [us] (v1 / v0: target {target_text('v1_v0')}) | {v['v1_us']:.1f} | {fmt(v['v1_hard_us'], '.1f')}"
-        f" | {fmt(v.get('v1_training_us'), '.1f')} | {v['v0_us']:.1f} | {v['ratio']:.2f} | {ratio(v['ratio_hard'])} | "
-        f"{ratio(v.get('ratio_training'))}"
-    ]
-    for n, r in v["vector"].items():
-        tr = r.get("v1_training")
-        cells.append(
-            f"vector, N = {n} [steps/s] | {r['v1']:.3g} | {r['v1_hard']:.3g} | {fmt(tr)} | {r['v0']:.3g} | "
-            f"{r['v0'] / r['v1']:.2f} (time) | {r['v0'] / r['v1_hard']:.2f} (time) | "
-            + ("-" if tr is None else f"{r['v0'] / tr:.2f} (time)")
-        )
-    targets_line = f"(N = 4096 targets: v1 defaults {target_text('v1_vector_4096')}, "
-    targets_line += f"v1 training distribution {target_text('v1_training_4096')})"
-    return [*md_table(head, cells), targets_line]
 
 
 def plot_vector(rows: Sequence[Doc], path: str, v1: Doc | None = None) -> None:
@@ -440,9 +415,8 @@ def plot_vector(rows: Sequence[Doc], path: str, v1: Doc | None = None) -> None:
         ax.plot(*zip(*sync, strict=True), "x:", label="SyncVectorEnv(AmigoBot-v0)")
     if v1 is not None and v1["vector"]:
         n1 = [int(n) for n in v1["vector"]]
-        tasks = [("v1", "D-", "default task"), ("v1_hard", "d--", "mixed paths, hard")]
-        tasks.append(("v1_training", "P-.", "training distribution"))
-        for key, style, task in tasks:
+        tasks = (("v1", "D-", "default task"), ("v1_hard", "d--", "mixed paths, hard"))
+        for key, style, task in (*tasks, ("v1_training", "P-.", "training distribution")):
             if all(key in r for r in v1["vector"].values()):
                 ax.plot(n1, [r[key] for r in v1["vector"].values()], style, label=f"AmigoBotV1VectorEnv ({task})")
     ax.set(xscale="log", yscale="log", xlabel="number of sub-envs N", ylabel="env-steps per second")

@@ -250,13 +250,10 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
             "",
             md_row("agent", "paths", "tolerance", "seeds", "median seed [%]", "worst seed [%]", f"within {f:g}x"),
             md_row(*["---"] * 7),
-        ]
-        lines += [
-            md_row(r["agent"], r["paths"], f"{r['tolerance']:g} m", len(r["seed_rates"]),
-                   "–" if r["median_rate"] is None else f"{100 * r['median_rate']:.1f}",
-                   "–" if r["worst_rate"] is None else f"{100 * r['worst_rate']:.1f} (seed {r['worst_seed']})",
-                   {True: "yes", False: "**no**", None: "–"}[r["within"]])
-            for r in spread
+            *(md_row(r["agent"], r["paths"], f"{r['tolerance']:g} m", len(r["seed_rates"]),
+                     "–" if r["median_rate"] is None else f"{100 * r['median_rate']:.1f}",
+                     "–" if r["worst_rate"] is None else f"{100 * r['worst_rate']:.1f} (seed {r['worst_seed']})",
+                     {True: "yes", False: "**no**", None: "–"}[r["within"]]) for r in spread),
         ]  # fmt: skip
     runs = Counter((u["agent"], u["seed"], u["reason"]) for u in doc["unavailable"])
     lines += [""] * bool(runs) + [f"- unavailable: {a} s{s} on {n} paths: {why}" for (a, s, why), n in runs.items()]
