@@ -7,13 +7,17 @@
 # 1. the machine (CPU, cores, GPU, versions);
 # 2. training at machine scale: experiments/gpu_train_bench.py (throughput of `train-fast` on --device, then a
 #    generalist trained for BUDGET_S seconds, its validation curve, and it against the analytic controller on the
-#    ideal cells; the model comes back as gpu_model.zip);
+#    ideal cells; the model comes back as gpu_model.zip); last, with --overlap, the throughput at N_TRAIN again with
+#    `train-fast --overlap` (about 30 s; after the budgeted training, whose budget it leaves as it was);
 # 3. the vector env's step against numba's threads at N = N_SCALE, the step alone (thread_wait.py's work = 0):
 #    AmigoBot-v0 and v1 (defaults) on each of THREADS, v1 on the last also with OMP_WAIT_POLICY=ACTIVE (the env's
 #    default is PASSIVE); v1's training distribution on the first and the last; then the share of v1's one-thread
 #    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up), at N_SCALE with
 #    the defaults and at N_TRAIN as train-fast steps it (restarts and the final infos included).
 # Each step has its own time limit, so one that fails or runs long leaves the others their time.
+# --overlap at N = 65,536 (where the learner's share is largest), a second call of about 3 minutes if the lease has it:
+#   python3 experiments/gpu_train_bench.py --budget-s 1 --n-envs 16384 --sizes 65536 --measure-iters 16 \
+#       --curve-points 1 --episodes 1 --device cuda --overlap --json "$OUT/gpu_overlap_sizes.json"
 set -u
 OUT=${OUT:-/tmp/amigo_device}
 N_SCALE=${N_SCALE:-65536} N_TRAIN=${N_TRAIN:-16384} BUDGET_S=${BUDGET_S:-180} DEVICE=${DEVICE:-cuda}
@@ -32,8 +36,8 @@ export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
         'numba', numba.__version__, 'torch', torch.__version__, 'gymnasium', gymnasium.__version__,
         'cuda', torch.cuda.is_available())"
     echo "== training (experiments/gpu_train_bench.py)"
-    timeout 450 $py experiments/gpu_train_bench.py --budget-s "$BUDGET_S" --n-envs "$N_TRAIN" --device "$DEVICE" \
-        --deadline-s 420 --json "$OUT/gpu_train_bench.json" || echo "gpu_train_bench: exit $?"
+    timeout 480 $py experiments/gpu_train_bench.py --budget-s "$BUDGET_S" --n-envs "$N_TRAIN" --device "$DEVICE" \
+        --deadline-s 420 --overlap --json "$OUT/gpu_train_bench.json" || echo "gpu_train_bench: exit $?"
     echo "== threads (experiments/thread_wait.py, work = 0, N = $N_SCALE)"
     for env in AmigoBot-v0 AmigoBot-v1; do
         for t in $THREADS; do

@@ -24,7 +24,10 @@ file's 8 minibatches per epoch), ``env_threads = --env-threads`` (default: every
    (:data:`targets_v1.IDEAL`, the benchmark suite's scenarios and test seeds, ``amigo-gym benchmark``'s
    evaluation): IQM of H RMS over (seed, cell) as ``targets_v1`` computes it, its ratio to the analytic's, the
    median over the cells of the settled chatter (issue 35's targets: ratio <= 1.2, chatter <= 0.1 rad/s, in <= 3
-   minutes of training; >= 1M env-steps/s of training).
+   minutes of training; >= 1M env-steps/s of training);
+7. ``--overlap``: step 3's throughput again at each N with ``overlap`` (two halves, one's env step on a second thread
+   while the main thread computes the other's policy), and its ratio to step 3's; last, so that it does not cut the
+   budget of step 4.
 """
 
 from __future__ import annotations
@@ -68,7 +71,9 @@ def say(msg: str) -> None:
     print(msg, flush=True)
 
 
-def settings(args: argparse.Namespace, total_steps: int, seed: int, curriculum: bool = True) -> FastPPOSettings:
+def settings(
+    args: argparse.Namespace, total_steps: int, seed: int, curriculum: bool = True, overlap: bool = False
+) -> FastPPOSettings:
     """The file's settings at ``--n-envs``; ``curriculum`` False: without the curvature curriculum (whose raises,
     eight in a run, each rebuild the pool of random paths: one per iteration in the few iterations of a timing)."""
     hp: dict[str, Any] = load_settings_yaml(CONFIG)
@@ -78,7 +83,7 @@ def settings(args: argparse.Namespace, total_steps: int, seed: int, curriculum: 
     batch = args.n_envs * hp["rollout_steps"]
     hp |= {"num_envs": args.n_envs, "minibatch_size": max(1, batch // 8), "env_threads": args.env_threads}
     hp |= {"device": args.device, "threads": args.threads or hp["threads"], "total_steps": total_steps, "seed": seed}
-    hp |= {"eval_every": 10**10, "checkpoint_every": 10**10}
+    hp |= {"eval_every": 10**10, "checkpoint_every": 10**10, "overlap": overlap}
     return FastPPOSettings(**hp)
 
 
@@ -106,11 +111,11 @@ def timed_train(s: FastPPOSettings, out: Path, **kw: Any) -> dict[str, Any]:
     return rec
 
 
-def throughput(args: argparse.Namespace, out: Path) -> dict[str, Any]:
+def throughput(args: argparse.Namespace, out: Path, overlap: bool = False) -> dict[str, Any]:
     """Training env-steps/s over the second half of ``--measure-iters`` iterations at ``args.n_envs``."""
     s = settings(args, 1, args.seed, False)
     batch = s.num_envs * s.rollout_steps
-    s = settings(args, batch * args.measure_iters, args.seed, False)
+    s = settings(args, batch * args.measure_iters, args.seed, False, overlap)
     half = args.measure_iters // 2
     if half:
         timed_train(s, out, until_steps=batch * half)
@@ -119,6 +124,7 @@ def throughput(args: argparse.Namespace, out: Path) -> dict[str, Any]:
     sps = (m["timesteps"] - batch * half) / w["loop"]
     return {
         "n_envs": s.num_envs,
+        "overlap": overlap,
         "env_steps": m["timesteps"] - batch * half,
         "loop_s": w["loop"],
         "train_sps": round(sps),
@@ -188,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--episodes", type=int, default=10, help="test seeds per ideal cell (the suite's: 10)")
     ap.add_argument("--json", type=Path, help="write the results here (default: $OUT/gpu_train_bench.json)")
+    ap.add_argument("--overlap", action="store_true", help="last, the throughput again with train-fast --overlap")
     args = ap.parse_args(argv)
     t_all = time.perf_counter()
     device = resolve_device(args.device)
@@ -255,6 +262,15 @@ def main(argv: list[str] | None = None) -> int:
             path.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(run / name, path.parent / f"gpu_{name}")  # the trained generalist, kept
         q["eval_s"] = round(time.perf_counter() - t0, 1)
+        doc["throughput_overlap"] = []
+        for plain in doc["throughput_sizes"] if args.overlap else ():
+            n = plain["n_envs"]
+            t = throughput(argparse.Namespace(**{**vars(args), "n_envs": n}), Path(tmp) / f"overlap{n}", True)
+            t["ratio_to_plain"] = round(t["train_sps"] / plain["train_sps"], 3)
+            doc["throughput_overlap"].append(t)
+            say(f"training, N = {n:,}, --overlap: {t['train_sps']:,} env-steps/s ({t['ratio_to_plain']:.2f}x without; "
+                f"env {100 * t['env_share']:.0f} % of the wall on its thread, rollout {100 * t['rollout_share']:.0f} "
+                f"%, update {100 * t['update_share']:.0f} %)")  # fmt: skip
     a, f = q["analytic"], q["fastppo"]
     say(f"ideal cells ({len(IDEAL)} x {q['episodes_per_cell']} episodes): H RMS IQM analytic {a['h_rms_iqm_mm']:.2f} "
         f"mm, generalist {f['h_rms_iqm_mm']:.2f} mm, ratio {q['ratio']:.2f} (target <= 1.2); settled chatter median "

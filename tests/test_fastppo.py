@@ -723,6 +723,7 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     machine, the throughput and its shares, the trained steps and the ideal-cell figures land in $OUT."""
     root = Path(__file__).resolve().parent.parent
     argv = ["--budget-s", "1", "--n-envs", "32", "--measure-iters", "2", "--env-steps", "2", "--episodes", "1"]
+    argv += ["--overlap"]
     env = {**__import__("os").environ, "OUT": str(tmp_path), "PYTHONPATH": str(root)}
     r = subprocess.run([sys.executable, str(root / "experiments" / "gpu_train_bench.py"), *argv], env=env,
                        capture_output=True, text=True, timeout=600)  # fmt: skip
@@ -738,6 +739,9 @@ def test_gpu_train_bench_runs_on_the_cpu_and_writes_its_json(tmp_path: Path) -> 
     assert len(q["cells"]) == 11 and q["episodes_per_cell"] == 1 and q["analytic"]["h_rms_iqm_mm"] > 0
     assert q["ratio"] == pytest.approx(q["fastppo"]["h_rms_iqm_mm"] / q["analytic"]["h_rms_iqm_mm"])
     assert t["env_steps"] == 32 * 16 and [x["n_envs"] for x in doc["throughput_sizes"]] == [32]
+    [o] = doc["throughput_overlap"]  # --overlap: the same N again with train-fast --overlap
+    assert o["overlap"] and not t["overlap"] and o["n_envs"] == 32
+    assert o["ratio_to_plain"] == pytest.approx(o["train_sps"] / t["train_sps"], rel=1e-2)
     assert json.loads((tmp_path / "gpu_run.json").read_text())["sha256"] == doc["training"]["sha256"]
     assert (tmp_path / "gpu_model.zip").stat().st_size > 0
     c = doc["curve"]  # the validation curve: from the untrained policy to the trained one, against training time
