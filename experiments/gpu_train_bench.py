@@ -265,7 +265,12 @@ def main(argv: list[str] | None = None) -> int:
         doc["throughput_overlap"] = []
         for plain in doc["throughput_sizes"] if args.overlap else ():
             n = plain["n_envs"]
-            t = throughput(argparse.Namespace(**{**vars(args), "n_envs": n}), Path(tmp) / f"overlap{n}", True)
+            try:  # a failure here leaves the figures above their JSON
+                t = throughput(argparse.Namespace(**{**vars(args), "n_envs": n}), Path(tmp) / f"overlap{n}", True)
+            except Exception as exc:
+                doc["throughput_overlap"].append({"n_envs": n, "overlap": True, "error": repr(exc)})
+                say(f"training, N = {n:,}, --overlap: failed: {exc!r}")
+                continue
             t["ratio_to_plain"] = round(t["train_sps"] / plain["train_sps"], 3)
             doc["throughput_overlap"].append(t)
             say(f"training, N = {n:,}, --overlap: {t['train_sps']:,} env-steps/s ({t['ratio_to_plain']:.2f}x without; "
