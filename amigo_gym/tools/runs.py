@@ -122,8 +122,7 @@ class RunLock:
             self._lock.release()
             self._lock = None
 
-    def __enter__(self) -> RunLock:
-        return self.acquire()
+    __enter__ = acquire
 
     def __exit__(self, *exc: object) -> None:
         self.release()
@@ -175,20 +174,16 @@ def verify_sha256(path: Path, expected: str, source: str) -> None:
         )
 
 
-def _key(path: Path, out: Path) -> str:
-    """A file's name in a manifest: relative to ``out`` when inside it, else absolute."""
-    with contextlib.suppress(ValueError):
-        return str(path.resolve().relative_to(out.resolve()))
-    return str(path.resolve())
-
-
 def publish(targets: Mapping[Path, Path], out: Path, manifest: str, **extra: Any) -> dict[str, str]:
     """Move the staged files ``{target: staged file}`` to their targets as one set; the manifest's ``{file: sha256}``.
 
     The manifest ``out/<manifest>`` (``{"files": {file: sha256}, **extra, "written": time}``) is removed first and
     written last. Fault stages: ``publish:<file name>`` after each move.
     """
-    files = {_key(dest, out): sha256_file(src) for dest, src in targets.items()}
+    files: dict[str, str] = {}
+    for dest, src in targets.items():  # a file's name: relative to ``out`` when inside it, else absolute
+        path, root = dest.resolve(), out.resolve()
+        files[str(path.relative_to(root) if path.is_relative_to(root) else path)] = sha256_file(src)
     (out / manifest).unlink(missing_ok=True)
     fsync_dir(out)
     for dest, src in targets.items():
@@ -376,10 +371,8 @@ def save_checkpoint(out: Path, algo: str, step: int, write: Callable[[Path], lis
         raise
     fsync_dir(root)
     fault_point("checkpoint:rename")
-    rel, previous = _write_pointer(out, algo, final, step)
-    for old in [p for p in root.iterdir() if str(p.relative_to(out)) not in (rel, previous)]:
-        if old.name.startswith("."):
-            continue
+    kept = _write_pointer(out, algo, final, step)
+    for old in [p for p in root.iterdir() if not p.name.startswith(".") and str(p.relative_to(out)) not in kept]:
         trash = root / f".trash-{old.name}"
         os.replace(old, trash)
         fault_point("checkpoint:trash")

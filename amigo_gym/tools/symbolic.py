@@ -1,8 +1,6 @@
 r"""Symbolic Denavit–Hartenberg derivation of the AmigoBot kinematics (SymPy), from the transforms to system (29).
 
-The steps, the equations and the paper's misprints: docs/derivation.md. :func:`derive` computes everything once
-(cached); :func:`lambdify` turns derived expressions into batched numpy functions of the names in
-:data:`PLAIN_SYMBOLS`; ``amigo-gym derive [--latex] [--out FILE]`` prints the derivation.
+The steps, the equations and the paper's misprints: docs/derivation.md.
 """
 
 from __future__ import annotations
@@ -66,15 +64,12 @@ def _frame(angle: Any, x: Any, y: Any, z: Any) -> Any:
     return sp.ImmutableMatrix([[c, -si, 0, x], [si, c, 0, y], [0, 0, 1, z], [0, 0, 0, 1]])
 
 
-def _wheel(alpha: Any) -> Any:
-    """The wheel's D–H transform (eqs 15, 23): frame of a wheel turned by ``alpha`` into the vehicle frame."""
+def _wheel(alpha: Any, radius: Any) -> tuple[Any, Any]:
+    """A wheel turned by ``alpha``: its D–H transform into the vehicle frame (eqs 15, 23) and its contact point in
+    its frame, ``(-r cos alpha, r sin alpha, 0, 1)`` (eqs 16, 24)."""
     c, si = sp.cos(alpha), sp.sin(alpha)
-    return sp.ImmutableMatrix([[si, c, 0, 0], [0, 0, 1, 0], [c, -si, 0, 0], [0, 0, 0, 1]])
-
-
-def _rim(radius: Any, alpha: Any) -> Any:
-    """Contact point in the wheel frame (eqs 16, 24): ``(-r cos alpha, r sin alpha, 0, 1)``."""
-    return sp.ImmutableMatrix([-radius * sp.cos(alpha), radius * sp.sin(alpha), 0, 1])
+    transform = sp.ImmutableMatrix([[si, c, 0, 0], [0, 0, 1, 0], [c, -si, 0, 0], [0, 0, 0, 1]])
+    return transform, sp.ImmutableMatrix([-radius * c, radius * si, 0, 1])
 
 
 @dataclass(frozen=True)
@@ -82,18 +77,13 @@ class Transforms:
     """The paper's homogeneous transforms (4x4) and point vectors (4x1), coordinates as functions of ``t``.
 
     Attributes:
-        T40H: eq. 2, vehicle frame 4 placed at H's vertical, into frame 0.
-        rho_H: eq. 3, H in that frame: ``(0, 0, -l4, 1)``.
-        T40K: eq. 14, frame 4 placed at the centre of wheel 1 (right), into frame 0.
-        T14: eq. 15, the frame of wheel 1 (turned by ``alpha1``) into frame 4.
-        rho_K: eq. 16, the contact point K in the frame of wheel 1.
-        T40L: eq. 22, frame 4 placed at the centre of wheel 2 (left).
-        T24: eq. 23, the frame of wheel 2 (``alpha2``).
-        rho_L: eq. 24, the contact point L in the frame of wheel 2.
-        T40S: frame 4 placed at the castor's swivel, ``l5`` behind A at height ``r3`` (not printed in the paper).
-        TSw: the swivel's rotation ``gamma`` about the vertical.
-        T3S: the castor wheel's frame (``alpha3``), as eq. 15.
-        rho_C: the castor's contact point in its wheel frame, as eq. 16 with ``r3``.
+        T40H, rho_H: eqs 2, 3: vehicle frame 4 placed at H's vertical, into frame 0; H in it, ``(0, 0, -l4, 1)``.
+        T40K, T14, rho_K: eqs 14, 15, 16: frame 4 placed at the centre of wheel 1 (right), into frame 0; the frame
+            of wheel 1 (turned by ``alpha1``) into frame 4; the contact point K in the frame of wheel 1.
+        T40L, T24, rho_L: eqs 22, 23, 24: the same for wheel 2 (left, ``alpha2``) and its contact point L.
+        T40S, TSw, T3S, rho_C: the castor (not printed in the paper): frame 4 placed at its swivel, ``l5`` behind A
+            at height ``r3``; the swivel's rotation ``gamma`` about the vertical; the castor wheel's frame
+            (``alpha3``) and contact point, as eqs 15, 16 with ``r3``.
     """
 
     T40H: Any
@@ -115,19 +105,16 @@ def transforms() -> Transforms:
     """Build the transforms of the paper (eqs 2, 3, 14, 15, 16, 22, 23, 24) and the castor's, in time-function form."""
     b = beta_t
     cb, sb = sp.cos(b), sp.sin(b)
-    return Transforms(
-        T40H=_frame(b, xA_t + l3 * cb, yA_t + l3 * sb, r1),
-        rho_H=sp.ImmutableMatrix([0, 0, -l4, 1]),
-        T40K=_frame(b, xA_t + l1 * sb, yA_t - l1 * cb, r1),
-        T14=_wheel(alpha1_t),
-        rho_K=_rim(r1, alpha1_t),
-        T40L=_frame(b, xA_t - l1 * sb, yA_t + l1 * cb, r2),
-        T24=_wheel(alpha2_t),
-        rho_L=_rim(r2, alpha2_t),
-        T40S=_frame(b, xA_t - l5 * cb, yA_t - l5 * sb, r3),
-        TSw=_frame(gamma_t, 0, 0, 0),
-        T3S=_wheel(alpha3_t),
-        rho_C=_rim(r3, alpha3_t),
+    return Transforms(  # in the order of the fields
+        _frame(b, xA_t + l3 * cb, yA_t + l3 * sb, r1),
+        sp.ImmutableMatrix([0, 0, -l4, 1]),
+        _frame(b, xA_t + l1 * sb, yA_t - l1 * cb, r1),
+        *_wheel(alpha1_t, r1),
+        _frame(b, xA_t - l1 * sb, yA_t + l1 * cb, r2),
+        *_wheel(alpha2_t, r2),
+        _frame(b, xA_t - l5 * cb, yA_t - l5 * sb, r3),
+        _frame(gamma_t, 0, 0, 0),
+        *_wheel(alpha3_t, r3),
     )
 
 
@@ -158,10 +145,8 @@ class Misprints:
     """The paper's misprinted forms, as printed (plain symbols), for showing that they are not identities.
 
     Attributes:
-        eq17: ``Tdot_{4,0,K} Tdot_{1,4} rho_K`` (product of derivatives) as a 4-vector.
-        eq25: ``Tdot_{4,0,L} Tdot_{2,4} rho_L``.
-        eq18: eq. 18's right-hand side with ``x_A``, ``y_A`` (positions) in place of velocities.
-        eq26: eq. 26's right-hand side likewise.
+        eq17, eq25: ``Tdot_{4,0,K} Tdot_{1,4} rho_K``, ``Tdot_{4,0,L} Tdot_{2,4} rho_L`` (products of derivatives).
+        eq18, eq26: eqs 18, 26's right-hand sides with ``x_A``, ``y_A`` (positions) in place of velocities.
         eq28: eq. 28, ``y_A - r2 alpha2dot sin b - l1 betadot sin b``.
         contact_point_velocity_K: full derivative of ``r_K`` (``rho_K`` differentiated too): the velocity of the
             geometric contact point, not of the wheel's material point; it is not zero when the wheel rolls.
@@ -184,17 +169,14 @@ class Derivation:
 
     Attributes:
         r_H: eq. 4, ``T_{4,0,H} rho_H``.
-        r_K: contact point of wheel 1, ``T_{4,0,K} T_{1,4} rho_K``.
-        r_L: contact point of wheel 2, ``T_{4,0,L} T_{2,4} rho_L``.
-        v_K: velocity of wheel 1's material point at K (eq. 18 corrected), product rule with frozen ``rho_K``.
-        v_L: the same for wheel 2 at L (eq. 26 corrected).
-        v_S: velocity of the castor's swivel S (a body point).
-        v_C: velocity of the castor wheel's material point in contact.
+        r_K, r_L: contact points of wheels 1 and 2, ``T_{4,0,K} T_{1,4} rho_K``, ``T_{4,0,L} T_{2,4} rho_L``.
+        v_K, v_L: velocities of the wheels' material points at K and L (eqs 18, 26 corrected), product rule, ``rho``
+            frozen.
+        v_S, v_C: velocities of the castor's swivel S (a body point) and of its wheel's material point in contact.
         eq7, eq8: H on the path of eq. 6 (``r_H - path = 0``), x and y.
         eq9, eq10: their time derivatives.
         eq11, eq12: ``xdot_A - v_A cos b``, ``ydot_A - v_A sin b``.
-        eq19, eq20: ``v_K = 0``, x and y.
-        eq27, eq28: ``v_L = 0``, x and y.
+        eq19, eq20, eq27, eq28: ``v_K = 0`` and ``v_L = 0``, x and y.
         eq_castor: ``sqrt(l5^2 betadot^2 + v_A^2) - r3 alphadot_3`` (forward motion).
         system_29: the seven equations (9, 10, 11, 12, 19, 27, castor), left-hand sides.
         slip_K, slip_L: the components of ``v_K``, ``v_L`` across the heading after eqs 11–12 (identically 0).
@@ -356,8 +338,7 @@ def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
     broadcast; the result has shape ``(..., n)``. ``f`` raises ``ValueError`` for a missing or non-finite value."""
     exprs = [sp.sympify(e) for e in exprs]
     syms = sorted(set().union(*(e.free_symbols for e in exprs)), key=str)
-    unknown = [str(x) for x in syms if str(x) not in PLAIN_SYMBOLS]
-    if unknown:
+    if unknown := [str(x) for x in syms if str(x) not in PLAIN_SYMBOLS]:
         raise ValueError(f"expressions contain symbols outside PLAIN_SYMBOLS: {unknown}")
     fn = sp.lambdify(syms, exprs, modules="numpy")
     names = [str(x) for x in syms]
@@ -378,8 +359,7 @@ def lambdify(exprs: Sequence[Any]) -> Callable[..., Array]:
 
 
 def system_29_latex() -> list[str]:
-    """The seven equations of system (29) as LaTeX, one string ``"<lhs> = 0"`` each (order of
-    :data:`SYSTEM_29_LABELS`)."""
+    """System (29) as LaTeX, one string ``"<lhs> = 0"`` per equation, in the order of :data:`SYSTEM_29_LABELS`."""
     return [f"{sp.latex(e)} = 0" for e in derive().system_29]
 
 
@@ -390,9 +370,9 @@ def _sections(latex: bool) -> dict[str, list[_Row]]:
     d, mp, lag = derive(), derive().misprints, {theta: beta + delta}
 
     def f(e: Any) -> str:
-        if isinstance(e, sp.MatrixBase):
-            return str(sp.latex(e)) if latex else "(" + ", ".join(sp.sstr(x) for x in e) + ")"
-        return str(sp.latex(e)) if latex else str(sp.sstr(e))
+        if latex:
+            return str(sp.latex(e))
+        return "(" + ", ".join(sp.sstr(x) for x in e) + ")" if isinstance(e, sp.MatrixBase) else str(sp.sstr(e))
 
     def eq(label: str | None, lhs: Any, rhs: Any, tex: str | None = None) -> _Row:  # tex: the LaTeX of a named lhs
         return (label, f(lhs) if tex is None else tex if latex else lhs, f(rhs))
