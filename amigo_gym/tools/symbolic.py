@@ -6,6 +6,7 @@ The steps, the equations and the paper's misprints: docs/derivation.md.
 from __future__ import annotations
 
 import functools
+import math
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -46,8 +47,7 @@ PLAIN_SYMBOLS |= {str(x): x for x in (l1, l3, l4, l5, r1, r2, r3, R, v_A, theta,
 
 
 def to_plain(expr: Any) -> Any:
-    """Replace the time functions ``q(t)`` and their derivatives ``dq/dt`` by the plain symbols ``q``, ``qdot`` (in
-    an expression or a matrix: an immutable matrix)."""
+    """Replace the time functions ``q(t)`` and ``dq/dt`` by the plain symbols ``q``, ``qdot`` (a matrix: immutable)."""
     return sp.sympify(expr).xreplace(_TO_PLAIN)
 
 
@@ -127,13 +127,8 @@ def material_velocity(chain: Sequence[Any], rho: Any) -> Any:
     ``rho`` is *frozen*: it is not differentiated (it names the point currently in contact, and the velocity
     wanted is that of the wheel's material point there). Time-function form in, time-function form out.
     """
-    total = sp.zeros(4, 1)
-    for i in range(len(chain)):
-        prod = sp.eye(4)
-        for j, m in enumerate(chain):
-            prod = prod * (sp.diff(m, t) if i == j else m)
-        total += prod * rho
-    return sp.ImmutableMatrix(total)
+    factors = [[sp.diff(m, t) if i == j else m for j, m in enumerate(chain)] for i in range(len(chain))]
+    return sp.ImmutableMatrix(sum((math.prod(f, start=sp.eye(4)) * rho for f in factors), sp.zeros(4, 1)))
 
 
 #: labels of the seven equations of system (29): the paper's numbers, and the castor's
@@ -238,12 +233,13 @@ def _solve_one(eqs: Sequence[Any], unknowns: Sequence[Any]) -> dict[Any, Any]:
 
 @functools.lru_cache(maxsize=1)
 def derive() -> Derivation:
-    """Carry out the whole derivation (a few seconds; cached). See the module docstring for the steps."""
+    """Carry out the whole derivation (a few seconds; cached); the steps: docs/derivation.md."""
     T = transforms()
     cb, sb = sp.cos(beta), sp.sin(beta)
-    on_heading = sp.ImmutableMatrix([cb, sb, 0, 0])
-    across = sp.ImmutableMatrix([-sb, cb, 0, 0])
     motion_of_a = {xdot_A: v_A * cb, ydot_A: v_A * sb}  # eqs 11-12 solved
+
+    def along(v: Any, angle: Any) -> Any:  # the component of v along the direction ``angle``, with eqs 11-12
+        return (sp.cos(angle) * v[0] + sp.sin(angle) * v[1]).subs(motion_of_a)
 
     # 1-2: positions
     r_H_t = T.T40H * T.rho_H
@@ -258,26 +254,21 @@ def derive() -> Derivation:
     v_C = _simp(to_plain(material_velocity([T.T40S, T.TSw, T.T3S], T.rho_C)))
 
     # 4: rolling constraints, reduced with the motion of A
-    slip_K, slip_L, roll_K, roll_L = (
-        _simp((e.T * v)[0].subs(motion_of_a)) for e in (across, on_heading) for v in (v_K, v_L)
-    )
+    slip_K, slip_L, roll_K, roll_L = (_simp(along(v, a)) for a in (beta + sp.pi / 2, beta) for v in (v_K, v_L))
     wheel_rates = _solve_one([roll_K, roll_L], [alphadot_1, alphadot_2])
     body_velocity = _solve_one([roll_K, roll_L], [v_A, betadot])
 
     # 5: castor: v_C = 0 <=> v_S = r3 alphadot_3 (cos(b + gamma), sin(b + gamma))
-    castor_dir = sp.ImmutableMatrix([sp.cos(beta + gamma), sp.sin(beta + gamma), 0, 0])
-    castor_normal = sp.ImmutableMatrix([-sp.sin(beta + gamma), sp.cos(beta + gamma), 0, 0])
-    c_across = _simp((castor_normal.T * v_C)[0].subs(motion_of_a))  # = -v_A sin g - l5 betadot cos g
+    c_across = _simp(along(v_C, beta + gamma + sp.pi / 2))  # = -v_A sin g - l5 betadot cos g
     castor_swivel = sp.atan2(-l5 * betadot, v_A)
-    c_along = (castor_dir.T * v_C)[0].subs(motion_of_a)
+    c_along = along(v_C, beta + gamma)
     castor_rate = _solve_one([sp.simplify(c_along.subs(gamma, castor_swivel))], [alphadot_3])[alphadot_3]
     if sp.simplify(c_across.subs(gamma, castor_swivel)) != 0:  # pragma: no cover
         raise RuntimeError("castor swivel angle does not cancel the lateral slip")
     eq_castor = r3 * castor_rate - r3 * alphadot_3
 
     # 6: H on the circle (eq 6), eqs 7-10
-    path_t = sp.ImmutableMatrix([R * sp.sin(phi_t), R * (1 - sp.cos(phi_t))])
-    eq7_t, eq8_t = r_H_t[0] - path_t[0], r_H_t[1] - path_t[1]
+    eq7_t, eq8_t = r_H_t[0] - R * sp.sin(phi_t), r_H_t[1] - R * (1 - sp.cos(phi_t))
     eq7, eq8 = to_plain(eq7_t), to_plain(eq8_t)
     eq9, eq10 = _simp(to_plain(sp.diff(eq7_t, t))), _simp(to_plain(sp.diff(eq8_t, t)))
     eq11, eq12 = xdot_A - v_A * cb, ydot_A - v_A * sb
@@ -414,8 +405,7 @@ def _sections(latex: bool) -> dict[str, list[_Row]]:
 
 
 def render(latex: bool = False) -> str:
-    """The derivation as text (``latex``: a LaTeX fragment of amsmath ``align`` environments, the paper's equation
-    numbers as tags): positions, contact velocities, system (29), its solution and the paper's misprints."""
+    """The derivation as text (``latex``: a LaTeX fragment, amsmath ``align`` environments, eq. numbers as tags)."""
     head = "Symbolic D-H derivation of the AmigoBot kinematics (amigo-gym derive"
     out = [f"% {head} --latex); needs amsmath" if latex else f"{head})"]
     for title, rows in _sections(latex).items():
