@@ -150,8 +150,8 @@ def report_markdown(doc: dict[str, Any]) -> str:
         ]
         new_names = [a for a in bench["aggregates"] if a not in {r["agent"] for r in doc["results"]}]
         if new_names:
-            gain = proto["analytic_gain"]
-            lines += ["", "Agents (besides those above): " + "; ".join(agent_legend(new_names, gain)) + "."]
+            legend = agent_legend(new_names, proto["analytic_gain"])
+            lines += ["", "Agents (besides those above): " + "; ".join(legend) + "."]
         lines += [("#" + ln if ln.startswith("#") else ln) for ln in table[1:]]
         if doc.get("benchmark_plots"):
             lines += ["", "![benchmark scenarios](benchmark_scenarios.png)", ""]
@@ -160,14 +160,12 @@ def report_markdown(doc: dict[str, Any]) -> str:
 
 
 def summary_text(doc: dict[str, Any], out: Path) -> str:
-    """What ``amigo-gym compare`` prints: the perturbed starts' table, the targets, the quick benchmark, the agents
-    and where the files went."""
+    """What ``amigo-gym compare`` prints: the perturbed starts, the targets, the quick benchmark, the agents, files."""
     proto = doc["protocol"]
     rows = [r for r in doc["results"] if r["scenario"] == "perturbed"]
-    n = len(proto["scenarios"]["perturbed"]["seeds"])
     lines = [
-        f"AmigoBot-v0, {n} perturbed starts of {proto['duration_s']:.0f} s on the circle R = "
-        f"{proto['env_params']['radius']} m (H within 2 cm, heading within 0.1 rad):",
+        f"AmigoBot-v0, {len(proto['scenarios']['perturbed']['seeds'])} perturbed starts of {proto['duration_s']:.0f} s "
+        f"on the circle R = {proto['env_params']['radius']} m (H within 2 cm, heading within 0.1 rad):",
         "",
         *md_table(
             ("agent", "H RMS error [mm]", "wheel-rate deviation from the analytic policy, RMS [rad/s]"),
@@ -198,28 +196,16 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
         lines.append(
             f"Quick benchmark ({len(bench['scenarios'])} scenarios x {bench['scenarios'][0]['episodes']} short "
             f"episodes on v0 and v1, a smoke test, not the benchmark's result), H RMS IQM [mm] (failed episodes): "
-            f"{', '.join(cells)}. "
-            f"{len(bench['unavailable'])} (agent, seed, scenario) runs could not run (a v0 model on a v1 "
-            "scenario or the reverse: other observations); report.md lists them."
+            f"{', '.join(cells)}. {len(bench['unavailable'])} (agent, seed, scenario) runs could not run (a v0 model "
+            "on a v1 scenario or the reverse: other observations); report.md lists them."
         )
     lines += ["", "Agents:", *(f"  {x}" for x in agent_legend(names, proto["analytic_gain"])), ""]
     plots = ", plots eval_*.png" + (", benchmark_*.png" if doc.get("benchmark_plots") else "")
-    has_plots = (out / "eval_trajectories.png").is_file()
     lines.append(
         f"Files in {out}/: report.md (every scenario, the training records, the benchmark's tables), results.json "
-        f"(all numbers), eval.md{plots if has_plots else ''}."
+        f"(all numbers), eval.md{plots if (out / 'eval_trajectories.png').is_file() else ''}."
     )
     return "\n".join(lines)
-
-
-def quick_benchmark(
-    specs: Sequence[ev.AgentSpec], generalists: Path | None = None, *, progress: bool = False
-) -> dict[str, Any]:
-    """The benchmark's ``--quick`` subset on ``specs`` and the v1 generalists in ``generalists`` (``<folder>_v1``)."""
-    specs = [*specs, *([] if generalists is None else bm.generalists(generalists))]
-    doc = bm.run_benchmark(specs, bm.quick_suite(), progress=progress, quick=True)
-    doc["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
-    return doc
 
 
 def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = None) -> dict[str, Any]:
@@ -237,19 +223,16 @@ def fresh_run_request(train_steps: int, seed: int, hyperparams: Path | None = No
 def reuse_mismatch(run_dir: Path, request: dict[str, Any]) -> str | None:
     """Why the run in ``run_dir`` cannot serve ``request`` (``None``: it can): its ``config.json`` must record the
     same settings, hyperparameters and versions, and it must have a checkpoint."""
-    cfg_file = run_dir / "config.json"
+    cfg_file, short = run_dir / "config.json", ("algo", "timesteps", "seed")
     if not cfg_file.is_file() or not (run_dir / "checkpoint.json").is_file():
         return "no complete earlier run"
     try:
         cfg = json.loads(cfg_file.read_text())
-        recorded = {k: cfg["settings"][k] for k in ("algo", "timesteps", "seed")} | {
-            "env_kwargs": cfg.get("env_kwargs")
-        }
+        recorded = {k: cfg["settings"][k] for k in short} | {"env_kwargs": cfg.get("env_kwargs")}
         recorded |= {k: cfg[k] for k in ("hyperparams", "versions")}
     except (ValueError, KeyError, TypeError):
         return f"unreadable {cfg_file}"
     differ = [k for k in request if json.dumps(recorded[k], sort_keys=True) != json.dumps(request[k], sort_keys=True)]
-    short = ("algo", "timesteps", "seed")
     reasons = [f"{k} {recorded[k]!r} != {request[k]!r}" if k in short else f"{k} differ" for k in differ]
     return ", ".join(reasons) if reasons else None
 
@@ -261,8 +244,7 @@ def verify_outputs(out: Path) -> dict[str, str]:
 
 @dataclass(frozen=True)
 class CompareSettings:
-    """Settings of ``amigo-gym compare``, each the option of the same name (``plots``: ``--no-plots``,
-    ``benchmark``: ``--no-benchmark``, ``progress``: ``--no-progress``).
+    """Options of ``amigo-gym compare``, each the option of the same name unless its ``cli(flag)`` names one.
 
     Attributes:
         out: output directory [dir].
@@ -291,7 +273,6 @@ class CompareSettings:
     progress: bool = field(default=True, metadata=cli("--no-progress"))
 
     def validate(self) -> None:
-        """Raise ``ValueError`` naming the option and its allowed range on a bad setting."""
         for name, low in (("train_steps", 0), ("seed", 0), ("seeds", 1)):
             if getattr(self, name) < low:
                 raise ValueError(f"--{name.replace('_', '-')} must be an integer >= {low}, got {getattr(self, name)}")
@@ -303,44 +284,42 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
     with runs.RunLock(out):
         runs.clean_temporaries(out)
         hyperparams = Path(s.hyperparams) if s.hyperparams else None
-        train_steps, seed, plots, progress = s.train_steps, s.seed, s.plots, s.progress
         if models is not None:
             say(f"loading pretrained agents from {models}")
         proto, agents, specs, training = ev.protocol_agents(s.steps, s.seeds, models)
-        if train_steps > 0:
+        if s.train_steps > 0:
             from amigo_gym.tools.training.train import Settings, train
 
             run_dir = out / "train_ppo"
-            request = fresh_run_request(train_steps, seed, hyperparams)
+            request = fresh_run_request(s.train_steps, s.seed, hyperparams)
             stale = reuse_mismatch(run_dir, request)
             if stale is not None and run_dir.exists():
                 say(f"retraining: the run in {run_dir} does not match the request ({stale})")
                 shutil.rmtree(run_dir)
-            argv = ["--algo", "ppo", "--seed", str(seed), "--timesteps", str(train_steps), "--out", str(run_dir)]
+            argv = ["--algo", "ppo", "--seed", str(s.seed), "--timesteps", str(s.train_steps), "--out", str(run_dir)]
             fresh = Settings(
                 algo="ppo",
-                seed=seed,
+                seed=s.seed,
                 out=str(run_dir),
-                timesteps=train_steps,
+                timesteps=s.train_steps,
                 hyperparams=None if hyperparams is None else str(hyperparams),
                 resume=stale is None,
                 eval_freq=0,
-                checkpoint_freq=max(train_steps // 4, 1),
-                progress=progress,
+                checkpoint_freq=max(s.train_steps // 4, 1),
+                progress=s.progress,
                 argv=argv + ([] if hyperparams is None else ["--hyperparams", str(hyperparams)]),
             )
             if stale is None:
                 say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
             else:
-                say(f"training a fresh PPO agent for {train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+                say(f"training a fresh PPO agent for {s.train_steps} steps in {run_dir} (about 1 min on 2 cores)")
             t0 = time.perf_counter()
-            training["ppo_fresh"] = train(fresh)
-            rec = training["ppo_fresh"]
+            rec = training["ppo_fresh"] = train(fresh)
             took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
             print(f"ppo_fresh: {rec['timesteps']} steps, trained in {rec['wall_time_s']:.0f} s ({took})")
             trained = ev.find_models(run_dir)[0]
             agents["ppo_fresh"] = trained.load()  # checked against run.json, as every model
-            specs.append(replace(trained, name="ppo_fresh", seed=seed, _model=agents["ppo_fresh"]))
+            specs.append(replace(trained, name="ppo_fresh", seed=s.seed, _model=agents["ppo_fresh"]))
         say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
         results, trajs = ev.evaluate_agents(agents, proto)
         best = best_learned(results)
@@ -350,12 +329,14 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
             generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
             also = f" and {generalists}" if generalists else ""
             say(f"quick benchmark (amigo-gym benchmark --quick) on these agents{also}")
-            bench = quick_benchmark(specs, generalists, progress=progress)
+            v1 = [] if generalists is None else bm.generalists(generalists)  # named <folder>_v1
+            bench = bm.run_benchmark([*specs, *v1], bm.quick_suite(), progress=s.progress, quick=True)
+            bench["command"] = "amigo-gym compare (the quick subset of amigo-gym benchmark)"
             extra["benchmark"] = json_safe(bench)
-            extra["benchmark_plots"] = plots and bool(bench["results"])
+            extra["benchmark_plots"] = s.plots and bool(bench["results"])
         with tempfile.TemporaryDirectory(dir=out, prefix=".staging-", ignore_cleanup_errors=True) as tmp:
             staging = Path(tmp)
-            doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=plots)
+            doc = ev.write_outputs(results, trajs, proto, staging, staging / "results.json", extra=extra, plots=s.plots)
             if bench is not None and extra["benchmark_plots"]:
                 bm.plot_all(bench, staging)
             atomic_write(staging / "report.md", report_markdown(doc).encode())

@@ -63,8 +63,7 @@ class EvalProtocol:
             raise ValueError(f"EvalProtocol.steps must be an integer >= 1, got {self.steps!r}")
         if not (seeds := self.perturbed_seeds) or any(not isinstance(s, int) or s < 0 for s in seeds):
             raise ValueError(f"EvalProtocol.perturbed_seeds must be non-negative integers, got {seeds!r}")
-        bad = [s for s in self.scenarios if s not in SCENARIOS]
-        if bad or not self.scenarios:
+        if (bad := [s for s in self.scenarios if s not in SCENARIOS]) or not self.scenarios:
             raise ValueError(f"EvalProtocol.scenarios must be a non-empty subset of {list(SCENARIOS)}, got {bad}")
         check_real("EvalProtocol", "settle_time_s", self.settle_time_s, 0.0)
         check_real("EvalProtocol", "analytic_gain", self.analytic_gain, 0.0, 10.0)
@@ -86,6 +85,10 @@ class Trajectory:
     ret: float
     terminated: bool
     h0: Array = field(default_factory=lambda: np.zeros(2))
+
+
+#: ``trajs[agent][scenario]``: the episodes
+Trajs = dict[str, dict[str, list[Trajectory]]]
 
 
 def steady_start_pose(params: TrackingParams) -> Array:
@@ -129,9 +132,8 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
         start["h0"] = [np.asarray(info_row(infos, i)["h_position"], dtype=np.float64) for i in range(len(sc.seeds))]
 
     def on_row(i: int, info: dict[str, Any], _ended: bool, obs: Any) -> None:
-        params: TrackingParams = start["params"]
-        wmax = params.robot.max_wheel_rate
-        ref = np.clip(analytic_wheel_rates(obs, params, gain), -wmax, wmax)
+        wmax = start["params"].robot.max_wheel_rate
+        ref = np.clip(analytic_wheel_rates(obs, start["params"], gain), -wmax, wmax)
         row = (info["time"], info["cross_track_error"], info["h_position"], info["wheel_rates"], info["wheel_angles"])
         for k, v in zip(keys, (*row, ref), strict=True):
             cols[i][k].append(v)
@@ -150,16 +152,6 @@ def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajecto
     return out
 
 
-def _settling_time(tr: Trajectory, band: float = SETTLED_BAND_M) -> float | None:
-    if tr.terminated or tr.e.size == 0:
-        return None
-    outside = np.flatnonzero(np.abs(tr.e) > band)
-    if outside.size == 0:
-        return 0.0
-    last = int(outside[-1])
-    return None if last == tr.e.size - 1 else float(tr.time[last + 1])
-
-
 def summarize(trajs: Sequence[Trajectory], params: TrackingParams, proto: EvalProtocol) -> dict[str, Any]:
     """Pooled metrics of one (agent, scenario)."""
     ss_rates = circle_steady_state(params.radius, params.speed, params.robot, params.direction).wheel_rates
@@ -169,7 +161,11 @@ def summarize(trajs: Sequence[Trajectory], params: TrackingParams, proto: EvalPr
     dev = np.concatenate([t.rates - t.ref_rates for t in trajs])
     dev_ss = np.concatenate([t.rates[m] - ss_rates for t, m in zip(trajs, settled, strict=True)])
     rets = np.array([t.ret for t in trajs])
-    st = [_settling_time(t) for t in trajs]
+    st: list[float | None] = []  # from the first step after the last one outside the band; None: it ends outside
+    for t in trajs:
+        outside = np.flatnonzero(np.abs(t.e) > SETTLED_BAND_M)
+        k = int(outside[-1]) + 1 if outside.size else 0
+        st.append(None if t.terminated or k == t.e.size else float(t.time[k]) if k else 0.0)
     return {
         "episodes": len(trajs),
         "h_rms_m": _rms(e),
@@ -267,12 +263,8 @@ class AgentSpec:
 
     def load(self, trust: bool = False) -> Agent:
         """The model, loaded on the CPU (with its ``VecNormalize`` statistics). Each pickle is checked first against
-        the sha256 its manifest or record gives, then that it is shipped, written here, or ``trust``ed.
-
-        Raises:
-            CorruptFileError: a sha256 mismatch or a file that is no loadable model (one line naming it).
-            UntrustedFileError: a file not trusted (one line naming it and the flag).
-        """
+        the sha256 its manifest or record gives (:class:`CorruptFileError` on a mismatch, as for a file that is no
+        loadable model), then that it is shipped, written here, or ``trust``ed (:class:`UntrustedFileError`)."""
         if self._model is not None:
             return self._model
         record: Any = self.manifest
@@ -305,12 +297,10 @@ class AgentSpec:
         return NormalizedAgent(model, stats)
 
     def instantiate(self, env: Any) -> Any:
-        """A classical policy built for ``env``, or the model if its observation space matches (else
-        :class:`Unavailable`)."""
+        """A classical policy for ``env``, or the model if its observation space matches (else :class:`Unavailable`)."""
         if self.path is None:
             return CLASSICAL[self.name](env)
-        model: Any = self.load()
-        self._model = model
+        self._model = model = self.load()
         want = (model.builder.obs_dim,) if self.fast else getattr(model.observation_space, "shape", None)
         got = getattr(env.observation_space, "shape", None)
         if want != got:
@@ -323,18 +313,16 @@ class AgentSpec:
         """JSON description (path, algo, seed, sha256 of the zip, manifest)."""
         d: dict[str, Any] = {"agent": self.name, "seed": self.seed}
         if self.path is None:
-            d["kind"] = "classical"
-        else:
-            kind = "fastppo" if self.fast else "sb3"
-            d |= {"kind": kind, "algo": self.algo, "path": self.path, "sha256": sha256_file(self.path)}
-            if self.manifest is not None:
-                d["manifest"] = self.manifest
-        return d
+            return d | {"kind": "classical"}
+        d |= {"kind": "fastppo" if self.fast else "sb3", "algo": self.algo, "path": self.path}
+        d["sha256"] = sha256_file(self.path)
+        return d if self.manifest is None else d | {"manifest": self.manifest}
 
 
-def _beside(model: Path, name: str) -> Path | None:
-    f = model.parent / name
-    return f if f.is_file() else None
+def _spec(name: str, model: Path, algo: str, record: str, stats: bool = True) -> AgentSpec:
+    """The spec of ``model``, with the files ``record`` and (``stats``) ``vecnormalize.pkl`` beside it if present."""
+    beside = [f if (f := model.parent / n).is_file() else None for n in (record, "vecnormalize.pkl")]
+    return AgentSpec(name, 0, str(model), algo, None, beside[0], beside[1] if stats else None)
 
 
 def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
@@ -345,9 +333,7 @@ def _run_ref(run_dir: Path, model: Path | None = None) -> AgentSpec:
         raise ValueError(f"--models: {run_dir} has a model.zip but no readable config.json naming its algo") from None
     if algo not in ALGOS:
         raise ValueError(f"--models: {cfg} names an unknown algo {algo!r}")
-    return AgentSpec(
-        run_dir.name, 0, str(model), algo, None, _beside(model, "run.json"), _beside(model, "vecnormalize.pkl")
-    )
+    return _spec(run_dir.name, model, algo, "run.json")
 
 
 def _is_run(d: Path) -> bool:
@@ -360,12 +346,8 @@ def v0_name(name: str) -> str:
 
 
 def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
-    """The trained models at ``path``: a run folder, a folder of them, a model ``.zip`` or a folder of ``<algo>.zip``.
-
-    Raises:
-        FileNotFoundError: ``path`` does not exist.
-        ValueError: it holds no model, or a model whose algorithm cannot be told.
-    """
+    """The trained models at ``path``: a run folder, a folder of them, a model ``.zip`` or a folder of ``<algo>.zip``;
+    ``FileNotFoundError`` if it does not exist, ``ValueError`` if it holds no model or one of an unknown algorithm."""
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"--models: no file or directory {p}")
@@ -373,18 +355,13 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
         if p.suffix != ".zip":
             raise ValueError(f"--models: {p} is not a model .zip")
         if p.stem in ALGOS:
-            record, stats = _beside(p, f"{p.stem}.json"), _beside(p, "vecnormalize.pkl")
-            return [AgentSpec(p.stem, 0, str(p), p.stem, None, record, stats)]
+            return [_spec(p.stem, p, p.stem, f"{p.stem}.json")]
         if (p.parent / "config.json").is_file():
             return [_run_ref(p.parent, p)]
         raise ValueError(f"--models: cannot tell the algorithm of {p} (name it <algo>.zip or keep its config.json)")
     if _is_run(p):
         return [_run_ref(p)]
-    refs = [
-        AgentSpec(a, 0, str(p / f"{a}.zip"), a, None, _beside(p / f"{a}.zip", f"{a}.json"))
-        for a in ALGOS
-        if (p / f"{a}.zip").is_file()
-    ]
+    refs = [_spec(a, p / f"{a}.zip", a, f"{a}.json", stats=False) for a in ALGOS if (p / f"{a}.zip").is_file()]
     refs += [_run_ref(d) for d in sorted(p.iterdir()) if d.is_dir() and _is_run(d)]
     if not refs:
         raise ValueError(
@@ -425,20 +402,17 @@ def protocol_agents(
     return proto, agents, specs, training
 
 
-def evaluate_agents(
-    agents: dict[str, Agent], proto: EvalProtocol | None = None
-) -> tuple[list[dict[str, Any]], dict[str, dict[str, list[Trajectory]]]]:
+def evaluate_agents(agents: dict[str, Agent], proto: EvalProtocol | None = None) -> tuple[list[dict[str, Any]], Trajs]:
     """Every agent on every scenario of ``proto``: ``(results, trajectories)``, one result per (agent, scenario)
     (:func:`summarize`) and ``trajectories[agent][scenario]`` the episodes."""
     proto = proto or EvalProtocol()
     params = TrackingParams.v0()
     results: list[dict[str, Any]] = []
-    trajs: dict[str, dict[str, list[Trajectory]]] = {}
+    trajs: Trajs = {}
     for name, agent in agents.items():
         trajs[name] = {}
         for sc in protocol_scenarios(proto, params):
-            eps = trajectories(agent, sc, proto.analytic_gain)
-            trajs[name][sc.name] = eps
+            trajs[name][sc.name] = eps = trajectories(agent, sc, proto.analytic_gain)
             results.append({"agent": name, "scenario": sc.name, **summarize(eps, params, proto)})
     return results, trajs
 
@@ -467,7 +441,7 @@ def markdown_table(results: Sequence[dict[str, Any]]) -> str:
     return "\n".join(md_table([c[1] for c in COLUMNS], rows)) + "\n"
 
 
-def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path) -> None:
+def plot_trajectories(trajs: Trajs, params: TrackingParams, path: Path) -> None:
     """Top: H's trajectory of every agent against the circle, whole and near the start. Bottom: ``|e(t)|``."""
     plt = pyplot()
     have = {s for s in SCENARIOS if all(s in v for v in trajs.values())}
@@ -499,9 +473,7 @@ def plot_trajectories(trajs: dict[str, dict[str, list[Trajectory]]], params: Tra
     save_figure(fig, path)
 
 
-def plot_wheels(
-    trajs: dict[str, dict[str, list[Trajectory]]], params: TrackingParams, path: Path, scenario: str = "perturbed"
-) -> None:
+def plot_wheels(trajs: Trajs, params: TrackingParams, path: Path, scenario: str = "perturbed") -> None:
     """Per agent (the paper's Figs. 2–5): wheel angles, wheel rates over 10 s, angles minus the analytic policy's."""
     plt = pyplot()
     if "analytic" not in trajs:
@@ -537,7 +509,7 @@ def plot_wheels(
 # --------------------------------------------------------------------------- files
 def write_outputs(
     results: list[dict[str, Any]],
-    trajs: dict[str, dict[str, list[Trajectory]]],
+    trajs: Trajs,
     proto: EvalProtocol,
     out: Path,
     json_path: Path,
@@ -620,7 +592,6 @@ class EvaluateSettings:
     plots: bool = field(default=True, metadata=cli("--no-plots"))
 
     def validate(self) -> None:
-        """Raise ``ValueError`` naming the option, its allowed range and the value."""
         if self.seeds < 1:
             raise ValueError(f"--seeds must be an integer >= 1, got {self.seeds}")
 
