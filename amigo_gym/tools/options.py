@@ -11,7 +11,7 @@ import json
 import re
 import sys
 import types
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import MISSING, Field, fields
 from typing import Any, Literal, NoReturn, TypeVar, Union, get_args, get_origin, get_type_hints
 
@@ -97,31 +97,25 @@ def json_object(text: str) -> dict[str, Any]:
     raise ValueError(f"must be a JSON object, got {text!r}")
 
 
-_BOOLS = {"1": True, "true": True, "yes": True, "on": True, "0": False, "false": False, "no": False, "off": False}
-
-
 def parse_bool(text: str) -> bool:
     """``true/yes/on/1`` or ``false/no/off/0`` (any case) as a ``bool``."""
-    if (value := _BOOLS.get(text.strip().lower())) is None:
+    words = {"1": True, "true": True, "yes": True, "on": True, "0": False, "false": False, "no": False, "off": False}
+    if (value := words.get(text.strip().lower())) is None:
         raise argparse.ArgumentTypeError(f"expected true or false, got {text!r}")
     return value
 
 
-def _options(cls: type) -> list[tuple[Field[Any], dict[str, Any], str]]:
+def _options(cls: type) -> Iterator[tuple[Field[Any], dict[str, Any], str]]:
     """The fields of ``cls`` that are options: each with its :func:`cli` metadata and its flag."""
-    out = []
     for f in fields(cls):
         meta = {**cli()["cli"], **f.metadata.get("cli", {})}
         if f.init and not meta["skip"]:
-            out.append((f, meta, str(meta["flag"] or "--" + f.name.replace("_", "-"))))
-    return out
+            yield f, meta, str(meta["flag"] or "--" + f.name.replace("_", "-"))
 
 
 def _strip_optional(tp: Any) -> Any:
-    if get_origin(tp) in (Union, types.UnionType):
-        args = [a for a in get_args(tp) if a is not type(None)]
-        return args[0] if len(args) == 1 else tp
-    return tp
+    args = [a for a in get_args(tp) if a is not type(None)]
+    return args[0] if get_origin(tp) in (Union, types.UnionType) and len(args) == 1 else tp
 
 
 def _scalar(tp: Any) -> dict[str, Any]:
@@ -249,12 +243,13 @@ def say(message: str) -> None:
 def missing_modules(modules: Sequence[str]) -> list[str]:
     """The modules of ``modules`` that ``importlib.util.find_spec`` cannot find (nothing is imported)."""
 
-    def found(module: str) -> bool:
+    missing = []
+    for m in modules:
         with contextlib.suppress(ImportError, ValueError):
-            return importlib.util.find_spec(module) is not None
-        return False
-
-    return [m for m in modules if not found(m)]
+            if importlib.util.find_spec(m) is not None:
+                continue
+        missing.append(m)
+    return missing
 
 
 def install_hint(extra: str) -> str:

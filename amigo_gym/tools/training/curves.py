@@ -1,11 +1,10 @@
-"""``amigo-gym curves``: learning curves over training seeds and the time to reach a tracking threshold.
-
-Usage, the run folders read, the aggregation over seeds, the threshold and the output files: docs/benchmark.md,
-"Reference: `amigo-gym curves`".
-"""
+"""``amigo-gym curves``: learning curves over training seeds and the time to reach a tracking threshold (usage, the
+run folders read, the aggregation over seeds, the threshold, the output files: docs/benchmark.md, "Reference:
+`amigo-gym curves`")."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 import sys
@@ -19,7 +18,7 @@ import numpy as np
 
 from amigo_gym.io import atomic_write, atomic_write_json
 from amigo_gym.tools import runs
-from amigo_gym.tools.options import cli, parse_settings, run_guarded, say
+from amigo_gym.tools.options import cli, run_command, say
 from amigo_gym.tools.plots import pyplot, save_figure
 from amigo_gym.tools.training.intervals import stratified_bootstrap
 from amigo_gym.tools.training.task_metrics import md_table
@@ -48,32 +47,29 @@ class Run:
     group: str = ""
 
 
-def _identify(run_dir: Path) -> tuple[str, int, str | None]:
-    cfg_file = run_dir / "config.json"
-    if cfg_file.is_file():
-        cfg = runs.read_json(cfg_file)
-        settings = cfg.get("settings") if isinstance(cfg, dict) else None
-        if isinstance(settings, dict):
-            algo, seed = settings.get("algo"), settings.get("seed")
-            if isinstance(algo, str) and isinstance(seed, int) and not isinstance(seed, bool):
-                env = cfg.get("env_id", settings.get("env_id"))
-                return algo, seed, env if isinstance(env, str) else None
-    m = _NAME.match(run_dir.name)
-    if m is None:
-        raise ValueError("no config.json with settings.algo and settings.seed, and the name is not <algo>_s<seed>")
-    return m.group("algo").lower(), int(m.group("seed")), None
-
-
 def _finite(x: Any) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(float(x))
 
 
-def _read_evals(path: Path) -> tuple[dict[str, Any], ...]:
-    data = runs.read_json(path)
+def _read_run(run_dir: Path) -> Run:
+    """The run in ``run_dir`` (its group not set); ``ValueError`` saying why it is none."""
+    if not (run_dir / "eval.json").is_file():
+        raise ValueError("no eval.json")
+    cfg: Any = runs.read_json(run_dir / "config.json") if (run_dir / "config.json").is_file() else None
+    settings: Any = cfg.get("settings") if isinstance(cfg, dict) else None
+    algo, seed = (settings.get("algo"), settings.get("seed")) if isinstance(settings, dict) else (None, None)
+    if isinstance(algo, str) and isinstance(seed, int) and not isinstance(seed, bool):
+        env = cfg.get("env_id", settings.get("env_id"))
+    elif m := _NAME.match(run_dir.name):
+        algo, seed, env = m.group("algo").lower(), int(m.group("seed")), None
+    else:
+        raise ValueError("no config.json with settings.algo and settings.seed, and the name is not <algo>_s<seed>")
+    data = runs.read_json(run_dir / "eval.json")
     if not isinstance(data, list) or not all(isinstance(e, dict) and _finite(e.get("timesteps")) for e in data):
         raise ValueError("eval.json is not a list of evaluations with 'timesteps'")
-    by_step = {int(e["timesteps"]): e for e in data}  # a repeated step (resumed run) keeps its later evaluation
-    return tuple(by_step[k] for k in sorted(by_step))
+    if not (by_step := {int(e["timesteps"]): e for e in data}):  # a repeated step (resumed run) keeps its later one
+        raise ValueError("eval.json holds no evaluation yet")
+    return Run(algo, seed, run_dir, env if isinstance(env, str) else None, tuple(by_step[k] for k in sorted(by_step)))
 
 
 def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, str]]]:
@@ -87,38 +83,27 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
         candidates = [folder] if (folder / "eval.json").is_file() else sorted(p for p in folder.iterdir() if p.is_dir())
         for run_dir in candidates:
             try:
-                if not (run_dir / "eval.json").is_file():
-                    raise ValueError("no eval.json")
-                algo, seed, env_id = _identify(run_dir)
-                if not (evals := _read_evals(run_dir / "eval.json")):
-                    raise ValueError("eval.json holds no evaluation yet")
+                found.append(_read_run(run_dir))
             except ValueError as exc:  # includes CorruptFileError
                 skipped.append({"path": str(run_dir), "reason": " ".join(str(exc).split())})
-                continue
-            found.append(Run(algo, seed, run_dir, env_id, evals))
     several_envs = len({r.env_id for r in found if r.env_id is not None}) > 1
     runs_out = [replace(r, group=f"{r.algo} {r.env_id}" if several_envs and r.env_id else r.algo) for r in found]
-    seen: dict[tuple[str, int], Path] = {}
+    seen: dict[tuple[str, int], Run] = {}
     for r in runs_out:
-        key = (r.group, r.seed)
-        if key in seen:
-            raise ValueError(f"--runs: {r.group} seed {r.seed} twice ({seen[key]} and {r.path})")
-        seen[key] = r.path
+        if (first := seen.setdefault((r.group, r.seed), r)) is not r:
+            raise ValueError(f"--runs: {r.group} seed {r.seed} twice ({first.path} and {r.path})")
     runs_out.sort(key=lambda r: (r.group, r.seed))
     return runs_out, skipped
-
-
-def _series(run: Run, axis: str, metric: str) -> tuple[np.ndarray, np.ndarray]:
-    pts = [(float(e[axis]), float(e[metric])) for e in run.evals if _finite(e.get(axis)) and _finite(e.get(metric))]
-    pts.sort(key=lambda p: p[0])
-    a = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
-    return a[:, 0], a[:, 1]
 
 
 def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, seed: int = 0) -> dict[str, Any] | None:
     """Mean over ``runs`` of ``metric`` against ``axis`` (step functions on the range every seed covers) with its
     pointwise 95 % bootstrap band over seeds; ``None`` if the seeds share no range."""
-    series = {r.seed: _series(r, axis, metric) for r in runs}
+    series: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for r in runs:  # each seed's (x, y) points, sorted by x
+        pts = [(float(e[axis]), float(e[metric])) for e in r.evals if _finite(e.get(axis)) and _finite(e.get(metric))]
+        xy = np.asarray(sorted(pts, key=lambda p: p[0]), dtype=np.float64).reshape(-1, 2)
+        series[r.seed] = xy[:, 0], xy[:, 1]
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:
         return None
@@ -193,16 +178,12 @@ def learning_curves(
     for s in skipped:
         say(f"amigo-gym curves: skipping {s['path']}: {s['reason']}")
     if not found:
-        where = ", ".join(map(str, folders))
-        raise ValueError(f"--runs: no run folder with an eval.json in {where}")
-    groups: dict[str, list[Run]] = {}
-    for r in found:
-        groups.setdefault(r.group, []).append(r)
+        raise ValueError(f"--runs: no run folder with an eval.json in {', '.join(map(str, folders))}")
+    groups = {g: list(rs) for g, rs in itertools.groupby(found, key=lambda r: r.group)}  # found is sorted by group
     say(f"{len(found)} runs: " + ", ".join(f"{g} ({len(rs)} seeds)" for g, rs in groups.items()))
     curves: dict[str, Any] = {}
     jobs = [(g, axis, m) for g in groups for axis in AXES for m in CURVE_METRICS]
-    bar = tqdm(jobs, desc="curves", unit="curve", file=sys.stderr, disable=not progress)
-    for g, axis, m in bar:
+    for g, axis, m in tqdm(jobs, desc="curves", unit="curve", file=sys.stderr, disable=not progress):
         curves.setdefault(g, {}).setdefault(axis, {})[m] = curve(groups[g], axis, m, reps=reps, seed=bootstrap_seed)
     return {
         "protocol": {
@@ -228,15 +209,14 @@ def learning_curves(
     }
 
 
-# --------------------------------------------------------------------------- reports
-def _final(c: Mapping[str, Any] | None, scale: float) -> str:
-    if c is None:
-        return "–"
-    return f"{scale * c['mean'][-1]:.3g} [{scale * c['ci95_low'][-1]:.3g}, {scale * c['ci95_high'][-1]:.3g}]"
-
-
 def markdown_report(doc: Mapping[str, Any]) -> str:
     """Markdown: the time-to-threshold table, the final values with their intervals, the skipped folders."""
+
+    def final(c: Mapping[str, Any] | None, scale: float) -> str:
+        if c is None:
+            return "–"
+        return f"{scale * c['mean'][-1]:.3g} [{scale * c['ci95_low'][-1]:.3g}, {scale * c['ci95_high'][-1]:.3g}]"
+
     p = doc["protocol"]
     thr_mm = 1e3 * p["threshold_m"]
     lines = [
@@ -262,7 +242,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     for g, axes in doc["curves"].items():
         h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
         c = h or ret
-        rows.append((g, c["n_seeds"] if c else 0, f"{c['x'][-1]:.0f}" if c else "–", _final(h, 1e3), _final(ret, 1.0)))
+        rows.append((g, c["n_seeds"] if c else 0, f"{c['x'][-1]:.0f}" if c else "–", final(h, 1e3), final(ret, 1.0)))
     lines += md_table(("algorithm", "seeds", "step", "H RMS [mm]", "return"), rows)
     lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
     if doc["skipped"]:
@@ -272,14 +252,12 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
 
 def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
     """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
-    plt = pyplot()
-    fig, axs = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axs = pyplot().subplots(1, 2, figsize=(11, 4.2))
     for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
         for i, (g, axes) in enumerate(doc["curves"].items()):
-            c = axes[axis][metric]
-            color = f"C{i}"
-            if c is None:
+            if (c := axes[axis][metric]) is None:
                 continue
+            color = f"C{i}"
             for s in c["per_seed"].values():
                 ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
             marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
@@ -310,7 +288,6 @@ def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> l
     return written
 
 
-# --------------------------------------------------------------------------- command line
 @dataclass(frozen=True)
 class CurvesSettings:
     """Options of ``amigo-gym curves``; checked by :func:`learning_curves`.
@@ -339,11 +316,8 @@ class CurvesSettings:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``amigo-gym curves``."""
     args = list(sys.argv[1:] if argv is None else argv)
-    a = parse_settings(
-        CurvesSettings, args, "amigo-gym curves", "Learning curves over training seeds, time to threshold."
-    )
 
-    def run() -> int:
+    def run(a: CurvesSettings) -> None:
         tty = a.progress and sys.stderr.isatty()
         doc = learning_curves(
             a.runs, metric=a.metric, threshold=a.threshold, reps=a.reps, bootstrap_seed=a.bootstrap_seed, progress=tty
@@ -352,6 +326,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         written = write_outputs(doc, Path(a.out), plots=a.plots)
         print(markdown_report(doc), end="")
         print("wrote " + ", ".join(map(str, written)))
-        return 0
 
-    return run_guarded(run, "amigo-gym curves")
+    about = "Learning curves over training seeds, time to threshold."
+    return run_command(CurvesSettings, run, args, "amigo-gym curves", about)

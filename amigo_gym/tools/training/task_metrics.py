@@ -1,9 +1,6 @@
-"""The protocol engine: scenarios, the episode runner, the task metrics read from the environments' ``info`` and the
-Markdown table writer.
-
-One engine for ``evaluate``, ``benchmark``, ``compare`` and the training's evaluation callback; the metrics:
-docs/benchmark.md, "Reference: task metrics".
-"""
+"""The protocol engine of ``evaluate``, ``benchmark``, ``compare`` and the training's evaluation callback: scenarios,
+the episode runner, the task metrics read from the environments' ``info`` (docs/benchmark.md, "Reference: task
+metrics") and the Markdown table writer."""
 
 from __future__ import annotations
 
@@ -75,9 +72,7 @@ class Scenario:
 
     def to_json(self) -> dict[str, Any]:
         """The fields and ``episodes`` as JSON data (``pose`` only when set)."""
-        d = {**asdict(self), "episodes": self.episodes}
-        if self.pose is None:
-            del d["pose"]
+        d = {k: v for k, v in asdict(self).items() if k != "pose" or v is not None} | {"episodes": self.episodes}
         return json_safe(d)  # type: ignore[no-any-return]
 
 
@@ -105,21 +100,18 @@ def make_env(sc: Scenario) -> Any:
         raise Unavailable(f"gym.make({sc.env_id!r}, ...) refused the scenario: {exc}".splitlines()[0]) from exc
 
 
-#: ``on_row(i, info, ended, obs)`` after each recorded step of row ``i``, ``obs`` what the agent acted on
-OnRow = Callable[[int, dict[str, Any], bool, Any], object]
-
-
 def run_scenario(
     agent: Any,
     sc: Scenario,
     *,
     on_reset: Callable[[Any, dict[str, Any]], object] | None = None,
-    on_row: OnRow | None = None,
+    on_row: Callable[[int, dict[str, Any], bool, Any], object] | None = None,
 ) -> list[EpisodeRecorder]:
     """Run ``agent`` (SB3's ``predict``) deterministically for one episode per seed of ``sc``, side by side in its
     native vector env (else Gymnasium's ``SyncVectorEnv``), until every row's first episode has ended; one recorder
     per episode. The whole batch is predicted at every step (a network's outputs do not depend on how many rows still
-    run); reaching the end of an open path is a success. ``on_reset(venv, infos)`` is called after the reset."""
+    run); reaching the end of an open path is a success. ``on_reset(venv, infos)`` is called after the reset,
+    ``on_row(i, info, ended, obs)`` after each recorded step of row ``i`` (``obs``: what the agent acted on)."""
     mode = "sync" if gym.spec(sc.env_id).vector_entry_point is None else "vector_entry_point"
     kw = dict(sc.env_kwargs)
     venv: Any = gym.make_vec(sc.env_id, len(sc.seeds), vectorization_mode=mode, max_episode_steps=sc.max_steps, **kw)
@@ -140,8 +132,7 @@ def run_scenario(
             for i in np.flatnonzero(live).tolist():
                 info = info_row(vinfo, i)
                 recs[i].add(adapter.read(info), float(reward[i]))
-                ended = bool(terminated[i] or truncated[i])
-                if ended:
+                if ended := bool(terminated[i] or truncated[i]):
                     recs[i].terminated = bool(terminated[i]) and not bool(info.get("end_of_path", False))
                     live[i] = False
                 if on_row is not None:
@@ -186,8 +177,7 @@ def run_grid(
             grid.unavailable.append({"agent": None, "seed": None, "scenario": sc.name, "reason": str(exc)})
             continue
         grid.status[sc.name] = "ok"
-        report = getattr(env.unwrapped, "feasibility", None)
-        if report is not None:
+        if (report := getattr(env.unwrapped, "feasibility", None)) is not None:
             grid.feasibility[sc.name] = report
     total = sum(sc.episodes for sc in scenarios if sc.name in envs) * len(agents)
     bar = tqdm(total=total, desc=desc, unit="ep", file=sys.stderr, disable=not progress)
@@ -198,9 +188,7 @@ def run_grid(
                 try:
                     grid.runs.append((spec, sc, run(spec.instantiate(envs[sc.name]), sc)))
                 except Unavailable as exc:
-                    grid.unavailable.append(
-                        {"agent": spec.name, "seed": spec.seed, "scenario": sc.name, "reason": str(exc)}
-                    )
+                    grid.unavailable.append(dict(agent=spec.name, seed=spec.seed, scenario=sc.name, reason=str(exc)))
                 bar.update(sc.episodes)
     finally:
         bar.close()
@@ -230,10 +218,9 @@ class InfoAdapter:
     def for_env(cls, env: Any) -> InfoAdapter:
         """Adapter of ``env.unwrapped.params``' ``robot`` and ``speed``, if present."""
         params = getattr(getattr(env, "unwrapped", env), "params", None)
-        robot = getattr(params, "robot", None)
-        speed = getattr(params, "speed", None)
+        robot, speed = getattr(params, "robot", None), getattr(params, "speed", None)
         ok = robot is not None and isinstance(speed, (int, float)) and not isinstance(speed, bool)
-        return cls(robot if ok else None, float(speed) if ok else None)  # type: ignore[arg-type]
+        return cls(robot, float(speed)) if ok else cls()  # type: ignore[arg-type]
 
     def read(self, info: Mapping[str, Any]) -> StepSample:
         """The step's sample; ``KeyError`` if ``cross_track_error`` or ``wheel_rates`` is missing."""
@@ -292,8 +279,7 @@ def episode_metrics(
     """Metrics (:data:`METRIC_NAMES`) of one episode of ``T`` steps, step ``k`` at ``t = (k + 1) dt`` [s]: ``e`` [m],
     ``speed_error`` [m/s] ``(T,)``, ``command`` and ``wheel_rates`` ``(T, 2)`` [rad/s], ``rewards`` ``(T,)``; a failure
     is ``terminated`` or ``|e| > failure_tolerance_m`` [m] at some ``t >= settle_time_s`` [s]."""
-    t = dt * np.arange(1, e.size + 1)
-    settled = t >= settle_time_s - 1e-9
+    settled = dt * np.arange(1, e.size + 1) >= settle_time_s - 1e-9  # step k at t = (k + 1) dt
     e_set = e[settled]
     dcmd = np.diff(command, axis=0)
     fail = bool(terminated) or bool(e_set.size and float(np.max(np.abs(e_set))) > failure_tolerance_m)
