@@ -6,6 +6,7 @@ Reference (objective, storage, modes, budget, stopped workers, summary, exit sta
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import json
 import math
 import os
@@ -47,6 +48,7 @@ MIN_ITERATIONS = 8
 #: the marker in the folder of a trial whose worker was stopped or killed
 ABANDONED = "ABANDONED.json"
 OBJECTIVE = "validation_h_rms_iqm_m"
+Validation = tuple[float, dict[str, float | None]]  # OBJECTIVE [m] and each validation cell's mean (None: not finite)
 #: exit status of a worker stopped by SIGTERM / Ctrl-C
 INTERRUPTED = 130
 #: how long a worker joining a study waits for its creator to set it up [s]
@@ -55,28 +57,20 @@ READY_TIMEOUT_S = 120.0
 LOWS = {"n_trials": 1, "n_jobs": 1, "timesteps": 1, "eval_freq": 1, "eval_episodes": 1, "heartbeat_interval": 1,
         "grace_period": 1, "max_retry": 0, "threads": 1, "n_startup_trials": 0, "worker_index": 0, "train_seed": 0,
         "val_episodes": 1, "val_max_steps": 0}  # fmt: skip
-#: a query parameter whose name has one of these holds a credential
-_SECRET_PARAM = re.compile(r"pass|pwd|secret|token|key|auth|cred", re.IGNORECASE)
 
 
 # --------------------------------------------------------------------------- secrets
-def _secrets(url: str | None) -> set[str]:
-    """Every form (as typed, decoded, quoted) of each credential in ``url`` (``user:pw@``, credential parameters)."""
-    found = set()
+def scrub(text: str, url: str | None) -> str:
+    """``text`` with every form (as typed, decoded, quoted) of each credential of ``url`` (``user:pw@``, credential
+    parameters) replaced by ``***``."""
     m = re.match(r"[^:/?#]*://([^/?#]*)@", url or "")  # the userinfo, up to the host's last "@"
-    if m and ":" in m.group(1):
-        found.add(m.group(1).partition(":")[2])
+    found = {m.group(1).partition(":")[2]} if m and ":" in m.group(1) else set()
     for part in re.split(r"[&;]", (url or "").partition("?")[2]):
         name, eq, value = part.partition("=")
-        if eq and _SECRET_PARAM.search(unquote_plus(name)):
+        if eq and re.search(r"pass|pwd|secret|token|key|auth|cred", unquote_plus(name), re.IGNORECASE):  # a credential
             found.add(value.partition("#")[0])
     forms = {g for f in found for v in (f, unquote(f), unquote_plus(f)) for g in (v, quote(v, safe=""), quote_plus(v))}
-    return {f for f in forms if f}
-
-
-def scrub(text: str, url: str | None) -> str:
-    """``text`` with every form of every credential of ``url`` replaced by ``***``."""
-    for form in sorted(_secrets(url), key=len, reverse=True):
+    for form in sorted(forms - {""}, key=len, reverse=True):
         text = text.replace(form, "***")
     return text
 
@@ -255,21 +249,16 @@ class SweepConfig:
     def train_env_kwargs(self) -> dict[str, Any]:
         if self.env_kwargs is not None:
             return dict(self.env_kwargs)
-        if self.env_id == "AmigoBot-v1":
-            return json.loads(json.dumps(TRAINING_DISTRIBUTION["env_kwargs"]))  # type: ignore[no-any-return]
-        return {}
+        default = TRAINING_DISTRIBUTION["env_kwargs"] if self.env_id == "AmigoBot-v1" else {}
+        return json.loads(json.dumps(default))  # type: ignore[no-any-return]
 
 
-def validate_agent(agent: Any, cells: Sequence[Any]) -> tuple[float, dict[str, float | None]]:
+def validate_agent(agent: Any, cells: Sequence[Any]) -> Validation:
     """IQM over ``cells`` of ``agent``'s mean H cross-track RMS [m] on each cell's seeds, and the per-cell values
     (``None``: not finite; then the IQM is NaN)."""
-    per_cell: dict[str, float | None] = {}
-    for sc in cells:
-        vals = np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], dtype=np.float64)
-        per_cell[sc.name] = float(vals.mean()) if np.isfinite(vals).all() else None
-    if any(v is None for v in per_cell.values()):
-        return math.nan, per_cell
-    return float(iqm(np.array([list(per_cell.values())]))), per_cell
+    vals = {sc.name: np.array([r.metrics()["h_rms_m"] for r in run_scenario(agent, sc)], float) for sc in cells}
+    per_cell = {name: float(v.mean()) if np.isfinite(v).all() else None for name, v in vals.items()}
+    return (math.nan if None in per_cell.values() else float(iqm(np.array([list(per_cell.values())])))), per_cell
 
 
 # --------------------------------------------------------------------------- storage and study
@@ -311,11 +300,9 @@ def make_storage(cfg: SweepConfig) -> Any:
 
 def driver_url(url: str) -> str:
     """``postgresql://`` with the installed driver (psycopg 3, else psycopg2); ``postgresql+<driver>://`` kept."""
-    if url.startswith(("postgresql://", "postgres://")):
-        import importlib.util
-
-        if importlib.util.find_spec("psycopg") is None and importlib.util.find_spec("psycopg2") is not None:
-            return "postgresql+psycopg2://" + url.split("://", 1)[1]
+    postgres = url.startswith(("postgresql://", "postgres://"))
+    if postgres and importlib.util.find_spec("psycopg") is None and importlib.util.find_spec("psycopg2") is not None:
+        return "postgresql+psycopg2://" + url.split("://", 1)[1]
     return url
 
 
@@ -325,8 +312,8 @@ def _worker_seed(cfg: SweepConfig) -> int:
 
 
 def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
-    """Create the study (store the command, enqueue a grid) or join it; ``ValueError``: the existing study is of
-    another mode, environment or objective."""
+    """Create the study (store the command, enqueue a grid) or join it once its creator made it ready;
+    ``ValueError``: the existing study is of another mode, environment or objective."""
     import optuna
 
     sampler: Any = optuna.samplers.RandomSampler(seed=sampler_seed)
@@ -339,7 +326,20 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
     try:  # exactly one process creates the study (unique name) and enqueues the grid
         study = optuna.create_study(direction="minimize", **kw)
     except optuna.exceptions.DuplicatedStudyError:
-        return _join(cfg, optuna.create_study(direction="minimize", load_if_exists=True, **kw))
+        study = optuna.create_study(direction="minimize", load_if_exists=True, **kw)
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        while not study.user_attrs.get("ready"):
+            if time.monotonic() > deadline:
+                raise RuntimeError(
+                    f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
+                    "stopped while queuing the grid?); delete the study and start again"
+                ) from None
+            time.sleep(0.5)
+        for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
+            theirs = study.user_attrs.get(key)
+            if theirs is not None and theirs != mine:
+                raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}") from None
+        return study
     attrs = {"command": cfg.command, "argv": public_argv(cfg.argv), "mode": cfg.mode, "algos": cfg.algos,
              "budget": cfg.budget, "env_id": cfg.env_id, "env_kwargs": cfg.train_env_kwargs, "objective": OBJECTIVE,
              "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "host": socket.gethostname()}  # fmt: skip
@@ -353,23 +353,6 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
         base = load_hyperparams(cfg.base_file(cfg.algos[0]), cfg.env_id)
         study.enqueue_trial(base_params(cfg.algos[0], base), user_attrs={"baseline": True})
     study.set_user_attr("ready", True)  # joiners wait for the whole grid
-    return study
-
-
-def _join(cfg: SweepConfig, study: Any) -> Any:
-    """``study``, once its creator made it ready; ``ValueError``: it is of another mode, environment or objective."""
-    deadline = time.monotonic() + READY_TIMEOUT_S
-    while not study.user_attrs.get("ready"):
-        if time.monotonic() > deadline:
-            raise RuntimeError(
-                f"study {cfg.name!r} was created but not made ready within {READY_TIMEOUT_S:g} s (its creator "
-                "stopped while queuing the grid?); delete the study and start again"
-            )
-        time.sleep(0.5)
-    for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
-        theirs = study.user_attrs.get(key)
-        if theirs is not None and theirs != mine:
-            raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}")
     return study
 
 
@@ -389,19 +372,6 @@ def _exhausted(study: Any, cfg: SweepConfig, running: bool = False) -> bool:
     if any(t.state.name == "WAITING" for t in study.get_trials(deepcopy=False)):
         return False
     return cfg.mode == "seeds" or budget_count(study, before=sys.maxsize if running else None) >= cfg.budget
-
-
-def study_status(study: Any, budget: int | None = None) -> str:
-    """``complete``, ``running`` or ``incomplete``, from the study alone."""
-    trials = study.get_trials(deepcopy=False)
-    if any(t.state.name in ("RUNNING", "WAITING") for t in trials):
-        return "running"
-    attrs = study.user_attrs
-    if attrs.get("mode") == "seeds":
-        cells = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.user_attrs.get("grid") is True}
-        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state.name == "COMPLETE"}
-        return "complete" if cells and cells <= done else "incomplete"
-    return "complete" if budget_count(study) >= int(attrs.get("budget", budget or 0)) else "incomplete"
 
 
 def _abandoned(t: Any) -> bool:
@@ -433,10 +403,9 @@ def mark_abandoned(study: Any) -> None:
         if old.get("retried_as") == retries:
             continue
         reason = ua.get("interrupted") or "its worker stopped sending heartbeats (killed, or its machine lost)"
-        marked_at = old.get("marked") or time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        doc = {"study": study.study_name, "trial": t.number, "state": "FAIL", "reason": reason, "retried_as": retries,
-               "worker": ua.get("worker"), "marked": marked_at}  # fmt: skip
-        atomic_write_json(path, doc)
+        marked = old.get("marked") or time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        atomic_write_json(path, {"study": study.study_name, "trial": t.number, "state": "FAIL", "reason": reason,
+                                 "retried_as": retries, "worker": ua.get("worker"), "marked": marked})  # fmt: skip
 
 
 # --------------------------------------------------------------------------- search spaces
@@ -517,9 +486,7 @@ def sample_fastppo(trial: Any, timesteps: int) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- the objective
-def _validated_trial(
-    trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], tuple[float, dict[str, float | None]]]
-) -> float:
+def _validated_trial(trial: Any, cells: Sequence[Any], fit_and_validate: Callable[[], Validation]) -> float:
     """``fit_and_validate()``'s value, cells in ``validation``; an error (not a prune) or NaN sets ``fail_reason``."""
     import optuna
 
@@ -572,26 +539,29 @@ def _objective(cfg: SweepConfig, study: Any, sampler_seed: int) -> Callable[[Any
 
 def _trial(
     cfg: SweepConfig, study: Any, trial: Any, algo: str, seed: int, run_dir: Path, cells: Sequence[Any]
-) -> tuple[float, dict[str, float | None]]:
-    """One trial: its settings in ``run_dir/hyperparams.yml``, training in ``run_dir/run``, the value on ``cells``."""
+) -> Validation:
+    """One trial: its settings in ``run_dir/hyperparams.yml``; ``amigo-gym train`` or ``train-fast`` (resumed:
+    :func:`_resume_fastppo`) in ``run_dir/run``, each evaluation reported to the pruner; the value on ``cells``."""
     import optuna
     import yaml
 
     from amigo_gym.tools.training import fastppo
 
-    fast = algo == FASTPPO
+    fast, pre = algo == FASTPPO, "eval_" if algo == FASTPPO else ""  # fast-PPO's evaluation keys: eval_<metric>
     hp = fastppo.load_settings_yaml(cfg.base_file(algo)) if fast else load_hyperparams(cfg.base_file(algo), cfg.env_id)
     if cfg.mode == "hyperparams":
         hp |= sample_fastppo(trial, cfg.timesteps) if fast else sample_hyperparams(trial, algo, hp)
     trial.set_user_attr("hyperparams", hp)
     hp_key = fastppo.YAML_ENV_ID if fast else cfg.env_id
-    atomic_write(run_dir / "hyperparams.yml", yaml.safe_dump({hp_key: hp}, sort_keys=True), parents=True)
+    env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
+    atomic_write(hp_file, yaml.safe_dump({hp_key: hp}, sort_keys=True), parents=True)
     reported: set[int] = set()
     pruned: list[int] = []
 
-    def report(value: float, at: int, step: int | None = None) -> bool:
-        """Report an evaluation ``value`` at env-step ``at`` as ``step`` (default ``at``); whether training goes on."""
-        step = at if step is None else step
+    def report(row: Mapping[str, Any]) -> bool:
+        """Report evaluation ``row`` at its env-step (fast-PPO: floored to a multiple of --eval-freq); False: pruned."""
+        value, at = float(row.get(f"{pre}h_rms_m", math.nan)), int(row["env_steps" if fast else "timesteps"])
+        step = at // cfg.eval_freq * cfg.eval_freq if fast else at
         if not math.isfinite(value):
             raise FloatingPointError(f"evaluation at step {at} gave h_rms_m {value}")
         if cfg.mode == "hyperparams" and step not in reported:
@@ -602,130 +572,83 @@ def _trial(
                 return False
         return True
 
-    record, attrs = (
-        _fit_fast(cfg, study, trial, seed, hp, run_dir, report) if fast else _fit_sb3(cfg, algo, seed, run_dir, report)
-    )
+    if fast:
+        run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes,
+               "threads": cfg.threads}  # fmt: skip
+        s = fastppo.FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
+        resumed = _resume_fastppo(study, trial, s, out)
+        if resumed is not None:
+            trial.set_user_attr("resumed_from", resumed)
+        flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
+        command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
+        command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
+        config = {"settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
+                  "fastppo_settings": s.to_json(), "env_id": cfg.env_id, "env_kwargs": env_kwargs, "command": command,
+                  "resumed_from": resumed, "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}  # fmt: skip
+        atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
+        with open(out / "train.log", "a", encoding="utf-8") as log:
+            record = fastppo.train(s, out, resume=resumed is not None, log=lambda m: print(m, file=log, flush=True),
+                                   command=command, after_eval=report)  # fmt: skip
+        keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
+    else:
+        argv = ["--algo", algo, "--seed", str(seed), "--out", str(out), "--timesteps", str(cfg.timesteps),
+                "--eval-freq", str(cfg.eval_freq), "--eval-episodes", str(cfg.eval_episodes), "--checkpoint-freq", "0",
+                "--threads", str(cfg.threads), "--no-progress", "--hyperparams", str(hp_file), "--env", cfg.env_id,
+                "--env-kwargs", json.dumps(env_kwargs)]  # fmt: skip
+        record = train(parse_settings(Settings, argv, "amigo-gym train", argv=argv), after_eval=report)
+        keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
+    last = record.get("last_eval") or {}
+    attrs = {f"last_eval_{k}": last[pre + k] for k in keys if pre + k in last}
+    attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]} if fast else {}
     for key, value in (attrs | {"wall_time_s": record["wall_time_s"]}).items():
         trial.set_user_attr(key, value)
     if pruned:
         raise optuna.TrialPruned(f"pruned at step {pruned[0]}")
-    out, manifest = run_dir / "run", run_dir / "run" / "run.json"
-    if not fast:
-        return validate_agent(load_model(find_models(out)[0]), cells)
-    verify_sha256(out / "model.zip", str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
-    return validate_agent(FastPolicy.load(out / "model.zip"), cells)
-
-
-def _fit_sb3(
-    cfg: SweepConfig, algo: str, seed: int, run_dir: Path, report: Callable[..., bool]
-) -> tuple[dict[str, Any], dict[str, Any]]:
-    """``amigo-gym train`` in ``run_dir/run``, evaluations reported at their steps; the record, the trial's attrs."""
-    argv = ["--algo", algo, "--seed", str(seed), "--out", str(run_dir / "run"), "--timesteps", str(cfg.timesteps),
-            "--eval-freq", str(cfg.eval_freq), "--eval-episodes", str(cfg.eval_episodes), "--checkpoint-freq", "0",
-            "--threads", str(cfg.threads), "--no-progress", "--hyperparams", str(run_dir / "hyperparams.yml"),
-            "--env", cfg.env_id, "--env-kwargs", json.dumps(cfg.train_env_kwargs)]  # fmt: skip
-    s = parse_settings(Settings, argv, "amigo-gym train", argv=argv)
-    record = train(s, after_eval=lambda e: report(float(e.get("h_rms_m", math.nan)), int(e["timesteps"])))
-    last = record.get("last_eval") or {}
-    keys = ("h_rms_m", "speed_err_rms", "failure_rate", "timesteps", "mean_reward")
-    return record, {f"last_eval_{k}": last[k] for k in keys if k in last}
-
-
-def _fit_fast(
-    cfg: SweepConfig, study: Any, trial: Any, seed: int, hp: dict[str, Any], run_dir: Path, report: Callable[..., bool]
-) -> tuple[dict[str, Any], dict[str, Any]]:
-    """``amigo-gym train-fast`` in ``run_dir/run`` (resumed: :func:`_resume_fastppo`), at multiples of --eval-freq."""
-    from amigo_gym.tools.training import fastppo
-
-    env_kwargs, hp_file, out = cfg.train_env_kwargs, run_dir / "hyperparams.yml", run_dir / "run"
-    run = {"seed": seed, "total_steps": cfg.timesteps, "eval_every": cfg.eval_freq, "eval_envs": cfg.eval_episodes,
-           "threads": cfg.threads}  # fmt: skip
-    s = fastppo.FastPPOSettings.from_json({**hp, **run, "env_kwargs": env_kwargs})
-    resumed = _resume_fastppo(study, trial, s, out)
-    if resumed is not None:
-        trial.set_user_attr("resumed_from", resumed)
-    flags = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in run.items())
-    command = f"amigo-gym train-fast --out {out} --hyperparams {hp_file} {flags} --env-kwargs "
-    command += repr(json.dumps(env_kwargs)) + (" --resume" if resumed else "")
-    config = {"settings": {"algo": FASTPPO, "seed": seed, "timesteps": cfg.timesteps, "hyperparams": str(hp_file)},
-              "fastppo_settings": s.to_json(), "env_id": cfg.env_id, "env_kwargs": env_kwargs, "command": command,
-              "resumed_from": resumed, "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}  # fmt: skip
-    atomic_write_json(out / "config.json", config, parents=True)  # the trial's training starts now
-
-    def after_eval(row: dict[str, float]) -> bool:
-        at = int(row["env_steps"])
-        return report(float(row.get("eval_h_rms_m", math.nan)), at, at // cfg.eval_freq * cfg.eval_freq)
-
-    with open(out / "train.log", "a", encoding="utf-8") as log:
-        record = fastppo.train(s, out, resume=resumed is not None, log=lambda m: print(m, file=log, flush=True),
-                               command=command, after_eval=after_eval)  # fmt: skip
-    last = record.get("last_eval") or {}
-    keys = ("h_rms_m", "h_rms_settled_m", "chatter_settled_rms", "speed_err_settled_rms", "failure")
-    attrs = {f"last_eval_{k}": last[f"eval_{k}"] for k in keys if f"eval_{k}" in last}
-    attrs |= {"last_eval_timesteps": record["timesteps"], "train_sps": record["train_sps"]}
-    return record, attrs
+    if fast:
+        manifest = out / "run.json"
+        verify_sha256(out / "model.zip", str(json.loads(manifest.read_text()).get("sha256")), str(manifest))
+    return validate_agent(FastPolicy.load(out / "model.zip") if fast else load_model(find_models(out)[0]), cells)
 
 
 def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any] | None:
     """Copy into ``out`` the newest run of an abandoned trial of these params and settings ``s``; its origin or None."""
-    best: tuple[float, Any, Path] | None = None
+    found: list[tuple[float, int, Path]] = []  # (checkpoint mtime, trial, run)
     for t in study.get_trials(deepcopy=False):
         if t.number == trial.number or t.params != trial.params or not _abandoned(t):
             continue
         src = Path(str(t.user_attrs["run_dir"])) / "run"
-        try:
-            same = json.loads((src / "settings.json").read_text()) == s.to_json()
-            mtime = (src / "checkpoint.pt").stat().st_mtime
-        except (OSError, ValueError):
-            continue
-        if same and (best is None or mtime > best[0]):
-            best = (mtime, t, src)
-    if best is None:
+        with contextlib.suppress(OSError, ValueError):
+            if json.loads((src / "settings.json").read_text()) == s.to_json():
+                found.append(((src / "checkpoint.pt").stat().st_mtime, t.number, src))
+    if not found:
         return None
-    _, t, src = best
+    _, number, src = max(found, key=lambda f: f[0])  # the first of equal times
     out.mkdir(parents=True, exist_ok=True)
     for f in src.iterdir():
         if f.is_file() and f.name not in ("config.json", "run.lock", ABANDONED):
             shutil.copy2(f, out / f.name)
-    return {"trial": t.number, "run_dir": str(src)}
-
-
-def run_worker(cfg: SweepConfig, opened: list[Any] | None = None) -> None:
-    """One worker: join the study, run trials until the budget (or the grid) is spent; ``opened`` receives the
-    study as soon as it is open."""
-    import optuna
-
-    cfg.validate()
-    sampler_seed = _worker_seed(cfg)
-    study = open_study(cfg, make_storage(cfg), sampler_seed)
-    if opened is not None:
-        opened.append(study)
-    study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
-    with warnings.catch_warnings():  # experimental in Optuna
-        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        optuna.storages.fail_stale_trials(study)  # requeue trials of dead workers before checking the budget
-    mark_abandoned(study)
-
-    def stop_when_spent(st: Any, _t: Any) -> None:
-        if _exhausted(st, cfg, running=True):
-            st.stop()
-
-    with handling(signal.default_int_handler, signal.SIGTERM):
-        if not _exhausted(study, cfg):
-            errors = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)  # the trial's: FAIL, go on
-            study.optimize(_objective(cfg, study, sampler_seed), catch=errors, callbacks=[stop_when_spent])
+    return {"trial": number, "run_dir": str(src)}
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
-    """The study's summary, from the study alone (the same for every worker)."""
+    """The study's summary, from the study alone (the same for every worker); its status ``running`` (a trial
+    RUNNING or WAITING), else ``complete`` (every grid cell COMPLETE; the budget counted) or ``incomplete``."""
     from optuna.trial import TrialState
 
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
     best = study.best_trial if any(t.state == TrialState.COMPLETE for t in trials) else None
     attrs = dict(sorted(study.user_attrs.items()))
+    if any(t.state.name in ("RUNNING", "WAITING") for t in trials):
+        status = "running"
+    elif attrs.get("mode") == "seeds":
+        cells = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.user_attrs.get("grid") is True}
+        done = {(str(t.params.get("algo")), t.params.get("seed")) for t in trials if t.state.name == "COMPLETE"}
+        status = "complete" if cells and cells <= done else "incomplete"
+    else:
+        status = "complete" if budget_count(study) >= int(attrs.get("budget", budget or 0)) else "incomplete"
     return {
         "study": study.study_name,
-        "status": study_status(study, budget),
+        "status": status,
         "budget": attrs.get("budget", budget),
         "states": {s.name: sum(t.state == s for t in trials) for s in TrialState},
         "finished": sum(t.state not in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
@@ -744,16 +667,6 @@ def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
             for t in trials
         ],
     }
-
-
-def write_summary(folder: Path, summary: dict[str, Any]) -> None:
-    """Write ``summary.json`` into ``folder`` (locked) unless the one there saw more finished trials."""
-    path = folder / "summary.json"
-    with RunLock(folder, name="summary.lock", wait=60.0):
-        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
-            if int(json.loads(path.read_text()).get("finished", -1)) > int(summary["finished"]):
-                return
-        atomic_write_json(path, summary, parents=True)
 
 
 # --------------------------------------------------------------------------- the winners into a YAML file
@@ -800,54 +713,68 @@ def write_best_yaml(path: str | Path, study: Any, env_id: str) -> dict[str, Any]
 
 
 # --------------------------------------------------------------------------- command line
-def _spawn_workers(cfg: SweepConfig) -> list[int]:
-    """Open the study, then run ``n_jobs`` workers of this command (SIGTERM'd on a stop); their exit statuses."""
-    storage = make_storage(cfg)
-    open_study(cfg, storage, _worker_seed(cfg))
-    storage.engine.dispose()
-    procs: list[subprocess.Popen[bytes]] = []
-    try:
-        for i in range(cfg.n_jobs):
-            args = [*cfg.argv, "--n-jobs", "1", "--worker-index", str(i)]
-            procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args]))
-        return [p.wait() for p in procs]
-    except BaseException:
-        for p in procs:
-            if p.poll() is None:
-                p.send_signal(signal.SIGTERM)
-        for p in procs:
-            p.wait()
-        raise
-
-
 def _describe(code: int) -> str:
-    if code >= 0:
-        return f"exit status {code}"
-    return f"killed by {signal.Signals(-code).name if -code in signal.valid_signals() else f'signal {-code}'}"
+    name = signal.Signals(-code).name if -code in signal.valid_signals() else f"signal {-code}"
+    return f"exit status {code}" if code >= 0 else f"killed by {name}"
 
 
 def _run(cfg: SweepConfig) -> int:
-    """The command: the workers, then the summary, the ``--save-best`` file and the exit status."""
+    """The command: the study opened, then ``--n-jobs`` worker processes of this command (SIGTERM'd on a stop), or
+    this process as the one worker (it joins the study and runs trials until the budget or the grid is spent); then
+    the summary, the ``--save-best`` file and the exit status."""
     import optuna
 
     failed: list[str] = []
-    opened: list[Any] = []
+    procs: list[subprocess.Popen[bytes]] = []
+    study: Any = None  # this process's own study when it has one (an in-memory storage lives only in it)
     interrupted = False
+
+    def stop_when_spent(st: Any, _t: Any) -> None:
+        if _exhausted(st, cfg, running=True):
+            st.stop()
+
     with handling(signal.default_int_handler, signal.SIGTERM):
         try:
             if cfg.n_jobs > 1:
-                codes = _spawn_workers(cfg)
+                storage = make_storage(cfg)
+                open_study(cfg, storage, _worker_seed(cfg))
+                storage.engine.dispose()
+                try:
+                    for i in range(cfg.n_jobs):
+                        args = [*cfg.argv, "--n-jobs", "1", "--worker-index", str(i)]
+                        procs.append(subprocess.Popen([sys.executable, "-m", "amigo_gym.tools.cli", "sweep", *args]))
+                    codes = [p.wait() for p in procs]
+                except BaseException:
+                    for p in procs:
+                        if p.poll() is None:
+                            p.send_signal(signal.SIGTERM)
+                    for p in procs:
+                        p.wait()
+                    raise
                 failed = [f"worker {i}: {_describe(c)}" for i, c in enumerate(codes) if c not in (0, INTERRUPTED)]
                 interrupted = INTERRUPTED in codes
             else:
-                run_worker(cfg, opened)
+                sampler_seed = _worker_seed(cfg)
+                study = open_study(cfg, make_storage(cfg), sampler_seed)
+                study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
+                with warnings.catch_warnings():  # experimental in Optuna
+                    warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                    optuna.storages.fail_stale_trials(study)  # requeue dead workers' trials before checking the budget
+                mark_abandoned(study)
+                if not _exhausted(study, cfg):
+                    errors = (ValueError, RuntimeError, FloatingPointError, FileNotFoundError)  # a trial's: FAIL, go on
+                    study.optimize(_objective(cfg, study, sampler_seed), catch=errors, callbacks=[stop_when_spent])
         except KeyboardInterrupt:
             interrupted = True
-    # this process's own study when it has one (an in-memory storage lives only in it)
-    study = opened[0] if opened else optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
+    study = study or optuna.load_study(study_name=cfg.name, storage=make_storage(cfg))
     mark_abandoned(study)
-    summary = summarize(study, cfg.budget)
-    write_summary(Path(cfg.out) / cfg.name, summary)
+    summary, folder = summarize(study, cfg.budget), Path(cfg.out) / cfg.name
+    with RunLock(folder, name="summary.lock", wait=60.0):  # summary.json, unless the one there saw more finished trials
+        newer = False
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):  # no readable summary there
+            newer = int(json.loads((folder / "summary.json").read_text()).get("finished", -1)) > summary["finished"]
+        if not newer:
+            atomic_write_json(folder / "summary.json", summary, parents=True)
     status, best = summary["status"], summary["best"]
     counted = f"counted {summary['counted']} of budget {summary['budget']}"
     print(f"study {cfg.name}: {status}; {summary['states']}; {counted}")
