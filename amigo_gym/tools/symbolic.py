@@ -354,10 +354,7 @@ def system_29_latex() -> list[str]:
     return [f"{sp.latex(e)} = 0" for e in derive().system_29]
 
 
-_Row = tuple[str | None, str, str]  # (equation label or None, left-hand side, right-hand side)
-
-
-def _sections(latex: bool) -> dict[str, list[_Row]]:
+def _sections(latex: bool) -> dict[str, list[tuple[str | None, str, str]]]:  # rows: (label or None, lhs, rhs)
     d, mp, lag = derive(), derive().misprints, {theta: beta + delta}
 
     def f(e: Any) -> str:
@@ -365,8 +362,8 @@ def _sections(latex: bool) -> dict[str, list[_Row]]:
             return str(sp.latex(e))
         return "(" + ", ".join(sp.sstr(x) for x in e) + ")" if isinstance(e, sp.MatrixBase) else str(sp.sstr(e))
 
-    def eq(label: str | None, lhs: Any, rhs: Any, tex: str | None = None) -> _Row:  # tex: the LaTeX of a named lhs
-        return (label, f(lhs) if tex is None else tex if latex else lhs, f(rhs))
+    def eq(label: str | None, lhs: Any, rhs: Any, tex: str | None = None) -> tuple[str | None, str, str]:
+        return (label, f(lhs) if tex is None else tex if latex else lhs, f(rhs))  # tex: the LaTeX of a named lhs
 
     return {
         "Positions (eqs 4, 13, 21): H, and the contact points K (wheel 1, right) and L (wheel 2, left)": [
