@@ -631,8 +631,8 @@ def _resume_fastppo(study: Any, trial: Any, s: Any, out: Path) -> dict[str, Any]
 
 
 def summarize(study: Any, budget: int | None = None) -> dict[str, Any]:
-    """The study's summary, from the study alone (the same for every worker); its status ``running`` (a trial
-    RUNNING or WAITING), else ``complete`` (every grid cell COMPLETE; the budget counted) or ``incomplete``."""
+    """The study's summary, from the study alone (the same for every worker); status ``running`` (a trial RUNNING or
+    WAITING), else ``complete`` (seeds: every grid cell COMPLETE; else the budget counted) or ``incomplete``."""
     from optuna.trial import TrialState
 
     trials = sorted(study.get_trials(deepcopy=False), key=lambda t: t.number)
