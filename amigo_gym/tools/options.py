@@ -77,15 +77,12 @@ def cli(
     nargs: str | int | None = None,
     group: str | None = None,
 ) -> dict[str, Any]:
-    """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``.
-
-    Args:
-        flag: the option's name when not ``--field-name``; a ``--no-x`` flag of a ``bool`` field stores ``False``.
-        required: the option must be given although the field has a default. hidden: left out of ``--help``.
-        parse: turns the option's text into the value (e.g. :func:`json_object`; a ``ValueError`` becomes ``<flag>
-            <message>``). skip: no option (the command sets the field). positional: a positional argument.
-        metavar, choices, nargs: argparse's, in place of the type's. group: a mutually exclusive group's name.
-    """
+    """Command-line metadata of a settings field, for ``field(..., metadata=cli(...))``: ``flag``, the option's name
+    when not ``--field-name`` (a ``--no-x`` flag of a ``bool`` field stores ``False``); ``required``: the option must
+    be given although the field has a default; ``hidden``: left out of ``--help``; ``parse`` turns the option's text
+    into the value (e.g. :func:`json_object`; a ``ValueError`` becomes ``<flag> <message>``); ``skip``: no option (the
+    command sets the field); ``positional``: a positional argument; ``metavar``, ``choices``, ``nargs``: argparse's,
+    in place of the type's; ``group``: a mutually exclusive group's name."""
     return {"cli": dict(locals())}  # the arguments above, by name
 
 
@@ -105,38 +102,25 @@ def parse_bool(text: str) -> bool:
     return value
 
 
-def _options(cls: type) -> Iterator[tuple[Field[Any], dict[str, Any], str]]:
-    """The fields of ``cls`` that are options: each with its :func:`cli` metadata and its flag."""
+def _options(cls: type) -> Iterator[tuple[Field[Any], dict[str, Any], str, Any]]:
+    """The option fields of ``cls``, each with its :func:`cli` metadata, flag and type (``X`` of ``X | None``)."""
+    hints = get_type_hints(cls)
     for f in fields(cls):
         meta = {**cli()["cli"], **f.metadata.get("cli", {})}
         if f.init and not meta["skip"]:
-            yield f, meta, str(meta["flag"] or "--" + f.name.replace("_", "-"))
-
-
-def _strip_optional(tp: Any) -> Any:
-    args = [a for a in get_args(tp) if a is not type(None)]
-    return args[0] if get_origin(tp) in (Union, types.UnionType) and len(args) == 1 else tp
-
-
-def _scalar(tp: Any) -> dict[str, Any]:
-    if get_origin(tp) is Literal:
-        return {"type": type(get_args(tp)[0]), "choices": get_args(tp)}
-    if isinstance(tp, type):
-        return {"type": tp}
-    raise TypeError(f"no command-line type for {tp!r}")
+            args = [a for a in get_args(hints[f.name]) if a is not type(None)]
+            tp = args[0] if get_origin(hints[f.name]) in (Union, types.UnionType) and len(args) == 1 else hints[f.name]
+            yield f, meta, str(meta["flag"] or "--" + f.name.replace("_", "-")), tp
 
 
 def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
     """One option ``--field-name`` (or :func:`cli`'s) per field of the dataclass ``cls``, typed and defaulted as the
-    field, its help the field's ``Attributes:`` entry (unit in brackets; ``[file]``: metavar ``FILE``).
-
-    Types: one-argument classes, ``X | None``, ``Literal`` (choices), ``list[X]``/``tuple[X, ...]`` (``nargs="+"``),
-    ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag (default ``False``), a ``--no-x`` flag, else ``true``/``false``.
-    No default: a required option.
-    """
-    helps, hints = attribute_help(cls), get_type_hints(cls)
-    groups: dict[str, Any] = {}
-    for f, meta, flag in _options(cls):
+    field, its help the field's ``Attributes:`` entry (unit in brackets; ``[file]``: metavar ``FILE``); no default: a
+    required option. Types: one-argument classes, ``X | None``, ``Literal`` (choices), ``list[X]``/``tuple[X, ...]``
+    (``nargs="+"``), ``tuple[X, X]`` (``nargs=2``); ``bool``: a flag (default ``False``), a ``--no-x`` flag, else
+    ``true``/``false``."""
+    helps, groups = attribute_help(cls), {}
+    for f, meta, flag, tp in _options(cls):
         default = f.default_factory() if f.default_factory is not MISSING else f.default
         help_text = argparse.SUPPRESS if meta["hidden"] else helps.get(f.name, "")
         kw: dict[str, Any] = {"help": help_text}
@@ -144,7 +128,6 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
             kw["required"] = True
         else:
             kw["default"] = list(default) if isinstance(default, tuple) else default
-        tp = _strip_optional(hints[f.name])
         origin, args = get_origin(tp), get_args(tp)
         if meta["parse"] is not None:
             kw.update(type=str, default=None)
@@ -154,10 +137,15 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
             kw["action"] = "store_true"
         elif tp is bool:
             kw.update(type=parse_bool, help=f"{help_text} [true/false]")
-        elif origin in (list, tuple):
-            kw.update(_scalar(args[0]), nargs=len(args) if origin is tuple and Ellipsis not in args else "+")
         else:
-            kw.update(_scalar(tp))
+            if origin in (list, tuple):  # the option's arguments are the items
+                tp, kw["nargs"] = args[0], len(args) if origin is tuple and Ellipsis not in args else "+"
+            if get_origin(tp) is Literal:
+                kw.update(type=type(get_args(tp)[0]), choices=get_args(tp))
+            elif isinstance(tp, type):
+                kw["type"] = tp
+            else:
+                raise TypeError(f"no command-line type for {tp!r}")
         if "[file]" in help_text and not meta["positional"] and "action" not in kw:
             kw["metavar"] = "FILE"  # an option whose unit is a file shows FILE as its argument in --help
         kw.update({k: meta[k] for k in ("metavar", "choices", "nargs") if meta[k] is not None})
@@ -175,9 +163,8 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
     """The settings ``cls(...)`` from the options :func:`add_dataclass_options` added (``extra``: further fields),
     ``validate()``d when ``cls`` has it; ``cli(parse=...)`` options are parsed here (a ``ValueError`` becomes ``<flag>
     <message>``)."""
-    hints = get_type_hints(cls)
     kw: dict[str, Any] = {}
-    for f, meta, flag in _options(cls):
+    for f, meta, flag, tp in _options(cls):
         value = getattr(namespace, f.name, None)
         if value is None and (meta["parse"] is not None or not hasattr(namespace, f.name)):
             continue
@@ -187,7 +174,7 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
             except ValueError as exc:
                 raise ValueError(f"{flag} {exc}") from None
         elif isinstance(value, list):
-            value = tuple(value) if get_origin(_strip_optional(hints[f.name])) is tuple else list(value)
+            value = tuple(value) if get_origin(tp) is tuple else list(value)
         kw[f.name] = value
     out = cls(**kw, **extra)
     getattr(out, "validate", lambda: None)()
@@ -195,7 +182,6 @@ def settings_from_args(cls: type[T], namespace: argparse.Namespace, **extra: Any
 
 
 def _parse(cls: type, argv: Sequence[str] | None, prog: str, doc: str) -> tuple[OneLineParser, argparse.Namespace]:
-    """The parser of ``cls``'s options and the namespace it parsed from ``argv`` (``None``: ``sys.argv[1:]``)."""
     parser = OneLineParser(prog=prog, description=doc)
     add_dataclass_options(parser, cls)
     return parser, parser.parse_args(sys.argv[1:] if argv is None else list(argv))
@@ -242,7 +228,6 @@ def say(message: str) -> None:
 
 def missing_modules(modules: Sequence[str]) -> list[str]:
     """The modules of ``modules`` that ``importlib.util.find_spec`` cannot find (nothing is imported)."""
-
     missing = []
     for m in modules:
         with contextlib.suppress(ImportError, ValueError):

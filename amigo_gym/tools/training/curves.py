@@ -107,8 +107,7 @@ def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, se
     series = {s: xy for s, xy in series.items() if xy[0].size}
     if not series:
         return None
-    lo = max(float(x[0]) for x, _ in series.values())
-    hi = min(float(x[-1]) for x, _ in series.values())
+    lo, hi = max(float(x[0]) for x, _ in series.values()), min(float(x[-1]) for x, _ in series.values())
     if lo > hi:
         return None
     grid = np.unique(np.concatenate([x[(x >= lo) & (x <= hi)] for x, _ in series.values()]))
@@ -211,21 +210,14 @@ def learning_curves(
 
 def markdown_report(doc: Mapping[str, Any]) -> str:
     """Markdown: the time-to-threshold table, the final values with their intervals, the skipped folders."""
-
-    def final(c: Mapping[str, Any] | None, scale: float) -> str:
-        if c is None:
-            return "–"
-        return f"{scale * c['mean'][-1]:.3g} [{scale * c['ci95_low'][-1]:.3g}, {scale * c['ci95_high'][-1]:.3g}]"
-
     p = doc["protocol"]
     thr_mm = 1e3 * p["threshold_m"]
     lines = [
         "# Learning curves",
         "",
-        f"Mean over training seeds; intervals: {p['interval']} ({p['reps']} replications). "
-        f"Threshold: first evaluation with `{p['threshold_metric']}` <= {thr_mm:g} mm; "
-        "median over all seeds (a seed that never reached it counts as later than any that did; "
-        "'not reached': fewer than half did).",
+        f"Mean over training seeds; intervals: {p['interval']} ({p['reps']} replications). Threshold: first "
+        f"evaluation with `{p['threshold_metric']}` <= {thr_mm:g} mm; median over all seeds (a seed that never "
+        "reached it counts as later than any that did; 'not reached': fewer than half did).",
         "",
     ]
     rows = []
@@ -242,7 +234,11 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     for g, axes in doc["curves"].items():
         h, ret = axes["timesteps"]["h_rms_m"], axes["timesteps"]["mean_reward"]
         c = h or ret
-        rows.append((g, c["n_seeds"] if c else 0, f"{c['x'][-1]:.0f}" if c else "–", final(h, 1e3), final(ret, 1.0)))
+        final = (
+            "–" if x is None else f"{s * x['mean'][-1]:.3g} [{s * x['ci95_low'][-1]:.3g}, {s * x['ci95_high'][-1]:.3g}]"
+            for x, s in ((h, 1e3), (ret, 1.0))
+        )
+        rows.append((g, c["n_seeds"] if c else 0, f"{c['x'][-1]:.0f}" if c else "–", *final))
     lines += md_table(("algorithm", "seeds", "step", "H RMS [mm]", "return"), rows)
     lines += ["", "![against steps](curves_steps.png)", "", "![against wall time](curves_wall.png)", ""]
     if doc["skipped"]:
@@ -250,41 +246,36 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
-    """H error (log scale) and return against ``axis``: mean over seeds, 95 % bootstrap band, thin seed lines."""
-    fig, axs = pyplot().subplots(1, 2, figsize=(11, 4.2))
-    for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
-        for i, (g, axes) in enumerate(doc["curves"].items()):
-            if (c := axes[axis][metric]) is None:
-                continue
-            color = f"C{i}"
-            for s in c["per_seed"].values():
-                ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
-            marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
-            seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
-            ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
-            ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
-        ax.set(xlabel=AXES[axis], ylabel=label, yscale="log" if metric == "h_rms_m" else "linear")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    p = doc["protocol"]
-    fig.suptitle(f"Learning curves against {AXES[axis]}")
-    note = (f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({p['reps']} "
-            "replications); thin: each seed (latest evaluation at or before x).")  # fmt: skip
-    fig.text(0.5, 0.01, note, ha="center", fontsize=8)
-    fig.tight_layout(rect=(0, 0.04, 1, 0.96))
-    save_figure(fig, path)
-
-
 def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:
-    """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png``; the paths."""
+    """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png`` (H error, log
+    scale, and return against each axis: mean over seeds, 95 % bootstrap band, thin seed lines); the paths."""
     written = [out / "curves.json", out / "curves.md"]
     atomic_write_json(written[0], doc, parents=True)
     atomic_write(written[1], markdown_report(doc), parents=True)
-    if plots:
-        for axis, name in (("timesteps", "curves_steps.png"), ("wall_time_s", "curves_wall.png")):
-            plot_curves(doc, axis, out / name)
-            written.append(out / name)
+    for axis, name in (("timesteps", "curves_steps.png"), ("wall_time_s", "curves_wall.png")) if plots else ():
+        fig, axs = pyplot().subplots(1, 2, figsize=(11, 4.2))
+        for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
+            for i, (g, axes) in enumerate(doc["curves"].items()):
+                if (c := axes[axis][metric]) is None:
+                    continue
+                color = f"C{i}"
+                for s in c["per_seed"].values():
+                    ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
+                marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
+                seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
+                ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
+                ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
+            ax.set(xlabel=AXES[axis], ylabel=label, yscale="log" if metric == "h_rms_m" else "linear")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8)
+        fig.suptitle(f"Learning curves against {AXES[axis]}")
+        reps = doc["protocol"]["reps"]
+        note = (f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({reps} "
+                "replications); thin: each seed (latest evaluation at or before x).")  # fmt: skip
+        fig.text(0.5, 0.01, note, ha="center", fontsize=8)
+        fig.tight_layout(rect=(0, 0.04, 1, 0.96))
+        save_figure(fig, out / name)
+        written.append(out / name)
     return written
 
 

@@ -253,10 +253,9 @@ class EpisodeRecorder:
 
     def metrics(self) -> dict[str, float]:
         e, ve, cmd, w = (np.asarray([x[k] for x in self.samples], dtype=np.float64) for k in range(4))
-        r = np.asarray(self.rewards, dtype=np.float64)
         return episode_metrics(
-            e, ve, cmd.reshape(-1, 2), w.reshape(-1, 2), r, dt=self.dt, terminated=self.terminated,
-            settle_time_s=self.settle_time_s, failure_tolerance_m=self.failure_tolerance_m,
+            e, ve, cmd.reshape(-1, 2), w.reshape(-1, 2), np.asarray(self.rewards, dtype=np.float64), dt=self.dt,
+            terminated=self.terminated, settle_time_s=self.settle_time_s, failure_tolerance_m=self.failure_tolerance_m,
         )  # fmt: skip
 
 
