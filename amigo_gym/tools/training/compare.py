@@ -27,7 +27,7 @@ from amigo_gym.tools.training.hyperparams import load_hyperparams
 from amigo_gym.tools.training.task_metrics import md_table
 from amigo_gym.tools.training.train import HYPERPARAMS_DIR, env_kwargs, versions
 
-MANIFEST = "manifest.json"
+PROG, MANIFEST = "amigo-gym compare", "manifest.json"
 
 #: targets for the best learned agent on the perturbed scenario
 TARGETS = {"h_rms_m": 2e-3, "wheel_rate_dev_rms": 0.1}
@@ -69,17 +69,15 @@ def agent_legend(names: Sequence[str], gain: float) -> list[str]:
 
 
 def display_command(command: str, root: Path | None = None) -> str:
-    """``command`` with its absolute paths relative to ``root`` (default the current folder) when inside it, else
-    their last two parts, so that no printed command shows a machine's temporary folders."""
+    """``command``, its absolute paths relative to ``root`` (default: the current folder) if inside, else their last
+    two parts (no printed command shows a machine's temporary folders)."""
     base = (root or Path.cwd()).resolve()
     words = []
     for word in shlex.split(command):
         if word.startswith("/"):
-            p = Path(word)
-            try:
-                word = str(p.resolve().relative_to(base))
-            except ValueError:
-                word = str(Path(*p.parts[-2:])) if len(p.parts) > 2 else p.name
+            p, full = Path(word), Path(word).resolve()
+            short = str(Path(*p.parts[-2:])) if len(p.parts) > 2 else p.name
+            word = str(full.relative_to(base)) if full.is_relative_to(base) else short
         words.append(shlex.quote(word))
     return " ".join(words)
 
@@ -110,8 +108,7 @@ def report_markdown(doc: dict[str, Any]) -> str:
         "",
         ev.markdown_table(doc["results"]),
     ]
-    best = doc.get("best_learned")
-    if best:
+    if best := doc.get("best_learned"):
         ok_h, ok_w = _met(best)
         lines += [
             "## Targets (best learned agent, perturbed starts)",
@@ -121,8 +118,7 @@ def report_markdown(doc: dict[str, Any]) -> str:
             f"- RMS wheel-rate deviation: {best['wheel_rate_dev_rms']:.4f} rad/s (target <= "
             f"{TARGETS['wheel_rate_dev_rms']} rad/s): {ok_w}",
         ]
-        rec = doc.get("training", {}).get(best["agent"])
-        if rec:
+        if rec := doc.get("training", {}).get(best["agent"]):
             lines.append(
                 f"- training: {rec['timesteps']} steps in {rec['wall_time_s']:.0f} s wall time "
                 f"({rec.get('cpu_count', '?')} CPU cores, {rec.get('torch_threads', '?')} torch thread(s))"
@@ -138,8 +134,7 @@ def report_markdown(doc: dict[str, Any]) -> str:
         header = ("agent", "steps", "wall time [s]", "model", "command (then resumes)")
         lines += ["## Training records", "", *md_table(header, rows), ""]
     lines += ["![trajectories](eval_trajectories.png)", "", "![wheels](eval_wheels.png)", ""]
-    bench = doc.get("benchmark")
-    if bench:
+    if bench := doc.get("benchmark"):
         table = bm.markdown_report(bench).splitlines()
         lines += [
             "#" + table[0],  # one level down
@@ -148,8 +143,7 @@ def report_markdown(doc: dict[str, Any]) -> str:
             f"{bench['scenarios'][0]['episodes']} episodes each; {bench['wall_time_s']:.0f} s). A smoke-sized view: "
             "the whole suite is `amigo-gym benchmark` (docs/benchmark.md).",
         ]
-        new_names = [a for a in bench["aggregates"] if a not in {r["agent"] for r in doc["results"]}]
-        if new_names:
+        if new_names := [a for a in bench["aggregates"] if a not in {r["agent"] for r in doc["results"]}]:
             legend = agent_legend(new_names, proto["analytic_gain"])
             lines += ["", "Agents (besides those above): " + "; ".join(legend) + "."]
         lines += [("#" + ln if ln.startswith("#") else ln) for ln in table[1:]]
@@ -174,8 +168,7 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
         ),
         "",
     ]
-    best = doc.get("best_learned")
-    if best:
+    if best := doc.get("best_learned"):
         ok_h, ok_w = _met(best)
         lines.append(
             f"Best learned agent: {best['agent']}, {best['h_rms_m'] * 1e3:.3f} mm (target <= "
@@ -183,12 +176,10 @@ def summary_text(doc: dict[str, Any], out: Path) -> str:
             f"{TARGETS['wheel_rate_dev_rms']:g} rad/s: {ok_w})."
         )
     names = [r["agent"] for r in rows]
-    bench = doc.get("benchmark")
-    if bench:
+    if bench := doc.get("benchmark"):
         cells = []
         for agent, a in bench["aggregates"].items():
-            g = a.get("all")
-            if g is not None:
+            if (g := a.get("all")) is not None:
                 runs_ = f", {a['n_runs']} seeds" if a["n_runs"] > 1 else ""
                 failed, episodes = bm.failed_episodes(bench, agent)
                 cells.append(f"{agent} {g['h_rms_m_iqm']['value'] * 1e3:.3g} ({failed} of {episodes} failed{runs_})")
@@ -291,8 +282,7 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
             from amigo_gym.tools.training.train import Settings, train
 
             run_dir = out / "train_ppo"
-            request = fresh_run_request(s.train_steps, s.seed, hyperparams)
-            stale = reuse_mismatch(run_dir, request)
+            stale = reuse_mismatch(run_dir, fresh_run_request(s.train_steps, s.seed, hyperparams))
             if stale is not None and run_dir.exists():
                 say(f"retraining: the run in {run_dir} does not match the request ({stale})")
                 shutil.rmtree(run_dir)
@@ -322,8 +312,7 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
             specs.append(replace(trained, name="ppo_fresh", seed=s.seed, _model=agents["ppo_fresh"]))
         say(f"evaluating {len(agents)} agents: {', '.join(agents)} ({len(proto.scenarios)} scenarios)")
         results, trajs = ev.evaluate_agents(agents, proto)
-        best = best_learned(results)
-        extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best}
+        extra: dict[str, Any] = {"training": training, "targets": TARGETS, "best_learned": best_learned(results)}
         bench: dict[str, Any] | None = None
         if s.benchmark:
             generalists = models / "v1" if models is not None and (models / "v1").is_dir() else None
@@ -346,10 +335,7 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``amigo-gym compare``."""
-    s = parse_settings(
-        CompareSettings, argv, "amigo-gym compare", "Pretrained agents vs the analytic inverse solution."
-    )
+    s = parse_settings(CompareSettings, argv, PROG, "Pretrained agents vs the analytic inverse solution.")
 
     def run() -> int:
         ev.one_torch_thread()
@@ -357,4 +343,4 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(summary_text(doc, Path(s.out)))
         return 0
 
-    return run_guarded(run, "amigo-gym compare")
+    return run_guarded(run, PROG)

@@ -94,8 +94,7 @@ Trajs = dict[str, dict[str, list[Trajectory]]]
 def steady_start_pose(params: TrackingParams) -> Array:
     """Pose ``(x_A, y_A, beta)`` with H at the circle's start in the closed-form steady state
     (``beta = theta(0) - d atan(l3 / R_A)``)."""
-    path = params.path
-    if not isinstance(path, CirclePath):
+    if not isinstance(path := params.path, CirclePath):
         raise ValueError(f"the nominal scenario needs path='circle', got {type(path).__name__}")
     ss = circle_steady_state(params.radius, params.speed, params.robot, params.direction)
     beta = float(path.tangent_angle(0.0)) - float(ss.heading_lag)
@@ -104,8 +103,7 @@ def steady_start_pose(params: TrackingParams) -> Array:
 
 
 def protocol_scenarios(proto: EvalProtocol, params: TrackingParams | None = None) -> tuple[Scenario, ...]:
-    """The protocol's scenarios: ``nominal`` and ``paper_start`` one episode from a fixed pose, ``perturbed`` one per
-    seed from the env's random start."""
+    """``nominal``, ``paper_start``: an episode from a fixed pose; ``perturbed``: one per seed, a random start."""
     params = params or TrackingParams.v0()
     poses = {
         "nominal": (tuple(steady_start_pose(params).tolist()), "H on the circle, steady heading lag"),
@@ -121,8 +119,7 @@ def protocol_scenarios(proto: EvalProtocol, params: TrackingParams | None = None
 
 
 def trajectories(agent: Agent, sc: Scenario, gain: float = 3.0) -> list[Trajectory]:
-    """The episodes of ``sc`` as :class:`Trajectory` rows, the analytic policy's rates (gain ``gain`` [1/s]) on the
-    agent's observations as the reference."""
+    """The episodes of ``sc``, against the analytic policy's rates (gain ``gain`` [1/s]) on the agent's observations."""
     keys = ("time", "e", "h", "rates", "angles", "ref_rates")
     cols: list[dict[str, list[Any]]] = [{k: [] for k in keys} for _ in sc.seeds]
     start: dict[str, Any] = {}
@@ -188,12 +185,10 @@ def default_agents(params: TrackingParams, gain: float = 3.0) -> dict[str, Agent
     return {"analytic": AnalyticPolicy(params, gain=gain), "analytic_ff": AnalyticPolicy(params, feedforward_only=True)}
 
 
-# --------------------------------------------------------------------------- agents
 def _classical(name: str, env: Any) -> Any:
     """The classical policy ``name`` built for ``env``; :class:`Unavailable` if it has none."""
     base = env.unwrapped
-    hook = getattr(base, "classical_policy", None)
-    if callable(hook):
+    if callable(hook := getattr(base, "classical_policy", None)):
         return hook(name)
     params = getattr(base, "params", None)
     if isinstance(params, TrackingParams) and params.observation == "v1":  # the nominal robot's policies
@@ -226,9 +221,7 @@ class NormalizedAgent:
     model: Any
     vecnormalize: Any
 
-    @property
-    def observation_space(self) -> Any:
-        return self.model.observation_space
+    observation_space: Any = None  # the model's
 
     def predict(
         self, observation: Any, state: Any = None, episode_start: Any = None, deterministic: bool = True
@@ -294,7 +287,7 @@ class AgentSpec:
         with corrupt_errors(self.vecnormalize, "VecNormalize statistics"), open(self.vecnormalize, "rb") as f:
             stats = pickle.load(f)  # VecNormalize.load without a venv: the statistics only
         stats.training = False
-        return NormalizedAgent(model, stats)
+        return NormalizedAgent(model, stats, model.observation_space)
 
     def instantiate(self, env: Any) -> Any:
         """A classical policy for ``env``, or the model if its observation space matches (else :class:`Unavailable`)."""
@@ -302,8 +295,7 @@ class AgentSpec:
             return CLASSICAL[self.name](env)
         self._model = model = self.load()
         want = (model.builder.obs_dim,) if self.fast else getattr(model.observation_space, "shape", None)
-        got = getattr(env.observation_space, "shape", None)
-        if want != got:
+        if want != (got := getattr(env.observation_space, "shape", None)):
             raise Unavailable(
                 f"observation shape {got}{'' if self.fast else ' of the scenario'} differs from the model's {want}"
             )
@@ -320,7 +312,6 @@ class AgentSpec:
 
 
 def _spec(name: str, model: Path, algo: str, record: str, stats: bool = True) -> AgentSpec:
-    """The spec of ``model``, with the files ``record`` and (``stats``) ``vecnormalize.pkl`` beside it if present."""
     beside = [f if (f := model.parent / n).is_file() else None for n in (record, "vecnormalize.pkl")]
     return AgentSpec(name, 0, str(model), algo, None, beside[0], beside[1] if stats else None)
 
@@ -368,8 +359,7 @@ def find_models(path: str | os.PathLike[str]) -> list[AgentSpec]:
             f"--models: no models in {p} (expected a run folder with model.zip and config.json, "
             "folders of such runs, or <algo>.zip files)"
         )
-    names = [r.name for r in refs]
-    if len(set(names)) != len(names):
+    if len(set(names := [r.name for r in refs])) != len(names):
         raise ValueError(f"--models: two models in {p} share a name: {sorted(names)}")
     return refs
 
@@ -403,10 +393,8 @@ def protocol_agents(
 
 
 def evaluate_agents(agents: dict[str, Agent], proto: EvalProtocol | None = None) -> tuple[list[dict[str, Any]], Trajs]:
-    """Every agent on every scenario of ``proto``: ``(results, trajectories)``, one result per (agent, scenario)
-    (:func:`summarize`) and ``trajectories[agent][scenario]`` the episodes."""
-    proto = proto or EvalProtocol()
-    params = TrackingParams.v0()
+    """Every agent on ``proto``: a :func:`summarize` row per (agent, scenario), the episodes ``[agent][scenario]``."""
+    proto, params = proto or EvalProtocol(), TrackingParams.v0()
     results: list[dict[str, Any]] = []
     trajs: Trajs = {}
     for name, agent in agents.items():
@@ -417,7 +405,6 @@ def evaluate_agents(agents: dict[str, Agent], proto: EvalProtocol | None = None)
     return results, trajs
 
 
-# --------------------------------------------------------------------------- table and plots
 COLUMNS: tuple[tuple[str, str, Callable[[Any], str]], ...] = (
     ("agent", "agent", str),
     ("scenario", "scenario", str),
@@ -506,7 +493,6 @@ def plot_wheels(trajs: Trajs, params: TrackingParams, path: Path, scenario: str 
     save_figure(fig, path)
 
 
-# --------------------------------------------------------------------------- files
 def write_outputs(
     results: list[dict[str, Any]],
     trajs: Trajs,
@@ -517,8 +503,8 @@ def write_outputs(
     plots: bool = True,
     markdown_path: Path | None = None,
 ) -> dict[str, Any]:
-    """Write the JSON (``protocol``, ``results``, ``extra``), the Markdown table (default ``out/eval.md``) and the
-    figures; the JSON document."""
+    """The JSON document (``protocol``, ``results``, ``extra``), written with the table (default ``out/eval.md``) and
+    the figures."""
     params = TrackingParams.v0()
     v0 = v0_settings(params) or {}
     protocol = {
@@ -558,8 +544,7 @@ def one_torch_thread() -> None:
         torch.set_num_threads(1)
 
 
-#: evaluate's own default output folder (``amigo-gym compare`` writes to ``results``)
-DEFAULT_OUT = "results/evaluate"
+PROG, DEFAULT_OUT = "amigo-gym evaluate", "results/evaluate"  # compare writes to results
 
 
 @dataclass(frozen=True)
@@ -597,10 +582,7 @@ class EvaluateSettings:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``amigo-gym evaluate``."""
-    a = parse_settings(
-        EvaluateSettings, argv, "amigo-gym evaluate", "Evaluate analytic and trained agents (fixed protocol)."
-    )
+    a = parse_settings(EvaluateSettings, argv, PROG, "Evaluate analytic and trained agents (fixed protocol).")
 
     def run() -> int:
         one_torch_thread()
@@ -622,4 +604,4 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"wrote {json_path}, {md_path}" + (f", {out}/eval_*.png" if a.plots else ""))
         return 0
 
-    return run_guarded(run, "amigo-gym evaluate")
+    return run_guarded(run, PROG)
