@@ -246,35 +246,41 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def plot_curves(doc: Mapping[str, Any], axis: str, path: Path) -> None:
+    """H error (log scale) and return against ``axis`` into ``path``: mean over seeds, 95 % bootstrap band, thin
+    seed lines."""
+    fig, axs = pyplot().subplots(1, 2, figsize=(11, 4.2))
+    for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
+        for i, (g, axes) in enumerate(doc["curves"].items()):
+            if (c := axes[axis][metric]) is None:
+                continue
+            color = f"C{i}"
+            for s in c["per_seed"].values():
+                ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
+            marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
+            seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
+            ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
+            ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
+        ax.set(xlabel=AXES[axis], ylabel=label, yscale="log" if metric == "h_rms_m" else "linear")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"Learning curves against {AXES[axis]}")
+    reps = doc["protocol"]["reps"]
+    note = (f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({reps} "
+            "replications); thin: each seed (latest evaluation at or before x).")  # fmt: skip
+    fig.text(0.5, 0.01, note, ha="center", fontsize=8)
+    fig.tight_layout(rect=(0, 0.04, 1, 0.96))
+    save_figure(fig, path)
+
+
 def write_outputs(doc: Mapping[str, Any], out: Path, *, plots: bool = True) -> list[Path]:
-    """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png`` (H error, log
-    scale, and return against each axis: mean over seeds, 95 % bootstrap band, thin seed lines); the paths."""
+    """``curves.json``, ``curves.md`` and (``plots``) ``curves_steps.png`` and ``curves_wall.png``
+    (:func:`plot_curves`); the paths."""
     written = [out / "curves.json", out / "curves.md"]
     atomic_write_json(written[0], doc, parents=True)
     atomic_write(written[1], markdown_report(doc), parents=True)
     for axis, name in (("timesteps", "curves_steps.png"), ("wall_time_s", "curves_wall.png")) if plots else ():
-        fig, axs = pyplot().subplots(1, 2, figsize=(11, 4.2))
-        for ax, (metric, label) in zip(axs, CURVE_METRICS.items(), strict=True):
-            for i, (g, axes) in enumerate(doc["curves"].items()):
-                if (c := axes[axis][metric]) is None:
-                    continue
-                color = f"C{i}"
-                for s in c["per_seed"].values():
-                    ax.step(s["x"], s["y"], where="post", color=color, alpha=0.25, lw=0.7)
-                marker = "o" if len(c["x"]) < 3 else None  # a curve of one or two points is still visible
-                seeds = f"{c['n_seeds']} seed" + ("s" if c["n_seeds"] != 1 else "")
-                ax.step(c["x"], c["mean"], where="post", color=color, lw=1.8, marker=marker, label=f"{g} ({seeds})")
-                ax.fill_between(c["x"], c["ci95_low"], c["ci95_high"], step="post", color=color, alpha=0.2)
-            ax.set(xlabel=AXES[axis], ylabel=label, yscale="log" if metric == "h_rms_m" else "linear")
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=8)
-        fig.suptitle(f"Learning curves against {AXES[axis]}")
-        reps = doc["protocol"]["reps"]
-        note = (f"Thick: mean over training seeds; band: pointwise 95 % percentile bootstrap over seeds ({reps} "
-                "replications); thin: each seed (latest evaluation at or before x).")  # fmt: skip
-        fig.text(0.5, 0.01, note, ha="center", fontsize=8)
-        fig.tight_layout(rect=(0, 0.04, 1, 0.96))
-        save_figure(fig, out / name)
+        plot_curves(doc, axis, out / name)
         written.append(out / name)
     return written
 
