@@ -150,6 +150,27 @@ def off_claim(result: dict[str, float], claim: dict[str, float], exact: bool) ->
     }
 
 
+@pytest.mark.parametrize("cell", ["delay_0.15", "delay_0.3"])
+def test_the_committed_suite_2_run_is_reproduced_on_the_delay_cells(cell: str) -> None:
+    """Issue 36's claims on suite 2.0's test cells hold after any change: the shipped compensator residual (its three
+    seeds) and the analytic controller on the two delay test cells give the committed run's figures
+    (docs/benchmark/suite_2.0/benchmark.json) to :data:`REL`, and the ratio the docs quote (0.82 at 0.15 s)."""
+    root = Path(__file__).resolve().parents[1]
+    committed = json.loads((root / "docs/benchmark/suite_2.0/benchmark.json").read_text())["results"]
+    (scenario,) = [sc for sc in bm.SUITES["2.0"] if sc.name == cell]
+    specs = bm.parse_agents(["analytic", *map(str, COMPENSATOR)])
+    doc = bm.run_benchmark(specs, [scenario], progress=False, reps=100, profile_reps=10)
+    names = {"analytic": "analytic", "fastppo_residual": "compensator_residual_v1"}
+    by_key = {(c["agent"], c["seed"], c["scenario"]): c for c in committed}
+    means: dict[str, list[float]] = {}
+    for r in doc["results"]:
+        old = by_key[names[r["agent"]], r["seed"], cell]
+        assert not off_claim(r, old, exact=False), (r["agent"], r["seed"], off_claim(r, old, exact=False))
+        means.setdefault(r["agent"], []).append(r["h_rms_m"])
+    ratio = np.mean(means["fastppo_residual"]) / np.mean(means["analytic"])
+    assert len(means["fastppo_residual"]) == 3 and round(ratio, 2) == {"delay_0.15": 0.82, "delay_0.3": 0.75}[cell]
+
+
 def test_a_claim_off_by_more_than_the_tolerance_fails() -> None:
     """What another CPU does (:data:`REL`'s measurements) passes; any figure off by more than its tolerance, a
     changed failure rate, and any difference at all on the recording machine fail."""
