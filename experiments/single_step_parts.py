@@ -14,24 +14,13 @@ repeats of 3000 calls, in µs; the CPU is printed.
 from __future__ import annotations
 
 import sys
-import time
-from collections.abc import Callable
 
 import gymnasium as gym
+from env_step_speed import least  # beside this file: the least CPU time [ns] of a call
 
 import amigo_gym  # noqa: F401  (registers the envs)
 from amigo_gym.tools.bench import stepper
 from amigo_gym.tools.machine import machine_line
-
-
-def least(fn: Callable[[], object], repeats: int, calls: int = 3000) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        for _ in range(calls):
-            fn()
-        best = min(best, (time.thread_time() - t0) / calls)
-    return best * 1e6
 
 
 def parts(env_id: str, repeats: int) -> dict[str, float]:
@@ -64,7 +53,7 @@ def parts(env_id: str, repeats: int) -> dict[str, float]:
     for _ in range(500):
         wrapped()
         bare()
-    out = {name: least(fn, repeats) for name, fn in
+    out = {name: least(fn, 3000, repeats) / 1e3 for name, fn in
            (("gym.make step", wrapped), ("env.step", bare), ("compiled step", kernel), ("info", info),
             ("info and end", end))}  # fmt: skip
     env.close()

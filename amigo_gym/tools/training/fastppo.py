@@ -599,11 +599,8 @@ def rollout(
                 u_host[sl].copy_(buf.u[t, sl])  # the step's one device-to-host copy
             prev, mask = builder.previous_command(r.obs[sl]), builder.correcting(feats)
             a = env_action(u_host[sl].numpy(), base, prev, s.residual_bound, s.filter_alpha, mask)
-            if pool is None:
-                out = _timed_step(envs[p], a)
-                pending[p] = lambda out=out: out  # type: ignore[misc]
-            else:
-                pending[p] = pool.submit(_timed_step, envs[p], a).result
+            step = functools.partial(_timed_step, envs[p], a)  # inline (no pool): stepped when collected
+            pending[p] = step if pool is None else pool.submit(step).result
             s_next[p] = nxt
     if finals:  # one forward pass for every truncated row of the rollout
         steps, rows, feats = (np.concatenate(z) for z in zip(*finals, strict=True))
