@@ -20,8 +20,7 @@ def agents_dir() -> Path:
     installed = _PACKAGE / "agents"
     if installed.is_dir():
         return installed
-    root = repository_root()
-    if root is not None:
+    if (root := repository_root()) is not None:
         return root / "agents"
     raise FileNotFoundError(f"the agents data folder is missing: neither {installed} nor a source checkout")
 

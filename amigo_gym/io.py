@@ -1,8 +1,7 @@
 """Atomic file writing (temporary file, fsync, ``os.replace``, fsync of the folder; on any error the target is
 untouched), strict JSON, file digests and the trust check of pickles. Fault injection (tests only):
 ``AMIGO_GYM_FAULT=<stage>[@<n>]`` kills the process the ``n``-th time it reaches ``<stage>``: ``write:<file name>``
-(written, not moved), ``rename:<file name>`` (moved, folder not fsynced), and the stages of ``amigo_gym.tools.runs``.
-"""
+(written, not moved), ``rename:<file name>`` (moved, folder not fsynced), and the stages of ``amigo_gym.tools.runs``."""
 
 from __future__ import annotations
 

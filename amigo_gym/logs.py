@@ -3,8 +3,7 @@
 Logs are CSV files (:data:`CSV_COLUMNS`: ``t``, ``cmd_w1``, ``cmd_w2`` required, with ``x, y, theta`` of A
 and/or ``w1, w2``) or ROS 2 bags (:func:`read_bag`), refused in one line (:class:`LogError`) by :func:`check_log`.
 :func:`replay` drives :func:`amigo_gym.model.actuators.actuator_step` with the commands; :func:`identify` fits the
-true radii, half track, delay and ramps by bounded least squares. Format, topics, messages: ``docs/logs.md``.
-"""
+true radii, half track, delay and ramps by bounded least squares. Format, topics, messages: ``docs/logs.md``."""
 
 from __future__ import annotations
 
@@ -101,8 +100,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
         raise LogError(f"{p.name}: empty log (no header row)")
     header_line, header = rows[0]
     names = [h.strip() for h in header]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
+    if dup := sorted({n for n in names if names.count(n) > 1}):
         raise LogError(f"{p.name}: column(s) {dup} appear more than once in the header (line {header_line})")
     has_pose, has_rates = ([c in names for c in g] for g in (("x", "y", "theta"), ("w1", "w2")))
     missing = [c for c in ("t", "cmd_w1", "cmd_w2") if c not in names]
@@ -128,8 +126,7 @@ def read_csv(path: str | os.PathLike[str], nominal: RobotParams | None = None) -
         raise LogError(f"{p.name}: {data.shape[0]} data row(s); a log needs at least 3")
     col = {c: data[:, j] for j, c in enumerate(used)}
     t = col["t"]
-    bad = np.flatnonzero(np.diff(t) <= 0.0)
-    if bad.size:
+    if (bad := np.flatnonzero(np.diff(t) <= 0.0)).size:
         k = int(bad[0]) + 1
         raise LogError(
             f"{p.name}: time t is not strictly increasing at line {rows[k + 1][0]} "
@@ -157,8 +154,7 @@ def read_bag(
     A Twist ``(v, w)`` [m/s, rad/s] gives the nominal setpoints ``((v + l1 w) / r1, (v - l1 w) / r2)``; a pose message
     A's ``x``, ``y`` and heading ``atan2(2(qw qz + qx qy), 1 - 2(qy^2 + qz^2))``. Times: record times [s] from the
     first message of either topic; of messages at one time on one topic, the last counts. Raises
-    ``FileNotFoundError`` or :class:`LogError` (not a bag, empty, a topic missing or of another type, NaN, units).
-    """
+    ``FileNotFoundError`` or :class:`LogError` (not a bag, empty, a topic missing or of another type, NaN, units)."""
     nominal = RobotParams() if nominal is None else nominal
     p = Path(path)
     if not p.exists():
@@ -206,30 +202,28 @@ def read_bag(
         if not ts:
             raise LogError(f"{p.name}: topic {topic!r} has no messages")
         arr = np.asarray(vals, dtype=np.float64)
-        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
-        if bad.size:
+        if (bad := np.flatnonzero(~np.isfinite(arr).all(axis=1))).size:
             raise LogError(f"{p.name}: topic {topic!r}: NaN or inf in message {int(bad[0])} (of {len(ts)})")
     t0 = min(t_c[0], t_p[0])
-    tc, vc = _last_of_equal(np.asarray(t_c, dtype=np.int64), np.asarray(cmd))
-    tp, vp = _last_of_equal(np.asarray(t_p, dtype=np.int64), np.asarray(pose))
-    if tp.size < 3:
-        raise LogError(f"{p.name}: topic {pose_topic!r} has {tp.size} message(s); a log needs at least 3")
+    t_cmd, vc = _last_of_equal(t_c, cmd, t0)
+    t_meas, vp = _last_of_equal(t_p, pose, t0)
+    if t_meas.size < 3:
+        raise LogError(f"{p.name}: topic {pose_topic!r} has {t_meas.size} message(s); a log needs at least 3")
     wheel = np.stack(wheel_rates_columns(vc[:, 0], vc[:, 1], nominal), axis=1)
     vp[:, 2] = np.unwrap(vp[:, 2])
-    t_cmd = np.asarray((tc - t0) * 1e-9, dtype=np.float64)
-    t_meas = np.asarray((tp - t0) * 1e-9, dtype=np.float64)
     log = Log(t_cmd, wheel, t_meas, vp, None, source=f"{p.name} ({cmd_topic}, {pose_topic})")
     check_log(log, nominal, names={"t": "bag time", "cmd": f"{cmd_topic} (as wheel rates)", "pose": pose_topic,
                                    "theta": f"{pose_topic} heading", "rates": ""}, where=p.name)  # fmt: skip
     return log
 
 
-def _last_of_equal(t: NDArray[np.int64], values: Array) -> tuple[NDArray[np.int64], Array]:
-    """Samples in time order; of equal times the last (the stable sort keeps the bag's order)."""
+def _last_of_equal(stamps: Sequence[int], values: Sequence[Any], t0: int) -> tuple[Array, Array]:
+    """Samples in time order, times [s] since t0 [ns]; of equal times the last (a stable sort keeps the bag's order)."""
+    t = np.asarray(stamps, dtype=np.int64)
     order = np.argsort(t, kind="stable")
-    t, values = t[order], values[order]
+    t, v = t[order], np.asarray(values)[order]
     keep = np.append(t[1:] != t[:-1], True)
-    return t[keep], values[keep]
+    return np.asarray((t[keep] - t0) * 1e-9, dtype=np.float64), v[keep]
 
 
 def read_log(
@@ -263,10 +257,7 @@ def check_log(log: Log, nominal: RobotParams, names: Mapping[str, str], where: s
         )
     w_max = nominal.max_wheel_rate
     for key, arr in (("cmd", log.cmd), ("rates", log.rates)):
-        if arr is None:
-            continue
-        top = float(np.max(np.abs(arr)))
-        if top > 3.0 * w_max:
+        if arr is not None and (top := float(np.max(np.abs(arr)))) > 3.0 * w_max:
             raise LogError(
                 f"{where}: {names[key]}: |wheel rate| up to {top:.4g} rad/s, over 3 times the robot's limit "
                 f"{w_max:g} rad/s; wheel rates must be in rad/s (deg/s or rpm?)"
@@ -455,13 +446,11 @@ def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dic
         data = json.loads(p.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{p.name}: not a JSON file ({exc})") from None
-    where = p.name
     if not isinstance(data, Mapping):
-        raise ValueError(f"{where}: a robot file must hold a JSON object, got {show_value(data)}")
-    unknown = sorted(str(k) for k in data if k not in _ROBOT_FIELDS | _ACTUATOR_FIELDS | _META_FIELDS)
-    if unknown:
+        raise ValueError(f"{p.name}: a robot file must hold a JSON object, got {show_value(data)}")
+    if unknown := sorted(str(k) for k in data if k not in _ROBOT_FIELDS | _ACTUATOR_FIELDS | _META_FIELDS):
         raise ValueError(
-            f"{where}: unknown key(s) {unknown}; allowed: RobotParams fields {sorted(_ROBOT_FIELDS)} and "
+            f"{p.name}: unknown key(s) {unknown}; allowed: RobotParams fields {sorted(_ROBOT_FIELDS)} and "
             f"ActuatorParams fields {sorted(_ACTUATOR_FIELDS)}"
         )
     robot: dict[str, float] = {}
@@ -470,7 +459,7 @@ def load_robot_file(path: str | os.PathLike[str]) -> tuple[dict[str, float], dic
         if k in _META_FIELDS:
             continue
         if isinstance(v, bool) or not isinstance(v, int | float):
-            raise ValueError(f"{where}: {k} must be a number, got {show_value(v)}")
+            raise ValueError(f"{p.name}: {k} must be a number, got {show_value(v)}")
         (robot if k in _ROBOT_FIELDS else act)[str(k)] = float(v)
     return robot, act
 
@@ -508,13 +497,11 @@ class Fit:
 
     def robot_json(self, log: Log, nominal: RobotParams) -> dict[str, Any]:
         """The content of ``robot.json``: the robot as replayed under ``gym.make``'s names, then the report."""
-        act, v = self.actuators, self.values
+        act, v, unc = self.actuators, self.values, self.uncertainty
         out: dict[str, Any] = {"format": ROBOT_FORMAT, "r1": self.robot.r1, "r2": self.robot.r2, "l1": self.robot.l1}
         out |= {k: getattr(act, k) for k in ("delay", "acceleration", "deceleration", "rot_acceleration",
                                               "rot_deceleration")}  # fmt: skip
-        out["uncertainty"] = {
-            k: self.uncertainty[k] for k in (*self.fitted, "x0", "y0", "theta0") if k in self.uncertainty
-        }
+        out["uncertainty"] = {k: unc[k] for k in (*self.fitted, "x0", "y0", "theta0") if k in unc}
         out |= {"fitted": list(self.fitted), "fixed": dict(self.fixed)}
         if "x0" in v:
             out["start_pose"] = [v["x0"], v["y0"], v["theta0"]]
@@ -550,8 +537,7 @@ def identify(
     nominal ``* (1 +- 0.25)``, ``delay`` in ``[0, 0.5]`` s, ramps in nominal ``* [0.1, 10]``, from the nominal robot
     (``nominal``, :class:`RobotParams` by default; ramps of ``actuators``) and the best delay of a grid of
     ``MAX_DELAY / 10``. ``lambda = heading_weight`` [m/rad], default ``nominal.l1``. Uncertainties:
-    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)``. ``ValueError`` for a bad ``ramps``.
-    """
+    ``sqrt(diag(s^2 (J^T J)^{-1}))``, ``s^2 = 2 cost / (N - p)``. ``ValueError`` for a bad ``ramps``."""
     from scipy.optimize import least_squares  # heavy: only here
 
     nominal = RobotParams() if nominal is None else nominal
@@ -586,8 +572,7 @@ def identify(
         robot, act, start = unpack(z)
         # one simulation per robot, from the origin, placed at each start pose
         key = tuple(float(a) for a in z[:n_fit])
-        rep = cache.get(key)
-        if rep is None:
+        if (rep := cache.get(key)) is None:
             rep = cache[key] = simulate(log, robot, act, nominal, (0.0, 0.0, 0.0))
             if len(cache) > 64:
                 cache.pop(next(iter(cache)))

@@ -4,8 +4,7 @@ The whole path plus a margin of ``termination_distance + 0.25 m`` fits the squar
 body (``body_length`` x ``body_width``, centred on A), the wheels (``2 r1`` long at K and L, with a spoke that turns
 with the wheel angle), the castor (radius ``r3``, ``l5`` behind A), H (red) and its trail (green), the path (blue)
 and a 0.5 m grid. ``"rgb_array"`` returns ``(H, W, 3)`` uint8; ``"human"`` shows a window at ``1/dt`` frames per
-second. Both work headless with ``SDL_VIDEODRIVER=dummy``.
-"""
+second. Both work headless with ``SDL_VIDEODRIVER=dummy``."""
 
 from __future__ import annotations
 
@@ -70,10 +69,7 @@ class Renderer:
                 'rendering needs pygame: pip install "amigo-gym[render]" (from a clone: pip install -e ".[render]")'
             ) from exc
         self._pg: Any = pygame
-        self.params = params
-        self.path = path
-        self.mode = mode
-        self.size = int(size)
+        self.params, self.path, self.mode, self.size = params, path, mode, int(size)
         pts = path_polyline(path)  # the view: a square around the path with a margin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         half = 0.5 * float(np.max(hi - lo)) + (params.termination_distance + 0.25)
@@ -104,8 +100,7 @@ class Renderer:
         surf = pg.Surface((self.size, self.size))
         surf.fill(BACKGROUND)
         x0, y0 = self._origin
-        span = self.size / self.scale
-        step = 0.5
+        span, step = self.size / self.scale, 0.5
         for k in range(math.ceil(x0 / step), math.floor((x0 + span) / step) + 1):
             x, _ = self._px((k * step, 0.0))
             pg.draw.line(surf, GRID, (x, 0), (x, self.size))

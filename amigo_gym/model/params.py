@@ -1,8 +1,7 @@
 """The robot's parameters as a frozen, validated dataclass, and the checks every setting uses.
 
 Lengths in metres, angles in radians, times in seconds; parameters are passed explicitly (no module-level
-settings). Sources (the paper's Table 1, the manufacturer's parameter files and MobileSim model): ``docs/model.md``.
-"""
+settings). Sources (the paper's Table 1, the manufacturer's parameter files and MobileSim model): ``docs/model.md``."""
 
 from __future__ import annotations
 
@@ -63,13 +62,10 @@ def check_real(
     if v is None:
         rng = _interval(low, high, low_open, high_open)
         raise ValueError(f"{owner}.{name} must be a real number in {rng}, got {show_value(value)}")
-    ok = math.isfinite(v)
-    ok = ok and (v > low if low_open else v >= low)
-    ok = ok and (v < high if high_open else v <= high)
-    if not ok:
-        rng = _interval(low, high, low_open, high_open)
-        raise ValueError(f"{owner}.{name} must be a finite number in {rng}, got {value!r}")
-    return v
+    if math.isfinite(v) and (v > low if low_open else v >= low) and (v < high if high_open else v <= high):
+        return v
+    rng = _interval(low, high, low_open, high_open)
+    raise ValueError(f"{owner}.{name} must be a finite number in {rng}, got {value!r}")
 
 
 def check_pair(
@@ -115,8 +111,7 @@ class RobotParams:
         body_width: body width, for rendering [m]: 0.279.
 
     Ranges (else a one-line ``ValueError``): lengths in [1e-3, 100] m, ``l4`` in [1e-6, r1), ``max_speed`` in
-    [1e-3, 100] m/s, the other limits in [1e-6, 1e3]; stored as Python floats, non-numbers and bools refused.
-    """
+    [1e-3, 100] m/s, the other limits in [1e-6, 1e3]; stored as Python floats, non-numbers and bools refused."""
 
     l1: float = 0.12
     l3: float = 0.08

@@ -3,8 +3,7 @@
 :func:`sample` draws one episode's values from the env's ``np_random`` in a fixed order (``reset(seed=...)``
 reproduces them); per-step draws (slips ``s_i ~ U(0, s_max)``, Gaussian measurement noise; the true state is never
 perturbed) are a pure function of a per-episode key and the step (:func:`step_noise`, a counter-based SplitMix64),
-the same for one robot and a batch.
-"""
+the same for one robot and a batch."""
 
 from __future__ import annotations
 
@@ -74,8 +73,7 @@ def make_randomization(value: str | Randomization | Mapping[str, Any] | None) ->
         return PRESETS[value]
     if isinstance(value, Mapping):
         names = {f.name for f in fields(Randomization)}
-        bad = sorted(str(k) for k in value if k not in names)
-        if bad:
+        if bad := sorted(str(k) for k in value if k not in names):
             raise ValueError(f"randomize: unknown field(s) {bad}; allowed: {sorted(names)}")
         return Randomization(**{str(k): v for k, v in value.items()})  # (pairs as lists too: JSON)
     raise ValueError(f"randomize must be a preset name, a Randomization or a mapping, got {type(value).__name__}")

@@ -1,7 +1,6 @@
 """What a path asks of the robot: the path ahead in the robot's frame (:func:`preview`) and the wheel rates and
 accelerations the exact inverse solution needs (:func:`feasibility`), for any
-:class:`~amigo_gym.paths.clothoid.PathSpec`.
-"""
+:class:`~amigo_gym.paths.clothoid.PathSpec`."""
 
 from __future__ import annotations
 
@@ -101,10 +100,9 @@ def heading_lag_profile(
     by classical Runge–Kutta with steps of at most ``step_fraction l3`` (in [1e-3, 0.5]) aligned with
     ``path.breakpoints()`` if present. An open path from its start to its end, from ``initial_lag`` [rad] (None:
     ``asin(kappa(0) l3)``, clipped); a closed one over one lap after a warm-up of whole laps of at least
-    :data:`WARMUP_L3` ``l3`` (the periodic solution).
-    """
-    l3 = robot.l3
-    frac = check_real("heading_lag_profile", "step_fraction", step_fraction, 1e-3, 0.5)
+    :data:`WARMUP_L3` ``l3`` (the periodic solution)."""
+    l3, o = robot.l3, "heading_lag_profile"
+    frac = check_real(o, "step_fraction", step_fraction, 1e-3, 0.5)
     h_max = frac * l3
     length = path.length
     warm = length * math.ceil(WARMUP_L3 * l3 / length) if path.closed else 0.0
@@ -117,13 +115,10 @@ def heading_lag_profile(
     if initial_lag is None:
         psi = math.asin(min(max(float(k_a[0]) * l3, -1.0), 1.0))
     else:
-        psi = check_real(
-            "heading_lag_profile", "initial_lag", initial_lag, -math.pi / 2, math.pi / 2, low_open=True, high_open=True
-        )
+        psi = check_real(o, "initial_lag", initial_lag, -math.pi / 2, math.pi / 2, low_open=True, high_open=True)
     inv = 1.0 / l3
     n = len(a)
-    psi_a = np.empty(n)
-    psi_b = np.empty(n)
+    psi_a, psi_b = np.empty(n), np.empty(n)
     hs = (b - a).tolist()
     ka, km, kb = k_a.tolist(), k_m.tolist(), k_b.tolist()
     sin = math.sin
@@ -137,9 +132,7 @@ def heading_lag_profile(
         psi = psi + h * (f1 + 2.0 * f2 + 2.0 * f3 + f4) / 6.0
         psi_b[i] = psi
     keep = a >= 0.0
-    s = np.concatenate((a[keep], b[keep]))
-    ps = np.concatenate((psi_a[keep], psi_b[keep]))
-    kk = np.concatenate((k_a[keep], k_b[keep]))
+    s, ps, kk = (np.concatenate((u[keep], w[keep])) for u, w in ((a, b), (psi_a, psi_b), (k_a, k_b)))
     order = np.argsort(s, kind="stable")
     s, ps, kk = s[order], ps[order], kk[order]
     return LagProfile(s, ps, kk - np.sin(ps) * inv, kk)
@@ -164,8 +157,7 @@ class Feasibility:
     lag reaches 90 degrees: H cannot follow), its ``needed`` and ``limit``, the path ``radius`` ``1/|kappa|`` [m]
     there (``inf`` on a straight); ``feasible``: all within the limits and the lag below 90 degrees;
     ``max_heading_lag`` ``max |theta - beta|`` [rad]; ``exceeded``: per quantity (and ``"heading lag"``) the
-    arc-length intervals ``(s_from, s_to)`` [m] over the limit (at most :data:`MAX_INTERVALS`, the rest merged).
-    """
+    arc-length intervals ``(s_from, s_to)`` [m] over the limit (at most :data:`MAX_INTERVALS`, the rest merged)."""
 
     speed: float
     speed_of: str
@@ -230,21 +222,17 @@ def feasibility(
 
     ``speed`` [m/s] in (0, 10]; ``robot`` default :class:`RobotParams`; ``max_wheel_rate`` [rad/s] default
     ``robot.max_wheel_rate``; the other limits (units of :data:`QUANTITIES`) None: not checked (peaks reported);
-    ``initial_lag`` as :func:`heading_lag_profile`.
-    """
+    ``initial_lag`` as :func:`heading_lag_profile`."""
     robot = RobotParams() if robot is None else robot
     v = check_real("feasibility", "speed", speed, 0.0, 10.0, low_open=True)
     if speed_of not in ("A", "H"):
         raise ValueError(f"feasibility.speed_of must be 'A' or 'H', got {speed_of!r}")
-    given = {
-        "wheel_rate": robot.max_wheel_rate if max_wheel_rate is None else max_wheel_rate,
-        "wheel_acceleration": max_wheel_acceleration,
-        "acceleration": max_acceleration,
-        "rotation_rate": max_rotation_rate,
-        "rotational_acceleration": max_rotational_acceleration,
-    }
-    limits = {
-        k: check_real("feasibility", QUANTITIES[k][1], x, 0.0, low_open=True) for k, x in given.items() if x is not None
+    w_max = robot.max_wheel_rate if max_wheel_rate is None else max_wheel_rate
+    given = (w_max, max_wheel_acceleration, max_acceleration, max_rotation_rate, max_rotational_acceleration)
+    limits = {  # in the order of QUANTITIES
+        k: check_real("feasibility", QUANTITIES[k][1], x, 0.0, low_open=True)
+        for k, x in zip(QUANTITIES, given, strict=True)
+        if x is not None
     }
     prof = heading_lag_profile(path, robot, initial_lag)
     psi, kappa = prof.psi, prof.curvature
@@ -263,13 +251,8 @@ def feasibility(
         w2 = (v_a - l1 * bd) / robot.r2
         wd1 = (acc + l1 * bdd) / robot.r1
         wd2 = (acc - l1 * bdd) / robot.r2
-    series = {
-        "wheel_rate": np.maximum(np.abs(w1), np.abs(w2)),
-        "wheel_acceleration": np.maximum(np.abs(wd1), np.abs(wd2)),
-        "acceleration": np.abs(acc),
-        "rotation_rate": np.abs(bd),
-        "rotational_acceleration": np.abs(bdd),
-    }
+    wheels = (np.maximum(np.abs(w1), np.abs(w2)), np.maximum(np.abs(wd1), np.abs(wd2)))
+    series = dict(zip(QUANTITIES, (*wheels, np.abs(acc), np.abs(bd), np.abs(bdd)), strict=True))
     arg = {name: int(np.argmax(np.where(np.isfinite(f), f, np.inf))) for name, f in series.items()}
     peaks = {name: float(f[arg[name]]) for name, f in series.items()}
     peak_s = {name: float(prof.s[i]) for name, i in arg.items()}

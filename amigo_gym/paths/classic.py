@@ -3,8 +3,7 @@
 Arc lengths ``s`` [m] from the start point, points ``(..., 2)`` [m], tangent angle ``theta(s)`` [rad] continuous,
 signed curvature ``kappa(s) = dtheta/ds`` [1/m] positive turning left, cross-track error ``e = (p - closest) . n``
 [m] with ``n = (-sin theta, cos theta)`` (positive left). ``project`` takes points ``(..., 2)``, ``project_xy``
-columns (floats or arrays). The foot functions are in numba's subset (compiled by :mod:`amigo_gym.sim`).
-"""
+columns (floats or arrays). The foot functions are in numba's subset (compiled by :mod:`amigo_gym.sim`)."""
 
 from __future__ import annotations
 
@@ -94,8 +93,7 @@ class PathPoint(NamedTuple):
     from the hint ``s_prev``), ``x, y`` [m], ``tangent_angle`` [rad] unwrapped, ``curvature`` [1/m],
     ``curvature_rate`` [1/m^2], ``cross_track_error = (p - c) . n`` [m] (positive left; at a clamped end the
     lateral part), ``cos_theta, sin_theta``, ``distance = |p - c|`` [m] and ``status`` (``STATUS_INTERIOR`` 0,
-    ``STATUS_START``, ``STATUS_END``, ``STATUS_WINDOW`` of :mod:`amigo_gym.paths.clothoid`).
-    """
+    ``STATUS_START``, ``STATUS_END``, ``STATUS_WINDOW`` of :mod:`amigo_gym.paths.clothoid`)."""
 
     s: Real
     progress: Real
@@ -133,8 +131,7 @@ class CirclePath(_Projecting):
 
     In general ``theta(s) = theta0 + d s / R``, ``p(s) = c + d R (sin theta, -cos theta)``, centre
     ``c = p0 + d R (-sin theta0, cos theta0)``, with ``R = radius`` [m] > 0, ``p0 = start`` [m], ``theta0 =
-    start_angle`` [rad], ``d = direction``. Projections' arc lengths lie in ``[0, 2 pi R)``; laps repeat.
-    """
+    start_angle`` [rad], ``d = direction``. Projections' arc lengths lie in ``[0, 2 pi R)``; laps repeat."""
 
     radius: float = 1.0
     start: tuple[float, float] = (0.0, 0.0)
@@ -181,8 +178,7 @@ class CirclePath(_Projecting):
         th = self.tangent_angle(s)
         cx, cy = self.center
         dr = self.direction * self.radius
-        k = np.full(np.shape(th), self.direction / self.radius)
-        return _pose(cx + dr * np.sin(th), cy - dr * np.cos(th), th, k, s)
+        return _pose(cx + dr * np.sin(th), cy - dr * np.cos(th), th, self.curvature(th), s)
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
@@ -190,11 +186,9 @@ class CirclePath(_Projecting):
         """:class:`PathPoint` of ``(x, y)`` [m] by :meth:`project_xy`; ``progress`` is ``s`` plus the whole laps
         nearest to ``s_prev`` (``s`` without a hint); the window is not used (the projection is unique); status 0."""
         cp = self.project_xy(x, y)
-        s = cp.s
-        progress = s
+        s = progress = cp.s
         if s_prev is not None:
-            lap = self.length
-            progress = s + lap * np.round((s_prev - s) / lap)
+            progress = s + self.length * np.round((s_prev - s) / self.length)
             if not isinstance(progress, np.ndarray) or progress.ndim == 0:
                 progress = float(progress)
         return _located(cp, progress)
@@ -210,8 +204,7 @@ class CirclePath(_Projecting):
 
         With ``u = (x, y) - c``, ``rho = |u|``, ``n = u / rho``: the point ``c + R n``, the tangent ``d (-n_y, n_x)``,
         ``e = d (R - rho)``, ``s = R a`` with ``a = atan2(d (r0 x u), r0 . u)`` in ``[0, 2 pi)`` from the start
-        radius ``r0``. At the centre: the start point. ``minimal=True``: ``s``, point and tangent angle are NaN.
-        """
+        radius ``r0``. At the centre: the start point. ``minimal=True``: ``s``, point and tangent angle are NaN."""
         cx, cy, r0x, r0y = self._frame
         d, r = self.direction, self.radius
         e, cos_theta, sin_theta, ux, uy = circle_foot(x, y, cx, cy, r0x, r0y, float(d), r)
@@ -301,8 +294,7 @@ def circle_arc(ux: Real, uy: Real, r0x: float, r0y: float, d: float, r: float) -
 class ManoeuvrePath(_Projecting):
     """The paper's manoeuvre path: ``(s, 0)`` with tangent 0 for ``s <= straight_length`` [m] (>= 0; also for
     ``s < 0``), then the circle of ``radius`` [m] (> 0) tangent to the segment's end, turning by ``direction`` (+1
-    left, -1 right; laps repeat). Projection takes the closer of the half-line and the circle (ties to the line).
-    """
+    left, -1 right; laps repeat). Projection takes the closer of the half-line and the circle (ties to the line)."""
 
     radius: float = 1.0
     straight_length: float = 1.0
@@ -348,8 +340,7 @@ class ManoeuvrePath(_Projecting):
     def pose_columns(self, s: Real) -> PathPose:
         """``x``, ``y`` [m], ``theta`` [rad], ``curvature`` [1/m] at ``s`` [m], floats for a float ``s``."""
         xy = self.point(s)
-        k = np.where(np.asarray(s) <= self.straight_length, 0.0, self.direction / self.radius)
-        return _pose(xy[..., 0], xy[..., 1], self.tangent_angle(s), k, s)
+        return _pose(xy[..., 0], xy[..., 1], self.tangent_angle(s), self.curvature(s), s)
 
     def locate(
         self, x: Real, y: Real, s_prev: Real | None = None, max_advance: float = 0.5, max_retreat: float | None = None
@@ -365,17 +356,14 @@ class ManoeuvrePath(_Projecting):
         """Closest point to ``(x, y)`` [m] (:func:`manoeuvre_foot`); ``minimal=True``: point and tangent
         angle are NaN."""
         circle = self.circle
-        cx, cy, r0x, r0y = circle._frame
         d, r = self.direction, self.radius
-        e, cos_theta, sin_theta, s, s_circ, on_line = manoeuvre_foot(
-            x, y, cx, cy, r0x, r0y, float(d), r, self.straight_length
-        )
+        e, ct, st, s, s_circ, on_line = manoeuvre_foot(x, y, *circle._frame, float(d), r, self.straight_length)
         curvature = where(on_line, 0.0, d / r)
         if minimal:
-            return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, cos_theta, sin_theta)
-        arc = circle._on_arc(s_circ, cos_theta, sin_theta)
+            return ClosestPoint(s, math.nan, math.nan, math.nan, curvature, e, ct, st)
+        arc = circle._on_arc(s_circ, ct, st)
         px, py, theta = (where(on_line, a, b) for a, b in zip((s, 0.0, 0.0), arc, strict=True))
-        return ClosestPoint(s, px, py, theta, curvature, e, cos_theta, sin_theta)
+        return ClosestPoint(s, px, py, theta, curvature, e, ct, st)
 
 
 def manoeuvre_foot(

@@ -12,8 +12,7 @@
 With ``smoothing=sigma`` [m] (the points' noise) points are averaged in groups of ``g`` (a power of 2: points ``g``
 apart a median ``3 sigma`` apart), then moved to the discrete cubic smoothing spline (Whittaker–Reinsch, least
 ``|z - b|^2 + lambda |z''|^2``) at an RMS distance ``sigma sqrt(2 / g)`` from the means (an open path's end
-curvature 0).
-"""
+curvature 0)."""
 
 from __future__ import annotations
 
@@ -58,8 +57,7 @@ class PointsFit:
     """The result of :func:`fit_points`: the ``path``, ``max_error = max_i |c(s_i) - p_i|`` [m] (``<= tolerance``)
     at the points' arc lengths ``point_s`` ``(n,)`` [m], the largest chord ``step`` [m] used, a closed path's
     ``closure_correction`` ``(c_0, ..., c_4)`` [1/m] (empty if open), and ``smoothed``: the RMS distance [m] the
-    smoothing moved the grouped points (0 without; with it, the errors and ``point_s`` are of the smoothed points).
-    """
+    smoothing moved the grouped points (0 without; with it, the errors and ``point_s`` are of the smoothed points)."""
 
     path: ClothoidPath
     max_error: float
@@ -83,8 +81,7 @@ def _check_points(points: Any, closed: bool, owner: str) -> Array:
     if arr.ndim != 2 or arr.shape[1] != 2:
         raise ValueError(f"{owner}.points must have shape (n, 2) (x, y in metres), got shape {arr.shape}")
     p = arr.astype(np.float64)
-    bad = np.flatnonzero(~np.isfinite(p).all(axis=1))
-    if bad.size:
+    if (bad := np.flatnonzero(~np.isfinite(p).all(axis=1))).size:
         i = int(bad[0])
         raise ValueError(f"{owner}.points[{i}] must be finite, got {p[i].tolist()}")
     if closed and len(p) > 1 and np.hypot(*(p[-1] - p[0])) < MIN_CHORD:
@@ -96,8 +93,7 @@ def _check_points(points: Any, closed: bool, owner: str) -> Array:
     if len(p) > MAX_POINTS:
         raise ValueError(f"{owner}.points must hold at most {MAX_POINTS} points, got {len(p)}")
     chord = np.hypot(np.diff(p[:, 0]), np.diff(p[:, 1]))
-    dup = np.flatnonzero(chord < MIN_CHORD)
-    if dup.size:
+    if (dup := np.flatnonzero(chord < MIN_CHORD)).size:
         i = int(dup[0]) + 1
         raise ValueError(f"{owner}.points[{i}] repeats points[{i - 1}] ({p[i].tolist()}): points must be distinct")
     # shuffled: consecutive points far apart where each has a close neighbour
@@ -164,8 +160,7 @@ def _whittaker(b: Array, z: Array, closed: bool, target: float) -> Array:
     penalty, eye = (d.T @ d).tocsc(), identity(n, format="csc")
 
     def solve(log_lam: float) -> Array:
-        out: Array = splu(eye + math.exp(log_lam) * penalty).solve(b)
-        return out
+        return np.asarray(splu(eye + math.exp(log_lam) * penalty).solve(b), dtype=np.float64)
 
     def gap(log_lam: float) -> float:
         return float(np.sqrt(np.mean(np.sum((solve(log_lam) - b) ** 2, axis=1)))) - target
@@ -213,8 +208,7 @@ def fit_points(
     None (through the points) or the points' noise ``sigma`` [m] in (0, 1]; ``tolerance`` [m] in [1e-9, 1]; the
     first ``step`` [m] in [1e-4, 10]; ``sample_spacing`` [m] of the path's coarse projection samples. ``ValueError``
     for bad points or arguments, a curvature above 1e4 1/m (a cusp), or ``tolerance`` not reached after
-    :data:`MAX_REFINEMENTS` halvings of ``step``.
-    """
+    :data:`MAX_REFINEMENTS` halvings of ``step``."""
     from scipy.interpolate import CubicSpline
 
     owner = "from_points"
@@ -227,9 +221,7 @@ def fit_points(
     if sigma == 0.0:
         raise ValueError(f"{owner}.smoothing must be in (0, 1] m or None, got 0")
     p = _check_points(points, closed, owner)
-    smoothed = 0.0
-    if sigma is not None:
-        p, smoothed = _smooth(p, closed, sigma, owner)
+    p, smoothed = (p, 0.0) if sigma is None else _smooth(p, closed, sigma, owner)
     knots = np.vstack((p, p[:1])) if closed else p
     chord = np.hypot(np.diff(knots[:, 0]), np.diff(knots[:, 1]))
     t = np.concatenate(([0.0], np.cumsum(chord)))
@@ -303,12 +295,8 @@ def _close(
     for _ in range(12):
         if abs(g[0]) + abs(g[1]) <= 1e-12 * scale and abs(g[2]) <= 1e-12:
             break
-        jac = np.empty((3, nm))
-        eps = 1e-6 / scale
-        for q in range(nm):
-            dc = np.zeros(nm)
-            dc[q] = eps
-            jac[:, q] = (gap(coef + dc) - gap(coef - dc)) / (2.0 * eps)
+        eps = 1e-6 / scale  # central differences along each mode
+        jac = np.stack([(gap(coef + dc) - gap(coef - dc)) / (2.0 * eps) for dc in np.eye(nm) * eps], axis=1)
         coef = coef - np.linalg.pinv(jac) @ g  # the smallest correction (least squares over the modes)
         g = gap(coef)
     k = kappa + coef @ modes
@@ -333,8 +321,7 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
     """The points ``(n, 2)`` [m] of a file, and the JSON's ``"closed"`` if given. JSON (``.json``):
     ``{"x": [...], "y": [...]}`` (optionally ``"closed": true``) or a list of ``{"x", "y"}`` objects; CSV (any
     other suffix): a header naming ``x`` and ``y`` (any case), one point per row, blank and ``#`` lines skipped.
-    Raises ``FileNotFoundError`` (no such file) or ``ValueError`` (one line naming the file and the row or key).
-    """
+    Raises ``FileNotFoundError`` (no such file) or ``ValueError`` (one line naming the file and the row or key)."""
     f = Path(file)
     name = str(f)
     if not f.is_file():
@@ -346,8 +333,7 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
             raise ValueError(f"{name}: not valid JSON ({exc})") from None
         closed = doc.get("closed") if isinstance(doc, dict) else None
         if isinstance(doc, dict):
-            missing = [k for k in ("x", "y") if k not in doc]
-            if missing:
+            if missing := [k for k in ("x", "y") if k not in doc]:
                 raise ValueError(f"{name}: missing key(s) {missing}; expected {{'x': [...], 'y': [...]}}")
             xs, ys = doc["x"], doc["y"]
             if not isinstance(xs, list) or not isinstance(ys, list) or len(xs) != len(ys):
@@ -376,8 +362,7 @@ def load_points(file: str | os.PathLike[str]) -> tuple[Array, bool | None]:
         raise ValueError(f"{name}: empty; expected a header with columns x, y and one point per row")
     table = list(csv.reader([ln for _, ln in lines]))
     header = [h.strip().lower() for h in table[0]]
-    missing = [k for k in ("x", "y") if k not in header]
-    if missing:
+    if missing := [k for k in ("x", "y") if k not in header]:
         raise ValueError(f"{name}: missing column(s) {missing} in the header {table[0]}; expected columns x, y [m]")
     ix, iy = header.index("x"), header.index("y")
     pts: list[tuple[float, float]] = []

@@ -6,8 +6,7 @@ and ``curvature`` [1/m, positive left] of the shape of ``s`` (an open path also 
 the end tangent). Optional ``locate(x, y, s_prev, max_advance, max_retreat)`` returning a
 :class:`~amigo_gym.paths.PathPoint`; else samples every :data:`SAMPLE_SPACING` m (at most :data:`MAX_SAMPLES`)
 are searched, then :meth:`~amigo_gym.paths.ClothoidPath.locate`'s Newton iteration runs on ``pose_columns``.
-Errors (at ``gym.make``, on a probe, at any later step) name the path, the member and the value.
-"""
+Errors (at ``gym.make``, on a probe, at any later step) name the path, the member and the value."""
 
 from __future__ import annotations
 
@@ -50,15 +49,12 @@ def _finite_column(value: Any, shape: tuple[int, ...], where: str) -> Array:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError(f"{where} must be real numbers, got {show_value(value)}") from None
+    if a.shape != shape and a.ndim == 0:
+        a = np.broadcast_to(a, shape)
     if a.shape != shape:
-        if a.ndim == 0:
-            a = np.broadcast_to(a, shape)
-        else:
-            raise ValueError(f"{where} must have the shape of s, {shape}, got shape {a.shape}")
+        raise ValueError(f"{where} must have the shape of s, {shape}, got shape {a.shape}")
     if not np.isfinite(a).all():
-        flat = np.asarray(a).reshape(-1)
-        bad = float(flat[~np.isfinite(flat)][0])
-        raise ValueError(f"{where} must be finite, got {bad!r}")
+        raise ValueError(f"{where} must be finite, got {float(a[~np.isfinite(a)][0])!r}")
     return a
 
 
@@ -67,12 +63,9 @@ class UserPath:
     uses; ``name`` (:func:`path_name`), ``length`` [m] and ``closed`` are its values, checked."""
 
     def __init__(self, path: Any, owner: str = "AmigoBot-v1") -> None:
-        self.path = path
-        self.name = path_name(path)
-        self._owner = owner
+        self.path, self.name, self._owner = path, path_name(path), owner
         who = f"{owner}: path {self.name}"
-        missing = [m for m in REQUIRED_MEMBERS if not hasattr(path, m)]
-        if missing:
+        if missing := [m for m in REQUIRED_MEMBERS if not hasattr(path, m)]:
             raise ValueError(
                 f"{who} has no {', '.join(repr(m) for m in missing)}; a path must be a family name or an object "
                 "with length [m], closed and pose_columns(s) (amigo_gym.paths.UserPath)"

@@ -1,8 +1,7 @@
 """Classical and learned controllers with stable-baselines3's ``predict`` interface: :class:`AnalyticPolicy`
 (``AmigoBot-v0``'s baseline), :class:`AnalyticTrackingPolicy` (PI and feedforward, any path),
 :class:`PurePursuitPolicy`, :class:`DelayCompensatedPolicy` (the analytic controller over the estimated actuation
-delay), and learned ``AmigoBot-v1`` policies (:class:`FastPolicy`, :func:`load_pretrained`).
-"""
+delay), and learned ``AmigoBot-v1`` policies (:class:`FastPolicy`, :func:`load_pretrained`)."""
 
 from __future__ import annotations
 

@@ -13,8 +13,7 @@ reference_speed * max_speed`` [m/s]. H = A + l3 (cos beta, sin beta) moves along
 ``v_A = v_ref`` and ``edot = -k e``: :math:`\dot\beta = (-k e - v_{ref}\sin\psi) / (l_3\cos\psi)`.
 ``speed_reference="H"`` imposes ``(v_A, betadot) = M(psi)^{-1} (v_ref / cos delta_ss, -k e)``, ``sin delta_ss =
 kappa l3``. The wheel rates ``r1 w1 = v_A + l1 betadot``, ``r2 w2 = v_A - l1 betadot``, the action ``clip(w /
-max_wheel_rate, -1, 1)``; ``cos psi`` floored at :data:`COS_MIN`.
-"""
+max_wheel_rate, -1, 1)``; ``cos psi`` floored at :data:`COS_MIN`."""
 
 from __future__ import annotations
 
@@ -56,13 +55,9 @@ def analytic_tracking_command(
         \omega = \omega_0 - \frac{\dot s}{l_3\cos\psi}\Bigl(\omega_0 - \frac{\kappa\dot s}{1 - \kappa e}\Bigr)
         \frac{dt}{2}\ \text{(feedforward)},
 
-    with ``v = v_ref``, ``cos psi`` floored at :data:`COS_MIN` and ``1 - kappa e`` at 0.5.
-    """
-    e_a = np.asarray(e, dtype=np.float64)
-    sp = np.asarray(sin_psi, dtype=np.float64)
+    with ``v = v_ref``, ``cos psi`` floored at :data:`COS_MIN` and ``1 - kappa e`` at 0.5."""
+    e_a, sp, v, c_a = (np.asarray(a, dtype=np.float64) for a in (e, sin_psi, v_ref, c))
     cp = np.maximum(np.asarray(cos_psi, dtype=np.float64), COS_MIN)
-    v = np.asarray(v_ref, dtype=np.float64)
-    c_a = np.asarray(c, dtype=np.float64)
     omega = (c_a - v * sp) / (l3 * cp)
     if feedforward:
         sdot = (v - c_a * sp) / cp
@@ -73,8 +68,7 @@ def analytic_tracking_command(
 
 
 def _body_velocity(f: Fields, o: Array, gain: float, speed_reference: str) -> tuple[Array, Array]:
-    p = f.params
-    l3 = f.robot.l3
+    p, l3 = f.params, f.robot.l3
     e = f(o, "cross_track_error") * p.error_scale
     psi = np.arctan2(f(o, "sin_heading_error"), f(o, "cos_heading_error"))
     v_ref = f(o, "reference_speed") * f.robot.max_speed

@@ -7,7 +7,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from amigo_gym.model.params import RobotParams
 from amigo_gym.task.v1 import TrackingParams, obs_fields
 
 Array = NDArray[np.float64]
@@ -22,9 +21,7 @@ class Fields:
             want = "TrackingParams with observation='v1'" if v1_only else "TrackingParams"
             got = f"observation={params.observation!r}" if isinstance(params, TrackingParams) else type(params).__name__
             raise ValueError(f"{owner}.params must be {want}, got {got}")
-        self.owner = owner
-        self.params: TrackingParams = params
-        self.robot: RobotParams = params.robot
+        self.owner, self.params, self.robot = owner, params, params.robot
         self.names = obs_fields(params)
         self.dim = len(self.names)
         self.index = {n: i for i, n in enumerate(self.names)}

@@ -10,8 +10,7 @@ Prediction: H's cross-track error ``e`` and heading error ``psi`` moved over the
 simulates the nominal ``v``, ``omega`` from the commands issued so far; the one with the least summed squared
 distance :math:`(v_c - v)^2 + (l_1 (\omega_c - \omega))^2` to the measurements wins. Gain: ``k = gain`` while that
 distance per step is at most ``quiet`` [(m/s)^2] (measurements the nominal model explains), else ``k = 1`` (the
-analytic controller's: a higher gain amplifies noise). Validated in docs/experiments.md, "Delay compensation".
-"""
+analytic controller's: a higher gain amplifies noise). Validated in docs/experiments.md, "Delay compensation"."""
 
 from __future__ import annotations
 

@@ -8,8 +8,7 @@ the observation normalisation). Features of observations ``o`` ``(N, d)``: ``o``
 :class:`~amigo_gym.policies.DelayCompensatedPolicy`'s, then its estimated delay [s] and quiet flag); normalised,
 ``clip((x - mean) / sqrt(var + 1e-8), -10, 10)``. The action ``a = clip(u, -1, 1)`` of the output ``u`` (or ``clip(a0
 + b clip(u, -1, 1), -1, 1)``, with ``gate`` the correction zeroed where the quiet flag is off), with ``filter_alpha =
-alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``.
-"""
+alpha < 1`` ``p + alpha (a - p)`` of the previous command ``p``."""
 
 from __future__ import annotations
 
@@ -245,13 +244,9 @@ class FastPolicy(Policy):
 
     def save(self, path: str | Path) -> None:
         """Write the model zip atomically (``model.json`` + ``weights.npz``)."""
-        meta = {
-            "format": FORMAT,
-            "spec": {**asdict(self.spec), "env_kwargs": dict(self.spec.env_kwargs)},
-            "obs_fields": list(self.builder.fields.names),
-            "n_layers": len(self.layers),
-            "info": self.info,
-        }
+        spec = {**asdict(self.spec), "env_kwargs": dict(self.spec.env_kwargs)}
+        meta: dict[str, Any] = {"format": FORMAT, "spec": spec, "obs_fields": list(self.builder.fields.names)}
+        meta |= {"n_layers": len(self.layers), "info": self.info}
         arrays: dict[str, Array] = {"log_std": self.log_std, "obs_mean": self.obs_rms.mean, "obs_var": self.obs_rms.var}
         arrays["obs_count"] = np.array([self.obs_rms.count])
         for i, (w, bias) in enumerate(self.layers):
@@ -261,11 +256,8 @@ class FastPolicy(Policy):
 
         def write(tmp: str) -> None:
             with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:  # fixed dates: same model, same bytes
-                for name, data in (
-                    ("model.json", json.dumps(meta, indent=2).encode()),
-                    ("weights.npz", buf.getvalue()),
-                ):
-                    z.writestr(zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0)), data, zipfile.ZIP_DEFLATED)
+                for name, raw in (("model.json", json.dumps(meta, indent=2).encode()), ("weights.npz", buf.getvalue())):
+                    z.writestr(zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0)), raw, zipfile.ZIP_DEFLATED)
 
         atomic_save(write, path, parents=True)
 
@@ -294,8 +286,7 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
     """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
     zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
     ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here. Raises ``FileNotFoundError``
-    (no zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``.
-    """
+    (no zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"load_pretrained: no model file {p}")

@@ -15,8 +15,7 @@ impulse response (``zoh_error_bound`` in tests/test_policies_v1.py).
 
 .. math:: \kappa = \frac{2 y_L}{L^2}, \qquad L^2 = x_L^2 + y_L^2, \qquad v = v_{ref}, \qquad \omega = v\kappa;
 
-on a circle of radius ``R`` H runs outside it: ``e_ss = -direction (sqrt(R^2 + l3^2) - R)``.
-"""
+on a circle of radius ``R`` H runs outside it: ``e_ss = -direction (sqrt(R^2 + l3^2) - R)``."""
 
 from __future__ import annotations
 
@@ -46,9 +45,7 @@ def limit_wheel_rates(v: ArrayLike, omega: ArrayLike, params: TrackingParams) ->
     """The action ``(..., 2)`` in [-1, 1] for speeds ``v`` [m/s] and turn rates ``omega`` [rad/s]: the wheel rates
     ``(v +- l1 omega) / r_i`` divided by ``max(1, |w1| / w_max, |w2| / w_max)``, then by ``w_max``."""
     r = params.robot
-    v_a = np.asarray(v, dtype=np.float64)
-    om = np.asarray(omega, dtype=np.float64)
-    w1, w2 = wheel_rates_columns(v_a, om, r)
+    w1, w2 = wheel_rates_columns(np.asarray(v, dtype=np.float64), np.asarray(omega, dtype=np.float64), r)
     w_max = r.max_wheel_rate
     m = np.maximum(1.0, np.maximum(np.abs(w1), np.abs(w2)) / w_max)
     out: Array = np.stack((w1 / m, w2 / m), axis=-1) / w_max
@@ -60,8 +57,7 @@ class AnalyticTrackingPolicy(Policy):
     ``TrackingParams``: ``gain`` ``k`` [1/s] in (0, 1/dt], ``integral_gain`` ``k_i`` [1/s^2] >= 0 (default ``k^2/4``),
     ``integral_limit`` [m/s] > 0, ``feedforward``: of the mid-step turn rate and the reference speed.
 
-    ``predict`` keeps the integral ``z`` [m s] per batch row as its state ``(N, 1)``, reset where ``episode_start``.
-    """
+    ``predict`` keeps the integral ``z`` [m s] per batch row as its state ``(N, 1)``, reset where ``episode_start``."""
 
     def __init__(
         self,
@@ -87,12 +83,9 @@ class AnalyticTrackingPolicy(Policy):
         ``z_new = clip(z + dt e, +-integral_limit / k_i)``, ``c = -k e - k_i z_new``. With ``feedforward``, ``v`` is
         the reference at the step's end: ``min(v_ref + profile_accel dt, v_ahead)`` when rising, else the chord
         ``v_ref + (v_ahead - v_ref) dt / 1 s``."""
-        p = self.params
-        r = p.robot
-        d = self._fields
+        p, r, d = self.params, self.params.robot, self._fields
         e = d(obs, "cross_track_error") * p.error_scale
-        sp = d(obs, "sin_heading_error")
-        cp = d(obs, "cos_heading_error")
+        sp, cp = d(obs, "sin_heading_error"), d(obs, "cos_heading_error")
         kappa = d(obs, "curvature") / r.l3
         v_ref = d(obs, "reference_speed") * r.max_speed
         if self.feedforward and "reference_speed_ahead" in d.index:
@@ -127,8 +120,7 @@ class PurePursuitPolicy(Policy):
     """Pure pursuit (Coulter 1992) towards the preview point ``lookahead`` [m] ahead (one of ``params.preview``,
     default the nearest to 0.5), or with ``lookahead_time`` [s] the one nearest ``lookahead_time v_ref``; from A
     (``origin="axle"``) or H (``"H"``: ``(x_L - l3, y_L)``); the turn rate clipped to ``max_turn_rate`` [rad/s]
-    when given. ``predict`` is stateless.
-    """
+    when given. ``predict`` is stateless."""
 
     max_turn_rate: float | None
     lookahead_time: float | None

@@ -8,8 +8,7 @@ eqs (7)-(10) reduce to (``docs/model.md``)
     \dot\beta = \frac{v_A \tan(\theta(s) - \beta)}{l_3},
 
 singular at ``|theta - beta| = pi/2``; the wheel rates follow from the rolling constraints (system 29). Units: m,
-rad, s; arrays of an :class:`InverseSolution` have shape ``(T,)``.
-"""
+rad, s; arrays of an :class:`InverseSolution` have shape ``(T,)``."""
 
 from __future__ import annotations
 
@@ -86,8 +85,7 @@ class TrapezoidProfile:
         \end{cases}
 
     with ``v = speed`` [m/s] > 0, ``a = accel`` [m/s^2] > 0 (``None``: a step at ``t_start``), ``d = decel``
-    [m/s^2] > 0, ``t_s = t_start`` [s] >= 0 and ``t_b = t_brake`` [s] >= :attr:`t_cruise` (``None``: no braking).
-    """
+    [m/s^2] > 0, ``t_s = t_start`` [s] >= 0 and ``t_b = t_brake`` [s] >= :attr:`t_cruise` (``None``: no braking)."""
 
     speed: float = 0.2
     accel: float | None = 0.3
@@ -135,11 +133,8 @@ class TrapezoidProfile:
 
     def __call__(self, t: ArrayLike) -> Array:
         t = np.asarray(t, dtype=np.float64)
-        v = float(self.speed)
-        if self.accel is None:
-            up = np.where(t >= self.t_start, v, 0.0)
-        else:
-            up = np.clip(self.accel * (t - self.t_start), 0.0, v)
+        v, ts = float(self.speed), self.t_start
+        up = np.where(t >= ts, v, 0.0) if self.accel is None else np.clip(self.accel * (t - ts), 0.0, v)
         if self.t_brake is None:
             return up
         down = np.clip(v - self.decel * (t - self.t_brake), 0.0, v)
@@ -229,8 +224,7 @@ class InverseSolution:
     def to_csv(self, path: str | os.PathLike[str], columns: Sequence[str] = COLUMNS) -> None:
         """Write the chosen columns as CSV with a header line, atomically. Raises ``ValueError`` on an unknown column,
         ``OSError`` when the folder does not exist or is not writable."""
-        unknown = [c for c in columns if c not in COLUMNS]
-        if unknown:
+        if unknown := [c for c in columns if c not in COLUMNS]:
             raise ValueError(f"unknown column(s) {unknown}; choose from {', '.join(COLUMNS)}")
         data = np.stack([getattr(self, c) for c in columns], axis=-1)
         header = ",".join(columns)
@@ -276,8 +270,7 @@ def solve_inverse(
 
     At ``t[0]`` (of the increasing grid) H is at ``path.point(s0)`` [m] (a ``CirclePath`` or ``ManoeuvrePath`` of
     radius above ``l3``), heading ``beta0`` [rad] (default ``theta(s0)``; ``|theta(s0) - beta0| < pi/2``), the wheel
-    angles ``alpha0`` [rad]; the ``profile``'s peak at most ``robot.max_speed``. ``ValueError`` names a bad field.
-    """
+    angles ``alpha0`` [rad]; the ``profile``'s peak at most ``robot.max_speed``. ``ValueError`` names a bad field."""
     from scipy.integrate import solve_ivp
 
     robot = RobotParams() if robot is None else robot
@@ -332,21 +325,17 @@ def solve_inverse(
     s_breaks = [float(path.straight_length)] if isinstance(path, ManoeuvrePath) and path.straight_length > s0 else []
     out = np.empty((y.size, tg.size))
     out[:, 0] = y
+
+    def reach(_t: float, yy: Array) -> float:  # the event of the next curvature jump
+        return float(yy[0] - s_breaks[0])
+
+    reach.terminal = True  # type: ignore[attr-defined]
+    reach.direction = 1.0  # type: ignore[attr-defined]
     for ta, tb in itertools.pairwise(edges):
         tc = ta
         while tc < tb:
-            events = []
-            if s_breaks:
-                target = s_breaks[0]
-
-                def reach(_t: float, yy: Array, target: float = target) -> float:
-                    return float(yy[0] - target)
-
-                reach.terminal = True  # type: ignore[attr-defined]
-                reach.direction = 1.0  # type: ignore[attr-defined]
-                events.append(reach)
-            sol = solve_ivp(make_rhs(ta, tb), (tc, tb), y, "DOP853", dense_output=True, events=events or None,
-                            max_step=max_step, rtol=rtol, atol=atol)  # fmt: skip
+            sol = solve_ivp(make_rhs(ta, tb), (tc, tb), y, "DOP853", dense_output=True,
+                            events=[reach] if s_breaks else None, max_step=max_step, rtol=rtol, atol=atol)  # fmt: skip
             if not sol.success:
                 raise RuntimeError(f"{o}: integration failed at t = {sol.t[-1]:.6g} s: {sol.message}")
             t_end = float(sol.t[-1])
