@@ -10,9 +10,9 @@ optionally closed (laps). On a piece of curvature ``kappa(u) = k0 + c u`` from `
 by :func:`amigo_gym.model.fresnel.advance`'s 10-node rule on pieces of ``|k0| u + |c| u^2 / 2 <= MAX_PHASE_PER_SUB``
 (within 5e-14 of ``u``, 4e-16 up to 1 rad). Conventions as :mod:`amigo_gym.paths.classic` (``theta`` continuous: laps
 add the total turn); an open path goes on straight beyond its ends, a closed one repeats with period ``length``. A flat
-float vector (:data:`PATH_HEADER`, the pieces' ``s0, x0, y0, th0, k0, c``, the coarse samples' ``x``, ``y``), in
-numba's subset; a closed path of arcs of one curvature (a circle) also stores its curvature and centre: its projection
-starts at the foot in closed form instead of the coarse search.
+float vector (:data:`PATH_HEADER`, each piece's ``s0, x0, y0, th0, k0, c`` in turn, the coarse samples' ``x``, ``y``),
+in numba's subset; a closed path of arcs of one curvature (a circle) also stores its curvature and centre: its
+projection starts at the foot in closed form instead of the coarse search.
 """
 
 from __future__ import annotations
@@ -148,8 +148,9 @@ class _Tables:
     def column(self, k: int) -> Array:
         # column k (a view): 0 ... 5 the pieces' s0, x0, y0, th0, k0, c; 6, 7 the samples' x, y
         n, m = int(self.flat[P_N]), int(self.flat[P_M])
-        a = P_TAIL + k * n if k < 6 else P_TAIL + 6 * n + (k - 6) * m
-        return self.flat[a : a + (n if k < 6 else m)]
+        if k < 6:
+            return self.flat[P_TAIL + k : P_TAIL + 6 * n : 6]
+        return self.flat[P_TAIL + 6 * n + (k - 6) * m :][:m]
 
     s0 = property(lambda self: self.column(0).tolist())
 
@@ -389,12 +390,12 @@ def piece_at(pv: FlatPath, s: float) -> tuple[int, float, float, float]:
     hi = n
     while lo < hi:
         mid = (lo + hi) // 2
-        if u < pv[P_TAIL + mid]:
+        if u < pv[P_TAIL + 6 * mid]:
             hi = mid
         else:
             lo = mid + 1
     j = min(max(lo - 1, 0), n - 1)
-    return j, u - pv[P_TAIL + j], lap, extra
+    return j, u - pv[P_TAIL + 6 * j], lap, extra
 
 
 def place(
@@ -403,9 +404,8 @@ def place(
     """The pose on the whole path from the unit-speed pose ``x, y, th, ct, st`` at ``du`` [m] into piece ``j``:
     curvature ``k0 + c du``; laps add ``lap * turn`` [rad] to the heading; past an open path's ends it goes
     straight (curvature 0)."""
-    n = int(pv[P_N])
-    c = pv[P_TAIL + 5 * n + j]
-    kappa = pv[P_TAIL + 4 * n + j] + c * du
+    c = pv[P_TAIL + 6 * j + 5]
+    kappa = pv[P_TAIL + 6 * j + 4] + c * du
     if pv[P_CLOSED] != 0.0:
         return x, y, th + lap * pv[P_TURN], kappa, c, ct, st
     if extra != 0.0:
@@ -489,11 +489,10 @@ def locate_flat(
 def circle_foot(pv: FlatPath, x: float, y: float, sp: float) -> float:
     """On a circle (``pv[P_CIRCLE_K] != 0``): the arc length [m] of the foot of ``(x, y)`` [m] on the lap nearest
     ``sp`` [m], ``s = Delta / k`` with ``Delta`` the signed angle at the centre from the start point to ``(x, y)``."""
-    n = int(pv[P_N])
     cx = pv[P_CIRCLE_X]
     cy = pv[P_CIRCLE_Y]
-    ax = pv[P_TAIL + n] - cx  # the start point (piece 0's), s = 0
-    ay = pv[P_TAIL + 2 * n] - cy
+    ax = pv[P_TAIL + 1] - cx  # the start point (piece 0's), s = 0
+    ay = pv[P_TAIL + 2] - cy
     bx = x - cx
     by = y - cy
     s = math.atan2(ax * by - ay * bx, ax * bx + ay * by) / pv[P_CIRCLE_K]
@@ -609,17 +608,16 @@ def pose_flat(buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, s: float) -> Fl
     On a circle (``pv[P_CIRCLE_K] = k != 0``) in closed form: ``theta = theta_0 + k s``, the point
     ``c + (sin theta, -cos theta) / k``.
     """
-    n = int(pv[P_N])
     k = pv[P_CIRCLE_K]
     if k != 0.0:
-        th = pv[P_TAIL + 3 * n] + k * s
+        th = pv[P_TAIL + 3] + k * s
         ct = math.cos(th)
         st = math.sin(th)
         return pv[P_CIRCLE_X] + st / k, pv[P_CIRCLE_Y] - ct / k, th, k, 0.0, ct, st
     j, du, lap, extra = piece_at(pv, s)
-    b = P_TAIL + n + j
+    b = P_TAIL + 6 * j
     x, y, th, ct, st = unit_speed_nodes(
-        buf, pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du, nodes, nb, NODES
+        buf, pv[b + 1], pv[b + 2], pv[b + 3], pv[b + 4], pv[b + 5], du, nodes, nb, NODES
     )
     return place(pv, j, du, lap, extra, x, y, th, ct, st)
 
@@ -634,8 +632,9 @@ def chain_pieces(
     out: Buffer, n: int, segs: Buffer, n_segs: int, x: float, y: float, th: float, buf: Buffer, nodes: Buffer
 ) -> tuple[float, float, float, float]:
     """Split the segments ``segs[4 g : 4 g + 4]`` (length [m], curvature [1/m], rate [1/m^2], piece count) into
-    pieces chained from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into ``out[q], out[n + q], ...,
-    out[5 n + q]`` (``buf``, ``nodes`` as :func:`pose_flat`); returns ``(x, y, theta, length)`` at the end."""
+    pieces chained from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into ``out[6 q : 6 q + 6]`` (one
+    piece's numbers together: one cache line for a pose), ``n`` pieces in all (``buf``, ``nodes`` as
+    :func:`pose_flat`); returns ``(x, y, theta, length)`` at the end."""
     q = 0
     s_seg = 0.0
     for g in range(n_segs):
@@ -647,12 +646,12 @@ def chain_pieces(
         for j in range(m):
             kj = k + rate * (j * h)
             hj = h if j < m - 1 else length - (m - 1) * h
-            out[q] = s_seg + j * h
-            out[n + q] = x
-            out[2 * n + q] = y
-            out[3 * n + q] = th
-            out[4 * n + q] = kj
-            out[5 * n + q] = rate
+            out[6 * q] = s_seg + j * h
+            out[6 * q + 1] = x
+            out[6 * q + 2] = y
+            out[6 * q + 3] = th
+            out[6 * q + 4] = kj
+            out[6 * q + 5] = rate
             x, y, th, _ct, _st = unit_speed_nodes(buf, x, y, th, kj, rate, hj, nodes, 0, NODES)
             q += 1
         s_seg += length
@@ -670,12 +669,11 @@ def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, 
 
 def _poses_flat(pv: FlatPath, ss: list[float]) -> list[FloatPose]:
     """:func:`pose_flat` of several floats ``ss`` [m], the cosines and sines in one numpy call."""
-    n = int(pv[P_N])
     where = [piece_at(pv, s) for s in ss]
     starts = []
     for j, du, _, _ in where:
-        b = P_TAIL + n + j
-        starts.append((pv[b], pv[b + n], pv[b + 2 * n], pv[b + 3 * n], pv[b + 4 * n], du))
+        b = P_TAIL + 6 * j
+        starts.append((pv[b + 1], pv[b + 2], pv[b + 3], pv[b + 4], pv[b + 5], du))
     return [
         place(pv, j, du, lap, extra, *pose)
         for pose, (j, du, lap, extra) in zip(unit_speed_poses(starts), where, strict=True)
