@@ -39,6 +39,21 @@ def test_measure_many_times_every_function() -> None:
     assert calls["a"] >= 5 and calls["b"] >= 5
 
 
+def test_stepper_takes_the_warmup_steps_before_the_first_timed_one() -> None:
+    """``bench-env --warmup``: the vector envs are timed in the steady state of restarts, not from the reset."""
+    import gymnasium as gym
+
+    from amigo_gym.tools.bench import stepper
+
+    env = gym.make_vec("AmigoBot-v0", 2, vectorization_mode="vector_entry_point")
+    taken, step = [0], env.step
+    env.step = lambda a: (taken.__setitem__(0, taken[0] + 1), step(a))[1]  # type: ignore[method-assign]
+    timed = stepper(env, 0, warmup=7)
+    assert taken[0] == 7
+    timed()
+    assert taken[0] == 8
+
+
 def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("stable_baselines3")
     pytest.importorskip("matplotlib")

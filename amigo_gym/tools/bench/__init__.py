@@ -35,13 +35,17 @@ def measure_many(fns: Mapping[str, Callable[[], object]], repeats: int, min_time
     return {name: statistics.median(v) for name, v in samples.items()}
 
 
-def stepper(env: Any, seed: int = 0) -> Callable[[], object]:
-    """One ``step`` of ``env`` (reset here) with random actions from a pool of :data:`POOL`, drawn with ``seed``; a
-    single env is reset when its episode ends."""
+def stepper(env: Any, seed: int = 0, warmup: int = 0) -> Callable[[], object]:
+    """One ``step`` of ``env`` (reset here, then stepped ``warmup`` times untimed) with random actions from a pool of
+    :data:`POOL`, drawn with ``seed``; a single env is reset when its episode ends."""
     env.action_space.seed(seed)
     actions = itertools.cycle([env.action_space.sample() for _ in range(POOL)])
     env.reset(seed=seed)
     single = not isinstance(env, gym.vector.VectorEnv)
+    for _ in range(warmup):
+        out = env.step(next(actions))
+        if single and (out[2] or out[3]):
+            env.reset()
 
     def step() -> object:
         out = env.step(next(actions))
@@ -52,10 +56,13 @@ def stepper(env: Any, seed: int = 0) -> Callable[[], object]:
     return step
 
 
-def time_envs(envs: Mapping[str, Any], repeats: int, min_time: float, seed: int = 0) -> dict[str, float]:
-    """Median time of one ``step`` [s] of each env (:func:`stepper`, :func:`measure_many`); closes the envs."""
+def time_envs(
+    envs: Mapping[str, Any], repeats: int, min_time: float, seed: int = 0, warmup: int = 0
+) -> dict[str, float]:
+    """Median time of one ``step`` [s] of each env (:func:`stepper` after ``warmup`` steps, :func:`measure_many`);
+    closes the envs."""
     try:
-        return measure_many({k: stepper(e, seed) for k, e in envs.items()}, repeats, min_time)
+        return measure_many({k: stepper(e, seed, warmup) for k, e in envs.items()}, repeats, min_time)
     finally:
         for e in envs.values():
             e.close()

@@ -92,8 +92,11 @@ def vector_row(n: int, native: float, cartpole: float, sync: float | None = None
     return {"n": n, "native": native, "cartpole": cartpole, "sync": sync, "kernels": kernels or {}} | ratios | calls
 
 
-def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: int, seed: int = 0) -> list[Doc]:
-    """The native vector env (as built, and per kernel), CartPole's native one, and Sync of AmigoBot, per size."""
+def bench_vector(
+    sizes: Sequence[int], repeats: int, min_time: float, sync_max: int, seed: int = 0, warmup: int = 0
+) -> list[Doc]:
+    """The native vector env (as built, and per kernel), CartPole's native one, and Sync of AmigoBot, per size, each
+    timed after ``warmup`` steps."""
     choices = _vector_kernels(parallel=True)
     rows = []
     for n in sizes:
@@ -101,7 +104,7 @@ def bench_vector(sizes: Sequence[int], repeats: int, min_time: float, sync_max: 
         envs |= {k: _vec("AmigoBot-v0", n, kernel=k) for k in choices}
         if n <= sync_max:
             envs["sync"] = gym.make_vec("AmigoBot-v0", num_envs=n, vectorization_mode="sync")
-        t = time_envs(envs, repeats, min_time, seed)
+        t = time_envs(envs, repeats, min_time, seed, warmup)
         sync = n / t["sync"] if "sync" in t else None
         row = vector_row(n, n / t["native"], n / t["cartpole"], sync, {k: n / t[k] for k in choices})
         extra = "".join(f", {k} {v:.3g}" for k, v in row["kernels"].items())
@@ -217,10 +220,10 @@ def bench_ppo(
     return rows
 
 
-def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0) -> Doc:
+def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0, warmup: int = 0) -> Doc:
     """v1 (its default task, :data:`V1_HARD` and the training distribution of the v1 generalists, ``v1_training``)
     against v0: single step [us] and the ratios, and the vector envs' env-steps/s at ``sizes`` up to
-    :data:`V1_MAX_N`."""
+    :data:`V1_MAX_N`, timed after ``warmup`` steps."""
     from amigo_gym.tools.training.benchmark import TRAINING_DISTRIBUTION  # here: bench-env imports no torch
 
     training = dict(TRAINING_DISTRIBUTION["env_kwargs"])
@@ -229,7 +232,7 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
     ts = time_envs({k: gym.make(e, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
     vector = {}
     for n in (n for n in sizes if n <= V1_MAX_N):
-        tv = time_envs({k: _vec(e, n, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed)
+        tv = time_envs({k: _vec(e, n, **kw) for k, (e, kw) in tasks.items()}, repeats, min_time, seed, warmup)
         vector[str(n)] = {k: n / tv[k] for k in ("v1", "v0", "v1_hard", "v1_training")}
         say(f"  N = {n}: " + ", ".join(f"{k} {v:.3g}" for k, v in vector[str(n)].items()) + " env-steps/s")
     us = {f"{k}_us": t * 1e6 for k, t in ts.items()}
@@ -237,7 +240,7 @@ def bench_v1(sizes: Sequence[int], repeats: int, min_time: float, seed: int = 0)
     return us | ratios | {"hard_task": dict(V1_HARD), "training_task": training, "vector": vector}
 
 
-def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[Doc]:
+def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0, warmup: int = 0) -> list[Doc]:
     """Time of one env-step [us] of AmigoBot-v0 and v1 per step implementation (``us``) and the speed-up numpy /
     numba, single env (``n = 0``) and vector env at ``n`` robots; ``[]`` without numba."""
     if not numba_available():
@@ -245,7 +248,8 @@ def bench_kernels(n: int, repeats: int, min_time: float, seed: int = 0) -> list[
     rows = []
     for env_id in ("AmigoBot-v0", "AmigoBot-v1"):
         single = time_envs({k: gym.make(env_id, kernel=k) for k in KERNEL_CHOICES}, repeats, min_time, seed)
-        vector = time_envs({k: _vec(env_id, n, kernel=k) for k in _vector_kernels(True)}, repeats, min_time, seed)
+        vectors = {k: _vec(env_id, n, kernel=k) for k in _vector_kernels(True)}
+        vector = time_envs(vectors, repeats, min_time, seed, warmup)
         for m, t in ((0, single), (n, vector)):
             us = {k: v * 1e6 / max(m, 1) for k, v in t.items()}
             rows.append({"env_id": env_id, "n": m, "us": us, "speedup": us["numpy"] / us["numba"]})
@@ -464,6 +468,9 @@ class EnvSettings:
         sizes: vector sizes [envs] (default: (1, 64, 1024, 4096, 65536)).
         repeats: repeats per measurement [repeats]; the median is reported.
         min_time: least duration of one repeat [s].
+        warmup: untimed steps of each vector env before it is timed [steps], so that it is timed in the steady
+            state of restarts: under random actions AmigoBot-v1's episodes begin to end after about 50 steps and end
+            at their steady rate from about 200 (experiments/vector_warmup.py).
         sync_max: largest N for the SyncVectorEnv peer [envs].
         memory_n: N of the memory measurement (against N = 1) [envs].
         ppo_steps: PPO budget per run [env-steps].
@@ -489,6 +496,7 @@ class EnvSettings:
     sizes: tuple[int, ...] | None = None
     repeats: int = 5
     min_time: float = 0.2
+    warmup: int = 300
     sync_max: int = SYNC_MAX
     memory_n: int = 65536
     ppo_steps: int = 8192
@@ -510,7 +518,7 @@ class EnvSettings:
     def __post_init__(self) -> None:
         check_fields(PROG, self, sizes=(1, 1e6), min_time=(0, 60, True), repeats=(1, 1000), sync_max=(0, 1e6))
         check_fields(PROG, self, memory_n=(2, 1e7), ppo_steps=(1, 1e7), ppo_envs=(1, 4096), ppo_repeats=(1, 100))
-        check_fields(PROG, self, threads=(1, os.cpu_count() or 1))
+        check_fields(PROG, self, warmup=(0, 1e5), threads=(1, os.cpu_count() or 1))
 
 
 def run(s: EnvSettings) -> int:
@@ -528,7 +536,7 @@ def run(s: EnvSettings) -> int:
     if s.quick:
         small: dict[str, Any] = {"sync_max": min(s.sync_max, SYNC_MAX), "memory_n": min(s.memory_n, 256)}
         small["ppo_steps"] = min(s.ppo_steps, 128)
-        s = replace(s, min_time=0.02, **small, repeats=1, ppo_repeats=1)
+        s = replace(s, min_time=0.02, **small, repeats=1, ppo_repeats=1, warmup=min(s.warmup, 3))
     if s.threads is not None and numba_available():
         import numba
 
@@ -538,14 +546,14 @@ def run(s: EnvSettings) -> int:
     doc |= {"vector": [], "ppo": [], "kernels": [], "targets": [], "notes": []}
     start = load_average()
     print(f"{machine_line()}; {numba_state()}; load average {start}", flush=True)
-    print(f"median of {s.repeats} repeats of >= {s.min_time:g} s", flush=True)
+    print(f"median of {s.repeats} repeats of >= {s.min_time:g} s; vector envs after {s.warmup} steps", flush=True)
     if not s.skip_single:
         say("single env: AmigoBot-v0 vs Pendulum-v1")
         t = time_envs({"a": gym.make("AmigoBot-v0"), "p": gym.make("Pendulum-v1")}, s.repeats, s.min_time)
         doc["single"] = {"amigobot_us": t["a"] * 1e6, "pendulum_us": t["p"] * 1e6, "ratio": t["a"] / t["p"]}
     if not s.skip_vector:
         say(f"vector env at N = {sizes} (Sync up to N = {s.sync_max})")
-        doc["vector"] = bench_vector(sizes, s.repeats, s.min_time, s.sync_max)
+        doc["vector"] = bench_vector(sizes, s.repeats, s.min_time, s.sync_max, warmup=s.warmup)
         doc["fixed_cost_n1"] = fixed_cost(doc["vector"])
     if not s.skip_memory:
         say(f"memory per sub-env (N = {s.memory_n} vs 1)")
@@ -557,14 +565,14 @@ def run(s: EnvSettings) -> int:
         doc["ppo"] = bench_ppo(s.ppo_steps, s.ppo_envs, rollout=64 if s.quick else 2048, repeats=s.ppo_repeats, v1=s.v1)
     if s.v1:
         say("AmigoBot-v1 vs v0")
-        doc["v1"] = bench_v1(sizes, s.repeats, s.min_time)
+        doc["v1"] = bench_v1(sizes, s.repeats, s.min_time, warmup=s.warmup)
     if s.kernels:
         n_k = max([n for n in sizes if n <= V1_MAX_N], default=min(sizes))
         say(f"step implementations of AmigoBot-v0 and v1, single env and N = {n_k}")
-        doc["kernels"] = bench_kernels(n_k, s.repeats, s.min_time)
+        doc["kernels"] = bench_kernels(n_k, s.repeats, s.min_time, warmup=s.warmup)
         if not doc["kernels"]:
             doc["notes"].append("--kernels: numba is not installed; only the numpy step exists")
-    doc["targets"] = targets(doc)
+    doc["targets"], doc["warmup_steps"] = targets(doc), s.warmup
     cpu = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
     doc["machine"] = cpu | {"numba": numba_state(), "load_average": {"start": start, "end": load_average()}}
     print(format_report(doc))
