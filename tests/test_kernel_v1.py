@@ -359,3 +359,32 @@ def test_compiled_path_loops_build_the_same_paths(family: str) -> None:
             x, y = a._t.column(k), b._t.column(k)
             assert x.shape == y.shape and np.allclose(x, y, rtol=0, atol=1e-12 * max(1.0, np.abs(x).max())), k
         assert a._t.length == pytest.approx(b._t.length, rel=1e-12)
+
+
+@pytest.mark.parametrize("path", ["figure8", "lane_change", "random"])
+def test_measured_projection_from_the_true_foot_is_the_searched_one(path: str) -> None:
+    """The compiled step projects the measured H by Newton from H's foot, without the coarse search, where that foot
+    is interior, ``|kappa e| <= 0.5`` and the two points are within a sample spacing (``_evaluate``): for such pairs
+    of points on each family's path, the same foot and cross-track error to 1e-12 m as the search."""
+    from amigo_gym.paths import STATUS_INTERIOR
+    from amigo_gym.paths import clothoid as C
+
+    kv = fast_v1.kernels()
+    env = gym.make_vec("AmigoBot-v1", 1, vectorization_mode="vector_entry_point", path=path)
+    env.reset(seed=0)
+    b = env.unwrapped._batch  # type: ignore[attr-defined]
+    c, pv = b.consts, b.arena.flat[b.arena.starts[0] : b.arena.stops[0]]
+    h, rng, compared = float(pv[C.P_SPACING]), np.random.default_rng(1), 0
+    for _ in range(3000):
+        s = rng.uniform(0.0, float(pv[C.P_LENGTH]))
+        x, y, _th, _k, _c, ct, st = C.pose_flat([0.0] * C._SCRATCH, C._PATH_TABLE, 0, pv, s)
+        off = rng.uniform(-0.2, 0.2)
+        hx, hy = x - off * st, y + off * ct
+        s_h, kappa, e, *_, status = kv._locate(c, pv, hx, hy, s + rng.uniform(-0.05, 0.05))
+        mx, my = hx + rng.uniform(-h, h), hy + rng.uniform(-h, h)
+        if status != STATUS_INTERIOR or abs(kappa * e) > 0.5 or (mx - hx) ** 2 + (my - hy) ** 2 > h * h:
+            continue
+        searched, newton = kv._locate(c, pv, mx, my, s_h, True), kv._locate(c, pv, mx, my, s_h, False)
+        assert abs(searched[0] - newton[0]) <= 1e-12 and abs(searched[2] - newton[2]) <= 1e-12, (s, off, mx, my)
+        compared += 1
+    assert compared > 1000

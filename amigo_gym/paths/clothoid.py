@@ -470,10 +470,11 @@ def nearest_in_run(
 
 def locate_flat(
     pose: PoseOf, buf: Buffer, nodes: Buffer, nb: int, pv: FlatPath, x: float, y: float, sp: float, ahead: float,
-    behind: float,
+    behind: float, scan: bool = True,
 ) -> FlatPoint:  # fmt: skip
     """:meth:`ClothoidPath.locate` of one point ``(x, y)`` [m] with hint ``sp`` [m] and window ``ahead``,
-    ``behind`` [m] (> 0) on the flat path ``pv``; ``pose(buf, nodes, nb, pv, s)``: :func:`pose_flat` or alike."""
+    ``behind`` [m] (> 0) on the flat path ``pv``; ``pose(buf, nodes, nb, pv, s)``: :func:`pose_flat` or alike.
+    ``scan=False``: Newton's steps start at ``sp`` itself (a foot within a sample spacing of ``(x, y)``'s)."""
     lo = sp - behind
     hi = sp + ahead
     if pv[P_CLOSED] == 0.0:
@@ -482,7 +483,9 @@ def locate_flat(
     if pv[P_CIRCLE_K] != 0.0:  # the foot in closed form: no Newton step
         return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(circle_foot(pv, x, y, sp), lo), hi), lo, hi, 0)
     h = pv[P_SPACING]
-    s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
+    s = sp
+    if scan:
+        s = nearest_sample(pv, x, y, float(np.floor((sp - behind) / h)), math.ceil((ahead + behind) / h) + 2)
     return project_flat(pose, buf, nodes, nb, pv, x, y, min(max(s, lo), hi), lo, hi, NEWTON_ITERATIONS)
 
 

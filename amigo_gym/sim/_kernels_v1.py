@@ -241,10 +241,13 @@ def pose(c: F64, pv: F64, s: float) -> tuple[float, float, float, float, float, 
 
 
 @_jit
-def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, float, float, float, float, int]:
+def _locate(
+    c: F64, pv: F64, x: float, y: float, sp: float, scan: bool = True
+) -> tuple[float, float, float, float, float, int]:
     """H's projection ``(progress, curvature, cross_track_error, cos_theta, sin_theta, status)`` from the hint ``sp``:
-    ``path.locate`` with the window ``c[L.C_WINDOW]`` ahead and behind; a circle's or manoeuvre's closed form
-    (the circle's lap nearest ``sp``), status 0."""
+    ``path.locate`` with the window ``c[L.C_WINDOW]`` ahead and behind (``scan=False``: Newton from ``sp``, the foot
+    of a point within a sample spacing); a circle's or manoeuvre's closed form (the circle's lap nearest ``sp``),
+    status 0."""
     kind = c[L.C_PATH_KIND]
     if kind != L.PATH_CLOTHOID:
         d = c[L.C_DIRECTION]
@@ -260,7 +263,7 @@ def _locate(c: F64, pv: F64, x: float, y: float, sp: float) -> tuple[float, floa
     window = c[L.C_WINDOW]
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
     s, _px, _py, _th, kappa, _cr, e, ct, st, _dist, status = clothoid.locate_flat(
-        clothoid.pose_flat, buf, c, _path_nodes(c), pv, x, y, sp, window, window
+        clothoid.pose_flat, buf, c, _path_nodes(c), pv, x, y, sp, window, window, scan
     )
     return s, kappa, e, ct, st, status
 
@@ -391,7 +394,11 @@ def _evaluate(
         mcb = math.cos(mb)
         msb = math.sin(mb)
         mhx, mhy = kinematics.h_from_a(mx, my, mcb, msb, l3)
-        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h)
+        # Newton from H's foot (no coarse search) where it is a well-conditioned interior foot within a sample
+        # spacing: the same foot (to 1e-12 m: tests/test_kernel_v1.py)
+        near = len(pv) > 0 and status == clothoid.STATUS_INTERIOR and abs(kappa * e) <= 0.5
+        near = near and (mhx - hx) ** 2 + (mhy - hy) ** 2 <= pv[clothoid.P_SPACING] ** 2
+        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h, not near)
     else:
         mcb = cb
         msb = sb
