@@ -82,10 +82,9 @@ class PathBatch:
         self._set(np.arange(n, dtype=np.intp), seq)
 
     def _set(self, rows: NDArray[np.intp], paths: Sequence[PathSpec]) -> None:
-        for r in rows.tolist():
-            old = self._counts.get(int(self._ids[r]))
+        for oid in self._ids[rows].tolist():
+            old = self._counts.get(oid)
             if old is not None:  # (at construction the ids are 0: no object has id 0)
-                oid = int(self._ids[r])
                 if old == 1:
                     del self._counts[oid], self._objects[oid]
                     self._foreign_objects.pop(oid, None)
@@ -94,17 +93,15 @@ class PathBatch:
         groups: dict[int, tuple[PathSpec, list[int]]] = {}
         for r, p in zip(rows.tolist(), paths, strict=True):
             groups.setdefault(id(p), (p, []))[1].append(r)
+            self._paths[r] = p
         for oid, (p, rs) in groups.items():
-            ra = np.asarray(rs, dtype=np.intp)
-            self._ids[ra] = oid
-            self._length[ra] = float(p.length)
-            self._closed[ra] = bool(p.closed)
             self._objects[oid] = p
             if not isinstance(p, ClothoidPath):
                 self._foreign_objects[oid] = p
             self._counts[oid] = self._counts.get(oid, 0) + len(rs)
-            for r in rs:
-                self._paths[r] = p
+        self._ids[rows] = [id(p) for p in paths]  # the per-row columns in one assignment each
+        self._length[rows] = [float(p.length) for p in paths]
+        self._closed[rows] = [bool(p.closed) for p in paths]
         if self._tables is not None:
             for p, rs in groups.values():
                 self._tables.write(np.asarray(rs, dtype=np.intp), p)
