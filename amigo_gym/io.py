@@ -113,8 +113,7 @@ def _shipped_digests() -> set[str]:
 
     out: set[str] = set()
     for manifest in pretrained_dir().rglob("*.json"):
-        doc = json.loads(manifest.read_bytes())
-        if isinstance(doc, dict):
+        if isinstance(doc := json.loads(manifest.read_bytes()), dict):
             files = doc.get("files")
             digests = [doc.get("sha256"), *(files.values() if isinstance(files, dict) else ())]
             out |= {d for d in digests if isinstance(d, str)}

@@ -113,8 +113,7 @@ class AnalyticPolicy(Policy):
         feedforward_only: bool = False,
         speed_reference: SpeedReference = "A",
     ) -> None:
-        self._fields = Fields("AnalyticPolicy", params)
-        self.params = params
+        self._fields, self.params = Fields("AnalyticPolicy", params), params
         self.gain = 0.0 if feedforward_only else check_real("AnalyticPolicy", "gain", gain, 0.0, 1.0 / params.dt)
         self.feedforward_only = bool(feedforward_only)
         if speed_reference not in ("A", "H"):

@@ -205,17 +205,14 @@ class FastPolicy(Policy):
         obs_rms: RunningMeanStd,
         info: Mapping[str, Any] | None = None,
     ) -> None:
-        self.spec = spec
-        self.builder = FeatureBuilder(spec)
+        self.spec, self.builder = spec, FeatureBuilder(spec)
         self._fields = self.builder.fields
         if layers[0][0].shape[0] != self.builder.dim or layers[-1][0].shape[1] != 2:
             raise ValueError(
                 f"FastPolicy: the network maps {layers[0][0].shape[0]} -> {layers[-1][0].shape[1]}, the features "
                 f"need {self.builder.dim} -> 2"
             )
-        self.layers = layers
-        self.log_std = np.asarray(log_std, dtype=np.float64)
-        self.obs_rms = obs_rms
+        self.layers, self.log_std, self.obs_rms = layers, np.asarray(log_std, dtype=np.float64), obs_rms
         self.info: dict[str, Any] = dict(info or {})
         self._rng = np.random.default_rng()
 

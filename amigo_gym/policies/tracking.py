@@ -68,8 +68,7 @@ class AnalyticTrackingPolicy(Policy):
         feedforward: bool = True,
     ) -> None:
         o = "AnalyticTrackingPolicy"
-        self._fields = Fields(o, params)
-        self.params = params
+        self._fields, self.params = Fields(o, params), params
         self.gain = check_real(o, "gain", gain, 0.0, 1.0 / params.dt, low_open=True)
         ki = self.gain * self.gain / 4.0 if integral_gain is None else integral_gain
         self.integral_gain = check_real(o, "integral_gain", ki, 0.0, 1.0 / params.dt**2)
@@ -135,8 +134,7 @@ class PurePursuitPolicy(Policy):
         lookahead_time: float | None = None,
     ) -> None:
         o = "PurePursuitPolicy"
-        self._fields = Fields(o, params, v1_only=True)
-        self.params = params
+        self._fields, self.params = Fields(o, params, v1_only=True), params
         prev = params.preview
         if lookahead is None:
             lookahead = min(prev, key=lambda d: abs(d - DEFAULT_LOOKAHEAD))
