@@ -1,5 +1,6 @@
-"""The measured H's projection in the compiled step (``_kernels_v1._evaluate``): Newton from H's foot, or from the
-first Newton step taken with that foot's known pose (one pose fewer), CPU time a robot of both projections.
+"""The measured H's projection of the compiled step (``_kernels_v1._evaluate``: Newton from H's foot, no coarse
+search) against an alternative not kept (Newton from the first step, taken with that foot's known pose: one pose
+fewer, but ``project_flat``'s Newton step written a second time), CPU time a robot of both projections.
 
     NUMBA_NUM_THREADS=1 python experiments/measured_projection.py
 

@@ -394,16 +394,11 @@ def _evaluate(
         mcb = math.cos(mb)
         msb = math.sin(mb)
         mhx, mhy = kinematics.h_from_a(mx, my, mcb, msb, l3)
-        # Newton (no coarse search) where H's foot is interior, well conditioned and within a sample spacing, its
-        # first step taken from that foot's known pose: the same foot (to 1e-12 m: tests/test_kernel_v1.py)
+        # Newton from H's foot (no coarse search) where it is a well-conditioned interior foot within a sample
+        # spacing: the same foot (to 1e-12 m: tests/test_kernel_v1.py)
         near = len(pv) > 0 and status == clothoid.STATUS_INTERIOR and abs(kappa * e) <= 0.5
-        h = pv[clothoid.P_SPACING] if near else 0.0
-        near = near and (mhx - hx) ** 2 + (mhy - hy) ** 2 <= h * h
-        s_m = s_h
-        if near:  # g, e of the measured H from H's foot (hx + e st, hy - e ct)
-            _dx, _dy, g, e0 = clothoid.foot_terms(mhx, mhy, hx + e * st, hy - e * ct, ct, st)
-            s_m = s_h + min(max(g / max(1.0 - kappa * e0, clothoid.MIN_NEWTON_DENOMINATOR), -h), h)
-        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_m, not near)
+        near = near and (mhx - hx) ** 2 + (mhy - hy) ** 2 <= pv[clothoid.P_SPACING] ** 2
+        m_s, m_k, m_e, m_ct, m_st, _ = _locate(c, pv, mhx, mhy, s_h, not near)
     else:
         mcb = cb
         msb = sb

@@ -42,10 +42,6 @@ def stepper(env: Any, seed: int = 0, warmup: int = 0) -> Callable[[], object]:
     actions = itertools.cycle([env.action_space.sample() for _ in range(POOL)])
     env.reset(seed=seed)
     single = not isinstance(env, gym.vector.VectorEnv)
-    for _ in range(warmup):
-        out = env.step(next(actions))
-        if single and (out[2] or out[3]):
-            env.reset()
 
     def step() -> object:
         out = env.step(next(actions))
@@ -53,6 +49,8 @@ def stepper(env: Any, seed: int = 0, warmup: int = 0) -> Callable[[], object]:
             env.reset()
         return None
 
+    for _ in range(warmup):
+        step()
     return step
 
 
